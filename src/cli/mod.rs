@@ -1,0 +1,30 @@
+//! Subcommands of the `sylva` binary, one module per area.
+
+pub mod render;
+pub mod run;
+pub mod simulate;
+pub mod species;
+pub mod terrain;
+pub mod tree;
+
+/// Sets up `tracing` to stderr: warnings by default, `-v` info, `-vv` debug; `RUST_LOG` wins.
+pub fn init_logging(verbose: u8) {
+    let level = match verbose {
+        0 => "warn",
+        1 => "info",
+        _ => "debug",
+    };
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).try_init();
+}
+
+/// A progress bar in Sylva's style (hidden when stderr is not a terminal or in tests).
+pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
+    let pb = indicatif::ProgressBar::new(len);
+    let style = indicatif::ProgressStyle::with_template("{spinner} {prefix:>12} [{bar:30}] {pos}/{len} {msg} ({elapsed})")
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar())
+        .progress_chars("=> ");
+    pb.set_style(style);
+    pb.set_prefix(what.to_string());
+    pb
+}

@@ -1,0 +1,140 @@
+//! `Grid<T>`: a row-major raster with its georeferencing.
+//!
+//! Conventions (DESIGN.md): row 0 is the **northern** edge, as in GeoTIFF and ESRI ASCII grids;
+//! column 0 the western edge. World coordinates are metres with x east, y north, origin at the
+//! south-west corner of the grid, so cell `(col, row)` has its centre at
+//! `x = (col + 0.5) * cell_x_m`, `y = (height - row - 0.5) * cell_y_m`.
+//! For geographic grids (degrees) `cell_x_m` is the east–west spacing at the grid's central
+//! latitude; fields that need the exact spacing use [`GeoRef::cell_x_m_at_row`].
+
+use serde::{Deserialize, Serialize};
+
+/// Coordinate reference system of a grid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Crs {
+    /// Longitude/latitude in degrees (e.g. EPSG:4326). Cell sizes in metres vary per row.
+    Geographic,
+    /// A projected CRS in metres (e.g. UTM, EPSG:326xx).
+    Projected,
+    /// No georeferencing: a local metric grid (generated terrain, PNG heightmap).
+    Local,
+}
+
+/// Mean radius of the Earth used for degree-to-metre conversion (m), WGS 84 authalic radius.
+pub const EARTH_RADIUS_M: f64 = 6_371_007.2;
+/// Metres per degree of latitude, the scale `gdaldem -s 111120` uses for geographic input.
+pub const METRES_PER_DEGREE: f64 = 111_120.0;
+
+/// Georeferencing of a grid: where its upper-left corner is and how large a cell is.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GeoRef {
+    /// Kind of coordinates.
+    pub crs: Crs,
+    /// EPSG code when known (4326, 32616, ...).
+    pub epsg: Option<u32>,
+    /// X (easting or longitude) of the upper-left corner of the upper-left cell, CRS units.
+    pub origin_x: f64,
+    /// Y (northing or latitude) of the upper-left corner of the upper-left cell, CRS units.
+    pub origin_y: f64,
+    /// Cell width in CRS units (degrees or metres), > 0.
+    pub pixel_w: f64,
+    /// Cell height in CRS units (degrees or metres), > 0 (rows go south).
+    pub pixel_h: f64,
+    /// Latitude of the grid centre in degrees (given for projected/local grids by the user or
+    /// scenario; computed for geographic grids). Used for insolation.
+    pub latitude_deg: f64,
+}
+
+impl GeoRef {
+    /// A local metric grid with square cells of `cell_m` metres at latitude `latitude_deg`.
+    pub fn local(cell_m: f64, latitude_deg: f64) -> Self {
+        GeoRef { crs: Crs::Local, epsg: None, origin_x: 0.0, origin_y: 0.0, pixel_w: cell_m, pixel_h: cell_m, latitude_deg }
+    }
+    /// Latitude (degrees) of the centre of `row` for geographic grids; the grid latitude otherwise.
+    pub fn row_latitude_deg(&self, row: usize) -> f64 {
+        match self.crs {
+            Crs::Geographic => self.origin_y - (row as f64 + 0.5) * self.pixel_h,
+            _ => self.latitude_deg,
+        }
+    }
+    /// East–west cell size in metres for `row` (geographic: `pixel_w · 111120 · cos φ`).
+    pub fn cell_x_m_at_row(&self, row: usize) -> f64 {
+        match self.crs {
+            Crs::Geographic => self.pixel_w * METRES_PER_DEGREE * self.row_latitude_deg(row).to_radians().cos(),
+            _ => self.pixel_w,
+        }
+    }
+    /// North–south cell size in metres (geographic: `pixel_h · 111120`).
+    pub fn cell_y_m(&self) -> f64 {
+        match self.crs {
+            Crs::Geographic => self.pixel_h * METRES_PER_DEGREE,
+            _ => self.pixel_h,
+        }
+    }
+}
+
+/// A row-major raster of `width × height` cells (row 0 north).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Grid<T> {
+    /// Number of columns (west → east).
+    pub width: usize,
+    /// Number of rows (north → south).
+    pub height: usize,
+    /// Cell values, `data[row * width + col]`; length `width * height`.
+    pub data: Vec<T>,
+}
+
+impl<T: Clone> Grid<T> {
+    /// A grid filled with `value`.
+    pub fn filled(width: usize, height: usize, value: T) -> Self {
+        Grid { width, height, data: vec![value; width * height] }
+    }
+}
+
+impl<T> Grid<T> {
+    /// Wraps `data` (length must be `width * height`; returns `None` otherwise).
+    pub fn from_vec(width: usize, height: usize, data: Vec<T>) -> Option<Self> {
+        (data.len() == width * height).then_some(Grid { width, height, data })
+    }
+    /// Linear index of `(col, row)`.
+    #[inline]
+    pub fn idx(&self, col: usize, row: usize) -> usize {
+        row * self.width + col
+    }
+    /// Value at `(col, row)`; panics when out of range (like slice indexing).
+    #[inline]
+    pub fn get(&self, col: usize, row: usize) -> &T {
+        &self.data[row * self.width + col]
+    }
+    /// Mutable value at `(col, row)`.
+    #[inline]
+    pub fn get_mut(&mut self, col: usize, row: usize) -> &mut T {
+        &mut self.data[row * self.width + col]
+    }
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        self.data.len()
+    }
+    /// True for a grid without cells.
+    pub fn is_empty(&self) -> bool {
+        self.data.is_empty()
+    }
+    /// Maps every value.
+    pub fn map<U>(&self, f: impl Fn(&T) -> U) -> Grid<U> {
+        Grid { width: self.width, height: self.height, data: self.data.iter().map(f).collect() }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn geographic_cell_size_at_jacksboro() {
+        // 3 arc-second grid at 36.6°N: ≈ 74 m E–W × 92.6 m N–S (terrains/README.md).
+        let g = GeoRef { crs: Crs::Geographic, epsg: Some(4326), origin_x: -84.41, origin_y: 36.6, pixel_w: 1.0 / 1200.0, pixel_h: 1.0 / 1200.0, latitude_deg: 36.6 };
+        let dx = g.cell_x_m_at_row(0);
+        assert!((dx - 74.3).abs() < 0.5, "dx {dx}");
+        assert!((g.cell_y_m() - 92.6).abs() < 0.05);
+    }
+}

@@ -1,0 +1,62 @@
+//! The `sylva` command line. Each subcommand lives in `src/cli/<area>.rs`; this file only
+//! dispatches. Errors from the library are reported once here, with their chain of causes.
+
+mod cli;
+
+use clap::{Parser, Subcommand};
+
+/// Sylva: forests at terrain scale.
+#[derive(Parser)]
+#[command(name = "sylva", version, about, long_about = None)]
+struct Cli {
+    /// More log output (-v info, -vv debug); RUST_LOG overrides.
+    #[arg(short, long, action = clap::ArgAction::Count, global = true)]
+    verbose: u8,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Run the main job: afforest a landscape, write maps, inventories, stills and a timelapse.
+    Run(cli::run::Args),
+    /// Elevation models: information and condition maps.
+    #[command(subcommand)]
+    Terrain(cli::terrain::Command),
+    /// The species library: list, show, check, new.
+    #[command(subcommand)]
+    Species(cli::species::Command),
+    /// Run an ecosystem simulation from a scenario file.
+    Simulate(cli::simulate::Args),
+    /// Single trees: grow a skeleton and export meshes.
+    #[command(subcommand)]
+    Tree(cli::tree::Command),
+    /// Render a still of a simulation run.
+    Render(cli::render::RenderArgs),
+    /// Render a timelapse of a simulation run.
+    Timelapse(cli::render::TimelapseArgs),
+}
+
+fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    cli::init_logging(cli.verbose);
+    let res = match cli.command {
+        Command::Run(a) => cli::run::run(a),
+        Command::Terrain(c) => cli::terrain::run(c),
+        Command::Species(c) => cli::species::run(c),
+        Command::Simulate(a) => cli::simulate::run(a),
+        Command::Tree(c) => cli::tree::run(c),
+        Command::Render(a) => cli::render::render(a),
+        Command::Timelapse(a) => cli::render::timelapse(a),
+    };
+    match res {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            for cause in e.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

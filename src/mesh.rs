@@ -1,0 +1,78 @@
+//! Plain triangle meshes shared by `structure` (which builds them) and `render`/`output`
+//! (which draw and export them). Units: metres, z up (DESIGN.md world convention).
+
+use serde::{Deserialize, Serialize};
+
+/// Which material a mesh part uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum MaterialKind {
+    /// Bark (trunk and branches).
+    Bark,
+    /// Foliage (leaves, needles, leaf clusters, crown hulls, impostors).
+    Leaf,
+}
+
+/// An indexed triangle mesh in one material.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TriMesh {
+    /// Vertex positions (m), z up.
+    pub positions: Vec<[f32; 3]>,
+    /// Unit vertex normals, one per position.
+    pub normals: Vec<[f32; 3]>,
+    /// Texture coordinates, one per position.
+    pub uvs: Vec<[f32; 2]>,
+    /// Triangle list, counter-clockwise seen from outside; length a multiple of 3.
+    pub indices: Vec<u32>,
+}
+
+impl TriMesh {
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+    /// Appends `other`, offsetting its indices.
+    pub fn append(&mut self, other: &TriMesh) {
+        let base = self.positions.len() as u32;
+        self.positions.extend_from_slice(&other.positions);
+        self.normals.extend_from_slice(&other.normals);
+        self.uvs.extend_from_slice(&other.uvs);
+        self.indices.extend(other.indices.iter().map(|i| i + base));
+    }
+    /// Axis-aligned bounds `(min, max)`; `None` for an empty mesh.
+    pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
+        let mut it = self.positions.iter();
+        let first = *it.next()?;
+        let (mut lo, mut hi) = (first, first);
+        for p in it {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        Some((lo, hi))
+    }
+}
+
+/// A tree mesh at one level of detail: bark and foliage parts.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TreeMesh {
+    /// Trunk and branches.
+    pub bark: TriMesh,
+    /// Leaves / leaf clusters / hull / impostor cards.
+    pub leaves: TriMesh,
+}
+
+impl TreeMesh {
+    /// Total triangles of both parts.
+    pub fn triangle_count(&self) -> usize {
+        self.bark.triangle_count() + self.leaves.triangle_count()
+    }
+}
+
+/// Levels of detail of one tree, finest first (DESIGN: full mesh, reduced skeleton with leaf
+/// clusters, crown hull, billboard impostor).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct LodChain {
+    /// Meshes, index 0 = full detail.
+    pub levels: Vec<TreeMesh>,
+}

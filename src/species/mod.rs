@@ -1,0 +1,386 @@
+//! Species library: one TOML file per species in `species/` (schema documented in
+//! `species/README.md`).
+//!
+//! OWNERSHIP NOTE (foundation): the field names below are the contract used by `sim` and
+//! `structure`; they may gain fields but must not be renamed.
+
+use serde::{Deserialize, Serialize};
+
+/// Index of a species within a loaded [`SpeciesLibrary`] (0-based, in the library's order, which
+/// is sorted by `id`).
+pub type SpeciesId = u16;
+
+/// One tree species.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Species {
+    /// Short identifier, lower-case ASCII with underscores, e.g. `"beech"`; unique in a library.
+    pub id: String,
+    /// Names, leaf habit and sources.
+    pub identity: Identity,
+    /// Ellenberg-style niche: indicator values and tolerance widths.
+    pub niche: Niche,
+    /// Life history: ages, sizes, reproduction, growth and allometry.
+    pub life: LifeHistory,
+    /// Branching architecture parameters of the three growth models.
+    pub architecture: Architecture,
+    /// Colours and textures.
+    pub appearance: Appearance,
+}
+
+/// Names and leaf habit.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Identity {
+    /// Scientific name, e.g. "Fagus sylvatica".
+    pub scientific_name: String,
+    /// Common English name, e.g. "European beech".
+    pub common_name: String,
+    /// Broadleaf or conifer.
+    pub leaf_type: LeafType,
+    /// Deciduous (sheds leaves in winter) or evergreen.
+    pub deciduous: bool,
+    /// Sources of the numbers in this file (free text, one per entry).
+    #[serde(default)]
+    pub sources: Vec<String>,
+}
+
+/// Broadleaf or conifer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum LeafType {
+    /// Broad-leaved tree.
+    Broadleaf,
+    /// Needle-leaved tree.
+    Conifer,
+}
+
+/// An Ellenberg indicator value: a number on the factor's scale or indifferent ("x").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Indicator {
+    /// Optimum on the factor's scale (1–9; F up to 12).
+    Value(f32),
+    /// Indifferent to this factor ("x").
+    Indifferent(String),
+}
+
+/// One factor of the niche: optimum and tolerance width.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Factor {
+    /// Ellenberg value (optimum) or "x".
+    pub value: IndicatorValue,
+    /// Tolerance width on the same scale (> 0): distance from the optimum at which suitability
+    /// has fallen to the documented edge value.
+    pub tolerance: f32,
+}
+
+/// Ellenberg value as stored: a number or the string "x".
+pub type IndicatorValue = Indicator;
+
+/// Ellenberg-style niche (L light, T temperature, K continentality, F moisture, R reaction/pH,
+/// N nitrogen).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Niche {
+    /// Light.
+    pub l: Factor,
+    /// Temperature.
+    pub t: Factor,
+    /// Continentality.
+    pub k: Factor,
+    /// Moisture (1–12).
+    pub f: Factor,
+    /// Soil reaction.
+    pub r: Factor,
+    /// Nitrogen.
+    pub n: Factor,
+}
+
+/// Seed dispersal kernel shape.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KernelType {
+    /// Negative exponential in distance, truncated at `max_m`.
+    NegativeExponential,
+    /// 2Dt (Clark et al. 1999) fat-tailed kernel, truncated at `max_m`.
+    TwoDt,
+}
+
+/// Dispersal kernel.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Dispersal {
+    /// Kernel shape.
+    pub kernel: KernelType,
+    /// Mean dispersal distance (m), > 0.
+    pub mean_m: f32,
+    /// Maximum dispersal distance (m), ≥ mean_m.
+    pub max_m: f32,
+}
+
+/// Life history.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LifeHistory {
+    /// Maximum age (years).
+    pub max_age_yr: f32,
+    /// Maximum height (m).
+    pub max_height_m: f32,
+    /// Maximum diameter at breast height (cm).
+    pub max_dbh_cm: f32,
+    /// Age at which seed production starts (years).
+    pub maturity_age_yr: f32,
+    /// Shade tolerance, 1 (intolerant) … 5 (very tolerant), LandClim/iLand scale.
+    pub shade_tolerance: f32,
+    /// Seeds produced per m² of crown projection area per year by a mature tree.
+    pub seeds_per_m2_crown: f32,
+    /// Seed dispersal kernel.
+    pub dispersal: Dispersal,
+    /// Minimum relative ground light (0–1) for germination.
+    pub germination_min_light: f32,
+    /// Probability (0–1) that a seed on a suitable, lit cell establishes as a seedling.
+    pub establishment_rate: f32,
+    /// Potential height growth: Chapman–Richards H(t) = H_max (1 − e^(−k t))^p.
+    pub growth: Growth,
+    /// Allometries.
+    pub allometry: Allometry,
+}
+
+/// Chapman–Richards potential height growth parameters.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Growth {
+    /// Rate k (1/yr), > 0.
+    pub k: f32,
+    /// Shape p (dimensionless), ≥ 1.
+    pub p: f32,
+}
+
+/// Allometric relations.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Allometry {
+    /// Height–DBH: H = 1.3 + (H_max − 1.3)(1 − e^(−a·D))^b, D in cm: coefficient a (1/cm).
+    pub hd_a: f32,
+    /// Height–DBH exponent b.
+    pub hd_b: f32,
+    /// Open-grown crown radius r = c0 + c1·D (m, D in cm): intercept c0 (m).
+    pub crown_c0: f32,
+    /// Crown radius slope c1 (m/cm).
+    pub crown_c1: f32,
+    /// Crown length as a fraction of height for an open-grown tree (0–1).
+    pub crown_ratio: f32,
+    /// Pipe-model exponent d in r^d = Σ r_j^d (2 = da Vinci/pipe model; 2–3).
+    pub pipe_exponent: f32,
+}
+
+/// Leaf distribution of the EcoMod strand model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum LeafDistribution {
+    /// Leaves in a spiral around the branch.
+    Spiral,
+    /// Leaves stacked in whorls.
+    Stacked,
+    /// Alternating leaves.
+    Staggered,
+    /// Bunches at branch tips.
+    Bunched,
+    /// Needles.
+    Coniferous,
+}
+
+/// A poly-line graph: control points (abscissa = Gravelius or Weibull order, ordinate = value),
+/// linearly interpolated, constant beyond the ends (EcoMod, section II.B).
+pub type PolyLine = Vec<[f32; 2]>;
+
+/// EcoMod strand model parameters (Zamuda et al., `004_*.txt`, section II and III).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EcoModParams {
+    /// Number of strands S (0–5000 in the paper's dialog; pine uses 6000).
+    pub strands: u32,
+    /// Base trunk length l₀ (m), 0–10 (the paper's L₀).
+    pub trunk_length_m: f32,
+    /// Branch thickness coefficient k_d (0–0.05): d = k_d √S.
+    pub k_d: f32,
+    /// Gravicentrism k_c (0–1).
+    pub k_c: f32,
+    /// Phyllotaxis angle α_p (degrees, 0–360).
+    pub phyllotaxis_deg: f32,
+    /// Leaf density ρ_l (0–30).
+    pub leaf_density: f32,
+    /// Leaf size l_l (m, 0–0.3).
+    pub leaf_size_m: f32,
+    /// Leaf distribution l_type.
+    pub leaf_distribution: LeafDistribution,
+    /// Directed wind speed w_g (0–10).
+    pub wind_directed: f32,
+    /// Undirected wind speed w_s (0–10).
+    pub wind_undirected: f32,
+    /// Wind flexibility k_f (0–1).
+    pub k_f: f32,
+    /// k_s^g over Gravelius order (eq. 1).
+    pub ks_g: PolyLine,
+    /// k_s^w over Weibull order (eq. 1).
+    pub ks_w: PolyLine,
+    /// α^g (degrees) (eq. 2).
+    pub alpha_g: PolyLine,
+    /// α^w (eq. 2).
+    pub alpha_w: PolyLine,
+    /// α_m^g gravimorphism (degrees) (eq. 3).
+    pub alpha_m_g: PolyLine,
+    /// α_m^w (eq. 3).
+    pub alpha_m_w: PolyLine,
+    /// M^g maximum relative branch length (eq. 4).
+    pub max_len_g: PolyLine,
+    /// M^w (eq. 4).
+    pub max_len_w: PolyLine,
+    /// k_l^g branch length scaling (eq. 5).
+    pub kl_g: PolyLine,
+    /// k_l^w (eq. 5).
+    pub kl_w: PolyLine,
+    /// m^g minimum relative branch length (eq. 6).
+    pub min_len_g: PolyLine,
+    /// m^w (eq. 6).
+    pub min_len_w: PolyLine,
+}
+
+/// Light-guided growth parameters (Yi et al., `001_*.txt`, Table 1).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightGuidedParams {
+    /// λ: apical control weight of the Borchert–Honda allocation (0–1, eq. 1).
+    pub lambda: f32,
+    /// k: priority allocation coefficient.
+    pub k: f32,
+    /// b: shadow propagation base (l_n = l_o − b^(−q)).
+    pub b: f32,
+    /// μ: weight of the optimal (light) direction V_o.
+    pub mu: f32,
+    /// γ: weight of the tropism direction V_t.
+    pub gamma: f32,
+    /// θ: half-angle of the perception cone (degrees).
+    pub theta_deg: f32,
+    /// r_s: shedding threshold.
+    pub r_s: f32,
+}
+
+/// Plastic Trees parameters (Pirk et al. 2012, `000_*.txt`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlasticParams {
+    /// Phototropism weight.
+    pub phototropism: f32,
+    /// Gravitropism weight.
+    pub gravitropism: f32,
+    /// Pruning strength c_ψ (paper default 0.8).
+    pub pruning_c_psi: f32,
+    /// Base leaf-cluster translucency γ_c0 (paper default 0.5, eq. 4).
+    pub translucency_gamma_c0: f32,
+}
+
+/// Laplacian (dielectric breakdown) growth parameters (Jinasena & Sonnadara, `003_*.txt`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LaplacianParams {
+    /// η: exponent on the potential in the growth probability p ∝ φ^η.
+    pub eta: f32,
+    /// Base width W(1) of a Strahler order-1 branch (m).
+    pub base_width_m: f32,
+    /// Width growth rate per Strahler order (exponential form W(k) = W(1)·rate^(k−1)).
+    pub width_rate: f32,
+}
+
+/// Architecture parameters of the three growth models plus Plastic Trees adaptation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Architecture {
+    /// EcoMod strand model.
+    pub ecomod: EcoModParams,
+    /// Light-guided growth.
+    pub light_guided: LightGuidedParams,
+    /// Laplacian growth.
+    pub laplacian: LaplacianParams,
+    /// Plastic Trees adaptation.
+    pub plastic: PlasticParams,
+}
+
+/// Colours (sRGB 0–255) and texture names.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Appearance {
+    /// Bark colour.
+    pub bark: [u8; 3],
+    /// Foliage colour at leaf-out (spring).
+    pub leaf_spring: [u8; 3],
+    /// Foliage colour in summer.
+    pub leaf_summer: [u8; 3],
+    /// Foliage colour in autumn.
+    pub leaf_autumn: [u8; 3],
+    /// Foliage colour in winter (evergreens) — deciduous trees are bare.
+    pub leaf_winter: [u8; 3],
+    /// Leaf texture name (informative; the renderer uses flat colours).
+    pub leaf_texture: String,
+}
+
+/// Season of a snapshot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Season {
+    /// Leaf-out.
+    Spring,
+    /// Full foliage.
+    Summer,
+    /// Autumn colour.
+    Autumn,
+    /// Bare (deciduous) / winter colour.
+    Winter,
+}
+
+/// A set of species, sorted by id; `SpeciesId` indexes `species`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SpeciesLibrary {
+    /// Species in id order.
+    pub species: Vec<Species>,
+}
+
+impl SpeciesLibrary {
+    /// Looks a species up by id or scientific/common name (case-insensitive).
+    pub fn find(&self, name: &str) -> Option<SpeciesId> {
+        let n = name.to_ascii_lowercase();
+        self.species
+            .iter()
+            .position(|s| s.id == n || s.identity.scientific_name.to_ascii_lowercase() == n || s.identity.common_name.to_ascii_lowercase() == n)
+            .map(|i| i as SpeciesId)
+    }
+}
+
+impl Factor {
+    /// Suitability (0–1) of index value `x` for this factor.
+    ///
+    /// PROVISIONAL (foundation stub, to be replaced by the documented response curve):
+    /// Gaussian `exp(−½ ((x − opt)/tol)²)`; indifferent factors give 1.
+    pub fn suitability(&self, x: f32) -> f32 {
+        match self.value {
+            Indicator::Value(opt) => {
+                let z = (x - opt) / self.tolerance.max(1e-3);
+                (-0.5 * z * z).exp()
+            }
+            Indicator::Indifferent(_) => 1.0,
+        }
+    }
+}
+
+impl Species {
+    /// Combined site suitability (0–1) for Ellenberg-style indices `[L, T, K, F, R, N]`.
+    ///
+    /// PROVISIONAL: geometric mean of the per-factor suitabilities.
+    pub fn suitability(&self, indices: &[f32; 6]) -> f32 {
+        let n = &self.niche;
+        let f = [n.l, n.t, n.k, n.f, n.r, n.n];
+        let p: f32 = f.iter().zip(indices).map(|(f, &x)| f.suitability(x).max(1e-6)).product();
+        p.powf(1.0 / 6.0)
+    }
+}
