@@ -56,7 +56,7 @@ pub enum LeafType {
 }
 
 /// An Ellenberg indicator value: a number on the factor's scale or indifferent ("x").
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum Indicator {
     /// Optimum on the factor's scale (1–9; F up to 12).
@@ -66,7 +66,7 @@ pub enum Indicator {
 }
 
 /// One factor of the niche: optimum and tolerance width.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Factor {
     /// Ellenberg value (optimum) or "x".
@@ -81,7 +81,7 @@ pub type IndicatorValue = Indicator;
 
 /// Ellenberg-style niche (L light, T temperature, K continentality, F moisture, R reaction/pH,
 /// N nitrogen).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Niche {
     /// Light.
@@ -363,9 +363,9 @@ impl Factor {
     /// PROVISIONAL (foundation stub, to be replaced by the documented response curve):
     /// Gaussian `exp(−½ ((x − opt)/tol)²)`; indifferent factors give 1.
     pub fn suitability(&self, x: f32) -> f32 {
-        match self.value {
+        match &self.value {
             Indicator::Value(opt) => {
-                let z = (x - opt) / self.tolerance.max(1e-3);
+                let z = (x - *opt) / self.tolerance.max(1e-3);
                 (-0.5 * z * z).exp()
             }
             Indicator::Indifferent(_) => 1.0,
@@ -379,7 +379,7 @@ impl Species {
     /// PROVISIONAL: geometric mean of the per-factor suitabilities.
     pub fn suitability(&self, indices: &[f32; 6]) -> f32 {
         let n = &self.niche;
-        let f = [n.l, n.t, n.k, n.f, n.r, n.n];
+        let f = [&n.l, &n.t, &n.k, &n.f, &n.r, &n.n];
         let p: f32 = f.iter().zip(indices).map(|(f, &x)| f.suitability(x).max(1e-6)).product();
         p.powf(1.0 / 6.0)
     }
