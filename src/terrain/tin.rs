@@ -1,0 +1,1 @@
+//! Triangulated irregular network (placeholder, filled in below).
