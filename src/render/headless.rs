@@ -511,7 +511,7 @@ impl Renderer {
             sky_zenith: v3(scene.sky.zenith, 0.0),
             sky_horizon: v3(scene.sky.horizon, 0.0),
             wind: [wd.x, wd.y, scene.wind.directed, scene.wind.undirected],
-            params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.25 / size],
+            params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.1 / size],
         };
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         g.view_proj = g.light_view_proj;

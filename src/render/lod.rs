@@ -161,7 +161,7 @@ pub fn placeholder_chain(conifer: bool) -> LodChain {
     for &(segs, tiers, rings) in &detail {
         let mut t = TreeMesh::default();
         if conifer {
-            t.bark = trunk(0.025, 0.97, (segs / 2).max(3));
+            t.bark = trunk(0.012, 0.97, (segs / 2).max(3));
             for k in 0..tiers {
                 // tiers from z = 0.15 up; each tier a skirt cone, narrower towards the top
                 let z0 = 0.15 + 0.8 * k as f32 / tiers as f32;
@@ -171,7 +171,7 @@ pub fn placeholder_chain(conifer: bool) -> LodChain {
                 t.leaves.append(&revolve(&prof, segs));
             }
         } else {
-            t.bark = trunk(0.035, 0.55, (segs / 2).max(3));
+            t.bark = trunk(0.014, 0.55, (segs / 2).max(3));
             let (zc, rz, rr) = (0.62, 0.38, 0.33);
             let mut prof = Vec::new();
             for i in 0..=rings {
@@ -202,7 +202,7 @@ pub fn placeholder_chain(conifer: bool) -> LodChain {
     for a in [0.0f32, std::f32::consts::FRAC_PI_2] {
         if conifer {
             imp.leaves.append(&card(&[(-0.22, 0.12), (0.22, 0.12), (0.0, 1.0)], 0.4, a));
-            imp.bark.append(&card(&[(-0.02, 0.0), (0.02, 0.0), (0.02, 0.15), (-0.02, 0.15)], 0.07, a));
+            imp.bark.append(&card(&[(-0.012, 0.0), (0.012, 0.0), (0.012, 0.15), (-0.012, 0.15)], 0.07, a));
         } else {
             let pts: Vec<(f32, f32)> = (0..10)
                 .map(|i| {
@@ -211,9 +211,25 @@ pub fn placeholder_chain(conifer: bool) -> LodChain {
                 })
                 .collect();
             imp.leaves.append(&card(&pts, 0.62, a));
-            imp.bark.append(&card(&[(-0.03, 0.0), (0.03, 0.0), (0.03, 0.3), (-0.03, 0.3)], 0.15, a));
+            imp.bark.append(&card(&[(-0.014, 0.0), (0.014, 0.0), (0.014, 0.3), (-0.014, 0.3)], 0.15, a));
         }
     }
+    // a horizontal card so that the impostor also reads from above (map view)
+    let (zc, r) = if conifer { (0.45, 0.16) } else { (0.7, 0.3) };
+    let mut top = TriMesh::default();
+    top.positions.push([0.0, 0.0, zc + 0.05]);
+    top.normals.push([0.0, 0.0, 1.0]);
+    top.uvs.push([0.5, 0.5]);
+    for i in 0..8 {
+        let a = i as f32 / 8.0 * std::f32::consts::TAU;
+        top.positions.push([r * a.cos(), r * a.sin(), zc]);
+        top.normals.push(Vec3::new(a.cos(), a.sin(), 1.2).normalize().to_array());
+        top.uvs.push([a.cos(), a.sin()]);
+    }
+    for i in 0..8u32 {
+        top.indices.extend_from_slice(&[0, 1 + i, 1 + (i + 1) % 8]);
+    }
+    imp.leaves.append(&top);
     levels.push(imp);
     LodChain { levels }
 }

@@ -229,7 +229,7 @@ pub struct Sky {
 
 impl Default for Sky {
     fn default() -> Self {
-        Sky { zenith: [0.16, 0.32, 0.68], horizon: [0.62, 0.74, 0.88] }
+        Sky { zenith: [0.13, 0.28, 0.65], horizon: [0.55, 0.68, 0.85] }
     }
 }
 
@@ -307,8 +307,8 @@ pub fn demo_scene(n_trees: usize, size_m: f32, seed: u64) -> Scene {
     }
     let terrain = super::terrain::from_grid(&heights, cell, cell, &super::terrain::LandCover::default(), None).unwrap_or_default();
     let prototypes = vec![
-        Prototype { name: "broadleaf".into(), lods: super::lod::placeholder_chain(false), bark_color: [0.22, 0.18, 0.14], leaf_color: [0.12, 0.3, 0.05], stiffness: 0.6 },
-        Prototype { name: "conifer".into(), lods: super::lod::placeholder_chain(true), bark_color: [0.2, 0.12, 0.08], leaf_color: [0.04, 0.16, 0.06], stiffness: 0.8 },
+        Prototype { name: "broadleaf".into(), lods: super::lod::placeholder_chain(false), bark_color: [0.3, 0.2, 0.12], leaf_color: [0.12, 0.3, 0.05], stiffness: 0.6 },
+        Prototype { name: "conifer".into(), lods: super::lod::placeholder_chain(true), bark_color: [0.26, 0.15, 0.09], leaf_color: [0.04, 0.16, 0.06], stiffness: 0.8 },
     ];
     let mut instances = Vec::with_capacity(n_trees);
     for i in 0..n_trees as u64 {

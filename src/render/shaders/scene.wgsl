@@ -59,7 +59,8 @@ fn shade(albedo: vec3<f32>, n: vec3<f32>, world: vec3<f32>, wrap: f32, ao: f32) 
     let l = g.sun_dir.xyz;
     let ndl = max((dot(n, l) + wrap) / (1.0 + wrap), 0.0);
     let sh = shadow_factor(world, n);
-    let sky_amb = mix(g.sky_horizon.rgb * 0.5, g.sky_zenith.rgb, n.z * 0.5 + 0.5) * 0.55;
+    let amb_col = mix(vec3<f32>(0.55, 0.55, 0.5), mix(g.sky_horizon.rgb, g.sky_zenith.rgb, 0.5), 0.5);
+    let sky_amb = amb_col * (0.25 + 0.17 * n.z);
     let lit = g.sun_color.rgb * ndl * sh + sky_amb * ao;
     return albedo * lit;
 }
