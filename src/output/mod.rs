@@ -34,3 +34,5 @@ pub fn write_atomic_with(path: &Path, f: impl FnOnce(&mut std::io::BufWriter<std
 
 pub mod gltf;
 pub mod obj;
+pub mod geotiff;
+pub mod maps;
