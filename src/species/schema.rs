@@ -85,7 +85,7 @@ const LIGHT: &str = "Ellenberg light value L (1 deep shade … 9 full light) rea
 
 /// Every leaf field of a species file, in file order.
 pub const FIELDS: &[FieldSpec] = &[
-    f("id", "", Kind::Ident, "Short unique identifier; must equal the file name without `.toml`"),
+    f("id", "", Kind::Ident, "Short unique identifier (unique in a folder); by convention the file name without `.toml`"),
     f("identity.scientific_name", "", Kind::Text { non_empty: true }, "Scientific name, e.g. `Fagus sylvatica`"),
     f("identity.common_name", "", Kind::Text { non_empty: true }, "Common English name"),
     f("identity.leaf_type", "", Kind::Enum(&["broadleaf", "conifer"]), "Broad-leaved or needle-leaved"),
