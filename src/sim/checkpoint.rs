@@ -88,7 +88,7 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
     o.u64(rows.len() as u64);
     for r in rows {
         o.u64(r.year as u64);
-        for v in [r.stems_ha, r.seedlings_ha, r.basal_area_m2_ha, r.mean_height_m, r.top_height_m, r.qmd_cm] {
+        for v in [r.stems_ha, r.seedlings_ha, r.basal_area_m2_ha, r.mean_height_m, r.top_height_m, r.qmd_cm, r.stems_7cm_ha, r.qmd_7cm_cm] {
             o.f64(v);
         }
         o.u64(r.share_ba.len() as u64);
@@ -153,7 +153,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     let mut rows = Vec::with_capacity(nr);
     for _ in 0..nr {
         let year = r.u64()? as u32;
-        let mut v = [0f64; 6];
+        let mut v = [0f64; 8];
         for x in v.iter_mut() {
             *x = r.f64()?;
         }
@@ -167,7 +167,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
         for x in d.iter_mut() {
             *x = r.u64()?;
         }
-        rows.push(StandRow { year, stems_ha: v[0], seedlings_ha: v[1], basal_area_m2_ha: v[2], mean_height_m: v[3], top_height_m: v[4], qmd_cm: v[5], share_ba: a, share_stems: b, deaths: d });
+        rows.push(StandRow { year, stems_ha: v[0], seedlings_ha: v[1], basal_area_m2_ha: v[2], mean_height_m: v[3], top_height_m: v[4], qmd_cm: v[5], stems_7cm_ha: v[6], qmd_7cm_cm: v[7], share_ba: a, share_stems: b, deaths: d });
     }
     w.trees = t;
     w.year = year;

@@ -21,6 +21,10 @@ pub struct StandRow {
     pub top_height_m: f64,
     /// Quadratic mean DBH of stems ≥ 1.3 m (cm).
     pub qmd_cm: f64,
+    /// Stems per ha with DBH ≥ 7 cm (the merchantable-timber threshold of German yield tables).
+    pub stems_7cm_ha: f64,
+    /// Quadratic mean DBH of stems with DBH ≥ 7 cm (cm).
+    pub qmd_7cm_cm: f64,
     /// Share of basal area per pool species (0–1), pool order.
     pub share_ba: Vec<f64>,
     /// Share of stems (≥ 1.3 m) per pool species (0–1), pool order.
@@ -35,6 +39,7 @@ pub fn stand_row(w: &World) -> StandRow {
     let a = w.area_ha.max(1e-9);
     let np = w.pool.len();
     let (mut n, mut ns, mut ba, mut hs, mut d2) = (0usize, 0usize, 0f64, 0f64, 0f64);
+    let (mut n7, mut d27) = (0usize, 0f64);
     let mut sba = vec![0f64; np];
     let mut sn = vec![0f64; np];
     let pidx: Vec<usize> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s).unwrap_or(0)).collect();
@@ -49,6 +54,10 @@ pub fn stand_row(w: &World) -> StandRow {
         ba += b;
         hs += t.height[i] as f64;
         d2 += (t.dbh[i] as f64).powi(2);
+        if t.dbh[i] >= 7.0 {
+            n7 += 1;
+            d27 += (t.dbh[i] as f64).powi(2);
+        }
         let p = pidx[t.species[i] as usize];
         sba[p] += b;
         sn[p] += 1.0;
@@ -70,6 +79,8 @@ pub fn stand_row(w: &World) -> StandRow {
         mean_height_m: if n > 0 { hs / n as f64 } else { 0.0 },
         top_height_m: h100,
         qmd_cm: if n > 0 { (d2 / n as f64).sqrt() } else { 0.0 },
+        stems_7cm_ha: n7 as f64 / a,
+        qmd_7cm_cm: if n7 > 0 { (d27 / n7 as f64).sqrt() } else { 0.0 },
         share_ba: sba.iter().map(|v| if ba > 0.0 { v / ba } else { 0.0 }).collect(),
         share_stems: sn.iter().map(|v| if n > 0 { v / n as f64 } else { 0.0 }).collect(),
         deaths,
