@@ -27,19 +27,35 @@ pub struct Args {
 
 /// The species library used by simulations.
 pub fn library() -> anyhow::Result<SpeciesLibrary> {
-    Ok(sylva::sim::fixtures::library())
+    Ok(SpeciesLibrary::embedded()?)
 }
 
 /// Loads the site conditions a scenario names (window applied).
 pub fn load_site(sc: &Scenario) -> anyhow::Result<SiteConditions> {
     let site = match sc.terrain_spec() {
         TerrainSpec::Uniform(u) => SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, sc.climate.latitude_deg),
-        other => anyhow::bail!("terrain source {other:?} is not available in this build yet (use terrain.uniform)"),
+        TerrainSpec::Default => derive_site(&sylva::terrain::io::default_terrain()?, sc)?,
+        TerrainSpec::Path(p) => derive_site(&sylva::terrain::io::load(&p)?, sc)?,
+        TerrainSpec::Generate(g) => derive_site(&sylva::terrain::generate::generate(g.size, g.cell_m, g.relief_m as f64, g.seed)?, sc)?,
     };
     Ok(match sc.terrain.window {
         Some(w) => sylva::sim::scenario::crop_site(&site, w)?,
         None => site,
     })
+}
+
+/// Derives the living conditions of a loaded terrain with the scenario's climate, showing a
+/// spinner while the fields are computed.
+fn derive_site(t: &sylva::terrain::Terrain, sc: &Scenario) -> anyhow::Result<SiteConditions> {
+    let pb = indicatif::ProgressBar::new_spinner();
+    pb.set_prefix("conditions");
+    let cb = |stage: &str| {
+        pb.set_message(stage.to_string());
+        pb.tick();
+    };
+    let site = sylva::conditions::derive_with_progress(t, &sc.climate, &cb).with_context(|| format!("deriving living conditions of {}", t.source))?;
+    pb.finish_and_clear();
+    Ok(site)
 }
 
 /// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year).
