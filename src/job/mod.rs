@@ -2,4 +2,5 @@
 //! the site to pictures. The core modules stay independent of each other; this layer joins them.
 
 pub mod inventory;
+pub mod pictures;
 pub mod scene;
