@@ -58,8 +58,21 @@ fn derive_site(t: &sylva::terrain::Terrain, sc: &Scenario) -> anyhow::Result<Sit
     Ok(site)
 }
 
-/// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year).
-pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool) -> anyhow::Result<()> {
+/// What `sylva run` needs from a finished simulation.
+pub struct SimOutcome {
+    /// Final year.
+    pub year: u32,
+    /// Live trees at the end (all sizes).
+    pub trees_alive: usize,
+    /// Species ids of the pool, in stand-table order.
+    pub pool: Vec<String>,
+    /// Stand table rows.
+    pub rows: Vec<sylva::sim::stats::StandRow>,
+}
+
+/// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year);
+/// returns what the main job reports.
+pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool) -> anyhow::Result<SimOutcome> {
     let stop = Arc::new(AtomicBool::new(false));
     {
         let s = stop.clone();
@@ -90,7 +103,8 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
         if res.stopped { ", stopped early (resume with --resume)" } else { "" },
         out.display()
     );
-    Ok(())
+    let pool = res.world.pool.iter().map(|&s| res.world.lib.species[s as usize].id.clone()).collect();
+    Ok(SimOutcome { year: res.world.year, trees_alive: res.world.trees.len(), pool, rows: res.rows })
 }
 
 /// Runs a simulation.
@@ -98,7 +112,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let sc = Scenario::load(&a.scenario)?;
     let lib = library()?;
     let site = load_site(&sc)?;
-    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume);
+    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume).map(|_| ());
     match a.threads {
         Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build().context("thread pool")?.install(go),
         None => go(),

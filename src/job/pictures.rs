@@ -111,7 +111,7 @@ pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: 
     let mut frames = Vec::with_capacity(total);
     let mut prev = scene::instances(&inventory::read(&snaps[0].1)?, &stage.library, &stage.site, opts.season);
     let mut k = 0usize;
-    let mut emit = |stage: &mut Stage, inst: Vec<crate::render::scene::TreeInstance>, k: usize| -> Result<image::RgbaImage> {
+    let emit = |stage: &mut Stage, inst: Vec<crate::render::scene::TreeInstance>, k: usize| -> Result<image::RgbaImage> {
         let u = if total > 1 { k as f32 / (total - 1) as f32 } else { 0.0 };
         let cam = match opts.camera {
             Some(p) => stage.camera(p),
