@@ -402,3 +402,12 @@ fn cli_check_new_list_show() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("architecture.ecomod.k_c") && err.contains("architecture.ecomod.k_f"), "{err}");
 }
+
+#[test]
+fn every_shipped_species_grows_an_ecomod_tree() {
+    // The architecture parameters are usable by the structure module (EcoMod strand model).
+    for s in SpeciesLibrary::embedded().unwrap().species {
+        let (sk, _leaves) = sylva::structure::grow::ecomod::try_grow(&s.architecture.ecomod, 1, 0.0).unwrap_or_else(|e| panic!("{}: {e}", s.id));
+        let _ = sk;
+    }
+}
