@@ -238,6 +238,36 @@ impl Skeleton {
         Ok(out)
     }
 
+    /// Removes the nodes flagged in `remove` together with all their descendants, keeping the
+    /// arena order (parents before children). Returns the map old id → new id (`None` = removed).
+    /// The root is never removed.
+    pub fn prune(&mut self, remove: &[bool]) -> Vec<Option<NodeId>> {
+        let n = self.nodes.len();
+        let mut gone = vec![false; n];
+        for i in 1..n {
+            let p = self.nodes[i].parent.map(|p| p as usize).unwrap_or(0);
+            gone[i] = remove.get(i).copied().unwrap_or(false) || gone[p];
+        }
+        let mut map = vec![None; n];
+        let mut next = 0u32;
+        for i in 0..n {
+            if !gone[i] {
+                map[i] = Some(next);
+                next += 1;
+            }
+        }
+        let old = std::mem::take(&mut self.nodes);
+        for (i, mut node) in old.into_iter().enumerate() {
+            if gone[i] {
+                continue;
+            }
+            node.parent = node.parent.and_then(|p| map[p as usize]);
+            node.children = node.children.iter().filter_map(|&c| map[c as usize]).collect();
+            self.nodes.push(node);
+        }
+        map
+    }
+
     /// Segment length of node `i` (distance to its parent; 0 for the root) (m).
     pub fn segment_length(&self, i: usize) -> f32 {
         match self.nodes[i].parent {
