@@ -363,7 +363,8 @@ fn horizon_steps(max_cells: usize) -> Vec<usize> {
 ///
 /// Horizons: for each cell, the tangent of the highest elevation angle of valid terrain along
 /// 8 directions (N, NE, …, NW), marched at geometric distances (×1.25) up to
-/// `horizon_max_cells` cells and `horizon_max_m` metres (0 where no terrain is reached).
+/// `horizon_max_cells` cells and `horizon_max_m` metres; a direction that leaves the grid at
+/// once takes the mean of the other directions (0 when none reaches terrain).
 /// Insolation: Σ over sampled sun positions (see `sun_table`) of beam · max(0, n·s) where the
 /// sun's altitude exceeds the horizon (interpolated between the two nearest directions), plus
 /// diffuse · V, with sky view V = (1 + cos β)/2 · mean_k cos² H_k⁺ (Dozier & Frew 1990,
@@ -421,7 +422,15 @@ pub fn insolation_and_wind(t: &Terrain, m: &Grid<bool>, climate_lat: f64, wind_f
                         }
                     }
                 }
-                hz[k] = if best.is_finite() { best } else { 0.0 };
+                hz[k] = best;
+            }
+            // Directions that leave the grid at once (border cells) take the mean of the others.
+            let known: Vec<f64> = hz.iter().copied().filter(|v| v.is_finite()).collect();
+            let fill = if known.is_empty() { 0.0 } else { known.iter().sum::<f64>() / known.len() as f64 };
+            for v in &mut hz {
+                if !v.is_finite() {
+                    *v = fill;
+                }
             }
             let (gx, gy) = horn_gradient(&window3(z, m, c, r), dx, dy);
             let nl = (gx * gx + gy * gy + 1.0).sqrt();

@@ -4,8 +4,8 @@
 //! Greedy insertion after Garland & Heckbert (1995, "Fast polygonal approximation of terrains
 //! and height fields", CMU-CS-95-181, algorithm III): start from the four corner cells; each
 //! round finds, for every triangle, the grid point with the largest vertical error
-//! |z − plane(x, y)| inside it, and inserts all those whose error exceeds the tolerance (the
-//! batched variant; Garland & Heckbert insert one point per step). Triangles are keyed by their
+//! |z − plane(x, y)| inside it, and inserts those whose error exceeds both the tolerance and half the current
+//! worst error (a batched variant; Garland & Heckbert insert one point per step). Triangles are keyed by their
 //! vertex triple so that each is scanned once. Stops when the largest error ≤ tolerance or at
 //! the vertex limit.
 //!
@@ -21,7 +21,7 @@ use spade::{DelaunayTriangulation, HasPosition, Point2, PositionInTriangulation,
 use std::collections::HashMap;
 
 /// Default vertical tolerance (m) used by `sylva terrain info`.
-pub const DEFAULT_TOLERANCE_M: f64 = 2.0;
+pub const DEFAULT_TOLERANCE_M: f64 = 5.0;
 
 #[derive(Debug, Clone, Copy)]
 struct V {
@@ -160,6 +160,10 @@ impl Tin {
                 max_error_m = worst as f64;
                 break;
             }
+            // Greedy order in batches: only points within a factor 2 of the worst error go in
+            // this round, so large errors are fixed before small ones (closer to one-at-a-time).
+            let bar = (worst as f64 * 0.5).max(tolerance_m);
+            cand = faces.iter().filter_map(|(k, _, _)| cache.get(k)).filter(|v| v.1 as f64 > bar).map(|v| v.0).collect();
             cand.sort_unstable();
             cand.dedup();
             for i in cand.into_iter().take(max_vertices.saturating_sub(tri.num_vertices())) {
