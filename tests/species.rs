@@ -37,8 +37,22 @@ fn shipped_files_validate() {
     let lib = SpeciesLibrary::load_dir(&species_dir()).unwrap();
     assert!(lib.len() >= 15, "{} species", lib.len());
     for id in [
-        "beech", "norway_spruce", "silver_fir", "scots_pine", "european_larch", "pedunculate_oak", "sessile_oak", "sycamore", "norway_maple", "ash",
-        "silver_birch", "black_alder", "hornbeam", "small_leaved_lime", "rowan", "aspen",
+        "beech",
+        "norway_spruce",
+        "silver_fir",
+        "scots_pine",
+        "european_larch",
+        "pedunculate_oak",
+        "sessile_oak",
+        "sycamore",
+        "norway_maple",
+        "ash",
+        "silver_birch",
+        "black_alder",
+        "hornbeam",
+        "small_leaved_lime",
+        "rowan",
+        "aspen",
     ] {
         assert!(lib.get(id).is_some(), "missing {id}");
     }
@@ -51,11 +65,18 @@ fn shipped_files_validate() {
 
 #[test]
 fn embedded_equals_folder() {
-    let mut names: Vec<String> = species::species_files(&species_dir()).unwrap().iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    let mut names: Vec<String> = species::species_files(&species_dir())
+        .unwrap()
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
     names.sort();
     let mut embedded: Vec<String> = species::EMBEDDED_FILES.iter().map(|(n, _)| n.to_string()).collect();
     embedded.sort();
-    assert_eq!(names, embedded, "EMBEDDED_FILES in src/species/library.rs must list exactly the files of species/");
+    assert_eq!(
+        names, embedded,
+        "EMBEDDED_FILES in src/species/library.rs must list exactly the files of species/"
+    );
     assert_eq!(SpeciesLibrary::embedded().unwrap(), SpeciesLibrary::load_dir(&species_dir()).unwrap());
 }
 
@@ -171,7 +192,10 @@ fn beech_and_pine_carry_ecomod_published_values_exactly() {
     let lib = SpeciesLibrary::embedded().unwrap();
     let b = &lib.get("beech").unwrap().architecture.ecomod;
     assert_eq!(b.strands, 1000);
-    assert_eq!((b.trunk_length_m, b.k_d, b.phyllotaxis_deg, b.k_c, b.leaf_size_m, b.leaf_density), (5.0, 0.01, 85.0, 0.3, 0.2862, 5.0));
+    assert_eq!(
+        (b.trunk_length_m, b.k_d, b.phyllotaxis_deg, b.k_c, b.leaf_size_m, b.leaf_density),
+        (5.0, 0.01, 85.0, 0.3, 0.2862, 5.0)
+    );
     assert_eq!(b.leaf_distribution, LeafDistribution::Spiral);
     assert_eq!((b.wind_directed, b.k_f), (1.5, 1.0));
     assert_eq!(b.ks_g, vec![[0.0, 0.75], [15.0, 0.9]]);
@@ -184,7 +208,10 @@ fn beech_and_pine_carry_ecomod_published_values_exactly() {
 
     let p = &lib.get("scots_pine").unwrap().architecture.ecomod;
     assert_eq!(p.strands, 6000);
-    assert_eq!((p.trunk_length_m, p.k_d, p.phyllotaxis_deg, p.k_c, p.leaf_size_m, p.leaf_density), (5.47, 0.005, 85.0, 0.98, 0.1815, 30.0));
+    assert_eq!(
+        (p.trunk_length_m, p.k_d, p.phyllotaxis_deg, p.k_c, p.leaf_size_m, p.leaf_density),
+        (5.47, 0.005, 85.0, 0.98, 0.1815, 30.0)
+    );
     assert_eq!(p.leaf_distribution, LeafDistribution::Stacked);
     assert_eq!(p.ks_g, vec![[0.0, 0.955], [0.7749, 0.9615], [1.827, 0.8288], [4.207, 0.8269], [15.0, 0.8294]]);
     assert_eq!(p.ks_w, vec![[0.0, 1.0], [42.89, 1.005], [42.89, 0.654], [50.0, 0.6256]]);
@@ -193,7 +220,10 @@ fn beech_and_pine_carry_ecomod_published_values_exactly() {
     assert_eq!(p.max_len_g, vec![[0.0, 0.9953], [15.0, 1.0]]);
     assert_eq!(p.kl_g, vec![[0.0, 0.7109], [0.7749, 0.5385], [2.522, 1.327], [15.0, 1.0]]);
     assert_eq!(p.kl_w, vec![[0.0, 1.014], [38.58, 1.014], [45.26, 0.5877], [50.0, 0.01896]]);
-    assert_eq!(p.alpha_m_g, vec![[0.0, 0.0], [0.3875, 34.62], [1.034, -4.265], [1.55, -4.154], [2.974, -5.972], [15.0, -0.8532]]);
+    assert_eq!(
+        p.alpha_m_g,
+        vec![[0.0, 0.0], [0.3875, 34.62], [1.034, -4.265], [1.55, -4.154], [2.974, -5.972], [15.0, -0.8532]]
+    );
 
     // Yi et al. Table 1 rows and Plastic Trees defaults for every species.
     let rows: [[f32; 7]; 7] = [
@@ -234,7 +264,10 @@ fn readme_documents_every_field_of_the_schema() {
         std::fs::write(&readme_path, &expected).unwrap();
         return;
     }
-    assert_eq!(readme, expected, "species/README.md field table is out of date: run SYLVA_BLESS=1 cargo test --test species");
+    assert_eq!(
+        readme, expected,
+        "species/README.md field table is out of date: run SYLVA_BLESS=1 cargo test --test species"
+    );
     for f in schema::FIELDS {
         assert!(readme.contains(&format!("`{}`", f.path)), "{} not documented", f.path);
     }
@@ -252,7 +285,10 @@ fn out_of_range_value_names_file_line_field_value_and_range() {
     assert_eq!(p[0].value, "1.7");
     assert_eq!(p[0].expected, "a number in [0, 1]");
     let msg = p[0].to_string();
-    assert!(msg.contains("bad.toml:") && msg.contains("`architecture.ecomod.k_c` = 1.7: expected a number in [0, 1]"), "{msg}");
+    assert!(
+        msg.contains("bad.toml:") && msg.contains("`architecture.ecomod.k_c` = 1.7: expected a number in [0, 1]"),
+        "{msg}"
+    );
     // Same through from_toml_str (an Error::Invalid).
     let err = Species::from_toml_str(&beech_text().replace("k_c = 0.3\n", "k_c = 1.7\n"), "x.toml").unwrap_err();
     assert!(matches!(err, sylva::Error::Invalid { .. }), "{err}");
@@ -261,7 +297,10 @@ fn out_of_range_value_names_file_line_field_value_and_range() {
 
 #[test]
 fn ellenberg_value_out_of_scale_and_bad_indicator_string() {
-    let (_d, p) = problems_of(|t| t.replace("t = { value = 5,", "t = { value = 10,").replace("f = { value = 5,", "f = { value = 12,"));
+    let (_d, p) = problems_of(|t| {
+        t.replace("t = { value = 5,", "t = { value = 10,")
+            .replace("f = { value = 5,", "f = { value = 12,")
+    });
     assert_eq!(p.len(), 1, "{p:?}"); // F may reach 12, T may not
     assert_eq!(p[0].field, "niche.t.value");
     assert!(p[0].expected.contains("[1, 9]"));
@@ -293,7 +332,10 @@ fn unknown_field_is_reported() {
 
 #[test]
 fn missing_field_is_reported() {
-    let (_d, p) = problems_of(|t| t.replace("growth = { k = 0.0129, p = 1.211 }", "growth = { k = 0.0129 }").replace("max_dbh_cm = 150.0", ""));
+    let (_d, p) = problems_of(|t| {
+        t.replace("growth = { k = 0.0129, p = 1.211 }", "growth = { k = 0.0129 }")
+            .replace("max_dbh_cm = 150.0", "")
+    });
     assert_eq!(p.len(), 2, "{p:?}");
     let fields: Vec<&str> = p.iter().map(|p| p.field.as_str()).collect();
     assert!(fields.contains(&"life.growth.p") && fields.contains(&"life.max_dbh_cm"), "{fields:?}");
@@ -309,7 +351,10 @@ fn missing_field_is_reported() {
 
 #[test]
 fn cross_field_rules() {
-    let (_d, p) = problems_of(|t| t.replace("maturity_age_yr = 55.0", "maturity_age_yr = 700.0").replace("max_m = 200.0", "max_m = 10.0"));
+    let (_d, p) = problems_of(|t| {
+        t.replace("maturity_age_yr = 55.0", "maturity_age_yr = 700.0")
+            .replace("max_m = 200.0", "max_m = 10.0")
+    });
     let fields: Vec<&str> = p.iter().map(|p| p.field.as_str()).collect();
     assert_eq!(fields.len(), 2, "{p:?}");
     assert!(fields.contains(&"life.maturity_age_yr") && fields.contains(&"life.dispersal.max_m"));
@@ -338,7 +383,11 @@ fn duplicate_species_names_both_files() {
     let p = species::check_dir(d.path());
     assert_eq!(p.len(), 1, "{p:?}");
     assert_eq!(p[0].field, "id");
-    assert!(p[0].expected.contains("beech.toml") && p[0].expected.contains("beech_copy.toml"), "{}", p[0].expected);
+    assert!(
+        p[0].expected.contains("beech.toml") && p[0].expected.contains("beech_copy.toml"),
+        "{}",
+        p[0].expected
+    );
     let err = SpeciesLibrary::load_dir(d.path()).unwrap_err().to_string();
     assert!(err.contains("unique id"), "{err}");
 }
@@ -347,8 +396,20 @@ fn duplicate_species_names_both_files() {
 fn check_dir_reports_every_problem_of_every_file_at_once() {
     let d = tempfile::tempdir().unwrap();
     let t = beech_text();
-    write(d.path(), "a.toml", &t.replace("id = \"beech\"", "id = \"a\"").replace("k_c = 0.3\n", "k_c = 1.7\n").replace("strands = 1000", "strands = 0"));
-    write(d.path(), "b.toml", &t.replace("id = \"beech\"", "id = \"b\"").replace("leaf_type = \"broadleaf\"", "leaf_type = \"palm\"").replace("bark = [150, 150, 140]", "bark = [300, 150, 140]"));
+    write(
+        d.path(),
+        "a.toml",
+        &t.replace("id = \"beech\"", "id = \"a\"")
+            .replace("k_c = 0.3\n", "k_c = 1.7\n")
+            .replace("strands = 1000", "strands = 0"),
+    );
+    write(
+        d.path(),
+        "b.toml",
+        &t.replace("id = \"beech\"", "id = \"b\"")
+            .replace("leaf_type = \"broadleaf\"", "leaf_type = \"palm\"")
+            .replace("bark = [150, 150, 140]", "bark = [300, 150, 140]"),
+    );
     write(d.path(), "ok.toml", &t);
     let p = species::check_dir(d.path());
     assert_eq!(p.len(), 4, "{p:?}");
@@ -367,7 +428,10 @@ fn replace_id_keeps_comments() {
     let t = beech_text();
     let n = species::replace_id(&t, "my_beech", Path::new("x.toml")).unwrap();
     assert!(n.contains("id = \"my_beech\""));
-    assert_eq!(n.lines().filter(|l| l.starts_with('#')).count(), t.lines().filter(|l| l.starts_with('#')).count());
+    assert_eq!(
+        n.lines().filter(|l| l.starts_with('#')).count(),
+        t.lines().filter(|l| l.starts_with('#')).count()
+    );
     assert_eq!(Species::from_toml_str(&n, "x.toml").unwrap().id, "my_beech");
 }
 
@@ -396,9 +460,25 @@ fn cli_check_new_list_show() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("already exists"));
     assert_eq!(std::fs::read(d.path().join("red_beech.toml")).unwrap(), before);
     // check exits non-zero and prints every problem.
-    write(d.path(), "bad.toml", &beech_text().replace("id = \"beech\"", "id = \"bad\"").replace("k_c = 0.3\n", "k_c = 1.7\n").replace("k_f = 1.0", "k_f = -1.0"));
+    write(
+        d.path(),
+        "bad.toml",
+        &beech_text()
+            .replace("id = \"beech\"", "id = \"bad\"")
+            .replace("k_c = 0.3\n", "k_c = 1.7\n")
+            .replace("k_f = 1.0", "k_f = -1.0"),
+    );
     let o = run(&["species", "check", dir]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("architecture.ecomod.k_c") && err.contains("architecture.ecomod.k_f"), "{err}");
+}
+
+#[test]
+fn every_shipped_species_grows_an_ecomod_tree() {
+    // The architecture parameters are usable by the structure module (EcoMod strand model).
+    for s in SpeciesLibrary::embedded().unwrap().species {
+        let (sk, _leaves) = sylva::structure::grow::ecomod::try_grow(&s.architecture.ecomod, 1, 0.0).unwrap_or_else(|e| panic!("{}: {e}", s.id));
+        let _ = sk;
+    }
 }

@@ -27,14 +27,16 @@ pub struct Args {
 
 /// The species library used by simulations.
 pub fn library() -> anyhow::Result<SpeciesLibrary> {
-    Ok(sylva::sim::fixtures::library())
+    Ok(SpeciesLibrary::embedded()?)
 }
 
 /// Loads the site conditions a scenario names (window applied).
 pub fn load_site(sc: &Scenario) -> anyhow::Result<SiteConditions> {
     let site = match sc.terrain_spec() {
         TerrainSpec::Uniform(u) => SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, sc.climate.latitude_deg),
-        other => anyhow::bail!("terrain source {other:?} is not available in this build yet (use terrain.uniform)"),
+        TerrainSpec::Default => derive_site(&sylva::terrain::io::default_terrain()?, sc)?,
+        TerrainSpec::Path(p) => derive_site(&sylva::terrain::io::load(&p)?, sc)?,
+        TerrainSpec::Generate(g) => derive_site(&sylva::terrain::generate::generate(g.size, g.cell_m, g.relief_m as f64, g.seed)?, sc)?,
     };
     Ok(match sc.terrain.window {
         Some(w) => sylva::sim::scenario::crop_site(&site, w)?,
@@ -42,8 +44,35 @@ pub fn load_site(sc: &Scenario) -> anyhow::Result<SiteConditions> {
     })
 }
 
-/// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year).
-pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool) -> anyhow::Result<()> {
+/// Derives the living conditions of a loaded terrain with the scenario's climate, showing a
+/// spinner while the fields are computed.
+fn derive_site(t: &sylva::terrain::Terrain, sc: &Scenario) -> anyhow::Result<SiteConditions> {
+    let pb = indicatif::ProgressBar::new_spinner();
+    pb.set_prefix("conditions");
+    let cb = |stage: &str| {
+        pb.set_message(stage.to_string());
+        pb.tick();
+    };
+    let site = sylva::conditions::derive_with_progress(t, &sc.climate, &cb).with_context(|| format!("deriving living conditions of {}", t.source))?;
+    pb.finish_and_clear();
+    Ok(site)
+}
+
+/// What `sylva run` needs from a finished simulation.
+pub struct SimOutcome {
+    /// Final year.
+    pub year: u32,
+    /// Live trees at the end (all sizes).
+    pub trees_alive: usize,
+    /// Species ids of the pool, in stand-table order.
+    pub pool: Vec<String>,
+    /// Stand table rows.
+    pub rows: Vec<sylva::sim::stats::StandRow>,
+}
+
+/// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year);
+/// returns what the main job reports.
+pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool) -> anyhow::Result<SimOutcome> {
     let stop = Arc::new(AtomicBool::new(false));
     {
         let s = stop.clone();
@@ -74,7 +103,8 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
         if res.stopped { ", stopped early (resume with --resume)" } else { "" },
         out.display()
     );
-    Ok(())
+    let pool = res.world.pool.iter().map(|&s| res.world.lib.species[s as usize].id.clone()).collect();
+    Ok(SimOutcome { year: res.world.year, trees_alive: res.world.trees.len(), pool, rows: res.rows })
 }
 
 /// Runs a simulation.
@@ -82,7 +112,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let sc = Scenario::load(&a.scenario)?;
     let lib = library()?;
     let site = load_site(&sc)?;
-    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume);
+    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume).map(|_| ());
     match a.threads {
         Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build().context("thread pool")?.install(go),
         None => go(),

@@ -64,7 +64,10 @@ fn source_text(name: &str, dir: Option<&Path>) -> anyhow::Result<(String, String
     }
     let lib = SpeciesLibrary::embedded()?;
     let s = lib.get(name).with_context(|| {
-        format!("no species `{name}` (known: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", "))
+        format!(
+            "no species `{name}` (known: {})",
+            lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")
+        )
     })?;
     let text = match species::embedded_text(&s.id) {
         Some(t) => t.to_string(),
@@ -78,7 +81,10 @@ pub fn run(c: Command) -> anyhow::Result<()> {
     match c {
         Command::List { dir } => {
             let lib = library(dir.as_deref())?;
-            println!("{:<20} {:<24} {:<22} {:<9} {:>6} {:>6} {:>5}", "id", "scientific name", "common name", "type", "H_max", "age", "shade");
+            println!(
+                "{:<20} {:<24} {:<22} {:<9} {:>6} {:>6} {:>5}",
+                "id", "scientific name", "common name", "type", "H_max", "age", "shade"
+            );
             for s in &lib.species {
                 let kind = match (s.identity.leaf_type, s.identity.deciduous) {
                     (species::LeafType::Broadleaf, true) => "broad/dec",
@@ -128,7 +134,11 @@ pub fn run(c: Command) -> anyhow::Result<()> {
                 std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
             }
             sylva::output::write_atomic(&target, new_text.as_bytes())?;
-            println!("wrote {} (copy of `{from_id}`); edit it, then run `sylva species check {}`", target.display(), dir.display());
+            println!(
+                "wrote {} (copy of `{from_id}`); edit it, then run `sylva species check {}`",
+                target.display(),
+                dir.display()
+            );
             Ok(())
         }
     }

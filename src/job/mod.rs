@@ -2,4 +2,6 @@
 //! the site to pictures. The core modules stay independent of each other; this layer joins them.
 
 pub mod inventory;
+pub mod maps;
+pub mod pictures;
 pub mod scene;

@@ -75,9 +75,17 @@ impl Problem {
             None => self.file.display().to_string(),
         };
         if self.field.is_empty() || self.value.is_empty() {
-            Error::Format { path: self.file.clone(), message: self.to_string() }
+            Error::Format {
+                path: self.file.clone(),
+                message: self.to_string(),
+            }
         } else {
-            Error::Invalid { context, field: self.field.clone(), value: self.value.clone(), expected: self.expected.clone() }
+            Error::Invalid {
+                context,
+                field: self.field.clone(),
+                value: self.value.clone(),
+                expected: self.expected.clone(),
+            }
         }
     }
 }
@@ -121,7 +129,11 @@ fn path_at(table: &DeTable<'_>, pos: usize, prefix: &str) -> Option<String> {
         let kspan = k.span();
         let vspan = v.span();
         let inside = (kspan.start <= pos && pos < kspan.end.max(kspan.start + 1)) || (vspan.start <= pos && pos < vspan.end);
-        let name = if prefix.is_empty() { k.get_ref().to_string() } else { format!("{prefix}.{}", k.get_ref()) };
+        let name = if prefix.is_empty() {
+            k.get_ref().to_string()
+        } else {
+            format!("{prefix}.{}", k.get_ref())
+        };
         if let DeValue::Table(t) = v.get_ref() {
             if let Some(p) = path_at(t, pos, &name) {
                 return Some(p);
@@ -171,8 +183,7 @@ fn check_leaf(kind: &Kind, v: &toml::Value) -> std::result::Result<(), String> {
         },
         Kind::Ident => match v.as_str() {
             Some(s)
-                if s.chars().next().is_some_and(|c| c.is_ascii_lowercase())
-                    && s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_') =>
+                if s.chars().next().is_some_and(|c| c.is_ascii_lowercase()) && s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_') =>
             {
                 Ok(())
             }
@@ -182,7 +193,13 @@ fn check_leaf(kind: &Kind, v: &toml::Value) -> std::result::Result<(), String> {
             Some(a) if a.iter().all(|e| e.is_str()) => Ok(()),
             _ => bad(),
         },
-        Kind::Bool => if v.is_bool() { Ok(()) } else { bad() },
+        Kind::Bool => {
+            if v.is_bool() {
+                Ok(())
+            } else {
+                bad()
+            }
+        }
         Kind::Enum(allowed) => match v.as_str() {
             Some(s) if allowed.contains(&s) => Ok(()),
             _ => bad(),
@@ -264,7 +281,11 @@ impl Species {
         let leaves = match leaf_fields(self) {
             Ok(l) => l,
             Err(e) => {
-                out.push(Violation { field: "id".into(), value: self.id.clone(), expected: e.to_string() });
+                out.push(Violation {
+                    field: "id".into(),
+                    value: self.id.clone(),
+                    expected: e.to_string(),
+                });
                 return out;
             }
         };
@@ -272,10 +293,18 @@ impl Species {
             match schema::field(path) {
                 Some(spec) => {
                     if let Err(value) = check_leaf(&spec.kind, v) {
-                        out.push(Violation { field: path.clone(), value, expected: spec.kind.expected() });
+                        out.push(Violation {
+                            field: path.clone(),
+                            value,
+                            expected: spec.kind.expected(),
+                        });
                     }
                 }
-                None => out.push(Violation { field: path.clone(), value: fmt_value(v), expected: "a field of the schema (internal: field missing from schema::FIELDS)".into() }),
+                None => out.push(Violation {
+                    field: path.clone(),
+                    value: fmt_value(v),
+                    expected: "a field of the schema (internal: field missing from schema::FIELDS)".into(),
+                }),
             }
         }
         out.extend(self.cross_checks());
@@ -326,7 +355,10 @@ impl Species {
 
 /// Whether `path` names a table of the schema (a strict prefix of some field path).
 fn is_table_path(path: &str) -> bool {
-    path.is_empty() || schema::FIELDS.iter().any(|f| f.path.len() > path.len() && f.path.starts_with(path) && f.path.as_bytes()[path.len()] == b'.')
+    path.is_empty()
+        || schema::FIELDS
+            .iter()
+            .any(|f| f.path.len() > path.len() && f.path.starts_with(path) && f.path.as_bytes()[path.len()] == b'.')
 }
 
 fn walk_doc(t: &toml::Table, prefix: &str, out: &mut Vec<(String, toml::Value)>) {
@@ -350,16 +382,28 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
         match schema::field(path) {
             Some(spec) => {
                 if let Err(value) = check_leaf(&spec.kind, v) {
-                    out.push(Violation { field: path.clone(), value, expected: spec.kind.expected() });
+                    out.push(Violation {
+                        field: path.clone(),
+                        value,
+                        expected: spec.kind.expected(),
+                    });
                 }
             }
-            None if is_table_path(path) => out.push(Violation { field: path.clone(), value: fmt_value(v), expected: "a table (see species/README.md)".into() }),
+            None if is_table_path(path) => out.push(Violation {
+                field: path.clone(),
+                value: fmt_value(v),
+                expected: "a table (see species/README.md)".into(),
+            }),
             None => {
                 let parent = path.rsplit_once('.').map(|(p, _)| p).unwrap_or("");
                 let known: Vec<&str> = schema::FIELDS
                     .iter()
                     .filter_map(|f| {
-                        let rest = if parent.is_empty() { Some(f.path) } else { f.path.strip_prefix(parent).and_then(|r| r.strip_prefix('.')) };
+                        let rest = if parent.is_empty() {
+                            Some(f.path)
+                        } else {
+                            f.path.strip_prefix(parent).and_then(|r| r.strip_prefix('.'))
+                        };
                         rest.map(|r| r.split('.').next().unwrap_or(r))
                     })
                     .fold(Vec::new(), |mut acc, k| {
@@ -368,7 +412,15 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
                         }
                         acc
                     });
-                out.push(Violation { field: path.clone(), value: fmt_value(v), expected: format!("a known field (`{}` is an unknown field); known here: {}", path.rsplit('.').next().unwrap_or(path), known.join(", ")) });
+                out.push(Violation {
+                    field: path.clone(),
+                    value: fmt_value(v),
+                    expected: format!(
+                        "a known field (`{}` is an unknown field); known here: {}",
+                        path.rsplit('.').next().unwrap_or(path),
+                        known.join(", ")
+                    ),
+                });
             }
         }
     }
@@ -382,7 +434,11 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
         // Report a missing field only if its parent table exists or is itself missing at the top.
         let present_prefix = leaves.iter().any(|(p, _)| spec.path.starts_with(&format!("{p}.")));
         if !present_prefix {
-            out.push(Violation { field: spec.path.to_string(), value: String::new(), expected: format!("missing field: {} ({})", spec.kind.expected(), spec.doc) });
+            out.push(Violation {
+                field: spec.path.to_string(),
+                value: String::new(),
+                expected: format!("missing field: {} ({})", spec.kind.expected(), spec.doc),
+            });
         }
     }
     out
@@ -396,7 +452,13 @@ pub fn parse_text(text: &str, file: &Path) -> (Option<Species>, Vec<Problem>) {
         Ok(d) => d,
         Err(e) => {
             let line = e.span().map(|s| line_of(text, s.start));
-            problems.push(Problem { file: file.into(), line, field: String::new(), value: String::new(), expected: format!("TOML syntax error: {}", e.message().trim()) });
+            problems.push(Problem {
+                file: file.into(),
+                line,
+                field: String::new(),
+                value: String::new(),
+                expected: format!("TOML syntax error: {}", e.message().trim()),
+            });
             return (None, problems);
         }
     };
@@ -407,13 +469,25 @@ pub fn parse_text(text: &str, file: &Path) -> (Option<Species>, Vec<Problem>) {
             let parent = v.field.rsplit_once('.').map(|(p, _)| p)?;
             span_of(doc.get_ref(), parent)
         });
-        Problem { file: file.into(), line: line.map(|s| line_of(text, s.start)), field: v.field, value: v.value, expected: v.expected }
+        Problem {
+            file: file.into(),
+            line: line.map(|s| line_of(text, s.start)),
+            field: v.field,
+            value: v.value,
+            expected: v.expected,
+        }
     };
     let table: toml::Table = match toml::from_str(text) {
         Ok(t) => t,
         Err(e) => {
             let line = e.span().map(|s| line_of(text, s.start));
-            problems.push(Problem { file: file.into(), line, field: String::new(), value: String::new(), expected: format!("TOML error: {}", e.message().trim()) });
+            problems.push(Problem {
+                file: file.into(),
+                line,
+                field: String::new(),
+                value: String::new(),
+                expected: format!("TOML error: {}", e.message().trim()),
+            });
             return (None, problems);
         }
     };
@@ -429,7 +503,13 @@ pub fn parse_text(text: &str, file: &Path) -> (Option<Species>, Vec<Problem>) {
             let span = e.span();
             let line = span.as_ref().map(|s| line_of(text, s.start));
             let field = span.and_then(|s| path_at(doc.get_ref(), s.start, "")).unwrap_or_default();
-            problems.push(Problem { file: file.into(), line, field, value: String::new(), expected: e.message().trim().to_string() });
+            problems.push(Problem {
+                file: file.into(),
+                line,
+                field,
+                value: String::new(),
+                expected: e.message().trim().to_string(),
+            });
             return (None, problems);
         }
     };
@@ -515,7 +595,13 @@ fn scan<'a>(files: impl Iterator<Item = (PathBuf, std::borrow::Cow<'a, [u8]>)>) 
 pub fn check_dir(dir: &Path) -> Vec<Problem> {
     match read_dir_files(dir) {
         Ok(files) => scan(files.into_iter()).1,
-        Err(e) => vec![Problem { file: dir.into(), line: None, field: String::new(), value: String::new(), expected: e.to_string() }],
+        Err(e) => vec![Problem {
+            file: dir.into(),
+            line: None,
+            field: String::new(),
+            value: String::new(),
+            expected: e.to_string(),
+        }],
     }
 }
 
@@ -530,7 +616,9 @@ fn read_dir_files(dir: &Path) -> Result<Vec<(PathBuf, std::borrow::Cow<'static, 
 
 fn into_library(mut all: Vec<(PathBuf, Species)>) -> SpeciesLibrary {
     all.sort_by(|a, b| a.1.id.cmp(&b.1.id));
-    SpeciesLibrary { species: all.into_iter().map(|(_, s)| s).collect() }
+    SpeciesLibrary {
+        species: all.into_iter().map(|(_, s)| s).collect(),
+    }
 }
 
 impl SpeciesLibrary {
@@ -556,7 +644,9 @@ impl SpeciesLibrary {
     /// # Errors
     /// Only if a shipped file were invalid (a test guarantees they are not).
     pub fn embedded() -> Result<SpeciesLibrary> {
-        let files = EMBEDDED_FILES.iter().map(|(n, t)| (Path::new("species").join(n), std::borrow::Cow::Borrowed(t.as_bytes())));
+        let files = EMBEDDED_FILES
+            .iter()
+            .map(|(n, t)| (Path::new("species").join(n), std::borrow::Cow::Borrowed(t.as_bytes())));
         let (all, problems) = scan(files);
         if !problems.is_empty() {
             return Err(problems_to_error(&problems));
@@ -593,7 +683,11 @@ pub fn embedded_text(id: &str) -> Option<&'static str> {
 /// `Error::Format` if the text is not TOML or has no top-level `id` string.
 pub fn replace_id(text: &str, new_id: &str, file: &Path) -> Result<String> {
     let doc = DeTable::parse(text).map_err(|e| Error::format(file, format!("TOML syntax error: {}", e.message().trim())))?;
-    let (_, v) = doc.get_ref().iter().find(|(k, _)| k.get_ref().as_ref() == "id").ok_or_else(|| Error::format(file, "no top-level `id` field"))?;
+    let (_, v) = doc
+        .get_ref()
+        .iter()
+        .find(|(k, _)| k.get_ref().as_ref() == "id")
+        .ok_or_else(|| Error::format(file, "no top-level `id` field"))?;
     let span = v.span();
     if !matches!(v.get_ref(), DeValue::String(_)) || span.end > text.len() {
         return Err(Error::format(file, "top-level `id` is not a string"));
