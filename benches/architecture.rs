@@ -1,2 +1,77 @@
-//! Benchmark (to be written): prints its figures.
-fn main() {}
+//! Tree architecture benchmark: time per node of each growth model and of meshing, and the
+//! 10,000-node full-detail meshing figure (target ≤ 20 ms on one core). Plain program; run with
+//! `cargo bench --bench architecture`. Single-threaded throughout. Medians over repeated runs.
+use std::time::Instant;
+use sylva::species::EcoModParams;
+use sylva::structure::grow::{ecomod, laplacian, light_guided};
+use sylva::structure::mesh::{self, LodOptions};
+use sylva::structure::params;
+
+fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..runs)
+        .map(|_| {
+            let s = Instant::now();
+            f();
+            s.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    t.sort_by(|a, b| a.total_cmp(b));
+    t[t.len() / 2]
+}
+
+fn main() {
+    println!("# architecture benchmark (one core, medians)");
+    // EcoMod
+    for (name, p) in [("beech S=1000", EcoModParams::beech_paper()), ("pine S=6000", EcoModParams::pine_paper())] {
+        let n = ecomod::grow(&p, 1, 0.0).0.len();
+        let ms = median_ms(21, || {
+            std::hint::black_box(ecomod::grow(&p, 1, 0.0));
+        });
+        println!("ecomod {name}: {n} nodes, {ms:.2} ms, {:.1} ns/node", ms * 1e6 / n as f64);
+    }
+    // 10,000-node tree: EcoMod beech with S = 5000 (2S = 10,000 nodes)
+    let mut p = EcoModParams::beech_paper();
+    p.strands = 5000;
+    let (sk, lv) = ecomod::grow(&p, 1, 0.0);
+    let o = LodOptions::default();
+    let full = mesh::full_mesh(&sk, &lv, &o);
+    let bark_ms = median_ms(31, || {
+        std::hint::black_box(mesh::branch_mesh(&sk, &o, None));
+    });
+    let full_ms = median_ms(31, || {
+        std::hint::black_box(mesh::full_mesh(&sk, &lv, &o));
+    });
+    let chain_ms = median_ms(15, || {
+        std::hint::black_box(mesh::lod_chain(&sk, &lv, &o));
+    });
+    println!(
+        "mesh 10,000-node tree ({} nodes, {} leaves): full detail LOD0 {:.2} ms ({} triangles; bark only {:.2} ms), {:.1} ns/node; whole LOD chain {:.2} ms",
+        sk.len(),
+        lv.len(),
+        full_ms,
+        full.triangle_count(),
+        bark_ms,
+        full_ms * 1e6 / sk.len() as f64,
+        chain_ms
+    );
+    // light-guided
+    let lp = params::light_guided_paper();
+    let lo = light_guided::LightOptions::default();
+    let mut nodes = 0;
+    let ms = median_ms(5, || {
+        nodes = light_guided::grow(&lp, &lo, &[], 1, 12).unwrap().len();
+    });
+    println!("light-guided 12 cycles: {nodes} nodes, {ms:.1} ms, {:.1} µs/node", ms * 1e3 / nodes as f64);
+    let wall = [sylva::structure::grow::space::Obstacle::Wall { x: 1.5 }];
+    let ms = median_ms(5, || {
+        nodes = light_guided::grow(&lp, &lo, &wall, 1, 12).unwrap().len();
+    });
+    println!("light-guided 12 cycles beside a wall: {nodes} nodes, {ms:.1} ms, {:.1} µs/node", ms * 1e3 / nodes as f64);
+    // Laplacian
+    let ap = params::laplacian_paper();
+    let ao = laplacian::LaplacianOptions::default();
+    let ms = median_ms(5, || {
+        nodes = laplacian::grow(&ap, &ao, &[], 1, 500).unwrap().skeleton.len();
+    });
+    println!("laplacian 500 branches (24x24x28 voxels): {nodes} nodes, {ms:.1} ms, {:.1} µs/node", ms * 1e3 / nodes as f64);
+}

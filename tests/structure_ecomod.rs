@@ -79,3 +79,22 @@ fn invalid_parameters_are_reported() {
     let e = ecomod::try_grow(&p, 1, 0.0).unwrap_err().to_string();
     assert!(e.contains("k_d"), "{e}");
 }
+
+#[test]
+fn species_files_carry_the_paper_parameters() {
+    let lib = sylva::species::SpeciesLibrary::embedded().unwrap();
+    let beech = &lib.species[lib.find("beech").unwrap() as usize];
+    assert_eq!(beech.architecture.ecomod, EcoModParams::beech_paper());
+    let pine = &lib.species[lib.find("scots_pine").unwrap() as usize];
+    assert_eq!(pine.architecture.ecomod, EcoModParams::pine_paper());
+    // and they build: beech S = 1000, pine S = 6000
+    assert_eq!(ecomod::grow(&beech.architecture.ecomod, 1, 0.0).0.len(), 2000);
+    assert_eq!(ecomod::grow(&pine.architecture.ecomod, 1, 0.0).0.len(), 12000);
+    // every species of the library gives a non-empty LOD chain normalised to 1 m
+    for s in &lib.species {
+        let chain = sylva::structure::species_lod_chain(s, 1);
+        assert_eq!(chain.levels.len(), 4, "{}", s.id);
+        let (lo, hi) = chain.levels[0].bark.bounds().unwrap();
+        assert!(hi[2] <= 1.05 && lo[2] >= -0.5, "{}: {lo:?} {hi:?}", s.id);
+    }
+}

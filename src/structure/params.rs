@@ -107,11 +107,12 @@ pub fn light_guided_paper() -> LightGuidedParams {
     LightGuidedParams { lambda: 0.52, k: 0.5, b: 2.0, mu: 1.5, gamma: 0.5, theta_deg: 45.0, r_s: 0.35 }
 }
 
-/// Laplacian defaults: Jinasena & Sonnadara `003_*.txt` Table I: c = 0.67 (stored as
-/// `base_width_m`, the W(k) scale), β = 1.50 (`width_rate`); η = 1 (the DBM exponent; the paper
-/// gives no value, 1 is the classical dielectric-breakdown choice).
+/// Laplacian defaults: Jinasena & Sonnadara `003_*.txt` Table I: β = 1.50 (`width_rate`); the
+/// paper's c = 0.67 is unitless and cancels, because diameters are W(k)/W(1) ×
+/// `base_width_m` = 0.02 m (our choice: a 2 cm twig); η = 1 (the DBM exponent; the paper gives
+/// no value, 1 is the classical dielectric-breakdown choice).
 pub fn laplacian_paper() -> LaplacianParams {
-    LaplacianParams { eta: 1.0, base_width_m: 0.67, width_rate: 1.5 }
+    LaplacianParams { eta: 1.0, base_width_m: 0.02, width_rate: 1.5 }
 }
 
 /// Polynomial-form exponent α of W(k) = c·k^α (`003_*.txt` Table I).
