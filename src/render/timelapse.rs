@@ -164,3 +164,61 @@ pub fn write_mp4(dir: &Path, fps: f32, out: &Path) -> Result<bool> {
     }
     Ok(true)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tree(id: u64, h: f32) -> TreeInstance {
+        TreeInstance::new(id, [id as f32, 0.0, 0.0], h, h * 0.3, 0, [0.1, 0.3, 0.05])
+    }
+
+    #[test]
+    fn growing_recruit_and_dying_trees() {
+        let a = vec![tree(1, 10.0), tree(2, 20.0)];
+        let b = vec![tree(3, 4.0), tree(1, 14.0)];
+        let m = interpolate(&a, &b, 0.25);
+        assert_eq!(m.iter().map(|t| t.id).collect::<Vec<_>>(), vec![1, 2, 3]);
+        assert!((m[0].height - 11.0).abs() < 1e-5);
+        assert_eq!(m[0].opacity, 1.0);
+        // dying tree fades out without growing
+        assert_eq!(m[1].height, 20.0);
+        assert!((m[1].opacity - 0.75).abs() < 1e-6);
+        // recruit scales and fades in
+        assert!((m[2].opacity - 0.25).abs() < 1e-6);
+        assert!((m[2].height - 4.0 * (0.3 + 0.7 * 0.25)).abs() < 1e-5);
+        // end points
+        let end = interpolate(&a, &b, 1.0);
+        assert_eq!(end[1].opacity, 0.0);
+        assert_eq!(end[0].height, 14.0);
+        assert_eq!(end[2].height, 4.0);
+        assert_eq!(interpolate(&a, &b, 0.0)[0].height, 10.0);
+        // order independence
+        let mut b2 = b.clone();
+        b2.reverse();
+        assert_eq!(interpolate(&a, &b2, 0.4), interpolate(&a, &b, 0.4));
+    }
+
+    #[test]
+    fn gif_and_png_frames_are_written_and_decodable() {
+        let dir = tempfile::tempdir().unwrap();
+        let frames: Vec<image::RgbaImage> = (0..3).map(|i| image::RgbaImage::from_pixel(8, 6, image::Rgba([i * 80, 100, 50, 255]))).collect();
+        let gif = dir.path().join("a.gif");
+        write_gif(&gif, &frames, 12.0).unwrap();
+        let dec = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(std::fs::File::open(&gif).unwrap())).unwrap();
+        use image::AnimationDecoder;
+        let got = dec.into_frames().collect_frames().unwrap();
+        assert_eq!(got.len(), 3);
+        assert_eq!(got[0].buffer().dimensions(), (8, 6));
+        let paths = write_png_frames(&dir.path().join("frames"), &frames).unwrap();
+        assert_eq!(paths.len(), 3);
+        assert_eq!(image::open(&paths[2]).unwrap().to_rgba8().get_pixel(0, 0).0, [160, 100, 50, 255]);
+        assert!(write_gif(&gif, &[], 12.0).is_err());
+        assert!(write_gif(&gif, &frames, 0.0).is_err());
+        let mut seen = Vec::new();
+        let mut m = ProgressMeter::new(2, |p: Progress| seen.push(p.done));
+        m.tick();
+        m.tick();
+        assert_eq!(seen, vec![1, 2]);
+    }
+}
