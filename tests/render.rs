@@ -294,5 +294,33 @@ fn bad_inputs_are_errors_not_panics() {
     });
 }
 
+#[test]
+fn timelapse_grows_trees_and_writes_gif() {
+    use sylva::render::timelapse::{render_sequence, write_gif};
+    let base = demo_scene(40, 200.0, 9);
+    let young: Vec<TreeInstance> = base.instances.iter().map(|t| TreeInstance { height: t.height * 0.4, crown_radius: t.crown_radius * 0.4, ..*t }).collect();
+    let old = base.instances.clone();
+    let terrain = base.terrain.clone();
+    with_renderer(|r| {
+        let mut seen = Vec::new();
+        let frames = render_sequence(r, &base, &[young.clone(), old.clone()], 3, 12.0, |u| Camera::orbit(&terrain, u * 0.1), (64, 48), |p| seen.push(p.done)).unwrap();
+        assert_eq!(frames.len(), 4);
+        assert_eq!(seen, vec![1, 2, 3, 4]);
+        // trees grow: more tree-coloured pixels above the terrain in the last frame than the first
+        let mut empty = base.clone();
+        empty.instances.clear();
+        let mut covered = |img: &image::RgbaImage, u: f32| {
+            let bare = r.render(&empty, &Camera::orbit(&terrain, u * 0.1), 64, 48).unwrap();
+            img.pixels().zip(bare.pixels()).filter(|(p, q)| p.0.iter().zip(q.0.iter()).any(|(a, b)| (*a as i32 - *b as i32).abs() > 30)).count()
+        };
+        let (first, last) = (covered(&frames[0], 0.0), covered(&frames[3], 1.0));
+        assert!(last as f32 > 1.5 * first as f32, "tree pixels {first} -> {last}");
+        let gif = out_dir().join("timelapse.gif");
+        frames[3].save(out_dir().join("timelapse_last.png")).unwrap();
+        write_gif(&gif, &frames, 12.0).unwrap();
+        assert!(std::fs::metadata(&gif).unwrap().len() > 100);
+    });
+}
+
 #[allow(dead_code)]
 fn unused(_: Prototype) {}

@@ -222,3 +222,46 @@ mod tests {
         assert_eq!(seen, vec![1, 2]);
     }
 }
+
+/// Renders a timelapse through a series of snapshots: `steps_per_snapshot` frames between each
+/// consecutive pair (growth interpolated with [`interpolate`]), plus the last snapshot, so
+/// `(snapshots − 1) · steps + 1` frames (one frame for a single snapshot). `camera(u)` gives
+/// the camera at film position `u` in 0..1 (e.g. [`super::camera::Camera::orbit`]); the wind
+/// time advances by `1 / fps` per frame. `progress` is called after every frame.
+///
+/// # Errors
+/// [`Error::Invalid`] when there is no snapshot or `steps_per_snapshot` is 0; rendering errors
+/// from [`super::headless::Renderer::render`].
+#[allow(clippy::too_many_arguments)]
+pub fn render_sequence(
+    renderer: &mut super::headless::Renderer,
+    base: &super::scene::Scene,
+    snapshots: &[Vec<TreeInstance>],
+    steps_per_snapshot: usize,
+    fps: f32,
+    camera: impl Fn(f32) -> super::camera::Camera,
+    size: (u32, u32),
+    progress: impl FnMut(Progress),
+) -> Result<Vec<image::RgbaImage>> {
+    if snapshots.is_empty() || steps_per_snapshot == 0 {
+        return Err(Error::Invalid {
+            context: "render::timelapse::render_sequence".into(),
+            field: if snapshots.is_empty() { "snapshots".into() } else { "steps_per_snapshot".into() },
+            value: "0".into(),
+            expected: "at least 1".into(),
+        });
+    }
+    let total = (snapshots.len() - 1) * steps_per_snapshot + 1;
+    let mut meter = ProgressMeter::new(total, progress);
+    let mut scene = base.clone();
+    let mut frames = Vec::with_capacity(total);
+    for k in 0..total {
+        let (i, j) = (k / steps_per_snapshot, k % steps_per_snapshot);
+        scene.instances = if i + 1 >= snapshots.len() { snapshots[snapshots.len() - 1].clone() } else { interpolate(&snapshots[i], &snapshots[i + 1], j as f32 / steps_per_snapshot as f32) };
+        scene.wind.time_s = base.wind.time_s + k as f32 / fps.max(1e-3);
+        let u = if total > 1 { k as f32 / (total - 1) as f32 } else { 0.0 };
+        frames.push(renderer.render(&scene, &camera(u), size.0, size.1)?);
+        meter.tick();
+    }
+    Ok(frames)
+}
