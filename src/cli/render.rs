@@ -1,25 +1,122 @@
-//! `sylva render` and `sylva timelapse`.
+//! `sylva render` and `sylva timelapse`: pictures of a run directory.
+
+use anyhow::Context;
+use std::path::{Path, PathBuf};
+use sylva::job::pictures::{self, Stage, TimelapseOptions};
+use sylva::render::camera::CameraPreset;
+use sylva::sim::Scenario;
+use sylva::species::Season;
+
+/// Parses `WIDTHxHEIGHT`.
+pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("size `{s}`: expected WIDTHxHEIGHT, e.g. 1920x1080"))?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("size `{s}`: width is not a whole number"))?;
+    let h: u32 = h.trim().parse().map_err(|_| format!("size `{s}`: height is not a whole number"))?;
+    if !(16..=8192).contains(&w) || !(16..=8192).contains(&h) {
+        return Err(format!("size `{s}`: width and height must be 16–8192 pixels"));
+    }
+    Ok((w, h))
+}
+
+fn parse_camera(s: &str) -> Result<CameraPreset, String> {
+    s.parse::<CameraPreset>().map_err(|_| format!("camera `{s}`: expected overview, oblique, ground or map"))
+}
+
+fn parse_season(s: &str) -> Result<Season, String> {
+    match s.to_ascii_lowercase().as_str() {
+        "spring" => Ok(Season::Spring),
+        "summer" => Ok(Season::Summer),
+        "autumn" | "fall" => Ok(Season::Autumn),
+        "winter" => Ok(Season::Winter),
+        _ => Err(format!("season `{s}`: expected spring, summer, autumn or winter")),
+    }
+}
 
 /// Arguments of `sylva render`.
 #[derive(clap::Args)]
 pub struct RenderArgs {
     /// Run directory written by `sylva run` / `sylva simulate`.
-    pub run_dir: std::path::PathBuf,
+    pub run_dir: PathBuf,
+    /// Snapshot year (default: the last one).
+    #[arg(long)]
+    pub year: Option<u32>,
+    /// Camera preset: overview, oblique, ground, map.
+    #[arg(long, default_value = "oblique", value_parser = parse_camera)]
+    pub camera: CameraPreset,
+    /// Season of the foliage: spring, summer, autumn, winter.
+    #[arg(long, default_value = "summer", value_parser = parse_season)]
+    pub season: Season,
+    /// Image size WIDTHxHEIGHT.
+    #[arg(long, default_value = "1920x1080", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Output PNG.
+    #[arg(long, default_value = "frame.png")]
+    pub out: PathBuf,
 }
 
 /// Arguments of `sylva timelapse`.
 #[derive(clap::Args)]
 pub struct TimelapseArgs {
     /// Run directory written by `sylva run` / `sylva simulate`.
-    pub run_dir: std::path::PathBuf,
+    pub run_dir: PathBuf,
+    /// Camera preset (overview, oblique, ground, map); a slow orbit when omitted.
+    #[arg(long, value_parser = parse_camera)]
+    pub camera: Option<CameraPreset>,
+    /// Frames per second.
+    #[arg(long, default_value_t = 12.0)]
+    pub fps: f32,
+    /// Interpolated frames between consecutive snapshots.
+    #[arg(long, default_value_t = 2)]
+    pub frames_between: u32,
+    /// Frame size WIDTHxHEIGHT.
+    #[arg(long, default_value = "960x540", value_parser = parse_size)]
+    pub size: (u32, u32),
+    /// Season of the foliage.
+    #[arg(long, default_value = "summer", value_parser = parse_season)]
+    pub season: Season,
+    /// Output GIF (frames go to a `frames/` folder beside it; MP4 too when ffmpeg is found).
+    #[arg(long, default_value = "forest.gif")]
+    pub out: PathBuf,
+}
+
+/// Builds the render stage of a run directory from its `scenario.toml`.
+pub fn stage_for(run_dir: &Path) -> anyhow::Result<Stage> {
+    let sc_path = run_dir.join("scenario.toml");
+    let sc = Scenario::load(&sc_path).with_context(|| format!("{} is not a Sylva run directory", run_dir.display()))?;
+    let site = super::simulate::load_site(&sc)?;
+    let lib = super::simulate::library()?;
+    Ok(Stage::new(site, lib, sc.climate.sea_level_m)?)
 }
 
 /// Renders a still.
-pub fn render(_a: RenderArgs) -> anyhow::Result<()> {
-    anyhow::bail!("not implemented yet")
+pub fn render(a: RenderArgs) -> anyhow::Result<()> {
+    let mut stage = stage_for(&a.run_dir)?;
+    let year = match a.year {
+        Some(y) => y,
+        None => sylva::job::inventory::snapshots(&a.run_dir)?.iter().map(|s| s.0).max().context("the run directory has no snapshots")?,
+    };
+    let rows = pictures::snapshot_rows(&a.run_dir, year)?;
+    let cam = stage.camera(a.camera);
+    let img = stage.render_rows(&rows, a.season, &cam, a.size.0, a.size.1)?;
+    sylva::render::timelapse::write_png(&a.out, &img)?;
+    let st = stage.renderer.last_stats();
+    eprintln!("year {year}: {} trees drawn, {} triangles → {}", st.instances_drawn, st.triangles, a.out.display());
+    Ok(())
 }
 
 /// Renders a timelapse.
-pub fn timelapse(_a: TimelapseArgs) -> anyhow::Result<()> {
-    anyhow::bail!("not implemented yet")
+pub fn timelapse(a: TimelapseArgs) -> anyhow::Result<()> {
+    let mut stage = stage_for(&a.run_dir)?;
+    let frames_dir = a.out.parent().unwrap_or(Path::new(".")).join("frames");
+    let opts = TimelapseOptions { width: a.size.0, height: a.size.1, fps: a.fps, frames_between: a.frames_between, camera: a.camera, season: a.season };
+    let pb = super::progress(1, "timelapse");
+    let t0 = std::time::Instant::now();
+    let (n, mp4) = pictures::timelapse(&mut stage, &a.run_dir, &frames_dir, &a.out, &opts, &mut |done, total| {
+        pb.set_length(total as u64);
+        pb.set_position(done as u64);
+        pb.set_message(format!("{:.1} frames/s", done as f64 / t0.elapsed().as_secs_f64().max(1e-3)));
+    })?;
+    pb.finish();
+    eprintln!("{n} frames → {}{}", a.out.display(), if mp4 { " (+ MP4)" } else { "" });
+    Ok(())
 }

@@ -1,13 +1,120 @@
-//! `sylva simulate SCENARIO`.
+//! `sylva simulate SCENARIO [--out DIR] [--resume] [--threads N]`.
+
+use anyhow::Context;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use sylva::conditions::SiteConditions;
+use sylva::sim::run::{run_scenario, Progress, RunOptions};
+use sylva::sim::{Scenario, TerrainSpec};
+use sylva::species::SpeciesLibrary;
 
 /// Arguments of `sylva simulate`.
 #[derive(clap::Args)]
 pub struct Args {
     /// Scenario file (TOML).
-    pub scenario: std::path::PathBuf,
+    pub scenario: PathBuf,
+    /// Run directory.
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    /// Continue an interrupted run from OUT/checkpoint.bin.
+    #[arg(long)]
+    pub resume: bool,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+}
+
+/// The species library used by simulations.
+pub fn library() -> anyhow::Result<SpeciesLibrary> {
+    Ok(SpeciesLibrary::embedded()?)
+}
+
+/// Loads the site conditions a scenario names (window applied).
+pub fn load_site(sc: &Scenario) -> anyhow::Result<SiteConditions> {
+    let site = match sc.terrain_spec() {
+        TerrainSpec::Uniform(u) => SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, sc.climate.latitude_deg),
+        TerrainSpec::Default => derive_site(&sylva::terrain::io::default_terrain()?, sc)?,
+        TerrainSpec::Path(p) => derive_site(&sylva::terrain::io::load(&p)?, sc)?,
+        TerrainSpec::Generate(g) => derive_site(&sylva::terrain::generate::generate(g.size, g.cell_m, g.relief_m as f64, g.seed)?, sc)?,
+    };
+    Ok(match sc.terrain.window {
+        Some(w) => sylva::sim::scenario::crop_site(&site, w)?,
+        None => site,
+    })
+}
+
+/// Derives the living conditions of a loaded terrain with the scenario's climate, showing a
+/// spinner while the fields are computed.
+fn derive_site(t: &sylva::terrain::Terrain, sc: &Scenario) -> anyhow::Result<SiteConditions> {
+    let pb = indicatif::ProgressBar::new_spinner();
+    pb.set_prefix("conditions");
+    let cb = |stage: &str| {
+        pb.set_message(stage.to_string());
+        pb.tick();
+    };
+    let site = sylva::conditions::derive_with_progress(t, &sc.climate, &cb).with_context(|| format!("deriving living conditions of {}", t.source))?;
+    pb.finish_and_clear();
+    Ok(site)
+}
+
+/// What `sylva run` needs from a finished simulation.
+pub struct SimOutcome {
+    /// Final year.
+    pub year: u32,
+    /// Live trees at the end (all sizes).
+    pub trees_alive: usize,
+    /// Species ids of the pool, in stand-table order.
+    pub pool: Vec<String>,
+    /// Stand table rows.
+    pub rows: Vec<sylva::sim::stats::StandRow>,
+}
+
+/// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year);
+/// returns what the main job reports.
+pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool) -> anyhow::Result<SimOutcome> {
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let s = stop.clone();
+        let _ = ctrlc::set_handler(move || {
+            s.store(true, Ordering::SeqCst);
+        });
+    }
+    let pb = super::progress(sc.years as u64, "simulate");
+    let mut cb = |p: &Progress| {
+        pb.set_position(p.year as u64);
+        pb.set_message(format!("year {} · {} trees · {:.0} trees/s", p.year, p.trees, p.trees_per_s));
+    };
+    let mut opts = RunOptions::new(&out);
+    opts.resume = resume;
+    opts.stop = Some(stop);
+    opts.progress = Some(&mut cb);
+    let res = run_scenario(sc, site, lib, opts).with_context(|| format!("simulating {}", sc.name))?;
+    pb.finish();
+    let last = res.rows.last();
+    eprintln!(
+        "{} year {}: {} trees, basal area {:.1} m²/ha, top height {:.1} m ({:.1} s){} → {}",
+        sc.name,
+        res.world.year,
+        res.world.trees.len(),
+        last.map_or(0.0, |r| r.basal_area_m2_ha),
+        last.map_or(0.0, |r| r.top_height_m),
+        res.seconds,
+        if res.stopped { ", stopped early (resume with --resume)" } else { "" },
+        out.display()
+    );
+    let pool = res.world.pool.iter().map(|&s| res.world.lib.species[s as usize].id.clone()).collect();
+    Ok(SimOutcome { year: res.world.year, trees_alive: res.world.trees.len(), pool, rows: res.rows })
 }
 
 /// Runs a simulation.
-pub fn run(_a: Args) -> anyhow::Result<()> {
-    anyhow::bail!("not implemented yet")
+pub fn run(a: Args) -> anyhow::Result<()> {
+    let sc = Scenario::load(&a.scenario)?;
+    let lib = library()?;
+    let site = load_site(&sc)?;
+    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume).map(|_| ());
+    match a.threads {
+        Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build().context("thread pool")?.install(go),
+        None => go(),
+    }
 }

@@ -1,6 +1,10 @@
 //! Writers for Sylva's artefacts: one module per format. Every writer writes to a temporary file
 //! in the destination folder and renames it into place, so a reader never sees half a file.
 
+pub mod inventory;
+pub mod plot;
+pub mod stand_table;
+
 use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::Path;
@@ -31,3 +35,8 @@ pub fn write_atomic_with(path: &Path, f: impl FnOnce(&mut std::io::BufWriter<std
     }
     Ok(())
 }
+
+pub mod gltf;
+pub mod obj;
+pub mod geotiff;
+pub mod maps;

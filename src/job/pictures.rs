@@ -1,0 +1,141 @@
+//! Stills and timelapses of a run directory: the glue between inventory snapshots
+//! ([`super::inventory`]), scene building ([`super::scene`]) and the headless renderer.
+
+use super::inventory::{self, InventoryRow};
+use super::scene;
+use crate::conditions::SiteConditions;
+use crate::render::camera::{Camera, CameraPreset};
+use crate::render::headless::Renderer;
+use crate::render::scene::{Prototype, TerrainMesh};
+use crate::render::timelapse;
+use crate::species::{Season, SpeciesLibrary};
+use crate::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// Everything needed to draw any snapshot of one run: built once, reused for every frame.
+pub struct Stage {
+    /// Site conditions the run used.
+    pub site: SiteConditions,
+    /// Species library (indexes the prototypes).
+    pub library: SpeciesLibrary,
+    /// Tree models, one per library species.
+    pub prototypes: Vec<Prototype>,
+    /// Terrain mesh.
+    pub terrain: TerrainMesh,
+    /// Sea level (m) for the water plane, when any cell is water.
+    pub sea_level: Option<f32>,
+    /// The renderer (wgpu device on a GPU or the software adapter).
+    pub renderer: Renderer,
+}
+
+impl Stage {
+    /// Builds the stage: terrain mesh with cells ≤ 10 m, one EcoMod prototype per species.
+    ///
+    /// # Errors
+    /// [`Error::Render`] when no wgpu adapter is found.
+    pub fn new(site: SiteConditions, library: SpeciesLibrary, sea_level_m: f32) -> Result<Self> {
+        let terrain = scene::terrain_mesh(&site, 10.0, sea_level_m)?;
+        let prototypes = scene::prototypes(&library);
+        let renderer = Renderer::new()?;
+        let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
+        Ok(Stage { site, library, prototypes, terrain, sea_level: has_water.then_some(sea_level_m), renderer })
+    }
+
+    /// Renders `rows` (an inventory snapshot) in `season` from `camera` at `width × height`.
+    pub fn render_rows(&mut self, rows: &[InventoryRow], season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
+        let inst = scene::instances(rows, &self.library, &self.site, season);
+        self.render_instances(inst, season, camera, width, height)
+    }
+
+    /// Renders prepared instances.
+    pub fn render_instances(&mut self, inst: Vec<crate::render::scene::TreeInstance>, season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
+        let sc = scene::scene(self.terrain.clone(), self.prototypes.clone(), inst, self.site.geo.latitude_deg, season, self.sea_level);
+        self.renderer.render(&sc, camera, width, height)
+    }
+
+    /// The camera of a preset for this terrain.
+    pub fn camera(&self, preset: CameraPreset) -> Camera {
+        Camera::preset(preset, &self.terrain)
+    }
+}
+
+/// Inventory snapshot of `year` (plain, not seasonal) in `run_dir`.
+///
+/// # Errors
+/// [`Error::Format`] naming the run directory when no snapshot of that year exists.
+pub fn snapshot_rows(run_dir: &Path, year: u32) -> Result<Vec<InventoryRow>> {
+    let snaps = inventory::snapshots(run_dir)?;
+    let path = snaps
+        .iter()
+        .find(|(y, s, _)| *y == year && s.is_empty())
+        .map(|(_, _, p)| p.clone())
+        .ok_or_else(|| Error::format(run_dir, format!("no inventory snapshot for year {year} (years present: {})", years_list(&snaps))))?;
+    inventory::read(&path)
+}
+
+fn years_list(snaps: &[(u32, String, PathBuf)]) -> String {
+    let mut ys: Vec<u32> = snaps.iter().map(|s| s.0).collect();
+    ys.dedup();
+    ys.iter().map(|y| y.to_string()).collect::<Vec<_>>().join(", ")
+}
+
+/// Options of [`timelapse`].
+#[derive(Debug, Clone)]
+pub struct TimelapseOptions {
+    /// Frame width (px).
+    pub width: u32,
+    /// Frame height (px).
+    pub height: u32,
+    /// Frames per second of the GIF/MP4.
+    pub fps: f32,
+    /// Interpolated frames between consecutive snapshots (≥ 1).
+    pub frames_between: u32,
+    /// Camera: a preset, or `None` for a slow orbit (a quarter turn over the film).
+    pub camera: Option<CameraPreset>,
+    /// Season drawn.
+    pub season: Season,
+}
+
+/// Renders a timelapse of all plain snapshots of `run_dir` into `out_gif` (frames as PNG in
+/// `frames_dir`, an MP4 beside the GIF when `ffmpeg` is on PATH). Growth between snapshots is
+/// interpolated per tree id ([`timelapse::interpolate`]). Calls `progress(done, total)` per frame.
+/// Returns the number of frames and whether an MP4 was written.
+pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
+    let snaps: Vec<(u32, PathBuf)> = inventory::snapshots(run_dir)?.into_iter().filter(|(_, s, _)| s.is_empty()).map(|(y, _, p)| (y, p)).collect();
+    if snaps.is_empty() {
+        return Err(Error::format(run_dir, "no inventory snapshots to make a timelapse from"));
+    }
+    std::fs::create_dir_all(frames_dir).map_err(|e| Error::io(frames_dir, e))?;
+    let steps = opts.frames_between.max(1) as usize;
+    let total = if snaps.len() == 1 { 1 } else { (snaps.len() - 1) * steps + 1 };
+    let mut frames = Vec::with_capacity(total);
+    let mut prev = scene::instances(&inventory::read(&snaps[0].1)?, &stage.library, &stage.site, opts.season);
+    let mut k = 0usize;
+    let emit = |stage: &mut Stage, inst: Vec<crate::render::scene::TreeInstance>, k: usize| -> Result<image::RgbaImage> {
+        let u = if total > 1 { k as f32 / (total - 1) as f32 } else { 0.0 };
+        let cam = match opts.camera {
+            Some(p) => stage.camera(p),
+            None => Camera::orbit(&stage.terrain, 0.05 + 0.25 * u),
+        };
+        let img = stage.render_instances(inst, opts.season, &cam, opts.width, opts.height)?;
+        timelapse::write_png(&frames_dir.join(format!("frame_{k:05}.png")), &img)?;
+        Ok(img)
+    };
+    frames.push(emit(stage, prev.clone(), k)?);
+    progress(1, total);
+    for (_, path) in snaps.iter().skip(1) {
+        let next = scene::instances(&inventory::read(path)?, &stage.library, &stage.site, opts.season);
+        for s in 1..=steps {
+            k += 1;
+            let t = s as f32 / steps as f32;
+            let inst = timelapse::interpolate(&prev, &next, t);
+            frames.push(emit(stage, inst, k)?);
+            progress(k + 1, total);
+        }
+        prev = next;
+    }
+    timelapse::write_gif(out_gif, &frames, opts.fps)?;
+    let mp4 = out_gif.with_extension("mp4");
+    let wrote_mp4 = timelapse::write_mp4(frames_dir, opts.fps, &mp4).unwrap_or(false);
+    Ok((frames.len(), wrote_mp4))
+}

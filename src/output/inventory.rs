@@ -1,0 +1,67 @@
+//! Tree inventories: CSV (columns fixed by ARCHITECTURE.md) and GeoJSON points.
+
+use crate::error::Result;
+use crate::sim::World;
+use std::fmt::Write as _;
+use std::io::Write;
+use std::path::Path;
+
+/// The inventory CSV header (ARCHITECTURE.md).
+pub const HEADER: &str = "id,species,x_m,y_m,z_m,age_yr,height_m,dbh_cm,crown_radius_m,crown_base_m,status";
+
+/// One inventory record.
+struct Rec<'a> {
+    id: u64,
+    species: &'a str,
+    v: [f32; 8],
+    status: String,
+}
+
+fn records(w: &World) -> Vec<Rec<'_>> {
+    let t = &w.trees;
+    let mut out: Vec<Rec> = (0..t.len())
+        .map(|i| Rec { id: t.id[i], species: &w.lib.species[t.species[i] as usize].id, v: [t.x[i], t.y[i], t.z[i], t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i]], status: "alive".into() })
+        .collect();
+    let mut dead: Vec<Rec> = w.dead.iter().map(|d| Rec { id: d.id, species: &w.lib.species[d.species as usize].id, v: [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base], status: format!("dead:{}", d.cause.name()) }).collect();
+    dead.sort_by_key(|r| r.id);
+    out.extend(dead);
+    out
+}
+
+/// The inventory as CSV text: living trees (status `alive`) in id order, then the trees that
+/// died in the current year (`dead:<cause>`). Positions and sizes in metres (DBH cm), 2 decimals.
+pub fn inventory_csv(w: &World) -> String {
+    let mut s = String::with_capacity(80 * (w.trees.len() + 1));
+    s.push_str(HEADER);
+    s.push('\n');
+    for r in records(w) {
+        let v = r.v;
+        let _ = writeln!(s, "{},{},{:.2},{:.2},{:.2},{:.0},{:.2},{:.2},{:.2},{:.2},{}", r.id, r.species, v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], r.status);
+    }
+    s
+}
+
+/// Writes the inventory CSV atomically.
+pub fn write_inventory_csv(path: &Path, w: &World) -> Result<()> {
+    crate::output::write_atomic(path, inventory_csv(w).as_bytes())
+}
+
+/// Writes the inventory as a GeoJSON FeatureCollection of points (world metres, x east, y north;
+/// `crs` is not set: coordinates are local to the terrain's south-west corner).
+pub fn write_inventory_geojson(path: &Path, w: &World) -> Result<()> {
+    crate::output::write_atomic_with(path, |f| {
+        f.write_all(b"{\"type\":\"FeatureCollection\",\"features\":[\n")?;
+        for (k, r) in records(w).iter().enumerate() {
+            let v = r.v;
+            if k > 0 {
+                f.write_all(b",\n")?;
+            }
+            write!(
+                f,
+                "{{\"type\":\"Feature\",\"geometry\":{{\"type\":\"Point\",\"coordinates\":[{:.2},{:.2},{:.2}]}},\"properties\":{{\"id\":{},\"species\":\"{}\",\"age_yr\":{:.0},\"height_m\":{:.2},\"dbh_cm\":{:.2},\"crown_radius_m\":{:.2},\"crown_base_m\":{:.2},\"status\":\"{}\"}}}}",
+                v[0], v[1], v[2], r.id, r.species, v[3], v[4], v[5], v[6], v[7], r.status
+            )?;
+        }
+        f.write_all(b"\n]}\n")
+    })
+}

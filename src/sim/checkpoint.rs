@@ -1,0 +1,189 @@
+//! Checkpoints: the evolving state of a [`World`] (trees, seeds, year, death counts) and the
+//! stand table so far, in a compact little-endian binary with exact float bits, so that a
+//! resumed run continues bit for bit. Site conditions and species are rebuilt from the scenario.
+
+use super::stats::StandRow;
+use super::trees::TreeStore;
+use super::world::World;
+use crate::error::{Error, Result};
+use std::path::Path;
+
+const MAGIC: &[u8; 8] = b"SYLVACK1";
+
+struct W(Vec<u8>);
+impl W {
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f32s(&mut self, v: &[f32]) {
+        self.u64(v.len() as u64);
+        for x in v {
+            self.0.extend_from_slice(&x.to_bits().to_le_bytes());
+        }
+    }
+    fn f64(&mut self, v: f64) {
+        self.u64(v.to_bits());
+    }
+}
+
+struct R<'a> {
+    b: &'a [u8],
+    p: usize,
+    path: &'a Path,
+}
+impl R<'_> {
+    fn err(&self) -> Error {
+        Error::format(self.path, format!("checkpoint truncated or corrupt at byte {}", self.p))
+    }
+    fn u64(&mut self) -> Result<u64> {
+        let s = self.b.get(self.p..self.p + 8).ok_or_else(|| self.err())?;
+        self.p += 8;
+        let mut a = [0u8; 8];
+        a.copy_from_slice(s);
+        Ok(u64::from_le_bytes(a))
+    }
+    fn len(&mut self, elem: usize) -> Result<usize> {
+        let n = self.u64()? as usize;
+        if n.saturating_mul(elem) > self.b.len() - self.p.min(self.b.len()) {
+            return Err(self.err());
+        }
+        Ok(n)
+    }
+    fn f32s(&mut self) -> Result<Vec<f32>> {
+        let n = self.len(4)?;
+        let s = &self.b[self.p..self.p + 4 * n];
+        self.p += 4 * n;
+        Ok(s.chunks_exact(4).map(|c| f32::from_bits(u32::from_le_bytes([c[0], c[1], c[2], c[3]]))).collect())
+    }
+    fn f64(&mut self) -> Result<f64> {
+        Ok(f64::from_bits(self.u64()?))
+    }
+}
+
+/// Serialises the world's evolving state and the stand table.
+pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
+    let mut o = W(MAGIC.to_vec());
+    o.u64(w.year as u64);
+    o.u64(w.seed);
+    let t = &w.trees;
+    o.u64(t.next_id);
+    o.u64(t.len() as u64);
+    for v in &t.id {
+        o.u64(*v);
+    }
+    o.u64(t.species.len() as u64);
+    for v in &t.species {
+        o.0.extend_from_slice(&v.to_le_bytes());
+    }
+    for c in [&t.x, &t.y, &t.z, &t.age, &t.height, &t.dbh, &t.crown_radius, &t.crown_base, &t.light, &t.vigour, &t.suitability] {
+        o.f32s(c);
+    }
+    o.u64(w.seeds.len() as u64);
+    for s in &w.seeds {
+        o.f32s(s);
+    }
+    for d in w.deaths_total {
+        o.u64(d);
+    }
+    o.u64(rows.len() as u64);
+    for r in rows {
+        o.u64(r.year as u64);
+        for v in [r.stems_ha, r.seedlings_ha, r.basal_area_m2_ha, r.mean_height_m, r.top_height_m, r.qmd_cm, r.stems_7cm_ha, r.qmd_7cm_cm] {
+            o.f64(v);
+        }
+        o.u64(r.share_ba.len() as u64);
+        for (a, b) in r.share_ba.iter().zip(&r.share_stems) {
+            o.f64(*a);
+            o.f64(*b);
+        }
+        for d in r.deaths {
+            o.u64(d);
+        }
+    }
+    o.0
+}
+
+/// Restores a checkpoint into `w` (built from the same scenario) and returns the stand table.
+///
+/// Errors: [`Error::Format`] naming `path` when the bytes are not a checkpoint, are truncated, or
+/// belong to a different scenario (seed or species pool).
+pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>> {
+    if bytes.len() < 8 || &bytes[..8] != MAGIC {
+        return Err(Error::format(path, "not a Sylva checkpoint (bad magic)"));
+    }
+    let mut r = R { b: bytes, p: 8, path };
+    let year = r.u64()? as u32;
+    let seed = r.u64()?;
+    if seed != w.seed {
+        return Err(Error::format(path, format!("checkpoint seed {seed} differs from the scenario's seed {}", w.seed)));
+    }
+    let mut t = TreeStore { next_id: r.u64()?, ..Default::default() };
+    let n = r.len(8)?;
+    t.id = (0..n).map(|_| r.u64()).collect::<Result<_>>()?;
+    let n = r.len(2)?;
+    let s = &bytes[r.p..r.p + 2 * n];
+    r.p += 2 * n;
+    t.species = s.chunks_exact(2).map(|c| u16::from_le_bytes([c[0], c[1]])).collect();
+    for c in [&mut t.x, &mut t.y, &mut t.z, &mut t.age, &mut t.height, &mut t.dbh, &mut t.crown_radius, &mut t.crown_base, &mut t.light, &mut t.vigour, &mut t.suitability] {
+        *c = r.f32s()?;
+        if c.len() != t.id.len() {
+            return Err(r.err());
+        }
+    }
+    if t.species.iter().any(|&s| s as usize >= w.lib.species.len()) {
+        return Err(Error::format(path, "checkpoint names a species index outside the library"));
+    }
+    let ns = r.u64()? as usize;
+    if ns != w.pool.len() {
+        return Err(Error::format(path, format!("checkpoint has {ns} species in the pool, the scenario {}", w.pool.len())));
+    }
+    let mut seeds = Vec::new();
+    for _ in 0..ns {
+        let s = r.f32s()?;
+        if s.len() != w.seed_dims.0 * w.seed_dims.1 {
+            return Err(Error::format(path, "checkpoint seed grid does not match the terrain"));
+        }
+        seeds.push(s);
+    }
+    let mut deaths = [0u64; 3];
+    for d in deaths.iter_mut() {
+        *d = r.u64()?;
+    }
+    let nr = r.len(8)?;
+    let mut rows = Vec::with_capacity(nr);
+    for _ in 0..nr {
+        let year = r.u64()? as u32;
+        let mut v = [0f64; 8];
+        for x in v.iter_mut() {
+            *x = r.f64()?;
+        }
+        let k = r.len(16)?;
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        for _ in 0..k {
+            a.push(r.f64()?);
+            b.push(r.f64()?);
+        }
+        let mut d = [0u64; 3];
+        for x in d.iter_mut() {
+            *x = r.u64()?;
+        }
+        rows.push(StandRow { year, stems_ha: v[0], seedlings_ha: v[1], basal_area_m2_ha: v[2], mean_height_m: v[3], top_height_m: v[4], qmd_cm: v[5], stems_7cm_ha: v[6], qmd_7cm_cm: v[7], share_ba: a, share_stems: b, deaths: d });
+    }
+    w.trees = t;
+    w.year = year;
+    w.seeds = seeds;
+    w.deaths_total = deaths;
+    w.dead.clear();
+    Ok(rows)
+}
+
+/// Writes a checkpoint file atomically.
+pub fn save(path: &Path, w: &World, rows: &[StandRow]) -> Result<()> {
+    crate::output::write_atomic(path, &to_bytes(w, rows))
+}
+
+/// Reads a checkpoint file into `w`.
+pub fn load(path: &Path, w: &mut World) -> Result<Vec<StandRow>> {
+    let b = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    restore(w, &b, path)
+}

@@ -1,0 +1,101 @@
+//! Reproduction (autumn): mature trees produce seeds in proportion to crown projection area
+//! and light; seeds are spread over the whole landscape on a seed grid of
+//! [`SEED_CELL_M`](super::super::world::SEED_CELL_M) by each species' dispersal kernel
+//! (a gather over kernel offsets, so tile borders do not exist). Seeds that would land outside
+//! the terrain are lost.
+
+use super::super::world::{World, SEED_CELL_M};
+use crate::species::{Dispersal, KernelType};
+use rayon::prelude::*;
+
+/// Discrete dispersal kernel: `(dcol, drow, weight)` offsets within `max_m`, weights sum to 1.
+/// Densities per m² at distance r: negative exponential `e^(−r/a) / (2π a²)` with `a = mean/2`;
+/// 2Dt (Clark et al. 1999, Ecology 80:1475, eq. 3) `p / (π u) · (1 + r²/u)^(−(p+1))` with
+/// `p = 1.5`, `u = mean²` (for p = 1.5 the mean distance is √u).
+pub fn kernel(d: &Dispersal, cell: f64) -> Vec<(isize, isize, f32)> {
+    let n = (d.max_m as f64 / cell).ceil() as isize;
+    let mut out = Vec::new();
+    let mean = d.mean_m.max(0.1) as f64;
+    for dr in -n..=n {
+        for dc in -n..=n {
+            let r = ((dc * dc + dr * dr) as f64).sqrt() * cell;
+            if r > d.max_m as f64 + 0.5 * cell {
+                continue;
+            }
+            let r = r.max(cell / 3.0);
+            let dens = match d.kernel {
+                KernelType::NegativeExponential => {
+                    let a = mean / 2.0;
+                    (-r / a).exp() / (std::f64::consts::TAU * a * a)
+                }
+                KernelType::TwoDt => {
+                    let (p, u) = (1.5, mean * mean);
+                    p / (std::f64::consts::PI * u) * (1.0 + r * r / u).powf(-(p + 1.0))
+                }
+            };
+            out.push((dc, dr, dens));
+        }
+    }
+    let sum: f64 = out.iter().map(|o| o.2).sum();
+    out.into_iter().map(|(a, b, w)| (a, b, (w / sum) as f32)).filter(|o| o.2 > 1e-7).collect()
+}
+
+/// Produces and disperses this year's seeds into `w.seeds` (seeds per m² per pool species).
+/// Seeds per tree: `seeds_per_m2_crown · π r² · min(L, 1)` for trees at or above maturity age.
+pub fn run(w: &mut World) {
+    let (cols, rows) = w.seed_dims;
+    let t = &w.trees;
+    let mut src = vec![vec![0f32; cols * rows]; w.pool.len()];
+    let pidx: Vec<Option<usize>> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s)).collect();
+    for i in 0..t.len() {
+        let sp = &w.lib.species[t.species[i] as usize];
+        if t.age[i] < sp.life.maturity_age_yr {
+            continue;
+        }
+        let Some(p) = pidx[t.species[i] as usize] else { continue };
+        let r = t.crown_radius[i];
+        let n = sp.life.seeds_per_m2_crown * std::f32::consts::PI * r * r * t.light[i].min(1.0);
+        let c = ((t.x[i] as f64 / SEED_CELL_M) as usize).min(cols - 1);
+        let rw = ((t.y[i] as f64 / SEED_CELL_M) as usize).min(rows - 1);
+        src[p][rw * cols + c] += n;
+    }
+    let area = (SEED_CELL_M * SEED_CELL_M) as f32;
+    for (p, s) in src.iter().enumerate() {
+        let sp = &w.lib.species[w.pool[p] as usize];
+        if s.iter().all(|v| *v == 0.0) {
+            w.seeds[p].iter_mut().for_each(|v| *v = 0.0);
+            continue;
+        }
+        let k = kernel(&sp.life.dispersal, SEED_CELL_M);
+        w.seeds[p] = (0..cols * rows)
+            .into_par_iter()
+            .map(|c| {
+                let (r0, c0) = ((c / cols) as isize, (c % cols) as isize);
+                let mut acc = 0f32;
+                for &(dc, dr, wt) in &k {
+                    let (rr, cc) = (r0 - dr, c0 - dc);
+                    if rr >= 0 && cc >= 0 && (rr as usize) < rows && (cc as usize) < cols {
+                        acc += s[rr as usize * cols + cc as usize] * wt;
+                    }
+                }
+                acc / area
+            })
+            .collect();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn kernels_normalised_and_decreasing() {
+        for kt in [KernelType::NegativeExponential, KernelType::TwoDt] {
+            let k = kernel(&Dispersal { kernel: kt, mean_m: 30.0, max_m: 200.0 }, 20.0);
+            let s: f32 = k.iter().map(|o| o.2).sum();
+            assert!((s - 1.0).abs() < 1e-3);
+            let w = |dc: isize| k.iter().find(|o| o.0 == dc && o.1 == 0).unwrap().2;
+            assert!(w(0) > w(1) && w(1) > w(3));
+        }
+    }
+}

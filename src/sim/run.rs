@@ -1,0 +1,172 @@
+//! The run driver shared by `sylva simulate` and `sylva run`: steps the years, writes the run
+//! directory of ARCHITECTURE.md (scenario, stand table + plot, inventories, maps, checkpoint),
+//! reports progress and stops cleanly after the current year when asked to.
+
+use super::checkpoint;
+use super::scenario::Scenario;
+use super::stats::StandRow;
+use super::step::{step_year_with, YearReport};
+use super::world::World;
+use crate::conditions::SiteConditions;
+use crate::error::{Error, Result};
+use crate::output::{inventory, plot, stand_table};
+use crate::species::{Season, SpeciesLibrary};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Progress after a simulated year.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Progress {
+    /// Years completed.
+    pub year: u32,
+    /// Years of the scenario.
+    pub years: u32,
+    /// Living trees.
+    pub trees: usize,
+    /// Tree-years simulated per second of wall time in this year.
+    pub trees_per_s: f64,
+}
+
+/// Options of [`run_scenario`].
+pub struct RunOptions<'a> {
+    /// Run directory (created).
+    pub out_dir: PathBuf,
+    /// Continue from `out_dir/checkpoint.bin`.
+    pub resume: bool,
+    /// When set (e.g. by a Ctrl-C handler), the run stops after the current year with all
+    /// outputs so far written and a checkpoint.
+    pub stop: Option<Arc<AtomicBool>>,
+    /// Called after every year.
+    pub progress: Option<&'a mut dyn FnMut(&Progress)>,
+    /// Longest side of the species and basal-area maps (pixels).
+    pub map_px: usize,
+    /// Write inventories, maps and plots (false: stand table and checkpoint only).
+    pub write_snapshots: bool,
+}
+
+impl RunOptions<'_> {
+    /// Defaults: no resume, no stop flag, no progress callback, 1024-pixel maps, snapshots on.
+    pub fn new(out_dir: impl Into<PathBuf>) -> Self {
+        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true }
+    }
+}
+
+/// What a run did.
+#[derive(Debug, Clone)]
+pub struct RunSummary {
+    /// The world at the end.
+    pub world: World,
+    /// Stand table, one row per year.
+    pub rows: Vec<StandRow>,
+    /// True when stopped early by the stop flag.
+    pub stopped: bool,
+    /// Wall time of the years simulated in this call (s).
+    pub seconds: f64,
+}
+
+fn mkdir(p: &Path) -> Result<()> {
+    std::fs::create_dir_all(p).map_err(|e| Error::io(p, e))
+}
+
+fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize) -> Result<()> {
+    inventory::write_inventory_csv(&dir.join("inventory").join(format!("{label}.csv")), w)?;
+    inventory::write_inventory_geojson(&dir.join("inventory").join(format!("{label}.geojson")), w)?;
+    if maps {
+        let m = dir.join("maps");
+        plot::write_maps(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), w, map_px)?;
+    }
+    Ok(())
+}
+
+fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
+    let names: Vec<&str> = w.pool.iter().map(|&s| w.lib.species[s as usize].id.as_str()).collect();
+    stand_table::write_stand_table(&dir.join("stand_table.csv"), rows, &names)?;
+    if png && rows.len() >= 2 {
+        plot::plot_stand_table(&dir.join("stand_table.png"), rows, w)?;
+    }
+    Ok(())
+}
+
+/// Runs `scenario` on `site` with species from `lib`, writing the run directory.
+///
+/// Snapshots (inventory CSV + GeoJSON, species and basal-area maps) at year 0, every
+/// `snapshot_every` years and at the end, labelled `year_NNNN` (plus `_spring`, `_summer`,
+/// `_autumn` when `seasonal_snapshots`); checkpoint every `checkpoint_every` years and at the end.
+///
+/// Errors: I/O errors naming the file; unknown species; a missing or mismatching checkpoint
+/// with `resume`.
+pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut opts: RunOptions) -> Result<RunSummary> {
+    let dir = opts.out_dir.clone();
+    mkdir(&dir)?;
+    if opts.write_snapshots {
+        mkdir(&dir.join("inventory"))?;
+        mkdir(&dir.join("maps"))?;
+    }
+    let mut world = World::new(site, lib, scenario)?;
+    let ck = dir.join("checkpoint.bin");
+    let mut rows = Vec::new();
+    if opts.resume {
+        if !ck.exists() {
+            return Err(Error::format(&ck, "--resume: no checkpoint in the run directory"));
+        }
+        rows = checkpoint::load(&ck, &mut world)?;
+    } else {
+        crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
+        if opts.write_snapshots {
+            snapshot(&dir, &world, "year_0000", true, opts.map_px)?;
+        }
+    }
+    let t0 = Instant::now();
+    let mut stopped = false;
+    let every = scenario.snapshot_every;
+    while world.year < scenario.years {
+        let y = world.year + 1;
+        let snap_year = opts.write_snapshots && (y == scenario.years || (every > 0 && y % every == 0));
+        let ty = Instant::now();
+        let mut rep = YearReport::default();
+        let mut err: Option<Error> = None;
+        let seasonal = snap_year && scenario.seasonal_snapshots;
+        let (d, px) = (dir.clone(), opts.map_px);
+        step_year_with(&mut world, scenario, &mut rep, &mut |season, w| {
+            if seasonal && season != Season::Winter && err.is_none() {
+                let name = match season {
+                    Season::Spring => "spring",
+                    Season::Summer => "summer",
+                    _ => "autumn",
+                };
+                if let Err(e) = snapshot(&d, w, &format!("year_{y:04}_{name}"), false, px) {
+                    err = Some(e);
+                }
+            }
+        });
+        if let Some(e) = err {
+            return Err(e);
+        }
+        let trees_yr = rep.trees.max(1) as f64;
+        if let Some(r) = rep.row {
+            rows.push(r);
+        }
+        if snap_year {
+            snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px)?;
+            tables(&dir, &rows, &world, true)?;
+        }
+        let stop_now = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
+        if y == scenario.years || stop_now || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0) {
+            tables(&dir, &rows, &world, opts.write_snapshots)?;
+            checkpoint::save(&ck, &world, &rows)?;
+        }
+        if let Some(p) = opts.progress.as_mut() {
+            p(&Progress { year: y, years: scenario.years, trees: rep.trees, trees_per_s: trees_yr / ty.elapsed().as_secs_f64().max(1e-9) });
+        }
+        if stop_now && y < scenario.years {
+            stopped = true;
+            if opts.write_snapshots && !snap_year {
+                snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px)?;
+            }
+            break;
+        }
+    }
+    Ok(RunSummary { world, rows, stopped, seconds: t0.elapsed().as_secs_f64() })
+}

@@ -1,0 +1,389 @@
+//! Scenario files (TOML): terrain, climate, species pool, start, duration, seed and outputs.
+//!
+//! Every field is validated after parsing; errors name the file, the field, the offending value
+//! and what was expected ([`crate::Error::Invalid`]).
+
+use crate::conditions::Climate;
+use crate::error::{Error, Result};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A simulation scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Name of the scenario (free text, used in outputs).
+    pub name: String,
+    /// Where the terrain comes from.
+    pub terrain: TerrainSection,
+    /// Climate and soil constants (all fields default, see [`Climate`]).
+    #[serde(default)]
+    pub climate: Climate,
+    /// Species ids of the pool (from the library); empty = all species of the library.
+    #[serde(default)]
+    pub species: Vec<String>,
+    /// How the simulation starts (seed sources, seed rain, planted stands).
+    #[serde(default)]
+    pub start: Vec<Start>,
+    /// Number of years to simulate (1–10 000).
+    pub years: u32,
+    /// Random seed.
+    #[serde(default)]
+    pub seed: u64,
+    /// Write an inventory snapshot every N years (0 = only the first and last year).
+    #[serde(default = "default_snapshot_every")]
+    pub snapshot_every: u32,
+    /// Also write snapshots after spring, summer and autumn of snapshot years.
+    #[serde(default)]
+    pub seasonal_snapshots: bool,
+    /// Write a checkpoint every N years (0 = only at the end).
+    #[serde(default = "default_checkpoint_every")]
+    pub checkpoint_every: u32,
+    /// Light grid cell size (m), 2–20; default 5.
+    #[serde(default = "default_light_cell")]
+    pub light_cell_m: f64,
+}
+
+fn default_snapshot_every() -> u32 {
+    10
+}
+fn default_checkpoint_every() -> u32 {
+    10
+}
+fn default_light_cell() -> f64 {
+    5.0
+}
+
+/// `[terrain]`: exactly one source, plus an optional window.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TerrainSection {
+    /// Use the embedded default terrain (`terrains/`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub default: Option<bool>,
+    /// A DEM file (GeoTIFF, ESRI ASCII, PNG), relative to the scenario file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub path: Option<PathBuf>,
+    /// A generated terrain.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub generate: Option<GenerateSpec>,
+    /// A flat uniform site.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uniform: Option<UniformSpec>,
+    /// Sub-window `[col0, row0, width, height]` in cells of the terrain grid.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window: Option<[usize; 4]>,
+}
+
+/// A generated (fractal noise) terrain.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GenerateSpec {
+    /// Cells per side.
+    pub size: usize,
+    /// Cell size (m).
+    pub cell_m: f64,
+    /// Relief (m).
+    pub relief_m: f32,
+    /// Generator seed.
+    pub seed: u64,
+}
+
+/// A flat uniform site (for stand-level runs and tests).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UniformSpec {
+    /// Columns.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+    /// Cell size (m).
+    pub cell_m: f64,
+    /// Elevation (m).
+    #[serde(default)]
+    pub elevation_m: f32,
+    /// Ellenberg-style indices `[L, T, K, F, R, N]`.
+    pub indices: [f32; 6],
+}
+
+/// The terrain source resolved from `[terrain]`; the caller (CLI) loads it.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TerrainSpec {
+    /// The embedded default terrain.
+    Default,
+    /// A DEM file (absolute or relative to the working directory).
+    Path(PathBuf),
+    /// A generated terrain.
+    Generate(GenerateSpec),
+    /// A flat uniform site.
+    Uniform(UniformSpec),
+}
+
+/// One start condition.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Start {
+    /// Mature seed trees clustered (within 10 m) around points.
+    SeedSources {
+        /// World points `[x, y]` (m, origin SW corner).
+        points: Vec<[f64; 2]>,
+        /// Species id.
+        species: String,
+        /// Trees per point (1–1000).
+        trees_per_source: u32,
+    },
+    /// Uniform external seed input every year (seeds per hectare per year).
+    SeedRain {
+        /// Species id.
+        species: String,
+        /// Seeds per hectare and year (≥ 0).
+        seeds_per_ha: f64,
+    },
+    /// A planted stand on a square lattice.
+    Planted {
+        /// Species id.
+        species: String,
+        /// Spacing (m), 0.5–50.
+        spacing_m: f64,
+        /// Age at planting (years).
+        #[serde(default)]
+        age_yr: f32,
+        /// Area `[x0, y0, x1, y1]` (m); the whole terrain when omitted.
+        #[serde(default)]
+        area: Option<[f64; 4]>,
+    },
+}
+
+impl Start {
+    /// Species id of this start.
+    pub fn species(&self) -> &str {
+        match self {
+            Start::SeedSources { species, .. } | Start::SeedRain { species, .. } | Start::Planted { species, .. } => species,
+        }
+    }
+}
+
+fn invalid(ctx: &str, field: &str, value: impl ToString, expected: &str) -> Error {
+    Error::Invalid { context: ctx.to_string(), field: field.to_string(), value: value.to_string(), expected: expected.to_string() }
+}
+
+impl Scenario {
+    /// Parses and validates a scenario from TOML text; `name` (usually the file path) appears in
+    /// error messages.
+    ///
+    /// Errors: [`Error::Format`] for TOML syntax, unknown fields or wrong types (with line);
+    /// [`Error::Invalid`] for out-of-range values.
+    pub fn from_toml_str(text: &str, name: &str) -> Result<Scenario> {
+        let s: Scenario = toml::from_str(text).map_err(|e| Error::format(name, e.to_string()))?;
+        s.validate(name)?;
+        Ok(s)
+    }
+
+    /// Reads, parses and validates a scenario file. A relative `terrain.path` is resolved
+    /// against the scenario's folder.
+    pub fn load(path: &Path) -> Result<Scenario> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let mut s = Scenario::from_toml_str(&text, &path.display().to_string())?;
+        if let Some(p) = &s.terrain.path {
+            if p.is_relative() {
+                if let Some(dir) = path.parent() {
+                    s.terrain.path = Some(dir.join(p));
+                }
+            }
+        }
+        Ok(s)
+    }
+
+    /// The scenario as TOML text.
+    pub fn to_toml_string(&self) -> Result<String> {
+        toml::to_string_pretty(self).map_err(|e| Error::Other(format!("scenario {}: cannot write TOML: {e}", self.name)))
+    }
+
+    /// Checks ranges; `ctx` names the file.
+    pub fn validate(&self, ctx: &str) -> Result<()> {
+        let t = &self.terrain;
+        let n = t.default.filter(|d| *d).is_some() as u8 + t.path.is_some() as u8 + t.generate.is_some() as u8 + t.uniform.is_some() as u8;
+        if n != 1 {
+            return Err(invalid(ctx, "terrain", format!("{n} sources"), "exactly one of default = true, path, generate, uniform"));
+        }
+        if let Some(g) = &t.generate {
+            if !(16..=8192).contains(&g.size) {
+                return Err(invalid(ctx, "terrain.generate.size", g.size, "16–8192 cells"));
+            }
+            if !(g.cell_m > 0.0 && g.cell_m <= 1000.0) {
+                return Err(invalid(ctx, "terrain.generate.cell_m", g.cell_m, "> 0 and ≤ 1000 m"));
+            }
+            if !(g.relief_m >= 0.0 && g.relief_m <= 9000.0) {
+                return Err(invalid(ctx, "terrain.generate.relief_m", g.relief_m, "0–9000 m"));
+            }
+        }
+        if let Some(u) = &t.uniform {
+            if u.width == 0 || u.height == 0 || u.width * u.height > 64_000_000 {
+                return Err(invalid(ctx, "terrain.uniform.width/height", format!("{} x {}", u.width, u.height), "≥ 1 and at most 64 million cells"));
+            }
+            if !(u.cell_m > 0.0 && u.cell_m <= 1000.0) {
+                return Err(invalid(ctx, "terrain.uniform.cell_m", u.cell_m, "> 0 and ≤ 1000 m"));
+            }
+            for (i, v) in u.indices.iter().enumerate() {
+                let max = if i == crate::conditions::factor::F { 12.0 } else { 9.0 };
+                if !(*v >= 1.0 && *v <= max) {
+                    return Err(invalid(ctx, &format!("terrain.uniform.indices[{i}] ({})", crate::conditions::factor::NAMES[i]), v, &format!("1–{max}")));
+                }
+            }
+        }
+        if let Some(w) = &t.window {
+            if w[2] == 0 || w[3] == 0 {
+                return Err(invalid(ctx, "terrain.window", format!("{w:?}"), "[col0, row0, width, height] with width, height ≥ 1"));
+            }
+        }
+        let c = &self.climate;
+        if !(c.latitude_deg >= -90.0 && c.latitude_deg <= 90.0) {
+            return Err(invalid(ctx, "climate.latitude_deg", c.latitude_deg, "−90–90 degrees"));
+        }
+        if !(1..=10_000).contains(&self.years) {
+            return Err(invalid(ctx, "years", self.years, "1–10000"));
+        }
+        if !(self.light_cell_m >= 2.0 && self.light_cell_m <= 20.0) {
+            return Err(invalid(ctx, "light_cell_m", self.light_cell_m, "2–20 m"));
+        }
+        for (i, s) in self.start.iter().enumerate() {
+            let f = |x: &str| format!("start[{i}].{x}");
+            match s {
+                Start::SeedSources { points, trees_per_source, .. } => {
+                    if points.is_empty() {
+                        return Err(invalid(ctx, &f("points"), "[]", "at least one [x, y] point"));
+                    }
+                    if !(1..=1000).contains(trees_per_source) {
+                        return Err(invalid(ctx, &f("trees_per_source"), trees_per_source, "1–1000"));
+                    }
+                }
+                Start::SeedRain { seeds_per_ha, .. } => {
+                    if !(*seeds_per_ha >= 0.0 && seeds_per_ha.is_finite()) {
+                        return Err(invalid(ctx, &f("seeds_per_ha"), seeds_per_ha, "a finite number ≥ 0"));
+                    }
+                }
+                Start::Planted { spacing_m, age_yr, area, .. } => {
+                    if !(*spacing_m >= 0.5 && *spacing_m <= 50.0) {
+                        return Err(invalid(ctx, &f("spacing_m"), spacing_m, "0.5–50 m"));
+                    }
+                    if !(*age_yr >= 0.0 && *age_yr <= 1000.0) {
+                        return Err(invalid(ctx, &f("age_yr"), age_yr, "0–1000 years"));
+                    }
+                    if let Some(a) = area {
+                        if !(a[2] > a[0] && a[3] > a[1]) {
+                            return Err(invalid(ctx, &f("area"), format!("{a:?}"), "[x0, y0, x1, y1] with x1 > x0 and y1 > y0"));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The terrain source to load.
+    pub fn terrain_spec(&self) -> TerrainSpec {
+        let t = &self.terrain;
+        if let Some(u) = t.uniform {
+            TerrainSpec::Uniform(u)
+        } else if let Some(g) = t.generate {
+            TerrainSpec::Generate(g)
+        } else if let Some(p) = &t.path {
+            TerrainSpec::Path(p.clone())
+        } else {
+            TerrainSpec::Default
+        }
+    }
+
+    /// Checks that every species named in `species` and `start` exists in `lib`; returns the
+    /// pool's species ids (all species of the library when `species` is empty).
+    pub fn resolve_species(&self, lib: &crate::species::SpeciesLibrary, ctx: &str) -> Result<Vec<crate::species::SpeciesId>> {
+        let known = || lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ");
+        let mut pool = Vec::new();
+        if self.species.is_empty() {
+            pool = (0..lib.species.len() as u16).collect();
+        } else {
+            for (i, s) in self.species.iter().enumerate() {
+                let id = lib.find(s).ok_or_else(|| invalid(ctx, &format!("species[{i}]"), s, &format!("one of: {}", known())))?;
+                pool.push(id);
+            }
+        }
+        for (i, st) in self.start.iter().enumerate() {
+            let id = lib.find(st.species()).ok_or_else(|| invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("one of: {}", known())))?;
+            if !pool.contains(&id) {
+                pool.push(id);
+            }
+        }
+        pool.sort_unstable();
+        pool.dedup();
+        Ok(pool)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const OK: &str = r#"
+name = "t"
+years = 5
+seed = 3
+[terrain]
+uniform = { width = 4, height = 4, cell_m = 25.0, indices = [5, 5, 4, 5, 6, 5] }
+[[start]]
+kind = "planted"
+species = "beech"
+spacing_m = 2.0
+"#;
+
+    #[test]
+    fn parses_and_resolves() {
+        let s = Scenario::from_toml_str(OK, "t.toml").unwrap();
+        assert_eq!(s.years, 5);
+        assert!(matches!(s.terrain_spec(), TerrainSpec::Uniform(_)));
+        assert_eq!(s.snapshot_every, 10);
+    }
+
+    #[test]
+    fn errors_name_field_and_value() {
+        let e = Scenario::from_toml_str(&OK.replace("years = 5", "years = 0"), "t.toml").unwrap_err().to_string();
+        assert!(e.contains("t.toml") && e.contains("years") && e.contains("1–10000"), "{e}");
+        let e = Scenario::from_toml_str(&OK.replace("spacing_m = 2.0", "spacing_m = 0.1"), "t.toml").unwrap_err().to_string();
+        assert!(e.contains("start[0].spacing_m") && e.contains("0.1"), "{e}");
+        let e = Scenario::from_toml_str(&OK.replace("seed = 3", "seed = 3\nbogus = 1"), "t.toml").unwrap_err().to_string();
+        assert!(e.contains("bogus"), "{e}");
+    }
+}
+
+/// Cuts the window `[col0, row0, width, height]` (cells, row 0 north) out of `site`.
+///
+/// Errors: [`Error::Invalid`] when the window leaves the grid.
+pub fn crop_site(site: &crate::conditions::SiteConditions, window: [usize; 4]) -> Result<crate::conditions::SiteConditions> {
+    let [c0, r0, w, h] = window;
+    if w == 0 || h == 0 || c0 + w > site.width() || r0 + h > site.height() {
+        return Err(invalid("scenario", "terrain.window", format!("{window:?}"), &format!("inside the {} x {} terrain grid", site.width(), site.height())));
+    }
+    fn cut<T: Clone>(g: &crate::grid::Grid<T>, c0: usize, r0: usize, w: usize, h: usize) -> crate::grid::Grid<T> {
+        let mut data = Vec::with_capacity(w * h);
+        for r in r0..r0 + h {
+            data.extend_from_slice(&g.data[r * g.width + c0..r * g.width + c0 + w]);
+        }
+        crate::grid::Grid { width: w, height: h, data }
+    }
+    let mut geo = site.geo.clone();
+    geo.origin_x += c0 as f64 * geo.pixel_w;
+    geo.origin_y -= r0 as f64 * geo.pixel_h;
+    Ok(crate::conditions::SiteConditions {
+        geo,
+        cell_x_m: site.cell_x_m,
+        cell_y_m: site.cell_y_m,
+        mask: cut(&site.mask, c0, r0, w, h),
+        elevation_m: cut(&site.elevation_m, c0, r0, w, h),
+        slope_deg: cut(&site.slope_deg, c0, r0, w, h),
+        aspect_deg: cut(&site.aspect_deg, c0, r0, w, h),
+        twi: cut(&site.twi, c0, r0, w, h),
+        insolation_kwh_m2: cut(&site.insolation_kwh_m2, c0, r0, w, h),
+        wind_exposure: cut(&site.wind_exposure, c0, r0, w, h),
+        temperature_c: cut(&site.temperature_c, c0, r0, w, h),
+        indices: cut(&site.indices, c0, r0, w, h),
+    })
+}

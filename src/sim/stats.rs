@@ -1,0 +1,88 @@
+//! Stand statistics: one row of the stand table per year.
+
+use super::trees::DeathCause;
+use super::world::World;
+use serde::{Deserialize, Serialize};
+
+/// One stand-table row (per hectare of unmasked area).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StandRow {
+    /// Simulation year (1 = after the first year).
+    pub year: u32,
+    /// Stems per ha with height ≥ 1.3 m.
+    pub stems_ha: f64,
+    /// Trees per ha below 1.3 m (regeneration).
+    pub seedlings_ha: f64,
+    /// Basal area (m²/ha).
+    pub basal_area_m2_ha: f64,
+    /// Mean height of stems ≥ 1.3 m (m).
+    pub mean_height_m: f64,
+    /// Top height H100: mean height of the 100 thickest trees per ha (m).
+    pub top_height_m: f64,
+    /// Quadratic mean DBH of stems ≥ 1.3 m (cm).
+    pub qmd_cm: f64,
+    /// Stems per ha with DBH ≥ 7 cm (the merchantable-timber threshold of German yield tables).
+    pub stems_7cm_ha: f64,
+    /// Quadratic mean DBH of stems with DBH ≥ 7 cm (cm).
+    pub qmd_7cm_cm: f64,
+    /// Share of basal area per pool species (0–1), pool order.
+    pub share_ba: Vec<f64>,
+    /// Share of stems (≥ 1.3 m) per pool species (0–1), pool order.
+    pub share_stems: Vec<f64>,
+    /// Deaths in the year per cause ([`DeathCause::ALL`] order).
+    pub deaths: [u64; 3],
+}
+
+/// Computes the stand-table row of the world's current state (deaths from `w.dead`).
+pub fn stand_row(w: &World) -> StandRow {
+    let t = &w.trees;
+    let a = w.area_ha.max(1e-9);
+    let np = w.pool.len();
+    let (mut n, mut ns, mut ba, mut hs, mut d2) = (0usize, 0usize, 0f64, 0f64, 0f64);
+    let (mut n7, mut d27) = (0usize, 0f64);
+    let mut sba = vec![0f64; np];
+    let mut sn = vec![0f64; np];
+    let pidx: Vec<usize> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s).unwrap_or(0)).collect();
+    let mut top: Vec<(f32, f32)> = Vec::new();
+    for i in 0..t.len() {
+        if t.height[i] < 1.3 {
+            ns += 1;
+            continue;
+        }
+        n += 1;
+        let b = t.basal_area_m2(i);
+        ba += b;
+        hs += t.height[i] as f64;
+        d2 += (t.dbh[i] as f64).powi(2);
+        if t.dbh[i] >= 7.0 {
+            n7 += 1;
+            d27 += (t.dbh[i] as f64).powi(2);
+        }
+        let p = pidx[t.species[i] as usize];
+        sba[p] += b;
+        sn[p] += 1.0;
+        top.push((t.dbh[i], t.height[i]));
+    }
+    let k = ((100.0 * a).round() as usize).clamp(1, top.len().max(1));
+    top.sort_by(|x, y| y.0.total_cmp(&x.0).then(y.1.total_cmp(&x.1)));
+    let h100 = if top.is_empty() { 0.0 } else { top.iter().take(k).map(|x| x.1 as f64).sum::<f64>() / k.min(top.len()) as f64 };
+    let mut deaths = [0u64; 3];
+    for d in &w.dead {
+        deaths[d.cause.index()] += 1;
+    }
+    let _ = DeathCause::ALL;
+    StandRow {
+        year: w.year,
+        stems_ha: n as f64 / a,
+        seedlings_ha: ns as f64 / a,
+        basal_area_m2_ha: ba / a,
+        mean_height_m: if n > 0 { hs / n as f64 } else { 0.0 },
+        top_height_m: h100,
+        qmd_cm: if n > 0 { (d2 / n as f64).sqrt() } else { 0.0 },
+        stems_7cm_ha: n7 as f64 / a,
+        qmd_7cm_cm: if n7 > 0 { (d27 / n7 as f64).sqrt() } else { 0.0 },
+        share_ba: sba.iter().map(|v| if ba > 0.0 { v / ba } else { 0.0 }).collect(),
+        share_stems: sn.iter().map(|v| if n > 0 { v / n as f64 } else { 0.0 }).collect(),
+        deaths,
+    }
+}

@@ -1,0 +1,279 @@
+//! Tree storage: struct of arrays with stable ids, and a spatial hash grid for neighbour queries.
+
+use crate::species::SpeciesId;
+use serde::{Deserialize, Serialize};
+
+/// Stable tree identifier (never reused within a run).
+pub type TreeId = u64;
+
+/// Why a tree died.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum DeathCause {
+    /// Background (intrinsic, age-related) mortality, Bugmann 2001: p = 4.605 / max_age.
+    Age,
+    /// Stress: suppressed growth over several years (JABOWA/ForClim tradition).
+    Stress,
+    /// Windthrow on exposed sites.
+    Wind,
+}
+
+impl DeathCause {
+    /// All causes in output order.
+    pub const ALL: [DeathCause; 3] = [DeathCause::Age, DeathCause::Stress, DeathCause::Wind];
+    /// Lower-case name used in outputs (`dead:<name>`).
+    pub fn name(self) -> &'static str {
+        match self {
+            DeathCause::Age => "age",
+            DeathCause::Stress => "stress",
+            DeathCause::Wind => "wind",
+        }
+    }
+    /// Index in [`DeathCause::ALL`].
+    pub fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// A tree that died, kept in the world's record of the year it died in.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DeadTree {
+    /// Tree id.
+    pub id: TreeId,
+    /// Species.
+    pub species: SpeciesId,
+    /// Position (m).
+    pub x: f32,
+    /// Position (m).
+    pub y: f32,
+    /// Ground elevation (m).
+    pub z: f32,
+    /// Age at death (years).
+    pub age: f32,
+    /// Height at death (m).
+    pub height: f32,
+    /// DBH at death (cm).
+    pub dbh: f32,
+    /// Crown radius at death (m).
+    pub crown_radius: f32,
+    /// Crown base height at death (m).
+    pub crown_base: f32,
+    /// Simulation year of death.
+    pub year: u32,
+    /// Cause.
+    pub cause: DeathCause,
+}
+
+/// All living trees, one `Vec` per attribute (index `i` is one tree). Dead trees are removed at
+/// the end of the mortality phase (order of the survivors is kept) and recorded as [`DeadTree`].
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TreeStore {
+    /// Stable ids, strictly increasing in index order.
+    pub id: Vec<TreeId>,
+    /// Species index.
+    pub species: Vec<SpeciesId>,
+    /// East (m, world coordinates).
+    pub x: Vec<f32>,
+    /// North (m).
+    pub y: Vec<f32>,
+    /// Ground elevation (m).
+    pub z: Vec<f32>,
+    /// Age (years).
+    pub age: Vec<f32>,
+    /// Height (m).
+    pub height: Vec<f32>,
+    /// Diameter at breast height (cm); 0 below 1.3 m.
+    pub dbh: Vec<f32>,
+    /// Crown radius (m).
+    pub crown_radius: Vec<f32>,
+    /// Crown base height (m).
+    pub crown_base: Vec<f32>,
+    /// Light resource of the crown (0–1) from the last light phase.
+    pub light: Vec<f32>,
+    /// Vigour memory: exponentially weighted ratio of realised to potential growth (0–1).
+    pub vigour: Vec<f32>,
+    /// Site suitability (0–1) of the tree's cell for its species (cached at establishment).
+    pub suitability: Vec<f32>,
+    /// Next id to hand out.
+    pub next_id: TreeId,
+}
+
+/// A new tree to add.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NewTree {
+    /// Species.
+    pub species: SpeciesId,
+    /// Position (m).
+    pub x: f32,
+    /// Position (m).
+    pub y: f32,
+    /// Ground elevation (m).
+    pub z: f32,
+    /// Age (years).
+    pub age: f32,
+    /// Height (m).
+    pub height: f32,
+    /// DBH (cm).
+    pub dbh: f32,
+    /// Crown radius (m).
+    pub crown_radius: f32,
+    /// Site suitability (0–1).
+    pub suitability: f32,
+}
+
+impl TreeStore {
+    /// Number of living trees.
+    pub fn len(&self) -> usize {
+        self.id.len()
+    }
+    /// True when no tree lives.
+    pub fn is_empty(&self) -> bool {
+        self.id.is_empty()
+    }
+    /// Adds a tree and returns its new id.
+    pub fn push(&mut self, t: NewTree) -> TreeId {
+        let id = self.next_id;
+        self.next_id += 1;
+        self.id.push(id);
+        self.species.push(t.species);
+        self.x.push(t.x);
+        self.y.push(t.y);
+        self.z.push(t.z);
+        self.age.push(t.age);
+        self.height.push(t.height);
+        self.dbh.push(t.dbh);
+        self.crown_radius.push(t.crown_radius);
+        self.crown_base.push(t.height * 0.4);
+        self.light.push(1.0);
+        self.vigour.push(1.0);
+        self.suitability.push(t.suitability);
+        id
+    }
+    /// Removes every tree whose `keep` flag is false, keeping the order of the others.
+    pub fn retain(&mut self, keep: &[bool]) {
+        fn r<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
+            let mut j = 0;
+            for i in 0..v.len() {
+                if keep[i] {
+                    v[j] = v[i];
+                    j += 1;
+                }
+            }
+            v.truncate(j);
+        }
+        r(&mut self.id, keep);
+        r(&mut self.species, keep);
+        r(&mut self.x, keep);
+        r(&mut self.y, keep);
+        r(&mut self.z, keep);
+        r(&mut self.age, keep);
+        r(&mut self.height, keep);
+        r(&mut self.dbh, keep);
+        r(&mut self.crown_radius, keep);
+        r(&mut self.crown_base, keep);
+        r(&mut self.light, keep);
+        r(&mut self.vigour, keep);
+        r(&mut self.suitability, keep);
+    }
+    /// Basal area of tree `i` (m²).
+    #[inline]
+    pub fn basal_area_m2(&self, i: usize) -> f64 {
+        let d = self.dbh[i] as f64 / 100.0;
+        std::f64::consts::FRAC_PI_4 * d * d
+    }
+    /// Approximate heap size in bytes.
+    pub fn heap_bytes(&self) -> usize {
+        self.id.capacity() * 8 + self.species.capacity() * 2 + 11 * self.x.capacity() * 4
+    }
+}
+
+/// A spatial hash grid over the world: cells of `cell_m` metres, trees listed per cell (counting
+/// sort, O(trees)); rebuilt every year. Row 0 is the southern edge here (world y upwards).
+#[derive(Debug, Clone, Default)]
+pub struct SpatialGrid {
+    /// Cell size (m).
+    pub cell_m: f64,
+    /// Columns.
+    pub cols: usize,
+    /// Rows.
+    pub rows: usize,
+    /// `start[c]..start[c+1]` indexes `items` for cell `c = row * cols + col`.
+    pub start: Vec<u32>,
+    /// Tree indices, grouped by cell, ascending within a cell.
+    pub items: Vec<u32>,
+}
+
+impl SpatialGrid {
+    /// Cell index of world point `(x, y)`, clamped to the grid.
+    #[inline]
+    pub fn cell_of(&self, x: f32, y: f32) -> usize {
+        let c = ((x as f64 / self.cell_m) as isize).clamp(0, self.cols as isize - 1) as usize;
+        let r = ((y as f64 / self.cell_m) as isize).clamp(0, self.rows as isize - 1) as usize;
+        r * self.cols + c
+    }
+    /// Builds the grid over an extent `(w, h)` metres.
+    pub fn build(trees: &TreeStore, extent: (f64, f64), cell_m: f64) -> SpatialGrid {
+        let cols = ((extent.0 / cell_m).ceil() as usize).max(1);
+        let rows = ((extent.1 / cell_m).ceil() as usize).max(1);
+        let mut g = SpatialGrid { cell_m, cols, rows, start: vec![0; cols * rows + 1], items: vec![0; trees.len()] };
+        let cells: Vec<u32> = (0..trees.len()).map(|i| g.cell_of(trees.x[i], trees.y[i]) as u32).collect();
+        for &c in &cells {
+            g.start[c as usize + 1] += 1;
+        }
+        for c in 0..cols * rows {
+            g.start[c + 1] += g.start[c];
+        }
+        let mut fill = g.start.clone();
+        for (i, &c) in cells.iter().enumerate() {
+            g.items[fill[c as usize] as usize] = i as u32;
+            fill[c as usize] += 1;
+        }
+        g
+    }
+    /// Trees of cell `c`.
+    #[inline]
+    pub fn cell(&self, c: usize) -> &[u32] {
+        &self.items[self.start[c] as usize..self.start[c + 1] as usize]
+    }
+    /// Indices of trees within `r` metres of `(x, y)` (ascending cell order).
+    pub fn within(&self, trees: &TreeStore, x: f32, y: f32, r: f32, out: &mut Vec<u32>) {
+        out.clear();
+        let c0 = (((x - r) as f64 / self.cell_m).floor() as isize).max(0);
+        let c1 = (((x + r) as f64 / self.cell_m).floor() as isize).min(self.cols as isize - 1);
+        let r0 = (((y - r) as f64 / self.cell_m).floor() as isize).max(0);
+        let r1 = (((y + r) as f64 / self.cell_m).floor() as isize).min(self.rows as isize - 1);
+        for row in r0..=r1 {
+            for col in c0..=c1 {
+                for &i in self.cell(row as usize * self.cols + col as usize) {
+                    let dx = trees.x[i as usize] - x;
+                    let dy = trees.y[i as usize] - y;
+                    if dx * dx + dy * dy <= r * r {
+                        out.push(i);
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ids_are_stable_and_grid_finds_neighbours() {
+        let mut t = TreeStore::default();
+        for k in 0..10 {
+            t.push(NewTree { species: 0, x: k as f32 * 3.0, y: 1.0, z: 0.0, age: 1.0, height: 1.0, dbh: 0.0, crown_radius: 0.3, suitability: 1.0 });
+        }
+        let keep: Vec<bool> = (0..10).map(|k| k % 2 == 0).collect();
+        t.retain(&keep);
+        assert_eq!(t.id, vec![0, 2, 4, 6, 8]);
+        t.push(NewTree { species: 0, x: 1.0, y: 1.0, z: 0.0, age: 1.0, height: 1.0, dbh: 0.0, crown_radius: 0.3, suitability: 1.0 });
+        assert_eq!(*t.id.last().unwrap(), 10);
+        let g = SpatialGrid::build(&t, (40.0, 10.0), 5.0);
+        let mut out = vec![];
+        g.within(&t, 0.0, 1.0, 2.0, &mut out);
+        out.sort();
+        assert_eq!(out, vec![0, 5]);
+    }
+}

@@ -1,0 +1,184 @@
+//! The simulated world: site conditions, species pool, trees and the grids the phases share.
+
+use super::scenario::{Scenario, Start};
+use super::trees::{DeadTree, NewTree, SpatialGrid, TreeStore};
+use crate::conditions::SiteConditions;
+use crate::error::Result;
+use crate::rng::{salt, Stream};
+use crate::species::{Species, SpeciesId, SpeciesLibrary};
+use rayon::prelude::*;
+
+/// Size of the seed grid cells (m) onto which seeds are dispersed.
+pub const SEED_CELL_M: f64 = 20.0;
+
+/// Everything the yearly phases read and write.
+#[derive(Debug, Clone)]
+pub struct World {
+    /// Site conditions (terrain grid).
+    pub site: SiteConditions,
+    /// Species library (the pool indexes into it).
+    pub lib: SpeciesLibrary,
+    /// Species taking part, ascending ids.
+    pub pool: Vec<SpeciesId>,
+    /// Living trees.
+    pub trees: TreeStore,
+    /// Years completed so far (the next year to simulate).
+    pub year: u32,
+    /// Scenario seed.
+    pub seed: u64,
+    /// World extent (m).
+    pub extent: (f64, f64),
+    /// Area of unmasked cells (ha).
+    pub area_ha: f64,
+    /// Light grid / spatial hash cell size (m).
+    pub light_cell_m: f64,
+    /// Spatial hash of the trees at the last light phase (same cells as the light grid).
+    pub grid: SpatialGrid,
+    /// Relative light at the ground (0–1.5) per light cell, from the last light phase.
+    pub ground_light: Vec<f32>,
+    /// Site cell index (row-major, row 0 north) of each light cell; `u32::MAX` where masked.
+    pub light_site: Vec<u32>,
+    /// Relative insolation (cell insolation / median of unmasked cells, clamped 0.2–1.5) per site cell.
+    pub rel_insolation: Vec<f32>,
+    /// Suitability (0–1) per pool species (outer, pool order) per site cell.
+    pub suitability: Vec<Vec<f32>>,
+    /// Seed grid columns and rows (cells of [`SEED_CELL_M`], row 0 south).
+    pub seed_dims: (usize, usize),
+    /// Seeds per m² per pool species on the seed grid, from the last autumn.
+    pub seeds: Vec<Vec<f32>>,
+    /// External seed rain per pool species (seeds per m² and year).
+    pub seed_rain: Vec<f32>,
+    /// Trees that died in the current year (cleared at the start of each year).
+    pub dead: Vec<DeadTree>,
+    /// Deaths since the start, by cause ([`super::trees::DeathCause::ALL`] order).
+    pub deaths_total: [u64; 3],
+}
+
+impl World {
+    /// Builds the world of `scenario` on `site` with species from `lib`, placing the start
+    /// (planted stands, seed-source trees) at year 0.
+    ///
+    /// Errors: unknown species names ([`crate::Error::Invalid`]).
+    pub fn new(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
+        let pool = scenario.resolve_species(lib, &scenario.name)?;
+        let extent = site.extent_m();
+        let cell = scenario.light_cell_m;
+        let cols = ((extent.0 / cell).ceil() as usize).max(1);
+        let rows = ((extent.1 / cell).ceil() as usize).max(1);
+        let light_site: Vec<u32> = (0..rows * cols)
+            .into_par_iter()
+            .map(|c| {
+                let (r, col) = (c / cols, c % cols);
+                let (x, y) = ((col as f64 + 0.5) * cell, (r as f64 + 0.5) * cell);
+                match site.cell_at(x, y) {
+                    Some((sc, sr)) if *site.mask.get(sc, sr) => site.mask.idx(sc, sr) as u32,
+                    _ => u32::MAX,
+                }
+            })
+            .collect();
+        let mut ins: Vec<f32> = site.insolation_kwh_m2.data.iter().zip(&site.mask.data).filter(|(_, m)| **m).map(|(v, _)| *v).collect();
+        ins.sort_by(|a, b| a.total_cmp(b));
+        let median = ins.get(ins.len() / 2).copied().filter(|m| *m > 0.0).unwrap_or(1.0);
+        let rel_insolation = site.insolation_kwh_m2.data.iter().map(|v| (v / median).clamp(0.2, 1.5)).collect();
+        let suitability = pool.iter().map(|&s| site.indices.data.par_iter().zip(&site.mask.data).map(|(ix, m)| if *m { lib.species[s as usize].suitability(ix) } else { 0.0 }).collect()).collect();
+        let valid = site.mask.data.iter().filter(|m| **m).count();
+        let area_ha = valid as f64 * site.cell_x_m * site.cell_y_m / 10_000.0;
+        let seed_dims = (((extent.0 / SEED_CELL_M).ceil() as usize).max(1), ((extent.1 / SEED_CELL_M).ceil() as usize).max(1));
+        let mut seed_rain = vec![0.0f32; pool.len()];
+        for st in &scenario.start {
+            if let Start::SeedRain { species, seeds_per_ha } = st {
+                if let Some(p) = lib.find(species).and_then(|id| pool.iter().position(|&q| q == id)) {
+                    seed_rain[p] += (*seeds_per_ha / 10_000.0) as f32;
+                }
+            }
+        }
+        let mut w = World {
+            site,
+            lib: lib.clone(),
+            seeds: vec![vec![0.0; seed_dims.0 * seed_dims.1]; pool.len()],
+            pool,
+            trees: TreeStore::default(),
+            year: 0,
+            seed: scenario.seed,
+            extent,
+            area_ha,
+            light_cell_m: cell,
+            grid: SpatialGrid::default(),
+            ground_light: vec![1.0; rows * cols],
+            light_site,
+            rel_insolation,
+            suitability,
+            seed_dims,
+            seed_rain,
+            dead: Vec::new(),
+            deaths_total: [0; 3],
+        };
+        w.place_start(scenario);
+        Ok(w)
+    }
+
+    /// Position of species `s` in the pool.
+    pub fn pool_index(&self, s: SpeciesId) -> Option<usize> {
+        self.pool.iter().position(|&q| q == s)
+    }
+
+    /// Species record of `s`.
+    #[inline]
+    pub fn species(&self, s: SpeciesId) -> &Species {
+        &self.lib.species[s as usize]
+    }
+
+    /// Site cell index (row-major) of world point `(x, y)` when unmasked.
+    pub fn site_cell(&self, x: f64, y: f64) -> Option<usize> {
+        let (c, r) = self.site.cell_at(x, y)?;
+        (*self.site.mask.get(c, r)).then(|| self.site.mask.idx(c, r))
+    }
+
+    fn new_tree(&self, s: SpeciesId, x: f64, y: f64, age: f32) -> Option<NewTree> {
+        let cell = self.site_cell(x, y)?;
+        let p = self.pool_index(s)?;
+        let sp = self.species(s);
+        let h = super::phases::growth::potential_height(sp, age).max(0.3);
+        let d = super::phases::growth::open_dbh(sp, h) * 0.8;
+        Some(NewTree { species: s, x: x as f32, y: y as f32, z: self.site.elevation_at(x, y), age: age.max(1.0), height: h, dbh: d, crown_radius: super::phases::growth::open_crown_radius(sp, h, d), suitability: self.suitability[p][cell] })
+    }
+
+    fn place_start(&mut self, scenario: &Scenario) {
+        for (k, st) in scenario.start.iter().enumerate() {
+            let Some(s) = self.lib.find(st.species()) else { continue };
+            match st {
+                Start::Planted { spacing_m, age_yr, area, .. } => {
+                    let [x0, y0, x1, y1] = area.unwrap_or([0.0, 0.0, self.extent.0, self.extent.1]);
+                    let (x0, y0, x1, y1) = (x0.max(0.0), y0.max(0.0), x1.min(self.extent.0), y1.min(self.extent.1));
+                    let nx = ((x1 - x0) / spacing_m).floor().max(0.0) as u64;
+                    let ny = ((y1 - y0) / spacing_m).floor().max(0.0) as u64;
+                    for j in 0..ny {
+                        for i in 0..nx {
+                            let mut r = Stream::new(self.seed, (k as u64) << 48 | j << 24 | i, 0, salt::INIT);
+                            let x = x0 + (i as f64 + 0.5 + r.range(-0.15, 0.15)) * spacing_m;
+                            let y = y0 + (j as f64 + 0.5 + r.range(-0.15, 0.15)) * spacing_m;
+                            let a = (*age_yr + r.range(-0.5, 0.5) as f32).max(1.0);
+                            if let Some(t) = self.new_tree(s, x, y, a) {
+                                self.trees.push(t);
+                            }
+                        }
+                    }
+                }
+                Start::SeedSources { points, trees_per_source, .. } => {
+                    let sp = self.species(s);
+                    let age = sp.life.maturity_age_yr + 20.0;
+                    for (pi, p) in points.iter().enumerate() {
+                        for t in 0..*trees_per_source as u64 {
+                            let mut r = Stream::new(self.seed, (k as u64) << 48 | (pi as u64) << 24 | t, 0, salt::INIT);
+                            let (a, d) = (r.range(0.0, std::f64::consts::TAU), 10.0 * r.uniform().sqrt());
+                            if let Some(nt) = self.new_tree(s, p[0] + d * a.cos(), p[1] + d * a.sin(), age) {
+                                self.trees.push(nt);
+                            }
+                        }
+                    }
+                }
+                Start::SeedRain { .. } => {}
+            }
+        }
+    }
+}

@@ -1,0 +1,126 @@
+//! End to end through the binary: `sylva run` on a reduced scenario (a 12 × 12-cell corner of
+//! the shipped DEM that includes nodata cells, 6 years, small frames). Checks that every output
+//! exists, parses and holds sane values. Renders on the software adapter in CI.
+
+use std::path::Path;
+use std::process::Command;
+
+const SCENARIO: &str = r#"
+name = "reduced main job"
+years = 6
+seed = 7
+snapshot_every = 3
+checkpoint_every = 3
+species = ["beech", "silver_birch", "scots_pine"]
+
+[terrain]
+default = true
+window = [10, 5, 12, 12]
+
+[climate]
+latitude_deg = 36.59
+reference_temperature_c = 9.5
+reference_elevation_m = 360.0
+
+[[start]]
+kind = "planted"
+species = "beech"
+spacing_m = 6.0
+age_yr = 20.0
+
+[[start]]
+kind = "seed_rain"
+species = "silver_birch"
+seeds_per_ha = 500.0
+
+[[start]]
+kind = "seed_sources"
+species = "scots_pine"
+points = [[700, 200]]
+trees_per_source = 5
+"#;
+
+fn png_variance(path: &Path) -> f64 {
+    let img = image::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display())).to_rgb8();
+    let n = (img.width() * img.height()) as f64;
+    let mean: f64 = img.pixels().map(|p| p[1] as f64).sum::<f64>() / n;
+    img.pixels().map(|p| (p[1] as f64 - mean).powi(2)).sum::<f64>() / n
+}
+
+#[test]
+fn sylva_run_reduced_scenario_writes_every_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = dir.path().join("reduced.toml");
+    std::fs::write(&sc, SCENARIO).unwrap();
+    let out = dir.path().join("out");
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva"))
+        .args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--size", "320x180", "--timelapse-size", "160x90", "--frames-between", "1"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&res.stdout);
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(res.status.success(), "sylva run failed:\n{stdout}\n{stderr}");
+    assert!(stdout.contains("basal area"), "summary table printed: {stdout}");
+
+    // Files exist.
+    for f in [
+        "summary.md",
+        "scenario.toml",
+        "stand_table.csv",
+        "stand_table.png",
+        "inventory/year_0000.csv",
+        "inventory/year_0006.csv",
+        "inventory/year_0006.geojson",
+        "maps/conditions/elevation.png",
+        "maps/conditions/elevation.tif",
+        "maps/conditions/L.png",
+        "maps/conditions/F.tif",
+        "stills/year_0000_oblique.png",
+        "stills/year_0006_topdown.png",
+        "timelapse.gif",
+        "frames/frame_00000.png",
+    ] {
+        assert!(out.join(f).is_file(), "missing output {f}");
+    }
+
+    // The stand table parses; species shares of basal area sum to 1 once there is basal area.
+    let mut rdr = csv::Reader::from_path(out.join("stand_table.csv")).unwrap();
+    let headers = rdr.headers().unwrap().clone();
+    let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
+    assert_eq!(rows.len(), 6, "one row per year");
+    let last = rows.last().unwrap();
+    let ba: f64 = last[headers.iter().position(|h| h == "basal_area_m2_ha").unwrap()].parse().unwrap();
+    assert!(ba > 0.5, "the planted beech has basal area, got {ba}");
+    let share: f64 = headers.iter().enumerate().filter(|(_, h)| h.starts_with("ba_share_")).map(|(i, _)| last[i].parse::<f64>().unwrap()).sum();
+    assert!((share - 1.0).abs() < 1e-3, "species shares sum to {share}");
+
+    // No tree stands on a masked (nodata) cell of the window.
+    let t = sylva::terrain::io::default_terrain().unwrap();
+    let w = sylva::terrain::io::window(&t, 10, 5, 12, 12).unwrap();
+    let masked = w.elevation.data.iter().filter(|v| !v.is_finite()).count();
+    assert!(masked > 20 && masked < 120, "the window mixes nodata and valid cells ({masked} nodata)");
+    let rows = sylva::job::inventory::read(&out.join("inventory/year_0006.csv")).unwrap();
+    assert!(rows.len() > 50, "trees in the final inventory: {}", rows.len());
+    let cell = w.geo.cell_y_m();
+    for r in rows.iter().filter(|r| r.status == "alive") {
+        let col = (r.x_m / cell) as usize;
+        let row = w.elevation.height - 1 - (r.y_m / cell) as usize;
+        assert!(w.is_valid(col, row), "tree {} at ({}, {}) stands on a nodata cell", r.id, r.x_m, r.y_m);
+        assert!(r.height_m > 0.0 && r.dbh_cm >= 0.0 && r.crown_radius_m > 0.0);
+    }
+
+    // GeoJSON parses and has one feature per tree.
+    let gj: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("inventory/year_0006.geojson")).unwrap()).unwrap();
+    assert_eq!(gj["type"], "FeatureCollection");
+    assert_eq!(gj["features"].as_array().unwrap().len(), rows.len());
+
+    // Pictures are not blank: terrain and trees give contrast.
+    for f in ["stills/year_0006_oblique.png", "stills/year_0006_topdown.png", "stand_table.png", "maps/conditions/elevation.png"] {
+        let v = png_variance(&out.join(f));
+        assert!(v > 20.0, "{f} looks blank (variance {v})");
+    }
+    let gif = std::fs::read(out.join("timelapse.gif")).unwrap();
+    assert_eq!(&gif[..6], b"GIF89a");
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("stills/year_0006_oblique.png") && md.contains("timelapse.gif"));
+}

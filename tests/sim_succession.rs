@@ -1,0 +1,32 @@
+//! Succession: birch (pioneer, L 7, shade tolerance 1) and beech (L 3, tolerance 4.5) arrive
+//! together by seed rain on bare, beech-suitable flat land. Birch must dominate basal area at
+//! year 30 and beech at year 200.
+mod common;
+
+#[test]
+fn birch_then_beech() {
+    let (sc, mut w) = common::world(r#"
+name = "succession"
+years = 200
+seed = 11
+[terrain]
+uniform = { width = 5, height = 5, cell_m = 20.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }
+[[start]]
+kind = "seed_rain"
+species = "birch"
+seeds_per_ha = 2000
+[[start]]
+kind = "seed_rain"
+species = "beech"
+seeds_per_ha = 500
+"#);
+    let rows = common::run(&sc, &mut w, 200);
+    for r in rows.iter().filter(|r| r.year % 20 == 0 || r.year == 30) {
+        eprintln!("year {} N {:.0} BA {:.1} H100 {:.1} share_ba beech {:.2} birch {:.2}", r.year, r.stems_ha, r.basal_area_m2_ha, r.top_height_m, r.share_ba[0], r.share_ba[1]);
+    }
+    let (y30, y200) = (&rows[29], &rows[199]);
+    // pool order: beech = 0, birch = 1
+    assert!(y30.share_ba[1] > 0.5, "birch share of BA at year 30: {:.2}", y30.share_ba[1]);
+    assert!(y200.share_ba[0] > 0.5, "beech share of BA at year 200: {:.2}", y200.share_ba[0]);
+    assert!(y200.basal_area_m2_ha > 10.0, "closed forest expected, BA {:.1}", y200.basal_area_m2_ha);
+}
