@@ -213,5 +213,114 @@ fn showcase_images_for_inspection() {
     });
 }
 
+#[test]
+fn batches_pick_levels_by_distance_and_cross_fade() {
+    use sylva::render::instanced::build_batches;
+    // trees along the view axis at 30 m, 200 m, 700 m, 3 km from a ground camera
+    let mut trees: Vec<TreeInstance> = [30.0f32, 200.0, 700.0, 3000.0].iter().enumerate().map(|(i, &d)| TreeInstance::new(i as u64, [0.0, d, 0.0], 20.0, 5.0, 0, [0.1, 0.3, 0.05])).collect();
+    trees.push(TreeInstance::new(9, [0.0, -100.0, 0.0], 20.0, 5.0, 0, [0.1, 0.3, 0.05])); // behind
+    trees.push(TreeInstance::new(10, [0.0, 50.0, 0.0], 20.0, 5.0, 7, [0.1, 0.3, 0.05])); // bad species
+    let mut scene = flat_scene(trees);
+    scene.terrain.positions.iter_mut().for_each(|p| p[1] -= 100.0);
+    let cam = Camera { far: 10_000.0, ..Camera::look_at([0.0, 0.0, 10.0], [0.0, 100.0, 10.0], 60.0) };
+    let b = build_batches(&scene, &cam, 1920, 1080, &LodParams::default());
+    assert_eq!(b.culled, 1);
+    assert_eq!(b.invalid, 1);
+    assert_eq!(b.per_level, vec![1, 1, 1, 1]);
+    let levels: Vec<usize> = b.draws.iter().map(|d| d.level).collect();
+    assert_eq!(levels, vec![0, 1, 2, 3]);
+    // one draw range per (prototype, level), instances inside its range
+    let l0: usize = scene.prototypes[0].lods.levels[0].triangle_count();
+    assert!(b.triangles >= l0 as u64);
+    // a tree exactly at a switch size is drawn at both levels with complementary fades
+    let p = LodParams::default();
+    let f = 1080.0 / (2.0 * (30f32.to_radians()).tan());
+    let d = 20.0 * f / p.switch_px[1];
+    let scene2 = flat_scene(vec![TreeInstance::new(1, [0.0, d, 0.0], 20.0, 5.0, 0, [0.1, 0.3, 0.05])]);
+    let mut cam2 = cam;
+    cam2.eye = [0.0, 0.0, 10.0];
+    let b2 = build_batches(&scene2, &cam2, 1920, 1080, &p);
+    assert_eq!(b2.draws.len(), 2, "{:?}", b2.draws);
+    let (fine, coarse) = (b2.instances[0], b2.instances[1]);
+    assert!((fine.p1[2] - 0.5).abs() < 0.05 && fine.p1[3] == 0.0 && coarse.p1[3] == 1.0);
+}
+
+#[test]
+fn wind_sways_crowns_and_bare_crowns_show_fewer_leaves() {
+    let trees = vec![TreeInstance::new(1, [100.0, 100.0, 0.0], 22.0, 6.0, 0, [0.1, 0.35, 0.05])];
+    let mut scene = flat_scene(trees);
+    let cam = Camera::look_at([100.0, 60.0, 11.0], [100.0, 100.0, 11.0], 50.0);
+    with_renderer(|r| {
+        let calm = r.render(&scene, &cam, 160, 120).unwrap();
+        scene.wind = Wind { direction: [1.0, 0.0], directed: 8.0, undirected: 0.0, time_s: 0.0 };
+        let windy = r.render(&scene, &cam, 160, 120).unwrap();
+        // centroid of tree pixels in the upper half moves downwind (+x = right on screen)
+        let cx = |img: &image::RgbaImage| {
+            let (mut s, mut n) = (0.0f64, 0.0f64);
+            for (x, y, p) in img.enumerate_pixels() {
+                if y < 60 && is_tree_colour(p) {
+                    s += x as f64;
+                    n += 1.0;
+                }
+            }
+            s / n.max(1.0)
+        };
+        let (a, b) = (cx(&calm), cx(&windy));
+        assert!(b > a + 1.0, "crown centroid {a:.1} -> {b:.1} px with wind towards +x");
+        scene.wind = Wind::default();
+        let count = |img: &image::RgbaImage| img.enumerate_pixels().filter(|(_, y, _)| *y < 55).map(|(_, _, p)| p).filter(|p| { let [r, g, b, _] = p.0; g as i32 > r as i32 + 8 && g as i32 > b as i32 + 8 && g < 200 }).count();
+        let leafy = count(&calm);
+        scene.instances[0].leaf_amount = 0.0;
+        let bare = r.render(&scene, &cam, 160, 120).unwrap();
+        img_save(&bare, "bare.png");
+        assert!(count(&bare) * 4 < leafy, "bare {} vs leafy {leafy} foliage pixels", count(&bare));
+    });
+}
+
+fn img_save(img: &image::RgbaImage, name: &str) {
+    img.save(out_dir().join(name)).unwrap();
+}
+
+#[test]
+fn bad_inputs_are_errors_not_panics() {
+    let mut scene = flat_scene(vec![]);
+    let cam = Camera::preset(CameraPreset::Overview, &scene.terrain);
+    with_renderer(|r| {
+        assert!(r.render(&scene, &cam, 0, 10).is_err());
+        scene.terrain.indices.push(1_000_000);
+        scene.terrain.indices.extend_from_slice(&[0, 0]);
+        let e = r.render(&scene, &cam, 16, 16).unwrap_err().to_string();
+        assert!(e.contains("indices"), "{e}");
+    });
+}
+
+#[test]
+fn timelapse_grows_trees_and_writes_gif() {
+    use sylva::render::timelapse::{render_sequence, write_gif};
+    let base = demo_scene(40, 200.0, 9);
+    let young: Vec<TreeInstance> = base.instances.iter().map(|t| TreeInstance { height: t.height * 0.4, crown_radius: t.crown_radius * 0.4, ..*t }).collect();
+    let old = base.instances.clone();
+    let terrain = base.terrain.clone();
+    with_renderer(|r| {
+        let mut seen = Vec::new();
+        let frames = render_sequence(r, &base, &[young.clone(), old.clone()], 3, 12.0, |u| Camera::orbit(&terrain, u * 0.1), (64, 48), |p| seen.push(p.done)).unwrap();
+        assert_eq!(frames.len(), 4);
+        assert_eq!(seen, vec![1, 2, 3, 4]);
+        // trees grow: more tree-coloured pixels above the terrain in the last frame than the first
+        let mut empty = base.clone();
+        empty.instances.clear();
+        let mut covered = |img: &image::RgbaImage, u: f32| {
+            let bare = r.render(&empty, &Camera::orbit(&terrain, u * 0.1), 64, 48).unwrap();
+            img.pixels().zip(bare.pixels()).filter(|(p, q)| p.0.iter().zip(q.0.iter()).any(|(a, b)| (*a as i32 - *b as i32).abs() > 30)).count()
+        };
+        let (first, last) = (covered(&frames[0], 0.0), covered(&frames[3], 1.0));
+        assert!(last as f32 > 1.5 * first as f32, "tree pixels {first} -> {last}");
+        let gif = out_dir().join("timelapse.gif");
+        frames[3].save(out_dir().join("timelapse_last.png")).unwrap();
+        write_gif(&gif, &frames, 12.0).unwrap();
+        assert!(std::fs::metadata(&gif).unwrap().len() > 100);
+    });
+}
+
 #[allow(dead_code)]
 fn unused(_: Prototype) {}

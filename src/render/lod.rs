@@ -204,9 +204,9 @@ pub fn placeholder_chain(conifer: bool) -> LodChain {
             imp.leaves.append(&card(&[(-0.22, 0.12), (0.22, 0.12), (0.0, 1.0)], 0.4, a));
             imp.bark.append(&card(&[(-0.012, 0.0), (0.012, 0.0), (0.012, 0.15), (-0.012, 0.15)], 0.07, a));
         } else {
-            let pts: Vec<(f32, f32)> = (0..10)
+            let pts: Vec<(f32, f32)> = (0..6)
                 .map(|i| {
-                    let th = i as f32 / 10.0 * std::f32::consts::TAU;
+                    let th = i as f32 / 6.0 * std::f32::consts::TAU;
                     (0.33 * th.cos(), 0.62 + 0.38 * th.sin())
                 })
                 .collect();
@@ -220,16 +220,53 @@ pub fn placeholder_chain(conifer: bool) -> LodChain {
     top.positions.push([0.0, 0.0, zc + 0.05]);
     top.normals.push([0.0, 0.0, 1.0]);
     top.uvs.push([0.5, 0.5]);
-    for i in 0..8 {
-        let a = i as f32 / 8.0 * std::f32::consts::TAU;
+    for i in 0..6 {
+        let a = i as f32 / 6.0 * std::f32::consts::TAU;
         top.positions.push([r * a.cos(), r * a.sin(), zc]);
         top.normals.push(Vec3::new(a.cos(), a.sin(), 1.2).normalize().to_array());
         top.uvs.push([a.cos(), a.sin()]);
     }
-    for i in 0..8u32 {
-        top.indices.extend_from_slice(&[0, 1 + i, 1 + (i + 1) % 8]);
+    for i in 0..6u32 {
+        top.indices.extend_from_slice(&[0, 1 + i, 1 + (i + 1) % 6]);
     }
     imp.leaves.append(&top);
     levels.push(imp);
     LodChain { levels }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::camera::Camera;
+
+    #[test]
+    fn placeholder_chains_have_four_decreasing_levels_of_unit_height() {
+        for conifer in [false, true] {
+            let c = placeholder_chain(conifer);
+            assert_eq!(c.levels.len(), 4);
+            let tris: Vec<usize> = c.levels.iter().map(|l| l.triangle_count()).collect();
+            assert!(tris.windows(2).all(|w| w[0] > w[1]), "{tris:?}");
+            for l in &c.levels {
+                for m in [&l.bark, &l.leaves] {
+                    assert_eq!(m.positions.len(), m.normals.len());
+                    assert!(m.indices.iter().all(|&i| (i as usize) < m.positions.len()));
+                }
+                let (lo, hi) = l.leaves.bounds().unwrap();
+                assert!(hi[2] <= 1.0 + 1e-4 && hi[2] > 0.9, "top {hi:?}");
+                assert!(lo[2] >= 0.0);
+                assert!(l.bark.bounds().unwrap().0[2].abs() < 1e-4, "trunk starts at the base");
+            }
+        }
+    }
+
+    #[test]
+    fn frustum_culls_behind_and_beside() {
+        let cam = Camera::look_at([0.0, 0.0, 10.0], [0.0, 100.0, 10.0], 60.0);
+        let f = Frustum::from_view_proj(cam.view_proj(1.5));
+        assert!(f.sphere_visible(Vec3::new(0.0, 50.0, 10.0), 1.0));
+        assert!(!f.sphere_visible(Vec3::new(0.0, -50.0, 10.0), 1.0), "behind");
+        assert!(!f.sphere_visible(Vec3::new(500.0, 50.0, 10.0), 1.0), "far right");
+        assert!(f.sphere_visible(Vec3::new(0.0, -0.5, 10.0), 1.0), "sphere straddling the eye");
+        assert!(!f.sphere_visible(Vec3::new(0.0, 1e6, 10.0), 1.0), "beyond far plane");
+    }
 }

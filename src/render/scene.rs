@@ -324,3 +324,52 @@ pub fn demo_scene(n_trees: usize, size_m: f32, seed: u64) -> Scene {
     }
     Scene { terrain, sea_level: None, prototypes, instances, sun: Sun::from_position(47.0, 172.0, 14.0), sky: Sky::default(), wind: Wind::default() }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sun_at_noon_equinox_stands_at_colatitude_in_the_south() {
+        // day 80 ≈ March equinox: declination ≈ 0, noon elevation = 90° − latitude
+        let s = Sun::from_position(47.0, 80.0, 12.0);
+        assert!((s.elevation_deg() - 43.0).abs() < 1.0, "{}", s.elevation_deg());
+        assert!(s.direction[1] < 0.0 && s.direction[0].abs() < 1e-3, "{:?}", s.direction);
+        // summer solstice: δ = 23.44°, elevation 66.4°
+        let s = Sun::from_position(47.0, 172.0, 12.0);
+        assert!((s.elevation_deg() - 66.44).abs() < 0.2, "{}", s.elevation_deg());
+        // morning sun in the east, afternoon in the west
+        assert!(Sun::from_position(47.0, 172.0, 9.0).direction[0] > 0.3);
+        assert!(Sun::from_position(47.0, 172.0, 15.0).direction[0] < -0.3);
+        // night is clamped just above the horizon, dimmed
+        let n = Sun::from_position(47.0, 172.0, 0.0);
+        assert!(n.elevation_deg() > 1.0 && n.elevation_deg() < 3.0);
+        assert!(n.color[1] < 0.5);
+    }
+
+    #[test]
+    fn season_colours() {
+        let summer = [0.1, 0.3, 0.05];
+        assert_eq!(deciduous_season(200.0, summer), (summer, 1.0));
+        assert_eq!(deciduous_season(30.0, summer).1, 0.0);
+        let (c, a) = deciduous_season(295.0, summer);
+        assert!(c[0] > c[1] && a > 0.5 && a < 1.0, "{c:?} {a}");
+        assert!(deciduous_season(115.0, summer).1 > 0.0 && deciduous_season(115.0, summer).1 < 1.0);
+    }
+
+    #[test]
+    fn demo_scene_is_valid_and_deterministic() {
+        let a = demo_scene(50, 300.0, 5);
+        let b = demo_scene(50, 300.0, 5);
+        assert_eq!(a, b);
+        a.terrain.validate().unwrap();
+        assert_eq!(a.instances.len(), 50);
+        let (lo, hi) = a.terrain.bounds();
+        for t in &a.instances {
+            assert!(t.position[0] >= lo[0] && t.position[0] <= hi[0] && t.position[1] >= lo[1] && t.position[1] <= hi[1]);
+            // stands on the ground: within 2 m of the nearest vertex height
+            let g = a.terrain.nearest_height(t.position[0], t.position[1]).unwrap();
+            assert!((t.position[2] - g).abs() < 2.0, "{} vs {g}", t.position[2]);
+        }
+    }
+}

@@ -165,3 +165,60 @@ pub fn from_tin(vertices: &[[f32; 3]], triangles: &[[u32; 3]], cover: &LandCover
     };
     Ok(TerrainMesh { positions: vertices.to_vec(), normals, colors, indices })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plane_grid_has_analytic_normals_and_positions() {
+        // z = 0.5·x (slope 26.57° facing west)
+        let (w, h, cell) = (5, 4, 10.0f32);
+        let mut g = Grid::filled(w, h, 0.0f32);
+        for r in 0..h {
+            for c in 0..w {
+                *g.get_mut(c, r) = 0.5 * (c as f32 + 0.5) * cell;
+            }
+        }
+        let m = from_grid(&g, cell, cell, &LandCover::default(), None).unwrap();
+        m.validate().unwrap();
+        assert_eq!(m.triangle_count(), 2 * (w - 1) * (h - 1));
+        // row 0 is north: its y is the largest
+        assert_eq!(m.positions[0], [5.0, 35.0, 2.5]);
+        let want = Vec3::new(-0.5, 0.0, 1.0).normalize();
+        for n in &m.normals {
+            assert!((Vec3::from(*n) - want).length() < 1e-5, "{n:?}");
+        }
+        // triangles face up (counter-clockwise from above)
+        for t in m.indices.chunks(3) {
+            let [a, b, c] = [0, 1, 2].map(|k| Vec3::from(m.positions[t[k] as usize]));
+            assert!((b - a).cross(c - a).z > 0.0);
+        }
+    }
+
+    #[test]
+    fn tin_normals_and_orientation() {
+        let v = [[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [0.0, 10.0, 0.0], [10.0, 10.0, 0.0]];
+        let t = [[0, 2, 1], [1, 2, 3]]; // first one clockwise from above
+        let m = from_tin(&v, &t, &LandCover::default(), None).unwrap();
+        for n in &m.normals {
+            assert_eq!(*n, [0.0, 0.0, 1.0]);
+        }
+        assert_eq!(&m.indices[..3], &[0, 1, 2]);
+        assert!(from_tin(&v, &[[0, 1, 9]], &LandCover::default(), None).is_err());
+    }
+
+    #[test]
+    fn land_cover_rock_and_snow() {
+        let lc = LandCover::default();
+        let flat = [0.0, 0.0, 1.0];
+        let steep = [0.8, 0.0, 0.6]; // 53°
+        let meadow = lc.color(500.0, flat);
+        assert!(meadow[1] > meadow[0] && meadow[1] > meadow[2]);
+        let rock = lc.color(500.0, steep);
+        assert!((rock[0] - 0.36).abs() < 1e-3);
+        let snow = lc.color(3200.0, flat);
+        assert!(snow[2] > 0.8);
+        assert_eq!(overlay_ramp(-1.0), overlay_ramp(0.0));
+    }
+}

@@ -164,3 +164,104 @@ pub fn write_mp4(dir: &Path, fps: f32, out: &Path) -> Result<bool> {
     }
     Ok(true)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tree(id: u64, h: f32) -> TreeInstance {
+        TreeInstance::new(id, [id as f32, 0.0, 0.0], h, h * 0.3, 0, [0.1, 0.3, 0.05])
+    }
+
+    #[test]
+    fn growing_recruit_and_dying_trees() {
+        let a = vec![tree(1, 10.0), tree(2, 20.0)];
+        let b = vec![tree(3, 4.0), tree(1, 14.0)];
+        let m = interpolate(&a, &b, 0.25);
+        assert_eq!(m.iter().map(|t| t.id).collect::<Vec<_>>(), vec![1, 2, 3]);
+        assert!((m[0].height - 11.0).abs() < 1e-5);
+        assert_eq!(m[0].opacity, 1.0);
+        // dying tree fades out without growing
+        assert_eq!(m[1].height, 20.0);
+        assert!((m[1].opacity - 0.75).abs() < 1e-6);
+        // recruit scales and fades in
+        assert!((m[2].opacity - 0.25).abs() < 1e-6);
+        assert!((m[2].height - 4.0 * (0.3 + 0.7 * 0.25)).abs() < 1e-5);
+        // end points
+        let end = interpolate(&a, &b, 1.0);
+        assert_eq!(end[1].opacity, 0.0);
+        assert_eq!(end[0].height, 14.0);
+        assert_eq!(end[2].height, 4.0);
+        assert_eq!(interpolate(&a, &b, 0.0)[0].height, 10.0);
+        // order independence
+        let mut b2 = b.clone();
+        b2.reverse();
+        assert_eq!(interpolate(&a, &b2, 0.4), interpolate(&a, &b, 0.4));
+    }
+
+    #[test]
+    fn gif_and_png_frames_are_written_and_decodable() {
+        let dir = tempfile::tempdir().unwrap();
+        let frames: Vec<image::RgbaImage> = (0..3).map(|i| image::RgbaImage::from_pixel(8, 6, image::Rgba([i * 80, 100, 50, 255]))).collect();
+        let gif = dir.path().join("a.gif");
+        write_gif(&gif, &frames, 12.0).unwrap();
+        let dec = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(std::fs::File::open(&gif).unwrap())).unwrap();
+        use image::AnimationDecoder;
+        let got = dec.into_frames().collect_frames().unwrap();
+        assert_eq!(got.len(), 3);
+        assert_eq!(got[0].buffer().dimensions(), (8, 6));
+        let paths = write_png_frames(&dir.path().join("frames"), &frames).unwrap();
+        assert_eq!(paths.len(), 3);
+        assert_eq!(image::open(&paths[2]).unwrap().to_rgba8().get_pixel(0, 0).0, [160, 100, 50, 255]);
+        assert!(write_gif(&gif, &[], 12.0).is_err());
+        assert!(write_gif(&gif, &frames, 0.0).is_err());
+        let mut seen = Vec::new();
+        let mut m = ProgressMeter::new(2, |p: Progress| seen.push(p.done));
+        m.tick();
+        m.tick();
+        assert_eq!(seen, vec![1, 2]);
+    }
+}
+
+/// Renders a timelapse through a series of snapshots: `steps_per_snapshot` frames between each
+/// consecutive pair (growth interpolated with [`interpolate`]), plus the last snapshot, so
+/// `(snapshots − 1) · steps + 1` frames (one frame for a single snapshot). `camera(u)` gives
+/// the camera at film position `u` in 0..1 (e.g. [`super::camera::Camera::orbit`]); the wind
+/// time advances by `1 / fps` per frame. `progress` is called after every frame.
+///
+/// # Errors
+/// [`Error::Invalid`] when there is no snapshot or `steps_per_snapshot` is 0; rendering errors
+/// from [`super::headless::Renderer::render`].
+#[allow(clippy::too_many_arguments)]
+pub fn render_sequence(
+    renderer: &mut super::headless::Renderer,
+    base: &super::scene::Scene,
+    snapshots: &[Vec<TreeInstance>],
+    steps_per_snapshot: usize,
+    fps: f32,
+    camera: impl Fn(f32) -> super::camera::Camera,
+    size: (u32, u32),
+    progress: impl FnMut(Progress),
+) -> Result<Vec<image::RgbaImage>> {
+    if snapshots.is_empty() || steps_per_snapshot == 0 {
+        return Err(Error::Invalid {
+            context: "render::timelapse::render_sequence".into(),
+            field: if snapshots.is_empty() { "snapshots".into() } else { "steps_per_snapshot".into() },
+            value: "0".into(),
+            expected: "at least 1".into(),
+        });
+    }
+    let total = (snapshots.len() - 1) * steps_per_snapshot + 1;
+    let mut meter = ProgressMeter::new(total, progress);
+    let mut scene = base.clone();
+    let mut frames = Vec::with_capacity(total);
+    for k in 0..total {
+        let (i, j) = (k / steps_per_snapshot, k % steps_per_snapshot);
+        scene.instances = if i + 1 >= snapshots.len() { snapshots[snapshots.len() - 1].clone() } else { interpolate(&snapshots[i], &snapshots[i + 1], j as f32 / steps_per_snapshot as f32) };
+        scene.wind.time_s = base.wind.time_s + k as f32 / fps.max(1e-3);
+        let u = if total > 1 { k as f32 / (total - 1) as f32 } else { 0.0 };
+        frames.push(renderer.render(&scene, &camera(u), size.0, size.1)?);
+        meter.tick();
+    }
+    Ok(frames)
+}

@@ -26,13 +26,13 @@ fn shadow_factor(world: vec3<f32>, n: vec3<f32>) -> f32 {
         return 1.0;
     }
     let t = g.params.z;
+    // 4 bilinear comparison taps (each already a 2x2 PCF with a linear comparison sampler)
     var s = 0.0;
-    for (var i = -1; i <= 1; i = i + 1) {
-        for (var j = -1; j <= 1; j = j + 1) {
-            s = s + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + vec2<f32>(f32(i), f32(j)) * t, ndc.z - 0.0015);
-        }
-    }
-    return s / 9.0;
+    s = s + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + vec2<f32>(-0.5, -0.5) * t, ndc.z - 0.0015);
+    s = s + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + vec2<f32>(0.5, -0.5) * t, ndc.z - 0.0015);
+    s = s + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + vec2<f32>(-0.5, 0.5) * t, ndc.z - 0.0015);
+    s = s + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + vec2<f32>(0.5, 0.5) * t, ndc.z - 0.0015);
+    return s / 4.0;
 }
 
 fn sky_color(dir: vec3<f32>) -> vec3<f32> {
