@@ -151,3 +151,116 @@ impl Default for Climate {
         }
     }
 }
+
+/// Light index L (1–9) from the ratio `r` of a cell's annual insolation to unshaded flat ground
+/// at the same latitude: L = clamp(7 + 2·(r − 1)/0.25, 1, 9). Anchors: open flat ground (r = 1)
+/// → 7 ("light plant, rarely under 40 % relative light", Ellenberg et al. 1991, Scripta
+/// Geobotanica 18); r ≥ 1.25 (steep sun-facing slope) → 9; r ≤ 0.25 (deep shade of a north
+/// face) → 1. Linear between.
+pub fn light_index(ratio: f64) -> f32 {
+    (7.0 + 2.0 * (ratio - 1.0) / 0.25).clamp(1.0, 9.0) as f32
+}
+
+/// Temperature index T (1–9) from mean annual air temperature (°C):
+/// T = clamp(1 + 8·(t + 2)/20, 1, 9). Anchors: −2 °C (arctic–alpine belt) → 1, 8 °C
+/// (submontane Central Europe, Ellenberg's T 5) → 5, 18 °C (Mediterranean lowland) → 9.
+pub fn temperature_index(t_c: f64) -> f32 {
+    (1.0 + 8.0 * (t_c + 2.0) / 20.0).clamp(1.0, 9.0) as f32
+}
+
+/// Moisture index F (1–12) from the topographic wetness index: F = clamp(1 + 0.5·TWI, 1, 12).
+/// Anchors: a ridge (TWI ≈ 4) → 3 (dry), a mid-slope (TWI ≈ 8) → 5 ("fresh", Ellenberg's
+/// mid-point), a valley floor (TWI ≈ 14) → 8, TWI ≥ 22 → 12 (water plants).
+pub fn moisture_index(twi: f64) -> f32 {
+    (1.0 + 0.5 * twi).clamp(1.0, 12.0) as f32
+}
+
+/// Living conditions of `terrain` under `climate` (see [`derive_with_progress`]).
+pub fn derive(terrain: &crate::terrain::Terrain, climate: &Climate) -> crate::Result<SiteConditions> {
+    derive_with_progress(terrain, climate, &|_| {})
+}
+
+/// Computes every terrain field ([`crate::terrain::fields::compute`]) and maps it to the
+/// Ellenberg-style indices: L by [`light_index`], T by [`temperature_index`], F by
+/// [`moisture_index`], K, R, N the scenario constants of `climate`. Masked cells (nodata or at
+/// or below `climate.sea_level_m`) get indices `[0; 6]`, elevation 0 where not finite, and NaN in
+/// the other fields. `progress` receives the name of each stage.
+///
+/// Errors: [`crate::Error::Invalid`] when no cell is above sea level.
+pub fn derive_with_progress(terrain: &crate::terrain::Terrain, climate: &Climate, progress: &dyn Fn(&str)) -> crate::Result<SiteConditions> {
+    let f = crate::terrain::fields::compute(terrain, climate, progress)?;
+    progress("Ellenberg indices");
+    Ok(from_fields(terrain, climate, f))
+}
+
+/// Builds [`SiteConditions`] from already computed fields (see [`derive_with_progress`]).
+pub fn from_fields(terrain: &crate::terrain::Terrain, climate: &Climate, f: crate::terrain::fields::Fields) -> SiteConditions {
+    let (w, h) = (terrain.elevation.width, terrain.elevation.height);
+    let flat = f.flat_insolation_kwh_m2.max(1e-9);
+    let mut indices = Grid::filled(w, h, [0f32; 6]);
+    for i in 0..w * h {
+        if !f.mask.data[i] {
+            continue;
+        }
+        let mut v = [0f32; 6];
+        v[factor::L] = light_index(f.insolation_kwh_m2.data[i] as f64 / flat);
+        v[factor::T] = temperature_index(f.temperature_c.data[i] as f64);
+        v[factor::K] = climate.continentality_k;
+        v[factor::F] = moisture_index(f.twi.data[i] as f64);
+        v[factor::R] = climate.reaction_r;
+        v[factor::N] = climate.nitrogen_n;
+        indices.data[i] = v;
+    }
+    let cell_x_m = (0..h).map(|r| terrain.geo.cell_x_m_at_row(r)).sum::<f64>() / h.max(1) as f64;
+    SiteConditions {
+        geo: terrain.geo.clone(),
+        cell_x_m,
+        cell_y_m: terrain.geo.cell_y_m(),
+        elevation_m: terrain.elevation.map(|z| if z.is_finite() { *z } else { 0.0 }),
+        mask: f.mask,
+        slope_deg: f.slope_deg,
+        aspect_deg: f.aspect_deg,
+        twi: f.twi,
+        insolation_kwh_m2: f.insolation_kwh_m2,
+        wind_exposure: f.wind_exposure,
+        temperature_c: f.temperature_c,
+        indices,
+    }
+}
+
+#[cfg(test)]
+mod derive_tests {
+    use super::*;
+
+    #[test]
+    fn index_anchors() {
+        assert_eq!(light_index(1.0), 7.0);
+        assert_eq!(light_index(2.0), 9.0);
+        assert_eq!(light_index(0.0), 1.0);
+        assert_eq!(temperature_index(8.0), 5.0);
+        assert_eq!(temperature_index(-10.0), 1.0);
+        assert_eq!(moisture_index(8.0), 5.0);
+        assert_eq!(moisture_index(40.0), 12.0);
+    }
+
+    #[test]
+    fn derive_default_terrain() {
+        let t = crate::terrain::io::default_terrain().unwrap();
+        let c = Climate::default();
+        let s = derive(&t, &c).unwrap();
+        assert_eq!(s.width(), 387);
+        assert_eq!(s.cell_x_m, 80.0);
+        assert!(!s.mask.get(0, 0));
+        let valid: Vec<usize> = (0..s.mask.len()).filter(|&i| s.mask.data[i]).collect();
+        assert!(valid.len() > 140_000);
+        for &i in &valid {
+            let v = s.indices.data[i];
+            assert!(v.iter().all(|x| (1.0..=12.0).contains(x)), "{v:?}");
+            assert_eq!(v[factor::K], 4.0);
+        }
+        // Higher ground is colder: the highest valid cell has the lowest T.
+        let hi = *valid.iter().max_by(|&&a, &&b| s.elevation_m.data[a].total_cmp(&s.elevation_m.data[b])).unwrap();
+        let t_min = valid.iter().map(|&i| s.indices.data[i][factor::T]).fold(f32::MAX, f32::min);
+        assert_eq!(s.indices.data[hi][factor::T], t_min);
+    }
+}

@@ -12,6 +12,7 @@
 pub mod conditions;
 pub mod error;
 pub mod grid;
+pub mod job;
 pub mod mesh;
 pub mod output;
 pub mod render;

@@ -1,14 +1,135 @@
-//! `sylva species list|show|check|new`.
+//! `sylva species list|show|check|new`: browse, validate and copy species files.
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
 use clap::Subcommand;
+use sylva::species::{self, Species, SpeciesLibrary};
 
 /// Species subcommands.
 #[derive(Subcommand)]
 pub enum Command {
-    /// List the species of the library.
-    List,
+    /// List the species of the library (the shipped one, or the files in --dir).
+    List {
+        /// Read the species files of this folder instead of the shipped library.
+        #[arg(long)]
+        dir: Option<PathBuf>,
+    },
+    /// Print one species file (by id, scientific or common name).
+    Show {
+        /// Species id or name, e.g. `beech` or "Fagus sylvatica".
+        name: String,
+        /// Read the species files of this folder instead of the shipped library.
+        #[arg(long)]
+        dir: Option<PathBuf>,
+    },
+    /// Check every species file of a folder; prints every problem and fails if there is any.
+    Check {
+        /// Folder of species files (default: `species`).
+        dir: Option<PathBuf>,
+    },
+    /// Create a new species file NAME.toml as a copy of an existing species (comments kept).
+    New {
+        /// Id of the new species (lower-case letters, digits, `_`); the file is DIR/NAME.toml.
+        name: String,
+        /// Species to copy (id or name), looked up in DIR first, then in the shipped library.
+        #[arg(long)]
+        from: String,
+        /// Folder to write to (default: `species`).
+        #[arg(long)]
+        dir: Option<PathBuf>,
+    },
+}
+
+fn library(dir: Option<&Path>) -> anyhow::Result<SpeciesLibrary> {
+    Ok(match dir {
+        Some(d) => SpeciesLibrary::load_dir(d)?,
+        None => SpeciesLibrary::embedded()?,
+    })
+}
+
+/// The file text of species `name` (from `dir`, else the shipped library), with its id.
+fn source_text(name: &str, dir: Option<&Path>) -> anyhow::Result<(String, String)> {
+    if let Some(d) = dir {
+        if d.is_dir() {
+            for f in species::species_files(d)? {
+                let bytes = std::fs::read(&f).with_context(|| format!("reading {}", f.display()))?;
+                if let (Some(s), _) = species::parse_bytes(&bytes, &f) {
+                    let lib = SpeciesLibrary { species: vec![s.clone()] };
+                    if lib.find(name).is_some() {
+                        return Ok((s.id, String::from_utf8_lossy(&bytes).into_owned()));
+                    }
+                }
+            }
+        }
+    }
+    let lib = SpeciesLibrary::embedded()?;
+    let s = lib.get(name).with_context(|| {
+        format!("no species `{name}` (known: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", "))
+    })?;
+    let text = match species::embedded_text(&s.id) {
+        Some(t) => t.to_string(),
+        None => s.to_toml_string()?,
+    };
+    Ok((s.id.clone(), text))
 }
 
 /// Runs a species subcommand.
-pub fn run(_c: Command) -> anyhow::Result<()> {
-    anyhow::bail!("not implemented yet")
+pub fn run(c: Command) -> anyhow::Result<()> {
+    match c {
+        Command::List { dir } => {
+            let lib = library(dir.as_deref())?;
+            println!("{:<20} {:<24} {:<22} {:<9} {:>6} {:>6} {:>5}", "id", "scientific name", "common name", "type", "H_max", "age", "shade");
+            for s in &lib.species {
+                let kind = match (s.identity.leaf_type, s.identity.deciduous) {
+                    (species::LeafType::Broadleaf, true) => "broad/dec",
+                    (species::LeafType::Broadleaf, false) => "broad/evg",
+                    (species::LeafType::Conifer, true) => "conif/dec",
+                    (species::LeafType::Conifer, false) => "conif/evg",
+                };
+                println!(
+                    "{:<20} {:<24} {:<22} {:<9} {:>5}m {:>5}y {:>5}",
+                    s.id, s.identity.scientific_name, s.identity.common_name, kind, s.life.max_height_m, s.life.max_age_yr, s.life.shade_tolerance
+                );
+            }
+            println!("{} species", lib.len());
+            Ok(())
+        }
+        Command::Show { name, dir } => {
+            let (_, text) = source_text(&name, dir.as_deref())?;
+            print!("{text}");
+            Ok(())
+        }
+        Command::Check { dir } => {
+            let dir = dir.unwrap_or_else(|| PathBuf::from("species"));
+            let problems = species::check_dir(&dir);
+            for p in &problems {
+                eprintln!("{p}");
+            }
+            if problems.is_empty() {
+                let n = species::species_files(&dir)?.len();
+                println!("{}: {n} species files, no problems", dir.display());
+                Ok(())
+            } else {
+                anyhow::bail!("{} problem(s) in {}", problems.len(), dir.display())
+            }
+        }
+        Command::New { name, from, dir } => {
+            let dir = dir.unwrap_or_else(|| PathBuf::from("species"));
+            let target = dir.join(format!("{name}.toml"));
+            if target.exists() {
+                anyhow::bail!("{} already exists; not overwriting it", target.display());
+            }
+            let (from_id, text) = source_text(&from, Some(&dir))?;
+            let new_text = species::replace_id(&text, &name, &target)?;
+            let new_text = new_text.replacen("Sylva species file.", &format!("Sylva species file (copied from `{from_id}`)."), 1);
+            // Validate before writing (also checks the new id's form).
+            Species::from_toml_str(&new_text, &target.to_string_lossy())?;
+            if !dir.is_dir() {
+                std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+            }
+            sylva::output::write_atomic(&target, new_text.as_bytes())?;
+            println!("wrote {} (copy of `{from_id}`); edit it, then run `sylva species check {}`", target.display(), dir.display());
+            Ok(())
+        }
+    }
 }

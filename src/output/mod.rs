@@ -35,3 +35,8 @@ pub fn write_atomic_with(path: &Path, f: impl FnOnce(&mut std::io::BufWriter<std
     }
     Ok(())
 }
+
+pub mod gltf;
+pub mod obj;
+pub mod geotiff;
+pub mod maps;

@@ -6,6 +6,13 @@
 
 use serde::{Deserialize, Serialize};
 
+mod library;
+pub mod schema;
+
+pub use library::{
+    check_dir, embedded_text, leaf_fields, parse_bytes, parse_text, problems_to_error, replace_id, species_files, Problem, Violation, EMBEDDED_FILES,
+};
+
 /// Index of a species within a loaded [`SpeciesLibrary`] (0-based, in the library's order, which
 /// is sorted by `id`).
 pub type SpeciesId = u16;
@@ -56,7 +63,10 @@ pub enum LeafType {
 }
 
 /// An Ellenberg indicator value: a number on the factor's scale or indifferent ("x").
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+///
+/// Deserialises from a TOML number or the string `"x"`; any other string is refused with a
+/// message naming both allowed forms.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 #[serde(untagged)]
 pub enum Indicator {
     /// Optimum on the factor's scale (1–9; F up to 12).
@@ -357,11 +367,48 @@ impl SpeciesLibrary {
     }
 }
 
+impl<'de> Deserialize<'de> for Indicator {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl serde::de::Visitor<'_> for V {
+            type Value = Indicator;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("an Ellenberg value (a number, 1–9; F 1–12) or \"x\" (indifferent)")
+            }
+            fn visit_f64<E: serde::de::Error>(self, v: f64) -> std::result::Result<Indicator, E> {
+                Ok(Indicator::Value(v as f32))
+            }
+            fn visit_i64<E: serde::de::Error>(self, v: i64) -> std::result::Result<Indicator, E> {
+                Ok(Indicator::Value(v as f32))
+            }
+            fn visit_u64<E: serde::de::Error>(self, v: u64) -> std::result::Result<Indicator, E> {
+                Ok(Indicator::Value(v as f32))
+            }
+            fn visit_str<E: serde::de::Error>(self, v: &str) -> std::result::Result<Indicator, E> {
+                if v == "x" {
+                    Ok(Indicator::Indifferent(v.to_string()))
+                } else {
+                    Err(E::invalid_value(serde::de::Unexpected::Str(v), &self))
+                }
+            }
+        }
+        d.deserialize_any(V)
+    }
+}
+
+/// Suitability at `optimum ± tolerance` of one factor: exp(−½) ≈ 0.6065 (the Gaussian's value
+/// one standard deviation from its mean).
+pub const TOLERANCE_EDGE_SUITABILITY: f32 = 0.606_530_66;
+
 impl Factor {
-    /// Suitability (0–1) of index value `x` for this factor.
+    /// Suitability (0–1) of index value `x` (on the factor's Ellenberg scale) for this factor.
     ///
-    /// PROVISIONAL (foundation stub, to be replaced by the documented response curve):
-    /// Gaussian `exp(−½ ((x − opt)/tol)²)`; indifferent factors give 1.
+    /// Response curve: Gaussian `s(x) = exp(−½ ((x − v)/τ)²)` with optimum `v` (the Ellenberg
+    /// value) and tolerance width `τ`: `s = 1` at the optimum, [`TOLERANCE_EDGE_SUITABILITY`]
+    /// (= e^(−½) ≈ 0.61) at `v ± τ`, 0.135 at `v ± 2τ`, 0.011 at `v ± 3τ`. This is the Gaussian
+    /// response model of species along environmental gradients (ter Braak & Looman 1986), with
+    /// the Ellenberg value as optimum (Ellenberg et al. 1991, *Zeigerwerte*). An indifferent
+    /// factor ("x") gives 1 everywhere. A non-positive tolerance is treated as 0.001.
     pub fn suitability(&self, x: f32) -> f32 {
         match &self.value {
             Indicator::Value(opt) => {
@@ -374,13 +421,71 @@ impl Factor {
 }
 
 impl Species {
-    /// Combined site suitability (0–1) for Ellenberg-style indices `[L, T, K, F, R, N]`.
-    ///
-    /// PROVISIONAL: geometric mean of the per-factor suitabilities.
-    pub fn suitability(&self, indices: &[f32; 6]) -> f32 {
+    /// Per-factor suitabilities `[L, T, K, F, R, N]` (each 0–1, see [`Factor::suitability`]).
+    pub fn suitability_factors(&self, indices: &[f32; 6]) -> [f32; 6] {
         let n = &self.niche;
         let f = [&n.l, &n.t, &n.k, &n.f, &n.r, &n.n];
-        let p: f32 = f.iter().zip(indices).map(|(f, &x)| f.suitability(x).max(1e-6)).product();
-        p.powf(1.0 / 6.0)
+        std::array::from_fn(|i| f[i].suitability(indices[i]))
+    }
+
+    /// Combined site suitability (0–1) for Ellenberg-style site indices `[L, T, K, F, R, N]`.
+    ///
+    /// Combination: Liebig's law of the minimum — the smallest of the six per-factor
+    /// suitabilities. One factor far outside the niche excludes the species however good the
+    /// others are ("a single inconvenient living condition can fully stop the prosperity of some
+    /// tree", EcoMod, `004_*.txt` section IV), which a product or geometric mean would dilute
+    /// (a geometric mean of six factors turns 0.01 into 0.46). Indifferent factors count as 1.
+    ///
+    /// The light factor L is the adult tree's light demand (Ellenberg's tree-stage value): the
+    /// site index for L should describe the open-canopy light climate of the cell (e.g. from
+    /// slope and aspect), not the shade under neighbours; shade tolerance of young trees under a
+    /// canopy is `life.shade_tolerance` and `life.germination_min_light`.
+    pub fn suitability(&self, indices: &[f32; 6]) -> f32 {
+        self.suitability_factors(indices).into_iter().fold(1.0f32, f32::min)
+    }
+
+    /// Potential (site-optimal, open-grown) height at age `t` years, m: Chapman–Richards
+    /// `H(t) = H_max (1 − e^(−k t))^p` with `H_max = life.max_height_m` (Richards 1959).
+    pub fn potential_height_m(&self, age_yr: f32) -> f32 {
+        let g = &self.life.growth;
+        self.life.max_height_m * (1.0 - (-g.k * age_yr.max(0.0)).exp()).powf(g.p)
+    }
+
+    /// Height (m) of a tree of diameter `dbh_cm` (cm) from the height–DBH allometry
+    /// `H = 1.3 + (H_max − 1.3)(1 − e^(−a D))^b`.
+    pub fn height_from_dbh_m(&self, dbh_cm: f32) -> f32 {
+        let a = &self.life.allometry;
+        1.3 + (self.life.max_height_m - 1.3) * (1.0 - (-a.hd_a * dbh_cm.max(0.0)).exp()).powf(a.hd_b)
+    }
+
+    /// Inverse of [`Species::height_from_dbh_m`]: DBH (cm) of a tree of height `h_m` (m);
+    /// 0 at or below 1.3 m; capped at `life.max_dbh_cm`.
+    pub fn dbh_from_height_cm(&self, h_m: f32) -> f32 {
+        let a = &self.life.allometry;
+        let hmax = self.life.max_height_m;
+        if h_m <= 1.3 {
+            return 0.0;
+        }
+        let q = ((h_m - 1.3) / (hmax - 1.3)).min(0.999_999);
+        let d = -(1.0 - q.powf(1.0 / a.hd_b)).ln() / a.hd_a;
+        d.min(self.life.max_dbh_cm)
+    }
+
+    /// Open-grown crown radius (m) at diameter `dbh_cm`: `r = c0 + c1·D`.
+    pub fn crown_radius_m(&self, dbh_cm: f32) -> f32 {
+        let a = &self.life.allometry;
+        a.crown_c0 + a.crown_c1 * dbh_cm.max(0.0)
+    }
+
+    /// Foliage colour for a season (`None` for a deciduous tree in winter: bare).
+    pub fn leaf_colour(&self, season: Season) -> Option<[u8; 3]> {
+        let a = &self.appearance;
+        match season {
+            Season::Spring => Some(a.leaf_spring),
+            Season::Summer => Some(a.leaf_summer),
+            Season::Autumn => Some(a.leaf_autumn),
+            Season::Winter if self.identity.deciduous => None,
+            Season::Winter => Some(a.leaf_winter),
+        }
     }
 }

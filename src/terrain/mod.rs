@@ -22,3 +22,8 @@ impl Terrain {
         self.elevation.get(col, row).is_finite()
     }
 }
+
+pub mod fields;
+pub mod generate;
+pub mod io;
+pub mod tin;

@@ -1,0 +1,75 @@
+//! Reading inventory snapshots back from a run directory (ARCHITECTURE.md "Run directory").
+
+use crate::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// One row of `inventory/year_NNNN.csv`.
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+pub struct InventoryRow {
+    /// Stable tree id.
+    pub id: u64,
+    /// Species id (as in `species/*.toml`).
+    pub species: String,
+    /// Easting from the site's south-west corner (m).
+    pub x_m: f64,
+    /// Northing from the site's south-west corner (m).
+    pub y_m: f64,
+    /// Ground elevation (m).
+    pub z_m: f64,
+    /// Age (years).
+    pub age_yr: f32,
+    /// Height (m).
+    pub height_m: f32,
+    /// Diameter at breast height (cm).
+    pub dbh_cm: f32,
+    /// Crown radius (m).
+    pub crown_radius_m: f32,
+    /// Height of the crown base (m).
+    pub crown_base_m: f32,
+    /// `alive` or `dead:<cause>`.
+    pub status: String,
+}
+
+/// Reads one inventory CSV.
+///
+/// # Errors
+/// [`Error::Io`] when the file cannot be read; [`Error::Format`] naming the line when a row does
+/// not have the columns of ARCHITECTURE.md.
+pub fn read(path: &Path) -> Result<Vec<InventoryRow>> {
+    let mut rdr = csv::Reader::from_path(path).map_err(|e| Error::format(path, e.to_string()))?;
+    let mut rows = Vec::new();
+    for (i, rec) in rdr.deserialize().enumerate() {
+        let row: InventoryRow = rec.map_err(|e| Error::format(path, format!("line {}: {e}", i + 2)))?;
+        rows.push(row);
+    }
+    Ok(rows)
+}
+
+/// Snapshot files of a run directory as `(year, season suffix or "", path)`, sorted by year then
+/// season order (spring, summer, autumn, winter, then plain).
+pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
+    let dir = run_dir.join("inventory");
+    let rd = std::fs::read_dir(&dir).map_err(|e| Error::io(&dir, e))?;
+    let mut out = Vec::new();
+    for entry in rd {
+        let entry = entry.map_err(|e| Error::io(&dir, e))?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        let Some(stem) = name.strip_prefix("year_").and_then(|s| s.strip_suffix(".csv")) else { continue };
+        let (num, season) = match stem.split_once('_') {
+            Some((n, s)) => (n, s.to_string()),
+            None => (stem, String::new()),
+        };
+        if let Ok(y) = num.parse::<u32>() {
+            out.push((y, season, entry.path()));
+        }
+    }
+    let order = |s: &str| match s {
+        "spring" => 0,
+        "summer" => 1,
+        "autumn" => 2,
+        "winter" => 3,
+        _ => 4,
+    };
+    out.sort_by(|a, b| (a.0, order(&a.1)).cmp(&(b.0, order(&b.1))));
+    Ok(out)
+}

@@ -1,0 +1,227 @@
+//! Colour-mapped PNG maps of grids with a legend (title, colour bar, units), optional hillshade
+//! underlay. Text is drawn with `ab_glyph` and the bundled DejaVu Sans.
+
+use crate::error::{Error, Result};
+use crate::grid::Grid;
+use ab_glyph::{Font, FontRef, PxScale, ScaleFont};
+use image::{Rgb, RgbImage};
+use std::path::Path;
+
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// Colour ramps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Ramp {
+    /// Perceptually uniform dark blue → green → yellow (matplotlib viridis stops).
+    Viridis,
+    /// Hypsometric: green lowlands → yellow → brown → white summits.
+    Terrain,
+    /// Black → purple → orange → pale yellow (matplotlib magma stops), for energy.
+    Magma,
+    /// White → dark blue, for water.
+    Blues,
+    /// Cyclic hue wheel for directions (0° = 360°).
+    Cyclic,
+    /// Diverging blue (cold/low) → yellow → red (warm/high).
+    BlueRed,
+    /// Black → white.
+    Grey,
+}
+
+fn hex(c: u32) -> [f32; 3] {
+    [((c >> 16) & 255) as f32, ((c >> 8) & 255) as f32, (c & 255) as f32]
+}
+
+impl Ramp {
+    /// Colour of `t` in 0–1 (clamped).
+    pub fn color(self, t: f32) -> [u8; 3] {
+        let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
+        if self == Ramp::Cyclic {
+            let h = t * 6.0;
+            let x = 1.0 - (h % 2.0 - 1.0).abs();
+            let (r, g, b) = match h as u32 {
+                0 => (1.0, x, 0.0),
+                1 => (x, 1.0, 0.0),
+                2 => (0.0, 1.0, x),
+                3 => (0.0, x, 1.0),
+                4 => (x, 0.0, 1.0),
+                _ => (1.0, 0.0, x),
+            };
+            return [(40.0 + 200.0 * r) as u8, (40.0 + 200.0 * g) as u8, (40.0 + 200.0 * b) as u8];
+        }
+        let stops: &[u32] = match self {
+            Ramp::Viridis => &[0x440154, 0x482878, 0x3e4989, 0x31688e, 0x26828e, 0x1f9e89, 0x35b779, 0x6ece58, 0xb5de2b, 0xfde725],
+            Ramp::Terrain => &[0x1a9850, 0x91cf60, 0xd9ef8b, 0xfee08b, 0xd8b365, 0x8c510a, 0xf5f5f5],
+            Ramp::Magma => &[0x000004, 0x3b0f70, 0x8c2981, 0xde4968, 0xfe9f6d, 0xfcfdbf],
+            Ramp::Blues => &[0xf7fbff, 0xc6dbef, 0x6baed6, 0x2171b5, 0x08306b],
+            Ramp::BlueRed => &[0x313695, 0x4575b4, 0xabd9e9, 0xffffbf, 0xfdae61, 0xd73027, 0xa50026],
+            _ => &[0x000000, 0xffffff],
+        };
+        let f = t * (stops.len() - 1) as f32;
+        let i = (f.floor() as usize).min(stops.len() - 2);
+        let u = f - i as f32;
+        let (a, b) = (hex(stops[i]), hex(stops[i + 1]));
+        [0, 1, 2].map(|k| (a[k] + (b[k] - a[k]) * u).round() as u8)
+    }
+}
+
+/// How to draw a field.
+#[derive(Debug, Clone)]
+pub struct MapStyle<'a> {
+    /// Colour ramp.
+    pub ramp: Ramp,
+    /// Title above the map.
+    pub title: String,
+    /// Units written under the colour bar.
+    pub units: String,
+    /// Value range mapped onto the ramp; `None`: 1st–99th percentile of valid values.
+    pub range: Option<(f32, f32)>,
+    /// Hillshade (0–255) multiplied under the colours (gdaldem-style relief).
+    pub hillshade: Option<&'a Grid<f32>>,
+    /// Strength of the hillshade (0 none … 1 full).
+    pub shade_strength: f32,
+}
+
+/// Writes a colour-mapped PNG of `grid` with a title, a colour bar and its units. Cells that are
+/// NaN or `false` in `mask` are light grey. Range: 1st–99th percentile of valid values.
+///
+/// Errors: [`Error::Invalid`] for an empty grid or a mask of another size; [`Error::Io`].
+pub fn write_field_png(grid: &Grid<f32>, mask: Option<&Grid<bool>>, ramp: Ramp, title: &str, units: &str, path: &Path) -> Result<()> {
+    let style = MapStyle { ramp, title: title.into(), units: units.into(), range: None, hillshade: None, shade_strength: 0.0 };
+    write_field_png_styled(grid, mask, &style, path)
+}
+
+/// Percentile range (p in 0–1) of the finite values; `None` when there are none.
+pub fn percentile_range(grid: &Grid<f32>, mask: Option<&Grid<bool>>, lo: f64, hi: f64) -> Option<(f32, f32)> {
+    let mut v: Vec<f32> = grid.data.iter().enumerate().filter(|(i, x)| x.is_finite() && mask.is_none_or(|m| m.data[*i])).map(|(_, x)| *x).collect();
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_unstable_by(f32::total_cmp);
+    let at = |p: f64| v[((v.len() - 1) as f64 * p).round() as usize];
+    Some((at(lo), at(hi)))
+}
+
+/// Like [`write_field_png`] with full control of the style.
+pub fn write_field_png_styled(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyle, path: &Path) -> Result<()> {
+    let img = render_field(grid, mask, style).map_err(|e| match e {
+        Error::Invalid { field, value, expected, .. } => Error::Invalid { context: path.display().to_string(), field, value, expected },
+        o => o,
+    })?;
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| Error::Other(format!("{}: PNG encoding: {e}", path.display())))?;
+    super::write_atomic(path, &bytes)
+}
+
+/// Renders the map into an image (see [`write_field_png_styled`]).
+pub fn render_field(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyle) -> Result<RgbImage> {
+    let (w, h) = (grid.width, grid.height);
+    let inv = |f: &str, v: String, e: &str| Error::Invalid { context: "map".into(), field: f.into(), value: v, expected: e.into() };
+    if w == 0 || h == 0 {
+        return Err(inv("grid", format!("{w} x {h}"), "a non-empty grid"));
+    }
+    if let Some(m) = mask {
+        if (m.width, m.height) != (w, h) {
+            return Err(inv("mask", format!("{} x {}", m.width, m.height), &format!("{w} x {h} like the grid")));
+        }
+    }
+    let (lo, hi) = style.range.or_else(|| percentile_range(grid, mask, 0.01, 0.99)).unwrap_or((0.0, 1.0));
+    let hi = if hi > lo { hi } else { lo + 1.0 };
+    // Map scale: enlarge small grids to ≥ 600 px, shrink grids over 2000 px.
+    let (num, den) = if w.max(h) > 2000 { (1, w.max(h).div_ceil(2000)) } else { ((600 / w.max(1)).max(1), 1) };
+    let (mw, mh) = (w * num / den, h * num / den);
+    let (top, right, pad) = (44usize, 150usize, 12usize);
+    let (iw, ih) = (pad + mw + right, top + mh.max(260) + pad);
+    let mut img = RgbImage::from_pixel(iw as u32, ih as u32, Rgb([255, 255, 255]));
+    for y in 0..mh {
+        let r = y * den / num;
+        for x in 0..mw {
+            let c = x * den / num;
+            let i = r * w + c;
+            let v = grid.data[i];
+            let valid = v.is_finite() && mask.is_none_or(|m| m.data[i]);
+            let px = if valid {
+                let mut col = style.ramp.color((v - lo) / (hi - lo));
+                if let Some(hs) = style.hillshade {
+                    let s = hs.data.get(i).copied().unwrap_or(255.0);
+                    let s = if s.is_finite() { s / 255.0 } else { 1.0 };
+                    let k = 1.0 - style.shade_strength + style.shade_strength * s;
+                    col = col.map(|c| (c as f32 * k).clamp(0.0, 255.0) as u8);
+                }
+                col
+            } else {
+                [215, 215, 215]
+            };
+            img.put_pixel((pad + x) as u32, (top + y) as u32, Rgb(px));
+        }
+    }
+    let font = FontRef::try_from_slice(FONT).map_err(|e| Error::Other(format!("bundled font: {e}")))?;
+    draw_text(&mut img, &font, pad as f32, 10.0, 22.0, &style.title);
+    // Colour bar.
+    let (bx, by, bw, bh) = (pad + mw + 20, top + 10, 22usize, mh.clamp(200, 400) - 20);
+    for y in 0..bh {
+        let t = 1.0 - y as f32 / (bh - 1) as f32;
+        let col = style.ramp.color(t);
+        for x in 0..bw {
+            img.put_pixel((bx + x) as u32, (by + y) as u32, Rgb(col));
+        }
+    }
+    for k in 0..=4 {
+        let t = k as f32 / 4.0;
+        let y = by + ((1.0 - t) * (bh - 1) as f32) as usize;
+        for x in bw..bw + 5 {
+            img.put_pixel((bx + x) as u32, y as u32, Rgb([0, 0, 0]));
+        }
+        let v = lo + (hi - lo) * t;
+        let label = if (hi - lo).abs() >= 20.0 { format!("{v:.0}") } else if (hi - lo).abs() >= 2.0 { format!("{v:.1}") } else { format!("{v:.2}") };
+        draw_text(&mut img, &font, (bx + bw + 8) as f32, y as f32 - 8.0, 14.0, &label);
+    }
+    draw_text(&mut img, &font, bx as f32, (by + bh + 8) as f32, 14.0, &style.units);
+    Ok(img)
+}
+
+/// Draws `text` (black) with its top-left at `(x, y)` pixels, `px` pixels high.
+pub fn draw_text(img: &mut RgbImage, font: &FontRef, x: f32, y: f32, px: f32, text: &str) {
+    let sf = font.as_scaled(PxScale::from(px));
+    let mut caret = x;
+    let mut prev = None;
+    for ch in text.chars() {
+        let id = sf.glyph_id(ch);
+        if let Some(p) = prev {
+            caret += sf.kern(p, id);
+        }
+        let g = id.with_scale_and_position(px, ab_glyph::point(caret, y + sf.ascent()));
+        caret += sf.h_advance(id);
+        prev = Some(id);
+        if let Some(og) = font.outline_glyph(g) {
+            let b = og.px_bounds();
+            og.draw(|gx, gy, cov| {
+                let (px_, py_) = (b.min.x as i64 + gx as i64, b.min.y as i64 + gy as i64);
+                if px_ >= 0 && py_ >= 0 && (px_ as u32) < img.width() && (py_ as u32) < img.height() {
+                    let p = img.get_pixel_mut(px_ as u32, py_ as u32);
+                    for c in 0..3 {
+                        p.0[c] = (p.0[c] as f32 * (1.0 - cov.clamp(0.0, 1.0))) as u8;
+                    }
+                }
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ramp_ends_and_masked_grey() {
+        assert_eq!(Ramp::Viridis.color(0.0), [0x44, 0x01, 0x54]);
+        assert_eq!(Ramp::Viridis.color(1.0), [0xfd, 0xe7, 0x25]);
+        assert_eq!(Ramp::Grey.color(0.5), [128, 128, 128]);
+        let mut g = Grid::filled(10, 10, 1.0f32);
+        g.data[0] = f32::NAN;
+        let st = MapStyle { ramp: Ramp::Grey, title: "t".into(), units: "m".into(), range: Some((0.0, 1.0)), hillshade: None, shade_strength: 0.0 };
+        let img = render_field(&g, None, &st).unwrap();
+        assert_eq!(img.get_pixel(12, 44).0, [215, 215, 215]);
+        assert_eq!(img.get_pixel(12 + 60, 44).0, [255, 255, 255]);
+    }
+}

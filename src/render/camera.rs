@@ -1,0 +1,165 @@
+//! Cameras: explicit eye/target/field of view, presets (overview, oblique, ground level,
+//! top-down orthographic map) and an orbit path for timelapses.
+
+use glam::{Mat4, Vec3};
+
+use super::scene::TerrainMesh;
+
+/// Projection of a camera.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Projection {
+    /// Perspective with vertical field of view in degrees (1..170).
+    Perspective {
+        /// Vertical field of view (degrees).
+        fov_y_deg: f32,
+    },
+    /// Orthographic with the given half height of the view (m); width follows the aspect.
+    Orthographic {
+        /// Half of the visible height (m).
+        half_height: f32,
+    },
+}
+
+/// A camera looking at the scene.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Eye position (m).
+    pub eye: [f32; 3],
+    /// Point looked at (m).
+    pub target: [f32; 3],
+    /// Up vector (usually +z).
+    pub up: [f32; 3],
+    /// Projection.
+    pub projection: Projection,
+    /// Near plane (m), > 0.
+    pub near: f32,
+    /// Far plane (m), > near.
+    pub far: f32,
+}
+
+/// Named camera presets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CameraPreset {
+    /// High view of the whole terrain from the south.
+    Overview,
+    /// Lower oblique view from the south-west.
+    Oblique,
+    /// Eye 1.7 m above the ground at the south edge, looking north.
+    Ground,
+    /// Top-down orthographic map.
+    Map,
+}
+
+impl std::str::FromStr for CameraPreset {
+    type Err = crate::Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s.to_ascii_lowercase().as_str() {
+            "overview" => Ok(CameraPreset::Overview),
+            "oblique" => Ok(CameraPreset::Oblique),
+            "ground" => Ok(CameraPreset::Ground),
+            "map" | "top" | "topdown" => Ok(CameraPreset::Map),
+            _ => Err(crate::Error::Invalid {
+                context: "camera".into(),
+                field: "preset".into(),
+                value: s.into(),
+                expected: "overview, oblique, ground or map".into(),
+            }),
+        }
+    }
+}
+
+impl Camera {
+    /// A perspective camera at `eye` looking at `target` with vertical field of view `fov_y_deg`.
+    pub fn look_at(eye: [f32; 3], target: [f32; 3], fov_y_deg: f32) -> Self {
+        let d = (Vec3::from(eye) - Vec3::from(target)).length().max(1.0);
+        Camera { eye, target, up: [0.0, 0.0, 1.0], projection: Projection::Perspective { fov_y_deg }, near: (d * 0.002).max(0.05), far: d * 8.0 + 1000.0 }
+    }
+
+    /// A preset framing the terrain's bounds.
+    pub fn preset(p: CameraPreset, terrain: &TerrainMesh) -> Self {
+        let (lo, hi) = terrain.bounds();
+        let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+        let c = (lo + hi) * 0.5;
+        let size = (hi - lo).truncate().max_element().max(1.0);
+        match p {
+            CameraPreset::Overview => {
+                let eye = c + Vec3::new(0.0, -0.95 * size, 0.75 * size + (hi.z - lo.z));
+                Camera::look_at(eye.to_array(), [c.x, c.y, lo.z + 0.3 * (hi.z - lo.z)], 45.0)
+            }
+            CameraPreset::Oblique => {
+                let eye = c + Vec3::new(-0.55 * size, -0.7 * size, 0.3 * size + (hi.z - lo.z) * 0.5);
+                Camera::look_at(eye.to_array(), [c.x, c.y, lo.z + 0.3 * (hi.z - lo.z)], 45.0)
+            }
+            CameraPreset::Ground => {
+                let x = c.x;
+                let y = lo.y + 0.05 * size;
+                let gz = terrain.nearest_height(x, y).unwrap_or(lo.z);
+                let tz = terrain.nearest_height(x, c.y).unwrap_or(c.z);
+                let mut cam = Camera::look_at([x, y, gz + 1.7], [x, c.y, tz + 8.0], 60.0);
+                cam.near = 0.1;
+                cam
+            }
+            CameraPreset::Map => {
+                let half = 0.5 * (hi.y - lo.y).max(hi.x - lo.x) * 1.02;
+                let eye = Vec3::new(c.x, c.y, hi.z + size);
+                Camera {
+                    eye: eye.to_array(),
+                    target: [c.x, c.y, lo.z],
+                    up: [0.0, 1.0, 0.0],
+                    projection: Projection::Orthographic { half_height: half.max(1.0) },
+                    near: 1.0,
+                    far: (hi.z - lo.z) + 2.0 * size + 10.0,
+                }
+            }
+        }
+    }
+
+    /// A point on an orbit around the terrain centre at parameter `u` in 0..1 (one full turn,
+    /// starting south of the centre, counter-clockwise seen from above), at the overview's
+    /// distance and height.
+    pub fn orbit(terrain: &TerrainMesh, u: f32) -> Self {
+        let (lo, hi) = terrain.bounds();
+        let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+        let c = (lo + hi) * 0.5;
+        let size = (hi - lo).truncate().max_element().max(1.0);
+        let a = -std::f32::consts::FRAC_PI_2 + u * std::f32::consts::TAU;
+        let r = 0.85 * size;
+        let eye = Vec3::new(c.x + r * a.cos(), c.y + r * a.sin(), hi.z + 0.35 * size);
+        Camera::look_at(eye.to_array(), [c.x, c.y, lo.z + 0.3 * (hi.z - lo.z)], 45.0)
+    }
+
+    /// View matrix (right-handed).
+    pub fn view(&self) -> Mat4 {
+        glam::camera::rh::view::look_at_mat4(Vec3::from(self.eye), Vec3::from(self.target), Vec3::from(self.up))
+    }
+
+    /// Projection matrix for `aspect` = width / height (depth range 0..1).
+    pub fn proj(&self, aspect: f32) -> Mat4 {
+        match self.projection {
+            Projection::Perspective { fov_y_deg } => glam::camera::rh::proj::directx::perspective(fov_y_deg.clamp(1.0, 170.0).to_radians(), aspect, self.near, self.far),
+            Projection::Orthographic { half_height } => {
+                let hw = half_height * aspect;
+                glam::camera::rh::proj::directx::orthographic(-hw, hw, -half_height, half_height, self.near, self.far)
+            }
+        }
+    }
+
+    /// `proj · view`.
+    pub fn view_proj(&self, aspect: f32) -> Mat4 {
+        self.proj(aspect) * self.view()
+    }
+
+    /// Size in pixels on screen of an object of `size_m` metres at `pos` for a viewport
+    /// `height_px` tall (perspective: `size · f / distance` with `f = h / (2 tan(fov/2))`;
+    /// orthographic: `size · h / (2 · half_height)`).
+    pub fn projected_size_px(&self, pos: Vec3, size_m: f32, height_px: f32) -> f32 {
+        match self.projection {
+            Projection::Perspective { fov_y_deg } => {
+                let f = height_px / (2.0 * (fov_y_deg.to_radians() * 0.5).tan());
+                let d = (pos - Vec3::from(self.eye)).length().max(1e-3);
+                size_m * f / d
+            }
+            Projection::Orthographic { half_height } => size_m * height_px / (2.0 * half_height.max(1e-3)),
+        }
+    }
+}

@@ -1,0 +1,144 @@
+//! CPU culling and level-of-detail pass: turns [`TreeInstance`]s into per-instance GPU records
+//! grouped so that each (prototype, level) is one contiguous range, drawn with one instanced
+//! call per material (bark, foliage).
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::camera::Camera;
+use super::lod::{select_lod, Frustum, LodParams, LodPick};
+use super::scene::{Scene, TreeInstance};
+
+/// Per-instance record read by the tree vertex shader (`shaders/scene.wgsl`, `TreeIn`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct InstanceRaw {
+    /// Base x, y, z (m) and height (m).
+    pub pos_h: [f32; 4],
+    /// Horizontal scale (m per normalised unit), rotation (rad), fade threshold, fade side.
+    pub p1: [f32; 4],
+    /// Leaf colour (linear RGB), leaf amount 0..1.
+    pub leaf: [f32; 4],
+    /// Opacity 0..1, wind phases R_x, R_z (rad), flexibility 1 − k_f.
+    pub p2: [f32; 4],
+    /// Bark colour (linear RGB), dither salt.
+    pub bark: [f32; 4],
+}
+
+/// One (prototype, level) range of [`Batches::instances`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DrawBatch {
+    /// Prototype index.
+    pub prototype: usize,
+    /// Level of detail.
+    pub level: usize,
+    /// First instance in [`Batches::instances`].
+    pub first: u32,
+    /// Number of instances.
+    pub count: u32,
+}
+
+/// Result of the culling/LOD pass.
+#[derive(Debug, Clone, Default)]
+pub struct Batches {
+    /// Instance records, grouped by (prototype, level).
+    pub instances: Vec<InstanceRaw>,
+    /// Non-empty ranges, sorted by (prototype, level).
+    pub draws: Vec<DrawBatch>,
+    /// Triangles the tree draws submit (both materials, cross-fades counted twice).
+    pub triangles: u64,
+    /// Trees culled by the frustum or for being smaller than `min_px`.
+    pub culled: usize,
+    /// Trees skipped for invalid data (bad species index, non-positive or non-finite height).
+    pub invalid: usize,
+    /// Number of drawn instances per level (index = level).
+    pub per_level: Vec<usize>,
+}
+
+fn hash01(mut x: u64) -> f32 {
+    // splitmix64 finaliser
+    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^= x >> 31;
+    (x >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// Bounding sphere (centre, radius) of an instance, in metres.
+pub fn bounding_sphere(t: &TreeInstance) -> (Vec3, f32) {
+    let c = Vec3::from(t.position) + Vec3::new(0.0, 0.0, 0.5 * t.height);
+    (c, (0.5 * t.height).max(t.crown_radius) * 1.1)
+}
+
+/// Culls and picks levels for every instance of `scene` seen by `camera` in a `width` ×
+/// `height` pixel frame. Deterministic (instance order preserved within each range).
+pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, params: &LodParams) -> Batches {
+    let aspect = width.max(1) as f32 / height.max(1) as f32;
+    let frustum = Frustum::from_view_proj(camera.view_proj(aspect));
+    let n_protos = scene.prototypes.len();
+    let levels: Vec<usize> = scene.prototypes.iter().map(|p| p.lods.levels.len()).collect();
+    // (pick) per instance; None = culled, Some(None) = invalid
+    let picks: Vec<Result<Option<LodPick>, ()>> = scene
+        .instances
+        .par_iter()
+        .map(|t| {
+            let s = t.species as usize;
+            if s >= n_protos || !(t.height > 0.0) || !t.height.is_finite() || !t.position.iter().all(|v| v.is_finite()) {
+                return Err(());
+            }
+            let (c, r) = bounding_sphere(t);
+            if !frustum.sphere_visible(c, r) {
+                return Ok(None);
+            }
+            let px = camera.projected_size_px(c, t.height, height as f32);
+            Ok(select_lod(px, params, levels[s]))
+        })
+        .collect();
+    let mut buckets: Vec<Vec<Vec<InstanceRaw>>> = levels.iter().map(|&n| vec![Vec::new(); n]).collect();
+    let mut out = Batches::default();
+    let max_levels = levels.iter().copied().max().unwrap_or(0);
+    out.per_level = vec![0; max_levels];
+    let crown_r0: Vec<f32> = scene.prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
+    for (t, pick) in scene.instances.iter().zip(&picks) {
+        let pick = match pick {
+            Err(()) => {
+                out.invalid += 1;
+                continue;
+            }
+            Ok(None) => {
+                out.culled += 1;
+                continue;
+            }
+            Ok(Some(p)) => *p,
+        };
+        let s = t.species as usize;
+        let proto = &scene.prototypes[s];
+        let sxy = if t.crown_radius > 0.0 && t.crown_radius.is_finite() { t.crown_radius / crown_r0[s] } else { t.height };
+        let base = InstanceRaw {
+            pos_h: [t.position[0], t.position[1], t.position[2], t.height],
+            p1: [sxy, t.rotation, pick.blend, 0.0],
+            leaf: [t.leaf_color[0], t.leaf_color[1], t.leaf_color[2], t.leaf_amount.clamp(0.0, 1.0)],
+            p2: [t.opacity.clamp(0.0, 1.0), hash01(t.id) * std::f32::consts::TAU, hash01(t.id ^ 0x5DEE_CE66) * std::f32::consts::TAU, (1.0 - proto.stiffness).clamp(0.0, 1.0)],
+            bark: [proto.bark_color[0], proto.bark_color[1], proto.bark_color[2], (hash01(t.id ^ 0xA5A5) * 64.0).floor()],
+        };
+        buckets[s][pick.level].push(base);
+        out.per_level[pick.level] += 1;
+        if pick.blend > 0.0 && pick.level + 1 < levels[s] {
+            let mut coarse = base;
+            coarse.p1[3] = 1.0;
+            buckets[s][pick.level + 1].push(coarse);
+        }
+    }
+    for (p, lv) in buckets.into_iter().enumerate() {
+        for (l, v) in lv.into_iter().enumerate() {
+            if v.is_empty() {
+                continue;
+            }
+            let tris = scene.prototypes[p].lods.levels[l].triangle_count() as u64;
+            out.triangles += tris * v.len() as u64;
+            out.draws.push(DrawBatch { prototype: p, level: l, first: out.instances.len() as u32, count: v.len() as u32 });
+            out.instances.extend(v);
+        }
+    }
+    out
+}

@@ -1,0 +1,235 @@
+//! Level-of-detail selection by projected size, frustum culling, and stand-in tree chains.
+
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::mesh::{LodChain, TreeMesh, TriMesh};
+
+/// Parameters of the level choice.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LodParams {
+    /// Screen heights (px) at which the level switches from `i` to `i + 1`, decreasing:
+    /// level 0 when the tree is at least `switch_px[0]` pixels tall, level 1 down to
+    /// `switch_px[1]`, and so on; the coarsest level below the last entry.
+    pub switch_px: [f32; 3],
+    /// Relative half-width of the cross-fade band around each switch (0.25 = from
+    /// `switch/1.25` to `switch·1.25`), in which both levels are drawn with complementary
+    /// dither masks.
+    pub band: f32,
+    /// Trees shorter than this on screen (px) are not drawn.
+    pub min_px: f32,
+}
+
+impl Default for LodParams {
+    fn default() -> Self {
+        LodParams { switch_px: [150.0, 50.0, 16.0], band: 0.25, min_px: 0.75 }
+    }
+}
+
+/// The level(s) drawn for one instance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LodPick {
+    /// Level drawn (0 = finest).
+    pub level: usize,
+    /// Coverage 0..1 of the next coarser level `level + 1`, drawn in the complementary dither
+    /// pattern; `level` itself covers `1 − blend`. 0 outside a cross-fade band.
+    pub blend: f32,
+}
+
+/// Chooses the level for a tree `size_px` pixels tall on screen, for a chain of `n_levels`
+/// levels. `None` when it is smaller than `params.min_px` or the chain is empty.
+///
+/// Inside the band around a switch size the pick blends into the coarser level linearly in
+/// log(size), so that levels change without popping.
+pub fn select_lod(size_px: f32, params: &LodParams, n_levels: usize) -> Option<LodPick> {
+    if n_levels == 0 || !(size_px >= params.min_px) {
+        return None;
+    }
+    let b = 1.0 + params.band.max(0.0);
+    for (i, &s) in params.switch_px.iter().enumerate() {
+        if i + 1 >= n_levels {
+            return Some(LodPick { level: i, blend: 0.0 });
+        }
+        let (hi, lo) = (s * b, s / b);
+        if size_px >= hi {
+            return Some(LodPick { level: i, blend: 0.0 });
+        }
+        if size_px > lo {
+            let f = (hi.ln() - size_px.ln()) / (hi.ln() - lo.ln());
+            return Some(LodPick { level: i, blend: f.clamp(0.0, 1.0) });
+        }
+    }
+    Some(LodPick { level: params.switch_px.len().min(n_levels - 1), blend: 0.0 })
+}
+
+/// The six planes of a view frustum, for culling bounding spheres.
+#[derive(Debug, Clone, Copy)]
+pub struct Frustum {
+    planes: [Vec4; 6],
+}
+
+impl Frustum {
+    /// Planes of `view_proj` (clip depth 0..1), Gribb & Hartmann (2001) extraction.
+    pub fn from_view_proj(m: Mat4) -> Self {
+        let (r0, r1, r2, r3) = (m.row(0), m.row(1), m.row(2), m.row(3));
+        let mut planes = [r3 + r0, r3 - r0, r3 + r1, r3 - r1, r2, r3 - r2];
+        for p in &mut planes {
+            let n = p.truncate().length();
+            if n > 0.0 {
+                *p /= n;
+            }
+        }
+        Frustum { planes }
+    }
+
+    /// Whether a sphere at `c` with radius `r` (m) touches the frustum.
+    pub fn sphere_visible(&self, c: Vec3, r: f32) -> bool {
+        self.planes.iter().all(|p| p.truncate().dot(c) + p.w >= -r)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stand-in tree models
+
+/// Surface of revolution about z through the profile `(z, r)` (bottom to top) with `segs`
+/// segments; normals from the profile's slope.
+fn revolve(profile: &[(f32, f32)], segs: usize) -> TriMesh {
+    let mut m = TriMesh::default();
+    let n = profile.len();
+    for (i, &(z, r)) in profile.iter().enumerate() {
+        let (zp, rp) = profile[i.saturating_sub(1)];
+        let (zn, rn) = profile[(i + 1).min(n - 1)];
+        // tangent (dr, dz); outward normal in the (r, z) plane = (dz, -dr)
+        let (dr, dz) = (rn - rp, zn - zp);
+        let len = (dr * dr + dz * dz).sqrt().max(1e-6);
+        let (nr, nz) = (dz / len, -dr / len);
+        for j in 0..=segs {
+            let a = j as f32 / segs as f32 * std::f32::consts::TAU;
+            let (s, c) = a.sin_cos();
+            m.positions.push([r * c, r * s, z]);
+            let nv = Vec3::new(nr * c, nr * s, nz).normalize_or(Vec3::Z);
+            m.normals.push(nv.to_array());
+            m.uvs.push([j as f32 / segs as f32, i as f32 / (n - 1).max(1) as f32]);
+        }
+    }
+    let w = (segs + 1) as u32;
+    for i in 0..(n as u32 - 1) {
+        for j in 0..segs as u32 {
+            let (a, b, c, d) = (i * w + j, i * w + j + 1, (i + 1) * w + j + 1, (i + 1) * w + j);
+            m.indices.extend_from_slice(&[a, b, c, a, c, d]);
+        }
+    }
+    m
+}
+
+/// Trunk: a tapered cylinder from z = 0 to `top` with base radius `r`.
+fn trunk(r: f32, top: f32, segs: usize) -> TriMesh {
+    revolve(&[(0.0, r), (top, r * 0.55), (top, 0.0)], segs)
+}
+
+/// A flat polygon in the vertical plane at angle `a` (for crossed-plane impostors), given as a
+/// fan around `(0, zc)` through the outline `pts` of `(u, z)`, with pseudo-spherical normals.
+fn card(pts: &[(f32, f32)], zc: f32, a: f32) -> TriMesh {
+    let (s, c) = a.sin_cos();
+    let mut m = TriMesh::default();
+    let normal = |u: f32, z: f32| {
+        let side = Vec3::new(-s, c, 0.0) * 0.6;
+        (Vec3::new(u * c, u * s, (z - zc) * 0.6 + 0.3) + side).normalize_or(Vec3::Z).to_array()
+    };
+    m.positions.push([0.0, 0.0, zc]);
+    m.normals.push(normal(0.0, zc + 0.2));
+    m.uvs.push([0.5, 0.5]);
+    for &(u, z) in pts {
+        m.positions.push([u * c, u * s, z]);
+        m.normals.push(normal(u, z));
+        m.uvs.push([u, z]);
+    }
+    let k = pts.len() as u32;
+    for i in 0..k {
+        m.indices.extend_from_slice(&[0, 1 + i, 1 + (i + 1) % k]);
+    }
+    m
+}
+
+/// A simple stand-in level-of-detail chain of a normalised tree (base at origin, 1 m tall,
+/// z up) with 4 levels: full (stacked tiers or lumpy ellipsoid, 20 segments), reduced
+/// (10 segments), crown hull (6 segments), crossed-plane impostor. `conifer` selects a conical
+/// crown (spruce/fir-like, crown radius 0.22) or an ellipsoidal one (beech/oak-like, 0.33).
+/// Used until `structure::species_lod_chain` provides real architectures.
+pub fn placeholder_chain(conifer: bool) -> LodChain {
+    let mut levels = Vec::new();
+    let detail = [(20usize, 5usize, 10usize), (10, 3, 6), (6, 1, 4)];
+    for &(segs, tiers, rings) in &detail {
+        let mut t = TreeMesh::default();
+        if conifer {
+            t.bark = trunk(0.012, 0.97, (segs / 2).max(3));
+            for k in 0..tiers {
+                // tiers from z = 0.15 up; each tier a skirt cone, narrower towards the top
+                let z0 = 0.15 + 0.8 * k as f32 / tiers as f32;
+                let z1 = if k + 1 == tiers { 1.0 } else { z0 + 0.8 / tiers as f32 * 1.7 };
+                let r0 = 0.22 * (1.0 - 0.8 * (k as f32 / tiers as f32));
+                let prof = [(z0 + 0.02, 0.0), (z0, r0 * 0.9), (z0 + 0.01, r0), (z1.min(1.0), 0.0)];
+                t.leaves.append(&revolve(&prof, segs));
+            }
+        } else {
+            t.bark = trunk(0.014, 0.55, (segs / 2).max(3));
+            let (zc, rz, rr) = (0.62, 0.38, 0.33);
+            let mut prof = Vec::new();
+            for i in 0..=rings {
+                let th = std::f32::consts::PI * i as f32 / rings as f32;
+                // gently lumpy outline so the crown reads as foliage, not a ball
+                let lump = if segs >= 10 { 1.0 + 0.06 * (th * 5.0).sin() } else { 1.0 };
+                prof.push((zc - rz * th.cos(), rr * th.sin() * lump));
+            }
+            t.leaves = revolve(&prof, segs);
+            if segs >= 10 {
+                // a few secondary clumps break the silhouette
+                for k in 0..3 {
+                    let a = k as f32 * 2.1;
+                    let mut clump = revolve(&prof.iter().map(|&(z, r)| ((z - zc) * 0.5 + zc, r * 0.5)).collect::<Vec<_>>(), segs / 2);
+                    for p in &mut clump.positions {
+                        p[0] += 0.22 * a.cos();
+                        p[1] += 0.22 * a.sin();
+                        p[2] += 0.1 - 0.06 * k as f32;
+                    }
+                    t.leaves.append(&clump);
+                }
+            }
+        }
+        levels.push(t);
+    }
+    // impostor: two crossed cards
+    let mut imp = TreeMesh::default();
+    for a in [0.0f32, std::f32::consts::FRAC_PI_2] {
+        if conifer {
+            imp.leaves.append(&card(&[(-0.22, 0.12), (0.22, 0.12), (0.0, 1.0)], 0.4, a));
+            imp.bark.append(&card(&[(-0.012, 0.0), (0.012, 0.0), (0.012, 0.15), (-0.012, 0.15)], 0.07, a));
+        } else {
+            let pts: Vec<(f32, f32)> = (0..10)
+                .map(|i| {
+                    let th = i as f32 / 10.0 * std::f32::consts::TAU;
+                    (0.33 * th.cos(), 0.62 + 0.38 * th.sin())
+                })
+                .collect();
+            imp.leaves.append(&card(&pts, 0.62, a));
+            imp.bark.append(&card(&[(-0.014, 0.0), (0.014, 0.0), (0.014, 0.3), (-0.014, 0.3)], 0.15, a));
+        }
+    }
+    // a horizontal card so that the impostor also reads from above (map view)
+    let (zc, r) = if conifer { (0.45, 0.16) } else { (0.7, 0.3) };
+    let mut top = TriMesh::default();
+    top.positions.push([0.0, 0.0, zc + 0.05]);
+    top.normals.push([0.0, 0.0, 1.0]);
+    top.uvs.push([0.5, 0.5]);
+    for i in 0..8 {
+        let a = i as f32 / 8.0 * std::f32::consts::TAU;
+        top.positions.push([r * a.cos(), r * a.sin(), zc]);
+        top.normals.push(Vec3::new(a.cos(), a.sin(), 1.2).normalize().to_array());
+        top.uvs.push([a.cos(), a.sin()]);
+    }
+    for i in 0..8u32 {
+        top.indices.extend_from_slice(&[0, 1 + i, 1 + (i + 1) % 8]);
+    }
+    imp.leaves.append(&top);
+    levels.push(imp);
+    LodChain { levels }
+}

@@ -1,0 +1,326 @@
+//! Plain data the renderer consumes: terrain mesh, tree prototypes and instances, sun, sky, wind.
+//!
+//! World convention (DESIGN.md): metres, x east, y north, z up.
+
+use crate::mesh::LodChain;
+
+pub use super::camera::{Camera, CameraPreset, Projection};
+
+/// The terrain as an indexed triangle mesh with per-vertex normals and colours.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TerrainMesh {
+    /// Vertex positions (m), x east, y north, z up (elevation).
+    pub positions: Vec<[f32; 3]>,
+    /// Unit normals, one per position.
+    pub normals: Vec<[f32; 3]>,
+    /// Linear RGB albedo in 0..1, one per position (land cover or overlay).
+    pub colors: Vec<[f32; 3]>,
+    /// Triangle list (counter-clockwise seen from above); length a multiple of 3.
+    pub indices: Vec<u32>,
+}
+
+impl TerrainMesh {
+    /// Axis-aligned bounds `(min, max)` in metres; a unit box at the origin for an empty mesh.
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        let mut it = self.positions.iter();
+        let Some(&first) = it.next() else { return ([0.0; 3], [1.0; 3]) };
+        let (mut lo, mut hi) = (first, first);
+        for p in it {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Checks that the arrays agree and indices are in range.
+    ///
+    /// # Errors
+    /// [`crate::Error::Invalid`] naming the offending field.
+    pub fn validate(&self) -> crate::Result<()> {
+        let n = self.positions.len();
+        let bad = |field: &str, value: String, expected: String| crate::Error::Invalid {
+            context: "render::TerrainMesh".into(),
+            field: field.into(),
+            value,
+            expected,
+        };
+        if self.normals.len() != n {
+            return Err(bad("normals", self.normals.len().to_string(), format!("{n} (one per position)")));
+        }
+        if self.colors.len() != n {
+            return Err(bad("colors", self.colors.len().to_string(), format!("{n} (one per position)")));
+        }
+        if self.indices.len() % 3 != 0 {
+            return Err(bad("indices", self.indices.len().to_string(), "a multiple of 3".into()));
+        }
+        if let Some(&i) = self.indices.iter().find(|&&i| i as usize >= n) {
+            return Err(bad("indices", i.to_string(), format!("< {n} (vertex count)")));
+        }
+        Ok(())
+    }
+
+    /// Height (m) of the vertex nearest to `(x, y)` in plan, or `None` for an empty mesh.
+    /// A coarse lookup for camera placement, O(vertices).
+    pub fn nearest_height(&self, x: f32, y: f32) -> Option<f32> {
+        self.positions
+            .iter()
+            .min_by(|a, b| {
+                let da = (a[0] - x).powi(2) + (a[1] - y).powi(2);
+                let db = (b[0] - x).powi(2) + (b[1] - y).powi(2);
+                da.total_cmp(&db)
+            })
+            .map(|p| p[2])
+    }
+}
+
+/// One species' tree model as the renderer draws it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prototype {
+    /// Species name (for logs and legends).
+    pub name: String,
+    /// Levels of detail, finest first, of a *normalised* tree: base at the origin, height 1 m,
+    /// z up. Instances scale it to their height and crown radius.
+    pub lods: LodChain,
+    /// Bark albedo, linear RGB 0..1.
+    pub bark_color: [f32; 3],
+    /// Default foliage albedo, linear RGB 0..1 (instances carry their own seasonal colour).
+    pub leaf_color: [f32; 3],
+    /// Wind flexibility `k_f` of EcoMod (004_*.txt, Algorithm 1), 0..1: 1 = stiff (no
+    /// undirected sway), 0 = fully flexible.
+    pub stiffness: f32,
+}
+
+impl Prototype {
+    /// Crown radius of the normalised model (m per m of height): the largest horizontal
+    /// distance of a foliage vertex of level 0 from the axis; 0.3 when the model has no leaves.
+    pub fn normalised_crown_radius(&self) -> f32 {
+        let r = self
+            .lods
+            .levels
+            .first()
+            .map(|l| l.leaves.positions.iter().map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt()).fold(0.0f32, f32::max))
+            .unwrap_or(0.0);
+        if r > 1e-4 {
+            r
+        } else {
+            0.3
+        }
+    }
+}
+
+/// One tree to draw.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TreeInstance {
+    /// Stem base position (m), x east, y north, z = ground elevation.
+    pub position: [f32; 3],
+    /// Tree height (m), > 0.
+    pub height: f32,
+    /// Crown radius (m), > 0; scales the model horizontally.
+    pub crown_radius: f32,
+    /// Index into [`Scene::prototypes`].
+    pub species: u32,
+    /// Rotation about the vertical axis (rad).
+    pub rotation: f32,
+    /// Foliage colour (linear RGB 0..1) for the season (leaf-out, summer, autumn; bare crowns
+    /// use `opacity_leaves = 0`).
+    pub leaf_color: [f32; 3],
+    /// Foliage presence 0..1 (0 = bare winter crown, leaves dithered out).
+    pub leaf_amount: f32,
+    /// Overall presence 0..1 for fading in/out in timelapses (screen-door dithered).
+    pub opacity: f32,
+    /// Stable tree id (matches trees across snapshots).
+    pub id: u64,
+}
+
+impl TreeInstance {
+    /// A fully present tree in summer foliage.
+    pub fn new(id: u64, position: [f32; 3], height: f32, crown_radius: f32, species: u32, leaf_color: [f32; 3]) -> Self {
+        TreeInstance { position, height, crown_radius, species, rotation: (id as f32 * 2.399_963).rem_euclid(std::f32::consts::TAU), leaf_color, leaf_amount: 1.0, opacity: 1.0, id }
+    }
+}
+
+/// Seasonal foliage colour of a deciduous broadleaf crown (linear RGB) and leaf amount for
+/// day-of-year `doy` (1..=365): bare until leaf-out (~day 110), light green flush, summer green,
+/// autumn yellow-orange from ~day 270, bare after ~day 310 (Central-European phenology,
+/// ECOLOGY.md). Evergreen crowns should keep their summer colour.
+pub fn deciduous_season(doy: f32, summer: [f32; 3]) -> ([f32; 3], f32) {
+    let flush = [0.35, 0.55, 0.12];
+    let autumn = [0.65, 0.38, 0.06];
+    let lerp = |a: [f32; 3], b: [f32; 3], t: f32| [a[0] + (b[0] - a[0]) * t, a[1] + (b[1] - a[1]) * t, a[2] + (b[2] - a[2]) * t];
+    let d = doy.rem_euclid(365.0);
+    if d < 105.0 || d > 315.0 {
+        (autumn, 0.0)
+    } else if d < 125.0 {
+        (flush, (d - 105.0) / 20.0)
+    } else if d < 160.0 {
+        (lerp(flush, summer, (d - 125.0) / 35.0), 1.0)
+    } else if d < 260.0 {
+        (summer, 1.0)
+    } else if d < 290.0 {
+        (lerp(summer, autumn, (d - 260.0) / 30.0), 1.0)
+    } else {
+        (autumn, 1.0 - (d - 290.0) / 25.0)
+    }
+}
+
+/// The sun: direction and colour.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sun {
+    /// Unit vector from the ground towards the sun (x east, y north, z up).
+    pub direction: [f32; 3],
+    /// Light colour × intensity, linear RGB (1 = full midday sun).
+    pub color: [f32; 3],
+}
+
+impl Sun {
+    /// The sun's direction for latitude `latitude_deg` (−90..90), day of year `day_of_year`
+    /// (1..=366) and local solar time `hour` (0..24).
+    ///
+    /// Declination δ = 23.44° · sin(360°/365 · (284 + n)) (Cooper 1969); hour angle
+    /// H = 15° · (hour − 12); east = −cos δ sin H, north = cos φ sin δ − sin φ cos δ cos H,
+    /// up = sin φ sin δ + cos φ cos δ cos H (standard spherical astronomy, e.g. Iqbal 1983
+    /// eq. 1.3.1). Below the horizon the light is clamped to a dim twilight 2° above it; the
+    /// colour warms as the sun sinks.
+    pub fn from_position(latitude_deg: f32, day_of_year: f32, hour: f32) -> Self {
+        let phi = latitude_deg.clamp(-90.0, 90.0).to_radians();
+        let decl = (23.44f32).to_radians() * ((360.0 / 365.0) * (284.0 + day_of_year)).to_radians().sin();
+        let h = (15.0 * (hour - 12.0)).to_radians();
+        let east = -decl.cos() * h.sin();
+        let north = phi.cos() * decl.sin() - phi.sin() * decl.cos() * h.cos();
+        let up = phi.sin() * decl.sin() + phi.cos() * decl.cos() * h.cos();
+        let min_up = (2.0f32).to_radians().sin();
+        let mut d = glam::Vec3::new(east, north, up.max(min_up));
+        d = d.normalize_or(glam::Vec3::Z);
+        let elev = up.clamp(-1.0, 1.0).asin();
+        // warm and dim near the horizon
+        let k = (elev / 0.5).clamp(0.0, 1.0);
+        let color = [1.0, 0.55 + 0.4 * k, 0.35 + 0.55 * k];
+        let intensity = 0.25 + 0.75 * k;
+        Sun { direction: d.to_array(), color: [color[0] * intensity, color[1] * intensity, color[2] * intensity] }
+    }
+
+    /// Solar elevation above the horizon (degrees) of this direction.
+    pub fn elevation_deg(&self) -> f32 {
+        self.direction[2].clamp(-1.0, 1.0).asin().to_degrees()
+    }
+}
+
+impl Default for Sun {
+    fn default() -> Self {
+        Sun::from_position(47.0, 172.0, 14.0)
+    }
+}
+
+/// Sky colours (linear RGB) for the gradient behind the scene; also the ambient light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sky {
+    /// Colour straight up.
+    pub zenith: [f32; 3],
+    /// Colour at the horizon.
+    pub horizon: [f32; 3],
+}
+
+impl Default for Sky {
+    fn default() -> Self {
+        Sky { zenith: [0.13, 0.28, 0.65], horizon: [0.55, 0.68, 0.85] }
+    }
+}
+
+/// Wind driving the sway of trees (EcoMod, 004_*.txt, Algorithm 1).
+///
+/// Per vertex at normalised height `s` (0 at the base, 1 at the top) the tree bends by
+/// `α_w(s) = k_w · w_g · s²` rad along `direction` (directed wind, EcoMod `α_w = S_0/S · w_g`:
+/// the strand ratio `S_0/S` falls towards the top, which we model by the height fraction) and
+/// sways by `α_x(t) = sin(t + R_x) · w_s · (1 − k_f) · l_0`, `α_z(t) = sin(t + R_z) · …` (undirected
+/// wind) with `l_0 = s²` and phases `R_x, R_z` from the tree id; `k_w = 0.02 rad` per unit of
+/// wind speed (EcoMod's speeds are 0..10).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Wind {
+    /// Unit 2-D direction the wind blows *towards* (x east, y north).
+    pub direction: [f32; 2],
+    /// Directed wind speed `w_g` (EcoMod units 0..10, ≈ Beaufort).
+    pub directed: f32,
+    /// Undirected (gusty) wind speed `w_s` (0..10).
+    pub undirected: f32,
+    /// Animation time `t` (s).
+    pub time_s: f32,
+}
+
+impl Default for Wind {
+    fn default() -> Self {
+        Wind { direction: [1.0, 0.0], directed: 0.0, undirected: 0.0, time_s: 0.0 }
+    }
+}
+
+/// Everything the renderer draws.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Scene {
+    /// The ground.
+    pub terrain: TerrainMesh,
+    /// Sea level (m): a water plane is drawn there when set.
+    pub sea_level: Option<f32>,
+    /// Tree models, indexed by [`TreeInstance::species`].
+    pub prototypes: Vec<Prototype>,
+    /// Trees.
+    pub instances: Vec<TreeInstance>,
+    /// Sun.
+    pub sun: Sun,
+    /// Sky.
+    pub sky: Sky,
+    /// Wind.
+    pub wind: Wind,
+}
+
+fn hash01(mut x: u64) -> f32 {
+    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^= x >> 31;
+    (x >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// A synthetic scene for tests, benchmarks and demos: a `size_m` × `size_m` terrain of gentle
+/// analytic hills (≈ 1 vertex per `size_m / 128` m, heights 0..~0.12·size), two stand-in
+/// prototypes (broadleaf 0, conifer 1) and `n_trees` trees 12–30 m tall placed by a hash of
+/// `seed` (deterministic), summer noon sun at 47° N.
+pub fn demo_scene(n_trees: usize, size_m: f32, seed: u64) -> Scene {
+    let n = 129usize;
+    let cell = size_m / (n - 1) as f32;
+    let amp = 0.06 * size_m;
+    let height = |x: f32, y: f32| {
+        let (u, v) = (x / size_m * std::f32::consts::TAU, y / size_m * std::f32::consts::TAU);
+        amp * (1.0 + 0.6 * (u * 1.3).sin() * (v * 0.9).cos() + 0.3 * (u * 2.7 + 1.0).cos() * (v * 2.1).sin()) * 0.6
+    };
+    let mut heights = crate::grid::Grid::filled(n, n, 0.0f32);
+    for r in 0..n {
+        for c in 0..n {
+            // cell centres: x = (c + 0.5)·cell, y = (n − r − 0.5)·cell
+            *heights.get_mut(c, r) = height((c as f32 + 0.5) * cell, (n as f32 - r as f32 - 0.5) * cell);
+        }
+    }
+    let terrain = super::terrain::from_grid(&heights, cell, cell, &super::terrain::LandCover::default(), None).unwrap_or_default();
+    let prototypes = vec![
+        Prototype { name: "broadleaf".into(), lods: super::lod::placeholder_chain(false), bark_color: [0.3, 0.2, 0.12], leaf_color: [0.12, 0.3, 0.05], stiffness: 0.6 },
+        Prototype { name: "conifer".into(), lods: super::lod::placeholder_chain(true), bark_color: [0.26, 0.15, 0.09], leaf_color: [0.04, 0.16, 0.06], stiffness: 0.8 },
+    ];
+    let mut instances = Vec::with_capacity(n_trees);
+    for i in 0..n_trees as u64 {
+        let k = seed.wrapping_mul(0x1000_0000_01B3) ^ (i << 8);
+        let x = (0.5 + hash01(k)) * cell + hash01(k ^ 1) * (size_m - 2.0 * cell);
+        let y = (0.5 + hash01(k ^ 2)) * cell + hash01(k ^ 3) * (size_m - 2.0 * cell);
+        let species = (hash01(k ^ 4) < 0.45) as u32;
+        let h = 12.0 + 18.0 * hash01(k ^ 5);
+        let cr = if species == 1 { 0.2 * h } else { 0.3 * h } * (0.8 + 0.4 * hash01(k ^ 6));
+        let leaf = prototypes[species as usize].leaf_color;
+        let tint = 0.85 + 0.3 * hash01(k ^ 7);
+        instances.push(TreeInstance::new(i, [x, y, height(x, y) - 0.3], h, cr, species, [leaf[0] * tint, leaf[1] * tint, leaf[2] * tint]));
+    }
+    Scene { terrain, sea_level: None, prototypes, instances, sun: Sun::from_position(47.0, 172.0, 14.0), sky: Sky::default(), wind: Wind::default() }
+}

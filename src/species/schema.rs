@@ -1,0 +1,215 @@
+//! The field table of the species schema: every leaf field of a species file with its unit,
+//! allowed range and meaning. Validation ([`super::Species::validate`]) and the field table of
+//! `species/README.md` ([`readme_field_table`]) are both generated from [`FIELDS`], and a test
+//! checks that every leaf of a serialised species appears here and vice versa, so the code, the
+//! checks and the documentation cannot drift apart.
+
+/// What kind of value a field holds and which values are allowed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Kind {
+    /// Free text; `non_empty` requires at least one character.
+    Text {
+        /// Whether the empty string is refused.
+        non_empty: bool,
+    },
+    /// Identifier: lower-case ASCII letters, digits and `_`, starting with a letter.
+    Ident,
+    /// A list of free-text strings.
+    TextList,
+    /// `true` or `false`.
+    Bool,
+    /// One of the listed strings.
+    Enum(&'static [&'static str]),
+    /// A number in `[min, max]` (`min` excluded when `min_exclusive`).
+    Range {
+        /// Lower bound.
+        min: f64,
+        /// Upper bound (inclusive).
+        max: f64,
+        /// Whether `min` itself is refused (`> min` instead of `≥ min`).
+        min_exclusive: bool,
+    },
+    /// An integer in `[min, max]`.
+    Int {
+        /// Lower bound.
+        min: i64,
+        /// Upper bound.
+        max: i64,
+    },
+    /// An Ellenberg indicator: a number in `[1, max]` or the string `"x"` (indifferent).
+    Indicator {
+        /// Upper end of the scale (9, or 12 for moisture F).
+        max: f64,
+    },
+    /// An EcoMod poly-line: ≥ 1 points `[x, y]`, x non-decreasing within `x`, y within `y`.
+    PolyLine {
+        /// Allowed abscissa range (Gravelius order 0–15 or Weibull order 0–50).
+        x: (f64, f64),
+        /// Allowed ordinate range (the paper's bound for the auxiliary parameter).
+        y: (f64, f64),
+    },
+    /// An sRGB colour `[r, g, b]`, each 0–255.
+    Colour,
+}
+
+/// One leaf field of the species schema.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FieldSpec {
+    /// Dotted path in the TOML file, e.g. `life.growth.k`.
+    pub path: &'static str,
+    /// Unit (empty for dimensionless).
+    pub unit: &'static str,
+    /// Kind and allowed values.
+    pub kind: Kind,
+    /// One-line meaning, with the source of the model it parameterises.
+    pub doc: &'static str,
+}
+
+const fn r(min: f64, max: f64) -> Kind {
+    Kind::Range { min, max, min_exclusive: false }
+}
+const fn rx(min: f64, max: f64) -> Kind {
+    Kind::Range { min, max, min_exclusive: true }
+}
+const fn pl(x: (f64, f64), y: (f64, f64)) -> Kind {
+    Kind::PolyLine { x, y }
+}
+const G: (f64, f64) = (0.0, 15.0);
+const W: (f64, f64) = (0.0, 50.0);
+const fn f(path: &'static str, unit: &'static str, kind: Kind, doc: &'static str) -> FieldSpec {
+    FieldSpec { path, unit, kind, doc }
+}
+
+/// Ellenberg factor description used for the niche rows.
+const LIGHT: &str = "Ellenberg light value L (1 deep shade … 9 full light) read as the ADULT tree's light demand (tree-stage value, '(n)' in Ellenberg's list); shade tolerance of young trees is `life.shade_tolerance`";
+
+/// Every leaf field of a species file, in file order.
+pub const FIELDS: &[FieldSpec] = &[
+    f("id", "", Kind::Ident, "Short unique identifier (unique in a folder); by convention the file name without `.toml`"),
+    f("identity.scientific_name", "", Kind::Text { non_empty: true }, "Scientific name, e.g. `Fagus sylvatica`"),
+    f("identity.common_name", "", Kind::Text { non_empty: true }, "Common English name"),
+    f("identity.leaf_type", "", Kind::Enum(&["broadleaf", "conifer"]), "Broad-leaved or needle-leaved"),
+    f("identity.deciduous", "", Kind::Bool, "Sheds its foliage in winter (larch is a deciduous conifer)"),
+    f("identity.sources", "", Kind::TextList, "Sources of the numbers in the file, one per entry (optional)"),
+    f("niche.l.value", "Ellenberg", Kind::Indicator { max: 9.0 }, LIGHT),
+    f("niche.l.tolerance", "Ellenberg", rx(0.0, 12.0), "Tolerance width of L: suitability is exp(−½) ≈ 0.61 at value ± tolerance"),
+    f("niche.t.value", "Ellenberg", Kind::Indicator { max: 9.0 }, "Temperature value T (1 alpine cold … 9 Mediterranean warm)"),
+    f("niche.t.tolerance", "Ellenberg", rx(0.0, 12.0), "Tolerance width of T"),
+    f("niche.k.value", "Ellenberg", Kind::Indicator { max: 9.0 }, "Continentality value K (1 oceanic … 9 continental)"),
+    f("niche.k.tolerance", "Ellenberg", rx(0.0, 12.0), "Tolerance width of K"),
+    f("niche.f.value", "Ellenberg", Kind::Indicator { max: 12.0 }, "Moisture value F (1 very dry … 9 wet, 10–12 flooded/aquatic)"),
+    f("niche.f.tolerance", "Ellenberg", rx(0.0, 12.0), "Tolerance width of F"),
+    f("niche.r.value", "Ellenberg", Kind::Indicator { max: 9.0 }, "Soil reaction value R (1 very acid … 9 basic/calcareous)"),
+    f("niche.r.tolerance", "Ellenberg", rx(0.0, 12.0), "Tolerance width of R"),
+    f("niche.n.value", "Ellenberg", Kind::Indicator { max: 9.0 }, "Nitrogen (fertility) value N (1 very poor … 9 very rich)"),
+    f("niche.n.tolerance", "Ellenberg", rx(0.0, 12.0), "Tolerance width of N"),
+    f("life.max_age_yr", "yr", rx(0.0, 5000.0), "Maximum age"),
+    f("life.max_height_m", "m", rx(0.0, 120.0), "Maximum height H_max (asymptote of the growth curve and height–DBH allometry)"),
+    f("life.max_dbh_cm", "cm", rx(0.0, 1000.0), "Maximum diameter at breast height (1.3 m)"),
+    f("life.maturity_age_yr", "yr", rx(0.0, 1000.0), "Age at which seed production starts; must be below `life.max_age_yr`"),
+    f("life.shade_tolerance", "class", r(1.0, 5.0), "Shade tolerance, 1 intolerant … 5 very tolerant (LandClim/iLand scale)"),
+    f("life.seeds_per_m2_crown", "seeds/m²/yr", r(0.0, 1.0e6), "Mean seeds per m² of crown projection area per year of a mature tree"),
+    f("life.dispersal.kernel", "", Kind::Enum(&["negative_exponential", "two_dt"]), "Dispersal kernel: negative exponential (wind) or 2Dt fat-tailed (Clark et al. 1999; animals)"),
+    f("life.dispersal.mean_m", "m", rx(0.0, 1.0e4), "Mean dispersal distance"),
+    f("life.dispersal.max_m", "m", rx(0.0, 1.0e5), "Maximum dispersal distance (kernel truncation); must be ≥ `life.dispersal.mean_m`"),
+    f("life.germination_min_light", "fraction", r(0.0, 1.0), "Minimum relative light at the ground (0–1) for germination"),
+    f("life.establishment_rate", "probability", r(0.0, 1.0), "Probability that a seed on a suitable, lit cell becomes a seedling"),
+    f("life.growth.k", "1/yr", Kind::Range { min: 0.0, max: 1.0, min_exclusive: true }, "Chapman–Richards rate k in H(t) = H_max (1 − e^(−k t))^p"),
+    f("life.growth.p", "", r(1.0, 10.0), "Chapman–Richards shape p (≥ 1)"),
+    f("life.allometry.hd_a", "1/cm", rx(0.0, 1.0), "Height–DBH H = 1.3 + (H_max − 1.3)(1 − e^(−a·D))^b: coefficient a"),
+    f("life.allometry.hd_b", "", rx(0.0, 10.0), "Height–DBH exponent b"),
+    f("life.allometry.crown_c0", "m", r(0.0, 10.0), "Open-grown crown radius r = c0 + c1·D: intercept c0"),
+    f("life.allometry.crown_c1", "m/cm", r(0.0, 1.0), "Crown radius slope c1 per cm of DBH"),
+    f("life.allometry.crown_ratio", "fraction", rx(0.0, 1.0), "Crown length / height of an open-grown tree"),
+    f("life.allometry.pipe_exponent", "", r(2.0, 3.0), "Pipe-model exponent d in r^d = Σ r_j^d (2 = da Vinci/pipe model)"),
+    f("architecture.ecomod.strands", "", Kind::Int { min: 1, max: 10000 }, "EcoMod number of strands S (dialog 0–5000; the paper's pine uses 6000)"),
+    f("architecture.ecomod.trunk_length_m", "m", r(0.0, 10.0), "EcoMod base trunk length L₀"),
+    f("architecture.ecomod.k_d", "", r(0.0, 0.05), "EcoMod branch thickness coefficient k_d (d = k_d √S)"),
+    f("architecture.ecomod.k_c", "", r(0.0, 1.0), "EcoMod gravicentrism k_c"),
+    f("architecture.ecomod.phyllotaxis_deg", "°", r(0.0, 360.0), "EcoMod phyllotaxis angle α_p"),
+    f("architecture.ecomod.leaf_density", "", r(0.0, 30.0), "EcoMod leaf density ρ_l"),
+    f("architecture.ecomod.leaf_size_m", "m", r(0.0, 0.3), "EcoMod leaf size l_l"),
+    f("architecture.ecomod.leaf_distribution", "", Kind::Enum(&["Spiral", "Stacked", "Staggered", "Bunched", "Coniferous"]), "EcoMod leaf distribution l_type"),
+    f("architecture.ecomod.wind_directed", "", r(0.0, 10.0), "EcoMod directed wind speed w_g"),
+    f("architecture.ecomod.wind_undirected", "", r(0.0, 10.0), "EcoMod undirected wind speed w_s"),
+    f("architecture.ecomod.k_f", "", r(0.0, 1.0), "EcoMod wind flexibility k_f"),
+    f("architecture.ecomod.ks_g", "", pl(G, (0.5, 1.0)), "EcoMod k_s^g over Gravelius order g (eq. 1)"),
+    f("architecture.ecomod.ks_w", "", pl(W, (0.0, 2.0)), "EcoMod k_s^w over Weibull order w (eq. 1)"),
+    f("architecture.ecomod.alpha_g", "°", pl(G, (0.0, 180.0)), "EcoMod branching angle α^g (eq. 2)"),
+    f("architecture.ecomod.alpha_w", "", pl(W, (0.0, 2.0)), "EcoMod α^w (eq. 2)"),
+    f("architecture.ecomod.alpha_m_g", "°", pl(G, (-180.0, 180.0)), "EcoMod gravimorphism α_m^g (eq. 3)"),
+    f("architecture.ecomod.alpha_m_w", "", pl(W, (0.0, 2.0)), "EcoMod α_m^w (eq. 3)"),
+    f("architecture.ecomod.max_len_g", "", pl(G, (0.0, 10.0)), "EcoMod maximum relative branch length M^g (eq. 4)"),
+    f("architecture.ecomod.max_len_w", "", pl(W, (0.0, 2.0)), "EcoMod M^w (eq. 4)"),
+    f("architecture.ecomod.kl_g", "", pl(G, (0.0, 10.0)), "EcoMod branch length scaling k_l^g (eq. 5)"),
+    f("architecture.ecomod.kl_w", "", pl(W, (0.0, 2.0)), "EcoMod k_l^w (eq. 5)"),
+    f("architecture.ecomod.min_len_g", "", pl(G, (0.0, 10.0)), "EcoMod minimum relative branch length m^g (eq. 6)"),
+    f("architecture.ecomod.min_len_w", "", pl(W, (0.0, 2.0)), "EcoMod m^w (eq. 6)"),
+    f("architecture.light_guided.lambda", "", r(0.0, 1.0), "Light-guided λ: main-axis weight of the Borchert–Honda allocation (Yi et al. eq. 1)"),
+    f("architecture.light_guided.k", "", r(0.0, 1.0), "Light-guided priority allocation coefficient k (Yi et al. Table 1)"),
+    f("architecture.light_guided.b", "", rx(1.0, 10.0), "Light-guided shadow propagation base b (Yi et al. Table 1)"),
+    f("architecture.light_guided.mu", "", r(0.0, 10.0), "Light-guided weight μ of the optimal light direction"),
+    f("architecture.light_guided.gamma", "", r(0.0, 10.0), "Light-guided weight γ of the tropism direction"),
+    f("architecture.light_guided.theta_deg", "°", rx(0.0, 90.0), "Light-guided half-angle θ of the perception cone"),
+    f("architecture.light_guided.r_s", "", r(0.0, 1.0), "Light-guided shedding threshold r_s"),
+    f("architecture.laplacian.eta", "", r(0.0, 10.0), "Laplacian (DBM) exponent η in p ∝ φ^η"),
+    f("architecture.laplacian.base_width_m", "m", rx(0.0, 1.0), "Laplacian width W(1) of a Strahler order-1 branch"),
+    f("architecture.laplacian.width_rate", "", r(1.0, 5.0), "Laplacian width growth per Strahler order β in W(k) = W(1)·β^(k−1) (Jinasena & Sonnadara Table I)"),
+    f("architecture.plastic.phototropism", "", r(0.0, 1.0), "Plastic Trees phototropism weight"),
+    f("architecture.plastic.gravitropism", "", r(0.0, 1.0), "Plastic Trees gravitropism weight"),
+    f("architecture.plastic.pruning_c_psi", "", r(0.0, 2.0), "Plastic Trees pruning strength c_ψ (paper default 0.8)"),
+    f("architecture.plastic.translucency_gamma_c0", "", r(0.0, 1.0), "Plastic Trees base leaf-cluster translucency γ_c0 (paper default 0.5, eq. 4)"),
+    f("appearance.bark", "sRGB", Kind::Colour, "Bark colour"),
+    f("appearance.leaf_spring", "sRGB", Kind::Colour, "Foliage colour at leaf-out"),
+    f("appearance.leaf_summer", "sRGB", Kind::Colour, "Foliage colour in summer"),
+    f("appearance.leaf_autumn", "sRGB", Kind::Colour, "Foliage colour in autumn"),
+    f("appearance.leaf_winter", "sRGB", Kind::Colour, "Foliage colour in winter (evergreens; deciduous trees are drawn bare)"),
+    f("appearance.leaf_texture", "", Kind::Text { non_empty: false }, "Leaf texture name (informative)"),
+];
+
+/// Looks up the spec of a dotted field path.
+pub fn field(path: &str) -> Option<&'static FieldSpec> {
+    FIELDS.iter().find(|f| f.path == path)
+}
+
+fn num(x: f64) -> String {
+    // Shortest representation that round-trips through f32, as in the files.
+    format!("{}", x as f32)
+}
+
+impl Kind {
+    /// The allowed values in words, e.g. `a number in [0, 1]`.
+    pub fn expected(&self) -> String {
+        match *self {
+            Kind::Text { non_empty: true } => "a non-empty string".into(),
+            Kind::Text { non_empty: false } => "a string".into(),
+            Kind::Ident => "lower-case letters, digits and `_`, starting with a letter".into(),
+            Kind::TextList => "a list of strings".into(),
+            Kind::Bool => "true or false".into(),
+            Kind::Enum(v) => format!("one of {}", v.iter().map(|s| format!("\"{s}\"")).collect::<Vec<_>>().join(", ")),
+            Kind::Range { min, max, min_exclusive } => {
+                format!("a number in {}{}, {}]", if min_exclusive { "(" } else { "[" }, num(min), num(max))
+            }
+            Kind::Int { min, max } => format!("an integer in [{min}, {max}]"),
+            Kind::Indicator { max } => format!("a number in [1, {}] or \"x\" (indifferent)", num(max)),
+            Kind::PolyLine { x, y } => format!(
+                "a list of ≥ 1 points [x, y] with x non-decreasing in [{}, {}] and y in [{}, {}]",
+                num(x.0),
+                num(x.1),
+                num(y.0),
+                num(y.1)
+            ),
+            Kind::Colour => "[r, g, b] with each in [0, 255]".into(),
+        }
+    }
+}
+
+/// The Markdown table of all fields (path, unit, allowed values, meaning), generated from
+/// [`FIELDS`]; `species/README.md` contains it verbatim (checked by a test).
+pub fn readme_field_table() -> String {
+    let mut s = String::from("| Field | Unit | Allowed | Meaning |\n|---|---|---|---|\n");
+    for f in FIELDS {
+        s.push_str(&format!("| `{}` | {} | {} | {} |\n", f.path, f.unit, f.kind.expected().replace('|', "\\|"), f.doc.replace('|', "\\|")));
+    }
+    s
+}

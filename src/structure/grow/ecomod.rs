@@ -1,0 +1,275 @@
+//! EcoMod strand model (Zamuda, Brest, Guid & Žumer, `004_*.txt`, Algorithm 1, eqs. 1–6), after
+//! Holton's strands (1994).
+//!
+//! Every branch segment carries S₀ strands; it has diameter d = k_d·√S₀ (Algorithm 1, "thickness
+//! calculation from Mandelbrot"), and unless S₀ = 1 (a leaf-bearing tip) it splits into a major
+//! sub-branch with S₁ = ⌈1 + k_s^{g,w}(S₀ − 2)⌉ strands and a minor one with S₂ = S₀ − S₁, so
+//! strands are conserved and a tree of S strands has exactly 2S − 1 segments.
+//!
+//! Interpretation notes (the paper leaves these open):
+//! - Coordinates: the paper's branch axis y is mapped to the local frame's second column; the
+//!   trunk starts vertical (Sylva z up).
+//! - The major sub-branch turns by +α₁ and the minor by −α₂ about the local z axis, so that
+//!   α₁ + α₂ = α^{g,w} is the angle between them.
+//! - Sub-branch actual length l_i = k_l^{g,w}·L_i (metres; L is relative, 1 for the trunk whose
+//!   actual length is l₀^{0,0} = `trunk_length_m`).
+//! - Directed wind R_{w₀}(α_w) is a rotation about the wind vector w (the paper's w = [0 1 0]ᵀ,
+//!   its up axis, here world z), by α_w = (S₀/S)·w_g degrees.
+//! - Gravimorphism R_{y×y_m}(α_m) turns the branch towards the vertical by α_m (negative: droops).
+//! - Undirected wind α_x(t), α_z(t) = sin(t + R)·w_s·(1 − k_f)·l₀ degrees with a random phase R
+//!   per segment.
+//! - Leaves: ⌈ρ_l⌉ leaves of length l_l per tip segment, arranged by the leaf distribution.
+
+use crate::error::{Error, Result};
+use crate::rng::{salt, Stream};
+use crate::species::{EcoModParams, LeafDistribution};
+use crate::structure::params::eval_polyline;
+use crate::structure::skeleton::{Leaf, Leaves, NodeId, Role, Skeleton};
+use glam::{Mat3, Vec3};
+
+/// Largest number of strands accepted (a tree of S strands has 2S nodes).
+pub const MAX_STRANDS: u32 = 2_000_000;
+
+/// Local parameters at orders (g, w), eqs. (1)–(6) of `004_*.txt`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LocalParams {
+    /// k_s^{g,w} ∈ [½, 1] (eq. 1).
+    pub k_s: f32,
+    /// α^{g,w} (degrees) ∈ [0, 180] (eq. 2).
+    pub alpha: f32,
+    /// α_m^{g,w} (degrees) ∈ [−180, 180] (eq. 3).
+    pub alpha_m: f32,
+    /// M^{g,w} (eq. 4).
+    pub max_len: f32,
+    /// k_l^{g,w} (eq. 5).
+    pub k_l: f32,
+    /// m^{g,w} (eq. 6).
+    pub min_len: f32,
+}
+
+/// Evaluates eqs. (1)–(6) of `004_*.txt` at Gravelius order `g` and Weibull order `w`.
+pub fn local_params(p: &EcoModParams, g: u32, w: u32) -> LocalParams {
+    let (g, w) = (g as f32, w as f32);
+    let e = eval_polyline;
+    LocalParams {
+        k_s: (e(&p.ks_g, g) * e(&p.ks_w, w)).min(1.0).max(0.5),
+        alpha: (e(&p.alpha_g, g) * e(&p.alpha_w, w)).min(180.0),
+        alpha_m: (e(&p.alpha_m_g, g) * e(&p.alpha_m_w, w)).clamp(-180.0, 180.0),
+        max_len: e(&p.max_len_g, g) * e(&p.max_len_w, w),
+        k_l: e(&p.kl_g, g) * e(&p.kl_w, w),
+        min_len: e(&p.min_len_g, g) * e(&p.min_len_w, w),
+    }
+}
+
+/// Strand split of Algorithm 1: `(S₁, S₂)` with S₁ = ⌈1 + k_s(S₀ − 2)⌉, S₂ = S₀ − S₁, for S₀ ≥ 2.
+pub fn split_strands(s0: u32, k_s: f32) -> (u32, u32) {
+    let s1 = (1.0 + k_s as f64 * (s0 as f64 - 2.0)).ceil().clamp(1.0, (s0 - 1) as f64) as u32;
+    (s1, s0 - s1)
+}
+
+fn check(p: &EcoModParams) -> Result<()> {
+    let bad = |f: &str, v: String, e: &str| Err(Error::Invalid { context: "EcoMod parameters".into(), field: f.into(), value: v, expected: e.into() });
+    if p.strands == 0 || p.strands > MAX_STRANDS {
+        return bad("strands", p.strands.to_string(), "1 ..= 2000000 strands");
+    }
+    let scalars = [
+        ("trunk_length_m", p.trunk_length_m),
+        ("k_d", p.k_d),
+        ("k_c", p.k_c),
+        ("phyllotaxis_deg", p.phyllotaxis_deg),
+        ("leaf_density", p.leaf_density),
+        ("leaf_size_m", p.leaf_size_m),
+        ("wind_directed", p.wind_directed),
+        ("wind_undirected", p.wind_undirected),
+        ("k_f", p.k_f),
+    ];
+    for (f, v) in scalars {
+        if !v.is_finite() || v < 0.0 && f != "phyllotaxis_deg" {
+            return bad(f, v.to_string(), "a finite number ≥ 0");
+        }
+    }
+    if p.leaf_density > 1000.0 {
+        return bad("leaf_density", p.leaf_density.to_string(), "0 ..= 1000 leaves per tip (paper: 0–30)");
+    }
+    for (f, l) in [("ks_g", &p.ks_g), ("ks_w", &p.ks_w), ("alpha_g", &p.alpha_g), ("alpha_w", &p.alpha_w), ("alpha_m_g", &p.alpha_m_g), ("alpha_m_w", &p.alpha_m_w), ("max_len_g", &p.max_len_g), ("max_len_w", &p.max_len_w), ("kl_g", &p.kl_g), ("kl_w", &p.kl_w), ("min_len_g", &p.min_len_g), ("min_len_w", &p.min_len_w)] {
+        for (i, q) in l.iter().enumerate() {
+            if !q[0].is_finite() || !q[1].is_finite() || (i > 0 && q[0] < l[i - 1][0]) {
+                return bad(f, format!("{:?}", q), "finite control points with non-decreasing abscissae");
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Rotation about a world axis (unit or not; a zero axis gives the identity), angle in degrees.
+fn rot(axis: Vec3, deg: f32) -> Mat3 {
+    let a = axis.normalize_or_zero();
+    if a == Vec3::ZERO || deg == 0.0 {
+        Mat3::IDENTITY
+    } else {
+        Mat3::from_axis_angle(a, deg.to_radians())
+    }
+}
+
+/// Options of [`grow_with`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EcoModOptions {
+    /// Directed wind vector w (the paper: [0 1 0]ᵀ in its y-up frame = world up).
+    pub wind: Vec3,
+    /// Animation time t (radians of the sway phase).
+    pub t: f32,
+}
+
+/// Grows an EcoMod tree (Algorithm 1 of `004_*.txt`) at animation time `t`.
+/// Same as [`grow_with`] with the paper's wind vector (up). Invalid parameters give an empty
+/// skeleton; use [`try_grow`] to see the error.
+pub fn grow(p: &EcoModParams, seed: u64, t: f32) -> (Skeleton, Leaves) {
+    try_grow(p, seed, t).unwrap_or_default()
+}
+
+/// Like [`grow`], returning parameter errors ([`Error::Invalid`] naming the field).
+pub fn try_grow(p: &EcoModParams, seed: u64, t: f32) -> Result<(Skeleton, Leaves)> {
+    grow_with(p, seed, &EcoModOptions { wind: Vec3::Z, t })
+}
+
+struct Pending {
+    parent: NodeId,
+    g: u32,
+    w: u32,
+    s0: u32,
+    big_l: f32,
+    l: f32,
+    frame: Mat3,
+    lateral: bool,
+}
+
+/// Grows an EcoMod tree with explicit options. Node 0 is the trunk base at the origin; node
+/// i > 0 is the end of one branch segment (2S − 1 segments). Radii are d/2 with d = k_d√S₀;
+/// `strands`, `gravelius` and `weibull` are the algorithm's S₀, g and w.
+///
+/// Errors: [`Error::Invalid`] for out-of-range parameters.
+pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skeleton, Leaves)> {
+    check(p)?;
+    let s_total = p.strands;
+    let mut sk = Skeleton { nodes: Vec::with_capacity(2 * s_total as usize) };
+    let root_r = 0.5 * p.k_d * (s_total as f32).sqrt();
+    sk.add_root(Vec3::ZERO, root_r);
+    sk.nodes[0].strands = s_total;
+    let mut leaves = Leaves::default();
+    let n_leaves = p.leaf_density.ceil() as u32;
+    let up = Vec3::Z;
+    // Frame columns: x, y = branch axis, z. Trunk axis = world up.
+    let frame0 = Mat3::from_cols(Vec3::X, Vec3::Z, -Vec3::Y);
+    let mut stack = vec![Pending { parent: 0, g: 0, w: 0, s0: s_total, big_l: 1.0, l: p.trunk_length_m, frame: frame0, lateral: false }];
+    let sway = p.wind_undirected * (1.0 - p.k_f);
+    while let Some(b) = stack.pop() {
+        let id = sk.nodes.len() as NodeId;
+        let start = sk.nodes[b.parent as usize].pos;
+        let axis = b.frame.y_axis;
+        let end = start + axis * b.l;
+        let mut rng = Stream::new(seed, id as u64, 0, salt::ARCHITECTURE);
+        let d = p.k_d * (b.s0 as f32).sqrt();
+        let nid = sk.add_child(b.parent, end, 0.5 * d, b.lateral)?;
+        {
+            let n = &mut sk.nodes[nid as usize];
+            n.strands = b.s0;
+            n.gravelius = b.g.min(u16::MAX as u32) as u16;
+            n.weibull = b.w.min(u16::MAX as u32) as u16;
+            n.role = if b.s0 == 1 { Role::Tip } else if b.g == 0 { Role::Trunk } else { Role::Branch };
+        }
+        if b.s0 == 1 {
+            place_leaves(&mut leaves, p.leaf_distribution, n_leaves, p.leaf_size_m, p.phyllotaxis_deg, start, &b.frame, b.l, nid, &mut rng);
+            continue;
+        }
+        let lp = local_params(p, b.g, b.w);
+        let (s1, s2) = split_strands(b.s0, lp.k_s);
+        let r = |s: u32| ((s as f32 / b.s0 as f32).sqrt().min(lp.max_len)).max(lp.min_len);
+        let (big_l1, big_l2) = (r(s1) * b.big_l, r(s2) * b.big_l);
+        let (l1, l2) = (lp.k_l * big_l1, lp.k_l * big_l2);
+        let a1 = p.k_c * (s2 as f32 / b.s0 as f32).sqrt() * lp.alpha;
+        let a2 = lp.alpha - a1;
+        let (rx, rz) = (rng.range(0.0, std::f64::consts::TAU) as f32, rng.range(0.0, std::f64::consts::TAU) as f32);
+        let ax = (o.t + rx).sin() * sway * b.l;
+        let az = (o.t + rz).sin() * sway * b.l;
+        let aw = b.s0 as f32 / s_total as f32 * p.wind_directed;
+        // M_i = R_w(α_w) R_z(±α_i + α_z) R_x(α_x) R_y(α_p) R_{y×y_m}(α_m) T_y(l₀) M₀ (row-vector
+        // form); in column form the child frame is R_wind · R_grav · F₀ · R_y · R_x · R_z.
+        let grav = rot(axis.cross(up), lp.alpha_m);
+        let wind = rot(o.wind, aw);
+        let twist = Mat3::from_rotation_y(p.phyllotaxis_deg.to_radians()) * Mat3::from_rotation_x(ax.to_radians());
+        let child = |angle: f32| wind * grav * b.frame * twist * Mat3::from_rotation_z((angle + az).to_radians());
+        let f1 = orthonormal(child(a1));
+        let f2 = orthonormal(child(-a2));
+        stack.push(Pending { parent: nid, g: b.g + 1, w: b.w + 1, s0: s2, big_l: big_l2, l: l2, frame: f2, lateral: true });
+        stack.push(Pending { parent: nid, g: b.g, w: b.w + 1, s0: s1, big_l: big_l1, l: l1, frame: f1, lateral: false });
+    }
+    Ok((sk, leaves))
+}
+
+/// Re-orthonormalises a frame (Gram–Schmidt on y, then x) against drift over deep recursions.
+fn orthonormal(m: Mat3) -> Mat3 {
+    let y = m.y_axis.normalize_or(Vec3::Z);
+    let x = (m.x_axis - y * m.x_axis.dot(y)).normalize_or(y.any_orthonormal_vector());
+    Mat3::from_cols(x, y, x.cross(y))
+}
+
+/// Places `n` leaves on a tip segment from `start` along `frame.y` of length `len` by one of the
+/// five leaf distributions of EcoMod (section II.A).
+#[allow(clippy::too_many_arguments)]
+fn place_leaves(out: &mut Leaves, kind: LeafDistribution, n: u32, size: f32, phyllo_deg: f32, start: Vec3, frame: &Mat3, len: f32, node: NodeId, rng: &mut Stream) {
+    if n == 0 || size <= 0.0 {
+        return;
+    }
+    let axis = frame.y_axis;
+    let jitter = rng.range(0.0, 360.0) as f32;
+    for i in 0..n {
+        let fi = i as f32;
+        let nf = n as f32;
+        // (position along the segment 0..1, azimuth degrees, angle from the axis degrees)
+        let (t, az, tilt) = match kind {
+            LeafDistribution::Spiral => ((fi + 1.0) / nf, fi * phyllo_deg.max(137.5 * (phyllo_deg == 0.0) as u8 as f32), 50.0),
+            LeafDistribution::Staggered => ((fi + 1.0) / nf, fi * 180.0, 55.0),
+            LeafDistribution::Stacked => {
+                let per = 4u32.min(n);
+                let whorls = n.div_ceil(per) as f32;
+                (((i / per) as f32 + 1.0) / whorls, (i % per) as f32 * 360.0 / per as f32 + (i / per) as f32 * 45.0, 60.0)
+            }
+            LeafDistribution::Bunched => (1.0, fi * 360.0 / nf, 35.0 + 40.0 * ((i % 3) as f32) / 2.0),
+            LeafDistribution::Coniferous => ((fi + 0.5) / nf, fi * 137.5, 70.0),
+        };
+        let a = (az + jitter).to_radians();
+        let radial = frame.x_axis * a.cos() + frame.z_axis * a.sin();
+        let tl = tilt.to_radians();
+        let dir = (axis * tl.cos() + radial * tl.sin()).normalize_or(axis);
+        let side = dir.cross(axis).normalize_or(frame.x_axis);
+        let normal = side.cross(dir).normalize_or(Vec3::Z);
+        out.leaves.push(Leaf { pos: start + axis * (len * t), dir, normal, size, node });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn strand_split_conserves() {
+        for s0 in 2..200u32 {
+            for ks in [0.5f32, 0.75, 0.9, 1.0] {
+                let (a, b) = split_strands(s0, ks);
+                assert_eq!(a + b, s0);
+                assert!(a >= 1 && b >= 1 && a >= b);
+            }
+        }
+    }
+
+    #[test]
+    fn local_params_clamp_eq1() {
+        let p = EcoModParams::beech_paper();
+        let lp = local_params(&p, 0, 0);
+        assert_eq!(lp.k_s, 0.75);
+        assert_eq!(lp.alpha, 45.0);
+        assert_eq!(lp.min_len, 1.0);
+        let lp = local_params(&p, 15, 3);
+        assert!((lp.k_s - 0.9).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,200 @@
+//! Voxel space shared by the light-guided and Laplacian models: a regular grid of cubic voxels
+//! (edge `voxel_m`, z up) with solid obstacles (boxes, spheres, walls).
+
+use crate::error::{Error, Result};
+use glam::{IVec3, Vec3};
+
+/// A solid obstacle. Coordinates in metres, tree base at the origin.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Obstacle {
+    /// Axis-aligned box between two corners.
+    Box {
+        /// Lower corner (m).
+        min: Vec3,
+        /// Upper corner (m).
+        max: Vec3,
+    },
+    /// Sphere.
+    Sphere {
+        /// Centre (m).
+        center: Vec3,
+        /// Radius (m).
+        radius: f32,
+    },
+    /// Vertical wall filling the half-space beyond the plane x = `x` on the side away from the
+    /// origin (x ≥ `x` when `x` > 0, x ≤ `x` when `x` < 0), at all heights.
+    Wall {
+        /// Plane position (m), ≠ 0.
+        x: f32,
+    },
+}
+
+impl Obstacle {
+    /// True when `p` is inside the obstacle.
+    pub fn contains(&self, p: Vec3) -> bool {
+        match *self {
+            Obstacle::Box { min, max } => p.cmpge(min).all() && p.cmple(max).all(),
+            Obstacle::Sphere { center, radius } => p.distance_squared(center) <= radius * radius,
+            Obstacle::Wall { x } => {
+                if x >= 0.0 {
+                    p.x >= x
+                } else {
+                    p.x <= x
+                }
+            }
+        }
+    }
+
+    /// True when the ray `p + t·d`, 0 < t ≤ `max_t`, meets the obstacle (analytic: slab test,
+    /// sphere quadratic, plane crossing).
+    pub fn ray_hits(&self, p: Vec3, d: Vec3, max_t: f32) -> bool {
+        match *self {
+            Obstacle::Box { min, max } => {
+                let inv = d.recip();
+                let t0 = (min - p) * inv;
+                let t1 = (max - p) * inv;
+                let tmin = t0.min(t1).max_element().max(0.0);
+                let tmax = t0.max(t1).min_element().min(max_t);
+                tmin <= tmax
+            }
+            Obstacle::Sphere { center, radius } => {
+                let oc = p - center;
+                let b = oc.dot(d);
+                let c = oc.length_squared() - radius * radius;
+                let a = d.length_squared();
+                let disc = b * b - a * c;
+                if disc < 0.0 {
+                    return false;
+                }
+                let sq = disc.sqrt();
+                let (ta, tb) = ((-b - sq) / a, (-b + sq) / a);
+                tb > 0.0 && ta <= max_t
+            }
+            Obstacle::Wall { x } => {
+                if self.contains(p) {
+                    return true;
+                }
+                if d.x == 0.0 {
+                    return false;
+                }
+                let t = (x - p.x) / d.x;
+                t > 0.0 && t <= max_t
+            }
+        }
+    }
+
+    /// Parses `box:x0,y0,z0,x1,y1,z1`, `sphere:x,y,z,r` or `wall:x` (metres).
+    ///
+    /// Errors: [`Error::Invalid`] naming the text and the expected form.
+    pub fn parse(s: &str) -> Result<Obstacle> {
+        let bad = || Error::Invalid { context: "--obstacle".into(), field: "obstacle".into(), value: s.into(), expected: "box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x (metres, finite)".into() };
+        let (kind, rest) = s.split_once(':').ok_or_else(bad)?;
+        let v: Vec<f32> = rest.split(',').map(|t| t.trim().parse::<f32>()).collect::<std::result::Result<_, _>>().map_err(|_| bad())?;
+        if v.iter().any(|x| !x.is_finite()) {
+            return Err(bad());
+        }
+        match (kind.trim(), v.len()) {
+            ("box", 6) => {
+                let a = Vec3::new(v[0], v[1], v[2]);
+                let b = Vec3::new(v[3], v[4], v[5]);
+                Ok(Obstacle::Box { min: a.min(b), max: a.max(b) })
+            }
+            ("sphere", 4) if v[3] > 0.0 => Ok(Obstacle::Sphere { center: Vec3::new(v[0], v[1], v[2]), radius: v[3] }),
+            ("wall", 1) if v[0] != 0.0 => Ok(Obstacle::Wall { x: v[0] }),
+            _ => Err(bad()),
+        }
+    }
+}
+
+/// Largest voxel count accepted.
+pub const MAX_VOXELS: usize = 16_000_000;
+
+/// A regular voxel grid with a solid mask.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VoxelSpace {
+    /// Position of the lower corner of voxel (0, 0, 0) (m).
+    pub origin: Vec3,
+    /// Voxel edge (m).
+    pub voxel_m: f32,
+    /// Voxel counts along x, y, z.
+    pub dims: [usize; 3],
+    /// Solid voxels (obstacles), x fastest.
+    pub solid: Vec<bool>,
+}
+
+impl VoxelSpace {
+    /// A grid covering `[min, max]` with voxels of edge `voxel_m`, solid where an obstacle
+    /// contains the voxel centre.
+    ///
+    /// Errors: [`Error::Invalid`] for a non-positive voxel or empty box; [`Error::TooLarge`]
+    /// above [`MAX_VOXELS`].
+    pub fn new(min: Vec3, max: Vec3, voxel_m: f32, obstacles: &[Obstacle]) -> Result<Self> {
+        if !(voxel_m > 0.0 && voxel_m.is_finite()) || !(max.cmpgt(min).all()) || !min.is_finite() || !max.is_finite() {
+            return Err(Error::Invalid { context: "VoxelSpace::new".into(), field: "bounds/voxel".into(), value: format!("{min}..{max}, {voxel_m} m"), expected: "max > min and voxel > 0 m".into() });
+        }
+        let d = ((max - min) / voxel_m).ceil();
+        let dims = [d.x as usize, d.y as usize, d.z as usize];
+        let total = dims[0].saturating_mul(dims[1]).saturating_mul(dims[2]);
+        if total > MAX_VOXELS {
+            return Err(Error::TooLarge { path: "voxel space".into(), width: (dims[0] * dims[1]) as u64, height: dims[2] as u64, limit: MAX_VOXELS as u64 });
+        }
+        let mut s = VoxelSpace { origin: min, voxel_m, dims, solid: vec![false; total] };
+        if !obstacles.is_empty() {
+            for z in 0..dims[2] {
+                for y in 0..dims[1] {
+                    for x in 0..dims[0] {
+                        let c = s.center(IVec3::new(x as i32, y as i32, z as i32));
+                        if obstacles.iter().any(|o| o.contains(c)) {
+                            s.solid[(z * dims[1] + y) * dims[0] + x] = true;
+                        }
+                    }
+                }
+            }
+        }
+        Ok(s)
+    }
+
+    /// Number of voxels.
+    pub fn len(&self) -> usize {
+        self.solid.len()
+    }
+
+    /// True for a grid without voxels (never built by [`VoxelSpace::new`]).
+    pub fn is_empty(&self) -> bool {
+        self.solid.is_empty()
+    }
+
+    /// Voxel coordinates containing `p` (may be outside the grid).
+    pub fn cell(&self, p: Vec3) -> IVec3 {
+        ((p - self.origin) / self.voxel_m).floor().as_ivec3()
+    }
+
+    /// Centre of voxel `c` (m).
+    pub fn center(&self, c: IVec3) -> Vec3 {
+        self.origin + (c.as_vec3() + 0.5) * self.voxel_m
+    }
+
+    /// Flat index of voxel `c`, `None` outside the grid.
+    pub fn index(&self, c: IVec3) -> Option<usize> {
+        if c.x < 0 || c.y < 0 || c.z < 0 {
+            return None;
+        }
+        let (x, y, z) = (c.x as usize, c.y as usize, c.z as usize);
+        if x >= self.dims[0] || y >= self.dims[1] || z >= self.dims[2] {
+            return None;
+        }
+        Some((z * self.dims[1] + y) * self.dims[0] + x)
+    }
+
+    /// True when `p` is outside the grid or in a solid voxel.
+    pub fn blocked(&self, p: Vec3) -> bool {
+        self.index(self.cell(p)).map(|i| self.solid[i]).unwrap_or(true)
+    }
+
+    /// True when the segment a→b passes through a solid voxel or leaves the grid (sampled at a
+    /// quarter voxel).
+    pub fn segment_blocked(&self, a: Vec3, b: Vec3) -> bool {
+        let n = ((b - a).length() / (0.25 * self.voxel_m)).ceil().max(1.0) as usize;
+        (1..=n).any(|k| self.blocked(a + (b - a) * (k as f32 / n as f32)))
+    }
+}

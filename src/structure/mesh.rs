@@ -1,0 +1,334 @@
+//! Meshes of a skeleton: generalized cylinders with parallel-transport frames (continuous normals
+//! and UVs along each branch axis), leaves as quads (cards), and the level-of-detail chain
+//! (DESIGN.md): LOD0 full mesh; LOD1 reduced skeleton with thin branches merged into leaf-cluster
+//! cards; LOD2 crown hull (low-poly ellipsoid fitted to the foliage) on a simple trunk; LOD3
+//! billboard impostor (two crossed quads).
+//!
+//! Parallel transport: the ring frame is carried from one ring to the next by projecting the
+//! previous normal onto the plane of the new tangent (the discrete rotation-minimising frame of
+//! Bishop 1975 / Wang et al. 2008 to first order), so rings do not twist and the UV seam stays on
+//! one side of a branch.
+
+use crate::mesh::{LodChain, TreeMesh, TriMesh};
+use crate::structure::skeleton::{Leaves, Skeleton};
+use glam::Vec3;
+use std::f32::consts::TAU;
+
+/// Options of [`lod_chain`] and [`branch_mesh`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LodOptions {
+    /// Sides of the trunk tube at LOD0 (≥ 3); thinner branches get fewer (see `min_sides`).
+    pub sides: u32,
+    /// Fewest sides of any tube (≥ 3).
+    pub min_sides: u32,
+    /// Fraction (0–1] of branch nodes kept (the thickest) in the LOD1 reduced skeleton.
+    pub reduced_keep_fraction: f32,
+    /// Longitude segments of the LOD2 crown ellipsoid (≥ 3; latitude rings = half of it).
+    pub hull_segments: u32,
+    /// Emit leaves at LOD0.
+    pub leaves: bool,
+}
+
+impl Default for LodOptions {
+    fn default() -> Self {
+        LodOptions { sides: 8, min_sides: 3, reduced_keep_fraction: 0.12, hull_segments: 10, leaves: true }
+    }
+}
+
+/// Number of tube sides for radius `r` given the trunk radius `r0`: `sides` at the trunk,
+/// decreasing with √(r/r0) down to `min_sides`.
+fn sides_for(r: f32, r0: f32, o: &LodOptions) -> u32 {
+    let s = (o.sides as f32 * (r / r0.max(1e-9)).sqrt()).round() as u32;
+    s.clamp(o.min_sides.max(3), o.sides.max(3))
+}
+
+/// Generalized cylinders along the skeleton: one tube per branch axis (a chain that follows each
+/// node's first child), rings at every node, `keep[i] == false` nodes skipped (their subtree is
+/// cut). Tips taper to 30 % of their radius. UV: u around (0–1), v = distance along the axis
+/// divided by the trunk circumference (so bark texels stay square on the trunk).
+pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriMesh {
+    let mut m = TriMesh::default();
+    if sk.nodes.len() < 2 {
+        return m;
+    }
+    let kept = |i: usize| keep.map(|k| k[i]).unwrap_or(true);
+    let r0 = sk.nodes[0].radius.max(sk.nodes.get(1).map(|n| n.radius).unwrap_or(0.0)).max(1e-6);
+    let vscale = 1.0 / (TAU * r0);
+    let est = sk.nodes.len() * (o.sides as usize + 1);
+    m.positions.reserve(est);
+    m.normals.reserve(est);
+    m.uvs.reserve(est);
+    m.indices.reserve(est * 6);
+    let mut chain: Vec<usize> = Vec::with_capacity(256);
+    // Chain starts: the root, and every non-first kept child.
+    let mut starts: Vec<(usize, usize)> = vec![(0, 0)]; // (first point, first segment node)
+    for (i, n) in sk.nodes.iter().enumerate() {
+        if !kept(i) {
+            continue;
+        }
+        let kids: Vec<usize> = n.children.iter().map(|&c| c as usize).filter(|&c| kept(c)).collect();
+        for &c in kids.iter().skip(1) {
+            starts.push((i, c));
+        }
+    }
+    for &(p0, c0) in &starts {
+        chain.clear();
+        chain.push(p0);
+        let mut cur = if p0 == 0 && c0 == 0 {
+            sk.nodes[0].children.iter().map(|&c| c as usize).find(|&c| kept(c))
+        } else {
+            Some(c0)
+        };
+        while let Some(c) = cur {
+            chain.push(c);
+            cur = sk.nodes[c].children.iter().map(|&c| c as usize).find(|&c| kept(c));
+        }
+        if chain.len() < 2 {
+            continue;
+        }
+        let base_r = sk.nodes[chain[1]].radius;
+        let sides = sides_for(base_r, r0, o);
+        let ring = sides + 1;
+        let mut normal = Vec3::ZERO;
+        let mut v = 0.0f32;
+        let first_vertex = m.positions.len() as u32;
+        let n = chain.len();
+        for k in 0..n {
+            let pos = sk.nodes[chain[k]].pos;
+            let prev = sk.nodes[chain[k.saturating_sub(1)]].pos;
+            let next = sk.nodes[chain[(k + 1).min(n - 1)]].pos;
+            let t = (next - prev).normalize_or(Vec3::Z);
+            normal = if k == 0 { t.any_orthonormal_vector() } else { (normal - t * normal.dot(t)).normalize_or(t.any_orthonormal_vector()) };
+            let binormal = t.cross(normal);
+            let mut r = if k == 0 { base_r } else { sk.nodes[chain[k]].radius };
+            if k == n - 1 && sk.nodes[chain[k]].children.is_empty() {
+                r *= 0.3;
+            }
+            if k > 0 {
+                v += pos.distance(prev) * vscale;
+            }
+            for s in 0..ring {
+                let a = s as f32 / sides as f32 * TAU;
+                let (sa, ca) = a.sin_cos();
+                let dir = normal * ca + binormal * sa;
+                m.positions.push((pos + dir * r).to_array());
+                m.normals.push(dir.to_array());
+                m.uvs.push([s as f32 / sides as f32, v]);
+            }
+        }
+        for k in 0..(n as u32 - 1) {
+            let a = first_vertex + k * ring;
+            let b = a + ring;
+            for s in 0..sides {
+                // counter-clockwise seen from outside: (a+s, a+s+1, b+s+1), (a+s, b+s+1, b+s)
+                m.indices.extend_from_slice(&[a + s, a + s + 1, b + s + 1, a + s, b + s + 1, b + s]);
+            }
+        }
+    }
+    m
+}
+
+/// Leaves as quads (cards): each leaf a blade of length `size` and width `size/2` from its
+/// attachment point along `dir`, facing `normal`; 4 vertices, 2 triangles, UV 0–1 over the card.
+/// The glTF leaf material is double-sided.
+pub fn leaf_mesh(leaves: &Leaves) -> TriMesh {
+    let mut m = TriMesh::default();
+    let n = leaves.len();
+    m.positions.reserve(n * 4);
+    m.normals.reserve(n * 4);
+    m.uvs.reserve(n * 4);
+    m.indices.reserve(n * 6);
+    for l in &leaves.leaves {
+        let side = l.normal.cross(l.dir) * (0.25 * l.size);
+        let tip = l.dir * l.size;
+        let base = m.positions.len() as u32;
+        for (p, uv) in [(l.pos - side, [0.0, 0.0]), (l.pos + side, [1.0, 0.0]), (l.pos + side + tip, [1.0, 1.0]), (l.pos - side + tip, [0.0, 1.0])] {
+            m.positions.push(p.to_array());
+            m.normals.push(l.normal.to_array());
+            m.uvs.push(uv);
+        }
+        m.indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    m
+}
+
+/// Appends an axis-aligned-ish card: a quad centred at `c` spanned by half-vectors `u`, `v`.
+fn quad(m: &mut TriMesh, c: Vec3, u: Vec3, v: Vec3) {
+    let nrm = u.cross(v).normalize_or(Vec3::Z);
+    let base = m.positions.len() as u32;
+    for (p, uv) in [(c - u - v, [0.0, 0.0]), (c + u - v, [1.0, 0.0]), (c + u + v, [1.0, 1.0]), (c - u + v, [0.0, 1.0])] {
+        m.positions.push(p.to_array());
+        m.normals.push(nrm.to_array());
+        m.uvs.push(uv);
+    }
+    m.indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+}
+
+/// LOD1: keeps the thickest `reduced_keep_fraction` of nodes (by radius; the root always), and
+/// replaces every cut subtree by a leaf-cluster blob of three crossed cards centred on its
+/// leaves (or its nodes when leafless), sized by their spread plus one leaf length.
+pub fn reduced_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
+    let n = sk.nodes.len();
+    if n == 0 {
+        return TreeMesh::default();
+    }
+    let mut radii: Vec<f32> = sk.nodes.iter().map(|n| n.radius).collect();
+    radii.sort_by(|a, b| b.total_cmp(a));
+    let keep_n = ((n as f32 * o.reduced_keep_fraction.clamp(0.0, 1.0)).ceil() as usize).clamp(2.min(n), n);
+    let r_cut = radii[keep_n - 1];
+    let mut keep = vec![false; n];
+    let mut cluster = vec![u32::MAX; n];
+    let mut n_clusters = 0u32;
+    for i in 0..n {
+        let node = &sk.nodes[i];
+        match node.parent {
+            None => keep[i] = true,
+            Some(p) => {
+                let p = p as usize;
+                if keep[p] && node.radius >= r_cut {
+                    keep[i] = true;
+                } else if keep[p] {
+                    cluster[i] = n_clusters;
+                    n_clusters += 1;
+                } else {
+                    cluster[i] = cluster[p];
+                }
+            }
+        }
+    }
+    let bark = branch_mesh(sk, o, Some(&keep));
+    // accumulate cluster points
+    let nc = n_clusters as usize;
+    let mut sum = vec![Vec3::ZERO; nc];
+    let mut sum2 = vec![0.0f32; nc];
+    let mut cnt = vec![0u32; nc];
+    let mut leaf_size = vec![0.0f32; nc];
+    let mut add = |c: u32, p: Vec3, s: f32| {
+        let c = c as usize;
+        sum[c] += p;
+        sum2[c] += p.length_squared();
+        cnt[c] += 1;
+        leaf_size[c] = leaf_size[c].max(s);
+    };
+    let mut has_leaf = vec![false; nc];
+    for l in &leaves.leaves {
+        let c = cluster.get(l.node as usize).copied().unwrap_or(u32::MAX);
+        if c != u32::MAX {
+            add(c, l.pos + l.dir * (0.5 * l.size), l.size);
+            has_leaf[c as usize] = true;
+        }
+    }
+    for i in 0..n {
+        let c = cluster[i];
+        if c != u32::MAX && !has_leaf[c as usize] {
+            add(c, sk.nodes[i].pos, 0.0);
+        }
+    }
+    let mut foliage = TriMesh::default();
+    for c in 0..nc {
+        if cnt[c] == 0 {
+            continue;
+        }
+        let k = cnt[c] as f32;
+        let mean = sum[c] / k;
+        let var = (sum2[c] / k - mean.length_squared()).max(0.0);
+        let r = var.sqrt() + 0.5 * leaf_size[c].max(1e-3);
+        // three crossed cards (6 triangles)
+        quad(&mut foliage, mean, Vec3::X * r, Vec3::Z * r);
+        quad(&mut foliage, mean, Vec3::Y * r, Vec3::Z * r);
+        quad(&mut foliage, mean, Vec3::X * r, Vec3::Y * r);
+    }
+    TreeMesh { bark, leaves: foliage }
+}
+
+/// Foliage points of a tree: leaf centres, or tip nodes when there are no leaves.
+fn foliage_points(sk: &Skeleton, leaves: &Leaves) -> Vec<Vec3> {
+    if leaves.is_empty() {
+        sk.nodes.iter().filter(|n| n.children.is_empty()).map(|n| n.pos).collect()
+    } else {
+        leaves.leaves.iter().map(|l| l.pos + l.dir * (0.5 * l.size)).collect()
+    }
+}
+
+fn bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
+    let first = *pts.first()?;
+    Some(pts.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
+}
+
+/// LOD2: a low-poly ellipsoid hull fitted to the bounds of the foliage (leaf centres, or tips),
+/// on a 5-sided trunk from the root to the crown base.
+pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
+    let pts = foliage_points(sk, leaves);
+    let Some((lo, hi)) = bounds(&pts) else { return TreeMesh::default() };
+    let c = 0.5 * (lo + hi);
+    let r = (0.5 * (hi - lo)).max(Vec3::splat(1e-3));
+    let nlon = o.hull_segments.max(3);
+    let nlat = (nlon / 2).max(2);
+    let mut hull = TriMesh::default();
+    for j in 0..=nlat {
+        let th = j as f32 / nlat as f32 * std::f32::consts::PI;
+        let (st, ct) = th.sin_cos();
+        for i in 0..=nlon {
+            let ph = i as f32 / nlon as f32 * TAU;
+            let (sp, cp) = ph.sin_cos();
+            let unit = Vec3::new(st * cp, st * sp, ct);
+            hull.positions.push((c + unit * r).to_array());
+            hull.normals.push((unit / r).normalize_or(Vec3::Z).to_array());
+            hull.uvs.push([i as f32 / nlon as f32, j as f32 / nlat as f32]);
+        }
+    }
+    let row = nlon + 1;
+    for j in 0..nlat {
+        for i in 0..nlon {
+            let a = j * row + i;
+            let b = a + row;
+            if j > 0 {
+                hull.indices.extend_from_slice(&[a, b, a + 1]);
+            }
+            if j < nlat - 1 {
+                hull.indices.extend_from_slice(&[a + 1, b, b + 1]);
+            }
+        }
+    }
+    // trunk: root to crown base (or to the first node's end when the crown starts lower)
+    let mut bark = TriMesh::default();
+    if let Some(root) = sk.nodes.first() {
+        // up to half-way into the crown, so the hull sits on it
+        let top = Vec3::new(root.pos.x, root.pos.y, (c.z - 0.5 * r.z).max(root.pos.z + 1e-3));
+        let rr = root.radius.max(sk.nodes.get(1).map(|n| n.radius).unwrap_or(0.0));
+        let mut t = Skeleton::new();
+        t.add_root(root.pos, rr);
+        if t.add_child(0, top, rr * 0.7, false).is_ok() {
+            bark = branch_mesh(&t, &LodOptions { sides: 5, min_sides: 5, ..*o }, None);
+        }
+    }
+    TreeMesh { bark, leaves: hull }
+}
+
+/// LOD3: billboard impostor, two crossed vertical quads spanning the tree's bounds (leaf
+/// material; UV 0–1 over each card, v up).
+pub fn impostor_mesh(sk: &Skeleton, leaves: &Leaves) -> TreeMesh {
+    let mut pts: Vec<Vec3> = sk.nodes.iter().map(|n| n.pos).collect();
+    pts.extend(foliage_points(sk, leaves));
+    let Some((lo, hi)) = bounds(&pts) else { return TreeMesh::default() };
+    let root = sk.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO);
+    let half_w = ((hi.x - lo.x).max(hi.y - lo.y) * 0.5).max(1e-3);
+    let h = (hi.z - lo.z).max(1e-3) * 0.5;
+    let c = Vec3::new(root.x, root.y, lo.z + h);
+    let mut m = TriMesh::default();
+    quad(&mut m, c, Vec3::X * half_w, Vec3::Z * h);
+    quad(&mut m, c, Vec3::Y * half_w, Vec3::Z * h);
+    TreeMesh { bark: TriMesh::default(), leaves: m }
+}
+
+/// The full-detail tree mesh (LOD0): tubes plus leaf cards.
+pub fn full_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
+    TreeMesh { bark: branch_mesh(sk, o, None), leaves: if o.leaves { leaf_mesh(leaves) } else { TriMesh::default() } }
+}
+
+/// The LOD chain: `[full, reduced, hull, impostor]` (triangle counts via
+/// `TreeMesh::triangle_count`, decreasing along the chain for any tree with more than a few
+/// dozen nodes).
+pub fn lod_chain(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> LodChain {
+    LodChain { levels: vec![full_mesh(sk, leaves, o), reduced_mesh(sk, leaves, o), hull_mesh(sk, leaves, o), impostor_mesh(sk, leaves)] }
+}

@@ -1,0 +1,346 @@
+//! Readers for elevation models: GeoTIFF, ESRI ASCII grid (+ optional `.prj`), 16-bit PNG
+//! heightmaps; the embedded default DEM; sub-windows.
+//!
+//! Every reader returns a [`Terrain`] with invalid (nodata) cells set to `f32::NAN`, row 0 north.
+//! Grids larger than [`MAX_CELLS`] are refused from their header, before any allocation.
+
+use super::Terrain;
+use crate::error::{Error, Result};
+use crate::grid::{Crs, GeoRef, Grid};
+use std::io::{Cursor, Read, Seek};
+use std::path::{Path, PathBuf};
+
+/// Largest grid accepted by the readers: 2^28 cells (1 GiB of f32 elevations).
+pub const MAX_CELLS: u64 = 1 << 28;
+
+/// Latitude (degrees N) of the centre of the embedded default DEM.
+pub const DEFAULT_LATITUDE_DEG: f64 = 36.59;
+
+/// Latitude (degrees) used for projected grids whose latitude cannot be derived (non-UTM EPSG).
+pub const FALLBACK_LATITUDE_DEG: f64 = 45.0;
+
+static DEFAULT_DEM: &[u8] = include_bytes!("../../terrains/jacksboro_fault_dem_utm16n.tif");
+
+/// The embedded default terrain: `terrains/jacksboro_fault_dem_utm16n.tif` (USGS DEM of the
+/// Jacksboro fault, Tennessee; UTM zone 16N, 80 m cells, 387 × 408, nodata corners), latitude
+/// [`DEFAULT_LATITUDE_DEG`].
+pub fn default_terrain() -> Result<Terrain> {
+    let path = Path::new("<embedded>/terrains/jacksboro_fault_dem_utm16n.tif");
+    let mut t = read_geotiff(Cursor::new(DEFAULT_DEM), path)?;
+    t.geo.latitude_deg = DEFAULT_LATITUDE_DEG;
+    Ok(t)
+}
+
+/// Loads a DEM, choosing the reader by extension: `.tif`/`.tiff` (GeoTIFF), `.asc` (ESRI ASCII
+/// grid, with `.prj` beside it if present), `.png` (16-bit heightmap with 1 m cells and heights
+/// 0–65.535 km scaled as raw/1 m; use [`load_png_heightmap`] to give cell size and height range).
+///
+/// Errors: [`Error::Io`] (missing file), [`Error::Format`] (corrupt or unsupported content,
+/// naming the field or line), [`Error::TooLarge`], [`Error::Invalid`] (no valid cell).
+pub fn load(path: &Path) -> Result<Terrain> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    match ext.as_str() {
+        "tif" | "tiff" => {
+            let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+            read_geotiff(std::io::BufReader::new(f), path)
+        }
+        "asc" => load_asc(path),
+        "png" => load_png_heightmap(path, 1.0, 0.0, 65535.0),
+        _ => Err(Error::format(path, format!("unknown DEM extension `.{ext}`: expected .tif, .tiff, .asc or .png"))),
+    }
+}
+
+fn check_size(path: &Path, w: u64, h: u64) -> Result<()> {
+    if w == 0 || h == 0 {
+        return Err(Error::format(path, format!("grid has zero size ({w} x {h} cells)")));
+    }
+    if w.saturating_mul(h) > MAX_CELLS {
+        return Err(Error::TooLarge { path: path.to_path_buf(), width: w, height: h, limit: MAX_CELLS });
+    }
+    Ok(())
+}
+
+/// Checks that the grid has at least one finite cell; counts are reported in the error.
+fn check_valid(path: &Path, g: &Grid<f32>) -> Result<()> {
+    if !g.data.iter().any(|v| v.is_finite()) {
+        return Err(Error::Invalid {
+            context: path.display().to_string(),
+            field: "elevation".into(),
+            value: format!("all {} cells nodata or NaN", g.len()),
+            expected: "at least one finite elevation".into(),
+        });
+    }
+    Ok(())
+}
+
+fn tiff_err(path: &Path, what: &str, e: tiff::TiffError) -> Error {
+    Error::format(path, format!("GeoTIFF {what}: {e} (truncated or corrupt file?)"))
+}
+
+/// Reads a single-band GeoTIFF (Int16, UInt16, Int32, Float32 or Float64 samples) from `r`.
+///
+/// Georeferencing: ModelPixelScale (33550), ModelTiepoint (33922) and the GeoKeyDirectory
+/// (34735): GTModelTypeGeoKey (1024) 2 = geographic, 1 = projected; EPSG from
+/// ProjectedCSTypeGeoKey (3072) or GeographicTypeGeoKey (2048). GDAL_NODATA (42113, text) marks
+/// invalid cells, which become NaN. `path` is only used in messages.
+pub fn read_geotiff<R: Read + Seek>(r: R, path: &Path) -> Result<Terrain> {
+    use tiff::tags::Tag;
+    let mut dec = tiff::decoder::Decoder::new(r).map_err(|e| tiff_err(path, "header", e))?;
+    let (w, h) = dec.dimensions().map_err(|e| tiff_err(path, "dimensions", e))?;
+    check_size(path, w as u64, h as u64)?;
+    let mut limits = tiff::decoder::Limits::default();
+    limits.decoding_buffer_size = (MAX_CELLS as usize) * 8;
+    limits.intermediate_buffer_size = (MAX_CELLS as usize) * 8;
+    dec = dec.with_limits(limits);
+    let spp = dec.find_tag_unsigned::<u16>(Tag::SamplesPerPixel).map_err(|e| tiff_err(path, "SamplesPerPixel", e))?.unwrap_or(1);
+    if spp != 1 {
+        return Err(Error::format(path, format!("SamplesPerPixel = {spp}: expected 1 (a single elevation band)")));
+    }
+    let scale = dec.find_tag(Tag::ModelPixelScaleTag).ok().flatten().and_then(|v| v.into_f64_vec().ok());
+    let tie = dec.find_tag(Tag::ModelTiepointTag).ok().flatten().and_then(|v| v.into_f64_vec().ok());
+    let keys = dec.find_tag(Tag::GeoKeyDirectoryTag).ok().flatten().and_then(|v| v.into_u16_vec().ok());
+    let nodata_txt = dec.find_tag(Tag::GdalNodata).ok().flatten().and_then(|v| v.into_string().ok());
+    let nodata = match nodata_txt {
+        Some(s) => {
+            let t = s.trim_matches(|c: char| c == '\0' || c.is_whitespace());
+            Some(t.parse::<f64>().map_err(|_| Error::format(path, format!("GDAL_NODATA tag = `{t}`: expected a number")))?)
+        }
+        None => None,
+    };
+    let img = dec.read_image().map_err(|e| tiff_err(path, "image data", e))?;
+    use tiff::decoder::DecodingResult as D;
+    let data: Vec<f32> = match img {
+        D::I16(v) => v.into_iter().map(|x| x as f32).collect(),
+        D::U16(v) => v.into_iter().map(|x| x as f32).collect(),
+        D::I32(v) => v.into_iter().map(|x| x as f32).collect(),
+        D::U8(v) => v.into_iter().map(|x| x as f32).collect(),
+        D::F32(v) => v,
+        D::F64(v) => v.into_iter().map(|x| x as f32).collect(),
+        _ => return Err(Error::format(path, "sample format: expected Int16, UInt16, Int32, Float32 or Float64")),
+    };
+    let n = w as usize * h as usize;
+    if data.len() != n {
+        return Err(Error::format(path, format!("image data holds {} samples: expected {w} x {h} = {n}", data.len())));
+    }
+    let data: Vec<f32> = data
+        .into_iter()
+        .map(|x| if nodata.is_some_and(|nd| (x as f64 - nd).abs() <= 1e-6 * nd.abs().max(1.0)) || !x.is_finite() { f32::NAN } else { x })
+        .collect();
+    let elevation = Grid { width: w as usize, height: h as usize, data };
+    check_valid(path, &elevation)?;
+
+    // GeoKeys: header (version, rev, minor, count) then (key, location, count, value) quadruples.
+    let (mut model, mut epsg) = (0u16, None);
+    if let Some(k) = &keys {
+        for q in k.get(4..).unwrap_or(&[]).chunks_exact(4) {
+            match (q[0], q[1]) {
+                (1024, 0) => model = q[3],
+                (3072, 0) | (2048, 0) if epsg.is_none() || q[0] == 3072 => {
+                    if q[3] != 32767 && q[3] != 0 {
+                        epsg = Some(q[3] as u32)
+                    }
+                }
+                _ => {}
+            }
+        }
+    }
+    let crs = match (model, &scale) {
+        (2, _) => Crs::Geographic,
+        (1, _) => Crs::Projected,
+        (_, Some(_)) => Crs::Projected,
+        _ => Crs::Local,
+    };
+    let (pw, ph) = match &scale {
+        Some(s) if s.len() >= 2 && s[0] > 0.0 && s[1] > 0.0 => (s[0], s[1]),
+        Some(s) => return Err(Error::format(path, format!("ModelPixelScale = {s:?}: expected two positive cell sizes"))),
+        None => (1.0, 1.0),
+    };
+    let (ox, oy) = match &tie {
+        Some(t) if t.len() >= 6 => (t[3] - t[0] * pw, t[4] + t[1] * ph),
+        _ => (0.0, h as f64 * ph),
+    };
+    let mut geo = GeoRef { crs, epsg, origin_x: ox, origin_y: oy, pixel_w: pw, pixel_h: ph, latitude_deg: FALLBACK_LATITUDE_DEG };
+    geo.latitude_deg = centre_latitude(&geo, h as usize);
+    Ok(Terrain { elevation, geo, nodata, source: path.display().to_string() })
+}
+
+/// Latitude (degrees) of the grid centre: exact for geographic grids, inverse UTM (footpoint
+/// latitude series, Snyder 1987 eq. 3-26/8-18) for EPSG 326zz/327zz, else [`FALLBACK_LATITUDE_DEG`].
+fn centre_latitude(geo: &GeoRef, height: usize) -> f64 {
+    let cy = geo.origin_y - geo.pixel_h * height as f64 / 2.0;
+    match (geo.crs, geo.epsg) {
+        (Crs::Geographic, _) => cy,
+        (Crs::Projected, Some(e)) if (32601..=32660).contains(&e) || (32701..=32760).contains(&e) => {
+            let northing = if e >= 32701 { cy - 10_000_000.0 } else { cy };
+            let (a, e2, k0) = (6_378_137.0f64, 0.006_694_379_990_14f64, 0.9996);
+            let m = northing / k0;
+            let mu = m / (a * (1.0 - e2 / 4.0 - 3.0 * e2 * e2 / 64.0));
+            let e1 = (1.0 - (1.0 - e2).sqrt()) / (1.0 + (1.0 - e2).sqrt());
+            let phi1 = mu + (3.0 * e1 / 2.0 - 27.0 * e1.powi(3) / 32.0) * (2.0 * mu).sin() + (21.0 * e1 * e1 / 16.0) * (4.0 * mu).sin() + (151.0 * e1.powi(3) / 96.0) * (6.0 * mu).sin();
+            phi1.to_degrees()
+        }
+        _ => geo.latitude_deg,
+    }
+}
+
+fn parse_header_num(path: &Path, line_no: usize, key: &str, val: &str) -> Result<f64> {
+    val.parse::<f64>().map_err(|_| Error::format(path, format!("line {line_no}: header `{key}` = `{val}`: expected a number")))
+}
+
+/// Reads an ESRI ASCII grid (`ncols`, `nrows`, `xllcorner|xllcenter`, `yllcorner|yllcenter`,
+/// `cellsize`, optional `NODATA_value`, then `nrows` lines of `ncols` values). A `.prj` beside
+/// it that names `GEOGCS` without `PROJCS` makes the grid geographic (degrees); without a `.prj`
+/// or with `PROJCS` it is projected (metres).
+///
+/// Errors name the line: a header key missing or not a number, a data row with the wrong number
+/// of values, a value that is not a number, fewer or more rows than `nrows`.
+pub fn load_asc(path: &Path) -> Result<Terrain> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut lines = text.lines().enumerate().peekable();
+    let (mut ncols, mut nrows, mut xll, mut yll, mut cell, mut nodata) = (None, None, None, None, None, None);
+    let mut centre = false;
+    while let Some((i, line)) = lines.peek().copied() {
+        let mut it = line.split_whitespace();
+        let Some(key) = it.next() else {
+            lines.next();
+            continue;
+        };
+        if key.parse::<f64>().is_ok() || key.starts_with('-') {
+            break;
+        }
+        let val = it.next().ok_or_else(|| Error::format(path, format!("line {}: header `{key}` has no value", i + 1)))?;
+        let v = parse_header_num(path, i + 1, key, val)?;
+        match key.to_ascii_lowercase().as_str() {
+            "ncols" => ncols = Some(v),
+            "nrows" => nrows = Some(v),
+            "xllcorner" => xll = Some(v),
+            "yllcorner" => yll = Some(v),
+            "xllcenter" => {
+                xll = Some(v);
+                centre = true
+            }
+            "yllcenter" => {
+                yll = Some(v);
+                centre = true
+            }
+            "cellsize" => cell = Some(v),
+            "nodata_value" => nodata = Some(v),
+            other => return Err(Error::format(path, format!("line {}: unknown header key `{other}`: expected ncols, nrows, xllcorner, yllcorner, cellsize or NODATA_value", i + 1))),
+        }
+        lines.next();
+    }
+    let need = |v: Option<f64>, k: &str| v.ok_or_else(|| Error::format(path, format!("header key `{k}` missing")));
+    let (nc, nr, cs) = (need(ncols, "ncols")?, need(nrows, "nrows")?, need(cell, "cellsize")?);
+    let (xll, yll) = (need(xll, "xllcorner")?, need(yll, "yllcorner")?);
+    if nc < 0.0 || nr < 0.0 || nc.fract() != 0.0 || nr.fract() != 0.0 {
+        return Err(Error::format(path, format!("ncols = {nc}, nrows = {nr}: expected non-negative integers")));
+    }
+    if !(cs > 0.0) {
+        return Err(Error::format(path, format!("cellsize = {cs}: expected > 0")));
+    }
+    let (w, h) = (nc as u64, nr as u64);
+    check_size(path, w, h)?;
+    let (w, h) = (w as usize, h as usize);
+    let mut data = Vec::with_capacity(w * h);
+    let mut row = 0usize;
+    for (i, line) in lines {
+        let before = data.len();
+        for tok in line.split_whitespace() {
+            let v: f64 = tok.parse().map_err(|_| Error::format(path, format!("line {}: value `{tok}` is not a number", i + 1)))?;
+            data.push(if nodata.is_some_and(|nd| v == nd) || !v.is_finite() { f32::NAN } else { v as f32 });
+        }
+        let got = data.len() - before;
+        if got == 0 {
+            continue;
+        }
+        if row >= h {
+            return Err(Error::format(path, format!("line {}: data row {} beyond nrows = {h}", i + 1, row + 1)));
+        }
+        if got != w {
+            return Err(Error::format(path, format!("line {}: data row {} has {got} values: expected ncols = {w}", i + 1, row + 1)));
+        }
+        row += 1;
+    }
+    if row != h {
+        return Err(Error::format(path, format!("{row} data rows: expected nrows = {h} (file truncated?)")));
+    }
+    let elevation = Grid { width: w, height: h, data };
+    check_valid(path, &elevation)?;
+    let prj = path.with_extension("prj");
+    let geographic = match std::fs::read_to_string(&prj) {
+        Ok(s) => s.contains("GEOGCS") && !s.contains("PROJCS"),
+        Err(_) => false,
+    };
+    let half = if centre { cs / 2.0 } else { 0.0 };
+    let mut geo = GeoRef {
+        crs: if geographic { Crs::Geographic } else { Crs::Projected },
+        epsg: if geographic { Some(4326) } else { None },
+        origin_x: xll - half,
+        origin_y: yll - half + cs * h as f64,
+        pixel_w: cs,
+        pixel_h: cs,
+        latitude_deg: FALLBACK_LATITUDE_DEG,
+    };
+    geo.latitude_deg = centre_latitude(&geo, h);
+    Ok(Terrain { elevation, geo, nodata, source: path.display().to_string() })
+}
+
+/// Reads a grayscale PNG heightmap (16-bit, or 8-bit widened) — the game-engine convention:
+/// value 0 is `min_h_m`, the largest code (65535 or 255) is `max_h_m`, cells are `cell_m`
+/// metres square, no georeferencing ([`Crs::Local`], latitude [`FALLBACK_LATITUDE_DEG`]).
+///
+/// Errors: unreadable or non-grayscale PNG, `cell_m ≤ 0`, `max_h_m < min_h_m`, too large.
+pub fn load_png_heightmap(path: &Path, cell_m: f64, min_h_m: f64, max_h_m: f64) -> Result<Terrain> {
+    if !(cell_m > 0.0) || !cell_m.is_finite() {
+        return Err(Error::Invalid { context: path.display().to_string(), field: "cell_m".into(), value: cell_m.to_string(), expected: "> 0 metres".into() });
+    }
+    if !(max_h_m >= min_h_m) {
+        return Err(Error::Invalid { context: path.display().to_string(), field: "max_h_m".into(), value: max_h_m.to_string(), expected: format!(">= min_h_m = {min_h_m}") });
+    }
+    let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let reader = image::ImageReader::with_format(std::io::BufReader::new(f), image::ImageFormat::Png);
+    let mut dec = reader.into_decoder().map_err(|e| Error::format(path, format!("PNG header: {e}")))?;
+    let (w, h) = image::ImageDecoder::dimensions(&dec);
+    check_size(path, w as u64, h as u64)?;
+    let mut lim = image::Limits::default();
+    lim.max_alloc = Some(MAX_CELLS * 8);
+    image::ImageDecoder::set_limits(&mut dec, lim).map_err(|e| Error::format(path, format!("PNG limits: {e}")))?;
+    let img = image::DynamicImage::from_decoder(dec).map_err(|e| Error::format(path, format!("PNG data: {e}")))?;
+    let (vals, maxcode): (Vec<u16>, f64) = match img {
+        image::DynamicImage::ImageLuma16(b) => (b.into_raw(), 65535.0),
+        image::DynamicImage::ImageLuma8(b) => (b.into_raw().into_iter().map(u16::from).collect(), 255.0),
+        other => (other.to_luma16().into_raw(), 65535.0),
+    };
+    let data = vals.into_iter().map(|v| (min_h_m + (max_h_m - min_h_m) * v as f64 / maxcode) as f32).collect();
+    let elevation = Grid { width: w as usize, height: h as usize, data };
+    Ok(Terrain { elevation, geo: GeoRef::local(cell_m, FALLBACK_LATITUDE_DEG), nodata: None, source: path.display().to_string() })
+}
+
+/// A sub-window of `w × h` cells starting at column `col0`, row `row0` (row 0 north), with the
+/// georeferencing shifted so that it stays in place.
+///
+/// Errors: [`Error::Invalid`] when the window is empty, leaves the grid, or holds no valid cell.
+pub fn window(t: &Terrain, col0: usize, row0: usize, w: usize, h: usize) -> Result<Terrain> {
+    let g = &t.elevation;
+    if w == 0 || h == 0 || col0.checked_add(w).is_none_or(|e| e > g.width) || row0.checked_add(h).is_none_or(|e| e > g.height) {
+        return Err(Error::Invalid {
+            context: t.source.clone(),
+            field: "window".into(),
+            value: format!("cols {col0}..{} rows {row0}..{}", col0.saturating_add(w), row0.saturating_add(h)),
+            expected: format!("a non-empty window inside {} x {}", g.width, g.height),
+        });
+    }
+    let mut data = Vec::with_capacity(w * h);
+    for r in row0..row0 + h {
+        data.extend_from_slice(&g.data[r * g.width + col0..r * g.width + col0 + w]);
+    }
+    let elevation = Grid { width: w, height: h, data };
+    check_valid(&PathBuf::from(&t.source), &elevation)?;
+    let mut geo = t.geo.clone();
+    geo.origin_x += col0 as f64 * geo.pixel_w;
+    geo.origin_y -= row0 as f64 * geo.pixel_h;
+    if geo.crs == Crs::Geographic {
+        geo.latitude_deg = centre_latitude(&geo, h);
+    }
+    Ok(Terrain { elevation, geo, nodata: t.nodata, source: format!("{} [window {col0},{row0} {w}x{h}]", t.source) })
+}

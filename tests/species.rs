@@ -1,0 +1,404 @@
+//! Species library: shipped files, loader, validation errors, suitability, README/schema sync,
+//! published parameter values, CLI.
+
+use std::path::{Path, PathBuf};
+
+use sylva::species::{self, schema, Indicator, LeafDistribution, Problem, Species, SpeciesLibrary, TOLERANCE_EDGE_SUITABILITY};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+fn species_dir() -> PathBuf {
+    root().join("species")
+}
+fn beech_text() -> String {
+    std::fs::read_to_string(species_dir().join("beech.toml")).unwrap()
+}
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+/// The problems of a single bad file (beech with `edit` applied) in a fresh folder.
+fn problems_of(edit: impl Fn(&str) -> String) -> (tempfile::TempDir, Vec<Problem>) {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "bad.toml", &edit(&beech_text()));
+    let p = species::check_dir(d.path());
+    (d, p)
+}
+fn line_of(text: &str, needle: &str) -> usize {
+    text.lines().position(|l| l.starts_with(needle)).expect(needle) + 1
+}
+
+#[test]
+fn shipped_files_validate() {
+    let problems = species::check_dir(&species_dir());
+    assert!(problems.is_empty(), "{}", problems.iter().map(|p| p.to_string()).collect::<Vec<_>>().join("\n"));
+    let lib = SpeciesLibrary::load_dir(&species_dir()).unwrap();
+    assert!(lib.len() >= 15, "{} species", lib.len());
+    for id in [
+        "beech", "norway_spruce", "silver_fir", "scots_pine", "european_larch", "pedunculate_oak", "sessile_oak", "sycamore", "norway_maple", "ash",
+        "silver_birch", "black_alder", "hornbeam", "small_leaved_lime", "rowan", "aspen",
+    ] {
+        assert!(lib.get(id).is_some(), "missing {id}");
+    }
+    // Sorted by id, unique.
+    assert!(lib.species.windows(2).all(|w| w[0].id < w[1].id));
+    // Lookup by scientific and common name.
+    assert_eq!(lib.get("Fagus sylvatica").unwrap().id, "beech");
+    assert_eq!(lib.get("scots pine").unwrap().id, "scots_pine");
+}
+
+#[test]
+fn embedded_equals_folder() {
+    let mut names: Vec<String> = species::species_files(&species_dir()).unwrap().iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect();
+    names.sort();
+    let mut embedded: Vec<String> = species::EMBEDDED_FILES.iter().map(|(n, _)| n.to_string()).collect();
+    embedded.sort();
+    assert_eq!(names, embedded, "EMBEDDED_FILES in src/species/library.rs must list exactly the files of species/");
+    assert_eq!(SpeciesLibrary::embedded().unwrap(), SpeciesLibrary::load_dir(&species_dir()).unwrap());
+}
+
+#[test]
+fn round_trip_is_lossless() {
+    for s in SpeciesLibrary::embedded().unwrap().species {
+        let text = s.to_toml_string().unwrap();
+        let back = Species::from_toml_str(&text, "roundtrip.toml").unwrap();
+        assert_eq!(back, s, "{}", s.id);
+        assert_eq!(back.to_toml_string().unwrap(), text, "{}: second write differs", s.id);
+    }
+}
+
+#[test]
+fn suitability_one_at_optimum_and_documented_value_at_tolerance_edge() {
+    let lib = SpeciesLibrary::embedded().unwrap();
+    let beech = lib.get("beech").unwrap();
+    // beech: L 3, T 5, K 2, F 5, R x, N x.
+    let opt = [3.0, 5.0, 2.0, 5.0, 1.0, 9.0];
+    assert!((beech.suitability(&opt) - 1.0).abs() < 1e-6);
+    assert_eq!(beech.suitability_factors(&opt), [1.0; 6]);
+    // Each numeric factor at optimum + tolerance gives exp(-1/2); indifferent ones stay 1.
+    assert!((TOLERANCE_EDGE_SUITABILITY - (-0.5f32).exp()).abs() < 1e-7);
+    let n = &beech.niche;
+    for (i, f) in [&n.l, &n.t, &n.k, &n.f, &n.r, &n.n].into_iter().enumerate() {
+        let mut x = opt;
+        match f.value {
+            Indicator::Value(v) => {
+                for sign in [-1.0, 1.0] {
+                    x[i] = v + sign * f.tolerance;
+                    let s = beech.suitability(&x);
+                    assert!((s - TOLERANCE_EDGE_SUITABILITY).abs() < 1e-5, "factor {i}: {s}");
+                }
+            }
+            Indicator::Indifferent(_) => {
+                for v in [1.0, 5.0, 9.0] {
+                    x[i] = v;
+                    assert_eq!(beech.suitability(&x), 1.0);
+                }
+            }
+        }
+    }
+    // Liebig minimum: one factor 3 tolerances away excludes the species (exp(-4.5) = 0.011).
+    let mut wet = opt;
+    wet[3] = 5.0 + 3.0 * n.f.tolerance;
+    assert!((beech.suitability(&wet) - (-4.5f32).exp()).abs() < 1e-4);
+    // Symmetric and monotone away from the optimum.
+    let mut prev = 1.0;
+    for k in 1..20 {
+        let mut x = opt;
+        x[1] = 5.0 + k as f32 * 0.2;
+        let s = beech.suitability(&x);
+        assert!(s < prev);
+        x[1] = 5.0 - k as f32 * 0.2;
+        assert!((beech.suitability(&x) - s).abs() < 1e-6);
+        prev = s;
+    }
+    // Black alder (F 9) is clearly better than beech on wet ground and worse on dry-moist.
+    let alder = lib.get("black_alder").unwrap();
+    let wet_site = [5.0, 5.0, 3.0, 9.0, 6.0, 6.0];
+    assert!(alder.suitability(&wet_site) > 0.9);
+    assert!(beech.suitability(&wet_site) < 0.2);
+}
+
+#[test]
+fn beech_growth_matches_nwfva_yield_class_one() {
+    let lib = SpeciesLibrary::embedded().unwrap();
+    let beech = lib.get("beech").unwrap();
+    assert!((beech.potential_height_m(50.0) - 19.5).abs() < 0.3);
+    assert!((beech.potential_height_m(100.0) - 32.5).abs() < 0.3);
+    let mut rdr = csv::Reader::from_path(root().join("tests/data/stands/nwfva2021_yieldtable_et_bu.csv")).unwrap();
+    let mut n = 0;
+    for rec in rdr.records() {
+        let r = rec.unwrap();
+        if &r[0] != "1" {
+            continue;
+        }
+        let age: f32 = r[1].parse().unwrap();
+        let h100: f32 = r[4].parse().unwrap();
+        let h = beech.potential_height_m(age);
+        assert!((h - h100).abs() < 1.6, "age {age}: model {h} vs table {h100}");
+        n += 1;
+    }
+    assert!(n >= 20);
+    // Pioneers grow faster early than beech; all reach their maximum only asymptotically.
+    let birch = lib.get("silver_birch").unwrap();
+    assert!(birch.life.growth.k > 1.5 * beech.life.growth.k);
+    assert!(birch.potential_height_m(20.0) > beech.potential_height_m(20.0));
+    for s in &lib.species {
+        assert!(s.potential_height_m(s.life.max_age_yr) <= s.life.max_height_m);
+        // Allometry inverse.
+        let h = s.height_from_dbh_m(30.0);
+        assert!((s.dbh_from_height_cm(h) - 30.0).abs() < 0.05, "{}", s.id);
+    }
+}
+
+#[test]
+fn light_demand_orders_pioneers_and_shade_tolerant_species() {
+    let lib = SpeciesLibrary::embedded().unwrap();
+    let g = |id: &str| lib.get(id).unwrap().life.germination_min_light;
+    for pioneer in ["silver_birch", "aspen", "european_larch", "scots_pine"] {
+        assert!((0.4..=0.6).contains(&g(pioneer)), "{pioneer}");
+    }
+    for tolerant in ["beech", "silver_fir"] {
+        assert!((0.02..=0.05).contains(&g(tolerant)), "{tolerant}");
+        assert_eq!(lib.get(tolerant).unwrap().life.shade_tolerance, 5.0);
+    }
+    assert_eq!(lib.get("silver_birch").unwrap().life.shade_tolerance, 1.0);
+}
+
+#[test]
+fn beech_and_pine_carry_ecomod_published_values_exactly() {
+    let lib = SpeciesLibrary::embedded().unwrap();
+    let b = &lib.get("beech").unwrap().architecture.ecomod;
+    assert_eq!(b.strands, 1000);
+    assert_eq!((b.trunk_length_m, b.k_d, b.phyllotaxis_deg, b.k_c, b.leaf_size_m, b.leaf_density), (5.0, 0.01, 85.0, 0.3, 0.2862, 5.0));
+    assert_eq!(b.leaf_distribution, LeafDistribution::Spiral);
+    assert_eq!((b.wind_directed, b.k_f), (1.5, 1.0));
+    assert_eq!(b.ks_g, vec![[0.0, 0.75], [15.0, 0.9]]);
+    assert_eq!(b.ks_w, vec![[0.0, 1.0], [50.0, 1.0]]);
+    assert_eq!(b.alpha_g, vec![[0.0, 45.0], [15.0, 45.0]]);
+    assert_eq!(b.min_len_g, vec![[0.0, 1.0], [7.5, 0.45], [15.0, 1.0]]);
+    assert_eq!(b.max_len_g, vec![[0.0, 1.0], [15.0, 1.0]]);
+    assert_eq!(b.kl_g, vec![[0.0, 1.0], [15.0, 1.0]]);
+    assert_eq!(b.alpha_m_g, vec![[0.0, 0.0], [15.0, 0.0]]);
+
+    let p = &lib.get("scots_pine").unwrap().architecture.ecomod;
+    assert_eq!(p.strands, 6000);
+    assert_eq!((p.trunk_length_m, p.k_d, p.phyllotaxis_deg, p.k_c, p.leaf_size_m, p.leaf_density), (5.47, 0.005, 85.0, 0.98, 0.1815, 30.0));
+    assert_eq!(p.leaf_distribution, LeafDistribution::Stacked);
+    assert_eq!(p.ks_g, vec![[0.0, 0.955], [0.7749, 0.9615], [1.827, 0.8288], [4.207, 0.8269], [15.0, 0.8294]]);
+    assert_eq!(p.ks_w, vec![[0.0, 1.0], [42.89, 1.005], [42.89, 0.654], [50.0, 0.6256]]);
+    assert_eq!(p.alpha_g, vec![[0.0, 128.8], [1.164, 17.91], [3.621, 45.21], [15.0, 35.83]]);
+    assert_eq!(p.min_len_g, vec![[0.0, 0.7109], [1.293, 0.8531], [15.0, 1.0]]);
+    assert_eq!(p.max_len_g, vec![[0.0, 0.9953], [15.0, 1.0]]);
+    assert_eq!(p.kl_g, vec![[0.0, 0.7109], [0.7749, 0.5385], [2.522, 1.327], [15.0, 1.0]]);
+    assert_eq!(p.kl_w, vec![[0.0, 1.014], [38.58, 1.014], [45.26, 0.5877], [50.0, 0.01896]]);
+    assert_eq!(p.alpha_m_g, vec![[0.0, 0.0], [0.3875, 34.62], [1.034, -4.265], [1.55, -4.154], [2.974, -5.972], [15.0, -0.8532]]);
+
+    // Yi et al. Table 1 rows and Plastic Trees defaults for every species.
+    let rows: [[f32; 7]; 7] = [
+        [0.46, 0.5, 2.1, 1.5, 0.5, 45.0, 0.2],
+        [0.54, 0.35, 1.9, 1.0, 0.5, 38.0, 0.35],
+        [0.52, 0.5, 2.0, 1.5, 0.5, 45.0, 0.35],
+        [0.52, 0.5, 2.0, 1.5, 0.5, 45.0, 0.35],
+        [0.46, 0.5, 2.1, 1.0, 0.5, 45.0, 0.25],
+        [0.54, 0.35, 2.2, 1.5, 0.2, 30.0, 0.25],
+        [0.52, 0.35, 2.0, 1.0, 0.0, 38.0, 0.35],
+    ];
+    for s in &lib.species {
+        let l = &s.architecture.light_guided;
+        let row = [l.lambda, l.k, l.b, l.mu, l.gamma, l.theta_deg, l.r_s];
+        assert!(rows.contains(&row), "{}: light-guided parameters are not a row of Yi et al. Table 1", s.id);
+        assert_eq!(s.architecture.plastic.pruning_c_psi, 0.8);
+        assert_eq!(s.architecture.plastic.translucency_gamma_c0, 0.5);
+        assert_eq!(s.architecture.laplacian.width_rate, 1.5);
+    }
+}
+
+#[test]
+fn readme_documents_every_field_of_the_schema() {
+    let beech = SpeciesLibrary::embedded().unwrap().get("beech").unwrap().clone();
+    let mut leaves: Vec<String> = species::leaf_fields(&beech).unwrap().into_iter().map(|(p, _)| p).collect();
+    let mut fields: Vec<String> = schema::FIELDS.iter().map(|f| f.path.to_string()).collect();
+    leaves.sort();
+    fields.sort();
+    assert_eq!(leaves, fields, "schema::FIELDS must list exactly the leaf fields of a species");
+
+    let readme_path = species_dir().join("README.md");
+    let readme = std::fs::read_to_string(&readme_path).unwrap();
+    let (head, rest) = readme.split_once("<!-- fields:begin -->\n").expect("README fields:begin marker");
+    let (_, tail) = rest.split_once("<!-- fields:end -->").expect("README fields:end marker");
+    let table = schema::readme_field_table();
+    let expected = format!("{head}<!-- fields:begin -->\n{table}<!-- fields:end -->{tail}");
+    if std::env::var_os("SYLVA_BLESS").is_some() {
+        std::fs::write(&readme_path, &expected).unwrap();
+        return;
+    }
+    assert_eq!(readme, expected, "species/README.md field table is out of date: run SYLVA_BLESS=1 cargo test --test species");
+    for f in schema::FIELDS {
+        assert!(readme.contains(&format!("`{}`", f.path)), "{} not documented", f.path);
+    }
+}
+
+// ---------- bad inputs: each kind gives a clear error with file, line, field, value, range ----------
+
+#[test]
+fn out_of_range_value_names_file_line_field_value_and_range() {
+    let (_d, p) = problems_of(|t| t.replace("k_c = 0.3\n", "k_c = 1.7\n"));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert!(p[0].file.ends_with("bad.toml"));
+    assert_eq!(p[0].line, Some(line_of(&beech_text(), "k_c = ")));
+    assert_eq!(p[0].field, "architecture.ecomod.k_c");
+    assert_eq!(p[0].value, "1.7");
+    assert_eq!(p[0].expected, "a number in [0, 1]");
+    let msg = p[0].to_string();
+    assert!(msg.contains("bad.toml:") && msg.contains("`architecture.ecomod.k_c` = 1.7: expected a number in [0, 1]"), "{msg}");
+    // Same through from_toml_str (an Error::Invalid).
+    let err = Species::from_toml_str(&beech_text().replace("k_c = 0.3\n", "k_c = 1.7\n"), "x.toml").unwrap_err();
+    assert!(matches!(err, sylva::Error::Invalid { .. }), "{err}");
+    assert!(err.to_string().contains("k_c"), "{err}");
+}
+
+#[test]
+fn ellenberg_value_out_of_scale_and_bad_indicator_string() {
+    let (_d, p) = problems_of(|t| t.replace("t = { value = 5,", "t = { value = 10,").replace("f = { value = 5,", "f = { value = 12,"));
+    assert_eq!(p.len(), 1, "{p:?}"); // F may reach 12, T may not
+    assert_eq!(p[0].field, "niche.t.value");
+    assert!(p[0].expected.contains("[1, 9]"));
+    let (_d, p) = problems_of(|t| t.replace("r = { value = \"x\"", "r = { value = \"y\""));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert_eq!(p[0].field, "niche.r.value");
+    assert_eq!(p[0].value, "\"y\"");
+    assert!(p[0].expected.contains("\"x\""));
+}
+
+#[test]
+fn wrong_type_is_reported() {
+    let (_d, p) = problems_of(|t| t.replace("max_age_yr = 600.0", "max_age_yr = \"old\""));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert_eq!(p[0].field, "life.max_age_yr");
+    assert_eq!(p[0].value, "\"old\"");
+    assert_eq!(p[0].line, Some(line_of(&beech_text(), "max_age_yr")));
+    assert!(p[0].expected.contains("a number"));
+}
+
+#[test]
+fn unknown_field_is_reported() {
+    let (_d, p) = problems_of(|t| t.replace("k_c = 0.3\n", "k_c = 0.3\nk_cc = 0.5\n"));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert_eq!(p[0].field, "architecture.ecomod.k_cc");
+    assert_eq!(p[0].line, Some(line_of(&beech_text(), "k_c = ") + 1));
+    assert!(p[0].expected.contains("unknown field") && p[0].expected.contains("k_c"), "{}", p[0].expected);
+}
+
+#[test]
+fn missing_field_is_reported() {
+    let (_d, p) = problems_of(|t| t.replace("growth = { k = 0.0129, p = 1.211 }", "growth = { k = 0.0129 }").replace("max_dbh_cm = 150.0", ""));
+    assert_eq!(p.len(), 2, "{p:?}");
+    let fields: Vec<&str> = p.iter().map(|p| p.field.as_str()).collect();
+    assert!(fields.contains(&"life.growth.p") && fields.contains(&"life.max_dbh_cm"), "{fields:?}");
+    assert!(p.iter().all(|p| p.expected.starts_with("missing field")));
+    assert!(p.iter().all(|p| p.line.is_some()));
+    // `sources` is optional.
+    let text = beech_text();
+    let start = text.find("sources = [").unwrap();
+    let end = start + text[start..].find("]\n").unwrap() + 2;
+    let s = Species::from_toml_str(&format!("{}{}", &text[..start], &text[end..]), "nosources.toml").unwrap();
+    assert!(s.identity.sources.is_empty());
+}
+
+#[test]
+fn cross_field_rules() {
+    let (_d, p) = problems_of(|t| t.replace("maturity_age_yr = 55.0", "maturity_age_yr = 700.0").replace("max_m = 200.0", "max_m = 10.0"));
+    let fields: Vec<&str> = p.iter().map(|p| p.field.as_str()).collect();
+    assert_eq!(fields.len(), 2, "{p:?}");
+    assert!(fields.contains(&"life.maturity_age_yr") && fields.contains(&"life.dispersal.max_m"));
+}
+
+#[test]
+fn syntax_error_and_non_utf8_are_reported() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "syntax.toml", "id = \"a\"\n[identity\n");
+    std::fs::write(d.path().join("latin1.toml"), b"id = \"buche\"\n# H\xf6he\n").unwrap();
+    let p = species::check_dir(d.path());
+    assert_eq!(p.len(), 2, "{p:?}");
+    let utf = p.iter().find(|p| p.file.ends_with("latin1.toml")).unwrap();
+    assert_eq!(utf.line, Some(2));
+    assert!(utf.expected.contains("UTF-8"));
+    let syn = p.iter().find(|p| p.file.ends_with("syntax.toml")).unwrap();
+    assert_eq!(syn.line, Some(2));
+    assert!(syn.expected.contains("TOML syntax error"));
+}
+
+#[test]
+fn duplicate_species_names_both_files() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "beech.toml", &beech_text());
+    write(d.path(), "beech_copy.toml", &beech_text());
+    let p = species::check_dir(d.path());
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert_eq!(p[0].field, "id");
+    assert!(p[0].expected.contains("beech.toml") && p[0].expected.contains("beech_copy.toml"), "{}", p[0].expected);
+    let err = SpeciesLibrary::load_dir(d.path()).unwrap_err().to_string();
+    assert!(err.contains("unique id"), "{err}");
+}
+
+#[test]
+fn check_dir_reports_every_problem_of_every_file_at_once() {
+    let d = tempfile::tempdir().unwrap();
+    let t = beech_text();
+    write(d.path(), "a.toml", &t.replace("id = \"beech\"", "id = \"a\"").replace("k_c = 0.3\n", "k_c = 1.7\n").replace("strands = 1000", "strands = 0"));
+    write(d.path(), "b.toml", &t.replace("id = \"beech\"", "id = \"b\"").replace("leaf_type = \"broadleaf\"", "leaf_type = \"palm\"").replace("bark = [150, 150, 140]", "bark = [300, 150, 140]"));
+    write(d.path(), "ok.toml", &t);
+    let p = species::check_dir(d.path());
+    assert_eq!(p.len(), 4, "{p:?}");
+    assert_eq!(p.iter().filter(|p| p.file.ends_with("a.toml")).count(), 2);
+    assert_eq!(p.iter().filter(|p| p.file.ends_with("b.toml")).count(), 2);
+    // Problems of one file come in line order.
+    let a: Vec<usize> = p.iter().filter(|p| p.file.ends_with("a.toml")).map(|p| p.line.unwrap()).collect();
+    assert!(a[0] < a[1]);
+    // load_dir gathers all of them into one error.
+    let err = SpeciesLibrary::load_dir(d.path()).unwrap_err().to_string();
+    assert!(err.contains("4 problems"), "{err}");
+}
+
+#[test]
+fn replace_id_keeps_comments() {
+    let t = beech_text();
+    let n = species::replace_id(&t, "my_beech", Path::new("x.toml")).unwrap();
+    assert!(n.contains("id = \"my_beech\""));
+    assert_eq!(n.lines().filter(|l| l.starts_with('#')).count(), t.lines().filter(|l| l.starts_with('#')).count());
+    assert_eq!(Species::from_toml_str(&n, "x.toml").unwrap().id, "my_beech");
+}
+
+#[test]
+fn cli_check_new_list_show() {
+    let exe = env!("CARGO_BIN_EXE_sylva");
+    let run = |args: &[&str]| std::process::Command::new(exe).args(args).current_dir(root()).output().unwrap();
+    let o = run(&["species", "check"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = run(&["species", "list"]);
+    assert!(o.status.success());
+    assert!(String::from_utf8_lossy(&o.stdout).contains("Fagus sylvatica"));
+    let o = run(&["species", "show", "beech"]);
+    assert_eq!(String::from_utf8_lossy(&o.stdout), beech_text());
+
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path().to_str().unwrap();
+    let o = run(&["species", "new", "red_beech", "--from", "beech", "--dir", dir]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let lib = SpeciesLibrary::load_dir(d.path()).unwrap();
+    assert_eq!(lib.species[0].id, "red_beech");
+    // Refuses to overwrite.
+    let before = std::fs::read(d.path().join("red_beech.toml")).unwrap();
+    let o = run(&["species", "new", "red_beech", "--from", "scots_pine", "--dir", dir]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("already exists"));
+    assert_eq!(std::fs::read(d.path().join("red_beech.toml")).unwrap(), before);
+    // check exits non-zero and prints every problem.
+    write(d.path(), "bad.toml", &beech_text().replace("id = \"beech\"", "id = \"bad\"").replace("k_c = 0.3\n", "k_c = 1.7\n").replace("k_f = 1.0", "k_f = -1.0"));
+    let o = run(&["species", "check", dir]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("architecture.ecomod.k_c") && err.contains("architecture.ecomod.k_f"), "{err}");
+}

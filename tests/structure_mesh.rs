@@ -1,0 +1,125 @@
+//! Meshes, LOD chain and glb/obj export of EcoMod trees.
+use sylva::species::EcoModParams;
+use sylva::structure::grow::ecomod;
+use sylva::structure::mesh::{self, LodOptions};
+
+fn beech() -> (sylva::structure::Skeleton, sylva::structure::Leaves) {
+    ecomod::grow(&EcoModParams::beech_paper(), 3, 0.0)
+}
+
+#[test]
+fn lod_chain_triangle_counts_decrease() {
+    let (sk, lv) = beech();
+    let chain = mesh::lod_chain(&sk, &lv, &LodOptions::default());
+    assert_eq!(chain.levels.len(), 4);
+    let t: Vec<usize> = chain.levels.iter().map(|l| l.triangle_count()).collect();
+    eprintln!("triangles per LOD: {t:?}");
+    for w in t.windows(2) {
+        assert!(w[0] > w[1], "{t:?}");
+    }
+    assert_eq!(t[3], 4, "impostor = 2 crossed quads");
+    // LOD0 leaves: 2 triangles per leaf
+    assert_eq!(chain.levels[0].leaves.triangle_count(), 2 * lv.len());
+    for l in &chain.levels {
+        for m in [&l.bark, &l.leaves] {
+            assert_eq!(m.positions.len(), m.normals.len());
+            assert_eq!(m.positions.len(), m.uvs.len());
+            assert!(m.indices.iter().all(|&i| (i as usize) < m.positions.len()));
+            for n in &m.normals {
+                let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+                assert!((len - 1.0).abs() < 1e-3, "unit normals");
+            }
+        }
+    }
+    // the trunk tube encloses the trunk: bark bounds contain all skeleton nodes
+    let (lo, hi) = chain.levels[0].bark.bounds().unwrap();
+    let (slo, shi) = sk.bounds().unwrap();
+    for k in 0..3 {
+        assert!(lo[k] <= slo[k] + 1e-3 && hi[k] >= shi[k] - 0.05);
+    }
+}
+
+#[test]
+fn tube_normals_are_continuous_along_the_trunk() {
+    // A straight 3-node vertical chain: rings share the same normal directions (no twist).
+    let mut sk = sylva::structure::Skeleton::new();
+    let r = sk.add_root(glam::Vec3::ZERO, 0.2);
+    let a = sk.add_child(r, glam::Vec3::new(0.0, 0.0, 1.0), 0.2, false).unwrap();
+    sk.add_child(a, glam::Vec3::new(0.0, 0.0, 2.0), 0.1, false).unwrap();
+    let m = mesh::branch_mesh(&sk, &LodOptions::default(), None);
+    let ring = 9;
+    assert_eq!(m.positions.len(), 3 * ring);
+    for s in 0..ring {
+        assert_eq!(m.normals[s], m.normals[s + ring]);
+        assert_eq!(m.normals[s], m.normals[s + 2 * ring]);
+        assert!(m.normals[s][2].abs() < 1e-6, "horizontal normals on a vertical tube");
+    }
+    // v grows with height, u runs 0..1 around
+    assert!(m.uvs[ring][1] > m.uvs[0][1]);
+    assert_eq!(m.uvs[ring - 1][0], 1.0);
+    assert_eq!(m.triangle_count(), 2 * 8 * 2);
+}
+
+#[test]
+fn glb_rereads_with_gltf_crate() {
+    let (sk, lv) = beech();
+    let chain = mesh::lod_chain(&sk, &lv, &LodOptions::default());
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("beech.glb");
+    sylva::output::gltf::write_glb(&path, &chain, &Default::default()).unwrap();
+    let (doc, buffers, _images) = gltf::import(&path).expect("valid glb");
+    assert_eq!(buffers.len(), 1);
+    let names: Vec<String> = doc.nodes().map(|n| n.name().unwrap_or("").to_string()).collect();
+    assert_eq!(names, ["LOD0", "LOD1", "LOD2", "LOD3"]);
+    let mats: Vec<&str> = doc.materials().map(|m| m.name().unwrap_or("")).collect();
+    assert_eq!(mats, ["bark", "leaf"]);
+    assert!(doc.materials().nth(1).unwrap().double_sided());
+    for (mesh, level) in doc.meshes().zip(&chain.levels) {
+        let mut tris = 0;
+        for prim in mesh.primitives() {
+            let reader = prim.reader(|b| Some(&buffers[b.index()]));
+            let pos: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+            let idx: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+            assert!(idx.iter().all(|&i| (i as usize) < pos.len()));
+            tris += idx.len() / 3;
+            // declared bounds match the data
+            let bb = prim.bounding_box();
+            let mut lo = [f32::MAX; 3];
+            let mut hi = [f32::MIN; 3];
+            for p in &pos {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+            assert_eq!(bb.min, lo);
+            assert_eq!(bb.max, hi);
+            // y up: the tree's height is along y, and nothing is far below the base
+            assert!(hi[1] > 5.0 && lo[1] > -3.0);
+            assert_eq!(reader.read_normals().unwrap().count(), pos.len());
+        }
+        assert_eq!(tris, level.triangle_count());
+    }
+}
+
+#[test]
+fn obj_writes_all_levels() {
+    let (sk, lv) = beech();
+    let chain = mesh::lod_chain(&sk, &lv, &LodOptions::default());
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("beech.obj");
+    sylva::output::obj::write_obj(&path, &chain, None).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let faces = text.lines().filter(|l| l.starts_with("f ")).count();
+    let total: usize = chain.levels.iter().map(|l| l.triangle_count()).sum();
+    assert_eq!(faces, total);
+    assert_eq!(text.lines().filter(|l| l.starts_with("o LOD")).count(), 4);
+}
+
+#[test]
+fn species_chain_is_normalised_to_one_metre() {
+    let (sk, lv) = beech();
+    let (n, _) = sylva::structure::normalised(&sk, &lv, 1.0).unwrap();
+    assert!((n.height() - 1.0).abs() < 1e-5);
+    assert_eq!(n.nodes[0].pos, glam::Vec3::ZERO);
+}

@@ -1,0 +1,170 @@
+//! Readers: real DEMs in three forms, bad input gives clear errors.
+use std::path::{Path, PathBuf};
+use sylva::grid::Crs;
+use sylva::terrain::io;
+
+fn terrains() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("terrains")
+}
+
+#[test]
+fn geographic_geotiff_cell_sizes() {
+    let t = io::load(&terrains().join("jacksboro_fault_dem.tif")).unwrap();
+    assert_eq!((t.elevation.width, t.elevation.height), (403, 344));
+    assert_eq!(t.geo.crs, Crs::Geographic);
+    assert_eq!(t.geo.epsg, Some(4326));
+    let dx = t.geo.cell_x_m_at_row(t.elevation.height / 2);
+    assert!((dx - 74.3).abs() < 0.5, "dx {dx}");
+    assert!((t.geo.cell_y_m() - 92.6).abs() < 0.05, "dy {}", t.geo.cell_y_m());
+    assert!((t.geo.latitude_deg - 36.59).abs() < 0.05, "lat {}", t.geo.latitude_deg);
+    let (lo, hi) = t.elevation.data.iter().filter(|v| v.is_finite()).fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    assert_eq!((lo, hi), (236.0, 1076.0));
+    assert_eq!(t.nodata, Some(-32768.0));
+}
+
+#[test]
+fn asc_matches_geotiff() {
+    let a = io::load(&terrains().join("jacksboro_fault_dem.asc")).unwrap();
+    let t = io::load(&terrains().join("jacksboro_fault_dem.tif")).unwrap();
+    assert_eq!(a.geo.crs, Crs::Geographic);
+    assert_eq!(a.elevation.data, t.elevation.data);
+    assert!((a.geo.origin_x - t.geo.origin_x).abs() < 1e-6 && (a.geo.origin_y - t.geo.origin_y).abs() < 1e-6);
+    assert!((a.geo.pixel_w - t.geo.pixel_w).abs() < 1e-9);
+}
+
+#[test]
+fn utm_default_terrain() {
+    let t = io::default_terrain().unwrap();
+    assert_eq!((t.elevation.width, t.elevation.height), (387, 408));
+    assert_eq!(t.geo.crs, Crs::Projected);
+    assert_eq!(t.geo.epsg, Some(32616));
+    assert_eq!((t.geo.pixel_w, t.geo.pixel_h), (80.0, 80.0));
+    assert!((t.geo.latitude_deg - 36.59).abs() < 1e-9);
+    assert!(!t.elevation.get(0, 0).is_finite(), "nodata corner is NaN");
+    // the file read from disk gives the same grid and a UTM-derived latitude near 36.6
+    let f = io::load(&terrains().join("jacksboro_fault_dem_utm16n.tif")).unwrap();
+    assert_eq!(f.elevation.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>(), t.elevation.data.iter().map(|v| v.to_bits()).collect::<Vec<_>>());
+    assert!((f.geo.latitude_deg - 36.59).abs() < 0.05, "lat {}", f.geo.latitude_deg);
+}
+
+#[test]
+fn window_shifts_georeferencing() {
+    let t = io::default_terrain().unwrap();
+    let w = io::window(&t, 10, 20, 50, 40).unwrap();
+    assert_eq!((w.elevation.width, w.elevation.height), (50, 40));
+    assert_eq!(w.elevation.get(0, 0), t.elevation.get(10, 20));
+    assert_eq!(w.geo.origin_x, t.geo.origin_x + 800.0);
+    assert_eq!(w.geo.origin_y, t.geo.origin_y - 1600.0);
+    assert!(io::window(&t, 380, 0, 10, 10).is_err());
+}
+
+#[test]
+fn png_heightmap_scaling() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("h.png");
+    let img = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(4, 3, |x, _| image::Luma([(x * 21845) as u16]));
+    img.save(&p).unwrap();
+    let t = io::load_png_heightmap(&p, 2.0, 100.0, 400.0).unwrap();
+    assert_eq!(t.geo.crs, Crs::Local);
+    assert_eq!(t.geo.pixel_w, 2.0);
+    assert_eq!(*t.elevation.get(0, 1), 100.0);
+    assert_eq!(*t.elevation.get(3, 2), 400.0);
+    assert!((t.elevation.get(1, 0) - 200.0).abs() < 1e-3);
+}
+
+#[test]
+fn generated_is_deterministic() {
+    let a = sylva::terrain::generate::generate(64, 10.0, 300.0, 7).unwrap();
+    let b = sylva::terrain::generate::generate(64, 10.0, 300.0, 7).unwrap();
+    let c = sylva::terrain::generate::generate(64, 10.0, 300.0, 8).unwrap();
+    assert_eq!(a.elevation.data, b.elevation.data);
+    assert_ne!(a.elevation.data, c.elevation.data);
+    let (lo, hi) = a.elevation.data.iter().fold((f32::MAX, f32::MIN), |(x, y), &v| (x.min(v), y.max(v)));
+    assert!((lo - 100.0).abs() < 1e-3 && (hi - 400.0).abs() < 1e-2);
+}
+
+fn err_of(r: sylva::Result<sylva::terrain::Terrain>) -> String {
+    match r {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn bad_tiffs_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = std::fs::read(terrains().join("jacksboro_fault_dem_utm16n.tif")).unwrap();
+    let p = dir.path().join("trunc.tif");
+    std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
+    let e = err_of(io::load(&p));
+    assert!(e.contains("trunc.tif"), "{e}");
+    let p = dir.path().join("junk.tif");
+    std::fs::write(&p, b"II*\0garbage garbage").unwrap();
+    let e = err_of(io::load(&p));
+    assert!(e.contains("junk.tif") && e.contains("GeoTIFF"), "{e}");
+    let p = dir.path().join("empty.tif");
+    std::fs::write(&p, b"").unwrap();
+    assert!(err_of(io::load(&p)).contains("empty.tif"));
+}
+
+#[test]
+fn huge_tiff_header_refused_before_allocating() {
+    // A valid little-endian TIFF header declaring 100000 x 100000 Float32 with no real data.
+    let mut b: Vec<u8> = b"II*\0".to_vec();
+    b.extend_from_slice(&8u32.to_le_bytes());
+    let entries: [(u16, u16, u32, u32); 10] = [(256, 4, 1, 100_000), (257, 4, 1, 100_000), (258, 3, 1, 32), (259, 3, 1, 1), (262, 3, 1, 1), (273, 4, 1, 0), (277, 3, 1, 1), (278, 4, 1, 100_000), (279, 4, 1, 400_000), (339, 3, 1, 3)];
+    b.extend_from_slice(&(entries.len() as u16).to_le_bytes());
+    for (tag, ty, n, v) in entries {
+        b.extend_from_slice(&tag.to_le_bytes());
+        b.extend_from_slice(&ty.to_le_bytes());
+        b.extend_from_slice(&n.to_le_bytes());
+        if ty == 3 {
+            b.extend_from_slice(&(v as u16).to_le_bytes());
+            b.extend_from_slice(&[0, 0]);
+        } else {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    b.extend_from_slice(&0u32.to_le_bytes());
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("huge.tif");
+    std::fs::write(&p, &b).unwrap();
+    match io::load(&p) {
+        Err(sylva::Error::TooLarge { width, height, .. }) => assert_eq!((width, height), (100_000, 100_000)),
+        other => panic!("expected TooLarge, got {:?}", other.map(|_| ())),
+    }
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn asc_errors_name_the_line() {
+    let d = tempfile::tempdir().unwrap();
+    let hdr = "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 10\nNODATA_value -9999\n";
+    let ok = write(d.path(), "ok.asc", &format!("{hdr}1 2 3\n4 5 6\n"));
+    let t = io::load(&ok).unwrap();
+    assert_eq!(t.elevation.data, vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+    assert_eq!(t.geo.crs, Crs::Projected);
+    let p = write(d.path(), "short.asc", &format!("{hdr}1 2 3\n4 5\n"));
+    let e = err_of(io::load(&p));
+    assert!(e.contains("short.asc") && e.contains("line 8") && e.contains("ncols = 3"), "{e}");
+    let p = write(d.path(), "rows.asc", &format!("{hdr}1 2 3\n"));
+    let e = err_of(io::load(&p));
+    assert!(e.contains("nrows = 2"), "{e}");
+    let p = write(d.path(), "nan.asc", &format!("{hdr}1 x 3\n4 5 6\n"));
+    assert!(err_of(io::load(&p)).contains("line 7"));
+    let p = write(d.path(), "nodata.asc", &format!("{hdr}-9999 -9999 -9999\n-9999 -9999 -9999\n"));
+    let e = err_of(io::load(&p));
+    assert!(e.contains("nodata.asc") && e.contains("nodata"), "{e}");
+    let p = write(d.path(), "zero.asc", "ncols 0\nnrows 5\nxllcorner 0\nyllcorner 0\ncellsize 10\n");
+    assert!(err_of(io::load(&p)).contains("zero size"));
+    let p = write(d.path(), "big.asc", "ncols 1000000\nnrows 1000000\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2\n");
+    assert!(matches!(io::load(&p), Err(sylva::Error::TooLarge { .. })));
+    let p = write(d.path(), "hdr.asc", "ncols three\nnrows 5\n");
+    let e = err_of(io::load(&p));
+    assert!(e.contains("line 1") && e.contains("ncols"), "{e}");
+}
