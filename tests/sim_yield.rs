@@ -21,7 +21,8 @@ const PLANT_AGE: u32 = 3;
 
 #[test]
 fn beech_yield_class_one() {
-    let (sc, mut w) = common::world(r#"
+    let lib = common::embedded();
+    let (sc, mut w) = common::world_with(r#"
 name = "yield"
 years = 117
 seed = 7
@@ -34,7 +35,7 @@ kind = "planted"
 species = "beech"
 spacing_m = 1.5
 age_yr = 3
-"#);
+"#, &lib);
     let rows = common::run(&sc, &mut w, 117);
     let age = |r: &sylva::sim::stats::StandRow| (r.year + PLANT_AGE) as f64;
     let tab = table();

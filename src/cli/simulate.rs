@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use sylva::conditions::SiteConditions;
 use sylva::sim::run::{run_scenario, Progress, RunOptions};
-use sylva::sim::{Scenario, TerrainSpec};
+use sylva::sim::Scenario;
 use sylva::species::SpeciesLibrary;
 
 /// Arguments of `sylva simulate`.
@@ -27,19 +27,12 @@ pub struct Args {
 
 /// The species library used by simulations.
 pub fn library() -> anyhow::Result<SpeciesLibrary> {
-    Ok(sylva::sim::fixtures::library())
+    Ok(SpeciesLibrary::embedded()?)
 }
 
 /// Loads the site conditions a scenario names (window applied).
 pub fn load_site(sc: &Scenario) -> anyhow::Result<SiteConditions> {
-    let site = match sc.terrain_spec() {
-        TerrainSpec::Uniform(u) => SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, sc.climate.latitude_deg),
-        other => anyhow::bail!("terrain source {other:?} is not available in this build yet (use terrain.uniform)"),
-    };
-    Ok(match sc.terrain.window {
-        Some(w) => sylva::sim::scenario::crop_site(&site, w)?,
-        None => site,
-    })
+    Ok(sc.site().with_context(|| format!("terrain of scenario {}", sc.name))?)
 }
 
 /// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year).
