@@ -6,7 +6,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use sylva::conditions::SiteConditions;
 use sylva::sim::run::{run_scenario, Progress, RunOptions};
-use sylva::sim::{Scenario, TerrainSpec};
+use sylva::sim::Scenario;
 use sylva::species::SpeciesLibrary;
 
 /// Arguments of `sylva simulate`.
@@ -32,30 +32,7 @@ pub fn library() -> anyhow::Result<SpeciesLibrary> {
 
 /// Loads the site conditions a scenario names (window applied).
 pub fn load_site(sc: &Scenario) -> anyhow::Result<SiteConditions> {
-    let site = match sc.terrain_spec() {
-        TerrainSpec::Uniform(u) => SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, sc.climate.latitude_deg),
-        TerrainSpec::Default => derive_site(&sylva::terrain::io::default_terrain()?, sc)?,
-        TerrainSpec::Path(p) => derive_site(&sylva::terrain::io::load(&p)?, sc)?,
-        TerrainSpec::Generate(g) => derive_site(&sylva::terrain::generate::generate(g.size, g.cell_m, g.relief_m as f64, g.seed)?, sc)?,
-    };
-    Ok(match sc.terrain.window {
-        Some(w) => sylva::sim::scenario::crop_site(&site, w)?,
-        None => site,
-    })
-}
-
-/// Derives the living conditions of a loaded terrain with the scenario's climate, showing a
-/// spinner while the fields are computed.
-fn derive_site(t: &sylva::terrain::Terrain, sc: &Scenario) -> anyhow::Result<SiteConditions> {
-    let pb = indicatif::ProgressBar::new_spinner();
-    pb.set_prefix("conditions");
-    let cb = |stage: &str| {
-        pb.set_message(stage.to_string());
-        pb.tick();
-    };
-    let site = sylva::conditions::derive_with_progress(t, &sc.climate, &cb).with_context(|| format!("deriving living conditions of {}", t.source))?;
-    pb.finish_and_clear();
-    Ok(site)
+    Ok(sc.site().with_context(|| format!("terrain of scenario {}", sc.name))?)
 }
 
 /// What `sylva run` needs from a finished simulation.

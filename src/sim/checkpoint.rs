@@ -80,7 +80,7 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
     }
     o.u64(w.seeds.len() as u64);
     for s in &w.seeds {
-        o.f32s(s);
+        o.f32s(&s.data);
     }
     for d in w.deaths_total {
         o.u64(d);
@@ -137,13 +137,13 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     if ns != w.pool.len() {
         return Err(Error::format(path, format!("checkpoint has {ns} species in the pool, the scenario {}", w.pool.len())));
     }
-    let mut seeds = Vec::new();
-    for _ in 0..ns {
+    let mut seeds = w.seeds.clone();
+    for g in seeds.iter_mut() {
         let s = r.f32s()?;
-        if s.len() != w.seed_dims.0 * w.seed_dims.1 {
+        if s.len() != g.data.len() {
             return Err(Error::format(path, "checkpoint seed grid does not match the terrain"));
         }
-        seeds.push(s);
+        g.data = s;
     }
     let mut deaths = [0u64; 3];
     for d in deaths.iter_mut() {

@@ -63,7 +63,7 @@ pub fn beech_like() -> Species {
             germination_min_light: 0.03,
             establishment_rate: 0.05,
             growth: Growth { k: 0.0222, p: 1.79 },
-            allometry: Allometry { hd_a: 0.035, hd_b: 1.2, crown_c0: 0.6, crown_c1: 0.16, crown_ratio: 0.6, pipe_exponent: 2.5 },
+            allometry: Allometry { hd_a: 0.035, hd_b: 1.2, crown_c0: 1.0, crown_c1: 0.13, crown_ratio: 0.6, pipe_exponent: 2.5 },
         },
         architecture: arch(),
         appearance: appearance([60, 120, 40]),

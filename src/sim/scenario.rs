@@ -387,3 +387,30 @@ pub fn crop_site(site: &crate::conditions::SiteConditions, window: [usize; 4]) -
         indices: cut(&site.indices, c0, r0, w, h),
     })
 }
+
+impl Scenario {
+    /// Loads the terrain this scenario names (embedded default, file, generated or uniform),
+    /// applies the window and derives the site conditions under the scenario's climate
+    /// ([`crate::conditions::derive`]).
+    ///
+    /// Errors: terrain reading errors (file, format, window outside the grid), no valid cell.
+    pub fn site(&self) -> Result<crate::conditions::SiteConditions> {
+        let t = match self.terrain_spec() {
+            TerrainSpec::Uniform(u) => {
+                let site = crate::conditions::SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, self.climate.latitude_deg);
+                return match self.terrain.window {
+                    Some(w) => crop_site(&site, w),
+                    None => Ok(site),
+                };
+            }
+            TerrainSpec::Default => crate::terrain::io::default_terrain()?,
+            TerrainSpec::Path(p) => crate::terrain::io::load(&p)?,
+            TerrainSpec::Generate(g) => crate::terrain::generate::generate(g.size, g.cell_m, g.relief_m as f64, g.seed)?,
+        };
+        let t = match self.terrain.window {
+            Some([c0, r0, w, h]) => crate::terrain::io::window(&t, c0, r0, w, h)?,
+            None => t,
+        };
+        crate::conditions::derive(&t, &self.climate)
+    }
+}

@@ -8,8 +8,34 @@ use crate::rng::{salt, Stream};
 use crate::species::{Species, SpeciesId, SpeciesLibrary};
 use rayon::prelude::*;
 
-/// Size of the seed grid cells (m) onto which seeds are dispersed.
+/// Smallest seed grid cell (m) onto which seeds are dispersed.
 pub const SEED_CELL_M: f64 = 20.0;
+/// Largest dispersal kernel radius in seed cells: a species' seed cell is
+/// `max(SEED_CELL_M, max_m / KERNEL_CELLS)`, so the kernel has at most `(2·8+1)²` offsets.
+pub const KERNEL_CELLS: f64 = 8.0;
+
+/// Seeds per m² of one species on its own seed grid (row 0 south).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SeedGrid {
+    /// Cell size (m).
+    pub cell_m: f64,
+    /// Columns.
+    pub cols: usize,
+    /// Rows.
+    pub rows: usize,
+    /// Seeds per m², `row * cols + col`.
+    pub data: Vec<f32>,
+}
+
+impl SeedGrid {
+    /// Seeds per m² at world point `(x, y)`.
+    #[inline]
+    pub fn at(&self, x: f64, y: f64) -> f32 {
+        let c = ((x / self.cell_m) as usize).min(self.cols - 1);
+        let r = ((y / self.cell_m) as usize).min(self.rows - 1);
+        self.data[r * self.cols + c]
+    }
+}
 
 /// Everything the yearly phases read and write.
 #[derive(Debug, Clone)]
@@ -42,10 +68,8 @@ pub struct World {
     pub rel_insolation: Vec<f32>,
     /// Suitability (0–1) per pool species (outer, pool order) per site cell.
     pub suitability: Vec<Vec<f32>>,
-    /// Seed grid columns and rows (cells of [`SEED_CELL_M`], row 0 south).
-    pub seed_dims: (usize, usize),
-    /// Seeds per m² per pool species on the seed grid, from the last autumn.
-    pub seeds: Vec<Vec<f32>>,
+    /// Seeds per m² per pool species (pool order), from the last autumn.
+    pub seeds: Vec<SeedGrid>,
     /// External seed rain per pool species (seeds per m² and year).
     pub seed_rain: Vec<f32>,
     /// Trees that died in the current year (cleared at the start of each year).
@@ -83,7 +107,14 @@ impl World {
         let suitability = pool.iter().map(|&s| site.indices.data.par_iter().zip(&site.mask.data).map(|(ix, m)| if *m { lib.species[s as usize].suitability(ix) } else { 0.0 }).collect()).collect();
         let valid = site.mask.data.iter().filter(|m| **m).count();
         let area_ha = valid as f64 * site.cell_x_m * site.cell_y_m / 10_000.0;
-        let seed_dims = (((extent.0 / SEED_CELL_M).ceil() as usize).max(1), ((extent.1 / SEED_CELL_M).ceil() as usize).max(1));
+        let seeds = pool
+            .iter()
+            .map(|&s| {
+                let cell = SEED_CELL_M.max(lib.species[s as usize].life.dispersal.max_m as f64 / KERNEL_CELLS);
+                let (cols, rows) = (((extent.0 / cell).ceil() as usize).max(1), ((extent.1 / cell).ceil() as usize).max(1));
+                SeedGrid { cell_m: cell, cols, rows, data: vec![0.0; cols * rows] }
+            })
+            .collect();
         let mut seed_rain = vec![0.0f32; pool.len()];
         for st in &scenario.start {
             if let Start::SeedRain { species, seeds_per_ha } = st {
@@ -95,7 +126,7 @@ impl World {
         let mut w = World {
             site,
             lib: lib.clone(),
-            seeds: vec![vec![0.0; seed_dims.0 * seed_dims.1]; pool.len()],
+            seeds,
             pool,
             trees: TreeStore::default(),
             year: 0,
@@ -108,7 +139,6 @@ impl World {
             light_site,
             rel_insolation,
             suitability,
-            seed_dims,
             seed_rain,
             dead: Vec::new(),
             deaths_total: [0; 3],

@@ -1,16 +1,25 @@
 //! Helpers shared by the sim_* tests.
 #![allow(dead_code)]
-use sylva::conditions::SiteConditions;
+use sylva::species::SpeciesLibrary;
 use sylva::sim::stats::StandRow;
-use sylva::sim::{fixtures, step_year, Scenario, TerrainSpec, World, YearReport};
+use sylva::sim::{fixtures, step_year, Scenario, World, YearReport};
 
 /// Builds the world of a scenario with a uniform terrain, using the fixture species.
 pub fn world(toml: &str) -> (Scenario, World) {
+    world_with(toml, &fixtures::library())
+}
+
+/// Builds the world of a scenario (any terrain) with species from `lib`.
+pub fn world_with(toml: &str, lib: &SpeciesLibrary) -> (Scenario, World) {
     let sc = Scenario::from_toml_str(toml, "test").unwrap();
-    let TerrainSpec::Uniform(u) = sc.terrain_spec() else { panic!("uniform terrain expected") };
-    let site = SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, sc.climate.latitude_deg);
-    let w = World::new(site, &fixtures::library(), &sc).unwrap();
+    let site = sc.site().unwrap();
+    let w = World::new(site, lib, &sc).unwrap();
     (sc, w)
+}
+
+/// The species shipped in species/.
+pub fn embedded() -> SpeciesLibrary {
+    SpeciesLibrary::embedded().unwrap()
 }
 
 /// Steps `n` years and returns the rows.

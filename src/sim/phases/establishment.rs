@@ -4,7 +4,7 @@
 //! year), limited to [`MAX_SAPLINGS_PER_100M2`] trees below 1.3 m per 100 m².
 
 use super::super::trees::NewTree;
-use super::super::world::{World, SEED_CELL_M};
+use super::super::world::World;
 use crate::rng::{salt, Stream};
 use rayon::prelude::*;
 
@@ -17,7 +17,6 @@ pub fn run(w: &mut World) {
     let g = &w.grid;
     let cell = w.light_cell_m;
     let cap = ((MAX_SAPLINGS_PER_100M2 * cell * cell / 100.0).round() as usize).max(1);
-    let (scols, srows) = w.seed_dims;
     let t = &w.trees;
     let (seed, year) = (w.seed, w.year as u64);
     let per_cell: Vec<Vec<NewTree>> = (0..g.cols * g.rows)
@@ -33,9 +32,7 @@ pub fn run(w: &mut World) {
             }
             let gl = w.ground_light[c];
             let (col, row) = (c % g.cols, c / g.cols);
-            let sc = ((col as f64 + 0.5) * cell / SEED_CELL_M) as usize;
-            let sr = ((row as f64 + 0.5) * cell / SEED_CELL_M) as usize;
-            let sidx = sr.min(srows - 1) * scols + sc.min(scols - 1);
+            let (cx, cy) = ((col as f64 + 0.5) * cell, (row as f64 + 0.5) * cell);
             let mut r = Stream::new(seed, c as u64, year, salt::ESTABLISH);
             let mut out = Vec::new();
             for (p, &s) in w.pool.iter().enumerate() {
@@ -46,7 +43,7 @@ pub fn run(w: &mut World) {
                 if w.suitability[p][site as usize] < 0.05 {
                     continue;
                 }
-                let seeds = (w.seeds[p][sidx] + w.seed_rain[p]) as f64 * cell * cell;
+                let seeds = (w.seeds[p].at(cx, cy) + w.seed_rain[p]) as f64 * cell * cell;
                 let lambda = seeds * sp.life.establishment_rate as f64 * w.suitability[p][site as usize] as f64;
                 let n = r.poisson(lambda.min(4.0 * cap as f64));
                 for _ in 0..n {

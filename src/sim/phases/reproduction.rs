@@ -1,10 +1,10 @@
 //! Reproduction (autumn): mature trees produce seeds in proportion to crown projection area
-//! and light; seeds are spread over the whole landscape on a seed grid of
-//! [`SEED_CELL_M`](super::super::world::SEED_CELL_M) by each species' dispersal kernel
+//! and light; seeds are spread over the whole landscape on a per-species seed grid
+//! ([`SeedGrid`](super::super::world::SeedGrid), cells of at least 20 m) by each species' dispersal kernel
 //! (a gather over kernel offsets, so tile borders do not exist). Seeds that would land outside
 //! the terrain are lost.
 
-use super::super::world::{World, SEED_CELL_M};
+use super::super::world::World;
 use crate::species::{Dispersal, KernelType};
 use rayon::prelude::*;
 
@@ -43,9 +43,8 @@ pub fn kernel(d: &Dispersal, cell: f64) -> Vec<(isize, isize, f32)> {
 /// Produces and disperses this year's seeds into `w.seeds` (seeds per m² per pool species).
 /// Seeds per tree: `seeds_per_m2_crown · π r² · min(L, 1)` for trees at or above maturity age.
 pub fn run(w: &mut World) {
-    let (cols, rows) = w.seed_dims;
     let t = &w.trees;
-    let mut src = vec![vec![0f32; cols * rows]; w.pool.len()];
+    let mut src: Vec<Vec<f32>> = w.seeds.iter().map(|g| vec![0f32; g.data.len()]).collect();
     let pidx: Vec<Option<usize>> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s)).collect();
     for i in 0..t.len() {
         let sp = &w.lib.species[t.species[i] as usize];
@@ -55,19 +54,22 @@ pub fn run(w: &mut World) {
         let Some(p) = pidx[t.species[i] as usize] else { continue };
         let r = t.crown_radius[i];
         let n = sp.life.seeds_per_m2_crown * std::f32::consts::PI * r * r * t.light[i].min(1.0);
-        let c = ((t.x[i] as f64 / SEED_CELL_M) as usize).min(cols - 1);
-        let rw = ((t.y[i] as f64 / SEED_CELL_M) as usize).min(rows - 1);
-        src[p][rw * cols + c] += n;
+        let g = &w.seeds[p];
+        let c = ((t.x[i] as f64 / g.cell_m) as usize).min(g.cols - 1);
+        let rw = ((t.y[i] as f64 / g.cell_m) as usize).min(g.rows - 1);
+        src[p][rw * g.cols + c] += n;
     }
-    let area = (SEED_CELL_M * SEED_CELL_M) as f32;
     for (p, s) in src.iter().enumerate() {
         let sp = &w.lib.species[w.pool[p] as usize];
+        let g = &mut w.seeds[p];
         if s.iter().all(|v| *v == 0.0) {
-            w.seeds[p].iter_mut().for_each(|v| *v = 0.0);
+            g.data.iter_mut().for_each(|v| *v = 0.0);
             continue;
         }
-        let k = kernel(&sp.life.dispersal, SEED_CELL_M);
-        w.seeds[p] = (0..cols * rows)
+        let (cols, rows) = (g.cols, g.rows);
+        let area = (g.cell_m * g.cell_m) as f32;
+        let k = kernel(&sp.life.dispersal, g.cell_m);
+        g.data = (0..cols * rows)
             .into_par_iter()
             .map(|c| {
                 let (r0, c0) = ((c / cols) as isize, (c % cols) as isize);
