@@ -354,7 +354,7 @@ fn horizon_steps(max_cells: usize) -> Vec<usize> {
         if v.last() != Some(&k) {
             v.push(k);
         }
-        s *= 1.25;
+        s *= 1.5;
     }
     v
 }
@@ -362,7 +362,7 @@ fn horizon_steps(max_cells: usize) -> Vec<usize> {
 /// Annual clear-sky insolation with terrain shading (kWh/m²/yr) and wind exposure (0–1).
 ///
 /// Horizons: for each cell, the tangent of the highest elevation angle of valid terrain along
-/// 8 directions (N, NE, …, NW), marched at geometric distances (×1.25) up to
+/// 8 directions (N, NE, …, NW), marched at geometric distances (×1.5: 1, 2, 3, 5, 8, 11, 17, …) up to
 /// `horizon_max_cells` cells and `horizon_max_m` metres; a direction that leaves the grid at
 /// once takes the mean of the other directions (0 when none reaches terrain).
 /// Insolation: Σ over sampled sun positions (see `sun_table`) of beam · max(0, n·s) where the
