@@ -1,4 +1,4 @@
-//! Succession: birch (pioneer, L 7, shade tolerance 1) and beech (L 3, tolerance 4.5) arrive
+//! Succession: birch (pioneer, L 7, shade tolerance 1) and beech (L 3, tolerance 5) arrive
 //! together by seed rain on bare, beech-suitable flat land. Birch must dominate basal area at
 //! year 30 and beech at year 200.
 mod common;
@@ -16,11 +16,11 @@ uniform = { width = 5, height = 5, cell_m = 20.0, elevation_m = 300.0, indices =
 [[start]]
 kind = "seed_rain"
 species = "silver_birch"
-seeds_per_ha = 2000
+seeds_per_ha = 10000
 [[start]]
 kind = "seed_rain"
 species = "beech"
-seeds_per_ha = 500
+seeds_per_ha = 300
 "#, &lib);
     let rows = common::run(&sc, &mut w, 200);
     for r in rows.iter().filter(|r| r.year % 20 == 0 || r.year == 30) {
