@@ -184,11 +184,13 @@ impl Scenario {
     pub fn load(path: &Path) -> Result<Scenario> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let mut s = Scenario::from_toml_str(&text, &path.display().to_string())?;
+        // A relative terrain path is relative to the scenario file; store it absolute so that
+        // the copy written into a run directory (`RUN_DIR/scenario.toml`) still finds it.
         if let Some(p) = &s.terrain.path {
             if p.is_relative() {
-                if let Some(dir) = path.parent() {
-                    s.terrain.path = Some(dir.join(p));
-                }
+                let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+                let joined = dir.join(p);
+                s.terrain.path = Some(std::path::absolute(&joined).unwrap_or(joined));
             }
         }
         Ok(s)
