@@ -112,11 +112,62 @@ pub fn terrain_mesh(cond: &SiteConditions, max_cell_m: f64, sea_level: f32) -> R
     from_grid(&g, cx, cy, &cover, None)
 }
 
-/// Render instances of the live trees of `rows` for `season`; trees of species not in
-/// `library` are skipped. Positions are in the site's world coordinates with z from the terrain.
+/// Seedlings below this height (m) are not drawn at landscape scale.
+pub const MIN_DRAWN_HEIGHT_M: f32 = 1.0;
+/// A tree whose top is below this fraction of the canopy already drawn over its stem is hidden
+/// under that canopy and not drawn (see [`visible_rows`]).
+pub const UNDERSTORY_FRACTION: f32 = 0.6;
+/// Cell size (m) of the canopy-height raster used to find understory trees.
+pub const CANOPY_CELL_M: f64 = 2.0;
+
+/// Indices of the trees of `rows` worth drawing from above or at an angle: live, at least
+/// [`MIN_DRAWN_HEIGHT_M`] tall, and not hidden under the crowns of taller trees.
+///
+/// Trees are visited tallest first; each drawn tree stamps its crown disc into a canopy-height
+/// raster of [`CANOPY_CELL_M`] cells; a later (shorter) tree whose top is below
+/// [`UNDERSTORY_FRACTION`] × the canopy height at its stem is suppressed understory that no
+/// camera above the canopy sees, and is skipped. This is a visibility cull, not ecology: the
+/// inventory keeps every tree. It bounds the instances of dense young stands (thousands of stems
+/// per hectare) by the number of crowns that fit side by side. Deterministic (ties by id).
+pub fn visible_rows(rows: &[InventoryRow], extent_m: (f64, f64)) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].status == "alive" && rows[i].height_m >= MIN_DRAWN_HEIGHT_M).collect();
+    order.sort_by(|&a, &b| rows[b].height_m.total_cmp(&rows[a].height_m).then(rows[a].id.cmp(&rows[b].id)));
+    let nx = ((extent_m.0 / CANOPY_CELL_M).ceil() as usize).max(1);
+    let ny = ((extent_m.1 / CANOPY_CELL_M).ceil() as usize).max(1);
+    let mut canopy = vec![0.0f32; nx * ny];
+    let cell = |v: f64, n: usize| ((v / CANOPY_CELL_M).floor().max(0.0) as usize).min(n - 1);
+    let mut keep = Vec::with_capacity(order.len());
+    for i in order {
+        let r = &rows[i];
+        let (cx, cy) = (cell(r.x_m, nx), cell(r.y_m, ny));
+        if r.height_m < UNDERSTORY_FRACTION * canopy[cy * nx + cx] {
+            continue;
+        }
+        keep.push(i);
+        let rad = r.crown_radius_m.max(0.5) as f64;
+        let (x0, x1) = (cell(r.x_m - rad, nx), cell(r.x_m + rad, nx));
+        let (y0, y1) = (cell(r.y_m - rad, ny), cell(r.y_m + rad, ny));
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let (px, py) = ((x as f64 + 0.5) * CANOPY_CELL_M, (y as f64 + 0.5) * CANOPY_CELL_M);
+                if (px - r.x_m).powi(2) + (py - r.y_m).powi(2) <= rad * rad {
+                    let c = &mut canopy[y * nx + x];
+                    *c = c.max(r.height_m);
+                }
+            }
+        }
+    }
+    keep.sort_unstable();
+    keep
+}
+
+/// Render instances of the visible live trees of `rows` ([`visible_rows`]) for `season`; trees of
+/// species not in `library` are skipped. Positions are in the site's world coordinates with z
+/// from the terrain.
 pub fn instances(rows: &[InventoryRow], library: &SpeciesLibrary, cond: &SiteConditions, season: Season) -> Vec<TreeInstance> {
-    rows.iter()
-        .filter(|r| r.status == "alive" && r.height_m > 0.0)
+    visible_rows(rows, cond.extent_m())
+        .into_iter()
+        .map(|i| &rows[i])
         .filter_map(|r| {
             let sid = library.find(&r.species)?;
             let sp = &library.species[sid as usize];
@@ -129,6 +180,27 @@ pub fn instances(rows: &[InventoryRow], library: &SpeciesLibrary, cond: &SiteCon
         .collect()
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(id: u64, x: f64, y: f64, h: f32, r: f32) -> InventoryRow {
+        InventoryRow { id, species: "beech".into(), x_m: x, y_m: y, z_m: 0.0, age_yr: 10.0, height_m: h, dbh_cm: 10.0, crown_radius_m: r, crown_base_m: h * 0.5, status: "alive".into() }
+    }
+
+    #[test]
+    fn understory_under_a_crown_is_hidden_and_open_trees_are_kept() {
+        let rows = vec![
+            row(1, 50.0, 50.0, 30.0, 6.0), // canopy tree
+            row(2, 52.0, 51.0, 8.0, 2.0),  // under its crown: hidden (8 < 0.6·30)
+            row(3, 53.0, 50.0, 25.0, 4.0), // co-dominant under the crown edge: kept (25 ≥ 18)
+            row(4, 80.0, 80.0, 5.0, 2.0),  // in the open: kept
+            row(5, 90.0, 90.0, 0.5, 0.3),  // seedling: not drawn
+            InventoryRow { status: "dead:stress".into(), ..row(6, 20.0, 20.0, 20.0, 3.0) },
+        ];
+        assert_eq!(visible_rows(&rows, (100.0, 100.0)), vec![0, 2, 3]);
+    }
+}
 /// A full scene for one snapshot: terrain, prototypes, instances, the sun of the site's
 /// latitude on the season's day at 14:00 solar time, and a light westerly breeze.
 pub fn scene(terrain: TerrainMesh, prototypes: Vec<Prototype>, instances: Vec<TreeInstance>, latitude_deg: f64, season: Season, sea_level: Option<f32>) -> Scene {
