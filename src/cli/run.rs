@@ -36,14 +36,22 @@ pub struct Args {
     #[arg(long, default_value = "640x360", value_parser = super::render::parse_size)]
     pub timelapse_size: (u32, u32),
     /// Interpolated timelapse frames between consecutive snapshots.
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=50))]
     pub frames_between: u32,
-    /// Timelapse frames per second.
-    #[arg(long, default_value_t = 12.0)]
+    /// Timelapse frames per second (1–100).
+    #[arg(long, default_value_t = 8.0, value_parser = parse_fps)]
     pub fps: f32,
     /// Skip stills and timelapse (no GPU or software adapter needed).
     #[arg(long)]
     pub no_render: bool,
+}
+
+fn parse_fps(s: &str) -> Result<f32, String> {
+    let v: f32 = s.parse().map_err(|_| format!("fps `{s}`: expected a number"))?;
+    if !(1.0..=100.0).contains(&v) {
+        return Err(format!("fps `{s}`: expected 1–100 frames per second"));
+    }
+    Ok(v)
 }
 
 /// Runs the main job.
