@@ -14,7 +14,10 @@ pub fn init_logging(verbose: u8) {
         1 => "info",
         _ => "debug",
     };
-    let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(level));
+    // wgpu probes OpenGL/EGL too; on a headless machine that probe fails loudly although the
+    // Vulkan (lavapipe) adapter works, so its messages are silenced unless RUST_LOG asks.
+    let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(format!("{level},wgpu_hal::gles=off")));
+    quiet_mesa_runtime_dir();
     let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).try_init();
 }
 
@@ -27,4 +30,21 @@ pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
     pb.set_style(style);
     pb.set_prefix(what.to_string());
     pb
+}
+
+/// Mesa prints "XDG_RUNTIME_DIR is invalid or not set" on headless machines; give it a private
+/// folder (mode 0700) in the temporary directory when the variable is missing.
+fn quiet_mesa_runtime_dir() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some() {
+        return;
+    }
+    let dir = std::env::temp_dir().join("sylva-xdg-runtime");
+    if std::fs::create_dir_all(&dir).is_ok() {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o700));
+        }
+        std::env::set_var("XDG_RUNTIME_DIR", &dir);
+    }
 }
