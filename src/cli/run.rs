@@ -112,6 +112,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 pb.inc(1);
             }
         }
+        // A close view into the final forest, where the species' architectures show.
+        if let Some(&y) = years.last() {
+            let rows = pictures::snapshot_rows(&out, y)?;
+            let (ex, ey) = site.extent_m();
+            let (x0, y0) = (0.3 * ex, 0.3 * ey);
+            let (x1, y1) = (0.45 * ex, 0.45 * ey);
+            let z0 = site.elevation_at(x0, y0) + 45.0;
+            let z1 = site.elevation_at(x1, y1) + 5.0;
+            let cam = sylva::render::camera::Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0);
+            let img = stage.render_rows(&rows, Season::Summer, &cam, a.size.0, a.size.1)?;
+            let path = stills_dir.join(format!("year_{y:04}_closeup.png"));
+            sylva::render::timelapse::write_png(&path, &img)?;
+            stills.push((y, "closeup".to_string(), path));
+        }
         pb.finish_and_clear();
         eprintln!("[4/4] timelapse");
         let opts = TimelapseOptions { width: a.timelapse_size.0, height: a.timelapse_size.1, fps: a.fps, frames_between: a.frames_between, camera: None, season: Season::Summer };
@@ -174,6 +188,9 @@ fn write_summary_md(out: &Path, sc: &Scenario, table: &str, shares: &str, maps: 
         let _ = writeln!(md, "## Timelapse\n\n![timelapse]({})\n\n{n} frames{}.\n", rel(out, g), if *mp4 { ", also as `timelapse.mp4`" } else { "" });
     }
     if !stills.is_empty() {
+        if let Some(c) = stills.iter().find(|s| s.1 == "closeup") {
+            let _ = writeln!(md, "## Year {} from within the forest\n\n![close view]({})\n", c.0, rel(out, &c.2));
+        }
         let _ = writeln!(md, "## Stills\n\n| year | oblique | top-down |\n|---|---|---|");
         let mut years: Vec<u32> = stills.iter().map(|s| s.0).collect();
         years.dedup();
