@@ -1,0 +1,56 @@
+//! QA fixes of the simulation: fresh runs clear old snapshots, start conditions outside the
+//! site and bad climate values are rejected with errors naming the field.
+use sylva::sim::run::{run_scenario, RunOptions};
+use sylva::sim::{fixtures, Scenario, TerrainSpec};
+
+const SC: &str = r#"
+name = "qa"
+years = 2
+seed = 1
+snapshot_every = 1
+[terrain]
+uniform = { width = 4, height = 3, cell_m = 25.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }
+[[start]]
+kind = "seed_sources"
+species = "beech"
+points = [[20.0, 20.0], [80.0, 50.0]]
+trees_per_source = 2
+"#;
+
+fn site(sc: &Scenario) -> sylva::conditions::SiteConditions {
+    let TerrainSpec::Uniform(u) = sc.terrain_spec() else { panic!() };
+    sylva::conditions::SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, sc.climate.latitude_deg)
+}
+
+fn names(dir: &std::path::Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn fresh_run_removes_old_snapshots() {
+    let lib = fixtures::library();
+    let dir = tempfile::tempdir().unwrap();
+    let inv = dir.path().join("inventory");
+    let maps = dir.path().join("maps");
+    std::fs::create_dir_all(&inv).unwrap();
+    std::fs::create_dir_all(&maps).unwrap();
+    for f in ["year_0050.csv", "year_0050.geojson"] {
+        std::fs::write(inv.join(f), "old").unwrap();
+    }
+    for f in ["species_year_0050.png", "basal_area_year_0050.png", "notes.txt"] {
+        std::fs::write(maps.join(f), "old").unwrap();
+    }
+    std::fs::write(inv.join("mine.csv"), "keep").unwrap();
+    let sc = Scenario::from_toml_str(SC, "qa").unwrap();
+    let mut opts = RunOptions::new(dir.path());
+    opts.map_px = 64;
+    run_scenario(&sc, site(&sc), &lib, opts).unwrap();
+    let inv_names = names(&inv);
+    assert!(!inv_names.iter().any(|n| n.contains("0050")), "{inv_names:?}");
+    assert!(inv_names.contains(&"year_0002.csv".to_string()) && inv_names.contains(&"mine.csv".to_string()), "{inv_names:?}");
+    let map_names = names(&maps);
+    assert!(!map_names.iter().any(|n| n.contains("0050")), "{map_names:?}");
+    assert!(map_names.contains(&"notes.txt".to_string()) && map_names.contains(&"species_year_0002.png".to_string()), "{map_names:?}");
+}
