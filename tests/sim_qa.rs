@@ -54,3 +54,21 @@ fn fresh_run_removes_old_snapshots() {
     assert!(!map_names.iter().any(|n| n.contains("0050")), "{map_names:?}");
     assert!(map_names.contains(&"notes.txt".to_string()) && map_names.contains(&"species_year_0002.png".to_string()), "{map_names:?}");
 }
+
+#[test]
+fn start_outside_site_is_an_error() {
+    let lib = fixtures::library();
+    // site: 4 x 3 cells of 25 m = 100 m x 75 m
+    let sc = Scenario::from_toml_str(&SC.replace("[80.0, 50.0]", "[80.0, 150.0]"), "qa").unwrap();
+    let e = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap_err().to_string();
+    assert!(e.contains("start[0].points[1]") && e.contains("[80, 150]") && e.contains("75"), "{e}");
+    let planted = format!("{SC}\n[[start]]\nkind = \"planted\"\nspecies = \"beech\"\nspacing_m = 2.0\narea = [10.0, 10.0, 150.0, 50.0]\n");
+    let sc = Scenario::from_toml_str(&planted, "qa").unwrap();
+    let e = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap_err().to_string();
+    assert!(e.contains("start[1].area") && e.contains("150") && e.contains("100 m"), "{e}");
+    let inside = planted.replace("150.0, 50.0]", "100.0, 75.0]");
+    let sc = Scenario::from_toml_str(&inside, "qa").unwrap();
+    let w = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap();
+    // 45 x 32 lattice of 2 m in the 90 m x 65 m area, plus 2 x 2 seed-source trees
+    assert_eq!(w.trees.len(), 45 * 32 + 4);
+}

@@ -282,6 +282,40 @@ impl Scenario {
         Ok(())
     }
 
+    /// Checks that seed-source points (`start[i].points[j]`) lie inside the site and planted
+    /// areas (`start[i].area`) lie within it; `extent` is the site extent `(x, y)` in metres
+    /// (origin SW corner, [`crate::conditions::SiteConditions::extent_m`]), `ctx` names the
+    /// scenario. Called by [`crate::sim::World::new`].
+    ///
+    /// Errors: [`Error::Invalid`] naming the field, the value and the site extent.
+    pub fn validate_extent(&self, extent: (f64, f64), ctx: &str) -> Result<()> {
+        let (ex, ey) = extent;
+        let site = format!("inside the site, 0 ≤ x < {ex} m and 0 ≤ y < {ey} m (origin SW corner)");
+        for (i, s) in self.start.iter().enumerate() {
+            match s {
+                Start::SeedSources { points, .. } => {
+                    for (j, p) in points.iter().enumerate() {
+                        if !(p[0] >= 0.0 && p[0] < ex && p[1] >= 0.0 && p[1] < ey) {
+                            return Err(invalid(ctx, &format!("start[{i}].points[{j}]"), format!("[{}, {}]", p[0], p[1]), &site));
+                        }
+                    }
+                }
+                Start::Planted { area: Some(a), .. } => {
+                    if !(a[0] >= 0.0 && a[1] >= 0.0 && a[2] <= ex && a[3] <= ey) {
+                        return Err(invalid(
+                            ctx,
+                            &format!("start[{i}].area"),
+                            format!("[{}, {}, {}, {}]", a[0], a[1], a[2], a[3]),
+                            &format!("[x0, y0, x1, y1] within the site, 0 ≤ x0 < x1 ≤ {ex} m and 0 ≤ y0 < y1 ≤ {ey} m"),
+                        ));
+                    }
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
     /// The terrain source to load.
     pub fn terrain_spec(&self) -> TerrainSpec {
         let t = &self.terrain;

@@ -82,10 +82,12 @@ impl World {
     /// Builds the world of `scenario` on `site` with species from `lib`, placing the start
     /// (planted stands, seed-source trees) at year 0.
     ///
-    /// Errors: unknown species names ([`crate::Error::Invalid`]).
+    /// Errors: unknown species names, seed-source points or planted areas outside the site
+    /// ([`Scenario::validate_extent`]) ([`crate::Error::Invalid`]).
     pub fn new(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
         let pool = scenario.resolve_species(lib, &scenario.name)?;
         let extent = site.extent_m();
+        scenario.validate_extent(extent, &scenario.name)?;
         let cell = scenario.light_cell_m;
         let cols = ((extent.0 / cell).ceil() as usize).max(1);
         let rows = ((extent.1 / cell).ceil() as usize).max(1);
