@@ -72,3 +72,25 @@ fn start_outside_site_is_an_error() {
     // 45 x 32 lattice of 2 m in the 90 m x 65 m area, plus 2 x 2 seed-source trees
     assert_eq!(w.trees.len(), 45 * 32 + 4);
 }
+
+#[test]
+fn bad_climate_is_an_error() {
+    let cases = [
+        ("lapse_rate_k_per_km = nan", "climate.lapse_rate_k_per_km", "NaN"),
+        ("reference_temperature_c = inf", "climate.reference_temperature_c", "inf"),
+        ("latitude_deg = 120.0", "climate.latitude_deg", "120"),
+        ("lapse_rate_k_per_km = -40.0", "climate.lapse_rate_k_per_km", "-40"),
+        ("reference_temperature_c = 55.0", "climate.reference_temperature_c", "55"),
+        ("continentality_k = 0.0", "climate.continentality_k", "0"),
+        ("reaction_r = 12.0", "climate.reaction_r", "12"),
+        ("nitrogen_n = -1.0", "climate.nitrogen_n", "-1"),
+        ("wind_from_deg = 400.0", "climate.wind_from_deg", "400"),
+    ];
+    for (line, field, value) in cases {
+        let text = format!("{SC}\n[climate]\n{line}\n");
+        let e = Scenario::from_toml_str(&text, "qa.toml").unwrap_err().to_string();
+        assert!(e.contains("qa.toml") && e.contains(field) && e.contains(value), "{line}: {e}");
+    }
+    let ok = format!("{SC}\n[climate]\nlapse_rate_k_per_km = -5.0\nwind_from_deg = 360.0\nreference_temperature_c = -2.5\n");
+    assert!(Scenario::from_toml_str(&ok, "qa.toml").is_ok());
+}

@@ -167,6 +167,31 @@ fn invalid(ctx: &str, field: &str, value: impl ToString, expected: &str) -> Erro
     Error::Invalid { context: ctx.to_string(), field: field.to_string(), value: value.to_string(), expected: expected.to_string() }
 }
 
+/// Checks `[climate]`: every value finite; latitude −90–90°, lapse rate −15–5 K/km,
+/// reference temperature −30–40 °C, K/R/N 1–9, wind direction 0–360°, elevations
+/// (reference, sea level) −500–9000 m. `ctx` names the scenario file.
+///
+/// Errors: [`Error::Invalid`] naming `climate.<field>`, the value and the range.
+pub fn validate_climate(c: &Climate, ctx: &str) -> Result<()> {
+    let checks: [(&str, f64, String, f64, f64, &str); 9] = [
+        ("latitude_deg", c.latitude_deg, c.latitude_deg.to_string(), -90.0, 90.0, "degrees"),
+        ("reference_temperature_c", c.reference_temperature_c as f64, c.reference_temperature_c.to_string(), -30.0, 40.0, "°C"),
+        ("reference_elevation_m", c.reference_elevation_m as f64, c.reference_elevation_m.to_string(), -500.0, 9000.0, "m"),
+        ("lapse_rate_k_per_km", c.lapse_rate_k_per_km as f64, c.lapse_rate_k_per_km.to_string(), -15.0, 5.0, "K/km"),
+        ("continentality_k", c.continentality_k as f64, c.continentality_k.to_string(), 1.0, 9.0, "(index)"),
+        ("reaction_r", c.reaction_r as f64, c.reaction_r.to_string(), 1.0, 9.0, "(index)"),
+        ("nitrogen_n", c.nitrogen_n as f64, c.nitrogen_n.to_string(), 1.0, 9.0, "(index)"),
+        ("sea_level_m", c.sea_level_m as f64, c.sea_level_m.to_string(), -500.0, 9000.0, "m"),
+        ("wind_from_deg", c.wind_from_deg as f64, c.wind_from_deg.to_string(), 0.0, 360.0, "degrees"),
+    ];
+    for (field, v, shown, lo, hi, unit) in checks {
+        if !(v.is_finite() && v >= lo && v <= hi) {
+            return Err(invalid(ctx, &format!("climate.{field}"), shown, &format!("a finite number {lo}–{hi} {unit}")));
+        }
+    }
+    Ok(())
+}
+
 impl Scenario {
     /// Parses and validates a scenario from TOML text; `name` (usually the file path) appears in
     /// error messages.
@@ -238,10 +263,7 @@ impl Scenario {
                 return Err(invalid(ctx, "terrain.window", format!("{w:?}"), "[col0, row0, width, height] with width, height ≥ 1"));
             }
         }
-        let c = &self.climate;
-        if !(c.latitude_deg >= -90.0 && c.latitude_deg <= 90.0) {
-            return Err(invalid(ctx, "climate.latitude_deg", c.latitude_deg, "−90–90 degrees"));
-        }
+        validate_climate(&self.climate, ctx)?;
         if !(1..=10_000).contains(&self.years) {
             return Err(invalid(ctx, "years", self.years, "1–10000"));
         }
