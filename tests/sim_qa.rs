@@ -94,3 +94,32 @@ fn bad_climate_is_an_error() {
     let ok = format!("{SC}\n[climate]\nlapse_rate_k_per_km = -5.0\nwind_from_deg = 360.0\nreference_temperature_c = -2.5\n");
     assert!(Scenario::from_toml_str(&ok, "qa.toml").is_ok());
 }
+
+#[test]
+fn young_random_deaths_are_background_not_age() {
+    use sylva::sim::DeathCause;
+    let (sc, mut w) = {
+        let lib = fixtures::library();
+        let sc = Scenario::from_toml_str(&SC.replace("years = 2", "years = 30").replace("trees_per_source = 2", "trees_per_source = 60"), "qa").unwrap();
+        let w = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap();
+        (sc, w)
+    };
+    let mut seen = [0u64; 4];
+    for _ in 0..30 {
+        sylva::sim::step_year(&mut w, &sc, &mut sylva::sim::YearReport::default());
+        for d in &w.dead {
+            seen[d.cause.index()] += 1;
+            let max = w.lib.species[d.species as usize].life.max_age_yr;
+            match d.cause {
+                DeathCause::Age => assert!(d.age >= sylva::sim::trees::SENESCENT_AGE_SHARE * max, "age death at {} of max {max}", d.age),
+                DeathCause::Background => assert!(d.age < sylva::sim::trees::SENESCENT_AGE_SHARE * max),
+                _ => {}
+            }
+        }
+    }
+    assert!(seen[DeathCause::Background.index()] > 0, "no background deaths: {seen:?}");
+    let names: Vec<&str> = w.pool.iter().map(|&s| w.lib.species[s as usize].id.as_str()).collect();
+    let csv = sylva::output::stand_table::stand_table_csv(&[sylva::sim::stats::stand_row(&w)], &names);
+    assert!(csv.lines().next().unwrap().ends_with(",deaths_age,deaths_stress,deaths_wind,deaths_background"), "{csv}");
+    assert_eq!(csv.lines().nth(1).unwrap().split(',').count(), csv.lines().next().unwrap().split(',').count());
+}

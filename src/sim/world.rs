@@ -75,7 +75,7 @@ pub struct World {
     /// Trees that died in the current year (cleared at the start of each year).
     pub dead: Vec<DeadTree>,
     /// Deaths since the start, by cause ([`super::trees::DeathCause::ALL`] order).
-    pub deaths_total: [u64; 3],
+    pub deaths_total: [u64; super::trees::N_CAUSES],
 }
 
 impl World {
@@ -143,7 +143,7 @@ impl World {
             suitability,
             seed_rain,
             dead: Vec::new(),
-            deaths_total: [0; 3],
+            deaths_total: [0; super::trees::N_CAUSES],
         };
         w.place_start(scenario);
         Ok(w)
