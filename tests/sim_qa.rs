@@ -123,3 +123,24 @@ fn young_random_deaths_are_background_not_age() {
     assert!(csv.lines().next().unwrap().ends_with(",deaths_age,deaths_stress,deaths_wind,deaths_background"), "{csv}");
     assert_eq!(csv.lines().nth(1).unwrap().split(',').count(), csv.lines().next().unwrap().split(',').count());
 }
+
+#[test]
+fn scenario_errors_in_plain_words_and_name_the_file() {
+    let e = Scenario::from_toml_str(&SC.replace("years = 2", "years = -5"), "dir/qa.toml").unwrap_err().to_string();
+    assert!(e.contains("dir/qa.toml") && e.contains("whole number") && !e.contains("u32"), "{e}");
+    let lib = fixtures::library();
+    let sc = Scenario::from_toml_str(&format!("species = [\"beech\", \"baobab\"]\n{SC}"), "dir/qa.toml").unwrap();
+    let e = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap_err().to_string();
+    assert!(e.contains("dir/qa.toml") && e.contains("species[1]") && e.contains("baobab"), "{e}");
+}
+
+#[test]
+fn threads_out_of_range_is_rejected() {
+    let exe = env!("CARGO_BIN_EXE_sylva");
+    for bad in ["0", "257", "-1", "many"] {
+        let out = std::process::Command::new(exe).args(["simulate", "no_such.toml", &format!("--threads={bad}")]).output().unwrap();
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--threads") && err.contains("1 to 256"), "{bad}: {err}");
+    }
+}

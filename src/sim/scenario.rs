@@ -42,6 +42,10 @@ pub struct Scenario {
     /// Light grid cell size (m), 2–20; default 5.
     #[serde(default = "default_light_cell")]
     pub light_cell_m: f64,
+    /// Where the scenario was read from (the file path given to [`Scenario::load`] or the
+    /// `name` given to [`Scenario::from_toml_str`]); not part of the TOML, used in messages.
+    #[serde(skip)]
+    pub source: String,
 }
 
 fn default_snapshot_every() -> u32 {
@@ -192,6 +196,37 @@ pub fn validate_climate(c: &Climate, ctx: &str) -> Result<()> {
     Ok(())
 }
 
+/// Rewrites serde's Rust type names in a TOML error message into plain words
+/// (`expected u32` → `expected a whole number ≥ 0`).
+fn plain_type_words(msg: &str) -> String {
+    let mut m = msg.to_string();
+    for (rust, plain) in [
+        ("expected u32", "expected a whole number from 0 to 4294967295"),
+        ("expected u64", "expected a whole number ≥ 0"),
+        ("expected usize", "expected a whole number ≥ 0"),
+        ("expected u16", "expected a whole number from 0 to 65535"),
+        ("expected u8", "expected a whole number from 0 to 255"),
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+        ("expected a boolean", "expected true or false"),
+        ("expected a string", "expected a text in quotes"),
+    ] {
+        m = m.replace(rust, plain);
+    }
+    m
+}
+
+impl Scenario {
+    /// Context for error messages: the scenario file (or source name) and the scenario's `name`.
+    pub fn context(&self) -> String {
+        if self.source.is_empty() || self.source == self.name {
+            format!("scenario {}", self.name)
+        } else {
+            format!("{} (scenario {})", self.source, self.name)
+        }
+    }
+}
+
 impl Scenario {
     /// Parses and validates a scenario from TOML text; `name` (usually the file path) appears in
     /// error messages.
@@ -199,8 +234,9 @@ impl Scenario {
     /// Errors: [`Error::Format`] for TOML syntax, unknown fields or wrong types (with line);
     /// [`Error::Invalid`] for out-of-range values.
     pub fn from_toml_str(text: &str, name: &str) -> Result<Scenario> {
-        let s: Scenario = toml::from_str(text).map_err(|e| Error::format(name, e.to_string()))?;
+        let mut s: Scenario = toml::from_str(text).map_err(|e| Error::format(name, plain_type_words(&e.to_string())))?;
         s.validate(name)?;
+        s.source = name.to_string();
         Ok(s)
     }
 

@@ -85,9 +85,10 @@ impl World {
     /// Errors: unknown species names, seed-source points or planted areas outside the site
     /// ([`Scenario::validate_extent`]) ([`crate::Error::Invalid`]).
     pub fn new(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
-        let pool = scenario.resolve_species(lib, &scenario.name)?;
+        let ctx = scenario.context();
+        let pool = scenario.resolve_species(lib, &ctx)?;
         let extent = site.extent_m();
-        scenario.validate_extent(extent, &scenario.name)?;
+        scenario.validate_extent(extent, &ctx)?;
         let cell = scenario.light_cell_m;
         let cols = ((extent.0 / cell).ceil() as usize).max(1);
         let rows = ((extent.1 / cell).ceil() as usize).max(1);
