@@ -144,3 +144,35 @@ fn threads_out_of_range_is_rejected() {
         assert!(err.contains("--threads") && err.contains("1 to 256"), "{bad}: {err}");
     }
 }
+
+#[test]
+fn maps_are_large_with_legend_and_distinct_species_colours() {
+    use sylva::output::plot::{species_color, SPECIES_PALETTE};
+    let lib = fixtures::library();
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!("{SC}\n[[start]]\nkind = \"planted\"\nspecies = \"birch\"\nspacing_m = 2.0\narea = [0.0, 0.0, 40.0, 75.0]\n").replace("years = 2", "years = 3");
+    let sc = Scenario::from_toml_str(&text, "qa").unwrap();
+    let mut opts = RunOptions::new(dir.path());
+    opts.map_px = 64;
+    let sum = run_scenario(&sc, site(&sc), &lib, opts).unwrap();
+    let w = &sum.world;
+    // distinct categorical colours per pool species
+    let cols: Vec<[u8; 3]> = w.pool.iter().map(|&s| species_color(w, s)).collect();
+    for (i, a) in cols.iter().enumerate() {
+        assert!(cols[..i].iter().all(|b| b != a), "{cols:?}");
+    }
+    assert_eq!(cols[0], SPECIES_PALETTE[0]);
+    for name in ["species_year_0003.png", "basal_area_year_0003.png"] {
+        let p = dir.path().join("maps").join(name);
+        let img = image::open(&p).unwrap().to_rgb8();
+        assert!(img.width().max(img.height()) >= 512, "{name}: {}x{}", img.width(), img.height());
+        if std::env::var("SYLVA_KEEP").is_ok() {
+            std::fs::copy(&p, format!("/tmp/{name}")).unwrap();
+            std::fs::copy(dir.path().join("stand_table.png"), "/tmp/stand_table.png").unwrap();
+        }
+    }
+    // the legend swatch of the first pool species (right of the map) has its colour
+    let img = image::open(dir.path().join("maps/species_year_0003.png")).unwrap().to_rgb8();
+    let found = img.pixels().filter(|p| p.0 == cols[0]).count();
+    assert!(found >= 16 * 12, "legend swatch missing: {found} px");
+}
