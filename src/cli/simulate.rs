@@ -20,9 +20,17 @@ pub struct Args {
     /// Continue an interrupted run from OUT/checkpoint.bin.
     #[arg(long)]
     pub resume: bool,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
+    /// Worker threads, 1–256 (default: all cores).
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
+}
+
+/// Parses `--threads`: an integer 1–256.
+pub fn parse_threads(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if (1..=256).contains(&n) => Ok(n),
+        _ => Err(format!("expected a whole number of worker threads from 1 to 256, got '{s}'")),
+    }
 }
 
 /// The species library used by simulations.

@@ -75,7 +75,14 @@ pub fn plot_panels_png(path: &Path, panels: &[Panel], cols: usize, size: (u32, u
                 .y_label_area_size(56)
                 .build_cartesian_2d(x0..x1, 0f64..y1)
                 .map_err(|e| perr(path, e))?;
-            ch.configure_mesh().x_desc(&p.x_label).y_desc(&p.y_label).label_style(("sans-serif", 13)).draw().map_err(|e| perr(path, e))?;
+            let mut mesh = ch.configure_mesh();
+            mesh.x_desc(&p.x_label).y_desc(&p.y_label).label_style(("sans-serif", 13));
+            let year_fmt = |v: &f64| format!("{v:.0}");
+            if p.x_label == "year" {
+                // whole years only: at most one tick per year, integer labels
+                mesh.x_labels(((x1 - x0).round() as usize + 1).clamp(2, 11)).x_label_formatter(&year_fmt);
+            }
+            mesh.draw().map_err(|e| perr(path, e))?;
             for s in &p.series {
                 let c = RGBColor(s.color[0], s.color[1], s.color[2]);
                 if s.markers {
@@ -98,9 +105,35 @@ fn write_rgb_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> Result<()> {
     crate::output::write_atomic(path, &bytes)
 }
 
-/// Species colour for plots and maps: the species' summer foliage colour.
+/// Categorical palette for species: the 7 colours of Okabe & Ito (2008, "Color Universal
+/// Design", colour-blind safe; black left out) followed by Tableau 10 (Tableau Software).
+pub const SPECIES_PALETTE: [[u8; 3]; 17] = [
+    [230, 159, 0],
+    [86, 180, 233],
+    [0, 158, 115],
+    [240, 228, 66],
+    [0, 114, 178],
+    [213, 94, 0],
+    [204, 121, 167],
+    [78, 121, 167],
+    [242, 142, 43],
+    [225, 87, 89],
+    [118, 183, 178],
+    [89, 161, 79],
+    [237, 201, 72],
+    [176, 122, 161],
+    [255, 157, 167],
+    [156, 117, 95],
+    [186, 176, 172],
+];
+
+/// Species colour for plots and maps: [`SPECIES_PALETTE`] by the species' position in the pool
+/// (cycling after 17 species); species outside the pool are dark grey.
 pub fn species_color(w: &World, s: u16) -> [u8; 3] {
-    w.lib.species[s as usize].appearance.leaf_summer
+    match w.pool_index(s) {
+        Some(p) => SPECIES_PALETTE[p % SPECIES_PALETTE.len()],
+        None => [60, 60, 60],
+    }
 }
 
 /// A 2×2 figure of the stand table: stems/ha, basal area, heights, species basal-area shares.
@@ -126,8 +159,28 @@ fn map_dims(w: &World, max_px: usize) -> (usize, usize, f64) {
     (((w.extent.0 / cell).ceil() as usize).max(1), ((w.extent.1 / cell).ceil() as usize).max(1), cell)
 }
 
-/// Writes a species map (dominant species by basal area per map cell, in its foliage colour;
-/// grey = masked, light = no tree ≥ 1.3 m) and a basal-area map (white 0 → dark green ≥ 60 m²/ha).
+/// "year N" from a snapshot file name such as `species_year_0010_spring.png`.
+fn snapshot_label(p: &Path) -> String {
+    let stem = p.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    match stem.find("year_") {
+        Some(i) => {
+            let rest = &stem[i + 5..];
+            let digits: String = rest.chars().take_while(|c| c.is_ascii_digit()).collect();
+            let n: u64 = digits.parse().unwrap_or(0);
+            let season = rest[digits.len()..].trim_start_matches('_');
+            if season.is_empty() { format!("year {n}") } else { format!("year {n}, {season}") }
+        }
+        None => stem,
+    }
+}
+
+/// Writes a species map (dominant species by basal area per map cell, in its
+/// [`species_color`]; grey = masked, beige = no tree ≥ 1.3 m) with a title and a legend, and a
+/// basal-area map (m²/ha per map cell, viridis 0–60 m²/ha) with a title and a colour bar.
+/// Map cells are `max(light cell, longest extent / max_px)` metres; the pictures are enlarged to
+/// at least 512 pixels on the long side. Text: DejaVu Sans via [`super::maps::draw_text`].
+///
+/// Errors: [`Error::Io`] / PNG encoding errors naming the file.
 pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -> Result<()> {
     let (cols, rows, cell) = map_dims(w, max_px);
     let np = w.lib.species.len();
@@ -139,8 +192,11 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
         ba[(r * cols + c) * np + t.species[i] as usize] += t.basal_area_m2(i);
     }
     let area_ha = cell * cell / 10_000.0;
-    let mut sp_img = image::RgbImage::new(cols as u32, rows as u32);
-    let mut ba_img = image::RgbImage::new(cols as u32, rows as u32);
+    let masked_px = [128u8, 128, 128];
+    let empty_px = [235u8, 225, 200];
+    let mut sp_cells = vec![[0u8; 3]; cols * rows];
+    let mut ba_grid = crate::grid::Grid::filled(cols, rows, 0.0f32);
+    let mut mask = crate::grid::Grid::filled(cols, rows, true);
     for r in 0..rows {
         for c in 0..cols {
             let (x, y) = ((c as f64 + 0.5) * cell, (rows - r) as f64 * cell - 0.5 * cell);
@@ -148,17 +204,53 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
             let v = &ba[(r * cols + c) * np..(r * cols + c + 1) * np];
             let tot: f64 = v.iter().sum();
             let dom = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, _)| k).unwrap_or(0);
-            let px = if masked { [128, 128, 128] } else if tot <= 0.0 { [235, 225, 200] } else { species_color(w, dom as u16) };
-            sp_img.put_pixel(c as u32, r as u32, image::Rgb(px));
-            let f = (tot / area_ha / 60.0).clamp(0.0, 1.0) as f32;
-            let g = if masked { [128, 128, 128] } else { [(255.0 - 235.0 * f) as u8, (255.0 - 155.0 * f) as u8, (255.0 - 235.0 * f) as u8] };
-            ba_img.put_pixel(c as u32, r as u32, image::Rgb(g));
+            sp_cells[r * cols + c] = if masked { masked_px } else if tot <= 0.0 { empty_px } else { species_color(w, dom as u16) };
+            ba_grid.data[r * cols + c] = (tot / area_ha) as f32;
+            mask.data[r * cols + c] = !masked;
         }
     }
-    for (img, p) in [(sp_img, species_png), (ba_img, ba_png)] {
-        let mut bytes = Vec::new();
-        img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| perr(p, e))?;
-        crate::output::write_atomic(p, &bytes)?;
+    let when = snapshot_label(species_png);
+    // species map with legend
+    let font = ab_glyph::FontRef::try_from_slice(FONT).map_err(|e| Error::Other(format!("bundled font: {e}")))?;
+    let k = 512usize.div_ceil(cols.max(rows)).max(1);
+    let (mw, mh) = (cols * k, rows * k);
+    let (top, pad, right) = (44usize, 12usize, 190usize);
+    let legend_h = 30 + 22 * (w.pool.len() + 2);
+    let (iw, ih) = (pad + mw + right, top + mh.max(legend_h) + pad + 20);
+    let mut img = image::RgbImage::from_pixel(iw as u32, ih as u32, image::Rgb([255, 255, 255]));
+    for y in 0..mh {
+        for x in 0..mw {
+            img.put_pixel((pad + x) as u32, (top + y) as u32, image::Rgb(sp_cells[(y / k) * cols + x / k]));
+        }
     }
-    Ok(())
+    super::maps::draw_text(&mut img, &font, pad as f32, 10.0, 20.0, &format!("Dominant species by basal area, {when}"));
+    super::maps::draw_text(&mut img, &font, pad as f32, (top + mh + 4) as f32, 13.0, &format!("{:.0} m × {:.0} m, map cell {:.0} m", w.extent.0, w.extent.1, cell));
+    let lx = pad + mw + 16;
+    super::maps::draw_text(&mut img, &font, lx as f32, top as f32, 15.0, "Species");
+    let mut entries: Vec<(String, [u8; 3])> = w.pool.iter().map(|&s| (w.lib.species[s as usize].id.clone(), species_color(w, s))).collect();
+    entries.push(("no tree ≥ 1.3 m".into(), empty_px));
+    entries.push(("outside / water".into(), masked_px));
+    for (e, (name, col)) in entries.iter().enumerate() {
+        let y = top + 26 + 22 * e;
+        for dy in 0..14 {
+            for dx in 0..18 {
+                let edge = dx == 0 || dy == 0 || dx == 17 || dy == 13;
+                img.put_pixel((lx + dx) as u32, (y + dy) as u32, image::Rgb(if edge { [60, 60, 60] } else { *col }));
+            }
+        }
+        super::maps::draw_text(&mut img, &font, (lx + 26) as f32, y as f32 - 1.0, 14.0, name);
+    }
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| perr(species_png, e))?;
+    crate::output::write_atomic(species_png, &bytes)?;
+    // basal-area map with colour bar
+    let style = super::maps::MapStyle {
+        ramp: super::maps::Ramp::Viridis,
+        title: format!("Basal area, {when}"),
+        units: "m²/ha".into(),
+        range: Some((0.0, 60.0)),
+        hillshade: None,
+        shade_strength: 0.0,
+    };
+    super::maps::write_field_png_styled(&ba_grid, Some(&mask), &style, ba_png)
 }

@@ -7,7 +7,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// CSV text: `year,stems_ha,seedlings_ha,basal_area_m2_ha,mean_height_m,top_height_m,qmd_cm,
-/// stems_7cm_ha,qmd_7cm_cm,ba_share_<sp>…,stem_share_<sp>…,deaths_age,deaths_stress,deaths_wind`
+/// stems_7cm_ha,qmd_7cm_cm,ba_share_<sp>…,stem_share_<sp>…,deaths_age,deaths_stress,deaths_wind,
+/// deaths_background` (deaths in the year by [`DeathCause`])
 /// (`species` = pool ids in pool order).
 pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     let mut s = String::from("year,stems_ha,seedlings_ha,basal_area_m2_ha,mean_height_m,top_height_m,qmd_cm,stems_7cm_ha,qmd_7cm_cm");

@@ -8,7 +8,7 @@ use super::world::World;
 use crate::error::{Error, Result};
 use std::path::Path;
 
-const MAGIC: &[u8; 8] = b"SYLVACK1";
+const MAGIC: &[u8; 8] = b"SYLVACK2";
 
 struct W(Vec<u8>);
 impl W {
@@ -109,7 +109,7 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
 /// belong to a different scenario (seed or species pool).
 pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>> {
     if bytes.len() < 8 || &bytes[..8] != MAGIC {
-        return Err(Error::format(path, "not a Sylva checkpoint (bad magic)"));
+        return Err(Error::format(path, "not a Sylva checkpoint of this version (bad magic; checkpoints from before the `background` death cause must be re-run)"));
     }
     let mut r = R { b: bytes, p: 8, path };
     let year = r.u64()? as u32;
@@ -145,7 +145,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
         }
         g.data = s;
     }
-    let mut deaths = [0u64; 3];
+    let mut deaths = [0u64; super::trees::N_CAUSES];
     for d in deaths.iter_mut() {
         *d = r.u64()?;
     }
@@ -163,7 +163,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             a.push(r.f64()?);
             b.push(r.f64()?);
         }
-        let mut d = [0u64; 3];
+        let mut d = [0u64; super::trees::N_CAUSES];
         for x in d.iter_mut() {
             *x = r.u64()?;
         }

@@ -70,6 +70,32 @@ fn mkdir(p: &Path) -> Result<()> {
     std::fs::create_dir_all(p).map_err(|e| Error::io(p, e))
 }
 
+/// Removes the snapshot files of an earlier run from `dir`: `inventory/year_*` and
+/// `maps/species_*`, `maps/basal_area_*` (only these Sylva names; other files are kept), so a
+/// fresh run into an existing run directory never mixes its snapshots with old ones.
+///
+/// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
+pub fn clear_snapshots(dir: &Path) -> Result<()> {
+    for (sub, prefixes) in [("inventory", &["year_"][..]), ("maps", &["species_", "basal_area_"][..])] {
+        let d = dir.join(sub);
+        if !d.is_dir() {
+            continue;
+        }
+        let entries = std::fs::read_dir(&d).map_err(|e| Error::io(&d, e))?;
+        for e in entries {
+            let e = e.map_err(|err| Error::io(&d, err))?;
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            let ours = prefixes.iter().any(|p| name.starts_with(p));
+            let p = e.path();
+            if ours && p.is_file() {
+                std::fs::remove_file(&p).map_err(|err| Error::io(&p, err))?;
+            }
+        }
+    }
+    Ok(())
+}
+
 fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize) -> Result<()> {
     inventory::write_inventory_csv(&dir.join("inventory").join(format!("{label}.csv")), w)?;
     inventory::write_inventory_geojson(&dir.join("inventory").join(format!("{label}.geojson")), w)?;
@@ -95,6 +121,9 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
 /// `snapshot_every` years and at the end, labelled `year_NNNN` (plus `_spring`, `_summer`,
 /// `_autumn` when `seasonal_snapshots`); checkpoint every `checkpoint_every` years and at the end.
 ///
+/// A fresh run (not `resume`) first removes the snapshots of an earlier run in the same
+/// directory ([`clear_snapshots`]).
+///
 /// Errors: I/O errors naming the file; unknown species; a missing or mismatching checkpoint
 /// with `resume`.
 pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut opts: RunOptions) -> Result<RunSummary> {
@@ -113,6 +142,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         }
         rows = checkpoint::load(&ck, &mut world)?;
     } else {
+        clear_snapshots(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {
             snapshot(&dir, &world, "year_0000", true, opts.map_px)?;

@@ -42,6 +42,10 @@ pub struct Scenario {
     /// Light grid cell size (m), 2–20; default 5.
     #[serde(default = "default_light_cell")]
     pub light_cell_m: f64,
+    /// Where the scenario was read from (the file path given to [`Scenario::load`] or the
+    /// `name` given to [`Scenario::from_toml_str`]); not part of the TOML, used in messages.
+    #[serde(skip)]
+    pub source: String,
 }
 
 fn default_snapshot_every() -> u32 {
@@ -167,6 +171,62 @@ fn invalid(ctx: &str, field: &str, value: impl ToString, expected: &str) -> Erro
     Error::Invalid { context: ctx.to_string(), field: field.to_string(), value: value.to_string(), expected: expected.to_string() }
 }
 
+/// Checks `[climate]`: every value finite; latitude −90–90°, lapse rate −15–5 K/km,
+/// reference temperature −30–40 °C, K/R/N 1–9, wind direction 0–360°, elevations
+/// (reference, sea level) −500–9000 m. `ctx` names the scenario file.
+///
+/// Errors: [`Error::Invalid`] naming `climate.<field>`, the value and the range.
+pub fn validate_climate(c: &Climate, ctx: &str) -> Result<()> {
+    let checks: [(&str, f64, String, f64, f64, &str); 9] = [
+        ("latitude_deg", c.latitude_deg, c.latitude_deg.to_string(), -90.0, 90.0, "degrees"),
+        ("reference_temperature_c", c.reference_temperature_c as f64, c.reference_temperature_c.to_string(), -30.0, 40.0, "°C"),
+        ("reference_elevation_m", c.reference_elevation_m as f64, c.reference_elevation_m.to_string(), -500.0, 9000.0, "m"),
+        ("lapse_rate_k_per_km", c.lapse_rate_k_per_km as f64, c.lapse_rate_k_per_km.to_string(), -15.0, 5.0, "K/km"),
+        ("continentality_k", c.continentality_k as f64, c.continentality_k.to_string(), 1.0, 9.0, "(index)"),
+        ("reaction_r", c.reaction_r as f64, c.reaction_r.to_string(), 1.0, 9.0, "(index)"),
+        ("nitrogen_n", c.nitrogen_n as f64, c.nitrogen_n.to_string(), 1.0, 9.0, "(index)"),
+        ("sea_level_m", c.sea_level_m as f64, c.sea_level_m.to_string(), -500.0, 9000.0, "m"),
+        ("wind_from_deg", c.wind_from_deg as f64, c.wind_from_deg.to_string(), 0.0, 360.0, "degrees"),
+    ];
+    for (field, v, shown, lo, hi, unit) in checks {
+        if !(v.is_finite() && v >= lo && v <= hi) {
+            return Err(invalid(ctx, &format!("climate.{field}"), shown, &format!("a finite number {lo}–{hi} {unit}")));
+        }
+    }
+    Ok(())
+}
+
+/// Rewrites serde's Rust type names in a TOML error message into plain words
+/// (`expected u32` → `expected a whole number ≥ 0`).
+fn plain_type_words(msg: &str) -> String {
+    let mut m = msg.to_string();
+    for (rust, plain) in [
+        ("expected u32", "expected a whole number from 0 to 4294967295"),
+        ("expected u64", "expected a whole number ≥ 0"),
+        ("expected usize", "expected a whole number ≥ 0"),
+        ("expected u16", "expected a whole number from 0 to 65535"),
+        ("expected u8", "expected a whole number from 0 to 255"),
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+        ("expected a boolean", "expected true or false"),
+        ("expected a string", "expected a text in quotes"),
+    ] {
+        m = m.replace(rust, plain);
+    }
+    m
+}
+
+impl Scenario {
+    /// Context for error messages: the scenario file (or source name) and the scenario's `name`.
+    pub fn context(&self) -> String {
+        if self.source.is_empty() || self.source == self.name {
+            format!("scenario {}", self.name)
+        } else {
+            format!("{} (scenario {})", self.source, self.name)
+        }
+    }
+}
+
 impl Scenario {
     /// Parses and validates a scenario from TOML text; `name` (usually the file path) appears in
     /// error messages.
@@ -174,8 +234,9 @@ impl Scenario {
     /// Errors: [`Error::Format`] for TOML syntax, unknown fields or wrong types (with line);
     /// [`Error::Invalid`] for out-of-range values.
     pub fn from_toml_str(text: &str, name: &str) -> Result<Scenario> {
-        let s: Scenario = toml::from_str(text).map_err(|e| Error::format(name, e.to_string()))?;
+        let mut s: Scenario = toml::from_str(text).map_err(|e| Error::format(name, plain_type_words(&e.to_string())))?;
         s.validate(name)?;
+        s.source = name.to_string();
         Ok(s)
     }
 
@@ -238,10 +299,7 @@ impl Scenario {
                 return Err(invalid(ctx, "terrain.window", format!("{w:?}"), "[col0, row0, width, height] with width, height ≥ 1"));
             }
         }
-        let c = &self.climate;
-        if !(c.latitude_deg >= -90.0 && c.latitude_deg <= 90.0) {
-            return Err(invalid(ctx, "climate.latitude_deg", c.latitude_deg, "−90–90 degrees"));
-        }
+        validate_climate(&self.climate, ctx)?;
         if !(1..=10_000).contains(&self.years) {
             return Err(invalid(ctx, "years", self.years, "1–10000"));
         }
@@ -277,6 +335,40 @@ impl Scenario {
                         }
                     }
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks that seed-source points (`start[i].points[j]`) lie inside the site and planted
+    /// areas (`start[i].area`) lie within it; `extent` is the site extent `(x, y)` in metres
+    /// (origin SW corner, [`crate::conditions::SiteConditions::extent_m`]), `ctx` names the
+    /// scenario. Called by [`crate::sim::World::new`].
+    ///
+    /// Errors: [`Error::Invalid`] naming the field, the value and the site extent.
+    pub fn validate_extent(&self, extent: (f64, f64), ctx: &str) -> Result<()> {
+        let (ex, ey) = extent;
+        let site = format!("inside the site, 0 ≤ x < {ex} m and 0 ≤ y < {ey} m (origin SW corner)");
+        for (i, s) in self.start.iter().enumerate() {
+            match s {
+                Start::SeedSources { points, .. } => {
+                    for (j, p) in points.iter().enumerate() {
+                        if !(p[0] >= 0.0 && p[0] < ex && p[1] >= 0.0 && p[1] < ey) {
+                            return Err(invalid(ctx, &format!("start[{i}].points[{j}]"), format!("[{}, {}]", p[0], p[1]), &site));
+                        }
+                    }
+                }
+                Start::Planted { area: Some(a), .. } => {
+                    if !(a[0] >= 0.0 && a[1] >= 0.0 && a[2] <= ex && a[3] <= ey) {
+                        return Err(invalid(
+                            ctx,
+                            &format!("start[{i}].area"),
+                            format!("[{}, {}, {}, {}]", a[0], a[1], a[2], a[3]),
+                            &format!("[x0, y0, x1, y1] within the site, 0 ≤ x0 < x1 ≤ {ex} m and 0 ≤ y0 < y1 ≤ {ey} m"),
+                        ));
+                    }
+                }
+                _ => {}
             }
         }
         Ok(())

@@ -30,7 +30,7 @@ pub struct StandRow {
     /// Share of stems (≥ 1.3 m) per pool species (0–1), pool order.
     pub share_stems: Vec<f64>,
     /// Deaths in the year per cause ([`DeathCause::ALL`] order).
-    pub deaths: [u64; 3],
+    pub deaths: [u64; super::trees::N_CAUSES],
 }
 
 /// Computes the stand-table row of the world's current state (deaths from `w.dead`).
@@ -66,7 +66,7 @@ pub fn stand_row(w: &World) -> StandRow {
     let k = ((100.0 * a).round() as usize).clamp(1, top.len().max(1));
     top.sort_by(|x, y| y.0.total_cmp(&x.0).then(y.1.total_cmp(&x.1)));
     let h100 = if top.is_empty() { 0.0 } else { top.iter().take(k).map(|x| x.1 as f64).sum::<f64>() / k.min(top.len()) as f64 };
-    let mut deaths = [0u64; 3];
+    let mut deaths = [0u64; super::trees::N_CAUSES];
     for d in &w.dead {
         deaths[d.cause.index()] += 1;
     }

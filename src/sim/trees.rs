@@ -9,23 +9,38 @@ pub type TreeId = u64;
 /// Why a tree died.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub enum DeathCause {
-    /// Background (intrinsic, age-related) mortality, Bugmann 2001: p = 4.605 / max_age.
+    /// Senescence: the tree reached its species' maximum age, or the intrinsic (background)
+    /// mortality draw of Bugmann 2001 (p = 4.605 / max_age per year) hit a tree at or above
+    /// [`SENESCENT_AGE_SHARE`] of its maximum age.
     Age,
     /// Stress: suppressed growth over several years (JABOWA/ForClim tradition).
     Stress,
     /// Windthrow on exposed sites.
     Wind,
+    /// Background: the intrinsic random mortality draw (p = 4.605 / max_age per year,
+    /// Bugmann 2001) hit a tree younger than [`SENESCENT_AGE_SHARE`] of its maximum age —
+    /// accidents, pathogens, lightning and other causes the model does not resolve.
+    Background,
 }
+
+/// Share of the species' maximum age from which an intrinsic mortality draw counts as
+/// senescence ([`DeathCause::Age`]) instead of [`DeathCause::Background`]. 0.8: a convention of
+/// this model (reporting only; the death probabilities do not depend on it).
+pub const SENESCENT_AGE_SHARE: f32 = 0.8;
+
+/// Number of death causes ([`DeathCause::ALL`]).
+pub const N_CAUSES: usize = 4;
 
 impl DeathCause {
     /// All causes in output order.
-    pub const ALL: [DeathCause; 3] = [DeathCause::Age, DeathCause::Stress, DeathCause::Wind];
+    pub const ALL: [DeathCause; N_CAUSES] = [DeathCause::Age, DeathCause::Stress, DeathCause::Wind, DeathCause::Background];
     /// Lower-case name used in outputs (`dead:<name>`).
     pub fn name(self) -> &'static str {
         match self {
             DeathCause::Age => "age",
             DeathCause::Stress => "stress",
             DeathCause::Wind => "wind",
+            DeathCause::Background => "background",
         }
     }
     /// Index in [`DeathCause::ALL`].

@@ -75,17 +75,20 @@ pub struct World {
     /// Trees that died in the current year (cleared at the start of each year).
     pub dead: Vec<DeadTree>,
     /// Deaths since the start, by cause ([`super::trees::DeathCause::ALL`] order).
-    pub deaths_total: [u64; 3],
+    pub deaths_total: [u64; super::trees::N_CAUSES],
 }
 
 impl World {
     /// Builds the world of `scenario` on `site` with species from `lib`, placing the start
     /// (planted stands, seed-source trees) at year 0.
     ///
-    /// Errors: unknown species names ([`crate::Error::Invalid`]).
+    /// Errors: unknown species names, seed-source points or planted areas outside the site
+    /// ([`Scenario::validate_extent`]) ([`crate::Error::Invalid`]).
     pub fn new(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
-        let pool = scenario.resolve_species(lib, &scenario.name)?;
+        let ctx = scenario.context();
+        let pool = scenario.resolve_species(lib, &ctx)?;
         let extent = site.extent_m();
+        scenario.validate_extent(extent, &ctx)?;
         let cell = scenario.light_cell_m;
         let cols = ((extent.0 / cell).ceil() as usize).max(1);
         let rows = ((extent.1 / cell).ceil() as usize).max(1);
@@ -141,7 +144,7 @@ impl World {
             suitability,
             seed_rain,
             dead: Vec::new(),
-            deaths_total: [0; 3],
+            deaths_total: [0; super::trees::N_CAUSES],
         };
         w.place_start(scenario);
         Ok(w)

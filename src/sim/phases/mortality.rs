@@ -1,7 +1,7 @@
-//! Mortality (winter): intrinsic (age), stress (suppressed growth over several years) and
-//! windthrow. Dead trees leave the store and are recorded with their cause.
+//! Mortality (winter): intrinsic (recorded as `age` for senescent trees, `background` for
+//! younger ones), stress (suppressed growth over several years) and windthrow. Dead trees leave the store and are recorded with their cause.
 
-use super::super::trees::{DeadTree, DeathCause};
+use super::super::trees::{DeadTree, DeathCause, SENESCENT_AGE_SHARE};
 use super::super::world::World;
 use crate::rng::{salt, Stream};
 use rayon::prelude::*;
@@ -37,8 +37,12 @@ pub fn run(w: &mut World) {
         .map(|i| {
             let sp = &lib.species[t.species[i] as usize];
             let mut r = Stream::new(seed, t.id[i], year, salt::MORTALITY);
-            if t.age[i] >= sp.life.max_age_yr || r.chance(4.605 / sp.life.max_age_yr as f64) {
+            if t.age[i] >= sp.life.max_age_yr {
                 return Some(DeathCause::Age);
+            }
+            if r.chance(4.605 / sp.life.max_age_yr as f64) {
+                let senescent = t.age[i] >= SENESCENT_AGE_SHARE * sp.life.max_age_yr;
+                return Some(if senescent { DeathCause::Age } else { DeathCause::Background });
             }
             if t.vigour[i] < stress_threshold(sp.life.shade_tolerance) && r.chance(P_STRESS) {
                 return Some(DeathCause::Stress);

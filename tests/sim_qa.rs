@@ -1,0 +1,178 @@
+//! QA fixes of the simulation: fresh runs clear old snapshots, start conditions outside the
+//! site and bad climate values are rejected with errors naming the field.
+use sylva::sim::run::{run_scenario, RunOptions};
+use sylva::sim::{fixtures, Scenario, TerrainSpec};
+
+const SC: &str = r#"
+name = "qa"
+years = 2
+seed = 1
+snapshot_every = 1
+[terrain]
+uniform = { width = 4, height = 3, cell_m = 25.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }
+[[start]]
+kind = "seed_sources"
+species = "beech"
+points = [[20.0, 20.0], [80.0, 50.0]]
+trees_per_source = 2
+"#;
+
+fn site(sc: &Scenario) -> sylva::conditions::SiteConditions {
+    let TerrainSpec::Uniform(u) = sc.terrain_spec() else { panic!() };
+    sylva::conditions::SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, sc.climate.latitude_deg)
+}
+
+fn names(dir: &std::path::Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn fresh_run_removes_old_snapshots() {
+    let lib = fixtures::library();
+    let dir = tempfile::tempdir().unwrap();
+    let inv = dir.path().join("inventory");
+    let maps = dir.path().join("maps");
+    std::fs::create_dir_all(&inv).unwrap();
+    std::fs::create_dir_all(&maps).unwrap();
+    for f in ["year_0050.csv", "year_0050.geojson"] {
+        std::fs::write(inv.join(f), "old").unwrap();
+    }
+    for f in ["species_year_0050.png", "basal_area_year_0050.png", "notes.txt"] {
+        std::fs::write(maps.join(f), "old").unwrap();
+    }
+    std::fs::write(inv.join("mine.csv"), "keep").unwrap();
+    let sc = Scenario::from_toml_str(SC, "qa").unwrap();
+    let mut opts = RunOptions::new(dir.path());
+    opts.map_px = 64;
+    run_scenario(&sc, site(&sc), &lib, opts).unwrap();
+    let inv_names = names(&inv);
+    assert!(!inv_names.iter().any(|n| n.contains("0050")), "{inv_names:?}");
+    assert!(inv_names.contains(&"year_0002.csv".to_string()) && inv_names.contains(&"mine.csv".to_string()), "{inv_names:?}");
+    let map_names = names(&maps);
+    assert!(!map_names.iter().any(|n| n.contains("0050")), "{map_names:?}");
+    assert!(map_names.contains(&"notes.txt".to_string()) && map_names.contains(&"species_year_0002.png".to_string()), "{map_names:?}");
+}
+
+#[test]
+fn start_outside_site_is_an_error() {
+    let lib = fixtures::library();
+    // site: 4 x 3 cells of 25 m = 100 m x 75 m
+    let sc = Scenario::from_toml_str(&SC.replace("[80.0, 50.0]", "[80.0, 150.0]"), "qa").unwrap();
+    let e = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap_err().to_string();
+    assert!(e.contains("start[0].points[1]") && e.contains("[80, 150]") && e.contains("75"), "{e}");
+    let planted = format!("{SC}\n[[start]]\nkind = \"planted\"\nspecies = \"beech\"\nspacing_m = 2.0\narea = [10.0, 10.0, 150.0, 50.0]\n");
+    let sc = Scenario::from_toml_str(&planted, "qa").unwrap();
+    let e = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap_err().to_string();
+    assert!(e.contains("start[1].area") && e.contains("150") && e.contains("100 m"), "{e}");
+    let inside = planted.replace("150.0, 50.0]", "100.0, 75.0]");
+    let sc = Scenario::from_toml_str(&inside, "qa").unwrap();
+    let w = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap();
+    // 45 x 32 lattice of 2 m in the 90 m x 65 m area, plus 2 x 2 seed-source trees
+    assert_eq!(w.trees.len(), 45 * 32 + 4);
+}
+
+#[test]
+fn bad_climate_is_an_error() {
+    let cases = [
+        ("lapse_rate_k_per_km = nan", "climate.lapse_rate_k_per_km", "NaN"),
+        ("reference_temperature_c = inf", "climate.reference_temperature_c", "inf"),
+        ("latitude_deg = 120.0", "climate.latitude_deg", "120"),
+        ("lapse_rate_k_per_km = -40.0", "climate.lapse_rate_k_per_km", "-40"),
+        ("reference_temperature_c = 55.0", "climate.reference_temperature_c", "55"),
+        ("continentality_k = 0.0", "climate.continentality_k", "0"),
+        ("reaction_r = 12.0", "climate.reaction_r", "12"),
+        ("nitrogen_n = -1.0", "climate.nitrogen_n", "-1"),
+        ("wind_from_deg = 400.0", "climate.wind_from_deg", "400"),
+    ];
+    for (line, field, value) in cases {
+        let text = format!("{SC}\n[climate]\n{line}\n");
+        let e = Scenario::from_toml_str(&text, "qa.toml").unwrap_err().to_string();
+        assert!(e.contains("qa.toml") && e.contains(field) && e.contains(value), "{line}: {e}");
+    }
+    let ok = format!("{SC}\n[climate]\nlapse_rate_k_per_km = -5.0\nwind_from_deg = 360.0\nreference_temperature_c = -2.5\n");
+    assert!(Scenario::from_toml_str(&ok, "qa.toml").is_ok());
+}
+
+#[test]
+fn young_random_deaths_are_background_not_age() {
+    use sylva::sim::DeathCause;
+    let (sc, mut w) = {
+        let lib = fixtures::library();
+        let sc = Scenario::from_toml_str(&SC.replace("years = 2", "years = 30").replace("trees_per_source = 2", "trees_per_source = 60"), "qa").unwrap();
+        let w = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap();
+        (sc, w)
+    };
+    let mut seen = [0u64; 4];
+    for _ in 0..30 {
+        sylva::sim::step_year(&mut w, &sc, &mut sylva::sim::YearReport::default());
+        for d in &w.dead {
+            seen[d.cause.index()] += 1;
+            let max = w.lib.species[d.species as usize].life.max_age_yr;
+            match d.cause {
+                DeathCause::Age => assert!(d.age >= sylva::sim::trees::SENESCENT_AGE_SHARE * max, "age death at {} of max {max}", d.age),
+                DeathCause::Background => assert!(d.age < sylva::sim::trees::SENESCENT_AGE_SHARE * max),
+                _ => {}
+            }
+        }
+    }
+    assert!(seen[DeathCause::Background.index()] > 0, "no background deaths: {seen:?}");
+    let names: Vec<&str> = w.pool.iter().map(|&s| w.lib.species[s as usize].id.as_str()).collect();
+    let csv = sylva::output::stand_table::stand_table_csv(&[sylva::sim::stats::stand_row(&w)], &names);
+    assert!(csv.lines().next().unwrap().ends_with(",deaths_age,deaths_stress,deaths_wind,deaths_background"), "{csv}");
+    assert_eq!(csv.lines().nth(1).unwrap().split(',').count(), csv.lines().next().unwrap().split(',').count());
+}
+
+#[test]
+fn scenario_errors_in_plain_words_and_name_the_file() {
+    let e = Scenario::from_toml_str(&SC.replace("years = 2", "years = -5"), "dir/qa.toml").unwrap_err().to_string();
+    assert!(e.contains("dir/qa.toml") && e.contains("whole number") && !e.contains("u32"), "{e}");
+    let lib = fixtures::library();
+    let sc = Scenario::from_toml_str(&format!("species = [\"beech\", \"baobab\"]\n{SC}"), "dir/qa.toml").unwrap();
+    let e = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap_err().to_string();
+    assert!(e.contains("dir/qa.toml") && e.contains("species[1]") && e.contains("baobab"), "{e}");
+}
+
+#[test]
+fn threads_out_of_range_is_rejected() {
+    let exe = env!("CARGO_BIN_EXE_sylva");
+    for bad in ["0", "257", "-1", "many"] {
+        let out = std::process::Command::new(exe).args(["simulate", "no_such.toml", &format!("--threads={bad}")]).output().unwrap();
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("--threads") && err.contains("1 to 256"), "{bad}: {err}");
+    }
+}
+
+#[test]
+fn maps_are_large_with_legend_and_distinct_species_colours() {
+    use sylva::output::plot::{species_color, SPECIES_PALETTE};
+    let lib = fixtures::library();
+    let dir = tempfile::tempdir().unwrap();
+    let text = format!("{SC}\n[[start]]\nkind = \"planted\"\nspecies = \"birch\"\nspacing_m = 2.0\narea = [0.0, 0.0, 40.0, 75.0]\n").replace("years = 2", "years = 3");
+    let sc = Scenario::from_toml_str(&text, "qa").unwrap();
+    let mut opts = RunOptions::new(dir.path());
+    opts.map_px = 64;
+    let sum = run_scenario(&sc, site(&sc), &lib, opts).unwrap();
+    let w = &sum.world;
+    // distinct categorical colours per pool species
+    let cols: Vec<[u8; 3]> = w.pool.iter().map(|&s| species_color(w, s)).collect();
+    for (i, a) in cols.iter().enumerate() {
+        assert!(cols[..i].iter().all(|b| b != a), "{cols:?}");
+    }
+    assert_eq!(cols[0], SPECIES_PALETTE[0]);
+    for name in ["species_year_0003.png", "basal_area_year_0003.png"] {
+        let p = dir.path().join("maps").join(name);
+        let img = image::open(&p).unwrap().to_rgb8();
+        assert!(img.width().max(img.height()) >= 512, "{name}: {}x{}", img.width(), img.height());
+        if std::env::var("SYLVA_KEEP").is_ok() {
+            std::fs::copy(&p, format!("/tmp/{name}")).unwrap();
+            std::fs::copy(dir.path().join("stand_table.png"), "/tmp/stand_table.png").unwrap();
+        }
+    }
+    // the legend swatch of the first pool species (right of the map) has its colour
+    let img = image::open(dir.path().join("maps/species_year_0003.png")).unwrap().to_rgb8();
+    let found = img.pixels().filter(|p| p.0 == cols[0]).count();
+    assert!(found >= 16 * 12, "legend swatch missing: {found} px");
+}
