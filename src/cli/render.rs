@@ -90,6 +90,12 @@ pub fn stage_for(run_dir: &Path) -> anyhow::Result<Stage> {
 
 /// Renders a still.
 pub fn render(a: RenderArgs) -> anyhow::Result<()> {
+    if a.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) != Some("png".into()) {
+        anyhow::bail!("--out {}: stills are written as PNG; give a file name ending in .png", a.out.display());
+    }
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     let mut stage = stage_for(&a.run_dir)?;
     let year = match a.year {
         Some(y) => y,
