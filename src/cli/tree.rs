@@ -33,7 +33,8 @@ pub enum Command {
         /// Growth model.
         #[arg(long, value_enum, default_value = "ecomod")]
         model: Model,
-        /// Age in years: EcoMod scales the strands S·min(1, age/80)² (≥ 8); light-guided runs
+        /// Age in years: EcoMod scales the strands S·min(1, age/80)² (≥ 8); light-guided and Laplacian
+        /// grow in a space sized to the species' potential height at that age; light-guided runs
         /// `age` cycles (≤ 60); Laplacian adds 25 branches per year (≤ 4000).
         #[arg(long, default_value_t = 80.0)]
         age: f32,
@@ -56,6 +57,14 @@ pub fn run(c: Command) -> anyhow::Result<()> {
     }
 }
 
+/// Potential height (m) and open-grown crown radius (m) of `sp` at `age` years, from the
+/// species file's Chapman–Richards curve and allometries; at least 1.5 m and 0.5 m.
+fn target_size(sp: &sylva::species::Species, age: f32) -> (f32, f32) {
+    let h = sp.potential_height_m(age).max(1.5);
+    let r = sp.crown_radius_m(sp.dbh_from_height_cm(h)).max(0.5);
+    (h, r)
+}
+
 fn grow(species: &str, model: Model, age: f32, obstacles: &[String], seed: u64, out: &Path) -> anyhow::Result<()> {
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
     let lib = SpeciesLibrary::embedded().context("loading the embedded species library")?;
@@ -74,13 +83,24 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], seed: u64, 
             ecomod::try_grow(&p, seed, 0.0)?
         }
         Model::Light => {
-            let o = light_guided::LightOptions { pipe_exponent: sp.life.allometry.pipe_exponent, ..Default::default() };
+            // The light space is sized to the species' potential height and crown at this age
+            // (Chapman–Richards height, crown allometry of the species file): the tree grows
+            // until it fills it, so age and species set its size; the internode (voxel = half an
+            // internode, Yi et al. section 3.1) grows with the tree to keep the voxel count bounded.
+            let (h, r) = target_size(&sp, age);
+            let internode = (h / 30.0).max(0.3);
+            let o = light_guided::LightOptions { pipe_exponent: sp.life.allometry.pipe_exponent, internode_m: internode, height_m: h + internode, extent_m: (1.3 * r).max(2.0), ..Default::default() };
             let sk = light_guided::grow(&sp.architecture.light_guided, &o, &obs, seed, age.round().clamp(1.0, 60.0) as u32)?;
             let lv = tip_leaves(&sk, &sp.architecture.ecomod);
             (sk, lv)
         }
         Model::Laplacian => {
-            let g = laplacian::grow(&sp.architecture.laplacian, &laplacian::LaplacianOptions::default(), &obs, seed, (age * 25.0).round().clamp(1.0, 4000.0) as u32)?;
+            // The potential grid spans the species' potential height and crown at this age; a
+            // voxel is one branch length (Jinasena & Sonnadara, section III), 1/28 of the height.
+            let (h, r) = target_size(&sp, age);
+            let voxel = (h / 28.0).max(0.1);
+            let lo = laplacian::LaplacianOptions { voxel_m: voxel, extent_m: (1.3 * r).max(0.43 * h), height_m: h, ..Default::default() };
+            let g = laplacian::grow(&sp.architecture.laplacian, &lo, &obs, seed, (age * 25.0).round().clamp(1.0, 4000.0) as u32)?;
             let lv = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
             (g.skeleton, lv)
         }
