@@ -171,6 +171,22 @@ fn maps_are_large_with_legend_and_distinct_species_colours() {
             std::fs::copy(dir.path().join("stand_table.png"), "/tmp/stand_table.png").unwrap();
         }
     }
+    // GeoTIFF twins: basal area (m²/ha) summed over the map's cells gives back the trees'
+    // basal area (mass balance); species codes are 0 or a pool position listed in the CSV.
+    let ba = sylva::terrain::io::load(&dir.path().join("maps/basal_area_year_0003.tif")).unwrap();
+    let cell_m = ba.geo.pixel_w;
+    let total_ba: f64 = ba.elevation.data.iter().filter(|v| v.is_finite()).map(|&v| v as f64 * cell_m * cell_m / 10_000.0).sum();
+    let trees_ba: f64 = (0..w.trees.len()).map(|i| w.trees.basal_area_m2(i)).sum();
+    assert!(trees_ba > 0.01 && (total_ba - trees_ba).abs() < 1e-3 * trees_ba, "map {total_ba} m² vs trees {trees_ba} m²");
+    let sp = sylva::terrain::io::load(&dir.path().join("maps/species_year_0003.tif")).unwrap();
+    assert_eq!((sp.elevation.width, sp.elevation.height), (ba.elevation.width, ba.elevation.height));
+    let codes: Vec<f32> = sp.elevation.data.iter().copied().filter(|v| v.is_finite()).collect();
+    assert!(codes.iter().all(|&c| c == c.round() && c >= 0.0 && c as usize <= w.pool.len()), "{codes:?}");
+    assert!(codes.iter().any(|&c| c >= 1.0));
+    let csv_text = std::fs::read_to_string(dir.path().join("maps/species_codes.csv")).unwrap();
+    assert!(csv_text.starts_with("code,species\n0,none\n1,"), "{csv_text}");
+    assert_eq!(csv_text.lines().count(), w.pool.len() + 2);
+
     // the legend swatch of the first pool species (right of the map) has its colour
     let img = image::open(dir.path().join("maps/species_year_0003.png")).unwrap().to_rgb8();
     let found = img.pixels().filter(|p| p.0 == cols[0]).count();

@@ -180,7 +180,12 @@ fn snapshot_label(p: &Path) -> String {
 /// Map cells are `max(light cell, longest extent / max_px)` metres; the pictures are enlarged to
 /// at least 512 pixels on the long side. Text: DejaVu Sans via [`super::maps::draw_text`].
 ///
-/// Errors: [`Error::Io`] / PNG encoding errors naming the file.
+/// Beside each PNG the same map is written as a Float32 GeoTIFF (`.tif`, georeferenced like the
+/// terrain, see [`map_georef`]): the basal area in m²/ha, and the species map as codes — 0 no
+/// tree ≥ 1.3 m, k ≥ 1 the k-th species of the scenario's pool — listed in
+/// `species_codes.csv` (code,species) in the same folder; NaN marks masked cells.
+///
+/// Errors: [`Error::Io`] / PNG or GeoTIFF encoding errors naming the file.
 pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -> Result<()> {
     let (cols, rows, cell) = map_dims(w, max_px);
     let np = w.lib.species.len();
@@ -196,6 +201,7 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
     let empty_px = [235u8, 225, 200];
     let mut sp_cells = vec![[0u8; 3]; cols * rows];
     let mut ba_grid = crate::grid::Grid::filled(cols, rows, 0.0f32);
+    let mut code_grid = crate::grid::Grid::filled(cols, rows, 0.0f32);
     let mut mask = crate::grid::Grid::filled(cols, rows, true);
     for r in 0..rows {
         for c in 0..cols {
@@ -207,6 +213,8 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
             sp_cells[r * cols + c] = if masked { masked_px } else if tot <= 0.0 { empty_px } else { species_color(w, dom as u16) };
             ba_grid.data[r * cols + c] = (tot / area_ha) as f32;
             mask.data[r * cols + c] = !masked;
+            let pool_pos = w.pool.iter().position(|&s| s as usize == dom).map_or(0.0, |k| k as f32 + 1.0);
+            code_grid.data[r * cols + c] = if masked { f32::NAN } else if tot <= 0.0 { 0.0 } else { pool_pos };
         }
     }
     let when = snapshot_label(species_png);
@@ -252,5 +260,27 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
         hillshade: None,
         shade_strength: 0.0,
     };
-    super::maps::write_field_png_styled(&ba_grid, Some(&mask), &style, ba_png)
+    super::maps::write_field_png_styled(&ba_grid, Some(&mask), &style, ba_png)?;
+    let geo = map_georef(w, rows, cell);
+    let ba_tif: Vec<f32> = ba_grid.data.iter().zip(&mask.data).map(|(v, ok)| if *ok { *v } else { f32::NAN }).collect();
+    super::geotiff::write_f32(&ba_png.with_extension("tif"), &crate::grid::Grid { width: cols, height: rows, data: ba_tif }, &geo)?;
+    super::geotiff::write_f32(&species_png.with_extension("tif"), &code_grid, &geo)?;
+    let mut codes = String::from("code,species\n0,none\n");
+    for (k, &s) in w.pool.iter().enumerate() {
+        codes.push_str(&format!("{},{}\n", k + 1, w.lib.species[s as usize].id));
+    }
+    let codes_path = species_png.with_file_name("species_codes.csv");
+    crate::output::write_atomic(&codes_path, codes.as_bytes())
+}
+
+/// Georeferencing of a map of `rows` rows with square cells of `cell` metres laid over the
+/// world (x east from the terrain's west edge, y north from its south edge; map row 0 north,
+/// its top edge at y = rows·cell): the terrain's CRS, cell size converted to CRS units by the
+/// terrain's own metres-per-unit (degrees for geographic grids, at the grid's mean row).
+pub fn map_georef(w: &World, rows: usize, cell: f64) -> crate::grid::GeoRef {
+    let g = &w.site.geo;
+    let sx = g.pixel_w / w.site.cell_x_m.max(1e-12);
+    let sy = g.pixel_h / w.site.cell_y_m.max(1e-12);
+    let south = g.origin_y - w.site.height() as f64 * g.pixel_h;
+    crate::grid::GeoRef { pixel_w: cell * sx, pixel_h: cell * sy, origin_x: g.origin_x, origin_y: south + rows as f64 * cell * sy, ..g.clone() }
 }
