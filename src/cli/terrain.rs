@@ -2,9 +2,10 @@
 use anyhow::Context;
 use clap::{Args, Subcommand};
 use std::path::{Path, PathBuf};
-use sylva::conditions::{self, factor, Climate};
-use sylva::grid::{Crs, Grid};
-use sylva::output::{geotiff, maps};
+use sylva::conditions::{self, Climate};
+use sylva::grid::Crs;
+use sylva::job::maps as job_maps;
+use sylva::output::maps;
 use sylva::terrain::{fields, generate, io, tin::Tin, Terrain};
 
 /// Where the terrain comes from.
@@ -143,37 +144,18 @@ fn maps_cmd(s: &Source, out: &Path) -> anyhow::Result<()> {
     let m = f.mask.clone();
     let hs = fields::hillshade(&t, &m, 315.0, 45.0);
     let log_acc = f.flow_acc_cells.map(|v| if *v > 0.0 { v.log10() } else { f32::NAN });
-    let elev = t.elevation.clone();
     let flat = f.flat_insolation_kwh_m2;
-    let site = conditions::from_fields(&t, &climate, f.clone());
-    let index = |k: usize| -> Grid<f32> { Grid { width: m.width, height: m.height, data: site.indices.data.iter().zip(&m.data).map(|(v, ok)| if *ok { v[k] } else { f32::NAN }).collect() } };
-    use maps::Ramp::*;
-    let items: Vec<(&str, Grid<f32>, maps::Ramp, String, &str, Option<(f32, f32)>)> = vec![
-        ("elevation", elev, Terrain, "Elevation".into(), "m", None),
-        ("hillshade", hs.clone(), Grey, "Hillshade (az 315°, alt 45°)".into(), "0–255", Some((0.0, 255.0))),
-        ("slope", f.slope_deg.clone(), Viridis, "Slope (Horn)".into(), "degrees", None),
-        ("aspect", f.aspect_deg.map(|a| if *a < 0.0 { f32::NAN } else { *a }), Cyclic, "Aspect (from north, clockwise)".into(), "degrees", Some((0.0, 360.0))),
-        ("flow_accumulation", log_acc, Blues, "Flow accumulation (D8)".into(), "log10 cells", None),
-        ("twi", f.twi.clone(), Blues, "Topographic wetness index".into(), "ln(m)", None),
-        ("insolation", f.insolation_kwh_m2.clone(), Magma, format!("Annual clear-sky insolation (flat {flat:.0})"), "kWh/m²/yr", None),
-        ("wind_exposure", f.wind_exposure.clone(), Viridis, format!("Wind exposure (wind from {}°)", climate.wind_from_deg), "0–1", Some((0.0, 1.0))),
-        ("temperature", f.temperature_c.clone(), BlueRed, "Mean annual temperature".into(), "°C", None),
-        ("L", index(factor::L), Magma, "Ellenberg-style L (light)".into(), "1–9", Some((1.0, 9.0))),
-        ("T", index(factor::T), BlueRed, "Ellenberg-style T (temperature)".into(), "1–9", Some((1.0, 9.0))),
-        ("K", index(factor::K), Viridis, "Ellenberg-style K (continentality)".into(), "1–9", Some((1.0, 9.0))),
-        ("F", index(factor::F), Blues, "Ellenberg-style F (moisture)".into(), "1–12", Some((1.0, 12.0))),
-        ("R", index(factor::R), Viridis, "Ellenberg-style R (soil reaction)".into(), "1–9", Some((1.0, 9.0))),
-        ("N", index(factor::N), Viridis, "Ellenberg-style N (nitrogen)".into(), "1–9", Some((1.0, 9.0))),
-    ];
+    let site = conditions::from_fields(&t, &climate, f);
+    let mut layers = job_maps::site_layers(&site, Some(flat), Some(climate.wind_from_deg));
+    // The raw elevation (masked water included) and two maps the simulation does not read.
+    layers[0].grid = t.elevation.clone();
+    let extra = |name, grid, ramp, title: &str, units, range| job_maps::Layer { name, grid, ramp, title: title.to_string(), units, range };
+    layers.insert(1, extra("hillshade", hs.clone(), maps::Ramp::Grey, "Hillshade (az 315°, alt 45°)", "0–255", Some((0.0, 255.0))));
+    layers.insert(4, extra("flow_accumulation", log_acc, maps::Ramp::Blues, "Flow accumulation (D8)", "log10 cells", None));
     pb.set_message("writing maps");
-    for (name, grid, ramp, title, units, range) in &items {
-        let shade = if *name == "hillshade" { None } else { Some(&hs) };
-        let style = maps::MapStyle { ramp: *ramp, title: title.clone(), units: units.to_string(), range: *range, hillshade: shade, shade_strength: 0.35 };
-        maps::write_field_png_styled(grid, Some(&m), &style, &out.join(format!("{name}.png")))?;
-        geotiff::write_f32(&out.join(format!("{name}.tif")), grid, &t.geo)?;
-    }
+    let names = job_maps::write_layers(&layers, &m, &t.geo, out, Some((&hs, 0.35)))?;
     pb.inc(stages.saturating_sub(pb.position()));
     pb.finish_with_message("done");
-    println!("wrote {} maps (PNG + GeoTIFF) to {}", items.len(), out.display());
+    println!("wrote {} maps (PNG + GeoTIFF) to {}", names.len(), out.display());
     Ok(())
 }

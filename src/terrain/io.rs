@@ -289,7 +289,9 @@ pub fn load_asc(path: &Path) -> Result<Terrain> {
 /// value 0 is `min_h_m`, the largest code (65535 or 255) is `max_h_m`, cells are `cell_m`
 /// metres square, no georeferencing ([`Crs::Local`], latitude [`FALLBACK_LATITUDE_DEG`]).
 ///
-/// Errors: unreadable or non-grayscale PNG, `cell_m ≤ 0`, `max_h_m < min_h_m`, too large.
+/// Errors: unreadable PNG, a colour (RGB/RGBA) PNG ([`Error::Format`] naming the file and the
+/// colour type), `cell_m ≤ 0`, `max_h_m < min_h_m`, too large. Gray+alpha PNGs use the gray
+/// channel.
 pub fn load_png_heightmap(path: &Path, cell_m: f64, min_h_m: f64, max_h_m: f64) -> Result<Terrain> {
     if !(cell_m > 0.0) || !cell_m.is_finite() {
         return Err(Error::Invalid { context: path.display().to_string(), field: "cell_m".into(), value: cell_m.to_string(), expected: "> 0 metres".into() });
@@ -309,7 +311,11 @@ pub fn load_png_heightmap(path: &Path, cell_m: f64, min_h_m: f64, max_h_m: f64) 
     let (vals, maxcode): (Vec<u16>, f64) = match img {
         image::DynamicImage::ImageLuma16(b) => (b.into_raw(), 65535.0),
         image::DynamicImage::ImageLuma8(b) => (b.into_raw().into_iter().map(u16::from).collect(), 255.0),
-        other => (other.to_luma16().into_raw(), 65535.0),
+        image::DynamicImage::ImageLumaA16(b) => (b.pixels().map(|p| p.0[0]).collect(), 65535.0),
+        image::DynamicImage::ImageLumaA8(b) => (b.pixels().map(|p| u16::from(p.0[0])).collect(), 255.0),
+        other => {
+            return Err(Error::format(path, format!("PNG colour type {:?}: a heightmap must be a grayscale PNG (16-bit Gray preferred, 8-bit Gray accepted); convert it, e.g. `gdal_translate -ot UInt16` or `convert -colorspace Gray -depth 16`", other.color())));
+        }
     };
     let data = vals.into_iter().map(|v| (min_h_m + (max_h_m - min_h_m) * v as f64 / maxcode) as f32).collect();
     let elevation = Grid { width: w as usize, height: h as usize, data };

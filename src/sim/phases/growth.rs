@@ -19,6 +19,22 @@ pub fn effective_age(sp: &Species, h: f32) -> f32 {
     -(1.0 - q).ln() / g.k
 }
 
+/// One year's potential height increment (m) of a tree of height `h` (m) on the
+/// Chapman–Richards curve: `H(t_eff + 1) − H(t_eff)` with `t_eff` = [`effective_age`]`(h)`, in
+/// closed form — with q = (h / H_max)^(1/p) = 1 − e^(−k t_eff),
+/// `H(t_eff + 1) = H_max (1 − e^(−k) (1 − q))^p` — which saves the logarithm and one exponential
+/// of the round trip (same clamping of h / H_max to [10⁻⁶, 0.9995]).
+#[inline]
+pub fn potential_increment(sp: &Species, h: f32) -> f32 {
+    let g = sp.life.growth;
+    let hm = sp.life.max_height_m;
+    let rel = (h / hm).clamp(1e-6, 0.9995);
+    let q = rel.powf(1.0 / g.p);
+    let h0 = hm * rel;
+    let h1 = hm * (1.0 - (-g.k).exp() * (1.0 - q)).powf(g.p);
+    (h1 - h0).max(0.0)
+}
+
 /// Open-grown DBH (cm) of a tree of height `h` (m): the inverse of the species' height–DBH
 /// curve `H = 1.3 + (H_max − 1.3)(1 − e^(−a D))^b`; 0 below 1.3 m.
 pub fn open_dbh(sp: &Species, h: f32) -> f32 {
@@ -80,8 +96,7 @@ pub fn run(w: &mut World) {
             let (h, d) = (t.height[i], t.dbh[i]);
             let l = t.light[i];
             let f = light_response(l, sp.life.shade_tolerance) * t.suitability[i];
-            let te = effective_age(sp, h);
-            let dh_pot = (potential_height(sp, te + 1.0) - potential_height(sp, te)).max(0.0);
+            let dh_pot = potential_increment(sp, h);
             let h1 = (h + dh_pot * f).min(sp.life.max_height_m);
             let hp = (h + dh_pot).min(sp.life.max_height_m * 0.999);
             let dd_pot = (open_dbh(sp, hp) - open_dbh(sp, h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
@@ -125,6 +140,11 @@ mod tests {
         // beech fixture fitted to NW-FVA class I top heights (19.5 m at 50, 32.5 m at 100)
         assert!((potential_height(&b, 50.0) - 19.5).abs() < 0.8, "{}", potential_height(&b, 50.0));
         assert!((potential_height(&b, 100.0) - 32.5).abs() < 0.8);
+        for h in [0.2f32, 1.0, 5.0, 20.0, 35.0] {
+            let te = effective_age(&b, h);
+            let want = (potential_height(&b, te + 1.0) - potential_height(&b, te)).max(0.0);
+            assert!((potential_increment(&b, h) - want).abs() < 1e-3 + 1e-3 * want, "h {h}: {} vs {want}", potential_increment(&b, h));
+        }
         assert!(light_response(1.0, 1.0) > 0.99 && light_response(0.1, 1.0) < 0.05 && light_response(0.1, 5.0) > 0.15);
     }
 }

@@ -14,7 +14,8 @@
 //!    neighbouring cell towards the equator at distance `d` (one cell), and `I_rel` the cell's
 //!    insolation relative to the terrain's median (terrain shading, slope and aspect).
 //!
-//! Cost O(E log E) for E ≈ 2–4 entries per tree (one parallel sort), then O(log) per tree.
+//! Cost O(E) for E ≈ 2–4 entries per tree (counting sort by cell, then a small sort per cell),
+//! then O(log) per tree.
 
 use super::super::trees::SpatialGrid;
 use super::super::world::World;
@@ -65,7 +66,7 @@ pub fn run(w: &mut World) {
     let t = &w.trees;
     let lai_c: Vec<f32> = w.lib.species.iter().map(|s| crown_lai(s.life.shade_tolerance)).collect();
     // 1. stamp entries (key = cell << 32 | inverted height bits → ascending key = cell, tallest first)
-    let mut entries: Vec<(u64, f32)> = (0..t.len())
+    let entries: Vec<(u64, f32)> = (0..t.len())
         .into_par_iter()
         .fold(Vec::new, |mut out, i| {
             let r = t.crown_radius[i].max(0.05);
@@ -95,18 +96,39 @@ pub fn run(w: &mut World) {
             a.append(&mut b);
             a
         });
-    // total order → the same result whatever the scheduling
-    entries.par_sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.to_bits().cmp(&b.1.to_bits())));
-    let mut start = vec![0u32; cols * rows + 1];
+    // Bucket the entries by cell (counting sort, O(E)), then sort each cell's few entries by
+    // (key, leaf area): a total order, so the result does not depend on the scheduling.
+    let ncell = cols * rows;
+    let mut start = vec![0u32; ncell + 1];
     for e in &entries {
         start[(e.0 >> 32) as usize + 1] += 1;
     }
-    for c in 0..cols * rows {
+    for c in 0..ncell {
         start[c + 1] += start[c];
     }
+    let mut sorted = vec![(0u64, 0f32); entries.len()];
+    {
+        let mut pos: Vec<u32> = start[..ncell].to_vec();
+        for e in &entries {
+            let c = (e.0 >> 32) as usize;
+            sorted[pos[c] as usize] = *e;
+            pos[c] += 1;
+        }
+    }
+    let entries = {
+        let mut segs: Vec<&mut [(u64, f32)]> = Vec::with_capacity(ncell);
+        let mut rest: &mut [(u64, f32)] = &mut sorted;
+        for c in 0..ncell {
+            let (a, b) = std::mem::take(&mut rest).split_at_mut((start[c + 1] - start[c]) as usize);
+            segs.push(a);
+            rest = b;
+        }
+        segs.into_par_iter().with_min_len(256).for_each(|s| s.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.to_bits().cmp(&b.1.to_bits()))));
+        sorted
+    };
     let h: Vec<f32> = entries.par_iter().map(|e| f32::from_bits(u32::MAX - (e.0 as u32))).collect();
     let mut cum = vec![0f32; entries.len()];
-    for c in 0..cols * rows {
+    for c in 0..ncell {
         let mut acc = 0.0;
         for k in start[c] as usize..start[c + 1] as usize {
             acc += entries[k].1;
