@@ -20,8 +20,135 @@ pub struct LodParams {
 }
 
 impl Default for LodParams {
+    /// Full mesh above 240 px, reduced skeleton 100–240 px, crown hull 40–100 px, billboard
+    /// impostor (4 triangles) below 40 px; cross-fade bands of ±25 %; trees under 0.75 px are
+    /// not drawn. With these thresholds almost every tree of a landscape view is a billboard,
+    /// so triangles per frame grow with the few trees near the camera, not with the tree count
+    /// (BENCHMARKS.md, "Rendering").
     fn default() -> Self {
-        LodParams { switch_px: [150.0, 50.0, 16.0], band: 0.25, min_px: 0.75 }
+        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75 }
+    }
+}
+
+/// Number of levels the renderer draws for a species chain of `chain_len` levels: the chain's
+/// first `min(chain_len, 3)` meshes (full, reduced, hull) followed by the renderer's own
+/// billboard impostor ([`Silhouette`]), which replaces a chain's 4th (impostor) level and any
+/// further ones. Always ≥ 1 (an empty chain is drawn as a billboard only).
+pub fn drawn_levels(chain_len: usize) -> usize {
+    chain_len.min(3) + 1
+}
+
+/// Triangles of the billboard impostor level: one vertical quad turned towards the viewer
+/// (side silhouette) and one horizontal quad at crown height (seen from above).
+pub const BILLBOARD_TRIANGLES: usize = 4;
+
+/// Number of height bins of a [`Silhouette`] profile.
+pub const SILHOUETTE_BINS: usize = 16;
+
+/// The side outline of a normalised tree (base at the origin, height 1 m) that the billboard
+/// impostor carves out procedurally in its fragment shader: crown half-width per height bin
+/// relative to the widest point, crown extent, trunk width.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Silhouette {
+    /// Crown half-width in bin `i` (normalised heights `i/16 .. (i+1)/16`), 0..1 relative to
+    /// [`Silhouette::radius`]; 0 outside the crown.
+    pub width: [f32; SILHOUETTE_BINS],
+    /// Lowest foliage height (normalised, 0..1).
+    pub crown_bottom: f32,
+    /// Highest foliage height (normalised, 0..1).
+    pub crown_top: f32,
+    /// Trunk half-width relative to `radius` (0.02..0.2).
+    pub trunk_half_width: f32,
+    /// Largest horizontal distance of foliage from the axis (m per m of height).
+    pub radius: f32,
+    /// Height (normalised) of the widest bin: where the horizontal quad sits.
+    pub widest_z: f32,
+}
+
+impl Silhouette {
+    /// Outline of `chain`'s finest level: per height bin the largest horizontal distance of a
+    /// foliage vertex from the axis (crown hull of the leaf cards), gaps inside the crown filled
+    /// by linear interpolation, smoothed with a 1-2-1 kernel, normalised by the maximum.
+    /// Without foliage the bark is used; an empty chain gives an ellipsoidal crown over the
+    /// upper 70 % of the height.
+    pub fn from_chain(chain: &LodChain) -> Self {
+        let level = chain.levels.first();
+        let pts: Vec<[f32; 3]> = match level {
+            Some(l) if !l.leaves.positions.is_empty() => l.leaves.positions.clone(),
+            Some(l) => l.bark.positions.clone(),
+            None => Vec::new(),
+        };
+        let n = SILHOUETTE_BINS;
+        let mut w = [0.0f32; SILHOUETTE_BINS];
+        let (mut zlo, mut zhi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for p in pts.iter().filter(|p| p.iter().all(|v| v.is_finite())) {
+            let z = p[2].clamp(0.0, 1.0);
+            let b = ((z * n as f32) as usize).min(n - 1);
+            w[b] = w[b].max((p[0] * p[0] + p[1] * p[1]).sqrt());
+            zlo = zlo.min(z);
+            zhi = zhi.max(z);
+        }
+        let radius = w.iter().copied().fold(0.0f32, f32::max);
+        if radius <= 1e-5 || !(zhi > zlo) {
+            // default: ellipsoid over 0.3..1.0
+            let mut w = [0.0f32; SILHOUETTE_BINS];
+            for (i, v) in w.iter_mut().enumerate() {
+                let z = (i as f32 + 0.5) / n as f32;
+                let t = (z - 0.65) / 0.35;
+                *v = (1.0 - t * t).max(0.0).sqrt();
+            }
+            return Silhouette { width: w, crown_bottom: 0.3, crown_top: 1.0, trunk_half_width: 0.05, radius: 0.3, widest_z: 0.65 };
+        }
+        // fill empty bins between filled ones (sparse leaf cards)
+        let filled: Vec<usize> = (0..n).filter(|&i| w[i] > 0.0).collect();
+        for pair in filled.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            for i in a + 1..b {
+                let t = (i - a) as f32 / (b - a) as f32;
+                w[i] = w[a] + (w[b] - w[a]) * t;
+            }
+        }
+        let mut s = [0.0f32; SILHOUETTE_BINS];
+        for i in 0..n {
+            if w[i] > 0.0 {
+                let l = if i > 0 { w[i - 1] } else { w[i] };
+                let r = if i + 1 < n { w[i + 1] } else { w[i] };
+                s[i] = 0.25 * l + 0.5 * w[i] + 0.25 * r;
+            }
+        }
+        let m = s.iter().copied().fold(0.0f32, f32::max).max(1e-6);
+        let mut widest = 0;
+        for i in 0..n {
+            s[i] /= m;
+            if s[i] > s[widest] {
+                widest = i;
+            }
+        }
+        // trunk: bark radius below the crown
+        let trunk = level
+            .map(|l| l.bark.positions.iter().filter(|p| p[2] < zlo.max(0.05)).map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt()).fold(0.0f32, f32::max))
+            .unwrap_or(0.0);
+        Silhouette {
+            width: s,
+            crown_bottom: zlo,
+            crown_top: zhi,
+            trunk_half_width: (trunk / radius).clamp(0.02, 0.2),
+            radius,
+            widest_z: (widest as f32 + 0.5) / n as f32,
+        }
+    }
+
+    /// Half-width (relative to `radius`) at normalised height `z`, linear between bin centres.
+    pub fn width_at(&self, z: f32) -> f32 {
+        if !(z >= self.crown_bottom && z <= self.crown_top) {
+            return 0.0;
+        }
+        let n = SILHOUETTE_BINS as f32;
+        let x = (z * n - 0.5).clamp(0.0, n - 1.0);
+        let i = (x as usize).min(SILHOUETTE_BINS - 1);
+        let j = (i + 1).min(SILHOUETTE_BINS - 1);
+        let t = x - i as f32;
+        self.width[i] * (1.0 - t) + self.width[j] * t
     }
 }
 
@@ -79,6 +206,11 @@ impl Frustum {
             }
         }
         Frustum { planes }
+    }
+
+    /// The planes `(n, d)` (unit normal pointing inwards): left, right, bottom, top, near, far.
+    pub fn planes(&self) -> [Vec4; 6] {
+        self.planes
     }
 
     /// Whether a sphere at `c` with radius `r` (m) touches the frustum.
