@@ -453,8 +453,11 @@ fn cross_fade_draws_both_levels_with_complementary_masks_on_both_paths() {
 fn billboard_has_a_tree_silhouette_not_a_box() {
     let (w, h) = (160u32, 120u32);
     let tree = TreeInstance::new(3, [100.0, 100.0, 0.0], 20.0, 6.0, 0, [0.1, 0.35, 0.05]);
-    let scene = flat_scene(vec![tree]);
-    let empty = flat_scene(vec![]);
+    // no direct sun: the tree's shadow would count as covered ground
+    let mut scene = flat_scene(vec![tree]);
+    scene.sun.color = [0.0; 3];
+    let mut empty = scene.clone();
+    empty.instances.clear();
     let cam = Camera::look_at([100.0, 60.0, 10.0], [100.0, 100.0, 10.0], 50.0);
     with_renderer(|r| {
         let lod = r.lod;
@@ -481,7 +484,7 @@ fn billboard_has_a_tree_silhouette_not_a_box() {
         let mid: Vec<&image::Rgba<u8>> = cov.iter().filter(|c| c.1 == (y0 + y1) / 2).map(|c| img.get_pixel(c.0, c.1)).collect();
         let g = mid.iter().map(|p| p.0[1] as f64).sum::<f64>() / mid.len() as f64;
         let rr = mid.iter().map(|p| p.0[0] as f64).sum::<f64>() / mid.len() as f64;
-        assert!(g > rr + 10.0 && g > 60.0, "crown colour r {rr:.0} g {g:.0}");
+        assert!(g > rr + 10.0 && g > 40.0, "crown colour r {rr:.0} g {g:.0}");
     });
 }
 

@@ -148,22 +148,26 @@ struct GpuScene {
 
 /// The billboard impostor level of a prototype with outline `s`: a vertical quad (material 2,
 /// turned towards the viewer in the vertex shader) spanning the crown width and the full height,
-/// and a horizontal quad (material 3) at the widest crown height. Vertex normals carry the
+/// and a horizontal quad (material 3) in the upper crown, which the vertex shader shows only
+/// for views from well above (top-down maps). Vertex normals carry the
 /// outline coordinates the fragment shader carves with (side: a ∈ −1..1 across, z 0..1 up;
 /// top: a, b ∈ −1..1).
 fn billboard_vertices(s: &Silhouette) -> (Vec<TreeVertex>, Vec<u32>) {
     let r = s.radius;
-    let zc = s.widest_z;
+    // the top quad sits a third of the way from the widest point to the top, as wide as the
+    // crown there (≥ half the widest): the crown seen from above
+    let zc = s.widest_z + 0.35 * (s.crown_top - s.widest_z).max(0.0);
+    let rt = r * s.width_at(zc).max(0.5);
     let v = |x: f32, y: f32, z: f32, a: f32, b: f32, mat: f32| TreeVertex { pos: [x, y, z], normal: [a, b, 0.0], mat };
     let verts = vec![
         v(-r, 0.0, 0.0, -1.0, 0.0, 2.0),
         v(r, 0.0, 0.0, 1.0, 0.0, 2.0),
         v(r, 0.0, 1.0, 1.0, 1.0, 2.0),
         v(-r, 0.0, 1.0, -1.0, 1.0, 2.0),
-        v(-r, -r, zc, -1.0, -1.0, 3.0),
-        v(r, -r, zc, 1.0, -1.0, 3.0),
-        v(r, r, zc, 1.0, 1.0, 3.0),
-        v(-r, r, zc, -1.0, 1.0, 3.0),
+        v(-rt, -rt, zc, -1.0, -1.0, 3.0),
+        v(rt, -rt, zc, 1.0, -1.0, 3.0),
+        v(rt, rt, zc, 1.0, 1.0, 3.0),
+        v(-rt, rt, zc, -1.0, 1.0, 3.0),
     ];
     (verts, vec![0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7])
 }

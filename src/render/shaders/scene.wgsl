@@ -216,7 +216,10 @@ fn tree_vertex(v: TreeIn) -> TreeOut {
             rp = right_of(f) * (v.pos.x * sxy) + vec3<f32>(0.0, 0.0, v.pos.z * h);
             o.normal = f;
         } else {
-            rp = vec3<f32>(v.pos.x * sxy, v.pos.y * sxy, v.pos.z * h);
+            // the top quad only shows from above: it shrinks to nothing as the view flattens
+            // (continuous, so an orbiting camera sees no pop)
+            let k = smoothstep(0.45, 0.8, f.z);
+            rp = vec3<f32>(v.pos.x * sxy * k, v.pos.y * sxy * k, v.pos.z * h);
             o.normal = vec3<f32>(0.0, 0.0, 1.0);
         }
         w = sway(v, rp, v.pos.z);
@@ -295,7 +298,7 @@ fn carve(i: TreeOut) -> Carve {
             let na = a / max(w, 1e-3);
             let zc = 0.5 * (s.info.x + s.info.y);
             let nz = clamp((z - zc) / max(0.5 * (s.info.y - s.info.x), 1e-3), -1.0, 1.0);
-            r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.5 * nz + 0.25) + f * sqrt(max(1.0 - na * na, 0.0)));
+            r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.3 * nz + 0.35) + f * sqrt(max(1.0 - na * na, 0.0)));
         } else if (abs(a) < s.info.z && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
             r.kind = 2u;
             r.n = normalize(i.normal);
@@ -330,8 +333,19 @@ fn keep(i: TreeOut) -> bool {
 // Foliage of leaf amount `fade.w`: a fragment of a crown surface is a leaf (1) with probability
 // leaf amount, else a twig (2) with probability `twig` (bare crowns read as a grey-brown haze of
 // twigs), else dropped (0).
+fn hash2(p: vec2<f32>, salt: f32) -> f32 {
+    // integer hash of the pixel (white noise: no visible hatching), PCG-style mixing
+    var h = u32(p.x) * 1973u + u32(p.y) * 9277u + u32(salt) * 26699u;
+    h = (h ^ 61u) ^ (h >> 16u);
+    h = h * 9u;
+    h = h ^ (h >> 4u);
+    h = h * 0x27d4eb2du;
+    h = h ^ (h >> 15u);
+    return f32(h & 0xffffffu) / 16777216.0;
+}
+
 fn foliage(i: TreeOut, twig: f32) -> u32 {
-    let e2 = ign(i.clip.yx * 1.37 + vec2<f32>(i.salt * 3.0, 5.0));
+    let e2 = hash2(i.clip.xy, i.salt + 5.0);
     let la = i.fade.w;
     if (e2 < la) { return 1u; }
     if (e2 < la + (1.0 - la) * twig) { return 2u; }
