@@ -557,3 +557,34 @@ fn bare_crowns_read_as_twig_haze_at_every_level_and_seasons_render() {
         assert!(red(&imgs[2].1) > red(&imgs[1].1) + 0.1, "autumn r/g {:.2} vs summer {:.2}", red(&imgs[2].1), red(&imgs[1].1));
     });
 }
+
+#[test]
+fn triangle_budget_bounds_a_view_inside_the_forest_on_both_paths() {
+    let scene = demo_scene(3000, 600.0, 3);
+    let cam = Camera::preset(CameraPreset::Ground, &scene.terrain);
+    with_renderer(|r| {
+        let lod = r.lod;
+        r.lod = LodParams { max_triangles: 0, ..lod };
+        render_with(r, Culling::Cpu, &scene, &cam, 240, 160).unwrap();
+        let free = r.last_stats();
+        assert_eq!(free.lod_scale, 1.0);
+        let budget = (free.tree_triangles / 3) as u32;
+        r.lod = LodParams { max_triangles: budget, ..lod };
+        let mut seen = Vec::new();
+        for culling in [Culling::Cpu, Culling::Gpu] {
+            let Some(img) = render_with(r, culling, &scene, &cam, 240, 160) else { continue };
+            let s = r.last_stats();
+            eprintln!("{culling:?}: free {} tris {:?}; budget {budget}: {} tris {:?} scale {}", free.tree_triangles, free.per_level, s.tree_triangles, s.per_level, s.lod_scale);
+            assert!(s.lod_scale > 1.0, "{culling:?}: budget not applied");
+            assert!(s.tree_triangles as f64 <= 1.25 * budget as f64, "{culling:?}: {} triangles for a budget of {budget}", s.tree_triangles);
+            assert_eq!(s.instances_drawn, free.instances_drawn, "the budget changes levels, never hides trees");
+            seen.push((s, img));
+        }
+        r.lod = lod;
+        if let [(a, ia), (b, ib)] = &seen[..] {
+            assert_eq!(a.lod_scale, b.lod_scale, "both paths choose the same factor");
+            assert_eq!(a.per_level, b.per_level);
+            assert!(mean_abs_diff(ia, ib) < 0.5);
+        }
+    });
+}

@@ -88,6 +88,8 @@ struct GpuSlot {
 
 struct GpuCull {
     pipeline: wgpu::ComputePipeline,
+    hist: wgpu::ComputePipeline,
+    choose: wgpu::ComputePipeline,
     layout: wgpu::BindGroupLayout,
     params: wgpu::Buffer,
     /// src, protos, dst, args, readback (buffer, capacity in bytes)
@@ -100,6 +102,7 @@ struct GpuCull {
 
 struct GpuFrame {
     slots: Vec<GpuSlot>,
+    budget: bool,
     invalid: usize,
     valid: usize,
     args_bytes: u64,
@@ -201,6 +204,9 @@ pub struct FrameStats {
     pub per_level: [usize; 4],
     /// Whether culling and level selection ran in the GPU compute pass.
     pub gpu_culling: bool,
+    /// Factor by which the level switch sizes were raised to meet
+    /// [`LodParams::max_triangles`] (1 = not needed).
+    pub lod_scale: f32,
 }
 
 /// A headless renderer bound to one wgpu device.
@@ -405,9 +411,10 @@ impl Renderer {
             entries: &[buf(0, wgpu::BufferBindingType::Uniform), buf(1, ro), buf(2, ro), buf(3, rw), buf(4, rw)],
         });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("cull"), bind_group_layouts: &[Some(&layout)], immediate_size: 0 });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor { label: Some("cull"), layout: Some(&pl), module: &shader, entry_point: Some("cull"), compilation_options: Default::default(), cache: None });
+        let make = |entry: &str| device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor { label: Some(entry), layout: Some(&pl), module: &shader, entry_point: Some(entry), compilation_options: Default::default(), cache: None });
+        let (pipeline, hist, choose) = (make("cull"), make("hist"), make("choose"));
         let params = device.create_buffer(&wgpu::BufferDescriptor { label: Some("cull params"), size: std::mem::size_of::<CullParams>() as u64, usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
-        GpuCull { pipeline, layout, params, src: None, protos: None, dst: None, args: None, readback: None }
+        GpuCull { pipeline, hist, choose, layout, params, src: None, protos: None, dst: None, args: None, readback: None }
     }
 
     /// Whether this adapter can cull and select levels in a compute pass with indirect draws
@@ -676,11 +683,13 @@ impl Renderer {
         }
         targets.readback.unmap();
         let mut per_level = [0usize; 4];
+        let mut lod_scale = 1.0f32;
         let (tree_tris, culled, invalid, drawn) = match &draws {
             FrameDraws::Cpu(b) => {
                 for (i, n) in b.per_level.iter().enumerate() {
                     per_level[i.min(3)] += n;
                 }
+                lod_scale = b.lod_scale;
                 (b.triangles, b.culled, b.invalid, b.per_level.iter().sum())
             }
             FrameDraws::Gpu(f) => {
@@ -696,6 +705,9 @@ impl Renderer {
                         let off = f.slots.len() * 10;
                         for l in 0..4 {
                             per_level[l] = words[off + l] as usize;
+                        }
+                        if let Some(&w) = words.last() {
+                            lod_scale = f32::from_bits(w);
                         }
                     }
                     rb.unmap();
@@ -713,6 +725,7 @@ impl Renderer {
             invalid,
             per_level,
             gpu_culling: matches!(draws, FrameDraws::Gpu(_)),
+            lod_scale,
         };
         Ok(img)
     }
@@ -759,6 +772,11 @@ impl Renderer {
             }
             proto_words.push(w);
         }
+        // triangles per drawn level, one record per prototype
+        let cost_first = proto_words.len();
+        for p in &scene.prototypes {
+            proto_words.push(super::instanced::level_costs(p));
+        }
         if proto_words.is_empty() {
             proto_words.push([0; 4]);
         }
@@ -771,7 +789,9 @@ impl Renderer {
                 args.extend_from_slice(&[r.len() as u32, 0, r.start, 0, 0]);
             }
         }
-        args.extend_from_slice(&[0; 4]);
+        // per-level counters, size histogram, budget factor (1.0 unless `choose` runs)
+        args.extend(std::iter::repeat_n(0u32, 4 + n_protos * super::lod::SIZE_BINS));
+        args.push(1.0f32.to_bits());
         let args_bytes = (args.len() * 4) as u64;
         let aspect = width as f32 / height as f32;
         let vp = camera.view_proj(aspect);
@@ -787,7 +807,7 @@ impl Renderer {
             planes: fr.planes().map(|p| p.to_array()),
             eye: [camera.eye[0], camera.eye[1], camera.eye[2], if ortho { 1.0 } else { 0.0 }],
             lod: [self.lod.switch_px[0], self.lod.switch_px[1], self.lod.switch_px[2], self.lod.band],
-            misc: [self.lod.min_px, ppm, 0.0, 0.0],
+            misc: [self.lod.min_px, ppm, self.lod.max_triangles as f32, cost_first as f32],
             counts: [src.len() as u32, gx, n_protos as u32, (slots.len() * 10) as u32],
         };
         let Some(cull) = self.cull.as_mut() else { return Ok(None) };
@@ -813,7 +833,7 @@ impl Renderer {
         }
         self.queue.write_buffer(&cull.params, 0, bytemuck::bytes_of(&params));
         let valid = src.len();
-        Ok(Some(GpuFrame { slots, invalid, valid, args_bytes }))
+        Ok(Some(GpuFrame { slots, budget: self.lod.max_triangles > 0, invalid, valid, args_bytes }))
     }
 
     fn encode_cull(&self, enc: &mut wgpu::CommandEncoder, f: &GpuFrame) {
@@ -837,8 +857,14 @@ impl Renderer {
         let gx = groups.min(self.device.limits().max_compute_workgroups_per_dimension.max(1));
         let gy = groups.div_ceil(gx);
         let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("cull"), timestamp_writes: None });
-        pass.set_pipeline(&cull.pipeline);
         pass.set_bind_group(0, &bind, &[]);
+        if f.budget {
+            pass.set_pipeline(&cull.hist);
+            pass.dispatch_workgroups(gx, gy, 1);
+            pass.set_pipeline(&cull.choose);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        pass.set_pipeline(&cull.pipeline);
         pass.dispatch_workgroups(gx, gy, 1);
     }
 

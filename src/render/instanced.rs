@@ -6,7 +6,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::camera::Camera;
-use super::lod::{drawn_levels, select_lod, Frustum, LodParams, LodPick, BILLBOARD_TRIANGLES};
+use super::lod::{budget_scale, drawn_levels, select_lod_scaled, size_bin, Frustum, LodParams, LodPick, BILLBOARD_TRIANGLES, SIZE_BINS};
 use super::scene::{Prototype, Scene, TreeInstance};
 
 /// Per-instance record read by the tree vertex shader (`shaders/scene.wgsl`, `TreeIn`).
@@ -55,6 +55,8 @@ pub struct Batches {
     pub invalid: usize,
     /// Number of drawn instances per level (index = level).
     pub per_level: Vec<usize>,
+    /// Factor applied to the switch sizes to meet the triangle budget (1 = none).
+    pub lod_scale: f32,
 }
 
 fn hash01(mut x: u64) -> f32 {
@@ -83,6 +85,15 @@ pub fn level_triangles(proto: &Prototype, level: usize) -> u64 {
     } else {
         proto.lods.levels.get(level).map(|l| l.triangle_count() as u64).unwrap_or(0)
     }
+}
+
+/// Triangles of each drawn level of `proto` (0 beyond its levels), saturated to `u32`.
+pub fn level_costs(proto: &Prototype) -> [u32; 4] {
+    let mut c = [0u32; 4];
+    for (l, v) in c.iter_mut().enumerate().take(drawn_levels(proto.lods.levels.len())) {
+        *v = level_triangles(proto, l).min(u32::MAX as u64) as u32;
+    }
+    c
 }
 
 /// The GPU record of `t` before level selection (fade and level fields zero), or `None` for
@@ -118,8 +129,8 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
     let frustum = Frustum::from_view_proj(camera.view_proj(aspect));
     let levels: Vec<usize> = scene.prototypes.iter().map(|p| drawn_levels(p.lods.levels.len())).collect();
     let crown_r0: Vec<f32> = scene.prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
-    // Err = invalid, Ok(None) = culled
-    let picks: Vec<Result<Option<(LodPick, InstanceRaw)>, ()>> = scene
+    // Err = invalid, Ok(None) = culled by the frustum; else (projected size px, record)
+    let seen: Vec<Result<Option<(f32, InstanceRaw)>, ()>> = scene
         .instances
         .par_iter()
         .map(|t| {
@@ -128,12 +139,28 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
             if !frustum.sphere_visible(c, r) {
                 return Ok(None);
             }
-            let px = camera.projected_size_px(c, t.height, height as f32);
-            Ok(select_lod(px, params, levels[t.species as usize]).map(|p| (p, rec)))
+            Ok(Some((camera.projected_size_px(c, t.height, height as f32), rec)))
         })
         .collect();
+    // triangle budget: histogram of projected sizes per prototype, then the switch-size factor
+    let scale = if params.max_triangles > 0 {
+        let mut hist = vec![[0u32; SIZE_BINS]; levels.len()];
+        for (px, rec) in seen.iter().flatten().flatten() {
+            if *px >= params.min_px {
+                hist[rec.p3[0] as usize][size_bin(*px)] += 1;
+            }
+        }
+        let costs: Vec<[u32; 4]> = scene.prototypes.iter().map(|p| level_costs(p)).collect();
+        budget_scale(&hist, &costs, &levels, params)
+    } else {
+        1.0
+    };
+    let picks: Vec<Result<Option<(LodPick, InstanceRaw)>, ()>> = seen
+        .into_iter()
+        .map(|v| v.map(|o| o.and_then(|(px, rec)| select_lod_scaled(px, scale, params, levels[rec.p3[0] as usize]).map(|p| (p, rec)))))
+        .collect();
     let mut buckets: Vec<Vec<Vec<InstanceRaw>>> = levels.iter().map(|&n| vec![Vec::new(); n]).collect();
-    let mut out = Batches::default();
+    let mut out = Batches { lod_scale: scale, ..Batches::default() };
     let max_levels = levels.iter().copied().max().unwrap_or(0);
     out.per_level = vec![0; max_levels];
     for (t, pick) in scene.instances.iter().zip(&picks) {

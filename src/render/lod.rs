@@ -17,6 +17,12 @@ pub struct LodParams {
     pub band: f32,
     /// Trees shorter than this on screen (px) are not drawn.
     pub min_px: f32,
+    /// Budget of tree triangles per frame (main pass; 0 = unlimited). When the levels picked
+    /// by `switch_px` would exceed it, every switch size is multiplied by the smallest factor
+    /// `2^(k/4)`, k = 1..=40, whose estimated cost fits ([`budget_scale`]), so that a camera
+    /// inside a dense forest does not draw hundreds of full meshes. Billboards (4 triangles per
+    /// tree) are the floor: the budget never hides trees.
+    pub max_triangles: u32,
 }
 
 impl Default for LodParams {
@@ -26,8 +32,71 @@ impl Default for LodParams {
     /// so triangles per frame grow with the few trees near the camera, not with the tree count
     /// (BENCHMARKS.md, "Rendering").
     fn default() -> Self {
-        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75 }
+        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 2_000_000 }
     }
+}
+
+/// Number of projected-size bins of the budget histogram (quarter octaves from 2^-1 px).
+pub const SIZE_BINS: usize = 64;
+/// Largest exponent `k` of the switch-size factor `2^(k/4)` tried by [`budget_scale`].
+pub const MAX_SCALE_STEPS: u32 = 40;
+
+/// Histogram bin of a projected size (px): `floor(4·log2(px)) + 4`, clamped to 0..64.
+pub fn size_bin(px: f32) -> usize {
+    ((px.log2() * 4.0).floor() as i32 + 4).clamp(0, SIZE_BINS as i32 - 1) as usize
+}
+
+/// Representative size (px) of histogram bin `b` (its geometric centre).
+pub fn bin_px(b: usize) -> f32 {
+    ((b as f32 - 4.0 + 0.5) / 4.0).exp2()
+}
+
+/// The level pick of a tree `size_px` tall with switch sizes scaled by `scale` (≥ 1):
+/// `None` below `params.min_px` (unscaled: the budget never hides trees), else
+/// [`select_lod`] of `size_px / scale`.
+pub fn select_lod_scaled(size_px: f32, scale: f32, params: &LodParams, n_levels: usize) -> Option<LodPick> {
+    if !(size_px >= params.min_px) {
+        return None;
+    }
+    select_lod(size_px / scale, &LodParams { min_px: 0.0, ..*params }, n_levels)
+}
+
+/// The switch-size factor that keeps a frame within `params.max_triangles`: the smallest
+/// `2^(k/4)`, k = 0..=[`MAX_SCALE_STEPS`], for which `Σ_p Σ_b hist[p][b] · cost` (each bin
+/// at its centre size [`bin_px`], cost = triangles of the picked level plus those of the next
+/// level inside a cross-fade band) is within the budget; the largest factor when none is; 1
+/// when the budget is 0. `hist[p][b]` counts visible trees of prototype `p` in size bin `b`
+/// ([`size_bin`]), `costs[p][l]` the triangles of drawn level `l`, `n_levels[p]` the drawn
+/// levels. Summed in `f32` in this order, exactly as `shaders/cull.wgsl` (`choose`) does, so
+/// both culling paths pick the same factor.
+pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams) -> f32 {
+    if params.max_triangles == 0 {
+        return 1.0;
+    }
+    let budget = params.max_triangles as f32;
+    let p0 = LodParams { min_px: 0.0, ..*params };
+    let mut s = 1.0;
+    for k in 0..=MAX_SCALE_STEPS {
+        s = (k as f32 / 4.0).exp2();
+        let mut total = 0.0f32;
+        for (p, h) in hist.iter().enumerate() {
+            for (b, &n) in h.iter().enumerate() {
+                if n == 0 {
+                    continue;
+                }
+                let Some(pick) = select_lod(bin_px(b) / s, &p0, n_levels[p]) else { continue };
+                let mut c = costs[p][pick.level.min(3)];
+                if pick.blend > 0.0 && pick.level + 1 < n_levels[p] {
+                    c += costs[p][(pick.level + 1).min(3)];
+                }
+                total += n as f32 * c as f32;
+            }
+        }
+        if total <= budget {
+            break;
+        }
+    }
+    s
 }
 
 /// Number of levels the renderer draws for a species chain of `chain_len` levels: the chain's
@@ -389,6 +458,46 @@ mod tests {
                 assert!(l.bark.bounds().unwrap().0[2].abs() < 1e-4, "trunk starts at the base");
             }
         }
+    }
+
+    #[test]
+    fn budget_scale_raises_switch_sizes_just_enough() {
+        let p = LodParams { max_triangles: 5000, ..LodParams::default() };
+        let mut hist = [[0u32; SIZE_BINS]];
+        let b = size_bin(300.0);
+        assert_eq!(b, 36);
+        assert!((bin_px(b) - 279.17).abs() < 0.05, "{}", bin_px(b));
+        hist[0][b] = 10;
+        let costs = [[1000u32, 100, 10, 4]];
+        // 10 trees at ~279 px: level 0 cross-fading into 1 costs 11,000; 2^(3/4) moves them
+        // to level 1 (279/1.68 = 166 px ≥ 125): 1,000 triangles
+        let s = budget_scale(&hist, &costs, &[4], &p);
+        assert!((s - 2f32.powf(0.75)).abs() < 1e-5, "{s}");
+        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 20_000, ..p }), 1.0);
+        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 0, ..p }), 1.0);
+        // an impossible budget takes the largest factor; the trees are still drawn
+        let s = budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 1, ..p });
+        assert_eq!(s, 1024.0);
+        assert_eq!(select_lod_scaled(300.0, s, &p, 4).unwrap().level, 3);
+        assert!(select_lod_scaled(0.5, 1.0, &p, 4).is_none());
+    }
+
+    #[test]
+    fn silhouette_of_the_stand_in_chains() {
+        let b = Silhouette::from_chain(&placeholder_chain(false));
+        // main crown 0.33 (lumps ±6 %) and side clumps reaching 0.22 + 0.5·0.33·1.06 = 0.395
+        assert!((b.radius - 0.395).abs() < 0.01, "{}", b.radius);
+        assert!(b.crown_bottom > 0.2 && b.crown_bottom < 0.3 && b.crown_top > 0.95, "{b:?}");
+        assert!(b.widest_z > 0.5 && b.widest_z < 0.75, "broadleaf widest at {}", b.widest_z);
+        assert_eq!(b.width_at(0.1), 0.0, "no crown below the crown base");
+        let c = Silhouette::from_chain(&placeholder_chain(true));
+        assert!(c.widest_z < 0.4, "conifer widest low: {}", c.widest_z);
+        assert!(c.width_at(0.9) < 0.5 * c.width_at(c.widest_z), "conifer tapers to the top");
+        let e = Silhouette::from_chain(&LodChain::default());
+        assert_eq!(e.radius, 0.3);
+        assert_eq!(drawn_levels(0), 1);
+        assert_eq!(drawn_levels(4), 4);
+        assert_eq!(drawn_levels(6), 4);
     }
 
     #[test]
