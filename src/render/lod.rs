@@ -28,11 +28,11 @@ pub struct LodParams {
 impl Default for LodParams {
     /// Full mesh above 240 px, reduced skeleton 100–240 px, crown hull 40–100 px, billboard
     /// impostor (4 triangles) below 40 px; cross-fade bands of ±25 %; trees under 0.75 px are
-    /// not drawn. With these thresholds almost every tree of a landscape view is a billboard,
+    /// not drawn; at most 6 M tree triangles per frame (switch sizes raised beyond). With these thresholds almost every tree of a landscape view is a billboard,
     /// so triangles per frame grow with the few trees near the camera, not with the tree count
     /// (BENCHMARKS.md, "Rendering").
     fn default() -> Self {
-        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 2_000_000 }
+        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000 }
     }
 }
 
