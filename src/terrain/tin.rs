@@ -2,12 +2,12 @@
 //! error-bounded subset of the grid's cell centres.
 //!
 //! Greedy insertion after Garland & Heckbert (1995, "Fast polygonal approximation of terrains
-//! and height fields", CMU-CS-95-181, algorithm III): start from the four corner cells; each
-//! round finds, for every triangle, the grid point with the largest vertical error
-//! |z − plane(x, y)| inside it, and inserts those whose error exceeds both the tolerance and half the current
-//! worst error (a batched variant; Garland & Heckbert insert one point per step). Triangles are keyed by their
-//! vertex triple so that each is scanned once. Stops when the largest error ≤ tolerance or at
-//! the vertex limit.
+//! and height fields", CMU-CS-95-181, algorithm III): start from the four corner cells; every
+//! triangle's worst grid point (largest vertical error |z − plane(x, y)|) sits in a priority
+//! queue; the worst of all is inserted, one point per step, and only the triangles around the
+//! new vertex (all that Delaunay insertion creates) are rescanned; queue entries of destroyed
+//! triangles (identified by their vertex triple) are dropped when popped. Stops when the largest
+//! error ≤ tolerance or at the vertex limit.
 //!
 //! Coordinates are world metres (x east, y north, origin at the grid's south-west corner;
 //! cell centres at `((c + 0.5)·dx, (h − r − 0.5)·dy)`, dx the mean east–west cell size).
@@ -16,9 +16,10 @@
 
 use super::Terrain;
 use crate::error::{Error, Result};
-use rayon::prelude::*;
+use spade::handles::FixedVertexHandle;
 use spade::{DelaunayTriangulation, HasPosition, Point2, PositionInTriangulation, Triangulation};
-use std::collections::HashMap;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
 /// Default vertical tolerance (m) used by `sylva terrain info`.
 pub const DEFAULT_TOLERANCE_M: f64 = 5.0;
@@ -54,7 +55,9 @@ impl std::fmt::Debug for Tin {
 }
 
 /// Worst cell (index, error m) inside the triangle with corners `p` (grid coordinates col,row
-/// of cell centres) and heights `z`.
+/// of cell centres) and heights `z`: a scanline walk over the triangle's rows, each row's column
+/// span found from the three barycentric coordinates (linear in the column), the plane height
+/// advanced by one addition per cell.
 fn worst_in(z: &[f32], w: usize, h: usize, p: [[f64; 2]; 3], zv: [f64; 3]) -> (u32, f32) {
     let (x0, y0) = (p[0][0], p[0][1]);
     let (ax, ay, bx, by) = (p[1][0] - x0, p[1][1] - y0, p[2][0] - x0, p[2][1] - y0);
@@ -62,32 +65,55 @@ fn worst_in(z: &[f32], w: usize, h: usize, p: [[f64; 2]; 3], zv: [f64; 3]) -> (u
     if det.abs() < 1e-12 {
         return (0, 0.0);
     }
-    let cmin = p.iter().map(|q| q[0]).fold(f64::INFINITY, f64::min).ceil().max(0.0) as usize;
-    let cmax = (p.iter().map(|q| q[0]).fold(f64::NEG_INFINITY, f64::max).floor() as usize).min(w - 1);
     let rmin = p.iter().map(|q| q[1]).fold(f64::INFINITY, f64::min).ceil().max(0.0) as usize;
-    let rmax = (p.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max).floor() as usize).min(h - 1);
-    let mut best = (0u32, 0f32);
+    let rmax = (p.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max).floor().max(0.0) as usize).min(h - 1);
+    let cmin = p.iter().map(|q| q[0]).fold(f64::INFINITY, f64::min).ceil().max(0.0);
+    let cmax = p.iter().map(|q| q[0]).fold(f64::NEG_INFINITY, f64::max).floor().min((w - 1) as f64);
+    // u = (dx·by − dy·bx)/det, v = (ax·dy − ay·dx)/det with dx = c − x0, dy = r − y0.
+    let (uc, vc) = (by / det, -ay / det);
+    let (dz1, dz2) = (zv[1] - zv[0], zv[2] - zv[0]);
+    let zc = uc * dz1 + vc * dz2;
     let eps = 1e-9;
+    let mut best = (0u32, 0f32);
     for r in rmin..=rmax {
-        for c in cmin..=cmax {
-            let (dx, dy) = (c as f64 - x0, r as f64 - y0);
-            let u = (dx * by - dy * bx) / det;
-            let v = (ax * dy - ay * dx) / det;
-            if u < -eps || v < -eps || u + v > 1.0 + eps {
-                continue;
+        let dy = r as f64 - y0;
+        // values at c = x0 (dx = 0)
+        let (u0, v0) = (-dy * bx / det, ax * dy / det);
+        let (mut lo, mut hi) = (cmin, cmax);
+        // each coordinate a + b·(c − x0) ≥ −eps
+        for (a, b) in [(u0, uc), (v0, vc), (1.0 - u0 - v0, -uc - vc)] {
+            if b > 0.0 {
+                lo = lo.max(x0 + (-eps - a) / b);
+            } else if b < 0.0 {
+                hi = hi.min(x0 + (-eps - a) / b);
+            } else if a < -eps {
+                hi = f64::NEG_INFINITY;
             }
-            let zz = z[r * w + c];
-            if !zz.is_finite() {
-                continue;
-            }
-            let zp = zv[0] + u * (zv[1] - zv[0]) + v * (zv[2] - zv[0]);
+        }
+        let (lo, hi) = (lo.ceil(), hi.floor());
+        if !(lo <= hi) {
+            continue;
+        }
+        let (c0, c1) = (lo as usize, hi as usize);
+        let row = &z[r * w..(r + 1) * w];
+        let mut zp = zv[0] + (u0 + uc * (c0 as f64 - x0)) * dz1 + (v0 + vc * (c0 as f64 - x0)) * dz2;
+        for (c, &zz) in row[c0..=c1].iter().enumerate() {
             let e = (zz as f64 - zp).abs() as f32;
+            // NaN cells compare false and are skipped
             if e > best.1 {
-                best = ((r * w + c) as u32, e);
+                best = ((r * w + c0 + c) as u32, e);
             }
+            zp += zc;
         }
     }
     best
+}
+
+/// Sorted vertex triple of a face: its identity across insertions.
+fn face_key(vs: [u32; 3]) -> [u32; 3] {
+    let mut k = vs;
+    k.sort_unstable();
+    k
 }
 
 impl Tin {
@@ -116,58 +142,50 @@ impl Tin {
         };
         let world = |i: usize| Point2::new(((i % w) as f64 + 0.5) * dx, ((h - i / w) as f64 - 0.5) * dy);
         let mut tri: DelaunayTriangulation<V> = DelaunayTriangulation::new();
-        let mut cell_of: Vec<u32> = Vec::new();
-        let mut insert = |tri: &mut DelaunayTriangulation<V>, i: usize| -> Result<()> {
+        let insert = |tri: &mut DelaunayTriangulation<V>, i: usize| -> Result<()> {
             tri.insert(V { p: world(i), z: zat(i) }).map_err(|e| bad("vertex", format!("cell {i}"), &format!("insertable ({e:?})")))?;
-            cell_of.push(i as u32);
             Ok(())
         };
         for i in [0, w - 1, (h - 1) * w, h * w - 1] {
             insert(&mut tri, i)?;
         }
-        let mut cache: HashMap<[u32; 3], (u32, f32)> = HashMap::new();
-        let max_error_m;
-        loop {
-            let faces: Vec<([u32; 3], [[f64; 2]; 3], [f64; 3])> = tri
-                .inner_faces()
-                .map(|f| {
-                    let vs = f.vertices();
-                    let mut key = vs.map(|v| v.fix().index() as u32);
-                    key.sort_unstable();
-                    let p = vs.map(|v| {
-                        let q = v.position();
-                        [q.x / dx - 0.5, h as f64 - 0.5 - q.y / dy]
-                    });
-                    (key, p, vs.map(|v| v.data().z))
-                })
-                .collect();
-            let fresh: Vec<([u32; 3], (u32, f32))> = faces.par_iter().filter(|(k, _, _)| !cache.contains_key(k)).map(|(k, p, z)| (*k, worst_in(&g.data, w, h, *p, *z))).collect();
-            cache.extend(fresh);
-            let mut next: HashMap<[u32; 3], (u32, f32)> = HashMap::with_capacity(faces.len());
-            let mut cand: Vec<u32> = Vec::new();
-            let mut worst = 0f32;
-            for (k, _, _) in &faces {
-                if let Some(&v) = cache.get(k) {
-                    next.insert(*k, v);
-                    worst = worst.max(v.1);
-                    if v.1 as f64 > tolerance_m {
-                        cand.push(v.0);
-                    }
-                }
+        let grid_xy = |q: Point2<f64>| [q.x / dx - 0.5, h as f64 - 0.5 - q.y / dy];
+        // Candidates: (error bits, smaller cell first, face key). Non-negative f32 errors order
+        // like their bit patterns. Entries of faces destroyed by later insertions go stale and
+        // are skipped when popped.
+        let mut heap: BinaryHeap<(u32, Reverse<u32>, [u32; 3])> = BinaryHeap::new();
+        let scan = |f: spade::handles::FaceHandle<'_, spade::handles::InnerTag, V, (), (), ()>| {
+            let vs = f.vertices();
+            let key = face_key(vs.map(|v| v.fix().index() as u32));
+            let (cell, err) = worst_in(&g.data, w, h, vs.map(|v| grid_xy(v.position())), vs.map(|v| v.data().z));
+            (err.to_bits(), Reverse(cell), key)
+        };
+        for f in tri.inner_faces() {
+            heap.push(scan(f));
+        }
+        let alive = |tri: &DelaunayTriangulation<V>, k: [u32; 3]| -> bool {
+            let (a, b, c) = (FixedVertexHandle::from_index(k[0] as usize), FixedVertexHandle::from_index(k[1] as usize), k[2] as usize);
+            match tri.get_edge_from_neighbors(a, b) {
+                Some(e) => [e, e.rev()].iter().any(|e| e.face().as_inner().is_some() && e.opposite_vertex().map(|v| v.fix().index()) == Some(c)),
+                None => false,
             }
-            cache = next;
-            if cand.is_empty() || tri.num_vertices() >= max_vertices {
-                max_error_m = worst as f64;
+        };
+        let mut max_error_m = 0.0;
+        while let Some((bits, Reverse(cell), key)) = heap.pop() {
+            if !alive(&tri, key) {
+                continue;
+            }
+            let err = f32::from_bits(bits) as f64;
+            max_error_m = err;
+            if err <= tolerance_m || tri.num_vertices() >= max_vertices {
                 break;
             }
-            // Greedy order in batches: only points within a factor 2 of the worst error go in
-            // this round, so large errors are fixed before small ones (closer to one-at-a-time).
-            let bar = (worst as f64 * 0.5).max(tolerance_m);
-            cand = faces.iter().filter_map(|(k, _, _)| cache.get(k)).filter(|v| v.1 as f64 > bar).map(|v| v.0).collect();
-            cand.sort_unstable();
-            cand.dedup();
-            for i in cand.into_iter().take(max_vertices.saturating_sub(tri.num_vertices())) {
-                insert(&mut tri, i as usize)?;
+            insert(&mut tri, cell as usize)?;
+            let vh = FixedVertexHandle::from_index(tri.num_vertices() - 1);
+            for e in tri.vertex(vh).out_edges() {
+                if let Some(f) = e.face().as_inner() {
+                    heap.push(scan(f));
+                }
             }
         }
         let vertices: Vec<[f64; 3]> = tri.vertices().map(|v| [v.position().x, v.position().y, v.data().z]).collect();
