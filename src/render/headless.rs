@@ -760,7 +760,7 @@ impl Renderer {
         let rec = std::mem::size_of::<InstanceRaw>() as u64;
         let dst_bytes = (base * rec).max(256);
         let src_bytes = (src.len() as u64 * rec).max(256);
-        let max_bind = limits.max_storage_buffer_binding_size as u64;
+        let max_bind = limits.max_storage_buffer_binding_size;
         if dst_bytes > max_bind || dst_bytes > limits.max_buffer_size || src_bytes > max_bind || base > u32::MAX as u64 / 2 {
             return Ok(None);
         }

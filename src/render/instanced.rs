@@ -150,7 +150,7 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
                 hist[rec.p3[0] as usize][size_bin(*px)] += 1;
             }
         }
-        let costs: Vec<[u32; 4]> = scene.prototypes.iter().map(|p| level_costs(p)).collect();
+        let costs: Vec<[u32; 4]> = scene.prototypes.iter().map(level_costs).collect();
         budget_scale(&hist, &costs, &levels, params)
     } else {
         1.0
