@@ -2,13 +2,15 @@
 //! at 1920×1080 on whatever adapter wgpu finds (lavapipe on CI machines).
 //!
 //! Run: `cargo bench --bench render` (env `SYLVA_BENCH_FRAMES=N` overrides the frame count,
-//! `SYLVA_BENCH_SIZE=WxH` the resolution). Prints the median over the timed frames after one
-//! warm-up frame, and the triangles the same trees would cost all at level 0.
+//! `SYLVA_BENCH_SIZE=WxH` the resolution, `SYLVA_BENCH_CULLING=cpu|gpu` runs one culling path
+//! only). Prints, per culling path (CPU rayon pass with direct draws; GPU compute pass with
+//! indirect draws), the median over the timed frames after one warm-up frame, and the triangles
+//! the same trees would cost all at level 0.
 
 use std::time::Instant;
 
 use sylva::render::camera::{Camera, CameraPreset};
-use sylva::render::headless::Renderer;
+use sylva::render::headless::{Culling, Renderer};
 use sylva::render::instanced::build_batches;
 use sylva::render::lod::LodParams;
 use sylva::render::scene::demo_scene;
@@ -31,7 +33,17 @@ fn main() {
     let frames_override: Option<usize> = std::env::var("SYLVA_BENCH_FRAMES").ok().and_then(|s| s.parse().ok());
     println!("adapter: {}", r.adapter_description());
     println!("{w}x{h}, demo_scene on 2 km x 2 km, oblique camera, shadow map 2048^2, MSAA 4x");
-    println!("{:>9} {:>7} {:>11} {:>11} {:>13} {:>9} {:>16} {:>16}", "instances", "frames", "median ms", "fps", "tree tris", "draws", "L0/L1/L2/L3", "tris if all L0");
+    let only = std::env::var("SYLVA_BENCH_CULLING").ok().map(|s| s.to_ascii_lowercase());
+    let mut paths = vec![Culling::Cpu];
+    if r.gpu_culling_supported() {
+        paths.push(Culling::Gpu);
+    } else {
+        println!("(adapter without compute/indirect support: GPU culling path skipped)");
+    }
+    paths.retain(|c| only.as_deref().map(|o| format!("{c:?}").to_ascii_lowercase() == o).unwrap_or(true));
+    println!("{:>7} {:>9} {:>7} {:>11} {:>11} {:>13} {:>9} {:>22} {:>16}", "culling", "instances", "frames", "median ms", "fps", "tree tris", "draws", "L0/L1/L2/L3", "tris if all L0");
+    for &culling in &paths {
+    r.culling = culling;
     for &n in &[1_000usize, 10_000, 100_000] {
         let scene = demo_scene(n, 2000.0, 11);
         let cam = Camera::preset(CameraPreset::Oblique, &scene.terrain);
@@ -54,10 +66,11 @@ fn main() {
         times.sort_by(f64::total_cmp);
         let med = times[times.len() / 2];
         let s = r.last_stats();
-        let all0 = LodParams { switch_px: [0.0; 3], band: 0.0, min_px: 0.0 };
+        let all0 = LodParams { switch_px: [0.0; 3], band: 0.0, min_px: 0.0, max_triangles: 0 };
         let full = build_batches(&scene, &cam, w, h, &all0).triangles;
         println!(
-            "{:>9} {:>7} {:>11.1} {:>11.1} {:>13} {:>9} {:>16} {:>16}",
+            "{:>7} {:>9} {:>7} {:>11.1} {:>11.1} {:>13} {:>9} {:>22} {:>16}",
+            format!("{culling:?}"),
             n,
             frames,
             med,
@@ -67,5 +80,6 @@ fn main() {
             format!("{}/{}/{}/{}", s.per_level[0], s.per_level[1], s.per_level[2], s.per_level[3]),
             full
         );
+    }
     }
 }

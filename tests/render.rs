@@ -9,9 +9,9 @@ use std::sync::Mutex;
 
 use glam::Vec3;
 use sylva::render::camera::{Camera, CameraPreset};
-use sylva::render::headless::Renderer;
+use sylva::render::headless::{Culling, Renderer};
 use sylva::render::lod::{select_lod, LodParams};
-use sylva::render::scene::{demo_scene, Prototype, Scene, Sky, Sun, TreeInstance, Wind};
+use sylva::render::scene::{demo_scene, Scene, Sky, Sun, TreeInstance, Wind};
 use sylva::render::terrain::{from_grid, LandCover};
 
 static RENDERER: Mutex<Option<Renderer>> = Mutex::new(None);
@@ -113,8 +113,9 @@ fn lod_level_follows_projected_size() {
     let p = LodParams::default();
     // well inside each band
     assert_eq!(select_lod(1000.0, &p, 4).unwrap(), sylva::render::lod::LodPick { level: 0, blend: 0.0 });
-    assert_eq!(select_lod(80.0, &p, 4).unwrap().level, 1);
-    assert_eq!(select_lod(25.0, &p, 4).unwrap().level, 2);
+    assert_eq!(select_lod(150.0, &p, 4).unwrap().level, 1);
+    assert_eq!(select_lod(60.0, &p, 4).unwrap().level, 2);
+    assert_eq!(select_lod(20.0, &p, 4).unwrap().level, 3);
     assert_eq!(select_lod(5.0, &p, 4).unwrap().level, 3);
     assert!(select_lod(0.5, &p, 4).is_none(), "sub-pixel trees are culled");
     // exactly at a switch size the blend is one half (log-linear band)
@@ -137,8 +138,9 @@ fn lod_level_follows_projected_size() {
     let cam = Camera::look_at([0.0, 0.0, 2.0], [0.0, 100.0, 2.0], 60.0);
     let px = |d: f32| cam.projected_size_px(Vec3::new(0.0, d, 2.0), 20.0, 1080.0);
     assert_eq!(select_lod(px(50.0), &p, 4).unwrap().level, 0);
-    assert_eq!(select_lod(px(300.0), &p, 4).unwrap().level, 1);
-    assert_eq!(select_lod(px(1000.0), &p, 4).unwrap().level, 2);
+    assert_eq!(select_lod(px(120.0), &p, 4).unwrap(), sylva::render::lod::LodPick { level: 1, blend: 0.0 });
+    assert_eq!(select_lod(px(300.0), &p, 4).unwrap(), sylva::render::lod::LodPick { level: 2, blend: 0.0 });
+    assert_eq!(select_lod(px(1000.0), &p, 4).unwrap().level, 3);
     assert_eq!(select_lod(px(5000.0), &p, 4).unwrap().level, 3);
     // projected size: 20 m at 100 m with f = 540/tan(30°) = 935.3 px -> 187 px
     assert!((px(100.0) - 187.06).abs() < 0.1, "{}", px(100.0));
@@ -216,8 +218,8 @@ fn showcase_images_for_inspection() {
 #[test]
 fn batches_pick_levels_by_distance_and_cross_fade() {
     use sylva::render::instanced::build_batches;
-    // trees along the view axis at 30 m, 200 m, 700 m, 3 km from a ground camera
-    let mut trees: Vec<TreeInstance> = [30.0f32, 200.0, 700.0, 3000.0].iter().enumerate().map(|(i, &d)| TreeInstance::new(i as u64, [0.0, d, 0.0], 20.0, 5.0, 0, [0.1, 0.3, 0.05])).collect();
+    // trees along the view axis at 30 m, 120 m, 300 m, 1 km from a ground camera
+    let mut trees: Vec<TreeInstance> = [30.0f32, 120.0, 300.0, 1000.0].iter().enumerate().map(|(i, &d)| TreeInstance::new(i as u64, [0.0, d, 0.0], 20.0, 5.0, 0, [0.1, 0.3, 0.05])).collect();
     trees.push(TreeInstance::new(9, [0.0, -100.0, 0.0], 20.0, 5.0, 0, [0.1, 0.3, 0.05])); // behind
     trees.push(TreeInstance::new(10, [0.0, 50.0, 0.0], 20.0, 5.0, 7, [0.1, 0.3, 0.05])); // bad species
     let mut scene = flat_scene(trees);
@@ -322,5 +324,267 @@ fn timelapse_grows_trees_and_writes_gif() {
     });
 }
 
-#[allow(dead_code)]
-fn unused(_: Prototype) {}
+
+
+/// Renders with the given culling path; `None` (skip) when it is the GPU path and the adapter
+/// cannot run it.
+fn render_with(r: &mut Renderer, culling: Culling, scene: &Scene, cam: &Camera, w: u32, h: u32) -> Option<image::RgbaImage> {
+    if culling == Culling::Gpu && !r.gpu_culling_supported() {
+        eprintln!("skipping GPU culling: adapter {} lacks compute/indirect support", r.adapter_description());
+        return None;
+    }
+    r.culling = culling;
+    let img = r.render(scene, cam, w, h);
+    r.culling = Culling::Auto;
+    Some(img.unwrap())
+}
+
+fn frac_off(a: &image::RgbaImage, b: &image::RgbaImage, tol: i32) -> f64 {
+    let bad = a.pixels().zip(b.pixels()).filter(|(p, q)| p.0.iter().zip(q.0.iter()).any(|(x, y)| (*x as i32 - *y as i32).abs() > tol)).count();
+    bad as f64 / (a.width() * a.height()) as f64
+}
+
+#[test]
+fn gpu_and_cpu_culling_select_the_same_levels_and_images_agree() {
+    let scene = demo_scene(3000, 600.0, 3);
+    let cams = [Camera::preset(CameraPreset::Oblique, &scene.terrain), Camera::preset(CameraPreset::Ground, &scene.terrain), Camera::preset(CameraPreset::Map, &scene.terrain)];
+    with_renderer(|r| {
+        for (k, cam) in cams.iter().enumerate() {
+            let cpu = render_with(r, Culling::Cpu, &scene, cam, 240, 160).unwrap();
+            let sc = r.last_stats();
+            assert!(!sc.gpu_culling);
+            let Some(gpu) = render_with(r, Culling::Gpu, &scene, cam, 240, 160) else { return };
+            let sg = r.last_stats();
+            assert!(sg.gpu_culling);
+            img_save(&cpu, &format!("cull_cpu_{k}.png"));
+            img_save(&gpu, &format!("cull_gpu_{k}.png"));
+            eprintln!("camera {k}: cpu {sc:?}\n          gpu {sg:?}");
+            // same selection per level (float rounding may move a borderline tree: ≤ 0.2 %)
+            let tol = |n: usize| (n as f64 * 0.002).ceil() as i64 + 1;
+            for l in 0..4 {
+                let (a, b) = (sc.per_level[l] as i64, sg.per_level[l] as i64);
+                assert!((a - b).abs() <= tol(sc.instances_drawn), "camera {k} level {l}: cpu {a} gpu {b}");
+            }
+            assert!((sc.culled as i64 - sg.culled as i64).abs() <= tol(scene.instances.len()), "culled cpu {} gpu {}", sc.culled, sg.culled);
+            assert_eq!(sg.invalid, 0);
+            let dt = (sc.tree_triangles as f64 - sg.tree_triangles as f64).abs() / sc.tree_triangles.max(1) as f64;
+            assert!(dt < 0.01, "tree triangles cpu {} gpu {}", sc.tree_triangles, sg.tree_triangles);
+            // images agree
+            let (d, f) = (mean_abs_diff(&cpu, &gpu), frac_off(&cpu, &gpu, 48));
+            assert!(d < 0.5 && f < 0.005, "camera {k}: cpu vs gpu images: mean {d:.3}, {:.2} % pixels off", f * 100.0);
+            // the GPU path is deterministic although its compaction order is not
+            let gpu2 = render_with(r, Culling::Gpu, &scene, cam, 240, 160).unwrap();
+            assert_eq!(mean_abs_diff(&gpu, &gpu2), 0.0, "camera {k}: GPU path rendered two different images");
+        }
+    });
+}
+
+/// The fine level's pixels under the complementary Bayer masks: (x, y) shows the finer level
+/// when its 4×4 Bayer rank is ≥ 8 (threshold 0.5 = blend at a switch size).
+fn bayer_fine(x: u32, y: u32) -> bool {
+    const M: [u32; 16] = [0, 8, 2, 10, 12, 4, 14, 6, 3, 11, 1, 9, 15, 7, 13, 5];
+    M[((y & 3) * 4 + (x & 3)) as usize] >= 8
+}
+
+#[test]
+fn cross_fade_draws_both_levels_with_complementary_masks_on_both_paths() {
+    // a 20 m broadleaf exactly at the hull -> billboard switch size (40 px) in a 160x120 frame
+    let (w, h) = (160u32, 120u32);
+    let p = LodParams::default();
+    let fov = 50.0f32;
+    let f = h as f32 / (2.0 * (fov.to_radians() * 0.5).tan());
+    let d = 20.0 * f / p.switch_px[2];
+    let tree = TreeInstance::new(1, [100.0, 40.0 + d, 0.0], 20.0, 6.0, 0, [0.1, 0.35, 0.05]);
+    let scene = flat_scene(vec![tree]);
+    let cam = Camera::look_at([100.0, 40.0, 10.0], [100.0, 140.0, 10.0], fov);
+    let empty = flat_scene(vec![]);
+    with_renderer(|r| {
+        for culling in [Culling::Cpu, Culling::Gpu] {
+            let Some(blend) = render_with(r, culling, &scene, &cam, w, h) else { return };
+            let s = r.last_stats();
+            assert_eq!(s.per_level, [0, 0, 1, 0], "{culling:?}: {s:?}");
+            let hull = sylva::render::instanced::level_triangles(&scene.prototypes[0], 2);
+            assert_eq!(s.tree_triangles, hull + 4, "{culling:?}: both the hull and the billboard are drawn");
+            let lod = r.lod;
+            r.lod = LodParams { switch_px: [240.0, 100.0, 20.0], band: 0.0, ..p };
+            let fine = render_with(r, culling, &scene, &cam, w, h).unwrap();
+            r.lod = LodParams { switch_px: [240.0, 100.0, 80.0], band: 0.0, ..p };
+            let coarse = render_with(r, culling, &scene, &cam, w, h).unwrap();
+            r.lod = lod;
+            let bg = render_with(r, culling, &empty, &cam, w, h).unwrap();
+            let name = format!("{culling:?}").to_lowercase();
+            img_save(&blend, &format!("fade_{name}_blend.png"));
+            img_save(&fine, &format!("fade_{name}_fine.png"));
+            img_save(&coarse, &format!("fade_{name}_coarse.png"));
+            let differs = |a: &image::Rgba<u8>, b: &image::Rgba<u8>| a.0.iter().zip(b.0.iter()).any(|(x, y)| (*x as i32 - *y as i32).abs() > 20);
+            let (mut both, mut holes, mut judged, mut right) = (0, 0, 0, 0);
+            for y in 1..h - 1 {
+                for x in 1..w - 1 {
+                    // interior pixels covered by both levels (and by their 8 neighbours: no MSAA edges)
+                    let covered = |img: &image::RgbaImage| (0..9).all(|k| differs(img.get_pixel(x + k % 3 - 1, y + k / 3 - 1), bg.get_pixel(x + k % 3 - 1, y + k / 3 - 1)));
+                    if !(covered(&fine) && covered(&coarse)) {
+                        continue;
+                    }
+                    both += 1;
+                    let b = blend.get_pixel(x, y);
+                    if !differs(b, bg.get_pixel(x, y)) {
+                        holes += 1;
+                    }
+                    let (fp, cp) = (fine.get_pixel(x, y), coarse.get_pixel(x, y));
+                    if differs(fp, cp) {
+                        judged += 1;
+                        let df: i32 = (0..3).map(|c| (b.0[c] as i32 - fp.0[c] as i32).abs()).sum();
+                        let dc: i32 = (0..3).map(|c| (b.0[c] as i32 - cp.0[c] as i32).abs()).sum();
+                        if (df < dc) == bayer_fine(x, y) {
+                            right += 1;
+                        }
+                    }
+                }
+            }
+            eprintln!("{culling:?}: {both} pixels covered by both levels, {holes} holes, {right}/{judged} follow the Bayer split");
+            assert!(both > 150, "{culling:?}: tree too small on screen ({both} px)");
+            assert!(holes * 50 <= both, "{culling:?}: {holes} of {both} pixels are holes: masks are not complementary");
+            assert!(judged > 30 && right as f64 >= 0.9 * judged as f64, "{culling:?}: {right}/{judged} pixels follow the complementary Bayer masks");
+        }
+    });
+}
+
+#[test]
+fn billboard_has_a_tree_silhouette_not_a_box() {
+    let (w, h) = (160u32, 120u32);
+    let tree = TreeInstance::new(3, [100.0, 100.0, 0.0], 20.0, 6.0, 0, [0.1, 0.35, 0.05]);
+    // no direct sun: the tree's shadow would count as covered ground
+    let mut scene = flat_scene(vec![tree]);
+    scene.sun.color = [0.0; 3];
+    let mut empty = scene.clone();
+    empty.instances.clear();
+    let cam = Camera::look_at([100.0, 60.0, 10.0], [100.0, 100.0, 10.0], 50.0);
+    with_renderer(|r| {
+        let lod = r.lod;
+        // everything at the billboard level
+        r.lod = LodParams { switch_px: [1e6, 1e6, 1e6], band: 0.0, ..lod };
+        let img = r.render(&scene, &cam, w, h).unwrap();
+        let s = r.last_stats();
+        let bg = r.render(&empty, &cam, w, h).unwrap();
+        r.lod = lod;
+        img_save(&img, "billboard.png");
+        assert_eq!(s.per_level, [0, 0, 0, 1]);
+        assert_eq!(s.tree_triangles, 4);
+        let cov: Vec<(u32, u32)> = img.enumerate_pixels().filter(|(x, y, p)| p.0.iter().zip(bg.get_pixel(*x, *y).0.iter()).any(|(a, b)| (*a as i32 - *b as i32).abs() > 20)).map(|(x, y, _)| (x, y)).collect();
+        let (x0, x1) = (cov.iter().map(|c| c.0).min().unwrap(), cov.iter().map(|c| c.0).max().unwrap());
+        let (y0, y1) = (cov.iter().map(|c| c.1).min().unwrap(), cov.iter().map(|c| c.1).max().unwrap());
+        let fill = cov.len() as f64 / ((x1 - x0 + 1) * (y1 - y0 + 1)) as f64;
+        // a crown over a trunk fills well under its bounding box (a box would fill it all)
+        assert!(fill > 0.3 && fill < 0.75, "silhouette fills {:.0} % of its box {x0}..{x1} x {y0}..{y1}", fill * 100.0);
+        // narrow trunk at the bottom, wide crown in the middle
+        let width = |y: u32| cov.iter().filter(|c| c.1 == y).count();
+        let (wb, wm) = (width(y1 - 2), width((y0 + y1) / 2));
+        assert!(wb * 4 < wm, "bottom row {wb} px vs middle {wm} px");
+        // the crown is foliage green, not dark
+        let mid: Vec<&image::Rgba<u8>> = cov.iter().filter(|c| c.1 == (y0 + y1) / 2).map(|c| img.get_pixel(c.0, c.1)).collect();
+        let g = mid.iter().map(|p| p.0[1] as f64).sum::<f64>() / mid.len() as f64;
+        let rr = mid.iter().map(|p| p.0[0] as f64).sum::<f64>() / mid.len() as f64;
+        assert!(g > rr + 10.0 && g > 40.0, "crown colour r {rr:.0} g {g:.0}");
+    });
+}
+
+#[test]
+fn bare_crowns_read_as_twig_haze_at_every_level_and_seasons_render() {
+    use sylva::render::scene::deciduous_season;
+    // broadleaves at four distances: hull/billboard levels far away, full mesh near
+    let (w, h) = (240u32, 160u32);
+    let summer = [0.1, 0.35, 0.05];
+    let trees: Vec<TreeInstance> = [(85.0f32, 50.0f32, 22.0f32), (115.0, 100.0, 22.0), (92.0, 160.0, 20.0), (108.0, 320.0, 24.0)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(x, y, hh))| TreeInstance::new(i as u64 + 1, [x, y, 0.0], hh, 0.3 * hh, 0, summer))
+        .collect();
+    let mut scene = flat_scene(trees);
+    scene.terrain.positions.iter_mut().for_each(|p| p[1] *= 2.0);
+    let cam = Camera::look_at([100.0, 20.0, 8.0], [100.0, 200.0, 12.0], 50.0);
+    let mut no_crowns = scene.clone();
+    no_crowns.instances.clear();
+    with_renderer(|r| {
+        let bg = r.render(&no_crowns, &cam, w, h).unwrap();
+        let mut imgs = Vec::new();
+        for (name, doy) in [("spring", 135.0f32), ("summer", 196.0), ("autumn", 290.0), ("winter", 15.0)] {
+            let mut s = scene.clone();
+            let (c, a) = deciduous_season(doy, summer);
+            for t in &mut s.instances {
+                t.leaf_color = c;
+                t.leaf_amount = a;
+            }
+            let img = r.render(&s, &cam, w, h).unwrap();
+            let st = r.last_stats();
+            eprintln!("{name}: levels {:?}", st.per_level);
+            img_save(&img, &format!("season_{name}.png"));
+            imgs.push((name, img, st));
+        }
+        // winter: every tree's crown region keeps a haze of grey-brown twig pixels
+        let (_, winter, st) = &imgs[3];
+        assert!(st.per_level.iter().filter(|&&n| n > 0).count() >= 3, "levels used {:?}", st.per_level);
+        for t in &scene.instances {
+            let (cx, cy) = project(&cam, w, h, Vec3::from(t.position) + Vec3::new(0.0, 0.0, 0.72 * t.height));
+            let (_, top) = project(&cam, w, h, Vec3::from(t.position) + Vec3::new(0.0, 0.0, 0.9 * t.height));
+            let rad = ((cy - top).abs() * 0.8).max(2.0) as i32;
+            let (mut n, mut twig, mut green) = (0, 0, 0);
+            for dy in -rad..=rad {
+                for dx in -rad..=rad {
+                    let (x, y) = (cx as i32 + dx, cy as i32 + dy);
+                    if x < 0 || y < 0 || x >= w as i32 || y >= h as i32 {
+                        continue;
+                    }
+                    n += 1;
+                    let p = winter.get_pixel(x as u32, y as u32).0;
+                    let q = bg.get_pixel(x as u32, y as u32).0;
+                    let changed = (0..3).any(|c| (p[c] as i32 - q[c] as i32).abs() > 20);
+                    let [r, g, b, _] = p.map(|v| v as i32);
+                    if changed && r >= b && (g - r).abs() < 25 && r < 150 {
+                        twig += 1;
+                    }
+                    if g > r + 8 && g > b + 8 && changed {
+                        green += 1;
+                    }
+                }
+            }
+            let frac = twig as f64 / n.max(1) as f64;
+            eprintln!("tree {}: crown window {n} px, twig {frac:.2}, green {green}", t.id);
+            assert!(frac > 0.12, "tree {}: bare crown shows only {:.0} % twig pixels (trunk only?)", t.id, frac * 100.0);
+        }
+        // summer crowns are green, autumn ones redder than summer ones
+        let mean = |img: &image::RgbaImage, c: usize| img.pixels().zip(bg.pixels()).filter(|(p, q)| p.0.iter().zip(q.0.iter()).any(|(a, b)| (*a as i32 - *b as i32).abs() > 20)).map(|(p, _)| p.0[c] as f64).sum::<f64>();
+        let red = |img: &image::RgbaImage| mean(img, 0) / mean(img, 1).max(1.0);
+        assert!(red(&imgs[2].1) > red(&imgs[1].1) + 0.1, "autumn r/g {:.2} vs summer {:.2}", red(&imgs[2].1), red(&imgs[1].1));
+    });
+}
+
+#[test]
+fn triangle_budget_bounds_a_view_inside_the_forest_on_both_paths() {
+    let scene = demo_scene(3000, 600.0, 3);
+    let cam = Camera::preset(CameraPreset::Ground, &scene.terrain);
+    with_renderer(|r| {
+        let lod = r.lod;
+        r.lod = LodParams { max_triangles: 0, ..lod };
+        render_with(r, Culling::Cpu, &scene, &cam, 240, 160).unwrap();
+        let free = r.last_stats();
+        assert_eq!(free.lod_scale, 1.0);
+        let budget = (free.tree_triangles / 3) as u32;
+        r.lod = LodParams { max_triangles: budget, ..lod };
+        let mut seen = Vec::new();
+        for culling in [Culling::Cpu, Culling::Gpu] {
+            let Some(img) = render_with(r, culling, &scene, &cam, 240, 160) else { continue };
+            let s = r.last_stats();
+            eprintln!("{culling:?}: free {} tris {:?}; budget {budget}: {} tris {:?} scale {}", free.tree_triangles, free.per_level, s.tree_triangles, s.per_level, s.lod_scale);
+            assert!(s.lod_scale > 1.0, "{culling:?}: budget not applied");
+            assert!(s.tree_triangles as f64 <= 1.25 * budget as f64, "{culling:?}: {} triangles for a budget of {budget}", s.tree_triangles);
+            assert_eq!(s.instances_drawn, free.instances_drawn, "the budget changes levels, never hides trees");
+            seen.push((s, img));
+        }
+        r.lod = lod;
+        if let [(a, ia), (b, ib)] = &seen[..] {
+            assert_eq!(a.lod_scale, b.lod_scale, "both paths choose the same factor");
+            assert_eq!(a.per_level, b.per_level);
+            assert!(mean_abs_diff(ia, ib) < 0.5);
+        }
+    });
+}

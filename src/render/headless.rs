@@ -1,8 +1,16 @@
 //! Headless wgpu renderer: terrain, water, sky and instanced trees into an RGBA image.
 //!
-//! Passes per frame: (1) sun shadow map (2048², depth only, terrain and trees), (2) main pass
-//! with 4× MSAA and depth: sky gradient, terrain, trees (one instanced draw per prototype,
-//! level and material), water; resolved and read back with rows padded to 256 bytes.
+//! Passes per frame: (0) culling and level selection, on the CPU ([`build_batches`]) or in a
+//! compute pass (`shaders/cull.wgsl`, see [`Culling`]), (1) sun shadow map (2048², depth only,
+//! terrain and trees), (2) main pass with 4× MSAA and depth: sky gradient, terrain, trees (one
+//! instanced draw — direct on the CPU path, indirect on the GPU path — per prototype, level and
+//! material), water; resolved and read back with rows padded to 256 bytes.
+//!
+//! Trees are opaque, depth-tested, and all fades (level cross-fades, timelapse opacity, leaf
+//! amount) are screen-door dithers decided per pixel from the screen position and per-tree
+//! constants, never by blending; so the image does not depend on the order in which instances
+//! are drawn, and the GPU path's atomically compacted (unordered) instance lists give the same
+//! pixels as the CPU path's ordered ones.
 
 use std::hash::Hasher;
 
@@ -10,8 +18,8 @@ use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
 use super::camera::Camera;
-use super::instanced::{build_batches, Batches, InstanceRaw};
-use super::lod::LodParams;
+use super::instanced::{build_batches, instance_record, level_triangles, Batches, InstanceRaw};
+use super::lod::{drawn_levels, Frustum, LodParams, Silhouette, SILHOUETTE_BINS};
 use super::scene::Scene;
 use crate::{Error, Result};
 
@@ -33,6 +41,76 @@ struct Globals {
     sky_horizon: [f32; 4],
     wind: [f32; 4],
     params: [f32; 4],
+    facing: [f32; 4],
+}
+
+/// Per-prototype outline record of `shaders/scene.wgsl` (`Sil`).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct SilRaw {
+    w: [f32; SILHOUETTE_BINS],
+    info: [f32; 4],
+}
+
+/// Uniforms of `shaders/cull.wgsl` (`Params`).
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct CullParams {
+    planes: [[f32; 4]; 6],
+    eye: [f32; 4],
+    lod: [f32; 4],
+    misc: [f32; 4],
+    counts: [u32; 4],
+}
+
+/// Where culling and level-of-detail selection run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Culling {
+    /// On the GPU when the adapter supports compute shaders and indirect draws (and the
+    /// compacted buffers fit its limits), else on the CPU.
+    #[default]
+    Auto,
+    /// Always on the CPU (rayon), with direct instanced draws.
+    Cpu,
+    /// Always in the compute pass; [`Renderer::render`] fails with [`Error::Render`] when the
+    /// adapter cannot do it.
+    Gpu,
+}
+
+/// Per-frame state of the GPU culling path: one slot per (prototype, drawn level).
+struct GpuSlot {
+    prototype: usize,
+    level: usize,
+    /// First compacted instance of the slot and its capacity (instances).
+    base: u32,
+    cap: u32,
+}
+
+struct GpuCull {
+    pipeline: wgpu::ComputePipeline,
+    hist: wgpu::ComputePipeline,
+    choose: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    params: wgpu::Buffer,
+    /// src, protos, dst, args, readback (buffer, capacity in bytes)
+    src: Option<(wgpu::Buffer, u64)>,
+    protos: Option<(wgpu::Buffer, u64)>,
+    dst: Option<(wgpu::Buffer, u64)>,
+    args: Option<(wgpu::Buffer, u64)>,
+    readback: Option<(wgpu::Buffer, u64)>,
+}
+
+struct GpuFrame {
+    slots: Vec<GpuSlot>,
+    budget: bool,
+    invalid: usize,
+    valid: usize,
+    args_bytes: u64,
+}
+
+enum FrameDraws {
+    Cpu(Batches),
+    Gpu(GpuFrame),
 }
 
 #[repr(C)]
@@ -65,7 +143,36 @@ struct GpuScene {
     terrain_ib: Option<wgpu::Buffer>,
     terrain_count: u32,
     water_vb: Option<wgpu::Buffer>,
+    /// Drawn levels per prototype (chain meshes, then the billboard).
     protos: Vec<Vec<GpuLevel>>,
+    bind_main: wgpu::BindGroup,
+    bind_shadow: wgpu::BindGroup,
+}
+
+/// The billboard impostor level of a prototype with outline `s`: a vertical quad (material 2,
+/// turned towards the viewer in the vertex shader) spanning the crown width and the full height,
+/// and a horizontal quad (material 3) in the upper crown, which the vertex shader shows only
+/// for views from well above (top-down maps). Vertex normals carry the
+/// outline coordinates the fragment shader carves with (side: a ∈ −1..1 across, z 0..1 up;
+/// top: a, b ∈ −1..1).
+fn billboard_vertices(s: &Silhouette) -> (Vec<TreeVertex>, Vec<u32>) {
+    let r = s.radius;
+    // the top quad sits a third of the way from the widest point to the top, as wide as the
+    // crown there (≥ half the widest): the crown seen from above
+    let zc = s.widest_z + 0.35 * (s.crown_top - s.widest_z).max(0.0);
+    let rt = r * s.width_at(zc).max(0.5);
+    let v = |x: f32, y: f32, z: f32, a: f32, b: f32, mat: f32| TreeVertex { pos: [x, y, z], normal: [a, b, 0.0], mat };
+    let verts = vec![
+        v(-r, 0.0, 0.0, -1.0, 0.0, 2.0),
+        v(r, 0.0, 0.0, 1.0, 0.0, 2.0),
+        v(r, 0.0, 1.0, 1.0, 1.0, 2.0),
+        v(-r, 0.0, 1.0, -1.0, 1.0, 2.0),
+        v(-rt, -rt, zc, -1.0, -1.0, 3.0),
+        v(rt, -rt, zc, 1.0, -1.0, 3.0),
+        v(rt, rt, zc, 1.0, 1.0, 3.0),
+        v(-rt, rt, zc, -1.0, 1.0, 3.0),
+    ];
+    (verts, vec![0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7])
 }
 
 struct Targets {
@@ -93,8 +200,13 @@ pub struct FrameStats {
     pub culled: usize,
     /// Instances skipped for invalid data.
     pub invalid: usize,
-    /// Drawn instances per level of detail.
+    /// Drawn instances per level of detail (level 3 = billboard impostor for 4-level chains).
     pub per_level: [usize; 4],
+    /// Whether culling and level selection ran in the GPU compute pass.
+    pub gpu_culling: bool,
+    /// Factor by which the level switch sizes were raised to meet
+    /// [`LodParams::max_triangles`] (1 = not needed).
+    pub lod_scale: f32,
 }
 
 /// A headless renderer bound to one wgpu device.
@@ -111,13 +223,17 @@ pub struct Renderer {
     globals: wgpu::Buffer,
     shadow_globals: wgpu::Buffer,
     shadow_view: wgpu::TextureView,
-    bind_main: wgpu::BindGroup,
-    bind_shadow: wgpu::BindGroup,
+    layout_main: wgpu::BindGroupLayout,
+    layout_shadow: wgpu::BindGroupLayout,
+    sampler: wgpu::Sampler,
+    cull: Option<GpuCull>,
     instance_buf: Option<(wgpu::Buffer, u64)>,
     scene: Option<GpuScene>,
     targets: Option<Targets>,
     /// Level-of-detail parameters used by [`Renderer::render`].
     pub lod: LodParams,
+    /// Where culling and level selection run (default [`Culling::Auto`]).
+    pub culling: Culling,
     last: FrameStats,
 }
 
@@ -128,7 +244,7 @@ fn terrain_layout() -> wgpu::VertexBufferLayout<'static> {
 
 fn tree_layouts() -> [wgpu::VertexBufferLayout<'static>; 2] {
     const V: [wgpu::VertexAttribute; 3] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32];
-    const I: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4];
+    const I: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4];
     [
         wgpu::VertexBufferLayout { array_stride: std::mem::size_of::<TreeVertex>() as u64, step_mode: wgpu::VertexStepMode::Vertex, attributes: &V },
         wgpu::VertexBufferLayout { array_stride: std::mem::size_of::<InstanceRaw>() as u64, step_mode: wgpu::VertexStepMode::Instance, attributes: &I },
@@ -150,23 +266,35 @@ impl Renderer {
                 .map_err(|e| Error::Render(format!("no adapter found (install a GPU driver or Mesa's lavapipe, Debian package mesa-vulkan-drivers): {e}")))?,
         };
         let adapter_info = adapter.get_info();
-        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-            label: Some("sylva"),
-            required_features: wgpu::Features::empty(),
-            required_limits: wgpu::Limits::downlevel_defaults().using_resolution(adapter.limits()),
-            ..Default::default()
-        }))
-        .map_err(|e| Error::Render(format!("cannot create device on {}: {e}", adapter_info.name)))?;
-        Self::with_device(device, queue, adapter_info)
+        let al = adapter.limits();
+        let flags = adapter.get_downlevel_capabilities().flags;
+        // GPU culling needs compute shaders, indirect draws and 4 storage buffers per stage
+        let gpu_ok = flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS | wgpu::DownlevelFlags::INDIRECT_EXECUTION)
+            && al.max_storage_buffers_per_shader_stage >= 4
+            && al.max_compute_invocations_per_workgroup >= 64
+            && al.max_compute_workgroup_size_x >= 64;
+        let mut limits = wgpu::Limits::downlevel_defaults().using_resolution(al.clone());
+        limits.max_storage_buffer_binding_size = al.max_storage_buffer_binding_size;
+        limits.max_buffer_size = al.max_buffer_size;
+        limits.max_storage_buffers_per_shader_stage = al.max_storage_buffers_per_shader_stage.max(limits.max_storage_buffers_per_shader_stage);
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor { label: Some("sylva"), required_features: wgpu::Features::empty(), required_limits: limits, ..Default::default() }))
+            .map_err(|e| Error::Render(format!("cannot create device on {}: {e}", adapter_info.name)))?;
+        Self::with_device(device, queue, adapter_info, gpu_ok)
     }
 
-    fn with_device(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo) -> Result<Self> {
+    fn with_device(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo, gpu_ok: bool) -> Result<Self> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("scene.wgsl"), source: wgpu::ShaderSource::Wgsl(include_str!("shaders/scene.wgsl").into()) });
         let uniform_entry = wgpu::BindGroupLayoutEntry {
             binding: 0,
             visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
             ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
+            count: None,
+        };
+        let sil_entry = wgpu::BindGroupLayoutEntry {
+            binding: 3,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: true }, has_dynamic_offset: false, min_binding_size: None },
             count: None,
         };
         let layout_main = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -180,9 +308,10 @@ impl Renderer {
                     count: None,
                 },
                 wgpu::BindGroupLayoutEntry { binding: 2, visibility: wgpu::ShaderStages::FRAGMENT, ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison), count: None },
+                sil_entry,
             ],
         });
-        let layout_shadow = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("shadow"), entries: &[uniform_entry] });
+        let layout_shadow = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("shadow"), entries: &[uniform_entry, sil_entry] });
         let pl_main = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("main"), bind_group_layouts: &[Some(&layout_main)], immediate_size: 0 });
         let pl_shadow = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("shadow"), bind_group_layouts: &[Some(&layout_shadow)], immediate_size: 0 });
 
@@ -242,16 +371,7 @@ impl Renderer {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
-        let bind_main = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("main"),
-            layout: &layout_main,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: globals.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&shadow_view) },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&sampler) },
-            ],
-        });
-        let bind_shadow = device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some("shadow"), layout: &layout_shadow, entries: &[wgpu::BindGroupEntry { binding: 0, resource: shadow_globals.as_entire_binding() }] });
+        let cull = if gpu_ok { Some(Self::cull_pipeline(&device)) } else { None };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(Error::Render(format!("pipeline creation failed on {}: {e}", adapter_info.name)));
         }
@@ -268,14 +388,39 @@ impl Renderer {
             globals,
             shadow_globals,
             shadow_view,
-            bind_main,
-            bind_shadow,
+            layout_main,
+            layout_shadow,
+            sampler,
+            cull,
             instance_buf: None,
             scene: None,
             targets: None,
             lod: LodParams::default(),
+            culling: Culling::Auto,
             last: FrameStats::default(),
         })
+    }
+
+    fn cull_pipeline(device: &wgpu::Device) -> GpuCull {
+        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("cull.wgsl"), source: wgpu::ShaderSource::Wgsl(include_str!("shaders/cull.wgsl").into()) });
+        let buf = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry { binding, visibility: wgpu::ShaderStages::COMPUTE, ty: wgpu::BindingType::Buffer { ty, has_dynamic_offset: false, min_binding_size: None }, count: None };
+        let ro = wgpu::BufferBindingType::Storage { read_only: true };
+        let rw = wgpu::BufferBindingType::Storage { read_only: false };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("cull"),
+            entries: &[buf(0, wgpu::BufferBindingType::Uniform), buf(1, ro), buf(2, ro), buf(3, rw), buf(4, rw)],
+        });
+        let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("cull"), bind_group_layouts: &[Some(&layout)], immediate_size: 0 });
+        let make = |entry: &str| device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor { label: Some(entry), layout: Some(&pl), module: &shader, entry_point: Some(entry), compilation_options: Default::default(), cache: None });
+        let (pipeline, hist, choose) = (make("cull"), make("hist"), make("choose"));
+        let params = device.create_buffer(&wgpu::BufferDescriptor { label: Some("cull params"), size: std::mem::size_of::<CullParams>() as u64, usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+        GpuCull { pipeline, hist, choose, layout, params, src: None, protos: None, dst: None, args: None, readback: None }
+    }
+
+    /// Whether this adapter can cull and select levels in a compute pass with indirect draws
+    /// (wgpu downlevel flags `COMPUTE_SHADERS` and `INDIRECT_EXECUTION`, ≥ 4 storage buffers).
+    pub fn gpu_culling_supported(&self) -> bool {
+        self.cull.is_some()
     }
 
     /// Name and kind of the adapter in use (e.g. "llvmpipe (LLVM 19.1.7, 256 bits)", Cpu).
@@ -339,10 +484,20 @@ impl Renderer {
             let v = [c(lo[0], lo[1]), c(hi[0], lo[1]), c(hi[0], hi[1]), c(lo[0], lo[1]), c(hi[0], hi[1]), c(lo[0], hi[1])];
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("water"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX })
         });
+        let sils: Vec<Silhouette> = scene
+            .prototypes
+            .iter()
+            .map(|p| {
+                let mut s = Silhouette::from_chain(&p.lods);
+                s.radius = p.normalised_crown_radius();
+                s
+            })
+            .collect();
         let mut protos = Vec::new();
         for (pi, p) in scene.prototypes.iter().enumerate() {
             let mut levels = Vec::new();
-            for (li, l) in p.lods.levels.iter().enumerate() {
+            let n_mesh = drawn_levels(p.lods.levels.len()) - 1;
+            for (li, l) in p.lods.levels.iter().take(n_mesh).enumerate() {
                 let mut verts = Vec::new();
                 let mut idx = Vec::new();
                 let mut ranges = Vec::new();
@@ -372,9 +527,36 @@ impl Renderer {
                     leaves: ranges[1].clone(),
                 });
             }
+            let (verts, idx) = billboard_vertices(&sils[pi]);
+            levels.push(GpuLevel {
+                vb: d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("billboard vb"), contents: bytemuck::cast_slice(&verts), usage: wgpu::BufferUsages::VERTEX }),
+                ib: d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("billboard ib"), contents: bytemuck::cast_slice(&idx), usage: wgpu::BufferUsages::INDEX }),
+                bark: 0..0,
+                leaves: 0..idx.len() as u32,
+            });
             protos.push(levels);
         }
-        self.scene = Some(GpuScene { fingerprint: fp, terrain_vb, terrain_ib, terrain_count: t.indices.len() as u32, water_vb, protos });
+        let mut sil_raw: Vec<SilRaw> = sils.iter().map(|s| SilRaw { w: s.width, info: [s.crown_bottom, s.crown_top, s.trunk_half_width, s.widest_z] }).collect();
+        if sil_raw.is_empty() {
+            sil_raw.push(<SilRaw as bytemuck::Zeroable>::zeroed());
+        }
+        let sil_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("silhouettes"), contents: bytemuck::cast_slice(&sil_raw), usage: wgpu::BufferUsages::STORAGE });
+        let bind_main = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("main"),
+            layout: &self.layout_main,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.globals.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&self.shadow_view) },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() },
+            ],
+        });
+        let bind_shadow = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadow"),
+            layout: &self.layout_shadow,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.shadow_globals.as_entire_binding() }, wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() }],
+        });
+        self.scene = Some(GpuScene { fingerprint: fp, terrain_vb, terrain_ib, terrain_count: t.indices.len() as u32, water_vb, protos, bind_main, bind_shadow });
         Ok(())
     }
 
@@ -421,12 +603,40 @@ impl Renderer {
     fn render_inner(&mut self, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
         self.upload(scene)?;
         self.ensure_targets(width, height);
-        let batches = build_batches(scene, camera, width, height, &self.lod);
+        let gpu_frame = match self.culling {
+            Culling::Cpu => None,
+            Culling::Auto => {
+                if self.cull.is_some() {
+                    self.prepare_gpu_cull(scene, camera, width, height)?
+                } else {
+                    None
+                }
+            }
+            Culling::Gpu => {
+                if self.cull.is_none() {
+                    return Err(Error::Render(format!("GPU culling forced but {} lacks compute shaders or indirect draws", self.adapter_info.name)));
+                }
+                match self.prepare_gpu_cull(scene, camera, width, height)? {
+                    Some(f) => Some(f),
+                    None => return Err(Error::Render(format!("GPU culling forced but {} instances exceed the adapter's storage buffer limits", scene.instances.len()))),
+                }
+            }
+        };
+        let draws = match gpu_frame {
+            Some(f) => FrameDraws::Gpu(f),
+            None => {
+                let b = build_batches(scene, camera, width, height, &self.lod);
+                self.write_instances(&b);
+                FrameDraws::Cpu(b)
+            }
+        };
         self.write_globals(scene, camera, width, height);
-        self.write_instances(&batches);
         let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
-        self.encode_shadow(&mut enc, &batches);
-        let (tree_tris, tree_draws) = self.encode_main(&mut enc, &batches);
+        if let FrameDraws::Gpu(f) = &draws {
+            self.encode_cull(&mut enc, f);
+        }
+        self.encode_shadow(&mut enc, &draws);
+        let tree_draws = self.encode_main(&mut enc, &draws);
         let (targets, gpu) = match (&self.targets, &self.scene) {
             (Some(t), Some(g)) => (t, g),
             _ => return Err(Error::Render("internal: targets not created".into())),
@@ -436,14 +646,32 @@ impl Renderer {
             wgpu::TexelCopyBufferInfo { buffer: &targets.readback, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(targets.padded_row), rows_per_image: Some(height) } },
             wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
         );
+        let cull_rb = match (&draws, &self.cull) {
+            (FrameDraws::Gpu(f), Some(GpuCull { args: Some((args, _)), readback: Some((rb, _)), .. })) => {
+                enc.copy_buffer_to_buffer(args, 0, rb, 0, f.args_bytes);
+                Some(rb)
+            }
+            _ => None,
+        };
         let sub = self.queue.submit(Some(enc.finish()));
         let slice = targets.readback.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();
+        let tx2 = tx.clone();
         slice.map_async(wgpu::MapMode::Read, move |r| {
             let _ = tx.send(r);
         });
+        let args_bytes = if let FrameDraws::Gpu(f) = &draws { f.args_bytes } else { 0 };
+        if let Some(rb) = cull_rb {
+            rb.slice(..args_bytes).map_async(wgpu::MapMode::Read, move |r| {
+                let _ = tx2.send(r);
+            });
+        } else {
+            drop(tx2);
+        }
         self.device.poll(wgpu::PollType::Wait { submission_index: Some(sub), timeout: None }).map_err(|e| Error::Render(format!("device poll failed: {e}")))?;
-        rx.recv().map_err(|e| Error::Render(format!("readback channel: {e}")))?.map_err(|e| Error::Render(format!("readback map failed: {e}")))?;
+        for _ in 0..1 + cull_rb.is_some() as usize {
+            rx.recv().map_err(|e| Error::Render(format!("readback channel: {e}")))?.map_err(|e| Error::Render(format!("readback map failed: {e}")))?;
+        }
         let mut img = image::RgbaImage::new(width, height);
         {
             let view = slice.get_mapped_range().map_err(|e| Error::Render(format!("readback range: {e}")))?;
@@ -455,19 +683,189 @@ impl Renderer {
         }
         targets.readback.unmap();
         let mut per_level = [0usize; 4];
-        for (i, n) in batches.per_level.iter().enumerate() {
-            per_level[i.min(3)] += n;
-        }
+        let mut lod_scale = 1.0f32;
+        let (tree_tris, culled, invalid, drawn) = match &draws {
+            FrameDraws::Cpu(b) => {
+                for (i, n) in b.per_level.iter().enumerate() {
+                    per_level[i.min(3)] += n;
+                }
+                lod_scale = b.lod_scale;
+                (b.triangles, b.culled, b.invalid, b.per_level.iter().sum())
+            }
+            FrameDraws::Gpu(f) => {
+                let mut tris = 0u64;
+                if let Some(rb) = cull_rb {
+                    {
+                        let view = rb.slice(..args_bytes).get_mapped_range().map_err(|e| Error::Render(format!("culling readback range: {e}")))?;
+                        let words: &[u32] = bytemuck::cast_slice(&view);
+                        for (k, sl) in f.slots.iter().enumerate() {
+                            let n = words[k * 10 + 1] as u64;
+                            tris += n * level_triangles(&scene.prototypes[sl.prototype], sl.level);
+                        }
+                        let off = f.slots.len() * 10;
+                        for l in 0..4 {
+                            per_level[l] = words[off + l] as usize;
+                        }
+                        if let Some(&w) = words.last() {
+                            lod_scale = f32::from_bits(w);
+                        }
+                    }
+                    rb.unmap();
+                }
+                let drawn: usize = per_level.iter().sum();
+                (tris, f.valid.saturating_sub(drawn), f.invalid, drawn)
+            }
+        };
         self.last = FrameStats {
             triangles: tree_tris + gpu.terrain_count as u64 / 3 + if gpu.water_vb.is_some() { 2 } else { 0 },
             tree_triangles: tree_tris,
             tree_draws,
-            instances_drawn: batches.per_level.iter().sum(),
-            culled: batches.culled,
-            invalid: batches.invalid,
+            instances_drawn: drawn,
+            culled,
+            invalid,
             per_level,
+            gpu_culling: matches!(draws, FrameDraws::Gpu(_)),
+            lod_scale,
         };
         Ok(img)
+    }
+
+    /// Uploads the instance records and culling parameters for the compute pass. `None` when
+    /// the compacted buffers would exceed the adapter's limits (the caller falls back to the
+    /// CPU path or fails).
+    fn prepare_gpu_cull(&mut self, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<Option<GpuFrame>> {
+        use rayon::prelude::*;
+        let crown_r0: Vec<f32> = scene.prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
+        let recs: Vec<Option<InstanceRaw>> = scene.instances.par_iter().map(|t| instance_record(t, &scene.prototypes, &crown_r0)).collect();
+        let invalid = recs.iter().filter(|r| r.is_none()).count();
+        let src: Vec<InstanceRaw> = recs.into_iter().flatten().collect();
+        let n_protos = scene.prototypes.len();
+        let mut per_proto = vec![0u32; n_protos];
+        for r in &src {
+            per_proto[r.p3[0] as usize] += 1;
+        }
+        // slots: (prototype, level), capacity = instances of the prototype
+        let mut slots = Vec::new();
+        let mut proto_words: Vec<[u32; 4]> = Vec::with_capacity(n_protos);
+        let mut base = 0u64;
+        for (p, proto) in scene.prototypes.iter().enumerate() {
+            let n = drawn_levels(proto.lods.levels.len());
+            proto_words.push([n as u32, slots.len() as u32, 0, 0]);
+            for l in 0..n {
+                slots.push(GpuSlot { prototype: p, level: l, base: base as u32, cap: per_proto[p] });
+                base += per_proto[p] as u64;
+            }
+        }
+        let limits = self.device.limits();
+        let rec = std::mem::size_of::<InstanceRaw>() as u64;
+        let dst_bytes = (base * rec).max(256);
+        let src_bytes = (src.len() as u64 * rec).max(256);
+        let max_bind = limits.max_storage_buffer_binding_size;
+        if dst_bytes > max_bind || dst_bytes > limits.max_buffer_size || src_bytes > max_bind || base > u32::MAX as u64 / 2 {
+            return Ok(None);
+        }
+        // slot bases packed after the prototype records, 4 per record
+        for c in slots.chunks(4) {
+            let mut w = [0u32; 4];
+            for (k, s) in c.iter().enumerate() {
+                w[k] = s.base;
+            }
+            proto_words.push(w);
+        }
+        // triangles per drawn level, one record per prototype
+        let cost_first = proto_words.len();
+        for p in &scene.prototypes {
+            proto_words.push(super::instanced::level_costs(p));
+        }
+        if proto_words.is_empty() {
+            proto_words.push([0; 4]);
+        }
+        // indirect args: per slot bark and leaves records, then 4 per-level counters
+        let mut args: Vec<u32> = Vec::with_capacity(slots.len() * 10 + 4);
+        let Some(gs) = &self.scene else { return Err(Error::Render("internal: scene not uploaded".into())) };
+        for s in &slots {
+            let lv = gs.protos.get(s.prototype).and_then(|p| p.get(s.level));
+            for r in lv.map(|l| [l.bark.clone(), l.leaves.clone()]).unwrap_or([0..0, 0..0]) {
+                args.extend_from_slice(&[r.len() as u32, 0, r.start, 0, 0]);
+            }
+        }
+        // per-level counters, size histogram, budget factor (1.0 unless `choose` runs)
+        args.extend(std::iter::repeat_n(0u32, 4 + n_protos * super::lod::SIZE_BINS));
+        args.push(1.0f32.to_bits());
+        let args_bytes = (args.len() * 4) as u64;
+        let aspect = width as f32 / height as f32;
+        let vp = camera.view_proj(aspect);
+        let fr = Frustum::from_view_proj(vp);
+        let ortho = matches!(camera.projection, super::camera::Projection::Orthographic { .. });
+        let ppm = match camera.projection {
+            super::camera::Projection::Perspective { fov_y_deg } => height as f32 / (2.0 * (fov_y_deg.to_radians() * 0.5).tan()),
+            super::camera::Projection::Orthographic { half_height } => height as f32 / (2.0 * half_height.max(1e-3)),
+        };
+        let groups = (src.len() as u32).div_ceil(64);
+        let gx = groups.min(limits.max_compute_workgroups_per_dimension.max(1));
+        let params = CullParams {
+            planes: fr.planes().map(|p| p.to_array()),
+            eye: [camera.eye[0], camera.eye[1], camera.eye[2], if ortho { 1.0 } else { 0.0 }],
+            lod: [self.lod.switch_px[0], self.lod.switch_px[1], self.lod.switch_px[2], self.lod.band],
+            misc: [self.lod.min_px, ppm, self.lod.max_triangles as f32, cost_first as f32],
+            counts: [src.len() as u32, gx, n_protos as u32, (slots.len() * 10) as u32],
+        };
+        let Some(cull) = self.cull.as_mut() else { return Ok(None) };
+        let d = &self.device;
+        let ensure = |slot: &mut Option<(wgpu::Buffer, u64)>, need: u64, usage: wgpu::BufferUsages, label: &str| {
+            if slot.as_ref().map(|(_, c)| *c < need).unwrap_or(true) {
+                let cap = need.next_power_of_two();
+                *slot = Some((d.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size: cap, usage, mapped_at_creation: false }), cap));
+            }
+        };
+        use wgpu::BufferUsages as U;
+        ensure(&mut cull.src, src_bytes, U::STORAGE | U::COPY_DST, "cull src");
+        ensure(&mut cull.protos, (proto_words.len() * 16) as u64, U::STORAGE | U::COPY_DST, "cull protos");
+        ensure(&mut cull.dst, dst_bytes, U::STORAGE | U::VERTEX, "cull dst");
+        ensure(&mut cull.args, args_bytes.max(64), U::STORAGE | U::INDIRECT | U::COPY_SRC | U::COPY_DST, "cull args");
+        ensure(&mut cull.readback, args_bytes.max(64), U::MAP_READ | U::COPY_DST, "cull readback");
+        if let (Some((sb, _)), Some((pb, _)), Some((ab, _))) = (&cull.src, &cull.protos, &cull.args) {
+            if !src.is_empty() {
+                self.queue.write_buffer(sb, 0, bytemuck::cast_slice(&src));
+            }
+            self.queue.write_buffer(pb, 0, bytemuck::cast_slice(&proto_words));
+            self.queue.write_buffer(ab, 0, bytemuck::cast_slice(&args));
+        }
+        self.queue.write_buffer(&cull.params, 0, bytemuck::bytes_of(&params));
+        let valid = src.len();
+        Ok(Some(GpuFrame { slots, budget: self.lod.max_triangles > 0, invalid, valid, args_bytes }))
+    }
+
+    fn encode_cull(&self, enc: &mut wgpu::CommandEncoder, f: &GpuFrame) {
+        let Some(cull) = &self.cull else { return };
+        let (Some((sb, _)), Some((pb, _)), Some((db, _)), Some((ab, _))) = (&cull.src, &cull.protos, &cull.dst, &cull.args) else { return };
+        if f.valid == 0 {
+            return;
+        }
+        let bind = self.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("cull"),
+            layout: &cull.layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: cull.params.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: sb.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 2, resource: pb.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: db.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: ab.as_entire_binding() },
+            ],
+        });
+        let groups = (f.valid as u32).div_ceil(64);
+        let gx = groups.min(self.device.limits().max_compute_workgroups_per_dimension.max(1));
+        let gy = groups.div_ceil(gx);
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("cull"), timestamp_writes: None });
+        pass.set_bind_group(0, &bind, &[]);
+        if f.budget {
+            pass.set_pipeline(&cull.hist);
+            pass.dispatch_workgroups(gx, gy, 1);
+            pass.set_pipeline(&cull.choose);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        pass.set_pipeline(&cull.pipeline);
+        pass.dispatch_workgroups(gx, gy, 1);
     }
 
     fn light_matrix(scene: &Scene) -> (Mat4, f32) {
@@ -512,9 +910,11 @@ impl Renderer {
             sky_horizon: v3(scene.sky.horizon, 0.0),
             wind: [wd.x, wd.y, scene.wind.directed, scene.wind.undirected],
             params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.1 / size],
+            facing: if ortho { v3((Vec3::from(camera.eye) - Vec3::from(camera.target)).normalize_or(Vec3::Z).to_array(), 1.0) } else { [0.0; 4] },
         };
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         g.view_proj = g.light_view_proj;
+        g.facing = v3(sun, 1.0);
         self.queue.write_buffer(&self.shadow_globals, 0, bytemuck::bytes_of(&g));
     }
 
@@ -533,28 +933,54 @@ impl Renderer {
         }
     }
 
-    fn draw_trees<'a>(&'a self, pass: &mut wgpu::RenderPass<'a>, b: &Batches) -> (u64, u32) {
-        let (Some(gpu), Some((ibuf, _))) = (&self.scene, &self.instance_buf) else { return (0, 0) };
-        let mut tris = 0u64;
-        let mut draws = 0u32;
-        pass.set_vertex_buffer(1, ibuf.slice(..));
-        for d in &b.draws {
-            let Some(level) = gpu.protos.get(d.prototype).and_then(|p| p.get(d.level)) else { continue };
-            pass.set_vertex_buffer(0, level.vb.slice(..));
-            pass.set_index_buffer(level.ib.slice(..), wgpu::IndexFormat::Uint32);
-            let inst = d.first..d.first + d.count;
-            for r in [&level.bark, &level.leaves] {
-                if !r.is_empty() {
-                    pass.draw_indexed(r.clone(), 0, inst.clone());
-                    tris += (r.len() as u64 / 3) * d.count as u64;
-                    draws += 1;
+    /// Records the tree draws; returns the number of draw calls.
+    fn draw_trees<'a>(&'a self, pass: &mut wgpu::RenderPass<'a>, draws: &FrameDraws) -> u32 {
+        let Some(gpu) = &self.scene else { return 0 };
+        let mut n = 0u32;
+        match draws {
+            FrameDraws::Cpu(b) => {
+                let Some((ibuf, _)) = &self.instance_buf else { return 0 };
+                pass.set_vertex_buffer(1, ibuf.slice(..));
+                for d in &b.draws {
+                    let Some(level) = gpu.protos.get(d.prototype).and_then(|p| p.get(d.level)) else { continue };
+                    pass.set_vertex_buffer(0, level.vb.slice(..));
+                    pass.set_index_buffer(level.ib.slice(..), wgpu::IndexFormat::Uint32);
+                    let inst = d.first..d.first + d.count;
+                    for r in [&level.bark, &level.leaves] {
+                        if !r.is_empty() {
+                            pass.draw_indexed(r.clone(), 0, inst.clone());
+                            n += 1;
+                        }
+                    }
+                }
+            }
+            FrameDraws::Gpu(f) => {
+                let Some(GpuCull { dst: Some((dst, _)), args: Some((args, _)), .. }) = &self.cull else { return 0 };
+                let rec = std::mem::size_of::<InstanceRaw>() as u64;
+                for (k, s) in f.slots.iter().enumerate() {
+                    if s.cap == 0 {
+                        continue;
+                    }
+                    let Some(level) = gpu.protos.get(s.prototype).and_then(|p| p.get(s.level)) else { continue };
+                    pass.set_vertex_buffer(0, level.vb.slice(..));
+                    pass.set_index_buffer(level.ib.slice(..), wgpu::IndexFormat::Uint32);
+                    // indirect first_instance must be 0 without INDIRECT_FIRST_INSTANCE: bind the
+                    // slot's range of the compacted buffer instead
+                    pass.set_vertex_buffer(1, dst.slice(s.base as u64 * rec..(s.base as u64 + s.cap as u64) * rec));
+                    for (m, r) in [&level.bark, &level.leaves].into_iter().enumerate() {
+                        if !r.is_empty() {
+                            pass.draw_indexed_indirect(args, (k * 40 + m * 20) as u64);
+                            n += 1;
+                        }
+                    }
                 }
             }
         }
-        (tris, draws)
+        n
     }
 
-    fn encode_shadow(&self, enc: &mut wgpu::CommandEncoder, b: &Batches) {
+    fn encode_shadow(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws) {
+        let Some(gpu) = &self.scene else { return };
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("shadow"),
             color_attachments: &[],
@@ -563,21 +989,19 @@ impl Renderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_bind_group(0, &self.bind_shadow, &[]);
-        if let Some(gpu) = &self.scene {
-            if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
-                pass.set_pipeline(&self.terrain_shadow);
-                pass.set_vertex_buffer(0, vb.slice(..));
-                pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
-            }
+        pass.set_bind_group(0, &gpu.bind_shadow, &[]);
+        if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
+            pass.set_pipeline(&self.terrain_shadow);
+            pass.set_vertex_buffer(0, vb.slice(..));
+            pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
         }
         pass.set_pipeline(&self.tree_shadow);
-        self.draw_trees(&mut pass, b);
+        self.draw_trees(&mut pass, draws);
     }
 
-    fn encode_main(&self, enc: &mut wgpu::CommandEncoder, b: &Batches) -> (u64, u32) {
-        let Some(t) = &self.targets else { return (0, 0) };
+    fn encode_main(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws) -> u32 {
+        let (Some(t), Some(gpu)) = (&self.targets, &self.scene) else { return 0 };
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("main"),
             color_attachments: &[Some(wgpu::RenderPassColorAttachment { view: &t.msaa, depth_slice: None, resolve_target: Some(&t.resolve_view), ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard } })],
@@ -586,20 +1010,18 @@ impl Renderer {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_bind_group(0, &self.bind_main, &[]);
+        pass.set_bind_group(0, &gpu.bind_main, &[]);
         pass.set_pipeline(&self.sky);
         pass.draw(0..3, 0..1);
-        if let Some(gpu) = &self.scene {
-            if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
-                pass.set_pipeline(&self.terrain);
-                pass.set_vertex_buffer(0, vb.slice(..));
-                pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
-            }
+        if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
+            pass.set_pipeline(&self.terrain);
+            pass.set_vertex_buffer(0, vb.slice(..));
+            pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
         }
         pass.set_pipeline(&self.tree);
-        let r = self.draw_trees(&mut pass, b);
-        if let Some(vb) = self.scene.as_ref().and_then(|g| g.water_vb.as_ref()) {
+        let r = self.draw_trees(&mut pass, draws);
+        if let Some(vb) = &gpu.water_vb {
             pass.set_pipeline(&self.water);
             pass.set_vertex_buffer(0, vb.slice(..));
             pass.draw(0..6, 0..1);

@@ -6,8 +6,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::camera::Camera;
-use super::lod::{select_lod, Frustum, LodParams, LodPick};
-use super::scene::{Scene, TreeInstance};
+use super::lod::{budget_scale, drawn_levels, select_lod_scaled, size_bin, Frustum, LodParams, LodPick, BILLBOARD_TRIANGLES, SIZE_BINS};
+use super::scene::{Prototype, Scene, TreeInstance};
 
 /// Per-instance record read by the tree vertex shader (`shaders/scene.wgsl`, `TreeIn`).
 #[repr(C)]
@@ -23,6 +23,8 @@ pub struct InstanceRaw {
     pub p2: [f32; 4],
     /// Bark colour (linear RGB), dither salt.
     pub bark: [f32; 4],
+    /// Prototype index, level drawn, crown radius for culling (m, 0 when unknown), unused.
+    pub p3: [f32; 4],
 }
 
 /// One (prototype, level) range of [`Batches::instances`].
@@ -53,6 +55,8 @@ pub struct Batches {
     pub invalid: usize,
     /// Number of drawn instances per level (index = level).
     pub per_level: Vec<usize>,
+    /// Factor applied to the switch sizes to meet the triangle budget (1 = none).
+    pub lod_scale: f32,
 }
 
 fn hash01(mut x: u64) -> f32 {
@@ -64,43 +68,103 @@ fn hash01(mut x: u64) -> f32 {
     (x >> 40) as f32 / (1u64 << 24) as f32
 }
 
-/// Bounding sphere (centre, radius) of an instance, in metres.
+/// Bounding sphere (centre, radius) of an instance, in metres: centred at half height, radius
+/// 1.1 × the larger of half the height and the crown radius. The GPU culling shader
+/// (`shaders/cull.wgsl`) uses the same rule.
 pub fn bounding_sphere(t: &TreeInstance) -> (Vec3, f32) {
     let c = Vec3::from(t.position) + Vec3::new(0.0, 0.0, 0.5 * t.height);
     (c, (0.5 * t.height).max(t.crown_radius) * 1.1)
 }
 
+/// Triangles of drawn level `level` of `proto` (see [`drawn_levels`]): the chain's mesh for the
+/// first levels, [`BILLBOARD_TRIANGLES`] for the last.
+pub fn level_triangles(proto: &Prototype, level: usize) -> u64 {
+    let n = drawn_levels(proto.lods.levels.len());
+    if level + 1 >= n {
+        BILLBOARD_TRIANGLES as u64
+    } else {
+        proto.lods.levels.get(level).map(|l| l.triangle_count() as u64).unwrap_or(0)
+    }
+}
+
+/// Triangles of each drawn level of `proto` (0 beyond its levels), saturated to `u32`.
+pub fn level_costs(proto: &Prototype) -> [u32; 4] {
+    let mut c = [0u32; 4];
+    for (l, v) in c.iter_mut().enumerate().take(drawn_levels(proto.lods.levels.len())) {
+        *v = level_triangles(proto, l).min(u32::MAX as u64) as u32;
+    }
+    c
+}
+
+/// The GPU record of `t` before level selection (fade and level fields zero), or `None` for
+/// invalid data (species index out of range, non-positive or non-finite height or position).
+/// `crown_r0` is the prototype's [`Prototype::normalised_crown_radius`].
+pub fn instance_record(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32]) -> Option<InstanceRaw> {
+    let s = t.species as usize;
+    if s >= protos.len() || s >= crown_r0.len() || !(t.height > 0.0) || !t.height.is_finite() || !t.position.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let proto = &protos[s];
+    let valid_r = t.crown_radius > 0.0 && t.crown_radius.is_finite();
+    let sxy = if valid_r { t.crown_radius / crown_r0[s] } else { t.height };
+    Some(InstanceRaw {
+        pos_h: [t.position[0], t.position[1], t.position[2], t.height],
+        p1: [sxy, t.rotation, 0.0, 0.0],
+        leaf: [t.leaf_color[0], t.leaf_color[1], t.leaf_color[2], t.leaf_amount.clamp(0.0, 1.0)],
+        p2: [t.opacity.clamp(0.0, 1.0), hash01(t.id) * std::f32::consts::TAU, hash01(t.id ^ 0x5DEE_CE66) * std::f32::consts::TAU, (1.0 - proto.stiffness).clamp(0.0, 1.0)],
+        bark: [proto.bark_color[0], proto.bark_color[1], proto.bark_color[2], (hash01(t.id ^ 0xA5A5) * 64.0).floor()],
+        p3: [s as f32, 0.0, if valid_r { t.crown_radius } else { 0.0 }, 0.0],
+    })
+}
+
 /// Culls and picks levels for every instance of `scene` seen by `camera` in a `width` ×
 /// `height` pixel frame. Deterministic (instance order preserved within each range).
+///
+/// Levels are those of [`drawn_levels`]: the chain's meshes, then the billboard impostor.
+/// Inside a cross-fade band the instance is recorded twice: at its level with fade side 0 and
+/// at the next coarser level with fade side 1, both with the same fade threshold `blend`, so
+/// that the shader's complementary Bayer masks split the pixels between them.
 pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, params: &LodParams) -> Batches {
     let aspect = width.max(1) as f32 / height.max(1) as f32;
     let frustum = Frustum::from_view_proj(camera.view_proj(aspect));
-    let n_protos = scene.prototypes.len();
-    let levels: Vec<usize> = scene.prototypes.iter().map(|p| p.lods.levels.len()).collect();
-    // (pick) per instance; None = culled, Some(None) = invalid
-    let picks: Vec<Result<Option<LodPick>, ()>> = scene
+    let levels: Vec<usize> = scene.prototypes.iter().map(|p| drawn_levels(p.lods.levels.len())).collect();
+    let crown_r0: Vec<f32> = scene.prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
+    // Err = invalid, Ok(None) = culled by the frustum; else (projected size px, record)
+    let seen: Vec<Result<Option<(f32, InstanceRaw)>, ()>> = scene
         .instances
         .par_iter()
         .map(|t| {
-            let s = t.species as usize;
-            if s >= n_protos || !(t.height > 0.0) || !t.height.is_finite() || !t.position.iter().all(|v| v.is_finite()) {
-                return Err(());
-            }
+            let Some(rec) = instance_record(t, &scene.prototypes, &crown_r0) else { return Err(()) };
             let (c, r) = bounding_sphere(t);
             if !frustum.sphere_visible(c, r) {
                 return Ok(None);
             }
-            let px = camera.projected_size_px(c, t.height, height as f32);
-            Ok(select_lod(px, params, levels[s]))
+            Ok(Some((camera.projected_size_px(c, t.height, height as f32), rec)))
         })
         .collect();
+    // triangle budget: histogram of projected sizes per prototype, then the switch-size factor
+    let scale = if params.max_triangles > 0 {
+        let mut hist = vec![[0u32; SIZE_BINS]; levels.len()];
+        for (px, rec) in seen.iter().flatten().flatten() {
+            if *px >= params.min_px {
+                hist[rec.p3[0] as usize][size_bin(*px)] += 1;
+            }
+        }
+        let costs: Vec<[u32; 4]> = scene.prototypes.iter().map(level_costs).collect();
+        budget_scale(&hist, &costs, &levels, params)
+    } else {
+        1.0
+    };
+    let picks: Vec<Result<Option<(LodPick, InstanceRaw)>, ()>> = seen
+        .into_iter()
+        .map(|v| v.map(|o| o.and_then(|(px, rec)| select_lod_scaled(px, scale, params, levels[rec.p3[0] as usize]).map(|p| (p, rec)))))
+        .collect();
     let mut buckets: Vec<Vec<Vec<InstanceRaw>>> = levels.iter().map(|&n| vec![Vec::new(); n]).collect();
-    let mut out = Batches::default();
+    let mut out = Batches { lod_scale: scale, ..Batches::default() };
     let max_levels = levels.iter().copied().max().unwrap_or(0);
     out.per_level = vec![0; max_levels];
-    let crown_r0: Vec<f32> = scene.prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
     for (t, pick) in scene.instances.iter().zip(&picks) {
-        let pick = match pick {
+        let (pick, mut base) = match pick {
             Err(()) => {
                 out.invalid += 1;
                 continue;
@@ -112,20 +176,14 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
             Ok(Some(p)) => *p,
         };
         let s = t.species as usize;
-        let proto = &scene.prototypes[s];
-        let sxy = if t.crown_radius > 0.0 && t.crown_radius.is_finite() { t.crown_radius / crown_r0[s] } else { t.height };
-        let base = InstanceRaw {
-            pos_h: [t.position[0], t.position[1], t.position[2], t.height],
-            p1: [sxy, t.rotation, pick.blend, 0.0],
-            leaf: [t.leaf_color[0], t.leaf_color[1], t.leaf_color[2], t.leaf_amount.clamp(0.0, 1.0)],
-            p2: [t.opacity.clamp(0.0, 1.0), hash01(t.id) * std::f32::consts::TAU, hash01(t.id ^ 0x5DEE_CE66) * std::f32::consts::TAU, (1.0 - proto.stiffness).clamp(0.0, 1.0)],
-            bark: [proto.bark_color[0], proto.bark_color[1], proto.bark_color[2], (hash01(t.id ^ 0xA5A5) * 64.0).floor()],
-        };
+        base.p1[2] = pick.blend;
+        base.p3[1] = pick.level as f32;
         buckets[s][pick.level].push(base);
         out.per_level[pick.level] += 1;
         if pick.blend > 0.0 && pick.level + 1 < levels[s] {
             let mut coarse = base;
             coarse.p1[3] = 1.0;
+            coarse.p3[1] = (pick.level + 1) as f32;
             buckets[s][pick.level + 1].push(coarse);
         }
     }
@@ -134,8 +192,7 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
             if v.is_empty() {
                 continue;
             }
-            let tris = scene.prototypes[p].lods.levels[l].triangle_count() as u64;
-            out.triangles += tris * v.len() as u64;
+            out.triangles += level_triangles(&scene.prototypes[p], l) * v.len() as u64;
             out.draws.push(DrawBatch { prototype: p, level: l, first: out.instances.len() as u32, count: v.len() as u32 });
             out.instances.extend(v);
         }

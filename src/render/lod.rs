@@ -17,11 +17,207 @@ pub struct LodParams {
     pub band: f32,
     /// Trees shorter than this on screen (px) are not drawn.
     pub min_px: f32,
+    /// Budget of tree triangles per frame (main pass; 0 = unlimited). When the levels picked
+    /// by `switch_px` would exceed it, every switch size is multiplied by the smallest factor
+    /// `2^(k/4)`, k = 1..=40, whose estimated cost fits ([`budget_scale`]), so that a camera
+    /// inside a dense forest does not draw hundreds of full meshes. Billboards (4 triangles per
+    /// tree) are the floor: the budget never hides trees.
+    pub max_triangles: u32,
 }
 
 impl Default for LodParams {
+    /// Full mesh above 240 px, reduced skeleton 100–240 px, crown hull 40–100 px, billboard
+    /// impostor (4 triangles) below 40 px; cross-fade bands of ±25 %; trees under 0.75 px are
+    /// not drawn; at most 6 M tree triangles per frame (switch sizes raised beyond). With these thresholds almost every tree of a landscape view is a billboard,
+    /// so triangles per frame grow with the few trees near the camera, not with the tree count
+    /// (BENCHMARKS.md, "Rendering").
     fn default() -> Self {
-        LodParams { switch_px: [150.0, 50.0, 16.0], band: 0.25, min_px: 0.75 }
+        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000 }
+    }
+}
+
+/// Number of projected-size bins of the budget histogram (quarter octaves from 2^-1 px).
+pub const SIZE_BINS: usize = 64;
+/// Largest exponent `k` of the switch-size factor `2^(k/4)` tried by [`budget_scale`].
+pub const MAX_SCALE_STEPS: u32 = 40;
+
+/// Histogram bin of a projected size (px): `floor(4·log2(px)) + 4`, clamped to 0..64.
+pub fn size_bin(px: f32) -> usize {
+    ((px.log2() * 4.0).floor() as i32 + 4).clamp(0, SIZE_BINS as i32 - 1) as usize
+}
+
+/// Representative size (px) of histogram bin `b` (its geometric centre).
+pub fn bin_px(b: usize) -> f32 {
+    ((b as f32 - 4.0 + 0.5) / 4.0).exp2()
+}
+
+/// The level pick of a tree `size_px` tall with switch sizes scaled by `scale` (≥ 1):
+/// `None` below `params.min_px` (unscaled: the budget never hides trees), else
+/// [`select_lod`] of `size_px / scale`.
+pub fn select_lod_scaled(size_px: f32, scale: f32, params: &LodParams, n_levels: usize) -> Option<LodPick> {
+    if !(size_px >= params.min_px) {
+        return None;
+    }
+    select_lod(size_px / scale, &LodParams { min_px: 0.0, ..*params }, n_levels)
+}
+
+/// The switch-size factor that keeps a frame within `params.max_triangles`: the smallest
+/// `2^(k/4)`, k = 0..=[`MAX_SCALE_STEPS`], for which `Σ_p Σ_b hist[p][b] · cost` (each bin
+/// at its centre size [`bin_px`], cost = triangles of the picked level plus those of the next
+/// level inside a cross-fade band) is within the budget; the largest factor when none is; 1
+/// when the budget is 0. `hist[p][b]` counts visible trees of prototype `p` in size bin `b`
+/// ([`size_bin`]), `costs[p][l]` the triangles of drawn level `l`, `n_levels[p]` the drawn
+/// levels. Summed in `f32` in this order, exactly as `shaders/cull.wgsl` (`choose`) does, so
+/// both culling paths pick the same factor.
+pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams) -> f32 {
+    if params.max_triangles == 0 {
+        return 1.0;
+    }
+    let budget = params.max_triangles as f32;
+    let p0 = LodParams { min_px: 0.0, ..*params };
+    let mut s = 1.0;
+    for k in 0..=MAX_SCALE_STEPS {
+        s = (k as f32 / 4.0).exp2();
+        let mut total = 0.0f32;
+        for (p, h) in hist.iter().enumerate() {
+            for (b, &n) in h.iter().enumerate() {
+                if n == 0 {
+                    continue;
+                }
+                let Some(pick) = select_lod(bin_px(b) / s, &p0, n_levels[p]) else { continue };
+                let mut c = costs[p][pick.level.min(3)];
+                if pick.blend > 0.0 && pick.level + 1 < n_levels[p] {
+                    c += costs[p][(pick.level + 1).min(3)];
+                }
+                total += n as f32 * c as f32;
+            }
+        }
+        if total <= budget {
+            break;
+        }
+    }
+    s
+}
+
+/// Number of levels the renderer draws for a species chain of `chain_len` levels: the chain's
+/// first `min(chain_len, 3)` meshes (full, reduced, hull) followed by the renderer's own
+/// billboard impostor ([`Silhouette`]), which replaces a chain's 4th (impostor) level and any
+/// further ones. Always ≥ 1 (an empty chain is drawn as a billboard only).
+pub fn drawn_levels(chain_len: usize) -> usize {
+    chain_len.min(3) + 1
+}
+
+/// Triangles of the billboard impostor level: one vertical quad turned towards the viewer
+/// (side silhouette) and one horizontal quad at crown height (seen from above).
+pub const BILLBOARD_TRIANGLES: usize = 4;
+
+/// Number of height bins of a [`Silhouette`] profile.
+pub const SILHOUETTE_BINS: usize = 16;
+
+/// The side outline of a normalised tree (base at the origin, height 1 m) that the billboard
+/// impostor carves out procedurally in its fragment shader: crown half-width per height bin
+/// relative to the widest point, crown extent, trunk width.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Silhouette {
+    /// Crown half-width in bin `i` (normalised heights `i/16 .. (i+1)/16`), 0..1 relative to
+    /// [`Silhouette::radius`]; 0 outside the crown.
+    pub width: [f32; SILHOUETTE_BINS],
+    /// Lowest foliage height (normalised, 0..1).
+    pub crown_bottom: f32,
+    /// Highest foliage height (normalised, 0..1).
+    pub crown_top: f32,
+    /// Trunk half-width relative to `radius` (0.02..0.2).
+    pub trunk_half_width: f32,
+    /// Largest horizontal distance of foliage from the axis (m per m of height).
+    pub radius: f32,
+    /// Height (normalised) of the widest bin: where the horizontal quad sits.
+    pub widest_z: f32,
+}
+
+impl Silhouette {
+    /// Outline of `chain`'s finest level: per height bin the largest horizontal distance of a
+    /// foliage vertex from the axis (crown hull of the leaf cards), gaps inside the crown filled
+    /// by linear interpolation, smoothed with a 1-2-1 kernel, normalised by the maximum.
+    /// Without foliage the bark is used; an empty chain gives an ellipsoidal crown over the
+    /// upper 70 % of the height.
+    pub fn from_chain(chain: &LodChain) -> Self {
+        let level = chain.levels.first();
+        let pts: Vec<[f32; 3]> = match level {
+            Some(l) if !l.leaves.positions.is_empty() => l.leaves.positions.clone(),
+            Some(l) => l.bark.positions.clone(),
+            None => Vec::new(),
+        };
+        let n = SILHOUETTE_BINS;
+        let mut w = [0.0f32; SILHOUETTE_BINS];
+        let (mut zlo, mut zhi) = (f32::INFINITY, f32::NEG_INFINITY);
+        for p in pts.iter().filter(|p| p.iter().all(|v| v.is_finite())) {
+            let z = p[2].clamp(0.0, 1.0);
+            let b = ((z * n as f32) as usize).min(n - 1);
+            w[b] = w[b].max((p[0] * p[0] + p[1] * p[1]).sqrt());
+            zlo = zlo.min(z);
+            zhi = zhi.max(z);
+        }
+        let radius = w.iter().copied().fold(0.0f32, f32::max);
+        if radius <= 1e-5 || !(zhi > zlo) {
+            // default: ellipsoid over 0.3..1.0
+            let mut w = [0.0f32; SILHOUETTE_BINS];
+            for (i, v) in w.iter_mut().enumerate() {
+                let z = (i as f32 + 0.5) / n as f32;
+                let t = (z - 0.65) / 0.35;
+                *v = (1.0 - t * t).max(0.0).sqrt();
+            }
+            return Silhouette { width: w, crown_bottom: 0.3, crown_top: 1.0, trunk_half_width: 0.05, radius: 0.3, widest_z: 0.65 };
+        }
+        // fill empty bins between filled ones (sparse leaf cards)
+        let filled: Vec<usize> = (0..n).filter(|&i| w[i] > 0.0).collect();
+        for pair in filled.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            for i in a + 1..b {
+                let t = (i - a) as f32 / (b - a) as f32;
+                w[i] = w[a] + (w[b] - w[a]) * t;
+            }
+        }
+        let mut s = [0.0f32; SILHOUETTE_BINS];
+        for i in 0..n {
+            if w[i] > 0.0 {
+                let l = if i > 0 { w[i - 1] } else { w[i] };
+                let r = if i + 1 < n { w[i + 1] } else { w[i] };
+                s[i] = 0.25 * l + 0.5 * w[i] + 0.25 * r;
+            }
+        }
+        let m = s.iter().copied().fold(0.0f32, f32::max).max(1e-6);
+        let mut widest = 0;
+        for i in 0..n {
+            s[i] /= m;
+            if s[i] > s[widest] {
+                widest = i;
+            }
+        }
+        // trunk: bark radius below the crown
+        let trunk = level
+            .map(|l| l.bark.positions.iter().filter(|p| p[2] < zlo.max(0.05)).map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt()).fold(0.0f32, f32::max))
+            .unwrap_or(0.0);
+        Silhouette {
+            width: s,
+            crown_bottom: zlo,
+            crown_top: zhi,
+            trunk_half_width: (trunk / radius).clamp(0.02, 0.2),
+            radius,
+            widest_z: (widest as f32 + 0.5) / n as f32,
+        }
+    }
+
+    /// Half-width (relative to `radius`) at normalised height `z`, linear between bin centres.
+    pub fn width_at(&self, z: f32) -> f32 {
+        if !(z >= self.crown_bottom && z <= self.crown_top) {
+            return 0.0;
+        }
+        let n = SILHOUETTE_BINS as f32;
+        let x = (z * n - 0.5).clamp(0.0, n - 1.0);
+        let i = (x as usize).min(SILHOUETTE_BINS - 1);
+        let j = (i + 1).min(SILHOUETTE_BINS - 1);
+        let t = x - i as f32;
+        self.width[i] * (1.0 - t) + self.width[j] * t
     }
 }
 
@@ -79,6 +275,11 @@ impl Frustum {
             }
         }
         Frustum { planes }
+    }
+
+    /// The planes `(n, d)` (unit normal pointing inwards): left, right, bottom, top, near, far.
+    pub fn planes(&self) -> [Vec4; 6] {
+        self.planes
     }
 
     /// Whether a sphere at `c` with radius `r` (m) touches the frustum.
@@ -257,6 +458,46 @@ mod tests {
                 assert!(l.bark.bounds().unwrap().0[2].abs() < 1e-4, "trunk starts at the base");
             }
         }
+    }
+
+    #[test]
+    fn budget_scale_raises_switch_sizes_just_enough() {
+        let p = LodParams { max_triangles: 5000, ..LodParams::default() };
+        let mut hist = [[0u32; SIZE_BINS]];
+        let b = size_bin(300.0);
+        assert_eq!(b, 36);
+        assert!((bin_px(b) - 279.17).abs() < 0.05, "{}", bin_px(b));
+        hist[0][b] = 10;
+        let costs = [[1000u32, 100, 10, 4]];
+        // 10 trees at ~279 px: level 0 cross-fading into 1 costs 11,000; 2^(3/4) moves them
+        // to level 1 (279/1.68 = 166 px ≥ 125): 1,000 triangles
+        let s = budget_scale(&hist, &costs, &[4], &p);
+        assert!((s - 2f32.powf(0.75)).abs() < 1e-5, "{s}");
+        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 20_000, ..p }), 1.0);
+        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 0, ..p }), 1.0);
+        // an impossible budget takes the largest factor; the trees are still drawn
+        let s = budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 1, ..p });
+        assert_eq!(s, 1024.0);
+        assert_eq!(select_lod_scaled(300.0, s, &p, 4).unwrap().level, 3);
+        assert!(select_lod_scaled(0.5, 1.0, &p, 4).is_none());
+    }
+
+    #[test]
+    fn silhouette_of_the_stand_in_chains() {
+        let b = Silhouette::from_chain(&placeholder_chain(false));
+        // main crown 0.33 (lumps ±6 %) and side clumps reaching 0.22 + 0.5·0.33·1.06 = 0.395
+        assert!((b.radius - 0.395).abs() < 0.01, "{}", b.radius);
+        assert!(b.crown_bottom > 0.2 && b.crown_bottom < 0.3 && b.crown_top > 0.95, "{b:?}");
+        assert!(b.widest_z > 0.5 && b.widest_z < 0.75, "broadleaf widest at {}", b.widest_z);
+        assert_eq!(b.width_at(0.1), 0.0, "no crown below the crown base");
+        let c = Silhouette::from_chain(&placeholder_chain(true));
+        assert!(c.widest_z < 0.4, "conifer widest low: {}", c.widest_z);
+        assert!(c.width_at(0.9) < 0.5 * c.width_at(c.widest_z), "conifer tapers to the top");
+        let e = Silhouette::from_chain(&LodChain::default());
+        assert_eq!(e.radius, 0.3);
+        assert_eq!(drawn_levels(0), 1);
+        assert_eq!(drawn_levels(4), 4);
+        assert_eq!(drawn_levels(6), 4);
     }
 
     #[test]

@@ -8,9 +8,17 @@
 //!
 //! - [`terrain`]: builds a [`scene::TerrainMesh`] from a height grid or a TIN, coloured by
 //!   elevation/slope (land cover) or an overlay field.
-//! - [`lod`]: level-of-detail selection by projected size, frustum culling, stand-in tree chains.
+//! - [`lod`]: level-of-detail selection by projected size (with dithered cross-fade bands and a
+//!   per-frame triangle budget), frustum culling, the billboard [`lod::Silhouette`], stand-in
+//!   tree chains.
 //! - [`instanced`]: CPU culling/LOD pass that groups instances into one draw per
-//!   (prototype, level, material).
+//!   (prototype, level, material). The same selection runs on the GPU in a compute pass
+//!   (`shaders/cull.wgsl`) feeding indirect draws when the adapter allows it
+//!   ([`headless::Culling`]).
+//!
+//! Each species is drawn with the chain's full, reduced and hull meshes near the camera and the
+//! renderer's own 4-triangle billboard impostor (the species' silhouette carved procedurally)
+//! below 40 px; bare (winter) crowns keep a dithered grey-brown twig haze at every level.
 //! - [`timelapse`]: interpolation of snapshots, GIF/PNG/MP4 writers.
 
 pub mod camera;

@@ -12,11 +12,19 @@ struct Globals {
     sky_horizon: vec4<f32>,
     wind: vec4<f32>,         // direction x, y; directed w_g; undirected w_s
     params: vec4<f32>,       // time s, sea level m, shadow texel size, fog density 1/m
+    facing: vec4<f32>,       // xyz towards the viewer for billboards when w = 1 (ortho, sun); w = 0: use eye
+};
+
+// Billboard outline of one prototype (render/lod.rs, Silhouette).
+struct Sil {
+    w: array<vec4<f32>, 4>,  // 16 crown half-widths (relative to radius) by height bin
+    info: vec4<f32>,         // crown bottom, crown top, trunk half-width, widest z
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;
 @group(0) @binding(1) var shadow_map: texture_depth_2d;
 @group(0) @binding(2) var shadow_sampler: sampler_comparison;
+@group(0) @binding(3) var<storage, read> sils: array<Sil>;
 
 fn shadow_factor(world: vec3<f32>, n: vec3<f32>) -> f32 {
     let p = g.light_view_proj * vec4<f32>(world + n * 0.05, 1.0);
@@ -133,13 +141,14 @@ fn fs_water(i: TerrainOut) -> @location(0) vec4<f32> {
 // ---------------------------------------------------------------- trees
 struct TreeIn {
     @location(0) pos: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) mat: f32,          // 0 bark, 1 leaf
+    @location(1) normal: vec3<f32>, // billboards: local outline coordinates (a, z or b, 0)
+    @location(2) mat: f32,          // 0 bark, 1 leaf, 2 billboard side quad, 3 billboard top quad
     @location(3) pos_h: vec4<f32>,  // base x y z, height m
     @location(4) p1: vec4<f32>,     // horizontal scale, rotation rad, fade threshold, fade side
     @location(5) leaf: vec4<f32>,   // leaf rgb, leaf amount
     @location(6) p2: vec4<f32>,     // opacity, phase R_x, phase R_z, flexibility (1 - k_f)
     @location(7) bark: vec4<f32>,   // bark rgb, dither salt
+    @location(8) p3: vec4<f32>,     // prototype, level, crown radius (culling), unused
 };
 
 struct TreeOut {
@@ -150,44 +159,90 @@ struct TreeOut {
     @location(3) @interpolate(flat) fade: vec4<f32>,  // threshold, side, opacity, leaf amount
     @location(4) mat_s: vec2<f32>,                      // material, normalised height
     @location(5) @interpolate(flat) salt: f32,
+    @location(6) bb: vec2<f32>,                         // billboard outline coordinates
+    @location(7) @interpolate(flat) info: vec4<f32>,   // prototype, level, bark rgb packed? (unused)
+    @location(8) @interpolate(flat) bark: vec3<f32>,   // bark colour (billboard trunks, twigs)
 };
+
+// Direction from a tree towards the viewer (or the sun in the shadow pass).
+fn facing_dir(base: vec3<f32>) -> vec3<f32> {
+    if (g.facing.w > 0.5) {
+        return normalize(g.facing.xyz);
+    }
+    let d = g.eye.xyz - base;
+    if (dot(d, d) < 1e-8) {
+        return vec3<f32>(0.0, -1.0, 0.0);
+    }
+    return normalize(d);
+}
+
+// Horizontal unit vector to the right of a viewer looking along -f.
+fn right_of(f: vec3<f32>) -> vec3<f32> {
+    let h = vec2<f32>(-f.y, f.x);
+    let l = length(h);
+    if (l < 1e-4) {
+        return vec3<f32>(1.0, 0.0, 0.0);
+    }
+    return vec3<f32>(h / l, 0.0);
+}
 
 // World position of a tree vertex with EcoMod wind (Algorithm 1): directed bend
 // alpha_w = k_w * w_g * s^2 towards the wind, undirected sway alpha_x(t) = sin(w t + R_x) w_s (1-k_f) l0,
 // alpha_z(t) = sin(w t + R_z) w_s (1-k_f) l0 with l0 = s^2, small-angle displacement = angle * height.
-fn tree_world(v: TreeIn) -> vec3<f32> {
-    let h = v.pos_h.w;
-    let sxy = v.p1.x;
-    let c = cos(v.p1.y);
-    let s = sin(v.p1.y);
-    let lp = vec3<f32>(v.pos.x * sxy, v.pos.y * sxy, v.pos.z * h);
-    let rp = vec3<f32>(c * lp.x - s * lp.y, s * lp.x + c * lp.y, lp.z);
-    let sn = clamp(v.pos.z, 0.0, 1.2);
+// `rp` is the vertex offset from the stem base (m), `sn` its normalised height.
+fn sway(v: TreeIn, rp: vec3<f32>, sn_in: f32) -> vec3<f32> {
+    let sn = clamp(sn_in, 0.0, 1.2);
     let l0 = sn * sn;
     let t = g.params.x;
     let k_w = 0.02;
     let a_w = k_w * g.wind.z * l0;
     let a_x = sin(1.7 * t + v.p2.y) * g.wind.w * v.p2.w * l0 * k_w;
     let a_z = sin(1.3 * t + v.p2.z) * g.wind.w * v.p2.w * l0 * k_w;
-    let disp = (g.wind.xy * a_w + vec2<f32>(a_x, a_z)) * lp.z;
-    let dz = -0.5 * dot(disp, disp) / max(lp.z, 0.01);
+    let disp = (g.wind.xy * a_w + vec2<f32>(a_x, a_z)) * rp.z;
+    let dz = -0.5 * dot(disp, disp) / max(rp.z, 0.01);
     return v.pos_h.xyz + rp + vec3<f32>(disp, dz);
 }
 
 fn tree_vertex(v: TreeIn) -> TreeOut {
     var o: TreeOut;
-    let w = tree_world(v);
+    let h = v.pos_h.w;
+    let sxy = v.p1.x;
+    var w: vec3<f32>;
+    if (v.mat > 1.5) {
+        // billboard impostor: side quad turned towards the viewer about the stem, top quad flat
+        let f = facing_dir(v.pos_h.xyz + vec3<f32>(0.0, 0.0, 0.5 * h));
+        var rp: vec3<f32>;
+        if (v.mat < 2.5) {
+            rp = right_of(f) * (v.pos.x * sxy) + vec3<f32>(0.0, 0.0, v.pos.z * h);
+            o.normal = f;
+        } else {
+            // the top quad only shows from above: it shrinks to nothing as the view flattens
+            // (continuous, so an orbiting camera sees no pop)
+            let k = smoothstep(0.45, 0.8, f.z);
+            rp = vec3<f32>(v.pos.x * sxy * k, v.pos.y * sxy * k, v.pos.z * h);
+            o.normal = vec3<f32>(0.0, 0.0, 1.0);
+        }
+        w = sway(v, rp, v.pos.z);
+        o.bb = v.normal.xy;
+    } else {
+        let c = cos(v.p1.y);
+        let s = sin(v.p1.y);
+        let lp = vec3<f32>(v.pos.x * sxy, v.pos.y * sxy, v.pos.z * h);
+        let rp = vec3<f32>(c * lp.x - s * lp.y, s * lp.x + c * lp.y, lp.z);
+        w = sway(v, rp, v.pos.z);
+        let ln = vec3<f32>(v.normal.x / max(sxy, 1e-4), v.normal.y / max(sxy, 1e-4), v.normal.z / max(h, 1e-4));
+        let rn = vec3<f32>(c * ln.x - s * ln.y, s * ln.x + c * ln.y, ln.z);
+        o.normal = normalize(rn);
+        o.bb = vec2<f32>(0.0, 0.0);
+    }
     o.clip = g.view_proj * vec4<f32>(w, 1.0);
     o.world = w;
-    let c = cos(v.p1.y);
-    let s = sin(v.p1.y);
-    let ln = vec3<f32>(v.normal.x / max(v.p1.x, 1e-4), v.normal.y / max(v.p1.x, 1e-4), v.normal.z / max(v.pos_h.w, 1e-4));
-    let rn = vec3<f32>(c * ln.x - s * ln.y, s * ln.x + c * ln.y, ln.z);
-    o.normal = normalize(rn);
-    o.color = mix(v.bark.rgb, v.leaf.rgb, v.mat);
+    o.color = mix(v.bark.rgb, v.leaf.rgb, min(v.mat, 1.0));
     o.fade = vec4<f32>(v.p1.z, v.p1.w, v.p2.x, v.leaf.w);
     o.mat_s = vec2<f32>(v.mat, v.pos.z);
     o.salt = v.bark.w;
+    o.info = v.p3;
+    o.bark = v.bark.rgb;
     return o;
 }
 
@@ -202,8 +257,66 @@ fn ign(p: vec2<f32>) -> f32 {
     return fract(52.9829189 * fract(dot(p, vec2<f32>(0.06711056, 0.00583715))));
 }
 
-// Screen-door masks: LOD cross-fade (complementary Bayer patterns), timelapse opacity and
-// leaf amount (interleaved gradient noise). Returns false when the fragment is dropped.
+fn sil_width(p: u32, z: f32) -> f32 {
+    let s = sils[p];
+    if (z < s.info.x || z > s.info.y) {
+        return 0.0;
+    }
+    let x = clamp(z * 16.0 - 0.5, 0.0, 15.0);
+    let i = min(u32(x), 15u);
+    let j = min(i + 1u, 15u);
+    let t = x - f32(i);
+    let a = s.w[i / 4u][i % 4u];
+    let b = s.w[j / 4u][j % 4u];
+    return mix(a, b, t);
+}
+
+// Billboard outline test. Returns 0 outside (discard), 1 crown, 2 trunk; `n` gets a rounded
+// pseudo-normal for the crown.
+struct Carve {
+    kind: u32,
+    n: vec3<f32>,
+    z: f32,
+};
+
+fn carve(i: TreeOut) -> Carve {
+    var r: Carve;
+    r.kind = 0u;
+    r.n = vec3<f32>(0.0, 0.0, 1.0);
+    let p = u32(i.info.x + 0.5);
+    let s = sils[p];
+    // a gently lumpy edge, fixed per tree
+    let lump = 1.0 + 0.07 * sin(i.bb.y * 23.0 + i.salt) * sin(i.bb.x * 7.0 + i.salt * 0.37);
+    if (i.mat_s.x < 2.5) {
+        let a = i.bb.x;
+        let z = i.bb.y;
+        r.z = z;
+        let w = sil_width(p, z) * lump;
+        if (abs(a) < w) {
+            r.kind = 1u;
+            let f = normalize(i.normal);
+            let na = a / max(w, 1e-3);
+            let zc = 0.5 * (s.info.x + s.info.y);
+            let nz = clamp((z - zc) / max(0.5 * (s.info.y - s.info.x), 1e-3), -1.0, 1.0);
+            r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.3 * nz + 0.35) + f * sqrt(max(1.0 - na * na, 0.0)));
+        } else if (abs(a) < s.info.z && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
+            r.kind = 2u;
+            r.n = normalize(i.normal);
+        }
+    } else {
+        let q = i.bb;
+        let d = length(q);
+        r.z = i.mat_s.y;
+        if (d < 0.92 * lump) {
+            r.kind = 1u;
+            r.n = normalize(vec3<f32>(q * 0.7, sqrt(max(1.0 - d * d, 0.0)) + 0.2));
+        }
+    }
+    return r;
+}
+
+// Screen-door masks: LOD cross-fade (complementary Bayer patterns) and timelapse opacity
+// (interleaved gradient noise). Returns false when the fragment is dropped.
 fn keep(i: TreeOut) -> bool {
     let d = bayer4(i.clip.xy);
     let f = i.fade.x;
@@ -214,11 +327,40 @@ fn keep(i: TreeOut) -> bool {
     }
     let e = ign(i.clip.xy + vec2<f32>(i.salt * 7.0, i.salt * 13.0));
     if (e >= i.fade.z) { return false; }
-    if (i.mat_s.x > 0.5) {
-        let e2 = ign(i.clip.yx * 1.37 + vec2<f32>(i.salt * 3.0, 5.0));
-        if (e2 >= i.fade.w) { return false; }
-    }
     return true;
+}
+
+// Foliage of leaf amount `fade.w`: a fragment of a crown surface is a leaf (1) with probability
+// leaf amount, else a twig (2) with probability `twig` (bare crowns read as a grey-brown haze of
+// twigs), else dropped (0).
+fn hash2(p: vec2<f32>, salt: f32) -> f32 {
+    // integer hash of the pixel (white noise: no visible hatching), PCG-style mixing
+    var h = u32(p.x) * 1973u + u32(p.y) * 9277u + u32(salt) * 26699u;
+    h = (h ^ 61u) ^ (h >> 16u);
+    h = h * 9u;
+    h = h ^ (h >> 4u);
+    h = h * 0x27d4eb2du;
+    h = h ^ (h >> 15u);
+    return f32(h & 0xffffffu) / 16777216.0;
+}
+
+fn foliage(i: TreeOut, twig: f32) -> u32 {
+    let e2 = hash2(i.clip.xy, i.salt + 5.0);
+    let la = i.fade.w;
+    if (e2 < la) { return 1u; }
+    if (e2 < la + (1.0 - la) * twig) { return 2u; }
+    return 0u;
+}
+
+fn twig_density(i: TreeOut) -> f32 {
+    if (i.mat_s.x > 1.5) {
+        return 0.5;
+    }
+    return 0.25 + 0.08 * i.info.y;
+}
+
+fn twig_color(bark: vec3<f32>) -> vec3<f32> {
+    return mix(bark, vec3<f32>(0.16, 0.14, 0.12), 0.6);
 }
 
 @fragment
@@ -227,12 +369,35 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         discard;
     }
     var n = normalize(i.normal);
-    if (!ff) {
+    var leafy = min(i.mat_s.x, 1.0);
+    var albedo = i.color;
+    var hz = i.mat_s.y;
+    if (i.mat_s.x > 1.5) {
+        let c = carve(i);
+        if (c.kind == 0u) {
+            discard;
+        }
+        n = c.n;
+        hz = c.z;
+        if (c.kind == 2u) {
+            leafy = 0.0;
+            albedo = i.bark;
+        }
+    } else if (!ff) {
         n = -n;
     }
-    let leafy = i.mat_s.x;
-    let ao = mix(1.0, mix(0.45, 1.0, clamp(i.mat_s.y * 1.3 - 0.2, 0.0, 1.0)), leafy);
-    let c = shade(i.color, n, i.world, 0.35 * leafy, ao) * mix(1.0, ao * 0.4 + 0.6, leafy);
+    if (leafy > 0.5) {
+        let fo = foliage(i, twig_density(i));
+        if (fo == 0u) {
+            discard;
+        }
+        if (fo == 2u) {
+            albedo = twig_color(i.bark);
+            leafy = 0.3;
+        }
+    }
+    let ao = mix(1.0, mix(0.45, 1.0, clamp(hz * 1.3 - 0.2, 0.0, 1.0)), leafy);
+    let c = shade(albedo, n, i.world, 0.35 * leafy, ao) * mix(1.0, ao * 0.4 + 0.6, leafy);
     return vec4<f32>(fog(c, i.world), 1.0);
 }
 
@@ -249,6 +414,17 @@ fn vs_tree_shadow(v: TreeIn) -> TreeOut {
 @fragment
 fn fs_tree_shadow(i: TreeOut) {
     if (!keep(i)) {
+        discard;
+    }
+    var leafy = i.mat_s.x > 0.5;
+    if (i.mat_s.x > 1.5) {
+        let c = carve(i);
+        if (c.kind == 0u) {
+            discard;
+        }
+        leafy = c.kind == 1u;
+    }
+    if (leafy && foliage(i, twig_density(i)) == 0u) {
         discard;
     }
 }
