@@ -390,6 +390,13 @@ fn duplicate_species_names_both_files() {
     );
     let err = SpeciesLibrary::load_dir(d.path()).unwrap_err().to_string();
     assert!(err.contains("unique id"), "{err}");
+    // still reported when the copy also has a type error (which stops its parsing)
+    let bad = beech_text().replacen("max_height_m = 48.0", "max_height_m = \"tall\"", 1);
+    assert_ne!(bad, beech_text());
+    write(d.path(), "beech_copy.toml", &bad);
+    let p = species::check_dir(d.path());
+    assert!(p.iter().any(|q| q.field == "id" && q.expected.contains("beech_copy.toml")), "{p:?}");
+    assert!(p.iter().any(|q| q.field.ends_with("max_height_m")), "{p:?}");
 }
 
 #[test]

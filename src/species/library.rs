@@ -556,26 +556,32 @@ pub fn species_files(dir: &Path) -> Result<Vec<PathBuf>> {
 fn scan<'a>(files: impl Iterator<Item = (PathBuf, std::borrow::Cow<'a, [u8]>)>) -> (Vec<(PathBuf, Species)>, Vec<Problem>) {
     let mut all = Vec::new();
     let mut problems = Vec::new();
+    // (file, id) of every file whose id can be read, valid or not, so that a duplicate id is
+    // reported even when one of the two files has other errors.
+    let mut ids: Vec<(PathBuf, String)> = Vec::new();
     for (path, bytes) in files {
         let (s, mut p) = parse_bytes(&bytes, &path);
         problems.append(&mut p);
         if let Some(s) = s {
+            ids.push((path.clone(), s.id.clone()));
             all.push((path, s));
+        } else if let Some(id) = std::str::from_utf8(&bytes).ok().and_then(|t| DeTable::parse(t).ok()).and_then(|d| d.get_ref().get("id").and_then(|v| v.get_ref().as_str().map(str::to_string))) {
+            ids.push((path, id));
         }
     }
     let mut seen: BTreeMap<&str, &Path> = BTreeMap::new();
     let mut dups = Vec::new();
-    for (path, s) in &all {
-        if let Some(first) = seen.get(s.id.as_str()) {
+    for (path, id) in &ids {
+        if let Some(first) = seen.get(id.as_str()) {
             dups.push(Problem {
                 file: path.clone(),
                 line: Some(1),
                 field: "id".into(),
-                value: format!("{:?}", s.id),
-                expected: format!("a unique id: species `{}` is defined in both {} and {}", s.id, first.display(), path.display()),
+                value: format!("{id:?}"),
+                expected: format!("a unique id: species `{id}` is defined in both {} and {}", first.display(), path.display()),
             });
         } else {
-            seen.insert(&s.id, path);
+            seen.insert(id, path);
         }
     }
     // Line of the id in the duplicate file.
