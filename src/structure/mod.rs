@@ -11,6 +11,7 @@ pub mod grow;
 pub mod mesh;
 pub mod params;
 pub mod skeleton;
+pub mod species_tree;
 
 pub use skeleton::{Leaf, Leaves, Node, NodeId, Role, Skeleton};
 
