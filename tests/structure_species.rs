@@ -64,16 +64,23 @@ fn laplacian_crowns_are_rounded_or_conical_with_headroom() {
 #[test]
 fn roof_above_the_crown_shades_and_lowers_the_light_guided_tree() {
     let sp = species("beech");
-    let open = grow_species_tree(&sp, Model::Light, 30.0, &[], 5).unwrap();
+    let open = grow_species_tree(&sp, Model::Light, 40.0, &[], 5).unwrap();
     let h = open.envelope.unwrap().height_m;
     let r = open.envelope.unwrap().radius_m;
-    // a roof just above the species' height at 30 years, wider than the crown
-    let roof = Obstacle::Box { min: Vec3::new(-1.2 * r, -1.2 * r, 1.02 * h), max: Vec3::new(1.2 * r, 1.2 * r, 1.1 * h) };
-    let under = grow_species_tree(&sp, Model::Light, 30.0, &[roof], 5).unwrap();
+    // a roof high above the crown (above the voxel space, more than 6 m over the apex), much
+    // wider than the crown: it must still shade the tree below it (before the fix it was
+    // ignored and the tree was identical to the open-grown one)
+    let high = Obstacle::Box { min: Vec3::new(-3.0 * r, -3.0 * r, 1.5 * h), max: Vec3::new(3.0 * r, 3.0 * r, 1.6 * h) };
+    let shaded = grow_species_tree(&sp, Model::Light, 40.0, &[high], 5).unwrap();
+    eprintln!("open {:.2} m ({} nodes), under a high roof {:.2} m ({} nodes)", open.skeleton.height(), open.skeleton.len(), shaded.skeleton.height(), shaded.skeleton.len());
+    assert!((shaded.skeleton.len() as f32) < 0.85 * open.skeleton.len() as f32, "a shaded crown is sparser");
+    // a roof just above the apex: the tree stays clear below it
+    let low = Obstacle::Box { min: Vec3::new(-1.5 * r, -1.5 * r, 1.02 * h), max: Vec3::new(1.5 * r, 1.5 * r, 1.1 * h) };
+    let under = grow_species_tree(&sp, Model::Light, 40.0, &[low], 5).unwrap();
     let (ho, hu) = (open.skeleton.height(), under.skeleton.height());
-    eprintln!("open {ho:.2} m ({} nodes), under the roof {hu:.2} m ({} nodes), species height {h:.2} m", open.skeleton.len(), under.skeleton.len());
-    assert!(under.skeleton.nodes.iter().all(|n| !roof.contains(n.pos)), "no node inside the roof");
-    assert!(hu < 0.9 * ho, "under the roof {hu} m vs open {ho} m");
+    eprintln!("open {ho:.2} m, under a low roof {hu:.2} m ({} nodes), species height {h:.2} m", under.skeleton.len());
+    assert!(under.skeleton.nodes.iter().all(|n| !low.contains(n.pos)), "no node inside the roof");
+    assert!(hu < 0.92 * ho, "under the roof {hu} m vs open {ho} m");
 }
 
 /// Follows the trunk (first children) from the root to its tip.
