@@ -11,7 +11,7 @@ use super::grow::space::{validate_obstacles, Obstacle};
 use super::grow::{ecomod, laplacian, light_guided};
 use super::skeleton::{Leaf, Leaves, Skeleton};
 use crate::error::{Error, Result};
-use crate::species::{EcoModParams, Species};
+use crate::species::{EcoModParams, LeafType, Species};
 use glam::Vec3;
 
 /// Growth model of [`grow_species_tree`].
@@ -39,7 +39,8 @@ pub struct GrownTree {
 }
 
 /// Grows one tree of `sp` at `age_yr` years (> 0) with `model` among `obstacles` (ignored by
-/// EcoMod), seed `seed`. Light-guided runs `age` cycles (1–60) with an internode of
+/// EcoMod), seed `seed`. Light-guided runs `age` cycles (1–60), lateral shoots at 80° from the
+/// parent and plagiotropic side branches for conifers, 45° for broadleaves, with an internode of
 /// max(min(H/40, R/5), 0.15 m) (H height, R crown radius of the envelope); Laplacian adds 25
 /// branches per year (≤ 4000) on voxels of max(H/28, 0.1 m). Both have their radii scaled
 /// uniformly (which keeps the pipe model and the Strahler width ratios) so that the trunk base
@@ -70,6 +71,9 @@ pub fn grow_species_tree(sp: &Species, model: Model, age_yr: f32, obstacles: &[O
                 height_m: 1.25 * h,
                 extent_m: (r + 3.0 * internode).max(1.3 * r).max(2.0),
                 envelope: Some(env),
+                // conifers carry their branches near-horizontal in whorls, broadleaves at ~45°
+                branch_angle_deg: if sp.identity.leaf_type == LeafType::Conifer { 80.0 } else { 45.0 },
+                plagiotropic: sp.identity.leaf_type == LeafType::Conifer,
                 ..Default::default()
             };
             let mut skeleton = light_guided::grow(&sp.architecture.light_guided, &o, obstacles, seed, age_yr.round().clamp(1.0, 60.0) as u32)?;

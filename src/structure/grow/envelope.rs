@@ -105,8 +105,8 @@ impl CrownEnvelope {
         if r > 0.0 {
             rho - r
         } else if z < self.crown_base_m {
-            // below the crown: distance to the corridor or up to the crown base
-            (rho - self.trunk_radius_m).min(self.crown_base_m - z)
+            // below the crown (whose profile starts at radius 0): outside the corridor
+            (rho - self.trunk_radius_m).max(self.crown_base_m - z).max(1e-3)
         } else {
             // at the apex
             (rho - self.trunk_radius_m).max(z - self.height_m).max(1e-3)

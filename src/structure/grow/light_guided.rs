@@ -59,11 +59,15 @@ pub struct LightOptions {
     /// internode outside it, so the tree forms the species' crown and stops at its height.
     /// `None`: the whole space is open (the paper's setting).
     pub envelope: Option<CrownEnvelope>,
+    /// Plagiotropic side branches (conifers; our addition): the tropism V_t of shoots off the
+    /// main stem is their own horizontal direction instead of up, so they keep spreading
+    /// sideways in tiers while the leader stays orthotropic (up).
+    pub plagiotropic: bool,
 }
 
 impl Default for LightOptions {
     fn default() -> Self {
-        LightOptions { internode_m: 0.4, alpha: 3.0, max_shoot: 3, branch_angle_deg: 45.0, phyllotaxis_deg: 137.5, tip_radius_m: 0.004, pipe_exponent: 2.5, extent_m: 6.0, height_m: 14.0, envelope: None }
+        LightOptions { internode_m: 0.4, alpha: 3.0, max_shoot: 3, branch_angle_deg: 45.0, phyllotaxis_deg: 137.5, tip_radius_m: 0.004, pipe_exponent: 2.5, extent_m: 6.0, height_m: 14.0, envelope: None, plagiotropic: false }
     }
 }
 
@@ -328,6 +332,21 @@ impl LightSpace {
             Some(pp) => (pos - sk.nodes[pp as usize].pos).normalize_or(Vec3::Z),
             None => Vec3::Z,
         };
+        // on the main stem: every node up to the root is its parent's first child
+        let on_stem = {
+            let mut i = node;
+            let mut stem = terminal;
+            while stem {
+                match sk.nodes[i].parent {
+                    Some(par) => {
+                        stem = sk.nodes[par as usize].children.first().map(|&c| c as usize) == Some(i);
+                        i = par as usize;
+                    }
+                    None => break,
+                }
+            }
+            stem
+        };
         let mut vd = parent_dir;
         if !terminal {
             let k = self.trees[t].phyllo;
@@ -356,7 +375,8 @@ impl LightSpace {
                 vo += dir * lp;
             }
             let vo = vo.normalize_or_zero();
-            let vu = (vd + p.mu * vo + p.gamma * Vec3::Z).normalize_or(vd);
+            let vt = if o.plagiotropic && !on_stem { (vd * Vec3::new(1.0, 1.0, 0.0)).normalize_or(Vec3::Z) } else { Vec3::Z };
+            let vu = (vd + p.mu * vo + p.gamma * vt).normalize_or(vd);
             let next = cur_pos + vu * len;
             if self.space.segment_blocked(cur_pos, next) {
                 break;
