@@ -11,6 +11,7 @@ use super::grow::space::{validate_obstacles, Obstacle};
 use super::grow::{ecomod, laplacian, light_guided};
 use super::skeleton::{Leaf, Leaves, Skeleton};
 use crate::error::{Error, Result};
+use crate::rng::{salt, Stream};
 use crate::species::{EcoModParams, LeafType, Species};
 use glam::Vec3;
 
@@ -89,6 +90,7 @@ pub fn grow_species_tree(sp: &Species, model: Model, age_yr: f32, obstacles: &[O
             let lo = laplacian::LaplacianOptions { voxel_m: voxel, extent_m: (r + 3.0 * voxel).max(1.2 * r), height_m: 1.2 * h, source: laplacian::LightSource::Envelope(env), ..Default::default() };
             let mut g = laplacian::grow(&sp.architecture.laplacian, &lo, obstacles, seed, (age_yr * 25.0).round().clamp(1.0, 4000.0) as u32)?;
             scale_radii_to_dbh(&mut g.skeleton, sp);
+            relax_lattice(&mut g.skeleton, voxel, obstacles, seed);
             let top = g.space.origin.z + g.space.dims[2] as f32 * voxel;
             let leaves = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
             Ok(GrownTree { skeleton: g.skeleton, leaves, envelope: Some(env), space: Some((top, voxel)) })
@@ -131,6 +133,32 @@ fn scale_radii_to_dbh(sk: &mut Skeleton, sp: &Species) {
         let s = target / r0;
         for n in &mut sk.nodes {
             n.radius *= s;
+        }
+    }
+}
+
+/// Takes the voxel-lattice look off a Laplacian skeleton (for display; the grown tree's voxel
+/// cells are unchanged in [`super::grow::laplacian::LaplacianGrowth`]): every node but the root
+/// moves by a random offset of up to ±0.3 voxel per axis (seeded by `seed` and the node), then
+/// every node with one parent and one child moves halfway to the mean of the two (one smoothing
+/// pass). Moves that would put a node inside an obstacle or below the ground are skipped.
+pub fn relax_lattice(sk: &mut Skeleton, voxel_m: f32, obstacles: &[Obstacle], seed: u64) {
+    let ok = |p: Vec3| p.z >= 0.0 && !obstacles.iter().any(|o| o.contains(p));
+    for i in 1..sk.nodes.len() {
+        let mut rng = Stream::new(seed, i as u64, 0, salt::ARCHITECTURE ^ 0x1A77);
+        let mut d = || rng.range(-0.3, 0.3) as f32 * voxel_m;
+        let p = sk.nodes[i].pos + Vec3::new(d(), d(), d());
+        if ok(p) {
+            sk.nodes[i].pos = p;
+        }
+    }
+    let old: Vec<Vec3> = sk.nodes.iter().map(|n| n.pos).collect();
+    for (i, n) in sk.nodes.iter_mut().enumerate() {
+        if let (Some(par), [c]) = (n.parent, n.children.as_slice()) {
+            let p = 0.5 * old[i] + 0.25 * (old[par as usize] + old[*c as usize]);
+            if i > 0 && ok(p) {
+                n.pos = p;
+            }
         }
     }
 }
