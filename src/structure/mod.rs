@@ -10,6 +10,7 @@
 pub mod grow;
 pub mod mesh;
 pub mod params;
+pub mod plastic;
 pub mod skeleton;
 pub mod species_tree;
 
