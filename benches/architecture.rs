@@ -95,4 +95,20 @@ fn main() {
         });
         println!("species tree {id} {model:?} {age} yr{}: {nodes} nodes, height {h:.1} m, {ms:.1} ms, {:.1} µs/node", if roof { " under a high roof" } else { "" }, ms * 1e3 / nodes as f64);
     }
+    // Plastic Trees: adapt a grown light-guided beech to a wall versus regrowing it beside the wall
+    let s = sp("beech");
+    let g = grow_species_tree(&s, Model::Light, 40.0, &[], 1).unwrap();
+    let r = sylva::structure::crown_radius(&g.skeleton, &Default::default());
+    let wall = [sylva::structure::grow::space::Obstacle::Wall { x: 0.5 * r }];
+    let internode = (g.envelope.unwrap().height_m / 40.0).max(0.15);
+    let mut rep = None;
+    let adapt_ms = median_ms(3, || {
+        let (out, report) = sylva::structure::plastic::adapt(&g.skeleton, &s.architecture.plastic, &wall, internode).unwrap();
+        nodes = out.len();
+        rep = Some(report);
+    });
+    let regrow_ms = median_ms(3, || {
+        std::hint::black_box(grow_species_tree(&s, Model::Light, 40.0, &wall, 1).unwrap());
+    });
+    println!("plastic adaptation of a {}-node beech to a wall at {:.1} m: {adapt_ms:.1} ms ({nodes} nodes left, {rep:?}); regrowing it beside the wall: {regrow_ms:.1} ms", g.skeleton.len(), 0.5 * r);
 }

@@ -14,8 +14,12 @@
 //!    direction, phototropism w_p, gravitropism w_g of the species) and
 //!    w_s = (1 − w_p − w_g)^(l_s/l_i) (eq. 7). d_o is found from the quadratic (9), or from its
 //!    closest point when it has no root.
-//! 3. **Bending** (eq. 6 with the new light): h' = w_s·d_o + (1 − w_s)·t'; each segment turns
-//!    by the rotation h → h', composed with its parent's rotation (propagated to the children).
+//! 3. **Bending** (eq. 6 with the new light): h' = w_s·(Q_parent d_o) + (1 − w_s)·t', where
+//!    Q_parent is the parent segment's rotation h → h' (so a turn propagates to the children
+//!    without piling up along long axes). The tropism weight 1 − w_s is scaled by a flexibility
+//!    1 − r/(0.3·r_base) (clamped to 0–1; r: segment radius): the trunk and main limbs stay
+//!    put, twigs bend fully (our stand-in for the branch ages of section 4.1). The subtree is rebuilt from the root with the new
+//!    directions and the old segment lengths.
 //! 4. **Pruning** (eqs. 10–11): ζ_s = Σ 2π r_c² i_c over the leaf clusters of the subtree of s,
 //!    l_s = the subtree's total branch length, ψ_s = ζ_s/l_s. The reference ψ_ref is the
 //!    5th percentile of ψ_s in the original environment; a subtree is pruned when its ψ_s in
@@ -169,6 +173,7 @@ pub fn adapt(sk: &Skeleton, p: &PlasticParams, obstacles: &[Obstacle], internode
     let tropism = |l: Vec3| ((wp * l + wg * Vec3::Z) / (wp + wg).max(1e-6)).normalize_or(Vec3::Z);
     let mut out = sk.clone();
     let mut rot = vec![Quat::IDENTITY; n];
+    let r_root = sk.nodes.iter().map(|nd| nd.radius).fold(0.0f32, f32::max).max(1e-6);
     for k in 1..n {
         let par = sk.nodes[k].parent.unwrap_or(0) as usize;
         let seg = sk.nodes[k].pos - sk.nodes[par].pos;
@@ -176,14 +181,17 @@ pub fn adapt(sk: &Skeleton, p: &PlasticParams, obstacles: &[Obstacle], internode
         let mut q = rot[par];
         if len > 0.0 && wp + wg > 0.0 {
             let h = seg / len;
-            let w_s = (1.0 - wp - wg).powf(len / internode_m);
+            // stiffness: the trunk and main limbs (radius ≥ 30 % of the base radius) do not
+            // bend, thinner branches bend more (our stand-in for the paper's branch ages)
+            let flex = (1.0 - sk.nodes[k].radius / (0.3 * r_root)).clamp(0.0, 1.0);
+            let w_s = 1.0 - (1.0 - (1.0 - wp - wg).powf(len / internode_m)) * flex;
             let d_o = inverse_tropism(h, tropism(d0[k]), w_s);
-            let h_new = (w_s * d_o + (1.0 - w_s) * tropism(d1[k])).normalize_or(h);
-            let delta = Quat::from_rotation_arc(h, h_new);
-            if delta.angle_between(Quat::IDENTITY) > 1f32.to_radians() {
+            // the untropic direction follows the parent's turn; the new tropism bends it once
+            let h_new = (w_s * (rot[par] * d_o) + (1.0 - w_s) * tropism(d1[k])).normalize_or(h);
+            q = Quat::from_rotation_arc(h, h_new);
+            if h.angle_between(h_new) > 1f32.to_radians() {
                 report.bent += 1;
             }
-            q = (delta * q).normalize();
         }
         rot[k] = q;
         out.nodes[k].pos = out.nodes[par].pos + q * seg;
