@@ -7,7 +7,9 @@
 //!    8 azimuths at 20°, 45°, 70°) of the transmittance Π γ along the ray: 0 through a solid
 //!    obstacle, γ_c0 through each leaf cluster; the average light direction is the same mean of
 //!    the unit directions. Leaf clusters are spheres on the tip nodes (radius = the mean tip
-//!    segment length); a cluster containing the point does not shade it.
+//!    segment length); a cluster containing the point does not shade it. Light is evaluated on
+//!    the clusters; a branch segment uses the light-weighted mean direction of the clusters it
+//!    carries.
 //! 2. **Inverse tropism** (eqs. 6–9): every segment's direction h in the tree's original
 //!    environment is the tropism-bent version of an untropic direction d_o,
 //!    h = w_s·d_o + (1 − w_s)·t with t = (w_p·L + w_g·up)/(w_p + w_g) (L: average light
@@ -77,7 +79,9 @@ impl Light<'_> {
                 continue;
             }
             let mut t = 1.0f32;
-            for &c in &self.clusters {
+            // clusters sorted by height: those wholly below p cannot be on an upward ray
+            let first = self.clusters.partition_point(|c| c.z + self.r_c < p.z);
+            for &c in &self.clusters[first..] {
                 let oc = c - p;
                 if oc.length_squared() <= r2 {
                     continue;
@@ -97,29 +101,32 @@ impl Light<'_> {
     }
 }
 
-/// Per node: light, light direction, and ψ_s = ζ_s / l_s of its subtree (eq. 10).
+/// Per node: light (tips only), light direction, and ψ_s = ζ_s / l_s of its subtree (eq. 10).
 fn analyse(sk: &Skeleton, light: &Light) -> (Vec<f32>, Vec<Vec3>, Vec<f32>) {
     let n = sk.nodes.len();
-    let (mut i_n, mut d_n) = (vec![0.0f32; n], vec![Vec3::Z; n]);
-    for (k, node) in sk.nodes.iter().enumerate() {
-        let (i, d) = light.at(node.pos);
-        i_n[k] = i;
-        d_n[k] = d;
-    }
+    // light is evaluated on the leaf clusters (tips); a branch sees the light-weighted mean
+    // direction of the clusters it carries
+    let mut i_n = vec![0.0f32; n];
+    let mut dsum = vec![Vec3::ZERO; n];
     let mut zeta = vec![0.0f32; n];
     let mut len = vec![0.0f32; n];
     let area = 2.0 * std::f32::consts::PI * light.r_c * light.r_c;
     for k in (1..n).rev() {
         if sk.nodes[k].children.is_empty() {
-            zeta[k] += area * i_n[k];
+            let (i, d) = light.at(sk.nodes[k].pos);
+            i_n[k] = i;
+            dsum[k] += d * i.max(1e-3);
+            zeta[k] += area * i;
         }
         len[k] += sk.segment_length(k);
         if let Some(p) = sk.nodes[k].parent {
-            let (z, l) = (zeta[k], len[k]);
+            let (z, l, d) = (zeta[k], len[k], dsum[k]);
             zeta[p as usize] += z;
             len[p as usize] += l;
+            dsum[p as usize] += d;
         }
     }
+    let d_n = dsum.iter().map(|d| d.normalize_or(Vec3::Z)).collect();
     let psi = zeta.iter().zip(&len).map(|(z, l)| if *l > 0.0 { z / l } else { 0.0 }).collect();
     (i_n, d_n, psi)
 }
@@ -164,7 +171,8 @@ pub fn adapt(sk: &Skeleton, p: &PlasticParams, obstacles: &[Obstacle], internode
     let n = sk.nodes.len();
     let tips: Vec<usize> = (1..n).filter(|&k| sk.nodes[k].children.is_empty()).collect();
     let r_c = (tips.iter().map(|&k| sk.segment_length(k)).sum::<f32>() / tips.len().max(1) as f32).max(0.05);
-    let clusters: Vec<Vec3> = tips.iter().map(|&k| sk.nodes[k].pos).collect();
+    let mut clusters: Vec<Vec3> = tips.iter().map(|&k| sk.nodes[k].pos).collect();
+    clusters.sort_by(|a, b| a.z.total_cmp(&b.z));
     let before = Light { dirs: sky_dirs(), clusters: clusters.clone(), r_c, gamma_c: p.translucency_gamma_c0, obstacles: &[] };
     let after = Light { dirs: sky_dirs(), clusters, r_c, gamma_c: p.translucency_gamma_c0, obstacles };
     let (_, d0, psi0) = analyse(sk, &before);
@@ -197,6 +205,10 @@ pub fn adapt(sk: &Skeleton, p: &PlasticParams, obstacles: &[Obstacle], internode
         out.nodes[k].pos = out.nodes[par].pos + q * seg;
     }
     // pruning (eq. 11) in the adapted tree and collisions
+    // the leaf clusters move with their bent branches (section 5.3)
+    let mut moved: Vec<Vec3> = tips.iter().map(|&k| out.nodes[k].pos).collect();
+    moved.sort_by(|a, b| a.z.total_cmp(&b.z));
+    let after = Light { clusters: moved, ..after };
     let (_, _, psi1) = analyse(&out, &after);
     let mut sorted: Vec<f32> = psi0[1..].to_vec();
     sorted.sort_by(|a, b| a.total_cmp(b));
