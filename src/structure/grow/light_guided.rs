@@ -3,9 +3,11 @@
 //!
 //! Each iteration (one growth cycle, a year):
 //! 1. **Light space**: voxels of half an internode. Every voxel starts at its sky openness (the
-//!    fraction of 25 sky directions not blocked by obstacles within 6 m, see
-//!    [`SKY_RANGE_M`]; an addition so that walls and boxes shade from the side, the paper has only
-//!    vertical shadows); every node then lowers the voxels beneath it by
+//!    fraction of 25 sky directions not blocked by obstacles: steep ones at any distance, low
+//!    ones within [`SKY_RANGE_M`]; an addition so that walls and boxes shade from the side, the
+//!    paper has only vertical shadows), less the shadow l_n = l_o − b^(−(q−1)) of obstacle
+//!    voxels (fully occupied), times the crown envelope's light factor when one is given
+//!    ([`LightOptions::envelope`]); every node then lowers the voxels beneath it by
 //!    l_n = l_o − b^(−q), q = vertical voxel distance (q ≥ 1), over a pyramid widening by one
 //!    voxel every two layers (paper section 3, "Calculation of environmental impact").
 //! 2. **Resources**: each bud's light Q = its voxel's light; Q is summed basipetally; the root
