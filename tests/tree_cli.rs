@@ -30,3 +30,19 @@ fn light_and_laplacian_trees_grow_with_age_to_the_species_height() {
         assert!(old > 0.6 * target && old < 1.2 * target, "{model}: 60-year beech {old} m, species potential {target} m");
     }
 }
+
+#[test]
+fn bad_obstacles_are_refused_naming_the_option() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.glb");
+    for (arg, want) in [("box:2,0,0,1,1,1", "x0 < x1"), ("sphere:0,0,3,0", "sphere radius"), ("sphere:0,0,3,-1", "sphere radius"), ("box:0,0,NaN,1,1,1", "finite")] {
+        let res = Command::new(env!("CARGO_BIN_EXE_sylva"))
+            .args(["tree", "grow", "--species", "beech", "--model", "light", "--age", "5", "--obstacle", arg, "--out", out.to_str().unwrap()])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&res.stderr).into_owned();
+        assert!(!res.status.success(), "{arg} accepted");
+        assert!(err.contains("--obstacle") && err.contains(want), "{arg}: {err}");
+        assert!(!out.exists());
+    }
+}

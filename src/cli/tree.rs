@@ -6,8 +6,9 @@ use clap::{Subcommand, ValueEnum};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 use sylva::mesh::{LodChain, TreeMesh};
-use sylva::species::{EcoModParams, SpeciesLibrary};
-use sylva::structure::grow::{ecomod, laplacian, light_guided, space::Obstacle};
+use sylva::species::SpeciesLibrary;
+use sylva::structure::grow::space::Obstacle;
+use sylva::structure::species_tree;
 use sylva::structure::mesh::{lod_chain, LodOptions};
 use sylva::structure::{Leaves, Skeleton};
 
@@ -34,8 +35,9 @@ pub enum Command {
         #[arg(long, value_enum, default_value = "ecomod")]
         model: Model,
         /// Age in years: EcoMod scales the strands S·min(1, age/80)² (≥ 8); light-guided and Laplacian
-        /// grow in a space sized to the species' potential height at that age; light-guided runs
-        /// `age` cycles (≤ 60); Laplacian adds 25 branches per year (≤ 4000).
+        /// grow inside the species' crown envelope at that age (height, crown radius and length
+        /// from the species file); light-guided runs `age` cycles (≤ 60); Laplacian adds 25
+        /// branches per year (≤ 4000).
         #[arg(long, default_value_t = 80.0)]
         age: f32,
         /// Obstacles (light and laplacian models): box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x
@@ -57,14 +59,6 @@ pub fn run(c: Command) -> anyhow::Result<()> {
     }
 }
 
-/// Potential height (m) and open-grown crown radius (m) of `sp` at `age` years, from the
-/// species file's Chapman–Richards curve and allometries; at least 1.5 m and 0.5 m.
-fn target_size(sp: &sylva::species::Species, age: f32) -> (f32, f32) {
-    let h = sp.potential_height_m(age).max(1.5);
-    let r = sp.crown_radius_m(sp.dbh_from_height_cm(h)).max(0.5);
-    (h, r)
-}
-
 fn grow(species: &str, model: Model, age: f32, obstacles: &[String], seed: u64, out: &Path) -> anyhow::Result<()> {
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
     let lib = SpeciesLibrary::embedded().context("loading the embedded species library")?;
@@ -72,39 +66,18 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], seed: u64, 
     let sp = sp.with_context(|| format!("--species {species}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))?;
     let obs: Vec<Obstacle> = obstacles.iter().map(|s| Obstacle::parse(s)).collect::<Result<_, _>>()?;
     let t0 = std::time::Instant::now();
-    let (sk, leaves): (Skeleton, Leaves) = match model {
+    let m = match model {
         Model::Ecomod => {
             if !obs.is_empty() {
                 tracing::warn!("EcoMod ignores obstacles");
             }
-            let mut p: EcoModParams = sp.architecture.ecomod.clone();
-            let f = (age / 80.0).min(1.0);
-            p.strands = ((p.strands as f32 * f * f).round() as u32).max(8).min(p.strands.max(8));
-            ecomod::try_grow(&p, seed, 0.0)?
+            species_tree::Model::EcoMod
         }
-        Model::Light => {
-            // The light space is sized to the species' potential height and crown at this age
-            // (Chapman–Richards height, crown allometry of the species file): the tree grows
-            // until it fills it, so age and species set its size; the internode (voxel = half an
-            // internode, Yi et al. section 3.1) grows with the tree to keep the voxel count bounded.
-            let (h, r) = target_size(&sp, age);
-            let internode = (h / 30.0).max(0.3);
-            let o = light_guided::LightOptions { pipe_exponent: sp.life.allometry.pipe_exponent, internode_m: internode, height_m: h + internode, extent_m: (1.3 * r).max(2.0), ..Default::default() };
-            let sk = light_guided::grow(&sp.architecture.light_guided, &o, &obs, seed, age.round().clamp(1.0, 60.0) as u32)?;
-            let lv = tip_leaves(&sk, &sp.architecture.ecomod);
-            (sk, lv)
-        }
-        Model::Laplacian => {
-            // The potential grid spans the species' potential height and crown at this age; a
-            // voxel is one branch length (Jinasena & Sonnadara, section III), 1/28 of the height.
-            let (h, r) = target_size(&sp, age);
-            let voxel = (h / 28.0).max(0.1);
-            let lo = laplacian::LaplacianOptions { voxel_m: voxel, extent_m: (1.3 * r).max(0.43 * h), height_m: h, ..Default::default() };
-            let g = laplacian::grow(&sp.architecture.laplacian, &lo, &obs, seed, (age * 25.0).round().clamp(1.0, 4000.0) as u32)?;
-            let lv = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
-            (g.skeleton, lv)
-        }
+        Model::Light => species_tree::Model::Light,
+        Model::Laplacian => species_tree::Model::Laplacian,
     };
+    let grown = species_tree::grow_species_tree(&sp, m, age, &obs, seed)?;
+    let (sk, leaves): (Skeleton, Leaves) = (grown.skeleton, grown.leaves);
     let grow_s = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
     let chain = lod_chain(&sk, &leaves, &LodOptions::default());
@@ -133,31 +106,6 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], seed: u64, 
     println!("grow {:.1} ms, mesh {:.1} ms", grow_s * 1e3, mesh_s * 1e3);
     println!("wrote {} and {}", out.display(), png.display());
     Ok(())
-}
-
-/// Leaves for models without their own: the species' EcoMod leaf distribution on every tip.
-fn tip_leaves(sk: &Skeleton, p: &EcoModParams) -> Leaves {
-    let mut lv = Leaves::default();
-    let n = p.leaf_density.ceil().clamp(1.0, 30.0) as u32;
-    for (i, node) in sk.nodes.iter().enumerate() {
-        let Some(par) = node.parent else { continue };
-        if !node.children.is_empty() {
-            continue;
-        }
-        let start = sk.nodes[par as usize].pos;
-        let axis = (node.pos - start).normalize_or(Vec3::Z);
-        let x = axis.any_orthonormal_vector();
-        let y = axis.cross(x);
-        for k in 0..n {
-            let a = (k as f32 * 137.5 + i as f32 * 37.0).to_radians();
-            let radial = x * a.cos() + y * a.sin();
-            let dir = (axis * 0.6 + radial * 0.8).normalize();
-            let normal = dir.cross(axis).cross(dir).normalize_or(Vec3::Z);
-            let t = (k + 1) as f32 / n as f32;
-            lv.leaves.push(sylva::structure::Leaf { pos: start + (node.pos - start) * t, dir, normal, size: p.leaf_size_m.max(0.02), node: i as u32 });
-        }
-    }
-    lv
 }
 
 /// Side views (looking along +y, orthographic, z up) of every LOD level side by side, flat

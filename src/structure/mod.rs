@@ -6,11 +6,18 @@
 //!   (`003_*.txt`).
 //! - [`mesh`]: generalized cylinders, leaf cards and the LOD chain.
 //! - [`params`]: the papers' parameter sets.
+//! - [`species_tree`]: one tree of a species at an age by any model (what `sylva tree grow`
+//!   runs); light-guided and Laplacian trees grow in the species' crown envelope
+//!   ([`grow::envelope`]).
+//! - [`plastic`]: Plastic Trees (`000_*.txt`): bends and prunes a grown skeleton for a new
+//!   obstacle instead of regrowing it.
 
 pub mod grow;
 pub mod mesh;
 pub mod params;
+pub mod plastic;
 pub mod skeleton;
+pub mod species_tree;
 
 pub use skeleton::{Leaf, Leaves, Node, NodeId, Role, Skeleton};
 

@@ -18,6 +18,10 @@
 //! - Gravimorphism R_{y×y_m}(α_m) turns the branch towards the vertical by α_m (negative: droops).
 //! - Undirected wind α_x(t), α_z(t) = sin(t + R)·w_s·(1 − k_f)·l₀ degrees with a random phase R
 //!   per segment.
+//! - Posture limits (ours, so that published parameter sets give upright trees above the
+//!   ground): the trunk's continuation tilts at most [`TRUNK_MAX_TILT_DEG`] from the vertical,
+//!   branch axes droop at most [`MAX_DROOP_DEG`] below the horizontal, and no segment ends
+//!   below z = 0.
 //! - Leaves: ⌈ρ_l⌉ leaves of length l_l per tip segment, arranged by the leaf distribution.
 
 use crate::error::{Error, Result};
@@ -198,12 +202,40 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
         let wind = rot(o.wind, aw);
         let twist = Mat3::from_rotation_y(p.phyllotaxis_deg.to_radians()) * Mat3::from_rotation_x(ax.to_radians());
         let child = |angle: f32| wind * grav * b.frame * twist * Mat3::from_rotation_z((angle + az).to_radians());
-        let f1 = orthonormal(child(a1));
-        let f2 = orthonormal(child(-a2));
+        let f1 = constrain(orthonormal(child(a1)), end, l1, b.g == 0);
+        let f2 = constrain(orthonormal(child(-a2)), end, l2, false);
         stack.push(Pending { parent: nid, g: b.g + 1, w: b.w + 1, s0: s2, big_l: big_l2, l: l2, frame: f2, lateral: true });
         stack.push(Pending { parent: nid, g: b.g, w: b.w + 1, s0: s1, big_l: big_l1, l: l1, frame: f1, lateral: false });
     }
     Ok((sk, leaves))
+}
+
+/// Largest tilt of the trunk (the g = 0 axis) from the vertical (degrees): apical control keeps
+/// the leader upright. Our addition: Algorithm 1 turns the major sub-branch by α₁ at every split,
+/// which with the published pine angles (α = 128.8° at g = 0) makes the trunk wander and lean.
+pub const TRUNK_MAX_TILT_DEG: f32 = 6.0;
+
+/// Largest droop of a branch axis below the horizontal (degrees). Our addition: a negative
+/// gravimorphism angle α_m (the pine's −4° … −6°) applied at every one of a long branch's splits
+/// turns it all the way down; real branches sag at most a few tens of degrees.
+pub const MAX_DROOP_DEG: f32 = 30.0;
+
+/// Applies the trunk tilt limit ([`TRUNK_MAX_TILT_DEG`], for the trunk's continuation), the
+/// droop limit ([`MAX_DROOP_DEG`]) and the ground (a segment of length `len` from `start` must
+/// end at z ≥ 0) to a child frame, by turning it towards the vertical about y × up.
+fn constrain(f: Mat3, start: Vec3, len: f32, trunk: bool) -> Mat3 {
+    let y = f.y_axis;
+    let mut min_sin = if trunk { (90.0 - TRUNK_MAX_TILT_DEG).to_radians().sin() } else { (-MAX_DROOP_DEG).to_radians().sin() };
+    if len > 0.0 && start.z + y.z * len < 0.0 {
+        min_sin = min_sin.max((-start.z / len).clamp(-1.0, 0.0));
+    }
+    if y.z >= min_sin {
+        return f;
+    }
+    let axis = y.cross(Vec3::Z);
+    let axis = if axis.length_squared() > 1e-12 { axis.normalize() } else { f.x_axis };
+    let turn = min_sin.clamp(-1.0, 1.0).asin() - y.z.clamp(-1.0, 1.0).asin();
+    orthonormal(Mat3::from_axis_angle(axis, turn) * f)
 }
 
 /// Re-orthonormalises a frame (Gram–Schmidt on y, then x) against drift over deep recursions.

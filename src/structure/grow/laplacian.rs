@@ -11,6 +11,7 @@
 //! W(k) = c·k^α (polynomial) or c·β^k (exponential), eq. (1) and Table I (c 0.67, α 1.15,
 //! β 1.50); diameters are W(k)/W(1) × `base_width_m`.
 
+use super::envelope::CrownEnvelope;
 use super::space::{Obstacle, VoxelSpace};
 use crate::error::{Error, Result};
 use crate::rng::{salt, Stream};
@@ -44,6 +45,12 @@ pub enum LightSource {
     Sky,
     /// A sphere of voxels around a point (m) with a radius (m).
     Point(Vec3, f32),
+    /// The species' crown envelope (our addition, see [`super::envelope`]): voxels outside it
+    /// are held at φ = 0 and never grown into, its surface above the lowest quarter of the crown
+    /// is the light source (φ = 1) with a short column of source voxels above the apex, and
+    /// the trunk corridor below the crown stays free; the tree
+    /// fills the crown from the inside and stops at the apex.
+    Envelope(CrownEnvelope),
 }
 
 /// Options of the Laplacian model.
@@ -104,6 +111,15 @@ impl LaplacianGrowth {
         let [nx, ny, nz] = space.dims;
         let mut phi = vec![0.0f32; n];
         let mut fixed = vec![false; n];
+        // envelope with a corridor at least one voxel column wide around the root
+        let env = match options.source {
+            LightSource::Envelope(mut env) => {
+                env.trunk_radius_m = env.trunk_radius_m.max(0.75 * options.voxel_m);
+                Some(env)
+            }
+            _ => None,
+        };
+        let outside = |c: IVec3| env.map(|e| e.outside_m(space.center(c)) > 0.0).unwrap_or(false);
         for z in 0..nz {
             for y in 0..ny {
                 for x in 0..nx {
@@ -113,8 +129,23 @@ impl LaplacianGrowth {
                     let source = match options.source {
                         LightSource::Sky => z == nz - 2 && !boundary,
                         LightSource::Point(p, r) => space.center(c).distance(p) <= r.max(options.voxel_m),
+                        LightSource::Envelope(e) => {
+                            let d = space.center(c) - e.base;
+                            let (z, rho) = (d.z, d.truncate().length());
+                            // the trunk corridor stays free so the leader can climb the narrow top
+                            rho > env.map_or(0.0, |e| e.trunk_radius_m) && !outside(c) && z >= e.crown_base_m + 0.25 * e.crown_length_m() && [IVec3::X, -IVec3::X, IVec3::Y, -IVec3::Y, IVec3::Z, -IVec3::Z].iter().any(|&d| outside(c + d))
+                        }
                     };
-                    if space.solid[i] || boundary {
+                    // the sky above the apex: a short column of source voxels over the crown
+                    // top draws the leader up to the species' height
+                    let apex = env.is_some_and(|e| {
+                        let p = space.center(c) - e.base;
+                        p.z > e.height_m && p.z <= e.height_m + 2.0 * options.voxel_m && p.truncate().length() <= e.trunk_radius_m
+                    });
+                    if apex && !space.solid[i] && !boundary {
+                        fixed[i] = true;
+                        phi[i] = 1.0;
+                    } else if space.solid[i] || boundary || outside(c) {
                         fixed[i] = true;
                     } else if source {
                         fixed[i] = true;

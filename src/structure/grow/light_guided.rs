@@ -3,9 +3,11 @@
 //!
 //! Each iteration (one growth cycle, a year):
 //! 1. **Light space**: voxels of half an internode. Every voxel starts at its sky openness (the
-//!    fraction of 25 sky directions not blocked by obstacles within 6 m, see
-//!    [`SKY_RANGE_M`]; an addition so that walls and boxes shade from the side, the paper has only
-//!    vertical shadows); every node then lowers the voxels beneath it by
+//!    fraction of 25 sky directions not blocked by obstacles: steep ones at any distance, low
+//!    ones within [`SKY_RANGE_M`]; an addition so that walls and boxes shade from the side, the
+//!    paper has only vertical shadows), less the shadow l_n = l_o − b^(−(q−1)) of obstacle
+//!    voxels (fully occupied), times the crown envelope's light factor when one is given
+//!    ([`LightOptions::envelope`]); every node then lowers the voxels beneath it by
 //!    l_n = l_o − b^(−q), q = vertical voxel distance (q ≥ 1), over a pyramid widening by one
 //!    voxel every two layers (paper section 3, "Calculation of environmental impact").
 //! 2. **Resources**: each bud's light Q = its voxel's light; Q is summed basipetally; the root
@@ -25,6 +27,7 @@
 //!
 //! Several trees and obstacles share one [`LightSpace`].
 
+use super::envelope::CrownEnvelope;
 use super::space::{Obstacle, VoxelSpace};
 use crate::error::{Error, Result};
 use crate::rng::{salt, Stream};
@@ -53,11 +56,20 @@ pub struct LightOptions {
     pub extent_m: f32,
     /// Height of the space (m).
     pub height_m: f32,
+    /// Crown envelope (our addition, see [`super::envelope`]): the sky light is multiplied by
+    /// its light factor (1 inside, 0 one internode outside) and no shoot ends more than one
+    /// internode outside it, so the tree forms the species' crown and stops at its height.
+    /// `None`: the whole space is open (the paper's setting).
+    pub envelope: Option<CrownEnvelope>,
+    /// Plagiotropic side branches (conifers; our addition): the tropism V_t of shoots off the
+    /// main stem is their own horizontal direction instead of up, so they keep spreading
+    /// sideways in tiers while the leader stays orthotropic (up).
+    pub plagiotropic: bool,
 }
 
 impl Default for LightOptions {
     fn default() -> Self {
-        LightOptions { internode_m: 0.4, alpha: 3.0, max_shoot: 3, branch_angle_deg: 45.0, phyllotaxis_deg: 137.5, tip_radius_m: 0.004, pipe_exponent: 2.5, extent_m: 6.0, height_m: 14.0 }
+        LightOptions { internode_m: 0.4, alpha: 3.0, max_shoot: 3, branch_angle_deg: 45.0, phyllotaxis_deg: 137.5, tip_radius_m: 0.004, pipe_exponent: 2.5, extent_m: 6.0, height_m: 14.0, envelope: None, plagiotropic: false }
     }
 }
 
@@ -91,7 +103,8 @@ pub struct LightSpace {
     year: u64,
 }
 
-const SHADOW_DEPTH: i32 = 10;
+/// Layers (voxels) a shadow reaches below a node or obstacle voxel.
+pub const SHADOW_DEPTH: i32 = 10;
 
 impl LightSpace {
     /// A space spanning `extent_m` around the given roots (m, on the ground z = 0) and
@@ -116,7 +129,18 @@ impl LightSpace {
             hi = hi.max(*r + Vec3::new(options.extent_m, options.extent_m, options.height_m));
         }
         let space = VoxelSpace::new(lo, hi, options.internode_m * 0.5, obstacles)?;
-        let sky = sky_openness(&space, obstacles);
+        let mut sky = sky_openness(&space, obstacles);
+        obstacle_shadows(&space, params.b, &mut sky);
+        if let Some(env) = &options.envelope {
+            for z in 0..space.dims[2] {
+                for y in 0..space.dims[1] {
+                    for x in 0..space.dims[0] {
+                        let i = (z * space.dims[1] + y) * space.dims[0] + x;
+                        sky[i] *= env.light_factor(space.center(IVec3::new(x as i32, y as i32, z as i32)), options.internode_m);
+                    }
+                }
+            }
+        }
         let mut trees = Vec::new();
         for (i, &r) in roots.iter().enumerate() {
             if space.blocked(r) || space.blocked(r + Vec3::Z * options.internode_m) {
@@ -310,6 +334,21 @@ impl LightSpace {
             Some(pp) => (pos - sk.nodes[pp as usize].pos).normalize_or(Vec3::Z),
             None => Vec3::Z,
         };
+        // on the main stem: every node up to the root is its parent's first child
+        let on_stem = {
+            let mut i = node;
+            let mut stem = terminal;
+            while stem {
+                match sk.nodes[i].parent {
+                    Some(par) => {
+                        stem = sk.nodes[par as usize].children.first().map(|&c| c as usize) == Some(i);
+                        i = par as usize;
+                    }
+                    None => break,
+                }
+            }
+            stem
+        };
         let mut vd = parent_dir;
         if !terminal {
             let k = self.trees[t].phyllo;
@@ -338,10 +377,16 @@ impl LightSpace {
                 vo += dir * lp;
             }
             let vo = vo.normalize_or_zero();
-            let vu = (vd + p.mu * vo + p.gamma * Vec3::Z).normalize_or(vd);
+            let vt = if o.plagiotropic && !on_stem { (vd * Vec3::new(1.0, 1.0, 0.0)).normalize_or(Vec3::Z) } else { Vec3::Z };
+            let vu = (vd + p.mu * vo + p.gamma * vt).normalize_or(vd);
             let next = cur_pos + vu * len;
             if self.space.segment_blocked(cur_pos, next) {
                 break;
+            }
+            if let Some(env) = &o.envelope {
+                if env.outside_m(next) > o.internode_m {
+                    break;
+                }
             }
             let sk = &mut self.trees[t].skeleton;
             let Ok(id) = sk.add_child(cur, next, o.tip_radius_m, lateral) else { break };
@@ -391,21 +436,24 @@ impl LightSpace {
     }
 }
 
-/// Sky openness: the fraction of 25 sky directions (zenith; 8 azimuths at 20°, 45° and 70°
-/// elevation) from each voxel centre not blocked by an obstacle within `SKY_RANGE_M`
-/// (analytic ray tests against the obstacles).
+/// Sky openness: the share of 25 equally weighted sky directions (zenith; 8 azimuths at 20°,
+/// 45° and 70° elevation) that reach each voxel centre unblocked by obstacles (analytic ray
+/// tests). Steep directions (≥ 60° elevation) are blocked by obstacles at any distance, also
+/// above the voxel space (a roof); low ones only within [`SKY_RANGE_M`], so that an endless
+/// wall shades its near side more than its far side.
 fn sky_openness(s: &VoxelSpace, obstacles: &[Obstacle]) -> Vec<f32> {
     if obstacles.is_empty() {
         return vec![1.0; s.len()];
     }
-    let mut dirs = vec![Vec3::Z];
+    let mut dirs = vec![(Vec3::Z, 1.0f32, f32::INFINITY)];
     for e in [20.0f32, 45.0, 70.0] {
         let (se, ce) = e.to_radians().sin_cos();
         for k in 0..8 {
             let a = k as f32 * std::f32::consts::FRAC_PI_4;
-            dirs.push(Vec3::new(ce * a.cos(), ce * a.sin(), se));
+            dirs.push((Vec3::new(ce * a.cos(), ce * a.sin(), se), 1.0, if e >= 60.0 { f32::INFINITY } else { SKY_RANGE_M }));
         }
     }
+    let total: f32 = dirs.iter().map(|d| d.1).sum();
     let mut out = vec![0.0f32; s.len()];
     for z in 0..s.dims[2] {
         for y in 0..s.dims[1] {
@@ -415,12 +463,48 @@ fn sky_openness(s: &VoxelSpace, obstacles: &[Obstacle]) -> Vec<f32> {
                     continue;
                 }
                 let p = s.center(IVec3::new(x as i32, y as i32, z as i32));
-                let open = dirs.iter().filter(|d| !obstacles.iter().any(|o| o.ray_hits(p, **d, SKY_RANGE_M))).count();
-                out[i] = open as f32 / dirs.len() as f32;
+                let open: f32 = dirs.iter().filter(|d| !obstacles.iter().any(|o| o.ray_hits(p, d.0, d.2))).map(|d| d.1).sum();
+                out[i] = open / total;
             }
         }
     }
     out
+}
+
+/// Yi et al.'s shadow l_n = l_o − b^(−q) cast by obstacle voxels, treated as fully occupied:
+/// every solid voxel above a free one lowers the free voxels of the pyramid below it (widening
+/// by one voxel every two layers, [`SHADOW_DEPTH`] layers) by b^(−(q−1)), so the layer right
+/// under an obstacle loses all its light (occupancy 1) and the shade fades downwards as for
+/// nodes.
+fn obstacle_shadows(s: &VoxelSpace, b: f32, sky: &mut [f32]) {
+    let [nx, ny, nz] = s.dims;
+    for z in 1..nz {
+        for y in 0..ny {
+            for x in 0..nx {
+                let i = (z * ny + y) * nx + x;
+                if !s.solid[i] || s.solid[i - nx * ny] {
+                    continue;
+                }
+                let c = IVec3::new(x as i32, y as i32, z as i32);
+                for q in 1..=SHADOW_DEPTH {
+                    let w = b.powi(-(q - 1));
+                    let r = q / 2;
+                    for dy in -r..=r {
+                        for dx in -r..=r {
+                            if let Some(j) = s.index(c + IVec3::new(dx, dy, -q)) {
+                                if !s.solid[j] {
+                                    sky[j] -= w;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    for v in sky.iter_mut() {
+        *v = v.max(0.0);
+    }
 }
 
 /// Range (m) within which obstacles block the sky in [`LightSpace`]'s openness.

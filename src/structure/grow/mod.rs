@@ -3,6 +3,7 @@
 //! space and obstacles they share ([`space`]).
 
 pub mod ecomod;
+pub mod envelope;
 pub mod laplacian;
 pub mod light_guided;
 pub mod space;

@@ -83,27 +83,72 @@ impl Obstacle {
         }
     }
 
-    /// Parses `box:x0,y0,z0,x1,y1,z1`, `sphere:x,y,z,r` or `wall:x` (metres).
+    /// Checks the obstacle's numbers: finite coordinates, a box with `min < max` on every axis
+    /// (not inverted, not flat), a sphere radius > 0 m, a wall plane ≠ 0 (the tree base is at
+    /// the origin).
     ///
-    /// Errors: [`Error::Invalid`] naming the text and the expected form.
+    /// Errors: [`Error::Invalid`] with `context` as given (e.g. `obstacle 2` or `--obstacle`),
+    /// the field (`box`, `sphere radius`, `wall x`, …) and the expected value.
+    pub fn validate(&self, context: &str) -> Result<()> {
+        let bad = |field: &str, value: String, expected: &str| Err(Error::Invalid { context: context.into(), field: field.into(), value, expected: expected.into() });
+        match *self {
+            Obstacle::Box { min, max } => {
+                if !min.is_finite() || !max.is_finite() {
+                    return bad("box", format!("min {min}, max {max}"), "finite corner coordinates (m)");
+                }
+                if !max.cmpgt(min).all() {
+                    return bad("box", format!("min {min}, max {max}"), "x0 < x1, y0 < y1 and z0 < z1 (lower corner first, metres)");
+                }
+            }
+            Obstacle::Sphere { center, radius } => {
+                if !center.is_finite() {
+                    return bad("sphere centre", center.to_string(), "finite coordinates (m)");
+                }
+                if !(radius > 0.0 && radius.is_finite()) {
+                    return bad("sphere radius", radius.to_string(), "a finite radius > 0 m");
+                }
+            }
+            Obstacle::Wall { x } => {
+                if !x.is_finite() || x == 0.0 {
+                    return bad("wall x", x.to_string(), "a finite plane position ≠ 0 m (the tree stands at x = 0)");
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Parses `box:x0,y0,z0,x1,y1,z1`, `sphere:x,y,z,r` or `wall:x` (metres) and checks it with
+    /// [`Obstacle::validate`] (a box's first corner must be the lower one on every axis).
+    ///
+    /// Errors: [`Error::Invalid`] with context `--obstacle`, naming the text or the bad field
+    /// and the expected form or value.
     pub fn parse(s: &str) -> Result<Obstacle> {
-        let bad = || Error::Invalid { context: "--obstacle".into(), field: "obstacle".into(), value: s.into(), expected: "box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x (metres, finite)".into() };
+        let form = "box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x (metres, finite numbers)";
+        let bad = || Error::Invalid { context: "--obstacle".into(), field: "obstacle".into(), value: s.into(), expected: form.into() };
         let (kind, rest) = s.split_once(':').ok_or_else(bad)?;
         let v: Vec<f32> = rest.split(',').map(|t| t.trim().parse::<f32>()).collect::<std::result::Result<_, _>>().map_err(|_| bad())?;
         if v.iter().any(|x| !x.is_finite()) {
-            return Err(bad());
+            return Err(Error::Invalid { context: "--obstacle".into(), field: kind.trim().into(), value: s.into(), expected: "finite numbers (no NaN or infinity), metres".into() });
         }
-        match (kind.trim(), v.len()) {
-            ("box", 6) => {
-                let a = Vec3::new(v[0], v[1], v[2]);
-                let b = Vec3::new(v[3], v[4], v[5]);
-                Ok(Obstacle::Box { min: a.min(b), max: a.max(b) })
-            }
-            ("sphere", 4) if v[3] > 0.0 => Ok(Obstacle::Sphere { center: Vec3::new(v[0], v[1], v[2]), radius: v[3] }),
-            ("wall", 1) if v[0] != 0.0 => Ok(Obstacle::Wall { x: v[0] }),
-            _ => Err(bad()),
-        }
+        let o = match (kind.trim(), v.len()) {
+            ("box", 6) => Obstacle::Box { min: Vec3::new(v[0], v[1], v[2]), max: Vec3::new(v[3], v[4], v[5]) },
+            ("sphere", 4) => Obstacle::Sphere { center: Vec3::new(v[0], v[1], v[2]), radius: v[3] },
+            ("wall", 1) => Obstacle::Wall { x: v[0] },
+            _ => return Err(bad()),
+        };
+        o.validate(&format!("--obstacle {s}"))?;
+        Ok(o)
     }
+}
+
+/// Checks every obstacle with [`Obstacle::validate`] (context `obstacle i`, 0-based).
+///
+/// Errors: the first invalid obstacle's [`Error::Invalid`].
+pub fn validate_obstacles(obstacles: &[Obstacle]) -> Result<()> {
+    for (i, o) in obstacles.iter().enumerate() {
+        o.validate(&format!("obstacle {i}"))?;
+    }
+    Ok(())
 }
 
 /// Largest voxel count accepted.
@@ -126,8 +171,8 @@ impl VoxelSpace {
     /// A grid covering `[min, max]` with voxels of edge `voxel_m`, solid where an obstacle
     /// contains the voxel centre.
     ///
-    /// Errors: [`Error::Invalid`] for a non-positive voxel or empty box; [`Error::TooLarge`]
-    /// above [`MAX_VOXELS`].
+    /// Errors: [`Error::Invalid`] for a non-positive voxel, an empty box or an invalid obstacle
+    /// ([`validate_obstacles`]); [`Error::TooLarge`] above [`MAX_VOXELS`].
     pub fn new(min: Vec3, max: Vec3, voxel_m: f32, obstacles: &[Obstacle]) -> Result<Self> {
         if !(voxel_m > 0.0 && voxel_m.is_finite()) || !(max.cmpgt(min).all()) || !min.is_finite() || !max.is_finite() {
             return Err(Error::Invalid { context: "VoxelSpace::new".into(), field: "bounds/voxel".into(), value: format!("{min}..{max}, {voxel_m} m"), expected: "max > min and voxel > 0 m".into() });
@@ -138,6 +183,7 @@ impl VoxelSpace {
         if total > MAX_VOXELS {
             return Err(Error::TooLarge { path: "voxel space".into(), width: (dims[0] * dims[1]) as u64, height: dims[2] as u64, limit: MAX_VOXELS as u64 });
         }
+        validate_obstacles(obstacles)?;
         let mut s = VoxelSpace { origin: min, voxel_m, dims, solid: vec![false; total] };
         if !obstacles.is_empty() {
             for z in 0..dims[2] {
