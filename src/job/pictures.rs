@@ -36,7 +36,10 @@ impl Stage {
     pub fn new(site: SiteConditions, library: SpeciesLibrary, sea_level_m: f32) -> Result<Self> {
         let terrain = scene::terrain_mesh(&site, 10.0, sea_level_m)?;
         let prototypes = scene::prototypes(&library);
-        let renderer = Renderer::new()?;
+        let mut renderer = Renderer::new()?;
+        // Offline stills: a larger triangle budget than the interactive default keeps the trees
+        // near the camera at full detail (trunks and branches) in the close views.
+        renderer.lod.max_triangles = 30_000_000;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
         Ok(Stage { site, library, prototypes, terrain, sea_level: has_water.then_some(sea_level_m), renderer })
     }
