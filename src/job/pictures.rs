@@ -38,8 +38,10 @@ impl Stage {
         let prototypes = scene::prototypes(&library);
         let mut renderer = Renderer::new()?;
         // Offline stills: a larger triangle budget than the interactive default keeps the trees
-        // near the camera at full detail (trunks and branches) in the close views.
+        // near the camera at full detail (trunks and branches) in the close views, and lower switch
+        // sizes keep mid-distance crowns as meshes rather than billboards.
         renderer.lod.max_triangles = 30_000_000;
+        renderer.lod.switch_px = [110.0, 45.0, 18.0];
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
         Ok(Stage { site, library, prototypes, terrain, sea_level: has_water.then_some(sea_level_m), renderer })
     }
