@@ -8,7 +8,6 @@ use clap::{Subcommand, ValueEnum};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 use sylva::mesh::{LodChain, TreeMesh};
-use sylva::species::SpeciesLibrary;
 use sylva::structure::grow::space::Obstacle;
 use sylva::structure::species_tree;
 use sylva::structure::mesh::{lod_chain, LodOptions};
@@ -54,6 +53,9 @@ pub enum Command {
         /// Random seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Folder of extra or edited species files, over the shipped library.
+        #[arg(long)]
+        species_dir: Option<PathBuf>,
         /// Output file, .glb or .obj; the preview goes to the same name with .png.
         #[arg(long)]
         out: PathBuf,
@@ -63,15 +65,17 @@ pub enum Command {
 /// Runs a tree subcommand.
 pub fn run(c: Command) -> anyhow::Result<()> {
     match c {
-        Command::Grow { species, model, age, obstacle, adapt_to, seed, out } => grow(&species, model, age, &obstacle, &adapt_to, seed, &out),
+        Command::Grow { species, model, age, obstacle, adapt_to, seed, species_dir, out } => grow(&species, model, age, &obstacle, &adapt_to, seed, species_dir.as_deref(), &out),
     }
 }
 
-fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, out: &Path) -> anyhow::Result<()> {
+#[allow(clippy::too_many_arguments)]
+fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, species_dir: Option<&Path>, out: &Path) -> anyhow::Result<()> {
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
-    let lib = SpeciesLibrary::embedded().context("loading the embedded species library")?;
+    let lib = super::simulate::library(species_dir.as_slice())?;
     let sp = lib.find(species).map(|i| lib.species[i as usize].clone());
     let sp = sp.with_context(|| format!("--species {species}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))?;
+    anyhow::ensure!(age <= sp.life.max_age_yr, "--age {age}: expected at most the maximum age of {} ({} years, `life.max_age_yr` in its species file)", sp.id, sp.life.max_age_yr);
     let obs: Vec<Obstacle> = obstacles.iter().map(|s| Obstacle::parse(s)).collect::<Result<_, _>>()?;
     let parse_later = |s: &String| Obstacle::parse(s).map_err(|e| anyhow::anyhow!("{}", e.to_string().replace("--obstacle", "--adapt-to")));
     let later: Vec<Obstacle> = adapt_to.iter().map(parse_later).collect::<Result<_, _>>()?;
