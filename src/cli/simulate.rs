@@ -114,9 +114,12 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
         last.map_or(0.0, |r| r.basal_area_m2_ha),
         last.map_or(0.0, |r| r.top_height_m),
         res.seconds,
-        if res.stopped { ", stopped early (resume with --resume)" } else { "" },
+        if res.stopped { ", stopped early" } else { "" },
         out.display()
     );
+    if res.stopped {
+        return Err(super::Interrupted(format!("stopped by Ctrl-C after year {}: outputs so far are complete in {}; continue with --resume", res.world.year, out.display())).into());
+    }
     let pool = res.world.pool.iter().map(|&s| res.world.lib.species[s as usize].id.clone()).collect();
     Ok(SimOutcome { year: res.world.year, trees_alive: res.world.trees.len(), pool, rows: res.rows })
 }
