@@ -58,3 +58,15 @@ fn a_closed_output_pipe_ends_quietly() {
     use std::os::unix::process::ExitStatusExt;
     assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "ended by SIGPIPE like other Unix tools: {:?} {err}", out.status);
 }
+
+#[test]
+fn terrain_options_refuse_nan_and_out_of_range_values() {
+    for (opt, val, want) in [("--latitude", "nan", "-90 to 90"), ("--latitude", "200", "-90 to 90"), ("--sea-level", "nan", "finite"), ("--max-height", "inf", "finite")] {
+        let out = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info", &format!("{opt}={val}")]).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(opt) && err.contains(want), "{opt}={val}: {err}");
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info", "--latitude", "-30.5", "--generate", "--size", "16"]).output().unwrap();
+    let so = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && so.contains("latitude:    -30.500° (--latitude"), "{so}");
+}
