@@ -69,8 +69,8 @@ pub struct TimelapseArgs {
     /// Frames per second.
     #[arg(long, default_value_t = 12.0)]
     pub fps: f32,
-    /// Interpolated frames between consecutive snapshots (1–50).
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=50))]
+    /// Interpolated frames between consecutive snapshots (0–50; 0: one frame per snapshot).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=50))]
     pub frames_between: u32,
     /// Frame size WIDTHxHEIGHT.
     #[arg(long, default_value = "960x540", value_parser = parse_size)]
