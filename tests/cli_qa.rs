@@ -70,3 +70,27 @@ fn terrain_options_refuse_nan_and_out_of_range_values() {
     let so = String::from_utf8_lossy(&out.stdout);
     assert!(out.status.success() && so.contains("latitude:    -30.500° (--latitude"), "{so}");
 }
+
+#[test]
+fn folders_and_files_mixed_up_get_plain_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("empty")).unwrap();
+    std::fs::write(d.join("afile"), b"x").unwrap();
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).current_dir(d).output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    for (args, want) in [
+        (&["species", "check", "empty"][..], "no species files"),
+        (&["species", "show", "beech", "--dir", "nowhere"][..], "no such folder"),
+        (&["terrain", "info", "empty"][..], "is a folder"),
+        (&["run", "--out", "afile", "--years", "1"][..], "is a file"),
+    ] {
+        let (ok, err) = run(args);
+        assert!(!ok && err.contains(want), "{args:?}: {err}");
+    }
+    // without ./species, `species check` checks the shipped library
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["species", "check"]).current_dir(d).output().unwrap();
+    assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("shipped library: 17 species"));
+}

@@ -70,6 +70,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         sc.validate("--years")?;
     }
     let out = a.out.clone();
+    if out.exists() && !out.is_dir() {
+        anyhow::bail!("--out {}: is a file; expected a folder for the run's outputs", out.display());
+    }
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     eprintln!("Sylva · {} · {} years · seed {} → {}", sc.name, sc.years, sc.seed, out.display());
 

@@ -86,6 +86,9 @@ pub struct SimOutcome {
 /// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year);
 /// returns what the main job reports.
 pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool) -> anyhow::Result<SimOutcome> {
+    if out.exists() && !out.is_dir() {
+        anyhow::bail!("--out {}: is a file; expected a folder for the run's outputs", out.display());
+    }
     let stop = Arc::new(AtomicBool::new(false));
     {
         let s = stop.clone();

@@ -76,6 +76,10 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     let sp = lib.find(species).map(|i| lib.species[i as usize].clone());
     let sp = sp.with_context(|| format!("--species {species}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))?;
     anyhow::ensure!(age <= sp.life.max_age_yr, "--age {age}: expected at most the maximum age of {} ({} years, `life.max_age_yr` in its species file)", sp.id, sp.life.max_age_yr);
+    let png = out.with_extension("png");
+    if png.is_dir() {
+        anyhow::bail!("{}: the preview would go there, but it is a folder", png.display());
+    }
     let obs: Vec<Obstacle> = obstacles.iter().map(|s| Obstacle::parse(s)).collect::<Result<_, _>>()?;
     let parse_later = |s: &String| Obstacle::parse(s).map_err(|e| anyhow::anyhow!("{}", e.to_string().replace("--obstacle", "--adapt-to")));
     let later: Vec<Obstacle> = adapt_to.iter().map(parse_later).collect::<Result<_, _>>()?;
@@ -120,7 +124,6 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         "obj" => sylva::output::obj::write_obj(out, &chain, None)?,
         _ => anyhow::bail!("--out {}: expected a .glb or .obj file name", out.display()),
     }
-    let png = out.with_extension("png");
     let img = preview(&chain, bark, leaf, 360, 540);
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;

@@ -38,6 +38,9 @@ pub fn default_terrain() -> Result<Terrain> {
 /// Errors: [`Error::Io`] (missing file), [`Error::Format`] (corrupt or unsupported content,
 /// naming the field or line), [`Error::TooLarge`], [`Error::Invalid`] (no valid cell).
 pub fn load(path: &Path) -> Result<Terrain> {
+    if path.is_dir() {
+        return Err(Error::format(path, "is a folder: expected a DEM file (.tif, .tiff, .asc or .png)"));
+    }
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "tif" | "tiff" => {
