@@ -94,3 +94,29 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["species", "check"]).current_dir(d).output().unwrap();
     assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("shipped library: 17 species"));
 }
+
+#[test]
+fn ground_camera_steps_out_of_a_trunk_into_a_clearing() {
+    use sylva::job::inventory::InventoryRow;
+    use sylva::render::camera::CameraPreset;
+    let sc = sylva::sim::Scenario::from_toml_str(
+        "name = \"g\"\nyears = 1\n[terrain]\nuniform = { width = 20, height = 20, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 4, 5, 6, 6] }\n",
+        "g",
+    )
+    .unwrap();
+    let stage = sylva::job::pictures::Stage::new(sc.site().unwrap(), sylva::species::SpeciesLibrary::embedded().unwrap(), 0.0).expect("a wgpu adapter (lavapipe in CI)");
+    let preset = stage.camera(CameraPreset::Ground);
+    let tree = |id: u64, x: f32, y: f32| InventoryRow { id, species: "beech".into(), x_m: x as f64, y_m: y as f64, z_m: 300.0, age_yr: 60.0, height_m: 25.0, dbh_cm: 30.0, crown_radius_m: 3.0, crown_base_m: 10.0, status: "alive".into() };
+    // a beech right where the preset's eye stands, and a row of them along the southern edge
+    let (x0, y0) = (preset.eye[0], preset.eye[1]);
+    let mut rows: Vec<InventoryRow> = (0..8).map(|k| tree(k, x0 - 28.0 + 8.0 * k as f32, y0)).collect();
+    rows.push(tree(99, x0, y0));
+    let cam = stage.camera_for(CameraPreset::Ground, &rows);
+    let clear = rows.iter().map(|r| ((r.x_m as f32 - cam.eye[0]).hypot(r.y_m as f32 - cam.eye[1]) - r.crown_radius_m)).fold(f32::INFINITY, f32::min);
+    assert!(clear > 0.5, "eye {:?} still inside a crown (clearance {clear} m)", cam.eye);
+    assert!((cam.eye[2] - 301.7).abs() < 0.2, "eye at 1.7 m above the ground: {:?}", cam.eye);
+    assert!(cam.target[1] > cam.eye[1], "still looking north");
+    // with nobody in the way the preset is kept
+    let far = [tree(1, 10.0, 190.0)];
+    assert_eq!(stage.camera_for(CameraPreset::Ground, &far).eye, preset.eye);
+}

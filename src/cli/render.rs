@@ -119,7 +119,11 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
         None => sylva::job::inventory::snapshots(&a.run_dir)?.iter().map(|s| s.0).max().with_context(|| format!("{}: the run directory has no snapshots (inventory/year_NNNN.csv)", a.run_dir.display()))?,
     };
     let rows = pictures::snapshot_rows(&a.run_dir, year)?;
-    let cam = stage.camera(a.camera);
+    let unknown = rows.iter().filter(|r| stage.library.find(&r.species).is_none()).count();
+    if unknown > 0 {
+        tracing::warn!("{unknown} trees of species not in the library are not drawn (give their species files with --species-dir)");
+    }
+    let cam = stage.camera_for(a.camera, &rows);
     let img = stage.render_rows(&rows, a.season, &cam, a.size.0, a.size.1)?;
     sylva::render::timelapse::write_png(&a.out, &img)?;
     let st = stage.renderer.last_stats();
