@@ -192,3 +192,12 @@ fn asc_in_degrees_without_prj_is_read_as_geographic() {
     std::fs::write(dir.path().join("m.asc"), metres).unwrap();
     assert_eq!(io::load(&dir.path().join("m.asc")).unwrap().geo.crs, Crs::Projected);
 }
+
+#[test]
+fn undeclared_fill_values_are_refused_naming_the_cell() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("fill.asc");
+    std::fs::write(&p, "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 1e30 6\n").unwrap();
+    let e = err_of(io::load(&p));
+    assert!(e.contains("fill.asc") && e.contains("column 1, row 1") && e.contains("= 1000000") && e.contains("nodata"), "{e}");
+}

@@ -73,8 +73,20 @@ fn check_valid(path: &Path, g: &Grid<f32>) -> Result<()> {
             expected: "at least one finite elevation".into(),
         });
     }
+    if let Some(i) = g.data.iter().position(|v| v.is_finite() && !(ELEVATION_RANGE_M.0..=ELEVATION_RANGE_M.1).contains(v)) {
+        return Err(Error::Invalid {
+            context: path.display().to_string(),
+            field: format!("elevation at column {}, row {} (0-based, row 0 north)", i % g.width, i / g.width),
+            value: g.data[i].to_string(),
+            expected: format!("{} … {} m on Earth (an undeclared nodata value? declare it in the file's nodata field)", ELEVATION_RANGE_M.0, ELEVATION_RANGE_M.1),
+        });
+    }
     Ok(())
 }
+
+/// Elevations accepted from a DEM (m): the Challenger Deep (−10 935 m) to Everest (8 849 m)
+/// with a margin; anything outside is a fill value the file does not declare as nodata.
+pub const ELEVATION_RANGE_M: (f32, f32) = (-12_000.0, 9_000.0);
 
 fn tiff_err(path: &Path, what: &str, e: tiff::TiffError) -> Error {
     Error::format(path, format!("GeoTIFF {what}: {e} (truncated or corrupt file?)"))
