@@ -45,13 +45,21 @@ seeds_per_ha = 500
     eprintln!("ecosystem bench: {:.0} ha, {years} years, {} threads", w.area_ha, rayon::current_num_threads());
     let t0 = Instant::now();
     let mut tree_years = 0u64;
+    let mut phase_total = [0f64; sylva::sim::step::N_PHASES];
+    let mut phase_decade = [0f64; sylva::sim::step::N_PHASES];
     for _ in 0..years {
         let ty = Instant::now();
         let mut r = YearReport::default();
         step_year(&mut w, &sc, &mut r);
         tree_years += r.trees as u64;
+        for k in 0..phase_total.len() {
+            phase_total[k] += r.phase_seconds[k];
+            phase_decade[k] += r.phase_seconds[k];
+        }
         if w.year % 10 == 0 {
-            eprintln!("year {:3}: {:8} trees, {:.2} s/yr", w.year, r.trees, ty.elapsed().as_secs_f64());
+            let phases: Vec<String> = sylva::sim::step::PHASES.iter().zip(&phase_decade).map(|(n, s)| format!("{n} {:.2}", s / 10.0)).collect();
+            eprintln!("year {:3}: {:8} trees, {:.2} s/yr; per phase (s/yr over the decade): {}", w.year, r.trees, ty.elapsed().as_secs_f64(), phases.join(", "));
+            phase_decade = [0.0; sylva::sim::step::N_PHASES];
         }
     }
     let s = t0.elapsed().as_secs_f64();
@@ -63,5 +71,8 @@ seeds_per_ha = 500
     println!("total_s {s:.2}");
     println!("s_per_year {:.3}", s / years as f64);
     println!("tree_years_per_s {:.0}", tree_years as f64 / s);
+    for (n, s) in sylva::sim::step::PHASES.iter().zip(&phase_total) {
+        println!("phase_s {n} {s:.2}");
+    }
     println!("peak_rss_mib {:.0}", vm_hwm_kib().unwrap_or(0) as f64 / 1024.0);
 }
