@@ -72,8 +72,11 @@ fn resume_equals_uninterrupted() {
     let resumed = run_scenario(&sc, site(&sc), &lib, o).unwrap();
     assert_eq!(resumed.world.year, 40);
     assert_eq!(resumed.world.trees, full.world.trees, "tree store differs after resume");
+    assert!(!full.world.cohorts.is_empty(), "the run should have a regeneration layer");
+    assert_eq!(resumed.world.cohorts, full.world.cohorts, "regeneration cohorts differ after resume");
+    assert_eq!(resumed.world.regen_ledger, full.world.regen_ledger, "regeneration ledger differs after resume");
     assert_eq!(resumed.rows, full.rows);
-    for f in ["stand_table.csv", "inventory/year_0040.csv", "inventory/year_0040.geojson"] {
+    for f in ["stand_table.csv", "inventory/year_0040.csv", "inventory/year_0040.geojson", "inventory/year_0040_regeneration.csv"] {
         let a = std::fs::read(full_dir.path().join(f)).unwrap();
         let b = std::fs::read(dir.path().join(f)).unwrap();
         assert!(a == b, "{f} differs");

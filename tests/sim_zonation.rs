@@ -35,6 +35,9 @@ seeds_per_ha = 400
     common::run(&sc, &mut w, 25);
     let t = &w.trees;
     let (spruce, oak, alder) = (lib.find("norway_spruce").unwrap(), lib.find("pedunculate_oak").unwrap(), lib.find("black_alder").unwrap());
+    for &c in &w.cohorts.cell {
+        assert!(w.light_site[c as usize] != u32::MAX, "regeneration cohort on a masked light cell {c}");
+    }
     let mut sum = std::collections::BTreeMap::<u16, (f64, f64, usize)>::new();
     for i in 0..t.len() {
         let (c, r) = w.site.cell_at(t.x[i] as f64, t.y[i] as f64).expect("tree outside the terrain");
