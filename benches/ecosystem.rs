@@ -1,6 +1,7 @@
 //! Ecosystem benchmark: afforestation of a flat 10 km² (1,000 ha) site by seed rain of beech,
-//! Norway spruce and silver birch for 100 years. Prints time per year, trees/s, live trees and
-//! peak memory (VmHWM from /proc/self/status).
+//! Norway spruce and silver birch for 100 years. Prints time per year and per phase, trees/s,
+//! live trees, the regeneration layer (cohorts, stems) and peak memory (VmHWM from
+//! /proc/self/status).
 //!
 //! `cargo bench --bench ecosystem` (release). Environment: `SYLVA_BENCH_HA` (area, default 1000),
 //! `SYLVA_BENCH_YEARS` (default 100).
@@ -58,7 +59,7 @@ seeds_per_ha = 500
         }
         if w.year % 10 == 0 {
             let phases: Vec<String> = sylva::sim::step::PHASES.iter().zip(&phase_decade).map(|(n, s)| format!("{n} {:.2}", s / 10.0)).collect();
-            eprintln!("year {:3}: {:8} trees, {:.2} s/yr; per phase (s/yr over the decade): {}", w.year, r.trees, ty.elapsed().as_secs_f64(), phases.join(", "));
+            eprintln!("year {:3}: {:8} trees, {:8} cohorts ({:9} stems), {:.2} s/yr; per phase (s/yr over the decade): {}", w.year, r.trees, w.cohorts.len(), w.cohorts.total_stems(), ty.elapsed().as_secs_f64(), phases.join(", "));
             phase_decade = [0.0; sylva::sim::step::N_PHASES];
         }
     }
@@ -67,6 +68,7 @@ seeds_per_ha = 500
     println!("area_ha {:.0}", w.area_ha);
     println!("years {years}");
     println!("live_trees_end {}", w.trees.len());
+    println!("cohorts_end {} cohort_stems_end {} regeneration_per_ha_end {:.0}", w.cohorts.len(), w.cohorts.total_stems(), row.regeneration_ha);
     println!("stems_per_ha_end {:.0} basal_area_m2_ha {:.1} top_height_m {:.1}", row.stems_ha, row.basal_area_m2_ha, row.top_height_m);
     println!("total_s {s:.2}");
     println!("s_per_year {:.3}", s / years as f64);
