@@ -56,6 +56,22 @@ seeds_per_ha = 400
     let valid: Vec<usize> = (0..w.site.mask.len()).filter(|&k| w.site.mask.data[k]).collect();
     let twi_all = valid.iter().map(|&k| w.site.twi.data[k] as f64).sum::<f64>() / valid.len() as f64;
     eprintln!("spruce {ms:?} oak {mo:?} alder {ma:?}; mean TWI of the land {twi_all:.2}");
-    assert!(ms.0 > mo.0, "spruce mean elevation {:.0} m should exceed oak's {:.0} m", ms.0, mo.0);
+    // The margin to expect: the suitability-weighted mean elevation of the land per species
+    // (seed rain is uniform and germination is proportional to suitability, so this is where
+    // germinants stand; growth ∝ suitability only sharpens the contrast among trees ≥ 4 m).
+    let weighted = |s: u16| {
+        let p = w.pool_index(s).unwrap();
+        let (mut se, mut sw) = (0.0, 0.0);
+        for &k in &valid {
+            let su = w.suitability[p][k] as f64;
+            se += su * w.site.elevation_m.data[k] as f64;
+            sw += su;
+        }
+        se / sw
+    };
+    let (es, eo) = (weighted(spruce), weighted(oak));
+    eprintln!("suitability-weighted mean elevation: spruce {es:.0} m, oak {eo:.0} m (gap {:.0} m); simulated gap {:.0} m", es - eo, ms.0 - mo.0);
+    assert!(es > eo, "suitability: spruce {es:.0} m should exceed oak {eo:.0} m");
+    assert!(ms.0 - mo.0 >= es - eo, "spruce mean elevation {:.0} m should exceed oak's {:.0} m by at least the suitability-weighted gap {:.0} m", ms.0, mo.0, es - eo);
     assert!(ma.1 > twi_all && ma.1 > ms.1 && ma.1 > mo.1, "alder should stand on wetter cells: TWI alder {:.2}, spruce {:.2}, oak {:.2}, land {twi_all:.2}", ma.1, ms.1, mo.1);
 }
