@@ -5,25 +5,17 @@ mod common;
 use sylva::sim::regen::{max_density_ha, RegenDeath, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
 use sylva::sim::{step_year, World, YearReport};
 
-/// Mature beech seed trees and birch seed rain on a 100 m × 75 m site: both species germinate,
-/// birch recruits in the open, beech waits under the seed trees.
-const SC: &str = r#"
-name = "regen"
-years = 40
-seed = 9
-light_cell_m = 5.0
-[terrain]
-uniform = { width = 4, height = 3, cell_m = 25.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }
-[[start]]
-kind = "seed_rain"
-species = "birch"
-seeds_per_ha = 20000
-[[start]]
-kind = "seed_sources"
-species = "beech"
-points = [[20.0, 20.0], [80.0, 50.0]]
-trees_per_source = 4
-"#;
+/// Mature beech seed trees and birch seed rain on a flat site of `w × h` cells of 25 m (4 × 3:
+/// 100 m × 75 m): both species germinate, birch recruits in the open, beech waits under the
+/// seed trees.
+fn sc(light_cell_m: f64, w: usize, h: usize) -> String {
+    common::ScenarioToml::new("regen", 40, 9)
+        .line(&format!("light_cell_m = {light_cell_m:?}"))
+        .uniform(w, h, 25.0, 300.0)
+        .seed_rain("birch", 20000.0)
+        .seed_sources("beech", &[[20.0, 20.0], [80.0, 50.0]], 4)
+        .build()
+}
 
 fn check_year(w: &World, first_new_id: u64) {
     let c = &w.cohorts;
@@ -57,7 +49,7 @@ fn check_year(w: &World, first_new_id: u64) {
 
 #[test]
 fn mass_balance_recruitment_height_and_density_cap() {
-    let (sc, mut w) = common::world(SC);
+    let (sc, mut w) = common::world(&sc(5.0, 4, 3));
     let np = w.pool.len();
     let mut rows = Vec::new();
     let mut recruited_trees = 0u64;
@@ -109,8 +101,7 @@ fn cohorts_with_threads(n: usize) -> (sylva::sim::Cohorts, sylva::sim::regen::Re
     let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
     pool.install(|| {
         // a site wider than one parallel block of light cells (1024): 3 × 2 ha at 2 m cells
-        let toml = SC.replace("light_cell_m = 5.0", "light_cell_m = 2.0").replace("width = 4, height = 3", "width = 12, height = 8");
-        let (sc, mut w) = common::world(&toml);
+        let (sc, mut w) = common::world(&sc(2.0, 12, 8));
         common::run(&sc, &mut w, 25);
         (w.cohorts.clone(), w.regen_ledger.clone(), w.trees.id.clone())
     })

@@ -7,29 +7,16 @@ mod common;
 #[test]
 fn spruce_high_oak_low_alder_wet() {
     let lib = common::embedded();
-    let (sc, mut w) = common::world_with(r#"
-name = "zonation"
-years = 25
-seed = 21
-species = ["norway_spruce", "pedunculate_oak", "black_alder"]
-light_cell_m = 10.0
-climate = { sea_level_m = 550.0 }
-[terrain]
-default = true
-window = [200, 300, 40, 40]
-[[start]]
-kind = "seed_rain"
-species = "norway_spruce"
-seeds_per_ha = 400
-[[start]]
-kind = "seed_rain"
-species = "pedunculate_oak"
-seeds_per_ha = 400
-[[start]]
-kind = "seed_rain"
-species = "black_alder"
-seeds_per_ha = 400
-"#, &lib);
+    let toml = common::ScenarioToml::new("zonation", 25, 21)
+        .species(&["norway_spruce", "pedunculate_oak", "black_alder"])
+        .line("light_cell_m = 10.0")
+        .line("climate = { sea_level_m = 550.0 }")
+        .default_terrain([200, 300, 40, 40])
+        .seed_rain("norway_spruce", 400.0)
+        .seed_rain("pedunculate_oak", 400.0)
+        .seed_rain("black_alder", 400.0)
+        .build();
+    let (sc, mut w) = common::world_with(&toml, &lib);
     let masked = w.site.mask.data.iter().filter(|m| !**m).count();
     assert!(masked > 0, "the window should contain masked (water) cells");
     common::run(&sc, &mut w, 25);
