@@ -59,7 +59,7 @@ fn mass_balance_recruitment_height_and_density_cap() {
         step_year(&mut w, &sc, &mut r);
         // recruits this year = stems the regeneration layer reports as recruited
         assert_eq!(r.established as u64, w.regen_year.recruited);
-        recruited_trees += (w.trees.next_id - next) as u64;
+        recruited_trees += w.trees.next_id - next;
         check_year(&w, next);
         let row = r.row.unwrap();
         assert!((row.regeneration_ha - w.cohorts.total_stems() as f64 / w.area_ha).abs() < 1e-9);

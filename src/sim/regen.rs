@@ -239,7 +239,10 @@ pub fn run(w: &mut World) -> usize {
             let mut i = coh.cell.partition_point(|&c| (c as usize) < c0);
             let mut local: Vec<Cohort> = Vec::new();
             for c in c0..c1 {
-                let j = i + coh.cell[i..].partition_point(|&x| x as usize == c);
+                let mut j = i;
+                while j < coh.cell.len() && coh.cell[j] as usize == c {
+                    j += 1;
+                }
                 local.clear();
                 local.extend((i..j).map(|k| coh.get(k)));
                 i = j;
