@@ -44,6 +44,10 @@ pub struct Args {
     /// Skip stills and timelapse (no GPU or software adapter needed).
     #[arg(long)]
     pub no_render: bool,
+    /// Folder of extra or edited species files (e.g. made by `sylva species new`): they are
+    /// added to the shipped library, replacing shipped species of the same id.
+    #[arg(long)]
+    pub species_dir: Option<PathBuf>,
 }
 
 fn parse_fps(s: &str) -> Result<f32, String> {
@@ -72,7 +76,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // 1. Living conditions.
     let t_site = Instant::now();
     let site = super::simulate::load_site(&sc)?;
-    let lib = super::simulate::library()?;
+    let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let map_names = sylva::job::maps::write_site_maps(&site, &out.join("maps").join("conditions"))?;
     let site_s = t_site.elapsed().as_secs_f64();
     let (ex, ey) = site.extent_m();

@@ -187,10 +187,19 @@ fn parse_header_num(path: &Path, line_no: usize, key: &str, val: &str) -> Result
     val.parse::<f64>().map_err(|_| Error::format(path, format!("line {line_no}: header `{key}` = `{val}`: expected a number")))
 }
 
+/// True when an ESRI grid without a `.prj` can only be in degrees: a cell size below 0.01 (a
+/// 1 cm cell is not a terrain model in metres) and the whole grid inside longitude −180…180 and
+/// latitude −90…90.
+fn looks_geographic(xll: f64, yll: f64, cs: f64, w: usize, h: usize) -> bool {
+    let (x1, y1) = (xll + cs * w as f64, yll + cs * h as f64);
+    cs < 0.01 && xll >= -180.0 && x1 <= 180.0 && yll >= -90.0 && y1 <= 90.0
+}
+
 /// Reads an ESRI ASCII grid (`ncols`, `nrows`, `xllcorner|xllcenter`, `yllcorner|yllcenter`,
 /// `cellsize`, optional `NODATA_value`, then `nrows` lines of `ncols` values). A `.prj` beside
-/// it that names `GEOGCS` without `PROJCS` makes the grid geographic (degrees); without a `.prj`
-/// or with `PROJCS` it is projected (metres).
+/// it that names `GEOGCS` without `PROJCS` makes the grid geographic (degrees), with `PROJCS`
+/// projected (metres); without a `.prj` the grid is projected unless its cell size and extent
+/// can only be degrees (cell < 0.01, inside ±180° × ±90°: read as geographic, with a warning).
 ///
 /// Errors name the line: a header key missing or not a number, a data row with the wrong number
 /// of values, a value that is not a number, fewer or more rows than `nrows`.
@@ -269,7 +278,16 @@ pub fn load_asc(path: &Path) -> Result<Terrain> {
     let prj = path.with_extension("prj");
     let geographic = match std::fs::read_to_string(&prj) {
         Ok(s) => s.contains("GEOGCS") && !s.contains("PROJCS"),
-        Err(_) => false,
+        Err(_) => {
+            let deg = looks_geographic(xll, yll, cs, w, h);
+            if deg {
+                tracing::warn!(
+                    "{}: no .prj beside it; cell size {cs} and corner ({xll}, {yll}) are degrees, not metres: read as geographic (WGS 84). Put a .prj beside the file to be explicit.",
+                    path.display()
+                );
+            }
+            deg
+        }
     };
     let half = if centre { cs / 2.0 } else { 0.0 };
     let mut geo = GeoRef {
