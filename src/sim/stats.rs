@@ -9,7 +9,9 @@ use serde::{Deserialize, Serialize};
 pub struct StandRow {
     /// Simulation year (1 = after the first year).
     pub year: u32,
-    /// Stems per ha with height ≥ 1.3 m.
+    /// Individual trees (the tree store) per ha with height ≥ 1.3 m. Natural regeneration enters
+    /// the tree store at [`super::regen::RECRUIT_HEIGHT_M`]; its saplings below that height are
+    /// counted in [`StandRow::regeneration_ha`], not here.
     pub stems_ha: f64,
     /// Individual trees per ha below 1.3 m (planted; natural regeneration is in
     /// [`StandRow::regeneration_ha`]).
