@@ -1,7 +1,7 @@
 //! Regeneration layer: cohorts of saplings below the recruitment height, one cohort per light
-//! cell and species, as in iLand's sapling layer (Seidl et al. 2012, Ecol. Model. 231:87–100,
-//! section 2.5: saplings on 2 m cells up to 4 m height, recruited as individual trees when they
-//! pass 4 m) and the height-class cohorts of SORTIE/ForClim.
+//! cell and species, as in iLand's sapling layer (Seidl et al. 2012, Ecol. Model. 231:87–100:
+//! saplings on 2 m cells up to 4 m height, recruited as individual trees when they pass 4 m) and
+//! the height-class cohorts of SORTIE/ForClim.
 //!
 //! A cohort holds a stem count, a mean height (m), an age (years) and a vigour memory. Once a
 //! year, in spring, for every unmasked light cell (parallel over blocks of cells, each cell with
@@ -22,9 +22,10 @@
 //!    (Bugmann 2001), a binomial draw.
 //! 4. **Crowding** (cause `crowding`): a stem of height `h` occupies `1 / N_max(h)` ha with the
 //!    self-thinning line [`max_density_ha`] `N_max(h) = 2500 · (h / 4 m)^(−1.605)` stems/ha —
-//!    Reineke's exponent with sapling diameter proportional to height (iLand's sapling density
-//!    function), anchored at one tree per 4 m² at the recruitment height (iLand's 2 m sapling
-//!    cells). Cohorts are served tallest first; stems that do not fit into the cell die.
+//!    Reineke's (1933) exponent, with sapling diameter taken proportional to height (a choice of
+//!    this model), anchored at one tree per 4 m² at the recruitment height (the density of one
+//!    tree per 2 m × 2 m cell of iLand's sapling layer). Cohorts are served tallest first; stems
+//!    that do not fit into the cell die.
 //! 5. **Recruitment**: a cohort reaching [`RECRUIT_HEIGHT_M`] becomes individual trees (all its
 //!    stems) at random positions in the light cell on unmasked site cells, with the cohort's
 //!    height and age, 0.8 × open-grown DBH (as planted trees), and a crown shrunk by the ground
