@@ -119,6 +119,14 @@ fn sylva_run_reduced_scenario_writes_every_output() {
     let gj: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("inventory/year_0006.geojson")).unwrap()).unwrap();
     assert_eq!(gj["type"], "FeatureCollection");
     assert_eq!(gj["features"].as_array().unwrap().len(), rows.len());
+    // georeferenced like the map GeoTIFFs: UTM 16N eastings/northings, a constant offset from
+    // the local metres of the CSV
+    assert_eq!(gj["crs"]["properties"]["name"], "urn:ogc:def:crs:EPSG::32616");
+    let feats = gj["features"].as_array().unwrap();
+    let off = |f: &serde_json::Value| (f["geometry"]["coordinates"][0].as_f64().unwrap() - f["properties"]["x_m"].as_f64().unwrap(), f["geometry"]["coordinates"][1].as_f64().unwrap() - f["properties"]["y_m"].as_f64().unwrap());
+    let (ox, oy) = off(&feats[0]);
+    assert!((700_000.0..800_000.0).contains(&ox) && (4_000_000.0..4_100_000.0).contains(&oy), "offset {ox} {oy}");
+    assert!(feats.iter().all(|f| (off(f).0 - ox).abs() < 0.02 && (off(f).1 - oy).abs() < 0.02));
 
     // Pictures are not blank: terrain and trees give contrast.
     for f in ["stills/year_0006_oblique.png", "stills/year_0006_topdown.png", "stand_table.png", "maps/conditions/elevation.png"] {
