@@ -192,3 +192,27 @@ fn maps_are_large_with_legend_and_distinct_species_colours() {
     let found = img.pixels().filter(|p| p.0 == cols[0]).count();
     assert!(found >= 16 * 12, "legend swatch missing: {found} px");
 }
+
+#[test]
+fn pool_and_png_terrain_keys_are_checked() {
+    // a start whose species is not in the pool, and a species listed twice
+    let e = Scenario::from_toml_str(&format!("species = [\"silver_birch\"]\n{SC}"), "p.toml").unwrap_err().to_string();
+    assert!(e.contains("p.toml") && e.contains("start[0].species") && e.contains("beech"), "{e}");
+    let e = Scenario::from_toml_str(&format!("species = [\"beech\", \"beech\"]\n{SC}"), "p.toml").unwrap_err().to_string();
+    assert!(e.contains("species[1]") && e.contains("once"), "{e}");
+    // cell size and height range only for PNG heightmaps, and then they are used
+    let e = Scenario::from_toml_str(&SC.replace("[terrain]\n", "[terrain]\ncell_m = 2.0\n"), "p.toml").unwrap_err().to_string();
+    assert!(e.contains("terrain.cell_m") && e.contains("PNG"), "{e}");
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("h.png");
+    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(8, 6, |x, _| image::Luma([(x * 9000) as u16])).save(&png).unwrap();
+    let text = format!(
+        "name = \"png\"\nyears = 1\n[terrain]\npath = \"{}\"\ncell_m = 25.0\nheight_range_m = [200.0, 700.0]\n",
+        png.display()
+    );
+    let site = Scenario::from_toml_str(&text, "png.toml").unwrap().site().unwrap();
+    assert_eq!(site.extent_m(), (200.0, 150.0));
+    let z: Vec<f32> = site.elevation_m.data.iter().copied().filter(|v| v.is_finite()).collect();
+    let (lo, hi) = z.iter().fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    assert!((lo - 200.0).abs() < 0.5 && hi > 200.0 && hi <= 700.0 + 1e-3, "{lo} … {hi}");
+}

@@ -70,6 +70,16 @@ fn mkdir(p: &Path) -> Result<()> {
     std::fs::create_dir_all(p).map_err(|e| Error::io(p, e))
 }
 
+/// Checks that files can be created in `dir` (creates and removes a probe file), so a run
+/// fails before it removes anything of an earlier run.
+///
+/// Errors: [`Error::Io`] naming the folder.
+fn check_writable(dir: &Path) -> Result<()> {
+    let probe = dir.join(format!(".sylva_write_probe.{}", std::process::id()));
+    std::fs::write(&probe, b"").map_err(|e| Error::io(dir, e))?;
+    std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))
+}
+
 /// Removes the snapshot files of an earlier run from `dir`: `inventory/year_*` and
 /// `maps/species_*`, `maps/basal_area_*` (only these Sylva names; other files are kept), so a
 /// fresh run into an existing run directory never mixes its snapshots with old ones.
@@ -124,7 +134,8 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
 /// `_autumn` when `seasonal_snapshots`); checkpoint every `checkpoint_every` years and at the end.
 ///
 /// A fresh run (not `resume`) first removes the snapshots of an earlier run in the same
-/// directory ([`clear_snapshots`]).
+/// directory ([`clear_snapshots`]), after checking that the run, inventory and maps folders
+/// are writable (so a run that cannot write loses nothing of the earlier one).
 ///
 /// Errors: I/O errors naming the file; unknown species; a missing or mismatching checkpoint
 /// with `resume`.
@@ -144,6 +155,12 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         }
         rows = checkpoint::load(&ck, &mut world)?;
     } else {
+        // an old run's snapshots are only removed once the new files can be written beside them
+        for sub in [dir.clone(), dir.join("inventory"), dir.join("maps")] {
+            if sub.is_dir() {
+                check_writable(&sub)?;
+            }
+        }
         clear_snapshots(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {

@@ -77,6 +77,14 @@ pub struct TerrainSection {
     /// Sub-window `[col0, row0, width, height]` in cells of the terrain grid.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub window: Option<[usize; 4]>,
+    /// PNG heightmaps only (they carry no georeferencing): cell size (m, > 0; default 10, as
+    /// `sylva terrain --cell`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cell_m: Option<f64>,
+    /// PNG heightmaps only: heights (m) of the smallest and largest pixel value
+    /// (default `[0, 1000]`, as `sylva terrain --min-height/--max-height`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub height_range_m: Option<[f64; 2]>,
 }
 
 /// A generated (fractal noise) terrain.
@@ -294,6 +302,31 @@ impl Scenario {
                 }
             }
         }
+        let is_png = t.path.as_ref().is_some_and(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")));
+        if (t.cell_m.is_some() || t.height_range_m.is_some()) && !is_png {
+            return Err(invalid(ctx, "terrain.cell_m/height_range_m", "given", "only with a PNG heightmap path (other DEMs carry their own cell size and heights)"));
+        }
+        if let Some(c) = t.cell_m {
+            if !(c > 0.0 && c <= 1000.0) {
+                return Err(invalid(ctx, "terrain.cell_m", c, "> 0 and ≤ 1000 m"));
+            }
+        }
+        if let Some([lo, hi]) = t.height_range_m {
+            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                return Err(invalid(ctx, "terrain.height_range_m", format!("[{lo}, {hi}]"), "[lowest, highest] in metres with lowest < highest"));
+            }
+        }
+        // a start listing a species outside the pool would grow a species the scenario excludes
+        for (i, st) in self.start.iter().enumerate() {
+            if !self.species.is_empty() && !self.species.iter().any(|p| p == st.species()) {
+                return Err(invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("one of the scenario's species = {:?} (add it there)", self.species)));
+            }
+        }
+        for (i, sp) in self.species.iter().enumerate() {
+            if self.species[..i].contains(sp) {
+                return Err(invalid(ctx, &format!("species[{i}]"), sp, "each species once"));
+            }
+        }
         if let Some(w) = &t.window {
             if w[2] == 0 || w[3] == 0 {
                 return Err(invalid(ctx, "terrain.window", format!("{w:?}"), "[col0, row0, width, height] with width, height ≥ 1"));
@@ -498,6 +531,10 @@ impl Scenario {
                 };
             }
             TerrainSpec::Default => crate::terrain::io::default_terrain()?,
+            TerrainSpec::Path(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) => {
+                let [lo, hi] = self.terrain.height_range_m.unwrap_or([0.0, 1000.0]);
+                crate::terrain::io::load_png_heightmap(&p, self.terrain.cell_m.unwrap_or(10.0), lo, hi)?
+            }
             TerrainSpec::Path(p) => crate::terrain::io::load(&p)?,
             TerrainSpec::Generate(g) => crate::terrain::generate::generate(g.size, g.cell_m, g.relief_m as f64, g.seed)?,
         };
