@@ -42,6 +42,10 @@ struct Globals {
     wind: [f32; 4],
     params: [f32; 4],
     facing: [f32; 4],
+    /// canopy grid: origin x, y (m), texel (m), on (1) / off (0)
+    canopy0: [f32; 4],
+    /// canopy grid: nx, ny, oblique-view factor k, unused
+    canopy1: [f32; 4],
 }
 
 /// Per-prototype outline record of `shaders/scene.wgsl` (`Sil`).
@@ -61,6 +65,10 @@ struct CullParams {
     lod: [f32; 4],
     misc: [f32; 4],
     counts: [u32; 4],
+    /// canopy grid origin x, y (m), texel (m); base far-field switch (px, 0 = off)
+    canopy: [f32; 4],
+    /// canopy grid nx, ny; tree cap (0 = none); unused
+    canopy_n: [u32; 4],
 }
 
 /// Where culling and level-of-detail selection run.
@@ -102,6 +110,7 @@ struct GpuCull {
 
 struct GpuFrame {
     slots: Vec<GpuSlot>,
+    /// Whether the `hist` and `choose` passes run (triangle budget or tree cap).
     budget: bool,
     invalid: usize,
     valid: usize,
@@ -145,6 +154,9 @@ struct GpuScene {
     water_vb: Option<wgpu::Buffer>,
     /// Drawn levels per prototype (chain meshes, then the billboard).
     protos: Vec<Vec<GpuLevel>>,
+    /// Canopy layer: grid and its per-frame sums (`[u32; 4]` per texel).
+    canopy_grid: super::canopy::CanopyGrid,
+    canopy_buf: wgpu::Buffer,
     bind_main: wgpu::BindGroup,
     bind_shadow: wgpu::BindGroup,
 }
@@ -207,6 +219,11 @@ pub struct FrameStats {
     /// Factor by which the level switch sizes were raised to meet
     /// [`LodParams::max_triangles`] (1 = not needed).
     pub lod_scale: f32,
+    /// Far-field switch of the frame (px; 0 = canopy layer off): trees below it (less the
+    /// cross-fade band) are drawn only in the canopy layer.
+    pub canopy_px: f32,
+    /// Trees drawn only in the canopy layer (no triangles).
+    pub canopy_trees: usize,
 }
 
 /// A headless renderer bound to one wgpu device.
@@ -268,9 +285,9 @@ impl Renderer {
         let adapter_info = adapter.get_info();
         let al = adapter.limits();
         let flags = adapter.get_downlevel_capabilities().flags;
-        // GPU culling needs compute shaders, indirect draws and 4 storage buffers per stage
+        // GPU culling needs compute shaders, indirect draws and 5 storage buffers per stage
         let gpu_ok = flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS | wgpu::DownlevelFlags::INDIRECT_EXECUTION)
-            && al.max_storage_buffers_per_shader_stage >= 4
+            && al.max_storage_buffers_per_shader_stage >= 5
             && al.max_compute_invocations_per_workgroup >= 64
             && al.max_compute_workgroup_size_x >= 64;
         let mut limits = wgpu::Limits::downlevel_defaults().using_resolution(al.clone());
@@ -309,6 +326,12 @@ impl Renderer {
                 },
                 wgpu::BindGroupLayoutEntry { binding: 2, visibility: wgpu::ShaderStages::FRAGMENT, ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison), count: None },
                 sil_entry,
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: true }, has_dynamic_offset: false, min_binding_size: None },
+                    count: None,
+                },
             ],
         });
         let layout_shadow = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("shadow"), entries: &[uniform_entry, sil_entry] });
@@ -408,7 +431,7 @@ impl Renderer {
         let rw = wgpu::BufferBindingType::Storage { read_only: false };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull"),
-            entries: &[buf(0, wgpu::BufferBindingType::Uniform), buf(1, ro), buf(2, ro), buf(3, rw), buf(4, rw)],
+            entries: &[buf(0, wgpu::BufferBindingType::Uniform), buf(1, ro), buf(2, ro), buf(3, rw), buf(4, rw), buf(5, rw)],
         });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("cull"), bind_group_layouts: &[Some(&layout)], immediate_size: 0 });
         let make = |entry: &str| device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor { label: Some(entry), layout: Some(&pl), module: &shader, entry_point: Some(entry), compilation_options: Default::default(), cache: None });
@@ -418,7 +441,7 @@ impl Renderer {
     }
 
     /// Whether this adapter can cull and select levels in a compute pass with indirect draws
-    /// (wgpu downlevel flags `COMPUTE_SHADERS` and `INDIRECT_EXECUTION`, ≥ 4 storage buffers).
+    /// (wgpu downlevel flags `COMPUTE_SHADERS` and `INDIRECT_EXECUTION`, ≥ 5 storage buffers).
     pub fn gpu_culling_supported(&self) -> bool {
         self.cull.is_some()
     }
@@ -541,6 +564,14 @@ impl Renderer {
             sil_raw.push(<SilRaw as bytemuck::Zeroable>::zeroed());
         }
         let sil_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("silhouettes"), contents: bytemuck::cast_slice(&sil_raw), usage: wgpu::BufferUsages::STORAGE });
+        let (lo, hi) = t.bounds();
+        let canopy_grid = super::canopy::CanopyGrid::for_bounds(lo, hi);
+        let canopy_buf = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("canopy"),
+            size: (canopy_grid.len() as u64 * 16).max(256),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let bind_main = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("main"),
             layout: &self.layout_main,
@@ -549,6 +580,7 @@ impl Renderer {
                 wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&self.shadow_view) },
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
                 wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: canopy_buf.as_entire_binding() },
             ],
         });
         let bind_shadow = d.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -556,7 +588,7 @@ impl Renderer {
             layout: &self.layout_shadow,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.shadow_globals.as_entire_binding() }, wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() }],
         });
-        self.scene = Some(GpuScene { fingerprint: fp, terrain_vb, terrain_ib, terrain_count: t.indices.len() as u32, water_vb, protos, bind_main, bind_shadow });
+        self.scene = Some(GpuScene { fingerprint: fp, terrain_vb, terrain_ib, terrain_count: t.indices.len() as u32, water_vb, protos, canopy_grid, canopy_buf, bind_main, bind_shadow });
         Ok(())
     }
 
@@ -627,12 +659,16 @@ impl Renderer {
             None => {
                 let b = build_batches(scene, camera, width, height, &self.lod);
                 self.write_instances(&b);
+                self.write_canopy(&b);
                 FrameDraws::Cpu(b)
             }
         };
         self.write_globals(scene, camera, width, height);
         let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         if let FrameDraws::Gpu(f) = &draws {
+            if let Some(gs) = &self.scene {
+                enc.clear_buffer(&gs.canopy_buf, 0, None);
+            }
             self.encode_cull(&mut enc, f);
         }
         self.encode_shadow(&mut enc, &draws);
@@ -684,12 +720,15 @@ impl Renderer {
         targets.readback.unmap();
         let mut per_level = [0usize; 4];
         let mut lod_scale = 1.0f32;
+        let (mut canopy_px, mut canopy_trees) = (0.0f32, 0usize);
         let (tree_tris, culled, invalid, drawn) = match &draws {
             FrameDraws::Cpu(b) => {
                 for (i, n) in b.per_level.iter().enumerate() {
                     per_level[i.min(3)] += n;
                 }
                 lod_scale = b.lod_scale;
+                canopy_px = b.canopy_px;
+                canopy_trees = b.canopy_only;
                 (b.triangles, b.culled, b.invalid, b.per_level.iter().sum())
             }
             FrameDraws::Gpu(f) => {
@@ -706,14 +745,17 @@ impl Renderer {
                         for l in 0..4 {
                             per_level[l] = words[off + l] as usize;
                         }
-                        if let Some(&w) = words.last() {
-                            lod_scale = f32::from_bits(w);
+                        let tail = words.len().saturating_sub(3);
+                        if let [sc, cp, cn] = words[tail..] {
+                            lod_scale = f32::from_bits(sc);
+                            canopy_px = f32::from_bits(cp);
+                            canopy_trees = cn as usize;
                         }
                     }
                     rb.unmap();
                 }
                 let drawn: usize = per_level.iter().sum();
-                (tris, f.valid.saturating_sub(drawn), f.invalid, drawn)
+                (tris, f.valid.saturating_sub(drawn + canopy_trees), f.invalid, drawn)
             }
         };
         self.last = FrameStats {
@@ -726,6 +768,8 @@ impl Renderer {
             per_level,
             gpu_culling: matches!(draws, FrameDraws::Gpu(_)),
             lod_scale,
+            canopy_px,
+            canopy_trees,
         };
         Ok(img)
     }
@@ -791,7 +835,11 @@ impl Renderer {
         }
         // per-level counters, size histogram, budget factor (1.0 unless `choose` runs)
         args.extend(std::iter::repeat_n(0u32, 4 + n_protos * super::lod::SIZE_BINS));
+        // the `choose` results (or their defaults when it does not run): switch-size factor,
+        // far-field switch; then the count of canopy-only trees
         args.push(1.0f32.to_bits());
+        args.push(if self.lod.canopy_px > 0.0 { self.lod.canopy_px } else { 0.0 }.to_bits());
+        args.push(0);
         let args_bytes = (args.len() * 4) as u64;
         let aspect = width as f32 / height as f32;
         let vp = camera.view_proj(aspect);
@@ -809,6 +857,8 @@ impl Renderer {
             lod: [self.lod.switch_px[0], self.lod.switch_px[1], self.lod.switch_px[2], self.lod.band],
             misc: [self.lod.min_px, ppm, self.lod.max_triangles as f32, cost_first as f32],
             counts: [src.len() as u32, gx, n_protos as u32, (slots.len() * 10) as u32],
+            canopy: [gs.canopy_grid.origin[0], gs.canopy_grid.origin[1], gs.canopy_grid.texel, self.lod.canopy_px.max(0.0)],
+            canopy_n: [gs.canopy_grid.nx, gs.canopy_grid.ny, self.lod.max_geometry_trees, 0],
         };
         let Some(cull) = self.cull.as_mut() else { return Ok(None) };
         let d = &self.device;
@@ -833,11 +883,12 @@ impl Renderer {
         }
         self.queue.write_buffer(&cull.params, 0, bytemuck::bytes_of(&params));
         let valid = src.len();
-        Ok(Some(GpuFrame { slots, budget: self.lod.max_triangles > 0, invalid, valid, args_bytes }))
+        let budget = self.lod.max_triangles > 0 || (self.lod.canopy_px > 0.0 && self.lod.max_geometry_trees > 0);
+        Ok(Some(GpuFrame { slots, budget, invalid, valid, args_bytes }))
     }
 
     fn encode_cull(&self, enc: &mut wgpu::CommandEncoder, f: &GpuFrame) {
-        let Some(cull) = &self.cull else { return };
+        let (Some(cull), Some(gs)) = (&self.cull, &self.scene) else { return };
         let (Some((sb, _)), Some((pb, _)), Some((db, _)), Some((ab, _))) = (&cull.src, &cull.protos, &cull.dst, &cull.args) else { return };
         if f.valid == 0 {
             return;
@@ -851,6 +902,7 @@ impl Renderer {
                 wgpu::BindGroupEntry { binding: 2, resource: pb.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: db.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: ab.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: gs.canopy_buf.as_entire_binding() },
             ],
         });
         let groups = (f.valid as u32).div_ceil(64);
@@ -910,8 +962,15 @@ impl Renderer {
             sky_horizon: v3(scene.sky.horizon, 0.0),
             wind: [wd.x, wd.y, scene.wind.directed, scene.wind.undirected],
             params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.1 / size],
+            canopy0: [0.0; 4],
+            canopy1: [0.0; 4],
             facing: if ortho { v3((Vec3::from(camera.eye) - Vec3::from(camera.target)).normalize_or(Vec3::Z).to_array(), 1.0) } else { [0.0; 4] },
         };
+        if let Some(gs) = &self.scene {
+            let cg = gs.canopy_grid;
+            g.canopy0 = [cg.origin[0], cg.origin[1], cg.texel, if self.lod.canopy_px > 0.0 { 1.0 } else { 0.0 }];
+            g.canopy1 = [cg.nx as f32, cg.ny as f32, 1.5, 0.0];
+        }
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         g.view_proj = g.light_view_proj;
         g.facing = v3(sun, 1.0);
@@ -931,6 +990,17 @@ impl Renderer {
                 self.queue.write_buffer(buf, 0, bytes);
             }
         }
+    }
+
+    /// Splats the CPU path's canopy crowns into the grid and uploads the sums.
+    fn write_canopy(&self, b: &Batches) {
+        let Some(gs) = &self.scene else { return };
+        let g = gs.canopy_grid;
+        let mut sums = vec![[0u32; 4]; g.len()];
+        for c in &b.canopy {
+            g.splat(&mut sums, c.x, c.y, c.r, c.w, c.rgb);
+        }
+        self.queue.write_buffer(&gs.canopy_buf, 0, bytemuck::cast_slice(&sums));
     }
 
     /// Records the tree draws; returns the number of draw calls.

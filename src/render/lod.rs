@@ -23,16 +23,30 @@ pub struct LodParams {
     /// inside a dense forest does not draw hundreds of full meshes. Billboards (4 triangles per
     /// tree) are the floor: the budget never hides trees.
     pub max_triangles: u32,
+    /// Far-field switch (px, 0 = off): trees shorter than this on screen are not drawn as
+    /// geometry; their crowns are splatted into the per-frame canopy layer (colour + coverage per
+    /// terrain texel, [`crate::render::canopy`]) that the terrain shader blends in. Inside the
+    /// band `canopy_px/(1+band) .. canopy_px·(1+band)` the billboard fades out (dithered
+    /// opacity) while the splat fades in, so there is no pop. Trees below `min_px` still reach
+    /// the canopy layer when it is on.
+    pub canopy_px: f32,
+    /// Cap on the trees drawn as geometry per frame (0 = none). When more visible trees are
+    /// taller than `canopy_px` (estimated from the projected-size histogram), the far-field
+    /// switch is raised by the smallest factor `2^(k/4)` that fits ([`canopy_threshold`]), so
+    /// triangles per frame level off as the tree count grows (the canopy layer costs no
+    /// triangles).
+    pub max_geometry_trees: u32,
 }
 
 impl Default for LodParams {
     /// Full mesh above 240 px, reduced skeleton 100–240 px, crown hull 40–100 px, billboard
     /// impostor (4 triangles) below 40 px; cross-fade bands of ±25 %; trees under 0.75 px are
-    /// not drawn; at most 6 M tree triangles per frame (switch sizes raised beyond). With these thresholds almost every tree of a landscape view is a billboard,
-    /// so triangles per frame grow with the few trees near the camera, not with the tree count
-    /// (BENCHMARKS.md, "Rendering").
+    /// not drawn as geometry; at most 6 M tree triangles per frame (switch sizes raised
+    /// beyond); trees under 6 px go to the canopy layer, and at most 12,000 trees are drawn as
+    /// geometry (the far-field switch is raised beyond). Triangles per frame are then bounded
+    /// by the near trees and the cap, not by the tree count (BENCHMARKS.md, "Rendering").
     fn default() -> Self {
-        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000 }
+        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000, canopy_px: 6.0, max_geometry_trees: 12_000 }
     }
 }
 
@@ -68,8 +82,9 @@ pub fn select_lod_scaled(size_px: f32, scale: f32, params: &LodParams, n_levels:
 /// when the budget is 0. `hist[p][b]` counts visible trees of prototype `p` in size bin `b`
 /// ([`size_bin`]), `costs[p][l]` the triangles of drawn level `l`, `n_levels[p]` the drawn
 /// levels. Summed in `f32` in this order, exactly as `shaders/cull.wgsl` (`choose`) does, so
-/// both culling paths pick the same factor.
-pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams) -> f32 {
+/// both culling paths pick the same factor. Bins whose centre is below `floor_px` (trees
+/// that go wholly to the canopy layer, see [`canopy_threshold`]) cost nothing.
+pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams, floor_px: f32) -> f32 {
     if params.max_triangles == 0 {
         return 1.0;
     }
@@ -81,7 +96,7 @@ pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[u
         let mut total = 0.0f32;
         for (p, h) in hist.iter().enumerate() {
             for (b, &n) in h.iter().enumerate() {
-                if n == 0 {
+                if n == 0 || bin_px(b) < floor_px {
                     continue;
                 }
                 let Some(pick) = select_lod(bin_px(b) / s, &p0, n_levels[p]) else { continue };
@@ -97,6 +112,58 @@ pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[u
         }
     }
     s
+}
+
+/// The far-field switch size (px) of a frame: `params.canopy_px · 2^(k/4)` for the smallest
+/// k = 0..=[`MAX_SCALE_STEPS`] for which the trees drawn as geometry — those whose histogram bin
+/// centre ([`bin_px`]) is at least `switch / (1 + band)` — number at most
+/// `params.max_geometry_trees` (no cap when 0); 0 when the canopy layer is off
+/// (`canopy_px ≤ 0`). `hist` as in [`budget_scale`] (trees of at least `min_px`); computed in
+/// this order by `shaders/cull.wgsl` (`choose`) too.
+pub fn canopy_threshold(hist: &[[u32; SIZE_BINS]], params: &LodParams) -> f32 {
+    if !(params.canopy_px > 0.0) {
+        return 0.0;
+    }
+    let b = 1.0 + params.band.max(0.0);
+    let mut c = params.canopy_px;
+    if params.max_geometry_trees == 0 {
+        return c;
+    }
+    for k in 0..=MAX_SCALE_STEPS {
+        c = params.canopy_px * (k as f32 / 4.0).exp2();
+        let lo = c / b;
+        let mut n = 0u32;
+        for h in hist {
+            for (bin, &v) in h.iter().enumerate() {
+                if bin_px(bin) >= lo {
+                    n = n.saturating_add(v);
+                }
+            }
+        }
+        if n <= params.max_geometry_trees {
+            break;
+        }
+    }
+    c
+}
+
+/// Weight (0..1) of a tree `size_px` tall in the canopy layer for far-field switch `canopy`
+/// (px, from [`canopy_threshold`]; 0 = off → 0): 1 at or below `canopy/(1+band)`, 0 at or above
+/// `canopy·(1+band)`, linear in log(size) between (the billboard keeps `1 − weight` of its
+/// pixels). Mirrors `canopy_weight` of `shaders/cull.wgsl`.
+pub fn canopy_weight(size_px: f32, canopy: f32, band: f32) -> f32 {
+    if !(canopy > 0.0) {
+        return 0.0;
+    }
+    let b = 1.0 + band.max(0.0);
+    let (hi, lo) = (canopy * b, canopy / b);
+    if size_px <= lo {
+        return 1.0;
+    }
+    if size_px >= hi {
+        return 0.0;
+    }
+    ((hi.ln() - size_px.ln()) / (hi.ln() - lo.ln())).clamp(0.0, 1.0)
 }
 
 /// Number of levels the renderer draws for a species chain of `chain_len` levels: the chain's
@@ -471,12 +538,14 @@ mod tests {
         let costs = [[1000u32, 100, 10, 4]];
         // 10 trees at ~279 px: level 0 cross-fading into 1 costs 11,000; 2^(3/4) moves them
         // to level 1 (279/1.68 = 166 px ≥ 125): 1,000 triangles
-        let s = budget_scale(&hist, &costs, &[4], &p);
+        let s = budget_scale(&hist, &costs, &[4], &p, 0.0);
         assert!((s - 2f32.powf(0.75)).abs() < 1e-5, "{s}");
-        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 20_000, ..p }), 1.0);
-        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 0, ..p }), 1.0);
+        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 20_000, ..p }, 0.0), 1.0);
+        // trees wholly in the canopy layer cost nothing
+        assert_eq!(budget_scale(&hist, &costs, &[4], &p, 400.0), 1.0);
+        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 0, ..p }, 0.0), 1.0);
         // an impossible budget takes the largest factor; the trees are still drawn
-        let s = budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 1, ..p });
+        let s = budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 1, ..p }, 0.0);
         assert_eq!(s, 1024.0);
         assert_eq!(select_lod_scaled(300.0, s, &p, 4).unwrap().level, 3);
         assert!(select_lod_scaled(0.5, 1.0, &p, 4).is_none());

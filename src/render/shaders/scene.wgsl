@@ -13,6 +13,8 @@ struct Globals {
     wind: vec4<f32>,         // direction x, y; directed w_g; undirected w_s
     params: vec4<f32>,       // time s, sea level m, shadow texel size, fog density 1/m
     facing: vec4<f32>,       // xyz towards the viewer for billboards when w = 1 (ortho, sun); w = 0: use eye
+    canopy0: vec4<f32>,      // canopy grid origin x, y (m), texel (m), on (1) / off (0)
+    canopy1: vec4<f32>,      // canopy grid nx, ny, oblique-view factor k, unused
 };
 
 // Billboard outline of one prototype (render/lod.rs, Silhouette).
@@ -25,6 +27,8 @@ struct Sil {
 @group(0) @binding(1) var shadow_map: texture_depth_2d;
 @group(0) @binding(2) var shadow_sampler: sampler_comparison;
 @group(0) @binding(3) var<storage, read> sils: array<Sil>;
+// far-field canopy layer (render/canopy.rs): per texel coverage, r, g, b sums in 1/1024
+@group(0) @binding(4) var<storage, read> canopy: array<vec4<u32>>;
 
 fn shadow_factor(world: vec3<f32>, n: vec3<f32>) -> f32 {
     let p = g.light_view_proj * vec4<f32>(world + n * 0.05, 1.0);
@@ -121,10 +125,60 @@ fn vs_terrain(v: TerrainIn) -> TerrainOut {
     return o;
 }
 
+fn canopy_texel(i: i32, j: i32) -> vec4<f32> {
+    let nx = i32(g.canopy1.x);
+    let ny = i32(g.canopy1.y);
+    if (i < 0 || j < 0 || i >= nx || j >= ny) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(canopy[u32(j) * u32(nx) + u32(i)]) / 1024.0;
+}
+
+// Canopy layer at plan position p: (crown albedo, plan coverage 0..1), bilinear over texels.
+fn canopy_at(p: vec2<f32>) -> vec4<f32> {
+    let u = (p.x - g.canopy0.x) / g.canopy0.z - 0.5;
+    let v = (p.y - g.canopy0.y) / g.canopy0.z - 0.5;
+    let i = i32(floor(u));
+    let j = i32(floor(v));
+    let fu = u - floor(u);
+    let fv = v - floor(v);
+    let a = mix(canopy_texel(i, j), canopy_texel(i + 1, j), fu);
+    let b = mix(canopy_texel(i, j + 1), canopy_texel(i + 1, j + 1), fu);
+    let s = mix(a, b, fv);
+    if (s.x <= 1e-4) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(s.yzw / s.x, min(s.x, 1.0));
+}
+
+// Coverage seen along the view ray of plan coverage `c`: 1 - (1 - c)^(1 + k cot(elevation)),
+// crowns of height ~ their diameter hiding more ground the flatter the view (render/canopy.rs).
+fn canopy_view_cover(c: f32, world: vec3<f32>) -> f32 {
+    var sn = 1.0;
+    if (g.eye.w > 0.5) {
+        sn = abs(g.facing.z);
+    } else {
+        sn = normalize(g.eye.xyz - world).z;
+    }
+    sn = clamp(sn, 0.05, 1.0);
+    let ex = min(1.0 + g.canopy1.z * sqrt(1.0 - sn * sn) / sn, 12.0);
+    return 1.0 - pow(1.0 - clamp(c, 0.0, 0.999), ex);
+}
+
 @fragment
 fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
     let n = normalize(i.normal);
-    let c = shade(i.color, n, i.world, 0.0, 1.0);
+    var c = shade(i.color, n, i.world, 0.0, 1.0);
+    if (g.canopy0.w > 0.5) {
+        let cv = canopy_at(i.world.xy);
+        if (cv.w > 0.0) {
+            // crowns lit like the billboards' rounded crowns: wrapped light on an up-facing
+            // normal, the crown's mean ambient occlusion and self-shading
+            let cn = normalize(n + vec3<f32>(0.0, 0.0, 1.5));
+            let cc = shade(cv.rgb, cn, i.world + cn * 0.5, 0.35, 0.75) * 0.85;
+            c = mix(c, cc, canopy_view_cover(cv.w, i.world));
+        }
+    }
     return vec4<f32>(fog(c, i.world), 1.0);
 }
 
