@@ -13,7 +13,9 @@
 //! shader (`shaders/scene.wgsl`, `canopy_at`) filters them bilinearly, divides colour by
 //! coverage, and turns the plan coverage `c` into the coverage seen along an oblique view ray
 //! with a Beer–Lambert-like exponent, `1 − (1 − c)^(1 + k·cot θ)`, θ the view's elevation
-//! angle, k ≈ 1.5 (the side area of a crown of height ≈ its diameter over its plan area).
+//! angle, k = 2.5 (the side area of a crown over its plan area: ≈ 1.5 for a crown as tall as
+//! it is wide, more for the taller crowns of the stand-in and EcoMod trees; tuned so that the
+//! layer matches the billboard forest it replaces, `tests/render_canopy.rs`).
 
 /// Fixed-point unit of the canopy sums (1.0 = 1024).
 pub const CANOPY_ONE: f32 = 1024.0;

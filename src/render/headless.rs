@@ -969,7 +969,7 @@ impl Renderer {
         if let Some(gs) = &self.scene {
             let cg = gs.canopy_grid;
             g.canopy0 = [cg.origin[0], cg.origin[1], cg.texel, if self.lod.canopy_px > 0.0 { 1.0 } else { 0.0 }];
-            g.canopy1 = [cg.nx as f32, cg.ny as f32, 1.5, 0.0];
+            g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, 0.0];
         }
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         g.view_proj = g.light_view_proj;

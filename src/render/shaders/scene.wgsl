@@ -168,9 +168,23 @@ fn canopy_view_cover(c: f32, world: vec3<f32>) -> f32 {
 @fragment
 fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
     let n = normalize(i.normal);
+    // the pixel's footprint on the ground: the canopy is box-filtered over it (3 x 3 bilinear
+    // taps) so that texels smaller than a pixel do not alias into noise
+    let fx = dpdx(i.world.xy);
+    let fy = dpdy(i.world.xy);
     var c = shade(i.color, n, i.world, 0.0, 1.0);
     if (g.canopy0.w > 0.5) {
-        let cv = canopy_at(i.world.xy);
+        var acc = vec4<f32>(0.0);
+        for (var a = -1; a <= 1; a = a + 1) {
+            for (var b = -1; b <= 1; b = b + 1) {
+                let s = canopy_at(i.world.xy + fx * (f32(a) / 3.0) + fy * (f32(b) / 3.0));
+                acc = acc + vec4<f32>(s.rgb * s.w, s.w);
+            }
+        }
+        var cv = vec4<f32>(0.0);
+        if (acc.w > 1e-5) {
+            cv = vec4<f32>(acc.rgb / acc.w, acc.w / 9.0);
+        }
         if (cv.w > 0.0) {
             // crowns lit like the billboards' rounded crowns: wrapped light on an up-facing
             // normal, the crown's mean ambient occlusion and self-shading
