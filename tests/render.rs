@@ -588,3 +588,33 @@ fn triangle_budget_bounds_a_view_inside_the_forest_on_both_paths() {
         }
     });
 }
+
+#[test]
+fn showcase_real_species_levels_for_inspection() {
+    // writes target/tmp/render/species_levels.png: the embedded species' EcoMod chains on a
+    // flat plot, from a ground camera, so the near (full), reduced, hull and billboard levels
+    // and the canopy layer can be looked at side by side
+    let lib = sylva::species::SpeciesLibrary::embedded().unwrap();
+    let protos = sylva::job::scene::prototypes(&lib);
+    let n = protos.len() as u32;
+    let mut trees = Vec::new();
+    let mut k = 0u64;
+    for row in 0..40u32 {
+        for col in 0..24u32 {
+            let x = (col as f32 - 11.5) * 7.0 + (row % 2) as f32 * 3.0;
+            let y = 15.0 + row as f32 * 4.5;
+            let s = (col + row) % n;
+            let leaf = protos[s as usize].leaf_color;
+            trees.push(TreeInstance::new(k, [x, y, 0.0], 24.0, 4.0, s, leaf));
+            k += 1;
+        }
+    }
+    let mut scene = flat_scene(trees);
+    scene.prototypes = protos;
+    let cam = Camera::look_at([0.0, -5.0, 9.0], [0.0, 80.0, 8.0], 50.0);
+    with_renderer(|r| {
+        let img = r.render(&scene, &cam, 640, 360).unwrap();
+        img.save(out_dir().join("species_levels.png")).unwrap();
+        eprintln!("species levels: {:?}", r.last_stats());
+    });
+}

@@ -136,6 +136,23 @@ struct TreeVertex {
     pos: [f32; 3],
     normal: [f32; 3],
     mat: f32,
+    /// Card coordinates 0..1 of leaf cards (carved into discs by the fragment shader); −1
+    /// elsewhere.
+    uv: [f32; 2],
+}
+
+/// Whether `m` is a set of leaf cards: quads of 4 vertices and 2 triangles each with texture
+/// coordinates (0,0), (1,0), (1,1), (0,1) (`structure::mesh` cards).
+fn is_cards(m: &crate::mesh::TriMesh) -> bool {
+    let n = m.positions.len();
+    n > 0
+        && n % 4 == 0
+        && m.uvs.len() == n
+        && m.indices.len() == n / 4 * 6
+        && m.uvs.chunks(4).all(|q| {
+            let want = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+            q.iter().zip(want).all(|(a, b)| (a[0] - b[0]).abs() < 1e-4 && (a[1] - b[1]).abs() < 1e-4)
+        })
 }
 
 struct GpuLevel {
@@ -173,7 +190,7 @@ fn billboard_vertices(s: &Silhouette) -> (Vec<TreeVertex>, Vec<u32>) {
     // crown there (≥ half the widest): the crown seen from above
     let zc = s.widest_z + 0.35 * (s.crown_top - s.widest_z).max(0.0);
     let rt = r * s.width_at(zc).max(0.5);
-    let v = |x: f32, y: f32, z: f32, a: f32, b: f32, mat: f32| TreeVertex { pos: [x, y, z], normal: [a, b, 0.0], mat };
+    let v = |x: f32, y: f32, z: f32, a: f32, b: f32, mat: f32| TreeVertex { pos: [x, y, z], normal: [a, b, 0.0], mat, uv: [-1.0, -1.0] };
     let verts = vec![
         v(-r, 0.0, 0.0, -1.0, 0.0, 2.0),
         v(r, 0.0, 0.0, 1.0, 0.0, 2.0),
@@ -260,7 +277,7 @@ fn terrain_layout() -> wgpu::VertexBufferLayout<'static> {
 }
 
 fn tree_layouts() -> [wgpu::VertexBufferLayout<'static>; 2] {
-    const V: [wgpu::VertexAttribute; 3] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32];
+    const V: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32, 9 => Float32x2];
     const I: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4];
     [
         wgpu::VertexBufferLayout { array_stride: std::mem::size_of::<TreeVertex>() as u64, step_mode: wgpu::VertexStepMode::Vertex, attributes: &V },
@@ -535,13 +552,14 @@ impl Renderer {
                     }
                     let base = verts.len() as u32;
                     let start = idx.len() as u32;
-                    verts.extend(m.positions.iter().zip(&m.normals).map(|(p, n)| TreeVertex { pos: *p, normal: *n, mat }));
+                    let cards = mat > 0.5 && is_cards(m);
+                    verts.extend(m.positions.iter().zip(&m.normals).enumerate().map(|(k, (p, n))| TreeVertex { pos: *p, normal: *n, mat, uv: if cards { m.uvs[k] } else { [-1.0, -1.0] } }));
                     idx.extend(m.indices.iter().map(|i| i + base));
                     ranges.push(start..idx.len() as u32);
                 }
                 if idx.is_empty() {
                     idx.extend_from_slice(&[0, 0, 0]);
-                    verts.push(TreeVertex { pos: [0.0; 3], normal: [0.0, 0.0, 1.0], mat: 0.0 });
+                    verts.push(TreeVertex { pos: [0.0; 3], normal: [0.0, 0.0, 1.0], mat: 0.0, uv: [-1.0, -1.0] });
                 }
                 levels.push(GpuLevel {
                     vb: d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("tree vb"), contents: bytemuck::cast_slice(&verts), usage: wgpu::BufferUsages::VERTEX }),

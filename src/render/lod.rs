@@ -253,6 +253,27 @@ impl Silhouette {
             }
         }
         let m = s.iter().copied().fold(0.0f32, f32::max).max(1e-6);
+        // broadleaf crowns (widest in the upper 60 % of the crown) get a rounded outline: the
+        // profile is widened to at least 0.9 of the crown's inscribed half-ellipse, so the
+        // billboard's top is a dome, not a point; conifers (widest low) keep their cone
+        let mut wi = 0;
+        for i in 0..n {
+            if s[i] > s[wi] {
+                wi = i;
+            }
+        }
+        let wz = (wi as f32 + 0.5) / n as f32;
+        if (wz - zlo) / (zhi - zlo) >= 0.4 {
+            let (zc, hz) = (0.5 * (zlo + zhi), 0.5 * (zhi - zlo));
+            for (i, v) in s.iter_mut().enumerate() {
+                let z = (i as f32 + 0.5) / n as f32;
+                let t = (z - zc) / hz.max(1e-3);
+                if t.abs() < 1.0 {
+                    *v = v.max(0.9 * m * (1.0 - t * t).sqrt());
+                }
+            }
+        }
+        let m = s.iter().copied().fold(0.0f32, f32::max).max(1e-6);
         let mut widest = 0;
         for i in 0..n {
             s[i] /= m;
@@ -562,6 +583,12 @@ mod tests {
         let c = Silhouette::from_chain(&placeholder_chain(true));
         assert!(c.widest_z < 0.4, "conifer widest low: {}", c.widest_z);
         assert!(c.width_at(0.9) < 0.5 * c.width_at(c.widest_z), "conifer tapers to the top");
+        // the broadleaf dome: 90 % of the way from the widest point to the top, still at least
+        // 0.9 of the half-ellipse there (a point would be < 0.3)
+        let z = b.widest_z + 0.8 * (b.crown_top - b.widest_z);
+        let (zc, hz) = (0.5 * (b.crown_bottom + b.crown_top), 0.5 * (b.crown_top - b.crown_bottom));
+        let t = (z - zc) / hz;
+        assert!(b.width_at(z) >= 0.85 * (1.0 - t * t).sqrt(), "rounded top: {} at {z}", b.width_at(z));
         let e = Silhouette::from_chain(&LodChain::default());
         assert_eq!(e.radius, 0.3);
         assert_eq!(drawn_levels(0), 1);

@@ -216,7 +216,8 @@ struct TreeIn {
     @location(5) leaf: vec4<f32>,   // leaf rgb, leaf amount
     @location(6) p2: vec4<f32>,     // opacity, phase R_x, phase R_z, flexibility (1 - k_f)
     @location(7) bark: vec4<f32>,   // bark rgb, dither salt
-    @location(8) p3: vec4<f32>,     // prototype, level, crown radius (culling), unused
+    @location(8) p3: vec4<f32>,     // prototype, level, crown radius (culling), crown radius drawn
+    @location(9) uv: vec2<f32>,     // leaf-card coordinates 0..1 (carved into discs); -1 elsewhere
 };
 
 struct TreeOut {
@@ -230,6 +231,8 @@ struct TreeOut {
     @location(6) bb: vec2<f32>,                         // billboard outline coordinates
     @location(7) @interpolate(flat) info: vec4<f32>,   // prototype, level, bark rgb packed? (unused)
     @location(8) @interpolate(flat) bark: vec3<f32>,   // bark colour (billboard trunks, twigs)
+    @location(9) cdir: vec3<f32>,                       // direction from the crown centre (meshes)
+    @location(10) uv: vec2<f32>,                        // leaf-card coordinates (-1: not a card)
 };
 
 // Direction from a tree towards the viewer (or the sun in the shadow pass).
@@ -273,6 +276,7 @@ fn sway(v: TreeIn, rp: vec3<f32>, sn_in: f32) -> vec3<f32> {
 
 fn tree_vertex(v: TreeIn) -> TreeOut {
     var o: TreeOut;
+    o.cdir = vec3<f32>(0.0, 0.0, 1.0);
     let h = v.pos_h.w;
     let sxy = v.p1.x;
     var w: vec3<f32>;
@@ -302,6 +306,9 @@ fn tree_vertex(v: TreeIn) -> TreeOut {
         let rn = vec3<f32>(c * ln.x - s * ln.y, s * ln.x + c * ln.y, ln.z);
         o.normal = normalize(rn);
         o.bb = vec2<f32>(0.0, 0.0);
+        // outward direction of the crown as an ellipsoid about (0, 0, 0.6 h) with half-height
+        // 0.4 h: bends leaf-cluster normals into a rounded crown shade
+        o.cdir = vec3<f32>(rp.x / max(sxy, 1e-4), rp.y / max(sxy, 1e-4), (v.pos.z - 0.6) * 0.8);
     }
     o.clip = g.view_proj * vec4<f32>(w, 1.0);
     o.world = w;
@@ -311,7 +318,18 @@ fn tree_vertex(v: TreeIn) -> TreeOut {
     o.salt = v.bark.w;
     o.info = v.p3;
     o.bark = v.bark.rgb;
+    o.uv = v.uv;
     return o;
+}
+
+// Leaf cards are carved into discs with a dithered rim (radius 0.7..1 of the half-side), so
+// leaf clusters of crossed cards read as soft round clumps, not squares.
+fn card_kept(i: TreeOut) -> bool {
+    if (i.uv.x < -0.5 || i.mat_s.x < 0.5 || i.mat_s.x > 1.5) {
+        return true;
+    }
+    let d = length(i.uv * 2.0 - vec2<f32>(1.0, 1.0));
+    return d < 1.0 - 0.3 * hash2(i.clip.xy, i.salt + 17.0);
 }
 
 fn bayer4(p: vec2<f32>) -> f32 {
@@ -433,7 +451,7 @@ fn twig_color(bark: vec3<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32> {
-    if (!keep(i)) {
+    if (!keep(i) || !card_kept(i)) {
         discard;
     }
     var n = normalize(i.normal);
@@ -451,8 +469,35 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
             leafy = 0.0;
             albedo = i.bark;
         }
-    } else if (!ff) {
-        n = -n;
+    } else {
+        if (!ff) {
+            n = -n;
+        }
+        if (i.mat_s.x > 0.5) {
+            // leaf clusters: dither away faces seen edge-on (soft, rounded cluster outlines
+            // instead of box edges) and bend normals towards the crown's outward direction
+            // (rounded crown shade); more at the reduced and hull levels, whose clusters are
+            // coarse polyhedra
+            let coarse = i.info.y > 0.5;
+            var vd = g.facing.xyz;
+            if (g.facing.w < 0.5) {
+                vd = g.eye.xyz - i.world;
+            }
+            let e = abs(dot(n, normalize(vd)));
+            var soft = 0.12;
+            var bend = 0.35;
+            if (coarse) {
+                soft = 0.45;
+                bend = 0.7;
+            }
+            if (hash2(i.clip.xy, i.salt + 11.0) > smoothstep(0.0, soft, e)) {
+                discard;
+            }
+            let cd = i.cdir;
+            if (dot(cd, cd) > 1e-8) {
+                n = normalize(mix(n, normalize(cd), bend));
+            }
+        }
     }
     if (leafy > 0.5) {
         let fo = foliage(i, twig_density(i));
@@ -481,7 +526,7 @@ fn vs_tree_shadow(v: TreeIn) -> TreeOut {
 
 @fragment
 fn fs_tree_shadow(i: TreeOut) {
-    if (!keep(i)) {
+    if (!keep(i) || !card_kept(i)) {
         discard;
     }
     var leafy = i.mat_s.x > 0.5;
