@@ -67,7 +67,7 @@ struct CullParams {
     counts: [u32; 4],
     /// canopy grid origin x, y (m), texel (m); base far-field switch (px, 0 = off)
     canopy: [f32; 4],
-    /// canopy grid nx, ny; tree cap (0 = none); unused
+    /// canopy grid nx, ny; geometry triangle budget of the far-field switch (0 = none); unused
     canopy_n: [u32; 4],
 }
 
@@ -110,7 +110,7 @@ struct GpuCull {
 
 struct GpuFrame {
     slots: Vec<GpuSlot>,
-    /// Whether the `hist` and `choose` passes run (triangle budget or tree cap).
+    /// Whether the `hist` and `choose` passes run (either triangle budget).
     budget: bool,
     invalid: usize,
     valid: usize,
@@ -876,7 +876,7 @@ impl Renderer {
             misc: [self.lod.min_px, ppm, self.lod.max_triangles as f32, cost_first as f32],
             counts: [src.len() as u32, gx, n_protos as u32, (slots.len() * 10) as u32],
             canopy: [gs.canopy_grid.origin[0], gs.canopy_grid.origin[1], gs.canopy_grid.texel, self.lod.canopy_px.max(0.0)],
-            canopy_n: [gs.canopy_grid.nx, gs.canopy_grid.ny, self.lod.max_geometry_trees, 0],
+            canopy_n: [gs.canopy_grid.nx, gs.canopy_grid.ny, self.lod.max_geometry_triangles, 0],
         };
         let Some(cull) = self.cull.as_mut() else { return Ok(None) };
         let d = &self.device;
@@ -901,7 +901,7 @@ impl Renderer {
         }
         self.queue.write_buffer(&cull.params, 0, bytemuck::bytes_of(&params));
         let valid = src.len();
-        let budget = self.lod.max_triangles > 0 || (self.lod.canopy_px > 0.0 && self.lod.max_geometry_trees > 0);
+        let budget = self.lod.max_triangles > 0 || (self.lod.canopy_px > 0.0 && self.lod.max_geometry_triangles > 0);
         Ok(Some(GpuFrame { slots, budget, invalid, valid, args_bytes }))
     }
 

@@ -169,7 +169,7 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
     // histogram of projected sizes per prototype (trees of at least min_px), then the far-field
     // switch (tree cap) and the switch-size factor (triangle budget) of the geometry left
     let canopy_on = params.canopy_px > 0.0;
-    let need_hist = params.max_triangles > 0 || (canopy_on && params.max_geometry_trees > 0);
+    let need_hist = params.max_triangles > 0 || (canopy_on && params.max_geometry_triangles > 0);
     let mut hist = vec![[0u32; SIZE_BINS]; levels.len()];
     if need_hist {
         for (px, rec) in seen.iter().flatten().flatten() {
@@ -178,10 +178,10 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
             }
         }
     }
-    let canopy_px = canopy_threshold(&hist, params);
+    let costs: Vec<[u32; 4]> = scene.prototypes.iter().map(level_costs).collect();
+    let canopy_px = canopy_threshold(&hist, &costs, &levels, params);
     let floor = if canopy_px > 0.0 { canopy_px / (1.0 + params.band.max(0.0)) } else { 0.0 };
     let scale = if params.max_triangles > 0 {
-        let costs: Vec<[u32; 4]> = scene.prototypes.iter().map(level_costs).collect();
         budget_scale(&hist, &costs, &levels, params, floor)
     } else {
         1.0

@@ -30,23 +30,24 @@ pub struct LodParams {
     /// opacity) while the splat fades in, so there is no pop. Trees below `min_px` still reach
     /// the canopy layer when it is on.
     pub canopy_px: f32,
-    /// Cap on the trees drawn as geometry per frame (0 = none). When more visible trees are
-    /// taller than `canopy_px` (estimated from the projected-size histogram), the far-field
-    /// switch is raised by the smallest factor `2^(k/4)` that fits ([`canopy_threshold`]), so
-    /// triangles per frame level off as the tree count grows (the canopy layer costs no
-    /// triangles).
-    pub max_geometry_trees: u32,
+    /// Budget of tree triangles per frame drawn as geometry before the far-field switch is
+    /// raised (0 = none). When the visible trees taller than `canopy_px` would cost more (at
+    /// their levels, estimated from the projected-size histogram as in [`budget_scale`]), the
+    /// far-field switch is raised by the smallest factor `2^(k/4)` that fits
+    /// ([`canopy_threshold`]): more of the far forest goes to the canopy layer, which costs no
+    /// triangles, so triangles per frame level off as the tree count grows.
+    pub max_geometry_triangles: u32,
 }
 
 impl Default for LodParams {
     /// Full mesh above 240 px, reduced skeleton 100–240 px, crown hull 40–100 px, billboard
     /// impostor (4 triangles) below 40 px; cross-fade bands of ±25 %; trees under 0.75 px are
     /// not drawn as geometry; at most 6 M tree triangles per frame (switch sizes raised
-    /// beyond); trees under 6 px go to the canopy layer, and at most 12,000 trees are drawn as
-    /// geometry (the far-field switch is raised beyond). Triangles per frame are then bounded
-    /// by the near trees and the cap, not by the tree count (BENCHMARKS.md, "Rendering").
+    /// beyond); trees under 6 px go to the canopy layer, and the far-field switch is raised
+    /// when the geometry would cost more than 100,000 triangles. Triangles per frame then level
+    /// off as the tree count grows (BENCHMARKS.md, "Rendering").
     fn default() -> Self {
-        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000, canopy_px: 6.0, max_geometry_trees: 12_000 }
+        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000, canopy_px: 6.0, max_geometry_triangles: 100_000 }
     }
 }
 
@@ -89,58 +90,58 @@ pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[u
         return 1.0;
     }
     let budget = params.max_triangles as f32;
-    let p0 = LodParams { min_px: 0.0, ..*params };
     let mut s = 1.0;
     for k in 0..=MAX_SCALE_STEPS {
         s = (k as f32 / 4.0).exp2();
-        let mut total = 0.0f32;
-        for (p, h) in hist.iter().enumerate() {
-            for (b, &n) in h.iter().enumerate() {
-                if n == 0 || bin_px(b) < floor_px {
-                    continue;
-                }
-                let Some(pick) = select_lod(bin_px(b) / s, &p0, n_levels[p]) else { continue };
-                let mut c = costs[p][pick.level.min(3)];
-                if pick.blend > 0.0 && pick.level + 1 < n_levels[p] {
-                    c += costs[p][(pick.level + 1).min(3)];
-                }
-                total += n as f32 * c as f32;
-            }
-        }
-        if total <= budget {
+        if hist_cost(hist, costs, n_levels, params, s, floor_px) <= budget {
             break;
         }
     }
     s
 }
 
+/// Estimated tree triangles of a frame from its size histogram: `Σ_p Σ_b hist[p][b] · cost`
+/// over the bins whose centre ([`bin_px`]) is at least `floor_px`, each at its centre size with
+/// switch sizes scaled by `s` (cost = triangles of the picked level plus those of the next
+/// level inside a cross-fade band). Summed in `f32` in this order, as `shaders/cull.wgsl`
+/// (`hist_cost`) does.
+pub fn hist_cost(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams, s: f32, floor_px: f32) -> f32 {
+    let p0 = LodParams { min_px: 0.0, ..*params };
+    let mut total = 0.0f32;
+    for (p, h) in hist.iter().enumerate() {
+        for (b, &n) in h.iter().enumerate() {
+            if n == 0 || bin_px(b) < floor_px {
+                continue;
+            }
+            let Some(pick) = select_lod(bin_px(b) / s, &p0, n_levels[p]) else { continue };
+            let mut c = costs[p][pick.level.min(3)];
+            if pick.blend > 0.0 && pick.level + 1 < n_levels[p] {
+                c += costs[p][(pick.level + 1).min(3)];
+            }
+            total += n as f32 * c as f32;
+        }
+    }
+    total
+}
+
 /// The far-field switch size (px) of a frame: `params.canopy_px · 2^(k/4)` for the smallest
 /// k = 0..=[`MAX_SCALE_STEPS`] for which the trees drawn as geometry — those whose histogram bin
-/// centre ([`bin_px`]) is at least `switch / (1 + band)` — number at most
-/// `params.max_geometry_trees` (no cap when 0); 0 when the canopy layer is off
-/// (`canopy_px ≤ 0`). `hist` as in [`budget_scale`] (trees of at least `min_px`); computed in
-/// this order by `shaders/cull.wgsl` (`choose`) too.
-pub fn canopy_threshold(hist: &[[u32; SIZE_BINS]], params: &LodParams) -> f32 {
+/// centre ([`bin_px`]) is at least `switch / (1 + band)` — cost at most
+/// `params.max_geometry_triangles` ([`hist_cost`] with unscaled switch sizes; no budget when
+/// 0); 0 when the canopy layer is off (`canopy_px ≤ 0`). `hist`, `costs`, `n_levels` as in
+/// [`budget_scale`]; computed in this order by `shaders/cull.wgsl` (`choose`) too.
+pub fn canopy_threshold(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams) -> f32 {
     if !(params.canopy_px > 0.0) {
         return 0.0;
     }
     let b = 1.0 + params.band.max(0.0);
     let mut c = params.canopy_px;
-    if params.max_geometry_trees == 0 {
+    if params.max_geometry_triangles == 0 {
         return c;
     }
     for k in 0..=MAX_SCALE_STEPS {
         c = params.canopy_px * (k as f32 / 4.0).exp2();
-        let lo = c / b;
-        let mut n = 0u32;
-        for h in hist {
-            for (bin, &v) in h.iter().enumerate() {
-                if bin_px(bin) >= lo {
-                    n = n.saturating_add(v);
-                }
-            }
-        }
-        if n <= params.max_geometry_trees {
+        if hist_cost(hist, costs, n_levels, params, 1.0, c / b) <= params.max_geometry_triangles as f32 {
             break;
         }
     }
@@ -570,6 +571,15 @@ mod tests {
         assert_eq!(s, 1024.0);
         assert_eq!(select_lod_scaled(300.0, s, &p, 4).unwrap().level, 3);
         assert!(select_lod_scaled(0.5, 1.0, &p, 4).is_none());
+        // the far-field switch: 10 trees at ~279 px cost 11,000 > 5,000 triangles, so it rises
+        // until their bin (centre 279 px) is below switch/1.25, i.e. switch > 349 px: 6·2^(24/4) = 384
+        let q = LodParams { canopy_px: 6.0, max_geometry_triangles: 5000, ..p };
+        assert_eq!(canopy_threshold(&hist, &costs, &[4], &q), 384.0);
+        assert_eq!(canopy_threshold(&hist, &costs, &[4], &LodParams { max_geometry_triangles: 0, ..q }), 6.0);
+        assert_eq!(canopy_threshold(&hist, &costs, &[4], &LodParams { canopy_px: 0.0, ..q }), 0.0);
+        assert_eq!(canopy_weight(3.0, 6.0, 0.25), 1.0);
+        assert_eq!(canopy_weight(8.0, 6.0, 0.25), 0.0);
+        assert!((canopy_weight(6.0, 6.0, 0.25) - 0.5).abs() < 1e-5);
     }
 
     #[test]

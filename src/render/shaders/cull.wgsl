@@ -25,7 +25,7 @@ struct Params {
     counts: vec4<u32>,   // instances, workgroups along x, number of prototypes, word offset of
                          // the per-level counters in args (= 10 * slots)
     canopy: vec4<f32>,   // canopy grid origin x, y (m), texel (m); base far-field switch px (0 off)
-    canopy_n: vec4<u32>, // canopy grid nx, ny; cap on geometry trees (0 none); unused
+    canopy_n: vec4<u32>, // canopy grid nx, ny; geometry triangle budget of the far switch (0 none); unused
 };
 
 // Per prototype: number of drawn levels, first slot index.
@@ -227,10 +227,36 @@ fn cost(p: u32, l: u32) -> u32 {
     return c.pad1;
 }
 
-// Pass 2 (one invocation): budget_scale of render/lod.rs.
+// hist_cost of render/lod.rs: estimated triangles of the histogram's bins from floor_px up,
+// switch sizes scaled by s
+fn hist_cost(s: f32, floor_px: f32) -> f32 {
+    var total = 0.0;
+    for (var p = 0u; p < cp.counts.z; p = p + 1u) {
+        let nl = protos[p].n_levels;
+        for (var bb = 0u; bb < 64u; bb = bb + 1u) {
+            let n = atomicLoad(&args[hist_off() + p * 64u + bb]);
+            let px = exp2((f32(bb) - 4.0 + 0.5) / 4.0);
+            if (n == 0u || px < floor_px) {
+                continue;
+            }
+            let pick = select_lod(px / s, nl);
+            if (pick.level < 0) {
+                continue;
+            }
+            let lv = u32(pick.level);
+            var c = cost(p, lv);
+            if (pick.blend > 0.0 && lv + 1u < nl) {
+                c = c + cost(p, lv + 1u);
+            }
+            total = total + f32(n) * f32(c);
+        }
+    }
+    return total;
+}
+
+// Pass 2 (one invocation): canopy_threshold, then budget_scale of render/lod.rs.
 @compute @workgroup_size(1)
 fn choose() {
-    // canopy_threshold of render/lod.rs
     let b = 1.0 + max(cp.lod.w, 0.0);
     var cthr = 0.0;
     if (cp.canopy.w > 0.0) {
@@ -238,16 +264,7 @@ fn choose() {
         if (cp.canopy_n.z > 0u) {
             for (var k = 0u; k <= 40u; k = k + 1u) {
                 cthr = cp.canopy.w * exp2(f32(k) / 4.0);
-                let lo = cthr / b;
-                var n = 0u;
-                for (var p = 0u; p < cp.counts.z; p = p + 1u) {
-                    for (var bin = 0u; bin < 64u; bin = bin + 1u) {
-                        if (exp2((f32(bin) - 4.0 + 0.5) / 4.0) >= lo) {
-                            n = n + atomicLoad(&args[hist_off() + p * 64u + bin]);
-                        }
-                    }
-                }
-                if (n <= cp.canopy_n.z) {
+                if (hist_cost(1.0, cthr / b) <= f32(cp.canopy_n.z)) {
                     break;
                 }
             }
@@ -262,28 +279,7 @@ fn choose() {
     if (cp.misc.z > 0.0) {
         for (var k = 0u; k <= 40u; k = k + 1u) {
             s = exp2(f32(k) / 4.0);
-            var total = 0.0;
-            for (var p = 0u; p < cp.counts.z; p = p + 1u) {
-                let nl = protos[p].n_levels;
-                for (var bb = 0u; bb < 64u; bb = bb + 1u) {
-                    let n = atomicLoad(&args[hist_off() + p * 64u + bb]);
-                    let px = exp2((f32(bb) - 4.0 + 0.5) / 4.0);
-                    if (n == 0u || px < floor_px) {
-                        continue;
-                    }
-                    let pick = select_lod(px / s, nl);
-                    if (pick.level < 0) {
-                        continue;
-                    }
-                    let lv = u32(pick.level);
-                    var c = cost(p, lv);
-                    if (pick.blend > 0.0 && lv + 1u < nl) {
-                        c = c + cost(p, lv + 1u);
-                    }
-                    total = total + f32(n) * f32(c);
-                }
-            }
-            if (total <= cp.misc.z) {
+            if (hist_cost(s, floor_px) <= cp.misc.z) {
                 break;
             }
         }
