@@ -5,7 +5,8 @@
 //!
 //! Run: `cargo bench --bench render` (env `SYLVA_BENCH_FRAMES=N` overrides the frame count,
 //! `SYLVA_BENCH_SIZE=WxH` the resolution, `SYLVA_BENCH_CULLING=cpu|gpu` runs one culling path
-//! only, `SYLVA_BENCH_COUNTS=1000,10000` the instance counts). Prints, per culling path (CPU rayon pass with direct draws; GPU compute pass with
+//! only, `SYLVA_BENCH_COUNTS=1000,10000` the instance counts, `SYLVA_BENCH_CANOPY=off` turns the
+//! far-field canopy layer off for comparison). Prints, per culling path (CPU rayon pass with direct draws; GPU compute pass with
 //! indirect draws), the median over the timed frames after one warm-up frame, and the triangles
 //! the same trees would cost all at level 0.
 
@@ -54,6 +55,10 @@ fn main() {
     }
     paths.retain(|c| only.as_deref().map(|o| format!("{c:?}").to_ascii_lowercase() == o).unwrap_or(true));
     println!("{:>7} {:>9} {:>7} {:>11} {:>11} {:>13} {:>9} {:>22} {:>9} {:>9} {:>16}", "culling", "instances", "frames", "median ms", "fps", "tree tris", "draws", "L0/L1/L2/L3", "canopy", "far px", "tris if all L0");
+    if std::env::var("SYLVA_BENCH_CANOPY").map(|v| v == "off").unwrap_or(false) {
+        r.lod.canopy_px = 0.0;
+        println!("canopy layer off");
+    }
     for &culling in &paths {
     r.culling = culling;
     for &n in &counts {

@@ -677,11 +677,17 @@ impl Renderer {
             None => {
                 let b = build_batches(scene, camera, width, height, &self.lod);
                 self.write_instances(&b);
-                self.write_canopy(&b);
+                if !b.canopy.is_empty() {
+                    self.write_canopy(&b);
+                }
                 FrameDraws::Cpu(b)
             }
         };
-        self.write_globals(scene, camera, width, height);
+        let canopy_used = match &draws {
+            FrameDraws::Cpu(b) => !b.canopy.is_empty(),
+            FrameDraws::Gpu(_) => true,
+        };
+        self.write_globals(scene, camera, width, height, canopy_used);
         let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         if let FrameDraws::Gpu(f) = &draws {
             if let Some(gs) = &self.scene {
@@ -959,7 +965,9 @@ impl Renderer {
         (proj * view, 2.0 * r / SHADOW_SIZE as f32)
     }
 
-    fn write_globals(&self, scene: &Scene, camera: &Camera, w: u32, h: u32) {
+    /// `canopy_used`: whether the terrain shader reads the canopy layer (false when the CPU
+    /// path splatted nothing this frame).
+    fn write_globals(&self, scene: &Scene, camera: &Camera, w: u32, h: u32, canopy_used: bool) {
         let aspect = w as f32 / h as f32;
         let vp = camera.view_proj(aspect);
         let (lvp, _texel_m) = Self::light_matrix(scene);
@@ -986,7 +994,7 @@ impl Renderer {
         };
         if let Some(gs) = &self.scene {
             let cg = gs.canopy_grid;
-            g.canopy0 = [cg.origin[0], cg.origin[1], cg.texel, if self.lod.canopy_px > 0.0 { 1.0 } else { 0.0 }];
+            g.canopy0 = [cg.origin[0], cg.origin[1], cg.texel, if self.lod.canopy_px > 0.0 && canopy_used { 1.0 } else { 0.0 }];
             g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, 0.0];
         }
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));

@@ -168,22 +168,32 @@ fn canopy_view_cover(c: f32, world: vec3<f32>) -> f32 {
 @fragment
 fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
     let n = normalize(i.normal);
-    // the pixel's footprint on the ground: the canopy is box-filtered over it (3 x 3 bilinear
-    // taps) so that texels smaller than a pixel do not alias into noise
+    // the pixel's footprint on the ground: the canopy is box-filtered over it so that texels
+    // smaller than a pixel do not alias into noise
     let fx = dpdx(i.world.xy);
     let fy = dpdy(i.world.xy);
     var c = shade(i.color, n, i.world, 0.0, 1.0);
     if (g.canopy0.w > 0.5) {
+        // one bilinear tap when the footprint is within 1.5 texels, else 3 taps spread along
+        // its longer axis (the depth direction of oblique views)
+        let lx = length(fx);
+        let ly = length(fy);
+        var ax = fx;
+        if (ly > lx) {
+            ax = fy;
+        }
+        var taps = 0;
+        if (max(lx, ly) / g.canopy0.z > 1.5) {
+            taps = 1;
+        }
         var acc = vec4<f32>(0.0);
-        for (var a = -1; a <= 1; a = a + 1) {
-            for (var b = -1; b <= 1; b = b + 1) {
-                let s = canopy_at(i.world.xy + fx * (f32(a) / 3.0) + fy * (f32(b) / 3.0));
-                acc = acc + vec4<f32>(s.rgb * s.w, s.w);
-            }
+        for (var a = -taps; a <= taps; a = a + 1) {
+            let s = canopy_at(i.world.xy + ax * (f32(a) / 3.0));
+            acc = acc + vec4<f32>(s.rgb * s.w, s.w);
         }
         var cv = vec4<f32>(0.0);
         if (acc.w > 1e-5) {
-            cv = vec4<f32>(acc.rgb / acc.w, acc.w / 9.0);
+            cv = vec4<f32>(acc.rgb / acc.w, acc.w / f32(2 * taps + 1));
         }
         if (cv.w > 0.0) {
             // crowns lit like the billboards' rounded crowns: wrapped light on an up-facing
