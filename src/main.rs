@@ -38,6 +38,13 @@ enum Command {
 }
 
 fn main() -> std::process::ExitCode {
+    // `sylva terrain info … | head`: a closed pipe ends the program quietly, as for other tools
+    // (Rust ignores SIGPIPE by default, and `println!` would then panic on EPIPE).
+    #[cfg(unix)]
+    // SAFETY: called first thing on the main thread, before any other thread exists.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     let cli = Cli::parse();
     cli::init_logging(cli.verbose);
     let res = match cli.command {
@@ -51,10 +58,20 @@ fn main() -> std::process::ExitCode {
     };
     match res {
         Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) if e.is::<cli::Interrupted>() => {
+            eprintln!("{e}");
+            std::process::ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("error: {e}");
+            // causes whose text the message above already contains are not repeated
+            let mut said = e.to_string();
             for cause in e.chain().skip(1) {
-                eprintln!("  caused by: {cause}");
+                let c = cause.to_string();
+                if !said.contains(&c) {
+                    eprintln!("  caused by: {c}");
+                    said.push_str(&c);
+                }
             }
             std::process::ExitCode::FAILURE
         }

@@ -53,6 +53,12 @@ fn sylva_run_reduced_scenario_writes_every_output() {
     let sc = dir.path().join("reduced.toml");
     std::fs::write(&sc, SCENARIO).unwrap();
     let out = dir.path().join("out");
+    // leftovers of an earlier, longer run into the same folder must not survive
+    for stale in ["stills/year_0099_oblique.png", "frames/frame_00042.png"] {
+        std::fs::create_dir_all(out.join(stale).parent().unwrap()).unwrap();
+        std::fs::write(out.join(stale), b"old").unwrap();
+    }
+    std::fs::write(out.join("stills/notes.txt"), b"mine").unwrap();
     let res = Command::new(env!("CARGO_BIN_EXE_sylva"))
         .args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--size", "320x180", "--timelapse-size", "160x90", "--frames-between", "1"])
         .output()
@@ -113,12 +119,25 @@ fn sylva_run_reduced_scenario_writes_every_output() {
     let gj: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("inventory/year_0006.geojson")).unwrap()).unwrap();
     assert_eq!(gj["type"], "FeatureCollection");
     assert_eq!(gj["features"].as_array().unwrap().len(), rows.len());
+    // georeferenced like the map GeoTIFFs: UTM 16N eastings/northings, a constant offset from
+    // the local metres of the CSV
+    assert_eq!(gj["crs"]["properties"]["name"], "urn:ogc:def:crs:EPSG::32616");
+    let feats = gj["features"].as_array().unwrap();
+    let off = |f: &serde_json::Value| (f["geometry"]["coordinates"][0].as_f64().unwrap() - f["properties"]["x_m"].as_f64().unwrap(), f["geometry"]["coordinates"][1].as_f64().unwrap() - f["properties"]["y_m"].as_f64().unwrap());
+    let (ox, oy) = off(&feats[0]);
+    assert!((700_000.0..800_000.0).contains(&ox) && (4_000_000.0..4_100_000.0).contains(&oy), "offset {ox} {oy}");
+    assert!(feats.iter().all(|f| (off(f).0 - ox).abs() < 0.02 && (off(f).1 - oy).abs() < 0.02));
 
     // Pictures are not blank: terrain and trees give contrast.
     for f in ["stills/year_0006_oblique.png", "stills/year_0006_topdown.png", "stand_table.png", "maps/conditions/elevation.png"] {
         let v = png_variance(&out.join(f));
         assert!(v > 20.0, "{f} looks blank (variance {v})");
     }
+    // snapshots at years 0, 3, 6 with one interpolated frame between each pair: 5 frames
+    let frames: Vec<String> = std::fs::read_dir(out.join("frames")).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    assert_eq!(frames.len(), 5, "{frames:?}");
+    assert!(!out.join("stills/year_0099_oblique.png").exists() && !out.join("frames/frame_00042.png").exists(), "stale stills/frames removed");
+    assert!(out.join("stills/notes.txt").exists(), "files Sylva did not write are kept");
     let gif = std::fs::read(out.join("timelapse.gif")).unwrap();
     assert_eq!(&gif[..6], b"GIF89a");
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();

@@ -5,29 +5,21 @@ use sylva::output::inventory::inventory_csv;
 use sylva::sim::run::{run_scenario, RunOptions};
 use sylva::sim::{fixtures, Scenario, TerrainSpec};
 
-const SC: &str = r#"
-name = "det"
-years = 40
-seed = 5
-snapshot_every = 20
-checkpoint_every = 15
-[terrain]
-uniform = { width = 4, height = 3, cell_m = 25.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }
-[[start]]
-kind = "seed_rain"
-species = "birch"
-seeds_per_ha = 1500
-[[start]]
-kind = "seed_sources"
-species = "beech"
-points = [[20.0, 20.0], [80.0, 50.0]]
-trees_per_source = 3
-"#;
+/// Birch seed rain and beech seed trees on a 100 m × 75 m flat site, 40 years.
+fn sc_text() -> String {
+    common::ScenarioToml::new("det", 40, 5)
+        .line("snapshot_every = 20")
+        .line("checkpoint_every = 15")
+        .uniform(4, 3, 25.0, 300.0)
+        .seed_rain("birch", 1500.0)
+        .seed_sources("beech", &[[20.0, 20.0], [80.0, 50.0]], 3)
+        .build()
+}
 
 fn inventory_with_threads(n: usize) -> String {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
     pool.install(|| {
-        let (sc, mut w) = common::world(SC);
+        let (sc, mut w) = common::world(&sc_text());
         common::run(&sc, &mut w, 40);
         inventory_csv(&w)
     })
@@ -49,7 +41,7 @@ fn site(sc: &Scenario) -> sylva::conditions::SiteConditions {
 #[test]
 fn resume_equals_uninterrupted() {
     let lib = fixtures::library();
-    let sc = Scenario::from_toml_str(SC, "det").unwrap();
+    let sc = Scenario::from_toml_str(&sc_text(), "det").unwrap();
     let full_dir = tempfile::tempdir().unwrap();
     let full = run_scenario(&sc, site(&sc), &lib, RunOptions::new(full_dir.path())).unwrap();
     // interrupted run: stop after year 17 (checkpoints at 15 and on stop)
@@ -72,8 +64,11 @@ fn resume_equals_uninterrupted() {
     let resumed = run_scenario(&sc, site(&sc), &lib, o).unwrap();
     assert_eq!(resumed.world.year, 40);
     assert_eq!(resumed.world.trees, full.world.trees, "tree store differs after resume");
+    assert!(!full.world.cohorts.is_empty(), "the run should have a regeneration layer");
+    assert_eq!(resumed.world.cohorts, full.world.cohorts, "regeneration cohorts differ after resume");
+    assert_eq!(resumed.world.regen_ledger, full.world.regen_ledger, "regeneration ledger differs after resume");
     assert_eq!(resumed.rows, full.rows);
-    for f in ["stand_table.csv", "inventory/year_0040.csv", "inventory/year_0040.geojson"] {
+    for f in ["stand_table.csv", "inventory/year_0040.csv", "inventory/year_0040.geojson", "inventory/year_0040_regeneration.csv"] {
         let a = std::fs::read(full_dir.path().join(f)).unwrap();
         let b = std::fs::read(dir.path().join(f)).unwrap();
         assert!(a == b, "{f} differs");

@@ -6,22 +6,13 @@ mod common;
 #[test]
 fn birch_then_beech() {
     let lib = common::embedded();
-    let (sc, mut w) = common::world_with(r#"
-name = "succession"
-years = 200
-seed = 11
-species = ["beech", "silver_birch"]
-[terrain]
-uniform = { width = 5, height = 5, cell_m = 20.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }
-[[start]]
-kind = "seed_rain"
-species = "silver_birch"
-seeds_per_ha = 10000
-[[start]]
-kind = "seed_rain"
-species = "beech"
-seeds_per_ha = 300
-"#, &lib);
+    let toml = common::ScenarioToml::new("succession", 200, 11)
+        .species(&["beech", "silver_birch"])
+        .uniform(5, 5, 20.0, 300.0)
+        .seed_rain("silver_birch", 10000.0)
+        .seed_rain("beech", 300.0)
+        .build();
+    let (sc, mut w) = common::world_with(&toml, &lib);
     let rows = common::run(&sc, &mut w, 200);
     for r in rows.iter().filter(|r| r.year % 20 == 0 || r.year == 30) {
         eprintln!("year {} N {:.0} BA {:.1} H100 {:.1} share_ba beech {:.2} birch {:.2}", r.year, r.stems_ha, r.basal_area_m2_ha, r.top_height_m, r.share_ba[0], r.share_ba[1]);

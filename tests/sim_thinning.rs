@@ -5,19 +5,7 @@ mod common;
 
 #[test]
 fn reineke_slope() {
-    let (sc, mut w) = common::world(r#"
-name = "thinning"
-years = 120
-seed = 3
-species = ["beech"]
-[terrain]
-uniform = { width = 5, height = 5, cell_m = 20.0, elevation_m = 200.0, indices = [5, 5, 2, 5, 6, 6] }
-[[start]]
-kind = "planted"
-species = "beech"
-spacing_m = 1.2
-age_yr = 3
-"#);
+    let (sc, mut w) = common::world(&common::ScenarioToml::new("thinning", 120, 3).species(&["beech"]).uniform(5, 5, 20.0, 200.0).planted("beech", 1.2, 3.0).build());
     let rows = common::run(&sc, &mut w, 120);
     // the self-thinning phase: from the year stress mortality sets in, trees ≥ 7 cm
     let first = rows.iter().position(|r| r.deaths[1] > 0 && r.qmd_7cm_cm > 0.0).expect("no self-thinning");

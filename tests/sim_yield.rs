@@ -22,20 +22,8 @@ const PLANT_AGE: u32 = 3;
 #[test]
 fn beech_yield_class_one() {
     let lib = common::embedded();
-    let (sc, mut w) = common::world_with(r#"
-name = "yield"
-years = 117
-seed = 7
-species = ["beech"]
-climate = { latitude_deg = 51.0 }
-[terrain]
-uniform = { width = 5, height = 5, cell_m = 20.0, elevation_m = 200.0, indices = [5, 5, 2, 5, 6, 6] }
-[[start]]
-kind = "planted"
-species = "beech"
-spacing_m = 1.5
-age_yr = 3
-"#, &lib);
+    let toml = common::ScenarioToml::new("yield", 117, 7).species(&["beech"]).line("climate = { latitude_deg = 51.0 }").uniform(5, 5, 20.0, 200.0).planted("beech", 1.5, PLANT_AGE as f64).build();
+    let (sc, mut w) = common::world_with(&toml, &lib);
     let rows = common::run(&sc, &mut w, 117);
     let age = |r: &sylva::sim::stats::StandRow| (r.year + PLANT_AGE) as f64;
     let tab = table();

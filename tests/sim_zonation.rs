@@ -7,34 +7,24 @@ mod common;
 #[test]
 fn spruce_high_oak_low_alder_wet() {
     let lib = common::embedded();
-    let (sc, mut w) = common::world_with(r#"
-name = "zonation"
-years = 25
-seed = 21
-species = ["norway_spruce", "pedunculate_oak", "black_alder"]
-light_cell_m = 10.0
-climate = { sea_level_m = 550.0 }
-[terrain]
-default = true
-window = [200, 300, 40, 40]
-[[start]]
-kind = "seed_rain"
-species = "norway_spruce"
-seeds_per_ha = 400
-[[start]]
-kind = "seed_rain"
-species = "pedunculate_oak"
-seeds_per_ha = 400
-[[start]]
-kind = "seed_rain"
-species = "black_alder"
-seeds_per_ha = 400
-"#, &lib);
+    let toml = common::ScenarioToml::new("zonation", 25, 21)
+        .species(&["norway_spruce", "pedunculate_oak", "black_alder"])
+        .line("light_cell_m = 10.0")
+        .line("climate = { sea_level_m = 550.0 }")
+        .default_terrain([200, 300, 40, 40])
+        .seed_rain("norway_spruce", 400.0)
+        .seed_rain("pedunculate_oak", 400.0)
+        .seed_rain("black_alder", 400.0)
+        .build();
+    let (sc, mut w) = common::world_with(&toml, &lib);
     let masked = w.site.mask.data.iter().filter(|m| !**m).count();
     assert!(masked > 0, "the window should contain masked (water) cells");
     common::run(&sc, &mut w, 25);
     let t = &w.trees;
     let (spruce, oak, alder) = (lib.find("norway_spruce").unwrap(), lib.find("pedunculate_oak").unwrap(), lib.find("black_alder").unwrap());
+    for &c in &w.cohorts.cell {
+        assert!(w.light_site[c as usize] != u32::MAX, "regeneration cohort on a masked light cell {c}");
+    }
     let mut sum = std::collections::BTreeMap::<u16, (f64, f64, usize)>::new();
     for i in 0..t.len() {
         let (c, r) = w.site.cell_at(t.x[i] as f64, t.y[i] as f64).expect("tree outside the terrain");
@@ -53,6 +43,22 @@ seeds_per_ha = 400
     let valid: Vec<usize> = (0..w.site.mask.len()).filter(|&k| w.site.mask.data[k]).collect();
     let twi_all = valid.iter().map(|&k| w.site.twi.data[k] as f64).sum::<f64>() / valid.len() as f64;
     eprintln!("spruce {ms:?} oak {mo:?} alder {ma:?}; mean TWI of the land {twi_all:.2}");
-    assert!(ms.0 > mo.0, "spruce mean elevation {:.0} m should exceed oak's {:.0} m", ms.0, mo.0);
+    // The margin to expect: the suitability-weighted mean elevation of the land per species
+    // (seed rain is uniform and germination is proportional to suitability, so this is where
+    // germinants stand; growth ∝ suitability only sharpens the contrast among trees ≥ 4 m).
+    let weighted = |s: u16| {
+        let p = w.pool_index(s).unwrap();
+        let (mut se, mut sw) = (0.0, 0.0);
+        for &k in &valid {
+            let su = w.suitability[p][k] as f64;
+            se += su * w.site.elevation_m.data[k] as f64;
+            sw += su;
+        }
+        se / sw
+    };
+    let (es, eo) = (weighted(spruce), weighted(oak));
+    eprintln!("suitability-weighted mean elevation: spruce {es:.0} m, oak {eo:.0} m (gap {:.0} m); simulated gap {:.0} m", es - eo, ms.0 - mo.0);
+    assert!(es > eo, "suitability: spruce {es:.0} m should exceed oak {eo:.0} m");
+    assert!(ms.0 - mo.0 >= es - eo, "spruce mean elevation {:.0} m should exceed oak's {:.0} m by at least the suitability-weighted gap {:.0} m", ms.0, mo.0, es - eo);
     assert!(ma.1 > twi_all && ma.1 > ms.1 && ma.1 > mo.1, "alder should stand on wetter cells: TWI alder {:.2}, spruce {:.2}, oak {:.2}, land {twi_all:.2}", ma.1, ms.1, mo.1);
 }

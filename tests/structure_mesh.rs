@@ -123,3 +123,56 @@ fn species_chain_is_normalised_to_one_metre() {
     assert!((n.height() - 1.0).abs() < 1e-5);
     assert_eq!(n.nodes[0].pos, glam::Vec3::ZERO);
 }
+
+/// A leafless "tree" whose tips (its foliage points) lie on the given points, each on a
+/// twig from a trunk node at the same height.
+fn tips_tree(tips: &[glam::Vec3]) -> sylva::structure::Skeleton {
+    let mut sk = sylva::structure::Skeleton::new();
+    let root = sk.add_root(glam::Vec3::ZERO, 0.2);
+    let trunk = sk.add_child(root, glam::Vec3::new(0.0, 0.0, 4.0), 0.15, false).unwrap();
+    for &p in tips {
+        sk.add_child(trunk, p, 0.02, true).unwrap();
+    }
+    sk
+}
+
+fn radius_xy(p: [f32; 3]) -> f32 {
+    (p[0] * p[0] + p[1] * p[1]).sqrt()
+}
+
+#[test]
+fn crown_hull_follows_a_conical_and_a_one_sided_crown() {
+    let o = LodOptions::default();
+    // a cone: radius 3 m at 5 m falling to 0 at 17 m, 16 azimuths per level
+    let mut cone = Vec::new();
+    for j in 0..=12 {
+        let z = 5.0 + j as f32;
+        let r = 3.0 * (17.0 - z) / 12.0;
+        for k in 0..16 {
+            let a = k as f32 / 16.0 * std::f32::consts::TAU;
+            cone.push(glam::Vec3::new(r * a.cos(), r * a.sin(), z));
+        }
+    }
+    let hull = mesh::hull_mesh(&tips_tree(&cone), &Default::default(), &o).leaves;
+    let n = hull.positions.len() - 2; // rings, then apex and base
+    let rings = n / o.hull_segments as usize;
+    let mean_r: Vec<f32> = (0..rings).map(|b| (0..o.hull_segments as usize).map(|k| radius_xy(hull.positions[b * o.hull_segments as usize + k])).sum::<f32>() / o.hull_segments as f32).collect();
+    eprintln!("cone hull ring radii {mean_r:?}");
+    for w in mean_r.windows(2) {
+        assert!(w[1] < w[0] - 0.3, "a cone narrows upward: {mean_r:?}");
+    }
+    // every ring lies inside the cone's widest reach at its band's base, and no vertex leaves it
+    assert!(hull.positions.iter().all(|&p| radius_xy(p) <= 3.0 + 1e-3 && p[2] >= 5.0 - 1e-3 && p[2] <= 17.0 + 1e-3));
+    assert!(mean_r[0] > 2.0, "the base of the cone is wide: {mean_r:?}");
+    // outward normals: the normal points away from the axis at every ring vertex
+    for (p, nm) in hull.positions.iter().zip(&hull.normals).take(n) {
+        assert!(p[0] * nm[0] + p[1] * nm[1] > 0.0, "{p:?} {nm:?}");
+    }
+    // a crown pushed to +x (e.g. by a wall on its -x side): the hull keeps it one-sided
+    let one_sided: Vec<glam::Vec3> = cone.iter().filter(|p| p.x > 0.5).copied().collect();
+    let hull = mesh::hull_mesh(&tips_tree(&one_sided), &Default::default(), &o).leaves;
+    let max_x = hull.positions.iter().map(|p| p[0]).fold(f32::MIN, f32::max);
+    let min_x = hull.positions.iter().map(|p| p[0]).fold(f32::MAX, f32::min);
+    eprintln!("one-sided hull x {min_x:.2} .. {max_x:.2}");
+    assert!(max_x > 2.0 && min_x > -1.5 && max_x > 2.0 * -min_x, "x {min_x} .. {max_x}");
+}

@@ -178,3 +178,26 @@ fn asc_errors_name_the_line() {
     let e = err_of(io::load(&p));
     assert!(e.contains("line 1") && e.contains("ncols"), "{e}");
 }
+
+#[test]
+fn asc_in_degrees_without_prj_is_read_as_geographic() {
+    let dir = tempfile::tempdir().unwrap();
+    let grid = "ncols 3\nnrows 2\nxllcorner -84.4\nyllcorner 36.4\ncellsize 0.000833333333\n1 2 3\n4 5 6\n";
+    std::fs::write(dir.path().join("deg.asc"), grid).unwrap();
+    let t = io::load(&dir.path().join("deg.asc")).unwrap();
+    assert_eq!(t.geo.crs, Crs::Geographic);
+    assert!((t.geo.cell_y_m() - 92.6).abs() < 0.1, "N-S cell {} m", t.geo.cell_y_m());
+    // the same header in metres (UTM-like corner, 10 m cells) stays projected
+    let metres = grid.replace("-84.4", "748379").replace("36.4", "4046666").replace("0.000833333333", "10");
+    std::fs::write(dir.path().join("m.asc"), metres).unwrap();
+    assert_eq!(io::load(&dir.path().join("m.asc")).unwrap().geo.crs, Crs::Projected);
+}
+
+#[test]
+fn undeclared_fill_values_are_refused_naming_the_cell() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("fill.asc");
+    std::fs::write(&p, "ncols 3\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 10\n1 2 3\n4 1e30 6\n").unwrap();
+    let e = err_of(io::load(&p));
+    assert!(e.contains("fill.asc") && e.contains("column 1, row 1") && e.contains("= 1000000") && e.contains("nodata"), "{e}");
+}

@@ -35,14 +35,58 @@ fn light_and_laplacian_trees_grow_with_age_to_the_species_height() {
 fn bad_obstacles_are_refused_naming_the_option() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("t.glb");
-    for (arg, want) in [("box:2,0,0,1,1,1", "x0 < x1"), ("sphere:0,0,3,0", "sphere radius"), ("sphere:0,0,3,-1", "sphere radius"), ("box:0,0,NaN,1,1,1", "finite")] {
+    let cases = [("box:2,0,0,1,1,1", "x0 < x1"), ("sphere:0,0,3,0", "sphere radius"), ("sphere:0,0,3,-1", "sphere radius"), ("box:0,0,NaN,1,1,1", "finite")];
+    for ((arg, want), opt) in cases.into_iter().flat_map(|c| [(c, "--obstacle"), (c, "--adapt-to")]) {
         let res = Command::new(env!("CARGO_BIN_EXE_sylva"))
-            .args(["tree", "grow", "--species", "beech", "--model", "light", "--age", "5", "--obstacle", arg, "--out", out.to_str().unwrap()])
+            .args(["tree", "grow", "--species", "beech", "--model", "light", "--age", "5", opt, arg, "--out", out.to_str().unwrap()])
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&res.stderr).into_owned();
-        assert!(!res.status.success(), "{arg} accepted");
-        assert!(err.contains("--obstacle") && err.contains(want), "{arg}: {err}");
+        assert!(!res.status.success(), "{opt} {arg} accepted");
+        assert!(err.contains(opt) && err.contains(want), "{opt} {arg}: {err}");
         assert!(!out.exists());
     }
+}
+
+/// Largest x (m) of the LOD0 bark vertices in an OBJ written by `sylva tree grow`.
+fn lod0_bark_max_x(obj: &std::path::Path) -> f32 {
+    let text = std::fs::read_to_string(obj).unwrap();
+    let mut in_bark = false;
+    let mut max_x = f32::MIN;
+    for line in text.lines() {
+        if let Some(g) = line.strip_prefix("g ") {
+            in_bark = g == "LOD0_bark";
+        } else if line.starts_with("o ") {
+            in_bark = false;
+        } else if let Some(v) = line.strip_prefix("v ").filter(|_| in_bark) {
+            max_x = max_x.max(v.split_whitespace().next().unwrap().parse::<f32>().unwrap());
+        }
+    }
+    max_x
+}
+
+#[test]
+fn adapt_to_a_wall_bends_and_prunes_the_grown_tree_out_of_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let grow = |extra: &[&str], name: &str| {
+        let out = dir.path().join(name);
+        let mut args = vec!["tree", "grow", "--species", "beech", "--model", "light", "--age", "20", "--seed", "2", "--out", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(&args).output().unwrap();
+        assert!(res.status.success(), "{args:?}: {}", String::from_utf8_lossy(&res.stderr));
+        (out, String::from_utf8_lossy(&res.stdout).into_owned())
+    };
+    let (plain, so) = grow(&[], "plain.obj");
+    let r: f32 = so.split("crown radius ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+    let wall = 0.5 * r;
+    let before = lod0_bark_max_x(&plain);
+    assert!(before > wall + 0.3, "the open-grown crown reaches past x = {wall} m ({before} m)");
+    let (adapted, so) = grow(&["--adapt-to", &format!("wall:{wall}")], "adapted.obj");
+    let after = lod0_bark_max_x(&adapted);
+    // bark tubes may stick out of the wall by at most a twig's radius
+    assert!(after < wall + 0.1, "adapted bark reaches x = {after} m, wall at {wall} m");
+    let line = so.lines().find(|l| l.starts_with("adapted (Plastic Trees)")).unwrap_or_else(|| panic!("no adaptation report: {so}"));
+    let bent: usize = line.split("bent ").nth(1).unwrap().split(',').next().unwrap().parse().unwrap();
+    assert!(bent > 0, "{line}");
+    assert!(dir.path().join("adapted.png").exists());
 }

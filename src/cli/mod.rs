@@ -18,8 +18,22 @@ pub fn init_logging(verbose: u8) {
     // Vulkan (lavapipe) adapter works, so its messages are silenced unless RUST_LOG asks.
     let filter = tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(format!("{level},wgpu_hal::gles=off")));
     quiet_mesa_runtime_dir();
-    let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).try_init();
+    let ansi = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_ansi(ansi).try_init();
 }
+
+/// A run stopped by Ctrl-C after a complete year, its outputs so far intact: `sylva` exits with
+/// status 130 (128 + SIGINT, the shell convention) so scripts can tell it from a finished run.
+#[derive(Debug)]
+pub struct Interrupted(pub String);
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Interrupted {}
 
 /// A progress bar in Sylva's style (hidden when stderr is not a terminal or in tests).
 pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {

@@ -52,6 +52,10 @@ pub struct RenderArgs {
     /// Output PNG.
     #[arg(long, default_value = "frame.png")]
     pub out: PathBuf,
+    /// Folder of extra or edited species files, over the shipped library and the run's own
+    /// `species/` folder (written by `simulate`/`run`).
+    #[arg(long)]
+    pub species_dir: Option<PathBuf>,
 }
 
 /// Arguments of `sylva timelapse`.
@@ -65,8 +69,8 @@ pub struct TimelapseArgs {
     /// Frames per second.
     #[arg(long, default_value_t = 12.0)]
     pub fps: f32,
-    /// Interpolated frames between consecutive snapshots (1–50).
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=50))]
+    /// Interpolated frames between consecutive snapshots (0–50; 0: one frame per snapshot).
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=50))]
     pub frames_between: u32,
     /// Frame size WIDTHxHEIGHT.
     #[arg(long, default_value = "960x540", value_parser = parse_size)]
@@ -77,14 +81,27 @@ pub struct TimelapseArgs {
     /// Output GIF (frames go to a `frames/` folder beside it; MP4 too when ffmpeg is found).
     #[arg(long, default_value = "forest.gif")]
     pub out: PathBuf,
+    /// Folder of extra or edited species files, over the shipped library and the run's own
+    /// `species/` folder (written by `simulate`/`run`).
+    #[arg(long)]
+    pub species_dir: Option<PathBuf>,
 }
 
 /// Builds the render stage of a run directory from its `scenario.toml`.
-pub fn stage_for(run_dir: &Path) -> anyhow::Result<Stage> {
+///
+/// Species: the shipped library, overlaid by the run's `species/` folder when it has one, then
+/// by `species_dir`.
+pub fn stage_for(run_dir: &Path, species_dir: Option<&Path>) -> anyhow::Result<Stage> {
     let sc_path = run_dir.join("scenario.toml");
     let sc = Scenario::load(&sc_path).with_context(|| format!("{} is not a Sylva run directory", run_dir.display()))?;
     let site = super::simulate::load_site(&sc)?;
-    let lib = super::simulate::library()?;
+    let run_species = super::simulate::run_species_dir(run_dir);
+    let mut dirs: Vec<&Path> = Vec::new();
+    if run_species.is_dir() {
+        dirs.push(&run_species);
+    }
+    dirs.extend(species_dir);
+    let lib = super::simulate::library(&dirs)?;
     Ok(Stage::new(site, lib, sc.climate.sea_level_m)?)
 }
 
@@ -96,13 +113,17 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let mut stage = stage_for(&a.run_dir)?;
+    let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
     let year = match a.year {
         Some(y) => y,
-        None => sylva::job::inventory::snapshots(&a.run_dir)?.iter().map(|s| s.0).max().context("the run directory has no snapshots")?,
+        None => sylva::job::inventory::snapshots(&a.run_dir)?.iter().map(|s| s.0).max().with_context(|| format!("{}: the run directory has no snapshots (inventory/year_NNNN.csv)", a.run_dir.display()))?,
     };
     let rows = pictures::snapshot_rows(&a.run_dir, year)?;
-    let cam = stage.camera(a.camera);
+    let unknown = rows.iter().filter(|r| stage.library.find(&r.species).is_none()).count();
+    if unknown > 0 {
+        tracing::warn!("{unknown} trees of species not in the library are not drawn (give their species files with --species-dir)");
+    }
+    let cam = stage.camera_for(a.camera, &rows);
     let img = stage.render_rows(&rows, a.season, &cam, a.size.0, a.size.1)?;
     sylva::render::timelapse::write_png(&a.out, &img)?;
     let st = stage.renderer.last_stats();
@@ -112,7 +133,10 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
 
 /// Renders a timelapse.
 pub fn timelapse(a: TimelapseArgs) -> anyhow::Result<()> {
-    let mut stage = stage_for(&a.run_dir)?;
+    if a.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) != Some("gif".into()) {
+        anyhow::bail!("--out {}: the timelapse is written as an animated GIF (plus an MP4 beside it when ffmpeg is installed); give a file name ending in .gif", a.out.display());
+    }
+    let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
     let frames_dir = a.out.parent().unwrap_or(Path::new(".")).join("frames");
     let opts = TimelapseOptions { width: a.size.0, height: a.size.1, fps: a.fps, frames_between: a.frames_between, camera: a.camera, season: a.season };
     let pb = super::progress(1, "timelapse");

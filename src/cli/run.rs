@@ -35,8 +35,8 @@ pub struct Args {
     /// Size of the timelapse frames WIDTHxHEIGHT.
     #[arg(long, default_value = "640x360", value_parser = super::render::parse_size)]
     pub timelapse_size: (u32, u32),
-    /// Interpolated timelapse frames between consecutive snapshots.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=50))]
+    /// Interpolated timelapse frames between consecutive snapshots (0–50; 0: one per snapshot).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=50))]
     pub frames_between: u32,
     /// Timelapse frames per second (1–100).
     #[arg(long, default_value_t = 8.0, value_parser = parse_fps)]
@@ -44,6 +44,10 @@ pub struct Args {
     /// Skip stills and timelapse (no GPU or software adapter needed).
     #[arg(long)]
     pub no_render: bool,
+    /// Folder of extra or edited species files (e.g. made by `sylva species new`): they are
+    /// added to the shipped library, replacing shipped species of the same id.
+    #[arg(long)]
+    pub species_dir: Option<PathBuf>,
 }
 
 fn parse_fps(s: &str) -> Result<f32, String> {
@@ -66,13 +70,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         sc.validate("--years")?;
     }
     let out = a.out.clone();
+    if out.exists() && !out.is_dir() {
+        anyhow::bail!("--out {}: is a file; expected a folder for the run's outputs", out.display());
+    }
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     eprintln!("Sylva · {} · {} years · seed {} → {}", sc.name, sc.years, sc.seed, out.display());
 
     // 1. Living conditions.
     let t_site = Instant::now();
     let site = super::simulate::load_site(&sc)?;
-    let lib = super::simulate::library()?;
+    let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let map_names = sylva::job::maps::write_site_maps(&site, &out.join("maps").join("conditions"))?;
     let site_s = t_site.elapsed().as_secs_f64();
     let (ex, ey) = site.extent_m();
@@ -100,6 +107,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
         let stills_dir = out.join("stills");
         std::fs::create_dir_all(&stills_dir).with_context(|| format!("creating {}", stills_dir.display()))?;
+        remove_old_stills(&stills_dir)?;
         let pb = super::progress((years.len() * 2) as u64, "stills");
         for &y in &years {
             let rows = pictures::snapshot_rows(&out, y)?;
@@ -205,5 +213,19 @@ fn write_summary_md(out: &Path, sc: &Scenario, table: &str, shares: &str, maps: 
         let _ = writeln!(md, "![{m}](maps/conditions/{m}.png)");
     }
     sylva::output::write_atomic(&out.join("summary.md"), md.as_bytes())?;
+    Ok(())
+}
+
+/// Removes the stills an earlier run wrote (`year_NNNN_<view>.png`, nothing else) so that a new
+/// run into the same folder does not leave stills of years it did not reach.
+fn remove_old_stills(dir: &std::path::Path) -> anyhow::Result<()> {
+    for e in std::fs::read_dir(dir).with_context(|| format!("listing {}", dir.display()))? {
+        let p = e.with_context(|| format!("listing {}", dir.display()))?.path();
+        let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let ours = name.starts_with("year_") && name.ends_with(".png") && name.len() > 10 && name[5..9].bytes().all(|b| b.is_ascii_digit()) && name.as_bytes()[9] == b'_';
+        if ours {
+            std::fs::remove_file(&p).with_context(|| format!("removing {}", p.display()))?;
+        }
+    }
     Ok(())
 }

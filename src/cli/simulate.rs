@@ -1,7 +1,7 @@
 //! `sylva simulate SCENARIO [--out DIR] [--resume] [--threads N]`.
 
 use anyhow::Context;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use sylva::conditions::SiteConditions;
@@ -23,6 +23,10 @@ pub struct Args {
     /// Worker threads, 1–256 (default: all cores).
     #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
+    /// Folder of extra or edited species files (e.g. made by `sylva species new`): they are
+    /// added to the shipped library, replacing shipped species of the same id.
+    #[arg(long)]
+    pub species_dir: Option<PathBuf>,
 }
 
 /// Parses `--threads`: an integer 1–256.
@@ -33,9 +37,33 @@ pub fn parse_threads(s: &str) -> Result<usize, String> {
     }
 }
 
-/// The species library used by simulations.
-pub fn library() -> anyhow::Result<SpeciesLibrary> {
-    Ok(SpeciesLibrary::embedded()?)
+/// The species library used by simulations: the shipped species, overlaid by the files of each
+/// folder in `dirs` that exists or is given explicitly (later folders win; see
+/// [`SpeciesLibrary::overlay_dir`]).
+pub fn library(dirs: &[&Path]) -> anyhow::Result<SpeciesLibrary> {
+    let mut lib = SpeciesLibrary::embedded()?;
+    for d in dirs {
+        lib.overlay_dir(d).with_context(|| format!("species folder {}", d.display()))?;
+    }
+    Ok(lib)
+}
+
+/// Folder of a run directory that holds the species files the run was simulated with.
+pub fn run_species_dir(run_dir: &Path) -> PathBuf {
+    run_dir.join("species")
+}
+
+/// Writes the pool's species files into `RUN/species/` (so `render`, `timelapse` and a
+/// `--resume` find the same species later, also edited or custom ones).
+pub fn save_run_species(sc: &Scenario, lib: &SpeciesLibrary, run_dir: &Path) -> anyhow::Result<()> {
+    let dir = run_species_dir(run_dir);
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    for name in &sc.species {
+        if let Some(sp) = lib.get(name) {
+            sylva::output::write_atomic(&dir.join(format!("{}.toml", sp.id)), sp.to_toml_string()?.as_bytes())?;
+        }
+    }
+    Ok(())
 }
 
 /// Loads the site conditions a scenario names (window applied).
@@ -58,6 +86,9 @@ pub struct SimOutcome {
 /// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year);
 /// returns what the main job reports.
 pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool) -> anyhow::Result<SimOutcome> {
+    if out.exists() && !out.is_dir() {
+        anyhow::bail!("--out {}: is a file; expected a folder for the run's outputs", out.display());
+    }
     let stop = Arc::new(AtomicBool::new(false));
     {
         let s = stop.clone();
@@ -70,6 +101,7 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
         pb.set_position(p.year as u64);
         pb.set_message(format!("year {} · {} trees · {:.0} trees/s", p.year, p.trees, p.trees_per_s));
     };
+    save_run_species(sc, lib, &out)?;
     let mut opts = RunOptions::new(&out);
     opts.resume = resume;
     opts.stop = Some(stop);
@@ -85,9 +117,12 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
         last.map_or(0.0, |r| r.basal_area_m2_ha),
         last.map_or(0.0, |r| r.top_height_m),
         res.seconds,
-        if res.stopped { ", stopped early (resume with --resume)" } else { "" },
+        if res.stopped { ", stopped early" } else { "" },
         out.display()
     );
+    if res.stopped {
+        return Err(super::Interrupted(format!("stopped by Ctrl-C after year {}: outputs so far are complete in {}; continue with --resume", res.world.year, out.display())).into());
+    }
     let pool = res.world.pool.iter().map(|&s| res.world.lib.species[s as usize].id.clone()).collect();
     Ok(SimOutcome { year: res.world.year, trees_alive: res.world.trees.len(), pool, rows: res.rows })
 }
@@ -95,7 +130,13 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
 /// Runs a simulation.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let sc = Scenario::load(&a.scenario)?;
-    let lib = library()?;
+    let run_species = run_species_dir(&a.out);
+    let mut dirs: Vec<&Path> = Vec::new();
+    if a.resume && run_species.is_dir() {
+        dirs.push(&run_species);
+    }
+    dirs.extend(a.species_dir.as_deref());
+    let lib = library(&dirs)?;
     let site = load_site(&sc)?;
     let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume).map(|_| ());
     match a.threads {

@@ -18,13 +18,13 @@ pub enum Command {
     Show {
         /// Species id or name, e.g. `beech` or "Fagus sylvatica".
         name: String,
-        /// Read the species files of this folder instead of the shipped library.
+        /// Look in the species files of this folder first, then in the shipped library.
         #[arg(long)]
         dir: Option<PathBuf>,
     },
     /// Check every species file of a folder; prints every problem and fails if there is any.
     Check {
-        /// Folder of species files (default: `species`).
+        /// Folder of species files (default: `./species` when it exists, else the shipped library).
         dir: Option<PathBuf>,
     },
     /// Create a new species file NAME.toml as a copy of an existing species (comments kept).
@@ -101,18 +101,43 @@ pub fn run(c: Command) -> anyhow::Result<()> {
             Ok(())
         }
         Command::Show { name, dir } => {
+            if let Some(d) = dir.as_deref().filter(|d| !d.is_dir()) {
+                anyhow::bail!("--dir {}: no such folder", d.display());
+            }
             let (_, text) = source_text(&name, dir.as_deref())?;
             print!("{text}");
             Ok(())
         }
         Command::Check { dir } => {
-            let dir = dir.unwrap_or_else(|| PathBuf::from("species"));
+            let local = PathBuf::from("species");
+            let dir = match dir {
+                Some(d) => d,
+                None if local.is_dir() => local,
+                None => {
+                    let lib = SpeciesLibrary::embedded()?;
+                    println!("shipped library: {} species, no problems (no ./species folder here; give a folder to check yours)", lib.len());
+                    return Ok(());
+                }
+            };
+            if dir.is_dir() && species::species_files(&dir)?.is_empty() {
+                anyhow::bail!("{}: no species files (*.toml) in this folder", dir.display());
+            }
             let problems = species::check_dir(&dir);
             for p in &problems {
                 eprintln!("{p}");
             }
             if problems.is_empty() {
-                let n = species::species_files(&dir)?.len();
+                let files = species::species_files(&dir)?;
+                for f in &files {
+                    let bytes = std::fs::read(f).with_context(|| format!("reading {}", f.display()))?;
+                    if let (Some(sp), _) = species::parse_bytes(&bytes, f) {
+                        let stem = f.file_stem().and_then(|s| s.to_str()).unwrap_or("");
+                        if stem != sp.id {
+                            eprintln!("warning: {}: id `{}` differs from the file name; other commands know it as `{}`", f.display(), sp.id, sp.id);
+                        }
+                    }
+                }
+                let n = files.len();
                 println!("{}: {n} species files, no problems", dir.display());
                 Ok(())
             } else {

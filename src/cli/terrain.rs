@@ -24,23 +24,44 @@ pub struct Source {
     #[arg(long, default_value_t = 10.0)]
     pub cell: f64,
     /// Relief (m) of a generated terrain.
-    #[arg(long, default_value_t = 600.0)]
+    #[arg(long, default_value_t = 600.0, allow_negative_numbers = true, value_parser = parse_finite)]
     pub relief: f64,
     /// Seed of a generated terrain.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// PNG heightmap: height (m) of value 0.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_finite)]
     pub min_height: f64,
     /// PNG heightmap: height (m) of the largest value.
-    #[arg(long, default_value_t = 1000.0)]
+    #[arg(long, default_value_t = 1000.0, allow_negative_numbers = true, value_parser = parse_finite)]
     pub max_height: f64,
     /// Cells at or below this elevation (m) are water and masked.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_finite_f32)]
     pub sea_level: f32,
-    /// Latitude (degrees) for insolation when the terrain is not geographic or UTM.
-    #[arg(long)]
+    /// Latitude (degrees, −90…90) for insolation when the terrain is not geographic or UTM.
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_latitude)]
     pub latitude: Option<f64>,
+}
+
+/// Parses `--latitude`: a finite number of degrees in −90…90.
+fn parse_latitude(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && (-90.0..=90.0).contains(&v) => Ok(v),
+        _ => Err(format!("expected a latitude in degrees from -90 to 90, got '{s}'")),
+    }
+}
+
+/// Parses a finite number (metres) for `--sea-level`, `--min-height`, `--max-height`, `--relief`.
+fn parse_finite(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("expected a finite number of metres, got '{s}'")),
+    }
+}
+
+/// [`parse_finite`] for `f32` options.
+fn parse_finite_f32(s: &str) -> Result<f32, String> {
+    parse_finite(s).map(|v| v as f32)
 }
 
 impl Source {
@@ -120,7 +141,10 @@ fn info(s: &Source, tolerance: f64) -> anyhow::Result<()> {
     } else {
         println!("cell (m):    {} x {}", t.geo.pixel_w, t.geo.pixel_h);
     }
-    println!("latitude:    {:.3}°", t.geo.latitude_deg);
+    match s.latitude {
+        Some(l) => println!("latitude:    {l:.3}° (--latitude; the grid's own {:.3}°)", t.geo.latitude_deg),
+        None => println!("latitude:    {:.3}°", t.geo.latitude_deg),
+    }
     println!("elevation:   {lo:.1} … {hi:.1} m");
     println!("nodata:      {} cells{}", g.len() - valid.len(), t.nodata.map(|v| format!(" (file value {v})")).unwrap_or_default());
     let below = valid.iter().filter(|&&v| v <= s.sea_level).count();

@@ -1,12 +1,13 @@
 //! `sylva tree grow`: grows one tree with one of the three architecture models, exports its LOD
 //! chain as `.glb` or `.obj` (by extension), writes a PNG preview (side views of the four LOD
-//! levels, CPU rasterised) next to it and prints node/triangle counts per LOD.
+//! levels, CPU rasterised) next to it and prints node/triangle counts per LOD. With
+//! `--adapt-to`, the grown tree is then adapted to new obstacles by Plastic Trees (Pirk et al.
+//! 2012, `000_*.txt`; [`sylva::structure::plastic::adapt`]) instead of being regrown.
 use anyhow::Context;
 use clap::{Subcommand, ValueEnum};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 use sylva::mesh::{LodChain, TreeMesh};
-use sylva::species::SpeciesLibrary;
 use sylva::structure::grow::space::Obstacle;
 use sylva::structure::species_tree;
 use sylva::structure::mesh::{lod_chain, LodOptions};
@@ -43,9 +44,18 @@ pub enum Command {
         /// Obstacles (light and laplacian models): box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x
         #[arg(long)]
         obstacle: Vec<String>,
+        /// Obstacles that appear AFTER the tree has grown (any model; same forms as --obstacle):
+        /// the grown skeleton is bent away and pruned by Plastic Trees (Pirk et al. 2012,
+        /// eqs. 3, 6–11) instead of regrown; prints what was bent and pruned and the time taken
+        /// against regrowing among the obstacles.
+        #[arg(long = "adapt-to")]
+        adapt_to: Vec<String>,
         /// Random seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Folder of extra or edited species files, over the shipped library.
+        #[arg(long)]
+        species_dir: Option<PathBuf>,
         /// Output file, .glb or .obj; the preview goes to the same name with .png.
         #[arg(long)]
         out: PathBuf,
@@ -55,16 +65,24 @@ pub enum Command {
 /// Runs a tree subcommand.
 pub fn run(c: Command) -> anyhow::Result<()> {
     match c {
-        Command::Grow { species, model, age, obstacle, seed, out } => grow(&species, model, age, &obstacle, seed, &out),
+        Command::Grow { species, model, age, obstacle, adapt_to, seed, species_dir, out } => grow(&species, model, age, &obstacle, &adapt_to, seed, species_dir.as_deref(), &out),
     }
 }
 
-fn grow(species: &str, model: Model, age: f32, obstacles: &[String], seed: u64, out: &Path) -> anyhow::Result<()> {
+#[allow(clippy::too_many_arguments)]
+fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, species_dir: Option<&Path>, out: &Path) -> anyhow::Result<()> {
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
-    let lib = SpeciesLibrary::embedded().context("loading the embedded species library")?;
+    let lib = super::simulate::library(species_dir.as_slice())?;
     let sp = lib.find(species).map(|i| lib.species[i as usize].clone());
     let sp = sp.with_context(|| format!("--species {species}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))?;
+    anyhow::ensure!(age <= sp.life.max_age_yr, "--age {age}: expected at most the maximum age of {} ({} years, `life.max_age_yr` in its species file)", sp.id, sp.life.max_age_yr);
+    let png = out.with_extension("png");
+    if png.is_dir() {
+        anyhow::bail!("{}: the preview would go there, but it is a folder", png.display());
+    }
     let obs: Vec<Obstacle> = obstacles.iter().map(|s| Obstacle::parse(s)).collect::<Result<_, _>>()?;
+    let parse_later = |s: &String| Obstacle::parse(s).map_err(|e| anyhow::anyhow!("{}", e.to_string().replace("--obstacle", "--adapt-to")));
+    let later: Vec<Obstacle> = adapt_to.iter().map(parse_later).collect::<Result<_, _>>()?;
     let t0 = std::time::Instant::now();
     let m = match model {
         Model::Ecomod => {
@@ -77,8 +95,21 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], seed: u64, 
         Model::Laplacian => species_tree::Model::Laplacian,
     };
     let grown = species_tree::grow_species_tree(&sp, m, age, &obs, seed)?;
-    let (sk, leaves): (Skeleton, Leaves) = (grown.skeleton, grown.leaves);
+    let (mut sk, mut leaves): (Skeleton, Leaves) = (grown.skeleton, grown.leaves);
     let grow_s = t0.elapsed().as_secs_f64();
+    let mut adapted = None;
+    if !later.is_empty() {
+        let all: Vec<Obstacle> = obs.iter().chain(&later).copied().collect();
+        let ta = std::time::Instant::now();
+        let (new_sk, rep) = sylva::structure::plastic::adapt(&sk, &sp.architecture.plastic, &all, mean_internode(&sk))?;
+        let adapt_s = ta.elapsed().as_secs_f64();
+        // the model's own leaves hang on node ids that pruning renumbers: re-leaf the tips
+        leaves = species_tree::tip_leaves(&new_sk, &sp.architecture.ecomod);
+        sk = new_sk;
+        let tr = std::time::Instant::now();
+        species_tree::grow_species_tree(&sp, m, age, &all, seed)?;
+        adapted = Some((rep, adapt_s, tr.elapsed().as_secs_f64()));
+    }
     let t1 = std::time::Instant::now();
     let chain = lod_chain(&sk, &leaves, &LodOptions::default());
     let mesh_s = t1.elapsed().as_secs_f64();
@@ -93,7 +124,6 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], seed: u64, 
         "obj" => sylva::output::obj::write_obj(out, &chain, None)?,
         _ => anyhow::bail!("--out {}: expected a .glb or .obj file name", out.display()),
     }
-    let png = out.with_extension("png");
     let img = preview(&chain, bark, leaf, 360, 540);
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
@@ -104,8 +134,22 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], seed: u64, 
         println!("LOD{i}: {:>8} triangles (bark {}, foliage {})", l.triangle_count(), l.bark.triangle_count(), l.leaves.triangle_count());
     }
     println!("grow {:.1} ms, mesh {:.1} ms", grow_s * 1e3, mesh_s * 1e3);
+    if let Some((rep, adapt_s, regrow_s)) = adapted {
+        let (b, pl, pc) = (rep.bent, rep.pruned_light, rep.pruned_collision);
+        println!("adapted (Plastic Trees): bent {b}, pruned {pl} for light + {pc} in obstacles; adapt {:.1} ms, regrowing among the obstacles {:.1} ms", adapt_s * 1e3, regrow_s * 1e3);
+    }
     println!("wrote {} and {}", out.display(), png.display());
     Ok(())
+}
+
+/// Mean segment length of the skeleton (m, ≥ 0.05): the internode length l_i of Plastic Trees
+/// eq. 7 for a tree grown by any model.
+fn mean_internode(sk: &Skeleton) -> f32 {
+    let n = sk.nodes.len();
+    if n < 2 {
+        return 0.15;
+    }
+    ((1..n).map(|k| sk.segment_length(k)).sum::<f32>() / (n - 1) as f32).max(0.05)
 }
 
 /// Side views (looking along +y, orthographic, z up) of every LOD level side by side, flat

@@ -46,7 +46,8 @@ pub fn read(path: &Path) -> Result<Vec<InventoryRow>> {
 }
 
 /// Snapshot files of a run directory as `(year, season suffix or "", path)`, sorted by year then
-/// season order (spring, summer, autumn, winter, then plain).
+/// season order (spring, summer, autumn, winter, then plain); the regeneration-layer files
+/// `year_NNNN_regeneration.csv` are not tree inventories and are skipped.
 pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
     let dir = run_dir.join("inventory");
     let rd = std::fs::read_dir(&dir).map_err(|e| Error::io(&dir, e))?;
@@ -59,6 +60,10 @@ pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
             Some((n, s)) => (n, s.to_string()),
             None => (stem, String::new()),
         };
+        if season == "regeneration" {
+            // the regeneration layer's cohorts (`year_NNNN_regeneration.csv`), not a tree inventory
+            continue;
+        }
         if let Ok(y) = num.parse::<u32>() {
             out.push((y, season, entry.path()));
         }

@@ -65,6 +65,48 @@ impl Stage {
     pub fn camera(&self, preset: CameraPreset) -> Camera {
         Camera::preset(preset, &self.terrain)
     }
+
+    /// The camera of a preset for a snapshot: as [`Stage::camera`], except that the ground-level
+    /// camera steps into the nearest clearing, so that it does not stand inside a trunk or a
+    /// crown. Candidate eye points on a grid (1/60 of the site, up to 30 % of it across and 10 %
+    /// forward of the preset's eye) are scored by their clearance, the horizontal distance to the
+    /// nearest live tree taller than the eye (1.7 m) minus its crown radius; the eye moves to the
+    /// best one (ties: the nearest to the preset) unless the preset already has ≥ 2 m clearance.
+    /// Looks north at 8 m above the ground in the site's middle row, as the preset does.
+    pub fn camera_for(&self, preset: CameraPreset, rows: &[InventoryRow]) -> Camera {
+        let cam = self.camera(preset);
+        if preset != CameraPreset::Ground {
+            return cam;
+        }
+        let (ex, ey) = self.site.extent_m();
+        let size = ex.max(ey) as f32;
+        let tall: Vec<(f32, f32, f32)> = rows.iter().filter(|r| r.status == "alive" && r.height_m > 1.7).map(|r| (r.x_m as f32, r.y_m as f32, r.crown_radius_m)).collect();
+        let clearance = |x: f32, y: f32| tall.iter().map(|&(tx, ty, cr)| ((tx - x).hypot(ty - y) - cr).max(0.0)).fold(f32::INFINITY, f32::min);
+        let [x0, y0, _] = cam.eye;
+        if clearance(x0, y0) >= 2.0 {
+            return cam;
+        }
+        let step = (size / 60.0).max(1.0);
+        let mut best = (clearance(x0, y0), 0.0f32, x0, y0);
+        for j in 0..=((0.1 * size / step) as i32) {
+            for i in -((0.15 * size / step) as i32)..=((0.15 * size / step) as i32) {
+                let (x, y) = (x0 + i as f32 * step, y0 + j as f32 * step);
+                if x < 0.0 || y < 0.0 || x > ex as f32 || y > ey as f32 {
+                    continue;
+                }
+                let (c, d) = (clearance(x, y), (i as f32).hypot(j as f32));
+                if c > best.0 + 1e-3 || ((c - best.0).abs() <= 1e-3 && d < best.1) {
+                    best = (c, d, x, y);
+                }
+            }
+        }
+        let (_, _, x, y) = best;
+        let gz = self.terrain.nearest_height(x, y).unwrap_or(cam.eye[2] - 1.7);
+        let tz = self.terrain.nearest_height(x, cam.target[1]).unwrap_or(cam.target[2] - 8.0);
+        let mut moved = Camera::look_at([x, y, gz + 1.7], [x, cam.target[1], tz + 8.0], 60.0);
+        moved.near = cam.near;
+        moved
+    }
 }
 
 /// Inventory snapshot of `year` (plain, not seasonal) in `run_dir`.
@@ -87,6 +129,21 @@ fn years_list(snaps: &[(u32, String, PathBuf)]) -> String {
     ys.iter().map(|y| y.to_string()).collect::<Vec<_>>().join(", ")
 }
 
+/// Removes the `frame_NNNNN.png` files Sylva wrote into `dir` (nothing else).
+///
+/// Errors: [`Error::Io`] naming the folder or file.
+fn remove_frames(dir: &Path) -> Result<()> {
+    for e in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let p = e.map_err(|e| Error::io(dir, e))?.path();
+        let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let is_frame = name.len() == "frame_00000.png".len() && name.starts_with("frame_") && name.ends_with(".png") && name[6..11].bytes().all(|b| b.is_ascii_digit());
+        if is_frame {
+            std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
+        }
+    }
+    Ok(())
+}
+
 /// Options of [`timelapse`].
 #[derive(Debug, Clone)]
 pub struct TimelapseOptions {
@@ -96,7 +153,7 @@ pub struct TimelapseOptions {
     pub height: u32,
     /// Frames per second of the GIF/MP4.
     pub fps: f32,
-    /// Interpolated frames between consecutive snapshots (≥ 1).
+    /// Interpolated frames between consecutive snapshots (0–50; 0: one frame per snapshot).
     pub frames_between: u32,
     /// Camera: a preset, or `None` for a slow orbit (a quarter turn over the film).
     pub camera: Option<CameraPreset>,
@@ -106,7 +163,9 @@ pub struct TimelapseOptions {
 
 /// Renders a timelapse of all plain snapshots of `run_dir` into `out_gif` (frames as PNG in
 /// `frames_dir`, an MP4 beside the GIF when `ffmpeg` is on PATH). Growth between snapshots is
-/// interpolated per tree id ([`timelapse::interpolate`]). Calls `progress(done, total)` per frame.
+/// interpolated per tree id ([`timelapse::interpolate`]); every frame is captioned with its
+/// (interpolated) year. Frames of an earlier film in `frames_dir` are removed first. Calls
+/// `progress(done, total)` per frame.
 /// Returns the number of frames and whether an MP4 was written.
 pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
     let snaps: Vec<(u32, PathBuf)> = inventory::snapshots(run_dir)?.into_iter().filter(|(_, s, _)| s.is_empty()).map(|(y, _, p)| (y, p)).collect();
@@ -114,30 +173,34 @@ pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: 
         return Err(Error::format(run_dir, "no inventory snapshots to make a timelapse from"));
     }
     std::fs::create_dir_all(frames_dir).map_err(|e| Error::io(frames_dir, e))?;
-    let steps = opts.frames_between.max(1) as usize;
+    // frames of an earlier, longer film would otherwise remain beside the new ones
+    remove_frames(frames_dir)?;
+    let steps = opts.frames_between as usize + 1;
     let total = if snaps.len() == 1 { 1 } else { (snaps.len() - 1) * steps + 1 };
     let mut frames = Vec::with_capacity(total);
     let mut prev = scene::instances(&inventory::read(&snaps[0].1)?, &stage.library, &stage.site, opts.season);
     let mut k = 0usize;
-    let emit = |stage: &mut Stage, inst: Vec<crate::render::scene::TreeInstance>, k: usize| -> Result<image::RgbaImage> {
+    let emit = |stage: &mut Stage, inst: Vec<crate::render::scene::TreeInstance>, k: usize, year: f32| -> Result<image::RgbaImage> {
         let u = if total > 1 { k as f32 / (total - 1) as f32 } else { 0.0 };
         let cam = match opts.camera {
             Some(p) => stage.camera(p),
             None => Camera::orbit(&stage.terrain, 0.05 + 0.25 * u),
         };
-        let img = stage.render_instances(inst, opts.season, &cam, opts.width, opts.height)?;
+        let mut img = stage.render_instances(inst, opts.season, &cam, opts.width, opts.height)?;
+        crate::output::maps::stamp_caption(&mut img, &format!("year {}", year.round() as u32))?;
         timelapse::write_png(&frames_dir.join(format!("frame_{k:05}.png")), &img)?;
         Ok(img)
     };
-    frames.push(emit(stage, prev.clone(), k)?);
+    frames.push(emit(stage, prev.clone(), k, snaps[0].0 as f32)?);
     progress(1, total);
-    for (_, path) in snaps.iter().skip(1) {
+    for w in snaps.windows(2) {
+        let ((y0, _), (y1, path)) = (&w[0], &w[1]);
         let next = scene::instances(&inventory::read(path)?, &stage.library, &stage.site, opts.season);
         for s in 1..=steps {
             k += 1;
             let t = s as f32 / steps as f32;
             let inst = timelapse::interpolate(&prev, &next, t);
-            frames.push(emit(stage, inst, k)?);
+            frames.push(emit(stage, inst, k, *y0 as f32 + t * (*y1 as f32 - *y0 as f32))?);
             progress(k + 1, total);
         }
         prev = next;

@@ -182,6 +182,19 @@ pub fn render_field(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyl
 
 /// Draws `text` (black) with its top-left at `(x, y)` pixels, `px` pixels high.
 pub fn draw_text(img: &mut RgbImage, font: &FontRef, x: f32, y: f32, px: f32, text: &str) {
+    let (w, h) = img.dimensions();
+    glyph_coverage(font, x, y, px, text, w, h, |gx, gy, cov| {
+        let p = img.get_pixel_mut(gx, gy);
+        for c in 0..3 {
+            p.0[c] = (p.0[c] as f32 * (1.0 - cov)) as u8;
+        }
+    });
+}
+
+/// Calls `put(x, y, coverage 0–1)` for every pixel inside `w × h` that the glyphs of `text`
+/// (top-left at `(x, y)`, `px` pixels high) cover.
+#[allow(clippy::too_many_arguments)]
+fn glyph_coverage(font: &FontRef, x: f32, y: f32, px: f32, text: &str, w: u32, h: u32, mut put: impl FnMut(u32, u32, f32)) {
     let sf = font.as_scaled(PxScale::from(px));
     let mut caret = x;
     let mut prev = None;
@@ -197,15 +210,41 @@ pub fn draw_text(img: &mut RgbImage, font: &FontRef, x: f32, y: f32, px: f32, te
             let b = og.px_bounds();
             og.draw(|gx, gy, cov| {
                 let (px_, py_) = (b.min.x as i64 + gx as i64, b.min.y as i64 + gy as i64);
-                if px_ >= 0 && py_ >= 0 && (px_ as u32) < img.width() && (py_ as u32) < img.height() {
-                    let p = img.get_pixel_mut(px_ as u32, py_ as u32);
-                    for c in 0..3 {
-                        p.0[c] = (p.0[c] as f32 * (1.0 - cov.clamp(0.0, 1.0))) as u8;
-                    }
+                if px_ >= 0 && py_ >= 0 && (px_ as u32) < w && (py_ as u32) < h {
+                    put(px_ as u32, py_ as u32, cov.clamp(0.0, 1.0));
                 }
             });
         }
     }
+}
+
+/// Stamps a caption (e.g. `year 45`) in the top-left corner of a rendered frame: white text
+/// (height 1/18 of the frame, at least 10 px) on a 55 % dark box, so it reads on sky and forest.
+///
+/// Errors: only if the bundled font could not be parsed.
+pub fn stamp_caption(img: &mut image::RgbaImage, text: &str) -> Result<()> {
+    let font = FontRef::try_from_slice(FONT).map_err(|e| Error::Other(format!("bundled font: {e}")))?;
+    let (w, h) = img.dimensions();
+    let px = (h as f32 / 18.0).max(10.0);
+    let sf = font.as_scaled(PxScale::from(px));
+    let text_w: f32 = text.chars().map(|c| sf.h_advance(sf.glyph_id(c))).sum();
+    let (x0, y0, pad) = (0.4 * px, 0.4 * px, 0.3 * px);
+    let (bx1, by1) = (((x0 + text_w + pad) as u32).min(w), ((y0 + px * 1.2 + pad) as u32).min(h));
+    for yy in ((y0 - pad).max(0.0) as u32)..by1 {
+        for xx in ((x0 - pad).max(0.0) as u32)..bx1 {
+            let p = img.get_pixel_mut(xx, yy);
+            for c in 0..3 {
+                p.0[c] = (p.0[c] as f32 * 0.45) as u8;
+            }
+        }
+    }
+    glyph_coverage(&font, x0, y0, px, text, w, h, |gx, gy, cov| {
+        let p = img.get_pixel_mut(gx, gy);
+        for c in 0..3 {
+            p.0[c] = (p.0[c] as f32 + (255.0 - p.0[c] as f32) * cov) as u8;
+        }
+    });
+    Ok(())
 }
 
 #[cfg(test)]

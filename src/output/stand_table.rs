@@ -6,29 +6,39 @@ use crate::sim::trees::DeathCause;
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// CSV text: `year,stems_ha,seedlings_ha,basal_area_m2_ha,mean_height_m,top_height_m,qmd_cm,
-/// stems_7cm_ha,qmd_7cm_cm,ba_share_<sp>…,stem_share_<sp>…,deaths_age,deaths_stress,deaths_wind,
-/// deaths_background` (deaths in the year by [`DeathCause`])
+/// CSV text: `year,stems_ha,seedlings_ha,regeneration_ha,basal_area_m2_ha,mean_height_m,
+/// top_height_m,qmd_cm,stems_7cm_ha,qmd_7cm_cm,ba_share_<sp>…,stem_share_<sp>…,regen_germinated,
+/// regen_recruited,regen_deaths_shade,regen_deaths_crowding,deaths_age,deaths_stress,deaths_wind,
+/// deaths_background` (regeneration-layer stems in the year, then tree deaths in the year by
+/// [`DeathCause`])
 /// (`species` = pool ids in pool order).
 pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
-    let mut s = String::from("year,stems_ha,seedlings_ha,basal_area_m2_ha,mean_height_m,top_height_m,qmd_cm,stems_7cm_ha,qmd_7cm_cm");
+    let mut s = String::from("year,stems_ha,seedlings_ha,regeneration_ha,basal_area_m2_ha,mean_height_m,top_height_m,qmd_cm,stems_7cm_ha,qmd_7cm_cm");
     for sp in species {
         let _ = write!(s, ",ba_share_{sp}");
     }
     for sp in species {
         let _ = write!(s, ",stem_share_{sp}");
     }
+    s.push_str(",regen_germinated,regen_recruited");
+    for c in crate::sim::regen::RegenDeath::ALL {
+        let _ = write!(s, ",regen_deaths_{}", c.name());
+    }
     for c in DeathCause::ALL {
         let _ = write!(s, ",deaths_{}", c.name());
     }
     s.push('\n');
     for r in rows {
-        let _ = write!(s, "{},{:.1},{:.1},{:.3},{:.2},{:.2},{:.2},{:.1},{:.2}", r.year, r.stems_ha, r.seedlings_ha, r.basal_area_m2_ha, r.mean_height_m, r.top_height_m, r.qmd_cm, r.stems_7cm_ha, r.qmd_7cm_cm);
+        let _ = write!(s, "{},{:.1},{:.1},{:.1},{:.3},{:.2},{:.2},{:.2},{:.1},{:.2}", r.year, r.stems_ha, r.seedlings_ha, r.regeneration_ha, r.basal_area_m2_ha, r.mean_height_m, r.top_height_m, r.qmd_cm, r.stems_7cm_ha, r.qmd_7cm_cm);
         for v in &r.share_ba {
             let _ = write!(s, ",{v:.4}");
         }
         for v in &r.share_stems {
             let _ = write!(s, ",{v:.4}");
+        }
+        let _ = write!(s, ",{},{}", r.regen_germinated, r.regen_recruited);
+        for d in r.regen_deaths {
+            let _ = write!(s, ",{d}");
         }
         for d in r.deaths {
             let _ = write!(s, ",{d}");

@@ -1,14 +1,16 @@
-//! Checkpoints: the evolving state of a [`World`] (trees, seeds, year, death counts) and the
+//! Checkpoints: the evolving state of a [`World`] (trees, regeneration cohorts and their ledger,
+//! seeds, year, death counts) and the
 //! stand table so far, in a compact little-endian binary with exact float bits, so that a
 //! resumed run continues bit for bit. Site conditions and species are rebuilt from the scenario.
 
 use super::stats::StandRow;
+use super::regen::{Cohorts, RegenLedger, N_REGEN_CAUSES};
 use super::trees::TreeStore;
 use super::world::World;
 use crate::error::{Error, Result};
 use std::path::Path;
 
-const MAGIC: &[u8; 8] = b"SYLVACK2";
+const MAGIC: &[u8; 8] = b"SYLVACK3";
 
 struct W(Vec<u8>);
 impl W {
@@ -23,6 +25,12 @@ impl W {
     }
     fn f64(&mut self, v: f64) {
         self.u64(v.to_bits());
+    }
+    fn u32s(&mut self, v: &[u32]) {
+        self.u64(v.len() as u64);
+        for x in v {
+            self.0.extend_from_slice(&x.to_le_bytes());
+        }
     }
 }
 
@@ -58,6 +66,12 @@ impl R<'_> {
     fn f64(&mut self) -> Result<f64> {
         Ok(f64::from_bits(self.u64()?))
     }
+    fn u32s(&mut self) -> Result<Vec<u32>> {
+        let n = self.len(4)?;
+        let s = &self.b[self.p..self.p + 4 * n];
+        self.p += 4 * n;
+        Ok(s.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
+    }
 }
 
 /// Serialises the world's evolving state and the stand table.
@@ -85,6 +99,23 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
     for d in w.deaths_total {
         o.u64(d);
     }
+    // regeneration layer
+    let c = &w.cohorts;
+    o.u32s(&c.cell);
+    o.u32s(&c.pool.iter().map(|&p| p as u32).collect::<Vec<_>>());
+    o.u32s(&c.stems);
+    for v in [&c.height, &c.age, &c.vigour] {
+        o.f32s(v);
+    }
+    let l = &w.regen_ledger;
+    o.u64(l.germinated.len() as u64);
+    for p in 0..l.germinated.len() {
+        o.u64(l.germinated[p]);
+        o.u64(l.recruited[p]);
+        for d in l.dead[p] {
+            o.u64(d);
+        }
+    }
     o.u64(rows.len() as u64);
     for r in rows {
         o.u64(r.year as u64);
@@ -99,6 +130,12 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
         for d in r.deaths {
             o.u64(d);
         }
+        o.f64(r.regeneration_ha);
+        o.u64(r.regen_germinated);
+        o.u64(r.regen_recruited);
+        for d in r.regen_deaths {
+            o.u64(d);
+        }
     }
     o.0
 }
@@ -109,7 +146,7 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
 /// belong to a different scenario (seed or species pool).
 pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>> {
     if bytes.len() < 8 || &bytes[..8] != MAGIC {
-        return Err(Error::format(path, "not a Sylva checkpoint of this version (bad magic; checkpoints from before the `background` death cause must be re-run)"));
+        return Err(Error::format(path, "not a Sylva checkpoint of this version (bad magic; checkpoints from before the regeneration layer of sapling cohorts must be re-run)"));
     }
     let mut r = R { b: bytes, p: 8, path };
     let year = r.u64()? as u32;
@@ -149,6 +186,31 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     for d in deaths.iter_mut() {
         *d = r.u64()?;
     }
+    let mut cohorts = Cohorts { cell: r.u32s()?, ..Default::default() };
+    cohorts.pool = r.u32s()?.into_iter().map(|p| p as u16).collect();
+    cohorts.stems = r.u32s()?;
+    cohorts.height = r.f32s()?;
+    cohorts.age = r.f32s()?;
+    cohorts.vigour = r.f32s()?;
+    let nc = cohorts.cell.len();
+    if [cohorts.pool.len(), cohorts.stems.len(), cohorts.height.len(), cohorts.age.len(), cohorts.vigour.len()].iter().any(|&l| l != nc) {
+        return Err(r.err());
+    }
+    if cohorts.cell.iter().any(|&c| c as usize >= w.light_site.len()) || cohorts.pool.iter().any(|&p| p as usize >= w.pool.len()) {
+        return Err(Error::format(path, "checkpoint cohorts lie outside the light grid or the species pool"));
+    }
+    let np = r.u64()? as usize;
+    if np != w.pool.len() {
+        return Err(r.err());
+    }
+    let mut ledger = RegenLedger::new(np);
+    for p in 0..np {
+        ledger.germinated[p] = r.u64()?;
+        ledger.recruited[p] = r.u64()?;
+        for d in ledger.dead[p].iter_mut() {
+            *d = r.u64()?;
+        }
+    }
     let nr = r.len(8)?;
     let mut rows = Vec::with_capacity(nr);
     for _ in 0..nr {
@@ -167,12 +229,38 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
         for x in d.iter_mut() {
             *x = r.u64()?;
         }
-        rows.push(StandRow { year, stems_ha: v[0], seedlings_ha: v[1], basal_area_m2_ha: v[2], mean_height_m: v[3], top_height_m: v[4], qmd_cm: v[5], stems_7cm_ha: v[6], qmd_7cm_cm: v[7], share_ba: a, share_stems: b, deaths: d });
+        let regeneration_ha = r.f64()?;
+        let (regen_germinated, regen_recruited) = (r.u64()?, r.u64()?);
+        let mut regen_deaths = [0u64; N_REGEN_CAUSES];
+        for x in regen_deaths.iter_mut() {
+            *x = r.u64()?;
+        }
+        rows.push(StandRow {
+            year,
+            stems_ha: v[0],
+            seedlings_ha: v[1],
+            regeneration_ha,
+            basal_area_m2_ha: v[2],
+            mean_height_m: v[3],
+            top_height_m: v[4],
+            qmd_cm: v[5],
+            stems_7cm_ha: v[6],
+            qmd_7cm_cm: v[7],
+            share_ba: a,
+            share_stems: b,
+            deaths: d,
+            regen_germinated,
+            regen_recruited,
+            regen_deaths,
+        });
     }
     w.trees = t;
     w.year = year;
     w.seeds = seeds;
     w.deaths_total = deaths;
+    w.cohorts = cohorts;
+    w.regen_ledger = ledger;
+    w.regen_year = Default::default();
     w.dead.clear();
     Ok(rows)
 }

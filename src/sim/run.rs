@@ -100,6 +100,7 @@ fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize) -> Re
     inventory::write_inventory_csv(&dir.join("inventory").join(format!("{label}.csv")), w)?;
     inventory::write_inventory_geojson(&dir.join("inventory").join(format!("{label}.geojson")), w)?;
     if maps {
+        inventory::write_regeneration_csv(&dir.join("inventory").join(format!("{label}_regeneration.csv")), w)?;
         let m = dir.join("maps");
         plot::write_maps(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), w, map_px)?;
     }
@@ -117,7 +118,8 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
 
 /// Runs `scenario` on `site` with species from `lib`, writing the run directory.
 ///
-/// Snapshots (inventory CSV + GeoJSON, species and basal-area maps) at year 0, every
+/// Snapshots (inventory CSV + GeoJSON, regeneration-layer CSV `year_NNNN_regeneration.csv`,
+/// species and basal-area maps) at year 0, every
 /// `snapshot_every` years and at the end, labelled `year_NNNN` (plus `_spring`, `_summer`,
 /// `_autumn` when `seasonal_snapshots`); checkpoint every `checkpoint_every` years and at the end.
 ///

@@ -9,15 +9,23 @@ use serde::{Deserialize, Serialize};
 pub struct StandRow {
     /// Simulation year (1 = after the first year).
     pub year: u32,
-    /// Stems per ha with height ≥ 1.3 m.
+    /// Individual trees (the tree store) per ha with height ≥ 1.3 m. Natural regeneration enters
+    /// the tree store at [`super::regen::RECRUIT_HEIGHT_M`]; its saplings below that height are
+    /// counted in [`StandRow::regeneration_ha`], not here.
     pub stems_ha: f64,
-    /// Trees per ha below 1.3 m (regeneration).
+    /// Individual trees per ha below 1.3 m (planted; natural regeneration is in
+    /// [`StandRow::regeneration_ha`]).
     pub seedlings_ha: f64,
+    /// Regeneration layer: sapling stems per ha below the recruitment height
+    /// ([`super::regen::RECRUIT_HEIGHT_M`]), from the cohorts' stem counts.
+    pub regeneration_ha: f64,
     /// Basal area (m²/ha).
     pub basal_area_m2_ha: f64,
     /// Mean height of stems ≥ 1.3 m (m).
     pub mean_height_m: f64,
-    /// Top height H100: mean height of the 100 thickest trees per ha (m).
+    /// Top height H100 (m): mean height of the 100 largest-DBH trees (≥ 1.3 m) per ha of
+    /// unmasked area, i.e. of the `round(100 · area_ha)` thickest trees; where fewer trees stand,
+    /// the mean height of all of them (the H100 definition of the yield tables, Assmann 1970).
     pub top_height_m: f64,
     /// Quadratic mean DBH of stems ≥ 1.3 m (cm).
     pub qmd_cm: f64,
@@ -31,6 +39,12 @@ pub struct StandRow {
     pub share_stems: Vec<f64>,
     /// Deaths in the year per cause ([`DeathCause::ALL`] order).
     pub deaths: [u64; super::trees::N_CAUSES],
+    /// Regeneration layer in the year: stems germinated.
+    pub regen_germinated: u64,
+    /// Regeneration layer in the year: stems recruited as individual trees.
+    pub regen_recruited: u64,
+    /// Regeneration layer in the year: stems dead by cause ([`super::regen::RegenDeath::ALL`] order).
+    pub regen_deaths: [u64; super::regen::N_REGEN_CAUSES],
 }
 
 /// Computes the stand-table row of the world's current state (deaths from `w.dead`).
@@ -64,8 +78,14 @@ pub fn stand_row(w: &World) -> StandRow {
         top.push((t.dbh[i], t.height[i]));
     }
     let k = ((100.0 * a).round() as usize).clamp(1, top.len().max(1));
-    top.sort_by(|x, y| y.0.total_cmp(&x.0).then(y.1.total_cmp(&x.1)));
-    let h100 = if top.is_empty() { 0.0 } else { top.iter().take(k).map(|x| x.1 as f64).sum::<f64>() / k.min(top.len()) as f64 };
+    let by_dbh_desc = |x: &(f32, f32), y: &(f32, f32)| y.0.total_cmp(&x.0).then(y.1.total_cmp(&x.1));
+    if k < top.len() {
+        // the k thickest first (O(n) selection), then sorted for a fixed summation order
+        top.select_nth_unstable_by(k - 1, by_dbh_desc);
+        top.truncate(k);
+    }
+    top.sort_by(by_dbh_desc);
+    let h100 = if top.is_empty() { 0.0 } else { top.iter().map(|x| x.1 as f64).sum::<f64>() / top.len() as f64 };
     let mut deaths = [0u64; super::trees::N_CAUSES];
     for d in &w.dead {
         deaths[d.cause.index()] += 1;
@@ -84,5 +104,9 @@ pub fn stand_row(w: &World) -> StandRow {
         share_ba: sba.iter().map(|v| if ba > 0.0 { v / ba } else { 0.0 }).collect(),
         share_stems: sn.iter().map(|v| if n > 0 { v / n as f64 } else { 0.0 }).collect(),
         deaths,
+        regeneration_ha: w.cohorts.total_stems() as f64 / a,
+        regen_germinated: w.regen_year.germinated,
+        regen_recruited: w.regen_year.recruited,
+        regen_deaths: w.regen_year.dead,
     }
 }

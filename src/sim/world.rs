@@ -1,5 +1,6 @@
 //! The simulated world: site conditions, species pool, trees and the grids the phases share.
 
+use super::regen::{Cohorts, RegenLedger, RegenYear};
 use super::scenario::{Scenario, Start};
 use super::trees::{DeadTree, NewTree, SpatialGrid, TreeStore};
 use crate::conditions::SiteConditions;
@@ -76,6 +77,12 @@ pub struct World {
     pub dead: Vec<DeadTree>,
     /// Deaths since the start, by cause ([`super::trees::DeathCause::ALL`] order).
     pub deaths_total: [u64; super::trees::N_CAUSES],
+    /// The regeneration layer: sapling cohorts below the recruitment height ([`super::regen`]).
+    pub cohorts: Cohorts,
+    /// Cumulative counts of the regeneration layer per pool species.
+    pub regen_ledger: RegenLedger,
+    /// Counts of the regeneration layer in the current year.
+    pub regen_year: RegenYear,
 }
 
 impl World {
@@ -126,6 +133,7 @@ impl World {
                 }
             }
         }
+        let np = pool.len();
         let mut w = World {
             site,
             lib: lib.clone(),
@@ -145,6 +153,9 @@ impl World {
             seed_rain,
             dead: Vec::new(),
             deaths_total: [0; super::trees::N_CAUSES],
+            cohorts: Cohorts::default(),
+            regen_ledger: RegenLedger::new(np),
+            regen_year: RegenYear::default(),
         };
         w.place_start(scenario);
         Ok(w)

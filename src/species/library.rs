@@ -645,6 +645,26 @@ impl SpeciesLibrary {
         Ok(into_library(all))
     }
 
+    /// Adds every species of the `*.toml` files in `dir` to this library, replacing any species
+    /// with the same id (an edited copy of a shipped species overrides it), keeping the library
+    /// sorted by id. Used for `--species-dir` and for the `species/` folder a simulation writes
+    /// into its run directory.
+    ///
+    /// # Errors
+    /// As [`SpeciesLibrary::load_dir`]: I/O errors, every problem of every file (with file and
+    /// line), duplicate ids within `dir`, an empty folder.
+    pub fn overlay_dir(&mut self, dir: &Path) -> Result<()> {
+        let extra = SpeciesLibrary::load_dir(dir)?;
+        for sp in extra.species {
+            match self.species.iter_mut().find(|s| s.id == sp.id) {
+                Some(slot) => *slot = sp,
+                None => self.species.push(sp),
+            }
+        }
+        self.species.sort_by(|a, b| a.id.cmp(&b.id));
+        Ok(())
+    }
+
     /// The species shipped with Sylva ([`EMBEDDED_FILES`]), sorted by id.
     ///
     /// # Errors

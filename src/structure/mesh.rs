@@ -1,7 +1,7 @@
 //! Meshes of a skeleton: generalized cylinders with parallel-transport frames (continuous normals
 //! and UVs along each branch axis), leaves as quads (cards), and the level-of-detail chain
 //! (DESIGN.md): LOD0 full mesh; LOD1 reduced skeleton with thin branches merged into leaf-cluster
-//! cards; LOD2 crown hull (low-poly ellipsoid fitted to the foliage) on a simple trunk; LOD3
+//! cards; LOD2 crown hull (low-poly star-shaped hull fitted to the foliage) on a simple trunk; LOD3
 //! billboard impostor (two crossed quads).
 //!
 //! Parallel transport: the ring frame is carried from one ring to the next by projecting the
@@ -23,7 +23,7 @@ pub struct LodOptions {
     pub min_sides: u32,
     /// Fraction (0–1] of branch nodes kept (the thickest) in the LOD1 reduced skeleton.
     pub reduced_keep_fraction: f32,
-    /// Longitude segments of the LOD2 crown ellipsoid (≥ 3; latitude rings = half of it).
+    /// Azimuth sectors of the LOD2 crown hull (≥ 3; height bands = half of it minus one, ≥ 2).
     pub hull_segments: u32,
     /// Emit leaves at LOD0.
     pub leaves: bool,
@@ -255,41 +255,107 @@ fn bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
     Some(pts.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
 }
 
-/// LOD2: a low-poly ellipsoid hull fitted to the bounds of the foliage (leaf centres, or tips),
-/// on a 5-sided trunk from the root to the crown base.
+/// LOD2: a low-poly star-shaped crown hull fitted to the foliage (leaf centres, or tips): the
+/// crown between its lowest and highest foliage point is cut into `hull_segments / 2 − 1`
+/// (≥ 2) height bands and `hull_segments` (≥ 3) azimuth directions around the trunk axis; each
+/// ring vertex lies at the band's support function in its direction (the farthest horizontal
+/// reach of the band's foliage along it, at least 2 % of the crown radius; empty bands take the
+/// bands beside them; then one 5-point smoothing pass), closed by an apex at the highest foliage
+/// point and a base point on the trunk axis. The crown's bottom is the 3rd percentile of the
+/// foliage heights (lower points are left out). Unlike a bounding ellipsoid this keeps the crown's shape: conical spruces,
+/// ovoid beeches, and crowns made one-sided by a neighbour or a wall (Plastic Trees). Normals
+/// are area-weighted face normals, outward. Sits on a 5-sided trunk from the root to the crown
+/// base.
 pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
-    let pts = foliage_points(sk, leaves);
-    let Some((lo, hi)) = bounds(&pts) else { return TreeMesh::default() };
+    let mut pts = foliage_points(sk, leaves);
+    let Some((mut lo, hi)) = bounds(&pts) else { return TreeMesh::default() };
+    // the crown starts at the 3rd percentile of foliage height: a few low leaves on the trunk
+    // (epicormic shoots) do not drag the hull down to the ground
+    let mut zs: Vec<f32> = pts.iter().map(|p| p.z).collect();
+    zs.sort_by(f32::total_cmp);
+    lo.z = zs[(zs.len() * 3 / 100).min(zs.len() - 1)];
+    pts.retain(|p| p.z >= lo.z);
+    let top_xy = pts.iter().copied().fold(Vec3::new(0.0, 0.0, f32::MIN), |a, p| if p.z > a.z { p } else { a });
     let c = 0.5 * (lo + hi);
     let r = (0.5 * (hi - lo)).max(Vec3::splat(1e-3));
-    let nlon = o.hull_segments.max(3);
-    let nlat = (nlon / 2).max(2);
+    let nlon = o.hull_segments.max(3) as usize;
+    let nb = (o.hull_segments as usize / 2).max(3) - 1;
+    let axis = sk.nodes.first().map(|n| n.pos).unwrap_or(c);
+    let (z0, dz) = (lo.z, (hi.z - lo.z).max(1e-3));
+    // support function per (band, sector): the farthest reach of the band's foliage along the
+    // sector's direction (a convex outline per band; < 0: empty band)
+    let dirs: Vec<(f32, f32)> = (0..nlon).map(|k| ((k as f32 + 0.5) / nlon as f32 * TAU).sin_cos()).map(|(s, c)| (c, s)).collect();
+    let mut rad = vec![-1.0f32; nb * nlon];
+    for p in &pts {
+        let d = (*p - axis).truncate();
+        let b = (((p.z - z0) / dz * nb as f32) as usize).min(nb - 1);
+        for (k, &(cx, cy)) in dirs.iter().enumerate() {
+            let cell = &mut rad[b * nlon + k];
+            *cell = cell.max(d.x * cx + d.y * cy);
+        }
+    }
+    let floor = 0.02 * r.x.max(r.y);
+    for b in 0..nb {
+        if (0..nlon).any(|k| rad[b * nlon + k] >= 0.0) {
+            for k in 0..nlon {
+                // a one-sided band: the far side closes in near the axis
+                rad[b * nlon + k] = rad[b * nlon + k].max(floor);
+            }
+        }
+    }
+    // empty bands: mean of the nearest filled bands above and below
+    let filled: Vec<bool> = (0..nb).map(|b| rad[b * nlon] >= 0.0).collect();
+    for b in 0..nb {
+        if filled[b] {
+            continue;
+        }
+        let below = (0..b).rev().find(|&j| filled[j]);
+        let above = (b + 1..nb).find(|&j| filled[j]);
+        for k in 0..nlon {
+            let v: Vec<f32> = [below, above].iter().flatten().map(|&j| rad[j * nlon + k]).collect();
+            rad[b * nlon + k] = if v.is_empty() { r.x.max(r.y) } else { v.iter().sum::<f32>() / v.len() as f32 };
+        }
+    }
+    // one smoothing pass (centre 1/2, the four neighbours 1/8 each; bands clamp at the ends)
+    let src = rad.clone();
+    for b in 0..nb {
+        for k in 0..nlon {
+            let at = |bb: usize, kk: usize| src[bb * nlon + kk % nlon];
+            let n4 = at(b.saturating_sub(1), k) + at((b + 1).min(nb - 1), k) + at(b, k + 1) + at(b, k + nlon - 1);
+            rad[b * nlon + k] = (0.5 * src[b * nlon + k] + 0.125 * n4).max(1e-3);
+        }
+    }
     let mut hull = TriMesh::default();
-    for j in 0..=nlat {
-        let th = j as f32 / nlat as f32 * std::f32::consts::PI;
-        let (st, ct) = th.sin_cos();
-        for i in 0..=nlon {
-            let ph = i as f32 / nlon as f32 * TAU;
-            let (sp, cp) = ph.sin_cos();
-            let unit = Vec3::new(st * cp, st * sp, ct);
-            hull.positions.push((c + unit * r).to_array());
-            hull.normals.push((unit / r).normalize_or(Vec3::Z).to_array());
-            hull.uvs.push([i as f32 / nlon as f32, j as f32 / nlat as f32]);
+    for b in 0..nb {
+        let z = z0 + (b as f32 + 0.5) / nb as f32 * dz;
+        for k in 0..nlon {
+            let a = (k as f32 + 0.5) / nlon as f32 * TAU;
+            let rr = rad[b * nlon + k];
+            hull.positions.push([axis.x + rr * a.cos(), axis.y + rr * a.sin(), z]);
+            hull.uvs.push([k as f32 / nlon as f32, (b as f32 + 0.5) / nb as f32]);
         }
     }
-    let row = nlon + 1;
-    for j in 0..nlat {
-        for i in 0..nlon {
-            let a = j * row + i;
-            let b = a + row;
-            if j > 0 {
-                hull.indices.extend_from_slice(&[a, b, a + 1]);
-            }
-            if j < nlat - 1 {
-                hull.indices.extend_from_slice(&[a + 1, b, b + 1]);
-            }
+    let (apex, base) = (hull.positions.len() as u32, hull.positions.len() as u32 + 1);
+    hull.positions.push([top_xy.x, top_xy.y, hi.z]);
+    hull.positions.push([axis.x, axis.y, lo.z]);
+    hull.uvs.extend_from_slice(&[[0.5, 1.0], [0.5, 0.0]]);
+    let v = |b: usize, k: usize| (b * nlon + k % nlon) as u32;
+    for k in 0..nlon {
+        hull.indices.extend_from_slice(&[base, v(0, k + 1), v(0, k)]);
+        for b in 0..nb - 1 {
+            hull.indices.extend_from_slice(&[v(b, k), v(b, k + 1), v(b + 1, k + 1), v(b, k), v(b + 1, k + 1), v(b + 1, k)]);
+        }
+        hull.indices.extend_from_slice(&[v(nb - 1, k), v(nb - 1, k + 1), apex]);
+    }
+    let mut nrm = vec![Vec3::ZERO; hull.positions.len()];
+    for t in hull.indices.chunks_exact(3) {
+        let [a, b, c2] = [t[0], t[1], t[2]].map(|i| Vec3::from(hull.positions[i as usize]));
+        let f = (b - a).cross(c2 - a);
+        for &i in t {
+            nrm[i as usize] += f;
         }
     }
+    hull.normals = nrm.iter().map(|n| n.normalize_or(Vec3::Z).to_array()).collect();
     // trunk: root to crown base (or to the first node's end when the crown starts lower)
     let mut bark = TriMesh::default();
     if let Some(root) = sk.nodes.first() {

@@ -38,6 +38,9 @@ pub fn default_terrain() -> Result<Terrain> {
 /// Errors: [`Error::Io`] (missing file), [`Error::Format`] (corrupt or unsupported content,
 /// naming the field or line), [`Error::TooLarge`], [`Error::Invalid`] (no valid cell).
 pub fn load(path: &Path) -> Result<Terrain> {
+    if path.is_dir() {
+        return Err(Error::format(path, "is a folder: expected a DEM file (.tif, .tiff, .asc or .png)"));
+    }
     let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
     match ext.as_str() {
         "tif" | "tiff" => {
@@ -70,8 +73,20 @@ fn check_valid(path: &Path, g: &Grid<f32>) -> Result<()> {
             expected: "at least one finite elevation".into(),
         });
     }
+    if let Some(i) = g.data.iter().position(|v| v.is_finite() && !(ELEVATION_RANGE_M.0..=ELEVATION_RANGE_M.1).contains(v)) {
+        return Err(Error::Invalid {
+            context: path.display().to_string(),
+            field: format!("elevation at column {}, row {} (0-based, row 0 north)", i % g.width, i / g.width),
+            value: g.data[i].to_string(),
+            expected: format!("{} … {} m on Earth (an undeclared nodata value? declare it in the file's nodata field)", ELEVATION_RANGE_M.0, ELEVATION_RANGE_M.1),
+        });
+    }
     Ok(())
 }
+
+/// Elevations accepted from a DEM (m): the Challenger Deep (−10 935 m) to Everest (8 849 m)
+/// with a margin; anything outside is a fill value the file does not declare as nodata.
+pub const ELEVATION_RANGE_M: (f32, f32) = (-12_000.0, 9_000.0);
 
 fn tiff_err(path: &Path, what: &str, e: tiff::TiffError) -> Error {
     Error::format(path, format!("GeoTIFF {what}: {e} (truncated or corrupt file?)"))
@@ -187,10 +202,19 @@ fn parse_header_num(path: &Path, line_no: usize, key: &str, val: &str) -> Result
     val.parse::<f64>().map_err(|_| Error::format(path, format!("line {line_no}: header `{key}` = `{val}`: expected a number")))
 }
 
+/// True when an ESRI grid without a `.prj` can only be in degrees: a cell size below 0.01 (a
+/// 1 cm cell is not a terrain model in metres) and the whole grid inside longitude −180…180 and
+/// latitude −90…90.
+fn looks_geographic(xll: f64, yll: f64, cs: f64, w: usize, h: usize) -> bool {
+    let (x1, y1) = (xll + cs * w as f64, yll + cs * h as f64);
+    cs < 0.01 && xll >= -180.0 && x1 <= 180.0 && yll >= -90.0 && y1 <= 90.0
+}
+
 /// Reads an ESRI ASCII grid (`ncols`, `nrows`, `xllcorner|xllcenter`, `yllcorner|yllcenter`,
 /// `cellsize`, optional `NODATA_value`, then `nrows` lines of `ncols` values). A `.prj` beside
-/// it that names `GEOGCS` without `PROJCS` makes the grid geographic (degrees); without a `.prj`
-/// or with `PROJCS` it is projected (metres).
+/// it that names `GEOGCS` without `PROJCS` makes the grid geographic (degrees), with `PROJCS`
+/// projected (metres); without a `.prj` the grid is projected unless its cell size and extent
+/// can only be degrees (cell < 0.01, inside ±180° × ±90°: read as geographic, with a warning).
 ///
 /// Errors name the line: a header key missing or not a number, a data row with the wrong number
 /// of values, a value that is not a number, fewer or more rows than `nrows`.
@@ -269,7 +293,16 @@ pub fn load_asc(path: &Path) -> Result<Terrain> {
     let prj = path.with_extension("prj");
     let geographic = match std::fs::read_to_string(&prj) {
         Ok(s) => s.contains("GEOGCS") && !s.contains("PROJCS"),
-        Err(_) => false,
+        Err(_) => {
+            let deg = looks_geographic(xll, yll, cs, w, h);
+            if deg {
+                tracing::warn!(
+                    "{}: no .prj beside it; cell size {cs} and corner ({xll}, {yll}) are degrees, not metres: read as geographic (WGS 84). Put a .prj beside the file to be explicit.",
+                    path.display()
+                );
+            }
+            deg
+        }
     };
     let half = if centre { cs / 2.0 } else { 0.0 };
     let mut geo = GeoRef {

@@ -41,3 +41,70 @@ pub fn slope(pts: &[(f64, f64)]) -> f64 {
     let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
     sxy / sxx
 }
+
+/// Scenario TOML for the sim tests, built from parts instead of repeating the preamble in every
+/// test: top-level keys, one terrain, then the start conditions.
+///
+/// ```ignore
+/// let toml = common::ScenarioToml::new("thinning", 120, 3).species(&["beech"]).uniform(5, 5, 20.0, 200.0).planted("beech", 1.2, 3.0).build();
+/// ```
+#[derive(Debug, Clone)]
+pub struct ScenarioToml {
+    head: Vec<String>,
+    terrain: String,
+    starts: Vec<String>,
+}
+
+/// Site indices `[L, T, K, F, R, N]` of the flat test sites: a fresh, base-rich, beech-suitable site.
+pub const GOOD_SITE: [f32; 6] = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0];
+
+impl ScenarioToml {
+    /// `name`, `years` and `seed`; no terrain yet.
+    pub fn new(name: &str, years: u32, seed: u64) -> Self {
+        ScenarioToml { head: vec![format!("name = {name:?}"), format!("years = {years}"), format!("seed = {seed}")], terrain: String::new(), starts: Vec::new() }
+    }
+    /// Any further top-level line, e.g. `light_cell_m = 10.0` or `climate = { latitude_deg = 51.0 }`.
+    pub fn line(mut self, l: &str) -> Self {
+        self.head.push(l.to_string());
+        self
+    }
+    /// The species pool.
+    pub fn species(self, ids: &[&str]) -> Self {
+        let list: Vec<String> = ids.iter().map(|s| format!("{s:?}")).collect();
+        self.line(&format!("species = [{}]", list.join(", ")))
+    }
+    /// A flat uniform terrain of `width × height` cells of `cell_m` m at `elevation_m` on [`GOOD_SITE`].
+    pub fn uniform(self, width: usize, height: usize, cell_m: f64, elevation_m: f64) -> Self {
+        self.uniform_indices(width, height, cell_m, elevation_m, GOOD_SITE)
+    }
+    /// A flat uniform terrain with site indices `[L, T, K, F, R, N]`.
+    pub fn uniform_indices(mut self, width: usize, height: usize, cell_m: f64, elevation_m: f64, indices: [f32; 6]) -> Self {
+        self.terrain = format!("[terrain]\nuniform = {{ width = {width}, height = {height}, cell_m = {cell_m:?}, elevation_m = {elevation_m:?}, indices = {indices:?} }}\n");
+        self
+    }
+    /// A window `[col0, row0, width, height]` of the embedded default terrain (`terrains/`).
+    pub fn default_terrain(mut self, window: [usize; 4]) -> Self {
+        self.terrain = format!("[terrain]\ndefault = true\nwindow = {window:?}\n");
+        self
+    }
+    /// A planted stand over the whole terrain.
+    pub fn planted(mut self, species: &str, spacing_m: f64, age_yr: f64) -> Self {
+        self.starts.push(format!("[[start]]\nkind = \"planted\"\nspecies = {species:?}\nspacing_m = {spacing_m:?}\nage_yr = {age_yr:?}\n"));
+        self
+    }
+    /// Uniform seed rain (seeds per ha and year).
+    pub fn seed_rain(mut self, species: &str, seeds_per_ha: f64) -> Self {
+        self.starts.push(format!("[[start]]\nkind = \"seed_rain\"\nspecies = {species:?}\nseeds_per_ha = {seeds_per_ha:?}\n"));
+        self
+    }
+    /// Mature seed trees around points `[x, y]` (m).
+    pub fn seed_sources(mut self, species: &str, points: &[[f64; 2]], trees_per_source: u32) -> Self {
+        let pts: Vec<String> = points.iter().map(|p| format!("[{:?}, {:?}]", p[0], p[1])).collect();
+        self.starts.push(format!("[[start]]\nkind = \"seed_sources\"\nspecies = {species:?}\npoints = [{}]\ntrees_per_source = {trees_per_source}\n", pts.join(", ")));
+        self
+    }
+    /// The TOML text.
+    pub fn build(&self) -> String {
+        format!("{}\n{}{}", self.head.join("\n"), self.terrain, self.starts.join(""))
+    }
+}

@@ -66,55 +66,60 @@ pub fn run(w: &mut World) {
     let t = &w.trees;
     let lai_c: Vec<f32> = w.lib.species.iter().map(|s| crown_lai(s.life.shade_tolerance)).collect();
     // 1. stamp entries (key = cell << 32 | inverted height bits → ascending key = cell, tallest first)
-    let entries: Vec<(u64, f32)> = (0..t.len())
+    // stamped in chunks of trees (each chunk's entries in tree order), bucketed without
+    // concatenating the chunks
+    const TCHUNK: usize = 1 << 14;
+    let chunks: Vec<Vec<(u64, f32)>> = (0..t.len().div_ceil(TCHUNK))
         .into_par_iter()
-        .fold(Vec::new, |mut out, i| {
-            let r = t.crown_radius[i].max(0.05);
-            let s = r * 0.886_226_9; // half side of the equal-area square
-            let la = std::f32::consts::PI * r * r * lai_c[t.species[i] as usize];
-            let (x, y) = (t.x[i], t.y[i]);
-            let c0 = (((x - s) as f64 / cell).floor() as isize).max(0);
-            let c1 = (((x + s) as f64 / cell).floor() as isize).min(cols as isize - 1);
-            let r0 = (((y - s) as f64 / cell).floor() as isize).max(0);
-            let r1 = (((y + s) as f64 / cell).floor() as isize).min(rows as isize - 1);
-            let inv = u32::MAX - t.height[i].max(0.0).to_bits();
-            let sq = 4.0 * s * s;
-            for row in r0..=r1 {
-                let oy = ((y + s).min((row + 1) as f32 * cell as f32) - (y - s).max(row as f32 * cell as f32)).max(0.0);
-                for col in c0..=c1 {
-                    let ox = ((x + s).min((col + 1) as f32 * cell as f32) - (x - s).max(col as f32 * cell as f32)).max(0.0);
-                    let f = ox * oy / sq;
-                    if f > 0.0 {
-                        let c = row as u64 * cols as u64 + col as u64;
-                        out.push((c << 32 | inv as u64, la * f / cell_area));
+        .map(|k| {
+            let mut out = Vec::with_capacity(4 * TCHUNK);
+            for i in k * TCHUNK..((k + 1) * TCHUNK).min(t.len()) {
+                let r = t.crown_radius[i].max(0.05);
+                let s = r * 0.886_226_9; // half side of the equal-area square
+                let la = std::f32::consts::PI * r * r * lai_c[t.species[i] as usize];
+                let (x, y) = (t.x[i], t.y[i]);
+                let c0 = (((x - s) as f64 / cell).floor() as isize).max(0);
+                let c1 = (((x + s) as f64 / cell).floor() as isize).min(cols as isize - 1);
+                let r0 = (((y - s) as f64 / cell).floor() as isize).max(0);
+                let r1 = (((y + s) as f64 / cell).floor() as isize).min(rows as isize - 1);
+                let inv = u32::MAX - t.height[i].max(0.0).to_bits();
+                let sq = 4.0 * s * s;
+                for row in r0..=r1 {
+                    let oy = ((y + s).min((row + 1) as f32 * cell as f32) - (y - s).max(row as f32 * cell as f32)).max(0.0);
+                    for col in c0..=c1 {
+                        let ox = ((x + s).min((col + 1) as f32 * cell as f32) - (x - s).max(col as f32 * cell as f32)).max(0.0);
+                        let f = ox * oy / sq;
+                        if f > 0.0 {
+                            let c = row as u64 * cols as u64 + col as u64;
+                            out.push((c << 32 | inv as u64, la * f / cell_area));
+                        }
                     }
                 }
             }
             out
         })
-        .reduce(Vec::new, |mut a, mut b| {
-            a.append(&mut b);
-            a
-        });
+        .collect();
     // Bucket the entries by cell (counting sort, O(E)), then sort each cell's few entries by
     // (key, leaf area): a total order, so the result does not depend on the scheduling.
     let ncell = cols * rows;
     let mut start = vec![0u32; ncell + 1];
-    for e in &entries {
+    for e in chunks.iter().flatten() {
         start[(e.0 >> 32) as usize + 1] += 1;
     }
     for c in 0..ncell {
         start[c + 1] += start[c];
     }
-    let mut sorted = vec![(0u64, 0f32); entries.len()];
+    let n_entries = start[ncell] as usize;
+    let mut sorted = vec![(0u64, 0f32); n_entries];
     {
         let mut pos: Vec<u32> = start[..ncell].to_vec();
-        for e in &entries {
+        for e in chunks.iter().flatten() {
             let c = (e.0 >> 32) as usize;
             sorted[pos[c] as usize] = *e;
             pos[c] += 1;
         }
     }
+    drop(chunks);
     let entries = {
         let mut segs: Vec<&mut [(u64, f32)]> = Vec::with_capacity(ncell);
         let mut rest: &mut [(u64, f32)] = &mut sorted;
@@ -158,10 +163,29 @@ pub fn run(w: &mut World) {
         }
     };
     let (ls, ri) = (&w.light_site, &w.rel_insolation);
-    let light: Vec<f32> = (0..t.len()).into_par_iter().map(|i| {
-        let c = grid.cell_of(t.x[i], t.y[i]);
-        light_at(c, t.height[i], rel_of(c, ls, ri))
-    }).collect();
+    // Trees are queried cell by cell (the spatial grid's order), so that the canopy profile of
+    // a cell is read once from memory for all its trees, then scattered back to tree order.
+    const BLOCK: usize = 2048;
+    let by_cell: Vec<Vec<f32>> = (0..ncell.div_ceil(BLOCK))
+        .into_par_iter()
+        .map(|b| {
+            let (c0, c1) = (b * BLOCK, ((b + 1) * BLOCK).min(ncell));
+            let mut out = Vec::with_capacity((grid.start[c1] - grid.start[c0]) as usize);
+            for c in c0..c1 {
+                let rel = rel_of(c, ls, ri);
+                out.extend(grid.cell(c).iter().map(|&i| light_at(c, t.height[i as usize], rel)));
+            }
+            out
+        })
+        .collect();
+    let mut light = vec![0f32; t.len()];
+    let mut k = 0;
+    for v in by_cell {
+        for l in v {
+            light[grid.items[k] as usize] = l;
+            k += 1;
+        }
+    }
     let ground: Vec<f32> = (0..cols * rows).into_par_iter().map(|c| light_at(c, 0.0, rel_of(c, ls, ri))).collect();
     w.trees.light = light;
     w.ground_light = ground;

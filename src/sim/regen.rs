@@ -1,0 +1,412 @@
+//! Regeneration layer: cohorts of saplings below the recruitment height, one cohort per light
+//! cell and species, as in iLand's sapling layer (Seidl et al. 2012, Ecol. Model. 231:87–100:
+//! saplings on 2 m cells up to 4 m height, recruited as individual trees when they pass 4 m) and
+//! the height-class cohorts of SORTIE/ForClim.
+//!
+//! A cohort holds a stem count, a mean height (m), an age (years) and a vigour memory. Once a
+//! year, in spring, for every unmasked light cell (parallel over blocks of cells, each cell with
+//! its own keyed random streams, so results do not depend on thread count):
+//! 1. **Germination**: per pool species, `n ~ Poisson(λ)` new stems with
+//!    `λ = seeds/m² · cell area · establishment_rate · suitability` (as for the former individual
+//!    seedlings), where the ground light reaches the species' `germination_min_light` and the
+//!    suitability is at least 0.05. Germinants join the species' cohort of the cell while it is
+//!    still a seedling bank (mean height below [`SEEDLING_STAGE_M`], stem-weighted mean height
+//!    and age); where the species already has advance regeneration taller than that, its seeds
+//!    fail (one cohort per cell and species, as one cohort per pixel in iLand).
+//! 2. **Growth**: `ΔH = ΔH_pot(H) · f(L_ground) · S` — the trees' height growth
+//!    ([`potential_increment`], [`light_response`], suitability `S`) with the ground light of the
+//!    cell under the tree canopy. Cohorts do not shade each other or the trees: they stay out of
+//!    the canopy grid (they are under it); competition within the layer is the density cap.
+//! 3. **Shade mortality** (cause `shade`): vigour `v ← 0.7 v + 0.3 f(L)·S` as for trees; while
+//!    `v` is below the species' [`stress_threshold`], each stem dies with [`P_STRESS`]
+//!    (Bugmann 2001), a binomial draw.
+//! 4. **Crowding** (cause `crowding`): a stem of height `h` occupies `1 / N_max(h)` ha with the
+//!    self-thinning line [`max_density_ha`] `N_max(h) = 2500 · (h / 4 m)^(−1.605)` stems/ha —
+//!    Reineke's (1933) exponent, with sapling diameter taken proportional to height (a choice of
+//!    this model), anchored at one tree per 4 m² at the recruitment height (the density of one
+//!    tree per 2 m × 2 m cell of iLand's sapling layer). Cohorts are served tallest first; stems
+//!    that do not fit into the cell die.
+//! 5. **Recruitment**: a cohort reaching [`RECRUIT_HEIGHT_M`] becomes individual trees (all its
+//!    stems) at random positions in the light cell on unmasked site cells, with the cohort's
+//!    height and age, 0.8 × open-grown DBH (as planted trees), and a crown shrunk by the ground
+//!    light like shaded trees.
+//!
+//! Mass balance per species (tested): germinated = alive in cohorts + dead (shade, crowding) +
+//! recruited, kept in [`RegenLedger`].
+
+use super::phases::growth::{light_response, open_crown_radius, open_dbh, potential_increment};
+use super::phases::mortality::{stress_threshold, P_STRESS};
+use super::trees::NewTree;
+use super::world::World;
+use crate::rng::{salt, Stream};
+use rayon::prelude::*;
+
+/// Height (m) at which a cohort's stems become individual trees (iLand: 4 m).
+pub const RECRUIT_HEIGHT_M: f32 = 4.0;
+/// Height (m) of germinants at the start of their first season.
+pub const GERMINANT_HEIGHT_M: f32 = 0.3;
+/// Mean height (m) below which a cohort still takes new germinants of its species.
+pub const SEEDLING_STAGE_M: f32 = 1.3;
+/// Maximum stem density (stems/ha) at the recruitment height: one per 4 m² (iLand's 2 m
+/// sapling cells, Seidl et al. 2012).
+pub const RECRUIT_DENSITY_HA: f64 = 2500.0;
+/// Exponent of the sapling self-thinning line in height (Reineke 1933: 1.605, with DBH ∝ height).
+pub const DENSITY_EXPONENT: f64 = 1.605;
+/// Random-stream salt of the regeneration layer's mortality draws.
+pub const SALT_REGEN_MORTALITY: u64 = 0x2E6E_DEAD;
+/// Random-stream salt of the recruits' positions.
+pub const SALT_RECRUIT: u64 = 0x2EC2_0117;
+
+/// Number of causes of death in the regeneration layer ([`RegenDeath::ALL`]).
+pub const N_REGEN_CAUSES: usize = 2;
+
+/// Why sapling stems of a cohort died.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RegenDeath {
+    /// Light-dependent (stress) mortality: vigour below the species' threshold.
+    Shade,
+    /// The density cap [`max_density_ha`] of the cell.
+    Crowding,
+}
+
+impl RegenDeath {
+    /// All causes in output order.
+    pub const ALL: [RegenDeath; N_REGEN_CAUSES] = [RegenDeath::Shade, RegenDeath::Crowding];
+    /// Lower-case name used in outputs (`regen_deaths_<name>`).
+    pub fn name(self) -> &'static str {
+        match self {
+            RegenDeath::Shade => "shade",
+            RegenDeath::Crowding => "crowding",
+        }
+    }
+}
+
+/// Self-thinning line of the regeneration layer: the maximum stems per hectare of saplings of
+/// mean height `h` (m), `N_max(h) = 2500 · (h / 4 m)^(−1.605)` (see the module docs); `h` is
+/// floored at 0.05 m. 2,500/ha at 4 m, 15,200/ha at 1.3 m, 160,000/ha at 0.3 m.
+#[inline]
+pub fn max_density_ha(h: f32) -> f64 {
+    RECRUIT_DENSITY_HA * (h.max(0.05) as f64 / RECRUIT_HEIGHT_M as f64).powf(-DENSITY_EXPONENT)
+}
+
+/// One cohort.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Cohort {
+    /// Light cell index (row-major, row 0 south).
+    pub cell: u32,
+    /// Position of the species in the pool.
+    pub pool: u16,
+    /// Number of stems.
+    pub stems: u32,
+    /// Mean height (m), below [`RECRUIT_HEIGHT_M`].
+    pub height: f32,
+    /// Age (years).
+    pub age: f32,
+    /// Vigour memory (0–1), as for trees.
+    pub vigour: f32,
+}
+
+/// All cohorts, struct of arrays sorted by (cell, pool position); at most one per pair.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Cohorts {
+    /// Light cell index.
+    pub cell: Vec<u32>,
+    /// Pool position of the species.
+    pub pool: Vec<u16>,
+    /// Stems.
+    pub stems: Vec<u32>,
+    /// Mean height (m).
+    pub height: Vec<f32>,
+    /// Age (years).
+    pub age: Vec<f32>,
+    /// Vigour memory (0–1).
+    pub vigour: Vec<f32>,
+}
+
+impl Cohorts {
+    /// Number of cohorts.
+    pub fn len(&self) -> usize {
+        self.cell.len()
+    }
+    /// True when there is no cohort.
+    pub fn is_empty(&self) -> bool {
+        self.cell.is_empty()
+    }
+    /// Cohort `i`.
+    pub fn get(&self, i: usize) -> Cohort {
+        Cohort { cell: self.cell[i], pool: self.pool[i], stems: self.stems[i], height: self.height[i], age: self.age[i], vigour: self.vigour[i] }
+    }
+    /// Appends a cohort (the caller keeps the (cell, pool) order).
+    pub fn push(&mut self, c: Cohort) {
+        self.cell.push(c.cell);
+        self.pool.push(c.pool);
+        self.stems.push(c.stems);
+        self.height.push(c.height);
+        self.age.push(c.age);
+        self.vigour.push(c.vigour);
+    }
+    /// Total stems.
+    pub fn total_stems(&self) -> u64 {
+        self.stems.iter().map(|&n| n as u64).sum()
+    }
+    /// Stems per pool species (`np` species).
+    pub fn stems_per_species(&self, np: usize) -> Vec<u64> {
+        let mut v = vec![0u64; np];
+        for (p, n) in self.pool.iter().zip(&self.stems) {
+            if let Some(x) = v.get_mut(*p as usize) {
+                *x += *n as u64;
+            }
+        }
+        v
+    }
+    /// Approximate heap size in bytes.
+    pub fn heap_bytes(&self) -> usize {
+        self.cell.capacity() * 22
+    }
+}
+
+/// Cumulative counts of the regeneration layer per pool species (pool order), since the start.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct RegenLedger {
+    /// Stems germinated.
+    pub germinated: Vec<u64>,
+    /// Stems recruited into the tree store.
+    pub recruited: Vec<u64>,
+    /// Stems dead by cause ([`RegenDeath::ALL`] order).
+    pub dead: Vec<[u64; N_REGEN_CAUSES]>,
+}
+
+impl RegenLedger {
+    /// An empty ledger for `np` pool species.
+    pub fn new(np: usize) -> Self {
+        RegenLedger { germinated: vec![0; np], recruited: vec![0; np], dead: vec![[0; N_REGEN_CAUSES]; np] }
+    }
+}
+
+/// The regeneration layer's counts of one year (all species).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct RegenYear {
+    /// Stems germinated.
+    pub germinated: u64,
+    /// Stems recruited into the tree store.
+    pub recruited: u64,
+    /// Stems dead by cause ([`RegenDeath::ALL`] order).
+    pub dead: [u64; N_REGEN_CAUSES],
+}
+
+/// Binomial draw `B(n, p)`: Bernoulli trials up to 64 stems, a rounded normal approximation
+/// (clamped to 0..=n) above.
+fn binomial(r: &mut Stream, n: u32, p: f64) -> u32 {
+    if n <= 64 {
+        (0..n).filter(|_| r.chance(p)).count() as u32
+    } else {
+        let m = n as f64 * p;
+        let x = m + (m * (1.0 - p)).sqrt() * r.normal();
+        x.round().clamp(0.0, n as f64) as u32
+    }
+}
+
+/// Output of one block of cells.
+#[derive(Default)]
+struct Block {
+    cohorts: Vec<Cohort>,
+    recruits: Vec<(NewTree, f32, f32)>,
+    germinated: Vec<u64>,
+    recruited: Vec<u64>,
+    dead: Vec<[u64; N_REGEN_CAUSES]>,
+}
+
+/// Cells per parallel work item.
+const BLOCK: usize = 1024;
+
+/// Updates the regeneration layer for one year (germination, growth, shade mortality, crowding,
+/// recruitment; see the module docs), adds the recruits to the tree store (light and vigour set
+/// from the cohort) and the year's counts to `w.regen_ledger` / `w.regen_year`. Returns the
+/// number of recruits.
+pub fn run(w: &mut World) -> usize {
+    let ncell = w.light_site.len();
+    let cell = w.light_cell_m;
+    let cols = ((w.extent.0 / cell).ceil() as usize).max(1);
+    let area = cell * cell;
+    let np = w.pool.len();
+    let (seed, year) = (w.seed, w.year as u64);
+    let coh = &w.cohorts;
+    let wr: &World = w;
+    let blocks: Vec<Block> = (0..ncell.div_ceil(BLOCK))
+        .into_par_iter()
+        .map(|b| {
+            let (c0, c1) = (b * BLOCK, ((b + 1) * BLOCK).min(ncell));
+            let mut out = Block { germinated: vec![0; np], recruited: vec![0; np], dead: vec![[0; N_REGEN_CAUSES]; np], ..Default::default() };
+            let mut i = coh.cell.partition_point(|&c| (c as usize) < c0);
+            let mut local: Vec<Cohort> = Vec::new();
+            for c in c0..c1 {
+                let mut j = i;
+                while j < coh.cell.len() && coh.cell[j] as usize == c {
+                    j += 1;
+                }
+                local.clear();
+                local.extend((i..j).map(|k| coh.get(k)));
+                i = j;
+                let site = wr.light_site[c];
+                if site == u32::MAX {
+                    // masked light cell: no regeneration (cohorts never arise here)
+                    continue;
+                }
+                let site = site as usize;
+                let gl = wr.ground_light[c];
+                let (col, row) = (c % cols, c / cols);
+                let (cx, cy) = ((col as f64 + 0.5) * cell, (row as f64 + 0.5) * cell);
+                // 1. germination
+                let mut r = Stream::new(seed, c as u64, year, salt::ESTABLISH);
+                let cap0 = max_density_ha(GERMINANT_HEIGHT_M) * area / 10_000.0;
+                for (p, &s) in wr.pool.iter().enumerate() {
+                    let sp = &wr.lib.species[s as usize];
+                    let suit = wr.suitability[p][site];
+                    if gl < sp.life.germination_min_light || suit < 0.05 {
+                        continue;
+                    }
+                    let seeds = (wr.seeds[p].at(cx, cy) + wr.seed_rain[p]) as f64 * area;
+                    let lambda = seeds * sp.life.establishment_rate as f64 * suit as f64;
+                    let n = r.poisson(lambda.min(4.0 * cap0)) as u32;
+                    if n == 0 {
+                        continue;
+                    }
+                    match local.iter_mut().find(|k| k.pool as usize == p) {
+                        Some(k) if k.height < SEEDLING_STAGE_M => {
+                            let tot = (k.stems + n) as f32;
+                            k.height = (k.height * k.stems as f32 + GERMINANT_HEIGHT_M * n as f32) / tot;
+                            k.age = (k.age * k.stems as f32) / tot;
+                            k.vigour = (k.vigour * k.stems as f32 + n as f32) / tot;
+                            k.stems += n;
+                            out.germinated[p] += n as u64;
+                        }
+                        Some(_) => {}
+                        None => {
+                            local.push(Cohort { cell: c as u32, pool: p as u16, stems: n, height: GERMINANT_HEIGHT_M, age: 0.0, vigour: 1.0 });
+                            out.germinated[p] += n as u64;
+                        }
+                    }
+                }
+                if local.is_empty() {
+                    continue;
+                }
+                // 2. growth and 3. shade mortality
+                let mut rm = Stream::new(seed, c as u64, year, SALT_REGEN_MORTALITY);
+                for k in local.iter_mut() {
+                    let sp = &wr.lib.species[wr.pool[k.pool as usize] as usize];
+                    let f = light_response(gl, sp.life.shade_tolerance) * wr.suitability[k.pool as usize][site];
+                    k.height = (k.height + potential_increment(sp, k.height) * f).min(sp.life.max_height_m);
+                    k.age += 1.0;
+                    k.vigour = 0.7 * k.vigour + 0.3 * f;
+                    if k.vigour < stress_threshold(sp.life.shade_tolerance) {
+                        let d = binomial(&mut rm, k.stems, P_STRESS);
+                        k.stems -= d;
+                        out.dead[k.pool as usize][RegenDeath::Shade as usize] += d as u64;
+                    }
+                }
+                // 4. crowding, tallest first
+                local.sort_by(|a, b| b.height.total_cmp(&a.height).then(a.pool.cmp(&b.pool)));
+                let mut occ = 0.0f64;
+                for k in local.iter_mut() {
+                    let u = 10_000.0 / (max_density_ha(k.height) * area);
+                    let room = ((1.0 - occ) / u + 1e-9).floor().max(0.0) as u32;
+                    if k.stems > room {
+                        out.dead[k.pool as usize][RegenDeath::Crowding as usize] += (k.stems - room) as u64;
+                        k.stems = room;
+                    }
+                    occ += k.stems as f64 * u;
+                }
+                // 5. recruitment
+                local.sort_by_key(|k| k.pool);
+                let mut rr = Stream::new(seed, c as u64, year, SALT_RECRUIT);
+                for k in local.iter() {
+                    if k.stems == 0 {
+                        continue;
+                    }
+                    if k.height < RECRUIT_HEIGHT_M {
+                        out.cohorts.push(*k);
+                        continue;
+                    }
+                    let s = wr.pool[k.pool as usize];
+                    let sp = &wr.lib.species[s as usize];
+                    for _ in 0..k.stems {
+                        let mut pos = None;
+                        for _ in 0..8 {
+                            let (x, y) = ((col as f64 + rr.uniform()) * cell, (row as f64 + rr.uniform()) * cell);
+                            if let Some(sc) = wr.site_cell(x, y) {
+                                pos = Some((x, y, sc));
+                                break;
+                            }
+                        }
+                        let (x, y, sc) = pos.unwrap_or((cx, cy, site));
+                        let d = open_dbh(sp, k.height) * 0.8;
+                        let t = NewTree {
+                            species: s,
+                            x: x as f32,
+                            y: y as f32,
+                            z: wr.site.elevation_at(x, y),
+                            age: k.age,
+                            height: k.height,
+                            dbh: d,
+                            crown_radius: open_crown_radius(sp, k.height, d) * (0.5 + 0.5 * gl.clamp(0.0, 1.0)),
+                            suitability: wr.suitability[k.pool as usize][sc],
+                        };
+                        out.recruits.push((t, gl, k.vigour));
+                    }
+                    out.recruited[k.pool as usize] += k.stems as u64;
+                }
+            }
+            out
+        })
+        .collect();
+    let mut cohorts = Cohorts::default();
+    let mut year_counts = RegenYear::default();
+    let mut n_recruits = 0;
+    let ledger = &mut w.regen_ledger;
+    for b in blocks {
+        for k in b.cohorts {
+            cohorts.push(k);
+        }
+        for p in 0..np {
+            ledger.germinated[p] += b.germinated[p];
+            ledger.recruited[p] += b.recruited[p];
+            year_counts.germinated += b.germinated[p];
+            year_counts.recruited += b.recruited[p];
+            for q in 0..N_REGEN_CAUSES {
+                ledger.dead[p][q] += b.dead[p][q];
+                year_counts.dead[q] += b.dead[p][q];
+            }
+        }
+        for (t, light, vigour) in b.recruits {
+            w.trees.push(t);
+            *w.trees.light.last_mut().expect("just pushed") = light;
+            *w.trees.vigour.last_mut().expect("just pushed") = vigour;
+            n_recruits += 1;
+        }
+    }
+    w.cohorts = cohorts;
+    w.regen_year = year_counts;
+    n_recruits
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn density_line_anchors() {
+        assert!((max_density_ha(4.0) - 2500.0).abs() < 1e-6);
+        assert!((max_density_ha(1.3) / 15_200.0 - 1.0).abs() < 0.01, "{}", max_density_ha(1.3));
+        assert!((max_density_ha(0.3) / 160_000.0 - 1.0).abs() < 0.02, "{}", max_density_ha(0.3));
+    }
+
+    #[test]
+    fn binomial_mean() {
+        let mut r = Stream::new(1, 2, 3, 4);
+        let small: u32 = (0..2000).map(|_| binomial(&mut r, 10, 0.3)).sum();
+        assert!((small as f64 / 2000.0 - 3.0).abs() < 0.15);
+        let big: u32 = (0..2000).map(|_| binomial(&mut r, 1000, 0.368)).sum();
+        assert!((big as f64 / 2000.0 - 368.0).abs() < 2.0);
+        assert!((0..100).all(|_| binomial(&mut r, 5, 1.0) == 5 && binomial(&mut r, 500, 0.0) == 0));
+    }
+}

@@ -1,0 +1,122 @@
+//! Command-line behaviour a script relies on: Ctrl-C ends a simulation with status 130 after a
+//! complete year (outputs intact, resumable); a closed output pipe ends a command quietly.
+use std::process::{Command, Stdio};
+
+const LONG: &str = r#"
+name = "long"
+years = 1000
+seed = 3
+snapshot_every = 1
+checkpoint_every = 1
+species = ["beech"]
+[terrain]
+uniform = { width = 10, height = 10, cell_m = 20.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }
+[[start]]
+kind = "planted"
+species = "beech"
+spacing_m = 2.0
+age_yr = 10.0
+"#;
+
+#[test]
+fn ctrl_c_stops_after_a_year_with_status_130_and_a_checkpoint() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("long.toml"), LONG).unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["simulate", "long.toml", "--out", "run"]).current_dir(d).stderr(Stdio::piped()).spawn().unwrap();
+    // wait until the simulation is under way (its Ctrl-C handler is installed before year 1)
+    let marker = d.join("run/inventory/year_0002.csv");
+    while !marker.exists() {
+        assert!(child.try_wait().unwrap().is_none(), "the run ended before it could be interrupted");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    unsafe {
+        libc::kill(child.id() as i32, libc::SIGINT);
+    }
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert!(err.contains("--resume") && !err.contains("panicked"), "{err}");
+    assert!(d.join("run/checkpoint.bin").exists());
+    let table = std::fs::read_to_string(d.join("run/stand_table.csv")).unwrap();
+    let years = table.lines().count() - 1;
+    assert!((2..1000).contains(&years), "{years} rows");
+}
+
+#[test]
+fn a_closed_output_pipe_ends_quietly() {
+    let mut fds = [0i32; 2];
+    assert_eq!(unsafe { libc::pipe(fds.as_mut_ptr()) }, 0);
+    // close the read end first: the first line the program prints meets a closed pipe
+    unsafe {
+        libc::close(fds[0]);
+    }
+    let write_end = unsafe { <std::os::fd::OwnedFd as std::os::fd::FromRawFd>::from_raw_fd(fds[1]) };
+    let out = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["species", "list"]).stdout(Stdio::from(write_end)).stderr(Stdio::piped()).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
+    use std::os::unix::process::ExitStatusExt;
+    assert_eq!(out.status.signal(), Some(libc::SIGPIPE), "ended by SIGPIPE like other Unix tools: {:?} {err}", out.status);
+}
+
+#[test]
+fn terrain_options_refuse_nan_and_out_of_range_values() {
+    for (opt, val, want) in [("--latitude", "nan", "-90 to 90"), ("--latitude", "200", "-90 to 90"), ("--sea-level", "nan", "finite"), ("--max-height", "inf", "finite")] {
+        let out = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info", &format!("{opt}={val}")]).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && err.contains(opt) && err.contains(want), "{opt}={val}: {err}");
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info", "--latitude", "-30.5", "--generate", "--size", "16"]).output().unwrap();
+    let so = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success() && so.contains("latitude:    -30.500° (--latitude"), "{so}");
+}
+
+#[test]
+fn folders_and_files_mixed_up_get_plain_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::create_dir(d.join("empty")).unwrap();
+    std::fs::write(d.join("afile"), b"x").unwrap();
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).current_dir(d).output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    for (args, want) in [
+        (&["species", "check", "empty"][..], "no species files"),
+        (&["species", "show", "beech", "--dir", "nowhere"][..], "no such folder"),
+        (&["terrain", "info", "empty"][..], "is a folder"),
+        (&["run", "--out", "afile", "--years", "1"][..], "is a file"),
+    ] {
+        let (ok, err) = run(args);
+        assert!(!ok && err.contains(want), "{args:?}: {err}");
+    }
+    // without ./species, `species check` checks the shipped library
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["species", "check"]).current_dir(d).output().unwrap();
+    assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("shipped library: 17 species"));
+}
+
+#[test]
+fn ground_camera_steps_out_of_a_trunk_into_a_clearing() {
+    use sylva::job::inventory::InventoryRow;
+    use sylva::render::camera::CameraPreset;
+    let sc = sylva::sim::Scenario::from_toml_str(
+        "name = \"g\"\nyears = 1\n[terrain]\nuniform = { width = 20, height = 20, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 4, 5, 6, 6] }\n",
+        "g",
+    )
+    .unwrap();
+    let stage = sylva::job::pictures::Stage::new(sc.site().unwrap(), sylva::species::SpeciesLibrary::embedded().unwrap(), 0.0).expect("a wgpu adapter (lavapipe in CI)");
+    let preset = stage.camera(CameraPreset::Ground);
+    let tree = |id: u64, x: f32, y: f32| InventoryRow { id, species: "beech".into(), x_m: x as f64, y_m: y as f64, z_m: 300.0, age_yr: 60.0, height_m: 25.0, dbh_cm: 30.0, crown_radius_m: 3.0, crown_base_m: 10.0, status: "alive".into() };
+    // a beech right where the preset's eye stands, and a row of them along the southern edge
+    let (x0, y0) = (preset.eye[0], preset.eye[1]);
+    let mut rows: Vec<InventoryRow> = (0..8).map(|k| tree(k, x0 - 28.0 + 8.0 * k as f32, y0)).collect();
+    rows.push(tree(99, x0, y0));
+    let cam = stage.camera_for(CameraPreset::Ground, &rows);
+    let clear = rows.iter().map(|r| ((r.x_m as f32 - cam.eye[0]).hypot(r.y_m as f32 - cam.eye[1]) - r.crown_radius_m)).fold(f32::INFINITY, f32::min);
+    assert!(clear > 0.5, "eye {:?} still inside a crown (clearance {clear} m)", cam.eye);
+    assert!((cam.eye[2] - 301.7).abs() < 0.2, "eye at 1.7 m above the ground: {:?}", cam.eye);
+    assert!(cam.target[1] > cam.eye[1], "still looking north");
+    // with nobody in the way the preset is kept
+    let far = [tree(1, 10.0, 190.0)];
+    assert_eq!(stage.camera_for(CameraPreset::Ground, &far).eye, preset.eye);
+}

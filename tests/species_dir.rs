@@ -1,0 +1,50 @@
+//! A species made with `sylva species new` is usable everywhere: `simulate --species-dir`,
+//! the run keeps its species files in `RUN/species/`, and `render` finds them there.
+use std::process::Command;
+
+const SC: &str = r#"
+name = "custom species"
+years = 3
+seed = 5
+snapshot_every = 3
+species = ["my_beech"]
+[terrain]
+uniform = { width = 4, height = 4, cell_m = 20.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }
+[[start]]
+kind = "planted"
+species = "my_beech"
+spacing_m = 5.0
+age_yr = 15.0
+"#;
+
+fn sylva(args: &[&str], cwd: &std::path::Path) -> (bool, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).current_dir(cwd).output().unwrap();
+    (o.status.success(), format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr)))
+}
+
+#[test]
+fn a_new_species_simulates_and_renders_from_its_folder() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let (ok, log) = sylva(&["species", "new", "my_beech", "--from", "beech", "--dir", "mine"], d);
+    assert!(ok, "{log}");
+    std::fs::write(d.join("sc.toml"), SC).unwrap();
+    // without the folder the species is unknown, and the error says which one
+    let (ok, log) = sylva(&["simulate", "sc.toml", "--out", "run0"], d);
+    assert!(!ok && log.contains("my_beech"), "{log}");
+    let (ok, log) = sylva(&["simulate", "sc.toml", "--out", "run", "--species-dir", "mine"], d);
+    assert!(ok, "{log}");
+    let saved = std::fs::read_to_string(d.join("run/species/my_beech.toml")).unwrap();
+    assert!(saved.contains("my_beech"));
+    let inv = std::fs::read_to_string(d.join("run/inventory/year_0003.csv")).unwrap();
+    let planted = inv.lines().filter(|l| l.contains("my_beech")).count();
+    assert!(planted >= 9, "16 planted trees at 5 m on 80 m × 80 m, {planted} in the inventory");
+    // render finds the species in the run directory without being told
+    let (ok, log) = sylva(&["render", "run", "--size", "64x48", "--out", "f.png"], d);
+    assert!(ok, "{log}");
+    assert!(log.contains("year 3") && !log.contains("0 trees drawn"), "{log}");
+    // a species folder with a broken file is refused, naming the file
+    std::fs::write(d.join("mine/broken.toml"), "id = 3\n").unwrap();
+    let (ok, log) = sylva(&["simulate", "sc.toml", "--out", "run2", "--species-dir", "mine"], d);
+    assert!(!ok && log.contains("broken.toml"), "{log}");
+}
