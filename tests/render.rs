@@ -372,9 +372,13 @@ fn gpu_and_cpu_culling_select_the_same_levels_and_images_agree() {
             // images agree
             let (d, f) = (mean_abs_diff(&cpu, &gpu), frac_off(&cpu, &gpu, 48));
             assert!(d < 0.5 && f < 0.005, "camera {k}: cpu vs gpu images: mean {d:.3}, {:.2} % pixels off", f * 100.0);
-            // the GPU path is deterministic although its compaction order is not
+            // the GPU path is deterministic although its compaction order is not (all fades are
+            // order-free dithers, canopy sums are integer atomics); rarely one pixel flips where
+            // two instances' fragments tie in depth and the unordered compaction decides which
+            // is drawn first (seen once per few runs on lavapipe: mean 7e-5), hence the tolerance
             let gpu2 = render_with(r, Culling::Gpu, &scene, cam, 240, 160).unwrap();
-            assert_eq!(mean_abs_diff(&gpu, &gpu2), 0.0, "camera {k}: GPU path rendered two different images");
+            let (d2, f2) = (mean_abs_diff(&gpu, &gpu2), frac_off(&gpu, &gpu2, 8));
+            assert!(d2 < 0.01 && f2 < 0.0005, "camera {k}: GPU path rendered two different images: mean {d2}, {f2}");
         }
     });
 }
@@ -586,5 +590,35 @@ fn triangle_budget_bounds_a_view_inside_the_forest_on_both_paths() {
             assert_eq!(a.per_level, b.per_level);
             assert!(mean_abs_diff(ia, ib) < 0.5);
         }
+    });
+}
+
+#[test]
+fn showcase_real_species_levels_for_inspection() {
+    // writes target/tmp/render/species_levels.png: the embedded species' EcoMod chains on a
+    // flat plot, from a ground camera, so the near (full), reduced, hull and billboard levels
+    // and the canopy layer can be looked at side by side
+    let lib = sylva::species::SpeciesLibrary::embedded().unwrap();
+    let protos = sylva::job::scene::prototypes(&lib);
+    let n = protos.len() as u32;
+    let mut trees = Vec::new();
+    let mut k = 0u64;
+    for row in 0..40u32 {
+        for col in 0..24u32 {
+            let x = (col as f32 - 11.5) * 7.0 + (row % 2) as f32 * 3.0;
+            let y = 15.0 + row as f32 * 4.5;
+            let s = (col + row) % n;
+            let leaf = protos[s as usize].leaf_color;
+            trees.push(TreeInstance::new(k, [x, y, 0.0], 24.0, 4.0, s, leaf));
+            k += 1;
+        }
+    }
+    let mut scene = flat_scene(trees);
+    scene.prototypes = protos;
+    let cam = Camera::look_at([0.0, -5.0, 9.0], [0.0, 80.0, 8.0], 50.0);
+    with_renderer(|r| {
+        let img = r.render(&scene, &cam, 640, 360).unwrap();
+        img.save(out_dir().join("species_levels.png")).unwrap();
+        eprintln!("species levels: {:?}", r.last_stats());
     });
 }

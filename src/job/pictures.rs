@@ -42,6 +42,9 @@ impl Stage {
         // sizes keep mid-distance crowns as meshes rather than billboards.
         renderer.lod.max_triangles = 30_000_000;
         renderer.lod.switch_px = [110.0, 45.0, 18.0];
+        // no far-field triangle budget for stills: only trees under `canopy_px` (6 px) go to
+        // the canopy layer
+        renderer.lod.max_geometry_triangles = 0;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
         Ok(Stage { site, library, prototypes, terrain, sea_level: has_water.then_some(sea_level_m), renderer })
     }

@@ -42,6 +42,10 @@ struct Globals {
     wind: [f32; 4],
     params: [f32; 4],
     facing: [f32; 4],
+    /// canopy grid: origin x, y (m), texel (m), on (1) / off (0)
+    canopy0: [f32; 4],
+    /// canopy grid: nx, ny, oblique-view factor k, unused
+    canopy1: [f32; 4],
 }
 
 /// Per-prototype outline record of `shaders/scene.wgsl` (`Sil`).
@@ -61,6 +65,10 @@ struct CullParams {
     lod: [f32; 4],
     misc: [f32; 4],
     counts: [u32; 4],
+    /// canopy grid origin x, y (m), texel (m); base far-field switch (px, 0 = off)
+    canopy: [f32; 4],
+    /// canopy grid nx, ny; geometry triangle budget of the far-field switch (0 = none); unused
+    canopy_n: [u32; 4],
 }
 
 /// Where culling and level-of-detail selection run.
@@ -102,6 +110,7 @@ struct GpuCull {
 
 struct GpuFrame {
     slots: Vec<GpuSlot>,
+    /// Whether the `hist` and `choose` passes run (either triangle budget).
     budget: bool,
     invalid: usize,
     valid: usize,
@@ -127,6 +136,23 @@ struct TreeVertex {
     pos: [f32; 3],
     normal: [f32; 3],
     mat: f32,
+    /// Card coordinates 0..1 of leaf cards (carved into discs by the fragment shader); −1
+    /// elsewhere.
+    uv: [f32; 2],
+}
+
+/// Whether `m` is a set of leaf cards: quads of 4 vertices and 2 triangles each with texture
+/// coordinates (0,0), (1,0), (1,1), (0,1) (`structure::mesh` cards).
+fn is_cards(m: &crate::mesh::TriMesh) -> bool {
+    let n = m.positions.len();
+    n > 0
+        && n % 4 == 0
+        && m.uvs.len() == n
+        && m.indices.len() == n / 4 * 6
+        && m.uvs.chunks(4).all(|q| {
+            let want = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+            q.iter().zip(want).all(|(a, b)| (a[0] - b[0]).abs() < 1e-4 && (a[1] - b[1]).abs() < 1e-4)
+        })
 }
 
 struct GpuLevel {
@@ -145,6 +171,9 @@ struct GpuScene {
     water_vb: Option<wgpu::Buffer>,
     /// Drawn levels per prototype (chain meshes, then the billboard).
     protos: Vec<Vec<GpuLevel>>,
+    /// Canopy layer: grid and its per-frame sums (`[u32; 4]` per texel).
+    canopy_grid: super::canopy::CanopyGrid,
+    canopy_buf: wgpu::Buffer,
     bind_main: wgpu::BindGroup,
     bind_shadow: wgpu::BindGroup,
 }
@@ -161,7 +190,7 @@ fn billboard_vertices(s: &Silhouette) -> (Vec<TreeVertex>, Vec<u32>) {
     // crown there (≥ half the widest): the crown seen from above
     let zc = s.widest_z + 0.35 * (s.crown_top - s.widest_z).max(0.0);
     let rt = r * s.width_at(zc).max(0.5);
-    let v = |x: f32, y: f32, z: f32, a: f32, b: f32, mat: f32| TreeVertex { pos: [x, y, z], normal: [a, b, 0.0], mat };
+    let v = |x: f32, y: f32, z: f32, a: f32, b: f32, mat: f32| TreeVertex { pos: [x, y, z], normal: [a, b, 0.0], mat, uv: [-1.0, -1.0] };
     let verts = vec![
         v(-r, 0.0, 0.0, -1.0, 0.0, 2.0),
         v(r, 0.0, 0.0, 1.0, 0.0, 2.0),
@@ -207,6 +236,11 @@ pub struct FrameStats {
     /// Factor by which the level switch sizes were raised to meet
     /// [`LodParams::max_triangles`] (1 = not needed).
     pub lod_scale: f32,
+    /// Far-field switch of the frame (px; 0 = canopy layer off): trees below it (less the
+    /// cross-fade band) are drawn only in the canopy layer.
+    pub canopy_px: f32,
+    /// Trees drawn only in the canopy layer (no triangles).
+    pub canopy_trees: usize,
 }
 
 /// A headless renderer bound to one wgpu device.
@@ -243,7 +277,7 @@ fn terrain_layout() -> wgpu::VertexBufferLayout<'static> {
 }
 
 fn tree_layouts() -> [wgpu::VertexBufferLayout<'static>; 2] {
-    const V: [wgpu::VertexAttribute; 3] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32];
+    const V: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32, 9 => Float32x2];
     const I: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4];
     [
         wgpu::VertexBufferLayout { array_stride: std::mem::size_of::<TreeVertex>() as u64, step_mode: wgpu::VertexStepMode::Vertex, attributes: &V },
@@ -268,9 +302,9 @@ impl Renderer {
         let adapter_info = adapter.get_info();
         let al = adapter.limits();
         let flags = adapter.get_downlevel_capabilities().flags;
-        // GPU culling needs compute shaders, indirect draws and 4 storage buffers per stage
+        // GPU culling needs compute shaders, indirect draws and 5 storage buffers per stage
         let gpu_ok = flags.contains(wgpu::DownlevelFlags::COMPUTE_SHADERS | wgpu::DownlevelFlags::INDIRECT_EXECUTION)
-            && al.max_storage_buffers_per_shader_stage >= 4
+            && al.max_storage_buffers_per_shader_stage >= 5
             && al.max_compute_invocations_per_workgroup >= 64
             && al.max_compute_workgroup_size_x >= 64;
         let mut limits = wgpu::Limits::downlevel_defaults().using_resolution(al.clone());
@@ -309,6 +343,12 @@ impl Renderer {
                 },
                 wgpu::BindGroupLayoutEntry { binding: 2, visibility: wgpu::ShaderStages::FRAGMENT, ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison), count: None },
                 sil_entry,
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: true }, has_dynamic_offset: false, min_binding_size: None },
+                    count: None,
+                },
             ],
         });
         let layout_shadow = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("shadow"), entries: &[uniform_entry, sil_entry] });
@@ -408,7 +448,7 @@ impl Renderer {
         let rw = wgpu::BufferBindingType::Storage { read_only: false };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("cull"),
-            entries: &[buf(0, wgpu::BufferBindingType::Uniform), buf(1, ro), buf(2, ro), buf(3, rw), buf(4, rw)],
+            entries: &[buf(0, wgpu::BufferBindingType::Uniform), buf(1, ro), buf(2, ro), buf(3, rw), buf(4, rw), buf(5, rw)],
         });
         let pl = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("cull"), bind_group_layouts: &[Some(&layout)], immediate_size: 0 });
         let make = |entry: &str| device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor { label: Some(entry), layout: Some(&pl), module: &shader, entry_point: Some(entry), compilation_options: Default::default(), cache: None });
@@ -418,7 +458,7 @@ impl Renderer {
     }
 
     /// Whether this adapter can cull and select levels in a compute pass with indirect draws
-    /// (wgpu downlevel flags `COMPUTE_SHADERS` and `INDIRECT_EXECUTION`, ≥ 4 storage buffers).
+    /// (wgpu downlevel flags `COMPUTE_SHADERS` and `INDIRECT_EXECUTION`, ≥ 5 storage buffers).
     pub fn gpu_culling_supported(&self) -> bool {
         self.cull.is_some()
     }
@@ -512,13 +552,14 @@ impl Renderer {
                     }
                     let base = verts.len() as u32;
                     let start = idx.len() as u32;
-                    verts.extend(m.positions.iter().zip(&m.normals).map(|(p, n)| TreeVertex { pos: *p, normal: *n, mat }));
+                    let cards = mat > 0.5 && is_cards(m);
+                    verts.extend(m.positions.iter().zip(&m.normals).enumerate().map(|(k, (p, n))| TreeVertex { pos: *p, normal: *n, mat, uv: if cards { m.uvs[k] } else { [-1.0, -1.0] } }));
                     idx.extend(m.indices.iter().map(|i| i + base));
                     ranges.push(start..idx.len() as u32);
                 }
                 if idx.is_empty() {
                     idx.extend_from_slice(&[0, 0, 0]);
-                    verts.push(TreeVertex { pos: [0.0; 3], normal: [0.0, 0.0, 1.0], mat: 0.0 });
+                    verts.push(TreeVertex { pos: [0.0; 3], normal: [0.0, 0.0, 1.0], mat: 0.0, uv: [-1.0, -1.0] });
                 }
                 levels.push(GpuLevel {
                     vb: d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("tree vb"), contents: bytemuck::cast_slice(&verts), usage: wgpu::BufferUsages::VERTEX }),
@@ -541,6 +582,14 @@ impl Renderer {
             sil_raw.push(<SilRaw as bytemuck::Zeroable>::zeroed());
         }
         let sil_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("silhouettes"), contents: bytemuck::cast_slice(&sil_raw), usage: wgpu::BufferUsages::STORAGE });
+        let (lo, hi) = t.bounds();
+        let canopy_grid = super::canopy::CanopyGrid::for_bounds(lo, hi);
+        let canopy_buf = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("canopy"),
+            size: (canopy_grid.len() as u64 * 16).max(256),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let bind_main = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("main"),
             layout: &self.layout_main,
@@ -549,6 +598,7 @@ impl Renderer {
                 wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&self.shadow_view) },
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
                 wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: canopy_buf.as_entire_binding() },
             ],
         });
         let bind_shadow = d.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -556,7 +606,7 @@ impl Renderer {
             layout: &self.layout_shadow,
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.shadow_globals.as_entire_binding() }, wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() }],
         });
-        self.scene = Some(GpuScene { fingerprint: fp, terrain_vb, terrain_ib, terrain_count: t.indices.len() as u32, water_vb, protos, bind_main, bind_shadow });
+        self.scene = Some(GpuScene { fingerprint: fp, terrain_vb, terrain_ib, terrain_count: t.indices.len() as u32, water_vb, protos, canopy_grid, canopy_buf, bind_main, bind_shadow });
         Ok(())
     }
 
@@ -627,12 +677,22 @@ impl Renderer {
             None => {
                 let b = build_batches(scene, camera, width, height, &self.lod);
                 self.write_instances(&b);
+                if !b.canopy.is_empty() {
+                    self.write_canopy(&b);
+                }
                 FrameDraws::Cpu(b)
             }
         };
-        self.write_globals(scene, camera, width, height);
+        let canopy_used = match &draws {
+            FrameDraws::Cpu(b) => !b.canopy.is_empty(),
+            FrameDraws::Gpu(_) => true,
+        };
+        self.write_globals(scene, camera, width, height, canopy_used);
         let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         if let FrameDraws::Gpu(f) = &draws {
+            if let Some(gs) = &self.scene {
+                enc.clear_buffer(&gs.canopy_buf, 0, None);
+            }
             self.encode_cull(&mut enc, f);
         }
         self.encode_shadow(&mut enc, &draws);
@@ -684,12 +744,15 @@ impl Renderer {
         targets.readback.unmap();
         let mut per_level = [0usize; 4];
         let mut lod_scale = 1.0f32;
+        let (mut canopy_px, mut canopy_trees) = (0.0f32, 0usize);
         let (tree_tris, culled, invalid, drawn) = match &draws {
             FrameDraws::Cpu(b) => {
                 for (i, n) in b.per_level.iter().enumerate() {
                     per_level[i.min(3)] += n;
                 }
                 lod_scale = b.lod_scale;
+                canopy_px = b.canopy_px;
+                canopy_trees = b.canopy_only;
                 (b.triangles, b.culled, b.invalid, b.per_level.iter().sum())
             }
             FrameDraws::Gpu(f) => {
@@ -706,14 +769,17 @@ impl Renderer {
                         for l in 0..4 {
                             per_level[l] = words[off + l] as usize;
                         }
-                        if let Some(&w) = words.last() {
-                            lod_scale = f32::from_bits(w);
+                        let tail = words.len().saturating_sub(3);
+                        if let [sc, cp, cn] = words[tail..] {
+                            lod_scale = f32::from_bits(sc);
+                            canopy_px = f32::from_bits(cp);
+                            canopy_trees = cn as usize;
                         }
                     }
                     rb.unmap();
                 }
                 let drawn: usize = per_level.iter().sum();
-                (tris, f.valid.saturating_sub(drawn), f.invalid, drawn)
+                (tris, f.valid.saturating_sub(drawn + canopy_trees), f.invalid, drawn)
             }
         };
         self.last = FrameStats {
@@ -726,6 +792,8 @@ impl Renderer {
             per_level,
             gpu_culling: matches!(draws, FrameDraws::Gpu(_)),
             lod_scale,
+            canopy_px,
+            canopy_trees,
         };
         Ok(img)
     }
@@ -791,7 +859,11 @@ impl Renderer {
         }
         // per-level counters, size histogram, budget factor (1.0 unless `choose` runs)
         args.extend(std::iter::repeat_n(0u32, 4 + n_protos * super::lod::SIZE_BINS));
+        // the `choose` results (or their defaults when it does not run): switch-size factor,
+        // far-field switch; then the count of canopy-only trees
         args.push(1.0f32.to_bits());
+        args.push(if self.lod.canopy_px > 0.0 { self.lod.canopy_px } else { 0.0 }.to_bits());
+        args.push(0);
         let args_bytes = (args.len() * 4) as u64;
         let aspect = width as f32 / height as f32;
         let vp = camera.view_proj(aspect);
@@ -809,6 +881,8 @@ impl Renderer {
             lod: [self.lod.switch_px[0], self.lod.switch_px[1], self.lod.switch_px[2], self.lod.band],
             misc: [self.lod.min_px, ppm, self.lod.max_triangles as f32, cost_first as f32],
             counts: [src.len() as u32, gx, n_protos as u32, (slots.len() * 10) as u32],
+            canopy: [gs.canopy_grid.origin[0], gs.canopy_grid.origin[1], gs.canopy_grid.texel, self.lod.canopy_px.max(0.0)],
+            canopy_n: [gs.canopy_grid.nx, gs.canopy_grid.ny, self.lod.max_geometry_triangles, 0],
         };
         let Some(cull) = self.cull.as_mut() else { return Ok(None) };
         let d = &self.device;
@@ -833,11 +907,12 @@ impl Renderer {
         }
         self.queue.write_buffer(&cull.params, 0, bytemuck::bytes_of(&params));
         let valid = src.len();
-        Ok(Some(GpuFrame { slots, budget: self.lod.max_triangles > 0, invalid, valid, args_bytes }))
+        let budget = self.lod.max_triangles > 0 || (self.lod.canopy_px > 0.0 && self.lod.max_geometry_triangles > 0);
+        Ok(Some(GpuFrame { slots, budget, invalid, valid, args_bytes }))
     }
 
     fn encode_cull(&self, enc: &mut wgpu::CommandEncoder, f: &GpuFrame) {
-        let Some(cull) = &self.cull else { return };
+        let (Some(cull), Some(gs)) = (&self.cull, &self.scene) else { return };
         let (Some((sb, _)), Some((pb, _)), Some((db, _)), Some((ab, _))) = (&cull.src, &cull.protos, &cull.dst, &cull.args) else { return };
         if f.valid == 0 {
             return;
@@ -851,6 +926,7 @@ impl Renderer {
                 wgpu::BindGroupEntry { binding: 2, resource: pb.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 3, resource: db.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: ab.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: gs.canopy_buf.as_entire_binding() },
             ],
         });
         let groups = (f.valid as u32).div_ceil(64);
@@ -889,7 +965,9 @@ impl Renderer {
         (proj * view, 2.0 * r / SHADOW_SIZE as f32)
     }
 
-    fn write_globals(&self, scene: &Scene, camera: &Camera, w: u32, h: u32) {
+    /// `canopy_used`: whether the terrain shader reads the canopy layer (false when the CPU
+    /// path splatted nothing this frame).
+    fn write_globals(&self, scene: &Scene, camera: &Camera, w: u32, h: u32, canopy_used: bool) {
         let aspect = w as f32 / h as f32;
         let vp = camera.view_proj(aspect);
         let (lvp, _texel_m) = Self::light_matrix(scene);
@@ -910,8 +988,15 @@ impl Renderer {
             sky_horizon: v3(scene.sky.horizon, 0.0),
             wind: [wd.x, wd.y, scene.wind.directed, scene.wind.undirected],
             params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.1 / size],
+            canopy0: [0.0; 4],
+            canopy1: [0.0; 4],
             facing: if ortho { v3((Vec3::from(camera.eye) - Vec3::from(camera.target)).normalize_or(Vec3::Z).to_array(), 1.0) } else { [0.0; 4] },
         };
+        if let Some(gs) = &self.scene {
+            let cg = gs.canopy_grid;
+            g.canopy0 = [cg.origin[0], cg.origin[1], cg.texel, if self.lod.canopy_px > 0.0 && canopy_used { 1.0 } else { 0.0 }];
+            g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, 0.0];
+        }
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         g.view_proj = g.light_view_proj;
         g.facing = v3(sun, 1.0);
@@ -931,6 +1016,17 @@ impl Renderer {
                 self.queue.write_buffer(buf, 0, bytes);
             }
         }
+    }
+
+    /// Splats the CPU path's canopy crowns into the grid and uploads the sums.
+    fn write_canopy(&self, b: &Batches) {
+        let Some(gs) = &self.scene else { return };
+        let g = gs.canopy_grid;
+        let mut sums = vec![[0u32; 4]; g.len()];
+        for c in &b.canopy {
+            g.splat(&mut sums, c.x, c.y, c.r, c.w, c.rgb);
+        }
+        self.queue.write_buffer(&gs.canopy_buf, 0, bytemuck::cast_slice(&sums));
     }
 
     /// Records the tree draws; returns the number of draw calls.

@@ -6,7 +6,8 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::camera::Camera;
-use super::lod::{budget_scale, drawn_levels, select_lod_scaled, size_bin, Frustum, LodParams, LodPick, BILLBOARD_TRIANGLES, SIZE_BINS};
+use super::canopy::crown_albedo;
+use super::lod::{budget_scale, canopy_threshold, canopy_weight, drawn_levels, select_lod_scaled, size_bin, Frustum, LodParams, LodPick, BILLBOARD_TRIANGLES, SIZE_BINS};
 use super::scene::{Prototype, Scene, TreeInstance};
 
 /// Per-instance record read by the tree vertex shader (`shaders/scene.wgsl`, `TreeIn`).
@@ -23,8 +24,24 @@ pub struct InstanceRaw {
     pub p2: [f32; 4],
     /// Bark colour (linear RGB), dither salt.
     pub bark: [f32; 4],
-    /// Prototype index, level drawn, crown radius for culling (m, 0 when unknown), unused.
+    /// Prototype index, level drawn, crown radius for culling (m, 0 when unknown), crown
+    /// radius drawn (m: horizontal scale × the prototype's normalised crown radius).
     pub p3: [f32; 4],
+}
+
+/// One crown for the canopy layer ([`super::canopy::CanopyGrid::splat`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CanopySplat {
+    /// Plan position of the stem (m).
+    pub x: f32,
+    /// Plan position of the stem (m).
+    pub y: f32,
+    /// Crown radius (m).
+    pub r: f32,
+    /// Weight 0..1: canopy weight × opacity × foliage cover.
+    pub w: f32,
+    /// Crown albedo (linear RGB).
+    pub rgb: [f32; 3],
 }
 
 /// One (prototype, level) range of [`Batches::instances`].
@@ -57,6 +74,13 @@ pub struct Batches {
     pub per_level: Vec<usize>,
     /// Factor applied to the switch sizes to meet the triangle budget (1 = none).
     pub lod_scale: f32,
+    /// Far-field switch of the frame (px; 0 = canopy layer off), see
+    /// [`super::lod::canopy_threshold`].
+    pub canopy_px: f32,
+    /// Crowns for the canopy layer, in instance order.
+    pub canopy: Vec<CanopySplat>,
+    /// Trees drawn only in the canopy layer (no geometry).
+    pub canopy_only: usize,
 }
 
 fn hash01(mut x: u64) -> f32 {
@@ -113,7 +137,7 @@ pub fn instance_record(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32])
         leaf: [t.leaf_color[0], t.leaf_color[1], t.leaf_color[2], t.leaf_amount.clamp(0.0, 1.0)],
         p2: [t.opacity.clamp(0.0, 1.0), hash01(t.id) * std::f32::consts::TAU, hash01(t.id ^ 0x5DEE_CE66) * std::f32::consts::TAU, (1.0 - proto.stiffness).clamp(0.0, 1.0)],
         bark: [proto.bark_color[0], proto.bark_color[1], proto.bark_color[2], (hash01(t.id ^ 0xA5A5) * 64.0).floor()],
-        p3: [s as f32, 0.0, if valid_r { t.crown_radius } else { 0.0 }, 0.0],
+        p3: [s as f32, 0.0, if valid_r { t.crown_radius } else { 0.0 }, sxy * crown_r0[s]],
     })
 }
 
@@ -142,25 +166,50 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
             Ok(Some((camera.projected_size_px(c, t.height, height as f32), rec)))
         })
         .collect();
-    // triangle budget: histogram of projected sizes per prototype, then the switch-size factor
-    let scale = if params.max_triangles > 0 {
-        let mut hist = vec![[0u32; SIZE_BINS]; levels.len()];
+    // histogram of projected sizes per prototype (trees of at least min_px), then the far-field
+    // switch (tree cap) and the switch-size factor (triangle budget) of the geometry left
+    let canopy_on = params.canopy_px > 0.0;
+    let need_hist = params.max_triangles > 0 || (canopy_on && params.max_geometry_triangles > 0);
+    let mut hist = vec![[0u32; SIZE_BINS]; levels.len()];
+    if need_hist {
         for (px, rec) in seen.iter().flatten().flatten() {
             if *px >= params.min_px {
                 hist[rec.p3[0] as usize][size_bin(*px)] += 1;
             }
         }
-        let costs: Vec<[u32; 4]> = scene.prototypes.iter().map(level_costs).collect();
-        budget_scale(&hist, &costs, &levels, params)
+    }
+    let costs: Vec<[u32; 4]> = scene.prototypes.iter().map(level_costs).collect();
+    let canopy_px = canopy_threshold(&hist, &costs, &levels, params);
+    let floor = if canopy_px > 0.0 { canopy_px / (1.0 + params.band.max(0.0)) } else { 0.0 };
+    let scale = if params.max_triangles > 0 {
+        budget_scale(&hist, &costs, &levels, params, floor)
     } else {
         1.0
     };
+    let mut canopy = Vec::new();
+    let mut canopy_only = 0usize;
     let picks: Vec<Result<Option<(LodPick, InstanceRaw)>, ()>> = seen
         .into_iter()
-        .map(|v| v.map(|o| o.and_then(|(px, rec)| select_lod_scaled(px, scale, params, levels[rec.p3[0] as usize]).map(|p| (p, rec)))))
+        .map(|v| {
+            v.map(|o| {
+                o.and_then(|(px, mut rec)| {
+                    let wc = canopy_weight(px, canopy_px, params.band);
+                    if wc > 0.0 {
+                        let (rgb, cover) = crown_albedo([rec.leaf[0], rec.leaf[1], rec.leaf[2]], rec.leaf[3], [rec.bark[0], rec.bark[1], rec.bark[2]]);
+                        canopy.push(CanopySplat { x: rec.pos_h[0], y: rec.pos_h[1], r: rec.p3[3], w: wc * rec.p2[0] * cover, rgb });
+                        if wc >= 1.0 {
+                            canopy_only += 1;
+                            return None;
+                        }
+                        rec.p2[0] *= 1.0 - wc;
+                    }
+                    select_lod_scaled(px, scale, params, levels[rec.p3[0] as usize]).map(|p| (p, rec))
+                })
+            })
+        })
         .collect();
     let mut buckets: Vec<Vec<Vec<InstanceRaw>>> = levels.iter().map(|&n| vec![Vec::new(); n]).collect();
-    let mut out = Batches { lod_scale: scale, ..Batches::default() };
+    let mut out = Batches { lod_scale: scale, canopy_px, canopy, canopy_only, ..Batches::default() };
     let max_levels = levels.iter().copied().max().unwrap_or(0);
     out.per_level = vec![0; max_levels];
     for (t, pick) in scene.instances.iter().zip(&picks) {
@@ -187,6 +236,7 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
             buckets[s][pick.level + 1].push(coarse);
         }
     }
+    out.culled = out.culled.saturating_sub(out.canopy_only);
     for (p, lv) in buckets.into_iter().enumerate() {
         for (l, v) in lv.into_iter().enumerate() {
             if v.is_empty() {

@@ -23,16 +23,31 @@ pub struct LodParams {
     /// inside a dense forest does not draw hundreds of full meshes. Billboards (4 triangles per
     /// tree) are the floor: the budget never hides trees.
     pub max_triangles: u32,
+    /// Far-field switch (px, 0 = off): trees shorter than this on screen are not drawn as
+    /// geometry; their crowns are splatted into the per-frame canopy layer (colour + coverage per
+    /// terrain texel, [`crate::render::canopy`]) that the terrain shader blends in. Inside the
+    /// band `canopy_px/(1+band) .. canopy_px·(1+band)` the billboard fades out (dithered
+    /// opacity) while the splat fades in, so there is no pop. Trees below `min_px` still reach
+    /// the canopy layer when it is on.
+    pub canopy_px: f32,
+    /// Budget of tree triangles per frame drawn as geometry before the far-field switch is
+    /// raised (0 = none). When the visible trees taller than `canopy_px` would cost more (at
+    /// their levels, estimated from the projected-size histogram as in [`budget_scale`]), the
+    /// far-field switch is raised by the smallest factor `2^(k/4)` that fits
+    /// ([`canopy_threshold`]): more of the far forest goes to the canopy layer, which costs no
+    /// triangles, so triangles per frame level off as the tree count grows.
+    pub max_geometry_triangles: u32,
 }
 
 impl Default for LodParams {
     /// Full mesh above 240 px, reduced skeleton 100–240 px, crown hull 40–100 px, billboard
     /// impostor (4 triangles) below 40 px; cross-fade bands of ±25 %; trees under 0.75 px are
-    /// not drawn; at most 6 M tree triangles per frame (switch sizes raised beyond). With these thresholds almost every tree of a landscape view is a billboard,
-    /// so triangles per frame grow with the few trees near the camera, not with the tree count
-    /// (BENCHMARKS.md, "Rendering").
+    /// not drawn as geometry; at most 6 M tree triangles per frame (switch sizes raised
+    /// beyond); trees under 6 px go to the canopy layer, and the far-field switch is raised
+    /// when the geometry would cost more than 100,000 triangles. Triangles per frame then level
+    /// off as the tree count grows (BENCHMARKS.md, "Rendering").
     fn default() -> Self {
-        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000 }
+        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000, canopy_px: 6.0, max_geometry_triangles: 100_000 }
     }
 }
 
@@ -68,35 +83,88 @@ pub fn select_lod_scaled(size_px: f32, scale: f32, params: &LodParams, n_levels:
 /// when the budget is 0. `hist[p][b]` counts visible trees of prototype `p` in size bin `b`
 /// ([`size_bin`]), `costs[p][l]` the triangles of drawn level `l`, `n_levels[p]` the drawn
 /// levels. Summed in `f32` in this order, exactly as `shaders/cull.wgsl` (`choose`) does, so
-/// both culling paths pick the same factor.
-pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams) -> f32 {
+/// both culling paths pick the same factor. Bins whose centre is below `floor_px` (trees
+/// that go wholly to the canopy layer, see [`canopy_threshold`]) cost nothing.
+pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams, floor_px: f32) -> f32 {
     if params.max_triangles == 0 {
         return 1.0;
     }
     let budget = params.max_triangles as f32;
-    let p0 = LodParams { min_px: 0.0, ..*params };
     let mut s = 1.0;
     for k in 0..=MAX_SCALE_STEPS {
         s = (k as f32 / 4.0).exp2();
-        let mut total = 0.0f32;
-        for (p, h) in hist.iter().enumerate() {
-            for (b, &n) in h.iter().enumerate() {
-                if n == 0 {
-                    continue;
-                }
-                let Some(pick) = select_lod(bin_px(b) / s, &p0, n_levels[p]) else { continue };
-                let mut c = costs[p][pick.level.min(3)];
-                if pick.blend > 0.0 && pick.level + 1 < n_levels[p] {
-                    c += costs[p][(pick.level + 1).min(3)];
-                }
-                total += n as f32 * c as f32;
-            }
-        }
-        if total <= budget {
+        if hist_cost(hist, costs, n_levels, params, s, floor_px) <= budget {
             break;
         }
     }
     s
+}
+
+/// Estimated tree triangles of a frame from its size histogram: `Σ_p Σ_b hist[p][b] · cost`
+/// over the bins whose centre ([`bin_px`]) is at least `floor_px`, each at its centre size with
+/// switch sizes scaled by `s` (cost = triangles of the picked level plus those of the next
+/// level inside a cross-fade band). Summed in `f32` in this order, as `shaders/cull.wgsl`
+/// (`hist_cost`) does.
+pub fn hist_cost(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams, s: f32, floor_px: f32) -> f32 {
+    let p0 = LodParams { min_px: 0.0, ..*params };
+    let mut total = 0.0f32;
+    for (p, h) in hist.iter().enumerate() {
+        for (b, &n) in h.iter().enumerate() {
+            if n == 0 || bin_px(b) < floor_px {
+                continue;
+            }
+            let Some(pick) = select_lod(bin_px(b) / s, &p0, n_levels[p]) else { continue };
+            let mut c = costs[p][pick.level.min(3)];
+            if pick.blend > 0.0 && pick.level + 1 < n_levels[p] {
+                c += costs[p][(pick.level + 1).min(3)];
+            }
+            total += n as f32 * c as f32;
+        }
+    }
+    total
+}
+
+/// The far-field switch size (px) of a frame: `params.canopy_px · 2^(k/4)` for the smallest
+/// k = 0..=[`MAX_SCALE_STEPS`] for which the trees drawn as geometry — those whose histogram bin
+/// centre ([`bin_px`]) is at least `switch / (1 + band)` — cost at most
+/// `params.max_geometry_triangles` ([`hist_cost`] with unscaled switch sizes; no budget when
+/// 0); 0 when the canopy layer is off (`canopy_px ≤ 0`). `hist`, `costs`, `n_levels` as in
+/// [`budget_scale`]; computed in this order by `shaders/cull.wgsl` (`choose`) too.
+pub fn canopy_threshold(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams) -> f32 {
+    if !(params.canopy_px > 0.0) {
+        return 0.0;
+    }
+    let b = 1.0 + params.band.max(0.0);
+    let mut c = params.canopy_px;
+    if params.max_geometry_triangles == 0 {
+        return c;
+    }
+    for k in 0..=MAX_SCALE_STEPS {
+        c = params.canopy_px * (k as f32 / 4.0).exp2();
+        if hist_cost(hist, costs, n_levels, params, 1.0, c / b) <= params.max_geometry_triangles as f32 {
+            break;
+        }
+    }
+    c
+}
+
+/// Weight (0..1) of a tree `size_px` tall in the canopy layer for far-field switch `canopy`
+/// (px, from [`canopy_threshold`]; 0 = off → 0): 1 at or below `canopy/(1+band)`, 0 at or above
+/// `canopy·(1+band)`, linear in log(size) between (the billboard keeps `1 − weight` of its
+/// pixels). Mirrors `canopy_weight` of `shaders/cull.wgsl`.
+pub fn canopy_weight(size_px: f32, canopy: f32, band: f32) -> f32 {
+    if !(canopy > 0.0) {
+        return 0.0;
+    }
+    let b = 1.0 + band.max(0.0);
+    let (hi, lo) = (canopy * b, canopy / b);
+    if size_px <= lo {
+        return 1.0;
+    }
+    if size_px >= hi {
+        return 0.0;
+    }
+    ((hi.ln() - size_px.ln()) / (hi.ln() - lo.ln())).clamp(0.0, 1.0)
 }
 
 /// Number of levels the renderer draws for a species chain of `chain_len` levels: the chain's
@@ -183,6 +251,27 @@ impl Silhouette {
                 let l = if i > 0 { w[i - 1] } else { w[i] };
                 let r = if i + 1 < n { w[i + 1] } else { w[i] };
                 s[i] = 0.25 * l + 0.5 * w[i] + 0.25 * r;
+            }
+        }
+        let m = s.iter().copied().fold(0.0f32, f32::max).max(1e-6);
+        // broadleaf crowns (widest in the upper 60 % of the crown) get a rounded outline: the
+        // profile is widened to at least 0.9 of the crown's inscribed half-ellipse, so the
+        // billboard's top is a dome, not a point; conifers (widest low) keep their cone
+        let mut wi = 0;
+        for i in 0..n {
+            if s[i] > s[wi] {
+                wi = i;
+            }
+        }
+        let wz = (wi as f32 + 0.5) / n as f32;
+        if (wz - zlo) / (zhi - zlo) >= 0.4 {
+            let (zc, hz) = (0.5 * (zlo + zhi), 0.5 * (zhi - zlo));
+            for (i, v) in s.iter_mut().enumerate() {
+                let z = (i as f32 + 0.5) / n as f32;
+                let t = (z - zc) / hz.max(1e-3);
+                if t.abs() < 1.0 {
+                    *v = v.max(0.9 * m * (1.0 - t * t).sqrt());
+                }
             }
         }
         let m = s.iter().copied().fold(0.0f32, f32::max).max(1e-6);
@@ -471,15 +560,26 @@ mod tests {
         let costs = [[1000u32, 100, 10, 4]];
         // 10 trees at ~279 px: level 0 cross-fading into 1 costs 11,000; 2^(3/4) moves them
         // to level 1 (279/1.68 = 166 px ≥ 125): 1,000 triangles
-        let s = budget_scale(&hist, &costs, &[4], &p);
+        let s = budget_scale(&hist, &costs, &[4], &p, 0.0);
         assert!((s - 2f32.powf(0.75)).abs() < 1e-5, "{s}");
-        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 20_000, ..p }), 1.0);
-        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 0, ..p }), 1.0);
+        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 20_000, ..p }, 0.0), 1.0);
+        // trees wholly in the canopy layer cost nothing
+        assert_eq!(budget_scale(&hist, &costs, &[4], &p, 400.0), 1.0);
+        assert_eq!(budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 0, ..p }, 0.0), 1.0);
         // an impossible budget takes the largest factor; the trees are still drawn
-        let s = budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 1, ..p });
+        let s = budget_scale(&hist, &costs, &[4], &LodParams { max_triangles: 1, ..p }, 0.0);
         assert_eq!(s, 1024.0);
         assert_eq!(select_lod_scaled(300.0, s, &p, 4).unwrap().level, 3);
         assert!(select_lod_scaled(0.5, 1.0, &p, 4).is_none());
+        // the far-field switch: 10 trees at ~279 px cost 11,000 > 5,000 triangles, so it rises
+        // until their bin (centre 279 px) is below switch/1.25, i.e. switch > 349 px: 6·2^(24/4) = 384
+        let q = LodParams { canopy_px: 6.0, max_geometry_triangles: 5000, ..p };
+        assert_eq!(canopy_threshold(&hist, &costs, &[4], &q), 384.0);
+        assert_eq!(canopy_threshold(&hist, &costs, &[4], &LodParams { max_geometry_triangles: 0, ..q }), 6.0);
+        assert_eq!(canopy_threshold(&hist, &costs, &[4], &LodParams { canopy_px: 0.0, ..q }), 0.0);
+        assert_eq!(canopy_weight(3.0, 6.0, 0.25), 1.0);
+        assert_eq!(canopy_weight(8.0, 6.0, 0.25), 0.0);
+        assert!((canopy_weight(6.0, 6.0, 0.25) - 0.5).abs() < 1e-5);
     }
 
     #[test]
@@ -493,6 +593,12 @@ mod tests {
         let c = Silhouette::from_chain(&placeholder_chain(true));
         assert!(c.widest_z < 0.4, "conifer widest low: {}", c.widest_z);
         assert!(c.width_at(0.9) < 0.5 * c.width_at(c.widest_z), "conifer tapers to the top");
+        // the broadleaf dome: 90 % of the way from the widest point to the top, still at least
+        // 0.9 of the half-ellipse there (a point would be < 0.3)
+        let z = b.widest_z + 0.8 * (b.crown_top - b.widest_z);
+        let (zc, hz) = (0.5 * (b.crown_bottom + b.crown_top), 0.5 * (b.crown_top - b.crown_bottom));
+        let t = (z - zc) / hz;
+        assert!(b.width_at(z) >= 0.85 * (1.0 - t * t).sqrt(), "rounded top: {} at {z}", b.width_at(z));
         let e = Silhouette::from_chain(&LodChain::default());
         assert_eq!(e.radius, 0.3);
         assert_eq!(drawn_levels(0), 1);

@@ -19,9 +19,15 @@
 //! Each species is drawn with the chain's full, reduced and hull meshes near the camera and the
 //! renderer's own 4-triangle billboard impostor (the species' silhouette carved procedurally)
 //! below 40 px; bare (winter) crowns keep a dithered grey-brown twig haze at every level.
+//! Below a few pixels (the far-field switch, raised so that at most
+//! [`lod::LodParams::max_geometry_trees`] trees are geometry) crowns leave the geometry for the
+//! [`canopy`] layer: splatted per frame into a terrain-texel grid of colour and coverage that
+//! the terrain shader blends in, cross-faded with the billboards, so triangles per frame level
+//! off as the tree count grows.
 //! - [`timelapse`]: interpolation of snapshots, GIF/PNG/MP4 writers.
 
 pub mod camera;
+pub mod canopy;
 pub mod headless;
 pub mod instanced;
 pub mod lod;

@@ -24,6 +24,8 @@ struct Params {
                          // triangle budget (0 = none); index of the first cost record in protos
     counts: vec4<u32>,   // instances, workgroups along x, number of prototypes, word offset of
                          // the per-level counters in args (= 10 * slots)
+    canopy: vec4<f32>,   // canopy grid origin x, y (m), texel (m); base far-field switch px (0 off)
+    canopy_n: vec4<u32>, // canopy grid nx, ny; geometry triangle budget of the far switch (0 none); unused
 };
 
 // Per prototype: number of drawn levels, first slot index.
@@ -43,6 +45,8 @@ struct Proto {
 // 10 words per slot (two DrawIndexedIndirect records), then 4 per-level counters, then the size
 // histogram (64 bins per prototype), then the switch-size factor (f32 bits) chosen for the budget
 @group(0) @binding(4) var<storage, read_write> args: array<atomic<u32>>;
+// canopy layer sums (render/canopy.rs): per texel coverage, r, g, b in units of 1/1024
+@group(0) @binding(5) var<storage, read_write> canopy: array<atomic<u32>>;
 
 struct Pick {
     level: i32,
@@ -103,6 +107,79 @@ fn scale_word() -> u32 {
     return hist_off() + cp.counts.z * 64u;
 }
 
+// canopy_weight of render/lod.rs
+fn canopy_weight(px: f32, c: f32) -> f32 {
+    if (!(c > 0.0)) {
+        return 0.0;
+    }
+    let b = 1.0 + max(cp.lod.w, 0.0);
+    let hi = c * b;
+    let lo = c / b;
+    if (px <= lo) {
+        return 1.0;
+    }
+    if (px >= hi) {
+        return 0.0;
+    }
+    return clamp((log(hi) - log(px)) / (log(hi) - log(lo)), 0.0, 1.0);
+}
+
+// crown_albedo of render/canopy.rs: (albedo, cover)
+fn crown_albedo(t: Inst) -> vec4<f32> {
+    let la = clamp(t.leaf.w, 0.0, 1.0);
+    let tw = 0.5 * (1.0 - la);
+    let cover = la + tw;
+    let tc = t.bark.rgb + (vec3<f32>(0.16, 0.14, 0.12) - t.bark.rgb) * 0.6;
+    return vec4<f32>((la * t.leaf.rgb + tw * tc) / max(cover, 1e-6), cover);
+}
+
+// CanopyGrid::splat of render/canopy.rs
+fn splat(x: f32, y: f32, r: f32, w: f32, rgb: vec3<f32>) {
+    if (!(w > 0.0 && r > 0.0)) {
+        return;
+    }
+    let t = cp.canopy.z;
+    let u = (x - cp.canopy.x) / t;
+    let v = (y - cp.canopy.y) / t;
+    let ci = i32(floor(u));
+    let cj = i32(floor(v));
+    let rt = r / t;
+    let half = clamp(i32(ceil(rt)), 1, 4);
+    var total = 0.0;
+    for (var dj = -half; dj <= half; dj = dj + 1) {
+        for (var di = -half; di <= half; di = di + 1) {
+            let du = f32(ci + di) + 0.5 - u;
+            let dv = f32(cj + dj) + 0.5 - v;
+            total = total + clamp(rt - sqrt(du * du + dv * dv) + 0.5, 0.0, 1.0);
+        }
+    }
+    if (!(total > 0.0)) {
+        return;
+    }
+    let k = 3.14159265 * rt * rt / total * w * 1024.0;
+    let c3 = clamp(rgb, vec3<f32>(0.0), vec3<f32>(1.0));
+    for (var dj = -half; dj <= half; dj = dj + 1) {
+        for (var di = -half; di <= half; di = di + 1) {
+            let i = ci + di;
+            let j = cj + dj;
+            if (i < 0 || j < 0 || i >= i32(cp.canopy_n.x) || j >= i32(cp.canopy_n.y)) {
+                continue;
+            }
+            let du = f32(i) + 0.5 - u;
+            let dv = f32(j) + 0.5 - v;
+            let c = clamp(rt - sqrt(du * du + dv * dv) + 0.5, 0.0, 1.0) * k;
+            if (!(c > 0.0)) {
+                continue;
+            }
+            let o = (u32(j) * cp.canopy_n.x + u32(i)) * 4u;
+            atomicAdd(&canopy[o], u32(round(c)));
+            atomicAdd(&canopy[o + 1u], u32(round(c * c3.x)));
+            atomicAdd(&canopy[o + 2u], u32(round(c * c3.y)));
+            atomicAdd(&canopy[o + 3u], u32(round(c * c3.z)));
+        }
+    }
+}
+
 // Frustum test and projected size (px); negative when culled.
 fn visible_px(t: Inst) -> f32 {
     let h = t.pos_h.w;
@@ -150,35 +227,59 @@ fn cost(p: u32, l: u32) -> u32 {
     return c.pad1;
 }
 
-// Pass 2 (one invocation): budget_scale of render/lod.rs.
+// hist_cost of render/lod.rs: estimated triangles of the histogram's bins from floor_px up,
+// switch sizes scaled by s
+fn hist_cost(s: f32, floor_px: f32) -> f32 {
+    var total = 0.0;
+    for (var p = 0u; p < cp.counts.z; p = p + 1u) {
+        let nl = protos[p].n_levels;
+        for (var bb = 0u; bb < 64u; bb = bb + 1u) {
+            let n = atomicLoad(&args[hist_off() + p * 64u + bb]);
+            let px = exp2((f32(bb) - 4.0 + 0.5) / 4.0);
+            if (n == 0u || px < floor_px) {
+                continue;
+            }
+            let pick = select_lod(px / s, nl);
+            if (pick.level < 0) {
+                continue;
+            }
+            let lv = u32(pick.level);
+            var c = cost(p, lv);
+            if (pick.blend > 0.0 && lv + 1u < nl) {
+                c = c + cost(p, lv + 1u);
+            }
+            total = total + f32(n) * f32(c);
+        }
+    }
+    return total;
+}
+
+// Pass 2 (one invocation): canopy_threshold, then budget_scale of render/lod.rs.
 @compute @workgroup_size(1)
 fn choose() {
+    let b = 1.0 + max(cp.lod.w, 0.0);
+    var cthr = 0.0;
+    if (cp.canopy.w > 0.0) {
+        cthr = cp.canopy.w;
+        if (cp.canopy_n.z > 0u) {
+            for (var k = 0u; k <= 40u; k = k + 1u) {
+                cthr = cp.canopy.w * exp2(f32(k) / 4.0);
+                if (hist_cost(1.0, cthr / b) <= f32(cp.canopy_n.z)) {
+                    break;
+                }
+            }
+        }
+    }
+    var floor_px = 0.0;
+    if (cthr > 0.0) {
+        floor_px = cthr / b;
+    }
+    atomicStore(&args[scale_word() + 1u], bitcast<u32>(cthr));
     var s = 1.0;
     if (cp.misc.z > 0.0) {
         for (var k = 0u; k <= 40u; k = k + 1u) {
             s = exp2(f32(k) / 4.0);
-            var total = 0.0;
-            for (var p = 0u; p < cp.counts.z; p = p + 1u) {
-                let nl = protos[p].n_levels;
-                for (var b = 0u; b < 64u; b = b + 1u) {
-                    let n = atomicLoad(&args[hist_off() + p * 64u + b]);
-                    if (n == 0u) {
-                        continue;
-                    }
-                    let px = exp2((f32(b) - 4.0 + 0.5) / 4.0);
-                    let pick = select_lod(px / s, nl);
-                    if (pick.level < 0) {
-                        continue;
-                    }
-                    let lv = u32(pick.level);
-                    var c = cost(p, lv);
-                    if (pick.blend > 0.0 && lv + 1u < nl) {
-                        c = c + cost(p, lv + 1u);
-                    }
-                    total = total + f32(n) * f32(c);
-                }
-            }
-            if (total <= cp.misc.z) {
+            if (hist_cost(s, floor_px) <= cp.misc.z) {
                 break;
             }
         }
@@ -195,6 +296,19 @@ fn cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     var t = src[idx];
     let px = visible_px(t);
+    if (!(px >= 0.0)) {
+        return;
+    }
+    let wc = canopy_weight(px, bitcast<f32>(atomicLoad(&args[scale_word() + 1u])));
+    if (wc > 0.0) {
+        let ca = crown_albedo(t);
+        splat(t.pos_h.x, t.pos_h.y, t.p3.w, wc * t.p2.x * ca.w, ca.xyz);
+        if (wc >= 1.0) {
+            atomicAdd(&args[scale_word() + 2u], 1u);
+            return;
+        }
+        t.p2.x = t.p2.x * (1.0 - wc);
+    }
     if (!(px >= cp.misc.x)) {
         return;
     }

@@ -13,6 +13,8 @@ struct Globals {
     wind: vec4<f32>,         // direction x, y; directed w_g; undirected w_s
     params: vec4<f32>,       // time s, sea level m, shadow texel size, fog density 1/m
     facing: vec4<f32>,       // xyz towards the viewer for billboards when w = 1 (ortho, sun); w = 0: use eye
+    canopy0: vec4<f32>,      // canopy grid origin x, y (m), texel (m), on (1) / off (0)
+    canopy1: vec4<f32>,      // canopy grid nx, ny, oblique-view factor k, unused
 };
 
 // Billboard outline of one prototype (render/lod.rs, Silhouette).
@@ -25,6 +27,8 @@ struct Sil {
 @group(0) @binding(1) var shadow_map: texture_depth_2d;
 @group(0) @binding(2) var shadow_sampler: sampler_comparison;
 @group(0) @binding(3) var<storage, read> sils: array<Sil>;
+// far-field canopy layer (render/canopy.rs): per texel coverage, r, g, b sums in 1/1024
+@group(0) @binding(4) var<storage, read> canopy: array<vec4<u32>>;
 
 fn shadow_factor(world: vec3<f32>, n: vec3<f32>) -> f32 {
     let p = g.light_view_proj * vec4<f32>(world + n * 0.05, 1.0);
@@ -121,10 +125,84 @@ fn vs_terrain(v: TerrainIn) -> TerrainOut {
     return o;
 }
 
+fn canopy_texel(i: i32, j: i32) -> vec4<f32> {
+    let nx = i32(g.canopy1.x);
+    let ny = i32(g.canopy1.y);
+    if (i < 0 || j < 0 || i >= nx || j >= ny) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(canopy[u32(j) * u32(nx) + u32(i)]) / 1024.0;
+}
+
+// Canopy layer at plan position p: (crown albedo, plan coverage 0..1), bilinear over texels.
+fn canopy_at(p: vec2<f32>) -> vec4<f32> {
+    let u = (p.x - g.canopy0.x) / g.canopy0.z - 0.5;
+    let v = (p.y - g.canopy0.y) / g.canopy0.z - 0.5;
+    let i = i32(floor(u));
+    let j = i32(floor(v));
+    let fu = u - floor(u);
+    let fv = v - floor(v);
+    let a = mix(canopy_texel(i, j), canopy_texel(i + 1, j), fu);
+    let b = mix(canopy_texel(i, j + 1), canopy_texel(i + 1, j + 1), fu);
+    let s = mix(a, b, fv);
+    if (s.x <= 1e-4) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(s.yzw / s.x, min(s.x, 1.0));
+}
+
+// Coverage seen along the view ray of plan coverage `c`: 1 - (1 - c)^(1 + k cot(elevation)),
+// crowns of height ~ their diameter hiding more ground the flatter the view (render/canopy.rs).
+fn canopy_view_cover(c: f32, world: vec3<f32>) -> f32 {
+    var sn = 1.0;
+    if (g.eye.w > 0.5) {
+        sn = abs(g.facing.z);
+    } else {
+        sn = normalize(g.eye.xyz - world).z;
+    }
+    sn = clamp(sn, 0.05, 1.0);
+    let ex = min(1.0 + g.canopy1.z * sqrt(1.0 - sn * sn) / sn, 12.0);
+    return 1.0 - pow(1.0 - clamp(c, 0.0, 0.999), ex);
+}
+
 @fragment
 fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
     let n = normalize(i.normal);
-    let c = shade(i.color, n, i.world, 0.0, 1.0);
+    // the pixel's footprint on the ground: the canopy is box-filtered over it so that texels
+    // smaller than a pixel do not alias into noise
+    let fx = dpdx(i.world.xy);
+    let fy = dpdy(i.world.xy);
+    var c = shade(i.color, n, i.world, 0.0, 1.0);
+    if (g.canopy0.w > 0.5) {
+        // one bilinear tap when the footprint is within 1.5 texels, else 3 taps spread along
+        // its longer axis (the depth direction of oblique views)
+        let lx = length(fx);
+        let ly = length(fy);
+        var ax = fx;
+        if (ly > lx) {
+            ax = fy;
+        }
+        var taps = 0;
+        if (max(lx, ly) / g.canopy0.z > 1.5) {
+            taps = 1;
+        }
+        var acc = vec4<f32>(0.0);
+        for (var a = -taps; a <= taps; a = a + 1) {
+            let s = canopy_at(i.world.xy + ax * (f32(a) / 3.0));
+            acc = acc + vec4<f32>(s.rgb * s.w, s.w);
+        }
+        var cv = vec4<f32>(0.0);
+        if (acc.w > 1e-5) {
+            cv = vec4<f32>(acc.rgb / acc.w, acc.w / f32(2 * taps + 1));
+        }
+        if (cv.w > 0.0) {
+            // crowns lit like the billboards' rounded crowns: wrapped light on an up-facing
+            // normal, the crown's mean ambient occlusion and self-shading
+            let cn = normalize(n + vec3<f32>(0.0, 0.0, 1.5));
+            let cc = shade(cv.rgb, cn, i.world + cn * 0.5, 0.35, 0.75) * 0.85;
+            c = mix(c, cc, canopy_view_cover(cv.w, i.world));
+        }
+    }
     return vec4<f32>(fog(c, i.world), 1.0);
 }
 
@@ -148,7 +226,8 @@ struct TreeIn {
     @location(5) leaf: vec4<f32>,   // leaf rgb, leaf amount
     @location(6) p2: vec4<f32>,     // opacity, phase R_x, phase R_z, flexibility (1 - k_f)
     @location(7) bark: vec4<f32>,   // bark rgb, dither salt
-    @location(8) p3: vec4<f32>,     // prototype, level, crown radius (culling), unused
+    @location(8) p3: vec4<f32>,     // prototype, level, crown radius (culling), crown radius drawn
+    @location(9) uv: vec2<f32>,     // leaf-card coordinates 0..1 (carved into discs); -1 elsewhere
 };
 
 struct TreeOut {
@@ -162,6 +241,8 @@ struct TreeOut {
     @location(6) bb: vec2<f32>,                         // billboard outline coordinates
     @location(7) @interpolate(flat) info: vec4<f32>,   // prototype, level, bark rgb packed? (unused)
     @location(8) @interpolate(flat) bark: vec3<f32>,   // bark colour (billboard trunks, twigs)
+    @location(9) cdir: vec3<f32>,                       // direction from the crown centre (meshes)
+    @location(10) uv: vec2<f32>,                        // leaf-card coordinates (-1: not a card)
 };
 
 // Direction from a tree towards the viewer (or the sun in the shadow pass).
@@ -205,6 +286,7 @@ fn sway(v: TreeIn, rp: vec3<f32>, sn_in: f32) -> vec3<f32> {
 
 fn tree_vertex(v: TreeIn) -> TreeOut {
     var o: TreeOut;
+    o.cdir = vec3<f32>(0.0, 0.0, 1.0);
     let h = v.pos_h.w;
     let sxy = v.p1.x;
     var w: vec3<f32>;
@@ -234,6 +316,9 @@ fn tree_vertex(v: TreeIn) -> TreeOut {
         let rn = vec3<f32>(c * ln.x - s * ln.y, s * ln.x + c * ln.y, ln.z);
         o.normal = normalize(rn);
         o.bb = vec2<f32>(0.0, 0.0);
+        // outward direction of the crown as an ellipsoid about (0, 0, 0.6 h) with half-height
+        // 0.4 h: bends leaf-cluster normals into a rounded crown shade
+        o.cdir = vec3<f32>(rp.x / max(sxy, 1e-4), rp.y / max(sxy, 1e-4), (v.pos.z - 0.6) * 0.8);
     }
     o.clip = g.view_proj * vec4<f32>(w, 1.0);
     o.world = w;
@@ -243,7 +328,18 @@ fn tree_vertex(v: TreeIn) -> TreeOut {
     o.salt = v.bark.w;
     o.info = v.p3;
     o.bark = v.bark.rgb;
+    o.uv = v.uv;
     return o;
+}
+
+// Leaf cards are carved into discs with a dithered rim (radius 0.7..1 of the half-side), so
+// leaf clusters of crossed cards read as soft round clumps, not squares.
+fn card_kept(i: TreeOut) -> bool {
+    if (i.uv.x < -0.5 || i.mat_s.x < 0.5 || i.mat_s.x > 1.5) {
+        return true;
+    }
+    let d = length(i.uv * 2.0 - vec2<f32>(1.0, 1.0));
+    return d < 1.0 - 0.3 * hash2(i.clip.xy, i.salt + 17.0);
 }
 
 fn bayer4(p: vec2<f32>) -> f32 {
@@ -365,7 +461,7 @@ fn twig_color(bark: vec3<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32> {
-    if (!keep(i)) {
+    if (!keep(i) || !card_kept(i)) {
         discard;
     }
     var n = normalize(i.normal);
@@ -383,8 +479,35 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
             leafy = 0.0;
             albedo = i.bark;
         }
-    } else if (!ff) {
-        n = -n;
+    } else {
+        if (!ff) {
+            n = -n;
+        }
+        if (i.mat_s.x > 0.5) {
+            // leaf clusters: dither away faces seen edge-on (soft, rounded cluster outlines
+            // instead of box edges) and bend normals towards the crown's outward direction
+            // (rounded crown shade); more at the reduced and hull levels, whose clusters are
+            // coarse polyhedra
+            let coarse = i.info.y > 0.5;
+            var vd = g.facing.xyz;
+            if (g.facing.w < 0.5) {
+                vd = g.eye.xyz - i.world;
+            }
+            let e = abs(dot(n, normalize(vd)));
+            var soft = 0.12;
+            var bend = 0.35;
+            if (coarse) {
+                soft = 0.45;
+                bend = 0.7;
+            }
+            if (hash2(i.clip.xy, i.salt + 11.0) > smoothstep(0.0, soft, e)) {
+                discard;
+            }
+            let cd = i.cdir;
+            if (dot(cd, cd) > 1e-8) {
+                n = normalize(mix(n, normalize(cd), bend));
+            }
+        }
     }
     if (leafy > 0.5) {
         let fo = foliage(i, twig_density(i));
@@ -413,7 +536,7 @@ fn vs_tree_shadow(v: TreeIn) -> TreeOut {
 
 @fragment
 fn fs_tree_shadow(i: TreeOut) {
-    if (!keep(i)) {
+    if (!keep(i) || !card_kept(i)) {
         discard;
     }
     var leafy = i.mat_s.x > 0.5;
