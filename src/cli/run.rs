@@ -88,7 +88,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // 2. Simulation.
     let t_sim = Instant::now();
     eprintln!("[2/4] simulating {} years", sc.years);
-    let summary = super::simulate::simulate(&sc, site.clone(), &lib, out.clone(), false)?;
+    // GeoJSON (≈ 250 bytes per tree) only at the years the job renders, CSV at every snapshot
+    let summary = super::simulate::simulate(&sc, site.clone(), &lib, out.clone(), false, Some(STILL_YEARS.to_vec()))?;
     let sim_s = t_sim.elapsed().as_secs_f64();
 
     // 3 + 4. Pictures.

@@ -85,7 +85,9 @@ pub struct SimOutcome {
 
 /// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year);
 /// returns what the main job reports.
-pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool) -> anyhow::Result<SimOutcome> {
+///
+/// `geojson_years`: the years whose snapshots also get a GeoJSON inventory (`None`: all).
+pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, geojson_years: Option<Vec<u32>>) -> anyhow::Result<SimOutcome> {
     if out.exists() && !out.is_dir() {
         anyhow::bail!("--out {}: is a file; expected a folder for the run's outputs", out.display());
     }
@@ -104,6 +106,7 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
     save_run_species(sc, lib, &out)?;
     let mut opts = RunOptions::new(&out);
     opts.resume = resume;
+    opts.geojson_years = geojson_years;
     opts.stop = Some(stop);
     opts.progress = Some(&mut cb);
     let res = run_scenario(sc, site, lib, opts).with_context(|| format!("simulating {}", sc.name))?;
@@ -138,7 +141,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     dirs.extend(a.species_dir.as_deref());
     let lib = library(&dirs)?;
     let site = load_site(&sc)?;
-    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume).map(|_| ());
+    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume, None).map(|_| ());
     match a.threads {
         Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build().context("thread pool")?.install(go),
         None => go(),

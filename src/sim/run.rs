@@ -44,12 +44,16 @@ pub struct RunOptions<'a> {
     pub map_px: usize,
     /// Write inventories, maps and plots (false: stand table and checkpoint only).
     pub write_snapshots: bool,
+    /// Years whose snapshots also get the GeoJSON inventory (`None`: every snapshot). The last
+    /// year and a year stopped at always get it. GeoJSON is ~250 bytes per tree, so the main job
+    /// limits it to the years it renders; the CSV inventory is written at every snapshot.
+    pub geojson_years: Option<Vec<u32>>,
 }
 
 impl RunOptions<'_> {
     /// Defaults: no resume, no stop flag, no progress callback, 1024-pixel maps, snapshots on.
     pub fn new(out_dir: impl Into<PathBuf>) -> Self {
-        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true }
+        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, geojson_years: None }
     }
 }
 
@@ -106,9 +110,11 @@ pub fn clear_snapshots(dir: &Path) -> Result<()> {
     Ok(())
 }
 
-fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize) -> Result<()> {
+fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize, geojson: bool) -> Result<()> {
     inventory::write_inventory_csv(&dir.join("inventory").join(format!("{label}.csv")), w)?;
-    inventory::write_inventory_geojson(&dir.join("inventory").join(format!("{label}.geojson")), w)?;
+    if geojson {
+        inventory::write_inventory_geojson(&dir.join("inventory").join(format!("{label}.geojson")), w)?;
+    }
     if maps {
         inventory::write_regeneration_csv(&dir.join("inventory").join(format!("{label}_regeneration.csv")), w)?;
         let m = dir.join("maps");
@@ -148,6 +154,9 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
     }
     let mut world = World::new(site, lib, scenario)?;
     let ck = dir.join("checkpoint.bin");
+    let gj_years = opts.geojson_years.clone();
+    let last_year = scenario.years;
+    let gj = move |y: u32| y == last_year || gj_years.as_ref().is_none_or(|ys| ys.contains(&y));
     let mut rows = Vec::new();
     if opts.resume {
         if !ck.exists() {
@@ -164,7 +173,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         clear_snapshots(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {
-            snapshot(&dir, &world, "year_0000", true, opts.map_px)?;
+            snapshot(&dir, &world, "year_0000", true, opts.map_px, gj(0))?;
         }
     }
     let t0 = Instant::now();
@@ -177,7 +186,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         let mut rep = YearReport::default();
         let mut err: Option<Error> = None;
         let seasonal = snap_year && scenario.seasonal_snapshots;
-        let (d, px) = (dir.clone(), opts.map_px);
+        let (d, px, gj_y) = (dir.clone(), opts.map_px, gj(y));
         step_year_with(&mut world, scenario, &mut rep, &mut |season, w| {
             if seasonal && season != Season::Winter && err.is_none() {
                 let name = match season {
@@ -185,7 +194,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
                     Season::Summer => "summer",
                     _ => "autumn",
                 };
-                if let Err(e) = snapshot(&d, w, &format!("year_{y:04}_{name}"), false, px) {
+                if let Err(e) = snapshot(&d, w, &format!("year_{y:04}_{name}"), false, px, gj_y) {
                     err = Some(e);
                 }
             }
@@ -198,7 +207,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
             rows.push(r);
         }
         if snap_year {
-            snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px)?;
+            snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px, gj(y))?;
             tables(&dir, &rows, &world, true)?;
         }
         let stop_now = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
@@ -212,7 +221,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         if stop_now && y < scenario.years {
             stopped = true;
             if opts.write_snapshots && !snap_year {
-                snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px)?;
+                snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px, true)?;
             }
             break;
         }

@@ -256,30 +256,31 @@ fn bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
 }
 
 /// LOD2: a low-poly star-shaped crown hull fitted to the foliage (leaf centres, or tips): the
-/// crown between its lowest and highest foliage point is cut into `hull_segments / 2 − 1`
-/// (≥ 2) height bands and `hull_segments` (≥ 3) azimuth directions around the trunk axis; each
+/// crown between the 3rd and 98th percentile of its foliage heights is cut into
+/// `hull_segments / 2 − 2` (≥ 2) height bands and `hull_segments` (≥ 3) azimuth directions around the trunk axis; each
 /// ring vertex lies at the band's support function in its direction (the farthest horizontal
 /// reach of the band's foliage along it, at least 2 % of the crown radius; empty bands take the
-/// bands beside them; then one 5-point smoothing pass), closed by an apex at the highest foliage
-/// point and a base point on the trunk axis. The crown's bottom is the 3rd percentile of the
-/// foliage heights (lower points are left out). Unlike a bounding ellipsoid this keeps the crown's shape: conical spruces,
+/// bands beside them; then one 5-point smoothing pass). Dome rings below and above (radii
+/// r·cos θ) round the crown off to a base point on the trunk axis and an apex over the highest
+/// foliage point. Unlike a bounding ellipsoid this keeps the crown's shape: conical spruces,
 /// ovoid beeches, and crowns made one-sided by a neighbour or a wall (Plastic Trees). Normals
 /// are area-weighted face normals, outward. Sits on a 5-sided trunk from the root to the crown
 /// base.
 pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     let mut pts = foliage_points(sk, leaves);
-    let Some((mut lo, hi)) = bounds(&pts) else { return TreeMesh::default() };
-    // the crown starts at the 3rd percentile of foliage height: a few low leaves on the trunk
-    // (epicormic shoots) do not drag the hull down to the ground
+    let Some((mut lo, mut hi)) = bounds(&pts) else { return TreeMesh::default() };
+    // the crown spans the 3rd to 98th percentile of foliage height: a few low leaves on the
+    // trunk (epicormic shoots) or a leader's leaves do not stretch the hull into a spike
     let mut zs: Vec<f32> = pts.iter().map(|p| p.z).collect();
     zs.sort_by(f32::total_cmp);
     lo.z = zs[(zs.len() * 3 / 100).min(zs.len() - 1)];
-    pts.retain(|p| p.z >= lo.z);
+    hi.z = zs[(zs.len() * 98 / 100).min(zs.len() - 1)].max(lo.z + 1e-3);
+    pts.retain(|p| p.z >= lo.z && p.z <= hi.z);
     let top_xy = pts.iter().copied().fold(Vec3::new(0.0, 0.0, f32::MIN), |a, p| if p.z > a.z { p } else { a });
     let c = 0.5 * (lo + hi);
     let r = (0.5 * (hi - lo)).max(Vec3::splat(1e-3));
     let nlon = o.hull_segments.max(3) as usize;
-    let nb = (o.hull_segments as usize / 2).max(3) - 1;
+    let nb = (o.hull_segments as usize / 2).max(4) - 2;
     let axis = sk.nodes.first().map(|n| n.pos).unwrap_or(c);
     let (z0, dz) = (lo.z, (hi.z - lo.z).max(1e-3));
     // support function per (band, sector): the farthest reach of the band's foliage along the
@@ -325,14 +326,28 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
             rad[b * nlon + k] = (0.5 * src[b * nlon + k] + 0.125 * n4).max(1e-3);
         }
     }
-    let mut hull = TriMesh::default();
+    // rings: a dome ring below the lowest band, the band rings, two dome rings above the top
+    // band (z = z_ring ± (end − z_ring)·sin θ, r = r_ring·cos θ at θ = 50° below, 45° and 75°
+    // above), so broadleaf crowns are rounded while a cone's narrow top stays pointed
+    let band_z = |b: usize| z0 + (b as f32 + 0.5) / nb as f32 * dz;
+    let (zb, zt) = (band_z(0), band_z(nb - 1));
+    let mut rings: Vec<(f32, Vec<f32>)> = Vec::new();
+    let th = 50f32.to_radians();
+    rings.push((zb - (zb - lo.z) * th.sin(), (0..nlon).map(|k| rad[k] * th.cos()).collect()));
     for b in 0..nb {
-        let z = z0 + (b as f32 + 0.5) / nb as f32 * dz;
-        for k in 0..nlon {
+        rings.push((band_z(b), rad[b * nlon..(b + 1) * nlon].to_vec()));
+    }
+    for deg in [45f32, 75.0] {
+        let t = deg.to_radians();
+        rings.push((zt + (hi.z - zt) * t.sin(), (0..nlon).map(|k| rad[(nb - 1) * nlon + k] * t.cos()).collect()));
+    }
+    let nr = rings.len();
+    let mut hull = TriMesh::default();
+    for (j, (z, rr)) in rings.iter().enumerate() {
+        for (k, &r_k) in rr.iter().enumerate() {
             let a = (k as f32 + 0.5) / nlon as f32 * TAU;
-            let rr = rad[b * nlon + k];
-            hull.positions.push([axis.x + rr * a.cos(), axis.y + rr * a.sin(), z]);
-            hull.uvs.push([k as f32 / nlon as f32, (b as f32 + 0.5) / nb as f32]);
+            hull.positions.push([axis.x + r_k * a.cos(), axis.y + r_k * a.sin(), *z]);
+            hull.uvs.push([k as f32 / nlon as f32, (j as f32 + 0.5) / nr as f32]);
         }
     }
     let (apex, base) = (hull.positions.len() as u32, hull.positions.len() as u32 + 1);
@@ -342,10 +357,10 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     let v = |b: usize, k: usize| (b * nlon + k % nlon) as u32;
     for k in 0..nlon {
         hull.indices.extend_from_slice(&[base, v(0, k + 1), v(0, k)]);
-        for b in 0..nb - 1 {
+        for b in 0..nr - 1 {
             hull.indices.extend_from_slice(&[v(b, k), v(b, k + 1), v(b + 1, k + 1), v(b, k), v(b + 1, k + 1), v(b + 1, k)]);
         }
-        hull.indices.extend_from_slice(&[v(nb - 1, k), v(nb - 1, k + 1), apex]);
+        hull.indices.extend_from_slice(&[v(nr - 1, k), v(nr - 1, k + 1), apex]);
     }
     let mut nrm = vec![Vec3::ZERO; hull.positions.len()];
     for t in hull.indices.chunks_exact(3) {
