@@ -20,6 +20,18 @@ age_yr = 10.0
 
 #[test]
 fn ctrl_c_stops_after_a_year_with_status_130_and_a_checkpoint() {
+    stop_with(libc::SIGINT);
+}
+
+#[test]
+fn sigterm_stops_like_ctrl_c_and_leaves_no_temporary_files() {
+    let d = stop_with(libc::SIGTERM);
+    let tmp: Vec<String> = std::fs::read_dir(d.path().join("run/inventory")).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).filter(|n| n.ends_with(".tmp")).collect();
+    assert!(tmp.is_empty(), "{tmp:?}");
+}
+
+/// Runs a long simulation, sends `sig` once year 2 is written, checks the graceful stop.
+fn stop_with(sig: i32) -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     std::fs::write(d.join("long.toml"), LONG).unwrap();
@@ -31,7 +43,7 @@ fn ctrl_c_stops_after_a_year_with_status_130_and_a_checkpoint() {
         std::thread::sleep(std::time::Duration::from_millis(5));
     }
     unsafe {
-        libc::kill(child.id() as i32, libc::SIGINT);
+        libc::kill(child.id() as i32, sig);
     }
     let out = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
@@ -41,6 +53,7 @@ fn ctrl_c_stops_after_a_year_with_status_130_and_a_checkpoint() {
     let table = std::fs::read_to_string(d.join("run/stand_table.csv")).unwrap();
     let years = table.lines().count() - 1;
     assert!((2..1000).contains(&years), "{years} rows");
+    dir
 }
 
 #[test]

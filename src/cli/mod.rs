@@ -22,7 +22,8 @@ pub fn init_logging(verbose: u8) {
     let _ = tracing_subscriber::fmt().with_env_filter(filter).with_writer(std::io::stderr).with_ansi(ansi).try_init();
 }
 
-/// A run stopped by Ctrl-C after a complete year, its outputs so far intact: `sylva` exits with
+/// A run stopped by Ctrl-C (or SIGTERM/SIGHUP, e.g. `timeout` or a closed terminal) after a
+/// complete year, its outputs so far intact and no temporary file left: `sylva` exits with
 /// status 130 (128 + SIGINT, the shell convention) so scripts can tell it from a finished run.
 #[derive(Debug)]
 pub struct Interrupted(pub String);

@@ -124,7 +124,7 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
         out.display()
     );
     if res.stopped {
-        return Err(super::Interrupted(format!("stopped by Ctrl-C after year {}: outputs so far are complete in {}; continue with --resume", res.world.year, out.display())).into());
+        return Err(super::Interrupted(format!("stopped (Ctrl-C or SIGTERM) after year {}: outputs so far are complete in {}; continue with --resume", res.world.year, out.display())).into());
     }
     let pool = res.world.pool.iter().map(|&s| res.world.lib.species[s as usize].id.clone()).collect();
     Ok(SimOutcome { year: res.world.year, trees_alive: res.world.trees.len(), pool, rows: res.rows })

@@ -107,14 +107,16 @@ fn write_rgb_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> Result<()> {
 
 /// Categorical palette for species: the 7 colours of Okabe & Ito (2008, "Color Universal
 /// Design", colour-blind safe; black left out) followed by Tableau 10 (Tableau Software).
+/// Ordered so that neighbours in a pool differ in hue and lightness (blue, orange, green,
+/// purple, sky blue, yellow, vermillion).
 pub const SPECIES_PALETTE: [[u8; 3]; 17] = [
-    [230, 159, 0],
-    [86, 180, 233],
-    [0, 158, 115],
-    [240, 228, 66],
     [0, 114, 178],
-    [213, 94, 0],
+    [230, 159, 0],
+    [0, 158, 115],
     [204, 121, 167],
+    [86, 180, 233],
+    [240, 228, 66],
+    [213, 94, 0],
     [78, 121, 167],
     [242, 142, 43],
     [225, 87, 89],
@@ -155,8 +157,13 @@ pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()>
 }
 
 /// Map raster size: cells of `cell_m` so that the longer side has at most `max_px` pixels.
+/// Smallest cell of the species and basal-area maps (m): 20 m × 20 m = 0.04 ha, a usual
+/// inventory plot size. Finer cells would hold a single tree each, and basal area per hectare
+/// of a 5 m cell under one crown reads as hundreds of m²/ha (salt-and-pepper maps).
+pub const MIN_MAP_CELL_M: f64 = 20.0;
+
 fn map_dims(w: &World, max_px: usize) -> (usize, usize, f64) {
-    let cell = (w.extent.0.max(w.extent.1) / max_px as f64).max(w.light_cell_m);
+    let cell = (w.extent.0.max(w.extent.1) / max_px as f64).max(w.light_cell_m).max(MIN_MAP_CELL_M);
     (((w.extent.0 / cell).ceil() as usize).max(1), ((w.extent.1 / cell).ceil() as usize).max(1), cell)
 }
 
@@ -207,9 +214,10 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
     for r in 0..rows {
         for c in 0..cols {
             let (x, y) = ((c as f64 + 0.5) * cell, (rows - r) as f64 * cell - 0.5 * cell);
-            let masked = w.site_cell(x, y).is_none();
             let v = &ba[(r * cols + c) * np..(r * cols + c + 1) * np];
             let tot: f64 = v.iter().sum();
+            // a cell whose centre is masked but that holds trees keeps them (mass balance)
+            let masked = w.site_cell(x, y).is_none() && tot <= 0.0;
             let dom = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, _)| k).unwrap_or(0);
             sp_cells[r * cols + c] = if masked { masked_px } else if tot <= 0.0 { empty_px } else { species_color(w, dom as u16) };
             ba_grid.data[r * cols + c] = (tot / area_ha) as f32;
@@ -257,7 +265,7 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
         ramp: super::maps::Ramp::Viridis,
         title: format!("Basal area, {when}"),
         units: "m²/ha".into(),
-        range: Some((0.0, 60.0)),
+        range: Some((0.0, ba_scale_top(&ba_grid.data) as f32)),
         hillshade: None,
         shade_strength: 0.0,
     };
@@ -272,6 +280,19 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
     }
     let codes_path = species_png.with_file_name("species_codes.csv");
     crate::output::write_atomic(&codes_path, codes.as_bytes())
+}
+
+/// Top of the basal-area colour scale (m²/ha): the 99th percentile of the non-empty cells,
+/// rounded up to 10, at least 60 (so maps of different years share the scale until a stand
+/// exceeds it).
+fn ba_scale_top(v: &[f32]) -> f64 {
+    let mut nz: Vec<f32> = v.iter().copied().filter(|x| x.is_finite() && *x > 0.0).collect();
+    if nz.is_empty() {
+        return 60.0;
+    }
+    nz.sort_by(f32::total_cmp);
+    let p99 = nz[(nz.len() * 99 / 100).min(nz.len() - 1)] as f64;
+    ((p99 / 10.0).ceil() * 10.0).max(60.0)
 }
 
 /// Georeferencing of a map of `rows` rows with square cells of `cell` metres laid over the
