@@ -216,3 +216,17 @@ fn pool_and_png_terrain_keys_are_checked() {
     let (lo, hi) = z.iter().fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
     assert!((lo - 200.0).abs() < 0.5 && hi > 200.0 && hi <= 700.0 + 1e-3, "{lo} … {hi}");
 }
+
+#[test]
+fn absurd_planting_and_seed_rain_are_refused() {
+    let big = "name = \"big\"\nyears = 1\n[terrain]\nuniform = { width = 200, height = 200, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n[[start]]\nkind = \"planted\"\nspecies = \"beech\"\nspacing_m = 0.5\n";
+    let sc = Scenario::from_toml_str(big, "big.toml").unwrap();
+    let e = sylva::sim::World::new(site(&sc), &fixtures::library(), &sc).err().expect("16 M trees refused").to_string();
+    assert!(e.contains("start[0].spacing_m") && e.contains("5000000"), "{e}");
+    let ok = big.replace("spacing_m = 0.5", "spacing_m = 2.0");
+    let sc = Scenario::from_toml_str(&ok, "big.toml").unwrap();
+    assert!(sylva::sim::World::new(site(&sc), &fixtures::library(), &sc).is_ok(), "1 M trees at 2 m are fine");
+    let rain = SC.replace("kind = \"seed_sources\"\nspecies = \"beech\"\npoints = [[20.0, 20.0], [80.0, 50.0]]\ntrees_per_source = 2", "kind = \"seed_rain\"\nspecies = \"beech\"\nseeds_per_ha = 1e12");
+    let e = Scenario::from_toml_str(&rain, "r.toml").unwrap_err().to_string();
+    assert!(e.contains("seeds_per_ha") && e.contains("100,000,000"), "{e}");
+}

@@ -87,6 +87,10 @@ pub struct TerrainSection {
     pub height_range_m: Option<[f64; 2]>,
 }
 
+/// Most trees all `planted` starts of a scenario may plant together (each is an individual;
+/// 5 M is about 2,000 ha at 2 m spacing).
+pub const MAX_PLANTED_TREES: u64 = 5_000_000;
+
 /// A generated (fractal noise) terrain.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -351,8 +355,8 @@ impl Scenario {
                     }
                 }
                 Start::SeedRain { seeds_per_ha, .. } => {
-                    if !(*seeds_per_ha >= 0.0 && seeds_per_ha.is_finite()) {
-                        return Err(invalid(ctx, &f("seeds_per_ha"), seeds_per_ha, "a finite number ≥ 0"));
+                    if !(*seeds_per_ha >= 0.0 && *seeds_per_ha <= 1e8) {
+                        return Err(invalid(ctx, &f("seeds_per_ha"), seeds_per_ha, "0–100,000,000 seeds per ha per year (a beech mast year gives up to ~2·10⁷)"));
                     }
                 }
                 Start::Planted { spacing_m, age_yr, area, .. } => {
@@ -402,6 +406,17 @@ impl Scenario {
                     }
                 }
                 _ => {}
+            }
+        }
+        // planted trees over the site: each is an individual in memory and in every inventory
+        let mut planted = 0u64;
+        for (i, s) in self.start.iter().enumerate() {
+            if let Start::Planted { spacing_m, area, .. } = s {
+                let [x0, y0, x1, y1] = area.unwrap_or([0.0, 0.0, ex, ey]);
+                planted += (((x1 - x0) / spacing_m).floor().max(0.0) as u64) * (((y1 - y0) / spacing_m).floor().max(0.0) as u64);
+                if planted > MAX_PLANTED_TREES {
+                    return Err(invalid(ctx, &format!("start[{i}].spacing_m"), spacing_m, &format!("a spacing that plants at most {MAX_PLANTED_TREES} trees in all ({planted} so far on {:.0} ha; widen the spacing or give an area)", ex * ey / 10_000.0)));
+                }
             }
         }
         Ok(())
