@@ -5,7 +5,6 @@
 //! with `UPDATE_SNAPSHOTS=1 cargo test --test render golden`.
 
 use std::path::PathBuf;
-use std::sync::Mutex;
 
 use glam::Vec3;
 use sylva::render::camera::{Camera, CameraPreset};
@@ -14,33 +13,9 @@ use sylva::render::lod::{select_lod, LodParams};
 use sylva::render::scene::{demo_scene, Scene, Sky, Sun, TreeInstance, Wind};
 use sylva::render::terrain::{from_grid, LandCover};
 
-static RENDERER: Mutex<Option<Renderer>> = Mutex::new(None);
-
-/// Runs `f` with the shared renderer, or returns (skips) when there is no adapter.
-fn with_renderer(f: impl FnOnce(&mut Renderer)) {
-    let mut guard = RENDERER.lock().unwrap_or_else(|e| e.into_inner());
-    if guard.is_none() {
-        match Renderer::new() {
-            Ok(r) => *guard = Some(r),
-            Err(e) => {
-                if std::env::var_os("SYLVA_REQUIRE_ADAPTER").is_some() {
-                    panic!("SYLVA_REQUIRE_ADAPTER is set but no adapter was found: {e}");
-                }
-                eprintln!("skipping: {e}");
-                return;
-            }
-        }
-    }
-    if let Some(r) = guard.as_mut() {
-        f(r)
-    }
-}
-
-fn out_dir() -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render");
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+#[path = "common/render.rs"]
+mod render_common;
+use render_common::{out_dir, with_renderer};
 
 /// Flat 200 m terrain at z = 0, two prototypes, the given trees; sun high in the south-east.
 fn flat_scene(trees: Vec<TreeInstance>) -> Scene {

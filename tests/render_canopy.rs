@@ -5,40 +5,15 @@
 //! note and pass, unless `SYLVA_REQUIRE_ADAPTER` is set, in which case they fail (as in
 //! `tests/render.rs`).
 
-use std::path::PathBuf;
-use std::sync::Mutex;
 
 use sylva::render::camera::{Camera, CameraPreset};
 use sylva::render::headless::{Culling, FrameStats, Renderer};
 use sylva::render::lod::LodParams;
 use sylva::render::scene::{demo_scene, Scene};
 
-static RENDERER: Mutex<Option<Renderer>> = Mutex::new(None);
-
-fn with_renderer(f: impl FnOnce(&mut Renderer)) {
-    let mut guard = RENDERER.lock().unwrap_or_else(|e| e.into_inner());
-    if guard.is_none() {
-        match Renderer::new() {
-            Ok(r) => *guard = Some(r),
-            Err(e) => {
-                if std::env::var_os("SYLVA_REQUIRE_ADAPTER").is_some() {
-                    panic!("SYLVA_REQUIRE_ADAPTER is set but no adapter was found: {e}");
-                }
-                eprintln!("skipping: {e}");
-                return;
-            }
-        }
-    }
-    if let Some(r) = guard.as_mut() {
-        f(r)
-    }
-}
-
-fn out_dir() -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render");
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+#[path = "common/render.rs"]
+mod render_common;
+use render_common::{out_dir, with_renderer};
 
 fn paths(r: &Renderer) -> Vec<Culling> {
     if r.gpu_culling_supported() {

@@ -379,8 +379,9 @@ pub fn run(w: &mut World) -> usize {
         }
         for (t, light, vigour) in b.recruits {
             w.trees.push(t);
-            *w.trees.light.last_mut().expect("just pushed") = light;
-            *w.trees.vigour.last_mut().expect("just pushed") = vigour;
+            let i = w.trees.len() - 1;
+            w.trees.light[i] = light;
+            w.trees.vigour[i] = vigour;
             n_recruits += 1;
         }
     }
