@@ -3,6 +3,7 @@
 //! OWNERSHIP NOTE (foundation): [`SiteConditions`] is the contract between terrain and the
 //! simulation; fields may be added, not renamed.
 
+pub use crate::climate::Climate;
 use crate::grid::{GeoRef, Grid};
 
 /// Index of each Ellenberg factor in `[L, T, K, F, R, N]` arrays.
@@ -108,46 +109,6 @@ impl SiteConditions {
             wind_exposure: Grid::filled(width, height, 0.3),
             temperature_c: Grid::filled(width, height, 8.0),
             indices: Grid::filled(width, height, indices),
-        }
-    }
-}
-
-/// Climate and soil constants of a scenario that, with the terrain, give the living conditions.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct Climate {
-    /// Latitude (degrees, −90…90) for insolation when the terrain is not geographic.
-    pub latitude_deg: f64,
-    /// Mean annual temperature (°C) at `reference_elevation_m`.
-    pub reference_temperature_c: f32,
-    /// Elevation (m) at which `reference_temperature_c` holds.
-    pub reference_elevation_m: f32,
-    /// Temperature lapse rate (K per km, negative = cooling upwards); default −6.5.
-    pub lapse_rate_k_per_km: f32,
-    /// Continentality index K (1–9), constant over the terrain.
-    pub continentality_k: f32,
-    /// Soil reaction index R (1–9), constant over the terrain.
-    pub reaction_r: f32,
-    /// Nitrogen index N (1–9), constant over the terrain.
-    pub nitrogen_n: f32,
-    /// Cells at or below this elevation (m) are water and masked.
-    pub sea_level_m: f32,
-    /// Direction the prevailing wind comes from (degrees clockwise from north).
-    pub wind_from_deg: f32,
-}
-
-impl Default for Climate {
-    fn default() -> Self {
-        Climate {
-            latitude_deg: 46.0,
-            reference_temperature_c: 9.0,
-            reference_elevation_m: 300.0,
-            lapse_rate_k_per_km: -6.5,
-            continentality_k: 4.0,
-            reaction_r: 6.0,
-            nitrogen_n: 5.0,
-            sea_level_m: 0.0,
-            wind_from_deg: 270.0,
         }
     }
 }

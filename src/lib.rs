@@ -9,6 +9,7 @@
 //! windows or files beyond its loaders. See `ARCHITECTURE.md`.
 #![warn(missing_docs)]
 
+pub mod climate;
 pub mod conditions;
 pub mod error;
 pub mod grid;

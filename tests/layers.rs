@@ -280,8 +280,8 @@ fn no_cycles_between_second_level_modules() {
 #[test]
 fn checker_finds_planted_violations() {
     let m = |s: &str| s.split("::").map(String::from).collect::<Vec<_>>();
-    let code = "use crate::{sim::world::World, output};\nuse super::super::world::X; // crate::render::x\n";
-    let r = referenced(&super::code(code), &m("sim::phases::growth"));
+    let text = "use crate::{sim::world::World, output};\nuse super::super::world::X; // crate::render::x\n";
+    let r = referenced(&code(text), &m("sim::phases::growth"));
     assert!(r.contains(&m("sim::world::World")) && r.contains(&m("output")) && r.contains(&m("sim::world::X")), "{r:?}");
     assert!(!r.iter().any(|p| p.first().is_some_and(|s| s == "render")), "comments are skipped: {r:?}");
     let t = Tree {

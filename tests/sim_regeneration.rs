@@ -29,7 +29,7 @@ fn check_year(w: &World, first_new_id: u64) {
         }
     }
     // the density cap of every light cell: Σ stems / N_max(h) ≤ cell area
-    let area_ha = w.light_cell_m * w.light_cell_m / 10_000.0;
+    let area_ha = w.light.cell_m * w.light.cell_m / 10_000.0;
     let mut occ = std::collections::BTreeMap::<u32, f64>::new();
     for i in 0..c.len() {
         *occ.entry(c.cell[i]).or_default() += c.stems[i] as f64 / (max_density_ha(c.height[i]) * area_ha);

@@ -50,15 +50,13 @@ pub const REGENERATION_HEADER: &str = "cell,species,x_m,y_m,stems,stems_per_ha,h
 /// (m, 2 decimals), age (years).
 pub fn regeneration_csv(w: &World) -> String {
     let c = &w.cohorts;
-    let cell = w.light_cell_m;
-    let cols = ((w.extent.0 / cell).ceil() as usize).max(1);
-    let per_ha = 10_000.0 / (cell * cell);
+    let per_ha = 10_000.0 / w.light.cell_area_m2();
     let mut s = String::with_capacity(48 * (c.len() + 1));
     s.push_str(REGENERATION_HEADER);
     s.push('\n');
     for i in 0..c.len() {
         let k = c.cell[i] as usize;
-        let (x, y) = (((k % cols) as f64 + 0.5) * cell, ((k / cols) as f64 + 0.5) * cell);
+        let (x, y) = w.light.centre(k);
         let sp = w.pool.get(c.pool[i] as usize).map(|&s| w.lib.species[s as usize].id.as_str()).unwrap_or("?");
         let _ = writeln!(s, "{},{},{:.2},{:.2},{},{:.0},{:.2},{:.0}", k, sp, x, y, c.stems[i], c.stems[i] as f64 * per_ha, c.height[i], c.age[i]);
     }

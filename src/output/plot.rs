@@ -163,7 +163,7 @@ pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()>
 pub const MIN_MAP_CELL_M: f64 = 20.0;
 
 fn map_dims(w: &World, max_px: usize) -> (usize, usize, f64) {
-    let cell = (w.extent.0.max(w.extent.1) / max_px as f64).max(w.light_cell_m).max(MIN_MAP_CELL_M);
+    let cell = (w.extent.0.max(w.extent.1) / max_px as f64).max(w.light.cell_m).max(MIN_MAP_CELL_M);
     (((w.extent.0 / cell).ceil() as usize).max(1), ((w.extent.1 / cell).ceil() as usize).max(1), cell)
 }
 

@@ -21,7 +21,7 @@ pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
         let _ = write!(s, ",stem_share_{sp}");
     }
     s.push_str(",regen_germinated,regen_recruited");
-    for c in crate::sim::regen::RegenDeath::ALL {
+    for c in crate::sim::cohorts::RegenDeath::ALL {
         let _ = write!(s, ",regen_deaths_{}", c.name());
     }
     for c in DeathCause::ALL {

@@ -3,7 +3,7 @@
 
 use glam::{Mat4, Vec3};
 
-use super::scene::TerrainMesh;
+use super::terrain::TerrainMesh;
 
 /// Projection of a camera.
 #[derive(Debug, Clone, Copy, PartialEq)]

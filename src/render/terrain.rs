@@ -3,9 +3,82 @@
 
 use glam::Vec3;
 
-use super::scene::TerrainMesh;
 use crate::grid::Grid;
 use crate::{Error, Result};
+
+/// The terrain as an indexed triangle mesh with per-vertex normals and colours.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TerrainMesh {
+    /// Vertex positions (m), x east, y north, z up (elevation).
+    pub positions: Vec<[f32; 3]>,
+    /// Unit normals, one per position.
+    pub normals: Vec<[f32; 3]>,
+    /// Linear RGB albedo in 0..1, one per position (land cover or overlay).
+    pub colors: Vec<[f32; 3]>,
+    /// Triangle list (counter-clockwise seen from above); length a multiple of 3.
+    pub indices: Vec<u32>,
+}
+
+impl TerrainMesh {
+    /// Axis-aligned bounds `(min, max)` in metres; a unit box at the origin for an empty mesh.
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        let mut it = self.positions.iter();
+        let Some(&first) = it.next() else { return ([0.0; 3], [1.0; 3]) };
+        let (mut lo, mut hi) = (first, first);
+        for p in it {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// Number of triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Checks that the arrays agree and indices are in range.
+    ///
+    /// # Errors
+    /// [`crate::Error::Invalid`] naming the offending field.
+    pub fn validate(&self) -> crate::Result<()> {
+        let n = self.positions.len();
+        let bad = |field: &str, value: String, expected: String| crate::Error::Invalid {
+            context: "render::TerrainMesh".into(),
+            field: field.into(),
+            value,
+            expected,
+        };
+        if self.normals.len() != n {
+            return Err(bad("normals", self.normals.len().to_string(), format!("{n} (one per position)")));
+        }
+        if self.colors.len() != n {
+            return Err(bad("colors", self.colors.len().to_string(), format!("{n} (one per position)")));
+        }
+        if self.indices.len() % 3 != 0 {
+            return Err(bad("indices", self.indices.len().to_string(), "a multiple of 3".into()));
+        }
+        if let Some(&i) = self.indices.iter().find(|&&i| i as usize >= n) {
+            return Err(bad("indices", i.to_string(), format!("< {n} (vertex count)")));
+        }
+        Ok(())
+    }
+
+    /// Height (m) of the vertex nearest to `(x, y)` in plan, or `None` for an empty mesh.
+    /// A coarse lookup for camera placement, O(vertices).
+    pub fn nearest_height(&self, x: f32, y: f32) -> Option<f32> {
+        self.positions
+            .iter()
+            .min_by(|a, b| {
+                let da = (a[0] - x).powi(2) + (a[1] - y).powi(2);
+                let db = (b[0] - x).powi(2) + (b[1] - y).powi(2);
+                da.total_cmp(&db)
+            })
+            .map(|p| p[2])
+    }
+}
 
 /// Land-cover colouring by elevation and slope (linear RGB albedo).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -4,7 +4,7 @@
 //! resumed run continues bit for bit. Site conditions and species are rebuilt from the scenario.
 
 use super::stats::StandRow;
-use super::regen::{Cohorts, RegenLedger, N_REGEN_CAUSES};
+use super::cohorts::{Cohorts, RegenLedger, N_REGEN_CAUSES};
 use super::trees::TreeStore;
 use super::world::World;
 use crate::error::{Error, Result};

@@ -7,9 +7,10 @@
 //! phase); parallel work is merged in index order, so results do not depend on thread count.
 
 pub mod checkpoint;
+pub mod cohorts;
 pub mod fixtures;
+pub mod light_grid;
 pub mod phases;
-pub mod regen;
 pub mod run;
 pub mod scenario;
 pub mod stats;
@@ -20,5 +21,8 @@ pub mod world;
 pub use scenario::{Scenario, Start, TerrainSpec};
 pub use step::{step_year, YearReport};
 pub use trees::{DeathCause, TreeId, TreeStore};
-pub use regen::{Cohort, Cohorts, RegenDeath, RECRUIT_HEIGHT_M};
+pub use cohorts::{Cohort, Cohorts, RegenDeath, RECRUIT_HEIGHT_M};
+/// The regeneration phase, also at its former path `sim::regen`.
+pub use phases::regen;
 pub use world::World;
+pub use light_grid::LightGrid;

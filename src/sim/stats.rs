@@ -44,7 +44,7 @@ pub struct StandRow {
     /// Regeneration layer in the year: stems recruited as individual trees.
     pub regen_recruited: u64,
     /// Regeneration layer in the year: stems dead by cause ([`super::regen::RegenDeath::ALL`] order).
-    pub regen_deaths: [u64; super::regen::N_REGEN_CAUSES],
+    pub regen_deaths: [u64; super::cohorts::N_REGEN_CAUSES],
 }
 
 /// Computes the stand-table row of the world's current state (deaths from `w.dead`).

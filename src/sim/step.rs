@@ -1,6 +1,6 @@
 //! One simulated year as a readable list of phases.
 
-use super::phases::{establishment, growth, light, mortality, reproduction};
+use super::phases::{growth, light, mortality, regen, reproduction};
 use super::scenario::Scenario;
 use super::stats::{stand_row, StandRow};
 use super::world::World;
@@ -47,7 +47,7 @@ pub fn step_year_with(world: &mut World, _scenario: &Scenario, report: &mut Year
     light::run(world);
     lap(0, report);
     // spring: germination and establishment
-    report.established = establishment::run(world);
+    report.established = regen::run(world);
     lap(1, report);
     on_season(Season::Spring, world);
     // summer: growth

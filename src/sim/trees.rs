@@ -1,5 +1,6 @@
 //! Tree storage: struct of arrays with stable ids, and a spatial hash grid for neighbour queries.
 
+use super::light_grid::LightGrid;
 use crate::species::SpeciesId;
 use serde::{Deserialize, Serialize};
 
@@ -201,8 +202,8 @@ impl TreeStore {
     }
 }
 
-/// A spatial hash grid over the world: cells of `cell_m` metres, trees listed per cell (counting
-/// sort, O(trees)); rebuilt every year. Row 0 is the southern edge here (world y upwards).
+/// A spatial hash grid over the world on the [`LightGrid`] (cells of `cell_m` metres, row 0
+/// south), trees listed per cell (counting sort, O(trees)); rebuilt every year.
 #[derive(Debug, Clone, Default)]
 pub struct SpatialGrid {
     /// Cell size (m).
@@ -226,9 +227,8 @@ impl SpatialGrid {
         r * self.cols + c
     }
     /// Builds the grid over an extent `(w, h)` metres.
-    pub fn build(trees: &TreeStore, extent: (f64, f64), cell_m: f64) -> SpatialGrid {
-        let cols = ((extent.0 / cell_m).ceil() as usize).max(1);
-        let rows = ((extent.1 / cell_m).ceil() as usize).max(1);
+    pub fn build(trees: &TreeStore, light: &LightGrid) -> SpatialGrid {
+        let LightGrid { cell_m, cols, rows } = *light;
         let mut g = SpatialGrid { cell_m, cols, rows, start: vec![0; cols * rows + 1], items: vec![0; trees.len()] };
         let cells: Vec<u32> = (0..trees.len()).map(|i| g.cell_of(trees.x[i], trees.y[i]) as u32).collect();
         for &c in &cells {

@@ -1,12 +1,13 @@
 //! The simulated world: site conditions, species pool, trees and the grids the phases share.
 
-use super::regen::{Cohorts, RegenLedger, RegenYear};
+use super::light_grid::LightGrid;
+use super::cohorts::{Cohorts, RegenLedger, RegenYear};
 use super::scenario::{Scenario, Start};
 use super::trees::{DeadTree, NewTree, SpatialGrid, TreeStore};
 use crate::conditions::SiteConditions;
 use crate::error::Result;
 use crate::rng::{salt, Stream};
-use crate::species::{Species, SpeciesId, SpeciesLibrary};
+use crate::species::{allometry, Species, SpeciesId, SpeciesLibrary};
 use rayon::prelude::*;
 
 /// Smallest seed grid cell (m) onto which seeds are dispersed.
@@ -57,8 +58,8 @@ pub struct World {
     pub extent: (f64, f64),
     /// Area of unmasked cells (ha).
     pub area_ha: f64,
-    /// Light grid / spatial hash cell size (m).
-    pub light_cell_m: f64,
+    /// The light grid (canopy, ground light, spatial hash and regeneration cells; row 0 south).
+    pub light: LightGrid,
     /// Spatial hash of the trees at the last light phase (same cells as the light grid).
     pub grid: SpatialGrid,
     /// Relative light at the ground (0–1.5) per light cell, from the last light phase.
@@ -77,7 +78,7 @@ pub struct World {
     pub dead: Vec<DeadTree>,
     /// Deaths since the start, by cause ([`super::trees::DeathCause::ALL`] order).
     pub deaths_total: [u64; super::trees::N_CAUSES],
-    /// The regeneration layer: sapling cohorts below the recruitment height ([`super::regen`]).
+    /// The regeneration layer: sapling cohorts below the recruitment height ([`super::phases::regen`]).
     pub cohorts: Cohorts,
     /// Cumulative counts of the regeneration layer per pool species.
     pub regen_ledger: RegenLedger,
@@ -96,14 +97,11 @@ impl World {
         let pool = scenario.resolve_species(lib, &ctx)?;
         let extent = site.extent_m();
         scenario.validate_extent(extent, &ctx)?;
-        let cell = scenario.light_cell_m;
-        let cols = ((extent.0 / cell).ceil() as usize).max(1);
-        let rows = ((extent.1 / cell).ceil() as usize).max(1);
-        let light_site: Vec<u32> = (0..rows * cols)
+        let light = LightGrid::new(extent, scenario.light_cell_m);
+        let light_site: Vec<u32> = (0..light.len())
             .into_par_iter()
             .map(|c| {
-                let (r, col) = (c / cols, c % cols);
-                let (x, y) = ((col as f64 + 0.5) * cell, (r as f64 + 0.5) * cell);
+                let (x, y) = light.centre(c);
                 match site.cell_at(x, y) {
                     Some((sc, sr)) if *site.mask.get(sc, sr) => site.mask.idx(sc, sr) as u32,
                     _ => u32::MAX,
@@ -144,9 +142,9 @@ impl World {
             seed: scenario.seed,
             extent,
             area_ha,
-            light_cell_m: cell,
+            light,
             grid: SpatialGrid::default(),
-            ground_light: vec![1.0; rows * cols],
+            ground_light: vec![1.0; light.len()],
             light_site,
             rel_insolation,
             suitability,
@@ -182,9 +180,9 @@ impl World {
         let cell = self.site_cell(x, y)?;
         let p = self.pool_index(s)?;
         let sp = self.species(s);
-        let h = super::phases::growth::potential_height(sp, age).max(0.3);
-        let d = super::phases::growth::open_dbh(sp, h) * 0.8;
-        Some(NewTree { species: s, x: x as f32, y: y as f32, z: self.site.elevation_at(x, y), age: age.max(1.0), height: h, dbh: d, crown_radius: super::phases::growth::open_crown_radius(sp, h, d), suitability: self.suitability[p][cell] })
+        let h = allometry::potential_height(sp, age).max(0.3);
+        let d = allometry::open_dbh(sp, h) * 0.8;
+        Some(NewTree { species: s, x: x as f32, y: y as f32, z: self.site.elevation_at(x, y), age: age.max(1.0), height: h, dbh: d, crown_radius: allometry::open_crown_radius(sp, h, d), suitability: self.suitability[p][cell] })
     }
 
     fn place_start(&mut self, scenario: &Scenario) {

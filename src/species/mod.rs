@@ -6,6 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
+pub mod allometry;
 mod library;
 pub mod schema;
 
@@ -444,37 +445,26 @@ impl Species {
         self.suitability_factors(indices).into_iter().fold(1.0f32, f32::min)
     }
 
-    /// Potential (site-optimal, open-grown) height at age `t` years, m: Chapman–Richards
-    /// `H(t) = H_max (1 − e^(−k t))^p` with `H_max = life.max_height_m` (Richards 1959).
+    /// Potential (site-optimal, open-grown) height at age `t` years, m:
+    /// [`allometry::potential_height`] (Chapman–Richards, Richards 1959).
     pub fn potential_height_m(&self, age_yr: f32) -> f32 {
-        let g = &self.life.growth;
-        self.life.max_height_m * (1.0 - (-g.k * age_yr.max(0.0)).exp()).powf(g.p)
+        allometry::potential_height(self, age_yr)
     }
 
-    /// Height (m) of a tree of diameter `dbh_cm` (cm) from the height–DBH allometry
-    /// `H = 1.3 + (H_max − 1.3)(1 − e^(−a D))^b`.
+    /// Height (m) of a tree of diameter `dbh_cm` (cm): [`allometry::height_from_dbh`].
     pub fn height_from_dbh_m(&self, dbh_cm: f32) -> f32 {
-        let a = &self.life.allometry;
-        1.3 + (self.life.max_height_m - 1.3) * (1.0 - (-a.hd_a * dbh_cm.max(0.0)).exp()).powf(a.hd_b)
+        allometry::height_from_dbh(self, dbh_cm)
     }
 
-    /// Inverse of [`Species::height_from_dbh_m`]: DBH (cm) of a tree of height `h_m` (m);
-    /// 0 at or below 1.3 m; capped at `life.max_dbh_cm`.
+    /// DBH (cm) of an open-grown tree of height `h_m` (m): [`allometry::open_dbh`] (the inverse
+    /// of [`Species::height_from_dbh_m`]; 0 at or below 1.3 m; capped at `life.max_dbh_cm`).
     pub fn dbh_from_height_cm(&self, h_m: f32) -> f32 {
-        let a = &self.life.allometry;
-        let hmax = self.life.max_height_m;
-        if h_m <= 1.3 {
-            return 0.0;
-        }
-        let q = ((h_m - 1.3) / (hmax - 1.3)).min(0.999_999);
-        let d = -(1.0 - q.powf(1.0 / a.hd_b)).ln() / a.hd_a;
-        d.min(self.life.max_dbh_cm)
+        allometry::open_dbh(self, h_m)
     }
 
-    /// Open-grown crown radius (m) at diameter `dbh_cm`: `r = c0 + c1·D`.
+    /// Open-grown crown radius (m) at diameter `dbh_cm`: [`allometry::crown_radius`], `r = c0 + c1·D`.
     pub fn crown_radius_m(&self, dbh_cm: f32) -> f32 {
-        let a = &self.life.allometry;
-        a.crown_c0 + a.crown_c1 * dbh_cm.max(0.0)
+        allometry::crown_radius(self, dbh_cm)
     }
 
     /// Foliage colour for a season (`None` for a deciduous tree in winter: bare).

@@ -7,7 +7,7 @@
 //! Geographic grids use the east–west cell size of each row ([`GeoRef::cell_x_m_at_row`]).
 
 use super::Terrain;
-use crate::conditions::Climate;
+use crate::climate::Climate;
 use crate::error::{Error, Result};
 use crate::grid::{Crs, GeoRef, Grid};
 use rayon::prelude::*;

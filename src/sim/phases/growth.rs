@@ -2,61 +2,8 @@
 //! light response × site suitability, with the species' allometries.
 
 use super::super::world::World;
-use crate::species::Species;
+pub use crate::species::allometry::{effective_age, open_crown_radius, open_dbh, potential_height, potential_increment};
 use rayon::prelude::*;
-
-/// Potential (open-grown, fully suitable site) height (m) at age `t` (years):
-/// Chapman–Richards `H(t) = H_max (1 − e^(−k t))^p` (species file, `life.growth`).
-pub fn potential_height(sp: &Species, t: f32) -> f32 {
-    let g = sp.life.growth;
-    sp.life.max_height_m * (1.0 - (-g.k * t.max(0.0)).exp()).powf(g.p)
-}
-
-/// Effective age (years) of height `h` on the Chapman–Richards curve (its inverse).
-pub fn effective_age(sp: &Species, h: f32) -> f32 {
-    let g = sp.life.growth;
-    let q = (h / sp.life.max_height_m).clamp(1e-6, 0.9995).powf(1.0 / g.p);
-    -(1.0 - q).ln() / g.k
-}
-
-/// One year's potential height increment (m) of a tree of height `h` (m) on the
-/// Chapman–Richards curve: `H(t_eff + 1) − H(t_eff)` with `t_eff` = [`effective_age`]`(h)`, in
-/// closed form — with q = (h / H_max)^(1/p) = 1 − e^(−k t_eff),
-/// `H(t_eff + 1) = H_max (1 − e^(−k) (1 − q))^p` — which saves the logarithm and one exponential
-/// of the round trip (same clamping of h / H_max to [10⁻⁶, 0.9995]).
-#[inline]
-pub fn potential_increment(sp: &Species, h: f32) -> f32 {
-    let g = sp.life.growth;
-    let hm = sp.life.max_height_m;
-    let rel = (h / hm).clamp(1e-6, 0.9995);
-    let q = rel.powf(1.0 / g.p);
-    let h0 = hm * rel;
-    let h1 = hm * (1.0 - (-g.k).exp() * (1.0 - q)).powf(g.p);
-    (h1 - h0).max(0.0)
-}
-
-/// Open-grown DBH (cm) of a tree of height `h` (m): the inverse of the species' height–DBH
-/// curve `H = 1.3 + (H_max − 1.3)(1 − e^(−a D))^b`; 0 below 1.3 m.
-pub fn open_dbh(sp: &Species, h: f32) -> f32 {
-    let a = sp.life.allometry;
-    let hm = sp.life.max_height_m;
-    if h <= 1.3 {
-        return 0.0;
-    }
-    let q = ((h - 1.3) / (hm - 1.3)).clamp(0.0, 0.999).powf(1.0 / a.hd_b);
-    (-(1.0 - q).ln() / a.hd_a).min(sp.life.max_dbh_cm)
-}
-
-/// Open-grown crown radius (m): `c0 + c1 · D` (species allometry), scaled by `h / 1.3` below
-/// breast height.
-pub fn open_crown_radius(sp: &Species, h: f32, dbh: f32) -> f32 {
-    let a = sp.life.allometry;
-    if h < 1.3 {
-        (a.crown_c0 * h / 1.3).max(0.05)
-    } else {
-        a.crown_c0 + a.crown_c1 * dbh
-    }
-}
 
 /// Light response (0–1) of growth to relative light `l` by shade tolerance `st` (1–5): the
 /// JABOWA/ForClim curves (Botkin et al. 1972; Bugmann 2001) for tolerant

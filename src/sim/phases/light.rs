@@ -59,8 +59,8 @@ impl Canopy {
 
 /// Builds the spatial grid and canopy, and sets every tree's light and the ground light.
 pub fn run(w: &mut World) {
-    let cell = w.light_cell_m;
-    let grid = SpatialGrid::build(&w.trees, w.extent, cell);
+    let cell = w.light.cell_m;
+    let grid = SpatialGrid::build(&w.trees, &w.light);
     let (cols, rows) = (grid.cols, grid.rows);
     let cell_area = (cell * cell) as f32;
     let t = &w.trees;

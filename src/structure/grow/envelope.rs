@@ -4,13 +4,13 @@
 //! space and spreads flat under the top.
 //!
 //! Sizes come from the species file: height H(t) from the Chapman–Richards curve
-//! ([`Species::potential_height_m`]), crown radius from the crown allometry
-//! ([`Species::crown_radius_m`] of the DBH at that height), crown length from
+//! ([`allometry::potential_height`]), crown radius from the simulation's crown allometry
+//! ([`allometry::open_crown_radius`] of the open-grown DBH at that height), crown length from
 //! `life.allometry.crown_ratio`. The envelope's profile is our choice (crown-shape models of the
 //! kind of Pretzsch 2009, ch. 8: a cone for conifers, an egg widest at 40 % of the crown length
 //! for broadleaves).
 
-use crate::species::{LeafType, Species};
+use crate::species::{allometry, LeafType, Species};
 use glam::Vec3;
 
 /// Profile of the crown envelope.
@@ -47,9 +47,9 @@ impl CrownEnvelope {
     /// allometry (≥ 0.5 m, ≤ 0.45 H for conifers and 0.6 H for broadleaves so young trees are
     /// not wider than tall), crown length `crown_ratio`·H (0.3–0.95 of H), shape by leaf type.
     pub fn for_species(sp: &Species, age_yr: f32, base: Vec3) -> Self {
-        let h = sp.potential_height_m(age_yr).max(1.5);
+        let h = allometry::potential_height(sp, age_yr).max(1.5);
         let conifer = sp.identity.leaf_type == LeafType::Conifer;
-        let r = sp.crown_radius_m(sp.dbh_from_height_cm(h)).max(0.5).min(if conifer { 0.45 } else { 0.6 } * h);
+        let r = allometry::open_crown_radius(sp, h, allometry::open_dbh(sp, h)).max(0.5).min(if conifer { 0.45 } else { 0.6 } * h);
         let ratio = sp.life.allometry.crown_ratio.clamp(0.3, 0.95);
         CrownEnvelope { base, height_m: h, crown_base_m: h * (1.0 - ratio), radius_m: r, shape: if conifer { CrownShape::Conical } else { CrownShape::Ovoid }, trunk_radius_m: (h / 40.0).max(0.1) }
     }

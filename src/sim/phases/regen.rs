@@ -34,15 +34,14 @@
 //! Mass balance per species (tested): germinated = alive in cohorts + dead (shade, crowding) +
 //! recruited, kept in [`RegenLedger`].
 
-use super::phases::growth::{light_response, open_crown_radius, open_dbh, potential_increment};
-use super::phases::mortality::{stress_threshold, P_STRESS};
-use super::trees::NewTree;
-use super::world::World;
+use super::growth::{light_response, open_crown_radius, open_dbh, potential_increment};
+use super::mortality::{stress_threshold, P_STRESS};
+pub use crate::sim::cohorts::{Cohort, Cohorts, RegenDeath, RegenLedger, RegenYear, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
+use crate::sim::trees::NewTree;
+use crate::sim::world::World;
 use crate::rng::{salt, Stream};
 use rayon::prelude::*;
 
-/// Height (m) at which a cohort's stems become individual trees (iLand: 4 m).
-pub const RECRUIT_HEIGHT_M: f32 = 4.0;
 /// Height (m) of germinants at the start of their first season.
 pub const GERMINANT_HEIGHT_M: f32 = 0.3;
 /// Mean height (m) below which a cohort still takes new germinants of its species.
@@ -57,141 +56,12 @@ pub const SALT_REGEN_MORTALITY: u64 = 0x2E6E_DEAD;
 /// Random-stream salt of the recruits' positions.
 pub const SALT_RECRUIT: u64 = 0x2EC2_0117;
 
-/// Number of causes of death in the regeneration layer ([`RegenDeath::ALL`]).
-pub const N_REGEN_CAUSES: usize = 2;
-
-/// Why sapling stems of a cohort died.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum RegenDeath {
-    /// Light-dependent (stress) mortality: vigour below the species' threshold.
-    Shade,
-    /// The density cap [`max_density_ha`] of the cell.
-    Crowding,
-}
-
-impl RegenDeath {
-    /// All causes in output order.
-    pub const ALL: [RegenDeath; N_REGEN_CAUSES] = [RegenDeath::Shade, RegenDeath::Crowding];
-    /// Lower-case name used in outputs (`regen_deaths_<name>`).
-    pub fn name(self) -> &'static str {
-        match self {
-            RegenDeath::Shade => "shade",
-            RegenDeath::Crowding => "crowding",
-        }
-    }
-}
-
 /// Self-thinning line of the regeneration layer: the maximum stems per hectare of saplings of
 /// mean height `h` (m), `N_max(h) = 2500 · (h / 4 m)^(−1.605)` (see the module docs); `h` is
 /// floored at 0.05 m. 2,500/ha at 4 m, 15,200/ha at 1.3 m, 160,000/ha at 0.3 m.
 #[inline]
 pub fn max_density_ha(h: f32) -> f64 {
     RECRUIT_DENSITY_HA * (h.max(0.05) as f64 / RECRUIT_HEIGHT_M as f64).powf(-DENSITY_EXPONENT)
-}
-
-/// One cohort.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Cohort {
-    /// Light cell index (row-major, row 0 south).
-    pub cell: u32,
-    /// Position of the species in the pool.
-    pub pool: u16,
-    /// Number of stems.
-    pub stems: u32,
-    /// Mean height (m), below [`RECRUIT_HEIGHT_M`].
-    pub height: f32,
-    /// Age (years).
-    pub age: f32,
-    /// Vigour memory (0–1), as for trees.
-    pub vigour: f32,
-}
-
-/// All cohorts, struct of arrays sorted by (cell, pool position); at most one per pair.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Cohorts {
-    /// Light cell index.
-    pub cell: Vec<u32>,
-    /// Pool position of the species.
-    pub pool: Vec<u16>,
-    /// Stems.
-    pub stems: Vec<u32>,
-    /// Mean height (m).
-    pub height: Vec<f32>,
-    /// Age (years).
-    pub age: Vec<f32>,
-    /// Vigour memory (0–1).
-    pub vigour: Vec<f32>,
-}
-
-impl Cohorts {
-    /// Number of cohorts.
-    pub fn len(&self) -> usize {
-        self.cell.len()
-    }
-    /// True when there is no cohort.
-    pub fn is_empty(&self) -> bool {
-        self.cell.is_empty()
-    }
-    /// Cohort `i`.
-    pub fn get(&self, i: usize) -> Cohort {
-        Cohort { cell: self.cell[i], pool: self.pool[i], stems: self.stems[i], height: self.height[i], age: self.age[i], vigour: self.vigour[i] }
-    }
-    /// Appends a cohort (the caller keeps the (cell, pool) order).
-    pub fn push(&mut self, c: Cohort) {
-        self.cell.push(c.cell);
-        self.pool.push(c.pool);
-        self.stems.push(c.stems);
-        self.height.push(c.height);
-        self.age.push(c.age);
-        self.vigour.push(c.vigour);
-    }
-    /// Total stems.
-    pub fn total_stems(&self) -> u64 {
-        self.stems.iter().map(|&n| n as u64).sum()
-    }
-    /// Stems per pool species (`np` species).
-    pub fn stems_per_species(&self, np: usize) -> Vec<u64> {
-        let mut v = vec![0u64; np];
-        for (p, n) in self.pool.iter().zip(&self.stems) {
-            if let Some(x) = v.get_mut(*p as usize) {
-                *x += *n as u64;
-            }
-        }
-        v
-    }
-    /// Approximate heap size in bytes.
-    pub fn heap_bytes(&self) -> usize {
-        self.cell.capacity() * 22
-    }
-}
-
-/// Cumulative counts of the regeneration layer per pool species (pool order), since the start.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct RegenLedger {
-    /// Stems germinated.
-    pub germinated: Vec<u64>,
-    /// Stems recruited into the tree store.
-    pub recruited: Vec<u64>,
-    /// Stems dead by cause ([`RegenDeath::ALL`] order).
-    pub dead: Vec<[u64; N_REGEN_CAUSES]>,
-}
-
-impl RegenLedger {
-    /// An empty ledger for `np` pool species.
-    pub fn new(np: usize) -> Self {
-        RegenLedger { germinated: vec![0; np], recruited: vec![0; np], dead: vec![[0; N_REGEN_CAUSES]; np] }
-    }
-}
-
-/// The regeneration layer's counts of one year (all species).
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct RegenYear {
-    /// Stems germinated.
-    pub germinated: u64,
-    /// Stems recruited into the tree store.
-    pub recruited: u64,
-    /// Stems dead by cause ([`RegenDeath::ALL`] order).
-    pub dead: [u64; N_REGEN_CAUSES],
 }
 
 /// Binomial draw `B(n, p)`: Bernoulli trials up to 64 stems, a rounded normal approximation
@@ -225,9 +95,9 @@ const BLOCK: usize = 1024;
 /// number of recruits.
 pub fn run(w: &mut World) -> usize {
     let ncell = w.light_site.len();
-    let cell = w.light_cell_m;
-    let cols = ((w.extent.0 / cell).ceil() as usize).max(1);
-    let area = cell * cell;
+    let lg = w.light;
+    let cell = lg.cell_m;
+    let area = lg.cell_area_m2();
     let np = w.pool.len();
     let (seed, year) = (w.seed, w.year as u64);
     let coh = &w.cohorts;
@@ -254,8 +124,8 @@ pub fn run(w: &mut World) -> usize {
                 }
                 let site = site as usize;
                 let gl = wr.ground_light[c];
-                let (col, row) = (c % cols, c / cols);
-                let (cx, cy) = ((col as f64 + 0.5) * cell, (row as f64 + 0.5) * cell);
+                let (col, row) = lg.col_row(c);
+                let (cx, cy) = lg.centre(c);
                 // 1. germination
                 let mut r = Stream::new(seed, c as u64, year, salt::ESTABLISH);
                 let cap0 = max_density_ha(GERMINANT_HEIGHT_M) * area / 10_000.0;
