@@ -2,7 +2,7 @@
 //! same final state as an uninterrupted run.
 mod common;
 use sylva::output::inventory::inventory_csv;
-use sylva::sim::run::{run_scenario, RunOptions};
+use sylva::job::run::{run_scenario, RunOptions};
 use sylva::sim::{fixtures, Scenario, TerrainSpec};
 
 /// Birch seed rain and beech seed trees on a 100 m × 75 m flat site, 40 years.
@@ -48,7 +48,7 @@ fn resume_equals_uninterrupted() {
     let dir = tempfile::tempdir().unwrap();
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let s2 = stop.clone();
-    let mut cb = move |p: &sylva::sim::run::Progress| {
+    let mut cb = move |p: &sylva::job::run::Progress| {
         if p.year == 16 {
             s2.store(true, std::sync::atomic::Ordering::SeqCst);
         }

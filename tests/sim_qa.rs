@@ -1,6 +1,6 @@
 //! QA fixes of the simulation: fresh runs clear old snapshots, start conditions outside the
 //! site and bad climate values are rejected with errors naming the field.
-use sylva::sim::run::{run_scenario, RunOptions};
+use sylva::job::run::{run_scenario, RunOptions};
 use sylva::sim::{fixtures, Scenario, TerrainSpec};
 
 const SC: &str = r#"

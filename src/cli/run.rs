@@ -8,6 +8,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use sylva::job::pictures::{self, Stage, TimelapseOptions};
+use sylva::job::scene;
+use sylva::render::scene::TreeInstance;
 use sylva::render::camera::CameraPreset;
 use sylva::sim::Scenario;
 use sylva::species::Season;
@@ -89,7 +91,15 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let t_sim = Instant::now();
     eprintln!("[2/4] simulating {} years", sc.years);
     // GeoJSON (≈ 250 bytes per tree) only at the years the job renders, CSV at every snapshot
-    let summary = super::simulate::simulate(&sc, site.clone(), &lib, out.clone(), false, Some(STILL_YEARS.to_vec()))?;
+    // The pictures' key frames come from the in-memory world at each snapshot (summer
+    // instances of the visible trees), not from the inventory files.
+    let mut keys: Vec<(u32, Vec<TreeInstance>)> = Vec::new();
+    let mut keep = |y: u32, w: &sylva::sim::World| {
+        if !a.no_render {
+            keys.push((y, scene::instances(&scene::plants_from_world(w), &lib, &site, Season::Summer)));
+        }
+    };
+    let summary = super::simulate::simulate(&sc, site.clone(), &lib, out.clone(), false, Some(STILL_YEARS.to_vec()), Some(&mut keep))?;
     let sim_s = t_sim.elapsed().as_secs_f64();
 
     // 3 + 4. Pictures.
@@ -99,9 +109,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if !a.no_render {
         let mut stage = Stage::new(site.clone(), lib.clone(), sc.climate.sea_level_m).context("setting up the renderer (install mesa-vulkan-drivers for the CPU adapter)")?;
         eprintln!("[3/4] stills on {}", stage.renderer.adapter_description());
-        let snaps = sylva::job::inventory::snapshots(&out)?;
-        let mut years: Vec<u32> = STILL_YEARS.iter().copied().filter(|y| snaps.iter().any(|s| s.0 == *y && s.1.is_empty())).collect();
-        if let Some(last) = snaps.iter().filter(|s| s.1.is_empty()).map(|s| s.0).max() {
+        let mut years: Vec<u32> = STILL_YEARS.iter().copied().filter(|y| keys.iter().any(|k| k.0 == *y)).collect();
+        if let Some(last) = keys.iter().map(|k| k.0).max() {
             if !years.contains(&last) {
                 years.push(last);
             }
@@ -110,11 +119,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         std::fs::create_dir_all(&stills_dir).with_context(|| format!("creating {}", stills_dir.display()))?;
         remove_old_stills(&stills_dir)?;
         let pb = super::progress((years.len() * 2) as u64, "stills");
+        let key = |y: u32| keys.iter().find(|k| k.0 == y).map(|k| k.1.clone()).unwrap_or_default();
         for &y in &years {
-            let rows = pictures::snapshot_rows(&out, y)?;
             for (preset, name) in [(CameraPreset::Oblique, "oblique"), (CameraPreset::Map, "topdown")] {
                 let cam = stage.camera(preset);
-                let img = stage.render_rows(&rows, Season::Summer, &cam, a.size.0, a.size.1)?;
+                let img = stage.render_instances(key(y), Season::Summer, &cam, a.size.0, a.size.1)?;
                 let path = stills_dir.join(format!("year_{y:04}_{name}.png"));
                 sylva::render::timelapse::write_png(&path, &img)?;
                 stills.push((y, name.to_string(), path));
@@ -123,14 +132,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         }
         // A close view into the final forest, where the species' architectures show.
         if let Some(&y) = years.last() {
-            let rows = pictures::snapshot_rows(&out, y)?;
             let (ex, ey) = site.extent_m();
             let (x0, y0) = (0.3 * ex, 0.3 * ey);
             let (x1, y1) = (0.45 * ex, 0.45 * ey);
             let z0 = site.elevation_at(x0, y0) + 45.0;
             let z1 = site.elevation_at(x1, y1) + 5.0;
             let cam = sylva::render::camera::Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0);
-            let img = stage.render_rows(&rows, Season::Summer, &cam, a.size.0, a.size.1)?;
+            let img = stage.render_instances(key(y), Season::Summer, &cam, a.size.0, a.size.1)?;
             let path = stills_dir.join(format!("year_{y:04}_closeup.png"));
             sylva::render::timelapse::write_png(&path, &img)?;
             stills.push((y, "closeup".to_string(), path));
@@ -141,7 +149,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let pb = super::progress(1, "timelapse");
         let tl0 = Instant::now();
         let gif_path = out.join("timelapse.gif");
-        let (n, mp4) = pictures::timelapse(&mut stage, &out, &out.join("frames"), &gif_path, &opts, &mut |done, total| {
+        let key_years: Vec<u32> = keys.iter().map(|k| k.0).collect();
+        let mut key_frames: Vec<Vec<TreeInstance>> = std::mem::take(&mut keys).into_iter().map(|k| k.1).collect();
+        let (n, mp4) = pictures::timelapse_from(&mut stage, &key_years, &mut |_, k| Ok(std::mem::take(&mut key_frames[k])), &out.join("frames"), &gif_path, &opts, &mut |done, total| {
             pb.set_length(total as u64);
             pb.set_position(done as u64);
             pb.set_message(format!("{:.1} frames/s", done as f64 / tl0.elapsed().as_secs_f64().max(1e-3)));

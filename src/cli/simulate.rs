@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use sylva::conditions::SiteConditions;
-use sylva::sim::run::{run_scenario, Progress, RunOptions};
+use sylva::job::run::{run_scenario, Progress, RunOptions};
 use sylva::sim::Scenario;
 use sylva::species::SpeciesLibrary;
 
@@ -87,7 +87,7 @@ pub struct SimOutcome {
 /// returns what the main job reports.
 ///
 /// `geojson_years`: the years whose snapshots also get a GeoJSON inventory (`None`: all).
-pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, geojson_years: Option<Vec<u32>>) -> anyhow::Result<SimOutcome> {
+pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, geojson_years: Option<Vec<u32>>, on_snapshot: Option<&mut dyn FnMut(u32, &sylva::sim::World)>) -> anyhow::Result<SimOutcome> {
     if out.exists() && !out.is_dir() {
         anyhow::bail!("--out {}: is a file; expected a folder for the run's outputs", out.display());
     }
@@ -109,6 +109,10 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
     opts.geojson_years = geojson_years;
     opts.stop = Some(stop);
     opts.progress = Some(&mut cb);
+    let mut on_snapshot = on_snapshot;
+    if let Some(f) = on_snapshot.as_mut() {
+        opts.on_snapshot = Some(&mut **f);
+    }
     let res = run_scenario(sc, site, lib, opts).with_context(|| format!("simulating {}", sc.name))?;
     pb.finish();
     let last = res.rows.last();
@@ -141,7 +145,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     dirs.extend(a.species_dir.as_deref());
     let lib = library(&dirs)?;
     let site = load_site(&sc)?;
-    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume, None).map(|_| ());
+    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume, None, None).map(|_| ());
     match a.threads {
         Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build().context("thread pool")?.install(go),
         None => go(),

@@ -1,7 +1,11 @@
-//! The main job's glue (`sylva run`, `sylva render`, `sylva timelapse`): from a run directory and
-//! the site to pictures. The core modules stay independent of each other; this layer joins them.
+//! The main job's glue (`sylva simulate`, `sylva run`, `sylva render`, `sylva timelapse`): the
+//! run driver that steps the pure simulation and writes the run directory ([`run`],
+//! [`checkpoint`]), and from a run directory or an in-memory world to pictures. The core
+//! modules stay independent of each other and of the disk; this layer joins them.
 
+pub mod checkpoint;
 pub mod inventory;
 pub mod maps;
 pub mod pictures;
+pub mod run;
 pub mod scene;

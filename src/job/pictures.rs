@@ -2,11 +2,11 @@
 //! ([`super::inventory`]), scene building ([`super::scene`]) and the headless renderer.
 
 use super::inventory::{self, InventoryRow};
-use super::scene;
+use super::scene::{self, Plant};
 use crate::conditions::SiteConditions;
 use crate::render::camera::{Camera, CameraPreset};
 use crate::render::headless::Renderer;
-use crate::render::scene::{Prototype, TerrainMesh};
+use crate::render::scene::{Prototype, TerrainMesh, TreeInstance};
 use crate::render::timelapse;
 use crate::species::{Season, SpeciesLibrary};
 use crate::{Error, Result};
@@ -51,12 +51,18 @@ impl Stage {
 
     /// Renders `rows` (an inventory snapshot) in `season` from `camera` at `width × height`.
     pub fn render_rows(&mut self, rows: &[InventoryRow], season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
-        let inst = scene::instances(rows, &self.library, &self.site, season);
+        self.render_plants(&scene::plants_from_rows(rows), season, camera, width, height)
+    }
+
+    /// Renders `plants` (e.g. [`scene::plants_from_world`] of the in-memory world) in `season`
+    /// from `camera` at `width × height`.
+    pub fn render_plants(&mut self, plants: &[Plant], season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
+        let inst = scene::instances(plants, &self.library, &self.site, season);
         self.render_instances(inst, season, camera, width, height)
     }
 
     /// Renders prepared instances.
-    pub fn render_instances(&mut self, inst: Vec<crate::render::scene::TreeInstance>, season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
+    pub fn render_instances(&mut self, inst: Vec<TreeInstance>, season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
         let sc = scene::scene(self.terrain.clone(), self.prototypes.clone(), inst, self.site.geo.latitude_deg, season, self.sea_level);
         self.renderer.render(&sc, camera, width, height)
     }
@@ -74,13 +80,18 @@ impl Stage {
     /// best one (ties: the nearest to the preset) unless the preset already has ≥ 2 m clearance.
     /// Looks north at 8 m above the ground in the site's middle row, as the preset does.
     pub fn camera_for(&self, preset: CameraPreset, rows: &[InventoryRow]) -> Camera {
+        self.camera_for_plants(preset, &scene::plants_from_rows(rows))
+    }
+
+    /// [`Stage::camera_for`] over [`Plant`]s.
+    pub fn camera_for_plants(&self, preset: CameraPreset, rows: &[Plant]) -> Camera {
         let cam = self.camera(preset);
         if preset != CameraPreset::Ground {
             return cam;
         }
         let (ex, ey) = self.site.extent_m();
         let size = ex.max(ey) as f32;
-        let tall: Vec<(f32, f32, f32)> = rows.iter().filter(|r| r.status == "alive" && r.height_m > 1.7).map(|r| (r.x_m as f32, r.y_m as f32, r.crown_radius_m)).collect();
+        let tall: Vec<(f32, f32, f32)> = rows.iter().filter(|r| r.alive && r.height_m > 1.7).map(|r| (r.x_m as f32, r.y_m as f32, r.crown_radius_m)).collect();
         let clearance = |x: f32, y: f32| tall.iter().map(|&(tx, ty, cr)| ((tx - x).hypot(ty - y) - cr).max(0.0)).fold(f32::INFINITY, f32::min);
         let [x0, y0, _] = cam.eye;
         if clearance(x0, y0) >= 2.0 {
@@ -172,15 +183,30 @@ pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: 
     if snaps.is_empty() {
         return Err(Error::format(run_dir, "no inventory snapshots to make a timelapse from"));
     }
+    let years: Vec<u32> = snaps.iter().map(|s| s.0).collect();
+    let season = opts.season;
+    timelapse_from(stage, &years, &mut |stage, k| Ok(scene::instances(&scene::plants_from_rows(&inventory::read(&snaps[k].1)?), &stage.library, &stage.site, season)), frames_dir, out_gif, opts, progress)
+}
+
+/// [`timelapse`] from key frames given by `key(stage, k)`: the render instances (in
+/// `opts.season`) of the snapshot of `years[k]`, asked for once each, in order, e.g. from
+/// instances the main job kept from the in-memory world at each snapshot.
+///
+/// Errors: as [`timelapse`]; [`Error::Invalid`] when `years` is empty.
+pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Stage, usize) -> Result<Vec<TreeInstance>>, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
+    if years.is_empty() {
+        return Err(Error::Invalid { context: "timelapse".into(), field: "snapshots".into(), value: "none".into(), expected: "at least one snapshot year".into() });
+    }
+    let snaps = years;
     std::fs::create_dir_all(frames_dir).map_err(|e| Error::io(frames_dir, e))?;
     // frames of an earlier, longer film would otherwise remain beside the new ones
     remove_frames(frames_dir)?;
     let steps = opts.frames_between as usize + 1;
     let total = if snaps.len() == 1 { 1 } else { (snaps.len() - 1) * steps + 1 };
     let mut frames = Vec::with_capacity(total);
-    let mut prev = scene::instances(&inventory::read(&snaps[0].1)?, &stage.library, &stage.site, opts.season);
+    let mut prev = key(stage, 0)?;
     let mut k = 0usize;
-    let emit = |stage: &mut Stage, inst: Vec<crate::render::scene::TreeInstance>, k: usize, year: f32| -> Result<image::RgbaImage> {
+    let emit = |stage: &mut Stage, inst: Vec<TreeInstance>, k: usize, year: f32| -> Result<image::RgbaImage> {
         let u = if total > 1 { k as f32 / (total - 1) as f32 } else { 0.0 };
         let cam = match opts.camera {
             Some(p) => stage.camera(p),
@@ -191,11 +217,11 @@ pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: 
         timelapse::write_png(&frames_dir.join(format!("frame_{k:05}.png")), &img)?;
         Ok(img)
     };
-    frames.push(emit(stage, prev.clone(), k, snaps[0].0 as f32)?);
+    frames.push(emit(stage, prev.clone(), k, snaps[0] as f32)?);
     progress(1, total);
-    for w in snaps.windows(2) {
-        let ((y0, _), (y1, path)) = (&w[0], &w[1]);
-        let next = scene::instances(&inventory::read(path)?, &stage.library, &stage.site, opts.season);
+    for (j, w) in snaps.windows(2).enumerate() {
+        let (y0, y1) = (&w[0], &w[1]);
+        let next = key(stage, j + 1)?;
         for s in 1..=steps {
             k += 1;
             let t = s as f32 / steps as f32;

@@ -9,6 +9,7 @@
 use crate::conditions::SiteConditions;
 use crate::grid::Grid;
 use crate::job::inventory::InventoryRow;
+use crate::sim::World;
 use crate::render::scene::{deciduous_season, Prototype, Scene, Sky, Sun, TerrainMesh, TreeInstance, Wind};
 use crate::render::terrain::{from_grid, LandCover};
 use crate::species::{Season, Species, SpeciesLibrary};
@@ -130,7 +131,47 @@ pub const CANOPY_CELL_M: f64 = 2.0;
 /// inventory keeps every tree. It bounds the instances of dense young stands (thousands of stems
 /// per hectare) by the number of crowns that fit side by side. Deterministic (ties by id).
 pub fn visible_rows(rows: &[InventoryRow], extent_m: (f64, f64)) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].status == "alive" && rows[i].height_m >= MIN_DRAWN_HEIGHT_M).collect();
+    visible(&plants_from_rows(rows), extent_m)
+}
+
+/// One tree as the pictures need it, from an in-memory [`World`] ([`plants_from_world`]) or an
+/// inventory file ([`plants_from_rows`]): world coordinates (m, from the site's south-west
+/// corner), height and crown radius (m), alive or not.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plant<'a> {
+    /// Stable tree id.
+    pub id: u64,
+    /// Species id (as in `species/*.toml`).
+    pub species: &'a str,
+    /// Easting (m).
+    pub x_m: f64,
+    /// Northing (m).
+    pub y_m: f64,
+    /// Height (m).
+    pub height_m: f32,
+    /// Crown radius (m).
+    pub crown_radius_m: f32,
+    /// False for a tree that died in the snapshot's year (drawn by no picture).
+    pub alive: bool,
+}
+
+/// The living trees of `w` as [`Plant`]s, in tree-store order (no file round trip).
+pub fn plants_from_world(w: &World) -> Vec<Plant<'_>> {
+    let t = &w.trees;
+    (0..t.len())
+        .map(|i| Plant { id: t.id[i], species: w.lib.species[t.species[i] as usize].id.as_str(), x_m: t.x[i] as f64, y_m: t.y[i] as f64, height_m: t.height[i], crown_radius_m: t.crown_radius[i], alive: true })
+        .collect()
+}
+
+/// The rows of an inventory snapshot as [`Plant`]s, one per row in row order (status `alive`
+/// read once here).
+pub fn plants_from_rows(rows: &[InventoryRow]) -> Vec<Plant<'_>> {
+    rows.iter().map(|r| Plant { id: r.id, species: r.species.as_str(), x_m: r.x_m, y_m: r.y_m, height_m: r.height_m, crown_radius_m: r.crown_radius_m, alive: r.status == "alive" }).collect()
+}
+
+/// [`visible_rows`] over [`Plant`]s: indices of the drawn trees of `rows`, ascending.
+pub fn visible(rows: &[Plant], extent_m: (f64, f64)) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].alive && rows[i].height_m >= MIN_DRAWN_HEIGHT_M).collect();
     order.sort_by(|&a, &b| rows[b].height_m.total_cmp(&rows[a].height_m).then(rows[a].id.cmp(&rows[b].id)));
     let nx = ((extent_m.0 / CANOPY_CELL_M).ceil() as usize).max(1);
     let ny = ((extent_m.1 / CANOPY_CELL_M).ceil() as usize).max(1);
@@ -161,15 +202,15 @@ pub fn visible_rows(rows: &[InventoryRow], extent_m: (f64, f64)) -> Vec<usize> {
     keep
 }
 
-/// Render instances of the visible live trees of `rows` ([`visible_rows`]) for `season`; trees of
+/// Render instances of the visible live trees of `rows` ([`visible`]) for `season`; trees of
 /// species not in `library` are skipped. Positions are in the site's world coordinates with z
 /// from the terrain.
-pub fn instances(rows: &[InventoryRow], library: &SpeciesLibrary, cond: &SiteConditions, season: Season) -> Vec<TreeInstance> {
-    visible_rows(rows, cond.extent_m())
+pub fn instances(rows: &[Plant], library: &SpeciesLibrary, cond: &SiteConditions, season: Season) -> Vec<TreeInstance> {
+    visible(rows, cond.extent_m())
         .into_iter()
         .map(|i| &rows[i])
         .filter_map(|r| {
-            let sid = library.find(&r.species)?;
+            let sid = library.find(r.species)?;
             let sp = &library.species[sid as usize];
             let (col, amount) = foliage(sp, season);
             let z = cond.elevation_at(r.x_m, r.y_m);

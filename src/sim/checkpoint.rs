@@ -264,14 +264,3 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     w.dead.clear();
     Ok(rows)
 }
-
-/// Writes a checkpoint file atomically.
-pub fn save(path: &Path, w: &World, rows: &[StandRow]) -> Result<()> {
-    crate::output::write_atomic(path, &to_bytes(w, rows))
-}
-
-/// Reads a checkpoint file into `w`.
-pub fn load(path: &Path, w: &mut World) -> Result<Vec<StandRow>> {
-    let b = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    restore(w, &b, path)
-}

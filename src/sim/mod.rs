@@ -1,5 +1,6 @@
-//! Ecosystem simulation: scenario, tree store (struct of arrays), yearly phases, statistics,
-//! checkpoints and the run driver.
+//! Ecosystem simulation: scenario, tree store (struct of arrays), yearly phases, statistics and
+//! checkpoint encoding. A pure core: it computes and returns values and writes no files (the run
+//! driver that writes the run directory is [`crate::job::run`]).
 //!
 //! Year (see [`step::step_year`]): light (height-sorted canopy grid, [`phases::light`]) →
 //! spring regeneration layer (sapling cohorts, [`regen`]) → summer growth → autumn seed fall → winter mortality → stand table.
@@ -11,7 +12,6 @@ pub mod cohorts;
 pub mod fixtures;
 pub mod light_grid;
 pub mod phases;
-pub mod run;
 pub mod scenario;
 pub mod stats;
 pub mod step;

@@ -1,13 +1,14 @@
-//! The run driver shared by `sylva simulate` and `sylva run`: steps the years, writes the run
-//! directory of ARCHITECTURE.md (scenario, stand table + plot, inventories, maps, checkpoint),
-//! reports progress and stops cleanly after the current year when asked to.
+//! The run driver shared by `sylva simulate` and `sylva run`: steps the years of the pure
+//! simulation ([`crate::sim::step_year_with`]), writes the run directory of ARCHITECTURE.md
+//! (scenario, stand table + plot, inventories, maps, checkpoint), reports progress and stops
+//! cleanly after the current year when asked to. The simulation itself writes no files.
 
 use super::checkpoint;
-use super::scenario::Scenario;
-use super::stats::StandRow;
-use super::step::{step_year_with, YearReport};
-use super::world::World;
 use crate::conditions::SiteConditions;
+use crate::sim::scenario::Scenario;
+use crate::sim::stats::StandRow;
+use crate::sim::step::{step_year_with, YearReport};
+use crate::sim::world::World;
 use crate::error::{Error, Result};
 use crate::output::{inventory, plot, stand_table};
 use crate::species::{Season, SpeciesLibrary};
@@ -48,12 +49,17 @@ pub struct RunOptions<'a> {
     /// year and a year stopped at always get it. GeoJSON is ~250 bytes per tree, so the main job
     /// limits it to the years it renders; the CSV inventory is written at every snapshot.
     pub geojson_years: Option<Vec<u32>>,
+    /// Called with the year and the in-memory world at every plain snapshot (year 0 of a fresh
+    /// run, every `snapshot_every` years, the end, a year stopped at), after its files are
+    /// written; the main job builds its pictures' instances here instead of reading the
+    /// inventories back. Not called when `write_snapshots` is off.
+    pub on_snapshot: Option<&'a mut dyn FnMut(u32, &World)>,
 }
 
 impl RunOptions<'_> {
     /// Defaults: no resume, no stop flag, no progress callback, 1024-pixel maps, snapshots on.
     pub fn new(out_dir: impl Into<PathBuf>) -> Self {
-        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, geojson_years: None }
+        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, geojson_years: None, on_snapshot: None }
     }
 }
 
@@ -174,6 +180,9 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {
             snapshot(&dir, &world, "year_0000", true, opts.map_px, gj(0))?;
+            if let Some(f) = opts.on_snapshot.as_mut() {
+                f(0, &world);
+            }
         }
     }
     let t0 = Instant::now();
@@ -209,6 +218,9 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         if snap_year {
             snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px, gj(y))?;
             tables(&dir, &rows, &world, true)?;
+            if let Some(f) = opts.on_snapshot.as_mut() {
+                f(y, &world);
+            }
         }
         let stop_now = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
         if y == scenario.years || stop_now || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0) {
@@ -222,6 +234,9 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
             stopped = true;
             if opts.write_snapshots && !snap_year {
                 snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px, true)?;
+                if let Some(f) = opts.on_snapshot.as_mut() {
+                    f(y, &world);
+                }
             }
             break;
         }
