@@ -43,7 +43,7 @@ seeds_per_ha = 500
     let sc = Scenario::from_toml_str(&toml, "bench").expect("scenario");
     let lib = SpeciesLibrary::embedded().expect("species");
     let mut w = World::new(sc.site().expect("site"), &lib, &sc).expect("world");
-    eprintln!("ecosystem bench: {:.0} ha, {years} years, {} threads", w.area_ha, rayon::current_num_threads());
+    eprintln!("ecosystem bench: {:.0} ha, {years} years, {} threads", w.site.area_ha, rayon::current_num_threads());
     let t0 = Instant::now();
     let mut tree_years = 0u64;
     let mut phase_total = [0f64; sylva::sim::step::N_PHASES];
@@ -57,23 +57,23 @@ seeds_per_ha = 500
             phase_total[k] += r.phase_seconds[k];
             phase_decade[k] += r.phase_seconds[k];
         }
-        if w.year % 10 == 0 {
-            let phases: Vec<String> = sylva::sim::step::PHASES.iter().zip(&phase_decade).map(|(n, s)| format!("{n} {:.2}", s / 10.0)).collect();
-            eprintln!("year {:3}: {:8} trees, {:8} cohorts ({:9} stems), {:.2} s/yr; per phase (s/yr over the decade): {}", w.year, r.trees, w.cohorts.len(), w.cohorts.total_stems(), ty.elapsed().as_secs_f64(), phases.join(", "));
+        if w.stand.year % 10 == 0 {
+            let phases: Vec<String> = sylva::sim::step::PHASES.iter().map(|p| p.name).zip(&phase_decade).map(|(n, s)| format!("{n} {:.2}", s / 10.0)).collect();
+            eprintln!("year {:3}: {:8} trees, {:8} cohorts ({:9} stems), {:.2} s/yr; per phase (s/yr over the decade): {}", w.stand.year, r.trees, w.stand.cohorts.len(), w.stand.cohorts.total_stems(), ty.elapsed().as_secs_f64(), phases.join(", "));
             phase_decade = [0.0; sylva::sim::step::N_PHASES];
         }
     }
     let s = t0.elapsed().as_secs_f64();
     let row = sylva::sim::stats::stand_row(&w);
-    println!("area_ha {:.0}", w.area_ha);
+    println!("area_ha {:.0}", w.site.area_ha);
     println!("years {years}");
-    println!("live_trees_end {}", w.trees.len());
-    println!("cohorts_end {} cohort_stems_end {} regeneration_per_ha_end {:.0}", w.cohorts.len(), w.cohorts.total_stems(), row.regeneration_ha);
+    println!("live_trees_end {}", w.stand.trees.len());
+    println!("cohorts_end {} cohort_stems_end {} regeneration_per_ha_end {:.0}", w.stand.cohorts.len(), w.stand.cohorts.total_stems(), row.regeneration_ha);
     println!("stems_per_ha_end {:.0} basal_area_m2_ha {:.1} top_height_m {:.1}", row.stems_ha, row.basal_area_m2_ha, row.top_height_m);
     println!("total_s {s:.2}");
     println!("s_per_year {:.3}", s / years as f64);
     println!("tree_years_per_s {:.0}", tree_years as f64 / s);
-    for (n, s) in sylva::sim::step::PHASES.iter().zip(&phase_total) {
+    for (n, s) in sylva::sim::step::PHASES.iter().map(|p| p.name).zip(&phase_total) {
         println!("phase_s {n} {s:.2}");
     }
     println!("peak_rss_mib {:.0}", vm_hwm_kib().unwrap_or(0) as f64 / 1024.0);

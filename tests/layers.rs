@@ -291,3 +291,15 @@ fn checker_finds_planted_violations() {
     assert_eq!(cycles(&graph(&t, 2)), vec![vec!["sim::regen".to_string(), "sim::world".to_string()]]);
     assert_eq!(cycles(&graph(&t, 1)), vec![vec!["grid".to_string(), "sim".to_string()]]);
 }
+
+/// ARCHITECTURE.md quotes the phase list of `sim::step::PHASES`, in order, between its
+/// `<!-- phases` markers, one line `N. \`name\` — summary` per phase.
+#[test]
+fn architecture_md_quotes_the_phase_list() {
+    let doc = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("ARCHITECTURE.md")).unwrap();
+    let start = doc.find("<!-- phases").expect("ARCHITECTURE.md has a <!-- phases ... --> block");
+    let end = doc[start..].find("<!-- /phases -->").expect("the phases block is closed") + start;
+    let quoted: Vec<&str> = doc[start..end].lines().skip(1).filter(|l| !l.trim().is_empty()).collect();
+    let want: Vec<String> = sylva::sim::step::PHASES.iter().enumerate().map(|(k, p)| format!("{}. `{}` — {}", k + 1, p.name, p.summary)).collect();
+    assert_eq!(quoted, want, "ARCHITECTURE.md's phase list differs from sim::step::PHASES; paste:\n{}", want.join("\n"));
+}

@@ -58,15 +58,15 @@ fn resume_equals_uninterrupted() {
     o.progress = Some(&mut cb);
     let part = run_scenario(&sc, site(&sc), &lib, o).unwrap();
     assert!(part.stopped);
-    assert_eq!(part.world.year, 17, "stops after the year in which the flag was set");
+    assert_eq!(part.world.stand.year, 17, "stops after the year in which the flag was set");
     let mut o = RunOptions::new(dir.path());
     o.resume = true;
     let resumed = run_scenario(&sc, site(&sc), &lib, o).unwrap();
-    assert_eq!(resumed.world.year, 40);
-    assert_eq!(resumed.world.trees, full.world.trees, "tree store differs after resume");
-    assert!(!full.world.cohorts.is_empty(), "the run should have a regeneration layer");
-    assert_eq!(resumed.world.cohorts, full.world.cohorts, "regeneration cohorts differ after resume");
-    assert_eq!(resumed.world.regen_ledger, full.world.regen_ledger, "regeneration ledger differs after resume");
+    assert_eq!(resumed.world.stand.year, 40);
+    assert_eq!(resumed.world.stand.trees, full.world.stand.trees, "tree store differs after resume");
+    assert!(!full.world.stand.cohorts.is_empty(), "the run should have a regeneration layer");
+    assert_eq!(resumed.world.stand.cohorts, full.world.stand.cohorts, "regeneration cohorts differ after resume");
+    assert_eq!(resumed.world.tallies.regen_ledger, full.world.tallies.regen_ledger, "regeneration ledger differs after resume");
     assert_eq!(resumed.rows, full.rows);
     for f in ["stand_table.csv", "inventory/year_0040.csv", "inventory/year_0040.geojson", "inventory/year_0040_regeneration.csv"] {
         let a = std::fs::read(full_dir.path().join(f)).unwrap();

@@ -70,7 +70,7 @@ fn start_outside_site_is_an_error() {
     let sc = Scenario::from_toml_str(&inside, "qa").unwrap();
     let w = sylva::sim::World::new(site(&sc), &lib, &sc).unwrap();
     // 45 x 32 lattice of 2 m in the 90 m x 65 m area, plus 2 x 2 seed-source trees
-    assert_eq!(w.trees.len(), 45 * 32 + 4);
+    assert_eq!(w.stand.trees.len(), 45 * 32 + 4);
 }
 
 #[test]
@@ -107,9 +107,9 @@ fn young_random_deaths_are_background_not_age() {
     let mut seen = [0u64; 4];
     for _ in 0..30 {
         sylva::sim::step_year(&mut w, &sc, &mut sylva::sim::YearReport::default());
-        for d in &w.dead {
+        for d in &w.scratch.dead {
             seen[d.cause.index()] += 1;
-            let max = w.lib.species[d.species as usize].life.max_age_yr;
+            let max = w.site.lib.species[d.species as usize].life.max_age_yr;
             match d.cause {
                 DeathCause::Age => assert!(d.age >= sylva::sim::trees::SENESCENT_AGE_SHARE * max, "age death at {} of max {max}", d.age),
                 DeathCause::Background => assert!(d.age < sylva::sim::trees::SENESCENT_AGE_SHARE * max),
@@ -118,7 +118,7 @@ fn young_random_deaths_are_background_not_age() {
         }
     }
     assert!(seen[DeathCause::Background.index()] > 0, "no background deaths: {seen:?}");
-    let names: Vec<&str> = w.pool.iter().map(|&s| w.lib.species[s as usize].id.as_str()).collect();
+    let names: Vec<&str> = w.site.pool.iter().map(|&s| w.site.lib.species[s as usize].id.as_str()).collect();
     let csv = sylva::output::stand_table::stand_table_csv(&[sylva::sim::stats::stand_row(&w)], &names);
     assert!(csv.lines().next().unwrap().ends_with(",deaths_age,deaths_stress,deaths_wind,deaths_background"), "{csv}");
     assert_eq!(csv.lines().nth(1).unwrap().split(',').count(), csv.lines().next().unwrap().split(',').count());
@@ -157,7 +157,7 @@ fn maps_are_large_with_legend_and_distinct_species_colours() {
     let sum = run_scenario(&sc, site(&sc), &lib, opts).unwrap();
     let w = &sum.world;
     // distinct categorical colours per pool species
-    let cols: Vec<[u8; 3]> = w.pool.iter().map(|&s| species_color(w, s)).collect();
+    let cols: Vec<[u8; 3]> = w.site.pool.iter().map(|&s| species_color(w, s)).collect();
     for (i, a) in cols.iter().enumerate() {
         assert!(cols[..i].iter().all(|b| b != a), "{cols:?}");
     }
@@ -176,16 +176,16 @@ fn maps_are_large_with_legend_and_distinct_species_colours() {
     let ba = sylva::terrain::io::load(&dir.path().join("maps/basal_area_year_0003.tif")).unwrap();
     let cell_m = ba.geo.pixel_w;
     let total_ba: f64 = ba.elevation.data.iter().filter(|v| v.is_finite()).map(|&v| v as f64 * cell_m * cell_m / 10_000.0).sum();
-    let trees_ba: f64 = (0..w.trees.len()).map(|i| w.trees.basal_area_m2(i)).sum();
+    let trees_ba: f64 = (0..w.stand.trees.len()).map(|i| w.stand.trees.basal_area_m2(i)).sum();
     assert!(trees_ba > 0.01 && (total_ba - trees_ba).abs() < 1e-3 * trees_ba, "map {total_ba} m² vs trees {trees_ba} m²");
     let sp = sylva::terrain::io::load(&dir.path().join("maps/species_year_0003.tif")).unwrap();
     assert_eq!((sp.elevation.width, sp.elevation.height), (ba.elevation.width, ba.elevation.height));
     let codes: Vec<f32> = sp.elevation.data.iter().copied().filter(|v| v.is_finite()).collect();
-    assert!(codes.iter().all(|&c| c == c.round() && c >= 0.0 && c as usize <= w.pool.len()), "{codes:?}");
+    assert!(codes.iter().all(|&c| c == c.round() && c >= 0.0 && c as usize <= w.site.pool.len()), "{codes:?}");
     assert!(codes.iter().any(|&c| c >= 1.0));
     let csv_text = std::fs::read_to_string(dir.path().join("maps/species_codes.csv")).unwrap();
     assert!(csv_text.starts_with("code,species\n0,none\n1,"), "{csv_text}");
-    assert_eq!(csv_text.lines().count(), w.pool.len() + 2);
+    assert_eq!(csv_text.lines().count(), w.site.pool.len() + 2);
 
     // the legend swatch of the first pool species (right of the map) has its colour
     let img = image::open(dir.path().join("maps/species_year_0003.png")).unwrap().to_rgb8();

@@ -18,18 +18,18 @@ fn sc(light_cell_m: f64, w: usize, h: usize) -> String {
 }
 
 fn check_year(w: &World, first_new_id: u64) {
-    let c = &w.cohorts;
+    let c = &w.stand.cohorts;
     // cohorts below the recruitment height, sorted by (cell, pool), one per pair, not empty
     for i in 0..c.len() {
         assert!(c.height[i] < RECRUIT_HEIGHT_M, "cohort {i} at {} m", c.height[i]);
         assert!(c.stems[i] > 0);
-        assert!(w.light_site[c.cell[i] as usize] != u32::MAX, "cohort on a masked light cell");
+        assert!(w.site.light_site[c.cell[i] as usize] != u32::MAX, "cohort on a masked light cell");
         if i > 0 {
             assert!((c.cell[i - 1], c.pool[i - 1]) < (c.cell[i], c.pool[i]), "cohorts out of order at {i}");
         }
     }
     // the density cap of every light cell: Σ stems / N_max(h) ≤ cell area
-    let area_ha = w.light.cell_m * w.light.cell_m / 10_000.0;
+    let area_ha = w.site.light.cell_m * w.site.light.cell_m / 10_000.0;
     let mut occ = std::collections::BTreeMap::<u32, f64>::new();
     for i in 0..c.len() {
         *occ.entry(c.cell[i]).or_default() += c.stems[i] as f64 / (max_density_ha(c.height[i]) * area_ha);
@@ -39,7 +39,7 @@ fn check_year(w: &World, first_new_id: u64) {
         assert!(o <= 1.0 + 1e-6, "cell {cell} over the density cap: {o:.3}");
     }
     // every tree that appeared this year is a recruit of at least the recruitment height
-    let t = &w.trees;
+    let t = &w.stand.trees;
     for i in 0..t.len() {
         if t.id[i] >= first_new_id {
             assert!(t.height[i] >= RECRUIT_HEIGHT_M, "tree {} recruited at {} m", t.id[i], t.height[i]);
@@ -50,23 +50,23 @@ fn check_year(w: &World, first_new_id: u64) {
 #[test]
 fn mass_balance_recruitment_height_and_density_cap() {
     let (sc, mut w) = common::world(&sc(5.0, 4, 3));
-    let np = w.pool.len();
+    let np = w.site.pool.len();
     let mut rows = Vec::new();
     let mut recruited_trees = 0u64;
     for _ in 0..40 {
-        let next = w.trees.next_id;
+        let next = w.stand.trees.next_id;
         let mut r = YearReport::default();
         step_year(&mut w, &sc, &mut r);
         // recruits this year = stems the regeneration layer reports as recruited
-        assert_eq!(r.established as u64, w.regen_year.recruited);
-        recruited_trees += w.trees.next_id - next;
+        assert_eq!(r.established as u64, w.scratch.regen_year.recruited);
+        recruited_trees += w.stand.trees.next_id - next;
         check_year(&w, next);
         let row = r.row.unwrap();
-        assert!((row.regeneration_ha - w.cohorts.total_stems() as f64 / w.area_ha).abs() < 1e-9);
+        assert!((row.regeneration_ha - w.stand.cohorts.total_stems() as f64 / w.site.area_ha).abs() < 1e-9);
         rows.push(row);
     }
-    let l = &w.regen_ledger;
-    let alive = w.cohorts.stems_per_species(np);
+    let l = &w.tallies.regen_ledger;
+    let alive = w.stand.cohorts.stems_per_species(np);
     for p in 0..np {
         let dead: u64 = l.dead[p].iter().sum();
         assert_eq!(l.germinated[p], alive[p] + dead + l.recruited[p], "mass balance of pool species {p}: {} germinated, {} alive, {dead} dead, {} recruited", l.germinated[p], alive[p], l.recruited[p]);
@@ -84,7 +84,7 @@ fn mass_balance_recruitment_height_and_density_cap() {
     assert_eq!(rows.iter().map(|r| r.regen_germinated).sum::<u64>(), l.germinated.iter().sum::<u64>());
     assert_eq!(rows.iter().map(|r| r.regen_recruited).sum::<u64>(), l.recruited.iter().sum::<u64>());
     // the CSV carries the regeneration columns
-    let names: Vec<&str> = w.pool.iter().map(|&s| w.lib.species[s as usize].id.as_str()).collect();
+    let names: Vec<&str> = w.site.pool.iter().map(|&s| w.site.lib.species[s as usize].id.as_str()).collect();
     let csv = sylva::output::stand_table::stand_table_csv(&rows, &names);
     let head: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
     for col in ["regeneration_ha", "regen_germinated", "regen_recruited", "regen_deaths_shade", "regen_deaths_crowding"] {
@@ -92,9 +92,9 @@ fn mass_balance_recruitment_height_and_density_cap() {
     }
     // the regeneration CSV lists every cohort
     let reg = sylva::output::inventory::regeneration_csv(&w);
-    assert_eq!(reg.lines().count(), w.cohorts.len() + 1);
+    assert_eq!(reg.lines().count(), w.stand.cohorts.len() + 1);
     let stems: u64 = reg.lines().skip(1).map(|l| l.split(',').nth(4).unwrap().parse::<u64>().unwrap()).sum();
-    assert_eq!(stems, w.cohorts.total_stems());
+    assert_eq!(stems, w.stand.cohorts.total_stems());
 }
 
 fn cohorts_with_threads(n: usize) -> (sylva::sim::Cohorts, sylva::sim::regen::RegenLedger, Vec<u64>) {
@@ -103,7 +103,7 @@ fn cohorts_with_threads(n: usize) -> (sylva::sim::Cohorts, sylva::sim::regen::Re
         // a site wider than one parallel block of light cells (1024): 3 × 2 ha at 2 m cells
         let (sc, mut w) = common::world(&sc(2.0, 12, 8));
         common::run(&sc, &mut w, 25);
-        (w.cohorts.clone(), w.regen_ledger.clone(), w.trees.id.clone())
+        (w.stand.cohorts.clone(), w.tallies.regen_ledger.clone(), w.stand.trees.id.clone())
     })
 }
 

@@ -17,21 +17,21 @@ fn spruce_high_oak_low_alder_wet() {
         .seed_rain("black_alder", 400.0)
         .build();
     let (sc, mut w) = common::world_with(&toml, &lib);
-    let masked = w.site.mask.data.iter().filter(|m| !**m).count();
+    let masked = w.site.conditions.mask.data.iter().filter(|m| !**m).count();
     assert!(masked > 0, "the window should contain masked (water) cells");
     common::run(&sc, &mut w, 25);
-    let t = &w.trees;
+    let t = &w.stand.trees;
     let (spruce, oak, alder) = (lib.find("norway_spruce").unwrap(), lib.find("pedunculate_oak").unwrap(), lib.find("black_alder").unwrap());
-    for &c in &w.cohorts.cell {
-        assert!(w.light_site[c as usize] != u32::MAX, "regeneration cohort on a masked light cell {c}");
+    for &c in &w.stand.cohorts.cell {
+        assert!(w.site.light_site[c as usize] != u32::MAX, "regeneration cohort on a masked light cell {c}");
     }
     let mut sum = std::collections::BTreeMap::<u16, (f64, f64, usize)>::new();
     for i in 0..t.len() {
-        let (c, r) = w.site.cell_at(t.x[i] as f64, t.y[i] as f64).expect("tree outside the terrain");
-        assert!(*w.site.mask.get(c, r), "tree {} on a masked cell", t.id[i]);
+        let (c, r) = w.site.conditions.cell_at(t.x[i] as f64, t.y[i] as f64).expect("tree outside the terrain");
+        assert!(*w.site.conditions.mask.get(c, r), "tree {} on a masked cell", t.id[i]);
         let e = sum.entry(t.species[i]).or_default();
-        e.0 += *w.site.elevation_m.get(c, r) as f64;
-        e.1 += *w.site.twi.get(c, r) as f64;
+        e.0 += *w.site.conditions.elevation_m.get(c, r) as f64;
+        e.1 += *w.site.conditions.twi.get(c, r) as f64;
         e.2 += 1;
     }
     let mean = |s: u16| {
@@ -40,8 +40,8 @@ fn spruce_high_oak_low_alder_wet() {
         (e.0 / e.2 as f64, e.1 / e.2 as f64, e.2)
     };
     let (ms, mo, ma) = (mean(spruce), mean(oak), mean(alder));
-    let valid: Vec<usize> = (0..w.site.mask.len()).filter(|&k| w.site.mask.data[k]).collect();
-    let twi_all = valid.iter().map(|&k| w.site.twi.data[k] as f64).sum::<f64>() / valid.len() as f64;
+    let valid: Vec<usize> = (0..w.site.conditions.mask.len()).filter(|&k| w.site.conditions.mask.data[k]).collect();
+    let twi_all = valid.iter().map(|&k| w.site.conditions.twi.data[k] as f64).sum::<f64>() / valid.len() as f64;
     eprintln!("spruce {ms:?} oak {mo:?} alder {ma:?}; mean TWI of the land {twi_all:.2}");
     // The margin to expect: the suitability-weighted mean elevation of the land per species
     // (seed rain is uniform and germination is proportional to suitability, so this is where
@@ -50,8 +50,8 @@ fn spruce_high_oak_low_alder_wet() {
         let p = w.pool_index(s).unwrap();
         let (mut se, mut sw) = (0.0, 0.0);
         for &k in &valid {
-            let su = w.suitability[p][k] as f64;
-            se += su * w.site.elevation_m.data[k] as f64;
+            let su = w.site.suitability[p][k] as f64;
+            se += su * w.site.conditions.elevation_m.data[k] as f64;
             sw += su;
         }
         se / sw

@@ -119,8 +119,8 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
     eprintln!(
         "{} year {}: {} trees, basal area {:.1} m²/ha, top height {:.1} m ({:.1} s){} → {}",
         sc.name,
-        res.world.year,
-        res.world.trees.len(),
+        res.world.stand.year,
+        res.world.stand.trees.len(),
         last.map_or(0.0, |r| r.basal_area_m2_ha),
         last.map_or(0.0, |r| r.top_height_m),
         res.seconds,
@@ -128,10 +128,10 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
         out.display()
     );
     if res.stopped {
-        return Err(super::Interrupted(format!("stopped (Ctrl-C or SIGTERM) after year {}: outputs so far are complete in {}; continue with --resume", res.world.year, out.display())).into());
+        return Err(super::Interrupted(format!("stopped (Ctrl-C or SIGTERM) after year {}: outputs so far are complete in {}; continue with --resume", res.world.stand.year, out.display())).into());
     }
-    let pool = res.world.pool.iter().map(|&s| res.world.lib.species[s as usize].id.clone()).collect();
-    Ok(SimOutcome { year: res.world.year, trees_alive: res.world.trees.len(), pool, rows: res.rows })
+    let pool = res.world.site.pool.iter().map(|&s| res.world.site.lib.species[s as usize].id.clone()).collect();
+    Ok(SimOutcome { year: res.world.stand.year, trees_alive: res.world.stand.trees.len(), pool, rows: res.rows })
 }
 
 /// Runs a simulation.

@@ -130,7 +130,7 @@ fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize, geojs
 }
 
 fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
-    let names: Vec<&str> = w.pool.iter().map(|&s| w.lib.species[s as usize].id.as_str()).collect();
+    let names: Vec<&str> = w.site.pool.iter().map(|&s| w.site.lib.species[s as usize].id.as_str()).collect();
     stand_table::write_stand_table(&dir.join("stand_table.csv"), rows, &names)?;
     if png && rows.len() >= 2 {
         plot::plot_stand_table(&dir.join("stand_table.png"), rows, w)?;
@@ -188,8 +188,8 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
     let t0 = Instant::now();
     let mut stopped = false;
     let every = scenario.snapshot_every;
-    while world.year < scenario.years {
-        let y = world.year + 1;
+    while world.stand.year < scenario.years {
+        let y = world.stand.year + 1;
         let snap_year = opts.write_snapshots && (y == scenario.years || (every > 0 && y % every == 0));
         let ty = Instant::now();
         let mut rep = YearReport::default();

@@ -157,9 +157,9 @@ pub struct Plant<'a> {
 
 /// The living trees of `w` as [`Plant`]s, in tree-store order (no file round trip).
 pub fn plants_from_world(w: &World) -> Vec<Plant<'_>> {
-    let t = &w.trees;
+    let t = &w.stand.trees;
     (0..t.len())
-        .map(|i| Plant { id: t.id[i], species: w.lib.species[t.species[i] as usize].id.as_str(), x_m: t.x[i] as f64, y_m: t.y[i] as f64, height_m: t.height[i], crown_radius_m: t.crown_radius[i], alive: true })
+        .map(|i| Plant { id: t.id[i], species: w.site.lib.species[t.species[i] as usize].id.as_str(), x_m: t.x[i] as f64, y_m: t.y[i] as f64, height_m: t.height[i], crown_radius_m: t.crown_radius[i], alive: true })
         .collect()
 }
 

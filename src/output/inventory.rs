@@ -18,11 +18,11 @@ struct Rec<'a> {
 }
 
 fn records(w: &World) -> Vec<Rec<'_>> {
-    let t = &w.trees;
+    let t = &w.stand.trees;
     let mut out: Vec<Rec> = (0..t.len())
-        .map(|i| Rec { id: t.id[i], species: &w.lib.species[t.species[i] as usize].id, v: [t.x[i], t.y[i], t.z[i], t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i]], status: "alive".into() })
+        .map(|i| Rec { id: t.id[i], species: &w.site.lib.species[t.species[i] as usize].id, v: [t.x[i], t.y[i], t.z[i], t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i]], status: "alive".into() })
         .collect();
-    let mut dead: Vec<Rec> = w.dead.iter().map(|d| Rec { id: d.id, species: &w.lib.species[d.species as usize].id, v: [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base], status: format!("dead:{}", d.cause.name()) }).collect();
+    let mut dead: Vec<Rec> = w.scratch.dead.iter().map(|d| Rec { id: d.id, species: &w.site.lib.species[d.species as usize].id, v: [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base], status: format!("dead:{}", d.cause.name()) }).collect();
     dead.sort_by_key(|r| r.id);
     out.extend(dead);
     out
@@ -31,7 +31,7 @@ fn records(w: &World) -> Vec<Rec<'_>> {
 /// The inventory as CSV text: living trees (status `alive`) in id order, then the trees that
 /// died in the current year (`dead:<cause>`). Positions and sizes in metres (DBH cm), 2 decimals.
 pub fn inventory_csv(w: &World) -> String {
-    let mut s = String::with_capacity(80 * (w.trees.len() + 1));
+    let mut s = String::with_capacity(80 * (w.stand.trees.len() + 1));
     s.push_str(HEADER);
     s.push('\n');
     for r in records(w) {
@@ -49,15 +49,15 @@ pub const REGENERATION_HEADER: &str = "cell,species,x_m,y_m,stems,stems_per_ha,h
 /// cell centre (m, world coordinates), stems, stems per hectare of the light cell, mean height
 /// (m, 2 decimals), age (years).
 pub fn regeneration_csv(w: &World) -> String {
-    let c = &w.cohorts;
-    let per_ha = 10_000.0 / w.light.cell_area_m2();
+    let c = &w.stand.cohorts;
+    let per_ha = 10_000.0 / w.site.light.cell_area_m2();
     let mut s = String::with_capacity(48 * (c.len() + 1));
     s.push_str(REGENERATION_HEADER);
     s.push('\n');
     for i in 0..c.len() {
         let k = c.cell[i] as usize;
-        let (x, y) = w.light.centre(k);
-        let sp = w.pool.get(c.pool[i] as usize).map(|&s| w.lib.species[s as usize].id.as_str()).unwrap_or("?");
+        let (x, y) = w.site.light.centre(k);
+        let sp = w.site.pool.get(c.pool[i] as usize).map(|&s| w.site.lib.species[s as usize].id.as_str()).unwrap_or("?");
         let _ = writeln!(s, "{},{},{:.2},{:.2},{},{:.0},{:.2},{:.0}", k, sp, x, y, c.stems[i], c.stems[i] as f64 * per_ha, c.height[i], c.age[i]);
     }
     s
@@ -93,9 +93,9 @@ pub struct PointGeoRef {
 impl PointGeoRef {
     /// The mapping for a world's site (from the terrain's GeoRef, as the map GeoTIFFs use).
     pub fn of(w: &World) -> PointGeoRef {
-        let g = &w.site.geo;
-        let per_m = (g.pixel_w / w.site.cell_x_m.max(1e-12), g.pixel_h / w.site.cell_y_m.max(1e-12));
-        let south = g.origin_y - w.site.height() as f64 * g.pixel_h;
+        let g = &w.site.conditions.geo;
+        let per_m = (g.pixel_w / w.site.conditions.cell_x_m.max(1e-12), g.pixel_h / w.site.conditions.cell_y_m.max(1e-12));
+        let south = g.origin_y - w.site.conditions.height() as f64 * g.pixel_h;
         let (epsg, degrees) = match g.crs {
             crate::grid::Crs::Geographic => (Some(g.epsg.unwrap_or(4326)), true),
             crate::grid::Crs::Projected => (g.epsg, false),

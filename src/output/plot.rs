@@ -144,8 +144,8 @@ pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()>
     let x = |f: &dyn Fn(&StandRow) -> f64| rows.iter().map(|r| (r.year as f64, f(r))).collect::<Vec<_>>();
     let s = |name: &str, pts, color| Series { name: name.into(), points: pts, color, markers: false };
     let mut shares = Vec::new();
-    for (p, &sp) in w.pool.iter().enumerate() {
-        shares.push(s(&w.lib.species[sp as usize].id, x(&|r| r.share_ba.get(p).copied().unwrap_or(0.0)), species_color(w, sp)));
+    for (p, &sp) in w.site.pool.iter().enumerate() {
+        shares.push(s(&w.site.lib.species[sp as usize].id, x(&|r| r.share_ba.get(p).copied().unwrap_or(0.0)), species_color(w, sp)));
     }
     let panels = vec![
         Panel { title: "Stems".into(), x_label: "year".into(), y_label: "stems/ha".into(), series: vec![s("trees ≥ 1.3 m", x(&|r| r.stems_ha), [30, 90, 160]), s("DBH ≥ 7 cm", x(&|r| r.stems_7cm_ha), [200, 80, 40]), s("regeneration < 4 m (cohorts)", x(&|r| r.regeneration_ha), [120, 170, 60])] },
@@ -163,8 +163,8 @@ pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()>
 pub const MIN_MAP_CELL_M: f64 = 20.0;
 
 fn map_dims(w: &World, max_px: usize) -> (usize, usize, f64) {
-    let cell = (w.extent.0.max(w.extent.1) / max_px as f64).max(w.light.cell_m).max(MIN_MAP_CELL_M);
-    (((w.extent.0 / cell).ceil() as usize).max(1), ((w.extent.1 / cell).ceil() as usize).max(1), cell)
+    let cell = (w.site.extent.0.max(w.site.extent.1) / max_px as f64).max(w.site.light.cell_m).max(MIN_MAP_CELL_M);
+    (((w.site.extent.0 / cell).ceil() as usize).max(1), ((w.site.extent.1 / cell).ceil() as usize).max(1), cell)
 }
 
 /// "year N" from a snapshot file name such as `species_year_0010_spring.png`.
@@ -196,9 +196,9 @@ fn snapshot_label(p: &Path) -> String {
 /// Errors: [`Error::Io`] / PNG or GeoTIFF encoding errors naming the file.
 pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -> Result<()> {
     let (cols, rows, cell) = map_dims(w, max_px);
-    let np = w.lib.species.len();
+    let np = w.site.lib.species.len();
     let mut ba = vec![0f64; cols * rows * np];
-    let t = &w.trees;
+    let t = &w.stand.trees;
     for i in 0..t.len() {
         let c = ((t.x[i] as f64 / cell) as usize).min(cols - 1);
         let r = rows - 1 - ((t.y[i] as f64 / cell) as usize).min(rows - 1);
@@ -222,7 +222,7 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
             sp_cells[r * cols + c] = if masked { masked_px } else if tot <= 0.0 { empty_px } else { species_color(w, dom as u16) };
             ba_grid.data[r * cols + c] = (tot / area_ha) as f32;
             mask.data[r * cols + c] = !masked;
-            let pool_pos = w.pool.iter().position(|&s| s as usize == dom).map_or(0.0, |k| k as f32 + 1.0);
+            let pool_pos = w.site.pool.iter().position(|&s| s as usize == dom).map_or(0.0, |k| k as f32 + 1.0);
             code_grid.data[r * cols + c] = if masked { f32::NAN } else if tot <= 0.0 { 0.0 } else { pool_pos };
         }
     }
@@ -232,7 +232,7 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
     let k = 512usize.div_ceil(cols.max(rows)).max(1);
     let (mw, mh) = (cols * k, rows * k);
     let (top, pad, right) = (44usize, 12usize, 190usize);
-    let legend_h = 30 + 22 * (w.pool.len() + 2);
+    let legend_h = 30 + 22 * (w.site.pool.len() + 2);
     let (iw, ih) = (pad + mw + right, top + mh.max(legend_h) + pad + 20);
     let mut img = image::RgbImage::from_pixel(iw as u32, ih as u32, image::Rgb([255, 255, 255]));
     for y in 0..mh {
@@ -241,10 +241,10 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
         }
     }
     super::maps::draw_text(&mut img, &font, pad as f32, 10.0, 20.0, &format!("Dominant species by basal area, {when}"));
-    super::maps::draw_text(&mut img, &font, pad as f32, (top + mh + 4) as f32, 13.0, &format!("{:.0} m × {:.0} m, map cell {:.0} m", w.extent.0, w.extent.1, cell));
+    super::maps::draw_text(&mut img, &font, pad as f32, (top + mh + 4) as f32, 13.0, &format!("{:.0} m × {:.0} m, map cell {:.0} m", w.site.extent.0, w.site.extent.1, cell));
     let lx = pad + mw + 16;
     super::maps::draw_text(&mut img, &font, lx as f32, top as f32, 15.0, "Species");
-    let mut entries: Vec<(String, [u8; 3])> = w.pool.iter().map(|&s| (w.lib.species[s as usize].id.clone(), species_color(w, s))).collect();
+    let mut entries: Vec<(String, [u8; 3])> = w.site.pool.iter().map(|&s| (w.site.lib.species[s as usize].id.clone(), species_color(w, s))).collect();
     entries.push(("no tree ≥ 1.3 m".into(), empty_px));
     entries.push(("outside / water".into(), masked_px));
     for (e, (name, col)) in entries.iter().enumerate() {
@@ -275,8 +275,8 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
     super::geotiff::write_f32(&ba_png.with_extension("tif"), &crate::grid::Grid { width: cols, height: rows, data: ba_tif }, &geo)?;
     super::geotiff::write_f32(&species_png.with_extension("tif"), &code_grid, &geo)?;
     let mut codes = String::from("code,species\n0,none\n");
-    for (k, &s) in w.pool.iter().enumerate() {
-        codes.push_str(&format!("{},{}\n", k + 1, w.lib.species[s as usize].id));
+    for (k, &s) in w.site.pool.iter().enumerate() {
+        codes.push_str(&format!("{},{}\n", k + 1, w.site.lib.species[s as usize].id));
     }
     let codes_path = species_png.with_file_name("species_codes.csv");
     crate::output::write_atomic(&codes_path, codes.as_bytes())
@@ -300,9 +300,9 @@ fn ba_scale_top(v: &[f32]) -> f64 {
 /// its top edge at y = rows·cell): the terrain's CRS, cell size converted to CRS units by the
 /// terrain's own metres-per-unit (degrees for geographic grids, at the grid's mean row).
 pub fn map_georef(w: &World, rows: usize, cell: f64) -> crate::grid::GeoRef {
-    let g = &w.site.geo;
-    let sx = g.pixel_w / w.site.cell_x_m.max(1e-12);
-    let sy = g.pixel_h / w.site.cell_y_m.max(1e-12);
-    let south = g.origin_y - w.site.height() as f64 * g.pixel_h;
+    let g = &w.site.conditions.geo;
+    let sx = g.pixel_w / w.site.conditions.cell_x_m.max(1e-12);
+    let sy = g.pixel_h / w.site.conditions.cell_y_m.max(1e-12);
+    let south = g.origin_y - w.site.conditions.height() as f64 * g.pixel_h;
     crate::grid::GeoRef { pixel_w: cell * sx, pixel_h: cell * sy, origin_x: g.origin_x, origin_y: south + rows as f64 * cell * sy, ..g.clone() }
 }

@@ -77,9 +77,9 @@ impl R<'_> {
 /// Serialises the world's evolving state and the stand table.
 pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
     let mut o = W(MAGIC.to_vec());
-    o.u64(w.year as u64);
-    o.u64(w.seed);
-    let t = &w.trees;
+    o.u64(w.stand.year as u64);
+    o.u64(w.site.seed);
+    let t = &w.stand.trees;
     o.u64(t.next_id);
     o.u64(t.len() as u64);
     for v in &t.id {
@@ -92,22 +92,22 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
     for c in [&t.x, &t.y, &t.z, &t.age, &t.height, &t.dbh, &t.crown_radius, &t.crown_base, &t.light, &t.vigour, &t.suitability] {
         o.f32s(c);
     }
-    o.u64(w.seeds.len() as u64);
-    for s in &w.seeds {
+    o.u64(w.stand.seeds.len() as u64);
+    for s in &w.stand.seeds {
         o.f32s(&s.data);
     }
-    for d in w.deaths_total {
+    for d in w.tallies.deaths_total {
         o.u64(d);
     }
     // regeneration layer
-    let c = &w.cohorts;
+    let c = &w.stand.cohorts;
     o.u32s(&c.cell);
     o.u32s(&c.pool.iter().map(|&p| p as u32).collect::<Vec<_>>());
     o.u32s(&c.stems);
     for v in [&c.height, &c.age, &c.vigour] {
         o.f32s(v);
     }
-    let l = &w.regen_ledger;
+    let l = &w.tallies.regen_ledger;
     o.u64(l.germinated.len() as u64);
     for p in 0..l.germinated.len() {
         o.u64(l.germinated[p]);
@@ -151,8 +151,8 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     let mut r = R { b: bytes, p: 8, path };
     let year = r.u64()? as u32;
     let seed = r.u64()?;
-    if seed != w.seed {
-        return Err(Error::format(path, format!("checkpoint seed {seed} differs from the scenario's seed {}", w.seed)));
+    if seed != w.site.seed {
+        return Err(Error::format(path, format!("checkpoint seed {seed} differs from the scenario's seed {}", w.site.seed)));
     }
     let mut t = TreeStore { next_id: r.u64()?, ..Default::default() };
     let n = r.len(8)?;
@@ -167,14 +167,14 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             return Err(r.err());
         }
     }
-    if t.species.iter().any(|&s| s as usize >= w.lib.species.len()) {
+    if t.species.iter().any(|&s| s as usize >= w.site.lib.species.len()) {
         return Err(Error::format(path, "checkpoint names a species index outside the library"));
     }
     let ns = r.u64()? as usize;
-    if ns != w.pool.len() {
-        return Err(Error::format(path, format!("checkpoint has {ns} species in the pool, the scenario {}", w.pool.len())));
+    if ns != w.site.pool.len() {
+        return Err(Error::format(path, format!("checkpoint has {ns} species in the pool, the scenario {}", w.site.pool.len())));
     }
-    let mut seeds = w.seeds.clone();
+    let mut seeds = w.stand.seeds.clone();
     for g in seeds.iter_mut() {
         let s = r.f32s()?;
         if s.len() != g.data.len() {
@@ -196,11 +196,11 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     if [cohorts.pool.len(), cohorts.stems.len(), cohorts.height.len(), cohorts.age.len(), cohorts.vigour.len()].iter().any(|&l| l != nc) {
         return Err(r.err());
     }
-    if cohorts.cell.iter().any(|&c| c as usize >= w.light_site.len()) || cohorts.pool.iter().any(|&p| p as usize >= w.pool.len()) {
+    if cohorts.cell.iter().any(|&c| c as usize >= w.site.light_site.len()) || cohorts.pool.iter().any(|&p| p as usize >= w.site.pool.len()) {
         return Err(Error::format(path, "checkpoint cohorts lie outside the light grid or the species pool"));
     }
     let np = r.u64()? as usize;
-    if np != w.pool.len() {
+    if np != w.site.pool.len() {
         return Err(r.err());
     }
     let mut ledger = RegenLedger::new(np);
@@ -254,13 +254,13 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             regen_deaths,
         });
     }
-    w.trees = t;
-    w.year = year;
-    w.seeds = seeds;
-    w.deaths_total = deaths;
-    w.cohorts = cohorts;
-    w.regen_ledger = ledger;
-    w.regen_year = Default::default();
-    w.dead.clear();
+    w.stand.trees = t;
+    w.stand.year = year;
+    w.stand.seeds = seeds;
+    w.tallies.deaths_total = deaths;
+    w.stand.cohorts = cohorts;
+    w.tallies.regen_ledger = ledger;
+    w.scratch.regen_year = Default::default();
+    w.scratch.dead.clear();
     Ok(rows)
 }

@@ -47,16 +47,16 @@ pub struct StandRow {
     pub regen_deaths: [u64; super::cohorts::N_REGEN_CAUSES],
 }
 
-/// Computes the stand-table row of the world's current state (deaths from `w.dead`).
+/// Computes the stand-table row of the world's current state (deaths from `w.scratch.dead`).
 pub fn stand_row(w: &World) -> StandRow {
-    let t = &w.trees;
-    let a = w.area_ha.max(1e-9);
-    let np = w.pool.len();
+    let t = &w.stand.trees;
+    let a = w.site.area_ha.max(1e-9);
+    let np = w.site.pool.len();
     let (mut n, mut ns, mut ba, mut hs, mut d2) = (0usize, 0usize, 0f64, 0f64, 0f64);
     let (mut n7, mut d27) = (0usize, 0f64);
     let mut sba = vec![0f64; np];
     let mut sn = vec![0f64; np];
-    let pidx: Vec<usize> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s).unwrap_or(0)).collect();
+    let pidx: Vec<usize> = (0..w.site.lib.species.len() as u16).map(|s| w.pool_index(s).unwrap_or(0)).collect();
     let mut top: Vec<(f32, f32)> = Vec::new();
     for i in 0..t.len() {
         if t.height[i] < 1.3 {
@@ -87,12 +87,12 @@ pub fn stand_row(w: &World) -> StandRow {
     top.sort_by(by_dbh_desc);
     let h100 = if top.is_empty() { 0.0 } else { top.iter().map(|x| x.1 as f64).sum::<f64>() / top.len() as f64 };
     let mut deaths = [0u64; super::trees::N_CAUSES];
-    for d in &w.dead {
+    for d in &w.scratch.dead {
         deaths[d.cause.index()] += 1;
     }
     let _ = DeathCause::ALL;
     StandRow {
-        year: w.year,
+        year: w.stand.year,
         stems_ha: n as f64 / a,
         seedlings_ha: ns as f64 / a,
         basal_area_m2_ha: ba / a,
@@ -104,9 +104,9 @@ pub fn stand_row(w: &World) -> StandRow {
         share_ba: sba.iter().map(|v| if ba > 0.0 { v / ba } else { 0.0 }).collect(),
         share_stems: sn.iter().map(|v| if n > 0 { v / n as f64 } else { 0.0 }).collect(),
         deaths,
-        regeneration_ha: w.cohorts.total_stems() as f64 / a,
-        regen_germinated: w.regen_year.germinated,
-        regen_recruited: w.regen_year.recruited,
-        regen_deaths: w.regen_year.dead,
+        regeneration_ha: w.stand.cohorts.total_stems() as f64 / a,
+        regen_germinated: w.scratch.regen_year.germinated,
+        regen_recruited: w.scratch.regen_year.recruited,
+        regen_deaths: w.scratch.regen_year.dead,
     }
 }

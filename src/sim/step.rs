@@ -1,4 +1,6 @@
-//! One simulated year as a readable list of phases.
+//! One simulated year as data: [`PHASES`], the phases in order, each with its name (used by the
+//! timers, the bench's per-phase output and ARCHITECTURE.md), what it does, the season it
+//! closes, and the function that hands it the parts of the [`World`] it reads and writes.
 
 use super::phases::{growth, light, mortality, regen, reproduction};
 use super::scenario::Scenario;
@@ -22,49 +24,107 @@ pub struct YearReport {
     pub phase_seconds: [f64; N_PHASES],
 }
 
-/// Number of timed phases.
-pub const N_PHASES: usize = 6;
-/// Names of the timed phases, in [`YearReport::phase_seconds`] order.
-pub const PHASES: [&str; N_PHASES] = ["light", "establishment", "growth", "reproduction", "mortality", "stats"];
+/// One phase of the year.
+pub struct Phase {
+    /// Short name: timers, bench output, ARCHITECTURE.md.
+    pub name: &'static str,
+    /// What the phase does, in one line (quoted in ARCHITECTURE.md).
+    pub summary: &'static str,
+    /// The season that ends with this phase (seasonal snapshots are taken after it).
+    pub ends: Option<Season>,
+    /// Runs the phase: passes it the parts of the world it reads and writes.
+    pub run: fn(&mut World, &mut YearReport),
+}
 
-/// Simulates one year: light → spring establishment → summer growth → autumn seed fall →
-/// winter mortality → statistics. Increments `world.year`.
+/// Number of phases.
+pub const N_PHASES: usize = 6;
+
+/// The year, in order. ARCHITECTURE.md quotes this list (checked by `tests/layers.rs`).
+pub const PHASES: [Phase; N_PHASES] = [
+    Phase { name: "light", summary: "canopy grid from the trees at the start of the year; light of every tree and of the ground", ends: None, run: run_light },
+    Phase { name: "regeneration", summary: "spring: germination, growth, thinning and recruitment of the sapling cohorts", ends: Some(Season::Spring), run: run_regeneration },
+    Phase { name: "growth", summary: "summer: height, DBH and crown increments of every tree", ends: Some(Season::Summer), run: run_growth },
+    Phase { name: "reproduction", summary: "autumn: seed production and dispersal onto the seed grids", ends: Some(Season::Autumn), run: run_reproduction },
+    Phase { name: "mortality", summary: "winter: senescence, background, stress and wind deaths", ends: None, run: run_mortality },
+    Phase { name: "stats", summary: "the year ends: stand-table row of the year", ends: Some(Season::Winter), run: run_stats },
+];
+
+fn run_light(w: &mut World, _: &mut YearReport) {
+    light::run(light::Light {
+        light: &w.site.light,
+        site: &w.site.conditions,
+        lib: &w.site.lib,
+        light_site: &w.site.light_site,
+        rel_insolation: &w.site.rel_insolation,
+        trees: &mut w.stand.trees,
+        ground_light: &mut w.scratch.ground_light,
+        grid: &mut w.scratch.grid,
+    });
+}
+
+fn run_regeneration(w: &mut World, report: &mut YearReport) {
+    report.established = regen::run(regen::Regen {
+        seed: w.site.seed,
+        year: w.stand.year,
+        light: &w.site.light,
+        light_site: &w.site.light_site,
+        site: &w.site.conditions,
+        lib: &w.site.lib,
+        pool: &w.site.pool,
+        suitability: &w.site.suitability,
+        seed_rain: &w.site.seed_rain,
+        ground_light: &w.scratch.ground_light,
+        seeds: &w.stand.seeds,
+        cohorts: &mut w.stand.cohorts,
+        trees: &mut w.stand.trees,
+        regen_ledger: &mut w.tallies.regen_ledger,
+        regen_year: &mut w.scratch.regen_year,
+    });
+}
+
+fn run_growth(w: &mut World, _: &mut YearReport) {
+    growth::run(growth::Growth { lib: &w.site.lib, trees: &mut w.stand.trees });
+}
+
+fn run_reproduction(w: &mut World, _: &mut YearReport) {
+    reproduction::run(reproduction::Reproduction { trees: &w.stand.trees, lib: &w.site.lib, pool: &w.site.pool, seeds: &mut w.stand.seeds });
+}
+
+fn run_mortality(w: &mut World, _: &mut YearReport) {
+    mortality::run(mortality::Mortality {
+        seed: w.site.seed,
+        year: w.stand.year,
+        site: &w.site.conditions,
+        lib: &w.site.lib,
+        trees: &mut w.stand.trees,
+        dead: &mut w.scratch.dead,
+        deaths_total: &mut w.tallies.deaths_total,
+    });
+}
+
+fn run_stats(w: &mut World, report: &mut YearReport) {
+    w.stand.year += 1;
+    report.died = w.scratch.dead.len();
+    report.trees = w.stand.trees.len();
+    report.row = Some(stand_row(w));
+}
+
+/// Simulates one year: the [`PHASES`] in order. Increments `world.stand.year`.
 pub fn step_year(world: &mut World, scenario: &Scenario, report: &mut YearReport) {
     step_year_with(world, scenario, report, &mut |_, _| {});
 }
 
-/// Like [`step_year`], calling `on_season(season, world)` after spring, summer, autumn and
-/// winter (for seasonal snapshots).
+/// Like [`step_year`], calling `on_season(season, world)` after the phases that end spring,
+/// summer, autumn and winter (for seasonal snapshots). Each phase's wall time goes to
+/// `report.phase_seconds` (callbacks not included).
 pub fn step_year_with(world: &mut World, _scenario: &Scenario, report: &mut YearReport, on_season: &mut dyn FnMut(Season, &World)) {
-    world.dead.clear();
-    let mut clock = Instant::now();
-    let mut lap = |k: usize, report: &mut YearReport| {
-        let now = Instant::now();
-        report.phase_seconds[k] = (now - clock).as_secs_f64();
-        clock = now;
-    };
-    // light regime from the canopy at the start of the year
-    light::run(world);
-    lap(0, report);
-    // spring: germination and establishment
-    report.established = regen::run(world);
-    lap(1, report);
-    on_season(Season::Spring, world);
-    // summer: growth
-    growth::run(world);
-    lap(2, report);
-    on_season(Season::Summer, world);
-    // autumn: seed production and dispersal
-    reproduction::run(world);
-    lap(3, report);
-    on_season(Season::Autumn, world);
-    // winter: mortality and windthrow
-    mortality::run(world);
-    lap(4, report);
-    world.year += 1;
-    report.died = world.dead.len();
-    report.trees = world.trees.len();
-    report.row = Some(stand_row(world));
-    lap(5, report);
-    on_season(Season::Winter, world);
+    world.scratch.dead.clear();
+    for (k, phase) in PHASES.iter().enumerate() {
+        let t0 = Instant::now();
+        (phase.run)(world, report);
+        report.phase_seconds[k] = t0.elapsed().as_secs_f64();
+        if let Some(season) = phase.ends {
+            on_season(season, world);
+        }
+    }
 }

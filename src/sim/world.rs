@@ -39,19 +39,31 @@ impl SeedGrid {
     }
 }
 
-/// Everything the yearly phases read and write.
+/// Everything the yearly phases read and write, in four parts by lifetime: the fixed site
+/// (inputs, never written after [`World::new`]), the stand's state (what a checkpoint keeps),
+/// per-year scratch (rebuilt or cleared every year) and running tallies. Each phase takes only
+/// the parts it reads and writes ([`crate::sim::step::PHASES`]).
 #[derive(Debug, Clone)]
 pub struct World {
-    /// Site conditions (terrain grid).
-    pub site: SiteConditions,
+    /// Fixed inputs: site conditions, species, derived per-cell grids.
+    pub site: Site,
+    /// The stand's evolving state: trees, regeneration cohorts, seeds, year.
+    pub stand: Stand,
+    /// Per-year scratch shared between the phases of one year.
+    pub scratch: Scratch,
+    /// Running totals since the start.
+    pub tallies: Tallies,
+}
+
+/// The fixed site of a [`World`]: set by [`World::new`], read by every phase, written by none.
+#[derive(Debug, Clone)]
+pub struct Site {
+    /// Site conditions (terrain grid, row 0 north).
+    pub conditions: SiteConditions,
     /// Species library (the pool indexes into it).
     pub lib: SpeciesLibrary,
     /// Species taking part, ascending ids.
     pub pool: Vec<SpeciesId>,
-    /// Living trees.
-    pub trees: TreeStore,
-    /// Years completed so far (the next year to simulate).
-    pub year: u32,
     /// Scenario seed.
     pub seed: u64,
     /// World extent (m).
@@ -60,30 +72,69 @@ pub struct World {
     pub area_ha: f64,
     /// The light grid (canopy, ground light, spatial hash and regeneration cells; row 0 south).
     pub light: LightGrid,
-    /// Spatial hash of the trees at the last light phase (same cells as the light grid).
-    pub grid: SpatialGrid,
-    /// Relative light at the ground (0–1.5) per light cell, from the last light phase.
-    pub ground_light: Vec<f32>,
     /// Site cell index (row-major, row 0 north) of each light cell; `u32::MAX` where masked.
     pub light_site: Vec<u32>,
     /// Relative insolation (cell insolation / median of unmasked cells, clamped 0.2–1.5) per site cell.
     pub rel_insolation: Vec<f32>,
     /// Suitability (0–1) per pool species (outer, pool order) per site cell.
     pub suitability: Vec<Vec<f32>>,
-    /// Seeds per m² per pool species (pool order), from the last autumn.
-    pub seeds: Vec<SeedGrid>,
     /// External seed rain per pool species (seeds per m² and year).
     pub seed_rain: Vec<f32>,
-    /// Trees that died in the current year (cleared at the start of each year).
-    pub dead: Vec<DeadTree>,
-    /// Deaths since the start, by cause ([`super::trees::DeathCause::ALL`] order).
-    pub deaths_total: [u64; super::trees::N_CAUSES],
+}
+
+/// The stand's state: everything that evolves from year to year and that a checkpoint keeps.
+#[derive(Debug, Clone, Default)]
+pub struct Stand {
+    /// Living trees.
+    pub trees: TreeStore,
+    /// Years completed so far (the next year to simulate).
+    pub year: u32,
     /// The regeneration layer: sapling cohorts below the recruitment height ([`super::phases::regen`]).
     pub cohorts: Cohorts,
-    /// Cumulative counts of the regeneration layer per pool species.
-    pub regen_ledger: RegenLedger,
+    /// Seeds per m² per pool species (pool order), from the last autumn.
+    pub seeds: Vec<SeedGrid>,
+}
+
+/// Per-year scratch: written by one phase and read by later phases of the same year (or the
+/// outputs after it); rebuilt or cleared every year, not checkpointed.
+#[derive(Debug, Clone, Default)]
+pub struct Scratch {
+    /// Spatial hash of the trees at the last light phase (cells of the light grid).
+    pub grid: SpatialGrid,
+    /// Relative light at the ground (0–1.5) per light cell, from the last light phase.
+    pub ground_light: Vec<f32>,
+    /// Trees that died in the current year (cleared at the start of each year).
+    pub dead: Vec<DeadTree>,
     /// Counts of the regeneration layer in the current year.
     pub regen_year: RegenYear,
+}
+
+/// Running totals since the start of the run (checkpointed).
+#[derive(Debug, Clone, Default)]
+pub struct Tallies {
+    /// Deaths by cause ([`super::trees::DeathCause::ALL`] order).
+    pub deaths_total: [u64; super::trees::N_CAUSES],
+    /// Cumulative counts of the regeneration layer per pool species.
+    pub regen_ledger: RegenLedger,
+}
+
+impl Site {
+    /// Position of species `s` in the pool.
+    pub fn pool_index(&self, s: SpeciesId) -> Option<usize> {
+        self.pool.iter().position(|&q| q == s)
+    }
+
+    /// Species record of `s`.
+    #[inline]
+    pub fn species(&self, s: SpeciesId) -> &Species {
+        &self.lib.species[s as usize]
+    }
+
+    /// Site cell index (row-major) of world point `(x, y)` when unmasked.
+    pub fn site_cell(&self, x: f64, y: f64) -> Option<usize> {
+        let (c, r) = self.conditions.cell_at(x, y)?;
+        (*self.conditions.mask.get(c, r)).then(|| self.conditions.mask.idx(c, r))
+    }
 }
 
 impl World {
@@ -133,47 +184,29 @@ impl World {
         }
         let np = pool.len();
         let mut w = World {
-            site,
-            lib: lib.clone(),
-            seeds,
-            pool,
-            trees: TreeStore::default(),
-            year: 0,
-            seed: scenario.seed,
-            extent,
-            area_ha,
-            light,
-            grid: SpatialGrid::default(),
-            ground_light: vec![1.0; light.len()],
-            light_site,
-            rel_insolation,
-            suitability,
-            seed_rain,
-            dead: Vec::new(),
-            deaths_total: [0; super::trees::N_CAUSES],
-            cohorts: Cohorts::default(),
-            regen_ledger: RegenLedger::new(np),
-            regen_year: RegenYear::default(),
+            site: Site { conditions: site, lib: lib.clone(), pool, seed: scenario.seed, extent, area_ha, light, light_site, rel_insolation, suitability, seed_rain },
+            stand: Stand { trees: TreeStore::default(), year: 0, cohorts: Cohorts::default(), seeds },
+            scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], dead: Vec::new(), regen_year: RegenYear::default() },
+            tallies: Tallies { deaths_total: [0; super::trees::N_CAUSES], regen_ledger: RegenLedger::new(np) },
         };
         w.place_start(scenario);
         Ok(w)
     }
 
-    /// Position of species `s` in the pool.
+    /// Position of species `s` in the pool ([`Site::pool_index`]).
     pub fn pool_index(&self, s: SpeciesId) -> Option<usize> {
-        self.pool.iter().position(|&q| q == s)
+        self.site.pool_index(s)
     }
 
-    /// Species record of `s`.
+    /// Species record of `s` ([`Site::species`]).
     #[inline]
     pub fn species(&self, s: SpeciesId) -> &Species {
-        &self.lib.species[s as usize]
+        self.site.species(s)
     }
 
-    /// Site cell index (row-major) of world point `(x, y)` when unmasked.
+    /// Site cell index (row-major) of world point `(x, y)` when unmasked ([`Site::site_cell`]).
     pub fn site_cell(&self, x: f64, y: f64) -> Option<usize> {
-        let (c, r) = self.site.cell_at(x, y)?;
-        (*self.site.mask.get(c, r)).then(|| self.site.mask.idx(c, r))
+        self.site.site_cell(x, y)
     }
 
     fn new_tree(&self, s: SpeciesId, x: f64, y: f64, age: f32) -> Option<NewTree> {
@@ -182,26 +215,26 @@ impl World {
         let sp = self.species(s);
         let h = allometry::potential_height(sp, age).max(0.3);
         let d = allometry::open_dbh(sp, h) * 0.8;
-        Some(NewTree { species: s, x: x as f32, y: y as f32, z: self.site.elevation_at(x, y), age: age.max(1.0), height: h, dbh: d, crown_radius: allometry::open_crown_radius(sp, h, d), suitability: self.suitability[p][cell] })
+        Some(NewTree { species: s, x: x as f32, y: y as f32, z: self.site.conditions.elevation_at(x, y), age: age.max(1.0), height: h, dbh: d, crown_radius: allometry::open_crown_radius(sp, h, d), suitability: self.site.suitability[p][cell] })
     }
 
     fn place_start(&mut self, scenario: &Scenario) {
         for (k, st) in scenario.start.iter().enumerate() {
-            let Some(s) = self.lib.find(st.species()) else { continue };
+            let Some(s) = self.site.lib.find(st.species()) else { continue };
             match st {
                 Start::Planted { spacing_m, age_yr, area, .. } => {
-                    let [x0, y0, x1, y1] = area.unwrap_or([0.0, 0.0, self.extent.0, self.extent.1]);
-                    let (x0, y0, x1, y1) = (x0.max(0.0), y0.max(0.0), x1.min(self.extent.0), y1.min(self.extent.1));
+                    let [x0, y0, x1, y1] = area.unwrap_or([0.0, 0.0, self.site.extent.0, self.site.extent.1]);
+                    let (x0, y0, x1, y1) = (x0.max(0.0), y0.max(0.0), x1.min(self.site.extent.0), y1.min(self.site.extent.1));
                     let nx = ((x1 - x0) / spacing_m).floor().max(0.0) as u64;
                     let ny = ((y1 - y0) / spacing_m).floor().max(0.0) as u64;
                     for j in 0..ny {
                         for i in 0..nx {
-                            let mut r = Stream::new(self.seed, (k as u64) << 48 | j << 24 | i, 0, salt::INIT);
+                            let mut r = Stream::new(self.site.seed, (k as u64) << 48 | j << 24 | i, 0, salt::INIT);
                             let x = x0 + (i as f64 + 0.5 + r.range(-0.15, 0.15)) * spacing_m;
                             let y = y0 + (j as f64 + 0.5 + r.range(-0.15, 0.15)) * spacing_m;
                             let a = (*age_yr + r.range(-0.5, 0.5) as f32).max(1.0);
                             if let Some(t) = self.new_tree(s, x, y, a) {
-                                self.trees.push(t);
+                                self.stand.trees.push(t);
                             }
                         }
                     }
@@ -211,10 +244,10 @@ impl World {
                     let age = sp.life.maturity_age_yr + 20.0;
                     for (pi, p) in points.iter().enumerate() {
                         for t in 0..*trees_per_source as u64 {
-                            let mut r = Stream::new(self.seed, (k as u64) << 48 | (pi as u64) << 24 | t, 0, salt::INIT);
+                            let mut r = Stream::new(self.site.seed, (k as u64) << 48 | (pi as u64) << 24 | t, 0, salt::INIT);
                             let (a, d) = (r.range(0.0, std::f64::consts::TAU), 10.0 * r.uniform().sqrt());
                             if let Some(nt) = self.new_tree(s, p[0] + d * a.cos(), p[1] + d * a.sin(), age) {
-                                self.trees.push(nt);
+                                self.stand.trees.push(nt);
                             }
                         }
                     }

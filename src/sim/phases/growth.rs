@@ -1,7 +1,8 @@
 //! Growth (summer): height, DBH and crown increments from the species' potential growth ×
 //! light response × site suitability, with the species' allometries.
 
-use super::super::world::World;
+use crate::sim::trees::TreeStore;
+use crate::species::SpeciesLibrary;
 pub use crate::species::allometry::{effective_age, open_crown_radius, open_dbh, potential_height, potential_increment};
 use rayon::prelude::*;
 
@@ -27,13 +28,21 @@ struct Grown {
     v: f32,
 }
 
+/// What growth reads (the species) and writes (height, DBH, crown, vigour and age of every tree).
+pub struct Growth<'a> {
+    /// Species library.
+    pub lib: &'a SpeciesLibrary,
+    /// Trees: light and suitability read; size, vigour and age written.
+    pub trees: &'a mut TreeStore,
+}
+
 /// Grows every tree by one season. Height: `ΔH = (H(t_eff + 1) − H(t_eff)) · f(L) · S` with
 /// `t_eff` the effective age of the current height, `f` [`light_response`], `S` site suitability.
 /// DBH: `ΔD = (D_open(H + ΔH_pot) − D_open(H)) · f(L) · S` (D_open from the height–DBH allometry),
 /// so shaded trees become slender. Crown radius: open-grown radius of the new DBH, shrunk by
 /// `0.5 + 0.5 L` in shade (crown plasticity); crown base rises to `H (1 − crown_ratio (0.4 + 0.6 L))`
 /// and never falls (natural pruning). Vigour memory `v ← 0.7 v + 0.3 f(L)·S` feeds stress mortality.
-pub fn run(w: &mut World) {
+pub fn run(w: Growth<'_>) {
     let t = &w.trees;
     let lib = &w.lib;
     let out: Vec<Grown> = (0..t.len())
@@ -59,7 +68,7 @@ pub fn run(w: &mut World) {
             Grown { h: h1, d: d1, r, cb, v }
         })
         .collect();
-    let t = &mut w.trees;
+    let t = &mut *w.trees;
     for (i, g) in out.into_iter().enumerate() {
         t.height[i] = g.h;
         t.dbh[i] = g.d;

@@ -17,8 +17,10 @@
 //! Cost O(E) for E ≈ 2–4 entries per tree (counting sort by cell, then a small sort per cell),
 //! then O(log) per tree.
 
-use super::super::trees::SpatialGrid;
-use super::super::world::World;
+use crate::conditions::SiteConditions;
+use crate::sim::light_grid::LightGrid;
+use crate::sim::trees::{SpatialGrid, TreeStore};
+use crate::species::SpeciesLibrary;
 use rayon::prelude::*;
 
 /// Beer–Lambert extinction coefficient (dimensionless).
@@ -57,8 +59,30 @@ impl Canopy {
     }
 }
 
+/// What the light phase reads (the light grid, the site's latitude, the species' crown LAI,
+/// the light cells' site cells and relative insolation, the trees) and writes (each tree's
+/// light, the ground light per light cell, the spatial hash of the trees).
+pub struct Light<'a> {
+    /// The light grid (row 0 south).
+    pub light: &'a LightGrid,
+    /// Site conditions (latitude for the sun elevation).
+    pub site: &'a SiteConditions,
+    /// Species library (crown leaf-area index from the shade tolerance).
+    pub lib: &'a SpeciesLibrary,
+    /// Site cell per light cell (`u32::MAX` where masked).
+    pub light_site: &'a [u32],
+    /// Relative insolation per site cell.
+    pub rel_insolation: &'a [f32],
+    /// Trees: read; `light` written.
+    pub trees: &'a mut TreeStore,
+    /// Written: relative light at the ground per light cell.
+    pub ground_light: &'a mut Vec<f32>,
+    /// Written: spatial hash of the trees on the light grid.
+    pub grid: &'a mut SpatialGrid,
+}
+
 /// Builds the spatial grid and canopy, and sets every tree's light and the ground light.
-pub fn run(w: &mut World) {
+pub fn run(w: Light<'_>) {
     let cell = w.light.cell_m;
     let grid = SpatialGrid::build(&w.trees, &w.light);
     let (cols, rows) = (grid.cols, grid.rows);
@@ -188,6 +212,6 @@ pub fn run(w: &mut World) {
     }
     let ground: Vec<f32> = (0..cols * rows).into_par_iter().map(|c| light_at(c, 0.0, rel_of(c, ls, ri))).collect();
     w.trees.light = light;
-    w.ground_light = ground;
-    w.grid = grid;
+    *w.ground_light = ground;
+    *w.grid = grid;
 }

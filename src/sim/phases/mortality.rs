@@ -1,8 +1,9 @@
 //! Mortality (winter): intrinsic (recorded as `age` for senescent trees, `background` for
 //! younger ones), stress (suppressed growth over several years) and windthrow. Dead trees leave the store and are recorded with their cause.
 
-use super::super::trees::{DeadTree, DeathCause, SENESCENT_AGE_SHARE};
-use super::super::world::World;
+use crate::conditions::SiteConditions;
+use crate::sim::trees::{DeadTree, DeathCause, TreeStore, N_CAUSES, SENESCENT_AGE_SHARE};
+use crate::species::SpeciesLibrary;
 use crate::rng::{salt, Stream};
 use rayon::prelude::*;
 
@@ -26,8 +27,27 @@ pub fn p_wind(exposure: f32, height: f32) -> f64 {
     0.02 * e * e * (height as f64 / 40.0).powi(2)
 }
 
+/// What mortality reads (seed and year for the random streams, the site's wind exposure, the
+/// species) and writes (removes the dead from the trees, records them and counts them by cause).
+pub struct Mortality<'a> {
+    /// Scenario seed.
+    pub seed: u64,
+    /// The year being simulated (years completed before it).
+    pub year: u32,
+    /// Site conditions (wind exposure).
+    pub site: &'a SiteConditions,
+    /// Species library.
+    pub lib: &'a SpeciesLibrary,
+    /// Trees: the dead are removed.
+    pub trees: &'a mut TreeStore,
+    /// Appended: this year's dead with their cause.
+    pub dead: &'a mut Vec<DeadTree>,
+    /// Incremented: deaths since the start by cause ([`DeathCause::ALL`] order).
+    pub deaths_total: &'a mut [u64; N_CAUSES],
+}
+
 /// Draws deaths for the year and removes the dead trees.
-pub fn run(w: &mut World) {
+pub fn run(w: Mortality<'_>) {
     let t = &w.trees;
     let (seed, year) = (w.seed, w.year as u64);
     let site = &w.site;

@@ -37,8 +37,11 @@
 use super::growth::{light_response, open_crown_radius, open_dbh, potential_increment};
 use super::mortality::{stress_threshold, P_STRESS};
 pub use crate::sim::cohorts::{Cohort, Cohorts, RegenDeath, RegenLedger, RegenYear, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
-use crate::sim::trees::NewTree;
-use crate::sim::world::World;
+use crate::conditions::SiteConditions;
+use crate::sim::light_grid::LightGrid;
+use crate::sim::trees::{NewTree, TreeStore};
+use crate::sim::world::SeedGrid;
+use crate::species::{SpeciesId, SpeciesLibrary};
 use crate::rng::{salt, Stream};
 use rayon::prelude::*;
 
@@ -89,19 +92,63 @@ struct Block {
 /// Cells per parallel work item.
 const BLOCK: usize = 1024;
 
+/// What the regeneration phase reads (the fixed site: light grid, site cells, pool, species,
+/// suitability, seed rain; the year's ground light and last autumn's seeds) and writes (the
+/// cohorts, the recruits added to the trees, the ledger and the year's counts).
+pub struct Regen<'a> {
+    /// Scenario seed.
+    pub seed: u64,
+    /// The year being simulated (years completed before it).
+    pub year: u32,
+    /// The light grid (row 0 south).
+    pub light: &'a LightGrid,
+    /// Site cell per light cell (`u32::MAX` where masked).
+    pub light_site: &'a [u32],
+    /// Site conditions (elevation of the recruits, unmasked cells).
+    pub site: &'a SiteConditions,
+    /// Species library.
+    pub lib: &'a SpeciesLibrary,
+    /// Species taking part.
+    pub pool: &'a [SpeciesId],
+    /// Suitability per pool species per site cell.
+    pub suitability: &'a [Vec<f32>],
+    /// External seed rain per pool species (seeds per m² and year).
+    pub seed_rain: &'a [f32],
+    /// Relative light at the ground per light cell (this year's light phase).
+    pub ground_light: &'a [f32],
+    /// Seeds per m² per pool species (last autumn).
+    pub seeds: &'a [SeedGrid],
+    /// Read and written: the sapling cohorts.
+    pub cohorts: &'a mut Cohorts,
+    /// Appended: the recruits.
+    pub trees: &'a mut TreeStore,
+    /// Incremented: cumulative counts per pool species.
+    pub regen_ledger: &'a mut RegenLedger,
+    /// Written: this year's counts.
+    pub regen_year: &'a mut RegenYear,
+}
+
+impl Regen<'_> {
+    /// Site cell index (row-major) of world point `(x, y)` when unmasked.
+    fn site_cell(&self, x: f64, y: f64) -> Option<usize> {
+        let (c, r) = self.site.cell_at(x, y)?;
+        (*self.site.mask.get(c, r)).then(|| self.site.mask.idx(c, r))
+    }
+}
+
 /// Updates the regeneration layer for one year (germination, growth, shade mortality, crowding,
 /// recruitment; see the module docs), adds the recruits to the tree store (light and vigour set
 /// from the cohort) and the year's counts to `w.regen_ledger` / `w.regen_year`. Returns the
 /// number of recruits.
-pub fn run(w: &mut World) -> usize {
+pub fn run(w: Regen<'_>) -> usize {
     let ncell = w.light_site.len();
-    let lg = w.light;
+    let lg = *w.light;
     let cell = lg.cell_m;
     let area = lg.cell_area_m2();
     let np = w.pool.len();
     let (seed, year) = (w.seed, w.year as u64);
     let coh = &w.cohorts;
-    let wr: &World = w;
+    let wr = &w;
     let blocks: Vec<Block> = (0..ncell.div_ceil(BLOCK))
         .into_par_iter()
         .map(|b| {
@@ -232,7 +279,7 @@ pub fn run(w: &mut World) -> usize {
     let mut cohorts = Cohorts::default();
     let mut year_counts = RegenYear::default();
     let mut n_recruits = 0;
-    let ledger = &mut w.regen_ledger;
+    let ledger = &mut *w.regen_ledger;
     for b in blocks {
         for k in b.cohorts {
             cohorts.push(k);
@@ -255,8 +302,8 @@ pub fn run(w: &mut World) -> usize {
             n_recruits += 1;
         }
     }
-    w.cohorts = cohorts;
-    w.regen_year = year_counts;
+    *w.cohorts = cohorts;
+    *w.regen_year = year_counts;
     n_recruits
 }
 

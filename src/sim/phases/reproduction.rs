@@ -4,8 +4,9 @@
 //! (a gather over kernel offsets, so tile borders do not exist). Seeds that would land outside
 //! the terrain are lost.
 
-use super::super::world::World;
-use crate::species::{Dispersal, KernelType};
+use crate::sim::trees::TreeStore;
+use crate::sim::world::SeedGrid;
+use crate::species::{Dispersal, KernelType, SpeciesId, SpeciesLibrary};
 use rayon::prelude::*;
 
 /// Discrete dispersal kernel: `(dcol, drow, weight)` offsets within `max_m`, weights sum to 1.
@@ -40,9 +41,28 @@ pub fn kernel(d: &Dispersal, cell: f64) -> Vec<(isize, isize, f32)> {
     out.into_iter().map(|(a, b, w)| (a, b, (w / sum) as f32)).filter(|o| o.2 > 1e-7).collect()
 }
 
+/// What reproduction reads (the trees, the species, the pool) and writes (the seed grids).
+pub struct Reproduction<'a> {
+    /// Trees (mature ones produce seeds).
+    pub trees: &'a TreeStore,
+    /// Species library.
+    pub lib: &'a SpeciesLibrary,
+    /// Species taking part (pool order indexes `seeds`).
+    pub pool: &'a [SpeciesId],
+    /// Written: seeds per m² per pool species.
+    pub seeds: &'a mut [SeedGrid],
+}
+
+impl Reproduction<'_> {
+    /// Position of species `s` in the pool.
+    pub fn pool_index(&self, s: SpeciesId) -> Option<usize> {
+        self.pool.iter().position(|&q| q == s)
+    }
+}
+
 /// Produces and disperses this year's seeds into `w.seeds` (seeds per m² per pool species).
 /// Seeds per tree: `seeds_per_m2_crown · π r² · min(L, 1)` for trees at or above maturity age.
-pub fn run(w: &mut World) {
+pub fn run(w: Reproduction<'_>) {
     let t = &w.trees;
     let mut src: Vec<Vec<f32>> = w.seeds.iter().map(|g| vec![0f32; g.data.len()]).collect();
     let pidx: Vec<Option<usize>> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s)).collect();
