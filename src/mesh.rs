@@ -69,6 +69,14 @@ impl TreeMesh {
     }
 }
 
+/// Number of levels of detail, defined once: the chain `structure::mesh::lod_chain` builds
+/// (full mesh, reduced skeleton with leaf clusters, crown hull, impostor) and the levels the
+/// renderer draws (`render::lod::drawn_levels`: the first three meshes, then its own billboard).
+/// The culling shader `render/shaders/cull.wgsl` declares the same `const LOD_LEVELS` (checked
+/// by a test in `render::lod`) and packs one level per word of its 4-word records, so changing
+/// it means changing those records too (a compile-time assertion in `render::headless` says so).
+pub const LOD_LEVELS: usize = 4;
+
 /// Levels of detail of one tree, finest first (DESIGN: full mesh, reduced skeleton with leaf
 /// clusters, crown hull, billboard impostor).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]

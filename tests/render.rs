@@ -273,7 +273,8 @@ fn bad_inputs_are_errors_not_panics() {
 
 #[test]
 fn timelapse_grows_trees_and_writes_gif() {
-    use sylva::render::timelapse::{render_sequence, write_gif};
+    use sylva::output::pictures::write_gif;
+    use sylva::render::timelapse::render_sequence;
     let base = demo_scene(40, 200.0, 9);
     let young: Vec<TreeInstance> = base.instances.iter().map(|t| TreeInstance { height: t.height * 0.4, crown_radius: t.crown_radius * 0.4, ..*t }).collect();
     let old = base.instances.clone();

@@ -125,7 +125,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     }
     let cam = stage.camera_for(a.camera, &rows);
     let img = stage.render_rows(&rows, a.season, &cam, a.size.0, a.size.1)?;
-    sylva::render::timelapse::write_png(&a.out, &img)?;
+    sylva::output::pictures::write_png(&a.out, &img)?;
     let st = stage.renderer.last_stats();
     eprintln!("year {year}: {} trees drawn, {} triangles → {}", st.instances_drawn, st.triangles, a.out.display());
     Ok(())

@@ -125,7 +125,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 let cam = stage.camera(preset);
                 let img = stage.render_instances(key(y), Season::Summer, &cam, a.size.0, a.size.1)?;
                 let path = stills_dir.join(format!("year_{y:04}_{name}.png"));
-                sylva::render::timelapse::write_png(&path, &img)?;
+                sylva::output::pictures::write_png(&path, &img)?;
                 stills.push((y, name.to_string(), path));
                 pb.inc(1);
             }
@@ -140,7 +140,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             let cam = sylva::render::camera::Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0);
             let img = stage.render_instances(key(y), Season::Summer, &cam, a.size.0, a.size.1)?;
             let path = stills_dir.join(format!("year_{y:04}_closeup.png"));
-            sylva::render::timelapse::write_png(&path, &img)?;
+            sylva::output::pictures::write_png(&path, &img)?;
             stills.push((y, "closeup".to_string(), path));
         }
         pb.finish_and_clear();

@@ -6,7 +6,7 @@ use super::scene::{self, Plant};
 use crate::conditions::SiteConditions;
 use crate::render::camera::{Camera, CameraPreset};
 use crate::render::headless::Renderer;
-use crate::render::scene::{Prototype, TerrainMesh, TreeInstance};
+use crate::render::scene::{Scene, Sun, TreeInstance};
 use crate::render::timelapse;
 use crate::species::{Season, SpeciesLibrary};
 use crate::{Error, Result};
@@ -18,12 +18,10 @@ pub struct Stage {
     pub site: SiteConditions,
     /// Species library (indexes the prototypes).
     pub library: SpeciesLibrary,
-    /// Tree models, one per library species.
-    pub prototypes: Vec<Prototype>,
-    /// Terrain mesh.
-    pub terrain: TerrainMesh,
-    /// Sea level (m) for the water plane, when any cell is water.
-    pub sea_level: Option<f32>,
+    /// The scene drawn: terrain mesh, tree models (one prototype per library species), sea
+    /// level (m) for the water plane when any cell is water. Built once; each frame only sets
+    /// its instances and sun (no copy of the terrain or the prototypes per frame).
+    pub scene: Scene,
     /// The renderer (wgpu device on a GPU or the software adapter).
     pub renderer: Renderer,
 }
@@ -32,7 +30,7 @@ impl Stage {
     /// Builds the stage: terrain mesh with cells ≤ 10 m, one EcoMod prototype per species.
     ///
     /// # Errors
-    /// [`Error::Render`] when no wgpu adapter is found.
+    /// [`Error::Render`] ([`crate::error::RenderError::NoAdapter`]) when no wgpu adapter is found.
     pub fn new(site: SiteConditions, library: SpeciesLibrary, sea_level_m: f32) -> Result<Self> {
         let terrain = scene::terrain_mesh(&site, 10.0, sea_level_m)?;
         let prototypes = scene::prototypes(&library);
@@ -46,7 +44,8 @@ impl Stage {
         // the canopy layer
         renderer.lod.max_geometry_triangles = 0;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
-        Ok(Stage { site, library, prototypes, terrain, sea_level: has_water.then_some(sea_level_m), renderer })
+        let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));
+        Ok(Stage { site, library, scene, renderer })
     }
 
     /// Renders `rows` (an inventory snapshot) in `season` from `camera` at `width × height`.
@@ -63,13 +62,16 @@ impl Stage {
 
     /// Renders prepared instances.
     pub fn render_instances(&mut self, inst: Vec<TreeInstance>, season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
-        let sc = scene::scene(self.terrain.clone(), self.prototypes.clone(), inst, self.site.geo.latitude_deg, season, self.sea_level);
-        self.renderer.render(&sc, camera, width, height)
+        self.scene.instances = inst;
+        self.scene.sun = Sun::from_position(self.site.geo.latitude_deg as f32, scene::season_day(season), 14.0);
+        let img = self.renderer.render(&self.scene, camera, width, height);
+        self.scene.instances = Vec::new();
+        img
     }
 
     /// The camera of a preset for this terrain.
     pub fn camera(&self, preset: CameraPreset) -> Camera {
-        Camera::preset(preset, &self.terrain)
+        Camera::preset(preset, &self.scene.terrain)
     }
 
     /// The camera of a preset for a snapshot: as [`Stage::camera`], except that the ground-level
@@ -112,8 +114,8 @@ impl Stage {
             }
         }
         let (_, _, x, y) = best;
-        let gz = self.terrain.nearest_height(x, y).unwrap_or(cam.eye[2] - 1.7);
-        let tz = self.terrain.nearest_height(x, cam.target[1]).unwrap_or(cam.target[2] - 8.0);
+        let gz = self.scene.terrain.nearest_height(x, y).unwrap_or(cam.eye[2] - 1.7);
+        let tz = self.scene.terrain.nearest_height(x, cam.target[1]).unwrap_or(cam.target[2] - 8.0);
         let mut moved = Camera::look_at([x, y, gz + 1.7], [x, cam.target[1], tz + 8.0], 60.0);
         moved.near = cam.near;
         moved
@@ -210,11 +212,11 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
         let u = if total > 1 { k as f32 / (total - 1) as f32 } else { 0.0 };
         let cam = match opts.camera {
             Some(p) => stage.camera(p),
-            None => Camera::orbit(&stage.terrain, 0.05 + 0.25 * u),
+            None => Camera::orbit(&stage.scene.terrain, 0.05 + 0.25 * u),
         };
         let mut img = stage.render_instances(inst, opts.season, &cam, opts.width, opts.height)?;
         crate::output::maps::stamp_caption(&mut img, &format!("year {}", year.round() as u32))?;
-        timelapse::write_png(&frames_dir.join(format!("frame_{k:05}.png")), &img)?;
+        crate::output::pictures::write_png(&frames_dir.join(format!("frame_{k:05}.png")), &img)?;
         Ok(img)
     };
     frames.push(emit(stage, prev.clone(), k, snaps[0] as f32)?);
@@ -231,8 +233,8 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
         }
         prev = next;
     }
-    timelapse::write_gif(out_gif, &frames, opts.fps)?;
+    crate::output::pictures::write_gif(out_gif, &frames, opts.fps)?;
     let mp4 = out_gif.with_extension("mp4");
-    let wrote_mp4 = timelapse::write_mp4(frames_dir, opts.fps, &mp4).unwrap_or(false);
+    let wrote_mp4 = crate::output::pictures::write_mp4(frames_dir, opts.fps, &mp4).unwrap_or(false);
     Ok((frames.len(), wrote_mp4))
 }

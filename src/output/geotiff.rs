@@ -47,8 +47,8 @@ pub fn encode_f32(grid: &Grid<f32>, geo: &GeoRef) -> std::result::Result<Vec<u8>
 
 /// Writes `grid` (row 0 north; NaN = nodata) with `geo`'s georeferencing to `path` atomically.
 ///
-/// Errors: [`Error::Other`] when encoding fails (naming `path`), [`Error::Io`] when writing.
+/// Errors: [`Error::Encode`] when encoding fails (naming `path`), [`Error::Io`] when writing.
 pub fn write_f32(path: &Path, grid: &Grid<f32>, geo: &GeoRef) -> Result<()> {
-    let bytes = encode_f32(grid, geo).map_err(|e| Error::Other(format!("{}: encoding GeoTIFF: {e}", path.display())))?;
+    let bytes = encode_f32(grid, geo).map_err(|e| Error::Encode { path: path.to_path_buf(), format: "GeoTIFF", message: e.to_string() })?;
     super::write_atomic(path, &bytes)
 }

@@ -122,11 +122,11 @@ fn material(name: &str, rgb: [u8; 3], double_sided: bool) -> Value {
 
 /// Encodes a LOD chain as GLB bytes (see the module docs for the layout).
 ///
-/// Errors: [`Error::Other`] when the chain has no triangles or the JSON does not parse back as
-/// glTF.
+/// Errors: [`Error::Invalid`] when the chain has no triangles; [`Error::Serialize`] when the JSON
+/// cannot be written or does not parse back as valid glTF.
 pub fn glb_bytes(chain: &LodChain, o: &GlbOptions) -> Result<Vec<u8>> {
     if chain.levels.iter().all(|l| l.triangle_count() == 0) {
-        return Err(Error::Other("glb: the LOD chain has no triangles".into()));
+        return Err(Error::Invalid { context: "glb".into(), field: "LOD chain".into(), value: "0 triangles".into(), expected: "at least one level with triangles".into() });
     }
     let mut b = Builder { views: Vec::new(), accessors: Vec::new(), bin: Vec::new() };
     let materials = vec![material("bark", o.bark_rgb, false), material("leaf", o.leaf_rgb, true)];
@@ -159,7 +159,7 @@ pub fn glb_bytes(chain: &LodChain, o: &GlbOptions) -> Result<Vec<u8>> {
         "bufferViews": b.views,
         "buffers": [{"byteLength": b.bin.len()}],
     });
-    let mut js = serde_json::to_vec(&root).map_err(|e| Error::Other(format!("glb: JSON serialisation failed: {e}")))?;
+    let mut js = serde_json::to_vec(&root).map_err(|e| Error::Serialize { what: "glb".into(), format: "JSON", message: e.to_string() })?;
     json_check(&js)?;
     while js.len() % 4 != 0 {
         js.push(b' ');
@@ -181,13 +181,13 @@ pub fn glb_bytes(chain: &LodChain, o: &GlbOptions) -> Result<Vec<u8>> {
 /// Parses the JSON chunk back with `gltf-json` and runs its validation.
 fn json_check(js: &[u8]) -> Result<()> {
     use gltf_json::validation::Validate;
-    let root = gltf_json::Root::from_slice(js).map_err(|e| Error::Other(format!("glb: produced JSON is not glTF: {e}")))?;
+    let root = gltf_json::Root::from_slice(js).map_err(|e| Error::Serialize { what: "glb".into(), format: "glTF", message: format!("produced JSON is not glTF: {e}") })?;
     let mut errs = Vec::new();
     root.validate(&root, gltf_json::Path::new, &mut |path, err| errs.push(format!("{}: {err}", path())));
     if errs.is_empty() {
         Ok(())
     } else {
-        Err(Error::Other(format!("glb: validation failed: {}", errs.join("; "))))
+        Err(Error::Serialize { what: "glb".into(), format: "glTF", message: format!("validation failed: {}", errs.join("; ")) })
     }
 }
 

@@ -109,7 +109,7 @@ pub fn write_field_png_styled(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style
         o => o,
     })?;
     let mut bytes = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| Error::Other(format!("{}: PNG encoding: {e}", path.display())))?;
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| Error::Encode { path: path.to_path_buf(), format: "PNG", message: e.to_string() })?;
     super::write_atomic(path, &bytes)
 }
 
@@ -155,7 +155,7 @@ pub fn render_field(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyl
             img.put_pixel((pad + x) as u32, (top + y) as u32, Rgb(px));
         }
     }
-    let font = FontRef::try_from_slice(FONT).map_err(|e| Error::Other(format!("bundled font: {e}")))?;
+    let font = FontRef::try_from_slice(FONT).map_err(|e| Error::Bundled { what: "font", message: e.to_string() })?;
     draw_text(&mut img, &font, pad as f32, 10.0, 22.0, &style.title);
     // Colour bar.
     let (bx, by, bw, bh) = (pad + mw + 20, top + 10, 22usize, mh.clamp(200, 400) - 20);
@@ -223,7 +223,7 @@ fn glyph_coverage(font: &FontRef, x: f32, y: f32, px: f32, text: &str, w: u32, h
 ///
 /// Errors: only if the bundled font could not be parsed.
 pub fn stamp_caption(img: &mut image::RgbaImage, text: &str) -> Result<()> {
-    let font = FontRef::try_from_slice(FONT).map_err(|e| Error::Other(format!("bundled font: {e}")))?;
+    let font = FontRef::try_from_slice(FONT).map_err(|e| Error::Bundled { what: "font", message: e.to_string() })?;
     let (w, h) = img.dimensions();
     let px = (h as f32 / 18.0).max(10.0);
     let sf = font.as_scaled(PxScale::from(px));

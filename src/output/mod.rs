@@ -40,3 +40,4 @@ pub mod gltf;
 pub mod obj;
 pub mod geotiff;
 pub mod maps;
+pub mod pictures;

@@ -228,7 +228,7 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
     }
     let when = snapshot_label(species_png);
     // species map with legend
-    let font = ab_glyph::FontRef::try_from_slice(FONT).map_err(|e| Error::Other(format!("bundled font: {e}")))?;
+    let font = ab_glyph::FontRef::try_from_slice(FONT).map_err(|e| Error::Bundled { what: "font", message: e.to_string() })?;
     let k = 512usize.div_ceil(cols.max(rows)).max(1);
     let (mw, mh) = (cols * k, rows * k);
     let (top, pad, right) = (44usize, 12usize, 190usize);

@@ -1,10 +1,14 @@
-//! Headless wgpu renderer: terrain, water, sky and instanced trees into an RGBA image.
+//! The wgpu renderer: terrain, water, sky and instanced trees drawn into any texture view
+//! ([`Renderer::render_to_view`], on a device given with [`Renderer::from_device`]), and the
+//! headless layer on top ([`Renderer::new`] opens an adapter, [`Renderer::render`] draws into
+//! its own texture and reads it back as an RGBA image).
 //!
 //! Passes per frame: (0) culling and level selection, on the CPU ([`build_batches`]) or in a
 //! compute pass (`shaders/cull.wgsl`, see [`Culling`]), (1) sun shadow map (2048², depth only,
 //! terrain and trees), (2) main pass with 4× MSAA and depth: sky gradient, terrain, trees (one
 //! instanced draw — direct on the CPU path, indirect on the GPU path — per prototype, level and
-//! material), water; resolved and read back with rows padded to 256 bytes.
+//! material), water; resolved into the given view (headless: a texture read back with rows
+//! padded to 256 bytes).
 //!
 //! Trees are opaque, depth-tested, and all fades (level cross-fades, timelapse opacity, leaf
 //! amount) are screen-door dithers decided per pixel from the screen position and per-tree
@@ -21,6 +25,12 @@ use super::camera::Camera;
 use super::instanced::{build_batches, instance_record, level_triangles, Batches, InstanceRaw};
 use super::lod::{drawn_levels, Frustum, LodParams, Silhouette, SILHOUETTE_BINS};
 use super::scene::Scene;
+use crate::mesh::LOD_LEVELS;
+
+// `shaders/cull.wgsl` keeps one drawn level per word of a 4-word record (the level costs of a
+// prototype, `cost()`), so the number of levels is tied to that record width.
+const _: () = assert!(LOD_LEVELS == 4, "cull.wgsl packs the level costs of a prototype into one vec4<u32>-sized record");
+use crate::error::RenderError;
 use crate::{Error, Result};
 
 const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -80,7 +90,7 @@ pub enum Culling {
     Auto,
     /// Always on the CPU (rayon), with direct instanced draws.
     Cpu,
-    /// Always in the compute pass; [`Renderer::render`] fails with [`Error::Render`] when the
+    /// Always in the compute pass; [`Renderer::render`] fails with [`RenderError::GpuCullingUnavailable`] when the
     /// adapter cannot do it.
     Gpu,
 }
@@ -204,13 +214,19 @@ fn billboard_vertices(s: &Silhouette) -> (Vec<TreeVertex>, Vec<u32>) {
     (verts, vec![0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7])
 }
 
+/// Multisampled colour and depth targets of one frame size (any output view).
 struct Targets {
     size: (u32, u32),
     msaa: wgpu::TextureView,
     depth: wgpu::TextureView,
-    resolve: wgpu::Texture,
-    resolve_view: wgpu::TextureView,
-    readback: wgpu::Buffer,
+}
+
+/// The headless output: a texture to draw into and a buffer to read it back.
+struct Readback {
+    size: (u32, u32),
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    buffer: wgpu::Buffer,
     padded_row: u32,
 }
 
@@ -230,7 +246,7 @@ pub struct FrameStats {
     /// Instances skipped for invalid data.
     pub invalid: usize,
     /// Drawn instances per level of detail (level 3 = billboard impostor for 4-level chains).
-    pub per_level: [usize; 4],
+    pub per_level: [usize; LOD_LEVELS],
     /// Whether culling and level selection ran in the GPU compute pass.
     pub gpu_culling: bool,
     /// Factor by which the level switch sizes were raised to meet
@@ -243,7 +259,11 @@ pub struct FrameStats {
     pub canopy_trees: usize,
 }
 
-/// A headless renderer bound to one wgpu device.
+/// The renderer, bound to one wgpu device: draws a [`Scene`] into any texture view of its target
+/// format ([`Renderer::render_to_view`]: a window's surface, an offscreen texture). Built on an
+/// existing device with [`Renderer::from_device`], or headless with [`Renderer::new`], which
+/// opens its own adapter and adds a texture and a readback ([`Renderer::render`] returns an
+/// image).
 pub struct Renderer {
     device: wgpu::Device,
     queue: wgpu::Queue,
@@ -264,6 +284,8 @@ pub struct Renderer {
     instance_buf: Option<(wgpu::Buffer, u64)>,
     scene: Option<GpuScene>,
     targets: Option<Targets>,
+    readback: Option<Readback>,
+    format: wgpu::TextureFormat,
     /// Level-of-detail parameters used by [`Renderer::render`].
     pub lod: LodParams,
     /// Where culling and level selection run (default [`Culling::Auto`]).
@@ -290,14 +312,14 @@ impl Renderer {
     /// such as lavapipe) and builds the pipelines.
     ///
     /// # Errors
-    /// [`Error::Render`] `"no adapter ..."` when wgpu finds no adapter, or when the device
+    /// [`RenderError::NoAdapter`] when wgpu finds no adapter, [`RenderError::Create`] when the device
     /// cannot be created.
     pub fn new() -> Result<Self> {
         let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
         let adapter = match pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions { power_preference: wgpu::PowerPreference::HighPerformance, force_fallback_adapter: false, compatible_surface: None, ..Default::default() })) {
             Ok(a) => a,
             Err(_) => pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions { force_fallback_adapter: true, ..Default::default() }))
-                .map_err(|e| Error::Render(format!("no adapter found (install a GPU driver or Mesa's lavapipe, Debian package mesa-vulkan-drivers): {e}")))?,
+                .map_err(|e| RenderError::NoAdapter(e.to_string()))?,
         };
         let adapter_info = adapter.get_info();
         let al = adapter.limits();
@@ -312,11 +334,32 @@ impl Renderer {
         limits.max_buffer_size = al.max_buffer_size;
         limits.max_storage_buffers_per_shader_stage = al.max_storage_buffers_per_shader_stage.max(limits.max_storage_buffers_per_shader_stage);
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor { label: Some("sylva"), required_features: wgpu::Features::empty(), required_limits: limits, ..Default::default() }))
-            .map_err(|e| Error::Render(format!("cannot create device on {}: {e}", adapter_info.name)))?;
-        Self::with_device(device, queue, adapter_info, gpu_ok)
+            .map_err(|e| RenderError::Create { what: "device", adapter: adapter_info.name.clone(), message: e.to_string() })?;
+        Self::with_device(device, queue, adapter_info, gpu_ok, COLOR_FORMAT)
     }
 
-    fn with_device(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo, gpu_ok: bool) -> Result<Self> {
+    /// Builds the renderer on an existing device and queue (e.g. those of a window), drawing
+    /// into views of `target_format` ([`Renderer::render_to_view`]). GPU culling is used
+    /// ([`Culling::Auto`]) when the device's limits allow compute passes with 5 storage buffers
+    /// and 64-wide workgroups; on a downlevel device without indirect draws set
+    /// [`Culling::Cpu`].
+    ///
+    /// # Errors
+    /// [`RenderError::Create`] when the pipelines cannot be created on the device (e.g. a
+    /// `target_format` that is not renderable).
+    pub fn from_device(device: wgpu::Device, queue: wgpu::Queue, target_format: wgpu::TextureFormat) -> Result<Self> {
+        let al = device.limits();
+        let gpu_ok = al.max_storage_buffers_per_shader_stage >= 5 && al.max_compute_invocations_per_workgroup >= 64 && al.max_compute_workgroup_size_x >= 64;
+        let info = device.adapter_info();
+        Self::with_device(device, queue, info, gpu_ok, target_format)
+    }
+
+    /// The colour format of the views this renderer draws into.
+    pub fn target_format(&self) -> wgpu::TextureFormat {
+        self.format
+    }
+
+    fn with_device(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo, gpu_ok: bool, format: wgpu::TextureFormat) -> Result<Self> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("scene.wgsl"), source: wgpu::ShaderSource::Wgsl(include_str!("shaders/scene.wgsl").into()) });
         let uniform_entry = wgpu::BindGroupLayoutEntry {
@@ -366,8 +409,8 @@ impl Renderer {
         let tl = [Some(terrain_layout())];
         let trl = tree_layouts();
         let trl = [Some(trl[0].clone()), Some(trl[1].clone())];
-        let opaque = [Some(wgpu::ColorTargetState { format: COLOR_FORMAT, blend: None, write_mask: wgpu::ColorWrites::ALL })];
-        let blended = [Some(wgpu::ColorTargetState { format: COLOR_FORMAT, blend: Some(wgpu::BlendState::ALPHA_BLENDING), write_mask: wgpu::ColorWrites::ALL })];
+        let opaque = [Some(wgpu::ColorTargetState { format, blend: None, write_mask: wgpu::ColorWrites::ALL })];
+        let blended = [Some(wgpu::ColorTargetState { format, blend: Some(wgpu::BlendState::ALPHA_BLENDING), write_mask: wgpu::ColorWrites::ALL })];
         let make = |label: &str, layout: &wgpu::PipelineLayout, vs: &str, buffers: &[Option<wgpu::VertexBufferLayout>], fs: Option<(&str, &[Option<wgpu::ColorTargetState>])>, ds: wgpu::DepthStencilState, msaa: bool, cull: Option<wgpu::Face>| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -413,7 +456,7 @@ impl Renderer {
         });
         let cull = if gpu_ok { Some(Self::cull_pipeline(&device)) } else { None };
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Render(format!("pipeline creation failed on {}: {e}", adapter_info.name)));
+            return Err(RenderError::Create { what: "pipelines", adapter: adapter_info.name.clone(), message: e.to_string() }.into());
         }
         Ok(Renderer {
             device,
@@ -435,6 +478,8 @@ impl Renderer {
             instance_buf: None,
             scene: None,
             targets: None,
+            readback: None,
+            format,
             lod: LodParams::default(),
             culling: Culling::Auto,
             last: FrameStats::default(),
@@ -616,16 +661,31 @@ impl Renderer {
         }
         let d = &self.device;
         let size = wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 };
-        let tex = |label: &str, format, samples, usage| {
-            d.create_texture(&wgpu::TextureDescriptor { label: Some(label), size, mip_level_count: 1, sample_count: samples, dimension: wgpu::TextureDimension::D2, format, usage, view_formats: &[] })
-        };
-        let msaa = tex("msaa", COLOR_FORMAT, SAMPLES, wgpu::TextureUsages::RENDER_ATTACHMENT).create_view(&Default::default());
-        let depth = tex("depth", DEPTH_FORMAT, SAMPLES, wgpu::TextureUsages::RENDER_ATTACHMENT).create_view(&Default::default());
-        let resolve = tex("resolve", COLOR_FORMAT, 1, wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC);
-        let resolve_view = resolve.create_view(&Default::default());
+        let tex = |label: &str, format, usage| d.create_texture(&wgpu::TextureDescriptor { label: Some(label), size, mip_level_count: 1, sample_count: SAMPLES, dimension: wgpu::TextureDimension::D2, format, usage, view_formats: &[] });
+        let msaa = tex("msaa", self.format, wgpu::TextureUsages::RENDER_ATTACHMENT).create_view(&Default::default());
+        let depth = tex("depth", DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT).create_view(&Default::default());
+        self.targets = Some(Targets { size: (w, h), msaa, depth });
+    }
+
+    fn ensure_readback(&mut self, w: u32, h: u32) {
+        if self.readback.as_ref().map(|t| t.size) == Some((w, h)) {
+            return;
+        }
+        let d = &self.device;
+        let size = wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 };
+        let texture = d.create_texture(&wgpu::TextureDescriptor { label: Some("resolve"), size, mip_level_count: 1, sample_count: 1, dimension: wgpu::TextureDimension::D2, format: self.format, usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC, view_formats: &[] });
+        let view = texture.create_view(&Default::default());
         let padded_row = (w * 4).div_ceil(256) * 256;
-        let readback = d.create_buffer(&wgpu::BufferDescriptor { label: Some("readback"), size: padded_row as u64 * h as u64, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
-        self.targets = Some(Targets { size: (w, h), msaa, depth, resolve, resolve_view, readback, padded_row });
+        let buffer = d.create_buffer(&wgpu::BufferDescriptor { label: Some("readback"), size: padded_row as u64 * h as u64, usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST, mapped_at_creation: false });
+        self.readback = Some(Readback { size: (w, h), texture, view, buffer, padded_row });
+    }
+
+    fn check_size(&self, width: u32, height: u32) -> Result<()> {
+        let max = self.device.limits().max_texture_dimension_2d;
+        if width == 0 || height == 0 || width > max || height > max {
+            return Err(Error::Invalid { context: "render".into(), field: "size".into(), value: format!("{width}x{height}"), expected: format!("1..={max} pixels per side") });
+        }
+        Ok(())
     }
 
     /// Renders `scene` seen by `camera` into a `width` × `height` image (sRGB RGBA).
@@ -635,22 +695,69 @@ impl Renderer {
     ///
     /// # Errors
     /// [`Error::Invalid`] for a zero or too large size (limit: the adapter's 2-D texture size)
-    /// or inconsistent meshes; [`Error::Render`] when the GPU fails or the readback cannot be
+    /// or inconsistent meshes; [`Error::Render`] ([`RenderError`]) when the GPU fails or the readback cannot be
     /// mapped.
     pub fn render(&mut self, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
-        let max = self.device.limits().max_texture_dimension_2d;
-        if width == 0 || height == 0 || width > max || height > max {
-            return Err(Error::Invalid { context: "render".into(), field: "size".into(), value: format!("{width}x{height}"), expected: format!("1..={max} pixels per side") });
+        self.check_size(width, height)?;
+        if self.format != COLOR_FORMAT {
+            return Err(Error::Invalid { context: "render".into(), field: "target format".into(), value: format!("{:?}", self.format), expected: format!("{COLOR_FORMAT:?} to read an image back (draw other formats with render_to_view)") });
         }
+        self.ensure_readback(width, height);
+        let Some(rb) = self.readback.take() else { return Err(RenderError::Internal("readback target").into()) };
+        let r = self.render_to_view(scene, camera, &rb.view, width, height).and_then(|_| self.read_back(&rb, width, height));
+        self.readback = Some(rb);
+        r
+    }
+
+    /// Copies the headless texture to the readback buffer and into an image.
+    fn read_back(&self, rb: &Readback, width: u32, height: u32) -> Result<image::RgbaImage> {
+        let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
+        enc.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo { texture: &rb.texture, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect: wgpu::TextureAspect::All },
+            wgpu::TexelCopyBufferInfo { buffer: &rb.buffer, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(rb.padded_row), rows_per_image: Some(height) } },
+            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
+        );
+        let sub = self.queue.submit(Some(enc.finish()));
+        let slice = rb.buffer.slice(..);
+        let (tx, rx) = std::sync::mpsc::channel();
+        slice.map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.device.poll(wgpu::PollType::Wait { submission_index: Some(sub), timeout: None }).map_err(|e| RenderError::Readback { stage: "poll", message: e.to_string() })?;
+        rx.recv().map_err(|e| RenderError::Readback { stage: "channel", message: e.to_string() })?.map_err(|e| RenderError::Readback { stage: "map", message: e.to_string() })?;
+        let mut img = image::RgbaImage::new(width, height);
+        {
+            let view = slice.get_mapped_range().map_err(|e| RenderError::Readback { stage: "range", message: e.to_string() })?;
+            let row = (width * 4) as usize;
+            for (y, out) in img.chunks_mut(row).enumerate() {
+                let s = y * rb.padded_row as usize;
+                out.copy_from_slice(&view[s..s + row]);
+            }
+        }
+        rb.buffer.unmap();
+        Ok(img)
+    }
+
+    /// Draws `scene` seen by `camera` into `view` (`width` × `height` pixels, the renderer's
+    /// [`Renderer::target_format`], usage `RENDER_ATTACHMENT`): a window's surface texture or an
+    /// offscreen texture. The GPU copies of the terrain and prototypes are kept between frames
+    /// while they stay the same; the instances are uploaded each frame. Returns the frame's
+    /// statistics (also [`Renderer::last_stats`]).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] for a zero or too large size or inconsistent meshes;
+    /// [`Error::Render`] ([`RenderError`]) when the GPU fails.
+    pub fn render_to_view(&mut self, scene: &Scene, camera: &Camera, view: &wgpu::TextureView, width: u32, height: u32) -> Result<FrameStats> {
+        self.check_size(width, height)?;
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let r = self.render_inner(scene, camera, width, height);
+        let r = self.render_inner(scene, camera, view, width, height);
         if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(Error::Render(format!("GPU validation error: {e}")));
+            return Err(RenderError::Validation(e.to_string()).into());
         }
         r
     }
 
-    fn render_inner(&mut self, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
+    fn render_inner(&mut self, scene: &Scene, camera: &Camera, view: &wgpu::TextureView, width: u32, height: u32) -> Result<FrameStats> {
         self.upload(scene)?;
         self.ensure_targets(width, height);
         let gpu_frame = match self.culling {
@@ -664,11 +771,11 @@ impl Renderer {
             }
             Culling::Gpu => {
                 if self.cull.is_none() {
-                    return Err(Error::Render(format!("GPU culling forced but {} lacks compute shaders or indirect draws", self.adapter_info.name)));
+                    return Err(RenderError::GpuCullingUnavailable(format!("{} lacks compute shaders or indirect draws", self.adapter_info.name)).into());
                 }
                 match self.prepare_gpu_cull(scene, camera, width, height)? {
                     Some(f) => Some(f),
-                    None => return Err(Error::Render(format!("GPU culling forced but {} instances exceed the adapter's storage buffer limits", scene.instances.len()))),
+                    None => return Err(RenderError::GpuCullingUnavailable(format!("{} instances exceed the adapter's storage buffer limits", scene.instances.len())).into()),
                 }
             }
         };
@@ -696,16 +803,8 @@ impl Renderer {
             self.encode_cull(&mut enc, f);
         }
         self.encode_shadow(&mut enc, &draws);
-        let tree_draws = self.encode_main(&mut enc, &draws);
-        let (targets, gpu) = match (&self.targets, &self.scene) {
-            (Some(t), Some(g)) => (t, g),
-            _ => return Err(Error::Render("internal: targets not created".into())),
-        };
-        enc.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo { texture: &targets.resolve, mip_level: 0, origin: wgpu::Origin3d::ZERO, aspect: wgpu::TextureAspect::All },
-            wgpu::TexelCopyBufferInfo { buffer: &targets.readback, layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(targets.padded_row), rows_per_image: Some(height) } },
-            wgpu::Extent3d { width, height, depth_or_array_layers: 1 },
-        );
+        let tree_draws = self.encode_main(&mut enc, &draws, view);
+        let Some(gpu) = &self.scene else { return Err(RenderError::Internal("uploaded scene").into()) };
         let cull_rb = match (&draws, &self.cull) {
             (FrameDraws::Gpu(f), Some(GpuCull { args: Some((args, _)), readback: Some((rb, _)), .. })) => {
                 enc.copy_buffer_to_buffer(args, 0, rb, 0, f.args_bytes);
@@ -714,41 +813,27 @@ impl Renderer {
             _ => None,
         };
         let sub = self.queue.submit(Some(enc.finish()));
-        let slice = targets.readback.slice(..);
         let (tx, rx) = std::sync::mpsc::channel();
-        let tx2 = tx.clone();
-        slice.map_async(wgpu::MapMode::Read, move |r| {
-            let _ = tx.send(r);
-        });
         let args_bytes = if let FrameDraws::Gpu(f) = &draws { f.args_bytes } else { 0 };
         if let Some(rb) = cull_rb {
             rb.slice(..args_bytes).map_async(wgpu::MapMode::Read, move |r| {
-                let _ = tx2.send(r);
+                let _ = tx.send(r);
             });
         } else {
-            drop(tx2);
+            drop(tx);
         }
-        self.device.poll(wgpu::PollType::Wait { submission_index: Some(sub), timeout: None }).map_err(|e| Error::Render(format!("device poll failed: {e}")))?;
-        for _ in 0..1 + cull_rb.is_some() as usize {
-            rx.recv().map_err(|e| Error::Render(format!("readback channel: {e}")))?.map_err(|e| Error::Render(format!("readback map failed: {e}")))?;
+        if cull_rb.is_some() {
+            // the GPU path's statistics are read back from the culling pass
+            self.device.poll(wgpu::PollType::Wait { submission_index: Some(sub), timeout: None }).map_err(|e| RenderError::Readback { stage: "poll", message: e.to_string() })?;
+            rx.recv().map_err(|e| RenderError::Readback { stage: "channel", message: e.to_string() })?.map_err(|e| RenderError::Readback { stage: "map", message: e.to_string() })?;
         }
-        let mut img = image::RgbaImage::new(width, height);
-        {
-            let view = slice.get_mapped_range().map_err(|e| Error::Render(format!("readback range: {e}")))?;
-            let row = (width * 4) as usize;
-            for (y, out) in img.chunks_mut(row).enumerate() {
-                let s = y * targets.padded_row as usize;
-                out.copy_from_slice(&view[s..s + row]);
-            }
-        }
-        targets.readback.unmap();
-        let mut per_level = [0usize; 4];
+        let mut per_level = [0usize; LOD_LEVELS];
         let mut lod_scale = 1.0f32;
         let (mut canopy_px, mut canopy_trees) = (0.0f32, 0usize);
         let (tree_tris, culled, invalid, drawn) = match &draws {
             FrameDraws::Cpu(b) => {
                 for (i, n) in b.per_level.iter().enumerate() {
-                    per_level[i.min(3)] += n;
+                    per_level[i.min(LOD_LEVELS - 1)] += n;
                 }
                 lod_scale = b.lod_scale;
                 canopy_px = b.canopy_px;
@@ -759,14 +844,14 @@ impl Renderer {
                 let mut tris = 0u64;
                 if let Some(rb) = cull_rb {
                     {
-                        let view = rb.slice(..args_bytes).get_mapped_range().map_err(|e| Error::Render(format!("culling readback range: {e}")))?;
+                        let view = rb.slice(..args_bytes).get_mapped_range().map_err(|e| RenderError::Readback { stage: "culling range", message: e.to_string() })?;
                         let words: &[u32] = bytemuck::cast_slice(&view);
                         for (k, sl) in f.slots.iter().enumerate() {
                             let n = words[k * 10 + 1] as u64;
                             tris += n * level_triangles(&scene.prototypes[sl.prototype], sl.level);
                         }
                         let off = f.slots.len() * 10;
-                        for l in 0..4 {
+                        for l in 0..LOD_LEVELS {
                             per_level[l] = words[off + l] as usize;
                         }
                         let tail = words.len().saturating_sub(3);
@@ -795,7 +880,7 @@ impl Renderer {
             canopy_px,
             canopy_trees,
         };
-        Ok(img)
+        Ok(self.last)
     }
 
     /// Uploads the instance records and culling parameters for the compute pass. `None` when
@@ -848,9 +933,9 @@ impl Renderer {
         if proto_words.is_empty() {
             proto_words.push([0; 4]);
         }
-        // indirect args: per slot bark and leaves records, then 4 per-level counters
-        let mut args: Vec<u32> = Vec::with_capacity(slots.len() * 10 + 4);
-        let Some(gs) = &self.scene else { return Err(Error::Render("internal: scene not uploaded".into())) };
+        // indirect args: per slot bark and leaves records, then LOD_LEVELS per-level counters
+        let mut args: Vec<u32> = Vec::with_capacity(slots.len() * 10 + LOD_LEVELS);
+        let Some(gs) = &self.scene else { return Err(RenderError::Internal("uploaded scene").into()) };
         for s in &slots {
             let lv = gs.protos.get(s.prototype).and_then(|p| p.get(s.level));
             for r in lv.map(|l| [l.bark.clone(), l.leaves.clone()]).unwrap_or([0..0, 0..0]) {
@@ -858,7 +943,7 @@ impl Renderer {
             }
         }
         // per-level counters, size histogram, budget factor (1.0 unless `choose` runs)
-        args.extend(std::iter::repeat_n(0u32, 4 + n_protos * super::lod::SIZE_BINS));
+        args.extend(std::iter::repeat_n(0u32, LOD_LEVELS + n_protos * super::lod::SIZE_BINS));
         // the `choose` results (or their defaults when it does not run): switch-size factor,
         // far-field switch; then the count of canopy-only trees
         args.push(1.0f32.to_bits());
@@ -1096,11 +1181,11 @@ impl Renderer {
         self.draw_trees(&mut pass, draws);
     }
 
-    fn encode_main(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws) -> u32 {
+    fn encode_main(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws, view: &wgpu::TextureView) -> u32 {
         let (Some(t), Some(gpu)) = (&self.targets, &self.scene) else { return 0 };
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("main"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment { view: &t.msaa, depth_slice: None, resolve_target: Some(&t.resolve_view), ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard } })],
+            color_attachments: &[Some(wgpu::RenderPassColorAttachment { view: &t.msaa, depth_slice: None, resolve_target: Some(view), ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard } })],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: &t.depth, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }), stencil_ops: None }),
             timestamp_writes: None,
             occlusion_query_set: None,

@@ -6,6 +6,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::camera::Camera;
+use crate::mesh::LOD_LEVELS;
 use super::canopy::crown_albedo;
 use super::lod::{budget_scale, canopy_threshold, canopy_weight, drawn_levels, select_lod_scaled, size_bin, Frustum, LodParams, LodPick, BILLBOARD_TRIANGLES, SIZE_BINS};
 use super::scene::{Prototype, Scene, TreeInstance};
@@ -112,8 +113,8 @@ pub fn level_triangles(proto: &Prototype, level: usize) -> u64 {
 }
 
 /// Triangles of each drawn level of `proto` (0 beyond its levels), saturated to `u32`.
-pub fn level_costs(proto: &Prototype) -> [u32; 4] {
-    let mut c = [0u32; 4];
+pub fn level_costs(proto: &Prototype) -> [u32; LOD_LEVELS] {
+    let mut c = [0u32; LOD_LEVELS];
     for (l, v) in c.iter_mut().enumerate().take(drawn_levels(proto.lods.levels.len())) {
         *v = level_triangles(proto, l).min(u32::MAX as u64) as u32;
     }
@@ -178,7 +179,7 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
             }
         }
     }
-    let costs: Vec<[u32; 4]> = scene.prototypes.iter().map(level_costs).collect();
+    let costs: Vec<[u32; LOD_LEVELS]> = scene.prototypes.iter().map(level_costs).collect();
     let canopy_px = canopy_threshold(&hist, &costs, &levels, params);
     let floor = if canopy_px > 0.0 { canopy_px / (1.0 + params.band.max(0.0)) } else { 0.0 };
     let scale = if params.max_triangles > 0 {

@@ -2,7 +2,7 @@
 
 use glam::{Mat4, Vec3, Vec4};
 
-use crate::mesh::{LodChain, TreeMesh, TriMesh};
+use crate::mesh::{LodChain, TreeMesh, TriMesh, LOD_LEVELS};
 
 /// Parameters of the level choice.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -10,7 +10,7 @@ pub struct LodParams {
     /// Screen heights (px) at which the level switches from `i` to `i + 1`, decreasing:
     /// level 0 when the tree is at least `switch_px[0]` pixels tall, level 1 down to
     /// `switch_px[1]`, and so on; the coarsest level below the last entry.
-    pub switch_px: [f32; 3],
+    pub switch_px: [f32; LOD_LEVELS - 1],
     /// Relative half-width of the cross-fade band around each switch (0.25 = from
     /// `switch/1.25` to `switch·1.25`), in which both levels are drawn with complementary
     /// dither masks.
@@ -85,7 +85,7 @@ pub fn select_lod_scaled(size_px: f32, scale: f32, params: &LodParams, n_levels:
 /// levels. Summed in `f32` in this order, exactly as `shaders/cull.wgsl` (`choose`) does, so
 /// both culling paths pick the same factor. Bins whose centre is below `floor_px` (trees
 /// that go wholly to the canopy layer, see [`canopy_threshold`]) cost nothing.
-pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams, floor_px: f32) -> f32 {
+pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; LOD_LEVELS]], n_levels: &[usize], params: &LodParams, floor_px: f32) -> f32 {
     if params.max_triangles == 0 {
         return 1.0;
     }
@@ -105,7 +105,7 @@ pub fn budget_scale(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[u
 /// switch sizes scaled by `s` (cost = triangles of the picked level plus those of the next
 /// level inside a cross-fade band). Summed in `f32` in this order, as `shaders/cull.wgsl`
 /// (`hist_cost`) does.
-pub fn hist_cost(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams, s: f32, floor_px: f32) -> f32 {
+pub fn hist_cost(hist: &[[u32; SIZE_BINS]], costs: &[[u32; LOD_LEVELS]], n_levels: &[usize], params: &LodParams, s: f32, floor_px: f32) -> f32 {
     let p0 = LodParams { min_px: 0.0, ..*params };
     let mut total = 0.0f32;
     for (p, h) in hist.iter().enumerate() {
@@ -130,7 +130,7 @@ pub fn hist_cost(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usiz
 /// `params.max_geometry_triangles` ([`hist_cost`] with unscaled switch sizes; no budget when
 /// 0); 0 when the canopy layer is off (`canopy_px ≤ 0`). `hist`, `costs`, `n_levels` as in
 /// [`budget_scale`]; computed in this order by `shaders/cull.wgsl` (`choose`) too.
-pub fn canopy_threshold(hist: &[[u32; SIZE_BINS]], costs: &[[u32; 4]], n_levels: &[usize], params: &LodParams) -> f32 {
+pub fn canopy_threshold(hist: &[[u32; SIZE_BINS]], costs: &[[u32; LOD_LEVELS]], n_levels: &[usize], params: &LodParams) -> f32 {
     if !(params.canopy_px > 0.0) {
         return 0.0;
     }
@@ -168,11 +168,12 @@ pub fn canopy_weight(size_px: f32, canopy: f32, band: f32) -> f32 {
 }
 
 /// Number of levels the renderer draws for a species chain of `chain_len` levels: the chain's
-/// first `min(chain_len, 3)` meshes (full, reduced, hull) followed by the renderer's own
-/// billboard impostor ([`Silhouette`]), which replaces a chain's 4th (impostor) level and any
-/// further ones. Always ≥ 1 (an empty chain is drawn as a billboard only).
+/// first `min(chain_len, LOD_LEVELS − 1)` meshes (full, reduced, hull) followed by the
+/// renderer's own billboard impostor ([`Silhouette`]), which replaces a chain's last
+/// ([`LOD_LEVELS`]th, impostor) level and any further ones. Always ≥ 1 (an empty chain is drawn
+/// as a billboard only), at most [`LOD_LEVELS`].
 pub fn drawn_levels(chain_len: usize) -> usize {
-    chain_len.min(3) + 1
+    chain_len.min(LOD_LEVELS - 1) + 1
 }
 
 /// Triangles of the billboard impostor level: one vertical quad turned towards the viewer
@@ -528,6 +529,15 @@ pub fn placeholder_chain(conifer: bool) -> LodChain {
 mod tests {
     use super::*;
     use crate::render::camera::Camera;
+
+    #[test]
+    fn the_cull_shader_declares_the_same_number_of_levels() {
+        let wgsl = include_str!("shaders/cull.wgsl");
+        let want = format!("const LOD_LEVELS: u32 = {LOD_LEVELS}u;");
+        assert!(wgsl.lines().any(|l| l.trim() == want), "shaders/cull.wgsl must declare `{want}` (crate::mesh::LOD_LEVELS)");
+        assert_eq!(LodParams::default().switch_px.len() + 1, LOD_LEVELS);
+        assert_eq!(drawn_levels(LOD_LEVELS + 3), LOD_LEVELS);
+    }
 
     #[test]
     fn placeholder_chains_have_four_decreasing_levels_of_unit_height() {

@@ -1,8 +1,7 @@
-//! Timelapses: interpolation between snapshots (growth, recruitment, death), frame writers
-//! (PNG per frame, animated GIF with `image`, MP4 through `ffmpeg` when it is on `PATH`).
+//! Timelapses: interpolation between snapshots (growth, recruitment, death) and frame
+//! sequences. Writing the frames (PNG, GIF, MP4) is [`crate::output::pictures`]'s.
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::scene::TreeInstance;
@@ -81,90 +80,6 @@ impl<F: FnMut(Progress)> ProgressMeter<F> {
     }
 }
 
-/// Writes `frames` as `dir/frame_00000.png`, ... (atomically, one file each) and returns the
-/// paths.
-///
-/// # Errors
-/// [`Error::Io`] when the folder cannot be created or a file written; [`Error::Render`] when PNG
-/// encoding fails.
-pub fn write_png_frames(dir: &Path, frames: &[image::RgbaImage]) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    let mut paths = Vec::new();
-    for (i, f) in frames.iter().enumerate() {
-        let p = dir.join(format!("frame_{i:05}.png"));
-        write_png(&p, f)?;
-        paths.push(p);
-    }
-    Ok(paths)
-}
-
-/// Writes one image as PNG atomically.
-///
-/// # Errors
-/// [`Error::Io`] / [`Error::Render`] as for [`write_png_frames`].
-pub fn write_png(path: &Path, img: &image::RgbaImage) -> Result<()> {
-    let mut bytes = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| Error::Render(format!("{}: PNG encoding failed: {e}", path.display())))?;
-    crate::output::write_atomic(path, &bytes)
-}
-
-/// Writes `frames` as an endlessly looping animated GIF at `fps` frames per second (1..=100).
-///
-/// # Errors
-/// [`Error::Invalid`] for no frames, frames of different sizes or a bad `fps`;
-/// [`Error::Render`] when encoding fails; [`Error::Io`] when writing fails.
-pub fn write_gif(path: &Path, frames: &[image::RgbaImage], fps: f32) -> Result<()> {
-    let inv = |field: &str, value: String, expected: &str| Error::Invalid { context: path.display().to_string(), field: field.into(), value, expected: expected.into() };
-    if frames.is_empty() {
-        return Err(inv("frames", "0".into(), "at least one frame"));
-    }
-    if !(fps >= 1.0 && fps <= 100.0) {
-        return Err(inv("fps", fps.to_string(), "1..=100 frames per second"));
-    }
-    let (w, h) = frames[0].dimensions();
-    if let Some(f) = frames.iter().find(|f| f.dimensions() != (w, h)) {
-        return Err(inv("frame size", format!("{:?}", f.dimensions()), &format!("all frames {w}x{h}")));
-    }
-    let mut bytes = Vec::new();
-    {
-        let mut enc = image::codecs::gif::GifEncoder::new_with_speed(&mut bytes, 10);
-        enc.set_repeat(image::codecs::gif::Repeat::Infinite).map_err(|e| Error::Render(format!("{}: GIF: {e}", path.display())))?;
-        let delay = image::Delay::from_numer_denom_ms((1000.0 / fps).round() as u32, 1);
-        for f in frames {
-            enc.encode_frame(image::Frame::from_parts(f.clone(), 0, 0, delay)).map_err(|e| Error::Render(format!("{}: GIF encoding failed: {e}", path.display())))?;
-        }
-    }
-    crate::output::write_atomic(path, &bytes)
-}
-
-/// Path of `ffmpeg` when it is found on `PATH`.
-pub fn find_ffmpeg() -> Option<PathBuf> {
-    let path = std::env::var_os("PATH")?;
-    std::env::split_paths(&path).map(|d| d.join("ffmpeg")).find(|p| p.is_file())
-}
-
-/// Encodes the PNG frames `dir/frame_%05d.png` into an H.264 MP4 at `fps` with `ffmpeg` when it
-/// is installed. Returns `Ok(false)` (and writes nothing) when `ffmpeg` is not on `PATH`.
-///
-/// # Errors
-/// [`Error::Render`] when `ffmpeg` runs but fails.
-pub fn write_mp4(dir: &Path, fps: f32, out: &Path) -> Result<bool> {
-    let Some(ff) = find_ffmpeg() else { return Ok(false) };
-    let status = std::process::Command::new(ff)
-        .args(["-y", "-loglevel", "error", "-framerate"])
-        .arg(format!("{fps}"))
-        .arg("-i")
-        .arg(dir.join("frame_%05d.png"))
-        .args(["-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", "-c:v", "libx264"])
-        .arg(out)
-        .status()
-        .map_err(|e| Error::Render(format!("cannot run ffmpeg: {e}")))?;
-    if !status.success() {
-        return Err(Error::Render(format!("ffmpeg failed ({status}) writing {}", out.display())));
-    }
-    Ok(true)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -200,21 +115,7 @@ mod tests {
     }
 
     #[test]
-    fn gif_and_png_frames_are_written_and_decodable() {
-        let dir = tempfile::tempdir().unwrap();
-        let frames: Vec<image::RgbaImage> = (0..3).map(|i| image::RgbaImage::from_pixel(8, 6, image::Rgba([i * 80, 100, 50, 255]))).collect();
-        let gif = dir.path().join("a.gif");
-        write_gif(&gif, &frames, 12.0).unwrap();
-        let dec = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(std::fs::File::open(&gif).unwrap())).unwrap();
-        use image::AnimationDecoder;
-        let got = dec.into_frames().collect_frames().unwrap();
-        assert_eq!(got.len(), 3);
-        assert_eq!(got[0].buffer().dimensions(), (8, 6));
-        let paths = write_png_frames(&dir.path().join("frames"), &frames).unwrap();
-        assert_eq!(paths.len(), 3);
-        assert_eq!(image::open(&paths[2]).unwrap().to_rgba8().get_pixel(0, 0).0, [160, 100, 50, 255]);
-        assert!(write_gif(&gif, &[], 12.0).is_err());
-        assert!(write_gif(&gif, &frames, 0.0).is_err());
+    fn progress_meter_counts_frames() {
         let mut seen = Vec::new();
         let mut m = ProgressMeter::new(2, |p: Progress| seen.push(p.done));
         m.tick();

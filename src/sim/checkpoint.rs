@@ -5,12 +5,62 @@
 
 use super::stats::StandRow;
 use super::cohorts::{Cohorts, RegenLedger, N_REGEN_CAUSES};
-use super::trees::TreeStore;
+use super::trees::{TreeStore, N_CAUSES};
 use super::world::World;
 use crate::error::{Error, Result};
 use std::path::Path;
 
-const MAGIC: &[u8; 8] = b"SYLVACK3";
+/// File signature: 7 bytes, then `V` and the little-endian `u32` [`LAYOUT_VERSION`]. Files
+/// from before the version field (`SYLVACK1`…`SYLVACK3`) have a digit in place of the `V`.
+const MAGIC: &[u8; 7] = b"SYLVACK";
+
+/// Hand-kept part of the layout version: bump it whenever the order, kind or number of the
+/// stored fields changes (the cause counts below are folded in by themselves).
+const LAYOUT_BASE: u32 = 4;
+
+/// Version of the checkpoint layout, written in the header and required on reading:
+/// `LAYOUT_BASE · 65536 + N_CAUSES · 256 + N_REGEN_CAUSES`, so that adding a cause of death
+/// of trees ([`crate::sim::trees::N_CAUSES`]) or of the regeneration layer
+/// ([`N_REGEN_CAUSES`]), which changes the size of the stored counts, changes the version.
+pub const LAYOUT_VERSION: u32 = LAYOUT_BASE << 16 | (N_CAUSES as u32) << 8 | N_REGEN_CAUSES as u32;
+
+/// The header of this layout: [`MAGIC`], `V`, [`LAYOUT_VERSION`] (12 bytes).
+fn header() -> Vec<u8> {
+    let mut h = MAGIC.to_vec();
+    h.push(b'V');
+    h.extend_from_slice(&LAYOUT_VERSION.to_le_bytes());
+    h
+}
+
+/// Describes a layout version for messages: `4.4.2 (base, tree death causes, regeneration causes)`.
+fn describe(v: u32) -> String {
+    format!("{}.{}.{} (layout, tree death causes, regeneration death causes)", v >> 16, (v >> 8) & 0xff, v & 0xff)
+}
+
+/// Checks the header of `bytes`; returns the offset of the body.
+///
+/// Errors: [`Error::Format`] naming `path`: not a checkpoint; a checkpoint of an older Sylva
+/// (before layout versions) or of another layout version, saying which and what to do.
+fn check_header(bytes: &[u8], path: &Path) -> Result<usize> {
+    let again = "start the run again without --resume (or with the Sylva version that wrote it)";
+    if bytes.len() < 8 || &bytes[..7] != MAGIC {
+        return Err(Error::format(path, "not a Sylva checkpoint (no SYLVACK signature)"));
+    }
+    match bytes[7] {
+        b'V' => {
+            let v = bytes.get(8..12).map(|s| u32::from_le_bytes([s[0], s[1], s[2], s[3]])).ok_or_else(|| Error::format(path, "checkpoint header truncated (no layout version)"))?;
+            if v != LAYOUT_VERSION {
+                return Err(Error::format(path, format!("checkpoint layout version {} differs from this build's {}: {again}", describe(v), describe(LAYOUT_VERSION))));
+            }
+            Ok(12)
+        }
+        d if d.is_ascii_digit() => Err(Error::format(
+            path,
+            format!("checkpoint from an older Sylva (layout SYLVACK{}, before layout versions; this build reads version {}): {again}", d as char, describe(LAYOUT_VERSION)),
+        )),
+        _ => Err(Error::format(path, "not a Sylva checkpoint (unknown header after SYLVACK)")),
+    }
+}
 
 struct W(Vec<u8>);
 impl W {
@@ -76,7 +126,7 @@ impl R<'_> {
 
 /// Serialises the world's evolving state and the stand table.
 pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
-    let mut o = W(MAGIC.to_vec());
+    let mut o = W(header());
     o.u64(w.stand.year as u64);
     o.u64(w.site.seed);
     let t = &w.stand.trees;
@@ -145,10 +195,8 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
 /// Errors: [`Error::Format`] naming `path` when the bytes are not a checkpoint, are truncated, or
 /// belong to a different scenario (seed or species pool).
 pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>> {
-    if bytes.len() < 8 || &bytes[..8] != MAGIC {
-        return Err(Error::format(path, "not a Sylva checkpoint of this version (bad magic; checkpoints from before the regeneration layer of sapling cohorts must be re-run)"));
-    }
-    let mut r = R { b: bytes, p: 8, path };
+    let body = check_header(bytes, path)?;
+    let mut r = R { b: bytes, p: body, path };
     let year = r.u64()? as u32;
     let seed = r.u64()?;
     if seed != w.site.seed {

@@ -271,7 +271,7 @@ impl Scenario {
 
     /// The scenario as TOML text.
     pub fn to_toml_string(&self) -> Result<String> {
-        toml::to_string_pretty(self).map_err(|e| Error::Other(format!("scenario {}: cannot write TOML: {e}", self.name)))
+        toml::to_string_pretty(self).map_err(|e| Error::Serialize { what: format!("scenario {}", self.name), format: "TOML", message: e.to_string() })
     }
 
     /// Checks ranges; `ctx` names the file.

@@ -285,7 +285,7 @@ mod tests {
         assert_eq!(t.id, vec![0, 2, 4, 6, 8]);
         t.push(NewTree { species: 0, x: 1.0, y: 1.0, z: 0.0, age: 1.0, height: 1.0, dbh: 0.0, crown_radius: 0.3, suitability: 1.0 });
         assert_eq!(*t.id.last().unwrap(), 10);
-        let g = SpatialGrid::build(&t, (40.0, 10.0), 5.0);
+        let g = SpatialGrid::build(&t, &LightGrid::new((40.0, 10.0), 5.0));
         let mut out = vec![];
         g.within(&t, 0.0, 1.0, 2.0, &mut out);
         out.sort();

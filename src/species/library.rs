@@ -94,7 +94,7 @@ impl Problem {
 /// `Format` error listing all of them, one per line).
 pub fn problems_to_error(problems: &[Problem]) -> Error {
     match problems {
-        [] => Error::Other("no problems".into()),
+        [] => Error::Invalid { context: "species check".into(), field: "problems".into(), value: "none".into(), expected: "at least one problem to report".into() },
         [p] => p.to_error(),
         ps => Error::Format {
             path: ps[0].file.clone(),
@@ -266,7 +266,7 @@ fn walk(v: &toml::Value, prefix: &str, out: &mut Vec<(String, toml::Value)>) {
 
 /// All leaf fields of a species as (dotted path, value), in the serialiser's order.
 pub fn leaf_fields(s: &Species) -> Result<Vec<(String, toml::Value)>> {
-    let v = toml::Value::try_from(s).map_err(|e| Error::Other(format!("species `{}`: cannot serialise: {e}", s.id)))?;
+    let v = toml::Value::try_from(s).map_err(|e| Error::Serialize { what: format!("species `{}`", s.id), format: "TOML", message: e.to_string() })?;
     let mut out = Vec::new();
     walk(&v, "", &mut out);
     Ok(out)
@@ -349,7 +349,7 @@ impl Species {
     /// Serialises to TOML (without the comments of the original file); reading the result
     /// back gives an equal `Species`.
     pub fn to_toml_string(&self) -> Result<String> {
-        toml::to_string(self).map_err(|e| Error::Other(format!("species `{}`: cannot serialise: {e}", self.id)))
+        toml::to_string(self).map_err(|e| Error::Serialize { what: format!("species `{}`", self.id), format: "TOML", message: e.to_string() })
     }
 }
 

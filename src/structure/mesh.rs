@@ -9,7 +9,7 @@
 //! Bishop 1975 / Wang et al. 2008 to first order), so rings do not twist and the UV seam stays on
 //! one side of a branch.
 
-use crate::mesh::{LodChain, TreeMesh, TriMesh};
+use crate::mesh::{LodChain, TreeMesh, TriMesh, LOD_LEVELS};
 use crate::structure::skeleton::{Leaves, Skeleton};
 use glam::Vec3;
 use std::f32::consts::TAU;
@@ -411,5 +411,6 @@ pub fn full_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
 /// `TreeMesh::triangle_count`, decreasing along the chain for any tree with more than a few
 /// dozen nodes).
 pub fn lod_chain(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> LodChain {
-    LodChain { levels: vec![full_mesh(sk, leaves, o), reduced_mesh(sk, leaves, o), hull_mesh(sk, leaves, o), impostor_mesh(sk, leaves)] }
+    let levels: [TreeMesh; LOD_LEVELS] = [full_mesh(sk, leaves, o), reduced_mesh(sk, leaves, o), hull_mesh(sk, leaves, o), impostor_mesh(sk, leaves)];
+    LodChain { levels: levels.into() }
 }

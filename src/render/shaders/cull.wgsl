@@ -48,6 +48,9 @@ struct Proto {
 // canopy layer sums (render/canopy.rs): per texel coverage, r, g, b in units of 1/1024
 @group(0) @binding(5) var<storage, read_write> canopy: array<atomic<u32>>;
 
+// Levels of detail drawn per prototype: crate::mesh::LOD_LEVELS (checked by a test in render/lod.rs).
+const LOD_LEVELS: u32 = 4u;
+
 struct Pick {
     level: i32,
     blend: f32,
@@ -62,7 +65,7 @@ fn select_lod(size_px: f32, n_levels: u32) -> Pick {
         return r;
     }
     let b = 1.0 + max(cp.lod.w, 0.0);
-    for (var i = 0u; i < 3u; i = i + 1u) {
+    for (var i = 0u; i < LOD_LEVELS - 1u; i = i + 1u) {
         r.level = i32(i);
         if (i + 1u >= n_levels) {
             return r;
@@ -79,7 +82,7 @@ fn select_lod(size_px: f32, n_levels: u32) -> Pick {
             return r;
         }
     }
-    r.level = i32(min(3u, n_levels - 1u));
+    r.level = i32(min(LOD_LEVELS - 1u, n_levels - 1u));
     return r;
 }
 
@@ -100,7 +103,7 @@ fn append(slot: u32, inst: Inst) {
 }
 
 fn hist_off() -> u32 {
-    return cp.counts.w + 4u;
+    return cp.counts.w + LOD_LEVELS;
 }
 
 fn scale_word() -> u32 {
@@ -220,7 +223,7 @@ fn hist(@builtin(global_invocation_id) gid: vec3<u32>) {
 
 fn cost(p: u32, l: u32) -> u32 {
     let c = protos[u32(cp.misc.w + 0.5) + p];
-    let j = min(l, 3u);
+    let j = min(l, LOD_LEVELS - 1u);
     if (j == 0u) { return c.n_levels; }
     if (j == 1u) { return c.first_slot; }
     if (j == 2u) { return c.pad0; }
