@@ -74,7 +74,7 @@ impl TreeMesh {
 /// renderer draws (`render::lod::drawn_levels`: the first three meshes, then its own billboard).
 /// The culling shader `render/shaders/cull.wgsl` declares the same `const LOD_LEVELS` (checked
 /// by a test in `render::lod`) and packs one level per word of its 4-word records, so changing
-/// it means changing those records too (a compile-time assertion in `render::headless` says so).
+/// it means changing those records too (a compile-time assertion in `render::renderer` says so).
 pub const LOD_LEVELS: usize = 4;
 
 /// Levels of detail of one tree, finest first (DESIGN: full mesh, reduced skeleton with leaf

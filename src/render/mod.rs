@@ -1,11 +1,15 @@
-//! Rendering: the terrain and thousands of trees with levels of detail, headless into stills and
-//! timelapses (issue 6).
+//! Rendering: the terrain and thousands of trees with levels of detail, into any texture view
+//! (a window's surface, an offscreen texture) or headless into stills and timelapses (issue 6).
 //!
 //! The renderer never reads the simulation: callers fill the plain data of [`scene`]
 //! ([`scene::TerrainMesh`], [`scene::Prototype`], [`scene::TreeInstance`], [`scene::Sun`], ...)
-//! and hand it to [`headless::Renderer::render`] with a [`scene::Camera`]. It runs on any wgpu
-//! adapter, including Mesa's lavapipe software rasteriser that CI uses.
+//! and hand it with a [`scene::Camera`] to [`renderer::Renderer::render_to_view`] (a renderer
+//! made with [`renderer::Renderer::from_device`] on the caller's device) or to the headless
+//! [`headless`] layer's [`headless::Renderer::render`] (own adapter, texture and readback). It
+//! runs on any wgpu adapter, including Mesa's lavapipe software rasteriser that CI uses.
 //!
+//! - [`renderer`]: the renderer (pipelines, uploads, culling paths, the frame into a view);
+//!   [`headless`]: adapter, texture and readback on top of it.
 //! - [`terrain`]: builds a [`scene::TerrainMesh`] from a height grid or a TIN, coloured by
 //!   elevation/slope (land cover) or an overlay field.
 //! - [`lod`]: level-of-detail selection by projected size (with dithered cross-fade bands and a
@@ -24,13 +28,15 @@
 //! [`canopy`] layer: splatted per frame into a terrain-texel grid of colour and coverage that
 //! the terrain shader blends in, cross-faded with the billboards, so triangles per frame level
 //! off as the tree count grows.
-//! - [`timelapse`]: interpolation of snapshots, GIF/PNG/MP4 writers.
+//! - [`timelapse`]: interpolation of snapshots and frame sequences (the GIF/PNG/MP4 writers are
+//!   in [`crate::output::pictures`]).
 
 pub mod camera;
 pub mod canopy;
 pub mod headless;
 pub mod instanced;
 pub mod lod;
+pub mod renderer;
 pub mod scene;
 pub mod terrain;
 pub mod timelapse;
