@@ -86,3 +86,31 @@ fn from_device_draws_into_the_callers_view_in_its_format() {
         }
     }
 }
+
+#[test]
+fn terrain_and_prototypes_are_uploaded_once_and_again_only_when_they_change() {
+    let Some((device, queue)) = own_device() else { return };
+    let mut r = Renderer::from_device(device.clone(), queue.clone(), wgpu::TextureFormat::Rgba8UnormSrgb).unwrap();
+    r.culling = Culling::Cpu;
+    let size = wgpu::Extent3d { width: 64, height: 48, depth_or_array_layers: 1 };
+    let tex = device.create_texture(&wgpu::TextureDescriptor { label: None, size, mip_level_count: 1, sample_count: 1, dimension: wgpu::TextureDimension::D2, format: wgpu::TextureFormat::Rgba8UnormSrgb, usage: wgpu::TextureUsages::RENDER_ATTACHMENT, view_formats: &[] });
+    let view = tex.create_view(&Default::default());
+    let mut scene = demo_scene(50, 200.0, 3);
+    let cam = Camera::preset(CameraPreset::Oblique, &scene.terrain);
+    let mut frame = |scene: &sylva::render::scene::Scene| {
+        let s = r.render_to_view(scene, &cam, &view, 64, 48).unwrap();
+        (s.uploaded_terrain, s.uploaded_prototypes)
+    };
+    assert_eq!(frame(&scene), (true, true), "first frame uploads both");
+    assert_eq!(frame(&scene), (false, false));
+    scene.instances.truncate(10);
+    scene.instances[0].height *= 1.5;
+    assert_eq!(frame(&scene), (false, false), "new instances upload neither");
+    scene.terrain.colors[0] = [1.0, 0.0, 0.0];
+    assert_eq!(frame(&scene), (true, false), "a changed terrain uploads the terrain only");
+    let mesh = scene.prototypes[0].lods.levels.iter_mut().flat_map(|l| [&mut l.bark, &mut l.leaves]).find(|m| !m.positions.is_empty()).expect("a prototype mesh");
+    mesh.positions[0][2] += 0.1;
+    assert_eq!(frame(&scene), (false, true), "changed prototypes upload the prototypes only");
+    scene.sea_level = Some(1.0);
+    assert_eq!(frame(&scene), (true, false), "the sea level belongs to the terrain part");
+}

@@ -57,8 +57,9 @@ impl Renderer {
 
     /// Renders `scene` seen by `camera` into a `width` × `height` image (sRGB RGBA).
     ///
-    /// GPU copies of the terrain and prototypes are cached between calls while they stay the
-    /// same (content fingerprint), so a timelapse re-uploads only instances.
+    /// GPU copies of the terrain and of the prototypes are kept between calls and each is
+    /// uploaded again only when its content changes ([`FrameStats::uploaded_terrain`],
+    /// [`FrameStats::uploaded_prototypes`]), so a timelapse uploads only instances.
     ///
     /// # Errors
     /// [`Error::Invalid`] for a zero or too large size (limit: the adapter's 2-D texture size)

@@ -174,19 +174,37 @@ struct GpuLevel {
     leaves: std::ops::Range<u32>,
 }
 
+/// The scene's static data on the GPU, in two parts uploaded separately: the terrain (with the
+/// water plane and the canopy grid over it) and the prototypes (meshes and silhouettes); each
+/// part is uploaded again only when its content fingerprint changes.
 struct GpuScene {
-    fingerprint: u64,
+    /// Content fingerprint of the terrain and sea level.
+    terrain_fp: u64,
+    /// Content fingerprint of the prototypes.
+    protos_fp: u64,
     terrain_vb: Option<wgpu::Buffer>,
     terrain_ib: Option<wgpu::Buffer>,
     terrain_count: u32,
     water_vb: Option<wgpu::Buffer>,
     /// Drawn levels per prototype (chain meshes, then the billboard).
     protos: Vec<Vec<GpuLevel>>,
+    /// Silhouettes of the prototypes (storage buffer of `SilRaw`).
+    sil_buf: wgpu::Buffer,
     /// Canopy layer: grid and its per-frame sums (`[u32; 4]` per texel).
     canopy_grid: super::canopy::CanopyGrid,
     canopy_buf: wgpu::Buffer,
     bind_main: wgpu::BindGroup,
     bind_shadow: wgpu::BindGroup,
+}
+
+/// The terrain part of [`GpuScene`].
+struct GpuTerrain {
+    vb: Option<wgpu::Buffer>,
+    ib: Option<wgpu::Buffer>,
+    count: u32,
+    water_vb: Option<wgpu::Buffer>,
+    canopy_grid: super::canopy::CanopyGrid,
+    canopy_buf: wgpu::Buffer,
 }
 
 /// The billboard impostor level of a prototype with outline `s`: a vertical quad (material 2,
@@ -259,6 +277,10 @@ pub struct FrameStats {
     pub canopy_px: f32,
     /// Trees drawn only in the canopy layer (no triangles).
     pub canopy_trees: usize,
+    /// The terrain (and water plane) was uploaded for this frame (its content changed).
+    pub uploaded_terrain: bool,
+    /// The prototypes were uploaded for this frame (their content changed).
+    pub uploaded_prototypes: bool,
 }
 
 /// The renderer, bound to one wgpu device: draws a [`Scene`] into any texture view of its target
@@ -495,7 +517,7 @@ impl Renderer {
         self.last
     }
 
-    fn fingerprint(scene: &Scene) -> u64 {
+    fn terrain_fingerprint(scene: &Scene) -> u64 {
         let mut h = std::collections::hash_map::DefaultHasher::new();
         let t = &scene.terrain;
         h.write_usize(t.positions.len());
@@ -505,6 +527,12 @@ impl Renderer {
         h.write(bytemuck::cast_slice(&t.colors));
         h.write(bytemuck::cast_slice(&t.indices));
         h.write_u32(scene.sea_level.map(f32::to_bits).unwrap_or(1));
+        h.finish()
+    }
+
+    fn prototypes_fingerprint(scene: &Scene) -> u64 {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        h.write_usize(scene.prototypes.len());
         for p in &scene.prototypes {
             for l in &p.lods.levels {
                 for m in [&l.bark, &l.leaves] {
@@ -518,11 +546,58 @@ impl Renderer {
         h.finish()
     }
 
-    fn upload(&mut self, scene: &Scene) -> Result<()> {
-        let fp = Self::fingerprint(scene);
-        if self.scene.as_ref().map(|s| s.fingerprint) == Some(fp) {
-            return Ok(());
+    /// Uploads what changed of the scene's static data: the terrain part when its fingerprint
+    /// differs from the uploaded one, the prototypes when theirs does, nothing when neither does.
+    fn upload(&mut self, scene: &Scene) -> Result<(bool, bool)> {
+        let (tfp, pfp) = (Self::terrain_fingerprint(scene), Self::prototypes_fingerprint(scene));
+        let old = self.scene.take();
+        if old.as_ref().is_some_and(|g| g.terrain_fp == tfp && g.protos_fp == pfp) {
+            self.scene = old;
+            return Ok((false, false));
         }
+        let (mut terrain, mut protos) = (None, None);
+        if let Some(g) = old {
+            if g.terrain_fp == tfp {
+                terrain = Some(GpuTerrain { vb: g.terrain_vb, ib: g.terrain_ib, count: g.terrain_count, water_vb: g.water_vb, canopy_grid: g.canopy_grid, canopy_buf: g.canopy_buf });
+            }
+            if g.protos_fp == pfp {
+                protos = Some((g.protos, g.sil_buf));
+            }
+        }
+        let uploaded = (terrain.is_none(), protos.is_none());
+        let terrain = match terrain {
+            Some(t) => t,
+            None => self.upload_terrain(scene)?,
+        };
+        let (protos, sil_buf) = match protos {
+            Some(p) => p,
+            None => self.upload_prototypes(scene)?,
+        };
+        let d = &self.device;
+        let bind_main = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("main"),
+            layout: &self.layout_main,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.globals.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&self.shadow_view) },
+                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
+                wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 4, resource: terrain.canopy_buf.as_entire_binding() },
+            ],
+        });
+        let bind_shadow = d.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("shadow"),
+            layout: &self.layout_shadow,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.shadow_globals.as_entire_binding() }, wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() }],
+        });
+        let GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: terrain_count, water_vb, canopy_grid, canopy_buf } = terrain;
+        self.scene = Some(GpuScene { terrain_fp: tfp, protos_fp: pfp, terrain_vb, terrain_ib, terrain_count, water_vb, protos, sil_buf, canopy_grid, canopy_buf, bind_main, bind_shadow });
+        Ok(uploaded)
+    }
+
+    /// The terrain part: vertex and index buffers, the water plane, the canopy grid over the
+    /// terrain's bounds and its buffer.
+    fn upload_terrain(&self, scene: &Scene) -> Result<GpuTerrain> {
         scene.terrain.validate()?;
         let d = &self.device;
         let t = &scene.terrain;
@@ -541,6 +616,23 @@ impl Renderer {
             let v = [c(lo[0], lo[1]), c(hi[0], lo[1]), c(hi[0], hi[1]), c(lo[0], lo[1]), c(hi[0], hi[1]), c(lo[0], hi[1])];
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("water"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX })
         });
+        let (lo, hi) = t.bounds();
+        let canopy_grid = super::canopy::CanopyGrid::for_bounds(lo, hi);
+        let canopy_buf = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("canopy"),
+            size: (canopy_grid.len() as u64 * 16).max(256),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Ok(GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: t.indices.len() as u32, water_vb, canopy_grid, canopy_buf })
+    }
+
+    /// The prototypes part: one vertex and index buffer per drawn level (chain meshes, then the
+    /// billboard) and the silhouettes' storage buffer.
+    ///
+    /// Errors: [`Error::Invalid`] naming the prototype and level of an inconsistent mesh.
+    fn upload_prototypes(&self, scene: &Scene) -> Result<(Vec<Vec<GpuLevel>>, wgpu::Buffer)> {
+        let d = &self.device;
         let sils: Vec<Silhouette> = scene
             .prototypes
             .iter()
@@ -599,32 +691,7 @@ impl Renderer {
             sil_raw.push(<SilRaw as bytemuck::Zeroable>::zeroed());
         }
         let sil_buf = d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("silhouettes"), contents: bytemuck::cast_slice(&sil_raw), usage: wgpu::BufferUsages::STORAGE });
-        let (lo, hi) = t.bounds();
-        let canopy_grid = super::canopy::CanopyGrid::for_bounds(lo, hi);
-        let canopy_buf = d.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("canopy"),
-            size: (canopy_grid.len() as u64 * 16).max(256),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let bind_main = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("main"),
-            layout: &self.layout_main,
-            entries: &[
-                wgpu::BindGroupEntry { binding: 0, resource: self.globals.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::TextureView(&self.shadow_view) },
-                wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
-                wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() },
-                wgpu::BindGroupEntry { binding: 4, resource: canopy_buf.as_entire_binding() },
-            ],
-        });
-        let bind_shadow = d.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("shadow"),
-            layout: &self.layout_shadow,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.shadow_globals.as_entire_binding() }, wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() }],
-        });
-        self.scene = Some(GpuScene { fingerprint: fp, terrain_vb, terrain_ib, terrain_count: t.indices.len() as u32, water_vb, protos, canopy_grid, canopy_buf, bind_main, bind_shadow });
-        Ok(())
+        Ok((protos, sil_buf))
     }
 
     fn ensure_targets(&mut self, w: u32, h: u32) {
@@ -667,7 +734,7 @@ impl Renderer {
     }
 
     fn render_inner(&mut self, scene: &Scene, camera: &Camera, view: &wgpu::TextureView, width: u32, height: u32) -> Result<FrameStats> {
-        self.upload(scene)?;
+        let (uploaded_terrain, uploaded_prototypes) = self.upload(scene)?;
         self.ensure_targets(width, height);
         let gpu_frame = match self.culling {
             Culling::Cpu => None,
@@ -788,6 +855,8 @@ impl Renderer {
             lod_scale,
             canopy_px,
             canopy_trees,
+            uploaded_terrain,
+            uploaded_prototypes,
         };
         Ok(self.last)
     }
