@@ -1,24 +1,33 @@
 //! Stand density: Reineke's stand density index, the species' maximum-density lines and the
 //! local relative density that the growth phase turns into crowding.
 //!
-//! Model (documented choice): every tree with a DBH contributes `(D / 25 cm)^(−b)` stems of
-//! 25 cm equivalent to the stand density index of its neighbourhood (additive SDI, Stage 1968,
-//! Shaw 2000, Western J. Appl. For. 15:40–42), relative to its own species' maximum
-//! `SDI_max` (species file, `life.density`). The relative density of a neighbourhood is
-//! `RD = Σ_i (D_i / 25)^(−b_i) / SDI_max,i / A` (A in ha): 1 on the species' self-thinning line,
-//! and in mixtures the sum of the species' shares of their own lines (Sterba & Monserud 1993;
-//! Ducey & Knapp 2010), so a mixed stand stays between its species' lines. The neighbourhood is
+//! Model (documented choice): the relative density of a neighbourhood of area A (ha) holding
+//! `N_s` stems with a DBH of species s and quadratic mean DBH `Dq` (all species) is
+//! `RD = Σ_s N_s (Dq / 25 cm)^(−b_s) / SDI_max,s / A`, with each species' slope b_s and maximum
+//! SDI_max,s (species file, `life.density`): Reineke's (1933) relative density, 1 on the
+//! species' self-thinning line; in mixtures the sum of the species' shares of their own lines
+//! (Sterba & Monserud 1993; Ducey & Knapp 2010, For. Ecol. Manage. 260:1613–1622), evaluated at
+//! the mixture's Dq, so a mixed stand stays between its species' lines. N and Dq count the stems
+//! of at least [`MIN_DBH_CM`]; thinner stems add `(D / 25)^(−b) / SDI_max` each (additive SDI,
+//! Stage 1968; Shaw 2000, Western J. Appl. For. 15:40–42), so that a sapling layer does not
+//! drag the neighbourhood's Dq down. The neighbourhood is
 //! the 3 × 3 block of [`CROWD_CELL_M`] cells around the tree's cell (30 m × 30 m, about 0.09 ha:
 //! the scale of a few dominant crowns), clipped to the world.
 
 use super::scenario::Scenario;
 use super::step::{step_year, YearReport};
+use super::phases::growth::open_crown_radius;
 use super::world::World;
 use crate::error::Result;
 use crate::species::{Indicator, Species, SpeciesLibrary};
 
 /// Crowding cell size (m); the neighbourhood is 3 × 3 cells.
 pub const CROWD_CELL_M: f64 = 10.0;
+
+/// DBH threshold (cm) of the stems whose number and quadratic mean DBH make the relative
+/// density (7 cm: German yield tables, Pretzsch & Biber 2005); thinner stems add their
+/// additive share `(D / 25)^(−b) / SDI_max` (Stage 1968).
+pub const MIN_DBH_CM: f32 = 7.0;
 
 /// Reineke's reference diameter (cm).
 pub const D_REF_CM: f64 = 25.0;
@@ -48,6 +57,9 @@ pub struct Crowding {
     pub rd: Vec<f32>,
     /// Quadratic mean DBH (cm) of the stems with a DBH in the neighbourhood (0 if none).
     pub dq_cm: Vec<f32>,
+    /// Crown competition factor of the neighbourhood: open-grown crown projection area of all
+    /// trees per ground area (Krajicek, Brinkman & Gingrich 1961, Forest Science 7:35–42), 0–∞.
+    pub ccf: Vec<f32>,
 }
 
 /// Per-tree relative density and neighbourhood quadratic mean DBH (see the module docs).
@@ -58,58 +70,93 @@ pub fn crowding(w: &World) -> Crowding {
     let (ex, ey) = w.extent;
     let cols = ((ex / CROWD_CELL_M).ceil() as usize).max(1);
     let rows = ((ey / CROWD_CELL_M).ceil() as usize).max(1);
-    let cell_of = |x: f32, y: f32| -> (usize, usize) {
+    let ncell = cols * rows;
+    let cell_of = |x: f32, y: f32| -> usize {
         let c = ((x as f64 / CROWD_CELL_M) as isize).clamp(0, cols as isize - 1) as usize;
         let r = ((y as f64 / CROWD_CELL_M) as isize).clamp(0, rows as isize - 1) as usize;
-        (c, r)
+        r * cols + c
     };
-    // per species: 1 / SDI_max and the exponent −b
-    let inv: Vec<f64> = w.lib.species.iter().map(|s| 1.0 / (s.life.density.sdi_max as f64).max(1.0)).collect();
-    let ex_b: Vec<f64> = w.lib.species.iter().map(|s| -(s.life.density.reineke_slope as f64)).collect();
-    let mut rd = vec![0f64; cols * rows];
-    let mut d2 = vec![0f64; cols * rows];
-    let mut n = vec![0u32; cols * rows];
+    // pool index of each library species (trees only ever belong to pool species)
+    let np = w.pool.len().max(1);
+    let pidx: Vec<usize> = (0..w.lib.species.len()).map(|s| w.pool_index(s as u16).unwrap_or(0)).collect();
+    // per pool species: 1 / SDI_max and the exponent −b
+    let inv: Vec<f64> = (0..np).map(|p| w.pool.get(p).map(|&s| 1.0 / (w.lib.species[s as usize].life.density.sdi_max as f64).max(1.0)).unwrap_or(0.0)).collect();
+    let ex_b: Vec<f64> = (0..np).map(|p| w.pool.get(p).map(|&s| -(w.lib.species[s as usize].life.density.reineke_slope as f64)).unwrap_or(1.605)).collect();
+    let mut n_sp = vec![0u32; ncell * np];
+    let mut d2 = vec![0f64; ncell];
+    let mut n = vec![0u32; ncell];
+    let (mut d2_all, mut n_all, mut small) = (vec![0f64; ncell], vec![0u32; ncell], vec![0f64; ncell]);
+    let mut crown = vec![0f64; ncell];
+    let cells: Vec<u32> = (0..t.len()).map(|i| cell_of(t.x[i], t.y[i]) as u32).collect();
     for i in 0..t.len() {
-        let d = t.dbh[i] as f64;
-        if d <= 0.0 {
-            continue;
-        }
-        let (c, r) = cell_of(t.x[i], t.y[i]);
-        let k = r * cols + c;
+        let k = cells[i] as usize;
         let s = t.species[i] as usize;
-        rd[k] += (d / D_REF_CM).powf(ex_b[s]) * inv[s];
-        d2[k] += d * d;
-        n[k] += 1;
+        let ro = open_crown_radius(&w.lib.species[s], t.height[i], t.dbh[i]) as f64;
+        crown[k] += std::f64::consts::PI * ro * ro;
+        let d = t.dbh[i] as f64;
+        if d >= MIN_DBH_CM as f64 {
+            n_sp[k * np + pidx[s]] += 1;
+            d2[k] += d * d;
+            n[k] += 1;
+        } else if d > 0.0 {
+            let p = pidx[s];
+            small[k] += (d / D_REF_CM).powf(ex_b[p]) * inv[p];
+        }
+        if d > 0.0 {
+            d2_all[k] += d * d;
+            n_all[k] += 1;
+        }
     }
-    // cell areas (ha), clipped to the extent
+    // cell sides (m), clipped to the extent
     let side = |i: usize, e: f64| ((i as f64 + 1.0) * CROWD_CELL_M).min(e) - i as f64 * CROWD_CELL_M;
-    let mut out = Crowding { rd: Vec::with_capacity(t.len()), dq_cm: Vec::with_capacity(t.len()) };
-    // neighbourhood sums per cell (3 × 3), computed once per cell
-    let mut nb_rd = vec![0f32; cols * rows];
-    let mut nb_dq = vec![0f32; cols * rows];
+    // neighbourhood (3 × 3 cells) values, once per cell
+    let mut nb_rd = vec![0f32; ncell];
+    let mut nb_dq = vec![0f32; ncell];
+    let mut nb_ccf = vec![0f32; ncell];
+    let mut ns = vec![0u32; np];
     for r in 0..rows {
         for c in 0..cols {
-            let (mut a, mut s_rd, mut s_d2, mut s_n) = (0f64, 0f64, 0f64, 0u32);
+            let (mut a, mut s_d2, mut s_n, mut s_cr) = (0f64, 0f64, 0u32, 0f64);
+            let (mut s_d2a, mut s_na, mut s_small) = (0f64, 0u32, 0f64);
+            ns.iter_mut().for_each(|v| *v = 0);
             for rr in r.saturating_sub(1)..(r + 2).min(rows) {
                 for cc in c.saturating_sub(1)..(c + 2).min(cols) {
                     let k = rr * cols + cc;
-                    a += side(cc, ex) * side(rr, ey) / 10_000.0;
-                    s_rd += rd[k];
+                    a += side(cc, ex) * side(rr, ey);
                     s_d2 += d2[k];
                     s_n += n[k];
+                    s_cr += crown[k];
+                    s_d2a += d2_all[k];
+                    s_na += n_all[k];
+                    s_small += small[k];
+                    for p in 0..np {
+                        ns[p] += n_sp[k * np + p];
+                    }
                 }
             }
             let k = r * cols + c;
-            nb_rd[k] = if a > 0.0 { (s_rd / a) as f32 } else { 0.0 };
-            nb_dq[k] = if s_n > 0 { (s_d2 / s_n as f64).sqrt() as f32 } else { 0.0 };
+            if a <= 0.0 {
+                continue;
+            }
+            let a_ha = a / 10_000.0;
+            let mut rd = s_small;
+            if s_n > 0 {
+                let dq = (s_d2 / s_n as f64).sqrt();
+                let x = dq / D_REF_CM;
+                rd += (0..np).filter(|&p| ns[p] > 0).map(|p| ns[p] as f64 * x.powf(ex_b[p]) * inv[p]).sum::<f64>();
+                nb_dq[k] = dq as f32;
+            } else if s_na > 0 {
+                nb_dq[k] = (s_d2a / s_na as f64).sqrt() as f32;
+            }
+            nb_rd[k] = (rd / a_ha) as f32;
+            nb_ccf[k] = (s_cr / a) as f32;
         }
     }
-    for i in 0..t.len() {
-        let (c, r) = cell_of(t.x[i], t.y[i]);
-        out.rd.push(nb_rd[r * cols + c]);
-        out.dq_cm.push(nb_dq[r * cols + c]);
+    Crowding {
+        rd: cells.iter().map(|&k| nb_rd[k as usize]).collect(),
+        dq_cm: cells.iter().map(|&k| nb_dq[k as usize]).collect(),
+        ccf: cells.iter().map(|&k| nb_ccf[k as usize]).collect(),
     }
-    out
 }
 
 /// Stand density of a world, per hectare of unmasked area, for the stand tables and the tests.
