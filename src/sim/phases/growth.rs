@@ -180,7 +180,7 @@ pub fn run(w: &mut World) {
             let lc = l.clamp(0.0, 1.0);
             let r = open_crown_radius(sp, h1, d1) * (0.5 + 0.5 * lc) * crown_space(crowd.ccf[i]);
             let cb = t.crown_base[i].max(h1 * (1.0 - sp.life.allometry.crown_ratio * (0.4 + 0.6 * lc))).min(h1 * 0.95);
-            let v = 0.7 * t.vigour[i] + 0.3 * f * m;
+            let v = 0.5 * t.vigour[i] + 0.5 * f * m;
             Grown { h: h1, d: d1, r, cb, v }
         })
         .collect();
