@@ -89,16 +89,20 @@ pub const GROWTH_SIGMA: f64 = 0.15;
 /// Crowding modifier (0–1) of diameter increment for a tree of relative size `s = D / Dq`
 /// (DBH over the neighbourhood's quadratic mean DBH) at local relative density `rd`
 /// ([`crate::sim::density`]): `m = clamp(1 − P · φ(s), 0, 1)` with the crowding pressure
-/// `P = (max(0, rd − RD_ONSET) / (1 − RD_ONSET))²` (0 below the onset, 1 on the maximum-density
-/// line) and the size share `φ(s) = clamp((S_DOMINANT + 0.2 − s) / 1.0, PHI_DOMINANT, 1)`:
-/// suppressed trees (`s` ≲ 0.5) stop growing in diameter on the line, mean trees keep half their
-/// increment and dominants three quarters. Model choice (ESTIMATE), in the spirit of the
+/// `P = x³ (1 + 4 max(0, x − 1))`, `x = max(0, rd − RD_ONSET) / (1 − RD_ONSET)` (0 below the
+/// onset, 1 on the maximum-density line, steep beyond it) and the size share
+/// `φ(s) = clamp(S_DOMINANT + 0.2 − s, PHI_DOMINANT, 1)`: on the line suppressed trees
+/// (`s` ≲ 0.5) stop growing in diameter, mean trees keep half their increment and dominants 70 %;
+/// above it growth stops but for a floor `0.1 · clamp((s − 0.8) / 0.5, 0, 1)` that keeps the
+/// dominants alive while the suppressed die. Model choice (ESTIMATE), in the spirit of the
 /// relative-density growth modifiers of distance-independent models (e.g. Sterba's PROGNAUS,
 /// Monserud & Sterba 1996, For. Ecol. Manage. 80:57–80).
 pub fn crowding_modifier(rd: f32, s: f32) -> f32 {
-    let p = ((rd - RD_ONSET).max(0.0) / (1.0 - RD_ONSET)).powi(3);
+    let x = (rd - RD_ONSET).max(0.0) / (1.0 - RD_ONSET);
+    let p = x.powi(3) * (1.0 + 4.0 * (x - 1.0).max(0.0));
     let phi = (S_DOMINANT + 0.2 - s).clamp(PHI_DOMINANT, 1.0);
-    (1.0 - p * phi).clamp(0.0, 1.0)
+    let floor = 0.1 * ((s - 0.8) / 0.5).clamp(0.0, 1.0);
+    (1.0 - p * phi).clamp(floor, 1.0)
 }
 
 /// Share (0.5–1) of the potential height increment that crowding leaves a tree of relative size
