@@ -157,3 +157,23 @@ fn shade_tolerant_stands_denser_than_light_demanding() {
     let hi = demanding.iter().map(|t| t.1).fold(0.0, f64::max);
     assert!(lo > hi, "tolerant {tolerant:?} not denser than light-demanding {demanding:?}");
 }
+
+#[test]
+fn relative_density_is_reineke_on_a_regular_stand() {
+    // fixture beech (SDI_max 1000, slope −1.605) planted at 2 m (2,500/ha) on 1 ha; every stem
+    // set to 25 cm: away from the edges RD = N / SDI_max = 2.5, at 40 cm 2.5 · 1.6^1.605
+    let (_, mut w) = common::world(&common::ScenarioToml::new("rd", 1, 1).species(&["beech"]).uniform(5, 5, 20.0, 200.0).planted("beech", 2.0, 30.0).build());
+    let n = w.trees.len() as f64 / w.area_ha;
+    for d in [25.0f32, 40.0] {
+        w.trees.dbh.iter_mut().for_each(|x| *x = d);
+        let c = sylva::sim::density::crowding(&w);
+        let inner: Vec<f32> = (0..w.trees.len()).filter(|&i| (15.0..85.0).contains(&w.trees.x[i]) && (15.0..85.0).contains(&w.trees.y[i])).map(|i| c.rd[i]).collect();
+        let want = n * (d as f64 / 25.0).powf(1.605) / 1000.0;
+        let mean = inner.iter().map(|v| *v as f64).sum::<f64>() / inner.len() as f64;
+        assert!((mean / want - 1.0).abs() < 0.03, "D {d}: RD {mean:.3} want {want:.3}");
+        assert!(inner.iter().all(|&v| (v as f64 / want - 1.0).abs() < 0.1));
+        assert!(c.dq_cm.iter().all(|&q| (q - d).abs() < 1e-3));
+        let sd = stand_density(&w, 7.0);
+        assert!((sd.rd - want).abs() < 1e-6 && (sd.dq_cm - d as f64).abs() < 1e-6);
+    }
+}

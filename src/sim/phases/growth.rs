@@ -155,7 +155,8 @@ struct Grown {
 /// allometry, `g` the tree's [`growth_factor`]), so crowded and suppressed trees stay thin.
 /// Crown radius: open-grown radius of the new DBH, shrunk by `0.5 + 0.5 L` in shade (crown
 /// plasticity); crown base rises to `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural
-/// pruning). Vigour memory `v ← 0.7 v + 0.3 f · m` feeds stress mortality, which thins crowded
+/// pruning). Vigour memory `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding is
+/// felt within a few years) feeds stress mortality, which thins crowded
 /// stands along the species' maximum-density line.
 pub fn run(w: &mut World) {
     let crowd = density::crowding(w);
@@ -221,6 +222,22 @@ mod tests {
             let want = (potential_height(&b, te + 1.0) - potential_height(&b, te)).max(0.0);
             assert!((potential_increment(&b, h) - want).abs() < 1e-3 + 1e-3 * want, "h {h}: {} vs {want}", potential_increment(&b, h));
         }
+        // crowding: none below the onset; on the line suppressed trees stop, the mean tree keeps
+        // half, dominants 70 %; far above it only the dominants' floor is left
+        assert_eq!(crowding_modifier(0.4, 0.5), 1.0);
+        assert!((crowding_modifier(1.0, 1.0) - 0.5).abs() < 1e-6);
+        assert_eq!(crowding_modifier(1.0, 0.4), 0.0);
+        assert!((crowding_modifier(1.0, 1.5) - 0.7).abs() < 1e-6);
+        assert!((crowding_modifier(1.3, 1.5) - 0.1).abs() < 1e-6);
+        assert!(crowding_modifier(0.8, 0.6) < crowding_modifier(0.8, 1.2));
+        assert_eq!(height_share(1.0, 0.3), 1.0);
+        assert_eq!(height_share(0.0, 0.3), 0.5);
+        assert_eq!(height_share(0.0, 1.3), 1.0);
+        assert_eq!(crown_space(0.8), 1.0);
+        assert!((crown_space(4.0) - 0.5).abs() < 1e-6);
+        let g: Vec<f32> = (0..2000).map(|id| growth_factor(1, id)).collect();
+        let mean_ln = g.iter().map(|v| (*v as f64).ln()).sum::<f64>() / g.len() as f64;
+        assert!(mean_ln.abs() < 0.02 && g.iter().all(|v| (0.6..=1.6).contains(v)), "{mean_ln}");
         assert!(light_response(1.0, 1.0) > 0.99 && light_response(0.1, 1.0) < 0.05 && light_response(0.1, 5.0) > 0.15);
     }
 }
