@@ -97,7 +97,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let text = format!(
             "# Pure-stand density of every shipped species\n\nUnmanaged pure stands planted at 1.5 m (4,444/ha) at age 3 on a flat {side} m × {side} m site at the species' niche optimum (latitude 51° N), stems ≥ 7 cm DBH. RD: relative density against the species' maximum-density line (`life.density`; 1 = on the line). Tables are moderately thinned (Wiedemann) or fully stocked (Assmann & Franz); where no table is shipped, the maximum-density line's N and BA at the simulated Dq are given.\n\nMade by `{cmd}`.\n\n{md}"
         );
-        std::fs::write(dir.join("table.md"), text)?;
+        let figs: String = ids.iter().map(|id| format!("\n### {id}\n\n![{id}]({id}.png)\n")).collect();
+        std::fs::write(dir.join("table.md"), format!("{text}\n## Figures\n\nLeft: ln N against ln Dq (stems ≥ 7 cm) with the species' maximum-density line; right: basal area over age, with the yield tables where shipped.\n{figs}"))?;
     }
     Ok(())
 }
