@@ -9,9 +9,11 @@
 
 pub mod checkpoint;
 pub mod cohorts;
+pub mod density;
 pub mod fixtures;
 pub mod light_grid;
 pub mod phases;
+pub mod pure_stand;
 pub mod scenario;
 pub mod stats;
 pub mod step;

@@ -2,6 +2,7 @@
 //! timers, the bench's per-phase output and ARCHITECTURE.md), what it does, the season it
 //! closes, and the function that hands it the parts of the [`World`] it reads and writes.
 
+use super::density;
 use super::phases::{growth, light, mortality, regen, reproduction};
 use super::scenario::Scenario;
 use super::stats::{stand_row, StandRow};
@@ -43,7 +44,7 @@ pub const N_PHASES: usize = 6;
 pub const PHASES: [Phase; N_PHASES] = [
     Phase { name: "light", summary: "canopy grid from the trees at the start of the year; light of every tree and of the ground", ends: None, run: run_light },
     Phase { name: "regeneration", summary: "spring: germination, growth, thinning and recruitment of the sapling cohorts", ends: Some(Season::Spring), run: run_regeneration },
-    Phase { name: "growth", summary: "summer: height, DBH and crown increments of every tree", ends: Some(Season::Summer), run: run_growth },
+    Phase { name: "growth", summary: "summer: crowding of every tree's neighbourhood; height, DBH and crown increments", ends: Some(Season::Summer), run: run_growth },
     Phase { name: "reproduction", summary: "autumn: seed production and dispersal onto the seed grids", ends: Some(Season::Autumn), run: run_reproduction },
     Phase { name: "mortality", summary: "winter: senescence, background, stress and wind deaths", ends: None, run: run_mortality },
     Phase { name: "stats", summary: "the year ends: stand-table row of the year", ends: Some(Season::Winter), run: run_stats },
@@ -83,7 +84,8 @@ fn run_regeneration(w: &mut World, report: &mut YearReport) {
 }
 
 fn run_growth(w: &mut World, _: &mut YearReport) {
-    growth::run(growth::Growth { lib: &w.site.lib, trees: &mut w.stand.trees });
+    let crowd = density::crowding(&w.site, &w.stand.trees);
+    growth::run(growth::Growth { seed: w.site.seed, lib: &w.site.lib, crowd: &crowd, trees: &mut w.stand.trees });
 }
 
 fn run_reproduction(w: &mut World, _: &mut YearReport) {
