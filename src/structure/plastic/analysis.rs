@@ -69,6 +69,10 @@ pub struct Analysis {
     pub w_s: Vec<f32>,
     /// Untropic direction d_o of each segment (inverse tropism, eqs. 8–9; unit; root: +z).
     pub d_o: Vec<Vec3>,
+    /// Residual p·h − (w_s·d_o + (1 − w_s)·t) of the inverse (zero where eq. 9 has a root; where
+    /// it has none the closest-point d_o does not reproduce h and the residual keeps the input
+    /// direction when nothing changes).
+    pub residual: Vec<Vec3>,
     /// Reference pruning factor ψ_ref: the 5th percentile of all ψ_s(t) (eq. 11).
     pub psi_ref: f32,
     /// Pruning threshold ψ_s,min = c_ψ·min(ψ_ref, min_t ψ_s(t)) per node (eq. 11; m of leaf
@@ -317,14 +321,19 @@ fn stage_clusters(sk: &Skeleton, season: &[u16], last: u16, lobes: &[Lobe], inte
 /// w_s² = p²|h|² − 2p(h·t_w) + |t_w|²; without a root, p from the first derivative (the point of
 /// the line closest to the sphere). w_s ≤ 10⁻⁶ returns h.
 pub fn inverse_tropism(h: Vec3, t: Vec3, w_s: f32) -> Vec3 {
+    inverse_parts(h, t, w_s).0
+}
+
+/// [`inverse_tropism`] with the line parameter p of eq. (8).
+fn inverse_parts(h: Vec3, t: Vec3, w_s: f32) -> (Vec3, f32) {
     if w_s <= 1e-6 {
-        return h;
+        return (h, 1.0);
     }
     let tw = (1.0 - w_s) * t;
     let (a, b, c) = (h.length_squared(), h.dot(tw), tw.length_squared() - w_s * w_s);
     let disc = b * b - a * c;
     let p = if disc >= 0.0 { (b + disc.sqrt()) / a } else { b / a };
-    ((p * h - tw) / w_s).normalize_or(h)
+    (((p * h - tw) / w_s).normalize_or(h), p)
 }
 
 /// Centre of stage cluster `c` given node positions `pos`: a lobe's centroid moved by the mean
@@ -443,14 +452,18 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
     let base = 1.0 - p.phototropism - p.gravitropism;
     let mut w_s = vec![1.0f32; n];
     let mut d_o = vec![Vec3::Z; n];
+    let mut residual = vec![Vec3::ZERO; n];
     for k in 1..n {
         let par = sk.nodes[k].parent.unwrap_or(0) as usize;
         let seg = pos[k] - pos[par];
         let l = seg.length();
         w_s[k] = base.powf(l / l_i);
         if l > 0.0 {
-            d_o[k] = inverse_tropism(seg / l, tropism(p, light_dir[k]), w_s[k]);
+            let (h, t) = (seg / l, tropism(p, light_dir[k]));
+            let (d, pp) = inverse_parts(h, t, w_s[k]);
+            d_o[k] = d;
+            residual[k] = pp * h - (w_s[k] * d + (1.0 - w_s[k]) * t);
         }
     }
-    Ok(Analysis { internode_m: l_i, growth_rate: rates, season, seasons: last, lobes, stages, stage_light, light_dir, w_s, d_o, psi_ref, psi_min, mask, sky })
+    Ok(Analysis { internode_m: l_i, growth_rate: rates, season, seasons: last, lobes, stages, stage_light, light_dir, w_s, d_o, residual, psi_ref, psi_min, mask, sky })
 }

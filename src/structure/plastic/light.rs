@@ -172,7 +172,9 @@ impl DirGrid {
         }
         let ext = (hi - lo).max(Vec2::splat(1e-3));
         let mean_r = rsum / occ.len() as f32;
-        let cell = (2.0 * mean_r).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
+        // about two cells per cluster: the grid's size follows the cluster count
+        let by_count = (ext.x * ext.y / (2.0 * occ.len() as f32)).sqrt();
+        let cell = (2.0 * mean_r).max(by_count).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
         let nx = ((ext.x / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
         let ny = ((ext.y / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
         let range = |p: Vec2, r: f32| {

@@ -5,7 +5,8 @@
 //! Per call of [`adapt_group`]:
 //! 1. **What changed.** For every input node the sky directions blocked by solids (obstacles,
 //!    terrain) and by the other trees' leaf clusters are computed as a bit signature; nodes whose
-//!    signature differs from the previous call, and their subtrees, are recomputed; the others
+//!    signature differs from the previous call, and the nodes below a node that moved, are
+//!    recomputed; the others
 //!    keep their state (section 5: "parts of the tree are transformed only when required"). A
 //!    changed sky (global light) recomputes everything.
 //! 2. **Levels.** All trees are processed together by season: with G the largest number of
@@ -202,7 +203,7 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
     } else {
         Vec::new()
     };
-    let dirty: Vec<Vec<bool>> = trees
+    let own: Vec<Vec<bool>> = trees
         .par_iter_mut()
         .enumerate()
         .map(|(i, t)| {
@@ -219,8 +220,7 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
                         }
                     }
                 }
-                let par = t.input.nodes[k].parent.map(|q| q as usize);
-                dirty[k] = all || sig != t.sig[k] || par.is_some_and(|q| dirty[q]);
+                dirty[k] = all || sig != t.sig[k];
                 t.sig[k] = sig;
             }
             // every node may be shed anew: light pruning is re-evaluated each call
@@ -232,15 +232,16 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
             dirty
         })
         .collect();
-    // 2.–4. levels
+    // 2.–4. levels; a node is recomputed when its own signature changed or its parent moved
+    let mut work: Vec<Work> = own.into_iter().map(|own| Work { moved: vec![false; own.len()], done: vec![false; own.len()], own }).collect();
     let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
     for g in 0..=g_max {
         let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
         let occ: Vec<Vec<Option<Occluder>>> = trees.par_iter().map(|t| stage_of(t).map(|s| stage_occluders(t, s, env)).unwrap_or_default()).collect();
         let vols = ShadowVolumes::new(sky, occ.iter().flatten().flatten().copied().collect());
-        trees.par_iter_mut().zip(&dirty).zip(&occ).for_each(|((t, dirty), occ)| {
+        trees.par_iter_mut().zip(&mut work).zip(&occ).for_each(|((t, w), occ)| {
             let Some(s) = stage_of(t) else { return };
-            level(t, s, dirty, occ, env, &solids, &vols);
+            level(t, s, w, occ, env, &solids, &vols);
         });
     }
     // 6. wood of the other trees, then the report
@@ -260,7 +261,8 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
         });
     }
     let mut rep = GroupReport { trees: Vec::with_capacity(trees.len()), recomputed_nodes: 0, levels: g_max + 1 };
-    for (t, d) in trees.iter_mut().zip(&dirty) {
+    for (t, w) in trees.iter_mut().zip(&work) {
+        let d = &w.done;
         let n = t.input.nodes.len();
         let mut r = PlasticReport { nodes_before: n, recomputed_nodes: d.iter().filter(|&&x| x).count(), ..Default::default() };
         for k in 0..n {
@@ -282,9 +284,17 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
     Ok(rep)
 }
 
+/// Per-tree flags of one [`adapt_group`] call: `own` (signature changed), `moved` (position or
+/// rotation changed by this call), `done` (recomputed).
+struct Work {
+    own: Vec<bool>,
+    moved: Vec<bool>,
+    done: Vec<bool>,
+}
+
 /// One level (stage `s`) of one tree: bend its recomputed season-`s` nodes, refresh the light on
 /// its recomputed stage clusters, prune by eq. (11).
-fn level(t: &mut PlasticTree, s: usize, dirty: &[bool], occ: &[Option<Occluder>], env: &Environment, solids: &Solids, vols: &ShadowVolumes) {
+fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &Solids, vols: &ShadowVolumes) {
     let n = t.input.nodes.len();
     let a = &t.analysis;
     let last = a.seasons as f32;
@@ -297,9 +307,11 @@ fn level(t: &mut PlasticTree, s: usize, dirty: &[bool], occ: &[Option<Occluder>]
         if t.fate[par] != Fate::Alive {
             t.fate[k] = t.fate[par];
         }
-        if !dirty[k] {
+        if !(w.own[k] || w.moved[par]) {
             continue;
         }
+        w.done[k] = true;
+        let (old_pos, old_rot) = (t.pos[k], t.rot[k]);
         let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
         let len = seg.length();
         let q_par = t.rot[par];
@@ -312,15 +324,18 @@ fn level(t: &mut PlasticTree, s: usize, dirty: &[bool], occ: &[Option<Occluder>]
             let t_old = tropism(&t.params, a.light_dir[k]);
             let kappa = 1.0 - (last - a.season[k] as f32) / (last + 1.0);
             let t_eff = (t_old + kappa * (tropism(&t.params, l_new) - t_old)).normalize_or(t_old);
-            let w = a.w_s[k];
+            let ws = a.w_s[k];
             let h_rigid = q_par * h;
-            let h_new = (w * (q_par * a.d_o[k]) + (1.0 - w) * t_eff).normalize_or(h_rigid);
+            // eq. (6) plus the analysis residual (zero where eq. 9 has a root): exact identity
+            // when nothing changed
+            let h_new = (ws * (q_par * a.d_o[k]) + (1.0 - ws) * t_eff + q_par * a.residual[k]).normalize_or(h_rigid);
             q = Quat::from_rotation_arc(h, h_new);
             bend = h_rigid.dot(h_new).clamp(-1.0, 1.0).acos();
         }
         t.rot[k] = q;
         t.bend[k] = bend;
         t.pos[k] = t.pos[par] + q * seg;
+        w.moved[k] = t.pos[k].distance_squared(old_pos) > 1e-12 || t.rot[k].dot(old_rot).abs() < 1.0 - 1e-9;
         if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
             t.fate[k] = Fate::Collision;
         }
@@ -329,8 +344,8 @@ fn level(t: &mut PlasticTree, s: usize, dirty: &[bool], occ: &[Option<Occluder>]
     let clusters = &a.stages[s];
     for (ci, c) in clusters.iter().enumerate() {
         let touched = match c.lobe {
-            Some(l) => a.lobes[l as usize].nodes.iter().any(|&k| dirty[k as usize]),
-            None => dirty[c.anchor as usize],
+            Some(l) => a.lobes[l as usize].nodes.iter().any(|&k| w.done[k as usize]),
+            None => w.done[c.anchor as usize],
         };
         if touched {
             t.light_cache[s][ci] = match occ[ci] {
