@@ -366,7 +366,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
 
 /// Paper Fig. 6 style before/after side view (looking along +y, x right, z up): left the input
 /// with the parts that will be pruned in blue, right the adapted tree with every segment red by
-/// its own bend angle (0° dark brown → ≥ 20° red); neighbours in green, obstacles grey.
+/// its own bend angle (0° dark brown → ≥ 5° red); neighbours in green, obstacles grey.
 fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obstacle], w: u32, h: u32) -> image::RgbImage {
     let mut img = image::RgbImage::from_pixel(2 * w, h, image::Rgb([235, 240, 245]));
     let mut lo = Vec3::splat(f32::MAX);
@@ -406,7 +406,7 @@ fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obst
             let col = if i > 0 { [60, 150, 60] } else if pruned { [40, 80, 230] } else { [90, 60, 40] };
             line(&mut img, px(0, sk.nodes[p].pos), px(0, sk.nodes[k].pos), col, 0, w);
             if !pruned {
-                let a = (t.bend_angles()[k].to_degrees() / 20.0).clamp(0.0, 1.0);
+                let a = (t.bend_angles()[k].to_degrees() / 5.0).clamp(0.0, 1.0);
                 let col = if i > 0 { [60, 150, 60] } else { [(90.0 + 165.0 * a) as u8, (60.0 * (1.0 - a)) as u8, (40.0 * (1.0 - a)) as u8] };
                 line(&mut img, px(w, t.positions()[p]), px(w, t.positions()[k]), col, w, 2 * w);
             }

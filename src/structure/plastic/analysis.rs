@@ -349,6 +349,19 @@ pub(crate) fn cluster_center(c: &StageCluster, lobes: &[Lobe], input: &Skeleton,
     }
 }
 
+/// The light of eq. (3) brought into 0–1 by the normalisation constant c: our reading takes c
+/// per stage as 1/max over the stage's clusters that `keep` (so ψ of eq. 10 measures how shaded
+/// a branch is relative to the best-lit part of the tree at that stage; a uniform loss of sky,
+/// e.g. a dull day, sheds nothing).
+pub(crate) fn normalised(light: &[f32], keep: impl Fn(usize) -> bool) -> Vec<f32> {
+    let m = light.iter().enumerate().filter(|(i, _)| keep(*i)).map(|(_, &l)| l).fold(0.0f32, f32::max);
+    if m > 0.0 {
+        light.iter().map(|l| l / m).collect()
+    } else {
+        light.to_vec()
+    }
+}
+
 /// True when a branch created in `season` is judged by eq. (11) at stage `t`: from its
 /// [`LOBE_SEASONS`]-th season on (our reading of "a branch that does not receive light for a
 /// longer period of time eventually dies off": a shoot has its first seasons to form a lobe).
@@ -426,7 +439,7 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
             light_dir[k as usize] = light_at(&sky, mask[k as usize], &vols, pos[k as usize]).1;
         }
         let li: Vec<f32> = centres.iter().map(|&c| light_at(&sky, solids.mask(&sky, c), &vols, c).0).collect();
-        psi_at_stage(sk, &season, t as u16, clusters, &li, &alive, &mut zeta, &mut len, &mut psi);
+        psi_at_stage(sk, &season, t as u16, clusters, &normalised(&li, |_| true), &alive, &mut zeta, &mut len, &mut psi);
         for k in 1..n {
             if psi[k].is_finite() && judged(season[k], t as u16) {
                 psi_min_t[k] = psi_min_t[k].min(psi[k]);

@@ -26,7 +26,8 @@
 //!    their estimated age", section 5.1). A node that enters an obstacle or the ground (closer
 //!    than `clearance_m`), or whose segment crosses one, is removed with its subtree.
 //! 4. **Pruning (section 5.1)** after every level: ψ_s(t) = ζ_s(t)/l_s(t) from the light on the
-//!    stage's clusters (eq. 10); a branch with ψ_s(t) < ψ_s,min (eq. 11) is shed with its
+//!    stage's clusters (eq. 10; light normalised per stage by its best-lit cluster, see
+//!    [`super::analysis::Analysis::stage_light`]); a branch with ψ_s(t) < ψ_s,min (eq. 11) is shed with its
 //!    children. Cluster light is evaluated at the moved cluster centres with the level's
 //!    shadow volumes (built before the level's bending).
 //! 5. **Leaf density (eq. 12)** ρ_l = ρ_l0·ρ(i)/ρ(i_l0) with ρ(i) = i (linear), reported per
@@ -38,7 +39,7 @@
 //! Approximation: a node whose signature did not change keeps its state even when moved
 //! clusters of recomputed subtrees now shade it differently.
 
-use super::analysis::{cluster_center, judged, psi_at_stage};
+use super::analysis::{cluster_center, judged, normalised, psi_at_stage};
 use super::light::{light_at, Occluder, ShadowVolumes, Solids};
 use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
 use crate::error::Result;
@@ -357,7 +358,8 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     // pruning (eqs. 10–11)
     let alive: Vec<bool> = t.fate.iter().map(|f| *f == Fate::Alive).collect();
     let (mut zeta, mut len, mut psi) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    psi_at_stage(&t.input, &a.season, s as u16, clusters, &t.light_cache[s], &alive, &mut zeta, &mut len, &mut psi);
+    let light = normalised(&t.light_cache[s], |ci| occ[ci].is_some());
+    psi_at_stage(&t.input, &a.season, s as u16, clusters, &light, &alive, &mut zeta, &mut len, &mut psi);
     for k in 1..n {
         let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
         if t.fate[par] != Fate::Alive {
