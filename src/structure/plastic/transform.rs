@@ -5,8 +5,9 @@
 //! Per call of [`adapt_group`]:
 //! 1. **What changed.** For every input node the sky directions blocked by solids (obstacles,
 //!    terrain) and by the other trees' leaf clusters are computed as a bit signature; nodes whose
-//!    signature differs from the previous call, and the nodes below a node that moved, are
-//!    recomputed; the others
+//!    signature differs from the previous call, and the children of a recomputed node that
+//!    turned by more than [`ROTATION_EPS`], are recomputed; the others (which only follow
+//!    their parent's displacement)
 //!    keep their state (section 5: "parts of the tree are transformed only when required"). A
 //!    changed sky (global light) recomputes everything.
 //! 2. **Levels.** All trees are processed together by season: with G the largest number of
@@ -234,7 +235,7 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
         })
         .collect();
     // 2.–4. levels; a node is recomputed when its own signature changed or its parent moved
-    let mut work: Vec<Work> = own.into_iter().map(|own| Work { moved: vec![false; own.len()], done: vec![false; own.len()], own }).collect();
+    let mut work: Vec<Work> = own.into_iter().map(|own| Work { moved: vec![false; own.len()], shifted: vec![false; own.len()], done: vec![false; own.len()], own }).collect();
     let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
     for g in 0..=g_max {
         let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
@@ -290,8 +291,13 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
 struct Work {
     own: Vec<bool>,
     moved: Vec<bool>,
+    shifted: Vec<bool>,
     done: Vec<bool>,
 }
+
+/// Turn (radians, 0.057°) below which a recomputed node's children are not recomputed: they keep
+/// their rotation and follow the node's displacement.
+pub const ROTATION_EPS: f32 = 1e-3;
 
 /// One level (stage `s`) of one tree: bend its recomputed season-`s` nodes, refresh the light on
 /// its recomputed stage clusters, prune by eq. (11).
@@ -309,6 +315,14 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             t.fate[k] = t.fate[par];
         }
         if !(w.own[k] || w.moved[par]) {
+            // not recomputed: keeps its rotation, follows its parent's (small) displacement
+            if w.shifted[par] {
+                t.pos[k] = t.pos[par] + t.rot[k] * (t.input.nodes[k].pos - t.input.nodes[par].pos);
+                w.shifted[k] = true;
+                if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
+                    t.fate[k] = Fate::Collision;
+                }
+            }
             continue;
         }
         w.done[k] = true;
@@ -336,7 +350,10 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         t.rot[k] = q;
         t.bend[k] = bend;
         t.pos[k] = t.pos[par] + q * seg;
-        w.moved[k] = t.pos[k].distance_squared(old_pos) > 1e-12 || t.rot[k].dot(old_rot).abs() < 1.0 - 1e-9;
+        w.shifted[k] = t.pos[k] != old_pos;
+        // the children are recomputed when this node turned by more than ROTATION_EPS
+        let turn = 2.0 * (t.rot[k] * old_rot.inverse()).xyz().length().min(1.0).asin();
+        w.moved[k] = turn > ROTATION_EPS;
         if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
             t.fate[k] = Fate::Collision;
         }
