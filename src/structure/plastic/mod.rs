@@ -13,12 +13,15 @@
 //!   obstacles cutting lobes (Fig. 4), tree–obstacle and tree–tree interaction, and incremental
 //!   recomputation of only the subtrees whose light or obstacles changed.
 //!
+//! - [`evaluation`]: section 7, Table 1 (sets O, G, T; edit distances; t-tests).
+//!
 //! Use: [`PlasticTree::analyse`] each tree once (in the environment it grew in, alone), place
 //! it ([`PlasticTree::translate`]), then call [`adapt_group`] with the trees that share a
 //! neighbourhood and the [`Environment`] whenever something changes; [`PlasticTree::skeleton`]
 //! gives the adapted skeleton. [`adapt`] does all of it for one tree.
 
 pub mod analysis;
+pub mod evaluation;
 pub mod light;
 pub mod transform;
 
