@@ -358,3 +358,20 @@ fn adapted_skeletons_are_valid_and_independent_of_threads() {
     assert_eq!(kept, one[0].nodes.iter().map(|n| n.radius).collect::<Vec<_>>());
     assert!(rep1.trees[0].nodes_after < ga.skeleton.len(), "{rep1:?}");
 }
+
+/// Global light (section 6): moving the tree from the zenith sky it was analysed in to 50° N,
+/// where the brightest sky point is the noon sun 40° above the southern horizon (−y), turns the
+/// crown south and recomputes every node.
+#[test]
+fn global_light_at_50_north_turns_the_crown_south() {
+    let sky = sylva::structure::plastic::Sky::from_latitude(50.0);
+    assert!((sky.brightest.z - 40f32.to_radians().sin()).abs() < 1e-6 && sky.brightest.y < 0.0 && sky.brightest.x == 0.0);
+    let sk = symmetric_tree();
+    let p = PlasticParams { phototropism: 0.45, gravitropism: 0.44, pruning_c_psi: 0.8, translucency_gamma_c0: 0.5 };
+    let mut t = PlasticTree::analyse(&sk, &p, &Environment::open(), Some(1.0)).unwrap();
+    let rep = t.adapt(&Environment::global(50.0, 0.0, 0.0, Vec3::ZERO, &[])).unwrap();
+    assert_eq!(rep.recomputed_nodes, sk.len() - 1);
+    let (c0, c1) = (tip_centroid(&sk), tip_centroid(&t.skeleton()));
+    assert!(c1.y < c0.y - 0.05, "tip centroid y {} -> {}", c0.y, c1.y);
+    assert!((c1.x - c0.x).abs() < 0.01, "no east–west drift: {} -> {}", c0.x, c1.x);
+}
