@@ -1,17 +1,27 @@
 //! Self-thinning: an even-aged single-species stand on a flat uniform site follows Reineke's
-//! line, log N against log QMD with slope in [−2.0, −1.2] (Reineke 1933: −1.605; Pretzsch &
-//! Biber 2005 for beech: −1.789).
+//! line. The fixture beech's maximum-density line has Reineke's slope −1.605 (Reineke 1933;
+//! `sim::fixtures::beech_like`); the least-squares slope of ln N on ln Dq (stems ≥ 7 cm) over the
+//! fully stocked phase — the years whose stand density index is at least 90 % of the run's
+//! maximum, as in Pretzsch & Biber's (2005) fully stocked plots — must lie within
+//! −1.605 ± 0.15 (Pretzsch & Biber's species slopes span −1.42 … −1.79).
 mod common;
+use sylva::sim::density::{sdi, REINEKE_SLOPE};
 
 #[test]
 fn reineke_slope() {
     let (sc, mut w) = common::world(&common::ScenarioToml::new("thinning", 120, 3).species(&["beech"]).uniform(5, 5, 20.0, 200.0).planted("beech", 1.2, 3.0).build());
     let rows = common::run(&sc, &mut w, 120);
-    // the self-thinning phase: from the year stress mortality sets in, trees ≥ 7 cm
     let first = rows.iter().position(|r| r.deaths[1] > 0 && r.qmd_7cm_cm > 0.0).expect("no self-thinning");
-    let pts: Vec<(f64, f64)> = rows[first..].iter().filter(|r| r.stems_7cm_ha > 0.0).map(|r| (r.qmd_7cm_cm.ln(), r.stems_7cm_ha.ln())).collect();
+    let sdis: Vec<f64> = rows.iter().map(|r| sdi(r.stems_7cm_ha, r.qmd_7cm_cm, REINEKE_SLOPE)).collect();
+    let top = sdis.iter().cloned().fold(0.0, f64::max);
+    let pts: Vec<(f64, f64)> = rows[first..]
+        .iter()
+        .zip(&sdis[first..])
+        .filter(|(r, s)| r.stems_7cm_ha > 0.0 && **s >= 0.9 * top)
+        .map(|(r, _)| (r.qmd_7cm_cm.ln(), r.stems_7cm_ha.ln()))
+        .collect();
     let s = common::slope(&pts);
-    eprintln!("self-thinning from year {} over {} years: slope {s:.3}", rows[first].year, pts.len());
-    assert!(pts.len() > 40);
-    assert!((-2.0..=-1.2).contains(&s), "slope {s:.3}");
+    eprintln!("self-thinning from year {} (max SDI {top:.0}), {} fully stocked years: slope {s:.3}", rows[first].year, pts.len());
+    assert!(pts.len() > 40, "only {} fully stocked years", pts.len());
+    assert!((s - REINEKE_SLOPE).abs() <= 0.15, "slope {s:.3}, want −1.605 ± 0.15");
 }

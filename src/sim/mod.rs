@@ -7,6 +7,7 @@
 //! phase); parallel work is merged in index order, so results do not depend on thread count.
 
 pub mod checkpoint;
+pub mod density;
 pub mod fixtures;
 pub mod phases;
 pub mod regen;

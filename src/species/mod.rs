@@ -156,6 +156,22 @@ pub struct LifeHistory {
     pub growth: Growth,
     /// Allometries.
     pub allometry: Allometry,
+    /// Maximum stand density (self-thinning line) of pure, fully stocked, unmanaged stands.
+    pub density: Density,
+}
+
+/// Maximum stand density: the species' self-thinning line `ln N = ln SDI_max + b·ln(Dq / 25 cm)`
+/// (Reineke 1933, metric form; per-species slopes Pretzsch & Biber 2005, Forest Science
+/// 51(4):304–320). The growth phase reads the local relative density
+/// `RD = Σ_i (D_i / 25 cm)^(−b_i) / SDI_max,i` per hectare (additive SDI, Stage 1968; Shaw
+/// 2000) to reduce diameter increment with crowding (see [`crate::sim::density`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Density {
+    /// Maximum stand density index SDI_max (stems/ha at a quadratic mean DBH of 25 cm), > 0.
+    pub sdi_max: f32,
+    /// Slope b of ln N on ln Dq along the maximum-density line (negative; Reineke: −1.605).
+    pub reineke_slope: f32,
 }
 
 /// Chapman–Richards potential height growth parameters.

@@ -246,6 +246,18 @@ pub const FIELDS: &[FieldSpec] = &[
         "Pipe-model exponent d in r^d = Σ r_j^d (2 = da Vinci/pipe model)",
     ),
     f(
+        "life.density.sdi_max",
+        "stems/ha",
+        rx(0.0, 5000.0),
+        "Maximum stand density index SDI_max: stems/ha of a fully stocked unmanaged pure stand at a quadratic mean DBH of 25 cm (Reineke 1933)",
+    ),
+    f(
+        "life.density.reineke_slope",
+        "",
+        r(-3.0, -1.0),
+        "Slope b of ln N on ln Dq along the maximum-density line (Reineke 1933: −1.605; Pretzsch & Biber 2005 per species)",
+    ),
+    f(
         "architecture.ecomod.strands",
         "",
         Kind::Int { min: 1, max: 10000 },

@@ -1,7 +1,9 @@
 //! Growth (summer): height, DBH and crown increments from the species' potential growth ×
 //! light response × site suitability, with the species' allometries.
 
+use super::super::density;
 use super::super::world::World;
+use crate::rng::{salt, Stream};
 use crate::species::Species;
 use rayon::prelude::*;
 
@@ -70,6 +72,71 @@ pub fn light_response(l: f32, st: f32) -> f32 {
     (w * tol + (1.0 - w) * intol).clamp(0.0, 1.0)
 }
 
+/// Relative density at which crowding starts to reduce diameter increment: 0.4 of the
+/// maximum-density line (Long 1985, Forestry Chronicle 61:23–27: 35 % of SDI_max is the lower
+/// limit of full site occupancy, 60 % the onset of self-thinning).
+pub const RD_ONSET: f32 = 0.4;
+/// Relative size `D / Dq` above which a tree takes only the dominants' share [`PHI_DOMINANT`] of
+/// the crowding (size-asymmetric competition: Schwinning & Weiner 1998, Oecologia 113:447–455).
+pub const S_DOMINANT: f32 = 1.3;
+/// Share of the crowding pressure that dominant trees bear (0–1).
+pub const PHI_DOMINANT: f32 = 0.3;
+/// Standard deviation of the log of a tree's persistent diameter-growth factor (micro-site and
+/// genotype: even-aged stands reach a DBH coefficient of variation of 20–30 % by age 30,
+/// Pretzsch 2009 ch. 8; a lognormal factor of σ = 0.15 starts that differentiation).
+pub const GROWTH_SIGMA: f64 = 0.15;
+
+/// Crowding modifier (0–1) of diameter increment for a tree of relative size `s = D / Dq`
+/// (DBH over the neighbourhood's quadratic mean DBH) at local relative density `rd`
+/// ([`crate::sim::density`]): `m = clamp(1 − P · φ(s), 0, 1)` with the crowding pressure
+/// `P = x³ (1 + 4 max(0, x − 1))`, `x = max(0, rd − RD_ONSET) / (1 − RD_ONSET)` (0 below the
+/// onset, 1 on the maximum-density line, steep beyond it) and the size share
+/// `φ(s) = clamp(S_DOMINANT + 0.2 − s, PHI_DOMINANT, 1)`: on the line suppressed trees
+/// (`s` ≲ 0.5) stop growing in diameter, mean trees keep half their increment and dominants 70 %;
+/// above it growth stops but for a floor `0.1 · clamp((s − 0.8) / 0.5, 0, 1)` that keeps the
+/// dominants alive while the suppressed die. Model choice (ESTIMATE), in the spirit of the
+/// relative-density growth modifiers of distance-independent models (e.g. Sterba's PROGNAUS,
+/// Monserud & Sterba 1996, For. Ecol. Manage. 80:57–80).
+pub fn crowding_modifier(rd: f32, s: f32) -> f32 {
+    let x = (rd - RD_ONSET).max(0.0) / (1.0 - RD_ONSET);
+    let p = x.powi(3) * (1.0 + 4.0 * (x - 1.0).max(0.0));
+    let phi = (S_DOMINANT + 0.2 - s).clamp(PHI_DOMINANT, 1.0);
+    let floor = 0.1 * ((s - 0.8) / 0.5).clamp(0.0, 1.0);
+    (1.0 - p * phi).clamp(floor, 1.0)
+}
+
+/// Share (0.5–1) of the potential height increment that crowding leaves a tree of relative size
+/// `s` with crowding modifier `m`: `1 − 0.5 (1 − m) · clamp((1.2 − s) / 0.7, 0, 1)`. Trees at
+/// or above 1.2 × Dq keep their full height growth (height growth of dominants depends little
+/// on density: Assmann 1970, The Principles of Forest Yield Study), suppressed trees (s ≤ 0.5)
+/// lose up to half of it and fall behind.
+pub fn height_share(m: f32, s: f32) -> f32 {
+    1.0 - 0.5 * (1.0 - m) * ((1.2 - s) / 0.7).clamp(0.0, 1.0)
+}
+
+/// Persistent diameter-growth factor of tree `id` (lognormal, median 1, σ = [`GROWTH_SIGMA`],
+/// clamped to [0.6, 1.6]); drawn from the tree's own stream, so it needs no stored state.
+pub fn growth_factor(seed: u64, id: u64) -> f32 {
+    let z = Stream::new(seed, id, 0, salt::GROWTH).normal();
+    (GROWTH_SIGMA * z).exp().clamp(0.6, 1.6) as f32
+}
+
+/// Crown competition factor at which the open-grown crowns of a neighbourhood just cover the
+/// ground (Krajicek et al. 1961: CCF = 100 %).
+pub const CCF_FULL: f32 = 1.0;
+
+/// Crown plasticity under crowding (0–1): where the open-grown crowns of the neighbourhood
+/// would cover more than [`CCF_FULL`] of the ground, every crown radius shrinks by
+/// `sqrt(CCF_FULL / CCF)`, so that crown projections share the canopy instead of overlapping
+/// several-fold (closed stands carry crowns narrower than open-grown ones: Pretzsch 2009 ch. 8).
+pub fn crown_space(ccf: f32) -> f32 {
+    if ccf > CCF_FULL {
+        (CCF_FULL / ccf).sqrt()
+    } else {
+        1.0
+    }
+}
+
 /// Updated state of one tree after a growing season.
 #[derive(Clone, Copy)]
 struct Grown {
@@ -80,15 +147,22 @@ struct Grown {
     v: f32,
 }
 
-/// Grows every tree by one season. Height: `ΔH = (H(t_eff + 1) − H(t_eff)) · f(L) · S` with
-/// `t_eff` the effective age of the current height, `f` [`light_response`], `S` site suitability.
-/// DBH: `ΔD = (D_open(H + ΔH_pot) − D_open(H)) · f(L) · S` (D_open from the height–DBH allometry),
-/// so shaded trees become slender. Crown radius: open-grown radius of the new DBH, shrunk by
-/// `0.5 + 0.5 L` in shade (crown plasticity); crown base rises to `H (1 − crown_ratio (0.4 + 0.6 L))`
-/// and never falls (natural pruning). Vigour memory `v ← 0.7 v + 0.3 f(L)·S` feeds stress mortality.
+/// Grows every tree by one season. With `f = f(L) · S` ([`light_response`] × site suitability)
+/// and `m` the crowding modifier ([`crowding_modifier`]) of the tree's neighbourhood:
+/// height `ΔH = (H(t_eff + 1) − H(t_eff)) · f · (0.5 + 0.5 m)` with `t_eff` the effective age of
+/// the current height (dominants' height growth depends little on density, suppressed trees fall
+/// behind); DBH `ΔD = (D_open(H + ΔH_pot) − D_open(H)) · f · m · g` (D_open from the height–DBH
+/// allometry, `g` the tree's [`growth_factor`]), so crowded and suppressed trees stay thin.
+/// Crown radius: open-grown radius of the new DBH, shrunk by `0.5 + 0.5 L` in shade (crown
+/// plasticity); crown base rises to `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural
+/// pruning). Vigour memory `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding is
+/// felt within a few years) feeds stress mortality, which thins crowded
+/// stands along the species' maximum-density line.
 pub fn run(w: &mut World) {
+    let crowd = density::crowding(w);
     let t = &w.trees;
     let lib = &w.lib;
+    let seed = w.seed;
     let out: Vec<Grown> = (0..t.len())
         .into_par_iter()
         .map(|i| {
@@ -96,19 +170,22 @@ pub fn run(w: &mut World) {
             let (h, d) = (t.height[i], t.dbh[i]);
             let l = t.light[i];
             let f = light_response(l, sp.life.shade_tolerance) * t.suitability[i];
+            let dq = crowd.dq_cm[i];
+            let s = if d > 0.0 && dq > 0.0 { d / dq } else { 1.0 };
+            let m = crowding_modifier(crowd.rd[i], s);
             let dh_pot = potential_increment(sp, h);
-            let h1 = (h + dh_pot * f).min(sp.life.max_height_m);
+            let h1 = (h + dh_pot * f * height_share(m, s)).min(sp.life.max_height_m);
             let hp = (h + dh_pot).min(sp.life.max_height_m * 0.999);
             let dd_pot = (open_dbh(sp, hp) - open_dbh(sp, h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
-            let mut d1 = d + dd_pot * f;
+            let mut d1 = d + dd_pot * f * m * growth_factor(seed, t.id[i]);
             if d1 == 0.0 && h1 > 1.3 {
                 d1 = open_dbh(sp, h1) * 0.5;
             }
             let d1 = d1.min(sp.life.max_dbh_cm);
             let lc = l.clamp(0.0, 1.0);
-            let r = open_crown_radius(sp, h1, d1) * (0.5 + 0.5 * lc);
+            let r = open_crown_radius(sp, h1, d1) * (0.5 + 0.5 * lc) * crown_space(crowd.ccf[i]);
             let cb = t.crown_base[i].max(h1 * (1.0 - sp.life.allometry.crown_ratio * (0.4 + 0.6 * lc))).min(h1 * 0.95);
-            let v = 0.7 * t.vigour[i] + 0.3 * f;
+            let v = 0.5 * t.vigour[i] + 0.5 * f * m;
             Grown { h: h1, d: d1, r, cb, v }
         })
         .collect();
@@ -145,6 +222,22 @@ mod tests {
             let want = (potential_height(&b, te + 1.0) - potential_height(&b, te)).max(0.0);
             assert!((potential_increment(&b, h) - want).abs() < 1e-3 + 1e-3 * want, "h {h}: {} vs {want}", potential_increment(&b, h));
         }
+        // crowding: none below the onset; on the line suppressed trees stop, the mean tree keeps
+        // half, dominants 70 %; far above it only the dominants' floor is left
+        assert_eq!(crowding_modifier(0.4, 0.5), 1.0);
+        assert!((crowding_modifier(1.0, 1.0) - 0.5).abs() < 1e-6);
+        assert_eq!(crowding_modifier(1.0, 0.4), 0.0);
+        assert!((crowding_modifier(1.0, 1.5) - 0.7).abs() < 1e-6);
+        assert!((crowding_modifier(1.3, 1.5) - 0.1).abs() < 1e-6);
+        assert!(crowding_modifier(0.8, 0.6) < crowding_modifier(0.8, 1.2));
+        assert_eq!(height_share(1.0, 0.3), 1.0);
+        assert_eq!(height_share(0.0, 0.3), 0.5);
+        assert_eq!(height_share(0.0, 1.3), 1.0);
+        assert_eq!(crown_space(0.8), 1.0);
+        assert!((crown_space(4.0) - 0.5).abs() < 1e-6);
+        let g: Vec<f32> = (0..2000).map(|id| growth_factor(1, id)).collect();
+        let mean_ln = g.iter().map(|v| (*v as f64).ln()).sum::<f64>() / g.len() as f64;
+        assert!(mean_ln.abs() < 0.02 && g.iter().all(|v| (0.6..=1.6).contains(v)), "{mean_ln}");
         assert!(light_response(1.0, 1.0) > 0.99 && light_response(0.1, 1.0) < 0.05 && light_response(0.1, 5.0) > 0.15);
     }
 }

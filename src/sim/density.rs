@@ -1,0 +1,286 @@
+//! Stand density: Reineke's stand density index, the species' maximum-density lines and the
+//! local relative density that the growth phase turns into crowding.
+//!
+//! Model (documented choice): the relative density of a neighbourhood of area A (ha) holding
+//! `N_s` stems with a DBH of species s and quadratic mean DBH `Dq` (all species) is
+//! `RD = Σ_s N_s (Dq / 25 cm)^(−b_s) / SDI_max,s / A`, with each species' slope b_s and maximum
+//! SDI_max,s (species file, `life.density`): Reineke's (1933) relative density, 1 on the
+//! species' self-thinning line; in mixtures the sum of the species' shares of their own lines
+//! (Sterba & Monserud 1993; Ducey & Knapp 2010, For. Ecol. Manage. 260:1613–1622), evaluated at
+//! the mixture's Dq, so a mixed stand stays between its species' lines. N and Dq count the stems
+//! of at least [`MIN_DBH_CM`]; thinner stems add `(D / 25)^(−b) / SDI_max` each (additive SDI,
+//! Stage 1968; Shaw 2000, Western J. Appl. For. 15:40–42), so that a sapling layer does not
+//! drag the neighbourhood's Dq down. The neighbourhood is
+//! the 3 × 3 block of [`CROWD_CELL_M`] cells around the tree's cell (30 m × 30 m, about 0.09 ha:
+//! the scale of a few dominant crowns), clipped to the world.
+
+use super::scenario::Scenario;
+use super::step::{step_year, YearReport};
+use super::phases::growth::open_crown_radius;
+use super::world::World;
+use crate::error::Result;
+use crate::species::{Indicator, Species, SpeciesLibrary};
+
+/// Crowding cell size (m); the neighbourhood is 3 × 3 cells.
+pub const CROWD_CELL_M: f64 = 10.0;
+
+/// DBH threshold (cm) of the stems whose number and quadratic mean DBH make the relative
+/// density (7 cm: German yield tables, Pretzsch & Biber 2005); thinner stems add their
+/// additive share `(D / 25)^(−b) / SDI_max` (Stage 1968).
+pub const MIN_DBH_CM: f32 = 7.0;
+
+/// Reineke's reference diameter (cm).
+pub const D_REF_CM: f64 = 25.0;
+
+/// Reineke's (1933) general slope of ln N on ln Dq.
+pub const REINEKE_SLOPE: f64 = -1.605;
+
+/// Stand density index (stems/ha of 25 cm equivalent) of `n_ha` stems/ha with quadratic mean
+/// DBH `dq_cm` (cm) on a line of slope `slope` (negative): `N · (Dq / 25)^(−slope)`
+/// (Reineke 1933, metric form). 0 for no stems.
+pub fn sdi(n_ha: f64, dq_cm: f64, slope: f64) -> f64 {
+    if n_ha <= 0.0 || dq_cm <= 0.0 {
+        return 0.0;
+    }
+    n_ha * (dq_cm / D_REF_CM).powf(-slope)
+}
+
+/// Stems/ha on the maximum-density line `ln N = ln SDI_max + slope · ln(Dq / 25)` at `dq_cm`.
+pub fn max_stems(sdi_max: f64, slope: f64, dq_cm: f64) -> f64 {
+    sdi_max * (dq_cm / D_REF_CM).powf(slope)
+}
+
+/// Local crowding of every tree, tree-index order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Crowding {
+    /// Relative density RD of the tree's neighbourhood (0 = open; 1 = on the self-thinning line).
+    pub rd: Vec<f32>,
+    /// Quadratic mean DBH (cm) of the stems with a DBH in the neighbourhood (0 if none).
+    pub dq_cm: Vec<f32>,
+    /// Crown competition factor of the neighbourhood: open-grown crown projection area of all
+    /// trees per ground area (Krajicek, Brinkman & Gingrich 1961, Forest Science 7:35–42), 0–∞.
+    pub ccf: Vec<f32>,
+}
+
+/// Per-tree relative density and neighbourhood quadratic mean DBH (see the module docs).
+/// Sums run sequentially in tree order (f64), so the result does not depend on thread count.
+/// Cost O(n + cells).
+pub fn crowding(w: &World) -> Crowding {
+    let t = &w.trees;
+    let (ex, ey) = w.extent;
+    let cols = ((ex / CROWD_CELL_M).ceil() as usize).max(1);
+    let rows = ((ey / CROWD_CELL_M).ceil() as usize).max(1);
+    let ncell = cols * rows;
+    let cell_of = |x: f32, y: f32| -> usize {
+        let c = ((x as f64 / CROWD_CELL_M) as isize).clamp(0, cols as isize - 1) as usize;
+        let r = ((y as f64 / CROWD_CELL_M) as isize).clamp(0, rows as isize - 1) as usize;
+        r * cols + c
+    };
+    // pool index of each library species (trees only ever belong to pool species)
+    let np = w.pool.len().max(1);
+    let pidx: Vec<usize> = (0..w.lib.species.len()).map(|s| w.pool_index(s as u16).unwrap_or(0)).collect();
+    // per pool species: 1 / SDI_max and the exponent −b
+    let inv: Vec<f64> = (0..np).map(|p| w.pool.get(p).map(|&s| 1.0 / (w.lib.species[s as usize].life.density.sdi_max as f64).max(1.0)).unwrap_or(0.0)).collect();
+    let ex_b: Vec<f64> = (0..np).map(|p| w.pool.get(p).map(|&s| -(w.lib.species[s as usize].life.density.reineke_slope as f64)).unwrap_or(1.605)).collect();
+    let mut n_sp = vec![0u32; ncell * np];
+    let mut d2 = vec![0f64; ncell];
+    let mut n = vec![0u32; ncell];
+    let (mut d2_all, mut n_all, mut small) = (vec![0f64; ncell], vec![0u32; ncell], vec![0f64; ncell]);
+    let mut crown = vec![0f64; ncell];
+    let cells: Vec<u32> = (0..t.len()).map(|i| cell_of(t.x[i], t.y[i]) as u32).collect();
+    for i in 0..t.len() {
+        let k = cells[i] as usize;
+        let s = t.species[i] as usize;
+        let ro = open_crown_radius(&w.lib.species[s], t.height[i], t.dbh[i]) as f64;
+        crown[k] += std::f64::consts::PI * ro * ro;
+        let d = t.dbh[i] as f64;
+        if d >= MIN_DBH_CM as f64 {
+            n_sp[k * np + pidx[s]] += 1;
+            d2[k] += d * d;
+            n[k] += 1;
+        } else if d > 0.0 {
+            let p = pidx[s];
+            small[k] += (d / D_REF_CM).powf(ex_b[p]) * inv[p];
+        }
+        if d > 0.0 {
+            d2_all[k] += d * d;
+            n_all[k] += 1;
+        }
+    }
+    // cell sides (m), clipped to the extent
+    let side = |i: usize, e: f64| ((i as f64 + 1.0) * CROWD_CELL_M).min(e) - i as f64 * CROWD_CELL_M;
+    // neighbourhood (3 × 3 cells) values, once per cell
+    let mut nb_rd = vec![0f32; ncell];
+    let mut nb_dq = vec![0f32; ncell];
+    let mut nb_ccf = vec![0f32; ncell];
+    let mut ns = vec![0u32; np];
+    for r in 0..rows {
+        for c in 0..cols {
+            let (mut a, mut s_d2, mut s_n, mut s_cr) = (0f64, 0f64, 0u32, 0f64);
+            let (mut s_d2a, mut s_na, mut s_small) = (0f64, 0u32, 0f64);
+            ns.iter_mut().for_each(|v| *v = 0);
+            for rr in r.saturating_sub(1)..(r + 2).min(rows) {
+                for cc in c.saturating_sub(1)..(c + 2).min(cols) {
+                    let k = rr * cols + cc;
+                    a += side(cc, ex) * side(rr, ey);
+                    s_d2 += d2[k];
+                    s_n += n[k];
+                    s_cr += crown[k];
+                    s_d2a += d2_all[k];
+                    s_na += n_all[k];
+                    s_small += small[k];
+                    for p in 0..np {
+                        ns[p] += n_sp[k * np + p];
+                    }
+                }
+            }
+            let k = r * cols + c;
+            if a <= 0.0 {
+                continue;
+            }
+            let a_ha = a / 10_000.0;
+            let mut rd = s_small;
+            if s_n > 0 {
+                let dq = (s_d2 / s_n as f64).sqrt();
+                let x = dq / D_REF_CM;
+                rd += (0..np).filter(|&p| ns[p] > 0).map(|p| ns[p] as f64 * x.powf(ex_b[p]) * inv[p]).sum::<f64>();
+                nb_dq[k] = dq as f32;
+            } else if s_na > 0 {
+                nb_dq[k] = (s_d2a / s_na as f64).sqrt() as f32;
+            }
+            nb_rd[k] = (rd / a_ha) as f32;
+            nb_ccf[k] = (s_cr / a) as f32;
+        }
+    }
+    Crowding {
+        rd: cells.iter().map(|&k| nb_rd[k as usize]).collect(),
+        dq_cm: cells.iter().map(|&k| nb_dq[k as usize]).collect(),
+        ccf: cells.iter().map(|&k| nb_ccf[k as usize]).collect(),
+    }
+}
+
+/// Stand density of a world, per hectare of unmasked area, for the stand tables and the tests.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StandDensity {
+    /// Stems/ha with DBH ≥ `min_dbh_cm`.
+    pub n_ha: f64,
+    /// Quadratic mean DBH (cm) of those stems.
+    pub dq_cm: f64,
+    /// Basal area (m²/ha) of those stems.
+    pub ba_m2_ha: f64,
+    /// Reineke's SDI with the general slope −1.605.
+    pub sdi: f64,
+    /// Relative density: `Σ_species SDI_s(own slope) / SDI_max,s` from each species' N and Dq
+    /// (1 = on the species' maximum-density line).
+    pub rd: f64,
+    /// The largest `SDI_max` among species holding ≥ 5 % of the basal area (0 if no stems).
+    pub densest_sdi_max: f64,
+}
+
+/// Stand density of the stems with DBH ≥ `min_dbh_cm` (cm) (7 cm: the threshold of German yield
+/// tables and of Pretzsch & Biber's plots).
+pub fn stand_density(w: &World, min_dbh_cm: f32) -> StandDensity {
+    let t = &w.trees;
+    let a = w.area_ha.max(1e-9);
+    let ns = w.lib.species.len();
+    let (mut n, mut d2) = (vec![0f64; ns], vec![0f64; ns]);
+    for i in 0..t.len() {
+        if t.dbh[i] >= min_dbh_cm && t.dbh[i] > 0.0 {
+            let s = t.species[i] as usize;
+            n[s] += 1.0;
+            d2[s] += (t.dbh[i] as f64).powi(2);
+        }
+    }
+    let (nt, d2t): (f64, f64) = (n.iter().sum(), d2.iter().sum());
+    let dq = if nt > 0.0 { (d2t / nt).sqrt() } else { 0.0 };
+    let ba = std::f64::consts::FRAC_PI_4 * d2t / 1e4 / a;
+    let mut rd = 0.0;
+    let mut densest = 0f64;
+    for s in 0..ns {
+        if n[s] == 0.0 {
+            continue;
+        }
+        let sp = &w.lib.species[s].life.density;
+        rd += sdi(n[s] / a, (d2[s] / n[s]).sqrt(), sp.reineke_slope as f64) / sp.sdi_max as f64;
+        if d2[s] >= 0.05 * d2t {
+            densest = densest.max(sp.sdi_max as f64);
+        }
+    }
+    StandDensity { n_ha: nt / a, dq_cm: dq, ba_m2_ha: ba, sdi: sdi(nt / a, dq, REINEKE_SLOPE), rd, densest_sdi_max: densest }
+}
+
+/// Site indices `[L, T, K, F, R, N]` at a species' niche optimum: each Ellenberg value of the
+/// species, and for indifferent ("x") factors the fresh, base-rich values `[5, 5, 2, 5, 6, 6]`.
+pub fn niche_optimum(sp: &Species) -> [f32; 6] {
+    const DEFAULT: [f32; 6] = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0];
+    let n = &sp.niche;
+    let f = [&n.l, &n.t, &n.k, &n.f, &n.r, &n.n];
+    std::array::from_fn(|i| match f[i].value {
+        Indicator::Value(v) => v,
+        Indicator::Indifferent(_) => DEFAULT[i],
+    })
+}
+
+/// Scenario TOML of a pure, unmanaged stand of species `id` planted at `spacing_m` (m) and age
+/// `plant_age_yr` (yr) on a flat `side_m × side_m` (m) site at the species' niche optimum
+/// ([`niche_optimum`]), latitude 51° N, 200 m a.s.l., run for `years` years.
+pub fn pure_stand_toml(sp: &Species, side_m: f64, spacing_m: f64, plant_age_yr: f64, years: u32, seed: u64) -> String {
+    let cells = (side_m / 10.0).round().max(1.0) as usize;
+    let ix = niche_optimum(sp);
+    format!(
+        "name = \"pure_{id}\"\nyears = {years}\nseed = {seed}\nspecies = [\"{id}\"]\nclimate = {{ latitude_deg = 51.0 }}\n\
+         [terrain]\nuniform = {{ width = {cells}, height = {cells}, cell_m = 10.0, elevation_m = 200.0, indices = {ix:?} }}\n\
+         [[start]]\nkind = \"planted\"\nspecies = \"{id}\"\nspacing_m = {spacing_m:?}\nage_yr = {plant_age_yr:?}\n",
+        id = sp.id
+    )
+}
+
+/// One year of a pure stand's development.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PureStandYear {
+    /// Stand age (yr): planting age + years simulated.
+    pub age: f64,
+    /// Top height H100 (m).
+    pub h100_m: f64,
+    /// Density of stems ≥ 7 cm DBH (the yield tables' threshold).
+    pub d7: StandDensity,
+    /// Density of all stems with a DBH (≥ 1.3 m tall).
+    pub all: StandDensity,
+}
+
+/// Plants and runs a pure stand ([`pure_stand_toml`]) of species `id` from `lib` to age
+/// `to_age` (yr), one row per year.
+///
+/// Errors: unknown species id ([`crate::Error::Invalid`]); scenario errors.
+pub fn run_pure_stand(lib: &SpeciesLibrary, id: &str, side_m: f64, spacing_m: f64, plant_age_yr: f64, to_age: f64, seed: u64) -> Result<Vec<PureStandYear>> {
+    let sp = lib.species.iter().find(|s| s.id == id).ok_or_else(|| crate::Error::Invalid { context: "pure stand".into(), field: "species".into(), value: id.into(), expected: "a species id of the library".into() })?;
+    let years = (to_age - plant_age_yr).round().max(1.0) as u32;
+    let sc = Scenario::from_toml_str(&pure_stand_toml(sp, side_m, spacing_m, plant_age_yr, years, seed), "pure stand")?;
+    let mut w = World::new(sc.site()?, lib, &sc)?;
+    let mut out = Vec::with_capacity(years as usize);
+    for _ in 0..years {
+        let mut r = YearReport::default();
+        step_year(&mut w, &sc, &mut r);
+        let h100 = r.row.as_ref().map(|r| r.top_height_m).unwrap_or(0.0);
+        out.push(PureStandYear { age: plant_age_yr + w.year as f64, h100_m: h100, d7: stand_density(&w, 7.0), all: stand_density(&w, 0.0) });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sdi_is_reineke() {
+        // 25 cm: SDI = N whatever the slope
+        assert!((sdi(500.0, 25.0, -1.605) - 500.0).abs() < 1e-9);
+        // doubling Dq on Reineke's line divides N by 2^1.605 = 3.042
+        assert!((sdi(1000.0, 50.0, -1.605) - 1000.0 * 2f64.powf(1.605)).abs() < 1e-6);
+        assert!((max_stems(1000.0, -1.605, 50.0) - 1000.0 / 2f64.powf(1.605)).abs() < 1e-6);
+        // a stand on its own line has SDI = SDI_max
+        let n = max_stems(800.0, -1.789, 37.0);
+        assert!((sdi(n, 37.0, -1.789) - 800.0).abs() < 1e-6);
+        assert_eq!(sdi(0.0, 20.0, -1.6), 0.0);
+    }
+}
