@@ -7,17 +7,8 @@ use sylva::structure::grow::{ecomod, laplacian, light_guided};
 use sylva::structure::mesh::{self, LodOptions};
 use sylva::structure::params;
 
-fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
-    let mut t: Vec<f64> = (0..runs)
-        .map(|_| {
-            let s = Instant::now();
-            f();
-            s.elapsed().as_secs_f64() * 1e3
-        })
-        .collect();
-    t.sort_by(|a, b| a.total_cmp(b));
-    t[t.len() / 2]
-}
+mod common;
+use common::median_ms;
 
 fn main() {
     println!("# architecture benchmark (one core, medians)");

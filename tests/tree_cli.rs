@@ -90,3 +90,67 @@ fn adapt_to_a_wall_bends_and_prunes_the_grown_tree_out_of_it() {
     assert!(bent > 0, "{line}");
     assert!(dir.path().join("adapted.png").exists());
 }
+
+fn sylva(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).output().unwrap()
+}
+
+/// `sylva tree adapt`: a tree grown in place or read back from a `.glb` (skeleton sidecar) is
+/// adapted to a wall and a neighbour; `--json` reports what was done and how long regrowing takes.
+#[test]
+fn tree_adapt_reports_json_writes_glb_png_and_reads_its_skeleton_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("adapted.glb");
+    let o = out.to_str().unwrap();
+    let res = sylva(&["tree", "adapt", "--species", "beech", "--model", "light", "--age", "12", "--seed", "2", "--obstacle", "wall:1.0,6,12", "--neighbour", "beech@-3,0,10", "--out", o, "--json"]);
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&res.stdout).unwrap();
+    for f in ["nodes_before", "nodes_after", "bent", "pruned", "recomputed_nodes", "adapt_ms", "regrow_ms"] {
+        assert!(j[f].is_number(), "field {f} in {j}");
+    }
+    let (before, after) = (j["nodes_before"].as_u64().unwrap(), j["nodes_after"].as_u64().unwrap());
+    assert!(after < before && j["bent"].as_u64().unwrap() > 0, "{j}");
+    assert_eq!(j["pruned"].as_u64().unwrap(), before - after);
+    assert!(j["adapt_ms"].as_f64().unwrap() > 0.0 && j["regrow_ms"].as_f64().unwrap() > 0.0);
+    assert!(out.is_file() && out.with_extension("png").is_file());
+    let side = sylva::output::gltf::read_skeleton_sidecar(&out).unwrap();
+    assert_eq!(side.len() as u64, after);
+    let png = image::open(out.with_extension("png")).unwrap().to_rgb8();
+    // Fig. 6: pruned parts blue on the left, bent segments red on the right
+    assert!(png.pixels().any(|p| p.0 == [40, 80, 230]), "no pruned (blue) segment drawn");
+    assert!(png.pixels().any(|p| p.0[0] > 200 && p.0[1] < 30), "no strongly bent (red) segment drawn");
+    // a .glb written by `tree grow` is read back through its sidecar
+    let grown = dir.path().join("grown.glb");
+    let res = sylva(&["tree", "grow", "--species", "beech", "--model", "light", "--age", "10", "--seed", "4", "--out", grown.to_str().unwrap()]);
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    let sk = sylva::output::gltf::read_skeleton_sidecar(&grown).unwrap();
+    let res = sylva(&["tree", "adapt", "--input", grown.to_str().unwrap(), "--species", "beech", "--obstacle", "wall:0.8", "--out", dir.path().join("again.glb").to_str().unwrap(), "--json"]);
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    let j: serde_json::Value = serde_json::from_slice(&res.stdout).unwrap();
+    assert_eq!(j["nodes_before"].as_u64().unwrap(), sk.len() as u64);
+}
+
+#[test]
+fn tree_adapt_refuses_bad_input_clearly() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.glb");
+    let o = out.to_str().unwrap();
+    let glb = dir.path().join("bare.glb");
+    std::fs::write(&glb, b"glTF").unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--neighbour", "beech@0,0"], "at least 0.5 m apart"),
+        (vec!["--obstacle", "box:-1,-1,0,1,1,3"], "contains the trunk base"),
+        (vec!["--obstacle", "sphere:1,1,1,NaN"], "finite"),
+        (vec!["--obstacle", "sphere:2,2,1,-1"], "radius"),
+        (vec!["--obstacle", "wall:1,-4"], "wall length"),
+        (vec!["--neighbour", "beech@3,NaN"], "finite"),
+        (vec!["--input", glb.to_str().unwrap()], "no skeleton beside it"),
+    ];
+    for (extra, want) in cases {
+        let mut args = vec!["tree", "adapt", "--species", "beech", "--age", "5", "--out", o];
+        args.extend(extra.iter());
+        let res = sylva(&args);
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert!(!res.status.success() && err.contains(want), "{extra:?}: {err}");
+    }
+}

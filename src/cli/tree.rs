@@ -11,6 +11,7 @@ use sylva::mesh::{LodChain, TreeMesh};
 use sylva::structure::grow::space::Obstacle;
 use sylva::structure::species_tree;
 use sylva::structure::mesh::{lod_chain, LodOptions};
+use sylva::structure::plastic::{adapt_group, Environment, Fate, PlasticTree};
 use sylva::structure::{Leaves, Skeleton};
 
 /// Growth model.
@@ -56,16 +57,59 @@ pub enum Command {
         /// Folder of extra or edited species files, over the shipped library.
         #[arg(long)]
         species_dir: Option<PathBuf>,
-        /// Output file, .glb or .obj; the preview goes to the same name with .png.
+        /// Output file, .glb or .obj; the preview goes to the same name with .png. A .glb gets
+        /// its skeleton beside it (`NAME.skeleton.json`) for `sylva tree adapt --input`.
         #[arg(long)]
         out: PathBuf,
     },
+    /// Adapt a grown tree to obstacles and neighbours by Plastic Trees (Pirk et al. 2012)
+    /// instead of regrowing it; writes the adapted tree and a before/after PNG (Fig. 6).
+    Adapt(AdaptArgs),
+}
+
+/// Arguments of `sylva tree adapt`.
+#[derive(clap::Args)]
+pub struct AdaptArgs {
+    /// A .glb written by `sylva tree grow` (its skeleton sidecar NAME.skeleton.json is read);
+    /// without it the tree is grown here from --species/--model/--age/--seed.
+    #[arg(long)]
+    input: Option<PathBuf>,
+    /// Species id or name (the tree's species; also its Plastic Trees parameters).
+    #[arg(long)]
+    species: String,
+    /// Growth model of a tree grown here.
+    #[arg(long, value_enum, default_value = "light")]
+    model: Model,
+    /// Age (years) of a tree grown here, and of neighbours without their own age.
+    #[arg(long, default_value_t = 20.0)]
+    age: f32,
+    /// Random seed of a tree grown here (neighbours use seed + 1, + 2, …).
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Obstacle to adapt to: box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x[,length[,height]] (m).
+    #[arg(long)]
+    obstacle: Vec<String>,
+    /// Neighbour tree SPECIES@X,Y[,AGE] (m, years), grown and adapted together with the tree.
+    #[arg(long)]
+    neighbour: Vec<String>,
+    /// Folder of extra or edited species files, over the shipped library.
+    #[arg(long)]
+    species_dir: Option<PathBuf>,
+    /// Output .glb (adapted tree; skeleton sidecar beside it); the before/after PNG goes to the
+    /// same name with .png.
+    #[arg(long)]
+    out: PathBuf,
+    /// Print one JSON object on stdout (nodes_before, nodes_after, bent, pruned, pruned_light,
+    /// pruned_collision, recomputed_nodes, adapt_ms, regrow_ms, neighbours, out, png).
+    #[arg(long)]
+    json: bool,
 }
 
 /// Runs a tree subcommand.
 pub fn run(c: Command) -> anyhow::Result<()> {
     match c {
         Command::Grow { species, model, age, obstacle, adapt_to, seed, species_dir, out } => grow(&species, model, age, &obstacle, &adapt_to, seed, species_dir.as_deref(), &out),
+        Command::Adapt(a) => adapt(&a),
     }
 }
 
@@ -100,8 +144,13 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     let mut adapted = None;
     if !later.is_empty() {
         let all: Vec<Obstacle> = obs.iter().chain(&later).copied().collect();
+        // analysed in the environment it grew in (its own obstacles), adapted to all of them:
+        // the obstacles it grew beside are not counted twice
+        let mut pt = PlasticTree::analyse(&sk, &sp.architecture.plastic, &Environment::with_obstacles(&obs), Some(mean_internode(&sk)))?;
+        pt.clearance_m = sp.architecture.ecomod.leaf_size_m.max(0.0);
         let ta = std::time::Instant::now();
-        let (new_sk, rep) = sylva::structure::plastic::adapt(&sk, &sp.architecture.plastic, &all, mean_internode(&sk))?;
+        let rep = pt.adapt(&Environment::with_obstacles(&all))?;
+        let new_sk = pt.skeleton();
         let adapt_s = ta.elapsed().as_secs_f64();
         // the model's own leaves hang on node ids that pruning renumbers: re-leaf the tips
         leaves = species_tree::tip_leaves(&new_sk, &sp.architecture.ecomod);
@@ -119,7 +168,8 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     match ext.as_str() {
         "glb" => {
             let width = sk.bounds().map(|(lo, hi)| (hi - lo).x.max((hi - lo).y)).unwrap_or(1.0);
-            sylva::output::gltf::write_glb(out, &chain, &sylva::output::gltf::GlbOptions { bark_rgb: bark, leaf_rgb: leaf, spacing_m: width * 1.2 })?
+            sylva::output::gltf::write_glb(out, &chain, &sylva::output::gltf::GlbOptions { bark_rgb: bark, leaf_rgb: leaf, spacing_m: width * 1.2 })?;
+            sylva::output::gltf::write_skeleton_sidecar(out, &sk)?;
         }
         "obj" => sylva::output::obj::write_obj(out, &chain, None)?,
         _ => anyhow::bail!("--out {}: expected a .glb or .obj file name", out.display()),
@@ -218,3 +268,161 @@ fn draw_level(img: &mut image::RgbImage, m: &TreeMesh, x0: u32, w: u32, h: u32, 
     }
 }
 
+
+/// A `--neighbour SPECIES@X,Y[,AGE]`.
+fn parse_neighbour(s: &str, default_age: f32) -> anyhow::Result<(String, Vec3, f32)> {
+    let form = "--neighbour SPECIES@X,Y[,AGE] (metres, years; e.g. beech@3,0,20)";
+    let (sp, rest) = s.split_once('@').with_context(|| format!("--neighbour {s}: expected {form}"))?;
+    let v: Vec<f32> = rest.split(',').map(|t| t.trim().parse::<f32>()).collect::<Result<_, _>>().map_err(|_| anyhow::anyhow!("--neighbour {s}: expected {form}"))?;
+    anyhow::ensure!(v.len() == 2 || v.len() == 3, "--neighbour {s}: expected {form}");
+    anyhow::ensure!(v.iter().all(|x| x.is_finite()), "--neighbour {s}: expected finite numbers (no NaN or infinity)");
+    let age = v.get(2).copied().unwrap_or(default_age);
+    anyhow::ensure!(age > 0.0, "--neighbour {s}: age {age}: expected a positive number of years");
+    Ok((sp.trim().to_string(), Vec3::new(v[0], v[1], 0.0), age))
+}
+
+fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
+    anyhow::ensure!(a.age.is_finite() && a.age > 0.0, "--age {}: expected a positive number of years", a.age);
+    let ext = a.out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    anyhow::ensure!(ext == "glb", "--out {}: expected a .glb file name", a.out.display());
+    let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
+    let find = |name: &str| {
+        lib.find(name).map(|i| lib.species[i as usize].clone()).with_context(|| format!("species {name}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))
+    };
+    let sp = find(&a.species)?;
+    let obstacles: Vec<Obstacle> = a.obstacle.iter().map(|s| Obstacle::parse(s)).collect::<Result<_, _>>()?;
+    for (o, text) in obstacles.iter().zip(&a.obstacle) {
+        anyhow::ensure!(!o.contains(Vec3::ZERO) && o.signed_distance(Vec3::ZERO) > 0.0, "--obstacle {text}: contains the trunk base at (0, 0, 0); expected an obstacle beside the tree");
+    }
+    let neighbours: Vec<(String, Vec3, f32)> = a.neighbour.iter().map(|s| parse_neighbour(s, a.age)).collect::<anyhow::Result<_>>()?;
+    let model = match a.model {
+        Model::Ecomod => species_tree::Model::EcoMod,
+        Model::Light => species_tree::Model::Light,
+        Model::Laplacian => species_tree::Model::Laplacian,
+    };
+    let sk = match &a.input {
+        Some(glb) => {
+            anyhow::ensure!(glb.is_file(), "--input {}: no such file", glb.display());
+            let side = sylva::output::gltf::skeleton_sidecar_path(glb);
+            anyhow::ensure!(side.is_file(), "--input {}: no skeleton beside it (expected {}, written by `sylva tree grow --out NAME.glb`)", glb.display(), side.display());
+            sylva::output::gltf::read_skeleton_sidecar(glb)?
+        }
+        None => species_tree::grow_species_tree(&sp, model, a.age, &[], a.seed)?.skeleton,
+    };
+    let base_r = sk.nodes.first().map(|n| n.radius).unwrap_or(0.0);
+    let mut trees = vec![PlasticTree::analyse(&sk, &sp.architecture.plastic, &Environment::open(), None)?];
+    trees[0].clearance_m = sp.architecture.ecomod.leaf_size_m.max(0.0);
+    let mut spots = vec![Vec3::ZERO];
+    for (i, (name, at, age)) in neighbours.iter().enumerate() {
+        let nsp = find(name).with_context(|| format!("--neighbour {}", a.neighbour[i]))?;
+        for (j, s) in spots.iter().enumerate() {
+            anyhow::ensure!(s.distance(*at) >= 0.5, "--neighbour {}: at {:.2} m from {} at ({}, {}); expected trees at least 0.5 m apart", a.neighbour[i], s.distance(*at), if j == 0 { "the tree".to_string() } else { format!("neighbour {j}") }, s.x, s.y);
+        }
+        for (o, text) in obstacles.iter().zip(&a.obstacle) {
+            anyhow::ensure!(o.signed_distance(*at) > 0.0, "--neighbour {}: stands inside --obstacle {text}", a.neighbour[i]);
+        }
+        spots.push(*at);
+        let g = species_tree::grow_species_tree(&nsp, model, age.min(nsp.life.max_age_yr), &[], a.seed + 1 + i as u64)?;
+        let mut t = PlasticTree::analyse(&g.skeleton, &nsp.architecture.plastic, &Environment::open(), None)?;
+        t.translate(*at);
+        trees.push(t);
+    }
+    let before: Vec<PlasticTree> = trees.clone();
+    let env = Environment::with_obstacles(&obstacles);
+    let ta = std::time::Instant::now();
+    let rep = adapt_group(&mut trees, &env)?;
+    let adapt_ms = ta.elapsed().as_secs_f64() * 1e3;
+    // our light-guided model regrowing the same tree beside the same obstacles, in this run
+    let tr = std::time::Instant::now();
+    species_tree::grow_species_tree(&sp, species_tree::Model::Light, a.age.min(sp.life.max_age_yr), &obstacles, a.seed)?;
+    let regrow_ms = tr.elapsed().as_secs_f64() * 1e3;
+    let adapted = trees[0].skeleton();
+    let leaves = species_tree::tip_leaves(&adapted, &sp.architecture.ecomod);
+    let chain = lod_chain(&adapted, &leaves, &LodOptions::default());
+    let width = adapted.bounds().map(|(lo, hi)| (hi - lo).x.max((hi - lo).y)).unwrap_or(1.0);
+    sylva::output::gltf::write_glb(&a.out, &chain, &sylva::output::gltf::GlbOptions { bark_rgb: sp.appearance.bark, leaf_rgb: sp.appearance.leaf_summer, spacing_m: width * 1.2 })?;
+    sylva::output::gltf::write_skeleton_sidecar(&a.out, &adapted)?;
+    let png = a.out.with_extension("png");
+    let img = before_after(&before, &trees, &obstacles, 420, 480);
+    let mut bytes = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
+    sylva::output::write_atomic(&png, &bytes)?;
+    let r = rep.trees[0];
+    if a.json {
+        let j = serde_json::json!({
+            "species": sp.id, "nodes_before": r.nodes_before, "nodes_after": r.nodes_after, "bent": r.bent,
+            "pruned": r.pruned_light + r.pruned_collision, "pruned_light": r.pruned_light, "pruned_collision": r.pruned_collision,
+            "recomputed_nodes": rep.recomputed_nodes, "adapt_ms": adapt_ms, "regrow_ms": regrow_ms, "neighbours": neighbours.len(),
+            "trunk_base_radius_m": base_r, "out": a.out.display().to_string(), "png": png.display().to_string(),
+        });
+        println!("{j}");
+    } else {
+        println!("species {} : {} -> {} nodes, bent {}, pruned {} for light + {} in obstacles, {} nodes recomputed", sp.id, r.nodes_before, r.nodes_after, r.bent, r.pruned_light, r.pruned_collision, rep.recomputed_nodes);
+        println!("adapt {adapt_ms:.1} ms, regrowing beside the obstacles {regrow_ms:.1} ms");
+        println!("wrote {}, {} and {}", a.out.display(), sylva::output::gltf::skeleton_sidecar_path(&a.out).display(), png.display());
+    }
+    Ok(())
+}
+
+/// Paper Fig. 6 style before/after side view (looking along +y, x right, z up): left the input
+/// with the parts that will be pruned in blue, right the adapted tree with every segment red by
+/// its own bend angle (0° dark brown → ≥ 5° red); neighbours in green, obstacles grey.
+fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obstacle], w: u32, h: u32) -> image::RgbImage {
+    let mut img = image::RgbImage::from_pixel(2 * w, h, image::Rgb([235, 240, 245]));
+    let mut lo = Vec3::splat(f32::MAX);
+    let mut hi = Vec3::splat(f32::MIN);
+    for t in before.iter().chain(after) {
+        for p in t.positions() {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+    }
+    let margin = 12.0;
+    let s = ((w as f32 - 2.0 * margin) / (hi.x - lo.x).max(1e-3)).min((h as f32 - 2.0 * margin) / (hi.z - lo.z).max(1e-3));
+    let px = |x0: u32, p: Vec3| (x0 as f32 + margin + (p.x - lo.x) * s, h as f32 - margin - (p.z - lo.z) * s);
+    for x0 in [0, w] {
+        for o in obstacles {
+            let (a, b) = match *o {
+                Obstacle::Box { min, max } => (min, max),
+                Obstacle::Sphere { center, radius } => (center - radius, center + radius),
+                Obstacle::Wall { x } => (Vec3::new(x, 0.0, lo.z), Vec3::new(if x > 0.0 { hi.x.max(x) + 10.0 } else { x }, 0.0, hi.z + 10.0)),
+                Obstacle::FiniteWall { x, height, .. } => (Vec3::new(x, 0.0, 0.0), Vec3::new(if x > 0.0 { hi.x.max(x) + 10.0 } else { x }, 0.0, height.min(hi.z + 10.0))),
+            };
+            let (a, b) = (a.min(b), a.max(b));
+            let (ax, ay) = px(x0, Vec3::new(a.x.max(lo.x - 10.0), 0.0, a.z));
+            let (bx, by) = px(x0, Vec3::new(b.x, 0.0, b.z));
+            for y in by.max(0.0) as u32..(ay.min(h as f32 - 1.0) as u32) {
+                for x in ax.max(x0 as f32) as u32..(bx.min((x0 + w - 1) as f32) as u32) {
+                    img.put_pixel(x, y, image::Rgb([150, 150, 150]));
+                }
+            }
+        }
+    }
+    for (i, (b, t)) in before.iter().zip(after).enumerate() {
+        let sk = b.input();
+        for k in 1..sk.len() {
+            let p = sk.nodes[k].parent.unwrap_or(0) as usize;
+            let pruned = t.fates()[k] != Fate::Alive;
+            let col = if i > 0 { [60, 150, 60] } else if pruned { [40, 80, 230] } else { [90, 60, 40] };
+            line(&mut img, px(0, sk.nodes[p].pos), px(0, sk.nodes[k].pos), col, 0, w);
+            if !pruned {
+                let a = (t.bend_angles()[k].to_degrees() / 5.0).clamp(0.0, 1.0);
+                let col = if i > 0 { [60, 150, 60] } else { [(90.0 + 165.0 * a) as u8, (60.0 * (1.0 - a)) as u8, (40.0 * (1.0 - a)) as u8] };
+                line(&mut img, px(w, t.positions()[p]), px(w, t.positions()[k]), col, w, 2 * w);
+            }
+        }
+    }
+    img
+}
+
+/// A one-pixel line from `a` to `b` (pixels) clipped to columns x0..x1.
+fn line(img: &mut image::RgbImage, a: (f32, f32), b: (f32, f32), col: [u8; 3], x0: u32, x1: u32) {
+    let n = ((b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil() as usize).max(1);
+    for i in 0..=n {
+        let t = i as f32 / n as f32;
+        let (x, y) = (a.0 + (b.0 - a.0) * t, a.1 + (b.1 - a.1) * t);
+        if x >= x0 as f32 && x < x1 as f32 && y >= 0.0 && (y as u32) < img.height() {
+            img.put_pixel(x as u32, y as u32, image::Rgb(col));
+        }
+    }
+}

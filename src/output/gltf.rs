@@ -198,3 +198,80 @@ pub fn write_glb(path: &Path, chain: &LodChain, o: &GlbOptions) -> Result<()> {
     let bytes = glb_bytes(chain, o)?;
     super::write_atomic(path, &bytes)
 }
+
+/// Path of the skeleton sidecar of a `.glb`: `tree.glb` → `tree.skeleton.json`.
+pub fn skeleton_sidecar_path(glb: &Path) -> std::path::PathBuf {
+    glb.with_extension("skeleton.json")
+}
+
+/// Format tag of the skeleton sidecar.
+const SKELETON_FORMAT: &str = "sylva-skeleton";
+
+/// Writes the skeleton of the tree in `glb` to its sidecar ([`skeleton_sidecar_path`]) as JSON:
+/// `{"format": "sylva-skeleton", "version": 1, "nodes": [[x, y, z, parent, radius, age,
+/// gravelius, weibull, strands], …]}` with Sylva's z-up metres, parent −1 for the root, radius in
+/// m, age in years; written to a temporary file then renamed. `sylva tree adapt` reads it back
+/// with [`read_skeleton_sidecar`].
+///
+/// Errors: [`Error::Io`] when the file cannot be written.
+pub fn write_skeleton_sidecar(glb: &Path, sk: &crate::structure::Skeleton) -> Result<()> {
+    let nodes: Vec<Value> = sk
+        .nodes
+        .iter()
+        .map(|n| json!([n.pos.x, n.pos.y, n.pos.z, n.parent.map(|p| p as i64).unwrap_or(-1), n.radius, n.age, n.gravelius, n.weibull, n.strands]))
+        .collect();
+    let doc = json!({ "format": SKELETON_FORMAT, "version": 1, "nodes": nodes });
+    crate::output::write_atomic(&skeleton_sidecar_path(glb), doc.to_string().as_bytes())
+}
+
+/// Reads the skeleton sidecar of `glb` written by [`write_skeleton_sidecar`]; roles are
+/// rebuilt (Gravelius 0 = trunk, childless = tip).
+///
+/// Errors: [`Error::Io`] when the sidecar is missing or unreadable; [`Error::Format`] naming the
+/// sidecar and the node for a wrong format tag, a malformed node, a non-finite value or a parent
+/// that does not precede its child.
+pub fn read_skeleton_sidecar(glb: &Path) -> Result<crate::structure::Skeleton> {
+    use crate::structure::{Node, Role, Skeleton};
+    let path = skeleton_sidecar_path(glb);
+    let text = std::fs::read_to_string(&path).map_err(|source| Error::Io { path: path.clone(), source })?;
+    let fmt = |message: String| Error::Format { path: path.clone(), message };
+    let doc: Value = serde_json::from_str(&text).map_err(|e| fmt(format!("not JSON: {e}")))?;
+    if doc.get("format").and_then(Value::as_str) != Some(SKELETON_FORMAT) {
+        return Err(fmt(format!("field `format`: expected \"{SKELETON_FORMAT}\"")));
+    }
+    let nodes = doc.get("nodes").and_then(Value::as_array).ok_or_else(|| fmt("field `nodes`: expected an array of nodes".into()))?;
+    let mut sk = Skeleton::new();
+    for (i, v) in nodes.iter().enumerate() {
+        let a = v.as_array().filter(|a| a.len() == 9).ok_or_else(|| fmt(format!("node {i}: expected [x, y, z, parent, radius, age, gravelius, weibull, strands]")))?;
+        let f: Vec<f64> = a.iter().map(|x| x.as_f64().unwrap_or(f64::NAN)).collect();
+        if f.iter().any(|x| !x.is_finite()) {
+            return Err(fmt(format!("node {i}: expected finite numbers")));
+        }
+        let parent = if f[3] < 0.0 { None } else { Some(f[3] as u32) };
+        match parent {
+            None if i != 0 => return Err(fmt(format!("node {i}: parent -1 (only node 0 is the root)"))),
+            Some(p) if p as usize >= i => return Err(fmt(format!("node {i}: parent {p} must precede the node"))),
+            _ => {}
+        }
+        let gravelius = f[6] as u16;
+        sk.nodes.push(Node {
+            pos: glam::Vec3::new(f[0] as f32, f[1] as f32, f[2] as f32),
+            parent,
+            children: Vec::new(),
+            radius: f[4] as f32,
+            age: f[5] as f32,
+            role: if gravelius == 0 { Role::Trunk } else { Role::Branch },
+            strands: f[8] as u32,
+            gravelius,
+            weibull: f[7] as u16,
+        });
+        if let Some(p) = parent {
+            sk.nodes[p as usize].children.push(i as u32);
+        }
+    }
+    if sk.nodes.is_empty() {
+        return Err(fmt("field `nodes`: expected at least the root".into()));
+    }
+    sk.mark_tips();
+    Ok(sk)
+}

@@ -9,9 +9,12 @@
 //! - [`species_tree`]: one tree of a species at an age by any model (what `sylva tree grow`
 //!   runs); light-guided and Laplacian trees grow in the species' crown envelope
 //!   ([`grow::envelope`]).
+//! - [`edit_distance`]: constrained edit distance between skeletons (Zhang 1996), the
+//!   comparison of Plastic Trees section 7.
 //! - [`plastic`]: Plastic Trees (`000_*.txt`): bends and prunes a grown skeleton for a new
 //!   obstacle instead of regrowing it.
 
+pub mod edit_distance;
 pub mod grow;
 pub mod mesh;
 pub mod params;

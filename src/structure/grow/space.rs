@@ -27,6 +27,17 @@ pub enum Obstacle {
         /// Plane position (m), ≠ 0.
         x: f32,
     },
+    /// A finite vertical wall: the part of [`Obstacle::Wall`]'s half-space (beyond the plane
+    /// x = `x`, away from the origin) with |y| ≤ `length`/2 and 0 ≤ z ≤ `height`. Rays can pass
+    /// around its ends and over its top (Plastic Trees section 6 moves walls of finite size).
+    FiniteWall {
+        /// Plane position (m), ≠ 0.
+        x: f32,
+        /// Length along y (m, > 0; may be infinite), centred on y = 0.
+        length: f32,
+        /// Height above z = 0 (m, > 0; may be infinite).
+        height: f32,
+    },
 }
 
 impl Obstacle {
@@ -42,21 +53,49 @@ impl Obstacle {
                     p.x <= x
                 }
             }
+            Obstacle::FiniteWall { x, length, height } => Obstacle::Wall { x }.contains(p) && p.y.abs() <= 0.5 * length && p.z >= 0.0 && p.z <= height,
         }
+    }
+
+    /// The obstacle as an axis-aligned box (lower, upper corner; infinite where unbounded).
+    /// `None` for a sphere.
+    fn as_box(&self) -> Option<(Vec3, Vec3)> {
+        let inf = f32::INFINITY;
+        match *self {
+            Obstacle::Box { min, max } => Some((min, max)),
+            Obstacle::Sphere { .. } => None,
+            Obstacle::Wall { x } => Obstacle::FiniteWall { x, length: inf, height: inf }.as_box().map(|(lo, hi)| (lo.with_z(-inf), hi)),
+            Obstacle::FiniteWall { x, length, height } => {
+                let (x0, x1) = if x >= 0.0 { (x, inf) } else { (-inf, x) };
+                Some((Vec3::new(x0, -0.5 * length, 0.0), Vec3::new(x1, 0.5 * length, height)))
+            }
+        }
+    }
+
+    /// Signed distance from `p` to the obstacle's surface (m): negative inside, 0 on it,
+    /// positive outside (exact for boxes, walls and spheres).
+    pub fn signed_distance(&self, p: Vec3) -> f32 {
+        if let Obstacle::Sphere { center, radius } = *self {
+            return p.distance(center) - radius;
+        }
+        let Some((lo, hi)) = self.as_box() else { return f32::INFINITY };
+        // per axis: distance outside the slab (> 0) or depth inside (< 0)
+        let d = Vec3::new((lo.x - p.x).max(p.x - hi.x), (lo.y - p.y).max(p.y - hi.y), (lo.z - p.z).max(p.z - hi.z));
+        let outside = d.max(Vec3::ZERO).length();
+        outside + d.max_element().min(0.0)
     }
 
     /// True when the ray `p + t·d`, 0 < t ≤ `max_t`, meets the obstacle (analytic: slab test,
     /// sphere quadratic, plane crossing).
+    /// Slab axes parallel to the ray are handled exactly (no 0·∞), so a ray with d.x = 0 never
+    /// meets a wall it starts outside of.
     pub fn ray_hits(&self, p: Vec3, d: Vec3, max_t: f32) -> bool {
         match *self {
-            Obstacle::Box { min, max } => {
-                let inv = d.recip();
-                let t0 = (min - p) * inv;
-                let t1 = (max - p) * inv;
-                let tmin = t0.min(t1).max_element().max(0.0);
-                let tmax = t0.max(t1).min_element().min(max_t);
-                tmin <= tmax
-            }
+            Obstacle::Box { min, max } => slab_hit(p, d, max_t, min, max),
+            Obstacle::FiniteWall { .. } => match self.as_box() {
+                Some((lo, hi)) => slab_hit(p, d, max_t, lo, hi),
+                None => false,
+            },
             Obstacle::Sphere { center, radius } => {
                 let oc = p - center;
                 let b = oc.dot(d);
@@ -113,17 +152,27 @@ impl Obstacle {
                     return bad("wall x", x.to_string(), "a finite plane position ≠ 0 m (the tree stands at x = 0)");
                 }
             }
+            Obstacle::FiniteWall { x, length, height } => {
+                Obstacle::Wall { x }.validate(context)?;
+                if !(length > 0.0) {
+                    return bad("wall length", length.to_string(), "a length > 0 m");
+                }
+                if !(height > 0.0) {
+                    return bad("wall height", height.to_string(), "a height > 0 m");
+                }
+            }
         }
         Ok(())
     }
 
-    /// Parses `box:x0,y0,z0,x1,y1,z1`, `sphere:x,y,z,r` or `wall:x` (metres) and checks it with
+    /// Parses `box:x0,y0,z0,x1,y1,z1`, `sphere:x,y,z,r`, `wall:x` (infinite) or
+    /// `wall:x,length[,height]` (a [`Obstacle::FiniteWall`]) (metres) and checks it with
     /// [`Obstacle::validate`] (a box's first corner must be the lower one on every axis).
     ///
     /// Errors: [`Error::Invalid`] with context `--obstacle`, naming the text or the bad field
     /// and the expected form or value.
     pub fn parse(s: &str) -> Result<Obstacle> {
-        let form = "box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x (metres, finite numbers)";
+        let form = "box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x[,length[,height]] (metres, finite numbers)";
         let bad = || Error::Invalid { context: "--obstacle".into(), field: "obstacle".into(), value: s.into(), expected: form.into() };
         let (kind, rest) = s.split_once(':').ok_or_else(bad)?;
         let v: Vec<f32> = rest.split(',').map(|t| t.trim().parse::<f32>()).collect::<std::result::Result<_, _>>().map_err(|_| bad())?;
@@ -134,11 +183,38 @@ impl Obstacle {
             ("box", 6) => Obstacle::Box { min: Vec3::new(v[0], v[1], v[2]), max: Vec3::new(v[3], v[4], v[5]) },
             ("sphere", 4) => Obstacle::Sphere { center: Vec3::new(v[0], v[1], v[2]), radius: v[3] },
             ("wall", 1) => Obstacle::Wall { x: v[0] },
+            ("wall", 2) => Obstacle::FiniteWall { x: v[0], length: v[1], height: f32::INFINITY },
+            ("wall", 3) => Obstacle::FiniteWall { x: v[0], length: v[1], height: v[2] },
             _ => return Err(bad()),
         };
         o.validate(&format!("--obstacle {s}"))?;
         Ok(o)
     }
+}
+
+/// Ray–box slab test for 0 < t ≤ `max_t` with possibly infinite bounds; axes where the ray is
+/// parallel (d = 0) only test whether `p` lies inside that slab.
+fn slab_hit(p: Vec3, d: Vec3, max_t: f32, lo: Vec3, hi: Vec3) -> bool {
+    let (mut t0, mut t1) = (0.0f32, max_t);
+    for a in 0..3 {
+        if d[a] == 0.0 {
+            if p[a] < lo[a] || p[a] > hi[a] {
+                return false;
+            }
+            continue;
+        }
+        let inv = 1.0 / d[a];
+        let (mut ta, mut tb) = ((lo[a] - p[a]) * inv, (hi[a] - p[a]) * inv);
+        if ta > tb {
+            std::mem::swap(&mut ta, &mut tb);
+        }
+        t0 = t0.max(ta);
+        t1 = t1.min(tb);
+        if t0 > t1 {
+            return false;
+        }
+    }
+    true
 }
 
 /// Checks every obstacle with [`Obstacle::validate`] (context `obstacle i`, 0-based).

@@ -1,0 +1,97 @@
+//! Plastic Trees benchmark (Pirk et al. 2012, `000_*.txt`, Table 2): light-guided trees (Yi et
+//! al. paper parameters, beech Plastic Trees parameters with the paper's Tree 1 tropisms) of
+//! about 530, 2,540 and 9,130 nodes beside a finite wall; analysis (once), adaptation and the
+//! time our light-guided model takes to regrow the same tree beside the same wall; two
+//! ≈2,540-node trees adapted together; moving the wall by 10 cm and re-adapting. Plain program:
+//! `RAYON_NUM_THREADS=1 cargo bench --bench plastic`. Medians over repeated runs (regrowth: one
+//! run).
+use std::time::Instant;
+use glam::Vec3;
+use sylva::species::SpeciesLibrary;
+use sylva::structure::grow::space::Obstacle;
+use sylva::structure::plastic::{adapt_group, Environment, PlasticTree};
+use sylva::structure::grow::light_guided::{self, LightOptions};
+use sylva::structure::params;
+use sylva::structure::Skeleton;
+
+mod common;
+use common::median_ms;
+
+/// A finite wall beside a tree of crown half-width `r` and height `h` (m).
+fn wall_for(r: f32, h: f32) -> Obstacle {
+    Obstacle::FiniteWall { x: 0.5 * r, length: 4.0 * r, height: 1.2 * h }
+}
+
+fn main() {
+    let lib = SpeciesLibrary::embedded().expect("embedded species");
+    let sp = &lib.species[lib.find("beech").expect("beech") as usize];
+    let mut p = sp.architecture.plastic;
+    p.phototropism = 0.25; // the paper's Tree 1 (section 6)
+    p.gravitropism = 0.12;
+    let lp = params::light_guided_paper();
+    // the light-guided model (Yi et al.) with the paper parameters in a 24 m × 24 m × 22 m space
+    let lo = LightOptions { extent_m: 12.0, height_m: 22.0, ..LightOptions::default() };
+    println!("# Plastic Trees benchmark (light-guided trees beside a finite wall; threads: {})", rayon::current_num_threads());
+    println!("| target nodes | cycles | nodes | analysis ms | adapt ms | regrow ms | regrow / adapt | bent | pruned | move wall 10 cm: ms (recomputed nodes) |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
+    let mut mid: Option<Skeleton> = None;
+    let mut years = 4u32;
+    for target in [530usize, 2540, 9130] {
+        // the fewest cycles whose tree reaches the target
+        let mut sk = light_guided::grow(&lp, &lo, &[], 1, years).expect("grow");
+        while sk.len() < target && years < 60 {
+            years += 1;
+            sk = light_guided::grow(&lp, &lo, &[], 1, years).expect("grow");
+        }
+        let (lo_b, hi_b) = sk.bounds().expect("nodes");
+        let wall = wall_for(0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y), hi_b.z - lo_b.z);
+        let env = Environment::with_obstacles(&[wall]);
+        let t0 = Instant::now();
+        let tree = PlasticTree::analyse(&sk, &p, &Environment::open(), None).expect("analyse");
+        let analysis_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let mut rep = None;
+        let adapt_ms = median_ms(7, || {
+            let mut t = tree.clone();
+            rep = Some(t.adapt(&env).expect("adapt"));
+        });
+        let rep = rep.expect("ran");
+        let mut adapted = tree.clone();
+        adapted.adapt(&env).expect("adapt");
+        let mut rec = 0;
+        let moved = match wall {
+            Obstacle::FiniteWall { x, length, height } => Obstacle::FiniteWall { x: x + 0.1, length, height },
+            o => o,
+        };
+        let move_ms = median_ms(7, || {
+            let mut t = adapted.clone();
+            rec = t.adapt(&Environment::with_obstacles(&[moved])).expect("adapt").recomputed_nodes;
+        });
+        let t1 = Instant::now();
+        std::hint::black_box(light_guided::grow(&lp, &lo, &[wall], 1, years).expect("regrow"));
+        let regrow_ms = t1.elapsed().as_secs_f64() * 1e3;
+        println!(
+            "| {target} | {years} | {} | {analysis_ms:.1} | {adapt_ms:.2} | {regrow_ms:.0} | {:.0}× | {} | {} | {move_ms:.2} ({rec}) |",
+            sk.len(),
+            regrow_ms / adapt_ms,
+            rep.bent,
+            rep.pruned_light + rep.pruned_collision
+        );
+        if target == 2540 {
+            mid = Some(sk.clone());
+        }
+    }
+    if let Some(sk) = mid {
+        let (lo_b, hi_b) = sk.bounds().expect("nodes");
+        let r = 0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y);
+        let a = PlasticTree::analyse(&sk, &p, &Environment::open(), None).expect("analyse");
+        let mut b = a.clone();
+        b.translate(Vec3::new(1.5 * r, 0.0, 0.0));
+        let env = Environment::open();
+        let mut rec = 0;
+        let ms = median_ms(7, || {
+            let mut pair = vec![a.clone(), b.clone()];
+            rec = adapt_group(&mut pair, &env).expect("group").recomputed_nodes;
+        });
+        println!("\ntwo {}-node trees {:.2} m apart (1.5 crown radii) adapted together: {ms:.2} ms ({rec} nodes recomputed)", sk.len(), 1.5 * r);
+    }
+}

@@ -1,0 +1,482 @@
+//! Tree analysis of Plastic Trees section 4 (Pirk et al. 2012, `000_*.txt`), done once per tree:
+//! internode length (mean-shift), growth rates (eq. 1), branch seasons (eq. 2), leaf clusters
+//! from terminal lobes and their younger versions (eq. 5), the temporal light the tree grew in
+//! (eqs. 3–4), the untropic direction of every segment (inverse tropism, eqs. 6–9) and the
+//! pruning thresholds (eqs. 10–11).
+
+use super::light::{light_at, Occluder, ShadowVolumes, Sky, Solids};
+use super::{tropism, Environment};
+use crate::error::{Error, Result};
+use crate::species::PlasticParams;
+use crate::structure::skeleton::Skeleton;
+use glam::Vec3;
+
+/// Seasons (years) of growth a terminal lobe spans: the nodes created in the last
+/// `LOBE_SEASONS` seasons form the leaf clusters of the input tree.
+pub const LOBE_SEASONS: u16 = 2;
+
+/// Most seasons reconstructed; deeper trees are clamped (their oldest levels merge).
+pub const MAX_SEASONS: u16 = 400;
+
+/// A leaf cluster of the input tree (a terminal lobe): a sphere around the young nodes of one
+/// branch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Lobe {
+    /// Nodes of the lobe (input ids, arena order); the first is the lobe's root.
+    pub nodes: Vec<u32>,
+    /// Centroid of the nodes (m).
+    pub center: Vec3,
+    /// Radius (m): the largest node distance from the centroid, at least half an internode.
+    pub radius: f32,
+}
+
+/// A leaf cluster of the tree at one growth stage (section 4.2, Fig. 2b).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StageCluster {
+    /// Node carrying the cluster: the lobe's root, or for a propagated cluster the node that is
+    /// a leaf at this stage.
+    pub anchor: u32,
+    /// Radius r_c (m): the lobe's, or eq. (5) for a propagated cluster.
+    pub radius: f32,
+    /// The lobe this cluster is, `None` for a propagated (merged) cluster.
+    pub lobe: Option<u32>,
+    /// Latest season among the nodes the cluster covers (it exists at stages ≥ its anchor's
+    /// season and is kept unchanged down to this season).
+    pub max_season: u16,
+}
+
+/// What section 4 derives from a tree once; adaptation reuses it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Analysis {
+    /// Internode length l_i (m): the main peak of the distances between nearest branching nodes,
+    /// found by mean-shift (section 4.1).
+    pub internode_m: f32,
+    /// Relative growth rate ν̂_s of eq. (1) per node (0–1; 1 on the fastest axis).
+    pub growth_rate: Vec<f32>,
+    /// Season in which each node was created (eq. 2, rounded down; root 0).
+    pub season: Vec<u16>,
+    /// Last season T (the tree's age in reconstructed seasons).
+    pub seasons: u16,
+    /// Terminal lobes (leaf clusters of the full-grown tree).
+    pub lobes: Vec<Lobe>,
+    /// Leaf clusters per stage t = 0..=T (index t); stage T holds one cluster per lobe.
+    pub stages: Vec<Vec<StageCluster>>,
+    /// Light i_c (0–1, eq. 3) on every stage cluster in the environment the tree grew in.
+    pub stage_light: Vec<Vec<f32>>,
+    /// Average light direction (unit, eq. 3) at every node in the stage it was created.
+    pub light_dir: Vec<Vec3>,
+    /// w_s of eq. (7) per node: (1 − w_p − w_g)^(l_s/l_i).
+    pub w_s: Vec<f32>,
+    /// Untropic direction d_o of each segment (inverse tropism, eqs. 8–9; unit; root: +z).
+    pub d_o: Vec<Vec3>,
+    /// Residual p·h − (w_s·d_o + (1 − w_s)·t) of the inverse (zero where eq. 9 has a root; where
+    /// it has none the closest-point d_o does not reproduce h and the residual keeps the input
+    /// direction when nothing changes).
+    pub residual: Vec<Vec3>,
+    /// Reference pruning factor ψ_ref: the 5th percentile of all ψ_s(t) (eq. 11).
+    pub psi_ref: f32,
+    /// Pruning threshold ψ_s,min = c_ψ·min(ψ_ref, min_t ψ_s(t)) per node (eq. 11; m of leaf
+    /// area per m of branch); 0 (never shed) on the main stem (Gravelius order 0) and the root.
+    pub psi_min: Vec<f32>,
+    /// Sky directions blocked by solids at each input node position in the environment the
+    /// tree grew in (bit k: direction k of [`Sky::dirs`]).
+    pub mask: Vec<u32>,
+    /// Sky of that environment.
+    pub sky: Sky,
+}
+
+/// Checks the skeleton: non-empty, parents before children, finite positions and radii ≥ 0.
+pub(crate) fn validate_skeleton(sk: &Skeleton) -> Result<()> {
+    let bad = |field: &str, value: String, expected: &str| Err(Error::Invalid { context: "Plastic Trees skeleton".into(), field: field.into(), value, expected: expected.into() });
+    if sk.nodes.is_empty() {
+        return bad("nodes", "0".into(), "at least the root node");
+    }
+    for (i, n) in sk.nodes.iter().enumerate() {
+        if !n.pos.is_finite() {
+            return bad(&format!("node {i} position"), n.pos.to_string(), "finite coordinates (m)");
+        }
+        if !(n.radius >= 0.0 && n.radius.is_finite()) {
+            return bad(&format!("node {i} radius"), n.radius.to_string(), "a finite radius ≥ 0 m");
+        }
+        match n.parent {
+            None if i != 0 => return bad(&format!("node {i} parent"), "none".into(), "a parent (only node 0 is the root)"),
+            Some(p) if p as usize >= i => return bad(&format!("node {i} parent"), p.to_string(), "a parent id smaller than the node's (parents first)"),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Checks the Plastic Trees parameters.
+pub(crate) fn validate_params(p: &PlasticParams) -> Result<()> {
+    let bad = |f: &str, v: String, e: &str| Err(Error::Invalid { context: "Plastic Trees".into(), field: f.into(), value: v, expected: e.into() });
+    let (wp, wg) = (p.phototropism, p.gravitropism);
+    if !(wp >= 0.0 && wg >= 0.0 && wp + wg < 1.0) {
+        return bad("phototropism/gravitropism", format!("{wp}/{wg}"), "weights ≥ 0 with a sum < 1 (eq. 7)");
+    }
+    if !(0.0..=1.0).contains(&p.translucency_gamma_c0) {
+        return bad("translucency_gamma_c0", p.translucency_gamma_c0.to_string(), "0 ..= 1 (eq. 4)");
+    }
+    if !(p.pruning_c_psi >= 0.0 && p.pruning_c_psi.is_finite()) {
+        return bad("pruning_c_psi", p.pruning_c_psi.to_string(), "a finite factor ≥ 0 (paper default 0.8, eq. 11)");
+    }
+    Ok(())
+}
+
+/// Internode length (section 4.1): the distances from every branching node and tip to its
+/// nearest branching ancestor (or the root), and the most significant mode of their
+/// distribution by mean-shift with a Gaussian kernel (bandwidth by Silverman's rule,
+/// 1.06·σ·n^(−1/5), at least 1 % of the mean); 64 starting points at the quantiles. Returns
+/// the mean segment length when the tree has no branching, and at least 1 mm.
+pub fn internode_length(sk: &Skeleton) -> f32 {
+    let n = sk.nodes.len();
+    if n < 2 {
+        return 0.1;
+    }
+    let mut d_root = vec![0.0f32; n];
+    let mut last_branch = vec![0.0f32; n]; // path distance of the nearest branching ancestor
+    let mut samples = Vec::new();
+    for k in 1..n {
+        let p = sk.nodes[k].parent.unwrap_or(0) as usize;
+        d_root[k] = d_root[p] + sk.segment_length(k);
+        let pb = sk.nodes[p].children.len() >= 2 || p == 0;
+        last_branch[k] = if pb { d_root[p] } else { last_branch[p] };
+        if sk.nodes[k].children.len() != 1 {
+            samples.push(d_root[k] - last_branch[k]);
+        }
+    }
+    samples.retain(|d| *d > 0.0);
+    if samples.is_empty() {
+        return ((1..n).map(|k| sk.segment_length(k)).sum::<f32>() / (n - 1) as f32).max(1e-3);
+    }
+    samples.sort_by(f32::total_cmp);
+    // bounded cost: at most 4,000 samples (evenly strided over the sorted list)
+    if samples.len() > 4000 {
+        let step = samples.len() as f32 / 4000.0;
+        samples = (0..4000).map(|i| samples[(i as f32 * step) as usize]).collect();
+    }
+    let m = samples.len() as f64;
+    let mean = samples.iter().map(|&x| x as f64).sum::<f64>() / m;
+    let sd = (samples.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / m).sqrt();
+    let h = (1.06 * sd * m.powf(-0.2)).max(0.01 * mean).max(1e-6);
+    let density_and_shift = |x: f64| {
+        let (mut w, mut wx) = (0.0f64, 0.0f64);
+        for &s in &samples {
+            let k = (-0.5 * ((s as f64 - x) / h).powi(2)).exp();
+            w += k;
+            wx += k * s as f64;
+        }
+        (w, if w > 0.0 { wx / w } else { x })
+    };
+    let mut best = (f64::NEG_INFINITY, mean);
+    for q in 0..64 {
+        let mut x = samples[(q * samples.len()) / 64] as f64;
+        for _ in 0..100 {
+            let (_, nx) = density_and_shift(x);
+            let done = (nx - x).abs() < 1e-6 * h;
+            x = nx;
+            if done {
+                break;
+            }
+        }
+        let (w, _) = density_and_shift(x);
+        if w > best.0 + 1e-9 {
+            best = (w, x);
+        }
+    }
+    (best.1 as f32).max(1e-3)
+}
+
+/// Relative growth rates ν̂_s of eq. (1): d_{s,l}/(d_r − d_{s,r}) with d_{s,l} the path
+/// distance from the node to its furthest leaf, d_{s,r} from the root to the node and d_r from
+/// the root to the furthest leaf; where d_{s,l} < 0.2·d_r the parent's rate is copied (root: 1).
+/// Values in (0, 1].
+pub fn growth_rates(sk: &Skeleton) -> Vec<f32> {
+    let n = sk.nodes.len();
+    let mut d_root = vec![0.0f32; n];
+    for k in 1..n {
+        let p = sk.nodes[k].parent.unwrap_or(0) as usize;
+        d_root[k] = d_root[p] + sk.segment_length(k);
+    }
+    let mut d_leaf = vec![0.0f32; n]; // distance to the furthest leaf below
+    for k in (1..n).rev() {
+        let p = sk.nodes[k].parent.unwrap_or(0) as usize;
+        d_leaf[p] = d_leaf[p].max(d_leaf[k] + sk.segment_length(k));
+    }
+    let d_r = d_leaf[0];
+    let mut nu = vec![1.0f32; n];
+    for k in 1..n {
+        let p = sk.nodes[k].parent.unwrap_or(0) as usize;
+        let rest = d_r - d_root[k];
+        nu[k] = if d_leaf[k] >= 0.2 * d_r && rest > 0.0 { (d_leaf[k] / rest).clamp(1e-3, 1.0) } else { nu[p] };
+    }
+    nu
+}
+
+/// Seasons of creation by eq. (2), t_s = t_{s_p} + (l_s/l_i)·(1/ν̂_s), rounded down (root 0),
+/// clamped to [`MAX_SEASONS`]. Our reading of eq. (2): the paper prints the factor as
+/// ν_s = ν̂_s/ν̂_min, but eq. (1) is defined so that "all branches reach their leaf nodes at the
+/// same time", which holds when a branch growing ν̂_s times as fast as the fastest axis needs
+/// 1/ν̂_s seasons per internode; with that factor every tip ends near season d_r/l_i.
+pub fn seasons(sk: &Skeleton, internode_m: f32, rates: &[f32]) -> Vec<u16> {
+    let n = sk.nodes.len();
+    let mut t = vec![0.0f32; n];
+    let mut out = vec![0u16; n];
+    for k in 1..n {
+        let p = sk.nodes[k].parent.unwrap_or(0) as usize;
+        t[k] = t[p] + sk.segment_length(k) / internode_m / rates[k].max(1e-3);
+        out[k] = (t[k].floor().max(0.0) as u32).min(MAX_SEASONS as u32) as u16;
+    }
+    out
+}
+
+/// Terminal lobes: a node created in the last [`LOBE_SEASONS`] seasons joins its parent's lobe
+/// when the parent is young too, else it starts one; a tip created earlier is a lobe of its own.
+fn lobes(sk: &Skeleton, season: &[u16], last: u16, internode_m: f32) -> Vec<Lobe> {
+    let n = sk.nodes.len();
+    let young = |k: usize| season[k] + LOBE_SEASONS > last;
+    let mut lobe_of = vec![u32::MAX; n];
+    let mut lobes: Vec<Lobe> = Vec::new();
+    for k in 1..n {
+        let p = sk.nodes[k].parent.unwrap_or(0) as usize;
+        if young(k) || sk.nodes[k].children.is_empty() {
+            if young(k) && p != 0 && young(p) && lobe_of[p] != u32::MAX {
+                lobe_of[k] = lobe_of[p];
+                lobes[lobe_of[p] as usize].nodes.push(k as u32);
+            } else {
+                lobe_of[k] = lobes.len() as u32;
+                lobes.push(Lobe { nodes: vec![k as u32], center: Vec3::ZERO, radius: 0.0 });
+            }
+        }
+    }
+    for l in &mut lobes {
+        let c = l.nodes.iter().map(|&k| sk.nodes[k as usize].pos).sum::<Vec3>() / l.nodes.len() as f32;
+        let r = l.nodes.iter().map(|&k| sk.nodes[k as usize].pos.distance(c)).fold(0.0f32, f32::max);
+        l.center = c;
+        l.radius = r.max(0.5 * internode_m);
+    }
+    lobes
+}
+
+/// Leaf clusters of every stage (section 4.2, eq. 5): going back one season at a time, a
+/// cluster whose nodes all exist stays; the others move to the nearest ancestor that exists at
+/// that stage, and clusters arriving at the same node merge with radius
+/// r_n = ∛(Σ r_i³)·Π (d_n/d_i) (d: distance from the root to the cluster centre), at least a
+/// tenth of an internode (our floor: the product of many ratios < 1 would vanish).
+fn stage_clusters(sk: &Skeleton, season: &[u16], last: u16, lobes: &[Lobe], internode_m: f32) -> Vec<Vec<StageCluster>> {
+    let root = sk.nodes[0].pos;
+    let mut stages = vec![Vec::new(); last as usize + 1];
+    let mut cur: Vec<(StageCluster, Vec3)> = lobes
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let ms = l.nodes.iter().map(|&k| season[k as usize]).max().unwrap_or(0);
+            (StageCluster { anchor: l.nodes[0], radius: l.radius, lobe: Some(i as u32), max_season: ms }, l.center)
+        })
+        .collect();
+    stages[last as usize] = cur.iter().map(|c| c.0).collect();
+    for t in (0..last).rev() {
+        let mut keep = Vec::with_capacity(cur.len());
+        let mut moved: Vec<(u32, f32, Vec3)> = Vec::new(); // (new anchor, r_i, centre_i)
+        for (c, centre) in cur {
+            if c.max_season <= t {
+                keep.push((c, centre));
+            } else {
+                let mut a = c.anchor as usize;
+                while season[a] > t && a != 0 {
+                    a = sk.nodes[a].parent.unwrap_or(0) as usize;
+                }
+                moved.push((a as u32, c.radius, centre));
+            }
+        }
+        moved.sort_by_key(|m| m.0);
+        let mut i = 0;
+        while i < moved.len() {
+            let a = moved[i].0;
+            let mut j = i;
+            let (mut r3, mut prod) = (0.0f64, 1.0f64);
+            let pa = sk.nodes[a as usize].pos;
+            let d_n = pa.distance(root) as f64;
+            while j < moved.len() && moved[j].0 == a {
+                r3 += (moved[j].1 as f64).powi(3);
+                let d_i = moved[j].2.distance(root) as f64;
+                if d_i > 0.0 {
+                    prod *= (d_n / d_i).min(1.0);
+                }
+                j += 1;
+            }
+            let r = ((r3.cbrt() * prod) as f32).max(0.1 * internode_m);
+            keep.push((StageCluster { anchor: a, radius: r, lobe: None, max_season: season[a as usize] }, pa));
+            i = j;
+        }
+        keep.sort_by_key(|c| (c.0.anchor, c.0.lobe.unwrap_or(u32::MAX)));
+        stages[t as usize] = keep.iter().map(|c| c.0).collect();
+        cur = keep;
+    }
+    stages
+}
+
+/// Inverse tropism (eqs. 8–9): the untropic unit direction d_o with w_s·d_o = p·h − t_w
+/// (t_w = (1 − w_s)·t, h and t unit), p the larger root of
+/// w_s² = p²|h|² − 2p(h·t_w) + |t_w|²; without a root, p from the first derivative (the point of
+/// the line closest to the sphere). w_s ≤ 10⁻⁶ returns h.
+pub fn inverse_tropism(h: Vec3, t: Vec3, w_s: f32) -> Vec3 {
+    inverse_parts(h, t, w_s).0
+}
+
+/// [`inverse_tropism`] with the line parameter p of eq. (8).
+fn inverse_parts(h: Vec3, t: Vec3, w_s: f32) -> (Vec3, f32) {
+    if w_s <= 1e-6 {
+        return (h, 1.0);
+    }
+    let tw = (1.0 - w_s) * t;
+    let (a, b, c) = (h.length_squared(), h.dot(tw), tw.length_squared() - w_s * w_s);
+    let disc = b * b - a * c;
+    let p = if disc >= 0.0 { (b + disc.sqrt()) / a } else { b / a };
+    (((p * h - tw) / w_s).normalize_or(h), p)
+}
+
+/// Centre of stage cluster `c` given node positions `pos`: a lobe's centroid moved by the mean
+/// offset of its nodes (section 5.2), a propagated cluster at its anchor.
+pub(crate) fn cluster_center(c: &StageCluster, lobes: &[Lobe], input: &Skeleton, pos: &[Vec3]) -> Vec3 {
+    match c.lobe {
+        Some(l) => {
+            let lobe = &lobes[l as usize];
+            let off = lobe.nodes.iter().map(|&k| pos[k as usize] - input.nodes[k as usize].pos).sum::<Vec3>() / lobe.nodes.len() as f32;
+            lobe.center + off
+        }
+        None => pos[c.anchor as usize],
+    }
+}
+
+/// The light of eq. (3) brought into 0–1 by the normalisation constant c: our reading takes c
+/// per stage as 1/max over the stage's clusters that `keep` (so ψ of eq. 10 measures how shaded
+/// a branch is relative to the best-lit part of the tree at that stage; a uniform loss of sky,
+/// e.g. a dull day, sheds nothing).
+pub(crate) fn normalised(light: &[f32], keep: impl Fn(usize) -> bool) -> Vec<f32> {
+    let m = light.iter().enumerate().filter(|(i, _)| keep(*i)).map(|(_, &l)| l).fold(0.0f32, f32::max);
+    if m > 0.0 {
+        light.iter().map(|l| l / m).collect()
+    } else {
+        light.to_vec()
+    }
+}
+
+/// True when a branch created in `season` is judged by eq. (11) at stage `t`: from its
+/// [`LOBE_SEASONS`]-th season on (our reading of "a branch that does not receive light for a
+/// longer period of time eventually dies off": a shoot has its first seasons to form a lobe).
+pub(crate) fn judged(season: u16, t: u16) -> bool {
+    t >= season + LOBE_SEASONS
+}
+
+/// Accumulates ψ_s(t) = ζ_s(t)/l_s(t) (eq. 10) for the nodes existing at stage `t`: ζ from the
+/// stage's clusters (2π r_c² i_c), l the total branch length of the stage subtree. `alive`
+/// masks pruned nodes; `zeta`/`len` are scratch of the tree's size. ψ is written for nodes of
+/// season ≤ t with length > 0, NaN elsewhere.
+pub(crate) fn psi_at_stage(sk: &Skeleton, season: &[u16], t: u16, clusters: &[StageCluster], light: &[f32], alive: &[bool], zeta: &mut [f32], len: &mut [f32], psi: &mut [f32]) {
+    let n = sk.nodes.len();
+    zeta.iter_mut().for_each(|z| *z = 0.0);
+    len.iter_mut().for_each(|z| *z = 0.0);
+    for (c, &i) in clusters.iter().zip(light) {
+        if alive[c.anchor as usize] {
+            zeta[c.anchor as usize] += 2.0 * std::f32::consts::PI * c.radius * c.radius * i;
+        }
+    }
+    for k in (1..n).rev() {
+        if season[k] > t || !alive[k] {
+            psi[k] = f32::NAN;
+            continue;
+        }
+        len[k] += sk.segment_length(k);
+        psi[k] = if len[k] > 0.0 { zeta[k] / len[k] } else { f32::NAN };
+        let p = sk.nodes[k].parent.unwrap_or(0) as usize;
+        let (z, l) = (zeta[k], len[k]);
+        zeta[p] += z;
+        len[p] += l;
+    }
+    psi[0] = f32::NAN;
+}
+
+/// Runs the analysis of section 4 on `sk` grown in `grown_in` (its obstacles and sky; the
+/// tree alone, without neighbours). `internode_m` overrides the mean-shift estimate when given.
+///
+/// Errors: [`Error::Invalid`] for a bad skeleton ([`validate_skeleton`]), bad parameters, a
+/// non-positive internode or an invalid obstacle.
+pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, internode_m: Option<f32>) -> Result<Analysis> {
+    validate_skeleton(sk)?;
+    validate_params(p)?;
+    grown_in.validate()?;
+    let l_i = match internode_m {
+        Some(l) if l > 0.0 && l.is_finite() => l,
+        Some(l) => return Err(Error::Invalid { context: "Plastic Trees".into(), field: "internode_m".into(), value: l.to_string(), expected: "a finite length > 0 m".into() }),
+        None => internode_length(sk),
+    };
+    let n = sk.nodes.len();
+    let rates = growth_rates(sk);
+    let season = seasons(sk, l_i, &rates);
+    let last = season.iter().copied().max().unwrap_or(0);
+    let lobes = lobes(sk, &season, last, l_i);
+    let stages = stage_clusters(sk, &season, last, &lobes, l_i);
+    let sky = grown_in.sky.clone();
+    let solids = Solids { obstacles: &grown_in.obstacles, ground: grown_in.ground };
+    let mask: Vec<u32> = sk.nodes.iter().map(|nd| solids.mask(&sky, nd.pos)).collect();
+    let pos: Vec<Vec3> = sk.nodes.iter().map(|nd| nd.pos).collect();
+    let mut by_season = vec![Vec::new(); last as usize + 1];
+    for (k, &s) in season.iter().enumerate().skip(1) {
+        by_season[s as usize].push(k as u32);
+    }
+    let mut light_dir = vec![Vec3::Z; n];
+    let mut stage_light = Vec::with_capacity(stages.len());
+    let alive = vec![true; n];
+    let (mut zeta, mut len, mut psi) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut psi_min_t = vec![f32::INFINITY; n];
+    let mut all_psi = Vec::new();
+    for (t, clusters) in stages.iter().enumerate() {
+        let centres: Vec<Vec3> = clusters.iter().map(|c| cluster_center(c, &lobes, sk, &pos)).collect();
+        let occ = clusters.iter().zip(&centres).map(|(c, &centre)| Occluder { center: centre, radius: c.radius, gamma: p.translucency_gamma_c0.powf(c.radius) }).collect();
+        let vols = ShadowVolumes::new(&sky, occ);
+        for &k in &by_season[t] {
+            light_dir[k as usize] = light_at(&sky, mask[k as usize], &vols, pos[k as usize]).1;
+        }
+        let li: Vec<f32> = centres.iter().map(|&c| light_at(&sky, solids.mask(&sky, c), &vols, c).0).collect();
+        psi_at_stage(sk, &season, t as u16, clusters, &normalised(&li, |_| true), &alive, &mut zeta, &mut len, &mut psi);
+        for k in 1..n {
+            if psi[k].is_finite() && judged(season[k], t as u16) {
+                psi_min_t[k] = psi_min_t[k].min(psi[k]);
+                all_psi.push(psi[k]);
+            }
+        }
+        stage_light.push(li);
+    }
+    let psi_ref = if all_psi.is_empty() {
+        0.0
+    } else {
+        let i = all_psi.len() / 20;
+        *all_psi.select_nth_unstable_by(i, f32::total_cmp).1
+    };
+    let mut psi_min: Vec<f32> = psi_min_t.iter().map(|&m| p.pruning_c_psi * psi_ref.min(m)).collect();
+    // the main stem is never shed (our addition: eq. 11 alone would shed a leader whose light
+    // falls by more than 1 − c_ψ below its historical minimum, killing the whole tree)
+    for (k, nd) in sk.nodes.iter().enumerate() {
+        if nd.gravelius == 0 {
+            psi_min[k] = 0.0;
+        }
+    }
+    let base = 1.0 - p.phototropism - p.gravitropism;
+    let mut w_s = vec![1.0f32; n];
+    let mut d_o = vec![Vec3::Z; n];
+    let mut residual = vec![Vec3::ZERO; n];
+    for k in 1..n {
+        let par = sk.nodes[k].parent.unwrap_or(0) as usize;
+        let seg = pos[k] - pos[par];
+        let l = seg.length();
+        w_s[k] = base.powf(l / l_i);
+        if l > 0.0 {
+            let (h, t) = (seg / l, tropism(p, light_dir[k]));
+            let (d, pp) = inverse_parts(h, t, w_s[k]);
+            d_o[k] = d;
+            residual[k] = pp * h - (w_s[k] * d + (1.0 - w_s[k]) * t);
+        }
+    }
+    Ok(Analysis { internode_m: l_i, growth_rate: rates, season, seasons: last, lobes, stages, stage_light, light_dir, w_s, d_o, residual, psi_ref, psi_min, mask, sky })
+}

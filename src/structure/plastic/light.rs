@@ -1,0 +1,351 @@
+//! The light model of Plastic Trees section 4.2 (Pirk et al. 2012, `000_*.txt`): eq. (3) with the
+//! sky intensity I = cos²(Δσ) around the brightest sky point and the sin θ weight, translucent
+//! leaf clusters (eq. 4, γ_c = γ_c0^r_c), solid obstacles and the terrain surface, and shadow
+//! volumes that pick the casters to test.
+
+use crate::structure::grow::space::Obstacle;
+use glam::{Vec2, Vec3};
+
+/// Zenith-angle rings of the sky quadrature and their azimuth counts (multiples of 4, so the
+/// sampling is symmetric under quarter turns about the vertical: no azimuth bias).
+const RINGS: [usize; 4] = [4, 8, 8, 12];
+
+/// Number of sky directions ([`Sky::dirs`]); fits a `u32` bit mask.
+pub const SKY_DIRS: usize = 32;
+
+/// The sky of eq. (3): directions over the upper hemisphere with quadrature weights
+/// w_k = c·I(θ_k, φ_k)·sin θ_k·Δθ·Δφ_k, I = cos²(Δσ) (Δσ: angle between the direction and the
+/// brightest sky point; I = 0 beyond 90°, our reading: the paper's cos² would rise again below
+/// the horizon of the brightest point), c such that Σ w_k = 1.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sky {
+    /// Unit direction towards the brightest sky point (z ≥ 0).
+    pub brightest: Vec3,
+    /// Unit sky directions (z > 0), exact in f32: components that are 0 analytically are 0.
+    pub dirs: Vec<Vec3>,
+    /// Weights (sum 1, ≥ 0), one per direction.
+    pub weights: Vec<f32>,
+}
+
+impl Default for Sky {
+    fn default() -> Self {
+        Sky::toward(Vec3::Z)
+    }
+}
+
+/// cos/sin of an angle computed in f64 with values below 1e-12 snapped to 0 (cos(3π/2) in f32
+/// is +1.19e-8, which made infinite walls at +x darken −y rays).
+fn exact_sin_cos(a: f64) -> (f32, f32) {
+    let snap = |v: f64| if v.abs() < 1e-12 { 0.0 } else { v as f32 };
+    (snap(a.sin()), snap(a.cos()))
+}
+
+impl Sky {
+    /// The sky with its brightest point in direction `brightest` (normalised; the zenith when it
+    /// is zero, not finite or below the horizon).
+    pub fn toward(brightest: Vec3) -> Sky {
+        let b = if brightest.is_finite() && brightest.z >= 0.0 { brightest.normalize_or(Vec3::Z) } else { Vec3::Z };
+        let dtheta = std::f64::consts::FRAC_PI_2 / RINGS.len() as f64;
+        let mut dirs = Vec::with_capacity(SKY_DIRS);
+        let mut weights = Vec::with_capacity(SKY_DIRS);
+        for (r, &n) in RINGS.iter().enumerate() {
+            let theta = (r as f64 + 0.5) * dtheta; // zenith angle
+            let (st, ct) = exact_sin_cos(theta);
+            for k in 0..n {
+                // rings offset by half a step alternately; both sets are symmetric under 90° turns
+                let phi = (k as f64 + 0.5 * (r % 2) as f64) * std::f64::consts::TAU / n as f64;
+                let (sp, cp) = exact_sin_cos(phi);
+                let d = Vec3::new(st * cp, st * sp, ct);
+                let cos_ds = d.dot(b).max(0.0);
+                dirs.push(d);
+                weights.push(cos_ds * cos_ds * st * (dtheta * std::f64::consts::TAU / n as f64) as f32);
+            }
+        }
+        let sum: f32 = weights.iter().sum();
+        if sum > 0.0 {
+            weights.iter_mut().for_each(|w| *w /= sum);
+        }
+        Sky { brightest: b, dirs, weights }
+    }
+
+    /// Global light (Plastic Trees section 6, "global light interaction"): the brightest sky
+    /// point is the noon sun at the equinox, elevation 90° − |latitude| towards the equator
+    /// (−y = south in the northern hemisphere, +y = north in the southern; +x east).
+    /// `latitude_deg` in −90..=90.
+    pub fn from_latitude(latitude_deg: f32) -> Sky {
+        let lat = latitude_deg.clamp(-90.0, 90.0);
+        let elev = (90.0 - lat.abs()).to_radians() as f64;
+        let (se, ce) = exact_sin_cos(elev);
+        let toward_equator = if lat >= 0.0 { -1.0 } else { 1.0 };
+        Sky::toward(Vec3::new(0.0, toward_equator * ce, se))
+    }
+}
+
+/// The terrain surface as a plane through `point` with upward unit `normal`: points below it are
+/// solid, rays going below it are blocked.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ground {
+    /// A point of the surface (m).
+    pub point: Vec3,
+    /// Upward unit normal.
+    pub normal: Vec3,
+}
+
+impl Ground {
+    /// Flat ground at height `z` (m).
+    pub fn flat(z: f32) -> Ground {
+        Ground { point: Vec3::new(0.0, 0.0, z), normal: Vec3::Z }
+    }
+
+    /// A slope of `slope_deg` (0–89°) through `point` falling towards azimuth `aspect_deg`
+    /// (clockwise from north = +y: 90° = east = +x, 180° = south).
+    pub fn slope(point: Vec3, slope_deg: f32, aspect_deg: f32) -> Ground {
+        let s = slope_deg.clamp(0.0, 89.0).to_radians();
+        let a = aspect_deg.to_radians();
+        let downhill = Vec3::new(a.sin(), a.cos(), 0.0);
+        Ground { point, normal: (Vec3::Z * s.cos() + downhill * s.sin()).normalize_or(Vec3::Z) }
+    }
+
+    /// Height of `p` above the surface along the normal (m; < 0 below).
+    pub fn height_of(&self, p: Vec3) -> f32 {
+        (p - self.point).dot(self.normal)
+    }
+
+    /// True when the ray from `p` in unit direction `d` is blocked by the terrain (it points
+    /// below the surface, or starts below it).
+    pub fn blocks(&self, p: Vec3, d: Vec3) -> bool {
+        self.height_of(p) < 0.0 || d.dot(self.normal) <= 0.0
+    }
+}
+
+/// A leaf cluster as a light occluder: a sphere of radius `r` (m) transmitting `gamma`
+/// (eq. 4, γ_c = γ_c0^r_c, or eq. 13 after losses).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Occluder {
+    /// Centre (m).
+    pub center: Vec3,
+    /// Radius (m, > 0).
+    pub radius: f32,
+    /// Transmittance 0–1.
+    pub gamma: f32,
+}
+
+/// Shadow volumes of a set of clusters, one grid per sky direction: the shadow volume of a
+/// cluster for direction d is the half-cylinder of its radius behind it (opposite d). Each
+/// direction's grid bins the clusters by their projection on the plane ⟂ d, so a receiver tests
+/// only the casters whose shadow volume contains it.
+#[derive(Debug, Clone)]
+pub struct ShadowVolumes {
+    occ: Vec<Occluder>,
+    grids: Vec<DirGrid>,
+}
+
+#[derive(Debug, Clone)]
+struct DirGrid {
+    d: Vec3,
+    u: Vec3,
+    v: Vec3,
+    lo: Vec2,
+    cell: f32,
+    nx: usize,
+    ny: usize,
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+const MAX_CELLS_PER_AXIS: usize = 96;
+
+impl DirGrid {
+    fn new(d: Vec3, occ: &[Occluder]) -> DirGrid {
+        let (u, v) = d.any_orthonormal_pair();
+        let proj: Vec<Vec2> = occ.iter().map(|o| Vec2::new(o.center.dot(u), o.center.dot(v))).collect();
+        let mut lo = Vec2::splat(f32::INFINITY);
+        let mut hi = Vec2::splat(f32::NEG_INFINITY);
+        let mut rsum = 0.0;
+        for (p, o) in proj.iter().zip(occ) {
+            lo = lo.min(*p - o.radius);
+            hi = hi.max(*p + o.radius);
+            rsum += o.radius;
+        }
+        if occ.is_empty() {
+            return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], items: vec![] };
+        }
+        let ext = (hi - lo).max(Vec2::splat(1e-3));
+        let mean_r = rsum / occ.len() as f32;
+        // about two cells per cluster: the grid's size follows the cluster count
+        let by_count = (ext.x * ext.y / (2.0 * occ.len() as f32)).sqrt();
+        let cell = (2.0 * mean_r).max(by_count).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
+        let nx = ((ext.x / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
+        let ny = ((ext.y / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
+        let range = |p: Vec2, r: f32| {
+            let a = ((p - r - lo) / cell).floor();
+            let b = ((p + r - lo) / cell).floor();
+            let cx = |x: f32, n: usize| (x.max(0.0) as usize).min(n - 1);
+            (cx(a.x, nx), cx(b.x, nx), cx(a.y, ny), cx(b.y, ny))
+        };
+        let mut count = vec![0u32; nx * ny + 1];
+        for (p, o) in proj.iter().zip(occ) {
+            let (x0, x1, y0, y1) = range(*p, o.radius);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    count[y * nx + x + 1] += 1;
+                }
+            }
+        }
+        for i in 1..count.len() {
+            count[i] += count[i - 1];
+        }
+        let mut fill = count.clone();
+        let mut items = vec![0u32; count[nx * ny] as usize];
+        for (i, (p, o)) in proj.iter().zip(occ).enumerate() {
+            let (x0, x1, y0, y1) = range(*p, o.radius);
+            for y in y0..=y1 {
+                for x in x0..=x1 {
+                    let c = y * nx + x;
+                    items[fill[c] as usize] = i as u32;
+                    fill[c] += 1;
+                }
+            }
+        }
+        DirGrid { d, u, v, lo, cell, nx, ny, start: count, items }
+    }
+
+    fn candidates(&self, p: Vec3) -> &[u32] {
+        if self.nx == 0 {
+            return &[];
+        }
+        let q = (Vec2::new(p.dot(self.u), p.dot(self.v)) - self.lo) / self.cell;
+        if q.x < 0.0 || q.y < 0.0 {
+            return &[];
+        }
+        let (x, y) = (q.x as usize, q.y as usize);
+        if x >= self.nx || y >= self.ny {
+            return &[];
+        }
+        let c = y * self.nx + x;
+        &self.items[self.start[c] as usize..self.start[c + 1] as usize]
+    }
+}
+
+impl ShadowVolumes {
+    /// Shadow volumes of `occ` for every direction of `sky`.
+    pub fn new(sky: &Sky, occ: Vec<Occluder>) -> ShadowVolumes {
+        let grids = sky.dirs.iter().map(|&d| DirGrid::new(d, &occ)).collect();
+        ShadowVolumes { occ, grids }
+    }
+
+    /// The occluders.
+    pub fn occluders(&self) -> &[Occluder] {
+        &self.occ
+    }
+
+    /// Transmittance Π γ of the clusters on the ray from `p` along sky direction `k`; clusters
+    /// containing `p` do not shade it.
+    pub fn transmittance(&self, k: usize, p: Vec3) -> f32 {
+        let g = &self.grids[k];
+        let mut t = 1.0f32;
+        for &i in g.candidates(p) {
+            let o = &self.occ[i as usize];
+            let oc = o.center - p;
+            let l2 = oc.length_squared();
+            let r2 = o.radius * o.radius;
+            if l2 <= r2 {
+                continue;
+            }
+            let along = oc.dot(g.d);
+            if along > 0.0 && l2 - along * along <= r2 {
+                t *= o.gamma;
+                if t < 1e-4 {
+                    return 0.0;
+                }
+            }
+        }
+        t
+    }
+}
+
+/// Solid things of eq. (3) (transmittance 0): obstacles and the terrain surface.
+#[derive(Debug, Clone, Copy)]
+pub struct Solids<'a> {
+    /// Obstacles.
+    pub obstacles: &'a [Obstacle],
+    /// Terrain surface, if any.
+    pub ground: Option<Ground>,
+}
+
+impl Solids<'_> {
+    /// Bit k set when sky direction k is blocked at `p` by an obstacle or the terrain.
+    pub fn mask(&self, sky: &Sky, p: Vec3) -> u32 {
+        let mut m = 0u32;
+        for (k, &d) in sky.dirs.iter().enumerate() {
+            if self.ground.is_some_and(|g| g.blocks(p, d)) || self.obstacles.iter().any(|o| o.ray_hits(p, d, f32::INFINITY)) {
+                m |= 1 << k;
+            }
+        }
+        m
+    }
+}
+
+/// Light at `p` by eq. (3): (i(p) in 0–1, average light direction: the same integral of the unit
+/// directions, normalised; straight up when no light arrives). `blocked` is the
+/// [`Solids::mask`] at `p`.
+pub fn light_at(sky: &Sky, blocked: u32, vols: &ShadowVolumes, p: Vec3) -> (f32, Vec3) {
+    let mut sum = 0.0f32;
+    let mut dir = Vec3::ZERO;
+    for k in 0..sky.dirs.len() {
+        let w = sky.weights[k];
+        if blocked & (1 << k) != 0 || w == 0.0 {
+            continue;
+        }
+        let t = vols.transmittance(k, p);
+        sum += w * t;
+        dir += sky.dirs[k] * (w * t);
+    }
+    (sum, dir.normalize_or(Vec3::Z))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sky_weights_and_exact_directions() {
+        let s = Sky::default();
+        assert_eq!(s.dirs.len(), SKY_DIRS);
+        assert!((s.weights.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+        // a direction at azimuth 270° has x exactly 0 (f32 cos(3π/2) would be 1.19e-8)
+        assert!(s.dirs.iter().any(|d| d.x == 0.0 && d.y < 0.0));
+        // symmetric: the weighted mean direction is the zenith
+        let m: Vec3 = s.dirs.iter().zip(&s.weights).map(|(d, w)| *d * *w).sum();
+        assert!(m.x.abs() < 1e-6 && m.y.abs() < 1e-6 && m.z > 0.5);
+        // the brightest point at the zenith: I = cos²θ, so the zenith ring outweighs the horizon
+        assert!(s.weights[0] > s.weights[SKY_DIRS - 1]);
+    }
+
+    #[test]
+    fn infinite_wall_does_not_darken_rays_parallel_to_it() {
+        let s = Sky::default();
+        let wall = [Obstacle::Wall { x: 1.0 }];
+        let m = Solids { obstacles: &wall, ground: None }.mask(&s, Vec3::new(0.0, 0.0, 2.0));
+        // rays with d.x > 0 can reach x = 1; rays with d.x ≤ 0 cannot
+        for (k, d) in s.dirs.iter().enumerate() {
+            assert_eq!(m & (1 << k) != 0, d.x > 0.0, "direction {d}");
+        }
+    }
+
+    #[test]
+    fn cluster_transmittance_eq4() {
+        let s = Sky::default();
+        let c = Occluder { center: Vec3::new(0.0, 0.0, 5.0), radius: 1.0, gamma: 0.5f32.powf(1.0) };
+        let v = ShadowVolumes::new(&s, vec![c, Occluder { center: Vec3::new(0.0, 0.0, 8.0), ..c }]);
+        // the low ring (zenith angle 78.75°) passes beside both clusters
+        assert_eq!(v.transmittance(SKY_DIRS - 1, Vec3::ZERO), 1.0);
+        // straight up through both clusters: 0.5²
+        let up = ShadowVolumes::new(&Sky { brightest: Vec3::Z, dirs: vec![Vec3::Z], weights: vec![1.0] }, v.occluders().to_vec());
+        assert!((up.transmittance(0, Vec3::ZERO) - 0.25).abs() < 1e-6);
+        // inside a cluster: not shaded by it
+        assert!((up.transmittance(0, Vec3::new(0.0, 0.0, 5.2)) - 0.5).abs() < 1e-6);
+        let (i, _) = light_at(&Sky { brightest: Vec3::Z, dirs: vec![Vec3::Z], weights: vec![1.0] }, 0, &up, Vec3::ZERO);
+        assert!((i - 0.25).abs() < 1e-6);
+    }
+}

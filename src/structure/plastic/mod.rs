@@ -1,0 +1,281 @@
+//! Plastic Trees (Pirk, Stava, Kratt, Massih Said, Neubert, Měch, Benes & Deussen 2012,
+//! `000_*.txt`): a grown skeleton is analysed once (section 4, [`analysis`]) and then bent and
+//! pruned, level by level of branch age, whenever its light, obstacles or neighbouring trees
+//! change (sections 5–6, [`transform`]), instead of being regrown.
+//!
+//! - [`light`]: eq. (3) with the sky intensity I = cos²(Δσ) and the sin θ weight, leaf-cluster
+//!   translucency (eq. 4), obstacles, the terrain, shadow volumes.
+//! - [`analysis`]: internode length by mean-shift, growth rate (eq. 1), season of every node
+//!   (eq. 2), terminal lobes and their younger versions (eq. 5), the temporal light of the
+//!   tree's life, inverse tropism (eqs. 6–9), pruning thresholds (eqs. 10–11).
+//! - [`transform`]: bending by eq. (6) with the new light, rotations propagated to children,
+//!   flexibility by age, pruning after every level, clusters moved and thinned (eqs. 12–13),
+//!   obstacles cutting lobes (Fig. 4), tree–obstacle and tree–tree interaction, and incremental
+//!   recomputation of only the subtrees whose light or obstacles changed.
+//!
+//! - [`evaluation`]: section 7, Table 1 (sets O, G, T; edit distances; t-tests).
+//!
+//! Use: [`PlasticTree::analyse`] each tree once (in the environment it grew in, alone), place
+//! it ([`PlasticTree::translate`]), then call [`adapt_group`] with the trees that share a
+//! neighbourhood and the [`Environment`] whenever something changes; [`PlasticTree::skeleton`]
+//! gives the adapted skeleton. [`adapt`] does all of it for one tree.
+
+pub mod analysis;
+pub mod evaluation;
+pub mod light;
+pub mod transform;
+
+pub use analysis::{inverse_tropism, Analysis};
+pub use light::{Ground, Sky};
+pub use transform::{adapt_group, GroupReport};
+
+use crate::error::{Error, Result};
+use crate::species::PlasticParams;
+use crate::structure::grow::space::{validate_obstacles, Obstacle};
+use crate::structure::skeleton::Skeleton;
+use glam::{Quat, Vec3};
+
+/// Tropism direction t of eq. (6) for phototropism towards the light direction `light` and
+/// gravitropism (negative geotropism, +z): (w_p·L + w_g·ẑ)/(w_p + w_g), normalised; +z when
+/// both weights are 0.
+pub fn tropism(p: &PlasticParams, light: Vec3) -> Vec3 {
+    let (wp, wg) = (p.phototropism, p.gravitropism);
+    if wp + wg <= 0.0 {
+        return Vec3::Z;
+    }
+    ((wp * light + wg * Vec3::Z) / (wp + wg)).normalize_or(Vec3::Z)
+}
+
+/// What a tree adapts to: solid obstacles (boxes, finite or infinite walls, spheres), the
+/// terrain surface and the sky (global light, section 6).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Environment {
+    /// Solid obstacles (m, world coordinates).
+    pub obstacles: Vec<Obstacle>,
+    /// Terrain surface; `None`: no ground (nothing below is pruned).
+    pub ground: Option<Ground>,
+    /// The sky.
+    pub sky: Sky,
+}
+
+impl Default for Environment {
+    fn default() -> Self {
+        Environment::open()
+    }
+}
+
+impl Environment {
+    /// Open space: flat ground at z = 0, the brightest sky point at the zenith, no obstacles.
+    pub fn open() -> Environment {
+        Environment { obstacles: Vec::new(), ground: Some(Ground::flat(0.0)), sky: Sky::default() }
+    }
+
+    /// Open space with `obstacles`.
+    pub fn with_obstacles(obstacles: &[Obstacle]) -> Environment {
+        Environment { obstacles: obstacles.to_vec(), ..Environment::open() }
+    }
+
+    /// Global light (section 6): the sky of [`Sky::from_latitude`] and a terrain slope of
+    /// `slope_deg` (0–89°) through `point` falling towards `aspect_deg` (clockwise from
+    /// north, +y).
+    pub fn global(latitude_deg: f32, slope_deg: f32, aspect_deg: f32, point: Vec3, obstacles: &[Obstacle]) -> Environment {
+        Environment { obstacles: obstacles.to_vec(), ground: Some(Ground::slope(point, slope_deg, aspect_deg)), sky: Sky::from_latitude(latitude_deg) }
+    }
+
+    /// Checks the obstacles ([`validate_obstacles`]) and the ground.
+    ///
+    /// Errors: [`Error::Invalid`] naming the bad obstacle or ground field.
+    pub fn validate(&self) -> Result<()> {
+        validate_obstacles(&self.obstacles)?;
+        if let Some(g) = self.ground {
+            if !g.point.is_finite() || !g.normal.is_finite() || g.normal.z <= 0.0 {
+                return Err(Error::Invalid { context: "Plastic Trees environment".into(), field: "ground".into(), value: format!("point {}, normal {}", g.point, g.normal), expected: "finite values and an upward normal (z > 0)".into() });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Why a node of the input is missing from the adapted tree.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Fate {
+    /// Present.
+    Alive,
+    /// Shed for lack of light (eq. 11), or below a shed node.
+    Light,
+    /// Removed because it (or its segment, or an ancestor) entered an obstacle, the ground or
+    /// another tree's wood.
+    Collision,
+}
+
+/// What an adaptation did to one tree.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PlasticReport {
+    /// Segments whose own direction turned by more than 1° relative to their parent's
+    /// rotation (segments that only follow a bent parent are not counted).
+    pub bent: usize,
+    /// Nodes shed for lack of light (eq. 11), subtrees included.
+    pub pruned_light: usize,
+    /// Nodes removed by collisions (obstacles, ground, other trees' wood), subtrees included.
+    pub pruned_collision: usize,
+    /// Nodes of the input skeleton.
+    pub nodes_before: usize,
+    /// Nodes of the adapted skeleton.
+    pub nodes_after: usize,
+    /// Nodes whose bending was recomputed by this call (the subtrees whose light or obstacles
+    /// changed since the previous call).
+    pub recomputed_nodes: usize,
+}
+
+/// One tree ready for adaptation: its input skeleton, the analysis of section 4 and its
+/// current adapted state.
+#[derive(Debug, Clone)]
+pub struct PlasticTree {
+    pub(crate) input: Skeleton,
+    pub(crate) params: PlasticParams,
+    pub(crate) analysis: Analysis,
+    /// Smallest distance (m) every node keeps from obstacles (e.g. the leaf length, so leaf
+    /// cards stay outside).
+    pub clearance_m: f32,
+    /// Segments of this radius (m) or thicker are solid wood for other trees.
+    pub wood_radius_m: f32,
+    pub(crate) pos: Vec<Vec3>,
+    pub(crate) rot: Vec<Quat>,
+    pub(crate) bend: Vec<f32>,
+    pub(crate) fate: Vec<Fate>,
+    pub(crate) light_cache: Vec<Vec<f32>>,
+    pub(crate) sig: Vec<u64>,
+    pub(crate) sky: Sky,
+    pub(crate) force: bool,
+    pub(crate) report: PlasticReport,
+}
+
+impl PlasticTree {
+    /// Analyses `sk` (section 4) as grown in `grown_in` (the obstacles it grew beside and its
+    /// sky, without neighbours), with the species' Plastic Trees parameters; `internode_m`
+    /// overrides the mean-shift internode estimate. The adapted state starts as the input.
+    ///
+    /// Errors: see [`analysis::analyse`].
+    pub fn analyse(sk: &Skeleton, params: &PlasticParams, grown_in: &Environment, internode_m: Option<f32>) -> Result<PlasticTree> {
+        let analysis = analysis::analyse(sk, params, grown_in, internode_m)?;
+        let n = sk.nodes.len();
+        Ok(PlasticTree {
+            input: sk.clone(),
+            params: *params,
+            light_cache: analysis.stage_light.clone(),
+            sig: analysis.mask.iter().map(|&m| m as u64).collect(),
+            sky: analysis.sky.clone(),
+            analysis,
+            clearance_m: 0.0,
+            wood_radius_m: 0.02,
+            pos: sk.nodes.iter().map(|nd| nd.pos).collect(),
+            rot: vec![Quat::IDENTITY; n],
+            bend: vec![0.0; n],
+            fate: vec![Fate::Alive; n],
+            force: false,
+            report: PlasticReport { nodes_before: n, nodes_after: n, ..Default::default() },
+        })
+    }
+
+    /// Moves the tree (input, analysis and state) by `offset` (m). Obstacles of the
+    /// environment it grew in are not moved; call before adapting it among others.
+    pub fn translate(&mut self, offset: Vec3) {
+        for nd in &mut self.input.nodes {
+            nd.pos += offset;
+        }
+        for p in &mut self.pos {
+            *p += offset;
+        }
+        for l in &mut self.analysis.lobes {
+            l.center += offset;
+        }
+    }
+
+    /// The analysis (section 4).
+    pub fn analysis(&self) -> &Analysis {
+        &self.analysis
+    }
+
+    /// The input skeleton (as analysed, translated).
+    pub fn input(&self) -> &Skeleton {
+        &self.input
+    }
+
+    /// Fate of every input node after the last adaptation.
+    pub fn fates(&self) -> &[Fate] {
+        &self.fate
+    }
+
+    /// Current positions of every input node (m; pruned nodes keep their last computed place).
+    pub fn positions(&self) -> &[Vec3] {
+        &self.pos
+    }
+
+    /// Own bend angle of every input node (radians; 0 for the root).
+    pub fn bend_angles(&self) -> &[f32] {
+        &self.bend
+    }
+
+    /// Report of the last adaptation.
+    pub fn report(&self) -> PlasticReport {
+        self.report
+    }
+
+    /// Makes the next adaptation recompute every node (not only the changed subtrees).
+    pub fn invalidate(&mut self) {
+        self.force = true;
+    }
+
+    /// Current leaf clusters of the full-grown stage: (centre (m), radius (m)) of every lobe
+    /// with a living node, moved with its nodes (section 5.2).
+    pub fn clusters(&self) -> Vec<(Vec3, f32)> {
+        self.analysis
+            .lobes
+            .iter()
+            .filter(|l| l.nodes.iter().any(|&k| self.fate[k as usize] == Fate::Alive))
+            .map(|l| {
+                let off = l.nodes.iter().map(|&k| self.pos[k as usize] - self.input.nodes[k as usize].pos).sum::<Vec3>() / l.nodes.len() as f32;
+                (l.center + off, l.radius)
+            })
+            .collect()
+    }
+
+    /// The adapted skeleton: input radii and topology with the current positions, pruned
+    /// subtrees removed and tips re-marked (the input itself, bit for bit, when nothing moved
+    /// or was pruned).
+    pub fn skeleton(&self) -> Skeleton {
+        let mut out = self.input.clone();
+        for (nd, &p) in out.nodes.iter_mut().zip(&self.pos) {
+            nd.pos = p;
+        }
+        let remove: Vec<bool> = self.fate.iter().map(|f| *f != Fate::Alive).collect();
+        if remove.iter().any(|&r| r) {
+            out.prune(&remove);
+            out.mark_tips();
+        }
+        out
+    }
+
+    /// Adapts this tree alone to `env` ([`adapt_group`] with one tree).
+    ///
+    /// Errors: see [`adapt_group`].
+    pub fn adapt(&mut self, env: &Environment) -> Result<PlasticReport> {
+        let g = adapt_group(std::slice::from_mut(self), env)?;
+        Ok(g.trees[0])
+    }
+}
+
+/// Adapts `sk`, grown in the open, to `obstacles` with the species' Plastic Trees parameters;
+/// `internode_m` (> 0 m) is the internode length l_i of eq. (7) (instead of the mean-shift
+/// estimate). Returns the adapted skeleton and the report; with no obstacles the tree is
+/// returned unchanged. For a tree grown beside obstacles, or several trees, use
+/// [`PlasticTree`] and [`adapt_group`].
+///
+/// Errors: [`Error::Invalid`] for an invalid obstacle or skeleton, `internode_m` ≤ 0, tropism
+/// weights outside 0 ≤ w_p, w_g with w_p + w_g < 1, γ_c0 outside 0–1, or c_ψ < 0.
+pub fn adapt(sk: &Skeleton, p: &PlasticParams, obstacles: &[Obstacle], internode_m: f32) -> Result<(Skeleton, PlasticReport)> {
+    validate_obstacles(obstacles)?;
+    let mut t = PlasticTree::analyse(sk, p, &Environment::open(), Some(internode_m))?;
+    let rep = t.adapt(&Environment::with_obstacles(obstacles))?;
+    Ok((t.skeleton(), rep))
+}

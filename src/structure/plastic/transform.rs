@@ -1,0 +1,390 @@
+//! Transformations and interactions of Plastic Trees sections 5–6 (Pirk et al. 2012,
+//! `000_*.txt`): trees are bent and pruned level by level of branch age in a changed
+//! environment, alone or several together.
+//!
+//! Per call of [`adapt_group`]:
+//! 1. **What changed.** For every input node the sky directions blocked by solids (obstacles,
+//!    terrain) and by the other trees' leaf clusters are computed as a bit signature; nodes whose
+//!    signature differs from the previous call, and the children of a recomputed node that
+//!    turned by more than [`ROTATION_EPS`], are recomputed; the others (which only follow
+//!    their parent's displacement)
+//!    keep their state (section 5: "parts of the tree are transformed only when required"). A
+//!    changed sky (global light) recomputes everything.
+//! 2. **Levels.** All trees are processed together by season: with G the largest number of
+//!    seasons in the group, a tree of T seasons processes its season t at global level
+//!    g = t + (G − T), so the younger trees' schedules end with the others' (section 6,
+//!    tree–tree interaction). At each level the leaf clusters of every tree at its stage (moved
+//!    with their nodes, section 5.2; cut by obstacles, Fig. 4: the radius shrinks to the distance
+//!    from the centre to the obstacle and a cluster whose centre is inside is removed;
+//!    translucency γ_c = γ_c0^r_c (eq. 4) raised to n_c/n_0 when nodes of it were removed
+//!    (eq. 13)) cast shadows through [`ShadowVolumes`].
+//! 3. **Bending (eq. 6)** of every recomputed node created in that season:
+//!    h' = w_s·(Q_parent d_o) + (1 − w_s)·t', with d_o the untropic direction from the analysis,
+//!    Q_parent the parent's rotation (so a turn propagates to the children), w_s of eq. (7) and
+//!    t' = t + κ·(t(L') − t), L' the new average light direction at the node, t the tropism it
+//!    grew with. κ = 1 − a/(T + 1), a = T − season the branch age in years: old trunks bend
+//!    little, but they bend (our form of "transform individual branch segments according to
+//!    their estimated age", section 5.1). A node that enters an obstacle or the ground (closer
+//!    than `clearance_m`), or whose segment crosses one, is removed with its subtree.
+//! 4. **Pruning (section 5.1)** after every level: ψ_s(t) = ζ_s(t)/l_s(t) from the light on the
+//!    stage's clusters (eq. 10; light normalised per stage by its best-lit cluster, see
+//!    [`super::analysis::Analysis::stage_light`]); a branch with ψ_s(t) < ψ_s,min (eq. 11) is shed with its
+//!    children. Cluster light is evaluated at the moved cluster centres with the level's
+//!    shadow volumes (built before the level's bending).
+//! 5. **Leaf density (eq. 12)** ρ_l = ρ_l0·ρ(i)/ρ(i_l0) with ρ(i) = i (linear), reported per
+//!    lobe by [`cluster_density`].
+//! 6. **Wood of other trees** (segments at least `wood_radius_m` thick) is solid: nodes inside it
+//!    are removed after the levels; the other trees' leaf clusters are not solid (they overlap
+//!    and share the space, section 5.2).
+//!
+//! Approximation: a node whose signature did not change keeps its state even when moved
+//! clusters of recomputed subtrees now shade it differently.
+
+use super::analysis::{cluster_center, judged, normalised, psi_at_stage};
+use super::light::{light_at, Occluder, ShadowVolumes, Solids};
+use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
+use crate::error::Result;
+use crate::structure::grow::space::Obstacle;
+use glam::{IVec3, Quat, Vec3};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// What an [`adapt_group`] call did.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct GroupReport {
+    /// One report per tree, in the order given.
+    pub trees: Vec<PlasticReport>,
+    /// Nodes recomputed over all trees.
+    pub recomputed_nodes: usize,
+    /// Global levels (seasons) processed.
+    pub levels: usize,
+}
+
+/// Leaf density ρ_l of eq. (12) for a cluster of initial density `rho0` at initial light `i0`,
+/// now at light `i` (both 0–1), with ρ(i) = i: ρ_l0·i/i_0 (ρ_l0 when i_0 = 0).
+pub fn cluster_density(rho0: f32, i0: f32, i: f32) -> f32 {
+    if i0 > 0.0 {
+        rho0 * i / i0
+    } else {
+        rho0
+    }
+}
+
+/// Translucency of a cluster after losing nodes, eq. (13): γ_c' = γ_c^(n_c/n_0).
+pub fn thinned_translucency(gamma_c: f32, n_c: usize, n_0: usize) -> f32 {
+    if n_0 == 0 {
+        return gamma_c;
+    }
+    gamma_c.powf(n_c as f32 / n_0 as f32)
+}
+
+/// Capsules of solid wood of one tree (segments ≥ its `wood_radius_m`), hashed on a grid.
+struct Wood {
+    segs: Vec<(Vec3, Vec3, f32)>,
+    cell: f32,
+    grid: HashMap<IVec3, Vec<u32>>,
+}
+
+impl Wood {
+    fn of(t: &PlasticTree) -> Wood {
+        let mut segs = Vec::new();
+        for k in 1..t.input.nodes.len() {
+            let r = t.input.nodes[k].radius;
+            if t.fate[k] == Fate::Alive && r >= t.wood_radius_m {
+                let p = t.input.nodes[k].parent.unwrap_or(0) as usize;
+                segs.push((t.pos[p], t.pos[k], r));
+            }
+        }
+        let cell = (2.0 * t.analysis.internode_m).max(0.1);
+        let mut grid: HashMap<IVec3, Vec<u32>> = HashMap::new();
+        for (i, &(a, b, r)) in segs.iter().enumerate() {
+            let lo = ((a.min(b) - r) / cell).floor().as_ivec3();
+            let hi = ((a.max(b) + r) / cell).floor().as_ivec3();
+            for z in lo.z..=hi.z {
+                for y in lo.y..=hi.y {
+                    for x in lo.x..=hi.x {
+                        grid.entry(IVec3::new(x, y, z)).or_default().push(i as u32);
+                    }
+                }
+            }
+        }
+        Wood { segs, cell, grid }
+    }
+
+    fn contains(&self, p: Vec3) -> bool {
+        let Some(list) = self.grid.get(&(p / self.cell).floor().as_ivec3()) else { return false };
+        list.iter().any(|&i| {
+            let (a, b, r) = self.segs[i as usize];
+            let ab = b - a;
+            let t = if ab.length_squared() > 0.0 { ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0) } else { 0.0 };
+            p.distance_squared(a + ab * t) <= r * r
+        })
+    }
+}
+
+/// True when node position `p` (segment from `a`) collides: closer than `clear` to an obstacle,
+/// below the ground, or the segment crosses an obstacle.
+fn collides(env: &Environment, a: Vec3, p: Vec3, clear: f32) -> bool {
+    if env.ground.is_some_and(|g| g.height_of(p) < 0.0) {
+        return true;
+    }
+    let mid = 0.5 * (a + p);
+    env.obstacles.iter().any(|o| {
+        if o.signed_distance(p) < clear || o.signed_distance(mid) < clear {
+            return true;
+        }
+        let d = p - a;
+        let l = d.length();
+        l > 0.0 && o.ray_hits(a, d / l, l)
+    })
+}
+
+/// Smallest signed distance from `c` to the obstacles (m; +∞ without obstacles).
+fn obstacle_distance(obs: &[Obstacle], c: Vec3) -> f32 {
+    obs.iter().map(|o| o.signed_distance(c)).fold(f32::INFINITY, f32::min)
+}
+
+/// The occluders of tree `t` at stage `s`: its stage clusters at their current centres, cut by
+/// obstacles, with translucency by eqs. (4) and (13); dead clusters are left out. Returns
+/// (occluder or None per stage cluster).
+fn stage_occluders(t: &PlasticTree, s: usize, env: &Environment) -> Vec<Option<Occluder>> {
+    let a = &t.analysis;
+    a.stages[s]
+        .iter()
+        .map(|c| {
+            let (n_c, n_0) = match c.lobe {
+                Some(l) => {
+                    let nodes = &a.lobes[l as usize].nodes;
+                    (nodes.iter().filter(|&&k| t.fate[k as usize] == Fate::Alive).count(), nodes.len())
+                }
+                None => ((t.fate[c.anchor as usize] == Fate::Alive) as usize, 1),
+            };
+            if n_c == 0 {
+                return None;
+            }
+            let centre = cluster_center(c, &a.lobes, &t.input, &t.pos);
+            let r = c.radius.min(obstacle_distance(&env.obstacles, centre));
+            if !(r > 0.0) {
+                return None;
+            }
+            let gamma = thinned_translucency(t.params.translucency_gamma_c0.powf(r), n_c, n_0);
+            Some(Occluder { center: centre, radius: r, gamma })
+        })
+        .collect()
+}
+
+/// Adapts several trees together to `env` and to each other (sections 5–6; see the module
+/// documentation for the steps). Each tree sees the others' leaf clusters as translucent
+/// occluders and their wood as solid. Deterministic and independent of the thread count
+/// (trees are processed in parallel with rayon, each writing only its own state). Calling it
+/// again after a change recomputes only the subtrees whose light or obstacles changed; the
+/// report says how many nodes that was.
+///
+/// Errors: [`crate::Error::Invalid`] for an invalid environment (obstacle or ground).
+pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<GroupReport> {
+    env.validate()?;
+    let solids = Solids { obstacles: &env.obstacles, ground: env.ground };
+    let sky = &env.sky;
+    // 1. signatures: solids and the other trees' input-time clusters at the final stage
+    let neighbours: Vec<(usize, Occluder)> = trees
+        .iter()
+        .enumerate()
+        .flat_map(|(i, t)| {
+            let n = t.input.nodes.len();
+            let pos: Vec<Vec3> = (0..n).map(|k| t.input.nodes[k].pos).collect();
+            let s = t.analysis.seasons as usize;
+            t.analysis.stages[s]
+                .iter()
+                .map(|c| (i, Occluder { center: cluster_center(c, &t.analysis.lobes, &t.input, &pos), radius: c.radius, gamma: t.params.translucency_gamma_c0.powf(c.radius) }))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let group = trees.len() > 1;
+    let others: Vec<ShadowVolumes> = if group {
+        (0..trees.len()).map(|i| ShadowVolumes::new(sky, neighbours.iter().filter(|(j, _)| *j != i).map(|(_, o)| *o).collect())).collect()
+    } else {
+        Vec::new()
+    };
+    let own: Vec<Vec<bool>> = trees
+        .par_iter_mut()
+        .enumerate()
+        .map(|(i, t)| {
+            let n = t.input.nodes.len();
+            let all = t.force || t.sky != *sky;
+            let mut dirty = vec![false; n];
+            for k in 0..n {
+                let p = t.input.nodes[k].pos;
+                let mut sig = solids.mask(sky, p) as u64;
+                if group {
+                    for d in 0..sky.dirs.len() {
+                        if others[i].transmittance(d, p) < 1.0 {
+                            sig |= 1u64 << (32 + d);
+                        }
+                    }
+                }
+                dirty[k] = all || sig != t.sig[k];
+                t.sig[k] = sig;
+            }
+            // every node may be shed anew: light pruning is re-evaluated each call
+            for f in &mut t.fate {
+                *f = Fate::Alive;
+            }
+            t.force = false;
+            t.sky = sky.clone();
+            dirty
+        })
+        .collect();
+    // 2.–4. levels; a node is recomputed when its own signature changed or its parent moved
+    let mut work: Vec<Work> = own.into_iter().map(|own| Work { moved: vec![false; own.len()], shifted: vec![false; own.len()], done: vec![false; own.len()], own }).collect();
+    let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
+    for g in 0..=g_max {
+        let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
+        let occ: Vec<Vec<Option<Occluder>>> = trees.par_iter().map(|t| stage_of(t).map(|s| stage_occluders(t, s, env)).unwrap_or_default()).collect();
+        let vols = ShadowVolumes::new(sky, occ.iter().flatten().flatten().copied().collect());
+        trees.par_iter_mut().zip(&mut work).zip(&occ).for_each(|((t, w), occ)| {
+            let Some(s) = stage_of(t) else { return };
+            level(t, s, w, occ, env, &solids, &vols);
+        });
+    }
+    // 6. wood of the other trees, then the report
+    if group {
+        let wood: Vec<Wood> = trees.iter().map(Wood::of).collect();
+        trees.par_iter_mut().enumerate().for_each(|(i, t)| {
+            for k in 1..t.input.nodes.len() {
+                let p = t.input.nodes[k].parent.unwrap_or(0) as usize;
+                if t.fate[p] != Fate::Alive {
+                    if t.fate[k] == Fate::Alive {
+                        t.fate[k] = t.fate[p];
+                    }
+                } else if t.fate[k] == Fate::Alive && wood.iter().enumerate().any(|(j, w)| j != i && w.contains(t.pos[k])) {
+                    t.fate[k] = Fate::Collision;
+                }
+            }
+        });
+    }
+    let mut rep = GroupReport { trees: Vec::with_capacity(trees.len()), recomputed_nodes: 0, levels: g_max + 1 };
+    for (t, w) in trees.iter_mut().zip(&work) {
+        let d = &w.done;
+        let n = t.input.nodes.len();
+        let mut r = PlasticReport { nodes_before: n, recomputed_nodes: d.iter().filter(|&&x| x).count(), ..Default::default() };
+        for k in 0..n {
+            match t.fate[k] {
+                Fate::Alive => {
+                    r.nodes_after += 1;
+                    if t.bend[k] > 1f32.to_radians() {
+                        r.bent += 1;
+                    }
+                }
+                Fate::Light => r.pruned_light += 1,
+                Fate::Collision => r.pruned_collision += 1,
+            }
+        }
+        rep.recomputed_nodes += r.recomputed_nodes;
+        t.report = r;
+        rep.trees.push(r);
+    }
+    Ok(rep)
+}
+
+/// Per-tree flags of one [`adapt_group`] call: `own` (signature changed), `moved` (position or
+/// rotation changed by this call), `done` (recomputed).
+struct Work {
+    own: Vec<bool>,
+    moved: Vec<bool>,
+    shifted: Vec<bool>,
+    done: Vec<bool>,
+}
+
+/// Turn (radians, 0.057°) below which a recomputed node's children are not recomputed: they keep
+/// their rotation and follow the node's displacement.
+pub const ROTATION_EPS: f32 = 1e-3;
+
+/// One level (stage `s`) of one tree: bend its recomputed season-`s` nodes, refresh the light on
+/// its recomputed stage clusters, prune by eq. (11).
+fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &Solids, vols: &ShadowVolumes) {
+    let n = t.input.nodes.len();
+    let a = &t.analysis;
+    let last = a.seasons as f32;
+    let sky = &env.sky;
+    for k in 1..n {
+        if a.season[k] as usize != s {
+            continue;
+        }
+        let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
+        if t.fate[par] != Fate::Alive {
+            t.fate[k] = t.fate[par];
+        }
+        if !(w.own[k] || w.moved[par]) {
+            // not recomputed: keeps its rotation, follows its parent's (small) displacement
+            if w.shifted[par] {
+                t.pos[k] = t.pos[par] + t.rot[k] * (t.input.nodes[k].pos - t.input.nodes[par].pos);
+                w.shifted[k] = true;
+                if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
+                    t.fate[k] = Fate::Collision;
+                }
+            }
+            continue;
+        }
+        w.done[k] = true;
+        let (old_pos, old_rot) = (t.pos[k], t.rot[k]);
+        let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
+        let len = seg.length();
+        let q_par = t.rot[par];
+        let mut q = q_par;
+        let mut bend = 0.0;
+        if len > 0.0 {
+            let h = seg / len;
+            let p_c = t.pos[par] + q_par * seg;
+            let (_, l_new) = light_at(sky, solids.mask(sky, p_c), vols, p_c);
+            let t_old = tropism(&t.params, a.light_dir[k]);
+            let kappa = 1.0 - (last - a.season[k] as f32) / (last + 1.0);
+            let t_eff = (t_old + kappa * (tropism(&t.params, l_new) - t_old)).normalize_or(t_old);
+            let ws = a.w_s[k];
+            let h_rigid = q_par * h;
+            // eq. (6) plus the analysis residual (zero where eq. 9 has a root): exact identity
+            // when nothing changed
+            let h_new = (ws * (q_par * a.d_o[k]) + (1.0 - ws) * t_eff + q_par * a.residual[k]).normalize_or(h_rigid);
+            q = Quat::from_rotation_arc(h, h_new);
+            bend = h_rigid.dot(h_new).clamp(-1.0, 1.0).acos();
+        }
+        t.rot[k] = q;
+        t.bend[k] = bend;
+        t.pos[k] = t.pos[par] + q * seg;
+        w.shifted[k] = t.pos[k] != old_pos;
+        // the children are recomputed when this node turned by more than ROTATION_EPS
+        let turn = 2.0 * (t.rot[k] * old_rot.inverse()).xyz().length().min(1.0).asin();
+        w.moved[k] = turn > ROTATION_EPS;
+        if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
+            t.fate[k] = Fate::Collision;
+        }
+    }
+    // light on this stage's clusters that were recomputed
+    let clusters = &a.stages[s];
+    for (ci, c) in clusters.iter().enumerate() {
+        let touched = match c.lobe {
+            Some(l) => a.lobes[l as usize].nodes.iter().any(|&k| w.done[k as usize]),
+            None => w.done[c.anchor as usize],
+        };
+        if touched {
+            t.light_cache[s][ci] = match occ[ci] {
+                Some(o) => light_at(sky, solids.mask(sky, o.center), vols, o.center).0,
+                None => 0.0,
+            };
+        }
+    }
+    // pruning (eqs. 10–11)
+    let alive: Vec<bool> = t.fate.iter().map(|f| *f == Fate::Alive).collect();
+    let (mut zeta, mut len, mut psi) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let light = normalised(&t.light_cache[s], |ci| occ[ci].is_some());
+    psi_at_stage(&t.input, &a.season, s as u16, clusters, &light, &alive, &mut zeta, &mut len, &mut psi);
+    for k in 1..n {
+        let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
+        if t.fate[par] != Fate::Alive {
+            if t.fate[k] == Fate::Alive && a.season[k] as usize <= s {
+                t.fate[k] = t.fate[par];
+            }
+        } else if t.fate[k] == Fate::Alive && judged(a.season[k], s as u16) && psi[k] < a.psi_min[k] {
+            t.fate[k] = Fate::Light;
+        }
+    }
+}
