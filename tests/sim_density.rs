@@ -186,3 +186,29 @@ fn relative_density_is_reineke_on_a_regular_stand() {
         assert!((sd.rd - want).abs() < 1e-6 && (sd.dq_cm - d as f64).abs() < 1e-6);
     }
 }
+
+/// Every shipped species, pure and unmanaged (70 m × 70 m, planted at 1.5 m), has at age 100 a
+/// quadratic mean DBH (stems ≥ 7 cm) a forester would accept for a closed stand on a good site:
+/// - tall species (`max_height_m` ≥ 35 m): 25–45 cm. The shipped moderately thinned tables give
+///   Dq 32.0 cm (beech, Wiedemann 1931 class I) and 37.6 cm (spruce, Wiedemann 1936/42 class I)
+///   at age 100 (tests/data/stands/), Jüttner's 1955 oak table class I about 34 cm; an unmanaged
+///   stand carries more, thinner stems than the thinned table (0.75–1.2 × its Dq), and open-grown
+///   diameters (60–100 cm at these heights) are far outside the range;
+/// - small-statured and pioneer species (`max_height_m` < 35 m: aspen, birch, alder, hornbeam,
+///   rowan, Norway maple): 14–35 cm, from their top heights at 100 (17–26 m) at the closed-stand
+///   slenderness H/D of 80–120 m/m of mean trees (Assmann 1970; Pretzsch 2009 ch. 8).
+#[test]
+fn pure_stand_dq_at_100_is_plausible() {
+    let lib = common::embedded();
+    let mut bad = Vec::new();
+    for sp in &lib.species {
+        let rows = run_pure_stand(&lib, &sp.id, 70.0, 1.5, 3.0, 100.0, 11).unwrap();
+        let r = at(&rows, 100.0);
+        let (lo, hi) = if sp.life.max_height_m >= 35.0 { (25.0, 45.0) } else { (14.0, 35.0) };
+        eprintln!("{:<18} age 100: H100 {:.1} N {:.0} Dq {:.1} (want {lo}–{hi})", sp.id, r.h100_m, r.d7.n_ha, r.d7.dq_cm);
+        if !(lo..=hi).contains(&r.d7.dq_cm) {
+            bad.push(format!("{} Dq {:.1} cm (want {lo}–{hi})", sp.id, r.d7.dq_cm));
+        }
+    }
+    assert!(bad.is_empty(), "implausible Dq at age 100: {bad:?}");
+}
