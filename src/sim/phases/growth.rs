@@ -153,6 +153,10 @@ struct Grown {
 /// the current height (dominants' height growth depends little on density, suppressed trees fall
 /// behind); DBH `ΔD = (D_open(H + ΔH_pot) − D_open(H)) · f · m · g` (D_open from the height–DBH
 /// allometry, `g` the tree's [`growth_factor`]), so crowded and suppressed trees stay thin.
+/// Under crowding the potential increment `D_open(H + ΔH_pot) − D_open(H)` blends, with weight
+/// `x = clamp((RD − 0.4) / 0.2, 0, 1)`, into the closed-stand increment
+/// `min(max(100 ΔH_pot / 60, 0.5 cm), open increment)` (closed-stand slenderness H/D = 60 m/m,
+/// a 5 mm/yr floor once height growth culminates; ESTIMATE, see the comments in the body).
 /// Crown radius: open-grown radius of the new DBH, shrunk by `0.5 + 0.5 L` in shade (crown
 /// plasticity); crown base rises to `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural
 /// pruning). Vigour memory `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding is
