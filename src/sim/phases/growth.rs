@@ -114,6 +114,10 @@ pub struct Growth<'a> {
 /// the current height (dominants' height growth depends little on density, suppressed trees fall
 /// behind); DBH `ΔD = (D_open(H + ΔH_pot) − D_open(H)) · f · m · g` (D_open from the height–DBH
 /// allometry, `g` the tree's [`growth_factor`]), so crowded and suppressed trees stay thin.
+/// Under crowding the potential increment `D_open(H + ΔH_pot) − D_open(H)` blends, with weight
+/// `x = clamp((RD − 0.4) / 0.2, 0, 1)`, into the closed-stand increment
+/// `min(max(100 ΔH_pot / 60, 0.5 cm), open increment)` (closed-stand slenderness H/D = 60 m/m,
+/// a 5 mm/yr floor once height growth culminates; ESTIMATE, see the comments in the body).
 /// Crown radius: open-grown radius of the new DBH, shrunk by `0.5 + 0.5 L` in shade (crown
 /// plasticity); crown base rises to `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural
 /// pruning). Vigour memory `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding is
@@ -137,7 +141,26 @@ pub fn run(w: Growth<'_>) {
             let dh_pot = potential_increment(sp, h);
             let h1 = (h + dh_pot * f * height_share(m, s)).min(sp.life.max_height_m);
             let hp = (h + dh_pot).min(sp.life.max_height_m * 0.999);
-            let dd_pot = (open_dbh(sp, hp) - open_dbh(sp, h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
+            let dd_open = (open_dbh(sp, hp) - open_dbh(sp, h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
+            // Closed-stand allometry: under crowding, diameter increment follows height
+            // increment at the slenderness H/D of trees in closed stands, not the open-grown
+            // curve (whose H/D of 30–60 m/m at 25–35 m comes from each species' record DBH and
+            // differs 2-fold between species). Dominants of closed Central European stands carry
+            // H/D ≈ 60–80 m/m, mean trees 80–100 (Assmann 1970; Pretzsch 2009 ch. 8; the
+            // Wiedemann beech and spruce tables give 100 and 89 at age 100); HD_CLOSED is the
+            // potential (uncrowded-share m = 1) value, ESTIMATE within that range. The weight
+            // x of the closed-stand allometry rises from 0 at RD_ONSET (0.4, lower limit of full
+            // site occupancy) to 1 at RD 0.6 (onset of self-thinning, canopy closed: Long 1985).
+            const HD_CLOSED: f32 = 60.0;
+            let x = ((crowd.rd[i] - RD_ONSET).max(0.0) / 0.2).min(1.0);
+            // After height growth culminates, dominants of closed stands keep putting on
+            // diameter (basal-area increment of mature stands stays nearly level: Assmann 1970):
+            // a floor DD_CLOSED_MIN (cm/yr, ESTIMATE: 5 mm, about twice the Dq increment of Wiedemann's
+            // and Assmann & Franz's mean trees at ages 100–120); never more than the open-grown
+            // increment: crowding does not speed diameter growth.
+            const DD_CLOSED_MIN: f32 = 0.5;
+            let dd_closed = if h > 1.3 { (dh_pot * 100.0 / HD_CLOSED).max(DD_CLOSED_MIN).min(dd_open) } else { dd_open };
+            let dd_pot = (1.0 - x) * dd_open + x * dd_closed;
             let mut d1 = d + dd_pot * f * m * growth_factor(seed, t.id[i]);
             if d1 == 0.0 && h1 > 1.3 {
                 d1 = open_dbh(sp, h1) * 0.5;
