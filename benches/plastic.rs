@@ -3,9 +3,11 @@
 //! about 530, 2,540 and 9,130 nodes beside a finite wall; analysis (once), adaptation and the
 //! time our light-guided model takes to regrow the same tree beside the same wall; two
 //! ≈2,540-node trees adapted together; moving the wall by 10 cm and re-adapting. Plain program:
-//! `RAYON_NUM_THREADS=1 cargo bench --bench plastic`. Medians over repeated runs (regrowth: one
-//! run).
-use std::time::Instant;
+//! `RAYON_NUM_THREADS=1 cargo bench --bench plastic`. Process CPU time (not wall time: the
+//! machine is shared), medians over repeated runs (regrowth: one run). `SYLVA_PLASTIC_NO_REGROW=1`
+//! skips the regrowth (for profiling). Each case also prints a fingerprint (FNV-1a over the bits
+//! of every adapted position, bend angle and fate) so a speed-up can be checked to compute the
+//! same trees bit for bit.
 use glam::Vec3;
 use sylva::species::SpeciesLibrary;
 use sylva::structure::grow::space::Obstacle;
@@ -14,8 +16,51 @@ use sylva::structure::grow::light_guided::{self, LightOptions};
 use sylva::structure::params;
 use sylva::structure::Skeleton;
 
-mod common;
-use common::median_ms;
+/// CPU time of the whole process (ms): with `RAYON_NUM_THREADS=1` the work of one case, and
+/// unlike wall time hardly affected by other jobs sharing the cores.
+fn cpu_ms() -> f64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: `ts` is a valid, writable timespec; CLOCK_PROCESS_CPUTIME_ID is always available on Linux.
+    unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    ts.tv_sec as f64 * 1e3 + ts.tv_nsec as f64 * 1e-6
+}
+
+/// Median process CPU time (ms) of `runs` calls of `f` (see [`cpu_ms`]).
+fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
+    let mut t: Vec<f64> = (0..runs)
+        .map(|_| {
+            let s = cpu_ms();
+            f();
+            cpu_ms() - s
+        })
+        .collect();
+    t.sort_by(f64::total_cmp);
+    t[t.len() / 2]
+}
+
+/// FNV-1a over the bits of the adapted positions, bend angles and fates of `trees`.
+fn fingerprint(trees: &[PlasticTree]) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut eat = |v: u32| {
+        for b in v.to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    for t in trees {
+        for p in t.positions() {
+            eat(p.x.to_bits());
+            eat(p.y.to_bits());
+            eat(p.z.to_bits());
+        }
+        for b in t.bend_angles() {
+            eat(b.to_bits());
+        }
+        for f in t.fates() {
+            eat(*f as u32);
+        }
+    }
+    h
+}
 
 /// A finite wall beside a tree of crown half-width `r` and height `h` (m).
 fn wall_for(r: f32, h: f32) -> Obstacle {
@@ -34,6 +79,8 @@ fn main() {
     println!("# Plastic Trees benchmark (light-guided trees beside a finite wall; threads: {})", rayon::current_num_threads());
     println!("| target nodes | cycles | nodes | analysis ms | adapt ms | regrow ms | regrow / adapt | bent | pruned | move wall 10 cm: ms (recomputed nodes) |");
     println!("|---|---|---|---|---|---|---|---|---|---|");
+    let regrow = std::env::var_os("SYLVA_PLASTIC_NO_REGROW").is_none();
+    let mut prints = Vec::new();
     let mut mid: Option<Skeleton> = None;
     let mut years = 4u32;
     for target in [530usize, 2540, 9130] {
@@ -46,9 +93,9 @@ fn main() {
         let (lo_b, hi_b) = sk.bounds().expect("nodes");
         let wall = wall_for(0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y), hi_b.z - lo_b.z);
         let env = Environment::with_obstacles(&[wall]);
-        let t0 = Instant::now();
+        let t0 = cpu_ms();
         let tree = PlasticTree::analyse(&sk, &p, &Environment::open(), None).expect("analyse");
-        let analysis_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let analysis_ms = cpu_ms() - t0;
         let mut rep = None;
         let adapt_ms = median_ms(7, || {
             let mut t = tree.clone();
@@ -62,13 +109,18 @@ fn main() {
             Obstacle::FiniteWall { x, length, height } => Obstacle::FiniteWall { x: x + 0.1, length, height },
             o => o,
         };
+        let mut after_move = adapted.clone();
         let move_ms = median_ms(7, || {
             let mut t = adapted.clone();
             rec = t.adapt(&Environment::with_obstacles(&[moved])).expect("adapt").recomputed_nodes;
+            after_move = t;
         });
-        let t1 = Instant::now();
-        std::hint::black_box(light_guided::grow(&lp, &lo, &[wall], 1, years).expect("regrow"));
-        let regrow_ms = t1.elapsed().as_secs_f64() * 1e3;
+        prints.push(format!("{}: adapt {:016x}, moved wall {:016x}", sk.len(), fingerprint(std::slice::from_ref(&adapted)), fingerprint(std::slice::from_ref(&after_move))));
+        let t1 = cpu_ms();
+        if regrow {
+            std::hint::black_box(light_guided::grow(&lp, &lo, &[wall], 1, years).expect("regrow"));
+        }
+        let regrow_ms = cpu_ms() - t1;
         println!(
             "| {target} | {years} | {} | {analysis_ms:.1} | {adapt_ms:.2} | {regrow_ms:.0} | {:.0}× | {} | {} | {move_ms:.2} ({rec}) |",
             sk.len(),
@@ -88,10 +140,14 @@ fn main() {
         b.translate(Vec3::new(1.5 * r, 0.0, 0.0));
         let env = Environment::open();
         let mut rec = 0;
+        let mut last = Vec::new();
         let ms = median_ms(7, || {
             let mut pair = vec![a.clone(), b.clone()];
             rec = adapt_group(&mut pair, &env).expect("group").recomputed_nodes;
+            last = pair;
         });
+        prints.push(format!("two trees: {:016x}", fingerprint(&last)));
         println!("\ntwo {}-node trees {:.2} m apart (1.5 crown radii) adapted together: {ms:.2} ms ({rec} nodes recomputed)", sk.len(), 1.5 * r);
     }
+    println!("\nresult fingerprints (FNV-1a of positions, bend angles, fates): {}", prints.join("; "));
 }

@@ -4,7 +4,7 @@
 //! (eqs. 3–4), the untropic direction of every segment (inverse tropism, eqs. 6–9) and the
 //! pruning thresholds (eqs. 10–11).
 
-use super::light::{light_at, Occluder, ShadowVolumes, Sky, Solids};
+use super::light::{light_at, Occluder, ShadowVolumes, Sky, SkyMask, Solids};
 use super::{tropism, Environment};
 use crate::error::{Error, Result};
 use crate::species::PlasticParams;
@@ -418,8 +418,8 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
     let lobes = lobes(sk, &season, last, l_i);
     let stages = stage_clusters(sk, &season, last, &lobes, l_i);
     let sky = grown_in.sky.clone();
-    let solids = Solids { obstacles: &grown_in.obstacles, ground: grown_in.ground };
-    let mask: Vec<u32> = sk.nodes.iter().map(|nd| solids.mask(&sky, nd.pos)).collect();
+    let solids = SkyMask::new(Solids { obstacles: &grown_in.obstacles, ground: grown_in.ground }, &sky);
+    let mask: Vec<u32> = sk.nodes.iter().map(|nd| solids.mask(nd.pos)).collect();
     let pos: Vec<Vec3> = sk.nodes.iter().map(|nd| nd.pos).collect();
     let mut by_season = vec![Vec::new(); last as usize + 1];
     for (k, &s) in season.iter().enumerate().skip(1) {
@@ -438,7 +438,7 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
         for &k in &by_season[t] {
             light_dir[k as usize] = light_at(&sky, mask[k as usize], &vols, pos[k as usize]).1;
         }
-        let li: Vec<f32> = centres.iter().map(|&c| light_at(&sky, solids.mask(&sky, c), &vols, c).0).collect();
+        let li: Vec<f32> = centres.iter().map(|&c| light_at(&sky, solids.mask(c), &vols, c).0).collect();
         psi_at_stage(sk, &season, t as u16, clusters, &normalised(&li, |_| true), &alive, &mut zeta, &mut len, &mut psi);
         for k in 1..n {
             if psi[k].is_finite() && judged(season[k], t as u16) {

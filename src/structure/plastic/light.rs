@@ -150,14 +150,28 @@ struct DirGrid {
     nx: usize,
     ny: usize,
     start: Vec<u32>,
-    items: Vec<u32>,
+    /// The casters of every cell, cells in row order and each cell's casters in occluder order
+    /// (so the product of eq. 4 is taken in the same order whatever the grid), copied inline
+    /// as structure-of-arrays (centre x, y, z (m), squared radius (m²), transmittance) so a
+    /// query reads contiguous runs and tests [`LANES`] casters at a time.
+    x: Vec<f32>,
+    y: Vec<f32>,
+    z: Vec<f32>,
+    r2: Vec<f32>,
+    gamma: Vec<f32>,
 }
+
+/// Casters tested together by [`ShadowVolumes::transmittance`] (the hit test vectorises).
+const LANES: usize = 8;
 
 const MAX_CELLS_PER_AXIS: usize = 96;
 
 impl DirGrid {
     fn new(d: Vec3, occ: &[Occluder]) -> DirGrid {
         let (u, v) = d.any_orthonormal_pair();
+        if occ.is_empty() {
+            return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], x: vec![], y: vec![], z: vec![], r2: vec![], gamma: vec![] };
+        }
         let proj: Vec<Vec2> = occ.iter().map(|o| Vec2::new(o.center.dot(u), o.center.dot(v))).collect();
         let mut lo = Vec2::splat(f32::INFINITY);
         let mut hi = Vec2::splat(f32::NEG_INFINITY);
@@ -167,9 +181,6 @@ impl DirGrid {
             hi = hi.max(*p + o.radius);
             rsum += o.radius;
         }
-        if occ.is_empty() {
-            return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], items: vec![] };
-        }
         let ext = (hi - lo).max(Vec2::splat(1e-3));
         let mean_r = rsum / occ.len() as f32;
         // about two cells per cluster: the grid's size follows the cluster count
@@ -177,18 +188,24 @@ impl DirGrid {
         let cell = (2.0 * mean_r).max(by_count).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
         let nx = ((ext.x / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
         let ny = ((ext.y / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
-        let range = |p: Vec2, r: f32| {
-            let a = ((p - r - lo) / cell).floor();
-            let b = ((p + r - lo) / cell).floor();
-            let cx = |x: f32, n: usize| (x.max(0.0) as usize).min(n - 1);
-            (cx(a.x, nx), cx(b.x, nx), cx(a.y, ny), cx(b.y, ny))
-        };
+        // cell range of each caster's disc; `as usize` truncates, which equals the floor for the
+        // non-negative values kept by `max(0.0)` (and avoids a libm call per bound)
+        let cx = |x: f32, n: usize| (x.max(0.0) as usize).min(n - 1);
+        let ranges: Vec<[u32; 4]> = proj
+            .iter()
+            .zip(occ)
+            .map(|(p, o)| {
+                let a = (*p - o.radius - lo) / cell;
+                let b = (*p + o.radius - lo) / cell;
+                [cx(a.x, nx) as u32, cx(b.x, nx) as u32, cx(a.y, ny) as u32, cx(b.y, ny) as u32]
+            })
+            .collect();
         let mut count = vec![0u32; nx * ny + 1];
-        for (p, o) in proj.iter().zip(occ) {
-            let (x0, x1, y0, y1) = range(*p, o.radius);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    count[y * nx + x + 1] += 1;
+        for &[x0, x1, y0, y1] in &ranges {
+            for y in y0 as usize..=y1 as usize {
+                let row = &mut count[y * nx + 1..];
+                for c in &mut row[x0 as usize..=x1 as usize] {
+                    *c += 1;
                 }
             }
         }
@@ -196,34 +213,62 @@ impl DirGrid {
             count[i] += count[i - 1];
         }
         let mut fill = count.clone();
-        let mut items = vec![0u32; count[nx * ny] as usize];
-        for (i, (p, o)) in proj.iter().zip(occ).enumerate() {
-            let (x0, x1, y0, y1) = range(*p, o.radius);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
+        let len = count[nx * ny] as usize;
+        let (mut ix, mut iy, mut iz, mut ir2, mut ig) = (vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![1.0; len]);
+        for (&[x0, x1, y0, y1], o) in ranges.iter().zip(occ) {
+            let r2 = o.radius * o.radius;
+            for y in y0 as usize..=y1 as usize {
+                for x in x0 as usize..=x1 as usize {
                     let c = y * nx + x;
-                    items[fill[c] as usize] = i as u32;
+                    let f = fill[c] as usize;
+                    (ix[f], iy[f], iz[f], ir2[f], ig[f]) = (o.center.x, o.center.y, o.center.z, r2, o.gamma);
                     fill[c] += 1;
                 }
             }
         }
-        DirGrid { d, u, v, lo, cell, nx, ny, start: count, items }
+        DirGrid { d, u, v, lo, cell, nx, ny, start: count, x: ix, y: iy, z: iz, r2: ir2, gamma: ig }
     }
 
-    fn candidates(&self, p: Vec3) -> &[u32] {
+    /// Item range of the cell containing the projection of `p` (empty outside the grid).
+    fn candidates(&self, p: Vec3) -> std::ops::Range<usize> {
         if self.nx == 0 {
-            return &[];
+            return 0..0;
         }
         let q = (Vec2::new(p.dot(self.u), p.dot(self.v)) - self.lo) / self.cell;
         if q.x < 0.0 || q.y < 0.0 {
-            return &[];
+            return 0..0;
         }
         let (x, y) = (q.x as usize, q.y as usize);
         if x >= self.nx || y >= self.ny {
-            return &[];
+            return 0..0;
         }
         let c = y * self.nx + x;
-        &self.items[self.start[c] as usize..self.start[c + 1] as usize]
+        self.start[c] as usize..self.start[c + 1] as usize
+    }
+
+    /// Hit flags of the casters `range` on the ray from `p` along `d` into `hit` (the ray passes
+    /// through the caster's sphere ahead of `p`, and `p` is outside it): the arithmetic of
+    /// glam's `Vec3::dot`/`length_squared`, written per component so [`LANES`] casters are
+    /// tested at once.
+    #[inline]
+    fn hits(&self, range: std::ops::Range<usize>, p: Vec3, hit: &mut [bool; LANES]) {
+        let (xs, ys, zs, rs) = (&self.x[range.clone()], &self.y[range.clone()], &self.z[range.clone()], &self.r2[range]);
+        let d = self.d;
+        let test = |x: f32, y: f32, z: f32, r2: f32| {
+            let (ox, oy, oz) = (x - p.x, y - p.y, z - p.z);
+            let along = ox * d.x + oy * d.y + oz * d.z;
+            let l2 = ox * ox + oy * oy + oz * oz;
+            (along > 0.0) & (l2 > r2) & (l2 - along * along <= r2)
+        };
+        if let (Ok(xs), Ok(ys), Ok(zs), Ok(rs)) = (<&[f32; LANES]>::try_from(xs), <&[f32; LANES]>::try_from(ys), <&[f32; LANES]>::try_from(zs), <&[f32; LANES]>::try_from(rs)) {
+            for j in 0..LANES {
+                hit[j] = test(xs[j], ys[j], zs[j], rs[j]);
+            }
+        } else {
+            for j in 0..xs.len().min(LANES) {
+                hit[j] = test(xs[j], ys[j], zs[j], rs[j]);
+            }
+        }
     }
 }
 
@@ -239,28 +284,38 @@ impl ShadowVolumes {
         &self.occ
     }
 
+    /// True when [`ShadowVolumes::transmittance`] of the same ray is below 1, found at the first
+    /// cluster that brings the product below 1 (the product never rises again).
+    pub fn shaded(&self, k: usize, p: Vec3) -> bool {
+        self.product_until(k, p, 1.0).is_none()
+    }
+
     /// Transmittance Π γ of the clusters on the ray from `p` along sky direction `k`; clusters
     /// containing `p` do not shade it.
     pub fn transmittance(&self, k: usize, p: Vec3) -> f32 {
+        self.product_until(k, p, 1e-4).unwrap_or(0.0)
+    }
+
+    /// Π γ of the clusters hit by the ray from `p` along direction `k`, multiplied in caster
+    /// order; `None` as soon as the product falls below `stop`.
+    fn product_until(&self, k: usize, p: Vec3, stop: f32) -> Option<f32> {
         let g = &self.grids[k];
+        let r = g.candidates(p);
+        let mut hit = [false; LANES];
         let mut t = 1.0f32;
-        for &i in g.candidates(p) {
-            let o = &self.occ[i as usize];
-            let oc = o.center - p;
-            let l2 = oc.length_squared();
-            let r2 = o.radius * o.radius;
-            if l2 <= r2 {
-                continue;
-            }
-            let along = oc.dot(g.d);
-            if along > 0.0 && l2 - along * along <= r2 {
-                t *= o.gamma;
-                if t < 1e-4 {
-                    return 0.0;
+        let mut i = r.start;
+        while i < r.end {
+            let m = (r.end - i).min(LANES);
+            g.hits(i..i + m, p, &mut hit);
+            for (j, _) in hit[..m].iter().enumerate().filter(|(_, h)| **h) {
+                t *= g.gamma[i + j];
+                if t < stop {
+                    return None;
                 }
             }
+            i += m;
         }
-        t
+        Some(t)
     }
 }
 
@@ -284,6 +339,92 @@ impl Solids<'_> {
         }
         m
     }
+}
+
+/// [`Solids::mask`] prepared for one sky: the boxes of boxes and finite walls, 1/d per axis and
+/// the directions below the terrain are computed once, so a mask costs three multiplications per
+/// box and direction. Gives the same bits as [`Solids::mask`] (the same operations in the same
+/// order as [`Obstacle::ray_hits`]; spheres and infinite walls call it).
+#[derive(Debug, Clone)]
+pub struct SkyMask<'a> {
+    solids: Solids<'a>,
+    dirs: Vec<Vec3>,
+    inv: Vec<Vec3>,
+    below_ground: u32,
+    slabs: Vec<(Vec3, Vec3)>,
+    others: Vec<Obstacle>,
+}
+
+impl<'a> SkyMask<'a> {
+    /// Prepares the mask of `solids` for the directions of `sky` (at most 32).
+    pub fn new(solids: Solids<'a>, sky: &Sky) -> SkyMask<'a> {
+        let dirs = sky.dirs.clone();
+        let inv = dirs.iter().map(|d| Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z)).collect();
+        let below_ground = match solids.ground {
+            Some(g) => dirs.iter().enumerate().filter(|(_, d)| d.dot(g.normal) <= 0.0).fold(0u32, |m, (k, _)| m | 1 << k),
+            None => 0,
+        };
+        let inf = f32::INFINITY;
+        let (mut slabs, mut others) = (Vec::new(), Vec::new());
+        for &o in solids.obstacles {
+            match o {
+                Obstacle::Box { min, max } => slabs.push((min, max)),
+                // the box of a finite wall as `Obstacle::ray_hits` tests it (`space.rs`, `as_box`)
+                Obstacle::FiniteWall { x, length, height } => {
+                    let (x0, x1) = if x >= 0.0 { (x, inf) } else { (-inf, x) };
+                    slabs.push((Vec3::new(x0, -0.5 * length, 0.0), Vec3::new(x1, 0.5 * length, height)));
+                }
+                Obstacle::Sphere { .. } | Obstacle::Wall { .. } => others.push(o),
+            }
+        }
+        SkyMask { solids, dirs, inv, below_ground, slabs, others }
+    }
+
+    /// Bit k set when sky direction k is blocked at `p` by an obstacle or the terrain (equal to
+    /// [`Solids::mask`]).
+    pub fn mask(&self, p: Vec3) -> u32 {
+        let n = self.dirs.len();
+        let mut m = 0u32;
+        if let Some(g) = self.solids.ground {
+            if g.height_of(p) < 0.0 {
+                return (0..n).fold(0u32, |m, k| m | 1 << k);
+            }
+            m = self.below_ground;
+        }
+        for &(lo, hi) in &self.slabs {
+            let (a, b) = (lo - p, hi - p);
+            for k in 0..n {
+                if m & (1 << k) == 0 && slab_hits(p, self.dirs[k], self.inv[k], lo, hi, a, b) {
+                    m |= 1 << k;
+                }
+            }
+        }
+        for o in &self.others {
+            for k in 0..n {
+                if m & (1 << k) == 0 && o.ray_hits(p, self.dirs[k], f32::INFINITY) {
+                    m |= 1 << k;
+                }
+            }
+        }
+        m
+    }
+}
+
+/// The slab test of `Obstacle::ray_hits` for an unbounded ray from `p` along `d` (1/d per axis
+/// `inv`) against the box `lo`–`hi`, with `a = lo − p`, `b = hi − p`.
+#[inline]
+fn slab_hits(p: Vec3, d: Vec3, inv: Vec3, lo: Vec3, hi: Vec3, a: Vec3, b: Vec3) -> bool {
+    // the entry and exit distances (t0, t1) narrowed axis by axis; parallel axes test the slab
+    let mut span = (0.0f32, f32::INFINITY);
+    (0..3).all(|ax| {
+        if d[ax] == 0.0 {
+            return !(p[ax] < lo[ax] || p[ax] > hi[ax]);
+        }
+        let (ta, tb) = (a[ax] * inv[ax], b[ax] * inv[ax]);
+        let (near, far) = if ta > tb { (tb, ta) } else { (ta, tb) };
+        span = (span.0.max(near), span.1.min(far));
+        !(span.0 > span.1)
+    })
 }
 
 /// Light at `p` by eq. (3): (i(p) in 0–1, average light direction: the same integral of the unit
@@ -334,6 +475,35 @@ mod tests {
     }
 
     #[test]
+    fn prepared_mask_equals_plain_mask() {
+        let obstacles = [
+            Obstacle::FiniteWall { x: 1.0, length: 4.0, height: 3.0 },
+            Obstacle::FiniteWall { x: -2.0, length: 2.0, height: 1.0 },
+            Obstacle::Box { min: Vec3::new(-1.0, 1.0, 0.5), max: Vec3::new(0.5, 2.0, 4.0) },
+            Obstacle::Sphere { center: Vec3::new(0.0, -2.0, 3.0), radius: 0.7 },
+            Obstacle::Wall { x: 3.0 },
+        ];
+        for sky in [Sky::default(), Sky::from_latitude(50.0)] {
+            for (i, o) in obstacles.iter().enumerate() {
+                for ground in [None, Some(Ground::slope(Vec3::ZERO, 20.0, 135.0))] {
+                    let solids = Solids { obstacles: std::slice::from_ref(o), ground };
+                    let fast = SkyMask::new(solids, &sky);
+                    let mut blocked = 0;
+                    for j in 0..400 {
+                        let f = j as f32;
+                        let p = Vec3::new((f * 0.37).sin() * 3.0, (f * 0.71).cos() * 3.0, (f * 0.13).sin() * 2.0 + 1.5);
+                        let m = solids.mask(&sky, p);
+                        assert_eq!(fast.mask(p), m, "obstacle {i}, point {p}");
+                        blocked += m.count_ones();
+                    }
+                    // the cases test something: some directions are blocked, not all
+                    assert!(blocked > 0 && blocked < 400 * 32, "obstacle {i}: {blocked}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn cluster_transmittance_eq4() {
         let s = Sky::default();
         let c = Occluder { center: Vec3::new(0.0, 0.0, 5.0), radius: 1.0, gamma: 0.5f32.powf(1.0) };
@@ -345,6 +515,9 @@ mod tests {
         assert!((up.transmittance(0, Vec3::ZERO) - 0.25).abs() < 1e-6);
         // inside a cluster: not shaded by it
         assert!((up.transmittance(0, Vec3::new(0.0, 0.0, 5.2)) - 0.5).abs() < 1e-6);
+        // shaded: transmittance below 1
+        assert!(up.shaded(0, Vec3::ZERO) && up.shaded(0, Vec3::new(0.0, 0.0, 5.2)));
+        assert!(!v.shaded(SKY_DIRS - 1, Vec3::ZERO) && !up.shaded(0, Vec3::new(0.0, 0.0, 9.5)));
         let (i, _) = light_at(&Sky { brightest: Vec3::Z, dirs: vec![Vec3::Z], weights: vec![1.0] }, 0, &up, Vec3::ZERO);
         assert!((i - 0.25).abs() < 1e-6);
     }

@@ -41,7 +41,7 @@
 //! clusters of recomputed subtrees now shade it differently.
 
 use super::analysis::{cluster_center, judged, normalised, psi_at_stage};
-use super::light::{light_at, Occluder, ShadowVolumes, Solids};
+use super::light::{light_at, Occluder, ShadowVolumes, SkyMask, Solids};
 use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
 use crate::error::Result;
 use crate::structure::grow::space::Obstacle;
@@ -183,8 +183,8 @@ fn stage_occluders(t: &PlasticTree, s: usize, env: &Environment) -> Vec<Option<O
 /// Errors: [`crate::Error::Invalid`] for an invalid environment (obstacle or ground).
 pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<GroupReport> {
     env.validate()?;
-    let solids = Solids { obstacles: &env.obstacles, ground: env.ground };
     let sky = &env.sky;
+    let solids = SkyMask::new(Solids { obstacles: &env.obstacles, ground: env.ground }, sky);
     // 1. signatures: solids and the other trees' input-time clusters at the final stage
     let neighbours: Vec<(usize, Occluder)> = trees
         .iter()
@@ -214,10 +214,10 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
             let mut dirty = vec![false; n];
             for k in 0..n {
                 let p = t.input.nodes[k].pos;
-                let mut sig = solids.mask(sky, p) as u64;
+                let mut sig = solids.mask(p) as u64;
                 if group {
                     for d in 0..sky.dirs.len() {
-                        if others[i].transmittance(d, p) < 1.0 {
+                        if others[i].shaded(d, p) {
                             sig |= 1u64 << (32 + d);
                         }
                     }
@@ -301,7 +301,7 @@ pub const ROTATION_EPS: f32 = 1e-3;
 
 /// One level (stage `s`) of one tree: bend its recomputed season-`s` nodes, refresh the light on
 /// its recomputed stage clusters, prune by eq. (11).
-fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &Solids, vols: &ShadowVolumes) {
+fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &SkyMask, vols: &ShadowVolumes) {
     let n = t.input.nodes.len();
     let a = &t.analysis;
     let last = a.seasons as f32;
@@ -335,7 +335,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         if len > 0.0 {
             let h = seg / len;
             let p_c = t.pos[par] + q_par * seg;
-            let (_, l_new) = light_at(sky, solids.mask(sky, p_c), vols, p_c);
+            let (_, l_new) = light_at(sky, solids.mask(p_c), vols, p_c);
             let t_old = tropism(&t.params, a.light_dir[k]);
             let kappa = 1.0 - (last - a.season[k] as f32) / (last + 1.0);
             let t_eff = (t_old + kappa * (tropism(&t.params, l_new) - t_old)).normalize_or(t_old);
@@ -367,7 +367,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         };
         if touched {
             t.light_cache[s][ci] = match occ[ci] {
-                Some(o) => light_at(sky, solids.mask(sky, o.center), vols, o.center).0,
+                Some(o) => light_at(sky, solids.mask(o.center), vols, o.center).0,
                 None => 0.0,
             };
         }
