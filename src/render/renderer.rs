@@ -30,8 +30,8 @@ use crate::mesh::LOD_LEVELS;
 // `shaders/cull.wgsl` keeps one drawn level per word of a 4-word record (the level costs of a
 // prototype, `cost()`), so the number of levels is tied to that record width.
 const _: () = assert!(LOD_LEVELS == 4, "cull.wgsl packs the level costs of a prototype into one vec4<u32>-sized record");
-use crate::error::RenderError;
-use crate::{Error, Result};
+use super::{RenderError, Result};
+use crate::Error;
 
 /// Colour format of the headless texture (sRGB RGBA, read back as an image).
 pub(super) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -630,7 +630,7 @@ impl Renderer {
     /// The prototypes part: one vertex and index buffer per drawn level (chain meshes, then the
     /// billboard) and the silhouettes' storage buffer.
     ///
-    /// Errors: [`Error::Invalid`] naming the prototype and level of an inconsistent mesh.
+    /// Errors: [`RenderError::Input`] ([`Error::Invalid`]) naming the prototype and level of an inconsistent mesh.
     fn upload_prototypes(&self, scene: &Scene) -> Result<(Vec<Vec<GpuLevel>>, wgpu::Buffer)> {
         let d = &self.device;
         let sils: Vec<Silhouette> = scene
@@ -652,12 +652,12 @@ impl Renderer {
                 let mut ranges = Vec::new();
                 for (m, mat) in [(&l.bark, 0.0f32), (&l.leaves, 1.0)] {
                     if m.normals.len() != m.positions.len() || m.indices.len() % 3 != 0 || m.indices.iter().any(|&i| i as usize >= m.positions.len()) {
-                        return Err(Error::Invalid {
+                        return Err(RenderError::Input(Error::Invalid {
                             context: format!("render prototype {pi} `{}` level {li}", p.name),
                             field: if mat == 0.0 { "bark".into() } else { "leaves".into() },
                             value: format!("{} positions, {} normals, {} indices", m.positions.len(), m.normals.len(), m.indices.len()),
                             expected: "one normal per position, indices in range, a multiple of 3".into(),
-                        });
+                        }));
                     }
                     let base = verts.len() as u32;
                     let start = idx.len() as u32;
@@ -709,7 +709,7 @@ impl Renderer {
     pub(super) fn check_size(&self, width: u32, height: u32) -> Result<()> {
         let max = self.device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
-            return Err(Error::Invalid { context: "render".into(), field: "size".into(), value: format!("{width}x{height}"), expected: format!("1..={max} pixels per side") });
+            return Err(RenderError::Input(Error::Invalid { context: "render".into(), field: "size".into(), value: format!("{width}x{height}"), expected: format!("1..={max} pixels per side") }));
         }
         Ok(())
     }
@@ -721,8 +721,8 @@ impl Renderer {
     /// statistics (also [`Renderer::last_stats`]).
     ///
     /// # Errors
-    /// [`Error::Invalid`] for a zero or too large size or inconsistent meshes;
-    /// [`Error::Render`] ([`RenderError`]) when the GPU fails.
+    /// [`RenderError::Input`] ([`Error::Invalid`]) for a zero or too large size or inconsistent meshes;
+    /// [`RenderError`] when the GPU fails.
     pub fn render_to_view(&mut self, scene: &Scene, camera: &Camera, view: &wgpu::TextureView, width: u32, height: u32) -> Result<FrameStats> {
         self.check_size(width, height)?;
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
