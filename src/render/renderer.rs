@@ -16,7 +16,6 @@
 //! are drawn, and the GPU path's atomically compacted (unordered) instance lists give the same
 //! pixels as the CPU path's ordered ones.
 
-use std::hash::Hasher;
 
 use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
@@ -176,12 +175,12 @@ struct GpuLevel {
 
 /// The scene's static data on the GPU, in two parts uploaded separately: the terrain (with the
 /// water plane and the canopy grid over it) and the prototypes (meshes and silhouettes); each
-/// part is uploaded again only when its content fingerprint changes.
+/// part is uploaded again only when its [`super::scene::Version`] changes.
 struct GpuScene {
-    /// Content fingerprint of the terrain and sea level.
-    terrain_fp: u64,
-    /// Content fingerprint of the prototypes.
-    protos_fp: u64,
+    /// Version of the uploaded terrain and sea level.
+    terrain_version: super::scene::Version,
+    /// Version of the uploaded prototypes.
+    protos_version: super::scene::Version,
     terrain_vb: Option<wgpu::Buffer>,
     terrain_ib: Option<wgpu::Buffer>,
     terrain_count: u32,
@@ -517,50 +516,22 @@ impl Renderer {
         self.last
     }
 
-    fn terrain_fingerprint(scene: &Scene) -> u64 {
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        let t = &scene.terrain;
-        h.write_usize(t.positions.len());
-        h.write_usize(t.indices.len());
-        h.write(bytemuck::cast_slice(&t.positions));
-        h.write(bytemuck::cast_slice(&t.normals));
-        h.write(bytemuck::cast_slice(&t.colors));
-        h.write(bytemuck::cast_slice(&t.indices));
-        h.write_u32(scene.sea_level.map(f32::to_bits).unwrap_or(1));
-        h.finish()
-    }
-
-    fn prototypes_fingerprint(scene: &Scene) -> u64 {
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        h.write_usize(scene.prototypes.len());
-        for p in &scene.prototypes {
-            for l in &p.lods.levels {
-                for m in [&l.bark, &l.leaves] {
-                    h.write(bytemuck::cast_slice(&m.positions));
-                    h.write(bytemuck::cast_slice(&m.normals));
-                    h.write(bytemuck::cast_slice(&m.indices));
-                }
-            }
-            h.write_u8(0xff);
-        }
-        h.finish()
-    }
-
-    /// Uploads what changed of the scene's static data: the terrain part when its fingerprint
-    /// differs from the uploaded one, the prototypes when theirs does, nothing when neither does.
+    /// Uploads what changed of the scene's static data: the terrain part when its version
+    /// ([`Scene::terrain_version`]) differs from the uploaded one, the prototypes when theirs
+    /// does, nothing when neither does (no pass over the meshes).
     fn upload(&mut self, scene: &Scene) -> Result<(bool, bool)> {
-        let (tfp, pfp) = (Self::terrain_fingerprint(scene), Self::prototypes_fingerprint(scene));
+        let (tfp, pfp) = (scene.terrain_version(), scene.prototypes_version());
         let old = self.scene.take();
-        if old.as_ref().is_some_and(|g| g.terrain_fp == tfp && g.protos_fp == pfp) {
+        if old.as_ref().is_some_and(|g| g.terrain_version == tfp && g.protos_version == pfp) {
             self.scene = old;
             return Ok((false, false));
         }
         let (mut terrain, mut protos) = (None, None);
         if let Some(g) = old {
-            if g.terrain_fp == tfp {
+            if g.terrain_version == tfp {
                 terrain = Some(GpuTerrain { vb: g.terrain_vb, ib: g.terrain_ib, count: g.terrain_count, water_vb: g.water_vb, canopy_grid: g.canopy_grid, canopy_buf: g.canopy_buf });
             }
-            if g.protos_fp == pfp {
+            if g.protos_version == pfp {
                 protos = Some((g.protos, g.sil_buf));
             }
         }
@@ -591,7 +562,7 @@ impl Renderer {
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.shadow_globals.as_entire_binding() }, wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() }],
         });
         let GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: terrain_count, water_vb, canopy_grid, canopy_buf } = terrain;
-        self.scene = Some(GpuScene { terrain_fp: tfp, protos_fp: pfp, terrain_vb, terrain_ib, terrain_count, water_vb, protos, sil_buf, canopy_grid, canopy_buf, bind_main, bind_shadow });
+        self.scene = Some(GpuScene { terrain_version: tfp, protos_version: pfp, terrain_vb, terrain_ib, terrain_count, water_vb, protos, sil_buf, canopy_grid, canopy_buf, bind_main, bind_shadow });
         Ok(uploaded)
     }
 
@@ -717,7 +688,7 @@ impl Renderer {
     /// Draws `scene` seen by `camera` into `view` (`width` × `height` pixels, the renderer's
     /// [`Renderer::target_format`], usage `RENDER_ATTACHMENT`): a window's surface texture or an
     /// offscreen texture. The GPU copies of the terrain and prototypes are kept between frames
-    /// while they stay the same; the instances are uploaded each frame. Returns the frame's
+    /// while their versions ([`Scene::terrain_version`], [`Scene::prototypes_version`]) stay the same (change tracking, no hashing); the instances are uploaded each frame. Returns the frame's
     /// statistics (also [`Renderer::last_stats`]).
     ///
     /// # Errors
