@@ -1,11 +1,21 @@
-//! Error types of the library, one enum per layer (DESIGN.md: "handle each error once").
+//! Errors of the core (`grid`, `terrain`, `conditions`, `species`, `sim`, `structure`): reading
+//! and validating inputs. One enum per layer (DESIGN.md: "thiserror enums per layer; anyhow only
+//! in the binary"; "handle each error once"):
+//! - [`Error`] here, the core's: I/O while reading, a malformed file, an invalid value, a grid
+//!   too large, a document that cannot be serialised to TOML;
+//! - [`crate::output::OutputError`], the output shell's: writing files (atomic writes' I/O),
+//!   encoding PNG/GIF/MP4/GeoTIFF, serialising JSON/glTF, the bundled font;
+//! - [`crate::render::RenderError`], the renderer's: adapter, device, GPU validation, readback;
+//! - [`crate::job::JobError`], the main job's: wraps each of the above unchanged.
 //!
-//! Every variant names the file (where there is one), the field or line, and what was expected,
-//! so that a user can fix the input without reading code. The binary wraps these in `anyhow`.
+//! A shell's enum wraps the core's (`Input(#[from] Error)`, shown unchanged) for an invalid
+//! argument it checks; the core names none of the shells' types. Every variant names the file
+//! (where there is one), the field or line, and what was expected, so that a user can fix the
+//! input without reading code. The binary wraps these in `anyhow`.
 
 use std::path::PathBuf;
 
-/// Errors from reading, validating or writing Sylva's inputs and outputs.
+/// Errors from reading and validating Sylva's inputs (the core's error).
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// An operating-system I/O error on `path`.
@@ -49,72 +59,16 @@ pub enum Error {
         /// Maximum number of cells accepted.
         limit: u64,
     },
-    /// Encoding a picture or film (`format`: PNG, GIF, MP4) for `path` failed.
-    #[error("{path}: {format} encoding failed: {message}")]
-    Encode {
-        /// The file being written.
-        path: PathBuf,
-        /// The format being encoded.
-        format: &'static str,
-        /// What the encoder said.
-        message: String,
-    },
-    /// Serialising `what` (a scenario, a species, a glTF document) to `format` failed.
+    /// Serialising `what` (a scenario, a species) to `format` in memory failed.
     #[error("{what}: cannot write {format}: {message}")]
     Serialize {
         /// The object being written (names it).
         what: String,
-        /// The target format (TOML, JSON, glTF).
+        /// The target format (TOML).
         format: &'static str,
         /// What the serialiser said.
         message: String,
     },
-    /// A resource compiled into the binary (e.g. the bundled font) cannot be used.
-    #[error("bundled {what}: {message}")]
-    Bundled {
-        /// The resource.
-        what: &'static str,
-        /// What is wrong with it.
-        message: String,
-    },
-    /// Rendering failed ([`RenderError`]: no adapter, device, GPU validation, readback).
-    #[error("render: {0}")]
-    Render(#[from] RenderError),
-}
-
-/// Errors of the render layer (`render`): the GPU side, independent of files and inputs.
-#[derive(Debug, thiserror::Error)]
-pub enum RenderError {
-    /// wgpu finds no adapter (neither a GPU nor a software adapter such as lavapipe).
-    #[error("no adapter found (install a GPU driver or Mesa's lavapipe, Debian package mesa-vulkan-drivers): {0}")]
-    NoAdapter(String),
-    /// The adapter `adapter` refuses to create a device or a pipeline (`what`).
-    #[error("cannot create {what} on {adapter}: {message}")]
-    Create {
-        /// What could not be created (device, pipeline).
-        what: &'static str,
-        /// The adapter's name.
-        adapter: String,
-        /// What wgpu said.
-        message: String,
-    },
-    /// A wgpu validation error while drawing a frame.
-    #[error("GPU validation error: {0}")]
-    Validation(String),
-    /// GPU culling was forced ([`crate::render::headless::Culling::Gpu`]) but cannot run.
-    #[error("GPU culling forced but {0}")]
-    GpuCullingUnavailable(String),
-    /// Waiting for the GPU or reading a buffer back failed (`stage`: poll, map, range).
-    #[error("readback ({stage}) failed: {message}")]
-    Readback {
-        /// Which step of the readback.
-        stage: &'static str,
-        /// What wgpu said.
-        message: String,
-    },
-    /// An internal ordering invariant of the renderer was broken (a bug): `what` was missing.
-    #[error("internal: {0} missing")]
-    Internal(&'static str),
 }
 
 impl Error {

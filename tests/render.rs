@@ -23,7 +23,7 @@ fn flat_scene(trees: Vec<TreeInstance>) -> Scene {
     let grid = sylva::grid::Grid::filled(n, n, 0.0f32);
     let terrain = from_grid(&grid, 10.0, 10.0, &LandCover::default(), None).unwrap();
     let mut s = demo_scene(0, 200.0, 1);
-    s.terrain = terrain;
+    s.set_terrain(terrain);
     s.instances = trees;
     s.sun = Sun::from_position(47.0, 172.0, 11.0);
     s.sky = Sky::default();
@@ -590,7 +590,7 @@ fn showcase_real_species_levels_for_inspection() {
         }
     }
     let mut scene = flat_scene(trees);
-    scene.prototypes = protos;
+    scene.set_prototypes(protos);
     let cam = Camera::look_at([0.0, -5.0, 9.0], [0.0, 80.0, 8.0], 50.0);
     with_renderer(|r| {
         let img = r.render(&scene, &cam, 640, 360).unwrap();

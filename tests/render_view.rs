@@ -88,6 +88,8 @@ fn from_device_draws_into_the_callers_view_in_its_format() {
 }
 
 #[test]
+/// Explicit change tracking ([`Scene::terrain_changed`], `set_*`): an unchanged version uploads
+/// nothing, so this fails if the renderer uploaded every frame.
 fn terrain_and_prototypes_are_uploaded_once_and_again_only_when_they_change() {
     let Some((device, queue)) = own_device() else { return };
     let mut r = Renderer::from_device(device.clone(), queue.clone(), wgpu::TextureFormat::Rgba8UnormSrgb).unwrap();
@@ -107,10 +109,22 @@ fn terrain_and_prototypes_are_uploaded_once_and_again_only_when_they_change() {
     scene.instances[0].height *= 1.5;
     assert_eq!(frame(&scene), (false, false), "new instances upload neither");
     scene.terrain.colors[0] = [1.0, 0.0, 0.0];
+    scene.terrain_changed();
     assert_eq!(frame(&scene), (true, false), "a changed terrain uploads the terrain only");
+    assert_eq!(frame(&scene), (false, false), "and only once");
     let mesh = scene.prototypes[0].lods.levels.iter_mut().flat_map(|l| [&mut l.bark, &mut l.leaves]).find(|m| !m.positions.is_empty()).expect("a prototype mesh");
     mesh.positions[0][2] += 0.1;
+    scene.prototypes_changed();
     assert_eq!(frame(&scene), (false, true), "changed prototypes upload the prototypes only");
-    scene.sea_level = Some(1.0);
+    assert_eq!(frame(&scene), (false, false), "and only once");
+    scene.set_sea_level(Some(1.0));
     assert_eq!(frame(&scene), (true, false), "the sea level belongs to the terrain part");
+    let protos = scene.prototypes.clone();
+    scene.set_prototypes(protos);
+    assert_eq!(frame(&scene), (false, true), "replaced prototypes are uploaded");
+    // a clone shares the versions (same content: nothing to upload); another scene does not
+    let twin = scene.clone();
+    assert_eq!(frame(&twin), (false, false), "a clone of the drawn scene uploads nothing");
+    let other = demo_scene(50, 200.0, 3);
+    assert_eq!(frame(&other), (true, true), "another scene uploads both");
 }

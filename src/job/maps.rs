@@ -4,7 +4,8 @@
 use crate::conditions::{factor, SiteConditions};
 use crate::grid::Grid;
 use crate::output::{geotiff, maps};
-use crate::{Error, Result};
+use super::Result;
+use crate::Error;
 use std::path::Path;
 
 /// One condition map: file stem, field (row 0 north, NaN = no data), colour ramp, title, units

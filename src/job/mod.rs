@@ -3,6 +3,9 @@
 //! [`checkpoint`]), and from a run directory or an in-memory world to pictures. The core
 //! modules stay independent of each other and of the disk; this layer joins them.
 
+mod error;
+pub use error::{JobError, Result};
+
 pub mod checkpoint;
 pub mod inventory;
 pub mod maps;

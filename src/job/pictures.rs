@@ -9,7 +9,8 @@ use crate::render::headless::Renderer;
 use crate::render::scene::{Scene, Sun, TreeInstance};
 use crate::render::timelapse;
 use crate::species::{Season, SpeciesLibrary};
-use crate::{Error, Result};
+use super::Result;
+use crate::Error;
 use std::path::{Path, PathBuf};
 
 /// Everything needed to draw any snapshot of one run: built once, reused for every frame.
@@ -30,7 +31,7 @@ impl Stage {
     /// Builds the stage: terrain mesh with cells ≤ 10 m, one EcoMod prototype per species.
     ///
     /// # Errors
-    /// [`Error::Render`] ([`crate::error::RenderError::NoAdapter`]) when no wgpu adapter is found.
+    /// [`super::JobError::Render`] ([`crate::render::RenderError::NoAdapter`]) when no wgpu adapter is found.
     pub fn new(site: SiteConditions, library: SpeciesLibrary, sea_level_m: f32) -> Result<Self> {
         let terrain = scene::terrain_mesh(&site, 10.0, sea_level_m)?;
         let prototypes = scene::prototypes(&library);
@@ -66,7 +67,7 @@ impl Stage {
         self.scene.sun = Sun::from_position(self.site.geo.latitude_deg as f32, scene::season_day(season), 14.0);
         let img = self.renderer.render(&self.scene, camera, width, height);
         self.scene.instances = Vec::new();
-        img
+        Ok(img?)
     }
 
     /// The camera of a preset for this terrain.
@@ -133,7 +134,7 @@ pub fn snapshot_rows(run_dir: &Path, year: u32) -> Result<Vec<InventoryRow>> {
         .find(|(y, s, _)| *y == year && s.is_empty())
         .map(|(_, _, p)| p.clone())
         .ok_or_else(|| Error::format(run_dir, format!("no inventory snapshot for year {year} (years present: {})", years_list(&snaps))))?;
-    inventory::read(&path)
+    Ok(inventory::read(&path)?)
 }
 
 fn years_list(snaps: &[(u32, String, PathBuf)]) -> String {
@@ -183,7 +184,7 @@ pub struct TimelapseOptions {
 pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
     let snaps: Vec<(u32, PathBuf)> = inventory::snapshots(run_dir)?.into_iter().filter(|(_, s, _)| s.is_empty()).map(|(y, _, p)| (y, p)).collect();
     if snaps.is_empty() {
-        return Err(Error::format(run_dir, "no inventory snapshots to make a timelapse from"));
+        return Err(Error::format(run_dir, "no inventory snapshots to make a timelapse from").into());
     }
     let years: Vec<u32> = snaps.iter().map(|s| s.0).collect();
     let season = opts.season;
@@ -197,7 +198,7 @@ pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: 
 /// Errors: as [`timelapse`]; [`Error::Invalid`] when `years` is empty.
 pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Stage, usize) -> Result<Vec<TreeInstance>>, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
     if years.is_empty() {
-        return Err(Error::Invalid { context: "timelapse".into(), field: "snapshots".into(), value: "none".into(), expected: "at least one snapshot year".into() });
+        return Err(Error::Invalid { context: "timelapse".into(), field: "snapshots".into(), value: "none".into(), expected: "at least one snapshot year".into() }.into());
     }
     let snaps = years;
     std::fs::create_dir_all(frames_dir).map_err(|e| Error::io(frames_dir, e))?;

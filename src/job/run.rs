@@ -9,7 +9,8 @@ use crate::sim::scenario::Scenario;
 use crate::sim::stats::StandRow;
 use crate::sim::step::{step_year_with, YearReport};
 use crate::sim::world::World;
-use crate::error::{Error, Result};
+use super::Result;
+use crate::Error;
 use crate::output::{inventory, plot, stand_table};
 use crate::species::{Season, SpeciesLibrary};
 use std::path::{Path, PathBuf};
@@ -77,7 +78,7 @@ pub struct RunSummary {
 }
 
 fn mkdir(p: &Path) -> Result<()> {
-    std::fs::create_dir_all(p).map_err(|e| Error::io(p, e))
+    Ok(std::fs::create_dir_all(p).map_err(|e| Error::io(p, e))?)
 }
 
 /// Checks that files can be created in `dir` (creates and removes a probe file), so a run
@@ -87,7 +88,7 @@ fn mkdir(p: &Path) -> Result<()> {
 fn check_writable(dir: &Path) -> Result<()> {
     let probe = dir.join(format!(".sylva_write_probe.{}", std::process::id()));
     std::fs::write(&probe, b"").map_err(|e| Error::io(dir, e))?;
-    std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))
+    Ok(std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))?)
 }
 
 /// Removes the snapshot files of an earlier run from `dir`: `inventory/year_*` and
@@ -166,7 +167,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
     let mut rows = Vec::new();
     if opts.resume {
         if !ck.exists() {
-            return Err(Error::format(&ck, "--resume: no checkpoint in the run directory"));
+            return Err(Error::format(&ck, "--resume: no checkpoint in the run directory").into());
         }
         rows = checkpoint::load(&ck, &mut world)?;
     } else {
@@ -193,7 +194,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         let snap_year = opts.write_snapshots && (y == scenario.years || (every > 0 && y % every == 0));
         let ty = Instant::now();
         let mut rep = YearReport::default();
-        let mut err: Option<Error> = None;
+        let mut err: Option<super::JobError> = None;
         let seasonal = snap_year && scenario.seasonal_snapshots;
         let (d, px, gj_y) = (dir.clone(), opts.map_px, gj(y));
         step_year_with(&mut world, scenario, &mut rep, &mut |season, w| {

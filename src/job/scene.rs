@@ -245,13 +245,5 @@ mod tests {
 /// A full scene for one snapshot: terrain, prototypes, instances, the sun of the site's
 /// latitude on the season's day at 14:00 solar time, and a light westerly breeze.
 pub fn scene(terrain: TerrainMesh, prototypes: Vec<Prototype>, instances: Vec<TreeInstance>, latitude_deg: f64, season: Season, sea_level: Option<f32>) -> Scene {
-    Scene {
-        terrain,
-        sea_level,
-        prototypes,
-        instances,
-        sun: Sun::from_position(latitude_deg as f32, season_day(season), 14.0),
-        sky: Sky::default(),
-        wind: Wind { direction: [1.0, 0.0], directed: 1.5, undirected: 1.0, time_s: 0.0 },
-    }
+    Scene::new(terrain, sea_level, prototypes, instances, Sun::from_position(latitude_deg as f32, season_day(season), 14.0), Sky::default(), Wind { direction: [1.0, 0.0], directed: 1.5, undirected: 1.0, time_s: 0.0 })
 }

@@ -6,7 +6,7 @@
 //! GeographicType (2048) = EPSG when known; GDAL_NODATA (42113) = "nan". Local grids get the
 //! scale and tiepoint only. Deflate-compressed strips.
 
-use crate::error::{Error, Result};
+use super::{OutputError, Result};
 use crate::grid::{Crs, GeoRef, Grid};
 use std::path::Path;
 use tiff::encoder::{colortype, Compression, TiffEncoder};
@@ -47,8 +47,8 @@ pub fn encode_f32(grid: &Grid<f32>, geo: &GeoRef) -> std::result::Result<Vec<u8>
 
 /// Writes `grid` (row 0 north; NaN = nodata) with `geo`'s georeferencing to `path` atomically.
 ///
-/// Errors: [`Error::Encode`] when encoding fails (naming `path`), [`Error::Io`] when writing.
+/// Errors: [`OutputError::Encode`] when encoding fails (naming `path`), [`OutputError::Io`] when writing.
 pub fn write_f32(path: &Path, grid: &Grid<f32>, geo: &GeoRef) -> Result<()> {
-    let bytes = encode_f32(grid, geo).map_err(|e| Error::Encode { path: path.to_path_buf(), format: "GeoTIFF", message: e.to_string() })?;
+    let bytes = encode_f32(grid, geo).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "GeoTIFF", message: e.to_string() })?;
     super::write_atomic(path, &bytes)
 }

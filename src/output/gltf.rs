@@ -6,7 +6,8 @@
 //! coordinates are converted to glTF's y-up: (x, y, z) ↦ (x, z, −y) (right-handed both ways).
 //! Positions carry the min/max bounds the specification requires.
 
-use crate::error::{Error, Result};
+use super::{OutputError, Result};
+use crate::error::Error;
 use crate::mesh::{LodChain, TriMesh};
 use serde_json::{json, Value};
 use std::path::Path;
@@ -122,11 +123,11 @@ fn material(name: &str, rgb: [u8; 3], double_sided: bool) -> Value {
 
 /// Encodes a LOD chain as GLB bytes (see the module docs for the layout).
 ///
-/// Errors: [`Error::Invalid`] when the chain has no triangles; [`Error::Serialize`] when the JSON
+/// Errors: [`Error::Invalid`] (in [`OutputError::Input`]) when the chain has no triangles; [`OutputError::Serialize`] when the JSON
 /// cannot be written or does not parse back as valid glTF.
 pub fn glb_bytes(chain: &LodChain, o: &GlbOptions) -> Result<Vec<u8>> {
     if chain.levels.iter().all(|l| l.triangle_count() == 0) {
-        return Err(Error::Invalid { context: "glb".into(), field: "LOD chain".into(), value: "0 triangles".into(), expected: "at least one level with triangles".into() });
+        return Err(Error::Invalid { context: "glb".into(), field: "LOD chain".into(), value: "0 triangles".into(), expected: "at least one level with triangles".into() }.into());
     }
     let mut b = Builder { views: Vec::new(), accessors: Vec::new(), bin: Vec::new() };
     let materials = vec![material("bark", o.bark_rgb, false), material("leaf", o.leaf_rgb, true)];
@@ -159,7 +160,7 @@ pub fn glb_bytes(chain: &LodChain, o: &GlbOptions) -> Result<Vec<u8>> {
         "bufferViews": b.views,
         "buffers": [{"byteLength": b.bin.len()}],
     });
-    let mut js = serde_json::to_vec(&root).map_err(|e| Error::Serialize { what: "glb".into(), format: "JSON", message: e.to_string() })?;
+    let mut js = serde_json::to_vec(&root).map_err(|e| OutputError::Serialize { what: "glb".into(), format: "JSON", message: e.to_string() })?;
     json_check(&js)?;
     while js.len() % 4 != 0 {
         js.push(b' ');
@@ -181,19 +182,19 @@ pub fn glb_bytes(chain: &LodChain, o: &GlbOptions) -> Result<Vec<u8>> {
 /// Parses the JSON chunk back with `gltf-json` and runs its validation.
 fn json_check(js: &[u8]) -> Result<()> {
     use gltf_json::validation::Validate;
-    let root = gltf_json::Root::from_slice(js).map_err(|e| Error::Serialize { what: "glb".into(), format: "glTF", message: format!("produced JSON is not glTF: {e}") })?;
+    let root = gltf_json::Root::from_slice(js).map_err(|e| OutputError::Serialize { what: "glb".into(), format: "glTF", message: format!("produced JSON is not glTF: {e}") })?;
     let mut errs = Vec::new();
     root.validate(&root, gltf_json::Path::new, &mut |path, err| errs.push(format!("{}: {err}", path())));
     if errs.is_empty() {
         Ok(())
     } else {
-        Err(Error::Serialize { what: "glb".into(), format: "glTF", message: format!("validation failed: {}", errs.join("; ")) })
+        Err(OutputError::Serialize { what: "glb".into(), format: "glTF", message: format!("validation failed: {}", errs.join("; ")) })
     }
 }
 
 /// Writes a LOD chain to `path` as `.glb` (atomically).
 ///
-/// Errors: as [`glb_bytes`]; [`Error::Io`] naming `path`.
+/// Errors: as [`glb_bytes`]; [`OutputError::Io`] naming `path`.
 pub fn write_glb(path: &Path, chain: &LodChain, o: &GlbOptions) -> Result<()> {
     let bytes = glb_bytes(chain, o)?;
     super::write_atomic(path, &bytes)
@@ -213,7 +214,7 @@ const SKELETON_FORMAT: &str = "sylva-skeleton";
 /// m, age in years; written to a temporary file then renamed. `sylva tree adapt` reads it back
 /// with [`read_skeleton_sidecar`].
 ///
-/// Errors: [`Error::Io`] when the file cannot be written.
+/// Errors: [`OutputError::Io`] when the file cannot be written.
 pub fn write_skeleton_sidecar(glb: &Path, sk: &crate::structure::Skeleton) -> Result<()> {
     let nodes: Vec<Value> = sk
         .nodes
@@ -234,7 +235,7 @@ pub fn read_skeleton_sidecar(glb: &Path) -> Result<crate::structure::Skeleton> {
     use crate::structure::{Node, Role, Skeleton};
     let path = skeleton_sidecar_path(glb);
     let text = std::fs::read_to_string(&path).map_err(|source| Error::Io { path: path.clone(), source })?;
-    let fmt = |message: String| Error::Format { path: path.clone(), message };
+    let fmt = |message: String| OutputError::from(Error::Format { path: path.clone(), message });
     let doc: Value = serde_json::from_str(&text).map_err(|e| fmt(format!("not JSON: {e}")))?;
     if doc.get("format").and_then(Value::as_str) != Some(SKELETON_FORMAT) {
         return Err(fmt(format!("field `format`: expected \"{SKELETON_FORMAT}\"")));

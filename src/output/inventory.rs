@@ -1,6 +1,6 @@
 //! Tree inventories: CSV (columns fixed by ARCHITECTURE.md) and GeoJSON points.
 
-use crate::error::Result;
+use super::Result;
 use crate::sim::World;
 use std::fmt::Write as _;
 use std::io::Write;

@@ -1,7 +1,8 @@
 //! Colour-mapped PNG maps of grids with a legend (title, colour bar, units), optional hillshade
 //! underlay. Text is drawn with `ab_glyph` and the bundled DejaVu Sans.
 
-use crate::error::{Error, Result};
+use super::{OutputError, Result};
+use crate::error::Error;
 use crate::grid::Grid;
 use ab_glyph::{Font, FontRef, PxScale, ScaleFont};
 use image::{Rgb, RgbImage};
@@ -85,7 +86,7 @@ pub struct MapStyle<'a> {
 /// Writes a colour-mapped PNG of `grid` with a title, a colour bar and its units. Cells that are
 /// NaN or `false` in `mask` are light grey. Range: 1st–99th percentile of valid values.
 ///
-/// Errors: [`Error::Invalid`] for an empty grid or a mask of another size; [`Error::Io`].
+/// Errors: [`Error::Invalid`] (in [`OutputError::Input`]) for an empty grid or a mask of another size; [`OutputError::Io`].
 pub fn write_field_png(grid: &Grid<f32>, mask: Option<&Grid<bool>>, ramp: Ramp, title: &str, units: &str, path: &Path) -> Result<()> {
     let style = MapStyle { ramp, title: title.into(), units: units.into(), range: None, hillshade: None, shade_strength: 0.0 };
     write_field_png_styled(grid, mask, &style, path)
@@ -105,18 +106,18 @@ pub fn percentile_range(grid: &Grid<f32>, mask: Option<&Grid<bool>>, lo: f64, hi
 /// Like [`write_field_png`] with full control of the style.
 pub fn write_field_png_styled(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyle, path: &Path) -> Result<()> {
     let img = render_field(grid, mask, style).map_err(|e| match e {
-        Error::Invalid { field, value, expected, .. } => Error::Invalid { context: path.display().to_string(), field, value, expected },
+        OutputError::Input(Error::Invalid { field, value, expected, .. }) => Error::Invalid { context: path.display().to_string(), field, value, expected }.into(),
         o => o,
     })?;
     let mut bytes = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| Error::Encode { path: path.to_path_buf(), format: "PNG", message: e.to_string() })?;
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "PNG", message: e.to_string() })?;
     super::write_atomic(path, &bytes)
 }
 
 /// Renders the map into an image (see [`write_field_png_styled`]).
 pub fn render_field(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyle) -> Result<RgbImage> {
     let (w, h) = (grid.width, grid.height);
-    let inv = |f: &str, v: String, e: &str| Error::Invalid { context: "map".into(), field: f.into(), value: v, expected: e.into() };
+    let inv = |f: &str, v: String, e: &str| OutputError::from(Error::Invalid { context: "map".into(), field: f.into(), value: v, expected: e.into() });
     if w == 0 || h == 0 {
         return Err(inv("grid", format!("{w} x {h}"), "a non-empty grid"));
     }
@@ -155,7 +156,7 @@ pub fn render_field(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyl
             img.put_pixel((pad + x) as u32, (top + y) as u32, Rgb(px));
         }
     }
-    let font = FontRef::try_from_slice(FONT).map_err(|e| Error::Bundled { what: "font", message: e.to_string() })?;
+    let font = FontRef::try_from_slice(FONT).map_err(|e| OutputError::Bundled { what: "font", message: e.to_string() })?;
     draw_text(&mut img, &font, pad as f32, 10.0, 22.0, &style.title);
     // Colour bar.
     let (bx, by, bw, bh) = (pad + mw + 20, top + 10, 22usize, mh.clamp(200, 400) - 20);
@@ -223,7 +224,7 @@ fn glyph_coverage(font: &FontRef, x: f32, y: f32, px: f32, text: &str, w: u32, h
 ///
 /// Errors: only if the bundled font could not be parsed.
 pub fn stamp_caption(img: &mut image::RgbaImage, text: &str) -> Result<()> {
-    let font = FontRef::try_from_slice(FONT).map_err(|e| Error::Bundled { what: "font", message: e.to_string() })?;
+    let font = FontRef::try_from_slice(FONT).map_err(|e| OutputError::Bundled { what: "font", message: e.to_string() })?;
     let (w, h) = img.dimensions();
     let px = (h as f32 / 18.0).max(10.0);
     let sf = font.as_scaled(PxScale::from(px));

@@ -1,17 +1,19 @@
 //! Writers for Sylva's artefacts: one module per format. Every writer writes to a temporary file
 //! in the destination folder and renames it into place, so a reader never sees half a file.
 
+mod error;
+pub use error::{OutputError, Result};
+
 pub mod inventory;
 pub mod plot;
 pub mod stand_table;
 
-use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::Path;
 
 /// Writes `bytes` to `path` atomically (temporary file in the same folder, then rename).
 ///
-/// Errors: [`Error::Io`] naming `path` when the folder is missing or not writable.
+/// Errors: [`OutputError::Io`] naming `path` when the folder is missing or not writable.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic_with(path, |w| w.write_all(bytes))
 }
@@ -31,7 +33,7 @@ pub fn write_atomic_with(path: &Path, f: impl FnOnce(&mut std::io::BufWriter<std
     })();
     if let Err(e) = res {
         let _ = std::fs::remove_file(&tmp);
-        return Err(Error::io(path, e));
+        return Err(OutputError::io(path, e));
     }
     Ok(())
 }

@@ -2,7 +2,7 @@
 //! `leaf` with `usemtl` names (no .mtl file is written), z up as in Sylva (Blender's OBJ importer
 //! offers "Z up" in its options), vertices `v`, normals `vn`, texture coordinates `vt`.
 
-use crate::error::Result;
+use super::Result;
 use crate::mesh::LodChain;
 use std::io::Write;
 use std::path::Path;
@@ -10,7 +10,7 @@ use std::path::Path;
 /// Writes `chain` to `path` as OBJ (atomically). Only the levels in `levels` are written (all
 /// when `None`).
 ///
-/// Errors: [`crate::Error::Io`] naming `path`.
+/// Errors: [`super::OutputError::Io`] naming `path`.
 pub fn write_obj(path: &Path, chain: &LodChain, levels: Option<&[usize]>) -> Result<()> {
     super::write_atomic_with(path, |w| {
         writeln!(w, "# sylva tree, z up, metres")?;

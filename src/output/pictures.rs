@@ -1,17 +1,18 @@
 //! Pictures on disk: PNG stills and frame sequences, animated GIFs (`image`), MP4 through
 //! `ffmpeg` when it is on `PATH`. All files are written atomically (temporary file + rename).
 
-use crate::{Error, Result};
+use super::{OutputError, Result};
+use crate::error::Error;
 use std::path::{Path, PathBuf};
 
 /// Writes `frames` as `dir/frame_00000.png`, ... (atomically, one file each) and returns the
 /// paths.
 ///
 /// # Errors
-/// [`Error::Io`] when the folder cannot be created or a file written; [`Error::Encode`] when PNG
+/// [`OutputError::Io`] when the folder cannot be created or a file written; [`OutputError::Encode`] when PNG
 /// encoding fails.
 pub fn write_png_frames(dir: &Path, frames: &[image::RgbaImage]) -> Result<Vec<PathBuf>> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    std::fs::create_dir_all(dir).map_err(|e| OutputError::io(dir, e))?;
     let mut paths = Vec::new();
     for (i, f) in frames.iter().enumerate() {
         let p = dir.join(format!("frame_{i:05}.png"));
@@ -24,20 +25,20 @@ pub fn write_png_frames(dir: &Path, frames: &[image::RgbaImage]) -> Result<Vec<P
 /// Writes one image as PNG atomically.
 ///
 /// # Errors
-/// [`Error::Io`] / [`Error::Encode`] as for [`write_png_frames`].
+/// [`OutputError::Io`] / [`OutputError::Encode`] as for [`write_png_frames`].
 pub fn write_png(path: &Path, img: &image::RgbaImage) -> Result<()> {
     let mut bytes = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| Error::Encode { path: path.to_path_buf(), format: "PNG", message: e.to_string() })?;
+    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "PNG", message: e.to_string() })?;
     super::write_atomic(path, &bytes)
 }
 
 /// Writes `frames` as an endlessly looping animated GIF at `fps` frames per second (1..=100).
 ///
 /// # Errors
-/// [`Error::Invalid`] for no frames, frames of different sizes or a bad `fps`;
-/// [`Error::Encode`] when encoding fails; [`Error::Io`] when writing fails.
+/// [`Error::Invalid`] (in [`OutputError::Input`]) for no frames, frames of different sizes or a bad `fps`;
+/// [`OutputError::Encode`] when encoding fails; [`OutputError::Io`] when writing fails.
 pub fn write_gif(path: &Path, frames: &[image::RgbaImage], fps: f32) -> Result<()> {
-    let inv = |field: &str, value: String, expected: &str| Error::Invalid { context: path.display().to_string(), field: field.into(), value, expected: expected.into() };
+    let inv = |field: &str, value: String, expected: &str| OutputError::from(Error::Invalid { context: path.display().to_string(), field: field.into(), value, expected: expected.into() });
     if frames.is_empty() {
         return Err(inv("frames", "0".into(), "at least one frame"));
     }
@@ -51,10 +52,10 @@ pub fn write_gif(path: &Path, frames: &[image::RgbaImage], fps: f32) -> Result<(
     let mut bytes = Vec::new();
     {
         let mut enc = image::codecs::gif::GifEncoder::new_with_speed(&mut bytes, 10);
-        enc.set_repeat(image::codecs::gif::Repeat::Infinite).map_err(|e| Error::Encode { path: path.to_path_buf(), format: "GIF", message: e.to_string() })?;
+        enc.set_repeat(image::codecs::gif::Repeat::Infinite).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "GIF", message: e.to_string() })?;
         let delay = image::Delay::from_numer_denom_ms((1000.0 / fps).round() as u32, 1);
         for f in frames {
-            enc.encode_frame(image::Frame::from_parts(f.clone(), 0, 0, delay)).map_err(|e| Error::Encode { path: path.to_path_buf(), format: "GIF", message: e.to_string() })?;
+            enc.encode_frame(image::Frame::from_parts(f.clone(), 0, 0, delay)).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "GIF", message: e.to_string() })?;
         }
     }
     super::write_atomic(path, &bytes)
@@ -70,7 +71,7 @@ pub fn find_ffmpeg() -> Option<PathBuf> {
 /// is installed. Returns `Ok(false)` (and writes nothing) when `ffmpeg` is not on `PATH`.
 ///
 /// # Errors
-/// [`Error::Encode`] when `ffmpeg` cannot be run or fails.
+/// [`OutputError::Encode`] when `ffmpeg` cannot be run or fails.
 pub fn write_mp4(dir: &Path, fps: f32, out: &Path) -> Result<bool> {
     let Some(ff) = find_ffmpeg() else { return Ok(false) };
     let status = std::process::Command::new(ff)
@@ -81,9 +82,9 @@ pub fn write_mp4(dir: &Path, fps: f32, out: &Path) -> Result<bool> {
         .args(["-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", "-c:v", "libx264"])
         .arg(out)
         .status()
-        .map_err(|e| Error::Encode { path: out.to_path_buf(), format: "MP4", message: format!("cannot run ffmpeg: {e}") })?;
+        .map_err(|e| OutputError::Encode { path: out.to_path_buf(), format: "MP4", message: format!("cannot run ffmpeg: {e}") })?;
     if !status.success() {
-        return Err(Error::Encode { path: out.to_path_buf(), format: "MP4", message: format!("ffmpeg failed ({status})") });
+        return Err(OutputError::Encode { path: out.to_path_buf(), format: "MP4", message: format!("ffmpeg failed ({status})") });
     }
     Ok(true)
 }

@@ -1,6 +1,7 @@
 //! Plots (plotters, DejaVu Sans registered from `assets/fonts/`) and raster maps (PNG).
 
-use crate::error::{Error, Result};
+use super::{OutputError, Result};
+use crate::error::Error;
 use crate::sim::stats::StandRow;
 use crate::sim::World;
 use plotters::prelude::*;
@@ -193,7 +194,7 @@ fn snapshot_label(p: &Path) -> String {
 /// tree ≥ 1.3 m, k ≥ 1 the k-th species of the scenario's pool — listed in
 /// `species_codes.csv` (code,species) in the same folder; NaN marks masked cells.
 ///
-/// Errors: [`Error::Io`] / PNG or GeoTIFF encoding errors naming the file.
+/// Errors: [`OutputError::Io`] / PNG or GeoTIFF encoding errors naming the file.
 pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -> Result<()> {
     let (cols, rows, cell) = map_dims(w, max_px);
     let np = w.site.lib.species.len();
@@ -228,7 +229,7 @@ pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -
     }
     let when = snapshot_label(species_png);
     // species map with legend
-    let font = ab_glyph::FontRef::try_from_slice(FONT).map_err(|e| Error::Bundled { what: "font", message: e.to_string() })?;
+    let font = ab_glyph::FontRef::try_from_slice(FONT).map_err(|e| OutputError::Bundled { what: "font", message: e.to_string() })?;
     let k = 512usize.div_ceil(cols.max(rows)).max(1);
     let (mw, mh) = (cols * k, rows * k);
     let (top, pad, right) = (44usize, 12usize, 190usize);

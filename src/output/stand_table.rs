@@ -1,6 +1,6 @@
 //! The stand table over time as CSV.
 
-use crate::error::Result;
+use super::Result;
 use crate::sim::stats::StandRow;
 use crate::sim::trees::DeathCause;
 use std::fmt::Write as _;

@@ -8,8 +8,8 @@ pub use super::renderer::{Culling, FrameStats, Renderer};
 use super::camera::Camera;
 use super::renderer::{Readback, COLOR_FORMAT};
 use super::scene::Scene;
-use crate::error::RenderError;
-use crate::{Error, Result};
+use super::{RenderError, Result};
+use crate::Error;
 
 impl Renderer {
     /// Opens the first available adapter (a GPU when there is one, else a software adapter
@@ -62,13 +62,13 @@ impl Renderer {
     /// [`FrameStats::uploaded_prototypes`]), so a timelapse uploads only instances.
     ///
     /// # Errors
-    /// [`Error::Invalid`] for a zero or too large size (limit: the adapter's 2-D texture size)
-    /// or inconsistent meshes; [`Error::Render`] ([`RenderError`]) when the GPU fails or the readback cannot be
+    /// [`RenderError::Input`] ([`Error::Invalid`]) for a zero or too large size (limit: the adapter's 2-D texture size)
+    /// or inconsistent meshes; [`RenderError`] when the GPU fails or the readback cannot be
     /// mapped.
     pub fn render(&mut self, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
         self.check_size(width, height)?;
         if self.format != COLOR_FORMAT {
-            return Err(Error::Invalid { context: "render".into(), field: "target format".into(), value: format!("{:?}", self.format), expected: format!("{COLOR_FORMAT:?} to read an image back (draw other formats with render_to_view)") });
+            return Err(RenderError::Input(Error::Invalid { context: "render".into(), field: "target format".into(), value: format!("{:?}", self.format), expected: format!("{COLOR_FORMAT:?} to read an image back (draw other formats with render_to_view)") }));
         }
         self.ensure_readback(width, height);
         let Some(rb) = self.readback.take() else { return Err(RenderError::Internal("readback target").into()) };

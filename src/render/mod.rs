@@ -31,6 +31,9 @@
 //! - [`timelapse`]: interpolation of snapshots and frame sequences (the GIF/PNG/MP4 writers are
 //!   in [`crate::output::pictures`]).
 
+mod error;
+pub use error::{RenderError, Result};
+
 pub mod camera;
 pub mod canopy;
 pub mod headless;

@@ -16,7 +16,6 @@
 //! are drawn, and the GPU path's atomically compacted (unordered) instance lists give the same
 //! pixels as the CPU path's ordered ones.
 
-use std::hash::Hasher;
 
 use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
@@ -30,8 +29,8 @@ use crate::mesh::LOD_LEVELS;
 // `shaders/cull.wgsl` keeps one drawn level per word of a 4-word record (the level costs of a
 // prototype, `cost()`), so the number of levels is tied to that record width.
 const _: () = assert!(LOD_LEVELS == 4, "cull.wgsl packs the level costs of a prototype into one vec4<u32>-sized record");
-use crate::error::RenderError;
-use crate::{Error, Result};
+use super::{RenderError, Result};
+use crate::Error;
 
 /// Colour format of the headless texture (sRGB RGBA, read back as an image).
 pub(super) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
@@ -176,12 +175,12 @@ struct GpuLevel {
 
 /// The scene's static data on the GPU, in two parts uploaded separately: the terrain (with the
 /// water plane and the canopy grid over it) and the prototypes (meshes and silhouettes); each
-/// part is uploaded again only when its content fingerprint changes.
+/// part is uploaded again only when its [`super::scene::Version`] changes.
 struct GpuScene {
-    /// Content fingerprint of the terrain and sea level.
-    terrain_fp: u64,
-    /// Content fingerprint of the prototypes.
-    protos_fp: u64,
+    /// Version of the uploaded terrain and sea level.
+    terrain_version: super::scene::Version,
+    /// Version of the uploaded prototypes.
+    protos_version: super::scene::Version,
     terrain_vb: Option<wgpu::Buffer>,
     terrain_ib: Option<wgpu::Buffer>,
     terrain_count: u32,
@@ -517,50 +516,22 @@ impl Renderer {
         self.last
     }
 
-    fn terrain_fingerprint(scene: &Scene) -> u64 {
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        let t = &scene.terrain;
-        h.write_usize(t.positions.len());
-        h.write_usize(t.indices.len());
-        h.write(bytemuck::cast_slice(&t.positions));
-        h.write(bytemuck::cast_slice(&t.normals));
-        h.write(bytemuck::cast_slice(&t.colors));
-        h.write(bytemuck::cast_slice(&t.indices));
-        h.write_u32(scene.sea_level.map(f32::to_bits).unwrap_or(1));
-        h.finish()
-    }
-
-    fn prototypes_fingerprint(scene: &Scene) -> u64 {
-        let mut h = std::collections::hash_map::DefaultHasher::new();
-        h.write_usize(scene.prototypes.len());
-        for p in &scene.prototypes {
-            for l in &p.lods.levels {
-                for m in [&l.bark, &l.leaves] {
-                    h.write(bytemuck::cast_slice(&m.positions));
-                    h.write(bytemuck::cast_slice(&m.normals));
-                    h.write(bytemuck::cast_slice(&m.indices));
-                }
-            }
-            h.write_u8(0xff);
-        }
-        h.finish()
-    }
-
-    /// Uploads what changed of the scene's static data: the terrain part when its fingerprint
-    /// differs from the uploaded one, the prototypes when theirs does, nothing when neither does.
+    /// Uploads what changed of the scene's static data: the terrain part when its version
+    /// ([`Scene::terrain_version`]) differs from the uploaded one, the prototypes when theirs
+    /// does, nothing when neither does (no pass over the meshes).
     fn upload(&mut self, scene: &Scene) -> Result<(bool, bool)> {
-        let (tfp, pfp) = (Self::terrain_fingerprint(scene), Self::prototypes_fingerprint(scene));
+        let (tfp, pfp) = (scene.terrain_version(), scene.prototypes_version());
         let old = self.scene.take();
-        if old.as_ref().is_some_and(|g| g.terrain_fp == tfp && g.protos_fp == pfp) {
+        if old.as_ref().is_some_and(|g| g.terrain_version == tfp && g.protos_version == pfp) {
             self.scene = old;
             return Ok((false, false));
         }
         let (mut terrain, mut protos) = (None, None);
         if let Some(g) = old {
-            if g.terrain_fp == tfp {
+            if g.terrain_version == tfp {
                 terrain = Some(GpuTerrain { vb: g.terrain_vb, ib: g.terrain_ib, count: g.terrain_count, water_vb: g.water_vb, canopy_grid: g.canopy_grid, canopy_buf: g.canopy_buf });
             }
-            if g.protos_fp == pfp {
+            if g.protos_version == pfp {
                 protos = Some((g.protos, g.sil_buf));
             }
         }
@@ -591,7 +562,7 @@ impl Renderer {
             entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.shadow_globals.as_entire_binding() }, wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() }],
         });
         let GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: terrain_count, water_vb, canopy_grid, canopy_buf } = terrain;
-        self.scene = Some(GpuScene { terrain_fp: tfp, protos_fp: pfp, terrain_vb, terrain_ib, terrain_count, water_vb, protos, sil_buf, canopy_grid, canopy_buf, bind_main, bind_shadow });
+        self.scene = Some(GpuScene { terrain_version: tfp, protos_version: pfp, terrain_vb, terrain_ib, terrain_count, water_vb, protos, sil_buf, canopy_grid, canopy_buf, bind_main, bind_shadow });
         Ok(uploaded)
     }
 
@@ -630,7 +601,7 @@ impl Renderer {
     /// The prototypes part: one vertex and index buffer per drawn level (chain meshes, then the
     /// billboard) and the silhouettes' storage buffer.
     ///
-    /// Errors: [`Error::Invalid`] naming the prototype and level of an inconsistent mesh.
+    /// Errors: [`RenderError::Input`] ([`Error::Invalid`]) naming the prototype and level of an inconsistent mesh.
     fn upload_prototypes(&self, scene: &Scene) -> Result<(Vec<Vec<GpuLevel>>, wgpu::Buffer)> {
         let d = &self.device;
         let sils: Vec<Silhouette> = scene
@@ -652,12 +623,12 @@ impl Renderer {
                 let mut ranges = Vec::new();
                 for (m, mat) in [(&l.bark, 0.0f32), (&l.leaves, 1.0)] {
                     if m.normals.len() != m.positions.len() || m.indices.len() % 3 != 0 || m.indices.iter().any(|&i| i as usize >= m.positions.len()) {
-                        return Err(Error::Invalid {
+                        return Err(RenderError::Input(Error::Invalid {
                             context: format!("render prototype {pi} `{}` level {li}", p.name),
                             field: if mat == 0.0 { "bark".into() } else { "leaves".into() },
                             value: format!("{} positions, {} normals, {} indices", m.positions.len(), m.normals.len(), m.indices.len()),
                             expected: "one normal per position, indices in range, a multiple of 3".into(),
-                        });
+                        }));
                     }
                     let base = verts.len() as u32;
                     let start = idx.len() as u32;
@@ -709,7 +680,7 @@ impl Renderer {
     pub(super) fn check_size(&self, width: u32, height: u32) -> Result<()> {
         let max = self.device.limits().max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
-            return Err(Error::Invalid { context: "render".into(), field: "size".into(), value: format!("{width}x{height}"), expected: format!("1..={max} pixels per side") });
+            return Err(RenderError::Input(Error::Invalid { context: "render".into(), field: "size".into(), value: format!("{width}x{height}"), expected: format!("1..={max} pixels per side") }));
         }
         Ok(())
     }
@@ -717,12 +688,12 @@ impl Renderer {
     /// Draws `scene` seen by `camera` into `view` (`width` × `height` pixels, the renderer's
     /// [`Renderer::target_format`], usage `RENDER_ATTACHMENT`): a window's surface texture or an
     /// offscreen texture. The GPU copies of the terrain and prototypes are kept between frames
-    /// while they stay the same; the instances are uploaded each frame. Returns the frame's
+    /// while their versions ([`Scene::terrain_version`], [`Scene::prototypes_version`]) stay the same (change tracking, no hashing); the instances are uploaded each frame. Returns the frame's
     /// statistics (also [`Renderer::last_stats`]).
     ///
     /// # Errors
-    /// [`Error::Invalid`] for a zero or too large size or inconsistent meshes;
-    /// [`Error::Render`] ([`RenderError`]) when the GPU fails.
+    /// [`RenderError::Input`] ([`Error::Invalid`]) for a zero or too large size or inconsistent meshes;
+    /// [`RenderError`] when the GPU fails.
     pub fn render_to_view(&mut self, scene: &Scene, camera: &Camera, view: &wgpu::TextureView, width: u32, height: u32) -> Result<FrameStats> {
         self.check_size(width, height)?;
         let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);

@@ -186,8 +186,38 @@ impl Default for Wind {
     }
 }
 
+/// The version of one part of a [`Scene`] (its terrain, its prototypes): a number unique in the
+/// process, taken anew whenever the part is replaced or marked changed, so that a renderer
+/// uploads the part again only when its version differs from the one it uploaded (explicit
+/// change tracking: no hashing of the meshes per frame). A clone of a scene shares its versions,
+/// which is right as long as neither is changed without a new version.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Version(u64);
+
+impl Version {
+    /// A version no other call has returned in this process.
+    pub fn new() -> Self {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        Version(NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed))
+    }
+}
+
+impl Default for Version {
+    /// A fresh version ([`Version::new`]).
+    fn default() -> Self {
+        Version::new()
+    }
+}
+
 /// Everything the renderer draws.
-#[derive(Debug, Clone, Default, PartialEq)]
+///
+/// The terrain (with the sea level) and the prototypes are uploaded to the GPU once and kept
+/// there while their [`Version`]s stay the same; the instances, sun, sky and wind are read every
+/// frame. Replace them with [`Scene::set_terrain`], [`Scene::set_sea_level`] and
+/// [`Scene::set_prototypes`], or after changing them in place call [`Scene::terrain_changed`] or
+/// [`Scene::prototypes_changed`]: a change made without either is not seen by a renderer that
+/// has already drawn the scene. Equality (`==`) compares the content, not the versions.
+#[derive(Debug, Clone, Default)]
 pub struct Scene {
     /// The ground.
     pub terrain: TerrainMesh,
@@ -203,6 +233,56 @@ pub struct Scene {
     pub sky: Sky,
     /// Wind.
     pub wind: Wind,
+    /// Version of `terrain` and `sea_level`.
+    terrain_version: Version,
+    /// Version of `prototypes`.
+    prototypes_version: Version,
+}
+
+impl PartialEq for Scene {
+    /// Same content (terrain, sea level, prototypes, instances, sun, sky, wind), whatever the versions.
+    fn eq(&self, o: &Self) -> bool {
+        let Scene { terrain, sea_level, prototypes, instances, sun, sky, wind, terrain_version: _, prototypes_version: _ } = self;
+        *terrain == o.terrain && *sea_level == o.sea_level && *prototypes == o.prototypes && *instances == o.instances && *sun == o.sun && *sky == o.sky && *wind == o.wind
+    }
+}
+
+impl Scene {
+    /// A scene of these parts, each static part with a fresh [`Version`].
+    pub fn new(terrain: TerrainMesh, sea_level: Option<f32>, prototypes: Vec<Prototype>, instances: Vec<TreeInstance>, sun: Sun, sky: Sky, wind: Wind) -> Self {
+        Scene { terrain, sea_level, prototypes, instances, sun, sky, wind, terrain_version: Version::new(), prototypes_version: Version::new() }
+    }
+    /// Replaces the terrain (a new terrain version: uploaded again on the next frame).
+    pub fn set_terrain(&mut self, terrain: TerrainMesh) {
+        self.terrain = terrain;
+        self.terrain_changed();
+    }
+    /// Sets the sea level in metres, `None` for no water plane (part of the terrain version).
+    pub fn set_sea_level(&mut self, sea_level: Option<f32>) {
+        self.sea_level = sea_level;
+        self.terrain_changed();
+    }
+    /// Replaces the prototypes (a new prototypes version: uploaded again on the next frame).
+    pub fn set_prototypes(&mut self, prototypes: Vec<Prototype>) {
+        self.prototypes = prototypes;
+        self.prototypes_changed();
+    }
+    /// Marks the terrain or the sea level as changed in place (a new terrain version).
+    pub fn terrain_changed(&mut self) {
+        self.terrain_version = Version::new();
+    }
+    /// Marks the prototypes as changed in place (a new prototypes version).
+    pub fn prototypes_changed(&mut self) {
+        self.prototypes_version = Version::new();
+    }
+    /// The version of the terrain and sea level.
+    pub fn terrain_version(&self) -> Version {
+        self.terrain_version
+    }
+    /// The version of the prototypes.
+    pub fn prototypes_version(&self) -> Version {
+        self.prototypes_version
+    }
 }
 
 fn hash01(mut x: u64) -> f32 {
@@ -249,7 +329,7 @@ pub fn demo_scene(n_trees: usize, size_m: f32, seed: u64) -> Scene {
         let tint = 0.85 + 0.3 * hash01(k ^ 7);
         instances.push(TreeInstance::new(i, [x, y, height(x, y) - 0.3], h, cr, species, [leaf[0] * tint, leaf[1] * tint, leaf[2] * tint]));
     }
-    Scene { terrain, sea_level: None, prototypes, instances, sun: Sun::from_position(47.0, 172.0, 14.0), sky: Sky::default(), wind: Wind::default() }
+    Scene::new(terrain, None, prototypes, instances, Sun::from_position(47.0, 172.0, 14.0), Sky::default(), Wind::default())
 }
 
 #[cfg(test)]

@@ -5,7 +5,8 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use super::scene::TreeInstance;
-use crate::{Error, Result};
+use super::{RenderError, Result};
+use crate::Error;
 
 /// Trees at fraction `t` (0..1) between snapshot `a` and snapshot `b`, matched by
 /// [`TreeInstance::id`]:
@@ -145,12 +146,12 @@ pub fn render_sequence(
     progress: impl FnMut(Progress),
 ) -> Result<Vec<image::RgbaImage>> {
     if snapshots.is_empty() || steps_per_snapshot == 0 {
-        return Err(Error::Invalid {
+        return Err(RenderError::Input(Error::Invalid {
             context: "render::timelapse::render_sequence".into(),
             field: if snapshots.is_empty() { "snapshots".into() } else { "steps_per_snapshot".into() },
             value: "0".into(),
             expected: "at least 1".into(),
-        });
+        }));
     }
     let total = (snapshots.len() - 1) * steps_per_snapshot + 1;
     let mut meter = ProgressMeter::new(total, progress);

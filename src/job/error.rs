@@ -1,0 +1,33 @@
+//! Errors of the job layer (`job`): each layer's error wrapped unchanged, so that a run, a
+//! render or a checkpoint reports what the layer that failed said (file, field or line,
+//! expected value).
+
+use crate::output::OutputError;
+use crate::render::RenderError;
+
+/// Errors from the main job: reading inputs, writing the run directory, rendering.
+#[derive(Debug, thiserror::Error)]
+pub enum JobError {
+    /// Reading or validating an input, or an invalid option (the core's [`crate::Error`]).
+    #[error(transparent)]
+    Input(#[from] crate::Error),
+    /// Writing an artefact ([`OutputError`]: I/O, encoding, serialising, bundled font).
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    /// Rendering on the GPU ([`RenderError`]: no adapter, device, validation, readback).
+    #[error("render: {0}")]
+    Render(RenderError),
+}
+
+impl From<RenderError> for JobError {
+    /// A render error; an invalid argument inside it is reported as the input error it is.
+    fn from(e: RenderError) -> Self {
+        match e {
+            RenderError::Input(e) => JobError::Input(e),
+            e => JobError::Render(e),
+        }
+    }
+}
+
+/// Result alias of the job layer.
+pub type Result<T> = std::result::Result<T, JobError>;
