@@ -1,7 +1,6 @@
 //! Tree architecture benchmark: time per node of each growth model and of meshing, and the
 //! 10,000-node full-detail meshing figure (target ≤ 20 ms on one core). Plain program; run with
 //! `cargo bench --bench architecture`. Single-threaded throughout. Medians over repeated runs.
-use std::time::Instant;
 use sylva::species::EcoModParams;
 use sylva::structure::grow::{ecomod, laplacian, light_guided};
 use sylva::structure::mesh::{self, LodOptions};
