@@ -59,7 +59,10 @@ impl Obstacle {
 
     /// The obstacle as an axis-aligned box (lower, upper corner; infinite where unbounded).
     /// `None` for a sphere.
-    fn as_box(&self) -> Option<(Vec3, Vec3)> {
+    /// The obstacle as an axis-aligned box (min, max corners, m; infinite extents as ±∞), or
+    /// `None` for a sphere. The one definition used by the ray tests here and by the Plastic
+    /// Trees sky mask (`structure::plastic::light::SkyMask`).
+    pub(crate) fn as_box(&self) -> Option<(Vec3, Vec3)> {
         let inf = f32::INFINITY;
         match *self {
             Obstacle::Box { min, max } => Some((min, max)),

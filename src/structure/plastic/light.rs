@@ -364,17 +364,12 @@ impl<'a> SkyMask<'a> {
             Some(g) => dirs.iter().enumerate().filter(|(_, d)| d.dot(g.normal) <= 0.0).fold(0u32, |m, (k, _)| m | 1 << k),
             None => 0,
         };
-        let inf = f32::INFINITY;
         let (mut slabs, mut others) = (Vec::new(), Vec::new());
         for &o in solids.obstacles {
-            match o {
-                Obstacle::Box { min, max } => slabs.push((min, max)),
-                // the box of a finite wall as `Obstacle::ray_hits` tests it (`space.rs`, `as_box`)
-                Obstacle::FiniteWall { x, length, height } => {
-                    let (x0, x1) = if x >= 0.0 { (x, inf) } else { (-inf, x) };
-                    slabs.push((Vec3::new(x0, -0.5 * length, 0.0), Vec3::new(x1, 0.5 * length, height)));
-                }
-                Obstacle::Sphere { .. } | Obstacle::Wall { .. } => others.push(o),
+            match (o, o.as_box()) {
+                // boxes and finite walls as `Obstacle::ray_hits` tests them (`space.rs`, `as_box`)
+                (Obstacle::Box { .. } | Obstacle::FiniteWall { .. }, Some(b)) => slabs.push(b),
+                _ => others.push(o),
             }
         }
         SkyMask { solids, dirs, inv, below_ground, slabs, others }
