@@ -74,7 +74,7 @@ fn viewer_year_slider_moves_the_trees_and_a_click_selects_a_tree() {
     assert_eq!(h.state().year, 10.0, "opens at the last snapshot");
     let tall_10: f32 = h.state().trees().iter().map(|t| t.height).sum();
     // move the year slider to 2.5: half way between the snapshots of years 0 and 5
-    h.get_by_label("Year").set_value_accesskit(2.5);
+    h.get_by_role_and_label(egui::Role::Slider, "Year").set_value_accesskit(2.5);
     h.run();
     assert!((h.state().year - 2.5).abs() < 1e-3, "{}", h.state().year);
     let tall_2: f32 = h.state().trees().iter().map(|t| t.height).sum();
@@ -188,7 +188,7 @@ fn editor_shows_the_species_check_message_beside_the_field() {
     let expected = ed.problems_of("architecture.ecomod.k_c")[0].expected.clone();
     let mut h = Harness::builder().with_size(egui::vec2(1500.0, 4200.0)).build_ui_state(|ui, e: &mut Editor| e.ui(ui), ed);
     h.run();
-    h.get_by_label(&format!("⚠ {expected}"));
+    h.get_by_label(&format!("problem: {expected}"));
     h.get_by_label("1 problem(s)");
 }
 

@@ -108,7 +108,7 @@ pub fn curve_editor(ui: &mut egui::Ui, name: &str, pts: &mut Vec<[f64; 2]>, xr: 
         if r.secondary_clicked() {
             remove = Some(i);
         }
-        let r = r.on_hover_text(format!("{}: ({:.3}, {:.4}) — drag to move, right-click to remove", label, pts[i][0], pts[i][1]));
+        let r = r.on_hover_text(format!("{}: ({:.3}, {:.4}): drag to move, right-click to remove", label, pts[i][0], pts[i][1]));
         let hot = r.hovered() || r.dragged();
         painter.circle(to_screen(pts[i]), if hot { 6.0 } else { 4.5 }, if hot { egui::Color32::from_rgb(255, 60, 190) } else { egui::Color32::from_rgb(230, 230, 240) }, egui::Stroke::new(1.0, egui::Color32::BLACK));
     }

@@ -274,7 +274,7 @@ impl Editor {
 
     fn top_bar(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
-            ui.strong(format!("{}{}", self.doc.path.display(), if self.doc.is_dirty() { " •" } else { "" }));
+            ui.strong(format!("{}{}", self.doc.path.display(), if self.doc.is_dirty() { " (modified)" } else { "" }));
             ui.separator();
             if ui.add_enabled(self.doc.can_undo(), egui::Button::new("Undo")).on_hover_text("Ctrl+Z").clicked() {
                 self.undo();
@@ -304,9 +304,12 @@ impl Editor {
         });
     }
 
-    fn field_ui(&mut self, ui: &mut egui::Ui, f: &schema::FieldSpec) {
+    fn field_ui(&mut self, ui: &mut egui::Ui, f: &schema::FieldSpec, prefix: &str) {
         let path = f.path;
-        let short = path.rsplit('.').next().unwrap_or(path);
+        // the name within its section: `growth.k`, and `L value` for the niche
+        let rest = path.strip_prefix(prefix).unwrap_or(path);
+        let short_owned = if prefix == "niche." { let mut c = rest.replacen('.', " ", 1); c.replace_range(0..1, &c[0..1].to_ascii_uppercase()); c } else { rest.to_string() };
+        let short = short_owned.as_str();
         let unit = if f.unit.is_empty() { String::new() } else { format!(" ({})", f.unit) };
         let merge_of = |r: &egui::Response| r.dragged() && !r.drag_started();
         let mut err: Option<String> = None;
@@ -422,7 +425,7 @@ impl Editor {
             self.status = e;
         }
         for p in self.problems_of(path) {
-            ui.colored_label(egui::Color32::from_rgb(230, 90, 70), format!("⚠ {}", p.expected));
+            ui.colored_label(egui::Color32::from_rgb(230, 90, 70), format!("problem: {}", p.expected));
         }
     }
 
@@ -455,7 +458,7 @@ impl Editor {
                     self.niche_curves(ui);
                 }
                 for f in schema::FIELDS.iter().filter(|f| f.path.starts_with(prefix)) {
-                    self.field_ui(ui, f);
+                    self.field_ui(ui, f, prefix);
                 }
             });
         }
@@ -463,7 +466,7 @@ impl Editor {
         if !other.is_empty() {
             ui.separator();
             for p in other {
-                ui.colored_label(egui::Color32::from_rgb(230, 90, 70), format!("⚠ {p}"));
+                ui.colored_label(egui::Color32::from_rgb(230, 90, 70), format!("problem: {p}"));
             }
         }
     }

@@ -28,7 +28,7 @@ use data::{Overlay, RunData, TreeInfo};
 /// Keyboard shortcuts of the viewer, as the help panel lists them.
 pub const SHORTCUTS: &[(&str, &str)] = &[
     ("Space", "play / pause the years"),
-    ("← / →", "previous / next snapshot"),
+    ("Left / Right arrow", "previous / next snapshot"),
     ("Home / End", "first / last snapshot"),
     ("drag (left)", "orbit (orbit camera) or look around (fly camera)"),
     ("drag (right or middle)", "pan"),
@@ -106,6 +106,14 @@ impl Viewer {
         let (lo, hi) = scene.terrain.bounds();
         let rig = CameraRig::framing(lo, hi);
         let base_colours = scene.terrain.colors.clone();
+        let mut gpu = gpu;
+        if let Some(g) = gpu.as_mut() {
+            // as the stills (`job::pictures::Stage`): lower switch sizes keep mid-distance crowns as
+            // meshes, and no far-field triangle budget (only trees under 6 px go to the canopy
+            // layer); the default budget of 6 M triangles per frame stays
+            g.renderer.lod.switch_px = [110.0, 45.0, 18.0];
+            g.renderer.lod.max_geometry_triangles = 0;
+        }
         let year = data.span().1 as f32;
         let plot_column = PLOT_COLUMNS.iter().map(|c| c.0).find(|c| data.stand_table.columns.iter().any(|x| x == c)).unwrap_or("basal_area_m2_ha").to_string();
         Ok(Viewer {
@@ -296,7 +304,7 @@ impl Viewer {
     fn top_bar(&mut self, ui: &mut egui::Ui) {
         ui.horizontal(|ui| {
             let (a, b) = self.data.span();
-            if ui.button(if self.playing { "⏸ Pause" } else { "▶ Play" }).on_hover_text("Space").clicked() {
+            if ui.button(if self.playing { "Pause" } else { "Play" }).on_hover_text("Space").clicked() {
                 self.playing = !self.playing;
             }
             let mut y = self.year;
@@ -381,7 +389,7 @@ impl Viewer {
             return;
         }
         let label = cols.iter().find(|c| c.0 == self.plot_column).map_or(self.plot_column.clone(), |c| c.1.to_string());
-        egui::ComboBox::from_id_salt("plot column").selected_text(label.clone()).show_ui(ui, |ui| {
+        egui::ComboBox::from_label("column").selected_text(label.clone()).show_ui(ui, |ui| {
             for c in &cols {
                 ui.selectable_value(&mut self.plot_column, c.0.to_string(), c.1);
             }
@@ -536,9 +544,9 @@ impl Viewer {
         egui::Panel::top("top bar").show(ui, |ui| self.top_bar(ui));
         egui::Panel::bottom("status").show(ui, |ui| {
             ui.horizontal(|ui| {
-                ui.label(format!("{}  ·  {} snapshots, years {}–{}", self.data.dir.display(), self.data.years.len(), self.data.span().0, self.data.span().1));
+                ui.label(format!("{}  |  {} snapshots, years {}–{}", self.data.dir.display(), self.data.years.len(), self.data.span().0, self.data.span().1));
                 if let Some(g) = &self.gpu {
-                    ui.label(format!("·  {}", g.renderer.adapter_description()));
+                    ui.label(format!("|  {}", g.renderer.adapter_description()));
                 }
                 if let Some(s) = &self.status {
                     ui.colored_label(egui::Color32::from_rgb(220, 80, 60), s);
