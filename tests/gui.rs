@@ -31,14 +31,14 @@ generate = { size = 24, cell_m = 10.0, relief_m = 40.0, seed = 2 }
 [[start]]
 kind = "planted"
 species = "beech"
-spacing_m = 7.0
+spacing_m = 10.0
 age_yr = 25.0
 area = [20, 20, 220, 220]
 
 [[start]]
 kind = "planted"
 species = "silver_birch"
-spacing_m = 9.0
+spacing_m = 14.0
 age_yr = 15.0
 area = [40, 30, 200, 120]
 "#;
@@ -192,6 +192,35 @@ fn editor_shows_the_species_check_message_beside_the_field() {
     h.get_by_label("1 problem(s)");
 }
 
+#[test]
+fn editor_regrows_the_preview_and_highlights_the_orders_of_the_hovered_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mut ed, _) = editor_in(dir.path());
+    ed.age_yr = 20.0;
+    ed.finish_preview();
+    let n0 = ed.grown().unwrap().skeleton.nodes.len();
+    let h0 = ed.grown().unwrap().height_m;
+    ed.doc.set_number("architecture.ecomod.trunk_length_m", 8.0, false).unwrap();
+    ed.finish_preview();
+    let g = ed.grown().unwrap();
+    assert_eq!(g.request.species.architecture.ecomod.trunk_length_m, 8.0, "regrown from the edited text");
+    assert!(g.height_m != h0 || g.skeleton.nodes.len() != n0, "the tree changed");
+    assert_eq!(ed.preview_prototypes(), 1);
+    // hover the second point of alpha_g (order 15 end): the orders from its left neighbour on
+    let mut h = Harness::builder().with_size(egui::vec2(1500.0, 4200.0)).build_ui_state(|ui, e: &mut Editor| e.ui(ui), ed);
+    h.run();
+    let c = h.get_by_label(&sylva::edit::curve::point_label("architecture.ecomod.alpha_g", 1)).rect().center();
+    h.hover_at(c);
+    h.run();
+    h.run();
+    assert_eq!(h.state().highlighted(), Some(sylva::edit::preview::Highlight::Gravelius(0.0, 15.0)));
+    assert_eq!(h.state().preview_prototypes(), 2, "the highlight is drawn");
+    h.hover_at(egui::pos2(1400.0, 4000.0));
+    h.run();
+    h.run();
+    assert_eq!(h.state().highlighted(), None);
+}
+
 /// A virtual display for one test, or `None` (with a note) when Xvfb is not installed.
 struct Xvfb {
     child: std::process::Child,
@@ -273,21 +302,21 @@ fn view_and_edit_screenshots_under_xvfb_show_the_landscape_and_the_tree() {
     let out = tempfile::tempdir().unwrap();
     let run = run_dir().join("run");
     let shot = out.path().join("view.png");
-    let (ok, err) = sylva_on(Some(&x.display), &["view", run.to_str().unwrap(), "--screenshot", shot.to_str().unwrap(), "--frames", "3"], &[]);
+    let (ok, err) = sylva_on(Some(&x.display), &["view", run.to_str().unwrap(), "--screenshot", shot.to_str().unwrap(), "--frames", "2", "--window", "1000x640"], &[]);
     assert!(ok, "{err}");
     let img = image::open(&shot).unwrap().to_rgba8();
-    assert_eq!(img.dimensions(), (1280, 800), "the whole window");
+    assert_eq!(img.dimensions(), (1000, 640), "the whole window");
     // the 3-D view (left of the 340 px side panel, under the top bar): terrain and crowns
-    let view = (20, 60, 900, 760);
+    let view = (20, 60, 640, 600);
     assert!(greenish(&img, view) > 0.2, "green share {:.2}: {err}", greenish(&img, view));
     assert!(distinct_colours(&img, view) > 200, "{} colours", distinct_colours(&img, view));
     // the editor's preview of beech
     let shot = out.path().join("edit.png");
-    let (ok, err) = sylva_on(Some(&x.display), &["edit", "beech", "--dir", out.path().to_str().unwrap(), "--screenshot", shot.to_str().unwrap(), "--frames", "3", "--age", "30"], &[]);
+    let (ok, err) = sylva_on(Some(&x.display), &["edit", "beech", "--dir", out.path().to_str().unwrap(), "--screenshot", shot.to_str().unwrap(), "--frames", "2", "--age", "30", "--window", "1000x640"], &[]);
     assert!(ok, "{err}");
     let img = image::open(&shot).unwrap().to_rgba8();
-    assert_eq!(img.dimensions(), (1280, 800));
-    let preview = (560, 80, 1260, 760);
+    assert_eq!(img.dimensions(), (1000, 640));
+    let preview = (560, 80, 980, 600);
     assert!(greenish(&img, preview) > 0.05, "green share {:.3}: {err}", greenish(&img, preview));
     assert!(distinct_colours(&img, preview) > 100, "{} colours", distinct_colours(&img, preview));
     assert!(!out.path().join("beech.toml").exists(), "a screenshot saves nothing");

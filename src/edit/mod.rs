@@ -102,6 +102,9 @@ pub struct Editor {
     show_help: bool,
     /// Wait for each preview before drawing (screenshots: the picture shows the finished tree).
     pub wait_for_preview: bool,
+    /// Grow previews even without a GPU viewport (tests of the preview; off by default, so a
+    /// window-less editor in tests only edits).
+    pub grow_without_gpu: bool,
 }
 
 fn ground(size: f32) -> TerrainMesh {
@@ -140,6 +143,7 @@ impl Editor {
             status: String::new(),
             show_help: false,
             wait_for_preview: false,
+            grow_without_gpu: false,
         };
         e.revalidate();
         e
@@ -168,6 +172,16 @@ impl Editor {
         self.problems.iter().filter(|p| p.field == field).collect()
     }
 
+    /// The highlight drawn in the preview (the orders the hovered curve point acts on).
+    pub fn highlighted(&self) -> Option<Highlight> {
+        self.shown_highlight
+    }
+
+    /// Prototypes in the preview scene: the tree, and the highlight when there is one.
+    pub fn preview_prototypes(&self) -> usize {
+        self.scene.prototypes.len()
+    }
+
     /// The last grown preview tree.
     pub fn grown(&self) -> Option<&preview::Grown> {
         self.grown.as_ref()
@@ -177,6 +191,9 @@ impl Editor {
     /// one.
     pub fn update_preview(&mut self) {
         self.revalidate();
+        if self.gpu.is_none() && !self.grow_without_gpu {
+            return;
+        }
         if let (Some(sp), true) = (&self.species, self.problems.is_empty()) {
             self.grower.request(Request { species: sp.clone(), model: self.model, age_yr: self.age_yr, seed: 1 });
         }
@@ -198,8 +215,9 @@ impl Editor {
         }
     }
 
-    /// Waits until the preview of the current text is grown (tests).
+    /// Waits until the preview of the current text is grown (tests; grows without a GPU too).
     pub fn finish_preview(&mut self) {
+        self.grow_without_gpu = true;
         self.update_preview();
         while self.grower.busy() {
             if let Some(Ok(g)) = self.grower.wait() {
