@@ -120,6 +120,14 @@ fn ground(size: f32) -> TerrainMesh {
 impl Editor {
     /// The editor of `doc`; "save as new species" writes into `new_dir`.
     pub fn new(doc: SpeciesDoc, new_dir: PathBuf, gpu: Option<Viewport3d>) -> Self {
+        let mut gpu = gpu;
+        if let Some(g) = gpu.as_mut() {
+            // one tree, always the full mesh: no triangle budgets, no far-field canopy layer
+            g.renderer.lod.max_triangles = 0;
+            g.renderer.lod.max_geometry_triangles = 0;
+            g.renderer.lod.canopy_px = 0.0;
+            g.renderer.lod.switch_px = [20.0, 10.0, 5.0];
+        }
         let scene = Scene::new(ground(30.0), None, Vec::new(), Vec::new(), Sun::from_position(46.0, 196.0, 14.0), Sky::default(), Wind { direction: [1.0, 0.0], directed: 0.0, undirected: 0.0, time_s: 0.0 });
         let rig = CameraRig::looking(Vec3::new(-14.0, -18.0, 9.0), Vec3::new(0.0, 0.0, 6.0), 30.0);
         let mut e = Editor {
