@@ -347,7 +347,7 @@ impl Viewer {
     fn side_panel(&mut self, ui: &mut egui::Ui) {
         ui.heading(format!("Year {:.1}", self.year));
         let alive = self.current.iter().filter(|t| t.opacity > 0.5).count();
-        ui.label(format!("{} trees in the scene (live, ≥ 1 m, not hidden under taller crowns), from the snapshots of {}", alive, {
+        ui.label(format!("{} trees in the scene (live, at least 1 m tall, not hidden under taller crowns), from the snapshots of {}", alive, {
             let (k0, k1, _) = self.data.bracket(self.year);
             if k0 == k1 { format!("year {}", self.data.years[k0]) } else { format!("years {}–{}", self.data.years[k0], self.data.years[k1]) }
         }));
