@@ -62,8 +62,8 @@ fn check_species(id: &str, file: &str) -> Vec<String> {
     bad
 }
 
-/// Every species with an NW-FVA 2021 table: both oaks (the table is for Quercus robur and
-/// Q. petraea together) and Scots pine; all failures are listed at once.
+/// Every species with an NW-FVA 2021 table: both oaks (the table is for oak, Eiche, without
+/// separating Quercus robur and Q. petraea) and Scots pine; all failures are listed at once.
 #[test]
 fn oaks_and_pine_against_nwfva_2021_class_one() {
     let bad: Vec<String> = [("sessile_oak", "nwfva2021_yieldtable_et_ei.csv"), ("pedunculate_oak", "nwfva2021_yieldtable_et_ei.csv"), ("scots_pine", "nwfva2021_yieldtable_et_ki.csv")]
