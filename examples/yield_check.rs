@@ -47,6 +47,7 @@ fn tables(id: &str) -> Vec<(&'static str, Vec<[f64; 5]>)> {
         "norway_spruce" => vec![
             ("Wiedemann 1936/42 moderate, class I (h_q)", table("ForestElementsR_fe_ytable_spruce_wiedemann_moderate_1936_42.csv", 1.0, "h_q_m")),
             ("Assmann & Franz 1963 fully stocked, SI 36 (H100)", table("ForestElementsR_fe_ytable_spruce_assmann_franz_mean_yield_level_1963.csv", 36.0, "h_100_m")),
+            ("NW-FVA 2021, class I (H100; heavy thinning)", table("nwfva2021_yieldtable_et_fi.csv", 1.0, "")),
         ],
         "sessile_oak" | "pedunculate_oak" => vec![("NW-FVA 2021 oak, class I (H100; heavy thinning)", table("nwfva2021_yieldtable_et_ei.csv", 1.0, ""))],
         "scots_pine" => vec![("NW-FVA 2021 pine, class I (H100; heavy thinning)", table("nwfva2021_yieldtable_et_ki.csv", 1.0, ""))],
