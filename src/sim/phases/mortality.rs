@@ -29,8 +29,8 @@ pub const INTRINSIC_SHAPE: f64 = 0.25;
 /// (senescence) and young trees die less from chance, so that self-thinning in young stands is
 /// left to competition (stress mortality). Model choice (ESTIMATE): k = 0.25 is the mildest
 /// age-dependence tried (0.25, 0.5, 1, 2) with which the short-lived species (aspen, max age 100;
-/// rowan and hornbeam, 150), whose constant rate of 3–4.6 %/yr removed 70 % of a stand's stems
-/// by age 27 whatever the crowding, reach their maximum-density lines, while mixed stands stay
+/// rowan and hornbeam, 150), whose constant rate of 3.1–4.6 %/yr removed 56–71 % of a stand's
+/// stems by age 27 whatever the crowding, reach their maximum-density lines, while mixed stands stay
 /// within 10 % of theirs (tests/sim_density.rs).
 pub fn p_intrinsic(age: f32, max_age: f32) -> f64 {
     let m = (max_age as f64).max(1.0);
