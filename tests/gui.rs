@@ -125,6 +125,37 @@ fn viewer_overlays_recolour_the_terrain() {
     assert!(v.status.is_none(), "{:?}", v.status);
 }
 
+#[test]
+fn viewer_tree_info_tells_the_cause_of_death_or_that_it_went_unrecorded() {
+    // a run directory of three snapshots made by hand on the test run's site
+    let d = tempfile::tempdir().unwrap();
+    let run = d.path();
+    std::fs::create_dir_all(run.join("inventory")).unwrap();
+    std::fs::copy(run_dir().join("run/scenario.toml"), run.join("scenario.toml")).unwrap();
+    let head = "id,species,x_m,y_m,z_m,age_yr,height_m,dbh_cm,crown_radius_m,crown_base_m,status\n";
+    let row = |id: u64, age: f32, h: f32, status: &str| format!("{id},beech,50.0,60.0,0.0,{age},{h},{},2.0,{},{status}\n", h * 1.5, h * 0.4);
+    std::fs::write(run.join("inventory/year_0000.csv"), format!("{head}{}{}", row(1, 20.0, 10.0, "alive"), row(2, 30.0, 15.0, "alive"))).unwrap();
+    std::fs::write(run.join("inventory/year_0005.csv"), format!("{head}{}{}", row(1, 25.0, 11.0, "dead:stress"), row(2, 35.0, 16.0, "alive"))).unwrap();
+    std::fs::write(run.join("inventory/year_0010.csv"), head).unwrap();
+    let sc = sylva::sim::Scenario::load(&run.join("scenario.toml")).unwrap();
+    let mut data = RunData::open(run, sc.site().unwrap(), sylva::species::SpeciesLibrary::embedded().unwrap(), vec!["beech".into()]).unwrap();
+    let one = data.tree_info(1, 0.0).unwrap().unwrap();
+    assert_eq!(one.year, 0);
+    assert_eq!(one.row.height_m, 10.0);
+    assert_eq!(one.fate, "alive at year 0; dead: stress (year 5)");
+    let two = data.tree_info(2, 6.0).unwrap().unwrap();
+    assert_eq!((two.year, two.row.age_yr), (5, 35.0), "shown from the snapshot at or before the year");
+    assert_eq!(two.fate, "alive at year 5; gone by year 10 (cause not recorded between snapshots)");
+    assert!(data.tree_info(3, 0.0).unwrap().is_none());
+    // the dead tree fades out between its last snapshots and is gone at year 10
+    let at = |d: &mut RunData, y: f32| d.instances_at(y, sylva::species::Season::Summer).unwrap();
+    assert_eq!(at(&mut data, 0.0).len(), 2);
+    let mid = at(&mut data, 7.5);
+    assert_eq!(mid.len(), 1);
+    assert!((mid[0].opacity - 0.5).abs() < 1e-4, "fading out: {}", mid[0].opacity);
+    assert!(at(&mut data, 10.0).is_empty());
+}
+
 fn editor_in(dir: &Path) -> (Editor, PathBuf) {
     let p = dir.join("beech.toml");
     std::fs::write(&p, sylva::species::embedded_text("beech").unwrap()).unwrap();
@@ -241,6 +272,8 @@ fn xvfb(n: u32) -> Option<Xvfb> {
         eprintln!("skipping: Xvfb is not installed (apt-get install xvfb)");
         return None;
     }
+    // the first free display number from n on
+    let n = (n..n + 40).find(|k| !Path::new(&format!("/tmp/.X11-unix/X{k}")).exists() && !Path::new(&format!("/tmp/.X{k}-lock")).exists()).unwrap_or(n);
     let display = format!(":{n}");
     let child = Command::new("Xvfb").args([display.as_str(), "-screen", "0", "1400x900x24", "-nolisten", "tcp"]).stderr(std::process::Stdio::null()).spawn().unwrap();
     let sock = PathBuf::from(format!("/tmp/.X11-unix/X{n}"));

@@ -36,6 +36,12 @@ impl WindowArgs {
     }
 }
 
+fn said_screenshot(opts: &WindowOptions) {
+    if let Some(p) = &opts.screenshot {
+        eprintln!("screenshot → {}", p.display());
+    }
+}
+
 /// Arguments of `sylva view`.
 #[derive(clap::Args)]
 pub struct ViewArgs {
@@ -65,6 +71,7 @@ pub fn view(a: ViewArgs) -> anyhow::Result<()> {
     let lib = super::simulate::library(&dirs)?;
     let data = sylva::view::data::RunData::open(&a.run_dir, site, lib, sc.species.clone())?;
     sylva::view::run(data, sc.climate.sea_level_m, &opts)?;
+    said_screenshot(&opts);
     Ok(())
 }
 
@@ -108,5 +115,6 @@ pub fn edit(a: EditArgs) -> anyhow::Result<()> {
     let doc = sylva::edit::open_target(a.species.as_deref(), &a.dir)?;
     eprintln!("editing {} (saves there)", doc.path.display());
     sylva::edit::run(doc, a.dir.clone(), a.model, a.age, &opts)?;
+    said_screenshot(&opts);
     Ok(())
 }

@@ -442,9 +442,7 @@ impl Editor {
                 }
             }
             Kind::TextList => {
-                let n = self.doc.text().lines().count();
-                let _ = n;
-                ui.label(format!("{short}: edit in the file"));
+                ui.label(format!("{short}: a list, edited in the file"));
             }
         }
         if let Some(e) = err {

@@ -167,7 +167,7 @@ impl Screenshot {
                     *f = Some(e);
                 }
             } else {
-                eprintln!("screenshot {}×{} → {}", img.size[0], img.size[1], self.path.display());
+                tracing::info!("screenshot {}×{} → {}", img.size[0], img.size[1], self.path.display());
             }
             self.done = true;
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);

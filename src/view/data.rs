@@ -188,6 +188,10 @@ impl RunData {
             return Ok(a);
         }
         let b = self.snapshot_instances(k1, season)?;
+        if t >= 1.0 {
+            // exactly at a snapshot: its trees, without the faded-out dead of the one before
+            return Ok(b);
+        }
         Ok(timelapse::interpolate(&a, &b, t))
     }
 

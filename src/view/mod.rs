@@ -217,8 +217,10 @@ impl Viewer {
     pub fn pick_at(&mut self, px: f32, py: f32) -> Option<u64> {
         let (w, h) = (self.view_rect.width(), self.view_rect.height());
         let (o, d) = self.rig.ray(px, py, w, h);
-        let trees: Vec<(Vec3, f32, f32)> = self.current.iter().map(|t| (Vec3::from(t.position), t.height, t.crown_radius)).collect();
-        let hit = camera::pick(o, d, &trees).map(|i| self.current[i].id);
+        // trees faded out to nothing (dead between the snapshots shown) are not hit
+        let seen: Vec<&TreeInstance> = self.current.iter().filter(|t| t.opacity > 0.05).collect();
+        let trees: Vec<(Vec3, f32, f32)> = seen.iter().map(|t| (Vec3::from(t.position), t.height, t.crown_radius)).collect();
+        let hit = camera::pick(o, d, &trees).map(|i| seen[i].id);
         self.selected = hit;
         self.info = match hit {
             Some(id) => self.data.tree_info(id, self.year).ok().flatten(),
