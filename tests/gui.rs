@@ -169,7 +169,8 @@ fn editor_drag_a_curve_point_undo_redo_and_save_keeps_comments() {
     let (ed, path) = editor_in(dir.path());
     let field = "architecture.ecomod.ks_g";
     let before = ed.doc.polyline(field).unwrap();
-    let mut h = Harness::builder().with_size(egui::vec2(1500.0, 4200.0)).build_ui_state(|ui, e: &mut Editor| e.ui(ui), ed);
+    // 60 steps a second, so that two clicks one step apart make a double-click
+    let mut h = Harness::builder().with_size(egui::vec2(1500.0, 4200.0)).with_step_dt(1.0 / 60.0).with_max_steps(120).build_ui_state(|ui, e: &mut Editor| e.ui(ui), ed);
     h.run();
     let c = h.get_by_label(&sylva::edit::curve::point_label(field, 0)).rect().center();
     h.hover_at(c);
@@ -207,6 +208,17 @@ fn editor_drag_a_curve_point_undo_redo_and_save_keeps_comments() {
     let changed: Vec<(&str, &str)> = orig.lines().zip(text.lines()).filter(|(a, b)| a != b).collect();
     assert_eq!(changed.len(), 1, "only the ks_g line changed: {changed:?}");
     assert!(changed[0].1.starts_with("ks_g = [["));
+    // right-click removes a point (min_len_g has three; adding by double-click is
+    // `curve::add_point`, tested in src/edit/curve.rs)
+    let ml = "architecture.ecomod.min_len_g";
+    assert_eq!(h.state().doc.polyline(ml).unwrap().len(), 3);
+    h.get_by_label(&sylva::edit::curve::point_label(ml, 1)).click_secondary();
+    h.run();
+    assert_eq!(h.state().doc.polyline(ml).unwrap(), vec![[0.0, 1.0], [15.0, 1.0]]);
+    // the removal is one undo step
+    h.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    h.run();
+    assert_eq!(h.state().doc.polyline(ml).unwrap().len(), 3);
 }
 
 #[test]
