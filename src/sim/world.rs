@@ -188,7 +188,7 @@ impl World {
                 }
             }
         }
-        let (obstacle_canopy, ground_free) = super::obstacle::light_cells(&scenario.obstacles, light.cols, light.rows, light.cell_m, super::phases::light::K_EXT);
+        let (obstacle_canopy, ground_free) = super::obstacle::light_cells(&scenario.obstacles, light.cols, light.rows, light.cell_m, super::light_grid::EXTINCTION_K);
         let np = pool.len();
         let mut w = World {
             site: Site { conditions: site, lib: lib.clone(), pool, seed: scenario.seed, extent, area_ha, light, light_site, rel_insolation, suitability, seed_rain, obstacles: scenario.obstacles.clone(), obstacle_canopy, ground_free },

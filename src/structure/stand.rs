@@ -11,7 +11,9 @@
 //!    stand of thousands of trees stays affordable), grown with a seed drawn from the scenario's
 //!    seed, the species and the class ([`crate::rng::hash`]; EcoMod uses it for the wind sway,
 //!    and the tree is turned about its stem by an angle drawn from it), normalised to 1 m height. A small
-//!    cache: one entry per (species, age class) met.
+//!    cache: one entry per (species, age class) met. With fewer strands than the full tree the
+//!    leaves are made √(S_full/S_used) times longer so that the foliage area stays that of the
+//!    full tree.
 //! 2. **Fitted to the tree**: positions scaled about the base by H vertically and by
 //!    R / r₁ horizontally (H height, R crown radius from the simulation, r₁ the normalised
 //!    tree's crown radius), radii and leaves by H; every branch leaving the main stem (Gravelius
@@ -156,7 +158,10 @@ impl SkeletonCache {
                 let mut p = sp.architecture.ecomod.clone();
                 let age = AGE_CLASS_AGES[(c as usize).min(AGE_CLASS_AGES.len() - 1)];
                 let f = (age / 80.0).min(1.0);
-                p.strands = ((p.strands as f32 * f * f).round() as u32).clamp(8, self.max_strands);
+                let full = ((p.strands as f32 * f * f).round() as u32).max(8);
+                p.strands = full.min(self.max_strands);
+                // fewer strands, fewer tips: larger leaves keep the foliage area of the full tree
+                p.leaf_size_m *= (full as f32 / p.strands as f32).sqrt();
                 let (sk, lv) = ecomod::try_grow(&p, self.seed_of(s, c), 0.0)?;
                 let (mut sk, mut lv) = super::normalised(&sk, &lv, 1.0)?;
                 // EcoMod draws only its wind sway from the seed: the seed also turns the tree

@@ -26,8 +26,9 @@ use crate::sim::trees::{SpatialGrid, TreeStore};
 use crate::species::SpeciesLibrary;
 use rayon::prelude::*;
 
-/// Beer–Lambert extinction coefficient (dimensionless).
-pub const K_EXT: f32 = 0.5;
+/// Beer–Lambert extinction coefficient (dimensionless; defined in
+/// [`crate::sim::light_grid::EXTINCTION_K`], where the obstacles' entries read it too).
+pub const K_EXT: f32 = crate::sim::light_grid::EXTINCTION_K;
 /// Weight of the zenith (diffuse) direction.
 pub const W_ZENITH: f32 = 0.35;
 
