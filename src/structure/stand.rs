@@ -160,8 +160,6 @@ impl SkeletonCache {
                 let f = (age / 80.0).min(1.0);
                 let full = ((p.strands as f32 * f * f).round() as u32).max(8);
                 p.strands = full.min(self.max_strands);
-                // fewer strands, fewer tips: larger leaves keep the foliage area of the full tree
-                p.leaf_size_m *= (full as f32 / p.strands as f32).sqrt();
                 let (sk, lv) = ecomod::try_grow(&p, self.seed_of(s, c), 0.0)?;
                 let (mut sk, mut lv) = super::normalised(&sk, &lv, 1.0)?;
                 // EcoMod draws only its wind sway from the seed: the seed also turns the tree
@@ -174,6 +172,9 @@ impl SkeletonCache {
                     l.normal = turn * l.normal;
                 });
                 let crown_radius = super::crown_radius(&sk, &lv).max(0.05);
+                // fewer strands, fewer tips: larger leaves keep the foliage area of the full tree
+                let grow_leaf = (full as f32 / p.strands as f32).sqrt();
+                lv.leaves.iter_mut().for_each(|l| l.size *= grow_leaf);
                 Ok(((s, c), OpenGrown { skeleton: sk, leaves: lv, crown_radius }))
             })
             .collect::<Result<_>>()?;
