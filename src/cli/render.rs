@@ -66,7 +66,7 @@ pub struct RenderArgs {
     pub species_dir: Option<PathBuf>,
     /// Trees near the camera adapted to their neighbours and obstacles (Plastic Trees) with
     /// their own meshes (on), or every tree its species' open-grown prototype (off).
-    #[arg(long, default_value = "on", value_parser = parse_on_off)]
+    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub adapt: bool,
     /// Write the frame's figures as JSON (adapted_trees, adapt_s, unique_meshes,
     /// instanced_trees, triangles, frame_s).

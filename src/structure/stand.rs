@@ -12,8 +12,8 @@
 //!    seed, the species and the class ([`crate::rng::hash`]; EcoMod uses it for the wind sway,
 //!    and the tree is turned about its stem by an angle drawn from it), normalised to 1 m height. A small
 //!    cache: one entry per (species, age class) met. With fewer strands than the full tree the
-//!    leaves are made √(S_full/S_used) times longer so that the foliage area stays that of the
-//!    full tree.
+//!    leaves are made √(S_full/S_used) times longer (at most [`MAX_LEAF_GROWTH`]) so that the
+//!    foliage area stays near that of the full tree.
 //! 2. **Fitted to the tree**: positions scaled about the base by H vertically and by
 //!    R / r₁ horizontally (H height, R crown radius from the simulation, r₁ the normalised
 //!    tree's crown radius), radii and leaves by H; every branch leaving the main stem (Gravelius
@@ -119,6 +119,9 @@ pub struct SkeletonCache {
     map: BTreeMap<(u16, u16), Arc<OpenGrown>>,
 }
 
+/// Largest factor by which the leaves of a stand skeleton grow to make up for its fewer tips.
+pub const MAX_LEAF_GROWTH: f32 = 2.0;
+
 /// Default most EcoMod strands of a stand skeleton (about 2 nodes per strand).
 pub const DEFAULT_MAX_STRANDS: u32 = 48;
 
@@ -173,7 +176,7 @@ impl SkeletonCache {
                 });
                 let crown_radius = super::crown_radius(&sk, &lv).max(0.05);
                 // fewer strands, fewer tips: larger leaves keep the foliage area of the full tree
-                let grow_leaf = (full as f32 / p.strands as f32).sqrt();
+                let grow_leaf = (full as f32 / p.strands as f32).sqrt().min(MAX_LEAF_GROWTH);
                 lv.leaves.iter_mut().for_each(|l| l.size *= grow_leaf);
                 Ok(((s, c), OpenGrown { skeleton: sk, leaves: lv, crown_radius }))
             })
