@@ -63,7 +63,7 @@ fn a_tree_beside_a_wall_leans_away_from_it() {
     proto.save(dir.join("wall_prototype.png")).unwrap();
     let (al, ar) = foliage_sides(&img, &bg, w / 2);
     let (pl, pr) = foliage_sides(&proto, &bg, w / 2);
-    assert!(al + ar > 500, "the adapted crown is drawn: {al} + {ar} foliage pixels");
+    assert!(al + ar > 200, "the adapted crown is drawn: {al} + {ar} foliage pixels");
     // west (left) of the stem: away from the wall (east, right)
     assert!(al > 2 * ar, "adapted: {al} foliage pixels away from the wall, {ar} towards it");
     assert!((al as f64 / ar.max(1) as f64) > 1.5 * (pl as f64 / pr.max(1) as f64), "adapted {al}/{ar} vs prototype {pl}/{pr}");
