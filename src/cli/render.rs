@@ -22,6 +22,14 @@ fn parse_camera(s: &str) -> Result<CameraPreset, String> {
     s.parse::<CameraPreset>().map_err(|_| format!("camera `{s}`: expected overview, oblique, ground or map"))
 }
 
+fn parse_on_off(s: &str) -> Result<bool, String> {
+    match s.to_ascii_lowercase().as_str() {
+        "on" | "true" | "yes" => Ok(true),
+        "off" | "false" | "no" => Ok(false),
+        _ => Err(format!("`{s}`: expected on or off")),
+    }
+}
+
 fn parse_season(s: &str) -> Result<Season, String> {
     match s.to_ascii_lowercase().as_str() {
         "spring" => Ok(Season::Spring),
@@ -56,6 +64,14 @@ pub struct RenderArgs {
     /// `species/` folder (written by `simulate`/`run`).
     #[arg(long)]
     pub species_dir: Option<PathBuf>,
+    /// Trees near the camera adapted to their neighbours and obstacles (Plastic Trees) with
+    /// their own meshes (on), or every tree its species' open-grown prototype (off).
+    #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
+    pub adapt: bool,
+    /// Write the frame's figures as JSON (adapted_trees, adapt_s, unique_meshes,
+    /// instanced_trees, triangles, frame_s).
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
 }
 
 /// Arguments of `sylva timelapse`.
@@ -102,7 +118,9 @@ pub fn stage_for(run_dir: &Path, species_dir: Option<&Path>) -> anyhow::Result<S
     }
     dirs.extend(species_dir);
     let lib = super::simulate::library(&dirs)?;
-    Ok(Stage::new(site, lib, sc.climate.sea_level_m)?)
+    let mut stage = Stage::new(site, lib, sc.climate.sea_level_m)?;
+    stage.set_scenario(sc.seed, &sc.obstacles);
+    Ok(stage)
 }
 
 /// Renders a still.
@@ -124,9 +142,23 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
         tracing::warn!("{unknown} trees of species not in the library are not drawn (give their species files with --species-dir)");
     }
     let cam = stage.camera_for(a.camera, &rows);
+    if !a.adapt {
+        stage.adapt = None;
+    }
+    let t = std::time::Instant::now();
     let img = stage.render_rows(&rows, a.season, &cam, a.size.0, a.size.1)?;
+    let frame_s = t.elapsed().as_secs_f64();
     sylva::output::pictures::write_png(&a.out, &img)?;
     let st = stage.renderer.last_stats();
+    if let Some(path) = &a.stats {
+        let ad = stage.last_adapt;
+        let j = serde_json::json!({
+            "year": year, "adapt": a.adapt, "adapted_trees": ad.adapted_trees, "adapt_s": ad.adapt_s, "mesh_s": ad.mesh_s,
+            "trees_in_groups": ad.trees_in_groups, "unique_meshes": stage.library.species.len() + stage.obstacles.len() + ad.adapted_trees,
+            "instanced_trees": st.instances_drawn.saturating_sub(ad.adapted_trees), "instances_drawn": st.instances_drawn, "triangles": st.triangles, "frame_s": frame_s,
+        });
+        sylva::output::write_atomic(path, serde_json::to_string_pretty(&j)?.as_bytes())?;
+    }
     eprintln!("year {year}: {} trees drawn, {} triangles → {}", st.instances_drawn, st.triangles, a.out.display());
     Ok(())
 }

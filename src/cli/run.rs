@@ -94,9 +94,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // The pictures' key frames come from the in-memory world at each snapshot (summer
     // instances of the visible trees), not from the inventory files.
     let mut keys: Vec<(u32, Vec<TreeInstance>)> = Vec::new();
+    // the living trees of the last kept snapshot, for the adapted close-up
+    let mut last_rows: Vec<sylva::job::inventory::InventoryRow> = Vec::new();
     let mut keep = |y: u32, w: &sylva::sim::World| {
         if !a.no_render {
             keys.push((y, scene::instances(&scene::plants_from_world(w), &lib, &site, Season::Summer)));
+            last_rows = sylva::job::inventory::rows_from_world(w);
         }
     };
     let summary = super::simulate::simulate(&sc, site.clone(), &lib, out.clone(), false, Some(STILL_YEARS.to_vec()), Some(&mut keep))?;
@@ -108,6 +111,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let t_pic = Instant::now();
     if !a.no_render {
         let mut stage = Stage::new(site.clone(), lib.clone(), sc.climate.sea_level_m).context("setting up the renderer (install mesa-vulkan-drivers for the CPU adapter)")?;
+        stage.set_scenario(sc.seed, &sc.obstacles);
+        // the stills from afar draw instanced prototypes; the close-up adapts its near field
+        let adapt = stage.adapt.take();
         eprintln!("[3/4] stills on {}", stage.renderer.adapter_description());
         let mut years: Vec<u32> = STILL_YEARS.iter().copied().filter(|y| keys.iter().any(|k| k.0 == *y)).collect();
         if let Some(last) = keys.iter().map(|k| k.0).max() {
@@ -138,7 +144,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             let z0 = site.elevation_at(x0, y0) + 45.0;
             let z1 = site.elevation_at(x1, y1) + 5.0;
             let cam = sylva::render::camera::Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0);
-            let img = stage.render_instances(key(y), Season::Summer, &cam, a.size.0, a.size.1)?;
+            stage.adapt = adapt;
+            let img = stage.render_rows(&last_rows, Season::Summer, &cam, a.size.0, a.size.1)?;
+            stage.adapt = None;
+            let ad = stage.last_adapt;
+            eprintln!("close-up: {} trees adapted to their neighbours ({:.1} s adaptation, {:.1} s meshes)", ad.adapted_trees, ad.adapt_s, ad.mesh_s);
             let path = stills_dir.join(format!("year_{y:04}_closeup.png"));
             sylva::output::pictures::write_png(&path, &img)?;
             stills.push((y, "closeup".to_string(), path));

@@ -78,3 +78,24 @@ pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
     out.sort_by(|a, b| (a.0, order(&a.1)).cmp(&(b.0, order(&b.1))));
     Ok(out)
 }
+
+/// The living trees of `w` as inventory rows (status `alive`), in tree-store order, as the
+/// inventory CSV of the same year would hold them.
+pub fn rows_from_world(w: &crate::sim::World) -> Vec<InventoryRow> {
+    let t = &w.stand.trees;
+    (0..t.len())
+        .map(|i| InventoryRow {
+            id: t.id[i],
+            species: w.site.lib.species[t.species[i] as usize].id.clone(),
+            x_m: t.x[i] as f64,
+            y_m: t.y[i] as f64,
+            z_m: t.z[i] as f64,
+            age_yr: t.age[i],
+            height_m: t.height[i],
+            dbh_cm: t.dbh[i],
+            crown_radius_m: t.crown_radius[i],
+            crown_base_m: t.crown_base[i],
+            status: "alive".into(),
+        })
+        .collect()
+}

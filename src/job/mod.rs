@@ -6,6 +6,7 @@
 mod error;
 pub use error::{JobError, Result};
 
+pub mod adapted;
 pub mod checkpoint;
 pub mod inventory;
 pub mod maps;

@@ -6,7 +6,10 @@ use super::scene::{self, Plant};
 use crate::conditions::SiteConditions;
 use crate::render::camera::{Camera, CameraPreset};
 use crate::render::headless::Renderer;
-use crate::render::scene::{Scene, Sun, TreeInstance};
+use crate::render::scene::{Prototype, Scene, Sun, TreeInstance};
+use super::adapted::{self, AdaptOptions, AdaptStats};
+use crate::sim::obstacle::ObstacleSpec;
+use crate::structure::stand::SkeletonCache;
 use crate::render::timelapse;
 use crate::species::{Season, SpeciesLibrary};
 use super::Result;
@@ -25,6 +28,19 @@ pub struct Stage {
     pub scene: Scene,
     /// The renderer (wgpu device on a GPU or the software adapter).
     pub renderer: Renderer,
+    /// The scenario's obstacles, drawn in every picture ([`Stage::set_scenario`]).
+    pub obstacles: Vec<ObstacleSpec>,
+    /// Adapted near field ([`super::adapted`]) in [`Stage::render_plants`]; `None`: every tree
+    /// is an instanced species prototype.
+    pub adapt: Option<AdaptOptions>,
+    /// What the last [`Stage::render_plants`] adapted.
+    pub last_adapt: AdaptStats,
+    /// Prototypes of the species and obstacles (the scene's, without adapted trees).
+    base_prototypes: Vec<Prototype>,
+    /// Instances of the obstacles.
+    obstacle_instances: Vec<TreeInstance>,
+    /// Open-grown trees per species and age class (the scenario's seed).
+    cache: SkeletonCache,
 }
 
 impl Stage {
@@ -45,8 +61,22 @@ impl Stage {
         // the canopy layer
         renderer.lod.max_geometry_triangles = 0;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
+        let base_prototypes = prototypes.clone();
         let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));
-        Ok(Stage { site, library, scene, renderer })
+        Ok(Stage { site, library, scene, renderer, obstacles: Vec::new(), adapt: Some(AdaptOptions::default()), last_adapt: AdaptStats::default(), base_prototypes, obstacle_instances: Vec::new(), cache: adapted::cache(0) })
+    }
+
+    /// Sets what the scenario adds to the pictures: its seed (the open-grown trees of the
+    /// adapted near field are grown with it) and its obstacles (drawn in every picture).
+    pub fn set_scenario(&mut self, seed: u64, obstacles: &[ObstacleSpec]) {
+        self.cache = adapted::cache(seed);
+        self.obstacles = obstacles.to_vec();
+        let n = self.library.species.len();
+        self.base_prototypes.truncate(n);
+        let (p, i) = adapted::obstacle_models(obstacles, &self.site, n as u32);
+        self.base_prototypes.extend(p);
+        self.obstacle_instances = i;
+        self.scene.set_prototypes(self.base_prototypes.clone());
     }
 
     /// Renders `rows` (an inventory snapshot) in `season` from `camera` at `width × height`.
@@ -56,14 +86,32 @@ impl Stage {
 
     /// Renders `plants` (e.g. [`scene::plants_from_world`] of the in-memory world) in `season`
     /// from `camera` at `width × height`.
+    /// The trees near the camera are adapted with their neighbours and drawn with their own
+    /// meshes when [`Stage::adapt`] is set ([`adapted::adapt_near_field`]; figures in
+    /// [`Stage::last_adapt`]).
+    ///
+    /// Errors: rendering errors; [`crate::Error::Invalid`] from the adaptation.
     pub fn render_plants(&mut self, plants: &[Plant], season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
-        let inst = scene::instances(plants, &self.library, &self.site, season);
-        self.render_instances(inst, season, camera, width, height)
+        let mut inst = scene::instances(plants, &self.library, &self.site, season);
+        self.last_adapt = AdaptStats::default();
+        let Some(o) = self.adapt.clone() else {
+            return self.render_instances(inst, season, camera, width, height);
+        };
+        let mut protos = self.base_prototypes.clone();
+        self.last_adapt = adapted::adapt_near_field(plants, &mut inst, &mut protos, &self.library, &self.site, &self.obstacles, camera, season, &mut self.cache, &o)?;
+        if self.last_adapt.adapted_trees == 0 {
+            return self.render_instances(inst, season, camera, width, height);
+        }
+        self.scene.set_prototypes(protos);
+        let img = self.render_instances(inst, season, camera, width, height);
+        self.scene.set_prototypes(self.base_prototypes.clone());
+        img
     }
 
     /// Renders prepared instances.
     pub fn render_instances(&mut self, inst: Vec<TreeInstance>, season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
         self.scene.instances = inst;
+        self.scene.instances.extend_from_slice(&self.obstacle_instances);
         self.scene.sun = Sun::from_position(self.site.geo.latitude_deg as f32, scene::season_day(season), 14.0);
         let img = self.renderer.render(&self.scene, camera, width, height);
         self.scene.instances = Vec::new();

@@ -2,9 +2,9 @@
 //! species (its EcoMod skeleton meshed into a level-of-detail chain), and one instance per live
 //! tree of an inventory snapshot.
 //!
-//! This is where an adapted skeleton (Plastic Trees, Pirk et al. 2012, `000_*.txt`) will replace
-//! the open-grown one: [`prototypes`] builds one open-grown tree per species; a later step can
-//! build per-tree chains and point instances at them.
+//! [`prototypes`] builds one open-grown tree per species; the trees near the camera get their own
+//! adapted skeletons and meshes in [`super::adapted`] (Plastic Trees, Pirk et al. 2012,
+//! `000_*.txt`).
 
 use crate::conditions::SiteConditions;
 use crate::grid::Grid;
@@ -151,6 +151,10 @@ pub struct Plant<'a> {
     pub height_m: f32,
     /// Crown radius (m).
     pub crown_radius_m: f32,
+    /// Age (years).
+    pub age_yr: f32,
+    /// Crown base height above the stem base (m).
+    pub crown_base_m: f32,
     /// False for a tree that died in the snapshot's year (drawn by no picture).
     pub alive: bool,
 }
@@ -159,14 +163,14 @@ pub struct Plant<'a> {
 pub fn plants_from_world(w: &World) -> Vec<Plant<'_>> {
     let t = &w.stand.trees;
     (0..t.len())
-        .map(|i| Plant { id: t.id[i], species: w.site.lib.species[t.species[i] as usize].id.as_str(), x_m: t.x[i] as f64, y_m: t.y[i] as f64, height_m: t.height[i], crown_radius_m: t.crown_radius[i], alive: true })
+        .map(|i| Plant { id: t.id[i], species: w.site.lib.species[t.species[i] as usize].id.as_str(), x_m: t.x[i] as f64, y_m: t.y[i] as f64, height_m: t.height[i], crown_radius_m: t.crown_radius[i], age_yr: t.age[i], crown_base_m: t.crown_base[i], alive: true })
         .collect()
 }
 
 /// The rows of an inventory snapshot as [`Plant`]s, one per row in row order (status `alive`
 /// read once here).
 pub fn plants_from_rows(rows: &[InventoryRow]) -> Vec<Plant<'_>> {
-    rows.iter().map(|r| Plant { id: r.id, species: r.species.as_str(), x_m: r.x_m, y_m: r.y_m, height_m: r.height_m, crown_radius_m: r.crown_radius_m, alive: r.status == "alive" }).collect()
+    rows.iter().map(|r| Plant { id: r.id, species: r.species.as_str(), x_m: r.x_m, y_m: r.y_m, height_m: r.height_m, crown_radius_m: r.crown_radius_m, age_yr: r.age_yr, crown_base_m: r.crown_base_m, alive: r.status == "alive" }).collect()
 }
 
 /// [`visible_rows`] over [`Plant`]s: indices of the drawn trees of `rows`, ascending.

@@ -7,6 +7,10 @@
 //! from the terrain's south-west corner. The grid covers the whole extent, so the last row and
 //! column may reach past it.
 
+/// Beer–Lambert extinction coefficient k of the light phase (dimensionless, 0.5: spherical leaf
+/// angle distribution, Monsi & Saeki 1953).
+pub const EXTINCTION_K: f32 = 0.5;
+
 /// Shape and orientation of the light grid (see the module docs).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct LightGrid {

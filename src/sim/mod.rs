@@ -12,6 +12,7 @@ pub mod cohorts;
 pub mod density;
 pub mod fixtures;
 pub mod light_grid;
+pub mod obstacle;
 pub mod phases;
 pub mod pure_stand;
 pub mod scenario;

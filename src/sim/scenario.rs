@@ -42,6 +42,10 @@ pub struct Scenario {
     /// Light grid cell size (m), 2–20; default 5.
     #[serde(default = "default_light_cell")]
     pub light_cell_m: f64,
+    /// Obstacles (`[[obstacle]]` entries: box, wall, sphere, footprint; see
+    /// [`super::obstacle`]).
+    #[serde(default, rename = "obstacle", skip_serializing_if = "Vec::is_empty")]
+    pub obstacles: Vec<super::obstacle::ObstacleSpec>,
     /// Where the scenario was read from (the file path given to [`Scenario::load`] or the
     /// `name` given to [`Scenario::from_toml_str`]); not part of the TOML, used in messages.
     #[serde(skip)]
@@ -343,6 +347,9 @@ impl Scenario {
         if !(self.light_cell_m >= 2.0 && self.light_cell_m <= 20.0) {
             return Err(invalid(ctx, "light_cell_m", self.light_cell_m, "2–20 m"));
         }
+        for (i, o) in self.obstacles.iter().enumerate() {
+            o.validate(i, ctx)?;
+        }
         for (i, s) in self.start.iter().enumerate() {
             let f = |x: &str| format!("start[{i}].{x}");
             match s {
@@ -406,6 +413,12 @@ impl Scenario {
                     }
                 }
                 _ => {}
+            }
+        }
+        for (i, o) in self.obstacles.iter().enumerate() {
+            let b = o.bounds_xy();
+            if !(b[2] > 0.0 && b[3] > 0.0 && b[0] < ex && b[1] < ey) {
+                return Err(invalid(ctx, &format!("obstacle[{i}]"), format!("{} over x {}–{} m, y {}–{} m", o.kind(), b[0], b[2], b[1], b[3]), &format!("an obstacle overlapping the site, 0 ≤ x < {ex} m and 0 ≤ y < {ey} m (origin SW corner)")));
             }
         }
         // planted trees over the site: each is an individual in memory and in every inventory

@@ -80,6 +80,12 @@ pub struct Site {
     pub suitability: Vec<Vec<f32>>,
     /// External seed rain per pool species (seeds per m² and year).
     pub seed_rain: Vec<f32>,
+    /// The scenario's obstacles ([`super::obstacle`]).
+    pub obstacles: Vec<super::obstacle::ObstacleSpec>,
+    /// Canopy entries of the obstacles on the light grid ([`super::obstacle::light_cells`]).
+    pub obstacle_canopy: Vec<(u64, f32)>,
+    /// Fraction (0–1) of each light cell's ground not covered by a solid obstacle.
+    pub ground_free: Vec<f32>,
 }
 
 /// The stand's state: everything that evolves from year to year and that a checkpoint keeps.
@@ -182,9 +188,10 @@ impl World {
                 }
             }
         }
+        let (obstacle_canopy, ground_free) = super::obstacle::light_cells(&scenario.obstacles, light.cols, light.rows, light.cell_m, super::light_grid::EXTINCTION_K);
         let np = pool.len();
         let mut w = World {
-            site: Site { conditions: site, lib: lib.clone(), pool, seed: scenario.seed, extent, area_ha, light, light_site, rel_insolation, suitability, seed_rain },
+            site: Site { conditions: site, lib: lib.clone(), pool, seed: scenario.seed, extent, area_ha, light, light_site, rel_insolation, suitability, seed_rain, obstacles: scenario.obstacles.clone(), obstacle_canopy, ground_free },
             stand: Stand { trees: TreeStore::default(), year: 0, cohorts: Cohorts::default(), seeds },
             scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], dead: Vec::new(), regen_year: RegenYear::default() },
             tallies: Tallies { deaths_total: [0; super::trees::N_CAUSES], regen_ledger: RegenLedger::new(np) },
@@ -211,6 +218,9 @@ impl World {
 
     fn new_tree(&self, s: SpeciesId, x: f64, y: f64, age: f32) -> Option<NewTree> {
         let cell = self.site_cell(x, y)?;
+        if self.site.obstacles.iter().any(|o| o.solid_at_ground(x, y)) {
+            return None;
+        }
         let p = self.pool_index(s)?;
         let sp = self.species(s);
         let h = allometry::potential_height(sp, age).max(0.3);

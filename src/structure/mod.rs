@@ -21,6 +21,7 @@ pub mod params;
 pub mod plastic;
 pub mod skeleton;
 pub mod species_tree;
+pub mod stand;
 
 pub use skeleton::{Leaf, Leaves, Node, NodeId, Role, Skeleton};
 

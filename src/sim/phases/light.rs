@@ -14,6 +14,9 @@
 //!    neighbouring cell towards the equator at distance `d` (one cell), and `I_rel` the cell's
 //!    insolation relative to the terrain's median (terrain shading, slope and aspect).
 //!
+//! 4. The scenario's obstacles (`sim::obstacle::light_cells`) enter as opaque entries at their
+//!    top height, with the leaf-area index whose transmission is the uncovered share of the cell.
+//!
 //! Cost O(E) for E ≈ 2–4 entries per tree (counting sort by cell, then a small sort per cell),
 //! then O(log) per tree.
 
@@ -23,8 +26,9 @@ use crate::sim::trees::{SpatialGrid, TreeStore};
 use crate::species::SpeciesLibrary;
 use rayon::prelude::*;
 
-/// Beer–Lambert extinction coefficient (dimensionless).
-pub const K_EXT: f32 = 0.5;
+/// Beer–Lambert extinction coefficient (dimensionless; defined in
+/// [`crate::sim::light_grid::EXTINCTION_K`], where the obstacles' entries read it too).
+pub const K_EXT: f32 = crate::sim::light_grid::EXTINCTION_K;
 /// Weight of the zenith (diffuse) direction.
 pub const W_ZENITH: f32 = 0.35;
 
@@ -73,6 +77,9 @@ pub struct Light<'a> {
     pub light_site: &'a [u32],
     /// Relative insolation per site cell.
     pub rel_insolation: &'a [f32],
+    /// Opaque canopy entries of the scenario's obstacles (`sim::obstacle::light_cells`: key
+    /// cell << 32 | inverted top height bits, leaf-area index), stamped with the trees'.
+    pub obstacles: &'a [(u64, f32)],
     /// Trees: read; `light` written.
     pub trees: &'a mut TreeStore,
     /// Written: relative light at the ground per light cell.
@@ -93,7 +100,7 @@ pub fn run(w: Light<'_>) {
     // stamped in chunks of trees (each chunk's entries in tree order), bucketed without
     // concatenating the chunks
     const TCHUNK: usize = 1 << 14;
-    let chunks: Vec<Vec<(u64, f32)>> = (0..t.len().div_ceil(TCHUNK))
+    let mut chunks: Vec<Vec<(u64, f32)>> = (0..t.len().div_ceil(TCHUNK))
         .into_par_iter()
         .map(|k| {
             let mut out = Vec::with_capacity(4 * TCHUNK);
@@ -123,6 +130,7 @@ pub fn run(w: Light<'_>) {
             out
         })
         .collect();
+    chunks.push(w.obstacles.to_vec());
     // Bucket the entries by cell (counting sort, O(E)), then sort each cell's few entries by
     // (key, leaf area): a total order, so the result does not depend on the scheduling.
     let ncell = cols * rows;

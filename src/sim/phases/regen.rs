@@ -116,6 +116,9 @@ pub struct Regen<'a> {
     pub seed_rain: &'a [f32],
     /// Relative light at the ground per light cell (this year's light phase).
     pub ground_light: &'a [f32],
+    /// Fraction (0–1) of each light cell's ground free of solid obstacles (germination scales
+    /// with it).
+    pub ground_free: &'a [f32],
     /// Seeds per m² per pool species (last autumn).
     pub seeds: &'a [SeedGrid],
     /// Read and written: the sapling cohorts.
@@ -183,7 +186,7 @@ pub fn run(w: Regen<'_>) -> usize {
                         continue;
                     }
                     let seeds = (wr.seeds[p].at(cx, cy) + wr.seed_rain[p]) as f64 * area;
-                    let lambda = seeds * sp.life.establishment_rate as f64 * suit as f64;
+                    let lambda = seeds * sp.life.establishment_rate as f64 * suit as f64 * wr.ground_free.get(c).copied().unwrap_or(1.0) as f64;
                     let n = r.poisson(lambda.min(4.0 * cap0)) as u32;
                     if n == 0 {
                         continue;

@@ -1,0 +1,348 @@
+//! The near field of a picture with per-tree adapted skeletons (issue 14): the trees close to the
+//! camera are adapted with their neighbours by [`crate::structure::stand::adapt_stand`] (Plastic
+//! Trees, Pirk et al. 2012, `000_*.txt`) and get their own meshes at every level of detail; the
+//! far field stays instanced species prototypes. The scenario's obstacles are meshed here too.
+//!
+//! Memory and triangles stay bounded: at most [`AdaptOptions::max_trees`] trees, all within
+//! [`AdaptOptions::near_m`] of the camera's eye and in front of it, get their own meshes.
+
+use super::scene::{foliage, srgb_to_linear, Plant};
+use crate::conditions::SiteConditions;
+use crate::mesh::{LodChain, TreeMesh, TriMesh, LOD_LEVELS};
+use crate::render::scene::{Camera, Prototype, TreeInstance};
+use crate::sim::obstacle::ObstacleSpec;
+use crate::species::{Season, SpeciesLibrary};
+use crate::structure::grow::space::Obstacle;
+use crate::structure::stand::{adapt_stand, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// Which trees get adapted skeletons.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AdaptOptions {
+    /// Largest horizontal distance (m) from the camera's eye of an adapted tree.
+    pub near_m: f32,
+    /// Most trees adapted (the nearest first).
+    pub max_trees: usize,
+    /// Neighbourhood cells and halo (m) of [`StandOptions`].
+    pub cell_m: f32,
+    /// See [`StandOptions::halo_m`].
+    pub halo_m: f32,
+}
+
+impl Default for AdaptOptions {
+    /// 80 m, 400 trees, cells of 12 m with a halo of 6 m.
+    fn default() -> Self {
+        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0 }
+    }
+}
+
+/// What the near field cost and holds (the `--stats` figures of `sylva render`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AdaptStats {
+    /// Trees drawn with their own adapted mesh.
+    pub adapted_trees: usize,
+    /// Wall time of the adaptation (s).
+    pub adapt_s: f64,
+    /// Wall time of meshing the adapted trees (s).
+    pub mesh_s: f64,
+    /// Trees adapted in all, context neighbours included.
+    pub trees_in_groups: usize,
+}
+
+/// Stand trees of `plants` (live, of a species in `library`, at least 1 m tall) with the ground
+/// elevation, slope and aspect of `site`; returns (plant index, stand tree) pairs.
+pub fn stand_trees(plants: &[Plant], library: &SpeciesLibrary, site: &SiteConditions) -> Vec<(usize, StandTree)> {
+    plants
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.alive && p.height_m >= super::scene::MIN_DRAWN_HEIGHT_M)
+        .filter_map(|(i, p)| {
+            let s = library.find(p.species)?;
+            let (slope, aspect) = match site.cell_at(p.x_m, p.y_m) {
+                Some((c, r)) => (*site.slope_deg.get(c, r), *site.aspect_deg.get(c, r)),
+                None => (0.0, 180.0),
+            };
+            let (slope, aspect) = if aspect < 0.0 || !slope.is_finite() { (0.0, 180.0) } else { (slope.clamp(0.0, 60.0), aspect) };
+            let h = p.height_m;
+            Some((
+                i,
+                StandTree {
+                    id: p.id,
+                    species: s,
+                    base: Vec3::new(p.x_m as f32, p.y_m as f32, site.elevation_at(p.x_m, p.y_m)),
+                    age_yr: p.age_yr.max(0.0),
+                    height_m: h,
+                    crown_radius_m: p.crown_radius_m.max(0.2),
+                    crown_base_m: p.crown_base_m.clamp(0.0, 0.9 * h),
+                    slope_deg: slope,
+                    aspect_deg: aspect,
+                },
+            ))
+        })
+        .collect()
+}
+
+/// The Plastic Trees solids of `obstacles` on `site` (world coordinates, ground at each
+/// obstacle's anchor).
+pub fn solids(obstacles: &[ObstacleSpec], site: &SiteConditions) -> Vec<Obstacle> {
+    obstacles.iter().flat_map(|o| o.solids(site.elevation_at(o.anchor()[0], o.anchor()[1]) as f64)).collect()
+}
+
+/// Adapts the near field of `camera` and meshes it: replaces the instances of `inst` (built by
+/// [`super::scene::instances`] from `plants`) of the adapted trees by instances of their own
+/// prototypes, appended to `prototypes` (index `prototypes.len()` onwards). `cache` holds the
+/// open-grown trees (the scenario's seed). Returns the stats.
+///
+/// Errors: those of [`adapt_stand`] (invalid obstacles or trees).
+#[allow(clippy::too_many_arguments)]
+pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes: &mut Vec<Prototype>, library: &SpeciesLibrary, site: &SiteConditions, obstacles: &[ObstacleSpec], camera: &Camera, season: Season, cache: &mut SkeletonCache, o: &AdaptOptions) -> crate::Result<AdaptStats> {
+    let t0 = std::time::Instant::now();
+    let eye = Vec3::from(camera.eye);
+    let fwd = (Vec3::from(camera.target) - eye).with_z(0.0).normalize_or(Vec3::Y);
+    let stand = stand_trees(plants, library, site);
+    let by_id: std::collections::HashMap<u64, usize> = stand.iter().enumerate().map(|(k, (_, t))| (t.id, k)).collect();
+    // the drawn trees near the eye and not behind it, nearest first
+    let mut near: Vec<(f32, usize, usize)> = inst
+        .iter()
+        .enumerate()
+        .filter_map(|(j, t)| {
+            let k = *by_id.get(&t.id)?;
+            let d = (Vec3::from(t.position) - eye).with_z(0.0);
+            (d.length() <= o.near_m && d.dot(fwd) > -t.crown_radius.max(2.0)).then_some((d.length(), j, k))
+        })
+        .collect();
+    near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    near.truncate(o.max_trees);
+    if near.is_empty() {
+        return Ok(AdaptStats::default());
+    }
+    let trees: Vec<StandTree> = stand.iter().map(|(_, t)| *t).collect();
+    let targets: Vec<usize> = near.iter().map(|n| n.2).collect();
+    let opts = StandOptions { cell_m: o.cell_m, halo_m: o.halo_m, latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(obstacles, site) };
+    let st = adapt_stand(&trees, &targets, library, cache, &opts)?;
+    let adapt_s = t0.elapsed().as_secs_f64();
+    let t1 = std::time::Instant::now();
+    let meshed: Vec<Option<(Prototype, f32, f32)>> = st
+        .trees
+        .par_iter()
+        .map(|a| {
+            let t = &trees[a.index];
+            let sp = &library.species[t.species as usize];
+            let mut sk = a.skeleton.clone();
+            let mut lv = a.leaves.clone();
+            sk.nodes.iter_mut().for_each(|n| n.pos -= t.base);
+            lv.leaves.iter_mut().for_each(|l| l.pos -= t.base);
+            let h = sk.nodes.iter().map(|n| n.pos.z).fold(0.0f32, f32::max).max(lv.leaves.iter().map(|l| l.pos.z).fold(0.0, f32::max));
+            if !(h > 0.1) {
+                return None;
+            }
+            let s = 1.0 / h;
+            sk.nodes.iter_mut().for_each(|n| {
+                n.pos *= s;
+                n.radius *= s;
+            });
+            lv.leaves.iter_mut().for_each(|l| {
+                l.pos *= s;
+                l.size *= s;
+            });
+            let lods = crate::structure::mesh::lod_chain(&sk, &lv, &crate::structure::mesh::LodOptions::default());
+            if lods.levels.is_empty() {
+                return None;
+            }
+            let p = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0) };
+            let r0 = p.normalised_crown_radius();
+            Some((p, h, r0))
+        })
+        .collect();
+    let mut adapted = 0;
+    for (m, n) in meshed.into_iter().zip(&near) {
+        let Some((p, h, r0)) = m else { continue };
+        let i = &mut inst[n.1];
+        let sp = &library.species[trees[n.2].species as usize];
+        let (col, amount) = foliage(sp, season);
+        i.species = prototypes.len() as u32;
+        i.height = h;
+        i.crown_radius = r0 * h;
+        i.rotation = 0.0;
+        i.position[2] = trees[n.2].base.z;
+        i.leaf_color = col;
+        i.leaf_amount = amount;
+        prototypes.push(p);
+        adapted += 1;
+    }
+    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups: st.trees_in_groups })
+}
+
+/// A new open-grown tree cache for scenario seed `seed` ([`SkeletonCache`]).
+pub fn cache(seed: u64) -> SkeletonCache {
+    SkeletonCache::new(seed, DEFAULT_MAX_STRANDS)
+}
+
+/// Grey of the obstacles (sRGB 150, 146, 140: weathered stone and concrete).
+pub const OBSTACLE_RGB: [u8; 3] = [150, 146, 140];
+
+/// Triangle mesh of one obstacle in world coordinates (ground at its anchor's elevation on
+/// `site`), outward normals, counter-clockwise from outside: boxes and walls as 12 triangles, a
+/// sphere as 16 × 10 quads, a footprint as its side walls and a roof (ear clipping).
+pub fn obstacle_mesh(o: &ObstacleSpec, site: &SiteConditions) -> TriMesh {
+    let a = o.anchor();
+    let g = site.elevation_at(a[0], a[1]);
+    let mut m = TriMesh::default();
+    let mut quad = |m: &mut TriMesh, p: [Vec3; 4]| {
+        let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Z);
+        let b = m.positions.len() as u32;
+        for (k, q) in p.iter().enumerate() {
+            m.positions.push(q.to_array());
+            m.normals.push(n.to_array());
+            m.uvs.push([(k == 1 || k == 2) as u8 as f32, (k >= 2) as u8 as f32]);
+        }
+        m.indices.extend_from_slice(&[b, b + 1, b + 2, b, b + 2, b + 3]);
+    };
+    // a prism over the counter-clockwise polygon `poly` from z0 to z1 (absolute)
+    let prism = |m: &mut TriMesh, poly: &[Vec3], z0: f32, z1: f32, quad: &mut dyn FnMut(&mut TriMesh, [Vec3; 4])| {
+        for k in 0..poly.len() {
+            let (p, q) = (poly[k], poly[(k + 1) % poly.len()]);
+            quad(m, [p.with_z(z0), q.with_z(z0), q.with_z(z1), p.with_z(z1)]);
+        }
+        let b = m.positions.len() as u32;
+        for p in poly {
+            m.positions.push(p.with_z(z1).to_array());
+            m.normals.push([0.0, 0.0, 1.0]);
+            m.uvs.push([0.0, 0.0]);
+        }
+        for t in ear_clip(poly) {
+            m.indices.extend_from_slice(&[b + t[0], b + t[1], b + t[2]]);
+        }
+    };
+    let v2 = |x: f64, y: f64| Vec3::new(x as f32, y as f32, 0.0);
+    match o {
+        ObstacleSpec::Box { min, max } => {
+            let poly = [v2(min[0], min[1]), v2(max[0], min[1]), v2(max[0], max[1]), v2(min[0], max[1])];
+            prism(&mut m, &poly, g + min[2] as f32, g + max[2] as f32, &mut quad);
+            let z = g + min[2] as f32;
+            quad(&mut m, [poly[0].with_z(z), poly[3].with_z(z), poly[2].with_z(z), poly[1].with_z(z)]);
+        }
+        ObstacleSpec::Wall { start, end, height_m, thickness_m } => {
+            let (s, e) = (v2(start[0], start[1]), v2(end[0], end[1]));
+            let side = (e - s).normalize_or(Vec3::X).cross(Vec3::Z) * (0.5 * *thickness_m as f32);
+            let poly = [s + side, e + side, e - side, s - side];
+            // counter-clockwise seen from above
+            let poly: Vec<Vec3> = if signed_area(&poly) < 0.0 { poly.iter().rev().copied().collect() } else { poly.to_vec() };
+            prism(&mut m, &poly, g - 1.0, g + *height_m as f32, &mut quad);
+        }
+        ObstacleSpec::Footprint { points, height_m } => {
+            let mut poly: Vec<Vec3> = points.iter().map(|p| v2(p[0], p[1])).collect();
+            if signed_area(&poly) < 0.0 {
+                poly.reverse();
+            }
+            prism(&mut m, &poly, g - 1.0, g + *height_m as f32, &mut quad);
+        }
+        ObstacleSpec::Sphere { center, radius_m } => {
+            let c = Vec3::new(center[0] as f32, center[1] as f32, g + center[2] as f32);
+            let r = *radius_m as f32;
+            let (nu, nv) = (16u32, 10u32);
+            for j in 0..=nv {
+                for i in 0..=nu {
+                    let (th, ph) = (i as f32 / nu as f32 * std::f32::consts::TAU, j as f32 / nv as f32 * std::f32::consts::PI);
+                    let n = Vec3::new(ph.sin() * th.cos(), ph.sin() * th.sin(), -ph.cos());
+                    m.positions.push((c + n * r).to_array());
+                    m.normals.push(n.to_array());
+                    m.uvs.push([i as f32 / nu as f32, j as f32 / nv as f32]);
+                }
+            }
+            for j in 0..nv {
+                for i in 0..nu {
+                    let (a0, a1) = (j * (nu + 1) + i, (j + 1) * (nu + 1) + i);
+                    m.indices.extend_from_slice(&[a0, a0 + 1, a1 + 1, a0, a1 + 1, a1]);
+                }
+            }
+        }
+    }
+    m
+}
+
+/// Twice the signed area of a polygon in the xy plane (> 0 counter-clockwise).
+fn signed_area(poly: &[Vec3]) -> f32 {
+    (0..poly.len()).map(|k| {
+        let (p, q) = (poly[k], poly[(k + 1) % poly.len()]);
+        p.x * q.y - q.x * p.y
+    }).sum()
+}
+
+/// Triangles of a simple counter-clockwise polygon by ear clipping (indices into `poly`).
+fn ear_clip(poly: &[Vec3]) -> Vec<[u32; 3]> {
+    let mut idx: Vec<u32> = (0..poly.len() as u32).collect();
+    let mut out = Vec::new();
+    let cross = |a: Vec3, b: Vec3, c: Vec3| (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    let mut guard = 0;
+    while idx.len() > 3 && guard < 10 * poly.len() {
+        guard += 1;
+        let n = idx.len();
+        let mut clipped = false;
+        for k in 0..n {
+            let (i0, i1, i2) = (idx[(k + n - 1) % n], idx[k], idx[(k + 1) % n]);
+            let (a, b, c) = (poly[i0 as usize], poly[i1 as usize], poly[i2 as usize]);
+            if cross(a, b, c) <= 0.0 {
+                continue;
+            }
+            let inside = idx.iter().any(|&j| j != i0 && j != i1 && j != i2 && {
+                let p = poly[j as usize];
+                cross(a, b, p) >= 0.0 && cross(b, c, p) >= 0.0 && cross(c, a, p) >= 0.0
+            });
+            if !inside {
+                out.push([i0, i1, i2]);
+                idx.remove(k);
+                clipped = true;
+                break;
+            }
+        }
+        if !clipped {
+            break;
+        }
+    }
+    if idx.len() == 3 {
+        out.push([idx[0], idx[1], idx[2]]);
+    }
+    out
+}
+
+/// Prototypes and instances drawing `obstacles` on `site`: one prototype per obstacle (its mesh
+/// as bark at every level, normalised so the instance's height scales it uniformly), one
+/// instance each (ids from `u64::MAX` down), prototype indices from `first`.
+pub fn obstacle_models(obstacles: &[ObstacleSpec], site: &SiteConditions, first: u32) -> (Vec<Prototype>, Vec<TreeInstance>) {
+    let mut protos = Vec::new();
+    let mut inst = Vec::new();
+    for (k, o) in obstacles.iter().enumerate() {
+        let a = o.anchor();
+        let base = Vec3::new(a[0] as f32, a[1] as f32, site.elevation_at(a[0], a[1]) - 1.0);
+        let mut mesh = obstacle_mesh(o, site);
+        let top = mesh.positions.iter().map(|p| p[2] - base.z).fold(0.0f32, f32::max).max(0.1);
+        for p in &mut mesh.positions {
+            *p = ((Vec3::from(*p) - base) / top).to_array();
+        }
+        let level = TreeMesh { bark: mesh, leaves: TriMesh::default() };
+        let p = Prototype { name: format!("obstacle {k} ({})", o.kind()), lods: LodChain { levels: vec![level; LOD_LEVELS - 1] }, bark_color: srgb_to_linear(OBSTACLE_RGB), leaf_color: [0.0; 3], stiffness: 1.0 };
+        let r0 = p.normalised_crown_radius();
+        protos.push(p);
+        let mut t = TreeInstance::new(u64::MAX - k as u64, base.to_array(), top, r0 * top, first + k as u32, [0.0; 3]);
+        t.rotation = 0.0;
+        t.leaf_amount = 0.0;
+        inst.push(t);
+    }
+    (protos, inst)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ear_clipping_an_l_covers_its_area() {
+        let l: Vec<Vec3> = [[0.0, 0.0], [10.0, 0.0], [10.0, 4.0], [4.0, 4.0], [4.0, 10.0], [0.0, 10.0]].iter().map(|p| Vec3::new(p[0], p[1], 0.0)).collect();
+        let tris = ear_clip(&l);
+        assert_eq!(tris.len(), 4);
+        let area: f32 = tris.iter().map(|t| 0.5 * signed_area(&[l[t[0] as usize], l[t[1] as usize], l[t[2] as usize]])).sum();
+        assert!((area - 64.0).abs() < 1e-4, "{area}");
+    }
+}

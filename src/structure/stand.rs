@@ -1,0 +1,528 @@
+//! Per-tree skeletons of a stand (issue 14): every tree a picture draws up close gets its own
+//! skeleton, the species' open-grown tree of its age class scaled to the tree's height and crown
+//! from the simulation, with the branches below the simulated crown base shed, then adapted by
+//! Plastic Trees (Pirk et al. 2012, `000_*.txt`, sections 5–6) together with its neighbours, to
+//! the global light of the site's latitude, the terrain slope and the obstacles.
+//!
+//! Steps of [`adapt_stand`]:
+//! 1. **Open-grown skeleton per species and age class** ([`SkeletonCache`]): the EcoMod tree
+//!    (`004_*.txt`, Algorithm 1) of the species with S·min(1, a/80)² strands (a the class age,
+//!    S the species' strand count; at least 8, at most [`StandOptions::max_strands`] so that a
+//!    stand of thousands of trees stays affordable), grown with a seed drawn from the scenario's
+//!    seed, the species and the class ([`crate::rng::hash`]; EcoMod uses it for the wind sway,
+//!    and the tree is turned about its stem by an angle drawn from it), normalised to 1 m height. A small
+//!    cache: one entry per (species, age class) met. With fewer strands than the full tree the
+//!    leaves are made √(S_full/S_used) times longer (at most [`MAX_LEAF_GROWTH`]) so that the
+//!    foliage area stays near that of the full tree.
+//! 2. **Fitted to the tree**: positions scaled about the base by H vertically and by
+//!    R / r₁ horizontally (H height, R crown radius from the simulation, r₁ the normalised
+//!    tree's crown radius), radii and leaves by H; every branch leaving the main stem (Gravelius
+//!    order 0) below the crown base is removed with its subtree (lower branches shed in the
+//!    stand, as the simulation's crown base says). Trees are analysed (Plastic Trees section 4)
+//!    alone on flat ground under the site's sky; trees of the same species, age class and
+//!    dimensions within [`DIM_STEP`] (5 %) share one analysis, and the adapted tree is scaled
+//!    back to its exact height and crown radius afterwards (at most ±2.5 %).
+//! 3. **Neighbourhoods**: the trees to adapt are binned into square cells of
+//!    [`StandOptions::cell_m`]; each cell's trees are adapted together ([`adapt_group`]) with every
+//!    other tree whose base lies within [`StandOptions::halo_m`] of the cell (those are adapted
+//!    only as context; their results are dropped), in the cell's [`Environment`]: the sky of the
+//!    latitude ([`Sky::from_latitude`], section 6 global light), a ground plane with the slope
+//!    and aspect of the cell's first tree lowered 5 cm below the lowest tree base of the group,
+//!    and the obstacles. Cells run in parallel (rayon); each cell's result depends only on its
+//!    own trees, so the stand is the same for a seed whatever the thread count.
+
+use super::grow::ecomod;
+use super::grow::space::Obstacle;
+use super::plastic::{adapt_group, Environment, Fate, Ground, PlasticReport, PlasticTree, Sky};
+use super::skeleton::{Leaves, Skeleton};
+use crate::error::{Error, Result};
+use crate::species::SpeciesLibrary;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+/// One tree of the stand as the simulation describes it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StandTree {
+    /// Stable tree id.
+    pub id: u64,
+    /// Species (index into the [`SpeciesLibrary`]).
+    pub species: u16,
+    /// Stem base (m, world coordinates: x east, y north, z the ground elevation).
+    pub base: Vec3,
+    /// Age (years, ≥ 0).
+    pub age_yr: f32,
+    /// Height (m, > 0).
+    pub height_m: f32,
+    /// Crown radius (m, > 0).
+    pub crown_radius_m: f32,
+    /// Crown base height above the stem base (m, 0 ≤ crown base < height).
+    pub crown_base_m: f32,
+    /// Terrain slope at the base (degrees, 0–89).
+    pub slope_deg: f32,
+    /// Terrain aspect at the base (degrees clockwise from north, the downhill direction).
+    pub aspect_deg: f32,
+}
+
+/// Upper bounds (years, exclusive) of the age classes; the last class holds every older tree.
+pub const AGE_CLASS_BOUNDS: [f32; 5] = [15.0, 30.0, 50.0, 80.0, 120.0];
+/// The age (years) each class grows its open-grown tree at.
+pub const AGE_CLASS_AGES: [f32; 6] = [10.0, 22.0, 40.0, 65.0, 100.0, 150.0];
+
+/// Age class (0–5) of a tree of `age_yr` years ([`AGE_CLASS_BOUNDS`]).
+pub fn age_class(age_yr: f32) -> u16 {
+    AGE_CLASS_BOUNDS.iter().position(|&b| age_yr < b).unwrap_or(AGE_CLASS_BOUNDS.len()) as u16
+}
+
+/// Relative step (5 %) of the height and crown-radius classes that share one analysis.
+pub const DIM_STEP: f32 = 1.05;
+
+/// Options of [`adapt_stand`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct StandOptions {
+    /// Side of the square neighbourhood cells (m, > 0).
+    pub cell_m: f32,
+    /// Distance around a cell within which other trees take part as neighbours (m, ≥ 0).
+    pub halo_m: f32,
+    /// Site latitude (degrees, −90–90) for the global light.
+    pub latitude_deg: f32,
+    /// Solid obstacles (world coordinates, m).
+    pub obstacles: Vec<Obstacle>,
+}
+
+impl Default for StandOptions {
+    /// Cells of 12 m, a halo of 6 m, latitude 47° N, no obstacles.
+    fn default() -> Self {
+        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new() }
+    }
+}
+
+/// The open-grown tree of one species and age class: EcoMod skeleton and leaves, 1 m tall, base
+/// at the origin, z up.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OpenGrown {
+    /// Skeleton (m per m of height).
+    pub skeleton: Skeleton,
+    /// Leaves.
+    pub leaves: Leaves,
+    /// Crown radius of the normalised tree ([`super::crown_radius`], m per m of height; at
+    /// least 0.05).
+    pub crown_radius: f32,
+}
+
+/// Open-grown trees per (species, age class), grown with the scenario's seed.
+#[derive(Debug, Clone)]
+pub struct SkeletonCache {
+    seed: u64,
+    max_strands: u32,
+    map: BTreeMap<(u16, u16), Arc<OpenGrown>>,
+}
+
+/// Largest factor by which the leaves of a stand skeleton grow to make up for its fewer tips.
+pub const MAX_LEAF_GROWTH: f32 = 2.0;
+
+/// Default most EcoMod strands of a stand skeleton (about 2 nodes per strand).
+pub const DEFAULT_MAX_STRANDS: u32 = 48;
+
+impl SkeletonCache {
+    /// An empty cache for scenario seed `seed`, trees of at most `max_strands` strands (≥ 8).
+    pub fn new(seed: u64, max_strands: u32) -> SkeletonCache {
+        SkeletonCache { seed, max_strands: max_strands.max(8), map: BTreeMap::new() }
+    }
+
+    /// Number of (species, age class) trees held.
+    pub fn len(&self) -> usize {
+        self.map.len()
+    }
+
+    /// True when nothing was grown yet.
+    pub fn is_empty(&self) -> bool {
+        self.map.is_empty()
+    }
+
+    /// Seed of the tree of `species` in age class `class`: a hash of the scenario's seed, the
+    /// species, the class and the architecture salt.
+    pub fn seed_of(&self, species: u16, class: u16) -> u64 {
+        crate::rng::hash(&[self.seed, species as u64, class as u64, crate::rng::salt::ARCHITECTURE])
+    }
+
+    /// Grows the missing trees of `keys` (species, age class) in parallel.
+    ///
+    /// Errors: [`Error::Invalid`] for a species index outside `lib` or bad EcoMod parameters.
+    pub fn prepare(&mut self, lib: &SpeciesLibrary, keys: &[(u16, u16)]) -> Result<()> {
+        let mut missing: Vec<(u16, u16)> = keys.iter().copied().filter(|k| !self.map.contains_key(k)).collect();
+        missing.sort_unstable();
+        missing.dedup();
+        let grown: Vec<((u16, u16), OpenGrown)> = missing
+            .par_iter()
+            .map(|&(s, c)| {
+                let sp = lib.species.get(s as usize).ok_or_else(|| Error::Invalid { context: "stand skeletons".into(), field: "species".into(), value: s.to_string(), expected: format!("a species index below {}", lib.species.len()) })?;
+                let mut p = sp.architecture.ecomod.clone();
+                let age = AGE_CLASS_AGES[(c as usize).min(AGE_CLASS_AGES.len() - 1)];
+                let f = (age / 80.0).min(1.0);
+                let full = ((p.strands as f32 * f * f).round() as u32).max(8);
+                p.strands = full.min(self.max_strands);
+                let (sk, lv) = ecomod::try_grow(&p, self.seed_of(s, c), 0.0)?;
+                let (mut sk, mut lv) = super::normalised(&sk, &lv, 1.0)?;
+                // EcoMod draws only its wind sway from the seed: the seed also turns the tree
+                // about its stem, so that each scenario seed shows its own trees
+                let turn = glam::Quat::from_rotation_z((self.seed_of(s, c) >> 11) as f32 / (1u64 << 53) as f32 * std::f32::consts::TAU);
+                sk.nodes.iter_mut().for_each(|n| n.pos = turn * n.pos);
+                lv.leaves.iter_mut().for_each(|l| {
+                    l.pos = turn * l.pos;
+                    l.dir = turn * l.dir;
+                    l.normal = turn * l.normal;
+                });
+                let crown_radius = super::crown_radius(&sk, &lv).max(0.05);
+                // fewer strands, fewer tips: larger leaves keep the foliage area of the full tree
+                let grow_leaf = (full as f32 / p.strands as f32).sqrt().min(MAX_LEAF_GROWTH);
+                lv.leaves.iter_mut().for_each(|l| l.size *= grow_leaf);
+                Ok(((s, c), OpenGrown { skeleton: sk, leaves: lv, crown_radius }))
+            })
+            .collect::<Result<_>>()?;
+        for (k, g) in grown {
+            self.map.insert(k, Arc::new(g));
+        }
+        Ok(())
+    }
+
+    /// The tree of `species` in age class `class`, if grown.
+    pub fn get(&self, species: u16, class: u16) -> Option<&OpenGrown> {
+        self.map.get(&(species, class)).map(|a| a.as_ref())
+    }
+}
+
+/// The open-grown tree `g` fitted to height `h`, crown radius `r` and crown base `cb` (m): the
+/// scaling and crown-base shedding of step 2 of the module documentation, base at the origin.
+pub fn fit(g: &OpenGrown, h: f32, r: f32, cb: f32) -> (Skeleton, Leaves) {
+    let s = Vec3::new(r / g.crown_radius, r / g.crown_radius, h);
+    let mut sk = g.skeleton.clone();
+    for n in &mut sk.nodes {
+        n.pos *= s;
+        n.radius *= h;
+    }
+    let mut lv = g.leaves.clone();
+    for l in &mut lv.leaves {
+        l.pos *= s;
+        l.size *= h;
+    }
+    let cb = cb.clamp(0.0, 0.9 * h);
+    let remove: Vec<bool> = sk
+        .nodes
+        .iter()
+        .map(|n| match n.parent {
+            Some(p) => {
+                let par = &sk.nodes[p as usize];
+                par.gravelius == 0 && n.gravelius > 0 && par.pos.z < cb
+            }
+            None => false,
+        })
+        .collect();
+    if remove.iter().any(|&x| x) {
+        let map = sk.prune(&remove);
+        sk.mark_tips();
+        lv.leaves = lv.leaves.iter().filter_map(|l| map[l.node as usize].map(|n| super::Leaf { node: n, ..*l })).collect();
+    }
+    (sk, lv)
+}
+
+/// One adapted tree of [`adapt_stand`].
+#[derive(Debug, Clone)]
+pub struct AdaptedTree {
+    /// Index of the tree in the `trees` given to [`adapt_stand`].
+    pub index: usize,
+    /// Adapted skeleton (world coordinates, m).
+    pub skeleton: Skeleton,
+    /// Its leaves, moved with their nodes (world coordinates).
+    pub leaves: Leaves,
+    /// What the adaptation did.
+    pub report: PlasticReport,
+    /// Leaf clusters (centre, radius; m) of the fitted tree before adaptation.
+    pub clusters_before: Vec<(Vec3, f32)>,
+    /// Leaf clusters after adaptation (moved, dead ones left out).
+    pub clusters_after: Vec<(Vec3, f32)>,
+}
+
+/// What [`adapt_stand`] returns.
+#[derive(Debug, Clone)]
+pub struct Stand {
+    /// The adapted trees, in the order of `targets`.
+    pub trees: Vec<AdaptedTree>,
+    /// Neighbourhood cells adapted.
+    pub cells: usize,
+    /// Trees adapted in all, context neighbours included.
+    pub trees_in_groups: usize,
+    /// Distinct analyses (shared by trees of the same class).
+    pub analyses: usize,
+}
+
+/// Analysis class of a tree: species, age class, height, crown radius and crown-base classes.
+type ClassKey = (u16, u16, i32, i32, i32);
+
+fn class_of(t: &StandTree) -> ClassKey {
+    let q = |v: f32| (v.max(0.05).ln() / DIM_STEP.ln()).round() as i32;
+    let cbq = ((t.crown_base_m / t.height_m.max(0.1)).clamp(0.0, 0.9) * 20.0).round() as i32;
+    (t.species, age_class(t.age_yr), q(t.height_m), q(t.crown_radius_m), cbq)
+}
+
+fn class_dims(k: &ClassKey) -> (f32, f32, f32) {
+    let h = DIM_STEP.powi(k.2);
+    (h, DIM_STEP.powi(k.3), k.4 as f32 / 20.0 * h)
+}
+
+/// Checks one stand tree.
+fn validate_tree(i: usize, t: &StandTree, lib: &SpeciesLibrary) -> Result<()> {
+    let bad = |field: &str, value: String, expected: &str| Err(Error::Invalid { context: format!("stand tree {i} (id {})", t.id), field: field.into(), value, expected: expected.into() });
+    if t.species as usize >= lib.species.len() {
+        return bad("species", t.species.to_string(), &format!("a species index below {}", lib.species.len()));
+    }
+    if !t.base.is_finite() {
+        return bad("base", t.base.to_string(), "finite coordinates (m)");
+    }
+    if !(t.height_m > 0.0 && t.height_m.is_finite()) {
+        return bad("height_m", t.height_m.to_string(), "a finite height > 0 m");
+    }
+    if !(t.crown_radius_m > 0.0 && t.crown_radius_m.is_finite()) {
+        return bad("crown_radius_m", t.crown_radius_m.to_string(), "a finite crown radius > 0 m");
+    }
+    if !(t.crown_base_m >= 0.0 && t.crown_base_m < t.height_m) {
+        return bad("crown_base_m", t.crown_base_m.to_string(), "0 ≤ crown base < height (m)");
+    }
+    if !(t.age_yr >= 0.0 && t.age_yr.is_finite()) {
+        return bad("age_yr", t.age_yr.to_string(), "a finite age ≥ 0 years");
+    }
+    if !(t.slope_deg >= 0.0 && t.slope_deg < 90.0) || !t.aspect_deg.is_finite() {
+        return bad("slope_deg/aspect_deg", format!("{}/{}", t.slope_deg, t.aspect_deg), "a slope 0–89° and a finite aspect");
+    }
+    Ok(())
+}
+
+/// Adapts the trees `targets` (indices into `trees`) with their neighbours among `trees`
+/// (module documentation, steps 1–3); grows what `cache` lacks.
+///
+/// Errors: [`Error::Invalid`] naming the bad tree field, a target index outside `trees`, bad
+/// options (cell ≤ 0 m, halo < 0 m, latitude outside −90–90°), an invalid obstacle, or the
+/// errors of [`SkeletonCache::prepare`] and [`PlasticTree::analyse`].
+pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary, cache: &mut SkeletonCache, opts: &StandOptions) -> Result<Stand> {
+    let bad = |field: &str, value: String, expected: &str| Error::Invalid { context: "stand adaptation".into(), field: field.into(), value, expected: expected.into() };
+    if !(opts.cell_m > 0.0 && opts.cell_m.is_finite()) {
+        return Err(bad("cell_m", opts.cell_m.to_string(), "a cell side > 0 m"));
+    }
+    if !(opts.halo_m >= 0.0 && opts.halo_m.is_finite()) {
+        return Err(bad("halo_m", opts.halo_m.to_string(), "a halo ≥ 0 m"));
+    }
+    if !(-90.0..=90.0).contains(&opts.latitude_deg) {
+        return Err(bad("latitude_deg", opts.latitude_deg.to_string(), "−90–90°"));
+    }
+    super::grow::space::validate_obstacles(&opts.obstacles)?;
+    for &i in targets {
+        if i >= trees.len() {
+            return Err(bad("targets", i.to_string(), &format!("tree indices below {}", trees.len())));
+        }
+    }
+    // 3. cells and their groups (targets first, then the context trees), in a fixed order
+    let cell_of = |t: &StandTree| ((t.base.x / opts.cell_m).floor() as i64, (t.base.y / opts.cell_m).floor() as i64);
+    let mut cells: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
+    for (k, &i) in targets.iter().enumerate() {
+        cells.entry(cell_of(&trees[i])).or_default().push(k);
+    }
+    // a hash of all trees by cell for the halo search
+    let mut by_cell: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
+    for (i, t) in trees.iter().enumerate() {
+        by_cell.entry(cell_of(t)).or_default().push(i);
+    }
+    let reach = (opts.halo_m / opts.cell_m).ceil() as i64;
+    let groups: Vec<((i64, i64), Vec<usize>, Vec<usize>)> = cells
+        .iter()
+        .map(|(&(cx, cy), ks)| {
+            let mine: Vec<usize> = ks.iter().map(|&k| targets[k]).collect();
+            let (x0, y0) = (cx as f32 * opts.cell_m - opts.halo_m, cy as f32 * opts.cell_m - opts.halo_m);
+            let (x1, y1) = ((cx + 1) as f32 * opts.cell_m + opts.halo_m, (cy + 1) as f32 * opts.cell_m + opts.halo_m);
+            let mut ctx = Vec::new();
+            for gy in cy - reach..=cy + reach {
+                for gx in cx - reach..=cx + reach {
+                    for &i in by_cell.get(&(gx, gy)).map(|v| v.as_slice()).unwrap_or(&[]) {
+                        let b = trees[i].base;
+                        if b.x >= x0 && b.x < x1 && b.y >= y0 && b.y < y1 && !mine.contains(&i) {
+                            ctx.push(i);
+                        }
+                    }
+                }
+            }
+            ctx.sort_unstable();
+            ((cx, cy), ks.clone(), [mine, ctx].concat())
+        })
+        .collect();
+    for g in &groups {
+        for &i in &g.2 {
+            validate_tree(i, &trees[i], lib)?;
+        }
+    }
+    // 1. open-grown trees
+    let mut keys: Vec<(u16, u16)> = groups.iter().flat_map(|g| g.2.iter().map(|&i| (trees[i].species, age_class(trees[i].age_yr)))).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    cache.prepare(lib, &keys)?;
+    // 2. one analysis per class
+    let sky = Sky::from_latitude(opts.latitude_deg);
+    let alone = Environment { obstacles: Vec::new(), ground: Some(Ground::flat(0.0)), sky: sky.clone() };
+    let mut classes: Vec<ClassKey> = groups.iter().flat_map(|g| g.2.iter().map(|&i| class_of(&trees[i]))).collect();
+    classes.sort_unstable();
+    classes.dedup();
+    let cache = &*cache;
+    let analysed: Vec<(ClassKey, (PlasticTree, Leaves))> = classes
+        .par_iter()
+        .map(|k| {
+            let g = cache.get(k.0, k.1).ok_or_else(|| bad("species/age class", format!("{}/{}", k.0, k.1), "a grown open-grown tree"))?;
+            let (h, r, cb) = class_dims(k);
+            let (sk, lv) = fit(g, h, r, cb);
+            let sp = &lib.species[k.0 as usize];
+            let mut t = PlasticTree::analyse(&sk, &sp.architecture.plastic, &alone, None)?;
+            t.clearance_m = sp.architecture.ecomod.leaf_size_m.max(0.0);
+            Ok((*k, (t, lv)))
+        })
+        .collect::<Result<_>>()?;
+    let analysed: BTreeMap<ClassKey, (PlasticTree, Leaves)> = analysed.into_iter().collect();
+    // 3. the cells, in parallel
+    let per_cell: Vec<Vec<(usize, AdaptedTree)>> = groups
+        .par_iter()
+        .map(|((cx, cy), ks, members)| {
+            let mut group: Vec<PlasticTree> = members
+                .iter()
+                .map(|&i| {
+                    let (t, _) = &analysed[&class_of(&trees[i])];
+                    let mut t = t.clone();
+                    t.translate(trees[i].base);
+                    t
+                })
+                .collect();
+            let first = &trees[members[0]];
+            let mut ground = Ground::slope(first.base, first.slope_deg, first.aspect_deg);
+            let lowest = members.iter().map(|&i| ground.height_of(trees[i].base)).fold(0.0f32, f32::min);
+            ground.point += ground.normal * (lowest - 0.05);
+            let centre = Vec3::new((*cx as f32 + 0.5) * opts.cell_m, (*cy as f32 + 0.5) * opts.cell_m, first.base.z);
+            let tallest = members.iter().map(|&i| trees[i].height_m + trees[i].crown_radius_m).fold(0.0f32, f32::max);
+            let near = opts.cell_m + opts.halo_m + 2.0 * tallest;
+            let obstacles: Vec<Obstacle> = opts.obstacles.iter().copied().filter(|o| o.signed_distance(centre.with_z(centre.z + 0.5 * tallest)) < near).collect();
+            let env = Environment { obstacles, ground: Some(ground), sky: sky.clone() };
+            let before: Vec<Vec<(Vec3, f32)>> = group[..ks.len()].iter().map(|t| t.clusters()).collect();
+            let rep = adapt_group(&mut group, &env)?;
+            let mut out = Vec::with_capacity(ks.len());
+            for (j, &k) in ks.iter().enumerate() {
+                let i = members[j];
+                let st = &trees[i];
+                let key = class_of(st);
+                let (h, r, _) = class_dims(&key);
+                let t = &group[j];
+                let (skeleton, leaves) = adapted_with_leaves(t, &analysed[&key].1, st.base);
+                // exact dimensions: scale about the base by the class rounding
+                let s = Vec3::new(st.crown_radius_m / r, st.crown_radius_m / r, st.height_m / h);
+                let at = |p: Vec3| st.base + (p - st.base) * s;
+                let mut skeleton = skeleton;
+                skeleton.nodes.iter_mut().for_each(|n| n.pos = at(n.pos));
+                let mut leaves = leaves;
+                leaves.leaves.iter_mut().for_each(|l| l.pos = at(l.pos));
+                let scale_c = |v: Vec<(Vec3, f32)>| v.into_iter().map(|(c, rad)| (at(c), rad * s.x.max(s.z))).collect::<Vec<_>>();
+                out.push((k, AdaptedTree { index: i, skeleton, leaves, report: rep.trees[j], clusters_before: scale_c(before[j].clone()), clusters_after: scale_c(t.clusters()) }));
+            }
+            Ok(out)
+        })
+        .collect::<Result<_>>()?;
+    let mut slots: Vec<Option<AdaptedTree>> = vec![None; targets.len()];
+    for (k, a) in per_cell.into_iter().flatten() {
+        slots[k] = Some(a);
+    }
+    Ok(Stand { trees: slots.into_iter().flatten().collect(), cells: groups.len(), trees_in_groups: groups.iter().map(|g| g.2.len()).sum(), analyses: analysed.len() })
+}
+
+/// The adapted skeleton of `t` ([`PlasticTree::skeleton`]) and the leaves `lv` of its input
+/// (in the tree's analysis frame, base at the origin; `base` the translation applied), each leaf
+/// moved by its node's displacement and dropped with its node.
+fn adapted_with_leaves(t: &PlasticTree, lv: &Leaves, base: Vec3) -> (Skeleton, Leaves) {
+    let sk = t.skeleton();
+    let input = t.input();
+    let fates = t.fates();
+    let pos = t.positions();
+    // the id map of Skeleton::prune: removed nodes and their descendants are gone
+    let n = input.nodes.len();
+    let mut gone = vec![false; n];
+    let mut map = vec![None; n];
+    let mut next = 0u32;
+    for k in 0..n {
+        let p = input.nodes[k].parent.map(|p| p as usize);
+        gone[k] = k > 0 && (fates[k] != Fate::Alive || p.is_some_and(|p| gone[p]));
+        if !gone[k] {
+            map[k] = Some(next);
+            next += 1;
+        }
+    }
+    let mut leaves = Leaves::default();
+    for l in &lv.leaves {
+        let k = l.node as usize;
+        if let Some(Some(nk)) = map.get(k) {
+            let d = pos[k] - input.nodes[k].pos;
+            leaves.leaves.push(super::Leaf { pos: l.pos + base + d, node: *nk, ..*l });
+        }
+    }
+    (sk, leaves)
+}
+
+/// Overlap of the leaf clusters of different trees: Σ over pairs of clusters of two different
+/// trees of the volume of the intersection of their spheres (m³; lens volume
+/// π(r₁ + r₂ − d)²(d² + 2d(r₁ + r₂) − 3(r₁ − r₂)²)/(12d), the smaller sphere's volume when one
+/// holds the other). `clusters[i]` are tree i's (centre, radius) pairs.
+pub fn cluster_overlap(clusters: &[Vec<(Vec3, f32)>]) -> f64 {
+    let mut total = 0.0f64;
+    for i in 0..clusters.len() {
+        for j in i + 1..clusters.len() {
+            for &(a, ra) in &clusters[i] {
+                for &(b, rb) in &clusters[j] {
+                    total += sphere_intersection(a.distance(b) as f64, ra as f64, rb as f64);
+                }
+            }
+        }
+    }
+    total
+}
+
+/// Volume (m³) of the intersection of two spheres of radii `r1`, `r2` (m) at centre distance `d`
+/// (m): 0 when apart, the smaller sphere's volume when inside the other, the lens volume
+/// otherwise (see [`cluster_overlap`]).
+pub fn sphere_intersection(d: f64, r1: f64, r2: f64) -> f64 {
+    use std::f64::consts::PI;
+    if d >= r1 + r2 {
+        return 0.0;
+    }
+    if d <= (r1 - r2).abs() {
+        let r = r1.min(r2);
+        return 4.0 / 3.0 * PI * r * r * r;
+    }
+    PI * (r1 + r2 - d).powi(2) * (d * d + 2.0 * d * (r1 + r2) - 3.0 * (r1 - r2).powi(2)) / (12.0 * d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sphere_intersection_limits() {
+        // apart, touching, contained, identical
+        assert_eq!(sphere_intersection(3.0, 1.0, 1.0), 0.0);
+        assert_eq!(sphere_intersection(2.0, 1.0, 1.0), 0.0);
+        let v1 = 4.0 / 3.0 * std::f64::consts::PI;
+        assert!((sphere_intersection(0.5, 2.0, 1.0) - v1).abs() < 1e-12);
+        assert!((sphere_intersection(1e-9, 1.0, 1.0) - v1).abs() < 1e-6);
+        // two unit spheres at d = 1: 5π/12
+        assert!((sphere_intersection(1.0, 1.0, 1.0) - 5.0 * std::f64::consts::PI / 12.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn age_classes() {
+        assert_eq!(age_class(0.0), 0);
+        assert_eq!(age_class(14.9), 0);
+        assert_eq!(age_class(15.0), 1);
+        assert_eq!(age_class(79.0), 3);
+        assert_eq!(age_class(500.0), 5);
+    }
+}

@@ -1,0 +1,184 @@
+//! Per-tree skeletons of a stand (issue 14, Build 1): open-grown skeletons fitted to the
+//! simulation's trees and adapted by Plastic Trees (Pirk et al. 2012, `000_*.txt`) together with
+//! their neighbours. Must-show: a tree at a gap's edge leans into the gap; a tree inside a closed
+//! stand has a higher crown base and a narrower crown than the same tree alone; neighbouring
+//! crowns' clusters overlap less after adaptation; the same stand for any thread count.
+use glam::Vec3;
+use sylva::species::SpeciesLibrary;
+use sylva::structure::grow::space::Obstacle;
+use sylva::structure::stand::{adapt_stand, age_class, cluster_overlap, fit, AdaptedTree, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
+
+fn lib() -> SpeciesLibrary {
+    SpeciesLibrary::embedded().unwrap()
+}
+
+fn beech_tree(lib: &SpeciesLibrary, id: u64, x: f32, y: f32) -> StandTree {
+    StandTree { id, species: lib.find("beech").unwrap(), base: Vec3::new(x, y, 100.0), age_yr: 60.0, height_m: 18.0, crown_radius_m: 3.5, crown_base_m: 6.0, slope_deg: 0.0, aspect_deg: 180.0 }
+}
+
+/// A square lattice of beeches at `spacing` m, `n` × `n`, the lower-left tree at (10, 10),
+/// leaving out the trees for which `skip(i, j)` holds.
+fn lattice(lib: &SpeciesLibrary, n: usize, spacing: f32, skip: impl Fn(usize, usize) -> bool) -> Vec<StandTree> {
+    let mut v = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            if !skip(i, j) {
+                v.push(beech_tree(lib, (j * n + i) as u64, 10.0 + i as f32 * spacing, 10.0 + j as f32 * spacing));
+            }
+        }
+    }
+    v
+}
+
+fn find(trees: &[StandTree], x: f32, y: f32) -> usize {
+    trees.iter().position(|t| (t.base.x - x).abs() < 1e-3 && (t.base.y - y).abs() < 1e-3).unwrap()
+}
+
+/// Horizontal offset (m) of the mean cluster centre from the stem base.
+fn crown_offset(clusters: &[(Vec3, f32)], base: Vec3) -> Vec3 {
+    let c = clusters.iter().map(|c| c.0).sum::<Vec3>() / clusters.len() as f32;
+    (c - base).with_z(0.0)
+}
+
+/// Height of the lowest leaf above the base (m) and the 90th percentile of the leaves'
+/// horizontal distances from the stem (m).
+fn crown_base_and_width(a: &AdaptedTree, base: Vec3) -> (f32, f32) {
+    let lo = a.leaves.leaves.iter().map(|l| l.pos.z - base.z).fold(f32::INFINITY, f32::min);
+    let mut d: Vec<f32> = a.leaves.leaves.iter().map(|l| (l.pos - base).with_z(0.0).length()).collect();
+    d.sort_by(f32::total_cmp);
+    (lo, d[(d.len() * 9) / 10])
+}
+
+#[test]
+fn fitted_tree_has_the_simulated_height_crown_and_crown_base() {
+    let lib = lib();
+    let mut cache = SkeletonCache::new(7, DEFAULT_MAX_STRANDS);
+    let s = lib.find("beech").unwrap();
+    cache.prepare(&lib, &[(s, age_class(60.0))]).unwrap();
+    let g = cache.get(s, age_class(60.0)).unwrap();
+    let (sk, lv) = fit(g, 20.0, 4.0, 8.0);
+    assert!((sk.height() - 20.0).abs() < 0.05, "height {}", sk.height());
+    let r = sylva::structure::crown_radius(&sk, &Default::default());
+    assert!(r <= 4.0 + 1e-3 && r > 2.0, "crown radius {r}");
+    // no branch leaves the stem below the crown base
+    for n in &sk.nodes {
+        if let Some(p) = n.parent {
+            let par = &sk.nodes[p as usize];
+            assert!(!(par.gravelius == 0 && n.gravelius > 0 && par.pos.z < 8.0), "branch at {}", par.pos.z);
+        }
+    }
+    assert!(lv.leaves.iter().all(|l| (l.node as usize) < sk.nodes.len()));
+    assert!(lv.leaves.iter().map(|l| l.pos.z).fold(f32::INFINITY, f32::min) > 6.0);
+    // another scenario seed grows another tree
+    let mut other = SkeletonCache::new(8, DEFAULT_MAX_STRANDS);
+    other.prepare(&lib, &[(s, age_class(60.0))]).unwrap();
+    assert_ne!(other.get(s, age_class(60.0)).unwrap().skeleton, g.skeleton);
+}
+
+#[test]
+fn tree_at_a_gap_edge_shifts_its_crown_into_the_gap() {
+    let lib = lib();
+    // 7 × 7 lattice at 2.5 m (crowns of 3.5 m overlap); the columns i ≥ 4 are a gap: the trees
+    // of column 3 stand at its edge
+    let trees = lattice(&lib, 7, 2.5, |i, _| i >= 4);
+    // the edge trees (column 3) and trees two columns inside (column 1), rows 1–5
+    let edge: Vec<usize> = (1..6).map(|j| find(&trees, 17.5, 10.0 + 2.5 * j as f32)).collect();
+    let inner: Vec<usize> = (1..6).map(|j| find(&trees, 12.5, 10.0 + 2.5 * j as f32)).collect();
+    let mut cache = SkeletonCache::new(1, DEFAULT_MAX_STRANDS);
+    let opts = StandOptions { halo_m: 7.0, ..Default::default() };
+    let st = adapt_stand(&trees, &[edge.clone(), inner].concat(), &lib, &mut cache, &opts).unwrap();
+    let shift = |a: &AdaptedTree| crown_offset(&a.clusters_after, trees[a.index].base) - crown_offset(&a.clusters_before, trees[a.index].base);
+    let mean = |v: &[AdaptedTree]| v.iter().map(shift).sum::<Vec3>() / v.len() as f32;
+    let (se, si) = (mean(&st.trees[..edge.len()]), mean(&st.trees[edge.len()..]));
+    for a in &st.trees[..edge.len()] {
+        assert!(shift(a).x > 0.0, "edge tree {}: {}", a.index, shift(a));
+    }
+    assert!(se.x > 0.15, "edge trees' crowns moved {se} on average (towards the gap is +x)");
+    assert!(se.x > si.x.abs() + 0.1, "edge {se} vs inner {si}");
+}
+
+#[test]
+fn closed_stand_raises_the_crown_base_and_narrows_the_crown() {
+    let lib = lib();
+    let trees = lattice(&lib, 5, 3.0, |_, _| false);
+    let mid = find(&trees, 16.0, 16.0);
+    let mut cache = SkeletonCache::new(11, DEFAULT_MAX_STRANDS);
+    let opts = StandOptions { halo_m: 5.0, ..Default::default() };
+    let stand = adapt_stand(&trees, &[mid], &lib, &mut cache, &opts).unwrap();
+    let alone = adapt_stand(&trees[mid..=mid], &[0], &lib, &mut cache, &opts).unwrap();
+    let base = trees[mid].base;
+    let (cb_s, w_s) = crown_base_and_width(&stand.trees[0], base);
+    let (cb_a, w_a) = crown_base_and_width(&alone.trees[0], base);
+    assert!(cb_s > cb_a + 0.3, "crown base in the stand {cb_s} m, alone {cb_a} m");
+    assert!(w_s < 0.99 * w_a, "crown width in the stand {w_s} m, alone {w_a} m");
+    assert!(stand.trees[0].report.pruned_light + stand.trees[0].report.pruned_collision > alone.trees[0].report.pruned_light + alone.trees[0].report.pruned_collision);
+}
+
+#[test]
+fn neighbouring_clusters_overlap_less_after_adaptation() {
+    let lib = lib();
+    let trees = lattice(&lib, 3, 3.0, |_, _| false);
+    let all: Vec<usize> = (0..trees.len()).collect();
+    let mut cache = SkeletonCache::new(5, DEFAULT_MAX_STRANDS);
+    let opts = StandOptions { cell_m: 30.0, ..Default::default() };
+    let st = adapt_stand(&trees, &all, &lib, &mut cache, &opts).unwrap();
+    assert_eq!(st.cells, 1);
+    let before: Vec<Vec<(Vec3, f32)>> = st.trees.iter().map(|a| a.clusters_before.clone()).collect();
+    let after: Vec<Vec<(Vec3, f32)>> = st.trees.iter().map(|a| a.clusters_after.clone()).collect();
+    let (b, a) = (cluster_overlap(&before), cluster_overlap(&after));
+    assert!(b > 0.0, "the crowns overlap before: {b}");
+    assert!(a < 0.9 * b, "overlap after {a} m³, before {b} m³");
+}
+
+#[test]
+fn stand_is_the_same_whatever_the_thread_count_and_obstacles_prune() {
+    let lib = lib();
+    let trees = lattice(&lib, 6, 5.0, |i, j| (i + j) % 5 == 0);
+    let all: Vec<usize> = (0..trees.len()).collect();
+    let wall = Obstacle::Box { min: Vec3::new(26.0, 0.0, 90.0), max: Vec3::new(27.0, 50.0, 125.0) };
+    let opts = StandOptions { obstacles: vec![wall], ..Default::default() };
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let mut cache = SkeletonCache::new(9, DEFAULT_MAX_STRANDS);
+            adapt_stand(&trees, &all, &lib, &mut cache, &opts).unwrap()
+        })
+    };
+    let (a, b) = (run(1), run(2));
+    assert_eq!(a.trees.len(), trees.len());
+    assert!(a.cells > 1);
+    for (x, y) in a.trees.iter().zip(&b.trees) {
+        assert_eq!(x.index, y.index);
+        assert_eq!(x.skeleton, y.skeleton);
+        assert_eq!(x.leaves, y.leaves);
+    }
+    // nothing of any tree stays inside the wall
+    for t in &a.trees {
+        assert!(t.skeleton.nodes.iter().all(|n| !wall.contains(n.pos)));
+    }
+    // the trees 1 m from the wall (x = 25) shed their branches on its side (in its shadow or
+    // in it); the trees beyond it (x = 30) keep theirs
+    for t in &a.trees {
+        let b = trees[t.index].base;
+        let reach = t.skeleton.nodes.iter().map(|n| n.pos.x - b.x).fold(f32::MIN, f32::max);
+        if (b.x - 25.0).abs() < 0.1 {
+            assert!(t.report.pruned_light + t.report.pruned_collision > 0 && reach < 1.0, "tree at {b}: {:?}, reaches {reach} m towards the wall", t.report);
+        }
+        if (b.x - 30.0).abs() < 0.1 {
+            assert!(reach > 3.0, "tree at {b} reaches {reach} m east");
+        }
+    }
+}
+
+#[test]
+fn bad_trees_are_refused_with_the_field() {
+    let lib = lib();
+    let mut t = vec![beech_tree(&lib, 1, 0.0, 0.0)];
+    t[0].crown_base_m = 30.0;
+    let e = adapt_stand(&t, &[0], &lib, &mut SkeletonCache::new(1, 48), &StandOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("crown_base_m") && e.contains("30"), "{e}");
+    let e = adapt_stand(&t, &[3], &lib, &mut SkeletonCache::new(1, 48), &StandOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("targets"), "{e}");
+}
+
+
