@@ -133,11 +133,19 @@ pub struct Occluder {
 /// Shadow volumes of a set of clusters, one grid per sky direction: the shadow volume of a
 /// cluster for direction d is the half-cylinder of its radius behind it (opposite d). Each
 /// direction's grid bins the clusters by their projection on the plane ⟂ d, so a receiver tests
-/// only the casters whose shadow volume contains it.
-#[derive(Debug, Clone)]
+/// only the casters whose shadow volume contains it. A direction's grid is built the first time it is queried (directions blocked by solids at
+/// every receiver cost nothing).
+#[derive(Debug)]
 pub struct ShadowVolumes {
     occ: Vec<Occluder>,
-    grids: Vec<DirGrid>,
+    dirs: Vec<Vec3>,
+    grids: Vec<std::sync::OnceLock<DirGrid>>,
+}
+
+impl Clone for ShadowVolumes {
+    fn clone(&self) -> Self {
+        ShadowVolumes::from_dirs(self.dirs.clone(), self.occ.clone())
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -164,7 +172,9 @@ struct DirGrid {
 /// Casters tested together by [`ShadowVolumes::transmittance`] (the hit test vectorises).
 const LANES: usize = 8;
 
+
 const MAX_CELLS_PER_AXIS: usize = 96;
+
 
 impl DirGrid {
     fn new(d: Vec3, occ: &[Occluder]) -> DirGrid {
@@ -183,9 +193,9 @@ impl DirGrid {
         }
         let ext = (hi - lo).max(Vec2::splat(1e-3));
         let mean_r = rsum / occ.len() as f32;
-        // about two cells per cluster: the grid's size follows the cluster count
-        let by_count = (ext.x * ext.y / (2.0 * occ.len() as f32)).sqrt();
-        let cell = (2.0 * mean_r).max(by_count).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
+        // about CELLS_PER_CASTER cells per cluster: the grid's size follows the cluster count
+        let by_count = (ext.x * ext.y / (CELLS_PER_CASTER * occ.len() as f32)).sqrt();
+        let cell = (CELL_RADII * mean_r).max(by_count).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
         let nx = ((ext.x / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
         let ny = ((ext.y / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
         // cell range of each caster's disc; `as usize` truncates, which equals the floor for the
@@ -272,16 +282,29 @@ impl DirGrid {
     }
 }
 
+/// Grid cell size, in mean cluster radii, at least.
+const CELL_RADII: f32 = 2.0;
+/// Grid cells per cluster over the grid's area, at most (the cell is at least that coarse).
+const CELLS_PER_CASTER: f32 = 2.0;
+
 impl ShadowVolumes {
     /// Shadow volumes of `occ` for every direction of `sky`.
     pub fn new(sky: &Sky, occ: Vec<Occluder>) -> ShadowVolumes {
-        let grids = sky.dirs.iter().map(|&d| DirGrid::new(d, &occ)).collect();
-        ShadowVolumes { occ, grids }
+        ShadowVolumes::from_dirs(sky.dirs.clone(), occ)
+    }
+
+    fn from_dirs(dirs: Vec<Vec3>, occ: Vec<Occluder>) -> ShadowVolumes {
+        let grids = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
+        ShadowVolumes { occ, dirs, grids }
     }
 
     /// The occluders.
     pub fn occluders(&self) -> &[Occluder] {
         &self.occ
+    }
+
+    fn grid(&self, k: usize) -> &DirGrid {
+        self.grids[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ))
     }
 
     /// True when [`ShadowVolumes::transmittance`] of the same ray is below 1, found at the first
@@ -291,7 +314,7 @@ impl ShadowVolumes {
     }
 
     /// Transmittance Π γ of the clusters on the ray from `p` along sky direction `k`; clusters
-    /// containing `p` do not shade it.
+    /// containing `p` do not shade it. A product below 10⁻⁴ is returned as 0 (the ray is dark).
     pub fn transmittance(&self, k: usize, p: Vec3) -> f32 {
         self.product_until(k, p, 1e-4).unwrap_or(0.0)
     }
@@ -299,7 +322,7 @@ impl ShadowVolumes {
     /// Π γ of the clusters hit by the ray from `p` along direction `k`, multiplied in caster
     /// order; `None` as soon as the product falls below `stop`.
     fn product_until(&self, k: usize, p: Vec3, stop: f32) -> Option<f32> {
-        let g = &self.grids[k];
+        let g = self.grid(k);
         let r = g.candidates(p);
         let mut hit = [false; LANES];
         let mut t = 1.0f32;
@@ -438,6 +461,29 @@ pub fn light_at(sky: &Sky, blocked: u32, vols: &ShadowVolumes, p: Vec3) -> (f32,
         dir += sky.dirs[k] * (w * t);
     }
     (sum, dir.normalize_or(Vec3::Z))
+}
+
+/// [`light_at`] for many points at once, `points` as (position, [`Solids::mask`] there):
+/// the same sums in the same order (bit for bit the values of [`light_at`]), computed direction
+/// by direction so that each direction's shadow-volume grid is read while it is in cache.
+pub fn light_many(sky: &Sky, vols: &ShadowVolumes, points: &[(Vec3, u32)]) -> Vec<(f32, Vec3)> {
+    let mut acc = vec![(0.0f32, Vec3::ZERO); points.len()];
+    for k in 0..sky.dirs.len() {
+        let w = sky.weights[k];
+        if w == 0.0 {
+            continue;
+        }
+        let d = sky.dirs[k];
+        for ((p, blocked), a) in points.iter().zip(acc.iter_mut()) {
+            if blocked & (1 << k) != 0 {
+                continue;
+            }
+            let t = vols.transmittance(k, *p);
+            a.0 += w * t;
+            a.1 += d * (w * t);
+        }
+    }
+    acc.into_iter().map(|(s, d)| (s, d.normalize_or(Vec3::Z))).collect()
 }
 
 #[cfg(test)]

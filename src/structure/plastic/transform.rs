@@ -41,7 +41,7 @@
 //! clusters of recomputed subtrees now shade it differently.
 
 use super::analysis::{cluster_center, judged, normalised, psi_at_stage};
-use super::light::{light_at, Occluder, ShadowVolumes, SkyMask, Solids};
+use super::light::{light_at, light_many, Occluder, ShadowVolumes, SkyMask, Solids};
 use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
 use crate::error::Result;
 use crate::structure::grow::space::Obstacle;
@@ -360,17 +360,22 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     }
     // light on this stage's clusters that were recomputed
     let clusters = &a.stages[s];
+    let mut lit = Vec::new();
     for (ci, c) in clusters.iter().enumerate() {
         let touched = match c.lobe {
             Some(l) => a.lobes[l as usize].nodes.iter().any(|&k| w.done[k as usize]),
             None => w.done[c.anchor as usize],
         };
         if touched {
-            t.light_cache[s][ci] = match occ[ci] {
-                Some(o) => light_at(sky, solids.mask(o.center), vols, o.center).0,
-                None => 0.0,
-            };
+            match occ[ci] {
+                Some(o) => lit.push((ci, o.center)),
+                None => t.light_cache[s][ci] = 0.0,
+            }
         }
+    }
+    let at: Vec<(Vec3, u32)> = lit.iter().map(|&(_, c)| (c, solids.mask(c))).collect();
+    for (&(ci, _), (i, _)) in lit.iter().zip(light_many(sky, vols, &at)) {
+        t.light_cache[s][ci] = i;
     }
     // pruning (eqs. 10–11)
     let alive: Vec<bool> = t.fate.iter().map(|f| *f == Fate::Alive).collect();
