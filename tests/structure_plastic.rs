@@ -4,7 +4,7 @@
 use glam::{Quat, Vec3};
 use sylva::species::{PlasticParams, Species, SpeciesLibrary};
 use sylva::structure::grow::space::Obstacle;
-use sylva::structure::plastic::{adapt, adapt_group, inverse_tropism, Environment, Fate, PlasticTree};
+use sylva::structure::plastic::{adapt, adapt_group, cluster_density, inverse_tropism, Environment, Fate, PlasticTree};
 use sylva::structure::species_tree::{grow_species_tree, tip_leaves, GrownTree, Model};
 use sylva::structure::Skeleton;
 
@@ -374,4 +374,48 @@ fn global_light_at_50_north_turns_the_crown_south() {
     let (c0, c1) = (tip_centroid(&sk), tip_centroid(&t.skeleton()));
     assert!(c1.y < c0.y - 0.05, "tip centroid y {} -> {}", c0.y, c1.y);
     assert!((c1.x - c0.x).abs() < 0.01, "no east–west drift: {} -> {}", c0.x, c1.x);
+}
+
+/// Eq. (12), ρ_l = ρ_l0·ρ(i)/ρ(i_l0) with ρ(i) = i: unchanged light keeps every cluster's
+/// density; beside a wall the clusters on the wall side lose more light, so they thin more than
+/// those on the far side; deleted clusters have density 0.
+#[test]
+fn leaf_cluster_density_follows_eq12() {
+    assert_eq!(cluster_density(0.8, 0.5, 0.25), 0.4);
+    assert_eq!(cluster_density(0.8, 0.0, 0.25), 0.8);
+    let sp = beech();
+    let g = grow(&sp, 20.0, 2);
+    let sk = &g.skeleton;
+    let mut t = PlasticTree::analyse(sk, &tree1(&sp), &Environment::open(), None).unwrap();
+    let before = t.leaf_clusters();
+    assert_eq!(before.len(), t.analysis().lobes.len());
+    assert!(before.iter().all(|c| c.density == 1.0 && c.alive_nodes == c.input_nodes));
+    // the same environment, every node recomputed: the light of every cluster is the analysis'
+    t.invalidate();
+    t.adapt(&Environment::open()).unwrap();
+    for c in t.leaf_clusters() {
+        assert!((c.density - 1.0).abs() < 1e-5, "lobe {}: density {} (light {} vs {})", c.lobe, c.density, c.light, c.light_input);
+    }
+    let wall = finite_wall(&g);
+    t.adapt(&Environment::with_obstacles(&[wall])).unwrap();
+    let cl = t.leaf_clusters();
+    let live: Vec<_> = cl.iter().filter(|c| c.alive_nodes > 0 && c.radius > 0.0).collect();
+    assert!(cl.iter().filter(|c| c.alive_nodes == 0).all(|c| c.density == 0.0));
+    for c in &live {
+        assert!((c.density - c.light / c.light_input).abs() <= 1e-6 * c.density.max(1.0), "eq. 12 for lobe {}", c.lobe);
+        assert!(c.gamma > 0.0 && c.gamma <= 1.0 && !wall.contains(c.center));
+    }
+    let mut xs: Vec<f32> = live.iter().map(|c| c.center.x).collect();
+    xs.sort_by(f32::total_cmp);
+    let median = xs[xs.len() / 2];
+    let mean_density = |near: bool| {
+        let d: Vec<f32> = live.iter().filter(|c| (c.center.x > median) == near).map(|c| c.density).collect();
+        d.iter().sum::<f32>() / d.len() as f32
+    };
+    let (near, far) = (mean_density(true), mean_density(false));
+    eprintln!("{} of {} clusters alive; mean density wall side {near:.3}, far side {far:.3}", live.len(), cl.len());
+    assert!(near < far && near < 0.95, "wall side {near}, far side {far}");
+    let dens = t.leaf_density();
+    assert_eq!(dens.len(), t.skeleton().len());
+    assert!(dens.iter().all(|d| d.is_finite() && *d >= 0.0));
 }

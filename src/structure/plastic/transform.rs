@@ -31,8 +31,10 @@
 //!    [`super::analysis::Analysis::stage_light`]); a branch with ψ_s(t) < ψ_s,min (eq. 11) is shed with its
 //!    children. Cluster light is evaluated at the moved cluster centres with the level's
 //!    shadow volumes (built before the level's bending).
-//! 5. **Leaf density (eq. 12)** ρ_l = ρ_l0·ρ(i)/ρ(i_l0) with ρ(i) = i (linear), reported per
-//!    lobe by [`cluster_density`].
+//! 5. **Leaf density (eq. 12)** ρ_l = ρ_l0·ρ(i)/ρ(i_l0) with ρ(i) = i (linear) for every leaf
+//!    cluster of the full-grown stage after the levels: [`PlasticTree::leaf_clusters`] (with the
+//!    obstacle-cut radius and the translucency of eqs. 4 and 13) and, per node of the adapted
+//!    skeleton, [`PlasticTree::leaf_density`] (what a leaf generator scales its leaf count by).
 //! 6. **Wood of other trees** (segments at least `wood_radius_m` thick) is solid: nodes inside it
 //!    are removed after the levels; the other trees' leaf clusters are not solid (they overlap
 //!    and share the space, section 5.2).
@@ -60,8 +62,10 @@ pub struct GroupReport {
     pub levels: usize,
 }
 
-/// Leaf density ρ_l of eq. (12) for a cluster of initial density `rho0` at initial light `i0`,
-/// now at light `i` (both 0–1), with ρ(i) = i: ρ_l0·i/i_0 (ρ_l0 when i_0 = 0).
+/// Leaf density ρ_l of eq. (12), ρ_l = ρ_l0·ρ(i)/ρ(i_l0), for a cluster of initial density
+/// `rho0` at initial light `i0`, now at light `i` (both 0–1, eq. 3), with ρ(i) = i (linear; the
+/// paper leaves ρ open): ρ_l0·i/i_0, ρ_l0 when i_0 = 0. Not clamped: a cluster that receives
+/// more light than in the input gets denser than it was.
 pub fn cluster_density(rho0: f32, i0: f32, i: f32) -> f32 {
     if i0 > 0.0 {
         rho0 * i / i0
@@ -262,6 +266,11 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
             }
         });
     }
+    // the leaf clusters of the full-grown stage as they end (section 5.2, eqs. 12–13)
+    trees.par_iter_mut().for_each(|t| {
+        let last = t.analysis.seasons as usize;
+        t.final_occ = stage_occluders(t, last, env);
+    });
     let mut rep = GroupReport { trees: Vec::with_capacity(trees.len()), recomputed_nodes: 0, levels: g_max + 1 };
     for (t, w) in trees.iter_mut().zip(&work) {
         let d = &w.done;
