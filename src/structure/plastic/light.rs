@@ -169,7 +169,8 @@ struct DirGrid {
     gamma: Vec<f32>,
 }
 
-/// Casters tested together by [`ShadowVolumes::transmittance`] (the hit test vectorises).
+/// Casters tested together by [`ShadowVolumes::transmittance`] (the hit test vectorises); every
+/// cell's run of casters is padded to a multiple of it.
 const LANES: usize = 8;
 
 
@@ -219,12 +220,14 @@ impl DirGrid {
                 }
             }
         }
+        // every cell's run padded to whole blocks of LANES with casters that never hit
+        // (squared radius −1: `l2 − along² ≤ −1` is false; transmittance 1)
         for i in 1..count.len() {
-            count[i] += count[i - 1];
+            count[i] = count[i - 1] + count[i].div_ceil(LANES as u32) * LANES as u32;
         }
         let mut fill = count.clone();
         let len = count[nx * ny] as usize;
-        let (mut ix, mut iy, mut iz, mut ir2, mut ig) = (vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![1.0; len]);
+        let (mut ix, mut iy, mut iz, mut ir2, mut ig) = (vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![-1.0; len], vec![1.0; len]);
         for (&[x0, x1, y0, y1], o) in ranges.iter().zip(occ) {
             let r2 = o.radius * o.radius;
             for y in y0 as usize..=y1 as usize {
@@ -256,29 +259,39 @@ impl DirGrid {
         self.start[c] as usize..self.start[c + 1] as usize
     }
 
-    /// Hit flags of the casters `range` on the ray from `p` along `d` into `hit` (the ray passes
-    /// through the caster's sphere ahead of `p`, and `p` is outside it): the arithmetic of
-    /// glam's `Vec3::dot`/`length_squared`, written per component so [`LANES`] casters are
-    /// tested at once.
+    /// Multiplies `t` by the transmittance of every caster of the block of [`LANES`] casters
+    /// from `i` that the ray from `p` along `d` hits (the ray passes through the caster's sphere
+    /// ahead of `p`, and `p` is outside it), in caster order, and returns it: the arithmetic of
+    /// glam's `Vec3::dot`/`length_squared` written per component so the hit tests vectorise.
     #[inline]
-    fn hits(&self, range: std::ops::Range<usize>, p: Vec3, hit: &mut [bool; LANES]) {
-        let (xs, ys, zs, rs) = (&self.x[range.clone()], &self.y[range.clone()], &self.z[range.clone()], &self.r2[range]);
+    fn block(&self, i: usize, p: Vec3, mut t: f32) -> f32 {
+        let j = i..i + LANES;
+        let (Ok(xs), Ok(ys), Ok(zs), Ok(rs), Ok(gs)) = (
+            <&[f32; LANES]>::try_from(&self.x[j.clone()]),
+            <&[f32; LANES]>::try_from(&self.y[j.clone()]),
+            <&[f32; LANES]>::try_from(&self.z[j.clone()]),
+            <&[f32; LANES]>::try_from(&self.r2[j.clone()]),
+            <&[f32; LANES]>::try_from(&self.gamma[j]),
+        ) else {
+            return t; // unreachable: runs are padded to whole blocks
+        };
         let d = self.d;
-        let test = |x: f32, y: f32, z: f32, r2: f32| {
-            let (ox, oy, oz) = (x - p.x, y - p.y, z - p.z);
+        let mut hit = [false; LANES];
+        for k in 0..LANES {
+            let (ox, oy, oz) = (xs[k] - p.x, ys[k] - p.y, zs[k] - p.z);
             let along = ox * d.x + oy * d.y + oz * d.z;
             let l2 = ox * ox + oy * oy + oz * oz;
-            (along > 0.0) & (l2 > r2) & (l2 - along * along <= r2)
-        };
-        if let (Ok(xs), Ok(ys), Ok(zs), Ok(rs)) = (<&[f32; LANES]>::try_from(xs), <&[f32; LANES]>::try_from(ys), <&[f32; LANES]>::try_from(zs), <&[f32; LANES]>::try_from(rs)) {
-            for j in 0..LANES {
-                hit[j] = test(xs[j], ys[j], zs[j], rs[j]);
-            }
-        } else {
-            for j in 0..xs.len().min(LANES) {
-                hit[j] = test(xs[j], ys[j], zs[j], rs[j]);
+            hit[k] = (along > 0.0) & (l2 > rs[k]) & (l2 - along * along <= rs[k]);
+        }
+        // most blocks hit nothing: one test of the whole block, then the hits in order
+        if hit.iter().fold(false, |a, &h| a | h) {
+            for k in 0..LANES {
+                if hit[k] {
+                    t *= gs[k];
+                }
             }
         }
+        t
     }
 }
 
@@ -324,19 +337,16 @@ impl ShadowVolumes {
     fn product_until(&self, k: usize, p: Vec3, stop: f32) -> Option<f32> {
         let g = self.grid(k);
         let r = g.candidates(p);
-        let mut hit = [false; LANES];
         let mut t = 1.0f32;
         let mut i = r.start;
+        // the product never rises again, so stopping after the block that crosses `stop` gives
+        // the same answer as stopping at the caster that crosses it
         while i < r.end {
-            let m = (r.end - i).min(LANES);
-            g.hits(i..i + m, p, &mut hit);
-            for (j, _) in hit[..m].iter().enumerate().filter(|(_, h)| **h) {
-                t *= g.gamma[i + j];
-                if t < stop {
-                    return None;
-                }
+            t = g.block(i, p, t);
+            if t < stop {
+                return None;
             }
-            i += m;
+            i += LANES;
         }
         Some(t)
     }
