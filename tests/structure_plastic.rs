@@ -276,11 +276,66 @@ fn symmetric_sky_leaves_a_symmetric_tree_symmetric() {
     assert!(c.x.abs() < 0.01 && c.y.abs() < 0.01, "tip centroid {c}");
 }
 
-/// Known failure (issue 12, not fixed yet): with four symmetric boxes one twig is shed on one
-/// side and kept on the others (the pruning threshold is met within f32 rounding), so the
-/// adapted tree is not exactly 4-fold symmetric although its centroid is (test above).
+/// Quarter turn `q` about the vertical, exact in f32 (components swapped and negated, no
+/// rounding as with a quaternion).
+fn quarter(v: Vec3, q: u32) -> Vec3 {
+    match q % 4 {
+        0 => v,
+        1 => Vec3::new(-v.y, v.x, v.z),
+        2 => Vec3::new(-v.x, -v.y, v.z),
+        _ => Vec3::new(v.y, -v.x, v.z),
+    }
+}
+
+/// [`symmetric_tree`] built with exact quarter turns.
+fn exactly_symmetric_tree() -> Skeleton {
+    let mut s = Skeleton::new();
+    let r = s.add_root(Vec3::ZERO, 0.08);
+    let mut top = r;
+    for z in 1..=4 {
+        top = s.add_child(top, Vec3::new(0.0, 0.0, z as f32), 0.06, false).unwrap();
+    }
+    for q in 0..4 {
+        let limb = s.add_child(top, quarter(Vec3::new(1.0, 0.0, 5.0), q), 0.03, true).unwrap();
+        let l2 = s.add_child(limb, quarter(Vec3::new(2.0, 0.0, 5.8), q), 0.02, false).unwrap();
+        s.add_child(l2, quarter(Vec3::new(2.6, 0.4, 6.4), q), 0.01, true).unwrap();
+        s.add_child(l2, quarter(Vec3::new(2.6, -0.4, 6.4), q), 0.01, true).unwrap();
+    }
+    s.add_child(top, Vec3::new(0.0, 0.0, 6.5), 0.03, false).unwrap();
+    s.mark_tips();
+    s
+}
+
+/// With four boxes around an exactly 4-fold symmetric tree, every node of the adapted tree has
+/// a quarter-turn twin (a twig shed on one side is shed on all four).
 #[test]
-#[ignore = "known asymmetry of light pruning at the threshold, see the report of issue 12"]
+fn symmetric_obstacles_keep_every_node_twin_exact_input() {
+    let sk = exactly_symmetric_tree();
+    let p = PlasticParams { phototropism: 0.45, gravitropism: 0.44, pruning_c_psi: 0.8, translucency_gamma_c0: 0.5 };
+    let mut t = PlasticTree::analyse(&sk, &p, &Environment::open(), Some(1.0)).unwrap();
+    let boxes: Vec<Obstacle> = (0..4)
+        .map(|q| {
+            let (a, b) = (quarter(Vec3::new(2.8, -0.4, 0.0), q), quarter(Vec3::new(3.6, 0.4, 7.0), q));
+            Obstacle::Box { min: a.min(b), max: a.max(b) }
+        })
+        .collect();
+    let rep = t.adapt(&Environment::with_obstacles(&boxes)).unwrap();
+    let out = t.skeleton();
+    eprintln!("{rep:?}");
+    assert!(rep.bent > 0);
+    for n in &out.nodes {
+        let r = quarter(n.pos, 1);
+        assert!(out.nodes.iter().any(|m| m.pos.distance(r) < 0.02), "{} has no quarter-turn twin", n.pos);
+    }
+}
+
+/// Known failure (issue 12, not fixed yet): with four symmetric boxes one twig is shed on one
+/// side and kept on the others (the pruning threshold is met within f32 rounding of the
+/// quaternion-rotated input and boxes), so the adapted tree is not exactly 4-fold symmetric
+/// although its centroid is (test above); with exactly symmetric input see
+/// `symmetric_obstacles_keep_every_node_twin_exact_input`.
+#[test]
+#[ignore = "measured: one twig shed on one side only, the pruning threshold met within the f32 rounding of the quaternion-rotated input; the exactly symmetric input passes (symmetric_obstacles_keep_every_node_twin_exact_input)"]
 fn symmetric_obstacles_keep_every_node_twin() {
     let sk = symmetric_tree();
     let p = PlasticParams { phototropism: 0.45, gravitropism: 0.44, pruning_c_psi: 0.8, translucency_gamma_c0: 0.5 };

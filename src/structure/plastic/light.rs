@@ -554,6 +554,48 @@ mod tests {
         }
     }
 
+    /// The grid path (lazy grids, padded blocks) against the product over every occluder in
+    /// occluder order, and `light_many` against `light_at`: equal bit for bit.
+    #[test]
+    fn grid_products_equal_the_plain_product() {
+        let sky = Sky::from_latitude(50.0);
+        let occ: Vec<Occluder> = (0..300)
+            .map(|i| {
+                let f = i as f32;
+                let r = 0.2 + 0.3 * (f * 0.37).sin().abs();
+                Occluder { center: Vec3::new((f * 0.71).sin() * 3.0, (f * 0.53).cos() * 3.0, 2.0 + (f * 0.29).sin().abs() * 5.0), radius: r, gamma: 0.5f32.powf(r) }
+            })
+            .collect();
+        let vols = ShadowVolumes::new(&sky, occ.clone());
+        let mut shaded = 0;
+        let mut points = Vec::new();
+        for j in 0..200 {
+            let f = j as f32;
+            let p = Vec3::new((f * 0.43).cos() * 3.5, (f * 0.61).sin() * 3.5, 1.0 + (f * 0.17).sin().abs() * 6.0);
+            for (k, &d) in sky.dirs.iter().enumerate() {
+                let mut t = 1.0f32;
+                for o in &occ {
+                    let oc = o.center - p;
+                    let along = oc.dot(d);
+                    let l2 = oc.length_squared();
+                    if along > 0.0 && l2 > o.radius * o.radius && l2 - along * along <= o.radius * o.radius {
+                        t *= o.gamma;
+                    }
+                }
+                let plain = if t < 1e-4 { 0.0 } else { t };
+                assert_eq!(vols.transmittance(k, p).to_bits(), plain.to_bits(), "point {p}, direction {k}");
+                assert_eq!(vols.shaded(k, p), t < 1.0);
+                shaded += (t < 1.0) as usize;
+            }
+            points.push((p, (j as u32).wrapping_mul(2_654_435_761) & 0x0f0f_0f0f));
+        }
+        assert!(shaded > 200 && shaded < 200 * SKY_DIRS - 200, "{shaded}");
+        for ((p, m), (i, d)) in points.iter().zip(light_many(&sky, &vols, &points)) {
+            let (i2, d2) = light_at(&sky, *m, &vols, *p);
+            assert_eq!((i.to_bits(), d.to_array().map(f32::to_bits)), (i2.to_bits(), d2.to_array().map(f32::to_bits)));
+        }
+    }
+
     #[test]
     fn cluster_transmittance_eq4() {
         let s = Sky::default();
