@@ -229,8 +229,9 @@ fn two_trees_3m_apart_grow_apart() {
     assert!(rep.trees.iter().all(|r| r.bent > 0));
 }
 
-/// A 4-fold symmetric tree: trunk, four limbs at 0°, 90°, 180°, 270°, each with two twigs.
-fn symmetric_tree() -> Skeleton {
+/// A 4-fold symmetric tree: trunk, four limbs at 0°, 90°, 180°, 270°, each with two twigs;
+/// `turn(v, q)` turns v by q quarter turns about the vertical.
+fn symmetric_tree_by(turn: impl Fn(Vec3, u32) -> Vec3) -> Skeleton {
     let mut s = Skeleton::new();
     let r = s.add_root(Vec3::ZERO, 0.08);
     let mut top = r;
@@ -238,15 +239,34 @@ fn symmetric_tree() -> Skeleton {
         top = s.add_child(top, Vec3::new(0.0, 0.0, z as f32), 0.06, false).unwrap();
     }
     for q in 0..4 {
-        let rot = Quat::from_rotation_z(q as f32 * std::f32::consts::FRAC_PI_2);
-        let limb = s.add_child(top, rot * Vec3::new(1.0, 0.0, 5.0), 0.03, true).unwrap();
-        let l2 = s.add_child(limb, rot * Vec3::new(2.0, 0.0, 5.8), 0.02, false).unwrap();
-        s.add_child(l2, rot * Vec3::new(2.6, 0.4, 6.4), 0.01, true).unwrap();
-        s.add_child(l2, rot * Vec3::new(2.6, -0.4, 6.4), 0.01, true).unwrap();
+        let limb = s.add_child(top, turn(Vec3::new(1.0, 0.0, 5.0), q), 0.03, true).unwrap();
+        let l2 = s.add_child(limb, turn(Vec3::new(2.0, 0.0, 5.8), q), 0.02, false).unwrap();
+        s.add_child(l2, turn(Vec3::new(2.6, 0.4, 6.4), q), 0.01, true).unwrap();
+        s.add_child(l2, turn(Vec3::new(2.6, -0.4, 6.4), q), 0.01, true).unwrap();
     }
     s.add_child(top, Vec3::new(0.0, 0.0, 6.5), 0.03, false).unwrap();
     s.mark_tips();
     s
+}
+
+/// Quarter turns by a quaternion (f32 rounding leaves ~1e-7 m asymmetries).
+fn quat_turn(v: Vec3, q: u32) -> Vec3 {
+    Quat::from_rotation_z(q as f32 * std::f32::consts::FRAC_PI_2) * v
+}
+
+/// [`symmetric_tree_by`] with quaternion turns.
+fn symmetric_tree() -> Skeleton {
+    symmetric_tree_by(quat_turn)
+}
+
+/// Four boxes 0.8 m wide and 7 m high centred 3.2 m from the trunk, placed by `turn`.
+fn four_boxes(turn: impl Fn(Vec3, u32) -> Vec3) -> Vec<Obstacle> {
+    (0..4)
+        .map(|q| {
+            let c = turn(Vec3::new(3.2, 0.0, 0.0), q);
+            Obstacle::Box { min: c - Vec3::new(0.4, 0.4, 0.0), max: c + Vec3::new(0.4, 0.4, 7.0) }
+        })
+        .collect()
 }
 
 /// Must show 5: a symmetric sky and no obstacle leave a symmetric tree unchanged, and four
@@ -262,12 +282,7 @@ fn symmetric_sky_leaves_a_symmetric_tree_symmetric() {
     let worst = t.positions().iter().zip(&sk.nodes).map(|(a, b)| a.distance(b.pos)).fold(0.0f32, f32::max);
     assert!(worst < 1e-4, "moved {worst} m");
     // four boxes at the same distance around it: it bends, but stays 4-fold symmetric
-    let boxes: Vec<Obstacle> = (0..4)
-        .map(|q| {
-            let c = Quat::from_rotation_z(q as f32 * std::f32::consts::FRAC_PI_2) * Vec3::new(3.2, 0.0, 0.0);
-            Obstacle::Box { min: c - Vec3::new(0.4, 0.4, 0.0), max: c + Vec3::new(0.4, 0.4, 7.0) }
-        })
-        .collect();
+    let boxes = four_boxes(quat_turn);
     let rep = t.adapt(&Environment::with_obstacles(&boxes)).unwrap();
     let out = t.skeleton();
     assert!(rep.bent > 0, "{rep:?}");
@@ -287,38 +302,14 @@ fn quarter(v: Vec3, q: u32) -> Vec3 {
     }
 }
 
-/// [`symmetric_tree`] built with exact quarter turns.
-fn exactly_symmetric_tree() -> Skeleton {
-    let mut s = Skeleton::new();
-    let r = s.add_root(Vec3::ZERO, 0.08);
-    let mut top = r;
-    for z in 1..=4 {
-        top = s.add_child(top, Vec3::new(0.0, 0.0, z as f32), 0.06, false).unwrap();
-    }
-    for q in 0..4 {
-        let limb = s.add_child(top, quarter(Vec3::new(1.0, 0.0, 5.0), q), 0.03, true).unwrap();
-        let l2 = s.add_child(limb, quarter(Vec3::new(2.0, 0.0, 5.8), q), 0.02, false).unwrap();
-        s.add_child(l2, quarter(Vec3::new(2.6, 0.4, 6.4), q), 0.01, true).unwrap();
-        s.add_child(l2, quarter(Vec3::new(2.6, -0.4, 6.4), q), 0.01, true).unwrap();
-    }
-    s.add_child(top, Vec3::new(0.0, 0.0, 6.5), 0.03, false).unwrap();
-    s.mark_tips();
-    s
-}
-
 /// With four boxes around an exactly 4-fold symmetric tree, every node of the adapted tree has
 /// a quarter-turn twin (a twig shed on one side is shed on all four).
 #[test]
 fn symmetric_obstacles_keep_every_node_twin_exact_input() {
-    let sk = exactly_symmetric_tree();
+    let sk = symmetric_tree_by(quarter);
     let p = PlasticParams { phototropism: 0.45, gravitropism: 0.44, pruning_c_psi: 0.8, translucency_gamma_c0: 0.5 };
     let mut t = PlasticTree::analyse(&sk, &p, &Environment::open(), Some(1.0)).unwrap();
-    let boxes: Vec<Obstacle> = (0..4)
-        .map(|q| {
-            let (a, b) = (quarter(Vec3::new(2.8, -0.4, 0.0), q), quarter(Vec3::new(3.6, 0.4, 7.0), q));
-            Obstacle::Box { min: a.min(b), max: a.max(b) }
-        })
-        .collect();
+    let boxes = four_boxes(quarter);
     let rep = t.adapt(&Environment::with_obstacles(&boxes)).unwrap();
     let out = t.skeleton();
     eprintln!("{rep:?}");
@@ -340,12 +331,7 @@ fn symmetric_obstacles_keep_every_node_twin() {
     let sk = symmetric_tree();
     let p = PlasticParams { phototropism: 0.45, gravitropism: 0.44, pruning_c_psi: 0.8, translucency_gamma_c0: 0.5 };
     let mut t = PlasticTree::analyse(&sk, &p, &Environment::open(), Some(1.0)).unwrap();
-    let boxes: Vec<Obstacle> = (0..4)
-        .map(|q| {
-            let c = Quat::from_rotation_z(q as f32 * std::f32::consts::FRAC_PI_2) * Vec3::new(3.2, 0.0, 0.0);
-            Obstacle::Box { min: c - Vec3::new(0.4, 0.4, 0.0), max: c + Vec3::new(0.4, 0.4, 7.0) }
-        })
-        .collect();
+    let boxes = four_boxes(quat_turn);
     t.adapt(&Environment::with_obstacles(&boxes)).unwrap();
     let out = t.skeleton();
     let quarter = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
