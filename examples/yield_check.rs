@@ -1,8 +1,8 @@
 //! Pure, unmanaged stands of every shipped species planted at 1.5 m on a flat site at the
 //! species' niche optimum (1 ha unless `--side M` is given): top height H100, stems/ha N,
 //! basal area BA, quadratic mean DBH Dq (stems ≥ 7 cm DBH) and Reineke's SDI at ages 30, 50, 100,
-//! 120 and 150, against the species' maximum-density line and, for beech and spruce, the yield
-//! tables in tests/data/stands/.
+//! 120 and 150, against the species' maximum-density line and, for beech, spruce, the oaks and
+//! Scots pine, the yield tables in tests/data/stands/.
 //!
 //! `cargo run --release --example yield_check [-- --side 100 --species beech,norway_spruce --docs docs/density]`
 //!
@@ -15,15 +15,18 @@ use sylva::sim::density::{max_stems, sdi};
 use sylva::sim::pure_stand::{run_pure_stand, PureStandYear};
 use sylva::species::SpeciesLibrary;
 
-/// Yield-table rows (age, H, N, BA, Dq) of `file` (tests/data/stands/) at `site`.
+/// Yield-table rows (age, H, N, BA, Dq) of `file` (tests/data/stands/) at `site`: the
+/// ForestElementsR tables (columns site_index, age, `h_col`, n_ha, ba_m2_ha, d_q_cm) or the NW-FVA
+/// 2021 tables (Ekl, Alter, H100, N, G, Dg; `h_col` ignored).
 fn table(file: &str, site: f64, h_col: &str) -> Vec<[f64; 5]> {
     let Ok(text) = std::fs::read_to_string(format!("{}/tests/data/stands/{file}", env!("CARGO_MANIFEST_DIR"))) else {
         return Vec::new();
     };
     let mut lines = text.lines();
-    let head: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
-    let ix = |n: &str| head.iter().position(|h| *h == n);
-    let (Some(si), Some(a), Some(h), Some(n), Some(b), Some(d)) = (ix("site_index"), ix("age"), ix(h_col), ix("n_ha"), ix("ba_m2_ha"), ix("d_q_cm")) else {
+    let head: Vec<String> = lines.next().unwrap_or("").split(',').map(|h| h.trim_matches('"').to_string()).collect();
+    let ix = |n: &str| head.iter().position(|h| h == n);
+    let cols = if file.starts_with("nwfva") { ["Ekl", "Alter", "H100", "N", "G", "Dg"] } else { ["site_index", "age", h_col, "n_ha", "ba_m2_ha", "d_q_cm"] };
+    let (Some(si), Some(a), Some(h), Some(n), Some(b), Some(d)) = (ix(cols[0]), ix(cols[1]), ix(cols[2]), ix(cols[3]), ix(cols[4]), ix(cols[5])) else {
         return Vec::new();
     };
     lines
@@ -37,11 +40,17 @@ fn table(file: &str, site: f64, h_col: &str) -> Vec<[f64; 5]> {
 /// The tables each species is compared with: (label, rows).
 fn tables(id: &str) -> Vec<(&'static str, Vec<[f64; 5]>)> {
     match id {
-        "beech" => vec![("Wiedemann 1931 moderate, class I (h_q)", table("ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv", 1.0, "h_q_m"))],
+        "beech" => vec![
+            ("Wiedemann 1931 moderate, class I (h_q)", table("ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv", 1.0, "h_q_m")),
+            ("NW-FVA 2021, class I (H100; heavy thinning)", table("nwfva2021_yieldtable_et_bu.csv", 1.0, "")),
+        ],
         "norway_spruce" => vec![
             ("Wiedemann 1936/42 moderate, class I (h_q)", table("ForestElementsR_fe_ytable_spruce_wiedemann_moderate_1936_42.csv", 1.0, "h_q_m")),
             ("Assmann & Franz 1963 fully stocked, SI 36 (H100)", table("ForestElementsR_fe_ytable_spruce_assmann_franz_mean_yield_level_1963.csv", 36.0, "h_100_m")),
+            ("NW-FVA 2021, class I (H100; heavy thinning)", table("nwfva2021_yieldtable_et_fi.csv", 1.0, "")),
         ],
+        "sessile_oak" | "pedunculate_oak" => vec![("NW-FVA 2021 oak, class I (H100; heavy thinning)", table("nwfva2021_yieldtable_et_ei.csv", 1.0, ""))],
+        "scots_pine" => vec![("NW-FVA 2021 pine, class I (H100; heavy thinning)", table("nwfva2021_yieldtable_et_ki.csv", 1.0, ""))],
         _ => vec![],
     }
 }
@@ -96,7 +105,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(dir) = &docs {
         let cmd = format!("cargo run --release --example yield_check -- --side {side} --docs {}", dir.display());
         let text = format!(
-            "# Pure-stand density of every shipped species\n\nUnmanaged pure stands planted at 1.5 m (4,444/ha) at age 3 on a flat {side} m × {side} m site at the species' niche optimum (latitude 51° N), stems ≥ 7 cm DBH. RD: relative density against the species' maximum-density line (`life.density`; 1 = on the line). Tables are moderately thinned (Wiedemann) or fully stocked (Assmann & Franz); where no table is shipped, the maximum-density line's N and BA at the simulated Dq are given.\n\nMade by `{cmd}`.\n\n{md}"
+            "# Pure-stand density of every shipped species\n\nUnmanaged pure stands planted at 1.5 m (4,444/ha) at age 3 on a flat {side} m × {side} m site at the species' niche optimum (latitude 51° N), stems ≥ 7 cm DBH. RD: relative density against the species' maximum-density line (`life.density`; 1 = on the line). Tables are moderately thinned (Wiedemann), fully stocked (Assmann & Franz) or heavily thinned (NW-FVA 2021: today's crown thinnings, fewer and thicker stems); where no table is shipped, the maximum-density line's N and BA at the simulated Dq are given.\n\nMade by `{cmd}`.\n\n{md}"
         );
         let figs: String = ids.iter().map(|id| format!("\n### {id}\n\n![{id}]({id}.png)\n")).collect();
         std::fs::write(dir.join("table.md"), format!("{text}\n## Figures\n\nLeft: ln N against ln Dq (stems ≥ 7 cm) with the species' maximum-density line; right: basal area over age, with the yield tables where shipped.\n{figs}"))?;
@@ -109,7 +118,7 @@ fn figure(path: &std::path::Path, id: &str, rows: &[PureStandYear], sdi_max: f64
     let traj: Vec<(f64, f64)> = rows.iter().filter(|r| r.d7.n_ha > 0.0 && r.d7.dq_cm > 0.0).map(|r| (r.d7.dq_cm.ln(), r.d7.n_ha.ln())).collect();
     let (d0, d1) = traj.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| (a.0.min(p.0), a.1.max(p.0)));
     let line: Vec<(f64, f64)> = (0..=20).map(|k| d0 + (d1 - d0) * k as f64 / 20.0).map(|x| (x, max_stems(sdi_max, slope, x.exp()).ln())).collect();
-    let colors = [[200, 60, 30], [60, 60, 200]];
+    let colors = [[200, 60, 30], [60, 60, 200], [150, 40, 150]];
     let mut p1 = vec![
         Series { name: "Sylva, unmanaged (DBH ≥ 7 cm)".into(), points: traj, color: [30, 110, 40], markers: false },
         Series { name: format!("maximum density: SDI_max {sdi_max:.0}, slope {slope:.3}"), points: line, color: [0, 0, 0], markers: false },

@@ -11,8 +11,10 @@
 
 pub mod climate;
 pub mod conditions;
+pub mod edit;
 pub mod error;
 pub mod grid;
+pub mod gui;
 pub mod job;
 pub mod mesh;
 pub mod output;
@@ -22,5 +24,6 @@ pub mod sim;
 pub mod species;
 pub mod structure;
 pub mod terrain;
+pub mod view;
 
 pub use error::{Error, Result};

@@ -35,6 +35,10 @@ enum Command {
     Render(cli::render::RenderArgs),
     /// Render a timelapse of a simulation run.
     Timelapse(cli::render::TimelapseArgs),
+    /// Open a run directory in the interactive viewer (years, cameras, overlays, trees, stand table).
+    View(cli::view::ViewArgs),
+    /// Edit a species file with sliders, curves, a live tree preview and validation.
+    Edit(cli::view::EditArgs),
 }
 
 fn main() -> std::process::ExitCode {
@@ -55,6 +59,8 @@ fn main() -> std::process::ExitCode {
         Command::Tree(c) => cli::tree::run(c),
         Command::Render(a) => cli::render::render(a),
         Command::Timelapse(a) => cli::render::timelapse(a),
+        Command::View(a) => cli::view::view(a),
+        Command::Edit(a) => cli::view::edit(a),
     };
     match res {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -4,7 +4,8 @@
 //! (`crate::a::b`, `super::…`, `sylva::…` in the binary, grouped `crate::{a, b::c}` imports
 //! included; comments and the `#[cfg(test)]` tail of a file excluded) and checks:
 //! 1. no core module (`grid`, `rng`, `climate`, `terrain`, `conditions`, `species`, `sim`,
-//!    `structure`, `mesh`) names a shell module (`output`, `render`, `job`, `cli`, `app`);
+//!    `structure`, `mesh`) names a shell module (`output`, `render`, `job`, `cli`, `app`, and the
+//!    windows `gui`, `view`, `edit`);
 //! 2. no two top-level modules name each other, directly or through a chain (no cycle);
 //! 3. no two second-level modules (`sim::world`, `render::scene`, `terrain::fields`, …) form a
 //!    cycle either (edges between a module and its own parent — `mod` declarations and
@@ -14,7 +15,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 const CORE: &[&str] = &["grid", "rng", "climate", "terrain", "conditions", "species", "sim", "structure", "mesh"];
-const SHELL: &[&str] = &["output", "render", "job", "cli", "app"];
+const SHELL: &[&str] = &["output", "render", "job", "cli", "app", "gui", "view", "edit"];
 
 /// Module path of a source file: `src/sim/phases/growth.rs` → `[sim, phases, growth]`,
 /// `src/sim/mod.rs` → `[sim]`, `src/lib.rs` and `src/main.rs` → `[]`.

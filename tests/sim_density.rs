@@ -8,18 +8,19 @@
 //!   thinning holds 0.6–0.8 of the maximum basal area and removes mostly small stems, so the
 //!   unmanaged stand carries more stems (N 0.7–2.5 × the table; the lower bound allows for the
 //!   planting density of 4,444/ha against Wiedemann's 4,600 stems from dense natural
-//!   regeneration at age 30), a higher basal area (BA 0.9–1.7 ×; beech 2.0 × at age 30, when
-//!   the table's dense young stand is still thin) and a similar quadratic mean DBH (Dq 0.6–1.3 ×;
-//!   beech 1.6 × at age 30, for the same reason); top height H100 against the table's mean
+//!   regeneration at age 30), a higher basal area (BA 0.9–1.7 ×; beech 0.9–1.6 ×, and 2.2 × at age 30, when
+//!   the table's dense young stand is still thin: see the test) and a similar quadratic mean DBH (Dq 0.6–1.3 ×;
+//!   beech 1.7 × at age 30, for the same reason); top height H100 against the table's mean
 //!   height h_q (0.9–1.4 ×: H100 exceeds h_q by 5–15 % in closed stands and more in young ones,
 //!   and height growth depends little on density). Against Assmann & Franz's fully stocked
 //!   maximum (ages 50–120) the basal area must agree within ±20 %, N within 0.7–1.6 × and Dq
 //!   within 0.7–1.3 ×. Beech, with diameter growth following the closed-stand allometry
 //!   (src/sim/phases/growth.rs), is held tighter: N 0.7–1.6 × and Dq 0.8–1.6 ×.
-//! - Every shipped species, pure, and a mixed stand (beech, sessile oak, sycamore, birch planted,
-//!   pine seed rain; at least two species with ≥ 10 % of the basal area): never more than 10 % above the species'
+//! - Every shipped species, pure, and in three mixed stands (all 17 species; the first, beech,
+//!   sessile oak, sycamore, birch planted with pine seed rain, with at least two species holding
+//!   ≥ 10 % of the basal area for 100 of 147 years): never more than 10 % above the species'
 //!   maximum-density line (relative density RD ≤ 1.1, stems ≥ 7 cm) nor above 80 m²/ha basal area
-//!   (all stems), every year to age 150.
+//!   (all stems), every year to age 150; and every pure stand comes within 15 % of its line.
 //! - Shade-tolerant silver fir and Norway spruce stand denser than light-demanding larch, birch,
 //!   Scots pine and the oaks.
 use sylva::sim::density::{stand_density, sdi, REINEKE_SLOPE};
@@ -68,7 +69,15 @@ fn beech_against_wiedemann_1931_class_one() {
     let tab = table("ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv", 1.0, &["h_q_m", "n_ha", "ba_m2_ha", "d_q_cm"]);
     for age in [30.0, 50.0, 100.0, 120.0] {
         let t = &tab.iter().find(|t| t.0 == age).unwrap().1;
-        check("beech/Wiedemann", at(&rows, age), t, (0.9, 1.4), (0.7, 1.6), (0.9, 2.0), (0.8, 1.6));
+        // age 30: the table's dense young stand (4,600 stems/ha at Dq 7.4 cm) holds SDI 521, 0.58 of
+        // the maximum line (SDI_max 900); a stand on its line at the simulated Dq (≈ 12 cm) carries
+        // 1.73 × (12 / 7.4)^(2 − 1.789) = 1.9 × the table's basal area, up to 2.1 × within the 10 %
+        // allowed above the line; older tables hold 0.65–0.8 of the line: BA 0.9–1.6 ×. Dq at
+        // age 30: a planted stand that has thinned itself to 3,500 stems/ha on its line has
+        // Dq = 25 (900 / 3,500)^(1 / 1.789) = 11.7 cm (1.58 × the table's 7.4 cm), 12.4 cm
+        // (1.68 ×) 10 % above it: Dq 0.8–1.7 × at 30, 0.8–1.6 × later.
+        let (ba, dq) = if age < 40.0 { ((0.9, 2.2), (0.8, 1.7)) } else { ((0.9, 1.6), (0.8, 1.6)) };
+        check("beech/Wiedemann", at(&rows, age), t, (0.9, 1.4), (0.7, 1.6), ba, dq);
     }
 }
 
@@ -99,29 +108,27 @@ fn no_pure_stand_exceeds_its_maximum_density() {
         eprintln!("{:<18} max RD {:.2} at age {} (N {:.0}, Dq {:.1}); max BA {ba:.1}", sp.id, worst.d7.rd, worst.age, worst.d7.n_ha, worst.d7.dq_cm);
         assert!(worst.d7.rd <= 1.1, "{}: RD {:.2} at age {} (N {:.0}, Dq {:.1} cm, SDI_max {})", sp.id, worst.d7.rd, worst.age, worst.d7.n_ha, worst.d7.dq_cm, sp.life.density.sdi_max);
         assert!(ba <= 80.0, "{}: basal area {ba:.1} m²/ha", sp.id);
-        // the stand reaches its line (self-thinning happens, not just sparse growth) for the
-        // species that form closed stands in the tables
-        if ["beech", "norway_spruce", "scots_pine", "sessile_oak", "silver_fir", "european_larch"].contains(&sp.id.as_str()) {
-            assert!(worst.d7.rd >= 0.85, "{}: never within 15 % of its line (RD {:.2})", sp.id, worst.d7.rd);
-        }
+        // every species' stand reaches its line (self-thinning happens, not just sparse growth),
+        // the short-lived aspen, rowan and hornbeam included
+        assert!(worst.d7.rd >= 0.85, "{}: never within 15 % of its line (RD {:.2})", sp.id, worst.d7.rd);
     }
 }
 
-#[test]
-fn mixed_stand_stays_below_its_densest_line() {
-    // beech, sessile oak, sycamore and birch planted on interleaved grids, with pine seed rain
+/// Runs a mixed stand of `planted` (species, spacing m) with seed rain of `rain` (species,
+/// seeds/ha/yr) on a 70 m × 70 m site at 300 m for 147 years; asserts that the basal area (all
+/// stems) never exceeds 80 m²/ha and the relative density never exceeds 1.1 (see the test below);
+/// returns (worst relative density, years with ≥ 2 species holding ≥ 10 % of the basal area).
+fn mixed_run(name: &str, planted: &[(&str, f64)], rain: &[(&str, f64)]) -> (f64, u32) {
     let lib = common::embedded();
-    let toml = common::ScenarioToml::new("mixed", 147, 5)
-        .species(&["beech", "sessile_oak", "sycamore", "silver_birch", "scots_pine"])
-        .line("climate = { latitude_deg = 51.0 }")
-        .uniform(7, 7, 10.0, 300.0)
-        .planted("beech", 2.5, 3.0)
-        .planted("sessile_oak", 2.2, 3.0)
-        .planted("sycamore", 3.1, 3.0)
-        .planted("silver_birch", 3.7, 3.0)
-        .seed_rain("scots_pine", 1000.0)
-        .build();
-    let (sc, mut w) = common::world_with(&toml, &lib);
+    let ids: Vec<&str> = planted.iter().chain(rain).map(|p| p.0).collect();
+    let mut toml = common::ScenarioToml::new(name, 147, 5).species(&ids).line("climate = { latitude_deg = 51.0 }").uniform(7, 7, 10.0, 300.0);
+    for (id, sp) in planted {
+        toml = toml.planted(id, *sp, 3.0);
+    }
+    for (id, r) in rain {
+        toml = toml.seed_rain(id, *r);
+    }
+    let (sc, mut w) = common::world_with(&toml.build(), &lib);
     let mut worst = (0.0f64, 0u32, 0.0f64, 0.0f64);
     let mut mixed_years = 0;
     for y in 0..147 {
@@ -136,7 +143,7 @@ fn mixed_stand_stays_below_its_densest_line() {
         if row.share_ba.iter().filter(|&&x| x >= 0.1).count() >= 2 {
             mixed_years += 1;
         }
-        assert!(all.ba_m2_ha <= 80.0, "year {y}: BA {:.1}", all.ba_m2_ha);
+        assert!(all.ba_m2_ha <= 80.0, "{name} year {y}: BA {:.1}", all.ba_m2_ha);
         if d.densest_sdi_max > 0.0 && q > worst.0 {
             worst = (q, y, d.sdi, d.densest_sdi_max);
         }
@@ -145,11 +152,25 @@ fn mixed_stand_stays_below_its_densest_line() {
         v[s as usize] += 1;
         v
     });
-    eprintln!("mixed: worst relative density {:.2} in year {} (SDI {:.0}, densest {:.0}); stems by species {shares:?}", worst.0, worst.1, worst.2, worst.3);
-    assert!(worst.0 <= 1.1, "mixed stand relative density {:.2} > 1.1 (SDI {:.0}, densest line {:.0}) in year {}", worst.0, worst.2, worst.3, worst.1);
-    eprintln!("years with ≥ 2 species holding ≥ 10 % of the basal area: {mixed_years}");
+    eprintln!("{name}: worst relative density {:.2} in year {} (SDI {:.0}, densest {:.0}); stems by species {shares:?}; {mixed_years} years with ≥ 2 species holding ≥ 10 % of the basal area", worst.0, worst.1, worst.2, worst.3);
+    assert!(worst.0 <= 1.1, "{name}: relative density {:.2} > 1.1 (SDI {:.0}, densest line {:.0}) in year {}", worst.0, worst.2, worst.3, worst.1);
+    (worst.0, mixed_years)
+}
+
+/// Mixed stands of all 17 shipped species, in three mixtures: (a) beech, sessile oak, sycamore
+/// and birch planted on interleaved grids with pine seed rain (the mixture that must stay mixed
+/// for 100 of 147 years and close its canopy); (b) the conifers and shade-tolerant broadleaves:
+/// spruce, silver fir, larch, lime, hornbeam, ash; (c) the wet-site and minor broadleaves:
+/// black alder, aspen, rowan, wych elm, Norway maple, pedunculate oak. None may exceed its
+/// densest line by more than 10 % nor 80 m²/ha.
+#[test]
+fn mixed_stands_stay_below_their_densest_line() {
+    let (worst, mixed_years) = mixed_run("mixed", &[("beech", 2.5), ("sessile_oak", 2.2), ("sycamore", 3.1), ("silver_birch", 3.7)], &[("scots_pine", 1000.0)]);
     assert!(mixed_years >= 100, "stand mixed in only {mixed_years} of 147 years");
-    assert!(worst.0 > 0.5, "mixed stand never closed (SDI/SDI_max {:.2})", worst.0);
+    assert!(worst > 0.5, "mixed stand never closed (SDI/SDI_max {worst:.2})");
+    let (w2, _) = mixed_run("conifers", &[("norway_spruce", 2.5), ("silver_fir", 2.9), ("european_larch", 3.3), ("small_leaved_lime", 3.7), ("hornbeam", 4.1), ("ash", 4.3)], &[]);
+    let (w3, _) = mixed_run("minor", &[("black_alder", 2.5), ("aspen", 2.9), ("rowan", 3.3), ("wych_elm", 3.7), ("norway_maple", 4.1), ("pedunculate_oak", 4.3)], &[]);
+    assert!(w2 > 0.5 && w3 > 0.5, "mixtures never closed ({w2:.2}, {w3:.2})");
 }
 
 #[test]

@@ -6,6 +6,7 @@ pub mod simulate;
 pub mod species;
 pub mod terrain;
 pub mod tree;
+pub mod view;
 
 /// Sets up `tracing` to stderr: warnings by default, `-v` info, `-vv` debug; `RUST_LOG` wins.
 pub fn init_logging(verbose: u8) {

@@ -11,14 +11,15 @@ pub type TreeId = u64;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub enum DeathCause {
     /// Senescence: the tree reached its species' maximum age, or the intrinsic (background)
-    /// mortality draw of Bugmann 2001 (p = 4.605 / max_age per year) hit a tree at or above
+    /// mortality draw (an age-dependent hazard with 1 % survival to max_age, as Bugmann 2001's
+    /// constant 4.605 / max_age per year: `sim::phases::mortality::p_intrinsic`) hit a tree at or above
     /// [`SENESCENT_AGE_SHARE`] of its maximum age.
     Age,
     /// Stress: suppressed growth over several years (JABOWA/ForClim tradition).
     Stress,
     /// Windthrow on exposed sites.
     Wind,
-    /// Background: the intrinsic random mortality draw (p = 4.605 / max_age per year,
+    /// Background: the intrinsic random mortality draw (`sim::phases::mortality::p_intrinsic`,
     /// Bugmann 2001) hit a tree younger than [`SENESCENT_AGE_SHARE`] of its maximum age —
     /// accidents, pathogens, lightning and other causes the model does not resolve.
     Background,

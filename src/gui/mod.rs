@@ -1,0 +1,299 @@
+//! What the two windows of Sylva share (`sylva view`, [`crate::view`]; `sylva edit`,
+//! [`crate::edit`]): opening an eframe window on wgpu with the device limits the renderer needs,
+//! a clear error instead of a panic when there is no display or no adapter, the 3-D viewport
+//! (the scene drawn by [`crate::render::renderer::Renderer::render_to_view`] into an offscreen
+//! texture that egui shows as an image), and `--screenshot PATH --frames N` (render N frames,
+//! write a PNG of the whole window, close).
+//!
+//! A shell module: the core names none of it (`tests/layers.rs`).
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+use eframe::{egui, egui_wgpu};
+
+use crate::render::camera::Camera;
+use crate::render::renderer::Renderer;
+use crate::render::scene::Scene;
+
+/// Errors of the windows.
+#[derive(Debug, thiserror::Error)]
+pub enum GuiError {
+    /// Neither `DISPLAY` (X11) nor `WAYLAND_DISPLAY` is set.
+    #[error("no display: neither DISPLAY nor WAYLAND_DISPLAY is set (on a machine without a screen run under a virtual one, e.g. `xvfb-run -s '-screen 0 1280x800x24' sylva …`)")]
+    NoDisplay,
+    /// wgpu found no adapter that can draw into the window.
+    #[error("no graphics adapter can draw into the window ({0}); on a machine without a GPU install Mesa's software Vulkan driver (`apt-get install mesa-vulkan-drivers`)")]
+    NoAdapter(String),
+    /// The window system or the event loop failed.
+    #[error("the window could not be opened: {0}")]
+    Window(String),
+    /// The renderer could not be built on the window's device.
+    #[error(transparent)]
+    Render(#[from] crate::render::RenderError),
+    /// Writing the screenshot failed.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
+    /// The screenshot did not arrive.
+    #[error("screenshot {path}: {message}")]
+    Screenshot {
+        /// The PNG that was to be written.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+}
+
+/// Result of the windows.
+pub type Result<T> = std::result::Result<T, GuiError>;
+
+/// How a window is opened.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WindowOptions {
+    /// Inner size in logical points (width, height).
+    pub size: (f32, f32),
+    /// `--screenshot PATH`: write a PNG of the whole window after [`WindowOptions::frames`]
+    /// frames, then close.
+    pub screenshot: Option<PathBuf>,
+    /// `--frames N` (≥ 1): frames drawn before the screenshot.
+    pub frames: u32,
+}
+
+impl Default for WindowOptions {
+    fn default() -> Self {
+        WindowOptions { size: (1280.0, 800.0), screenshot: None, frames: 5 }
+    }
+}
+
+/// Fails with [`GuiError::NoDisplay`] when no display server is named in the environment
+/// (`DISPLAY` or `WAYLAND_DISPLAY`); winit would otherwise abort deep in its setup.
+pub fn check_display() -> Result<()> {
+    let set = |k: &str| std::env::var_os(k).is_some_and(|v| !v.is_empty());
+    if cfg!(target_os = "linux") && !set("DISPLAY") && !set("WAYLAND_DISPLAY") {
+        return Err(GuiError::NoDisplay);
+    }
+    Ok(())
+}
+
+/// Device limits for the renderer: wgpu's defaults with the adapter's own buffer sizes (the
+/// instance and culling buffers of a large forest) and storage buffers per stage (the compute
+/// culling pass needs 5), as the headless renderer asks.
+fn device_descriptor(adapter: &wgpu::Adapter) -> wgpu::DeviceDescriptor<'static> {
+    let al = adapter.limits();
+    let base = if adapter.get_info().backend == wgpu::Backend::Gl { wgpu::Limits::downlevel_webgl2_defaults() } else { wgpu::Limits::default() };
+    let mut limits = base.using_resolution(al.clone());
+    limits.max_storage_buffer_binding_size = al.max_storage_buffer_binding_size;
+    limits.max_buffer_size = al.max_buffer_size;
+    limits.max_storage_buffers_per_shader_stage = al.max_storage_buffers_per_shader_stage;
+    wgpu::DeviceDescriptor { label: Some("sylva window"), required_limits: limits, ..Default::default() }
+}
+
+/// Opens a window titled `title` running the app that `make` builds (given the egui context and
+/// the window's wgpu render state), and returns when it closes.
+///
+/// # Errors
+/// [`GuiError::NoDisplay`] without a display, [`GuiError::NoAdapter`] when wgpu finds no
+/// adapter, [`GuiError::Window`] for other window-system failures, and any error the app
+/// reported through the shared `failure` slot (e.g. a screenshot that could not be written).
+pub fn run_window<A: eframe::App + 'static>(title: &str, opts: &WindowOptions, make: impl FnOnce(&eframe::CreationContext<'_>, Arc<Mutex<Option<GuiError>>>) -> Result<A>) -> Result<()> {
+    check_display()?;
+    let failure: Arc<Mutex<Option<GuiError>>> = Arc::new(Mutex::new(None));
+    let setup = egui_wgpu::WgpuSetupCreateNew { device_descriptor: Arc::new(device_descriptor), ..egui_wgpu::WgpuSetupCreateNew::without_display_handle() };
+    let native = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default().with_title(title).with_inner_size([opts.size.0, opts.size.1]).with_app_id("sylva"),
+        renderer: eframe::Renderer::Wgpu,
+        wgpu_options: egui_wgpu::WgpuConfiguration { wgpu_setup: egui_wgpu::WgpuSetup::CreateNew(setup), ..Default::default() },
+        ..Default::default()
+    };
+    let f2 = failure.clone();
+    let res = eframe::run_native(
+        title,
+        native,
+        Box::new(move |cc| {
+            let app = make(cc, f2.clone()).map_err(|e| -> Box<dyn std::error::Error + Send + Sync> { Box::new(e) })?;
+            Ok(Box::new(app))
+        }),
+    );
+    if let Some(e) = failure.lock().ok().and_then(|mut f| f.take()) {
+        return Err(e);
+    }
+    match res {
+        Ok(()) => Ok(()),
+        Err(eframe::Error::Wgpu(e)) => Err(GuiError::NoAdapter(e.to_string())),
+        Err(eframe::Error::AppCreation(e)) => match e.downcast::<GuiError>() {
+            Ok(g) => Err(*g),
+            Err(e) => Err(GuiError::Window(e.to_string())),
+        },
+        Err(e) => Err(GuiError::Window(e.to_string())),
+    }
+}
+
+/// The `--screenshot` state machine of a window: counts frames, asks egui for a screenshot of
+/// the whole window after the last one, writes it as PNG and closes the window.
+pub struct Screenshot {
+    path: PathBuf,
+    frames: u32,
+    frame: u32,
+    requested_at: Option<u32>,
+    image: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
+    failure: Arc<Mutex<Option<GuiError>>>,
+    done: bool,
+}
+
+impl Screenshot {
+    /// A screenshot of the window into `path` after `frames` frames (at least 1); errors go to
+    /// `failure`, which [`run_window`] returns.
+    pub fn new(path: &Path, frames: u32, failure: Arc<Mutex<Option<GuiError>>>) -> Self {
+        Screenshot { path: path.to_path_buf(), frames: frames.max(1), frame: 0, requested_at: None, image: Arc::new(Mutex::new(None)), failure, done: false }
+    }
+
+    /// Whether the window is still drawing the frames before its screenshot.
+    pub fn pending(&self) -> bool {
+        !self.done
+    }
+
+    /// Call once per frame, after the UI is laid out.
+    pub fn frame(&mut self, ctx: &egui::Context) {
+        if self.done {
+            return;
+        }
+        self.frame += 1;
+        ctx.request_repaint();
+        let got = self.image.lock().ok().and_then(|mut g| g.take());
+        if let Some(img) = got {
+            let r = write_color_image(&self.path, &img);
+            if let Err(e) = r {
+                if let Ok(mut f) = self.failure.lock() {
+                    *f = Some(e);
+                }
+            } else {
+                tracing::info!("screenshot {}×{} → {}", img.size[0], img.size[1], self.path.display());
+            }
+            self.done = true;
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            return;
+        }
+        match self.requested_at {
+            None if self.frame >= self.frames => {
+                let slot = self.image.clone();
+                ctx.request_screenshot(move |img| {
+                    if let Ok(mut s) = slot.lock() {
+                        *s = Some(img);
+                    }
+                });
+                self.requested_at = Some(self.frame);
+            }
+            Some(at) if self.frame > at + 120 => {
+                if let Ok(mut f) = self.failure.lock() {
+                    *f = Some(GuiError::Screenshot { path: self.path.clone(), message: "the window system returned no image within 120 frames".into() });
+                }
+                self.done = true;
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Writes an egui screenshot (sRGB, unmultiplied alpha made opaque) as PNG (atomically).
+///
+/// # Errors
+/// [`GuiError::Output`] naming the file.
+pub fn write_color_image(path: &Path, img: &egui::ColorImage) -> Result<()> {
+    let [w, h] = img.size;
+    let mut out = image::RgbaImage::new(w as u32, h as u32);
+    for (p, c) in out.pixels_mut().zip(&img.pixels) {
+        *p = image::Rgba([c.r(), c.g(), c.b(), 255]);
+    }
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| crate::output::OutputError::io(dir, e))?;
+    }
+    crate::output::pictures::write_png(path, &out)?;
+    Ok(())
+}
+
+/// The 3-D viewport of a window: the renderer on the window's device, drawing into an offscreen
+/// texture of the viewport's size in pixels that egui shows as an image.
+///
+/// The texture is `Rgba8Unorm` (what egui samples, its bytes read as sRGB-encoded values) and
+/// the renderer draws through an `Rgba8UnormSrgb` view of it, so its linear output is encoded
+/// to sRGB on write exactly as in the stills.
+pub struct Viewport3d {
+    /// The renderer (its `lod` parameters can be tuned).
+    pub renderer: Renderer,
+    device: wgpu::Device,
+    egui_renderer: Arc<egui::mutex::RwLock<egui_wgpu::Renderer>>,
+    target: Option<(wgpu::Texture, wgpu::TextureView, egui::TextureId, (u32, u32))>,
+    /// Milliseconds the last [`Viewport3d::draw`] took on the CPU side (culling, uploads,
+    /// command recording and submission).
+    pub last_ms: f32,
+}
+
+impl Viewport3d {
+    /// The viewport on the window's render state.
+    ///
+    /// # Errors
+    /// [`GuiError::Render`] when the renderer's pipelines cannot be built on this device.
+    pub fn new(rs: &egui_wgpu::RenderState) -> Result<Self> {
+        let renderer = Renderer::from_device(rs.device.clone(), rs.queue.clone(), wgpu::TextureFormat::Rgba8UnormSrgb)?;
+        Ok(Viewport3d { renderer, device: rs.device.clone(), egui_renderer: rs.renderer.clone(), target: None, last_ms: 0.0 })
+    }
+
+    /// Draws `scene` from `camera` at `w × h` pixels and returns the egui texture to show.
+    ///
+    /// # Errors
+    /// [`GuiError::Render`] when the frame fails.
+    pub fn draw(&mut self, scene: &Scene, camera: &Camera, w: u32, h: u32) -> Result<egui::TextureId> {
+        let (w, h) = (w.max(16), h.max(16));
+        let t0 = std::time::Instant::now();
+        if self.target.as_ref().map(|t| t.3) != Some((w, h)) {
+            let tex = self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some("viewport"),
+                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba8Unorm,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+                view_formats: &[wgpu::TextureFormat::Rgba8UnormSrgb],
+            });
+            let srgb = tex.create_view(&wgpu::TextureViewDescriptor { format: Some(wgpu::TextureFormat::Rgba8UnormSrgb), ..Default::default() });
+            let plain = tex.create_view(&Default::default());
+            let mut er = self.egui_renderer.write();
+            let id = match self.target.take() {
+                Some((_, _, id, _)) => {
+                    er.update_egui_texture_from_wgpu_texture(&self.device, &plain, wgpu::FilterMode::Linear, id);
+                    id
+                }
+                None => er.register_native_texture(&self.device, &plain, wgpu::FilterMode::Linear),
+            };
+            self.target = Some((tex, srgb, id, (w, h)));
+        }
+        let Some((_, view, id, _)) = self.target.as_ref() else { return Err(GuiError::Window("viewport texture missing".into())) };
+        self.renderer.render_to_view(scene, camera, view, w, h)?;
+        self.last_ms = t0.elapsed().as_secs_f32() * 1000.0;
+        Ok(*id)
+    }
+}
+
+/// Frame timing shown in the windows: an exponential moving average of the time between frames.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FrameClock {
+    last: Option<std::time::Instant>,
+    /// Smoothed time between frames (ms).
+    pub frame_ms: f32,
+}
+
+impl FrameClock {
+    /// Records a new frame; returns the seconds since the previous one (0 on the first).
+    pub fn tick(&mut self) -> f32 {
+        let now = std::time::Instant::now();
+        let dt = self.last.map_or(0.0, |l| (now - l).as_secs_f32());
+        self.last = Some(now);
+        if dt > 0.0 {
+            let ms = dt * 1000.0;
+            self.frame_ms = if self.frame_ms == 0.0 { ms } else { 0.9 * self.frame_ms + 0.1 * ms };
+        }
+        dt
+    }
+}

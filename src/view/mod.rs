@@ -1,0 +1,616 @@
+//! `sylva view RUN_DIR`: the interactive viewer of a run directory (issue 15).
+//!
+//! The landscape is drawn by the same renderer as the stills ([`crate::render`], through
+//! [`crate::gui::Viewport3d`]); orbit, pan, zoom and fly cameras ([`camera`]); a year slider with
+//! play/pause, the trees interpolated between snapshots as the timelapse is ([`data`]);
+//! overlays of every condition map and of the species and basal-area maps on the terrain; a
+//! click on a tree shows its species, age, height, DBH, crown and fate; the stand table is
+//! plotted beside the view (egui_plot); the help panel (F1 or H) lists the shortcuts; the frame
+//! time is shown in the top bar.
+//!
+//! A shell module: the core names none of it (`tests/layers.rs`).
+
+pub mod camera;
+pub mod data;
+
+use std::sync::{Arc, Mutex};
+
+use eframe::egui;
+use glam::Vec3;
+
+use crate::gui::{self, FrameClock, GuiError, Screenshot, Viewport3d, WindowOptions};
+use crate::job::scene;
+use crate::render::scene::{Scene, Sun, TreeInstance};
+use crate::species::Season;
+use camera::{CameraRig, Mode};
+use data::{Overlay, RunData, TreeInfo};
+
+/// Keyboard shortcuts of the viewer, as the help panel lists them.
+pub const SHORTCUTS: &[(&str, &str)] = &[
+    ("Space", "play / pause the years"),
+    ("Left / Right arrow", "previous / next snapshot"),
+    ("Home / End", "first / last snapshot"),
+    ("drag (left)", "orbit (orbit camera) or look around (fly camera)"),
+    ("drag (right or middle)", "pan"),
+    ("wheel", "zoom (orbit) or move forward (fly)"),
+    ("click", "select the tree under the pointer"),
+    ("W A S D", "move forward, left, back, right (Shift: faster)"),
+    ("Q / E", "move down / up"),
+    ("O / F", "orbit / fly camera"),
+    ("R", "reset the view"),
+    ("V", "next overlay"),
+    ("Esc", "clear the selection"),
+    ("F1 or H", "show / hide this help"),
+];
+
+/// Stand-table columns offered for the plot (when present in the run's table).
+const PLOT_COLUMNS: &[(&str, &str)] = &[
+    ("basal_area_m2_ha", "basal area (m²/ha)"),
+    ("stems_ha", "stems (/ha)"),
+    ("mean_height_m", "mean height (m)"),
+    ("top_height_m", "top height (m)"),
+    ("qmd_cm", "quadratic mean DBH (cm)"),
+    ("regeneration_ha", "regeneration (stems/ha)"),
+];
+
+/// The viewer: run data, scene, camera, time and selection. [`Viewer::ui`] lays out the whole
+/// window; without a GPU viewport (tests) the 3-D view is left blank but still takes clicks.
+pub struct Viewer {
+    /// The run shown.
+    pub data: RunData,
+    scene: Scene,
+    base_colours: Vec<[f32; 3]>,
+    gpu: Option<Viewport3d>,
+    /// Camera.
+    pub rig: CameraRig,
+    /// The year shown (between the first and last snapshot).
+    pub year: f32,
+    /// Whether the years play.
+    pub playing: bool,
+    /// Years per second while playing.
+    pub speed: f32,
+    /// Season drawn.
+    pub season: Season,
+    /// Overlay painted on the terrain.
+    pub overlay: Overlay,
+    painted: Option<(Overlay, i64)>,
+    shown: Option<(i64, Season)>,
+    current: Vec<TreeInstance>,
+    /// The selected tree's id.
+    pub selected: Option<u64>,
+    /// What is known of the selected tree.
+    pub info: Option<TreeInfo>,
+    /// Whether the help panel is open.
+    pub show_help: bool,
+    plot_column: String,
+    clock: FrameClock,
+    screenshot: Option<Screenshot>,
+    /// Last error shown in the status line.
+    pub status: Option<String>,
+    view_rect: egui::Rect,
+    pixels_per_point: f32,
+}
+
+impl Viewer {
+    /// The viewer of `data`, drawing the sea at `sea_level_m` where cells are water, with a GPU
+    /// viewport when given.
+    ///
+    /// # Errors
+    /// [`GuiError::Render`] when the terrain mesh cannot be built.
+    pub fn new(data: RunData, sea_level_m: f32, gpu: Option<Viewport3d>) -> gui::Result<Self> {
+        let terrain = scene::terrain_mesh(&data.site, 10.0, sea_level_m).map_err(|e| GuiError::Render(crate::render::RenderError::Input(e)))?;
+        let prototypes = pool_prototypes(&data.library, &data.pool);
+        let site = &data.site;
+        let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
+        let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));
+        let (lo, hi) = scene.terrain.bounds();
+        let rig = CameraRig::framing(lo, hi);
+        let base_colours = scene.terrain.colors.clone();
+        let mut gpu = gpu;
+        if let Some(g) = gpu.as_mut() {
+            // as the stills (`job::pictures::Stage`): lower switch sizes keep mid-distance crowns as
+            // meshes, and no far-field triangle budget (only trees under 6 px go to the canopy
+            // layer); the default budget of 6 M triangles per frame stays
+            g.renderer.lod.switch_px = [110.0, 45.0, 18.0];
+            g.renderer.lod.max_geometry_triangles = 0;
+        }
+        let year = data.span().1 as f32;
+        let plot_column = PLOT_COLUMNS.iter().map(|c| c.0).find(|c| data.stand_table.columns.iter().any(|x| x == c)).unwrap_or("basal_area_m2_ha").to_string();
+        Ok(Viewer {
+            data,
+            scene,
+            base_colours,
+            gpu,
+            rig,
+            year,
+            playing: false,
+            speed: 10.0,
+            season: Season::Summer,
+            overlay: Overlay::None,
+            painted: None,
+            shown: None,
+            current: Vec::new(),
+            selected: None,
+            info: None,
+            show_help: false,
+            plot_column,
+            clock: FrameClock::default(),
+            screenshot: None,
+            status: None,
+            view_rect: egui::Rect::NOTHING,
+            pixels_per_point: 1.0,
+        })
+    }
+
+    /// Takes a `--screenshot` after the given frames.
+    pub fn with_screenshot(mut self, s: Screenshot) -> Self {
+        self.screenshot = Some(s);
+        self
+    }
+
+    /// The trees drawn now (interpolated at [`Viewer::year`]).
+    pub fn trees(&self) -> &[TreeInstance] {
+        &self.current
+    }
+
+    /// The overlays in menu order with their names.
+    pub fn overlays(&self) -> Vec<(Overlay, String)> {
+        let mut v = vec![(Overlay::None, "land cover".to_string())];
+        v.extend(self.data.layers.iter().enumerate().map(|(k, l)| (Overlay::Condition(k), format!("{} ({})", l.title, l.units))));
+        v.push((Overlay::Species, "species (dominant by basal area)".into()));
+        v.push((Overlay::BasalArea, "basal area (m²/ha)".into()));
+        v
+    }
+
+    /// Brings the scene up to date with the year, season and overlay.
+    pub fn refresh(&mut self) {
+        let key = ((self.year * 1000.0).round() as i64, self.season);
+        if self.shown != Some(key) {
+            match self.data.instances_at(self.year, self.season) {
+                Ok(v) => self.current = v,
+                Err(e) => self.status = Some(e.to_string()),
+            }
+            self.scene.sun = Sun::from_position(self.data.site.geo.latitude_deg as f32, scene::season_day(self.season), 14.0);
+            self.shown = Some(key);
+            if let Some(id) = self.selected {
+                self.info = self.data.tree_info(id, self.year).ok().flatten();
+            }
+        }
+        // species and basal-area overlays change with the snapshot shown, condition maps never
+        let (k0, k1, t) = self.data.bracket(self.year);
+        let snap = match self.overlay {
+            Overlay::Species | Overlay::BasalArea => self.data.years[if t >= 0.5 { k1 } else { k0 }] as i64,
+            _ => -1,
+        };
+        if self.painted != Some((self.overlay, snap)) {
+            let colours = match self.data.overlay_field(self.overlay, self.year) {
+                Ok(Some((g, cell, ramp, range))) => data::overlay_colours(&self.scene.terrain.positions, &self.base_colours, &g, cell, self.data.site.extent_m().1, ramp, range, self.overlay == Overlay::Species),
+                Ok(None) => self.base_colours.clone(),
+                Err(e) => {
+                    self.status = Some(e.to_string());
+                    self.base_colours.clone()
+                }
+            };
+            self.scene.terrain.colors = colours;
+            self.scene.terrain_changed();
+            self.painted = Some((self.overlay, snap));
+        }
+    }
+
+    /// Moves to year `y` (clamped to the snapshots).
+    pub fn set_year(&mut self, y: f32) {
+        let (a, b) = self.data.span();
+        self.year = y.clamp(a as f32, b as f32);
+    }
+
+    fn step_snapshot(&mut self, dir: i32) {
+        let ys = &self.data.years;
+        let y = self.year;
+        let next = if dir > 0 { ys.iter().map(|&v| v as f32).find(|&v| v > y + 1e-3) } else { ys.iter().rev().map(|&v| v as f32).find(|&v| v < y - 1e-3) };
+        if let Some(v) = next {
+            self.year = v;
+        }
+    }
+
+    /// Selects the tree under viewport pixel `(px, py)` (points from the viewport's top left);
+    /// returns its id.
+    pub fn pick_at(&mut self, px: f32, py: f32) -> Option<u64> {
+        let (w, h) = (self.view_rect.width(), self.view_rect.height());
+        let (o, d) = self.rig.ray(px, py, w, h);
+        // trees faded out to nothing (dead between the snapshots shown) are not hit
+        let seen: Vec<&TreeInstance> = self.current.iter().filter(|t| t.opacity > 0.05).collect();
+        let trees: Vec<(Vec3, f32, f32)> = seen.iter().map(|t| (Vec3::from(t.position), t.height, t.crown_radius)).collect();
+        let hit = camera::pick(o, d, &trees).map(|i| seen[i].id);
+        self.selected = hit;
+        self.info = match hit {
+            Some(id) => self.data.tree_info(id, self.year).ok().flatten(),
+            None => None,
+        };
+        hit
+    }
+
+    /// Where a tree's crown centre is on screen (egui points), when it is in front of the camera;
+    /// for tests and tooltips.
+    pub fn screen_pos_of(&self, id: u64) -> Option<egui::Pos2> {
+        let t = self.current.iter().find(|t| t.id == id)?;
+        let r = self.view_rect;
+        let p = Vec3::from(t.position) + Vec3::Z * 0.6 * t.height;
+        let clip = self.rig.camera().view_proj(r.width().max(1.0) / r.height().max(1.0)) * p.extend(1.0);
+        if clip.w <= 0.0 {
+            return None;
+        }
+        let ndc = clip.truncate() / clip.w;
+        Some(egui::pos2(r.left() + (ndc.x + 1.0) * 0.5 * r.width(), r.top() + (1.0 - ndc.y) * 0.5 * r.height()))
+    }
+
+    fn keys(&mut self, ctx: &egui::Context, dt: f32) {
+        if ctx.egui_wants_keyboard_input() {
+            return;
+        }
+        use egui::Key;
+        let (mut fwd, mut right, mut up) = (0.0f32, 0.0f32, 0.0f32);
+        let mut fast = false;
+        ctx.input(|i| {
+            if i.key_pressed(Key::Space) {
+                self.playing = !self.playing;
+            }
+            if i.key_pressed(Key::F1) || i.key_pressed(Key::H) {
+                self.show_help = !self.show_help;
+            }
+            if i.key_pressed(Key::O) {
+                self.rig.set_mode(Mode::Orbit);
+            }
+            if i.key_pressed(Key::F) {
+                self.rig.set_mode(Mode::Fly);
+            }
+            if i.key_pressed(Key::Escape) {
+                self.selected = None;
+                self.info = None;
+            }
+            let held = |k| if i.key_down(k) { 1.0 } else { 0.0 };
+            fwd = held(Key::W) - held(Key::S);
+            right = held(Key::D) - held(Key::A);
+            up = held(Key::E) - held(Key::Q);
+            fast = i.modifiers.shift;
+        });
+        let pressed = |k| ctx.input(|i| i.key_pressed(k));
+        if pressed(Key::ArrowRight) {
+            self.step_snapshot(1);
+        }
+        if pressed(Key::ArrowLeft) {
+            self.step_snapshot(-1);
+        }
+        if pressed(Key::Home) {
+            self.year = self.data.span().0 as f32;
+        }
+        if pressed(Key::End) {
+            self.year = self.data.span().1 as f32;
+        }
+        if pressed(Key::R) {
+            let (lo, hi) = self.scene.terrain.bounds();
+            let mode = self.rig.mode;
+            self.rig = CameraRig::framing(lo, hi);
+            self.rig.set_mode(mode);
+        }
+        if pressed(Key::V) {
+            let all = self.overlays();
+            let k = all.iter().position(|o| o.0 == self.overlay).unwrap_or(0);
+            self.overlay = all[(k + 1) % all.len()].0;
+        }
+        if fwd != 0.0 || right != 0.0 || up != 0.0 {
+            self.rig.fly(fwd, right, up, dt.min(0.1), fast);
+            ctx.request_repaint();
+        }
+    }
+
+    fn top_bar(&mut self, ui: &mut egui::Ui) {
+        ui.horizontal(|ui| {
+            let (a, b) = self.data.span();
+            if ui.button(if self.playing { "Pause" } else { "Play" }).on_hover_text("Space").clicked() {
+                self.playing = !self.playing;
+            }
+            let mut y = self.year;
+            let slider = egui::Slider::new(&mut y, a as f32..=b as f32).text("Year").fixed_decimals(1).step_by(0.0);
+            if ui.add_sized([320.0, 18.0], slider).changed() {
+                self.year = y;
+                self.playing = false;
+            }
+            ui.add(egui::DragValue::new(&mut self.speed).range(0.5..=100.0).suffix(" yr/s").speed(0.2));
+            ui.separator();
+            egui::ComboBox::from_label("Season").selected_text(format!("{:?}", self.season)).show_ui(ui, |ui| {
+                for s in [Season::Spring, Season::Summer, Season::Autumn, Season::Winter] {
+                    ui.selectable_value(&mut self.season, s, format!("{s:?}"));
+                }
+            });
+            let overlays = self.overlays();
+            let name = overlays.iter().find(|o| o.0 == self.overlay).map(|o| o.1.clone()).unwrap_or_default();
+            egui::ComboBox::from_label("Overlay").width(220.0).selected_text(name).show_ui(ui, |ui| {
+                for (o, n) in &overlays {
+                    ui.selectable_value(&mut self.overlay, *o, n);
+                }
+            });
+            ui.separator();
+            let mut mode = self.rig.mode;
+            ui.radio_value(&mut mode, Mode::Orbit, "Orbit").on_hover_text("O");
+            ui.radio_value(&mut mode, Mode::Fly, "Fly").on_hover_text("F");
+            if mode != self.rig.mode {
+                self.rig.set_mode(mode);
+            }
+            if ui.button("Help").on_hover_text("F1").clicked() {
+                self.show_help = !self.show_help;
+            }
+            ui.separator();
+            let gpu_ms = self.gpu.as_ref().map_or(0.0, |g| g.last_ms);
+            let st = self.gpu.as_ref().map(|g| g.renderer.last_stats());
+            ui.label(format!("frame {:.1} ms (3-D {:.1} ms){}", self.clock.frame_ms, gpu_ms, st.map_or(String::new(), |s| format!(", {} trees drawn, {} k triangles", s.instances_drawn, s.triangles / 1000))));
+        });
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
+        ui.heading(format!("Year {:.1}", self.year));
+        let alive = self.current.iter().filter(|t| t.opacity > 0.5).count();
+        ui.label(format!("{} trees in the scene (live, at least 1 m tall, not hidden under taller crowns), from the snapshots of {}", alive, {
+            let (k0, k1, _) = self.data.bracket(self.year);
+            if k0 == k1 { format!("year {}", self.data.years[k0]) } else { format!("years {}–{}", self.data.years[k0], self.data.years[k1]) }
+        }));
+        ui.separator();
+        ui.strong("Selected tree");
+        match &self.info {
+            Some(info) => {
+                let r = &info.row;
+                let name = self.data.library.get(&r.species).map(|s| format!("{} ({})", s.identity.common_name, s.identity.scientific_name)).unwrap_or_else(|| r.species.clone());
+                egui::Grid::new("tree").num_columns(2).show(ui, |ui| {
+                    let mut row = |k: &str, v: String| {
+                        ui.label(k);
+                        ui.label(v);
+                        ui.end_row();
+                    };
+                    row("id", r.id.to_string());
+                    row("species", name);
+                    row("age", format!("{:.0} years", r.age_yr));
+                    row("height", format!("{:.1} m", r.height_m));
+                    row("DBH", format!("{:.1} cm", r.dbh_cm));
+                    row("crown radius", format!("{:.1} m", r.crown_radius_m));
+                    row("crown base", format!("{:.1} m", r.crown_base_m));
+                    row("position", format!("{:.0} m E, {:.0} m N", r.x_m, r.y_m));
+                    row("status", info.fate.clone());
+                    row("from snapshot", format!("year {}", info.year));
+                });
+            }
+            None => {
+                ui.label("Click a tree in the view.");
+            }
+        }
+        ui.separator();
+        self.legend(ui);
+        ui.separator();
+        ui.strong("Stand table");
+        let cols: Vec<(&str, &str)> = PLOT_COLUMNS.iter().copied().filter(|c| self.data.stand_table.columns.iter().any(|x| x == c.0)).collect();
+        if cols.is_empty() {
+            ui.label("(no stand_table.csv in the run directory)");
+            return;
+        }
+        let label = cols.iter().find(|c| c.0 == self.plot_column).map_or(self.plot_column.clone(), |c| c.1.to_string());
+        egui::ComboBox::from_label("column").selected_text(label.clone()).show_ui(ui, |ui| {
+            for c in &cols {
+                ui.selectable_value(&mut self.plot_column, c.0.to_string(), c.1);
+            }
+        });
+        let pts = self.data.stand_table.series(&self.plot_column);
+        let year = self.year as f64;
+        egui_plot::Plot::new("stand table plot").height(220.0).x_axis_label("year").y_axis_label(label.clone()).allow_scroll(false).show(ui, |p| {
+            p.line(egui_plot::Line::new(label, egui_plot::PlotPoints::from(pts)).color(egui::Color32::from_rgb(40, 120, 40)));
+            p.vline(egui_plot::VLine::new("year shown", year).color(egui::Color32::from_rgb(200, 80, 40)));
+        });
+    }
+
+    fn legend(&mut self, ui: &mut egui::Ui) {
+        ui.strong("Overlay");
+        match self.overlay {
+            Overlay::None => {
+                ui.label("land cover (elevation and slope colours)");
+            }
+            Overlay::Species => {
+                for (p, id) in self.data.pool.iter().enumerate() {
+                    ui.horizontal(|ui| {
+                        let [r, g, b] = RunData::species_colour(p);
+                        let (rect, _) = ui.allocate_exact_size(egui::vec2(18.0, 12.0), egui::Sense::hover());
+                        ui.painter().rect_filled(rect, 2.0, egui::Color32::from_rgb(r, g, b));
+                        ui.label(id);
+                    });
+                }
+            }
+            o => {
+                let (ramp, range, title) = match o {
+                    Overlay::Condition(k) => {
+                        let l = &self.data.layers[k];
+                        let range = l.range.or_else(|| crate::output::maps::percentile_range(&l.grid, Some(&self.data.site.mask), 0.02, 0.98)).unwrap_or((0.0, 1.0));
+                        (l.ramp, range, format!("{} ({})", l.title, l.units))
+                    }
+                    _ => (crate::output::maps::Ramp::Viridis, (0.0, 60.0), "basal area (m²/ha) per 20 m cell".to_string()),
+                };
+                ui.label(title);
+                let (rect, _) = ui.allocate_exact_size(egui::vec2(ui.available_width().min(260.0), 14.0), egui::Sense::hover());
+                let n = 32;
+                for i in 0..n {
+                    let [r, g, b] = ramp.color((i as f32 + 0.5) / n as f32);
+                    let x0 = rect.left() + rect.width() * i as f32 / n as f32;
+                    let x1 = rect.left() + rect.width() * (i + 1) as f32 / n as f32;
+                    ui.painter().rect_filled(egui::Rect::from_x_y_ranges(x0..=x1, rect.y_range()), 0.0, egui::Color32::from_rgb(r, g, b));
+                }
+                ui.horizontal(|ui| {
+                    ui.label(format!("{:.1}", range.0));
+                    ui.add_space((rect.width() - 80.0).max(0.0));
+                    ui.label(format!("{:.1}", range.1));
+                });
+            }
+        }
+    }
+
+    fn view_3d(&mut self, ui: &mut egui::Ui) {
+        let size = ui.available_size();
+        let (rect, resp) = ui.allocate_exact_size(size, egui::Sense::click_and_drag());
+        self.view_rect = rect;
+        self.pixels_per_point = ui.ctx().pixels_per_point();
+        if resp.dragged_by(egui::PointerButton::Primary) {
+            let d = resp.drag_delta();
+            self.rig.rotate(d.x, d.y);
+        }
+        if resp.dragged_by(egui::PointerButton::Secondary) || resp.dragged_by(egui::PointerButton::Middle) {
+            let d = resp.drag_delta();
+            self.rig.pan(d.x, d.y, rect.height());
+        }
+        if resp.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                self.rig.zoom(scroll / 50.0);
+            }
+        }
+        if resp.clicked() {
+            if let Some(p) = resp.interact_pointer_pos() {
+                self.pick_at(p.x - rect.left(), p.y - rect.top());
+            }
+        }
+        self.refresh();
+        self.scene.instances = std::mem::take(&mut self.current);
+        let (w, h) = ((rect.width() * self.pixels_per_point) as u32, (rect.height() * self.pixels_per_point) as u32);
+        let cam = self.rig.camera();
+        let drawn = self.gpu.as_mut().map(|g| g.draw(&self.scene, &cam, w, h));
+        self.current = std::mem::take(&mut self.scene.instances);
+        match drawn {
+            Some(Ok(tex)) => {
+                ui.painter().image(tex, rect, egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)), egui::Color32::WHITE);
+            }
+            Some(Err(e)) => {
+                self.status = Some(e.to_string());
+            }
+            None => {
+                ui.painter().rect_filled(rect, 0.0, egui::Color32::from_gray(40));
+                ui.painter().text(rect.center(), egui::Align2::CENTER_CENTER, "3-D view: no GPU viewport", egui::FontId::proportional(16.0), egui::Color32::LIGHT_GRAY);
+            }
+        }
+        // the selected tree: a ring at its foot and its label
+        if let Some(id) = self.selected {
+            if let Some(t) = self.current.iter().find(|t| t.id == id) {
+                let cam = self.rig.camera();
+                let vp = cam.view_proj(rect.width().max(1.0) / rect.height().max(1.0));
+                let to_screen = |p: Vec3| {
+                    let c = vp * p.extend(1.0);
+                    (c.w > 0.0).then(|| egui::pos2(rect.left() + (c.x / c.w + 1.0) * 0.5 * rect.width(), rect.top() + (1.0 - c.y / c.w) * 0.5 * rect.height()))
+                };
+                let base = Vec3::from(t.position);
+                let pts: Vec<egui::Pos2> = (0..=32).filter_map(|k| {
+                    let a = k as f32 / 32.0 * std::f32::consts::TAU;
+                    to_screen(base + Vec3::new(a.cos(), a.sin(), 0.0) * t.crown_radius.max(1.0) + Vec3::Z * 0.3)
+                }).collect();
+                ui.painter().add(egui::Shape::line(pts, egui::Stroke::new(2.0, egui::Color32::YELLOW)));
+                if let Some(top) = to_screen(base + Vec3::Z * t.height) {
+                    ui.painter().text(top, egui::Align2::CENTER_BOTTOM, format!("#{id}"), egui::FontId::proportional(13.0), egui::Color32::YELLOW);
+                }
+            }
+        }
+    }
+
+    fn help(&mut self, ctx: &egui::Context) {
+        let mut open = self.show_help;
+        egui::Window::new("Help: keyboard and mouse").open(&mut open).resizable(false).collapsible(false).anchor(egui::Align2::CENTER_CENTER, [0.0, 0.0]).show(ctx, |ui| {
+            egui::Grid::new("shortcuts").num_columns(2).striped(true).show(ui, |ui| {
+                for (k, what) in SHORTCUTS {
+                    ui.strong(*k);
+                    ui.label(*what);
+                    ui.end_row();
+                }
+            });
+            ui.separator();
+            ui.label(format!("Run: {}", self.data.dir.display()));
+            ui.label("Trees between snapshots are interpolated (growth; recruits fade in; the dead fade out), as in the timelapse.");
+        });
+        self.show_help = open;
+    }
+
+    /// Lays out the whole window in `ui` (the root of an eframe window or a test harness).
+    pub fn ui(&mut self, ui: &mut egui::Ui) {
+        let ctx = ui.ctx().clone();
+        let dt = self.clock.tick();
+        if self.playing {
+            let (a, b) = self.data.span();
+            self.year += dt * self.speed;
+            if self.year >= b as f32 {
+                self.year = b as f32;
+                self.playing = false;
+            }
+            self.year = self.year.max(a as f32);
+            ctx.request_repaint();
+        }
+        self.keys(&ctx, dt);
+        egui::Panel::top("top bar").show(ui, |ui| self.top_bar(ui));
+        egui::Panel::bottom("status").show(ui, |ui| {
+            ui.horizontal(|ui| {
+                ui.label(format!("{}  |  {} snapshots, years {}–{}", self.data.dir.display(), self.data.years.len(), self.data.span().0, self.data.span().1));
+                if let Some(g) = &self.gpu {
+                    ui.label(format!("|  {}", g.renderer.adapter_description()));
+                }
+                if let Some(s) = &self.status {
+                    ui.colored_label(egui::Color32::from_rgb(220, 80, 60), s);
+                }
+            });
+        });
+        egui::Panel::right("side").default_size(340.0).resizable(true).show(ui, |ui| {
+            egui::ScrollArea::vertical().show(ui, |ui| self.side_panel(ui));
+        });
+        egui::CentralPanel::no_frame().show(ui, |ui| self.view_3d(ui));
+        self.help(&ctx);
+        if let Some(s) = self.screenshot.as_mut() {
+            s.frame(&ctx);
+        }
+    }
+}
+
+/// One prototype per species of `library` (in library order, as the instances index them): the
+/// EcoMod model of [`scene::prototypes`] for the species of `pool`, the renderer's cheap stand-in
+/// for the others (no tree of theirs is in the run).
+fn pool_prototypes(library: &crate::species::SpeciesLibrary, pool: &[String]) -> Vec<crate::render::scene::Prototype> {
+    let used = crate::species::SpeciesLibrary { species: library.species.iter().filter(|s| pool.contains(&s.id)).cloned().collect() };
+    let mut built = scene::prototypes(&used).into_iter();
+    library
+        .species
+        .iter()
+        .map(|s| {
+            if pool.contains(&s.id) {
+                if let Some(p) = built.next() {
+                    return p;
+                }
+            }
+            let conifer = s.identity.leaf_type == crate::species::LeafType::Conifer;
+            crate::render::scene::Prototype { name: s.id.clone(), lods: crate::render::lod::placeholder_chain(conifer), bark_color: scene::srgb_to_linear(s.appearance.bark), leaf_color: scene::srgb_to_linear(s.appearance.leaf_summer), stiffness: 1.0 }
+        })
+        .collect()
+}
+
+impl eframe::App for Viewer {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        Viewer::ui(self, ui);
+    }
+}
+
+/// Opens the viewer window on `data` and returns when it is closed (or, with
+/// `opts.screenshot`, after the screenshot is written).
+///
+/// # Errors
+/// As [`gui::run_window`]; [`GuiError::Render`] when the renderer cannot be built on the
+/// window's device.
+pub fn run(data: RunData, sea_level_m: f32, opts: &WindowOptions) -> gui::Result<()> {
+    let title = format!("Sylva — {}", data.dir.display());
+    let opts2 = opts.clone();
+    let data = Arc::new(Mutex::new(Some(data)));
+    gui::run_window(&title, opts, move |cc, failure| {
+        let rs = cc.wgpu_render_state.as_ref().ok_or_else(|| GuiError::NoAdapter("the window has no wgpu render state".into()))?;
+        let vp = Viewport3d::new(rs)?;
+        let d = data.lock().ok().and_then(|mut d| d.take()).ok_or_else(|| GuiError::Window("viewer data taken twice".into()))?;
+        let mut v = Viewer::new(d, sea_level_m, Some(vp))?;
+        if let Some(p) = &opts2.screenshot {
+            v = v.with_screenshot(Screenshot::new(p, opts2.frames, failure));
+        }
+        Ok(v)
+    })
+}
