@@ -1,6 +1,7 @@
 //! Plastic Trees benchmark (Pirk et al. 2012, `000_*.txt`, Table 2): light-guided trees (Yi et
 //! al. paper parameters, beech Plastic Trees parameters with the paper's Tree 1 tropisms) of
-//! about 530, 2,540 and 9,130 nodes beside a finite wall; analysis (once), adaptation and the
+//! about 530, 2,540 and 9,130 nodes (the paper's Table 2; the cycle count and seed whose tree
+//! is nearest in node count) beside a finite wall; analysis (once), adaptation and the
 //! time our light-guided model takes to regrow the same tree beside the same wall; two
 //! ≈2,540-node trees adapted together; moving the wall by 10 cm and re-adapting. Plain program:
 //! `RAYON_NUM_THREADS=1 cargo bench --bench plastic`. Process CPU time (not wall time: the
@@ -77,18 +78,28 @@ fn main() {
     // the light-guided model (Yi et al.) with the paper parameters in a 24 m × 24 m × 22 m space
     let lo = LightOptions { extent_m: 12.0, height_m: 22.0, ..LightOptions::default() };
     println!("# Plastic Trees benchmark (light-guided trees beside a finite wall; threads: {})", rayon::current_num_threads());
-    println!("| target nodes | cycles | nodes | analysis ms | adapt ms | regrow ms | regrow / adapt | bent | pruned | move wall 10 cm: ms (recomputed nodes) |");
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("| target nodes | cycles | seed | nodes | analysis ms | adapt ms | regrow ms | regrow / adapt | bent | pruned | move wall 10 cm: ms (recomputed nodes) |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     let regrow = std::env::var_os("SYLVA_PLASTIC_NO_REGROW").is_none();
     let mut prints = Vec::new();
     let mut mid: Option<Skeleton> = None;
     let mut years = 4u32;
     for target in [530usize, 2540, 9130] {
-        // the fewest cycles whose tree reaches the target
+        // the fewest cycles whose seed-1 tree reaches the target, then of that and one cycle
+        // fewer, seeds 1–6, the tree nearest the target in node count
         let mut sk = light_guided::grow(&lp, &lo, &[], 1, years).expect("grow");
         while sk.len() < target && years < 60 {
             years += 1;
             sk = light_guided::grow(&lp, &lo, &[], 1, years).expect("grow");
+        }
+        let mut seed = 1u64;
+        for y in [years.saturating_sub(1).max(1), years] {
+            for s in 1..=6u64 {
+                let cand = light_guided::grow(&lp, &lo, &[], s, y).expect("grow");
+                if cand.len().abs_diff(target) < sk.len().abs_diff(target) {
+                    (sk, seed, years) = (cand, s, y);
+                }
+            }
         }
         let (lo_b, hi_b) = sk.bounds().expect("nodes");
         let wall = wall_for(0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y), hi_b.z - lo_b.z);
@@ -115,14 +126,14 @@ fn main() {
             rec = t.adapt(&Environment::with_obstacles(&[moved])).expect("adapt").recomputed_nodes;
             after_move = t;
         });
-        prints.push(format!("{}: adapt {:016x}, moved wall {:016x}", sk.len(), fingerprint(std::slice::from_ref(&adapted)), fingerprint(std::slice::from_ref(&after_move))));
+        prints.push(format!("{} (seed {seed}): adapt {:016x}, moved wall {:016x}", sk.len(), fingerprint(std::slice::from_ref(&adapted)), fingerprint(std::slice::from_ref(&after_move))));
         let t1 = cpu_ms();
         if regrow {
-            std::hint::black_box(light_guided::grow(&lp, &lo, &[wall], 1, years).expect("regrow"));
+            std::hint::black_box(light_guided::grow(&lp, &lo, &[wall], seed, years).expect("regrow"));
         }
         let regrow_ms = cpu_ms() - t1;
         println!(
-            "| {target} | {years} | {} | {analysis_ms:.1} | {adapt_ms:.2} | {regrow_ms:.0} | {:.0}× | {} | {} | {move_ms:.2} ({rec}) |",
+            "| {target} | {years} | {seed} | {} | {analysis_ms:.1} | {adapt_ms:.2} | {regrow_ms:.0} | {:.0}× | {} | {} | {move_ms:.2} ({rec}) |",
             sk.len(),
             regrow_ms / adapt_ms,
             rep.bent,

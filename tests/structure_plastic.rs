@@ -4,7 +4,7 @@
 use glam::{Quat, Vec3};
 use sylva::species::{PlasticParams, Species, SpeciesLibrary};
 use sylva::structure::grow::space::Obstacle;
-use sylva::structure::plastic::{adapt, adapt_group, inverse_tropism, Environment, Fate, PlasticTree};
+use sylva::structure::plastic::{adapt, adapt_group, cluster_density, inverse_tropism, Environment, Fate, PlasticTree};
 use sylva::structure::species_tree::{grow_species_tree, tip_leaves, GrownTree, Model};
 use sylva::structure::Skeleton;
 
@@ -229,8 +229,9 @@ fn two_trees_3m_apart_grow_apart() {
     assert!(rep.trees.iter().all(|r| r.bent > 0));
 }
 
-/// A 4-fold symmetric tree: trunk, four limbs at 0°, 90°, 180°, 270°, each with two twigs.
-fn symmetric_tree() -> Skeleton {
+/// A 4-fold symmetric tree: trunk, four limbs at 0°, 90°, 180°, 270°, each with two twigs;
+/// `turn(v, q)` turns v by q quarter turns about the vertical.
+fn symmetric_tree_by(turn: impl Fn(Vec3, u32) -> Vec3) -> Skeleton {
     let mut s = Skeleton::new();
     let r = s.add_root(Vec3::ZERO, 0.08);
     let mut top = r;
@@ -238,15 +239,34 @@ fn symmetric_tree() -> Skeleton {
         top = s.add_child(top, Vec3::new(0.0, 0.0, z as f32), 0.06, false).unwrap();
     }
     for q in 0..4 {
-        let rot = Quat::from_rotation_z(q as f32 * std::f32::consts::FRAC_PI_2);
-        let limb = s.add_child(top, rot * Vec3::new(1.0, 0.0, 5.0), 0.03, true).unwrap();
-        let l2 = s.add_child(limb, rot * Vec3::new(2.0, 0.0, 5.8), 0.02, false).unwrap();
-        s.add_child(l2, rot * Vec3::new(2.6, 0.4, 6.4), 0.01, true).unwrap();
-        s.add_child(l2, rot * Vec3::new(2.6, -0.4, 6.4), 0.01, true).unwrap();
+        let limb = s.add_child(top, turn(Vec3::new(1.0, 0.0, 5.0), q), 0.03, true).unwrap();
+        let l2 = s.add_child(limb, turn(Vec3::new(2.0, 0.0, 5.8), q), 0.02, false).unwrap();
+        s.add_child(l2, turn(Vec3::new(2.6, 0.4, 6.4), q), 0.01, true).unwrap();
+        s.add_child(l2, turn(Vec3::new(2.6, -0.4, 6.4), q), 0.01, true).unwrap();
     }
     s.add_child(top, Vec3::new(0.0, 0.0, 6.5), 0.03, false).unwrap();
     s.mark_tips();
     s
+}
+
+/// Quarter turns by a quaternion (f32 rounding leaves ~1e-7 m asymmetries).
+fn quat_turn(v: Vec3, q: u32) -> Vec3 {
+    Quat::from_rotation_z(q as f32 * std::f32::consts::FRAC_PI_2) * v
+}
+
+/// [`symmetric_tree_by`] with quaternion turns.
+fn symmetric_tree() -> Skeleton {
+    symmetric_tree_by(quat_turn)
+}
+
+/// Four boxes 0.8 m wide and 7 m high centred 3.2 m from the trunk, placed by `turn`.
+fn four_boxes(turn: impl Fn(Vec3, u32) -> Vec3) -> Vec<Obstacle> {
+    (0..4)
+        .map(|q| {
+            let c = turn(Vec3::new(3.2, 0.0, 0.0), q);
+            Obstacle::Box { min: c - Vec3::new(0.4, 0.4, 0.0), max: c + Vec3::new(0.4, 0.4, 7.0) }
+        })
+        .collect()
 }
 
 /// Must show 5: a symmetric sky and no obstacle leave a symmetric tree unchanged, and four
@@ -262,12 +282,7 @@ fn symmetric_sky_leaves_a_symmetric_tree_symmetric() {
     let worst = t.positions().iter().zip(&sk.nodes).map(|(a, b)| a.distance(b.pos)).fold(0.0f32, f32::max);
     assert!(worst < 1e-4, "moved {worst} m");
     // four boxes at the same distance around it: it bends, but stays 4-fold symmetric
-    let boxes: Vec<Obstacle> = (0..4)
-        .map(|q| {
-            let c = Quat::from_rotation_z(q as f32 * std::f32::consts::FRAC_PI_2) * Vec3::new(3.2, 0.0, 0.0);
-            Obstacle::Box { min: c - Vec3::new(0.4, 0.4, 0.0), max: c + Vec3::new(0.4, 0.4, 7.0) }
-        })
-        .collect();
+    let boxes = four_boxes(quat_turn);
     let rep = t.adapt(&Environment::with_obstacles(&boxes)).unwrap();
     let out = t.skeleton();
     assert!(rep.bent > 0, "{rep:?}");
@@ -276,21 +291,47 @@ fn symmetric_sky_leaves_a_symmetric_tree_symmetric() {
     assert!(c.x.abs() < 0.01 && c.y.abs() < 0.01, "tip centroid {c}");
 }
 
-/// Known failure (issue 12, not fixed yet): with four symmetric boxes one twig is shed on one
-/// side and kept on the others (the pruning threshold is met within f32 rounding), so the
-/// adapted tree is not exactly 4-fold symmetric although its centroid is (test above).
+/// Quarter turn `q` about the vertical, exact in f32 (components swapped and negated, no
+/// rounding as with a quaternion).
+fn quarter(v: Vec3, q: u32) -> Vec3 {
+    match q % 4 {
+        0 => v,
+        1 => Vec3::new(-v.y, v.x, v.z),
+        2 => Vec3::new(-v.x, -v.y, v.z),
+        _ => Vec3::new(v.y, -v.x, v.z),
+    }
+}
+
+/// With four boxes around an exactly 4-fold symmetric tree, every node of the adapted tree has
+/// a quarter-turn twin (a twig shed on one side is shed on all four).
 #[test]
-#[ignore = "known asymmetry of light pruning at the threshold, see the report of issue 12"]
+fn symmetric_obstacles_keep_every_node_twin_exact_input() {
+    let sk = symmetric_tree_by(quarter);
+    let p = PlasticParams { phototropism: 0.45, gravitropism: 0.44, pruning_c_psi: 0.8, translucency_gamma_c0: 0.5 };
+    let mut t = PlasticTree::analyse(&sk, &p, &Environment::open(), Some(1.0)).unwrap();
+    let boxes = four_boxes(quarter);
+    let rep = t.adapt(&Environment::with_obstacles(&boxes)).unwrap();
+    let out = t.skeleton();
+    eprintln!("{rep:?}");
+    assert!(rep.bent > 0);
+    for n in &out.nodes {
+        let r = quarter(n.pos, 1);
+        assert!(out.nodes.iter().any(|m| m.pos.distance(r) < 0.02), "{} has no quarter-turn twin", n.pos);
+    }
+}
+
+/// Known failure (issue 12, not fixed yet): with four symmetric boxes one twig is shed on one
+/// side and kept on the others (the pruning threshold is met within f32 rounding of the
+/// quaternion-rotated input and boxes), so the adapted tree is not exactly 4-fold symmetric
+/// although its centroid is (test above); with exactly symmetric input see
+/// `symmetric_obstacles_keep_every_node_twin_exact_input`.
+#[test]
+#[ignore = "measured: one twig shed on one side only, the pruning threshold met within the f32 rounding of the quaternion-rotated input; the exactly symmetric input passes (symmetric_obstacles_keep_every_node_twin_exact_input)"]
 fn symmetric_obstacles_keep_every_node_twin() {
     let sk = symmetric_tree();
     let p = PlasticParams { phototropism: 0.45, gravitropism: 0.44, pruning_c_psi: 0.8, translucency_gamma_c0: 0.5 };
     let mut t = PlasticTree::analyse(&sk, &p, &Environment::open(), Some(1.0)).unwrap();
-    let boxes: Vec<Obstacle> = (0..4)
-        .map(|q| {
-            let c = Quat::from_rotation_z(q as f32 * std::f32::consts::FRAC_PI_2) * Vec3::new(3.2, 0.0, 0.0);
-            Obstacle::Box { min: c - Vec3::new(0.4, 0.4, 0.0), max: c + Vec3::new(0.4, 0.4, 7.0) }
-        })
-        .collect();
+    let boxes = four_boxes(quat_turn);
     t.adapt(&Environment::with_obstacles(&boxes)).unwrap();
     let out = t.skeleton();
     let quarter = Quat::from_rotation_z(std::f32::consts::FRAC_PI_2);
@@ -374,4 +415,48 @@ fn global_light_at_50_north_turns_the_crown_south() {
     let (c0, c1) = (tip_centroid(&sk), tip_centroid(&t.skeleton()));
     assert!(c1.y < c0.y - 0.05, "tip centroid y {} -> {}", c0.y, c1.y);
     assert!((c1.x - c0.x).abs() < 0.01, "no east–west drift: {} -> {}", c0.x, c1.x);
+}
+
+/// Eq. (12), ρ_l = ρ_l0·ρ(i)/ρ(i_l0) with ρ(i) = i: unchanged light keeps every cluster's
+/// density; beside a wall the clusters on the wall side lose more light, so they thin more than
+/// those on the far side; deleted clusters have density 0.
+#[test]
+fn leaf_cluster_density_follows_eq12() {
+    assert_eq!(cluster_density(0.8, 0.5, 0.25), 0.4);
+    assert_eq!(cluster_density(0.8, 0.0, 0.25), 0.8);
+    let sp = beech();
+    let g = grow(&sp, 20.0, 2);
+    let sk = &g.skeleton;
+    let mut t = PlasticTree::analyse(sk, &tree1(&sp), &Environment::open(), None).unwrap();
+    let before = t.leaf_clusters();
+    assert_eq!(before.len(), t.analysis().lobes.len());
+    assert!(before.iter().all(|c| c.density == 1.0 && c.alive_nodes == c.input_nodes));
+    // the same environment, every node recomputed: the light of every cluster is the analysis'
+    t.invalidate();
+    t.adapt(&Environment::open()).unwrap();
+    for c in t.leaf_clusters() {
+        assert!((c.density - 1.0).abs() < 1e-5, "lobe {}: density {} (light {} vs {})", c.lobe, c.density, c.light, c.light_input);
+    }
+    let wall = finite_wall(&g);
+    t.adapt(&Environment::with_obstacles(&[wall])).unwrap();
+    let cl = t.leaf_clusters();
+    let live: Vec<_> = cl.iter().filter(|c| c.alive_nodes > 0 && c.radius > 0.0).collect();
+    assert!(cl.iter().filter(|c| c.alive_nodes == 0).all(|c| c.density == 0.0));
+    for c in &live {
+        assert!((c.density - c.light / c.light_input).abs() <= 1e-6 * c.density.max(1.0), "eq. 12 for lobe {}", c.lobe);
+        assert!(c.gamma > 0.0 && c.gamma <= 1.0 && !wall.contains(c.center));
+    }
+    let mut xs: Vec<f32> = live.iter().map(|c| c.center.x).collect();
+    xs.sort_by(f32::total_cmp);
+    let median = xs[xs.len() / 2];
+    let mean_density = |near: bool| {
+        let d: Vec<f32> = live.iter().filter(|c| (c.center.x > median) == near).map(|c| c.density).collect();
+        d.iter().sum::<f32>() / d.len() as f32
+    };
+    let (near, far) = (mean_density(true), mean_density(false));
+    eprintln!("{} of {} clusters alive; mean density wall side {near:.3}, far side {far:.3}", live.len(), cl.len());
+    assert!(near < far && near < 0.95, "wall side {near}, far side {far}");
+    let dens = t.leaf_density();
+    assert_eq!(dens.len(), t.skeleton().len());
+    assert!(dens.iter().all(|d| d.is_finite() && *d >= 0.0));
 }

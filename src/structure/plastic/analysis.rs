@@ -4,7 +4,7 @@
 //! (eqs. 3–4), the untropic direction of every segment (inverse tropism, eqs. 6–9) and the
 //! pruning thresholds (eqs. 10–11).
 
-use super::light::{light_at, Occluder, ShadowVolumes, Sky, SkyMask, Solids};
+use super::light::{light_many, Occluder, ShadowVolumes, Sky, SkyMask, Solids};
 use super::{tropism, Environment};
 use crate::error::{Error, Result};
 use crate::species::PlasticParams;
@@ -435,10 +435,12 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
         let centres: Vec<Vec3> = clusters.iter().map(|c| cluster_center(c, &lobes, sk, &pos)).collect();
         let occ = clusters.iter().zip(&centres).map(|(c, &centre)| Occluder { center: centre, radius: c.radius, gamma: p.translucency_gamma_c0.powf(c.radius) }).collect();
         let vols = ShadowVolumes::new(&sky, occ);
-        for &k in &by_season[t] {
-            light_dir[k as usize] = light_at(&sky, mask[k as usize], &vols, pos[k as usize]).1;
+        let at_nodes: Vec<(Vec3, u32)> = by_season[t].iter().map(|&k| (pos[k as usize], mask[k as usize])).collect();
+        for (&k, (_, dir)) in by_season[t].iter().zip(light_many(&sky, &vols, &at_nodes)) {
+            light_dir[k as usize] = dir;
         }
-        let li: Vec<f32> = centres.iter().map(|&c| light_at(&sky, solids.mask(c), &vols, c).0).collect();
+        let at_centres: Vec<(Vec3, u32)> = centres.iter().map(|&c| (c, solids.mask(c))).collect();
+        let li: Vec<f32> = light_many(&sky, &vols, &at_centres).into_iter().map(|(i, _)| i).collect();
         psi_at_stage(sk, &season, t as u16, clusters, &normalised(&li, |_| true), &alive, &mut zeta, &mut len, &mut psi);
         for k in 1..n {
             if psi[k].is_finite() && judged(season[k], t as u16) {

@@ -133,11 +133,19 @@ pub struct Occluder {
 /// Shadow volumes of a set of clusters, one grid per sky direction: the shadow volume of a
 /// cluster for direction d is the half-cylinder of its radius behind it (opposite d). Each
 /// direction's grid bins the clusters by their projection on the plane ⟂ d, so a receiver tests
-/// only the casters whose shadow volume contains it.
-#[derive(Debug, Clone)]
+/// only the casters whose shadow volume contains it. A direction's grid is built the first time it is queried (directions blocked by solids at
+/// every receiver cost nothing).
+#[derive(Debug)]
 pub struct ShadowVolumes {
     occ: Vec<Occluder>,
-    grids: Vec<DirGrid>,
+    dirs: Vec<Vec3>,
+    grids: Vec<std::sync::OnceLock<DirGrid>>,
+}
+
+impl Clone for ShadowVolumes {
+    fn clone(&self) -> Self {
+        ShadowVolumes::from_dirs(self.dirs.clone(), self.occ.clone())
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -161,10 +169,13 @@ struct DirGrid {
     gamma: Vec<f32>,
 }
 
-/// Casters tested together by [`ShadowVolumes::transmittance`] (the hit test vectorises).
+/// Casters tested together by [`ShadowVolumes::transmittance`] (the hit test vectorises); every
+/// cell's run of casters is padded to a multiple of it.
 const LANES: usize = 8;
 
+
 const MAX_CELLS_PER_AXIS: usize = 96;
+
 
 impl DirGrid {
     fn new(d: Vec3, occ: &[Occluder]) -> DirGrid {
@@ -183,9 +194,9 @@ impl DirGrid {
         }
         let ext = (hi - lo).max(Vec2::splat(1e-3));
         let mean_r = rsum / occ.len() as f32;
-        // about two cells per cluster: the grid's size follows the cluster count
-        let by_count = (ext.x * ext.y / (2.0 * occ.len() as f32)).sqrt();
-        let cell = (2.0 * mean_r).max(by_count).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
+        // about CELLS_PER_CASTER cells per cluster: the grid's size follows the cluster count
+        let by_count = (ext.x * ext.y / (CELLS_PER_CASTER * occ.len() as f32)).sqrt();
+        let cell = (CELL_RADII * mean_r).max(by_count).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
         let nx = ((ext.x / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
         let ny = ((ext.y / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
         // cell range of each caster's disc; `as usize` truncates, which equals the floor for the
@@ -209,12 +220,14 @@ impl DirGrid {
                 }
             }
         }
+        // every cell's run padded to whole blocks of LANES with casters that never hit
+        // (squared radius −1: `l2 − along² ≤ −1` is false; transmittance 1)
         for i in 1..count.len() {
-            count[i] += count[i - 1];
+            count[i] = count[i - 1] + count[i].div_ceil(LANES as u32) * LANES as u32;
         }
         let mut fill = count.clone();
         let len = count[nx * ny] as usize;
-        let (mut ix, mut iy, mut iz, mut ir2, mut ig) = (vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![1.0; len]);
+        let (mut ix, mut iy, mut iz, mut ir2, mut ig) = (vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![-1.0; len], vec![1.0; len]);
         for (&[x0, x1, y0, y1], o) in ranges.iter().zip(occ) {
             let r2 = o.radius * o.radius;
             for y in y0 as usize..=y1 as usize {
@@ -246,42 +259,65 @@ impl DirGrid {
         self.start[c] as usize..self.start[c + 1] as usize
     }
 
-    /// Hit flags of the casters `range` on the ray from `p` along `d` into `hit` (the ray passes
-    /// through the caster's sphere ahead of `p`, and `p` is outside it): the arithmetic of
-    /// glam's `Vec3::dot`/`length_squared`, written per component so [`LANES`] casters are
-    /// tested at once.
+    /// Multiplies `t` by the transmittance of every caster of the block of [`LANES`] casters
+    /// from `i` that the ray from `p` along `d` hits (the ray passes through the caster's sphere
+    /// ahead of `p`, and `p` is outside it), in caster order, and returns it: the arithmetic of
+    /// glam's `Vec3::dot`/`length_squared` written per component so the hit tests vectorise.
     #[inline]
-    fn hits(&self, range: std::ops::Range<usize>, p: Vec3, hit: &mut [bool; LANES]) {
-        let (xs, ys, zs, rs) = (&self.x[range.clone()], &self.y[range.clone()], &self.z[range.clone()], &self.r2[range]);
+    fn block(&self, i: usize, p: Vec3, mut t: f32) -> f32 {
+        let j = i..i + LANES;
+        let (Ok(xs), Ok(ys), Ok(zs), Ok(rs), Ok(gs)) = (
+            <&[f32; LANES]>::try_from(&self.x[j.clone()]),
+            <&[f32; LANES]>::try_from(&self.y[j.clone()]),
+            <&[f32; LANES]>::try_from(&self.z[j.clone()]),
+            <&[f32; LANES]>::try_from(&self.r2[j.clone()]),
+            <&[f32; LANES]>::try_from(&self.gamma[j]),
+        ) else {
+            return t; // unreachable: runs are padded to whole blocks
+        };
         let d = self.d;
-        let test = |x: f32, y: f32, z: f32, r2: f32| {
-            let (ox, oy, oz) = (x - p.x, y - p.y, z - p.z);
+        let mut hit = [false; LANES];
+        for k in 0..LANES {
+            let (ox, oy, oz) = (xs[k] - p.x, ys[k] - p.y, zs[k] - p.z);
             let along = ox * d.x + oy * d.y + oz * d.z;
             let l2 = ox * ox + oy * oy + oz * oz;
-            (along > 0.0) & (l2 > r2) & (l2 - along * along <= r2)
-        };
-        if let (Ok(xs), Ok(ys), Ok(zs), Ok(rs)) = (<&[f32; LANES]>::try_from(xs), <&[f32; LANES]>::try_from(ys), <&[f32; LANES]>::try_from(zs), <&[f32; LANES]>::try_from(rs)) {
-            for j in 0..LANES {
-                hit[j] = test(xs[j], ys[j], zs[j], rs[j]);
-            }
-        } else {
-            for j in 0..xs.len().min(LANES) {
-                hit[j] = test(xs[j], ys[j], zs[j], rs[j]);
+            hit[k] = (along > 0.0) & (l2 > rs[k]) & (l2 - along * along <= rs[k]);
+        }
+        // most blocks hit nothing: one test of the whole block, then the hits in order
+        if hit.iter().fold(false, |a, &h| a | h) {
+            for k in 0..LANES {
+                if hit[k] {
+                    t *= gs[k];
+                }
             }
         }
+        t
     }
 }
+
+/// Grid cell size, in mean cluster radii, at least.
+const CELL_RADII: f32 = 2.0;
+/// Grid cells per cluster over the grid's area, at most (the cell is at least that coarse).
+const CELLS_PER_CASTER: f32 = 2.0;
 
 impl ShadowVolumes {
     /// Shadow volumes of `occ` for every direction of `sky`.
     pub fn new(sky: &Sky, occ: Vec<Occluder>) -> ShadowVolumes {
-        let grids = sky.dirs.iter().map(|&d| DirGrid::new(d, &occ)).collect();
-        ShadowVolumes { occ, grids }
+        ShadowVolumes::from_dirs(sky.dirs.clone(), occ)
+    }
+
+    fn from_dirs(dirs: Vec<Vec3>, occ: Vec<Occluder>) -> ShadowVolumes {
+        let grids = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
+        ShadowVolumes { occ, dirs, grids }
     }
 
     /// The occluders.
     pub fn occluders(&self) -> &[Occluder] {
         &self.occ
+    }
+
+    fn grid(&self, k: usize) -> &DirGrid {
+        self.grids[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ))
     }
 
     /// True when [`ShadowVolumes::transmittance`] of the same ray is below 1, found at the first
@@ -291,7 +327,7 @@ impl ShadowVolumes {
     }
 
     /// Transmittance Π γ of the clusters on the ray from `p` along sky direction `k`; clusters
-    /// containing `p` do not shade it.
+    /// containing `p` do not shade it. A product below 10⁻⁴ is returned as 0 (the ray is dark).
     pub fn transmittance(&self, k: usize, p: Vec3) -> f32 {
         self.product_until(k, p, 1e-4).unwrap_or(0.0)
     }
@@ -299,21 +335,18 @@ impl ShadowVolumes {
     /// Π γ of the clusters hit by the ray from `p` along direction `k`, multiplied in caster
     /// order; `None` as soon as the product falls below `stop`.
     fn product_until(&self, k: usize, p: Vec3, stop: f32) -> Option<f32> {
-        let g = &self.grids[k];
+        let g = self.grid(k);
         let r = g.candidates(p);
-        let mut hit = [false; LANES];
         let mut t = 1.0f32;
         let mut i = r.start;
+        // the product never rises again, so stopping after the block that crosses `stop` gives
+        // the same answer as stopping at the caster that crosses it
         while i < r.end {
-            let m = (r.end - i).min(LANES);
-            g.hits(i..i + m, p, &mut hit);
-            for (j, _) in hit[..m].iter().enumerate().filter(|(_, h)| **h) {
-                t *= g.gamma[i + j];
-                if t < stop {
-                    return None;
-                }
+            t = g.block(i, p, t);
+            if t < stop {
+                return None;
             }
-            i += m;
+            i += LANES;
         }
         Some(t)
     }
@@ -440,6 +473,29 @@ pub fn light_at(sky: &Sky, blocked: u32, vols: &ShadowVolumes, p: Vec3) -> (f32,
     (sum, dir.normalize_or(Vec3::Z))
 }
 
+/// [`light_at`] for many points at once, `points` as (position, [`Solids::mask`] there):
+/// the same sums in the same order (bit for bit the values of [`light_at`]), computed direction
+/// by direction so that each direction's shadow-volume grid is read while it is in cache.
+pub fn light_many(sky: &Sky, vols: &ShadowVolumes, points: &[(Vec3, u32)]) -> Vec<(f32, Vec3)> {
+    let mut acc = vec![(0.0f32, Vec3::ZERO); points.len()];
+    for k in 0..sky.dirs.len() {
+        let w = sky.weights[k];
+        if w == 0.0 {
+            continue;
+        }
+        let d = sky.dirs[k];
+        for ((p, blocked), a) in points.iter().zip(acc.iter_mut()) {
+            if blocked & (1 << k) != 0 {
+                continue;
+            }
+            let t = vols.transmittance(k, *p);
+            a.0 += w * t;
+            a.1 += d * (w * t);
+        }
+    }
+    acc.into_iter().map(|(s, d)| (s, d.normalize_or(Vec3::Z))).collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -495,6 +551,48 @@ mod tests {
                     assert!(blocked > 0 && blocked < 400 * 32, "obstacle {i}: {blocked}");
                 }
             }
+        }
+    }
+
+    /// The grid path (lazy grids, padded blocks) against the product over every occluder in
+    /// occluder order, and `light_many` against `light_at`: equal bit for bit.
+    #[test]
+    fn grid_products_equal_the_plain_product() {
+        let sky = Sky::from_latitude(50.0);
+        let occ: Vec<Occluder> = (0..300)
+            .map(|i| {
+                let f = i as f32;
+                let r = 0.2 + 0.3 * (f * 0.37).sin().abs();
+                Occluder { center: Vec3::new((f * 0.71).sin() * 3.0, (f * 0.53).cos() * 3.0, 2.0 + (f * 0.29).sin().abs() * 5.0), radius: r, gamma: 0.5f32.powf(r) }
+            })
+            .collect();
+        let vols = ShadowVolumes::new(&sky, occ.clone());
+        let mut shaded = 0;
+        let mut points = Vec::new();
+        for j in 0..200 {
+            let f = j as f32;
+            let p = Vec3::new((f * 0.43).cos() * 3.5, (f * 0.61).sin() * 3.5, 1.0 + (f * 0.17).sin().abs() * 6.0);
+            for (k, &d) in sky.dirs.iter().enumerate() {
+                let mut t = 1.0f32;
+                for o in &occ {
+                    let oc = o.center - p;
+                    let along = oc.dot(d);
+                    let l2 = oc.length_squared();
+                    if along > 0.0 && l2 > o.radius * o.radius && l2 - along * along <= o.radius * o.radius {
+                        t *= o.gamma;
+                    }
+                }
+                let plain = if t < 1e-4 { 0.0 } else { t };
+                assert_eq!(vols.transmittance(k, p).to_bits(), plain.to_bits(), "point {p}, direction {k}");
+                assert_eq!(vols.shaded(k, p), t < 1.0);
+                shaded += (t < 1.0) as usize;
+            }
+            points.push((p, (j as u32).wrapping_mul(2_654_435_761) & 0x0f0f_0f0f));
+        }
+        assert!(shaded > 200 && shaded < 200 * SKY_DIRS - 200, "{shaded}");
+        for ((p, m), (i, d)) in points.iter().zip(light_many(&sky, &vols, &points)) {
+            let (i2, d2) = light_at(&sky, *m, &vols, *p);
+            assert_eq!((i.to_bits(), d.to_array().map(f32::to_bits)), (i2.to_bits(), d2.to_array().map(f32::to_bits)));
         }
     }
 

@@ -27,13 +27,14 @@ pub mod transform;
 
 pub use analysis::{inverse_tropism, Analysis};
 pub use light::{Ground, Sky};
-pub use transform::{adapt_group, GroupReport};
+pub use transform::{adapt_group, cluster_density, GroupReport};
 
 use crate::error::{Error, Result};
 use crate::species::PlasticParams;
 use crate::structure::grow::space::{validate_obstacles, Obstacle};
 use crate::structure::skeleton::Skeleton;
 use glam::{Quat, Vec3};
+use light::Occluder;
 
 /// Tropism direction t of eq. (6) for phototropism towards the light direction `light` and
 /// gravitropism (negative geotropism, +z): (w_p·L + w_g·ẑ)/(w_p + w_g), normalised; +z when
@@ -127,6 +128,30 @@ pub struct PlasticReport {
     pub recomputed_nodes: usize,
 }
 
+/// A leaf cluster of the adapted tree ([`PlasticTree::leaf_clusters`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LeafCluster {
+    /// Index of its terminal lobe in [`Analysis::lobes`].
+    pub lobe: u32,
+    /// Centre (m): the lobe's centroid moved by the mean offset of its nodes (section 5.2).
+    pub center: Vec3,
+    /// Radius (m), cut by obstacles (Fig. 4); 0 when deleted.
+    pub radius: f32,
+    /// Translucency γ_c (eq. 4, γ_c0^r_c, and eq. 13 after losing nodes), 0–1.
+    pub gamma: f32,
+    /// Nodes of the lobe in the input, n_0 of eq. (13).
+    pub input_nodes: usize,
+    /// Nodes of the lobe still alive, n_c of eq. (13).
+    pub alive_nodes: usize,
+    /// Light i_l0 on the cluster in the environment analysed (eq. 3, 0–1).
+    pub light_input: f32,
+    /// Light i on the cluster now (eq. 3, 0–1), as the last adaptation's final level computed it.
+    pub light: f32,
+    /// Leaf density ρ_l of eq. (12) relative to the input (ρ_l0 = 1, ρ(i) = i): i/i_l0; 0 for a
+    /// deleted cluster.
+    pub density: f32,
+}
+
 /// One tree ready for adaptation: its input skeleton, the analysis of section 4 and its
 /// current adapted state.
 #[derive(Debug, Clone)]
@@ -146,6 +171,8 @@ pub struct PlasticTree {
     pub(crate) light_cache: Vec<Vec<f32>>,
     pub(crate) sig: Vec<u64>,
     pub(crate) sky: Sky,
+    /// Occluders of the full-grown stage's clusters after the last adaptation (empty before).
+    pub(crate) final_occ: Vec<Option<Occluder>>,
     pub(crate) force: bool,
     pub(crate) report: PlasticReport,
 }
@@ -165,6 +192,7 @@ impl PlasticTree {
             light_cache: analysis.stage_light.clone(),
             sig: analysis.mask.iter().map(|&m| m as u64).collect(),
             sky: analysis.sky.clone(),
+            final_occ: Vec::new(),
             analysis,
             clearance_m: 0.0,
             wood_radius_m: 0.02,
@@ -238,6 +266,50 @@ impl PlasticTree {
                 (l.center + off, l.radius)
             })
             .collect()
+    }
+
+    /// The leaf clusters of the full-grown tree after the last adaptation (section 5.2), one per
+    /// terminal lobe, in the order of [`Analysis::stages`]`[T]`: centre moved with its nodes,
+    /// radius cut by obstacles (Fig. 4), translucency by eqs. (4) and (13), light i (eq. 3) now
+    /// and in the analysis, and the leaf density of eq. (12) relative to the input (ρ_l0 = 1,
+    /// ρ(i) = i). Deleted clusters (no living node, or the centre inside an obstacle) have
+    /// `alive_nodes` 0 or radius 0 and density 0. Before any adaptation: the input clusters, density 1.
+    pub fn leaf_clusters(&self) -> Vec<LeafCluster> {
+        let a = &self.analysis;
+        let last = a.seasons as usize;
+        a.stages[last]
+            .iter()
+            .enumerate()
+            .map(|(ci, c)| {
+                let lobe = c.lobe.unwrap_or(0);
+                let nodes = a.lobes.get(lobe as usize).map(|l| l.nodes.as_slice()).unwrap_or(&[]);
+                let alive = nodes.iter().filter(|&&k| self.fate[k as usize] == Fate::Alive).count();
+                let centre = analysis::cluster_center(c, &a.lobes, &self.input, &self.pos);
+                let i0 = a.stage_light[last][ci];
+                let (radius, gamma, light) = match self.final_occ.get(ci) {
+                    Some(Some(o)) => (o.radius, o.gamma, self.light_cache[last][ci]),
+                    Some(None) => (0.0, 1.0, 0.0),
+                    None => (c.radius, self.params.translucency_gamma_c0.powf(c.radius), i0),
+                };
+                let density = if alive == 0 || radius <= 0.0 { 0.0 } else { cluster_density(1.0, i0, light) };
+                LeafCluster { lobe, center: centre, radius, gamma, input_nodes: nodes.len(), alive_nodes: alive, light_input: i0, light, density }
+            })
+            .collect()
+    }
+
+    /// Leaf density of eq. (12) (relative to the input, see [`PlasticTree::leaf_clusters`]) of
+    /// every node of [`PlasticTree::skeleton`] (same order): the density of the lobe the node
+    /// belongs to, 1 for nodes in no lobe (older wood keeps what it had).
+    pub fn leaf_density(&self) -> Vec<f32> {
+        let mut by_node = vec![1.0f32; self.input.nodes.len()];
+        for c in self.leaf_clusters() {
+            if let Some(l) = self.analysis.lobes.get(c.lobe as usize) {
+                for &k in &l.nodes {
+                    by_node[k as usize] = c.density;
+                }
+            }
+        }
+        by_node.iter().zip(&self.fate).filter(|(_, f)| **f == Fate::Alive).map(|(d, _)| *d).collect()
     }
 
     /// The adapted skeleton: input radii and topology with the current positions, pruned

@@ -31,8 +31,16 @@
 //!    [`super::analysis::Analysis::stage_light`]); a branch with ψ_s(t) < ψ_s,min (eq. 11) is shed with its
 //!    children. Cluster light is evaluated at the moved cluster centres with the level's
 //!    shadow volumes (built before the level's bending).
-//! 5. **Leaf density (eq. 12)** ρ_l = ρ_l0·ρ(i)/ρ(i_l0) with ρ(i) = i (linear), reported per
-//!    lobe by [`cluster_density`].
+//!    The light of each level's clusters is evaluated direction by direction; a cluster that
+//!    is the same occluder as at the previous level keeps that level's transmittance of a sky
+//!    direction when no caster that changed between the two levels (added, removed, moved,
+//!    cut or thinned) lies on the ray, which is exactly the value a recomputation gives (the
+//!    same casters, multiplied in the same order); levels where most casters changed recompute
+//!    everything.
+//! 5. **Leaf density (eq. 12)** ρ_l = ρ_l0·ρ(i)/ρ(i_l0) with ρ(i) = i (linear) for every leaf
+//!    cluster of the full-grown stage after the levels: [`PlasticTree::leaf_clusters`] (with the
+//!    obstacle-cut radius and the translucency of eqs. 4 and 13) and, per node of the adapted
+//!    skeleton, [`PlasticTree::leaf_density`] (what a leaf generator scales its leaf count by).
 //! 6. **Wood of other trees** (segments at least `wood_radius_m` thick) is solid: nodes inside it
 //!    are removed after the levels; the other trees' leaf clusters are not solid (they overlap
 //!    and share the space, section 5.2).
@@ -60,8 +68,10 @@ pub struct GroupReport {
     pub levels: usize,
 }
 
-/// Leaf density ρ_l of eq. (12) for a cluster of initial density `rho0` at initial light `i0`,
-/// now at light `i` (both 0–1), with ρ(i) = i: ρ_l0·i/i_0 (ρ_l0 when i_0 = 0).
+/// Leaf density ρ_l of eq. (12), ρ_l = ρ_l0·ρ(i)/ρ(i_l0), for a cluster of initial density
+/// `rho0` at initial light `i0`, now at light `i` (both 0–1, eq. 3), with ρ(i) = i (linear; the
+/// paper leaves ρ open): ρ_l0·i/i_0, ρ_l0 when i_0 = 0. Not clamped: a cluster that receives
+/// more light than in the input gets denser than it was.
 pub fn cluster_density(rho0: f32, i0: f32, i: f32) -> f32 {
     if i0 > 0.0 {
         rho0 * i / i0
@@ -237,14 +247,59 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
     // 2.–4. levels; a node is recomputed when its own signature changed or its parent moved
     let mut work: Vec<Work> = own.into_iter().map(|own| Work { moved: vec![false; own.len()], shifted: vec![false; own.len()], done: vec![false; own.len()], own }).collect();
     let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
+    // per tree: the previous level's occluders and per-direction cluster transmittances
+    let mut prev: Vec<Option<(Vec<Option<Occluder>>, Rows)>> = vec![None; trees.len()];
     for g in 0..=g_max {
         let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
         let occ: Vec<Vec<Option<Occluder>>> = trees.par_iter().map(|t| stage_of(t).map(|s| stage_occluders(t, s, env)).unwrap_or_default()).collect();
-        let vols = ShadowVolumes::new(sky, occ.iter().flatten().flatten().copied().collect());
-        trees.par_iter_mut().zip(&mut work).zip(&occ).for_each(|((t, w), occ)| {
-            let Some(s) = stage_of(t) else { return };
-            level(t, s, w, occ, env, &solids, &vols);
-        });
+        let casters: Vec<Occluder> = occ.iter().flatten().flatten().copied().collect();
+        // the casters that differ from the previous level's (removed, added or changed)
+        let maps: Vec<Vec<Option<u32>>> = trees.iter().zip(&prev).map(|(t, pr)| match (stage_of(t), pr) {
+            (Some(s), Some(_)) if s > 0 => match_stage(&t.analysis.stages[s - 1], &t.analysis.stages[s]),
+            (Some(s), _) => vec![None; t.analysis.stages[s].len()],
+            _ => Vec::new(),
+        }).collect();
+        let mut delta = Vec::new();
+        for ((o, pr), map) in occ.iter().zip(&prev).zip(&maps) {
+            let mut used = vec![false; pr.as_ref().map_or(0, |p| p.0.len())];
+            for (ci, cur) in o.iter().enumerate() {
+                match (map[ci], pr) {
+                    (Some(pj), Some((po, _))) => {
+                        used[pj as usize] = true;
+                        if !same_occluder(&po[pj as usize], cur) {
+                            delta.extend(po[pj as usize]);
+                            delta.extend(*cur);
+                        }
+                    }
+                    _ => delta.extend(*cur),
+                }
+            }
+            if let Some((po, _)) = pr {
+                delta.extend(po.iter().zip(&used).filter(|(_, u)| !**u).filter_map(|(o, _)| *o));
+            }
+        }
+        // reuse pays while the changes are a minority of the casters
+        // (measured on the bench trees: below 60 % changed casters the check is cheaper than the
+        // products it saves; above, it is not)
+        let delta = (5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta));
+        let vols = ShadowVolumes::new(sky, casters);
+        let next: Vec<Option<(Vec<Option<Occluder>>, Rows)>> = trees
+            .par_iter_mut()
+            .zip(&mut work)
+            .zip(occ)
+            .zip(&prev)
+            .zip(&maps)
+            .map(|((((t, w), occ), pr), map)| {
+                let s = stage_of(t)?;
+                let reuse = match (&delta, pr) {
+                    (Some(d), Some((po, rows))) => Some(Reuse { delta: d, occ: po, rows, map }),
+                    _ => None,
+                };
+                let rows = level(t, s, w, &occ, env, &solids, &vols, reuse);
+                Some((occ, rows))
+            })
+            .collect();
+        prev = next;
     }
     // 6. wood of the other trees, then the report
     if group {
@@ -262,6 +317,11 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
             }
         });
     }
+    // the leaf clusters of the full-grown stage as they end (section 5.2, eqs. 12–13)
+    trees.par_iter_mut().for_each(|t| {
+        let last = t.analysis.seasons as usize;
+        t.final_occ = stage_occluders(t, last, env);
+    });
     let mut rep = GroupReport { trees: Vec::with_capacity(trees.len()), recomputed_nodes: 0, levels: g_max + 1 };
     for (t, w) in trees.iter_mut().zip(&work) {
         let d = &w.done;
@@ -286,6 +346,49 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
     Ok(rep)
 }
 
+/// Per-direction transmittances (eq. 4 products) of the clusters of one stage as evaluated at
+/// its level: `start[ci]` indexes `t` (one value per sky direction, NaN where not evaluated),
+/// `u32::MAX` for a cluster not evaluated.
+#[derive(Debug, Clone, Default)]
+struct Rows {
+    start: Vec<u32>,
+    t: Vec<f32>,
+}
+
+/// What a level may reuse from the level before: the casters that changed since (`delta`),
+/// the previous stage's occluders and transmittances, and the previous index of every cluster.
+struct Reuse<'a> {
+    delta: &'a ShadowVolumes,
+    occ: &'a [Option<Occluder>],
+    rows: &'a Rows,
+    map: &'a [Option<u32>],
+}
+
+/// Index in stage `prev` of every cluster of stage `cur` that is the same stage cluster
+/// (anchor, radius, lobe); both lists are sorted by (anchor, lobe).
+fn match_stage(prev: &[super::analysis::StageCluster], cur: &[super::analysis::StageCluster]) -> Vec<Option<u32>> {
+    let key = |c: &super::analysis::StageCluster| (c.anchor, c.lobe.unwrap_or(u32::MAX));
+    let mut j = 0;
+    cur.iter()
+        .map(|c| {
+            while j < prev.len() && key(&prev[j]) < key(c) {
+                j += 1;
+            }
+            (j < prev.len() && prev[j] == *c).then_some(j as u32)
+        })
+        .collect()
+}
+
+/// Bitwise equality of two optional occluders.
+fn same_occluder(a: &Option<Occluder>, b: &Option<Occluder>) -> bool {
+    let bits = |o: &Occluder| [o.center.x.to_bits(), o.center.y.to_bits(), o.center.z.to_bits(), o.radius.to_bits(), o.gamma.to_bits()];
+    match (a, b) {
+        (Some(a), Some(b)) => bits(a) == bits(b),
+        (None, None) => true,
+        _ => false,
+    }
+}
+
 /// Per-tree flags of one [`adapt_group`] call: `own` (signature changed), `moved` (position or
 /// rotation changed by this call), `done` (recomputed).
 struct Work {
@@ -301,7 +404,13 @@ pub const ROTATION_EPS: f32 = 1e-3;
 
 /// One level (stage `s`) of one tree: bend its recomputed season-`s` nodes, refresh the light on
 /// its recomputed stage clusters, prune by eq. (11).
-fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &SkyMask, vols: &ShadowVolumes) {
+/// The light of the clusters is taken direction by direction; a direction of a cluster whose
+/// occluder is the same as at the previous level reuses that level's transmittance when no
+/// changed caster (`reuse.delta`) lies on the ray: the same casters hit, multiplied in the same
+/// order, so the value is the one a recomputation gives, bit for bit. Returns the stage's
+/// transmittances.
+#[allow(clippy::too_many_arguments)]
+fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &SkyMask, vols: &ShadowVolumes, reuse: Option<Reuse>) -> Rows {
     let n = t.input.nodes.len();
     let a = &t.analysis;
     let last = a.seasons as f32;
@@ -360,17 +469,54 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     }
     // light on this stage's clusters that were recomputed
     let clusters = &a.stages[s];
+    let mut lit = Vec::new();
     for (ci, c) in clusters.iter().enumerate() {
         let touched = match c.lobe {
             Some(l) => a.lobes[l as usize].nodes.iter().any(|&k| w.done[k as usize]),
             None => w.done[c.anchor as usize],
         };
         if touched {
-            t.light_cache[s][ci] = match occ[ci] {
-                Some(o) => light_at(sky, solids.mask(o.center), vols, o.center).0,
-                None => 0.0,
-            };
+            match occ[ci] {
+                Some(o) => lit.push((ci, o.center)),
+                None => t.light_cache[s][ci] = 0.0,
+            }
         }
+    }
+    let nd = sky.dirs.len();
+    let mut rows = Rows { start: vec![u32::MAX; clusters.len()], t: vec![f32::NAN; lit.len() * nd] };
+    // (mask, previous row) of every cluster lit
+    let from: Vec<(u32, Option<&[f32]>)> = lit
+        .iter()
+        .map(|&(ci, c)| {
+            let old = reuse.as_ref().and_then(|r| {
+                let pj = r.map[ci]? as usize;
+                let st = r.rows.start[pj];
+                (st != u32::MAX && same_occluder(&r.occ[pj], &occ[ci])).then(|| &r.rows.t[st as usize..st as usize + nd])
+            });
+            (solids.mask(c), old)
+        })
+        .collect();
+    let mut sums = vec![0.0f32; lit.len()];
+    for k in 0..nd {
+        let wk = sky.weights[k];
+        if wk == 0.0 {
+            continue;
+        }
+        for (j, (&(_, c), &(mask, old))) in lit.iter().zip(&from).enumerate() {
+            if mask & (1 << k) != 0 {
+                continue;
+            }
+            let tk = match (old, &reuse) {
+                (Some(o), Some(r)) if !o[k].is_nan() && !r.delta.shaded(k, c) => o[k],
+                _ => vols.transmittance(k, c),
+            };
+            rows.t[j * nd + k] = tk;
+            sums[j] += wk * tk;
+        }
+    }
+    for (j, &(ci, _)) in lit.iter().enumerate() {
+        rows.start[ci] = (j * nd) as u32;
+        t.light_cache[s][ci] = sums[j];
     }
     // pruning (eqs. 10–11)
     let alive: Vec<bool> = t.fate.iter().map(|f| *f == Fate::Alive).collect();
@@ -386,5 +532,5 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         } else if t.fate[k] == Fate::Alive && judged(a.season[k], s as u16) && psi[k] < a.psi_min[k] {
             t.fate[k] = Fate::Light;
         }
-    }
+    }    rows
 }
