@@ -220,6 +220,15 @@ fn looks_geographic(xll: f64, yll: f64, cs: f64, w: usize, h: usize) -> bool {
 /// of values, a value that is not a number, fewer or more rows than `nrows`.
 pub fn load_asc(path: &Path) -> Result<Terrain> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let prj = std::fs::read_to_string(path.with_extension("prj")).ok();
+    read_asc(&text, prj.as_deref(), path)
+}
+
+/// Parses the text of an ESRI ASCII grid as [`load_asc`] does, with the text of its `.prj`
+/// (`None` when there is none); `path` is only used in messages.
+///
+/// Errors: as [`load_asc`].
+pub fn read_asc(text: &str, prj: Option<&str>, path: &Path) -> Result<Terrain> {
     let mut lines = text.lines().enumerate().peekable();
     let (mut ncols, mut nrows, mut xll, mut yll, mut cell, mut nodata) = (None, None, None, None, None, None);
     let mut centre = false;
@@ -290,10 +299,9 @@ pub fn load_asc(path: &Path) -> Result<Terrain> {
     }
     let elevation = Grid { width: w, height: h, data };
     check_valid(path, &elevation)?;
-    let prj = path.with_extension("prj");
-    let geographic = match std::fs::read_to_string(&prj) {
-        Ok(s) => s.contains("GEOGCS") && !s.contains("PROJCS"),
-        Err(_) => {
+    let geographic = match prj {
+        Some(s) => s.contains("GEOGCS") && !s.contains("PROJCS"),
+        None => {
             let deg = looks_geographic(xll, yll, cs, w, h);
             if deg {
                 tracing::warn!(
@@ -333,7 +341,21 @@ pub fn load_png_heightmap(path: &Path, cell_m: f64, min_h_m: f64, max_h_m: f64) 
         return Err(Error::Invalid { context: path.display().to_string(), field: "max_h_m".into(), value: max_h_m.to_string(), expected: format!(">= min_h_m = {min_h_m}") });
     }
     let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let reader = image::ImageReader::with_format(std::io::BufReader::new(f), image::ImageFormat::Png);
+    read_png_heightmap(std::io::BufReader::new(f), path, cell_m, min_h_m, max_h_m)
+}
+
+/// Decodes a PNG heightmap from `r` as [`load_png_heightmap`] does; `path` is only used in
+/// messages.
+///
+/// Errors: as [`load_png_heightmap`].
+pub fn read_png_heightmap<R: std::io::BufRead + Seek>(r: R, path: &Path, cell_m: f64, min_h_m: f64, max_h_m: f64) -> Result<Terrain> {
+    if !(cell_m > 0.0) || !cell_m.is_finite() {
+        return Err(Error::Invalid { context: path.display().to_string(), field: "cell_m".into(), value: cell_m.to_string(), expected: "> 0 metres".into() });
+    }
+    if !(max_h_m >= min_h_m) {
+        return Err(Error::Invalid { context: path.display().to_string(), field: "max_h_m".into(), value: max_h_m.to_string(), expected: format!(">= min_h_m = {min_h_m}") });
+    }
+    let reader = image::ImageReader::with_format(r, image::ImageFormat::Png);
     let mut dec = reader.into_decoder().map_err(|e| Error::format(path, format!("PNG header: {e}")))?;
     let (w, h) = image::ImageDecoder::dimensions(&dec);
     check_size(path, w as u64, h as u64)?;
