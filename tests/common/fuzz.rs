@@ -127,7 +127,9 @@ pub fn seeds(target: &str) -> Vec<Vec<u8>> {
         "species" => ["beech", "norway_spruce", "silver_birch", "scots_pine"].iter().map(|s| data(&format!("species/{s}.toml"))).collect(),
         "geotiff" => gis(&[
             "int16_deflate_striped.tif",
-            "uint16_lzw_pred2_tiled.tif",
+            "uint16_lzw_tiled.tif",
+            "float32_zstd.tif",
+            "float32_pixelispoint.tif",
             "int32_packbits.tif",
             "float32_deflate_pred3.tif",
             "float64_lzw_pred3_tiled.tif",
