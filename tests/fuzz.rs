@@ -9,7 +9,7 @@ mod fuzz;
 static ALLOC: fuzz::CountingAlloc = fuzz::CountingAlloc;
 
 /// Executions per target in the suite (fixed, so the run is the same on every machine).
-const EXECS: u64 = 400;
+const EXECS: u64 = 2000;
 
 /// Aborts the process when one target runs far longer than it should (a hang), naming it.
 fn watchdog(target: &'static str) -> std::sync::mpsc::Sender<()> {

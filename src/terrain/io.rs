@@ -98,11 +98,29 @@ fn tiff_err(path: &Path, what: &str, e: tiff::TiffError) -> Error {
 /// (34735): GTModelTypeGeoKey (1024) 2 = geographic, 1 = projected; EPSG from
 /// ProjectedCSTypeGeoKey (3072) or GeographicTypeGeoKey (2048). GDAL_NODATA (42113, text) marks
 /// invalid cells, which become NaN. `path` is only used in messages.
-pub fn read_geotiff<R: Read + Seek>(r: R, path: &Path) -> Result<Terrain> {
+pub fn read_geotiff<R: Read + Seek>(mut r: R, path: &Path) -> Result<Terrain> {
     use tiff::tags::Tag;
+    let file_len = r.seek(std::io::SeekFrom::End(0)).and_then(|n| r.seek(std::io::SeekFrom::Start(0)).map(|_| n)).map_err(|e| Error::io(path, e))?;
     let mut dec = tiff::decoder::Decoder::new(r).map_err(|e| tiff_err(path, "header", e))?;
     let (w, h) = dec.dimensions().map_err(|e| tiff_err(path, "dimensions", e))?;
     check_size(path, w as u64, h as u64)?;
+    // before the decoder allocates w × h samples: can a file of this length hold them? (largest
+    // expansion of each compression: none 1, PackBits 64, Deflate 1032, LZW 4096 bytes a code)
+    let bits = dec.find_tag_unsigned::<u16>(Tag::BitsPerSample).ok().flatten().unwrap_or(8).max(1) as u64;
+    let compression = dec.find_tag_unsigned::<u16>(Tag::Compression).ok().flatten().unwrap_or(1);
+    let ratio: Option<u64> = match compression {
+        1 => Some(1),
+        32773 => Some(64),
+        8 | 32946 => Some(1032),
+        5 => Some(4096),
+        _ => None,
+    };
+    let need = (w as u64 * h as u64).saturating_mul(bits) / 8;
+    if let Some(k) = ratio {
+        if need > file_len.saturating_mul(k) {
+            return Err(Error::format(path, format!("{w} x {h} cells of {bits} bits need {need} bytes, more than the {file_len}-byte file can hold with compression {compression} (truncated file or corrupt dimensions?)")));
+        }
+    }
     let mut limits = tiff::decoder::Limits::default();
     limits.decoding_buffer_size = (MAX_CELLS as usize) * 8;
     limits.intermediate_buffer_size = (MAX_CELLS as usize) * 8;
@@ -362,6 +380,10 @@ pub fn read_asc(text: &str, prj: Option<&str>, path: &Path) -> Result<Terrain> {
     let (w, h) = (nc as u64, nr as u64);
     check_size(path, w, h)?;
     let (w, h) = (w as usize, h as usize);
+    // each value takes at least 2 bytes ("1 "): refuse a header the file cannot fill before allocating
+    if w * h > text.len() / 2 + 1 {
+        return Err(Error::format(path, format!("ncols × nrows = {w} × {h} values, more than the {}-byte file can hold (truncated file or wrong header?)", text.len())));
+    }
     // values are read as one stream: GIS tools wrap long rows over several lines
     let mut data = Vec::with_capacity(w * h);
     let mut last_line = 0;
