@@ -105,15 +105,17 @@ pub fn read_geotiff<R: Read + Seek>(mut r: R, path: &Path) -> Result<Terrain> {
     let (w, h) = dec.dimensions().map_err(|e| tiff_err(path, "dimensions", e))?;
     check_size(path, w as u64, h as u64)?;
     // before the decoder allocates w × h samples: can a file of this length hold them? (largest
-    // expansion of each compression: none 1, PackBits 64, Deflate 1032, LZW 4096 bytes a code)
-    let bits = dec.find_tag_unsigned::<u16>(Tag::BitsPerSample).ok().flatten().unwrap_or(8).max(1) as u64;
+    // expansion of each compression: none 1, PackBits 64, Deflate 1032, LZW 4096 bytes a code,
+    // others 32768)
+    let bits = dec.find_tag_unsigned::<u16>(Tag::BitsPerSample).ok().flatten().unwrap_or(8).max(8) as u64;
     let compression = dec.find_tag_unsigned::<u16>(Tag::Compression).ok().flatten().unwrap_or(1);
     let ratio: Option<u64> = match compression {
         1 => Some(1),
         32773 => Some(64),
         8 | 32946 => Some(1032),
         5 => Some(4096),
-        _ => None,
+        // ZSTD and anything else: no terrain compresses better than 32768:1
+        _ => Some(32768),
     };
     let need = (w as u64 * h as u64).saturating_mul(bits) / 8;
     if let Some(k) = ratio {
