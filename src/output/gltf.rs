@@ -232,11 +232,20 @@ pub fn write_skeleton_sidecar(glb: &Path, sk: &crate::structure::Skeleton) -> Re
 /// sidecar and the node for a wrong format tag, a malformed node, a non-finite value or a parent
 /// that does not precede its child.
 pub fn read_skeleton_sidecar(glb: &Path) -> Result<crate::structure::Skeleton> {
-    use crate::structure::{Node, Role, Skeleton};
     let path = skeleton_sidecar_path(glb);
     let text = std::fs::read_to_string(&path).map_err(|source| Error::Io { path: path.clone(), source })?;
+    parse_skeleton_sidecar(&text, &path)
+}
+
+/// Parses the text of a skeleton sidecar as [`read_skeleton_sidecar`] does; `path` (the
+/// sidecar) is only used in messages.
+///
+/// Errors: as [`read_skeleton_sidecar`], less the I/O.
+pub fn parse_skeleton_sidecar(text: &str, path: &Path) -> Result<crate::structure::Skeleton> {
+    use crate::structure::{Node, Role, Skeleton};
+    let path = path.to_path_buf();
     let fmt = |message: String| OutputError::from(Error::Format { path: path.clone(), message });
-    let doc: Value = serde_json::from_str(&text).map_err(|e| fmt(format!("not JSON: {e}")))?;
+    let doc: Value = serde_json::from_str(text).map_err(|e| fmt(format!("not JSON: {e}")))?;
     if doc.get("format").and_then(Value::as_str) != Some(SKELETON_FORMAT) {
         return Err(fmt(format!("field `format`: expected \"{SKELETON_FORMAT}\"")));
     }

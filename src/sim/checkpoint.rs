@@ -209,6 +209,9 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     let s = &bytes[r.p..r.p + 2 * n];
     r.p += 2 * n;
     t.species = s.chunks_exact(2).map(|c| u16::from_le_bytes([c[0], c[1]])).collect();
+    if t.species.len() != t.id.len() {
+        return Err(Error::format(path, format!("checkpoint has {} tree ids but {} tree species (corrupt)", t.id.len(), t.species.len())));
+    }
     for c in [&mut t.x, &mut t.y, &mut t.z, &mut t.age, &mut t.height, &mut t.dbh, &mut t.crown_radius, &mut t.crown_base, &mut t.light, &mut t.vigour, &mut t.suitability] {
         *c = r.f32s()?;
         if c.len() != t.id.len() {
@@ -217,6 +220,16 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     }
     if t.species.iter().any(|&s| s as usize >= w.site.lib.species.len()) {
         return Err(Error::format(path, "checkpoint names a species index outside the library"));
+    }
+    // positions inside the terrain, sizes finite and non-negative: a corrupt value would
+    // otherwise index outside the light grid or spread NaN through the stand
+    let (ex, ey) = (w.site.extent.0 as f32, w.site.extent.1 as f32);
+    for i in 0..t.id.len() {
+        let ok = (0.0..=ex).contains(&t.x[i]) && (0.0..=ey).contains(&t.y[i]) && t.z[i].is_finite()
+            && [t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i], t.light[i], t.vigour[i], t.suitability[i]].iter().all(|v| v.is_finite() && *v >= 0.0);
+        if !ok {
+            return Err(Error::format(path, format!("checkpoint tree {} (id {}): position or size out of range (x {}, y {}, height {}, dbh {}): corrupt", i, t.id[i], t.x[i], t.y[i], t.height[i], t.dbh[i])));
+        }
     }
     let ns = r.u64()? as usize;
     if ns != w.site.pool.len() {
@@ -243,6 +256,10 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     let nc = cohorts.cell.len();
     if [cohorts.pool.len(), cohorts.stems.len(), cohorts.height.len(), cohorts.age.len(), cohorts.vigour.len()].iter().any(|&l| l != nc) {
         return Err(r.err());
+    }
+    let bad_f = |v: &[f32]| v.iter().any(|x| !(x.is_finite() && *x >= 0.0));
+    if bad_f(&cohorts.height) || bad_f(&cohorts.age) || bad_f(&cohorts.vigour) || seeds.iter().any(|g| bad_f(&g.data)) {
+        return Err(Error::format(path, "checkpoint holds a negative, NaN or infinite cohort height, age, vigour or seed count: corrupt"));
     }
     if cohorts.cell.iter().any(|&c| c as usize >= w.site.light_site.len()) || cohorts.pool.iter().any(|&p| p as usize >= w.site.pool.len()) {
         return Err(Error::format(path, "checkpoint cohorts lie outside the light grid or the species pool"));

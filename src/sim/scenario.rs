@@ -297,7 +297,7 @@ impl Scenario {
             }
         }
         if let Some(u) = &t.uniform {
-            if u.width == 0 || u.height == 0 || u.width * u.height > 64_000_000 {
+            if u.width == 0 || u.height == 0 || u.width.saturating_mul(u.height) > 64_000_000 {
                 return Err(invalid(ctx, "terrain.uniform.width/height", format!("{} x {}", u.width, u.height), "≥ 1 and at most 64 million cells"));
             }
             if !(u.cell_m > 0.0 && u.cell_m <= 1000.0) {

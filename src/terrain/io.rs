@@ -98,11 +98,31 @@ fn tiff_err(path: &Path, what: &str, e: tiff::TiffError) -> Error {
 /// (34735): GTModelTypeGeoKey (1024) 2 = geographic, 1 = projected; EPSG from
 /// ProjectedCSTypeGeoKey (3072) or GeographicTypeGeoKey (2048). GDAL_NODATA (42113, text) marks
 /// invalid cells, which become NaN. `path` is only used in messages.
-pub fn read_geotiff<R: Read + Seek>(r: R, path: &Path) -> Result<Terrain> {
+pub fn read_geotiff<R: Read + Seek>(mut r: R, path: &Path) -> Result<Terrain> {
     use tiff::tags::Tag;
+    let file_len = r.seek(std::io::SeekFrom::End(0)).and_then(|n| r.seek(std::io::SeekFrom::Start(0)).map(|_| n)).map_err(|e| Error::io(path, e))?;
     let mut dec = tiff::decoder::Decoder::new(r).map_err(|e| tiff_err(path, "header", e))?;
     let (w, h) = dec.dimensions().map_err(|e| tiff_err(path, "dimensions", e))?;
     check_size(path, w as u64, h as u64)?;
+    // before the decoder allocates w × h samples: can a file of this length hold them? (largest
+    // expansion of each compression: none 1, PackBits 64, Deflate 1032, LZW 4096 bytes a code,
+    // others 32768)
+    let bits = dec.find_tag_unsigned::<u16>(Tag::BitsPerSample).ok().flatten().unwrap_or(8).max(8) as u64;
+    let compression = dec.find_tag_unsigned::<u16>(Tag::Compression).ok().flatten().unwrap_or(1);
+    let ratio: Option<u64> = match compression {
+        1 => Some(1),
+        32773 => Some(64),
+        8 | 32946 => Some(1032),
+        5 => Some(4096),
+        // ZSTD and anything else: no terrain compresses better than 32768:1
+        _ => Some(32768),
+    };
+    let need = (w as u64 * h as u64).saturating_mul(bits) / 8;
+    if let Some(k) = ratio {
+        if need > file_len.saturating_mul(k) {
+            return Err(Error::format(path, format!("{w} x {h} cells of {bits} bits need {need} bytes, more than the {file_len}-byte file can hold with compression {compression} (truncated file or corrupt dimensions?)")));
+        }
+    }
     let mut limits = tiff::decoder::Limits::default();
     limits.decoding_buffer_size = (MAX_CELLS as usize) * 8;
     limits.intermediate_buffer_size = (MAX_CELLS as usize) * 8;
@@ -112,6 +132,7 @@ pub fn read_geotiff<R: Read + Seek>(r: R, path: &Path) -> Result<Terrain> {
         return Err(Error::format(path, format!("SamplesPerPixel = {spp}: expected 1 (a single elevation band)")));
     }
     let scale = dec.find_tag(Tag::ModelPixelScaleTag).ok().flatten().and_then(|v| v.into_f64_vec().ok());
+    let transform = dec.find_tag(Tag::ModelTransformationTag).ok().flatten().and_then(|v| v.into_f64_vec().ok());
     let tie = dec.find_tag(Tag::ModelTiepointTag).ok().flatten().and_then(|v| v.into_f64_vec().ok());
     let keys = dec.find_tag(Tag::GeoKeyDirectoryTag).ok().flatten().and_then(|v| v.into_u16_vec().ok());
     let nodata_txt = dec.find_tag(Tag::GdalNodata).ok().flatten().and_then(|v| v.into_string().ok());
@@ -141,15 +162,16 @@ pub fn read_geotiff<R: Read + Seek>(r: R, path: &Path) -> Result<Terrain> {
         .into_iter()
         .map(|x| if nodata.is_some_and(|nd| (x as f64 - nd).abs() <= 1e-6 * nd.abs().max(1.0)) || !x.is_finite() { f32::NAN } else { x })
         .collect();
-    let elevation = Grid { width: w as usize, height: h as usize, data };
+    let mut elevation = Grid { width: w as usize, height: h as usize, data };
     check_valid(path, &elevation)?;
 
     // GeoKeys: header (version, rev, minor, count) then (key, location, count, value) quadruples.
-    let (mut model, mut epsg) = (0u16, None);
+    let (mut model, mut epsg, mut raster_type) = (0u16, None, 1u16);
     if let Some(k) = &keys {
         for q in k.get(4..).unwrap_or(&[]).chunks_exact(4) {
             match (q[0], q[1]) {
                 (1024, 0) => model = q[3],
+                (1025, 0) => raster_type = q[3],
                 (3072, 0) | (2048, 0) if epsg.is_none() || q[0] == 3072 => {
                     if q[3] != 32767 && q[3] != 0 {
                         epsg = Some(q[3] as u32)
@@ -159,42 +181,126 @@ pub fn read_geotiff<R: Read + Seek>(r: R, path: &Path) -> Result<Terrain> {
             }
         }
     }
-    let crs = match (model, &scale) {
-        (2, _) => Crs::Geographic,
-        (1, _) => Crs::Projected,
-        (_, Some(_)) => Crs::Projected,
+    let crs = match (model, &scale, &transform) {
+        (2, _, _) => Crs::Geographic,
+        (1, _, _) => Crs::Projected,
+        (_, Some(_), _) | (_, _, Some(_)) => Crs::Projected,
         _ => Crs::Local,
     };
-    let (pw, ph) = match &scale {
-        Some(s) if s.len() >= 2 && s[0] > 0.0 && s[1] > 0.0 => (s[0], s[1]),
-        Some(s) => return Err(Error::format(path, format!("ModelPixelScale = {s:?}: expected two positive cell sizes"))),
-        None => (1.0, 1.0),
+    // (pw, ph): cell size east and south (m or degrees); (ox, oy): north-west corner of cell (0, 0)
+    let (pw, ph, mut ox, mut oy) = match (&scale, &transform) {
+        (Some(s), _) if s.len() >= 2 && s[0] > 0.0 && s[1] > 0.0 && s[0].is_finite() && s[1].is_finite() => {
+            let (ox, oy) = match &tie {
+                Some(t) if t.len() >= 6 => (t[3] - t[0] * s[0], t[4] + t[1] * s[1]),
+                _ => (0.0, h as f64 * s[1]),
+            };
+            (s[0], s[1], ox, oy)
+        }
+        (Some(s), _) => return Err(Error::format(path, format!("ModelPixelScale = {s:?}: expected two positive cell sizes"))),
+        // ModelTransformation: x = a·col + b·row + d, y = e·col + f·row + h (row-major 4 × 4)
+        (None, Some(m)) if m.len() >= 8 => {
+            let (a, b, d, e, f, hh) = (m[0], m[1], m[3], m[4], m[5], m[7]);
+            if b != 0.0 || e != 0.0 {
+                return Err(Error::format(path, format!("ModelTransformation {m:?} is rotated or sheared (terms b = {b}, e = {e}): expected a north-up or south-up grid; warp it first, e.g. `gdalwarp -t_srs EPSG:NNNN`")));
+            }
+            if !(a > 0.0 && f != 0.0 && a.is_finite() && f.is_finite()) {
+                return Err(Error::format(path, format!("ModelTransformation {m:?}: expected a positive cell width and a non-zero cell height")));
+            }
+            (a, -f, d, hh)
+        }
+        (None, Some(m)) => return Err(Error::format(path, format!("ModelTransformation has {} values: expected 16", m.len()))),
+        (None, None) => (1.0, 1.0, 0.0, h as f64),
     };
-    let (ox, oy) = match &tie {
-        Some(t) if t.len() >= 6 => (t[3] - t[0] * pw, t[4] + t[1] * ph),
-        _ => (0.0, h as f64 * ph),
+    let ph = if ph < 0.0 {
+        // south-up rows (row 0 is the southern edge): flip them so that row 0 is north
+        let wu = w as usize;
+        let rows: Vec<&[f32]> = elevation.data.chunks_exact(wu).rev().collect();
+        elevation.data = rows.concat();
+        oy += -ph * h as f64;
+        -ph
+    } else {
+        ph
     };
+    if raster_type == 2 {
+        // RasterPixelIsPoint: the tie point is the centre of the cell, not its corner
+        ox -= pw / 2.0;
+        oy += ph / 2.0;
+    }
     let mut geo = GeoRef { crs, epsg, origin_x: ox, origin_y: oy, pixel_w: pw, pixel_h: ph, latitude_deg: FALLBACK_LATITUDE_DEG };
-    geo.latitude_deg = centre_latitude(&geo, h as usize);
+    let proj = epsg.and_then(epsg_projection);
+    geo.latitude_deg = centre_latitude(&geo, w as usize, h as usize, proj.as_ref(), path)?;
     Ok(Terrain { elevation, geo, nodata, source: path.display().to_string() })
 }
 
-/// Latitude (degrees) of the grid centre: exact for geographic grids, inverse UTM (footpoint
-/// latitude series, Snyder 1987 eq. 3-26/8-18) for EPSG 326zz/327zz, else [`FALLBACK_LATITUDE_DEG`].
-fn centre_latitude(geo: &GeoRef, height: usize) -> f64 {
+/// A projected coordinate reference system as the readers understand it: its name and the
+/// PROJ string handed to `proj4rs` for inverse projection.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Projection {
+    /// Name, e.g. `NAD83 / UTM zone 17N` (from the EPSG code or the `.prj`).
+    pub name: String,
+    /// PROJ string, e.g. `+proj=utm +zone=17 +ellps=GRS80 +units=m`.
+    pub proj: String,
+}
+
+/// The projection of a GeoTIFF's EPSG code, for the UTM families GIS tools write most:
+/// WGS 84 (32601–32660 north, 32701–32760 south), NAD83 (26901–26923) and ETRS89 (25828–25838).
+/// Other codes give `None` (the grid keeps [`FALLBACK_LATITUDE_DEG`], with a warning).
+pub fn epsg_projection(epsg: u32) -> Option<Projection> {
+    let (datum, ellps, zone, south) = match epsg {
+        32601..=32660 => ("WGS 84", "WGS84", epsg - 32600, false),
+        32701..=32760 => ("WGS 84", "WGS84", epsg - 32700, true),
+        26901..=26923 => ("NAD83", "GRS80", epsg - 26900, false),
+        25828..=25838 => ("ETRS89", "GRS80", epsg - 25800, false),
+        _ => return None,
+    };
+    Some(Projection {
+        name: format!("{datum} / UTM zone {zone}{}", if south { "S" } else { "N" }),
+        proj: format!("+proj=utm +zone={zone}{} +ellps={ellps} +units=m", if south { " +south" } else { "" }),
+    })
+}
+
+/// The projection described by a `.prj` in OGC or ESRI WKT (`PROJCS[...]`), converted to a
+/// PROJ string by `proj4wkt`; `None` for a geographic `.prj` (`GEOGCS` only).
+///
+/// Errors: [`Error::Format`] naming `prj_path` when the WKT cannot be parsed or names a
+/// projection `proj4wkt` does not know.
+pub fn wkt_projection(wkt: &str, prj_path: &Path) -> Result<Option<Projection>> {
+    if !wkt.contains("PROJCS") {
+        return Ok(None);
+    }
+    let name = wkt.split_once("PROJCS[\"").and_then(|(_, r)| r.split_once('"')).map(|(n, _)| n.replace('_', " ")).unwrap_or_else(|| "unnamed".into());
+    let proj = proj4wkt::wkt_to_projstring(wkt.trim()).map_err(|e| Error::format(prj_path, format!("projection `{name}`: cannot read its WKT ({e}); expected OGC or ESRI WKT of a projected CRS")))?;
+    Ok(Some(Projection { name, proj }))
+}
+
+/// Latitude (degrees) of the grid centre: exact for geographic grids; for projected grids the
+/// inverse projection (`proj4rs`) of the centre of `proj`; else [`FALLBACK_LATITUDE_DEG`]
+/// with a warning.
+///
+/// Errors: [`Error::Format`] naming `path` when the projection cannot be set up or inverted.
+fn centre_latitude(geo: &GeoRef, width: usize, height: usize, proj: Option<&Projection>, path: &Path) -> Result<f64> {
     let cy = geo.origin_y - geo.pixel_h * height as f64 / 2.0;
-    match (geo.crs, geo.epsg) {
-        (Crs::Geographic, _) => cy,
-        (Crs::Projected, Some(e)) if (32601..=32660).contains(&e) || (32701..=32760).contains(&e) => {
-            let northing = if e >= 32701 { cy - 10_000_000.0 } else { cy };
-            let (a, e2, k0) = (6_378_137.0f64, 0.006_694_379_990_14f64, 0.9996);
-            let m = northing / k0;
-            let mu = m / (a * (1.0 - e2 / 4.0 - 3.0 * e2 * e2 / 64.0));
-            let e1 = (1.0 - (1.0 - e2).sqrt()) / (1.0 + (1.0 - e2).sqrt());
-            let phi1 = mu + (3.0 * e1 / 2.0 - 27.0 * e1.powi(3) / 32.0) * (2.0 * mu).sin() + (21.0 * e1 * e1 / 16.0) * (4.0 * mu).sin() + (151.0 * e1.powi(3) / 96.0) * (6.0 * mu).sin();
-            phi1.to_degrees()
+    let cx = geo.origin_x + geo.pixel_w * width as f64 / 2.0;
+    match (geo.crs, proj) {
+        (Crs::Geographic, _) => Ok(cy),
+        (Crs::Projected, Some(p)) => {
+            let bad = |e: String| Error::format(path, format!("projection {} (`{}`): {e}", p.name, p.proj));
+            let from = proj4rs::proj::Proj::from_proj_string(&p.proj).map_err(|e| bad(e.to_string()))?;
+            let to = proj4rs::proj::Proj::from_proj_string("+proj=longlat +ellps=WGS84").map_err(|e| bad(e.to_string()))?;
+            let mut pt = (cx, cy, 0.0);
+            proj4rs::transform::transform(&from, &to, &mut pt).map_err(|e| bad(format!("centre ({cx}, {cy}) cannot be inverted: {e}")))?;
+            let lat = pt.1.to_degrees();
+            if !(-90.0..=90.0).contains(&lat) {
+                return Err(bad(format!("centre ({cx}, {cy}) inverts to latitude {lat}: expected -90 … 90")));
+            }
+            tracing::info!("{}: CRS {}, centre latitude {lat:.4}°", path.display(), p.name);
+            Ok(lat)
         }
-        _ => geo.latitude_deg,
+        (Crs::Projected, None) => {
+            tracing::warn!("{}: projected CRS {} not known; latitude for insolation set to {FALLBACK_LATITUDE_DEG}° (put a .prj beside the file or set climate.latitude_deg)", path.display(), geo.epsg.map_or("without EPSG code".into(), |e| format!("EPSG:{e}")));
+            Ok(geo.latitude_deg)
+        }
+        _ => Ok(geo.latitude_deg),
     }
 }
 
@@ -216,10 +322,21 @@ fn looks_geographic(xll: f64, yll: f64, cs: f64, w: usize, h: usize) -> bool {
 /// projected (metres); without a `.prj` the grid is projected unless its cell size and extent
 /// can only be degrees (cell < 0.01, inside ±180° × ±90°: read as geographic, with a warning).
 ///
+/// Rows may wrap over several lines (values are read as one stream of `ncols × nrows`).
+///
 /// Errors name the line: a header key missing or not a number, a data row with the wrong number
 /// of values, a value that is not a number, fewer or more rows than `nrows`.
 pub fn load_asc(path: &Path) -> Result<Terrain> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let prj = std::fs::read_to_string(path.with_extension("prj")).ok();
+    read_asc(&text, prj.as_deref(), path)
+}
+
+/// Parses the text of an ESRI ASCII grid as [`load_asc`] does, with the text of its `.prj`
+/// (`None` when there is none); `path` is only used in messages.
+///
+/// Errors: as [`load_asc`].
+pub fn read_asc(text: &str, prj: Option<&str>, path: &Path) -> Result<Terrain> {
     let mut lines = text.lines().enumerate().peekable();
     let (mut ncols, mut nrows, mut xll, mut yll, mut cell, mut nodata) = (None, None, None, None, None, None);
     let mut centre = false;
@@ -265,35 +382,36 @@ pub fn load_asc(path: &Path) -> Result<Terrain> {
     let (w, h) = (nc as u64, nr as u64);
     check_size(path, w, h)?;
     let (w, h) = (w as usize, h as usize);
+    // each value takes at least 2 bytes ("1 "): refuse a header the file cannot fill before allocating
+    if w * h > text.len() / 2 + 1 {
+        return Err(Error::format(path, format!("ncols × nrows = {w} × {h} values, more than the {}-byte file can hold (truncated file or wrong header?)", text.len())));
+    }
+    // values are read as one stream: GIS tools wrap long rows over several lines
     let mut data = Vec::with_capacity(w * h);
-    let mut row = 0usize;
+    let mut last_line = 0;
     for (i, line) in lines {
-        let before = data.len();
         for tok in line.split_whitespace() {
+            if data.len() == w * h {
+                return Err(Error::format(path, format!("line {}: value `{tok}` beyond ncols × nrows = {w} × {h} values", i + 1)));
+            }
             let v: f64 = tok.parse().map_err(|_| Error::format(path, format!("line {}: value `{tok}` is not a number", i + 1)))?;
             data.push(if nodata.is_some_and(|nd| v == nd) || !v.is_finite() { f32::NAN } else { v as f32 });
+            last_line = i + 1;
         }
-        let got = data.len() - before;
-        if got == 0 {
-            continue;
-        }
-        if row >= h {
-            return Err(Error::format(path, format!("line {}: data row {} beyond nrows = {h}", i + 1, row + 1)));
-        }
-        if got != w {
-            return Err(Error::format(path, format!("line {}: data row {} has {got} values: expected ncols = {w}", i + 1, row + 1)));
-        }
-        row += 1;
     }
-    if row != h {
-        return Err(Error::format(path, format!("{row} data rows: expected nrows = {h} (file truncated?)")));
+    if data.len() != w * h {
+        return Err(Error::format(path, format!("line {last_line}: the data end after {} values ({} full rows of ncols = {w}): expected ncols × nrows = {w} × {h} values, nrows = {h} (file truncated?)", data.len(), data.len() / w)));
     }
     let elevation = Grid { width: w, height: h, data };
     check_valid(path, &elevation)?;
-    let prj = path.with_extension("prj");
-    let geographic = match std::fs::read_to_string(&prj) {
-        Ok(s) => s.contains("GEOGCS") && !s.contains("PROJCS"),
-        Err(_) => {
+    let prj_path = path.with_extension("prj");
+    let projection = match prj {
+        Some(s) => wkt_projection(s, &prj_path)?,
+        None => None,
+    };
+    let geographic = match prj {
+        Some(s) => s.contains("GEOGCS") && !s.contains("PROJCS"),
+        None => {
             let deg = looks_geographic(xll, yll, cs, w, h);
             if deg {
                 tracing::warn!(
@@ -314,7 +432,7 @@ pub fn load_asc(path: &Path) -> Result<Terrain> {
         pixel_h: cs,
         latitude_deg: FALLBACK_LATITUDE_DEG,
     };
-    geo.latitude_deg = centre_latitude(&geo, h);
+    geo.latitude_deg = centre_latitude(&geo, w, h, projection.as_ref(), &prj_path)?;
     Ok(Terrain { elevation, geo, nodata, source: path.display().to_string() })
 }
 
@@ -333,7 +451,21 @@ pub fn load_png_heightmap(path: &Path, cell_m: f64, min_h_m: f64, max_h_m: f64) 
         return Err(Error::Invalid { context: path.display().to_string(), field: "max_h_m".into(), value: max_h_m.to_string(), expected: format!(">= min_h_m = {min_h_m}") });
     }
     let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let reader = image::ImageReader::with_format(std::io::BufReader::new(f), image::ImageFormat::Png);
+    read_png_heightmap(std::io::BufReader::new(f), path, cell_m, min_h_m, max_h_m)
+}
+
+/// Decodes a PNG heightmap from `r` as [`load_png_heightmap`] does; `path` is only used in
+/// messages.
+///
+/// Errors: as [`load_png_heightmap`].
+pub fn read_png_heightmap<R: std::io::BufRead + Seek>(r: R, path: &Path, cell_m: f64, min_h_m: f64, max_h_m: f64) -> Result<Terrain> {
+    if !(cell_m > 0.0) || !cell_m.is_finite() {
+        return Err(Error::Invalid { context: path.display().to_string(), field: "cell_m".into(), value: cell_m.to_string(), expected: "> 0 metres".into() });
+    }
+    if !(max_h_m >= min_h_m) {
+        return Err(Error::Invalid { context: path.display().to_string(), field: "max_h_m".into(), value: max_h_m.to_string(), expected: format!(">= min_h_m = {min_h_m}") });
+    }
+    let reader = image::ImageReader::with_format(r, image::ImageFormat::Png);
     let mut dec = reader.into_decoder().map_err(|e| Error::format(path, format!("PNG header: {e}")))?;
     let (w, h) = image::ImageDecoder::dimensions(&dec);
     check_size(path, w as u64, h as u64)?;
@@ -379,7 +511,7 @@ pub fn window(t: &Terrain, col0: usize, row0: usize, w: usize, h: usize) -> Resu
     geo.origin_x += col0 as f64 * geo.pixel_w;
     geo.origin_y -= row0 as f64 * geo.pixel_h;
     if geo.crs == Crs::Geographic {
-        geo.latitude_deg = centre_latitude(&geo, h);
+        geo.latitude_deg = geo.origin_y - geo.pixel_h * h as f64 / 2.0;
     }
     Ok(Terrain { elevation, geo, nodata: t.nodata, source: format!("{} [window {col0},{row0} {w}x{h}]", t.source) })
 }
