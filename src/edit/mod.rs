@@ -529,20 +529,7 @@ impl Editor {
             self.frame_tree();
         }
         let (rect, resp) = ui.allocate_exact_size(ui.available_size(), egui::Sense::click_and_drag());
-        if resp.dragged_by(egui::PointerButton::Primary) {
-            let d = resp.drag_delta();
-            self.rig.rotate(d.x, d.y);
-        }
-        if resp.dragged_by(egui::PointerButton::Secondary) || resp.dragged_by(egui::PointerButton::Middle) {
-            let d = resp.drag_delta();
-            self.rig.pan(d.x, d.y, rect.height());
-        }
-        if resp.hovered() {
-            let s = ui.input(|i| i.smooth_scroll_delta.y);
-            if s != 0.0 {
-                self.rig.zoom(s / 50.0);
-            }
-        }
+        self.rig.drive(ui, &resp, rect.height());
         let ppp = ui.ctx().pixels_per_point();
         let cam = self.rig.camera();
         let drawn = if self.grown.is_some() { self.gpu.as_mut().map(|g| g.draw(&self.scene, &cam, (rect.width() * ppp) as u32, (rect.height() * ppp) as u32)) } else { None };

@@ -118,6 +118,28 @@ impl CameraRig {
         }
     }
 
+    /// Applies a 3-D view's pointer input to the camera, the same way in the viewer and the
+    /// editor: primary drag turns ([`CameraRig::rotate`]), secondary or middle drag pans
+    /// ([`CameraRig::pan`], `rect_height_px` the view's height in points), the wheel over the
+    /// view zooms ([`CameraRig::zoom`], one step per 50 points of scroll).
+    pub fn drive(&mut self, ui: &eframe::egui::Ui, resp: &eframe::egui::Response, rect_height_px: f32) {
+        use eframe::egui::PointerButton;
+        if resp.dragged_by(PointerButton::Primary) {
+            let d = resp.drag_delta();
+            self.rotate(d.x, d.y);
+        }
+        if resp.dragged_by(PointerButton::Secondary) || resp.dragged_by(PointerButton::Middle) {
+            let d = resp.drag_delta();
+            self.pan(d.x, d.y, rect_height_px);
+        }
+        if resp.hovered() {
+            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
+            if scroll != 0.0 {
+                self.zoom(scroll / 50.0);
+            }
+        }
+    }
+
     /// Zooms by `steps` wheel notches (positive: closer): the orbit distance is multiplied by
     /// 0.9^steps (kept within 1 m … 4 × the scene size); in fly mode the eye moves forward by
     /// 2 % of the scene size per notch.

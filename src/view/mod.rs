@@ -452,20 +452,7 @@ impl Viewer {
         let (rect, resp) = ui.allocate_exact_size(size, egui::Sense::click_and_drag());
         self.view_rect = rect;
         self.pixels_per_point = ui.ctx().pixels_per_point();
-        if resp.dragged_by(egui::PointerButton::Primary) {
-            let d = resp.drag_delta();
-            self.rig.rotate(d.x, d.y);
-        }
-        if resp.dragged_by(egui::PointerButton::Secondary) || resp.dragged_by(egui::PointerButton::Middle) {
-            let d = resp.drag_delta();
-            self.rig.pan(d.x, d.y, rect.height());
-        }
-        if resp.hovered() {
-            let scroll = ui.input(|i| i.smooth_scroll_delta.y);
-            if scroll != 0.0 {
-                self.rig.zoom(scroll / 50.0);
-            }
-        }
+        self.rig.drive(ui, &resp, rect.height());
         if resp.clicked() {
             if let Some(p) = resp.interact_pointer_pos() {
                 self.pick_at(p.x - rect.left(), p.y - rect.top());
