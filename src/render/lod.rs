@@ -201,6 +201,70 @@ pub struct Silhouette {
     pub radius: f32,
     /// Height (normalised) of the widest bin: where the horizontal quad sits.
     pub widest_z: f32,
+    /// How the crown reads from a distance, measured on the finest level (see [`CrownLook`]).
+    pub look: CrownLook,
+}
+
+/// The texture of a crown seen from afar, measured on a prototype's finest level so that the
+/// coarse levels (billboard, crown hull) keep the species' character: a beech's smooth dome, an
+/// oak's lumpy open crown, a birch's airy one, a spruce's spire, a pine's flat umbrella.
+///
+/// All three are 0..1 and computed from the foliage (leaf-card vertices) of level 0 in plan
+/// (seen from above) on a 12 × 12 grid over the crown's square of side 2 × radius, cells inside
+/// the crown disc only.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CrownLook {
+    /// Half-width of the crown at 85 % of its depth relative to its widest (0 = pointed spire,
+    /// ≈ 0.6 = dome, → 1 = flat top).
+    pub top_flatness: f32,
+    /// Fraction of the crown disc's plan cells holding foliage (1 = dense, low = airy crown with
+    /// sky and ground seen through it).
+    pub cover: f32,
+    /// Clumping: coefficient of variation of the foliage per covered plan cell, divided by 2 and
+    /// clamped to 0..1 (0 = evenly spread leaves, smooth crown; high = foliage in separate lumps).
+    pub clump: f32,
+}
+
+impl Default for CrownLook {
+    /// A dense, smooth dome.
+    fn default() -> Self {
+        CrownLook { top_flatness: 0.6, cover: 0.9, clump: 0.2 }
+    }
+}
+
+impl CrownLook {
+    /// Measures `pts` (foliage vertices of a normalised tree) with crown radius `radius`, crown
+    /// profile `s` (as in [`Silhouette::width`]) and crown extent `zlo..zhi`.
+    fn measure(pts: &[[f32; 3]], radius: f32, s: &[f32; SILHOUETTE_BINS], zlo: f32, zhi: f32) -> Self {
+        const N: usize = 12;
+        let mut count = [0u32; N * N];
+        let cell = |v: f32| (((v / radius.max(1e-6) + 1.0) * 0.5 * N as f32) as usize).min(N - 1);
+        for p in pts.iter().filter(|p| p.iter().all(|v| v.is_finite())) {
+            count[cell(p[1]) * N + cell(p[0])] += 1;
+        }
+        let inside: Vec<u32> = (0..N * N)
+            .filter(|k| {
+                let (x, y) = (((k % N) as f32 + 0.5) / N as f32 * 2.0 - 1.0, ((k / N) as f32 + 0.5) / N as f32 * 2.0 - 1.0);
+                x * x + y * y <= 1.0
+            })
+            .map(|k| count[k])
+            .collect();
+        let covered: Vec<f32> = inside.iter().filter(|&&c| c > 0).map(|&c| c as f32).collect();
+        let cover = covered.len() as f32 / inside.len().max(1) as f32;
+        let clump = if covered.len() > 1 {
+            let m = covered.iter().sum::<f32>() / covered.len() as f32;
+            let var = covered.iter().map(|c| (c - m) * (c - m)).sum::<f32>() / covered.len() as f32;
+            (var.sqrt() / m.max(1e-6) * 0.5).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let z = zlo + 0.85 * (zhi - zlo);
+        let x = (z * SILHOUETTE_BINS as f32 - 0.5).clamp(0.0, SILHOUETTE_BINS as f32 - 1.0);
+        let i = (x as usize).min(SILHOUETTE_BINS - 1);
+        let j = (i + 1).min(SILHOUETTE_BINS - 1);
+        let top = s[i] + (s[j] - s[i]) * (x - i as f32);
+        CrownLook { top_flatness: top.clamp(0.0, 1.0), cover: cover.clamp(0.0, 1.0), clump }
+    }
 }
 
 impl Silhouette {
@@ -235,7 +299,7 @@ impl Silhouette {
                 let t = (z - 0.65) / 0.35;
                 *v = (1.0 - t * t).max(0.0).sqrt();
             }
-            return Silhouette { width: w, crown_bottom: 0.3, crown_top: 1.0, trunk_half_width: 0.05, radius: 0.3, widest_z: 0.65 };
+            return Silhouette { width: w, crown_bottom: 0.3, crown_top: 1.0, trunk_half_width: 0.05, radius: 0.3, widest_z: 0.65, look: CrownLook::default() };
         }
         // fill empty bins between filled ones (sparse leaf cards)
         let filled: Vec<usize> = (0..n).filter(|&i| w[i] > 0.0).collect();
@@ -287,6 +351,11 @@ impl Silhouette {
         let trunk = level
             .map(|l| l.bark.positions.iter().filter(|p| p[2] < zlo.max(0.05)).map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt()).fold(0.0f32, f32::max))
             .unwrap_or(0.0);
+        // foliage only: a leafless chain (bark points) reads as a dense default
+        let look = match level {
+            Some(l) if !l.leaves.positions.is_empty() => CrownLook::measure(&pts, radius, &s, zlo, zhi),
+            _ => CrownLook::default(),
+        };
         Silhouette {
             width: s,
             crown_bottom: zlo,
@@ -294,6 +363,7 @@ impl Silhouette {
             trunk_half_width: (trunk / radius).clamp(0.02, 0.2),
             radius,
             widest_z: (widest as f32 + 0.5) / n as f32,
+            look,
         }
     }
 

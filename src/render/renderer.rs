@@ -56,6 +56,8 @@ struct Globals {
     canopy0: [f32; 4],
     /// canopy grid: nx, ny, oblique-view factor k, unused
     canopy1: [f32; 4],
+    /// shadow map: texel (uv), depth bias (depth units), texel (m), unused
+    shadow: [f32; 4],
 }
 
 /// Per-prototype outline record of `shaders/scene.wgsl` (`Sil`).
@@ -64,6 +66,8 @@ struct Globals {
 struct SilRaw {
     w: [f32; SILHOUETTE_BINS],
     info: [f32; 4],
+    /// crown look: top flatness, plan cover, clumping, unused ([`super::lod::CrownLook`])
+    look: [f32; 4],
 }
 
 /// Uniforms of `shaders/cull.wgsl` (`Params`).
@@ -146,9 +150,17 @@ struct TreeVertex {
     pos: [f32; 3],
     normal: [f32; 3],
     mat: f32,
-    /// Card coordinates 0..1 of leaf cards (carved into discs by the fragment shader); −1
-    /// elsewhere.
+    /// Card coordinates 0..1 of leaf cards (carved into discs by the fragment shader); (−1,
+    /// twig factor 0..1, see `twig_factor`) on bark; (−1, −1) elsewhere.
     uv: [f32; 2],
+}
+
+/// How far a bark vertex at `p` (normalised model, m per m of height) is out among the twigs,
+/// 0..1: 0 within 15 % of the crown radius `r0` of the stem axis, 1 beyond 55 % (smoothstep).
+/// The tree shader darkens the bark towards the twig colour by it.
+fn twig_factor(p: &[f32; 3], r0: f32) -> f32 {
+    let t = (((p[0] * p[0] + p[1] * p[1]).sqrt() / r0 - 0.15) / 0.4).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
 }
 
 /// Whether `m` is a set of leaf cards: quads of 4 vertices and 2 triangles each with texture
@@ -633,7 +645,17 @@ impl Renderer {
                     let base = verts.len() as u32;
                     let start = idx.len() as u32;
                     let cards = mat > 0.5 && is_cards(m);
-                    verts.extend(m.positions.iter().zip(&m.normals).enumerate().map(|(k, (p, n))| TreeVertex { pos: *p, normal: *n, mat, uv: if cards { m.uvs[k] } else { [-1.0, -1.0] } }));
+                    let r0 = sils[pi].radius.max(1e-3);
+                    verts.extend(m.positions.iter().zip(&m.normals).enumerate().map(|(k, (p, n))| {
+                        let uv = if cards {
+                            m.uvs[k]
+                        } else if mat < 0.5 {
+                            [-1.0, twig_factor(p, r0)]
+                        } else {
+                            [-1.0, -1.0]
+                        };
+                        TreeVertex { pos: *p, normal: *n, mat, uv }
+                    }));
                     idx.extend(m.indices.iter().map(|i| i + base));
                     ranges.push(start..idx.len() as u32);
                 }
@@ -657,7 +679,7 @@ impl Renderer {
             });
             protos.push(levels);
         }
-        let mut sil_raw: Vec<SilRaw> = sils.iter().map(|s| SilRaw { w: s.width, info: [s.crown_bottom, s.crown_top, s.trunk_half_width, s.widest_z] }).collect();
+        let mut sil_raw: Vec<SilRaw> = sils.iter().map(|s| SilRaw { w: s.width, info: [s.crown_bottom, s.crown_top, s.trunk_half_width, s.widest_z], look: [s.look.top_flatness, s.look.cover, s.look.clump, 0.0] }).collect();
         if sil_raw.is_empty() {
             sil_raw.push(<SilRaw as bytemuck::Zeroable>::zeroed());
         }
@@ -978,7 +1000,10 @@ impl Renderer {
         pass.dispatch_workgroups(gx, gy, 1);
     }
 
-    fn light_matrix(scene: &Scene) -> (Mat4, f32) {
+    /// The sun's orthographic view-projection over the scene's bounding sphere (radius r, depth
+    /// range r..3r from an eye 2r towards the sun), the world size of a shadow texel (m) and the
+    /// depth range (m).
+    fn light_matrix(scene: &Scene) -> (Mat4, f32, f32) {
         let (lo, hi) = scene.terrain.bounds();
         let (mut lo, mut hi) = (Vec3::from(lo), Vec3::from(hi));
         let tallest = scene.instances.iter().map(|t| t.height).filter(|h| h.is_finite()).fold(0.0f32, f32::max);
@@ -995,8 +1020,8 @@ impl Renderer {
         let sun = Vec3::from(scene.sun.direction).normalize_or(Vec3::Z);
         let up = if sun.z.abs() > 0.99 { Vec3::Y } else { Vec3::Z };
         let view = glam::camera::rh::view::look_at_mat4(c + sun * 2.0 * r, c, up);
-        let proj = glam::camera::rh::proj::directx::orthographic(-r, r, -r, r, 0.5 * r, 3.5 * r);
-        (proj * view, 2.0 * r / SHADOW_SIZE as f32)
+        let proj = glam::camera::rh::proj::directx::orthographic(-r, r, -r, r, 0.9 * r, 3.1 * r);
+        (proj * view, 2.0 * r / SHADOW_SIZE as f32, 2.2 * r)
     }
 
     /// `canopy_used`: whether the terrain shader reads the canopy layer (false when the CPU
@@ -1004,7 +1029,7 @@ impl Renderer {
     fn write_globals(&self, scene: &Scene, camera: &Camera, w: u32, h: u32, canopy_used: bool) {
         let aspect = w as f32 / h as f32;
         let vp = camera.view_proj(aspect);
-        let (lvp, _texel_m) = Self::light_matrix(scene);
+        let (lvp, texel_m, depth_m) = Self::light_matrix(scene);
         let (lo, hi) = scene.terrain.bounds();
         let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0);
         let ortho = matches!(camera.projection, super::camera::Projection::Orthographic { .. });
@@ -1024,6 +1049,7 @@ impl Renderer {
             params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.1 / size],
             canopy0: [0.0; 4],
             canopy1: [0.0; 4],
+            shadow: [1.0 / SHADOW_SIZE as f32, 0.5 * texel_m / depth_m, texel_m, 0.0],
             facing: if ortho { v3((Vec3::from(camera.eye) - Vec3::from(camera.target)).normalize_or(Vec3::Z).to_array(), 1.0) } else { [0.0; 4] },
         };
         if let Some(gs) = &self.scene {

@@ -311,7 +311,8 @@ impl Species {
         out
     }
 
-    /// The rules between fields: maturity below maximum age, maximum dispersal distance ≥ mean.
+    /// The rules between fields: maturity below maximum age, maximum dispersal distance ≥ mean,
+    /// leaf-out before autumn colour before leaf fall.
     fn cross_checks(&self) -> Vec<Violation> {
         let mut out = Vec::new();
         let l = &self.life;
@@ -321,6 +322,12 @@ impl Species {
                 value: fmt_num(l.maturity_age_yr as f64),
                 expected: format!("less than life.max_age_yr = {}", l.max_age_yr),
             });
+        }
+        let a = &self.appearance;
+        for (field, v, after, before) in [("appearance.autumn_doy", a.autumn_doy, "appearance.leaf_out_doy", a.leaf_out_doy), ("appearance.leaf_fall_doy", a.leaf_fall_doy, "appearance.autumn_doy", a.autumn_doy)] {
+            if v.is_finite() && before.is_finite() && v <= before {
+                out.push(Violation { field: field.into(), value: fmt_num(v as f64), expected: format!("a later day than {after} = {before}") });
+            }
         }
         if l.dispersal.max_m.is_finite() && l.dispersal.mean_m.is_finite() && l.dispersal.max_m < l.dispersal.mean_m {
             out.push(Violation {

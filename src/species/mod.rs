@@ -350,6 +350,16 @@ pub struct Appearance {
     pub leaf_winter: [u8; 3],
     /// Leaf texture name (informative; the renderer uses flat colours).
     pub leaf_texture: String,
+    /// Day of year (1–366) of leaf unfolding (BBCH 11) of a deciduous tree, or of the new-shoot
+    /// flush of an evergreen, at a Central-European lowland site (see `species/README.md`,
+    /// Phenology, for sources).
+    pub leaf_out_doy: f32,
+    /// Day of year (1–366) by which half the foliage has turned its autumn colour (BBCH 94);
+    /// evergreens: the day the summer colour starts to turn to the winter colour.
+    pub autumn_doy: f32,
+    /// Day of year (1–366) of leaf fall (BBCH 95, half the leaves fallen; the crown is bare a
+    /// fortnight later); evergreens: the day the winter colour is reached.
+    pub leaf_fall_doy: f32,
 }
 
 /// Season of a snapshot.

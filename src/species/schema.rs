@@ -390,6 +390,24 @@ pub const FIELDS: &[FieldSpec] = &[
         Kind::Text { non_empty: false },
         "Leaf texture name (informative)",
     ),
+    f(
+        "appearance.leaf_out_doy",
+        "day of year",
+        r(1.0, 366.0),
+        "Leaf unfolding (BBCH 11; evergreens: new-shoot flush), Central-European lowland mean",
+    ),
+    f(
+        "appearance.autumn_doy",
+        "day of year",
+        r(1.0, 366.0),
+        "Half the foliage in autumn colour (BBCH 94; evergreens: start of the turn to the winter colour); after leaf_out_doy",
+    ),
+    f(
+        "appearance.leaf_fall_doy",
+        "day of year",
+        r(1.0, 366.0),
+        "Half the leaves fallen (BBCH 95; evergreens: winter colour reached); after autumn_doy",
+    ),
 ];
 
 /// Looks up the spec of a dotted field path.

@@ -15,12 +15,14 @@ struct Globals {
     facing: vec4<f32>,       // xyz towards the viewer for billboards when w = 1 (ortho, sun); w = 0: use eye
     canopy0: vec4<f32>,      // canopy grid origin x, y (m), texel (m), on (1) / off (0)
     canopy1: vec4<f32>,      // canopy grid nx, ny, oblique-view factor k, unused
+    shadow: vec4<f32>,       // shadow map: texel (uv), depth bias (depth units), texel (m), unused
 };
 
 // Billboard outline of one prototype (render/lod.rs, Silhouette).
 struct Sil {
     w: array<vec4<f32>, 4>,  // 16 crown half-widths (relative to radius) by height bin
     info: vec4<f32>,         // crown bottom, crown top, trunk half-width, widest z
+    look: vec4<f32>,         // top flatness, plan cover, clumping, unused (render/lod.rs, CrownLook)
 };
 
 @group(0) @binding(0) var<uniform> g: Globals;
@@ -30,21 +32,59 @@ struct Sil {
 // far-field canopy layer (render/canopy.rs): per texel coverage, r, g, b sums in 1/1024
 @group(0) @binding(4) var<storage, read> canopy: array<vec4<u32>>;
 
-fn shadow_factor(world: vec3<f32>, n: vec3<f32>) -> f32 {
-    let p = g.light_view_proj * vec4<f32>(world + n * 0.05, 1.0);
+// One percentage-closer tap of the sun's shadow map at `uv`, depth `z` (a linear comparison
+// sampler: each tap is already a bilinear 2x2 PCF).
+fn shadow_tap(uv: vec2<f32>, z: f32) -> f32 {
+    return textureSampleCompareLevel(shadow_map, shadow_sampler, uv, z);
+}
+
+// Shadow-map coordinates (uv, depth) of a world point, nudged along its normal; w = 0 outside
+// the map (lit).
+fn shadow_coord(world: vec3<f32>, n: vec3<f32>) -> vec4<f32> {
+    // normal offset of one texel and a depth bias of half a texel (world units): no acne on
+    // ground lit at a grazing angle, contact shadows kept within a metre or two
+    let p = g.light_view_proj * vec4<f32>(world + n * g.shadow.z, 1.0);
     let ndc = p.xyz / p.w;
     let uv = vec2<f32>(ndc.x * 0.5 + 0.5, -ndc.y * 0.5 + 0.5);
     if (uv.x < 0.0 || uv.x > 1.0 || uv.y < 0.0 || uv.y > 1.0 || ndc.z > 1.0) {
+        return vec4<f32>(uv, ndc.z, 0.0);
+    }
+    return vec4<f32>(uv, ndc.z - g.shadow.y, 1.0);
+}
+
+// Sun visibility 0..1: percentage-closer filtering over a 3x3 grid of bilinear comparison taps
+// one texel apart (a 4x4-texel tent kernel: soft crown-shadow edges without stair steps).
+fn shadow_factor(world: vec3<f32>, n: vec3<f32>) -> f32 {
+    let c = shadow_coord(world, n);
+    if (c.w < 0.5) {
         return 1.0;
     }
-    let t = g.params.z;
-    // 4 bilinear comparison taps (each already a 2x2 PCF with a linear comparison sampler)
+    let t = g.shadow.x;
     var s = 0.0;
-    s = s + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + vec2<f32>(-0.5, -0.5) * t, ndc.z - 0.0015);
-    s = s + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + vec2<f32>(0.5, -0.5) * t, ndc.z - 0.0015);
-    s = s + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + vec2<f32>(-0.5, 0.5) * t, ndc.z - 0.0015);
-    s = s + textureSampleCompareLevel(shadow_map, shadow_sampler, uv + vec2<f32>(0.5, 0.5) * t, ndc.z - 0.0015);
-    return s / 4.0;
+    for (var j = -1; j <= 1; j = j + 1) {
+        for (var i = -1; i <= 1; i = i + 1) {
+            s = s + shadow_tap(c.xy + vec2<f32>(f32(i), f32(j)) * t, c.z);
+        }
+    }
+    return s / 9.0;
+}
+
+// Sky visibility 0..1 under the canopy: the sun's shadow map averaged over a wide ring (8 taps
+// at 6 texels, the centre at weight 2), a cheap stand-in for the fraction of the sky hemisphere
+// not hidden by crowns above (the canopy seen from the sun's direction, blurred over a few
+// metres). Floors at 0.45 so that deep shade keeps some skylight.
+fn sky_visibility(world: vec3<f32>, n: vec3<f32>) -> f32 {
+    let c = shadow_coord(world, n);
+    if (c.w < 0.5) {
+        return 1.0;
+    }
+    let t = g.shadow.x * 6.0;
+    var s = 2.0 * shadow_tap(c.xy, c.z);
+    for (var k = 0; k < 8; k = k + 1) {
+        let a = f32(k) * 0.7853982 + 0.39;
+        s = s + shadow_tap(c.xy + vec2<f32>(cos(a), sin(a)) * t, c.z);
+    }
+    return mix(0.45, 1.0, s / 10.0);
 }
 
 fn sky_color(dir: vec3<f32>) -> vec3<f32> {
@@ -58,22 +98,35 @@ fn sky_color(dir: vec3<f32>) -> vec3<f32> {
     return c;
 }
 
+// Aerial perspective: in-scattered sky light over the view distance, exp(-d * density), towards
+// the horizon colour, a little warmer towards the sun (forward scattering); at most 85 %.
 fn fog(c: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
     var d = length(world - g.eye.xyz);
     if (g.eye.w > 0.5) {
         d = 0.0;
     }
     let f = 1.0 - exp(-d * g.params.w);
-    return mix(c, g.sky_horizon.rgb, clamp(f, 0.0, 0.85));
+    let v = normalize(world - g.eye.xyz + vec3<f32>(0.0, 0.0, 1e-4));
+    let sunward = pow(max(dot(v, g.sun_dir.xyz), 0.0), 8.0);
+    let air = mix(g.sky_horizon.rgb, g.sky_horizon.rgb * 0.6 + g.sun_color.rgb * 0.4, sunward * 0.5);
+    return mix(c, air, clamp(f, 0.0, 0.85));
 }
 
+// Sun (Lambert with `wrap`, shadow-mapped) plus sky light: a hemisphere ambient between the
+// ground-bounced light (down-facing normals) and the sky (up-facing), occluded by the canopy above
+// (`sky_visibility`) and by `ao`.
 fn shade(albedo: vec3<f32>, n: vec3<f32>, world: vec3<f32>, wrap: f32, ao: f32) -> vec3<f32> {
+    return shade_sh(albedo, n, world, wrap, ao, shadow_factor(world, n));
+}
+
+// [`shade`] with the sun visibility `sh` given.
+fn shade_sh(albedo: vec3<f32>, n: vec3<f32>, world: vec3<f32>, wrap: f32, ao: f32, sh: f32) -> vec3<f32> {
     let l = g.sun_dir.xyz;
     let ndl = max((dot(n, l) + wrap) / (1.0 + wrap), 0.0);
-    let sh = shadow_factor(world, n);
     let amb_col = mix(vec3<f32>(0.55, 0.55, 0.5), mix(g.sky_horizon.rgb, g.sky_zenith.rgb, 0.5), 0.5);
-    let sky_amb = amb_col * (0.25 + 0.17 * n.z);
-    let lit = g.sun_color.rgb * ndl * sh + sky_amb * ao;
+    let ground = amb_col * vec3<f32>(0.36, 0.38, 0.3);
+    let sky_amb = mix(ground, amb_col * 0.42, clamp(0.5 + 0.5 * n.z, 0.0, 1.0));
+    let lit = g.sun_color.rgb * ndl * sh + sky_amb * ao * sky_visibility(world, n);
     return albedo * lit;
 }
 
@@ -367,8 +420,46 @@ fn sil_width(p: u32, z: f32) -> f32 {
     return mix(a, b, t);
 }
 
+// Lattice hash 0..1 of an integer cell and a salt.
+fn lattice(c: vec2<f32>, salt: f32) -> f32 {
+    return fract(sin(dot(c, vec2<f32>(127.1, 311.7)) + salt * 17.13) * 43758.5453);
+}
+
+// Smooth value noise 0..1 (bicubic-faded bilinear over the lattice): the foliage lumps.
+fn vnoise(p: vec2<f32>, salt: f32) -> f32 {
+    let c = floor(p);
+    let f = p - c;
+    let u = f * f * (3.0 - 2.0 * f);
+    let a = lattice(c, salt);
+    let b = lattice(c + vec2<f32>(1.0, 0.0), salt);
+    let d = lattice(c + vec2<f32>(0.0, 1.0), salt);
+    let e = lattice(c + vec2<f32>(1.0, 1.0), salt);
+    return mix(mix(a, b, u.x), mix(d, e, u.x), u.y);
+}
+
+// Foliage lumps of a crown point `q` (outline coordinates, −1..1 across the crown): 0..1, lumps
+// the larger the more clumped the species' foliage (`look.z`), fixed per tree by its salt.
+fn lumps(q: vec2<f32>, look: vec4<f32>, salt: f32) -> f32 {
+    let f = mix(4.5, 2.5, look.z);
+    return 0.65 * vnoise(q * f, salt) + 0.35 * vnoise(q * f * 2.3 + vec2<f32>(5.2, 1.3), salt + 3.0);
+}
+
+// Whether a crown point with lump value `l` is a gap (sky or ground seen through an airy crown):
+// the species' plan cover `look.y` sets how much of the crown opens (none above 0.95).
+fn crown_gap(l: f32, look: vec4<f32>) -> bool {
+    return l < (0.95 - look.y) * 0.9;
+}
+
+// Gaps of the crown-hull level (a closed polyhedron): the species' airy or lumpy foliage cut
+// into it with the same lumps as the billboard, over the crown direction `cdir`.
+fn hull_gap(i: TreeOut) -> bool {
+    let look = sils[u32(i.info.x + 0.5)].look;
+    let q = vec2<f32>(i.cdir.x + 0.6 * i.cdir.y, i.cdir.z * 1.6 - 0.4 * i.cdir.y);
+    return crown_gap(lumps(q, look, i.salt), look);
+}
+
 // Billboard outline test. Returns 0 outside (discard), 1 crown, 2 trunk; `n` gets a rounded
-// pseudo-normal for the crown.
+// pseudo-normal for the crown, shaped by the species' look (dome, spire, flat top, lumps).
 struct Carve {
     kind: u32,
     n: vec3<f32>,
@@ -381,20 +472,28 @@ fn carve(i: TreeOut) -> Carve {
     r.n = vec3<f32>(0.0, 0.0, 1.0);
     let p = u32(i.info.x + 0.5);
     let s = sils[p];
-    // a gently lumpy edge, fixed per tree
-    let lump = 1.0 + 0.07 * sin(i.bb.y * 23.0 + i.salt) * sin(i.bb.x * 7.0 + i.salt * 0.37);
+    let look = s.look;
+    // a lumpy edge, fixed per tree: the more clumped the foliage, the deeper the lumps
+    let depth = 0.05 + 0.22 * look.z;
     if (i.mat_s.x < 2.5) {
         let a = i.bb.x;
         let z = i.bb.y;
         r.z = z;
-        let w = sil_width(p, z) * lump;
+        let zq = (z - s.info.x) / max(s.info.y - s.info.x, 1e-3) * 2.0 - 1.0;
+        let l = lumps(vec2<f32>(a, zq * 1.4), look, i.salt);
+        let w = sil_width(p, z) * (1.0 - depth + depth * 2.0 * l);
         if (abs(a) < w) {
+            if (crown_gap(l, look)) {
+                return r;
+            }
             r.kind = 1u;
             let f = normalize(i.normal);
             let na = a / max(w, 1e-3);
             let zc = 0.5 * (s.info.x + s.info.y);
             let nz = clamp((z - zc) / max(0.5 * (s.info.y - s.info.x), 1e-3), -1.0, 1.0);
             r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.3 * nz + 0.35) + f * sqrt(max(1.0 - na * na, 0.0)));
+            // each lump is a small dome of its own: its shading bends the normal about it
+            r.n = normalize(r.n + right_of(f) * (l - 0.5) * look.z * 1.5);
         } else if (abs(a) < s.info.z && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
             r.kind = 2u;
             r.n = normalize(i.normal);
@@ -403,9 +502,17 @@ fn carve(i: TreeOut) -> Carve {
         let q = i.bb;
         let d = length(q);
         r.z = i.mat_s.y;
-        if (d < 0.92 * lump) {
+        let l = lumps(q, look, i.salt);
+        if (d < 0.92 * (1.0 - depth + depth * 2.0 * l)) {
+            if (crown_gap(l, look)) {
+                return r;
+            }
             r.kind = 1u;
-            r.n = normalize(vec3<f32>(q * 0.7, sqrt(max(1.0 - d * d, 0.0)) + 0.2));
+            // seen from above: a spire's flanks slope steeply away from its tip, a dome rounds
+            // off, a flat umbrella faces the sky
+            let k = mix(1.4, 0.2, smoothstep(0.1, 0.9, look.x));
+            let bump = vec2<f32>(vnoise(q * 5.0 + vec2<f32>(0.5, 0.0), i.salt) - vnoise(q * 5.0 - vec2<f32>(0.5, 0.0), i.salt), vnoise(q * 5.0 + vec2<f32>(0.0, 0.5), i.salt) - vnoise(q * 5.0 - vec2<f32>(0.0, 0.5), i.salt));
+            r.n = normalize(vec3<f32>(q * k + bump * (0.3 + 1.2 * look.z), sqrt(max(1.0 - d * d, 0.0)) + 0.2));
         }
     }
     return r;
@@ -459,6 +566,11 @@ fn twig_color(bark: vec3<f32>) -> vec3<f32> {
     return mix(bark, vec3<f32>(0.16, 0.14, 0.12), 0.6);
 }
 
+// Colour of thin outer twigs of mesh levels: dark red-brown, only a fifth of the stem's colour.
+fn fine_twig_color(bark: vec3<f32>) -> vec3<f32> {
+    return mix(bark, vec3<f32>(0.09, 0.065, 0.05), 0.8);
+}
+
 @fragment
 fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32> {
     if (!keep(i) || !card_kept(i)) {
@@ -503,6 +615,9 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
             if (hash2(i.clip.xy, i.salt + 11.0) > smoothstep(0.0, soft, e)) {
                 discard;
             }
+            if (i.info.y > 1.5 && hull_gap(i)) {
+                discard;
+            }
             let cd = i.cdir;
             if (dot(cd, cd) > 1e-8) {
                 n = normalize(mix(n, normalize(cd), bend));
@@ -518,9 +633,22 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
             albedo = twig_color(i.bark);
             leafy = 0.3;
         }
+    } else if (i.mat_s.x < 0.5 && i.uv.y > 0.0) {
+        // mesh bark away from the stem: fine twigs are dark whatever the stem's colour (a
+        // birch's white bark is on its stem and main limbs only)
+        albedo = mix(i.bark, fine_twig_color(i.bark), i.uv.y);
     }
     let ao = mix(1.0, mix(0.45, 1.0, clamp(hz * 1.3 - 0.2, 0.0, 1.0)), leafy);
-    let c = shade(albedo, n, i.world, 0.35 * leafy, ao) * mix(1.0, ao * 0.4 + 0.6, leafy);
+    let sh = shadow_factor(i.world, n);
+    var c = shade_sh(albedo, n, i.world, 0.35 * leafy, ao, sh) * mix(1.0, ao * 0.4 + 0.6, leafy);
+    if (leafy > 0.5) {
+        // leaves are translucent: the side facing away from the sun glows with transmitted,
+        // yellower light (a thin-leaf transmittance of ~0.3 of the sunlight), so crowns seen from
+        // below or against the sun are not black
+        let back = max(-dot(n, g.sun_dir.xyz), 0.0);
+        let trans = albedo * vec3<f32>(1.1, 1.15, 0.6) * g.sun_color.rgb * (0.3 * back * sh);
+        c = c + trans * ao;
+    }
     return vec4<f32>(fog(c, i.world), 1.0);
 }
 

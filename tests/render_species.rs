@@ -1,0 +1,199 @@
+//! Species you can tell apart (issue 19, Build 2): the top-down still of a stand with known
+//! single-species patches, read back per 20 m cell, names the right species by colour.
+//!
+//! Runs on whatever adapter wgpu finds (lavapipe in CI); without one it prints a note and passes,
+//! unless `SYLVA_REQUIRE_ADAPTER` is set (CI), in which case it fails (tests/common/render.rs).
+
+use glam::Vec3;
+use sylva::render::camera::{Camera, CameraPreset};
+use sylva::render::headless::Renderer;
+use sylva::render::scene::{Scene, Sky, Sun, TreeInstance, Wind};
+use sylva::render::terrain::{from_grid, LandCover};
+use sylva::species::{Season, SpeciesLibrary};
+
+#[path = "common/render.rs"]
+mod render_common;
+use render_common::{out_dir, with_renderer};
+
+/// Stand side (m) and analysis cell (m).
+const SIDE: f32 = 320.0;
+const CELL: f32 = 20.0;
+
+/// The patch species, and per species (height m, crown radius m) of a mature canopy tree
+/// (heights of yield class I at ~100 years; crown radii of closed stands).
+const SPECIES: [(&str, f32, f32); 5] = [("beech", 30.0, 4.5), ("sessile_oak", 27.0, 5.0), ("silver_birch", 23.0, 3.2), ("norway_spruce", 33.0, 2.8), ("scots_pine", 25.0, 3.4)];
+
+/// Patch centres (m) of the Voronoi patches and their species (index into [`SPECIES`]).
+const SEEDS: [(f32, f32, usize); 8] = [(50.0, 60.0, 0), (170.0, 40.0, 1), (280.0, 90.0, 2), (60.0, 190.0, 3), (160.0, 160.0, 4), (270.0, 230.0, 0), (90.0, 290.0, 1), (210.0, 290.0, 2)];
+
+fn hash(mut x: u64) -> f32 {
+    x ^= x >> 33;
+    x = x.wrapping_mul(0xff51_afd7_ed55_8ccd);
+    x ^= x >> 33;
+    x = x.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+    x ^= x >> 33;
+    (x >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// The patch (species index) of a point: its nearest seed.
+fn patch(x: f32, y: f32) -> usize {
+    SEEDS.iter().min_by(|a, b| ((a.0 - x).hypot(a.1 - y)).total_cmp(&(b.0 - x).hypot(b.1 - y))).map(|s| s.2).unwrap_or(0)
+}
+
+/// Trees of the stand: per species a jittered grid of spacing 1.8 × its crown radius (a closed
+/// canopy), kept where the point lies in one of its patches; sizes vary ±10 %. Returns
+/// (species index, x, y, height, crown radius, id).
+fn stand() -> Vec<(usize, f32, f32, f32, f32, u64)> {
+    let mut out = Vec::new();
+    let mut id = 1u64;
+    for (s, &(_, h, r)) in SPECIES.iter().enumerate() {
+        let sp = 1.8 * r;
+        let n = (SIDE / sp).ceil() as u32;
+        for j in 0..n {
+            for i in 0..n {
+                let k = (s as u64) << 40 | (j as u64) << 20 | i as u64;
+                let x = (i as f32 + 0.2 + 0.6 * hash(k)) * sp;
+                let y = (j as f32 + 0.2 + 0.6 * hash(k ^ 0x9e37)) * sp;
+                if x >= SIDE || y >= SIDE || patch(x, y) != s {
+                    continue;
+                }
+                let f = 0.9 + 0.2 * hash(k ^ 0x51ed);
+                out.push((s, x, y, h * f, r * f, id));
+                id += 1;
+            }
+        }
+    }
+    out
+}
+
+/// The scene of `trees` with the species of `lib` (in [`SPECIES`] order) in summer, on flat
+/// terrain, the sun of 47° N in July at 14:00; `only`: every tree drawn as that species.
+fn scene(lib: &SpeciesLibrary, protos: &[sylva::render::scene::Prototype], trees: &[(usize, f32, f32, f32, f32, u64)], only: Option<usize>) -> Scene {
+    let n = (SIDE / 10.0) as usize + 1;
+    let grid = sylva::grid::Grid::filled(n, n, 0.0f32);
+    let terrain = from_grid(&grid, 10.0, 10.0, &LandCover::default(), None).unwrap();
+    let inst = trees
+        .iter()
+        .map(|&(s, x, y, h, r, id)| {
+            let s = only.unwrap_or(s);
+            let (col, amount) = sylva::job::scene::foliage(&lib.species[s], Season::Summer);
+            let mut t = TreeInstance::new(id, [x, y, 0.0], h, r, s as u32, col);
+            t.leaf_amount = amount;
+            t
+        })
+        .collect();
+    Scene::new(terrain, None, protos.to_vec(), inst, Sun::from_position(47.0, 196.0, 14.0), Sky::default(), Wind::default())
+}
+
+/// The renderer's level settings of the offline stills (`job::pictures::Stage::new`).
+fn still_lod(r: &mut Renderer) {
+    r.lod.max_triangles = 30_000_000;
+    r.lod.switch_px = [110.0, 45.0, 18.0];
+    r.lod.max_geometry_triangles = 0;
+}
+
+/// Mean sRGB colour of the pixels of each analysis cell (row-major, south to north).
+fn cell_means(img: &image::RgbaImage, cam: &Camera) -> Vec<[f64; 3]> {
+    let (w, h) = img.dimensions();
+    let vp = cam.view_proj(w as f32 / h as f32);
+    let px = |x: f32, y: f32| {
+        let c = vp * Vec3::new(x, y, 0.0).extend(1.0);
+        let ndc = c.truncate() / c.w;
+        ((ndc.x * 0.5 + 0.5) * w as f32, (0.5 - ndc.y * 0.5) * h as f32)
+    };
+    let n = (SIDE / CELL) as usize;
+    let mut out = Vec::with_capacity(n * n);
+    for cy in 0..n {
+        for cx in 0..n {
+            let (x0, y0) = px(cx as f32 * CELL, (cy + 1) as f32 * CELL);
+            let (x1, y1) = px((cx + 1) as f32 * CELL, cy as f32 * CELL);
+            let (mut s, mut k) = ([0.0f64; 3], 0.0f64);
+            for y in (y0.ceil().max(0.0) as u32)..(y1.floor().min(h as f32) as u32) {
+                for x in (x0.ceil().max(0.0) as u32)..(x1.floor().min(w as f32) as u32) {
+                    let p = img.get_pixel(x, y).0;
+                    for c in 0..3 {
+                        s[c] += p[c] as f64;
+                    }
+                    k += 1.0;
+                }
+            }
+            out.push(s.map(|v| v / k.max(1.0)));
+        }
+    }
+    out
+}
+
+/// The species holding at least 75 % of the crown area of the trees standing in each cell
+/// (row-major like [`cell_means`]), `None` for mixed or empty cells.
+fn dominant(trees: &[(usize, f32, f32, f32, f32, u64)]) -> Vec<Option<usize>> {
+    let n = (SIDE / CELL) as usize;
+    let mut area = vec![[0.0f32; SPECIES.len()]; n * n];
+    for &(s, x, y, _, r, _) in trees {
+        let (cx, cy) = (((x / CELL) as usize).min(n - 1), ((y / CELL) as usize).min(n - 1));
+        area[cy * n + cx][s] += r * r;
+    }
+    area.iter()
+        .map(|a| {
+            let tot: f32 = a.iter().sum();
+            (0..SPECIES.len()).find(|&s| tot > 0.0 && a[s] >= 0.75 * tot)
+        })
+        .collect()
+}
+
+fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
+    (0..3).map(|c| (a[c] - b[c]).powi(2)).sum::<f64>().sqrt()
+}
+
+#[test]
+fn top_down_still_names_the_species_of_each_patch_by_colour() {
+    let all = SpeciesLibrary::embedded().unwrap();
+    let lib = SpeciesLibrary { species: SPECIES.iter().map(|(id, _, _)| all.species[all.find(id).unwrap() as usize].clone()).collect() };
+    let protos = sylva::job::scene::prototypes(&lib);
+    let trees = stand();
+    let truth = dominant(&trees);
+    let judged = truth.iter().filter(|t| t.is_some()).count();
+    assert!(judged >= 150, "the stand must have mostly single-species cells: {judged} of 256");
+    with_renderer(|r| {
+        still_lod(r);
+        // the gallery's top-down still is 1600 m in 720 px (2.2 m/px); also a closer map
+        for (size, name) in [(160u32, "far"), (640, "near")] {
+            let mixed = scene(&lib, &protos, &trees, None);
+            let cam = Camera::preset(CameraPreset::Map, &mixed.terrain);
+            let img = r.render(&mixed, &cam, size, size).unwrap();
+            img.save(out_dir().join(format!("species_patches_{name}.png"))).unwrap();
+            // reference colour of each species: the mean cell colour of the same stand drawn as
+            // that species alone
+            let refs: Vec<[f64; 3]> = (0..SPECIES.len())
+                .map(|s| {
+                    let pure = r.render(&scene(&lib, &protos, &trees, Some(s)), &cam, size, size).unwrap();
+                    let m = cell_means(&pure, &cam);
+                    let mut a = [0.0f64; 3];
+                    for c in &m {
+                        for k in 0..3 {
+                            a[k] += c[k] / m.len() as f64;
+                        }
+                    }
+                    a
+                })
+                .collect();
+            let means = cell_means(&img, &cam);
+            let mut right = 0usize;
+            let mut confusion = vec![[0usize; SPECIES.len()]; SPECIES.len()];
+            for (m, t) in means.iter().zip(&truth) {
+                let Some(t) = *t else { continue };
+                let guess = (0..SPECIES.len()).min_by(|&a, &b| dist(*m, refs[a]).total_cmp(&dist(*m, refs[b]))).unwrap();
+                confusion[t][guess] += 1;
+                right += (guess == t) as usize;
+            }
+            let frac = right as f64 / judged as f64;
+            eprintln!("{name} ({size} px): reference colours {refs:.0?}; confusion (row = truth) {confusion:?}; {right}/{judged} = {:.1} %", 100.0 * frac);
+            assert!(frac >= 0.75, "{name}: the nearest species colour matches the species map on {:.1} % of single-species cells (< 75 %); confusion {confusion:?}", 100.0 * frac);
+            // and the references themselves are apart: no two species within 6 sRGB levels
+            for a in 0..SPECIES.len() {
+                for b in a + 1..SPECIES.len() {
+                    assert!(dist(refs[a], refs[b]) > 6.0, "{name}: {} and {} render alike: {:?} vs {:?}", SPECIES[a].0, SPECIES[b].0, refs[a], refs[b]);
+                }
+            }
+        }
+    });
+}
