@@ -155,8 +155,10 @@ fn top_down_still_names_the_species_of_each_patch_by_colour() {
     assert!(judged >= 150, "the stand must have mostly single-species cells: {judged} of 256");
     with_renderer(|r| {
         still_lod(r);
-        // the gallery's top-down still is 1600 m in 720 px (2.2 m/px); also a closer map
-        for (size, name) in [(160u32, "far"), (640, "near")] {
+        // the gallery's top-down still is 1600 m in 720 px (2.2 m/px): billboards; also a closer
+        // map at 1 m/px, where the crowns are crown hulls
+        let mut failures = Vec::new();
+        for (size, name) in [(320u32, "near"), (160, "far")] {
             let mixed = scene(&lib, &protos, &trees, None);
             let cam = Camera::preset(CameraPreset::Map, &mixed.terrain);
             let img = r.render(&mixed, &cam, size, size).unwrap();
@@ -187,13 +189,18 @@ fn top_down_still_names_the_species_of_each_patch_by_colour() {
             }
             let frac = right as f64 / judged as f64;
             eprintln!("{name} ({size} px): reference colours {refs:.0?}; confusion (row = truth) {confusion:?}; {right}/{judged} = {:.1} %", 100.0 * frac);
-            assert!(frac >= 0.75, "{name}: the nearest species colour matches the species map on {:.1} % of single-species cells (< 75 %); confusion {confusion:?}", 100.0 * frac);
+            if frac < 0.75 {
+                failures.push(format!("{name}: the nearest species colour matches the species map on {:.1} % of single-species cells (< 75 %); confusion {confusion:?}", 100.0 * frac));
+            }
             // and the references themselves are apart: no two species within 6 sRGB levels
             for a in 0..SPECIES.len() {
                 for b in a + 1..SPECIES.len() {
-                    assert!(dist(refs[a], refs[b]) > 6.0, "{name}: {} and {} render alike: {:?} vs {:?}", SPECIES[a].0, SPECIES[b].0, refs[a], refs[b]);
+                    if dist(refs[a], refs[b]) <= 6.0 {
+                        failures.push(format!("{name}: {} and {} render alike: {:?} vs {:?}", SPECIES[a].0, SPECIES[b].0, refs[a], refs[b]));
+                    }
                 }
             }
         }
+        assert!(failures.is_empty(), "{failures:#?}");
     });
 }

@@ -226,10 +226,11 @@ struct GpuTerrain {
 /// top: a, b ∈ −1..1).
 fn billboard_vertices(s: &Silhouette) -> (Vec<TreeVertex>, Vec<u32>) {
     let r = s.radius;
-    // the top quad sits a third of the way from the widest point to the top, as wide as the
-    // crown there (≥ half the widest): the crown seen from above
+    // the top quad sits a third of the way from the widest point to the top and is as wide as
+    // the widest point: the crown's plan projection, which is what a view from above sees (a
+    // spire's cone included), so that crowns of a closed stand close up in a map view
     let zc = s.widest_z + 0.35 * (s.crown_top - s.widest_z).max(0.0);
-    let rt = r * s.width_at(zc).max(0.5);
+    let rt = r;
     let v = |x: f32, y: f32, z: f32, a: f32, b: f32, mat: f32| TreeVertex { pos: [x, y, z], normal: [a, b, 0.0], mat, uv: [-1.0, -1.0] };
     let verts = vec![
         v(-r, 0.0, 0.0, -1.0, 0.0, 2.0),
