@@ -204,3 +204,18 @@ fn top_down_still_names_the_species_of_each_patch_by_colour() {
         assert!(failures.is_empty(), "{failures:#?}");
     });
 }
+
+#[test]
+fn crown_looks_follow_the_species_habit() {
+    use sylva::render::lod::Silhouette;
+    let all = SpeciesLibrary::embedded().unwrap();
+    let lib = SpeciesLibrary { species: SPECIES.iter().map(|(id, _, _)| all.species[all.find(id).unwrap() as usize].clone()).collect() };
+    let protos = sylva::job::scene::prototypes(&lib);
+    let looks: Vec<_> = protos.iter().map(|p| Silhouette::from_chain(&p.lods).look).collect();
+    for (p, l) in protos.iter().zip(&looks) {
+        eprintln!("{}: {l:?}", p.name);
+    }
+    for c in [false, true] {
+        eprintln!("placeholder conifer={c}: {:?}", Silhouette::from_chain(&sylva::render::lod::placeholder_chain(c)).look);
+    }
+}

@@ -150,7 +150,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
             if lods.levels.is_empty() {
                 return None;
             }
-            let p = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0) };
+            let p = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0), look: Some(super::scene::crown_look(sp)) };
             let r0 = p.normalised_crown_radius();
             Some((p, h, r0))
         })
@@ -322,7 +322,7 @@ pub fn obstacle_models(obstacles: &[ObstacleSpec], site: &SiteConditions, first:
             *p = ((Vec3::from(*p) - base) / top).to_array();
         }
         let level = TreeMesh { bark: mesh, leaves: TriMesh::default() };
-        let p = Prototype { name: format!("obstacle {k} ({})", o.kind()), lods: LodChain { levels: vec![level; LOD_LEVELS - 1] }, bark_color: srgb_to_linear(OBSTACLE_RGB), leaf_color: [0.0; 3], stiffness: 1.0 };
+        let p = Prototype { name: format!("obstacle {k} ({})", o.kind()), lods: LodChain { levels: vec![level; LOD_LEVELS - 1] }, bark_color: srgb_to_linear(OBSTACLE_RGB), leaf_color: [0.0; 3], stiffness: 1.0, look: None };
         let r0 = p.normalised_crown_radius();
         protos.push(p);
         let mut t = TreeInstance::new(u64::MAX - k as u64, base.to_array(), top, r0 * top, first + k as u32, [0.0; 3]);

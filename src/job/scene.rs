@@ -88,6 +88,13 @@ pub fn foliage_on_day(species: &Species, doy: f32) -> ([f32; 3], f32) {
     }
 }
 
+/// The crown look of `species` from afar (`appearance.crown_top_flatness`, `crown_cover`,
+/// `crown_clump`), which the renderer's coarse levels draw.
+pub fn crown_look(species: &Species) -> crate::render::lod::CrownLook {
+    let a = &species.appearance;
+    crate::render::lod::CrownLook { top_flatness: a.crown_top_flatness, cover: a.crown_cover, clump: a.crown_clump }
+}
+
 /// One prototype per species of `library`, in library order (so `SpeciesId` indexes them):
 /// the species' EcoMod tree (004_*.txt, Algorithm 1) normalised to 1 m height, meshed into its
 /// LOD chain by [`crate::structure::species_lod_chain`]. A species whose model cannot be built
@@ -108,6 +115,7 @@ pub fn prototypes(library: &SpeciesLibrary) -> Vec<Prototype> {
                 bark_color: srgb_to_linear(s.appearance.bark),
                 leaf_color: srgb_to_linear(s.appearance.leaf_summer),
                 stiffness: s.architecture.ecomod.k_f.clamp(0.0, 1.0),
+                look: Some(crown_look(s)),
             }
         })
         .collect()

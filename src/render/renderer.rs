@@ -623,6 +623,9 @@ impl Renderer {
             .map(|p| {
                 let mut s = Silhouette::from_chain(&p.lods);
                 s.radius = p.normalised_crown_radius();
+                if let Some(l) = p.look {
+                    s.look = l;
+                }
                 s
             })
             .collect();

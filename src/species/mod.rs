@@ -360,6 +360,15 @@ pub struct Appearance {
     /// Day of year (1–366) of leaf fall (BBCH 95, half the leaves fallen; the crown is bare a
     /// fortnight later); evergreens: the day the winter colour is reached.
     pub leaf_fall_doy: f32,
+    /// Crown top seen from a distance, 0..1: 0 a pointed spire (spruce, fir), ≈ 0.6 a rounded
+    /// dome (beech), 1 a flat umbrella (old Scots pine).
+    pub crown_top_flatness: f32,
+    /// Fraction 0..1 of the crown's plan area that foliage covers (1 dense; birch's airy crown
+    /// lets sky and ground through).
+    pub crown_cover: f32,
+    /// Clumping of the foliage 0..1: 0 an even, smooth surface (beech), 1 separate lumps with
+    /// gaps between them (oak).
+    pub crown_clump: f32,
 }
 
 /// Season of a snapshot.

@@ -408,6 +408,24 @@ pub const FIELDS: &[FieldSpec] = &[
         r(1.0, 366.0),
         "Half the leaves fallen (BBCH 95; evergreens: winter colour reached); after autumn_doy",
     ),
+    f(
+        "appearance.crown_top_flatness",
+        "",
+        r(0.0, 1.0),
+        "Crown top seen from afar: 0 pointed spire, about 0.6 rounded dome, 1 flat umbrella",
+    ),
+    f(
+        "appearance.crown_cover",
+        "",
+        r(0.0, 1.0),
+        "Fraction of the crown's plan area covered by foliage (1 dense, lower = airy)",
+    ),
+    f(
+        "appearance.crown_clump",
+        "",
+        r(0.0, 1.0),
+        "Clumping of the foliage: 0 smooth even surface, 1 separate lumps with gaps",
+    ),
 ];
 
 /// Looks up the spec of a dotted field path.
