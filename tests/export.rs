@@ -52,21 +52,48 @@ fn validator() -> Option<PathBuf> {
     None
 }
 
-/// Runs the validator on `files`; panics on any error or warning, listing them.
-fn validate(files: &[&Path]) {
-    let Some(dir) = validator() else { return };
+/// The validator's reports on `files` (one JSON object each) and its exit status; `None` when
+/// the validator cannot be had outside CI.
+fn reports(files: &[&Path]) -> Option<(Vec<serde_json::Value>, bool)> {
+    let dir = validator()?;
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools").join("gltf-validate.js");
     let out = Command::new("node").arg(&script).args(files).env("GLTF_VALIDATOR_DIR", &dir).output().expect("run node");
     let text = String::from_utf8_lossy(&out.stdout);
-    let mut seen = 0;
-    for line in text.lines() {
-        let r: serde_json::Value = serde_json::from_str(line).unwrap_or_else(|e| panic!("validator output {line:?}: {e}; stderr {}", String::from_utf8_lossy(&out.stderr)));
+    let r: Vec<serde_json::Value> = text.lines().map(|line| serde_json::from_str(line).unwrap_or_else(|e| panic!("validator output {line:?}: {e}; stderr {}", String::from_utf8_lossy(&out.stderr)))).collect();
+    assert_eq!(r.len(), files.len(), "validator stdout {text}, stderr {}", String::from_utf8_lossy(&out.stderr));
+    Some((r, out.status.success()))
+}
+
+/// Runs the validator on `files`; panics on any error or warning, listing them.
+fn validate(files: &[&Path]) {
+    let Some((reports, ok)) = reports(files) else { return };
+    for r in &reports {
         let bad: Vec<&serde_json::Value> = r["messages"].as_array().unwrap().iter().filter(|m| m["severity"] == "error" || m["severity"] == "warning").collect();
         assert_eq!((r["errors"].as_u64(), r["warnings"].as_u64()), (Some(0), Some(0)), "{}: {bad:#?}", r["file"]);
-        seen += 1;
     }
-    assert_eq!(seen, files.len(), "validator stdout {text}, stderr {}", String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success());
+    assert!(ok);
+}
+
+#[test]
+fn the_validator_reports_a_broken_file() {
+    // a metallic factor of 9 (allowed: 0–1), same length as the 0.0 written: an error
+    let bytes = sylva::output::gltf::glb_bytes(&tree(&lib(), "beech").1, &GlbOptions::default()).unwrap();
+    let n = 20 + u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json = std::str::from_utf8(&bytes[20..n]).unwrap();
+    let patched = json.replacen("\"metallicFactor\":0.0", "\"metallicFactor\":9.0", 1);
+    assert_ne!(patched, json, "the factor is in the JSON");
+    let mut broken = bytes[..20].to_vec();
+    broken.extend_from_slice(patched.as_bytes());
+    broken.extend_from_slice(&bytes[n..]);
+    let dir = tempfile::tempdir().unwrap();
+    let (good, bad) = (dir.path().join("good.glb"), dir.path().join("bad.glb"));
+    std::fs::write(&good, &bytes).unwrap();
+    std::fs::write(&bad, &broken).unwrap();
+    let Some((r, ok)) = reports(&[&good, &bad]) else { return };
+    assert!(!ok);
+    assert_eq!(r[0]["errors"], 0);
+    assert!(r[1]["errors"].as_u64().unwrap() >= 1, "{:#?}", r[1]);
+    assert!(r[1]["messages"].as_array().unwrap().iter().any(|m| m["code"] == "VALUE_NOT_IN_RANGE"), "{:#?}", r[1]);
 }
 
 fn lib() -> SpeciesLibrary {
@@ -258,7 +285,8 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     assert!(want >= 20, "{want} trees in the area");
     assert_eq!(r.trees, want);
     assert_eq!(r.obstacles, 1);
-    assert!(r.terrain_triangles >= 2);
+    // 25 m × 30 m at 5 m vertex spacing
+    assert_eq!(r.terrain_triangles, 2 * 5 * 6);
     // instancing: meshes are fewer than the nodes drawing them (one billboard per species)
     assert!(r.counts.meshes < r.counts.mesh_nodes, "{:?}", r.counts);
     let (doc, _, _) = gltf::import(&out).unwrap();
@@ -311,4 +339,29 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--area", "20,15,45", "--out"]).arg(&cli).output().unwrap();
     assert!(!st.status.success());
     assert!(String::from_utf8_lossy(&st.stderr).contains("four numbers"), "{}", String::from_utf8_lossy(&st.stderr));
+}
+
+#[test]
+fn terrain_patch_follows_the_site_surface() {
+    let sc = sylva::sim::Scenario::from_toml_str("name = \"t\"\nyears = 1\nseed = 1\n[terrain]\ngenerate = { size = 32, cell_m = 10.0, relief_m = 120.0, seed = 3 }\n", "t").unwrap();
+    let site = sc.site().unwrap();
+    let area = [42.0, 57.0, 131.0, 140.0];
+    let (m, z0) = sylva::job::export::terrain_patch(&site, area);
+    let (cx, cy) = ((area[0] + area[2]) / 2.0, (area[1] + area[3]) / 2.0);
+    let zs: Vec<f32> = m.positions.iter().map(|p| p[2]).collect();
+    assert_eq!(zs.iter().copied().fold(f32::INFINITY, f32::min), 0.0, "origin at the lowest point");
+    assert!(zs.iter().copied().fold(0.0f32, f32::max) > 5.0, "relief");
+    for (p, n) in m.positions.iter().zip(&m.normals) {
+        let (x, y) = (p[0] as f64 + cx, p[1] as f64 + cy);
+        assert!(x >= area[0] - 1e-3 && x <= area[2] + 1e-3 && y >= area[1] - 1e-3 && y <= area[3] + 1e-3);
+        assert!((p[2] + z0 - site.elevation_at(x, y)).abs() < 1e-3);
+        assert!((n[0] * n[0] + n[1] * n[1] + n[2] * n[2] - 1.0).abs() < 1e-5 && n[2] > 0.0);
+    }
+    // 89 m × 83 m at 5 m: 18 × 17 quads, every triangle counter-clockwise seen from above
+    assert_eq!(m.triangle_count(), 2 * 18 * 17);
+    for t in m.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| m.positions[i as usize]);
+        let cross = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        assert!(cross > 0.0);
+    }
 }

@@ -239,13 +239,18 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     Ok(ExportReport { out: out.to_path_buf(), year, trees: scene.trees.len(), models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes })
 }
 
-/// The terrain under `area` (m, world coordinates) as a grid mesh at the site's cell size (at
-/// most 256 × 256 quads), elevations by [`SiteConditions::elevation_at`], normals from central
+/// Largest vertex spacing of the terrain patch (m): finer than the DEM's cells so that the
+/// patch follows the bilinear surface the trees stand on ([`SiteConditions::elevation_at`]).
+pub const TERRAIN_STEP_M: f64 = 5.0;
+
+/// The terrain under `area` (m, world coordinates) as a grid mesh with vertices every
+/// [`TERRAIN_STEP_M`] or the site's cell size if smaller (at most 256 × 256 quads, at least
+/// 0.5 m apart), elevations by [`SiteConditions::elevation_at`], normals from central
 /// differences; positions relative to the area's centre and the patch's lowest elevation,
 /// which is returned.
 pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
     let [x0, y0, x1, y1] = area;
-    let step = site.cell_x_m.min(site.cell_y_m).max((x1 - x0).max(y1 - y0) / 256.0).max(0.5);
+    let step = site.cell_x_m.min(site.cell_y_m).min(TERRAIN_STEP_M).max((x1 - x0).max(y1 - y0) / 256.0).max(0.5);
     let nx = ((x1 - x0) / step).ceil().max(1.0) as usize;
     let ny = ((y1 - y0) / step).ceil().max(1.0) as usize;
     let (cx, cy) = ((x0 + x1) * 0.5, (y0 + y1) * 0.5);
