@@ -13,7 +13,7 @@
 //! The default image is [`LEAF_TEXTURE_W`] × [`LEAF_TEXTURE_H`] (1:2 like the card, so a texel
 //! is square on the card). Alpha is the leaf's coverage of each texel (4 × 4 samples), meant
 //! for alpha testing at [`ALPHA_CUTOFF`] (glTF `alphaMode: MASK`); RGB is a grey shading (midrib
-//! and veins lighter, the margin darker, 0.62–1.0) to be multiplied by the foliage colour of
+//! and veins lighter, the margin darker, 0.70–1.0) to be multiplied by the foliage colour of
 //! the season ([`tint`]); RGB is also set where alpha is 0 so that filtered and mip-mapped
 //! samples at the edge keep the leaf's colour (no dark fringe).
 //!
@@ -301,7 +301,7 @@ fn outline(shape: LeafShape) -> Outline {
 }
 
 impl Outline {
-    /// Grey shading at card point `p` when inside (0.62–1.0), else `None`.
+    /// Grey shading at card point `p` when inside (0.70–1.0), else `None`.
     fn shade(&self, p: Vec2) -> Option<f32> {
         if self.stems.iter().any(|c| c.contains(p)) {
             return Some(0.9);
