@@ -89,10 +89,11 @@ pub fn foliage_on_day(species: &Species, doy: f32) -> ([f32; 3], f32) {
 }
 
 /// The crown look of `species` from afar (`appearance.crown_top_flatness`, `crown_cover`,
-/// `crown_clump`), which the renderer's coarse levels draw.
+/// `crown_clump`), which the renderer's coarse levels draw, and its leaf outline
+/// (`appearance.leaf_texture`) for the leaf cards.
 pub fn crown_look(species: &Species) -> crate::render::lod::CrownLook {
     let a = &species.appearance;
-    crate::render::lod::CrownLook { top_flatness: a.crown_top_flatness, cover: a.crown_cover, clump: a.crown_clump }
+    crate::render::lod::CrownLook { top_flatness: a.crown_top_flatness, cover: a.crown_cover, clump: a.crown_clump, leaf_shape: Some(crate::structure::texture::LeafShape::of_species(species)) }
 }
 
 /// One prototype per species of `library`, in library order (so `SpeciesId` indexes them):

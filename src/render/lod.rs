@@ -223,12 +223,15 @@ pub struct CrownLook {
     /// Clumping: coefficient of variation of the foliage per covered plan cell, divided by 2 and
     /// clamped to 0..1 (0 = evenly spread leaves, smooth crown; high = foliage in separate lumps).
     pub clump: f32,
+    /// Leaf outline of the leaf cards (LOD0) and leaf-cluster cards (LOD1), drawn with the
+    /// alpha textures of [`crate::structure::texture`]; `None`: cards carved into soft discs.
+    pub leaf_shape: Option<crate::structure::texture::LeafShape>,
 }
 
 impl Default for CrownLook {
     /// A dense, smooth dome.
     fn default() -> Self {
-        CrownLook { top_flatness: 0.6, cover: 0.9, clump: 0.2 }
+        CrownLook { top_flatness: 0.6, cover: 0.9, clump: 0.2, leaf_shape: None }
     }
 }
 
@@ -263,7 +266,7 @@ impl CrownLook {
         let i = (x as usize).min(SILHOUETTE_BINS - 1);
         let j = (i + 1).min(SILHOUETTE_BINS - 1);
         let top = s[i] + (s[j] - s[i]) * (x - i as f32);
-        CrownLook { top_flatness: top.clamp(0.0, 1.0), cover: cover.clamp(0.0, 1.0), clump }
+        CrownLook { top_flatness: top.clamp(0.0, 1.0), cover: cover.clamp(0.0, 1.0), clump, leaf_shape: None }
     }
 }
 

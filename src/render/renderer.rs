@@ -25,6 +25,7 @@ use super::instanced::{build_batches, instance_record, level_triangles, Batches,
 use super::lod::{drawn_levels, Frustum, LodParams, Silhouette, SILHOUETTE_BINS};
 use super::scene::Scene;
 use crate::mesh::LOD_LEVELS;
+use crate::structure::texture::{self, LeafShape};
 
 // `shaders/cull.wgsl` keeps one drawn level per word of a 4-word record (the level costs of a
 // prototype, `cost()`), so the number of levels is tied to that record width.
@@ -66,7 +67,8 @@ struct Globals {
 struct SilRaw {
     w: [f32; SILHOUETTE_BINS],
     info: [f32; 4],
-    /// crown look: top flatness, plan cover, clumping, unused ([`super::lod::CrownLook`])
+    /// crown look: top flatness, plan cover, clumping, first leaf texture layer (−1: none)
+    /// ([`super::lod::CrownLook`])
     look: [f32; 4],
 }
 
@@ -153,6 +155,41 @@ struct TreeVertex {
     /// Card coordinates 0..1 of leaf cards (carved into discs by the fragment shader); (−1,
     /// twig factor 0..1, see `twig_factor`) on bark; (−1, −1) elsewhere.
     uv: [f32; 2],
+}
+
+/// Side (texels) of each layer of the renderer's leaf texture array.
+const LEAF_TEX_PX: u32 = 64;
+
+/// The layers of the renderer's leaf texture array, in order: per [`LeafShape::ALL`] entry `k`,
+/// layer `2k` its leaf card ([`texture::leaf_texture_sized`], the 1:2 card drawn into a square)
+/// and layer `2k + 1` its leaf-cluster card ([`texture::cluster_texture`]); grey shading in RGB,
+/// coverage in alpha (alpha-tested at [`texture::ALPHA_CUTOFF`] by the tree shader).
+fn leaf_layers() -> Vec<image::RgbaImage> {
+    LeafShape::ALL.iter().flat_map(|&s| [texture::leaf_texture_sized(s, LEAF_TEX_PX, LEAF_TEX_PX), texture::cluster_texture(s, LEAF_TEX_PX)]).collect()
+}
+
+/// Index of the first layer of `shape` in the leaf texture array (−1: no texture).
+fn leaf_layer(shape: Option<LeafShape>) -> f32 {
+    shape.and_then(|s| LeafShape::ALL.iter().position(|&x| x == s)).map(|k| 2.0 * k as f32).unwrap_or(-1.0)
+}
+
+/// Uploads [`leaf_layers`] as a 2-D texture array (RGBA8 linear: the RGB is a shading factor,
+/// not a colour) with a bilinear clamped sampler.
+fn leaf_texture_array(device: &wgpu::Device, queue: &wgpu::Queue) -> (wgpu::TextureView, wgpu::Sampler) {
+    let layers = leaf_layers();
+    let size = wgpu::Extent3d { width: LEAF_TEX_PX, height: LEAF_TEX_PX, depth_or_array_layers: layers.len() as u32 };
+    let tex = device.create_texture(&wgpu::TextureDescriptor { label: Some("leaf textures"), size, mip_level_count: 1, sample_count: 1, dimension: wgpu::TextureDimension::D2, format: wgpu::TextureFormat::Rgba8Unorm, usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST, view_formats: &[] });
+    for (k, img) in layers.iter().enumerate() {
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo { texture: &tex, mip_level: 0, origin: wgpu::Origin3d { x: 0, y: 0, z: k as u32 }, aspect: wgpu::TextureAspect::All },
+            img.as_raw(),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * LEAF_TEX_PX), rows_per_image: Some(LEAF_TEX_PX) },
+            wgpu::Extent3d { width: LEAF_TEX_PX, height: LEAF_TEX_PX, depth_or_array_layers: 1 },
+        );
+    }
+    let view = tex.create_view(&wgpu::TextureViewDescriptor { dimension: Some(wgpu::TextureViewDimension::D2Array), ..Default::default() });
+    let sampler = device.create_sampler(&wgpu::SamplerDescriptor { label: Some("leaf sampler"), mag_filter: wgpu::FilterMode::Linear, min_filter: wgpu::FilterMode::Linear, ..Default::default() });
+    (view, sampler)
 }
 
 /// How far a bark vertex at `p` (normalised model, m per m of height) is out among the twigs,
@@ -316,6 +353,9 @@ pub struct Renderer {
     layout_main: wgpu::BindGroupLayout,
     layout_shadow: wgpu::BindGroupLayout,
     sampler: wgpu::Sampler,
+    /// Leaf alpha textures, two layers per [`LeafShape`] (see [`leaf_layers`]), and their sampler.
+    leaf_view: wgpu::TextureView,
+    leaf_sampler: wgpu::Sampler,
     cull: Option<GpuCull>,
     instance_buf: Option<(wgpu::Buffer, u64)>,
     scene: Option<GpuScene>,
@@ -380,6 +420,13 @@ impl Renderer {
             ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: true }, has_dynamic_offset: false, min_binding_size: None },
             count: None,
         };
+        let leaf_tex_entry = wgpu::BindGroupLayoutEntry {
+            binding: 5,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture { sample_type: wgpu::TextureSampleType::Float { filterable: true }, view_dimension: wgpu::TextureViewDimension::D2Array, multisampled: false },
+            count: None,
+        };
+        let leaf_samp_entry = wgpu::BindGroupLayoutEntry { binding: 6, visibility: wgpu::ShaderStages::FRAGMENT, ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering), count: None };
         let layout_main = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("main"),
             entries: &[
@@ -398,9 +445,11 @@ impl Renderer {
                     ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: true }, has_dynamic_offset: false, min_binding_size: None },
                     count: None,
                 },
+                leaf_tex_entry,
+                leaf_samp_entry,
             ],
         });
-        let layout_shadow = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("shadow"), entries: &[uniform_entry, sil_entry] });
+        let layout_shadow = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some("shadow"), entries: &[uniform_entry, sil_entry, leaf_tex_entry, leaf_samp_entry] });
         let pl_main = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("main"), bind_group_layouts: &[Some(&layout_main)], immediate_size: 0 });
         let pl_shadow = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor { label: Some("shadow"), bind_group_layouts: &[Some(&layout_shadow)], immediate_size: 0 });
 
@@ -460,6 +509,7 @@ impl Renderer {
             compare: Some(wgpu::CompareFunction::LessEqual),
             ..Default::default()
         });
+        let (leaf_view, leaf_sampler) = leaf_texture_array(&device, &queue);
         let cull = if gpu_ok { Some(Self::cull_pipeline(&device)) } else { None };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Create { what: "pipelines", adapter: adapter_info.name.clone(), message: e.to_string() }.into());
@@ -480,6 +530,8 @@ impl Renderer {
             layout_main,
             layout_shadow,
             sampler,
+            leaf_view,
+            leaf_sampler,
             cull,
             instance_buf: None,
             scene: None,
@@ -567,12 +619,19 @@ impl Renderer {
                 wgpu::BindGroupEntry { binding: 2, resource: wgpu::BindingResource::Sampler(&self.sampler) },
                 wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() },
                 wgpu::BindGroupEntry { binding: 4, resource: terrain.canopy_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&self.leaf_view) },
+                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(&self.leaf_sampler) },
             ],
         });
         let bind_shadow = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("shadow"),
             layout: &self.layout_shadow,
-            entries: &[wgpu::BindGroupEntry { binding: 0, resource: self.shadow_globals.as_entire_binding() }, wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() }],
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: self.shadow_globals.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 3, resource: sil_buf.as_entire_binding() },
+                wgpu::BindGroupEntry { binding: 5, resource: wgpu::BindingResource::TextureView(&self.leaf_view) },
+                wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(&self.leaf_sampler) },
+            ],
         });
         let GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: terrain_count, water_vb, canopy_grid, canopy_buf } = terrain;
         self.scene = Some(GpuScene { terrain_version: tfp, protos_version: pfp, terrain_vb, terrain_ib, terrain_count, water_vb, protos, sil_buf, canopy_grid, canopy_buf, bind_main, bind_shadow });
@@ -683,7 +742,7 @@ impl Renderer {
             });
             protos.push(levels);
         }
-        let mut sil_raw: Vec<SilRaw> = sils.iter().map(|s| SilRaw { w: s.width, info: [s.crown_bottom, s.crown_top, s.trunk_half_width, s.widest_z], look: [s.look.top_flatness, s.look.cover, s.look.clump, 0.0] }).collect();
+        let mut sil_raw: Vec<SilRaw> = sils.iter().map(|s| SilRaw { w: s.width, info: [s.crown_bottom, s.crown_top, s.trunk_half_width, s.widest_z], look: [s.look.top_flatness, s.look.cover, s.look.clump, leaf_layer(s.look.leaf_shape)] }).collect();
         if sil_raw.is_empty() {
             sil_raw.push(<SilRaw as bytemuck::Zeroable>::zeroed());
         }

@@ -317,8 +317,8 @@ pub fn demo_scene(n_trees: usize, size_m: f32, seed: u64) -> Scene {
     }
     let terrain = super::terrain::from_grid(&heights, cell, cell, &super::terrain::LandCover::default(), None).unwrap_or_default();
     let prototypes = vec![
-        Prototype { name: "broadleaf".into(), lods: super::lod::placeholder_chain(false), bark_color: [0.3, 0.2, 0.12], leaf_color: [0.12, 0.3, 0.05], stiffness: 0.6, look: Some(super::lod::CrownLook { top_flatness: 0.6, cover: 1.0, clump: 0.15 }) },
-        Prototype { name: "conifer".into(), lods: super::lod::placeholder_chain(true), bark_color: [0.26, 0.15, 0.09], leaf_color: [0.04, 0.16, 0.06], stiffness: 0.8, look: Some(super::lod::CrownLook { top_flatness: 0.0, cover: 1.0, clump: 0.2 }) },
+        Prototype { name: "broadleaf".into(), lods: super::lod::placeholder_chain(false), bark_color: [0.3, 0.2, 0.12], leaf_color: [0.12, 0.3, 0.05], stiffness: 0.6, look: Some(super::lod::CrownLook { top_flatness: 0.6, cover: 1.0, clump: 0.15, leaf_shape: None }) },
+        Prototype { name: "conifer".into(), lods: super::lod::placeholder_chain(true), bark_color: [0.26, 0.15, 0.09], leaf_color: [0.04, 0.16, 0.06], stiffness: 0.8, look: Some(super::lod::CrownLook { top_flatness: 0.0, cover: 1.0, clump: 0.2, leaf_shape: None }) },
     ];
     let mut instances = Vec::with_capacity(n_trees);
     for i in 0..n_trees as u64 {

@@ -31,6 +31,10 @@ struct Sil {
 @group(0) @binding(3) var<storage, read> sils: array<Sil>;
 // far-field canopy layer (render/canopy.rs): per texel coverage, r, g, b sums in 1/1024
 @group(0) @binding(4) var<storage, read> canopy: array<vec4<u32>>;
+// leaf alpha textures (structure/texture.rs via render/renderer.rs, leaf_layers): per leaf shape
+// a leaf-card layer and a leaf-cluster layer; grey shading in rgb, coverage in a
+@group(0) @binding(5) var leaf_tex: texture_2d_array<f32>;
+@group(0) @binding(6) var leaf_samp: sampler;
 
 // One percentage-closer tap of the sun's shadow map at `uv`, depth `z` (a linear comparison
 // sampler: each tap is already a bilinear 2x2 PCF).
@@ -385,11 +389,32 @@ fn tree_vertex(v: TreeIn) -> TreeOut {
     return o;
 }
 
-// Leaf cards are carved into discs with a dithered rim (radius 0.7..1 of the half-side), so
-// leaf clusters of crossed cards read as soft round clumps, not squares.
+// The leaf texture texel of a leaf card (full level: the leaf, reduced level: the leaf
+// cluster) of a prototype with a leaf shape; a = −1 when it has none or this is not a card.
+// Texture rows run from the leaf tip down (v flipped).
+fn card_texel(i: TreeOut) -> vec4<f32> {
+    if (i.uv.x < -0.5 || i.mat_s.x < 0.5 || i.mat_s.x > 1.5 || i.info.y > 1.5) {
+        return vec4<f32>(1.0, 1.0, 1.0, -1.0);
+    }
+    let layer = sils[u32(i.info.x + 0.5)].look.w;
+    if (layer < -0.5) {
+        return vec4<f32>(1.0, 1.0, 1.0, -1.0);
+    }
+    let l = i32(layer + 0.5) + i32(i.info.y + 0.5);
+    return textureSampleLevel(leaf_tex, leaf_samp, vec2<f32>(i.uv.x, 1.0 - i.uv.y), l, 0.0);
+}
+
+// Leaf cards: alpha-tested against the species' leaf texture (cutoff 0.5, structure/texture.rs
+// ALPHA_CUTOFF) where the prototype has a leaf shape; else carved into discs with a dithered
+// rim (radius 0.7..1 of the half-side), so leaf clusters of crossed cards read as soft round
+// clumps, not squares.
 fn card_kept(i: TreeOut) -> bool {
     if (i.uv.x < -0.5 || i.mat_s.x < 0.5 || i.mat_s.x > 1.5) {
         return true;
+    }
+    let t = card_texel(i);
+    if (t.a > -0.5) {
+        return t.a >= 0.5;
     }
     let d = length(i.uv * 2.0 - vec2<f32>(1.0, 1.0));
     return d < 1.0 - 0.3 * hash2(i.clip.xy, i.salt + 17.0);
@@ -579,6 +604,11 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
     var n = normalize(i.normal);
     var leafy = min(i.mat_s.x, 1.0);
     var albedo = i.color;
+    let tex = card_texel(i);
+    if (tex.a > -0.5) {
+        // the leaf's veins and margin (grey 0.7..1 in the texture)
+        albedo = albedo * tex.rgb;
+    }
     var hz = i.mat_s.y;
     if (i.mat_s.x > 1.5) {
         let c = carve(i);
@@ -664,7 +694,10 @@ fn vs_tree_shadow(v: TreeIn) -> TreeOut {
 
 @fragment
 fn fs_tree_shadow(i: TreeOut) {
-    if (!keep(i) || !card_kept(i)) {
+    // the billboard's top quad (the crown's plan disc) casts no shadow: the side quad, turned
+    // towards the sun, is the crown's outline as the sun sees it; the disc would shade the
+    // crown's own hull below it at the cross-fade
+    if (!keep(i) || !card_kept(i) || i.mat_s.x > 2.5) {
         discard;
     }
     var leafy = i.mat_s.x > 0.5;
