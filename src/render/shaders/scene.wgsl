@@ -130,7 +130,13 @@ fn shade_sh(albedo: vec3<f32>, n: vec3<f32>, world: vec3<f32>, wrap: f32, ao: f3
     let amb_col = mix(vec3<f32>(0.55, 0.55, 0.5), mix(g.sky_horizon.rgb, g.sky_zenith.rgb, 0.5), 0.5);
     let ground = amb_col * vec3<f32>(0.36, 0.38, 0.3);
     let sky_amb = mix(ground, amb_col * 0.42, clamp(0.5 + 0.5 * n.z, 0.0, 1.0));
-    let lit = g.sun_color.rgb * ndl * sh + sky_amb * ao * sky_visibility(world, n);
+    // foliage (wrapped light) has its own crown occlusion `ao`; the canopy's sky occlusion is
+    // for the ground and stems under it
+    var sv = 1.0;
+    if (wrap < 0.3) {
+        sv = sky_visibility(world, n);
+    }
+    let lit = g.sun_color.rgb * ndl * sh + sky_amb * ao * sv;
     return albedo * lit;
 }
 
@@ -341,7 +347,8 @@ fn sway(v: TreeIn, rp: vec3<f32>, sn_in: f32) -> vec3<f32> {
     return v.pos_h.xyz + rp + vec3<f32>(disp, dz);
 }
 
-fn tree_vertex(v: TreeIn) -> TreeOut {
+// `top_scale`: size of the billboard's top quad (1: the crown's plan disc, in both passes).
+fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     var o: TreeOut;
     o.cdir = vec3<f32>(0.0, 0.0, 1.0);
     let h = v.pos_h.w;
@@ -357,7 +364,7 @@ fn tree_vertex(v: TreeIn) -> TreeOut {
         } else {
             // the top quad only shows from above: it shrinks to nothing as the view flattens
             // (continuous, so an orbiting camera sees no pop)
-            let k = smoothstep(0.45, 0.8, f.z);
+            let k = smoothstep(0.45, 0.8, f.z) * top_scale;
             rp = vec3<f32>(v.pos.x * sxy * k, v.pos.y * sxy * k, v.pos.z * h);
             o.normal = vec3<f32>(0.0, 0.0, 1.0);
         }
@@ -684,20 +691,17 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
 
 @vertex
 fn vs_tree(v: TreeIn) -> TreeOut {
-    return tree_vertex(v);
+    return tree_vertex(v, 1.0);
 }
 
 @vertex
 fn vs_tree_shadow(v: TreeIn) -> TreeOut {
-    return tree_vertex(v);
+    return tree_vertex(v, 1.0);
 }
 
 @fragment
 fn fs_tree_shadow(i: TreeOut) {
-    // the billboard's top quad (the crown's plan disc) casts no shadow: the side quad, turned
-    // towards the sun, is the crown's outline as the sun sees it; the disc would shade the
-    // crown's own hull below it at the cross-fade
-    if (!keep(i) || !card_kept(i) || i.mat_s.x > 2.5) {
+    if (!keep(i) || !card_kept(i)) {
         discard;
     }
     var leafy = i.mat_s.x > 0.5;
