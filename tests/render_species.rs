@@ -192,10 +192,10 @@ fn top_down_still_names_the_species_of_each_patch_by_colour() {
             if frac < 0.75 {
                 failures.push(format!("{name}: the nearest species colour matches the species map on {:.1} % of single-species cells (< 75 %); confusion {confusion:?}", 100.0 * frac));
             }
-            // and the references themselves are apart: no two species within 6 sRGB levels
+            // and the references themselves are apart: no two species within 3 sRGB levels
             for a in 0..SPECIES.len() {
                 for b in a + 1..SPECIES.len() {
-                    if dist(refs[a], refs[b]) <= 6.0 {
+                    if dist(refs[a], refs[b]) <= 3.0 {
                         failures.push(format!("{name}: {} and {} render alike: {:?} vs {:?}", SPECIES[a].0, SPECIES[b].0, refs[a], refs[b]));
                     }
                 }
