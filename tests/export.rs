@@ -64,12 +64,15 @@ fn reports(files: &[&Path]) -> Option<(Vec<serde_json::Value>, bool)> {
     Some((r, out.status.success()))
 }
 
-/// Runs the validator on `files`; panics on any error or warning, listing them.
+/// Runs the validator on `files`; panics on any error or warning (or unused object), listing them.
 fn validate(files: &[&Path]) {
     let Some((reports, ok)) = reports(files) else { return };
     for r in &reports {
         let bad: Vec<&serde_json::Value> = r["messages"].as_array().unwrap().iter().filter(|m| m["severity"] == "error" || m["severity"] == "warning").collect();
         assert_eq!((r["errors"].as_u64(), r["warnings"].as_u64()), (Some(0), Some(0)), "{}: {bad:#?}", r["file"]);
+        // nothing written for nothing: no unused material, texture or attribute
+        let unused: Vec<&serde_json::Value> = r["messages"].as_array().unwrap().iter().filter(|m| m["code"] == "UNUSED_OBJECT").collect();
+        assert!(unused.is_empty(), "{}: {unused:#?}", r["file"]);
     }
     assert!(ok);
 }
