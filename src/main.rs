@@ -35,6 +35,8 @@ enum Command {
     Render(cli::render::RenderArgs),
     /// Render a timelapse of a simulation run.
     Timelapse(cli::render::TimelapseArgs),
+    /// Export the adapted trees of an area, the terrain and obstacles as one glTF scene.
+    Export(cli::export::Args),
     /// Open a run directory in the interactive viewer (years, cameras, overlays, trees, stand table).
     View(cli::view::ViewArgs),
     /// Edit a species file with sliders, curves, a live tree preview and validation.
@@ -59,6 +61,7 @@ fn main() -> std::process::ExitCode {
         Command::Tree(c) => cli::tree::run(c),
         Command::Render(a) => cli::render::render(a),
         Command::Timelapse(a) => cli::render::timelapse(a),
+        Command::Export(a) => cli::export::run(a),
         Command::View(a) => cli::view::view(a),
         Command::Edit(a) => cli::view::edit(a),
     };

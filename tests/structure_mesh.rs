@@ -69,10 +69,11 @@ fn glb_rereads_with_gltf_crate() {
     sylva::output::gltf::write_glb(&path, &chain, &Default::default()).unwrap();
     let (doc, buffers, _images) = gltf::import(&path).expect("valid glb");
     assert_eq!(buffers.len(), 1);
+    // LOD nodes named as Unity's and Unreal's importers group them, under the tree's node
     let names: Vec<String> = doc.nodes().map(|n| n.name().unwrap_or("").to_string()).collect();
-    assert_eq!(names, ["LOD0", "LOD1", "LOD2", "LOD3"]);
+    assert_eq!(names, ["tree_LOD0", "tree_LOD1", "tree_LOD2", "tree_LOD3", "tree"]);
     let mats: Vec<&str> = doc.materials().map(|m| m.name().unwrap_or("")).collect();
-    assert_eq!(mats, ["bark", "leaf"]);
+    assert_eq!(mats, ["tree_bark", "tree_leaf", "tree_cluster", "tree_crown", "tree_impostor"]);
     assert!(doc.materials().nth(1).unwrap().double_sided());
     for (mesh, level) in doc.meshes().zip(&chain.levels) {
         let mut tris = 0;
@@ -108,12 +109,12 @@ fn obj_writes_all_levels() {
     let chain = mesh::lod_chain(&sk, &lv, &LodOptions::default());
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("beech.obj");
-    sylva::output::obj::write_obj(&path, &chain, None).unwrap();
+    sylva::output::obj::write_obj(&path, &chain, None, "beech", &Default::default()).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
     let faces = text.lines().filter(|l| l.starts_with("f ")).count();
     let total: usize = chain.levels.iter().map(|l| l.triangle_count()).sum();
     assert_eq!(faces, total);
-    assert_eq!(text.lines().filter(|l| l.starts_with("o LOD")).count(), 4);
+    assert_eq!(text.lines().filter(|l| l.starts_with("o beech_LOD")).count(), 4);
 }
 
 #[test]

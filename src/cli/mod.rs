@@ -1,5 +1,6 @@
 //! Subcommands of the `sylva` binary, one module per area.
 
+pub mod export;
 pub mod render;
 pub mod run;
 pub mod simulate;

@@ -30,7 +30,8 @@ fn parse_on_off(s: &str) -> Result<bool, String> {
     }
 }
 
-fn parse_season(s: &str) -> Result<Season, String> {
+/// Parses a season name (spring, summer, autumn or fall, winter).
+pub fn parse_season(s: &str) -> Result<Season, String> {
     match s.to_ascii_lowercase().as_str() {
         "spring" => Ok(Season::Spring),
         "summer" => Ok(Season::Summer),

@@ -48,6 +48,18 @@ pub fn library(dirs: &[&Path]) -> anyhow::Result<SpeciesLibrary> {
     Ok(lib)
 }
 
+/// The species of a run directory: the shipped library, overlaid by the run's `species/`
+/// folder when it has one, then by `species_dir`.
+pub fn run_library(run_dir: &Path, species_dir: Option<&Path>) -> anyhow::Result<SpeciesLibrary> {
+    let run_species = run_species_dir(run_dir);
+    let mut dirs: Vec<&Path> = Vec::new();
+    if run_species.is_dir() {
+        dirs.push(&run_species);
+    }
+    dirs.extend(species_dir);
+    library(&dirs)
+}
+
 /// Folder of a run directory that holds the species files the run was simulated with.
 pub fn run_species_dir(run_dir: &Path) -> PathBuf {
     run_dir.join("species")

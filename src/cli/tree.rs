@@ -167,11 +167,10 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     let leaf = sp.appearance.leaf_summer;
     match ext.as_str() {
         "glb" => {
-            let width = sk.bounds().map(|(lo, hi)| (hi - lo).x.max((hi - lo).y)).unwrap_or(1.0);
-            sylva::output::gltf::write_glb(out, &chain, &sylva::output::gltf::GlbOptions { bark_rgb: bark, leaf_rgb: leaf, spacing_m: width * 1.2 })?;
+            sylva::output::gltf::write_glb(out, &chain, &glb_options(&sp))?;
             sylva::output::gltf::write_skeleton_sidecar(out, &sk)?;
         }
-        "obj" => sylva::output::obj::write_obj(out, &chain, None)?,
+        "obj" => sylva::output::obj::write_obj(out, &chain, None, &sp.id, &sylva::output::gltf::Look::for_species(&sp, sylva::species::Season::Summer))?,
         _ => anyhow::bail!("--out {}: expected a .glb or .obj file name", out.display()),
     }
     let img = preview(&chain, bark, leaf, 360, 540);
@@ -190,6 +189,12 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     }
     println!("wrote {} and {}", out.display(), png.display());
     Ok(())
+}
+
+/// glTF options of a tree of `sp`: named by its species id, its summer look, LOD levels on top
+/// of each other (a LOD group).
+fn glb_options(sp: &sylva::species::Species) -> sylva::output::gltf::GlbOptions {
+    sylva::output::gltf::GlbOptions { name: sp.id.clone(), look: sylva::output::gltf::Look::for_species(sp, sylva::species::Season::Summer), spacing_m: 0.0 }
 }
 
 /// Mean segment length of the skeleton (m, ≥ 0.05): the internode length l_i of Plastic Trees
@@ -339,8 +344,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     let adapted = trees[0].skeleton();
     let leaves = species_tree::tip_leaves(&adapted, &sp.architecture.ecomod);
     let chain = lod_chain(&adapted, &leaves, &LodOptions::default());
-    let width = adapted.bounds().map(|(lo, hi)| (hi - lo).x.max((hi - lo).y)).unwrap_or(1.0);
-    sylva::output::gltf::write_glb(&a.out, &chain, &sylva::output::gltf::GlbOptions { bark_rgb: sp.appearance.bark, leaf_rgb: sp.appearance.leaf_summer, spacing_m: width * 1.2 })?;
+    sylva::output::gltf::write_glb(&a.out, &chain, &glb_options(&sp))?;
     sylva::output::gltf::write_skeleton_sidecar(&a.out, &adapted)?;
     let png = a.out.with_extension("png");
     let img = before_after(&before, &trees, &obstacles, 420, 480);

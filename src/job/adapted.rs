@@ -13,7 +13,8 @@ use crate::render::scene::{Camera, Prototype, TreeInstance};
 use crate::sim::obstacle::ObstacleSpec;
 use crate::species::{Season, SpeciesLibrary};
 use crate::structure::grow::space::Obstacle;
-use crate::structure::stand::{adapt_stand, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
+use crate::structure::stand::{adapt_stand, AdaptedTree, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
+use crate::structure::{Leaves, Skeleton};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -129,14 +130,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         .map(|a| {
             let t = &trees[a.index];
             let sp = &library.species[t.species as usize];
-            let mut sk = a.skeleton.clone();
-            let mut lv = a.leaves.clone();
-            sk.nodes.iter_mut().for_each(|n| n.pos -= t.base);
-            lv.leaves.iter_mut().for_each(|l| l.pos -= t.base);
-            let h = sk.nodes.iter().map(|n| n.pos.z).fold(0.0f32, f32::max).max(lv.leaves.iter().map(|l| l.pos.z).fold(0.0, f32::max));
-            if !(h > 0.1) {
-                return None;
-            }
+            let (mut sk, mut lv, h) = tree_frame(a, t.base)?;
             let s = 1.0 / h;
             sk.nodes.iter_mut().for_each(|n| {
                 n.pos *= s;
@@ -172,6 +166,17 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         adapted += 1;
     }
     Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups: st.trees_in_groups })
+}
+
+/// The adapted tree `a` in its own frame (stem base `base` moved to the origin) with its height
+/// (m, highest node or leaf); `None` for a tree under 0.1 m.
+pub fn tree_frame(a: &AdaptedTree, base: Vec3) -> Option<(Skeleton, Leaves, f32)> {
+    let mut sk = a.skeleton.clone();
+    let mut lv = a.leaves.clone();
+    sk.nodes.iter_mut().for_each(|n| n.pos -= base);
+    lv.leaves.iter_mut().for_each(|l| l.pos -= base);
+    let h = sk.nodes.iter().map(|n| n.pos.z).fold(0.0f32, f32::max).max(lv.leaves.iter().map(|l| l.pos.z).fold(0.0, f32::max));
+    (h > 0.1).then_some((sk, lv, h))
 }
 
 /// A new open-grown tree cache for scenario seed `seed` ([`SkeletonCache`]).

@@ -8,6 +8,7 @@ pub use error::{JobError, Result};
 
 pub mod adapted;
 pub mod checkpoint;
+pub mod export;
 pub mod inventory;
 pub mod maps;
 pub mod pictures;

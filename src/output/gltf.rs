@@ -1,32 +1,92 @@
-//! glTF 2.0 binary (`.glb`) writer for tree LOD chains (JSON checked with `gltf-json`).
+//! glTF 2.0 binary (`.glb`) writer for trees and stands (JSON checked with `gltf-json`; the
+//! files pass the Khronos glTF validator with no error and no warning, `tests/export_gltf.rs`).
 //!
-//! Layout: one buffer (the GLB BIN chunk); per LOD level one mesh named `LOD<i>` with up to two
-//! primitives (bark, leaves; empty parts are left out) and one node named `LOD<i>`; two
-//! materials, `bark` and `leaf` (double-sided), with the given base colours. Sylva's z-up
-//! coordinates are converted to glTF's y-up: (x, y, z) ↦ (x, z, −y) (right-handed both ways).
+//! **A tree** ([`glb_bytes`]): one buffer (the GLB BIN chunk, images included); per level of
+//! detail one mesh named `<name>_LOD<i>` with up to two primitives (bark, foliage; empty parts
+//! are left out) and one node of the same name, children of a node `<name>`: the naming by which
+//! Unity's and Unreal's importers gather levels into a LOD group. **A stand**
+//! ([`stand_glb_bytes`]): the same per tree (node `<tree>` with its translation and scale,
+//! children `<tree>_LOD<i>`), meshes shared by every tree node that uses them (instancing: one
+//! mesh, many nodes), plus plain meshes (terrain, obstacles).
+//!
+//! **Materials** per [`Look`] (a species in a season): `<look>_bark` (opaque, tiling bark
+//! texture), `<look>_leaf` (LOD0 leaf cards), `<look>_cluster` (LOD1 leaf-cluster cards) and
+//! `<look>_impostor` (LOD3 billboard), all three double-sided with `alphaMode: MASK` and
+//! `alphaCutoff` [`ALPHA_CUTOFF`], and `<look>_crown` (LOD2 hull, opaque). Each has a
+//! `baseColorTexture` on `TEXCOORD_0`, a PNG embedded in the buffer, made by
+//! [`crate::structure::texture`] with the colours baked in (base colour factor white);
+//! identical images are stored once. Card textures clamp, bark and crown textures repeat.
+//! Plain meshes get an untextured material of their colour and no texture coordinates.
+//!
+//! Sylva's z-up coordinates are converted to glTF's y-up: (x, y, z) ↦ (x, z, −y)
+//! (right-handed both ways); texture v is flipped (glTF's origin is the image's top-left).
 //! Positions carry the min/max bounds the specification requires.
 
 use super::{OutputError, Result};
 use crate::error::Error;
 use crate::mesh::{LodChain, TriMesh};
+use crate::species::{Season, Species};
+use crate::structure::texture::{self, BarkPattern, FoliageTextures, LeafShape, ALPHA_CUTOFF};
+use image::RgbaImage;
 use serde_json::{json, Value};
+use std::collections::HashMap;
 use std::path::Path;
 
+/// The materials of one kind of tree: a name and its textures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Look {
+    /// Name prefix of the materials (`<name>_bark`, `<name>_leaf`, …).
+    pub name: String,
+    /// The textures (colours baked in).
+    pub textures: FoliageTextures,
+}
+
+impl Look {
+    /// The look of species `sp` in `season` ([`FoliageTextures::for_species`]), named by its id.
+    pub fn for_species(sp: &Species, season: Season) -> Look {
+        Look { name: sp.id.clone(), textures: FoliageTextures::for_species(sp, season) }
+    }
+
+    /// A look from colours (sRGB 0–255), a leaf shape and a bark pattern.
+    pub fn plain(name: &str, bark_rgb: [u8; 3], leaf_rgb: [u8; 3], shape: LeafShape, bark: BarkPattern) -> Look {
+        let px = texture::TEXTURE_PX;
+        Look {
+            name: name.into(),
+            textures: FoliageTextures {
+                shape,
+                leaf: texture::tint(&texture::leaf_texture(shape), leaf_rgb),
+                cluster: texture::tint(&texture::cluster_texture(shape, px), leaf_rgb),
+                crown: texture::tint(&texture::crown_texture(shape, px), leaf_rgb),
+                impostor: texture::tint(&texture::impostor_texture(shape, px), leaf_rgb),
+                bark: texture::bark_texture(bark_rgb, bark, px, 1),
+            },
+        }
+    }
+}
+
+impl Default for Look {
+    /// `tree`: a brown fissured bark (96, 72, 52) and ovate leaves (70, 120, 50).
+    fn default() -> Self {
+        Look::plain("tree", [96, 72, 52], [70, 120, 50], LeafShape::Ovate, BarkPattern::Fissured)
+    }
+}
+
 /// Options of [`write_glb`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct GlbOptions {
-    /// Bark base colour (sRGB 0–255).
-    pub bark_rgb: [u8; 3],
-    /// Leaf base colour (sRGB 0–255).
-    pub leaf_rgb: [u8; 3],
-    /// Distance (m) between LOD nodes along x, so all levels can be seen side by side; 0 puts
-    /// them on top of each other.
+    /// Name of the tree: the root node, and `<name>_LOD<i>` for the levels.
+    pub name: String,
+    /// Materials.
+    pub look: Look,
+    /// Distance (m) between LOD nodes along x, so all levels can be seen side by side; 0 (the
+    /// default, what LOD groups expect) puts them on top of each other.
     pub spacing_m: f32,
 }
 
 impl Default for GlbOptions {
+    /// Name `tree`, the default [`Look`], spacing 0.
     fn default() -> Self {
-        GlbOptions { bark_rgb: [96, 72, 52], leaf_rgb: [70, 120, 50], spacing_m: 0.0 }
+        GlbOptions { name: "tree".into(), look: Look::default(), spacing_m: 0.0 }
     }
 }
 
@@ -43,29 +103,62 @@ fn y_up(p: [f32; 3]) -> [f32; 3] {
     [p[0], p[2], -p[1]]
 }
 
-// glTF component types and targets (glTF 2.0 specification, section 3.6).
+// glTF constants (glTF 2.0 specification, sections 3.6 and 5.26).
 const F32: u32 = 5126;
 const U32: u32 = 5125;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+const LINEAR: u32 = 9729;
+const LINEAR_MIPMAP_LINEAR: u32 = 9987;
+const CLAMP_TO_EDGE: u32 = 33071;
+const REPEAT: u32 = 10497;
+/// Repeats of the crown texture round (u) and up (v) the LOD2 hull, whose texture coordinates
+/// go once round it (`structure::mesh::hull_mesh`): about one picture per metre of a crown
+/// 6 m across.
+const CROWN_REPEAT: [f32; 2] = [6.0, 3.0];
+/// Sampler indices of [`Doc::new`].
+const SAMPLER_CLAMP: usize = 0;
+const SAMPLER_REPEAT: usize = 1;
 
-/// Builds the glTF JSON with `serde_json` (gltf-json's struct fields change with its "names"
-/// feature, which the dev-dependency `gltf` turns on, so struct literals would not compile in
-/// both builds); the result is checked by parsing it back with `gltf-json`.
-struct Builder {
+/// Material indices of one [`Look`]: bark, then foliage per level (leaf, cluster, crown,
+/// impostor); `None` for a material no written level uses.
+#[derive(Debug, Clone, Copy)]
+struct LookMaterials {
+    bark: Option<usize>,
+    foliage: [Option<usize>; 4],
+}
+
+/// The glTF document being built, with `serde_json` (gltf-json's struct fields change with its
+/// "names" feature, which the dev-dependency `gltf` turns on, so struct literals would not
+/// compile in both builds); the result is checked by parsing it back with `gltf-json`.
+struct Doc {
     views: Vec<Value>,
     accessors: Vec<Value>,
     bin: Vec<u8>,
+    images: Vec<Value>,
+    textures: Vec<Value>,
+    materials: Vec<Value>,
+    meshes: Vec<Value>,
+    nodes: Vec<Value>,
+    /// (PNG bytes, sampler) → texture index.
+    texture_of: HashMap<(Vec<u8>, usize), usize>,
 }
 
-impl Builder {
-    fn view(&mut self, bytes: &[u8], stride: Option<usize>, target: u32) -> usize {
+impl Doc {
+    fn new() -> Doc {
+        Doc { views: Vec::new(), accessors: Vec::new(), bin: Vec::new(), images: Vec::new(), textures: Vec::new(), materials: Vec::new(), meshes: Vec::new(), nodes: Vec::new(), texture_of: HashMap::new() }
+    }
+
+    fn view(&mut self, bytes: &[u8], stride: Option<usize>, target: Option<u32>) -> usize {
         while self.bin.len() % 4 != 0 {
             self.bin.push(0);
         }
         let offset = self.bin.len();
         self.bin.extend_from_slice(bytes);
-        let mut v = json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len(), "target": target});
+        let mut v = json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len()});
+        if let Some(t) = target {
+            v["target"] = json!(t);
+        }
         if let Some(s) = stride {
             v["byteStride"] = json!(s);
         }
@@ -83,7 +176,68 @@ impl Builder {
         self.accessors.len() - 1
     }
 
-    fn primitive(&mut self, m: &TriMesh, material: usize) -> Option<Value> {
+    /// The texture of `img` (PNG in the buffer) with `sampler`; identical ones are shared.
+    fn texture(&mut self, img: &RgbaImage, sampler: usize) -> Result<usize> {
+        let mut png = Vec::new();
+        img.write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png).map_err(|e| OutputError::Serialize { what: "glb texture".into(), format: "PNG", message: e.to_string() })?;
+        if let Some(&t) = self.texture_of.get(&(png.clone(), sampler)) {
+            return Ok(t);
+        }
+        let view = self.view(&png, None, None);
+        self.images.push(json!({"bufferView": view, "mimeType": "image/png"}));
+        self.textures.push(json!({"source": self.images.len() - 1, "sampler": sampler}));
+        let t = self.textures.len() - 1;
+        self.texture_of.insert((png, sampler), t);
+        Ok(t)
+    }
+
+    fn material(&mut self, m: Value) -> usize {
+        self.materials.push(m);
+        self.materials.len() - 1
+    }
+
+    /// The materials of `look` (module documentation) that the LOD `levels` use: bark for
+    /// levels 0–2, the foliage material of each level (levels ≥ 3: the impostor).
+    fn look(&mut self, look: &Look, levels: &[usize]) -> Result<LookMaterials> {
+        let t = &look.textures;
+        let tex = |index: usize| json!({"index": index, "texCoord": 0});
+        let mut bark = None;
+        if levels.iter().any(|&l| l < 3) {
+            let bark_t = self.texture(&t.bark, SAMPLER_REPEAT)?;
+            bark = Some(self.material(json!({"name": format!("{}_bark", look.name), "pbrMetallicRoughness": {"baseColorTexture": tex(bark_t), "metallicFactor": 0.0, "roughnessFactor": 0.95}})));
+        }
+        let mut foliage = [None; 4];
+        for (k, (part, img, sampler)) in [("leaf", &t.leaf, SAMPLER_CLAMP), ("cluster", &t.cluster, SAMPLER_CLAMP), ("crown", &t.crown, SAMPLER_REPEAT), ("impostor", &t.impostor, SAMPLER_CLAMP)].into_iter().enumerate() {
+            if !levels.iter().any(|&l| l.min(3) == k) {
+                continue;
+            }
+            let ti = self.texture(img, sampler)?;
+            let mut m = json!({"name": format!("{}_{part}", look.name), "pbrMetallicRoughness": {"baseColorTexture": tex(ti), "metallicFactor": 0.0, "roughnessFactor": 0.8}});
+            if part != "crown" {
+                m["alphaMode"] = json!("MASK");
+                m["alphaCutoff"] = json!(ALPHA_CUTOFF);
+                m["doubleSided"] = json!(true);
+            }
+            foliage[k] = Some(self.material(m));
+        }
+        Ok(LookMaterials { bark, foliage })
+    }
+
+    /// A plain material of sRGB colour `rgb`.
+    fn plain(&mut self, name: &str, rgb: [u8; 3], roughness: f32) -> usize {
+        let c = [srgb_to_linear(rgb[0]), srgb_to_linear(rgb[1]), srgb_to_linear(rgb[2]), 1.0];
+        self.material(json!({"name": name, "pbrMetallicRoughness": {"baseColorFactor": c, "metallicFactor": 0.0, "roughnessFactor": roughness}}))
+    }
+
+    /// A primitive of `m` in `material`; texture coordinates only when `uv` (a textured
+    /// material) and the mesh has them. `None` for an empty mesh.
+    fn primitive(&mut self, m: &TriMesh, material: usize, uv: bool) -> Option<Value> {
+        self.primitive_uv(m, material, uv, [1.0, 1.0])
+    }
+
+    /// [`Doc::primitive`] with texture coordinates multiplied by `uv_scale` (the crown hull's
+    /// once-round coordinates repeat its leafy texture [`CROWN_REPEAT`] times).
+    fn primitive_uv(&mut self, m: &TriMesh, material: usize, uv: bool, uv_scale: [f32; 2]) -> Option<Value> {
         if m.positions.is_empty() || m.indices.is_empty() {
             return None;
         }
@@ -96,87 +250,132 @@ impl Builder {
             }
         }
         let n = pos.len();
-        let pv = self.view(bytemuck::cast_slice(&pos), Some(12), ARRAY_BUFFER);
+        let pv = self.view(bytemuck::cast_slice(&pos), Some(12), Some(ARRAY_BUFFER));
         let pa = self.accessor(pv, n, F32, "VEC3", Some((lo, hi)));
         let mut attributes = serde_json::Map::new();
         attributes.insert("POSITION".into(), json!(pa));
         if m.normals.len() == n {
-            let nrm: Vec<[f32; 3]> = m.normals.iter().map(|&p| y_up(p)).collect();
-            let nv = self.view(bytemuck::cast_slice(&nrm), Some(12), ARRAY_BUFFER);
+            // unit length as the specification requires (a zero normal becomes up)
+            let nrm: Vec<[f32; 3]> = m.normals.iter().map(|&p| glam::Vec3::from(y_up(p)).normalize_or(glam::Vec3::Y).to_array()).collect();
+            let nv = self.view(bytemuck::cast_slice(&nrm), Some(12), Some(ARRAY_BUFFER));
             attributes.insert("NORMAL".into(), json!(self.accessor(nv, n, F32, "VEC3", None)));
         }
-        if m.uvs.len() == n {
-            let uv: Vec<[f32; 2]> = m.uvs.iter().map(|&[u, v]| [u, 1.0 - v]).collect();
-            let uvv = self.view(bytemuck::cast_slice(&uv), Some(8), ARRAY_BUFFER);
+        if uv && m.uvs.len() == n {
+            let uv: Vec<[f32; 2]> = m.uvs.iter().map(|&[u, v]| [u * uv_scale[0], 1.0 - v * uv_scale[1]]).collect();
+            let uvv = self.view(bytemuck::cast_slice(&uv), Some(8), Some(ARRAY_BUFFER));
             attributes.insert("TEXCOORD_0".into(), json!(self.accessor(uvv, n, F32, "VEC2", None)));
         }
-        let iv = self.view(bytemuck::cast_slice(&m.indices), None, ELEMENT_ARRAY_BUFFER);
+        let iv = self.view(bytemuck::cast_slice(&m.indices), None, Some(ELEMENT_ARRAY_BUFFER));
         let ia = self.accessor(iv, m.indices.len(), U32, "SCALAR", None);
         Some(json!({"attributes": attributes, "indices": ia, "material": material, "mode": 4}))
     }
-}
 
-fn material(name: &str, rgb: [u8; 3], double_sided: bool) -> Value {
-    let c = [srgb_to_linear(rgb[0]), srgb_to_linear(rgb[1]), srgb_to_linear(rgb[2]), 1.0];
-    json!({"name": name, "doubleSided": double_sided, "pbrMetallicRoughness": {"baseColorFactor": c, "metallicFactor": 0.0, "roughnessFactor": 0.9}})
+    /// A mesh named `name` of `prims`; `None` when all are empty.
+    fn mesh(&mut self, name: &str, prims: Vec<Option<Value>>) -> Option<usize> {
+        let prims: Vec<Value> = prims.into_iter().flatten().collect();
+        if prims.is_empty() {
+            return None;
+        }
+        self.meshes.push(json!({"name": name, "primitives": prims}));
+        Some(self.meshes.len() - 1)
+    }
+
+    /// The meshes of a LOD chain, `<name>_LOD<i>`, for the levels in `levels` (`None`: empty or
+    /// not written).
+    fn chain(&mut self, name: &str, chain: &LodChain, mats: LookMaterials, levels: &[usize]) -> Vec<Option<usize>> {
+        chain
+            .levels
+            .iter()
+            .enumerate()
+            .map(|(i, level)| {
+                if !levels.contains(&i) {
+                    return None;
+                }
+                let bark = mats.bark.and_then(|m| self.primitive(&level.bark, m, true));
+                let scale = if i == 2 { CROWN_REPEAT } else { [1.0, 1.0] };
+                let leaves = mats.foliage[i.min(3)].and_then(|m| self.primitive_uv(&level.leaves, m, true, scale));
+                self.mesh(&format!("{name}_LOD{i}"), vec![bark, leaves])
+            })
+            .collect()
+    }
+
+    fn node(&mut self, n: Value) -> usize {
+        self.nodes.push(n);
+        self.nodes.len() - 1
+    }
+
+    /// The GLB bytes of the document with one scene of `roots`.
+    fn finish(mut self, scene: Value) -> Result<Vec<u8>> {
+        while self.bin.len() % 4 != 0 {
+            self.bin.push(0);
+        }
+        let samplers = json!([
+            {"magFilter": LINEAR, "minFilter": LINEAR_MIPMAP_LINEAR, "wrapS": CLAMP_TO_EDGE, "wrapT": CLAMP_TO_EDGE},
+            {"magFilter": LINEAR, "minFilter": LINEAR_MIPMAP_LINEAR, "wrapS": REPEAT, "wrapT": REPEAT},
+        ]);
+        let mut root = json!({
+            "asset": {"version": "2.0", "generator": format!("sylva {}", env!("CARGO_PKG_VERSION"))},
+            "scene": 0,
+            "scenes": [scene],
+            "nodes": self.nodes,
+            "meshes": self.meshes,
+            "materials": self.materials,
+            "accessors": self.accessors,
+            "bufferViews": self.views,
+            "buffers": [{"byteLength": self.bin.len()}],
+        });
+        if !self.textures.is_empty() {
+            root["images"] = json!(self.images);
+            root["textures"] = json!(self.textures);
+            root["samplers"] = samplers;
+        }
+        let mut js = serde_json::to_vec(&root).map_err(|e| OutputError::Serialize { what: "glb".into(), format: "JSON", message: e.to_string() })?;
+        json_check(&js)?;
+        while js.len() % 4 != 0 {
+            js.push(b' ');
+        }
+        let total = 12 + 8 + js.len() + 8 + self.bin.len();
+        if total > u32::MAX as usize {
+            return Err(Error::Invalid { context: "glb".into(), field: "size".into(), value: format!("{total} bytes"), expected: "at most 4 GiB (the GLB length field is 32 bits): export a smaller area".into() }.into());
+        }
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(js.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&js);
+        out.extend_from_slice(&(self.bin.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"BIN\0");
+        out.extend_from_slice(&self.bin);
+        Ok(out)
+    }
 }
 
 /// Encodes a LOD chain as GLB bytes (see the module docs for the layout).
 ///
-/// Errors: [`Error::Invalid`] (in [`OutputError::Input`]) when the chain has no triangles; [`OutputError::Serialize`] when the JSON
-/// cannot be written or does not parse back as valid glTF.
+/// Errors: [`Error::Invalid`] (in [`OutputError::Input`]) when the chain has no triangles;
+/// [`OutputError::Serialize`] when a texture cannot be encoded or the JSON cannot be written or
+/// does not parse back as valid glTF.
 pub fn glb_bytes(chain: &LodChain, o: &GlbOptions) -> Result<Vec<u8>> {
     if chain.levels.iter().all(|l| l.triangle_count() == 0) {
         return Err(Error::Invalid { context: "glb".into(), field: "LOD chain".into(), value: "0 triangles".into(), expected: "at least one level with triangles".into() }.into());
     }
-    let mut b = Builder { views: Vec::new(), accessors: Vec::new(), bin: Vec::new() };
-    let materials = vec![material("bark", o.bark_rgb, false), material("leaf", o.leaf_rgb, true)];
-    let mut meshes = Vec::new();
-    let mut nodes = Vec::new();
-    for (i, level) in chain.levels.iter().enumerate() {
-        let prims: Vec<Value> = [b.primitive(&level.bark, 0), b.primitive(&level.leaves, 1)].into_iter().flatten().collect();
-        if prims.is_empty() {
-            continue;
-        }
-        meshes.push(json!({"name": format!("LOD{i}"), "primitives": prims}));
-        let mut node = json!({"name": format!("LOD{i}"), "mesh": meshes.len() - 1});
+    let mut d = Doc::new();
+    let all: Vec<usize> = (0..chain.levels.len()).filter(|&i| chain.levels[i].triangle_count() > 0).collect();
+    let mats = d.look(&o.look, &all)?;
+    let meshes = d.chain(&o.name, chain, mats, &all);
+    let mut children = Vec::new();
+    for (i, m) in meshes.iter().enumerate() {
+        let Some(m) = *m else { continue };
+        let mut node = json!({"name": format!("{}_LOD{i}", o.name), "mesh": m});
         if o.spacing_m != 0.0 {
             node["translation"] = json!([o.spacing_m * i as f32, 0.0, 0.0]);
         }
-        nodes.push(node);
+        children.push(d.node(node));
     }
-    while b.bin.len() % 4 != 0 {
-        b.bin.push(0);
-    }
-    let scene_nodes: Vec<usize> = (0..nodes.len()).collect();
-    let root = json!({
-        "asset": {"version": "2.0", "generator": format!("sylva {}", env!("CARGO_PKG_VERSION"))},
-        "scene": 0,
-        "scenes": [{"name": "tree", "nodes": scene_nodes}],
-        "nodes": nodes,
-        "meshes": meshes,
-        "materials": materials,
-        "accessors": b.accessors,
-        "bufferViews": b.views,
-        "buffers": [{"byteLength": b.bin.len()}],
-    });
-    let mut js = serde_json::to_vec(&root).map_err(|e| OutputError::Serialize { what: "glb".into(), format: "JSON", message: e.to_string() })?;
-    json_check(&js)?;
-    while js.len() % 4 != 0 {
-        js.push(b' ');
-    }
-    let total = 12 + 8 + js.len() + 8 + b.bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(js.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"JSON");
-    out.extend_from_slice(&js);
-    out.extend_from_slice(&(b.bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(b"BIN\0");
-    out.extend_from_slice(&b.bin);
-    Ok(out)
+    let root = d.node(json!({"name": o.name, "children": children}));
+    d.finish(json!({"name": o.name, "nodes": [root]}))
 }
 
 /// Parses the JSON chunk back with `gltf-json` and runs its validation.
@@ -198,6 +397,206 @@ fn json_check(js: &[u8]) -> Result<()> {
 pub fn write_glb(path: &Path, chain: &LodChain, o: &GlbOptions) -> Result<()> {
     let bytes = glb_bytes(chain, o)?;
     super::write_atomic(path, &bytes)
+}
+
+/// One kind of tree mesh of a stand: a LOD chain in the tree's own frame (stem base at the
+/// origin, z up, m) and the [`Look`] it wears.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StandModel {
+    /// Name of its meshes (`<name>_LOD<i>`).
+    pub name: String,
+    /// The levels of detail.
+    pub chain: LodChain,
+    /// Index into [`StandScene::looks`].
+    pub look: usize,
+}
+
+/// One tree of a stand: a node drawing a [`StandModel`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct StandNode {
+    /// Node name (`<name>`, levels `<name>_LOD<i>`).
+    pub name: String,
+    /// Index into [`StandScene::models`].
+    pub model: usize,
+    /// Stem base in the scene (m, Sylva's z up; converted to y up).
+    pub translation: [f32; 3],
+    /// Scale of the model along Sylva's x, y, z (> 0; 1 for a model made for this tree).
+    pub scale: [f32; 3],
+}
+
+/// A plain mesh of a stand (terrain, obstacles): one colour, no texture.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StaticMesh {
+    /// Node, mesh and material name.
+    pub name: String,
+    /// Triangles in scene coordinates (m, z up).
+    pub mesh: TriMesh,
+    /// sRGB colour (0–255).
+    pub rgb: [u8; 3],
+    /// Roughness (0–1).
+    pub roughness: f32,
+}
+
+/// What [`stand_glb_bytes`] writes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StandScene {
+    /// Scene name.
+    pub name: String,
+    /// Materials per kind of tree.
+    pub looks: Vec<Look>,
+    /// Tree meshes.
+    pub models: Vec<StandModel>,
+    /// Tree nodes.
+    pub trees: Vec<StandNode>,
+    /// Terrain and obstacles.
+    pub statics: Vec<StaticMesh>,
+    /// Levels of detail written (indices into the chains, e.g. `[0, 1, 2, 3]` or `[0]`).
+    pub levels: Vec<usize>,
+    /// JSON stored as the scene's `extras` (provenance: run, year, area, origin).
+    pub extras: Value,
+}
+
+/// Counts of a written stand.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct StandCounts {
+    /// glTF meshes written.
+    pub meshes: usize,
+    /// Nodes drawing a mesh.
+    pub mesh_nodes: usize,
+    /// Images embedded.
+    pub images: usize,
+}
+
+/// Encodes a stand as GLB bytes (module documentation): node `trees` holds one node per tree,
+/// node `ground` the static meshes. Every [`StandModel`]'s meshes are written once however many
+/// trees use it, and the LOD3 billboard of all trees of one look is a single mesh (two crossed
+/// unit cards, 1 m wide and tall) placed and scaled by each tree's `_LOD3` node to the bounds of
+/// its model's billboard.
+///
+/// Errors: [`Error::Invalid`] for a node naming a missing model or look, a non-positive or
+/// non-finite scale, or nothing to draw; otherwise as [`glb_bytes`].
+pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
+    let bad = |field: &str, value: String, expected: String| OutputError::from(Error::Invalid { context: format!("stand glb {}", s.name), field: field.into(), value, expected });
+    for m in &s.models {
+        if m.look >= s.looks.len() {
+            return Err(bad("model look", format!("{} of {}", m.look, m.name), format!("a look index below {}", s.looks.len())));
+        }
+    }
+    for t in &s.trees {
+        if t.model >= s.models.len() {
+            return Err(bad("tree model", format!("{} of {}", t.model, t.name), format!("a model index below {}", s.models.len())));
+        }
+        if !t.scale.iter().all(|c| c.is_finite() && *c > 0.0) || !t.translation.iter().all(|c| c.is_finite()) {
+            return Err(bad("tree transform", format!("{:?} {:?} of {}", t.translation, t.scale, t.name), "finite numbers, scales > 0".into()));
+        }
+    }
+    if s.trees.is_empty() && s.statics.iter().all(|m| m.mesh.indices.is_empty()) {
+        return Err(bad("scene", "no trees and no ground".into(), "at least one tree or mesh".into()));
+    }
+    let mut d = Doc::new();
+    let used_looks: std::collections::BTreeSet<usize> = s.trees.iter().map(|t| s.models[t.model].look).collect();
+    let mut mats: Vec<Option<LookMaterials>> = vec![None; s.looks.len()];
+    for &l in &used_looks {
+        mats[l] = Some(d.look(&s.looks[l], &s.levels)?);
+    }
+    let billboard = crate::mesh::LOD_LEVELS - 1;
+    // the shared unit billboard of each look
+    let mut unit_billboard: Vec<Option<usize>> = vec![None; s.looks.len()];
+    if s.levels.contains(&billboard) {
+        for &l in &used_looks {
+            let Some(m) = mats[l] else { continue };
+            let card = unit_cards();
+            let p = m.foliage[3].and_then(|f| d.primitive(&card, f, true));
+            unit_billboard[l] = d.mesh(&format!("{}_billboard", s.looks[l].name), vec![p]);
+        }
+    }
+    // the models used, their meshes once (levels below the billboard)
+    let used_models: std::collections::BTreeSet<usize> = s.trees.iter().map(|t| t.model).collect();
+    let mut model_meshes: Vec<Vec<Option<usize>>> = vec![Vec::new(); s.models.len()];
+    let mut model_card: Vec<Option<([f32; 3], [f32; 3])>> = vec![None; s.models.len()];
+    for &mi in &used_models {
+        let m = &s.models[mi];
+        let Some(lm) = mats[m.look] else { continue };
+        let levels: Vec<usize> = s.levels.iter().copied().filter(|&l| l != billboard).collect();
+        model_meshes[mi] = d.chain(&m.name, &m.chain, lm, &levels);
+        model_card[mi] = m.chain.levels.get(billboard).and_then(|l| l.leaves.bounds());
+    }
+    let mut mesh_nodes = 0;
+    let mut tree_nodes = Vec::new();
+    for t in &s.trees {
+        let m = &s.models[t.model];
+        let mut children = Vec::new();
+        for (i, mesh) in model_meshes[t.model].iter().enumerate() {
+            if let Some(mesh) = *mesh {
+                children.push(d.node(json!({"name": format!("{}_LOD{i}", t.name), "mesh": mesh})));
+                mesh_nodes += 1;
+            }
+        }
+        if let (Some(mesh), Some((lo, hi))) = (unit_billboard[m.look], model_card[t.model]) {
+            // the model's billboard spans its bounds: centre (x, y), half-width, z range
+            let c = [(lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5, lo[2]];
+            let w = ((hi[0] - lo[0]).max(hi[1] - lo[1]) * 0.5).max(1e-3);
+            let h = (hi[2] - lo[2]).max(1e-3);
+            children.push(d.node(json!({"name": format!("{}_LOD{billboard}", t.name), "mesh": mesh, "translation": y_up(c), "scale": [w, h, w]})));
+            mesh_nodes += 1;
+        }
+        let [sx, sy, sz] = t.scale;
+        let mut node = json!({"name": t.name, "children": children, "translation": y_up(t.translation)});
+        if t.scale != [1.0; 3] {
+            node["scale"] = json!([sx, sz, sy]);
+        }
+        if let (true, Some(o)) = (children.is_empty(), node.as_object_mut()) {
+            o.remove("children");
+        }
+        tree_nodes.push(d.node(node));
+    }
+    let mut ground_nodes = Vec::new();
+    for g in &s.statics {
+        let mat = d.plain(&g.name, g.rgb, g.roughness);
+        let p = d.primitive(&g.mesh, mat, false);
+        if let Some(mesh) = d.mesh(&g.name, vec![p]) {
+            ground_nodes.push(d.node(json!({"name": g.name, "mesh": mesh})));
+            mesh_nodes += 1;
+        }
+    }
+    let mut roots = Vec::new();
+    if !tree_nodes.is_empty() {
+        roots.push(d.node(json!({"name": "trees", "children": tree_nodes})));
+    }
+    if !ground_nodes.is_empty() {
+        roots.push(d.node(json!({"name": "ground", "children": ground_nodes})));
+    }
+    let counts = StandCounts { meshes: d.meshes.len(), mesh_nodes, images: d.images.len() };
+    let mut scene = json!({"name": s.name, "nodes": roots});
+    if !s.extras.is_null() {
+        scene["extras"] = s.extras.clone();
+    }
+    Ok((d.finish(scene)?, counts))
+}
+
+/// Two crossed vertical unit cards (x and y planes, 2 m wide from −1 to 1, 0–1 m tall, z up),
+/// texture v up: the billboard all trees of a look share in a stand.
+fn unit_cards() -> TriMesh {
+    let mut m = TriMesh::default();
+    for (axis, normal) in [([1.0f32, 0.0, 0.0], [0.0f32, -1.0, 0.0]), ([0.0, 1.0, 0.0], [1.0, 0.0, 0.0])] {
+        let b = m.positions.len() as u32;
+        for (s, z) in [(-1.0f32, 0.0f32), (1.0, 0.0), (1.0, 1.0), (-1.0, 1.0)] {
+            m.positions.push([axis[0] * s, axis[1] * s, z]);
+            m.normals.push(normal);
+            m.uvs.push([(s + 1.0) * 0.5, z]);
+        }
+        m.indices.extend_from_slice(&[b, b + 1, b + 2, b, b + 2, b + 3]);
+    }
+    m
+}
+
+/// Writes a stand to `path` as `.glb` (atomically); returns what was written.
+///
+/// Errors: as [`stand_glb_bytes`]; [`OutputError::Io`] naming `path`.
+pub fn write_stand_glb(path: &Path, s: &StandScene) -> Result<StandCounts> {
+    let (bytes, counts) = stand_glb_bytes(s)?;
+    super::write_atomic(path, &bytes)?;
+    Ok(counts)
 }
 
 /// Path of the skeleton sidecar of a `.glb`: `tree.glb` → `tree.skeleton.json`.

@@ -348,7 +348,10 @@ pub struct Appearance {
     pub leaf_autumn: [u8; 3],
     /// Foliage colour in winter (evergreens) — deciduous trees are bare.
     pub leaf_winter: [u8; 3],
-    /// Leaf texture name (informative; the renderer uses flat colours).
+    /// Leaf-card outline (`structure::texture::LeafShape`): `broad_ovate`, `broad_lobed`,
+    /// `broad_cordate`, `broad_palmate`, `broad_pinnate`, `broad_round`, `broad_triangular`,
+    /// `needle_short`, `needle_long`, `needle_flat`, `needle_tuft`, or `none` (the default of the
+    /// leaf type: ovate for broadleaves, short needles for conifers).
     pub leaf_texture: String,
 }
 

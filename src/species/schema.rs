@@ -387,9 +387,26 @@ pub const FIELDS: &[FieldSpec] = &[
     f(
         "appearance.leaf_texture",
         "",
-        Kind::Text { non_empty: false },
-        "Leaf texture name (informative)",
+        Kind::Enum(&LEAF_TEXTURES),
+        "Leaf-card outline drawn by structure::texture (none: ovate for broadleaves, short needles for conifers)",
     ),
+];
+
+/// The values of `appearance.leaf_texture`: the leaf-card outlines of
+/// `structure::texture::LeafShape`, in its order, then `"none"` (the default of the leaf type).
+pub const LEAF_TEXTURES: [&str; 12] = [
+    "broad_ovate",
+    "broad_lobed",
+    "broad_cordate",
+    "broad_palmate",
+    "broad_pinnate",
+    "broad_round",
+    "broad_triangular",
+    "needle_short",
+    "needle_long",
+    "needle_flat",
+    "needle_tuft",
+    "none",
 ];
 
 /// Looks up the spec of a dotted field path.

@@ -11,6 +11,7 @@
 //!   ([`grow::envelope`]).
 //! - [`edit_distance`]: constrained edit distance between skeletons (Zhang 1996), the
 //!   comparison of Plastic Trees section 7.
+//! - [`texture`]: procedural leaf-card (per leaf shape), LOD and bark textures.
 //! - [`plastic`]: Plastic Trees (`000_*.txt`): bends and prunes a grown skeleton for a new
 //!   obstacle instead of regrowing it.
 
@@ -22,6 +23,7 @@ pub mod plastic;
 pub mod skeleton;
 pub mod species_tree;
 pub mod stand;
+pub mod texture;
 
 pub use skeleton::{Leaf, Leaves, Node, NodeId, Role, Skeleton};
 

@@ -1,0 +1,298 @@
+//! Stand export (issue 14, Build 4; `sylva export RUN_DIR --year Y --area X0,Y0,X1,Y1 --out
+//! stand.glb`): the live trees of an area of a run's snapshot, each with its own skeleton
+//! adapted to its neighbours, the light and the obstacles by [`adapt_stand`] (Plastic Trees,
+//! Pirk et al. 2012, `000_*.txt`; the same near-field adaptation `job::adapted` does for the
+//! pictures), meshed with its levels of detail, with the terrain patch under the area and the
+//! scenario's obstacles that reach into it, as one glTF scene ([`crate::output::gltf::StandScene`]).
+//!
+//! **Instancing.** Trees whose adapted skeletons have the same topology and the same shape once
+//! divided by their crown radius (x, y) and height (z), within [`SAME_SHAPE`], share one mesh
+//! per level, each tree's node scaling it (trees of one species, age and size class that their
+//! neighbours did not touch: the analysis is shared, `structure::stand`); and the LOD3
+//! billboards of all trees of a species are one mesh ([`crate::output::gltf`]).
+//!
+//! **Coordinates.** The scene's origin is the area's centre at the lowest terrain elevation of
+//! the patch (metres; x east, y north, z up in Sylva, y up in the file); the scene's `extras`
+//! record the origin in the run's world coordinates, the run directory, the year and the area.
+
+use super::adapted::{obstacle_mesh, solids, stand_trees, tree_frame, OBSTACLE_RGB};
+use super::scene::plants_from_rows;
+use super::Result;
+use crate::conditions::SiteConditions;
+use crate::error::Error;
+use crate::mesh::{TriMesh, LOD_LEVELS};
+use crate::output::gltf::{Look, StandCounts, StandModel, StandNode, StandScene, StaticMesh};
+use crate::sim::Scenario;
+use crate::species::{Season, SpeciesLibrary};
+use crate::structure::mesh::{lod_chain, LodOptions};
+use crate::structure::stand::{adapt_stand, StandOptions};
+use glam::Vec3;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Forest-floor colour of the terrain patch (sRGB 96, 84, 62: litter and soil).
+pub const GROUND_RGB: [u8; 3] = [96, 84, 62];
+
+/// Largest difference (a fraction of the tree's height or crown radius; for leaf directions,
+/// of a unit vector) between two trees' canonical shapes that still share one mesh: 10⁻³, 1 cm
+/// on a 10 m tree, well above the rounding of adapting the same tree at another place.
+pub const SAME_SHAPE: f32 = 1e-3;
+
+/// Most trees an export adapts (the area's live trees; a larger area is refused).
+pub const DEFAULT_MAX_TREES: usize = 5000;
+
+/// What to export.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExportOptions {
+    /// Snapshot year (`inventory/year_NNNN.csv`); `None`: the last one.
+    pub year: Option<u32>,
+    /// Area `[x0, y0, x1, y1]` (m, world coordinates from the terrain's south-west corner;
+    /// x0 < x1, y0 < y1, inside the terrain).
+    pub area: [f64; 4],
+    /// Season of the foliage colours.
+    pub season: Season,
+    /// Levels of detail written (indices below [`LOD_LEVELS`]; all by default).
+    pub levels: Vec<usize>,
+    /// Most trees (refused beyond: [`DEFAULT_MAX_TREES`] by default).
+    pub max_trees: usize,
+}
+
+impl ExportOptions {
+    /// The last year, summer, all levels, [`DEFAULT_MAX_TREES`].
+    pub fn new(area: [f64; 4]) -> ExportOptions {
+        ExportOptions { year: None, area, season: Season::Summer, levels: (0..LOD_LEVELS).collect(), max_trees: DEFAULT_MAX_TREES }
+    }
+}
+
+/// What [`export_stand`] wrote.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExportReport {
+    /// The file.
+    pub out: PathBuf,
+    /// Snapshot year exported.
+    pub year: u32,
+    /// Trees in the scene.
+    pub trees: usize,
+    /// Distinct tree models (sets of LOD meshes).
+    pub models: usize,
+    /// Obstacles in the scene.
+    pub obstacles: usize,
+    /// Triangles of the terrain patch.
+    pub terrain_triangles: usize,
+    /// Meshes, mesh nodes and images written.
+    pub counts: StandCounts,
+    /// Wall time of the adaptation (s).
+    pub adapt_s: f64,
+    /// Size of the file (bytes).
+    pub bytes: u64,
+}
+
+fn invalid(field: &str, value: String, expected: String) -> super::JobError {
+    Error::Invalid { context: "sylva export".into(), field: field.into(), value, expected }.into()
+}
+
+/// Parses an area `X0,Y0,X1,Y1` (m).
+///
+/// Errors: [`Error::Invalid`] naming `--area` for anything but four finite numbers with
+/// x0 < x1 and y0 < y1.
+pub fn parse_area(s: &str) -> Result<[f64; 4]> {
+    let v: Vec<f64> = s.split(',').map(|p| p.trim().parse::<f64>().unwrap_or(f64::NAN)).collect();
+    if v.len() != 4 || v.iter().any(|x| !x.is_finite()) {
+        return Err(invalid("--area", s.into(), "four numbers X0,Y0,X1,Y1 (m), e.g. 100,100,160,160".into()));
+    }
+    if !(v[0] < v[2] && v[1] < v[3]) {
+        return Err(invalid("--area", s.into(), "X0 < X1 and Y0 < Y1 (the south-west, then the north-east corner)".into()));
+    }
+    Ok([v[0], v[1], v[2], v[3]])
+}
+
+/// Exports the area of a run directory's snapshot to `out` (`.glb`, atomically). `library`:
+/// the species as simulated (the caller overlays the run's `species/` folder).
+///
+/// Errors: [`Error::Format`] / [`Error::Io`] when `RUN_DIR/scenario.toml`, its terrain or the
+/// snapshot cannot be read (a missing year names the years present); [`Error::Invalid`] naming
+/// `--area` for an area outside the terrain or holding no live tree of the library (it says
+/// where the trees are), naming `--lod` for a level ≥ [`LOD_LEVELS`], and for more trees than
+/// `max_trees`; the errors of [`adapt_stand`] and of the glTF writer.
+pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions, out: &Path) -> Result<ExportReport> {
+    let sc = Scenario::load(&run_dir.join("scenario.toml"))?;
+    let site = sc.site()?;
+    let year = match o.year {
+        Some(y) => y,
+        None => super::inventory::snapshots(run_dir)?.iter().map(|s| s.0).max().ok_or_else(|| Error::format(run_dir, "no inventory snapshots (inventory/year_NNNN.csv)"))?,
+    };
+    if let Some(&l) = o.levels.iter().find(|&&l| l >= LOD_LEVELS) {
+        return Err(invalid("--lod", l.to_string(), format!("levels 0–{}", LOD_LEVELS - 1)));
+    }
+    let [x0, y0, x1, y1] = o.area;
+    let (w, h) = (site.width() as f64 * site.cell_x_m, site.height() as f64 * site.cell_y_m);
+    if !(x0 < x1 && y0 < y1) || x0 < 0.0 || y0 < 0.0 || x1 > w || y1 > h {
+        return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}"), format!("X0 < X1, Y0 < Y1 inside the terrain, 0–{w:.1} m east and 0–{h:.1} m north")));
+    }
+    let rows = super::pictures::snapshot_rows(run_dir, year)?;
+    let plants = plants_from_rows(&rows);
+    let stand = stand_trees(&plants, library, &site);
+    let trees: Vec<_> = stand.iter().map(|(_, t)| *t).collect();
+    let inside = |x: f32, y: f32| (x as f64) >= x0 && (x as f64) < x1 && (y as f64) >= y0 && (y as f64) < y1;
+    let targets: Vec<usize> = (0..trees.len()).filter(|&k| inside(trees[k].base.x, trees[k].base.y)).collect();
+    if targets.is_empty() {
+        let span = trees.iter().fold(None, |acc: Option<(Vec3, Vec3)>, t| Some(acc.map_or((t.base, t.base), |(lo, hi)| (lo.min(t.base), hi.max(t.base)))));
+        let where_ = match span {
+            Some((lo, hi)) => format!("an area holding some of the year's {} live trees (they stand within {:.0},{:.0},{:.0},{:.0})", trees.len(), lo.x, lo.y, hi.x, hi.y),
+            None => format!("a year with live trees (year {year} has none of the species library ≥ 1 m tall)"),
+        };
+        return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}: no live tree in year {year}"), where_));
+    }
+    if targets.len() > o.max_trees {
+        return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}: {} trees", targets.len()), format!("at most {} trees: a smaller area", o.max_trees)));
+    }
+    let t0 = std::time::Instant::now();
+    let mut cache = super::adapted::cache(sc.seed);
+    let opts = StandOptions { latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(&sc.obstacles, &site), ..StandOptions::default() };
+    let st = adapt_stand(&trees, &targets, library, &mut cache, &opts)?;
+    let adapt_s = t0.elapsed().as_secs_f64();
+
+    // terrain patch and origin
+    let (terrain, z0) = terrain_patch(&site, o.area);
+    let origin = Vec3::new(((x0 + x1) * 0.5) as f32, ((y0 + y1) * 0.5) as f32, z0);
+
+    // each tree in its own frame, with its topology key and canonical shape
+    let meshed: Vec<Option<(u64, Vec<f32>, StandModel, [f32; 3], Vec3, usize)>> = st
+        .trees
+        .par_iter()
+        .map(|a| {
+            let t = &trees[a.index];
+            let (sk, lv, hgt) = tree_frame(a, t.base)?;
+            let r = t.crown_radius_m.max(0.2);
+            let s = Vec3::new(r, r, hgt);
+            let mut topology = vec![t.species as u64, sk.nodes.len() as u64];
+            topology.extend(sk.nodes.iter().map(|n| n.parent.map_or(u64::MAX, |p| p as u64)));
+            topology.extend(lv.leaves.iter().map(|l| l.node as u64));
+            let mut canon = Vec::with_capacity(sk.nodes.len() * 4 + lv.leaves.len() * 10);
+            for n in &sk.nodes {
+                let p = n.pos / s;
+                canon.extend([p.x, p.y, p.z, n.radius / hgt]);
+            }
+            for l in &lv.leaves {
+                let p = l.pos / s;
+                canon.extend([p.x, p.y, p.z, l.size / hgt, l.dir.x, l.dir.y, l.dir.z, l.normal.x, l.normal.y, l.normal.z]);
+            }
+            let chain = lod_chain(&sk, &lv, &LodOptions::default());
+            let sp = &library.species[t.species as usize];
+            Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize }, s.to_array(), t.base - origin, t.species as usize))
+        })
+        .collect();
+
+    let mut looks_of: HashMap<usize, usize> = HashMap::new();
+    let mut looks: Vec<Look> = Vec::new();
+    let mut models: Vec<StandModel> = Vec::new();
+    // topology key → (model, its size, its canonical shape) of the models with that topology
+    let mut model_of: HashMap<u64, Vec<(usize, [f32; 3], Vec<f32>)>> = HashMap::new();
+    let mut nodes = Vec::new();
+    for (m, a) in meshed.into_iter().zip(&st.trees) {
+        let Some((key, canon, mut model, size, pos, sp)) = m else { continue };
+        let look = *looks_of.entry(sp).or_insert_with(|| {
+            looks.push(Look::for_species(&library.species[sp], o.season));
+            looks.len() - 1
+        });
+        let t = &trees[a.index];
+        let name = format!("{}_{}", library.species[sp].id, t.id);
+        let same = model_of.get(&key).and_then(|c| c.iter().find(|(_, _, c)| c.iter().zip(&canon).all(|(a, b)| (a - b).abs() <= SAME_SHAPE)));
+        let (mi, scale) = match same {
+            Some(&(mi, s0, _)) => (mi, [size[0] / s0[0], size[1] / s0[1], size[2] / s0[2]]),
+            None => {
+                model.look = look;
+                models.push(model);
+                model_of.entry(key).or_default().push((models.len() - 1, size, canon));
+                (models.len() - 1, [1.0; 3])
+            }
+        };
+        nodes.push(StandNode { name, model: mi, translation: pos.to_array(), scale });
+    }
+
+    // obstacles reaching into the area
+    let mut statics = vec![StaticMesh { name: "terrain".into(), mesh: terrain, rgb: GROUND_RGB, roughness: 0.95 }];
+    let terrain_triangles = statics[0].mesh.triangle_count();
+    let mut n_obstacles = 0;
+    for (k, ob) in sc.obstacles.iter().enumerate() {
+        let mut m = obstacle_mesh(ob, &site);
+        let Some((lo, hi)) = m.bounds() else { continue };
+        if (hi[0] as f64) < x0 || (lo[0] as f64) > x1 || (hi[1] as f64) < y0 || (lo[1] as f64) > y1 {
+            continue;
+        }
+        for p in &mut m.positions {
+            *p = (Vec3::from(*p) - origin).to_array();
+        }
+        statics.push(StaticMesh { name: format!("obstacle_{k}_{}", ob.kind()), mesh: m, rgb: OBSTACLE_RGB, roughness: 0.9 });
+        n_obstacles += 1;
+    }
+    let scene = StandScene {
+        name: format!("stand_{year}"),
+        looks,
+        models,
+        trees: nodes,
+        statics,
+        levels: o.levels.clone(),
+        extras: serde_json::json!({
+            "sylva": {
+                "run_dir": run_dir.display().to_string(), "year": year, "area_m": o.area,
+                "origin_m": [origin.x, origin.y, origin.z],
+                "epsg": site.geo.epsg,
+                "note": "scene coordinates are metres from origin_m (run world coordinates: x east, y north from the terrain's south-west corner, z elevation), y up",
+            }
+        }),
+    };
+    let counts = crate::output::gltf::write_stand_glb(out, &scene)?;
+    let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
+    Ok(ExportReport { out: out.to_path_buf(), year, trees: scene.trees.len(), models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes })
+}
+
+/// Largest vertex spacing of the terrain patch (m): finer than the DEM's cells so that the
+/// patch follows the bilinear surface the trees stand on ([`SiteConditions::elevation_at`]).
+pub const TERRAIN_STEP_M: f64 = 5.0;
+
+/// The terrain under `area` (m, world coordinates) as a grid mesh with vertices every
+/// [`TERRAIN_STEP_M`] or the site's cell size if smaller (at most 256 × 256 quads, at least
+/// 0.5 m apart), elevations by [`SiteConditions::elevation_at`], normals from central
+/// differences; positions relative to the area's centre and the patch's lowest elevation,
+/// which is returned.
+pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
+    let [x0, y0, x1, y1] = area;
+    let step = site.cell_x_m.min(site.cell_y_m).min(TERRAIN_STEP_M).max((x1 - x0).max(y1 - y0) / 256.0).max(0.5);
+    let nx = ((x1 - x0) / step).ceil().max(1.0) as usize;
+    let ny = ((y1 - y0) / step).ceil().max(1.0) as usize;
+    let (cx, cy) = ((x0 + x1) * 0.5, (y0 + y1) * 0.5);
+    let at = |i: usize, j: usize| (x0 + (x1 - x0) * i as f64 / nx as f64, y0 + (y1 - y0) * j as f64 / ny as f64);
+    let mut z = Vec::with_capacity((nx + 1) * (ny + 1));
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let (x, y) = at(i, j);
+            z.push(site.elevation_at(x, y));
+        }
+    }
+    let z0 = z.iter().copied().fold(f32::INFINITY, f32::min);
+    let z0 = if z0.is_finite() { z0 } else { 0.0 };
+    let mut m = TriMesh::default();
+    let (dx, dy) = ((x1 - x0) as f32 / nx as f32, (y1 - y0) as f32 / ny as f32);
+    let zi = |i: usize, j: usize| z[j * (nx + 1) + i];
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let (x, y) = at(i, j);
+            m.positions.push([(x - cx) as f32, (y - cy) as f32, zi(i, j) - z0]);
+            let (il, ir) = (i.saturating_sub(1), (i + 1).min(nx));
+            let (jd, ju) = (j.saturating_sub(1), (j + 1).min(ny));
+            let gx = (zi(ir, j) - zi(il, j)) / (dx * (ir - il) as f32);
+            let gy = (zi(i, ju) - zi(i, jd)) / (dy * (ju - jd) as f32);
+            m.normals.push(Vec3::new(-gx, -gy, 1.0).normalize().to_array());
+        }
+    }
+    let v = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    for j in 0..ny {
+        for i in 0..nx {
+            // counter-clockwise seen from above (x east, y north)
+            m.indices.extend_from_slice(&[v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    (m, z0)
+}

@@ -1,0 +1,815 @@
+//! Procedural leaf and bark textures (issue 19, Build 5), made by Sylva from the species file:
+//! no image is copied from elsewhere. Pure: returns RGBA images ([`image::RgbaImage`], 8 bits
+//! per channel, straight alpha), writes no file and needs no GPU, so the renderer and the
+//! exporters use the same pictures.
+//!
+//! **Leaf cards.** [`leaf_texture`] draws one leaf (or, for conifers, one needle shoot: a leaf
+//! card of a conifer stands for a shoot, not a single needle) of a [`LeafShape`] onto the card
+//! that [`super::mesh::leaf_mesh`] builds: the card is `size` long and `size / 2` wide, texture
+//! coordinate u runs across it (0 left, 1 right) and v along it (0 at the petiole, 1 at the
+//! tip). Images are stored with row 0 at v = 1 (the tip at the top): the convention of glTF,
+//! wgpu and PNG, whose texture origin is the top-left corner, once v is flipped (`1 − v`) as
+//! `output::gltf` does; a sampler that keeps v as is sees the leaf upside down, nothing else.
+//! The default image is [`LEAF_TEXTURE_W`] × [`LEAF_TEXTURE_H`] (1:2 like the card, so a texel
+//! is square on the card). Alpha is the leaf's coverage of each texel (4 × 4 samples), meant
+//! for alpha testing at [`ALPHA_CUTOFF`] (glTF `alphaMode: MASK`); RGB is a grey shading (midrib
+//! and veins lighter, the margin darker, 0.70–1.0) to be multiplied by the foliage colour of
+//! the season ([`tint`]); RGB is also set where alpha is 0 so that filtered and mip-mapped
+//! samples at the edge keep the leaf's colour (no dark fringe).
+//!
+//! **Outlines** are built from one primitive, the *blade*: along an axis from base to tip
+//! (parameter t ∈ [0, 1]) the half-width is `w · t^a (1 − t)^b / max`, a Beta-function profile
+//! (a < b: widest below the middle, ovate; a = b = ½: an ellipse; a ≪ b: triangular), times a
+//! lobing factor `1 − A_l (½ − ½ cos 2π n_l t)` and a serration factor `1 − A_s frac(n_s t)`.
+//! Each [`LeafShape`] is a union of blades (one for simple leaves; leaflets on a rachis for
+//! pinnate leaves; five radiating lobes for palmate ones; needles along a shoot for conifers)
+//! and capsules (petiole, rachis, shoot). The proportions are drawn from the usual botanical
+//! descriptions of the shapes (ESTIMATE, e.g. Stace 2019, *New Flora of the British Isles*,
+//! glossary of leaf shapes); they are pictures, not measurements.
+//!
+//! **Level-of-detail pictures** ([`FoliageTextures`]): a *cluster* card (LOD1, the leaf-cluster
+//! cards of [`super::mesh::reduced_mesh`]: 36 leaves scattered over a disc), a *crown* texture
+//! (LOD2 hull: the cluster picture, opaque, over the shaded gaps between leaves) and an
+//! *impostor* (LOD3 billboard: the tree's silhouette, a cone for conifers or an ellipse for
+//! broadleaves filled with leaves, above a trunk).
+//!
+//! **Bark** ([`bark_texture`]): the species' bark colour with a periodic pattern (it tiles in u
+//! and v, as the branch tubes of [`super::mesh::branch_mesh`] repeat it: u once round the stem,
+//! v one stem circumference per unit) chosen by [`BarkPattern::of_species`].
+
+use crate::species::schema::LEAF_TEXTURES;
+use crate::species::{LeafType, Season, Species};
+use glam::Vec2;
+use image::{Rgba, RgbaImage};
+
+/// Default leaf texture width (texels; across the card).
+pub const LEAF_TEXTURE_W: u32 = 128;
+/// Default leaf texture height (texels; along the card, twice the width like the card).
+pub const LEAF_TEXTURE_H: u32 = 256;
+/// Default side of the square cluster, crown, impostor and bark textures (texels).
+pub const TEXTURE_PX: u32 = 256;
+/// Alpha threshold of the leaf textures (0–1; glTF `alphaCutoff`): texels with a coverage
+/// below it are discarded.
+pub const ALPHA_CUTOFF: f32 = 0.5;
+
+/// Outline of a species' leaf card: the `appearance.leaf_texture` field of a species file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum LeafShape {
+    /// Ovate, widest below the middle, wavy margin (beech, hornbeam, elm): `broad_ovate`.
+    Ovate,
+    /// Lobed, 4–5 rounded lobes a side, short petiole (oaks): `broad_lobed`.
+    Lobed,
+    /// Heart-shaped, two rounded basal lobes and a pointed tip (lime): `broad_cordate`.
+    Cordate,
+    /// Palmate, five pointed lobes from the petiole (maples, sycamore): `broad_palmate`.
+    Palmate,
+    /// Pinnate compound, leaflet pairs on a rachis and a terminal leaflet (ash, rowan):
+    /// `broad_pinnate`.
+    Pinnate,
+    /// Round, long petiole (aspen, alder): `broad_round`.
+    Round,
+    /// Triangular (deltoid), doubly serrate, long-pointed tip (birch): `broad_triangular`.
+    Triangular,
+    /// A shoot with short needles all round it (spruce): `needle_short`.
+    NeedleShort,
+    /// A shoot with long paired needles in a brush towards its end (pine): `needle_long`.
+    NeedleLong,
+    /// A shoot with flat needles in two ranks, like a comb (fir): `needle_flat`.
+    NeedleFlat,
+    /// A shoot with tufts of needles on short side shoots (larch): `needle_tuft`.
+    NeedleTuft,
+}
+
+impl LeafShape {
+    /// Every shape, in the order of the species schema's names
+    /// ([`crate::species::schema::LEAF_TEXTURES`], which ends with `"none"`: the default of
+    /// [`LeafShape::default_for`]).
+    pub const ALL: [LeafShape; 11] = [
+        LeafShape::Ovate,
+        LeafShape::Lobed,
+        LeafShape::Cordate,
+        LeafShape::Palmate,
+        LeafShape::Pinnate,
+        LeafShape::Round,
+        LeafShape::Triangular,
+        LeafShape::NeedleShort,
+        LeafShape::NeedleLong,
+        LeafShape::NeedleFlat,
+        LeafShape::NeedleTuft,
+    ];
+
+    /// The species-file name of the shape, e.g. `"broad_lobed"`.
+    pub fn name(self) -> &'static str {
+        LEAF_TEXTURES[self as usize]
+    }
+
+    /// The shape of a species-file name; `None` for `"none"` or an unknown name.
+    pub fn from_name(name: &str) -> Option<LeafShape> {
+        Self::ALL.iter().copied().find(|s| s.name() == name)
+    }
+
+    /// The default shape of a leaf type: ovate for broadleaves, short needles for conifers.
+    pub fn default_for(leaf_type: LeafType) -> LeafShape {
+        match leaf_type {
+            LeafType::Broadleaf => LeafShape::Ovate,
+            LeafType::Conifer => LeafShape::NeedleShort,
+        }
+    }
+
+    /// The shape of a species: its `appearance.leaf_texture`, or the default of its
+    /// `identity.leaf_type` when that is `"none"` (the species schema refuses other names).
+    pub fn of_species(sp: &Species) -> LeafShape {
+        Self::from_name(&sp.appearance.leaf_texture).unwrap_or_else(|| Self::default_for(sp.identity.leaf_type))
+    }
+
+    /// True for the needle shoots of conifers.
+    pub fn is_needle(self) -> bool {
+        matches!(self, LeafShape::NeedleShort | LeafShape::NeedleLong | LeafShape::NeedleFlat | LeafShape::NeedleTuft)
+    }
+}
+
+/// One blade of an outline (see the module documentation): card coordinates, x across
+/// (−0.25–0.25), y along (0–1), in units of the card's length.
+#[derive(Debug, Clone, Copy)]
+struct Blade {
+    base: Vec2,
+    tip: Vec2,
+    /// Largest half-width (card lengths).
+    half_width: f32,
+    a: f32,
+    b: f32,
+    lobe_amp: f32,
+    lobes: f32,
+    serr_amp: f32,
+    serrations: f32,
+}
+
+impl Blade {
+    fn new(base: Vec2, tip: Vec2, half_width: f32, a: f32, b: f32) -> Blade {
+        Blade { base, tip, half_width, a, b, lobe_amp: 0.0, lobes: 0.0, serr_amp: 0.0, serrations: 0.0 }
+    }
+    fn lobed(mut self, amp: f32, n: f32) -> Blade {
+        self.lobe_amp = amp;
+        self.lobes = n;
+        self
+    }
+    fn serrate(mut self, amp: f32, n: f32) -> Blade {
+        self.serr_amp = amp;
+        self.serrations = n;
+        self
+    }
+    /// (t along, |s| across, half-width at t) when `p` lies inside, else `None`.
+    fn inside(&self, p: Vec2) -> Option<(f32, f32, f32)> {
+        let axis = self.tip - self.base;
+        let len = axis.length();
+        if len <= 0.0 {
+            return None;
+        }
+        let d = axis / len;
+        let rel = p - self.base;
+        let t = rel.dot(d) / len;
+        if !(0.0..=1.0).contains(&t) {
+            return None;
+        }
+        let s = rel.perp_dot(d).abs();
+        let peak = self.a / (self.a + self.b);
+        let norm = peak.powf(self.a) * (1.0 - peak).powf(self.b);
+        let mut w = self.half_width * t.powf(self.a) * (1.0 - t).powf(self.b) / norm;
+        if self.lobes > 0.0 {
+            w *= 1.0 - self.lobe_amp * (0.5 - 0.5 * (std::f32::consts::TAU * self.lobes * t).cos());
+        }
+        if self.serrations > 0.0 {
+            w *= 1.0 - self.serr_amp * (self.serrations * t).fract();
+        }
+        (s <= w).then_some((t, s, w))
+    }
+}
+
+/// A segment with round ends (petiole, rachis, shoot): card coordinates.
+#[derive(Debug, Clone, Copy)]
+struct Capsule {
+    a: Vec2,
+    b: Vec2,
+    r: f32,
+}
+
+impl Capsule {
+    fn contains(&self, p: Vec2) -> bool {
+        let ab = self.b - self.a;
+        let t = ((p - self.a).dot(ab) / ab.length_squared().max(1e-12)).clamp(0.0, 1.0);
+        p.distance(self.a + ab * t) <= self.r
+    }
+}
+
+/// The blades and capsules of a shape.
+struct Outline {
+    blades: Vec<Blade>,
+    stems: Vec<Capsule>,
+    /// Veins drawn on the blades (broadleaves).
+    veins: bool,
+}
+
+fn v2(x: f32, y: f32) -> Vec2 {
+    Vec2::new(x, y)
+}
+
+/// A blade of `len` from `base` at `angle_deg` from the +y axis (positive to the right).
+fn ray(base: Vec2, angle_deg: f32, len: f32, half_width: f32, a: f32, b: f32) -> Blade {
+    let (s, c) = angle_deg.to_radians().sin_cos();
+    Blade::new(base, base + v2(s, c) * len, half_width, a, b)
+}
+
+fn outline(shape: LeafShape) -> Outline {
+    let petiole = |y1: f32| Capsule { a: v2(0.0, 0.0), b: v2(0.0, y1), r: 0.011 };
+    let shoot = |y0: f32, y1: f32| Capsule { a: v2(0.0, y0), b: v2(0.0, y1), r: 0.012 };
+    match shape {
+        LeafShape::Ovate => Outline { blades: vec![Blade::new(v2(0.0, 0.12), v2(0.0, 0.99), 0.2, 0.75, 1.05).lobed(0.06, 7.0)], stems: vec![petiole(0.14)], veins: true },
+        LeafShape::Lobed => Outline { blades: vec![Blade::new(v2(0.0, 0.05), v2(0.0, 0.99), 0.24, 1.0, 0.9).lobed(0.42, 4.5)], stems: vec![petiole(0.07)], veins: true },
+        LeafShape::Cordate => {
+            let main = Blade::new(v2(0.0, 0.2), v2(0.0, 0.99), 0.235, 0.45, 1.1).serrate(0.05, 18.0);
+            // the two basal lobes reach below the petiole's attachment
+            let l = Blade::new(v2(0.03, 0.33), v2(-0.15, 0.17), 0.085, 0.5, 0.6);
+            let r = Blade::new(v2(-0.03, 0.33), v2(0.15, 0.17), 0.085, 0.5, 0.6);
+            Outline { blades: vec![main, l, r], stems: vec![petiole(0.26)], veins: true }
+        }
+        LeafShape::Palmate => {
+            let c = v2(0.0, 0.3);
+            let lobe = |ang: f32, len: f32| ray(c, ang, len, 0.1 * len / 0.6, 0.55, 1.15).serrate(0.08, 5.0);
+            Outline { blades: vec![lobe(0.0, 0.68), lobe(-30.0, 0.5), lobe(30.0, 0.5), lobe(-75.0, 0.3), lobe(75.0, 0.3)], stems: vec![petiole(0.32)], veins: true }
+        }
+        LeafShape::Pinnate => {
+            let mut blades = vec![Blade::new(v2(0.0, 0.8), v2(0.0, 0.995), 0.045, 0.6, 1.0).serrate(0.1, 6.0)];
+            for k in 0..5 {
+                let y = 0.2 + 0.13 * k as f32;
+                let len = 0.22 - 0.015 * k as f32;
+                for side in [-1.0f32, 1.0] {
+                    blades.push(ray(v2(0.0, y), side * 55.0, len, 0.045, 0.6, 1.0).serrate(0.1, 6.0));
+                }
+            }
+            Outline { blades, stems: vec![Capsule { a: v2(0.0, 0.0), b: v2(0.0, 0.85), r: 0.008 }], veins: true }
+        }
+        LeafShape::Round => Outline { blades: vec![Blade::new(v2(0.0, 0.45), v2(0.0, 0.99), 0.24, 0.5, 0.55).lobed(0.05, 9.0)], stems: vec![petiole(0.47)], veins: true },
+        LeafShape::Triangular => Outline { blades: vec![Blade::new(v2(0.0, 0.2), v2(0.0, 0.995), 0.24, 0.28, 1.25).serrate(0.1, 16.0)], stems: vec![petiole(0.22)], veins: true },
+        LeafShape::NeedleShort => {
+            // needles all round the shoot, seen from the side: forward-pointing on both sides
+            let mut blades = Vec::new();
+            for k in 0..22 {
+                let y = 0.06 + 0.042 * k as f32;
+                for (side, jit) in [(-1.0f32, 0.0f32), (1.0, 0.021)] {
+                    let ang = side * (50.0 + 12.0 * ((k * 7 + 3) % 5) as f32 / 4.0);
+                    blades.push(ray(v2(0.0, y + jit), ang, 0.17, 0.009, 0.25, 0.6));
+                }
+            }
+            Outline { blades, stems: vec![shoot(0.0, 0.99)], veins: false }
+        }
+        LeafShape::NeedleLong => {
+            // long needle pairs in a brush from the upper half of the shoot
+            let mut blades = Vec::new();
+            for k in 0..14 {
+                let y = 0.3 + 0.045 * k as f32;
+                let ang = -38.0 + 76.0 * ((k * 5 + 2) % 14) as f32 / 13.0;
+                for d in [-4.0f32, 4.0] {
+                    blades.push(ray(v2(0.0, y), ang + d, 0.55 - 0.02 * k as f32, 0.007, 0.2, 0.5));
+                }
+            }
+            Outline { blades, stems: vec![shoot(0.0, 0.9)], veins: false }
+        }
+        LeafShape::NeedleFlat => {
+            let mut blades = Vec::new();
+            for k in 0..30 {
+                let y = 0.05 + 0.031 * k as f32;
+                for side in [-1.0f32, 1.0] {
+                    blades.push(ray(v2(0.0, y), side * 72.0, 0.21, 0.012, 0.15, 0.35));
+                }
+            }
+            Outline { blades, stems: vec![shoot(0.0, 0.99)], veins: false }
+        }
+        LeafShape::NeedleTuft => {
+            let mut blades = Vec::new();
+            let mut stems = vec![Capsule { a: v2(0.0, 0.0), b: v2(0.0, 0.98), r: 0.01 }];
+            for (k, &(x, y)) in [(-0.1f32, 0.2f32), (0.11, 0.36), (-0.11, 0.52), (0.1, 0.68), (-0.06, 0.84), (0.0, 0.95)].iter().enumerate() {
+                let c = v2(x, y);
+                stems.push(Capsule { a: v2(0.0, y - 0.06), b: c, r: 0.008 });
+                for j in 0..13 {
+                    let ang = -110.0 + 220.0 * j as f32 / 12.0 + 9.0 * k as f32;
+                    blades.push(ray(c, ang, 0.1, 0.007, 0.2, 0.5));
+                }
+            }
+            Outline { blades, stems, veins: false }
+        }
+    }
+}
+
+impl Outline {
+    /// Grey shading at card point `p` when inside (0.70–1.0), else `None`.
+    fn shade(&self, p: Vec2) -> Option<f32> {
+        if self.stems.iter().any(|c| c.contains(p)) {
+            return Some(0.9);
+        }
+        let mut best: Option<f32> = None;
+        for b in &self.blades {
+            if let Some((t, s, w)) = b.inside(p) {
+                let across = if w > 0.0 { s / w } else { 1.0 };
+                let mut g = 0.95 - 0.25 * across * across;
+                if self.veins {
+                    let len = (b.tip - b.base).length();
+                    // midrib, then lateral veins running forward from it (8 pairs per blade)
+                    if s < 0.006 {
+                        g = 1.0;
+                    } else if ((t * len - 0.8 * s) / (len / 8.0)).fract() < 0.1 {
+                        g = (g + 0.1).min(1.0);
+                    }
+                } else {
+                    g = 0.8 + 0.2 * (1.0 - across);
+                }
+                best = Some(best.map_or(g, |x: f32| x.max(g)));
+            }
+        }
+        best
+    }
+}
+
+/// The leaf card texture of `shape`, `width` × `height` texels (each at least 4; the card's
+/// proportions are 1:2, see the module documentation): grey shading in RGB, coverage in alpha.
+pub fn leaf_texture_sized(shape: LeafShape, width: u32, height: u32) -> RgbaImage {
+    let (w, h) = (width.max(4), height.max(4));
+    let o = outline(shape);
+    const N: u32 = 4;
+    let mut img = RgbaImage::new(w, h);
+    for py in 0..h {
+        for px in 0..w {
+            let (mut cover, mut grey, mut hits) = (0u32, 0.0f32, 0u32);
+            for sy in 0..N {
+                for sx in 0..N {
+                    let u = (px as f32 + (sx as f32 + 0.5) / N as f32) / w as f32;
+                    let v = 1.0 - (py as f32 + (sy as f32 + 0.5) / N as f32) / h as f32;
+                    if let Some(g) = o.shade(v2((u - 0.5) * 0.5, v)) {
+                        cover += 1;
+                        grey += g;
+                        hits += 1;
+                    }
+                }
+            }
+            let g = if hits > 0 { grey / hits as f32 } else { 0.8 };
+            let a = cover as f32 / (N * N) as f32;
+            img.put_pixel(px, py, Rgba([q(g), q(g), q(g), q(a)]));
+        }
+    }
+    img
+}
+
+/// The leaf card texture of `shape` at the default size ([`LEAF_TEXTURE_W`] ×
+/// [`LEAF_TEXTURE_H`]); see [`leaf_texture_sized`].
+pub fn leaf_texture(shape: LeafShape) -> RgbaImage {
+    leaf_texture_sized(shape, LEAF_TEXTURE_W, LEAF_TEXTURE_H)
+}
+
+fn q(x: f32) -> u8 {
+    (x.clamp(0.0, 1.0) * 255.0).round() as u8
+}
+
+/// `img` with its RGB multiplied by the sRGB colour `rgb` (0–255; the multiplication is done on
+/// the 0–1 sRGB values, as a glTF base colour factor of the same colour would in linear light
+/// only approximately); alpha unchanged.
+pub fn tint(img: &RgbaImage, rgb: [u8; 3]) -> RgbaImage {
+    let mut out = img.clone();
+    for p in out.pixels_mut() {
+        for k in 0..3 {
+            p.0[k] = ((p.0[k] as u32 * rgb[k] as u32 + 127) / 255) as u8;
+        }
+    }
+    out
+}
+
+/// Bilinear sample of `img` at texture coordinates (u, v) ∈ [0, 1]² (v up, as in the module
+/// documentation); outside: transparent.
+fn sample(img: &RgbaImage, u: f32, v: f32) -> [f32; 4] {
+    if !(0.0..=1.0).contains(&u) || !(0.0..=1.0).contains(&v) {
+        return [0.0; 4];
+    }
+    let (w, h) = (img.width() as f32, img.height() as f32);
+    let x = (u * w - 0.5).clamp(0.0, w - 1.0);
+    let y = ((1.0 - v) * h - 0.5).clamp(0.0, h - 1.0);
+    let (x0, y0) = (x.floor() as u32, y.floor() as u32);
+    let (x1, y1) = ((x0 + 1).min(img.width() - 1), (y0 + 1).min(img.height() - 1));
+    let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+    let mut out = [0.0; 4];
+    for (xx, yy, wt) in [(x0, y0, (1.0 - fx) * (1.0 - fy)), (x1, y0, fx * (1.0 - fy)), (x0, y1, (1.0 - fx) * fy), (x1, y1, fx * fy)] {
+        let p = img.get_pixel(xx, yy).0;
+        for k in 0..4 {
+            out[k] += p[k] as f32 / 255.0 * wt;
+        }
+    }
+    out
+}
+
+/// Uniform number in [0, 1) from a hash of `keys` ([`crate::rng::hash`]).
+fn unit(keys: &[u64]) -> f32 {
+    (crate::rng::hash(keys) >> 40) as f32 / (1u64 << 24) as f32
+}
+
+/// A leaf placed on a square picture: centre (u, v), direction angle, length (picture units).
+#[derive(Clone, Copy)]
+struct Placed {
+    c: Vec2,
+    angle: f32,
+    len: f32,
+    grey: f32,
+}
+
+/// Composites `leaves` (copies of `leaf`, a leaf card texture) over a square `size` picture;
+/// returns coverage-weighted grey and alpha per texel (front-to-back "over").
+fn scatter(leaf: &RgbaImage, leaves: &[Placed], size: u32) -> Vec<[f32; 2]> {
+    let mut px = vec![[0.0f32, 0.0f32]; (size * size) as usize];
+    for l in leaves {
+        let (s, c) = l.angle.sin_cos();
+        let along = Vec2::new(s, c);
+        let across = Vec2::new(c, -s);
+        // bounding square of the card (length len, width len/2) about its centre
+        let r = l.len * 0.56;
+        let (x0, x1) = (((l.c.x - r) * size as f32).floor().max(0.0) as u32, ((l.c.x + r) * size as f32).ceil().min(size as f32) as u32);
+        let (y0, y1) = (((1.0 - l.c.y - r) * size as f32).floor().max(0.0) as u32, ((1.0 - l.c.y + r) * size as f32).ceil().min(size as f32) as u32);
+        for y in y0..y1 {
+            for x in x0..x1 {
+                let p = Vec2::new((x as f32 + 0.5) / size as f32, 1.0 - (y as f32 + 0.5) / size as f32) - l.c;
+                let u = 0.5 + p.dot(across) / (l.len * 0.5);
+                let v = 0.5 + p.dot(along) / l.len;
+                let t = sample(leaf, u, v);
+                if t[3] <= 0.0 {
+                    continue;
+                }
+                let cell = &mut px[(y * size + x) as usize];
+                // later leaves lie on top
+                cell[0] = cell[0] * (1.0 - t[3]) + t[0] * l.grey * t[3];
+                cell[1] = cell[1] * (1.0 - t[3]) + t[3];
+            }
+        }
+    }
+    px
+}
+
+fn to_image(px: &[[f32; 2]], size: u32, background: Option<f32>) -> RgbaImage {
+    let mut img = RgbaImage::new(size, size);
+    for (i, p) in img.pixels_mut().enumerate() {
+        let [g, a] = px[i];
+        let (g, a) = match background {
+            // opaque: the gaps between leaves in shade
+            Some(bg) => (g + bg * (1.0 - a), 1.0),
+            // straight alpha: colour of the leaves where covered, a mid grey elsewhere
+            None => (if a > 1e-3 { g / a } else { 0.75 }, a),
+        };
+        *p = Rgba([q(g), q(g), q(g), q(a)]);
+    }
+    img
+}
+
+/// Leaves of a cluster card: 36 leaves over a disc of radius 0.42 about the centre, pointing
+/// outwards, the lower ones darker (self-shading), placed by hashes of `salt`.
+fn cluster_leaves(shape: LeafShape, salt: u64) -> Vec<Placed> {
+    let n = 36;
+    let len = if shape.is_needle() { 0.36 } else { 0.26 };
+    (0..n)
+        .map(|i| {
+            let k = i as u64;
+            let r = 0.42 * unit(&[salt, k, 1]).sqrt() * (1.0 - 0.5 * len);
+            let th = unit(&[salt, k, 2]) * std::f32::consts::TAU;
+            let c = Vec2::new(0.5 + r * th.cos(), 0.5 + r * th.sin());
+            let out = (c - Vec2::splat(0.5)).normalize_or(Vec2::Y);
+            let angle = out.x.atan2(out.y) + (unit(&[salt, k, 3]) - 0.5) * 1.2;
+            let grey = 0.7 + 0.3 * (c.y - 0.08).clamp(0.0, 1.0);
+            Placed { c: c + out * len * 0.3, angle, len, grey }
+        })
+        .collect()
+}
+
+/// The cluster card texture of `shape` (LOD1 leaf clusters): `size` × `size`, grey shading and
+/// coverage as [`leaf_texture`].
+pub fn cluster_texture(shape: LeafShape, size: u32) -> RgbaImage {
+    let size = size.max(8);
+    let leaf = leaf_texture_sized(shape, 64, 128);
+    to_image(&scatter(&leaf, &cluster_leaves(shape, 0xC1), size), size, None)
+}
+
+/// The crown hull texture of `shape` (LOD2): the cluster picture made opaque over the shade of
+/// the gaps (grey 0.35), tiling poorly but without holes; `size` × `size`.
+pub fn crown_texture(shape: LeafShape, size: u32) -> RgbaImage {
+    let size = size.max(8);
+    let leaf = leaf_texture_sized(shape, 64, 128);
+    let mut leaves = cluster_leaves(shape, 0xC2);
+    // fill the square, not only a disc: a second layer spread over the whole picture
+    leaves.extend((0..60u64).map(|k| Placed { c: Vec2::new(unit(&[0xC3, k, 1]), unit(&[0xC3, k, 2])), angle: unit(&[0xC3, k, 3]) * std::f32::consts::TAU, len: 0.22, grey: 0.85 }));
+    to_image(&scatter(&leaf, &leaves, size), size, Some(0.35))
+}
+
+/// The impostor texture of `shape` (LOD3 billboard, the card spanning the tree's bounds, v up):
+/// a crown of scattered leaves, a cone for needle shapes, an ellipse over the upper 70 % for
+/// broad ones, above a dark trunk; `size` × `size`.
+pub fn impostor_texture(shape: LeafShape, size: u32) -> RgbaImage {
+    let size = size.max(8);
+    let leaf = leaf_texture_sized(shape, 64, 128);
+    let conifer = shape.is_needle();
+    let len = 0.12;
+    let inside = |p: Vec2| {
+        if conifer {
+            p.y > 0.12 && p.y < 0.98 && (p.x - 0.5).abs() < 0.46 * (0.98 - p.y) / 0.86
+        } else {
+            let e = Vec2::new((p.x - 0.5) / 0.46, (p.y - 0.64) / 0.34);
+            e.length_squared() < 1.0
+        }
+    };
+    let mut leaves = Vec::new();
+    let mut k = 0u64;
+    while leaves.len() < 260 && k < 5000 {
+        let c = Vec2::new(unit(&[0x1A, k, 1]), unit(&[0x1A, k, 2]));
+        if inside(c) {
+            let grey = 0.65 + 0.35 * c.y;
+            leaves.push(Placed { c, angle: unit(&[0x1A, k, 3]) * std::f32::consts::TAU, len, grey });
+        }
+        k += 1;
+    }
+    let mut px = vec![[0.0f32, 0.0f32]; (size * size) as usize];
+    // the trunk first, the leaves over it
+    for y in 0..size {
+        for x in 0..size {
+            let p = Vec2::new((x as f32 + 0.5) / size as f32, 1.0 - (y as f32 + 0.5) / size as f32);
+            if (p.x - 0.5).abs() < 0.025 && p.y < 0.6 {
+                px[(y * size + x) as usize] = [0.3, 1.0];
+            }
+        }
+    }
+    let leaf_px = scatter(&leaf, &leaves, size);
+    for (d, s) in px.iter_mut().zip(&leaf_px) {
+        d[0] = d[0] * (1.0 - s[1]) + s[0];
+        d[1] = d[1] * (1.0 - s[1]) + s[1];
+    }
+    to_image(&px, size, None)
+}
+
+/// Bark pattern of a species.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BarkPattern {
+    /// Smooth, faint mottling (beech, hornbeam, young maples).
+    Smooth,
+    /// Vertical ridges and furrows (oak, ash, lime, elm).
+    Fissured,
+    /// Scaly plates (pine, spruce, larch, fir).
+    Plated,
+    /// Light bark with dark horizontal lenticel bands (birch).
+    Lenticelled,
+}
+
+impl BarkPattern {
+    /// The pattern of a species (ESTIMATE, a rule of thumb from the bark colour and leaf type,
+    /// the species files having no bark-texture field): conifers are plated; a broadleaf whose
+    /// bark is light (Rec. 709 luma > 200 of 255) is lenticelled; a grey one (channels within
+    /// 20 of each other, luma 120–190) smooth; other broadleaves fissured.
+    pub fn of_species(sp: &Species) -> BarkPattern {
+        let [r, g, b] = sp.appearance.bark.map(|c| c as f32);
+        let luma = 0.2126 * r + 0.7152 * g + 0.0722 * b;
+        let spread = r.max(g).max(b) - r.min(g).min(b);
+        match sp.identity.leaf_type {
+            LeafType::Conifer => BarkPattern::Plated,
+            LeafType::Broadleaf if luma > 200.0 => BarkPattern::Lenticelled,
+            LeafType::Broadleaf if spread <= 20.0 && (120.0..=190.0).contains(&luma) => BarkPattern::Smooth,
+            LeafType::Broadleaf => BarkPattern::Fissured,
+        }
+    }
+}
+
+/// Periodic value noise on the unit square with `cells` lattice cells per side (`cx` × `cy`),
+/// smoothstep interpolated, in [0, 1): tiles seamlessly.
+fn periodic_noise(u: f32, v: f32, cx: u32, cy: u32, salt: u64) -> f32 {
+    let (x, y) = (u.rem_euclid(1.0) * cx as f32, v.rem_euclid(1.0) * cy as f32);
+    let (i, j) = (x.floor() as u32, y.floor() as u32);
+    let (fx, fy) = (x - i as f32, y - j as f32);
+    let l = |a: u32, b: u32| unit(&[salt, (a % cx) as u64, (b % cy) as u64]);
+    let s = |t: f32| t * t * (3.0 - 2.0 * t);
+    let (sx, sy) = (s(fx), s(fy));
+    let top = l(i, j) * (1.0 - sx) + l(i + 1, j) * sx;
+    let bot = l(i, j + 1) * (1.0 - sx) + l(i + 1, j + 1) * sx;
+    top * (1.0 - sy) + bot * sy
+}
+
+/// The bark texture: `size` × `size`, opaque, the sRGB colour `rgb` (0–255) modulated by
+/// `pattern` (brightness 0.45–1.25 of the colour), tiling in u and v; `seed` varies the pattern.
+pub fn bark_texture(rgb: [u8; 3], pattern: BarkPattern, size: u32, seed: u64) -> RgbaImage {
+    let size = size.max(8);
+    let mut img = RgbaImage::new(size, size);
+    for y in 0..size {
+        for x in 0..size {
+            let (u, v) = ((x as f32 + 0.5) / size as f32, 1.0 - (y as f32 + 0.5) / size as f32);
+            let n1 = periodic_noise(u, v, 8, 8, seed ^ 1);
+            let n2 = periodic_noise(u, v, 24, 24, seed ^ 2);
+            let m = match pattern {
+                BarkPattern::Smooth => 0.92 + 0.12 * n1 + 0.06 * n2,
+                BarkPattern::Fissured => {
+                    // ridges along v: a warped periodic ridge profile across u
+                    let warp = periodic_noise(u, v, 4, 6, seed ^ 3) * 0.5;
+                    let ridge = (0.5 + 0.5 * ((u * 10.0 + warp) * std::f32::consts::TAU).cos()).powf(0.6);
+                    0.5 + 0.55 * ridge + 0.15 * n2
+                }
+                BarkPattern::Plated => {
+                    let p = periodic_noise(u, v, 10, 14, seed ^ 4);
+                    let crack = periodic_noise(u, v, 20, 28, seed ^ 5);
+                    let plate = if (p * 7.0).fract() < 0.14 || crack < 0.18 { 0.5 } else { 1.0 };
+                    plate * (0.9 + 0.2 * n2)
+                }
+                BarkPattern::Lenticelled => {
+                    let band = periodic_noise(u, v, 6, 40, seed ^ 6);
+                    let dark = band > 0.78 && periodic_noise(u, v, 3, 40, seed ^ 7) > 0.35;
+                    if dark {
+                        0.3
+                    } else {
+                        1.0 + 0.06 * n2
+                    }
+                }
+            };
+            let c = rgb.map(|c| ((c as f32 * m).round().clamp(0.0, 255.0)) as u8);
+            img.put_pixel(x, y, Rgba([c[0], c[1], c[2], 255]));
+        }
+    }
+    img
+}
+
+/// The textures of one species for one season: what the exporters embed and the renderer may
+/// upload. Leaf, cluster and impostor textures are alpha-tested ([`ALPHA_CUTOFF`]); crown and
+/// bark are opaque. Colours are baked in (sRGB, the species' foliage colour of the season and
+/// its bark colour), so a material's base colour factor is white.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FoliageTextures {
+    /// Shape drawn.
+    pub shape: LeafShape,
+    /// Leaf card (LOD0), [`LEAF_TEXTURE_W`] × [`LEAF_TEXTURE_H`].
+    pub leaf: RgbaImage,
+    /// Leaf-cluster card (LOD1), [`TEXTURE_PX`]².
+    pub cluster: RgbaImage,
+    /// Crown hull (LOD2), opaque, [`TEXTURE_PX`]².
+    pub crown: RgbaImage,
+    /// Billboard impostor (LOD3), [`TEXTURE_PX`]².
+    pub impostor: RgbaImage,
+    /// Bark, opaque, tiling, [`TEXTURE_PX`]².
+    pub bark: RgbaImage,
+}
+
+impl FoliageTextures {
+    /// The textures of `sp` in `season` (the foliage colour of [`Season`]: `leaf_spring`,
+    /// `leaf_summer`, `leaf_autumn` or `leaf_winter`); the bark pattern is seeded by a hash of
+    /// the species id so it is the same in every run.
+    pub fn for_species(sp: &Species, season: Season) -> FoliageTextures {
+        let a = &sp.appearance;
+        let rgb = match season {
+            Season::Spring => a.leaf_spring,
+            Season::Summer => a.leaf_summer,
+            Season::Autumn => a.leaf_autumn,
+            Season::Winter => a.leaf_winter,
+        };
+        let shape = LeafShape::of_species(sp);
+        let seed = sp.id.bytes().fold(0xB4u64, |h, b| crate::rng::hash(&[h, b as u64]));
+        FoliageTextures {
+            shape,
+            leaf: tint(&leaf_texture(shape), rgb),
+            cluster: tint(&cluster_texture(shape, TEXTURE_PX), rgb),
+            crown: tint(&crown_texture(shape, TEXTURE_PX), rgb),
+            impostor: tint(&impostor_texture(shape, TEXTURE_PX), rgb),
+            bark: bark_texture(a.bark, BarkPattern::of_species(sp), TEXTURE_PX, seed),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Fraction of texels at or above the alpha cutoff.
+    fn cover(img: &RgbaImage) -> f64 {
+        img.pixels().filter(|p| p.0[3] as f32 >= ALPHA_CUTOFF * 255.0).count() as f64 / (img.width() * img.height()) as f64
+    }
+
+    #[test]
+    fn names_round_trip_and_match_the_schema() {
+        for s in LeafShape::ALL {
+            assert_eq!(LeafShape::from_name(s.name()), Some(s));
+        }
+        assert_eq!(LeafShape::from_name("none"), None);
+        assert_eq!(LEAF_TEXTURES.len(), LeafShape::ALL.len() + 1);
+        assert_eq!(LEAF_TEXTURES[LeafShape::ALL.len()], "none");
+        let spec = crate::species::schema::field("appearance.leaf_texture").unwrap();
+        assert_eq!(spec.kind, crate::species::schema::Kind::Enum(&LEAF_TEXTURES));
+    }
+
+    #[test]
+    fn every_shipped_species_has_a_named_shape() {
+        let lib = crate::species::SpeciesLibrary::embedded().unwrap();
+        for sp in &lib.species {
+            assert!(LeafShape::from_name(&sp.appearance.leaf_texture).is_some(), "{}: {}", sp.id, sp.appearance.leaf_texture);
+            assert_eq!(LeafShape::of_species(sp).is_needle(), sp.identity.leaf_type == LeafType::Conifer, "{}", sp.id);
+        }
+    }
+
+    #[test]
+    fn an_elliptic_blade_covers_the_area_of_its_ellipse() {
+        // a = b = 1/2: half-width w·sqrt(t(1−t))/(1/2): an ellipse of semi-axes L/2 and w
+        let b = Blade::new(v2(0.0, 0.0), v2(0.0, 1.0), 0.2, 0.5, 0.5);
+        let n = 400;
+        let mut hits = 0;
+        for i in 0..n {
+            for j in 0..n {
+                let p = v2(-0.25 + 0.5 * (i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+                hits += b.inside(p).is_some() as u32;
+            }
+        }
+        let area = hits as f64 / (n * n) as f64 * 0.5;
+        let want = std::f64::consts::PI * 0.5 * 0.2;
+        assert!((area - want).abs() / want < 0.01, "{area} vs {want}");
+    }
+
+    #[test]
+    fn textures_are_deterministic_and_leaves_fill_part_of_their_card() {
+        for s in LeafShape::ALL {
+            let t = leaf_texture(s);
+            assert_eq!((t.width(), t.height()), (LEAF_TEXTURE_W, LEAF_TEXTURE_H));
+            assert_eq!(t, leaf_texture(s), "{s:?} not deterministic");
+            let c = cover(&t);
+            // a leaf is neither a speck nor the whole card
+            let (lo, hi) = if s.is_needle() { (0.08, 0.6) } else { (0.2, 0.75) };
+            assert!(c > lo && c < hi, "{s:?}: cover {c:.3}");
+            // coverage has soft edges (antialiased), not only 0 and 255
+            assert!(t.pixels().any(|p| p.0[3] > 0 && p.0[3] < 255), "{s:?}");
+        }
+    }
+
+    #[test]
+    fn lobed_oak_is_narrower_between_lobes_than_the_ovate_leaf() {
+        // rows of an oak leaf alternate between wide (lobes) and narrow (sinuses): the row
+        // widths vary far more than those of the ovate beech leaf
+        let width_var = |img: &RgbaImage| {
+            let rows: Vec<f64> = (60..200).map(|y| (0..img.width()).filter(|&x| img.get_pixel(x, y).0[3] >= 128).count() as f64).collect();
+            let mut d = 0.0;
+            for w in rows.windows(2) {
+                d += (w[1] - w[0]).abs();
+            }
+            d
+        };
+        let oak = width_var(&leaf_texture(LeafShape::Lobed));
+        let beech = width_var(&leaf_texture(LeafShape::Ovate));
+        assert!(oak > 2.0 * beech, "oak {oak}, beech {beech}");
+    }
+
+    #[test]
+    fn the_leaf_points_up_in_the_image() {
+        // the petiole (v = 0) is at the bottom: the blade's widest row lies in the upper part
+        // of a triangular birch leaf and the bottom rows hold only the thin petiole
+        let t = leaf_texture(LeafShape::Triangular);
+        let row = |y: u32| (0..t.width()).filter(|&x| t.get_pixel(x, y).0[3] >= 128).count();
+        let widest = (0..t.height()).max_by_key(|&y| row(y)).unwrap();
+        assert!(widest < t.height() * 3 / 4 && widest > t.height() / 4, "widest row {widest}");
+        // the petiole is a few texels wide, the blade tens
+        assert!(row(t.height() - 3) <= 8, "petiole row {}", row(t.height() - 3));
+        assert!(row(widest) > 60, "widest row {}", row(widest));
+    }
+
+    #[test]
+    fn tint_multiplies_colour_and_keeps_alpha() {
+        let t = tint(&leaf_texture(LeafShape::Round), [255, 128, 0]);
+        let o = leaf_texture(LeafShape::Round);
+        for (a, b) in t.pixels().zip(o.pixels()) {
+            assert_eq!(a.0[3], b.0[3]);
+            assert_eq!(a.0[0], b.0[0]);
+            assert_eq!(a.0[2], 0);
+            assert!((a.0[1] as i32 - (b.0[1] as i32 * 128 / 255)).abs() <= 1);
+        }
+    }
+
+    #[test]
+    fn lod_pictures_have_the_expected_coverage() {
+        let cl = cluster_texture(LeafShape::Ovate, 128);
+        let c = cover(&cl);
+        assert!(c > 0.25 && c < 0.7, "cluster cover {c}");
+        assert!(cover(&crown_texture(LeafShape::Ovate, 64)) == 1.0);
+        let imp = impostor_texture(LeafShape::NeedleShort, 128);
+        let ci = cover(&imp);
+        assert!(ci > 0.15 && ci < 0.6, "impostor cover {ci}");
+        // a cone: more cover in the lower than in the upper half of the crown
+        let half = |y0: u32, y1: u32| (y0..y1).flat_map(|y| (0..128).map(move |x| (x, y))).filter(|&(x, y)| imp.get_pixel(x, y).0[3] >= 128).count();
+        assert!(half(64, 100) > half(10, 46), "{} vs {}", half(64, 100), half(10, 46));
+    }
+
+    #[test]
+    fn bark_tiles_and_follows_the_species() {
+        let lib = crate::species::SpeciesLibrary::embedded().unwrap();
+        let pat = |id: &str| BarkPattern::of_species(&lib.species[lib.find(id).unwrap() as usize]);
+        assert_eq!(pat("silver_birch"), BarkPattern::Lenticelled);
+        assert_eq!(pat("beech"), BarkPattern::Smooth);
+        assert_eq!(pat("norway_spruce"), BarkPattern::Plated);
+        assert_eq!(pat("pedunculate_oak"), BarkPattern::Fissured);
+        for p in [BarkPattern::Smooth, BarkPattern::Fissured, BarkPattern::Plated, BarkPattern::Lenticelled] {
+            let b = bark_texture([120, 100, 80], p, 64, 7);
+            // seamless: the first and last columns (and rows) differ as little as neighbours do
+            let diff = |a: (u32, u32), c: (u32, u32)| (0..3).map(|k| (b.get_pixel(a.0, a.1).0[k] as i32 - b.get_pixel(c.0, c.1).0[k] as i32).abs()).sum::<i32>();
+            let seam: i32 = (0..64).map(|y| diff((0, y), (63, y))).sum::<i32>() + (0..64).map(|x| diff((x, 0), (x, 63))).sum::<i32>();
+            let inner: i32 = (0..64).map(|y| diff((31, y), (32, y))).sum::<i32>() + (0..64).map(|x| diff((x, 31), (x, 32))).sum::<i32>();
+            assert!(seam <= 3 * inner.max(20), "{p:?}: seam {seam}, inner {inner}");
+            assert!(b.pixels().all(|p| p.0[3] == 255));
+        }
+    }
+}

@@ -1,0 +1,380 @@
+//! Exports (issue 19 Build 5, issue 14 Build 4): textured trees in glTF and OBJ, the stand
+//! export of a run's area, and the Khronos glTF validator on every file (0 errors, 0 warnings).
+//!
+//! The validator is the npm package `gltf-validator` run by `tools/gltf-validate.js` with node.
+//! It is looked up in `$GLTF_VALIDATOR_DIR` (default `~/.cache/gltf-validator`), installed there
+//! with npm when missing; where node, npm or the package cannot be had the validator checks
+//! are skipped with a message, except with `CI=true` or `SYLVA_REQUIRE_GLTF_VALIDATOR=1` (`.ci/run`
+//! installs them and sets the latter), where they fail.
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use sylva::mesh::LodChain;
+use sylva::output::gltf::{GlbOptions, Look, StandModel, StandNode, StandScene, StaticMesh};
+use sylva::species::{Season, SpeciesLibrary};
+use sylva::structure::mesh::{lod_chain, LodOptions};
+use sylva::structure::species_tree::{grow_species_tree, Model};
+
+const VALIDATOR_VERSION: &str = "2.0.0-dev.3.10";
+
+/// The validator is required: `CI=true` (or `1`), or `SYLVA_REQUIRE_GLTF_VALIDATOR=1` as `.ci/run` sets.
+fn in_ci() -> bool {
+    let on = |k: &str| std::env::var(k).map(|v| v == "true" || v == "1").unwrap_or(false);
+    on("CI") || on("SYLVA_REQUIRE_GLTF_VALIDATOR")
+}
+
+fn validator_dir() -> PathBuf {
+    match std::env::var_os("GLTF_VALIDATOR_DIR") {
+        Some(d) => PathBuf::from(d),
+        None => PathBuf::from(std::env::var_os("HOME").unwrap_or_default()).join(".cache").join("gltf-validator"),
+    }
+}
+
+/// The validator's folder when node and the package are there (installing it with npm when
+/// only the package is missing); `None` (outside CI) when they cannot be had.
+fn validator() -> Option<PathBuf> {
+    let dir = validator_dir();
+    let have_node = Command::new("node").arg("--version").output().map(|o| o.status.success()).unwrap_or(false);
+    let pkg = dir.join("node_modules").join("gltf-validator").join("package.json");
+    let why = if !have_node {
+        "node is not installed".to_string()
+    } else if pkg.is_file() {
+        return Some(dir);
+    } else {
+        std::fs::create_dir_all(&dir).ok();
+        let st = Command::new("npm").args(["install", "--silent", "--no-audit", "--no-fund", "--prefix"]).arg(&dir).arg(format!("gltf-validator@{VALIDATOR_VERSION}")).status();
+        if pkg.is_file() {
+            return Some(dir);
+        }
+        format!("npm could not install gltf-validator into {} ({st:?})", dir.display())
+    };
+    assert!(!in_ci(), "CI=true: the glTF validator is required, but {why} (.ci/run installs node, npm and the package)");
+    eprintln!("skipping the Khronos glTF validator: {why}");
+    None
+}
+
+/// The validator's reports on `files` (one JSON object each) and its exit status; `None` when
+/// the validator cannot be had outside CI.
+fn reports(files: &[&Path]) -> Option<(Vec<serde_json::Value>, bool)> {
+    let dir = validator()?;
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tools").join("gltf-validate.js");
+    let out = Command::new("node").arg(&script).args(files).env("GLTF_VALIDATOR_DIR", &dir).output().expect("run node");
+    let text = String::from_utf8_lossy(&out.stdout);
+    let r: Vec<serde_json::Value> = text.lines().map(|line| serde_json::from_str(line).unwrap_or_else(|e| panic!("validator output {line:?}: {e}; stderr {}", String::from_utf8_lossy(&out.stderr)))).collect();
+    assert_eq!(r.len(), files.len(), "validator stdout {text}, stderr {}", String::from_utf8_lossy(&out.stderr));
+    Some((r, out.status.success()))
+}
+
+/// Runs the validator on `files`; panics on any error or warning (or unused object), listing them.
+fn validate(files: &[&Path]) {
+    let Some((reports, ok)) = reports(files) else { return };
+    for r in &reports {
+        let bad: Vec<&serde_json::Value> = r["messages"].as_array().unwrap().iter().filter(|m| m["severity"] == "error" || m["severity"] == "warning").collect();
+        assert_eq!((r["errors"].as_u64(), r["warnings"].as_u64()), (Some(0), Some(0)), "{}: {bad:#?}", r["file"]);
+        // nothing written for nothing: no unused material, texture or attribute
+        let unused: Vec<&serde_json::Value> = r["messages"].as_array().unwrap().iter().filter(|m| m["code"] == "UNUSED_OBJECT").collect();
+        assert!(unused.is_empty(), "{}: {unused:#?}", r["file"]);
+    }
+    assert!(ok);
+}
+
+#[test]
+fn the_validator_reports_a_broken_file() {
+    // a metallic factor of 9 (allowed: 0–1), same length as the 0.0 written: an error
+    let bytes = sylva::output::gltf::glb_bytes(&tree(&lib(), "beech").1, &GlbOptions::default()).unwrap();
+    let n = 20 + u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json = std::str::from_utf8(&bytes[20..n]).unwrap();
+    let patched = json.replacen("\"metallicFactor\":0.0", "\"metallicFactor\":9.0", 1);
+    assert_ne!(patched, json, "the factor is in the JSON");
+    let mut broken = bytes[..20].to_vec();
+    broken.extend_from_slice(patched.as_bytes());
+    broken.extend_from_slice(&bytes[n..]);
+    let dir = tempfile::tempdir().unwrap();
+    let (good, bad) = (dir.path().join("good.glb"), dir.path().join("bad.glb"));
+    std::fs::write(&good, &bytes).unwrap();
+    std::fs::write(&bad, &broken).unwrap();
+    let Some((r, ok)) = reports(&[&good, &bad]) else { return };
+    assert!(!ok);
+    assert_eq!(r[0]["errors"], 0);
+    assert!(r[1]["errors"].as_u64().unwrap() >= 1, "{:#?}", r[1]);
+    assert!(r[1]["messages"].as_array().unwrap().iter().any(|m| m["code"] == "VALUE_NOT_IN_RANGE"), "{:#?}", r[1]);
+}
+
+fn lib() -> SpeciesLibrary {
+    SpeciesLibrary::embedded().unwrap()
+}
+
+/// A small tree of `id` (EcoMod, young) and its chain.
+fn tree(lib: &SpeciesLibrary, id: &str) -> (sylva::species::Species, LodChain) {
+    let sp = lib.species[lib.find(id).unwrap() as usize].clone();
+    let g = grow_species_tree(&sp, Model::EcoMod, 25.0, &[], 3).unwrap();
+    (sp.clone(), lod_chain(&g.skeleton, &g.leaves, &LodOptions::default()))
+}
+
+#[test]
+fn tree_glb_has_textured_alpha_masked_leaves_lod_groups_and_validates() {
+    let lib = lib();
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    for id in ["pedunculate_oak", "norway_spruce"] {
+        let (sp, chain) = tree(&lib, id);
+        let path = dir.path().join(format!("{id}.glb"));
+        let o = GlbOptions { name: id.into(), look: Look::for_species(&sp, Season::Summer), spacing_m: 0.0 };
+        sylva::output::gltf::write_glb(&path, &chain, &o).unwrap();
+        let (doc, buffers, images) = gltf::import(&path).expect("valid glb");
+        // LOD nodes named <name>_LOD<i> under the node <name>
+        let root = doc.scenes().next().unwrap().nodes().next().unwrap();
+        assert_eq!(root.name(), Some(id));
+        let kids: Vec<String> = root.children().map(|n| n.name().unwrap().to_string()).collect();
+        assert_eq!(kids, (0..4).map(|i| format!("{id}_LOD{i}")).collect::<Vec<_>>());
+        let mats: Vec<&str> = doc.materials().map(|m| m.name().unwrap()).collect();
+        let want: Vec<String> = ["bark", "leaf", "cluster", "crown", "impostor"].iter().map(|p| format!("{id}_{p}")).collect();
+        assert_eq!(mats, want);
+        for m in doc.materials() {
+            let name = m.name().unwrap();
+            let tex = m.pbr_metallic_roughness().base_color_texture().unwrap_or_else(|| panic!("{name}: no baseColorTexture"));
+            assert_eq!(tex.tex_coord(), 0);
+            let masked = ["_leaf", "_cluster", "_impostor"].iter().any(|s| name.ends_with(s));
+            if masked {
+                assert_eq!(m.alpha_mode(), gltf::material::AlphaMode::Mask, "{name}");
+                assert_eq!(m.alpha_cutoff(), Some(sylva::structure::texture::ALPHA_CUTOFF));
+                assert!(m.double_sided());
+            } else {
+                assert_eq!(m.alpha_mode(), gltf::material::AlphaMode::Opaque, "{name}");
+            }
+        }
+        // every primitive carries TEXCOORD_0 and uses a textured material
+        for mesh in doc.meshes() {
+            for p in mesh.primitives() {
+                assert!(p.get(&gltf::Semantic::TexCoords(0)).is_some(), "{:?}", mesh.name());
+                assert!(p.material().pbr_metallic_roughness().base_color_texture().is_some());
+                let reader = p.reader(|b| Some(&buffers[b.index()]));
+                assert!(reader.read_tex_coords(0).unwrap().into_f32().all(|[u, v]| u.is_finite() && v.is_finite()));
+            }
+        }
+        // the leaf texture is the species' shape, with transparent and opaque texels
+        let leaf = doc.materials().find(|m| m.name() == Some(&format!("{id}_leaf"))).unwrap();
+        let img = &images[leaf.pbr_metallic_roughness().base_color_texture().unwrap().texture().source().index()];
+        assert_eq!(img.format, gltf::image::Format::R8G8B8A8);
+        let alpha: Vec<u8> = img.pixels.chunks_exact(4).map(|p| p[3]).collect();
+        assert!(alpha.iter().any(|&a| a == 0) && alpha.iter().any(|&a| a == 255));
+        let want = sylva::structure::texture::tint(&sylva::structure::texture::leaf_texture(sylva::structure::texture::LeafShape::of_species(&sp)), sp.appearance.leaf_summer);
+        assert_eq!(img.pixels, want.into_raw(), "{id}: the embedded leaf texture is the species' own");
+        files.push(path);
+    }
+    let refs: Vec<&Path> = files.iter().map(|p| p.as_path()).collect();
+    validate(&refs);
+}
+
+#[test]
+fn tree_cli_glb_validates() {
+    // `sylva tree grow --out x.glb` (the binary): the file a user gets
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("birch.glb");
+    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "silver_birch", "--age", "12", "--out"]).arg(&out).output().unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let (doc, _, _) = gltf::import(&out).unwrap();
+    assert!(doc.nodes().any(|n| n.name() == Some("silver_birch_LOD0")));
+    validate(&[&out]);
+}
+
+#[test]
+fn obj_has_mtl_and_textures() {
+    let lib = lib();
+    let (sp, chain) = tree(&lib, "beech");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("beech.obj");
+    let look = Look::for_species(&sp, Season::Autumn);
+    sylva::output::obj::write_obj(&path, &chain, None, "beech", &look).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.lines().any(|l| l == "mtllib beech.mtl"));
+    let objects: Vec<&str> = text.lines().filter_map(|l| l.strip_prefix("o ")).collect();
+    assert_eq!(objects, ["beech_LOD0", "beech_LOD1", "beech_LOD2", "beech_LOD3"]);
+    let mtl = std::fs::read_to_string(dir.path().join("beech.mtl")).unwrap();
+    let defined: Vec<&str> = mtl.lines().filter_map(|l| l.strip_prefix("newmtl ")).collect();
+    for used in text.lines().filter_map(|l| l.strip_prefix("usemtl ")) {
+        assert!(defined.contains(&used), "{used} not in the .mtl");
+    }
+    // every map names a PNG beside it; the leaf card's has an alpha channel and autumn colour
+    for m in mtl.lines().filter_map(|l| l.strip_prefix("map_Kd ").or_else(|| l.strip_prefix("map_d "))).map(|m| m.rsplit(' ').next().unwrap()) {
+        let img = image::open(dir.path().join(m)).unwrap_or_else(|e| panic!("{m}: {e}")).to_rgba8();
+        assert!(img.width() >= 64);
+    }
+    let leaf = image::open(dir.path().join("beech_beech_leaf.png")).unwrap().to_rgba8();
+    assert!(leaf.pixels().any(|p| p.0[3] == 0) && leaf.pixels().any(|p| p.0[3] == 255));
+    let opaque: Vec<_> = leaf.pixels().filter(|p| p.0[3] == 255).collect();
+    let mean_r = opaque.iter().map(|p| p.0[0] as f64).sum::<f64>() / opaque.len() as f64;
+    let mean_g = opaque.iter().map(|p| p.0[1] as f64).sum::<f64>() / opaque.len() as f64;
+    assert!(mean_r > mean_g, "autumn beech leaves are orange-brown: r {mean_r}, g {mean_g}");
+    // faces equal the chain's triangles; no temporary files left
+    let faces = text.lines().filter(|l| l.starts_with("f ")).count();
+    assert_eq!(faces, chain.levels.iter().map(|l| l.triangle_count()).sum::<usize>());
+    assert!(std::fs::read_dir(dir.path()).unwrap().all(|e| !e.unwrap().file_name().to_string_lossy().ends_with(".tmp")));
+}
+
+#[test]
+fn stand_writer_instances_one_model_on_many_nodes() {
+    let lib = lib();
+    let (sp, chain) = tree(&lib, "beech");
+    let model = StandModel { name: "beech_a".into(), chain, look: 0 };
+    let trees: Vec<StandNode> = (0..5).map(|k| StandNode { name: format!("beech_{k}"), model: 0, translation: [k as f32 * 4.0, 0.0, 0.0], scale: [1.0, 1.0, 1.0 + 0.1 * k as f32] }).collect();
+    let ground = sylva::mesh::TriMesh { positions: vec![[-10.0, -10.0, 0.0], [30.0, -10.0, 0.0], [30.0, 10.0, 0.0], [-10.0, 10.0, 0.0]], normals: vec![[0.0, 0.0, 1.0]; 4], uvs: vec![], indices: vec![0, 1, 2, 0, 2, 3] };
+    let scene = StandScene { name: "s".into(), looks: vec![Look::for_species(&sp, Season::Summer)], models: vec![model], trees, statics: vec![StaticMesh { name: "terrain".into(), mesh: ground, rgb: [90, 80, 60], roughness: 0.9 }], levels: vec![0, 1, 2, 3], extras: serde_json::Value::Null };
+    let (bytes, counts) = sylva::output::gltf::stand_glb_bytes(&scene).unwrap();
+    // 3 tree levels + 1 shared billboard + terrain, whatever the number of trees
+    assert_eq!(counts.meshes, 5);
+    assert_eq!(counts.mesh_nodes, 5 * 4 + 1);
+    let (doc, _, _) = gltf::import_slice(&bytes).unwrap();
+    let lod0: Vec<usize> = doc.nodes().filter(|n| n.name().is_some_and(|s| s.ends_with("_LOD0"))).map(|n| n.mesh().unwrap().index()).collect();
+    assert_eq!(lod0.len(), 5);
+    assert!(lod0.iter().all(|&m| m == lod0[0]), "one LOD0 mesh for all nodes");
+    let t4 = doc.nodes().find(|n| n.name() == Some("beech_4")).unwrap();
+    let (_, _, s) = t4.transform().decomposed();
+    assert!((s[1] - 1.4).abs() < 1e-6, "Sylva z scale is glTF y: {s:?}");
+    // a node naming a missing model is refused
+    let mut bad = scene.clone();
+    bad.trees[0].model = 3;
+    let e = sylva::output::gltf::stand_glb_bytes(&bad).unwrap_err().to_string();
+    assert!(e.contains("tree model") && e.contains("below 1"), "{e}");
+    let p = tempfile::tempdir().unwrap();
+    let f = p.path().join("s.glb");
+    std::fs::write(&f, &bytes).unwrap();
+    validate(&[&f]);
+}
+
+/// A small run: 100 m × 100 m flat site, beech planted at 5 m in its west half at 30 years, a
+/// wall in the middle, one simulated year.
+fn small_run(dir: &Path) {
+    let toml = r#"
+name = "export"
+years = 1
+seed = 5
+snapshot_every = 1
+species = ["beech", "norway_spruce"]
+[terrain]
+uniform = { width = 4, height = 4, cell_m = 25.0, elevation_m = 310.0, indices = [5, 5, 2, 5, 6, 6] }
+[[obstacle]]
+kind = "wall"
+start = [30.0, 20.0]
+end = [30.0, 40.0]
+height_m = 4.0
+thickness_m = 0.5
+"#;
+    let mut toml = toml.to_string();
+    // and an open plantation at 20 m: trees farther apart than a neighbourhood cell and its halo
+    for (sp, age, x0, x1, spacing) in [("beech", 30.0, 0.0, 40.0, 5.0), ("norway_spruce", 25.0, 40.0, 50.0, 5.0), ("beech", 30.0, 60.0, 100.0, 20.0)] {
+        toml += &format!("[[start]]\nkind = \"planted\"\nspecies = \"{sp}\"\nspacing_m = {spacing:?}\nage_yr = {age:?}\narea = [{x0:?}, 0.0, {x1:?}, 100.0]\n");
+    }
+    let sc = sylva::sim::Scenario::from_toml_str(&toml, "export").unwrap();
+    let site = sc.site().unwrap();
+    let mut opts = sylva::job::run::RunOptions::new(dir);
+    opts.map_px = 32;
+    sylva::job::run::run_scenario(&sc, site, &lib(), opts).unwrap();
+}
+
+#[test]
+fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
+    use sylva::job::export::{export_stand, parse_area, ExportOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    small_run(&run);
+    let lib = lib();
+    let out = dir.path().join("stand.glb");
+    let mut o = ExportOptions::new([20.0, 15.0, 45.0, 45.0]);
+    o.year = Some(1);
+    let r = export_stand(&run, &lib, &o, &out).unwrap();
+    assert_eq!(r.year, 1);
+    // trees of the area: the planted rows at x = 22.5, 27.5, ... inside 20–45 m (x) and 15–45 m (y)
+    let rows = sylva::job::pictures::snapshot_rows(&run, 1).unwrap();
+    let want = rows.iter().filter(|t| t.status == "alive" && t.height_m >= 1.0 && (20.0..45.0).contains(&t.x_m) && (15.0..45.0).contains(&t.y_m)).count();
+    assert!(want >= 20, "{want} trees in the area");
+    assert_eq!(r.trees, want);
+    assert_eq!(r.obstacles, 1);
+    // 25 m × 30 m at 5 m vertex spacing
+    assert_eq!(r.terrain_triangles, 2 * 5 * 6);
+    // instancing: meshes are fewer than the nodes drawing them (one billboard per species)
+    assert!(r.counts.meshes < r.counts.mesh_nodes, "{:?}", r.counts);
+    let (doc, _, _) = gltf::import(&out).unwrap();
+    let names: Vec<&str> = doc.nodes().filter_map(|n| n.name()).collect();
+    assert!(names.contains(&"terrain") && names.iter().any(|n| n.starts_with("obstacle_0_wall")));
+    let beech = rows.iter().find(|t| t.species == "beech" && (20.0..45.0).contains(&t.x_m) && (15.0..45.0).contains(&t.y_m)).unwrap();
+    for k in 0..4 {
+        assert!(names.contains(&format!("beech_{}_LOD{k}", beech.id).as_str()), "LOD{k} of beech {}", beech.id);
+    }
+    let bill = doc.meshes().find(|m| m.name() == Some("beech_billboard")).unwrap().index();
+    let users = doc.nodes().filter(|n| n.mesh().map(|m| m.index()) == Some(bill)).count();
+    assert_eq!(users, rows.iter().filter(|t| t.species == "beech" && t.status == "alive" && (20.0..45.0).contains(&t.x_m) && (15.0..45.0).contains(&t.y_m)).count());
+    // the scene records where it is
+    let bytes = std::fs::read(&out).unwrap();
+    let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + n]).unwrap();
+    let extras = &js["scenes"][0]["extras"]["sylva"];
+    assert_eq!(extras["origin_m"], serde_json::json!([32.5, 30.0, 310.0]), "{extras}");
+    assert_eq!(extras["year"], 1);
+    // LOD0 only: no level nodes beyond 0
+    let out0 = dir.path().join("stand0.glb");
+    o.levels = vec![0];
+    let r0 = export_stand(&run, &lib, &o, &out0).unwrap();
+    assert_eq!(r0.trees, r.trees);
+    let (doc0, _, _) = gltf::import(&out0).unwrap();
+    assert!(!doc0.nodes().any(|n| n.name().is_some_and(|s| s.ends_with("_LOD1") || s.ends_with("_LOD3"))));
+    validate(&[&out, &out0]);
+
+    // open-grown trees of one class, alone in their neighbourhoods, adapt alike: one model,
+    // many nodes, each scaled to its own height and crown
+    let open = dir.path().join("open.glb");
+    let ro = export_stand(&run, &lib, &ExportOptions::new([60.0, 0.0, 100.0, 100.0]), &open).unwrap();
+    let isolated = rows.iter().filter(|t| t.status == "alive" && t.x_m >= 60.0).count();
+    assert_eq!(ro.trees, isolated);
+    assert!(isolated >= 8 && ro.models < ro.trees, "{} models for {} trees", ro.models, ro.trees);
+    validate(&[&open]);
+
+    // bad requests name what is wrong
+    let err = |o: &ExportOptions| export_stand(&run, &lib, o, &dir.path().join("bad.glb")).unwrap_err().to_string();
+    let mut e = ExportOptions::new([20.0, 15.0, 45.0, 45.0]);
+    e.year = Some(7);
+    let m = err(&e);
+    assert!(m.contains("no inventory snapshot for year 7") && m.contains("0, 1"), "{m}");
+    let m = err(&ExportOptions::new([51.0, 0.0, 59.0, 100.0]));
+    assert!(m.contains("--area") && m.contains("no live tree") && m.contains("they stand within"), "{m}");
+    let m = err(&ExportOptions::new([50.0, 50.0, 150.0, 90.0]));
+    assert!(m.contains("--area") && m.contains("inside the terrain") && m.contains("0–100.0 m east"), "{m}");
+    for (s, want) in [("1,2,3", "four numbers"), ("10,10,5,20", "X0 < X1"), ("a,b,c,d", "four numbers")] {
+        let m = parse_area(s).unwrap_err().to_string();
+        assert!(m.contains("--area") && m.contains(want), "{s}: {m}");
+    }
+    assert!(!dir.path().join("bad.glb").exists());
+
+    // the command line
+    let cli = dir.path().join("cli.glb");
+    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--year", "1", "--area", "20,15,45,45", "--lod", "0", "--out"]).arg(&cli).output().unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(String::from_utf8_lossy(&st.stdout).contains(&format!("{} trees", r.trees)));
+    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--area", "20,15,45", "--out"]).arg(&cli).output().unwrap();
+    assert!(!st.status.success());
+    assert!(String::from_utf8_lossy(&st.stderr).contains("four numbers"), "{}", String::from_utf8_lossy(&st.stderr));
+}
+
+#[test]
+fn terrain_patch_follows_the_site_surface() {
+    let sc = sylva::sim::Scenario::from_toml_str("name = \"t\"\nyears = 1\nseed = 1\n[terrain]\ngenerate = { size = 32, cell_m = 10.0, relief_m = 120.0, seed = 3 }\n", "t").unwrap();
+    let site = sc.site().unwrap();
+    let area = [42.0, 57.0, 131.0, 140.0];
+    let (m, z0) = sylva::job::export::terrain_patch(&site, area);
+    let (cx, cy) = ((area[0] + area[2]) / 2.0, (area[1] + area[3]) / 2.0);
+    let zs: Vec<f32> = m.positions.iter().map(|p| p[2]).collect();
+    assert_eq!(zs.iter().copied().fold(f32::INFINITY, f32::min), 0.0, "origin at the lowest point");
+    assert!(zs.iter().copied().fold(0.0f32, f32::max) > 5.0, "relief");
+    for (p, n) in m.positions.iter().zip(&m.normals) {
+        let (x, y) = (p[0] as f64 + cx, p[1] as f64 + cy);
+        assert!(x >= area[0] - 1e-3 && x <= area[2] + 1e-3 && y >= area[1] - 1e-3 && y <= area[3] + 1e-3);
+        assert!((p[2] + z0 - site.elevation_at(x, y)).abs() < 1e-3);
+        assert!((n[0] * n[0] + n[1] * n[1] + n[2] * n[2] - 1.0).abs() < 1e-5 && n[2] > 0.0);
+    }
+    // 89 m × 83 m at 5 m: 18 × 17 quads, every triangle counter-clockwise seen from above
+    assert_eq!(m.triangle_count(), 2 * 18 * 17);
+    for t in m.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| m.positions[i as usize]);
+        let cross = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        assert!(cross > 0.0);
+    }
+}
