@@ -83,13 +83,14 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     let mut t = tree.clone();
     let rep = t.adapt(&Environment::with_obstacles(&[wall])).expect("adapt");
     let t2 = cpu_ms();
+    let first = fingerprint(std::slice::from_ref(&t));
     let moved = match wall {
         Obstacle::FiniteWall { x, length, height } => Obstacle::FiniteWall { x: x + 0.1, length, height },
         o => o,
     };
     let rep2 = t.adapt(&Environment::with_obstacles(&[moved])).expect("adapt");
     let t3 = cpu_ms();
-    println!("{} nodes: analysis {:.1} ms, adapt {:.1} ms ({rep:?}), move wall {:.1} ms ({} recomputed)", sk.len(), t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes);
+    println!("{} nodes: analysis {:.1} ms, adapt {:.1} ms ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
 }
 
 fn main() {
