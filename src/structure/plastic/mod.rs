@@ -15,8 +15,9 @@
 //!
 //! - [`evaluation`]: section 7, Table 1 (sets O, G, T; edit distances; t-tests).
 //!
-//! Use: [`PlasticTree::analyse`] each tree once (in the environment it grew in, alone), place
-//! it ([`PlasticTree::translate`]), then call [`adapt_group`] with the trees that share a
+//! Use: [`PlasticTree::analyse`] each tree once (in the environment it grew in, alone), fit
+//! it to a tree's size ([`PlasticTree::scale`], uniform about the root) and place it
+//! ([`PlasticTree::translate`]), then call [`adapt_group`] with the trees that share a
 //! neighbourhood and the [`Environment`] whenever something changes; [`PlasticTree::skeleton`]
 //! gives the adapted skeleton. [`adapt`] does all of it for one tree.
 
@@ -47,8 +48,9 @@ pub fn tropism(p: &PlasticParams, light: Vec3) -> Vec3 {
     ((wp * light + wg * Vec3::Z) / (wp + wg)).normalize_or(Vec3::Z)
 }
 
-/// What a tree adapts to: solid obstacles (boxes, finite or infinite walls, spheres), the
-/// terrain surface and the sky (global light, section 6).
+/// What a tree adapts to: solid obstacles (boxes, finite or infinite walls, spheres, boxes
+/// turned about the vertical — angled walls — and vertical prisms over a footprint polygon —
+/// buildings), the terrain surface and the sky (global light, section 6).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Environment {
     /// Solid obstacles (m, world coordinates).
