@@ -103,7 +103,11 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
         pb.set_position(p.year as u64);
         pb.set_message(format!("year {} · {} trees · {:.0} trees/s", p.year, p.trees, p.trees_per_s));
     };
-    save_run_species(sc, lib, &out)?;
+    // a resumed run keeps the species files it was simulated with (a changed species is
+    // refused by the checkpoint before anything is written)
+    if !(resume && out.join("checkpoint.bin").is_file()) {
+        save_run_species(sc, lib, &out)?;
+    }
     let mut opts = RunOptions::new(&out);
     opts.resume = resume;
     opts.geojson_years = geojson_years;
