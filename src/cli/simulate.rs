@@ -143,7 +143,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let sc = Scenario::load(&a.scenario)?;
     let run_species = run_species_dir(&a.out);
     let mut dirs: Vec<&Path> = Vec::new();
-    if a.resume && run_species.is_dir() {
+    // the run's own species files count once it has a checkpoint (a run killed before that
+    // starts again from year 0 and writes them anew)
+    if a.resume && run_species.is_dir() && a.out.join("checkpoint.bin").is_file() {
         dirs.push(&run_species);
     }
     dirs.extend(a.species_dir.as_deref());

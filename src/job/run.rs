@@ -92,15 +92,15 @@ fn check_writable(dir: &Path) -> Result<()> {
 }
 
 /// With `--resume` and no checkpoint `ck`: whether a run was started in `dir` (its
-/// `scenario.toml` is there) and stopped before its first checkpoint, so the resumed run starts
-/// from year 0.
+/// `scenario.toml` or its `species/` folder, the first things a run writes, are there) and
+/// stopped before its first checkpoint, so the resumed run starts from year 0.
 ///
 /// Errors: [`Error::Format`] naming the checkpoint when `dir` holds no started run either.
 fn started_here(dir: &Path, ck: &Path) -> Result<bool> {
-    if dir.join("scenario.toml").is_file() {
+    if dir.join("scenario.toml").is_file() || dir.join("species").is_dir() {
         return Ok(true);
     }
-    Err(Error::format(ck, "--resume: no checkpoint in the run directory (and no run started there: no scenario.toml)").into())
+    Err(Error::format(ck, "--resume: no checkpoint in the run directory (and no run started there: no scenario.toml, no species/)").into())
 }
 
 /// Removes the snapshot files of an earlier run from `dir`: `inventory/year_*` and
