@@ -163,8 +163,8 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
 /// maps folders are writable (so a run that cannot write loses nothing of the earlier one).
 /// A resumed run continues from `checkpoint.bin` (its identity must match the scenario's:
 /// [`crate::sim::checkpoint::restore`]; more `years` extend the run) and rewrites
-/// `scenario.toml`; with no checkpoint yet but a `scenario.toml` (a run killed before its first
-/// checkpoint) it starts from year 0. Every start removes the temporary files a killed run
+/// `scenario.toml`; with no checkpoint yet but a `scenario.toml` or `species/` (a run killed
+/// before its first checkpoint) it starts from year 0. Every start removes the temporary files a killed run
 /// left ([`crate::output::remove_stale_temporaries`]). Before each checkpoint the run, inventory
 /// and maps folders are synced ([`crate::output::sync_dir`]), so a resume after SIGKILL or a
 /// power cut ends byte-identical to an unbroken run (tests/faults.rs).
@@ -258,8 +258,8 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         if y == scenario.years || stop_now || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0) {
             tables(&dir, &rows, &world, opts.write_snapshots)?;
             // what the checkpoint counts as written is on disk before the checkpoint is
-            for sub in [dir.join("inventory"), dir.join("maps")] {
-                if opts.write_snapshots {
+            if opts.write_snapshots {
+                for sub in [dir.join("inventory"), dir.join("maps")] {
                     crate::output::sync_dir(&sub)?;
                 }
             }
