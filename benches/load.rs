@@ -50,7 +50,7 @@ fn main() {
             tmp.path().join("run")
         }
     };
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+    rayon::ThreadPoolBuilder::new().num_threads(threads).build_global().expect("thread pool");
     let t0 = Instant::now();
     let site = sc.site().expect("site");
     let site_s = t0.elapsed().as_secs_f64();
@@ -68,7 +68,7 @@ fn main() {
     let mut opts = RunOptions::new(&out);
     opts.write_snapshots = snapshots;
     opts.progress = Some(&mut cb);
-    let res = pool.install(|| run_scenario(&sc, site, &lib, opts)).expect("run");
+    let res = run_scenario(&sc, site, &lib, opts).expect("run");
     let total = t0.elapsed().as_secs_f64();
     let ck = std::fs::metadata(out.join("checkpoint.bin")).map(|m| m.len()).unwrap_or(0);
     let last_row = res.rows.last();
