@@ -98,7 +98,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut last_rows: Vec<sylva::job::inventory::InventoryRow> = Vec::new();
     let mut keep = |y: u32, w: &sylva::sim::World| {
         if !a.no_render {
-            keys.push((y, scene::instances(&scene::plants_from_world(w), &lib, &site, Season::Summer)));
+            keys.push((y, scene::instances_with_saplings(&scene::plants_from_world(w), &scene::saplings_from_world(w), &lib, &site, Season::Summer)));
             last_rows = sylva::job::inventory::rows_from_world(w);
         }
     };
@@ -112,6 +112,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if !a.no_render {
         let mut stage = Stage::new(site.clone(), lib.clone(), sc.climate.sea_level_m).context("setting up the renderer (install mesa-vulkan-drivers for the CPU adapter)")?;
         stage.set_scenario(sc.seed, &sc.obstacles);
+        stage.set_surroundings_of(&sc).context("the terrain around the simulated window")?;
         // the stills from afar draw instanced prototypes; the close-up adapts its near field
         let adapt = stage.adapt.take();
         eprintln!("[3/4] stills on {}", stage.renderer.adapter_description());
