@@ -33,13 +33,13 @@ impl TerrainMesh {
     /// all; a unit box at the origin for an empty mesh.
     pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
         let Some((lo, hi)) = self.focus else { return self.full_bounds() };
-        box_of(self.positions.iter().filter(|p| p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1])).unwrap_or_else(|| self.full_bounds())
+        crate::mesh::points_bounds(self.positions.iter().filter(|p| p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1])).unwrap_or_else(|| self.full_bounds())
     }
 
     /// Axis-aligned bounds `(min, max)` in metres of every vertex, surroundings included; a
     /// unit box at the origin for an empty mesh.
     pub fn full_bounds(&self) -> ([f32; 3], [f32; 3]) {
-        box_of(self.positions.iter()).unwrap_or(([0.0; 3], [1.0; 3]))
+        crate::mesh::points_bounds(self.positions.iter()).unwrap_or(([0.0; 3], [1.0; 3]))
     }
 
     /// Number of triangles.
@@ -94,19 +94,6 @@ impl TerrainMesh {
             })
             .map(|p| p[2])
     }
-}
-
-/// Axis-aligned box of points; `None` for none.
-fn box_of<'a>(mut it: impl Iterator<Item = &'a [f32; 3]>) -> Option<([f32; 3], [f32; 3])> {
-    let &first = it.next()?;
-    let (mut lo, mut hi) = (first, first);
-    for p in it {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    Some((lo, hi))
 }
 
 /// Land-cover colouring by elevation and slope (linear RGB albedo).
