@@ -588,8 +588,8 @@ impl Landscape {
     }
 }
 
-/// Plan canopy cover (0..1) per sample of `g` from the crowns of `instances` (saplings with
-/// half weight): each crown of radius `r` adds to the samples within it the anti-aliased cover
+/// Plan canopy cover (0..1) per sample of `g` from the crowns of `instances` (saplings count
+/// with weight `0.3 · h / 4 m`: grass still grows among young saplings): each crown of radius `r` adds to the samples within it the anti-aliased cover
 /// `clamp((r − d)/s + 0.5, 0, 1)` of their centre at distance `d` (`s` the sample spacing),
 /// then a 3 × 3 box blur softens the forest edge.
 pub fn canopy_cover(instances: &[TreeInstance], g: &crate::render::terrain::GroundGrid) -> Vec<f32> {
@@ -597,7 +597,7 @@ pub fn canopy_cover(instances: &[TreeInstance], g: &crate::render::terrain::Grou
     let mut cov = vec![0.0f32; w * h];
     let s = g.cell_x.min(g.cell_y).max(1e-3);
     for t in instances {
-        let weight = if t.id & SAPLING_ID_BIT != 0 { 0.5 } else { 1.0 } * t.opacity.clamp(0.0, 1.0);
+        let weight = if t.id & SAPLING_ID_BIT != 0 { 0.3 * (t.height / 4.0).min(1.0) } else { 1.0 } * t.opacity.clamp(0.0, 1.0);
         let r = t.crown_radius.max(0.3);
         let (x, y) = (t.position[0], t.position[1]);
         let c0 = (((x - r - g.origin[0]) / g.cell_x - 0.5).floor().max(0.0)) as usize;
