@@ -111,7 +111,7 @@ pub struct LandCover {
 
 impl Default for LandCover {
     fn default() -> Self {
-        LandCover { sea_level: f32::NEG_INFINITY, tree_line: 1900.0, snow_line: 2700.0, rock_slope_deg: 38.0 }
+        LandCover { sea_level: f32::NEG_INFINITY, tree_line: 1900.0, snow_line: 2700.0, rock_slope_deg: 42.0 }
     }
 }
 
@@ -152,15 +152,15 @@ pub struct Ground {
     pub canopy: f32,
 }
 
-/// Stream strength 0..1 of a cell draining `area_m2` square metres: 0 below 8 ha of
-/// contributing area, rising with the logarithm of the area to 1 at 100 ha. (Channel heads of
+/// Stream strength 0..1 of a cell draining `area_m2` square metres: 0 below 10 ha of
+/// contributing area, rising with the logarithm of the area to 1 at 150 ha. (Channel heads of
 /// humid Southern Appalachian headwaters lie at ≈ 1–10 ha of contributing area; Montgomery &
 /// Dietrich 1988, Nature 336:232–234, for the area–slope threshold of channel initiation.)
 pub fn stream_strength(area_m2: f32) -> f32 {
     if !(area_m2 > 0.0) {
         return 0.0;
     }
-    ((area_m2.ln() - 80_000f32.ln()) / (1_000_000f32.ln() - 80_000f32.ln())).clamp(0.0, 1.0)
+    ((area_m2.ln() - 100_000f32.ln()) / (1_500_000f32.ln() - 100_000f32.ln())).clamp(0.0, 1.0)
 }
 
 /// Wetness 0..1 of a cell with topographic wetness index `twi` = ln(a / tan β) (Beven & Kirkby
@@ -201,7 +201,7 @@ impl LandCover {
         let grass = [0.16, 0.25, 0.07];
         let wet = [0.09, 0.19, 0.06];
         let floor = [0.105, 0.085, 0.05];
-        let rock = [0.33, 0.31, 0.28];
+        let rock = [0.30, 0.30, 0.28];
         let water = [0.03, 0.06, 0.08];
         let alpine = [0.33, 0.34, 0.18];
         let snow = [0.85, 0.87, 0.9];
@@ -216,7 +216,7 @@ impl LandCover {
         c = c.map(|v| v * (1.0 + 0.12 * m));
         let rock_t = smooth01((slope - self.rock_slope_deg + 6.0) / 12.0 + 0.15 * m) * (1.0 - 0.6 * g.canopy);
         c = lerp3(c, rock, rock_t);
-        c = lerp3(c, water, g.stream * (0.8 - 0.35 * g.canopy));
+        c = lerp3(c, water, 0.7 * g.stream.max(0.0).sqrt() * (1.0 - 0.4 * g.canopy));
         lerp3(c, snow, (z - self.snow_line + 100.0) / 200.0 * (1.0 - (slope - 45.0).max(0.0) / 20.0))
     }
 }
@@ -482,11 +482,11 @@ mod tests {
         let rock = lc.ground_color(10.0, 10.0, 800.0, steep, &Ground::default());
         assert!((rock[0] - rock[1]).abs() < 0.03 && rock[0] > 0.25, "bare rock is grey: {rock:?}");
         let stream = lc.ground_color(10.0, 10.0, 800.0, flat, &Ground { stream: 1.0, ..Ground::default() });
-        assert!(stream.iter().sum::<f32>() < 0.25 && stream[2] >= stream[0], "water is dark and bluish: {stream:?}");
-        // streams start at 8 ha and are full at 100 ha; wetness from TWI 7 to 11
-        assert_eq!(stream_strength(70_000.0), 0.0);
-        assert!((stream_strength(1_000_000.0) - 1.0).abs() < 1e-5);
-        let mid = stream_strength((80_000f32 * 1_000_000.0).sqrt());
+        assert!(stream.iter().sum::<f32>() < 0.6 * open.iter().sum::<f32>() && stream[2] >= stream[0], "water is dark and bluish: {stream:?}");
+        // streams start at 10 ha and are full at 150 ha; wetness from TWI 7 to 11
+        assert_eq!(stream_strength(90_000.0), 0.0);
+        assert!((stream_strength(1_500_000.0) - 1.0).abs() < 1e-5);
+        let mid = stream_strength((100_000f32 * 1_500_000.0).sqrt());
         assert!((mid - 0.5).abs() < 1e-3, "{mid}");
         assert_eq!((wetness(6.0), wetness(9.0), wetness(12.0), wetness(f32::NAN)), (0.0, 0.5, 1.0, 0.0));
     }
