@@ -200,7 +200,7 @@ impl LandCover {
     pub fn ground_color(&self, x: f32, y: f32, z: f32, n: [f32; 3], g: &Ground) -> [f32; 3] {
         let grass = [0.16, 0.25, 0.07];
         let wet = [0.09, 0.19, 0.06];
-        let floor = [0.105, 0.085, 0.05];
+        let floor = [0.085, 0.078, 0.045];
         let rock = [0.30, 0.30, 0.28];
         let water = [0.03, 0.06, 0.08];
         let alpine = [0.33, 0.34, 0.18];
