@@ -113,6 +113,7 @@ fn ground(size: f32) -> TerrainMesh {
         normals: vec![[0.0, 0.0, 1.0]; 4],
         colors: vec![c; 4],
         indices: vec![0, 1, 2, 0, 2, 3],
+        ..TerrainMesh::default()
     }
 }
 
