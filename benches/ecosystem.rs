@@ -6,6 +6,7 @@
 //! `cargo bench --bench ecosystem` (release). Environment: `SYLVA_BENCH_HA` (area, default 1000),
 //! `SYLVA_BENCH_YEARS` (default 100).
 use std::time::Instant;
+mod common;
 use sylva::sim::{step_year, Scenario, World, YearReport};
 use sylva::species::SpeciesLibrary;
 
@@ -18,28 +19,8 @@ fn main() {
     let ha: f64 = std::env::var("SYLVA_BENCH_HA").ok().and_then(|v| v.parse().ok()).unwrap_or(1000.0);
     let years: u32 = std::env::var("SYLVA_BENCH_YEARS").ok().and_then(|v| v.parse().ok()).unwrap_or(100);
     let side_cells = ((ha * 10_000.0).sqrt() / 50.0).round().max(1.0) as usize; // 50 m cells
-    let toml = format!(
-        r#"
-name = "bench"
-years = {years}
-seed = 1
-species = ["beech", "norway_spruce", "silver_birch"]
-[terrain]
-uniform = {{ width = {side_cells}, height = {side_cells}, cell_m = 50.0, elevation_m = 500.0, indices = [5, 5, 3, 5, 6, 6] }}
-[[start]]
-kind = "seed_rain"
-species = "silver_birch"
-seeds_per_ha = 5000
-[[start]]
-kind = "seed_rain"
-species = "beech"
-seeds_per_ha = 500
-[[start]]
-kind = "seed_rain"
-species = "norway_spruce"
-seeds_per_ha = 500
-"#
-    );
+    let terrain = format!("uniform = {{ width = {side_cells}, height = {side_cells}, cell_m = 50.0, elevation_m = 500.0, indices = [5, 5, 3, 5, 6, 6] }}");
+    let toml = common::afforestation_toml("bench", years, "", &terrain);
     let sc = Scenario::from_toml_str(&toml, "bench").expect("scenario");
     let lib = SpeciesLibrary::embedded().expect("species");
     let mut w = World::new(sc.site().expect("site"), &lib, &sc).expect("world");

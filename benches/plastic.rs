@@ -68,6 +68,31 @@ fn wall_for(r: f32, h: f32) -> Obstacle {
     Obstacle::FiniteWall { x: 0.5 * r, length: 4.0 * r, height: 1.2 * h }
 }
 
+/// `SYLVA_PLASTIC_PROFILE=CYCLES,SEED` (e.g. `14,5`, the 9,133-node tree): grows that one
+/// tree, analyses it, adapts it beside the wall once and once more after moving the wall 10 cm,
+/// printing the CPU time of each step (for a profiler: no search over seeds, no medians).
+fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOptions, p: &sylva::species::PlasticParams) {
+    let v: Vec<u64> = case.split(',').filter_map(|t| t.trim().parse().ok()).collect();
+    let (years, seed) = (v.first().copied().unwrap_or(14) as u32, v.get(1).copied().unwrap_or(5));
+    let sk = light_guided::grow(lp, lo, &[], seed, years).expect("grow");
+    let (lo_b, hi_b) = sk.bounds().expect("nodes");
+    let wall = wall_for(0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y), hi_b.z - lo_b.z);
+    let t0 = cpu_ms();
+    let tree = PlasticTree::analyse(&sk, p, &Environment::open(), None).expect("analyse");
+    let t1 = cpu_ms();
+    let mut t = tree.clone();
+    let rep = t.adapt(&Environment::with_obstacles(&[wall])).expect("adapt");
+    let t2 = cpu_ms();
+    let first = fingerprint(std::slice::from_ref(&t));
+    let moved = match wall {
+        Obstacle::FiniteWall { x, length, height } => Obstacle::FiniteWall { x: x + 0.1, length, height },
+        o => o,
+    };
+    let rep2 = t.adapt(&Environment::with_obstacles(&[moved])).expect("adapt");
+    let t3 = cpu_ms();
+    println!("{} nodes: analysis {:.1} ms, adapt {:.1} ms ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
+}
+
 fn main() {
     let lib = SpeciesLibrary::embedded().expect("embedded species");
     let sp = &lib.species[lib.find("beech").expect("beech") as usize];
@@ -80,6 +105,10 @@ fn main() {
     println!("# Plastic Trees benchmark (light-guided trees beside a finite wall; threads: {})", rayon::current_num_threads());
     println!("| target nodes | cycles | seed | nodes | analysis ms | adapt ms | regrow ms | regrow / adapt | bent | pruned | move wall 10 cm: ms (recomputed nodes) |");
     println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    if let Some(case) = std::env::var_os("SYLVA_PLASTIC_PROFILE") {
+        profile_case(&case.to_string_lossy(), &lp, &lo, &p);
+        return;
+    }
     let regrow = std::env::var_os("SYLVA_PLASTIC_NO_REGROW").is_none();
     let mut prints = Vec::new();
     let mut mid: Option<Skeleton> = None;

@@ -40,17 +40,21 @@ impl TriMesh {
     }
     /// Axis-aligned bounds `(min, max)`; `None` for an empty mesh.
     pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
-        let mut it = self.positions.iter();
-        let first = *it.next()?;
-        let (mut lo, mut hi) = (first, first);
-        for p in it {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        Some((lo, hi))
+        points_bounds(self.positions.iter())
     }
+}
+
+/// Axis-aligned bounds `(min, max)` of points; `None` when there is none.
+pub fn points_bounds<'a>(mut it: impl Iterator<Item = &'a [f32; 3]>) -> Option<([f32; 3], [f32; 3])> {
+    let &first = it.next()?;
+    let (mut lo, mut hi) = (first, first);
+    for p in it {
+        for k in 0..3 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    Some((lo, hi))
 }
 
 /// A tree mesh at one level of detail: bark and foliage parts.

@@ -15,7 +15,7 @@ fn world() -> (sylva::sim::Scenario, sylva::sim::World) {
 fn version_follows_the_cause_counts() {
     assert_eq!((LAYOUT_VERSION >> 8) & 0xff, N_CAUSES as u32);
     assert_eq!(LAYOUT_VERSION & 0xff, N_REGEN_CAUSES as u32);
-    assert!(LAYOUT_VERSION >> 16 >= 4, "layouts up to SYLVACK3 came before versions");
+    assert!(LAYOUT_VERSION >> 16 >= 5, "layouts up to SYLVACK3 came before versions; 5 added the length, identity and CRC-32");
 }
 
 #[test]
@@ -41,7 +41,7 @@ fn round_trip_and_old_layouts_refused_with_a_clear_message() {
     let mut other = bytes.clone();
     other[8..12].copy_from_slice(&(LAYOUT_VERSION + 256).to_le_bytes());
     let e = restore(&mut world().1, &other, p).unwrap_err().to_string();
-    assert!(e.contains(&format!("layout version 4.{}.{}", N_CAUSES + 1, N_REGEN_CAUSES)) && e.contains("differs from this build's") && e.contains("without --resume"), "{e}");
+    assert!(e.contains(&format!("layout version {}.{}.{}", LAYOUT_VERSION >> 16, N_CAUSES + 1, N_REGEN_CAUSES)) && e.contains("differs from this build's") && e.contains("without --resume"), "{e}");
 
     let e = restore(&mut world().1, b"PK\x03\x04 not a checkpoint", p).unwrap_err().to_string();
     assert!(e.contains("not a Sylva checkpoint"), "{e}");

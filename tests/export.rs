@@ -64,12 +64,15 @@ fn reports(files: &[&Path]) -> Option<(Vec<serde_json::Value>, bool)> {
     Some((r, out.status.success()))
 }
 
-/// Runs the validator on `files`; panics on any error or warning, listing them.
+/// Runs the validator on `files`; panics on any error or warning (or unused object), listing them.
 fn validate(files: &[&Path]) {
     let Some((reports, ok)) = reports(files) else { return };
     for r in &reports {
         let bad: Vec<&serde_json::Value> = r["messages"].as_array().unwrap().iter().filter(|m| m["severity"] == "error" || m["severity"] == "warning").collect();
         assert_eq!((r["errors"].as_u64(), r["warnings"].as_u64()), (Some(0), Some(0)), "{}: {bad:#?}", r["file"]);
+        // nothing written for nothing: no unused material, texture or attribute
+        let unused: Vec<&serde_json::Value> = r["messages"].as_array().unwrap().iter().filter(|m| m["code"] == "UNUSED_OBJECT").collect();
+        assert!(unused.is_empty(), "{}: {unused:#?}", r["file"]);
     }
     assert!(ok);
 }
@@ -257,8 +260,9 @@ height_m = 4.0
 thickness_m = 0.5
 "#;
     let mut toml = toml.to_string();
-    for (sp, age, x0, x1) in [("beech", 30.0, 0.0, 40.0), ("norway_spruce", 25.0, 40.0, 50.0)] {
-        toml += &format!("[[start]]\nkind = \"planted\"\nspecies = \"{sp}\"\nspacing_m = 5.0\nage_yr = {age:?}\narea = [{x0:?}, 0.0, {x1:?}, 100.0]\n");
+    // and an open plantation at 20 m: trees farther apart than a neighbourhood cell and its halo
+    for (sp, age, x0, x1, spacing) in [("beech", 30.0, 0.0, 40.0, 5.0), ("norway_spruce", 25.0, 40.0, 50.0, 5.0), ("beech", 30.0, 60.0, 100.0, 20.0)] {
+        toml += &format!("[[start]]\nkind = \"planted\"\nspecies = \"{sp}\"\nspacing_m = {spacing:?}\nage_yr = {age:?}\narea = [{x0:?}, 0.0, {x1:?}, 100.0]\n");
     }
     let sc = sylva::sim::Scenario::from_toml_str(&toml, "export").unwrap();
     let site = sc.site().unwrap();
@@ -315,13 +319,22 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     assert!(!doc0.nodes().any(|n| n.name().is_some_and(|s| s.ends_with("_LOD1") || s.ends_with("_LOD3"))));
     validate(&[&out, &out0]);
 
+    // open-grown trees of one class, alone in their neighbourhoods, adapt alike: one model,
+    // many nodes, each scaled to its own height and crown
+    let open = dir.path().join("open.glb");
+    let ro = export_stand(&run, &lib, &ExportOptions::new([60.0, 0.0, 100.0, 100.0]), &open).unwrap();
+    let isolated = rows.iter().filter(|t| t.status == "alive" && t.x_m >= 60.0).count();
+    assert_eq!(ro.trees, isolated);
+    assert!(isolated >= 8 && ro.models < ro.trees, "{} models for {} trees", ro.models, ro.trees);
+    validate(&[&open]);
+
     // bad requests name what is wrong
     let err = |o: &ExportOptions| export_stand(&run, &lib, o, &dir.path().join("bad.glb")).unwrap_err().to_string();
     let mut e = ExportOptions::new([20.0, 15.0, 45.0, 45.0]);
     e.year = Some(7);
     let m = err(&e);
     assert!(m.contains("no inventory snapshot for year 7") && m.contains("0, 1"), "{m}");
-    let m = err(&ExportOptions::new([60.0, 60.0, 90.0, 90.0]));
+    let m = err(&ExportOptions::new([51.0, 0.0, 59.0, 100.0]));
     assert!(m.contains("--area") && m.contains("no live tree") && m.contains("they stand within"), "{m}");
     let m = err(&ExportOptions::new([50.0, 50.0, 150.0, 90.0]));
     assert!(m.contains("--area") && m.contains("inside the terrain") && m.contains("0–100.0 m east"), "{m}");

@@ -201,3 +201,32 @@ fn undeclared_fill_values_are_refused_naming_the_cell() {
     let e = err_of(io::load(&p));
     assert!(e.contains("fill.asc") && e.contains("column 1, row 1") && e.contains("= 1000000") && e.contains("nodata"), "{e}");
 }
+
+#[test]
+fn embedded_coweeta_basin_and_its_valid_rectangle() {
+    // terrains/coweeta_basin_10m_utm17n.tif: USGS 3DEP 10 m, NAD83 / UTM 17N (EPSG:26917)
+    let t = io::embedded_terrain("coweeta").unwrap();
+    assert_eq!((t.elevation.width, t.elevation.height), (619, 624));
+    assert_eq!(t.geo.epsg, Some(26917));
+    assert!((t.geo.cell_y_m() - 10.0).abs() < 1e-9 && (t.geo.pixel_w - 10.0).abs() < 1e-9);
+    // latitude by inverse projection of the grid's centre (the basin lies at ≈ 35.02–35.08° N)
+    assert!((t.geo.latitude_deg - 35.05).abs() < 0.03, "latitude {}", t.geo.latitude_deg);
+    let valid = t.elevation.data.iter().filter(|v| v.is_finite()).count() as f64 / t.elevation.data.len() as f64;
+    assert!((valid - 0.47).abs() < 0.02, "basin outline: {valid} of the cells valid");
+    // terrains/coweeta_10m_utm17n.tif is the basin's largest valid rectangle, cells 108.., 182..
+    let rect = io::load(&terrains().join("coweeta_10m_utm17n.tif")).unwrap();
+    let w = io::window(&t, 108, 182, 345, 256).unwrap();
+    assert_eq!(rect.elevation.data, w.elevation.data);
+    assert!(rect.elevation.data.iter().all(|v| v.is_finite()));
+    assert!((rect.geo.origin_x - w.geo.origin_x).abs() < 1e-6 && (rect.geo.origin_y - w.geo.origin_y).abs() < 1e-6);
+    // the default scenario's window lies inside it: 2.4 km × 1.8 km of ridges and coves
+    let sc = sylva::sim::Scenario::from_toml_str(&std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/default.toml")).unwrap(), "default.toml").unwrap();
+    assert_eq!(sc.terrain.embedded.as_deref(), Some("coweeta"));
+    let [c0, r0, ww, wh] = sc.terrain.window.unwrap();
+    assert!(c0 >= 108 && r0 >= 182 && c0 + ww <= 108 + 345 && r0 + wh <= 182 + 256);
+    assert!(ww as f64 * wh as f64 * 100.0 >= 4.0e6, "at least 4 km²");
+    let d = io::window(&t, c0, r0, ww, wh).unwrap();
+    let (lo, hi) = d.elevation.data.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+    assert!((740.0..760.0).contains(&lo) && (1270.0..1290.0).contains(&hi), "{lo}–{hi} m");
+    assert!(io::embedded_terrain("nowhere").unwrap_err().to_string().contains("coweeta"));
+}

@@ -1,4 +1,5 @@
 //! Helpers shared by the plain-program benches.
+#![allow(dead_code)]
 use std::time::Instant;
 
 /// Median wall time (ms) of `runs` calls of `f`.
@@ -12,4 +13,33 @@ pub fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
         .collect();
     t.sort_by(|a, b| a.total_cmp(b));
     t[t.len() / 2]
+}
+
+/// Scenario TOML of the afforestation benches (ecosystem, load): `name`, `years`, seed 1, any
+/// further top-level `head` lines, the `[terrain]` source line, then seed rain of silver birch
+/// (5,000 seeds/ha/yr), beech and Norway spruce (500 each).
+pub fn afforestation_toml(name: &str, years: u32, head: &str, terrain: &str) -> String {
+    format!(
+        r#"
+name = "{name}"
+years = {years}
+seed = 1
+{head}
+species = ["beech", "norway_spruce", "silver_birch"]
+[terrain]
+{terrain}
+[[start]]
+kind = "seed_rain"
+species = "silver_birch"
+seeds_per_ha = 5000
+[[start]]
+kind = "seed_rain"
+species = "beech"
+seeds_per_ha = 500
+[[start]]
+kind = "seed_rain"
+species = "norway_spruce"
+seeds_per_ha = 500
+"#
+    )
 }

@@ -121,6 +121,7 @@ pub fn stage_for(run_dir: &Path, species_dir: Option<&Path>) -> anyhow::Result<S
     let lib = super::simulate::library(&dirs)?;
     let mut stage = Stage::new(site, lib, sc.climate.sea_level_m)?;
     stage.set_scenario(sc.seed, &sc.obstacles);
+    stage.set_surroundings_of(&sc).context("the terrain around the simulated window")?;
     Ok(stage)
 }
 
@@ -147,7 +148,9 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
         stage.adapt = None;
     }
     let t = std::time::Instant::now();
-    let img = stage.render_rows(&rows, a.season, &cam, a.size.0, a.size.1)?;
+    // the regeneration layer of the same snapshot, drawn as saplings (runs without it: none)
+    let regen = sylva::job::inventory::read_regeneration(&a.run_dir, year)?.unwrap_or_default();
+    let img = stage.render_plants_with(&sylva::job::scene::plants_from_rows(&rows), &sylva::job::scene::saplings_from_rows(&regen), a.season, &cam, a.size.0, a.size.1)?;
     let frame_s = t.elapsed().as_secs_f64();
     sylva::output::pictures::write_png(&a.out, &img)?;
     let st = stage.renderer.last_stats();

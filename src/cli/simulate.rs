@@ -115,7 +115,11 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
         pb.set_position(p.year as u64);
         pb.set_message(format!("year {} · {} trees · {:.0} trees/s", p.year, p.trees, p.trees_per_s));
     };
-    save_run_species(sc, lib, &out)?;
+    // a resumed run keeps the species files it was simulated with (a changed species is
+    // refused by the checkpoint before anything is written)
+    if !(resume && out.join("checkpoint.bin").is_file()) {
+        save_run_species(sc, lib, &out)?;
+    }
     let mut opts = RunOptions::new(&out);
     opts.resume = resume;
     opts.geojson_years = geojson_years;
@@ -151,7 +155,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let sc = Scenario::load(&a.scenario)?;
     let run_species = run_species_dir(&a.out);
     let mut dirs: Vec<&Path> = Vec::new();
-    if a.resume && run_species.is_dir() {
+    // the run's own species files count once it has a checkpoint (a run killed before that
+    // starts again from year 0 and writes them anew)
+    if a.resume && run_species.is_dir() && a.out.join("checkpoint.bin").is_file() {
         dirs.push(&run_species);
     }
     dirs.extend(a.species_dir.as_deref());

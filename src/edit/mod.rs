@@ -20,12 +20,11 @@ pub mod doc;
 pub mod preview;
 
 use std::path::{Path, PathBuf};
-use std::sync::{Arc, Mutex};
 
 use eframe::egui;
 use glam::Vec3;
 
-use crate::gui::{self, FrameClock, GuiError, Screenshot, Viewport3d, WindowOptions};
+use crate::gui::{self, FrameClock, Screenshot, Viewport3d, WindowOptions};
 use crate::render::scene::{Scene, Sky, Sun, TerrainMesh, Wind};
 use crate::species::schema::{self, Kind};
 use crate::species::{Problem, Species};
@@ -114,6 +113,7 @@ fn ground(size: f32) -> TerrainMesh {
         normals: vec![[0.0, 0.0, 1.0]; 4],
         colors: vec![c; 4],
         indices: vec![0, 1, 2, 0, 2, 3],
+        ..TerrainMesh::default()
     }
 }
 
@@ -644,17 +644,12 @@ pub fn open_target(arg: Option<&str>, dir: &Path) -> Result<SpeciesDoc> {
 /// As [`gui::run_window`].
 pub fn run(doc: SpeciesDoc, new_dir: PathBuf, model: Model, age_yr: f32, opts: &WindowOptions) -> gui::Result<()> {
     let title = format!("Sylva species editor — {}", doc.path.display());
-    let opts2 = opts.clone();
-    let slot = Arc::new(Mutex::new(Some(doc)));
-    gui::run_window(&title, opts, move |cc, failure| {
-        let rs = cc.wgpu_render_state.as_ref().ok_or_else(|| GuiError::NoAdapter("the window has no wgpu render state".into()))?;
-        let vp = Viewport3d::new(rs)?;
-        let d = slot.lock().ok().and_then(|mut d| d.take()).ok_or_else(|| GuiError::Window("editor document taken twice".into()))?;
-        let mut e = Editor::new(d, new_dir.clone(), Some(vp));
+    gui::run_viewport_window(&title, opts, doc, move |d, vp, shot| {
+        let mut e = Editor::new(d, new_dir, Some(vp));
         e.model = model;
         e.age_yr = age_yr;
-        if let Some(p) = &opts2.screenshot {
-            e = e.with_screenshot(Screenshot::new(p, opts2.frames, failure));
+        if let Some(s) = shot {
+            e = e.with_screenshot(s);
         }
         Ok(e)
     })

@@ -128,6 +128,24 @@ pub fn run_window<A: eframe::App + 'static>(title: &str, opts: &WindowOptions, m
     }
 }
 
+/// Opens a window like [`run_window`] for an app with a 3-D viewport: `value` (the document or
+/// run data, moved into the window once) is handed to `make` together with a [`Viewport3d`] on
+/// the window's device and, with `opts.screenshot`, the [`Screenshot`] state the app must drive.
+///
+/// # Errors
+/// As [`run_window`]; [`GuiError::NoAdapter`] when the window has no wgpu render state;
+/// [`GuiError::Render`] when the viewport's renderer cannot be built; whatever `make` returns.
+pub fn run_viewport_window<T: Send + 'static, A: eframe::App + 'static>(title: &str, opts: &WindowOptions, value: T, make: impl FnOnce(T, Viewport3d, Option<Screenshot>) -> Result<A>) -> Result<()> {
+    let screenshot = opts.screenshot.clone().map(|p| (p, opts.frames));
+    let slot = Arc::new(Mutex::new(Some(value)));
+    run_window(title, opts, move |cc, failure| {
+        let rs = cc.wgpu_render_state.as_ref().ok_or_else(|| GuiError::NoAdapter("the window has no wgpu render state".into()))?;
+        let vp = Viewport3d::new(rs)?;
+        let v = slot.lock().ok().and_then(|mut d| d.take()).ok_or_else(|| GuiError::Window("the window's document was taken twice".into()))?;
+        make(v, vp, screenshot.map(|(p, frames)| Screenshot::new(&p, frames, failure)))
+    })
+}
+
 /// The `--screenshot` state machine of a window: counts frames, asks egui for a screenshot of
 /// the whole window after the last one, writes it as PNG and closes the window.
 pub struct Screenshot {

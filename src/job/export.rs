@@ -5,10 +5,11 @@
 //! pictures), meshed with its levels of detail, with the terrain patch under the area and the
 //! scenario's obstacles that reach into it, as one glTF scene ([`crate::output::gltf::StandScene`]).
 //!
-//! **Instancing.** Trees whose adapted skeletons are the same shape once divided by their
-//! crown radius (x, y) and height (z) share one mesh per level, each tree's node scaling it
-//! (quantised at 10⁻⁴ of the tree's size, so only trees adaptation left alike share); and the
-//! LOD3 billboards of all trees of a species are one mesh ([`crate::output::gltf`]).
+//! **Instancing.** Trees whose adapted skeletons have the same topology and the same shape once
+//! divided by their crown radius (x, y) and height (z), within [`SAME_SHAPE`], share one mesh
+//! per level, each tree's node scaling it (trees of one species, age and size class that their
+//! neighbours did not touch: the analysis is shared, `structure::stand`); and the LOD3
+//! billboards of all trees of a species are one mesh ([`crate::output::gltf`]).
 //!
 //! **Coordinates.** The scene's origin is the area's centre at the lowest terrain elevation of
 //! the patch (metres; x east, y north, z up in Sylva, y up in the file); the scene's `extras`
@@ -32,6 +33,11 @@ use std::path::{Path, PathBuf};
 
 /// Forest-floor colour of the terrain patch (sRGB 96, 84, 62: litter and soil).
 pub const GROUND_RGB: [u8; 3] = [96, 84, 62];
+
+/// Largest difference (a fraction of the tree's height or crown radius; for leaf directions,
+/// of a unit vector) between two trees' canonical shapes that still share one mesh: 10⁻³, 1 cm
+/// on a 10 m tree, well above the rounding of adapting the same tree at another place.
+pub const SAME_SHAPE: f32 = 1e-3;
 
 /// Most trees an export adapts (the area's live trees; a larger area is refused).
 pub const DEFAULT_MAX_TREES: usize = 5000;
@@ -151,8 +157,8 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let (terrain, z0) = terrain_patch(&site, o.area);
     let origin = Vec3::new(((x0 + x1) * 0.5) as f32, ((y0 + y1) * 0.5) as f32, z0);
 
-    // each tree in its own frame, with its canonical shape key
-    let meshed: Vec<Option<(u64, StandModel, [f32; 3], Vec3, usize)>> = st
+    // each tree in its own frame, with its topology key and canonical shape
+    let meshed: Vec<Option<(u64, Vec<f32>, StandModel, [f32; 3], Vec3, usize)>> = st
         .trees
         .par_iter()
         .map(|a| {
@@ -160,42 +166,45 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             let (sk, lv, hgt) = tree_frame(a, t.base)?;
             let r = t.crown_radius_m.max(0.2);
             let s = Vec3::new(r, r, hgt);
-            let q = |v: f32| (v * 1e4).round() as i64 as u64;
-            let mut keys = vec![t.species as u64];
+            let mut topology = vec![t.species as u64, sk.nodes.len() as u64];
+            topology.extend(sk.nodes.iter().map(|n| n.parent.map_or(u64::MAX, |p| p as u64)));
+            topology.extend(lv.leaves.iter().map(|l| l.node as u64));
+            let mut canon = Vec::with_capacity(sk.nodes.len() * 4 + lv.leaves.len() * 10);
             for n in &sk.nodes {
                 let p = n.pos / s;
-                keys.extend([q(p.x), q(p.y), q(p.z), q(n.radius / hgt), n.parent.map_or(u64::MAX, |p| p as u64)]);
+                canon.extend([p.x, p.y, p.z, n.radius / hgt]);
             }
             for l in &lv.leaves {
                 let p = l.pos / s;
-                keys.extend([q(p.x), q(p.y), q(p.z), q(l.size / hgt), q(l.dir.x), q(l.dir.y), q(l.dir.z), q(l.normal.x), q(l.normal.y), q(l.normal.z)]);
+                canon.extend([p.x, p.y, p.z, l.size / hgt, l.dir.x, l.dir.y, l.dir.z, l.normal.x, l.normal.y, l.normal.z]);
             }
-            let key = crate::rng::hash(&keys);
             let chain = lod_chain(&sk, &lv, &LodOptions::default());
             let sp = &library.species[t.species as usize];
-            Some((key, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize }, s.to_array(), t.base - origin, t.species as usize))
+            Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize }, s.to_array(), t.base - origin, t.species as usize))
         })
         .collect();
 
     let mut looks_of: HashMap<usize, usize> = HashMap::new();
     let mut looks: Vec<Look> = Vec::new();
     let mut models: Vec<StandModel> = Vec::new();
-    let mut model_of: HashMap<u64, (usize, [f32; 3])> = HashMap::new();
+    // topology key → (model, its size, its canonical shape) of the models with that topology
+    let mut model_of: HashMap<u64, Vec<(usize, [f32; 3], Vec<f32>)>> = HashMap::new();
     let mut nodes = Vec::new();
     for (m, a) in meshed.into_iter().zip(&st.trees) {
-        let Some((key, mut model, size, pos, sp)) = m else { continue };
+        let Some((key, canon, mut model, size, pos, sp)) = m else { continue };
         let look = *looks_of.entry(sp).or_insert_with(|| {
             looks.push(Look::for_species(&library.species[sp], o.season));
             looks.len() - 1
         });
         let t = &trees[a.index];
         let name = format!("{}_{}", library.species[sp].id, t.id);
-        let (mi, scale) = match model_of.get(&key) {
-            Some(&(mi, s0)) => (mi, [size[0] / s0[0], size[1] / s0[1], size[2] / s0[2]]),
+        let same = model_of.get(&key).and_then(|c| c.iter().find(|(_, _, c)| c.iter().zip(&canon).all(|(a, b)| (a - b).abs() <= SAME_SHAPE)));
+        let (mi, scale) = match same {
+            Some(&(mi, s0, _)) => (mi, [size[0] / s0[0], size[1] / s0[1], size[2] / s0[2]]),
             None => {
                 model.look = look;
                 models.push(model);
-                model_of.insert(key, (models.len() - 1, size));
+                model_of.entry(key).or_default().push((models.len() - 1, size, canon));
                 (models.len() - 1, [1.0; 3])
             }
         };

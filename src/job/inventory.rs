@@ -99,3 +99,45 @@ pub fn rows_from_world(w: &crate::sim::World) -> Vec<InventoryRow> {
         })
         .collect()
 }
+
+/// One row of `inventory/year_NNNN_regeneration.csv` (the regeneration layer: one sapling
+/// cohort per light cell and species, ARCHITECTURE.md).
+#[derive(Debug, Clone, PartialEq, serde::Deserialize)]
+pub struct RegenRow {
+    /// Light cell index.
+    pub cell: u32,
+    /// Species id.
+    pub species: String,
+    /// Light-cell centre, easting (m).
+    pub x_m: f64,
+    /// Light-cell centre, northing (m).
+    pub y_m: f64,
+    /// Stems of the cohort.
+    pub stems: u32,
+    /// Stems per hectare of the light cell.
+    pub stems_per_ha: f64,
+    /// Mean height (m).
+    pub height_m: f32,
+    /// Age (years).
+    pub age_yr: f32,
+}
+
+/// The regeneration-layer file of the plain snapshot of `year` in `run_dir`
+/// (`inventory/year_NNNN_regeneration.csv`), read when it exists; `None` when it does not (runs
+/// written without it).
+///
+/// # Errors
+/// [`Error::Format`] naming the file and line of a row without the columns of ARCHITECTURE.md.
+pub fn read_regeneration(run_dir: &Path, year: u32) -> Result<Option<Vec<RegenRow>>> {
+    let path = run_dir.join("inventory").join(format!("year_{year:04}_regeneration.csv"));
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let mut rdr = csv::Reader::from_path(&path).map_err(|e| Error::format(&path, e.to_string()))?;
+    let mut rows = Vec::new();
+    for (i, rec) in rdr.deserialize().enumerate() {
+        let row: RegenRow = rec.map_err(|e| Error::format(&path, format!("line {}: {e}", i + 2)))?;
+        rows.push(row);
+    }
+    Ok(Some(rows))
+}

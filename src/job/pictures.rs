@@ -41,15 +41,20 @@ pub struct Stage {
     obstacle_instances: Vec<TreeInstance>,
     /// Open-grown trees per species and age class (the scenario's seed).
     cache: SkeletonCache,
+    /// The ground drawn: the site and its surroundings ([`Stage::set_surroundings`]), recoloured
+    /// by each frame's canopy (forest floor under crowns).
+    landscape: scene::Landscape,
 }
 
 impl Stage {
-    /// Builds the stage: terrain mesh with cells ≤ 10 m, one EcoMod prototype per species.
+    /// Builds the stage: terrain mesh with cells ≤ 10 m (the site alone, its edges faded out;
+    /// [`Stage::set_surroundings`] adds the terrain around it), one EcoMod prototype per species.
     ///
     /// # Errors
     /// [`super::JobError::Render`] ([`crate::render::RenderError::NoAdapter`]) when no wgpu adapter is found.
     pub fn new(site: SiteConditions, library: SpeciesLibrary, sea_level_m: f32) -> Result<Self> {
-        let terrain = scene::terrain_mesh(&site, 10.0, sea_level_m)?;
+        let landscape = scene::Landscape::new(&site, None, 10.0, sea_level_m)?;
+        let terrain = landscape.mesh(&[])?;
         let prototypes = scene::prototypes(&library);
         let mut renderer = Renderer::new()?;
         // Offline stills: a larger triangle budget than the interactive default keeps the trees
@@ -63,7 +68,31 @@ impl Stage {
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
         let base_prototypes = prototypes.clone();
         let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));
-        Ok(Stage { site, library, scene, renderer, obstacles: Vec::new(), adapt: Some(AdaptOptions::default()), last_adapt: AdaptStats::default(), base_prototypes, obstacle_instances: Vec::new(), cache: adapted::cache(0) })
+        Ok(Stage { site, library, scene, renderer, obstacles: Vec::new(), adapt: Some(AdaptOptions::default()), last_adapt: AdaptStats::default(), base_prototypes, obstacle_instances: Vec::new(), cache: adapted::cache(0), landscape })
+    }
+
+    /// Draws the terrain beyond the simulated window around it: `full` is the whole terrain
+    /// the site was cut from with `window` (`[col0, row0, width, height]` in its cells), see
+    /// [`scene::Landscape::new`].
+    ///
+    /// Errors: [`Error::Invalid`] when the window leaves `full`'s grid.
+    pub fn set_surroundings(&mut self, full: &crate::terrain::Terrain, window: [usize; 4]) -> Result<()> {
+        self.landscape = scene::Landscape::new(&self.site, Some((full, window)), 10.0, self.landscape.cover.sea_level)?;
+        self.scene.set_terrain(self.landscape.mesh(&[])?);
+        Ok(())
+    }
+
+    /// [`Stage::set_surroundings`] from a scenario with a `[terrain] window` of a DEM (nothing
+    /// to do for other scenarios).
+    ///
+    /// Errors: reading the scenario's terrain ([`crate::sim::Scenario::full_terrain`]).
+    pub fn set_surroundings_of(&mut self, sc: &crate::sim::Scenario) -> Result<()> {
+        if let Some(w) = sc.terrain.window {
+            if let Some(t) = sc.full_terrain()? {
+                self.set_surroundings(&t, w)?;
+            }
+        }
+        Ok(())
     }
 
     /// Sets what the scenario adds to the pictures: its seed (the open-grown trees of the
@@ -92,7 +121,15 @@ impl Stage {
     ///
     /// Errors: rendering errors; [`crate::Error::Invalid`] from the adaptation.
     pub fn render_plants(&mut self, plants: &[Plant], season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
-        let mut inst = scene::instances(plants, &self.library, &self.site, season);
+        self.render_plants_with(plants, &[], season, camera, width, height)
+    }
+
+    /// [`Stage::render_plants`] with the saplings of the regeneration layer `saplings` drawn
+    /// below the trees ([`scene::instances_with_saplings`]).
+    ///
+    /// Errors: as [`Stage::render_plants`].
+    pub fn render_plants_with(&mut self, plants: &[Plant], saplings: &[scene::SaplingCohort], season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
+        let mut inst = scene::instances_with_saplings(plants, saplings, &self.library, &self.site, season);
         self.last_adapt = AdaptStats::default();
         let Some(o) = self.adapt.clone() else {
             return self.render_instances(inst, season, camera, width, height);
@@ -112,6 +149,8 @@ impl Stage {
     pub fn render_instances(&mut self, inst: Vec<TreeInstance>, season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
         self.scene.instances = inst;
         self.scene.instances.extend_from_slice(&self.obstacle_instances);
+        // the ground under this frame's crowns: forest floor instead of grass
+        self.scene.set_terrain(self.landscape.mesh(&self.scene.instances)?);
         self.scene.sun = Sun::from_position(self.site.geo.latitude_deg as f32, scene::season_day(season), 14.0);
         let img = self.renderer.render(&self.scene, camera, width, height);
         self.scene.instances = Vec::new();
@@ -236,7 +275,18 @@ pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: 
     }
     let years: Vec<u32> = snaps.iter().map(|s| s.0).collect();
     let season = opts.season;
-    timelapse_from(stage, &years, &mut |stage, k| Ok(scene::instances(&scene::plants_from_rows(&inventory::read(&snaps[k].1)?), &stage.library, &stage.site, season)), frames_dir, out_gif, opts, progress)
+    timelapse_from(
+        stage,
+        &years,
+        &mut |stage, k| {
+            let regen = inventory::read_regeneration(run_dir, years[k])?.unwrap_or_default();
+            Ok(scene::instances_with_saplings(&scene::plants_from_rows(&inventory::read(&snaps[k].1)?), &scene::saplings_from_rows(&regen), &stage.library, &stage.site, season))
+        },
+        frames_dir,
+        out_gif,
+        opts,
+        progress,
+    )
 }
 
 /// [`timelapse`] from key frames given by `key(stage, k)`: the render instances (in

@@ -86,9 +86,21 @@ fn mkdir(p: &Path) -> Result<()> {
 ///
 /// Errors: [`Error::Io`] naming the folder.
 fn check_writable(dir: &Path) -> Result<()> {
-    let probe = dir.join(format!(".sylva_write_probe.{}", std::process::id()));
+    let probe = dir.join(format!(".sylva_write_probe.{}.tmp", std::process::id()));
     std::fs::write(&probe, b"").map_err(|e| Error::io(dir, e))?;
     Ok(std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))?)
+}
+
+/// With `--resume` and no checkpoint `ck`: whether a run was started in `dir` (its
+/// `scenario.toml` or its `species/` folder, the first things a run writes, are there) and
+/// stopped before its first checkpoint, so the resumed run starts from year 0.
+///
+/// Errors: [`Error::Format`] naming the checkpoint when `dir` holds no started run either.
+fn started_here(dir: &Path, ck: &Path) -> Result<bool> {
+    if dir.join("scenario.toml").is_file() || dir.join("species").is_dir() {
+        return Ok(true);
+    }
+    Err(Error::format(ck, "--resume: no checkpoint in the run directory (and no run started there: no scenario.toml, no species/)").into())
 }
 
 /// Removes the snapshot files of an earlier run from `dir`: `inventory/year_*` and
@@ -146,12 +158,20 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
 /// `snapshot_every` years and at the end, labelled `year_NNNN` (plus `_spring`, `_summer`,
 /// `_autumn` when `seasonal_snapshots`); checkpoint every `checkpoint_every` years and at the end.
 ///
-/// A fresh run (not `resume`) first removes the snapshots of an earlier run in the same
-/// directory ([`clear_snapshots`]), after checking that the run, inventory and maps folders
-/// are writable (so a run that cannot write loses nothing of the earlier one).
+/// A fresh run (not `resume`) first removes the snapshots and the checkpoint of an earlier run
+/// in the same directory ([`clear_snapshots`]), after checking that the run, inventory and
+/// maps folders are writable (so a run that cannot write loses nothing of the earlier one).
+/// A resumed run continues from `checkpoint.bin` (its identity must match the scenario's:
+/// [`crate::sim::checkpoint::restore`]; more `years` extend the run) and rewrites
+/// `scenario.toml`; with no checkpoint yet but a `scenario.toml` or `species/` (a run killed
+/// before its first checkpoint) it starts from year 0. Every start removes the temporary files a killed run
+/// left ([`crate::output::remove_stale_temporaries`]). Before each checkpoint the run, inventory
+/// and maps folders are synced ([`crate::output::sync_dir`]), so a resume after SIGKILL or a
+/// power cut ends byte-identical to an unbroken run (tests/faults.rs).
 ///
-/// Errors: I/O errors naming the file; unknown species; a missing or mismatching checkpoint
-/// with `resume`.
+/// Errors: I/O errors naming the file and the reason (a full disk, a file-size limit, an
+/// unwritable folder; the last checkpoint stays whole); unknown species; with `resume`, no
+/// run in the directory, or a checkpoint that is truncated, corrupt or of a different run.
 pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut opts: RunOptions) -> Result<RunSummary> {
     let dir = opts.out_dir.clone();
     mkdir(&dir)?;
@@ -159,17 +179,24 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         mkdir(&dir.join("inventory"))?;
         mkdir(&dir.join("maps"))?;
     }
+    // temporary files a killed run left behind (never read, but they would pile up)
+    for sub in [dir.clone(), dir.join("inventory"), dir.join("maps"), dir.join("maps").join("conditions"), dir.join("species")] {
+        crate::output::remove_stale_temporaries(&sub)?;
+    }
     let mut world = World::new(site, lib, scenario)?;
     let ck = dir.join("checkpoint.bin");
     let gj_years = opts.geojson_years.clone();
     let last_year = scenario.years;
     let gj = move |y: u32| y == last_year || gj_years.as_ref().is_none_or(|ys| ys.contains(&y));
     let mut rows = Vec::new();
-    if opts.resume {
-        if !ck.exists() {
-            return Err(Error::format(&ck, "--resume: no checkpoint in the run directory").into());
-        }
+    let resume = opts.resume && (ck.exists() || !started_here(&dir, &ck)?);
+    if opts.resume && !resume {
+        tracing::warn!("{}: no checkpoint yet (the run was stopped before its first one): starting from year 0", dir.display());
+    }
+    if resume {
         rows = checkpoint::load(&ck, &mut world)?;
+        // the scenario as run, `years` included (a resume may extend the run)
+        crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
     } else {
         // an old run's snapshots are only removed once the new files can be written beside them
         for sub in [dir.clone(), dir.join("inventory"), dir.join("maps")] {
@@ -178,6 +205,10 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
             }
         }
         clear_snapshots(&dir)?;
+        // an earlier run's checkpoint must not be resumed after this run is interrupted
+        if ck.exists() {
+            std::fs::remove_file(&ck).map_err(|e| Error::io(&ck, e))?;
+        }
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {
             snapshot(&dir, &world, "year_0000", true, opts.map_px, gj(0))?;
@@ -226,7 +257,15 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         let stop_now = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
         if y == scenario.years || stop_now || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0) {
             tables(&dir, &rows, &world, opts.write_snapshots)?;
+            // what the checkpoint counts as written is on disk before the checkpoint is
+            if opts.write_snapshots {
+                for sub in [dir.join("inventory"), dir.join("maps")] {
+                    crate::output::sync_dir(&sub)?;
+                }
+            }
+            crate::output::sync_dir(&dir)?;
             checkpoint::save(&ck, &world, &rows)?;
+            crate::output::sync_dir(&dir)?;
         }
         if let Some(p) = opts.progress.as_mut() {
             p(&Progress { year: y, years: scenario.years, trees: rep.trees, trees_per_s: trees_yr / ty.elapsed().as_secs_f64().max(1e-9) });

@@ -217,12 +217,39 @@ pub fn plants_from_rows(rows: &[InventoryRow]) -> Vec<Plant<'_>> {
 
 /// [`visible_rows`] over [`Plant`]s: indices of the drawn trees of `rows`, ascending.
 pub fn visible(rows: &[Plant], extent_m: (f64, f64)) -> Vec<usize> {
+    visible_with_canopy(rows, extent_m).0
+}
+
+/// The canopy-height raster of [`visible`]: per [`CANOPY_CELL_M`] cell the height (m) of the
+/// tallest drawn crown over it (0: open).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CanopyHeights {
+    /// Columns (west to east).
+    pub nx: usize,
+    /// Rows (south to north).
+    pub ny: usize,
+    /// Heights (m), row-major from the south-west cell.
+    pub h: Vec<f32>,
+}
+
+impl CanopyHeights {
+    fn cell(v: f64, n: usize) -> usize {
+        ((v / CANOPY_CELL_M).floor().max(0.0) as usize).min(n - 1)
+    }
+    /// Canopy height (m) over plan point `(x, y)` (clamped to the raster).
+    pub fn at(&self, x: f64, y: f64) -> f32 {
+        self.h[Self::cell(y, self.ny) * self.nx + Self::cell(x, self.nx)]
+    }
+}
+
+/// [`visible`] and the canopy-height raster its drawn trees leave.
+pub fn visible_with_canopy(rows: &[Plant], extent_m: (f64, f64)) -> (Vec<usize>, CanopyHeights) {
     let mut order: Vec<usize> = (0..rows.len()).filter(|&i| rows[i].alive && rows[i].height_m >= MIN_DRAWN_HEIGHT_M).collect();
     order.sort_by(|&a, &b| rows[b].height_m.total_cmp(&rows[a].height_m).then(rows[a].id.cmp(&rows[b].id)));
     let nx = ((extent_m.0 / CANOPY_CELL_M).ceil() as usize).max(1);
     let ny = ((extent_m.1 / CANOPY_CELL_M).ceil() as usize).max(1);
     let mut canopy = vec![0.0f32; nx * ny];
-    let cell = |v: f64, n: usize| ((v / CANOPY_CELL_M).floor().max(0.0) as usize).min(n - 1);
+    let cell = CanopyHeights::cell;
     let mut keep = Vec::with_capacity(order.len());
     for i in order {
         let r = &rows[i];
@@ -245,16 +272,20 @@ pub fn visible(rows: &[Plant], extent_m: (f64, f64)) -> Vec<usize> {
         }
     }
     keep.sort_unstable();
-    keep
+    (keep, CanopyHeights { nx, ny, h: canopy })
 }
 
 /// Render instances of the visible live trees of `rows` ([`visible`]) for `season`; trees of
 /// species not in `library` are skipped. Positions are in the site's world coordinates with z
 /// from the terrain.
 pub fn instances(rows: &[Plant], library: &SpeciesLibrary, cond: &SiteConditions, season: Season) -> Vec<TreeInstance> {
-    visible(rows, cond.extent_m())
-        .into_iter()
-        .map(|i| &rows[i])
+    tree_instances(rows, &visible(rows, cond.extent_m()), library, cond, season)
+}
+
+/// Instances of the trees `keep` (indices into `rows`).
+fn tree_instances(rows: &[Plant], keep: &[usize], library: &SpeciesLibrary, cond: &SiteConditions, season: Season) -> Vec<TreeInstance> {
+    keep.iter()
+        .map(|&i| &rows[i])
         .filter_map(|r| {
             let sid = library.find(r.species)?;
             let sp = &library.species[sid as usize];
@@ -265,6 +296,382 @@ pub fn instances(rows: &[Plant], library: &SpeciesLibrary, cond: &SiteConditions
             Some(inst)
         })
         .collect()
+}
+
+/// One cohort of the regeneration layer (saplings below the recruitment height,
+/// [`crate::sim::cohorts`]) as the pictures need it: from the in-memory [`World`]
+/// ([`saplings_from_world`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SaplingCohort<'a> {
+    /// Light cell index (stable across years: keys the cohort's instances).
+    pub cell: u32,
+    /// Species id.
+    pub species: &'a str,
+    /// Light-cell centre, easting (m).
+    pub x_m: f64,
+    /// Light-cell centre, northing (m).
+    pub y_m: f64,
+    /// Light-cell side (m), > 0.
+    pub cell_m: f64,
+    /// Stems of the cohort in the cell.
+    pub stems: u32,
+    /// Mean height (m), below 4 m.
+    pub height_m: f32,
+}
+
+/// The cohorts of `w`'s regeneration layer as [`SaplingCohort`]s, in (cell, pool) order.
+pub fn saplings_from_world(w: &World) -> Vec<SaplingCohort<'_>> {
+    let c = &w.stand.cohorts;
+    (0..c.len())
+        .filter_map(|i| {
+            let sp = *w.site.pool.get(c.pool[i] as usize)?;
+            let (x, y) = w.site.light.centre(c.cell[i] as usize);
+            Some(SaplingCohort { cell: c.cell[i], species: w.site.lib.species[sp as usize].id.as_str(), x_m: x, y_m: y, cell_m: w.site.light.cell_m, stems: c.stems[i], height_m: c.height[i] })
+        })
+        .collect()
+}
+
+/// A uniform number in 0..1 from a key (SplitMix64 finaliser, [`crate::rng::mix64`]).
+fn unit(key: u64) -> f64 {
+    (crate::rng::mix64(key) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// The rows of a regeneration-layer file ([`crate::job::inventory::read_regeneration`]) as
+/// [`SaplingCohort`]s; the light-cell side comes from `stems / stems_per_ha` (cells without a
+/// positive density are skipped).
+pub fn saplings_from_rows(rows: &[crate::job::inventory::RegenRow]) -> Vec<SaplingCohort<'_>> {
+    rows.iter()
+        .filter(|r| r.stems > 0 && r.stems_per_ha > 0.0)
+        .map(|r| SaplingCohort { cell: r.cell, species: r.species.as_str(), x_m: r.x_m, y_m: r.y_m, cell_m: (r.stems as f64 * 10_000.0 / r.stems_per_ha).sqrt(), stems: r.stems, height_m: r.height_m })
+        .collect()
+}
+
+/// Saplings lower than this (m) are not drawn (they stand in the grass).
+pub const MIN_SAPLING_HEIGHT_M: f32 = 0.5;
+/// Most instances drawn per cohort; denser cohorts get wider clumps instead of more instances.
+pub const MAX_SAPLINGS_PER_COHORT: u32 = 3;
+/// Bit set in the ids of sapling instances (tree ids never reach it), so that a timelapse
+/// matches a cohort's saplings across snapshots and never with a tree.
+pub const SAPLING_ID_BIT: u64 = 1 << 63;
+
+/// Plan cover (0..1) of a light cell of `area_m2` by `stems` crowns of radius `r` (m) placed at
+/// random: `1 − exp(−N π r² / A)` (Poisson (Boolean) model of overlapping discs; proportional
+/// to the stem density, `N π r² / A`, while crowns rarely overlap).
+pub fn sapling_cover(stems: u32, r: f32, area_m2: f64) -> f64 {
+    if area_m2 <= 0.0 {
+        return 0.0;
+    }
+    1.0 - (-(stems as f64) * std::f64::consts::PI * (r as f64).powi(2) / area_m2).exp()
+}
+
+/// The drawn saplings of one cohort: `(count, crown radius m)`. The open-grown crown radius of
+/// the species at the cohort's height ([`crate::species::allometry::open_crown_radius`] of
+/// [`crate::species::allometry::open_dbh`]) gives the cover ([`sapling_cover`]); the instances
+/// share the covered area `cover · A` equally, as many as the stems up to
+/// [`MAX_SAPLINGS_PER_COHORT`] with crowns no wider than `1.0 · h + 0.3` m (a clump of a few
+/// stems), so the drawn plan area is the cohort's cover while it fits, and proportional to the
+/// stem density in sparse cohorts. `(0, 0)` below [`MIN_SAPLING_HEIGHT_M`] or without stems.
+pub fn sapling_clumps(sp: &Species, stems: u32, height_m: f32, cell_m: f64) -> (u32, f32) {
+    use crate::species::allometry::{open_crown_radius, open_dbh};
+    if stems == 0 || !(height_m >= MIN_SAPLING_HEIGHT_M) {
+        return (0, 0.0);
+    }
+    let r = open_crown_radius(sp, height_m, open_dbh(sp, height_m)).max(0.05);
+    let area = cell_m * cell_m;
+    let covered = sapling_cover(stems, r, area) * area;
+    let r_max = (1.0 * height_m + 0.3).max(r);
+    let one = std::f64::consts::PI * (r as f64).powi(2);
+    let want = (covered / one).ceil().max(1.0) as u32;
+    let n = want.min(stems).min(MAX_SAPLINGS_PER_COHORT).max(1);
+    let ri = ((covered / (n as f64 * std::f64::consts::PI)).sqrt() as f32).min(r_max).max(0.05);
+    (n, ri)
+}
+
+/// Render instances of the saplings of `cohorts` (the regeneration layer) for `season`: per
+/// cohort [`sapling_clumps`] instances of the species' prototype scaled to the cohort's height
+/// (± 15 %) and the clump's crown radius, scattered in the light cell by a hash of the cell,
+/// species and index (deterministic, stable across snapshots; ids carry [`SAPLING_ID_BIT`]).
+/// Cohorts under a drawn canopy (`canopy`, [`visible_with_canopy`]) lower than
+/// [`UNDERSTORY_FRACTION`] of it are hidden, as understory trees are.
+pub fn sapling_instances(cohorts: &[SaplingCohort], canopy: Option<&CanopyHeights>, library: &SpeciesLibrary, cond: &SiteConditions, season: Season) -> Vec<TreeInstance> {
+    let mut out = Vec::new();
+    for c in cohorts {
+        let Some(sid) = library.find(c.species) else { continue };
+        let sp = &library.species[sid as usize];
+        if canopy.is_some_and(|k| c.height_m < UNDERSTORY_FRACTION * k.at(c.x_m, c.y_m)) {
+            continue;
+        }
+        let (n, r) = sapling_clumps(sp, c.stems, c.height_m, c.cell_m);
+        let (col, amount) = foliage(sp, season);
+        for k in 0..n {
+            let id = SAPLING_ID_BIT | ((c.cell as u64) << 16) | ((sid as u64 & 0xfff) << 4) | k as u64;
+            let jx = (unit(id) - 0.5) * c.cell_m;
+            let jy = (unit(id ^ 0x5bd1_e995) - 0.5) * c.cell_m;
+            let (x, y) = (c.x_m + jx, c.y_m + jy);
+            let h = c.height_m * (0.85 + 0.3 * unit(id ^ 0x27d4_eb2d) as f32);
+            let z = cond.elevation_at(x, y);
+            let mut inst = TreeInstance::new(id, [x as f32, y as f32, z], h, r, sid as u32, col);
+            inst.leaf_amount = amount;
+            out.push(inst);
+        }
+    }
+    out
+}
+
+/// [`instances`] of the trees of `rows` and, below them, the saplings of `cohorts`
+/// ([`sapling_instances`], hidden under the drawn canopy): what a picture of a snapshot draws.
+pub fn instances_with_saplings(rows: &[Plant], cohorts: &[SaplingCohort], library: &SpeciesLibrary, cond: &SiteConditions, season: Season) -> Vec<TreeInstance> {
+    let (keep, canopy) = visible_with_canopy(rows, cond.extent_m());
+    let mut out = tree_instances(rows, &keep, library, cond, season);
+    out.extend(sapling_instances(cohorts, Some(&canopy), library, cond, season));
+    out
+}
+
+/// The ground of the pictures: the site's window and around it the terrain beyond the window
+/// (from the DEM where there is one, else a flat apron), at most 10 m between samples, with
+/// what land cover needs per sample (streams, wetness) and the fade of the surroundings into
+/// the sky. [`Landscape::mesh`] colours it by the canopy cover of a frame's trees.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Landscape {
+    /// The samples.
+    pub ground: crate::render::terrain::GroundGrid,
+    /// Land-cover colours (sea level).
+    pub cover: LandCover,
+}
+
+/// Width (m) over which the edge of the DEM (or of a site without surroundings) fades out.
+pub const EDGE_FADE_M: f64 = 150.0;
+
+/// Multi-source breadth-first distance (in samples, 8-connected with √2 diagonals, a chamfer
+/// approximation of the Euclidean distance) from the cells where `src` is true, and the index
+/// of the nearest source cell; `(∞, usize::MAX)` when there is no source.
+fn chamfer(w: usize, h: usize, src: &[bool]) -> (Vec<f32>, Vec<usize>) {
+    let n = w * h;
+    let mut d = vec![f32::INFINITY; n];
+    let mut near = vec![usize::MAX; n];
+    for i in 0..n {
+        if src[i] {
+            d[i] = 0.0;
+            near[i] = i;
+        }
+    }
+    // two raster passes of the 3 x 3 chamfer (Borgefors 1986, "Distance transformations in
+    // digital images", CVGIP 34:344–371), carrying the nearest source
+    let diag = std::f32::consts::SQRT_2;
+    let fwd: [(i64, i64, f32); 4] = [(-1, 0, 1.0), (-1, -1, diag), (0, -1, 1.0), (1, -1, diag)];
+    let bwd: [(i64, i64, f32); 4] = [(1, 0, 1.0), (1, 1, diag), (0, 1, 1.0), (-1, 1, diag)];
+    for (pass, offs) in [(0, fwd), (1, bwd)] {
+        for k in 0..n {
+            let i = if pass == 0 { k } else { n - 1 - k };
+            let (c, r) = ((i % w) as i64, (i / w) as i64);
+            for (dc, dr, cost) in offs {
+                let (nc, nr) = (c + dc, r + dr);
+                if nc < 0 || nr < 0 || nc >= w as i64 || nr >= h as i64 {
+                    continue;
+                }
+                let j = nr as usize * w + nc as usize;
+                if d[j] + cost < d[i] {
+                    d[i] = d[j] + cost;
+                    near[i] = near[j];
+                }
+            }
+        }
+    }
+    (d, near)
+}
+
+impl Landscape {
+    /// The landscape of `site`. `full`: the whole terrain the site was cut from and the window
+    /// `[col0, row0, width, height]` (cells of that terrain) it was cut with; `None`: the site
+    /// alone (its edges fade out over [`EDGE_FADE_M`] beyond it). The margin drawn around the
+    /// window is half its longer side, at most 2 km; the surroundings fade into the sky from
+    /// 35 % of the margin to its end, and over [`EDGE_FADE_M`] at the edge of the DEM (nodata or
+    /// the end of the grid). Samples at most `max_cell_m` apart; inside the window their height
+    /// is the site's [`SiteConditions::elevation_at`], so trees stand on the ground drawn.
+    /// Streams ([`crate::render::terrain::stream_strength`] of the D8 flow accumulation) and
+    /// wetness (topographic wetness index, [`crate::render::terrain::wetness`]) are computed on
+    /// the terrain of the drawn area (`crate::terrain::fields`), so the flow from beyond the
+    /// window counts.
+    ///
+    /// # Errors
+    /// [`crate::Error::Invalid`] when the window leaves `full`'s grid or `max_cell_m ≤ 0`.
+    pub fn new(site: &SiteConditions, full: Option<(&crate::terrain::Terrain, [usize; 4])>, max_cell_m: f64, sea_level: f32) -> Result<Landscape> {
+        use crate::terrain::fields;
+        if !(max_cell_m > 0.0) {
+            return Err(crate::Error::Invalid { context: "job::scene::Landscape".into(), field: "max_cell_m".into(), value: max_cell_m.to_string(), expected: "> 0 m".into() });
+        }
+        let f = ((site.cell_x_m.max(site.cell_y_m) / max_cell_m).ceil() as usize).clamp(1, 16);
+        let (cx, cy) = (site.cell_x_m / f as f64, site.cell_y_m / f as f64);
+        let (ex, ey) = site.extent_m();
+        // the source terrain: the full DEM around the window, or the site itself
+        let own;
+        let (src, [c0, r0, ww, wh]) = match full {
+            Some((t, w)) => {
+                if w[0] + w[2] > t.elevation.width || w[1] + w[3] > t.elevation.height {
+                    return Err(crate::Error::Invalid { context: t.source.clone(), field: "window".into(), value: format!("{w:?}"), expected: format!("inside {} x {}", t.elevation.width, t.elevation.height) });
+                }
+                (t, w)
+            }
+            None => {
+                own = crate::terrain::Terrain { elevation: site.elevation_m.clone(), geo: site.geo.clone(), nodata: None, source: "site".into() };
+                (&own, [0, 0, site.width(), site.height()])
+            }
+        };
+        let (scx, scy) = (ex / ww as f64, ey / wh as f64);
+        let margin = (0.5 * ex.max(ey)).min(2000.0);
+        let (mx, my) = ((margin / cx).ceil() as usize, (margin / cy).ceil() as usize);
+        let (nw, nh) = (((ex / cx).round() as usize) + 2 * mx, ((ey / cy).round() as usize) + 2 * my);
+        let origin = [-(mx as f64 * cx), -(my as f64 * cy)];
+        // the source cells under the drawn area, for the flow fields
+        let sc0 = (c0 as f64 - margin / scx).floor().max(0.0) as usize;
+        let sr0 = (r0 as f64 - margin / scy).floor().max(0.0) as usize;
+        let sc1 = ((c0 + ww) as f64 + margin / scx).ceil().min(src.elevation.width as f64) as usize;
+        let sr1 = ((r0 + wh) as f64 + margin / scy).ceil().min(src.elevation.height as f64) as usize;
+        let sub = crate::terrain::io::window(src, sc0, sr0, sc1 - sc0, sr1 - sr0)?;
+        let m = fields::mask(&sub, sea_level);
+        let filled = fields::fill_depressions(&sub, &m);
+        let dir = fields::flow_directions(&filled, &sub.geo, &m);
+        let acc = fields::flow_accumulation(&dir, &m);
+        let (slope, _) = fields::slope_aspect(&sub, &m);
+        let twi = fields::twi(&acc, &slope, &sub.geo, &m);
+        // source grid position (fractional column, row) of a window-local point
+        let to_src = |x: f64, y: f64| (c0 as f64 + x / scx - 0.5, r0 as f64 + wh as f64 - y / scy - 0.5);
+        let src_at = |fc: f64, fr: f64| -> f32 {
+            let g = &src.elevation;
+            if fc < -0.5 || fr < -0.5 || fc > g.width as f64 - 0.5 || fr > g.height as f64 - 0.5 {
+                return f32::NAN;
+            }
+            let (fc, fr) = (fc.clamp(0.0, (g.width - 1) as f64), fr.clamp(0.0, (g.height - 1) as f64));
+            let (a, b) = (fc.floor() as usize, fr.floor() as usize);
+            let (a1, b1) = ((a + 1).min(g.width - 1), (b + 1).min(g.height - 1));
+            let (tx, ty) = ((fc - a as f64) as f32, (fr - b as f64) as f32);
+            let v = g.get(a, b) * (1.0 - tx) * (1.0 - ty) + g.get(a1, b) * tx * (1.0 - ty) + g.get(a, b1) * (1.0 - tx) * ty + g.get(a1, b1) * tx * ty;
+            v
+        };
+        let n = nw * nh;
+        let mut heights = vec![f32::NAN; n];
+        let mut stream = vec![0.0f32; n];
+        let mut wet = vec![0.0f32; n];
+        let mut outside = vec![0.0f64; n];
+        let cell_area = scx * scy;
+        for r in 0..nh {
+            for c in 0..nw {
+                let i = r * nw + c;
+                let x = origin[0] + (c as f64 + 0.5) * cx;
+                let y = origin[1] + (nh as f64 - r as f64 - 0.5) * cy;
+                let inside = x >= 0.0 && y >= 0.0 && x <= ex && y <= ey;
+                let (fc, fr) = to_src(x, y);
+                heights[i] = if inside { site.elevation_at(x, y) } else { src_at(fc, fr) };
+                let (dx, dy) = ((-x).max(x - ex).max(0.0), (-y).max(y - ey).max(0.0));
+                outside[i] = dx.hypot(dy);
+                let (sc, sr) = (fc.round() as i64 - sc0 as i64, fr.round() as i64 - sr0 as i64);
+                if sc >= 0 && sr >= 0 && (sc as usize) < acc.width && (sr as usize) < acc.height {
+                    let (sc, sr) = (sc as usize, sr as usize);
+                    if *m.get(sc, sr) {
+                        stream[i] = crate::render::terrain::stream_strength((*acc.get(sc, sr) as f64 * cell_area) as f32);
+                        wet[i] = crate::render::terrain::wetness(*twi.get(sc, sr));
+                    }
+                }
+            }
+        }
+        // fill the samples without ground from the nearest ground (flat aprons) and fade them
+        let valid: Vec<bool> = heights.iter().map(|v| v.is_finite()).collect();
+        let invalid: Vec<bool> = valid.iter().map(|v| !v).collect();
+        let (d_out, near) = chamfer(nw, nh, &valid);
+        let (d_in, _) = chamfer(nw, nh, &invalid);
+        let step = cx.min(cy);
+        let sstep = |e0: f64, e1: f64, v: f64| {
+            let t = ((v - e0) / (e1 - e0)).clamp(0.0, 1.0);
+            t * t * (3.0 - 2.0 * t)
+        };
+        let mut fade = vec![0.0f32; n];
+        for i in 0..n {
+            if !valid[i] {
+                heights[i] = if near[i] == usize::MAX { 0.0 } else { heights[near[i]] };
+            }
+            if outside[i] <= 0.0 {
+                continue;
+            }
+            // signed distance to the edge of the ground: negative inside
+            let sd = if valid[i] { -(d_in[i] as f64) * step } else { d_out[i] as f64 * step };
+            let edge = if full.is_some() { sstep(-EDGE_FADE_M, 0.25 * EDGE_FADE_M, sd) } else { sstep(0.0, EDGE_FADE_M, outside[i]) };
+            fade[i] = sstep(0.35 * margin, margin, outside[i]).max(edge) as f32;
+        }
+        let ground = crate::render::terrain::GroundGrid {
+            heights: Grid { width: nw, height: nh, data: heights },
+            cell_x: cx as f32,
+            cell_y: cy as f32,
+            origin: [origin[0] as f32, origin[1] as f32],
+            stream,
+            wetness: wet,
+            fade,
+            focus: Some(([0.0, 0.0], [ex as f32, ey as f32])),
+        };
+        Ok(Landscape { ground, cover: LandCover { sea_level, ..LandCover::default() } })
+    }
+
+    /// The mesh of the landscape coloured for a frame whose trees are `instances`: plan canopy
+    /// cover per sample from their crowns ([`canopy_cover`]) turns grass into forest floor.
+    ///
+    /// Errors: as [`crate::render::terrain::from_ground`] (none for a grid built by [`Landscape::new`]).
+    pub fn mesh(&self, instances: &[TreeInstance]) -> Result<TerrainMesh> {
+        let g = &self.ground;
+        let cov = canopy_cover(instances, g);
+        let (w, h) = (g.heights.width, g.heights.height);
+        let lookup = |x: f32, y: f32| {
+            let c = ((x - g.origin[0]) / g.cell_x - 0.5).round();
+            let r = (h as f32 - (y - g.origin[1]) / g.cell_y - 0.5).round();
+            if c < 0.0 || r < 0.0 || c >= w as f32 || r >= h as f32 {
+                return 0.0;
+            }
+            cov[r as usize * w + c as usize]
+        };
+        crate::render::terrain::from_ground(g, &self.cover, &lookup)
+    }
+}
+
+/// Plan canopy cover (0..1) per sample of `g` from the crowns of `instances` (saplings count
+/// with weight `0.3 · h / 4 m`: grass still grows among young saplings): each crown of radius `r` adds to the samples within it the anti-aliased cover
+/// `clamp((r − d)/s + 0.5, 0, 1)` of their centre at distance `d` (`s` the sample spacing),
+/// then a 3 × 3 box blur softens the forest edge.
+pub fn canopy_cover(instances: &[TreeInstance], g: &crate::render::terrain::GroundGrid) -> Vec<f32> {
+    let (w, h) = (g.heights.width, g.heights.height);
+    let mut cov = vec![0.0f32; w * h];
+    let s = g.cell_x.min(g.cell_y).max(1e-3);
+    for t in instances {
+        let weight = if t.id & SAPLING_ID_BIT != 0 { 0.3 * (t.height / 4.0).min(1.0) } else { 1.0 } * t.opacity.clamp(0.0, 1.0);
+        let r = t.crown_radius.max(0.3);
+        let (x, y) = (t.position[0], t.position[1]);
+        let c0 = (((x - r - g.origin[0]) / g.cell_x - 0.5).floor().max(0.0)) as usize;
+        let c1 = ((((x + r - g.origin[0]) / g.cell_x - 0.5).ceil()).max(0.0) as usize).min(w - 1);
+        let rr0 = ((h as f32 - (y + r - g.origin[1]) / g.cell_y - 0.5).floor().max(0.0)) as usize;
+        let rr1 = (((h as f32 - (y - r - g.origin[1]) / g.cell_y - 0.5).ceil()).max(0.0) as usize).min(h - 1);
+        for rr in rr0..=rr1 {
+            let py = g.origin[1] + (h as f32 - rr as f32 - 0.5) * g.cell_y;
+            for c in c0..=c1 {
+                let px = g.origin[0] + (c as f32 + 0.5) * g.cell_x;
+                let d = (px - x).hypot(py - y);
+                let a = ((r - d) / s + 0.5).clamp(0.0, 1.0);
+                if a > 0.0 {
+                    cov[rr * w + c] += a * weight;
+                }
+            }
+        }
+    }
+    let mut out = vec![0.0f32; w * h];
+    for r in 0..h {
+        for c in 0..w {
+            let (mut sum, mut k) = (0.0, 0.0);
+            for rr in r.saturating_sub(1)..=(r + 1).min(h - 1) {
+                for cc in c.saturating_sub(1)..=(c + 1).min(w - 1) {
+                    sum += cov[rr * w + cc].min(1.0);
+                    k += 1.0;
+                }
+            }
+            out[r * w + c] = sum / k;
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -286,6 +693,130 @@ mod tests {
             InventoryRow { status: "dead:stress".into(), ..row(6, 20.0, 20.0, 20.0, 3.0) },
         ];
         assert_eq!(visible_rows(&rows, (100.0, 100.0)), vec![0, 2, 3]);
+    }
+
+    fn cohort(cell: u32, stems: u32, h: f32) -> SaplingCohort<'static> {
+        // 40 light cells of 5 m per row, row 0 south
+        let (c, r) = (cell % 40, cell / 40);
+        SaplingCohort { cell, species: "beech", x_m: (c as f64 + 0.5) * 5.0, y_m: (r as f64 + 0.5) * 5.0, cell_m: 5.0, stems, height_m: h }
+    }
+
+    #[test]
+    fn a_stand_of_only_cohorts_draws_saplings_in_proportion_to_their_density() {
+        use std::f64::consts::PI;
+        let lib = SpeciesLibrary::embedded().unwrap();
+        let beech = &lib.species[lib.find("beech").unwrap() as usize];
+        let cond = SiteConditions::uniform(20, 20, 10.0, 500.0, [5.0; 6], 47.0);
+        // three bands of 1.5 m beech saplings: rows 0-9 one stem per 5 m cell, rows 10-19 two,
+        // rows 20-29 none; row 30 a dense thicket of 400 stems of 3 m per cell
+        let mut cohorts = Vec::new();
+        for cell in 0..40 * 31u32 {
+            let band = cell / 400;
+            let stems = [1, 2, 0, 400][band as usize];
+            let h = if band == 3 { 3.0 } else { 1.5 };
+            cohorts.push(cohort(cell, stems, h));
+        }
+        let inst = instances_with_saplings(&[], &cohorts, &lib, &cond, Season::Summer);
+        assert!(inst.iter().all(|t| t.id & SAPLING_ID_BIT != 0 && t.height > 1.0 && t.height < 4.0));
+        let band_of = |t: &TreeInstance| (t.position[1] / 50.0) as usize;
+        let count = |b: usize| inst.iter().filter(|t| band_of(t) == b && t.position[1] < 150.0).count();
+        let area = |b: usize| inst.iter().filter(|t| band_of(t) == b && t.position[1] < 150.0).map(|t| PI * (t.crown_radius as f64).powi(2)).sum::<f64>();
+        // one instance per stem in the sparse bands, none without stems
+        assert_eq!((count(0), count(1), count(2)), (400, 800, 0));
+        // drawn plan cover = the Poisson cover of the cohorts' open-grown crowns
+        let r = crate::species::allometry::open_crown_radius(beech, 1.5, crate::species::allometry::open_dbh(beech, 1.5)) as f64;
+        let lambda = PI * r * r / 25.0;
+        assert!(lambda > 0.005 && lambda < 0.5, "beech sapling crown radius {r} m");
+        let want1 = 400.0 * 25.0 * (1.0 - (-lambda).exp());
+        assert!((area(0) / want1 - 1.0).abs() < 1e-3, "band 1: {} m² drawn, {want1} m² covered", area(0));
+        // twice the density: the cover of 2 stems, (1 + e^-λ) times that of one: ~ proportional
+        let ratio = area(1) / area(0);
+        assert!((ratio - (1.0 + (-lambda).exp())).abs() < 1e-3 && ratio > 1.6, "ratio {ratio}");
+        // the thicket covers its cells (clumps of at most 3 instances per cohort)
+        let thicket: Vec<&TreeInstance> = inst.iter().filter(|t| t.position[1] >= 150.0).collect();
+        assert_eq!(thicket.len(), 40 * 3);
+        let cover = thicket.iter().map(|t| PI * (t.crown_radius as f64).powi(2)).sum::<f64>() / (40.0 * 25.0);
+        assert!(cover > 0.95 && cover < 1.01, "thicket cover {cover}");
+        // deterministic, and inside their light cells
+        assert_eq!(inst, instances_with_saplings(&[], &cohorts, &lib, &cond, Season::Summer));
+        for (t, c) in inst.iter().zip(cohorts.iter().filter(|c| c.stems > 0).flat_map(|c| std::iter::repeat_n(c, sapling_clumps(beech, c.stems, c.height_m, 5.0).0 as usize))) {
+            assert!((t.position[0] as f64 - c.x_m).abs() <= 2.5 && (t.position[1] as f64 - c.y_m).abs() <= 2.5);
+        }
+    }
+
+    #[test]
+    fn saplings_under_a_canopy_and_seedlings_are_not_drawn() {
+        let lib = SpeciesLibrary::embedded().unwrap();
+        let cond = SiteConditions::uniform(20, 20, 10.0, 500.0, [5.0; 6], 47.0);
+        let tree = Plant { id: 1, species: "beech", x_m: 102.5, y_m: 102.5, height_m: 25.0, crown_radius_m: 6.0, age_yr: 60.0, crown_base_m: 12.0, alive: true };
+        let under = cohort(20 * 40 + 20, 5, 2.0); // centre (102.5, 102.5), under the crown
+        let open = cohort(2 * 40 + 2, 5, 2.0);
+        let seedlings = cohort(5 * 40 + 5, 50, 0.3);
+        let inst = instances_with_saplings(&[tree], &[under, open, seedlings], &lib, &cond, Season::Summer);
+        let saplings: Vec<&TreeInstance> = inst.iter().filter(|t| t.id & SAPLING_ID_BIT != 0).collect();
+        assert_eq!(inst.len() - saplings.len(), 1, "the tree");
+        assert!(!saplings.is_empty() && saplings.iter().all(|t| (t.position[0] - 12.5).abs() < 2.6), "only the open cohort: {saplings:?}");
+    }
+
+    #[test]
+    fn landscape_shows_the_dem_beyond_the_window_and_fades_out_at_its_edge() {
+        use crate::grid::GeoRef;
+        // a 60 x 40 DEM of 10 m: a plane rising 0.2 m/m eastwards, cut by a valley along row 20
+        // draining west; a nodata block in the north-east
+        let (w, h) = (60usize, 40usize);
+        let mut e = Grid::filled(w, h, 0.0f32);
+        for r in 0..h {
+            for c in 0..w {
+                *e.get_mut(c, r) = if c >= 40 && r < 8 { f32::NAN } else { 500.0 + 2.0 * c as f32 + 3.0 * (r as f32 - 20.0).abs() };
+            }
+        }
+        let full = crate::terrain::Terrain { elevation: e, geo: GeoRef::local(10.0, 47.0), nodata: None, source: "test".into() };
+        let win = [20, 10, 20, 20];
+        let t = crate::terrain::io::window(&full, win[0], win[1], win[2], win[3]).unwrap();
+        let site = crate::conditions::derive(&t, &crate::climate::Climate::default()).unwrap();
+        let l = Landscape::new(&site, Some((&full, win)), 10.0, f32::NEG_INFINITY).unwrap();
+        let g = &l.ground;
+        // margin: half the window's side (100 m = 10 samples) on every side
+        assert_eq!((g.heights.width, g.heights.height, g.origin), (40, 40, [-100.0, -100.0]));
+        let at = |x: f32, y: f32| {
+            let c = ((x - g.origin[0]) / g.cell_x - 0.5).round() as usize;
+            let r = (g.heights.height as f32 - (y - g.origin[1]) / g.cell_y - 0.5).round() as usize;
+            r * g.heights.width + c
+        };
+        // inside the window: the site's heights, no fade
+        let i = at(55.0, 75.0);
+        assert_eq!(g.heights.data[i], site.elevation_at(55.0, 75.0));
+        assert_eq!(g.fade[i], 0.0);
+        // beyond it: the DEM (column 20 + (x - 5)/10 - ..., row of y) and a fade rising outwards
+        let (x, y) = (-45.0f32, 75.0f32); // column 15, row 10 + 20 - 8 - 1 = 22 (north of the window's south edge)
+        let (c, r) = ((20.0 + (x / 10.0) - 0.5).round() as usize, (10.0 + 20.0 - y / 10.0 - 0.5).round() as usize);
+        assert_eq!(g.heights.data[at(x, y)], *full.elevation.get(c, r));
+        let f_near = g.fade[at(-5.0, 75.0)];
+        let f_mid = g.fade[at(-55.0, 75.0)];
+        let f_far = g.fade[at(-95.0, 75.0)];
+        assert!(f_near == 0.0 && f_mid > 0.0 && f_mid < f_far && f_far > 0.95, "{f_near} {f_mid} {f_far}");
+        // the nodata corner (columns 40-59, rows 0-7: x ≥ 205 m, y ≥ 225 m) is filled flat and
+        // faded out, although it is near the window
+        let k = at(215.0, 235.0);
+        assert!(g.heights.data[k].is_finite() && g.fade[k] > 0.95, "{}", g.fade[k]);
+        assert!(g.fade[at(215.0, 165.0)] < 0.5, "the DEM south of it is shown: {}", g.fade[at(215.0, 165.0)]);
+        // the valley floor (row 20: y = 95 m) is a stream, the slopes are not
+        assert!(g.stream[at(-95.0, 95.0)] > 0.0 && g.stream[at(-95.0, 45.0)] == 0.0, "{} {}", g.stream[at(-95.0, 95.0)], g.stream[at(-95.0, 45.0)]);
+        // the mesh's bounds are the window's: cameras frame the site, not its surroundings
+        let m = l.mesh(&[]).unwrap();
+        m.validate().unwrap();
+        let (lo, hi) = m.bounds();
+        assert!(lo[0] >= 0.0 && lo[1] >= 0.0 && hi[0] <= 200.0 && hi[1] <= 200.0 && hi[0] > 190.0, "{lo:?} {hi:?}");
+        assert!(m.full_bounds().0[0] < -90.0);
+        // forest floor under a crown
+        let tree = TreeInstance::new(1, [105.0, 105.0, 600.0], 20.0, 20.0, 0, [0.1, 0.3, 0.1]);
+        let m2 = l.mesh(&[tree]).unwrap();
+        let v = at(105.0, 105.0);
+        assert!(m2.colors[v][0] > m2.colors[v][1] && m.colors[v][1] > m.colors[v][0], "{:?} vs {:?}", m2.colors[v], m.colors[v]);
+        // without surroundings the site's edges fade out within EDGE_FADE_M
+        let alone = Landscape::new(&site, None, 10.0, f32::NEG_INFINITY).unwrap();
+        let ga = &alone.ground;
+        assert!(ga.fade.iter().all(|f| (0.0..=1.0).contains(f)) && ga.fade[0] > 0.99);
     }
 }
 /// A full scene for one snapshot: terrain, prototypes, instances, the sun of the site's

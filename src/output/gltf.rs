@@ -121,11 +121,11 @@ const SAMPLER_CLAMP: usize = 0;
 const SAMPLER_REPEAT: usize = 1;
 
 /// Material indices of one [`Look`]: bark, then foliage per level (leaf, cluster, crown,
-/// impostor).
+/// impostor); `None` for a material no written level uses.
 #[derive(Debug, Clone, Copy)]
 struct LookMaterials {
-    bark: usize,
-    foliage: [usize; 4],
+    bark: Option<usize>,
+    foliage: [Option<usize>; 4],
 }
 
 /// The glTF document being built, with `serde_json` (gltf-json's struct fields change with its
@@ -196,14 +196,21 @@ impl Doc {
         self.materials.len() - 1
     }
 
-    /// The five materials of `look` (module documentation).
-    fn look(&mut self, look: &Look) -> Result<LookMaterials> {
+    /// The materials of `look` (module documentation) that the LOD `levels` use: bark for
+    /// levels 0–2, the foliage material of each level (levels ≥ 3: the impostor).
+    fn look(&mut self, look: &Look, levels: &[usize]) -> Result<LookMaterials> {
         let t = &look.textures;
         let tex = |index: usize| json!({"index": index, "texCoord": 0});
-        let bark_t = self.texture(&t.bark, SAMPLER_REPEAT)?;
-        let bark = self.material(json!({"name": format!("{}_bark", look.name), "pbrMetallicRoughness": {"baseColorTexture": tex(bark_t), "metallicFactor": 0.0, "roughnessFactor": 0.95}}));
-        let mut foliage = [0; 4];
+        let mut bark = None;
+        if levels.iter().any(|&l| l < 3) {
+            let bark_t = self.texture(&t.bark, SAMPLER_REPEAT)?;
+            bark = Some(self.material(json!({"name": format!("{}_bark", look.name), "pbrMetallicRoughness": {"baseColorTexture": tex(bark_t), "metallicFactor": 0.0, "roughnessFactor": 0.95}})));
+        }
+        let mut foliage = [None; 4];
         for (k, (part, img, sampler)) in [("leaf", &t.leaf, SAMPLER_CLAMP), ("cluster", &t.cluster, SAMPLER_CLAMP), ("crown", &t.crown, SAMPLER_REPEAT), ("impostor", &t.impostor, SAMPLER_CLAMP)].into_iter().enumerate() {
+            if !levels.iter().any(|&l| l.min(3) == k) {
+                continue;
+            }
             let ti = self.texture(img, sampler)?;
             let mut m = json!({"name": format!("{}_{part}", look.name), "pbrMetallicRoughness": {"baseColorTexture": tex(ti), "metallicFactor": 0.0, "roughnessFactor": 0.8}});
             if part != "crown" {
@@ -211,7 +218,7 @@ impl Doc {
                 m["alphaCutoff"] = json!(ALPHA_CUTOFF);
                 m["doubleSided"] = json!(true);
             }
-            foliage[k] = self.material(m);
+            foliage[k] = Some(self.material(m));
         }
         Ok(LookMaterials { bark, foliage })
     }
@@ -284,9 +291,9 @@ impl Doc {
                 if !levels.contains(&i) {
                     return None;
                 }
-                let bark = self.primitive(&level.bark, mats.bark, true);
+                let bark = mats.bark.and_then(|m| self.primitive(&level.bark, m, true));
                 let scale = if i == 2 { CROWN_REPEAT } else { [1.0, 1.0] };
-                let leaves = self.primitive_uv(&level.leaves, mats.foliage[i.min(3)], true, scale);
+                let leaves = mats.foliage[i.min(3)].and_then(|m| self.primitive_uv(&level.leaves, m, true, scale));
                 self.mesh(&format!("{name}_LOD{i}"), vec![bark, leaves])
             })
             .collect()
@@ -355,8 +362,8 @@ pub fn glb_bytes(chain: &LodChain, o: &GlbOptions) -> Result<Vec<u8>> {
         return Err(Error::Invalid { context: "glb".into(), field: "LOD chain".into(), value: "0 triangles".into(), expected: "at least one level with triangles".into() }.into());
     }
     let mut d = Doc::new();
-    let mats = d.look(&o.look)?;
-    let all: Vec<usize> = (0..chain.levels.len()).collect();
+    let all: Vec<usize> = (0..chain.levels.len()).filter(|&i| chain.levels[i].triangle_count() > 0).collect();
+    let mats = d.look(&o.look, &all)?;
     let meshes = d.chain(&o.name, chain, mats, &all);
     let mut children = Vec::new();
     for (i, m) in meshes.iter().enumerate() {
@@ -490,7 +497,7 @@ pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
     let used_looks: std::collections::BTreeSet<usize> = s.trees.iter().map(|t| s.models[t.model].look).collect();
     let mut mats: Vec<Option<LookMaterials>> = vec![None; s.looks.len()];
     for &l in &used_looks {
-        mats[l] = Some(d.look(&s.looks[l])?);
+        mats[l] = Some(d.look(&s.looks[l], &s.levels)?);
     }
     let billboard = crate::mesh::LOD_LEVELS - 1;
     // the shared unit billboard of each look
@@ -499,7 +506,7 @@ pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
         for &l in &used_looks {
             let Some(m) = mats[l] else { continue };
             let card = unit_cards();
-            let p = d.primitive(&card, m.foliage[3], true);
+            let p = m.foliage[3].and_then(|f| d.primitive(&card, f, true));
             unit_billboard[l] = d.mesh(&format!("{}_billboard", s.looks[l].name), vec![p]);
         }
     }

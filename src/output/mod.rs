@@ -9,26 +9,40 @@ pub mod plot;
 pub mod stand_table;
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Writes `bytes` to `path` atomically (temporary file in the same folder, then rename).
 ///
-/// Errors: [`OutputError::Io`] naming `path` when the folder is missing or not writable.
+/// Errors: [`OutputError::Io`] naming `path` when the folder is missing or not writable, or
+/// the disk is full (the temporary file is removed; an earlier file at `path` is kept whole).
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     write_atomic_with(path, |w| w.write_all(bytes))
 }
 
-/// Like [`write_atomic`], with a closure that streams into a buffered writer.
-pub fn write_atomic_with(path: &Path, f: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>) -> Result<()> {
+/// The temporary file [`write_atomic_with`] writes before renaming it to `path`:
+/// `.<name>.<process id>.tmp` in the same folder.
+pub fn temporary_path(path: &Path) -> PathBuf {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "out".into());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    dir.join(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Like [`write_atomic`], with a closure that streams into a buffered writer.
+///
+/// The file is flushed and synced (`fsync`) before the rename, so after the rename it is whole
+/// on disk; a process killed at any moment (SIGKILL included) leaves either the earlier file or
+/// the new one at `path`, at worst a temporary file beside it, which
+/// [`remove_stale_temporaries`] clears on the next run.
+pub fn write_atomic_with(path: &Path, f: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>) -> Result<()> {
+    let tmp = temporary_path(path);
     let res = (|| {
         let file = std::fs::File::create(&tmp)?;
         let mut w = std::io::BufWriter::new(file);
         f(&mut w)?;
         w.flush()?;
-        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        fault::maybe_kill(&file);
+        file.sync_all()?;
         std::fs::rename(&tmp, path)
     })();
     if let Err(e) = res {
@@ -36,6 +50,91 @@ pub fn write_atomic_with(path: &Path, f: impl FnOnce(&mut std::io::BufWriter<std
         return Err(OutputError::io(path, e));
     }
     Ok(())
+}
+
+/// Makes the entries of folder `dir` (files renamed into it) durable: `fsync` of the folder on
+/// Unix, nothing elsewhere. The run driver calls it before each checkpoint, so that after a
+/// power cut no output the checkpoint counts as written is missing.
+///
+/// Errors: [`OutputError::Io`] naming the folder.
+pub fn sync_dir(dir: &Path) -> Result<()> {
+    #[cfg(unix)]
+    {
+        std::fs::File::open(dir).and_then(|d| d.sync_all()).map_err(|e| OutputError::io(dir, e))?;
+    }
+    let _ = dir;
+    Ok(())
+}
+
+/// Whether process `pid` still runs (Unix: `kill(pid, 0)`; elsewhere assumed running, so
+/// nothing is removed).
+fn process_alive(pid: u32) -> bool {
+    #[cfg(unix)]
+    {
+        let Ok(p) = i32::try_from(pid) else { return false };
+        // SAFETY: signal 0 only checks that the process exists; no signal is sent.
+        let r = unsafe { libc::kill(p, 0) };
+        r == 0 || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = pid;
+        true
+    }
+}
+
+/// Removes the temporary files `.<name>.<pid>.tmp` ([`temporary_path`]) that a killed process
+/// left in `dir` (not those of this process or of a process still running); returns how many.
+/// A missing folder has none.
+///
+/// Errors: [`OutputError::Io`] naming the folder or file that cannot be listed or removed.
+pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
+    if !dir.is_dir() {
+        return Ok(0);
+    }
+    let mut n = 0;
+    for e in std::fs::read_dir(dir).map_err(|e| OutputError::io(dir, e))? {
+        let e = e.map_err(|err| OutputError::io(dir, err))?;
+        let name = e.file_name();
+        let name = name.to_string_lossy();
+        let Some(stem) = name.strip_prefix('.').and_then(|s| s.strip_suffix(".tmp")) else { continue };
+        let Some(pid) = stem.rsplit_once('.').and_then(|(_, p)| p.parse::<u32>().ok()) else { continue };
+        if pid == std::process::id() || process_alive(pid) {
+            continue;
+        }
+        let p = e.path();
+        if p.is_file() {
+            std::fs::remove_file(&p).map_err(|err| OutputError::io(&p, err))?;
+            n += 1;
+        }
+    }
+    Ok(n)
+}
+
+/// Fault injection for the fault tests (`tests/faults.rs`): with the environment variable
+/// `SYLVA_FAULT_KILL_AT_WRITE=N`, the process kills itself with SIGKILL in its N-th atomic
+/// write (counted from 1), after cutting the temporary file to half its length: exactly what a
+/// kill in the middle of writing leaves behind. Unset (the normal case) it does nothing.
+mod fault {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    use std::sync::OnceLock;
+
+    static AT: OnceLock<Option<u64>> = OnceLock::new();
+    static COUNT: AtomicU64 = AtomicU64::new(0);
+
+    pub(super) fn maybe_kill(file: &std::fs::File) {
+        let Some(at) = *AT.get_or_init(|| std::env::var("SYLVA_FAULT_KILL_AT_WRITE").ok().and_then(|v| v.parse().ok())) else { return };
+        if COUNT.fetch_add(1, Ordering::SeqCst) + 1 == at {
+            let len = file.metadata().map(|m| m.len()).unwrap_or(0);
+            let _ = file.set_len(len / 2);
+            #[cfg(unix)]
+            // SAFETY: raising a signal at this process; SIGKILL cannot be caught.
+            unsafe {
+                libc::raise(libc::SIGKILL);
+            }
+            std::process::abort();
+        }
+    }
 }
 
 pub mod gltf;

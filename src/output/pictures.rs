@@ -70,22 +70,37 @@ pub fn find_ffmpeg() -> Option<PathBuf> {
 /// Encodes the PNG frames `dir/frame_%05d.png` into an H.264 MP4 at `fps` with `ffmpeg` when it
 /// is installed. Returns `Ok(false)` (and writes nothing) when `ffmpeg` is not on `PATH`.
 ///
+/// ffmpeg writes a temporary file beside `out` ([`super::temporary_path`]), renamed to `out`
+/// when it succeeds, so no half-encoded film is left at `out`.
+///
 /// # Errors
-/// [`OutputError::Encode`] when `ffmpeg` cannot be run or fails.
+/// [`OutputError::Encode`] when `ffmpeg` cannot be run or fails; [`OutputError::Io`] when the
+/// rename fails.
 pub fn write_mp4(dir: &Path, fps: f32, out: &Path) -> Result<bool> {
     let Some(ff) = find_ffmpeg() else { return Ok(false) };
+    // ffmpeg writes a temporary file (`-f mp4`: its name has no .mp4 suffix), renamed when done
+    let tmp = super::temporary_path(out);
     let status = std::process::Command::new(ff)
         .args(["-y", "-loglevel", "error", "-framerate"])
         .arg(format!("{fps}"))
         .arg("-i")
         .arg(dir.join("frame_%05d.png"))
-        .args(["-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", "-c:v", "libx264"])
-        .arg(out)
-        .status()
-        .map_err(|e| OutputError::Encode { path: out.to_path_buf(), format: "MP4", message: format!("cannot run ffmpeg: {e}") })?;
-    if !status.success() {
-        return Err(OutputError::Encode { path: out.to_path_buf(), format: "MP4", message: format!("ffmpeg failed ({status})") });
+        .args(["-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", "-c:v", "libx264", "-f", "mp4"])
+        .arg(&tmp)
+        .status();
+    let failed = match status {
+        Ok(s) if s.success() => None,
+        Ok(s) => Some(format!("ffmpeg failed ({s})")),
+        Err(e) => Some(format!("cannot run ffmpeg: {e}")),
+    };
+    if let Some(message) = failed {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(OutputError::Encode { path: out.to_path_buf(), format: "MP4", message });
     }
+    std::fs::rename(&tmp, out).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        OutputError::io(out, e)
+    })?;
     Ok(true)
 }
 

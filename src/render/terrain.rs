@@ -17,21 +17,29 @@ pub struct TerrainMesh {
     pub colors: Vec<[f32; 3]>,
     /// Triangle list (counter-clockwise seen from above); length a multiple of 3.
     pub indices: Vec<u32>,
+    /// Dissolve into the sky, one per position, 0 (solid ground) ..1 (the sky colour behind it,
+    /// no edge): the surroundings beyond the simulated window fade out towards the edge of
+    /// the DEM or of the drawn margin. Empty: 0 everywhere.
+    pub fade: Vec<f32>,
+    /// Plan rectangle `(min, max)` (m) of the simulated window when the mesh also holds its
+    /// surroundings: [`TerrainMesh::bounds`] (camera presets, shadow map, canopy layer) covers
+    /// only the vertices inside it. `None`: the whole mesh is the site.
+    pub focus: Option<([f32; 2], [f32; 2])>,
 }
 
 impl TerrainMesh {
-    /// Axis-aligned bounds `(min, max)` in metres; a unit box at the origin for an empty mesh.
+    /// Axis-aligned bounds `(min, max)` in metres of the site: the vertices inside
+    /// [`TerrainMesh::focus`] when set (the simulated window, without its surroundings), else
+    /// all; a unit box at the origin for an empty mesh.
     pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
-        let mut it = self.positions.iter();
-        let Some(&first) = it.next() else { return ([0.0; 3], [1.0; 3]) };
-        let (mut lo, mut hi) = (first, first);
-        for p in it {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
-            }
-        }
-        (lo, hi)
+        let Some((lo, hi)) = self.focus else { return self.full_bounds() };
+        crate::mesh::points_bounds(self.positions.iter().filter(|p| p[0] >= lo[0] && p[0] <= hi[0] && p[1] >= lo[1] && p[1] <= hi[1])).unwrap_or_else(|| self.full_bounds())
+    }
+
+    /// Axis-aligned bounds `(min, max)` in metres of every vertex, surroundings included; a
+    /// unit box at the origin for an empty mesh.
+    pub fn full_bounds(&self) -> ([f32; 3], [f32; 3]) {
+        crate::mesh::points_bounds(self.positions.iter()).unwrap_or(([0.0; 3], [1.0; 3]))
     }
 
     /// Number of triangles.
@@ -57,6 +65,9 @@ impl TerrainMesh {
         if self.colors.len() != n {
             return Err(bad("colors", self.colors.len().to_string(), format!("{n} (one per position)")));
         }
+        if !self.fade.is_empty() && self.fade.len() != n {
+            return Err(bad("fade", self.fade.len().to_string(), format!("0 or {n} (one per position)")));
+        }
         if self.indices.len() % 3 != 0 {
             return Err(bad("indices", self.indices.len().to_string(), "a multiple of 3".into()));
         }
@@ -64,6 +75,11 @@ impl TerrainMesh {
             return Err(bad("indices", i.to_string(), format!("< {n} (vertex count)")));
         }
         Ok(())
+    }
+
+    /// Fade of vertex `i` (0 when the mesh has none).
+    pub fn fade_at(&self, i: usize) -> f32 {
+        self.fade.get(i).copied().unwrap_or(0.0)
     }
 
     /// Height (m) of the vertex nearest to `(x, y)` in plan, or `None` for an empty mesh.
@@ -95,7 +111,7 @@ pub struct LandCover {
 
 impl Default for LandCover {
     fn default() -> Self {
-        LandCover { sea_level: f32::NEG_INFINITY, tree_line: 1900.0, snow_line: 2700.0, rock_slope_deg: 38.0 }
+        LandCover { sea_level: f32::NEG_INFINITY, tree_line: 1900.0, snow_line: 2700.0, rock_slope_deg: 42.0 }
     }
 }
 
@@ -120,6 +136,179 @@ impl LandCover {
         c = lerp3(c, rock, (slope - self.rock_slope_deg + 8.0) / 16.0);
         lerp3(c, snow, (z - self.snow_line + 100.0) / 200.0 * (1.0 - (slope - 45.0).max(0.0) / 20.0))
     }
+}
+
+/// What lies on the ground at one terrain vertex besides its elevation and slope, each 0..1:
+/// the inputs of [`LandCover::ground_color`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Ground {
+    /// Stream channel: 0 none, 1 a stream of the full width of a cell (from the flow
+    /// accumulation, [`stream_strength`]).
+    pub stream: f32,
+    /// Soil wetness (from the topographic wetness index, [`wetness`]): 1 = wet meadow / seep.
+    pub wetness: f32,
+    /// Plan canopy cover above the vertex (0 open land, 1 closed forest): forest floor of leaf
+    /// litter instead of grass.
+    pub canopy: f32,
+}
+
+/// Stream strength 0..1 of a cell draining `area_m2` square metres: 0 below 10 ha of
+/// contributing area, rising with the logarithm of the area to 1 at 150 ha. (Channel heads of
+/// humid Southern Appalachian headwaters lie at ≈ 1–10 ha of contributing area; Montgomery &
+/// Dietrich 1988, Nature 336:232–234, for the area–slope threshold of channel initiation.)
+pub fn stream_strength(area_m2: f32) -> f32 {
+    if !(area_m2 > 0.0) {
+        return 0.0;
+    }
+    ((area_m2.ln() - 100_000f32.ln()) / (1_500_000f32.ln() - 100_000f32.ln())).clamp(0.0, 1.0)
+}
+
+/// Wetness 0..1 of a cell with topographic wetness index `twi` = ln(a / tan β) (Beven & Kirkby
+/// 1979): 0 at TWI ≤ 7 (well-drained slopes), 1 at TWI ≥ 11 (hollows and valley floors).
+pub fn wetness(twi: f32) -> f32 {
+    if !twi.is_finite() {
+        return 0.0;
+    }
+    ((twi - 7.0) / 4.0).clamp(0.0, 1.0)
+}
+
+fn smooth01(t: f32) -> f32 {
+    let t = t.clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// A small deterministic brightness variation (±1) of a plan position, in cells of ~7 m and
+/// ~23 m, so that open land is not one flat colour.
+fn mottle(x: f32, y: f32) -> f32 {
+    let h = |x: f32, y: f32| {
+        let (i, j) = (x.floor() as i64, y.floor() as i64);
+        let k = (i.wrapping_mul(73_856_093) ^ j.wrapping_mul(19_349_663)) as u64;
+        let mut z = k.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
+    };
+    0.6 * h(x / 7.0, y / 7.0) + 0.4 * h(x / 23.0 + 0.5, y / 23.0 + 0.5)
+}
+
+impl LandCover {
+    /// Albedo (linear RGB) of the ground at plan position `(x, y)` (m), elevation `z` (m), unit
+    /// normal `n` and [`Ground`] `g`: meadow grass in open land (darker, lusher where wet), a
+    /// brown forest floor of leaf litter under canopy, bare rock on slopes steeper than
+    /// [`LandCover::rock_slope_deg`] (less under forest: roots hold soil), stream water in the
+    /// channels, alpine meadow and snow high up as [`LandCover::color`].
+    pub fn ground_color(&self, x: f32, y: f32, z: f32, n: [f32; 3], g: &Ground) -> [f32; 3] {
+        let grass = [0.16, 0.25, 0.07];
+        let wet = [0.09, 0.19, 0.06];
+        let floor = [0.085, 0.078, 0.045];
+        let rock = [0.30, 0.30, 0.28];
+        let water = [0.03, 0.06, 0.08];
+        let alpine = [0.33, 0.34, 0.18];
+        let snow = [0.85, 0.87, 0.9];
+        let slope = n[2].clamp(-1.0, 1.0).acos().to_degrees();
+        if z <= self.sea_level + 0.5 {
+            return [0.55, 0.5, 0.36];
+        }
+        let m = mottle(x, y);
+        let mut c = lerp3(grass, wet, g.wetness);
+        c = lerp3(c, alpine, (z - self.tree_line + 150.0) / 300.0);
+        c = lerp3(c, floor, smooth01(g.canopy * 1.25));
+        c = c.map(|v| v * (1.0 + 0.12 * m));
+        let rock_t = smooth01((slope - self.rock_slope_deg + 6.0) / 12.0 + 0.15 * m) * (1.0 - 0.6 * g.canopy);
+        c = lerp3(c, rock, rock_t);
+        c = lerp3(c, water, 0.7 * g.stream.max(0.0).sqrt() * (1.0 - 0.4 * g.canopy));
+        lerp3(c, snow, (z - self.snow_line + 100.0) / 200.0 * (1.0 - (slope - 45.0).max(0.0) / 20.0))
+    }
+}
+
+/// A regular grid of ground samples to mesh ([`from_ground`]): heights and what lies on the
+/// ground per sample, in world coordinates given by its south-west corner.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroundGrid {
+    /// Elevations (m), row 0 north; NaN: no ground (the quads around it are left out).
+    pub heights: Grid<f32>,
+    /// Sample spacing east–west (m), > 0.
+    pub cell_x: f32,
+    /// Sample spacing north–south (m), > 0.
+    pub cell_y: f32,
+    /// World position (m) of the grid's south-west corner: sample `(c, r)` sits at
+    /// `x = origin[0] + (c + 0.5)·cell_x`, `y = origin[1] + (height − r − 0.5)·cell_y`.
+    pub origin: [f32; 2],
+    /// Stream strength 0..1 per sample ([`stream_strength`]); empty: none.
+    pub stream: Vec<f32>,
+    /// Wetness 0..1 per sample ([`wetness`]); empty: none.
+    pub wetness: Vec<f32>,
+    /// Fade into the sky 0..1 per sample ([`TerrainMesh::fade`]); empty: none.
+    pub fade: Vec<f32>,
+    /// The simulated window's plan rectangle ([`TerrainMesh::focus`]).
+    pub focus: Option<([f32; 2], [f32; 2])>,
+}
+
+/// Meshes a [`GroundGrid`]: vertices at the samples, normals from central differences, albedo
+/// from [`LandCover::ground_color`] with the plan canopy cover `canopy(x, y)` (0..1) of the
+/// frame's trees, fade and focus copied. Quads with a NaN corner are left out.
+///
+/// # Errors
+/// [`Error::Invalid`] for a grid smaller than 2 × 2, non-positive spacings, or per-sample lists
+/// of another length.
+pub fn from_ground(g: &GroundGrid, cover: &LandCover, canopy: &dyn Fn(f32, f32) -> f32) -> Result<TerrainMesh> {
+    let inv = |field: &str, value: String, expected: String| Error::Invalid { context: "render::terrain::from_ground".into(), field: field.into(), value, expected };
+    let (w, h) = (g.heights.width, g.heights.height);
+    let n = w * h;
+    if w < 2 || h < 2 || g.heights.data.len() != n {
+        return Err(inv("heights", format!("{w} x {h}"), "at least 2 x 2 samples".into()));
+    }
+    if !(g.cell_x > 0.0 && g.cell_y > 0.0) {
+        return Err(inv("cell size", format!("{} x {}", g.cell_x, g.cell_y), "> 0 m".into()));
+    }
+    for (name, v) in [("stream", &g.stream), ("wetness", &g.wetness), ("fade", &g.fade)] {
+        if !v.is_empty() && v.len() != n {
+            return Err(inv(name, v.len().to_string(), format!("0 or {n} (one per sample)")));
+        }
+    }
+    let at = |v: &Vec<f32>, i: usize| v.get(i).copied().unwrap_or(0.0);
+    let min = g.heights.data.iter().copied().filter(|v| v.is_finite()).fold(f32::INFINITY, f32::min);
+    let min = if min.is_finite() { min } else { 0.0 };
+    let z = |c: usize, r: usize| {
+        let v = *g.heights.get(c, r);
+        if v.is_finite() {
+            v
+        } else {
+            min
+        }
+    };
+    let ok = |c: usize, r: usize| g.heights.get(c, r).is_finite();
+    let mut m = TerrainMesh { positions: Vec::with_capacity(n), normals: Vec::with_capacity(n), colors: Vec::with_capacity(n), fade: Vec::with_capacity(n), focus: g.focus, ..TerrainMesh::default() };
+    for r in 0..h {
+        for c in 0..w {
+            let i = r * w + c;
+            let x = g.origin[0] + (c as f32 + 0.5) * g.cell_x;
+            let y = g.origin[1] + (h as f32 - r as f32 - 0.5) * g.cell_y;
+            // one-sided differences next to missing samples
+            let (cl, cr) = (if c > 0 && ok(c - 1, r) { c - 1 } else { c }, if c + 1 < w && ok(c + 1, r) { c + 1 } else { c });
+            let (rn, rs) = (if r > 0 && ok(c, r - 1) { r - 1 } else { r }, if r + 1 < h && ok(c, r + 1) { r + 1 } else { r });
+            let dzdx = if cr > cl { (z(cr, r) - z(cl, r)) / ((cr - cl) as f32 * g.cell_x) } else { 0.0 };
+            let dzdy = if rs > rn { (z(c, rn) - z(c, rs)) / ((rs - rn) as f32 * g.cell_y) } else { 0.0 };
+            let nrm = Vec3::new(-dzdx, -dzdy, 1.0).normalize().to_array();
+            let zz = z(c, r);
+            let gr = Ground { stream: at(&g.stream, i), wetness: at(&g.wetness, i), canopy: canopy(x, y).clamp(0.0, 1.0) };
+            m.positions.push([x, y, zz]);
+            m.normals.push(nrm);
+            m.colors.push(cover.ground_color(x, y, zz, nrm, &gr));
+            m.fade.push(at(&g.fade, i).clamp(0.0, 1.0));
+        }
+    }
+    for r in 0..h - 1 {
+        for c in 0..w - 1 {
+            if !(ok(c, r) && ok(c + 1, r) && ok(c, r + 1) && ok(c + 1, r + 1)) {
+                continue;
+            }
+            let i = |c: usize, r: usize| (r * w + c) as u32;
+            let (sw, se, ne, nw) = (i(c, r + 1), i(c + 1, r + 1), i(c + 1, r), i(c, r));
+            m.indices.extend_from_slice(&[sw, se, ne, sw, ne, nw]);
+        }
+    }
+    Ok(m)
 }
 
 /// A blue–green–yellow–red ramp for overlay values in 0..1 (values outside are clamped).
@@ -236,7 +425,7 @@ pub fn from_tin(vertices: &[[f32; 3]], triangles: &[[u32; 3]], cover: &LandCover
         Some(c) => c.to_vec(),
         None => vertices.iter().zip(&normals).map(|(p, nn)| cover.color(p[2], *nn)).collect(),
     };
-    Ok(TerrainMesh { positions: vertices.to_vec(), normals, colors, indices })
+    Ok(TerrainMesh { positions: vertices.to_vec(), normals, colors, indices, ..TerrainMesh::default() })
 }
 
 #[cfg(test)]
@@ -279,6 +468,47 @@ mod tests {
         }
         assert_eq!(&m.indices[..3], &[0, 1, 2]);
         assert!(from_tin(&v, &[[0, 1, 9]], &LandCover::default(), None).is_err());
+    }
+
+    #[test]
+    fn ground_colours_follow_land_cover() {
+        let lc = LandCover::default();
+        let flat = [0.0, 0.0, 1.0];
+        let steep = [0.8, 0.0, 0.6]; // 53°
+        let open = lc.ground_color(10.0, 10.0, 800.0, flat, &Ground::default());
+        assert!(open[1] > open[0] && open[1] > open[2], "grass is green: {open:?}");
+        let forest = lc.ground_color(10.0, 10.0, 800.0, flat, &Ground { canopy: 1.0, ..Ground::default() });
+        assert!(forest[0] > forest[1] && forest[1] > forest[2], "forest floor is brown: {forest:?}");
+        let rock = lc.ground_color(10.0, 10.0, 800.0, steep, &Ground::default());
+        assert!((rock[0] - rock[1]).abs() < 0.03 && rock[0] > 0.25, "bare rock is grey: {rock:?}");
+        let stream = lc.ground_color(10.0, 10.0, 800.0, flat, &Ground { stream: 1.0, ..Ground::default() });
+        assert!(stream.iter().sum::<f32>() < 0.6 * open.iter().sum::<f32>() && stream[2] >= stream[0], "water is dark and bluish: {stream:?}");
+        // streams start at 10 ha and are full at 150 ha; wetness from TWI 7 to 11
+        assert_eq!(stream_strength(90_000.0), 0.0);
+        assert!((stream_strength(1_500_000.0) - 1.0).abs() < 1e-5);
+        let mid = stream_strength((100_000f32 * 1_500_000.0).sqrt());
+        assert!((mid - 0.5).abs() < 1e-3, "{mid}");
+        assert_eq!((wetness(6.0), wetness(9.0), wetness(12.0), wetness(f32::NAN)), (0.0, 0.5, 1.0, 0.0));
+    }
+
+    #[test]
+    fn ground_grid_skips_missing_samples_and_focuses_bounds() {
+        // 4 x 3 samples of 10 m, one missing corner sample; the focus covers the two west columns
+        let mut hts = Grid::filled(4, 3, 100.0f32);
+        *hts.get_mut(3, 0) = f32::NAN;
+        *hts.get_mut(0, 2) = 50.0;
+        let g = GroundGrid { heights: hts, cell_x: 10.0, cell_y: 10.0, origin: [-20.0, -10.0], stream: vec![], wetness: vec![], fade: vec![0.5; 12], focus: Some(([-20.0, -10.0], [0.0, 20.0])) };
+        let m = from_ground(&g, &LandCover::default(), &|_, _| 0.0).unwrap();
+        m.validate().unwrap();
+        // 3 x 2 quads, the one touching the missing sample left out
+        assert_eq!(m.triangle_count(), 2 * 5);
+        assert_eq!(m.positions[0], [-15.0, 15.0, 100.0]);
+        assert_eq!(m.fade_at(7), 0.5);
+        let (lo, hi) = m.bounds();
+        assert_eq!((lo, hi), ([-15.0, -5.0, 50.0], [-5.0, 15.0, 100.0]));
+        assert_eq!(m.full_bounds().1[0], 15.0);
+        let bad = GroundGrid { stream: vec![0.0; 3], ..g };
+        assert!(from_ground(&bad, &LandCover::default(), &|_, _| 0.0).is_err());
     }
 
     #[test]

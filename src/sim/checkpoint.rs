@@ -1,13 +1,23 @@
 //! Checkpoints: the evolving state of a [`World`] (trees, regeneration cohorts and their ledger,
-//! seeds, year, death counts) and the
-//! stand table so far, in a compact little-endian binary with exact float bits, so that a
-//! resumed run continues bit for bit. Site conditions and species are rebuilt from the scenario.
+//! seeds, year, death counts) and the stand table so far, in a compact little-endian binary
+//! with exact float bits, so that a resumed run continues bit for bit. Site conditions and
+//! species are rebuilt from the scenario; the checkpoint keeps the run's *identity* (seed,
+//! species pool and each species' parameters, terrain, site conditions, light cell, obstacles,
+//! seed rain) and refuses a resume whose scenario differs in any of them, naming the field with
+//! its old and new value. A length field and a CRC-32 over the whole file (IEEE polynomial,
+//! `crc32fast`) refuse a truncated or corrupted file before anything is decoded.
+//!
+//! Layout (all little-endian): `SYLVACK` `V` `u32` layout version | `u64` file length in bytes |
+//! identity: `u64` n, n × (string key, string value) | body (year, trees, seeds, cohorts,
+//! tallies, stand table) | `u32` CRC-32 of every byte before it. Strings are a `u64` byte
+//! count and UTF-8 bytes.
 
 use super::stats::StandRow;
 use super::cohorts::{Cohorts, RegenLedger, N_REGEN_CAUSES};
 use super::trees::{TreeStore, N_CAUSES};
 use super::world::World;
 use crate::error::{Error, Result};
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// File signature: 7 bytes, then `V` and the little-endian `u32` [`LAYOUT_VERSION`]. Files
@@ -15,14 +25,20 @@ use std::path::Path;
 const MAGIC: &[u8; 7] = b"SYLVACK";
 
 /// Hand-kept part of the layout version: bump it whenever the order, kind or number of the
-/// stored fields changes (the cause counts below are folded in by themselves).
-const LAYOUT_BASE: u32 = 4;
+/// stored fields changes (the cause counts below are folded in by themselves). 5: file length,
+/// run identity and CRC-32 added (issue 16).
+const LAYOUT_BASE: u32 = 5;
 
 /// Version of the checkpoint layout, written in the header and required on reading:
 /// `LAYOUT_BASE · 65536 + N_CAUSES · 256 + N_REGEN_CAUSES`, so that adding a cause of death
 /// of trees ([`crate::sim::trees::N_CAUSES`]) or of the regeneration layer
 /// ([`N_REGEN_CAUSES`]), which changes the size of the stored counts, changes the version.
 pub const LAYOUT_VERSION: u32 = LAYOUT_BASE << 16 | (N_CAUSES as u32) << 8 | N_REGEN_CAUSES as u32;
+
+/// Bytes before the identity: header (12) and file length (8).
+const PREFIX: usize = 20;
+/// Bytes of the trailing CRC-32.
+const CRC_LEN: usize = 4;
 
 /// The header of this layout: [`MAGIC`], `V`, [`LAYOUT_VERSION`] (12 bytes).
 fn header() -> Vec<u8> {
@@ -32,7 +48,7 @@ fn header() -> Vec<u8> {
     h
 }
 
-/// Describes a layout version for messages: `4.4.2 (base, tree death causes, regeneration causes)`.
+/// Describes a layout version for messages: `5.4.2 (base, tree death causes, regeneration causes)`.
 fn describe(v: u32) -> String {
     format!("{}.{}.{} (layout, tree death causes, regeneration death causes)", v >> 16, (v >> 8) & 0xff, v & 0xff)
 }
@@ -62,25 +78,232 @@ fn check_header(bytes: &[u8], path: &Path) -> Result<usize> {
     }
 }
 
-struct W(Vec<u8>);
-impl W {
+/// Checks the file length field and the CRC-32 of `bytes` (after [`check_header`]); returns
+/// the end of the body (the offset of the checksum).
+///
+/// Errors: [`Error::Format`] naming `path`: shorter than its length field says (truncated,
+/// with both lengths), longer (bytes appended), or a checksum that does not match (corrupt,
+/// with both checksums).
+fn check_seal(bytes: &[u8], path: &Path) -> Result<usize> {
+    let again = "the file was damaged (cut short by a full disk or an interrupted copy, or altered); restore a copy or start the run again without --resume";
+    if bytes.len() < PREFIX + CRC_LEN {
+        return Err(Error::format(path, format!("checkpoint truncated: {} bytes, shorter than its {}-byte header and checksum: {again}", bytes.len(), PREFIX + CRC_LEN)));
+    }
+    let mut l = [0u8; 8];
+    l.copy_from_slice(&bytes[12..20]);
+    let want = u64::from_le_bytes(l);
+    let have = bytes.len() as u64;
+    if have < want {
+        return Err(Error::format(path, format!("checkpoint truncated: {have} of {want} bytes: {again}")));
+    }
+    if have > want {
+        return Err(Error::format(path, format!("checkpoint corrupt: {have} bytes, its length field says {want}: {again}")));
+    }
+    let end = bytes.len() - CRC_LEN;
+    let stored = u32::from_le_bytes([bytes[end], bytes[end + 1], bytes[end + 2], bytes[end + 3]]);
+    let computed = crc32fast::hash(&bytes[..end]);
+    if stored != computed {
+        return Err(Error::format(path, format!("checkpoint corrupt: CRC-32 stored {stored:08x}, computed {computed:08x}: {again}")));
+    }
+    Ok(end)
+}
+
+/// Rewrites the length field and the CRC-32 of a checkpoint in place after its bytes were
+/// edited (fuzzing and tools: the body's own checks are then reached). Does nothing to a
+/// buffer shorter than the header, length field and checksum (24 bytes).
+pub fn reseal(bytes: &mut [u8]) {
+    if bytes.len() < PREFIX + CRC_LEN {
+        return;
+    }
+    let n = bytes.len() as u64;
+    bytes[12..20].copy_from_slice(&n.to_le_bytes());
+    let end = bytes.len() - CRC_LEN;
+    let c = crc32fast::hash(&bytes[..end]);
+    bytes[end..].copy_from_slice(&c.to_le_bytes());
+}
+
+/// CRC-32 of a slice of `f32`s' bits (little-endian).
+fn crc_f32(h: &mut crc32fast::Hasher, v: &[f32]) {
+    for x in v {
+        h.update(&x.to_bits().to_le_bytes());
+    }
+}
+
+/// The identity of the run of `w`: what a resumed run must share with the one that wrote the
+/// checkpoint, as (field, value) pairs in a fixed order. Fields: `seed`; `light_cell_m`;
+/// `species pool` (ids in pool order); `species <id>` (the species' parameters as TOML, so a
+/// difference names the parameter); `terrain` (grid size, cell size, elevation range and a
+/// CRC-32 of the elevations and the valid-cell mask: a changed DEM file or window);
+/// `site conditions` (CRC-32 of the per-cell indices L T K F R N, insolation, temperature,
+/// wind exposure and TWI: changes with the climate and soil constants); `seed rain`
+/// (seeds per m² and year per pool species); `obstacles` (count and CRC-32).
+pub fn identity(w: &World) -> Vec<(String, String)> {
+    let s = &w.site;
+    let mut out = vec![("seed".to_string(), s.seed.to_string()), ("light_cell_m".to_string(), format!("{}", s.light.cell_m))];
+    let ids: Vec<&str> = s.pool.iter().map(|&p| s.lib.species[p as usize].id.as_str()).collect();
+    out.push(("species pool".into(), ids.join(", ")));
+    for &p in &s.pool {
+        let sp = &s.lib.species[p as usize];
+        out.push((format!("species {}", sp.id), sp.to_toml_string().unwrap_or_else(|_| format!("{sp:?}"))));
+    }
+    let c = &s.conditions;
+    let mut h = crc32fast::Hasher::new();
+    h.update(&(c.width() as u64).to_le_bytes());
+    h.update(&(c.height() as u64).to_le_bytes());
+    h.update(&c.cell_x_m.to_bits().to_le_bytes());
+    h.update(&c.cell_y_m.to_bits().to_le_bytes());
+    crc_f32(&mut h, &c.elevation_m.data);
+    h.update(&c.mask.data.iter().map(|&m| m as u8).collect::<Vec<u8>>());
+    let valid: Vec<f32> = c.elevation_m.data.iter().zip(&c.mask.data).filter(|(_, m)| **m).map(|(e, _)| *e).collect();
+    let (lo, hi) = valid.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &e| (a.min(e), b.max(e)));
+    out.push(("terrain".into(), format!("{} × {} cells of {} m × {} m, {} valid, elevation {lo:.2}–{hi:.2} m, CRC-32 {:08x}", c.width(), c.height(), c.cell_x_m, c.cell_y_m, valid.len(), h.finalize())));
+    let mut h = crc32fast::Hasher::new();
+    for ix in &c.indices.data {
+        crc_f32(&mut h, ix);
+    }
+    for g in [&c.insolation_kwh_m2, &c.temperature_c, &c.wind_exposure, &c.twi] {
+        crc_f32(&mut h, &g.data);
+    }
+    out.push(("site conditions".into(), format!("CRC-32 {:08x} of the per-cell indices, insolation, temperature, wind exposure and TWI", h.finalize())));
+    out.push(("seed rain".into(), format!("{:?} seeds/m²/yr", s.seed_rain)));
+    out.push(("obstacles".into(), format!("{} obstacles, CRC-32 {:08x}", s.obstacles.len(), crc32fast::hash(format!("{:?}", s.obstacles).as_bytes()))));
+    out
+}
+
+/// Flattens a TOML document into `path = value` pairs (for naming a changed species parameter).
+fn flatten(prefix: &str, v: &toml::Value, out: &mut BTreeMap<String, String>) {
+    match v {
+        toml::Value::Table(t) => {
+            for (k, x) in t {
+                let p = if prefix.is_empty() { k.clone() } else { format!("{prefix}.{k}") };
+                flatten(&p, x, out);
+            }
+        }
+        _ => {
+            out.insert(prefix.to_string(), v.to_string());
+        }
+    }
+}
+
+/// The differences between two species' TOML texts as `parameter: checkpoint X, now Y`
+/// (at most 4, then a count); the whole texts' first difference when either does not parse.
+fn species_diff(old: &str, new: &str) -> String {
+    let parse = |t: &str| t.parse::<toml::Table>().ok().map(|t| {
+        let mut m = BTreeMap::new();
+        flatten("", &toml::Value::Table(t), &mut m);
+        m
+    });
+    let (Some(a), Some(b)) = (parse(old), parse(new)) else { return "parameters differ".into() };
+    let keys: std::collections::BTreeSet<&String> = a.keys().chain(b.keys()).collect();
+    let absent = "(absent)".to_string();
+    let diffs: Vec<String> = keys.into_iter().filter(|k| a.get(*k) != b.get(*k)).map(|k| format!("{k}: checkpoint {}, now {}", a.get(k).unwrap_or(&absent), b.get(k).unwrap_or(&absent))).collect();
+    match diffs.len() {
+        0 => "parameters differ in formatting only".into(),
+        n if n <= 4 => diffs.join(", "),
+        n => format!("{} and {} more", diffs[..4].join(", "), n - 4),
+    }
+}
+
+/// Compares the identity stored in a checkpoint with the world's.
+///
+/// Errors: [`Error::Format`] naming `path` and every changed field with its value in the
+/// checkpoint and now.
+fn check_identity(stored: &[(String, String)], w: &World, path: &Path) -> Result<()> {
+    let now = identity(w);
+    let get = |v: &[(String, String)], k: &str| v.iter().find(|(x, _)| x == k).map(|(_, y)| y.clone());
+    let mut keys: Vec<&str> = stored.iter().map(|(k, _)| k.as_str()).collect();
+    for (k, _) in &now {
+        if !keys.contains(&k.as_str()) {
+            keys.push(k);
+        }
+    }
+    let mut changes = Vec::new();
+    for k in keys {
+        let (a, b) = (get(stored, k), get(&now, k));
+        if a == b {
+            continue;
+        }
+        changes.push(match (k.strip_prefix("species "), &a, &b) {
+            (Some(id), Some(a), Some(b)) if k != "species pool" => format!("species `{id}` changed: {}", species_diff(a, b)),
+            (Some(id), None, Some(_)) if k != "species pool" => format!("species `{id}`: not in the checkpoint's pool"),
+            (Some(id), Some(_), None) if k != "species pool" => format!("species `{id}`: no longer in the pool"),
+            _ => format!("{k}: checkpoint {}, now {}", a.as_deref().unwrap_or("(absent)"), b.as_deref().unwrap_or("(absent)")),
+        });
+    }
+    if changes.is_empty() {
+        return Ok(());
+    }
+    Err(Error::format(
+        path,
+        format!(
+            "--resume refused: the scenario differs from the run that wrote this checkpoint: {} (a resumed run keeps its seed, species, terrain, site conditions, light cell, seed rain and obstacles; only `years` and the output cadence may change; or start the run again without --resume)",
+            changes.join("; ")
+        ),
+    ))
+}
+
+/// Where the encoder puts its bytes: a counter (the file length, known before writing), or a
+/// writer that keeps the running CRC-32 and the first I/O error.
+trait Sink {
+    fn put(&mut self, b: &[u8]);
+}
+
+/// Counts bytes.
+struct Count(u64);
+impl Sink for Count {
+    fn put(&mut self, b: &[u8]) {
+        self.0 += b.len() as u64;
+    }
+}
+
+/// Writes to `w`, hashing what it writes; after an error it writes nothing more.
+struct Out<'a, X: std::io::Write> {
+    w: &'a mut X,
+    crc: crc32fast::Hasher,
+    err: Option<std::io::Error>,
+}
+impl<X: std::io::Write> Sink for Out<'_, X> {
+    fn put(&mut self, b: &[u8]) {
+        if self.err.is_none() {
+            self.crc.update(b);
+            if let Err(e) = self.w.write_all(b) {
+                self.err = Some(e);
+            }
+        }
+    }
+}
+
+/// Little-endian encoding into a [`Sink`]; arrays go through a small buffer, so a store of
+/// millions of trees is streamed to the file without a copy of it in memory.
+struct W<'a, S: Sink>(&'a mut S);
+impl<S: Sink> W<'_, S> {
     fn u64(&mut self, v: u64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
+        self.0.put(&v.to_le_bytes());
+    }
+    fn each<T: Copy, const N: usize>(&mut self, v: &[T], f: impl Fn(T) -> [u8; N]) {
+        let mut buf = Vec::with_capacity(N * 4096);
+        for c in v.chunks(4096) {
+            buf.clear();
+            for &x in c {
+                buf.extend_from_slice(&f(x));
+            }
+            self.0.put(&buf);
+        }
     }
     fn f32s(&mut self, v: &[f32]) {
         self.u64(v.len() as u64);
-        for x in v {
-            self.0.extend_from_slice(&x.to_bits().to_le_bytes());
-        }
+        self.each(v, |x| x.to_bits().to_le_bytes());
     }
     fn f64(&mut self, v: f64) {
         self.u64(v.to_bits());
     }
     fn u32s(&mut self, v: &[u32]) {
         self.u64(v.len() as u64);
-        for x in v {
-            self.0.extend_from_slice(&x.to_le_bytes());
-        }
+        self.each(v, |x| x.to_le_bytes());
+    }
+    fn str(&mut self, s: &str) {
+        self.u64(s.len() as u64);
+        self.0.put(s.as_bytes());
     }
 }
 
@@ -122,23 +345,58 @@ impl R<'_> {
         self.p += 4 * n;
         Ok(s.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
     }
+    fn str(&mut self) -> Result<String> {
+        let n = self.len(1)?;
+        let s = &self.b[self.p..self.p + n];
+        self.p += n;
+        String::from_utf8(s.to_vec()).map_err(|_| self.err())
+    }
 }
 
-/// Serialises the world's evolving state and the stand table.
+/// Serialises the world's evolving state, the run's [`identity`] and the stand table, with the
+/// file length and a CRC-32 (layout in the module documentation), into memory.
 pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
-    let mut o = W(header());
+    let mut v = Vec::new();
+    // writing into a Vec cannot fail
+    let _ = write_to(w, rows, &mut v);
+    v
+}
+
+/// Streams the checkpoint of [`to_bytes`] into `out` (the same bytes) without building it in
+/// memory: one counting pass gives the file length of the header, the second writes and
+/// hashes.
+///
+/// Errors: the first I/O error of `out`.
+pub fn write_to(w: &World, rows: &[StandRow], out: &mut impl std::io::Write) -> std::io::Result<()> {
+    let id = identity(w);
+    let mut count = Count(0);
+    encode(w, rows, &id, &mut W(&mut count));
+    let len = PREFIX as u64 + count.0 + CRC_LEN as u64;
+    let mut o = Out { w: out, crc: crc32fast::Hasher::new(), err: None };
+    o.put(&header());
+    o.put(&len.to_le_bytes());
+    encode(w, rows, &id, &mut W(&mut o));
+    if let Some(e) = o.err {
+        return Err(e);
+    }
+    let crc = o.crc.finalize();
+    o.w.write_all(&crc.to_le_bytes())
+}
+
+/// The identity and the body (everything between the file length and the checksum).
+fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mut W<'_, S>) {
+    o.u64(id.len() as u64);
+    for (k, v) in id {
+        o.str(k);
+        o.str(v);
+    }
     o.u64(w.stand.year as u64);
-    o.u64(w.site.seed);
     let t = &w.stand.trees;
     o.u64(t.next_id);
     o.u64(t.len() as u64);
-    for v in &t.id {
-        o.u64(*v);
-    }
+    o.each(&t.id, |x| x.to_le_bytes());
     o.u64(t.species.len() as u64);
-    for v in &t.species {
-        o.0.extend_from_slice(&v.to_le_bytes());
-    }
+    o.each(&t.species, |x| x.to_le_bytes());
     for c in [&t.x, &t.y, &t.z, &t.age, &t.height, &t.dbh, &t.crown_radius, &t.crown_base, &t.light, &t.vigour, &t.suitability] {
         o.f32s(c);
     }
@@ -152,7 +410,8 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
     // regeneration layer
     let c = &w.stand.cohorts;
     o.u32s(&c.cell);
-    o.u32s(&c.pool.iter().map(|&p| p as u32).collect::<Vec<_>>());
+    o.u64(c.pool.len() as u64);
+    o.each(&c.pool, |p| (p as u32).to_le_bytes());
     o.u32s(&c.stems);
     for v in [&c.height, &c.age, &c.vigour] {
         o.f32s(v);
@@ -187,21 +446,27 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
             o.u64(d);
         }
     }
-    o.0
 }
 
 /// Restores a checkpoint into `w` (built from the same scenario) and returns the stand table.
 ///
-/// Errors: [`Error::Format`] naming `path` when the bytes are not a checkpoint, are truncated, or
-/// belong to a different scenario (seed or species pool).
+/// Errors: [`Error::Format`] naming `path` when the bytes are not a checkpoint (or of another
+/// layout version), are truncated (both lengths named), fail the CRC-32 (both checksums
+/// named), belong to a run whose identity differs from `w`'s (each changed field named with
+/// its value in the checkpoint and now: seed, species pool, a species' parameter, terrain,
+/// site conditions, light cell, seed rain, obstacles), or hold out-of-range values.
 pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>> {
-    let body = check_header(bytes, path)?;
-    let mut r = R { b: bytes, p: body, path };
-    let year = r.u64()? as u32;
-    let seed = r.u64()?;
-    if seed != w.site.seed {
-        return Err(Error::format(path, format!("checkpoint seed {seed} differs from the scenario's seed {}", w.site.seed)));
+    check_header(bytes, path)?;
+    let end = check_seal(bytes, path)?;
+    let bytes = &bytes[..end];
+    let mut r = R { b: bytes, p: PREFIX, path };
+    let n_id = r.len(16)?;
+    let mut stored = Vec::with_capacity(n_id);
+    for _ in 0..n_id {
+        stored.push((r.str()?, r.str()?));
     }
+    check_identity(&stored, w, path)?;
+    let year = r.u64()? as u32;
     let mut t = TreeStore { next_id: r.u64()?, ..Default::default() };
     let n = r.len(8)?;
     t.id = (0..n).map(|_| r.u64()).collect::<Result<_>>()?;
@@ -318,6 +583,9 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             regen_recruited,
             regen_deaths,
         });
+    }
+    if r.p != bytes.len() {
+        return Err(Error::format(path, format!("checkpoint has {} bytes after its stand table: corrupt", bytes.len() - r.p)));
     }
     w.stand.trees = t;
     w.stand.year = year;

@@ -28,8 +28,8 @@
 //! ```
 
 use crate::error::{Error, Result};
-use crate::structure::grow::space::Obstacle;
-use glam::Vec3;
+use crate::structure::grow::space::{Footprint, Obstacle, FOOTPRINT_MAX_POINTS};
+use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// One `[[obstacle]]` entry.
@@ -218,10 +218,12 @@ impl ObstacleSpec {
     }
 
     /// The obstacle as Plastic Trees solids ([`Obstacle`]) in world coordinates with the ground
-    /// at `ground_z` (m) under the anchor: a box, a sphere, an axis-parallel wall as one box; a
-    /// wall at an angle and a footprint as axis-aligned boxes of [`SOLID_STEP_M`] along x (one
-    /// per run of covered cells of each row), reaching 1 m below the ground so that no gap opens
-    /// on a slope.
+    /// at `ground_z` (m) under the anchor: a box, a sphere, an axis-parallel wall as one box, a
+    /// wall at an angle as one [`Obstacle::OrientedBox`], a footprint of up to
+    /// [`FOOTPRINT_MAX_POINTS`] vertices as one [`Obstacle::Prism`]; a larger footprint as
+    /// axis-aligned boxes of [`SOLID_STEP_M`] along x (one per run of covered cells of each row).
+    /// Walls, footprints and their boxes reach 1 m below the ground so that no gap opens on a
+    /// slope.
     pub fn solids(&self, ground_z: f64) -> Vec<Obstacle> {
         let v = |x: f64, y: f64, z: f64| Vec3::new(x as f32, y as f32, (ground_z + z) as f32);
         match self {
@@ -233,6 +235,22 @@ impl ObstacleSpec {
                 let (x0, x1) = if start[0] == end[0] { (start[0] - h, start[0] + h) } else { (b[0] + h, b[2] - h) };
                 let (y0, y1) = if start[1] == end[1] { (start[1] - h, start[1] + h) } else { (b[1] + h, b[3] - h) };
                 vec![Obstacle::Box { min: v(x0, y0, -1.0), max: v(x1, y1, *height_m) }]
+            }
+            // a wall at an angle: one box turned about the vertical along it
+            ObstacleSpec::Wall { start, end, height_m, thickness_m } => {
+                let (dx, dy) = (end[0] - start[0], end[1] - start[1]);
+                let (len, z0) = ((dx * dx + dy * dy).sqrt(), -1.0);
+                let center = v(0.5 * (start[0] + end[0]), 0.5 * (start[1] + end[1]), 0.5 * (z0 + height_m));
+                let half = Vec3::new((0.5 * len) as f32, (0.5 * thickness_m) as f32, (0.5 * (height_m - z0)) as f32);
+                vec![Obstacle::OrientedBox { center, half, yaw_deg: dy.atan2(dx).to_degrees() as f32 }]
+            }
+            // a footprint of up to 16 vertices: the polygon extruded (larger ones: boxes below)
+            ObstacleSpec::Footprint { points, height_m } if points.len() <= FOOTPRINT_MAX_POINTS && Footprint::new(&points.iter().map(|p| Vec2::new(p[0] as f32, p[1] as f32)).collect::<Vec<_>>()).is_ok() => {
+                let pts: Vec<Vec2> = points.iter().map(|p| Vec2::new(p[0] as f32, p[1] as f32)).collect();
+                match Footprint::new(&pts) {
+                    Ok(footprint) => vec![Obstacle::Prism { footprint, bottom: (ground_z - 1.0) as f32, top: (ground_z + height_m) as f32 }],
+                    Err(_) => Vec::new(), // unreachable: checked by the guard
+                }
             }
             _ => {
                 let b = self.bounds_xy();

@@ -69,6 +69,10 @@ pub struct TerrainSection {
     /// Use the embedded default terrain (`terrains/`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub default: Option<bool>,
+    /// A terrain embedded in the binary by name (`"jacksboro"`, `"coweeta"`:
+    /// [`crate::terrain::io::EMBEDDED_TERRAINS`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub embedded: Option<String>,
     /// A DEM file (GeoTIFF, ESRI ASCII, PNG), relative to the scenario file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub path: Option<PathBuf>,
@@ -131,6 +135,8 @@ pub struct UniformSpec {
 pub enum TerrainSpec {
     /// The embedded default terrain.
     Default,
+    /// A terrain embedded in the binary, by name ([`crate::terrain::io::embedded_terrain`]).
+    Embedded(String),
     /// A DEM file (absolute or relative to the working directory).
     Path(PathBuf),
     /// A generated terrain.
@@ -281,9 +287,14 @@ impl Scenario {
     /// Checks ranges; `ctx` names the file.
     pub fn validate(&self, ctx: &str) -> Result<()> {
         let t = &self.terrain;
-        let n = t.default.filter(|d| *d).is_some() as u8 + t.path.is_some() as u8 + t.generate.is_some() as u8 + t.uniform.is_some() as u8;
+        let n = t.default.filter(|d| *d).is_some() as u8 + t.embedded.is_some() as u8 + t.path.is_some() as u8 + t.generate.is_some() as u8 + t.uniform.is_some() as u8;
         if n != 1 {
-            return Err(invalid(ctx, "terrain", format!("{n} sources"), "exactly one of default = true, path, generate, uniform"));
+            return Err(invalid(ctx, "terrain", format!("{n} sources"), "exactly one of default = true, embedded, path, generate, uniform"));
+        }
+        if let Some(e) = &t.embedded {
+            if !crate::terrain::io::EMBEDDED_TERRAINS.contains(&e.as_str()) {
+                return Err(invalid(ctx, "terrain.embedded", e, &format!("one of {}", crate::terrain::io::EMBEDDED_TERRAINS.join(", "))));
+            }
         }
         if let Some(g) = &t.generate {
             if !(16..=8192).contains(&g.size) {
@@ -444,6 +455,8 @@ impl Scenario {
             TerrainSpec::Generate(g)
         } else if let Some(p) = &t.path {
             TerrainSpec::Path(p.clone())
+        } else if let Some(e) = &t.embedded {
+            TerrainSpec::Embedded(e.clone())
         } else {
             TerrainSpec::Default
         }
@@ -544,27 +557,40 @@ pub fn crop_site(site: &crate::conditions::SiteConditions, window: [usize; 4]) -
 }
 
 impl Scenario {
-    /// Loads the terrain this scenario names (embedded default, file, generated or uniform),
-    /// applies the window and derives the site conditions under the scenario's climate
-    /// ([`crate::conditions::derive`]).
+    /// The whole terrain this scenario names (embedded, file or generated), before its window;
+    /// `None` for a uniform site. The pictures draw the terrain beyond the window around the
+    /// simulated area (`job::scene::Landscape`).
     ///
-    /// Errors: terrain reading errors (file, format, window outside the grid), no valid cell.
-    pub fn site(&self) -> Result<crate::conditions::SiteConditions> {
-        let t = match self.terrain_spec() {
-            TerrainSpec::Uniform(u) => {
-                let site = crate::conditions::SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, self.climate.latitude_deg);
-                return match self.terrain.window {
-                    Some(w) => crop_site(&site, w),
-                    None => Ok(site),
-                };
-            }
+    /// Errors: terrain reading errors (file, format).
+    pub fn full_terrain(&self) -> Result<Option<crate::terrain::Terrain>> {
+        Ok(Some(match self.terrain_spec() {
+            TerrainSpec::Uniform(_) => return Ok(None),
             TerrainSpec::Default => crate::terrain::io::default_terrain()?,
+            TerrainSpec::Embedded(name) => crate::terrain::io::embedded_terrain(&name)?,
             TerrainSpec::Path(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) => {
                 let [lo, hi] = self.terrain.height_range_m.unwrap_or([0.0, 1000.0]);
                 crate::terrain::io::load_png_heightmap(&p, self.terrain.cell_m.unwrap_or(10.0), lo, hi)?
             }
             TerrainSpec::Path(p) => crate::terrain::io::load(&p)?,
             TerrainSpec::Generate(g) => crate::terrain::generate::generate(g.size, g.cell_m, g.relief_m as f64, g.seed)?,
+        }))
+    }
+
+    /// Loads the terrain this scenario names (embedded default, file, generated or uniform),
+    /// applies the window and derives the site conditions under the scenario's climate
+    /// ([`crate::conditions::derive`]).
+    ///
+    /// Errors: terrain reading errors (file, format, window outside the grid), no valid cell.
+    pub fn site(&self) -> Result<crate::conditions::SiteConditions> {
+        if let TerrainSpec::Uniform(u) = self.terrain_spec() {
+            let site = crate::conditions::SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, self.climate.latitude_deg);
+            return match self.terrain.window {
+                Some(w) => crop_site(&site, w),
+                None => Ok(site),
+            };
+        }
+        let Some(t) = self.full_terrain()? else {
+            return Err(invalid("scenario", "terrain", "uniform", "a terrain with elevations"));
         };
         let t = match self.terrain.window {
             Some([c0, r0, w, h]) => crate::terrain::io::window(&t, c0, r0, w, h)?,

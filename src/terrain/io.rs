@@ -31,6 +31,30 @@ pub fn default_terrain() -> Result<Terrain> {
     Ok(t)
 }
 
+static COWEETA_DEM: &[u8] = include_bytes!("../../terrains/coweeta_basin_10m_utm17n.tif");
+
+/// Names of the terrains embedded in the binary, for `[terrain] embedded = "NAME"` of a scenario.
+pub const EMBEDDED_TERRAINS: [&str; 2] = ["jacksboro", "coweeta"];
+
+/// An embedded terrain by name ([`EMBEDDED_TERRAINS`]):
+/// - `jacksboro`: [`default_terrain`] (USGS DEM of the Jacksboro fault, 80 m, UTM 16N);
+/// - `coweeta`: `terrains/coweeta_basin_10m_utm17n.tif`, the Coweeta Hydrologic Laboratory
+///   basin, North Carolina (USGS 3DEP 10 m DEM, public domain; NAD83 / UTM zone 17N, EPSG:26917;
+///   619 × 624 cells of 10 m, 673–1594 m; nodata outside the basin outline; provenance in
+///   `terrains/README.md`). Its largest fully valid rectangle is columns 108–452, rows 182–437
+///   (the 345 × 256 cells of `terrains/coweeta_10m_utm17n.tif`); the latitude comes from the
+///   inverse projection of the grid's centre.
+///
+/// Errors: [`Error::Invalid`] for an unknown name (listing the known ones); reading errors of the
+/// embedded file (none expected: a test reads both).
+pub fn embedded_terrain(name: &str) -> Result<Terrain> {
+    match name {
+        "jacksboro" => default_terrain(),
+        "coweeta" => read_geotiff(Cursor::new(COWEETA_DEM), Path::new("<embedded>/terrains/coweeta_basin_10m_utm17n.tif")),
+        _ => Err(Error::Invalid { context: "terrain".into(), field: "embedded".into(), value: name.into(), expected: format!("one of {}", EMBEDDED_TERRAINS.join(", ")) }),
+    }
+}
+
 /// Loads a DEM, choosing the reader by extension: `.tif`/`.tiff` (GeoTIFF), `.asc` (ESRI ASCII
 /// grid, with `.prj` beside it if present), `.png` (16-bit heightmap with 1 m cells and heights
 /// 0–65.535 km scaled as raw/1 m; use [`load_png_heightmap`] to give cell size and height range).

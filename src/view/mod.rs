@@ -13,7 +13,6 @@
 pub mod camera;
 pub mod data;
 
-use std::sync::{Arc, Mutex};
 
 use eframe::egui;
 use glam::Vec3;
@@ -588,15 +587,10 @@ impl eframe::App for Viewer {
 /// window's device.
 pub fn run(data: RunData, sea_level_m: f32, opts: &WindowOptions) -> gui::Result<()> {
     let title = format!("Sylva — {}", data.dir.display());
-    let opts2 = opts.clone();
-    let data = Arc::new(Mutex::new(Some(data)));
-    gui::run_window(&title, opts, move |cc, failure| {
-        let rs = cc.wgpu_render_state.as_ref().ok_or_else(|| GuiError::NoAdapter("the window has no wgpu render state".into()))?;
-        let vp = Viewport3d::new(rs)?;
-        let d = data.lock().ok().and_then(|mut d| d.take()).ok_or_else(|| GuiError::Window("viewer data taken twice".into()))?;
+    gui::run_viewport_window(&title, opts, data, move |d, vp, shot| {
         let mut v = Viewer::new(d, sea_level_m, Some(vp))?;
-        if let Some(p) = &opts2.screenshot {
-            v = v.with_screenshot(Screenshot::new(p, opts2.frames, failure));
+        if let Some(s) = shot {
+            v = v.with_screenshot(s);
         }
         Ok(v)
     })

@@ -91,11 +91,19 @@ fn sky_visibility(world: vec3<f32>, n: vec3<f32>) -> f32 {
     return mix(0.45, 1.0, s / 10.0);
 }
 
+// Below the horizon (terrain19): distant forested hills seen through haze, the horizon
+// colour turning a darker blue-green the further down the view looks, so that the faded
+// surroundings of the terrain end in a landscape horizon rather than in empty sky.
+fn below_horizon(up: f32) -> vec3<f32> {
+    let hills = g.sky_horizon.rgb * vec3<f32>(0.58, 0.68, 0.62);
+    return mix(g.sky_horizon.rgb * 0.97, hills, smoothstep(0.0, 0.22, -up));
+}
+
 fn sky_color(dir: vec3<f32>) -> vec3<f32> {
     let up = clamp(dir.z, -1.0, 1.0);
     var c = mix(g.sky_horizon.rgb, g.sky_zenith.rgb, pow(max(up, 0.0), 0.6));
     if (up < 0.0) {
-        c = g.sky_horizon.rgb * (1.0 + up * 0.4);
+        c = below_horizon(up);
     }
     let sd = max(dot(dir, g.sun_dir.xyz), 0.0);
     c = c + g.sun_color.rgb * (pow(sd, 800.0) * 4.0 + pow(sd, 12.0) * 0.15);
@@ -169,6 +177,7 @@ struct TerrainIn {
     @location(0) pos: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) color: vec3<f32>,
+    @location(3) fade: f32,
 };
 
 struct TerrainOut {
@@ -176,6 +185,7 @@ struct TerrainOut {
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) color: vec3<f32>,
+    @location(3) fade: f32,
 };
 
 @vertex
@@ -185,8 +195,27 @@ fn vs_terrain(v: TerrainIn) -> TerrainOut {
     o.world = v.pos;
     o.normal = v.normal;
     o.color = v.color;
+    o.fade = v.fade;
     return o;
 }
+
+// ---- surroundings (terrain19): the terrain beyond the simulated window dissolves into the
+// sky colour seen behind it (same sky_color as fs_sky), so the mesh ends without an edge.
+fn view_dir_to(world: vec3<f32>) -> vec3<f32> {
+    if (g.eye.w > 0.5) {
+        return -normalize(g.facing.xyz);
+    }
+    return normalize(world - g.eye.xyz);
+}
+
+fn surroundings_fade(c: vec3<f32>, world: vec3<f32>, fade: f32) -> vec3<f32> {
+    if (fade <= 0.0) {
+        return c;
+    }
+    let f = smoothstep(0.0, 1.0, clamp(fade, 0.0, 1.0));
+    return mix(c, sky_color(view_dir_to(world)), f);
+}
+// ---- end surroundings
 
 fn canopy_texel(i: i32, j: i32) -> vec4<f32> {
     let nx = i32(g.canopy1.x);
@@ -266,7 +295,7 @@ fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
             c = mix(c, cc, canopy_view_cover(cv.w, i.world));
         }
     }
-    return vec4<f32>(fog(c, i.world), 1.0);
+    return vec4<f32>(surroundings_fade(fog(c, i.world), i.world, i.fade), 1.0);
 }
 
 @fragment

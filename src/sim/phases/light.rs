@@ -142,16 +142,19 @@ pub fn run(w: Light<'_>) {
         start[c + 1] += start[c];
     }
     let n_entries = start[ncell] as usize;
+    // (zeroed, so its pages are committed as they are filled; each chunk is freed once
+    // scattered, so the entries are held about once, not twice, at the peak)
     let mut sorted = vec![(0u64, 0f32); n_entries];
     {
         let mut pos: Vec<u32> = start[..ncell].to_vec();
-        for e in chunks.iter().flatten() {
-            let c = (e.0 >> 32) as usize;
-            sorted[pos[c] as usize] = *e;
-            pos[c] += 1;
+        for chunk in chunks {
+            for e in chunk {
+                let c = (e.0 >> 32) as usize;
+                sorted[pos[c] as usize] = e;
+                pos[c] += 1;
+            }
         }
     }
-    drop(chunks);
     let entries = {
         let mut segs: Vec<&mut [(u64, f32)]> = Vec::with_capacity(ncell);
         let mut rest: &mut [(u64, f32)] = &mut sorted;

@@ -1,8 +1,132 @@
 //! Voxel space shared by the light-guided and Laplacian models: a regular grid of cubic voxels
-//! (edge `voxel_m`, z up) with solid obstacles (boxes, spheres, walls).
+//! (edge `voxel_m`, z up) with solid obstacles (boxes, spheres, walls, boxes turned about the
+//! vertical, vertical prisms over a footprint polygon).
 
 use crate::error::{Error, Result};
-use glam::{IVec3, Vec3};
+use glam::{IVec3, Vec2, Vec3};
+
+/// Most vertices of an [`Obstacle::Prism`] footprint (stored inline so that [`Obstacle`] stays
+/// `Copy`; a larger footprint is split into several prisms by the caller).
+pub const FOOTPRINT_MAX_POINTS: usize = 16;
+
+/// A simple polygon in the horizontal plane (x, y in m; 3 to [`FOOTPRINT_MAX_POINTS`] vertices,
+/// either winding, convex or not, not self-intersecting): the footprint of an
+/// [`Obstacle::Prism`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Footprint {
+    points: [Vec2; FOOTPRINT_MAX_POINTS],
+    len: u8,
+}
+
+impl Footprint {
+    /// The polygon through `points` (m; the last vertex joins the first).
+    ///
+    /// Errors: [`Error::Invalid`] (context `footprint`) for fewer than 3 or more than
+    /// [`FOOTPRINT_MAX_POINTS`] vertices, a non-finite coordinate, a zero area, or edges that
+    /// cross each other.
+    pub fn new(points: &[Vec2]) -> Result<Footprint> {
+        let bad = |field: &str, value: String, expected: &str| Err(Error::Invalid { context: "footprint".into(), field: field.into(), value, expected: expected.into() });
+        if !(3..=FOOTPRINT_MAX_POINTS).contains(&points.len()) {
+            return bad("points", points.len().to_string(), "3 to 16 vertices (split larger footprints)");
+        }
+        if let Some(i) = points.iter().position(|p| !p.is_finite()) {
+            return bad(&format!("point {i}"), points[i].to_string(), "finite coordinates (m)");
+        }
+        let mut f = Footprint { points: [Vec2::ZERO; FOOTPRINT_MAX_POINTS], len: points.len() as u8 };
+        f.points[..points.len()].copy_from_slice(points);
+        if !(f.area().abs() > 1e-9) {
+            return bad("points", format!("{points:?}"), "a polygon of non-zero area");
+        }
+        let n = points.len();
+        for i in 0..n {
+            for j in i + 1..n {
+                // adjacent edges share a vertex; test the others for a proper crossing
+                if j == i + 1 || (i == 0 && j == n - 1) {
+                    continue;
+                }
+                let (a, b) = f.edge(i);
+                let (c, d) = f.edge(j);
+                if segments_cross(a, b, c, d) {
+                    return bad("points", format!("edges {i} and {j} cross"), "a simple (not self-intersecting) polygon");
+                }
+            }
+        }
+        Ok(f)
+    }
+
+    /// The vertices (m).
+    pub fn points(&self) -> &[Vec2] {
+        &self.points[..self.len as usize]
+    }
+
+    /// Signed area (m², > 0 counter-clockwise; shoelace formula).
+    pub fn area(&self) -> f32 {
+        (0..self.len as usize).map(|i| {
+            let (a, b) = self.edge(i);
+            a.perp_dot(b)
+        }).sum::<f32>() * 0.5
+    }
+
+    fn edge(&self, i: usize) -> (Vec2, Vec2) {
+        let n = self.len as usize;
+        (self.points[i], self.points[(i + 1) % n])
+    }
+
+    /// True when `p` is inside (even–odd crossing rule; points on an edge may go either way).
+    pub fn contains(&self, p: Vec2) -> bool {
+        let mut inside = false;
+        for i in 0..self.len as usize {
+            let (a, b) = self.edge(i);
+            if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+                inside = !inside;
+            }
+        }
+        inside
+    }
+
+    /// Signed distance from `p` to the polygon's boundary (m; negative inside).
+    pub fn signed_distance(&self, p: Vec2) -> f32 {
+        let d = (0..self.len as usize)
+            .map(|i| {
+                let (a, b) = self.edge(i);
+                let ab = b - a;
+                let t = ((p - a).dot(ab) / ab.length_squared().max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
+                p.distance(a + ab * t)
+            })
+            .fold(f32::INFINITY, f32::min);
+        if self.contains(p) {
+            -d
+        } else {
+            d
+        }
+    }
+
+    /// True when the segment `a`–`b` has a point inside the polygon or crosses its boundary.
+    fn segment_meets(&self, a: Vec2, b: Vec2) -> bool {
+        self.contains(a) || self.contains(b) || (0..self.len as usize).any(|i| {
+            let (c, d) = self.edge(i);
+            segments_cross(a, b, c, d)
+        })
+    }
+}
+
+/// True when the closed segments a–b and c–d have a point in common (orientation tests).
+fn segments_cross(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> bool {
+    let o = |p: Vec2, q: Vec2, r: Vec2| (q - p).perp_dot(r - p);
+    let (d1, d2, d3, d4) = (o(c, d, a), o(c, d, b), o(a, b, c), o(a, b, d));
+    if ((d1 > 0.0 && d2 < 0.0) || (d1 < 0.0 && d2 > 0.0)) && ((d3 > 0.0 && d4 < 0.0) || (d3 < 0.0 && d4 > 0.0)) {
+        return true;
+    }
+    let on = |p: Vec2, q: Vec2, r: Vec2| r.x >= p.x.min(q.x) && r.x <= p.x.max(q.x) && r.y >= p.y.min(q.y) && r.y <= p.y.max(q.y);
+    (d1 == 0.0 && on(c, d, a)) || (d2 == 0.0 && on(c, d, b)) || (d3 == 0.0 && on(a, b, c)) || (d4 == 0.0 && on(a, b, d))
+}
+
+/// Rotation of the horizontal components of `v` by −`yaw` radians about +z (world to the
+/// frame of an [`Obstacle::OrientedBox`]).
+fn unyaw(v: Vec3, yaw: f32) -> Vec3 {
+    let (s, c) = yaw.sin_cos();
+    Vec3::new(c * v.x + s * v.y, -s * v.x + c * v.y, v.z)
+}
 
 /// A solid obstacle. Coordinates in metres, tree base at the origin.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,6 +162,27 @@ pub enum Obstacle {
         /// Height above z = 0 (m, > 0; may be infinite).
         height: f32,
     },
+    /// A box turned about the vertical: centre `center`, half extents `half` along its own x,
+    /// y, z axes, its x axis at `yaw_deg` counter-clockwise from world +x (an angled wall or
+    /// building; `yaw_deg` 0 is the axis-aligned box `center ± half`).
+    OrientedBox {
+        /// Centre (m).
+        center: Vec3,
+        /// Half extents (m, > 0, finite) along the box's own axes.
+        half: Vec3,
+        /// Turn about +z (degrees, counter-clockwise seen from above).
+        yaw_deg: f32,
+    },
+    /// A vertical prism: the footprint polygon extruded from `bottom` to `top` (a building or
+    /// wall footprint).
+    Prism {
+        /// Footprint in the horizontal plane (m).
+        footprint: Footprint,
+        /// Lowest z (m, finite).
+        bottom: f32,
+        /// Highest z (m, > `bottom`; may be infinite).
+        top: f32,
+    },
 }
 
 impl Obstacle {
@@ -54,19 +199,19 @@ impl Obstacle {
                 }
             }
             Obstacle::FiniteWall { x, length, height } => Obstacle::Wall { x }.contains(p) && p.y.abs() <= 0.5 * length && p.z >= 0.0 && p.z <= height,
+            Obstacle::OrientedBox { center, half, yaw_deg } => unyaw(p - center, yaw_deg.to_radians()).abs().cmple(half).all(),
+            Obstacle::Prism { footprint, bottom, top } => p.z >= bottom && p.z <= top && footprint.contains(p.truncate()),
         }
     }
 
-    /// The obstacle as an axis-aligned box (lower, upper corner; infinite where unbounded).
-    /// `None` for a sphere.
     /// The obstacle as an axis-aligned box (min, max corners, m; infinite extents as ±∞), or
-    /// `None` for a sphere. The one definition used by the ray tests here and by the Plastic
+    /// `None` for a sphere, an oriented box or a prism. The one definition used by the ray tests here and by the Plastic
     /// Trees sky mask (`structure::plastic::light::SkyMask`).
     pub(crate) fn as_box(&self) -> Option<(Vec3, Vec3)> {
         let inf = f32::INFINITY;
         match *self {
             Obstacle::Box { min, max } => Some((min, max)),
-            Obstacle::Sphere { .. } => None,
+            Obstacle::Sphere { .. } | Obstacle::OrientedBox { .. } | Obstacle::Prism { .. } => None,
             Obstacle::Wall { x } => Obstacle::FiniteWall { x, length: inf, height: inf }.as_box().map(|(lo, hi)| (lo.with_z(-inf), hi)),
             Obstacle::FiniteWall { x, length, height } => {
                 let (x0, x1) = if x >= 0.0 { (x, inf) } else { (-inf, x) };
@@ -75,17 +220,46 @@ impl Obstacle {
         }
     }
 
-    /// Signed distance from `p` to the obstacle's surface (m): negative inside, 0 on it,
-    /// positive outside (exact for boxes, walls and spheres).
-    pub fn signed_distance(&self, p: Vec3) -> f32 {
-        if let Obstacle::Sphere { center, radius } = *self {
-            return p.distance(center) - radius;
+    /// Axis-aligned bounding box (min, max corners, m; ±∞ where the obstacle is unbounded).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        match *self {
+            Obstacle::Sphere { center, radius } => (center - radius, center + radius),
+            Obstacle::OrientedBox { center, half, yaw_deg } => {
+                let (s, c) = yaw_deg.to_radians().sin_cos();
+                let e = Vec3::new(c.abs() * half.x + s.abs() * half.y, s.abs() * half.x + c.abs() * half.y, half.z);
+                (center - e, center + e)
+            }
+            Obstacle::Prism { footprint, bottom, top } => {
+                let (lo, hi) = footprint.points().iter().fold((Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)), |(lo, hi), q| (lo.min(*q), hi.max(*q)));
+                (lo.extend(bottom), hi.extend(top))
+            }
+            _ => self.as_box().unwrap_or((Vec3::splat(f32::NEG_INFINITY), Vec3::splat(f32::INFINITY))),
         }
-        let Some((lo, hi)) = self.as_box() else { return f32::INFINITY };
-        // per axis: distance outside the slab (> 0) or depth inside (< 0)
-        let d = Vec3::new((lo.x - p.x).max(p.x - hi.x), (lo.y - p.y).max(p.y - hi.y), (lo.z - p.z).max(p.z - hi.z));
-        let outside = d.max(Vec3::ZERO).length();
-        outside + d.max_element().min(0.0)
+    }
+
+    /// Signed distance from `p` to the obstacle's surface (m): negative inside, 0 on it,
+    /// positive outside (exact for every kind: boxes, walls, spheres, oriented boxes, prisms).
+    pub fn signed_distance(&self, p: Vec3) -> f32 {
+        match *self {
+            Obstacle::Sphere { center, radius } => p.distance(center) - radius,
+            Obstacle::OrientedBox { center, half, yaw_deg } => {
+                let q = unyaw(p - center, yaw_deg.to_radians());
+                let d = q.abs() - half;
+                d.max(Vec3::ZERO).length() + d.max_element().min(0.0)
+            }
+            Obstacle::Prism { footprint, bottom, top } => {
+                // an extrusion: the 2-D signed distance combined with the z slab's like a box's axes
+                let d = Vec2::new(footprint.signed_distance(p.truncate()), (bottom - p.z).max(p.z - top));
+                d.max(Vec2::ZERO).length() + d.max_element().min(0.0)
+            }
+            _ => {
+                let Some((lo, hi)) = self.as_box() else { return f32::INFINITY };
+                // per axis: distance outside the slab (> 0) or depth inside (< 0)
+                let d = Vec3::new((lo.x - p.x).max(p.x - hi.x), (lo.y - p.y).max(p.y - hi.y), (lo.z - p.z).max(p.z - hi.z));
+                let outside = d.max(Vec3::ZERO).length();
+                outside + d.max_element().min(0.0)
+            }
+        }
     }
 
     /// True when the ray `p + t·d`, 0 < t ≤ `max_t`, meets the obstacle (analytic: slab test,
@@ -121,6 +295,34 @@ impl Obstacle {
                 }
                 let t = (x - p.x) / d.x;
                 t > 0.0 && t <= max_t
+            }
+            Obstacle::OrientedBox { center, half, yaw_deg } => {
+                // the slab test in the box's own frame (a turn keeps the ray's parameter t)
+                let yaw = yaw_deg.to_radians();
+                slab_hit(unyaw(p - center, yaw), unyaw(d, yaw), max_t, -half, half)
+            }
+            Obstacle::Prism { footprint, bottom, top } => {
+                // the part of the ray inside the z slab, then its horizontal shadow against the polygon
+                let (mut t0, mut t1) = (0.0f32, max_t);
+                if d.z == 0.0 {
+                    if p.z < bottom || p.z > top {
+                        return false;
+                    }
+                } else {
+                    let (ta, tb) = ((bottom - p.z) / d.z, (top - p.z) / d.z);
+                    t0 = t0.max(ta.min(tb));
+                    t1 = t1.min(ta.max(tb));
+                }
+                if !(t0 <= t1) {
+                    return false;
+                }
+                // an unbounded ray: clip far enough to cross the whole footprint
+                if !t1.is_finite() {
+                    let reach = footprint.points().iter().map(|q| q.distance(p.truncate())).fold(0.0f32, f32::max);
+                    let h = d.truncate().length();
+                    t1 = if h > 0.0 { t0 + reach / h + 1.0 } else { t0 };
+                }
+                footprint.segment_meets((p + d * t0).truncate(), (p + d * t1).truncate())
             }
         }
     }
@@ -162,6 +364,23 @@ impl Obstacle {
                 }
                 if !(height > 0.0) {
                     return bad("wall height", height.to_string(), "a height > 0 m");
+                }
+            }
+            Obstacle::OrientedBox { center, half, yaw_deg } => {
+                if !center.is_finite() || !yaw_deg.is_finite() {
+                    return bad("oriented box", format!("centre {center}, yaw {yaw_deg}°"), "finite centre (m) and yaw (degrees)");
+                }
+                if !(half.is_finite() && half.cmpgt(Vec3::ZERO).all()) {
+                    return bad("oriented box half extents", half.to_string(), "finite half extents > 0 m");
+                }
+            }
+            Obstacle::Prism { footprint, bottom, top } => {
+                Footprint::new(footprint.points()).map_err(|e| match e {
+                    Error::Invalid { field, value, expected, .. } => Error::Invalid { context: context.into(), field: format!("prism footprint {field}"), value, expected },
+                    e => e,
+                })?;
+                if !bottom.is_finite() || !(top > bottom) || top.is_nan() {
+                    return bad("prism bottom/top", format!("{bottom}/{top}"), "a finite bottom and a top above it (m; the top may be infinite)");
                 }
             }
         }

@@ -15,8 +15,9 @@
 //!
 //! - [`evaluation`]: section 7, Table 1 (sets O, G, T; edit distances; t-tests).
 //!
-//! Use: [`PlasticTree::analyse`] each tree once (in the environment it grew in, alone), place
-//! it ([`PlasticTree::translate`]), then call [`adapt_group`] with the trees that share a
+//! Use: [`PlasticTree::analyse`] each tree once (in the environment it grew in, alone), fit
+//! it to a tree's size ([`PlasticTree::scale`], uniform about the root) and place it
+//! ([`PlasticTree::translate`]), then call [`adapt_group`] with the trees that share a
 //! neighbourhood and the [`Environment`] whenever something changes; [`PlasticTree::skeleton`]
 //! gives the adapted skeleton. [`adapt`] does all of it for one tree.
 
@@ -47,8 +48,9 @@ pub fn tropism(p: &PlasticParams, light: Vec3) -> Vec3 {
     ((wp * light + wg * Vec3::Z) / (wp + wg)).normalize_or(Vec3::Z)
 }
 
-/// What a tree adapts to: solid obstacles (boxes, finite or infinite walls, spheres), the
-/// terrain surface and the sky (global light, section 6).
+/// What a tree adapts to: solid obstacles (boxes, finite or infinite walls, spheres, boxes
+/// turned about the vertical — angled walls — and vertical prisms over a footprint polygon —
+/// buildings), the terrain surface and the sky (global light, section 6).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Environment {
     /// Solid obstacles (m, world coordinates).
@@ -219,12 +221,65 @@ impl PlasticTree {
         }
     }
 
+    /// Scales the tree uniformly by `factor` about its root (the base node): node positions
+    /// relative to the root, branch radii, the internode length l_i, the lobes' centres and
+    /// radii and every stage cluster's radius r_c, so the analysis stays the analysis of the
+    /// scaled skeleton in every length. Ratios are unchanged (growth rates of eq. 1, seasons of
+    /// eq. 2, w_s of eq. 7 since l_s/l_i is kept, the untropic directions of eqs. 8–9); the
+    /// pruning thresholds ψ_s,min and ψ_ref of eq. (11) scale with `factor` (ψ = ζ/l of eq. 10 is
+    /// a leaf area, ∝ r_c², per branch length). The translucency base γ_c0 of eq. (4) becomes
+    /// γ_c0^(1/factor), so every cluster keeps its transmittance γ_c = γ_c0^r_c: every ray of
+    /// eq. (3) meets the scaled clusters as it met the originals, and the light of the analysis
+    /// (eq. 3: stage light, light directions) is the scaled tree's own, unchanged. The adapted
+    /// state is reset to the scaled input and the next adaptation recomputes every node. Use it to fit one analysed prototype to trees of
+    /// several heights without analysing each again.
+    ///
+    /// Errors: [`Error::Invalid`] (field `scale`) unless `factor` is finite and > 0.
+    pub fn scale(&mut self, factor: f32) -> Result<()> {
+        if !(factor > 0.0 && factor.is_finite()) {
+            return Err(Error::Invalid { context: "PlasticTree::scale".into(), field: "scale".into(), value: factor.to_string(), expected: "a finite factor > 0".into() });
+        }
+        let root = self.input.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO);
+        let about = |p: Vec3| root + (p - root) * factor;
+        for nd in &mut self.input.nodes {
+            nd.pos = about(nd.pos);
+            nd.radius *= factor;
+        }
+        let a = &mut self.analysis;
+        a.internode_m *= factor;
+        for l in &mut a.lobes {
+            l.center = about(l.center);
+            l.radius *= factor;
+        }
+        for c in a.stages.iter_mut().flatten() {
+            c.radius *= factor;
+        }
+        a.psi_ref *= factor;
+        a.psi_min.iter_mut().for_each(|m| *m *= factor);
+        self.params.translucency_gamma_c0 = self.params.translucency_gamma_c0.powf(1.0 / factor);
+        let n = self.input.nodes.len();
+        self.pos = self.input.nodes.iter().map(|nd| nd.pos).collect();
+        self.rot = vec![Quat::IDENTITY; n];
+        self.bend = vec![0.0; n];
+        self.fate = vec![Fate::Alive; n];
+        self.light_cache = self.analysis.stage_light.clone();
+        self.final_occ.clear();
+        self.force = true;
+        self.report = PlasticReport { nodes_before: n, nodes_after: n, ..Default::default() };
+        Ok(())
+    }
+
     /// The analysis (section 4).
     pub fn analysis(&self) -> &Analysis {
         &self.analysis
     }
 
-    /// The input skeleton (as analysed, translated).
+    /// The Plastic Trees parameters in use (γ_c0 as changed by [`PlasticTree::scale`]).
+    pub fn params(&self) -> &PlasticParams {
+        &self.params
+    }
+
+    /// The input skeleton (as analysed, translated, scaled).
     pub fn input(&self) -> &Skeleton {
         &self.input
     }
