@@ -2,33 +2,15 @@
 //! wall and sheds the branches that reach into it, without regrowing; the must-show list of
 //! issue 12 (wall, restoring, inverse tropism, two trees, symmetry, validity and threads).
 use glam::{Quat, Vec3};
-use sylva::species::{PlasticParams, Species, SpeciesLibrary};
+use sylva::species::PlasticParams;
 use sylva::structure::grow::space::Obstacle;
 use sylva::structure::plastic::{adapt, adapt_group, cluster_density, inverse_tropism, Environment, Fate, PlasticTree};
-use sylva::structure::species_tree::{grow_species_tree, tip_leaves, GrownTree, Model};
+use sylva::structure::species_tree::{tip_leaves, GrownTree};
 use sylva::structure::Skeleton;
 
-fn tip_centroid(sk: &Skeleton) -> Vec3 {
-    let tips: Vec<Vec3> = sk.nodes.iter().filter(|n| n.children.is_empty()).map(|n| n.pos).collect();
-    tips.iter().copied().sum::<Vec3>() / tips.len() as f32
-}
-
-fn beech() -> Species {
-    let lib = SpeciesLibrary::embedded().unwrap();
-    lib.species[lib.find("beech").unwrap() as usize].clone()
-}
-
-/// The paper's Tree 1 tropisms (section 6): phototropism 0.25, gravitropism 0.12.
-fn tree1(sp: &Species) -> PlasticParams {
-    let mut p = sp.architecture.plastic;
-    p.phototropism = 0.25;
-    p.gravitropism = 0.12;
-    p
-}
-
-fn grow(sp: &Species, age: f32, seed: u64) -> GrownTree {
-    grow_species_tree(sp, Model::Light, age, &[], seed).unwrap()
-}
+#[path = "common/plastic.rs"]
+mod plastic_common;
+use plastic_common::{beech, grow, tip_centroid, tree1};
 
 fn finite_wall(g: &GrownTree) -> Obstacle {
     let e = g.envelope.unwrap();

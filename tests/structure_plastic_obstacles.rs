@@ -2,33 +2,15 @@
 //! footprints as solids (`Obstacle::OrientedBox`, `Obstacle::Prism`), and uniform scaling of an
 //! analysed tree (`PlasticTree::scale`).
 use glam::{Vec2, Vec3};
-use sylva::species::{PlasticParams, Species, SpeciesLibrary};
+use sylva::species::Species;
 use sylva::structure::grow::space::{Footprint, Obstacle};
 use sylva::structure::plastic::{Environment, Fate, PlasticTree};
-use sylva::structure::species_tree::{grow_species_tree, tip_leaves, GrownTree, Model};
+use sylva::structure::species_tree::tip_leaves;
 use sylva::structure::Skeleton;
 
-fn beech() -> Species {
-    let lib = SpeciesLibrary::embedded().unwrap();
-    lib.species[lib.find("beech").unwrap() as usize].clone()
-}
-
-/// The paper's Tree 1 tropisms (section 6): phototropism 0.25, gravitropism 0.12.
-fn tree1(sp: &Species) -> PlasticParams {
-    let mut p = sp.architecture.plastic;
-    p.phototropism = 0.25;
-    p.gravitropism = 0.12;
-    p
-}
-
-fn grow(sp: &Species, age: f32, seed: u64) -> GrownTree {
-    grow_species_tree(sp, Model::Light, age, &[], seed).unwrap()
-}
-
-fn tip_centroid(sk: &Skeleton) -> Vec3 {
-    let tips: Vec<Vec3> = sk.nodes.iter().filter(|n| n.children.is_empty()).map(|n| n.pos).collect();
-    tips.iter().copied().sum::<Vec3>() / tips.len() as f32
-}
+#[path = "common/plastic.rs"]
+mod plastic_common;
+use plastic_common::{beech, grow, tip_centroid, tree1};
 
 /// Deterministic points in a 12 m cube around the origin.
 fn points(n: usize) -> Vec<Vec3> {
