@@ -110,6 +110,11 @@ impl Grower {
     /// request on.
     pub fn poll(&mut self) -> Option<std::result::Result<Grown, String>> {
         let got = self.rx.try_recv().ok()?;
+        self.received(got)
+    }
+
+    /// A result arrived: the worker is free, so the queued request (if any) is sent now.
+    fn received(&mut self, got: std::result::Result<Grown, String>) -> Option<std::result::Result<Grown, String>> {
         self.busy = false;
         if let Some(q) = self.queued.take() {
             if let Some(tx) = &self.tx {
@@ -125,13 +130,7 @@ impl Grower {
             return None;
         }
         let got = self.rx.recv().ok()?;
-        self.busy = false;
-        if let Some(q) = self.queued.take() {
-            if let Some(tx) = &self.tx {
-                self.busy = tx.send(q).is_ok();
-            }
-        }
-        Some(got)
+        self.received(got)
     }
 }
 
