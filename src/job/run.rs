@@ -129,6 +129,31 @@ pub fn clear_snapshots(dir: &Path) -> Result<()> {
     Ok(())
 }
 
+/// Removes the files of the snapshot `label` (e.g. `year_0037`): `inventory/{label}.*`,
+/// `inventory/{label}_*` (regeneration layer, seasons) and `maps/species_{label}.*`,
+/// `maps/basal_area_{label}.*`; other files are kept.
+///
+/// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
+fn remove_snapshot(dir: &Path, label: &str) -> Result<()> {
+    let inv = [format!("{label}."), format!("{label}_")];
+    let maps = [format!("species_{label}."), format!("basal_area_{label}.")];
+    for (sub, prefixes) in [("inventory", &inv), ("maps", &maps)] {
+        let d = dir.join(sub);
+        if !d.is_dir() {
+            continue;
+        }
+        let entries = std::fs::read_dir(&d).map_err(|e| Error::io(&d, e))?;
+        for e in entries {
+            let e = e.map_err(|err| Error::io(&d, err))?;
+            let p = e.path();
+            if prefixes.iter().any(|pre| e.file_name().to_string_lossy().starts_with(pre.as_str())) && p.is_file() {
+                std::fs::remove_file(&p).map_err(|err| Error::io(&p, err))?;
+            }
+        }
+    }
+    Ok(())
+}
+
 fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize, geojson: bool) -> Result<()> {
     inventory::write_inventory_csv(&dir.join("inventory").join(format!("{label}.csv")), w)?;
     if geojson {
@@ -195,6 +220,14 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
     }
     if resume {
         rows = checkpoint::load(&ck, &mut world)?;
+        // a snapshot off this run's schedule at the checkpoint's year (one a stopped run wrote
+        // so its state could be viewed, or the end of a shorter run now extended) is not one an
+        // unbroken run writes: removed, so the resumed directory equals the unbroken run's
+        let yc = world.stand.year;
+        let scheduled = yc == 0 || yc == scenario.years || (scenario.snapshot_every > 0 && yc % scenario.snapshot_every == 0);
+        if !scheduled {
+            remove_snapshot(&dir, &format!("year_{yc:04}"))?;
+        }
         // the scenario as run, `years` included (a resume may extend the run)
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
     } else {
