@@ -109,7 +109,26 @@ fn started_here(dir: &Path, ck: &Path) -> Result<bool> {
 ///
 /// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
 pub fn clear_snapshots(dir: &Path) -> Result<()> {
-    for (sub, prefixes) in [("inventory", &["year_"][..]), ("maps", &["species_", "basal_area_"][..])] {
+    remove_prefixed(dir, &[("inventory", &["year_"]), ("maps", &["species_", "basal_area_"])])
+}
+
+/// Removes the files of the snapshot `label` (e.g. `year_0037`): `inventory/{label}.*`,
+/// `inventory/{label}_*` (regeneration layer, seasons) and `maps/species_{label}.*`,
+/// `maps/basal_area_{label}.*`; other files are kept.
+///
+/// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
+fn remove_snapshot(dir: &Path, label: &str) -> Result<()> {
+    let (i1, i2) = (format!("{label}."), format!("{label}_"));
+    let (m1, m2) = (format!("species_{label}."), format!("basal_area_{label}."));
+    remove_prefixed(dir, &[("inventory", &[&i1, &i2]), ("maps", &[&m1, &m2])])
+}
+
+/// Removes the plain files of each `dir/sub` whose name starts with one of its prefixes (a
+/// missing folder is skipped).
+///
+/// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
+fn remove_prefixed(dir: &Path, subs: &[(&str, &[&str])]) -> Result<()> {
+    for (sub, prefixes) in subs {
         let d = dir.join(sub);
         if !d.is_dir() {
             continue;
@@ -119,34 +138,8 @@ pub fn clear_snapshots(dir: &Path) -> Result<()> {
             let e = e.map_err(|err| Error::io(&d, err))?;
             let name = e.file_name();
             let name = name.to_string_lossy();
-            let ours = prefixes.iter().any(|p| name.starts_with(p));
             let p = e.path();
-            if ours && p.is_file() {
-                std::fs::remove_file(&p).map_err(|err| Error::io(&p, err))?;
-            }
-        }
-    }
-    Ok(())
-}
-
-/// Removes the files of the snapshot `label` (e.g. `year_0037`): `inventory/{label}.*`,
-/// `inventory/{label}_*` (regeneration layer, seasons) and `maps/species_{label}.*`,
-/// `maps/basal_area_{label}.*`; other files are kept.
-///
-/// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
-fn remove_snapshot(dir: &Path, label: &str) -> Result<()> {
-    let inv = [format!("{label}."), format!("{label}_")];
-    let maps = [format!("species_{label}."), format!("basal_area_{label}.")];
-    for (sub, prefixes) in [("inventory", &inv), ("maps", &maps)] {
-        let d = dir.join(sub);
-        if !d.is_dir() {
-            continue;
-        }
-        let entries = std::fs::read_dir(&d).map_err(|e| Error::io(&d, e))?;
-        for e in entries {
-            let e = e.map_err(|err| Error::io(&d, err))?;
-            let p = e.path();
-            if prefixes.iter().any(|pre| e.file_name().to_string_lossy().starts_with(pre.as_str())) && p.is_file() {
+            if prefixes.iter().any(|pre| name.starts_with(pre)) && p.is_file() {
                 std::fs::remove_file(&p).map_err(|err| Error::io(&p, err))?;
             }
         }
