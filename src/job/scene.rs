@@ -626,7 +626,164 @@ impl Landscape {
             }
             cov[r as usize * w + c as usize]
         };
-        crate::render::terrain::from_ground(g, &self.cover, &lookup)
+        let mut m = crate::render::terrain::from_ground(g, &self.cover, &lookup)?;
+        if let Some(far) = FarForest::of(instances, g, &cov) {
+            far.apply(&mut m, g, &self.cover);
+        }
+        Ok(m)
+    }
+}
+
+/// The forest drawn on the terrain beyond the simulated window, so that a window of forest
+/// does not stand on bare land (the surroundings of a real basin are forested too): a canopy
+/// surface in the window's state, taken from the frame's trees inside the window.
+///
+/// - **Cover**: the window's mean plan canopy cover ([`canopy_cover`]) modulated by a stand
+///   mosaic (Perlin noise of ~250 m, seed fixed: the same mosaic in every frame), with open
+///   meadows where the mosaic is low; none on streams, bare rock slopes or above the tree line.
+/// - **Species**: patches of ~140 m (jittered by a second noise, so their borders are not a
+///   grid) each lean to one species of the window, drawn with probability equal to its share of
+///   the window's crown area (π r² of the trees taller than 4 m): 50 % of the samples (~10 m,
+///   about a crown) take the patch's species, the others one drawn from the whole mix; the
+///   foliage colour is the frame's (season included), pulled 50 % towards the window's mean.
+/// - **Crowns**: [`TerrainMesh::forest`] carries the cover to the terrain shader, which draws
+///   crowns of ~7 m there (lit domes, dark gaps; faded to their mean where smaller than a
+///   pixel or two); stands of ~60 m vary in brightness by about ±10 % (Perlin noise).
+/// - **Height**: the canopy surface rises to the crown-area-weighted mean height of the
+///   window's trees times the cover, over 25 m from the window's edge, so the skyline beyond
+///   the window is a forest's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FarForest {
+    /// Mean plan canopy cover inside the window (0..1).
+    pub cover: f32,
+    /// Canopy height (m): crown-area-weighted mean height of the trees taller than 4 m.
+    pub height_m: f32,
+    /// (foliage colour, share of the crown area) per species present, shares summing to 1.
+    pub palette: Vec<([f32; 3], f32)>,
+}
+
+/// Mean window cover below which nothing is drawn beyond the window (bare or barely stocked).
+const FAR_FOREST_MIN_COVER: f32 = 0.05;
+
+impl FarForest {
+    /// The far forest of a frame's `instances` on the samples of `g` with plan cover `cov`
+    /// (one per sample); `None` without a window ([`GroundGrid::focus`]) or when the window's
+    /// mean cover is below 5 %.
+    ///
+    /// [`GroundGrid::focus`]: crate::render::terrain::GroundGrid::focus
+    pub fn of(instances: &[TreeInstance], g: &crate::render::terrain::GroundGrid, cov: &[f32]) -> Option<FarForest> {
+        let (lo, hi) = g.focus?;
+        let (w, h) = (g.heights.width, g.heights.height);
+        let (mut sum, mut n) = (0.0f64, 0usize);
+        for r in 0..h {
+            for c in 0..w {
+                let (x, y) = (g.origin[0] + (c as f32 + 0.5) * g.cell_x, g.origin[1] + (h as f32 - r as f32 - 0.5) * g.cell_y);
+                if x >= lo[0] && x <= hi[0] && y >= lo[1] && y <= hi[1] {
+                    sum += f64::from(cov[r * w + c].min(1.0));
+                    n += 1;
+                }
+            }
+        }
+        let cover = if n > 0 { (sum / n as f64) as f32 } else { 0.0 };
+        if !(cover >= FAR_FOREST_MIN_COVER) {
+            return None;
+        }
+        let mut by_species: Vec<(u32, [f64; 3], f64, f64)> = Vec::new(); // (species, Σ a·colour, Σ a, Σ a·h)
+        for t in instances.iter().filter(|t| t.id & SAPLING_ID_BIT == 0 && t.height > 4.0 && t.opacity > 0.0) {
+            let a = f64::from(t.crown_radius * t.crown_radius * t.opacity);
+            let col = t.leaf_color.map(|v| f64::from(v * t.leaf_amount.clamp(0.0, 1.0)));
+            let e = match by_species.iter_mut().find(|e| e.0 == t.species) {
+                Some(e) => e,
+                None => {
+                    by_species.push((t.species, [0.0; 3], 0.0, 0.0));
+                    by_species.last_mut()?
+                }
+            };
+            for k in 0..3 {
+                e.1[k] += a * col[k];
+            }
+            e.2 += a;
+            e.3 += a * f64::from(t.height);
+        }
+        by_species.sort_by_key(|e| e.0);
+        let total: f64 = by_species.iter().map(|e| e.2).sum();
+        if !(total > 0.0) {
+            return None;
+        }
+        let height_m = (by_species.iter().map(|e| e.3).sum::<f64>() / total) as f32;
+        let palette = by_species.iter().map(|e| (e.1.map(|v| (v / e.2) as f32), (e.2 / total) as f32)).collect();
+        Some(FarForest { cover, height_m, palette })
+    }
+
+    /// Draws the far forest on `m` (the mesh of `g`): colours and heights of the vertices
+    /// outside the window, as described on [`FarForest`]. Vertices inside the window are not
+    /// changed.
+    pub fn apply(&self, m: &mut TerrainMesh, g: &crate::render::terrain::GroundGrid, cover: &LandCover) {
+        use noise::{NoiseFn, Perlin};
+        let Some((lo, hi)) = g.focus else { return };
+        let mosaic = Perlin::new(19);
+        let jitter = Perlin::new(23);
+        let hash = |i: i64, j: i64, salt: u64| {
+            let mut z = (i.wrapping_mul(73_856_093) ^ j.wrapping_mul(19_349_663)) as u64 ^ salt;
+            z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            (z >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mean = self.palette.iter().fold([0.0f32; 3], |m, (c, w)| [m[0] + c[0] * w, m[1] + c[1] * w, m[2] + c[2] * w]);
+        let mut forest = std::mem::take(&mut m.forest);
+        forest.resize(m.positions.len(), 0.0);
+        for (i, p) in m.positions.iter_mut().enumerate() {
+            let (x, y) = (p[0], p[1]);
+            let dx = (lo[0] - x).max(x - hi[0]).max(0.0);
+            let dy = (lo[1] - y).max(y - hi[1]).max(0.0);
+            let d = dx.hypot(dy);
+            if d <= 0.0 {
+                continue;
+            }
+            let stream = g.stream.get(i).copied().unwrap_or(0.0);
+            let n = m.normals[i];
+            let slope = n[2].clamp(-1.0, 1.0).acos().to_degrees();
+            let site = (1.0 - 2.0 * stream).clamp(0.0, 1.0)
+                * (1.0 - (slope - cover.rock_slope_deg + 4.0) / 8.0).clamp(0.0, 1.0)
+                * (1.0 - (p[2] - cover.tree_line + 100.0) / 200.0).clamp(0.0, 1.0);
+            let (fx, fy) = (f64::from(x), f64::from(y));
+            let stand = mosaic.get([fx / 250.0, fy / 250.0]) as f32; // about −0.7..0.7
+            let open = ((stand + 0.62) / 0.1).clamp(0.0, 1.0); // a few meadows where the mosaic is lowest
+            let c = (self.cover * (0.9 + 0.2 * stand)).clamp(0.0, 1.0) * open * site;
+            if c <= 0.0 {
+                continue;
+            }
+            // the patch's species, by crown-area share
+            let (jx, jy) = (jitter.get([fx / 90.0, fy / 90.0]) * 60.0, jitter.get([fx / 90.0 + 7.3, fy / 90.0 - 3.1]) * 60.0);
+            // a vertex (~one crown) takes its patch's species half of the time, else one drawn
+            // from the whole window's mix: patches lean to a species without being uniform
+            let patch = hash(((fx + jx) / 140.0).floor() as i64, ((fy + jy) / 140.0).floor() as i64, 0x5151);
+            let own = hash((x / 10.0).floor() as i64, (y / 10.0).floor() as i64, 0xA5A5);
+            let u = if own < 0.5 { patch } else { hash((x / 10.0).floor() as i64, (y / 10.0).floor() as i64, 0x3C3C) };
+            let mut acc = 0.0;
+            let mut leaf = self.palette[self.palette.len() - 1].0;
+            for (col, share) in &self.palette {
+                acc += share;
+                if u < acc {
+                    leaf = *col;
+                    break;
+                }
+            }
+            // species colours pulled half-way towards the window's mean: a far canopy mixes crowns
+            let leaf = [0, 1, 2].map(|j| leaf[j] + (mean[j] - leaf[j]) * 0.5);
+            // stands of ~60 m a little lighter or darker (age, density); the crowns themselves
+            // are drawn by the terrain shader where `forest` > 0
+            let k = mosaic.get([fx / 60.0 + 11.7, fy / 60.0 - 5.3]) as f32;
+            let top = leaf.map(|v| v * (1.0 + 0.15 * k));
+            let col = &mut m.colors[i];
+            for j in 0..3 {
+                col[j] += (top[j] - col[j]) * (2.0 * c).min(1.0);
+            }
+            forest[i] = c;
+            p[2] += self.height_m * c * (d / 25.0).min(1.0);
+        }
+        m.forest = forest;
     }
 }
 
@@ -756,6 +913,71 @@ mod tests {
         let saplings: Vec<&TreeInstance> = inst.iter().filter(|t| t.id & SAPLING_ID_BIT != 0).collect();
         assert_eq!(inst.len() - saplings.len(), 1, "the tree");
         assert!(!saplings.is_empty() && saplings.iter().all(|t| (t.position[0] - 12.5).abs() < 2.6), "only the open cohort: {saplings:?}");
+    }
+
+    /// A flat 2 km × 2 km ground of 10 m samples around a 1 km window filled with crowns of
+    /// two species (70 % / 30 % of the crown area, green and orange), and the far forest drawn
+    /// beyond it.
+    #[test]
+    fn far_forest_beyond_the_window_follows_the_window_stand() {
+        let (w, h) = (200, 200);
+        let g = crate::render::terrain::GroundGrid {
+            heights: Grid { width: w, height: h, data: vec![500.0; w * h] },
+            cell_x: 10.0,
+            cell_y: 10.0,
+            origin: [-500.0, -500.0],
+            stream: vec![],
+            wetness: vec![],
+            fade: vec![],
+            focus: Some(([0.0, 0.0], [1000.0, 1000.0])),
+        };
+        let (green, orange) = ([0.1, 0.4, 0.1], [0.5, 0.3, 0.05]);
+        let mut trees = Vec::new();
+        for j in 0..125 {
+            for i in 0..125 {
+                let id = (j * 125 + i) as u64 + 1;
+                let sp = if (i * 7 + j * 3) % 10 < 7 { 0 } else { 1 };
+                trees.push(TreeInstance::new(id, [4.0 + 8.0 * i as f32, 4.0 + 8.0 * j as f32, 500.0], 25.0, 4.5, sp, if sp == 0 { green } else { orange }));
+            }
+        }
+        let cover = LandCover::default();
+        let cov = canopy_cover(&trees, &g);
+        let lookup = |_: f32, _: f32| 0.0;
+        let before = crate::render::terrain::from_ground(&g, &cover, &lookup).unwrap();
+        // nothing beyond a bare window
+        assert!(FarForest::of(&[], &g, &vec![0.0; w * h]).is_none());
+        let far = FarForest::of(&trees, &g, &cov).expect("a stocked window");
+        assert!(far.cover > 0.9, "{}", far.cover);
+        assert!((far.height_m - 25.0).abs() < 1e-3);
+        assert_eq!(far.palette.len(), 2);
+        assert!((far.palette[0].1 - 0.7).abs() < 0.02 && (far.palette[0].0[1] - 0.4).abs() < 1e-5, "{:?}", far.palette);
+        let mut m = before.clone();
+        far.apply(&mut m, &g, &cover);
+        let (mut raised, mut outside, mut a, mut b) = (0.0f64, 0usize, 0usize, 0usize);
+        for (i, p) in m.positions.iter().enumerate() {
+            let q = before.positions[i];
+            let inside = (0.0..=1000.0).contains(&q[0]) && (0.0..=1000.0).contains(&q[1]);
+            if inside {
+                assert_eq!((p, m.colors[i], m.forest[i]), (&q, before.colors[i], 0.0), "the window is left as it was");
+                continue;
+            }
+            let d = (-q[0]).max(q[0] - 1000.0).max(-q[1]).max(q[1] - 1000.0);
+            assert!(p[2] >= q[2] && p[2] <= q[2] + 25.0 + 1e-3);
+            if d > 30.0 {
+                outside += 1;
+                raised += f64::from(p[2] - q[2]);
+                // forest canopy: the species' hue, not grass
+                let c = m.colors[i];
+                if p[2] - q[2] > 15.0 {
+                    assert!(m.forest[i] > 0.6, "{}", m.forest[i]);
+                    if c[0] > c[1] { b += 1 } else { a += 1 }
+                }
+            }
+        }
+        let mean = raised / outside as f64;
+        assert!(mean > 10.0 && mean < 25.0, "mean canopy height beyond the window {mean}");
+        let share = a as f64 / (a + b) as f64;
+        assert!((0.5..0.9).contains(&share), "green patches {share} of {}", a + b);
     }
 
     #[test]
