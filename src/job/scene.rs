@@ -640,7 +640,8 @@ impl Landscape {
 ///
 /// - **Cover**: the window's mean plan canopy cover ([`canopy_cover`]) modulated by a stand
 ///   mosaic (Perlin noise of ~250 m, seed fixed: the same mosaic in every frame), with open
-///   meadows where the mosaic is low; none on streams, bare rock slopes or above the tree line.
+///   meadows where the mosaic is low; none on the main streams, on slopes steeper than the rock
+///   slope + 2–10° or above the tree line.
 /// - **Species**: patches of ~140 m (jittered by a second noise, so their borders are not a
 ///   grid) each lean to one species of the window, drawn with probability equal to its share of
 ///   the window's crown area (π r² of the trees taller than 4 m): 50 % of the samples (~10 m,
@@ -744,12 +745,14 @@ impl FarForest {
             let stream = g.stream.get(i).copied().unwrap_or(0.0);
             let n = m.normals[i];
             let slope = n[2].clamp(-1.0, 1.0).acos().to_degrees();
-            let site = (1.0 - 2.0 * stream).clamp(0.0, 1.0)
-                * (1.0 - (slope - cover.rock_slope_deg + 4.0) / 8.0).clamp(0.0, 1.0)
+            // riparian forest stands beside the channels: only the strongest streams stay open;
+            // forest holds on slopes up to a little beyond where bare rock starts to show
+            let site = (1.0 - (stream - 0.6) / 0.4).clamp(0.0, 1.0)
+                * (1.0 - (slope - cover.rock_slope_deg - 2.0) / 8.0).clamp(0.0, 1.0)
                 * (1.0 - (p[2] - cover.tree_line + 100.0) / 200.0).clamp(0.0, 1.0);
             let (fx, fy) = (f64::from(x), f64::from(y));
             let stand = mosaic.get([fx / 250.0, fy / 250.0]) as f32; // about −0.7..0.7
-            let open = ((stand + 0.62) / 0.1).clamp(0.0, 1.0); // a few meadows where the mosaic is lowest
+            let open = ((stand + 0.72) / 0.08).clamp(0.0, 1.0); // a few meadows where the mosaic is lowest
             let c = (self.cover * (0.9 + 0.2 * stand)).clamp(0.0, 1.0) * open * site;
             if c <= 0.0 {
                 continue;
