@@ -5,7 +5,8 @@
 //! rain of beech, Norway spruce and silver birch (the ecosystem bench's afforestation, ten times
 //! the area), or a generated fractal terrain with `SYLVA_LOAD_TERRAIN=generate`.
 //!
-//! Prints wall time, time per decade, live trees and regeneration cohorts, the checkpoint's
+//! Prints wall time, time per decade, wall time per phase of the year summed over the years
+//! (and of the outputs: stand table, checkpoint), live trees and regeneration cohorts, the checkpoint's
 //! size and the peak resident memory (VmHWM of /proc/self/status); the goal is ≤ 4 GiB and
 //! ≤ 5 min on 2 cores. Command (BENCHMARKS.md):
 //! `cargo bench --bench load` (release), under `/usr/bin/time -v` for the peak RSS as the
@@ -57,7 +58,12 @@ fn main() {
     eprintln!("load bench: {} × {} cells of 50 m ({:.0} ha, {}), {years} years, {threads} threads, snapshots {}", side, side, (side * side) as f64 * 0.25, if generate { "generated terrain" } else { "uniform site" }, if snapshots { "on" } else { "off" });
     let mut last = Instant::now();
     let mut decade = Vec::new();
+    let mut phases = [0f64; sylva::sim::step::N_PHASES + 1];
     let mut cb = |p: &Progress| {
+        for (k, s) in p.phase_seconds.iter().enumerate() {
+            phases[k] += s;
+        }
+        phases[sylva::sim::step::N_PHASES] += p.output_seconds;
         if p.year % 10 == 0 {
             let s = last.elapsed().as_secs_f64();
             last = Instant::now();
@@ -69,6 +75,8 @@ fn main() {
     opts.write_snapshots = snapshots;
     opts.progress = Some(&mut cb);
     let res = run_scenario(&sc, site, &lib, opts).expect("run");
+    let names: Vec<&str> = sylva::sim::step::PHASES.iter().map(|p| p.name).chain(["outputs"]).collect();
+    eprintln!("wall time per phase, all years (s): {}", names.iter().zip(&phases).map(|(n, s)| format!("{n} {s:.1}")).collect::<Vec<_>>().join(", "));
     let total = t0.elapsed().as_secs_f64();
     let ck = std::fs::metadata(out.join("checkpoint.bin")).map(|m| m.len()).unwrap_or(0);
     let last_row = res.rows.last();

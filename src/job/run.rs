@@ -29,6 +29,11 @@ pub struct Progress {
     pub trees: usize,
     /// Tree-years simulated per second of wall time in this year.
     pub trees_per_s: f64,
+    /// Wall time (s) of each phase of the year, [`crate::sim::step::PHASES`] order.
+    pub phase_seconds: [f64; crate::sim::step::N_PHASES],
+    /// Wall time (s) of this year's outputs: snapshots, stand table and checkpoint (0 in years
+    /// without any).
+    pub output_seconds: f64,
 }
 
 /// Options of [`run_scenario`].
@@ -273,6 +278,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         if let Some(r) = rep.row {
             rows.push(r);
         }
+        let t_out = Instant::now();
         if snap_year {
             snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px, gj(y))?;
             tables(&dir, &rows, &world, true)?;
@@ -294,7 +300,8 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
             crate::output::sync_dir(&dir)?;
         }
         if let Some(p) = opts.progress.as_mut() {
-            p(&Progress { year: y, years: scenario.years, trees: rep.trees, trees_per_s: trees_yr / ty.elapsed().as_secs_f64().max(1e-9) });
+            let output_seconds = t_out.elapsed().as_secs_f64();
+            p(&Progress { year: y, years: scenario.years, trees: rep.trees, trees_per_s: trees_yr / ty.elapsed().as_secs_f64().max(1e-9), phase_seconds: rep.phase_seconds, output_seconds });
         }
         if stop_now && y < scenario.years {
             stopped = true;

@@ -17,6 +17,7 @@
 use super::trees::TreeStore;
 use super::world::{Site, World};
 use crate::species::allometry::open_crown_radius;
+use rayon::prelude::*;
 
 /// Crowding cell size (m); the neighbourhood is 3 × 3 cells.
 pub const CROWD_CELL_M: f64 = 10.0;
@@ -61,7 +62,8 @@ pub struct Crowding {
 
 /// Per-tree relative density and neighbourhood quadratic mean DBH of `trees` on the site `w`
 /// (its extent, pool and species; see the module docs). Sums run sequentially in tree order
-/// (f64), so the result does not depend on thread count. Cost O(n + cells).
+/// (f64; cells in parallel, each cell's trees in index order: [`super::bucket::bucket`]), so the
+/// result does not depend on thread count. Cost O(n + cells).
 pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
     let t = trees;
     let (ex, ey) = w.extent;
@@ -79,39 +81,51 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
     // per pool species: 1 / SDI_max and the exponent −b
     let inv: Vec<f64> = (0..np).map(|p| w.pool.get(p).map(|&s| 1.0 / (w.lib.species[s as usize].life.density.sdi_max as f64).max(1.0)).unwrap_or(0.0)).collect();
     let ex_b: Vec<f64> = (0..np).map(|p| w.pool.get(p).map(|&s| -(w.lib.species[s as usize].life.density.reineke_slope as f64)).unwrap_or(1.605)).collect();
-    let mut n_sp = vec![0u32; ncell * np];
-    let mut d2 = vec![0f64; ncell];
-    let mut n = vec![0u32; ncell];
-    let (mut d2_all, mut n_all, mut small) = (vec![0f64; ncell], vec![0u32; ncell], vec![0f64; ncell]);
-    let mut crown = vec![0f64; ncell];
-    let cells: Vec<u32> = (0..t.len()).map(|i| cell_of(t.x[i], t.y[i]) as u32).collect();
-    for i in 0..t.len() {
-        let k = cells[i] as usize;
-        let s = t.species[i] as usize;
-        let ro = open_crown_radius(&w.lib.species[s], t.height[i], t.dbh[i]) as f64;
-        crown[k] += std::f64::consts::PI * ro * ro;
-        let d = t.dbh[i] as f64;
-        if d >= MIN_DBH_CM as f64 {
-            n_sp[k * np + pidx[s]] += 1;
-            d2[k] += d * d;
-            n[k] += 1;
-        } else if d > 0.0 {
-            let p = pidx[s];
-            small[k] += (d / D_REF_CM).powf(ex_b[p]) * inv[p];
-        }
-        if d > 0.0 {
-            d2_all[k] += d * d;
-            n_all[k] += 1;
-        }
+    let cells: Vec<u32> = t.x.par_iter().zip(&t.y).with_min_len(1 << 14).map(|(&x, &y)| cell_of(x, y) as u32).collect();
+    // the trees of each cell in ascending index order, so that each cell's sums run in tree
+    // order (f64) as a serial pass over the trees would add them: cells in parallel
+    let (start, items) = super::bucket::bucket(t.len(), ncell, |i| cells[i], |i| i as u32);
+    #[derive(Clone, Copy, Default)]
+    struct Sums {
+        d2: f64,
+        n: u32,
+        d2_all: f64,
+        n_all: u32,
+        small: f64,
+        crown: f64,
     }
+    let mut sums = vec![Sums::default(); ncell];
+    let mut n_sp = vec![0u32; ncell * np];
+    sums.par_iter_mut().zip(n_sp.par_chunks_mut(np)).enumerate().with_min_len(256).for_each(|(k, (c, nsp))| {
+        for &i in &items[start[k] as usize..start[k + 1] as usize] {
+            let i = i as usize;
+            let s = t.species[i] as usize;
+            let ro = open_crown_radius(&w.lib.species[s], t.height[i], t.dbh[i]) as f64;
+            c.crown += std::f64::consts::PI * ro * ro;
+            let d = t.dbh[i] as f64;
+            if d >= MIN_DBH_CM as f64 {
+                nsp[pidx[s]] += 1;
+                c.d2 += d * d;
+                c.n += 1;
+            } else if d > 0.0 {
+                let p = pidx[s];
+                c.small += (d / D_REF_CM).powf(ex_b[p]) * inv[p];
+            }
+            if d > 0.0 {
+                c.d2_all += d * d;
+                c.n_all += 1;
+            }
+        }
+    });
+    drop(items);
     // cell sides (m), clipped to the extent
     let side = |i: usize, e: f64| ((i as f64 + 1.0) * CROWD_CELL_M).min(e) - i as f64 * CROWD_CELL_M;
-    // neighbourhood (3 × 3 cells) values, once per cell
+    // neighbourhood (3 × 3 cells) values, once per cell, rows in parallel
     let mut nb_rd = vec![0f32; ncell];
     let mut nb_dq = vec![0f32; ncell];
     let mut nb_ccf = vec![0f32; ncell];
-    let mut ns = vec![0u32; np];
-    for r in 0..rows {
+    nb_rd.par_chunks_mut(cols).zip(nb_dq.par_chunks_mut(cols)).zip(nb_ccf.par_chunks_mut(cols)).enumerate().for_each(|(r, ((row_rd, row_dq), row_ccf))| {
+        let mut ns = vec![0u32; np];
         for c in 0..cols {
             let (mut a, mut s_d2, mut s_n, mut s_cr) = (0f64, 0f64, 0u32, 0f64);
             let (mut s_d2a, mut s_na, mut s_small) = (0f64, 0u32, 0f64);
@@ -119,19 +133,19 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
             for rr in r.saturating_sub(1)..(r + 2).min(rows) {
                 for cc in c.saturating_sub(1)..(c + 2).min(cols) {
                     let k = rr * cols + cc;
+                    let q = &sums[k];
                     a += side(cc, ex) * side(rr, ey);
-                    s_d2 += d2[k];
-                    s_n += n[k];
-                    s_cr += crown[k];
-                    s_d2a += d2_all[k];
-                    s_na += n_all[k];
-                    s_small += small[k];
+                    s_d2 += q.d2;
+                    s_n += q.n;
+                    s_cr += q.crown;
+                    s_d2a += q.d2_all;
+                    s_na += q.n_all;
+                    s_small += q.small;
                     for p in 0..np {
                         ns[p] += n_sp[k * np + p];
                     }
                 }
             }
-            let k = r * cols + c;
             if a <= 0.0 {
                 continue;
             }
@@ -141,19 +155,19 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
                 let dq = (s_d2 / s_n as f64).sqrt();
                 let x = dq / D_REF_CM;
                 rd += (0..np).filter(|&p| ns[p] > 0).map(|p| ns[p] as f64 * x.powf(ex_b[p]) * inv[p]).sum::<f64>();
-                nb_dq[k] = dq as f32;
+                row_dq[c] = dq as f32;
             } else if s_na > 0 {
-                nb_dq[k] = (s_d2a / s_na as f64).sqrt() as f32;
+                row_dq[c] = (s_d2a / s_na as f64).sqrt() as f32;
             }
-            nb_rd[k] = (rd / a_ha) as f32;
-            nb_ccf[k] = (s_cr / a) as f32;
+            row_rd[c] = (rd / a_ha) as f32;
+            row_ccf[c] = (s_cr / a) as f32;
         }
-    }
-    Crowding {
-        rd: cells.iter().map(|&k| nb_rd[k as usize]).collect(),
-        dq_cm: cells.iter().map(|&k| nb_dq[k as usize]).collect(),
-        ccf: cells.iter().map(|&k| nb_ccf[k as usize]).collect(),
-    }
+    });
+    let (rd, (dq_cm, ccf)) = rayon::join(
+        || cells.par_iter().with_min_len(1 << 14).map(|&k| nb_rd[k as usize]).collect(),
+        || rayon::join(|| cells.par_iter().with_min_len(1 << 14).map(|&k| nb_dq[k as usize]).collect(), || cells.par_iter().with_min_len(1 << 14).map(|&k| nb_ccf[k as usize]).collect()),
+    );
+    Crowding { rd, dq_cm, ccf }
 }
 
 /// Stand density of a world, per hectare of unmasked area, for the stand tables and the tests.

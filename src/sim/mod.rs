@@ -7,6 +7,7 @@
 //! All randomness comes from [`crate::rng::Stream`]s keyed by (seed, tree id or cell, year,
 //! phase); parallel work is merged in index order, so results do not depend on thread count.
 
+pub mod bucket;
 pub mod checkpoint;
 pub mod cohorts;
 pub mod density;

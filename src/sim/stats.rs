@@ -2,6 +2,7 @@
 
 use super::trees::DeathCause;
 use super::world::World;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// One stand-table row (per hectare of unmasked area).
@@ -47,37 +48,54 @@ pub struct StandRow {
     pub regen_deaths: [u64; super::cohorts::N_REGEN_CAUSES],
 }
 
-/// Computes the stand-table row of the world's current state (deaths from `w.scratch.dead`).
-pub fn stand_row(w: &World) -> StandRow {
-    let t = &w.stand.trees;
-    let a = w.site.area_ha.max(1e-9);
-    let np = w.site.pool.len();
-    let (mut n, mut ns, mut ba, mut hs, mut d2) = (0usize, 0usize, 0f64, 0f64, 0f64);
-    let (mut n7, mut d27) = (0usize, 0f64);
-    let mut sba = vec![0f64; np];
-    let mut sn = vec![0f64; np];
-    let pidx: Vec<usize> = (0..w.site.lib.species.len() as u16).map(|s| w.pool_index(s).unwrap_or(0)).collect();
-    let mut top: Vec<(f32, f32)> = Vec::new();
-    for i in 0..t.len() {
-        if t.height[i] < 1.3 {
-            ns += 1;
-            continue;
-        }
-        n += 1;
-        let b = t.basal_area_m2(i);
-        ba += b;
-        hs += t.height[i] as f64;
-        d2 += (t.dbh[i] as f64).powi(2);
-        if t.dbh[i] >= 7.0 {
-            n7 += 1;
-            d27 += (t.dbh[i] as f64).powi(2);
-        }
-        let p = pidx[t.species[i] as usize];
-        sba[p] += b;
-        sn[p] += 1.0;
-        top.push((t.dbh[i], t.height[i]));
+/// Order-preserving key of an f32 under [`f32::total_cmp`] (as an unsigned integer).
+#[inline]
+fn total_key(v: f32) -> u32 {
+    let b = v.to_bits();
+    if b >> 31 == 1 {
+        !b
+    } else {
+        b | 0x8000_0000
     }
-    let k = ((100.0 * a).round() as usize).clamp(1, top.len().max(1));
+}
+
+/// Top height: mean height of the `round(100 · a)` largest-DBH trees of at least 1.3 m
+/// (ties by height), summed in descending (DBH, height) order; all of them where fewer stand.
+/// The candidates are found by a histogram of the DBHs' leading 16 bits (in parallel; counts
+/// do not depend on the order), so only about the `k` thickest trees are sorted.
+fn top_height(dbh: &[f32], height: &[f32], a: f64) -> f64 {
+    const CH: usize = 1 << 16;
+    let n = dbh.len();
+    let eligible = |i: usize| !(height[i] < 1.3);
+    let hist: Vec<u32> = (0..n.div_ceil(CH))
+        .into_par_iter()
+        .map(|c| {
+            let mut h = vec![0u32; 1 << 16];
+            for i in c * CH..((c + 1) * CH).min(n) {
+                if eligible(i) {
+                    h[(total_key(dbh[i]) >> 16) as usize] += 1;
+                }
+            }
+            h
+        })
+        .reduce(|| vec![0u32; 1 << 16], |mut x, y| {
+            x.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
+            x
+        });
+    let m: usize = hist.iter().map(|&c| c as usize).sum();
+    let k = ((100.0 * a).round() as usize).clamp(1, m.max(1));
+    // lowest bin such that the bins from it upwards hold at least k trees
+    let mut acc = 0usize;
+    let mut bin = 0usize;
+    for b in (0..hist.len()).rev() {
+        acc += hist[b] as usize;
+        if acc >= k {
+            bin = b;
+            break;
+        }
+    }
+    let lo = (bin as u32) << 16;
+    let mut top: Vec<(f32, f32)> = (0..n).into_par_iter().with_min_len(1 << 14).filter(|&i| eligible(i) && total_key(dbh[i]) >= lo).map(|i| (dbh[i], height[i])).collect();
     let by_dbh_desc = |x: &(f32, f32), y: &(f32, f32)| y.0.total_cmp(&x.0).then(y.1.total_cmp(&x.1));
     if k < top.len() {
         // the k thickest first (O(n) selection), then sorted for a fixed summation order
@@ -85,7 +103,47 @@ pub fn stand_row(w: &World) -> StandRow {
         top.truncate(k);
     }
     top.sort_by(by_dbh_desc);
-    let h100 = if top.is_empty() { 0.0 } else { top.iter().map(|x| x.1 as f64).sum::<f64>() / top.len() as f64 };
+    if top.is_empty() {
+        0.0
+    } else {
+        top.iter().map(|x| x.1 as f64).sum::<f64>() / top.len() as f64
+    }
+}
+
+/// Computes the stand-table row of the world's current state (deaths from `w.scratch.dead`).
+/// The sums over the trees run serially in tree order (f64) on one thread while the top height
+/// ([`top_height`]) is found on the others.
+pub fn stand_row(w: &World) -> StandRow {
+    let t = &w.stand.trees;
+    let a = w.site.area_ha.max(1e-9);
+    let np = w.site.pool.len();
+    let pidx: Vec<usize> = (0..w.site.lib.species.len() as u16).map(|s| w.pool_index(s).unwrap_or(0)).collect();
+    let sums = || {
+        let (mut n, mut ns, mut ba, mut hs, mut d2) = (0usize, 0usize, 0f64, 0f64, 0f64);
+        let (mut n7, mut d27) = (0usize, 0f64);
+        let mut sba = vec![0f64; np];
+        let mut sn = vec![0f64; np];
+        for i in 0..t.len() {
+            if t.height[i] < 1.3 {
+                ns += 1;
+                continue;
+            }
+            n += 1;
+            let b = t.basal_area_m2(i);
+            ba += b;
+            hs += t.height[i] as f64;
+            d2 += (t.dbh[i] as f64).powi(2);
+            if t.dbh[i] >= 7.0 {
+                n7 += 1;
+                d27 += (t.dbh[i] as f64).powi(2);
+            }
+            let p = pidx[t.species[i] as usize];
+            sba[p] += b;
+            sn[p] += 1.0;
+        }
+        (n, ns, ba, hs, d2, n7, d27, sba, sn)
+    };
+    let ((n, ns, ba, hs, d2, n7, d27, sba, sn), h100) = rayon::join(sums, || top_height(&t.dbh, &t.height, a));
     let mut deaths = [0u64; super::trees::N_CAUSES];
     for d in &w.scratch.dead {
         deaths[d.cause.index()] += 1;

@@ -165,7 +165,8 @@ impl TreeStore {
         self.suitability.push(t.suitability);
         id
     }
-    /// Removes every tree whose `keep` flag is false, keeping the order of the others.
+    /// Removes every tree whose `keep` flag is false, keeping the order of the others (the
+    /// columns compacted in parallel, one task per column).
     pub fn retain(&mut self, keep: &[bool]) {
         fn r<T: Copy>(v: &mut Vec<T>, keep: &[bool]) {
             let mut j = 0;
@@ -177,19 +178,14 @@ impl TreeStore {
             }
             v.truncate(j);
         }
-        r(&mut self.id, keep);
-        r(&mut self.species, keep);
-        r(&mut self.x, keep);
-        r(&mut self.y, keep);
-        r(&mut self.z, keep);
-        r(&mut self.age, keep);
-        r(&mut self.height, keep);
-        r(&mut self.dbh, keep);
-        r(&mut self.crown_radius, keep);
-        r(&mut self.crown_base, keep);
-        r(&mut self.light, keep);
-        r(&mut self.vigour, keep);
-        r(&mut self.suitability, keep);
+        let TreeStore { id, species, x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability, next_id: _ } = self;
+        rayon::scope(|sc| {
+            sc.spawn(|_| r(id, keep));
+            sc.spawn(|_| r(species, keep));
+            for v in [x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability] {
+                sc.spawn(move |_| r(v, keep));
+            }
+        });
     }
     /// Basal area of tree `i` (m²).
     #[inline]
@@ -227,22 +223,14 @@ impl SpatialGrid {
         let r = ((y as f64 / self.cell_m) as isize).clamp(0, self.rows as isize - 1) as usize;
         r * self.cols + c
     }
-    /// Builds the grid over an extent `(w, h)` metres.
+    /// Builds the grid of `trees` on the light grid `light` (a stable parallel counting sort,
+    /// [`super::bucket::bucket`]: the trees of a cell in ascending index order).
     pub fn build(trees: &TreeStore, light: &LightGrid) -> SpatialGrid {
         let LightGrid { cell_m, cols, rows } = *light;
-        let mut g = SpatialGrid { cell_m, cols, rows, start: vec![0; cols * rows + 1], items: vec![0; trees.len()] };
-        let cells: Vec<u32> = (0..trees.len()).map(|i| g.cell_of(trees.x[i], trees.y[i]) as u32).collect();
-        for &c in &cells {
-            g.start[c as usize + 1] += 1;
-        }
-        for c in 0..cols * rows {
-            g.start[c + 1] += g.start[c];
-        }
-        let mut fill = g.start.clone();
-        for (i, &c) in cells.iter().enumerate() {
-            g.items[fill[c as usize] as usize] = i as u32;
-            fill[c as usize] += 1;
-        }
+        let mut g = SpatialGrid { cell_m, cols, rows, start: Vec::new(), items: Vec::new() };
+        let (start, items) = super::bucket::bucket(trees.len(), cols * rows, |i| g.cell_of(trees.x[i], trees.y[i]) as u32, |i| i as u32);
+        g.start = start;
+        g.items = items;
         g
     }
     /// Trees of cell `c`.

@@ -26,13 +26,38 @@ pub fn effective_age(sp: &Species, h: f32) -> f32 {
 /// of the round trip (same clamping of h / H_max to [10⁻⁶, 0.9995]).
 #[inline]
 pub fn potential_increment(sp: &Species, h: f32) -> f32 {
-    let g = sp.life.growth;
-    let hm = sp.life.max_height_m;
-    let rel = (h / hm).clamp(1e-6, 0.9995);
-    let q = rel.powf(1.0 / g.p);
-    let h0 = hm * rel;
-    let h1 = hm * (1.0 - (-g.k).exp() * (1.0 - q)).powf(g.p);
-    (h1 - h0).max(0.0)
+    HeightIncrement::of(sp).at(h)
+}
+
+/// The species' constants of [`potential_increment`] (`H_max`, `p`, `1 / p`, `e^(−k)`), computed
+/// once for many trees of a species; [`HeightIncrement::at`] gives the same bits as
+/// `potential_increment`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeightIncrement {
+    hm: f32,
+    p: f32,
+    inv_p: f32,
+    e_k: f32,
+}
+
+impl HeightIncrement {
+    /// The constants of species `sp`.
+    #[inline]
+    pub fn of(sp: &Species) -> Self {
+        let g = sp.life.growth;
+        HeightIncrement { hm: sp.life.max_height_m, p: g.p, inv_p: 1.0 / g.p, e_k: (-g.k).exp() }
+    }
+
+    /// [`potential_increment`] at height `h` (m).
+    #[inline]
+    pub fn at(&self, h: f32) -> f32 {
+        let hm = self.hm;
+        let rel = (h / hm).clamp(1e-6, 0.9995);
+        let q = rel.powf(self.inv_p);
+        let h0 = hm * rel;
+        let h1 = hm * (1.0 - self.e_k * (1.0 - q)).powf(self.p);
+        (h1 - h0).max(0.0)
+    }
 }
 
 /// Height (m) of a tree of diameter `dbh` (cm) from the species' height–DBH allometry
@@ -47,13 +72,36 @@ pub fn height_from_dbh(sp: &Species, dbh: f32) -> f32 {
 /// `(H − 1.3)/(H_max − 1.3)` clamped to 0–0.999; 0 at or below 1.3 m; capped at
 /// `life.max_dbh_cm`.
 pub fn open_dbh(sp: &Species, h: f32) -> f32 {
-    let a = sp.life.allometry;
-    let hm = sp.life.max_height_m;
-    if h <= 1.3 {
-        return 0.0;
+    OpenDbh::of(sp).at(h)
+}
+
+/// The species' constants of [`open_dbh`] (`H_max − 1.3`, `1 / b`, `a`, the DBH cap), computed
+/// once for many trees of a species; [`OpenDbh::at`] gives the same bits as `open_dbh`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OpenDbh {
+    span: f32,
+    inv_b: f32,
+    a: f32,
+    max_dbh: f32,
+}
+
+impl OpenDbh {
+    /// The constants of species `sp`.
+    #[inline]
+    pub fn of(sp: &Species) -> Self {
+        let a = sp.life.allometry;
+        OpenDbh { span: sp.life.max_height_m - 1.3, inv_b: 1.0 / a.hd_b, a: a.hd_a, max_dbh: sp.life.max_dbh_cm }
     }
-    let q = ((h - 1.3) / (hm - 1.3)).clamp(0.0, 0.999).powf(1.0 / a.hd_b);
-    (-(1.0 - q).ln() / a.hd_a).min(sp.life.max_dbh_cm)
+
+    /// [`open_dbh`] at height `h` (m).
+    #[inline]
+    pub fn at(&self, h: f32) -> f32 {
+        if h <= 1.3 {
+            return 0.0;
+        }
+        let q = ((h - 1.3) / self.span).clamp(0.0, 0.999).powf(self.inv_b);
+        (-(1.0 - q).ln() / self.a).min(self.max_dbh)
+    }
 }
 
 /// Open-grown crown radius (m) of a tree of diameter `dbh` (cm): the linear crown allometry

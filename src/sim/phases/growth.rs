@@ -4,6 +4,7 @@
 use crate::rng::{salt, Stream};
 use crate::sim::density::Crowding;
 use crate::sim::trees::TreeStore;
+use crate::species::allometry::{HeightIncrement, OpenDbh};
 use crate::species::SpeciesLibrary;
 pub use crate::species::allometry::{effective_age, open_crown_radius, open_dbh, potential_height, potential_increment};
 use rayon::prelude::*;
@@ -14,9 +15,12 @@ use rayon::prelude::*;
 /// normalised to 1 in full light and interpolated linearly in `st`.
 pub fn light_response(l: f32, st: f32) -> f32 {
     let l = l.clamp(0.0, 1.0);
-    let tol = ((1.0 - (-4.64 * (l - 0.05)).exp()) / (1.0 - (-4.64f32 * 0.95).exp())).max(0.0);
-    let intol = ((1.0 - (-1.136 * (l - 0.08)).exp()) / (1.0 - (-1.136f32 * 0.92).exp())).max(0.0);
     let w = ((st - 1.0) / 4.0).clamp(0.0, 1.0);
+    // At a weight of exactly 0 (ST 1) or 1 (ST 5) the other curve is not evaluated: it would
+    // enter the sum as 0 · x with x finite and ≥ 0, which adds +0 and leaves the sum's bits as
+    // they are.
+    let tol = if w > 0.0 { ((1.0 - (-4.64 * (l - 0.05)).exp()) / (1.0 - (-4.64f32 * 0.95).exp())).max(0.0) } else { 0.0 };
+    let intol = if w < 1.0 { ((1.0 - (-1.136 * (l - 0.08)).exp()) / (1.0 - (-1.136f32 * 0.92).exp())).max(0.0) } else { 0.0 };
     (w * tol + (1.0 - w) * intol).clamp(0.0, 1.0)
 }
 
@@ -125,63 +129,79 @@ pub struct Growth<'a> {
 /// stands along the species' maximum-density line.
 pub fn run(w: Growth<'_>) {
     let crowd = w.crowd;
-    let t = &w.trees;
     let lib = &w.lib;
     let seed = w.seed;
-    let out: Vec<Grown> = (0..t.len())
-        .into_par_iter()
-        .map(|i| {
-            let sp = &lib.species[t.species[i] as usize];
-            let (h, d) = (t.height[i], t.dbh[i]);
-            let l = t.light[i];
-            let f = light_response(l, sp.life.shade_tolerance) * t.suitability[i];
-            let dq = crowd.dq_cm[i];
-            let s = if d > 0.0 && dq > 0.0 { d / dq } else { 1.0 };
-            let m = crowding_modifier(crowd.rd[i], s);
-            let dh_pot = potential_increment(sp, h);
-            let h1 = (h + dh_pot * f * height_share(m, s)).min(sp.life.max_height_m);
-            let hp = (h + dh_pot).min(sp.life.max_height_m * 0.999);
-            let dd_open = (open_dbh(sp, hp) - open_dbh(sp, h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
-            // Closed-stand allometry: under crowding, diameter increment follows height
-            // increment at the slenderness H/D of trees in closed stands, not the open-grown
-            // curve (whose H/D of 30–60 m/m at 25–35 m comes from each species' record DBH and
-            // differs 2-fold between species). Dominants of closed Central European stands carry
-            // H/D ≈ 60–80 m/m, mean trees 80–100 (Assmann 1970; Pretzsch 2009 ch. 8; the
-            // Wiedemann beech and spruce tables give 100 and 89 at age 100); HD_CLOSED is the
-            // potential (uncrowded-share m = 1) value, ESTIMATE within that range. The weight
-            // x of the closed-stand allometry rises from 0 at RD_ONSET (0.4, lower limit of full
-            // site occupancy) to 1 at RD 0.6 (onset of self-thinning, canopy closed: Long 1985).
-            const HD_CLOSED: f32 = 60.0;
-            let x = ((crowd.rd[i] - RD_ONSET).max(0.0) / 0.2).min(1.0);
-            // After height growth culminates, dominants of closed stands keep putting on
-            // diameter (basal-area increment of mature stands stays nearly level: Assmann 1970):
-            // a floor DD_CLOSED_MIN (cm/yr, ESTIMATE: 5 mm, about twice the Dq increment of Wiedemann's
-            // and Assmann & Franz's mean trees at ages 100–120); never more than the open-grown
-            // increment: crowding does not speed diameter growth.
-            const DD_CLOSED_MIN: f32 = 0.5;
-            let dd_closed = if h > 1.3 { (dh_pot * 100.0 / HD_CLOSED).max(DD_CLOSED_MIN).min(dd_open) } else { dd_open };
-            let dd_pot = (1.0 - x) * dd_open + x * dd_closed;
-            let mut d1 = d + dd_pot * f * m * growth_factor(seed, t.id[i]);
-            if d1 == 0.0 && h1 > 1.3 {
-                d1 = open_dbh(sp, h1) * 0.5;
-            }
-            let d1 = d1.min(sp.life.max_dbh_cm);
-            let lc = l.clamp(0.0, 1.0);
-            let r = open_crown_radius(sp, h1, d1) * (0.5 + 0.5 * lc) * crown_space(crowd.ccf[i]);
-            let cb = t.crown_base[i].max(h1 * (1.0 - sp.life.allometry.crown_ratio * (0.4 + 0.6 * lc))).min(h1 * 0.95);
-            let v = 0.5 * t.vigour[i] + 0.5 * f * m;
-            Grown { h: h1, d: d1, r, cb, v }
-        })
-        .collect();
     let t = &mut *w.trees;
-    for (i, g) in out.into_iter().enumerate() {
-        t.height[i] = g.h;
-        t.dbh[i] = g.d;
-        t.crown_radius[i] = g.r;
-        t.crown_base[i] = g.cb;
-        t.vigour[i] = g.v;
-        t.age[i] += 1.0;
+    // the species' curve constants, once per species (same values as the plain functions)
+    let curves: Vec<Curves> = lib.species.iter().map(|sp| (HeightIncrement::of(sp), OpenDbh::of(sp))).collect();
+    let curves = &curves[..];
+    // read-only columns, then the written ones updated in place (each tree on its own)
+    let (species, light, suitability, id) = (&t.species, &t.light, &t.suitability, &t.id);
+    (&mut t.height, &mut t.dbh, &mut t.crown_radius, &mut t.crown_base, &mut t.vigour, &mut t.age)
+        .into_par_iter()
+        .enumerate()
+        .with_min_len(1024)
+        .for_each(|(i, (hr, dr, rr, cbr, vr, ar))| {
+            let g = grow(lib, curves, crowd, seed, species[i], light[i], suitability[i], id[i], *hr, *dr, *cbr, *vr, i);
+            *hr = g.h;
+            *dr = g.d;
+            *rr = g.r;
+            *cbr = g.cb;
+            *vr = g.v;
+            *ar += 1.0;
+        });
+}
+
+/// A species' height-increment and open-grown DBH curves.
+type Curves = (HeightIncrement, OpenDbh);
+
+/// One tree's season ([`run`]): species `s`, light `l`, suitability, id, height `h`, DBH `d`,
+/// crown base and vigour before it; `i` its index in the crowding.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s: u16, l: f32, suitability: f32, id: u64, h: f32, d: f32, crown_base: f32, vigour: f32, i: usize) -> Grown {
+    let sp = &lib.species[s as usize];
+    let (inc, dbh_of) = &curves[s as usize];
+    let f = light_response(l, sp.life.shade_tolerance) * suitability;
+    let dq = crowd.dq_cm[i];
+    let s = if d > 0.0 && dq > 0.0 { d / dq } else { 1.0 };
+    let m = crowding_modifier(crowd.rd[i], s);
+    let dh_pot = inc.at(h);
+    let h1 = (h + dh_pot * f * height_share(m, s)).min(sp.life.max_height_m);
+    let hp = (h + dh_pot).min(sp.life.max_height_m * 0.999);
+    let dd_open = (dbh_of.at(hp) - dbh_of.at(h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
+    // Closed-stand allometry: under crowding, diameter increment follows height
+    // increment at the slenderness H/D of trees in closed stands, not the open-grown
+    // curve (whose H/D of 30–60 m/m at 25–35 m comes from each species' record DBH and
+    // differs 2-fold between species). Dominants of closed Central European stands carry
+    // H/D ≈ 60–80 m/m, mean trees 80–100 (Assmann 1970; Pretzsch 2009 ch. 8; the
+    // Wiedemann beech and spruce tables give 100 and 89 at age 100); HD_CLOSED is the
+    // potential (uncrowded-share m = 1) value, ESTIMATE within that range. The weight
+    // x of the closed-stand allometry rises from 0 at RD_ONSET (0.4, lower limit of full
+    // site occupancy) to 1 at RD 0.6 (onset of self-thinning, canopy closed: Long 1985).
+    const HD_CLOSED: f32 = 60.0;
+    let x = ((crowd.rd[i] - RD_ONSET).max(0.0) / 0.2).min(1.0);
+    // After height growth culminates, dominants of closed stands keep putting on
+    // diameter (basal-area increment of mature stands stays nearly level: Assmann 1970):
+    // a floor DD_CLOSED_MIN (cm/yr, ESTIMATE: 5 mm, about twice the Dq increment of Wiedemann's
+    // and Assmann & Franz's mean trees at ages 100–120); never more than the open-grown
+    // increment: crowding does not speed diameter growth.
+    const DD_CLOSED_MIN: f32 = 0.5;
+    let dd_closed = if h > 1.3 { (dh_pot * 100.0 / HD_CLOSED).max(DD_CLOSED_MIN).min(dd_open) } else { dd_open };
+    let dd_pot = (1.0 - x) * dd_open + x * dd_closed;
+    // the tree's growth factor only matters for a non-zero increment (a zero times the factor,
+    // which is finite and > 0, is that same zero), so it is not drawn for trees that do not grow
+    let dd = dd_pot * f * m;
+    let mut d1 = d + if dd == 0.0 { dd } else { dd * growth_factor(seed, id) };
+    if d1 == 0.0 && h1 > 1.3 {
+        d1 = dbh_of.at(h1) * 0.5;
     }
+    let d1 = d1.min(sp.life.max_dbh_cm);
+    let lc = l.clamp(0.0, 1.0);
+    let r = open_crown_radius(sp, h1, d1) * (0.5 + 0.5 * lc) * crown_space(crowd.ccf[i]);
+    let cb = crown_base.max(h1 * (1.0 - sp.life.allometry.crown_ratio * (0.4 + 0.6 * lc))).min(h1 * 0.95);
+    let v = 0.5 * vigour + 0.5 * f * m;
+    Grown { h: h1, d: d1, r, cb, v }
 }
 
 #[cfg(test)]

@@ -88,95 +88,35 @@ pub struct Light<'a> {
     pub grid: &'a mut SpatialGrid,
 }
 
+/// The trees' slots of the light column, written from several threads: every tree index
+/// appears exactly once in the spatial grid (`SpatialGrid::items` is a permutation of the
+/// indices), so no two writes go to one slot.
+struct Slots(*mut f32, usize);
+// SAFETY: the pointer is only written through `set`, at distinct indices (see above), while the
+// vector it points into is alive and not otherwise accessed.
+unsafe impl Sync for Slots {}
+impl Slots {
+    #[inline]
+    fn set(&self, i: usize, v: f32) {
+        assert!(i < self.1);
+        // SAFETY: in bounds (checked), and no other thread writes index i (see the type docs).
+        unsafe { *self.0.add(i) = v }
+    }
+}
+
+/// Rows of light cells per band of the canopy build (each band is stamped, bucketed and sorted
+/// on its own, in parallel).
+const BAND_ROWS: usize = 32;
+
 /// Builds the spatial grid and canopy, and sets every tree's light and the ground light.
 pub fn run(w: Light<'_>) {
     let cell = w.light.cell_m;
     let grid = SpatialGrid::build(&w.trees, &w.light);
     let (cols, rows) = (grid.cols, grid.rows);
-    let cell_area = (cell * cell) as f32;
     let t = &w.trees;
     let lai_c: Vec<f32> = w.lib.species.iter().map(|s| crown_lai(s.life.shade_tolerance)).collect();
-    // 1. stamp entries (key = cell << 32 | inverted height bits → ascending key = cell, tallest first)
-    // stamped in chunks of trees (each chunk's entries in tree order), bucketed without
-    // concatenating the chunks
-    const TCHUNK: usize = 1 << 14;
-    let mut chunks: Vec<Vec<(u64, f32)>> = (0..t.len().div_ceil(TCHUNK))
-        .into_par_iter()
-        .map(|k| {
-            let mut out = Vec::with_capacity(4 * TCHUNK);
-            for i in k * TCHUNK..((k + 1) * TCHUNK).min(t.len()) {
-                let r = t.crown_radius[i].max(0.05);
-                let s = r * 0.886_226_9; // half side of the equal-area square
-                let la = std::f32::consts::PI * r * r * lai_c[t.species[i] as usize];
-                let (x, y) = (t.x[i], t.y[i]);
-                let c0 = (((x - s) as f64 / cell).floor() as isize).max(0);
-                let c1 = (((x + s) as f64 / cell).floor() as isize).min(cols as isize - 1);
-                let r0 = (((y - s) as f64 / cell).floor() as isize).max(0);
-                let r1 = (((y + s) as f64 / cell).floor() as isize).min(rows as isize - 1);
-                let inv = u32::MAX - t.height[i].max(0.0).to_bits();
-                let sq = 4.0 * s * s;
-                for row in r0..=r1 {
-                    let oy = ((y + s).min((row + 1) as f32 * cell as f32) - (y - s).max(row as f32 * cell as f32)).max(0.0);
-                    for col in c0..=c1 {
-                        let ox = ((x + s).min((col + 1) as f32 * cell as f32) - (x - s).max(col as f32 * cell as f32)).max(0.0);
-                        let f = ox * oy / sq;
-                        if f > 0.0 {
-                            let c = row as u64 * cols as u64 + col as u64;
-                            out.push((c << 32 | inv as u64, la * f / cell_area));
-                        }
-                    }
-                }
-            }
-            out
-        })
-        .collect();
-    chunks.push(w.obstacles.to_vec());
-    // Bucket the entries by cell (counting sort, O(E)), then sort each cell's few entries by
-    // (key, leaf area): a total order, so the result does not depend on the scheduling.
+    let canopy = build_canopy(t, &grid, &lai_c, w.obstacles);
     let ncell = cols * rows;
-    let mut start = vec![0u32; ncell + 1];
-    for e in chunks.iter().flatten() {
-        start[(e.0 >> 32) as usize + 1] += 1;
-    }
-    for c in 0..ncell {
-        start[c + 1] += start[c];
-    }
-    let n_entries = start[ncell] as usize;
-    // (zeroed, so its pages are committed as they are filled; each chunk is freed once
-    // scattered, so the entries are held about once, not twice, at the peak)
-    let mut sorted = vec![(0u64, 0f32); n_entries];
-    {
-        let mut pos: Vec<u32> = start[..ncell].to_vec();
-        for chunk in chunks {
-            for e in chunk {
-                let c = (e.0 >> 32) as usize;
-                sorted[pos[c] as usize] = e;
-                pos[c] += 1;
-            }
-        }
-    }
-    let entries = {
-        let mut segs: Vec<&mut [(u64, f32)]> = Vec::with_capacity(ncell);
-        let mut rest: &mut [(u64, f32)] = &mut sorted;
-        for c in 0..ncell {
-            let (a, b) = std::mem::take(&mut rest).split_at_mut((start[c + 1] - start[c]) as usize);
-            segs.push(a);
-            rest = b;
-        }
-        segs.into_par_iter().with_min_len(256).for_each(|s| s.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.to_bits().cmp(&b.1.to_bits()))));
-        sorted
-    };
-    let h: Vec<f32> = entries.par_iter().map(|e| f32::from_bits(u32::MAX - (e.0 as u32))).collect();
-    let mut cum = vec![0f32; entries.len()];
-    for c in 0..ncell {
-        let mut acc = 0.0;
-        for k in start[c] as usize..start[c + 1] as usize {
-            acc += entries[k].1;
-            cum[k] = acc;
-        }
-    }
-    drop(entries);
-    let canopy = Canopy { start, h, cum };
     // 2. sun geometry
     let lat = w.site.geo.latitude_deg as f32;
     let elev = (90.0 - lat.abs()).clamp(10.0, 80.0).to_radians();
@@ -199,30 +139,127 @@ pub fn run(w: Light<'_>) {
     };
     let (ls, ri) = (&w.light_site, &w.rel_insolation);
     // Trees are queried cell by cell (the spatial grid's order), so that the canopy profile of
-    // a cell is read once from memory for all its trees, then scattered back to tree order.
+    // a cell is read once from memory for all its trees; each value is written straight to its
+    // tree's slot (blocks of cells in parallel).
     const BLOCK: usize = 2048;
-    let by_cell: Vec<Vec<f32>> = (0..ncell.div_ceil(BLOCK))
-        .into_par_iter()
-        .map(|b| {
+    let mut light = vec![0f32; t.len()];
+    {
+        let out = Slots(light.as_mut_ptr(), light.len());
+        (0..ncell.div_ceil(BLOCK)).into_par_iter().for_each(|b| {
             let (c0, c1) = (b * BLOCK, ((b + 1) * BLOCK).min(ncell));
-            let mut out = Vec::with_capacity((grid.start[c1] - grid.start[c0]) as usize);
             for c in c0..c1 {
                 let rel = rel_of(c, ls, ri);
-                out.extend(grid.cell(c).iter().map(|&i| light_at(c, t.height[i as usize], rel)));
+                for &i in grid.cell(c) {
+                    out.set(i as usize, light_at(c, t.height[i as usize], rel));
+                }
             }
-            out
-        })
-        .collect();
-    let mut light = vec![0f32; t.len()];
-    let mut k = 0;
-    for v in by_cell {
-        for l in v {
-            light[grid.items[k] as usize] = l;
-            k += 1;
-        }
+        });
     }
-    let ground: Vec<f32> = (0..cols * rows).into_par_iter().map(|c| light_at(c, 0.0, rel_of(c, ls, ri))).collect();
+    let ground: Vec<f32> = (0..ncell).into_par_iter().map(|c| light_at(c, 0.0, rel_of(c, ls, ri))).collect();
     w.trees.light = light;
     *w.ground_light = ground;
     *w.grid = grid;
+}
+
+/// The canopy of `t` on the cells of `grid` plus the obstacles' entries: per band of
+/// [`BAND_ROWS`] rows (in parallel) the entries of every tree whose crown reaches the band
+/// (found through `grid`), bucketed by cell and sorted within a cell by (key, leaf area), a
+/// total order, so the canopy does not depend on the scheduling or on the order of stamping.
+fn build_canopy(t: &TreeStore, grid: &SpatialGrid, lai_c: &[f32], obstacles: &[(u64, f32)]) -> Canopy {
+    let (cols, rows, cell) = (grid.cols, grid.rows, grid.cell_m);
+    let cell_area = (cell * cell) as f32;
+    let ncell = cols * rows;
+    // rows beyond its own that a crown can reach (half side of the equal-area square)
+    let s_max = t.crown_radius.par_iter().with_min_len(1 << 14).map(|r| r.max(0.05) * 0.886_226_9).reduce(|| 0.0f32, f32::max);
+    let reach = (s_max as f64 / cell).ceil() as usize + 2;
+    let nbands = rows.div_ceil(BAND_ROWS);
+    // 1. stamp entries (key = cell << 32 | inverted height bits → ascending key = cell, tallest first)
+    let bands: Vec<(Vec<u32>, Vec<f32>, Vec<f32>)> = (0..nbands)
+        .into_par_iter()
+        .map(|b| {
+            let (ra, rb) = (b * BAND_ROWS, ((b + 1) * BAND_ROWS).min(rows));
+            let mut ent: Vec<(u64, f32)> = Vec::new();
+            for c in ra.saturating_sub(reach) * cols..(rb + reach).min(rows) * cols {
+                for &i in grid.cell(c) {
+                    let i = i as usize;
+                    let r = t.crown_radius[i].max(0.05);
+                    let s = r * 0.886_226_9; // half side of the equal-area square
+                    let (x, y) = (t.x[i], t.y[i]);
+                    let r0 = (((y - s) as f64 / cell).floor() as isize).max(ra as isize);
+                    let r1 = (((y + s) as f64 / cell).floor() as isize).min(rows as isize - 1).min(rb as isize - 1);
+                    if r0 > r1 {
+                        continue;
+                    }
+                    let la = std::f32::consts::PI * r * r * lai_c[t.species[i] as usize];
+                    let c0 = (((x - s) as f64 / cell).floor() as isize).max(0);
+                    let c1 = (((x + s) as f64 / cell).floor() as isize).min(cols as isize - 1);
+                    let inv = u32::MAX - t.height[i].max(0.0).to_bits();
+                    let sq = 4.0 * s * s;
+                    for row in r0..=r1 {
+                        let oy = ((y + s).min((row + 1) as f32 * cell as f32) - (y - s).max(row as f32 * cell as f32)).max(0.0);
+                        for col in c0..=c1 {
+                            let ox = ((x + s).min((col + 1) as f32 * cell as f32) - (x - s).max(col as f32 * cell as f32)).max(0.0);
+                            let f = ox * oy / sq;
+                            if f > 0.0 {
+                                let c = row as u64 * cols as u64 + col as u64;
+                                ent.push((c << 32 | inv as u64, la * f / cell_area));
+                            }
+                        }
+                    }
+                }
+            }
+            let (ka, kb) = (ra * cols, rb * cols);
+            ent.extend(obstacles.iter().filter(|e| ((e.0 >> 32) as usize) >= ka && ((e.0 >> 32) as usize) < kb));
+            // bucket by cell (counting sort), then sort each cell's few entries
+            let nb = kb - ka;
+            let mut count = vec![0u32; nb];
+            for e in &ent {
+                count[(e.0 >> 32) as usize - ka] += 1;
+            }
+            let mut pos = Vec::with_capacity(nb);
+            let mut acc = 0u32;
+            for &n in &count {
+                pos.push(acc);
+                acc += n;
+            }
+            let mut sorted = vec![(0u64, 0f32); ent.len()];
+            for e in ent {
+                let p = &mut pos[(e.0 >> 32) as usize - ka];
+                sorted[*p as usize] = e;
+                *p += 1;
+            }
+            let mut h = Vec::with_capacity(sorted.len());
+            let mut cum = Vec::with_capacity(sorted.len());
+            let mut a = 0usize;
+            for &n in &count {
+                let seg = &mut sorted[a..a + n as usize];
+                seg.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.to_bits().cmp(&b.1.to_bits())));
+                let mut acc = 0.0;
+                for e in seg.iter() {
+                    acc += e.1;
+                    h.push(f32::from_bits(u32::MAX - (e.0 as u32)));
+                    cum.push(acc);
+                }
+                a += n as usize;
+            }
+            (count, h, cum)
+        })
+        .collect();
+    let n_entries: usize = bands.iter().map(|b| b.1.len()).sum();
+    let mut start = Vec::with_capacity(ncell + 1);
+    let mut acc = 0u32;
+    for b in &bands {
+        for &n in &b.0 {
+            start.push(acc);
+            acc += n;
+        }
+    }
+    start.push(acc);
+    // concatenated band by band, each band freed once copied
+    let (mut h, mut cum) = (Vec::with_capacity(n_entries), Vec::with_capacity(n_entries));
+    for (_, bh, bc) in bands {
+        h.extend_from_slice(&bh);
+        cum.extend_from_slice(&bc);
+    }
+    Canopy { start, h, cum }
 }

@@ -38,6 +38,16 @@ pub fn p_intrinsic(age: f32, max_age: f32) -> f64 {
     ((INTRINSIC_SHAPE + 1.0) * 4.605 / m * rel.powf(INTRINSIC_SHAPE)).clamp(0.0, 1.0)
 }
 
+/// Upper bound of [`p_intrinsic`] for a species of maximum age `max_age` (yr): the hazard at
+/// the maximum age, `(k + 1) · 4.605 / max_age` clamped to 0–1, computed as `p_intrinsic`
+/// computes its factor, so `p_intrinsic(a, max_age) ≤ intrinsic_bound(max_age)` for every age
+/// (the power `(a / max_age)^k` is at most 1 and rounding is monotone).
+#[inline]
+pub fn intrinsic_bound(max_age: f32) -> f64 {
+    let m = (max_age as f64).max(1.0);
+    ((INTRINSIC_SHAPE + 1.0) * 4.605 / m).clamp(0.0, 1.0)
+}
+
 /// Windthrow probability per year: `0.02 · exposure² · (H / 40 m)²` for trees above 10 m
 /// (a simple stand-in for EcoMod's "windiness" living condition, `004_*.txt` section IV).
 pub fn p_wind(exposure: f32, height: f32) -> f64 {
@@ -81,7 +91,11 @@ pub fn run(w: Mortality<'_>) {
             if t.age[i] >= sp.life.max_age_yr {
                 return Some(DeathCause::Age);
             }
-            if r.chance(p_intrinsic(t.age[i], sp.life.max_age_yr)) {
+            // the draw of `r.chance(p_intrinsic(..))`; the hazard's power of the relative age is
+            // at most 1, so p_intrinsic is at most its factor `intrinsic_bound`, and draws at or
+            // above that bound need not evaluate the power (the outcome is the same)
+            let u = r.uniform();
+            if u < intrinsic_bound(sp.life.max_age_yr) && u < p_intrinsic(t.age[i], sp.life.max_age_yr) {
                 let senescent = t.age[i] >= SENESCENT_AGE_SHARE * sp.life.max_age_yr;
                 return Some(if senescent { DeathCause::Age } else { DeathCause::Background });
             }
@@ -96,12 +110,15 @@ pub fn run(w: Mortality<'_>) {
             None
         })
         .collect();
-    let mut keep = vec![true; t.len()];
-    for (i, c) in causes.iter().enumerate() {
-        if let Some(c) = c {
-            keep[i] = false;
-            w.deaths_total[c.index()] += 1;
-            w.dead.push(DeadTree {
+    let keep: Vec<bool> = causes.par_iter().with_min_len(1 << 14).map(|c| c.is_none()).collect();
+    // the dead in index order (an order-keeping parallel collect), then counted by cause
+    let year = w.year;
+    let dead: Vec<DeadTree> = causes
+        .par_iter()
+        .enumerate()
+        .with_min_len(1 << 14)
+        .filter_map(|(i, c)| {
+            c.map(|cause| DeadTree {
                 id: t.id[i],
                 species: t.species[i],
                 x: t.x[i],
@@ -112,11 +129,16 @@ pub fn run(w: Mortality<'_>) {
                 dbh: t.dbh[i],
                 crown_radius: t.crown_radius[i],
                 crown_base: t.crown_base[i],
-                year: w.year,
-                cause: *c,
-            });
-        }
+                year,
+                cause,
+            })
+        })
+        .collect();
+    drop(causes);
+    for d in &dead {
+        w.deaths_total[d.cause.index()] += 1;
     }
+    w.dead.extend(dead);
     w.trees.retain(&keep);
 }
 
@@ -137,5 +159,12 @@ mod tests {
         assert!((p_intrinsic(150.0, 150.0) / c - 1.25).abs() < 1e-9);
         assert!(p_intrinsic(10.0, 150.0) < p_intrinsic(100.0, 150.0));
         assert_eq!(p_intrinsic(0.0, 150.0), 0.0);
+        for max_age in [1.0f32, 100.0, 160.0, 600.0] {
+            for a in 0..=700 {
+                let age = a as f32 * 1.37;
+                assert!(p_intrinsic(age, max_age) <= intrinsic_bound(max_age), "{age} {max_age}");
+            }
+            assert_eq!(p_intrinsic(max_age, max_age), intrinsic_bound(max_age));
+        }
     }
 }

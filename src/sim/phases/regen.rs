@@ -14,7 +14,7 @@
 //!    and age); where the species already has advance regeneration taller than that, its seeds
 //!    fail (one cohort per cell and species, as one cohort per pixel in iLand).
 //! 2. **Growth**: `ΔH = ΔH_pot(H) · f(L_ground) · S` — the trees' height growth
-//!    ([`potential_increment`], [`light_response`], suitability `S`) with the ground light of the
+//!    ([`potential_increment`](super::growth::potential_increment), [`light_response`], suitability `S`) with the ground light of the
 //!    cell under the tree canopy. Cohorts do not shade each other or the trees: they stay out of
 //!    the canopy grid (they are under it); competition within the layer is the density cap.
 //! 3. **Shade mortality** (cause `shade`): vigour `v ← 0.7 v + 0.3 f(L)·S` as for trees; while
@@ -34,7 +34,8 @@
 //! Mass balance per species (tested): germinated = alive in cohorts + dead (shade, crowding) +
 //! recruited, kept in [`RegenLedger`].
 
-use super::growth::{light_response, open_crown_radius, open_dbh, potential_increment};
+use super::growth::{light_response, open_crown_radius, open_dbh};
+use crate::species::allometry::HeightIncrement;
 use super::mortality::{stress_threshold, P_STRESS};
 pub use crate::sim::cohorts::{Cohort, Cohorts, RegenDeath, RegenLedger, RegenYear, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
 use crate::conditions::SiteConditions;
@@ -152,6 +153,9 @@ pub fn run(w: Regen<'_>) -> usize {
     let (seed, year) = (w.seed, w.year as u64);
     let coh = &w.cohorts;
     let wr = &w;
+    // the pool species' height-increment curves, once (same values as potential_increment)
+    let inc: Vec<HeightIncrement> = w.pool.iter().map(|&s| HeightIncrement::of(&w.lib.species[s as usize])).collect();
+    let inc = &inc[..];
     let blocks: Vec<Block> = (0..ncell.div_ceil(BLOCK))
         .into_par_iter()
         .map(|b| {
@@ -215,7 +219,7 @@ pub fn run(w: Regen<'_>) -> usize {
                 for k in local.iter_mut() {
                     let sp = &wr.lib.species[wr.pool[k.pool as usize] as usize];
                     let f = light_response(gl, sp.life.shade_tolerance) * wr.suitability[k.pool as usize][site];
-                    k.height = (k.height + potential_increment(sp, k.height) * f).min(sp.life.max_height_m);
+                    k.height = (k.height + inc[k.pool as usize].at(k.height) * f).min(sp.life.max_height_m);
                     k.age += 1.0;
                     k.vigour = 0.7 * k.vigour + 0.3 * f;
                     if k.vigour < stress_threshold(sp.life.shade_tolerance) {
@@ -279,14 +283,9 @@ pub fn run(w: Regen<'_>) -> usize {
             out
         })
         .collect();
-    let mut cohorts = Cohorts::default();
     let mut year_counts = RegenYear::default();
-    let mut n_recruits = 0;
     let ledger = &mut *w.regen_ledger;
-    for b in blocks {
-        for k in b.cohorts {
-            cohorts.push(k);
-        }
+    for b in &blocks {
         for p in 0..np {
             ledger.germinated[p] += b.germinated[p];
             ledger.recruited[p] += b.recruited[p];
@@ -297,13 +296,53 @@ pub fn run(w: Regen<'_>) -> usize {
                 year_counts.dead[q] += b.dead[p][q];
             }
         }
-        for (t, light, vigour) in b.recruits {
-            w.trees.push(t);
-            let i = w.trees.len() - 1;
-            w.trees.light[i] = light;
-            w.trees.vigour[i] = vigour;
-            n_recruits += 1;
+    }
+    // the blocks' cohorts and recruits in block order, one column per task
+    let ncoh: usize = blocks.iter().map(|b| b.cohorts.len()).sum();
+    let n_recruits: usize = blocks.iter().map(|b| b.recruits.len()).sum();
+    fn cohorts_of(b: &Block) -> &[Cohort] {
+        &b.cohorts
+    }
+    fn recruits_of(b: &Block) -> &[(NewTree, f32, f32)] {
+        &b.recruits
+    }
+    fn column<T, U>(blocks: &[Block], n: usize, items: fn(&Block) -> &[U], f: impl Fn(&U) -> T, v: &mut Vec<T>) {
+        v.reserve(n);
+        for b in blocks {
+            v.extend(items(b).iter().map(&f));
         }
+    }
+    let mut cohorts = Cohorts::default();
+    let t = &mut *w.trees;
+    let first_id = t.next_id;
+    t.next_id += n_recruits as u64;
+    {
+        let bl = &blocks[..];
+        let (co, re) = (cohorts_of as fn(&Block) -> &[Cohort], recruits_of as fn(&Block) -> &[(NewTree, f32, f32)]);
+        let Cohorts { cell, pool, stems, height, age, vigour } = &mut cohorts;
+        let TreeStore { id, species, x, y, z, age: t_age, height: t_height, dbh, crown_radius, crown_base, light, vigour: t_vigour, suitability, next_id: _ } = t;
+        rayon::scope(|sc| {
+            sc.spawn(move |_| column(bl, ncoh, co, |k| k.cell, cell));
+            sc.spawn(move |_| column(bl, ncoh, co, |k| k.pool, pool));
+            sc.spawn(move |_| column(bl, ncoh, co, |k| k.stems, stems));
+            sc.spawn(move |_| column(bl, ncoh, co, |k| k.height, height));
+            sc.spawn(move |_| column(bl, ncoh, co, |k| k.age, age));
+            sc.spawn(move |_| column(bl, ncoh, co, |k| k.vigour, vigour));
+            sc.spawn(move |_| id.extend(first_id..first_id + n_recruits as u64));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.species, species));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.x, x));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.y, y));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.z, z));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.age, t_age));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.height, t_height));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.dbh, dbh));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.crown_radius, crown_radius));
+            // as TreeStore::push: crown base at 0.4 of the height
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.height * 0.4, crown_base));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.1, light));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.2, t_vigour));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.suitability, suitability));
+        });
     }
     *w.cohorts = cohorts;
     *w.regen_year = year_counts;
