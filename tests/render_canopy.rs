@@ -141,3 +141,65 @@ fn far_forest_stays_forest_coloured_in_the_canopy_layer() {
         }
     });
 }
+
+/// The far forest beyond a simulated window (`job::scene::FarForest`) is drawn by the terrain
+/// shader as crowns: looking steeply down (about 70°) on the surroundings from 120 m above them, the far-forest mesh
+/// shows darker, greener ground with a crown pattern (lit domes and gaps: a spread of pixel
+/// brightness several times that of plain meadow), while the same view of the plain mesh shows
+/// meadow.
+#[test]
+fn far_forest_beyond_the_window_is_drawn_as_crowns() {
+    use sylva::job::scene::{canopy_cover, FarForest};
+    use sylva::render::scene::TreeInstance;
+    use sylva::render::terrain::{from_ground, GroundGrid, LandCover};
+    let n = 100;
+    let g = GroundGrid {
+        heights: sylva::grid::Grid { width: n, height: n, data: vec![300.0; n * n] },
+        cell_x: 10.0,
+        cell_y: 10.0,
+        origin: [0.0, 0.0],
+        stream: vec![],
+        wetness: vec![],
+        fade: vec![],
+        focus: Some(([300.0, 300.0], [700.0, 700.0])),
+    };
+    // a closed window stand of one species (crowns 4.5 m wide every 8 m, 25 m tall)
+    let mut trees = Vec::new();
+    for j in 0..50 {
+        for i in 0..50 {
+            trees.push(TreeInstance::new((j * 50 + i + 1) as u64, [304.0 + 8.0 * i as f32, 304.0 + 8.0 * j as f32, 300.0], 25.0, 4.5, 0, [0.09, 0.2, 0.03]));
+        }
+    }
+    let cover = LandCover::default();
+    let plain = from_ground(&g, &cover, &|_, _| 0.0).unwrap();
+    let far = FarForest::of(&trees, &g, &canopy_cover(&trees, &g)).expect("a stocked window");
+    let mut forest = plain.clone();
+    far.apply(&mut forest, &g, &cover);
+    assert!(forest.forest.iter().filter(|&&f| f > 0.5).count() > n * n / 2);
+    // steeply down on the surroundings, 150 m south-west of the window
+    let cam = Camera::look_at([150.0, 100.0, 300.0 + 25.0 + 120.0], [150.0, 150.0, 300.0], 40.0);
+    let stats = |img: &image::RgbaImage| {
+        let px: Vec<[f64; 3]> = img.pixels().map(|p| [p[0] as f64, p[1] as f64, p[2] as f64]).collect();
+        let k = px.len() as f64;
+        let mean = px.iter().fold([0.0; 3], |m, p| [m[0] + p[0] / k, m[1] + p[1] / k, m[2] + p[2] / k]);
+        let lum: Vec<f64> = px.iter().map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]).collect();
+        let lm = lum.iter().sum::<f64>() / k;
+        let sd = (lum.iter().map(|l| (l - lm) * (l - lm)).sum::<f64>() / k).sqrt();
+        (mean, lm, sd)
+    };
+    with_renderer(|r| {
+        let mut scene = demo_scene(0, 1000.0, 3);
+        scene.set_terrain(plain.clone());
+        let meadow = r.render(&scene, &cam, 256, 256).unwrap();
+        scene.set_terrain(forest.clone());
+        let crowns = r.render(&scene, &cam, 256, 256).unwrap();
+        let _ = crowns.save(out_dir().join("far_forest_crowns.png"));
+        let (mm, ml, msd) = stats(&meadow);
+        let (fm, fl, fsd) = stats(&crowns);
+        eprintln!("meadow mean {mm:?} lum {ml:.1} sd {msd:.2}; far forest mean {fm:?} lum {fl:.1} sd {fsd:.2}");
+        // forest canopy: darker than sunlit meadow, green dominant, and textured by crowns
+        assert!(fl < ml, "far forest luminance {fl:.1} vs meadow {ml:.1}");
+        assert!(fm[1] > fm[0] && fm[1] > fm[2], "green canopy {fm:?}");
+        assert!(fsd > 3.0 * msd.max(1.0), "crown pattern: brightness spread {fsd:.2} vs meadow {msd:.2}");
+    });
+}
