@@ -724,13 +724,7 @@ impl FarForest {
         let Some((lo, hi)) = g.focus else { return };
         let mosaic = Perlin::new(19);
         let jitter = Perlin::new(23);
-        let hash = |i: i64, j: i64, salt: u64| {
-            let mut z = (i.wrapping_mul(73_856_093) ^ j.wrapping_mul(19_349_663)) as u64 ^ salt;
-            z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            (z >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let hash = crate::render::terrain::cell_hash;
         let mean = self.palette.iter().fold([0.0f32; 3], |m, (c, w)| [m[0] + c[0] * w, m[1] + c[1] * w, m[2] + c[2] * w]);
         let mut forest = std::mem::take(&mut m.forest);
         forest.resize(m.positions.len(), 0.0);

@@ -190,17 +190,20 @@ fn smooth01(t: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
+/// A deterministic value in 0..1 for the integer cell `(i, j)` and a `salt` (a spatial hash
+/// of the cell, then the SplitMix64 finaliser): per-cell variation of ground and canopy.
+pub(crate) fn cell_hash(i: i64, j: i64, salt: u64) -> f32 {
+    let k = (i.wrapping_mul(73_856_093) ^ j.wrapping_mul(19_349_663)) as u64 ^ salt;
+    let mut z = k.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    (z >> 40) as f32 / (1u64 << 24) as f32
+}
+
 /// A small deterministic brightness variation (±1) of a plan position, in cells of ~7 m and
 /// ~23 m, so that open land is not one flat colour.
 fn mottle(x: f32, y: f32) -> f32 {
-    let h = |x: f32, y: f32| {
-        let (i, j) = (x.floor() as i64, y.floor() as i64);
-        let k = (i.wrapping_mul(73_856_093) ^ j.wrapping_mul(19_349_663)) as u64;
-        let mut z = k.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z >> 40) as f32 / (1u64 << 24) as f32) * 2.0 - 1.0
-    };
+    let h = |x: f32, y: f32| cell_hash(x.floor() as i64, y.floor() as i64, 0) * 2.0 - 1.0;
     0.6 * h(x / 7.0, y / 7.0) + 0.4 * h(x / 23.0 + 0.5, y / 23.0 + 0.5)
 }
 
