@@ -25,6 +25,20 @@ pub const EARTH_RADIUS_M: f64 = 6_371_007.2;
 /// Metres per degree of latitude, the scale `gdaldem -s 111120` uses for geographic input.
 pub const METRES_PER_DEGREE: f64 = 111_120.0;
 
+/// `v.floor() as isize`, bit for bit (NaN → 0, saturating at the ends), without the libm call
+/// that `f64::floor` compiles to on the x86-64 baseline (no SSE4.1 `roundsd`): a cell index
+/// from a coordinate over a cell size, computed for every tree every year.
+#[inline]
+pub fn floor_index(v: f64) -> isize {
+    let t = v as isize;
+    // truncation rounds towards zero: one less for negative non-integers
+    if (t as f64) > v {
+        t.saturating_sub(1)
+    } else {
+        t
+    }
+}
+
 /// Georeferencing of a grid: where its upper-left corner is and how large a cell is.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct GeoRef {
@@ -127,6 +141,18 @@ impl<T> Grid<T> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn floor_index_is_floor() {
+        let vals = [0.0, -0.0, 0.5, -0.5, 1.0, -1.0, 2.999_999, -2.000_001, 1e15 + 0.5, -1e15 - 0.5, 1e300, -1e300, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, f64::MIN_POSITIVE, -f64::MIN_POSITIVE];
+        for v in vals {
+            assert_eq!(super::floor_index(v), v.floor() as isize, "{v}");
+        }
+        for k in -2000..2000 {
+            let v = k as f64 * 0.37 / 5.0;
+            assert_eq!(super::floor_index(v), v.floor() as isize, "{v}");
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -75,3 +75,24 @@ fn resume_equals_uninterrupted() {
     }
     assert!(dir.path().join("stand_table.png").exists() && dir.path().join("maps/species_year_0040.png").exists());
 }
+
+/// The growth factors cached in the tree store (drawn when a tree first grows, kept through
+/// mortality's compaction and regeneration's appends) are every tree's own
+/// `growth_factor(seed, id)`: a misaligned cache would give trees each other's factors.
+#[test]
+fn cached_growth_factors_belong_to_their_trees() {
+    let (sc, mut w) = common::world(&sc_text());
+    common::run(&sc, &mut w, 30);
+    let t = &w.stand.trees;
+    assert_eq!(t.growth_factor.0.len(), t.len());
+    let mut drawn = 0;
+    for (i, g) in t.growth_factor.0.iter().enumerate() {
+        if !g.is_nan() {
+            assert_eq!(g.to_bits(), sylva::sim::phases::growth::growth_factor(sc.seed, t.id[i]).to_bits(), "tree {i} (id {})", t.id[i]);
+            drawn += 1;
+        }
+    }
+    // most trees have grown in diameter at least once, and deaths have compacted the store
+    assert!(drawn > t.len() / 2, "{drawn} of {}", t.len());
+    assert!(w.stand.trees.next_id as usize > t.len(), "no tree died: the compaction is untested");
+}

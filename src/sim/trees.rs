@@ -110,8 +110,26 @@ pub struct TreeStore {
     pub vigour: Vec<f32>,
     /// Site suitability (0–1) of the tree's cell for its species (cached at establishment).
     pub suitability: Vec<f32>,
+    /// Each tree's persistent diameter-growth factor (`sim::phases::growth::growth_factor`,
+    /// a function of the scenario seed and the tree id only), computed the first time the
+    /// tree grows and kept: NaN until then. A cache, not state: it is not written to
+    /// checkpoints, and stores that differ only in it compare equal.
+    #[serde(skip)]
+    pub growth_factor: GrowthFactors,
     /// Next id to hand out.
     pub next_id: TreeId,
+}
+
+/// The cached growth factors of a [`TreeStore`], one per tree (NaN: not yet drawn). Equal to
+/// any other: the values are a pure function of the seed and the tree ids, so two stores with
+/// the same trees have the same factors whether or not they were drawn yet.
+#[derive(Debug, Clone, Default)]
+pub struct GrowthFactors(pub Vec<f32>);
+
+impl PartialEq for GrowthFactors {
+    fn eq(&self, _: &Self) -> bool {
+        true
+    }
 }
 
 /// A new tree to add.
@@ -163,6 +181,7 @@ impl TreeStore {
         self.light.push(1.0);
         self.vigour.push(1.0);
         self.suitability.push(t.suitability);
+        self.growth_factor.0.push(f32::NAN);
         id
     }
     /// Removes every tree whose `keep` flag is false, keeping the order of the others (the
@@ -178,11 +197,13 @@ impl TreeStore {
             }
             v.truncate(j);
         }
-        let TreeStore { id, species, x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability, next_id: _ } = self;
+        let TreeStore { id, species, x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability, growth_factor, next_id: _ } = self;
+        // a store restored from a checkpoint has no cached factors yet: give it NaN ones
+        growth_factor.0.resize(id.len(), f32::NAN);
         rayon::scope(|sc| {
             sc.spawn(|_| r(id, keep));
             sc.spawn(|_| r(species, keep));
-            for v in [x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability] {
+            for v in [x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability, &mut growth_factor.0] {
                 sc.spawn(move |_| r(v, keep));
             }
         });
@@ -195,7 +216,7 @@ impl TreeStore {
     }
     /// Approximate heap size in bytes.
     pub fn heap_bytes(&self) -> usize {
-        self.id.capacity() * 8 + self.species.capacity() * 2 + 11 * self.x.capacity() * 4
+        self.id.capacity() * 8 + self.species.capacity() * 2 + 11 * self.x.capacity() * 4 + self.growth_factor.0.capacity() * 4
     }
 }
 
@@ -241,10 +262,10 @@ impl SpatialGrid {
     /// Indices of trees within `r` metres of `(x, y)` (ascending cell order).
     pub fn within(&self, trees: &TreeStore, x: f32, y: f32, r: f32, out: &mut Vec<u32>) {
         out.clear();
-        let c0 = (((x - r) as f64 / self.cell_m).floor() as isize).max(0);
-        let c1 = (((x + r) as f64 / self.cell_m).floor() as isize).min(self.cols as isize - 1);
-        let r0 = (((y - r) as f64 / self.cell_m).floor() as isize).max(0);
-        let r1 = (((y + r) as f64 / self.cell_m).floor() as isize).min(self.rows as isize - 1);
+        let c0 = crate::grid::floor_index((x - r) as f64 / self.cell_m).max(0);
+        let c1 = crate::grid::floor_index((x + r) as f64 / self.cell_m).min(self.cols as isize - 1);
+        let r0 = crate::grid::floor_index((y - r) as f64 / self.cell_m).max(0);
+        let r1 = crate::grid::floor_index((y + r) as f64 / self.cell_m).min(self.rows as isize - 1);
         for row in r0..=r1 {
             for col in c0..=c1 {
                 for &i in self.cell(row as usize * self.cols + col as usize) {

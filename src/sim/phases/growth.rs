@@ -136,13 +136,15 @@ pub fn run(w: Growth<'_>) {
     let curves: Vec<Curves> = lib.species.iter().map(|sp| (HeightIncrement::of(sp), OpenDbh::of(sp))).collect();
     let curves = &curves[..];
     // read-only columns, then the written ones updated in place (each tree on its own)
+    // trees restored from a checkpoint have no cached growth factors yet (NaN: drawn below)
+    t.growth_factor.0.resize(t.id.len(), f32::NAN);
     let (species, light, suitability, id) = (&t.species, &t.light, &t.suitability, &t.id);
-    (&mut t.height, &mut t.dbh, &mut t.crown_radius, &mut t.crown_base, &mut t.vigour, &mut t.age)
+    (&mut t.height, &mut t.dbh, &mut t.crown_radius, &mut t.crown_base, &mut t.vigour, &mut t.age, &mut t.growth_factor.0)
         .into_par_iter()
         .enumerate()
         .with_min_len(1024)
-        .for_each(|(i, (hr, dr, rr, cbr, vr, ar))| {
-            let g = grow(lib, curves, crowd, seed, species[i], light[i], suitability[i], id[i], *hr, *dr, *cbr, *vr, i);
+        .for_each(|(i, (hr, dr, rr, cbr, vr, ar, gr))| {
+            let g = grow(lib, curves, crowd, seed, species[i], light[i], suitability[i], id[i], *hr, *dr, *cbr, *vr, gr, i);
             *hr = g.h;
             *dr = g.d;
             *rr = g.r;
@@ -156,10 +158,11 @@ pub fn run(w: Growth<'_>) {
 type Curves = (HeightIncrement, OpenDbh);
 
 /// One tree's season ([`run`]): species `s`, light `l`, suitability, id, height `h`, DBH `d`,
-/// crown base and vigour before it; `i` its index in the crowding.
+/// crown base and vigour before it, its cached [`growth_factor`] (NaN until first drawn, then
+/// kept); `i` its index in the crowding.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s: u16, l: f32, suitability: f32, id: u64, h: f32, d: f32, crown_base: f32, vigour: f32, i: usize) -> Grown {
+fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s: u16, l: f32, suitability: f32, id: u64, h: f32, d: f32, crown_base: f32, vigour: f32, factor: &mut f32, i: usize) -> Grown {
     let sp = &lib.species[s as usize];
     let (inc, dbh_of) = &curves[s as usize];
     let f = light_response(l, sp.life.shade_tolerance) * suitability;
@@ -190,9 +193,17 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
     let dd_closed = if h > 1.3 { (dh_pot * 100.0 / HD_CLOSED).max(DD_CLOSED_MIN).min(dd_open) } else { dd_open };
     let dd_pot = (1.0 - x) * dd_open + x * dd_closed;
     // the tree's growth factor only matters for a non-zero increment (a zero times the factor,
-    // which is finite and > 0, is that same zero), so it is not drawn for trees that do not grow
+    // which is finite and > 0, is that same zero), so it is not drawn for trees that do not
+    // grow; once drawn it is kept (a pure function of seed and id: the same bits every year)
     let dd = dd_pot * f * m;
-    let mut d1 = d + if dd == 0.0 { dd } else { dd * growth_factor(seed, id) };
+    let mut d1 = d + if dd == 0.0 {
+        dd
+    } else {
+        if factor.is_nan() {
+            *factor = growth_factor(seed, id);
+        }
+        dd * *factor
+    };
     if d1 == 0.0 && h1 > 1.3 {
         d1 = dbh_of.at(h1) * 0.5;
     }

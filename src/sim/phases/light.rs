@@ -185,14 +185,14 @@ fn build_canopy(t: &TreeStore, grid: &SpatialGrid, lai_c: &[f32], obstacles: &[(
                     let r = t.crown_radius[i].max(0.05);
                     let s = r * 0.886_226_9; // half side of the equal-area square
                     let (x, y) = (t.x[i], t.y[i]);
-                    let r0 = (((y - s) as f64 / cell).floor() as isize).max(ra as isize);
-                    let r1 = (((y + s) as f64 / cell).floor() as isize).min(rows as isize - 1).min(rb as isize - 1);
+                    let r0 = crate::grid::floor_index((y - s) as f64 / cell).max(ra as isize);
+                    let r1 = crate::grid::floor_index((y + s) as f64 / cell).min(rows as isize - 1).min(rb as isize - 1);
                     if r0 > r1 {
                         continue;
                     }
                     let la = std::f32::consts::PI * r * r * lai_c[t.species[i] as usize];
-                    let c0 = (((x - s) as f64 / cell).floor() as isize).max(0);
-                    let c1 = (((x + s) as f64 / cell).floor() as isize).min(cols as isize - 1);
+                    let c0 = crate::grid::floor_index((x - s) as f64 / cell).max(0);
+                    let c1 = crate::grid::floor_index((x + s) as f64 / cell).min(cols as isize - 1);
                     let inv = u32::MAX - t.height[i].max(0.0).to_bits();
                     let sq = 4.0 * s * s;
                     for row in r0..=r1 {

@@ -320,7 +320,9 @@ pub fn run(w: Regen<'_>) -> usize {
         let bl = &blocks[..];
         let (co, re) = (cohorts_of as fn(&Block) -> &[Cohort], recruits_of as fn(&Block) -> &[(NewTree, f32, f32)]);
         let Cohorts { cell, pool, stems, height, age, vigour } = &mut cohorts;
-        let TreeStore { id, species, x, y, z, age: t_age, height: t_height, dbh, crown_radius, crown_base, light, vigour: t_vigour, suitability, next_id: _ } = t;
+        let TreeStore { id, species, x, y, z, age: t_age, height: t_height, dbh, crown_radius, crown_base, light, vigour: t_vigour, suitability, growth_factor, next_id: _ } = t;
+        // factors drawn when the recruits first grow (NaN: not yet drawn)
+        growth_factor.0.resize(id.len(), f32::NAN);
         rayon::scope(|sc| {
             sc.spawn(move |_| column(bl, ncoh, co, |k| k.cell, cell));
             sc.spawn(move |_| column(bl, ncoh, co, |k| k.pool, pool));
@@ -342,6 +344,7 @@ pub fn run(w: Regen<'_>) -> usize {
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.1, light));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.2, t_vigour));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.suitability, suitability));
+            sc.spawn(move |_| growth_factor.0.resize(growth_factor.0.len() + n_recruits, f32::NAN));
         });
     }
     *w.cohorts = cohorts;
