@@ -5,7 +5,7 @@ use crate::rng::{salt, Stream};
 use crate::sim::density::Crowding;
 use crate::sim::trees::TreeStore;
 use crate::species::allometry::{HeightIncrement, OpenDbh};
-use crate::species::SpeciesLibrary;
+use crate::species::{Species, SpeciesLibrary};
 pub use crate::species::allometry::{effective_age, open_crown_radius, open_dbh, potential_height, potential_increment};
 use rayon::prelude::*;
 
@@ -171,6 +171,13 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
     let m = crowding_modifier(crowd.rd[i], s);
     let dh_pot = inc.at(h);
     let h1 = (h + dh_pot * f * height_share(m, s)).min(sp.life.max_height_m);
+    // Diameter increment below is `dd_pot · f · m` with dd_pot finite and ≥ 0: a tree with no
+    // light response or fully suppressed by crowding (f = 0 or m = 0) gets +0 whatever dd_pot
+    // is, so its open-grown curve (two powers and two logarithms) is not evaluated.
+    if f == 0.0 || m == 0.0 {
+        // `d + 0.0`, as `d + dd` below with dd = +0 (−0 becomes +0 there too)
+        return finish(sp, dbh_of, crowd.ccf[i], l, h1, d + 0.0, crown_base, vigour, f, m);
+    }
     let hp = (h + dh_pot).min(sp.life.max_height_m * 0.999);
     let dd_open = (dbh_of.at(hp) - dbh_of.at(h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
     // Closed-stand allometry: under crowding, diameter increment follows height
@@ -196,7 +203,7 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
     // which is finite and > 0, is that same zero), so it is not drawn for trees that do not
     // grow; once drawn it is kept (a pure function of seed and id: the same bits every year)
     let dd = dd_pot * f * m;
-    let mut d1 = d + if dd == 0.0 {
+    let d1 = d + if dd == 0.0 {
         dd
     } else {
         if factor.is_nan() {
@@ -204,12 +211,21 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
         }
         dd * *factor
     };
+    finish(sp, dbh_of, crowd.ccf[i], l, h1, d1, crown_base, vigour, f, m)
+}
+
+/// The end of [`grow`] from the new height `h1` and diameter `d1` (before its floor and cap):
+/// a first DBH for a tree that passed breast height without one, the crown radius, crown base
+/// and vigour.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn finish(sp: &Species, dbh_of: &OpenDbh, ccf: f32, l: f32, h1: f32, mut d1: f32, crown_base: f32, vigour: f32, f: f32, m: f32) -> Grown {
     if d1 == 0.0 && h1 > 1.3 {
         d1 = dbh_of.at(h1) * 0.5;
     }
     let d1 = d1.min(sp.life.max_dbh_cm);
     let lc = l.clamp(0.0, 1.0);
-    let r = open_crown_radius(sp, h1, d1) * (0.5 + 0.5 * lc) * crown_space(crowd.ccf[i]);
+    let r = open_crown_radius(sp, h1, d1) * (0.5 + 0.5 * lc) * crown_space(ccf);
     let cb = crown_base.max(h1 * (1.0 - sp.life.allometry.crown_ratio * (0.4 + 0.6 * lc))).min(h1 * 0.95);
     let v = 0.5 * vigour + 0.5 * f * m;
     Grown { h: h1, d: d1, r, cb, v }

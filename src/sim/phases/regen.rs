@@ -156,6 +156,8 @@ pub fn run(w: Regen<'_>) -> usize {
     // the pool species' height-increment curves, once (same values as potential_increment)
     let inc: Vec<HeightIncrement> = w.pool.iter().map(|&s| HeightIncrement::of(&w.lib.species[s as usize])).collect();
     let inc = &inc[..];
+    // germinants a light cell holds at most (the same for every cell: computed once)
+    let cap0 = max_density_ha(GERMINANT_HEIGHT_M) * area / 10_000.0;
     let blocks: Vec<Block> = (0..ncell.div_ceil(BLOCK))
         .into_par_iter()
         .map(|b| {
@@ -182,7 +184,6 @@ pub fn run(w: Regen<'_>) -> usize {
                 let (cx, cy) = lg.centre(c);
                 // 1. germination
                 let mut r = Stream::new(seed, c as u64, year, salt::ESTABLISH);
-                let cap0 = max_density_ha(GERMINANT_HEIGHT_M) * area / 10_000.0;
                 for (p, &s) in wr.pool.iter().enumerate() {
                     let sp = &wr.lib.species[s as usize];
                     let suit = wr.suitability[p][site];
