@@ -138,13 +138,16 @@ pub struct Occluder {
 #[derive(Debug)]
 pub struct ShadowVolumes {
     occ: Vec<Occluder>,
+    /// Owner of every occluder (e.g. its tree in a group), or empty when not tagged
+    /// ([`ShadowVolumes::with_owners`]).
+    owners: Vec<u32>,
     dirs: Vec<Vec3>,
     grids: Vec<std::sync::OnceLock<DirGrid>>,
 }
 
 impl Clone for ShadowVolumes {
     fn clone(&self) -> Self {
-        ShadowVolumes::from_dirs(self.dirs.clone(), self.occ.clone())
+        ShadowVolumes::from_dirs(self.dirs.clone(), self.occ.clone(), self.owners.clone())
     }
 }
 
@@ -167,6 +170,9 @@ struct DirGrid {
     z: Vec<f32>,
     r2: Vec<f32>,
     gamma: Vec<f32>,
+    /// Owner of every caster slot (`u32::MAX` in the padding); empty when the occluders are not
+    /// tagged.
+    owner: Vec<u32>,
 }
 
 /// Casters tested together by [`ShadowVolumes::transmittance`] (the hit test vectorises); every
@@ -178,10 +184,11 @@ const MAX_CELLS_PER_AXIS: usize = 96;
 
 
 impl DirGrid {
-    fn new(d: Vec3, occ: &[Occluder]) -> DirGrid {
+    /// The grid of `occ` for direction `d`; `owners` is empty or holds one owner per occluder.
+    fn new(d: Vec3, occ: &[Occluder], owners: &[u32]) -> DirGrid {
         let (u, v) = d.any_orthonormal_pair();
         if occ.is_empty() {
-            return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], x: vec![], y: vec![], z: vec![], r2: vec![], gamma: vec![] };
+            return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], x: vec![], y: vec![], z: vec![], r2: vec![], gamma: vec![], owner: vec![] };
         }
         let proj: Vec<Vec2> = occ.iter().map(|o| Vec2::new(o.center.dot(u), o.center.dot(v))).collect();
         let mut lo = Vec2::splat(f32::INFINITY);
@@ -228,18 +235,23 @@ impl DirGrid {
         let mut fill = count.clone();
         let len = count[nx * ny] as usize;
         let (mut ix, mut iy, mut iz, mut ir2, mut ig) = (vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![-1.0; len], vec![1.0; len]);
-        for (&[x0, x1, y0, y1], o) in ranges.iter().zip(occ) {
+        let tagged = owners.len() == occ.len();
+        let mut iow = if tagged { vec![u32::MAX; len] } else { Vec::new() };
+        for (j, (&[x0, x1, y0, y1], o)) in ranges.iter().zip(occ).enumerate() {
             let r2 = o.radius * o.radius;
             for y in y0 as usize..=y1 as usize {
                 for x in x0 as usize..=x1 as usize {
                     let c = y * nx + x;
                     let f = fill[c] as usize;
                     (ix[f], iy[f], iz[f], ir2[f], ig[f]) = (o.center.x, o.center.y, o.center.z, r2, o.gamma);
+                    if tagged {
+                        iow[f] = owners[j];
+                    }
                     fill[c] += 1;
                 }
             }
         }
-        DirGrid { d, u, v, lo, cell, nx, ny, start: count, x: ix, y: iy, z: iz, r2: ir2, gamma: ig }
+        DirGrid { d, u, v, lo, cell, nx, ny, start: count, x: ix, y: iy, z: iz, r2: ir2, gamma: ig, owner: iow }
     }
 
     /// Item range of the cell containing the projection of `p` (empty outside the grid).
@@ -264,7 +276,14 @@ impl DirGrid {
     /// ahead of `p`, and `p` is outside it), in caster order, and returns it: the arithmetic of
     /// glam's `Vec3::dot`/`length_squared` written per component so the hit tests vectorise.
     #[inline]
-    fn block(&self, i: usize, p: Vec3, mut t: f32) -> f32 {
+    fn block(&self, i: usize, p: Vec3, t: f32) -> f32 {
+        self.block_except(i, p, t, None)
+    }
+
+    /// [`DirGrid::block`] leaving out the casters owned by `skip` (when given; the grid's
+    /// casters are then tagged).
+    #[inline]
+    fn block_except(&self, i: usize, p: Vec3, mut t: f32, skip: Option<u32>) -> f32 {
         let j = i..i + LANES;
         let (Ok(xs), Ok(ys), Ok(zs), Ok(rs), Ok(gs)) = (
             <&[f32; LANES]>::try_from(&self.x[j.clone()]),
@@ -282,6 +301,14 @@ impl DirGrid {
             let along = ox * d.x + oy * d.y + oz * d.z;
             let l2 = ox * ox + oy * oy + oz * oz;
             hit[k] = (along > 0.0) & (l2 > rs[k]) & (l2 - along * along <= rs[k]);
+        }
+        if let Some(own) = skip {
+            let Ok(os) = <&[u32; LANES]>::try_from(&self.owner[i..i + LANES]) else {
+                return t; // unreachable: tagged grids have an owner per slot
+            };
+            for k in 0..LANES {
+                hit[k] &= os[k] != own;
+            }
         }
         // most blocks hit nothing: one test of the whole block, then the hits in order
         if hit.iter().fold(false, |a, &h| a | h) {
@@ -303,12 +330,22 @@ const CELLS_PER_CASTER: f32 = 2.0;
 impl ShadowVolumes {
     /// Shadow volumes of `occ` for every direction of `sky`.
     pub fn new(sky: &Sky, occ: Vec<Occluder>) -> ShadowVolumes {
-        ShadowVolumes::from_dirs(sky.dirs.clone(), occ)
+        ShadowVolumes::from_dirs(sky.dirs.clone(), occ, Vec::new())
     }
 
-    fn from_dirs(dirs: Vec<Vec3>, occ: Vec<Occluder>) -> ShadowVolumes {
+    /// Shadow volumes of `occ` for every direction of `sky`, each occluder tagged with an owner
+    /// (`owners[i]` owns `occ[i]`, e.g. the tree of a group it belongs to), so that
+    /// [`ShadowVolumes::shaded_except`] can leave one owner's occluders out: one set of grids
+    /// serves every member of a group instead of one set per member built from the others'
+    /// occluders. Owners beyond `occ` are ignored; missing ones are `u32::MAX`.
+    pub fn with_owners(sky: &Sky, occ: Vec<Occluder>, mut owners: Vec<u32>) -> ShadowVolumes {
+        owners.resize(occ.len(), u32::MAX);
+        ShadowVolumes::from_dirs(sky.dirs.clone(), occ, owners)
+    }
+
+    fn from_dirs(dirs: Vec<Vec3>, occ: Vec<Occluder>, owners: Vec<u32>) -> ShadowVolumes {
         let grids = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
-        ShadowVolumes { occ, dirs, grids }
+        ShadowVolumes { occ, owners, dirs, grids }
     }
 
     /// The occluders.
@@ -317,7 +354,26 @@ impl ShadowVolumes {
     }
 
     fn grid(&self, k: usize) -> &DirGrid {
-        self.grids[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ))
+        self.grids[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners))
+    }
+
+    /// [`ShadowVolumes::shaded`] counting only the occluders not owned by `owner`: the answer
+    /// that shadow volumes of those occluders alone would give (the same casters hit, in the
+    /// same order). Without owner tags ([`ShadowVolumes::new`]) every occluder counts.
+    pub fn shaded_except(&self, k: usize, p: Vec3, owner: u32) -> bool {
+        let g = self.grid(k);
+        let skip = (!g.owner.is_empty()).then_some(owner);
+        let r = g.candidates(p);
+        let mut t = 1.0f32;
+        let mut i = r.start;
+        while i < r.end {
+            t = g.block_except(i, p, t, skip);
+            if t < 1.0 {
+                return true;
+            }
+            i += LANES;
+        }
+        false
     }
 
     /// True when [`ShadowVolumes::transmittance`] of the same ray is below 1, found at the first
@@ -594,6 +650,44 @@ mod tests {
             let (i2, d2) = light_at(&sky, *m, &vols, *p);
             assert_eq!((i.to_bits(), d.to_array().map(f32::to_bits)), (i2.to_bits(), d2.to_array().map(f32::to_bits)));
         }
+    }
+
+    /// Shadow volumes of three owners' occluders, queried leaving one owner out, against shadow
+    /// volumes of the other owners' occluders alone: the same answer for every ray.
+    #[test]
+    fn shaded_except_equals_the_others_alone() {
+        let sky = Sky::from_latitude(47.0);
+        let occ: Vec<Occluder> = (0..240)
+            .map(|i| {
+                let f = i as f32;
+                let r = 0.2 + 0.4 * (f * 0.31).sin().abs();
+                Occluder { center: Vec3::new((f * 0.77).sin() * 4.0, (f * 0.41).cos() * 4.0, 2.0 + (f * 0.23).sin().abs() * 6.0), radius: r, gamma: 0.6f32.powf(r) }
+            })
+            .collect();
+        let owners: Vec<u32> = (0..occ.len() as u32).map(|i| (i * 7) % 3).collect();
+        let all = ShadowVolumes::with_owners(&sky, occ.clone(), owners.clone());
+        let (mut differ, mut shaded) = (0, 0);
+        for skip in 0..3u32 {
+            let rest: Vec<Occluder> = occ.iter().zip(&owners).filter(|(_, &w)| w != skip).map(|(o, _)| *o).collect();
+            let alone = ShadowVolumes::new(&sky, rest);
+            for j in 0..150 {
+                let f = j as f32;
+                let p = Vec3::new((f * 0.47).cos() * 4.5, (f * 0.59).sin() * 4.5, 1.0 + (f * 0.19).sin().abs() * 7.0);
+                for k in 0..sky.dirs.len() {
+                    let s = alone.shaded(k, p);
+                    assert_eq!(all.shaded_except(k, p, skip), s, "owner {skip}, point {p}, direction {k}");
+                    shaded += s as usize;
+                    differ += (all.shaded(k, p) != s) as usize;
+                }
+            }
+        }
+        // the cases test something: shaded and unshaded rays, and rays that only the skipped
+        // owner's occluders shade
+        assert!(shaded > 500 && shaded < 3 * 150 * SKY_DIRS - 500, "{shaded}");
+        assert!(differ > 50, "{differ}");
+        // untagged volumes count every occluder
+        let plain = ShadowVolumes::new(&sky, occ);
+        assert!((0..SKY_DIRS).all(|k| plain.shaded_except(k, Vec3::new(0.0, 0.0, 1.0), 0) == plain.shaded(k, Vec3::new(0.0, 0.0, 1.0))));
     }
 
     #[test]
