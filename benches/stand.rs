@@ -9,7 +9,8 @@
 //! (FNV-1a over the bits of every adapted node position and radius, leaf position and cluster
 //! of the targets) so a speed-up can be checked to compute the same stand bit for bit.
 //! `SYLVA_STAND_TARGETS=N` adapts the N nearest trees instead of 1,000 (for a profiler);
-//! `SYLVA_STAND_ONCE=1` skips the second call.
+//! `SYLVA_STAND_ONCE=1` skips the second call; `SYLVA_STAND_CELL=M` sets the neighbourhood
+//! cell side (m, default 12; other cells group the trees otherwise, so the stand differs).
 use glam::Vec3;
 use sylva::rng::Stream;
 use sylva::species::SpeciesLibrary;
@@ -72,7 +73,10 @@ fn main() {
     order.sort_by(|&a, &b| trees[a].base.distance(eye).total_cmp(&trees[b].base.distance(eye)).then(a.cmp(&b)));
     let n_targets = std::env::var("SYLVA_STAND_TARGETS").ok().and_then(|v| v.parse().ok()).unwrap_or(1000usize).min(order.len());
     let targets: Vec<usize> = order[..n_targets].to_vec();
-    let opts = StandOptions { latitude_deg: 36.6, ..Default::default() };
+    let mut opts = StandOptions { latitude_deg: 36.6, ..Default::default() };
+    if let Some(c) = std::env::var("SYLVA_STAND_CELL").ok().and_then(|v| v.parse().ok()) {
+        opts.cell_m = c;
+    }
     let mut cache = SkeletonCache::new(42, DEFAULT_MAX_STRANDS);
     let t = std::time::Instant::now();
     let st = adapt_stand(&trees, &targets, &lib, &mut cache, &opts).expect("adapt");
