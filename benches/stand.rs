@@ -5,11 +5,44 @@
 //! flat ground), the 1,000 trees nearest a camera point as targets, every tree within the halo
 //! as a neighbour. Plain program: `cargo bench --bench stand` (threads: `RAYON_NUM_THREADS`).
 //! Prints wall time (open-grown cache, analyses and adaptation together, then again with the
-//! cache warm) and the counts; the figures go to BENCHMARKS.md.
+//! cache warm) and the counts; the figures go to BENCHMARKS.md. Also prints a fingerprint
+//! (FNV-1a over the bits of every adapted node position and radius, leaf position and cluster
+//! of the targets) so a speed-up can be checked to compute the same stand bit for bit.
+//! `SYLVA_STAND_TARGETS=N` adapts the N nearest trees instead of 1,000 (for a profiler);
+//! `SYLVA_STAND_ONCE=1` skips the second call; `SYLVA_STAND_CELL=M` sets the neighbourhood
+//! cell side (m, default 12; other cells group the trees otherwise, so the stand differs).
 use glam::Vec3;
 use sylva::rng::Stream;
 use sylva::species::SpeciesLibrary;
-use sylva::structure::stand::{adapt_stand, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
+use sylva::structure::stand::{adapt_stand, Stand, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
+
+/// FNV-1a over the bits of the adapted trees of `st`: node positions and radii, leaf positions,
+/// clusters after adaptation, and the report counts.
+fn fingerprint(st: &Stand) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    let mut eat = |v: u32| {
+        for b in v.to_le_bytes() {
+            h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    };
+    for a in &st.trees {
+        eat(a.index as u32);
+        for n in &a.skeleton.nodes {
+            n.pos.to_array().iter().for_each(|v| eat(v.to_bits()));
+            eat(n.radius.to_bits());
+        }
+        for l in &a.leaves.leaves {
+            l.pos.to_array().iter().for_each(|v| eat(v.to_bits()));
+        }
+        for (c, r) in &a.clusters_after {
+            c.to_array().iter().for_each(|v| eat(v.to_bits()));
+            eat(r.to_bits());
+        }
+        let r = &a.report;
+        [r.nodes_after, r.bent, r.pruned_light, r.pruned_collision, r.recomputed_nodes].iter().for_each(|&v| eat(v as u32));
+    }
+    h
+}
 
 fn main() {
     let lib = SpeciesLibrary::embedded().expect("embedded species");
@@ -38,20 +71,30 @@ fn main() {
     let eye = Vec3::new(80.0, 20.0, 300.0);
     let mut order: Vec<usize> = (0..trees.len()).collect();
     order.sort_by(|&a, &b| trees[a].base.distance(eye).total_cmp(&trees[b].base.distance(eye)).then(a.cmp(&b)));
-    let targets: Vec<usize> = order[..1000].to_vec();
-    let opts = StandOptions { latitude_deg: 36.6, ..Default::default() };
+    let n_targets = std::env::var("SYLVA_STAND_TARGETS").ok().and_then(|v| v.parse().ok()).unwrap_or(1000usize).min(order.len());
+    let targets: Vec<usize> = order[..n_targets].to_vec();
+    let mut opts = StandOptions { latitude_deg: 36.6, ..Default::default() };
+    if let Some(c) = std::env::var("SYLVA_STAND_CELL").ok().and_then(|v| v.parse().ok()) {
+        opts.cell_m = c;
+    }
     let mut cache = SkeletonCache::new(42, DEFAULT_MAX_STRANDS);
     let t = std::time::Instant::now();
     let st = adapt_stand(&trees, &targets, &lib, &mut cache, &opts).expect("adapt");
     let cold = t.elapsed().as_secs_f64();
-    let t = std::time::Instant::now();
-    let st2 = adapt_stand(&trees, &targets, &lib, &mut cache, &opts).expect("adapt");
-    let warm = t.elapsed().as_secs_f64();
-    assert_eq!(st.trees.len(), st2.trees.len());
+    let fp = fingerprint(&st);
+    let warm = if std::env::var_os("SYLVA_STAND_ONCE").is_some() {
+        f64::NAN
+    } else {
+        let t = std::time::Instant::now();
+        let st2 = adapt_stand(&trees, &targets, &lib, &mut cache, &opts).expect("adapt");
+        assert_eq!(fingerprint(&st2), fp, "the second call computes the same stand");
+        t.elapsed().as_secs_f64()
+    };
     let nodes: usize = st.trees.iter().map(|a| a.report.nodes_before).sum();
     let pruned: usize = st.trees.iter().map(|a| a.report.pruned_light + a.report.pruned_collision).sum();
     println!("# stand adaptation (threads: {})", rayon::current_num_threads());
     println!("| targets | trees in groups | cells | analyses | open-grown trees | nodes (targets) | pruned | first call s | second call s |");
     println!("|---|---|---|---|---|---|---|---|---|");
     println!("| {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} |", st.trees.len(), st.trees_in_groups, st.cells, st.analyses, cache.len(), nodes, pruned, cold, warm);
+    println!("fingerprint {fp:016x}");
 }

@@ -210,11 +210,13 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
         })
         .collect();
     let group = trees.len() > 1;
-    let others: Vec<ShadowVolumes> = if group {
-        (0..trees.len()).map(|i| ShadowVolumes::new(sky, neighbours.iter().filter(|(j, _)| *j != i).map(|(_, o)| *o).collect())).collect()
-    } else {
-        Vec::new()
-    };
+    // one set of grids over every tree's clusters, each tagged with its tree; tree i's queries
+    // leave its own out (the same casters, in the same order, as shadow volumes of the other
+    // trees' clusters alone, without building a set per tree: O(N) grid entries, not O(N²))
+    let others = group.then(|| {
+        let owners = neighbours.iter().map(|(j, _)| *j as u32).collect();
+        ShadowVolumes::with_owners(sky, neighbours.iter().map(|(_, o)| *o).collect(), owners)
+    });
     let own: Vec<Vec<bool>> = trees
         .par_iter_mut()
         .enumerate()
@@ -225,9 +227,9 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
             for k in 0..n {
                 let p = t.input.nodes[k].pos;
                 let mut sig = solids.mask(p) as u64;
-                if group {
+                if let Some(others) = &others {
                     for d in 0..sky.dirs.len() {
-                        if others[i].shaded(d, p) {
+                        if others.shaded_except(d, p, i as u32) {
                             sig |= 1u64 << (32 + d);
                         }
                     }
