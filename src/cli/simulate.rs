@@ -27,6 +27,30 @@ pub struct Args {
     /// added to the shipped library, replacing shipped species of the same id.
     #[arg(long)]
     pub species_dir: Option<PathBuf>,
+    /// Cut the landscape into N tiles stepped by N threads of this process (the exchanges of
+    /// an MPI run, in memory); the run directory is the one of a single process. Under
+    /// `mpirun -np N` (a build with the `mpi` feature) the ranks are the tiles instead.
+    #[arg(long, value_parser = parse_tiles)]
+    pub tiles: Option<usize>,
+}
+
+/// Parses `--tiles`: an integer 1–4096.
+pub fn parse_tiles(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(n) if (1..=4096).contains(&n) => Ok(n),
+        _ => Err(format!("expected a whole number of tiles from 1 to 4096, got '{s}'")),
+    }
+}
+
+/// How `sylva simulate` steps the years.
+pub enum Mode<'a> {
+    /// One process, the whole landscape.
+    One,
+    /// N tiles, one thread each, in this process (`--tiles N`).
+    Local(usize),
+    /// Rank 0 of a tiled run over a transport (MPI); the other ranks run
+    /// [`sylva::job::tiled::work`].
+    Ranks(&'a mut dyn sylva::sim::tiles::Transport),
 }
 
 /// Parses `--threads`: an integer 1–256.
@@ -100,6 +124,12 @@ pub struct SimOutcome {
 ///
 /// `geojson_years`: the years whose snapshots also get a GeoJSON inventory (`None`: all).
 pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, geojson_years: Option<Vec<u32>>, on_snapshot: Option<&mut dyn FnMut(u32, &sylva::sim::World)>) -> anyhow::Result<SimOutcome> {
+    simulate_mode(sc, site, lib, out, resume, geojson_years, on_snapshot, Mode::One)
+}
+
+/// [`simulate`] stepped as `mode` says (one process, tiles in threads, rank 0 of MPI ranks).
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_mode(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, geojson_years: Option<Vec<u32>>, on_snapshot: Option<&mut dyn FnMut(u32, &sylva::sim::World)>, mode: Mode) -> anyhow::Result<SimOutcome> {
     if out.exists() && !out.is_dir() {
         anyhow::bail!("--out {}: is a file; expected a folder for the run's outputs", out.display());
     }
@@ -129,7 +159,12 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: 
     if let Some(f) = on_snapshot.as_mut() {
         opts.on_snapshot = Some(&mut **f);
     }
-    let res = run_scenario(sc, site, lib, opts).with_context(|| format!("simulating {}", sc.name))?;
+    let res = match mode {
+        Mode::One => run_scenario(sc, site, lib, opts),
+        Mode::Local(n) => sylva::job::tiled::run_local_tiles(sc, site, lib, opts, n).map(|r| r.0),
+        Mode::Ranks(t) => sylva::job::tiled::run_tiled(sc, site, lib, opts, t).and_then(|r| r.ok_or_else(|| sylva::Error::Exchange { peer: 0, reason: "rank 0 ended without a run summary".into() }.into())),
+    }
+    .with_context(|| format!("simulating {}", sc.name))?;
     pb.finish();
     let last = res.rows.last();
     eprintln!(
@@ -163,7 +198,23 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     dirs.extend(a.species_dir.as_deref());
     let lib = library(&dirs)?;
     let site = load_site(&sc)?;
-    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume, None, None).map(|_| ());
+    #[cfg(feature = "mpi")]
+    if let Some(mut t) = sylva::job::mpi_transport::MpiTransport::from_env() {
+        use sylva::sim::tiles::Transport;
+        if t.size() > 1 {
+            if t.rank() != 0 {
+                // a stop (Ctrl-C, SIGTERM from mpirun) is rank 0's to decide; the others follow it
+                let _ = ctrlc::set_handler(|| {});
+                return Ok(sylva::job::tiled::work(&sc, site, &lib, &mut t).with_context(|| format!("simulating {} (rank {})", sc.name, t.rank()))?);
+            }
+            return simulate_mode(&sc, site, &lib, a.out.clone(), a.resume, None, None, Mode::Ranks(&mut t)).map(|_| ());
+        }
+    }
+    let mode = || match a.tiles {
+        Some(n) if n > 1 => Mode::Local(n),
+        _ => Mode::One,
+    };
+    let go = || simulate_mode(&sc, site, &lib, a.out.clone(), a.resume, None, None, mode()).map(|_| ());
     match a.threads {
         Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build().context("thread pool")?.install(go),
         None => go(),
