@@ -3,7 +3,8 @@
 //! process byte for byte; a run stopped on 3 ranks and resumed on 2 ends as the unbroken run.
 #![cfg(feature = "mpi")]
 
-use std::collections::BTreeMap;
+mod common;
+use common::files;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -43,24 +44,12 @@ fn simulate(ranks: usize, sc: &Path, out: &Path, resume: bool) {
         c.arg("--resume");
     }
     let o = c.output().unwrap_or_else(|e| panic!("cannot start {} (is Open MPI's mpirun installed?): {e}", if ranks == 0 { sylva() } else { "mpirun" }));
-    assert!(o.status.success(), "{ranks} ranks failed: {}\n{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
-}
-
-/// Every file under `dir` (relative path → bytes).
-fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    fn walk(root: &Path, d: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
-        for e in std::fs::read_dir(d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                walk(root, &p, out);
-            } else {
-                out.insert(p.strip_prefix(root).unwrap().to_string_lossy().into_owned(), std::fs::read(&p).unwrap());
-            }
-        }
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{ranks} ranks failed: {}\n{err}", String::from_utf8_lossy(&o.stdout));
+    // every rank took part as a tile (each prints its line), not N copies of one process
+    for r in 0..ranks {
+        assert!(err.contains(&format!("rank {r}/{ranks}: ")), "no line of rank {r} of {ranks}: {err}");
     }
-    let mut m = BTreeMap::new();
-    walk(dir, dir, &mut m);
-    m
 }
 
 fn assert_same_dir(a: &Path, b: &Path, what: &str) {

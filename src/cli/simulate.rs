@@ -185,6 +185,16 @@ pub fn simulate_mode(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, 
     Ok(SimOutcome { year: res.world.stand.year, trees_alive: res.world.stand.trees.len(), pool, rows: res.rows })
 }
 
+/// Prints one line per rank of a tiled run to stderr: wall time, peak resident memory
+/// (VmHWM of /proc/self/status) and the bytes sent to other ranks (in all and per year of
+/// `years`), the figures of docs/SCALING.md.
+#[cfg_attr(not(feature = "mpi"), allow(dead_code))]
+fn rank_stats(rank: usize, size: usize, seconds: f64, sent: u64, years: u32) {
+    let hwm = std::fs::read_to_string("/proc/self/status").ok().and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok()));
+    let mib = hwm.map_or("?".to_string(), |k| format!("{:.0}", k as f64 / 1024.0));
+    eprintln!("rank {rank}/{size}: {seconds:.1} s, peak RSS {mib} MiB, sent {sent} bytes ({:.0} per year)", sent as f64 / years.max(1) as f64);
+}
+
 /// Runs a simulation.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let sc = Scenario::load(&a.scenario)?;
@@ -202,12 +212,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     if let Some(mut t) = sylva::job::mpi_transport::MpiTransport::from_env() {
         use sylva::sim::tiles::Transport;
         if t.size() > 1 {
-            if t.rank() != 0 {
+            let t0 = std::time::Instant::now();
+            let r = if t.rank() != 0 {
                 // a stop (Ctrl-C, SIGTERM from mpirun) is rank 0's to decide; the others follow it
                 let _ = ctrlc::set_handler(|| {});
-                return Ok(sylva::job::tiled::work(&sc, site, &lib, &mut t).with_context(|| format!("simulating {} (rank {})", sc.name, t.rank()))?);
-            }
-            return simulate_mode(&sc, site, &lib, a.out.clone(), a.resume, None, None, Mode::Ranks(&mut t)).map(|_| ());
+                sylva::job::tiled::work(&sc, site, &lib, &mut t).with_context(|| format!("simulating {} (rank {})", sc.name, t.rank()))
+            } else {
+                simulate_mode(&sc, site, &lib, a.out.clone(), a.resume, None, None, Mode::Ranks(&mut t)).map(|_| ())
+            };
+            rank_stats(t.rank(), t.size(), t0.elapsed().as_secs_f64(), t.bytes_sent(), sc.years);
+            return r;
         }
     }
     let mode = || match a.tiles {
