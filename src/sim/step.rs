@@ -35,10 +35,22 @@ pub struct Phase {
     pub ends: Option<Season>,
     /// Runs the phase: passes it the parts of the world it reads and writes.
     pub run: fn(&mut World, &mut YearReport),
-    /// The phase reads trees across a tile edge (a tiled run, `sim::tiles`, passes the
-    /// neighbours' trees within the halo before it): light (crowns shading a cell), growth
-    /// (crowding neighbourhoods), reproduction (seed sources within the kernels).
-    pub halo: bool,
+    /// What the phase reads across a tile edge (a tiled run, `sim::tiles`, passes each tile
+    /// the neighbours' trees within that reach before it).
+    pub halo: Halo,
+}
+
+/// What a phase reads of the trees around a tile ([`Phase::halo`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Halo {
+    /// Nothing beyond its own cells and trees.
+    None,
+    /// Crowns shading its cells (light): every tree within the largest crown plus two light cells.
+    Crowns,
+    /// Crowding neighbourhoods (growth): every tree within three 10 m crowding cells.
+    Crowding,
+    /// Seed sources (reproduction): the mature trees within the longest seed reach.
+    SeedSources,
 }
 
 /// Number of phases.
@@ -46,12 +58,12 @@ pub const N_PHASES: usize = 6;
 
 /// The year, in order. ARCHITECTURE.md quotes this list (checked by `tests/layers.rs`).
 pub const PHASES: [Phase; N_PHASES] = [
-    Phase { name: "light", summary: "canopy grid from the trees at the start of the year; light of every tree and of the ground", ends: None, run: run_light, halo: true },
-    Phase { name: "regeneration", summary: "spring: germination, growth, thinning and recruitment of the sapling cohorts", ends: Some(Season::Spring), run: run_regeneration, halo: false },
-    Phase { name: "growth", summary: "summer: crowding of every tree's neighbourhood; height, DBH and crown increments", ends: Some(Season::Summer), run: run_growth, halo: true },
-    Phase { name: "reproduction", summary: "autumn: seed production and dispersal onto the seed grids", ends: Some(Season::Autumn), run: run_reproduction, halo: true },
-    Phase { name: "mortality", summary: "winter: senescence, background, stress and wind deaths", ends: None, run: run_mortality, halo: false },
-    Phase { name: "stats", summary: "the year ends: stand-table row of the year", ends: Some(Season::Winter), run: run_stats, halo: false },
+    Phase { name: "light", summary: "canopy grid from the trees at the start of the year; light of every tree and of the ground", ends: None, run: run_light, halo: Halo::Crowns },
+    Phase { name: "regeneration", summary: "spring: germination, growth, thinning and recruitment of the sapling cohorts", ends: Some(Season::Spring), run: run_regeneration, halo: Halo::None },
+    Phase { name: "growth", summary: "summer: crowding of every tree's neighbourhood; height, DBH and crown increments", ends: Some(Season::Summer), run: run_growth, halo: Halo::Crowding },
+    Phase { name: "reproduction", summary: "autumn: seed production and dispersal onto the seed grids", ends: Some(Season::Autumn), run: run_reproduction, halo: Halo::SeedSources },
+    Phase { name: "mortality", summary: "winter: senescence, background, stress and wind deaths", ends: None, run: run_mortality, halo: Halo::None },
+    Phase { name: "stats", summary: "the year ends: stand-table row of the year", ends: Some(Season::Winter), run: run_stats, halo: Halo::None },
 ];
 
 fn run_light(w: &mut World, _: &mut YearReport) {

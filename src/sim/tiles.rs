@@ -14,8 +14,8 @@
 //! 3. **growth** reads the crowding of the 3 × 3 block of 10 m cells around each tree
 //!    ([`crate::sim::density`]): trees within 30 m, after this spring's recruitment;
 //! 4. **reproduction** gathers seeds over each species' dispersal kernel from the seed sources
-//!    of the seed cells within reach: trees within `(⌈max_m / cell⌉ + 2)` seed cells, after
-//!    this summer's growth;
+//!    of the seed cells within reach: the *mature* trees (the only seed sources) within
+//!    `(⌈max_m / cell⌉ + 2)` seed cells, after this summer's growth;
 //! 5. **mortality** draws each tree from its own stream: no exchange;
 //! 6. **stats**: the stand table row needs every tree (sums in id order, the top height): the
 //!    ranks send their trees' id, species, height and DBH to rank 0 ([`Tile::step`]).
@@ -30,7 +30,7 @@
 
 use super::cohorts::{Cohorts, RegenLedger, RegenYear, N_REGEN_CAUSES};
 use super::density;
-use super::step::PHASES;
+use super::step::{Halo, PHASES};
 use super::light_grid::{CellRect, LightGrid};
 use super::step::YearReport;
 use super::trees::{DeadTree, DeathCause, TreeStore, N_CAUSES};
@@ -117,23 +117,63 @@ impl Transport for LocalTransport {
     }
 }
 
-/// Halo width (m) a tiled run of `site` needs so that it equals one process: the largest of
-/// the light phase's reach (the largest possible crown radius of the pool,
-/// `crown_c0 + crown_c1 · max_dbh_cm`, plus two light cells), the crowding neighbourhood
-/// (3 × [`density::CROWD_CELL_M`]) and each pool species' seed reach
-/// (`(⌈max_m / cell⌉ + 2) · cell` with its seed cell `cell`, [`crate::sim::world::SeedGrid`]).
-pub fn min_halo_m(site: &Site) -> f64 {
-    let mut h = 3.0 * density::CROWD_CELL_M;
-    for &s in &site.pool {
-        let sp = &site.lib.species[s as usize];
-        let a = sp.life.allometry;
-        let crown = (a.crown_c0 + a.crown_c1 * sp.life.max_dbh_cm.max(0.0)).max(a.crown_c0) as f64;
-        h = h.max(crown + 2.0 * site.light.cell_m);
-        let d = &sp.life.dispersal;
-        let cell = SEED_CELL_M.max(d.max_m as f64 / KERNEL_CELLS);
-        h = h.max(((d.max_m as f64 / cell).ceil() + 2.0) * cell);
+/// The reach (m) of each kind of [`Halo`] on `site`: how far beyond a tile the trees a phase
+/// reads can stand.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reach {
+    /// Light ([`Halo::Crowns`]): the largest possible crown radius of the pool,
+    /// `crown_c0 + crown_c1 · max_dbh_cm` (crowns only shrink from the open-grown radius), plus
+    /// two light cells (the cell a crown covers and the next towards the equator, whose canopy
+    /// the sun direction reads).
+    pub crowns_m: f64,
+    /// Growth ([`Halo::Crowding`]): 3 × [`density::CROWD_CELL_M`] (the 3 × 3 block around a
+    /// tree's cell, whose cell may reach one cell past the tile).
+    pub crowding_m: f64,
+    /// Reproduction ([`Halo::SeedSources`]): per pool species `(⌈max_m / cell⌉ + 2) · cell` with
+    /// its seed cell `cell` ([`crate::sim::world::SeedGrid`]: the kernel's cells, the seed cell
+    /// that overlaps the tile and the source's own cell), the longest of the pool.
+    pub seeds_m: f64,
+}
+
+impl Reach {
+    /// The reaches of `site`'s pool.
+    pub fn of(site: &Site) -> Reach {
+        let mut r = Reach { crowns_m: 2.0 * site.light.cell_m, crowding_m: 3.0 * density::CROWD_CELL_M, seeds_m: 0.0 };
+        for &s in &site.pool {
+            let sp = &site.lib.species[s as usize];
+            let a = sp.life.allometry;
+            let crown = (a.crown_c0 + a.crown_c1 * sp.life.max_dbh_cm.max(0.0)).max(a.crown_c0) as f64;
+            r.crowns_m = r.crowns_m.max(crown + 2.0 * site.light.cell_m);
+            let d = &sp.life.dispersal;
+            let cell = SEED_CELL_M.max(d.max_m as f64 / KERNEL_CELLS);
+            r.seeds_m = r.seeds_m.max(((d.max_m as f64 / cell).ceil() + 2.0) * cell);
+        }
+        r
     }
-    h
+    /// The widest reach (m).
+    pub fn max(&self) -> f64 {
+        self.crowns_m.max(self.crowding_m).max(self.seeds_m)
+    }
+    /// The reach of `h` (m; 0 for [`Halo::None`]).
+    pub fn of_halo(&self, h: Halo) -> f64 {
+        match h {
+            Halo::None => 0.0,
+            Halo::Crowns => self.crowns_m,
+            Halo::Crowding => self.crowding_m,
+            Halo::SeedSources => self.seeds_m,
+        }
+    }
+    /// Every reach capped at `m` metres.
+    fn capped(self, m: f64) -> Reach {
+        Reach { crowns_m: self.crowns_m.min(m), crowding_m: self.crowding_m.min(m), seeds_m: self.seeds_m.min(m) }
+    }
+}
+
+/// Halo width (m) a tiled run of `site` needs so that it equals one process: the widest
+/// [`Reach`] (for a pool with a long seed kernel, the seed reach: only mature trees are passed
+/// that far).
+pub fn min_halo_m(site: &Site) -> f64 {
+    Reach::of(site).max()
 }
 
 /// How the light grid is cut: `nx × ny` rectangles of whole light cells (columns and rows split
@@ -150,9 +190,10 @@ pub struct Layout {
     pub col_bounds: Vec<usize>,
     /// Row boundaries, `ny + 1` values from 0 to `light.rows`.
     pub row_bounds: Vec<usize>,
-    /// Halo width (m): trees within it of a tile are copied to it before the phases that read
-    /// neighbours.
+    /// Halo width (m): the widest reach a tile's neighbours' trees are copied from.
     pub halo_m: f64,
+    /// The reach of each phase's halo ([`Reach::of`] the site, each capped at `halo_m`).
+    pub reach: Reach,
 }
 
 impl Layout {
@@ -178,11 +219,13 @@ impl Layout {
                 expected: format!("at least {min} m (the pool's longest seed reach, crowding neighbourhood or largest crown plus two light cells), or the tiles would differ from one process"),
             });
         }
-        Layout::unchecked(site.light, nx, ny, halo_m)
+        let mut l = Layout::unchecked(site.light, nx, ny, halo_m)?;
+        l.reach = Reach::of(site).capped(halo_m);
+        Ok(l)
     }
 
     /// A layout with any halo, not checked against [`min_halo_m`] (to show what a narrow halo
-    /// changes).
+    /// changes): every phase's reach is `halo_m`.
     ///
     /// Errors: [`Error::Invalid`] for the tile counts (as [`Layout::new`]).
     pub fn unchecked(light: LightGrid, nx: usize, ny: usize, halo_m: f64) -> Result<Layout> {
@@ -196,7 +239,7 @@ impl Layout {
         }
         let col_bounds = (0..=nx).map(|i| light.cols * i / nx).collect();
         let row_bounds = (0..=ny).map(|j| light.rows * j / ny).collect();
-        Ok(Layout { light, nx, ny, col_bounds, row_bounds, halo_m })
+        Ok(Layout { light, nx, ny, col_bounds, row_bounds, halo_m, reach: Reach { crowns_m: halo_m, crowding_m: halo_m, seeds_m: halo_m } })
     }
 
     /// Number of tiles.
@@ -228,13 +271,13 @@ impl Layout {
         self.owner_of_cell(col, row)
     }
 
-    /// True when world point `(x, y)` lies within the halo of tile `k` (its rectangle widened by
-    /// `halo_m` on every side).
-    pub fn in_halo(&self, k: usize, x: f32, y: f32) -> bool {
+    /// True when world point `(x, y)` lies within `m` metres of tile `k` (its rectangle widened
+    /// by `m` on every side).
+    pub fn in_halo(&self, k: usize, x: f32, y: f32, m: f64) -> bool {
         let r = self.rect(k);
         let c = self.light.cell_m;
         let (x, y) = (x as f64, y as f64);
-        x >= r.col0 as f64 * c - self.halo_m && x < r.col1 as f64 * c + self.halo_m && y >= r.row0 as f64 * c - self.halo_m && y < r.row1 as f64 * c + self.halo_m
+        x >= r.col0 as f64 * c - m && x < r.col1 as f64 * c + m && y >= r.row0 as f64 * c - m && y < r.row1 as f64 * c + m
     }
 }
 
@@ -426,19 +469,23 @@ impl Tile {
         Ok(())
     }
 
-    /// Copies of the other tiles' trees within this tile's halo, merged into the tile's trees
-    /// by id; returns the number of own trees before the merge. Checks that no crown is wider
-    /// than the halo allows for the light phase.
-    fn add_halo(&mut self, t: &mut dyn Transport) -> Result<()> {
+    /// Copies of the other tiles' trees that phases reading `halo` need (within its reach; for
+    /// seed sources only the mature trees), merged into the tile's trees by id. For
+    /// [`Halo::Crowns`], checks that no crown of any tile is wider than the reach allows.
+    fn add_halo(&mut self, t: &mut dyn Transport, halo: Halo) -> Result<()> {
         let n = t.size();
         let tr = &self.world.stand.trees;
         let max_r = tr.crown_radius.iter().fold(0f32, |a, &b| a.max(b));
+        let m = self.layout.reach.of_halo(halo);
+        let lib = &self.world.site.lib;
+        // as reproduction: trees below their species' maturity age produce no seeds
+        let source = |i: usize| halo != Halo::SeedSources || tr.age[i] >= lib.species[tr.species[i] as usize].life.maturity_age_yr;
         let mut out = Vec::with_capacity(n);
         for k in 0..n {
             let mut e = Enc::default();
             e.f32(max_r);
             if k != self.me {
-                let idx: Vec<usize> = (0..tr.len()).filter(|&i| self.layout.in_halo(k, tr.x[i], tr.y[i])).collect();
+                let idx: Vec<usize> = (0..tr.len()).filter(|&i| source(i) && self.layout.in_halo(k, tr.x[i], tr.y[i], m)).collect();
                 e.trees(tr, &idx);
             } else {
                 e.trees(tr, &[]);
@@ -460,11 +507,11 @@ impl Tile {
         }
         crown = crown.max(max_r);
         let reach = crown as f64 + 2.0 * self.layout.light.cell_m;
-        if reach > self.layout.halo_m {
+        if halo == Halo::Crowns && reach > m {
             return Err(Error::Invalid {
                 context: format!("tiled run, year {}", self.world.stand.year + 1),
                 field: "halo_m".into(),
-                value: format!("{} m", self.layout.halo_m),
+                value: format!("{m} m (the light phase's reach)"),
                 expected: format!("at least {reach} m: a crown of {crown} m radius plus two light cells"),
             });
         }
@@ -495,11 +542,11 @@ impl Tile {
         let stats = PHASES.len() - 1;
         for (k, phase) in PHASES.iter().enumerate().take(stats) {
             let t0 = Instant::now();
-            if phase.halo {
-                self.add_halo(t)?;
+            if phase.halo != Halo::None {
+                self.add_halo(t, phase.halo)?;
             }
             (phase.run)(&mut self.world, &mut report);
-            if phase.halo {
+            if phase.halo != Halo::None {
                 self.drop_halo();
             }
             report.phase_seconds[k] = t0.elapsed().as_secs_f64();
@@ -819,7 +866,7 @@ mod tests {
         assert_eq!(l.owner_of(35.0, 31.0), 4);
         assert_eq!(l.owner_of(29.9, 29.9), 0);
         assert_eq!(l.owner_of(500.0, 500.0), 5, "clamped to the grid");
-        assert!(l.in_halo(0, 44.0, 10.0) && !l.in_halo(0, 45.0, 10.0));
+        assert!(l.in_halo(0, 44.0, 10.0, 15.0) && !l.in_halo(0, 45.0, 10.0, 15.0));
         assert!(Layout::unchecked(light, 11, 1, 1.0).is_err());
         // every cell has exactly one owner
         for row in 0..6 {
