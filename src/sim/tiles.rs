@@ -378,14 +378,19 @@ impl<'a> Dec<'a> {
     }
 }
 
-/// The trees of `parts` in one store sorted by id (each part sorted by id, ids unique). Lean
-/// parts (id, species, height and DBH only) give a lean store. `next_id` is `next_id`.
-fn merge_by_id(parts: Vec<TreeStore>, next_id: u64) -> TreeStore {
+/// The trees of `parts` in one store sorted by id (each part sorted by id, ids unique), and the
+/// part each row came from. Lean parts (id, species, height and DBH only) give a lean store.
+/// `next_id` is `next_id`.
+fn merge_by_id(parts: &[TreeStore], next_id: u64) -> (TreeStore, Vec<usize>) {
+    // k-way merge of the sorted parts (a heap of their next ids): O(n log k)
     let mut all: Vec<(u64, usize, usize)> = Vec::with_capacity(parts.iter().map(|p| p.len()).sum());
-    for (k, p) in parts.iter().enumerate() {
-        all.extend(p.id.iter().enumerate().map(|(i, &id)| (id, k, i)));
+    let mut heap: std::collections::BinaryHeap<std::cmp::Reverse<(u64, usize, usize)>> = parts.iter().enumerate().filter(|(_, p)| !p.is_empty()).map(|(k, p)| std::cmp::Reverse((p.id[0], k, 0))).collect();
+    while let Some(std::cmp::Reverse((id, k, i))) = heap.pop() {
+        all.push((id, k, i));
+        if let Some(&next) = parts[k].id.get(i + 1) {
+            heap.push(std::cmp::Reverse((next, k, i + 1)));
+        }
     }
-    all.sort_unstable_by_key(|e| e.0);
     let full = parts.iter().all(|p| p.x.len() == p.len());
     let mut t = TreeStore { next_id, ..Default::default() };
     t.id = all.iter().map(|e| e.0).collect();
@@ -404,7 +409,7 @@ fn merge_by_id(parts: Vec<TreeStore>, next_id: u64) -> TreeStore {
         t.vigour = col(|p| &p.vigour);
         t.suitability = col(|p| &p.suitability);
     }
-    t
+    (t, all.iter().map(|e| e.1).collect())
 }
 
 /// One tile of a tiled run: a [`World`] whose stand holds only the tile's trees and cohorts,
@@ -419,6 +424,8 @@ pub struct Tile {
     /// Bytes sent for halo copies since the start (the stand-table and output gathers not
     /// counted).
     pub halo_bytes: u64,
+    /// While halo copies are merged in: which rows are the tile's own.
+    own: Vec<bool>,
 }
 
 impl Tile {
@@ -433,7 +440,7 @@ impl Tile {
         world.tallies.deaths_total = [0; N_CAUSES];
         world.tallies.regen_ledger = RegenLedger::new(world.site.pool.len());
         world.scratch.dead.clear();
-        Tile { world, layout, me, halo_bytes: 0 }
+        Tile { world, layout, me, halo_bytes: 0, own: Vec::new() }
     }
 
     /// Rank 0 sends every rank its part of `global` (rank 0's world after a fresh start or a
@@ -518,14 +525,16 @@ impl Tile {
         let own = std::mem::take(&mut self.world.stand.trees);
         let next = own.next_id;
         parts.push(own);
-        self.world.stand.trees = merge_by_id(parts, next);
+        let (merged, from) = merge_by_id(&parts, next);
+        self.world.stand.trees = merged;
+        self.own = from.iter().map(|&k| k == parts.len() - 1).collect();
         Ok(())
     }
 
     /// Drops the halo copies, keeping the tile's own trees (their order kept).
     fn drop_halo(&mut self) {
-        let t = &self.world.stand.trees;
-        let keep: Vec<bool> = (0..t.len()).map(|i| self.layout.owner_of(t.x[i], t.y[i]) == self.me).collect();
+        let keep = std::mem::take(&mut self.own);
+        debug_assert_eq!(keep.len(), self.world.stand.trees.len());
         self.world.stand.trees.retain(&keep);
     }
 
@@ -587,7 +596,7 @@ impl Tile {
                     *v += d.u64()?;
                 }
             }
-            let trees = merge_by_id(parts, 0);
+            let (trees, _) = merge_by_id(&parts, 0);
             report.trees = trees.len();
             report.established = est;
             report.died = died;
@@ -660,7 +669,7 @@ impl Tile {
             g.stand.year = w.year;
         }
         let next = g.stand.trees.next_id;
-        g.stand.trees = merge_by_id(parts, next);
+        g.stand.trees = merge_by_id(&parts, next).0;
         cohorts.sort_unstable_by_key(|e| (e.0, e.1));
         let mut c = Cohorts::default();
         for (_, _, k, i) in cohorts {
