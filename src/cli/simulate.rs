@@ -50,6 +50,7 @@ pub enum Mode<'a> {
     Local(usize),
     /// Rank 0 of a tiled run over a transport (MPI); the other ranks run
     /// [`sylva::job::tiled::work`].
+    #[cfg_attr(not(feature = "mpi"), allow(dead_code))]
     Ranks(&'a mut dyn sylva::sim::tiles::Transport),
 }
 
