@@ -142,9 +142,15 @@ pub fn simulate_mode(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, 
         });
     }
     let pb = super::progress(sc.years as u64, "simulate");
+    // wall time per phase (and of the outputs) summed over the years: printed at the end with
+    // SYLVA_PHASE_TIMES=1 (a tiled run: rank 0's tile, its exchanges included)
+    let mut phase_sums = [0f64; sylva::sim::step::N_PHASES + 1];
     let mut cb = |p: &Progress| {
         pb.set_position(p.year as u64);
         pb.set_message(format!("year {} · {} trees · {:.0} trees/s", p.year, p.trees, p.trees_per_s));
+        for (k, s) in p.phase_seconds.iter().chain([&p.output_seconds]).enumerate() {
+            phase_sums[k] += s;
+        }
     };
     // a resumed run keeps the species files it was simulated with (a changed species is
     // refused by the checkpoint before anything is written)
@@ -167,6 +173,11 @@ pub fn simulate_mode(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, 
     }
     .with_context(|| format!("simulating {}", sc.name))?;
     pb.finish();
+    if std::env::var_os("SYLVA_PHASE_TIMES").is_some() {
+        let names = sylva::sim::step::PHASES.iter().map(|p| p.name).chain(["outputs"]);
+        let list: Vec<String> = names.zip(phase_sums).map(|(n, s)| format!("{n} {s:.1} s")).collect();
+        eprintln!("phase times: {}", list.join(", "));
+    }
     let last = res.rows.last();
     eprintln!(
         "{} year {}: {} trees, basal area {:.1} m²/ha, top height {:.1} m ({:.1} s){} → {}",
