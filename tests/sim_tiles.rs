@@ -111,3 +111,34 @@ fn a_too_narrow_halo_is_refused_and_would_differ() {
         Err(e) => assert!(e.to_string().contains("halo_m"), "{e}"),
     }
 }
+
+#[test]
+fn tiles_in_threads_write_the_run_directory_of_one_process() {
+    // `sylva simulate --tiles 3`: job::tiled over the in-process transport, with outputs
+    let toml = common::ScenarioToml::new("tiles_dir", 12, 7)
+        .species(&["beech"])
+        .line("light_cell_m = 10.0")
+        .line("snapshot_every = 5")
+        .line("checkpoint_every = 4")
+        .uniform(20, 12, 20.0, 300.0)
+        .seed_sources("beech", &[[198.0, 118.0], [134.0, 200.0], [268.0, 125.0]], 3)
+        .build();
+    let sc = Scenario::from_toml_str(&toml, "tiles_dir").unwrap();
+    let lib = sylva::sim::fixtures::library();
+    let tmp = tempfile::tempdir().unwrap();
+    let (one, three) = (tmp.path().join("one"), tmp.path().join("three"));
+    let a = sylva::job::run::run_scenario(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&one)).unwrap();
+    let (b, bytes) = sylva::job::tiled::run_local_tiles(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&three), 3).unwrap();
+    assert_eq!(a.rows, b.rows);
+    assert!(bytes.len() == 3 && bytes.iter().all(|&n| n > 0), "bytes sent per rank: {bytes:?}");
+    let (fa, fb) = (common::files(&one), common::files(&three));
+    assert!(fa.contains_key("checkpoint.bin") && fa.contains_key("inventory/year_0010.csv") && fa.len() > 10, "{:?}", fa.keys());
+    assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>());
+    for (k, v) in &fa {
+        assert!(v == &fb[k], "{k} differs between one process and 3 tiles");
+    }
+    // seasonal snapshots need every tile in the middle of a year: refused
+    let seasonal = Scenario::from_toml_str(&toml.replace("snapshot_every = 5", "snapshot_every = 5\nseasonal_snapshots = true"), "tiles_dir").unwrap();
+    let e = sylva::job::tiled::run_local_tiles(&seasonal, seasonal.site().unwrap(), &lib, sylva::job::run::RunOptions::new(tmp.path().join("s")), 2).unwrap_err().to_string();
+    assert!(e.contains("seasonal_snapshots"), "{e}");
+}
