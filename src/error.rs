@@ -69,6 +69,15 @@ pub enum Error {
         /// What the serialiser said.
         message: String,
     },
+    /// A message between the tiles of a tiled run ([`crate::sim::tiles`]) could not be passed
+    /// or decoded.
+    #[error("tile exchange with rank {peer}: {reason}")]
+    Exchange {
+        /// The other rank.
+        peer: usize,
+        /// What went wrong and what was expected.
+        reason: String,
+    },
 }
 
 impl Error {

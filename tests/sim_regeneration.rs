@@ -54,12 +54,18 @@ fn mass_balance_recruitment_height_and_density_cap() {
     let mut rows = Vec::new();
     let mut recruited_trees = 0u64;
     for _ in 0..40 {
-        let next = w.stand.trees.next_id;
+        // recruits get birth ids (year + 1) · 2^44 + …: above every older tree's id
+        let next = sylva::sim::trees::birth_id(w.stand.year, 0, 0);
+        let before = w.stand.trees.id.iter().filter(|&&id| id < next).count();
         let mut r = YearReport::default();
         step_year(&mut w, &sc, &mut r);
         // recruits this year = stems the regeneration layer reports as recruited
         assert_eq!(r.established as u64, w.scratch.regen_year.recruited);
-        recruited_trees += w.stand.trees.next_id - next;
+        // trees born this year (ids from `next` on), alive or dead by the winter; none of the
+        // older ones got such an id
+        let born = w.stand.trees.id.iter().filter(|&&id| id >= next).count() + w.scratch.dead.iter().filter(|d| d.id >= next).count();
+        assert!(w.stand.trees.id.iter().filter(|&&id| id < next).count() <= before);
+        recruited_trees += born as u64;
         check_year(&w, next);
         let row = r.row.unwrap();
         assert!((row.regeneration_ha - w.stand.cohorts.total_stems() as f64 / w.site.area_ha).abs() < 1e-9);

@@ -14,3 +14,6 @@ pub mod maps;
 pub mod pictures;
 pub mod run;
 pub mod scene;
+pub mod tiled;
+#[cfg(feature = "mpi")]
+pub mod mpi_transport;

@@ -174,6 +174,43 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
     Ok(())
 }
 
+/// How a run steps its years: in this process ([`OneProcess`]: [`step_year_with`]) or as tiles
+/// on several ranks (`job::tiled`). The run driver ([`run_scenario_with`]) writes every output
+/// from the `world` it passes; a stepper makes that world whole whenever outputs follow.
+pub trait Stepper {
+    /// Called once before the first year with the world as started (year 0) or resumed.
+    ///
+    /// Errors: the stepper's (a tiled run's exchange).
+    fn begin(&mut self, world: &World) -> Result<()>;
+    /// Simulates one year of `world` into `report`, calling `on_season` after the phases that
+    /// end a season when `seasonal`. With `full` false the stepper may leave `world` partly
+    /// stale (a tiled run's rank 0 then holds only the year and the stand table row);
+    /// [`Stepper::complete`] makes it whole.
+    ///
+    /// Errors: the stepper's (a tiled run's exchange, a halo too narrow).
+    fn step(&mut self, world: &mut World, scenario: &Scenario, report: &mut YearReport, full: bool, on_season: &mut dyn FnMut(Season, &World)) -> Result<()>;
+    /// Makes `world` whole after a [`Stepper::step`] with `full` false.
+    ///
+    /// Errors: the stepper's.
+    fn complete(&mut self, world: &mut World) -> Result<()>;
+}
+
+/// The stepper of one process: [`step_year_with`] on the whole world.
+pub struct OneProcess;
+
+impl Stepper for OneProcess {
+    fn begin(&mut self, _: &World) -> Result<()> {
+        Ok(())
+    }
+    fn step(&mut self, world: &mut World, scenario: &Scenario, report: &mut YearReport, _full: bool, on_season: &mut dyn FnMut(Season, &World)) -> Result<()> {
+        step_year_with(world, scenario, report, on_season);
+        Ok(())
+    }
+    fn complete(&mut self, _: &mut World) -> Result<()> {
+        Ok(())
+    }
+}
+
 /// Runs `scenario` on `site` with species from `lib`, writing the run directory.
 ///
 /// Snapshots (inventory CSV + GeoJSON, regeneration-layer CSV `year_NNNN_regeneration.csv`,
@@ -195,7 +232,15 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
 /// Errors: I/O errors naming the file and the reason (a full disk, a file-size limit, an
 /// unwritable folder; the last checkpoint stays whole); unknown species; with `resume`, no
 /// run in the directory, or a checkpoint that is truncated, corrupt or of a different run.
-pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut opts: RunOptions) -> Result<RunSummary> {
+pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts: RunOptions) -> Result<RunSummary> {
+    run_scenario_with(scenario, site, lib, opts, &mut OneProcess)
+}
+
+/// [`run_scenario`] with the years stepped by `stepper` (one process, or a tiled run's rank 0:
+/// `job::tiled`); every output is written here from the world the stepper keeps whole.
+///
+/// Errors: as [`run_scenario`], and the stepper's.
+pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut opts: RunOptions, stepper: &mut dyn Stepper) -> Result<RunSummary> {
     let dir = opts.out_dir.clone();
     mkdir(&dir)?;
     if opts.write_snapshots {
@@ -248,6 +293,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
             }
         }
     }
+    stepper.begin(&world)?;
     let t0 = Instant::now();
     let mut stopped = false;
     let every = scenario.snapshot_every;
@@ -259,7 +305,10 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
         let mut err: Option<super::JobError> = None;
         let seasonal = snap_year && scenario.seasonal_snapshots;
         let (d, px, gj_y) = (dir.clone(), opts.map_px, gj(y));
-        step_year_with(&mut world, scenario, &mut rep, &mut |season, w| {
+        let checkpoint_year = y == scenario.years || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0);
+        let stop_before = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
+        let full = snap_year || checkpoint_year || stop_before;
+        stepper.step(&mut world, scenario, &mut rep, full, &mut |season, w| {
             if seasonal && season != Season::Winter && err.is_none() {
                 let name = match season {
                     Season::Spring => "spring",
@@ -270,7 +319,7 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
                     err = Some(e);
                 }
             }
-        });
+        })?;
         if let Some(e) = err {
             return Err(e);
         }
@@ -287,7 +336,10 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
             }
         }
         let stop_now = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
-        if y == scenario.years || stop_now || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0) {
+        if stop_now && !full {
+            stepper.complete(&mut world)?;
+        }
+        if checkpoint_year || stop_now {
             tables(&dir, &rows, &world, opts.write_snapshots)?;
             // what the checkpoint counts as written is on disk before the checkpoint is
             if opts.write_snapshots {

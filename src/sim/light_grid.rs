@@ -68,6 +68,36 @@ impl LightGrid {
     }
 }
 
+/// A rectangle of light cells: columns `col0..col1`, rows `row0..row1` (row 0 south), the
+/// cells a tile of a tiled run owns ([`crate::sim::tiles`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CellRect {
+    /// First column.
+    pub col0: usize,
+    /// First row (southernmost).
+    pub row0: usize,
+    /// One past the last column.
+    pub col1: usize,
+    /// One past the last row.
+    pub row1: usize,
+}
+
+impl CellRect {
+    /// True when cell `(col, row)` lies in the rectangle.
+    #[inline]
+    pub fn contains(&self, col: usize, row: usize) -> bool {
+        col >= self.col0 && col < self.col1 && row >= self.row0 && row < self.row1
+    }
+    /// Number of cells.
+    pub fn len(&self) -> usize {
+        (self.col1 - self.col0) * (self.row1 - self.row0)
+    }
+    /// True for a rectangle without cells.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -19,6 +19,7 @@ pub mod pure_stand;
 pub mod scenario;
 pub mod stats;
 pub mod step;
+pub mod tiles;
 pub mod trees;
 pub mod world;
 

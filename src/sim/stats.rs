@@ -1,7 +1,9 @@
 //! Stand statistics: one row of the stand table per year.
 
 use super::trees::DeathCause;
-use super::world::World;
+use super::cohorts::RegenYear;
+use super::trees::TreeStore;
+use super::world::{Site, World};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -114,10 +116,22 @@ fn top_height(dbh: &[f32], height: &[f32], a: f64) -> f64 {
 /// The sums over the trees run serially in tree order (f64) on one thread while the top height
 /// ([`top_height`]) is found on the others.
 pub fn stand_row(w: &World) -> StandRow {
-    let t = &w.stand.trees;
-    let a = w.site.area_ha.max(1e-9);
-    let np = w.site.pool.len();
-    let pidx: Vec<usize> = (0..w.site.lib.species.len() as u16).map(|s| w.pool_index(s).unwrap_or(0)).collect();
+    let mut deaths = [0u64; super::trees::N_CAUSES];
+    for d in &w.scratch.dead {
+        deaths[d.cause.index()] += 1;
+    }
+    row_of(&w.site, w.stand.year, &w.stand.trees, w.stand.cohorts.total_stems(), deaths, w.scratch.regen_year)
+}
+
+/// The stand-table row of `site` in `year` from the trees `t` (only their ids, species, heights
+/// and DBHs are read, in store order), the regeneration layer's stems, this year's deaths by
+/// cause and regeneration counts ([`stand_row`] on a world; a tiled run's rank 0 gathers these,
+/// `sim::tiles`).
+pub fn row_of(site: &Site, year: u32, t: &TreeStore, regeneration_stems: u64, deaths: [u64; super::trees::N_CAUSES], regen_year: RegenYear) -> StandRow {
+    let w = site;
+    let a = w.area_ha.max(1e-9);
+    let np = w.pool.len();
+    let pidx: Vec<usize> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s).unwrap_or(0)).collect();
     let sums = || {
         let (mut n, mut ns, mut ba, mut hs, mut d2) = (0usize, 0usize, 0f64, 0f64, 0f64);
         let (mut n7, mut d27) = (0usize, 0f64);
@@ -144,13 +158,9 @@ pub fn stand_row(w: &World) -> StandRow {
         (n, ns, ba, hs, d2, n7, d27, sba, sn)
     };
     let ((n, ns, ba, hs, d2, n7, d27, sba, sn), h100) = rayon::join(sums, || top_height(&t.dbh, &t.height, a));
-    let mut deaths = [0u64; super::trees::N_CAUSES];
-    for d in &w.scratch.dead {
-        deaths[d.cause.index()] += 1;
-    }
     let _ = DeathCause::ALL;
     StandRow {
-        year: w.stand.year,
+        year,
         stems_ha: n as f64 / a,
         seedlings_ha: ns as f64 / a,
         basal_area_m2_ha: ba / a,
@@ -162,9 +172,9 @@ pub fn stand_row(w: &World) -> StandRow {
         share_ba: sba.iter().map(|v| if ba > 0.0 { v / ba } else { 0.0 }).collect(),
         share_stems: sn.iter().map(|v| if n > 0 { v / n as f64 } else { 0.0 }).collect(),
         deaths,
-        regeneration_ha: w.stand.cohorts.total_stems() as f64 / a,
-        regen_germinated: w.scratch.regen_year.germinated,
-        regen_recruited: w.scratch.regen_year.recruited,
-        regen_deaths: w.scratch.regen_year.dead,
+        regeneration_ha: regeneration_stems as f64 / a,
+        regen_germinated: regen_year.germinated,
+        regen_recruited: regen_year.recruited,
+        regen_deaths: regen_year.dead,
     }
 }

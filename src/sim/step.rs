@@ -35,6 +35,22 @@ pub struct Phase {
     pub ends: Option<Season>,
     /// Runs the phase: passes it the parts of the world it reads and writes.
     pub run: fn(&mut World, &mut YearReport),
+    /// What the phase reads across a tile edge (a tiled run, `sim::tiles`, passes each tile
+    /// the neighbours' trees within that reach before it).
+    pub halo: Halo,
+}
+
+/// What a phase reads of the trees around a tile ([`Phase::halo`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Halo {
+    /// Nothing beyond its own cells and trees.
+    None,
+    /// Crowns shading its cells (light): every tree within the largest crown plus two light cells.
+    Crowns,
+    /// Crowding neighbourhoods (growth): every tree within three 10 m crowding cells.
+    Crowding,
+    /// Seed sources (reproduction): the mature trees within the longest seed reach.
+    SeedSources,
 }
 
 /// Number of phases.
@@ -42,12 +58,12 @@ pub const N_PHASES: usize = 6;
 
 /// The year, in order. ARCHITECTURE.md quotes this list (checked by `tests/layers.rs`).
 pub const PHASES: [Phase; N_PHASES] = [
-    Phase { name: "light", summary: "canopy grid from the trees at the start of the year; light of every tree and of the ground", ends: None, run: run_light },
-    Phase { name: "regeneration", summary: "spring: germination, growth, thinning and recruitment of the sapling cohorts", ends: Some(Season::Spring), run: run_regeneration },
-    Phase { name: "growth", summary: "summer: crowding of every tree's neighbourhood; height, DBH and crown increments", ends: Some(Season::Summer), run: run_growth },
-    Phase { name: "reproduction", summary: "autumn: seed production and dispersal onto the seed grids", ends: Some(Season::Autumn), run: run_reproduction },
-    Phase { name: "mortality", summary: "winter: senescence, background, stress and wind deaths", ends: None, run: run_mortality },
-    Phase { name: "stats", summary: "the year ends: stand-table row of the year", ends: Some(Season::Winter), run: run_stats },
+    Phase { name: "light", summary: "canopy grid from the trees at the start of the year; light of every tree and of the ground", ends: None, run: run_light, halo: Halo::Crowns },
+    Phase { name: "regeneration", summary: "spring: germination, growth, thinning and recruitment of the sapling cohorts", ends: Some(Season::Spring), run: run_regeneration, halo: Halo::None },
+    Phase { name: "growth", summary: "summer: crowding of every tree's neighbourhood; height, DBH and crown increments", ends: Some(Season::Summer), run: run_growth, halo: Halo::Crowding },
+    Phase { name: "reproduction", summary: "autumn: seed production and dispersal onto the seed grids", ends: Some(Season::Autumn), run: run_reproduction, halo: Halo::SeedSources },
+    Phase { name: "mortality", summary: "winter: senescence, background, stress and wind deaths", ends: None, run: run_mortality, halo: Halo::None },
+    Phase { name: "stats", summary: "the year ends: stand-table row of the year", ends: Some(Season::Winter), run: run_stats, halo: Halo::None },
 ];
 
 fn run_light(w: &mut World, _: &mut YearReport) {
@@ -82,6 +98,7 @@ fn run_regeneration(w: &mut World, report: &mut YearReport) {
         trees: &mut w.stand.trees,
         regen_ledger: &mut w.tallies.regen_ledger,
         regen_year: &mut w.scratch.regen_year,
+        window: w.site.window,
     });
 }
 

@@ -4,8 +4,29 @@ use super::light_grid::LightGrid;
 use crate::species::SpeciesId;
 use serde::{Deserialize, Serialize};
 
-/// Stable tree identifier (never reused within a run).
+/// Stable tree identifier (never reused within a run). Trees of the start (planted, seed
+/// sources) are numbered 0, 1, 2, … in the scenario's order; recruits get [`birth_id`], a
+/// function of where and when they were born, so ids do not depend on how the landscape is cut
+/// into tiles ([`crate::sim::tiles`]) and stay ascending in the tree store's order.
 pub type TreeId = u64;
+
+/// Bits of a recruit id ([`birth_id`]) for its index among the recruits of its cell and year.
+pub const BIRTH_INDEX_BITS: u32 = 12;
+/// Bits of a recruit id ([`birth_id`]) for its birth cell (light cells are `u32`).
+pub const BIRTH_CELL_BITS: u32 = 32;
+
+/// Id of the `k`-th tree recruited in light cell `cell` (row-major, row 0 south) in simulation
+/// year `year` (years completed before it): `(year + 1) · 2⁴⁴ + cell · 2¹² + k`. Partition
+/// independent (no counter shared by the whole landscape); larger than every start tree's id
+/// (those stay below 2⁴⁴) and than every id of an earlier year, and ascending in (cell, k)
+/// within a year, so recruits appended in cell order keep the store sorted by id. Ranges:
+/// `year` < 2²⁰ − 1 (scenarios run at most 10,000 years), `k` < 4096 (a light cell of at most
+/// 20 m holds at most about 100 stems at the recruitment height, `regen::max_density_ha`).
+#[inline]
+pub fn birth_id(year: u32, cell: u32, k: u32) -> TreeId {
+    debug_assert!(k < 1 << BIRTH_INDEX_BITS && year < (1 << 20) - 1);
+    ((year as u64 + 1) << (BIRTH_CELL_BITS + BIRTH_INDEX_BITS)) | (cell as u64) << BIRTH_INDEX_BITS | (k as u64 & ((1 << BIRTH_INDEX_BITS) - 1))
+}
 
 /// Why a tree died.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -84,7 +105,7 @@ pub struct DeadTree {
 /// the end of the mortality phase (order of the survivors is kept) and recorded as [`DeadTree`].
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct TreeStore {
-    /// Stable ids, strictly increasing in index order.
+    /// Stable ids, strictly increasing in index order ([`birth_id`] for recruits).
     pub id: Vec<TreeId>,
     /// Species index.
     pub species: Vec<SpeciesId>,
@@ -116,7 +137,7 @@ pub struct TreeStore {
     /// checkpoints, and stores that differ only in it compare equal.
     #[serde(skip)]
     pub growth_factor: GrowthFactors,
-    /// Next id to hand out.
+    /// Next id [`TreeStore::push`] hands out (trees of the start; recruits get [`birth_id`]).
     pub next_id: TreeId,
 }
 
@@ -283,6 +304,15 @@ impl SpatialGrid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn birth_ids_order_by_year_then_cell_then_index() {
+        assert_eq!(birth_id(0, 0, 0), 1 << 44);
+        assert_eq!(birth_id(0, 3, 5), (1 << 44) + (3 << 12) + 5);
+        assert!(birth_id(0, 3, 4095) < birth_id(0, 4, 0));
+        assert!(birth_id(0, u32::MAX, 4095) < birth_id(1, 0, 0));
+        assert!(birth_id(9_999, u32::MAX, 4095) > birth_id(9_998, 0, 0));
+    }
 
     #[test]
     fn ids_are_stable_and_grid_finds_neighbours() {

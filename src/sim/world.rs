@@ -86,6 +86,9 @@ pub struct Site {
     pub obstacle_canopy: Vec<(u64, f32)>,
     /// Fraction (0–1) of each light cell's ground not covered by a solid obstacle.
     pub ground_free: Vec<f32>,
+    /// The light cells whose regeneration this world steps: a tile's (`sim::tiles`); `None`
+    /// (one process): all.
+    pub window: Option<super::light_grid::CellRect>,
 }
 
 /// The stand's state: everything that evolves from year to year and that a checkpoint keeps.
@@ -191,7 +194,7 @@ impl World {
         let (obstacle_canopy, ground_free) = super::obstacle::light_cells(&scenario.obstacles, light.cols, light.rows, light.cell_m, super::light_grid::EXTINCTION_K);
         let np = pool.len();
         let mut w = World {
-            site: Site { conditions: site, lib: lib.clone(), pool, seed: scenario.seed, extent, area_ha, light, light_site, rel_insolation, suitability, seed_rain, obstacles: scenario.obstacles.clone(), obstacle_canopy, ground_free },
+            site: Site { conditions: site, lib: lib.clone(), pool, seed: scenario.seed, extent, area_ha, light, light_site, rel_insolation, suitability, seed_rain, obstacles: scenario.obstacles.clone(), obstacle_canopy, ground_free, window: None },
             stand: Stand { trees: TreeStore::default(), year: 0, cohorts: Cohorts::default(), seeds },
             scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], dead: Vec::new(), regen_year: RegenYear::default() },
             tallies: Tallies { deaths_total: [0; super::trees::N_CAUSES], regen_ledger: RegenLedger::new(np) },

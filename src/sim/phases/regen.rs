@@ -39,8 +39,8 @@ use crate::species::allometry::HeightIncrement;
 use super::mortality::{stress_threshold, P_STRESS};
 pub use crate::sim::cohorts::{Cohort, Cohorts, RegenDeath, RegenLedger, RegenYear, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
 use crate::conditions::SiteConditions;
-use crate::sim::light_grid::LightGrid;
-use crate::sim::trees::{NewTree, TreeStore};
+use crate::sim::light_grid::{CellRect, LightGrid};
+use crate::sim::trees::{birth_id, NewTree, TreeId, TreeStore};
 use crate::sim::world::SeedGrid;
 use crate::species::{SpeciesId, SpeciesLibrary};
 use crate::rng::{salt, Stream};
@@ -84,7 +84,7 @@ fn binomial(r: &mut Stream, n: u32, p: f64) -> u32 {
 #[derive(Default)]
 struct Block {
     cohorts: Vec<Cohort>,
-    recruits: Vec<(NewTree, f32, f32)>,
+    recruits: Vec<(NewTree, f32, f32, TreeId)>,
     germinated: Vec<u64>,
     recruited: Vec<u64>,
     dead: Vec<[u64; N_REGEN_CAUSES]>,
@@ -128,6 +128,9 @@ pub struct Regen<'a> {
     pub trees: &'a mut TreeStore,
     /// Incremented: cumulative counts per pool species.
     pub regen_ledger: &'a mut RegenLedger,
+    /// Only these light cells (a tile's, [`crate::sim::tiles`]); `None`: every cell. Cells
+    /// outside keep no cohorts and recruit nothing.
+    pub window: Option<CellRect>,
     /// Written: this year's counts.
     pub regen_year: &'a mut RegenYear,
 }
@@ -173,6 +176,10 @@ pub fn run(w: Regen<'_>) -> usize {
                 local.clear();
                 local.extend((i..j).map(|k| coh.get(k)));
                 i = j;
+                let (col, row) = lg.col_row(c);
+                if wr.window.is_some_and(|r| !r.contains(col, row)) {
+                    continue;
+                }
                 let site = wr.light_site[c];
                 if site == u32::MAX {
                     // masked light cell: no regeneration (cohorts never arise here)
@@ -180,7 +187,6 @@ pub fn run(w: Regen<'_>) -> usize {
                 }
                 let site = site as usize;
                 let gl = wr.ground_light[c];
-                let (col, row) = lg.col_row(c);
                 let (cx, cy) = lg.centre(c);
                 // 1. germination
                 let mut r = Stream::new(seed, c as u64, year, salt::ESTABLISH);
@@ -244,6 +250,7 @@ pub fn run(w: Regen<'_>) -> usize {
                 // 5. recruitment
                 local.sort_by_key(|k| k.pool);
                 let mut rr = Stream::new(seed, c as u64, year, SALT_RECRUIT);
+                let mut born = 0u32;
                 for k in local.iter() {
                     if k.stems == 0 {
                         continue;
@@ -276,7 +283,8 @@ pub fn run(w: Regen<'_>) -> usize {
                             crown_radius: open_crown_radius(sp, k.height, d) * (0.5 + 0.5 * gl.clamp(0.0, 1.0)),
                             suitability: wr.suitability[k.pool as usize][sc],
                         };
-                        out.recruits.push((t, gl, k.vigour));
+                        out.recruits.push((t, gl, k.vigour, birth_id(year as u32, c as u32, born)));
+                        born += 1;
                     }
                     out.recruited[k.pool as usize] += k.stems as u64;
                 }
@@ -304,7 +312,7 @@ pub fn run(w: Regen<'_>) -> usize {
     fn cohorts_of(b: &Block) -> &[Cohort] {
         &b.cohorts
     }
-    fn recruits_of(b: &Block) -> &[(NewTree, f32, f32)] {
+    fn recruits_of(b: &Block) -> &[(NewTree, f32, f32, TreeId)] {
         &b.recruits
     }
     fn column<T, U>(blocks: &[Block], n: usize, items: fn(&Block) -> &[U], f: impl Fn(&U) -> T, v: &mut Vec<T>) {
@@ -315,11 +323,9 @@ pub fn run(w: Regen<'_>) -> usize {
     }
     let mut cohorts = Cohorts::default();
     let t = &mut *w.trees;
-    let first_id = t.next_id;
-    t.next_id += n_recruits as u64;
     {
         let bl = &blocks[..];
-        let (co, re) = (cohorts_of as fn(&Block) -> &[Cohort], recruits_of as fn(&Block) -> &[(NewTree, f32, f32)]);
+        let (co, re) = (cohorts_of as fn(&Block) -> &[Cohort], recruits_of as fn(&Block) -> &[(NewTree, f32, f32, TreeId)]);
         let Cohorts { cell, pool, stems, height, age, vigour } = &mut cohorts;
         let TreeStore { id, species, x, y, z, age: t_age, height: t_height, dbh, crown_radius, crown_base, light, vigour: t_vigour, suitability, growth_factor, next_id: _ } = t;
         // factors drawn when the recruits first grow (NaN: not yet drawn)
@@ -331,7 +337,7 @@ pub fn run(w: Regen<'_>) -> usize {
             sc.spawn(move |_| column(bl, ncoh, co, |k| k.height, height));
             sc.spawn(move |_| column(bl, ncoh, co, |k| k.age, age));
             sc.spawn(move |_| column(bl, ncoh, co, |k| k.vigour, vigour));
-            sc.spawn(move |_| id.extend(first_id..first_id + n_recruits as u64));
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.3, id));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.species, species));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.x, x));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.y, y));

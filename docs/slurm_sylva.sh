@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Slurm batch script for a regional Sylva run over MPI (issue 17; docs/SCALING.md).
+# One tile per MPI rank; rank 0 writes the whole run directory (the same files, byte for byte,
+# as one process), so OUT must be on a file system rank 0 can write. Each rank holds the whole
+# site (terrain, conditions, per-cell grids) and its own tile's trees: size --mem-per-cpu from
+# a one-process run's memory at the site's size plus the tile's share of the trees
+# (docs/SCALING.md). Build once on the cluster with MPI:
+#   cargo build --release --features mpi      (needs libopenmpi-dev or the site's MPI, libclang)
+# Submit:  sbatch docs/slurm_sylva.sh scenarios/region.toml /scratch/$USER/region
+#SBATCH --job-name=sylva-region
+#SBATCH --nodes=4
+#SBATCH --ntasks-per-node=4          # 16 ranks = 16 tiles (the tiles are cut closest to square)
+#SBATCH --cpus-per-task=8            # rayon threads inside each rank
+#SBATCH --mem-per-cpu=2G
+#SBATCH --time=04:00:00
+set -euo pipefail
+SCENARIO=${1:?usage: sbatch slurm_sylva.sh SCENARIO.toml OUT_DIR}
+OUT=${2:?usage: sbatch slurm_sylva.sh SCENARIO.toml OUT_DIR}
+# a run already started in OUT continues from its checkpoint (on any number of ranks)
+RESUME=()
+[ -f "$OUT/checkpoint.bin" ] && RESUME=(--resume)
+# srun starts one `sylva` per task; Open MPI's PMIx (or PMI2) tells each its rank
+srun --mpi=pmix ./target/release/sylva simulate "$SCENARIO" --out "$OUT" \
+  --threads "${SLURM_CPUS_PER_TASK:-1}" "${RESUME[@]}"

@@ -1,0 +1,79 @@
+//! Tiled-run benchmark (issue 17): the afforestation of the load bench on a flat 1,000 ha site
+//! (50 m cells; seed rain of birch, beech and Norway spruce), run by the `sylva` binary as one
+//! process with 2 threads and as `mpirun -np 2` ranks with 1 thread each, on the same 2 cores.
+//! Prints wall time, the peak resident memory of the one process and of each rank, the bytes
+//! each rank sent per year, and whether the two stand tables are byte-identical (they must be).
+//!
+//! Command (docs/SCALING.md, BENCHMARKS.md): build the binary with MPI, then run the example
+//! with the same profile:
+//! `cargo build --release --features mpi --bin sylva && cargo run --release --example tiles_bench`.
+//! Environment: `SYLVA_TILES_HA` (default 1000), `SYLVA_TILES_YEARS` (default 100),
+//! `SYLVA_TILES_RANKS` (default 2), `SYLVA_BIN` (the `sylva` binary; default the one beside
+//! this example's folder).
+use std::path::PathBuf;
+use std::process::Command;
+use std::time::Instant;
+#[path = "../benches/common/mod.rs"]
+#[allow(dead_code)]
+mod common;
+
+fn env<T: std::str::FromStr>(k: &str, default: T) -> T {
+    std::env::var(k).ok().and_then(|v| v.parse().ok()).unwrap_or(default)
+}
+
+/// Peak resident memory (MiB) of the largest child waited for so far (getrusage).
+fn children_max_rss_mib() -> f64 {
+    // SAFETY: getrusage writes into the zeroed struct we own.
+    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+    // SAFETY: a valid pointer to a rusage struct.
+    unsafe { libc::getrusage(libc::RUSAGE_CHILDREN, &mut u) };
+    u.ru_maxrss as f64 / 1024.0
+}
+
+fn main() {
+    let ha: f64 = env("SYLVA_TILES_HA", 1000.0);
+    let years: u32 = env("SYLVA_TILES_YEARS", 100);
+    let ranks: usize = env("SYLVA_TILES_RANKS", 2);
+    let bin = std::env::var_os("SYLVA_BIN").map(PathBuf::from).unwrap_or_else(|| {
+        let exe = std::env::current_exe().expect("path of this example");
+        exe.parent().and_then(|d| d.parent()).expect("target folder").join("sylva")
+    });
+    let side = ((ha * 10_000.0).sqrt() / 50.0).round().max(1.0) as usize;
+    let terrain = format!("uniform = {{ width = {side}, height = {side}, cell_m = 50.0, elevation_m = 500.0, indices = [5, 5, 3, 5, 6, 6] }}");
+    let toml = common::afforestation_toml("tiles", years, "snapshot_every = 0\ncheckpoint_every = 0", &terrain);
+    let tmp = tempfile::tempdir().expect("temporary folder");
+    let sc = tmp.path().join("tiles.toml");
+    std::fs::write(&sc, toml).expect("scenario file");
+    println!("tiles bench: {side} × {side} cells of 50 m ({:.0} ha), {years} years, {} (one process, 2 threads) vs mpirun -np {ranks} (1 thread each)", (side * side) as f64 * 0.25, bin.display());
+    // one process
+    let one = tmp.path().join("one");
+    let t0 = Instant::now();
+    let o = Command::new(&bin).arg("simulate").arg(&sc).arg("--out").arg(&one).args(["--threads", "2"]).output().expect("run sylva");
+    let t_one = t0.elapsed().as_secs_f64();
+    assert!(o.status.success(), "one process failed: {}", String::from_utf8_lossy(&o.stderr));
+    let rss_one = children_max_rss_mib();
+    println!("1 process × 2 threads: {t_one:.1} s, peak RSS {rss_one:.0} MiB");
+    // ranks
+    let tiled = tmp.path().join("tiled");
+    let t0 = Instant::now();
+    let o = Command::new("mpirun")
+        .args(["--allow-run-as-root", "--oversubscribe", "-np", &ranks.to_string()])
+        .arg(&bin)
+        .arg("simulate")
+        .arg(&sc)
+        .arg("--out")
+        .arg(&tiled)
+        .args(["--threads", "1"])
+        .output()
+        .expect("run mpirun (Open MPI installed?)");
+    let t_ranks = t0.elapsed().as_secs_f64();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "mpirun failed: {err}");
+    println!("{ranks} ranks × 1 thread: {t_ranks:.1} s ({:.2}× the one process)", t_ranks / t_one);
+    for l in err.lines().filter(|l| l.starts_with("rank ")) {
+        println!("  {l}");
+    }
+    let same = std::fs::read(one.join("stand_table.csv")).ok() == std::fs::read(tiled.join("stand_table.csv")).ok() && std::fs::read(one.join("checkpoint.bin")).ok() == std::fs::read(tiled.join("checkpoint.bin")).ok();
+    println!("stand table and checkpoint byte-identical: {same}");
+    assert!(same, "the tiled run differs from one process");
+}

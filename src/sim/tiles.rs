@@ -1,0 +1,911 @@
+//! Tiled runs: the landscape cut into rectangular tiles of light cells, each stepped by its own
+//! process (an MPI rank) or thread, with the same result, byte for byte, as one process.
+//!
+//! Every tile holds the whole site (conditions, species, per-cell grids: read-only) but only
+//! its own stand: the trees standing on its light cells, the sapling cohorts of its cells.
+//! Each year it runs the phases of [`crate::sim::step::PHASES`] on its own trees; what a phase
+//! reads across a tile edge comes from copies of the neighbours' trees within the halo, passed
+//! once before each phase that reads neighbours, through a [`Transport`]:
+//! 1. **light**: the canopy of a cell holds every crown that covers it, and a tree's light
+//!    reads its cell and the next cell towards the equator: trees within the largest crown
+//!    radius plus two light cells of the tile;
+//! 2. **regeneration** reads only its own cells (ground light, last autumn's seeds, cohorts):
+//!    no exchange; recruits get partition-independent ids ([`crate::sim::trees::birth_id`]);
+//! 3. **growth** reads the crowding of the 3 × 3 block of 10 m cells around each tree
+//!    ([`crate::sim::density`]): trees within 30 m, after this spring's recruitment;
+//! 4. **reproduction** gathers seeds over each species' dispersal kernel from the seed sources
+//!    of the seed cells within reach: the *mature* trees (the only seed sources) within
+//!    `(⌈max_m / cell⌉ + 2)` seed cells, after this summer's growth;
+//! 5. **mortality** draws each tree from its own stream: no exchange;
+//! 6. **stats**: the stand table row needs every tree (sums in id order, the top height): the
+//!    ranks send their trees' id, species, height and DBH to rank 0 ([`Tile::step`]).
+//!
+//! Why the result is the same: every random stream is keyed by the scenario seed, a tree id or a
+//! global cell index and the year; tree ids do not depend on the partition; the tree store is
+//! kept sorted by id, so each tile's trees, with the halo's merged in by id, are a subsequence
+//! of the single-process store in the same order, and every per-cell sum runs over the same
+//! trees in the same order as in one process when the halo holds every tree the cell's value
+//! depends on. [`min_halo_m`] is that width; [`Layout::new`] refuses a narrower halo and
+//! [`Tile::step`] checks the crowns against it every year.
+
+use super::cohorts::{Cohorts, RegenLedger, RegenYear, N_REGEN_CAUSES};
+use super::density;
+use super::step::{Halo, PHASES};
+use super::light_grid::{CellRect, LightGrid};
+use super::step::YearReport;
+use super::trees::{DeadTree, DeathCause, TreeStore, N_CAUSES};
+use super::world::{Site, Tallies, World, KERNEL_CELLS, SEED_CELL_M};
+use crate::error::{Error, Result};
+use std::sync::{Arc, Barrier, Mutex};
+use std::time::Instant;
+
+/// Passes byte messages between the ranks of a tiled run: one all-to-all exchange at a time,
+/// every rank taking part in every exchange in the same order (MPI's model).
+pub trait Transport {
+    /// This rank (0-based; rank 0 gathers the stand table and writes the outputs).
+    fn rank(&self) -> usize;
+    /// Number of ranks.
+    fn size(&self) -> usize;
+    /// Sends `out[p]` to rank `p` for every `p` (`out.len() == size()`; `out[rank()]` comes back
+    /// unchanged) and returns what every rank sent to this one, by rank.
+    ///
+    /// Errors: [`Error::Exchange`] naming the rank when a message cannot be passed.
+    fn exchange(&mut self, out: Vec<Vec<u8>>) -> Result<Vec<Vec<u8>>>;
+    /// Bytes this rank has sent to other ranks so far.
+    fn bytes_sent(&self) -> u64;
+}
+
+/// All ranks in one process, one thread each ([`LocalTransport::group`]): a shared mailbox and a
+/// barrier, for tests and for `sylva simulate --tiles` without MPI.
+pub struct LocalTransport {
+    rank: usize,
+    size: usize,
+    shared: Arc<Shared>,
+    sent: u64,
+}
+
+/// The mailbox of a [`LocalTransport`] group: `boxes[to][from]`.
+struct Shared {
+    boxes: Mutex<Vec<Vec<Vec<u8>>>>,
+    barrier: Barrier,
+}
+
+impl LocalTransport {
+    /// `n` connected endpoints (ranks 0..n), to be moved to one thread each.
+    pub fn group(n: usize) -> Vec<LocalTransport> {
+        let shared = Arc::new(Shared { boxes: Mutex::new(vec![vec![Vec::new(); n]; n]), barrier: Barrier::new(n) });
+        (0..n).map(|rank| LocalTransport { rank, size: n, shared: shared.clone(), sent: 0 }).collect()
+    }
+}
+
+impl Transport for LocalTransport {
+    fn rank(&self) -> usize {
+        self.rank
+    }
+    fn size(&self) -> usize {
+        self.size
+    }
+    fn exchange(&mut self, out: Vec<Vec<u8>>) -> Result<Vec<Vec<u8>>> {
+        if out.len() != self.size {
+            return Err(Error::Exchange { peer: self.rank, reason: format!("{} messages for {} ranks", out.len(), self.size) });
+        }
+        let poisoned = |_| Error::Exchange { peer: self.rank, reason: "another rank's thread panicked".into() };
+        {
+            let mut b = self.shared.boxes.lock().map_err(poisoned)?;
+            for (to, m) in out.into_iter().enumerate() {
+                if to != self.rank {
+                    self.sent += m.len() as u64;
+                }
+                b[to][self.rank] = m;
+            }
+        }
+        self.shared.barrier.wait();
+        let got = {
+            let mut b = self.shared.boxes.lock().map_err(poisoned)?;
+            std::mem::take(&mut b[self.rank])
+        };
+        // nobody writes the next round's messages before everyone has taken this round's
+        {
+            let mut b = self.shared.boxes.lock().map_err(poisoned)?;
+            b[self.rank] = vec![Vec::new(); self.size];
+        }
+        self.shared.barrier.wait();
+        Ok(got)
+    }
+    fn bytes_sent(&self) -> u64 {
+        self.sent
+    }
+}
+
+/// The reach (m) of each kind of [`Halo`] on `site`: how far beyond a tile the trees a phase
+/// reads can stand.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Reach {
+    /// Light ([`Halo::Crowns`]): the largest possible crown radius of the pool,
+    /// `crown_c0 + crown_c1 · max_dbh_cm` (crowns only shrink from the open-grown radius), plus
+    /// two light cells (the cell a crown covers and the next towards the equator, whose canopy
+    /// the sun direction reads).
+    pub crowns_m: f64,
+    /// Growth ([`Halo::Crowding`]): 3 × [`density::CROWD_CELL_M`] (the 3 × 3 block around a
+    /// tree's cell, whose cell may reach one cell past the tile).
+    pub crowding_m: f64,
+    /// Reproduction ([`Halo::SeedSources`]): per pool species `(⌈max_m / cell⌉ + 2) · cell` with
+    /// its seed cell `cell` ([`crate::sim::world::SeedGrid`]: the kernel's cells, the seed cell
+    /// that overlaps the tile and the source's own cell), the longest of the pool.
+    pub seeds_m: f64,
+}
+
+impl Reach {
+    /// The reaches of `site`'s pool.
+    pub fn of(site: &Site) -> Reach {
+        let mut r = Reach { crowns_m: 2.0 * site.light.cell_m, crowding_m: 3.0 * density::CROWD_CELL_M, seeds_m: 0.0 };
+        for &s in &site.pool {
+            let sp = &site.lib.species[s as usize];
+            let a = sp.life.allometry;
+            let crown = (a.crown_c0 + a.crown_c1 * sp.life.max_dbh_cm.max(0.0)).max(a.crown_c0) as f64;
+            r.crowns_m = r.crowns_m.max(crown + 2.0 * site.light.cell_m);
+            let d = &sp.life.dispersal;
+            let cell = SEED_CELL_M.max(d.max_m as f64 / KERNEL_CELLS);
+            r.seeds_m = r.seeds_m.max(((d.max_m as f64 / cell).ceil() + 2.0) * cell);
+        }
+        r
+    }
+    /// The widest reach (m).
+    pub fn max(&self) -> f64 {
+        self.crowns_m.max(self.crowding_m).max(self.seeds_m)
+    }
+    /// The reach of `h` (m; 0 for [`Halo::None`]).
+    pub fn of_halo(&self, h: Halo) -> f64 {
+        match h {
+            Halo::None => 0.0,
+            Halo::Crowns => self.crowns_m,
+            Halo::Crowding => self.crowding_m,
+            Halo::SeedSources => self.seeds_m,
+        }
+    }
+    /// Every reach capped at `m` metres.
+    fn capped(self, m: f64) -> Reach {
+        Reach { crowns_m: self.crowns_m.min(m), crowding_m: self.crowding_m.min(m), seeds_m: self.seeds_m.min(m) }
+    }
+}
+
+/// Halo width (m) a tiled run of `site` needs so that it equals one process: the widest
+/// [`Reach`] (for a pool with a long seed kernel, the seed reach: only mature trees are passed
+/// that far).
+pub fn min_halo_m(site: &Site) -> f64 {
+    Reach::of(site).max()
+}
+
+/// How the light grid is cut: `nx × ny` rectangles of whole light cells (columns and rows split
+/// as evenly as they go), tile `k = ty · nx + tx` (row 0 south), and the halo width.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layout {
+    /// The light grid that is cut.
+    pub light: LightGrid,
+    /// Tiles across (west to east).
+    pub nx: usize,
+    /// Tiles up (south to north).
+    pub ny: usize,
+    /// Column boundaries, `nx + 1` values from 0 to `light.cols`.
+    pub col_bounds: Vec<usize>,
+    /// Row boundaries, `ny + 1` values from 0 to `light.rows`.
+    pub row_bounds: Vec<usize>,
+    /// Halo width (m): the widest reach a tile's neighbours' trees are copied from.
+    pub halo_m: f64,
+    /// The reach of each phase's halo ([`Reach::of`] the site, each capped at `halo_m`).
+    pub reach: Reach,
+}
+
+impl Layout {
+    /// `nx × ny` tiles over the light grid of `site` with the halo [`min_halo_m`].
+    ///
+    /// Errors: [`Error::Invalid`] when a tile would have no column or row (`nx` above the
+    /// grid's columns or `ny` above its rows, or either 0).
+    pub fn new(site: &Site, nx: usize, ny: usize) -> Result<Layout> {
+        Layout::with_halo(site, nx, ny, min_halo_m(site))
+    }
+
+    /// As [`Layout::new`] with a given halo width `halo_m` (m).
+    ///
+    /// Errors: [`Error::Invalid`] for the tile counts (as [`Layout::new`]) and for a halo
+    /// narrower than [`min_halo_m`] (a tiled run would differ from one process).
+    pub fn with_halo(site: &Site, nx: usize, ny: usize, halo_m: f64) -> Result<Layout> {
+        let min = min_halo_m(site);
+        if !(halo_m >= min) {
+            return Err(Error::Invalid {
+                context: "tiled run".into(),
+                field: "halo_m".into(),
+                value: format!("{halo_m} m"),
+                expected: format!("at least {min} m (the pool's longest seed reach, crowding neighbourhood or largest crown plus two light cells), or the tiles would differ from one process"),
+            });
+        }
+        let mut l = Layout::unchecked(site.light, nx, ny, halo_m)?;
+        l.reach = Reach::of(site).capped(halo_m);
+        Ok(l)
+    }
+
+    /// A layout with any halo, not checked against [`min_halo_m`] (to show what a narrow halo
+    /// changes): every phase's reach is `halo_m`.
+    ///
+    /// Errors: [`Error::Invalid`] for the tile counts (as [`Layout::new`]).
+    pub fn unchecked(light: LightGrid, nx: usize, ny: usize, halo_m: f64) -> Result<Layout> {
+        if nx == 0 || ny == 0 || nx > light.cols || ny > light.rows {
+            return Err(Error::Invalid {
+                context: "tiled run".into(),
+                field: "tiles".into(),
+                value: format!("{nx} × {ny}"),
+                expected: format!("1–{} across and 1–{} up (the light grid's columns and rows)", light.cols, light.rows),
+            });
+        }
+        let col_bounds = (0..=nx).map(|i| light.cols * i / nx).collect();
+        let row_bounds = (0..=ny).map(|j| light.rows * j / ny).collect();
+        Ok(Layout { light, nx, ny, col_bounds, row_bounds, halo_m, reach: Reach { crowns_m: halo_m, crowding_m: halo_m, seeds_m: halo_m } })
+    }
+
+    /// Number of tiles.
+    pub fn len(&self) -> usize {
+        self.nx * self.ny
+    }
+
+    /// True for a layout without tiles (never, once built).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The light cells of tile `k`.
+    pub fn rect(&self, k: usize) -> CellRect {
+        let (tx, ty) = (k % self.nx, k / self.nx);
+        CellRect { col0: self.col_bounds[tx], col1: self.col_bounds[tx + 1], row0: self.row_bounds[ty], row1: self.row_bounds[ty + 1] }
+    }
+
+    /// Tile owning light cell `(col, row)`.
+    pub fn owner_of_cell(&self, col: usize, row: usize) -> usize {
+        let tx = self.col_bounds[1..].partition_point(|&b| b <= col).min(self.nx - 1);
+        let ty = self.row_bounds[1..].partition_point(|&b| b <= row).min(self.ny - 1);
+        ty * self.nx + tx
+    }
+
+    /// Tile owning world point `(x, y)` (m): the tile of its light cell (clamped to the grid).
+    pub fn owner_of(&self, x: f32, y: f32) -> usize {
+        let (col, row) = self.light.col_row(self.light.cell_of(x, y));
+        self.owner_of_cell(col, row)
+    }
+
+    /// True when world point `(x, y)` lies within `m` metres of tile `k` (its rectangle widened
+    /// by `m` on every side).
+    pub fn in_halo(&self, k: usize, x: f32, y: f32, m: f64) -> bool {
+        let r = self.rect(k);
+        let c = self.light.cell_m;
+        let (x, y) = (x as f64, y as f64);
+        x >= r.col0 as f64 * c - m && x < r.col1 as f64 * c + m && y >= r.row0 as f64 * c - m && y < r.row1 as f64 * c + m
+    }
+}
+
+/// Little-endian writer of the messages.
+#[derive(Default)]
+struct Enc(Vec<u8>);
+
+impl Enc {
+    fn u64(&mut self, v: u64) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn f32(&mut self, v: f32) {
+        self.0.extend_from_slice(&v.to_le_bytes());
+    }
+    fn trees(&mut self, t: &TreeStore, idx: &[usize]) {
+        self.u64(idx.len() as u64);
+        for &i in idx {
+            self.u64(t.id[i]);
+        }
+        for &i in idx {
+            self.0.extend_from_slice(&t.species[i].to_le_bytes());
+        }
+        for c in [&t.x, &t.y, &t.z, &t.age, &t.height, &t.dbh, &t.crown_radius, &t.crown_base, &t.light, &t.vigour, &t.suitability] {
+            for &i in idx {
+                self.f32(c[i]);
+            }
+        }
+    }
+    /// The columns the stand table reads: id, species, height, DBH.
+    fn lean_trees(&mut self, t: &TreeStore) {
+        self.u64(t.len() as u64);
+        t.id.iter().for_each(|&v| self.u64(v));
+        t.species.iter().for_each(|&v| self.0.extend_from_slice(&v.to_le_bytes()));
+        t.height.iter().for_each(|&v| self.f32(v));
+        t.dbh.iter().for_each(|&v| self.f32(v));
+    }
+}
+
+/// Reader of the messages of [`Enc`]; every read checks the length.
+struct Dec<'a> {
+    b: &'a [u8],
+    p: usize,
+    peer: usize,
+}
+
+impl<'a> Dec<'a> {
+    fn new(b: &'a [u8], peer: usize) -> Self {
+        Dec { b, p: 0, peer }
+    }
+    fn take(&mut self, n: usize) -> Result<&'a [u8]> {
+        if self.b.len() - self.p < n {
+            return Err(Error::Exchange { peer: self.peer, reason: format!("message of {} bytes ends at byte {} (expected {n} more)", self.b.len(), self.p) });
+        }
+        let s = &self.b[self.p..self.p + n];
+        self.p += n;
+        Ok(s)
+    }
+    fn u64(&mut self) -> Result<u64> {
+        let s = self.take(8)?;
+        let mut a = [0u8; 8];
+        a.copy_from_slice(s);
+        Ok(u64::from_le_bytes(a))
+    }
+    fn u16(&mut self) -> Result<u16> {
+        let s = self.take(2)?;
+        Ok(u16::from_le_bytes([s[0], s[1]]))
+    }
+    fn f32(&mut self) -> Result<f32> {
+        let s = self.take(4)?;
+        Ok(f32::from_le_bytes([s[0], s[1], s[2], s[3]]))
+    }
+    fn count(&mut self, item_bytes: usize) -> Result<usize> {
+        let n = self.u64()? as usize;
+        if n.saturating_mul(item_bytes) > self.b.len() - self.p {
+            return Err(Error::Exchange { peer: self.peer, reason: format!("count {n} larger than the rest of the message ({} bytes)", self.b.len() - self.p) });
+        }
+        Ok(n)
+    }
+    fn f32s(&mut self, n: usize) -> Result<Vec<f32>> {
+        (0..n).map(|_| self.f32()).collect()
+    }
+    fn trees(&mut self) -> Result<TreeStore> {
+        let n = self.count(8 + 2 + 11 * 4)?;
+        let mut t = TreeStore { id: (0..n).map(|_| self.u64()).collect::<Result<_>>()?, ..Default::default() };
+        t.species = (0..n).map(|_| self.u16()).collect::<Result<_>>()?;
+        for c in [&mut t.x, &mut t.y, &mut t.z, &mut t.age, &mut t.height, &mut t.dbh, &mut t.crown_radius, &mut t.crown_base, &mut t.light, &mut t.vigour, &mut t.suitability] {
+            *c = self.f32s(n)?;
+        }
+        Ok(t)
+    }
+    fn lean_trees(&mut self) -> Result<TreeStore> {
+        let n = self.count(8 + 2 + 2 * 4)?;
+        let mut t = TreeStore { id: (0..n).map(|_| self.u64()).collect::<Result<_>>()?, ..Default::default() };
+        t.species = (0..n).map(|_| self.u16()).collect::<Result<_>>()?;
+        t.height = self.f32s(n)?;
+        t.dbh = self.f32s(n)?;
+        Ok(t)
+    }
+}
+
+/// The trees of `parts` in one store sorted by id (each part sorted by id, ids unique), and the
+/// part each row came from. Lean parts (id, species, height and DBH only) give a lean store.
+/// `next_id` is `next_id`.
+fn merge_by_id(parts: &[TreeStore], next_id: u64) -> (TreeStore, Vec<usize>) {
+    // k-way merge of the sorted parts (a heap of their next ids): O(n log k)
+    let mut all: Vec<(u64, usize, usize)> = Vec::with_capacity(parts.iter().map(|p| p.len()).sum());
+    let mut heap: std::collections::BinaryHeap<std::cmp::Reverse<(u64, usize, usize)>> = parts.iter().enumerate().filter(|(_, p)| !p.is_empty()).map(|(k, p)| std::cmp::Reverse((p.id[0], k, 0))).collect();
+    while let Some(std::cmp::Reverse((id, k, i))) = heap.pop() {
+        all.push((id, k, i));
+        if let Some(&next) = parts[k].id.get(i + 1) {
+            heap.push(std::cmp::Reverse((next, k, i + 1)));
+        }
+    }
+    let full = parts.iter().all(|p| p.x.len() == p.len());
+    let mut t = TreeStore { next_id, ..Default::default() };
+    t.id = all.iter().map(|e| e.0).collect();
+    t.species = all.iter().map(|e| parts[e.1].species[e.2]).collect();
+    t.height = all.iter().map(|e| parts[e.1].height[e.2]).collect();
+    t.dbh = all.iter().map(|e| parts[e.1].dbh[e.2]).collect();
+    if full {
+        let col = |f: fn(&TreeStore) -> &Vec<f32>| all.iter().map(|e| f(&parts[e.1])[e.2]).collect::<Vec<f32>>();
+        t.x = col(|p| &p.x);
+        t.y = col(|p| &p.y);
+        t.z = col(|p| &p.z);
+        t.age = col(|p| &p.age);
+        t.crown_radius = col(|p| &p.crown_radius);
+        t.crown_base = col(|p| &p.crown_base);
+        t.light = col(|p| &p.light);
+        t.vigour = col(|p| &p.vigour);
+        t.suitability = col(|p| &p.suitability);
+        // cached growth factors where a part has them (the tile's own rows), NaN (drawn again
+        // when needed, the same bits) for halo copies, which arrive without
+        t.growth_factor.0 = all.iter().map(|e| if parts[e.1].growth_factor.0.len() == parts[e.1].len() { parts[e.1].growth_factor.0[e.2] } else { f32::NAN }).collect();
+    }
+    (t, all.iter().map(|e| e.1).collect())
+}
+
+/// One tile of a tiled run: a [`World`] whose stand holds only the tile's trees and cohorts,
+/// and the layout it belongs to.
+pub struct Tile {
+    /// The tile's world: the whole site, the tile's stand.
+    pub world: World,
+    /// The layout of the run.
+    pub layout: Layout,
+    /// This tile's index in the layout (= its rank).
+    pub me: usize,
+    /// Bytes sent for halo copies since the start (the stand-table and output gathers not
+    /// counted).
+    pub halo_bytes: u64,
+    /// While halo copies are merged in: which rows are the tile's own.
+    own: Vec<bool>,
+}
+
+impl Tile {
+    /// Tile `me` of `layout`, cut from `global`, the world of one process (its trees and
+    /// cohorts on the tile's cells; the seed grids whole, of which the tile reads its own
+    /// part). The tile's tallies start at zero ([`Tile::gather`] adds them to the global
+    /// world's).
+    pub fn new(global: &World, layout: Layout, me: usize) -> Tile {
+        let mut world = global.clone();
+        keep_own(&mut world, &layout, me);
+        world.site.window = Some(layout.rect(me));
+        world.tallies.deaths_total = [0; N_CAUSES];
+        world.tallies.regen_ledger = RegenLedger::new(world.site.pool.len());
+        world.scratch.dead.clear();
+        Tile { world, layout, me, halo_bytes: 0, own: Vec::new() }
+    }
+
+    /// Rank 0 sends every rank its part of `global` (rank 0's world after a fresh start or a
+    /// resume); every rank's tile takes it as its stand, with tallies from zero. Other ranks
+    /// pass `None`.
+    ///
+    /// Errors: [`Error::Exchange`] from the transport or a malformed message.
+    pub fn scatter(&mut self, global: Option<&World>, t: &mut dyn Transport) -> Result<()> {
+        let n = t.size();
+        let mut out = vec![Vec::new(); n];
+        if let (0, Some(g)) = (t.rank(), global) {
+            for (k, m) in out.iter_mut().enumerate() {
+                *m = encode_part(g, &self.layout, k);
+            }
+        }
+        let got = t.exchange(out)?;
+        let p = decode_part(&got[0], 0)?;
+        let w = &mut self.world;
+        if p.seeds.len() != w.stand.seeds.len() || p.seeds.iter().zip(&w.stand.seeds).any(|(a, b)| a.len() != b.data.len()) {
+            return Err(Error::Exchange { peer: 0, reason: "seed grids of another shape than this rank's".into() });
+        }
+        w.stand.year = p.year;
+        let next = w.stand.trees.next_id;
+        w.stand.trees = p.trees;
+        w.stand.trees.next_id = next;
+        w.stand.cohorts = p.cohorts;
+        for (g, d) in w.stand.seeds.iter_mut().zip(p.seeds) {
+            g.data = d;
+        }
+        w.tallies.deaths_total = [0; N_CAUSES];
+        w.tallies.regen_ledger = RegenLedger::new(w.site.pool.len());
+        w.scratch.dead.clear();
+        Ok(())
+    }
+
+    /// Copies of the other tiles' trees that phases reading `halo` need (within its reach; for
+    /// seed sources only the mature trees), merged into the tile's trees by id. For
+    /// [`Halo::Crowns`], checks that no crown of any tile is wider than the reach allows.
+    fn add_halo(&mut self, t: &mut dyn Transport, halo: Halo) -> Result<()> {
+        let n = t.size();
+        let tr = &self.world.stand.trees;
+        let max_r = tr.crown_radius.iter().fold(0f32, |a, &b| a.max(b));
+        let m = self.layout.reach.of_halo(halo);
+        let lib = &self.world.site.lib;
+        // as reproduction: trees below their species' maturity age produce no seeds
+        let source = |i: usize| halo != Halo::SeedSources || tr.age[i] >= lib.species[tr.species[i] as usize].life.maturity_age_yr;
+        let mut out = Vec::with_capacity(n);
+        for k in 0..n {
+            let mut e = Enc::default();
+            e.f32(max_r);
+            if k != self.me {
+                let idx: Vec<usize> = (0..tr.len()).filter(|&i| source(i) && self.layout.in_halo(k, tr.x[i], tr.y[i], m)).collect();
+                e.trees(tr, &idx);
+            } else {
+                e.trees(tr, &[]);
+            }
+            out.push(e.0);
+        }
+        let sent0 = t.bytes_sent();
+        let got = t.exchange(out)?;
+        self.halo_bytes += t.bytes_sent() - sent0;
+        let mut parts = Vec::with_capacity(n);
+        let mut crown = 0f32;
+        for (k, m) in got.iter().enumerate() {
+            let mut d = Dec::new(m, k);
+            crown = crown.max(d.f32()?);
+            let p = d.trees()?;
+            if k != self.me {
+                parts.push(p);
+            }
+        }
+        crown = crown.max(max_r);
+        let reach = crown as f64 + 2.0 * self.layout.light.cell_m;
+        if halo == Halo::Crowns && reach > m {
+            return Err(Error::Invalid {
+                context: format!("tiled run, year {}", self.world.stand.year + 1),
+                field: "halo_m".into(),
+                value: format!("{m} m (the light phase's reach)"),
+                expected: format!("at least {reach} m: a crown of {crown} m radius plus two light cells"),
+            });
+        }
+        let own = std::mem::take(&mut self.world.stand.trees);
+        let next = own.next_id;
+        parts.push(own);
+        let (merged, from) = merge_by_id(&parts, next);
+        self.world.stand.trees = merged;
+        self.own = from.iter().map(|&k| k == parts.len() - 1).collect();
+        Ok(())
+    }
+
+    /// Drops the halo copies, keeping the tile's own trees (their order kept).
+    fn drop_halo(&mut self) {
+        let keep = std::mem::take(&mut self.own);
+        debug_assert_eq!(keep.len(), self.world.stand.trees.len());
+        self.world.stand.trees.retain(&keep);
+    }
+
+    /// Simulates one year of the tile (the phases of [`crate::sim::step::PHASES`], with the halo
+    /// exchanges of the module docs). Every rank calls it in the same year. On rank 0 the
+    /// report carries the stand-table row of the whole landscape and the whole landscape's
+    /// counts; on the others the row is `None` and the counts are the tile's.
+    ///
+    /// Errors: [`Error::Exchange`] from the transport; [`Error::Invalid`] when a crown grew
+    /// wider than the halo allows.
+    pub fn step(&mut self, t: &mut dyn Transport) -> Result<YearReport> {
+        let mut report = YearReport::default();
+        self.world.scratch.dead.clear();
+        let stats = PHASES.len() - 1;
+        for (k, phase) in PHASES.iter().enumerate().take(stats) {
+            let t0 = Instant::now();
+            if phase.halo != Halo::None {
+                self.add_halo(t, phase.halo)?;
+            }
+            (phase.run)(&mut self.world, &mut report);
+            if phase.halo != Halo::None {
+                self.drop_halo();
+            }
+            report.phase_seconds[k] = t0.elapsed().as_secs_f64();
+        }
+        // stats: the stand table's columns to rank 0 (the tile's own row is not the landscape's)
+        let t0 = Instant::now();
+        (PHASES[stats].run)(&mut self.world, &mut report);
+        report.row = None;
+        let mut e = Enc::default();
+        e.lean_trees(&self.world.stand.trees);
+        for c in DeathCause::ALL {
+            e.u64(self.world.scratch.dead.iter().filter(|d| d.cause == c).count() as u64);
+        }
+        let ry = &self.world.scratch.regen_year;
+        for v in [self.world.stand.cohorts.total_stems(), ry.germinated, ry.recruited, report.established as u64, report.died as u64] {
+            e.u64(v);
+        }
+        ry.dead.iter().for_each(|&v| e.u64(v));
+        let mut out = vec![Vec::new(); t.size()];
+        out[0] = e.0;
+        let got = t.exchange(out)?;
+        if t.rank() == 0 {
+            let mut parts = Vec::with_capacity(got.len());
+            let mut deaths = [0u64; N_CAUSES];
+            let (mut stems, mut ry, mut est, mut died) = (0u64, RegenYear::default(), 0usize, 0usize);
+            for (k, m) in got.iter().enumerate() {
+                let mut d = Dec::new(m, k);
+                parts.push(d.lean_trees()?);
+                for v in deaths.iter_mut() {
+                    *v += d.u64()?;
+                }
+                stems += d.u64()?;
+                ry.germinated += d.u64()?;
+                ry.recruited += d.u64()?;
+                est += d.u64()? as usize;
+                died += d.u64()? as usize;
+                for v in ry.dead.iter_mut() {
+                    *v += d.u64()?;
+                }
+            }
+            let (trees, _) = merge_by_id(&parts, 0);
+            report.trees = trees.len();
+            report.established = est;
+            report.died = died;
+            report.row = Some(super::stats::row_of(&self.world.site, self.world.stand.year, &trees, stems, deaths, ry));
+        }
+        report.phase_seconds[5] = t0.elapsed().as_secs_f64();
+        Ok(report)
+    }
+
+    /// Every rank sends its whole stand (trees, cohorts, its seed cells, this year's dead,
+    /// tallies) to rank 0, which writes it into `global` (the world of one process at the same
+    /// year: what the outputs and the checkpoint read). Tallies: `base` (the global world's at
+    /// the start of the tiled run) plus every tile's. Other ranks pass `None`.
+    ///
+    /// Errors: [`Error::Exchange`] from the transport or a malformed message.
+    pub fn gather(&self, global: Option<(&mut World, &Tallies)>, t: &mut dyn Transport) -> Result<()> {
+        let mut out = vec![Vec::new(); t.size()];
+        out[0] = encode_part(&self.world, &self.layout, self.me);
+        let got = t.exchange(out)?;
+        let Some((g, base)) = global else { return Ok(()) };
+        if t.rank() != 0 {
+            return Ok(());
+        }
+        let mut parts = Vec::new();
+        let mut cohorts: Vec<(u32, u16, usize, usize)> = Vec::new();
+        let mut coh_parts = Vec::new();
+        let mut dead: Vec<DeadTree> = Vec::new();
+        g.tallies.deaths_total = base.deaths_total;
+        g.tallies.regen_ledger = base.regen_ledger.clone();
+        g.scratch.regen_year = RegenYear::default();
+        for (k, m) in got.iter().enumerate() {
+            let w = decode_part(m, k)?;
+            parts.push(w.trees);
+            for i in 0..w.cohorts.len() {
+                cohorts.push((w.cohorts.cell[i], w.cohorts.pool[i], k, i));
+            }
+            coh_parts.push(w.cohorts);
+            dead.extend(w.dead);
+            for (a, b) in g.tallies.deaths_total.iter_mut().zip(w.deaths_total) {
+                *a += b;
+            }
+            let (l, m) = (&mut g.tallies.regen_ledger, &w.ledger);
+            for p in 0..l.germinated.len().min(m.germinated.len()) {
+                l.germinated[p] += m.germinated[p];
+                l.recruited[p] += m.recruited[p];
+                for q in 0..N_REGEN_CAUSES {
+                    l.dead[p][q] += m.dead[p][q];
+                }
+            }
+            let ry = &mut g.scratch.regen_year;
+            ry.germinated += w.regen_year.germinated;
+            ry.recruited += w.regen_year.recruited;
+            for q in 0..N_REGEN_CAUSES {
+                ry.dead[q] += w.regen_year.dead[q];
+            }
+            // the seed cells this tile owns (the tile of the seed cell's centre)
+            for (gs, s) in g.stand.seeds.iter_mut().zip(&w.seeds) {
+                if s.len() != gs.data.len() {
+                    return Err(Error::Exchange { peer: k, reason: format!("seed grid of {} cells, expected {}", s.len(), gs.data.len()) });
+                }
+                for r in 0..gs.rows {
+                    for c in 0..gs.cols {
+                        let (x, y) = (((c as f64 + 0.5) * gs.cell_m) as f32, ((r as f64 + 0.5) * gs.cell_m) as f32);
+                        if self.layout.owner_of(x, y) == k {
+                            gs.data[r * gs.cols + c] = s[r * gs.cols + c];
+                        }
+                    }
+                }
+            }
+            g.stand.year = w.year;
+        }
+        let next = g.stand.trees.next_id;
+        g.stand.trees = merge_by_id(&parts, next).0;
+        cohorts.sort_unstable_by_key(|e| (e.0, e.1));
+        let mut c = Cohorts::default();
+        for (_, _, k, i) in cohorts {
+            c.push(coh_parts[k].get(i));
+        }
+        g.stand.cohorts = c;
+        dead.sort_by_key(|d| d.id);
+        g.scratch.dead = dead;
+        Ok(())
+    }
+}
+
+/// Keeps in `w` only the trees and cohorts of tile `me` of `layout`.
+fn keep_own(w: &mut World, layout: &Layout, me: usize) {
+    let t = &w.stand.trees;
+    let keep: Vec<bool> = (0..t.len()).map(|i| layout.owner_of(t.x[i], t.y[i]) == me).collect();
+    w.stand.trees.retain(&keep);
+    let c = &w.stand.cohorts;
+    let mut own = Cohorts::default();
+    for i in 0..c.len() {
+        let (col, row) = layout.light.col_row(c.cell[i] as usize);
+        if layout.owner_of_cell(col, row) == me {
+            own.push(c.get(i));
+        }
+    }
+    w.stand.cohorts = own;
+}
+
+/// The part of `w` that tile `k` owns: year, trees, cohorts, seed grids (whole: the receiver
+/// keeps the cells it needs), this year's dead, tallies, this year's regeneration counts.
+fn encode_part(w: &World, layout: &Layout, k: usize) -> Vec<u8> {
+    let mut e = Enc::default();
+    e.u64(w.stand.year as u64);
+    let t = &w.stand.trees;
+    let idx: Vec<usize> = (0..t.len()).filter(|&i| layout.owner_of(t.x[i], t.y[i]) == k).collect();
+    e.trees(t, &idx);
+    let c = &w.stand.cohorts;
+    let own: Vec<usize> = (0..c.len()).filter(|&i| {
+        let (col, row) = layout.light.col_row(c.cell[i] as usize);
+        layout.owner_of_cell(col, row) == k
+    }).collect();
+    e.u64(own.len() as u64);
+    for &i in &own {
+        e.u64(c.cell[i] as u64);
+        e.u64(c.pool[i] as u64);
+        e.u64(c.stems[i] as u64);
+        e.f32(c.height[i]);
+        e.f32(c.age[i]);
+        e.f32(c.vigour[i]);
+    }
+    e.u64(w.stand.seeds.len() as u64);
+    for s in &w.stand.seeds {
+        e.u64(s.data.len() as u64);
+        s.data.iter().for_each(|&v| e.f32(v));
+    }
+    let dead: Vec<&DeadTree> = w.scratch.dead.iter().filter(|d| layout.owner_of(d.x, d.y) == k).collect();
+    e.u64(dead.len() as u64);
+    for d in dead {
+        e.u64(d.id);
+        e.u64(d.species as u64);
+        for v in [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base] {
+            e.f32(v);
+        }
+        e.u64(d.year as u64);
+        e.u64(d.cause.index() as u64);
+    }
+    w.tallies.deaths_total.iter().for_each(|&v| e.u64(v));
+    let l = &w.tallies.regen_ledger;
+    e.u64(l.germinated.len() as u64);
+    for p in 0..l.germinated.len() {
+        e.u64(l.germinated[p]);
+        e.u64(l.recruited[p]);
+        l.dead[p].iter().for_each(|&v| e.u64(v));
+    }
+    let ry = &w.scratch.regen_year;
+    e.u64(ry.germinated);
+    e.u64(ry.recruited);
+    ry.dead.iter().for_each(|&v| e.u64(v));
+    e.0
+}
+
+/// A tile's part of a world, as passed by [`encode_part`].
+struct Part {
+    year: u32,
+    trees: TreeStore,
+    cohorts: Cohorts,
+    seeds: Vec<Vec<f32>>,
+    dead: Vec<DeadTree>,
+    deaths_total: [u64; N_CAUSES],
+    ledger: RegenLedger,
+    regen_year: RegenYear,
+}
+
+/// Reads a message of [`encode_part`] from rank `peer`.
+fn decode_part(m: &[u8], peer: usize) -> Result<Part> {
+    let mut d = Dec::new(m, peer);
+    let bad = |what: &str, v: u64| Error::Exchange { peer, reason: format!("{what} {v} out of range") };
+    let year = d.u64()?;
+    let year = u32::try_from(year).map_err(|_| bad("year", year))?;
+    let trees = d.trees()?;
+    let n = d.count(3 * 8 + 3 * 4)?;
+    let mut cohorts = Cohorts::default();
+    for _ in 0..n {
+        let (cell, pool, stems) = (d.u64()?, d.u64()?, d.u64()?);
+        let (height, age, vigour) = (d.f32()?, d.f32()?, d.f32()?);
+        cohorts.push(super::cohorts::Cohort { cell: u32::try_from(cell).map_err(|_| bad("cohort cell", cell))?, pool: u16::try_from(pool).map_err(|_| bad("cohort pool", pool))?, stems: u32::try_from(stems).map_err(|_| bad("cohort stems", stems))?, height, age, vigour });
+    }
+    let ns = d.count(8)?;
+    let mut seeds = Vec::with_capacity(ns);
+    for _ in 0..ns {
+        let n = d.count(4)?;
+        seeds.push(d.f32s(n)?);
+    }
+    let n = d.count(8 * 4 + 8 * 4)?;
+    let mut dead = Vec::with_capacity(n);
+    for _ in 0..n {
+        let (id, species) = (d.u64()?, d.u64()?);
+        let v = d.f32s(8)?;
+        let (year, cause) = (d.u64()?, d.u64()?);
+        let cause = *DeathCause::ALL.get(cause as usize).ok_or_else(|| bad("cause of death", cause))?;
+        dead.push(DeadTree { id, species: species as u16, x: v[0], y: v[1], z: v[2], age: v[3], height: v[4], dbh: v[5], crown_radius: v[6], crown_base: v[7], year: year as u32, cause });
+    }
+    let mut deaths_total = [0u64; N_CAUSES];
+    for v in deaths_total.iter_mut() {
+        *v = d.u64()?;
+    }
+    let np = d.count(8 * (2 + N_REGEN_CAUSES))?;
+    let mut ledger = RegenLedger::new(np);
+    for p in 0..np {
+        ledger.germinated[p] = d.u64()?;
+        ledger.recruited[p] = d.u64()?;
+        for q in 0..N_REGEN_CAUSES {
+            ledger.dead[p][q] = d.u64()?;
+        }
+    }
+    let mut regen_year = RegenYear { germinated: d.u64()?, recruited: d.u64()?, ..Default::default() };
+    for q in 0..N_REGEN_CAUSES {
+        regen_year.dead[q] = d.u64()?;
+    }
+    Ok(Part { year, trees, cohorts, seeds, dead, deaths_total, ledger, regen_year })
+}
+
+/// Runs `years` years of `world` as `nx × ny` tiles, one thread per tile, over a
+/// [`LocalTransport`], and returns the stand-table rows and the world of one process at the
+/// end (gathered on rank 0), with the bytes each rank sent for halo copies. For tests and
+/// benches of the tiling itself; the run driver with outputs is `job::tiled`.
+///
+/// Errors: as [`Tile::step`] and [`Tile::gather`].
+pub fn run_local(world: &World, layout: &Layout, years: u32) -> Result<(World, Vec<super::stats::StandRow>, Vec<u64>)> {
+    let n = layout.len();
+    let base = world.tallies.clone();
+    let results: Vec<Result<(Option<(World, Vec<super::stats::StandRow>)>, u64)>> = std::thread::scope(|s| {
+        let handles: Vec<_> = LocalTransport::group(n)
+            .into_iter()
+            .map(|mut tr| {
+                let layout = layout.clone();
+                let base = base.clone();
+                s.spawn(move || -> Result<(Option<(World, Vec<super::stats::StandRow>)>, u64)> {
+                    let me = tr.rank();
+                    let mut tile = Tile::new(world, layout, me);
+                    let mut rows = Vec::new();
+                    for _ in 0..years {
+                        let r = tile.step(&mut tr)?;
+                        rows.extend(r.row);
+                    }
+                    if me == 0 {
+                        let mut g = world.clone();
+                        tile.gather(Some((&mut g, &base)), &mut tr)?;
+                        Ok((Some((g, rows)), tile.halo_bytes))
+                    } else {
+                        tile.gather(None, &mut tr)?;
+                        Ok((None, tile.halo_bytes))
+                    }
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap_or_else(|_| Err(Error::Exchange { peer: 0, reason: "a tile's thread panicked".into() }))).collect()
+    });
+    let mut out = None;
+    let mut bytes = Vec::with_capacity(n);
+    for r in results {
+        let (g, b) = r?;
+        bytes.push(b);
+        if g.is_some() {
+            out = g;
+        }
+    }
+    let (g, rows) = out.ok_or_else(|| Error::Exchange { peer: 0, reason: "rank 0 returned no world".into() })?;
+    Ok((g, rows, bytes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn layout_owners_and_halos() {
+        let light = LightGrid::new((100.0, 60.0), 10.0);
+        let l = Layout::unchecked(light, 3, 2, 15.0).unwrap();
+        assert_eq!(l.col_bounds, vec![0, 3, 6, 10]);
+        assert_eq!(l.row_bounds, vec![0, 3, 6]);
+        assert_eq!(l.rect(4), CellRect { col0: 3, col1: 6, row0: 3, row1: 6 });
+        assert_eq!(l.owner_of(35.0, 31.0), 4);
+        assert_eq!(l.owner_of(29.9, 29.9), 0);
+        assert_eq!(l.owner_of(500.0, 500.0), 5, "clamped to the grid");
+        assert!(l.in_halo(0, 44.0, 10.0, 15.0) && !l.in_halo(0, 45.0, 10.0, 15.0));
+        assert!(Layout::unchecked(light, 11, 1, 1.0).is_err());
+        // every cell has exactly one owner
+        for row in 0..6 {
+            for col in 0..10 {
+                let k = l.owner_of_cell(col, row);
+                assert!(l.rect(k).contains(col, row));
+            }
+        }
+    }
+
+    #[test]
+    fn local_transport_passes_messages() {
+        let got: Vec<Vec<Vec<u8>>> = std::thread::scope(|s| {
+            let h: Vec<_> = LocalTransport::group(3)
+                .into_iter()
+                .map(|mut t| s.spawn(move || {
+                    let me = t.rank() as u8;
+                    let a = t.exchange((0..3).map(|p| vec![me, p as u8]).collect()).unwrap();
+                    let b = t.exchange((0..3).map(|_| Vec::new()).collect()).unwrap();
+                    assert!(b.iter().all(|m| m.is_empty()));
+                    a
+                }))
+                .collect();
+            h.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        for (me, g) in got.iter().enumerate() {
+            assert_eq!(*g, (0..3).map(|p| vec![p as u8, me as u8]).collect::<Vec<_>>());
+        }
+    }
+}

@@ -1,0 +1,95 @@
+//! Tiled runs over MPI (issue 17; `cargo test --features mpi --test mpi`, needs Open MPI's
+//! `mpirun`): `mpirun -np 2` and `-np 3` of `sylva simulate` write the run directory of one
+//! process byte for byte; a run stopped on 3 ranks and resumed on 2 ends as the unbroken run.
+#![cfg(feature = "mpi")]
+
+mod common;
+use common::files;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// Beech seed trees on a flat 800 m × 240 m site (10 m light cells; beech's 200 m kernel makes
+/// a 250 m halo), sources at the tile edges of 2 ranks (x = 400 m) and of 3 ranks (x = 267 m),
+/// none east of 533 m: rank 2 of 3 starts with no trees. Snapshots every 5 years, checkpoints
+/// every 4.
+fn scenario(years: u32) -> String {
+    format!(
+        "name = \"mpi\"\nyears = {years}\nseed = 7\nspecies = [\"beech\"]\nlight_cell_m = 10.0\nsnapshot_every = 5\ncheckpoint_every = 4\n\
+         [terrain]\nuniform = {{ width = 40, height = 12, cell_m = 20.0, elevation_m = 300.0, indices = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0] }}\n\
+         [[start]]\nkind = \"seed_sources\"\nspecies = \"beech\"\npoints = [[398.0, 118.0], [404.0, 60.0], [268.0, 200.0], [264.0, 40.0], [60.0, 200.0]]\ntrees_per_source = 3\n"
+    )
+}
+
+fn sylva() -> &'static str {
+    env!("CARGO_BIN_EXE_sylva")
+}
+
+fn write_scenario(dir: &Path, years: u32) -> PathBuf {
+    let p = dir.join(format!("mpi_{years}.toml"));
+    std::fs::write(&p, scenario(years)).unwrap();
+    p
+}
+
+/// Runs `sylva simulate SC --out OUT [--resume]` on `ranks` MPI ranks (0: without mpirun).
+fn simulate(ranks: usize, sc: &Path, out: &Path, resume: bool) {
+    let mut c = if ranks == 0 {
+        Command::new(sylva())
+    } else {
+        let mut c = Command::new("mpirun");
+        c.args(["--allow-run-as-root", "--oversubscribe", "-np", &ranks.to_string(), sylva()]);
+        c
+    };
+    c.arg("simulate").arg(sc).arg("--out").arg(out).args(["--threads", "1"]);
+    if resume {
+        c.arg("--resume");
+    }
+    let o = c.output().unwrap_or_else(|e| panic!("cannot start {} (is Open MPI's mpirun installed?): {e}", if ranks == 0 { sylva() } else { "mpirun" }));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{ranks} ranks failed: {}\n{err}", String::from_utf8_lossy(&o.stdout));
+    // every rank took part as a tile (each prints its line), not N copies of one process
+    for r in 0..ranks {
+        assert!(err.contains(&format!("rank {r}/{ranks}: ")), "no line of rank {r} of {ranks}: {err}");
+    }
+}
+
+fn assert_same_dir(a: &Path, b: &Path, what: &str) {
+    let (fa, fb) = (files(a), files(b));
+    assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>(), "{what}: different files");
+    for (k, v) in &fa {
+        assert!(v == &fb[k], "{what}: {k} differs");
+    }
+}
+
+#[test]
+fn two_and_three_ranks_write_the_run_directory_of_one_process() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sc = write_scenario(tmp.path(), 20);
+    let one = tmp.path().join("one");
+    simulate(0, &sc, &one, false);
+    let f = files(&one);
+    // a meaningful run: recruits (ids from 2^44 on) in the last inventory, on more than one tile
+    let inv = String::from_utf8(f["inventory/year_0020.csv"].clone()).unwrap();
+    let recruits: Vec<f64> = inv.lines().skip(1).filter(|l| l.split(',').next().and_then(|id| id.parse::<u64>().ok()).is_some_and(|id| id >= 1 << 44)).map(|l| l.split(',').nth(2).unwrap().parse().unwrap()).collect();
+    assert!(recruits.len() > 20, "only {} recruits", recruits.len());
+    assert!(recruits.iter().any(|&x| x < 267.0) && recruits.iter().any(|&x| x > 400.0), "recruits on one side only");
+    assert!(f.contains_key("checkpoint.bin") && f.contains_key("stand_table.csv") && f.contains_key("inventory/year_0010.geojson"));
+    for n in [2, 3] {
+        let d = tmp.path().join(format!("np{n}"));
+        simulate(n, &sc, &d, false);
+        assert_same_dir(&one, &d, &format!("{n} ranks"));
+    }
+}
+
+#[test]
+fn stopped_on_three_ranks_resumed_on_two() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (short, long) = (write_scenario(tmp.path(), 9), write_scenario(tmp.path(), 18));
+    let one = tmp.path().join("one");
+    simulate(0, &long, &one, false);
+    let d = tmp.path().join("split");
+    simulate(3, &short, &d, false);
+    // the 9-year run ended with its own checkpoint and snapshot; 2 ranks extend it to 18 years
+    simulate(2, &long, &d, true);
+    // scenario.toml: both runs write the scenario as run (18 years), from different files
+    assert_same_dir(&one, &d, "3 ranks for 9 years, resumed on 2 for 18");
+}

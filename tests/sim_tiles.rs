@@ -1,0 +1,144 @@
+//! Tiled runs (issue 17): the landscape cut into tiles with halos, each tile stepped by its own
+//! thread over the in-process transport (`sim::tiles::run_local`), ends byte-identical to one
+//! process: the checkpoint bytes (trees, cohorts, seeds, tallies, stand table) and the
+//! inventory (with this year's dead) are compared.
+mod common;
+use sylva::output::inventory::inventory_csv;
+use sylva::sim::checkpoint::to_bytes;
+use sylva::sim::stats::StandRow;
+use sylva::sim::tiles::{min_halo_m, run_local, Layout, Tile};
+use sylva::sim::{Scenario, World};
+
+const YEARS: u32 = 25;
+
+/// Beech seed trees on a flat 400 m × 240 m site (10 m light cells: 40 × 24), sources at and
+/// near the boundaries of 2, 3, 5 and 2 × 2 tiles (x = 200, 133, 160, 240; y = 120).
+fn edges() -> String {
+    common::ScenarioToml::new("tiles", YEARS, 7)
+        .species(&["beech"])
+        .line("light_cell_m = 10.0")
+        .uniform(20, 12, 20.0, 300.0)
+        .seed_sources("beech", &[[198.0, 118.0], [203.0, 60.0], [134.0, 200.0], [161.0, 30.0], [241.0, 122.0], [60.0, 200.0]], 3)
+        .build()
+}
+
+fn one_process(toml: &str, years: u32) -> (Scenario, World, Vec<StandRow>) {
+    let (sc, mut w) = common::world(toml);
+    let rows = common::run(&sc, &mut w, years);
+    (sc, w, rows)
+}
+
+/// Asserts that the tiled run `nx × ny` of `toml` equals one process after `years`.
+fn assert_tiles_equal(toml: &str, nx: usize, ny: usize, years: u32, one: &(Scenario, World, Vec<StandRow>)) {
+    let (_, w0) = common::world(toml);
+    let layout = Layout::new(&w0.site, nx, ny).unwrap();
+    let (w, rows, bytes) = run_local(&w0, &layout, years).unwrap();
+    assert_eq!(rows.len(), years as usize);
+    assert_eq!(rows, one.2, "{nx} × {ny} tiles: stand table differs");
+    assert_eq!(w.stand.trees, one.1.stand.trees, "{nx} × {ny} tiles: trees differ");
+    assert_eq!(w.stand.cohorts, one.1.stand.cohorts, "{nx} × {ny} tiles: cohorts differ");
+    assert!(w.stand.seeds == one.1.stand.seeds, "{nx} × {ny} tiles: seed grids differ");
+    assert!(inventory_csv(&w) == inventory_csv(&one.1), "{nx} × {ny} tiles: inventories differ");
+    assert!(to_bytes(&w, &rows) == to_bytes(&one.1, &one.2), "{nx} × {ny} tiles: checkpoints differ");
+    // the tiles did exchange halo copies
+    assert!(bytes.iter().sum::<u64>() > 0, "{nx} × {ny}: no bytes exchanged");
+}
+
+#[test]
+fn two_three_five_and_2x2_tiles_equal_one_process() {
+    let toml = edges();
+    let one = one_process(&toml, YEARS);
+    let w = &one.1;
+    // a meaningful run: recruits (birth ids above 2^44), deaths, cohorts, and a halo narrower
+    // than the site, so tiles do not simply hold every tree
+    let recruits = w.stand.trees.id.iter().filter(|&&id| id >= 1 << 44).count();
+    assert!(recruits > 50, "only {recruits} recruits");
+    assert!(w.stand.trees.len() > 100 && !w.stand.cohorts.is_empty());
+    assert!(w.tallies.deaths_total.iter().sum::<u64>() > 0);
+    let halo = min_halo_m(&w.site);
+    assert!(halo == 100.0, "beech's 60 m kernel on 20 m seed cells: (3 + 2) × 20 m, got {halo}");
+    for (nx, ny) in [(2, 1), (3, 1), (5, 1), (2, 2)] {
+        assert_tiles_equal(&toml, nx, ny, YEARS, &one);
+    }
+}
+
+#[test]
+fn a_seed_kernel_crossing_two_tiles() {
+    // 10 tiles of 40 m across; one seed tree near x = 198 m, y = 120 m: beech's 60 m kernel
+    // reaches from tile 3 (120–160 m) to tile 6 (240–280 m)
+    let toml = common::ScenarioToml::new("kernel", 6, 11).species(&["beech"]).line("light_cell_m = 10.0").uniform(20, 12, 20.0, 300.0).seed_sources("beech", &[[198.0, 120.0]], 1).build();
+    let one = one_process(&toml, 6);
+    let g = &one.1.stand.seeds[0];
+    let seeded_x: Vec<f64> = (0..g.cols).filter(|&c| (0..g.rows).any(|r| g.data[r * g.cols + c] > 0.0)).map(|c| (c as f64 + 0.5) * g.cell_m).collect();
+    let (lo, hi) = (seeded_x[0], seeded_x[seeded_x.len() - 1]);
+    assert!(lo < 160.0 && hi > 240.0, "seeds from {lo} to {hi} m: the kernel should cross two tile edges each way");
+    let (_, w0) = common::world(&toml);
+    let layout = Layout::new(&w0.site, 10, 1).unwrap();
+    // the seeds of the one source land on at least four tiles: the kernel crosses two tile edges
+    // or more on one side of the source's tile
+    let (src, west, east) = (layout.owner_of(w0.stand.trees.x[0], w0.stand.trees.y[0]), layout.owner_of(lo as f32, 120.0), layout.owner_of(hi as f32, 120.0));
+    assert_eq!(w0.stand.trees.len(), 1);
+    assert!(east - west >= 3 && (src - west >= 2 || east - src >= 2), "source on tile {src}, seeds on tiles {west}–{east}");
+    assert_tiles_equal(&toml, 10, 1, 6, &one);
+}
+
+#[test]
+fn a_tile_without_trees() {
+    // seed trees only in the west: the eastern of four tiles starts empty
+    let toml = common::ScenarioToml::new("empty", 12, 5).species(&["beech"]).line("light_cell_m = 10.0").uniform(20, 12, 20.0, 300.0).seed_sources("beech", &[[40.0, 60.0], [90.0, 180.0]], 3).build();
+    let (_, w0) = common::world(&toml);
+    let layout = Layout::new(&w0.site, 4, 1).unwrap();
+    let east = Tile::new(&w0, layout.clone(), 3);
+    assert_eq!(east.world.stand.trees.len(), 0, "the eastern tile should start without trees");
+    assert!(Tile::new(&w0, layout, 0).world.stand.trees.len() > 0);
+    let one = one_process(&toml, 12);
+    assert_tiles_equal(&toml, 4, 1, 12, &one);
+}
+
+#[test]
+fn a_too_narrow_halo_is_refused_and_would_differ() {
+    let toml = edges();
+    let (_, w0) = common::world(&toml);
+    let e = Layout::with_halo(&w0.site, 2, 1, 20.0).unwrap_err().to_string();
+    assert!(e.contains("halo_m") && e.contains("20 m") && e.contains("at least 100 m"), "{e}");
+    // forced through: a 20 m halo misses seed sources and crowding beyond it, and the run differs
+    let years = 12;
+    let one = one_process(&toml, years);
+    let layout = Layout::unchecked(w0.site.light, 2, 1, 25.0).unwrap();
+    match run_local(&w0, &layout, years) {
+        Ok((w, rows, _)) => assert!(to_bytes(&w, &rows) != to_bytes(&one.1, &one.2), "a 25 m halo should change the result"),
+        // or a crown outgrew it (also a refusal naming the halo)
+        Err(e) => assert!(e.to_string().contains("halo_m"), "{e}"),
+    }
+}
+
+#[test]
+fn tiles_in_threads_write_the_run_directory_of_one_process() {
+    // `sylva simulate --tiles 3`: job::tiled over the in-process transport, with outputs
+    let toml = common::ScenarioToml::new("tiles_dir", 12, 7)
+        .species(&["beech"])
+        .line("light_cell_m = 10.0")
+        .line("snapshot_every = 5")
+        .line("checkpoint_every = 4")
+        .uniform(20, 12, 20.0, 300.0)
+        .seed_sources("beech", &[[198.0, 118.0], [134.0, 200.0], [268.0, 125.0]], 3)
+        .build();
+    let sc = Scenario::from_toml_str(&toml, "tiles_dir").unwrap();
+    let lib = sylva::sim::fixtures::library();
+    let tmp = tempfile::tempdir().unwrap();
+    let (one, three) = (tmp.path().join("one"), tmp.path().join("three"));
+    let a = sylva::job::run::run_scenario(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&one)).unwrap();
+    let (b, bytes) = sylva::job::tiled::run_local_tiles(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&three), 3).unwrap();
+    assert_eq!(a.rows, b.rows);
+    assert!(bytes.len() == 3 && bytes.iter().all(|&n| n > 0), "bytes sent per rank: {bytes:?}");
+    let (fa, fb) = (common::files(&one), common::files(&three));
+    assert!(fa.contains_key("checkpoint.bin") && fa.contains_key("inventory/year_0010.csv") && fa.len() > 10, "{:?}", fa.keys());
+    assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>());
+    for (k, v) in &fa {
+        assert!(v == &fb[k], "{k} differs between one process and 3 tiles");
+    }
+    // seasonal snapshots need every tile in the middle of a year: refused
+    let seasonal = Scenario::from_toml_str(&toml.replace("snapshot_every = 5", "snapshot_every = 5\nseasonal_snapshots = true"), "tiles_dir").unwrap();
+    let e = sylva::job::tiled::run_local_tiles(&seasonal, seasonal.site().unwrap(), &lib, sylva::job::run::RunOptions::new(tmp.path().join("s")), 2).unwrap_err().to_string();
+    assert!(e.contains("seasonal_snapshots"), "{e}");
+}
