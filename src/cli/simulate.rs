@@ -204,7 +204,10 @@ pub fn simulate_mode(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, 
 fn rank_stats(rank: usize, size: usize, seconds: f64, sent: u64, years: u32) {
     let hwm = std::fs::read_to_string("/proc/self/status").ok().and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok()));
     let mib = hwm.map_or("?".to_string(), |k| format!("{:.0}", k as f64 / 1024.0));
-    eprintln!("rank {rank}/{size}: {seconds:.1} s, peak RSS {mib} MiB, sent {sent} bytes ({:.0} per year)", sent as f64 / years.max(1) as f64);
+    // one write of the whole line: stderr is unbuffered, and `eprintln!` writes each piece of
+    // its format on its own, so the lines of ranks sharing mpirun's stderr came interleaved
+    let line = format!("rank {rank}/{size}: {seconds:.1} s, peak RSS {mib} MiB, sent {sent} bytes ({:.0} per year)\n", sent as f64 / years.max(1) as f64);
+    let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
 }
 
 /// Runs a simulation.

@@ -36,7 +36,7 @@ use super::step::YearReport;
 use super::trees::{DeadTree, DeathCause, TreeStore, N_CAUSES};
 use super::world::{Site, Tallies, World, KERNEL_CELLS, SEED_CELL_M};
 use crate::error::{Error, Result};
-use std::sync::{Arc, Barrier, Mutex};
+use std::sync::{Arc, Condvar, Mutex};
 use std::time::Instant;
 
 /// Passes byte messages between the ranks of a tiled run: one all-to-all exchange at a time,
@@ -64,17 +64,66 @@ pub struct LocalTransport {
     sent: u64,
 }
 
-/// The mailbox of a [`LocalTransport`] group: `boxes[to][from]`.
+/// The mailbox of a [`LocalTransport`] group: `boxes[to][from]`, and the barrier the ranks
+/// meet at twice per exchange.
 struct Shared {
     boxes: Mutex<Vec<Vec<Vec<u8>>>>,
-    barrier: Barrier,
+    meet: Mutex<Meet>,
+    cv: Condvar,
+}
+
+/// State of the barrier: ranks arrived in this round, rounds completed, ranks gone (their
+/// endpoint dropped: finished, or returned early with an error).
+#[derive(Default)]
+struct Meet {
+    arrived: usize,
+    round: u64,
+    gone: usize,
 }
 
 impl LocalTransport {
     /// `n` connected endpoints (ranks 0..n), to be moved to one thread each.
     pub fn group(n: usize) -> Vec<LocalTransport> {
-        let shared = Arc::new(Shared { boxes: Mutex::new(vec![vec![Vec::new(); n]; n]), barrier: Barrier::new(n) });
+        let shared = Arc::new(Shared { boxes: Mutex::new(vec![vec![Vec::new(); n]; n]), meet: Mutex::new(Meet::default()), cv: Condvar::new() });
         (0..n).map(|rank| LocalTransport { rank, size: n, shared: shared.clone(), sent: 0 }).collect()
+    }
+
+    /// Waits until every rank has arrived. Unlike `std::sync::Barrier`, a rank whose endpoint
+    /// is dropped (its thread stopped on an error) releases the others with
+    /// [`Error::Exchange`] instead of leaving them waiting for ever.
+    fn meet(&self) -> Result<()> {
+        let lost = |reason: &str| Error::Exchange { peer: self.rank, reason: reason.into() };
+        let mut m = self.shared.meet.lock().map_err(|_| lost("another rank's thread panicked"))?;
+        if m.gone > 0 {
+            return Err(lost("another rank stopped before this exchange"));
+        }
+        m.arrived += 1;
+        if m.arrived == self.size {
+            m.arrived = 0;
+            m.round += 1;
+            self.shared.cv.notify_all();
+            return Ok(());
+        }
+        let round = m.round;
+        // the round completing wins over a rank leaving after it (it had arrived)
+        while m.round == round && m.gone == 0 {
+            m = self.shared.cv.wait(m).map_err(|_| lost("another rank's thread panicked"))?;
+        }
+        if m.round != round {
+            Ok(())
+        } else {
+            Err(lost("another rank stopped before this exchange"))
+        }
+    }
+}
+
+impl Drop for LocalTransport {
+    fn drop(&mut self) {
+        // a poisoned lock means another thread panicked: nobody to release then
+        if let Ok(mut m) = self.shared.meet.lock() {
+            m.gone += 1;
+            self.shared.cv.notify_all();
+        }
     }
 }
 
@@ -99,7 +148,7 @@ impl Transport for LocalTransport {
                 b[to][self.rank] = m;
             }
         }
-        self.shared.barrier.wait();
+        self.meet()?;
         let got = {
             let mut b = self.shared.boxes.lock().map_err(poisoned)?;
             std::mem::take(&mut b[self.rank])
@@ -109,7 +158,7 @@ impl Transport for LocalTransport {
             let mut b = self.shared.boxes.lock().map_err(poisoned)?;
             b[self.rank] = vec![Vec::new(); self.size];
         }
-        self.shared.barrier.wait();
+        self.meet()?;
         Ok(got)
     }
     fn bytes_sent(&self) -> u64 {
@@ -866,6 +915,31 @@ pub fn run_local(world: &World, layout: &Layout, years: u32) -> Result<(World, V
 
 #[cfg(test)]
 mod tests {
+    /// A rank that stops (its endpoint dropped) releases the others with an error instead of
+    /// a hang; ranks that all finish release each other as before.
+    #[test]
+    fn a_rank_that_stops_releases_the_others() {
+        use super::{LocalTransport, Transport};
+        let mut g = LocalTransport::group(3);
+        let gone = g.pop();
+        let handles: Vec<_> = g
+            .into_iter()
+            .map(|mut t| {
+                std::thread::spawn(move || {
+                    let first = t.exchange(vec![vec![1]; 3]);
+                    (first.is_ok(), t.exchange(vec![vec![2]; 3]).is_err())
+                })
+            })
+            .collect();
+        // rank 2 takes part in the first exchange only
+        let mut last = gone.unwrap();
+        assert!(last.exchange(vec![vec![3]; 3]).is_ok());
+        drop(last);
+        for h in handles {
+            assert_eq!(h.join().unwrap(), (true, true));
+        }
+    }
+
     use super::*;
 
     #[test]
