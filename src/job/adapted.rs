@@ -3,6 +3,11 @@
 //! Trees, Pirk et al. 2012, `000_*.txt`) and get their own meshes at every level of detail; the
 //! far field stays instanced species prototypes. The scenario's obstacles are meshed here too.
 //!
+//! At the mid level ([`CLUSTER_HULL_LEVEL`]) an adapted tree is drawn as the crown hull of its
+//! adapted leaf clusters ([`crate::structure::crown_hull`]) on a stem, so a crown that its
+//! neighbours or a wall made one-sided stays one-sided from afar; beyond it (billboards, canopy
+//! layer) the species' look is drawn as for any tree.
+//!
 //! Memory and triangles stay bounded: at most [`AdaptOptions::max_trees`] trees, all within
 //! [`AdaptOptions::near_m`] of the camera's eye and in front of it, get their own meshes.
 
@@ -49,7 +54,17 @@ pub struct AdaptStats {
     pub mesh_s: f64,
     /// Trees adapted in all, context neighbours included.
     pub trees_in_groups: usize,
+    /// Adapted trees whose mid level ([`CLUSTER_HULL_LEVEL`]) is the crown hull of their
+    /// adapted leaf clusters ([`crate::structure::crown_hull`]; the others keep the leaf-card
+    /// hull of [`crate::structure::mesh::hull_mesh`]).
+    pub cluster_hulls: usize,
+    /// Triangles of those mid levels together (stem and hull; each drawn once per frame at most).
+    pub hull_triangles: usize,
 }
+
+/// The level of an adapted tree's chain that is its crown hull (LOD2: 40–100 px tall on screen
+/// with the default [`crate::render::lod::LodParams`]).
+pub const CLUSTER_HULL_LEVEL: usize = 2;
 
 /// Stand trees of `plants` (live, of a species in `library`, at least 1 m tall) with the ground
 /// elevation, slope and aspect of `site`; returns (plant index, stand tree) pairs.
@@ -124,7 +139,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
     let st = adapt_stand(&trees, &targets, library, cache, &opts)?;
     let adapt_s = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
-    let meshed: Vec<Option<(Prototype, f32, f32)>> = st
+    let meshed: Vec<Option<(Prototype, f32, f32, bool)>> = st
         .trees
         .par_iter()
         .map(|a| {
@@ -140,18 +155,30 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
                 l.pos *= s;
                 l.size *= s;
             });
-            let lods = crate::structure::mesh::lod_chain(&sk, &lv, &crate::structure::mesh::LodOptions::default());
+            let lo = crate::structure::mesh::LodOptions::default();
+            let mut lods = crate::structure::mesh::lod_chain(&sk, &lv, &lo);
             if lods.levels.is_empty() {
                 return None;
             }
+            // the mid level: the crown hull of the adapted clusters (one-sided where they are)
+            let clusters: Vec<(Vec3, f32)> = crate::structure::crown_hull::foliage_clusters(&a.leaf_clusters).into_iter().map(|(c, r)| ((c - t.base) * s, r * s)).collect();
+            let hull = crate::structure::crown_hull::cluster_hull_mesh(&sk, &clusters, &lo);
+            let hulled = hull.is_some();
+            if let (Some(m), Some(level)) = (hull, lods.levels.get_mut(CLUSTER_HULL_LEVEL)) {
+                *level = m;
+            }
             let p = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0), look: Some(super::scene::crown_look(sp)) };
             let r0 = p.normalised_crown_radius();
-            Some((p, h, r0))
+            Some((p, h, r0, hulled))
         })
         .collect();
-    let mut adapted = 0;
+    let (mut adapted, mut hulls, mut hull_triangles) = (0, 0, 0);
     for (m, n) in meshed.into_iter().zip(&near) {
-        let Some((p, h, r0)) = m else { continue };
+        let Some((p, h, r0, hulled)) = m else { continue };
+        if hulled {
+            hulls += 1;
+            hull_triangles += p.lods.levels.get(CLUSTER_HULL_LEVEL).map_or(0, |l| l.triangle_count());
+        }
         let i = &mut inst[n.1];
         let sp = &library.species[trees[n.2].species as usize];
         let (col, amount) = foliage(sp, season);
@@ -165,7 +192,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         prototypes.push(p);
         adapted += 1;
     }
-    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups: st.trees_in_groups })
+    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups: st.trees_in_groups, cluster_hulls: hulls, hull_triangles })
 }
 
 /// The adapted tree `a` in its own frame (stem base `base` moved to the origin) with its height

@@ -371,11 +371,17 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
         }
     }
     hull.normals = nrm.iter().map(|n| n.normalize_or(Vec3::Z).to_array()).collect();
-    // trunk: root to crown base (or to the first node's end when the crown starts lower)
+    // trunk: up to half-way into the crown, so the hull sits on it
+    TreeMesh { bark: hull_stem(sk, c.z - 0.5 * r.z, o), leaves: hull }
+}
+
+/// The stem of the crown-hull level: a 5-sided tapered tube (radius that of the root, or of its
+/// first child when larger, tapering to 70 %) from the skeleton's root straight up to height
+/// `top_z` (m, same frame; at least 1 mm above the root). Empty for an empty skeleton.
+pub(crate) fn hull_stem(sk: &Skeleton, top_z: f32, o: &LodOptions) -> TriMesh {
     let mut bark = TriMesh::default();
     if let Some(root) = sk.nodes.first() {
-        // up to half-way into the crown, so the hull sits on it
-        let top = Vec3::new(root.pos.x, root.pos.y, (c.z - 0.5 * r.z).max(root.pos.z + 1e-3));
+        let top = Vec3::new(root.pos.x, root.pos.y, top_z.max(root.pos.z + 1e-3));
         let rr = root.radius.max(sk.nodes.get(1).map(|n| n.radius).unwrap_or(0.0));
         let mut t = Skeleton::new();
         t.add_root(root.pos, rr);
@@ -383,7 +389,7 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
             bark = branch_mesh(&t, &LodOptions { sides: 5, min_sides: 5, ..*o }, None);
         }
     }
-    TreeMesh { bark, leaves: hull }
+    bark
 }
 
 /// LOD3: billboard impostor, two crossed vertical quads spanning the tree's bounds (leaf

@@ -5,6 +5,8 @@
 //! - [`grow`]: EcoMod strands (`004_*.txt`), light-guided growth (`001_*.txt`), Laplacian growth
 //!   (`003_*.txt`).
 //! - [`mesh`]: generalized cylinders, leaf cards and the LOD chain.
+//! - [`crown_hull`]: the mid-level crown hull of an adapted tree, shrink-wrapped onto its
+//!   adapted leaf clusters (issue 14).
 //! - [`params`]: the papers' parameter sets.
 //! - [`species_tree`]: one tree of a species at an age by any model (what `sylva tree grow`
 //!   runs); light-guided and Laplacian trees grow in the species' crown envelope
@@ -15,6 +17,7 @@
 //! - [`plastic`]: Plastic Trees (`000_*.txt`): bends and prunes a grown skeleton for a new
 //!   obstacle instead of regrowing it.
 
+pub mod crown_hull;
 pub mod edit_distance;
 pub mod grow;
 pub mod mesh;

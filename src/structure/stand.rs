@@ -33,7 +33,7 @@
 
 use super::grow::ecomod;
 use super::grow::space::Obstacle;
-use super::plastic::{adapt_group, Environment, Fate, Ground, PlasticReport, PlasticTree, Sky};
+use super::plastic::{adapt_group, Environment, Fate, Ground, LeafCluster, PlasticReport, PlasticTree, Sky};
 use super::skeleton::{Leaves, Skeleton};
 use crate::error::{Error, Result};
 use crate::species::SpeciesLibrary;
@@ -242,6 +242,12 @@ pub struct AdaptedTree {
     pub clusters_before: Vec<(Vec3, f32)>,
     /// Leaf clusters after adaptation (moved, dead ones left out).
     pub clusters_after: Vec<(Vec3, f32)>,
+    /// The adapted leaf clusters of [`PlasticTree::leaf_clusters`] (section 5.2; world
+    /// coordinates, m, scaled like [`AdaptedTree::clusters_after`]): one per terminal lobe of the
+    /// full-grown stage, centre moved with its nodes, radius cut by obstacles (Fig. 4; 0 when
+    /// deleted), translucency γ_c (eqs. 4, 13) and leaf density (eq. 12). The mid-level crown
+    /// hull of the pictures is built from them ([`crate::structure::crown_hull`]).
+    pub leaf_clusters: Vec<crate::structure::plastic::LeafCluster>,
 }
 
 /// What [`adapt_stand`] returns.
@@ -424,7 +430,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
                 let mut leaves = leaves;
                 leaves.leaves.iter_mut().for_each(|l| l.pos = at(l.pos));
                 let scale_c = |v: Vec<(Vec3, f32)>| v.into_iter().map(|(c, rad)| (at(c), rad * s.x.max(s.z))).collect::<Vec<_>>();
-                out.push((k, AdaptedTree { index: i, skeleton, leaves, report: rep.trees[j], clusters_before: scale_c(before[j].clone()), clusters_after: scale_c(t.clusters()) }));
+                out.push((k, AdaptedTree { index: i, skeleton, leaves, report: rep.trees[j], clusters_before: scale_c(before[j].clone()), clusters_after: scale_c(t.clusters()), leaf_clusters: t.leaf_clusters().into_iter().map(|c| LeafCluster { center: at(c.center), radius: c.radius * s.x.max(s.z), ..c }).collect() }));
             }
             Ok(out)
         })

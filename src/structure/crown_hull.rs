@@ -1,0 +1,319 @@
+//! The mid-level (LOD2) crown hull of an adapted tree built from its adapted leaf clusters
+//! (issue 14, Build 3): the union of the cluster spheres of Plastic Trees (Pirk et al. 2012,
+//! section 5.2: each terminal lobe's cluster, its centre moved with its nodes and its radius cut
+//! by obstacles, Fig. 4) shrink-wrapped onto an icosphere by casting rays from the crown centre.
+//!
+//! Why from the clusters: they are what the adaptation moved and cut, so a crown pushed away from
+//! a wall or into a gap of the canopy keeps that shape at the mid level, where
+//! [`crate::structure::mesh::hull_mesh`] would only follow the leaf cards' support function per
+//! height band. The hull is star-shaped about the crown centre (the clusters' volume-weighted
+//! mean), closed, outward-facing, with [`HULL_VERTICES`] vertices and [`HULL_TRIANGLES`]
+//! triangles at the default [`HULL_SUBDIVISIONS`].
+//!
+//! Construction, per icosphere vertex direction `v` (unit) from the centre `c`:
+//! 1. **Ray cast**: `R(v)` = the farthest exit `t = b + √(b² − |q|² + r²)`, `b = q·v`, of the ray
+//!    `c + t·v` from any cluster sphere `(c + q, r)` it meets (0 when it meets none);
+//! 2. **Every cluster centre inside**: for each cluster at distance `D = |q|` and each vertex within
+//!    the icosphere's longest edge angle `E` of its direction, `R(v) ≥ D / cos E`. A direction lies
+//!    in a triangle of the icosphere whose corners are all within `E` of it, so the flat triangle
+//!    over those corners passes at least `D` from the centre along it: the polyhedron contains
+//!    the centre;
+//! 3. **Pits filled**: `R(v) ≥ 0.85 × the mean R of its neighbours` and at least a quarter of the
+//!    mean cluster radius (a ray between clusters, or towards a wall that took the foliage, does
+//!    not collapse the surface to a spike); radii only grow, so 1 and 2 still hold.
+
+use super::mesh::{hull_stem, LodOptions};
+use super::plastic::LeafCluster;
+use super::skeleton::Skeleton;
+use crate::mesh::{TreeMesh, TriMesh};
+use glam::Vec3;
+use std::collections::HashMap;
+use std::f32::consts::TAU;
+
+/// Subdivisions of the icosahedron the hull is wrapped onto (2: 162 vertices, 320 triangles).
+pub const HULL_SUBDIVISIONS: u32 = 2;
+/// Vertices of a hull at [`HULL_SUBDIVISIONS`] (10·4^s + 2).
+pub const HULL_VERTICES: usize = 162;
+/// Triangles of a hull at [`HULL_SUBDIVISIONS`] (20·4^s).
+pub const HULL_TRIANGLES: usize = 320;
+/// Clusters more translucent than this (γ_c of eqs. 4 and 13, 0–1: a cluster that lost nearly
+/// all its nodes lets nearly all light through) are left out of the hull.
+pub const HULL_MAX_GAMMA: f32 = 0.98;
+/// A pit (ray between clusters) is raised to this fraction of its neighbours' mean radius.
+pub const PIT_FILL: f32 = 0.85;
+
+/// The clusters of `leaf` that carry foliage, as (centre (m), radius (m)) in the clusters'
+/// frame: alive nodes, radius > 0 (not deleted by an obstacle), leaf density > 0 (eq. 12) and
+/// translucency γ_c ≤ [`HULL_MAX_GAMMA`]; finite only; in the given order.
+pub fn foliage_clusters(leaf: &[LeafCluster]) -> Vec<(Vec3, f32)> {
+    leaf.iter()
+        .filter(|c| c.alive_nodes > 0 && c.radius > 0.0 && c.density > 0.0 && c.gamma <= HULL_MAX_GAMMA && c.center.is_finite() && c.radius.is_finite())
+        .map(|c| (c.center, c.radius))
+        .collect()
+}
+
+/// A unit icosphere: `(vertices, triangles)`, the icosahedron's faces split `subdivisions`
+/// times into four (edge midpoints pushed onto the sphere), counter-clockwise seen from outside;
+/// 10·4^s + 2 vertices and 20·4^s triangles.
+pub fn icosphere(subdivisions: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut v: Vec<Vec3> = [[-1.0, t, 0.0], [1.0, t, 0.0], [-1.0, -t, 0.0], [1.0, -t, 0.0], [0.0, -1.0, t], [0.0, 1.0, t], [0.0, -1.0, -t], [0.0, 1.0, -t], [t, 0.0, -1.0], [t, 0.0, 1.0], [-t, 0.0, -1.0], [-t, 0.0, 1.0]]
+        .iter()
+        .map(|p| Vec3::from(*p).normalize())
+        .collect();
+    let mut f: Vec<[u32; 3]> = vec![
+        [0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
+        [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1],
+    ];
+    for _ in 0..subdivisions {
+        let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut next = Vec::with_capacity(f.len() * 4);
+        for tri in &f {
+            let mut m = [0u32; 3];
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                let key = (a.min(b), a.max(b));
+                m[k] = *mid.entry(key).or_insert_with(|| {
+                    v.push((v[a as usize] + v[b as usize]).normalize());
+                    (v.len() - 1) as u32
+                });
+            }
+            next.extend_from_slice(&[[tri[0], m[0], m[2]], [tri[1], m[1], m[0]], [tri[2], m[2], m[1]], [m[0], m[1], m[2]]]);
+        }
+        f = next;
+    }
+    (v, f)
+}
+
+/// A crown hull ([`cluster_hull`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CrownHull {
+    /// The closed hull: positions (m, the clusters' frame), outward area-weighted normals, UVs
+    /// (u = azimuth / 2π, v = (1 + z of the direction) / 2), counter-clockwise from outside.
+    pub mesh: TriMesh,
+    /// The crown centre the rays start from (m): the clusters' mean weighted by r³.
+    pub centre: Vec3,
+    /// Clusters wrapped.
+    pub clusters: usize,
+}
+
+/// Shrink-wraps the union of the spheres `clusters` (centre (m), radius (m); radius ≤ 0 or
+/// non-finite ones ignored) onto an icosphere of `subdivisions` (module documentation, steps
+/// 1–3). `None` without a usable cluster.
+pub fn cluster_hull(clusters: &[(Vec3, f32)], subdivisions: u32) -> Option<CrownHull> {
+    let cl: Vec<(Vec3, f32)> = clusters.iter().copied().filter(|(c, r)| c.is_finite() && r.is_finite() && *r > 0.0).collect();
+    if cl.is_empty() {
+        return None;
+    }
+    let w: f32 = cl.iter().map(|(_, r)| r * r * r).sum();
+    let centre = cl.iter().map(|(c, r)| *c * (r * r * r)).sum::<Vec3>() / w.max(f32::MIN_POSITIVE);
+    let (dirs, tris) = icosphere(subdivisions);
+    // the longest edge angle E (as its cosine) and the neighbours of each vertex
+    let mut cos_e = 1.0f32;
+    let mut nbr: Vec<Vec<u32>> = vec![Vec::new(); dirs.len()];
+    for t in &tris {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            cos_e = cos_e.min(dirs[a as usize].dot(dirs[b as usize]));
+            if !nbr[a as usize].contains(&b) {
+                nbr[a as usize].push(b);
+            }
+            if !nbr[b as usize].contains(&a) {
+                nbr[b as usize].push(a);
+            }
+        }
+    }
+    // 1. ray cast: the farthest exit from any sphere
+    let mut rad: Vec<f32> = dirs
+        .iter()
+        .map(|v| {
+            cl.iter().fold(0.0f32, |m, (c, r)| {
+                let q = *c - centre;
+                let b = q.dot(*v);
+                let disc = b * b - q.length_squared() + r * r;
+                if disc >= 0.0 {
+                    m.max(b + disc.sqrt())
+                } else {
+                    m
+                }
+            })
+        })
+        .collect();
+    // 2. every cluster centre inside
+    for (c, _) in &cl {
+        let q = *c - centre;
+        let d = q.length();
+        if d <= 1e-6 {
+            continue;
+        }
+        let u = q / d;
+        let need = d / cos_e.max(0.1) * (1.0 + 1e-4);
+        for (k, v) in dirs.iter().enumerate() {
+            if v.dot(u) >= cos_e {
+                rad[k] = rad[k].max(need);
+            }
+        }
+    }
+    // 3. pits filled (radii only grow)
+    let floor = 0.25 * cl.iter().map(|(_, r)| *r).sum::<f32>() / cl.len() as f32;
+    let src = rad.clone();
+    for (k, r) in rad.iter_mut().enumerate() {
+        let mean = nbr[k].iter().map(|&j| src[j as usize]).sum::<f32>() / nbr[k].len().max(1) as f32;
+        *r = r.max(PIT_FILL * mean).max(floor);
+    }
+    let mut mesh = TriMesh::default();
+    for (v, r) in dirs.iter().zip(&rad) {
+        mesh.positions.push((centre + *v * *r).to_array());
+        mesh.uvs.push([v.y.atan2(v.x) / TAU + 0.5, 0.5 * (1.0 + v.z)]);
+    }
+    let mut nrm = vec![Vec3::ZERO; dirs.len()];
+    for t in &tris {
+        let [a, b, c] = t.map(|i| Vec3::from(mesh.positions[i as usize]));
+        let f = (b - a).cross(c - a);
+        for &i in t {
+            nrm[i as usize] += f;
+        }
+        mesh.indices.extend_from_slice(t);
+    }
+    // a vertex whose faces cancel (never seen in practice) keeps its ray direction
+    mesh.normals = nrm.iter().zip(&dirs).map(|(n, v)| n.try_normalize().unwrap_or(*v).to_array()).collect();
+    Some(CrownHull { mesh, centre, clusters: cl.len() })
+}
+
+/// The crown-hull level (LOD2) of an adapted tree from its clusters: the [`cluster_hull`] of
+/// `clusters` (the frame of `sk`) at [`HULL_SUBDIVISIONS`] as foliage, on the stem of
+/// [`crate::structure::mesh::hull_mesh`] (5 sides, from the root to a quarter of the way up
+/// the hull). `None` without a usable cluster (keep the chain's own hull then).
+pub fn cluster_hull_mesh(sk: &Skeleton, clusters: &[(Vec3, f32)], o: &LodOptions) -> Option<TreeMesh> {
+    let h = cluster_hull(clusters, HULL_SUBDIVISIONS)?;
+    let (lo, hi) = h.mesh.positions.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| (lo.min(p[2]), hi.max(p[2])));
+    Some(TreeMesh { bark: hull_stem(sk, lo + 0.25 * (hi - lo), o), leaves: h.mesh })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Winding number of the closed mesh `m` about `p` (1 inside, 0 outside): the sum of the
+    /// triangles' signed solid angles (Van Oosterom & Strackee 1983) over 4π.
+    fn winding(m: &TriMesh, p: Vec3) -> f32 {
+        let mut w = 0.0f64;
+        for t in m.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| (Vec3::from(m.positions[i as usize]) - p).as_dvec3());
+            let (la, lb, lc) = (a.length(), b.length(), c.length());
+            let num = a.dot(b.cross(c));
+            let den = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+            w += 2.0 * num.atan2(den);
+        }
+        (w / (4.0 * std::f64::consts::PI)) as f32
+    }
+
+    /// Volume and volume centroid of a closed mesh (tetrahedra from the origin).
+    fn volume_centroid(m: &TriMesh) -> (f32, Vec3) {
+        let (mut vol, mut c) = (0.0f32, Vec3::ZERO);
+        for t in m.indices.chunks_exact(3) {
+            let [a, b, d] = [t[0], t[1], t[2]].map(|i| Vec3::from(m.positions[i as usize]));
+            let v = a.dot(b.cross(d)) / 6.0;
+            vol += v;
+            c += v * (a + b + d) / 4.0;
+        }
+        (vol, c / vol)
+    }
+
+    /// Clusters of a crown around a stem at the origin (crown from 6 to 14 m, radius 4 m), in a
+    /// fixed pseudo-random layout; `one_sided`: only those east of the stem (x > 0.5 m), as
+    /// beside a wall to the west.
+    fn crown(one_sided: bool) -> Vec<(Vec3, f32)> {
+        let mut out = Vec::new();
+        let mut s = 12345u32;
+        let mut rnd = || {
+            s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (s >> 8) as f32 / (1u32 << 24) as f32
+        };
+        while out.len() < 60 {
+            let (x, y, z) = (rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0, rnd() * 8.0 + 6.0);
+            let e = (x * x + y * y) / 16.0 + ((z - 10.0) / 4.0).powi(2);
+            if e > 1.0 || (one_sided && x < 0.5) {
+                continue;
+            }
+            out.push((Vec3::new(x, y, z), 0.6 + 0.8 * rnd()));
+        }
+        out
+    }
+
+    #[test]
+    fn an_icosphere_has_the_expected_counts_and_is_closed() {
+        let (v, f) = icosphere(HULL_SUBDIVISIONS);
+        assert_eq!((v.len(), f.len()), (HULL_VERTICES, HULL_TRIANGLES));
+        // closed: every edge in exactly two triangles, once each way
+        let mut edges: HashMap<(u32, u32), i32> = HashMap::new();
+        for t in &f {
+            for k in 0..3 {
+                *edges.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            }
+        }
+        assert!(edges.iter().all(|(&(a, b), &n)| n == 1 && edges.get(&(b, a)) == Some(&1)));
+        // outward: every face normal points away from the centre
+        assert!(f.iter().all(|t| {
+            let [a, b, c] = t.map(|i| v[i as usize]);
+            (b - a).cross(c - a).dot(a + b + c) > 0.0
+        }));
+    }
+
+    #[test]
+    fn the_hull_of_a_one_sided_crown_is_one_sided_and_holds_every_cluster_centre() {
+        for one_sided in [false, true] {
+            let cl = crown(one_sided);
+            let h = cluster_hull(&cl, HULL_SUBDIVISIONS).unwrap();
+            assert_eq!((h.mesh.positions.len(), h.mesh.indices.len() / 3, h.clusters), (HULL_VERTICES, HULL_TRIANGLES, 60));
+            // closed and outward: winding number 1 at the centre, 0 far away
+            assert!((winding(&h.mesh, h.centre) - 1.0).abs() < 1e-3, "{}", winding(&h.mesh, h.centre));
+            assert!(winding(&h.mesh, Vec3::new(30.0, 0.0, 10.0)).abs() < 1e-3);
+            for (c, _) in &cl {
+                let w = winding(&h.mesh, *c);
+                assert!((w - 1.0).abs() < 1e-3, "cluster centre {c} outside the hull (winding {w}, one-sided {one_sided})");
+            }
+            // the hull envelops the spheres (cluster centre ± radius along x and z, within 10 %)
+            let lo = h.mesh.positions.iter().fold(Vec3::splat(f32::INFINITY), |a, p| a.min(Vec3::from(*p)));
+            let hi = h.mesh.positions.iter().fold(Vec3::splat(f32::NEG_INFINITY), |a, p| a.max(Vec3::from(*p)));
+            let slo = cl.iter().fold(Vec3::splat(f32::INFINITY), |a, (c, r)| a.min(*c - Vec3::splat(*r)));
+            let shi = cl.iter().fold(Vec3::splat(f32::NEG_INFINITY), |a, (c, r)| a.max(*c + Vec3::splat(*r)));
+            assert!((hi - shi).abs().max_element() < 0.1 * (shi - slo).max_element() && (lo - slo).abs().max_element() < 0.1 * (shi - slo).max_element(), "hull {lo}..{hi}, spheres {slo}..{shi}");
+            let (vol, cen) = volume_centroid(&h.mesh);
+            let mean = cl.iter().map(|(c, _)| *c).sum::<Vec3>() / cl.len() as f32;
+            if one_sided {
+                // shifted east of the stem like the clusters, by a similar amount
+                assert!(mean.x > 1.5, "{mean}");
+                assert!(cen.x > 0.6 * mean.x && cen.x < 1.4 * mean.x, "hull centroid {cen}, clusters' mean {mean}");
+                assert!(lo.x > -1.0, "nothing reaches the west: {lo}");
+                // about half the two-sided crown's (measured 142 against 245 m³)
+                assert!(vol > 110.0 && vol < 175.0, "{vol} m³");
+            } else {
+                assert!(cen.x.abs() < 0.5 && cen.y.abs() < 0.5, "{cen}");
+                // near the ellipsoid's 4/3·π·4·4·4 = 268 m³ the clusters fill (measured 245 m³)
+                assert!(vol > 200.0 && vol < 300.0, "{vol} m³");
+            }
+        }
+    }
+
+    #[test]
+    fn clusters_without_foliage_are_left_out() {
+        let c = |x: f32, radius: f32, alive: usize, gamma: f32, density: f32| LeafCluster { lobe: 0, center: Vec3::new(x, 0.0, 5.0), radius, gamma, input_nodes: 4, alive_nodes: alive, light_input: 1.0, light: 1.0, density };
+        let all = [c(1.0, 1.0, 4, 0.5, 1.0), c(2.0, 0.0, 4, 0.5, 0.0), c(3.0, 1.0, 0, 1.0, 0.0), c(4.0, 1.0, 1, 0.99, 0.2), c(5.0, 0.8, 2, 0.7, 0.4)];
+        assert_eq!(foliage_clusters(&all), vec![(Vec3::new(1.0, 0.0, 5.0), 1.0), (Vec3::new(5.0, 0.0, 5.0), 0.8)]);
+        assert!(cluster_hull(&[], 2).is_none());
+        assert!(cluster_hull(&[(Vec3::ZERO, 0.0)], 2).is_none());
+        // one sphere: the hull is that sphere (every vertex within 1 % of its surface)
+        let h = cluster_hull(&[(Vec3::new(1.0, 2.0, 3.0), 2.0)], 2).unwrap();
+        assert!(h.mesh.positions.iter().all(|p| ((Vec3::from(*p) - Vec3::new(1.0, 2.0, 3.0)).length() - 2.0).abs() < 0.02));
+        let sk = {
+            let mut s = Skeleton::new();
+            s.add_root(Vec3::ZERO, 0.2);
+            s
+        };
+        let m = cluster_hull_mesh(&sk, &[(Vec3::new(0.0, 0.0, 6.0), 2.0)], &LodOptions::default()).unwrap();
+        let top = m.bark.positions.iter().map(|p| p[2]).fold(0.0f32, f32::max);
+        assert!((top - 5.0).abs() < 0.05, "stem to a quarter of the hull's height: {top}");
+        assert_eq!(m.leaves.indices.len() / 3, HULL_TRIANGLES);
+    }
+}
