@@ -155,17 +155,9 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
                 l.pos *= s;
                 l.size *= s;
             });
-            let lo = crate::structure::mesh::LodOptions::default();
-            let mut lods = crate::structure::mesh::lod_chain(&sk, &lv, &lo);
+            let (lods, hulled) = adapted_lod_chain(&sk, &lv, a, t.base, s, &crate::structure::mesh::LodOptions::default());
             if lods.levels.is_empty() {
                 return None;
-            }
-            // the mid level: the crown hull of the adapted clusters (one-sided where they are)
-            let clusters: Vec<(Vec3, f32)> = crate::structure::crown_hull::foliage_clusters(&a.leaf_clusters).into_iter().map(|(c, r)| ((c - t.base) * s, r * s)).collect();
-            let hull = crate::structure::crown_hull::cluster_hull_mesh(&sk, &clusters, &lo);
-            let hulled = hull.is_some();
-            if let (Some(m), Some(level)) = (hull, lods.levels.get_mut(CLUSTER_HULL_LEVEL)) {
-                *level = m;
             }
             let p = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0), look: Some(super::scene::crown_look(sp)) };
             let r0 = p.normalised_crown_radius();
@@ -193,6 +185,24 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         adapted += 1;
     }
     Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups: st.trees_in_groups, cluster_hulls: hulls, hull_triangles })
+}
+
+/// The level-of-detail chain of the adapted tree `a` from its skeleton `sk` and leaves `lv` in
+/// its own frame (world coordinates less the stem base `base`, times `scale`; see
+/// [`tree_frame`]): [`crate::structure::mesh::lod_chain`] with the mid level
+/// ([`CLUSTER_HULL_LEVEL`]) replaced by the crown hull of its adapted leaf clusters
+/// ([`crate::structure::crown_hull::cluster_hull_mesh`], one-sided where they are), and whether
+/// it was (a tree without a foliage cluster keeps the leaf-card hull).
+pub fn adapted_lod_chain(sk: &Skeleton, lv: &Leaves, a: &AdaptedTree, base: Vec3, scale: f32, o: &crate::structure::mesh::LodOptions) -> (LodChain, bool) {
+    let mut lods = crate::structure::mesh::lod_chain(sk, lv, o);
+    let clusters: Vec<(Vec3, f32)> = crate::structure::crown_hull::foliage_clusters(&a.leaf_clusters).into_iter().map(|(c, r)| ((c - base) * scale, r * scale)).collect();
+    match (crate::structure::crown_hull::cluster_hull_mesh(sk, &clusters, o), lods.levels.get_mut(CLUSTER_HULL_LEVEL)) {
+        (Some(m), Some(level)) => {
+            *level = m;
+            (lods, true)
+        }
+        _ => (lods, false),
+    }
 }
 
 /// The adapted tree `a` in its own frame (stem base `base` moved to the origin) with its height

@@ -2,7 +2,8 @@
 //! stand.glb`): the live trees of an area of a run's snapshot, each with its own skeleton
 //! adapted to its neighbours, the light and the obstacles by [`adapt_stand`] (Plastic Trees,
 //! Pirk et al. 2012, `000_*.txt`; the same near-field adaptation `job::adapted` does for the
-//! pictures), meshed with its levels of detail, with the terrain patch under the area and the
+//! pictures), meshed with its levels of detail (the mid level: the crown hull of its adapted leaf
+//! clusters, [`super::adapted::adapted_lod_chain`]), with the terrain patch under the area and the
 //! scenario's obstacles that reach into it, as one glTF scene ([`crate::output::gltf::StandScene`]).
 //!
 //! **Instancing.** Trees whose adapted skeletons have the same topology and the same shape once
@@ -24,7 +25,7 @@ use crate::mesh::{TriMesh, LOD_LEVELS};
 use crate::output::gltf::{Look, StandCounts, StandModel, StandNode, StandScene, StaticMesh};
 use crate::sim::Scenario;
 use crate::species::{Season, SpeciesLibrary};
-use crate::structure::mesh::{lod_chain, LodOptions};
+use crate::structure::mesh::LodOptions;
 use crate::structure::stand::{adapt_stand, StandOptions};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -178,7 +179,8 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
                 let p = l.pos / s;
                 canon.extend([p.x, p.y, p.z, l.size / hgt, l.dir.x, l.dir.y, l.dir.z, l.normal.x, l.normal.y, l.normal.z]);
             }
-            let chain = lod_chain(&sk, &lv, &LodOptions::default());
+            // the mid level: the crown hull of the adapted clusters, as in the pictures
+            let (chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
             let sp = &library.species[t.species as usize];
             Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize }, s.to_array(), t.base - origin, t.species as usize))
         })
