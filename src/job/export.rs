@@ -131,16 +131,28 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     if !(x0 < x1 && y0 < y1) || x0 < 0.0 || y0 < 0.0 || x1 > w || y1 > h {
         return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}"), format!("X0 < X1, Y0 < Y1 inside the terrain, 0–{w:.1} m east and 0–{h:.1} m north")));
     }
-    let rows = super::pictures::snapshot_rows(run_dir, year)?;
+    let opts = StandOptions { latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(&sc.obstacles, &site), ..StandOptions::default() };
+    // only the rows that can take part: the area and every neighbour a target's cell may group
+    // with it (cell + halo, and a metre for the f32 positions); the snapshot's other trees are
+    // counted for the message below but not held (a million-tree snapshot took 340 MiB)
+    let margin = (opts.cell_m + opts.halo_m) as f64 + 1.0;
+    let (mut live, mut span): (usize, Option<([f64; 2], [f64; 2])>) = (0, None);
+    let rows = super::pictures::snapshot_rows_where(run_dir, year, |r| {
+        if r.status == "alive" && r.height_m >= super::scene::MIN_DRAWN_HEIGHT_M && library.find(&r.species).is_some() {
+            live += 1;
+            let p = [r.x_m, r.y_m];
+            span = Some(span.map_or((p, p), |(lo, hi)| ([lo[0].min(p[0]), lo[1].min(p[1])], [hi[0].max(p[0]), hi[1].max(p[1])])));
+        }
+        r.x_m >= x0 - margin && r.x_m < x1 + margin && r.y_m >= y0 - margin && r.y_m < y1 + margin
+    })?;
     let plants = plants_from_rows(&rows);
     let stand = stand_trees(&plants, library, &site);
     let trees: Vec<_> = stand.iter().map(|(_, t)| *t).collect();
     let inside = |x: f32, y: f32| (x as f64) >= x0 && (x as f64) < x1 && (y as f64) >= y0 && (y as f64) < y1;
     let targets: Vec<usize> = (0..trees.len()).filter(|&k| inside(trees[k].base.x, trees[k].base.y)).collect();
     if targets.is_empty() {
-        let span = trees.iter().fold(None, |acc: Option<(Vec3, Vec3)>, t| Some(acc.map_or((t.base, t.base), |(lo, hi)| (lo.min(t.base), hi.max(t.base)))));
         let where_ = match span {
-            Some((lo, hi)) => format!("an area holding some of the year's {} live trees (they stand within {:.0},{:.0},{:.0},{:.0})", trees.len(), lo.x, lo.y, hi.x, hi.y),
+            Some((lo, hi)) => format!("an area holding some of the year's {live} live trees (they stand within {:.0},{:.0},{:.0},{:.0})", lo[0], lo[1], hi[0], hi[1]),
             None => format!("a year with live trees (year {year} has none of the species library ≥ 1 m tall)"),
         };
         return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}: no live tree in year {year}"), where_));
@@ -150,7 +162,6 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     }
     let t0 = std::time::Instant::now();
     let mut cache = super::adapted::cache(sc.seed);
-    let opts = StandOptions { latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(&sc.obstacles, &site), ..StandOptions::default() };
     let st = adapt_stand(&trees, &targets, library, &mut cache, &opts)?;
     let adapt_s = t0.elapsed().as_secs_f64();
 

@@ -36,11 +36,27 @@ pub struct InventoryRow {
 /// [`Error::Io`] when the file cannot be read; [`Error::Format`] naming the line when a row does
 /// not have the columns of ARCHITECTURE.md.
 pub fn read(path: &Path) -> Result<Vec<InventoryRow>> {
+    read_filtered(path, |_| true)
+}
+
+/// Reads the rows of one inventory CSV for which `keep` is true, in file order, streaming: the
+/// rows left out are never held (an area of a snapshot of a million trees keeps only its own;
+/// `sylva export`).
+///
+/// # Errors
+/// As [`read`]; every row is parsed and checked, kept or not.
+pub fn read_filtered(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -> Result<Vec<InventoryRow>> {
     let mut rdr = csv::Reader::from_path(path).map_err(|e| Error::format(path, e.to_string()))?;
     let mut rows = Vec::new();
-    for (i, rec) in rdr.deserialize().enumerate() {
-        let row: InventoryRow = rec.map_err(|e| Error::format(path, format!("line {}: {e}", i + 2)))?;
-        rows.push(row);
+    let mut rec = csv::StringRecord::new();
+    let headers = rdr.headers().map_err(|e| Error::format(path, e.to_string()))?.clone();
+    let mut line = 2usize;
+    while rdr.read_record(&mut rec).map_err(|e| Error::format(path, format!("line {line}: {e}")))? {
+        let row: InventoryRow = rec.deserialize(Some(&headers)).map_err(|e| Error::format(path, format!("line {line}: {e}")))?;
+        if keep(&row) {
+            rows.push(row);
+        }
+        line += 1;
     }
     Ok(rows)
 }

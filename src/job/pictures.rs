@@ -215,13 +215,21 @@ impl Stage {
 /// # Errors
 /// [`Error::Format`] naming the run directory when no snapshot of that year exists.
 pub fn snapshot_rows(run_dir: &Path, year: u32) -> Result<Vec<InventoryRow>> {
+    snapshot_rows_where(run_dir, year, |_| true)
+}
+
+/// The rows of [`snapshot_rows`] for which `keep` is true ([`inventory::read_filtered`]: the
+/// others are never held).
+///
+/// Errors: those of [`snapshot_rows`].
+pub fn snapshot_rows_where(run_dir: &Path, year: u32, keep: impl FnMut(&InventoryRow) -> bool) -> Result<Vec<InventoryRow>> {
     let snaps = inventory::snapshots(run_dir)?;
     let path = snaps
         .iter()
         .find(|(y, s, _)| *y == year && s.is_empty())
         .map(|(_, _, p)| p.clone())
         .ok_or_else(|| Error::format(run_dir, format!("no inventory snapshot for year {year} (years present: {})", years_list(&snaps))))?;
-    Ok(inventory::read(&path)?)
+    Ok(inventory::read_filtered(&path, keep)?)
 }
 
 fn years_list(snaps: &[(u32, String, PathBuf)]) -> String {
