@@ -50,6 +50,7 @@ fn a_tree_beside_a_wall_leans_away_from_it() {
     let bg = stage.render_plants(&[], Season::Summer, &cam, w, h).unwrap();
     let img = stage.render_plants(&[tree], Season::Summer, &cam, w, h).unwrap();
     assert_eq!(stage.last_adapt.adapted_trees, 1);
+    assert_eq!(stage.last_adapt.per_level, [1, 0, 0, 0], "close up: the full mesh");
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render");
     std::fs::create_dir_all(&dir).unwrap();
     img.save(dir.join("wall_adapted.png")).unwrap();
@@ -83,6 +84,7 @@ fn a_tree_beside_a_wall_stays_one_sided_at_the_mid_level() {
     assert_eq!(stage.last_adapt.cluster_hulls, 1, "the mid level is the crown hull of the adapted clusters");
     assert_eq!(stage.last_adapt.hull_triangles, sylva::structure::crown_hull::HULL_TRIANGLES + 10, "hull and the 5-sided stem's 10 triangles");
     assert_eq!(st.per_level, [0, 0, 2, 0], "the tree and the wall drawn at the mid level");
+    assert_eq!(stage.last_adapt.per_level, [0, 0, 1, 0], "the adapted tree among them");
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render");
     std::fs::create_dir_all(&dir).unwrap();
     img.save(dir.join("wall_hull_adapted.png")).unwrap();

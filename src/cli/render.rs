@@ -72,7 +72,8 @@ pub struct RenderArgs {
     /// Write the frame's figures as JSON (adapted_trees, adapt_s, unique_meshes (one chain of
     /// level meshes per species, obstacle and adapted tree), cluster_hulls and hull_triangles
     /// (the adapted trees' mid-level crown hulls of their leaf clusters, in those chains),
-    /// instanced_trees, triangles (drawn), per_level (instances drawn per level), frame_s).
+    /// instanced_trees, triangles (drawn), per_level (instances drawn per level),
+    /// adapted_per_level (the adapted trees among them), frame_s).
     #[arg(long)]
     pub stats: Option<PathBuf>,
 }
@@ -161,7 +162,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
         let j = serde_json::json!({
             "year": year, "adapt": a.adapt, "adapted_trees": ad.adapted_trees, "adapt_s": ad.adapt_s, "mesh_s": ad.mesh_s,
             "trees_in_groups": ad.trees_in_groups, "unique_meshes": stage.library.species.len() + stage.obstacles.len() + ad.adapted_trees,
-            "cluster_hulls": ad.cluster_hulls, "hull_triangles": ad.hull_triangles, "per_level": st.per_level,
+            "cluster_hulls": ad.cluster_hulls, "hull_triangles": ad.hull_triangles, "per_level": st.per_level, "adapted_per_level": ad.per_level,
             "instanced_trees": st.instances_drawn.saturating_sub(ad.adapted_trees), "instances_drawn": st.instances_drawn, "triangles": st.triangles, "frame_s": frame_s,
         });
         sylva::output::write_atomic(path, serde_json::to_string_pretty(&j)?.as_bytes())?;

@@ -60,6 +60,13 @@ pub struct AdaptStats {
     pub cluster_hulls: usize,
     /// Triangles of those mid levels together (stem and hull; each drawn once per frame at most).
     pub hull_triangles: usize,
+    /// Adapted trees by the level the frame drew them at (index [`CLUSTER_HULL_LEVEL`]: as their
+    /// cluster hull; the last: billboard), filled by [`super::pictures::Stage`] after the frame:
+    /// [`crate::render::lod::select_lod_scaled`] of each tree's projected size with the frame's
+    /// switch-size factor, as the culling pass picks (a tree inside a cross-fade band counts at
+    /// its finer level); trees outside the frustum, under the smallest size drawn or wholly in
+    /// the canopy layer are not counted.
+    pub per_level: [usize; LOD_LEVELS],
 }
 
 /// The level of an adapted tree's chain that is its crown hull (LOD2: 40–100 px tall on screen
@@ -184,7 +191,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         prototypes.push(p);
         adapted += 1;
     }
-    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups: st.trees_in_groups, cluster_hulls: hulls, hull_triangles })
+    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups: st.trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS] })
 }
 
 /// The level-of-detail chain of the adapted tree `a` from its skeleton `sk` and leaves `lv` in

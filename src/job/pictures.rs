@@ -139,9 +139,12 @@ impl Stage {
         if self.last_adapt.adapted_trees == 0 {
             return self.render_instances(inst, season, camera, width, height);
         }
+        let base = self.base_prototypes.len();
+        let adapted: Vec<(TreeInstance, usize)> = inst.iter().filter(|t| t.species as usize >= base).map(|t| (*t, protos[t.species as usize].lods.levels.len())).collect();
         self.scene.set_prototypes(protos);
         let img = self.render_instances(inst, season, camera, width, height);
         self.scene.set_prototypes(self.base_prototypes.clone());
+        self.last_adapt.per_level = drawn_levels_of(&adapted, camera, width, height, &self.renderer.lod, &self.renderer.last_stats());
         img
     }
 
@@ -208,6 +211,29 @@ impl Stage {
         moved.near = cam.near;
         moved
     }
+}
+
+/// Instances `trees` (with their chains' level counts) by the level a frame of `width` ×
+/// `height` seen by `camera` with level parameters `lod` drew them at, from its stats `st`
+/// ([`AdaptStats::per_level`]).
+fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: u32, height: u32, lod: &crate::render::lod::LodParams, st: &crate::render::renderer::FrameStats) -> [usize; crate::mesh::LOD_LEVELS] {
+    use crate::render::lod::{canopy_weight, drawn_levels, select_lod_scaled, Frustum};
+    let frustum = Frustum::from_view_proj(camera.view_proj(width.max(1) as f32 / height.max(1) as f32));
+    let mut out = [0; crate::mesh::LOD_LEVELS];
+    for (t, n) in trees {
+        let (c, r) = crate::render::instanced::bounding_sphere(t);
+        if !frustum.sphere_visible(c, r) {
+            continue;
+        }
+        let px = camera.projected_size_px(c, t.height, height as f32);
+        if canopy_weight(px, st.canopy_px, lod.band) >= 1.0 {
+            continue;
+        }
+        if let Some(p) = select_lod_scaled(px, st.lod_scale, lod, drawn_levels(*n)) {
+            out[p.level.min(crate::mesh::LOD_LEVELS - 1)] += 1;
+        }
+    }
+    out
 }
 
 /// Inventory snapshot of `year` (plain, not seasonal) in `run_dir`.
