@@ -157,3 +157,32 @@ pub fn read_regeneration(run_dir: &Path, year: u32) -> Result<Option<Vec<RegenRo
     }
     Ok(Some(rows))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_filtered_read_keeps_the_chosen_rows_in_order_and_checks_the_others() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("year_0001.csv");
+        let head = "id,species,x_m,y_m,z_m,age_yr,height_m,dbh_cm,crown_radius_m,crown_base_m,status\n";
+        let rows: String = (0..6).map(|i| format!("{i},beech,{}.5,10.0,500.0,30,12.0,15.0,2.0,5.0,alive\n", i * 10)).collect();
+        std::fs::write(&path, format!("{head}{rows}")).unwrap();
+        let all = read(&path).unwrap();
+        assert_eq!(all.len(), 6);
+        let mut seen = 0;
+        let near = read_filtered(&path, |r| {
+            seen += 1;
+            r.x_m > 15.0 && r.x_m < 45.0
+        })
+        .unwrap();
+        assert_eq!(seen, 6);
+        assert_eq!(near.iter().map(|r| r.id).collect::<Vec<_>>(), vec![2, 3, 4]);
+        assert_eq!(near[0], all[2]);
+        // a bad row is an error naming its line, even when it would have been left out
+        std::fs::write(&path, format!("{head}{rows}9,beech,x,10.0,500.0,30,12.0,15.0,2.0,5.0,alive\n")).unwrap();
+        let e = read_filtered(&path, |_| false).unwrap_err().to_string();
+        assert!(e.contains("line 8"), "{e}");
+    }
+}
