@@ -5,16 +5,26 @@
 //! byte (stand table every year from the gathered stand-table columns; inventories, maps and
 //! the checkpoint in the years that write them, from every rank's whole stand).
 //!
-//! Checkpoints and `--resume`: rank 0 writes the one `checkpoint.bin` of a single process
-//! (the gathered world); a resumed run, on any number of ranks, reads it on rank 0 and sends
-//! every rank its part, so a run stopped on 3 ranks can go on with 2, or with one process.
+//! Checkpoints and `--resume` per rank ([`super::checkpoint`]): in a checkpoint year every
+//! rank writes its own tile's checkpoint, `checkpoint/year_YYYY_rank_RRRR.bin` (rank 0's with
+//! the stand table), nothing gathered; once all have, rank 0 writes `checkpoint/manifest.toml`
+//! (year, layout, files), which commits them, and removes the files it supersedes. A resume on
+//! the same number of ranks (the same layout) has every rank read its own file. On another
+//! number of ranks rank 0 assembles the world of one process from all the files
+//! ([`super::checkpoint::load_ranks`]) and sends every rank its part, so a run stopped on 3
+//! ranks can go on with 2, or with one process; a `checkpoint.bin` of one process is read by
+//! rank 0 and sent out the same way.
 //!
 //! Protocol: before every collective step rank 0 sends every rank a command ([`Command`]); the
 //! other ranks ([`work`]) wait for it, so all ranks take part in the same exchanges in the same
 //! order.
 
+use super::checkpoint::{self, Found, Manifest};
 use super::run::{run_scenario_with, RunOptions, RunSummary, Stepper};
 use super::Result;
+use crate::sim::cohorts::RegenLedger;
+use crate::sim::stats::StandRow;
+use std::path::{Path, PathBuf};
 use crate::conditions::SiteConditions;
 use crate::sim::scenario::Scenario;
 use crate::sim::step::YearReport;
@@ -37,11 +47,15 @@ pub enum Command {
     Complete = 4,
     /// The run is over.
     End = 5,
+    /// Write your tile's checkpoint to the path that follows ([`send_paths`], [`agree`]).
+    Save = 6,
+    /// Read your tile from the per-rank checkpoint at the path that follows.
+    Resume = 7,
 }
 
 impl Command {
     fn from_byte(b: u8) -> Option<Command> {
-        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End].into_iter().find(|c| *c as u8 == b)
+        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume].into_iter().find(|c| *c as u8 == b)
     }
 }
 
@@ -56,7 +70,70 @@ fn command(t: &mut dyn Transport, c: Option<Command>) -> Result<Command> {
     };
     let got = t.exchange(out)?;
     let b = got.first().and_then(|m| m.first()).copied().unwrap_or(0);
-    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–5)") })?)
+    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–7)") })?)
+}
+
+/// Rank 0 sends every rank `k` the year and `paths[k]` (a per-rank checkpoint file); the others
+/// pass `None`. Returns this rank's year and path.
+///
+/// Errors: [`Error::Exchange`] from the transport, a path that is not UTF-8 (named) or a
+/// malformed message.
+fn send_paths(t: &mut dyn Transport, paths: Option<(u32, Vec<PathBuf>)>) -> Result<(u32, PathBuf)> {
+    let n = t.size();
+    let mut out = vec![Vec::new(); n];
+    if let Some((year, paths)) = paths {
+        if paths.len() != n {
+            return Err(Error::Exchange { peer: 0, reason: format!("{} checkpoint paths for {n} ranks", paths.len()) }.into());
+        }
+        for (m, p) in out.iter_mut().zip(&paths) {
+            let s = p.to_str().ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "checkpoint path".into(), value: p.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() })?;
+            m.extend_from_slice(&year.to_le_bytes());
+            m.extend_from_slice(s.as_bytes());
+        }
+    }
+    let got = t.exchange(out)?;
+    let m = got.first().map(|m| m.as_slice()).unwrap_or(&[]);
+    if m.len() < 4 {
+        return Err(Error::Exchange { peer: 0, reason: format!("checkpoint path message of {} bytes (expected a year and a path)", m.len()) }.into());
+    }
+    let year = u32::from_le_bytes([m[0], m[1], m[2], m[3]]);
+    let path = std::str::from_utf8(&m[4..]).map_err(|e| Error::Exchange { peer: 0, reason: format!("checkpoint path not UTF-8: {e}") })?;
+    Ok((year, PathBuf::from(path)))
+}
+
+/// Every rank tells every other whether its part of a collective step (writing or reading its
+/// checkpoint) failed (`failed`: the error's text); all ranks then fail together.
+///
+/// Errors: [`Error::Exchange`] from the transport, or naming the first rank that failed with
+/// its error.
+fn agree(t: &mut dyn Transport, failed: Option<String>) -> Result<()> {
+    let n = t.size();
+    let msg = failed.map(|e| e.into_bytes()).unwrap_or_default();
+    let got = t.exchange(vec![msg; n])?;
+    match got.iter().enumerate().find(|(_, m)| !m.is_empty()) {
+        Some((k, m)) => Err(Error::Exchange { peer: k, reason: format!("rank {k} failed: {}", String::from_utf8_lossy(m)) }.into()),
+        None => Ok(()),
+    }
+}
+
+/// Reads tile `me` of `layout` from the per-rank checkpoint `path` of `year` into a copy of
+/// `template` (the world of the scenario at its start); returns it with the rows the file holds
+/// (rank 0's: the stand table).
+///
+/// Errors: as [`checkpoint::load`]; [`Error::Format`] naming the file when its year is not
+/// `year` (the manifest's).
+fn load_tile(template: &World, layout: &Layout, me: usize, path: &Path, year: u32) -> Result<(Tile, Vec<StandRow>)> {
+    let mut w = template.clone();
+    let rows = checkpoint::load(path, &mut w)?;
+    if w.stand.year != year {
+        return Err(Error::format(path, format!("year {} in a checkpoint whose manifest says year {year}", w.stand.year)).into());
+    }
+    Ok((Tile::resumed(w, layout.clone(), me), rows))
+}
+
+/// Tallies of zero for `world`'s pool.
+fn zero_tallies(world: &World) -> Tallies {
+    Tallies { deaths_total: Default::default(), regen_ledger: RegenLedger::new(world.site.pool.len()) }
 }
 
 /// Tiles across and up for `n` ranks on a light grid of `cols × rows` cells: the factor pair
@@ -93,7 +170,8 @@ pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
     Ok(Layout::new(&world.site, nx, ny)?)
 }
 
-/// Rank 0's [`Stepper`]: its own tile, the transport, the tallies at the start.
+/// Rank 0's [`Stepper`]: its own tile, the transport, the tallies at the start (zero once
+/// they are in rank 0's tile: its tallies then count from the run's start).
 pub struct Root<'t> {
     t: &'t mut dyn Transport,
     tile: Option<Tile>,
@@ -148,11 +226,21 @@ impl Drop for Root<'_> {
 
 impl Stepper for Root<'_> {
     fn begin(&mut self, world: &World) -> Result<()> {
+        if self.tile.is_some() {
+            // resumed from the per-rank checkpoints: every rank holds its tile already
+            return Ok(());
+        }
         let layout = layout_for(world, self.t.size())?;
         command(self.t, Some(Command::Begin))?;
-        self.base = world.tallies.clone();
         self.tile = Some(Tile::new(world, layout, 0));
-        self.collective(|tile, t| Ok(tile.scatter(Some(world), t)?))
+        self.collective(|tile, t| Ok(tile.scatter(Some(world), t)?))?;
+        // the tallies so far go into rank 0's tile, so the ranks' tallies add up to the run's
+        // (what each rank's checkpoint holds)
+        self.base = zero_tallies(world);
+        if let Some(tile) = self.tile.as_mut() {
+            tile.world.tallies = world.tallies.clone();
+        }
+        Ok(())
     }
     fn step(&mut self, world: &mut World, _: &Scenario, report: &mut YearReport, full: bool, _: &mut dyn FnMut(Season, &World)) -> Result<()> {
         command(self.t, Some(if full { Command::StepFull } else { Command::Step }))?;
@@ -171,6 +259,60 @@ impl Stepper for Root<'_> {
         command(self.t, Some(Command::Complete))?;
         let base = self.base.clone();
         self.collective(|tile, t| Ok(tile.gather(Some((world, &base)), t)?))
+    }
+    /// Per-rank checkpoints with the same layout: every rank reads its own file; otherwise
+    /// rank 0 reads `checkpoint.bin` or assembles the per-rank files, and [`Stepper::begin`]
+    /// sends the ranks their parts.
+    fn resume(&mut self, dir: &Path, world: &mut World) -> Result<Vec<StandRow>> {
+        let m = match checkpoint::find(dir)? {
+            Found::Ranks(m) => m,
+            _ => return checkpoint::load_any(dir, world),
+        };
+        let layout = layout_for(world, self.t.size())?;
+        if m.ranks != self.t.size() || !m.same_layout(&layout) {
+            return checkpoint::load_ranks(dir, &m, world);
+        }
+        command(self.t, Some(Command::Resume))?;
+        let cd = dir.join(checkpoint::RANK_DIR);
+        let r = (|| -> Result<(Tile, Vec<StandRow>)> {
+            let (year, p) = send_paths(self.t, Some((m.year, m.files.iter().map(|f| cd.join(f)).collect())))?;
+            let r = load_tile(world, &layout, 0, &p, year);
+            let a = agree(self.t, r.as_ref().err().map(|e| e.to_string()));
+            let r = r?;
+            a?;
+            Ok(r)
+        })();
+        if r.is_err() {
+            self.done = true;
+        }
+        let (tile, rows) = r?;
+        world.stand.year = tile.world.stand.year;
+        world.stand.trees.next_id = tile.world.stand.trees.next_id;
+        self.base = zero_tallies(world);
+        self.tile = Some(tile);
+        Ok(rows)
+    }
+    /// Every rank writes its tile's checkpoint (rank 0's with `rows`); rank 0 then commits
+    /// them with the manifest. `world` is not read.
+    fn save(&mut self, dir: &Path, _: &World, rows: &[StandRow]) -> Result<()> {
+        let Some(tile) = self.tile.as_ref() else {
+            return Err(Error::Exchange { peer: 0, reason: "a checkpoint before the run began".into() }.into());
+        };
+        let m = Manifest::new(tile.world.stand.year, &tile.layout);
+        let cd = dir.join(checkpoint::RANK_DIR);
+        std::fs::create_dir_all(&cd).map_err(|e| Error::io(&cd, e))?;
+        command(self.t, Some(Command::Save))?;
+        let paths: Vec<PathBuf> = m.files.iter().map(|f| cd.join(f)).collect();
+        self.collective(|tile, t| {
+            let (_, p) = send_paths(t, Some((m.year, paths)))?;
+            let r = checkpoint::save(&p, &tile.world, rows);
+            agree(t, r.as_ref().err().map(|e| e.to_string()))?;
+            r
+        })?;
+        checkpoint::commit_ranks(dir, &m)
+    }
+    fn save_reads_world(&self) -> bool {
+        false
     }
 }
 
@@ -202,6 +344,21 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 tl.gather(None, t)?;
             }
             (Command::Complete, Some(tl)) => tl.gather(None, t)?,
+            (Command::Save, Some(tl)) => {
+                let (_, p) = send_paths(t, None)?;
+                let r = checkpoint::save(&p, &tl.world, &[]);
+                agree(t, r.as_ref().err().map(|e| e.to_string()))?;
+                r?;
+            }
+            (Command::Resume, None) => {
+                let (year, p) = send_paths(t, None)?;
+                let r = load_tile(&world, &layout, me, &p, year);
+                let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
+                let (tl, _) = r?;
+                a?;
+                tile = Some(tl);
+            }
+            (Command::Resume, Some(_)) => return Err(Error::Exchange { peer: 0, reason: "command Resume after the run began".into() }.into()),
             (c, None) => return Err(Error::Exchange { peer: 0, reason: format!("command {c:?} before the run began") }.into()),
         }
     }
@@ -284,7 +441,7 @@ mod tests {
         assert_eq!(grid_for(4, 100, 100), (2, 2));
         assert_eq!(grid_for(8, 100, 50), (4, 2));
         assert_eq!(grid_for(6, 40, 120), (2, 3), "a tie (1 × 6, 2 × 3) goes to more tiles across");
-        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End] {
+        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume] {
             assert_eq!(Command::from_byte(c as u8), Some(c));
         }
         assert_eq!(Command::from_byte(0), None);
