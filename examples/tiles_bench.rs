@@ -73,7 +73,13 @@ fn main() {
     for l in err.lines().filter(|l| l.starts_with("rank ")) {
         println!("  {l}");
     }
-    let same = std::fs::read(one.join("stand_table.csv")).ok() == std::fs::read(tiled.join("stand_table.csv")).ok() && std::fs::read(one.join("checkpoint.bin")).ok() == std::fs::read(tiled.join("checkpoint.bin")).ok();
-    println!("stand table and checkpoint byte-identical: {same}");
+    // the ranks' checkpoints (one file each) assembled into the world of one process
+    let scenario = sylva::sim::Scenario::load(&sc).expect("scenario");
+    let lib = sylva::species::SpeciesLibrary::embedded().expect("species");
+    let mut w = sylva::sim::World::new(scenario.site().expect("site"), &lib, &scenario).expect("world");
+    let rows = sylva::job::checkpoint::load_any(&tiled, &mut w).expect("the ranks' checkpoints");
+    let same_ck = std::fs::read(one.join("checkpoint.bin")).ok() == Some(sylva::sim::checkpoint::to_bytes(&w, &rows));
+    let same = std::fs::read(one.join("stand_table.csv")).ok() == std::fs::read(tiled.join("stand_table.csv")).ok() && same_ck;
+    println!("stand table and checkpoint (the ranks' files assembled) byte-identical: {same}");
     assert!(same, "the tiled run differs from one process");
 }

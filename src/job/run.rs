@@ -222,6 +222,20 @@ pub trait Stepper {
     fn save_reads_world(&self) -> bool {
         true
     }
+    /// Writes the plain snapshot `label` (e.g. `year_0010`) into run directory `dir`: the
+    /// inventory CSV, the GeoJSON inventory when `geojson`, and with `maps` the
+    /// regeneration-layer CSV and the species and basal-area maps (longest side `map_px`).
+    /// Default: from `world`.
+    ///
+    /// Errors: I/O errors naming the file; the stepper's.
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool) -> Result<()> {
+        snapshot(dir, world, label, maps, map_px, geojson)
+    }
+    /// True when [`Stepper::snapshot`] reads `world` (so a snapshot year steps with `full`);
+    /// false when the stepper writes snapshots from its own state (a tiled run's ranks).
+    fn snapshot_reads_world(&self) -> bool {
+        true
+    }
 }
 
 /// The stepper of one process: [`step_year_with`] on the whole world.
@@ -325,6 +339,10 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     let t0 = Instant::now();
     let mut stopped = false;
     let mut trees = world.stand.trees.len();
+    // whether snapshots and checkpoints need the world whole on this process (one process, or
+    // a caller that reads the world at snapshots); a tiled run writes them from the ranks
+    let snap_world = stepper.snapshot_reads_world() || opts.on_snapshot.is_some();
+    let save_world = stepper.save_reads_world();
     let every = scenario.snapshot_every;
     while world.stand.year < scenario.years {
         let y = world.stand.year + 1;
@@ -336,7 +354,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         let (d, px, gj_y) = (dir.clone(), opts.map_px, gj(y));
         let checkpoint_year = y == scenario.years || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0);
         let stop_before = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
-        let full = snap_year || (checkpoint_year && stepper.save_reads_world()) || stop_before;
+        let full = (snap_year && snap_world) || (checkpoint_year && save_world) || (stop_before && (snap_world || save_world));
         stepper.step(&mut world, scenario, &mut rep, full, &mut |season, w| {
             if seasonal && season != Season::Winter && err.is_none() {
                 let name = match season {
@@ -359,14 +377,14 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         }
         let t_out = Instant::now();
         if snap_year {
-            snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px, gj(y))?;
+            stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, gj(y))?;
             tables(&dir, &rows, &world, true)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(y, &world);
             }
         }
         let stop_now = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
-        if stop_now && !full && (opts.write_snapshots || stepper.save_reads_world()) {
+        if stop_now && !full && ((opts.write_snapshots && snap_world) || save_world) {
             stepper.complete(&mut world)?;
         }
         if checkpoint_year || stop_now {
@@ -387,7 +405,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         if stop_now && y < scenario.years {
             stopped = true;
             if opts.write_snapshots && !snap_year {
-                snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px, true)?;
+                stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, true)?;
                 if let Some(f) = opts.on_snapshot.as_mut() {
                     f(y, &world);
                 }

@@ -51,11 +51,13 @@ pub enum Command {
     Save = 6,
     /// Read your tile from the per-rank checkpoint at the path that follows.
     Resume = 7,
+    /// Write your tile's part of the snapshot that follows ([`write_parts`]).
+    Snapshot = 8,
 }
 
 impl Command {
     fn from_byte(b: u8) -> Option<Command> {
-        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume].into_iter().find(|c| *c as u8 == b)
+        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot].into_iter().find(|c| *c as u8 == b)
     }
 }
 
@@ -70,7 +72,7 @@ fn command(t: &mut dyn Transport, c: Option<Command>) -> Result<Command> {
     };
     let got = t.exchange(out)?;
     let b = got.first().and_then(|m| m.first()).copied().unwrap_or(0);
-    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–7)") })?)
+    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–8)") })?)
 }
 
 /// Rank 0 sends every rank `k` the year and `paths[k]` (a per-rank checkpoint file); the others
@@ -129,6 +131,100 @@ fn load_tile(template: &World, layout: &Layout, me: usize, path: &Path, year: u3
         return Err(Error::format(path, format!("year {} in a checkpoint whose manifest says year {year}", w.stand.year)).into());
     }
     Ok((Tile::resumed(w, layout.clone(), me), rows))
+}
+
+/// A snapshot written by the ranks ([`write_parts`]).
+#[derive(Debug, Clone, PartialEq)]
+struct Snap {
+    /// Run directory.
+    dir: PathBuf,
+    /// Snapshot label (`year_NNNN`).
+    label: String,
+    /// Regeneration layer and maps too.
+    maps: bool,
+    /// GeoJSON inventory too.
+    geojson: bool,
+}
+
+impl Snap {
+    fn encode(&self) -> Result<Vec<u8>> {
+        let dir = self.dir.to_str().ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "run directory".into(), value: self.dir.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() })?;
+        let mut m = vec![self.maps as u8 | (self.geojson as u8) << 1];
+        m.extend_from_slice(&(self.label.len() as u64).to_le_bytes());
+        m.extend_from_slice(self.label.as_bytes());
+        m.extend_from_slice(dir.as_bytes());
+        Ok(m)
+    }
+    fn decode(m: &[u8]) -> Result<Snap> {
+        let bad = |what: &str| Error::Exchange { peer: 0, reason: format!("snapshot message of {} bytes: {what}", m.len()) };
+        if m.len() < 9 {
+            return Err(bad("shorter than its header").into());
+        }
+        let n = u64::from_le_bytes(m[1..9].try_into().map_err(|_| bad("no label length"))?) as usize;
+        let label = m.get(9..9 + n).ok_or_else(|| bad("label cut short"))?;
+        let label = std::str::from_utf8(label).map_err(|_| bad("label not UTF-8"))?.to_string();
+        let dir = std::str::from_utf8(&m[9 + n..]).map_err(|_| bad("folder not UTF-8"))?;
+        Ok(Snap { dir: PathBuf::from(dir), label, maps: m[0] & 1 != 0, geojson: m[0] & 2 != 0 })
+    }
+    /// This process's part file of rank `rank` for the output `name` in `sub`:
+    /// `.{name}.rank{rank}.{pid}.tmp`, a temporary file that a later run removes if this one
+    /// is killed ([`crate::output::remove_stale_temporaries`]).
+    fn part(&self, sub: &str, name: &str, rank: usize) -> PathBuf {
+        self.dir.join(sub).join(format!(".{name}.rank{rank:04}.{}.tmp", std::process::id()))
+    }
+}
+
+/// The ranks' part of a snapshot: rank 0 sends every rank `snap` (others pass `None`); every
+/// rank writes the inventory lines of its own trees (and GeoJSON features, and its cohorts'
+/// regeneration lines with `maps`) into its part files ([`Snap::part`]); all agree; the part
+/// paths and, with `maps`, the maps' tree columns ([`Tile::gather_map_columns`]) go to rank 0,
+/// which gets them back: per rank its part files (inventory CSV, then GeoJSON, then
+/// regeneration, those written), and the map columns.
+///
+/// Errors: [`Error::Exchange`] from the transport or naming a rank that failed to write its
+/// parts (with its I/O error naming the file).
+fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Result<Option<(Vec<Vec<PathBuf>>, Option<crate::sim::trees::TreeStore>)>> {
+    let n = t.size();
+    let mut out = vec![Vec::new(); n];
+    if let Some(s) = snap {
+        out = vec![s.encode()?; n];
+    }
+    let got = t.exchange(out)?;
+    let s = Snap::decode(got.first().map(|m| m.as_slice()).unwrap_or(&[]))?;
+    let me = t.rank();
+    let csv = s.part("inventory", &format!("{}.csv", s.label), me);
+    let gj = s.geojson.then(|| s.part("inventory", &format!("{}.geojson", s.label), me));
+    let regen = s.maps.then(|| s.part("inventory", &format!("{}_regeneration.csv", s.label), me));
+    let r = (|| -> Result<()> {
+        let layout = &tile.layout;
+        crate::output::inventory::write_inventory_part(&csv, gj.as_deref(), &tile.world, |x, y| layout.owner_of(x, y) == me)?;
+        if let Some(p) = &regen {
+            crate::output::inventory::write_regeneration_part(p, &tile.world)?;
+        }
+        Ok(())
+    })();
+    let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
+    r?;
+    a?;
+    let mine: Vec<PathBuf> = std::iter::once(csv).chain(gj).chain(regen).collect();
+    let text: Vec<&str> = mine.iter().filter_map(|p| p.to_str()).collect();
+    let mut out = vec![Vec::new(); n];
+    out[0] = text.join("\n").into_bytes();
+    let got = t.exchange(out)?;
+    let cols = if s.maps { tile.gather_map_columns(t)? } else { None };
+    if me != 0 {
+        return Ok(None);
+    }
+    let mut paths = Vec::with_capacity(n);
+    for (k, m) in got.iter().enumerate() {
+        let text = std::str::from_utf8(m).map_err(|_| Error::Exchange { peer: k, reason: "part file paths not UTF-8".into() })?;
+        let ps: Vec<PathBuf> = text.split('\n').map(PathBuf::from).collect();
+        if ps.len() != mine.len() {
+            return Err(Error::Exchange { peer: k, reason: format!("{} part files, expected {}", ps.len(), mine.len()) }.into());
+        }
+        paths.push(ps);
+    }
+    Ok(Some((paths, cols)))
 }
 
 /// Tallies of zero for `world`'s pool.
@@ -314,6 +410,42 @@ impl Stepper for Root<'_> {
     fn save_reads_world(&self) -> bool {
         false
     }
+    /// Every rank writes its part files of the snapshot ([`write_parts`]); rank 0 merges them
+    /// by tree id (cohorts by light cell) into the files of one process and draws the maps from
+    /// the gathered map columns.
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool) -> Result<()> {
+        let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), maps, geojson };
+        command(self.t, Some(Command::Snapshot))?;
+        let Some((parts, cols)) = self.collective(|tile, t| write_parts(tile, t, Some(&snap)))? else {
+            return Err(Error::Exchange { peer: 0, reason: "rank 0 got no snapshot parts".into() }.into());
+        };
+        let column = |i: usize| parts.iter().map(|p| p[i].clone()).collect::<Vec<PathBuf>>();
+        let inv = dir.join("inventory");
+        use crate::output::inventory as inventory_out;
+        inventory_out::merge_inventory_csv(&inv.join(format!("{label}.csv")), &column(0))?;
+        let mut i = 1;
+        if geojson {
+            inventory_out::merge_inventory_geojson(&inv.join(format!("{label}.geojson")), world, &column(i))?;
+            i += 1;
+        }
+        if maps {
+            inventory_out::merge_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), &column(i))?;
+            let cols = cols.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map columns gathered".into() })?;
+            // the maps read only the trees' positions, species and DBH
+            let saved = std::mem::replace(&mut world.stand.trees, cols);
+            let m = dir.join("maps");
+            let r = crate::output::plot::write_maps(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px);
+            world.stand.trees = saved;
+            r?;
+        }
+        for p in parts.iter().flatten() {
+            std::fs::remove_file(p).map_err(|e| Error::io(p, e))?;
+        }
+        Ok(())
+    }
+    fn snapshot_reads_world(&self) -> bool {
+        false
+    }
 }
 
 /// A rank other than 0: builds the world of `scenario` (for the site), then follows rank 0's
@@ -357,6 +489,9 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 let (tl, _) = r?;
                 a?;
                 tile = Some(tl);
+            }
+            (Command::Snapshot, Some(tl)) => {
+                write_parts(tl, t, None)?;
             }
             (Command::Resume, Some(_)) => return Err(Error::Exchange { peer: 0, reason: "command Resume after the run began".into() }.into()),
             (c, None) => return Err(Error::Exchange { peer: 0, reason: format!("command {c:?} before the run began") }.into()),
@@ -441,7 +576,7 @@ mod tests {
         assert_eq!(grid_for(4, 100, 100), (2, 2));
         assert_eq!(grid_for(8, 100, 50), (4, 2));
         assert_eq!(grid_for(6, 40, 120), (2, 3), "a tie (1 × 6, 2 × 3) goes to more tiles across");
-        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume] {
+        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot] {
             assert_eq!(Command::from_byte(c as u8), Some(c));
         }
         assert_eq!(Command::from_byte(0), None);

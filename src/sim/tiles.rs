@@ -667,6 +667,43 @@ impl Tile {
         Ok(report)
     }
 
+    /// Every rank sends rank 0 the columns of its trees that the species and basal-area maps
+    /// read (id, species, height, DBH, x, y: 26 bytes per tree); rank 0 returns them merged by
+    /// id: a tree store with those columns only (the others empty). Other ranks get `None`.
+    ///
+    /// Errors: [`Error::Exchange`] from the transport or a malformed message.
+    pub fn gather_map_columns(&self, t: &mut dyn Transport) -> Result<Option<TreeStore>> {
+        let tr = &self.world.stand.trees;
+        let mut e = Enc::default();
+        e.lean_trees(tr);
+        tr.x.iter().chain(&tr.y).for_each(|&v| e.f32(v));
+        let mut out = vec![Vec::new(); t.size()];
+        out[0] = e.0;
+        let got = t.exchange(out)?;
+        if t.rank() != 0 {
+            return Ok(None);
+        }
+        let mut lean = Vec::with_capacity(got.len());
+        let mut xy = Vec::with_capacity(got.len());
+        for (k, m) in got.iter().enumerate() {
+            let mut d = Dec::new(m, k);
+            let p = d.lean_trees()?;
+            let n = p.len();
+            xy.push((d.f32s(n)?, d.f32s(n)?));
+            lean.push(p);
+        }
+        let (mut merged, from) = merge_by_id(&lean, tr.next_id);
+        let mut at = vec![0usize; lean.len()];
+        merged.x = Vec::with_capacity(from.len());
+        merged.y = Vec::with_capacity(from.len());
+        for k in from {
+            merged.x.push(xy[k].0[at[k]]);
+            merged.y.push(xy[k].1[at[k]]);
+            at[k] += 1;
+        }
+        Ok(Some(merged))
+    }
+
     /// Every rank sends its whole stand (trees, cohorts, its seed cells, this year's dead,
     /// tallies) to rank 0, which writes it into `global` (the world of one process at the same
     /// year: what the outputs and the checkpoint read). Tallies: `base` (the global world's at
