@@ -1,9 +1,18 @@
 //! Tiled runs with outputs (`mpirun -np N sylva simulate …`, `sylva simulate --tiles N`): the
 //! landscape cut into one tile per rank ([`crate::sim::tiles`]); every rank steps its tile;
-//! rank 0 also runs the run driver ([`run_scenario_with`]) and writes the whole run directory
-//! from the world it gathers, so the directory is the one a single process writes, byte for
-//! byte (stand table every year from the gathered stand-table columns; inventories, maps and
-//! the checkpoint in the years that write them, from every rank's whole stand).
+//! rank 0 also runs the run driver ([`run_scenario_with`]). The run directory is the one a
+//! single process writes, byte for byte, except the checkpoint (one file per rank, below):
+//! - `stand_table.csv`, `stand_table.png`, `scenario.toml`, `species/`, year 0's snapshot:
+//!   rank 0 (the stand table's columns are gathered to it every year);
+//! - `inventory/year_NNNN.csv`, `.geojson`, `_regeneration.csv`: every rank writes the lines
+//!   of its own trees (living in id order, then this year's dead in id order) and cohorts into
+//!   part files `.NAME.rankRRRR.PID.tmp` beside the file; after all have, rank 0 merges them
+//!   by tree id (cohorts by light cell), streaming, into the file ([`write_parts`]);
+//! - `maps/species_*.png`, `maps/basal_area_*.png`: drawn by rank 0 from the trees' id,
+//!   species, height, DBH and position gathered for the year (26 bytes per tree), as one
+//!   process draws them;
+//! - the whole world is gathered to rank 0 only at a stop (Ctrl-C) or when a caller reads the
+//!   world at every snapshot (`RunOptions::on_snapshot`).
 //!
 //! Checkpoints and `--resume` per rank ([`super::checkpoint`]): in a checkpoint year every
 //! rank writes its own tile's checkpoint, `checkpoint/year_YYYY_rank_RRRR.bin` (rank 0's with

@@ -42,7 +42,7 @@ use std::time::Instant;
 /// Passes byte messages between the ranks of a tiled run: one all-to-all exchange at a time,
 /// every rank taking part in every exchange in the same order (MPI's model).
 pub trait Transport {
-    /// This rank (0-based; rank 0 gathers the stand table and writes the outputs).
+    /// This rank (0-based; rank 0 gathers the stand table and drives the run).
     fn rank(&self) -> usize;
     /// Number of ranks.
     fn size(&self) -> usize;
