@@ -325,3 +325,74 @@ pub fn merge_regeneration_csv(path: &Path, parts: &[std::path::PathBuf]) -> Resu
         Ok(())
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{step_year, Scenario, YearReport};
+
+    /// Parts split by position (the tiles of a tiled run), merged: the bytes of the whole
+    /// inventory CSV, GeoJSON and regeneration CSV; with no trees at all, the header only.
+    #[test]
+    fn merged_parts_are_the_whole_files() {
+        let toml = "name = \"parts\"\nyears = 22\nseed = 3\nspecies = [\"beech\"]\nlight_cell_m = 10.0\n\
+            [terrain]\nuniform = { width = 20, height = 12, cell_m = 20.0, elevation_m = 300.0, indices = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0] }\n\
+            [[start]]\nkind = \"seed_sources\"\nspecies = \"beech\"\npoints = [[100.0, 100.0], [300.0, 150.0]]\ntrees_per_source = 4\n";
+        let sc = Scenario::from_toml_str(toml, "parts").unwrap();
+        let mut w = World::new(sc.site().unwrap(), &crate::sim::fixtures::library(), &sc).unwrap();
+        for _ in 0..22 {
+            step_year(&mut w, &sc, &mut YearReport::default());
+        }
+        assert!(w.stand.trees.len() > 8 && !w.stand.cohorts.is_empty(), "{} trees, {} cohorts", w.stand.trees.len(), w.stand.cohorts.len());
+        let tmp = tempfile::tempdir().unwrap();
+        let d = tmp.path();
+        for (case, trees) in [("trees", true), ("empty", false)] {
+            let mut w = w.clone();
+            if !trees {
+                w.stand.trees = Default::default();
+                w.scratch.dead.clear();
+                w.stand.cohorts = Default::default();
+            }
+            let (csv, gj, rg) = (d.join(format!("{case}.csv")), d.join(format!("{case}.geojson")), d.join(format!("{case}_r.csv")));
+            write_inventory_csv(&csv, &w).unwrap();
+            write_inventory_geojson(&gj, &w).unwrap();
+            write_regeneration_csv(&rg, &w).unwrap();
+            let mut parts = (Vec::new(), Vec::new(), Vec::new());
+            for k in 0..3 {
+                let band = move |x: f32, _: f32| ((x / 134.0) as usize).min(2) == k;
+                let (pc, pg, pr) = (d.join(format!("{case}.{k}.csv.part")), d.join(format!("{case}.{k}.gj.part")), d.join(format!("{case}.{k}.r.part")));
+                write_inventory_part(&pc, Some(&pg), &w, band).unwrap();
+                let mut wk = w.clone();
+                let light = wk.site.light;
+                let c = &w.stand.cohorts;
+                let mut own = crate::sim::cohorts::Cohorts::default();
+                for i in 0..c.len() {
+                    let (x, y) = light.centre(c.cell[i] as usize);
+                    if band(x as f32, y as f32) {
+                        own.push(c.get(i));
+                    }
+                }
+                wk.stand.cohorts = own;
+                write_regeneration_part(&pr, &wk).unwrap();
+                parts.0.push(pc);
+                parts.1.push(pg);
+                parts.2.push(pr);
+            }
+            let (mc, mg, mr) = (d.join(format!("{case}.m.csv")), d.join(format!("{case}.m.geojson")), d.join(format!("{case}_r.m.csv")));
+            merge_inventory_csv(&mc, &parts.0).unwrap();
+            merge_inventory_geojson(&mg, &w, &parts.1).unwrap();
+            merge_regeneration_csv(&mr, &parts.2).unwrap();
+            for (a, b) in [(&csv, &mc), (&gj, &mg), (&rg, &mr)] {
+                assert_eq!(std::fs::read_to_string(a).unwrap(), std::fs::read_to_string(b).unwrap(), "{case}: {}", a.display());
+            }
+            if !trees {
+                assert_eq!(std::fs::read_to_string(&mc).unwrap(), format!("{HEADER}\n"));
+            }
+        }
+        // a part line without a key is refused naming the part
+        let bad = d.join("bad.part");
+        std::fs::write(&bad, "not-an-id,beech\n").unwrap();
+        let e = merge_inventory_csv(&d.join("bad.csv"), &[bad]).unwrap_err().to_string();
+        assert!(e.contains("bad.part line 1"), "{e}");
+    }
+}
