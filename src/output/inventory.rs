@@ -179,26 +179,30 @@ fn geojson_feature(f: &mut impl Write, r: &Rec, geo: &PointGeoRef) -> std::io::R
 /// Writes a rank's part of the inventory: the CSV lines (no header) of the trees of `w`
 /// standing where `keep(x, y)` to `csv`, and their GeoJSON features (one a line, no
 /// separators) to `geojson` when given; living trees in id order, then the dead in id order.
-/// Plain files (temporaries: [`merge_inventory_csv`] and [`merge_inventory_geojson`] read them).
+/// Written atomically like every file ([`crate::output::write_atomic_with`]); the part files
+/// are temporaries that [`merge_inventory_csv`] and [`merge_inventory_geojson`] read.
 ///
 /// Errors: [`super::OutputError::Io`] naming the part file.
 pub fn write_inventory_part(csv: &Path, geojson: Option<&Path>, w: &World, keep: impl Fn(f32, f32) -> bool) -> Result<()> {
     let recs = records_where(w, keep);
-    let mut f = create(csv)?;
-    let mut s = String::with_capacity(96);
-    for r in &recs {
-        s.clear();
-        csv_line(&mut s, r);
-        f.write_all(s.as_bytes()).map_err(|e| super::OutputError::io(csv, e))?;
-    }
-    finish(f, csv)?;
+    crate::output::write_atomic_with(csv, |f| {
+        let mut s = String::with_capacity(96);
+        for r in &recs {
+            s.clear();
+            csv_line(&mut s, r);
+            f.write_all(s.as_bytes())?;
+        }
+        Ok(())
+    })?;
     if let Some(g) = geojson {
         let geo = PointGeoRef::of(w);
-        let mut f = create(g)?;
-        for r in &recs {
-            geojson_feature(&mut f, r, &geo).and_then(|_| f.write_all(b"\n")).map_err(|e| super::OutputError::io(g, e))?;
-        }
-        finish(f, g)?;
+        crate::output::write_atomic_with(g, |f| {
+            for r in &recs {
+                geojson_feature(f, r, &geo)?;
+                f.write_all(b"\n")?;
+            }
+            Ok(())
+        })?;
     }
     Ok(())
 }
@@ -210,17 +214,7 @@ pub fn write_inventory_part(csv: &Path, geojson: Option<&Path>, w: &World, keep:
 pub fn write_regeneration_part(path: &Path, w: &World) -> Result<()> {
     let text = regeneration_csv(w);
     let body = text.split_once('\n').map_or("", |(_, b)| b);
-    let mut f = create(path)?;
-    f.write_all(body.as_bytes()).map_err(|e| super::OutputError::io(path, e))?;
-    finish(f, path)
-}
-
-fn create(p: &Path) -> Result<std::io::BufWriter<std::fs::File>> {
-    Ok(std::io::BufWriter::new(std::fs::File::create(p).map_err(|e| super::OutputError::io(p, e))?))
-}
-
-fn finish(mut f: std::io::BufWriter<std::fs::File>, p: &Path) -> Result<()> {
-    f.flush().map_err(|e| super::OutputError::io(p, e))
+    crate::output::write_atomic(path, body.as_bytes())
 }
 
 /// Merge key of an inventory line: living (0, `alive_end` ends the line) before dead (1),
