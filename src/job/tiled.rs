@@ -183,6 +183,10 @@ impl Snap {
     }
 }
 
+/// What rank 0 gets from [`write_parts`]: every rank's part files (inventory CSV, then
+/// GeoJSON, then regeneration, those written) and, with maps, the maps' tree columns.
+type SnapParts = (Vec<Vec<PathBuf>>, Option<crate::sim::trees::TreeStore>);
+
 /// The ranks' part of a snapshot: rank 0 sends every rank `snap` (others pass `None`); every
 /// rank writes the inventory lines of its own trees (and GeoJSON features, and its cohorts'
 /// regeneration lines with `maps`) into its part files ([`Snap::part`]); all agree; the part
@@ -192,7 +196,7 @@ impl Snap {
 ///
 /// Errors: [`Error::Exchange`] from the transport or naming a rank that failed to write its
 /// parts (with its I/O error naming the file).
-fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Result<Option<(Vec<Vec<PathBuf>>, Option<crate::sim::trees::TreeStore>)>> {
+fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Result<Option<SnapParts>> {
     let n = t.size();
     let mut out = vec![Vec::new(); n];
     if let Some(s) = snap {

@@ -225,6 +225,11 @@ fn inventory_key(line: &str, alive_end: &str, id_field: impl Fn(&str) -> Option<
     Some((dead as u8, id))
 }
 
+/// A part file being merged: its reader, its current line, the line's number.
+type PartReader = (std::io::BufReader<std::fs::File>, String, usize);
+/// A part's current line in the merge heap: its key and the part's index, least first.
+type HeapEntry = std::cmp::Reverse<((u8, u64), usize)>;
+
 /// Merges the sorted part files `parts` (one line per record, each sorted by `key`) into `out`,
 /// writing `sep` between records; records of equal key keep their part's order (a light cell's
 /// cohorts come from one part). Streams: one line per part in memory.
@@ -238,7 +243,7 @@ fn merge_lines(out: &mut impl Write, parts: &[std::path::PathBuf], key: impl Fn(
         readers.push((std::io::BufReader::new(f), String::new(), 0usize));
     }
     let mut heap = std::collections::BinaryHeap::new();
-    let next = |k: usize, r: &mut (std::io::BufReader<std::fs::File>, String, usize)| -> std::io::Result<Option<std::cmp::Reverse<((u8, u64), usize)>>> {
+    let next = |k: usize, r: &mut PartReader| -> std::io::Result<Option<HeapEntry>> {
         r.1.clear();
         if r.0.read_line(&mut r.1)? == 0 {
             return Ok(None);
