@@ -8,9 +8,11 @@
 //!   of its own trees (living in id order, then this year's dead in id order) and cohorts into
 //!   part files `.NAME.rankRRRR.PID.tmp` beside the file; after all have, rank 0 merges them
 //!   by tree id (cohorts by light cell), streaming, into the file ([`write_parts`]);
-//! - `maps/species_*.png`, `maps/basal_area_*.png`: drawn by rank 0 from the trees' id,
-//!   species, height, DBH and position gathered for the year (26 bytes per tree), as one
-//!   process draws them;
+//! - `maps/species_*.png`, `maps/basal_area_*.png`: drawn by rank 0 from the basal area per
+//!   map pixel and species: each rank sums its own trees per bin; a bin with trees on one rank
+//!   takes that rank's sum, and only the trees of bins with trees on several ranks are sent to
+//!   rank 0 and summed in id order ([`crate::sim::tiles::Tile::gather_bin_sums`]), so every
+//!   bin is the f64 sum of one process;
 //! - the whole world is gathered to rank 0 only at a stop (Ctrl-C) or when a caller reads the
 //!   world at every snapshot (`RunOptions::on_snapshot`).
 //!
@@ -153,12 +155,15 @@ struct Snap {
     maps: bool,
     /// GeoJSON inventory too.
     geojson: bool,
+    /// Longest side of the maps (pixels).
+    map_px: usize,
 }
 
 impl Snap {
     fn encode(&self) -> Result<Vec<u8>> {
         let dir = self.dir.to_str().ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "run directory".into(), value: self.dir.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() })?;
         let mut m = vec![self.maps as u8 | (self.geojson as u8) << 1];
+        m.extend_from_slice(&(self.map_px as u64).to_le_bytes());
         m.extend_from_slice(&(self.label.len() as u64).to_le_bytes());
         m.extend_from_slice(self.label.as_bytes());
         m.extend_from_slice(dir.as_bytes());
@@ -166,14 +171,15 @@ impl Snap {
     }
     fn decode(m: &[u8]) -> Result<Snap> {
         let bad = |what: &str| Error::Exchange { peer: 0, reason: format!("snapshot message of {} bytes: {what}", m.len()) };
-        if m.len() < 9 {
+        if m.len() < 17 {
             return Err(bad("shorter than its header").into());
         }
-        let n = u64::from_le_bytes(m[1..9].try_into().map_err(|_| bad("no label length"))?) as usize;
-        let label = m.get(9..9 + n).ok_or_else(|| bad("label cut short"))?;
+        let map_px = u64::from_le_bytes(m[1..9].try_into().map_err(|_| bad("no map size"))?) as usize;
+        let n = u64::from_le_bytes(m[9..17].try_into().map_err(|_| bad("no label length"))?) as usize;
+        let label = m.get(17..17 + n).ok_or_else(|| bad("label cut short"))?;
         let label = std::str::from_utf8(label).map_err(|_| bad("label not UTF-8"))?.to_string();
-        let dir = std::str::from_utf8(&m[9 + n..]).map_err(|_| bad("folder not UTF-8"))?;
-        Ok(Snap { dir: PathBuf::from(dir), label, maps: m[0] & 1 != 0, geojson: m[0] & 2 != 0 })
+        let dir = std::str::from_utf8(&m[17 + n..]).map_err(|_| bad("folder not UTF-8"))?;
+        Ok(Snap { dir: PathBuf::from(dir), label, maps: m[0] & 1 != 0, geojson: m[0] & 2 != 0, map_px })
     }
     /// This process's part file of rank `rank` for the output `name` in `sub`:
     /// `.{name}.rank{rank}.{pid}.tmp`, a temporary file that a later run removes if this one
@@ -184,15 +190,16 @@ impl Snap {
 }
 
 /// What rank 0 gets from [`write_parts`]: every rank's part files (inventory CSV, then
-/// GeoJSON, then regeneration, those written) and, with maps, the maps' tree columns.
-type SnapParts = (Vec<Vec<PathBuf>>, Option<crate::sim::trees::TreeStore>);
+/// GeoJSON, then regeneration, those written) and, with maps, the basal area per map bin.
+type SnapParts = (Vec<Vec<PathBuf>>, Option<Vec<f64>>);
 
 /// The ranks' part of a snapshot: rank 0 sends every rank `snap` (others pass `None`); every
 /// rank writes the inventory lines of its own trees (and GeoJSON features, and its cohorts'
 /// regeneration lines with `maps`) into its part files ([`Snap::part`]); all agree; the part
-/// paths and, with `maps`, the maps' tree columns ([`Tile::gather_map_columns`]) go to rank 0,
-/// which gets them back: per rank its part files (inventory CSV, then GeoJSON, then
-/// regeneration, those written), and the map columns.
+/// paths and, with `maps`, the basal area per map bin ([`crate::output::plot::map_bin`],
+/// summed exactly as one process: [`Tile::gather_bin_sums`]) go to rank 0, which gets them
+/// back: per rank its part files (inventory CSV, then GeoJSON, then regeneration, those
+/// written), and the sums.
 ///
 /// Errors: [`Error::Exchange`] from the transport or naming a rank that failed to write its
 /// parts (with its I/O error naming the file).
@@ -224,7 +231,13 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
     let mut out = vec![Vec::new(); n];
     out[0] = text.join("\n").into_bytes();
     let got = t.exchange(out)?;
-    let cols = if s.maps { tile.gather_map_columns(t)? } else { None };
+    let cols = if s.maps {
+        let dims = crate::output::plot::map_dims(&tile.world, s.map_px);
+        let np = tile.world.site.lib.species.len();
+        tile.gather_bin_sums(t, dims.0 * dims.1 * np, |tr, i| crate::output::plot::map_bin(tr, i, dims, np), |tr, i| tr.basal_area_m2(i))?
+    } else {
+        None
+    };
     if me != 0 {
         return Ok(None);
     }
@@ -427,7 +440,7 @@ impl Stepper for Root<'_> {
     /// by tree id (cohorts by light cell) into the files of one process and draws the maps from
     /// the gathered map columns.
     fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool) -> Result<()> {
-        let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), maps, geojson };
+        let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), maps, geojson, map_px };
         command(self.t, Some(Command::Snapshot))?;
         let Some((parts, cols)) = self.collective(|tile, t| write_parts(tile, t, Some(&snap)))? else {
             return Err(Error::Exchange { peer: 0, reason: "rank 0 got no snapshot parts".into() }.into());
@@ -443,13 +456,9 @@ impl Stepper for Root<'_> {
         }
         if maps {
             inventory_out::merge_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), &column(i))?;
-            let cols = cols.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map columns gathered".into() })?;
-            // the maps read only the trees' positions, species and DBH
-            let saved = std::mem::replace(&mut world.stand.trees, cols);
+            let ba = cols.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map sums gathered".into() })?;
             let m = dir.join("maps");
-            let r = crate::output::plot::write_maps(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px);
-            world.stand.trees = saved;
-            r?;
+            crate::output::plot::write_maps_from(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px, &ba)?;
         }
         for p in parts.iter().flatten() {
             std::fs::remove_file(p).map_err(|e| Error::io(p, e))?;

@@ -667,41 +667,97 @@ impl Tile {
         Ok(report)
     }
 
-    /// Every rank sends rank 0 the columns of its trees that the species and basal-area maps
-    /// read (id, species, height, DBH, x, y: 26 bytes per tree); rank 0 returns them merged by
-    /// id: a tree store with those columns only (the others empty). Other ranks get `None`.
+    /// Sums per bin over every tile's trees, exactly as one process sums them (f64, in id
+    /// order), without sending rank 0 the trees: `bin(store, i)` is tree `i`'s bin (of `bins`),
+    /// `value(store, i)` what it adds. Each rank sums its own trees per bin and sends the bins it
+    /// has trees in (16 bytes each); a bin with trees on one rank only takes that rank's sum (the
+    /// same trees in the same order as in one process); rank 0 names the bins with trees on
+    /// several ranks, and only their trees (id, bin, value: 24 bytes each) are sent and summed
+    /// in id order. Rank 0 returns the sums (0 for bins without trees); other ranks `None`.
+    /// Three exchanges.
     ///
-    /// Errors: [`Error::Exchange`] from the transport or a malformed message.
-    pub fn gather_map_columns(&self, t: &mut dyn Transport) -> Result<Option<TreeStore>> {
+    /// Errors: [`Error::Exchange`] from the transport, a malformed message or a bin out of range.
+    pub fn gather_bin_sums(&self, t: &mut dyn Transport, bins: usize, bin: impl Fn(&TreeStore, usize) -> usize, value: impl Fn(&TreeStore, usize) -> f64) -> Result<Option<Vec<f64>>> {
         let tr = &self.world.stand.trees;
+        let n = t.size();
+        let of: Vec<usize> = (0..tr.len()).map(|i| bin(tr, i)).collect();
+        let mut sums: std::collections::HashMap<usize, f64> = std::collections::HashMap::new();
+        for (i, &b) in of.iter().enumerate() {
+            *sums.entry(b).or_insert(0.0) += value(tr, i);
+        }
+        let mut pairs: Vec<(usize, f64)> = sums.into_iter().collect();
+        pairs.sort_unstable_by_key(|p| p.0);
         let mut e = Enc::default();
-        e.lean_trees(tr);
-        tr.x.iter().chain(&tr.y).for_each(|&v| e.f32(v));
-        let mut out = vec![Vec::new(); t.size()];
+        e.u64(pairs.len() as u64);
+        for (b, v) in &pairs {
+            e.u64(*b as u64);
+            e.u64(v.to_bits());
+        }
+        let mut out = vec![Vec::new(); n];
+        out[0] = e.0;
+        let got = t.exchange(out)?;
+        // rank 0: the sums of bins on one rank; the bins on several
+        let mut acc = Vec::new();
+        let mut shared = Vec::new();
+        if t.rank() == 0 {
+            acc = vec![0f64; bins];
+            let mut seen = vec![0u8; bins];
+            for (k, m) in got.iter().enumerate() {
+                let mut d = Dec::new(m, k);
+                let c = d.count(16)?;
+                for _ in 0..c {
+                    let b = d.u64()? as usize;
+                    let v = f64::from_bits(d.u64()?);
+                    if b >= bins {
+                        return Err(Error::Exchange { peer: k, reason: format!("map bin {b} out of range (0–{})", bins - 1) });
+                    }
+                    acc[b] = v;
+                    seen[b] = seen[b].saturating_add(1);
+                }
+            }
+            shared = (0..bins).filter(|&b| seen[b] > 1).collect::<Vec<usize>>();
+        }
+        let mut e = Enc::default();
+        e.u64(shared.len() as u64);
+        shared.iter().for_each(|&b| e.u64(b as u64));
+        let got = t.exchange(vec![e.0; n])?;
+        let mut d = Dec::new(&got[0], 0);
+        let c = d.count(8)?;
+        let shared: std::collections::HashSet<usize> = (0..c).map(|_| d.u64().map(|b| b as usize)).collect::<Result<_>>()?;
+        let mut e = Enc::default();
+        let mine: Vec<usize> = (0..tr.len()).filter(|&i| shared.contains(&of[i])).collect();
+        e.u64(mine.len() as u64);
+        for &i in &mine {
+            e.u64(tr.id[i]);
+            e.u64(of[i] as u64);
+            e.u64(value(tr, i).to_bits());
+        }
+        let mut out = vec![Vec::new(); n];
         out[0] = e.0;
         let got = t.exchange(out)?;
         if t.rank() != 0 {
             return Ok(None);
         }
-        let mut lean = Vec::with_capacity(got.len());
-        let mut xy = Vec::with_capacity(got.len());
+        let mut trees: Vec<(u64, usize, f64)> = Vec::new();
         for (k, m) in got.iter().enumerate() {
             let mut d = Dec::new(m, k);
-            let p = d.lean_trees()?;
-            let n = p.len();
-            xy.push((d.f32s(n)?, d.f32s(n)?));
-            lean.push(p);
+            let c = d.count(24)?;
+            for _ in 0..c {
+                let (id, b, v) = (d.u64()?, d.u64()? as usize, f64::from_bits(d.u64()?));
+                if !shared.contains(&b) {
+                    return Err(Error::Exchange { peer: k, reason: format!("map bin {b} was not asked for") });
+                }
+                trees.push((id, b, v));
+            }
         }
-        let (mut merged, from) = merge_by_id(&lean, tr.next_id);
-        let mut at = vec![0usize; lean.len()];
-        merged.x = Vec::with_capacity(from.len());
-        merged.y = Vec::with_capacity(from.len());
-        for k in from {
-            merged.x.push(xy[k].0[at[k]]);
-            merged.y.push(xy[k].1[at[k]]);
-            at[k] += 1;
+        trees.sort_unstable_by_key(|e| e.0);
+        for &b in &shared {
+            acc[b] = 0.0;
         }
-        Ok(Some(merged))
+        for (_, b, v) in trees {
+            acc[b] += v;
+        }
+        Ok(Some(acc))
     }
 
     /// Every rank sends its whole stand (trees, cohorts, its seed cells, this year's dead,
