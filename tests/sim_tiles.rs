@@ -219,3 +219,45 @@ fn per_rank_checkpoints_resume_on_the_same_and_other_counts() {
     assert!(e.contains("rank 2 failed") && e.contains(&m.files[2]) && e.contains("CRC"), "{e}");
     assert_eq!(sylva::job::checkpoint::read_manifest(&d).unwrap(), m);
 }
+
+#[test]
+fn map_sums_over_tiles_are_one_process_sums() {
+    use sylva::output::plot::{map_basal_area, map_bin, map_dims};
+    let toml = edges();
+    let (sc, mut w) = common::world(&toml);
+    common::run(&sc, &mut w, YEARS);
+    let px = 1024;
+    let dims = map_dims(&w, px);
+    let np = w.site.lib.species.len();
+    let bins = dims.0 * dims.1 * np;
+    let want = map_basal_area(&w, px);
+    let layout = Layout::new(&w.site, 3, 1).unwrap();
+    // some bins hold trees of two tiles (the map's 20 m pixels across the tile edges at 130 m
+    // and 260 m), so both ways of summing are used
+    let t = &w.stand.trees;
+    let mut owners: std::collections::HashMap<usize, std::collections::BTreeSet<usize>> = Default::default();
+    for i in 0..t.len() {
+        owners.entry(map_bin(t, i, dims, np)).or_default().insert(layout.owner_of(t.x[i], t.y[i]));
+    }
+    let shared = owners.values().filter(|o| o.len() > 1).count();
+    assert!(shared > 0 && owners.len() > shared + 10, "{shared} shared of {} bins with trees", owners.len());
+    let got: Vec<Option<Vec<f64>>> = std::thread::scope(|s| {
+        let h: Vec<_> = sylva::sim::tiles::LocalTransport::group(3)
+            .into_iter()
+            .map(|mut tr| {
+                let (w, layout) = (&w, layout.clone());
+                s.spawn(move || {
+                    use sylva::sim::tiles::Transport;
+                    let tile = Tile::new(w, layout, tr.rank());
+                    tile.gather_bin_sums(&mut tr, bins, |t, i| map_bin(t, i, dims, np), |t, i| t.basal_area_m2(i)).unwrap()
+                })
+            })
+            .collect();
+        h.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert!(got[1].is_none() && got[2].is_none());
+    let got = got[0].as_ref().unwrap();
+    assert_eq!(got.len(), bins);
+    assert!(got.iter().zip(&want).all(|(a, b)| a.to_bits() == b.to_bits()), "the sums differ from one process's");
+    assert!(want.iter().sum::<f64>() > 0.0);
+}
