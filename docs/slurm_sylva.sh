@@ -16,9 +16,11 @@
 set -euo pipefail
 SCENARIO=${1:?usage: sbatch slurm_sylva.sh SCENARIO.toml OUT_DIR}
 OUT=${2:?usage: sbatch slurm_sylva.sh SCENARIO.toml OUT_DIR}
-# a run already started in OUT continues from its checkpoint (on any number of ranks)
+# a run already started in OUT continues from its checkpoint (on any number of ranks): the
+# per-rank checkpoints of a tiled run (OUT/checkpoint/manifest.toml; each rank reads its own
+# file when the number of ranks is the same) or one process's OUT/checkpoint.bin
 RESUME=()
-[ -f "$OUT/checkpoint.bin" ] && RESUME=(--resume)
+if [ -f "$OUT/checkpoint/manifest.toml" ] || [ -f "$OUT/checkpoint.bin" ]; then RESUME=(--resume); fi
 # srun starts one `sylva` per task; Open MPI's PMIx (or PMI2) tells each its rank
 srun --mpi=pmix ./target/release/sylva simulate "$SCENARIO" --out "$OUT" \
   --threads "${SLURM_CPUS_PER_TASK:-1}" "${RESUME[@]}"
