@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Slurm batch script for a regional Sylva run over MPI (issue 17; docs/SCALING.md).
-# One tile per MPI rank; rank 0 writes the whole run directory (the same files, byte for byte,
-# as one process), so OUT must be on a file system rank 0 can write. Each rank holds the whole
+# One tile per MPI rank; the run directory holds the files of one process, byte for byte,
+# except the checkpoint (one file per rank in OUT/checkpoint/). Every rank writes into OUT (its
+# checkpoint, its part files of the inventories, which rank 0 merges), so OUT must be on a file
+# system all ranks share and can write (the cluster's parallel or network file system). Each rank holds the whole
 # site (terrain, conditions, per-cell grids) and its own tile's trees: size --mem-per-cpu from
 # a one-process run's memory at the site's size plus the tile's share of the trees
 # (docs/SCALING.md). Build once on the cluster with MPI:

@@ -521,8 +521,10 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
     }
 }
 
-/// Runs `scenario` as a tiled run over the transport `t`, one tile per rank: rank 0 writes the
-/// run directory of `opts` and returns its summary; the other ranks return `None`.
+/// Runs `scenario` as a tiled run over the transport `t`, one tile per rank: rank 0 drives the
+/// run and returns its summary, the other ranks return `None`. Every rank writes into the run
+/// directory of `opts` (its checkpoint, its part files of the inventories), so it must be a
+/// folder all ranks share.
 ///
 /// Errors: as [`run_scenario_with`] on rank 0 and [`work`] on the others; a scenario with
 /// seasonal snapshots.
