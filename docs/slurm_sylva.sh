@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Slurm batch script for a regional Sylva run over MPI (issue 17; docs/SCALING.md).
-# One tile per MPI rank; rank 0 writes the whole run directory (the same files, byte for byte,
-# as one process), so OUT must be on a file system rank 0 can write. Each rank holds the whole
+# One tile per MPI rank; the run directory holds the files of one process, byte for byte,
+# except the checkpoint (one file per rank in OUT/checkpoint/). Every rank writes into OUT (its
+# checkpoint, its part files of the inventories, which rank 0 merges), so OUT must be on a file
+# system all ranks share and can write (the cluster's parallel or network file system). Each rank holds the whole
 # site (terrain, conditions, per-cell grids) and its own tile's trees: size --mem-per-cpu from
 # a one-process run's memory at the site's size plus the tile's share of the trees
 # (docs/SCALING.md). Build once on the cluster with MPI:
@@ -16,9 +18,11 @@
 set -euo pipefail
 SCENARIO=${1:?usage: sbatch slurm_sylva.sh SCENARIO.toml OUT_DIR}
 OUT=${2:?usage: sbatch slurm_sylva.sh SCENARIO.toml OUT_DIR}
-# a run already started in OUT continues from its checkpoint (on any number of ranks)
+# a run already started in OUT continues from its checkpoint (on any number of ranks): the
+# per-rank checkpoints of a tiled run (OUT/checkpoint/manifest.toml; each rank reads its own
+# file when the number of ranks is the same) or one process's OUT/checkpoint.bin
 RESUME=()
-[ -f "$OUT/checkpoint.bin" ] && RESUME=(--resume)
+if [ -f "$OUT/checkpoint/manifest.toml" ] || [ -f "$OUT/checkpoint.bin" ]; then RESUME=(--resume); fi
 # srun starts one `sylva` per task; Open MPI's PMIx (or PMI2) tells each its rank
 srun --mpi=pmix ./target/release/sylva simulate "$SCENARIO" --out "$OUT" \
   --threads "${SLURM_CPUS_PER_TASK:-1}" "${RESUME[@]}"

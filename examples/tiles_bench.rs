@@ -9,7 +9,8 @@
 //! `cargo build --release --features mpi --bin sylva && cargo run --release --example tiles_bench`.
 //! Environment: `SYLVA_TILES_HA` (default 1000), `SYLVA_TILES_YEARS` (default 100),
 //! `SYLVA_TILES_RANKS` (default 2), `SYLVA_BIN` (the `sylva` binary; default the one beside
-//! this example's folder).
+//! this example's folder), `SYLVA_PHASE_TIMES=1` (also print the wall time per phase of the one
+//! process and of rank 0).
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::Instant;
@@ -53,6 +54,10 @@ fn main() {
     assert!(o.status.success(), "one process failed: {}", String::from_utf8_lossy(&o.stderr));
     let rss_one = children_max_rss_mib();
     println!("1 process × 2 threads: {t_one:.1} s, peak RSS {rss_one:.0} MiB");
+    // with SYLVA_PHASE_TIMES=1 the binary prints its wall time per phase
+    for l in String::from_utf8_lossy(&o.stderr).lines().filter(|l| l.starts_with("phase times")) {
+        println!("  {l}");
+    }
     // ranks
     let tiled = tmp.path().join("tiled");
     let t0 = Instant::now();
@@ -70,10 +75,16 @@ fn main() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "mpirun failed: {err}");
     println!("{ranks} ranks × 1 thread: {t_ranks:.1} s ({:.2}× the one process)", t_ranks / t_one);
-    for l in err.lines().filter(|l| l.starts_with("rank ")) {
+    for l in err.lines().filter(|l| l.starts_with("rank ") || l.starts_with("phase times")) {
         println!("  {l}");
     }
-    let same = std::fs::read(one.join("stand_table.csv")).ok() == std::fs::read(tiled.join("stand_table.csv")).ok() && std::fs::read(one.join("checkpoint.bin")).ok() == std::fs::read(tiled.join("checkpoint.bin")).ok();
-    println!("stand table and checkpoint byte-identical: {same}");
+    // the ranks' checkpoints (one file each) assembled into the world of one process
+    let scenario = sylva::sim::Scenario::load(&sc).expect("scenario");
+    let lib = sylva::species::SpeciesLibrary::embedded().expect("species");
+    let mut w = sylva::sim::World::new(scenario.site().expect("site"), &lib, &scenario).expect("world");
+    let rows = sylva::job::checkpoint::load_any(&tiled, &mut w).expect("the ranks' checkpoints");
+    let same_ck = std::fs::read(one.join("checkpoint.bin")).ok() == Some(sylva::sim::checkpoint::to_bytes(&w, &rows));
+    let same = std::fs::read(one.join("stand_table.csv")).ok() == std::fs::read(tiled.join("stand_table.csv")).ok() && same_ck;
+    println!("stand table and checkpoint (the ranks' files assembled) byte-identical: {same}");
     assert!(same, "the tiled run differs from one process");
 }

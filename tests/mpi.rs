@@ -1,10 +1,11 @@
 //! Tiled runs over MPI (issue 17; `cargo test --features mpi --test mpi`, needs Open MPI's
 //! `mpirun`): `mpirun -np 2` and `-np 3` of `sylva simulate` write the run directory of one
-//! process byte for byte; a run stopped on 3 ranks and resumed on 2 ends as the unbroken run.
+//! process byte for byte (each rank's checkpoint its own file: assembled, they are the one
+//! process's `checkpoint.bin`); a run stopped on 3 ranks and resumed on 2, and one stopped on
+//! 2 and resumed on 2 (each rank reading its own checkpoint), end as the unbroken run.
 #![cfg(feature = "mpi")]
 
 mod common;
-use common::files;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -52,12 +53,9 @@ fn simulate(ranks: usize, sc: &Path, out: &Path, resume: bool) {
     }
 }
 
-fn assert_same_dir(a: &Path, b: &Path, what: &str) {
-    let (fa, fb) = (files(a), files(b));
-    assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>(), "{what}: different files");
-    for (k, v) in &fa {
-        assert!(v == &fb[k], "{what}: {k} differs");
-    }
+/// The world of the scenario at its start, with the shipped species (as `sylva simulate`).
+fn template(years: u32) -> sylva::sim::World {
+    common::world_with(&scenario(years), &common::embedded()).1
 }
 
 #[test]
@@ -66,7 +64,7 @@ fn two_and_three_ranks_write_the_run_directory_of_one_process() {
     let sc = write_scenario(tmp.path(), 20);
     let one = tmp.path().join("one");
     simulate(0, &sc, &one, false);
-    let f = files(&one);
+    let f = common::files(&one);
     // a meaningful run: recruits (ids from 2^44 on) in the last inventory, on more than one tile
     let inv = String::from_utf8(f["inventory/year_0020.csv"].clone()).unwrap();
     let recruits: Vec<f64> = inv.lines().skip(1).filter(|l| l.split(',').next().and_then(|id| id.parse::<u64>().ok()).is_some_and(|id| id >= 1 << 44)).map(|l| l.split(',').nth(2).unwrap().parse().unwrap()).collect();
@@ -76,7 +74,8 @@ fn two_and_three_ranks_write_the_run_directory_of_one_process() {
     for n in [2, 3] {
         let d = tmp.path().join(format!("np{n}"));
         simulate(n, &sc, &d, false);
-        assert_same_dir(&one, &d, &format!("{n} ranks"));
+        let m = common::assert_same_run(&one, &d, &template(20), &format!("{n} ranks"));
+        assert_eq!((m.year, m.ranks, m.tiles_across, m.tiles_up), (20, n, n, 1));
     }
 }
 
@@ -91,5 +90,23 @@ fn stopped_on_three_ranks_resumed_on_two() {
     // the 9-year run ended with its own checkpoint and snapshot; 2 ranks extend it to 18 years
     simulate(2, &long, &d, true);
     // scenario.toml: both runs write the scenario as run (18 years), from different files
-    assert_same_dir(&one, &d, "3 ranks for 9 years, resumed on 2 for 18");
+    let m = common::assert_same_run(&one, &d, &template(18), "3 ranks for 9 years, resumed on 2 for 18");
+    assert_eq!((m.year, m.ranks), (18, 2));
+}
+
+#[test]
+fn stopped_on_two_ranks_resumed_on_two() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (short, long) = (write_scenario(tmp.path(), 9), write_scenario(tmp.path(), 18));
+    let one = tmp.path().join("one");
+    simulate(0, &long, &one, false);
+    let d = tmp.path().join("split");
+    simulate(2, &short, &d, false);
+    let m = sylva::job::checkpoint::read_manifest(&d).unwrap();
+    assert_eq!((m.year, m.ranks, m.files.len()), (9, 2, 2));
+    assert!(!d.join("checkpoint.bin").exists());
+    // the same layout: each rank reads its own file
+    simulate(2, &long, &d, true);
+    let m = common::assert_same_run(&one, &d, &template(18), "2 ranks for 9 years, resumed on 2 for 18");
+    assert_eq!((m.year, m.ranks), (18, 2));
 }

@@ -131,14 +131,133 @@ fn tiles_in_threads_write_the_run_directory_of_one_process() {
     let (b, bytes) = sylva::job::tiled::run_local_tiles(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&three), 3).unwrap();
     assert_eq!(a.rows, b.rows);
     assert!(bytes.len() == 3 && bytes.iter().all(|&n| n > 0), "bytes sent per rank: {bytes:?}");
-    let (fa, fb) = (common::files(&one), common::files(&three));
+    let fa = common::files(&one);
     assert!(fa.contains_key("checkpoint.bin") && fa.contains_key("inventory/year_0010.csv") && fa.len() > 10, "{:?}", fa.keys());
-    assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>());
-    for (k, v) in &fa {
-        assert!(v == &fb[k], "{k} differs between one process and 3 tiles");
-    }
+    let template = sylva::sim::World::new(sc.site().unwrap(), &lib, &sc).unwrap();
+    let m = common::assert_same_run(&one, &three, &template, "one process and 3 tiles");
+    assert_eq!((m.year, m.ranks, m.tiles_across, m.tiles_up), (12, 3, 3, 1), "{m:?}");
+    assert_eq!(m.files, ["year_0012_rank_0000.bin", "year_0012_rank_0001.bin", "year_0012_rank_0002.bin"]);
     // seasonal snapshots need every tile in the middle of a year: refused
     let seasonal = Scenario::from_toml_str(&toml.replace("snapshot_every = 5", "snapshot_every = 5\nseasonal_snapshots = true"), "tiles_dir").unwrap();
     let e = sylva::job::tiled::run_local_tiles(&seasonal, seasonal.site().unwrap(), &lib, sylva::job::run::RunOptions::new(tmp.path().join("s")), 2).unwrap_err().to_string();
     assert!(e.contains("seasonal_snapshots"), "{e}");
+}
+
+/// Beech seed trees at the tile edges of 2 and 3 tiles; snapshots every 5 years, checkpoints
+/// every 4.
+fn resume_scenario(years: u32) -> Scenario {
+    let toml = common::ScenarioToml::new("resume", years, 7)
+        .species(&["beech"])
+        .line("light_cell_m = 10.0")
+        .line("snapshot_every = 5")
+        .line("checkpoint_every = 4")
+        .uniform(20, 12, 20.0, 300.0)
+        .seed_sources("beech", &[[198.0, 118.0], [134.0, 200.0], [268.0, 125.0]], 3)
+        .build();
+    Scenario::from_toml_str(&toml, "resume").unwrap()
+}
+
+/// Runs `sc` into `dir` as one process (`n` = 1) or `n` tiles in threads.
+fn run_n(sc: &Scenario, dir: &std::path::Path, n: usize, resume: bool) -> Result<sylva::job::run::RunSummary, sylva::job::JobError> {
+    let lib = sylva::sim::fixtures::library();
+    let mut o = sylva::job::run::RunOptions::new(dir);
+    o.resume = resume;
+    if n == 1 {
+        sylva::job::run::run_scenario(sc, sc.site().unwrap(), &lib, o)
+    } else {
+        sylva::job::tiled::run_local_tiles(sc, sc.site().unwrap(), &lib, o, n).map(|r| r.0)
+    }
+}
+
+#[test]
+fn per_rank_checkpoints_resume_on_the_same_and_other_counts() {
+    let (short, long) = (resume_scenario(9), resume_scenario(18));
+    let lib = sylva::sim::fixtures::library();
+    let template = World::new(long.site().unwrap(), &lib, &long).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let one = tmp.path().join("one");
+    let unbroken = run_n(&long, &one, 1, false).unwrap();
+    assert_eq!(unbroken.rows.len(), 18);
+    assert!(unbroken.trees > 20 && unbroken.trees == unbroken.world.stand.trees.len(), "{} trees", unbroken.trees);
+    // 3 → 3: every rank reads its own file; 3 → 2 and 3 → 1: the files assembled; 1 → 3:
+    // checkpoint.bin scattered
+    for (first, then) in [(3, 3), (3, 2), (3, 1), (1, 3)] {
+        let d = tmp.path().join(format!("{first}_then_{then}"));
+        let s = run_n(&short, &d, first, false).unwrap();
+        assert!(s.rows.len() == 9 && s.trees > 0, "{} rows, {} trees", s.rows.len(), s.trees);
+        if first > 1 {
+            let m = sylva::job::checkpoint::read_manifest(&d).unwrap();
+            assert_eq!((m.year, m.ranks), (9, first));
+            assert!(!d.join("checkpoint.bin").exists());
+        }
+        let s = run_n(&long, &d, then, true).unwrap();
+        assert_eq!(s.rows, unbroken.rows, "{first} then {then}: stand table");
+        assert_eq!(s.trees, unbroken.trees, "{first} then {then}: living trees");
+        let what = format!("{first} tiles for 9 years, resumed on {then} for 18");
+        if then == 1 {
+            let (fa, fb) = (common::files(&one), common::files(&d));
+            assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>(), "{what}");
+            for (k, v) in &fa {
+                assert!(v == &fb[k], "{what}: {k} differs");
+            }
+        } else {
+            let m = common::assert_same_run(&one, &d, &template, &what);
+            assert_eq!((m.year, m.ranks), (18, then));
+        }
+    }
+    // the same count reads each rank's own file: a corrupt file of rank 2 is reported by rank 2,
+    // and the checkpoint is left as it was
+    let d = tmp.path().join("corrupt");
+    run_n(&short, &d, 3, false).unwrap();
+    let m = sylva::job::checkpoint::read_manifest(&d).unwrap();
+    let p = d.join("checkpoint").join(&m.files[2]);
+    let mut b = std::fs::read(&p).unwrap();
+    let mid = b.len() / 2;
+    b[mid] ^= 0x55;
+    std::fs::write(&p, &b).unwrap();
+    let e = run_n(&long, &d, 3, true).unwrap_err().to_string();
+    assert!(e.contains("rank 2 failed") && e.contains(&m.files[2]) && e.contains("CRC"), "{e}");
+    assert_eq!(sylva::job::checkpoint::read_manifest(&d).unwrap(), m);
+}
+
+#[test]
+fn map_sums_over_tiles_are_one_process_sums() {
+    use sylva::output::plot::{map_basal_area, map_bin, map_dims};
+    let toml = edges();
+    let (sc, mut w) = common::world(&toml);
+    common::run(&sc, &mut w, YEARS);
+    let px = 1024;
+    let dims = map_dims(&w, px);
+    let np = w.site.lib.species.len();
+    let bins = dims.0 * dims.1 * np;
+    let want = map_basal_area(&w, px);
+    let layout = Layout::new(&w.site, 3, 1).unwrap();
+    // some bins hold trees of two tiles (the map's 20 m pixels across the tile edges at 130 m
+    // and 260 m), so both ways of summing are used
+    let t = &w.stand.trees;
+    let mut owners: std::collections::HashMap<usize, std::collections::BTreeSet<usize>> = Default::default();
+    for i in 0..t.len() {
+        owners.entry(map_bin(t, i, dims, np)).or_default().insert(layout.owner_of(t.x[i], t.y[i]));
+    }
+    let shared = owners.values().filter(|o| o.len() > 1).count();
+    assert!(shared > 0 && owners.len() > shared + 10, "{shared} shared of {} bins with trees", owners.len());
+    let got: Vec<Option<Vec<f64>>> = std::thread::scope(|s| {
+        let h: Vec<_> = sylva::sim::tiles::LocalTransport::group(3)
+            .into_iter()
+            .map(|mut tr| {
+                let (w, layout) = (&w, layout.clone());
+                s.spawn(move || {
+                    use sylva::sim::tiles::Transport;
+                    let tile = Tile::new(w, layout, tr.rank());
+                    tile.gather_bin_sums(&mut tr, bins, |t, i| map_bin(t, i, dims, np), |t, i| t.basal_area_m2(i)).unwrap()
+                })
+            })
+            .collect();
+        h.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert!(got[1].is_none() && got[2].is_none());
+    let got = got[0].as_ref().unwrap();
+    assert_eq!(got.len(), bins);
+    assert!(got.iter().zip(&want).all(|(a, b)| a.to_bits() == b.to_bits()), "the sums differ from one process's");
+    assert!(want.iter().sum::<f64>() > 0.0);
 }

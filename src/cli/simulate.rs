@@ -17,7 +17,8 @@ pub struct Args {
     /// Run directory.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
-    /// Continue an interrupted run from OUT/checkpoint.bin.
+    /// Continue an interrupted run from its checkpoint (OUT/checkpoint.bin, or a tiled run's
+    /// per-rank OUT/checkpoint/).
     #[arg(long)]
     pub resume: bool,
     /// Worker threads, 1–256 (default: all cores).
@@ -154,7 +155,7 @@ pub fn simulate_mode(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, 
     };
     // a resumed run keeps the species files it was simulated with (a changed species is
     // refused by the checkpoint before anything is written)
-    if !(resume && out.join("checkpoint.bin").is_file()) {
+    if !(resume && sylva::job::checkpoint::exists(&out)) {
         save_run_species(sc, lib, &out)?;
     }
     let mut opts = RunOptions::new(&out);
@@ -183,7 +184,7 @@ pub fn simulate_mode(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, 
         "{} year {}: {} trees, basal area {:.1} m²/ha, top height {:.1} m ({:.1} s){} → {}",
         sc.name,
         res.world.stand.year,
-        res.world.stand.trees.len(),
+        res.trees,
         last.map_or(0.0, |r| r.basal_area_m2_ha),
         last.map_or(0.0, |r| r.top_height_m),
         res.seconds,
@@ -194,7 +195,7 @@ pub fn simulate_mode(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, 
         return Err(super::Interrupted(format!("stopped (Ctrl-C or SIGTERM) after year {}: outputs so far are complete in {}; continue with --resume", res.world.stand.year, out.display())).into());
     }
     let pool = res.world.site.pool.iter().map(|&s| res.world.site.lib.species[s as usize].id.clone()).collect();
-    Ok(SimOutcome { year: res.world.stand.year, trees_alive: res.world.stand.trees.len(), pool, rows: res.rows })
+    Ok(SimOutcome { year: res.world.stand.year, trees_alive: res.trees, pool, rows: res.rows })
 }
 
 /// Prints one line per rank of a tiled run to stderr: wall time, peak resident memory
@@ -217,7 +218,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut dirs: Vec<&Path> = Vec::new();
     // the run's own species files count once it has a checkpoint (a run killed before that
     // starts again from year 0 and writes them anew)
-    if a.resume && run_species.is_dir() && a.out.join("checkpoint.bin").is_file() {
+    if a.resume && run_species.is_dir() && sylva::job::checkpoint::exists(&a.out) {
         dirs.push(&run_species);
     }
     dirs.extend(a.species_dir.as_deref());

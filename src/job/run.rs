@@ -40,7 +40,8 @@ pub struct Progress {
 pub struct RunOptions<'a> {
     /// Run directory (created).
     pub out_dir: PathBuf,
-    /// Continue from `out_dir/checkpoint.bin`.
+    /// Continue from the checkpoint of `out_dir` (`checkpoint.bin`, or a tiled run's per-rank
+    /// checkpoints: [`checkpoint::find`]).
     pub resume: bool,
     /// When set (e.g. by a Ctrl-C handler), the run stops after the current year with all
     /// outputs so far written and a checkpoint.
@@ -72,8 +73,12 @@ impl RunOptions<'_> {
 /// What a run did.
 #[derive(Debug, Clone)]
 pub struct RunSummary {
-    /// The world at the end.
+    /// The world at the end. In a tiled run (rank 0) the year is the last one simulated, the
+    /// rest as of the last year whose outputs needed the whole world (a snapshot, a stop), or
+    /// as started when none did.
     pub world: World,
+    /// Living trees at the end (the whole landscape's, in a tiled run too).
+    pub trees: usize,
     /// Stand table, one row per year.
     pub rows: Vec<StandRow>,
     /// True when stopped early by the stop flag.
@@ -193,6 +198,44 @@ pub trait Stepper {
     ///
     /// Errors: the stepper's.
     fn complete(&mut self, world: &mut World) -> Result<()>;
+    /// Reads the checkpoint of run directory `dir` into `world` (built from the scenario) for a
+    /// resumed run, before [`Stepper::begin`]; returns the stand table so far. Default: one
+    /// process's [`checkpoint::load_any`] (`checkpoint.bin`, or per-rank checkpoints
+    /// assembled).
+    ///
+    /// Errors: as [`checkpoint::load_any`]; the stepper's.
+    fn resume(&mut self, dir: &Path, world: &mut World) -> Result<Vec<StandRow>> {
+        checkpoint::load_any(dir, world)
+    }
+    /// Writes the checkpoint of the year into run directory `dir` (the folders of the outputs
+    /// it counts as written are synced before). Default: `checkpoint.bin` of `world` and
+    /// `rows` ([`checkpoint::save`]), then the per-rank checkpoints it supersedes removed.
+    ///
+    /// Errors: I/O errors naming the file; the stepper's.
+    fn save(&mut self, dir: &Path, world: &World, rows: &[StandRow]) -> Result<()> {
+        checkpoint::save(&dir.join(checkpoint::FILE), world, rows)?;
+        crate::output::sync_dir(dir)?;
+        checkpoint::remove_ranks(dir)
+    }
+    /// True when [`Stepper::save`] reads `world` (so a checkpoint year steps with `full`);
+    /// false when the stepper saves from its own state (a tiled run's per-rank checkpoints).
+    fn save_reads_world(&self) -> bool {
+        true
+    }
+    /// Writes the plain snapshot `label` (e.g. `year_0010`) into run directory `dir`: the
+    /// inventory CSV, the GeoJSON inventory when `geojson`, and with `maps` the
+    /// regeneration-layer CSV and the species and basal-area maps (longest side `map_px`).
+    /// Default: from `world`.
+    ///
+    /// Errors: I/O errors naming the file; the stepper's.
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool) -> Result<()> {
+        snapshot(dir, world, label, maps, map_px, geojson)
+    }
+    /// True when [`Stepper::snapshot`] reads `world` (so a snapshot year steps with `full`);
+    /// false when the stepper writes snapshots from its own state (a tiled run's ranks).
+    fn snapshot_reads_world(&self) -> bool {
+        true
+    }
 }
 
 /// The stepper of one process: [`step_year_with`] on the whole world.
@@ -221,7 +264,8 @@ impl Stepper for OneProcess {
 /// A fresh run (not `resume`) first removes the snapshots and the checkpoint of an earlier run
 /// in the same directory ([`clear_snapshots`]), after checking that the run, inventory and
 /// maps folders are writable (so a run that cannot write loses nothing of the earlier one).
-/// A resumed run continues from `checkpoint.bin` (its identity must match the scenario's:
+/// A resumed run continues from `checkpoint.bin` or a tiled run's per-rank checkpoints
+/// ([`checkpoint::find`]; its identity must match the scenario's:
 /// [`crate::sim::checkpoint::restore`]; more `years` extend the run) and rewrites
 /// `scenario.toml`; with no checkpoint yet but a `scenario.toml` or `species/` (a run killed
 /// before its first checkpoint) it starts from year 0. Every start removes the temporary files a killed run
@@ -248,21 +292,21 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         mkdir(&dir.join("maps"))?;
     }
     // temporary files a killed run left behind (never read, but they would pile up)
-    for sub in [dir.clone(), dir.join("inventory"), dir.join("maps"), dir.join("maps").join("conditions"), dir.join("species")] {
+    for sub in [dir.clone(), dir.join("inventory"), dir.join("maps"), dir.join("maps").join("conditions"), dir.join("species"), dir.join(checkpoint::RANK_DIR)] {
         crate::output::remove_stale_temporaries(&sub)?;
     }
     let mut world = World::new(site, lib, scenario)?;
-    let ck = dir.join("checkpoint.bin");
+    let ck = dir.join(checkpoint::FILE);
     let gj_years = opts.geojson_years.clone();
     let last_year = scenario.years;
     let gj = move |y: u32| y == last_year || gj_years.as_ref().is_none_or(|ys| ys.contains(&y));
     let mut rows = Vec::new();
-    let resume = opts.resume && (ck.exists() || !started_here(&dir, &ck)?);
+    let resume = opts.resume && (checkpoint::exists(&dir) || !started_here(&dir, &ck)?);
     if opts.resume && !resume {
         tracing::warn!("{}: no checkpoint yet (the run was stopped before its first one): starting from year 0", dir.display());
     }
     if resume {
-        rows = checkpoint::load(&ck, &mut world)?;
+        rows = stepper.resume(&dir, &mut world)?;
         // a snapshot off this run's schedule at the checkpoint's year (one a stopped run wrote
         // so its state could be viewed, or the end of a shorter run now extended) is not one an
         // unbroken run writes: removed, so the resumed directory equals the unbroken run's
@@ -282,9 +326,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         }
         clear_snapshots(&dir)?;
         // an earlier run's checkpoint must not be resumed after this run is interrupted
-        if ck.exists() {
-            std::fs::remove_file(&ck).map_err(|e| Error::io(&ck, e))?;
-        }
+        checkpoint::remove_all(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {
             snapshot(&dir, &world, "year_0000", true, opts.map_px, gj(0))?;
@@ -296,6 +338,11 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     stepper.begin(&world)?;
     let t0 = Instant::now();
     let mut stopped = false;
+    let mut trees = world.stand.trees.len();
+    // whether snapshots and checkpoints need the world whole on this process (one process, or
+    // a caller that reads the world at snapshots); a tiled run writes them from the ranks
+    let snap_world = stepper.snapshot_reads_world() || opts.on_snapshot.is_some();
+    let save_world = stepper.save_reads_world();
     let every = scenario.snapshot_every;
     while world.stand.year < scenario.years {
         let y = world.stand.year + 1;
@@ -307,7 +354,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         let (d, px, gj_y) = (dir.clone(), opts.map_px, gj(y));
         let checkpoint_year = y == scenario.years || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0);
         let stop_before = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
-        let full = snap_year || checkpoint_year || stop_before;
+        let full = (snap_year && snap_world) || (checkpoint_year && save_world) || (stop_before && (snap_world || save_world));
         stepper.step(&mut world, scenario, &mut rep, full, &mut |season, w| {
             if seasonal && season != Season::Winter && err.is_none() {
                 let name = match season {
@@ -324,19 +371,20 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
             return Err(e);
         }
         let trees_yr = rep.trees.max(1) as f64;
+        trees = rep.trees;
         if let Some(r) = rep.row {
             rows.push(r);
         }
         let t_out = Instant::now();
         if snap_year {
-            snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px, gj(y))?;
+            stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, gj(y))?;
             tables(&dir, &rows, &world, true)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(y, &world);
             }
         }
         let stop_now = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
-        if stop_now && !full {
+        if stop_now && !full && ((opts.write_snapshots && snap_world) || save_world) {
             stepper.complete(&mut world)?;
         }
         if checkpoint_year || stop_now {
@@ -348,8 +396,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
                 }
             }
             crate::output::sync_dir(&dir)?;
-            checkpoint::save(&ck, &world, &rows)?;
-            crate::output::sync_dir(&dir)?;
+            stepper.save(&dir, &world, &rows)?;
         }
         if let Some(p) = opts.progress.as_mut() {
             let output_seconds = t_out.elapsed().as_secs_f64();
@@ -358,7 +405,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         if stop_now && y < scenario.years {
             stopped = true;
             if opts.write_snapshots && !snap_year {
-                snapshot(&dir, &world, &format!("year_{y:04}"), true, opts.map_px, true)?;
+                stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, true)?;
                 if let Some(f) = opts.on_snapshot.as_mut() {
                     f(y, &world);
                 }
@@ -366,5 +413,5 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
             break;
         }
     }
-    Ok(RunSummary { world, rows, stopped, seconds: t0.elapsed().as_secs_f64() })
+    Ok(RunSummary { world, trees, rows, stopped, seconds: t0.elapsed().as_secs_f64() })
 }

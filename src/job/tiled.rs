@@ -1,20 +1,41 @@
 //! Tiled runs with outputs (`mpirun -np N sylva simulate …`, `sylva simulate --tiles N`): the
 //! landscape cut into one tile per rank ([`crate::sim::tiles`]); every rank steps its tile;
-//! rank 0 also runs the run driver ([`run_scenario_with`]) and writes the whole run directory
-//! from the world it gathers, so the directory is the one a single process writes, byte for
-//! byte (stand table every year from the gathered stand-table columns; inventories, maps and
-//! the checkpoint in the years that write them, from every rank's whole stand).
+//! rank 0 also runs the run driver ([`run_scenario_with`]). The run directory is the one a
+//! single process writes, byte for byte, except the checkpoint (one file per rank, below):
+//! - `stand_table.csv`, `stand_table.png`, `scenario.toml`, `species/`, year 0's snapshot:
+//!   rank 0 (the stand table's columns are gathered to it every year);
+//! - `inventory/year_NNNN.csv`, `.geojson`, `_regeneration.csv`: every rank writes the lines
+//!   of its own trees (living in id order, then this year's dead in id order) and cohorts into
+//!   part files `.NAME.rankRRRR.PID.tmp` beside the file; after all have, rank 0 merges them
+//!   by tree id (cohorts by light cell), streaming, into the file ([`write_parts`]);
+//! - `maps/species_*.png`, `maps/basal_area_*.png`: drawn by rank 0 from the basal area per
+//!   map pixel and species: each rank sums its own trees per bin; a bin with trees on one rank
+//!   takes that rank's sum, and only the trees of bins with trees on several ranks are sent to
+//!   rank 0 and summed in id order ([`crate::sim::tiles::Tile::gather_bin_sums`]), so every
+//!   bin is the f64 sum of one process;
+//! - the whole world is gathered to rank 0 only at a stop (Ctrl-C) or when a caller reads the
+//!   world at every snapshot (`RunOptions::on_snapshot`).
 //!
-//! Checkpoints and `--resume`: rank 0 writes the one `checkpoint.bin` of a single process
-//! (the gathered world); a resumed run, on any number of ranks, reads it on rank 0 and sends
-//! every rank its part, so a run stopped on 3 ranks can go on with 2, or with one process.
+//! Checkpoints and `--resume` per rank ([`super::checkpoint`]): in a checkpoint year every
+//! rank writes its own tile's checkpoint, `checkpoint/year_YYYY_rank_RRRR.bin` (rank 0's with
+//! the stand table), nothing gathered; once all have, rank 0 writes `checkpoint/manifest.toml`
+//! (year, layout, files), which commits them, and removes the files it supersedes. A resume on
+//! the same number of ranks (the same layout) has every rank read its own file. On another
+//! number of ranks rank 0 assembles the world of one process from all the files
+//! ([`super::checkpoint::load_ranks`]) and sends every rank its part, so a run stopped on 3
+//! ranks can go on with 2, or with one process; a `checkpoint.bin` of one process is read by
+//! rank 0 and sent out the same way.
 //!
 //! Protocol: before every collective step rank 0 sends every rank a command ([`Command`]); the
 //! other ranks ([`work`]) wait for it, so all ranks take part in the same exchanges in the same
 //! order.
 
+use super::checkpoint::{self, Found, Manifest};
 use super::run::{run_scenario_with, RunOptions, RunSummary, Stepper};
 use super::Result;
+use crate::sim::cohorts::RegenLedger;
+use crate::sim::stats::StandRow;
+use std::path::{Path, PathBuf};
 use crate::conditions::SiteConditions;
 use crate::sim::scenario::Scenario;
 use crate::sim::step::YearReport;
@@ -37,11 +58,17 @@ pub enum Command {
     Complete = 4,
     /// The run is over.
     End = 5,
+    /// Write your tile's checkpoint to the path that follows ([`send_paths`], [`agree`]).
+    Save = 6,
+    /// Read your tile from the per-rank checkpoint at the path that follows.
+    Resume = 7,
+    /// Write your tile's part of the snapshot that follows ([`write_parts`]).
+    Snapshot = 8,
 }
 
 impl Command {
     fn from_byte(b: u8) -> Option<Command> {
-        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End].into_iter().find(|c| *c as u8 == b)
+        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot].into_iter().find(|c| *c as u8 == b)
     }
 }
 
@@ -56,7 +83,179 @@ fn command(t: &mut dyn Transport, c: Option<Command>) -> Result<Command> {
     };
     let got = t.exchange(out)?;
     let b = got.first().and_then(|m| m.first()).copied().unwrap_or(0);
-    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–5)") })?)
+    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–8)") })?)
+}
+
+/// Rank 0 sends every rank `k` the year and `paths[k]` (a per-rank checkpoint file); the others
+/// pass `None`. Returns this rank's year and path.
+///
+/// Errors: [`Error::Exchange`] from the transport, a path that is not UTF-8 (named) or a
+/// malformed message.
+fn send_paths(t: &mut dyn Transport, paths: Option<(u32, Vec<PathBuf>)>) -> Result<(u32, PathBuf)> {
+    let n = t.size();
+    let mut out = vec![Vec::new(); n];
+    if let Some((year, paths)) = paths {
+        if paths.len() != n {
+            return Err(Error::Exchange { peer: 0, reason: format!("{} checkpoint paths for {n} ranks", paths.len()) }.into());
+        }
+        for (m, p) in out.iter_mut().zip(&paths) {
+            let s = p.to_str().ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "checkpoint path".into(), value: p.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() })?;
+            m.extend_from_slice(&year.to_le_bytes());
+            m.extend_from_slice(s.as_bytes());
+        }
+    }
+    let got = t.exchange(out)?;
+    let m = got.first().map(|m| m.as_slice()).unwrap_or(&[]);
+    if m.len() < 4 {
+        return Err(Error::Exchange { peer: 0, reason: format!("checkpoint path message of {} bytes (expected a year and a path)", m.len()) }.into());
+    }
+    let year = u32::from_le_bytes([m[0], m[1], m[2], m[3]]);
+    let path = std::str::from_utf8(&m[4..]).map_err(|e| Error::Exchange { peer: 0, reason: format!("checkpoint path not UTF-8: {e}") })?;
+    Ok((year, PathBuf::from(path)))
+}
+
+/// Every rank tells every other whether its part of a collective step (writing or reading its
+/// checkpoint) failed (`failed`: the error's text); all ranks then fail together.
+///
+/// Errors: [`Error::Exchange`] from the transport, or naming the first rank that failed with
+/// its error.
+fn agree(t: &mut dyn Transport, failed: Option<String>) -> Result<()> {
+    let n = t.size();
+    let msg = failed.map(|e| e.into_bytes()).unwrap_or_default();
+    let got = t.exchange(vec![msg; n])?;
+    match got.iter().enumerate().find(|(_, m)| !m.is_empty()) {
+        Some((k, m)) => Err(Error::Exchange { peer: k, reason: format!("rank {k} failed: {}", String::from_utf8_lossy(m)) }.into()),
+        None => Ok(()),
+    }
+}
+
+/// Reads tile `me` of `layout` from the per-rank checkpoint `path` of `year` into a copy of
+/// `template` (the world of the scenario at its start); returns it with the rows the file holds
+/// (rank 0's: the stand table).
+///
+/// Errors: as [`checkpoint::load`]; [`Error::Format`] naming the file when its year is not
+/// `year` (the manifest's).
+fn load_tile(template: &World, layout: &Layout, me: usize, path: &Path, year: u32) -> Result<(Tile, Vec<StandRow>)> {
+    let mut w = template.clone();
+    let rows = checkpoint::load(path, &mut w)?;
+    if w.stand.year != year {
+        return Err(Error::format(path, format!("year {} in a checkpoint whose manifest says year {year}", w.stand.year)).into());
+    }
+    Ok((Tile::resumed(w, layout.clone(), me), rows))
+}
+
+/// A snapshot written by the ranks ([`write_parts`]).
+#[derive(Debug, Clone, PartialEq)]
+struct Snap {
+    /// Run directory.
+    dir: PathBuf,
+    /// Snapshot label (`year_NNNN`).
+    label: String,
+    /// Regeneration layer and maps too.
+    maps: bool,
+    /// GeoJSON inventory too.
+    geojson: bool,
+    /// Longest side of the maps (pixels).
+    map_px: usize,
+}
+
+impl Snap {
+    fn encode(&self) -> Result<Vec<u8>> {
+        let dir = self.dir.to_str().ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "run directory".into(), value: self.dir.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() })?;
+        let mut m = vec![self.maps as u8 | (self.geojson as u8) << 1];
+        m.extend_from_slice(&(self.map_px as u64).to_le_bytes());
+        m.extend_from_slice(&(self.label.len() as u64).to_le_bytes());
+        m.extend_from_slice(self.label.as_bytes());
+        m.extend_from_slice(dir.as_bytes());
+        Ok(m)
+    }
+    fn decode(m: &[u8]) -> Result<Snap> {
+        let bad = |what: &str| Error::Exchange { peer: 0, reason: format!("snapshot message of {} bytes: {what}", m.len()) };
+        if m.len() < 17 {
+            return Err(bad("shorter than its header").into());
+        }
+        let map_px = u64::from_le_bytes(m[1..9].try_into().map_err(|_| bad("no map size"))?) as usize;
+        let n = u64::from_le_bytes(m[9..17].try_into().map_err(|_| bad("no label length"))?) as usize;
+        let label = m.get(17..17 + n).ok_or_else(|| bad("label cut short"))?;
+        let label = std::str::from_utf8(label).map_err(|_| bad("label not UTF-8"))?.to_string();
+        let dir = std::str::from_utf8(&m[17 + n..]).map_err(|_| bad("folder not UTF-8"))?;
+        Ok(Snap { dir: PathBuf::from(dir), label, maps: m[0] & 1 != 0, geojson: m[0] & 2 != 0, map_px })
+    }
+    /// This process's part file of rank `rank` for the output `name` in `sub`:
+    /// `.{name}.rank{rank}.{pid}.tmp`, a temporary file that a later run removes if this one
+    /// is killed ([`crate::output::remove_stale_temporaries`]).
+    fn part(&self, sub: &str, name: &str, rank: usize) -> PathBuf {
+        self.dir.join(sub).join(format!(".{name}.rank{rank:04}.{}.tmp", std::process::id()))
+    }
+}
+
+/// What rank 0 gets from [`write_parts`]: every rank's part files (inventory CSV, then
+/// GeoJSON, then regeneration, those written) and, with maps, the basal area per map bin.
+type SnapParts = (Vec<Vec<PathBuf>>, Option<Vec<f64>>);
+
+/// The ranks' part of a snapshot: rank 0 sends every rank `snap` (others pass `None`); every
+/// rank writes the inventory lines of its own trees (and GeoJSON features, and its cohorts'
+/// regeneration lines with `maps`) into its part files ([`Snap::part`]); all agree; the part
+/// paths and, with `maps`, the basal area per map bin ([`crate::output::plot::map_bin`],
+/// summed exactly as one process: [`Tile::gather_bin_sums`]) go to rank 0, which gets them
+/// back: per rank its part files (inventory CSV, then GeoJSON, then regeneration, those
+/// written), and the sums.
+///
+/// Errors: [`Error::Exchange`] from the transport or naming a rank that failed to write its
+/// parts (with its I/O error naming the file).
+fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Result<Option<SnapParts>> {
+    let n = t.size();
+    let mut out = vec![Vec::new(); n];
+    if let Some(s) = snap {
+        out = vec![s.encode()?; n];
+    }
+    let got = t.exchange(out)?;
+    let s = Snap::decode(got.first().map(|m| m.as_slice()).unwrap_or(&[]))?;
+    let me = t.rank();
+    let csv = s.part("inventory", &format!("{}.csv", s.label), me);
+    let gj = s.geojson.then(|| s.part("inventory", &format!("{}.geojson", s.label), me));
+    let regen = s.maps.then(|| s.part("inventory", &format!("{}_regeneration.csv", s.label), me));
+    let r = (|| -> Result<()> {
+        let layout = &tile.layout;
+        crate::output::inventory::write_inventory_part(&csv, gj.as_deref(), &tile.world, |x, y| layout.owner_of(x, y) == me)?;
+        if let Some(p) = &regen {
+            crate::output::inventory::write_regeneration_part(p, &tile.world)?;
+        }
+        Ok(())
+    })();
+    let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
+    r?;
+    a?;
+    let mine: Vec<PathBuf> = std::iter::once(csv).chain(gj).chain(regen).collect();
+    let text: Vec<&str> = mine.iter().filter_map(|p| p.to_str()).collect();
+    let mut out = vec![Vec::new(); n];
+    out[0] = text.join("\n").into_bytes();
+    let got = t.exchange(out)?;
+    let cols = if s.maps {
+        let dims = crate::output::plot::map_dims(&tile.world, s.map_px);
+        let np = tile.world.site.lib.species.len();
+        tile.gather_bin_sums(t, dims.0 * dims.1 * np, |tr, i| crate::output::plot::map_bin(tr, i, dims, np), |tr, i| tr.basal_area_m2(i))?
+    } else {
+        None
+    };
+    if me != 0 {
+        return Ok(None);
+    }
+    let mut paths = Vec::with_capacity(n);
+    for (k, m) in got.iter().enumerate() {
+        let text = std::str::from_utf8(m).map_err(|_| Error::Exchange { peer: k, reason: "part file paths not UTF-8".into() })?;
+        let ps: Vec<PathBuf> = text.split('\n').map(PathBuf::from).collect();
+        if ps.len() != mine.len() {
+            return Err(Error::Exchange { peer: k, reason: format!("{} part files, expected {}", ps.len(), mine.len()) }.into());
+        }
+        paths.push(ps);
+    }
+    Ok(Some((paths, cols)))
+}
+
+/// Tallies of zero for `world`'s pool.
+fn zero_tallies(world: &World) -> Tallies {
+    Tallies { deaths_total: Default::default(), regen_ledger: RegenLedger::new(world.site.pool.len()) }
 }
 
 /// Tiles across and up for `n` ranks on a light grid of `cols × rows` cells: the factor pair
@@ -93,7 +292,8 @@ pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
     Ok(Layout::new(&world.site, nx, ny)?)
 }
 
-/// Rank 0's [`Stepper`]: its own tile, the transport, the tallies at the start.
+/// Rank 0's [`Stepper`]: its own tile, the transport, the tallies at the start (zero once
+/// they are in rank 0's tile: its tallies then count from the run's start).
 pub struct Root<'t> {
     t: &'t mut dyn Transport,
     tile: Option<Tile>,
@@ -148,11 +348,21 @@ impl Drop for Root<'_> {
 
 impl Stepper for Root<'_> {
     fn begin(&mut self, world: &World) -> Result<()> {
+        if self.tile.is_some() {
+            // resumed from the per-rank checkpoints: every rank holds its tile already
+            return Ok(());
+        }
         let layout = layout_for(world, self.t.size())?;
         command(self.t, Some(Command::Begin))?;
-        self.base = world.tallies.clone();
         self.tile = Some(Tile::new(world, layout, 0));
-        self.collective(|tile, t| Ok(tile.scatter(Some(world), t)?))
+        self.collective(|tile, t| Ok(tile.scatter(Some(world), t)?))?;
+        // the tallies so far go into rank 0's tile, so the ranks' tallies add up to the run's
+        // (what each rank's checkpoint holds)
+        self.base = zero_tallies(world);
+        if let Some(tile) = self.tile.as_mut() {
+            tile.world.tallies = world.tallies.clone();
+        }
+        Ok(())
     }
     fn step(&mut self, world: &mut World, _: &Scenario, report: &mut YearReport, full: bool, _: &mut dyn FnMut(Season, &World)) -> Result<()> {
         command(self.t, Some(if full { Command::StepFull } else { Command::Step }))?;
@@ -171,6 +381,92 @@ impl Stepper for Root<'_> {
         command(self.t, Some(Command::Complete))?;
         let base = self.base.clone();
         self.collective(|tile, t| Ok(tile.gather(Some((world, &base)), t)?))
+    }
+    /// Per-rank checkpoints with the same layout: every rank reads its own file; otherwise
+    /// rank 0 reads `checkpoint.bin` or assembles the per-rank files, and [`Stepper::begin`]
+    /// sends the ranks their parts.
+    fn resume(&mut self, dir: &Path, world: &mut World) -> Result<Vec<StandRow>> {
+        let m = match checkpoint::find(dir)? {
+            Found::Ranks(m) => m,
+            _ => return checkpoint::load_any(dir, world),
+        };
+        let layout = layout_for(world, self.t.size())?;
+        if m.ranks != self.t.size() || !m.same_layout(&layout) {
+            return checkpoint::load_ranks(dir, &m, world);
+        }
+        command(self.t, Some(Command::Resume))?;
+        let cd = dir.join(checkpoint::RANK_DIR);
+        let r = (|| -> Result<(Tile, Vec<StandRow>)> {
+            let (year, p) = send_paths(self.t, Some((m.year, m.files.iter().map(|f| cd.join(f)).collect())))?;
+            let r = load_tile(world, &layout, 0, &p, year);
+            let a = agree(self.t, r.as_ref().err().map(|e| e.to_string()));
+            let r = r?;
+            a?;
+            Ok(r)
+        })();
+        if r.is_err() {
+            self.done = true;
+        }
+        let (tile, rows) = r?;
+        world.stand.year = tile.world.stand.year;
+        world.stand.trees.next_id = tile.world.stand.trees.next_id;
+        self.base = zero_tallies(world);
+        self.tile = Some(tile);
+        Ok(rows)
+    }
+    /// Every rank writes its tile's checkpoint (rank 0's with `rows`); rank 0 then commits
+    /// them with the manifest. `world` is not read.
+    fn save(&mut self, dir: &Path, _: &World, rows: &[StandRow]) -> Result<()> {
+        let Some(tile) = self.tile.as_ref() else {
+            return Err(Error::Exchange { peer: 0, reason: "a checkpoint before the run began".into() }.into());
+        };
+        let m = Manifest::new(tile.world.stand.year, &tile.layout);
+        let cd = dir.join(checkpoint::RANK_DIR);
+        std::fs::create_dir_all(&cd).map_err(|e| Error::io(&cd, e))?;
+        command(self.t, Some(Command::Save))?;
+        let paths: Vec<PathBuf> = m.files.iter().map(|f| cd.join(f)).collect();
+        self.collective(|tile, t| {
+            let (_, p) = send_paths(t, Some((m.year, paths)))?;
+            let r = checkpoint::save(&p, &tile.world, rows);
+            agree(t, r.as_ref().err().map(|e| e.to_string()))?;
+            r
+        })?;
+        checkpoint::commit_ranks(dir, &m)
+    }
+    fn save_reads_world(&self) -> bool {
+        false
+    }
+    /// Every rank writes its part files of the snapshot ([`write_parts`]); rank 0 merges them
+    /// by tree id (cohorts by light cell) into the files of one process and draws the maps from
+    /// the gathered map columns.
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool) -> Result<()> {
+        let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), maps, geojson, map_px };
+        command(self.t, Some(Command::Snapshot))?;
+        let Some((parts, cols)) = self.collective(|tile, t| write_parts(tile, t, Some(&snap)))? else {
+            return Err(Error::Exchange { peer: 0, reason: "rank 0 got no snapshot parts".into() }.into());
+        };
+        let column = |i: usize| parts.iter().map(|p| p[i].clone()).collect::<Vec<PathBuf>>();
+        let inv = dir.join("inventory");
+        use crate::output::inventory as inventory_out;
+        inventory_out::merge_inventory_csv(&inv.join(format!("{label}.csv")), &column(0))?;
+        let mut i = 1;
+        if geojson {
+            inventory_out::merge_inventory_geojson(&inv.join(format!("{label}.geojson")), world, &column(i))?;
+            i += 1;
+        }
+        if maps {
+            inventory_out::merge_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), &column(i))?;
+            let ba = cols.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map sums gathered".into() })?;
+            let m = dir.join("maps");
+            crate::output::plot::write_maps_from(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px, &ba)?;
+        }
+        for p in parts.iter().flatten() {
+            std::fs::remove_file(p).map_err(|e| Error::io(p, e))?;
+        }
+        Ok(())
+    }
+    fn snapshot_reads_world(&self) -> bool {
+        false
     }
 }
 
@@ -202,13 +498,33 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 tl.gather(None, t)?;
             }
             (Command::Complete, Some(tl)) => tl.gather(None, t)?,
+            (Command::Save, Some(tl)) => {
+                let (_, p) = send_paths(t, None)?;
+                let r = checkpoint::save(&p, &tl.world, &[]);
+                agree(t, r.as_ref().err().map(|e| e.to_string()))?;
+                r?;
+            }
+            (Command::Resume, None) => {
+                let (year, p) = send_paths(t, None)?;
+                let r = load_tile(&world, &layout, me, &p, year);
+                let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
+                let (tl, _) = r?;
+                a?;
+                tile = Some(tl);
+            }
+            (Command::Snapshot, Some(tl)) => {
+                write_parts(tl, t, None)?;
+            }
+            (Command::Resume, Some(_)) => return Err(Error::Exchange { peer: 0, reason: "command Resume after the run began".into() }.into()),
             (c, None) => return Err(Error::Exchange { peer: 0, reason: format!("command {c:?} before the run began") }.into()),
         }
     }
 }
 
-/// Runs `scenario` as a tiled run over the transport `t`, one tile per rank: rank 0 writes the
-/// run directory of `opts` and returns its summary; the other ranks return `None`.
+/// Runs `scenario` as a tiled run over the transport `t`, one tile per rank: rank 0 drives the
+/// run and returns its summary, the other ranks return `None`. Every rank writes into the run
+/// directory of `opts` (its checkpoint, its part files of the inventories), so it must be a
+/// folder all ranks share.
 ///
 /// Errors: as [`run_scenario_with`] on rank 0 and [`work`] on the others; a scenario with
 /// seasonal snapshots.
@@ -284,7 +600,7 @@ mod tests {
         assert_eq!(grid_for(4, 100, 100), (2, 2));
         assert_eq!(grid_for(8, 100, 50), (4, 2));
         assert_eq!(grid_for(6, 40, 120), (2, 3), "a tie (1 × 6, 2 × 3) goes to more tiles across");
-        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End] {
+        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot] {
             assert_eq!(Command::from_byte(c as u8), Some(c));
         }
         assert_eq!(Command::from_byte(0), None);

@@ -18,11 +18,18 @@ struct Rec<'a> {
 }
 
 fn records(w: &World) -> Vec<Rec<'_>> {
+    records_where(w, |_, _| true)
+}
+
+/// The records of the living and this year's dead trees of `w` standing at `(x, y)` (m) where
+/// `keep(x, y)`: living in store (id) order, then the dead in id order.
+fn records_where(w: &World, keep: impl Fn(f32, f32) -> bool) -> Vec<Rec<'_>> {
     let t = &w.stand.trees;
     let mut out: Vec<Rec> = (0..t.len())
+        .filter(|&i| keep(t.x[i], t.y[i]))
         .map(|i| Rec { id: t.id[i], species: &w.site.lib.species[t.species[i] as usize].id, v: [t.x[i], t.y[i], t.z[i], t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i]], status: "alive".into() })
         .collect();
-    let mut dead: Vec<Rec> = w.scratch.dead.iter().map(|d| Rec { id: d.id, species: &w.site.lib.species[d.species as usize].id, v: [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base], status: format!("dead:{}", d.cause.name()) }).collect();
+    let mut dead: Vec<Rec> = w.scratch.dead.iter().filter(|d| keep(d.x, d.y)).map(|d| Rec { id: d.id, species: &w.site.lib.species[d.species as usize].id, v: [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base], status: format!("dead:{}", d.cause.name()) }).collect();
     dead.sort_by_key(|r| r.id);
     out.extend(dead);
     out
@@ -35,10 +42,15 @@ pub fn inventory_csv(w: &World) -> String {
     s.push_str(HEADER);
     s.push('\n');
     for r in records(w) {
-        let v = r.v;
-        let _ = writeln!(s, "{},{},{:.2},{:.2},{:.2},{:.0},{:.2},{:.2},{:.2},{:.2},{}", r.id, r.species, v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], r.status);
+        csv_line(&mut s, &r);
     }
     s
+}
+
+/// Appends the inventory CSV line of `r` (with its newline) to `s`.
+fn csv_line(s: &mut String, r: &Rec) {
+    let v = r.v;
+    let _ = writeln!(s, "{},{},{:.2},{:.2},{:.2},{:.0},{:.2},{:.2},{:.2},{:.2},{}", r.id, r.species, v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], r.status);
 }
 
 /// The regeneration-layer CSV header.
@@ -119,27 +131,267 @@ impl PointGeoRef {
 /// Every feature also carries the local `x_m`, `y_m` of the CSV inventory.
 pub fn write_inventory_geojson(path: &Path, w: &World) -> Result<()> {
     let geo = PointGeoRef::of(w);
+    let head = geojson_head(w);
     crate::output::write_atomic_with(path, |f| {
-        f.write_all(b"{\"type\":\"FeatureCollection\",")?;
-        match geo.epsg {
-            Some(code) if !geo.degrees => write!(f, "\"crs\":{{\"type\":\"name\",\"properties\":{{\"name\":\"urn:ogc:def:crs:EPSG::{code}\"}}}},")?,
-            None => f.write_all(b"\"sylva_coordinates\":\"local metres from the site's south-west corner (no georeferencing)\",")?,
-            _ => {}
-        }
-        f.write_all(b"\"features\":[\n")?;
+        f.write_all(head.as_bytes())?;
         for (k, r) in records(w).iter().enumerate() {
-            let v = r.v;
             if k > 0 {
                 f.write_all(b",\n")?;
             }
-            let (mx, my) = geo.map(v[0] as f64, v[1] as f64);
-            let prec = if geo.degrees { 7 } else { 2 };
-            write!(
-                f,
-                "{{\"type\":\"Feature\",\"geometry\":{{\"type\":\"Point\",\"coordinates\":[{mx:.prec$},{my:.prec$},{:.2}]}},\"properties\":{{\"id\":{},\"species\":\"{}\",\"x_m\":{:.2},\"y_m\":{:.2},\"age_yr\":{:.0},\"height_m\":{:.2},\"dbh_cm\":{:.2},\"crown_radius_m\":{:.2},\"crown_base_m\":{:.2},\"status\":\"{}\"}}}}",
-                v[2], r.id, r.species, v[0], v[1], v[3], v[4], v[5], v[6], v[7], r.status
-            )?;
+            geojson_feature(f, r, &geo)?;
         }
-        f.write_all(b"\n]}\n")
+        f.write_all(GEOJSON_END)
     })
+}
+
+/// What ends the GeoJSON inventory after its last feature.
+const GEOJSON_END: &[u8] = b"\n]}\n";
+
+/// The GeoJSON inventory up to its first feature (the `crs` member as [`PointGeoRef::of`] `w`).
+fn geojson_head(w: &World) -> String {
+    let geo = PointGeoRef::of(w);
+    let mut s = String::from("{\"type\":\"FeatureCollection\",");
+    match geo.epsg {
+        Some(code) if !geo.degrees => s.push_str(&format!("\"crs\":{{\"type\":\"name\",\"properties\":{{\"name\":\"urn:ogc:def:crs:EPSG::{code}\"}}}},")),
+        None => s.push_str("\"sylva_coordinates\":\"local metres from the site's south-west corner (no georeferencing)\","),
+        _ => {}
+    }
+    s.push_str("\"features\":[\n");
+    s
+}
+
+/// Writes the GeoJSON feature of `r` (one line, no separator).
+fn geojson_feature(f: &mut impl Write, r: &Rec, geo: &PointGeoRef) -> std::io::Result<()> {
+    let v = r.v;
+    let (mx, my) = geo.map(v[0] as f64, v[1] as f64);
+    let prec = if geo.degrees { 7 } else { 2 };
+    write!(
+        f,
+        "{{\"type\":\"Feature\",\"geometry\":{{\"type\":\"Point\",\"coordinates\":[{mx:.prec$},{my:.prec$},{:.2}]}},\"properties\":{{\"id\":{},\"species\":\"{}\",\"x_m\":{:.2},\"y_m\":{:.2},\"age_yr\":{:.0},\"height_m\":{:.2},\"dbh_cm\":{:.2},\"crown_radius_m\":{:.2},\"crown_base_m\":{:.2},\"status\":\"{}\"}}}}",
+        v[2], r.id, r.species, v[0], v[1], v[3], v[4], v[5], v[6], v[7], r.status
+    )
+}
+
+// ---- parts of a tiled run (issue 17): each rank writes the lines of its own trees and
+// cohorts, in the order of the whole file; rank 0 merges the parts by their keys into the file
+// one process writes, byte for byte.
+
+/// Writes a rank's part of the inventory: the CSV lines (no header) of the trees of `w`
+/// standing where `keep(x, y)` to `csv`, and their GeoJSON features (one a line, no
+/// separators) to `geojson` when given; living trees in id order, then the dead in id order.
+/// Written atomically like every file ([`crate::output::write_atomic_with`]); the part files
+/// are temporaries that [`merge_inventory_csv`] and [`merge_inventory_geojson`] read.
+///
+/// Errors: [`super::OutputError::Io`] naming the part file.
+pub fn write_inventory_part(csv: &Path, geojson: Option<&Path>, w: &World, keep: impl Fn(f32, f32) -> bool) -> Result<()> {
+    let recs = records_where(w, keep);
+    crate::output::write_atomic_with(csv, |f| {
+        let mut s = String::with_capacity(96);
+        for r in &recs {
+            s.clear();
+            csv_line(&mut s, r);
+            f.write_all(s.as_bytes())?;
+        }
+        Ok(())
+    })?;
+    if let Some(g) = geojson {
+        let geo = PointGeoRef::of(w);
+        crate::output::write_atomic_with(g, |f| {
+            for r in &recs {
+                geojson_feature(f, r, &geo)?;
+                f.write_all(b"\n")?;
+            }
+            Ok(())
+        })?;
+    }
+    Ok(())
+}
+
+/// Writes a rank's part of the regeneration CSV: the lines (no header) of every cohort of `w`
+/// (the rank's own), in (light cell, pool) order.
+///
+/// Errors: [`super::OutputError::Io`] naming the part file.
+pub fn write_regeneration_part(path: &Path, w: &World) -> Result<()> {
+    let text = regeneration_csv(w);
+    let body = text.split_once('\n').map_or("", |(_, b)| b);
+    crate::output::write_atomic(path, body.as_bytes())
+}
+
+/// Merge key of an inventory line: living (0, `alive_end` ends the line) before dead (1),
+/// then the tree id.
+fn inventory_key(line: &str, alive_end: &str, id_field: impl Fn(&str) -> Option<&str>) -> Option<(u8, u64)> {
+    let dead = !line.ends_with(alive_end);
+    let id = id_field(line)?.parse().ok()?;
+    Some((dead as u8, id))
+}
+
+/// A part file being merged: its reader, its current line, the line's number.
+type PartReader = (std::io::BufReader<std::fs::File>, String, usize);
+/// A part's current line in the merge heap: its key and the part's index, least first.
+type HeapEntry = std::cmp::Reverse<((u8, u64), usize)>;
+
+/// Merges the sorted part files `parts` (one line per record, each sorted by `key`) into `out`,
+/// writing `sep` between records; records of equal key keep their part's order (a light cell's
+/// cohorts come from one part). Streams: one line per part in memory.
+///
+/// Errors: I/O errors; a line without a key (`InvalidData`, naming the part file and line).
+fn merge_lines(out: &mut impl Write, parts: &[std::path::PathBuf], key: impl Fn(&str) -> Option<(u8, u64)>, sep: &[u8]) -> std::io::Result<()> {
+    use std::io::BufRead;
+    let mut readers = Vec::with_capacity(parts.len());
+    for p in parts {
+        let f = std::fs::File::open(p).map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", p.display())))?;
+        readers.push((std::io::BufReader::new(f), String::new(), 0usize));
+    }
+    let mut heap = std::collections::BinaryHeap::new();
+    let next = |k: usize, r: &mut PartReader| -> std::io::Result<Option<HeapEntry>> {
+        r.1.clear();
+        if r.0.read_line(&mut r.1)? == 0 {
+            return Ok(None);
+        }
+        r.2 += 1;
+        let k2 = key(r.1.trim_end_matches('\n')).ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{} line {}: no key in {:?}", parts[k].display(), r.2, r.1)))?;
+        Ok(Some(std::cmp::Reverse((k2, k))))
+    };
+    for (k, r) in readers.iter_mut().enumerate() {
+        if let Some(e) = next(k, r)? {
+            heap.push(e);
+        }
+    }
+    let mut first = true;
+    while let Some(std::cmp::Reverse((_, k))) = heap.pop() {
+        if !first {
+            out.write_all(sep)?;
+        }
+        first = false;
+        let r = &mut readers[k];
+        out.write_all(r.1.trim_end_matches('\n').as_bytes())?;
+        if let Some(e) = next(k, r)? {
+            heap.push(e);
+        }
+    }
+    Ok(())
+}
+
+/// Writes the inventory CSV `path` atomically from the ranks' parts ([`write_inventory_part`]):
+/// the bytes [`write_inventory_csv`] writes for the whole world.
+///
+/// Errors: [`super::OutputError::Io`] naming `path` (and in the message the part file).
+pub fn merge_inventory_csv(path: &Path, parts: &[std::path::PathBuf]) -> Result<()> {
+    crate::output::write_atomic_with(path, |f| {
+        f.write_all(HEADER.as_bytes())?;
+        f.write_all(b"\n")?;
+        merge_lines(f, parts, |l| inventory_key(l, ",alive", |l| l.split(',').next()), b"\n")?;
+        // every line ends with a newline; none when there are no records
+        if parts.iter().any(|p| std::fs::metadata(p).is_ok_and(|m| m.len() > 0)) {
+            f.write_all(b"\n")?;
+        }
+        Ok(())
+    })
+}
+
+/// Writes the GeoJSON inventory `path` atomically from the ranks' parts
+/// ([`write_inventory_part`]) with the head of `w`'s site: the bytes
+/// [`write_inventory_geojson`] writes for the whole world.
+///
+/// Errors: [`super::OutputError::Io`] naming `path` (and in the message the part file).
+pub fn merge_inventory_geojson(path: &Path, w: &World, parts: &[std::path::PathBuf]) -> Result<()> {
+    let head = geojson_head(w);
+    crate::output::write_atomic_with(path, |f| {
+        f.write_all(head.as_bytes())?;
+        merge_lines(f, parts, |l| inventory_key(l, "\"status\":\"alive\"}}", geojson_id), b",\n")?;
+        f.write_all(GEOJSON_END)
+    })
+}
+
+/// The tree id of a GeoJSON feature line.
+fn geojson_id(l: &str) -> Option<&str> {
+    l.split_once("\"properties\":{\"id\":").and_then(|(_, r)| r.split(',').next())
+}
+
+/// Writes the regeneration CSV `path` atomically from the ranks' parts
+/// ([`write_regeneration_part`]): the bytes [`write_regeneration_csv`] writes for the whole
+/// world (cohorts in light-cell order; a cell's cohorts all come from the rank owning it).
+///
+/// Errors: [`super::OutputError::Io`] naming `path` (and in the message the part file).
+pub fn merge_regeneration_csv(path: &Path, parts: &[std::path::PathBuf]) -> Result<()> {
+    crate::output::write_atomic_with(path, |f| {
+        f.write_all(REGENERATION_HEADER.as_bytes())?;
+        f.write_all(b"\n")?;
+        merge_lines(f, parts, |l| l.split(',').next()?.parse().ok().map(|c| (0, c)), b"\n")?;
+        if parts.iter().any(|p| std::fs::metadata(p).is_ok_and(|m| m.len() > 0)) {
+            f.write_all(b"\n")?;
+        }
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::{step_year, Scenario, YearReport};
+
+    /// Parts split by position (the tiles of a tiled run), merged: the bytes of the whole
+    /// inventory CSV, GeoJSON and regeneration CSV; with no trees at all, the header only.
+    #[test]
+    fn merged_parts_are_the_whole_files() {
+        let toml = "name = \"parts\"\nyears = 22\nseed = 3\nspecies = [\"beech\"]\nlight_cell_m = 10.0\n\
+            [terrain]\nuniform = { width = 20, height = 12, cell_m = 20.0, elevation_m = 300.0, indices = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0] }\n\
+            [[start]]\nkind = \"seed_sources\"\nspecies = \"beech\"\npoints = [[100.0, 100.0], [300.0, 150.0]]\ntrees_per_source = 4\n";
+        let sc = Scenario::from_toml_str(toml, "parts").unwrap();
+        let mut w = World::new(sc.site().unwrap(), &crate::sim::fixtures::library(), &sc).unwrap();
+        for _ in 0..22 {
+            step_year(&mut w, &sc, &mut YearReport::default());
+        }
+        assert!(w.stand.trees.len() > 8 && !w.stand.cohorts.is_empty(), "{} trees, {} cohorts", w.stand.trees.len(), w.stand.cohorts.len());
+        let tmp = tempfile::tempdir().unwrap();
+        let d = tmp.path();
+        for (case, trees) in [("trees", true), ("empty", false)] {
+            let mut w = w.clone();
+            if !trees {
+                w.stand.trees = Default::default();
+                w.scratch.dead.clear();
+                w.stand.cohorts = Default::default();
+            }
+            let (csv, gj, rg) = (d.join(format!("{case}.csv")), d.join(format!("{case}.geojson")), d.join(format!("{case}_r.csv")));
+            write_inventory_csv(&csv, &w).unwrap();
+            write_inventory_geojson(&gj, &w).unwrap();
+            write_regeneration_csv(&rg, &w).unwrap();
+            let mut parts = (Vec::new(), Vec::new(), Vec::new());
+            for k in 0..3 {
+                let band = move |x: f32, _: f32| ((x / 134.0) as usize).min(2) == k;
+                let (pc, pg, pr) = (d.join(format!("{case}.{k}.csv.part")), d.join(format!("{case}.{k}.gj.part")), d.join(format!("{case}.{k}.r.part")));
+                write_inventory_part(&pc, Some(&pg), &w, band).unwrap();
+                let mut wk = w.clone();
+                let light = wk.site.light;
+                let c = &w.stand.cohorts;
+                let mut own = crate::sim::cohorts::Cohorts::default();
+                for i in 0..c.len() {
+                    let (x, y) = light.centre(c.cell[i] as usize);
+                    if band(x as f32, y as f32) {
+                        own.push(c.get(i));
+                    }
+                }
+                wk.stand.cohorts = own;
+                write_regeneration_part(&pr, &wk).unwrap();
+                parts.0.push(pc);
+                parts.1.push(pg);
+                parts.2.push(pr);
+            }
+            let (mc, mg, mr) = (d.join(format!("{case}.m.csv")), d.join(format!("{case}.m.geojson")), d.join(format!("{case}_r.m.csv")));
+            merge_inventory_csv(&mc, &parts.0).unwrap();
+            merge_inventory_geojson(&mg, &w, &parts.1).unwrap();
+            merge_regeneration_csv(&mr, &parts.2).unwrap();
+            for (a, b) in [(&csv, &mc), (&gj, &mg), (&rg, &mr)] {
+                assert_eq!(std::fs::read_to_string(a).unwrap(), std::fs::read_to_string(b).unwrap(), "{case}: {}", a.display());
+            }
+            if !trees {
+                assert_eq!(std::fs::read_to_string(&mc).unwrap(), format!("{HEADER}\n"));
+            }
+        }
+        // a part line without a key is refused naming the part
+        let bad = d.join("bad.part");
+        std::fs::write(&bad, "not-an-id,beech\n").unwrap();
+        let e = merge_inventory_csv(&d.join("bad.csv"), &[bad]).unwrap_err().to_string();
+        assert!(e.contains("bad.part line 1"), "{e}");
+    }
 }

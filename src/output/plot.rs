@@ -163,7 +163,8 @@ pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()>
 /// of a 5 m cell under one crown reads as hundreds of m²/ha (salt-and-pepper maps).
 pub const MIN_MAP_CELL_M: f64 = 20.0;
 
-fn map_dims(w: &World, max_px: usize) -> (usize, usize, f64) {
+/// The species and basal-area maps' raster of `w` for `max_px`: (columns, rows, cell in m).
+pub fn map_dims(w: &World, max_px: usize) -> (usize, usize, f64) {
     let cell = (w.site.extent.0.max(w.site.extent.1) / max_px as f64).max(w.site.light.cell_m).max(MIN_MAP_CELL_M);
     (((w.site.extent.0 / cell).ceil() as usize).max(1), ((w.site.extent.1 / cell).ceil() as usize).max(1), cell)
 }
@@ -196,14 +197,41 @@ fn snapshot_label(p: &Path) -> String {
 ///
 /// Errors: [`OutputError::Io`] / PNG or GeoTIFF encoding errors naming the file.
 pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -> Result<()> {
-    let (cols, rows, cell) = map_dims(w, max_px);
+    let ba = map_basal_area(w, max_px);
+    write_maps_from(species_png, ba_png, w, max_px, &ba)
+}
+
+/// The map bin of tree `i` of `t` on the raster `(cols, rows, cell)` of [`map_dims`] with `np`
+/// species in the library: `(pixel · np + species)`, pixel row 0 north.
+pub fn map_bin(t: &crate::sim::TreeStore, i: usize, (cols, rows, cell): (usize, usize, f64), np: usize) -> usize {
+    let c = ((t.x[i] as f64 / cell) as usize).min(cols - 1);
+    let r = rows - 1 - ((t.y[i] as f64 / cell) as usize).min(rows - 1);
+    (r * cols + c) * np + t.species[i] as usize
+}
+
+/// Basal area (m²) per map bin ([`map_bin`]) of `w`'s trees, each bin summed in f64 in the
+/// store's (id) order: what [`write_maps`] draws.
+pub fn map_basal_area(w: &World, max_px: usize) -> Vec<f64> {
+    let dims = map_dims(w, max_px);
     let np = w.site.lib.species.len();
-    let mut ba = vec![0f64; cols * rows * np];
+    let mut ba = vec![0f64; dims.0 * dims.1 * np];
     let t = &w.stand.trees;
     for i in 0..t.len() {
-        let c = ((t.x[i] as f64 / cell) as usize).min(cols - 1);
-        let r = rows - 1 - ((t.y[i] as f64 / cell) as usize).min(rows - 1);
-        ba[(r * cols + c) * np + t.species[i] as usize] += t.basal_area_m2(i);
+        ba[map_bin(t, i, dims, np)] += t.basal_area_m2(i);
+    }
+    ba
+}
+
+/// [`write_maps`] from the basal area per map bin `ba` ([`map_basal_area`], or its bins
+/// assembled from the ranks of a tiled run); `w` gives the site, pool and library.
+///
+/// Errors: as [`write_maps`]; [`OutputError::Io`] naming the species map when `ba` is not
+/// one value per bin.
+pub fn write_maps_from(species_png: &Path, ba_png: &Path, w: &World, max_px: usize, ba: &[f64]) -> Result<()> {
+    let (cols, rows, cell) = map_dims(w, max_px);
+    let np = w.site.lib.species.len();
+    if ba.len() != cols * rows * np {
+        return Err(OutputError::io(species_png, std::io::Error::new(std::io::ErrorKind::InvalidInput, format!("{} basal-area bins for a {cols} × {rows} map of {np} species", ba.len()))));
     }
     let area_ha = cell * cell / 10_000.0;
     let masked_px = [128u8, 128, 128];

@@ -42,7 +42,7 @@ use std::time::Instant;
 /// Passes byte messages between the ranks of a tiled run: one all-to-all exchange at a time,
 /// every rank taking part in every exchange in the same order (MPI's model).
 pub trait Transport {
-    /// This rank (0-based; rank 0 gathers the stand table and writes the outputs).
+    /// This rank (0-based; rank 0 gathers the stand table and drives the run).
     fn rank(&self) -> usize;
     /// Number of ranks.
     fn size(&self) -> usize;
@@ -495,6 +495,15 @@ impl Tile {
         Tile { world, layout, me, halo_bytes: 0, own: Vec::new() }
     }
 
+    /// Tile `me` of `layout` from `world`, a tile's world as it was saved (its own trees and
+    /// cohorts, the seed grids it held, its tallies: a run's per-rank checkpoint read back);
+    /// tallies are kept, this year's dead cleared.
+    pub fn resumed(mut world: World, layout: Layout, me: usize) -> Tile {
+        world.site.window = Some(layout.rect(me));
+        world.scratch.dead.clear();
+        Tile { world, layout, me, halo_bytes: 0, own: Vec::new() }
+    }
+
     /// Rank 0 sends every rank its part of `global` (rank 0's world after a fresh start or a
     /// resume); every rank's tile takes it as its stand, with tallies from zero. Other ranks
     /// pass `None`.
@@ -658,6 +667,99 @@ impl Tile {
         Ok(report)
     }
 
+    /// Sums per bin over every tile's trees, exactly as one process sums them (f64, in id
+    /// order), without sending rank 0 the trees: `bin(store, i)` is tree `i`'s bin (of `bins`),
+    /// `value(store, i)` what it adds. Each rank sums its own trees per bin and sends the bins it
+    /// has trees in (16 bytes each); a bin with trees on one rank only takes that rank's sum (the
+    /// same trees in the same order as in one process); rank 0 names the bins with trees on
+    /// several ranks, and only their trees (id, bin, value: 24 bytes each) are sent and summed
+    /// in id order. Rank 0 returns the sums (0 for bins without trees); other ranks `None`.
+    /// Three exchanges.
+    ///
+    /// Errors: [`Error::Exchange`] from the transport, a malformed message or a bin out of range.
+    pub fn gather_bin_sums(&self, t: &mut dyn Transport, bins: usize, bin: impl Fn(&TreeStore, usize) -> usize, value: impl Fn(&TreeStore, usize) -> f64) -> Result<Option<Vec<f64>>> {
+        let tr = &self.world.stand.trees;
+        let n = t.size();
+        let of: Vec<usize> = (0..tr.len()).map(|i| bin(tr, i)).collect();
+        let mut sums: std::collections::HashMap<usize, f64> = std::collections::HashMap::new();
+        for (i, &b) in of.iter().enumerate() {
+            *sums.entry(b).or_insert(0.0) += value(tr, i);
+        }
+        let mut pairs: Vec<(usize, f64)> = sums.into_iter().collect();
+        pairs.sort_unstable_by_key(|p| p.0);
+        let mut e = Enc::default();
+        e.u64(pairs.len() as u64);
+        for (b, v) in &pairs {
+            e.u64(*b as u64);
+            e.u64(v.to_bits());
+        }
+        let mut out = vec![Vec::new(); n];
+        out[0] = e.0;
+        let got = t.exchange(out)?;
+        // rank 0: the sums of bins on one rank; the bins on several
+        let mut acc = Vec::new();
+        let mut shared = Vec::new();
+        if t.rank() == 0 {
+            acc = vec![0f64; bins];
+            let mut seen = vec![0u8; bins];
+            for (k, m) in got.iter().enumerate() {
+                let mut d = Dec::new(m, k);
+                let c = d.count(16)?;
+                for _ in 0..c {
+                    let b = d.u64()? as usize;
+                    let v = f64::from_bits(d.u64()?);
+                    if b >= bins {
+                        return Err(Error::Exchange { peer: k, reason: format!("map bin {b} out of range (0–{})", bins - 1) });
+                    }
+                    acc[b] = v;
+                    seen[b] = seen[b].saturating_add(1);
+                }
+            }
+            shared = (0..bins).filter(|&b| seen[b] > 1).collect::<Vec<usize>>();
+        }
+        let mut e = Enc::default();
+        e.u64(shared.len() as u64);
+        shared.iter().for_each(|&b| e.u64(b as u64));
+        let got = t.exchange(vec![e.0; n])?;
+        let mut d = Dec::new(&got[0], 0);
+        let c = d.count(8)?;
+        let shared: std::collections::HashSet<usize> = (0..c).map(|_| d.u64().map(|b| b as usize)).collect::<Result<_>>()?;
+        let mut e = Enc::default();
+        let mine: Vec<usize> = (0..tr.len()).filter(|&i| shared.contains(&of[i])).collect();
+        e.u64(mine.len() as u64);
+        for &i in &mine {
+            e.u64(tr.id[i]);
+            e.u64(of[i] as u64);
+            e.u64(value(tr, i).to_bits());
+        }
+        let mut out = vec![Vec::new(); n];
+        out[0] = e.0;
+        let got = t.exchange(out)?;
+        if t.rank() != 0 {
+            return Ok(None);
+        }
+        let mut trees: Vec<(u64, usize, f64)> = Vec::new();
+        for (k, m) in got.iter().enumerate() {
+            let mut d = Dec::new(m, k);
+            let c = d.count(24)?;
+            for _ in 0..c {
+                let (id, b, v) = (d.u64()?, d.u64()? as usize, f64::from_bits(d.u64()?));
+                if !shared.contains(&b) {
+                    return Err(Error::Exchange { peer: k, reason: format!("map bin {b} was not asked for") });
+                }
+                trees.push((id, b, v));
+            }
+        }
+        trees.sort_unstable_by_key(|e| e.0);
+        for &b in &shared {
+            acc[b] = 0.0;
+        }
+        for (_, b, v) in trees {
+            acc[b] += v;
+        }
+        Ok(Some(acc))
+    }
+
     /// Every rank sends its whole stand (trees, cohorts, its seed cells, this year's dead,
     /// tallies) to rank 0, which writes it into `global` (the world of one process at the same
     /// year: what the outputs and the checkpoint read). Tallies: `base` (the global world's at
@@ -672,66 +774,110 @@ impl Tile {
         if t.rank() != 0 {
             return Ok(());
         }
-        let mut parts = Vec::new();
-        let mut cohorts: Vec<(u32, u16, usize, usize)> = Vec::new();
-        let mut coh_parts = Vec::new();
-        let mut dead: Vec<DeadTree> = Vec::new();
-        g.tallies.deaths_total = base.deaths_total;
-        g.tallies.regen_ledger = base.regen_ledger.clone();
-        g.scratch.regen_year = RegenYear::default();
-        for (k, m) in got.iter().enumerate() {
-            let w = decode_part(m, k)?;
-            parts.push(w.trees);
-            for i in 0..w.cohorts.len() {
-                cohorts.push((w.cohorts.cell[i], w.cohorts.pool[i], k, i));
-            }
-            coh_parts.push(w.cohorts);
-            dead.extend(w.dead);
-            for (a, b) in g.tallies.deaths_total.iter_mut().zip(w.deaths_total) {
-                *a += b;
-            }
-            let (l, m) = (&mut g.tallies.regen_ledger, &w.ledger);
-            for p in 0..l.germinated.len().min(m.germinated.len()) {
-                l.germinated[p] += m.germinated[p];
-                l.recruited[p] += m.recruited[p];
-                for q in 0..N_REGEN_CAUSES {
-                    l.dead[p][q] += m.dead[p][q];
-                }
-            }
-            let ry = &mut g.scratch.regen_year;
-            ry.germinated += w.regen_year.germinated;
-            ry.recruited += w.regen_year.recruited;
+        let parts = got.iter().enumerate().map(|(k, m)| decode_part(m, k)).collect::<Result<Vec<_>>>()?;
+        merge_parts(g, base, &self.layout, parts)
+    }
+}
+
+/// Writes into `g` the world of one process made of the tile parts `parts` (part `k` from tile
+/// `k` of `layout`): trees merged by id, cohorts sorted by (cell, species), each seed cell from
+/// the tile owning its centre, this year's dead sorted by id, tallies `base` plus every part's,
+/// the year of the last part. `g.stand.trees.next_id` is kept.
+///
+/// Errors: [`Error::Exchange`] naming the part whose seed grids have another shape than `g`'s.
+fn merge_parts(g: &mut World, base: &Tallies, layout: &Layout, parts: Vec<Part>) -> Result<()> {
+    let mut trees = Vec::with_capacity(parts.len());
+    let mut cohorts: Vec<(u32, u16, usize, usize)> = Vec::new();
+    let mut coh_parts = Vec::with_capacity(parts.len());
+    let mut dead: Vec<DeadTree> = Vec::new();
+    g.tallies.deaths_total = base.deaths_total;
+    g.tallies.regen_ledger = base.regen_ledger.clone();
+    if g.tallies.regen_ledger.germinated.len() != g.site.pool.len() {
+        g.tallies.regen_ledger = RegenLedger::new(g.site.pool.len());
+    }
+    g.scratch.regen_year = RegenYear::default();
+    for (k, w) in parts.into_iter().enumerate() {
+        trees.push(w.trees);
+        for i in 0..w.cohorts.len() {
+            cohorts.push((w.cohorts.cell[i], w.cohorts.pool[i], k, i));
+        }
+        coh_parts.push(w.cohorts);
+        dead.extend(w.dead);
+        for (a, b) in g.tallies.deaths_total.iter_mut().zip(w.deaths_total) {
+            *a += b;
+        }
+        let (l, m) = (&mut g.tallies.regen_ledger, &w.ledger);
+        for p in 0..l.germinated.len().min(m.germinated.len()) {
+            l.germinated[p] += m.germinated[p];
+            l.recruited[p] += m.recruited[p];
             for q in 0..N_REGEN_CAUSES {
-                ry.dead[q] += w.regen_year.dead[q];
+                l.dead[p][q] += m.dead[p][q];
             }
-            // the seed cells this tile owns (the tile of the seed cell's centre)
-            for (gs, s) in g.stand.seeds.iter_mut().zip(&w.seeds) {
-                if s.len() != gs.data.len() {
-                    return Err(Error::Exchange { peer: k, reason: format!("seed grid of {} cells, expected {}", s.len(), gs.data.len()) });
-                }
-                for r in 0..gs.rows {
-                    for c in 0..gs.cols {
-                        let (x, y) = (((c as f64 + 0.5) * gs.cell_m) as f32, ((r as f64 + 0.5) * gs.cell_m) as f32);
-                        if self.layout.owner_of(x, y) == k {
-                            gs.data[r * gs.cols + c] = s[r * gs.cols + c];
-                        }
+        }
+        let ry = &mut g.scratch.regen_year;
+        ry.germinated += w.regen_year.germinated;
+        ry.recruited += w.regen_year.recruited;
+        for q in 0..N_REGEN_CAUSES {
+            ry.dead[q] += w.regen_year.dead[q];
+        }
+        // the seed cells this tile owns (the tile of the seed cell's centre)
+        if w.seeds.len() != g.stand.seeds.len() {
+            return Err(Error::Exchange { peer: k, reason: format!("{} seed grids, expected {}", w.seeds.len(), g.stand.seeds.len()) });
+        }
+        for (gs, s) in g.stand.seeds.iter_mut().zip(&w.seeds) {
+            if s.len() != gs.data.len() {
+                return Err(Error::Exchange { peer: k, reason: format!("seed grid of {} cells, expected {}", s.len(), gs.data.len()) });
+            }
+            for r in 0..gs.rows {
+                for c in 0..gs.cols {
+                    let (x, y) = (((c as f64 + 0.5) * gs.cell_m) as f32, ((r as f64 + 0.5) * gs.cell_m) as f32);
+                    if layout.owner_of(x, y) == k {
+                        gs.data[r * gs.cols + c] = s[r * gs.cols + c];
                     }
                 }
             }
-            g.stand.year = w.year;
         }
-        let next = g.stand.trees.next_id;
-        g.stand.trees = merge_by_id(&parts, next).0;
-        cohorts.sort_unstable_by_key(|e| (e.0, e.1));
-        let mut c = Cohorts::default();
-        for (_, _, k, i) in cohorts {
-            c.push(coh_parts[k].get(i));
-        }
-        g.stand.cohorts = c;
-        dead.sort_by_key(|d| d.id);
-        g.scratch.dead = dead;
-        Ok(())
+        g.stand.year = w.year;
     }
+    let next = g.stand.trees.next_id;
+    g.stand.trees = merge_by_id(&trees, next).0;
+    cohorts.sort_unstable_by_key(|e| (e.0, e.1));
+    let mut c = Cohorts::default();
+    for (_, _, k, i) in cohorts {
+        c.push(coh_parts[k].get(i));
+    }
+    g.stand.cohorts = c;
+    dead.sort_by_key(|d| d.id);
+    g.scratch.dead = dead;
+    Ok(())
+}
+
+/// Writes into `global` the world of one process made of the tile worlds `tiles` (tile `k` of
+/// `layout`, e.g. read back from a run's per-rank checkpoints): as [`Tile::gather`], with every
+/// tile's tallies added to zero (the tiles' tallies add up to the run's: rank 0's holds the
+/// tallies from before the tiled run began). `global.stand.trees.next_id` is kept.
+///
+/// Errors: [`Error::Invalid`] when `tiles` does not hold one world per tile of `layout`;
+/// [`Error::Exchange`] naming the tile whose seed grids have another shape than `global`'s.
+pub fn assemble(global: &mut World, layout: &Layout, tiles: Vec<World>) -> Result<()> {
+    if tiles.len() != layout.len() {
+        return Err(Error::Invalid { context: "tiled run".into(), field: "tiles".into(), value: format!("{} tile worlds", tiles.len()), expected: format!("{} (the layout's {} × {} tiles)", layout.len(), layout.nx, layout.ny) });
+    }
+    let zero = Tallies { deaths_total: [0; N_CAUSES], regen_ledger: RegenLedger::new(global.site.pool.len()) };
+    let parts = tiles
+        .into_iter()
+        .map(|w| Part {
+            year: w.stand.year,
+            seeds: w.stand.seeds.into_iter().map(|g| g.data).collect(),
+            trees: w.stand.trees,
+            cohorts: w.stand.cohorts,
+            dead: w.scratch.dead,
+            deaths_total: w.tallies.deaths_total,
+            ledger: w.tallies.regen_ledger,
+            regen_year: w.scratch.regen_year,
+        })
+        .collect();
+    merge_parts(global, &zero, layout, parts)
 }
 
 /// Keeps in `w` only the trees and cohorts of tile `me` of `layout`.

@@ -125,3 +125,27 @@ pub fn files(dir: &std::path::Path) -> std::collections::BTreeMap<String, Vec<u8
     walk(dir, dir, &mut m);
     m
 }
+
+/// Asserts that the tiled run directory `tiled` (per-rank checkpoints) is the one-process run
+/// directory `one` (`checkpoint.bin`): every other file byte for byte, the same file names,
+/// and the per-rank checkpoints, assembled into a copy of `template` (the scenario's world at
+/// its start), encode to `checkpoint.bin`'s bytes. Returns the manifest.
+pub fn assert_same_run(one: &std::path::Path, tiled: &std::path::Path, template: &World, what: &str) -> sylva::job::checkpoint::Manifest {
+    let is_ck = |k: &String| k == "checkpoint.bin" || k.starts_with("checkpoint/");
+    let (fa, fb) = (files(one), files(tiled));
+    let (ka, kb): (Vec<_>, Vec<_>) = (fa.keys().filter(|k| !is_ck(k)).collect(), fb.keys().filter(|k| !is_ck(k)).collect());
+    assert_eq!(ka, kb, "{what}: different files");
+    for k in ka {
+        assert!(fa[k] == fb[k], "{what}: {k} differs");
+    }
+    assert!(fa.contains_key("checkpoint.bin"), "{what}: one process wrote no checkpoint.bin");
+    assert!(!fb.contains_key("checkpoint.bin"), "{what}: the tiled run wrote checkpoint.bin");
+    let m = sylva::job::checkpoint::read_manifest(tiled).unwrap();
+    let ck: Vec<&String> = fb.keys().filter(|k| k.starts_with("checkpoint/") && k.ends_with(".bin")).collect();
+    let named: Vec<String> = m.files.iter().map(|f| format!("checkpoint/{f}")).collect();
+    assert_eq!(ck, named.iter().collect::<Vec<_>>(), "{what}: per-rank files other than the manifest's");
+    let mut w = template.clone();
+    let rows = sylva::job::checkpoint::load_any(tiled, &mut w).unwrap();
+    assert!(sylva::sim::checkpoint::to_bytes(&w, &rows) == fa["checkpoint.bin"], "{what}: the per-rank checkpoints assembled differ from checkpoint.bin");
+    m
+}
