@@ -115,14 +115,7 @@ fn a_too_narrow_halo_is_refused_and_would_differ() {
 #[test]
 fn tiles_in_threads_write_the_run_directory_of_one_process() {
     // `sylva simulate --tiles 3`: job::tiled over the in-process transport, with outputs
-    let toml = common::ScenarioToml::new("tiles_dir", 12, 7)
-        .species(&["beech"])
-        .line("light_cell_m = 10.0")
-        .line("snapshot_every = 5")
-        .line("checkpoint_every = 4")
-        .uniform(20, 12, 20.0, 300.0)
-        .seed_sources("beech", &[[198.0, 118.0], [134.0, 200.0], [268.0, 125.0]], 3)
-        .build();
+    let toml = edge_toml("tiles_dir", 12);
     let sc = Scenario::from_toml_str(&toml, "tiles_dir").unwrap();
     let lib = sylva::sim::fixtures::library();
     let tmp = tempfile::tempdir().unwrap();
@@ -146,15 +139,19 @@ fn tiles_in_threads_write_the_run_directory_of_one_process() {
 /// Beech seed trees at the tile edges of 2 and 3 tiles; snapshots every 5 years, checkpoints
 /// every 4.
 fn resume_scenario(years: u32) -> Scenario {
-    let toml = common::ScenarioToml::new("resume", years, 7)
+    Scenario::from_toml_str(&edge_toml("resume", years), "resume").unwrap()
+}
+
+/// The TOML of [`resume_scenario`] named `name` (seed 7, `years` years).
+fn edge_toml(name: &str, years: u32) -> String {
+    common::ScenarioToml::new(name, years, 7)
         .species(&["beech"])
         .line("light_cell_m = 10.0")
         .line("snapshot_every = 5")
         .line("checkpoint_every = 4")
         .uniform(20, 12, 20.0, 300.0)
         .seed_sources("beech", &[[198.0, 118.0], [134.0, 200.0], [268.0, 125.0]], 3)
-        .build();
-    Scenario::from_toml_str(&toml, "resume").unwrap()
+        .build()
 }
 
 /// Runs `sc` into `dir` as one process (`n` = 1) or `n` tiles in threads.
