@@ -277,11 +277,19 @@ fn merge_lines(out: &mut impl Write, parts: &[std::path::PathBuf], key: impl Fn(
 ///
 /// Errors: [`super::OutputError::Io`] naming `path` (and in the message the part file).
 pub fn merge_inventory_csv(path: &Path, parts: &[std::path::PathBuf]) -> Result<()> {
+    merge_csv(path, HEADER, parts, |l| inventory_key(l, ",alive", |l| l.split(',').next()))
+}
+
+/// Writes the CSV `path` atomically: `header`, then the lines of the sorted `parts` merged by
+/// `key` ([`merge_lines`]), every line ending with a newline (none after the header when no
+/// part has a line).
+///
+/// Errors: [`super::OutputError::Io`] naming `path` (and in the message the part file).
+fn merge_csv(path: &Path, header: &str, parts: &[std::path::PathBuf], key: impl Fn(&str) -> Option<(u8, u64)>) -> Result<()> {
     crate::output::write_atomic_with(path, |f| {
-        f.write_all(HEADER.as_bytes())?;
+        f.write_all(header.as_bytes())?;
         f.write_all(b"\n")?;
-        merge_lines(f, parts, |l| inventory_key(l, ",alive", |l| l.split(',').next()), b"\n")?;
-        // every line ends with a newline; none when there are no records
+        merge_lines(f, parts, key, b"\n")?;
         if parts.iter().any(|p| std::fs::metadata(p).is_ok_and(|m| m.len() > 0)) {
             f.write_all(b"\n")?;
         }
@@ -314,15 +322,7 @@ fn geojson_id(l: &str) -> Option<&str> {
 ///
 /// Errors: [`super::OutputError::Io`] naming `path` (and in the message the part file).
 pub fn merge_regeneration_csv(path: &Path, parts: &[std::path::PathBuf]) -> Result<()> {
-    crate::output::write_atomic_with(path, |f| {
-        f.write_all(REGENERATION_HEADER.as_bytes())?;
-        f.write_all(b"\n")?;
-        merge_lines(f, parts, |l| l.split(',').next()?.parse().ok().map(|c| (0, c)), b"\n")?;
-        if parts.iter().any(|p| std::fs::metadata(p).is_ok_and(|m| m.len() > 0)) {
-            f.write_all(b"\n")?;
-        }
-        Ok(())
-    })
+    merge_csv(path, REGENERATION_HEADER, parts, |l| l.split(',').next()?.parse().ok().map(|c| (0, c)))
 }
 
 #[cfg(test)]
