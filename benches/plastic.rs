@@ -12,7 +12,7 @@
 use glam::Vec3;
 use sylva::species::SpeciesLibrary;
 use sylva::structure::grow::space::Obstacle;
-use sylva::structure::plastic::{adapt_group, Environment, PlasticTree};
+use sylva::structure::plastic::{adapt_group, Environment, PlasticTree, Sky};
 use sylva::structure::grow::light_guided::{self, LightOptions};
 use sylva::structure::params;
 use sylva::structure::Skeleton;
@@ -63,6 +63,28 @@ fn fingerprint(trees: &[PlasticTree]) -> u64 {
     h
 }
 
+/// The sky of every environment: `SYLVA_PLASTIC_SKY_RINGS=4,8,8,12` (ring direction counts,
+/// see `Sky::with_rings`; `zenith:4,8,8,12` for the equal zenith bands of rounds 1–10), else
+/// the default sky.
+fn sky() -> Sky {
+    match std::env::var("SYLVA_PLASTIC_SKY_RINGS") {
+        Ok(v) => {
+            let (old, list) = match v.strip_prefix("zenith:") {
+                Some(l) => (true, l.to_string()),
+                None => (false, v),
+            };
+            let rings: Vec<usize> = list.split(',').map(|t| t.trim().parse().expect("SYLVA_PLASTIC_SKY_RINGS: counts")).collect();
+            if old { Sky::zenith_rings(Vec3::Z, &rings) } else { Sky::with_rings(Vec3::Z, &rings) }.expect("SYLVA_PLASTIC_SKY_RINGS")
+        }
+        Err(_) => Sky::default(),
+    }
+}
+
+/// Open space under [`sky`] with `obstacles`.
+fn env_with(obstacles: &[Obstacle]) -> Environment {
+    Environment { sky: sky(), ..Environment::with_obstacles(obstacles) }
+}
+
 /// A finite wall beside a tree of crown half-width `r` and height `h` (m).
 fn wall_for(r: f32, h: f32) -> Obstacle {
     Obstacle::FiniteWall { x: 0.5 * r, length: 4.0 * r, height: 1.2 * h }
@@ -78,17 +100,17 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     let (lo_b, hi_b) = sk.bounds().expect("nodes");
     let wall = wall_for(0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y), hi_b.z - lo_b.z);
     let t0 = cpu_ms();
-    let tree = PlasticTree::analyse(&sk, p, &Environment::open(), None).expect("analyse");
+    let tree = PlasticTree::analyse(&sk, p, &env_with(&[]), None).expect("analyse");
     let t1 = cpu_ms();
     let mut t = tree.clone();
-    let rep = t.adapt(&Environment::with_obstacles(&[wall])).expect("adapt");
+    let rep = t.adapt(&env_with(&[wall])).expect("adapt");
     let t2 = cpu_ms();
     let first = fingerprint(std::slice::from_ref(&t));
     let moved = match wall {
         Obstacle::FiniteWall { x, length, height } => Obstacle::FiniteWall { x: x + 0.1, length, height },
         o => o,
     };
-    let rep2 = t.adapt(&Environment::with_obstacles(&[moved])).expect("adapt");
+    let rep2 = t.adapt(&env_with(&[moved])).expect("adapt");
     let t3 = cpu_ms();
     println!("{} nodes: analysis {:.1} ms, adapt {:.1} ms ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
 }
@@ -132,9 +154,9 @@ fn main() {
         }
         let (lo_b, hi_b) = sk.bounds().expect("nodes");
         let wall = wall_for(0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y), hi_b.z - lo_b.z);
-        let env = Environment::with_obstacles(&[wall]);
+        let env = env_with(&[wall]);
         let t0 = cpu_ms();
-        let tree = PlasticTree::analyse(&sk, &p, &Environment::open(), None).expect("analyse");
+        let tree = PlasticTree::analyse(&sk, &p, &env_with(&[]), None).expect("analyse");
         let analysis_ms = cpu_ms() - t0;
         let mut rep = None;
         let adapt_ms = median_ms(7, || {
@@ -152,7 +174,7 @@ fn main() {
         let mut after_move = adapted.clone();
         let move_ms = median_ms(7, || {
             let mut t = adapted.clone();
-            rec = t.adapt(&Environment::with_obstacles(&[moved])).expect("adapt").recomputed_nodes;
+            rec = t.adapt(&env_with(&[moved])).expect("adapt").recomputed_nodes;
             after_move = t;
         });
         prints.push(format!("{} (seed {seed}): adapt {:016x}, moved wall {:016x}", sk.len(), fingerprint(std::slice::from_ref(&adapted)), fingerprint(std::slice::from_ref(&after_move))));
@@ -175,10 +197,10 @@ fn main() {
     if let Some(sk) = mid {
         let (lo_b, hi_b) = sk.bounds().expect("nodes");
         let r = 0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y);
-        let a = PlasticTree::analyse(&sk, &p, &Environment::open(), None).expect("analyse");
+        let a = PlasticTree::analyse(&sk, &p, &env_with(&[]), None).expect("analyse");
         let mut b = a.clone();
         b.translate(Vec3::new(1.5 * r, 0.0, 0.0));
-        let env = Environment::open();
+        let env = env_with(&[]);
         let mut rec = 0;
         let mut last = Vec::new();
         let ms = median_ms(7, || {

@@ -192,6 +192,21 @@ fn stage_occluders(t: &PlasticTree, s: usize, env: &Environment) -> Vec<Option<O
 ///
 /// Errors: [`crate::Error::Invalid`] for an invalid environment (obstacle or ground).
 pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<GroupReport> {
+    adapt_group_among(trees, &[], env)
+}
+
+/// [`adapt_group`] among `fixed` trees that are not adapted: they stand as they are (their
+/// current positions and living nodes) for the whole life span of the adapted trees, as the
+/// obstacles of the paper's tree–obstacle interaction do ("the obstacle then becomes a part of
+/// the environment that influences the tree by casting a shadow for the entire life span of its
+/// growth", section 6): their full-grown leaf clusters are translucent occluders (eq. 4) and
+/// their wood is solid. Used for the context trees around a stand's neighbourhood
+/// ([`crate::structure::stand`]): they shade and block the adapted trees without being adapted
+/// themselves, so one set of shadow volumes serves every level instead of their clusters being
+/// rebuilt at each level.
+///
+/// Errors: as [`adapt_group`].
+pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment) -> Result<GroupReport> {
     env.validate()?;
     let sky = &env.sky;
     let solids = SkyMask::new(Solids { obstacles: &env.obstacles, ground: env.ground }, sky);
@@ -217,6 +232,12 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
         let owners = neighbours.iter().map(|(j, _)| *j as u32).collect();
         ShadowVolumes::with_owners(sky, neighbours.iter().map(|(_, o)| *o).collect(), owners)
     });
+    // the fixed trees' full-grown clusters as they stand: one set of shadow volumes for the call
+    let fixed_vols = (!fixed.is_empty()).then(|| {
+        let occ: Vec<Occluder> = fixed.iter().flat_map(|t| stage_occluders(t, t.analysis.seasons as usize, env).into_iter().flatten()).collect();
+        ShadowVolumes::new(sky, occ)
+    });
+    let fixed_vols = fixed_vols.as_ref();
     let own: Vec<Vec<bool>> = trees
         .par_iter_mut()
         .enumerate()
@@ -227,11 +248,9 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
             for k in 0..n {
                 let p = t.input.nodes[k].pos;
                 let mut sig = solids.mask(p) as u64;
-                if let Some(others) = &others {
-                    for d in 0..sky.dirs.len() {
-                        if others.shaded_except(d, p, i as u32) {
-                            sig |= 1u64 << (32 + d);
-                        }
+                for d in 0..sky.dirs.len() {
+                    if others.as_ref().is_some_and(|o| o.shaded_except(d, p, i as u32)) || fixed_vols.is_some_and(|f| f.shaded(d, p)) {
+                        sig |= 1u64 << (32 + d);
                     }
                 }
                 dirty[k] = all || sig != t.sig[k];
@@ -297,15 +316,16 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
                     (Some(d), Some((po, rows))) => Some(Reuse { delta: d, occ: po, rows, map }),
                     _ => None,
                 };
-                let rows = level(t, s, w, &occ, env, &solids, &vols, reuse);
+                let rows = level(t, s, w, &occ, env, &solids, &vols, fixed_vols, reuse);
                 Some((occ, rows))
             })
             .collect();
         prev = next;
     }
     // 6. wood of the other trees, then the report
-    if group {
+    if group || !fixed.is_empty() {
         let wood: Vec<Wood> = trees.iter().map(Wood::of).collect();
+        let fixed_wood: Vec<Wood> = fixed.iter().map(Wood::of).collect();
         trees.par_iter_mut().enumerate().for_each(|(i, t)| {
             for k in 1..t.input.nodes.len() {
                 let p = t.input.nodes[k].parent.unwrap_or(0) as usize;
@@ -313,7 +333,7 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
                     if t.fate[k] == Fate::Alive {
                         t.fate[k] = t.fate[p];
                     }
-                } else if t.fate[k] == Fate::Alive && wood.iter().enumerate().any(|(j, w)| j != i && w.contains(t.pos[k])) {
+                } else if t.fate[k] == Fate::Alive && (wood.iter().enumerate().any(|(j, w)| j != i && w.contains(t.pos[k])) || fixed_wood.iter().any(|w| w.contains(t.pos[k]))) {
                     t.fate[k] = Fate::Collision;
                 }
             }
@@ -346,6 +366,24 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
         rep.trees.push(r);
     }
     Ok(rep)
+}
+
+/// [`light_at`] with the transmittance of the `fixed` trees' clusters multiplied in (eq. 3 over
+/// both sets of occluders).
+fn light_at_among(sky: &super::light::Sky, blocked: u32, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, p: Vec3) -> (f32, Vec3) {
+    let Some(f) = fixed else { return light_at(sky, blocked, vols, p) };
+    let mut sum = 0.0f32;
+    let mut dir = Vec3::ZERO;
+    for k in 0..sky.dirs.len() {
+        let w = sky.weights[k];
+        if blocked & (1 << k) != 0 || w == 0.0 {
+            continue;
+        }
+        let t = vols.transmittance(k, p) * f.transmittance(k, p);
+        sum += w * t;
+        dir += sky.dirs[k] * (w * t);
+    }
+    (sum, dir.normalize_or(Vec3::Z))
 }
 
 /// Per-direction transmittances (eq. 4 products) of the clusters of one stage as evaluated at
@@ -412,7 +450,7 @@ pub const ROTATION_EPS: f32 = 1e-3;
 /// order, so the value is the one a recomputation gives, bit for bit. Returns the stage's
 /// transmittances.
 #[allow(clippy::too_many_arguments)]
-fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &SkyMask, vols: &ShadowVolumes, reuse: Option<Reuse>) -> Rows {
+fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, reuse: Option<Reuse>) -> Rows {
     let n = t.input.nodes.len();
     let a = &t.analysis;
     let last = a.seasons as f32;
@@ -446,7 +484,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         if len > 0.0 {
             let h = seg / len;
             let p_c = t.pos[par] + q_par * seg;
-            let (_, l_new) = light_at(sky, solids.mask(p_c), vols, p_c);
+            let (_, l_new) = light_at_among(sky, solids.mask(p_c), vols, fixed, p_c);
             let t_old = tropism(&t.params, a.light_dir[k]);
             let kappa = 1.0 - (last - a.season[k] as f32) / (last + 1.0);
             let t_eff = (t_old + kappa * (tropism(&t.params, l_new) - t_old)).normalize_or(t_old);
@@ -508,9 +546,10 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             if mask & (1 << k) != 0 {
                 continue;
             }
+            // the fixed trees' part of a reused value is unchanged: they do not move
             let tk = match (old, &reuse) {
                 (Some(o), Some(r)) if !o[k].is_nan() && !r.delta.shaded(k, c) => o[k],
-                _ => vols.transmittance(k, c),
+                _ => vols.transmittance(k, c) * fixed.map_or(1.0, |f| f.transmittance(k, c)),
             };
             rows.t[j * nd + k] = tk;
             sums[j] += wk * tk;
