@@ -4,7 +4,7 @@
 use glam::{Quat, Vec3};
 use sylva::species::PlasticParams;
 use sylva::structure::grow::space::Obstacle;
-use sylva::structure::plastic::{adapt, adapt_group, cluster_density, inverse_tropism, Environment, Fate, PlasticTree};
+use sylva::structure::plastic::{adapt, adapt_group, adapt_group_among, cluster_density, inverse_tropism, Environment, Fate, PlasticTree};
 use sylva::structure::species_tree::{tip_leaves, GrownTree};
 use sylva::structure::Skeleton;
 
@@ -209,6 +209,36 @@ fn two_trees_3m_apart_grow_apart() {
     assert!(mean(&ca1).x < mean(&ca0).x - 0.02 && mean(&cb1).x > mean(&cb0).x + 0.02);
     assert!(ov1 < 0.9 * ov0);
     assert!(rep.trees.iter().all(|r| r.bent > 0));
+}
+
+/// A tree beside a fixed neighbour 3 m away (`adapt_group_among`, how a stand's context trees
+/// act): the adapted crown moves away from the neighbour, the neighbour is left as it was, and
+/// the result is that of an adaptation beside the neighbour's clusters alone: with the neighbour
+/// adapted too (`adapt_group`) the same tree moves differently, since the neighbour then moves
+/// away in turn.
+#[test]
+fn a_tree_among_a_fixed_neighbour_moves_away_and_leaves_it_be() {
+    let sp = beech();
+    let p = tree1(&sp);
+    let a = PlasticTree::analyse(&grow(&sp, 30.0, 7).skeleton, &p, &Environment::open(), None).unwrap();
+    let mut b = PlasticTree::analyse(&grow(&sp, 30.0, 8).skeleton, &p, &Environment::open(), None).unwrap();
+    b.translate(Vec3::new(3.0, 0.0, 0.0));
+    let ca0 = a.clusters();
+    let mut one = vec![a.clone()];
+    let rep = adapt_group_among(&mut one, std::slice::from_ref(&b), &Environment::open()).unwrap();
+    let ca1 = one[0].clusters();
+    eprintln!("{rep:?}
+A {:.3} -> {:.3}", mean(&ca0).x, mean(&ca1).x);
+    assert!(mean(&ca1).x < mean(&ca0).x - 0.02, "{} -> {}", mean(&ca0).x, mean(&ca1).x);
+    assert!(rep.trees[0].bent > 0 && rep.trees.len() == 1);
+    assert!(overlap(&ca1, &b.clusters()) < overlap(&ca0, &b.clusters()));
+    // without the neighbour nothing moves; with it adapted too, tree A ends elsewhere
+    let mut alone = vec![a.clone()];
+    adapt_group_among(&mut alone, &[], &Environment::open()).unwrap();
+    assert!(alone[0].positions().iter().zip(&a.input().nodes).all(|(p, n)| p.distance(n.pos) < 1e-4));
+    let mut pair = vec![a, b];
+    adapt_group(&mut pair, &Environment::open()).unwrap();
+    assert_ne!(pair[0].positions(), one[0].positions());
 }
 
 /// A 4-fold symmetric tree: trunk, four limbs at 0°, 90°, 180°, 270°, each with two twigs;
