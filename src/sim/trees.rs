@@ -325,11 +325,29 @@ impl SpatialGrid {
         r * self.cols + c
     }
     /// Builds the grid of `trees` on the light grid `light` (a stable parallel counting sort,
-    /// [`super::bucket::bucket`]: the trees of a cell in ascending index order).
+    /// [`super::bucket::bucket`]: the trees of a cell in ascending index order; a store already
+    /// in cell order is taken as it is, the same result).
     pub fn build(trees: &TreeStore, light: &LightGrid) -> SpatialGrid {
         let LightGrid { cell_m, cols, rows } = *light;
+        use rayon::prelude::*;
         let mut g = SpatialGrid { cell_m, cols, rows, start: Vec::new(), items: Vec::new() };
-        let (start, items) = super::bucket::bucket(trees.len(), cols * rows, |i| g.cell_of(trees.x[i], trees.y[i]) as u32, |i| i as u32);
+        let n = trees.len();
+        let cells: Vec<u32> = trees.x.par_iter().zip(&trees.y).with_min_len(1 << 14).map(|(&x, &y)| g.cell_of(x, y) as u32).collect();
+        // a store in cell order (recruits only: their ids are cell-major, `birth_id`) is its own
+        // bucketing: the cells' ranges in place, the items the identity
+        if cells.par_windows(2).with_min_len(1 << 14).all(|w| w[0] <= w[1]) {
+            let mut start = vec![0u32; cols * rows + 1];
+            for &c in &cells {
+                start[c as usize + 1] += 1;
+            }
+            for k in 0..cols * rows {
+                start[k + 1] += start[k];
+            }
+            g.start = start;
+            g.items = (0..n as u32).collect();
+            return g;
+        }
+        let (start, items) = super::bucket::bucket(n, cols * rows, |i| cells[i], |i| i as u32);
         g.start = start;
         g.items = items;
         g
