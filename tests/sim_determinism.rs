@@ -77,7 +77,7 @@ fn resume_equals_uninterrupted() {
 }
 
 /// The growth factors cached in the tree store (drawn when a tree first grows, kept through
-/// mortality's compaction and regeneration's inserts) are every tree's own
+/// mortality's compaction and regeneration's appends) are every tree's own
 /// `growth_factor(seed, id)`: a misaligned cache would give trees each other's factors.
 #[test]
 fn cached_growth_factors_belong_to_their_trees() {
@@ -95,41 +95,4 @@ fn cached_growth_factors_belong_to_their_trees() {
     // most trees have grown in diameter at least once, and deaths have compacted the store
     assert!(drawn > t.len() / 2, "{drawn} of {}", t.len());
     assert!(w.tallies.deaths_total.iter().sum::<u64>() > 0, "no tree died: the compaction is untested");
-}
-
-/// The tree store's spatial order (issue 16, session 11): recruits' ids are cell-major
-/// (`sim::trees::birth_id`) and every recruit is inserted at its place by id, so the store stays
-/// sorted by id and the recruits of a light cell stand next to each other, cells in row-major
-/// order, each in its birth cell; with 1 and 2 threads the stand tables and stores are equal.
-#[test]
-fn store_in_spatial_order_whatever_the_thread_count() {
-    use sylva::sim::trees::{birth_year, BIRTH_CELL_SHIFT};
-    let with = |n: usize| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(n).build().unwrap();
-        pool.install(|| {
-            let (sc, mut w) = common::world(&sc_text());
-            let rows = common::run(&sc, &mut w, 30);
-            (rows, w)
-        })
-    };
-    let (rows1, w1) = with(1);
-    let (rows2, w2) = with(2);
-    assert_eq!(rows1, rows2, "stand tables differ between 1 and 2 threads");
-    assert_eq!(w1.stand.trees, w2.stand.trees, "tree stores differ between 1 and 2 threads");
-    let t = &w1.stand.trees;
-    assert!(t.id.windows(2).all(|p| p[0] < p[1]), "store not sorted by id");
-    let g = &w1.site.light;
-    let mut recruits = 0;
-    let mut last_cell = 0usize;
-    let mut years = std::collections::BTreeSet::new();
-    for i in 0..t.len() {
-        let Some(year) = birth_year(t.id[i]) else { continue };
-        let cell = g.cell_of(t.x[i], t.y[i]);
-        assert_eq!(cell as u64, (t.id[i] >> BIRTH_CELL_SHIFT) - 1, "tree {} outside its birth cell", t.id[i]);
-        assert!(cell >= last_cell, "tree {} (cell {cell}) after a tree of cell {last_cell}", t.id[i]);
-        last_cell = cell;
-        recruits += 1;
-        years.insert(year);
-    }
-    assert!(recruits > 100 && years.len() > 5, "too few recruits ({recruits}) or birth years ({}) to be a meaningful test", years.len());
 }

@@ -3,7 +3,6 @@
 //! the stand table's regeneration columns, and determinism across thread counts.
 mod common;
 use sylva::sim::regen::{max_density_ha, RegenDeath, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
-use sylva::sim::trees::birth_year;
 use sylva::sim::{step_year, World, YearReport};
 
 /// Mature beech seed trees and birch seed rain on a flat site of `w × h` cells of 25 m (4 × 3:
@@ -18,7 +17,7 @@ fn sc(light_cell_m: f64, w: usize, h: usize) -> String {
         .build()
 }
 
-fn check_year(w: &World, year: u32) {
+fn check_year(w: &World, first_new_id: u64) {
     let c = &w.stand.cohorts;
     // cohorts below the recruitment height, sorted by (cell, pool), one per pair, not empty
     for i in 0..c.len() {
@@ -42,7 +41,7 @@ fn check_year(w: &World, year: u32) {
     // every tree that appeared this year is a recruit of at least the recruitment height
     let t = &w.stand.trees;
     for i in 0..t.len() {
-        if birth_year(t.id[i]) == Some(year) {
+        if t.id[i] >= first_new_id {
             assert!(t.height[i] >= RECRUIT_HEIGHT_M, "tree {} recruited at {} m", t.id[i], t.height[i]);
         }
     }
@@ -55,21 +54,19 @@ fn mass_balance_recruitment_height_and_density_cap() {
     let mut rows = Vec::new();
     let mut recruited_trees = 0u64;
     for _ in 0..40 {
-        // recruits get birth ids that carry their birth year (`birth_id`, cell-major)
-        let year = w.stand.year;
-        let this_year = |id: &u64| birth_year(*id) == Some(year);
-        let before = w.stand.trees.id.iter().filter(|id| !this_year(id)).count();
+        // recruits get birth ids (year + 1) · 2^44 + …: above every older tree's id
+        let next = sylva::sim::trees::birth_id(w.stand.year, 0, 0);
+        let before = w.stand.trees.id.iter().filter(|&&id| id < next).count();
         let mut r = YearReport::default();
         step_year(&mut w, &sc, &mut r);
         // recruits this year = stems the regeneration layer reports as recruited
         assert_eq!(r.established as u64, w.scratch.regen_year.recruited);
-        // trees born this year (ids of this birth year), alive or dead by the winter; none of
-        // the older ones got such an id; the store stays sorted by id
-        let born = w.stand.trees.id.iter().filter(|id| this_year(id)).count() + w.scratch.dead.iter().filter(|d| this_year(&d.id)).count();
-        assert!(w.stand.trees.id.iter().filter(|id| !this_year(id)).count() <= before);
-        assert!(w.stand.trees.id.windows(2).all(|p| p[0] < p[1]), "tree store not sorted by id in year {year}");
+        // trees born this year (ids from `next` on), alive or dead by the winter; none of the
+        // older ones got such an id
+        let born = w.stand.trees.id.iter().filter(|&&id| id >= next).count() + w.scratch.dead.iter().filter(|d| d.id >= next).count();
+        assert!(w.stand.trees.id.iter().filter(|&&id| id < next).count() <= before);
         recruited_trees += born as u64;
-        check_year(&w, year);
+        check_year(&w, next);
         let row = r.row.unwrap();
         assert!((row.regeneration_ha - w.stand.cohorts.total_stems() as f64 / w.site.area_ha).abs() < 1e-9);
         rows.push(row);

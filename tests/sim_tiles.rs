@@ -49,9 +49,9 @@ fn two_three_five_and_2x2_tiles_equal_one_process() {
     let toml = edges();
     let one = one_process(&toml, YEARS);
     let w = &one.1;
-    // a meaningful run: recruits (birth ids from 2^32 on), deaths, cohorts, and a halo narrower
+    // a meaningful run: recruits (birth ids above 2^44), deaths, cohorts, and a halo narrower
     // than the site, so tiles do not simply hold every tree
-    let recruits = w.stand.trees.id.iter().filter(|&&id| id >= sylva::sim::trees::FIRST_BIRTH_ID).count();
+    let recruits = w.stand.trees.id.iter().filter(|&&id| id >= 1 << 44).count();
     assert!(recruits > 50, "only {recruits} recruits");
     assert!(w.stand.trees.len() > 100 && !w.stand.cohorts.is_empty());
     assert!(w.tallies.deaths_total.iter().sum::<u64>() > 0);

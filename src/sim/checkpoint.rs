@@ -26,10 +26,8 @@ const MAGIC: &[u8; 7] = b"SYLVACK";
 
 /// Hand-kept part of the layout version: bump it whenever the order, kind or number of the
 /// stored fields changes (the cause counts below are folded in by themselves). 5: file length,
-/// run identity and CRC-32 added (issue 16). 6: recruits' ids cell-major
-/// ([`crate::sim::trees::birth_id`]; a store of the older year-major ids would no longer stay
-/// sorted by id as recruits are inserted).
-const LAYOUT_BASE: u32 = 6;
+/// run identity and CRC-32 added (issue 16).
+const LAYOUT_BASE: u32 = 5;
 
 /// Version of the checkpoint layout, written in the header and required on reading:
 /// `LAYOUT_BASE · 65536 + N_CAUSES · 256 + N_REGEN_CAUSES`, so that adding a cause of death

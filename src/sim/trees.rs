@@ -5,43 +5,27 @@ use crate::species::SpeciesId;
 use serde::{Deserialize, Serialize};
 
 /// Stable tree identifier (never reused within a run). Trees of the start (planted, seed
-/// sources) are numbered 0, 1, 2, … in the scenario's order (below [`FIRST_BIRTH_ID`]); recruits
-/// get [`birth_id`], a function of where and when they were born, so ids do not depend on how
-/// the landscape is cut into tiles ([`crate::sim::tiles`]). The tree store is kept sorted by id,
-/// which for recruits is the spatial order of their light cells ([`birth_id`]).
+/// sources) are numbered 0, 1, 2, … in the scenario's order; recruits get [`birth_id`], a
+/// function of where and when they were born, so ids do not depend on how the landscape is cut
+/// into tiles ([`crate::sim::tiles`]) and stay ascending in the tree store's order.
 pub type TreeId = u64;
 
 /// Bits of a recruit id ([`birth_id`]) for its index among the recruits of its cell and year.
 pub const BIRTH_INDEX_BITS: u32 = 12;
-/// Bits of a recruit id ([`birth_id`]) for its birth year (years completed before it).
-pub const BIRTH_YEAR_BITS: u32 = 20;
-/// Bits of a recruit id ([`birth_id`]) below its birth cell: the year and the index.
-pub const BIRTH_CELL_SHIFT: u32 = BIRTH_YEAR_BITS + BIRTH_INDEX_BITS;
-/// The smallest recruit id, `birth_id(0, 0, 0)` = 2³²; trees of the start stay below it.
-pub const FIRST_BIRTH_ID: TreeId = 1 << BIRTH_CELL_SHIFT;
+/// Bits of a recruit id ([`birth_id`]) for its birth cell (light cells are `u32`).
+pub const BIRTH_CELL_BITS: u32 = 32;
 
 /// Id of the `k`-th tree recruited in light cell `cell` (row-major, row 0 south) in simulation
-/// year `year` (years completed before it): `(cell + 1) · 2³² + year · 2¹² + k`. Partition
-/// independent (no counter shared by the whole landscape) and larger than every start tree's id
-/// (those stay below [`FIRST_BIRTH_ID`]). Cell-major (since session 11 of issue 16; year-major
-/// `(year + 1) · 2⁴⁴ + cell · 2¹² + k` before): ascending ids are ascending light cells (row by
-/// row), then birth years, then the index, so the tree store, kept sorted by id, holds the trees
-/// of a light cell next to each other and the per-cell passes (canopy, light, crowding) read it
-/// in one stream instead of gathering; recruits are inserted at their place
-/// (`sim::phases::regen`). Ranges: `cell` < 2³² − 1, `year` < 2²⁰ (scenarios run at most 10,000
-/// years), `k` < 4096 (a light cell of at most 20 m holds at most about 100 stems at the
-/// recruitment height, `regen::max_density_ha`).
+/// year `year` (years completed before it): `(year + 1) · 2⁴⁴ + cell · 2¹² + k`. Partition
+/// independent (no counter shared by the whole landscape); larger than every start tree's id
+/// (those stay below 2⁴⁴) and than every id of an earlier year, and ascending in (cell, k)
+/// within a year, so recruits appended in cell order keep the store sorted by id. Ranges:
+/// `year` < 2²⁰ − 1 (scenarios run at most 10,000 years), `k` < 4096 (a light cell of at most
+/// 20 m holds at most about 100 stems at the recruitment height, `regen::max_density_ha`).
 #[inline]
 pub fn birth_id(year: u32, cell: u32, k: u32) -> TreeId {
-    debug_assert!(k < 1 << BIRTH_INDEX_BITS && year < 1 << BIRTH_YEAR_BITS && cell < u32::MAX);
-    (cell as u64 + 1) << BIRTH_CELL_SHIFT | (year as u64) << BIRTH_INDEX_BITS | (k as u64 & ((1 << BIRTH_INDEX_BITS) - 1))
-}
-
-/// Birth year (years completed before it) of a recruit's id ([`birth_id`]); `None` for a tree
-/// of the start (id below [`FIRST_BIRTH_ID`]).
-#[inline]
-pub fn birth_year(id: TreeId) -> Option<u32> {
-    (id >= FIRST_BIRTH_ID).then(|| ((id >> BIRTH_INDEX_BITS) & ((1 << BIRTH_YEAR_BITS) - 1)) as u32)
+    debug_assert!(k < 1 << BIRTH_INDEX_BITS && year < (1 << 20) - 1);
+    ((year as u64 + 1) << (BIRTH_CELL_BITS + BIRTH_INDEX_BITS)) | (cell as u64) << BIRTH_INDEX_BITS | (k as u64 & ((1 << BIRTH_INDEX_BITS) - 1))
 }
 
 /// Why a tree died.
@@ -121,8 +105,7 @@ pub struct DeadTree {
 /// the end of the mortality phase (order of the survivors is kept) and recorded as [`DeadTree`].
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct TreeStore {
-    /// Stable ids, strictly increasing in index order ([`birth_id`] for recruits: the trees of
-    /// a light cell next to each other).
+    /// Stable ids, strictly increasing in index order ([`birth_id`] for recruits).
     pub id: Vec<TreeId>,
     /// Species index.
     pub species: Vec<SpeciesId>,
@@ -202,10 +185,9 @@ impl TreeStore {
     pub fn is_empty(&self) -> bool {
         self.id.is_empty()
     }
-    /// Adds a tree of the start and returns its new id (below [`FIRST_BIRTH_ID`]).
+    /// Adds a tree and returns its new id.
     pub fn push(&mut self, t: NewTree) -> TreeId {
         let id = self.next_id;
-        assert!(id < FIRST_BIRTH_ID, "more than 2^32 trees at the start");
         self.next_id += 1;
         self.id.push(id);
         self.species.push(t.species);
@@ -247,47 +229,6 @@ impl TreeStore {
             }
         });
     }
-    /// Inserts the trees of `new` (sorted by id, no id in this store) each at its place by id,
-    /// so that the store stays sorted by id; their cached growth factors are not drawn yet
-    /// (NaN). Each column is moved up in place from its end, one task per column (O(n) for a
-    /// store of n trees; the recruits of a year land all over the store).
-    pub fn insert(&mut self, mut new: TreeStore) {
-        use rayon::prelude::*;
-        if new.is_empty() {
-            return;
-        }
-        debug_assert!(new.id.windows(2).all(|w| w[0] < w[1]), "insert: new trees not sorted by id");
-        // the old index before which each new tree goes
-        let old_id = &self.id;
-        let at: Vec<usize> = new.id.par_iter().with_min_len(1 << 12).map(|id| old_id.partition_point(|v| v < id)).collect();
-        /// Inserts `new[j]` before old element `at[j]` (ascending), moving from the end.
-        fn ins<T: Copy + Default>(v: &mut Vec<T>, at: &[usize], new: &[T]) {
-            let mut end = v.len();
-            v.resize(end + new.len(), T::default());
-            for j in (0..new.len()).rev() {
-                let p = at[j];
-                v.copy_within(p..end, p + j + 1);
-                v[p + j] = new[j];
-                end = p;
-            }
-        }
-        let at = &at[..];
-        let n = new.len();
-        new.growth_factor.0 = vec![f32::NAN; n];
-        let TreeStore { id, species, x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability, growth_factor, next_id: _ } = self;
-        // a store restored from a checkpoint has no cached factors yet: give it NaN ones
-        growth_factor.0.resize(id.len(), f32::NAN);
-        let nw = &new;
-        rayon::scope(|sc| {
-            sc.spawn(move |_| ins(id, at, &nw.id));
-            sc.spawn(move |_| ins(species, at, &nw.species));
-            let cols = [x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability, &mut growth_factor.0];
-            let news = [&nw.x, &nw.y, &nw.z, &nw.age, &nw.height, &nw.dbh, &nw.crown_radius, &nw.crown_base, &nw.light, &nw.vigour, &nw.suitability, &nw.growth_factor.0];
-            for (v, w) in cols.into_iter().zip(news) {
-                sc.spawn(move |_| ins(v, at, w));
-            }
-        });
-    }
     /// Basal area of tree `i` (m²).
     #[inline]
     pub fn basal_area_m2(&self, i: usize) -> f64 {
@@ -325,29 +266,11 @@ impl SpatialGrid {
         r * self.cols + c
     }
     /// Builds the grid of `trees` on the light grid `light` (a stable parallel counting sort,
-    /// [`super::bucket::bucket`]: the trees of a cell in ascending index order; a store already
-    /// in cell order is taken as it is, the same result).
+    /// [`super::bucket::bucket`]: the trees of a cell in ascending index order).
     pub fn build(trees: &TreeStore, light: &LightGrid) -> SpatialGrid {
         let LightGrid { cell_m, cols, rows } = *light;
-        use rayon::prelude::*;
         let mut g = SpatialGrid { cell_m, cols, rows, start: Vec::new(), items: Vec::new() };
-        let n = trees.len();
-        let cells: Vec<u32> = trees.x.par_iter().zip(&trees.y).with_min_len(1 << 14).map(|(&x, &y)| g.cell_of(x, y) as u32).collect();
-        // a store in cell order (recruits only: their ids are cell-major, `birth_id`) is its own
-        // bucketing: the cells' ranges in place, the items the identity
-        if cells.par_windows(2).with_min_len(1 << 14).all(|w| w[0] <= w[1]) {
-            let mut start = vec![0u32; cols * rows + 1];
-            for &c in &cells {
-                start[c as usize + 1] += 1;
-            }
-            for k in 0..cols * rows {
-                start[k + 1] += start[k];
-            }
-            g.start = start;
-            g.items = (0..n as u32).collect();
-            return g;
-        }
-        let (start, items) = super::bucket::bucket(n, cols * rows, |i| cells[i], |i| i as u32);
+        let (start, items) = super::bucket::bucket(trees.len(), cols * rows, |i| g.cell_of(trees.x[i], trees.y[i]) as u32, |i| i as u32);
         g.start = start;
         g.items = items;
         g
@@ -383,51 +306,12 @@ mod tests {
     use super::*;
 
     #[test]
-    fn birth_ids_order_by_cell_then_year_then_index() {
-        assert_eq!(birth_id(0, 0, 0), FIRST_BIRTH_ID);
-        assert_eq!(birth_id(0, 3, 5), (4 << 32) + 5);
-        assert_eq!(birth_id(7, 3, 5), (4 << 32) + (7 << 12) + 5);
-        assert!(birth_id(0, 3, 4095) < birth_id(1, 3, 0));
-        assert!(birth_id(9_999, 3, 4095) < birth_id(0, 4, 0));
-        assert!(birth_id(0, u32::MAX - 1, 0) > birth_id((1 << 20) - 1, u32::MAX - 2, 4095));
-        assert_eq!(birth_year(birth_id(9_999, 12, 7)), Some(9_999));
-        assert_eq!(birth_year(birth_id(0, u32::MAX - 1, 4095)), Some(0));
-        assert_eq!(birth_year(FIRST_BIRTH_ID - 1), None);
-    }
-
-    #[test]
-    fn insert_keeps_the_store_sorted_by_id() {
-        let tree = |x: f32| NewTree { species: 0, x, y: 1.0, z: 0.0, age: 1.0, height: 2.0, dbh: 0.0, crown_radius: 0.3, suitability: 1.0 };
-        let mut t = TreeStore::default();
-        for k in 0..4 {
-            t.push(tree(k as f32));
-        }
-        // recruits of cells 0, 2 and 5: one before every old tree of a later cell, two between,
-        // one after the end; the old trees' cached factors stay with them
-        t.growth_factor.0[1] = 0.75;
-        let old = [birth_id(0, 0, 0), birth_id(1, 2, 0), birth_id(1, 2, 1)];
-        let mut s = TreeStore::default();
-        let mut moved = t.clone();
-        for (k, &id) in old.iter().enumerate() {
-            let mut one = TreeStore::default();
-            one.push(tree(10.0 + k as f32));
-            one.id[0] = id;
-            moved.insert(one);
-        }
-        assert_eq!(moved.id[4..], old);
-        assert_eq!(moved.x, vec![0.0, 1.0, 2.0, 3.0, 10.0, 11.0, 12.0]);
-        for (id, x) in [(birth_id(3, 0, 0), 20.0), (birth_id(3, 2, 0), 21.0), (birth_id(3, 2, 1), 22.0), (birth_id(0, 5, 0), 23.0)] {
-            s.push(tree(x));
-            *s.id.last_mut().unwrap() = id;
-        }
-        moved.insert(s);
-        assert!(moved.id.windows(2).all(|w| w[0] < w[1]));
-        assert_eq!(moved.x, vec![0.0, 1.0, 2.0, 3.0, 10.0, 20.0, 11.0, 12.0, 21.0, 22.0, 23.0]);
-        assert_eq!(moved.len(), 11);
-        assert_eq!(moved.growth_factor.0.len(), 11);
-        assert_eq!(moved.growth_factor.0[1], 0.75);
-        assert!(moved.growth_factor.0[5].is_nan());
-        assert_eq!(moved.crown_base[5], 0.8, "columns moved together");
+    fn birth_ids_order_by_year_then_cell_then_index() {
+        assert_eq!(birth_id(0, 0, 0), 1 << 44);
+        assert_eq!(birth_id(0, 3, 5), (1 << 44) + (3 << 12) + 5);
+        assert!(birth_id(0, 3, 4095) < birth_id(0, 4, 0));
+        assert!(birth_id(0, u32::MAX, 4095) < birth_id(1, 0, 0));
+        assert!(birth_id(9_999, u32::MAX, 4095) > birth_id(9_998, 0, 0));
     }
 
     #[test]

@@ -68,19 +68,6 @@ pub fn max_density_ha(h: f32) -> f64 {
     RECRUIT_DENSITY_HA * (h.max(0.05) as f64 / RECRUIT_HEIGHT_M as f64).powf(-DENSITY_EXPONENT)
 }
 
-/// `v` (m) as `f32`, kept below `hi` (m, a cell's upper edge): rounding to `f32` would carry a
-/// recruit's coordinate just below the edge onto it, into the next light cell, away from the
-/// trees of its birth cell that its id ([`birth_id`]) places it beside in the store.
-#[inline]
-fn below(v: f64, hi: f64) -> f32 {
-    let f = v as f32;
-    if f as f64 >= hi {
-        f.next_down()
-    } else {
-        f
-    }
-}
-
 /// Binomial draw `B(n, p)`: Bernoulli trials up to 64 stems, a rounded normal approximation
 /// (clamped to 0..=n) above.
 fn binomial(r: &mut Stream, n: u32, p: f64) -> u32 {
@@ -137,7 +124,7 @@ pub struct Regen<'a> {
     pub seeds: &'a [SeedGrid],
     /// Read and written: the sapling cohorts.
     pub cohorts: &'a mut Cohorts,
-    /// Written: the recruits, each inserted at its place by id ([`TreeStore::insert`]).
+    /// Appended: the recruits.
     pub trees: &'a mut TreeStore,
     /// Incremented: cumulative counts per pool species.
     pub regen_ledger: &'a mut RegenLedger,
@@ -287,8 +274,8 @@ pub fn run(w: Regen<'_>) -> usize {
                         let d = open_dbh(sp, k.height) * 0.8;
                         let t = NewTree {
                             species: s,
-                            x: below(x, (col + 1) as f64 * cell),
-                            y: below(y, (row + 1) as f64 * cell),
+                            x: x as f32,
+                            y: y as f32,
                             z: wr.site.elevation_at(x, y),
                             age: k.age,
                             height: k.height,
@@ -319,8 +306,7 @@ pub fn run(w: Regen<'_>) -> usize {
             }
         }
     }
-    // the blocks' cohorts and recruits in block order (cell order: the recruits ascending by
-    // id), one column per task
+    // the blocks' cohorts and recruits in block order, one column per task
     let ncoh: usize = blocks.iter().map(|b| b.cohorts.len()).sum();
     let n_recruits: usize = blocks.iter().map(|b| b.recruits.len()).sum();
     fn cohorts_of(b: &Block) -> &[Cohort] {
@@ -336,12 +322,14 @@ pub fn run(w: Regen<'_>) -> usize {
         }
     }
     let mut cohorts = Cohorts::default();
-    let mut rec = TreeStore::default();
+    let t = &mut *w.trees;
     {
         let bl = &blocks[..];
         let (co, re) = (cohorts_of as fn(&Block) -> &[Cohort], recruits_of as fn(&Block) -> &[(NewTree, f32, f32, TreeId)]);
         let Cohorts { cell, pool, stems, height, age, vigour } = &mut cohorts;
-        let TreeStore { id, species, x, y, z, age: t_age, height: t_height, dbh, crown_radius, crown_base, light, vigour: t_vigour, suitability, growth_factor: _, next_id: _ } = &mut rec;
+        let TreeStore { id, species, x, y, z, age: t_age, height: t_height, dbh, crown_radius, crown_base, light, vigour: t_vigour, suitability, growth_factor, next_id: _ } = t;
+        // factors drawn when the recruits first grow (NaN: not yet drawn)
+        growth_factor.0.resize(id.len(), f32::NAN);
         rayon::scope(|sc| {
             sc.spawn(move |_| column(bl, ncoh, co, |k| k.cell, cell));
             sc.spawn(move |_| column(bl, ncoh, co, |k| k.pool, pool));
@@ -363,11 +351,9 @@ pub fn run(w: Regen<'_>) -> usize {
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.1, light));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.2, t_vigour));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.suitability, suitability));
+            sc.spawn(move |_| growth_factor.0.resize(growth_factor.0.len() + n_recruits, f32::NAN));
         });
     }
-    // each recruit at its place by id: next to the trees of its light cell (growth factors
-    // drawn when the recruits first grow)
-    w.trees.insert(rec);
     *w.cohorts = cohorts;
     *w.regen_year = year_counts;
     n_recruits
@@ -382,17 +368,6 @@ mod tests {
         assert!((max_density_ha(4.0) - 2500.0).abs() < 1e-6);
         assert!((max_density_ha(1.3) / 15_200.0 - 1.0).abs() < 0.01, "{}", max_density_ha(1.3));
         assert!((max_density_ha(0.3) / 160_000.0 - 1.0).abs() < 0.02, "{}", max_density_ha(0.3));
-    }
-
-    #[test]
-    fn recruit_coordinates_stay_in_their_cell() {
-        // 5 m cells: just below the edge of cell 999_999 rounds to 5,000,000 m in f32
-        let (cell, col) = (5.0f64, 999_999usize);
-        let x = (col as f64 + 0.999_999_99) * cell;
-        assert_eq!(x as f32 as f64, (col + 1) as f64 * cell, "the case the guard is for");
-        let f = below(x, (col + 1) as f64 * cell);
-        assert!((f as f64) < (col + 1) as f64 * cell && f as f64 >= col as f64 * cell);
-        assert_eq!(below(12.5, 15.0), 12.5);
     }
 
     #[test]
