@@ -35,7 +35,7 @@
 //! recruited, kept in [`RegenLedger`].
 
 use super::growth::{light_response, open_crown_radius, open_dbh};
-use crate::species::allometry::HeightIncrement;
+use crate::species::allometry::{HeightIncrement, Table};
 use super::mortality::{stress_threshold, P_STRESS};
 pub use crate::sim::cohorts::{Cohort, Cohorts, RegenDeath, RegenLedger, RegenYear, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
 use crate::conditions::SiteConditions;
@@ -157,7 +157,7 @@ pub fn run(w: Regen<'_>) -> usize {
     let coh = &w.cohorts;
     let wr = &w;
     // the pool species' height-increment curves, once (same values as potential_increment)
-    let inc: Vec<HeightIncrement> = w.pool.iter().map(|&s| HeightIncrement::of(&w.lib.species[s as usize])).collect();
+    let inc: Vec<Table<HeightIncrement>> = w.pool.iter().map(|&s| HeightIncrement::of(&w.lib.species[s as usize]).table()).collect();
     let inc = &inc[..];
     // germinants a light cell holds at most (the same for every cell: computed once)
     let cap0 = max_density_ha(GERMINANT_HEIGHT_M) * area / 10_000.0;
