@@ -128,7 +128,9 @@ pub struct Growth<'a> {
 /// plasticity); crown base rises to `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural
 /// pruning). Vigour memory `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding is
 /// felt within a few years) feeds stress mortality, which thins crowded
-/// stands along the species' maximum-density line.
+/// stands along the species' maximum-density line. `H(t_eff + 1) − H(t_eff)` and `D_open` are
+/// read from the species' tables ([`crate::species::allometry::Table`], within 10⁻⁵ of the
+/// curves' ranges; since session 11 of issue 16).
 pub fn run(w: Growth<'_>) {
     let crowd = w.crowd;
     let lib = &w.lib;

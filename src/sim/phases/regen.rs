@@ -14,8 +14,9 @@
 //!    and age); where the species already has advance regeneration taller than that, its seeds
 //!    fail (one cohort per cell and species, as one cohort per pixel in iLand).
 //! 2. **Growth**: `ΔH = ΔH_pot(H) · f(L_ground) · S` — the trees' height growth
-//!    ([`potential_increment`](super::growth::potential_increment), [`light_response`], suitability `S`) with the ground light of the
-//!    cell under the tree canopy. Cohorts do not shade each other or the trees: they stay out of
+//!    ([`potential_increment`](super::growth::potential_increment), read from the species'
+//!    table as for the trees, [`Table`]; [`light_response`], suitability `S`) with the ground
+//!    light of the cell under the tree canopy. Cohorts do not shade each other or the trees: they stay out of
 //!    the canopy grid (they are under it); competition within the layer is the density cap.
 //! 3. **Shade mortality** (cause `shade`): vigour `v ← 0.7 v + 0.3 f(L)·S` as for trees; while
 //!    `v` is below the species' [`stress_threshold`], each stem dies with [`P_STRESS`]
