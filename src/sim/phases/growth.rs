@@ -129,15 +129,15 @@ pub struct Growth<'a> {
 /// pruning). Vigour memory `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding is
 /// felt within a few years) feeds stress mortality, which thins crowded
 /// stands along the species' maximum-density line. `H(t_eff + 1) − H(t_eff)` and `D_open` are
-/// read from the species' tables ([`crate::species::allometry::Table`], within 10⁻⁵ of the
-/// curves' ranges; since session 11 of issue 16).
+/// read from the species' tables ([`crate::species::allometry::Table`], within 5 · 10⁻⁵ of
+/// the curves' ranges; since session 11 of issue 16).
 pub fn run(w: Growth<'_>) {
     let crowd = w.crowd;
     let lib = &w.lib;
     let seed = w.seed;
     let t = &mut *w.trees;
-    // the species' curves, tabulated once per species (`allometry::Table`: within 10⁻⁵ of the
-    // plain functions, without their powers and logarithms per tree)
+    // the species' curves, tabulated once per species (`allometry::Table`: within 5 · 10⁻⁵ of
+    // the curves' ranges, without their powers and logarithms per tree)
     // (pool species only: trees belong to the pool)
     let curves: Vec<Curves> = lib
         .species
