@@ -4,8 +4,8 @@
 use crate::rng::{salt, Stream};
 use crate::sim::density::Crowding;
 use crate::sim::trees::TreeStore;
-use crate::species::allometry::{HeightIncrement, OpenDbh};
-use crate::species::{Species, SpeciesLibrary};
+use crate::species::allometry::{HeightIncrement, OpenDbh, Table};
+use crate::species::{Species, SpeciesId, SpeciesLibrary};
 pub use crate::species::allometry::{effective_age, open_crown_radius, open_dbh, potential_height, potential_increment};
 use rayon::prelude::*;
 
@@ -106,6 +106,8 @@ pub struct Growth<'a> {
     pub seed: u64,
     /// Species library.
     pub lib: &'a SpeciesLibrary,
+    /// Species taking part (their curves are tabulated once a year).
+    pub pool: &'a [SpeciesId],
     /// Local crowding of every tree, tree-index order ([`crate::sim::density::crowding`]).
     pub crowd: &'a Crowding,
     /// Trees: light and suitability read; size, vigour and age written.
@@ -126,14 +128,30 @@ pub struct Growth<'a> {
 /// plasticity); crown base rises to `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural
 /// pruning). Vigour memory `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding is
 /// felt within a few years) feeds stress mortality, which thins crowded
-/// stands along the species' maximum-density line.
+/// stands along the species' maximum-density line. `H(t_eff + 1) − H(t_eff)` and `D_open` are
+/// read from the species' tables ([`crate::species::allometry::Table`], within 5 · 10⁻⁵ of
+/// the curves' ranges; since session 11 of issue 16).
 pub fn run(w: Growth<'_>) {
     let crowd = w.crowd;
     let lib = &w.lib;
     let seed = w.seed;
     let t = &mut *w.trees;
-    // the species' curve constants, once per species (same values as the plain functions)
-    let curves: Vec<Curves> = lib.species.iter().map(|sp| (HeightIncrement::of(sp), OpenDbh::of(sp))).collect();
+    // the species' curves, tabulated once per species (`allometry::Table`: within 5 · 10⁻⁵ of
+    // the curves' ranges, without their powers and logarithms per tree)
+    // (pool species only: trees belong to the pool)
+    let curves: Vec<Curves> = lib
+        .species
+        .iter()
+        .enumerate()
+        .map(|(s, sp)| {
+            let (inc, dbh) = (HeightIncrement::of(sp), OpenDbh::of(sp));
+            if w.pool.contains(&(s as SpeciesId)) {
+                (inc.table(), dbh.table())
+            } else {
+                (Table::exact(inc), Table::exact(dbh))
+            }
+        })
+        .collect();
     let curves = &curves[..];
     // read-only columns, then the written ones updated in place (each tree on its own)
     // trees restored from a checkpoint have no cached growth factors yet (NaN: drawn below)
@@ -154,8 +172,8 @@ pub fn run(w: Growth<'_>) {
         });
 }
 
-/// A species' height-increment and open-grown DBH curves.
-type Curves = (HeightIncrement, OpenDbh);
+/// A species' height-increment and open-grown DBH curves (tabulated).
+type Curves = (Table<HeightIncrement>, Table<OpenDbh>);
 
 /// One tree's season ([`run`]): species `s`, light `l`, suitability, id, height `h`, DBH `d`,
 /// crown base and vigour before it, its cached [`growth_factor`] (NaN until first drawn, then
@@ -219,7 +237,7 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
 /// and vigour.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-fn finish(sp: &Species, dbh_of: &OpenDbh, ccf: f32, l: f32, h1: f32, mut d1: f32, crown_base: f32, vigour: f32, f: f32, m: f32) -> Grown {
+fn finish(sp: &Species, dbh_of: &Table<OpenDbh>, ccf: f32, l: f32, h1: f32, mut d1: f32, crown_base: f32, vigour: f32, f: f32, m: f32) -> Grown {
     if d1 == 0.0 && h1 > 1.3 {
         d1 = dbh_of.at(h1) * 0.5;
     }

@@ -14,8 +14,9 @@
 //!    and age); where the species already has advance regeneration taller than that, its seeds
 //!    fail (one cohort per cell and species, as one cohort per pixel in iLand).
 //! 2. **Growth**: `ΔH = ΔH_pot(H) · f(L_ground) · S` — the trees' height growth
-//!    ([`potential_increment`](super::growth::potential_increment), [`light_response`], suitability `S`) with the ground light of the
-//!    cell under the tree canopy. Cohorts do not shade each other or the trees: they stay out of
+//!    ([`potential_increment`](super::growth::potential_increment), read from the species'
+//!    table as for the trees, [`Table`]; [`light_response`], suitability `S`) with the ground
+//!    light of the cell under the tree canopy. Cohorts do not shade each other or the trees: they stay out of
 //!    the canopy grid (they are under it); competition within the layer is the density cap.
 //! 3. **Shade mortality** (cause `shade`): vigour `v ← 0.7 v + 0.3 f(L)·S` as for trees; while
 //!    `v` is below the species' [`stress_threshold`], each stem dies with [`P_STRESS`]
@@ -35,7 +36,7 @@
 //! recruited, kept in [`RegenLedger`].
 
 use super::growth::{light_response, open_crown_radius, open_dbh};
-use crate::species::allometry::HeightIncrement;
+use crate::species::allometry::{HeightIncrement, Table};
 use super::mortality::{stress_threshold, P_STRESS};
 pub use crate::sim::cohorts::{Cohort, Cohorts, RegenDeath, RegenLedger, RegenYear, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
 use crate::conditions::SiteConditions;
@@ -157,7 +158,7 @@ pub fn run(w: Regen<'_>) -> usize {
     let coh = &w.cohorts;
     let wr = &w;
     // the pool species' height-increment curves, once (same values as potential_increment)
-    let inc: Vec<HeightIncrement> = w.pool.iter().map(|&s| HeightIncrement::of(&w.lib.species[s as usize])).collect();
+    let inc: Vec<Table<HeightIncrement>> = w.pool.iter().map(|&s| HeightIncrement::of(&w.lib.species[s as usize]).table()).collect();
     let inc = &inc[..];
     // germinants a light cell holds at most (the same for every cell: computed once)
     let cap0 = max_density_ha(GERMINANT_HEIGHT_M) * area / 10_000.0;
