@@ -380,7 +380,7 @@ fn terrain_layout() -> wgpu::VertexBufferLayout<'static> {
 
 fn tree_layouts() -> [wgpu::VertexBufferLayout<'static>; 2] {
     const V: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32, 9 => Float32x2];
-    const I: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4];
+    const I: [wgpu::VertexAttribute; 7] = wgpu::vertex_attr_array![3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4, 10 => Float32x4];
     [
         wgpu::VertexBufferLayout { array_stride: std::mem::size_of::<TreeVertex>() as u64, step_mode: wgpu::VertexStepMode::Vertex, attributes: &V },
         wgpu::VertexBufferLayout { array_stride: std::mem::size_of::<InstanceRaw>() as u64, step_mode: wgpu::VertexStepMode::Instance, attributes: &I },
@@ -663,7 +663,8 @@ impl Renderer {
             let v = [c(lo[0], lo[1]), c(hi[0], lo[1]), c(hi[0], hi[1]), c(lo[0], lo[1]), c(hi[0], hi[1]), c(lo[0], hi[1])];
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("water"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX })
         });
-        let (lo, hi) = t.bounds();
+        // over the surroundings too: trees stand beyond the window (job::scene::Landscape)
+        let (lo, hi) = t.full_bounds();
         let canopy_grid = super::canopy::CanopyGrid::for_bounds(lo, hi);
         let canopy_buf = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("canopy"),

@@ -368,6 +368,7 @@ struct TreeIn {
     @location(7) bark: vec4<f32>,   // bark rgb, dither salt
     @location(8) p3: vec4<f32>,     // prototype, level, crown radius (culling), crown radius drawn
     @location(9) uv: vec2<f32>,     // leaf-card coordinates 0..1 (carved into discs); -1 elsewhere
+    @location(10) p4: vec4<f32>,    // sky fade 0..1 (TreeInstance::sky_fade), unused x3
 };
 
 struct TreeOut {
@@ -379,7 +380,7 @@ struct TreeOut {
     @location(4) mat_s: vec2<f32>,                      // material, normalised height
     @location(5) @interpolate(flat) salt: f32,
     @location(6) bb: vec2<f32>,                         // billboard outline coordinates
-    @location(7) @interpolate(flat) info: vec4<f32>,   // prototype, level, bark rgb packed? (unused)
+    @location(7) @interpolate(flat) info: vec4<f32>,   // prototype, level, sky fade 0..1, crown radius drawn
     @location(8) @interpolate(flat) bark: vec3<f32>,   // bark colour (billboard trunks, twigs)
     @location(9) cdir: vec3<f32>,                       // direction from the crown centre (meshes)
     @location(10) uv: vec2<f32>,                        // leaf-card coordinates (-1: not a card)
@@ -467,7 +468,7 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     o.fade = vec4<f32>(v.p1.z, v.p1.w, v.p2.x, v.leaf.w);
     o.mat_s = vec2<f32>(v.mat, v.pos.z);
     o.salt = v.bark.w;
-    o.info = v.p3;
+    o.info = vec4<f32>(v.p3.xy, v.p4.x, v.p3.w);
     o.bark = v.bark.rgb;
     o.uv = v.uv;
     return o;
@@ -763,7 +764,8 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         let trans = albedo * vec3<f32>(1.1, 1.15, 0.6) * g.sun_color.rgb * (0.3 * back * sh);
         c = c + trans * ao;
     }
-    return vec4<f32>(fog(c, i.world), 1.0);
+    // trees on the faded surroundings dissolve into the sky with their ground
+    return vec4<f32>(surroundings_fade(fog(c, i.world), i.world, i.info.z), 1.0);
 }
 
 @vertex
