@@ -23,7 +23,7 @@ use wgpu::util::DeviceExt;
 use super::camera::Camera;
 use super::instanced::{build_batches, instance_record, level_triangles, Batches, InstanceRaw};
 use super::lod::{drawn_levels, Frustum, LodParams, Silhouette, SILHOUETTE_BINS};
-use super::scene::Scene;
+use super::scene::{Scene, TreeInstance};
 use crate::mesh::LOD_LEVELS;
 use crate::structure::texture::{self, LeafShape};
 
@@ -55,7 +55,8 @@ struct Globals {
     facing: [f32; 4],
     /// canopy grid: origin x, y (m), texel (m), on (1) / off (0)
     canopy0: [f32; 4],
-    /// canopy grid: nx, ny, oblique-view factor k, unused
+    /// canopy grid: nx, ny, oblique-view factor k, height above the ground (m) at which the
+    /// layer's crowns take their sun visibility ([`canopy_light_height`])
     canopy1: [f32; 4],
     /// shadow map: texel (uv), depth bias (depth units), texel (m), unused
     shadow: [f32; 4],
@@ -1123,7 +1124,7 @@ impl Renderer {
         if let Some(gs) = &self.scene {
             let cg = gs.canopy_grid;
             g.canopy0 = [cg.origin[0], cg.origin[1], cg.texel, if self.lod.canopy_px > 0.0 && canopy_used { 1.0 } else { 0.0 }];
-            g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, 0.0];
+            g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, canopy_light_height(&scene.instances)];
         }
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         g.view_proj = g.light_view_proj;
@@ -1257,5 +1258,24 @@ impl Renderer {
 impl std::fmt::Debug for Renderer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Renderer").field("adapter", &self.adapter_description()).finish()
+    }
+}
+
+/// Height above the ground (m) at which the canopy layer's crowns take their sun visibility from
+/// the shadow map: 0.85 × the crown-area-weighted mean height of `instances` (about the sunlit
+/// upper crown of the mean tree; 0 without trees). Looked up at the ground instead, the layer
+/// would lie in the shadow of every tree drawn as geometry above it and read darker than the
+/// same crowns drawn as billboards.
+pub fn canopy_light_height(instances: &[TreeInstance]) -> f32 {
+    let (mut a, mut ah) = (0.0f64, 0.0f64);
+    for t in instances.iter().filter(|t| t.height.is_finite() && t.height > 0.0 && t.crown_radius.is_finite()) {
+        let w = f64::from(t.crown_radius * t.crown_radius * t.opacity.clamp(0.0, 1.0));
+        a += w;
+        ah += w * f64::from(t.height);
+    }
+    if a > 0.0 {
+        (0.85 * ah / a) as f32
+    } else {
+        0.0
     }
 }

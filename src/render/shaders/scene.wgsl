@@ -14,7 +14,7 @@ struct Globals {
     params: vec4<f32>,       // time s, sea level m, shadow texel size, fog density 1/m
     facing: vec4<f32>,       // xyz towards the viewer for billboards when w = 1 (ortho, sun); w = 0: use eye
     canopy0: vec4<f32>,      // canopy grid origin x, y (m), texel (m), on (1) / off (0)
-    canopy1: vec4<f32>,      // canopy grid nx, ny, oblique-view factor k, unused
+    canopy1: vec4<f32>,      // canopy grid nx, ny, oblique-view factor k, crown light height m
     shadow: vec4<f32>,       // shadow map: texel (uv), depth bias (depth units), texel (m), unused
 };
 
@@ -337,9 +337,12 @@ fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
         }
         if (cv.w > 0.0) {
             // crowns lit like the billboards' rounded crowns: wrapped light on an up-facing
-            // normal, the crown's mean ambient occlusion and self-shading
+            // normal, the crown's mean ambient occlusion and self-shading; sun visibility at the
+            // height of the upper crowns (render/renderer.rs, canopy_light_height), not in the
+            // shadow the trees drawn as geometry cast on the ground
             let cn = normalize(n + vec3<f32>(0.0, 0.0, 1.5));
-            let cc = shade(cv.rgb, cn, i.world + cn * 0.5, 0.35, 0.75) * 0.85;
+            let top = i.world + vec3<f32>(0.0, 0.0, g.canopy1.w);
+            let cc = shade(cv.rgb, cn, top + cn * 0.5, 0.35, 0.75) * 0.85;
             c = mix(c, cc, canopy_view_cover(cv.w, i.world));
         }
     }
