@@ -147,8 +147,6 @@ struct TerrainVertex {
     color: [f32; 3],
     /// dissolve into the sky 0..1 (`TerrainMesh::fade`)
     fade: f32,
-    /// far-forest canopy 0..1 (`TerrainMesh::forest`)
-    forest: f32,
 }
 
 #[repr(C)]
@@ -375,7 +373,7 @@ pub struct Renderer {
 }
 
 fn terrain_layout() -> wgpu::VertexBufferLayout<'static> {
-    const A: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32, 4 => Float32];
+    const A: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32];
     wgpu::VertexBufferLayout { array_stride: std::mem::size_of::<TerrainVertex>() as u64, step_mode: wgpu::VertexStepMode::Vertex, attributes: &A }
 }
 
@@ -652,7 +650,7 @@ impl Renderer {
         let (terrain_vb, terrain_ib) = if t.indices.is_empty() {
             (None, None)
         } else {
-            let verts: Vec<TerrainVertex> = (0..t.positions.len()).map(|i| TerrainVertex { pos: t.positions[i], normal: t.normals[i], color: t.colors[i], fade: t.fade_at(i), forest: t.forest_at(i) }).collect();
+            let verts: Vec<TerrainVertex> = (0..t.positions.len()).map(|i| TerrainVertex { pos: t.positions[i], normal: t.normals[i], color: t.colors[i], fade: t.fade_at(i) }).collect();
             (
                 Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("terrain vb"), contents: bytemuck::cast_slice(&verts), usage: wgpu::BufferUsages::VERTEX })),
                 Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("terrain ib"), contents: bytemuck::cast_slice(&t.indices), usage: wgpu::BufferUsages::INDEX })),
@@ -660,7 +658,7 @@ impl Renderer {
         };
         let water_vb = scene.sea_level.filter(|s| s.is_finite()).map(|z| {
             let (lo, hi) = t.bounds();
-            let c = |x: f32, y: f32| TerrainVertex { pos: [x, y, z], normal: [0.0, 0.0, 1.0], color: [0.0; 3], fade: 0.0, forest: 0.0 };
+            let c = |x: f32, y: f32| TerrainVertex { pos: [x, y, z], normal: [0.0, 0.0, 1.0], color: [0.0; 3], fade: 0.0 };
             let v = [c(lo[0], lo[1]), c(hi[0], lo[1]), c(hi[0], hi[1]), c(lo[0], lo[1]), c(hi[0], hi[1]), c(lo[0], hi[1])];
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("water"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX })
         });

@@ -178,7 +178,6 @@ struct TerrainIn {
     @location(1) normal: vec3<f32>,
     @location(2) color: vec3<f32>,
     @location(3) fade: f32,
-    @location(4) forest: f32,
 };
 
 struct TerrainOut {
@@ -187,7 +186,6 @@ struct TerrainOut {
     @location(1) normal: vec3<f32>,
     @location(2) color: vec3<f32>,
     @location(3) fade: f32,
-    @location(4) forest: f32,
 };
 
 @vertex
@@ -198,42 +196,9 @@ fn vs_terrain(v: TerrainIn) -> TerrainOut {
     o.normal = v.normal;
     o.color = v.color;
     o.fade = v.fade;
-    o.forest = v.forest;
     return o;
 }
 
-// ---- far forest (job::scene::FarForest): crowns drawn on the terrain beyond the simulated
-// window. A jittered grid of crowns of ~7 m (cellular pattern: the nearest of the 3 x 3 cells'
-// crown centres, each with its own radius), each a lit dome over a dark gap, and the footprint
-// of the pixel fading the pattern to its mean where crowns are smaller than ~2 pixels.
-fn crown_hash(c: vec2<f32>) -> vec3<f32> {
-    var p = vec3<f32>(dot(c, vec2<f32>(127.1, 311.7)), dot(c, vec2<f32>(269.5, 183.3)), dot(c, vec2<f32>(419.2, 371.9)));
-    return fract(sin(p) * 43758.5453);
-}
-
-// (dome height 0..1 at p (0 in a gap), its plan gradient (per m) for the crown normal)
-fn far_crowns(p: vec2<f32>) -> vec3<f32> {
-    let cell = 7.0;
-    let q = p / cell;
-    let base = floor(q);
-    var best = vec3<f32>(0.0);
-    for (var j = -1; j <= 1; j = j + 1) {
-        for (var i = -1; i <= 1; i = i + 1) {
-            let c = base + vec2<f32>(f32(i), f32(j));
-            let h = crown_hash(c);
-            let centre = (c + 0.15 + 0.7 * h.xy) * cell;
-            let r = cell * (0.5 + 0.3 * h.z);
-            let d = p - centre;
-            let t = 1.0 - dot(d, d) / (r * r);
-            if (t > best.x) {
-                let dome = sqrt(t);
-                best = vec3<f32>(dome, -d / (r * r * max(dome, 0.05)));
-            }
-        }
-    }
-    return best;
-}
-// ---- end far forest
 
 // ---- surroundings (terrain19): the terrain beyond the simulated window dissolves into the
 // sky colour seen behind it (same sky_color as fs_sky), so the mesh ends without an edge.
@@ -301,18 +266,6 @@ fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
     let fx = dpdx(i.world.xy);
     let fy = dpdy(i.world.xy);
     var c = shade(i.color, n, i.world, 0.0, 1.0);
-    if (i.forest > 0.0) {
-        let foot = max(length(fx), length(fy));
-        let detail = clamp(2.0 - foot / 1.75, 0.0, 1.0);
-        let fc = far_crowns(i.world.xy);
-        let dome = mix(0.62, fc.x, detail);
-        // crowns lit like the canopy layer's, with the dome's slope tilting the normal
-        let cn = normalize(n + vec3<f32>(detail * fc.y * 2.5, detail * fc.z * 2.5, 1.5));
-        let crown = shade(i.color * (0.4 + 0.7 * dome), cn, i.world + cn * 0.5, 0.35, 0.75) * 0.72;
-        let gap = shade(i.color * 0.3, n, i.world, 0.0, 0.6);
-        let fcov = smoothstep(0.0, 0.35, dome);
-        c = mix(c, mix(gap, crown, fcov), clamp(i.forest, 0.0, 1.0));
-    }
     if (g.canopy0.w > 0.5) {
         // one bilinear tap when the footprint is within 1.5 texels, else 3 taps spread along
         // its longer axis (the depth direction of oblique views)
