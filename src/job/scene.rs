@@ -293,6 +293,11 @@ fn tree_instances(rows: &[Plant], keep: &[usize], library: &SpeciesLibrary, cond
             let z = cond.elevation_at(r.x_m, r.y_m);
             let mut inst = TreeInstance::new(r.id, [r.x_m as f32, r.y_m as f32, z], r.height_m, r.crown_radius_m.max(0.2), sid as u32, col);
             inst.leaf_amount = amount;
+            // the crown from where the simulation has its base
+            let cb = r.crown_base_m / r.height_m;
+            if cb.is_finite() && cb > 0.0 {
+                inst.crown_base = cb.clamp(0.05, 0.85);
+            }
             Some(inst)
         })
         .collect()

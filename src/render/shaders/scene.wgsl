@@ -324,7 +324,7 @@ struct TreeIn {
     @location(7) bark: vec4<f32>,   // bark rgb, dither salt
     @location(8) p3: vec4<f32>,     // prototype, level, crown radius (culling), crown radius drawn
     @location(9) uv: vec2<f32>,     // leaf-card coordinates 0..1 (carved into discs); -1 elsewhere
-    @location(10) p4: vec4<f32>,    // sky fade 0..1 (TreeInstance::sky_fade), unused x3
+    @location(10) p4: vec4<f32>,    // sky fade 0..1 (TreeInstance::sky_fade), crown base (TreeInstance::crown_base), unused x2
 };
 
 struct TreeOut {
@@ -336,7 +336,7 @@ struct TreeOut {
     @location(4) mat_s: vec2<f32>,                      // material, normalised height
     @location(5) @interpolate(flat) salt: f32,
     @location(6) bb: vec2<f32>,                         // billboard outline coordinates
-    @location(7) @interpolate(flat) info: vec4<f32>,   // prototype, level, sky fade 0..1, crown radius drawn
+    @location(7) @interpolate(flat) info: vec4<f32>,   // prototype, level, sky fade 0..1, crown base (0: prototype's)
     @location(8) @interpolate(flat) bark: vec3<f32>,   // bark colour (billboard trunks, twigs)
     @location(9) cdir: vec3<f32>,                       // direction from the crown centre (meshes)
     @location(10) uv: vec2<f32>,                        // leaf-card coordinates (-1: not a card)
@@ -381,11 +381,39 @@ fn sway(v: TreeIn, rp: vec3<f32>, sn_in: f32) -> vec3<f32> {
     return v.pos_h.xyz + rp + vec3<f32>(disp, dz);
 }
 
+// Drawn normalised height of a prototype point at normalised height `z`, for a prototype whose
+// foliage starts at `b0` on a tree whose crown starts at `b` (TreeInstance::crown_base; 0: the
+// prototype's own): the stem below `b0` stretched or shortened to `b`, the crown above it to
+// span `b`..1. Unchanged for a prototype without a stem below its foliage (conifers to the
+// ground).
+fn crown_remap(z: f32, b0: f32, b: f32) -> f32 {
+    if (b <= 0.0 || b0 < 0.05 || b0 > 0.9) {
+        return z;
+    }
+    if (z <= b0) {
+        return z * b / b0;
+    }
+    return b + (z - b0) * (1.0 - b) / (1.0 - b0);
+}
+
+// The inverse of `crown_remap`: the prototype's normalised height of a drawn one.
+fn crown_unmap(z: f32, b0: f32, b: f32) -> f32 {
+    if (b <= 0.0 || b0 < 0.05 || b0 > 0.9) {
+        return z;
+    }
+    if (z <= b) {
+        return z * b0 / b;
+    }
+    return b0 + (z - b) * (1.0 - b0) / (1.0 - b);
+}
+
 // `top_scale`: size of the billboard's top quad (1: the crown's plan disc, in both passes).
 fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     var o: TreeOut;
     o.cdir = vec3<f32>(0.0, 0.0, 1.0);
     let h = v.pos_h.w;
+    // the crown drawn from the instance's crown base (render/scene.rs, TreeInstance::crown_base)
+    let zd = crown_remap(v.pos.z, sils[u32(v.p3.x + 0.5)].info.x, v.p4.y);
     let sxy = v.p1.x;
     var w: vec3<f32>;
     if (v.mat > 1.5) {
@@ -393,13 +421,13 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
         let f = facing_dir(v.pos_h.xyz + vec3<f32>(0.0, 0.0, 0.5 * h));
         var rp: vec3<f32>;
         if (v.mat < 2.5) {
-            rp = right_of(f) * (v.pos.x * sxy) + vec3<f32>(0.0, 0.0, v.pos.z * h);
+            rp = right_of(f) * (v.pos.x * sxy) + vec3<f32>(0.0, 0.0, zd * h);
             o.normal = f;
         } else {
             // the top quad only shows from above: it shrinks to nothing as the view flattens
             // (continuous, so an orbiting camera sees no pop)
             let k = smoothstep(0.45, 0.8, f.z) * top_scale;
-            rp = vec3<f32>(v.pos.x * sxy * k, v.pos.y * sxy * k, v.pos.z * h);
+            rp = vec3<f32>(v.pos.x * sxy * k, v.pos.y * sxy * k, zd * h);
             o.normal = vec3<f32>(0.0, 0.0, 1.0);
         }
         w = sway(v, rp, v.pos.z);
@@ -407,7 +435,7 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     } else {
         let c = cos(v.p1.y);
         let s = sin(v.p1.y);
-        let lp = vec3<f32>(v.pos.x * sxy, v.pos.y * sxy, v.pos.z * h);
+        let lp = vec3<f32>(v.pos.x * sxy, v.pos.y * sxy, zd * h);
         let rp = vec3<f32>(c * lp.x - s * lp.y, s * lp.x + c * lp.y, lp.z);
         w = sway(v, rp, v.pos.z);
         let ln = vec3<f32>(v.normal.x / max(sxy, 1e-4), v.normal.y / max(sxy, 1e-4), v.normal.z / max(h, 1e-4));
@@ -424,7 +452,7 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     o.fade = vec4<f32>(v.p1.z, v.p1.w, v.p2.x, v.leaf.w);
     o.mat_s = vec2<f32>(v.mat, v.pos.z);
     o.salt = v.bark.w;
-    o.info = vec4<f32>(v.p3.xy, v.p4.x, v.p3.w);
+    o.info = vec4<f32>(v.p3.xy, v.p4.x, v.p4.y);
     o.bark = v.bark.rgb;
     o.uv = v.uv;
     return o;
@@ -543,7 +571,8 @@ fn carve(i: TreeOut) -> Carve {
     let depth = 0.05 + 0.22 * look.z;
     if (i.mat_s.x < 2.5) {
         let a = i.bb.x;
-        let z = i.bb.y;
+        // the outline's height on the quad is the drawn one: back to the prototype's
+        let z = crown_unmap(i.bb.y, s.info.x, i.info.w);
         r.z = z;
         let zq = (z - s.info.x) / max(s.info.y - s.info.x, 1e-3) * 2.0 - 1.0;
         let l = lumps(vec2<f32>(a, zq * 1.4), look, i.salt);
