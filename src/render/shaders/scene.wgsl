@@ -381,30 +381,38 @@ fn sway(v: TreeIn, rp: vec3<f32>, sn_in: f32) -> vec3<f32> {
     return v.pos_h.xyz + rp + vec3<f32>(disp, dz);
 }
 
-// Drawn normalised height of a prototype point at normalised height `z`, for a prototype whose
-// foliage starts at `b0` on a tree whose crown starts at `b` (TreeInstance::crown_base; 0: the
-// prototype's own): the stem below `b0` stretched or shortened to `b`, the crown above it to
-// span `b`..1. Unchanged for a prototype without a stem below its foliage (conifers to the
-// ground).
+// Two-piece linear map of a normalised height `z` taking `z0` to `z1` (both inside 0..1) and
+// keeping 0 and 1.
+fn two_piece(z: f32, z0: f32, z1: f32) -> f32 {
+    if (z <= z0) {
+        return z * z1 / z0;
+    }
+    return z1 + (z - z0) * (1.0 - z1) / (1.0 - z0);
+}
+
+// Whether a prototype whose foliage starts at `b0` is drawn with its crown from `b`
+// (TreeInstance::crown_base; 0: the prototype's own): not for a prototype without a stem below
+// its foliage (conifers to the ground).
+fn crown_moved(b0: f32, b: f32) -> bool {
+    return b > 0.0 && b0 >= 0.05 && b0 <= 0.9;
+}
+
+// Drawn normalised height of a prototype point at normalised height `z`: the stem below the
+// prototype's foliage `b0` stretched or shortened to the crown base `b`, the crown above it to
+// span `b`..1.
 fn crown_remap(z: f32, b0: f32, b: f32) -> f32 {
-    if (b <= 0.0 || b0 < 0.05 || b0 > 0.9) {
+    if (!crown_moved(b0, b)) {
         return z;
     }
-    if (z <= b0) {
-        return z * b / b0;
-    }
-    return b + (z - b0) * (1.0 - b) / (1.0 - b0);
+    return two_piece(z, b0, b);
 }
 
 // The inverse of `crown_remap`: the prototype's normalised height of a drawn one.
 fn crown_unmap(z: f32, b0: f32, b: f32) -> f32 {
-    if (b <= 0.0 || b0 < 0.05 || b0 > 0.9) {
+    if (!crown_moved(b0, b)) {
         return z;
     }
-    if (z <= b) {
-        return z * b0 / b;
-    }
-    return b0 + (z - b) * (1.0 - b0) / (1.0 - b);
+    return two_piece(z, b, b0);
 }
 
 // `top_scale`: size of the billboard's top quad (1: the crown's plan disc, in both passes).
