@@ -661,9 +661,10 @@ impl Landscape {
     /// saplings while the window has saplings, the same species patches, heights, gaps and
     /// composition later); a mirror image continues every crown and patch across the window's
     /// edge, so no seam or straight line shows there, and the trees go through the same
-    /// renderer (billboards, canopy layer, shadows) as the window's. The window spans at least
-    /// half of the drawn margin ([`Landscape::new`]: the margin is half the longer side), so
-    /// one mirror image per edge fills the margin up to where it has faded.
+    /// renderer (billboards, canopy layer, shadows) as the window's. One mirror image per edge
+    /// reaches as far beyond it as the window is wide, so it fills the drawn margin
+    /// ([`Landscape::new`]: half the longer side) for windows up to twice as long as they are
+    /// wide; beyond that the far part of the margin along the long edges stays unforested.
     ///
     /// An image is kept with probability [`surroundings_keep`] of the ground sample it lands on
     /// (slope, tree line; a hash of its id), so the forest keeps off bare rock and stays below
