@@ -142,18 +142,19 @@ fn far_forest_stays_forest_coloured_in_the_canopy_layer() {
     });
 }
 
-/// The far forest beyond a simulated window (`job::scene::FarForest`) is drawn by the terrain
-/// shader as crowns: looking steeply down (about 70°) on the surroundings from 120 m above them, the far-forest mesh
-/// shows darker, greener ground with a crown pattern (lit domes and gaps: a spread of pixel
-/// brightness several times that of plain meadow), while the same view of the plain mesh shows
-/// meadow.
+/// The surroundings beyond a simulated window (`job::scene::Landscape::surroundings`: the
+/// window's stand mirrored across its edges) read as the same forest: seen from 600 m above the
+/// window's south-west corner, each of the three quadrants beyond the window has the mean
+/// colour and the pixel brightness spread (crown texture) of the quadrant inside it, while the
+/// same view without the surroundings shows a clearly different (bare) ground there.
 #[test]
-fn far_forest_beyond_the_window_is_drawn_as_crowns() {
-    use sylva::job::scene::{canopy_cover, FarForest};
+fn surroundings_beyond_the_window_are_the_same_forest() {
+    use glam::Vec3;
+    use sylva::job::scene::Landscape;
     use sylva::render::scene::TreeInstance;
-    use sylva::render::terrain::{from_ground, GroundGrid, LandCover};
+    use sylva::render::terrain::{GroundGrid, LandCover};
     let n = 100;
-    let g = GroundGrid {
+    let ground = GroundGrid {
         heights: sylva::grid::Grid { width: n, height: n, data: vec![300.0; n * n] },
         cell_x: 10.0,
         cell_y: 10.0,
@@ -163,43 +164,65 @@ fn far_forest_beyond_the_window_is_drawn_as_crowns() {
         fade: vec![],
         focus: Some(([300.0, 300.0], [700.0, 700.0])),
     };
-    // a closed window stand of one species (crowns 4.5 m wide every 8 m, 25 m tall)
+    let land = Landscape { ground, cover: LandCover::default() };
+    // a closed window stand: broadleaves 4.5 m wide every 8 m, 25 m tall, with conifer patches
     let mut trees = Vec::new();
     for j in 0..50 {
         for i in 0..50 {
-            trees.push(TreeInstance::new((j * 50 + i + 1) as u64, [304.0 + 8.0 * i as f32, 304.0 + 8.0 * j as f32, 300.0], 25.0, 4.5, 0, [0.09, 0.2, 0.03]));
+            let (x, y) = (304.0 + 8.0 * i as f32, 304.0 + 8.0 * j as f32);
+            let sp = if ((x / 60.0).sin() + (y / 45.0).cos()) > 0.8 { 1 } else { 0 };
+            trees.push(TreeInstance::new((j * 50 + i + 1) as u64, [x, y, 300.0], 25.0, 4.5, sp, if sp == 0 { [0.09, 0.2, 0.03] } else { [0.02, 0.05, 0.04] }));
         }
     }
-    let cover = LandCover::default();
-    let plain = from_ground(&g, &cover, &|_, _| 0.0).unwrap();
-    let far = FarForest::of(&trees, &g, &canopy_cover(&trees, &g)).expect("a stocked window");
-    let mut forest = plain.clone();
-    far.apply(&mut forest, &g, &cover);
-    assert!(forest.forest.iter().filter(|&&f| f > 0.5).count() > n * n / 2);
-    // steeply down on the surroundings, 150 m south-west of the window
-    let cam = Camera::look_at([150.0, 100.0, 300.0 + 25.0 + 120.0], [150.0, 150.0, 300.0], 40.0);
-    let stats = |img: &image::RgbaImage| {
-        let px: Vec<[f64; 3]> = img.pixels().map(|p| [p[0] as f64, p[1] as f64, p[2] as f64]).collect();
-        let k = px.len() as f64;
-        let mean = px.iter().fold([0.0; 3], |m, p| [m[0] + p[0] / k, m[1] + p[1] / k, m[2] + p[2] / k]);
-        let lum: Vec<f64> = px.iter().map(|p| 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]).collect();
+    let far = land.surroundings(&trees);
+    assert!(far.len() > 5_000, "{} trees beyond the window", far.len());
+    let cam = Camera::look_at([300.0, 299.0, 900.0], [300.0, 300.0, 300.0], 40.0);
+    let (w, h) = (256u32, 256u32);
+    // mean sRGB and luminance spread of the pixels of a plan box (m)
+    let box_stats = |img: &image::RgbaImage, x0: f32, y0: f32, x1: f32, y1: f32| {
+        let vp = cam.view_proj(w as f32 / h as f32);
+        let px = |x: f32, y: f32| {
+            let c = vp * Vec3::new(x, y, 320.0).extend(1.0);
+            let ndc = c.truncate() / c.w;
+            ((ndc.x * 0.5 + 0.5) * w as f32, (0.5 - ndc.y * 0.5) * h as f32)
+        };
+        let (a, b) = (px(x0, y0), px(x1, y1));
+        let (mut sum, mut lum) = ([0.0f64; 3], Vec::new());
+        for py in (a.1.min(b.1).max(0.0) as u32)..(a.1.max(b.1).min(h as f32) as u32) {
+            for qx in (a.0.min(b.0).max(0.0) as u32)..(a.0.max(b.0).min(w as f32) as u32) {
+                let p = img.get_pixel(qx, py).0;
+                for c in 0..3 {
+                    sum[c] += p[c] as f64;
+                }
+                lum.push(0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64);
+            }
+        }
+        let k = lum.len().max(1) as f64;
         let lm = lum.iter().sum::<f64>() / k;
-        let sd = (lum.iter().map(|l| (l - lm) * (l - lm)).sum::<f64>() / k).sqrt();
-        (mean, lm, sd)
+        (sum.map(|v| v / k), (lum.iter().map(|l| (l - lm) * (l - lm)).sum::<f64>() / k).sqrt())
     };
+    // 150 m boxes 10 m from the edges: inside (north-east of the corner) and the three beyond
+    let inside = (310.0, 310.0, 460.0, 460.0);
+    let beyond = [(140.0, 310.0, 290.0, 460.0), (310.0, 140.0, 460.0, 290.0), (140.0, 140.0, 290.0, 290.0)];
     with_renderer(|r| {
         let mut scene = demo_scene(0, 1000.0, 3);
-        scene.set_terrain(plain.clone());
-        let meadow = r.render(&scene, &cam, 256, 256).unwrap();
-        scene.set_terrain(forest.clone());
-        let crowns = r.render(&scene, &cam, 256, 256).unwrap();
-        let _ = crowns.save(out_dir().join("far_forest_crowns.png"));
-        let (mm, ml, msd) = stats(&meadow);
-        let (fm, fl, fsd) = stats(&crowns);
-        eprintln!("meadow mean {mm:?} lum {ml:.1} sd {msd:.2}; far forest mean {fm:?} lum {fl:.1} sd {fsd:.2}");
-        // forest canopy: darker than sunlit meadow, green dominant, and textured by crowns
-        assert!(fl < ml, "far forest luminance {fl:.1} vs meadow {ml:.1}");
-        assert!(fm[1] > fm[0] && fm[1] > fm[2], "green canopy {fm:?}");
-        assert!(fsd > 3.0 * msd.max(1.0), "crown pattern: brightness spread {fsd:.2} vs meadow {msd:.2}");
+        let mut render = |inst: Vec<TreeInstance>| {
+            scene.set_terrain(land.mesh(&inst).unwrap());
+            scene.instances = inst;
+            r.render(&scene, &cam, w, h).unwrap()
+        };
+        let alone = render(trees.clone());
+        let with = render(trees.iter().copied().chain(far.iter().copied()).collect());
+        let _ = with.save(out_dir().join("surroundings_corner.png"));
+        let _ = alone.save(out_dir().join("surroundings_corner_bare.png"));
+        let (im, isd) = box_stats(&with, inside.0, inside.1, inside.2, inside.3);
+        for (x0, y0, x1, y1) in beyond {
+            let (m, sd) = box_stats(&with, x0, y0, x1, y1);
+            let (bm, _) = box_stats(&alone, x0, y0, x1, y1);
+            eprintln!("inside {im:.1?} sd {isd:.2}; beyond ({x0}, {y0}) {m:.1?} sd {sd:.2}; bare there {bm:.1?}");
+            assert!(dist(m, im) < 6.0, "beyond ({x0}, {y0}): {m:?} vs inside {im:?}");
+            assert!(sd > 0.75 * isd && sd < 1.33 * isd, "texture beyond ({x0}, {y0}): {sd} vs {isd}");
+            assert!(dist(bm, im) > 15.0, "without the surroundings: {bm:?} vs inside {im:?}");
+        }
     });
 }

@@ -150,7 +150,10 @@ impl Stage {
 
     /// Renders prepared instances.
     pub fn render_instances(&mut self, inst: Vec<TreeInstance>, season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
+        // the window's trees mirrored into the surroundings (scene::Landscape::surroundings)
+        let far = self.landscape.surroundings(&inst);
         self.scene.instances = inst;
+        self.scene.instances.extend(far);
         self.scene.instances.extend_from_slice(&self.obstacle_instances);
         // the ground under this frame's crowns: forest floor instead of grass
         self.scene.set_terrain(self.landscape.mesh(&self.scene.instances)?);

@@ -293,6 +293,11 @@ fn tree_instances(rows: &[Plant], keep: &[usize], library: &SpeciesLibrary, cond
             let z = cond.elevation_at(r.x_m, r.y_m);
             let mut inst = TreeInstance::new(r.id, [r.x_m as f32, r.y_m as f32, z], r.height_m, r.crown_radius_m.max(0.2), sid as u32, col);
             inst.leaf_amount = amount;
+            // the crown from where the simulation has its base
+            let cb = r.crown_base_m / r.height_m;
+            if cb.is_finite() && cb > 0.0 {
+                inst.crown_base = cb.clamp(0.05, 0.85);
+            }
             Some(inst)
         })
         .collect()
@@ -626,161 +631,100 @@ impl Landscape {
             }
             cov[r as usize * w + c as usize]
         };
-        let mut m = crate::render::terrain::from_ground(g, &self.cover, &lookup)?;
-        if let Some(far) = FarForest::of(instances, g, &cov) {
-            far.apply(&mut m, g, &self.cover);
-        }
-        Ok(m)
+        crate::render::terrain::from_ground(g, &self.cover, &lookup)
     }
 }
 
-/// The forest drawn on the terrain beyond the simulated window, so that a window of forest
-/// does not stand on bare land (the surroundings of a real basin are forested too): a canopy
-/// surface in the window's state, taken from the frame's trees inside the window.
-///
-/// - **Cover**: the window's mean plan canopy cover ([`canopy_cover`]) modulated by a stand
-///   mosaic (Perlin noise of ~250 m, seed fixed: the same mosaic in every frame), with open
-///   meadows where the mosaic is low; none on the main streams, on slopes steeper than the rock
-///   slope + 2–10° or above the tree line.
-/// - **Species**: patches of ~140 m (jittered by a second noise, so their borders are not a
-///   grid) each lean to one species of the window, drawn with probability equal to its share of
-///   the window's crown area (π r² of the trees taller than 4 m): 50 % of the samples (~10 m,
-///   about a crown) take the patch's species, the others one drawn from the whole mix; the
-///   foliage colour is the frame's (season included), pulled 50 % towards the window's mean.
-/// - **Crowns**: [`TerrainMesh::forest`] carries the cover to the terrain shader, which draws
-///   crowns of ~7 m there (lit domes, dark gaps; faded to their mean where smaller than a
-///   pixel or two); stands of ~60 m vary in brightness by about ±10 % (Perlin noise).
-/// - **Height**: the canopy surface rises to the crown-area-weighted mean height of the
-///   window's trees times the cover, over 25 m from the window's edge, so the skyline beyond
-///   the window is a forest's.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FarForest {
-    /// Mean plan canopy cover inside the window (0..1).
-    pub cover: f32,
-    /// Canopy height (m): crown-area-weighted mean height of the trees taller than 4 m.
-    pub height_m: f32,
-    /// (foliage colour, share of the crown area) per species present, shares summing to 1.
-    pub palette: Vec<([f32; 3], f32)>,
+/// Share of the surroundings' trees kept on a DEM sample beyond the window on a slope of
+/// `slope_deg` at elevation `z` (m): all of them, except on slopes of bare rock (from
+/// [`LandCover::rock_slope_deg`] + 2° to + 10°), above the tree line (from 100 m below
+/// [`LandCover::tree_line`] to 100 m above) and at or below the sea.
+fn surroundings_keep(slope_deg: f32, z: f32, cover: &LandCover) -> f32 {
+    if !(z > cover.sea_level) {
+        return 0.0;
+    }
+    (1.0 - (slope_deg - cover.rock_slope_deg - 2.0) / 8.0).clamp(0.0, 1.0) * (1.0 - (z - cover.tree_line + 100.0) / 200.0).clamp(0.0, 1.0)
 }
 
-/// Mean window cover below which nothing is drawn beyond the window (bare or barely stocked).
-const FAR_FOREST_MIN_COVER: f32 = 0.05;
+/// The eight mirror images of the window around it: (−1, 0, +1) per axis, the west / south
+/// edge, none, the east / north edge.
+const MIRRORS: [(i8, i8); 8] = [(-1, -1), (0, -1), (1, -1), (-1, 0), (1, 0), (-1, 1), (0, 1), (1, 1)];
 
-impl FarForest {
-    /// The far forest of a frame's `instances` on the samples of `g` with plan cover `cov`
-    /// (one per sample); `None` without a window ([`GroundGrid::focus`]) or when the window's
-    /// mean cover is below 5 %.
+impl Landscape {
+    /// The trees drawn on the terrain beyond the simulated window, so that the window and its
+    /// surroundings read as one landscape: the window's own trees (`instances` inside
+    /// [`GroundGrid::focus`]: trees, saplings, all as drawn this frame) mirrored across its
+    /// four edges and four corners, standing on the surroundings' ground.
+    ///
+    /// Why mirrors: the surroundings are not simulated, so the most honest stand-in is the
+    /// window's own stand, in the same year, season and state of growth (bare land at year 0,
+    /// saplings while the window has saplings, the same species patches, heights, gaps and
+    /// composition later); a mirror image continues every crown and patch across the window's
+    /// edge, so no seam or straight line shows there, and the trees go through the same
+    /// renderer (billboards, canopy layer, shadows) as the window's. One mirror image per edge
+    /// reaches as far beyond it as the window is wide, so it fills the drawn margin
+    /// ([`Landscape::new`]: half the longer side) for windows up to twice as long as they are
+    /// wide; beyond that the far part of the margin along the long edges stays unforested.
+    ///
+    /// An image is kept with probability [`surroundings_keep`] of the ground sample it lands on
+    /// (slope, tree line; a hash of its id), so the forest keeps off bare rock and stays below
+    /// the tree line, and not where the ground has wholly faded into the sky; it fades into the
+    /// sky with that ground ([`TreeInstance::sky_fade`] = the sample's fade). Its id is the tree's
+    /// with the image number (1..=8) in bits 48..52, so that it varies like a tree of its own
+    /// and keeps its sapling flag ([`SAPLING_ID_BIT`]); `z` is the ground's height there
+    /// (bilinear over the samples). Empty without a window.
     ///
     /// [`GroundGrid::focus`]: crate::render::terrain::GroundGrid::focus
-    pub fn of(instances: &[TreeInstance], g: &crate::render::terrain::GroundGrid, cov: &[f32]) -> Option<FarForest> {
-        let (lo, hi) = g.focus?;
+    pub fn surroundings(&self, instances: &[TreeInstance]) -> Vec<TreeInstance> {
+        let g = &self.ground;
+        let Some((lo, hi)) = g.focus else { return Vec::new() };
         let (w, h) = (g.heights.width, g.heights.height);
-        let (mut sum, mut n) = (0.0f64, 0usize);
-        for r in 0..h {
-            for c in 0..w {
-                let (x, y) = (g.origin[0] + (c as f32 + 0.5) * g.cell_x, g.origin[1] + (h as f32 - r as f32 - 0.5) * g.cell_y);
-                if x >= lo[0] && x <= hi[0] && y >= lo[1] && y <= hi[1] {
-                    sum += f64::from(cov[r * w + c].min(1.0));
-                    n += 1;
-                }
-            }
+        if w < 2 || h < 2 {
+            return Vec::new();
         }
-        let cover = if n > 0 { (sum / n as f64) as f32 } else { 0.0 };
-        if !(cover >= FAR_FOREST_MIN_COVER) {
-            return None;
-        }
-        let mut by_species: Vec<(u32, [f64; 3], f64, f64)> = Vec::new(); // (species, Σ a·colour, Σ a, Σ a·h)
-        for t in instances.iter().filter(|t| t.id & SAPLING_ID_BIT == 0 && t.height > 4.0 && t.opacity > 0.0) {
-            let a = f64::from(t.crown_radius * t.crown_radius * t.opacity);
-            let col = t.leaf_color.map(|v| f64::from(v * t.leaf_amount.clamp(0.0, 1.0)));
-            let e = match by_species.iter_mut().find(|e| e.0 == t.species) {
-                Some(e) => e,
-                None => {
-                    by_species.push((t.species, [0.0; 3], 0.0, 0.0));
-                    by_species.last_mut()?
-                }
-            };
-            for k in 0..3 {
-                e.1[k] += a * col[k];
-            }
-            e.2 += a;
-            e.3 += a * f64::from(t.height);
-        }
-        by_species.sort_by_key(|e| e.0);
-        let total: f64 = by_species.iter().map(|e| e.2).sum();
-        if !(total > 0.0) {
-            return None;
-        }
-        let height_m = (by_species.iter().map(|e| e.3).sum::<f64>() / total) as f32;
-        let palette = by_species.iter().map(|e| (e.1.map(|v| (v / e.2) as f32), (e.2 / total) as f32)).collect();
-        Some(FarForest { cover, height_m, palette })
-    }
-
-    /// Draws the far forest on `m` (the mesh of `g`): colours and heights of the vertices
-    /// outside the window, as described on [`FarForest`]. Vertices inside the window are not
-    /// changed.
-    pub fn apply(&self, m: &mut TerrainMesh, g: &crate::render::terrain::GroundGrid, cover: &LandCover) {
-        use noise::{NoiseFn, Perlin};
-        let Some((lo, hi)) = g.focus else { return };
-        let mosaic = Perlin::new(19);
-        let jitter = Perlin::new(23);
-        let hash = crate::render::terrain::cell_hash;
-        let mean = self.palette.iter().fold([0.0f32; 3], |m, (c, w)| [m[0] + c[0] * w, m[1] + c[1] * w, m[2] + c[2] * w]);
-        let mut forest = std::mem::take(&mut m.forest);
-        forest.resize(m.positions.len(), 0.0);
-        for (i, p) in m.positions.iter_mut().enumerate() {
-            let (x, y) = (p[0], p[1]);
-            let dx = (lo[0] - x).max(x - hi[0]).max(0.0);
-            let dy = (lo[1] - y).max(y - hi[1]).max(0.0);
-            let d = dx.hypot(dy);
-            if d <= 0.0 {
+        // fractional sample coordinates (column, row) of a plan point
+        let frac = |x: f32, y: f32| ((x - g.origin[0]) / g.cell_x - 0.5, h as f32 - (y - g.origin[1]) / g.cell_y - 0.5);
+        let z = |c: usize, r: usize| *g.heights.get(c.min(w - 1), r.min(h - 1));
+        let mut out = Vec::new();
+        for t in instances {
+            let [x, y, _] = t.position;
+            if !(x >= lo[0] && x <= hi[0] && y >= lo[1] && y <= hi[1]) {
                 continue;
             }
-            let stream = g.stream.get(i).copied().unwrap_or(0.0);
-            let n = m.normals[i];
-            let slope = n[2].clamp(-1.0, 1.0).acos().to_degrees();
-            // riparian forest stands beside the channels: only the strongest streams stay open;
-            // forest holds on slopes up to a little beyond where bare rock starts to show
-            let site = (1.0 - (stream - 0.6) / 0.4).clamp(0.0, 1.0)
-                * (1.0 - (slope - cover.rock_slope_deg - 2.0) / 8.0).clamp(0.0, 1.0)
-                * (1.0 - (p[2] - cover.tree_line + 100.0) / 200.0).clamp(0.0, 1.0);
-            let (fx, fy) = (f64::from(x), f64::from(y));
-            let stand = mosaic.get([fx / 250.0, fy / 250.0]) as f32; // about −0.7..0.7
-            let open = ((stand + 0.72) / 0.08).clamp(0.0, 1.0); // a few meadows where the mosaic is lowest
-            let c = (self.cover * (0.9 + 0.2 * stand)).clamp(0.0, 1.0) * open * site;
-            if c <= 0.0 {
-                continue;
-            }
-            // the patch's species, by crown-area share
-            let (jx, jy) = (jitter.get([fx / 90.0, fy / 90.0]) * 60.0, jitter.get([fx / 90.0 + 7.3, fy / 90.0 - 3.1]) * 60.0);
-            // a vertex (~one crown) takes its patch's species half of the time, else one drawn
-            // from the whole window's mix: patches lean to a species without being uniform
-            let patch = hash(((fx + jx) / 140.0).floor() as i64, ((fy + jy) / 140.0).floor() as i64, 0x5151);
-            let own = hash((x / 10.0).floor() as i64, (y / 10.0).floor() as i64, 0xA5A5);
-            let u = if own < 0.5 { patch } else { hash((x / 10.0).floor() as i64, (y / 10.0).floor() as i64, 0x3C3C) };
-            let mut acc = 0.0;
-            let mut leaf = self.palette[self.palette.len() - 1].0;
-            for (col, share) in &self.palette {
-                acc += share;
-                if u < acc {
-                    leaf = *col;
-                    break;
+            for (k, &(mx, my)) in MIRRORS.iter().enumerate() {
+                let xs = match mx {
+                    -1 => 2.0 * lo[0] - x,
+                    1 => 2.0 * hi[0] - x,
+                    _ => x,
+                };
+                let ys = match my {
+                    -1 => 2.0 * lo[1] - y,
+                    1 => 2.0 * hi[1] - y,
+                    _ => y,
+                };
+                let (fc, fr) = frac(xs, ys);
+                if !(fc >= 0.0 && fr >= 0.0 && fc <= (w - 1) as f32 && fr <= (h - 1) as f32) {
+                    continue;
                 }
+                let (c, r) = (fc.floor() as usize, fr.floor() as usize);
+                let (tx, ty) = (fc - c as f32, fr - r as f32);
+                let zz = z(c, r) * (1.0 - tx) * (1.0 - ty) + z(c + 1, r) * tx * (1.0 - ty) + z(c, r + 1) * (1.0 - tx) * ty + z(c + 1, r + 1) * tx * ty;
+                let (cn, rn) = (fc.round() as usize, fr.round() as usize);
+                // central differences, one-sided at the grid's edge
+                let (c0, c1, r0, r1) = (cn.saturating_sub(1), (cn + 1).min(w - 1), rn.saturating_sub(1), (rn + 1).min(h - 1));
+                let dzdx = (z(c1, rn) - z(c0, rn)) / ((c1 - c0).max(1) as f32 * g.cell_x);
+                let dzdy = (z(cn, r0) - z(cn, r1)) / ((r1 - r0).max(1) as f32 * g.cell_y);
+                let slope = dzdx.hypot(dzdy).atan().to_degrees();
+                let fade = g.fade.get(rn * w + cn).copied().unwrap_or(0.0);
+                let id = t.id ^ ((k as u64 + 1) << 48);
+                let keep = surroundings_keep(slope, zz, &self.cover);
+                if !(keep > 0.0 && fade < 0.99) || crate::render::terrain::cell_hash((id & 0xFFFF_FFFF) as i64, (id >> 32) as i64, 0x5EED) >= keep {
+                    continue;
+                }
+                out.push(TreeInstance { position: [xs, ys, zz], id, sky_fade: fade, ..*t });
             }
-            // species colours pulled half-way towards the window's mean: a far canopy mixes crowns
-            let leaf = [0, 1, 2].map(|j| leaf[j] + (mean[j] - leaf[j]) * 0.5);
-            // stands of ~60 m a little lighter or darker (age, density); the crowns themselves
-            // are drawn by the terrain shader where `forest` > 0
-            let k = mosaic.get([fx / 60.0 + 11.7, fy / 60.0 - 5.3]) as f32;
-            let top = leaf.map(|v| v * (1.0 + 0.15 * k));
-            let col = &mut m.colors[i];
-            for j in 0..3 {
-                col[j] += (top[j] - col[j]) * (2.0 * c).min(1.0);
-            }
-            forest[i] = c;
-            p[2] += self.height_m * c * (d / 25.0).min(1.0);
         }
-        m.forest = forest;
+        out
     }
 }
 
@@ -912,69 +856,75 @@ mod tests {
         assert!(!saplings.is_empty() && saplings.iter().all(|t| (t.position[0] - 12.5).abs() < 2.6), "only the open cohort: {saplings:?}");
     }
 
-    /// A flat 2 km × 2 km ground of 10 m samples around a 1 km window filled with crowns of
-    /// two species (70 % / 30 % of the crown area, green and orange), and the far forest drawn
-    /// beyond it.
+    /// A 2 km × 2 km ground of 10 m samples around a 1 km window filled with crowns of two
+    /// species (70 % / 30 %), flat except a cliff south of y = −300 m, faded into the sky west
+    /// of x = −400 m (half) and x = −450 m (wholly); the surroundings are the window mirrored.
     #[test]
-    fn far_forest_beyond_the_window_follows_the_window_stand() {
+    fn surroundings_mirror_the_window_stand() {
         let (w, h) = (200, 200);
-        let g = crate::render::terrain::GroundGrid {
-            heights: Grid { width: w, height: h, data: vec![500.0; w * h] },
+        let (mut heights, mut fade) = (vec![500.0f32; w * h], vec![0.0f32; w * h]);
+        for r in 0..h {
+            for c in 0..w {
+                let (x, y) = (-500.0 + (c as f32 + 0.5) * 10.0, -500.0 + (h as f32 - r as f32 - 0.5) * 10.0);
+                if y < -300.0 {
+                    heights[r * w + c] = 500.0 + 2.0 * (-300.0 - y); // 63°: bare rock
+                }
+                fade[r * w + c] = if x < -450.0 { 1.0 } else if x < -400.0 { 0.5 } else { 0.0 };
+            }
+        }
+        let ground = crate::render::terrain::GroundGrid {
+            heights: Grid { width: w, height: h, data: heights },
             cell_x: 10.0,
             cell_y: 10.0,
             origin: [-500.0, -500.0],
             stream: vec![],
             wetness: vec![],
-            fade: vec![],
+            fade,
             focus: Some(([0.0, 0.0], [1000.0, 1000.0])),
         };
-        let (green, orange) = ([0.1, 0.4, 0.1], [0.5, 0.3, 0.05]);
+        let land = Landscape { ground, cover: LandCover::default() };
         let mut trees = Vec::new();
         for j in 0..125 {
             for i in 0..125 {
                 let id = (j * 125 + i) as u64 + 1;
                 let sp = if (i * 7 + j * 3) % 10 < 7 { 0 } else { 1 };
-                trees.push(TreeInstance::new(id, [4.0 + 8.0 * i as f32, 4.0 + 8.0 * j as f32, 500.0], 25.0, 4.5, sp, if sp == 0 { green } else { orange }));
+                let id = if sp == 1 { id | SAPLING_ID_BIT } else { id };
+                trees.push(TreeInstance::new(id, [4.0 + 8.0 * i as f32, 4.0 + 8.0 * j as f32, 500.0], 25.0, 4.5, sp, [0.1, 0.4, 0.1]));
             }
         }
-        let cover = LandCover::default();
-        let cov = canopy_cover(&trees, &g);
-        let lookup = |_: f32, _: f32| 0.0;
-        let before = crate::render::terrain::from_ground(&g, &cover, &lookup).unwrap();
-        // nothing beyond a bare window
-        assert!(FarForest::of(&[], &g, &vec![0.0; w * h]).is_none());
-        let far = FarForest::of(&trees, &g, &cov).expect("a stocked window");
-        assert!(far.cover > 0.9, "{}", far.cover);
-        assert!((far.height_m - 25.0).abs() < 1e-3);
-        assert_eq!(far.palette.len(), 2);
-        assert!((far.palette[0].1 - 0.7).abs() < 0.02 && (far.palette[0].0[1] - 0.4).abs() < 1e-5, "{:?}", far.palette);
-        let mut m = before.clone();
-        far.apply(&mut m, &g, &cover);
-        let (mut raised, mut outside, mut a, mut b) = (0.0f64, 0usize, 0usize, 0usize);
-        for (i, p) in m.positions.iter().enumerate() {
-            let q = before.positions[i];
-            let inside = (0.0..=1000.0).contains(&q[0]) && (0.0..=1000.0).contains(&q[1]);
-            if inside {
-                assert_eq!((p, m.colors[i], m.forest[i]), (&q, before.colors[i], 0.0), "the window is left as it was");
-                continue;
-            }
-            let d = (-q[0]).max(q[0] - 1000.0).max(-q[1]).max(q[1] - 1000.0);
-            assert!(p[2] >= q[2] && p[2] <= q[2] + 25.0 + 1e-3);
-            if d > 30.0 {
-                outside += 1;
-                raised += f64::from(p[2] - q[2]);
-                // forest canopy: the species' hue, not grass
-                let c = m.colors[i];
-                if p[2] - q[2] > 15.0 {
-                    assert!(m.forest[i] > 0.6, "{}", m.forest[i]);
-                    if c[0] > c[1] { b += 1 } else { a += 1 }
-                }
-            }
+        assert!(land.surroundings(&[]).is_empty(), "nothing beyond a bare window");
+        let far = land.surroundings(&trees);
+        assert_eq!(far, land.surroundings(&trees), "deterministic");
+        let by_id: std::collections::HashMap<u64, &TreeInstance> = trees.iter().map(|t| (t.id, t)).collect();
+        let (mut n, mut sp1) = (0usize, 0usize);
+        for t in &far {
+            let [x, y, z] = t.position;
+            assert!(!((0.0..=1000.0).contains(&x) && (0.0..=1000.0).contains(&y)), "beyond the window: {x} {y}");
+            // the image of a window tree across the edges it is beyond
+            let k = ((t.id >> 48) & 0xF) as usize;
+            assert!((1..=8).contains(&k));
+            let src = by_id[&(t.id ^ ((k as u64) << 48))];
+            let (mx, my) = MIRRORS[k - 1];
+            let mirror = |v: f32, m: i8| match m {
+                -1 => -v,
+                1 => 2000.0 - v,
+                _ => v,
+            };
+            assert_eq!((x, y), (mirror(src.position[0], mx), mirror(src.position[1], my)));
+            assert_eq!((t.species, t.height, t.crown_radius, t.id & SAPLING_ID_BIT), (src.species, src.height, src.crown_radius, src.id & SAPLING_ID_BIT));
+            // on the ground there, off the cliff, not where it has faded away, fading with it
+            assert!(y > -305.0 && (z - 500.0).abs() < 1e-3, "{x} {y} {z}");
+            assert!(x > -455.0, "{x}");
+            assert_eq!(t.sky_fade, if x < -400.0 { 0.5 } else { 0.0 }, "{x}");
+            n += 1;
+            sp1 += t.species as usize;
         }
-        let mean = raised / outside as f64;
-        assert!(mean > 10.0 && mean < 25.0, "mean canopy height beyond the window {mean}");
-        let share = a as f64 / (a + b) as f64;
-        assert!((0.5..0.9).contains(&share), "green patches {share} of {}", a + b);
+        // all the ground that keeps trees does, at the window's density (15,625 trees per km²):
+        // x from −450 m, y from −300 m to the grid's end at 1500 m, less the window; the
+        // window's mix beyond it
+        let want = 15_625.0 * (1950.0 * 1800.0 - 1e6) / 1e6;
+        assert!((n as f64 / want - 1.0).abs() < 0.05, "{n} trees beyond the window, {want} expected");
+        assert!((sp1 as f64 / n as f64 - 0.3).abs() < 0.02, "{sp1} of {n}");
     }
 
     #[test]

@@ -28,6 +28,9 @@ pub struct InstanceRaw {
     /// Prototype index, level drawn, crown radius for culling (m, 0 when unknown), crown
     /// radius drawn (m: horizontal scale × the prototype's normalised crown radius).
     pub p3: [f32; 4],
+    /// Dissolve into the sky 0..1 ([`TreeInstance::sky_fade`]), crown base (fraction of the
+    /// height, 0 = the prototype's own: [`TreeInstance::crown_base`]); unused ×2.
+    pub p4: [f32; 4],
 }
 
 /// One crown for the canopy layer ([`super::canopy::CanopyGrid::splat`]).
@@ -139,6 +142,7 @@ pub fn instance_record(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32])
         p2: [t.opacity.clamp(0.0, 1.0), hash01(t.id) * std::f32::consts::TAU, hash01(t.id ^ 0x5DEE_CE66) * std::f32::consts::TAU, (1.0 - proto.stiffness).clamp(0.0, 1.0)],
         bark: [proto.bark_color[0], proto.bark_color[1], proto.bark_color[2], (hash01(t.id ^ 0xA5A5) * 64.0).floor()],
         p3: [s as f32, 0.0, if valid_r { t.crown_radius } else { 0.0 }, sxy * crown_r0[s]],
+        p4: [t.sky_fade.clamp(0.0, 1.0), if t.crown_base > 0.0 { t.crown_base.clamp(0.05, 0.85) } else { 0.0 }, 0.0, 0.0],
     })
 }
 

@@ -23,7 +23,7 @@ use wgpu::util::DeviceExt;
 use super::camera::Camera;
 use super::instanced::{build_batches, instance_record, level_triangles, Batches, InstanceRaw};
 use super::lod::{drawn_levels, Frustum, LodParams, Silhouette, SILHOUETTE_BINS};
-use super::scene::Scene;
+use super::scene::{Scene, TreeInstance};
 use crate::mesh::LOD_LEVELS;
 use crate::structure::texture::{self, LeafShape};
 
@@ -55,7 +55,8 @@ struct Globals {
     facing: [f32; 4],
     /// canopy grid: origin x, y (m), texel (m), on (1) / off (0)
     canopy0: [f32; 4],
-    /// canopy grid: nx, ny, oblique-view factor k, unused
+    /// canopy grid: nx, ny, oblique-view factor k, height above the ground (m) at which the
+    /// layer's crowns take their sun visibility ([`canopy_light_height`])
     canopy1: [f32; 4],
     /// shadow map: texel (uv), depth bias (depth units), texel (m), unused
     shadow: [f32; 4],
@@ -146,8 +147,6 @@ struct TerrainVertex {
     color: [f32; 3],
     /// dissolve into the sky 0..1 (`TerrainMesh::fade`)
     fade: f32,
-    /// far-forest canopy 0..1 (`TerrainMesh::forest`)
-    forest: f32,
 }
 
 #[repr(C)]
@@ -374,13 +373,13 @@ pub struct Renderer {
 }
 
 fn terrain_layout() -> wgpu::VertexBufferLayout<'static> {
-    const A: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32, 4 => Float32];
+    const A: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32];
     wgpu::VertexBufferLayout { array_stride: std::mem::size_of::<TerrainVertex>() as u64, step_mode: wgpu::VertexStepMode::Vertex, attributes: &A }
 }
 
 fn tree_layouts() -> [wgpu::VertexBufferLayout<'static>; 2] {
     const V: [wgpu::VertexAttribute; 4] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32, 9 => Float32x2];
-    const I: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4];
+    const I: [wgpu::VertexAttribute; 7] = wgpu::vertex_attr_array![3 => Float32x4, 4 => Float32x4, 5 => Float32x4, 6 => Float32x4, 7 => Float32x4, 8 => Float32x4, 10 => Float32x4];
     [
         wgpu::VertexBufferLayout { array_stride: std::mem::size_of::<TreeVertex>() as u64, step_mode: wgpu::VertexStepMode::Vertex, attributes: &V },
         wgpu::VertexBufferLayout { array_stride: std::mem::size_of::<InstanceRaw>() as u64, step_mode: wgpu::VertexStepMode::Instance, attributes: &I },
@@ -418,9 +417,10 @@ impl Renderer {
             ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Uniform, has_dynamic_offset: false, min_binding_size: None },
             count: None,
         };
+        // silhouettes: the vertex stage reads the prototype's crown bottom (crown_remap)
         let sil_entry = wgpu::BindGroupLayoutEntry {
             binding: 3,
-            visibility: wgpu::ShaderStages::FRAGMENT,
+            visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
             ty: wgpu::BindingType::Buffer { ty: wgpu::BufferBindingType::Storage { read_only: true }, has_dynamic_offset: false, min_binding_size: None },
             count: None,
         };
@@ -651,7 +651,7 @@ impl Renderer {
         let (terrain_vb, terrain_ib) = if t.indices.is_empty() {
             (None, None)
         } else {
-            let verts: Vec<TerrainVertex> = (0..t.positions.len()).map(|i| TerrainVertex { pos: t.positions[i], normal: t.normals[i], color: t.colors[i], fade: t.fade_at(i), forest: t.forest_at(i) }).collect();
+            let verts: Vec<TerrainVertex> = (0..t.positions.len()).map(|i| TerrainVertex { pos: t.positions[i], normal: t.normals[i], color: t.colors[i], fade: t.fade_at(i) }).collect();
             (
                 Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("terrain vb"), contents: bytemuck::cast_slice(&verts), usage: wgpu::BufferUsages::VERTEX })),
                 Some(d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("terrain ib"), contents: bytemuck::cast_slice(&t.indices), usage: wgpu::BufferUsages::INDEX })),
@@ -659,11 +659,12 @@ impl Renderer {
         };
         let water_vb = scene.sea_level.filter(|s| s.is_finite()).map(|z| {
             let (lo, hi) = t.bounds();
-            let c = |x: f32, y: f32| TerrainVertex { pos: [x, y, z], normal: [0.0, 0.0, 1.0], color: [0.0; 3], fade: 0.0, forest: 0.0 };
+            let c = |x: f32, y: f32| TerrainVertex { pos: [x, y, z], normal: [0.0, 0.0, 1.0], color: [0.0; 3], fade: 0.0 };
             let v = [c(lo[0], lo[1]), c(hi[0], lo[1]), c(hi[0], hi[1]), c(lo[0], lo[1]), c(hi[0], hi[1]), c(lo[0], hi[1])];
             d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("water"), contents: bytemuck::cast_slice(&v), usage: wgpu::BufferUsages::VERTEX })
         });
-        let (lo, hi) = t.bounds();
+        // over the surroundings too: trees stand beyond the window (job::scene::Landscape)
+        let (lo, hi) = t.full_bounds();
         let canopy_grid = super::canopy::CanopyGrid::for_bounds(lo, hi);
         let canopy_buf = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("canopy"),
@@ -1122,7 +1123,7 @@ impl Renderer {
         if let Some(gs) = &self.scene {
             let cg = gs.canopy_grid;
             g.canopy0 = [cg.origin[0], cg.origin[1], cg.texel, if self.lod.canopy_px > 0.0 && canopy_used { 1.0 } else { 0.0 }];
-            g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, 0.0];
+            g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, canopy_light_height(&scene.instances)];
         }
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         g.view_proj = g.light_view_proj;
@@ -1256,5 +1257,24 @@ impl Renderer {
 impl std::fmt::Debug for Renderer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Renderer").field("adapter", &self.adapter_description()).finish()
+    }
+}
+
+/// Height above the ground (m) at which the canopy layer's crowns take their sun visibility from
+/// the shadow map: 0.85 × the crown-area-weighted mean height of `instances` (about the sunlit
+/// upper crown of the mean tree; 0 without trees). Looked up at the ground instead, the layer
+/// would lie in the shadow of every tree drawn as geometry above it and read darker than the
+/// same crowns drawn as billboards.
+pub fn canopy_light_height(instances: &[TreeInstance]) -> f32 {
+    let (mut a, mut ah) = (0.0f64, 0.0f64);
+    for t in instances.iter().filter(|t| t.height.is_finite() && t.height > 0.0 && t.crown_radius.is_finite()) {
+        let w = f64::from(t.crown_radius * t.crown_radius * t.opacity.clamp(0.0, 1.0));
+        a += w;
+        ah += w * f64::from(t.height);
+    }
+    if a > 0.0 {
+        (0.85 * ah / a) as f32
+    } else {
+        0.0
     }
 }

@@ -67,12 +67,23 @@ pub struct TreeInstance {
     pub opacity: f32,
     /// Stable tree id (matches trees across snapshots).
     pub id: u64,
+    /// Dissolve into the sky colour seen behind the tree, 0 (none) ..1 (sky only): trees on
+    /// the faded surroundings of the simulated window fade with the ground they stand on
+    /// ([`TerrainMesh::fade`]); 0 for the window's own trees.
+    pub sky_fade: f32,
+    /// Height of the crown's base as a fraction of the tree's height (0.05..0.85; 0: the
+    /// prototype's own): the prototype is stretched vertically in two pieces, its stem below
+    /// its lowest foliage to reach this height and its crown above it to span the rest, so
+    /// that a forest-grown tree with a high crown base is drawn with a clear stem and a short
+    /// crown rather than as a prototype's open-grown crown squeezed narrow (a poplar-like
+    /// column).
+    pub crown_base: f32,
 }
 
 impl TreeInstance {
     /// A fully present tree in summer foliage.
     pub fn new(id: u64, position: [f32; 3], height: f32, crown_radius: f32, species: u32, leaf_color: [f32; 3]) -> Self {
-        TreeInstance { position, height, crown_radius, species, rotation: (id as f32 * 2.399_963).rem_euclid(std::f32::consts::TAU), leaf_color, leaf_amount: 1.0, opacity: 1.0, id }
+        TreeInstance { position, height, crown_radius, species, rotation: (id as f32 * 2.399_963).rem_euclid(std::f32::consts::TAU), leaf_color, leaf_amount: 1.0, opacity: 1.0, id, sky_fade: 0.0, crown_base: 0.0 }
     }
 }
 

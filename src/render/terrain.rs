@@ -21,11 +21,6 @@ pub struct TerrainMesh {
     /// no edge): the surroundings beyond the simulated window fade out towards the edge of
     /// the DEM or of the drawn margin. Empty: 0 everywhere.
     pub fade: Vec<f32>,
-    /// Far forest, one per position, 0..1: how much of the vertex is a forest canopy drawn by
-    /// the terrain shader rather than by trees (the surroundings beyond the simulated window,
-    /// `job::scene::FarForest`): the shader adds crowns of about 7 m (lit domes and dark gaps)
-    /// to the vertex colour there. Empty: 0 everywhere.
-    pub forest: Vec<f32>,
     /// Plan rectangle `(min, max)` (m) of the simulated window when the mesh also holds its
     /// surroundings: [`TerrainMesh::bounds`] (camera presets, shadow map, canopy layer) covers
     /// only the vertices inside it. `None`: the whole mesh is the site.
@@ -73,9 +68,6 @@ impl TerrainMesh {
         if !self.fade.is_empty() && self.fade.len() != n {
             return Err(bad("fade", self.fade.len().to_string(), format!("0 or {n} (one per position)")));
         }
-        if !self.forest.is_empty() && self.forest.len() != n {
-            return Err(bad("forest", self.forest.len().to_string(), format!("0 or {n} (one per position)")));
-        }
         if self.indices.len() % 3 != 0 {
             return Err(bad("indices", self.indices.len().to_string(), "a multiple of 3".into()));
         }
@@ -88,11 +80,6 @@ impl TerrainMesh {
     /// Fade of vertex `i` (0 when the mesh has none).
     pub fn fade_at(&self, i: usize) -> f32 {
         self.fade.get(i).copied().unwrap_or(0.0)
-    }
-
-    /// Far-forest amount of vertex `i` ([`TerrainMesh::forest`]; 0 when the mesh has none).
-    pub fn forest_at(&self, i: usize) -> f32 {
-        self.forest.get(i).copied().unwrap_or(0.0)
     }
 
     /// Height (m) of the vertex nearest to `(x, y)` in plan, or `None` for an empty mesh.

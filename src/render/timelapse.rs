@@ -35,6 +35,8 @@ pub fn interpolate(a: &[TreeInstance], b: &[TreeInstance], t: f32) -> Vec<TreeIn
                 leaf_amount: lerp(x.leaf_amount, y.leaf_amount),
                 opacity: lerp(x.opacity, y.opacity),
                 id: x.id,
+                sky_fade: lerp(x.sky_fade, y.sky_fade),
+                crown_base: lerp(x.crown_base, y.crown_base),
             }),
             None => out.push(TreeInstance { opacity: x.opacity * (1.0 - t), ..*x }),
         }

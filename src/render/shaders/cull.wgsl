@@ -13,7 +13,8 @@ struct Inst {
     leaf: vec4<f32>,
     p2: vec4<f32>,
     bark: vec4<f32>,
-    p3: vec4<f32>,   // prototype, level, crown radius (m, 0 unknown), unused
+    p3: vec4<f32>,   // prototype, level, crown radius (m, 0 unknown), crown radius drawn (m)
+    p4: vec4<f32>,   // sky fade 0..1, crown base (fraction of the height, 0 = prototype's), unused x2
 };
 
 struct Params {

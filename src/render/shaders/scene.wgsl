@@ -14,7 +14,7 @@ struct Globals {
     params: vec4<f32>,       // time s, sea level m, shadow texel size, fog density 1/m
     facing: vec4<f32>,       // xyz towards the viewer for billboards when w = 1 (ortho, sun); w = 0: use eye
     canopy0: vec4<f32>,      // canopy grid origin x, y (m), texel (m), on (1) / off (0)
-    canopy1: vec4<f32>,      // canopy grid nx, ny, oblique-view factor k, unused
+    canopy1: vec4<f32>,      // canopy grid nx, ny, oblique-view factor k, crown light height m
     shadow: vec4<f32>,       // shadow map: texel (uv), depth bias (depth units), texel (m), unused
 };
 
@@ -178,7 +178,6 @@ struct TerrainIn {
     @location(1) normal: vec3<f32>,
     @location(2) color: vec3<f32>,
     @location(3) fade: f32,
-    @location(4) forest: f32,
 };
 
 struct TerrainOut {
@@ -187,7 +186,6 @@ struct TerrainOut {
     @location(1) normal: vec3<f32>,
     @location(2) color: vec3<f32>,
     @location(3) fade: f32,
-    @location(4) forest: f32,
 };
 
 @vertex
@@ -198,42 +196,9 @@ fn vs_terrain(v: TerrainIn) -> TerrainOut {
     o.normal = v.normal;
     o.color = v.color;
     o.fade = v.fade;
-    o.forest = v.forest;
     return o;
 }
 
-// ---- far forest (job::scene::FarForest): crowns drawn on the terrain beyond the simulated
-// window. A jittered grid of crowns of ~7 m (cellular pattern: the nearest of the 3 x 3 cells'
-// crown centres, each with its own radius), each a lit dome over a dark gap, and the footprint
-// of the pixel fading the pattern to its mean where crowns are smaller than ~2 pixels.
-fn crown_hash(c: vec2<f32>) -> vec3<f32> {
-    var p = vec3<f32>(dot(c, vec2<f32>(127.1, 311.7)), dot(c, vec2<f32>(269.5, 183.3)), dot(c, vec2<f32>(419.2, 371.9)));
-    return fract(sin(p) * 43758.5453);
-}
-
-// (dome height 0..1 at p (0 in a gap), its plan gradient (per m) for the crown normal)
-fn far_crowns(p: vec2<f32>) -> vec3<f32> {
-    let cell = 7.0;
-    let q = p / cell;
-    let base = floor(q);
-    var best = vec3<f32>(0.0);
-    for (var j = -1; j <= 1; j = j + 1) {
-        for (var i = -1; i <= 1; i = i + 1) {
-            let c = base + vec2<f32>(f32(i), f32(j));
-            let h = crown_hash(c);
-            let centre = (c + 0.15 + 0.7 * h.xy) * cell;
-            let r = cell * (0.5 + 0.3 * h.z);
-            let d = p - centre;
-            let t = 1.0 - dot(d, d) / (r * r);
-            if (t > best.x) {
-                let dome = sqrt(t);
-                best = vec3<f32>(dome, -d / (r * r * max(dome, 0.05)));
-            }
-        }
-    }
-    return best;
-}
-// ---- end far forest
 
 // ---- surroundings (terrain19): the terrain beyond the simulated window dissolves into the
 // sky colour seen behind it (same sky_color as fs_sky), so the mesh ends without an edge.
@@ -301,18 +266,6 @@ fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
     let fx = dpdx(i.world.xy);
     let fy = dpdy(i.world.xy);
     var c = shade(i.color, n, i.world, 0.0, 1.0);
-    if (i.forest > 0.0) {
-        let foot = max(length(fx), length(fy));
-        let detail = clamp(2.0 - foot / 1.75, 0.0, 1.0);
-        let fc = far_crowns(i.world.xy);
-        let dome = mix(0.62, fc.x, detail);
-        // crowns lit like the canopy layer's, with the dome's slope tilting the normal
-        let cn = normalize(n + vec3<f32>(detail * fc.y * 2.5, detail * fc.z * 2.5, 1.5));
-        let crown = shade(i.color * (0.4 + 0.7 * dome), cn, i.world + cn * 0.5, 0.35, 0.75) * 0.72;
-        let gap = shade(i.color * 0.3, n, i.world, 0.0, 0.6);
-        let fcov = smoothstep(0.0, 0.35, dome);
-        c = mix(c, mix(gap, crown, fcov), clamp(i.forest, 0.0, 1.0));
-    }
     if (g.canopy0.w > 0.5) {
         // one bilinear tap when the footprint is within 1.5 texels, else 3 taps spread along
         // its longer axis (the depth direction of oblique views)
@@ -337,9 +290,12 @@ fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
         }
         if (cv.w > 0.0) {
             // crowns lit like the billboards' rounded crowns: wrapped light on an up-facing
-            // normal, the crown's mean ambient occlusion and self-shading
+            // normal, the crown's mean ambient occlusion and self-shading; sun visibility at the
+            // height of the upper crowns (render/renderer.rs, canopy_light_height), not in the
+            // shadow the trees drawn as geometry cast on the ground
             let cn = normalize(n + vec3<f32>(0.0, 0.0, 1.5));
-            let cc = shade(cv.rgb, cn, i.world + cn * 0.5, 0.35, 0.75) * 0.85;
+            let top = i.world + vec3<f32>(0.0, 0.0, g.canopy1.w);
+            let cc = shade(cv.rgb, cn, top + cn * 0.5, 0.35, 0.75) * 0.85;
             c = mix(c, cc, canopy_view_cover(cv.w, i.world));
         }
     }
@@ -368,6 +324,7 @@ struct TreeIn {
     @location(7) bark: vec4<f32>,   // bark rgb, dither salt
     @location(8) p3: vec4<f32>,     // prototype, level, crown radius (culling), crown radius drawn
     @location(9) uv: vec2<f32>,     // leaf-card coordinates 0..1 (carved into discs); -1 elsewhere
+    @location(10) p4: vec4<f32>,    // sky fade 0..1 (TreeInstance::sky_fade), crown base (TreeInstance::crown_base), unused x2
 };
 
 struct TreeOut {
@@ -379,7 +336,7 @@ struct TreeOut {
     @location(4) mat_s: vec2<f32>,                      // material, normalised height
     @location(5) @interpolate(flat) salt: f32,
     @location(6) bb: vec2<f32>,                         // billboard outline coordinates
-    @location(7) @interpolate(flat) info: vec4<f32>,   // prototype, level, bark rgb packed? (unused)
+    @location(7) @interpolate(flat) info: vec4<f32>,   // prototype, level, sky fade 0..1, crown base (0: prototype's)
     @location(8) @interpolate(flat) bark: vec3<f32>,   // bark colour (billboard trunks, twigs)
     @location(9) cdir: vec3<f32>,                       // direction from the crown centre (meshes)
     @location(10) uv: vec2<f32>,                        // leaf-card coordinates (-1: not a card)
@@ -424,11 +381,47 @@ fn sway(v: TreeIn, rp: vec3<f32>, sn_in: f32) -> vec3<f32> {
     return v.pos_h.xyz + rp + vec3<f32>(disp, dz);
 }
 
+// Two-piece linear map of a normalised height `z` taking `z0` to `z1` (both inside 0..1) and
+// keeping 0 and 1.
+fn two_piece(z: f32, z0: f32, z1: f32) -> f32 {
+    if (z <= z0) {
+        return z * z1 / z0;
+    }
+    return z1 + (z - z0) * (1.0 - z1) / (1.0 - z0);
+}
+
+// Whether a prototype whose foliage starts at `b0` is drawn with its crown from `b`
+// (TreeInstance::crown_base; 0: the prototype's own): not for a prototype without a stem below
+// its foliage (conifers to the ground).
+fn crown_moved(b0: f32, b: f32) -> bool {
+    return b > 0.0 && b0 >= 0.05 && b0 <= 0.9;
+}
+
+// Drawn normalised height of a prototype point at normalised height `z`: the stem below the
+// prototype's foliage `b0` stretched or shortened to the crown base `b`, the crown above it to
+// span `b`..1.
+fn crown_remap(z: f32, b0: f32, b: f32) -> f32 {
+    if (!crown_moved(b0, b)) {
+        return z;
+    }
+    return two_piece(z, b0, b);
+}
+
+// The inverse of `crown_remap`: the prototype's normalised height of a drawn one.
+fn crown_unmap(z: f32, b0: f32, b: f32) -> f32 {
+    if (!crown_moved(b0, b)) {
+        return z;
+    }
+    return two_piece(z, b, b0);
+}
+
 // `top_scale`: size of the billboard's top quad (1: the crown's plan disc, in both passes).
 fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     var o: TreeOut;
     o.cdir = vec3<f32>(0.0, 0.0, 1.0);
     let h = v.pos_h.w;
+    // the crown drawn from the instance's crown base (render/scene.rs, TreeInstance::crown_base)
+    let zd = crown_remap(v.pos.z, sils[u32(v.p3.x + 0.5)].info.x, v.p4.y);
     let sxy = v.p1.x;
     var w: vec3<f32>;
     if (v.mat > 1.5) {
@@ -436,13 +429,13 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
         let f = facing_dir(v.pos_h.xyz + vec3<f32>(0.0, 0.0, 0.5 * h));
         var rp: vec3<f32>;
         if (v.mat < 2.5) {
-            rp = right_of(f) * (v.pos.x * sxy) + vec3<f32>(0.0, 0.0, v.pos.z * h);
+            rp = right_of(f) * (v.pos.x * sxy) + vec3<f32>(0.0, 0.0, zd * h);
             o.normal = f;
         } else {
             // the top quad only shows from above: it shrinks to nothing as the view flattens
             // (continuous, so an orbiting camera sees no pop)
             let k = smoothstep(0.45, 0.8, f.z) * top_scale;
-            rp = vec3<f32>(v.pos.x * sxy * k, v.pos.y * sxy * k, v.pos.z * h);
+            rp = vec3<f32>(v.pos.x * sxy * k, v.pos.y * sxy * k, zd * h);
             o.normal = vec3<f32>(0.0, 0.0, 1.0);
         }
         w = sway(v, rp, v.pos.z);
@@ -450,7 +443,7 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     } else {
         let c = cos(v.p1.y);
         let s = sin(v.p1.y);
-        let lp = vec3<f32>(v.pos.x * sxy, v.pos.y * sxy, v.pos.z * h);
+        let lp = vec3<f32>(v.pos.x * sxy, v.pos.y * sxy, zd * h);
         let rp = vec3<f32>(c * lp.x - s * lp.y, s * lp.x + c * lp.y, lp.z);
         w = sway(v, rp, v.pos.z);
         let ln = vec3<f32>(v.normal.x / max(sxy, 1e-4), v.normal.y / max(sxy, 1e-4), v.normal.z / max(h, 1e-4));
@@ -467,7 +460,7 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     o.fade = vec4<f32>(v.p1.z, v.p1.w, v.p2.x, v.leaf.w);
     o.mat_s = vec2<f32>(v.mat, v.pos.z);
     o.salt = v.bark.w;
-    o.info = v.p3;
+    o.info = vec4<f32>(v.p3.xy, v.p4.x, v.p4.y);
     o.bark = v.bark.rgb;
     o.uv = v.uv;
     return o;
@@ -586,7 +579,8 @@ fn carve(i: TreeOut) -> Carve {
     let depth = 0.05 + 0.22 * look.z;
     if (i.mat_s.x < 2.5) {
         let a = i.bb.x;
-        let z = i.bb.y;
+        // the outline's height on the quad is the drawn one: back to the prototype's
+        let z = crown_unmap(i.bb.y, s.info.x, i.info.w);
         r.z = z;
         let zq = (z - s.info.x) / max(s.info.y - s.info.x, 1e-3) * 2.0 - 1.0;
         let l = lumps(vec2<f32>(a, zq * 1.4), look, i.salt);
@@ -763,7 +757,8 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         let trans = albedo * vec3<f32>(1.1, 1.15, 0.6) * g.sun_color.rgb * (0.3 * back * sh);
         c = c + trans * ao;
     }
-    return vec4<f32>(fog(c, i.world), 1.0);
+    // trees on the faded surroundings dissolve into the sky with their ground
+    return vec4<f32>(surroundings_fade(fog(c, i.world), i.world, i.info.z), 1.0);
 }
 
 @vertex
