@@ -189,15 +189,22 @@ fn mean(c: &[(Vec3, f32)]) -> Vec3 {
     c.iter().map(|c| c.0).sum::<Vec3>() / c.len() as f32
 }
 
-/// Must show 4: two trees planted 3 m apart: each crown's mean leaf position moves away from the
-/// other and the overlap of their clusters shrinks.
-#[test]
-fn two_trees_3m_apart_grow_apart() {
+/// Two analysed beeches (30 m space, seeds 7 and 8, the paper's Tree 1 tropisms), the second
+/// planted 3 m east of the first.
+fn two_beeches_3m_apart() -> (PlasticTree, PlasticTree) {
     let sp = beech();
     let p = tree1(&sp);
     let a = PlasticTree::analyse(&grow(&sp, 30.0, 7).skeleton, &p, &Environment::open(), None).unwrap();
     let mut b = PlasticTree::analyse(&grow(&sp, 30.0, 8).skeleton, &p, &Environment::open(), None).unwrap();
     b.translate(Vec3::new(3.0, 0.0, 0.0));
+    (a, b)
+}
+
+/// Must show 4: two trees planted 3 m apart: each crown's mean leaf position moves away from the
+/// other and the overlap of their clusters shrinks.
+#[test]
+fn two_trees_3m_apart_grow_apart() {
+    let (a, b) = two_beeches_3m_apart();
     let (ca0, cb0) = (a.clusters(), b.clusters());
     let ov0 = overlap(&ca0, &cb0);
     let mut pair = vec![a, b];
@@ -212,17 +219,12 @@ fn two_trees_3m_apart_grow_apart() {
 }
 
 /// A tree beside a fixed neighbour 3 m away (`adapt_group_among`, how a stand's context trees
-/// act): the adapted crown moves away from the neighbour, the neighbour is left as it was, and
-/// the result is that of an adaptation beside the neighbour's clusters alone: with the neighbour
-/// adapted too (`adapt_group`) the same tree moves differently, since the neighbour then moves
-/// away in turn.
+/// act): the adapted crown moves away from the neighbour and overlaps it less; without the
+/// neighbour nothing moves; with the neighbour adapted too (`adapt_group`) the same tree ends
+/// elsewhere, since the neighbour then moves away in turn.
 #[test]
 fn a_tree_among_a_fixed_neighbour_moves_away_and_leaves_it_be() {
-    let sp = beech();
-    let p = tree1(&sp);
-    let a = PlasticTree::analyse(&grow(&sp, 30.0, 7).skeleton, &p, &Environment::open(), None).unwrap();
-    let mut b = PlasticTree::analyse(&grow(&sp, 30.0, 8).skeleton, &p, &Environment::open(), None).unwrap();
-    b.translate(Vec3::new(3.0, 0.0, 0.0));
+    let (a, b) = two_beeches_3m_apart();
     let ca0 = a.clusters();
     let mut one = vec![a.clone()];
     let rep = adapt_group_among(&mut one, std::slice::from_ref(&b), &Environment::open()).unwrap();

@@ -145,24 +145,14 @@ impl Sky {
     /// I·sin θ·Δθ·Δφ. It has more than [`MAX_SKY_DIRS`] directions, so it serves checks that
     /// trace rays themselves, not [`Solids::mask`] or [`light_at`].
     pub fn reference(brightest: Vec3, bands: usize) -> Sky {
-        let b = brightest_or_zenith(brightest);
-        let dtheta = std::f64::consts::FRAC_PI_2 / bands.max(1) as f64;
-        let (mut dirs, mut weights) = (Vec::new(), Vec::new());
-        for r in 0..bands.max(1) {
-            let theta = (r as f64 + 0.5) * dtheta;
-            let n = 4 * (theta.sin() * bands as f64).round().max(1.0) as usize;
-            let (st, ct) = exact_sin_cos(theta);
-            for k in 0..n {
-                let phi = (k as f64 + 0.5 * (r % 2) as f64) * std::f64::consts::TAU / n as f64;
-                let (sp, cp) = exact_sin_cos(phi);
-                let d = Vec3::new(st * cp, st * sp, ct);
-                let c = d.dot(b).max(0.0);
-                dirs.push(d);
-                weights.push(c * c * st / n as f32);
-            }
-        }
-        normalise(&mut weights);
-        Sky { brightest: b, dirs, weights }
+        let bands = bands.max(1);
+        let counts: Vec<usize> = (0..bands)
+            .map(|r| {
+                let theta = (r as f64 + 0.5) * std::f64::consts::FRAC_PI_2 / bands as f64;
+                4 * (theta.sin() * bands as f64).round().max(1.0) as usize
+            })
+            .collect();
+        Sky::zenith_bands(brightest_or_zenith(brightest), &counts)
     }
 
     /// The quadrature of rounds 1–10, kept for comparison: equal zenith-angle bands with `rings`
@@ -171,11 +161,16 @@ impl Sky {
     /// Errors: as [`Sky::with_rings`].
     pub fn zenith_rings(brightest: Vec3, rings: &[usize]) -> Result<Sky> {
         check_rings(rings)?;
-        let b = brightest_or_zenith(brightest);
-        let dtheta = std::f64::consts::FRAC_PI_2 / rings.len() as f64;
+        Ok(Sky::zenith_bands(brightest_or_zenith(brightest), rings))
+    }
+
+    /// Equal zenith-angle bands of `counts[r]` directions (offset by half a step in odd bands),
+    /// weights I·sin θ·Δθ·Δφ normalised; `b` the unit direction of the brightest point.
+    fn zenith_bands(b: Vec3, counts: &[usize]) -> Sky {
+        let dtheta = std::f64::consts::FRAC_PI_2 / counts.len() as f64;
         let mut dirs = Vec::new();
         let mut weights = Vec::new();
-        for (r, &n) in rings.iter().enumerate() {
+        for (r, &n) in counts.iter().enumerate() {
             let theta = (r as f64 + 0.5) * dtheta; // zenith angle
             let (st, ct) = exact_sin_cos(theta);
             for k in 0..n {
@@ -188,7 +183,7 @@ impl Sky {
             }
         }
         normalise(&mut weights);
-        Ok(Sky { brightest: b, dirs, weights })
+        Sky { brightest: b, dirs, weights }
     }
 
     /// Global light (Plastic Trees section 6, "global light interaction"): the brightest sky
@@ -673,6 +668,13 @@ fn slab_hits(p: Vec3, d: Vec3, inv: Vec3, lo: Vec3, hi: Vec3, a: Vec3, b: Vec3) 
 /// directions, normalised; straight up when no light arrives). `blocked` is the
 /// [`Solids::mask`] at `p`.
 pub fn light_at(sky: &Sky, blocked: u32, vols: &ShadowVolumes, p: Vec3) -> (f32, Vec3) {
+    light_by(sky, blocked, |k| vols.transmittance(k, p))
+}
+
+/// Eq. (3) with the transmittance of sky direction k given by `transmittance(k)`: (i in 0–1,
+/// average light direction, straight up when no light arrives); directions set in `blocked`
+/// and directions of weight 0 are skipped.
+pub fn light_by(sky: &Sky, blocked: u32, transmittance: impl Fn(usize) -> f32) -> (f32, Vec3) {
     let mut sum = 0.0f32;
     let mut dir = Vec3::ZERO;
     for k in 0..sky.dirs.len() {
@@ -680,7 +682,7 @@ pub fn light_at(sky: &Sky, blocked: u32, vols: &ShadowVolumes, p: Vec3) -> (f32,
         if blocked & (1 << k) != 0 || w == 0.0 {
             continue;
         }
-        let t = vols.transmittance(k, p);
+        let t = transmittance(k);
         sum += w * t;
         dir += sky.dirs[k] * (w * t);
     }

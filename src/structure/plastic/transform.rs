@@ -49,7 +49,7 @@
 //! clusters of recomputed subtrees now shade it differently.
 
 use super::analysis::{cluster_center, judged, normalised, psi_at_stage};
-use super::light::{light_at, Occluder, ShadowVolumes, SkyMask, Solids};
+use super::light::{light_at, light_by, Occluder, ShadowVolumes, SkyMask, Solids};
 use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
 use crate::error::Result;
 use crate::structure::grow::space::Obstacle;
@@ -371,19 +371,10 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
 /// [`light_at`] with the transmittance of the `fixed` trees' clusters multiplied in (eq. 3 over
 /// both sets of occluders).
 fn light_at_among(sky: &super::light::Sky, blocked: u32, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, p: Vec3) -> (f32, Vec3) {
-    let Some(f) = fixed else { return light_at(sky, blocked, vols, p) };
-    let mut sum = 0.0f32;
-    let mut dir = Vec3::ZERO;
-    for k in 0..sky.dirs.len() {
-        let w = sky.weights[k];
-        if blocked & (1 << k) != 0 || w == 0.0 {
-            continue;
-        }
-        let t = vols.transmittance(k, p) * f.transmittance(k, p);
-        sum += w * t;
-        dir += sky.dirs[k] * (w * t);
+    match fixed {
+        Some(f) => light_by(sky, blocked, |k| vols.transmittance(k, p) * f.transmittance(k, p)),
+        None => light_at(sky, blocked, vols, p),
     }
-    (sum, dir.normalize_or(Vec3::Z))
 }
 
 /// Per-direction transmittances (eq. 4 products) of the clusters of one stage as evaluated at
