@@ -36,14 +36,40 @@ fn foliage_sides(img: &image::RgbaImage, bg: &image::RgbaImage, x: u32) -> (usiz
     (l, r)
 }
 
+/// A beech 1.2 m west of a 25 m high, 12 m long north–south wall (short enough not to hide the
+/// crown's east side from a camera in the south), set as `stage`'s scenario.
+fn beech_beside_a_wall(stage: &mut Stage) -> Plant<'static> {
+    let wall = ObstacleSpec::Wall { start: [51.2, 44.0], end: [51.2, 56.0], height_m: 25.0, thickness_m: 0.4 };
+    stage.set_scenario(42, &[wall]);
+    Plant { id: 1, species: "beech", x_m: 50.0, y_m: 50.0, height_m: 18.0, crown_radius_m: 4.0, age_yr: 60.0, crown_base_m: 5.0, alive: true }
+}
+
+/// Checks the picture `img` of the adapted `tree` (`bg`: the same view without it) against its
+/// prototype drawn from `cam`: the adapted crown is drawn, it has more than twice the foliage
+/// pixels away from the wall (left of the middle column) as towards it, and it is more
+/// one-sided than the prototype by half again. Both pictures are saved as `NAME_adapted.png`
+/// and `NAME_prototype.png` in the tests' temporary folder.
+fn assert_one_sided(stage: &mut Stage, tree: Plant, cam: &Camera, bg: &image::RgbaImage, img: &image::RgbaImage, name: &str) {
+    let (w, h) = img.dimensions();
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render");
+    std::fs::create_dir_all(&dir).unwrap();
+    img.save(dir.join(format!("{name}_adapted.png"))).unwrap();
+    stage.adapt = None;
+    let proto = stage.render_plants(&[tree], Season::Summer, cam, w, h).unwrap();
+    proto.save(dir.join(format!("{name}_prototype.png"))).unwrap();
+    let (al, ar) = foliage_sides(img, bg, w / 2);
+    let (pl, pr) = foliage_sides(&proto, bg, w / 2);
+    eprintln!("{name}: adapted {al} | {ar}, prototype {pl} | {pr} foliage pixels");
+    assert!(al + ar > 200, "{name}: the adapted crown is drawn: {al} + {ar} foliage pixels");
+    // west (left) of the stem: away from the wall (east, right)
+    assert!(al > 2 * ar, "{name}: adapted: {al} foliage pixels away from the wall, {ar} towards it");
+    assert!((al as f64 / ar.max(1) as f64) > 1.5 * (pl as f64 / pr.max(1) as f64), "{name}: adapted {al}/{ar} vs prototype {pl}/{pr}");
+}
+
 #[test]
 fn a_tree_beside_a_wall_leans_away_from_it() {
     let Some(mut stage) = stage() else { return };
-    // a beech 1.2 m west of a 25 m high, 12 m long north–south wall (short enough not to hide
-    // the crown's east side from the camera in the south)
-    let wall = ObstacleSpec::Wall { start: [51.2, 44.0], end: [51.2, 56.0], height_m: 25.0, thickness_m: 0.4 };
-    stage.set_scenario(42, &[wall]);
-    let tree = Plant { id: 1, species: "beech", x_m: 50.0, y_m: 50.0, height_m: 18.0, crown_radius_m: 4.0, age_yr: 60.0, crown_base_m: 5.0, alive: true };
+    let tree = beech_beside_a_wall(&mut stage);
     // looking north along the wall, the stem in the middle column
     let cam = Camera::look_at([50.0, 15.0, 209.0], [50.0, 50.0, 209.0], 45.0);
     let (w, h) = (240, 200);
@@ -51,26 +77,13 @@ fn a_tree_beside_a_wall_leans_away_from_it() {
     let img = stage.render_plants(&[tree], Season::Summer, &cam, w, h).unwrap();
     assert_eq!(stage.last_adapt.adapted_trees, 1);
     assert_eq!(stage.last_adapt.per_level, [1, 0, 0, 0], "close up: the full mesh");
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render");
-    std::fs::create_dir_all(&dir).unwrap();
-    img.save(dir.join("wall_adapted.png")).unwrap();
-    stage.adapt = None;
-    let proto = stage.render_plants(&[tree], Season::Summer, &cam, w, h).unwrap();
-    proto.save(dir.join("wall_prototype.png")).unwrap();
-    let (al, ar) = foliage_sides(&img, &bg, w / 2);
-    let (pl, pr) = foliage_sides(&proto, &bg, w / 2);
-    assert!(al + ar > 200, "the adapted crown is drawn: {al} + {ar} foliage pixels");
-    // west (left) of the stem: away from the wall (east, right)
-    assert!(al > 2 * ar, "adapted: {al} foliage pixels away from the wall, {ar} towards it");
-    assert!((al as f64 / ar.max(1) as f64) > 1.5 * (pl as f64 / pr.max(1) as f64), "adapted {al}/{ar} vs prototype {pl}/{pr}");
+    assert_one_sided(&mut stage, tree, &cam, &bg, &img, "wall");
 }
 
 #[test]
 fn a_tree_beside_a_wall_stays_one_sided_at_the_mid_level() {
     let Some(mut stage) = stage() else { return };
-    let wall = ObstacleSpec::Wall { start: [51.2, 44.0], end: [51.2, 56.0], height_m: 25.0, thickness_m: 0.4 };
-    stage.set_scenario(42, &[wall]);
-    let tree = Plant { id: 1, species: "beech", x_m: 50.0, y_m: 50.0, height_m: 18.0, crown_radius_m: 4.0, age_yr: 60.0, crown_base_m: 5.0, alive: true };
+    let tree = beech_beside_a_wall(&mut stage);
     // switch sizes 3× the pictures' (330, 135, 54 px), as the triangle budget raises them in a
     // dense still: the mid level spans 67–108 px; 60 m south the 18 m tree is ≈ 72 px tall in a
     // 200 px frame of 45°, so it is drawn as its crown hull
@@ -85,17 +98,5 @@ fn a_tree_beside_a_wall_stays_one_sided_at_the_mid_level() {
     assert_eq!(stage.last_adapt.hull_triangles, sylva::structure::crown_hull::HULL_TRIANGLES + 10, "hull and the 5-sided stem's 10 triangles");
     assert_eq!(st.per_level, [0, 0, 2, 0], "the tree and the wall drawn at the mid level");
     assert_eq!(stage.last_adapt.per_level, [0, 0, 1, 0], "the adapted tree among them");
-    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render");
-    std::fs::create_dir_all(&dir).unwrap();
-    img.save(dir.join("wall_hull_adapted.png")).unwrap();
-    stage.adapt = None;
-    let proto = stage.render_plants(&[tree], Season::Summer, &cam, w, h).unwrap();
-    proto.save(dir.join("wall_hull_prototype.png")).unwrap();
-    let (al, ar) = foliage_sides(&img, &bg, w / 2);
-    let (pl, pr) = foliage_sides(&proto, &bg, w / 2);
-    eprintln!("mid level: adapted {al} | {ar}, prototype {pl} | {pr} foliage pixels");
-    assert!(al + ar > 200, "the hull is drawn: {al} + {ar} foliage pixels");
-    // west (left) of the stem, away from the wall
-    assert!(al > 2 * ar, "adapted hull: {al} foliage pixels away from the wall, {ar} towards it");
-    assert!((al as f64 / ar.max(1) as f64) > 1.5 * (pl as f64 / pr.max(1) as f64), "adapted {al}/{ar} vs prototype {pl}/{pr}");
+    assert_one_sided(&mut stage, tree, &cam, &bg, &img, "wall_hull");
 }
