@@ -145,6 +145,9 @@ fn tree_adapt_refuses_bad_input_clearly() {
         (vec!["--obstacle", "wall:1,-4"], "wall length"),
         (vec!["--neighbour", "beech@3,NaN"], "finite"),
         (vec!["--input", glb.to_str().unwrap()], "no skeleton beside it"),
+        (vec!["--sky-rings", "3,8"], "multiples of 4"),
+        (vec!["--sky-rings", "8,12,16"], "at most 32"),
+        (vec!["--latitude", "95"], "from -90 to 90"),
     ];
     for (extra, want) in cases {
         let mut args = vec!["tree", "adapt", "--species", "beech", "--age", "5", "--out", o];
@@ -153,4 +156,28 @@ fn tree_adapt_refuses_bad_input_clearly() {
         let err = String::from_utf8_lossy(&res.stderr);
         assert!(!res.status.success() && err.contains(want), "{extra:?}: {err}");
     }
+}
+
+/// Global light and the sky quadrature of `sylva tree adapt`: with no obstacle, a tree analysed
+/// and adapted under the same sky is left as it is, whatever the quadrature (`--sky-rings`);
+/// moving the brightest sky point from the zenith to the equinox noon sun at 50° N
+/// (`--latitude 50`) bends it.
+#[test]
+fn tree_adapt_global_light_bends_and_the_quadrature_alone_does_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = dir.path().join("t.glb");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["tree", "adapt", "--species", "beech", "--model", "light", "--age", "8", "--seed", "3", "--out", o.to_str().unwrap(), "--json"];
+        args.extend(extra.iter());
+        let res = sylva(&args);
+        assert!(res.status.success(), "{extra:?}: {}", String::from_utf8_lossy(&res.stderr));
+        let j: serde_json::Value = serde_json::from_slice(&res.stdout).unwrap();
+        (j["bent"].as_u64().unwrap(), j["pruned"].as_u64().unwrap(), j["nodes_before"].as_u64().unwrap())
+    };
+    for rings in ["4,8,12", "4,8", "4"] {
+        let (bent, pruned, _) = run(&["--sky-rings", rings]);
+        assert_eq!((bent, pruned), (0, 0), "--sky-rings {rings}: an unchanged sky changed the tree");
+    }
+    let (bent, _, n) = run(&["--latitude", "50"]);
+    assert!(bent > 0, "the sun at 50 N bent none of {n} nodes");
 }

@@ -130,7 +130,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         let key = |y: u32| keys.iter().find(|k| k.0 == y).map(|k| k.1.clone()).unwrap_or_default();
         for &y in &years {
             for (preset, name) in [(CameraPreset::Oblique, "oblique"), (CameraPreset::Map, "topdown")] {
-                let cam = stage.camera(preset);
+                let cam = stage.camera_sized(preset, a.size.0, a.size.1);
                 let img = stage.render_instances(key(y), Season::Summer, &cam, a.size.0, a.size.1)?;
                 let path = stills_dir.join(format!("year_{y:04}_{name}.png"));
                 sylva::output::pictures::write_png(&path, &img)?;

@@ -163,9 +163,15 @@ impl Stage {
         Ok(img?)
     }
 
-    /// The camera of a preset for this terrain.
+    /// The camera of a preset for this terrain (for a square picture).
     pub fn camera(&self, preset: CameraPreset) -> Camera {
         Camera::preset(preset, &self.scene.terrain)
+    }
+
+    /// The camera of a preset for this terrain and a picture of `width` × `height` pixels
+    /// ([`Camera::preset_sized`]: the map fits the window to the picture's shape).
+    pub fn camera_sized(&self, preset: CameraPreset, width: u32, height: u32) -> Camera {
+        Camera::preset_sized(preset, &self.scene.terrain, width, height)
     }
 
     /// The camera of a preset for a snapshot: as [`Stage::camera`], except that the ground-level
@@ -347,7 +353,7 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
     let emit = |stage: &mut Stage, inst: Vec<TreeInstance>, k: usize, year: f32| -> Result<image::RgbaImage> {
         let u = if total > 1 { k as f32 / (total - 1) as f32 } else { 0.0 };
         let cam = match opts.camera {
-            Some(p) => stage.camera(p),
+            Some(p) => stage.camera_sized(p, opts.width, opts.height),
             None => Camera::orbit(&stage.scene.terrain, 0.05 + 0.25 * u),
         };
         let mut img = stage.render_instances(inst, opts.season, &cam, opts.width, opts.height)?;

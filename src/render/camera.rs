@@ -75,8 +75,39 @@ impl Camera {
         Camera { eye, target, up: [0.0, 0.0, 1.0], projection: Projection::Perspective { fov_y_deg }, near: (d * 0.002).max(0.05), far: d * 8.0 + 1000.0 }
     }
 
-    /// A preset framing the terrain's bounds.
+    /// A preset framing the terrain's bounds ([`TerrainMesh::bounds`]: the simulated window
+    /// without its surroundings) for a square picture; see [`Camera::preset_sized`].
     pub fn preset(p: CameraPreset, terrain: &TerrainMesh) -> Self {
+        Camera::preset_sized(p, terrain, 1, 1)
+    }
+
+    /// A preset framing the terrain's bounds for a picture of `width` × `height` pixels. The
+    /// top-down map ([`CameraPreset::Map`]) fits the whole window into the picture with 2 %
+    /// to spare on the axis that limits it (half height 0.51 · max(Δy, Δx · height/width)), so
+    /// a wide still shows the window, not kilometres of surroundings beside it; the other
+    /// presets do not depend on the picture's shape (their field of view is vertical).
+    pub fn preset_sized(p: CameraPreset, terrain: &TerrainMesh, width: u32, height: u32) -> Self {
+        let (lo, hi) = terrain.bounds();
+        let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+        if p == CameraPreset::Map {
+            let c = (lo + hi) * 0.5;
+            let size = (hi - lo).truncate().max_element().max(1.0);
+            let across = (hi.x - lo.x) * height.max(1) as f32 / width.max(1) as f32;
+            let half = 0.51 * (hi.y - lo.y).max(across);
+            return Camera {
+                eye: [c.x, c.y, hi.z + size],
+                target: [c.x, c.y, lo.z],
+                up: [0.0, 1.0, 0.0],
+                projection: Projection::Orthographic { half_height: half.max(1.0) },
+                near: 1.0,
+                far: (hi.z - lo.z) + 2.0 * size + 10.0,
+            };
+        }
+        Camera::preset_any(p, terrain)
+    }
+
+    /// The perspective presets framing the terrain's bounds (the map: [`Camera::preset_sized`]).
+    fn preset_any(p: CameraPreset, terrain: &TerrainMesh) -> Self {
         let (lo, hi) = terrain.bounds();
         let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
         let c = (lo + hi) * 0.5;
@@ -99,18 +130,7 @@ impl Camera {
                 cam.near = 0.1;
                 cam
             }
-            CameraPreset::Map => {
-                let half = 0.5 * (hi.y - lo.y).max(hi.x - lo.x) * 1.02;
-                let eye = Vec3::new(c.x, c.y, hi.z + size);
-                Camera {
-                    eye: eye.to_array(),
-                    target: [c.x, c.y, lo.z],
-                    up: [0.0, 1.0, 0.0],
-                    projection: Projection::Orthographic { half_height: half.max(1.0) },
-                    near: 1.0,
-                    far: (hi.z - lo.z) + 2.0 * size + 10.0,
-                }
-            }
+            CameraPreset::Map => Camera::preset_sized(p, terrain, 1, 1),
         }
     }
 
@@ -160,6 +180,47 @@ impl Camera {
                 size_m * f / d
             }
             Projection::Orthographic { half_height } => size_m * height_px / (2.0 * half_height.max(1e-3)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A flat terrain mesh of `w` × `h` m (four corner vertices, z 0–10 m).
+    fn window(w: f32, h: f32) -> TerrainMesh {
+        TerrainMesh { positions: vec![[0.0, 0.0, 0.0], [w, 0.0, 10.0], [0.0, h, 5.0], [w, h, 0.0]], ..TerrainMesh::default() }
+    }
+
+    fn half_extents(cam: &Camera, width: u32, height: u32) -> (f32, f32) {
+        let Projection::Orthographic { half_height } = cam.projection else { panic!("the map is orthographic") };
+        (half_height * width as f32 / height as f32, half_height)
+    }
+
+    #[test]
+    fn map_fits_the_window_to_the_pictures_shape() {
+        // (window w, h (m), picture width, height, the axis that limits it: x or y)
+        for (w, h, pw, ph, by_x) in [(3450.0, 2560.0, 1600, 900, false), (1000.0, 3000.0, 1600, 900, false), (4000.0, 500.0, 1600, 900, true), (2000.0, 2000.0, 900, 1600, true)] {
+            let cam = Camera::preset_sized(CameraPreset::Map, &window(w, h), pw, ph);
+            let (hx, hy) = half_extents(&cam, pw, ph);
+            // the whole window shows, centred
+            assert!(hx >= 0.5 * w && hy >= 0.5 * h, "{w} x {h} in {pw} x {ph}: {hx} x {hy}");
+            assert_eq!((cam.eye[0], cam.eye[1]), (0.5 * w, 0.5 * h));
+            // with 2 % to spare on the limiting axis, not more
+            let (have, need) = if by_x { (hx, 0.5 * w) } else { (hy, 0.5 * h) };
+            assert!((have / need - 1.02).abs() < 1e-4, "{w} x {h} in {pw} x {ph}: {have} for {need}");
+        }
+        // the old framing of a wide still showed 2.4 times the window's width; now 1.36 times
+        let cam = Camera::preset_sized(CameraPreset::Map, &window(3450.0, 2560.0), 1280, 720);
+        let (hx, _) = half_extents(&cam, 1280, 720);
+        assert!((2.0 * hx / 3450.0 - 1.347).abs() < 0.01, "{}", 2.0 * hx / 3450.0);
+        // square pictures and the perspective presets are as before
+        let t = window(3450.0, 2560.0);
+        assert_eq!(Camera::preset(CameraPreset::Map, &t), Camera::preset_sized(CameraPreset::Map, &t, 7, 7));
+        assert_eq!(half_extents(&Camera::preset(CameraPreset::Map, &t), 1, 1).1, 0.51 * 3450.0);
+        for p in [CameraPreset::Overview, CameraPreset::Oblique, CameraPreset::Ground] {
+            assert_eq!(Camera::preset_sized(p, &t, 1600, 900), Camera::preset(p, &t));
         }
     }
 }
