@@ -485,6 +485,91 @@ fn chamfer(w: usize, h: usize, src: &[bool]) -> (Vec<f32>, Vec<usize>) {
     (d, near)
 }
 
+/// Stream channels as smoothed centre lines (for drawing). Every cell of the flow grid with a
+/// [`crate::render::terrain::stream_strength`] s > 0 of its contributing area (`acc` cells of
+/// `cell_area` m²) is a channel cell; its part of the channel runs from the midpoint of the D8
+/// step into it (from its upstream channel neighbour of largest area; from its own centre at a
+/// channel head) to the midpoint of its D8 step out (its own centre at an outlet), as the
+/// quadratic Bézier curve with the cell centre as control point, every centre first replaced by
+/// the mean of the centres within two steps along the channel (upstream along the main stem; as
+/// many steps on each side, so heads and outlets stay in place).
+/// D8 paths are staircases of axis and diagonal steps in irregular runs; averaged along the
+/// channel and with their corners cut (Chaikin's corner cutting, one round), a channel running
+/// at 30° to the grid is drawn as a smooth line, not a staircase. `at(x, y, s, len)` is called at points of every curve at most
+/// `spacing` m apart (window-local metres from `local`, the plan position of a cell centre),
+/// `len` the length of curve (m) the point stands for (half of each chord beside it).
+fn stream_lines(acc: &Grid<f32>, dir: &Grid<u8>, m: &Grid<bool>, cell_area: f64, local: &dyn Fn(usize, usize) -> [f64; 2], spacing: f64, mut at: impl FnMut(f64, f64, f32, f64)) {
+    use crate::terrain::fields::{D8, OUTLET};
+    let (w, h) = (acc.width, acc.height);
+    let strength = |i: usize| if m.data[i] { crate::render::terrain::stream_strength((acc.data[i] as f64 * cell_area) as f32) } else { 0.0 };
+    let s: Vec<f32> = (0..w * h).map(strength).collect();
+    let down = |i: usize| -> Option<usize> {
+        let d = dir.data[i];
+        if d == OUTLET || d as usize >= D8.len() {
+            return None;
+        }
+        let (dc, dr) = D8[d as usize];
+        let (c, r) = ((i % w) as i64 + dc, (i / w) as i64 + dr);
+        (c >= 0 && r >= 0 && (c as usize) < w && (r as usize) < h).then(|| r as usize * w + c as usize)
+    };
+    // the main upstream channel cell of every channel cell: the one of largest area
+    let mut up: Vec<Option<usize>> = vec![None; w * h];
+    for i in 0..w * h {
+        if s[i] > 0.0 {
+            if let Some(j) = down(i) {
+                if up[j].is_none_or(|k| acc.data[i] > acc.data[k]) {
+                    up[j] = Some(i);
+                }
+            }
+        }
+    }
+    // every channel cell's centre smoothed along the channel: the mean of the centres of the
+    // cells up to SMOOTH steps upstream (main stem) and as many downstream of it
+    const SMOOTH: usize = 2;
+    let centre = |i: usize| local(i % w, i / w);
+    let xy = |i: usize| {
+        let mut sum = centre(i);
+        let mut k = 1.0;
+        let (mut u, mut d) = (i, i);
+        // as many steps upstream as downstream, so that heads and outlets stay where they are
+        for _ in 0..SMOOTH {
+            let (Some(nu), Some(nd)) = (up[u], down(d)) else { break };
+            (u, d) = (nu, nd);
+            let (qu, qd) = (centre(u), centre(d));
+            sum = [sum[0] + qu[0] + qd[0], sum[1] + qu[1] + qd[1]];
+            k += 2.0;
+        }
+        [sum[0] / k, sum[1] / k]
+    };
+    let mid = |a: [f64; 2], b: [f64; 2]| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
+    for i in 0..w * h {
+        if s[i] <= 0.0 {
+            continue;
+        }
+        let p = xy(i);
+        let a = up[i].map_or(p, |k| mid(xy(k), p));
+        let b = down(i).map_or(p, |j| mid(p, xy(j)));
+        let len = (a[0] - p[0]).hypot(a[1] - p[1]) + (b[0] - p[0]).hypot(b[1] - p[1]);
+        if len <= 0.0 {
+            continue; // a lone channel cell (head and outlet): no line
+        }
+        let n = ((len / spacing.max(1e-3)).ceil() as usize).clamp(2, 256);
+        let pts: Vec<[f64; 2]> = (0..=n)
+            .map(|k| {
+                let t = k as f64 / n as f64;
+                let (u, v, z) = ((1.0 - t) * (1.0 - t), 2.0 * (1.0 - t) * t, t * t);
+                [u * a[0] + v * p[0] + z * b[0], u * a[1] + v * p[1] + z * b[1]]
+            })
+            .collect();
+        let chord = |k: usize| (pts[k + 1][0] - pts[k][0]).hypot(pts[k + 1][1] - pts[k][1]);
+        for k in 0..=n {
+            // the curves of consecutive cells meet at the midpoints: each end counts half
+            let l = 0.5 * (if k > 0 { chord(k - 1) } else { 0.0 } + if k < n { chord(k) } else { 0.0 });
+            at(pts[k][0], pts[k][1], s[i], l);
+        }
+    }
+}
+
 impl Landscape {
     /// The landscape of `site`. `full`: the whole terrain the site was cut from and the window
     /// `[col0, row0, width, height]` (cells of that terrain) it was cut with; `None`: the site
@@ -493,7 +578,8 @@ impl Landscape {
     /// 35 % of the margin to its end, and over [`EDGE_FADE_M`] at the edge of the DEM (nodata or
     /// the end of the grid). Samples at most `max_cell_m` apart; inside the window their height
     /// is the site's [`SiteConditions::elevation_at`], so trees stand on the ground drawn.
-    /// Streams ([`crate::render::terrain::stream_strength`] of the D8 flow accumulation) and
+    /// Streams ([`crate::render::terrain::stream_strength`] of the D8 flow accumulation, drawn
+    /// along corner-cut centre lines so that they do not show the D8 staircase) and
     /// wetness (topographic wetness index, [`crate::render::terrain::wetness`]) are computed on
     /// the terrain of the drawn area (`crate::terrain::fields`), so the flow from beyond the
     /// window counts.
@@ -573,12 +659,29 @@ impl Landscape {
                 if sc >= 0 && sr >= 0 && (sc as usize) < acc.width && (sr as usize) < acc.height {
                     let (sc, sr) = (sc as usize, sr as usize);
                     if *m.get(sc, sr) {
-                        stream[i] = crate::render::terrain::stream_strength((*acc.get(sc, sr) as f64 * cell_area) as f32);
                         wet[i] = crate::render::terrain::wetness(*twi.get(sc, sr));
                     }
                 }
             }
         }
+        // window-local plan position of the centre of cell (c, r) of `sub`
+        let local = |c: usize, r: usize| -> [f64; 2] { [((sc0 + c) as f64 - c0 as f64 + 0.5) * scx, (r0 as f64 + wh as f64 - (sr0 + r) as f64 - 0.5) * scy] };
+        // every curve point splats its strength bilinearly onto the four samples around it,
+        // weighted by the length of curve it stands for (so a line through sample centres
+        // along an axis draws its strength there, and the strength-weighted centre of a column
+        // lies on the line: bilinear weights keep the first moment), at most 1 where lines meet
+        stream_lines(&acc, &dir, &m, cell_area, &local, 0.2 * cx.min(cy), |x, y, s, len| {
+            let (fc, fr) = ((x - origin[0]) / cx - 0.5, nh as f64 - (y - origin[1]) / cy - 0.5);
+            let (c, r) = (fc.floor(), fr.floor());
+            let (tx, ty) = (fc - c, fr - r);
+            for (dc, dr, wgt) in [(0.0, 0.0, (1.0 - tx) * (1.0 - ty)), (1.0, 0.0, tx * (1.0 - ty)), (0.0, 1.0, (1.0 - tx) * ty), (1.0, 1.0, tx * ty)] {
+                let (cc, rr) = (c + dc, r + dr);
+                if cc >= 0.0 && rr >= 0.0 && cc < nw as f64 && rr < nh as f64 {
+                    stream[rr as usize * nw + cc as usize] += (s as f64 * wgt * len / cx.min(cy)) as f32;
+                }
+            }
+        });
+        stream.iter_mut().for_each(|v| *v = v.min(1.0));
         // fill the samples without ground from the nearest ground (flat aprons) and fade them
         let valid: Vec<bool> = heights.iter().map(|v| v.is_finite()).collect();
         let invalid: Vec<bool> = valid.iter().map(|v| !v).collect();
@@ -925,6 +1028,79 @@ mod tests {
         let want = 15_625.0 * (1950.0 * 1800.0 - 1e6) / 1e6;
         assert!((n as f64 / want - 1.0).abs() < 0.05, "{n} trees beyond the window, {want} expected");
         assert!((sp1 as f64 / n as f64 - 0.3).abs() < 0.02, "{sp1} of {n}");
+    }
+
+    /// A valley running at 30° to the grid: its D8 channel is a staircase of east and
+    /// north-east steps. Drawn per cell (as before), the stream's centre in each column jumps
+    /// about a straight line by a good part of a cell; drawn along the corner-cut centre lines
+    /// of `stream_lines`, it runs straight.
+    #[test]
+    fn streams_are_drawn_without_the_d8_staircase() {
+        use crate::grid::GeoRef;
+        let n = 120usize;
+        let (ca, sa) = (30f32.to_radians().cos(), 30f32.to_radians().sin());
+        let mut e = Grid::filled(n, n, 0.0f32);
+        for r in 0..n {
+            for c in 0..n {
+                // window-local metres (x east, y north) of the cell centre, from the grid's centre
+                let (x, y) = ((c as f32 + 0.5 - 0.5 * n as f32) * 10.0, (0.5 * n as f32 - r as f32 - 0.5) * 10.0);
+                let (along, across) = (x * ca + y * sa, -x * sa + y * ca);
+                *e.get_mut(c, r) = 500.0 + 0.08 * along + 0.25 * across.abs();
+            }
+        }
+        let t = crate::terrain::Terrain { elevation: e, geo: GeoRef::local(10.0, 47.0), nodata: None, source: "test".into() };
+        let site = crate::conditions::derive(&t, &crate::climate::Climate::default()).unwrap();
+        let l = Landscape::new(&site, None, 10.0, f32::NEG_INFINITY).unwrap();
+        let g = &l.ground;
+        let (w, h) = (g.heights.width, g.heights.height);
+        // the same channel drawn per cell: the strength of the flow cell under each sample
+        let m = crate::terrain::fields::mask(&t, f32::NEG_INFINITY);
+        let filled = crate::terrain::fields::fill_depressions(&t, &m);
+        let dir = crate::terrain::fields::flow_directions(&filled, &t.geo, &m);
+        let acc = crate::terrain::fields::flow_accumulation(&dir, &m);
+        let per_cell = |x: f32, y: f32| {
+            let (c, r) = ((x / 10.0).floor(), n as f32 - 1.0 - (y / 10.0).floor());
+            if c < 0.0 || r < 0.0 || c >= n as f32 || r >= n as f32 {
+                return 0.0;
+            }
+            crate::render::terrain::stream_strength(*acc.get(c as usize, r as usize) * 100.0)
+        };
+        // per sample column inside the site: the strength-weighted mean y of the stream, then the
+        // RMS of these means about their least-squares line (m)
+        let roughness = |value: &dyn Fn(usize, usize) -> f32| {
+            let mut pts = Vec::new();
+            for c in 0..w {
+                let x = g.origin[0] + (c as f32 + 0.5) * g.cell_x;
+                if !(50.0..=1150.0).contains(&x) {
+                    continue;
+                }
+                let (mut sw, mut sy) = (0.0f64, 0.0f64);
+                for r in 0..h {
+                    let y = g.origin[1] + (h as f32 - r as f32 - 0.5) * g.cell_y;
+                    if (0.0..=1200.0).contains(&y) {
+                        let v = value(c, r) as f64;
+                        sw += v;
+                        sy += v * y as f64;
+                    }
+                }
+                if sw > 0.0 {
+                    pts.push((x as f64, sy / sw));
+                }
+            }
+            let k = pts.len() as f64;
+            let (mx, my) = (pts.iter().map(|p| p.0).sum::<f64>() / k, pts.iter().map(|p| p.1).sum::<f64>() / k);
+            let b = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum::<f64>() / pts.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>();
+            let rms = (pts.iter().map(|p| (p.1 - my - b * (p.0 - mx)).powi(2)).sum::<f64>() / k).sqrt();
+            (pts.len(), b.atan().to_degrees(), rms)
+        };
+        let drawn = roughness(&|c, r| g.stream[r * w + c]);
+        let raw = roughness(&|c, r| per_cell(g.origin[0] + (c as f32 + 0.5) * g.cell_x, g.origin[1] + (h as f32 - r as f32 - 0.5) * g.cell_y));
+        eprintln!("stream columns, direction, RMS about the line: drawn {drawn:?}, per cell {raw:?}");
+        // a long stream at about 30°
+        assert!(drawn.0 >= 40 && (drawn.1 - 30.0).abs() < 3.0, "{drawn:?}");
+        // per cell, the staircase shows (RMS of a few metres on 10 m cells); drawn, it is gone
+        assert!(raw.2 > 2.0, "the per-cell drawing should show the staircase: {raw:?}");
+        assert!(drawn.2 < 0.3 * raw.2 && drawn.2 < 0.8, "drawn {drawn:?}, per cell {raw:?}");
     }
 
     #[test]

@@ -92,7 +92,9 @@ fn next_up(x: f32) -> f32 {
     if x > 0.0 { f32::from_bits(b + 1) } else { f32::from_bits(b - 1) }
 }
 
-const D8: [(i64, i64); 8] = [(0, -1), (1, -1), (1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1)];
+/// Column and row offsets (dc, dr) of the D8 neighbours in the order of [`flow_directions`]'
+/// codes 0–7: N, NE, E, SE, S, SW, W, NW (rows grow southwards).
+pub const D8: [(i64, i64); 8] = [(0, -1), (1, -1), (1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1)];
 
 fn is_seed(m: &Grid<bool>, c: usize, r: usize) -> bool {
     if c == 0 || r == 0 || c + 1 == m.width || r + 1 == m.height {
