@@ -148,6 +148,7 @@ fn tree_adapt_refuses_bad_input_clearly() {
         (vec!["--sky-rings", "3,8"], "multiples of 4"),
         (vec!["--sky-rings", "8,12,16"], "at most 32"),
         (vec!["--latitude", "95"], "from -90 to 90"),
+        (vec!["--neighbour", "beech@1e30,0"], "within 100 m"),
     ];
     for (extra, want) in cases {
         let mut args = vec!["tree", "adapt", "--species", "beech", "--age", "5", "--out", o];
@@ -156,6 +157,30 @@ fn tree_adapt_refuses_bad_input_clearly() {
         let err = String::from_utf8_lossy(&res.stderr);
         assert!(!res.status.success() && err.contains(want), "{extra:?}: {err}");
     }
+    // an output path that cannot be written is refused before anything is written: with the
+    // PNG's name taken by a folder, neither the .glb nor its skeleton is left behind
+    let set = dir.path().join("set.glb");
+    std::fs::create_dir(dir.path().join("set.png")).unwrap();
+    let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "5", "--obstacle", "wall:1.0", "--out", set.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(!res.status.success() && err.contains("set.png") && err.contains("is a folder"), "{err}");
+    assert!(!set.exists() && !sylva::output::gltf::skeleton_sidecar_path(&set).exists());
+    let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "5", "--out", dir.path().join("no/such/folder/t.glb").to_str().unwrap()]);
+    assert!(!res.status.success() && String::from_utf8_lossy(&res.stderr).contains("does not exist"));
+    // a tree read back from a file is checked against its own trunk base
+    let grown = dir.path().join("moved.glb");
+    let res = sylva(&["tree", "grow", "--species", "beech", "--model", "light", "--age", "5", "--out", grown.to_str().unwrap()]);
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    let side = sylva::output::gltf::skeleton_sidecar_path(&grown);
+    let mut sk = sylva::output::gltf::read_skeleton_sidecar(&grown).unwrap();
+    for n in &mut sk.nodes {
+        n.pos.x += 5.0;
+    }
+    sylva::output::gltf::write_skeleton_sidecar(&grown, &sk).unwrap();
+    assert!(side.is_file());
+    let res = sylva(&["tree", "adapt", "--input", grown.to_str().unwrap(), "--species", "beech", "--obstacle", "box:4,-1,0,6,1,3", "--out", o]);
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(!res.status.success() && err.contains("contains the trunk base at (5, 0, 0)"), "{err}");
 }
 
 /// Global light and the sky quadrature of `sylva tree adapt`: with no obstacle, a tree analysed

@@ -134,7 +134,15 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
         anyhow::bail!("--out {}: stills are written as PNG; give a file name ending in .png", a.out.display());
     }
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
+    }
+    // the statistics file is checked before the picture is drawn, so that a bad path does not
+    // leave the picture without its statistics
+    if let Some(p) = &a.stats {
+        anyhow::ensure!(!p.is_dir(), "--stats {}: is a folder; expected a .json file name", p.display());
+        if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("--stats {}: creating its folder {}", p.display(), dir.display()))?;
+        }
     }
     let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
     let year = match a.year {

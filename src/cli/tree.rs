@@ -101,7 +101,7 @@ pub struct AdaptArgs {
     /// each a multiple of 4, at most 32 in all. The default 4,8,12 (24 directions) is within
     /// 0.02 of a 5,872-direction reference in light; 4,8 (12 directions) adapts about 1.7×
     /// faster at about twice the error (BENCHMARKS.md, Plastic Trees sky).
-    #[arg(long, value_delimiter = ',', default_values_t = [4usize, 8, 12])]
+    #[arg(long, value_delimiter = ',', default_value = "4,8,12")]
     sky_rings: Vec<usize>,
     /// Folder of extra or edited species files, over the shipped library.
     #[arg(long)]
@@ -286,6 +286,9 @@ fn draw_level(img: &mut image::RgbImage, m: &TreeMesh, x0: u32, w: u32, h: u32, 
 
 
 /// A `--neighbour SPECIES@X,Y[,AGE]`.
+/// Farthest a `--neighbour` may stand from the adapted tree (m).
+const MAX_NEIGHBOUR_M: f32 = 100.0;
+
 fn parse_neighbour(s: &str, default_age: f32) -> anyhow::Result<(String, Vec3, f32)> {
     let form = "--neighbour SPECIES@X,Y[,AGE] (metres, years; e.g. beech@3,0,20)";
     let (sp, rest) = s.split_once('@').with_context(|| format!("--neighbour {s}: expected {form}"))?;
@@ -294,6 +297,7 @@ fn parse_neighbour(s: &str, default_age: f32) -> anyhow::Result<(String, Vec3, f
     anyhow::ensure!(v.iter().all(|x| x.is_finite()), "--neighbour {s}: expected finite numbers (no NaN or infinity)");
     let age = v.get(2).copied().unwrap_or(default_age);
     anyhow::ensure!(age > 0.0, "--neighbour {s}: age {age}: expected a positive number of years");
+    anyhow::ensure!(v[0].hypot(v[1]) <= MAX_NEIGHBOUR_M, "--neighbour {s}: {:.0} m from the tree; expected a neighbour within {MAX_NEIGHBOUR_M} m (trees farther apart do not interact)", v[0].hypot(v[1]));
     Ok((sp.trim().to_string(), Vec3::new(v[0], v[1], 0.0), age))
 }
 
@@ -301,14 +305,30 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.age.is_finite() && a.age > 0.0, "--age {}: expected a positive number of years", a.age);
     let ext = a.out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     anyhow::ensure!(ext == "glb", "--out {}: expected a .glb file name", a.out.display());
+    // the three files written (glb, skeleton sidecar, before/after PNG), checked before any is
+    // written, so that a bad path does not leave a partial set behind
+    let outputs = [a.out.clone(), sylva::output::gltf::skeleton_sidecar_path(&a.out), a.out.with_extension("png")];
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        anyhow::ensure!(dir.is_dir(), "--out {}: the folder {} does not exist", a.out.display(), dir.display());
+    }
+    for f in &outputs {
+        anyhow::ensure!(!f.is_dir(), "--out {}: {} is a folder; expected to write a file there", a.out.display(), f.display());
+    }
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let find = |name: &str| {
         lib.find(name).map(|i| lib.species[i as usize].clone()).with_context(|| format!("species {name}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))
     };
     let sp = find(&a.species)?;
     let obstacles: Vec<Obstacle> = a.obstacle.iter().map(|s| Obstacle::parse(s)).collect::<Result<_, _>>()?;
-    for (o, text) in obstacles.iter().zip(&a.obstacle) {
-        anyhow::ensure!(!o.contains(Vec3::ZERO) && o.signed_distance(Vec3::ZERO) > 0.0, "--obstacle {text}: contains the trunk base at (0, 0, 0); expected an obstacle beside the tree");
+    // the trunk base: the origin for a tree grown here, wherever a file's tree stands
+    let check_base = |base: Vec3| -> anyhow::Result<()> {
+        for (o, text) in obstacles.iter().zip(&a.obstacle) {
+            anyhow::ensure!(!o.contains(base) && o.signed_distance(base) > 0.0, "--obstacle {text}: contains the trunk base at ({}, {}, {}); expected an obstacle beside the tree", base.x, base.y, base.z);
+        }
+        Ok(())
+    };
+    if a.input.is_none() {
+        check_base(Vec3::ZERO)?;
     }
     let neighbours: Vec<(String, Vec3, f32)> = a.neighbour.iter().map(|s| parse_neighbour(s, a.age)).collect::<anyhow::Result<_>>()?;
     let model = match a.model {
@@ -318,10 +338,13 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     };
     let sk = match &a.input {
         Some(glb) => {
+            anyhow::ensure!(!glb.is_dir(), "--input {}: is a folder; expected a .glb written by `sylva tree grow`", glb.display());
             anyhow::ensure!(glb.is_file(), "--input {}: no such file", glb.display());
             let side = sylva::output::gltf::skeleton_sidecar_path(glb);
             anyhow::ensure!(side.is_file(), "--input {}: no skeleton beside it (expected {}, written by `sylva tree grow --out NAME.glb`)", glb.display(), side.display());
-            sylva::output::gltf::read_skeleton_sidecar(glb)?
+            let sk = sylva::output::gltf::read_skeleton_sidecar(glb)?;
+            check_base(sk.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO))?;
+            sk
         }
         None => species_tree::grow_species_tree(&sp, model, a.age, &[], a.seed)?.skeleton,
     };
@@ -385,17 +408,28 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
         });
         println!("{j}");
     } else {
-        println!("species {} : {} -> {} nodes, bent {}, pruned {} for light + {} in obstacles, {} nodes recomputed", sp.id, r.nodes_before, r.nodes_after, r.bent, r.pruned_light, r.pruned_collision, rep.recomputed_nodes);
-        println!("adapt {adapt_ms:.1} ms, regrowing beside the obstacles {regrow_ms:.1} ms");
+        println!("species {}: {} -> {} nodes, bent {}, pruned {} for light + {} in obstacles, {} nodes recomputed", sp.id, r.nodes_before, r.nodes_after, r.bent, r.pruned_light, r.pruned_collision, rep.recomputed_nodes);
+        println!("adapt {adapt_ms:.1} ms, regrowing it{} {regrow_ms:.1} ms", if obstacles.is_empty() { "" } else { " among the obstacles" });
         println!("wrote {}, {} and {}", a.out.display(), sylva::output::gltf::skeleton_sidecar_path(&a.out).display(), png.display());
     }
     Ok(())
 }
 
-/// Paper Fig. 6 style before/after side view (looking along +y, x right, z up): left the input
-/// with the parts that will be pruned in blue, right the adapted tree with every segment red by
-/// its own bend angle (0° dark brown → ≥ 5° red); neighbours in green, obstacles grey.
+/// Paper Fig. 6 style before/after side view (z up): left the input with the parts that will be
+/// pruned in blue, right the adapted tree with every segment red by its own bend angle (0° dark
+/// brown → ≥ 5° red); neighbours in green behind the tree, obstacles grey (spheres as discs,
+/// other solids as their bounding rectangles). The view looks along +y (x to the right) unless
+/// there is no obstacle and the adapted tree moved more along y than along x (global light from
+/// `--latitude` bends it north or south): then it looks along −x (y to the right), so that the
+/// change shows.
 fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obstacle], w: u32, h: u32) -> image::RgbImage {
+    let shift = match (before.first(), after.first()) {
+        (Some(b), Some(a)) => b.positions().iter().zip(a.positions()).zip(a.fates()).filter(|(_, f)| **f == Fate::Alive).map(|((p, q), _)| (*q - *p).abs()).sum::<Vec3>(),
+        _ => Vec3::ZERO,
+    };
+    // horizontal axis of the picture: 0 = x, 1 = y
+    let ax = if obstacles.is_empty() && shift.y > shift.x { 1 } else { 0 };
+    let hor = |p: Vec3| if ax == 0 { p.x } else { p.y };
     let mut img = image::RgbImage::from_pixel(2 * w, h, image::Rgb([235, 240, 245]));
     let mut lo = Vec3::splat(f32::MAX);
     let mut hi = Vec3::splat(f32::MIN);
@@ -405,11 +439,25 @@ fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obst
             hi = hi.max(*p);
         }
     }
+    let (lo_h, hi_h) = (hor(lo), hor(hi));
     let margin = 12.0;
-    let s = ((w as f32 - 2.0 * margin) / (hi.x - lo.x).max(1e-3)).min((h as f32 - 2.0 * margin) / (hi.z - lo.z).max(1e-3));
-    let px = |x0: u32, p: Vec3| (x0 as f32 + margin + (p.x - lo.x) * s, h as f32 - margin - (p.z - lo.z) * s);
+    let s = ((w as f32 - 2.0 * margin) / (hi_h - lo_h).max(1e-3)).min((h as f32 - 2.0 * margin) / (hi.z - lo.z).max(1e-3));
+    let px = |x0: u32, p: Vec3| (x0 as f32 + margin + (hor(p) - lo_h) * s, h as f32 - margin - (p.z - lo.z) * s);
+    let grey = image::Rgb([150, 150, 150]);
     for x0 in [0, w] {
         for o in obstacles {
+            if let Obstacle::Sphere { center, radius } = *o {
+                let (cx, cy) = px(x0, center);
+                let r = radius * s;
+                for y in (cy - r).max(0.0) as u32..((cy + r).min(h as f32 - 1.0).max(0.0) as u32) {
+                    for x in (cx - r).max(x0 as f32) as u32..((cx + r).min((x0 + w - 1) as f32).max(0.0) as u32) {
+                        if (x as f32 + 0.5 - cx).hypot(y as f32 + 0.5 - cy) <= r {
+                            img.put_pixel(x, y, grey);
+                        }
+                    }
+                }
+                continue;
+            }
             let (a, b) = match *o {
                 Obstacle::Box { min, max } => (min, max),
                 Obstacle::Sphere { center, radius } => (center - radius, center + radius),
@@ -418,16 +466,19 @@ fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obst
                 Obstacle::OrientedBox { .. } | Obstacle::Prism { .. } => o.bounds(),
             };
             let (a, b) = (a.min(b), a.max(b));
-            let (ax, ay) = px(x0, Vec3::new(a.x.max(lo.x - 10.0), 0.0, a.z));
-            let (bx, by) = px(x0, Vec3::new(b.x, 0.0, b.z));
-            for y in by.max(0.0) as u32..(ay.min(h as f32 - 1.0) as u32) {
-                for x in ax.max(x0 as f32) as u32..(bx.min((x0 + w - 1) as f32) as u32) {
-                    img.put_pixel(x, y, image::Rgb([150, 150, 150]));
+            let (ax_, ay) = px(x0, Vec3::new(a.x.max(lo.x - 10.0), a.y.max(lo.y - 10.0), a.z));
+            let (bx, by) = px(x0, Vec3::new(b.x, b.y, b.z));
+            for y in by.max(0.0) as u32..(ay.min(h as f32 - 1.0).max(0.0) as u32) {
+                for x in ax_.max(x0 as f32) as u32..(bx.min((x0 + w - 1) as f32).max(0.0) as u32) {
+                    img.put_pixel(x, y, grey);
                 }
             }
         }
     }
-    for (i, (b, t)) in before.iter().zip(after).enumerate() {
+    // neighbours first, so that the adapted tree is drawn over them
+    let order = (1..before.len()).chain(0..before.len().min(1));
+    for i in order {
+        let (b, t) = (&before[i], &after[i]);
         let sk = b.input();
         for k in 1..sk.len() {
             let p = sk.nodes[k].parent.unwrap_or(0) as usize;
@@ -444,7 +495,6 @@ fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obst
     img
 }
 
-/// A one-pixel line from `a` to `b` (pixels) clipped to columns x0..x1.
 fn line(img: &mut image::RgbImage, a: (f32, f32), b: (f32, f32), col: [u8; 3], x0: u32, x1: u32) {
     let n = ((b.0 - a.0).abs().max((b.1 - a.1).abs()).ceil() as usize).max(1);
     for i in 0..=n {
