@@ -74,16 +74,18 @@ pub struct AdaptArgs {
     /// without it the tree is grown here from --species/--model/--age/--seed.
     #[arg(long)]
     input: Option<PathBuf>,
-    /// Species id or name (the tree's species; also its Plastic Trees parameters).
+    /// Species id or name (the tree's species: its Plastic Trees parameters and leaves, also for
+    /// a tree read with --input).
     #[arg(long)]
     species: String,
-    /// Growth model of a tree grown here.
+    /// Growth model of a tree grown here and of the neighbours (with --input: of the neighbours).
     #[arg(long, value_enum, default_value = "light")]
     model: Model,
-    /// Age (years) of a tree grown here, and of neighbours without their own age.
+    /// Age (years) of a tree grown here, of neighbours without their own age, and of the
+    /// light-guided regrowth timed for `regrow_ms` (also with --input).
     #[arg(long, default_value_t = 20.0)]
     age: f32,
-    /// Random seed of a tree grown here (neighbours use seed + 1, + 2, …).
+    /// Random seed of a tree grown here and of its regrowth (neighbours use seed + 1, + 2, …).
     #[arg(long, default_value_t = 1)]
     seed: u64,
     /// Obstacle to adapt to: box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x[,length[,height]] (m).
