@@ -175,7 +175,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
         });
         sylva::output::write_atomic(path, serde_json::to_string_pretty(&j)?.as_bytes())?;
     }
-    eprintln!("year {year}: {} trees drawn, {} triangles → {}", st.instances_drawn, st.triangles, a.out.display());
+    eprintln!("year {year}: {} trees drawn as meshes or billboards, {} more in the far-field canopy layer, {} triangles → {}", st.instances_drawn, st.canopy_trees, st.triangles, a.out.display());
     Ok(())
 }
 
