@@ -88,7 +88,10 @@ pub struct AdaptArgs {
     /// Random seed of a tree grown here and of its regrowth (neighbours use seed + 1, + 2, …).
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// Obstacle to adapt to: box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x[,length[,height]] (m).
+    /// Obstacle to adapt to: box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x[,length[,height]]
+    /// (m). A wall fills the space beyond the plane at x (away from the trunk) from the ground
+    /// up; with a length it runs along y, centred on y = 0, and with a height it ends there
+    /// (without them it is endless and as high as the sky).
     #[arg(long)]
     obstacle: Vec<String>,
     /// Neighbour tree SPECIES@X,Y[,AGE] (m, years), grown and adapted together with the tree.
@@ -396,7 +399,14 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     sylva::output::gltf::write_glb(&a.out, &chain, &glb_options(&sp))?;
     sylva::output::gltf::write_skeleton_sidecar(&a.out, &adapted)?;
     let png = a.out.with_extension("png");
-    let img = before_after(&before, &trees, &obstacles, 420, 480);
+    let (drawing, along) = before_after(&before, &trees, &obstacles, 420, 480);
+    // a strip above the drawing for its caption
+    const STRIP: u32 = 56;
+    let mut img = image::RgbaImage::from_pixel(drawing.width(), drawing.height() + STRIP, image::Rgba([235, 240, 245, 255]));
+    for (x, y, p) in drawing.enumerate_pixels() {
+        img.put_pixel(x, y + STRIP, image::Rgba([p.0[0], p.0[1], p.0[2], 255]));
+    }
+    sylva::output::maps::stamp_caption(&mut img, &format!("before | after: {:.1} m high, seen along {along}", sk.height()))?;
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
     sylva::output::write_atomic(&png, &bytes)?;
@@ -417,14 +427,15 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Paper Fig. 6 style before/after side view (z up): left the input with the parts that will be
+/// Paper Fig. 6 style before/after side view (z up), and the direction it looks along: left the
+/// input with the parts that will be
 /// pruned in blue, right the adapted tree with every segment red by its own bend angle (0° dark
 /// brown → ≥ 5° red); neighbours in green behind the tree, obstacles grey (spheres as discs,
 /// other solids as their bounding rectangles). The view looks along +y (x to the right) unless
 /// there is no obstacle and the adapted tree moved more along y than along x (global light from
 /// `--latitude` bends it north or south): then it looks along −x (y to the right), so that the
 /// change shows.
-fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obstacle], w: u32, h: u32) -> image::RgbImage {
+fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obstacle], w: u32, h: u32) -> (image::RgbImage, &'static str) {
     let shift = match (before.first(), after.first()) {
         (Some(b), Some(a)) => b.positions().iter().zip(a.positions()).zip(a.fates()).filter(|(_, f)| **f == Fate::Alive).map(|((p, q), _)| (*q - *p).abs()).sum::<Vec3>(),
         _ => Vec3::ZERO,
@@ -494,7 +505,7 @@ fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obst
             }
         }
     }
-    img
+    (img, if ax == 0 { "y (x to the right)" } else { "-x (y to the right)" })
 }
 
 fn line(img: &mut image::RgbImage, a: (f32, f32), b: (f32, f32), col: [u8; 3], x0: u32, x1: u32) {
