@@ -165,8 +165,14 @@ fn tree_adapt_refuses_bad_input_clearly() {
     let err = String::from_utf8_lossy(&res.stderr);
     assert!(!res.status.success() && err.contains("set.png") && err.contains("is a folder"), "{err}");
     assert!(!set.exists() && !sylva::output::gltf::skeleton_sidecar_path(&set).exists());
-    let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "5", "--out", dir.path().join("no/such/folder/t.glb").to_str().unwrap()]);
-    assert!(!res.status.success() && String::from_utf8_lossy(&res.stderr).contains("does not exist"));
+    // a missing output folder is created (as `render` and `run` do); a file in its way is named
+    let nested = dir.path().join("new/folder/t.glb");
+    let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "5", "--out", nested.to_str().unwrap()]);
+    assert!(res.status.success() && nested.is_file() && nested.with_extension("png").is_file(), "{}", String::from_utf8_lossy(&res.stderr));
+    std::fs::write(dir.path().join("afile"), b"x").unwrap();
+    let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "5", "--out", dir.path().join("afile/t.glb").to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(!res.status.success() && err.contains("creating its folder") && err.contains("afile"), "{err}");
     // a tree read back from a file is checked against its own trunk base
     let grown = dir.path().join("moved.glb");
     let res = sylva(&["tree", "grow", "--species", "beech", "--model", "light", "--age", "5", "--out", grown.to_str().unwrap()]);

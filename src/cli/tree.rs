@@ -313,11 +313,12 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     // the three files written (glb, skeleton sidecar, before/after PNG), checked before any is
     // written, so that a bad path does not leave a partial set behind
     let outputs = [a.out.clone(), sylva::output::gltf::skeleton_sidecar_path(&a.out), a.out.with_extension("png")];
-    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        anyhow::ensure!(dir.is_dir(), "--out {}: the folder {} does not exist", a.out.display(), dir.display());
-    }
     for f in &outputs {
         anyhow::ensure!(!f.is_dir(), "--out {}: {} is a folder; expected to write a file there", a.out.display(), f.display());
+    }
+    // a missing output folder is created, as `sylva render` and `sylva run` do
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
     }
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let find = |name: &str| {
