@@ -134,7 +134,7 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
     let lib = super::simulate::library(species_dir.as_slice())?;
     let sp = lib.find(species).map(|i| lib.species[i as usize].clone());
-    let sp = sp.with_context(|| format!("--species {species}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))?;
+    let sp = sp.with_context(|| format!("--species {species:?}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))?;
     anyhow::ensure!(age <= sp.life.max_age_yr, "--age {age}: expected at most the maximum age of {} ({} years, `life.max_age_yr` in its species file)", sp.id, sp.life.max_age_yr);
     let png = out.with_extension("png");
     if png.is_dir() {
@@ -322,7 +322,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     }
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let find = |name: &str| {
-        lib.find(name).map(|i| lib.species[i as usize].clone()).with_context(|| format!("species {name}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))
+        lib.find(name).map(|i| lib.species[i as usize].clone()).with_context(|| format!("species {name:?}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))
     };
     let sp = find(&a.species)?;
     let obstacles: Vec<Obstacle> = a.obstacle.iter().map(|s| Obstacle::parse(s)).collect::<Result<_, _>>()?;
