@@ -124,12 +124,12 @@ fn ground_camera_steps_out_of_a_trunk_into_a_clearing() {
     let (x0, y0) = (preset.eye[0], preset.eye[1]);
     let mut rows: Vec<InventoryRow> = (0..8).map(|k| tree(k, x0 - 28.0 + 8.0 * k as f32, y0)).collect();
     rows.push(tree(99, x0, y0));
-    let cam = stage.camera_for(CameraPreset::Ground, &rows);
+    let cam = stage.camera_for(CameraPreset::Ground, &rows, 1280, 720);
     let clear = rows.iter().map(|r| (r.x_m as f32 - cam.eye[0]).hypot(r.y_m as f32 - cam.eye[1]) - r.crown_radius_m).fold(f32::INFINITY, f32::min);
     assert!(clear > 0.5, "eye {:?} still inside a crown (clearance {clear} m)", cam.eye);
     assert!((cam.eye[2] - 301.7).abs() < 0.2, "eye at 1.7 m above the ground: {:?}", cam.eye);
     assert!(cam.target[1] > cam.eye[1], "still looking north");
     // with nobody in the way the preset is kept
     let far = [tree(1, 10.0, 190.0)];
-    assert_eq!(stage.camera_for(CameraPreset::Ground, &far).eye, preset.eye);
+    assert_eq!(stage.camera_for(CameraPreset::Ground, &far, 1280, 720).eye, preset.eye);
 }

@@ -154,7 +154,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     if unknown > 0 {
         tracing::warn!("{unknown} trees of species not in the library are not drawn (give their species files with --species-dir)");
     }
-    let cam = if a.camera == CameraPreset::Map { stage.camera_sized(a.camera, a.size.0, a.size.1) } else { stage.camera_for(a.camera, &rows) };
+    let cam = stage.camera_for(a.camera, &rows, a.size.0, a.size.1);
     if !a.adapt {
         stage.adapt = None;
     }

@@ -174,20 +174,21 @@ impl Stage {
         Camera::preset_sized(preset, &self.scene.terrain, width, height)
     }
 
-    /// The camera of a preset for a snapshot: as [`Stage::camera`], except that the ground-level
+    /// The camera of a preset for a snapshot and a picture of `width` × `height` pixels: as
+    /// [`Stage::camera_sized`], except that the ground-level
     /// camera steps into the nearest clearing, so that it does not stand inside a trunk or a
     /// crown. Candidate eye points on a grid (1/60 of the site, up to 30 % of it across and 10 %
     /// forward of the preset's eye) are scored by their clearance, the horizontal distance to the
     /// nearest live tree taller than the eye (1.7 m) minus its crown radius; the eye moves to the
     /// best one (ties: the nearest to the preset) unless the preset already has ≥ 2 m clearance.
     /// Looks north at 8 m above the ground in the site's middle row, as the preset does.
-    pub fn camera_for(&self, preset: CameraPreset, rows: &[InventoryRow]) -> Camera {
-        self.camera_for_plants(preset, &scene::plants_from_rows(rows))
+    pub fn camera_for(&self, preset: CameraPreset, rows: &[InventoryRow], width: u32, height: u32) -> Camera {
+        self.camera_for_plants(preset, &scene::plants_from_rows(rows), width, height)
     }
 
     /// [`Stage::camera_for`] over [`Plant`]s.
-    pub fn camera_for_plants(&self, preset: CameraPreset, rows: &[Plant]) -> Camera {
-        let cam = self.camera(preset);
+    pub fn camera_for_plants(&self, preset: CameraPreset, rows: &[Plant], width: u32, height: u32) -> Camera {
+        let cam = self.camera_sized(preset, width, height);
         if preset != CameraPreset::Ground {
             return cam;
         }

@@ -499,19 +499,10 @@ fn chamfer(w: usize, h: usize, src: &[bool]) -> (Vec<f32>, Vec<usize>) {
 /// `spacing` m apart (window-local metres from `local`, the plan position of a cell centre),
 /// `len` the length of curve (m) the point stands for (half of each chord beside it).
 fn stream_lines(acc: &Grid<f32>, dir: &Grid<u8>, m: &Grid<bool>, cell_area: f64, local: &dyn Fn(usize, usize) -> [f64; 2], spacing: f64, mut at: impl FnMut(f64, f64, f32, f64)) {
-    use crate::terrain::fields::{D8, OUTLET};
     let (w, h) = (acc.width, acc.height);
     let strength = |i: usize| if m.data[i] { crate::render::terrain::stream_strength((acc.data[i] as f64 * cell_area) as f32) } else { 0.0 };
     let s: Vec<f32> = (0..w * h).map(strength).collect();
-    let down = |i: usize| -> Option<usize> {
-        let d = dir.data[i];
-        if d == OUTLET || d as usize >= D8.len() {
-            return None;
-        }
-        let (dc, dr) = D8[d as usize];
-        let (c, r) = ((i % w) as i64 + dc, (i / w) as i64 + dr);
-        (c >= 0 && r >= 0 && (c as usize) < w && (r as usize) < h).then(|| r as usize * w + c as usize)
-    };
+    let down = |i: usize| crate::terrain::fields::downstream(dir, i);
     // the main upstream channel cell of every channel cell: the one of largest area
     let mut up: Vec<Option<usize>> = vec![None; w * h];
     for i in 0..w * h {
@@ -541,14 +532,17 @@ fn stream_lines(acc: &Grid<f32>, dir: &Grid<u8>, m: &Grid<bool>, cell_area: f64,
         }
         [sum[0] / k, sum[1] / k]
     };
+    // smoothed once per channel cell (and per cell a channel drains into), not per curve
+    let smooth: Vec<Option<[f64; 2]>> = (0..w * h).map(|i| (s[i] > 0.0 || up[i].is_some()).then(|| xy(i))).collect();
+    let at_cell = |i: usize| smooth[i].unwrap_or_else(|| xy(i));
     let mid = |a: [f64; 2], b: [f64; 2]| [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
     for i in 0..w * h {
         if s[i] <= 0.0 {
             continue;
         }
-        let p = xy(i);
-        let a = up[i].map_or(p, |k| mid(xy(k), p));
-        let b = down(i).map_or(p, |j| mid(p, xy(j)));
+        let p = at_cell(i);
+        let a = up[i].map_or(p, |k| mid(at_cell(k), p));
+        let b = down(i).map_or(p, |j| mid(p, at_cell(j)));
         let len = (a[0] - p[0]).hypot(a[1] - p[1]) + (b[0] - p[0]).hypot(b[1] - p[1]);
         if len <= 0.0 {
             continue; // a lone channel cell (head and outlet): no line

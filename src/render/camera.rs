@@ -89,27 +89,6 @@ impl Camera {
     pub fn preset_sized(p: CameraPreset, terrain: &TerrainMesh, width: u32, height: u32) -> Self {
         let (lo, hi) = terrain.bounds();
         let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-        if p == CameraPreset::Map {
-            let c = (lo + hi) * 0.5;
-            let size = (hi - lo).truncate().max_element().max(1.0);
-            let across = (hi.x - lo.x) * height.max(1) as f32 / width.max(1) as f32;
-            let half = 0.51 * (hi.y - lo.y).max(across);
-            return Camera {
-                eye: [c.x, c.y, hi.z + size],
-                target: [c.x, c.y, lo.z],
-                up: [0.0, 1.0, 0.0],
-                projection: Projection::Orthographic { half_height: half.max(1.0) },
-                near: 1.0,
-                far: (hi.z - lo.z) + 2.0 * size + 10.0,
-            };
-        }
-        Camera::preset_any(p, terrain)
-    }
-
-    /// The perspective presets framing the terrain's bounds (the map: [`Camera::preset_sized`]).
-    fn preset_any(p: CameraPreset, terrain: &TerrainMesh) -> Self {
-        let (lo, hi) = terrain.bounds();
-        let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
         let c = (lo + hi) * 0.5;
         let size = (hi - lo).truncate().max_element().max(1.0);
         match p {
@@ -130,7 +109,18 @@ impl Camera {
                 cam.near = 0.1;
                 cam
             }
-            CameraPreset::Map => Camera::preset_sized(p, terrain, 1, 1),
+            CameraPreset::Map => {
+                let across = (hi.x - lo.x) * height.max(1) as f32 / width.max(1) as f32;
+                let half = 0.51 * (hi.y - lo.y).max(across);
+                Camera {
+                    eye: [c.x, c.y, hi.z + size],
+                    target: [c.x, c.y, lo.z],
+                    up: [0.0, 1.0, 0.0],
+                    projection: Projection::Orthographic { half_height: half.max(1.0) },
+                    near: 1.0,
+                    far: (hi.z - lo.z) + 2.0 * size + 10.0,
+                }
+            }
         }
     }
 

@@ -275,20 +275,21 @@ pub fn flow_directions(filled: &Grid<f32>, geo: &GeoRef, m: &Grid<bool>) -> Grid
     dir
 }
 
+/// The cell (row-major index) that cell `i` of the D8 direction grid `dir` drains into; `None`
+/// at an outlet ([`OUTLET`]), for a code that is not a direction, or for a step off the grid.
+pub fn downstream(dir: &Grid<u8>, i: usize) -> Option<usize> {
+    let (dc, dr) = *D8.get(*dir.data.get(i)? as usize)?;
+    let (c, r) = ((i % dir.width) as i64 + dc, (i / dir.width) as i64 + dr);
+    (c >= 0 && r >= 0 && (c as usize) < dir.width && (r as usize) < dir.height).then(|| r as usize * dir.width + c as usize)
+}
+
 /// D8 flow accumulation (number of cells, including the cell itself, draining through each
 /// cell), by a topological sweep (Kahn) over the direction grid. Masked cells hold 0.
 /// Invariant: the sum over outlet cells equals the number of valid cells.
 pub fn flow_accumulation(dir: &Grid<u8>, m: &Grid<bool>) -> Grid<f32> {
     let (w, h) = (m.width, m.height);
     let n = w * h;
-    let down = |i: usize| -> Option<usize> {
-        let d = dir.data[i];
-        if d == OUTLET {
-            return None;
-        }
-        let (dc, dr) = D8[d as usize];
-        Some(((i / w) as i64 + dr) as usize * w + ((i % w) as i64 + dc) as usize)
-    };
+    let down = |i: usize| downstream(dir, i);
     let mut indeg = vec![0u8; n];
     for i in 0..n {
         if m.data[i] {
