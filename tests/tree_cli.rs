@@ -149,6 +149,7 @@ fn tree_adapt_refuses_bad_input_clearly() {
         (vec!["--sky-rings", "8,12,16"], "at most 32"),
         (vec!["--latitude", "95"], "from -90 to 90"),
         (vec!["--neighbour", "beech@1e30,0"], "within 100 m"),
+        (vec!["--age", "1e9"], "maximum age"),
     ];
     for (extra, want) in cases {
         let mut args = vec!["tree", "adapt", "--species", "beech", "--age", "5", "--out", o];
@@ -173,6 +174,9 @@ fn tree_adapt_refuses_bad_input_clearly() {
     let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "5", "--out", dir.path().join("afile/t.glb").to_str().unwrap()]);
     let err = String::from_utf8_lossy(&res.stderr);
     assert!(!res.status.success() && err.contains("creating its folder") && err.contains("afile"), "{err}");
+    // bad input is refused before the output folder is created
+    let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "5", "--latitude", "95", "--out", dir.path().join("never/t.glb").to_str().unwrap()]);
+    assert!(!res.status.success() && !dir.path().join("never").exists());
     // a tree read back from a file is checked against its own trunk base
     let grown = dir.path().join("moved.glb");
     let res = sylva(&["tree", "grow", "--species", "beech", "--model", "light", "--age", "5", "--out", grown.to_str().unwrap()]);

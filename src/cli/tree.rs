@@ -129,13 +129,24 @@ pub fn run(c: Command) -> anyhow::Result<()> {
     }
 }
 
+/// The species `name` (id or name) of `lib`, or an error naming `what` (the option, or
+/// "species") and listing the ids.
+fn find_species(lib: &sylva::species::SpeciesLibrary, name: &str, what: &str) -> anyhow::Result<sylva::species::Species> {
+    lib.find(name).map(|i| lib.species[i as usize].clone()).with_context(|| format!("{what} {name:?}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))
+}
+
+/// Refuses `--age` beyond the species' maximum age.
+fn check_age(age: f32, sp: &sylva::species::Species) -> anyhow::Result<()> {
+    anyhow::ensure!(age <= sp.life.max_age_yr, "--age {age}: expected at most the maximum age of {} ({} years, `life.max_age_yr` in its species file)", sp.id, sp.life.max_age_yr);
+    Ok(())
+}
+
 #[allow(clippy::too_many_arguments)]
 fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, species_dir: Option<&Path>, out: &Path) -> anyhow::Result<()> {
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
     let lib = super::simulate::library(species_dir.as_slice())?;
-    let sp = lib.find(species).map(|i| lib.species[i as usize].clone());
-    let sp = sp.with_context(|| format!("--species {species:?}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))?;
-    anyhow::ensure!(age <= sp.life.max_age_yr, "--age {age}: expected at most the maximum age of {} ({} years, `life.max_age_yr` in its species file)", sp.id, sp.life.max_age_yr);
+    let sp = find_species(&lib, species, "--species")?;
+    check_age(age, &sp)?;
     let png = out.with_extension("png");
     if png.is_dir() {
         anyhow::bail!("{}: the preview would go there, but it is a folder", png.display());
@@ -316,15 +327,12 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     for f in &outputs {
         anyhow::ensure!(!f.is_dir(), "--out {}: {} is a folder; expected to write a file there", a.out.display(), f.display());
     }
-    // a missing output folder is created, as `sylva render` and `sylva run` do
-    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
-    }
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
-    let find = |name: &str| {
-        lib.find(name).map(|i| lib.species[i as usize].clone()).with_context(|| format!("species {name:?}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))
-    };
-    let sp = find(&a.species)?;
+    let find = |name: &str| find_species(&lib, name, "species");
+    let sp = find_species(&lib, &a.species, "--species")?;
+    if a.input.is_none() {
+        check_age(a.age, &sp)?;
+    }
     let obstacles: Vec<Obstacle> = a.obstacle.iter().map(|s| Obstacle::parse(s)).collect::<Result<_, _>>()?;
     // the trunk base: the origin for a tree grown here, wherever a file's tree stands
     let check_base = |base: Vec3| -> anyhow::Result<()> {
@@ -397,6 +405,11 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     let adapted = trees[0].skeleton();
     let leaves = species_tree::tip_leaves(&adapted, &sp.architecture.ecomod);
     let chain = lod_chain(&adapted, &leaves, &LodOptions::default());
+    // a missing output folder is created (as `sylva render` and `sylva run` do) once the
+    // input has been checked, just before the files are written
+    if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
+    }
     sylva::output::gltf::write_glb(&a.out, &chain, &glb_options(&sp))?;
     sylva::output::gltf::write_skeleton_sidecar(&a.out, &adapted)?;
     let png = a.out.with_extension("png");
@@ -442,8 +455,8 @@ fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obst
         _ => Vec3::ZERO,
     };
     // horizontal axis of the picture: 0 = x, 1 = y
-    let ax = if obstacles.is_empty() && shift.y > shift.x { 1 } else { 0 };
-    let hor = |p: Vec3| if ax == 0 { p.x } else { p.y };
+    let axis = if obstacles.is_empty() && shift.y > shift.x { 1 } else { 0 };
+    let hor = |p: Vec3| if axis == 0 { p.x } else { p.y };
     let mut img = image::RgbImage::from_pixel(2 * w, h, image::Rgb([235, 240, 245]));
     let mut lo = Vec3::splat(f32::MAX);
     let mut hi = Vec3::splat(f32::MIN);
@@ -480,10 +493,10 @@ fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obst
                 Obstacle::OrientedBox { .. } | Obstacle::Prism { .. } => o.bounds(),
             };
             let (a, b) = (a.min(b), a.max(b));
-            let (ax_, ay) = px(x0, Vec3::new(a.x.max(lo.x - 10.0), a.y.max(lo.y - 10.0), a.z));
+            let (ax, ay) = px(x0, Vec3::new(a.x.max(lo.x - 10.0), a.y.max(lo.y - 10.0), a.z));
             let (bx, by) = px(x0, Vec3::new(b.x, b.y, b.z));
             for y in by.max(0.0) as u32..(ay.min(h as f32 - 1.0).max(0.0) as u32) {
-                for x in ax_.max(x0 as f32) as u32..(bx.min((x0 + w - 1) as f32).max(0.0) as u32) {
+                for x in ax.max(x0 as f32) as u32..(bx.min((x0 + w - 1) as f32).max(0.0) as u32) {
                     img.put_pixel(x, y, grey);
                 }
             }
@@ -506,7 +519,7 @@ fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obst
             }
         }
     }
-    (img, if ax == 0 { "y (x to the right)" } else { "-x (y to the right)" })
+    (img, if axis == 0 { "y (x to the right)" } else { "-x (y to the right)" })
 }
 
 fn line(img: &mut image::RgbImage, a: (f32, f32), b: (f32, f32), col: [u8; 3], x0: u32, x1: u32) {
