@@ -147,6 +147,7 @@ fn tree_adapt_refuses_bad_input_clearly() {
         (vec!["--input", glb.to_str().unwrap()], "no skeleton beside it"),
         (vec!["--sky-rings", "3,8"], "multiples of 4"),
         (vec!["--sky-rings", "8,12,16"], "at most 32"),
+        (vec!["--sky-rings", "-4"], "invalid value '-4' for '--sky-rings"),
         (vec!["--latitude", "95"], "from -90 to 90"),
         (vec!["--neighbour", "beech@1e30,0"], "within 100 m"),
     ];

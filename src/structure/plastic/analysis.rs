@@ -18,6 +18,27 @@ pub const LOBE_SEASONS: u16 = 2;
 /// Most seasons reconstructed; deeper trees are clamped (their oldest levels merge).
 pub const MAX_SEASONS: u16 = 400;
 
+/// Reach of a foliage lobe relative to d_r (the path distance from the root to the furthest
+/// leaf): a foliage lobe is a maximal subtree whose segments, from its parent junction to its
+/// furthest tip, reach at most `FOLIAGE_REACH·d_r`. Section 8 of the paper keeps only the
+/// branches above a thickness threshold in the tree graph and turns "the smaller branches" into
+/// the leaf clusters (Livny et al. 2011, texture lobes): the volume of thin twigs is where the
+/// foliage is, and that volume is what casts shade. Our terminal lobes (the nodes of the last
+/// [`LOBE_SEASONS`] seasons) stay the units of light, pruning and density (eqs. 10–13); the
+/// shade they cast is the foliage lobe's (see [`shade_casters`]).
+///
+/// Why 0.3: the terminal lobes of our light-guided trees hold one or two internodes, so their
+/// spheres (radius at least ½ l_i) fill a small part of the crown; as occluders they let most
+/// light through the gaps between them. Measured on an 8-year light-guided beech (436 nodes,
+/// seed 3) 1.2 m from the trunk of a 40-year one (1,510 nodes, 16.2 m), the sapling's mean
+/// cluster light (eq. 3) grown in the open → adapted beside the neighbour, its bent segments and
+/// its segments shed for light (round 13, BENCHMARKS.md): terminal lobes alone 0.94 → 0.86,
+/// 0 bent, 0 shed; reach 0.2: 0.91 → 0.59, 20, 0; 0.25: 0.84 → 0.41, 169, 26; 0.3: 0.74 → 0.32,
+/// 188, 67 (the 40-year
+/// crown then casts 78 foliage spheres). Texture lobes (Livny et al. 2011) are of this scale:
+/// a few dozen per crown.
+pub const FOLIAGE_REACH: f32 = 0.3;
+
 /// A leaf cluster of the input tree (a terminal lobe): a sphere around the young nodes of one
 /// branch.
 #[derive(Debug, Clone, PartialEq)]
@@ -73,7 +94,11 @@ pub struct Analysis {
     /// it has none the closest-point d_o does not reproduce h and the residual keeps the input
     /// direction when nothing changes).
     pub residual: Vec<Vec3>,
-    /// Reference pruning factor ψ_ref: the 5th percentile of all ψ_s(t) (eq. 11).
+    /// Reference pruning factor ψ_ref of eq. (11): the 5th percentile of the ψ_s(t) > 0 of the
+    /// branches judged (our reading: the paper takes all ψ_s(t); inside crowns shaded by
+    /// foliage lobes ([`FOLIAGE_REACH`]) more than 5 % of the values are 0, fully dark, which made
+    /// ψ_ref 0 and so every threshold ψ_s,min 0: measured on the 9,133-node bench tree, ψ_ref
+    /// 8·10⁻⁵ and nothing shed for light beside a wall; with the lit values 1,624 nodes shed).
     pub psi_ref: f32,
     /// Pruning threshold ψ_s,min = c_ψ·min(ψ_ref, min_t ψ_s(t)) per node (eq. 11; m of leaf
     /// area per m of branch); 0 (never shed) on the main stem (Gravelius order 0) and the root.
@@ -83,6 +108,9 @@ pub struct Analysis {
     pub mask: Vec<u32>,
     /// Sky of that environment.
     pub sky: Sky,
+    /// Foliage lobe of every node ([`FOLIAGE_REACH`]), `u32::MAX` for the branches above them
+    /// (the skeleton proper).
+    pub foliage_of: Vec<u32>,
 }
 
 /// Checks the skeleton: non-empty, parents before children, finite positions and radii ≥ 0.
@@ -316,6 +344,87 @@ fn stage_clusters(sk: &Skeleton, season: &[u16], last: u16, lobes: &[Lobe], inte
     stages
 }
 
+/// Foliage lobe of every node (see [`FOLIAGE_REACH`]): node k starts a lobe when the path from
+/// its parent through k to the furthest leaf below is at most `FOLIAGE_REACH·d_r` long and its
+/// parent is in none; its subtree joins it. `u32::MAX` for nodes in no lobe.
+pub fn foliage_lobes(sk: &Skeleton) -> Vec<u32> {
+    let n = sk.nodes.len();
+    let mut d_leaf = vec![0.0f32; n];
+    for k in (1..n).rev() {
+        let p = sk.nodes[k].parent.unwrap_or(0) as usize;
+        d_leaf[p] = d_leaf[p].max(d_leaf[k] + sk.segment_length(k));
+    }
+    let reach = FOLIAGE_REACH * d_leaf[0];
+    let mut of = vec![u32::MAX; n];
+    let mut count = 0u32;
+    for k in 1..n {
+        let p = sk.nodes[k].parent.unwrap_or(0) as usize;
+        if of[p] != u32::MAX {
+            of[k] = of[p];
+        } else if d_leaf[k] + sk.segment_length(k) <= reach {
+            of[k] = count;
+            count += 1;
+        }
+    }
+    of
+}
+
+/// Key of the shade group of a stage cluster: its anchor's foliage lobe, or (for an anchor on
+/// the skeleton proper) a group of its own keyed by the anchor (above every lobe id).
+pub(crate) fn shade_key(foliage_of: &[u32], c: &StageCluster) -> u64 {
+    match foliage_of[c.anchor as usize] {
+        u32::MAX => (1u64 << 32) | c.anchor as u64,
+        f => f as u64,
+    }
+}
+
+/// The shade casters of one stage: the stage's clusters (`fine`, one per cluster of `clusters`,
+/// `None` for a deleted one) grouped by foliage lobe ([`shade_key`]), one translucent sphere
+/// per group, sorted by key. A group's sphere encloses its clusters' spheres, centred on their
+/// centroid weighted by volume r³; it is cut by `obstacles` (Fig. 4: the radius shrinks to the
+/// centre's distance from the nearest, a group whose centre is inside one casts nothing); its
+/// translucency is eq. (4) for its radius, γ_c0^R, raised to the volume-weighted share of the
+/// group's input nodes still alive (eq. 13; `alive(ci)` is n_c/n_0 of cluster ci). A group of
+/// one cluster is that cluster's occluder. Returns (key, occluder) pairs.
+pub(crate) fn shade_casters(foliage_of: &[u32], clusters: &[StageCluster], fine: &[Option<Occluder>], alive: impl Fn(usize) -> f32, gamma_c0: f32, obstacles: &[crate::structure::grow::space::Obstacle]) -> Vec<(u64, Occluder)> {
+    let mut members: Vec<(u64, u32)> = fine.iter().enumerate().filter(|(_, o)| o.is_some()).map(|(ci, _)| (shade_key(foliage_of, &clusters[ci]), ci as u32)).collect();
+    members.sort_unstable();
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < members.len() {
+        let key = members[i].0;
+        let mut j = i;
+        while j < members.len() && members[j].0 == key {
+            j += 1;
+        }
+        let group = &members[i..j];
+        i = j;
+        if group.len() == 1 {
+            let ci = group[0].1 as usize;
+            out.push((key, fine[ci].unwrap()));
+            continue;
+        }
+        let (mut vol, mut centre, mut share) = (0.0f32, Vec3::ZERO, 0.0f32);
+        for &(_, ci) in group {
+            let o = fine[ci as usize].unwrap();
+            let v = o.radius * o.radius * o.radius;
+            vol += v;
+            centre += o.center * v;
+            share += v * alive(ci as usize);
+        }
+        let (centre, share) = (centre / vol, share / vol);
+        let r = group.iter().map(|&(_, ci)| {
+            let o = fine[ci as usize].unwrap();
+            o.center.distance(centre) + o.radius
+        });
+        let r = r.fold(0.0f32, f32::max).min(obstacles.iter().map(|o| o.signed_distance(centre)).fold(f32::INFINITY, f32::min));
+        if r > 0.0 {
+            out.push((key, Occluder { center: centre, radius: r, gamma: gamma_c0.powf(r * share) }));
+        }
+    }
+    out
+}
+
 /// Inverse tropism (eqs. 8–9): the untropic unit direction d_o with w_s·d_o = p·h − t_w
 /// (t_w = (1 − w_s)·t, h and t unit), p the larger root of
 /// w_s² = p²|h|² − 2p(h·t_w) + |t_w|²; without a root, p from the first derivative (the point of
@@ -417,6 +526,7 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
     let last = season.iter().copied().max().unwrap_or(0);
     let lobes = lobes(sk, &season, last, l_i);
     let stages = stage_clusters(sk, &season, last, &lobes, l_i);
+    let foliage_of = foliage_lobes(sk);
     let sky = grown_in.sky.clone();
     let solids = SkyMask::new(Solids { obstacles: &grown_in.obstacles, ground: grown_in.ground }, &sky);
     let mask: Vec<u32> = sk.nodes.iter().map(|nd| solids.mask(nd.pos)).collect();
@@ -433,7 +543,8 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
     let mut all_psi = Vec::new();
     for (t, clusters) in stages.iter().enumerate() {
         let centres: Vec<Vec3> = clusters.iter().map(|c| cluster_center(c, &lobes, sk, &pos)).collect();
-        let occ = clusters.iter().zip(&centres).map(|(c, &centre)| Occluder { center: centre, radius: c.radius, gamma: p.translucency_gamma_c0.powf(c.radius) }).collect();
+        let fine: Vec<Option<Occluder>> = clusters.iter().zip(&centres).map(|(c, &centre)| Some(Occluder { center: centre, radius: c.radius, gamma: p.translucency_gamma_c0.powf(c.radius) })).collect();
+        let occ = shade_casters(&foliage_of, clusters, &fine, |_| 1.0, p.translucency_gamma_c0, &[]).into_iter().map(|(_, o)| o).collect();
         let vols = ShadowVolumes::new(&sky, occ);
         let at_nodes: Vec<(Vec3, u32)> = by_season[t].iter().map(|&k| (pos[k as usize], mask[k as usize])).collect();
         for (&k, (_, dir)) in by_season[t].iter().zip(light_many(&sky, &vols, &at_nodes)) {
@@ -445,7 +556,10 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
         for k in 1..n {
             if psi[k].is_finite() && judged(season[k], t as u16) {
                 psi_min_t[k] = psi_min_t[k].min(psi[k]);
-                all_psi.push(psi[k]);
+                // ψ_ref from the lit branches only (see Analysis::psi_ref)
+                if psi[k] > 0.0 {
+                    all_psi.push(psi[k]);
+                }
             }
         }
         stage_light.push(li);
@@ -480,5 +594,5 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
             residual[k] = pp * h - (w_s[k] * d + (1.0 - w_s[k]) * t);
         }
     }
-    Ok(Analysis { internode_m: l_i, growth_rate: rates, season, seasons: last, lobes, stages, stage_light, light_dir, w_s, d_o, residual, psi_ref, psi_min, mask, sky })
+    Ok(Analysis { internode_m: l_i, growth_rate: rates, season, seasons: last, lobes, stages, stage_light, light_dir, w_s, d_o, residual, psi_ref, psi_min, mask, sky, foliage_of })
 }

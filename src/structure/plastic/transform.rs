@@ -17,7 +17,12 @@
 //!    with their nodes, section 5.2; cut by obstacles, Fig. 4: the radius shrinks to the distance
 //!    from the centre to the obstacle and a cluster whose centre is inside is removed;
 //!    translucency γ_c = γ_c0^r_c (eq. 4) raised to n_c/n_0 when nodes of it were removed
-//!    (eq. 13)) cast shadows through [`ShadowVolumes`].
+//!    (eq. 13)) are the receivers of light; the shadows are cast through [`ShadowVolumes`] by
+//!    their foliage lobes ([`super::analysis::FOLIAGE_REACH`], one sphere enclosing the stage
+//!    clusters of each lobe, cut and thinned the same way), as in the analysis. Before the
+//!    level's casters are built, the nodes created in that season are placed where they stand
+//!    before bending (following their parent's rotation), so a tree adapted back to the
+//!    environment of its analysis gets its input back.
 //! 3. **Bending (eq. 6)** of every recomputed node created in that season:
 //!    h' = w_s·(Q_parent d_o) + (1 − w_s)·t', with d_o the untropic direction from the analysis,
 //!    Q_parent the parent's rotation (so a turn propagates to the children), w_s of eq. (7) and
@@ -48,7 +53,7 @@
 //! Approximation: a node whose signature did not change keeps its state even when moved
 //! clusters of recomputed subtrees now shade it differently.
 
-use super::analysis::{cluster_center, judged, normalised, psi_at_stage};
+use super::analysis::{cluster_center, judged, normalised, psi_at_stage, shade_casters, StageCluster};
 use super::light::{light_at, light_by, Occluder, ShadowVolumes, SkyMask, Solids};
 use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
 use crate::error::Result;
@@ -183,6 +188,25 @@ fn stage_occluders(t: &PlasticTree, s: usize, env: &Environment) -> Vec<Option<O
         .collect()
 }
 
+/// Share n_c/n_0 of the input nodes of stage cluster `c` of tree `t` still alive (eq. 13).
+fn alive_share(t: &PlasticTree, c: &StageCluster) -> f32 {
+    match c.lobe {
+        Some(l) => {
+            let nodes = &t.analysis.lobes[l as usize].nodes;
+            nodes.iter().filter(|&&k| t.fate[k as usize] == Fate::Alive).count() as f32 / nodes.len().max(1) as f32
+        }
+        None => (t.fate[c.anchor as usize] == Fate::Alive) as u8 as f32,
+    }
+}
+
+/// The shade casters of tree `t` at stage `s` from its stage occluders `fine`
+/// ([`stage_occluders`]): one sphere per foliage lobe ([`shade_casters`]), cut by the
+/// obstacles, sorted by key.
+fn stage_casters(t: &PlasticTree, s: usize, fine: &[Option<Occluder>], env: &Environment) -> Vec<(u64, Occluder)> {
+    let clusters = &t.analysis.stages[s];
+    shade_casters(&t.analysis.foliage_of, clusters, fine, |ci| alive_share(t, &clusters[ci]), t.params.translucency_gamma_c0, &env.obstacles)
+}
+
 /// Adapts several trees together to `env` and to each other (sections 5–6; see the module
 /// documentation for the steps). Each tree sees the others' leaf clusters as translucent
 /// occluders and their wood as solid. Deterministic and independent of the thread count
@@ -218,10 +242,9 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             let n = t.input.nodes.len();
             let pos: Vec<Vec3> = (0..n).map(|k| t.input.nodes[k].pos).collect();
             let s = t.analysis.seasons as usize;
-            t.analysis.stages[s]
-                .iter()
-                .map(|c| (i, Occluder { center: cluster_center(c, &t.analysis.lobes, &t.input, &pos), radius: c.radius, gamma: t.params.translucency_gamma_c0.powf(c.radius) }))
-                .collect::<Vec<_>>()
+            let clusters = &t.analysis.stages[s];
+            let fine: Vec<Option<Occluder>> = clusters.iter().map(|c| Some(Occluder { center: cluster_center(c, &t.analysis.lobes, &t.input, &pos), radius: c.radius, gamma: t.params.translucency_gamma_c0.powf(c.radius) })).collect();
+            shade_casters(&t.analysis.foliage_of, clusters, &fine, |_| 1.0, t.params.translucency_gamma_c0, &[]).into_iter().map(|(_, o)| (i, o)).collect::<Vec<_>>()
         })
         .collect();
     let group = trees.len() > 1;
@@ -234,7 +257,13 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
     });
     // the fixed trees' full-grown clusters as they stand: one set of shadow volumes for the call
     let fixed_vols = (!fixed.is_empty()).then(|| {
-        let occ: Vec<Occluder> = fixed.iter().flat_map(|t| stage_occluders(t, t.analysis.seasons as usize, env).into_iter().flatten()).collect();
+        let occ: Vec<Occluder> = fixed
+            .iter()
+            .flat_map(|t| {
+                let last = t.analysis.seasons as usize;
+                stage_casters(t, last, &stage_occluders(t, last, env), env).into_iter().map(|(_, o)| o)
+            })
+            .collect();
         ShadowVolumes::new(sky, occ)
     });
     let fixed_vols = fixed_vols.as_ref();
@@ -266,37 +295,63 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         })
         .collect();
     // 2.–4. levels; a node is recomputed when its own signature changed or its parent moved
-    let mut work: Vec<Work> = own.into_iter().map(|own| Work { moved: vec![false; own.len()], shifted: vec![false; own.len()], done: vec![false; own.len()], own }).collect();
+    let mut work: Vec<Work> = own.into_iter().zip(trees.iter()).map(|(own, t)| Work { before: t.pos.clone(), moved: vec![false; own.len()], shifted: vec![false; own.len()], done: vec![false; own.len()], own }).collect();
     let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
-    // per tree: the previous level's occluders and per-direction cluster transmittances
-    let mut prev: Vec<Option<(Vec<Option<Occluder>>, Rows)>> = vec![None; trees.len()];
+    // per tree: the previous level's occluders, shade casters and per-direction cluster
+    // transmittances
+    let mut prev: Vec<Option<Prev>> = vec![None; trees.len()];
     for g in 0..=g_max {
         let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
-        let occ: Vec<Vec<Option<Occluder>>> = trees.par_iter().map(|t| stage_of(t).map(|s| stage_occluders(t, s, env)).unwrap_or_default()).collect();
-        let casters: Vec<Occluder> = occ.iter().flatten().flatten().copied().collect();
-        // the casters that differ from the previous level's (removed, added or changed)
+        let occ: Vec<(Vec<Option<Occluder>>, Vec<(u64, Occluder)>)> = trees
+            .par_iter_mut()
+            .zip(&work)
+            .map(|(t, w)| match stage_of(t) {
+                Some(s) => {
+                    preposition(t, s, w);
+                    let fine = stage_occluders(t, s, env);
+                    let shade = stage_casters(t, s, &fine, env);
+                    (fine, shade)
+                }
+                None => Default::default(),
+            })
+            .collect();
+        let casters: Vec<Occluder> = occ.iter().flat_map(|(_, c)| c.iter().map(|(_, o)| *o)).collect();
+        // the receivers that are the same stage cluster as at the previous level
         let maps: Vec<Vec<Option<u32>>> = trees.iter().zip(&prev).map(|(t, pr)| match (stage_of(t), pr) {
             (Some(s), Some(_)) if s > 0 => match_stage(&t.analysis.stages[s - 1], &t.analysis.stages[s]),
             (Some(s), _) => vec![None; t.analysis.stages[s].len()],
             _ => Vec::new(),
         }).collect();
+        // the casters that differ from the previous level's (removed, added or changed): both
+        // lists are sorted by key
         let mut delta = Vec::new();
-        for ((o, pr), map) in occ.iter().zip(&prev).zip(&maps) {
-            let mut used = vec![false; pr.as_ref().map_or(0, |p| p.0.len())];
-            for (ci, cur) in o.iter().enumerate() {
-                match (map[ci], pr) {
-                    (Some(pj), Some((po, _))) => {
-                        used[pj as usize] = true;
-                        if !same_occluder(&po[pj as usize], cur) {
-                            delta.extend(po[pj as usize]);
-                            delta.extend(*cur);
+        for ((_, cur), pr) in occ.iter().zip(&prev) {
+            let old: &[(u64, Occluder)] = pr.as_ref().map_or(&[], |p| &p.shade);
+            let (mut i, mut j) = (0, 0);
+            while i < old.len() || j < cur.len() {
+                match (old.get(i), cur.get(j)) {
+                    (Some(a), Some(b)) if a.0 == b.0 => {
+                        if !same_occluder(&Some(a.1), &Some(b.1)) {
+                            delta.push(a.1);
+                            delta.push(b.1);
                         }
+                        i += 1;
+                        j += 1;
                     }
-                    _ => delta.extend(*cur),
+                    (Some(a), Some(b)) if a.0 < b.0 => {
+                        delta.push(a.1);
+                        i += 1;
+                    }
+                    (Some(a), None) => {
+                        delta.push(a.1);
+                        i += 1;
+                    }
+                    (_, Some(b)) => {
+                        delta.push(b.1);
+                        j += 1;
+                    }
+                    (None, None) => unreachable!(),
                 }
-            }
-            if let Some((po, _)) = pr {
-                delta.extend(po.iter().zip(&used).filter(|(_, u)| !**u).filter_map(|(o, _)| *o));
             }
         }
         // reuse pays while the changes are a minority of the casters
@@ -304,20 +359,20 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         // products it saves; above, it is not)
         let delta = (5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta));
         let vols = ShadowVolumes::new(sky, casters);
-        let next: Vec<Option<(Vec<Option<Occluder>>, Rows)>> = trees
+        let next: Vec<Option<Prev>> = trees
             .par_iter_mut()
             .zip(&mut work)
             .zip(occ)
             .zip(&prev)
             .zip(&maps)
-            .map(|((((t, w), occ), pr), map)| {
+            .map(|((((t, w), (occ, shade)), pr), map)| {
                 let s = stage_of(t)?;
                 let reuse = match (&delta, pr) {
-                    (Some(d), Some((po, rows))) => Some(Reuse { delta: d, occ: po, rows, map }),
+                    (Some(d), Some(p)) => Some(Reuse { delta: d, occ: &p.occ, rows: &p.rows, map }),
                     _ => None,
                 };
                 let rows = level(t, s, w, &occ, env, &solids, &vols, fixed_vols, reuse);
-                Some((occ, rows))
+                Some(Prev { occ, shade, rows })
             })
             .collect();
         prev = next;
@@ -386,6 +441,15 @@ struct Rows {
     t: Vec<f32>,
 }
 
+/// One tree's state of the previous level: its stage occluders (the receivers), its shade
+/// casters (by key) and the receivers' per-direction transmittances.
+#[derive(Debug, Clone)]
+struct Prev {
+    occ: Vec<Option<Occluder>>,
+    shade: Vec<(u64, Occluder)>,
+    rows: Rows,
+}
+
 /// What a level may reuse from the level before: the casters that changed since (`delta`),
 /// the previous stage's occluders and transmittances, and the previous index of every cluster.
 struct Reuse<'a> {
@@ -423,10 +487,33 @@ fn same_occluder(a: &Option<Occluder>, b: &Option<Occluder>) -> bool {
 /// Per-tree flags of one [`adapt_group`] call: `own` (signature changed), `moved` (position or
 /// rotation changed by this call), `done` (recomputed).
 struct Work {
+    /// Positions at the start of the call.
+    before: Vec<Vec3>,
     own: Vec<bool>,
     moved: Vec<bool>,
     shifted: Vec<bool>,
     done: Vec<bool>,
+}
+
+/// Places the nodes created in season `s` where they stand before the level bends them: a node
+/// to be recomputed follows its parent's current rotation rigidly (its own turn is what the
+/// level computes), a node kept follows its parent's displacement with its own rotation. So the
+/// stage's clusters cast their shadows from the stage tree as adapted so far, not from where the
+/// previous call left the young nodes (with that, an adaptation back to the environment of the
+/// analysis restores the input exactly).
+fn preposition(t: &mut PlasticTree, s: usize, w: &Work) {
+    for k in 1..t.input.nodes.len() {
+        if t.analysis.season[k] as usize != s {
+            continue;
+        }
+        let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
+        let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
+        if w.own[k] || w.moved[par] {
+            t.pos[k] = t.pos[par] + t.rot[par] * seg;
+        } else if w.shifted[par] {
+            t.pos[k] = t.pos[par] + t.rot[k] * seg;
+        }
+    }
 }
 
 /// Turn (radians, 0.057°) below which a recomputed node's children are not recomputed: they keep
@@ -458,7 +545,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             // not recomputed: keeps its rotation, follows its parent's (small) displacement
             if w.shifted[par] {
                 t.pos[k] = t.pos[par] + t.rot[k] * (t.input.nodes[k].pos - t.input.nodes[par].pos);
-                w.shifted[k] = true;
+                w.shifted[k] = t.pos[k] != w.before[k];
                 if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
                     t.fate[k] = Fate::Collision;
                 }
@@ -466,7 +553,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             continue;
         }
         w.done[k] = true;
-        let (old_pos, old_rot) = (t.pos[k], t.rot[k]);
+        let (old_pos, old_rot) = (w.before[k], t.rot[k]);
         let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
         let len = seg.length();
         let q_par = t.rot[par];
