@@ -1,6 +1,7 @@
 //! Tree analysis of Plastic Trees section 4 (Pirk et al. 2012, `000_*.txt`), done once per tree:
 //! internode length (mean-shift), growth rates (eq. 1), branch seasons (eq. 2), leaf clusters
-//! from terminal lobes and their younger versions (eq. 5), the temporal light the tree grew in
+//! from terminal lobes and their younger versions (eq. 5), the foliage lobes whose volume casts
+//! the clusters' shade ([`FOLIAGE_REACH`], section 8), the temporal light the tree grew in
 //! (eqs. 3–4), the untropic direction of every segment (inverse tropism, eqs. 6–9) and the
 //! pruning thresholds (eqs. 10–11).
 
