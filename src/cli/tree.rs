@@ -104,7 +104,7 @@ pub struct AdaptArgs {
     latitude: Option<f32>,
     /// Sky quadrature of eq. (3): direction counts of the rings around the brightest sky point,
     /// each a multiple of 4, at most 32 in all. The default 4,8,12 (24 directions) is within
-    /// 0.02 of a 5,872-direction reference in light; 4,8 (12 directions) adapts about 1.7×
+    /// 0.02 of a 5,872-direction reference in light; 4,8 (12 directions) adapts about 1.9×
     /// faster at about twice the error (BENCHMARKS.md, Plastic Trees sky).
     #[arg(long, value_delimiter = ',', default_value = "4,8,12", allow_negative_numbers = true)]
     sky_rings: Vec<usize>,

@@ -597,3 +597,55 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
     }
     Ok(Analysis { internode_m: l_i, growth_rate: rates, season, seasons: last, lobes, stages, stage_light, light_dir, w_s, d_o, residual, psi_ref, psi_min, mask, sky, foliage_of })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::structure::grow::space::Obstacle;
+
+    /// A trunk of two 5 m segments, a 2 m twig and a 6 m limb at 5 m: d_r = 5 + 6 = 11 m, so
+    /// foliage lobes reach at most 0.3·11 = 3.3 m from their parent junction.
+    #[test]
+    fn foliage_lobes_are_the_maximal_subtrees_within_the_reach() {
+        let mut sk = Skeleton::new();
+        let root = sk.add_root(Vec3::ZERO, 0.2);
+        let mid = sk.add_child(root, Vec3::new(0.0, 0.0, 5.0), 0.15, false).unwrap();
+        let top = sk.add_child(mid, Vec3::new(0.0, 0.0, 10.0), 0.05, false).unwrap();
+        let t1 = sk.add_child(mid, Vec3::new(1.0, 0.0, 5.0), 0.02, true).unwrap();
+        let t2 = sk.add_child(t1, Vec3::new(2.0, 0.0, 5.0), 0.01, false).unwrap();
+        let l1 = sk.add_child(mid, Vec3::new(0.0, 2.0, 5.0), 0.05, true).unwrap();
+        let l2 = sk.add_child(l1, Vec3::new(0.0, 4.0, 5.0), 0.04, false).unwrap();
+        let l3 = sk.add_child(l2, Vec3::new(0.0, 6.0, 5.0), 0.02, false).unwrap();
+        let of = foliage_lobes(&sk);
+        let none = u32::MAX;
+        // the twig (reach 2 m) is lobe 0 with its tip; of the limb only its last segment (2 m;
+        // the one before reaches 4 m); the leader's top segment (5 m) is skeleton
+        assert_eq!([of[root as usize], of[mid as usize], of[top as usize]], [none; 3]);
+        assert_eq!([of[t1 as usize], of[t2 as usize]], [0, 0]);
+        assert_eq!([of[l1 as usize], of[l2 as usize], of[l3 as usize]], [none, none, 1]);
+    }
+
+    /// Two clusters of one foliage lobe (unit spheres 2 m apart) cast one sphere enclosing both:
+    /// centre halfway, radius 2 m, γ = γ_c0^2; with half its nodes dead (eq. 13) γ_c0^(2·½);
+    /// cut by a wall 1.5 m from the centre (Fig. 4). A cluster on the skeleton casts itself.
+    #[test]
+    fn shade_casters_enclose_a_lobes_clusters() {
+        let foliage_of = vec![u32::MAX, 0, 0, u32::MAX];
+        let clusters: Vec<StageCluster> = (1..4).map(|a| StageCluster { anchor: a, radius: 1.0, lobe: Some(a - 1), max_season: 0 }).collect();
+        let occ = |x: f32, r: f32| Some(Occluder { center: Vec3::new(x, 0.0, 0.0), radius: r, gamma: 0.5f32.powf(r) });
+        let fine = vec![occ(0.0, 1.0), occ(2.0, 1.0), occ(9.0, 0.5)];
+        let out = shade_casters(&foliage_of, &clusters, &fine, |_| 1.0, 0.5, &[]);
+        assert_eq!(out.len(), 2);
+        assert_eq!(out[0].0, 0);
+        let g = out[0].1;
+        assert!(g.center.distance(Vec3::new(1.0, 0.0, 0.0)) < 1e-6 && (g.radius - 2.0).abs() < 1e-6 && (g.gamma - 0.25).abs() < 1e-6, "{g:?}");
+        assert_eq!(out[1], ((1u64 << 32) | 3, fine[2].unwrap()));
+        let thinned = shade_casters(&foliage_of, &clusters, &fine, |ci| if ci == 0 { 1.0 } else { 0.0 }, 0.5, &[]);
+        assert!((thinned[0].1.gamma - 0.5).abs() < 1e-6, "{:?}", thinned[0]);
+        let cut = shade_casters(&foliage_of, &clusters, &fine, |_| 1.0, 0.5, &[Obstacle::Wall { x: 2.5 }]);
+        assert!((cut[0].1.radius - 1.5).abs() < 1e-6, "{:?}", cut[0]);
+        // a deleted cluster leaves its lobe's other cluster alone: that cluster's own sphere
+        let one = shade_casters(&foliage_of, &clusters, &[occ(0.0, 1.0), None, None], |_| 1.0, 0.5, &[]);
+        assert_eq!(one, vec![(0, occ(0.0, 1.0).unwrap())]);
+    }
+}
