@@ -420,7 +420,9 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     for (x, y, p) in drawing.enumerate_pixels() {
         img.put_pixel(x, y + STRIP, image::Rgba([p.0[0], p.0[1], p.0[2], 255]));
     }
-    sylva::output::maps::stamp_caption(&mut img, &format!("before | after: {:.1} m high, seen along {along}", sk.height()))?;
+    // the height is the adapted tree's (brown); with neighbours (green) in view, say so
+    let what = if neighbours.is_empty() { format!("{:.1} m high", sk.height()) } else { format!("brown tree {:.1} m", sk.height()) };
+    sylva::output::maps::stamp_caption(&mut img, &format!("before | after: {what}, seen along {along}"))?;
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
     sylva::output::write_atomic(&png, &bytes)?;
