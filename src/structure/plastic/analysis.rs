@@ -402,8 +402,8 @@ pub(crate) fn shade_key(foliage_of: &[u32], c: &StageCluster) -> u64 {
 /// group's input nodes still alive (eq. 13; `alive(ci)` is n_c/n_0 of cluster ci). A group of
 /// one cluster is that cluster's occluder. Returns (key, occluder) pairs.
 pub(crate) fn shade_casters(foliage_of: &[u32], clusters: &[StageCluster], fine: &[Option<Occluder>], alive: impl Fn(usize) -> f32, gamma_c0: f32, obstacles: &[crate::structure::grow::space::Obstacle]) -> Vec<(u64, Occluder)> {
-    let mut members: Vec<(u64, u32)> = fine.iter().enumerate().filter(|(_, o)| o.is_some()).map(|(ci, _)| (shade_key(foliage_of, &clusters[ci]), ci as u32)).collect();
-    members.sort_unstable();
+    let mut members: Vec<(u64, usize, Occluder)> = fine.iter().enumerate().filter_map(|(ci, o)| o.map(|o| (shade_key(foliage_of, &clusters[ci]), ci, o))).collect();
+    members.sort_unstable_by_key(|m| (m.0, m.1));
     let mut out = Vec::new();
     let mut i = 0;
     while i < members.len() {
@@ -414,30 +414,32 @@ pub(crate) fn shade_casters(foliage_of: &[u32], clusters: &[StageCluster], fine:
         }
         let group = &members[i..j];
         i = j;
-        if group.len() == 1 {
-            let ci = group[0].1 as usize;
-            out.push((key, fine[ci].unwrap()));
+        if let [(_, _, o)] = group {
+            out.push((key, *o));
             continue;
         }
         let (mut vol, mut centre, mut share) = (0.0f32, Vec3::ZERO, 0.0f32);
-        for &(_, ci) in group {
-            let o = fine[ci as usize].unwrap();
+        for &(_, ci, o) in group {
             let v = o.radius * o.radius * o.radius;
             vol += v;
             centre += o.center * v;
-            share += v * alive(ci as usize);
+            share += v * alive(ci);
         }
         let (centre, share) = (centre / vol, share / vol);
-        let r = group.iter().map(|&(_, ci)| {
-            let o = fine[ci as usize].unwrap();
-            o.center.distance(centre) + o.radius
-        });
+        let r = group.iter().map(|(_, _, o)| o.center.distance(centre) + o.radius);
         let r = r.fold(0.0f32, f32::max).min(obstacles.iter().map(|o| o.signed_distance(centre)).fold(f32::INFINITY, f32::min));
         if r > 0.0 {
             out.push((key, Occluder { center: centre, radius: r, gamma: gamma_c0.powf(r * share) }));
         }
     }
     out
+}
+
+/// The shade casters ([`shade_casters`]) of stage clusters `clusters` with centres `centres`
+/// as grown: every cluster alive, eq. (4) translucency γ_c0^r_c, no obstacle cut.
+pub(crate) fn input_casters(foliage_of: &[u32], clusters: &[StageCluster], centres: &[Vec3], gamma_c0: f32) -> Vec<Occluder> {
+    let fine: Vec<Option<Occluder>> = clusters.iter().zip(centres).map(|(c, &centre)| Some(Occluder { center: centre, radius: c.radius, gamma: gamma_c0.powf(c.radius) })).collect();
+    shade_casters(foliage_of, clusters, &fine, |_| 1.0, gamma_c0, &[]).into_iter().map(|(_, o)| o).collect()
 }
 
 /// Inverse tropism (eqs. 8–9): the untropic unit direction d_o with w_s·d_o = p·h − t_w
@@ -558,9 +560,7 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
     let mut all_psi = Vec::new();
     for (t, clusters) in stages.iter().enumerate() {
         let centres: Vec<Vec3> = clusters.iter().map(|c| cluster_center(c, &lobes, sk, &pos)).collect();
-        let fine: Vec<Option<Occluder>> = clusters.iter().zip(&centres).map(|(c, &centre)| Some(Occluder { center: centre, radius: c.radius, gamma: p.translucency_gamma_c0.powf(c.radius) })).collect();
-        let occ = shade_casters(&foliage_of, clusters, &fine, |_| 1.0, p.translucency_gamma_c0, &[]).into_iter().map(|(_, o)| o).collect();
-        let vols = ShadowVolumes::new(&sky, occ);
+        let vols = ShadowVolumes::new(&sky, input_casters(&foliage_of, clusters, &centres, p.translucency_gamma_c0));
         let at_nodes: Vec<(Vec3, u32)> = by_season[t].iter().map(|&k| (pos[k as usize], mask[k as usize])).collect();
         for (&k, (_, dir)) in by_season[t].iter().zip(light_many(&sky, &vols, &at_nodes)) {
             light_dir[k as usize] = dir;

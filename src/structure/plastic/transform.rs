@@ -53,7 +53,7 @@
 //! Approximation: a node whose signature did not change keeps its state even when moved
 //! clusters of recomputed subtrees now shade it differently.
 
-use super::analysis::{cluster_center, judged, normalised, psi_at_stage, shade_casters, StageCluster};
+use super::analysis::{cluster_center, input_casters, judged, normalised, psi_at_stage, shade_casters, StageCluster};
 use super::light::{light_at, light_by, Occluder, ShadowVolumes, SkyMask, Solids};
 use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
 use crate::error::Result;
@@ -167,13 +167,7 @@ fn stage_occluders(t: &PlasticTree, s: usize, env: &Environment) -> Vec<Option<O
     a.stages[s]
         .iter()
         .map(|c| {
-            let (n_c, n_0) = match c.lobe {
-                Some(l) => {
-                    let nodes = &a.lobes[l as usize].nodes;
-                    (nodes.iter().filter(|&&k| t.fate[k as usize] == Fate::Alive).count(), nodes.len())
-                }
-                None => ((t.fate[c.anchor as usize] == Fate::Alive) as usize, 1),
-            };
+            let (n_c, n_0) = alive_counts(t, c);
             if n_c == 0 {
                 return None;
             }
@@ -188,14 +182,15 @@ fn stage_occluders(t: &PlasticTree, s: usize, env: &Environment) -> Vec<Option<O
         .collect()
 }
 
-/// Share n_c/n_0 of the input nodes of stage cluster `c` of tree `t` still alive (eq. 13).
-fn alive_share(t: &PlasticTree, c: &StageCluster) -> f32 {
+/// (n_c, n_0) of eq. (13) for stage cluster `c` of tree `t`: the input nodes it covers still
+/// alive, and all of them (a propagated cluster covers its anchor).
+fn alive_counts(t: &PlasticTree, c: &StageCluster) -> (usize, usize) {
     match c.lobe {
         Some(l) => {
             let nodes = &t.analysis.lobes[l as usize].nodes;
-            nodes.iter().filter(|&&k| t.fate[k as usize] == Fate::Alive).count() as f32 / nodes.len().max(1) as f32
+            (nodes.iter().filter(|&&k| t.fate[k as usize] == Fate::Alive).count(), nodes.len())
         }
-        None => (t.fate[c.anchor as usize] == Fate::Alive) as u8 as f32,
+        None => ((t.fate[c.anchor as usize] == Fate::Alive) as usize, 1),
     }
 }
 
@@ -204,7 +199,11 @@ fn alive_share(t: &PlasticTree, c: &StageCluster) -> f32 {
 /// obstacles, sorted by key.
 fn stage_casters(t: &PlasticTree, s: usize, fine: &[Option<Occluder>], env: &Environment) -> Vec<(u64, Occluder)> {
     let clusters = &t.analysis.stages[s];
-    shade_casters(&t.analysis.foliage_of, clusters, fine, |ci| alive_share(t, &clusters[ci]), t.params.translucency_gamma_c0, &env.obstacles)
+    let share = |ci: usize| {
+        let (n_c, n_0) = alive_counts(t, &clusters[ci]);
+        n_c as f32 / n_0.max(1) as f32
+    };
+    shade_casters(&t.analysis.foliage_of, clusters, fine, share, t.params.translucency_gamma_c0, &env.obstacles)
 }
 
 /// Adapts several trees together to `env` and to each other (sections 5–6; see the module
@@ -239,12 +238,11 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         .iter()
         .enumerate()
         .flat_map(|(i, t)| {
-            let n = t.input.nodes.len();
-            let pos: Vec<Vec3> = (0..n).map(|k| t.input.nodes[k].pos).collect();
-            let s = t.analysis.seasons as usize;
-            let clusters = &t.analysis.stages[s];
-            let fine: Vec<Option<Occluder>> = clusters.iter().map(|c| Some(Occluder { center: cluster_center(c, &t.analysis.lobes, &t.input, &pos), radius: c.radius, gamma: t.params.translucency_gamma_c0.powf(c.radius) })).collect();
-            shade_casters(&t.analysis.foliage_of, clusters, &fine, |_| 1.0, t.params.translucency_gamma_c0, &[]).into_iter().map(|(_, o)| (i, o)).collect::<Vec<_>>()
+            let pos: Vec<Vec3> = t.input.nodes.iter().map(|nd| nd.pos).collect();
+            let a = &t.analysis;
+            let clusters = &a.stages[a.seasons as usize];
+            let centres: Vec<Vec3> = clusters.iter().map(|c| cluster_center(c, &a.lobes, &t.input, &pos)).collect();
+            input_casters(&a.foliage_of, clusters, &centres, t.params.translucency_gamma_c0).into_iter().map(|o| (i, o)).collect::<Vec<_>>()
         })
         .collect();
     let group = trees.len() > 1;
@@ -329,28 +327,29 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             let old: &[(u64, Occluder)] = pr.as_ref().map_or(&[], |p| &p.shade);
             let (mut i, mut j) = (0, 0);
             while i < old.len() || j < cur.len() {
-                match (old.get(i), cur.get(j)) {
-                    (Some(a), Some(b)) if a.0 == b.0 => {
-                        if !same_occluder(&Some(a.1), &Some(b.1)) {
-                            delta.push(a.1);
-                            delta.push(b.1);
+                use std::cmp::Ordering;
+                let ord = match (old.get(i), cur.get(j)) {
+                    (Some(a), Some(b)) => a.0.cmp(&b.0),
+                    (Some(_), None) => Ordering::Less,
+                    _ => Ordering::Greater,
+                };
+                match ord {
+                    Ordering::Equal => {
+                        if !same_occluder(&Some(old[i].1), &Some(cur[j].1)) {
+                            delta.push(old[i].1);
+                            delta.push(cur[j].1);
                         }
                         i += 1;
                         j += 1;
                     }
-                    (Some(a), Some(b)) if a.0 < b.0 => {
-                        delta.push(a.1);
+                    Ordering::Less => {
+                        delta.push(old[i].1);
                         i += 1;
                     }
-                    (Some(a), None) => {
-                        delta.push(a.1);
-                        i += 1;
-                    }
-                    (_, Some(b)) => {
-                        delta.push(b.1);
+                    Ordering::Greater => {
+                        delta.push(cur[j].1);
                         j += 1;
                     }
-                    (None, None) => unreachable!(),
                 }
             }
         }
