@@ -9,7 +9,10 @@
 //! 2. no two top-level modules name each other, directly or through a chain (no cycle);
 //! 3. no two second-level modules (`sim::world`, `render::scene`, `terrain::fields`, …) form a
 //!    cycle either (edges between a module and its own parent — `mod` declarations and
-//!    re-exports — are structural and left out).
+//!    re-exports — are structural and left out);
+//! 4. the command line (`src/main.rs`, `src/cli/`) names no simulation internals, only
+//!    `sim::Scenario` and `sim::tiles::Transport` (issue 33: the main job is `job::main_job`);
+//! 5. no field of `job::pictures::Stage` is set outside `job`.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -303,4 +306,119 @@ fn architecture_md_quotes_the_phase_list() {
     let quoted: Vec<&str> = doc[start..end].lines().skip(1).filter(|l| !l.trim().is_empty()).collect();
     let want: Vec<String> = sylva::sim::step::PHASES.iter().enumerate().map(|(k, p)| format!("{}. `{}` — {}", k + 1, p.name, p.summary)).collect();
     assert_eq!(quoted, want, "ARCHITECTURE.md's phase list differs from sim::step::PHASES; paste:\n{}", want.join("\n"));
+}
+
+/// The `sim` paths the command line may name: the scenario it loads and the transport trait an
+/// MPI rank implements. Everything else of the simulation is reached through `job`.
+const CLI_SIM_PATHS: &[&str] = &["sim::Scenario", "sim::tiles::Transport"];
+
+/// The `sim` paths named by the command line's modules (`src/main.rs`, `src/cli/`) that
+/// [`CLI_SIM_PATHS`] does not allow.
+fn cli_sim_paths(t: &Tree) -> BTreeSet<String> {
+    t.refs
+        .iter()
+        .filter(|(from, to)| from.first().is_some_and(|m| m == "cli") && to.first().is_some_and(|m| m == "sim"))
+        .map(|(from, to)| (from.join("::"), to.join("::")))
+        .filter(|(_, to)| !CLI_SIM_PATHS.contains(&to.as_str()))
+        .map(|(from, to)| format!("{from} -> {to}"))
+        .collect()
+}
+
+/// The command line only parses arguments, draws progress and handles Ctrl-C: it names no
+/// internals of the simulation (the main job is `job::main_job`).
+#[test]
+fn cli_names_no_sim_internals() {
+    let bad = cli_sim_paths(&read_tree());
+    assert!(bad.is_empty(), "the command line names simulation internals (go through job::main_job):\n{}", bad.into_iter().collect::<Vec<_>>().join("\n"));
+}
+
+/// The public fields of `job::pictures::Stage` (read from its definition).
+fn stage_fields() -> Vec<String> {
+    let text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src/job/pictures.rs")).unwrap();
+    let start = text.find("pub struct Stage {").expect("job::pictures defines Stage");
+    let body = &text[start..start + text[start..].find("\n}").unwrap()];
+    body.lines().filter_map(|l| l.trim().strip_prefix("pub ")?.split_once(':').map(|(n, _)| n.trim().to_string())).collect()
+}
+
+/// Where `code` sets a field of a `Stage` (`stage.adapt = …`, `.take()`, `.replace(…)`,
+/// `&mut stage.adapt`): the variables bound to a stage (`let [mut] x = …Stage::…(` or
+/// `…stage_for(`, parameters `x: &mut Stage`) followed by one of `fields`.
+fn stage_writes(code: &str, fields: &[String]) -> Vec<String> {
+    let mut vars: BTreeSet<String> = BTreeSet::new();
+    for l in code.lines() {
+        let l = l.trim();
+        if let Some(rest) = l.strip_prefix("let ") {
+            if l.contains("Stage::") || l.contains("stage_for(") {
+                let rest = rest.trim_start_matches("mut ");
+                vars.insert(rest.split([' ', ':', '=']).next().unwrap_or("").to_string());
+            }
+        }
+        let mut s = l;
+        while let Some(i) = s.find(": &mut Stage") {
+            let name = s[..i].rsplit([' ', '(', ',']).next().unwrap_or("");
+            vars.insert(name.to_string());
+            s = &s[i + 1..];
+        }
+    }
+    let mut out = Vec::new();
+    for v in vars.iter().filter(|v| !v.is_empty()) {
+        for f in fields {
+            let at = format!("{v}.{f}");
+            let mut from = 0;
+            while let Some(i) = code[from..].find(&at) {
+                let (b, e) = (from + i, from + i + at.len());
+                from = e;
+                let before_ok = b == 0 || !code.as_bytes()[b - 1].is_ascii_alphanumeric() && code.as_bytes()[b - 1] != b'_' && code.as_bytes()[b - 1] != b'.';
+                let after = &code[e..];
+                if !before_ok || after.starts_with(|c: char| c.is_ascii_alphanumeric() || c == '_') {
+                    continue;
+                }
+                // a field of the field (`stage.scene.sun = …`) is the field set too
+                let mut rest = after;
+                while let Some(r) = rest.strip_prefix('.') {
+                    let n = r.find(|c: char| !(c.is_ascii_alphanumeric() || c == '_')).unwrap_or(r.len());
+                    if n == 0 || r[n..].starts_with('(') {
+                        break;
+                    }
+                    rest = &r[n..];
+                }
+                let t = rest.trim_start();
+                let assign = t.starts_with('=') && !t.starts_with("==") || ["+=", "-=", "*=", "/="].iter().any(|o| t.starts_with(o));
+                let mutate = [".take()", ".replace(", ".push(", ".clear()", ".extend", ".truncate(", ".insert("].iter().any(|m| rest.starts_with(m));
+                let borrowed = code[..b].trim_end().ends_with("&mut");
+                if assign || mutate || borrowed {
+                    out.push(at.clone());
+                }
+            }
+        }
+    }
+    out
+}
+
+/// `job::pictures::Stage`'s fields are set only in `job` (through its methods elsewhere).
+#[test]
+fn no_stage_field_set_outside_job() {
+    let fields = stage_fields();
+    assert!(fields.contains(&"adapt".to_string()) && fields.contains(&"renderer".to_string()), "{fields:?}");
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let mut bad = Vec::new();
+    for f in files.iter().filter(|f| !f.starts_with(src.join("job"))) {
+        for w in stage_writes(&code(&std::fs::read_to_string(f).unwrap()), &fields) {
+            bad.push(format!("{}: {w}", f.strip_prefix(&src).unwrap().display()));
+        }
+    }
+    assert!(bad.is_empty(), "Stage fields set outside job (use Stage's methods):\n{}", bad.join("\n"));
+}
+
+/// The two checkers find planted violations.
+#[test]
+fn cli_and_stage_checkers_find_planted_violations() {
+    let fields: Vec<String> = ["adapt", "scene"].iter().map(|s| s.to_string()).collect();
+    let text = "fn f(st: &mut Stage) {\n    let mut stage = stage_for(&dir, None)?;\n    stage.adapt = None;\n    let a = stage.adapt.take();\n    if stage.adapt == None {}\n    st.scene.sun = x;\n    g(&mut st.scene);\n    stage.adapted = 1;\n}\n";
+    assert_eq!(stage_writes(text, &fields), vec!["st.scene".to_string(), "st.scene".to_string(), "stage.adapt".to_string(), "stage.adapt".to_string()]);
+    let m = |s: &str| s.split("::").map(String::from).collect::<Vec<_>>();
+    let t = Tree { modules: ["cli", "cli::run", "sim", "sim::world"].iter().map(|s| m(s)).collect(), refs: vec![(m("cli::run"), m("sim::Scenario")), (m("cli::run"), m("sim::world::World"))] };
+    assert_eq!(cli_sim_paths(&t).into_iter().collect::<Vec<_>>(), vec!["cli::run -> sim::world::World".to_string()]);
 }

@@ -1,9 +1,12 @@
-//! End to end through the binary: `sylva run` on a reduced scenario (a 12 × 12-cell corner of
-//! the shipped DEM that includes nodata cells, 6 years, small frames). Checks that every output
-//! exists, parses and holds sane values. Renders on the software adapter in CI.
+//! The main job end to end, in process ([`sylva::job::main_job::main_job`], the whole of
+//! `sylva run`) on a reduced scenario (a 12 × 12-cell corner of the shipped DEM that includes
+//! nodata cells, 6 years, small frames). Checks that every output exists, parses and holds sane
+//! values, and that the run writes nothing [`sylva::job::main_job::OUTPUTS`] does not list.
+//! Renders on the software adapter in CI. One smoke test goes through the binary.
 
 use std::path::Path;
 use std::process::Command;
+use sylva::job::main_job::{self, MainJobOptions};
 
 const SCENARIO: &str = r#"
 name = "reduced main job"
@@ -47,11 +50,23 @@ fn png_variance(path: &Path) -> f64 {
     img.pixels().map(|p| (p[1] as f64 - mean).powi(2)).sum::<f64>() / n
 }
 
+/// Every file under `dir`, as `/`-separated paths relative to it.
+fn files(dir: &Path, base: &Path, out: &mut Vec<String>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            files(&p, base, out);
+        } else {
+            out.push(p.strip_prefix(base).unwrap().to_string_lossy().replace('\\', "/"));
+        }
+    }
+}
+
 #[test]
-fn sylva_run_reduced_scenario_writes_every_output() {
+fn main_job_reduced_scenario_writes_every_output() {
     let dir = tempfile::tempdir().unwrap();
-    let sc = dir.path().join("reduced.toml");
-    std::fs::write(&sc, SCENARIO).unwrap();
+    let sc = sylva::sim::Scenario::from_toml_str(SCENARIO, "reduced.toml").unwrap();
+    let lib = sylva::species::SpeciesLibrary::embedded().unwrap();
     let out = dir.path().join("out");
     // leftovers of an earlier, longer run into the same folder must not survive
     for stale in ["stills/year_0099_oblique.png", "frames/frame_00042.png"] {
@@ -59,14 +74,31 @@ fn sylva_run_reduced_scenario_writes_every_output() {
         std::fs::write(out.join(stale), b"old").unwrap();
     }
     std::fs::write(out.join("stills/notes.txt"), b"mine").unwrap();
-    let res = Command::new(env!("CARGO_BIN_EXE_sylva"))
-        .args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--size", "320x180", "--timelapse-size", "160x90", "--frames-between", "1"])
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8_lossy(&res.stdout);
-    let stderr = String::from_utf8_lossy(&res.stderr);
-    assert!(res.status.success(), "sylva run failed:\n{stdout}\n{stderr}");
-    assert!(stdout.contains("basal area"), "summary table printed: {stdout}");
+    let mut opts = MainJobOptions::new(&out);
+    opts.size = (320, 180);
+    opts.timelapse_size = (160, 90);
+    opts.frames_between = 1;
+    let mut events: Vec<String> = Vec::new();
+    let summary = main_job::main_job(&sc, &lib, &opts, &mut |e| {
+        let name = format!("{e:?}");
+        let name = name.split([' ', '(']).next().unwrap_or("").to_string();
+        if events.last() != Some(&name) {
+            events.push(name);
+        }
+    })
+    .unwrap();
+    assert!(!summary.sim.stopped && summary.sim.year == 6 && summary.sim.rows.len() == 6);
+    let (table, shares) = summary.tables();
+    assert!(table.contains("basal area") && shares.contains("beech"), "{table}\n{shares}");
+    assert_eq!(events, ["Begin", "Conditions", "Simulating", "Year", "Simulated", "Stills", "Still", "CloseUp", "StillsDone", "Timelapse", "Frame", "TimelapseDone"], "the job's steps, in order");
+    assert_eq!(summary.stills.len(), 2 * 2 + 1, "oblique and top-down at year 0 (the still year within the run) and 6 (the last), one close-up: {:?}", summary.stills);
+    assert_eq!(summary.film.as_ref().map(|f| f.frames), Some(5));
+
+    // The run wrote only what OUTPUTS lists (and kept the file it did not write).
+    let mut written = Vec::new();
+    files(&out, &out, &mut written);
+    let unlisted: Vec<&String> = written.iter().filter(|f| !main_job::is_output(f) && f.as_str() != "stills/notes.txt").collect();
+    assert!(unlisted.is_empty(), "files not in main_job::OUTPUTS: {unlisted:?}");
 
     // Files exist.
     for f in [
@@ -142,4 +174,21 @@ fn sylva_run_reduced_scenario_writes_every_output() {
     assert_eq!(&gif[..6], b"GIF89a");
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("stills/year_0006_oblique.png") && md.contains("timelapse.gif"));
+}
+
+/// The binary's `sylva run`: argument parsing, the printed summary, the exit status
+/// (without pictures).
+#[test]
+fn sylva_run_binary_smoke() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = dir.path().join("reduced.toml");
+    std::fs::write(&sc, SCENARIO).unwrap();
+    let out = dir.path().join("out");
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--years", "2", "--no-render"]).output().unwrap();
+    let stdout = String::from_utf8_lossy(&res.stdout);
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(res.status.success(), "sylva run failed:\n{stdout}\n{stderr}");
+    assert!(stdout.contains("basal area") && stdout.contains("outputs in"), "summary table printed: {stdout}");
+    assert!(stderr.contains("[1/4] conditions") && stderr.contains("[2/4] simulating 2 years"), "steps reported: {stderr}");
+    assert!(out.join("summary.md").is_file() && out.join("inventory/year_0002.geojson").is_file() && !out.join("stills").exists());
 }

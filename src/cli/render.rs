@@ -122,10 +122,7 @@ pub fn stage_for(run_dir: &Path, species_dir: Option<&Path>) -> anyhow::Result<S
     }
     dirs.extend(species_dir);
     let lib = super::simulate::library(&dirs)?;
-    let mut stage = Stage::new(site, lib, sc.climate.sea_level_m)?;
-    stage.set_scenario(sc.seed, &sc.obstacles);
-    stage.set_surroundings_of(&sc).context("the terrain around the simulated window")?;
-    Ok(stage)
+    Ok(Stage::for_scenario(&sc, site, lib)?)
 }
 
 /// Renders a still.
@@ -156,7 +153,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     }
     let cam = stage.camera_for(a.camera, &rows, a.size.0, a.size.1);
     if !a.adapt {
-        stage.adapt = None;
+        stage.set_adapt(None);
     }
     let t = std::time::Instant::now();
     // the regeneration layer of the same snapshot, drawn as saplings (runs without it: none)

@@ -1,11 +1,14 @@
-//! `sylva simulate SCENARIO [--out DIR] [--resume] [--threads N]`.
+//! `sylva simulate SCENARIO [--out DIR] [--resume] [--threads N]`: parses the arguments, loads
+//! the scenario, site and species, draws progress and handles Ctrl-C around
+//! [`sylva::job::main_job::simulate`].
 
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use sylva::conditions::SiteConditions;
-use sylva::job::run::{run_scenario, Progress, RunOptions};
+use sylva::job::main_job::{self, Event, Simulated, SimulateOptions, Stepping};
+pub use sylva::job::main_job::run_species_dir;
 use sylva::sim::Scenario;
 use sylva::species::SpeciesLibrary;
 
@@ -43,18 +46,6 @@ pub fn parse_tiles(s: &str) -> Result<usize, String> {
     }
 }
 
-/// How `sylva simulate` steps the years.
-pub enum Mode<'a> {
-    /// One process, the whole landscape.
-    One,
-    /// N tiles, one thread each, in this process (`--tiles N`).
-    Local(usize),
-    /// Rank 0 of a tiled run over a transport (MPI); the other ranks run
-    /// [`sylva::job::tiled::work`].
-    #[cfg_attr(not(feature = "mpi"), allow(dead_code))]
-    Ranks(&'a mut dyn sylva::sim::tiles::Transport),
-}
-
 /// Parses `--threads`: an integer 1–256.
 pub fn parse_threads(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
@@ -86,116 +77,80 @@ pub fn run_library(run_dir: &Path, species_dir: Option<&Path>) -> anyhow::Result
     library(&dirs)
 }
 
-/// Folder of a run directory that holds the species files the run was simulated with.
-pub fn run_species_dir(run_dir: &Path) -> PathBuf {
-    run_dir.join("species")
-}
-
-/// Writes the pool's species files into `RUN/species/` (so `render`, `timelapse` and a
-/// `--resume` find the same species later, also edited or custom ones).
-pub fn save_run_species(sc: &Scenario, lib: &SpeciesLibrary, run_dir: &Path) -> anyhow::Result<()> {
-    let dir = run_species_dir(run_dir);
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    for name in &sc.species {
-        if let Some(sp) = lib.get(name) {
-            sylva::output::write_atomic(&dir.join(format!("{}.toml", sp.id)), sp.to_toml_string()?.as_bytes())?;
-        }
-    }
-    Ok(())
-}
-
 /// Loads the site conditions a scenario names (window applied).
 pub fn load_site(sc: &Scenario) -> anyhow::Result<SiteConditions> {
     Ok(sc.site().with_context(|| format!("terrain of scenario {}", sc.name))?)
 }
 
-/// What `sylva run` needs from a finished simulation.
-pub struct SimOutcome {
-    /// Final year.
-    pub year: u32,
-    /// Live trees at the end (all sizes).
-    pub trees_alive: usize,
-    /// Species ids of the pool, in stand-table order.
-    pub pool: Vec<String>,
-    /// Stand table rows.
-    pub rows: Vec<sylva::sim::stats::StandRow>,
-}
-
-/// Runs `sc` into `out` with a progress bar and a Ctrl-C handler (stop after the current year);
-/// returns what the main job reports.
-///
-/// `geojson_years`: the years whose snapshots also get a GeoJSON inventory (`None`: all).
-pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, geojson_years: Option<Vec<u32>>, on_snapshot: Option<&mut dyn FnMut(u32, &sylva::sim::World)>) -> anyhow::Result<SimOutcome> {
-    simulate_mode(sc, site, lib, out, resume, geojson_years, on_snapshot, Mode::One)
-}
-
-/// [`simulate`] stepped as `mode` says (one process, tiles in threads, rank 0 of MPI ranks).
-#[allow(clippy::too_many_arguments)]
-pub fn simulate_mode(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, geojson_years: Option<Vec<u32>>, on_snapshot: Option<&mut dyn FnMut(u32, &sylva::sim::World)>, mode: Mode) -> anyhow::Result<SimOutcome> {
-    if out.exists() && !out.is_dir() {
-        anyhow::bail!("--out {}: is a file; expected a folder for the run's outputs", out.display());
-    }
+/// A stop flag set by Ctrl-C, SIGTERM or SIGHUP: the run stops after the current year with its
+/// outputs so far complete.
+pub fn stop_on_ctrl_c() -> Arc<AtomicBool> {
     let stop = Arc::new(AtomicBool::new(false));
-    {
-        let s = stop.clone();
-        let _ = ctrlc::set_handler(move || {
-            s.store(true, Ordering::SeqCst);
-        });
-    }
-    let pb = super::progress(sc.years as u64, "simulate");
-    // wall time per phase (and of the outputs) summed over the years: printed at the end with
-    // SYLVA_PHASE_TIMES=1 (a tiled run: rank 0's tile, its exchanges included)
-    let mut phase_sums = [0f64; sylva::sim::step::N_PHASES + 1];
-    let mut cb = |p: &Progress| {
-        pb.set_position(p.year as u64);
-        pb.set_message(format!("year {} · {} trees · {:.0} trees/s", p.year, p.trees, p.trees_per_s));
-        for (k, s) in p.phase_seconds.iter().chain([&p.output_seconds]).enumerate() {
-            phase_sums[k] += s;
+    let s = stop.clone();
+    let _ = ctrlc::set_handler(move || {
+        s.store(true, Ordering::SeqCst);
+    });
+    stop
+}
+
+/// The message of a run stopped early (exit status 130).
+pub fn interrupted(s: &Simulated) -> super::Interrupted {
+    super::Interrupted(format!("stopped (Ctrl-C or SIGTERM) after year {}: outputs so far are complete in {}; continue with --resume", s.year, s.out.display()))
+}
+
+/// The simulation's progress on stderr: a bar over the years, then one line with the final
+/// year's figures (and the phase times with `SYLVA_PHASE_TIMES=1`).
+#[derive(Default)]
+pub struct SimBar(Option<indicatif::ProgressBar>);
+
+impl SimBar {
+    /// Draws `e` ([`Event::Simulating`], [`Event::Year`], [`Event::Simulated`]; others are
+    /// ignored).
+    pub fn show(&mut self, e: &Event) {
+        match e {
+            Event::Simulating { years } => self.0 = Some(super::progress(*years as u64, "simulate")),
+            Event::Year(p) => {
+                if let Some(pb) = &self.0 {
+                    pb.set_position(p.year as u64);
+                    pb.set_message(format!("year {} · {} trees · {:.0} trees/s", p.year, p.trees, p.trees_per_s));
+                }
+            }
+            Event::Simulated(s) => {
+                if let Some(pb) = self.0.take() {
+                    pb.finish();
+                }
+                if std::env::var_os("SYLVA_PHASE_TIMES").is_some() {
+                    let list: Vec<String> = s.phase_seconds.iter().map(|(n, t)| format!("{n} {t:.1} s")).collect();
+                    eprintln!("phase times: {}", list.join(", "));
+                }
+                let last = s.rows.last();
+                eprintln!(
+                    "{} year {}: {} trees, basal area {:.1} m²/ha, top height {:.1} m ({:.1} s){} → {}",
+                    s.name,
+                    s.year,
+                    s.trees_alive,
+                    last.map_or(0.0, |r| r.basal_area_m2_ha),
+                    last.map_or(0.0, |r| r.top_height_m),
+                    s.seconds,
+                    if s.stopped { ", stopped early" } else { "" },
+                    s.out.display()
+                );
+            }
+            _ => {}
         }
-    };
-    // a resumed run keeps the species files it was simulated with (a changed species is
-    // refused by the checkpoint before anything is written)
-    if !(resume && sylva::job::checkpoint::exists(&out)) {
-        save_run_species(sc, lib, &out)?;
     }
-    let mut opts = RunOptions::new(&out);
-    opts.resume = resume;
-    opts.geojson_years = geojson_years;
-    opts.stop = Some(stop);
-    opts.progress = Some(&mut cb);
-    let mut on_snapshot = on_snapshot;
-    if let Some(f) = on_snapshot.as_mut() {
-        opts.on_snapshot = Some(&mut **f);
+}
+
+/// `sylva simulate` into `out` stepped as `stepping` says, with a progress bar and a Ctrl-C
+/// handler (stop after the current year: [`super::Interrupted`]).
+fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, stepping: Stepping) -> anyhow::Result<()> {
+    let opts = SimulateOptions { out, resume, geojson_years: None, stop: Some(stop_on_ctrl_c()) };
+    let mut bar = SimBar::default();
+    let s = main_job::simulate(sc, site, lib, opts, stepping, None, &mut |e| bar.show(e))?;
+    if s.stopped {
+        return Err(interrupted(&s).into());
     }
-    let res = match mode {
-        Mode::One => run_scenario(sc, site, lib, opts),
-        Mode::Local(n) => sylva::job::tiled::run_local_tiles(sc, site, lib, opts, n).map(|r| r.0),
-        Mode::Ranks(t) => sylva::job::tiled::run_tiled(sc, site, lib, opts, t).and_then(|r| r.ok_or_else(|| sylva::Error::Exchange { peer: 0, reason: "rank 0 ended without a run summary".into() }.into())),
-    }
-    .with_context(|| format!("simulating {}", sc.name))?;
-    pb.finish();
-    if std::env::var_os("SYLVA_PHASE_TIMES").is_some() {
-        let names = sylva::sim::step::PHASES.iter().map(|p| p.name).chain(["outputs"]);
-        let list: Vec<String> = names.zip(phase_sums).map(|(n, s)| format!("{n} {s:.1} s")).collect();
-        eprintln!("phase times: {}", list.join(", "));
-    }
-    let last = res.rows.last();
-    eprintln!(
-        "{} year {}: {} trees, basal area {:.1} m²/ha, top height {:.1} m ({:.1} s){} → {}",
-        sc.name,
-        res.world.stand.year,
-        res.trees,
-        last.map_or(0.0, |r| r.basal_area_m2_ha),
-        last.map_or(0.0, |r| r.top_height_m),
-        res.seconds,
-        if res.stopped { ", stopped early" } else { "" },
-        out.display()
-    );
-    if res.stopped {
-        return Err(super::Interrupted(format!("stopped (Ctrl-C or SIGTERM) after year {}: outputs so far are complete in {}; continue with --resume", res.world.stand.year, out.display())).into());
-    }
-    let pool = res.world.site.pool.iter().map(|&s| res.world.site.lib.species[s as usize].id.clone()).collect();
-    Ok(SimOutcome { year: res.world.stand.year, trees_alive: res.trees, pool, rows: res.rows })
+    Ok(())
 }
 
 /// Prints one line per rank of a tiled run to stderr: wall time, peak resident memory
@@ -234,17 +189,17 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 let _ = ctrlc::set_handler(|| {});
                 sylva::job::tiled::work(&sc, site, &lib, &mut t).with_context(|| format!("simulating {} (rank {})", sc.name, t.rank()))
             } else {
-                simulate_mode(&sc, site, &lib, a.out.clone(), a.resume, None, None, Mode::Ranks(&mut t)).map(|_| ())
+                simulate(&sc, site, &lib, a.out.clone(), a.resume, Stepping::Ranks(&mut t))
             };
             rank_stats(t.rank(), t.size(), t0.elapsed().as_secs_f64(), t.bytes_sent(), sc.years);
             return r;
         }
     }
-    let mode = || match a.tiles {
-        Some(n) if n > 1 => Mode::Local(n),
-        _ => Mode::One,
+    let stepping = || match a.tiles {
+        Some(n) if n > 1 => Stepping::Local(n),
+        _ => Stepping::One,
     };
-    let go = || simulate_mode(&sc, site, &lib, a.out.clone(), a.resume, None, None, mode()).map(|_| ());
+    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume, stepping());
     match a.threads {
         Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build().context("thread pool")?.install(go),
         None => go(),

@@ -17,6 +17,16 @@ pub enum JobError {
     /// Rendering on the GPU ([`RenderError`]: no adapter, device, validation, readback).
     #[error("render: {0}")]
     Render(RenderError),
+    /// An error of a step of the main job under the step's name (e.g. "simulating NAME"), as
+    /// the command line prints it: the step, then the cause.
+    #[error("{what}")]
+    Context {
+        /// The step that failed.
+        what: String,
+        /// Its error.
+        #[source]
+        source: Box<JobError>,
+    },
 }
 
 impl From<RenderError> for JobError {

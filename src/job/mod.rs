@@ -10,6 +10,7 @@ pub mod adapted;
 pub mod checkpoint;
 pub mod export;
 pub mod inventory;
+pub mod main_job;
 pub mod maps;
 pub mod pictures;
 pub mod run;

@@ -71,6 +71,25 @@ impl Stage {
         Ok(Stage { site, library, scene, renderer, obstacles: Vec::new(), adapt: Some(AdaptOptions::default()), last_adapt: AdaptStats::default(), base_prototypes, obstacle_instances: Vec::new(), cache: adapted::cache(0), landscape })
     }
 
+    /// The stage of a scenario's pictures: [`Stage::new`] with its sea level, its seed and
+    /// obstacles ([`Stage::set_scenario`]) and the terrain around its window
+    /// ([`Stage::set_surroundings_of`]).
+    ///
+    /// Errors: as [`Stage::new`]; reading the scenario's terrain under "the terrain around the
+    /// simulated window" ([`super::JobError::Context`]).
+    pub fn for_scenario(sc: &crate::sim::Scenario, site: SiteConditions, library: SpeciesLibrary) -> Result<Self> {
+        let mut stage = Stage::new(site, library, sc.climate.sea_level_m)?;
+        stage.set_scenario(sc.seed, &sc.obstacles);
+        stage.set_surroundings_of(sc).map_err(|e| super::JobError::Context { what: "the terrain around the simulated window".into(), source: Box::new(e) })?;
+        Ok(stage)
+    }
+
+    /// Sets the adaptation of the near field ([`Stage::adapt`]; `None`: every tree an instanced
+    /// prototype); returns the one it replaces.
+    pub fn set_adapt(&mut self, adapt: Option<AdaptOptions>) -> Option<AdaptOptions> {
+        std::mem::replace(&mut self.adapt, adapt)
+    }
+
     /// Draws the terrain beyond the simulated window around it: `full` is the whole terrain
     /// the site was cut from with `window` (`[col0, row0, width, height]` in its cells), see
     /// [`scene::Landscape::new`].

@@ -1,0 +1,627 @@
+//! The main job as library calls: [`main_job`] is the whole of `sylva run` (living conditions →
+//! maps → simulation → stills → close-up → timelapse → `summary.md`), [`simulate`] the whole of
+//! `sylva simulate` (the run directory of a scenario, stepped in one process, in tiles or as
+//! rank 0 of MPI ranks). Both report through a progress sink (a closure over [`Event`]) and
+//! return a summary; the command line only parses arguments, draws progress bars and handles
+//! Ctrl-C (the stop flag of the options). What a run writes is listed once, with its schedule,
+//! in [`OUTPUTS`].
+
+use super::adapted::AdaptStats;
+use super::pictures::{self, Stage, TimelapseOptions};
+use super::run::{run_scenario, Progress, RunOptions};
+use super::{inventory, scene, JobError, Result};
+use crate::render::camera::{Camera, CameraPreset};
+use crate::render::scene::TreeInstance;
+use crate::sim::scenario::Scenario;
+use crate::sim::stats::StandRow;
+use crate::sim::tiles::Transport;
+use crate::sim::world::World;
+use crate::species::{Season, SpeciesLibrary};
+use crate::conditions::SiteConditions;
+use crate::Error;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// The embedded default scenario (`scenarios/default.toml`).
+pub const DEFAULT_SCENARIO: &str = include_str!("../../scenarios/default.toml");
+
+/// The name [`default_scenario`] gives the embedded scenario in its error messages.
+pub const DEFAULT_SCENARIO_SOURCE: &str = "embedded default scenario (scenarios/default.toml)";
+
+/// The embedded default scenario, parsed.
+///
+/// Errors: none for the shipped file (a test parses it); [`Error::Format`] / [`Error::Invalid`]
+/// naming [`DEFAULT_SCENARIO_SOURCE`] otherwise.
+pub fn default_scenario() -> crate::Result<Scenario> {
+    Scenario::from_toml_str(DEFAULT_SCENARIO, DEFAULT_SCENARIO_SOURCE)
+}
+
+/// Years at which [`main_job`] renders stills (those within the run; the last snapshot's year
+/// is always added).
+pub const STILL_YEARS: [u32; 6] = [0, 10, 25, 50, 100, 150];
+
+/// When an output of a run is written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum When {
+    /// Once, when the run starts (a resumed run rewrites `scenario.toml` only).
+    Start,
+    /// At every plain snapshot: year 0 of a fresh run, every `snapshot_every` years, the last
+    /// year, a year stopped at.
+    Snapshot,
+    /// At the snapshots of `seasonal_snapshots` runs, after spring, summer and autumn.
+    Season,
+    /// At every checkpoint: every `checkpoint_every` years, the last year, a year stopped at.
+    Checkpoint,
+    /// After the simulation, once per still year ([`STILL_YEARS`] within the run and the last
+    /// snapshot's year); `sylva run` only.
+    StillYears,
+    /// Once after the simulation; `sylva run` only.
+    End,
+}
+
+/// One output of a run directory.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Output {
+    /// Path in the run directory; `NNNN` stands for a four-digit year (`NNNNN` a frame
+    /// number), `*` for any name, `{a,b}` for one of the names.
+    pub path: &'static str,
+    /// When it is written.
+    pub when: When,
+    /// True for outputs of `sylva run` ([`main_job`]) only, false for outputs of both commands.
+    pub main_job_only: bool,
+    /// What it holds.
+    pub what: &'static str,
+}
+
+/// Every file a run directory may hold, with its schedule (tests/main_job.rs checks that a
+/// run writes nothing else). `sylva simulate` ([`simulate`]) writes those with
+/// `main_job_only` false; [`main_job`] all of them (GeoJSON inventories only for the last
+/// year).
+pub const OUTPUTS: &[Output] = &[
+    Output { path: "scenario.toml", when: When::Start, main_job_only: false, what: "the scenario as run (`years` included)" },
+    Output { path: "species/*.toml", when: When::Start, main_job_only: false, what: "the species files of the pool, as simulated" },
+    Output { path: "maps/conditions/*.{png,tif}", when: When::Start, main_job_only: true, what: "condition maps with legends and GeoTIFFs" },
+    Output { path: "inventory/year_NNNN.csv", when: When::Snapshot, main_job_only: false, what: "every tree" },
+    Output { path: "inventory/year_NNNN.geojson", when: When::Snapshot, main_job_only: false, what: "every tree as GeoJSON points (the main job: the last year only)" },
+    Output { path: "inventory/year_NNNN_regeneration.csv", when: When::Snapshot, main_job_only: false, what: "the sapling cohorts of the regeneration layer" },
+    Output { path: "inventory/year_NNNN_{spring,summer,autumn}.{csv,geojson}", when: When::Season, main_job_only: false, what: "seasonal inventories" },
+    Output { path: "maps/{species,basal_area}_year_NNNN.{png,tif}", when: When::Snapshot, main_job_only: false, what: "dominant species and basal-area maps" },
+    Output { path: "maps/species_codes.csv", when: When::Snapshot, main_job_only: false, what: "the codes of the species GeoTIFFs" },
+    Output { path: "stand_table.{csv,png}", when: When::Checkpoint, main_job_only: false, what: "one row per year, and its plot (also at every snapshot)" },
+    Output { path: "checkpoint.bin", when: When::Checkpoint, main_job_only: false, what: "the latest checkpoint (a tiled run: `checkpoint/`)" },
+    Output { path: "checkpoint/*", when: When::Checkpoint, main_job_only: false, what: "per-rank checkpoints of a tiled run" },
+    Output { path: "stills/year_NNNN_{oblique,topdown}.png", when: When::StillYears, main_job_only: true, what: "stills from afar" },
+    Output { path: "stills/year_NNNN_closeup.png", when: When::End, main_job_only: true, what: "a close view into the last year's forest, its near field adapted" },
+    Output { path: "frames/frame_NNNNN.png", when: When::End, main_job_only: true, what: "the timelapse's frames" },
+    Output { path: "timelapse.{gif,mp4}", when: When::End, main_job_only: true, what: "the timelapse (MP4 when ffmpeg is installed)" },
+    Output { path: "summary.md", when: When::End, main_job_only: true, what: "the figures and every picture in one page" },
+];
+
+/// Whether `rel` (a path in a run directory, `/`-separated) is one of [`OUTPUTS`]' patterns:
+/// `N` matches a digit, `*` one or more characters other than `/`, `{a,b}` one of the names.
+pub fn is_output(rel: &str) -> bool {
+    OUTPUTS.iter().any(|o| expand(o.path).iter().any(|p| matches_pattern(p.as_bytes(), rel.as_bytes())))
+}
+
+/// The patterns of `p` with its `{a,b}` groups expanded.
+fn expand(p: &str) -> Vec<String> {
+    let (Some(i), Some(j)) = (p.find('{'), p.find('}')) else { return vec![p.to_string()] };
+    p[i + 1..j].split(',').flat_map(|alt| expand(&format!("{}{alt}{}", &p[..i], &p[j + 1..]))).collect()
+}
+
+fn matches_pattern(p: &[u8], s: &[u8]) -> bool {
+    match (p.first(), s.first()) {
+        (None, None) => true,
+        (Some(b'*'), Some(&c)) if c != b'/' => matches_pattern(&p[1..], &s[1..]) || matches_pattern(p, &s[1..]),
+        (Some(b'N'), Some(c)) if c.is_ascii_digit() => matches_pattern(&p[1..], &s[1..]),
+        (Some(a), Some(b)) if *a != b'*' && *a != b'N' && a == b => matches_pattern(&p[1..], &s[1..]),
+        _ => false,
+    }
+}
+
+/// What [`main_job`] and [`simulate`] report while they run, in order.
+#[derive(Debug)]
+pub enum Event<'a> {
+    /// The main job starts: the scenario's name, years and seed, the run directory.
+    Begin {
+        /// Scenario name.
+        name: &'a str,
+        /// Years to simulate.
+        years: u32,
+        /// Scenario seed.
+        seed: u64,
+        /// Run directory.
+        out: &'a Path,
+    },
+    /// The living conditions are derived and mapped: grid size (cells), extent (m), map names,
+    /// wall time (s).
+    Conditions {
+        /// Grid columns.
+        width: usize,
+        /// Grid rows.
+        height: usize,
+        /// Extent east and north (m).
+        extent_m: (f64, f64),
+        /// Names of the condition maps written (`maps/conditions/NAME.png`).
+        maps: &'a [String],
+        /// Wall time (s).
+        seconds: f64,
+    },
+    /// The simulation of `years` years starts.
+    Simulating {
+        /// Years of the scenario.
+        years: u32,
+    },
+    /// A year is simulated.
+    Year(&'a Progress),
+    /// The simulation ended (or was stopped: [`Simulated::stopped`]).
+    Simulated(&'a Simulated),
+    /// The stills start: `count` pictures from afar (two per still year) on the renderer's
+    /// `adapter`.
+    Stills {
+        /// Stills from afar to come.
+        count: usize,
+        /// The renderer's adapter (name, driver).
+        adapter: &'a str,
+    },
+    /// A still from afar is written.
+    Still,
+    /// The close-up is written, with what its near field adapted.
+    CloseUp(&'a AdaptStats),
+    /// The stills are done.
+    StillsDone,
+    /// The timelapse starts.
+    Timelapse,
+    /// `done` of `total` timelapse frames are written.
+    Frame {
+        /// Frames written so far.
+        done: usize,
+        /// Frames of the film.
+        total: usize,
+    },
+    /// The timelapse is done.
+    TimelapseDone,
+}
+
+/// A progress sink: called with every [`Event`] (`&mut |_| {}` ignores them).
+pub type Sink<'s> = dyn FnMut(&Event) + 's;
+
+/// How [`simulate`] steps the years.
+pub enum Stepping<'a> {
+    /// One process, the whole landscape.
+    One,
+    /// N tiles, one thread each, in this process (`sylva simulate --tiles N`).
+    Local(usize),
+    /// Rank 0 of a tiled run over a transport (MPI); the other ranks run
+    /// [`super::tiled::work`].
+    Ranks(&'a mut dyn Transport),
+}
+
+/// Options of [`simulate`].
+pub struct SimulateOptions {
+    /// Run directory (created; it must not be a file).
+    pub out: PathBuf,
+    /// Continue from the run directory's checkpoint ([`RunOptions::resume`]).
+    pub resume: bool,
+    /// Years whose snapshots also get a GeoJSON inventory (`None`: all; the last year always).
+    pub geojson_years: Option<Vec<u32>>,
+    /// Stop after the current year when set (e.g. by a Ctrl-C handler); the outputs so far are
+    /// complete and a checkpoint is written.
+    pub stop: Option<Arc<AtomicBool>>,
+}
+
+impl SimulateOptions {
+    /// A fresh run into `out`: no resume, GeoJSON at every snapshot, no stop flag.
+    pub fn new(out: impl Into<PathBuf>) -> Self {
+        SimulateOptions { out: out.into(), resume: false, geojson_years: None, stop: None }
+    }
+}
+
+/// What a simulation did.
+#[derive(Debug, Clone)]
+pub struct Simulated {
+    /// Scenario name.
+    pub name: String,
+    /// The last year simulated.
+    pub year: u32,
+    /// Living trees at the end (all sizes).
+    pub trees_alive: usize,
+    /// Species ids of the pool, in stand-table order.
+    pub pool: Vec<String>,
+    /// Stand table, one row per year.
+    pub rows: Vec<StandRow>,
+    /// True when stopped early by the stop flag (outputs so far complete; continue with a
+    /// resume).
+    pub stopped: bool,
+    /// Wall time of the years simulated (s).
+    pub seconds: f64,
+    /// Wall time (s) of each phase ([`crate::sim::step::PHASES`] names) and of the yearly
+    /// outputs (`"outputs"`), summed over the years (a tiled run: rank 0's tile, its exchanges
+    /// included).
+    pub phase_seconds: Vec<(&'static str, f64)>,
+    /// The run directory.
+    pub out: PathBuf,
+}
+
+/// Errors: [`Error::Format`] naming `out` when it is a file.
+fn check_out(out: &Path) -> Result<()> {
+    if out.exists() && !out.is_dir() {
+        return Err(Error::format(out, "is a file; expected a folder for the run's outputs").into());
+    }
+    Ok(())
+}
+
+/// `r` with its error under the message `what` ([`JobError::Context`]).
+fn context<T>(r: Result<T>, what: impl FnOnce() -> String) -> Result<T> {
+    r.map_err(|e| JobError::Context { what: what(), source: Box::new(e) })
+}
+
+/// Folder of a run directory that holds the species files the run was simulated with.
+pub fn run_species_dir(run_dir: &Path) -> PathBuf {
+    run_dir.join("species")
+}
+
+/// Writes the pool's species files into `RUN/species/` (so `render`, `timelapse` and a
+/// `--resume` find the same species later, also edited or custom ones).
+///
+/// Errors: I/O errors naming the folder or file; serialising a species.
+pub fn save_run_species(sc: &Scenario, lib: &SpeciesLibrary, run_dir: &Path) -> Result<()> {
+    let dir = run_species_dir(run_dir);
+    std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+    for name in &sc.species {
+        if let Some(sp) = lib.get(name) {
+            crate::output::write_atomic(&dir.join(format!("{}.toml", sp.id)), sp.to_toml_string()?.as_bytes())?;
+        }
+    }
+    Ok(())
+}
+
+/// Runs `sc` on `site` with species from `lib` into the run directory `opts.out`, stepped as
+/// `stepping` says: saves the pool's species files (not on a resume with a checkpoint), then
+/// [`run_scenario`] (or a tiled run) with `on_snapshot` called at every plain snapshot with the
+/// in-memory world. Reports [`Event::Simulating`], [`Event::Year`] and [`Event::Simulated`].
+/// A run stopped by `opts.stop` returns with [`Simulated::stopped`] set.
+///
+/// Errors: as [`run_scenario`] under "simulating NAME"; [`Error::Format`] when `opts.out` is
+/// a file.
+pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts: SimulateOptions, stepping: Stepping, on_snapshot: Option<&mut dyn FnMut(u32, &World)>, sink: &mut Sink) -> Result<Simulated> {
+    let out = opts.out;
+    check_out(&out)?;
+    sink(&Event::Simulating { years: sc.years });
+    let mut phase_sums = [0f64; crate::sim::step::N_PHASES + 1];
+    let mut cb = |p: &Progress| {
+        for (k, s) in p.phase_seconds.iter().chain([&p.output_seconds]).enumerate() {
+            phase_sums[k] += s;
+        }
+        sink(&Event::Year(p));
+    };
+    // a resumed run keeps the species files it was simulated with (a changed species is
+    // refused by the checkpoint before anything is written)
+    if !(opts.resume && super::checkpoint::exists(&out)) {
+        save_run_species(sc, lib, &out)?;
+    }
+    let mut ro = RunOptions::new(&out);
+    ro.resume = opts.resume;
+    ro.geojson_years = opts.geojson_years;
+    ro.stop = opts.stop;
+    ro.progress = Some(&mut cb);
+    let mut on_snapshot = on_snapshot;
+    if let Some(f) = on_snapshot.as_mut() {
+        ro.on_snapshot = Some(&mut **f);
+    }
+    let res = match stepping {
+        Stepping::One => run_scenario(sc, site, lib, ro),
+        Stepping::Local(n) => super::tiled::run_local_tiles(sc, site, lib, ro, n).map(|r| r.0),
+        Stepping::Ranks(t) => super::tiled::run_tiled(sc, site, lib, ro, t).and_then(|r| r.ok_or_else(|| Error::Exchange { peer: 0, reason: "rank 0 ended without a run summary".into() }.into())),
+    };
+    let res = context(res, || format!("simulating {}", sc.name))?;
+    let names = crate::sim::step::PHASES.iter().map(|p| p.name).chain(["outputs"]);
+    let pool = res.world.site.pool.iter().map(|&s| res.world.site.lib.species[s as usize].id.clone()).collect();
+    let done = Simulated { name: sc.name.clone(), year: res.world.stand.year, trees_alive: res.trees, pool, rows: res.rows, stopped: res.stopped, seconds: res.seconds, phase_seconds: names.zip(phase_sums).collect(), out };
+    sink(&Event::Simulated(&done));
+    Ok(done)
+}
+
+/// Options of [`main_job`].
+#[derive(Debug, Clone)]
+pub struct MainJobOptions {
+    /// Output folder (created; it must not be a file).
+    pub out: PathBuf,
+    /// Size of the stills (px).
+    pub size: (u32, u32),
+    /// Size of the timelapse frames (px).
+    pub timelapse_size: (u32, u32),
+    /// Interpolated timelapse frames between consecutive snapshots (0–50).
+    pub frames_between: u32,
+    /// Timelapse frames per second (1–100).
+    pub fps: f32,
+    /// Render stills and the timelapse (false: no GPU or software adapter needed).
+    pub render: bool,
+    /// Stop after the current year when set (e.g. by a Ctrl-C handler): no pictures, no
+    /// `summary.md`; [`Simulated::stopped`] is set.
+    pub stop: Option<Arc<AtomicBool>>,
+}
+
+impl MainJobOptions {
+    /// The defaults of `sylva run`: stills 1280 × 720, frames 640 × 360, one interpolated
+    /// frame between snapshots, 8 frames per second, rendering on, no stop flag.
+    pub fn new(out: impl Into<PathBuf>) -> Self {
+        MainJobOptions { out: out.into(), size: (1280, 720), timelapse_size: (640, 360), frames_between: 1, fps: 8.0, render: true, stop: None }
+    }
+}
+
+/// One still of the main job.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Still {
+    /// Snapshot year.
+    pub year: u32,
+    /// View: `oblique`, `topdown` or `closeup`.
+    pub view: String,
+    /// The PNG written.
+    pub path: PathBuf,
+}
+
+/// The timelapse of the main job.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Film {
+    /// The GIF written.
+    pub gif: PathBuf,
+    /// Frames in it.
+    pub frames: usize,
+    /// True when an MP4 was written beside it.
+    pub mp4: bool,
+}
+
+/// What [`main_job`] did.
+#[derive(Debug, Clone)]
+pub struct MainJobSummary {
+    /// The simulation.
+    pub sim: Simulated,
+    /// Scenario name, years, seed and species count as `summary.md` states them.
+    pub scenario: Scenario,
+    /// Names of the condition maps (`maps/conditions/NAME.png`).
+    pub maps: Vec<String>,
+    /// Stills written, in order (empty without rendering or when stopped).
+    pub stills: Vec<Still>,
+    /// The timelapse (none without rendering or when stopped).
+    pub film: Option<Film>,
+    /// Wall time (s) of the living conditions and their maps.
+    pub site_s: f64,
+    /// Wall time (s) of the simulation.
+    pub sim_s: f64,
+    /// Wall time (s) of the pictures.
+    pub pictures_s: f64,
+    /// Wall time (s) of the whole job.
+    pub total_s: f64,
+}
+
+impl MainJobSummary {
+    /// The summary's two Markdown tables: figures and times, species shares of basal area
+    /// and stems (largest first), as printed by `sylva run` and written into `summary.md`.
+    pub fn tables(&self) -> (String, String) {
+        let s = &self.sim;
+        let last = s.rows.last();
+        let mut table = String::new();
+        let _ = writeln!(table, "| quantity | value |\n|---|---|");
+        let _ = writeln!(table, "| year | {} |", s.year);
+        let _ = writeln!(table, "| trees alive (all sizes) | {} |", s.trees_alive);
+        if let Some(r) = last {
+            let _ = writeln!(table, "| stems ≥ 1.3 m per ha | {:.0} |", r.stems_ha);
+            let _ = writeln!(table, "| basal area (m²/ha) | {:.1} |", r.basal_area_m2_ha);
+            let _ = writeln!(table, "| top height H100 (m) | {:.1} |", r.top_height_m);
+            let _ = writeln!(table, "| quadratic mean DBH (cm) | {:.1} |", r.qmd_cm);
+        }
+        let _ = writeln!(table, "| time: living conditions (s) | {:.1} |", self.site_s);
+        let _ = writeln!(table, "| time: simulation (s) | {:.1} |", self.sim_s);
+        let _ = writeln!(table, "| time: pictures (s) | {:.1} |", self.pictures_s);
+        let _ = writeln!(table, "| time: total (s) | {:.1} |", self.total_s);
+        let mut shares = String::from("| species | share of basal area | share of stems |\n|---|---|---|\n");
+        if let Some(r) = last {
+            let mut order: Vec<usize> = (0..s.pool.len()).collect();
+            order.sort_by(|&i, &j| r.share_ba[j].total_cmp(&r.share_ba[i]).then(i.cmp(&j)));
+            for i in order {
+                let _ = writeln!(shares, "| {} | {:.1} % | {:.1} % |", s.pool[i], 100.0 * r.share_ba[i], 100.0 * r.share_stems[i]);
+            }
+        }
+        (table, shares)
+    }
+}
+
+/// The whole of `sylva run`: derives the living conditions of `sc`'s terrain and writes their
+/// maps, simulates the forest with species from `lib` ([`simulate`]: stand table, inventories
+/// with GeoJSON for the last year, species and basal-area maps, checkpoints), then, with
+/// `opts.render`, stills from an oblique and a top-down camera at [`STILL_YEARS`] (and the last
+/// snapshot), a close view into the last year's forest with its near field adapted, a
+/// timelapse of every snapshot, and `summary.md`. [`OUTPUTS`] lists the files. Reports every
+/// step to `sink`. A run stopped by `opts.stop` returns after the simulation with
+/// [`Simulated::stopped`] set (no pictures, no `summary.md`).
+///
+/// Errors: [`Error::Format`] when `opts.out` is a file; I/O errors naming the file; reading the
+/// terrain (under "terrain of scenario NAME"); the simulation's (under "simulating NAME");
+/// [`JobError::Render`] when no adapter is found (under "setting up the renderer").
+pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink: &mut Sink) -> Result<MainJobSummary> {
+    let t0 = Instant::now();
+    let out = opts.out.clone();
+    check_out(&out)?;
+    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
+    sink(&Event::Begin { name: &sc.name, years: sc.years, seed: sc.seed, out: &out });
+
+    // 1. Living conditions.
+    let t_site = Instant::now();
+    let site = context(sc.site().map_err(JobError::from), || format!("terrain of scenario {}", sc.name))?;
+    let maps = super::maps::write_site_maps(&site, &out.join("maps").join("conditions"))?;
+    let site_s = t_site.elapsed().as_secs_f64();
+    sink(&Event::Conditions { width: site.width(), height: site.height(), extent_m: site.extent_m(), maps: &maps, seconds: site_s });
+
+    // 2. Simulation. The pictures' key frames come from the in-memory world at each snapshot
+    // (summer instances of the visible trees), not from the inventory files.
+    let t_sim = Instant::now();
+    let mut keys: Vec<(u32, Vec<TreeInstance>)> = Vec::new();
+    // the living trees of the last kept snapshot, for the adapted close-up
+    let mut last_rows: Vec<inventory::InventoryRow> = Vec::new();
+    let mut keep = |y: u32, w: &World| {
+        if opts.render {
+            keys.push((y, scene::instances_with_saplings(&scene::plants_from_world(w), &scene::saplings_from_world(w), lib, &site, Season::Summer)));
+            last_rows = inventory::rows_from_world(w);
+        }
+    };
+    // GeoJSON (≈ 280 bytes per tree, ≈ 250 MB at the end of the default run) only for the
+    // final year; the CSV inventory is written at every snapshot
+    let so = SimulateOptions { out: out.clone(), resume: false, geojson_years: Some(vec![sc.years]), stop: opts.stop.clone() };
+    let sim = simulate(sc, site.clone(), lib, so, Stepping::One, Some(&mut keep), sink)?;
+    let sim_s = t_sim.elapsed().as_secs_f64();
+    let mut summary = MainJobSummary { sim, scenario: sc.clone(), maps, stills: Vec::new(), film: None, site_s, sim_s, pictures_s: 0.0, total_s: 0.0 };
+    if summary.sim.stopped {
+        summary.total_s = t0.elapsed().as_secs_f64();
+        return Ok(summary);
+    }
+
+    // 3 + 4. Pictures.
+    let t_pic = Instant::now();
+    if opts.render {
+        let (stills, film) = pictures_of(sc, site, lib, keys, &last_rows, opts, sink)?;
+        summary.stills = stills;
+        summary.film = Some(film);
+    }
+    summary.pictures_s = t_pic.elapsed().as_secs_f64();
+    summary.total_s = t0.elapsed().as_secs_f64();
+    write_summary_md(&out, &summary)?;
+    Ok(summary)
+}
+
+/// The main job's pictures: stills at the still years, the close-up of the last one, the
+/// timelapse of the key frames `keys` (year, summer instances), in `opts.out`.
+fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut keys: Vec<(u32, Vec<TreeInstance>)>, last_rows: &[inventory::InventoryRow], opts: &MainJobOptions, sink: &mut Sink) -> Result<(Vec<Still>, Film)> {
+    let out = &opts.out;
+    let (w, h) = opts.size;
+    let mut stage = context(Stage::for_scenario(sc, site.clone(), lib.clone()), || "setting up the renderer (install mesa-vulkan-drivers for the CPU adapter)".into())?;
+    // the stills from afar draw instanced prototypes; the close-up adapts its near field
+    let adapt = stage.set_adapt(None);
+    let mut years: Vec<u32> = STILL_YEARS.iter().copied().filter(|y| keys.iter().any(|k| k.0 == *y)).collect();
+    if let Some(last) = keys.iter().map(|k| k.0).max() {
+        if !years.contains(&last) {
+            years.push(last);
+        }
+    }
+    sink(&Event::Stills { count: years.len() * 2, adapter: &stage.renderer.adapter_description() });
+    let stills_dir = out.join("stills");
+    std::fs::create_dir_all(&stills_dir).map_err(|e| Error::io(&stills_dir, e))?;
+    remove_old_stills(&stills_dir)?;
+    let mut stills = Vec::new();
+    let key = |y: u32| keys.iter().find(|k| k.0 == y).map(|k| k.1.clone()).unwrap_or_default();
+    for &y in &years {
+        for (preset, name) in [(CameraPreset::Oblique, "oblique"), (CameraPreset::Map, "topdown")] {
+            let cam = stage.camera_sized(preset, w, h);
+            let img = stage.render_instances(key(y), Season::Summer, &cam, w, h)?;
+            let path = stills_dir.join(format!("year_{y:04}_{name}.png"));
+            crate::output::pictures::write_png(&path, &img)?;
+            stills.push(Still { year: y, view: name.to_string(), path });
+            sink(&Event::Still);
+        }
+    }
+    // A close view into the final forest, where the species' architectures show.
+    if let Some(&y) = years.last() {
+        let (ex, ey) = site.extent_m();
+        let (x0, y0) = (0.3 * ex, 0.3 * ey);
+        let (x1, y1) = (0.45 * ex, 0.45 * ey);
+        let z0 = site.elevation_at(x0, y0) + 45.0;
+        let z1 = site.elevation_at(x1, y1) + 5.0;
+        let cam = Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0);
+        stage.set_adapt(adapt);
+        let img = stage.render_rows(last_rows, Season::Summer, &cam, w, h)?;
+        stage.set_adapt(None);
+        sink(&Event::CloseUp(&stage.last_adapt));
+        let path = stills_dir.join(format!("year_{y:04}_closeup.png"));
+        crate::output::pictures::write_png(&path, &img)?;
+        stills.push(Still { year: y, view: "closeup".to_string(), path });
+    }
+    sink(&Event::StillsDone);
+    sink(&Event::Timelapse);
+    let topts = TimelapseOptions { width: opts.timelapse_size.0, height: opts.timelapse_size.1, fps: opts.fps, frames_between: opts.frames_between, camera: None, season: Season::Summer };
+    let gif = out.join("timelapse.gif");
+    let key_years: Vec<u32> = keys.iter().map(|k| k.0).collect();
+    let mut key_frames: Vec<Vec<TreeInstance>> = std::mem::take(&mut keys).into_iter().map(|k| k.1).collect();
+    let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, &mut |_, k| Ok(std::mem::take(&mut key_frames[k])), &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
+    sink(&Event::TimelapseDone);
+    Ok((stills, Film { gif, frames, mp4 }))
+}
+
+fn rel(out: &Path, p: &Path) -> String {
+    p.strip_prefix(out).unwrap_or(p).display().to_string()
+}
+
+/// Writes `summary.md` of the main job into `out`.
+///
+/// Errors: I/O errors naming the file.
+fn write_summary_md(out: &Path, s: &MainJobSummary) -> Result<()> {
+    let sc = &s.scenario;
+    let (table, shares) = s.tables();
+    let mut md = String::new();
+    let _ = writeln!(md, "# {}\n", sc.name);
+    let _ = writeln!(md, "{} years, seed {}, {} species in the pool. Scenario as run: `scenario.toml`.\n", sc.years, sc.seed, if sc.species.is_empty() { "all".to_string() } else { sc.species.len().to_string() });
+    let _ = writeln!(md, "## Result\n\n{table}\n{shares}");
+    let _ = writeln!(md, "## Stand development\n\n![stand table](stand_table.png)\n\nData: `stand_table.csv`; inventories: `inventory/`.\n");
+    if let Some(f) = &s.film {
+        let _ = writeln!(md, "## Timelapse\n\n![timelapse]({})\n\n{} frames{}.\n", rel(out, &f.gif), f.frames, if f.mp4 { ", also as `timelapse.mp4`" } else { "" });
+    }
+    let stills = &s.stills;
+    if !stills.is_empty() {
+        if let Some(c) = stills.iter().find(|s| s.view == "closeup") {
+            let _ = writeln!(md, "## Year {} from within the forest\n\n![close view]({})\n", c.year, rel(out, &c.path));
+        }
+        let _ = writeln!(md, "## Stills\n\n| year | oblique | top-down |\n|---|---|---|");
+        let mut years: Vec<u32> = stills.iter().map(|s| s.year).collect();
+        years.dedup();
+        for y in years {
+            let get = |n: &str| stills.iter().find(|s| s.year == y && s.view == n).map(|s| format!("![year {y} {n}]({})", rel(out, &s.path))).unwrap_or_default();
+            let _ = writeln!(md, "| {y} | {} | {} |", get("oblique"), get("topdown"));
+        }
+        md.push('\n');
+    }
+    let _ = writeln!(md, "## Living conditions\n");
+    for m in &s.maps {
+        let _ = writeln!(md, "![{m}](maps/conditions/{m}.png)");
+    }
+    crate::output::write_atomic(&out.join("summary.md"), md.as_bytes())?;
+    Ok(())
+}
+
+/// Removes the stills an earlier run wrote (`year_NNNN_<view>.png`, nothing else) so that a new
+/// run into the same folder does not leave stills of years it did not reach.
+///
+/// Errors: I/O errors naming the folder or file.
+fn remove_old_stills(dir: &Path) -> Result<()> {
+    for e in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
+        let p = e.map_err(|e| Error::io(dir, e))?.path();
+        let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
+        let ours = name.starts_with("year_") && name.ends_with(".png") && name.len() > 10 && name[5..9].bytes().all(|b| b.is_ascii_digit()) && name.as_bytes()[9] == b'_';
+        if ours {
+            std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn output_patterns() {
+        for ok in ["scenario.toml", "inventory/year_0030.csv", "inventory/year_0030_regeneration.csv", "inventory/year_0005_spring.geojson", "maps/basal_area_year_0010.tif", "maps/conditions/L.png", "stills/year_0030_closeup.png", "frames/frame_00012.png", "timelapse.mp4", "checkpoint/rank_0001.bin", "species/beech.toml"] {
+            assert!(is_output(ok), "{ok}");
+        }
+        for bad in ["notes.txt", "inventory/year_30.csv", "maps/conditions/sub/L.png", "stills/year_0030_side.png", "frames/frame_0001.png", "species/beech.txt"] {
+            assert!(!is_output(bad), "{bad}");
+        }
+    }
+
+    #[test]
+    fn default_scenario_parses() {
+        let sc = default_scenario().unwrap();
+        assert!(sc.years > 0 && !sc.name.is_empty());
+    }
+}
