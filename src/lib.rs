@@ -23,6 +23,7 @@ pub mod rng;
 pub mod sim;
 pub mod species;
 pub mod structure;
+pub mod sun;
 pub mod terrain;
 pub mod view;
 

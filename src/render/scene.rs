@@ -155,7 +155,7 @@ impl Sun {
 
 impl Default for Sun {
     fn default() -> Self {
-        Sun::from_position(47.0, 172.0, 14.0)
+        Sun::from_position(47.0, 172.0, crate::sun::REFERENCE_HOUR)
     }
 }
 
@@ -343,7 +343,7 @@ pub fn demo_scene(n_trees: usize, size_m: f32, seed: u64) -> Scene {
         let tint = 0.85 + 0.3 * hash01(k ^ 7);
         instances.push(TreeInstance::new(i, [x, y, height(x, y) - 0.3], h, cr, species, [leaf[0] * tint, leaf[1] * tint, leaf[2] * tint]));
     }
-    Scene::new(terrain, None, prototypes, instances, Sun::from_position(47.0, 172.0, 14.0), Sky::default(), Wind::default())
+    Scene::new(terrain, None, prototypes, instances, Sun::default(), Sky::default(), Wind::default())
 }
 
 #[cfg(test)]
