@@ -124,18 +124,11 @@ impl Sun {
     /// The sun's direction for latitude `latitude_deg` (−90..90), day of year `day_of_year`
     /// (1..=366) and local solar time `hour` (0..24).
     ///
-    /// Declination δ = 23.44° · sin(360°/365 · (284 + n)) (Cooper 1969); hour angle
-    /// H = 15° · (hour − 12); east = −cos δ sin H, north = cos φ sin δ − sin φ cos δ cos H,
-    /// up = sin φ sin δ + cos φ cos δ cos H (standard spherical astronomy, e.g. Iqbal 1983
-    /// eq. 1.3.1). Below the horizon the light is clamped to a dim twilight 2° above it; the
-    /// colour warms as the sun sinks.
+    /// The direction is [`crate::sun::position`] (declination by Cooper 1969, 23.45°; hour angle
+    /// 15°/h; computed in f64). Below the horizon the light is clamped to a dim twilight 2°
+    /// above it; the colour warms as the sun sinks.
     pub fn from_position(latitude_deg: f32, day_of_year: f32, hour: f32) -> Self {
-        let phi = latitude_deg.clamp(-90.0, 90.0).to_radians();
-        let decl = (23.44f32).to_radians() * ((360.0 / 365.0) * (284.0 + day_of_year)).to_radians().sin();
-        let h = (15.0 * (hour - 12.0)).to_radians();
-        let east = -decl.cos() * h.sin();
-        let north = phi.cos() * decl.sin() - phi.sin() * decl.cos() * h.cos();
-        let up = phi.sin() * decl.sin() + phi.cos() * decl.cos() * h.cos();
+        let [east, north, up] = crate::sun::position(latitude_deg as f64, day_of_year as f64, hour as f64).map(|v| v as f32);
         let min_up = (2.0f32).to_radians().sin();
         let mut d = glam::Vec3::new(east, north, up.max(min_up));
         d = d.normalize_or(glam::Vec3::Z);
