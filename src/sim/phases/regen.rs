@@ -35,7 +35,8 @@
 //! Mass balance per species (tested): germinated = alive in cohorts + dead (shade, crowding) +
 //! recruited, kept in [`RegenLedger`].
 
-use super::growth::{light_response, open_crown_radius, open_dbh};
+use super::growth::{light_response, open_crown_radius};
+use crate::sim::rules;
 use crate::species::allometry::{HeightIncrement, Table};
 use super::mortality::{stress_threshold, P_STRESS};
 pub use crate::sim::cohorts::{Cohort, Cohorts, RegenDeath, RegenLedger, RegenYear, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
@@ -272,7 +273,7 @@ pub fn run(w: Regen<'_>) -> usize {
                             }
                         }
                         let (x, y, sc) = pos.unwrap_or((cx, cy, site));
-                        let d = open_dbh(sp, k.height) * 0.8;
+                        let d = rules::start_dbh(sp, k.height);
                         let t = NewTree {
                             species: s,
                             x: x as f32,
@@ -281,7 +282,7 @@ pub fn run(w: Regen<'_>) -> usize {
                             age: k.age,
                             height: k.height,
                             dbh: d,
-                            crown_radius: open_crown_radius(sp, k.height, d) * (0.5 + 0.5 * gl.clamp(0.0, 1.0)),
+                            crown_radius: open_crown_radius(sp, k.height, d) * rules::shaded_crown(gl),
                             suitability: wr.suitability[k.pool as usize][sc],
                         };
                         out.recruits.push((t, gl, k.vigour, birth_id(year as u32, c as u32, born)));
@@ -347,8 +348,8 @@ pub fn run(w: Regen<'_>) -> usize {
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.height, t_height));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.dbh, dbh));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.crown_radius, crown_radius));
-            // as TreeStore::push: crown base at 0.4 of the height
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.height * 0.4, crown_base));
+            // as TreeStore::push
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| rules::start_crown_base(r.0.height), crown_base));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.1, light));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.2, t_vigour));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.suitability, suitability));
