@@ -36,8 +36,9 @@ pub fn shaded_crown(light: f32) -> f32 {
     0.5 + 0.5 * light.clamp(0.0, 1.0)
 }
 
-/// Vigour memory: the new vigour from last year's `vigour` and this year's growth response `f`
-/// (light response × site suitability) under crowding modifier `m` (1: none):
+/// Vigour memory of trees (`growth`) and sapling cohorts (`regen`, with `m` = 1): the new
+/// vigour from last year's `vigour` and this year's growth response `f` (light response × site
+/// suitability) under crowding modifier `m` (1: none):
 /// `v ← 0.5 v + 0.5 f m`, an exponential memory with a half-life of one year, so that
 /// suppression is felt within a few years; stress mortality acts while it is below the
 /// species' threshold (Bugmann 2001's low-growth stress mortality). Source of the weights:

@@ -18,7 +18,8 @@
 //!    table as for the trees, [`Table`]; [`light_response`], suitability `S`) with the ground
 //!    light of the cell under the tree canopy. Cohorts do not shade each other or the trees: they stay out of
 //!    the canopy grid (they are under it); competition within the layer is the density cap.
-//! 3. **Shade mortality** (cause `shade`): vigour `v ← 0.7 v + 0.3 f(L)·S` as for trees; while
+//! 3. **Shade mortality** (cause `shade`): vigour `v ← 0.5 v + 0.5 f(L)·S`, the trees' memory
+//!    ([`rules::vigour_memory`] with no crowding modifier: crowding in the layer is step 4); while
 //!    `v` is below the species' [`stress_threshold`], each stem dies with [`P_STRESS`]
 //!    (Bugmann 2001), a binomial draw.
 //! 4. **Crowding** (cause `crowding`): a stem of height `h` occupies `1 / N_max(h)` ha with the
@@ -230,7 +231,8 @@ pub fn run(w: Regen<'_>) -> usize {
                     let f = light_response(gl, sp.life.shade_tolerance) * wr.suitability[k.pool as usize][site];
                     k.height = (k.height + inc[k.pool as usize].at(k.height) * f).min(sp.life.max_height_m);
                     k.age += 1.0;
-                    k.vigour = 0.7 * k.vigour + 0.3 * f;
+                    // the trees' vigour memory; crowding within the layer is its density cap (4.)
+                    k.vigour = rules::vigour_memory(k.vigour, f, 1.0);
                     if k.vigour < stress_threshold(sp.life.shade_tolerance) {
                         let d = binomial(&mut rm, k.stems, P_STRESS);
                         k.stems -= d;
