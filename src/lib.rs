@@ -17,6 +17,7 @@ pub mod grid;
 pub mod gui;
 pub mod job;
 pub mod mesh;
+pub mod obstacle;
 pub mod output;
 pub mod render;
 pub mod rng;
