@@ -292,13 +292,7 @@ impl Scene {
     }
 }
 
-fn hash01(mut x: u64) -> f32 {
-    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^= x >> 31;
-    (x >> 40) as f32 / (1u64 << 24) as f32
-}
+use crate::rng::unit_f32 as hash01;
 
 /// A synthetic scene for tests, benchmarks and demos: a `size_m` × `size_m` terrain of gentle
 /// analytic hills (≈ 1 vertex per `size_m / 128` m, heights 0..~0.12·size), two stand-in
