@@ -17,12 +17,14 @@ pub mod grid;
 pub mod gui;
 pub mod job;
 pub mod mesh;
+pub mod obstacle;
 pub mod output;
 pub mod render;
 pub mod rng;
 pub mod sim;
 pub mod species;
 pub mod structure;
+pub mod sun;
 pub mod terrain;
 pub mod view;
 

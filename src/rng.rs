@@ -36,12 +36,24 @@ pub fn mix64(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// The golden-ratio increment of SplitMix64 (Steele, Lea & Flood 2014).
+pub const GOLDEN_GAMMA: u64 = 0x9E37_79B9_7F4A_7C15;
+
+/// A deterministic value in [0, 1) of the key `x`: the first output of a SplitMix64 sequence
+/// started at `x` ([`mix64`] of `x + GOLDEN_GAMMA`), its top 24 bits as a fraction. For
+/// per-position variation in pictures (instances, ground cells), where [`hash`] of several
+/// keys is not needed.
+#[inline]
+pub fn unit_f32(x: u64) -> f32 {
+    (mix64(x.wrapping_add(GOLDEN_GAMMA)) >> 40) as f32 / (1u64 << 24) as f32
+}
+
 /// Hashes a list of keys into one 64-bit value (order matters).
 #[inline]
 pub fn hash(keys: &[u64]) -> u64 {
-    let mut h = 0x9E37_79B9_7F4A_7C15u64;
+    let mut h = GOLDEN_GAMMA;
     for &k in keys {
-        h = mix64(h ^ k.wrapping_add(0x9E37_79B9_7F4A_7C15));
+        h = mix64(h ^ k.wrapping_add(GOLDEN_GAMMA));
     }
     h
 }
@@ -64,7 +76,7 @@ impl Stream {
     /// Next 64 random bits.
     #[inline]
     pub fn next_u64(&mut self) -> u64 {
-        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        self.state = self.state.wrapping_add(GOLDEN_GAMMA);
         mix64(self.state)
     }
     /// Uniform in [0, 1).
@@ -124,6 +136,28 @@ impl Stream {
 
 #[cfg(test)]
 mod tests {
+
+    /// `unit_f32` is the three copies it replaced (render::scene, render::instanced,
+    /// render::terrain), bit for bit.
+    #[test]
+    fn unit_f32_equals_the_copies_it_replaced() {
+        let old = |mut x: u64| {
+            x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+            x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+            x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+            let without_last = (x >> 40) as f32 / (1u64 << 24) as f32;
+            x ^= x >> 31;
+            let with_last = (x >> 40) as f32 / (1u64 << 24) as f32;
+            assert_eq!(without_last.to_bits(), with_last.to_bits());
+            with_last
+        };
+        let mut s = Stream::new(1, 2, 3, 4);
+        for k in [0u64, 1, 42, u64::MAX, 0x5DEE_CE66].into_iter().chain((0..1000).map(|_| s.next_u64())) {
+            assert_eq!(unit_f32(k).to_bits(), old(k).to_bits(), "{k}");
+            assert!((0.0..1.0).contains(&unit_f32(k)));
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -17,7 +17,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-const CORE: &[&str] = &["grid", "rng", "climate", "terrain", "conditions", "species", "sim", "structure", "mesh"];
+const CORE: &[&str] = &["grid", "rng", "sun", "obstacle", "climate", "terrain", "conditions", "species", "sim", "structure", "mesh"];
 const SHELL: &[&str] = &["output", "render", "job", "cli", "app", "gui", "view", "edit"];
 
 /// Module path of a source file: `src/sim/phases/growth.rs` → `[sim, phases, growth]`,

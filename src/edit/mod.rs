@@ -25,7 +25,7 @@ use eframe::egui;
 use glam::Vec3;
 
 use crate::gui::{self, FrameClock, Screenshot, Viewport3d, WindowOptions};
-use crate::render::scene::{Scene, Sky, Sun, TerrainMesh, Wind};
+use crate::render::scene::{Scene, Sky, TerrainMesh, Wind};
 use crate::species::schema::{self, Kind};
 use crate::species::{Problem, Species};
 use crate::structure::species_tree::Model;
@@ -128,7 +128,7 @@ impl Editor {
             g.renderer.lod.canopy_px = 0.0;
             g.renderer.lod.switch_px = [20.0, 10.0, 5.0];
         }
-        let scene = Scene::new(ground(30.0), None, Vec::new(), Vec::new(), Sun::from_position(46.0, 196.0, 14.0), Sky::default(), Wind { direction: [1.0, 0.0], directed: 0.0, undirected: 0.0, time_s: 0.0 });
+        let scene = Scene::new(ground(30.0), None, Vec::new(), Vec::new(), crate::job::scene::season_sun(46.0, crate::species::Season::Summer), Sky::default(), Wind { direction: [1.0, 0.0], directed: 0.0, undirected: 0.0, time_s: 0.0 });
         let rig = CameraRig::looking(Vec3::new(-14.0, -18.0, 9.0), Vec3::new(0.0, 0.0, 6.0), 30.0);
         let mut e = Editor {
             doc,

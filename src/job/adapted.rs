@@ -17,7 +17,7 @@ use crate::mesh::{LodChain, TreeMesh, TriMesh, LOD_LEVELS};
 use crate::render::scene::{Camera, Prototype, TreeInstance};
 use crate::sim::obstacle::ObstacleSpec;
 use crate::species::{Season, SpeciesLibrary};
-use crate::structure::grow::space::Obstacle;
+use crate::obstacle::Obstacle;
 use crate::structure::stand::{adapt_stand, AdaptedTree, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
 use crate::structure::{Leaves, Skeleton};
 use glam::Vec3;

@@ -6,7 +6,7 @@ use super::scene::{self, Plant};
 use crate::conditions::SiteConditions;
 use crate::render::camera::{Camera, CameraPreset};
 use crate::render::headless::Renderer;
-use crate::render::scene::{Prototype, Scene, Sun, TreeInstance};
+use crate::render::scene::{Prototype, Scene, TreeInstance};
 use super::adapted::{self, AdaptOptions, AdaptStats};
 use crate::sim::obstacle::ObstacleSpec;
 use crate::structure::stand::SkeletonCache;
@@ -176,7 +176,7 @@ impl Stage {
         self.scene.instances.extend_from_slice(&self.obstacle_instances);
         // the ground under this frame's crowns: forest floor instead of grass
         self.scene.set_terrain(self.landscape.mesh(&self.scene.instances)?);
-        self.scene.sun = Sun::from_position(self.site.geo.latitude_deg as f32, scene::season_day(season), 14.0);
+        self.scene.sun = scene::season_sun(self.site.geo.latitude_deg, season);
         let img = self.renderer.render(&self.scene, camera, width, height);
         self.scene.instances = Vec::new();
         Ok(img?)

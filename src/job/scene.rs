@@ -37,6 +37,12 @@ pub fn season_day(season: Season) -> f32 {
     }
 }
 
+/// The sun of every picture of `season` at latitude `latitude_deg`: its [`season_day`] at
+/// [`crate::sun::REFERENCE_HOUR`] (14:00 local solar time).
+pub fn season_sun(latitude_deg: f64, season: Season) -> Sun {
+    Sun::from_position(latitude_deg as f32, season_day(season), crate::sun::REFERENCE_HOUR)
+}
+
 /// Foliage colour (linear RGB) and leaf amount (0–1) of `species` in `season`: its
 /// [`foliage_on_day`] on the season's [`season_day`], so that species with different leaf-out and
 /// autumn dates differ in the same picture (in mid-May a birch is past its flush while an oak is
@@ -1161,5 +1167,5 @@ mod tests {
 /// A full scene for one snapshot: terrain, prototypes, instances, the sun of the site's
 /// latitude on the season's day at 14:00 solar time, and a light westerly breeze.
 pub fn scene(terrain: TerrainMesh, prototypes: Vec<Prototype>, instances: Vec<TreeInstance>, latitude_deg: f64, season: Season, sea_level: Option<f32>) -> Scene {
-    Scene::new(terrain, sea_level, prototypes, instances, Sun::from_position(latitude_deg as f32, season_day(season), 14.0), Sky::default(), Wind { direction: [1.0, 0.0], directed: 1.5, undirected: 1.0, time_s: 0.0 })
+    Scene::new(terrain, sea_level, prototypes, instances, season_sun(latitude_deg, season), Sky::default(), Wind { direction: [1.0, 0.0], directed: 1.5, undirected: 1.0, time_s: 0.0 })
 }

@@ -87,14 +87,7 @@ pub struct Batches {
     pub canopy_only: usize,
 }
 
-fn hash01(mut x: u64) -> f32 {
-    // splitmix64 finaliser
-    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^= x >> 31;
-    (x >> 40) as f32 / (1u64 << 24) as f32
-}
+use crate::rng::unit_f32 as hash01;
 
 /// Bounding sphere (centre, radius) of an instance, in metres: centred at half height, radius
 /// 1.1 × the larger of half the height and the crown radius. The GPU culling shader

@@ -124,18 +124,11 @@ impl Sun {
     /// The sun's direction for latitude `latitude_deg` (−90..90), day of year `day_of_year`
     /// (1..=366) and local solar time `hour` (0..24).
     ///
-    /// Declination δ = 23.44° · sin(360°/365 · (284 + n)) (Cooper 1969); hour angle
-    /// H = 15° · (hour − 12); east = −cos δ sin H, north = cos φ sin δ − sin φ cos δ cos H,
-    /// up = sin φ sin δ + cos φ cos δ cos H (standard spherical astronomy, e.g. Iqbal 1983
-    /// eq. 1.3.1). Below the horizon the light is clamped to a dim twilight 2° above it; the
-    /// colour warms as the sun sinks.
+    /// The direction is [`crate::sun::position`] (declination by Cooper 1969, 23.45°; hour angle
+    /// 15°/h; computed in f64). Below the horizon the light is clamped to a dim twilight 2°
+    /// above it; the colour warms as the sun sinks.
     pub fn from_position(latitude_deg: f32, day_of_year: f32, hour: f32) -> Self {
-        let phi = latitude_deg.clamp(-90.0, 90.0).to_radians();
-        let decl = (23.44f32).to_radians() * ((360.0 / 365.0) * (284.0 + day_of_year)).to_radians().sin();
-        let h = (15.0 * (hour - 12.0)).to_radians();
-        let east = -decl.cos() * h.sin();
-        let north = phi.cos() * decl.sin() - phi.sin() * decl.cos() * h.cos();
-        let up = phi.sin() * decl.sin() + phi.cos() * decl.cos() * h.cos();
+        let [east, north, up] = crate::sun::position(latitude_deg as f64, day_of_year as f64, hour as f64).map(|v| v as f32);
         let min_up = (2.0f32).to_radians().sin();
         let mut d = glam::Vec3::new(east, north, up.max(min_up));
         d = d.normalize_or(glam::Vec3::Z);
@@ -155,7 +148,7 @@ impl Sun {
 
 impl Default for Sun {
     fn default() -> Self {
-        Sun::from_position(47.0, 172.0, 14.0)
+        Sun::from_position(47.0, 172.0, crate::sun::REFERENCE_HOUR)
     }
 }
 
@@ -299,13 +292,7 @@ impl Scene {
     }
 }
 
-fn hash01(mut x: u64) -> f32 {
-    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    x ^= x >> 31;
-    (x >> 40) as f32 / (1u64 << 24) as f32
-}
+use crate::rng::unit_f32 as hash01;
 
 /// A synthetic scene for tests, benchmarks and demos: a `size_m` × `size_m` terrain of gentle
 /// analytic hills (≈ 1 vertex per `size_m / 128` m, heights 0..~0.12·size), two stand-in
@@ -343,7 +330,7 @@ pub fn demo_scene(n_trees: usize, size_m: f32, seed: u64) -> Scene {
         let tint = 0.85 + 0.3 * hash01(k ^ 7);
         instances.push(TreeInstance::new(i, [x, y, height(x, y) - 0.3], h, cr, species, [leaf[0] * tint, leaf[1] * tint, leaf[2] * tint]));
     }
-    Scene::new(terrain, None, prototypes, instances, Sun::from_position(47.0, 172.0, 14.0), Sky::default(), Wind::default())
+    Scene::new(terrain, None, prototypes, instances, Sun::default(), Sky::default(), Wind::default())
 }
 
 #[cfg(test)]

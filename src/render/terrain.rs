@@ -181,10 +181,8 @@ fn smooth01(t: f32) -> f32 {
 /// of the cell, then the SplitMix64 finaliser): per-cell variation of ground and canopy.
 pub(crate) fn cell_hash(i: i64, j: i64, salt: u64) -> f32 {
     let k = (i.wrapping_mul(73_856_093) ^ j.wrapping_mul(19_349_663)) as u64 ^ salt;
-    let mut z = k.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    (z >> 40) as f32 / (1u64 << 24) as f32
+    // (the finaliser's last `z ^ (z >> 31)` does not change the top 24 bits)
+    crate::rng::unit_f32(k)
 }
 
 /// A small deterministic brightness variation (±1) of a plan position, in cells of ~7 m and

@@ -16,6 +16,7 @@ pub mod light_grid;
 pub mod obstacle;
 pub mod phases;
 pub mod pure_stand;
+pub mod rules;
 pub mod scenario;
 pub mod stats;
 pub mod step;

@@ -28,7 +28,7 @@
 //! ```
 
 use crate::error::{Error, Result};
-use crate::structure::grow::space::{Footprint, Obstacle, FOOTPRINT_MAX_POINTS};
+use crate::obstacle::{Footprint, Obstacle, FOOTPRINT_MAX_POINTS};
 use glam::{Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 

@@ -198,7 +198,7 @@ impl TreeStore {
         self.height.push(t.height);
         self.dbh.push(t.dbh);
         self.crown_radius.push(t.crown_radius);
-        self.crown_base.push(t.height * 0.4);
+        self.crown_base.push(super::rules::start_crown_base(t.height));
         self.light.push(1.0);
         self.vigour.push(1.0);
         self.suitability.push(t.suitability);

@@ -227,7 +227,7 @@ impl World {
         let p = self.pool_index(s)?;
         let sp = self.species(s);
         let h = allometry::potential_height(sp, age).max(0.3);
-        let d = allometry::open_dbh(sp, h) * 0.8;
+        let d = super::rules::start_dbh(sp, h);
         Some(NewTree { species: s, x: x as f32, y: y as f32, z: self.site.conditions.elevation_at(x, y), age: age.max(1.0), height: h, dbh: d, crown_radius: allometry::open_crown_radius(sp, h, d), suitability: self.site.suitability[p][cell] })
     }
 

@@ -7,7 +7,7 @@
 //!   (25 % of the height for light-guided, 20 % for Laplacian) and room around the crown.
 
 use super::grow::envelope::CrownEnvelope;
-use super::grow::space::{validate_obstacles, Obstacle};
+use crate::obstacle::{validate_obstacles, Obstacle};
 use super::grow::{ecomod, laplacian, light_guided};
 use super::skeleton::{Leaf, Leaves, Skeleton};
 use crate::error::{Error, Result};

@@ -37,7 +37,7 @@
 //!    own trees, so the stand is the same for a seed whatever the thread count.
 
 use super::grow::ecomod;
-use super::grow::space::Obstacle;
+use crate::obstacle::Obstacle;
 use super::plastic::{adapt_group_among, Environment, Fate, Ground, LeafCluster, PlasticReport, PlasticTree, Sky};
 use super::skeleton::{Leaves, Skeleton};
 use crate::error::{Error, Result};

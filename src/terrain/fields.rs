@@ -367,8 +367,8 @@ struct Sun {
     diffuse_wh: f64,
 }
 
-/// Sun positions above the horizon for latitude `lat_deg`: declination by Cooper (1969)
-/// δ = 23.45° sin(360°(284+n)/365); hour angle 15°/h; clear-sky beam normal irradiance
+/// Sun positions above the horizon for latitude `lat_deg`: declination and direction from
+/// [`crate::sun`] (Cooper 1969: δ = 23.45° sin(360°(284+n)/365); hour angle 15°/h); clear-sky beam normal irradiance
 /// I₀ τ^M and diffuse horizontal irradiance I₀ (0.271 − 0.294 τ^M) sin α, with I₀ = 1367 W/m² ·
 /// (1 + 0.034 cos(360° n/365)) and air mass M = √(1229 + (614 sin α)²) − 614 sin α
 /// (Kumar, Skidmore & Knowles 1997, Int. J. GIS 11(5):475–497, eqs. 1–9).
@@ -381,14 +381,11 @@ fn sun_table(lat_deg: f64, p: &SkyParams) -> Vec<Sun> {
     let mut out = Vec::new();
     for d in 0..days {
         let n = ((d as f64 + 0.5) * day_w).round();
-        let decl = (23.45f64).to_radians() * (2.0 * std::f64::consts::PI * (284.0 + n) / 365.0).sin();
+        let decl = crate::sun::declination_rad(n);
         let i0 = 1367.0 * (1.0 + 0.034 * (2.0 * std::f64::consts::PI * n / 365.0).cos());
         for s in 0..steps {
             let hour = (s as f64 + 0.5) * dt_h;
-            let om = (15.0 * (hour - 12.0)).to_radians();
-            let e = -decl.cos() * om.sin();
-            let nn = decl.sin() * phi.cos() - decl.cos() * om.cos() * phi.sin();
-            let u = decl.sin() * phi.sin() + decl.cos() * om.cos() * phi.cos();
+            let [e, nn, u] = crate::sun::direction(phi, decl, hour);
             if u <= 0.0 {
                 continue;
             }

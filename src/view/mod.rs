@@ -19,7 +19,7 @@ use glam::Vec3;
 
 use crate::gui::{self, FrameClock, GuiError, Screenshot, Viewport3d, WindowOptions};
 use crate::job::scene;
-use crate::render::scene::{Scene, Sun, TreeInstance};
+use crate::render::scene::{Scene, TreeInstance};
 use crate::species::Season;
 use camera::{CameraRig, Mode};
 use data::{Overlay, RunData, TreeInfo};
@@ -169,7 +169,7 @@ impl Viewer {
                 Ok(v) => self.current = v,
                 Err(e) => self.status = Some(e.to_string()),
             }
-            self.scene.sun = Sun::from_position(self.data.site.geo.latitude_deg as f32, scene::season_day(self.season), 14.0);
+            self.scene.sun = scene::season_sun(self.data.site.geo.latitude_deg, self.season);
             self.shown = Some(key);
             if let Some(id) = self.selected {
                 self.info = self.data.tree_info(id, self.year).ok().flatten();

@@ -3,6 +3,7 @@
 
 use crate::rng::{salt, Stream};
 use crate::sim::density::Crowding;
+use crate::sim::rules;
 use crate::sim::trees::TreeStore;
 use crate::species::allometry::{HeightIncrement, OpenDbh, Table};
 use crate::species::{Species, SpeciesId, SpeciesLibrary};
@@ -124,10 +125,11 @@ pub struct Growth<'a> {
 /// `x = clamp((RD − 0.4) / 0.2, 0, 1)`, into the closed-stand increment
 /// `min(max(100 ΔH_pot / 60, 0.5 cm), open increment)` (closed-stand slenderness H/D = 60 m/m,
 /// a 5 mm/yr floor once height growth culminates; ESTIMATE, see the comments in the body).
-/// Crown radius: open-grown radius of the new DBH, shrunk by `0.5 + 0.5 L` in shade (crown
-/// plasticity); crown base rises to `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural
-/// pruning). Vigour memory `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding is
-/// felt within a few years) feeds stress mortality, which thins crowded
+/// Crown radius: open-grown radius of the new DBH, shrunk by [`rules::shaded_crown`]
+/// `0.5 + 0.5 L` in shade (crown plasticity); crown base rises to
+/// `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural pruning). Vigour memory
+/// [`rules::vigour_memory`] `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding
+/// is felt within a few years) feeds stress mortality, which thins crowded
 /// stands along the species' maximum-density line. `H(t_eff + 1) − H(t_eff)` and `D_open` are
 /// read from the species' tables ([`crate::species::allometry::Table`], within 5 · 10⁻⁵ of
 /// the curves' ranges; since session 11 of issue 16).
@@ -243,9 +245,9 @@ fn finish(sp: &Species, dbh_of: &Table<OpenDbh>, ccf: f32, l: f32, h1: f32, mut 
     }
     let d1 = d1.min(sp.life.max_dbh_cm);
     let lc = l.clamp(0.0, 1.0);
-    let r = open_crown_radius(sp, h1, d1) * (0.5 + 0.5 * lc) * crown_space(ccf);
+    let r = open_crown_radius(sp, h1, d1) * rules::shaded_crown(l) * crown_space(ccf);
     let cb = crown_base.max(h1 * (1.0 - sp.life.allometry.crown_ratio * (0.4 + 0.6 * lc))).min(h1 * 0.95);
-    let v = 0.5 * vigour + 0.5 * f * m;
+    let v = rules::vigour_memory(vigour, f, m);
     Grown { h: h1, d: d1, r, cb, v }
 }
 

@@ -119,9 +119,12 @@ pub fn run(w: Light<'_>) {
     let ncell = cols * rows;
     // 2. sun geometry
     let lat = w.site.geo.latitude_deg as f32;
-    let elev = (90.0 - lat.abs()).clamp(10.0, 80.0).to_radians();
+    // the equinox's noon sun (crate::sun), kept within 10–80° above the horizon: the shading
+    // geometry below looks one light row towards the equator at `cell · tan e` higher, which
+    // a sun near the zenith (tan e → ∞) or the horizon (sin e → 0) would break
+    let elev = crate::sun::noon_equinox_elevation_deg(lat).clamp(10.0, 80.0).to_radians();
     let (sin_e, tan_e) = (elev.sin(), elev.tan());
-    let drow: isize = if lat >= 0.0 { -1 } else { 1 }; // towards the equator (row 0 is south here)
+    let drow = crate::sun::equatorward(lat) as isize; // towards the equator (row 0 is south here)
     let rise = cell as f32 * tan_e;
     let light_at = |c: usize, z: f32, rel: f32| -> f32 {
         let own = canopy.lai_above(c, z);

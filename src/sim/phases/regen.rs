@@ -18,7 +18,8 @@
 //!    table as for the trees, [`Table`]; [`light_response`], suitability `S`) with the ground
 //!    light of the cell under the tree canopy. Cohorts do not shade each other or the trees: they stay out of
 //!    the canopy grid (they are under it); competition within the layer is the density cap.
-//! 3. **Shade mortality** (cause `shade`): vigour `v ← 0.7 v + 0.3 f(L)·S` as for trees; while
+//! 3. **Shade mortality** (cause `shade`): vigour `v ← 0.5 v + 0.5 f(L)·S`, the trees' memory
+//!    ([`rules::vigour_memory`] with no crowding modifier: crowding in the layer is step 4); while
 //!    `v` is below the species' [`stress_threshold`], each stem dies with [`P_STRESS`]
 //!    (Bugmann 2001), a binomial draw.
 //! 4. **Crowding** (cause `crowding`): a stem of height `h` occupies `1 / N_max(h)` ha with the
@@ -35,7 +36,8 @@
 //! Mass balance per species (tested): germinated = alive in cohorts + dead (shade, crowding) +
 //! recruited, kept in [`RegenLedger`].
 
-use super::growth::{light_response, open_crown_radius, open_dbh};
+use super::growth::{light_response, open_crown_radius};
+use crate::sim::rules;
 use crate::species::allometry::{HeightIncrement, Table};
 use super::mortality::{stress_threshold, P_STRESS};
 pub use crate::sim::cohorts::{Cohort, Cohorts, RegenDeath, RegenLedger, RegenYear, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
@@ -229,7 +231,8 @@ pub fn run(w: Regen<'_>) -> usize {
                     let f = light_response(gl, sp.life.shade_tolerance) * wr.suitability[k.pool as usize][site];
                     k.height = (k.height + inc[k.pool as usize].at(k.height) * f).min(sp.life.max_height_m);
                     k.age += 1.0;
-                    k.vigour = 0.7 * k.vigour + 0.3 * f;
+                    // the trees' vigour memory; crowding within the layer is its density cap (4.)
+                    k.vigour = rules::vigour_memory(k.vigour, f, 1.0);
                     if k.vigour < stress_threshold(sp.life.shade_tolerance) {
                         let d = binomial(&mut rm, k.stems, P_STRESS);
                         k.stems -= d;
@@ -272,7 +275,7 @@ pub fn run(w: Regen<'_>) -> usize {
                             }
                         }
                         let (x, y, sc) = pos.unwrap_or((cx, cy, site));
-                        let d = open_dbh(sp, k.height) * 0.8;
+                        let d = rules::start_dbh(sp, k.height);
                         let t = NewTree {
                             species: s,
                             x: x as f32,
@@ -281,7 +284,7 @@ pub fn run(w: Regen<'_>) -> usize {
                             age: k.age,
                             height: k.height,
                             dbh: d,
-                            crown_radius: open_crown_radius(sp, k.height, d) * (0.5 + 0.5 * gl.clamp(0.0, 1.0)),
+                            crown_radius: open_crown_radius(sp, k.height, d) * rules::shaded_crown(gl),
                             suitability: wr.suitability[k.pool as usize][sc],
                         };
                         out.recruits.push((t, gl, k.vigour, birth_id(year as u32, c as u32, born)));
@@ -347,8 +350,8 @@ pub fn run(w: Regen<'_>) -> usize {
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.height, t_height));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.dbh, dbh));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.crown_radius, crown_radius));
-            // as TreeStore::push: crown base at 0.4 of the height
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.height * 0.4, crown_base));
+            // as TreeStore::push
+            sc.spawn(move |_| column(bl, n_recruits, re, |r| rules::start_crown_base(r.0.height), crown_base));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.1, light));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.2, t_vigour));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.suitability, suitability));

@@ -12,7 +12,8 @@
 //! β 1.50); diameters are W(k)/W(1) × `base_width_m`.
 
 use super::envelope::CrownEnvelope;
-use super::space::{Obstacle, VoxelSpace};
+use super::space::VoxelSpace;
+use crate::obstacle::Obstacle;
 use crate::error::{Error, Result};
 use crate::rng::{salt, Stream};
 use crate::species::LaplacianParams;

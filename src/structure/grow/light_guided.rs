@@ -43,7 +43,8 @@
 //! Several trees and obstacles share one [`LightSpace`].
 
 use super::envelope::CrownEnvelope;
-use super::space::{Obstacle, VoxelSpace};
+use super::space::VoxelSpace;
+use crate::obstacle::Obstacle;
 use crate::error::{Error, Result};
 use crate::rng::{salt, Stream};
 use crate::species::LightGuidedParams;

@@ -192,10 +192,9 @@ impl Sky {
     /// `latitude_deg` in −90..=90.
     pub fn from_latitude(latitude_deg: f32) -> Sky {
         let lat = latitude_deg.clamp(-90.0, 90.0);
-        let elev = (90.0 - lat.abs()).to_radians() as f64;
+        let elev = crate::sun::noon_equinox_elevation_deg(lat).to_radians() as f64;
         let (se, ce) = exact_sin_cos(elev);
-        let toward_equator = if lat >= 0.0 { -1.0 } else { 1.0 };
-        Sky::toward(Vec3::new(0.0, toward_equator * ce, se))
+        Sky::toward(Vec3::new(0.0, crate::sun::equatorward(lat) * ce, se))
     }
 }
 
