@@ -177,7 +177,7 @@ fn read_tree() -> Tree {
 /// `depth` segments. `None` for the crate root.
 fn node(t: &Tree, path: &[String], depth: usize) -> Option<Vec<String>> {
     let mut n = path.len();
-    while n > 0 && !t.modules.contains(&path[..n].to_vec()) {
+    while n > 0 && !t.modules.contains(&path[..n]) {
         n -= 1;
     }
     (n > 0).then(|| path[..n.min(depth)].to_vec())

@@ -8,7 +8,7 @@
 
 use super::adapted::AdaptStats;
 use super::pictures::{self, Stage, TimelapseOptions};
-use super::run::{run_scenario, Progress, RunOptions};
+use super::run::{run_scenario, OnSnapshot, Progress, RunOptions};
 use super::{inventory, scene, JobError, Result};
 use crate::render::camera::{Camera, CameraPreset};
 use crate::render::scene::TreeInstance;
@@ -287,7 +287,7 @@ pub fn save_run_species(sc: &Scenario, lib: &SpeciesLibrary, run_dir: &Path) -> 
 ///
 /// Errors: as [`run_scenario`] under "simulating NAME"; [`Error::Format`] when `opts.out` is
 /// a file.
-pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts: SimulateOptions, stepping: Stepping, on_snapshot: Option<&mut dyn FnMut(u32, &World)>, sink: &mut Sink) -> Result<Simulated> {
+pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts: SimulateOptions, stepping: Stepping, on_snapshot: Option<&mut OnSnapshot>, sink: &mut Sink) -> Result<Simulated> {
     let out = opts.out;
     check_out(&out)?;
     sink(&Event::Simulating { years: sc.years });

@@ -36,6 +36,10 @@ pub struct Progress {
     pub output_seconds: f64,
 }
 
+/// What a run calls at every plain snapshot with the year and the in-memory world
+/// ([`RunOptions::on_snapshot`]).
+pub type OnSnapshot<'a> = dyn FnMut(u32, &World) + 'a;
+
 /// Options of [`run_scenario`].
 pub struct RunOptions<'a> {
     /// Run directory (created).
@@ -60,7 +64,7 @@ pub struct RunOptions<'a> {
     /// run, every `snapshot_every` years, the end, a year stopped at), after its files are
     /// written; the main job builds its pictures' instances here instead of reading the
     /// inventories back. Not called when `write_snapshots` is off.
-    pub on_snapshot: Option<&'a mut dyn FnMut(u32, &World)>,
+    pub on_snapshot: Option<&'a mut OnSnapshot<'a>>,
 }
 
 impl RunOptions<'_> {
