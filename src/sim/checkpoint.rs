@@ -409,7 +409,7 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
     o.each(&t.id, |x| x.to_le_bytes());
     o.u64(t.species.len() as u64);
     o.each(&t.species, |x| x.to_le_bytes());
-    for c in [&t.x, &t.y, &t.z, &t.age, &t.height, &t.dbh, &t.crown_radius, &t.crown_base, &t.light, &t.vigour, &t.suitability] {
+    for c in t.f32_columns() {
         o.f32s(c);
     }
     o.u64(w.stand.seeds.len() as u64);
@@ -489,9 +489,10 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     if t.species.len() != t.id.len() {
         return Err(Error::format(path, format!("checkpoint has {} tree ids but {} tree species (corrupt)", t.id.len(), t.species.len())));
     }
-    for c in [&mut t.x, &mut t.y, &mut t.z, &mut t.age, &mut t.height, &mut t.dbh, &mut t.crown_radius, &mut t.crown_base, &mut t.light, &mut t.vigour, &mut t.suitability] {
+    let n_trees = t.id.len();
+    for c in t.f32_columns_mut() {
         *c = r.f32s()?;
-        if c.len() != t.id.len() {
+        if c.len() != n_trees {
             return Err(r.err());
         }
     }

@@ -33,7 +33,7 @@ use super::density;
 use super::step::{Halo, PHASES};
 use super::light_grid::{CellRect, LightGrid};
 use super::step::YearReport;
-use super::trees::{DeadTree, DeathCause, TreeStore, N_CAUSES};
+use super::trees::{DeadTree, DeathCause, TreeStore, N_CAUSES, N_F32_COLUMNS};
 use super::world::{Site, Tallies, World, KERNEL_CELLS, SEED_CELL_M};
 use crate::error::{Error, Result};
 use std::sync::{Arc, Condvar, Mutex};
@@ -349,7 +349,7 @@ impl Enc {
         for &i in idx {
             self.0.extend_from_slice(&t.species[i].to_le_bytes());
         }
-        for c in [&t.x, &t.y, &t.z, &t.age, &t.height, &t.dbh, &t.crown_radius, &t.crown_base, &t.light, &t.vigour, &t.suitability] {
+        for c in t.f32_columns() {
             for &i in idx {
                 self.f32(c[i]);
             }
@@ -409,10 +409,10 @@ impl<'a> Dec<'a> {
         (0..n).map(|_| self.f32()).collect()
     }
     fn trees(&mut self) -> Result<TreeStore> {
-        let n = self.count(8 + 2 + 11 * 4)?;
+        let n = self.count(8 + 2 + N_F32_COLUMNS * 4)?;
         let mut t = TreeStore { id: (0..n).map(|_| self.u64()).collect::<Result<_>>()?, ..Default::default() };
         t.species = (0..n).map(|_| self.u16()).collect::<Result<_>>()?;
-        for c in [&mut t.x, &mut t.y, &mut t.z, &mut t.age, &mut t.height, &mut t.dbh, &mut t.crown_radius, &mut t.crown_base, &mut t.light, &mut t.vigour, &mut t.suitability] {
+        for c in t.f32_columns_mut() {
             *c = self.f32s(n)?;
         }
         Ok(t)

@@ -101,6 +101,9 @@ pub struct DeadTree {
     pub cause: DeathCause,
 }
 
+/// Number of `f32` columns of a [`TreeStore`] ([`TreeStore::f32_columns`]).
+pub const N_F32_COLUMNS: usize = 11;
+
 /// All living trees, one `Vec` per attribute (index `i` is one tree). Dead trees are removed at
 /// the end of the mortality phase (order of the survivors is kept) and recorded as [`DeadTree`].
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -185,6 +188,24 @@ impl TreeStore {
     pub fn is_empty(&self) -> bool {
         self.id.is_empty()
     }
+    /// The per-tree `f32` columns, in the one order the checkpoint (`sim::checkpoint`) and the
+    /// tile messages (`sim::tiles`) store them: x, y, z, age, height, DBH, crown radius, crown
+    /// base, light, vigour, suitability (units at the fields). A new `f32` attribute is added
+    /// here, in [`TreeStore::f32_columns_mut`] and in [`TreeStore::push`] (and the checkpoint
+    /// layout version raised); `retain`, the checkpoint and the tile codec follow.
+    pub fn f32_columns(&self) -> [&Vec<f32>; N_F32_COLUMNS] {
+        [&self.x, &self.y, &self.z, &self.age, &self.height, &self.dbh, &self.crown_radius, &self.crown_base, &self.light, &self.vigour, &self.suitability]
+    }
+    /// [`TreeStore::f32_columns`], mutable.
+    pub fn f32_columns_mut(&mut self) -> [&mut Vec<f32>; N_F32_COLUMNS] {
+        self.columns_mut().2
+    }
+    /// Every column, mutable: ids, species, the [`TreeStore::f32_columns`], the growth-factor
+    /// cache.
+    fn columns_mut(&mut self) -> (&mut Vec<TreeId>, &mut Vec<SpeciesId>, [&mut Vec<f32>; N_F32_COLUMNS], &mut Vec<f32>) {
+        let TreeStore { id, species, x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability, growth_factor, next_id: _ } = self;
+        (id, species, [x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability], &mut growth_factor.0)
+    }
     /// Adds a tree and returns its new id.
     pub fn push(&mut self, t: NewTree) -> TreeId {
         let id = self.next_id;
@@ -218,13 +239,13 @@ impl TreeStore {
             }
             v.truncate(j);
         }
-        let TreeStore { id, species, x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability, growth_factor, next_id: _ } = self;
+        let (id, species, columns, growth_factor) = self.columns_mut();
         // a store restored from a checkpoint has no cached factors yet: give it NaN ones
-        growth_factor.0.resize(id.len(), f32::NAN);
+        growth_factor.resize(id.len(), f32::NAN);
         rayon::scope(|sc| {
             sc.spawn(|_| r(id, keep));
             sc.spawn(|_| r(species, keep));
-            for v in [x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability, &mut growth_factor.0] {
+            for v in columns.into_iter().chain([growth_factor]) {
                 sc.spawn(move |_| r(v, keep));
             }
         });
@@ -237,7 +258,7 @@ impl TreeStore {
     }
     /// Approximate heap size in bytes.
     pub fn heap_bytes(&self) -> usize {
-        self.id.capacity() * 8 + self.species.capacity() * 2 + 11 * self.x.capacity() * 4 + self.growth_factor.0.capacity() * 4
+        self.id.capacity() * 8 + self.species.capacity() * 2 + N_F32_COLUMNS * self.x.capacity() * 4 + self.growth_factor.0.capacity() * 4
     }
 }
 
