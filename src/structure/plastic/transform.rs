@@ -515,6 +515,10 @@ fn preposition(t: &mut PlasticTree, s: usize, w: &Work) {
     }
 }
 
+/// Clusters whose light one task of a level evaluates ([`level`]: the level's clusters are split
+/// into chunks of this many over the cores).
+const LIGHT_CHUNK: usize = 64;
+
 /// Turn (radians, 0.057°) below which a recomputed node's children are not recomputed: they keep
 /// their rotation and follow the node's displacement.
 pub const ROTATION_EPS: f32 = 1e-3;
@@ -614,24 +618,30 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         })
         .collect();
     let mut sums = vec![0.0f32; lit.len()];
-    for k in 0..nd {
-        let wk = sky.weights[k];
-        if wk == 0.0 {
-            continue;
-        }
-        for (j, (&(_, c), &(mask, old))) in lit.iter().zip(&from).enumerate() {
-            if mask & (1 << k) != 0 {
+    // chunks of clusters over the cores; within a chunk direction by direction (each direction's
+    // grid read while in cache), every cluster's sum taken in direction order as before, so the
+    // values are the same bit for bit whatever the thread count
+    let reuse_ref = reuse.as_ref();
+    rows.t.par_chunks_mut(LIGHT_CHUNK * nd.max(1)).zip(sums.par_chunks_mut(LIGHT_CHUNK)).zip(lit.par_chunks(LIGHT_CHUNK).zip(from.par_chunks(LIGHT_CHUNK))).for_each(|((t_rows, sums), (lit, from))| {
+        for k in 0..nd {
+            let wk = sky.weights[k];
+            if wk == 0.0 {
                 continue;
             }
-            // the fixed trees' part of a reused value is unchanged: they do not move
-            let tk = match (old, &reuse) {
-                (Some(o), Some(r)) if !o[k].is_nan() && !r.delta.shaded(k, c) => o[k],
-                _ => vols.transmittance(k, c) * fixed.map_or(1.0, |f| f.transmittance(k, c)),
-            };
-            rows.t[j * nd + k] = tk;
-            sums[j] += wk * tk;
+            for (j, (&(_, c), &(mask, old))) in lit.iter().zip(from).enumerate() {
+                if mask & (1 << k) != 0 {
+                    continue;
+                }
+                // the fixed trees' part of a reused value is unchanged: they do not move
+                let tk = match (old, reuse_ref) {
+                    (Some(o), Some(r)) if !o[k].is_nan() && !r.delta.shaded(k, c) => o[k],
+                    _ => vols.transmittance(k, c) * fixed.map_or(1.0, |f| f.transmittance(k, c)),
+                };
+                t_rows[j * nd + k] = tk;
+                sums[j] += wk * tk;
+            }
         }
-    }
+    });
     for (j, &(ci, _)) in lit.iter().enumerate() {
         rows.start[ci] = (j * nd) as u32;
         t.light_cache[s][ci] = sums[j];
