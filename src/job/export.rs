@@ -16,7 +16,7 @@
 //! the patch (metres; x east, y north, z up in Sylva, y up in the file); the scene's `extras`
 //! record the origin in the run's world coordinates, the run directory, the year and the area.
 
-use super::adapted::{obstacle_mesh, solids, stand_trees, tree_frame, OBSTACLE_RGB};
+use super::adapted::{median_usize, obstacle_mesh, solids, stand_trees, tree_frame, OBSTACLE_RGB, STATS_MIN_HEIGHT_M};
 use super::scene::plants_from_rows;
 use super::Result;
 use crate::conditions::SiteConditions;
@@ -53,16 +53,42 @@ pub struct ExportOptions {
     pub area: [f64; 4],
     /// Season of the foliage colours.
     pub season: Season,
-    /// Levels of detail written (indices below [`LOD_LEVELS`]; all by default).
+    /// Levels of detail written (indices below [`LOD_LEVELS`]): by default only the full-detail
+    /// mesh (level 0), so that every tree is one visible mesh in Blender, three.js or a glTF
+    /// viewer, which show every node; [`all_levels`] for the LOD groups of game engines.
     pub levels: Vec<usize>,
     /// Most trees (refused beyond: [`DEFAULT_MAX_TREES`] by default).
     pub max_trees: usize,
 }
 
 impl ExportOptions {
-    /// The last year, summer, all levels, [`DEFAULT_MAX_TREES`].
+    /// The last year, summer, the full-detail level only, [`DEFAULT_MAX_TREES`].
     pub fn new(area: [f64; 4]) -> ExportOptions {
-        ExportOptions { year: None, area, season: Season::Summer, levels: (0..LOD_LEVELS).collect(), max_trees: DEFAULT_MAX_TREES }
+        ExportOptions { year: None, area, season: Season::Summer, levels: vec![0], max_trees: DEFAULT_MAX_TREES }
+    }
+}
+
+/// Every level of detail, `0..LOD_LEVELS` (`--lod all`: `<name>_LOD0…3` under each tree's node,
+/// as Unity's and Unreal's importers group them).
+pub fn all_levels() -> Vec<usize> {
+    (0..LOD_LEVELS).collect()
+}
+
+/// Parses `--lod`: `all` ([`all_levels`]) or a comma-separated list of levels, e.g. `0` or `0,1`.
+///
+/// Errors: [`Error::Invalid`] naming `--lod` for anything else or a level ≥ [`LOD_LEVELS`].
+pub fn parse_levels(s: &str) -> Result<Vec<usize>> {
+    if s.trim().eq_ignore_ascii_case("all") {
+        return Ok(all_levels());
+    }
+    let v: Vec<Option<usize>> = s.split(',').map(|p| p.trim().parse::<usize>().ok().filter(|&l| l < LOD_LEVELS)).collect();
+    match v.iter().copied().collect::<Option<Vec<usize>>>() {
+        Some(mut l) if !l.is_empty() => {
+            l.sort_unstable();
+            l.dedup();
+            Ok(l)
+        }
+        _ => Err(invalid("--lod", s.into(), format!("`all` or levels 0–{} separated by commas, e.g. 0 (full detail, the default) or 0,1,2,3", LOD_LEVELS - 1))),
     }
 }
 
@@ -87,7 +113,41 @@ pub struct ExportReport {
     pub adapt_s: f64,
     /// Size of the file (bytes).
     pub bytes: u64,
+    /// Figures of the trees written ([`ExportStats`]).
+    pub stats: ExportStats,
 }
+
+/// Figures of an export (`sylva export --stats FILE.json`).
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct ExportStats {
+    /// Trees written.
+    pub trees: usize,
+    /// Trees of [`STATS_MIN_HEIGHT_M`] and taller among them.
+    pub trees_15m: usize,
+    /// Median skeleton node count of the adapted trees of [`STATS_MIN_HEIGHT_M`] and taller (0
+    /// when there are none).
+    pub nodes_median: usize,
+    /// Smallest skeleton node count among them (0 when there are none).
+    pub nodes_min: usize,
+    /// Leaf cards of the full-detail meshes of all trees written (each tree counted, shared
+    /// meshes too).
+    pub leaf_cards: usize,
+    /// Wall time of the adaptation (s).
+    pub adapt_s: f64,
+    /// Triangles of the written levels of all trees (each tree counted, shared meshes too;
+    /// billboards as drawn, two crossed cards) plus the terrain and obstacles.
+    pub triangles: usize,
+    /// Levels of detail written.
+    pub levels: Vec<usize>,
+}
+
+impl ExportStats {
+    /// The figures as a JSON object.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::to_value(self).unwrap_or(serde_json::Value::Null)
+    }
+}
+
 
 fn invalid(field: &str, value: String, expected: String) -> super::JobError {
     Error::Invalid { context: "sylva export".into(), field: field.into(), value, expected }.into()
@@ -170,7 +230,9 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let origin = Vec3::new(((x0 + x1) * 0.5) as f32, ((y0 + y1) * 0.5) as f32, z0);
 
     // each tree in its own frame, with its topology key and canonical shape
-    let meshed: Vec<Option<(u64, Vec<f32>, StandModel, [f32; 3], Vec3, usize)>> = st
+    // per tree also (skeleton nodes, leaf cards of the full level, triangles of the levels written)
+    #[allow(clippy::type_complexity)]
+    let meshed: Vec<Option<(u64, Vec<f32>, StandModel, [f32; 3], Vec3, usize, [usize; 3])>> = st
         .trees
         .par_iter()
         .map(|a| {
@@ -193,7 +255,11 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             // the mid level: the crown hull of the adapted clusters, as in the pictures
             let (chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
             let sp = &library.species[t.species as usize];
-            Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize }, s.to_array(), t.base - origin, t.species as usize))
+            let billboard = LOD_LEVELS - 1;
+            // billboards are drawn as the shared two crossed cards (4 triangles)
+            let tris = o.levels.iter().map(|&l| if l == billboard { 4 } else { chain.levels.get(l).map_or(0, |m| m.triangle_count()) }).sum();
+            let figures = [sk.nodes.len(), lv.leaves.len(), tris];
+            Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize }, s.to_array(), t.base - origin, t.species as usize, figures))
         })
         .collect();
 
@@ -203,8 +269,14 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     // topology key → (model, its size, its canonical shape) of the models with that topology
     let mut model_of: HashMap<u64, Vec<(usize, [f32; 3], Vec<f32>)>> = HashMap::new();
     let mut nodes = Vec::new();
+    let (mut tall_nodes, mut leaf_cards, mut triangles) = (Vec::new(), 0usize, 0usize);
     for (m, a) in meshed.into_iter().zip(&st.trees) {
-        let Some((key, canon, mut model, size, pos, sp)) = m else { continue };
+        let Some((key, canon, mut model, size, pos, sp, [n_nodes, n_leaves, n_tris])) = m else { continue };
+        if trees[a.index].height_m >= STATS_MIN_HEIGHT_M {
+            tall_nodes.push(n_nodes);
+        }
+        leaf_cards += n_leaves;
+        triangles += n_tris;
         let look = *looks_of.entry(sp).or_insert_with(|| {
             looks.push(Look::for_species(&library.species[sp], o.season));
             looks.len() - 1
@@ -256,9 +328,20 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             }
         }),
     };
+    triangles += scene.statics.iter().map(|m| m.mesh.triangle_count()).sum::<usize>();
+    let stats = ExportStats {
+        trees: scene.trees.len(),
+        trees_15m: tall_nodes.len(),
+        nodes_min: tall_nodes.iter().copied().min().unwrap_or(0),
+        nodes_median: median_usize(&mut tall_nodes),
+        leaf_cards,
+        adapt_s,
+        triangles,
+        levels: o.levels.clone(),
+    };
     let counts = crate::output::gltf::write_stand_glb(out, &scene)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
-    Ok(ExportReport { out: out.to_path_buf(), year, trees: scene.trees.len(), models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes })
+    Ok(ExportReport { out: out.to_path_buf(), year, trees: scene.trees.len(), models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes, stats })
 }
 
 /// Largest vertex spacing of the terrain patch (m): finer than the DEM's cells so that the
