@@ -229,6 +229,8 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let (terrain, z0) = terrain_patch(&site, o.area);
     let origin = Vec3::new(((x0 + x1) * 0.5) as f32, ((y0 + y1) * 0.5) as f32, z0);
 
+    // the share of a leaf card its leaf texture covers, per species (fill_leaf_area)
+    let card_cover: Vec<f32> = library.species.iter().map(|sp| crate::structure::texture::leaf_card_cover(crate::structure::texture::LeafShape::of_species(sp))).collect();
     // each tree in its own frame, with its topology key and canonical shape
     // per tree also (skeleton nodes, leaf cards of the full level, triangles of the levels written)
     #[allow(clippy::type_complexity)]
@@ -237,8 +239,10 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         .par_iter()
         .map(|a| {
             let t = &trees[a.index];
-            let (sk, lv, hgt) = tree_frame(a, t.base)?;
+            let (sk, mut lv, hgt) = tree_frame(a, t.base)?;
             let r = t.crown_radius_m.max(0.2);
+            let sp = &library.species[t.species as usize];
+            fill_leaf_area(&mut lv, crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m), card_cover[t.species as usize], t.crown_radius_m, t.species as u64);
             let s = Vec3::new(r, r, hgt);
             let mut topology = vec![t.species as u64, sk.nodes.len() as u64];
             topology.extend(sk.nodes.iter().map(|n| n.parent.map_or(u64::MAX, |p| p as u64)));
@@ -254,7 +258,6 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             }
             // the mid level: the crown hull of the adapted clusters, as in the pictures
             let (chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
-            let sp = &library.species[t.species as usize];
             let billboard = LOD_LEVELS - 1;
             // billboards are drawn as the shared two crossed cards (4 triangles)
             let tris = o.levels.iter().map(|&l| if l == billboard { 4 } else { chain.levels.get(l).map_or(0, |m| m.triangle_count()) }).sum();
@@ -344,6 +347,55 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     Ok(ExportReport { out: out.to_path_buf(), year, trees: scene.trees.len(), models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes, stats })
 }
 
+/// Largest factor by which [`fill_leaf_area`] lengthens a tree's leaf cards (1.5: a beech
+/// card of 6 cm stays a leaf, not a board); the rest of the leaf area comes as more cards.
+pub const MAX_CARD_GROWTH: f32 = 1.5;
+
+/// Most cards [`fill_leaf_area`] makes of one leaf card (itself and its copies).
+pub const MAX_CARDS_PER_LEAF: usize = 24;
+
+/// Gives the leaf cards of `lv` (each `size × size/2`, [`crate::structure::mesh::leaf_mesh`],
+/// of which the leaf texture covers the share `card_cover`,
+/// [`crate::structure::texture::leaf_card_cover`]) a leaf area (one-sided) of `leaf_area_m2`,
+/// the leaf area the light model gives the tree
+/// ([`crate::sim::phases::light::crown_leaf_area`]: the crown's leaf-area index over its
+/// projection), so that the exported crown is as dense as the simulation's. With the area
+/// factor `F = leaf_area_m2 / current`, each card becomes `n = ceil(F / 1.5²)` cards (at most
+/// [`MAX_CARDS_PER_LEAF`]) of length × `sqrt(F / n)`: the card itself and `n − 1` copies on
+/// the same node, turned about the vertical by a hashed angle and moved by a hashed offset of
+/// up to two card lengths (the stand skeleton's few dozen tips stand for a crown's hundreds of
+/// shoots), kept within `crown_radius_m` (m) of the stem axis (the tree's frame: stem base at
+/// the origin, z up). Fewer cards (F < 1) shrink instead. Deterministic: the offsets hash the
+/// leaf's index and `seed` (the export passes the species, so that trees alike stay alike and
+/// share their meshes). A tree without leaves, or a target of 0, is left as it is.
+pub fn fill_leaf_area(lv: &mut crate::structure::Leaves, leaf_area_m2: f32, card_cover: f32, crown_radius_m: f32, seed: u64) {
+    let now: f32 = lv.leaves.iter().map(|l| 0.5 * l.size * l.size * card_cover.clamp(0.05, 1.0)).sum();
+    if now <= 0.0 || !(leaf_area_m2 > 0.0) {
+        return;
+    }
+    let f = leaf_area_m2 / now;
+    let n = ((f / (MAX_CARD_GROWTH * MAX_CARD_GROWTH)).ceil() as usize).clamp(1, MAX_CARDS_PER_LEAF);
+    let k = (f / n as f32).sqrt();
+    let rmax = crown_radius_m.max(0.05);
+    let mut out = Vec::with_capacity(lv.leaves.len() * n);
+    for (i, l) in lv.leaves.iter().enumerate() {
+        let size = l.size * k;
+        out.push(crate::structure::Leaf { size, ..*l });
+        for j in 1..n {
+            let u = |c: u64| crate::rng::unit_f32(crate::rng::hash(&[seed, i as u64, j as u64, c]));
+            let turn = glam::Quat::from_rotation_z(u(0) * std::f32::consts::TAU);
+            let off = Vec3::new(u(1) * 2.0 - 1.0, u(2) * 2.0 - 1.0, u(3) * 2.0 - 1.0) * (2.0 * size);
+            let mut pos = l.pos + off;
+            let rho = pos.truncate().length();
+            if rho > rmax {
+                pos = (pos.truncate() * (rmax / rho)).extend(pos.z);
+            }
+            out.push(crate::structure::Leaf { pos, dir: turn * l.dir, normal: turn * l.normal, size, node: l.node });
+        }
+    }
+    lv.leaves = out;
+}
+
 /// Largest vertex spacing of the terrain patch (m): finer than the DEM's cells so that the
 /// patch follows the bilinear surface the trees stand on ([`SiteConditions::elevation_at`]).
 pub const TERRAIN_STEP_M: f64 = 5.0;
@@ -391,4 +443,42 @@ pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
         }
     }
     (m, z0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::structure::{Leaf, Leaves};
+
+    #[test]
+    fn leaf_cards_carry_the_crowns_leaf_area() {
+        let leaf = |size: f32, x: f32| Leaf { pos: Vec3::new(x, 0.0, 5.0), dir: Vec3::Z, normal: Vec3::X, size, node: 0 };
+        let area = |lv: &Leaves| lv.leaves.iter().map(|l| 0.25 * l.size * l.size).sum::<f32>();
+        // two cards of 0.5 · size² each, half of it leaf: 0.5 · 0.5 · (0.04 + 0.16) = 0.05 m²
+        let mut lv = Leaves { leaves: vec![leaf(0.2, 0.0), leaf(0.4, 1.0)] };
+        fill_leaf_area(&mut lv, 2.0, 0.5, 1.2, 7);
+        // F = 40: 18 cards per leaf, each 1.49 × as long
+        assert_eq!(lv.len(), 36);
+        assert!((area(&lv) - 2.0).abs() < 1e-3, "{}", area(&lv));
+        assert!(lv.leaves.iter().all(|l| l.pos.truncate().length() <= 1.2 + 1e-4), "within the crown radius");
+        assert!(lv.leaves.iter().all(|l| l.size <= 0.4 * MAX_CARD_GROWTH + 1e-5));
+        let mut again = Leaves { leaves: vec![leaf(0.2, 0.0), leaf(0.4, 1.0)] };
+        fill_leaf_area(&mut again, 2.0, 0.5, 1.2, 7);
+        assert_eq!(again, lv, "deterministic");
+        // a smaller target shrinks the cards; no leaves or no target: unchanged
+        let mut lv = Leaves { leaves: vec![leaf(1.0, 0.0)] };
+        fill_leaf_area(&mut lv, 0.125, 1.0, 2.0, 1);
+        assert_eq!(lv.len(), 1);
+        assert!((lv.leaves[0].size - 0.5).abs() < 1e-6);
+        let mut none = Leaves::default();
+        fill_leaf_area(&mut none, 10.0, 1.0, 2.0, 1);
+        assert!(none.is_empty());
+        // a beech crown of 2.5 m: crown LAI 4.5 (shade tolerance 5) over 19.6 m²
+        assert!((crate::sim::phases::light::crown_leaf_area(5.0, 2.5) - 4.5 * std::f32::consts::PI * 6.25).abs() < 1e-3);
+        // leaf textures cover part of their cards
+        for s in crate::structure::texture::LeafShape::ALL {
+            let c = crate::structure::texture::leaf_card_cover(s);
+            assert!((0.05..1.0).contains(&c), "{s:?} {c}");
+        }
+    }
 }
