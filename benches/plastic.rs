@@ -115,6 +115,12 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     };
     let rep2 = t.adapt(&env_with(&[moved])).expect("adapt");
     let t3 = cpu_ms();
+    // `SYLVA_PLASTIC_MOVES=N`: N more moves of the wall by ±10 cm (for a profile of the moves)
+    let extra: usize = std::env::var("SYLVA_PLASTIC_MOVES").ok().and_then(|v| v.parse().ok()).unwrap_or(0);
+    let mut m = t.clone();
+    for i in 0..extra {
+        m.adapt(&env_with(&[if i % 2 == 0 { wall } else { moved }])).expect("adapt");
+    }
     println!("{} nodes: analysis {:.1} ms, adapt {:.1} ms CPU, {wall_ms:.1} ms wall ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
 }
 

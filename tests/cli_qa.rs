@@ -37,7 +37,7 @@ fn stop_with(sig: i32) -> tempfile::TempDir {
     std::fs::write(d.join("long.toml"), LONG).unwrap();
     let mut child = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["simulate", "long.toml", "--out", "run"]).current_dir(d).stderr(Stdio::piped()).spawn().unwrap();
     // wait until the simulation is under way (its Ctrl-C handler is installed before year 1)
-    let marker = d.join("run/inventory/year_0002.csv");
+    let marker = d.join("run/inventory/year_0002.parquet");
     while !marker.exists() {
         assert!(child.try_wait().unwrap().is_none(), "the run ended before it could be interrupted");
         std::thread::sleep(std::time::Duration::from_millis(5));

@@ -125,7 +125,7 @@ fn fixture() -> Fixture {
     std::fs::write(dir.join("small.toml"), small(6)).unwrap();
     ok(simulate(&dir, "small.toml", "ref", false));
     let reference = files(&dir.join("ref"));
-    assert!(reference.contains_key("checkpoint.bin") && reference.contains_key("inventory/year_0006.csv") && reference.contains_key("inventory/year_0004_autumn.csv"), "{:?}", reference.keys());
+    assert!(reference.contains_key("checkpoint.bin") && reference.contains_key("inventory/year_0006.parquet") && reference.contains_key("inventory/year_0004_autumn.parquet"), "{:?}", reference.keys());
     Fixture { _tmp: tmp, dir, reference }
 }
 
@@ -173,7 +173,7 @@ fn sigkill_after_k_checkpoint_years_and_at_random_moments_then_resume_is_byte_id
     for year in [2u32, 4] {
         let out = format!("y{year}");
         let mut child = simulate(&f.dir, "small.toml", &out, false).spawn().unwrap();
-        let marker = f.dir.join(&out).join(format!("inventory/year_{year:04}.csv"));
+        let marker = f.dir.join(&out).join(format!("inventory/year_{year:04}.parquet"));
         while !marker.exists() && child.try_wait().unwrap().is_none() {
             std::thread::sleep(std::time::Duration::from_micros(200));
         }
@@ -499,7 +499,7 @@ fn ctrl_c_then_resume_is_byte_identical_to_an_unbroken_run() {
     let unbroken = files(&d.join("unbroken"));
     // the Ctrl-C handler is installed before the first snapshot is written
     let mut child = simulate(d, "s.toml", "run", false).spawn().unwrap();
-    let marker = d.join("run/inventory/year_0000.csv");
+    let marker = d.join("run/inventory/year_0000.parquet");
     while !marker.exists() {
         assert!(child.try_wait().unwrap().is_none(), "the run ended before it could be interrupted");
         std::thread::sleep(std::time::Duration::from_millis(2));
@@ -512,7 +512,7 @@ fn ctrl_c_then_resume_is_byte_identical_to_an_unbroken_run() {
     let table = std::fs::read_to_string(d.join("run/stand_table.csv")).unwrap();
     let stopped_at = table.lines().count() as u32 - 1;
     assert!((1..60).contains(&stopped_at), "{stopped_at}");
-    let extra = format!("inventory/year_{stopped_at:04}.csv");
+    let extra = format!("inventory/year_{stopped_at:04}.parquet");
     if stopped_at % 7 != 0 {
         assert!(files(&d.join("run")).contains_key(&extra), "the stopped run has no snapshot of year {stopped_at}");
         assert!(!unbroken.contains_key(&extra));

@@ -106,8 +106,9 @@ fn main_job_reduced_scenario_writes_every_output() {
         "scenario.toml",
         "stand_table.csv",
         "stand_table.png",
-        "inventory/year_0000.csv",
-        "inventory/year_0006.csv",
+        "inventory/year_0000.parquet",
+        "inventory/year_0006.parquet",
+        "inventory/year_0006_regeneration.parquet",
         "inventory/year_0006.geojson",
         "maps/conditions/elevation.png",
         "maps/conditions/elevation.tif",
@@ -137,7 +138,7 @@ fn main_job_reduced_scenario_writes_every_output() {
     let w = sylva::terrain::io::window(&t, 10, 5, 12, 12).unwrap();
     let masked = w.elevation.data.iter().filter(|v| !v.is_finite()).count();
     assert!(masked > 20 && masked < 120, "the window mixes nodata and valid cells ({masked} nodata)");
-    let rows = sylva::job::inventory::read(&out.join("inventory/year_0006.csv")).unwrap();
+    let rows = sylva::job::inventory::read(&out.join("inventory/year_0006.parquet")).unwrap();
     assert!(rows.len() > 50, "trees in the final inventory: {}", rows.len());
     let cell = w.geo.cell_y_m();
     for r in rows.iter().filter(|r| r.status == "alive") {

@@ -66,8 +66,9 @@ fn two_and_three_ranks_write_the_run_directory_of_one_process() {
     simulate(0, &sc, &one, false);
     let f = common::files(&one);
     // a meaningful run: recruits (ids from 2^44 on) in the last inventory, on more than one tile
-    let inv = String::from_utf8(f["inventory/year_0020.csv"].clone()).unwrap();
-    let recruits: Vec<f64> = inv.lines().skip(1).filter(|l| l.split(',').next().and_then(|id| id.parse::<u64>().ok()).is_some_and(|id| id >= 1 << 44)).map(|l| l.split(',').nth(2).unwrap().parse().unwrap()).collect();
+    assert!(f.contains_key("inventory/year_0020.parquet"), "{:?}", f.keys());
+    let inv = sylva::job::inventory::read(&one.join("inventory/year_0020.parquet")).unwrap();
+    let recruits: Vec<f64> = inv.iter().filter(|r| r.id >= 1 << 44).map(|r| r.x_m).collect();
     assert!(recruits.len() > 20, "only {} recruits", recruits.len());
     assert!(recruits.iter().any(|&x| x < 267.0) && recruits.iter().any(|&x| x > 400.0), "recruits on one side only");
     assert!(f.contains_key("checkpoint.bin") && f.contains_key("stand_table.csv") && f.contains_key("inventory/year_0010.geojson"));

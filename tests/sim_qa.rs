@@ -49,7 +49,7 @@ fn fresh_run_removes_old_snapshots() {
     run_scenario(&sc, site(&sc), &lib, opts).unwrap();
     let inv_names = names(&inv);
     assert!(!inv_names.iter().any(|n| n.contains("0050")), "{inv_names:?}");
-    assert!(inv_names.contains(&"year_0002.csv".to_string()) && inv_names.contains(&"mine.csv".to_string()), "{inv_names:?}");
+    assert!(inv_names.contains(&"year_0002.parquet".to_string()) && inv_names.contains(&"mine.csv".to_string()), "{inv_names:?}");
     let map_names = names(&maps);
     assert!(!map_names.iter().any(|n| n.contains("0050")), "{map_names:?}");
     assert!(map_names.contains(&"notes.txt".to_string()) && map_names.contains(&"species_year_0002.png".to_string()), "{map_names:?}");

@@ -125,7 +125,7 @@ fn tiles_in_threads_write_the_run_directory_of_one_process() {
     assert_eq!(a.rows, b.rows);
     assert!(bytes.len() == 3 && bytes.iter().all(|&n| n > 0), "bytes sent per rank: {bytes:?}");
     let fa = common::files(&one);
-    assert!(fa.contains_key("checkpoint.bin") && fa.contains_key("inventory/year_0010.csv") && fa.len() > 10, "{:?}", fa.keys());
+    assert!(fa.contains_key("checkpoint.bin") && fa.contains_key("inventory/year_0010.parquet") && fa.len() > 10, "{:?}", fa.keys());
     let template = sylva::sim::World::new(sc.site().unwrap(), &lib, &sc).unwrap();
     let m = common::assert_same_run(&one, &three, &template, "one process and 3 tiles");
     assert_eq!((m.year, m.ranks, m.tiles_across, m.tiles_up), (12, 3, 3, 1), "{m:?}");

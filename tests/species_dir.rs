@@ -36,8 +36,8 @@ fn a_new_species_simulates_and_renders_from_its_folder() {
     assert!(ok, "{log}");
     let saved = std::fs::read_to_string(d.join("run/species/my_beech.toml")).unwrap();
     assert!(saved.contains("my_beech"));
-    let inv = std::fs::read_to_string(d.join("run/inventory/year_0003.csv")).unwrap();
-    let planted = inv.lines().filter(|l| l.contains("my_beech")).count();
+    let inv = sylva::job::inventory::read(&d.join("run/inventory/year_0003.parquet")).unwrap();
+    let planted = inv.iter().filter(|r| r.species == "my_beech").count();
     assert!(planted >= 9, "16 planted trees at 5 m on 80 m × 80 m, {planted} in the inventory");
     // render finds the species in the run directory without being told
     let (ok, log) = sylva(&["render", "run", "--size", "64x48", "--out", "f.png"], d);

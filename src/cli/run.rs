@@ -39,6 +39,10 @@ pub struct Args {
     /// added to the shipped library, replacing shipped species of the same id.
     #[arg(long)]
     pub species_dir: Option<PathBuf>,
+    /// File format of the inventories and regeneration tables: `parquet` (GeoParquet, read by
+    /// geopandas, R arrow, DuckDB, QGIS) or `csv`.
+    #[arg(long, default_value = "parquet")]
+    pub inventory: sylva::output::inventory::InventoryFormat,
 }
 
 fn parse_fps(s: &str) -> Result<f32, String> {
@@ -60,7 +64,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         sc.validate("--years")?;
     }
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
-    let opts = MainJobOptions { out: a.out.clone(), size: a.size, timelapse_size: a.timelapse_size, frames_between: a.frames_between, fps: a.fps, render: !a.no_render, stop: Some(super::simulate::stop_on_ctrl_c()) };
+    let opts = MainJobOptions { out: a.out.clone(), size: a.size, timelapse_size: a.timelapse_size, frames_between: a.frames_between, fps: a.fps, render: !a.no_render, stop: Some(super::simulate::stop_on_ctrl_c()), inventory: a.inventory };
     let mut bars = Bars::default();
     let summary = main_job::main_job(&sc, &lib, &opts, &mut |e| bars.show(e))?;
     if summary.sim.stopped {

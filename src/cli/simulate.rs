@@ -36,6 +36,10 @@ pub struct Args {
     /// `mpirun -np N` (a build with the `mpi` feature) the ranks are the tiles instead.
     #[arg(long, value_parser = parse_tiles)]
     pub tiles: Option<usize>,
+    /// File format of the inventories and regeneration tables: `parquet` (GeoParquet, read by
+    /// geopandas, R arrow, DuckDB, QGIS) or `csv`.
+    #[arg(long, default_value = "parquet")]
+    pub inventory: sylva::output::inventory::InventoryFormat,
 }
 
 /// Parses `--tiles`: an integer 1–4096.
@@ -143,8 +147,8 @@ impl SimBar {
 
 /// `sylva simulate` into `out` stepped as `stepping` says, with a progress bar and a Ctrl-C
 /// handler (stop after the current year: [`super::Interrupted`]).
-fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, stepping: Stepping) -> anyhow::Result<()> {
-    let opts = SimulateOptions { out, resume, geojson_years: None, stop: Some(stop_on_ctrl_c()) };
+fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, inventory: sylva::output::inventory::InventoryFormat, stepping: Stepping) -> anyhow::Result<()> {
+    let opts = SimulateOptions { out, resume, geojson_years: None, stop: Some(stop_on_ctrl_c()), inventory };
     let mut bar = SimBar::default();
     let s = main_job::simulate(sc, site, lib, opts, stepping, None, &mut |e| bar.show(e))?;
     if s.stopped {
@@ -189,7 +193,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
                 let _ = ctrlc::set_handler(|| {});
                 sylva::job::tiled::work(&sc, site, &lib, &mut t).with_context(|| format!("simulating {} (rank {})", sc.name, t.rank()))
             } else {
-                simulate(&sc, site, &lib, a.out.clone(), a.resume, Stepping::Ranks(&mut t))
+                simulate(&sc, site, &lib, a.out.clone(), a.resume, a.inventory, Stepping::Ranks(&mut t))
             };
             rank_stats(t.rank(), t.size(), t0.elapsed().as_secs_f64(), t.bytes_sent(), sc.years);
             return r;
@@ -199,7 +203,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Some(n) if n > 1 => Stepping::Local(n),
         _ => Stepping::One,
     };
-    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume, stepping());
+    let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume, a.inventory, stepping());
     match a.threads {
         Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build().context("thread pool")?.install(go),
         None => go(),

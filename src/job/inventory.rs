@@ -3,7 +3,7 @@
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 
-/// One row of `inventory/year_NNNN.csv`.
+/// One row of `inventory/year_NNNN.parquet` (or `.csv`).
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
 pub struct InventoryRow {
     /// Stable tree id.
@@ -30,11 +30,12 @@ pub struct InventoryRow {
     pub status: String,
 }
 
-/// Reads one inventory CSV.
+/// Reads one inventory: Parquet (`.parquet`, [`crate::output::parquet::INVENTORY`]) or CSV
+/// (any other name).
 ///
 /// # Errors
-/// [`Error::Io`] when the file cannot be read; [`Error::Format`] naming the line when a row does
-/// not have the columns of ARCHITECTURE.md.
+/// [`Error::Io`] when the file cannot be read; [`Error::Format`] naming the line (CSV) or the
+/// column (Parquet) when the file does not have the columns of ARCHITECTURE.md.
 pub fn read(path: &Path) -> Result<Vec<InventoryRow>> {
     read_filtered(path, |_| true)
 }
@@ -46,6 +47,9 @@ pub fn read(path: &Path) -> Result<Vec<InventoryRow>> {
 /// # Errors
 /// As [`read`]; every row is parsed and checked, kept or not.
 pub fn read_filtered(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -> Result<Vec<InventoryRow>> {
+    if is_parquet(path) {
+        return read_parquet(path, keep);
+    }
     let mut rdr = csv::Reader::from_path(path).map_err(|e| Error::format(path, e.to_string()))?;
     let mut rows = Vec::new();
     let mut rec = csv::StringRecord::new();
@@ -61,9 +65,38 @@ pub fn read_filtered(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -
     Ok(rows)
 }
 
+/// True for a `.parquet` file name.
+fn is_parquet(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e == "parquet")
+}
+
+/// A Parquet column of `table` that [`crate::output::parquet::read_table`] guarantees.
+fn column<'a, T>(c: Option<&'a [T]>, path: &Path, name: &str) -> Result<&'a [T]> {
+    c.ok_or_else(|| Error::format(path, format!("no column {name:?}")))
+}
+
+/// [`read_filtered`] of a Parquet inventory.
+fn read_parquet(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -> Result<Vec<InventoryRow>> {
+    let c = crate::output::parquet::read_table(path, &crate::output::parquet::INVENTORY).map_err(|e| Error::format(path, e.to_string()))?;
+    let (id, sp, st) = (column(c.int("id"), path, "id")?, column(c.text("species"), path, "species")?, column(c.text("status"), path, "status")?);
+    let (x, y, z) = (column(c.double("x_m"), path, "x_m")?, column(c.double("y_m"), path, "y_m")?, column(c.double("z_m"), path, "z_m")?);
+    let f = |n: &str| column(c.float(n), path, n);
+    let (age, h, d, cr, cb) = (f("age_yr")?, f("height_m")?, f("dbh_cm")?, f("crown_radius_m")?, f("crown_base_m")?);
+    let mut rows = Vec::new();
+    for i in 0..c.rows {
+        let row = InventoryRow { id: id[i] as u64, species: sp[i].clone(), x_m: x[i], y_m: y[i], z_m: z[i], age_yr: age[i], height_m: h[i], dbh_cm: d[i], crown_radius_m: cr[i], crown_base_m: cb[i], status: st[i].clone() };
+        if keep(&row) {
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}
+
 /// Snapshot files of a run directory as `(year, season suffix or "", path)`, sorted by year then
-/// season order (spring, summer, autumn, winter, then plain); the regeneration-layer files
-/// `year_NNNN_regeneration.csv` are not tree inventories and are skipped.
+/// season order (spring, summer, autumn, winter, then plain); `year_NNNN.parquet` or, from
+/// runs written with `--inventory csv` or before Parquet, `year_NNNN.csv` (the Parquet file
+/// when both are there); the regeneration-layer files `year_NNNN_regeneration.*` are not tree
+/// inventories and are skipped.
 pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
     let dir = run_dir.join("inventory");
     let rd = std::fs::read_dir(&dir).map_err(|e| Error::io(&dir, e))?;
@@ -71,7 +104,7 @@ pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
     for entry in rd {
         let entry = entry.map_err(|e| Error::io(&dir, e))?;
         let name = entry.file_name().to_string_lossy().into_owned();
-        let Some(stem) = name.strip_prefix("year_").and_then(|s| s.strip_suffix(".csv")) else { continue };
+        let Some(stem) = name.strip_prefix("year_").and_then(|s| s.strip_suffix(".parquet").or_else(|| s.strip_suffix(".csv"))) else { continue };
         let (num, season) = match stem.split_once('_') {
             Some((n, s)) => (n, s.to_string()),
             None => (stem, String::new()),
@@ -91,7 +124,9 @@ pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
         "winter" => 3,
         _ => 4,
     };
-    out.sort_by(|a, b| (a.0, order(&a.1)).cmp(&(b.0, order(&b.1))));
+    // Parquet before CSV within a snapshot, then one file per snapshot
+    out.sort_by_key(|a| (a.0, order(&a.1), !is_parquet(&a.2)));
+    out.dedup_by(|b, a| a.0 == b.0 && a.1 == b.1);
     Ok(out)
 }
 
@@ -139,12 +174,21 @@ pub struct RegenRow {
 }
 
 /// The regeneration-layer file of the plain snapshot of `year` in `run_dir`
-/// (`inventory/year_NNNN_regeneration.csv`), read when it exists; `None` when it does not (runs
-/// written without it).
+/// (`inventory/year_NNNN_regeneration.parquet`, else `.csv`), read when it exists; `None` when
+/// neither does (runs written without it).
 ///
 /// # Errors
 /// [`Error::Format`] naming the file and line of a row without the columns of ARCHITECTURE.md.
 pub fn read_regeneration(run_dir: &Path, year: u32) -> Result<Option<Vec<RegenRow>>> {
+    let pq = run_dir.join("inventory").join(format!("year_{year:04}_regeneration.parquet"));
+    if pq.is_file() {
+        let c = crate::output::parquet::read_table(&pq, &crate::output::parquet::REGENERATION).map_err(|e| Error::format(&pq, e.to_string()))?;
+        let (cell, sp, stems) = (column(c.int("cell"), &pq, "cell")?, column(c.text("species"), &pq, "species")?, column(c.int("stems"), &pq, "stems")?);
+        let (x, y, per_ha) = (column(c.double("x_m"), &pq, "x_m")?, column(c.double("y_m"), &pq, "y_m")?, column(c.double("stems_per_ha"), &pq, "stems_per_ha")?);
+        let (h, age) = (column(c.float("height_m"), &pq, "height_m")?, column(c.float("age_yr"), &pq, "age_yr")?);
+        let rows = (0..c.rows).map(|i| RegenRow { cell: cell[i] as u32, species: sp[i].clone(), x_m: x[i], y_m: y[i], stems: stems[i] as u32, stems_per_ha: per_ha[i], height_m: h[i], age_yr: age[i] }).collect();
+        return Ok(Some(rows));
+    }
     let path = run_dir.join("inventory").join(format!("year_{year:04}_regeneration.csv"));
     if !path.is_file() {
         return Ok(None);

@@ -6,6 +6,7 @@
 //! Ctrl-C (the stop flag of the options). What a run writes is listed once, with its schedule,
 //! in [`OUTPUTS`].
 
+use crate::output::inventory::InventoryFormat;
 use super::adapted::AdaptStats;
 use super::pictures::{self, Stage, TimelapseOptions};
 use super::run::{run_scenario, OnSnapshot, Progress, RunOptions};
@@ -84,10 +85,10 @@ pub const OUTPUTS: &[Output] = &[
     Output { path: "scenario.toml", when: When::Start, main_job_only: false, what: "the scenario as run (`years` included)" },
     Output { path: "species/*.toml", when: When::Start, main_job_only: false, what: "the species files of the pool, as simulated" },
     Output { path: "maps/conditions/*.{png,tif}", when: When::Start, main_job_only: true, what: "condition maps with legends and GeoTIFFs" },
-    Output { path: "inventory/year_NNNN.csv", when: When::Snapshot, main_job_only: false, what: "every tree" },
+    Output { path: "inventory/year_NNNN.{parquet,csv}", when: When::Snapshot, main_job_only: false, what: "every tree (GeoParquet by default; CSV with `--inventory csv`)" },
     Output { path: "inventory/year_NNNN.geojson", when: When::Snapshot, main_job_only: false, what: "every tree as GeoJSON points (the main job: the last year only)" },
-    Output { path: "inventory/year_NNNN_regeneration.csv", when: When::Snapshot, main_job_only: false, what: "the sapling cohorts of the regeneration layer" },
-    Output { path: "inventory/year_NNNN_{spring,summer,autumn}.{csv,geojson}", when: When::Season, main_job_only: false, what: "seasonal inventories" },
+    Output { path: "inventory/year_NNNN_regeneration.{parquet,csv}", when: When::Snapshot, main_job_only: false, what: "the sapling cohorts of the regeneration layer" },
+    Output { path: "inventory/year_NNNN_{spring,summer,autumn}.{parquet,csv,geojson}", when: When::Season, main_job_only: false, what: "seasonal inventories" },
     Output { path: "maps/{species,basal_area}_year_NNNN.{png,tif}", when: When::Snapshot, main_job_only: false, what: "dominant species and basal-area maps" },
     Output { path: "maps/species_codes.csv", when: When::Snapshot, main_job_only: false, what: "the codes of the species GeoTIFFs" },
     Output { path: "stand_table.{csv,png}", when: When::Checkpoint, main_job_only: false, what: "one row per year, and its plot (also at every snapshot)" },
@@ -211,12 +212,14 @@ pub struct SimulateOptions {
     /// Stop after the current year when set (e.g. by a Ctrl-C handler); the outputs so far are
     /// complete and a checkpoint is written.
     pub stop: Option<Arc<AtomicBool>>,
+    /// File format of the inventories (`--inventory`; default Parquet).
+    pub inventory: InventoryFormat,
 }
 
 impl SimulateOptions {
     /// A fresh run into `out`: no resume, GeoJSON at every snapshot, no stop flag.
     pub fn new(out: impl Into<PathBuf>) -> Self {
-        SimulateOptions { out: out.into(), resume: false, geojson_years: None, stop: None }
+        SimulateOptions { out: out.into(), resume: false, geojson_years: None, stop: None, inventory: InventoryFormat::Parquet }
     }
 }
 
@@ -306,6 +309,7 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
     let mut ro = RunOptions::new(&out);
     ro.resume = opts.resume;
     ro.geojson_years = opts.geojson_years;
+    ro.inventory = opts.inventory;
     ro.stop = opts.stop;
     ro.progress = Some(&mut cb);
     let mut on_snapshot = on_snapshot;
@@ -343,13 +347,15 @@ pub struct MainJobOptions {
     /// Stop after the current year when set (e.g. by a Ctrl-C handler): no pictures, no
     /// `summary.md`; [`Simulated::stopped`] is set.
     pub stop: Option<Arc<AtomicBool>>,
+    /// File format of the inventories (`--inventory`; default Parquet).
+    pub inventory: InventoryFormat,
 }
 
 impl MainJobOptions {
     /// The defaults of `sylva run`: stills 1280 × 720, frames 640 × 360, one interpolated
     /// frame between snapshots, 8 frames per second, rendering on, no stop flag.
     pub fn new(out: impl Into<PathBuf>) -> Self {
-        MainJobOptions { out: out.into(), size: (1280, 720), timelapse_size: (640, 360), frames_between: 1, fps: 8.0, render: true, stop: None }
+        MainJobOptions { out: out.into(), size: (1280, 720), timelapse_size: (640, 360), frames_between: 1, fps: 8.0, render: true, stop: None, inventory: InventoryFormat::Parquet }
     }
 }
 
@@ -470,7 +476,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     };
     // GeoJSON (≈ 280 bytes per tree, ≈ 250 MB at the end of the default run) only for the
     // final year; the CSV inventory is written at every snapshot
-    let so = SimulateOptions { out: out.clone(), resume: false, geojson_years: Some(vec![sc.years]), stop: opts.stop.clone() };
+    let so = SimulateOptions { out: out.clone(), resume: false, geojson_years: Some(vec![sc.years]), stop: opts.stop.clone(), inventory: opts.inventory };
     let sim = simulate(sc, site.clone(), lib, so, Stepping::One, Some(&mut keep), sink)?;
     let sim_s = t_sim.elapsed().as_secs_f64();
     let mut summary = MainJobSummary { sim, scenario: sc.clone(), maps, stills: Vec::new(), film: None, site_s, sim_s, pictures_s: 0.0, total_s: 0.0 };
@@ -611,7 +617,7 @@ mod tests {
 
     #[test]
     fn output_patterns() {
-        for ok in ["scenario.toml", "inventory/year_0030.csv", "inventory/year_0030_regeneration.csv", "inventory/year_0005_spring.geojson", "maps/basal_area_year_0010.tif", "maps/conditions/L.png", "stills/year_0030_closeup.png", "frames/frame_00012.png", "timelapse.mp4", "checkpoint/rank_0001.bin", "species/beech.toml"] {
+        for ok in ["scenario.toml", "inventory/year_0030.csv", "inventory/year_0030_regeneration.csv", "inventory/year_0030.parquet", "inventory/year_0030_regeneration.parquet", "inventory/year_0005_spring.geojson", "maps/basal_area_year_0010.tif", "maps/conditions/L.png", "stills/year_0030_closeup.png", "frames/frame_00012.png", "timelapse.mp4", "checkpoint/rank_0001.bin", "species/beech.toml"] {
             assert!(is_output(ok), "{ok}");
         }
         for bad in ["notes.txt", "inventory/year_30.csv", "maps/conditions/sub/L.png", "stills/year_0030_side.png", "frames/frame_0001.png", "species/beech.txt"] {

@@ -11,6 +11,7 @@ use crate::sim::step::{step_year_with, YearReport};
 use crate::sim::world::World;
 use super::Result;
 use crate::Error;
+use crate::output::inventory::InventoryFormat;
 use crate::output::{inventory, plot, stand_table};
 use crate::species::{Season, SpeciesLibrary};
 use std::path::{Path, PathBuf};
@@ -65,12 +66,14 @@ pub struct RunOptions<'a> {
     /// written; the main job builds its pictures' instances here instead of reading the
     /// inventories back. Not called when `write_snapshots` is off.
     pub on_snapshot: Option<&'a mut OnSnapshot<'a>>,
+    /// File format of the inventories and regeneration tables (default Parquet).
+    pub inventory: InventoryFormat,
 }
 
 impl RunOptions<'_> {
     /// Defaults: no resume, no stop flag, no progress callback, 1024-pixel maps, snapshots on.
     pub fn new(out_dir: impl Into<PathBuf>) -> Self {
-        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, geojson_years: None, on_snapshot: None }
+        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, geojson_years: None, on_snapshot: None, inventory: InventoryFormat::Parquet }
     }
 }
 
@@ -161,13 +164,20 @@ fn remove_prefixed(dir: &Path, subs: &[(&str, &[&str])]) -> Result<()> {
     Ok(())
 }
 
-fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize, geojson: bool) -> Result<()> {
-    inventory::write_inventory_csv(&dir.join("inventory").join(format!("{label}.csv")), w)?;
+fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize, geojson: bool, format: InventoryFormat) -> Result<()> {
+    let inv = dir.join("inventory");
+    match format {
+        InventoryFormat::Csv => inventory::write_inventory_csv(&inv.join(format!("{label}.csv")), w)?,
+        InventoryFormat::Parquet => inventory::write_inventory_parquet(&inv.join(format!("{label}.parquet")), w)?,
+    }
     if geojson {
         inventory::write_inventory_geojson(&dir.join("inventory").join(format!("{label}.geojson")), w)?;
     }
     if maps {
-        inventory::write_regeneration_csv(&dir.join("inventory").join(format!("{label}_regeneration.csv")), w)?;
+        match format {
+            InventoryFormat::Csv => inventory::write_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), w)?,
+            InventoryFormat::Parquet => inventory::write_regeneration_parquet(&inv.join(format!("{label}_regeneration.parquet")), w)?,
+        }
         let m = dir.join("maps");
         plot::write_maps(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), w, map_px)?;
     }
@@ -232,8 +242,9 @@ pub trait Stepper {
     /// Default: from `world`.
     ///
     /// Errors: I/O errors naming the file; the stepper's.
-    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool) -> Result<()> {
-        snapshot(dir, world, label, maps, map_px, geojson)
+    #[allow(clippy::too_many_arguments)]
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool, format: InventoryFormat) -> Result<()> {
+        snapshot(dir, world, label, maps, map_px, geojson, format)
     }
     /// True when [`Stepper::snapshot`] reads `world` (so a snapshot year steps with `full`);
     /// false when the stepper writes snapshots from its own state (a tiled run's ranks).
@@ -333,7 +344,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         checkpoint::remove_all(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {
-            snapshot(&dir, &world, "year_0000", true, opts.map_px, gj(0))?;
+            snapshot(&dir, &world, "year_0000", true, opts.map_px, gj(0), opts.inventory)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(0, &world);
             }
@@ -355,7 +366,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         let mut rep = YearReport::default();
         let mut err: Option<super::JobError> = None;
         let seasonal = snap_year && scenario.seasonal_snapshots;
-        let (d, px, gj_y) = (dir.clone(), opts.map_px, gj(y));
+        let (d, px, gj_y, fmt) = (dir.clone(), opts.map_px, gj(y), opts.inventory);
         let checkpoint_year = y == scenario.years || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0);
         let stop_before = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
         let full = (snap_year && snap_world) || (checkpoint_year && save_world) || (stop_before && (snap_world || save_world));
@@ -366,7 +377,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
                     Season::Summer => "summer",
                     _ => "autumn",
                 };
-                if let Err(e) = snapshot(&d, w, &format!("year_{y:04}_{name}"), false, px, gj_y) {
+                if let Err(e) = snapshot(&d, w, &format!("year_{y:04}_{name}"), false, px, gj_y, fmt) {
                     err = Some(e);
                 }
             }
@@ -381,7 +392,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         }
         let t_out = Instant::now();
         if snap_year {
-            stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, gj(y))?;
+            stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, gj(y), opts.inventory)?;
             tables(&dir, &rows, &world, true)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(y, &world);
@@ -409,7 +420,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         if stop_now && y < scenario.years {
             stopped = true;
             if opts.write_snapshots && !snap_year {
-                stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, true)?;
+                stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, true, opts.inventory)?;
                 if let Some(f) = opts.on_snapshot.as_mut() {
                     f(y, &world);
                 }

@@ -439,7 +439,8 @@ impl Stepper for Root<'_> {
     /// Every rank writes its part files of the snapshot ([`write_parts`]); rank 0 merges them
     /// by tree id (cohorts by light cell) into the files of one process and draws the maps from
     /// the gathered map columns.
-    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool) -> Result<()> {
+    #[allow(clippy::too_many_arguments)]
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool, format: crate::output::inventory::InventoryFormat) -> Result<()> {
         let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), maps, geojson, map_px };
         command(self.t, Some(Command::Snapshot))?;
         let Some((parts, cols)) = self.collective(|tile, t| write_parts(tile, t, Some(&snap)))? else {
@@ -462,6 +463,13 @@ impl Stepper for Root<'_> {
         }
         for p in parts.iter().flatten() {
             std::fs::remove_file(p).map_err(|e| Error::io(p, e))?;
+        }
+        // Parquet from the merged CSV: the bytes one process writes
+        if format == crate::output::inventory::InventoryFormat::Parquet {
+            inventory_out::csv_file_to_parquet(&inv.join(format!("{label}.csv")), &crate::output::parquet::INVENTORY, world)?;
+            if maps {
+                inventory_out::csv_file_to_parquet(&inv.join(format!("{label}_regeneration.csv")), &crate::output::parquet::REGENERATION, world)?;
+            }
         }
         Ok(())
     }

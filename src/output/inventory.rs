@@ -85,6 +85,65 @@ pub fn write_inventory_csv(path: &Path, w: &World) -> Result<()> {
     crate::output::write_atomic(path, inventory_csv(w).as_bytes())
 }
 
+/// The file format of a run's inventories and regeneration tables (`--inventory`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum InventoryFormat {
+    /// Apache Parquet with GeoParquet metadata ([`super::parquet`]): `year_NNNN.parquet`,
+    /// `year_NNNN_regeneration.parquet` (the default: about a tenth of the CSV's size).
+    #[default]
+    Parquet,
+    /// CSV text: `year_NNNN.csv`, `year_NNNN_regeneration.csv`.
+    Csv,
+}
+
+impl InventoryFormat {
+    /// The file extension (`parquet` or `csv`).
+    pub fn extension(self) -> &'static str {
+        match self {
+            InventoryFormat::Parquet => "parquet",
+            InventoryFormat::Csv => "csv",
+        }
+    }
+}
+
+impl std::str::FromStr for InventoryFormat {
+    type Err = String;
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "parquet" => Ok(InventoryFormat::Parquet),
+            "csv" => Ok(InventoryFormat::Csv),
+            _ => Err(format!("inventory format {s:?}: expected \"parquet\" or \"csv\"")),
+        }
+    }
+}
+
+/// Writes the inventory of `w` as Parquet ([`super::parquet::INVENTORY`]) atomically: the values
+/// of [`inventory_csv`], the points in the terrain's CRS ([`PointGeoRef::of`]).
+///
+/// Errors: [`super::OutputError::Io`] naming `path`.
+pub fn write_inventory_parquet(path: &Path, w: &World) -> Result<()> {
+    super::parquet::csv_to_parquet(inventory_csv(w).as_bytes(), "the inventory", path, &super::parquet::INVENTORY, &PointGeoRef::of(w))
+}
+
+/// Writes the regeneration layer of `w` as Parquet ([`super::parquet::REGENERATION`])
+/// atomically: the values of [`regeneration_csv`].
+///
+/// Errors: [`super::OutputError::Io`] naming `path`.
+pub fn write_regeneration_parquet(path: &Path, w: &World) -> Result<()> {
+    super::parquet::csv_to_parquet(regeneration_csv(w).as_bytes(), "the regeneration layer", path, &super::parquet::REGENERATION, &PointGeoRef::of(w))
+}
+
+/// Rewrites the CSV table `csv` (an inventory or regeneration table, by `table`) as the Parquet
+/// file beside it (same name, `.parquet`) and removes the CSV: a tiled run's rank 0 merges
+/// the ranks' CSV parts, then this (the same bytes as one process's Parquet file).
+///
+/// Errors: [`super::OutputError::Io`] naming the file.
+pub fn csv_file_to_parquet(csv: &Path, table: &super::parquet::Table, w: &World) -> Result<()> {
+    let f = std::fs::File::open(csv).map_err(|e| super::OutputError::io(csv, e))?;
+    super::parquet::csv_to_parquet(std::io::BufReader::new(f), &csv.display().to_string(), &csv.with_extension("parquet"), table, &PointGeoRef::of(w))?;
+    std::fs::remove_file(csv).map_err(|e| super::OutputError::io(csv, e))
+}
+
 /// Map coordinates of the inventory's points: how local site metres (x east, y north from the
 /// site's south-west corner) become the terrain's coordinate reference system.
 #[derive(Debug, Clone, Copy, PartialEq)]

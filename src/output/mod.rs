@@ -5,6 +5,7 @@ mod error;
 pub use error::{OutputError, Result};
 
 pub mod inventory;
+pub mod parquet;
 pub mod plot;
 pub mod stand_table;
 

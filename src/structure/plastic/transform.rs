@@ -54,7 +54,7 @@
 //! clusters of recomputed subtrees now shade it differently.
 
 use super::analysis::{cluster_center, input_casters, judged, normalised, psi_at_stage, shade_casters, StageCluster};
-use super::light::{light_at, light_by, Occluder, ShadowVolumes, SkyMask, Solids};
+use super::light::{Occluder, ShadowVolumes, SkyMask, Solids};
 use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
 use crate::error::Result;
 use crate::structure::grow::space::Obstacle;
@@ -422,13 +422,39 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
     Ok(rep)
 }
 
-/// [`light_at`] with the transmittance of the `fixed` trees' clusters multiplied in (eq. 3 over
-/// both sets of occluders).
-fn light_at_among(sky: &super::light::Sky, blocked: u32, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, p: Vec3) -> (f32, Vec3) {
-    match fixed {
-        Some(f) => light_by(sky, blocked, |k| vols.transmittance(k, p) * f.transmittance(k, p)),
-        None => light_at(sky, blocked, vols, p),
-    }
+/// Eq. (3) at every point of `at` over the level's shadow volumes `vols` and those of the
+/// `fixed` trees (their transmittances multiplied in), with the solids' mask at each point:
+/// (i in 0–1, average light direction) per point, bit for bit what [`super::light::light_by`] gives point by
+/// point (each point's sums in direction order). The points are split over the cores in chunks
+/// of [`LIGHT_CHUNK`], each chunk taken direction by direction so a direction's grid is read
+/// while in cache.
+fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3]) -> Vec<(f32, Vec3)> {
+    let mut out = vec![(0.0f32, Vec3::ZERO); at.len()];
+    out.par_chunks_mut(LIGHT_CHUNK).zip(at.par_chunks(LIGHT_CHUNK)).for_each(|(out, at)| {
+        let masks: Vec<u32> = at.iter().map(|&p| solids.mask(p)).collect();
+        for k in 0..sky.dirs.len() {
+            let wk = sky.weights[k];
+            if wk == 0.0 {
+                continue;
+            }
+            let d = sky.dirs[k];
+            for ((o, &p), &m) in out.iter_mut().zip(at).zip(&masks) {
+                if m & (1 << k) != 0 {
+                    continue;
+                }
+                let tk = match fixed {
+                    Some(f) => vols.transmittance(k, p) * f.transmittance(k, p),
+                    None => vols.transmittance(k, p),
+                };
+                o.0 += wk * tk;
+                o.1 += d * (wk * tk);
+            }
+        }
+        for o in out.iter_mut() {
+            o.1 = o.1.normalize_or(Vec3::Z);
+        }
+    });
+    out
 }
 
 /// Per-direction transmittances (eq. 4 products) of the clusters of one stage as evaluated at
@@ -536,56 +562,90 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     let a = &t.analysis;
     let last = a.seasons as f32;
     let sky = &env.sky;
-    for k in 1..n {
-        if a.season[k] as usize != s {
-            continue;
-        }
-        let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
-        if t.fate[par] != Fate::Alive {
-            t.fate[k] = t.fate[par];
-        }
-        if !(w.own[k] || w.moved[par]) {
-            // not recomputed: keeps its rotation, follows its parent's (small) displacement
-            if w.shifted[par] {
-                t.pos[k] = t.pos[par] + t.rot[k] * (t.input.nodes[k].pos - t.input.nodes[par].pos);
-                w.shifted[k] = t.pos[k] != w.before[k];
-                if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
-                    t.fate[k] = Fate::Collision;
-                }
+    // the season's nodes by depth below the older wood: a node's parent is placed before it
+    // (depth − 1, or older than the season), so each depth's bending light is taken as a batch
+    // (direction by direction, over the cores) and the nodes of a depth are then bent in index
+    // order as before, bit for bit the values of a node-by-node pass
+    let mut buckets: Vec<Vec<usize>> = Vec::new();
+    {
+        let mut depth = vec![0u32; n];
+        for k in 1..n {
+            if a.season[k] as usize != s {
+                continue;
             }
-            continue;
+            let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
+            let d = if par > 0 && a.season[par] as usize == s { depth[par] + 1 } else { 0 };
+            depth[k] = d;
+            if buckets.len() <= d as usize {
+                buckets.push(Vec::new());
+            }
+            buckets[d as usize].push(k);
         }
-        w.done[k] = true;
-        let (old_pos, old_rot) = (w.before[k], t.rot[k]);
-        let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
-        let len = seg.length();
-        let q_par = t.rot[par];
-        let mut q = q_par;
-        let mut bend = 0.0;
-        if len > 0.0 {
-            let h = seg / len;
-            let p_c = t.pos[par] + q_par * seg;
-            let (_, l_new) = light_at_among(sky, solids.mask(p_c), vols, fixed, p_c);
-            let t_old = tropism(&t.params, a.light_dir[k]);
-            let kappa = 1.0 - (last - a.season[k] as f32) / (last + 1.0);
-            let t_eff = (t_old + kappa * (tropism(&t.params, l_new) - t_old)).normalize_or(t_old);
-            let ws = a.w_s[k];
-            let h_rigid = q_par * h;
-            // eq. (6) plus the analysis residual (zero where eq. 9 has a root): exact identity
-            // when nothing changed
-            let h_new = (ws * (q_par * a.d_o[k]) + (1.0 - ws) * t_eff + q_par * a.residual[k]).normalize_or(h_rigid);
-            q = Quat::from_rotation_arc(h, h_new);
-            bend = h_rigid.dot(h_new).clamp(-1.0, 1.0).acos();
+    }
+    let mut at: Vec<Vec3> = Vec::new();
+    for bucket in &buckets {
+        // pass 1: fates, the nodes kept, and where the recomputed ones would stand unbent
+        at.clear();
+        for &k in bucket {
+            let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
+            if t.fate[par] != Fate::Alive {
+                t.fate[k] = t.fate[par];
+            }
+            if !(w.own[k] || w.moved[par]) {
+                // not recomputed: keeps its rotation, follows its parent's (small) displacement
+                if w.shifted[par] {
+                    t.pos[k] = t.pos[par] + t.rot[k] * (t.input.nodes[k].pos - t.input.nodes[par].pos);
+                    w.shifted[k] = t.pos[k] != w.before[k];
+                    if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
+                        t.fate[k] = Fate::Collision;
+                    }
+                }
+                continue;
+            }
+            let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
+            if seg.length() > 0.0 {
+                at.push(t.pos[par] + t.rot[par] * seg);
+            }
         }
-        t.rot[k] = q;
-        t.bend[k] = bend;
-        t.pos[k] = t.pos[par] + q * seg;
-        w.shifted[k] = t.pos[k] != old_pos;
-        // the children are recomputed when this node turned by more than ROTATION_EPS
-        let turn = 2.0 * (t.rot[k] * old_rot.inverse()).xyz().length().min(1.0).asin();
-        w.moved[k] = turn > ROTATION_EPS;
-        if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
-            t.fate[k] = Fate::Collision;
+        let lights = light_many_among(sky, solids, vols, fixed, &at);
+        // pass 2: bend the recomputed nodes
+        let mut lights = lights.into_iter();
+        for &k in bucket {
+            let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
+            if !(w.own[k] || w.moved[par]) {
+                continue;
+            }
+            w.done[k] = true;
+            let (old_pos, old_rot) = (w.before[k], t.rot[k]);
+            let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
+            let len = seg.length();
+            let q_par = t.rot[par];
+            let mut q = q_par;
+            let mut bend = 0.0;
+            if len > 0.0 {
+                let h = seg / len;
+                let (_, l_new) = lights.next().unwrap_or((0.0, Vec3::Z));
+                let t_old = tropism(&t.params, a.light_dir[k]);
+                let kappa = 1.0 - (last - a.season[k] as f32) / (last + 1.0);
+                let t_eff = (t_old + kappa * (tropism(&t.params, l_new) - t_old)).normalize_or(t_old);
+                let ws = a.w_s[k];
+                let h_rigid = q_par * h;
+                // eq. (6) plus the analysis residual (zero where eq. 9 has a root): exact identity
+                // when nothing changed
+                let h_new = (ws * (q_par * a.d_o[k]) + (1.0 - ws) * t_eff + q_par * a.residual[k]).normalize_or(h_rigid);
+                q = Quat::from_rotation_arc(h, h_new);
+                bend = h_rigid.dot(h_new).clamp(-1.0, 1.0).acos();
+            }
+            t.rot[k] = q;
+            t.bend[k] = bend;
+            t.pos[k] = t.pos[par] + q * seg;
+            w.shifted[k] = t.pos[k] != old_pos;
+            // the children are recomputed when this node turned by more than ROTATION_EPS
+            let turn = 2.0 * (t.rot[k] * old_rot.inverse()).xyz().length().min(1.0).asin();
+            w.moved[k] = turn > ROTATION_EPS;
+            if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
+                t.fate[k] = Fate::Collision;
+            }
         }
     }
     // light on this stage's clusters that were recomputed
