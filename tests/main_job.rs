@@ -185,11 +185,36 @@ fn sylva_run_binary_smoke() {
     let sc = dir.path().join("reduced.toml");
     std::fs::write(&sc, SCENARIO).unwrap();
     let out = dir.path().join("out");
-    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--years", "2", "--no-render"]).output().unwrap();
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--years", "2", "--no-pictures"]).output().unwrap();
     let stdout = String::from_utf8_lossy(&res.stdout);
     let stderr = String::from_utf8_lossy(&res.stderr);
     assert!(res.status.success(), "sylva run failed:\n{stdout}\n{stderr}");
     assert!(stdout.contains("basal area") && stdout.contains("outputs in"), "summary table printed: {stdout}");
     assert!(stderr.contains("[1/4] conditions") && stderr.contains("[2/4] simulating 2 years"), "steps reported: {stderr}");
     assert!(out.join("summary.md").is_file() && out.join("inventory/year_0002.geojson").is_file() && !out.join("stills").exists());
+}
+
+/// Without any graphics adapter (here: wgpu limited to a backend this machine lacks), `sylva
+/// run` says so before it simulates, naming the package to install, writes every output that
+/// needs no rendering, and exits non-zero; `--no-pictures` runs the same machine cleanly.
+#[test]
+fn without_an_adapter_sylva_run_writes_what_needs_no_rendering_and_fails() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = dir.path().join("reduced.toml");
+    std::fs::write(&sc, SCENARIO).unwrap();
+    let out = dir.path().join("out");
+    // Metal exists only on Apple systems: on Linux no adapter is found
+    let no_gpu = if cfg!(target_os = "macos") { "dx12" } else { "metal" };
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--years", "2"]).env("WGPU_BACKEND", no_gpu).output().unwrap();
+    let stderr = String::from_utf8_lossy(&res.stderr);
+    assert!(!res.status.success(), "exits non-zero without an adapter: {stderr}");
+    let warn = stderr.find("mesa-vulkan-drivers").expect("names the package to install");
+    let sim = stderr.find("[2/4] simulating").expect("simulates");
+    assert!(warn < sim, "told before the simulation: {stderr}");
+    for f in ["stand_table.csv", "inventory/year_0002.parquet", "inventory/year_0002.geojson", "maps/conditions/elevation.tif", "summary.md"] {
+        assert!(out.join(f).is_file(), "{f} written without an adapter");
+    }
+    assert!(!out.join("stills").exists() && !out.join("timelapse.gif").exists());
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--years", "2", "--no-pictures"]).env("WGPU_BACKEND", no_gpu).output().unwrap();
+    assert!(res.status.success(), "--no-pictures needs no adapter: {}", String::from_utf8_lossy(&res.stderr));
 }

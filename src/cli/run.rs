@@ -33,8 +33,8 @@ pub struct Args {
     #[arg(long, default_value_t = 8.0, value_parser = parse_fps)]
     pub fps: f32,
     /// Skip stills and timelapse (no GPU or software adapter needed).
-    #[arg(long)]
-    pub no_render: bool,
+    #[arg(long, alias = "no-render")]
+    pub no_pictures: bool,
     /// Folder of extra or edited species files (e.g. made by `sylva species new`): they are
     /// added to the shipped library, replacing shipped species of the same id.
     #[arg(long)]
@@ -64,7 +64,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         sc.validate("--years")?;
     }
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
-    let opts = MainJobOptions { out: a.out.clone(), size: a.size, timelapse_size: a.timelapse_size, frames_between: a.frames_between, fps: a.fps, render: !a.no_render, stop: Some(super::simulate::stop_on_ctrl_c()), inventory: a.inventory };
+    let opts = MainJobOptions { out: a.out.clone(), size: a.size, timelapse_size: a.timelapse_size, frames_between: a.frames_between, fps: a.fps, render: !a.no_pictures, stop: Some(super::simulate::stop_on_ctrl_c()), inventory: a.inventory };
     let mut bars = Bars::default();
     let summary = main_job::main_job(&sc, &lib, &opts, &mut |e| bars.show(e))?;
     if summary.sim.stopped {
@@ -94,6 +94,7 @@ impl Bars {
                 eprintln!("[2/4] simulating {years} years");
                 self.sim.show(e);
             }
+            Event::NoAdapter { message } => eprintln!("warning: {message}\n  the run goes on without pictures: maps, tables and inventories are written, then it ends with this error (`--no-pictures` skips the pictures on purpose)"),
             Event::Stills { count, adapter } => {
                 eprintln!("[3/4] stills on {adapter}");
                 self.bar = Some(super::progress(*count as u64, "stills"));

@@ -160,6 +160,13 @@ pub enum Event<'a> {
     Year(&'a Progress),
     /// The simulation ended (or was stopped: [`Simulated::stopped`]).
     Simulated(&'a Simulated),
+    /// `sylva run` found no graphics adapter before simulating (`message`: what wgpu said and
+    /// the package to install): it simulates and writes every output that needs no rendering,
+    /// then ends with [`JobError::Render`].
+    NoAdapter {
+        /// The error, naming the package to install.
+        message: String,
+    },
     /// The stills start: `count` pictures from afar (two per still year) on the renderer's
     /// `adapter`.
     Stills {
@@ -462,6 +469,14 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     let site_s = t_site.elapsed().as_secs_f64();
     sink(&Event::Conditions { width: site.width(), height: site.height(), extent_m: site.extent_m(), maps: &maps, seconds: site_s });
 
+    // the adapter is looked for before the simulation: without one the run says so now,
+    // writes everything that needs no rendering and then fails
+    let no_adapter = if opts.render { crate::render::headless::probe_adapter().err() } else { None };
+    if let Some(e) = &no_adapter {
+        sink(&Event::NoAdapter { message: e.to_string() });
+    }
+    let render = opts.render && no_adapter.is_none();
+
     // 2. Simulation. The pictures' key frames come from the in-memory world at each snapshot
     // (summer instances of the visible trees), not from the inventory files.
     let t_sim = Instant::now();
@@ -469,7 +484,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     // the living trees of the last kept snapshot, for the adapted close-up
     let mut last_rows: Vec<inventory::InventoryRow> = Vec::new();
     let mut keep = |y: u32, w: &World| {
-        if opts.render {
+        if render {
             keys.push((y, scene::instances_with_saplings(&scene::plants_from_world(w), &scene::saplings_from_world(w), lib, &site, Season::Summer)));
             last_rows = inventory::rows_from_world(w);
         }
@@ -487,7 +502,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
 
     // 3 + 4. Pictures.
     let t_pic = Instant::now();
-    if opts.render {
+    if render {
         let (stills, film) = pictures_of(sc, site, lib, keys, &last_rows, opts, sink)?;
         summary.stills = stills;
         summary.film = Some(film);
@@ -495,7 +510,10 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     summary.pictures_s = t_pic.elapsed().as_secs_f64();
     summary.total_s = t0.elapsed().as_secs_f64();
     write_summary_md(&out, &summary)?;
-    Ok(summary)
+    match no_adapter {
+        Some(e) => context(Err(JobError::from(e)), || "the pictures of the run (the maps, tables and inventories are written; `--no-pictures` skips the pictures on purpose)".into()),
+        None => Ok(summary),
+    }
 }
 
 /// The main job's pictures: stills at the still years, the close-up of the last one, the

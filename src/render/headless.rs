@@ -11,6 +11,30 @@ use super::scene::Scene;
 use super::{RenderError, Result};
 use crate::Error;
 
+/// The adapter the headless renderer draws on: a GPU when there is one, else a software adapter
+/// such as lavapipe; the backends wgpu tries follow `WGPU_BACKEND` (e.g. `vulkan`, `gl`).
+///
+/// # Errors
+/// [`RenderError::NoAdapter`] when wgpu finds none.
+fn open_adapter() -> Result<wgpu::Adapter> {
+    let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    match pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions { power_preference: wgpu::PowerPreference::HighPerformance, force_fallback_adapter: false, compatible_surface: None, ..Default::default() })) {
+        Ok(a) => Ok(a),
+        Err(_) => pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions { force_fallback_adapter: true, ..Default::default() })).map_err(|e| RenderError::NoAdapter(e.to_string())),
+    }
+}
+
+/// Whether the headless renderer finds an adapter, without opening a device: its name and
+/// backend (e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)"). `sylva run` asks before it
+/// simulates, so that a machine without one is told at once rather than after the simulation.
+///
+/// # Errors
+/// [`RenderError::NoAdapter`] when wgpu finds none (the message names the package to install).
+pub fn probe_adapter() -> Result<String> {
+    let info = open_adapter()?.get_info();
+    Ok(format!("{} ({:?})", info.name, info.backend))
+}
+
 impl Renderer {
     /// Opens the first available adapter (a GPU when there is one, else a software adapter
     /// such as lavapipe) and builds the pipelines.
@@ -19,12 +43,7 @@ impl Renderer {
     /// [`RenderError::NoAdapter`] when wgpu finds no adapter, [`RenderError::Create`] when the device
     /// cannot be created.
     pub fn new() -> Result<Self> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapter = match pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions { power_preference: wgpu::PowerPreference::HighPerformance, force_fallback_adapter: false, compatible_surface: None, ..Default::default() })) {
-            Ok(a) => a,
-            Err(_) => pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions { force_fallback_adapter: true, ..Default::default() }))
-                .map_err(|e| RenderError::NoAdapter(e.to_string()))?,
-        };
+        let adapter = open_adapter()?;
         let adapter_info = adapter.get_info();
         let al = adapter.limits();
         let flags = adapter.get_downlevel_capabilities().flags;
