@@ -273,15 +273,21 @@ thickness_m = 0.5
 
 #[test]
 fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
-    use sylva::job::export::{export_stand, parse_area, ExportOptions};
+    use sylva::job::export::{all_levels, export_stand, parse_area, parse_levels, ExportOptions};
     let dir = tempfile::tempdir().unwrap();
     let run = dir.path().join("run");
     small_run(&run);
     let lib = lib();
     let out = dir.path().join("stand.glb");
     let mut o = ExportOptions::new([20.0, 15.0, 45.0, 45.0]);
+    // by default one full-detail mesh per tree; the LOD chain on request (`--lod all`)
+    assert_eq!(o.levels, vec![0]);
+    o.levels = all_levels();
     o.year = Some(1);
     let r = export_stand(&run, &lib, &o, &out).unwrap();
+    assert_eq!(r.stats.trees, r.trees);
+    assert_eq!(r.stats.levels, vec![0, 1, 2, 3]);
+    assert!(r.stats.leaf_cards > 0 && r.stats.triangles > r.terrain_triangles, "{:?}", r.stats);
     assert_eq!(r.year, 1);
     // trees of the area: the planted rows at x = 22.5, 27.5, ... inside 20–45 m (x) and 15–45 m (y)
     let rows = sylva::job::pictures::snapshot_rows(&run, 1).unwrap();
@@ -317,6 +323,17 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     assert_eq!(r0.trees, r.trees);
     let (doc0, _, _) = gltf::import(&out0).unwrap();
     assert!(!doc0.nodes().any(|n| n.name().is_some_and(|s| s.ends_with("_LOD1") || s.ends_with("_LOD3"))));
+    // one mesh node per tree, plus the terrain and the wall
+    assert_eq!(r0.counts.mesh_nodes, r0.trees + 2, "{:?}", r0.counts);
+    assert!(r0.stats.triangles < r.stats.triangles && r0.stats.leaf_cards == r.stats.leaf_cards, "{:?} {:?}", r0.stats, r.stats);
+    // the 25- and 30-year trees are below 15 m: no node figures
+    assert_eq!((r0.stats.trees_15m, r0.stats.nodes_median, r0.stats.nodes_min), (0, 0, 0));
+    assert_eq!(parse_levels("all").unwrap(), all_levels());
+    assert_eq!(parse_levels("1,0").unwrap(), vec![0, 1]);
+    for bad in ["4", "x", "", "0,,1"] {
+        let m = parse_levels(bad).unwrap_err().to_string();
+        assert!(m.contains("--lod") && m.contains("`all`"), "{bad}: {m}");
+    }
     validate(&[&out, &out0]);
 
     // open-grown trees of one class, alone in their neighbourhoods, adapt alike: one model,
@@ -349,6 +366,24 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--year", "1", "--area", "20,15,45,45", "--lod", "0", "--out"]).arg(&cli).output().unwrap();
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
     assert!(String::from_utf8_lossy(&st.stdout).contains(&format!("{} trees", r.trees)));
+    // --stats: the figures as JSON; into a missing folder it is refused before anything is written
+    let stats = dir.path().join("stats.json");
+    let cli_all = dir.path().join("cli_all.glb");
+    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--year", "1", "--area", "20,15,45,45", "--lod", "all", "--stats"]).arg(&stats).arg("--out").arg(&cli_all).output().unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let js: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    for k in ["trees", "nodes_median", "nodes_min", "leaf_cards", "adapt_s", "triangles"] {
+        assert!(js[k].is_number(), "{k} in {js}");
+    }
+    assert_eq!(js["trees"], r.trees);
+    assert_eq!(js["levels"], serde_json::json!([0, 1, 2, 3]));
+    let missing = dir.path().join("no_such_folder").join("s.json");
+    let never = dir.path().join("never.glb");
+    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--year", "1", "--area", "20,15,45,45", "--stats"]).arg(&missing).arg("--out").arg(&never).output().unwrap();
+    assert!(!st.status.success());
+    let e = String::from_utf8_lossy(&st.stderr);
+    assert!(e.contains("--stats") && e.contains("does not exist"), "{e}");
+    assert!(!never.exists() && !missing.parent().unwrap().exists());
     let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--area", "20,15,45", "--out"]).arg(&cli).output().unwrap();
     assert!(!st.status.success());
     assert!(String::from_utf8_lossy(&st.stderr).contains("four numbers"), "{}", String::from_utf8_lossy(&st.stderr));

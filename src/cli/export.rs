@@ -1,5 +1,6 @@
-//! `sylva export RUN_DIR --year Y --area X0,Y0,X1,Y1 --out stand.glb`: the adapted trees of an
-//! area with the terrain patch and the obstacles as one glTF scene ([`sylva::job::export`]).
+//! `sylva export RUN_DIR --year Y --area X0,Y0,X1,Y1 --out stand.glb [--lod all] [--stats s.json]`:
+//! the adapted trees of an area with the terrain patch and the obstacles as one glTF scene
+//! ([`sylva::job::export`]).
 use anyhow::Context;
 use std::path::PathBuf;
 use sylva::species::Season;
@@ -19,10 +20,16 @@ pub struct Args {
     /// Season of the foliage colours: spring, summer, autumn, winter.
     #[arg(long, default_value = "summer", value_parser = super::render::parse_season)]
     pub season: Season,
-    /// Levels of detail to write, e.g. `0` (full trees only, for Blender) or `0,1,2,3` (LOD
-    /// groups for game engines; the default).
-    #[arg(long, value_delimiter = ',', default_value = "0,1,2,3")]
-    pub lod: Vec<usize>,
+    /// Levels of detail to write: `0`, the default, one full-detail mesh per tree (what
+    /// Blender, three.js and glTF viewers show: they draw every node); `all` the LOD chain
+    /// `<name>_LOD0…3` of each tree for game engines' LOD groups; or a list such as `0,1`.
+    #[arg(long, default_value = "0")]
+    pub lod: String,
+    /// Write the export's figures as JSON (trees, trees_15m, nodes_median and nodes_min over
+    /// the trees of 15 m and taller, leaf_cards, adapt_s, triangles, levels). Its folder must
+    /// exist.
+    #[arg(long)]
+    pub stats: Option<PathBuf>,
     /// Folder of extra or edited species files, over the shipped library and the run's own
     /// `species/` folder.
     #[arg(long)]
@@ -39,6 +46,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     anyhow::ensure!(a.run_dir.join("scenario.toml").is_file(), "{}: not a Sylva run directory (no scenario.toml)", a.run_dir.display());
     let area = sylva::job::export::parse_area(&a.area)?;
+    let levels = sylva::job::export::parse_levels(&a.lod)?;
+    if let Some(p) = &a.stats {
+        super::check_stats_path(p)?;
+    }
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
@@ -46,8 +57,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut o = sylva::job::export::ExportOptions::new(area);
     o.year = a.year;
     o.season = a.season;
-    o.levels = a.lod.clone();
+    o.levels = levels;
     let r = sylva::job::export::export_stand(&a.run_dir, &lib, &o, &a.out)?;
+    if let Some(p) = &a.stats {
+        sylva::output::write_atomic(p, serde_json::to_string_pretty(&r.stats.to_json())?.as_bytes())?;
+    }
     println!(
         "year {}: {} trees ({} tree models), {} obstacles, terrain {} triangles; {} meshes, {} mesh nodes, {} images; adapt {:.2} s → {} ({:.1} MB)",
         r.year, r.trees, r.models, r.obstacles, r.terrain_triangles, r.counts.meshes, r.counts.mesh_nodes, r.counts.images, r.adapt_s, r.out.display(), r.bytes as f64 / 1e6

@@ -65,3 +65,15 @@ fn quiet_mesa_runtime_dir() {
         std::env::set_var("XDG_RUNTIME_DIR", &dir);
     }
 }
+
+/// Checks a `--stats FILE.json` path before any work: not a folder, and its folder exists
+/// (nothing is written when it does not, rather than a folder made by mistake).
+///
+/// Errors: naming `--stats` and the path.
+pub fn check_stats_path(p: &std::path::Path) -> anyhow::Result<()> {
+    anyhow::ensure!(!p.is_dir(), "--stats {}: is a folder; expected a .json file name in an existing folder", p.display());
+    if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
+        anyhow::ensure!(dir.is_dir(), "--stats {}: the folder {} does not exist; create it first or give a file in an existing folder", p.display(), dir.display());
+    }
+    Ok(())
+}

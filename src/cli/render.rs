@@ -73,7 +73,9 @@ pub struct RenderArgs {
     /// level meshes per species, obstacle and adapted tree), cluster_hulls and hull_triangles
     /// (the adapted trees' mid-level crown hulls of their leaf clusters, in those chains),
     /// instanced_trees, triangles (drawn), per_level (instances drawn per level),
-    /// adapted_per_level (the adapted trees among them), frame_s).
+    /// adapted_per_level (the adapted trees among them), frame_s; trees (live trees of the
+    /// snapshot), trees_15m, nodes_median and nodes_min (skeleton nodes of the adapted trees of
+    /// 15 m and taller), leaf_cards (of the adapted trees)). Its folder must exist.
     #[arg(long)]
     pub stats: Option<PathBuf>,
 }
@@ -136,10 +138,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     // the statistics file is checked before the picture is drawn, so that a bad path does not
     // leave the picture without its statistics
     if let Some(p) = &a.stats {
-        anyhow::ensure!(!p.is_dir(), "--stats {}: is a folder; expected a .json file name", p.display());
-        if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("--stats {}: creating its folder {}", p.display(), dir.display()))?;
-        }
+        super::check_stats_path(p)?;
     }
     let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
     let year = match a.year {
@@ -169,6 +168,8 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
             "trees_in_groups": ad.trees_in_groups, "unique_meshes": stage.library.species.len() + stage.obstacles.len() + ad.adapted_trees,
             "cluster_hulls": ad.cluster_hulls, "hull_triangles": ad.hull_triangles, "per_level": st.per_level, "adapted_per_level": ad.per_level,
             "instanced_trees": st.instances_drawn.saturating_sub(ad.adapted_trees), "instances_drawn": st.instances_drawn, "triangles": st.triangles, "frame_s": frame_s,
+            "trees": rows.iter().filter(|r| r.status == "alive" && stage.library.find(&r.species).is_some()).count(),
+            "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards,
         });
         sylva::output::write_atomic(path, serde_json::to_string_pretty(&j)?.as_bytes())?;
     }

@@ -43,6 +43,20 @@ impl Default for AdaptOptions {
     }
 }
 
+/// Height (m) from which a tree counts in the node-count figures of `--stats`
+/// ([`AdaptStats::nodes_median`], `job::export::ExportStats`): the canopy trees whose detail a
+/// close view shows (issue 32).
+pub const STATS_MIN_HEIGHT_M: f32 = 15.0;
+
+/// Median of `v` (sorted in place; the lower middle of an even count); 0 when empty.
+pub fn median_usize(v: &mut [usize]) -> usize {
+    if v.is_empty() {
+        return 0;
+    }
+    v.sort_unstable();
+    v[(v.len() - 1) / 2]
+}
+
 /// What the near field cost and holds (the `--stats` figures of `sylva render`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct AdaptStats {
@@ -67,6 +81,15 @@ pub struct AdaptStats {
     /// its finer level); trees outside the frustum, under the smallest size drawn or wholly in
     /// the canopy layer are not counted.
     pub per_level: [usize; LOD_LEVELS],
+    /// Adapted trees of 15 m and taller ([`STATS_MIN_HEIGHT_M`]).
+    pub trees_15m: usize,
+    /// Median skeleton node count of those trees (the lower middle of an even count; 0 when
+    /// there are none).
+    pub nodes_median: usize,
+    /// Smallest skeleton node count of those trees (0 when there are none).
+    pub nodes_min: usize,
+    /// Leaf cards of the adapted trees' full-detail skeletons together.
+    pub leaf_cards: usize,
 }
 
 /// The level of an adapted tree's chain that is its crown hull (LOD2: 40–100 px tall on screen
@@ -146,13 +169,15 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
     let st = adapt_stand(&trees, &targets, library, cache, &opts)?;
     let adapt_s = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
-    let meshed: Vec<Option<(Prototype, f32, f32, bool)>> = st
+    #[allow(clippy::type_complexity)]
+    let meshed: Vec<Option<(Prototype, f32, f32, bool, usize, usize)>> = st
         .trees
         .par_iter()
         .map(|a| {
             let t = &trees[a.index];
             let sp = &library.species[t.species as usize];
             let (mut sk, mut lv, h) = tree_frame(a, t.base)?;
+            let (n_nodes, n_leaves) = (sk.nodes.len(), lv.leaves.len());
             let s = 1.0 / h;
             sk.nodes.iter_mut().for_each(|n| {
                 n.pos *= s;
@@ -168,12 +193,17 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
             }
             let p = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0), look: Some(super::scene::crown_look(sp)) };
             let r0 = p.normalised_crown_radius();
-            Some((p, h, r0, hulled))
+            Some((p, h, r0, hulled, n_nodes, n_leaves))
         })
         .collect();
     let (mut adapted, mut hulls, mut hull_triangles) = (0, 0, 0);
+    let (mut nodes_15m, mut leaf_cards) = (Vec::new(), 0);
     for (m, n) in meshed.into_iter().zip(&near) {
-        let Some((p, h, r0, hulled)) = m else { continue };
+        let Some((p, h, r0, hulled, n_nodes, n_leaves)) = m else { continue };
+        if trees[n.2].height_m >= STATS_MIN_HEIGHT_M {
+            nodes_15m.push(n_nodes);
+        }
+        leaf_cards += n_leaves;
         if hulled {
             hulls += 1;
             hull_triangles += p.lods.levels.get(CLUSTER_HULL_LEVEL).map_or(0, |l| l.triangle_count());
@@ -191,7 +221,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         prototypes.push(p);
         adapted += 1;
     }
-    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups: st.trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS] })
+    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups: st.trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards })
 }
 
 /// The level-of-detail chain of the adapted tree `a` from its skeleton `sk` and leaves `lv` in

@@ -16,7 +16,7 @@
 //! the patch (metres; x east, y north, z up in Sylva, y up in the file); the scene's `extras`
 //! record the origin in the run's world coordinates, the run directory, the year and the area.
 
-use super::adapted::{obstacle_mesh, solids, stand_trees, tree_frame, OBSTACLE_RGB};
+use super::adapted::{median_usize, obstacle_mesh, solids, stand_trees, tree_frame, OBSTACLE_RGB, STATS_MIN_HEIGHT_M};
 use super::scene::plants_from_rows;
 use super::Result;
 use crate::conditions::SiteConditions;
@@ -53,16 +53,42 @@ pub struct ExportOptions {
     pub area: [f64; 4],
     /// Season of the foliage colours.
     pub season: Season,
-    /// Levels of detail written (indices below [`LOD_LEVELS`]; all by default).
+    /// Levels of detail written (indices below [`LOD_LEVELS`]): by default only the full-detail
+    /// mesh (level 0), so that every tree is one visible mesh in Blender, three.js or a glTF
+    /// viewer, which show every node; [`all_levels`] for the LOD groups of game engines.
     pub levels: Vec<usize>,
     /// Most trees (refused beyond: [`DEFAULT_MAX_TREES`] by default).
     pub max_trees: usize,
 }
 
 impl ExportOptions {
-    /// The last year, summer, all levels, [`DEFAULT_MAX_TREES`].
+    /// The last year, summer, the full-detail level only, [`DEFAULT_MAX_TREES`].
     pub fn new(area: [f64; 4]) -> ExportOptions {
-        ExportOptions { year: None, area, season: Season::Summer, levels: (0..LOD_LEVELS).collect(), max_trees: DEFAULT_MAX_TREES }
+        ExportOptions { year: None, area, season: Season::Summer, levels: vec![0], max_trees: DEFAULT_MAX_TREES }
+    }
+}
+
+/// Every level of detail, `0..LOD_LEVELS` (`--lod all`: `<name>_LOD0…3` under each tree's node,
+/// as Unity's and Unreal's importers group them).
+pub fn all_levels() -> Vec<usize> {
+    (0..LOD_LEVELS).collect()
+}
+
+/// Parses `--lod`: `all` ([`all_levels`]) or a comma-separated list of levels, e.g. `0` or `0,1`.
+///
+/// Errors: [`Error::Invalid`] naming `--lod` for anything else or a level ≥ [`LOD_LEVELS`].
+pub fn parse_levels(s: &str) -> Result<Vec<usize>> {
+    if s.trim().eq_ignore_ascii_case("all") {
+        return Ok(all_levels());
+    }
+    let v: Vec<Option<usize>> = s.split(',').map(|p| p.trim().parse::<usize>().ok().filter(|&l| l < LOD_LEVELS)).collect();
+    match v.iter().copied().collect::<Option<Vec<usize>>>() {
+        Some(mut l) if !l.is_empty() => {
+            l.sort_unstable();
+            l.dedup();
+            Ok(l)
+        }
+        _ => Err(invalid("--lod", s.into(), format!("`all` or levels 0–{} separated by commas, e.g. 0 (full detail, the default) or 0,1,2,3", LOD_LEVELS - 1))),
     }
 }
 
@@ -87,7 +113,41 @@ pub struct ExportReport {
     pub adapt_s: f64,
     /// Size of the file (bytes).
     pub bytes: u64,
+    /// Figures of the trees written ([`ExportStats`]).
+    pub stats: ExportStats,
 }
+
+/// Figures of an export (`sylva export --stats FILE.json`).
+#[derive(Debug, Clone, PartialEq, Default, serde::Serialize)]
+pub struct ExportStats {
+    /// Trees written.
+    pub trees: usize,
+    /// Trees of [`STATS_MIN_HEIGHT_M`] and taller among them.
+    pub trees_15m: usize,
+    /// Median skeleton node count of the adapted trees of [`STATS_MIN_HEIGHT_M`] and taller (0
+    /// when there are none).
+    pub nodes_median: usize,
+    /// Smallest skeleton node count among them (0 when there are none).
+    pub nodes_min: usize,
+    /// Leaf cards of the full-detail meshes of all trees written (each tree counted, shared
+    /// meshes too).
+    pub leaf_cards: usize,
+    /// Wall time of the adaptation (s).
+    pub adapt_s: f64,
+    /// Triangles of the written levels of all trees (each tree counted, shared meshes too;
+    /// billboards as drawn, two crossed cards) plus the terrain and obstacles.
+    pub triangles: usize,
+    /// Levels of detail written.
+    pub levels: Vec<usize>,
+}
+
+impl ExportStats {
+    /// The figures as a JSON object.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::to_value(self).unwrap_or(serde_json::Value::Null)
+    }
+}
+
 
 fn invalid(field: &str, value: String, expected: String) -> super::JobError {
     Error::Invalid { context: "sylva export".into(), field: field.into(), value, expected }.into()
@@ -169,14 +229,20 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let (terrain, z0) = terrain_patch(&site, o.area);
     let origin = Vec3::new(((x0 + x1) * 0.5) as f32, ((y0 + y1) * 0.5) as f32, z0);
 
+    // the share of a leaf card its leaf texture covers, per species (fill_leaf_area)
+    let card_cover: Vec<f32> = library.species.iter().map(|sp| crate::structure::texture::leaf_card_cover(crate::structure::texture::LeafShape::of_species(sp))).collect();
     // each tree in its own frame, with its topology key and canonical shape
-    let meshed: Vec<Option<(u64, Vec<f32>, StandModel, [f32; 3], Vec3, usize)>> = st
+    // per tree also (skeleton nodes, leaf cards of the full level, triangles of the levels written)
+    #[allow(clippy::type_complexity)]
+    let meshed: Vec<Option<(u64, Vec<f32>, StandModel, [f32; 3], Vec3, usize, [usize; 3])>> = st
         .trees
         .par_iter()
         .map(|a| {
             let t = &trees[a.index];
-            let (sk, lv, hgt) = tree_frame(a, t.base)?;
+            let (sk, mut lv, hgt) = tree_frame(a, t.base)?;
             let r = t.crown_radius_m.max(0.2);
+            let sp = &library.species[t.species as usize];
+            fill_leaf_area(&mut lv, crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m), card_cover[t.species as usize], t.crown_radius_m, t.species as u64);
             let s = Vec3::new(r, r, hgt);
             let mut topology = vec![t.species as u64, sk.nodes.len() as u64];
             topology.extend(sk.nodes.iter().map(|n| n.parent.map_or(u64::MAX, |p| p as u64)));
@@ -192,8 +258,11 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             }
             // the mid level: the crown hull of the adapted clusters, as in the pictures
             let (chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
-            let sp = &library.species[t.species as usize];
-            Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize }, s.to_array(), t.base - origin, t.species as usize))
+            let billboard = LOD_LEVELS - 1;
+            // billboards are drawn as the shared two crossed cards (4 triangles)
+            let tris = o.levels.iter().map(|&l| if l == billboard { 4 } else { chain.levels.get(l).map_or(0, |m| m.triangle_count()) }).sum();
+            let figures = [sk.nodes.len(), lv.leaves.len(), tris];
+            Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize }, s.to_array(), t.base - origin, t.species as usize, figures))
         })
         .collect();
 
@@ -203,8 +272,14 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     // topology key → (model, its size, its canonical shape) of the models with that topology
     let mut model_of: HashMap<u64, Vec<(usize, [f32; 3], Vec<f32>)>> = HashMap::new();
     let mut nodes = Vec::new();
+    let (mut tall_nodes, mut leaf_cards, mut triangles) = (Vec::new(), 0usize, 0usize);
     for (m, a) in meshed.into_iter().zip(&st.trees) {
-        let Some((key, canon, mut model, size, pos, sp)) = m else { continue };
+        let Some((key, canon, mut model, size, pos, sp, [n_nodes, n_leaves, n_tris])) = m else { continue };
+        if trees[a.index].height_m >= STATS_MIN_HEIGHT_M {
+            tall_nodes.push(n_nodes);
+        }
+        leaf_cards += n_leaves;
+        triangles += n_tris;
         let look = *looks_of.entry(sp).or_insert_with(|| {
             looks.push(Look::for_species(&library.species[sp], o.season));
             looks.len() - 1
@@ -256,9 +331,69 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             }
         }),
     };
+    triangles += scene.statics.iter().map(|m| m.mesh.triangle_count()).sum::<usize>();
+    let stats = ExportStats {
+        trees: scene.trees.len(),
+        trees_15m: tall_nodes.len(),
+        nodes_min: tall_nodes.iter().copied().min().unwrap_or(0),
+        nodes_median: median_usize(&mut tall_nodes),
+        leaf_cards,
+        adapt_s,
+        triangles,
+        levels: o.levels.clone(),
+    };
     let counts = crate::output::gltf::write_stand_glb(out, &scene)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
-    Ok(ExportReport { out: out.to_path_buf(), year, trees: scene.trees.len(), models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes })
+    Ok(ExportReport { out: out.to_path_buf(), year, trees: scene.trees.len(), models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes, stats })
+}
+
+/// Largest factor by which [`fill_leaf_area`] lengthens a tree's leaf cards (1.5: a beech
+/// card of 6 cm stays a leaf, not a board); the rest of the leaf area comes as more cards.
+pub const MAX_CARD_GROWTH: f32 = 1.5;
+
+/// Most cards [`fill_leaf_area`] makes of one leaf card (itself and its copies).
+pub const MAX_CARDS_PER_LEAF: usize = 24;
+
+/// Gives the leaf cards of `lv` (each `size × size/2`, [`crate::structure::mesh::leaf_mesh`],
+/// of which the leaf texture covers the share `card_cover`,
+/// [`crate::structure::texture::leaf_card_cover`]) a leaf area (one-sided) of `leaf_area_m2`,
+/// the leaf area the light model gives the tree
+/// ([`crate::sim::phases::light::crown_leaf_area`]: the crown's leaf-area index over its
+/// projection), so that the exported crown is as dense as the simulation's. With the area
+/// factor `F = leaf_area_m2 / current`, each card becomes `n = ceil(F / 1.5²)` cards (at most
+/// [`MAX_CARDS_PER_LEAF`]) of length × `sqrt(F / n)`: the card itself and `n − 1` copies on
+/// the same node, turned about the vertical by a hashed angle and moved by a hashed offset of
+/// up to two card lengths (the stand skeleton's few dozen tips stand for a crown's hundreds of
+/// shoots), kept within `crown_radius_m` (m) of the stem axis (the tree's frame: stem base at
+/// the origin, z up). Fewer cards (F < 1) shrink instead. Deterministic: the offsets hash the
+/// leaf's index and `seed` (the export passes the species, so that trees alike stay alike and
+/// share their meshes). A tree without leaves, or a target of 0, is left as it is.
+pub fn fill_leaf_area(lv: &mut crate::structure::Leaves, leaf_area_m2: f32, card_cover: f32, crown_radius_m: f32, seed: u64) {
+    let now: f32 = lv.leaves.iter().map(|l| 0.5 * l.size * l.size * card_cover.clamp(0.05, 1.0)).sum();
+    if now <= 0.0 || !(leaf_area_m2 > 0.0) {
+        return;
+    }
+    let f = leaf_area_m2 / now;
+    let n = ((f / (MAX_CARD_GROWTH * MAX_CARD_GROWTH)).ceil() as usize).clamp(1, MAX_CARDS_PER_LEAF);
+    let k = (f / n as f32).sqrt();
+    let rmax = crown_radius_m.max(0.05);
+    let mut out = Vec::with_capacity(lv.leaves.len() * n);
+    for (i, l) in lv.leaves.iter().enumerate() {
+        let size = l.size * k;
+        out.push(crate::structure::Leaf { size, ..*l });
+        for j in 1..n {
+            let u = |c: u64| crate::rng::unit_f32(crate::rng::hash(&[seed, i as u64, j as u64, c]));
+            let turn = glam::Quat::from_rotation_z(u(0) * std::f32::consts::TAU);
+            let off = Vec3::new(u(1) * 2.0 - 1.0, u(2) * 2.0 - 1.0, u(3) * 2.0 - 1.0) * (2.0 * size);
+            let mut pos = l.pos + off;
+            let rho = pos.truncate().length();
+            if rho > rmax {
+                pos = (pos.truncate() * (rmax / rho)).extend(pos.z);
+            }
+            out.push(crate::structure::Leaf { pos, dir: turn * l.dir, normal: turn * l.normal, size, node: l.node });
+        }
+    }
+    lv.leaves = out;
 }
 
 /// Largest vertex spacing of the terrain patch (m): finer than the DEM's cells so that the
@@ -308,4 +443,42 @@ pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
         }
     }
     (m, z0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::structure::{Leaf, Leaves};
+
+    #[test]
+    fn leaf_cards_carry_the_crowns_leaf_area() {
+        let leaf = |size: f32, x: f32| Leaf { pos: Vec3::new(x, 0.0, 5.0), dir: Vec3::Z, normal: Vec3::X, size, node: 0 };
+        let area = |lv: &Leaves| lv.leaves.iter().map(|l| 0.25 * l.size * l.size).sum::<f32>();
+        // two cards of 0.5 · size² each, half of it leaf: 0.5 · 0.5 · (0.04 + 0.16) = 0.05 m²
+        let mut lv = Leaves { leaves: vec![leaf(0.2, 0.0), leaf(0.4, 1.0)] };
+        fill_leaf_area(&mut lv, 2.0, 0.5, 1.2, 7);
+        // F = 40: 18 cards per leaf, each 1.49 × as long
+        assert_eq!(lv.len(), 36);
+        assert!((area(&lv) - 2.0).abs() < 1e-3, "{}", area(&lv));
+        assert!(lv.leaves.iter().all(|l| l.pos.truncate().length() <= 1.2 + 1e-4), "within the crown radius");
+        assert!(lv.leaves.iter().all(|l| l.size <= 0.4 * MAX_CARD_GROWTH + 1e-5));
+        let mut again = Leaves { leaves: vec![leaf(0.2, 0.0), leaf(0.4, 1.0)] };
+        fill_leaf_area(&mut again, 2.0, 0.5, 1.2, 7);
+        assert_eq!(again, lv, "deterministic");
+        // a smaller target shrinks the cards; no leaves or no target: unchanged
+        let mut lv = Leaves { leaves: vec![leaf(1.0, 0.0)] };
+        fill_leaf_area(&mut lv, 0.125, 1.0, 2.0, 1);
+        assert_eq!(lv.len(), 1);
+        assert!((lv.leaves[0].size - 0.5).abs() < 1e-6);
+        let mut none = Leaves::default();
+        fill_leaf_area(&mut none, 10.0, 1.0, 2.0, 1);
+        assert!(none.is_empty());
+        // a beech crown of 2.5 m: crown LAI 4.5 (shade tolerance 5) over 19.6 m²
+        assert!((crate::sim::phases::light::crown_leaf_area(5.0, 2.5) - 4.5 * std::f32::consts::PI * 6.25).abs() < 1e-3);
+        // leaf textures cover part of their cards
+        for s in crate::structure::texture::LeafShape::ALL {
+            let c = crate::structure::texture::leaf_card_cover(s);
+            assert!((0.05..1.0).contains(&c), "{s:?} {c}");
+        }
+    }
 }

@@ -482,6 +482,15 @@ fn cluster_leaves(shape: LeafShape, salt: u64) -> Vec<Placed> {
         .collect()
 }
 
+/// Share (0–1) of a leaf card that its leaf covers: the fraction of the texels of
+/// [`leaf_texture`]`(shape)` whose coverage reaches [`ALPHA_CUTOFF`], what an alpha-tested
+/// card (glTF `alphaMode: MASK`) shows of its `size × size/2` quad. At least 0.05.
+pub fn leaf_card_cover(shape: LeafShape) -> f32 {
+    let img = leaf_texture(shape);
+    let n = img.pixels().filter(|p| p.0[3] as f32 >= ALPHA_CUTOFF * 255.0).count();
+    (n as f32 / (img.width() * img.height()).max(1) as f32).max(0.05)
+}
+
 /// The cluster card texture of `shape` (LOD1 leaf clusters): `size` × `size`, grey shading and
 /// coverage as [`leaf_texture`].
 pub fn cluster_texture(shape: LeafShape, size: u32) -> RgbaImage {

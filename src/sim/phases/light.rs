@@ -39,6 +39,16 @@ pub fn crown_lai(shade_tolerance: f32) -> f32 {
     2.0 + 0.5 * shade_tolerance
 }
 
+/// Leaf area (m², one-sided) of a crown of radius `crown_radius_m` (m) of a species of shade
+/// tolerance `shade_tolerance` (1–5): [`crown_lai`] × the crown projection `π r²` (r at least
+/// 0.05 m), the leaf area the light phase spreads over the light cells the crown covers, and
+/// what a stand export gives the tree's leaf cards (`job::export::fill_leaf_area`).
+#[inline]
+pub fn crown_leaf_area(shade_tolerance: f32, crown_radius_m: f32) -> f32 {
+    let r = crown_radius_m.max(0.05);
+    std::f32::consts::PI * r * r * crown_lai(shade_tolerance)
+}
+
 /// The sorted canopy of one year.
 pub struct Canopy {
     /// Per cell `start[c]..start[c+1]` into `h` / `cum`.
@@ -193,6 +203,7 @@ fn build_canopy(t: &TreeStore, grid: &SpatialGrid, lai_c: &[f32], obstacles: &[(
                     if r0 > r1 {
                         continue;
                     }
+                    // crown_leaf_area, with the species' crown LAI looked up once
                     let la = std::f32::consts::PI * r * r * lai_c[t.species[i] as usize];
                     let c0 = crate::grid::floor_index((x - s) as f64 / cell).max(0);
                     let c1 = crate::grid::floor_index((x + s) as f64 / cell).min(cols as isize - 1);
