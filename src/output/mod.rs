@@ -4,6 +4,7 @@
 mod error;
 pub use error::{OutputError, Result};
 
+pub mod georef;
 pub mod inventory;
 pub mod parquet;
 pub mod plot;

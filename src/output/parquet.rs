@@ -3,7 +3,7 @@
 //! (`arrow`, `sfarrow`), DuckDB and QGIS read them directly.
 //!
 //! A file holds the columns of the CSV table of the same name (names and units as
-//! ARCHITECTURE.md and [`super::inventory::HEADER`] give them; the values are the CSV's, so a
+//! ARCHITECTURE.md and `output::inventory::HEADER` give them; the values are the CSV's, so a
 //! Parquet and a CSV run hold the same numbers), zstd-compressed, in row groups of
 //! [`ROW_GROUP_ROWS`] rows, plus a `geometry` column: the point (`x_m`, `y_m`) in the DEM's
 //! coordinate reference system as WKB (ISO 19125 well-known binary, little-endian 2-D point),
@@ -15,7 +15,7 @@
 //! The files are made from the CSV text of the table ([`csv_to_parquet`]), so a tiled run's
 //! merged CSV and one process's CSV give the same bytes.
 
-use super::inventory::PointGeoRef;
+use super::georef::PointGeoRef;
 use super::Result;
 use parquet::basic::{Compression, ZstdLevel};
 use parquet::data_type::{ByteArray, ByteArrayType, DoubleType, FloatType, Int64Type};
@@ -429,7 +429,7 @@ mod tests {
     #[test]
     fn inventory_round_trip_with_geoparquet_metadata() {
         let dir = tempfile::tempdir().unwrap();
-        let csv = format!("{}\n1,beech,10.25,20.50,500.00,30,12.00,15.00,2.00,5.00,alive\n7,oak,0.00,1.00,501.50,80,25.50,40.25,4.75,9.00,dead:stress\n", super::super::inventory::HEADER);
+        let csv = format!("{}\n1,beech,10.25,20.50,500.00,30,12.00,15.00,2.00,5.00,alive\n7,oak,0.00,1.00,501.50,80,25.50,40.25,4.75,9.00,dead:stress\n", "id,species,x_m,y_m,z_m,age_yr,height_m,dbh_cm,crown_radius_m,crown_base_m,status");
         let out = dir.path().join("y.parquet");
         csv_to_parquet(csv.as_bytes(), "test csv", &out, &INVENTORY, &utm17()).unwrap();
         let c = read_table(&out, &INVENTORY).unwrap();
@@ -477,7 +477,7 @@ mod tests {
     fn bad_rows_name_the_line_and_column_and_leave_nothing() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("y.parquet");
-        let csv = format!("{}\n1,beech,ten,20.50,500.00,30,12.00,15.00,2.00,5.00,alive\n", super::super::inventory::HEADER);
+        let csv = format!("{}\n1,beech,ten,20.50,500.00,30,12.00,15.00,2.00,5.00,alive\n", "id,species,x_m,y_m,z_m,age_yr,height_m,dbh_cm,crown_radius_m,crown_base_m,status");
         let e = csv_to_parquet(csv.as_bytes(), "year_0001.csv", &out, &INVENTORY, &utm17()).unwrap_err().to_string();
         assert!(e.contains("line 2") && e.contains("x_m") && e.contains("ten"), "{e}");
         assert!(!out.exists());
@@ -490,7 +490,7 @@ mod tests {
     fn an_empty_table_is_a_valid_file() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("r.parquet");
-        csv_to_parquet(format!("{}\n", super::super::inventory::REGENERATION_HEADER).as_bytes(), "empty", &out, &REGENERATION, &utm17()).unwrap();
+        csv_to_parquet(format!("{}\n", "cell,species,x_m,y_m,stems,stems_per_ha,height_m,age_yr").as_bytes(), "empty", &out, &REGENERATION, &utm17()).unwrap();
         assert_eq!(read_table(&out, &REGENERATION).unwrap().rows, 0);
     }
 }
