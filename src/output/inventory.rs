@@ -352,6 +352,15 @@ pub fn merge_regeneration_csv(path: &Path, parts: &[std::path::PathBuf]) -> Resu
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn csv_headers_are_the_parquet_tables_columns() {
+        // one list of columns: the CSV headers and the Parquet schemas name the same columns in
+        // the same order (output::parquet::INVENTORY, REGENERATION)
+        let names = |t: &super::super::parquet::Table| t.columns.iter().map(|c| c.0).collect::<Vec<_>>().join(",");
+        assert_eq!(HEADER, names(&super::super::parquet::INVENTORY));
+        assert_eq!(REGENERATION_HEADER, names(&super::super::parquet::REGENERATION));
+    }
     use super::*;
     use crate::sim::{step_year, Scenario, YearReport};
 
