@@ -15,17 +15,7 @@ use crate::render::terrain::{from_grid, LandCover};
 use crate::species::{Season, Species, SpeciesLibrary};
 use crate::Result;
 
-/// sRGB (0–255) to linear RGB (0–1), IEC 61966-2-1.
-pub fn srgb_to_linear(c: [u8; 3]) -> [f32; 3] {
-    c.map(|v| {
-        let s = v as f32 / 255.0;
-        if s <= 0.04045 {
-            s / 12.92
-        } else {
-            ((s + 0.055) / 1.055).powf(2.4)
-        }
-    })
-}
+pub use crate::species::srgb_to_linear;
 
 /// Day of year (1–365) used to draw each season: mid-May, mid-July, mid-October, mid-January.
 pub fn season_day(season: Season) -> f32 {

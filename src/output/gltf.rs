@@ -90,15 +90,6 @@ impl Default for GlbOptions {
     }
 }
 
-fn srgb_to_linear(c: u8) -> f32 {
-    let c = c as f32 / 255.0;
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
 fn y_up(p: [f32; 3]) -> [f32; 3] {
     [p[0], p[2], -p[1]]
 }
@@ -225,7 +216,8 @@ impl Doc {
 
     /// A plain material of sRGB colour `rgb`.
     fn plain(&mut self, name: &str, rgb: [u8; 3], roughness: f32) -> usize {
-        let c = [srgb_to_linear(rgb[0]), srgb_to_linear(rgb[1]), srgb_to_linear(rgb[2]), 1.0];
+        let [r, g, b] = crate::species::srgb_to_linear([rgb[0], rgb[1], rgb[2]]);
+        let c = [r, g, b, 1.0];
         self.material(json!({"name": name, "pbrMetallicRoughness": {"baseColorFactor": c, "metallicFactor": 0.0, "roughnessFactor": roughness}}))
     }
 

@@ -334,6 +334,20 @@ pub struct Architecture {
     pub plastic: PlasticParams,
 }
 
+/// An sRGB colour (0–255 per channel, as [`Appearance`] gives them) as linear RGB (0–1), by the
+/// sRGB transfer function of IEC 61966-2-1: c/12.92 up to 0.04045, else ((c + 0.055)/1.055)^2.4.
+/// The renderer's colours and glTF's `baseColorFactor` are linear.
+pub fn srgb_to_linear(c: [u8; 3]) -> [f32; 3] {
+    c.map(|v| {
+        let s = v as f32 / 255.0;
+        if s <= 0.04045 {
+            s / 12.92
+        } else {
+            ((s + 0.055) / 1.055).powf(2.4)
+        }
+    })
+}
+
 /// Colours (sRGB 0–255) and texture names.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -515,5 +529,18 @@ impl Species {
             Season::Winter if self.identity.deciduous => None,
             Season::Winter => Some(a.leaf_winter),
         }
+    }
+}
+
+#[cfg(test)]
+mod colour_tests {
+    #[test]
+    fn srgb_transfer_function_values() {
+        let l = super::srgb_to_linear([0, 10, 255]);
+        assert_eq!(l[0], 0.0);
+        assert!((l[1] - 10.0 / 255.0 / 12.92).abs() < 1e-7, "linear segment below 0.04045: {}", l[1]);
+        assert!((l[2] - 1.0).abs() < 1e-6);
+        // mid-grey 128: ((128/255 + 0.055)/1.055)^2.4 = 0.21586
+        assert!((super::srgb_to_linear([128; 3])[0] - 0.215_860_5).abs() < 1e-5);
     }
 }
