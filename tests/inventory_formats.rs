@@ -93,3 +93,73 @@ fn a_damaged_parquet_inventory_is_an_error_naming_the_file() {
     let e = inventory::read(&reg).unwrap_err().to_string();
     assert!(e.contains("year_0002.parquet") && e.contains("\"id\""), "{e}");
 }
+
+/// A Parquet inventory as other tools write it (pandas/geopandas: optional columns; pyarrow's
+/// default snappy compression) is read; a null in a column is refused naming the column.
+#[test]
+fn parquet_from_other_tools_optional_columns_and_snappy_is_read() {
+    use parquet::data_type::{ByteArray, ByteArrayType, DoubleType, FloatType, Int64Type};
+    use std::sync::Arc;
+    let tmp = tempfile::tempdir().unwrap();
+    let write = |path: &std::path::Path, null_dbh: bool| {
+        let schema = "message schema { optional int64 id; optional binary species (UTF8); optional double x_m; optional double y_m; optional double z_m; optional float age_yr; optional float height_m; optional float dbh_cm; optional float crown_radius_m; optional float crown_base_m; optional binary status (UTF8); }";
+        let ty = Arc::new(parquet::schema::parser::parse_message_type(schema).unwrap());
+        let props = Arc::new(parquet::file::properties::WriterProperties::builder().set_compression(parquet::basic::Compression::SNAPPY).build());
+        let mut w = parquet::file::writer::SerializedFileWriter::new(std::fs::File::create(path).unwrap(), ty, props).unwrap();
+        let mut rg = w.next_row_group().unwrap();
+        let def = [1i16, 1];
+        let mut k = 0;
+        while let Some(mut c) = rg.next_column().unwrap() {
+            match k {
+                0 => c.typed::<Int64Type>().write_batch(&[4, 9], Some(&def), None).unwrap(),
+                1 => c.typed::<ByteArrayType>().write_batch(&[ByteArray::from("beech"), ByteArray::from("oak")], Some(&def), None).unwrap(),
+                10 => c.typed::<ByteArrayType>().write_batch(&[ByteArray::from("alive"), ByteArray::from("alive")], Some(&def), None).unwrap(),
+                2..=4 => c.typed::<DoubleType>().write_batch(&[10.5, 20.25], Some(&def), None).unwrap(),
+                7 if null_dbh => c.typed::<FloatType>().write_batch(&[30.0], Some(&[1, 0]), None).unwrap(),
+                _ => c.typed::<FloatType>().write_batch(&[12.0, 30.0], Some(&def), None).unwrap(),
+            };
+            c.close().unwrap();
+            k += 1;
+        }
+        rg.close().unwrap();
+        w.close().unwrap();
+    };
+    let ok = tmp.path().join("year_0001.parquet");
+    write(&ok, false);
+    let rows = inventory::read(&ok).unwrap();
+    assert_eq!(rows.len(), 2);
+    assert_eq!((rows[1].id, rows[1].species.as_str(), rows[1].y_m, rows[1].dbh_cm), (9, "oak", 20.25, 30.0));
+    let holes = tmp.path().join("year_0002.parquet");
+    write(&holes, true);
+    let e = inventory::read(&holes).unwrap_err().to_string();
+    assert!(e.contains("year_0002.parquet") && e.contains("\"dbh_cm\"") && e.contains("null"), "{e}");
+    assert_eq!(e.matches("year_0002.parquet").count(), 1, "the file is named once: {e}");
+}
+
+/// Values that cannot be a tree are refused on reading, in either format, naming the file, the
+/// line or row, the column and what was expected (a single infinite crown radius used to empty
+/// the far-field canopy of a render without a word).
+#[test]
+fn impossible_values_are_refused_naming_file_row_and_column() {
+    let tmp = tempfile::tempdir().unwrap();
+    let head = sylva::output::inventory::HEADER;
+    let cases = [
+        ("1,beech,10.00,20.00,500.00,30,12.00,15.00,inf,5.00,alive", "crown_radius_m", "line 2"),
+        ("1,beech,10.00,20.00,500.00,30,12.00,NaN,2.00,5.00,alive", "dbh_cm", "line 2"),
+        ("1,beech,10.00,20.00,500.00,30,1e30,15.00,2.00,5.00,alive", "height_m", "line 2"),
+        ("1,beech,1e300,20.00,500.00,30,12.00,15.00,2.00,5.00,alive", "x_m", "line 2"),
+        ("1,beech,10.00,20.00,500.00,30,12.00,15.00,2.00,5.00,zombie", "status", "line 2"),
+    ];
+    for (row, col, at) in cases {
+        let csv = tmp.path().join("year_0003.csv");
+        std::fs::write(&csv, format!("{head}\n{row}\n")).unwrap();
+        let e = inventory::read(&csv).unwrap_err().to_string();
+        assert!(e.contains("year_0003.csv") && e.contains(col) && e.contains(at) && e.contains("expected"), "{row}: {e}");
+        // the same values in a Parquet file (the writer keeps what it is given)
+        let pq = tmp.path().join("year_0003.parquet");
+        let geo = sylva::output::inventory::PointGeoRef { x0: 0.0, y0: 0.0, per_m: (1.0, 1.0), epsg: None, degrees: false };
+        sylva::output::parquet::csv_to_parquet(format!("{head}\n{row}\n").as_bytes(), "t", &pq, &sylva::output::parquet::INVENTORY, &geo).unwrap();
+        let e = inventory::read(&pq).unwrap_err().to_string();
+        assert!(e.contains("year_0003.parquet") && e.contains(col) && e.contains("row 1"), "{row}: {e}");
+    }
+}

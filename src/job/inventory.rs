@@ -57,12 +57,57 @@ pub fn read_filtered(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -
     let mut line = 2usize;
     while rdr.read_record(&mut rec).map_err(|e| Error::format(path, format!("line {line}: {e}")))? {
         let row: InventoryRow = rec.deserialize(Some(&headers)).map_err(|e| Error::format(path, format!("line {line}: {e}")))?;
+        check_row(path, || format!("line {line}"), &row)?;
         if keep(&row) {
             rows.push(row);
         }
         line += 1;
     }
     Ok(rows)
+}
+
+/// A Parquet reading error of `path` as [`Error::Format`] naming the file once.
+fn parquet_error(path: &Path, e: crate::output::OutputError) -> Error {
+    match e {
+        crate::output::OutputError::Io { source, .. } => Error::format(path, source.to_string()),
+        e => Error::format(path, e.to_string()),
+    }
+}
+
+/// Checks that the values of inventory row `r` (at `at()`, e.g. "line 7") can be a tree:
+/// finite positions (|x|, |y| < 10⁷ m), age 0–10,000 years, height 0–200 m, DBH 0–1,000 cm,
+/// crown radius 0–100 m, crown base 0–200 m, status `alive` or `dead:<cause>`.
+///
+/// # Errors
+/// [`Error::Format`] naming the file, the row, the tree id, the column, the value and what was
+/// expected.
+fn check_row(path: &Path, at: impl Fn() -> String, r: &InventoryRow) -> Result<()> {
+    let bad = |col: &str, v: String, want: &str| -> Result<()> { Err(Error::format(path, format!("{} (tree id {}): column {col} = {v}: expected {want}", at(), r.id)).into()) };
+    let within = |v: f64, lo: f64, hi: f64| v.is_finite() && v >= lo && v <= hi;
+    if !within(r.x_m, -1e7, 1e7) {
+        return bad("x_m", r.x_m.to_string(), "a finite easting in metres");
+    }
+    if !within(r.y_m, -1e7, 1e7) {
+        return bad("y_m", r.y_m.to_string(), "a finite northing in metres");
+    }
+    if !r.z_m.is_finite() {
+        return bad("z_m", r.z_m.to_string(), "a finite ground elevation in metres");
+    }
+    for (col, v, hi, want) in [
+        ("age_yr", r.age_yr, 10_000.0, "an age of 0–10,000 years"),
+        ("height_m", r.height_m, 200.0, "a height of 0–200 m"),
+        ("dbh_cm", r.dbh_cm, 1000.0, "a DBH of 0–1,000 cm"),
+        ("crown_radius_m", r.crown_radius_m, 100.0, "a crown radius of 0–100 m"),
+        ("crown_base_m", r.crown_base_m, 200.0, "a crown base height of 0–200 m"),
+    ] {
+        if !within(v as f64, 0.0, hi) {
+            return bad(col, v.to_string(), want);
+        }
+    }
+    if r.status != "alive" && !r.status.starts_with("dead:") {
+        return bad("status", format!("{:?}", r.status), "\"alive\" or \"dead:<cause>\"");
+    }
+    Ok(())
 }
 
 /// True for a `.parquet` file name.
@@ -77,7 +122,7 @@ fn column<'a, T>(c: Option<&'a [T]>, path: &Path, name: &str) -> Result<&'a [T]>
 
 /// [`read_filtered`] of a Parquet inventory.
 fn read_parquet(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -> Result<Vec<InventoryRow>> {
-    let c = crate::output::parquet::read_table(path, &crate::output::parquet::INVENTORY).map_err(|e| Error::format(path, e.to_string()))?;
+    let c = crate::output::parquet::read_table(path, &crate::output::parquet::INVENTORY).map_err(|e| parquet_error(path, e))?;
     let (id, sp, st) = (column(c.int("id"), path, "id")?, column(c.text("species"), path, "species")?, column(c.text("status"), path, "status")?);
     let (x, y, z) = (column(c.double("x_m"), path, "x_m")?, column(c.double("y_m"), path, "y_m")?, column(c.double("z_m"), path, "z_m")?);
     let f = |n: &str| column(c.float(n), path, n);
@@ -85,6 +130,7 @@ fn read_parquet(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -> Res
     let mut rows = Vec::new();
     for i in 0..c.rows {
         let row = InventoryRow { id: id[i] as u64, species: sp[i].clone(), x_m: x[i], y_m: y[i], z_m: z[i], age_yr: age[i], height_m: h[i], dbh_cm: d[i], crown_radius_m: cr[i], crown_base_m: cb[i], status: st[i].clone() };
+        check_row(path, || format!("row {}", i + 1), &row)?;
         if keep(&row) {
             rows.push(row);
         }
@@ -182,7 +228,7 @@ pub struct RegenRow {
 pub fn read_regeneration(run_dir: &Path, year: u32) -> Result<Option<Vec<RegenRow>>> {
     let pq = run_dir.join("inventory").join(format!("year_{year:04}_regeneration.parquet"));
     if pq.is_file() {
-        let c = crate::output::parquet::read_table(&pq, &crate::output::parquet::REGENERATION).map_err(|e| Error::format(&pq, e.to_string()))?;
+        let c = crate::output::parquet::read_table(&pq, &crate::output::parquet::REGENERATION).map_err(|e| parquet_error(&pq, e))?;
         let (cell, sp, stems) = (column(c.int("cell"), &pq, "cell")?, column(c.text("species"), &pq, "species")?, column(c.int("stems"), &pq, "stems")?);
         let (x, y, per_ha) = (column(c.double("x_m"), &pq, "x_m")?, column(c.double("y_m"), &pq, "y_m")?, column(c.double("stems_per_ha"), &pq, "stems_per_ha")?);
         let (h, age) = (column(c.float("height_m"), &pq, "height_m")?, column(c.float("age_yr"), &pq, "age_yr")?);

@@ -365,24 +365,25 @@ pub fn read_table(path: &Path, table: &Table) -> Result<Columns> {
             let n = rg.metadata().num_rows() as usize;
             for ((name, kind), &i) in table.columns.iter().zip(&idx) {
                 let cr = rg.get_column_reader(i).map_err(std::io::Error::other)?;
+                let max_def = schema.column(i).max_def_level();
                 match kind {
                     Kind::Int64 => {
-                        let v = read_column::<Int64Type>(cr, n, name, g)?;
+                        let v = read_column::<Int64Type>(cr, n, name, g, max_def)?;
                         out.ints.iter_mut().filter(|c| c.0 == *name).for_each(|c| c.1.extend_from_slice(&v));
                     }
                     Kind::Utf8 => {
                         let mut texts = Vec::with_capacity(n);
-                        for b in read_column::<ByteArrayType>(cr, n, name, g)? {
+                        for b in read_column::<ByteArrayType>(cr, n, name, g, max_def)? {
                             texts.push(String::from_utf8(b.data().to_vec()).map_err(|_| bad(format!("column {name:?}: not UTF-8 text")))?);
                         }
                         out.texts.iter_mut().filter(|c| c.0 == *name).for_each(|c| c.1.append(&mut texts));
                     }
                     Kind::Double => {
-                        let v = read_column::<DoubleType>(cr, n, name, g)?;
+                        let v = read_column::<DoubleType>(cr, n, name, g, max_def)?;
                         out.doubles.iter_mut().filter(|c| c.0 == *name).for_each(|c| c.1.extend_from_slice(&v));
                     }
                     Kind::Float => {
-                        let v = read_column::<FloatType>(cr, n, name, g)?;
+                        let v = read_column::<FloatType>(cr, n, name, g, max_def)?;
                         out.floats.iter_mut().filter(|c| c.0 == *name).for_each(|c| c.1.extend_from_slice(&v));
                     }
                 }
@@ -397,11 +398,18 @@ pub fn read_table(path: &Path, table: &Table) -> Result<Columns> {
 /// The `n` values of row group `g`'s chunk of the required column `name`, read by `cr`.
 ///
 /// Errors: `InvalidData` when the chunk holds fewer values.
-fn read_column<T: parquet::data_type::DataType>(cr: parquet::column::reader::ColumnReader, n: usize, name: &str, g: usize) -> std::io::Result<Vec<T::T>> {
+fn read_column<T: parquet::data_type::DataType>(cr: parquet::column::reader::ColumnReader, n: usize, name: &str, g: usize, max_def: i16) -> std::io::Result<Vec<T::T>> {
+    let bad = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidData, format!("column {name:?}: {m}"));
     let mut v = Vec::with_capacity(n);
-    let (r, _, _) = parquet::column::reader::get_typed_column_reader::<T>(cr).read_records(n, None, None, &mut v).map_err(std::io::Error::other)?;
+    // optional columns (as pandas and geopandas write them) carry definition levels; a value is
+    // still required in every row
+    let mut def = (max_def > 0).then(|| Vec::with_capacity(n));
+    let (r, values, _) = parquet::column::reader::get_typed_column_reader::<T>(cr).read_records(n, def.as_mut(), None, &mut v).map_err(|e| bad(e.to_string()))?;
     if r != n {
-        return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("column {name:?}: {r} values in row group {g}, expected {n}")));
+        return Err(bad(format!("{r} values in row group {g}, expected {n}")));
+    }
+    if values != n {
+        return Err(bad(format!("{} missing (null) values in row group {g}; expected a value in every row", n - values)));
     }
     Ok(v)
 }
