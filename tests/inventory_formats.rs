@@ -163,3 +163,24 @@ fn impossible_values_are_refused_naming_file_row_and_column() {
         assert!(e.contains("year_0003.parquet") && e.contains(col) && e.contains("row 1"), "{row}: {e}");
     }
 }
+
+/// A resumed run keeps its run directory's format: a CSV run extended by `--resume` (without
+/// `--inventory csv`) writes its new snapshots as CSV, not a mix of both.
+#[test]
+fn a_resumed_csv_run_stays_csv() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("run");
+    run(&dir, InventoryFormat::Csv);
+    let sc = Scenario::from_toml_str(&SC.replace("years = 6", "years = 9"), "formats").unwrap();
+    let TerrainSpec::Uniform(u) = sc.terrain_spec() else { panic!() };
+    let site = sylva::conditions::SiteConditions::uniform(u.width, u.height, u.cell_m, u.elevation_m, u.indices, sc.climate.latitude_deg);
+    let mut o = RunOptions::new(&dir);
+    o.map_px = 64;
+    o.resume = true;
+    let r = run_scenario(&sc, site, &fixtures::library(), o).unwrap();
+    assert_eq!(r.world.stand.year, 9);
+    let inv = dir.join("inventory");
+    assert!(inv.join("year_0009.csv").is_file() && inv.join("year_0009_regeneration.csv").is_file());
+    let parquet: Vec<_> = std::fs::read_dir(&inv).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n.ends_with(".parquet")).collect();
+    assert!(parquet.is_empty(), "{parquet:?}");
+}

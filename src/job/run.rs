@@ -320,6 +320,16 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     if opts.resume && !resume {
         tracing::warn!("{}: no checkpoint yet (the run was stopped before its first one): starting from year 0", dir.display());
     }
+    // a resumed run keeps the format its inventories were written in: a run directory holds
+    // one format (year 0 is always there; `--inventory` only chooses for a fresh run)
+    let format = match resume {
+        true if dir.join("inventory").join("year_0000.csv").is_file() && !dir.join("inventory").join("year_0000.parquet").is_file() => InventoryFormat::Csv,
+        true if dir.join("inventory").join("year_0000.parquet").is_file() => InventoryFormat::Parquet,
+        _ => opts.inventory,
+    };
+    if format != opts.inventory {
+        tracing::warn!("{}: resuming a run written as {}: its inventories stay {}", dir.display(), format.extension(), format.extension());
+    }
     if resume {
         rows = stepper.resume(&dir, &mut world)?;
         // a snapshot off this run's schedule at the checkpoint's year (one a stopped run wrote
@@ -344,7 +354,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         checkpoint::remove_all(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {
-            snapshot(&dir, &world, "year_0000", true, opts.map_px, gj(0), opts.inventory)?;
+            snapshot(&dir, &world, "year_0000", true, opts.map_px, gj(0), format)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(0, &world);
             }
@@ -366,7 +376,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         let mut rep = YearReport::default();
         let mut err: Option<super::JobError> = None;
         let seasonal = snap_year && scenario.seasonal_snapshots;
-        let (d, px, gj_y, fmt) = (dir.clone(), opts.map_px, gj(y), opts.inventory);
+        let (d, px, gj_y, fmt) = (dir.clone(), opts.map_px, gj(y), format);
         let checkpoint_year = y == scenario.years || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0);
         let stop_before = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
         let full = (snap_year && snap_world) || (checkpoint_year && save_world) || (stop_before && (snap_world || save_world));
@@ -392,7 +402,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         }
         let t_out = Instant::now();
         if snap_year {
-            stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, gj(y), opts.inventory)?;
+            stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, gj(y), format)?;
             tables(&dir, &rows, &world, true)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(y, &world);
@@ -420,7 +430,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         if stop_now && y < scenario.years {
             stopped = true;
             if opts.write_snapshots && !snap_year {
-                stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, true, opts.inventory)?;
+                stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, true, format)?;
                 if let Some(f) = opts.on_snapshot.as_mut() {
                     f(y, &world);
                 }
