@@ -93,7 +93,8 @@ fn wall_for(r: f32, h: f32) -> Obstacle {
 /// `SYLVA_PLASTIC_PROFILE=CYCLES,SEED` (e.g. `14,5`, the 9,133-node tree): grows that one
 /// tree, analyses it, adapts it beside the wall once and once more after moving the wall 10 cm,
 /// printing the CPU time of each step and the wall time of the first adaptation (for a
-/// profiler: no search over seeds, no medians).
+/// profiler: no search over seeds, no medians). `SYLVA_PLASTIC_ADAPTS=N` repeats the first
+/// adaptation N more times, `SYLVA_PLASTIC_MOVES=N` the wall move.
 fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOptions, p: &sylva::species::PlasticParams) {
     let v: Vec<u64> = case.split(',').filter_map(|t| t.trim().parse().ok()).collect();
     let (years, seed) = (v.first().copied().unwrap_or(14) as u32, v.get(1).copied().unwrap_or(5));
@@ -117,6 +118,11 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     let t3 = cpu_ms();
     // `SYLVA_PLASTIC_MOVES=N`: N more moves of the wall by ±10 cm (for a profile of the moves)
     let extra: usize = std::env::var("SYLVA_PLASTIC_MOVES").ok().and_then(|v| v.parse().ok()).unwrap_or(0);
+    // `SYLVA_PLASTIC_ADAPTS=N`: N more first adaptations (for a profile of the first adaptation)
+    let again: usize = std::env::var("SYLVA_PLASTIC_ADAPTS").ok().and_then(|v| v.parse().ok()).unwrap_or(0);
+    for _ in 0..again {
+        std::hint::black_box(tree.clone().adapt(&env_with(&[wall])).expect("adapt"));
+    }
     let mut m = t.clone();
     for i in 0..extra {
         m.adapt(&env_with(&[if i % 2 == 0 { wall } else { moved }])).expect("adapt");
