@@ -34,6 +34,10 @@ pub enum GuiError {
     /// Writing the screenshot failed.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
+    /// The graphics device reported an error while the window was open (a feature the adapter
+    /// lacks, a lost device); the window was closed instead of aborting.
+    #[error("the graphics device failed ({0}); the window was closed, and what was saved before is kept. Another backend may work: set WGPU_BACKEND=vulkan, gl, metal or dx12")]
+    Device(String),
     /// The screenshot did not arrive.
     #[error("screenshot {path}: {message}")]
     Screenshot {
@@ -110,6 +114,17 @@ pub fn run_window<A: eframe::App + 'static>(title: &str, opts: &WindowOptions, m
         title,
         native,
         Box::new(move |cc| {
+            // a device error never aborts: it is kept for the caller and the window closes
+            if let Some(rs) = cc.wgpu_render_state.as_ref() {
+                let (slot, ctx) = (f2.clone(), cc.egui_ctx.clone());
+                rs.device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+                    tracing::error!("graphics device error: {e}");
+                    if let Ok(mut f) = slot.lock() {
+                        f.get_or_insert(GuiError::Device(e.to_string()));
+                    }
+                    ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+                }));
+            }
             let app = make(cc, f2.clone()).map_err(|e| -> Box<dyn std::error::Error + Send + Sync> { Box::new(e) })?;
             Ok(Box::new(app))
         }),
@@ -235,16 +250,32 @@ pub fn write_color_image(path: &Path, img: &egui::ColorImage) -> Result<()> {
 ///
 /// The texture is `Rgba8Unorm` (what egui samples, its bytes read as sRGB-encoded values) and
 /// the renderer draws through an `Rgba8UnormSrgb` view of it, so its linear output is encoded
-/// to sRGB on write exactly as in the stills.
+/// to sRGB on write exactly as in the stills. Where the device cannot view a texture in another
+/// format (OpenGL/GLES adapters lack `DownlevelFlags::VIEW_FORMATS`), the renderer draws into an
+/// `Rgba8UnormSrgb` texture of its own that is copied into the `Rgba8Unorm` one after each frame
+/// (the bytes are the same: the formats differ only in how they are read).
 pub struct Viewport3d {
     /// The renderer (its `lod` parameters can be tuned).
     pub renderer: Renderer,
     device: wgpu::Device,
+    queue: wgpu::Queue,
     egui_renderer: Arc<egui::mutex::RwLock<egui_wgpu::Renderer>>,
-    target: Option<(wgpu::Texture, wgpu::TextureView, egui::TextureId, (u32, u32))>,
+    target: Option<ViewportTarget>,
+    /// Whether the device can view a texture in another format (`DownlevelFlags::VIEW_FORMATS`).
+    view_formats: bool,
     /// Milliseconds the last [`Viewport3d::draw`] took on the CPU side (culling, uploads,
     /// command recording and submission).
     pub last_ms: f32,
+}
+
+/// The viewport's textures: what egui shows, the view the renderer draws into, and (without
+/// view formats) the sRGB texture it draws into that is copied into the shown one.
+struct ViewportTarget {
+    shown: wgpu::Texture,
+    view: wgpu::TextureView,
+    staging: Option<wgpu::Texture>,
+    id: egui::TextureId,
+    size: (u32, u32),
 }
 
 impl Viewport3d {
@@ -254,7 +285,8 @@ impl Viewport3d {
     /// [`GuiError::Render`] when the renderer's pipelines cannot be built on this device.
     pub fn new(rs: &egui_wgpu::RenderState) -> Result<Self> {
         let renderer = Renderer::from_device(rs.device.clone(), rs.queue.clone(), wgpu::TextureFormat::Rgba8UnormSrgb)?;
-        Ok(Viewport3d { renderer, device: rs.device.clone(), egui_renderer: rs.renderer.clone(), target: None, last_ms: 0.0 })
+        let view_formats = rs.adapter.get_downlevel_capabilities().flags.contains(wgpu::DownlevelFlags::VIEW_FORMATS);
+        Ok(Viewport3d { renderer, device: rs.device.clone(), queue: rs.queue.clone(), egui_renderer: rs.renderer.clone(), target: None, view_formats, last_ms: 0.0 })
     }
 
     /// Draws `scene` from `camera` at `w × h` pixels and returns the egui texture to show.
@@ -264,33 +296,44 @@ impl Viewport3d {
     pub fn draw(&mut self, scene: &Scene, camera: &Camera, w: u32, h: u32) -> Result<egui::TextureId> {
         let (w, h) = (w.max(16), h.max(16));
         let t0 = std::time::Instant::now();
-        if self.target.as_ref().map(|t| t.3) != Some((w, h)) {
-            let tex = self.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some("viewport"),
-                size: wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba8Unorm,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[wgpu::TextureFormat::Rgba8UnormSrgb],
-            });
-            let srgb = tex.create_view(&wgpu::TextureViewDescriptor { format: Some(wgpu::TextureFormat::Rgba8UnormSrgb), ..Default::default() });
-            let plain = tex.create_view(&Default::default());
+        if self.target.as_ref().map(|t| t.size) != Some((w, h)) {
+            let views = self.view_formats;
+            let size = wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 };
+            let texture = |label, format, usage, view_formats: &[wgpu::TextureFormat]| {
+                self.device.create_texture(&wgpu::TextureDescriptor { label: Some(label), size, mip_level_count: 1, sample_count: 1, dimension: wgpu::TextureDimension::D2, format, usage, view_formats })
+            };
+            let srgb_format = wgpu::TextureFormat::Rgba8UnormSrgb;
+            let (shown, view, staging) = if views {
+                let shown = texture("viewport", wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING, &[srgb_format]);
+                let view = shown.create_view(&wgpu::TextureViewDescriptor { format: Some(srgb_format), ..Default::default() });
+                (shown, view, None)
+            } else {
+                let shown = texture("viewport", wgpu::TextureFormat::Rgba8Unorm, wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING, &[]);
+                let staging = texture("viewport (sRGB)", srgb_format, wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC, &[]);
+                let view = staging.create_view(&Default::default());
+                (shown, view, Some(staging))
+            };
+            let plain = shown.create_view(&Default::default());
             let mut er = self.egui_renderer.write();
             let id = match self.target.take() {
-                Some((_, _, id, _)) => {
-                    er.update_egui_texture_from_wgpu_texture(&self.device, &plain, wgpu::FilterMode::Linear, id);
-                    id
+                Some(t) => {
+                    er.update_egui_texture_from_wgpu_texture(&self.device, &plain, wgpu::FilterMode::Linear, t.id);
+                    t.id
                 }
                 None => er.register_native_texture(&self.device, &plain, wgpu::FilterMode::Linear),
             };
-            self.target = Some((tex, srgb, id, (w, h)));
+            self.target = Some(ViewportTarget { shown, view, staging, id, size: (w, h) });
         }
-        let Some((_, view, id, _)) = self.target.as_ref() else { return Err(GuiError::Window("viewport texture missing".into())) };
-        self.renderer.render_to_view(scene, camera, view, w, h)?;
+        let Some(t) = self.target.as_ref() else { return Err(GuiError::Window("viewport texture missing".into())) };
+        self.renderer.render_to_view(scene, camera, &t.view, w, h)?;
+        if let Some(staging) = &t.staging {
+            let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("viewport copy") });
+            enc.copy_texture_to_texture(staging.as_image_copy(), t.shown.as_image_copy(), wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 });
+            self.queue.submit([enc.finish()]);
+        }
+        let id = t.id;
         self.last_ms = t0.elapsed().as_secs_f32() * 1000.0;
-        Ok(*id)
+        Ok(id)
     }
 }
 
