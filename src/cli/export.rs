@@ -1,6 +1,8 @@
 //! `sylva export RUN_DIR --year Y --area X0,Y0,X1,Y1 --out stand.glb [--lod all] [--stats s.json]`:
 //! the adapted trees of an area with the terrain patch and the obstacles as one glTF scene
-//! ([`sylva::job::export`]).
+//! ([`sylva::job::export`]); `sylva export RUN_DIR --year Y --instances --out forest.glb`: every
+//! live tree of the run (or of `--area`) as an instance of its species and age class
+//! (`EXT_mesh_gpu_instancing`).
 use anyhow::Context;
 use std::path::PathBuf;
 use sylva::species::Season;
@@ -15,8 +17,14 @@ pub struct Args {
     pub year: Option<u32>,
     /// Area X0,Y0,X1,Y1 (m, world coordinates from the terrain's south-west corner, as in the
     /// inventory's x_m, y_m).
+    /// Required for a stand export; with `--instances` optional (default: the whole site).
     #[arg(long, allow_hyphen_values = true)]
-    pub area: String,
+    pub area: Option<String>,
+    /// Export every live tree (of the whole site, or of `--area`) as an instance of its species
+    /// and age class (`EXT_mesh_gpu_instancing`: Godot 4, Unity glTFast, three.js, Blender
+    /// 4.1+), not adapted one by one: the whole forest for a game engine.
+    #[arg(long)]
+    pub instances: bool,
     /// Season of the foliage colours: spring, summer, autumn, winter.
     #[arg(long, default_value = "summer", value_parser = super::render::parse_season)]
     pub season: Season,
@@ -45,7 +53,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         anyhow::bail!("--out {}: the stand is written as binary glTF; give a file name ending in .glb", a.out.display());
     }
     anyhow::ensure!(a.run_dir.join("scenario.toml").is_file(), "{}: not a Sylva run directory (no scenario.toml)", a.run_dir.display());
-    let area = sylva::job::export::parse_area(&a.area)?;
+    let area = a.area.as_deref().map(sylva::job::export::parse_area).transpose()?;
     let levels = sylva::job::export::parse_levels(&a.lod)?;
     if let Some(p) = &a.stats {
         super::check_stats_path(p)?;
@@ -54,11 +62,17 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
     let lib = super::simulate::run_library(&a.run_dir, a.species_dir.as_deref())?;
-    let mut o = sylva::job::export::ExportOptions::new(area);
-    o.year = a.year;
-    o.season = a.season;
-    o.levels = levels;
-    let r = sylva::job::export::export_stand(&a.run_dir, &lib, &o, &a.out)?;
+    let r = if a.instances {
+        let o = sylva::job::export::InstanceOptions { year: a.year, area, season: a.season, levels };
+        sylva::job::export::export_instances(&a.run_dir, &lib, &o, &a.out)?
+    } else {
+        let area = area.ok_or_else(|| anyhow::anyhow!("--area X0,Y0,X1,Y1 is required for a stand export (or give --instances to export every tree as instances)"))?;
+        let mut o = sylva::job::export::ExportOptions::new(area);
+        o.year = a.year;
+        o.season = a.season;
+        o.levels = levels;
+        sylva::job::export::export_stand(&a.run_dir, &lib, &o, &a.out)?
+    };
     if let Some(p) = &a.stats {
         sylva::output::write_atomic(p, serde_json::to_string_pretty(&r.stats.to_json())?.as_bytes())?;
     }

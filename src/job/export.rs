@@ -168,6 +168,28 @@ pub fn parse_area(s: &str) -> Result<[f64; 4]> {
     Ok([v[0], v[1], v[2], v[3]])
 }
 
+/// What both exports start from: the run's scenario and site, the snapshot year (`year`, or the
+/// last one), the levels checked, the area (`area`, or the whole site) checked to lie inside
+/// the terrain.
+fn open_export(run_dir: &Path, year: Option<u32>, levels: &[usize], area: Option<[f64; 4]>) -> Result<(Scenario, SiteConditions, u32, [f64; 4])> {
+    let sc = Scenario::load(&run_dir.join("scenario.toml"))?;
+    let site = sc.site()?;
+    let year = match year {
+        Some(y) => y,
+        None => super::inventory::snapshots(run_dir)?.iter().map(|s| s.0).max().ok_or_else(|| Error::format(run_dir, "no inventory snapshots (inventory/year_NNNN.csv)"))?,
+    };
+    if let Some(&l) = levels.iter().find(|&&l| l >= LOD_LEVELS) {
+        return Err(invalid("--lod", l.to_string(), format!("levels 0–{}", LOD_LEVELS - 1)));
+    }
+    let (w, h) = (site.width() as f64 * site.cell_x_m, site.height() as f64 * site.cell_y_m);
+    let area = area.unwrap_or([0.0, 0.0, w, h]);
+    let [x0, y0, x1, y1] = area;
+    if !(x0 < x1 && y0 < y1) || x0 < 0.0 || y0 < 0.0 || x1 > w || y1 > h {
+        return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}"), format!("X0 < X1, Y0 < Y1 inside the terrain, 0–{w:.1} m east and 0–{h:.1} m north")));
+    }
+    Ok((sc, site, year, area))
+}
+
 /// Exports the area of a run directory's snapshot to `out` (`.glb`, atomically). `library`:
 /// the species as simulated (the caller overlays the run's `species/` folder).
 ///
@@ -177,20 +199,7 @@ pub fn parse_area(s: &str) -> Result<[f64; 4]> {
 /// where the trees are), naming `--lod` for a level ≥ [`LOD_LEVELS`], and for more trees than
 /// `max_trees`; the errors of [`adapt_stand`] and of the glTF writer.
 pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions, out: &Path) -> Result<ExportReport> {
-    let sc = Scenario::load(&run_dir.join("scenario.toml"))?;
-    let site = sc.site()?;
-    let year = match o.year {
-        Some(y) => y,
-        None => super::inventory::snapshots(run_dir)?.iter().map(|s| s.0).max().ok_or_else(|| Error::format(run_dir, "no inventory snapshots (inventory/year_NNNN.csv)"))?,
-    };
-    if let Some(&l) = o.levels.iter().find(|&&l| l >= LOD_LEVELS) {
-        return Err(invalid("--lod", l.to_string(), format!("levels 0–{}", LOD_LEVELS - 1)));
-    }
-    let [x0, y0, x1, y1] = o.area;
-    let (w, h) = (site.width() as f64 * site.cell_x_m, site.height() as f64 * site.cell_y_m);
-    if !(x0 < x1 && y0 < y1) || x0 < 0.0 || y0 < 0.0 || x1 > w || y1 > h {
-        return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}"), format!("X0 < X1, Y0 < Y1 inside the terrain, 0–{w:.1} m east and 0–{h:.1} m north")));
-    }
+    let (sc, site, year, [x0, y0, x1, y1]) = open_export(run_dir, o.year, &o.levels, Some(o.area))?;
     let opts = StandOptions { latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(&sc.obstacles, &site), ..StandOptions::default() };
     // only the rows that can take part: the area and every neighbour a target's cell may group
     // with it (cell + halo, and a metre for the f32 positions); the snapshot's other trees are
@@ -302,19 +311,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     // obstacles reaching into the area
     let mut statics = vec![StaticMesh { name: "terrain".into(), mesh: terrain, rgb: GROUND_RGB, roughness: 0.95 }];
     let terrain_triangles = statics[0].mesh.triangle_count();
-    let mut n_obstacles = 0;
-    for (k, ob) in sc.obstacles.iter().enumerate() {
-        let mut m = obstacle_mesh(ob, &site);
-        let Some((lo, hi)) = m.bounds() else { continue };
-        if (hi[0] as f64) < x0 || (lo[0] as f64) > x1 || (hi[1] as f64) < y0 || (lo[1] as f64) > y1 {
-            continue;
-        }
-        for p in &mut m.positions {
-            *p = (Vec3::from(*p) - origin).to_array();
-        }
-        statics.push(StaticMesh { name: format!("obstacle_{k}_{}", ob.kind()), mesh: m, rgb: OBSTACLE_RGB, roughness: 0.9 });
-        n_obstacles += 1;
-    }
+    let n_obstacles = push_obstacles(&mut statics, &sc, &site, o.area, origin);
     let scene = StandScene {
         name: format!("stand_{year}"),
         looks,
@@ -345,6 +342,169 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let counts = crate::output::gltf::write_stand_glb(out, &scene)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
     Ok(ExportReport { out: out.to_path_buf(), year, trees: scene.trees.len(), models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes, stats })
+}
+
+/// Lower bounds (years) of the age classes of [`export_instances`]: a tree instances the model
+/// of its species and class, grown at the class's representative age ([`class_age`]).
+pub const AGE_CLASSES_YR: [f32; 5] = [0.0, 20.0, 40.0, 80.0, 140.0];
+
+/// Representative age (years) of age class `k` of [`AGE_CLASSES_YR`]: the middle of the class
+/// (the last, open class: its lower bound + 30), at most `max_age_yr`.
+pub fn class_age(k: usize, max_age_yr: f32) -> f32 {
+    let lo = AGE_CLASSES_YR[k];
+    let mid = AGE_CLASSES_YR.get(k + 1).map_or(lo + 30.0, |hi| 0.5 * (lo + hi));
+    mid.min(max_age_yr).max(1.0)
+}
+
+/// Age class (index into [`AGE_CLASSES_YR`]) of a tree of `age_yr` years.
+pub fn age_class(age_yr: f32) -> usize {
+    AGE_CLASSES_YR.iter().rposition(|&lo| age_yr >= lo).unwrap_or(0)
+}
+
+/// What [`export_instances`] exports: every live tree of a snapshot (or of an area of it).
+#[derive(Debug, Clone, PartialEq)]
+pub struct InstanceOptions {
+    /// Snapshot year; `None`: the last one.
+    pub year: Option<u32>,
+    /// Area `[x0, y0, x1, y1]` (m, world coordinates); `None`: the whole site.
+    pub area: Option<[f64; 4]>,
+    /// Season of the foliage colours.
+    pub season: Season,
+    /// Levels of detail written, one instanced node per model and level.
+    pub levels: Vec<usize>,
+}
+
+/// Exports every live tree (at least [`super::scene::MIN_DRAWN_HEIGHT_M`] tall) of a run's
+/// snapshot, or of an area of it, to `out` (`.glb`, atomically) for game engines and Blender:
+/// each tree an instance (`EXT_mesh_gpu_instancing`) of the model of its species and age class
+/// ([`AGE_CLASSES_YR`]: the species' EcoMod tree, Zamuda et al. `004_*.txt`, grown at the class's
+/// representative age and normalised to 1 m), scaled to its height (vertical) and crown radius
+/// (horizontal: the inventory's `crown_radius_m` over the model's normalised crown radius),
+/// turned about the vertical by a hash of its id, with the terrain under the area and the
+/// obstacles. Coordinates as [`export_stand`]'s (metres from the area's centre at the lowest
+/// terrain elevation, y up); the scene's `extras` give the origin in the run's world
+/// coordinates and in the terrain's map coordinates with its EPSG code.
+///
+/// Errors: as [`export_stand`] (a run directory or snapshot that cannot be read, an area
+/// outside the terrain or holding no live tree, naming `--area`; a level ≥ [`LOD_LEVELS`],
+/// naming `--lod`); the glTF writer's.
+pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOptions, out: &Path) -> Result<ExportReport> {
+    use crate::output::gltf::{InstanceGroup, InstancedScene};
+    let (sc, site, year, area) = open_export(run_dir, o.year, &o.levels, o.area)?;
+    let [x0, y0, x1, y1] = area;
+    let rows = super::pictures::snapshot_rows_where(run_dir, year, |r| {
+        r.status == "alive" && r.height_m >= super::scene::MIN_DRAWN_HEIGHT_M && r.x_m >= x0 && r.x_m < x1 && r.y_m >= y0 && r.y_m < y1 && library.find(&r.species).is_some()
+    })?;
+    if rows.is_empty() {
+        return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}: no live tree in year {year}"), "an area (or a year) with live trees of the species library at least 1 m tall".into()));
+    }
+    let (terrain, z0) = terrain_patch(&site, area);
+    let origin = Vec3::new(((x0 + x1) * 0.5) as f32, ((y0 + y1) * 0.5) as f32, z0);
+    // the (species, age class) pairs present, each one model
+    let mut keys: Vec<(usize, usize)> = rows.iter().filter_map(|r| Some((library.find(&r.species)? as usize, age_class(r.age_yr)))).collect();
+    keys.sort_unstable();
+    keys.dedup();
+    // per model: (model, normalised crown radius, skeleton nodes, triangles per level, leaf cards
+    // of level 0)
+    #[allow(clippy::type_complexity)]
+    let built: Vec<Option<(StandModel, f32, usize, [usize; 4], usize)>> = keys
+        .par_iter()
+        .map(|&(sp_i, class)| {
+            let sp = &library.species[sp_i];
+            let age = class_age(class, sp.life.max_age_yr);
+            let grown = crate::structure::species_tree::grow_species_tree(sp, crate::structure::species_tree::Model::EcoMod, age, &[], crate::rng::hash(&[sp_i as u64, class as u64])).ok()?;
+            let (sk, lv) = crate::structure::normalised(&grown.skeleton, &grown.leaves, 1.0).ok()?;
+            let r = crate::structure::crown_radius(&sk, &lv).max(0.05);
+            let chain = crate::structure::mesh::lod_chain(&sk, &lv, &LodOptions::default());
+            let tris = [0, 1, 2, 3].map(|l| chain.levels.get(l).map_or(0, |m| m.triangle_count()));
+            let cards = chain.levels.first().map_or(0, |m| m.leaves.triangle_count() / 2);
+            Some((StandModel { name: format!("{}_age{}", sp.id, AGE_CLASSES_YR[class] as u32), chain, look: sp_i }, r, sk.nodes.len(), tris, cards))
+        })
+        .collect();
+    // looks of the species used, and the groups
+    let mut looks_of: HashMap<usize, usize> = HashMap::new();
+    let mut looks: Vec<Look> = Vec::new();
+    let mut models: Vec<StandModel> = Vec::new();
+    #[allow(clippy::type_complexity)]
+    let mut model_of: HashMap<(usize, usize), (usize, f32, usize, [usize; 4], usize)> = HashMap::new();
+    for (key, b) in keys.iter().zip(built) {
+        let Some((mut m, r, nodes, tris, cards)) = b else {
+            tracing::warn!("species {}: no model for age class {}; its trees are left out", library.species[key.0].id, key.1);
+            continue;
+        };
+        m.look = *looks_of.entry(key.0).or_insert_with(|| {
+            looks.push(Look::for_species(&library.species[key.0], o.season));
+            looks.len() - 1
+        });
+        models.push(m);
+        model_of.insert(*key, (models.len() - 1, r, nodes, tris, cards));
+    }
+    let mut groups: Vec<InstanceGroup> = (0..models.len()).map(|model| InstanceGroup { model, ..Default::default() }).collect();
+    let (mut tall_nodes, mut leaf_cards, mut triangles) = (Vec::new(), 0usize, 0usize);
+    for r in &rows {
+        let Some(sp_i) = library.find(&r.species) else { continue };
+        let Some(&(mi, r0, nodes, tris, cards)) = model_of.get(&(sp_i as usize, age_class(r.age_yr))) else { continue };
+        let g = &mut groups[mi];
+        let z = site.elevation_at(r.x_m, r.y_m);
+        g.translations.push([(r.x_m - origin.x as f64) as f32, (r.y_m - origin.y as f64) as f32, z - origin.z]);
+        g.yaw.push((crate::rng::hash(&[r.id, 0x7961_77]) >> 11) as f32 / (1u64 << 53) as f32 * std::f32::consts::TAU);
+        let s = r.crown_radius_m.max(0.2) / r0;
+        g.scales.push([s, s, r.height_m.max(0.1)]);
+        g.ids.push(r.id);
+        if r.height_m >= STATS_MIN_HEIGHT_M {
+            tall_nodes.push(nodes);
+        }
+        leaf_cards += if o.levels.contains(&0) { cards } else { 0 };
+        triangles += o.levels.iter().map(|&l| tris[l]).sum::<usize>();
+    }
+    let trees: usize = groups.iter().map(|g| g.translations.len()).sum();
+    let mut statics = vec![StaticMesh { name: "terrain".into(), mesh: terrain, rgb: GROUND_RGB, roughness: 0.95 }];
+    let terrain_triangles = statics[0].mesh.triangle_count();
+    let n_obstacles = push_obstacles(&mut statics, &sc, &site, area, origin);
+    triangles += statics.iter().map(|m| m.mesh.triangle_count()).sum::<usize>();
+    let geo = crate::output::georef::PointGeoRef::of_site(&site);
+    let (mx, my) = geo.map(origin.x as f64, origin.y as f64);
+    let scene = InstancedScene {
+        name: format!("forest_{year}"),
+        looks,
+        models,
+        groups,
+        statics,
+        levels: o.levels.clone(),
+        extras: serde_json::json!({
+            "sylva": {
+                "run_dir": run_dir.display().to_string(), "year": year, "area_m": area,
+                "origin_m": [origin.x, origin.y, origin.z],
+                "origin_map": [mx, my, origin.z], "epsg": geo.epsg,
+                "age_classes_yr": AGE_CLASSES_YR,
+                "note": "scene coordinates are metres from origin_m (run world coordinates: x east, y north from the terrain's south-west corner, z elevation), y up; origin_map is the same point in the terrain's map coordinates (EPSG code epsg); each tree is an EXT_mesh_gpu_instancing instance of the model of its species and age class, _ID its inventory id",
+            }
+        }),
+    };
+    let counts = crate::output::gltf::write_instanced_glb(out, &scene)?;
+    let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
+    let stats = ExportStats { trees, trees_15m: tall_nodes.len(), nodes_min: tall_nodes.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut tall_nodes), leaf_cards, adapt_s: 0.0, triangles, levels: o.levels.clone() };
+    Ok(ExportReport { out: out.to_path_buf(), year, trees, models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s: 0.0, bytes, stats })
+}
+
+/// Appends the meshes of the scenario's obstacles that reach into `area` to `statics`, moved to
+/// `origin`; returns how many.
+fn push_obstacles(statics: &mut Vec<StaticMesh>, sc: &Scenario, site: &SiteConditions, area: [f64; 4], origin: Vec3) -> usize {
+    let [x0, y0, x1, y1] = area;
+    let mut n = 0;
+    for (k, ob) in sc.obstacles.iter().enumerate() {
+        let mut m = obstacle_mesh(ob, site);
+        let Some((lo, hi)) = m.bounds() else { continue };
+        if (hi[0] as f64) < x0 || (lo[0] as f64) > x1 || (hi[1] as f64) < y0 || (lo[1] as f64) > y1 {
+            continue;
+        }
+        for p in &mut m.positions {
+            *p = (Vec3::from(*p) - origin).to_array();
+        }
+        statics.push(StaticMesh { name: format!("obstacle_{k}_{}", ob.kind()), mesh: m, rgb: OBSTACLE_RGB, roughness: 0.9 });
+        n += 1;
+    }
+    n
 }
 
 /// Largest factor by which [`fill_leaf_area`] lengthens a tree's leaf cards (1.5: a beech

@@ -23,9 +23,14 @@ pub struct PointGeoRef {
 impl PointGeoRef {
     /// The mapping for a world's site (from the terrain's GeoRef, as the map GeoTIFFs use).
     pub fn of(w: &World) -> PointGeoRef {
-        let g = &w.site.conditions.geo;
-        let per_m = (g.pixel_w / w.site.conditions.cell_x_m.max(1e-12), g.pixel_h / w.site.conditions.cell_y_m.max(1e-12));
-        let south = g.origin_y - w.site.conditions.height() as f64 * g.pixel_h;
+        PointGeoRef::of_site(&w.site.conditions)
+    }
+
+    /// The mapping for a site's conditions (from the terrain's GeoRef).
+    pub fn of_site(site: &crate::conditions::SiteConditions) -> PointGeoRef {
+        let g = &site.geo;
+        let per_m = (g.pixel_w / site.cell_x_m.max(1e-12), g.pixel_h / site.cell_y_m.max(1e-12));
+        let south = g.origin_y - site.height() as f64 * g.pixel_h;
         let (epsg, degrees) = match g.crs {
             crate::grid::Crs::Geographic => (Some(g.epsg.unwrap_or(4326)), true),
             crate::grid::Crs::Projected => (g.epsg, false),

@@ -133,11 +133,13 @@ struct Doc {
     nodes: Vec<Value>,
     /// (PNG bytes, sampler) → texture index.
     texture_of: HashMap<(Vec<u8>, usize), usize>,
+    /// Extensions the document uses (`extensionsUsed`).
+    extensions_used: Vec<&'static str>,
 }
 
 impl Doc {
     fn new() -> Doc {
-        Doc { views: Vec::new(), accessors: Vec::new(), bin: Vec::new(), images: Vec::new(), textures: Vec::new(), materials: Vec::new(), meshes: Vec::new(), nodes: Vec::new(), texture_of: HashMap::new() }
+        Doc { views: Vec::new(), accessors: Vec::new(), bin: Vec::new(), images: Vec::new(), textures: Vec::new(), materials: Vec::new(), meshes: Vec::new(), nodes: Vec::new(), texture_of: HashMap::new(), extensions_used: Vec::new() }
     }
 
     fn view(&mut self, bytes: &[u8], stride: Option<usize>, target: Option<u32>) -> usize {
@@ -316,6 +318,9 @@ impl Doc {
             "bufferViews": self.views,
             "buffers": [{"byteLength": self.bin.len()}],
         });
+        if !self.extensions_used.is_empty() {
+            root["extensionsUsed"] = json!(self.extensions_used);
+        }
         if !self.textures.is_empty() {
             root["images"] = json!(self.images);
             root["textures"] = json!(self.textures);
@@ -542,28 +547,135 @@ pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
         }
         tree_nodes.push(d.node(node));
     }
-    let mut ground_nodes = Vec::new();
-    for g in &s.statics {
-        let mat = d.plain(&g.name, g.rgb, g.roughness);
-        let p = d.primitive(&g.mesh, mat, false);
-        if let Some(mesh) = d.mesh(&g.name, vec![p]) {
-            ground_nodes.push(d.node(json!({"name": g.name, "mesh": mesh})));
-            mesh_nodes += 1;
+    finish_forest(d, tree_nodes, mesh_nodes, &s.statics, &s.name, &s.extras)
+}
+
+/// The trees of one model drawn by `EXT_mesh_gpu_instancing` ([`InstancedScene`]): one entry
+/// per tree in every list.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct InstanceGroup {
+    /// Index into [`InstancedScene::models`].
+    pub model: usize,
+    /// Stem bases relative to the scene's origin (m, Sylva's frame: x east, y north, z up;
+    /// converted to y up).
+    pub translations: Vec<[f32; 3]>,
+    /// Turn of each tree about the vertical (rad, counter-clockwise seen from above).
+    pub yaw: Vec<f32>,
+    /// Scale of the model along Sylva's x, y, z (> 0).
+    pub scales: Vec<[f32; 3]>,
+    /// Tree ids (the inventory's `id`), written as the custom instance attribute `_ID`
+    /// (unsigned 32-bit) when every id fits; empty to leave it out.
+    pub ids: Vec<u64>,
+}
+
+/// What [`instanced_glb_bytes`] writes: tree models drawn many times through the
+/// `EXT_mesh_gpu_instancing` extension (glTF 2.0 extension registry; read by Godot 4, Unity's
+/// glTFast, three.js, Babylon.js and Blender 4.1+), and static meshes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InstancedScene {
+    /// Scene name.
+    pub name: String,
+    /// Materials per kind of tree.
+    pub looks: Vec<Look>,
+    /// Tree models (each in its own frame: stem base at the origin, z up).
+    pub models: Vec<StandModel>,
+    /// The trees of each model.
+    pub groups: Vec<InstanceGroup>,
+    /// Terrain and obstacles.
+    pub statics: Vec<StaticMesh>,
+    /// Levels of detail written (indices into the chains): one instanced node per model and
+    /// level, `<model>_LOD<i>`.
+    pub levels: Vec<usize>,
+    /// JSON stored as the scene's `extras`.
+    pub extras: Value,
+}
+
+/// Encodes an [`InstancedScene`] as GLB bytes: node `trees` holds, per model and level, one node
+/// `<model>_LOD<i>` drawing the level's mesh with the extension's `TRANSLATION`, `ROTATION`
+/// (about the vertical) and `SCALE` attributes (and `_ID`), one entry per tree; node `ground` the
+/// static meshes. The extension is used, not required: a viewer without it shows each model
+/// once at the origin.
+///
+/// Errors: [`Error::Invalid`] for a group naming a missing model or look, lists of different
+/// lengths, a non-finite translation or a non-positive scale, or nothing to draw; otherwise as
+/// [`glb_bytes`].
+pub fn instanced_glb_bytes(s: &InstancedScene) -> Result<(Vec<u8>, StandCounts)> {
+    let bad = |field: &str, value: String, expected: String| OutputError::from(Error::Invalid { context: format!("instanced glb {}", s.name), field: field.into(), value, expected });
+    for m in &s.models {
+        if m.look >= s.looks.len() {
+            return Err(bad("model look", format!("{} of {}", m.look, m.name), format!("a look index below {}", s.looks.len())));
         }
     }
-    let mut roots = Vec::new();
-    if !tree_nodes.is_empty() {
-        roots.push(d.node(json!({"name": "trees", "children": tree_nodes})));
+    for g in &s.groups {
+        let n = g.translations.len();
+        if g.model >= s.models.len() {
+            return Err(bad("group model", g.model.to_string(), format!("a model index below {}", s.models.len())));
+        }
+        if g.yaw.len() != n || g.scales.len() != n || !(g.ids.is_empty() || g.ids.len() == n) {
+            return Err(bad("group lengths", format!("{n} translations, {} turns, {} scales, {} ids", g.yaw.len(), g.scales.len(), g.ids.len()), "one entry per tree in every list".into()));
+        }
+        if !g.translations.iter().flatten().chain(&g.yaw).all(|c| c.is_finite()) || !g.scales.iter().flatten().all(|c| c.is_finite() && *c > 0.0) {
+            return Err(bad("group transforms", format!("model {}", s.models[g.model].name), "finite numbers, scales > 0".into()));
+        }
     }
-    if !ground_nodes.is_empty() {
-        roots.push(d.node(json!({"name": "ground", "children": ground_nodes})));
+    if s.groups.iter().all(|g| g.translations.is_empty()) && s.statics.iter().all(|m| m.mesh.indices.is_empty()) {
+        return Err(bad("scene", "no trees and no ground".into(), "at least one tree or mesh".into()));
     }
-    let counts = StandCounts { meshes: d.meshes.len(), mesh_nodes, images: d.images.len() };
-    let mut scene = json!({"name": s.name, "nodes": roots});
-    if !s.extras.is_null() {
-        scene["extras"] = s.extras.clone();
+    let mut d = Doc::new();
+    d.extensions_used.push("EXT_mesh_gpu_instancing");
+    let used_looks: std::collections::BTreeSet<usize> = s.groups.iter().filter(|g| !g.translations.is_empty()).map(|g| s.models[g.model].look).collect();
+    let mut mats: Vec<Option<LookMaterials>> = vec![None; s.looks.len()];
+    for &l in &used_looks {
+        mats[l] = Some(d.look(&s.looks[l], &s.levels)?);
     }
-    Ok((d.finish(scene)?, counts))
+    let mut tree_nodes = Vec::new();
+    let mut mesh_nodes = 0;
+    let mut meshes_of: HashMap<usize, Vec<Option<usize>>> = HashMap::new();
+    for g in s.groups.iter().filter(|g| !g.translations.is_empty()) {
+        let m = &s.models[g.model];
+        let Some(lm) = mats[m.look] else { continue };
+        let meshes = match meshes_of.get(&g.model) {
+            Some(v) => v.clone(),
+            None => {
+                let v = d.chain(&m.name, &m.chain, lm, &s.levels);
+                meshes_of.insert(g.model, v.clone());
+                v
+            }
+        };
+        let n = g.translations.len();
+        // the instance attributes, shared by the group's levels
+        let t: Vec<[f32; 3]> = g.translations.iter().map(|&p| y_up(p)).collect();
+        let r: Vec<[f32; 4]> = g.yaw.iter().map(|&a| [0.0, (0.5 * a).sin(), 0.0, (0.5 * a).cos()]).collect();
+        let sc: Vec<[f32; 3]> = g.scales.iter().map(|&[x, y, z]| [x, z, y]).collect();
+        let tv = d.view(bytemuck::cast_slice(&t), None, None);
+        let ta = d.accessor(tv, n, F32, "VEC3", None);
+        let rv = d.view(bytemuck::cast_slice(&r), None, None);
+        let ra = d.accessor(rv, n, F32, "VEC4", None);
+        let sv = d.view(bytemuck::cast_slice(&sc), None, None);
+        let sa = d.accessor(sv, n, F32, "VEC3", None);
+        let mut attributes = json!({"TRANSLATION": ta, "ROTATION": ra, "SCALE": sa});
+        if !g.ids.is_empty() && g.ids.iter().all(|&i| i <= u32::MAX as u64) {
+            let ids: Vec<u32> = g.ids.iter().map(|&i| i as u32).collect();
+            let iv = d.view(bytemuck::cast_slice(&ids), None, None);
+            attributes["_ID"] = json!(d.accessor(iv, n, U32, "SCALAR", None));
+        }
+        for (i, mesh) in meshes.iter().enumerate() {
+            if let Some(mesh) = *mesh {
+                tree_nodes.push(d.node(json!({"name": format!("{}_LOD{i}", m.name), "mesh": mesh, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": attributes}}})));
+                mesh_nodes += 1;
+            }
+        }
+    }
+    finish_forest(d, tree_nodes, mesh_nodes, &s.statics, &s.name, &s.extras)
+}
+
+/// Writes an [`InstancedScene`] to `path` as `.glb` (atomically); returns what was written.
+///
+/// Errors: as [`instanced_glb_bytes`]; [`OutputError::Io`] naming `path`.
+pub fn write_instanced_glb(path: &Path, s: &InstancedScene) -> Result<StandCounts> {
+    let (bytes, counts) = instanced_glb_bytes(s)?;
+    super::write_atomic(path, &bytes)?;
+    Ok(counts)
 }
 
 /// Two crossed vertical unit cards (x and y planes, 2 m wide from −1 to 1, 0–1 m tall, z up),
@@ -580,6 +692,34 @@ fn unit_cards() -> TriMesh {
         m.indices.extend_from_slice(&[b, b + 1, b + 2, b, b + 2, b + 3]);
     }
     m
+}
+
+/// The end of a stand or forest document: the static meshes under node `ground`, the tree
+/// nodes under node `trees`, the scene named `name` with `extras`; `mesh_nodes` counts the tree
+/// nodes drawing a mesh so far.
+fn finish_forest(mut d: Doc, tree_nodes: Vec<usize>, mut mesh_nodes: usize, statics: &[StaticMesh], name: &str, extras: &Value) -> Result<(Vec<u8>, StandCounts)> {
+    let mut ground_nodes = Vec::new();
+    for g in statics {
+        let mat = d.plain(&g.name, g.rgb, g.roughness);
+        let p = d.primitive(&g.mesh, mat, false);
+        if let Some(mesh) = d.mesh(&g.name, vec![p]) {
+            ground_nodes.push(d.node(json!({"name": g.name, "mesh": mesh})));
+            mesh_nodes += 1;
+        }
+    }
+    let mut roots = Vec::new();
+    if !tree_nodes.is_empty() {
+        roots.push(d.node(json!({"name": "trees", "children": tree_nodes})));
+    }
+    if !ground_nodes.is_empty() {
+        roots.push(d.node(json!({"name": "ground", "children": ground_nodes})));
+    }
+    let counts = StandCounts { meshes: d.meshes.len(), mesh_nodes, images: d.images.len() };
+    let mut scene = json!({"name": name, "nodes": roots});
+    if !extras.is_null() {
+        scene["extras"] = extras.clone();
+    }
+    Ok((d.finish(scene)?, counts))
 }
 
 /// Writes a stand to `path` as `.glb` (atomically); returns what was written.
