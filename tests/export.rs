@@ -502,3 +502,45 @@ fn instanced_export_places_every_live_tree_of_the_run() {
     assert!(e.contains("--lod"), "{e}");
     assert!(!dir.path().join("x.glb").exists());
 }
+
+/// `sylva render --camera hemi:X,Y` (issue 32 item 4): the virtual hemispherical photograph of
+/// a snapshot. On open ground the whole circle is sky and the light model says 1 too; under the
+/// 5 m beech plantation the sky is mostly hidden and darker than in the 20 m-spaced one; the
+/// dithered gap fraction follows the rays' mean transmission; bad places are refused.
+#[test]
+fn hemispherical_photograph_sees_the_gaps_the_stand_leaves() {
+    use sylva::job::hemi::{hemispherical_photo, parse_hemi, HemiOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    small_run(&run);
+    let lib = lib();
+    let at = |x: f64, y: f64| hemispherical_photo(&run, &lib, &HemiOptions { year: Some(1), x_m: x, y_m: y, size_px: 200 });
+    // open ground: the east edge of the flat site is 40 m from the nearest row of 20 m spacing
+    let (img, open) = at(99.0, 50.0).unwrap();
+    assert_eq!(img.dimensions(), (200, 200));
+    // the dense plantation (5 m, 30-year beech) and the open one (20 m)
+    let (_, dense) = at(12.5, 52.5).unwrap();
+    let (_, sparse) = at(80.0, 50.0).unwrap();
+    eprintln!("gap fraction / openness / simulated light: open {:.3} {:.3} {:.3}, 20 m spacing {:.3} {:.3} {:.3}, 5 m spacing {:.3} {:.3} {:.3}", open.gap_fraction, open.openness, open.simulated_light, sparse.gap_fraction, sparse.openness, sparse.simulated_light, dense.gap_fraction, dense.openness, dense.simulated_light);
+    assert!(open.gap_fraction > sparse.gap_fraction && sparse.gap_fraction > dense.gap_fraction + 0.1, "{open:?} {sparse:?} {dense:?}");
+    assert!(dense.gap_fraction < 0.5, "{dense:?}");
+    // the light model in the open: relative insolation 1 on the flat site, nothing above
+    assert!((open.simulated_light - 1.0).abs() < 0.02 && open.gap_fraction > 0.6, "{open:?}");
+    assert!(dense.simulated_light < open.simulated_light - 0.3, "{dense:?}");
+    for s in [&open, &sparse, &dense] {
+        assert!((s.gap_fraction - s.openness).abs() < 0.02, "dithering keeps the expected value: {s:?}");
+    }
+    // the picture: sky pixels are light, canopy dark, outside the circle black
+    assert_eq!(img.get_pixel(0, 0).0, [0, 0, 0]);
+    assert!(img.get_pixel(100, 100).0[2] > 200, "the zenith over open ground is sky");
+    // bad requests
+    assert!(parse_hemi("oblique").is_none());
+    assert_eq!(parse_hemi("hemi:10,20").unwrap().unwrap(), (10.0, 20.0));
+    let e = parse_hemi("hemi:10").unwrap().unwrap_err().to_string();
+    assert!(e.contains("--camera") && e.contains("hemi:X,Y"), "{e}");
+    let e = at(150.0, 50.0).unwrap_err().to_string();
+    assert!(e.contains("--camera") && e.contains("on the site"), "{e}");
+    // inside the wall (x = 30 m, y 20–40 m, 4 m tall)
+    let e = at(30.0, 30.0).unwrap_err().to_string();
+    assert!(e.contains("--camera") && e.contains("wall"), "{e}");
+}

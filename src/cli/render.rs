@@ -22,6 +22,23 @@ fn parse_camera(s: &str) -> Result<CameraPreset, String> {
     s.parse::<CameraPreset>().map_err(|_| format!("camera `{s}`: expected overview, oblique, ground or map"))
 }
 
+/// The camera of `sylva render`: a preset, or a hemispherical photograph at a place.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RenderCamera {
+    /// A camera preset of the renderer.
+    Preset(CameraPreset),
+    /// `hemi:X,Y`: an upward fisheye from 1.3 m at (X, Y) (m, world coordinates).
+    Hemi(f64, f64),
+}
+
+fn parse_render_camera(s: &str) -> Result<RenderCamera, String> {
+    match sylva::job::hemi::parse_hemi(s) {
+        Some(Ok((x, y))) => Ok(RenderCamera::Hemi(x, y)),
+        Some(Err(e)) => Err(e.to_string()),
+        None => s.parse::<CameraPreset>().map(RenderCamera::Preset).map_err(|_| format!("camera `{s}`: expected overview, oblique, ground, map or hemi:X,Y")),
+    }
+}
+
 fn parse_on_off(s: &str) -> Result<bool, String> {
     match s.to_ascii_lowercase().as_str() {
         "on" | "true" | "yes" => Ok(true),
@@ -49,9 +66,11 @@ pub struct RenderArgs {
     /// Snapshot year (default: the last one).
     #[arg(long)]
     pub year: Option<u32>,
-    /// Camera preset: overview, oblique, ground, map.
-    #[arg(long, default_value = "oblique", value_parser = parse_camera)]
-    pub camera: CameraPreset,
+    /// Camera preset: overview, oblique, ground, map; or `hemi:X,Y`, a virtual hemispherical
+    /// photograph (upward equisolid fisheye from 1.3 m at X, Y in metres; a square image of the
+    /// size's smaller side; `--stats` gives gap_fraction, openness and simulated_light).
+    #[arg(long, default_value = "oblique", value_parser = parse_render_camera)]
+    pub camera: RenderCamera,
     /// Season of the foliage: spring, summer, autumn, winter.
     #[arg(long, default_value = "summer", value_parser = parse_season)]
     pub season: Season,
@@ -140,6 +159,10 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     if let Some(p) = &a.stats {
         super::check_stats_path(p)?;
     }
+    let camera = match a.camera {
+        RenderCamera::Preset(p) => p,
+        RenderCamera::Hemi(x, y) => return hemi(&a, x, y),
+    };
     let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
     let year = match a.year {
         Some(y) => y,
@@ -150,7 +173,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     if unknown > 0 {
         tracing::warn!("{unknown} trees of species not in the library are not drawn (give their species files with --species-dir)");
     }
-    let cam = stage.camera_for(a.camera, &rows, a.size.0, a.size.1);
+    let cam = stage.camera_for(camera, &rows, a.size.0, a.size.1);
     if !a.adapt {
         stage.set_adapt(None);
     }
@@ -174,6 +197,19 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
         sylva::output::write_atomic(path, serde_json::to_string_pretty(&j)?.as_bytes())?;
     }
     eprintln!("year {year}: {} trees drawn as meshes or billboards, {} more in the far-field canopy layer, {} triangles → {}", st.instances_drawn, st.canopy_trees, st.triangles, a.out.display());
+    Ok(())
+}
+
+/// `sylva render --camera hemi:X,Y`: the hemispherical photograph ([`sylva::job::hemi`]).
+fn hemi(a: &RenderArgs, x: f64, y: f64) -> anyhow::Result<()> {
+    let lib = super::simulate::run_library(&a.run_dir, a.species_dir.as_deref())?;
+    let o = sylva::job::hemi::HemiOptions { year: a.year, x_m: x, y_m: y, size_px: a.size.0.min(a.size.1) };
+    let (img, st) = sylva::job::hemi::hemispherical_photo(&a.run_dir, &lib, &o)?;
+    sylva::output::pictures::write_png(&a.out, &image::DynamicImage::ImageRgb8(img).to_rgba8())?;
+    if let Some(path) = &a.stats {
+        sylva::output::write_atomic(path, serde_json::to_string_pretty(&st)?.as_bytes())?;
+    }
+    eprintln!("year {}: hemispherical photograph at {x},{y} ({} trees within {} m): gap fraction {:.3}, simulated light {:.3} → {}", st.year, st.trees, sylva::job::hemi::VIEW_RADIUS_M, st.gap_fraction, st.simulated_light, a.out.display());
     Ok(())
 }
 

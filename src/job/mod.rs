@@ -9,6 +9,7 @@ pub use error::{JobError, Result};
 pub mod adapted;
 pub mod checkpoint;
 pub mod export;
+pub mod hemi;
 pub mod inventory;
 pub mod main_job;
 pub mod maps;
