@@ -56,7 +56,7 @@ pub fn read_filtered(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -
     let headers = rdr.headers().map_err(|e| Error::format(path, e.to_string()))?.clone();
     let mut line = 2usize;
     while rdr.read_record(&mut rec).map_err(|e| Error::format(path, format!("line {line}: {e}")))? {
-        let row: InventoryRow = rec.deserialize(Some(&headers)).map_err(|e| Error::format(path, format!("line {line}: {e}")))?;
+        let row: InventoryRow = rec.deserialize(Some(&headers)).map_err(|e| Error::format(path, format!("line {line}: {}", csv_field_error(&e, &headers, &rec))))?;
         check_row(path, || format!("line {line}"), &row)?;
         if keep(&row) {
             rows.push(row);
@@ -64,6 +64,19 @@ pub fn read_filtered(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -
         line += 1;
     }
     Ok(rows)
+}
+
+/// A CSV value error told by its column: `column NAME = VALUE: what is wrong` (the csv crate
+/// says only "field N").
+fn csv_field_error(e: &csv::Error, headers: &csv::StringRecord, rec: &csv::StringRecord) -> String {
+    if let csv::ErrorKind::Deserialize { err, .. } = e.kind() {
+        if let Some(f) = err.field() {
+            let name = headers.get(f as usize).unwrap_or("?");
+            let value = rec.get(f as usize).unwrap_or("");
+            return format!("column {name} = {value:?}: {}", err.kind());
+        }
+    }
+    e.to_string()
 }
 
 /// A Parquet reading error of `path` as [`Error::Format`] naming the file once.
@@ -172,7 +185,21 @@ pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
     };
     // Parquet before CSV within a snapshot, then one file per snapshot
     out.sort_by_key(|a| (a.0, order(&a.1), !is_parquet(&a.2)));
-    out.dedup_by(|b, a| a.0 == b.0 && a.1 == b.1);
+    out.dedup_by(|b, a| {
+        let same = a.0 == b.0 && a.1 == b.1;
+        if same {
+            // said once per process and file pair: a run extended by an older version, or a
+            // file converted by hand, may hold both
+            static TOLD: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+            if let Ok(mut told) = TOLD.lock() {
+                if !told.contains(&b.2) {
+                    tracing::warn!("{} and {} hold the same snapshot: reading the Parquet file, not the CSV", a.2.display(), b.2.display());
+                    told.push(b.2.clone());
+                }
+            }
+        }
+        same
+    });
     Ok(out)
 }
 
@@ -237,6 +264,12 @@ pub fn read_regeneration(run_dir: &Path, year: u32) -> Result<Option<Vec<RegenRo
     }
     let path = run_dir.join("inventory").join(format!("year_{year:04}_regeneration.csv"));
     if !path.is_file() {
+        // a run that wrote the layer for other years lost this one: say so (the saplings of that
+        // year are not drawn), rather than thinning the pictures without a word
+        let others = std::fs::read_dir(run_dir.join("inventory")).map(|rd| rd.flatten().any(|e| e.file_name().to_string_lossy().contains("_regeneration."))).unwrap_or(false);
+        if others {
+            tracing::warn!("{}: no regeneration layer for year {year} (neither {} nor {}); its saplings are left out", run_dir.display(), pq.display(), path.display());
+        }
         return Ok(None);
     }
     let mut rdr = csv::Reader::from_path(&path).map_err(|e| Error::format(&path, e.to_string()))?;
