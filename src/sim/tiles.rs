@@ -17,6 +17,9 @@
 //!    of the seed cells within reach: the *mature* trees (the only seed sources) within
 //!    `(⌈max_m / cell⌉ + 2)` seed cells, after this summer's growth;
 //! 5. **mortality** draws each tree from its own stream: no exchange;
+//!    (**climate**, first in the year, sets each cell's and each own tree's suitability from
+//!    the whole site every tile holds: no exchange; **management** is refused over more than
+//!    one tile, [`Layout::with_halo`];)
 //! 6. **stats**: the stand table row needs every tree (sums in id order, the top height): the
 //!    ranks send their trees' id, species, height and DBH to rank 0 ([`Tile::step`]).
 //!
@@ -256,9 +259,19 @@ impl Layout {
 
     /// As [`Layout::new`] with a given halo width `halo_m` (m).
     ///
-    /// Errors: [`Error::Invalid`] for the tile counts (as [`Layout::new`]) and for a halo
-    /// narrower than [`min_halo_m`] (a tiled run would differ from one process).
+    /// Errors: [`Error::Invalid`] for the tile counts (as [`Layout::new`]), for a halo
+    /// narrower than [`min_halo_m`] (a tiled run would differ from one process), and for a site
+    /// with management entries over more than one tile (not supported: a thinning's figures are
+    /// over its whole area).
     pub fn with_halo(site: &Site, nx: usize, ny: usize, halo_m: f64) -> Result<Layout> {
+        if !site.management.is_empty() && nx * ny > 1 {
+            return Err(Error::Invalid {
+                context: "tiled run".into(),
+                field: "management".into(),
+                value: format!("{} [[management]] entries over {} tiles", site.management.len(), nx * ny),
+                expected: "a run in one process (no --tiles, no mpirun): a thinning's target and triggers are figures over its whole area, which the tiles do not yet gather; management in tiled and MPI runs is not supported".into(),
+            });
+        }
         let min = min_halo_m(site);
         if !(halo_m >= min) {
             return Err(Error::Invalid {
@@ -430,7 +443,7 @@ impl<'a> Dec<'a> {
 /// The trees of `parts` in one store sorted by id (each part sorted by id, ids unique), and the
 /// part each row came from. Lean parts (id, species, height and DBH only) give a lean store.
 /// `next_id` is `next_id`.
-fn merge_by_id(parts: &[TreeStore], next_id: u64) -> (TreeStore, Vec<usize>) {
+pub(crate) fn merge_by_id(parts: &[TreeStore], next_id: u64) -> (TreeStore, Vec<usize>) {
     // k-way merge of the sorted parts (a heap of their next ids): O(n log k)
     let mut all: Vec<(u64, usize, usize)> = Vec::with_capacity(parts.iter().map(|p| p.len()).sum());
     let mut heap: std::collections::BinaryHeap<std::cmp::Reverse<(u64, usize, usize)>> = parts.iter().enumerate().filter(|(_, p)| !p.is_empty()).map(|(k, p)| std::cmp::Reverse((p.id[0], k, 0))).collect();
@@ -661,9 +674,9 @@ impl Tile {
             report.trees = trees.len();
             report.established = est;
             report.died = died;
-            report.row = Some(super::stats::row_of(&self.world.site, self.world.stand.year, &trees, stems, deaths, ry));
+            report.row = Some(super::stats::row_of(&self.world.site, self.world.stand.year, &trees, stems, deaths, ry, (0, 0.0)));
         }
-        report.phase_seconds[5] = t0.elapsed().as_secs_f64();
+        report.phase_seconds[stats] = t0.elapsed().as_secs_f64();
         Ok(report)
     }
 

@@ -44,6 +44,9 @@ pub enum DeathCause {
     /// Bugmann 2001) hit a tree younger than [`SENESCENT_AGE_SHARE`] of its maximum age —
     /// accidents, pathogens, lightning and other causes the model does not resolve.
     Background,
+    /// Removed by a thinning or a harvest of the scenario's management
+    /// (`sim::phases::management`).
+    Harvest,
 }
 
 /// Share of the species' maximum age from which an intrinsic mortality draw counts as
@@ -52,11 +55,11 @@ pub enum DeathCause {
 pub const SENESCENT_AGE_SHARE: f32 = 0.8;
 
 /// Number of death causes ([`DeathCause::ALL`]).
-pub const N_CAUSES: usize = 4;
+pub const N_CAUSES: usize = 5;
 
 impl DeathCause {
     /// All causes in output order.
-    pub const ALL: [DeathCause; N_CAUSES] = [DeathCause::Age, DeathCause::Stress, DeathCause::Wind, DeathCause::Background];
+    pub const ALL: [DeathCause; N_CAUSES] = [DeathCause::Age, DeathCause::Stress, DeathCause::Wind, DeathCause::Background, DeathCause::Harvest];
     /// Lower-case name used in outputs (`dead:<name>`).
     pub fn name(self) -> &'static str {
         match self {
@@ -64,6 +67,7 @@ impl DeathCause {
             DeathCause::Stress => "stress",
             DeathCause::Wind => "wind",
             DeathCause::Background => "background",
+            DeathCause::Harvest => "harvest",
         }
     }
     /// Index in [`DeathCause::ALL`].
