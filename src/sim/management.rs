@@ -11,7 +11,8 @@
 //! carry triggers (`trigger_relative_density`, `trigger_top_height_m`): in a scheduled year they
 //! act only when every trigger given holds over their area.
 
-use super::world::Site;
+use super::light_grid::LightGrid;
+use crate::conditions::SiteConditions;
 use crate::error::{Error, Result};
 use crate::species::{SpeciesId, SpeciesLibrary};
 use serde::{Deserialize, Serialize};
@@ -102,6 +103,10 @@ pub struct AreaFilter {
     /// Value the property must have.
     pub equals: toml::Value,
 }
+
+/// Most trees all `planted` starts of a scenario may plant together, and one planting entry at
+/// a time (each is an individual; 5 M is about 2,000 ha at 2 m spacing).
+pub const MAX_PLANTED_TREES: u64 = 5_000_000;
 
 const KINDS: &str = "\"thinning\", \"harvest\" or \"planting\"";
 
@@ -405,7 +410,7 @@ pub struct Operation {
 /// Converts a point of the DEM's CRS to world metres (origin SW corner) on `site`: through the
 /// grid's georeferencing (pixel coordinates times the cell size); a local grid's coordinates
 /// are world metres already.
-fn crs_to_world(site: &crate::conditions::SiteConditions, x: f64, y: f64) -> [f64; 2] {
+fn crs_to_world(site: &SiteConditions, x: f64, y: f64) -> [f64; 2] {
     let g = &site.geo;
     if g.crs == crate::grid::Crs::Local {
         return [x, y];
@@ -477,14 +482,29 @@ pub fn read_geojson_polygons(path: &Path, filter: Option<&AreaFilter>, ctx: &str
     Ok(out)
 }
 
-/// Resolves the scenario's entries against `site` (its extent, mask, light grid and
+/// The parts of a site that [`resolve`] reads: its conditions (extent, georeferencing), light
+/// grid and the site cell of each light cell (`u32::MAX` where masked), and the species pool.
+pub struct SiteView<'a> {
+    /// Site conditions.
+    pub conditions: &'a SiteConditions,
+    /// World extent (m).
+    pub extent: (f64, f64),
+    /// The light grid.
+    pub light: &'a LightGrid,
+    /// Site cell of each light cell (`u32::MAX`: masked).
+    pub light_site: &'a [u32],
+    /// Pool species.
+    pub pool: &'a [SpeciesId],
+}
+
+/// Resolves the scenario's entries against the site (its extent, mask, light grid and
 /// georeferencing) and the species library: regions in world metres with their areas, species
 /// ids of plantings. Entries come out in scenario order.
 ///
 /// Errors: [`Error::Invalid`] naming `management[i].<field>`: a planted species outside the
 /// library or the pool, an area outside the site or without unmasked ground, an area file that
 /// cannot be read ([`read_geojson_polygons`]).
-pub fn resolve(entries: &[Management], site: &Site, lib: &SpeciesLibrary, ctx: &str) -> Result<Vec<Operation>> {
+pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary, ctx: &str) -> Result<Vec<Operation>> {
     let (ex, ey) = site.extent;
     let mut ops = Vec::with_capacity(entries.len());
     for (i, m) in entries.iter().enumerate() {
@@ -492,7 +512,7 @@ pub fn resolve(entries: &[Management], site: &Site, lib: &SpeciesLibrary, ctx: &
             (Some(p), _) => Some(p.clone()),
             (_, Some(f)) => {
                 let ps = read_geojson_polygons(f, m.filter.as_ref(), ctx, &format!("management[{i}].area_file"))?;
-                Some(ps.into_iter().map(|rings| rings.into_iter().map(|r| r.into_iter().map(|p| crs_to_world(&site.conditions, p[0], p[1])).collect()).collect()).collect())
+                Some(ps.into_iter().map(|rings| rings.into_iter().map(|r| r.into_iter().map(|p| crs_to_world(site.conditions, p[0], p[1])).collect()).collect()).collect())
             }
             _ => None,
         };
@@ -509,7 +529,7 @@ pub fn resolve(entries: &[Management], site: &Site, lib: &SpeciesLibrary, ctx: &
         };
         let clipped = [bbox[0].max(0.0), bbox[1].max(0.0), bbox[2].min(ex), bbox[3].min(ey)];
         let mut region = Region { bbox: clipped, polygons, area_ha: 0.0 };
-        let l = &site.light;
+        let l = site.light;
         let cells = (0..l.len()).filter(|&c| site.light_site[c] != u32::MAX && {
             let (x, y) = l.centre(c);
             region.contains(x, y)
@@ -548,28 +568,17 @@ pub fn resolve(entries: &[Management], site: &Site, lib: &SpeciesLibrary, ctx: &
                 if let Some(last) = out.last_mut() {
                     last.1 = 1.0;
                 }
+                let sp = m.spacing_m.unwrap_or(2.0);
+                let n = ((clipped[2] - clipped[0]) / sp).floor().max(0.0) * ((clipped[3] - clipped[1]) / sp).floor().max(0.0);
+                if n > MAX_PLANTED_TREES as f64 {
+                    return Err(invalid(ctx, i, "spacing_m", sp, &format!("a spacing that plants at most {} trees ({n} on this area)", MAX_PLANTED_TREES)));
+                }
                 Action::Planting { mix: out, spacing_m: m.spacing_m.unwrap_or(2.0), age_yr: m.age_yr.unwrap_or(2.0) }
             }
         };
         ops.push(Operation { index: i, spec: m.clone(), action, region });
     }
     Ok(ops)
-}
-
-/// Relative density of trees: the sum over species of Reineke's SDI of the species' stems with a
-/// DBH of at least [`super::density::MIN_DBH_CM`] per hectare of `area_ha`, over its
-/// SDI_max (`life.density`; 1 = on the maximum-density line), as
-/// [`super::density::stand_density`]'s `rd`. `n[s]` and `d2[s]` are the count and the sum of
-/// squared DBH (cm²) per library species.
-pub fn stand_rd(lib: &SpeciesLibrary, n: &[f64], d2: &[f64], area_ha: f64) -> f64 {
-    let mut rd = 0.0;
-    for s in 0..n.len() {
-        if n[s] > 0.0 {
-            let d = &lib.species[s].life.density;
-            rd += super::density::sdi(n[s] / area_ha, (d2[s] / n[s]).sqrt(), d.reineke_slope as f64) / d.sdi_max as f64;
-        }
-    }
-    rd
 }
 
 #[cfg(test)]

@@ -99,9 +99,7 @@ pub struct TerrainSection {
     pub height_range_m: Option<[f64; 2]>,
 }
 
-/// Most trees all `planted` starts of a scenario may plant together (each is an individual;
-/// 5 M is about 2,000 ha at 2 m spacing).
-pub const MAX_PLANTED_TREES: u64 = 5_000_000;
+pub use super::management::MAX_PLANTED_TREES;
 
 /// A generated (fractal noise) terrain.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

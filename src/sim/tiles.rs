@@ -440,43 +440,6 @@ impl<'a> Dec<'a> {
     }
 }
 
-/// The trees of `parts` in one store sorted by id (each part sorted by id, ids unique), and the
-/// part each row came from. Lean parts (id, species, height and DBH only) give a lean store.
-/// `next_id` is `next_id`.
-pub(crate) fn merge_by_id(parts: &[TreeStore], next_id: u64) -> (TreeStore, Vec<usize>) {
-    // k-way merge of the sorted parts (a heap of their next ids): O(n log k)
-    let mut all: Vec<(u64, usize, usize)> = Vec::with_capacity(parts.iter().map(|p| p.len()).sum());
-    let mut heap: std::collections::BinaryHeap<std::cmp::Reverse<(u64, usize, usize)>> = parts.iter().enumerate().filter(|(_, p)| !p.is_empty()).map(|(k, p)| std::cmp::Reverse((p.id[0], k, 0))).collect();
-    while let Some(std::cmp::Reverse((id, k, i))) = heap.pop() {
-        all.push((id, k, i));
-        if let Some(&next) = parts[k].id.get(i + 1) {
-            heap.push(std::cmp::Reverse((next, k, i + 1)));
-        }
-    }
-    let full = parts.iter().all(|p| p.x.len() == p.len());
-    let mut t = TreeStore { next_id, ..Default::default() };
-    t.id = all.iter().map(|e| e.0).collect();
-    t.species = all.iter().map(|e| parts[e.1].species[e.2]).collect();
-    t.height = all.iter().map(|e| parts[e.1].height[e.2]).collect();
-    t.dbh = all.iter().map(|e| parts[e.1].dbh[e.2]).collect();
-    if full {
-        let col = |f: fn(&TreeStore) -> &Vec<f32>| all.iter().map(|e| f(&parts[e.1])[e.2]).collect::<Vec<f32>>();
-        t.x = col(|p| &p.x);
-        t.y = col(|p| &p.y);
-        t.z = col(|p| &p.z);
-        t.age = col(|p| &p.age);
-        t.crown_radius = col(|p| &p.crown_radius);
-        t.crown_base = col(|p| &p.crown_base);
-        t.light = col(|p| &p.light);
-        t.vigour = col(|p| &p.vigour);
-        t.suitability = col(|p| &p.suitability);
-        // cached growth factors where a part has them (the tile's own rows), NaN (drawn again
-        // when needed, the same bits) for halo copies, which arrive without
-        t.growth_factor.0 = all.iter().map(|e| if parts[e.1].growth_factor.0.len() == parts[e.1].len() { parts[e.1].growth_factor.0[e.2] } else { f32::NAN }).collect();
-    }
-    (t, all.iter().map(|e| e.1).collect())
-}
-
 /// One tile of a tiled run: a [`World`] whose stand holds only the tile's trees and cohorts,
 /// and the layout it belongs to.
 pub struct Tile {
@@ -599,7 +562,7 @@ impl Tile {
         let own = std::mem::take(&mut self.world.stand.trees);
         let next = own.next_id;
         parts.push(own);
-        let (merged, from) = merge_by_id(&parts, next);
+        let (merged, from) = TreeStore::merge_by_id(&parts, next);
         self.world.stand.trees = merged;
         self.own = from.iter().map(|&k| k == parts.len() - 1).collect();
         Ok(())
@@ -670,7 +633,7 @@ impl Tile {
                     *v += d.u64()?;
                 }
             }
-            let (trees, _) = merge_by_id(&parts, 0);
+            let (trees, _) = TreeStore::merge_by_id(&parts, 0);
             report.trees = trees.len();
             report.established = est;
             report.died = died;
@@ -853,7 +816,7 @@ fn merge_parts(g: &mut World, base: &Tallies, layout: &Layout, parts: Vec<Part>)
         g.stand.year = w.year;
     }
     let next = g.stand.trees.next_id;
-    g.stand.trees = merge_by_id(&trees, next).0;
+    g.stand.trees = TreeStore::merge_by_id(&trees, next).0;
     cohorts.sort_unstable_by_key(|e| (e.0, e.1));
     let mut c = Cohorts::default();
     for (_, _, k, i) in cohorts {

@@ -180,6 +180,20 @@ impl Site {
         out
     }
 
+    /// The trees management entry `op` plants in simulation year `y` (0: at the start): the
+    /// lattice of the start's planted stands ([`Site::lattice`]) over the entry's bounding box,
+    /// the points inside its region, each tree's species drawn from its mix (streams keyed by the
+    /// seed, the entry and the year). None for an entry that is not a planting.
+    pub fn plant(&self, op: &super::management::Operation, y: u32) -> Vec<NewTree> {
+        let super::management::Action::Planting { mix, spacing_m, age_yr } = &op.action else { return Vec::new() };
+        let key = (op.index as u64) << 48;
+        let pick = |r: &mut Stream| {
+            let u = r.uniform();
+            mix.iter().find(|(_, c)| u < *c).or(mix.last()).map(|m| m.0).unwrap_or(0)
+        };
+        self.lattice(op.region.bbox, *spacing_m, *age_yr, |i, j| Stream::new(self.seed, key | j << 24 | i, y as u64, salt::MANAGEMENT), |x, y| op.region.contains(x, y), pick)
+    }
+
     /// Position of species `s` in the pool.
     pub fn pool_index(&self, s: SpeciesId) -> Option<usize> {
         self.pool.iter().position(|&q| q == s)
@@ -272,12 +286,13 @@ impl World {
             scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], dead: Vec::new(), regen_year: RegenYear::default() },
             tallies: Tallies { deaths_total: [0; super::trees::N_CAUSES], regen_ledger: RegenLedger::new(np) },
         };
-        w.site.management = super::management::resolve(&scenario.management, &w.site, lib, &ctx)?;
+        let view = super::management::SiteView { conditions: &w.site.conditions, extent: w.site.extent, light: &w.site.light, light_site: &w.site.light_site, pool: &w.site.pool };
+        w.site.management = super::management::resolve(&scenario.management, &view, lib, &ctx)?;
         w.place_start(scenario);
         // plantings of year 0 stand with the start
         for op in &w.site.management {
             if op.spec.due(0).is_some() {
-                for t in super::phases::management::plant(&w.site, op, 0) {
+                for t in w.site.plant(op, 0) {
                     w.stand.trees.push(t);
                 }
             }

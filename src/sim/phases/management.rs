@@ -5,14 +5,11 @@
 //! planted species are drawn from streams keyed by the seed, the entry and the year, and every
 //! sum runs in tree order, so the result does not depend on the thread count.
 
-use crate::rng::{mix64, Stream};
+use crate::rng::{mix64, salt};
 use crate::sim::management::{Action, Operation, Target};
 use crate::sim::trees::{birth_id, DeadTree, DeathCause, NewTree, TreeStore, N_CAUSES};
 use crate::sim::world::Site;
-use crate::species::SpeciesId;
-
-/// Random-stream salt of the management phase (planted positions and species, patch order).
-pub const SALT: u64 = 0x3A4A_6E77;
+use crate::species::SpeciesLibrary;
 
 /// First per-cell index of the ids of trees planted during a run ([`birth_id`]`(year, cell,
 /// PLANT_INDEX_BASE + k)`): recruits of a light cell and year use the indices below it (at most
@@ -50,7 +47,7 @@ pub fn run(m: Manage<'_>) -> usize {
             Action::ClearCut => (0..t.len()).map(|i| op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect(),
             Action::Patch { size_m, share } => patches(m.seed, t, op, *size_m, *share, k),
             Action::Planting { .. } => {
-                planted.extend(plant(m.site, op, y).into_iter().map(|nt| (m.site.light.cell_of(nt.x, nt.y) as u32, nt)));
+                planted.extend(m.site.plant(op, y).into_iter().map(|nt| (m.site.light.cell_of(nt.x, nt.y) as u32, nt)));
                 continue;
             }
         };
@@ -97,9 +94,25 @@ impl Figures {
         match target {
             Target::BasalArea(_) => self.ba_m2 / a,
             Target::Stems(_) => self.stems / a,
-            Target::RelativeDensity(_) => crate::sim::management::stand_rd(&site.lib, &self.n7, &self.d2_7, a),
+            Target::RelativeDensity(_) => stand_rd(&site.lib, &self.n7, &self.d2_7, a),
         }
     }
+}
+
+/// Relative density of trees: the sum over species of Reineke's SDI of the species' stems with a
+/// DBH of at least [`crate::sim::density::MIN_DBH_CM`] per hectare of `area_ha`, over its
+/// SDI_max (`life.density`; 1 = on the maximum-density line), as
+/// [`crate::sim::density::stand_density`]'s `rd`. `n[s]` and `d2[s]` are the count and the sum of
+/// squared DBH (cm²) per library species.
+pub fn stand_rd(lib: &SpeciesLibrary, n: &[f64], d2: &[f64], area_ha: f64) -> f64 {
+    let mut rd = 0.0;
+    for s in 0..n.len() {
+        if n[s] > 0.0 {
+            let d = &lib.species[s].life.density;
+            rd += crate::sim::density::sdi(n[s] / area_ha, (d2[s] / n[s]).sqrt(), d.reineke_slope as f64) / d.sdi_max as f64;
+        }
+    }
+    rd
 }
 
 /// The trees a thinning removes: none unless its triggers hold over its area; else the stems
@@ -153,7 +166,7 @@ fn patches(seed: u64, t: &TreeStore, op: &Operation, size_m: f64, share: f64, k:
     let ny = (((b[3] - b[1]) / size_m).ceil() as usize).max(1);
     let mut eligible: Vec<(u64, usize)> = (0..nx * ny)
         .filter(|&p| op.region.contains(b[0] + ((p % nx) as f64 + 0.5) * size_m, b[1] + ((p / nx) as f64 + 0.5) * size_m))
-        .map(|p| (mix64(seed ^ mix64(SALT ^ ((op.index as u64) << 40) ^ p as u64)), p))
+        .map(|p| (mix64(seed ^ mix64(salt::MANAGEMENT ^ ((op.index as u64) << 40) ^ p as u64)), p))
         .collect();
     eligible.sort_unstable();
     let per = ((share * eligible.len() as f64).round() as usize).max(1);
@@ -174,20 +187,6 @@ fn patches(seed: u64, t: &TreeStore, op: &Operation, size_m: f64, share: f64, k:
             cut[r * nx + c]
         })
         .collect()
-}
-
-/// The trees a planting entry plants in year `y` (0: at the start): the lattice of the start's
-/// planted stands ([`crate::sim::world::Site::lattice`]) over the region's bounding box, the
-/// points inside the region, each tree's species drawn from the mix.
-pub fn plant(site: &Site, op: &Operation, y: u32) -> Vec<NewTree> {
-    let Action::Planting { mix, spacing_m, age_yr } = &op.action else { return Vec::new() };
-    let key = (op.index as u64) << 48;
-    site.lattice(op.region.bbox, *spacing_m, *age_yr, |i, j| Stream::new(site.seed, key | j << 24 | i, y as u64, SALT), |x, y| op.region.contains(x, y), |r: &mut Stream| pick(mix, r.uniform()))
-}
-
-/// The species of cumulative share `u` (0–1) in `mix`.
-fn pick(mix: &[(SpeciesId, f64)], u: f64) -> SpeciesId {
-    mix.iter().find(|(_, c)| u < *c).or(mix.last()).map(|m| m.0).unwrap_or(0)
 }
 
 /// Adds trees planted during the simulation of `year` (years completed before it) with their
@@ -212,5 +211,5 @@ fn insert_planted(trees: &mut TreeStore, planted: Vec<(u32, NewTree)>, year: u32
     add.id = with_ids.iter().map(|e| e.0).collect();
     let own = std::mem::take(trees);
     let next = own.next_id;
-    *trees = crate::sim::tiles::merge_by_id(&[own, add], next).0;
+    *trees = TreeStore::merge_by_id(&[own, add], next).0;
 }
