@@ -24,6 +24,23 @@ pub struct Climate {
     pub sea_level_m: f32,
     /// Direction the prevailing wind comes from (degrees clockwise from north).
     pub wind_from_deg: f32,
+    /// Linear warming (K per century, −20…20; default 0): the mean annual temperature of every
+    /// cell rises by `warming_k_per_century · Y / 100` in simulation year `Y` (the stand table's
+    /// year), a ramp from year 0. Moves the temperature index T of every cell each year
+    /// (`sim::climate_change`); the terrain fields are not recomputed.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub warming_k_per_century: f32,
+    /// A CSV of yearly anomalies `year,temperature_k[,precipitation_factor]` (a header line
+    /// allowed; `#` comments), added to the ramp of `warming_k_per_century`; years not listed have
+    /// none. Relative paths are relative to the scenario file (stored absolute in a run's copy).
+    /// Read and checked by `sim::climate_change::ClimateChange::of` (errors name the file and
+    /// line).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub anomalies_file: Option<std::path::PathBuf>,
+}
+
+fn is_zero(v: &f32) -> bool {
+    *v == 0.0
 }
 
 impl Default for Climate {
@@ -38,6 +55,8 @@ impl Default for Climate {
             nitrogen_n: 5.0,
             sea_level_m: 0.0,
             wind_from_deg: 270.0,
+            warming_k_per_century: 0.0,
+            anomalies_file: None,
         }
     }
 }

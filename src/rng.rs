@@ -26,6 +26,8 @@ pub mod salt {
     pub const ARCHITECTURE: u64 = 0xA7C4_17EC;
     /// Terrain generation.
     pub const TERRAIN: u64 = 0x7E22_A111;
+    /// Management: planted positions and species, the order of patch cuts.
+    pub const MANAGEMENT: u64 = 0x3A4A_6E77;
 }
 
 /// SplitMix64 finaliser: a bijective 64-bit mix.

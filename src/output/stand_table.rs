@@ -9,8 +9,10 @@ use std::path::Path;
 /// CSV text: `year,stems_ha,seedlings_ha,regeneration_ha,basal_area_m2_ha,mean_height_m,
 /// top_height_m,qmd_cm,stems_7cm_ha,qmd_7cm_cm,ba_share_<sp>…,stem_share_<sp>…,regen_germinated,
 /// regen_recruited,regen_deaths_shade,regen_deaths_crowding,deaths_age,deaths_stress,deaths_wind,
-/// deaths_background` (regeneration-layer stems in the year, then tree deaths in the year by
-/// [`DeathCause`])
+/// deaths_background,deaths_harvest,volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha,
+/// temperature_offset_k,precipitation_factor` (regeneration-layer stems in the year, then tree
+/// deaths in the year by [`DeathCause`], then standing and harvested stem volume (m³/ha),
+/// harvested stems/ha and the year's climate: temperature offset (K) and precipitation factor)
 /// (`species` = pool ids in pool order).
 pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     let mut s = String::from("year,stems_ha,seedlings_ha,regeneration_ha,basal_area_m2_ha,mean_height_m,top_height_m,qmd_cm,stems_7cm_ha,qmd_7cm_cm");
@@ -27,7 +29,7 @@ pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     for c in DeathCause::ALL {
         let _ = write!(s, ",deaths_{}", c.name());
     }
-    s.push('\n');
+    s.push_str(",volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha,temperature_offset_k,precipitation_factor\n");
     for r in rows {
         let _ = write!(s, "{},{:.1},{:.1},{:.1},{:.3},{:.2},{:.2},{:.2},{:.1},{:.2}", r.year, r.stems_ha, r.seedlings_ha, r.regeneration_ha, r.basal_area_m2_ha, r.mean_height_m, r.top_height_m, r.qmd_cm, r.stems_7cm_ha, r.qmd_7cm_cm);
         for v in &r.share_ba {
@@ -43,6 +45,7 @@ pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
         for d in r.deaths {
             let _ = write!(s, ",{d}");
         }
+        let _ = write!(s, ",{:.2},{:.1},{:.2},{:.3},{:.3}", r.volume_m3_ha, r.harvest_stems_ha, r.harvest_volume_m3_ha, r.temperature_offset_k, r.precipitation_factor);
         s.push('\n');
     }
     s

@@ -26,8 +26,9 @@ const MAGIC: &[u8; 7] = b"SYLVACK";
 
 /// Hand-kept part of the layout version: bump it whenever the order, kind or number of the
 /// stored fields changes (the cause counts below are folded in by themselves). 5: file length,
-/// run identity and CRC-32 added (issue 16).
-const LAYOUT_BASE: u32 = 5;
+/// run identity and CRC-32 added (issue 16). 6: the stand table's volume, harvest and climate
+/// columns (issue 35).
+const LAYOUT_BASE: u32 = 6;
 
 /// Version of the checkpoint layout, written in the header and required on reading:
 /// `LAYOUT_BASE · 65536 + N_CAUSES · 256 + N_REGEN_CAUSES`, so that adding a cause of death
@@ -136,7 +137,9 @@ fn crc_f32(h: &mut crc32fast::Hasher, v: &[f32]) {
 /// CRC-32 of the elevations and the valid-cell mask: a changed DEM file or window);
 /// `site conditions` (CRC-32 of the per-cell indices L T K F R N, insolation, temperature,
 /// wind exposure and TWI: changes with the climate and soil constants); `seed rain`
-/// (seeds per m² and year per pool species); `obstacles` (count and CRC-32).
+/// (seeds per m² and year per pool species); `obstacles` (count and CRC-32); where the
+/// scenario has them, `management` (the entries and their resolved areas, CRC-32) and
+/// `climate change` (the ramp and a CRC-32 of the anomalies).
 pub fn identity(w: &World) -> Vec<(String, String)> {
     let s = &w.site;
     let mut out = vec![("seed".to_string(), s.seed.to_string()), ("light_cell_m".to_string(), format!("{}", s.light.cell_m))];
@@ -167,6 +170,15 @@ pub fn identity(w: &World) -> Vec<(String, String)> {
     out.push(("site conditions".into(), format!("CRC-32 {:08x} of the per-cell indices, insolation, temperature, wind exposure and TWI", h.finalize())));
     out.push(("seed rain".into(), format!("{:?} seeds/m²/yr", s.seed_rain)));
     out.push(("obstacles".into(), format!("{} obstacles, CRC-32 {:08x}", s.obstacles.len(), crc32fast::hash(format!("{:?}", s.obstacles).as_bytes()))));
+    // management and a changing climate, only where the scenario has them (so that the identity
+    // of other runs keeps its fields)
+    if !s.management.is_empty() {
+        out.push(("management".into(), format!("{} entries, CRC-32 {:08x} of the entries and their resolved areas", s.management.len(), crc32fast::hash(format!("{:?}", s.management).as_bytes()))));
+    }
+    if s.climate_change.is_active() {
+        let c = &s.climate_change;
+        out.push(("climate change".into(), format!("{} K per century, {} anomaly years, CRC-32 {:08x}", c.warming_k_per_century, c.anomalies.len(), crc32fast::hash(format!("{:?}", c.anomalies).as_bytes()))));
+    }
     out
 }
 
@@ -236,7 +248,7 @@ fn check_identity(stored: &[(String, String)], w: &World, path: &Path) -> Result
     Err(Error::format(
         path,
         format!(
-            "--resume refused: the scenario differs from the run that wrote this checkpoint: {} (a resumed run keeps its seed, species, terrain, site conditions, light cell, seed rain and obstacles; only `years` and the output cadence may change; or start the run again without --resume)",
+            "--resume refused: the scenario differs from the run that wrote this checkpoint: {} (a resumed run keeps its seed, species, terrain, site conditions, light cell, seed rain, obstacles, management and climate change; only `years` and the output cadence may change; or start the run again without --resume)",
             changes.join("; ")
         ),
     ))
@@ -457,6 +469,9 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
         for d in r.regen_deaths {
             o.u64(d);
         }
+        for v in [r.volume_m3_ha, r.harvest_stems_ha, r.harvest_volume_m3_ha, r.temperature_offset_k, r.precipitation_factor] {
+            o.f64(v);
+        }
     }
 }
 
@@ -578,6 +593,10 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
         for x in regen_deaths.iter_mut() {
             *x = r.u64()?;
         }
+        let mut m = [0f64; 5];
+        for x in m.iter_mut() {
+            *x = r.f64()?;
+        }
         rows.push(StandRow {
             year,
             stems_ha: v[0],
@@ -595,6 +614,11 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             regen_germinated,
             regen_recruited,
             regen_deaths,
+            volume_m3_ha: m[0],
+            harvest_stems_ha: m[1],
+            harvest_volume_m3_ha: m[2],
+            temperature_offset_k: m[3],
+            precipitation_factor: m[4],
         });
     }
     if r.p != bytes.len() {

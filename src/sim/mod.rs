@@ -9,10 +9,12 @@
 
 pub mod bucket;
 pub mod checkpoint;
+pub mod climate_change;
 pub mod cohorts;
 pub mod density;
 pub mod fixtures;
 pub mod light_grid;
+pub mod management;
 pub mod obstacle;
 pub mod phases;
 pub mod pure_stand;

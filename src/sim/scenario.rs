@@ -46,6 +46,10 @@ pub struct Scenario {
     /// [`super::obstacle`]).
     #[serde(default, rename = "obstacle", skip_serializing_if = "Vec::is_empty")]
     pub obstacles: Vec<super::obstacle::ObstacleSpec>,
+    /// Management (`[[management]]` entries: thinnings, harvests, plantings; see
+    /// [`super::management`]); none by default.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub management: Vec<super::management::Management>,
     /// Where the scenario was read from (the file path given to [`Scenario::load`] or the
     /// `name` given to [`Scenario::from_toml_str`]); not part of the TOML, used in messages.
     #[serde(skip)]
@@ -95,9 +99,7 @@ pub struct TerrainSection {
     pub height_range_m: Option<[f64; 2]>,
 }
 
-/// Most trees all `planted` starts of a scenario may plant together (each is an individual;
-/// 5 M is about 2,000 ha at 2 m spacing).
-pub const MAX_PLANTED_TREES: u64 = 5_000_000;
+pub use super::management::MAX_PLANTED_TREES;
 
 /// A generated (fractal noise) terrain.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -215,6 +217,10 @@ pub fn validate_climate(c: &Climate, ctx: &str) -> Result<()> {
             return Err(invalid(ctx, &format!("climate.{field}"), shown, &format!("a finite number {lo}–{hi} {unit}")));
         }
     }
+    let w = c.warming_k_per_century;
+    if !(w.is_finite() && (-20.0..=20.0).contains(&w)) {
+        return Err(invalid(ctx, "climate.warming_k_per_century", w, "a finite number −20–20 K per century"));
+    }
     Ok(())
 }
 
@@ -262,8 +268,9 @@ impl Scenario {
         Ok(s)
     }
 
-    /// Reads, parses and validates a scenario file. A relative `terrain.path` is resolved
-    /// against the scenario's folder.
+    /// Reads, parses and validates a scenario file. A relative `terrain.path`,
+    /// `climate.anomalies_file` or `management[i].area_file` is resolved against the scenario's
+    /// folder (the files themselves are read by [`crate::sim::World::new`]).
     pub fn load(path: &Path) -> Result<Scenario> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let mut s = Scenario::from_toml_str(&text, &path.display().to_string())?;
@@ -274,6 +281,22 @@ impl Scenario {
                 let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
                 let joined = dir.join(p);
                 s.terrain.path = Some(std::path::absolute(&joined).unwrap_or(joined));
+            }
+        }
+        // so are the climate anomalies and management area files
+        let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let abs = |p: &mut PathBuf| {
+            if p.is_relative() {
+                let joined = dir.join(&*p);
+                *p = std::path::absolute(&joined).unwrap_or(joined);
+            }
+        };
+        if let Some(p) = s.climate.anomalies_file.as_mut() {
+            abs(p);
+        }
+        for m in s.management.iter_mut() {
+            if let Some(p) = m.area_file.as_mut() {
+                abs(p);
             }
         }
         Ok(s)
@@ -360,6 +383,14 @@ impl Scenario {
         }
         for (i, o) in self.obstacles.iter().enumerate() {
             o.validate(i, ctx)?;
+        }
+        for (i, m) in self.management.iter().enumerate() {
+            m.validate(i, ctx)?;
+            for sp in m.mix.iter().flat_map(|x| x.keys()) {
+                if !self.species.is_empty() && !self.species.contains(sp) {
+                    return Err(invalid(ctx, &format!("management[{i}].mix.{sp}"), sp, &format!("one of the scenario's species = {:?} (add it there)", self.species)));
+                }
+            }
         }
         for (i, s) in self.start.iter().enumerate() {
             let f = |x: &str| format!("start[{i}].{x}");

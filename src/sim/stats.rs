@@ -48,6 +48,48 @@ pub struct StandRow {
     pub regen_recruited: u64,
     /// Regeneration layer in the year: stems dead by cause ([`super::regen::RegenDeath::ALL`] order).
     pub regen_deaths: [u64; super::cohorts::N_REGEN_CAUSES],
+    /// Standing stem volume (m³/ha) of the trees with DBH ≥ 7 cm ([`stem_volume_m3`]).
+    pub volume_m3_ha: f64,
+    /// Stems (≥ 1.3 m) per ha removed by the year's thinnings and harvests.
+    pub harvest_stems_ha: f64,
+    /// Stem volume (m³/ha, trees with DBH ≥ 7 cm, [`stem_volume_m3`]) removed by the year's
+    /// thinnings and harvests.
+    pub harvest_volume_m3_ha: f64,
+    /// The year's temperature offset (K) against the scenario's base climate
+    /// (`sim::climate_change`; 0 under a constant climate).
+    pub temperature_offset_k: f64,
+    /// The year's precipitation factor (1 under a constant climate).
+    pub precipitation_factor: f64,
+}
+
+/// DBH (cm) from which a stem has merchantable volume (German "Derbholz": wood of at least 7 cm
+/// diameter; the yield tables' volumes count it).
+pub const VOLUME_MIN_DBH_CM: f32 = 7.0;
+
+/// Stem volume (m³) of a tree of DBH `dbh_cm` (cm) and height `height_m` (m) with the form
+/// factor `form_factor` of its species (`life.form_factor`): `V = f · g · h`, `g` the basal area
+/// at 1.3 m (m²); 0 below [`VOLUME_MIN_DBH_CM`] (Kramer & Akça 2008, Leitfaden zur
+/// Waldmesslehre, form factors of the merchantable stem; the species' factors in their files).
+#[inline]
+pub fn stem_volume_m3(form_factor: f32, dbh_cm: f32, height_m: f32) -> f64 {
+    if dbh_cm < VOLUME_MIN_DBH_CM {
+        return 0.0;
+    }
+    let d = dbh_cm as f64 / 100.0;
+    form_factor as f64 * std::f64::consts::FRAC_PI_4 * d * d * height_m as f64
+}
+
+/// The year's harvest: stems (≥ 1.3 m) and stem volume (m³) of the trees that died of
+/// [`DeathCause::Harvest`] in `dead`, summed in their order.
+pub fn harvest_sums(site: &Site, dead: &[super::trees::DeadTree]) -> (u64, f64) {
+    let (mut n, mut v) = (0u64, 0f64);
+    for d in dead.iter().filter(|d| d.cause == DeathCause::Harvest) {
+        if d.height >= 1.3 {
+            n += 1;
+        }
+        v += stem_volume_m3(site.lib.species[d.species as usize].life.form_factor, d.dbh, d.height);
+    }
+    (n, v)
 }
 
 /// Order-preserving key of an f32 under [`f32::total_cmp`] (as an unsigned integer).
@@ -65,7 +107,7 @@ fn total_key(v: f32) -> u32 {
 /// (ties by height), summed in descending (DBH, height) order; all of them where fewer stand.
 /// The candidates are found by a histogram of the DBHs' leading 16 bits (in parallel; counts
 /// do not depend on the order), so only about the `k` thickest trees are sorted.
-fn top_height(dbh: &[f32], height: &[f32], a: f64) -> f64 {
+pub(crate) fn top_height(dbh: &[f32], height: &[f32], a: f64) -> f64 {
     const CH: usize = 1 << 16;
     let n = dbh.len();
     let eligible = |i: usize| !(height[i] < 1.3);
@@ -120,21 +162,24 @@ pub fn stand_row(w: &World) -> StandRow {
     for d in &w.scratch.dead {
         deaths[d.cause.index()] += 1;
     }
-    row_of(&w.site, w.stand.year, &w.stand.trees, w.stand.cohorts.total_stems(), deaths, w.scratch.regen_year)
+    row_of(&w.site, w.stand.year, &w.stand.trees, w.stand.cohorts.total_stems(), deaths, w.scratch.regen_year, harvest_sums(&w.site, &w.scratch.dead))
 }
 
 /// The stand-table row of `site` in `year` from the trees `t` (only their ids, species, heights
 /// and DBHs are read, in store order), the regeneration layer's stems, this year's deaths by
-/// cause and regeneration counts ([`stand_row`] on a world; a tiled run's rank 0 gathers these,
-/// `sim::tiles`).
-pub fn row_of(site: &Site, year: u32, t: &TreeStore, regeneration_stems: u64, deaths: [u64; super::trees::N_CAUSES], regen_year: RegenYear) -> StandRow {
+/// cause and regeneration counts, and the year's harvest (stems ≥ 1.3 m, volume m³:
+/// [`harvest_sums`]) ([`stand_row`] on a world; a tiled run's rank 0 gathers these,
+/// `sim::tiles`). The year's temperature offset and precipitation factor come from the site's
+/// climate change.
+pub fn row_of(site: &Site, year: u32, t: &TreeStore, regeneration_stems: u64, deaths: [u64; super::trees::N_CAUSES], regen_year: RegenYear, harvest: (u64, f64)) -> StandRow {
     let w = site;
     let a = w.area_ha.max(1e-9);
     let np = w.pool.len();
     let pidx: Vec<usize> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s).unwrap_or(0)).collect();
+    let ff: Vec<f32> = w.lib.species.iter().map(|s| s.life.form_factor).collect();
     let sums = || {
         let (mut n, mut ns, mut ba, mut hs, mut d2) = (0usize, 0usize, 0f64, 0f64, 0f64);
-        let (mut n7, mut d27) = (0usize, 0f64);
+        let (mut n7, mut d27, mut vol) = (0usize, 0f64, 0f64);
         let mut sba = vec![0f64; np];
         let mut sn = vec![0f64; np];
         for i in 0..t.len() {
@@ -150,15 +195,16 @@ pub fn row_of(site: &Site, year: u32, t: &TreeStore, regeneration_stems: u64, de
             if t.dbh[i] >= 7.0 {
                 n7 += 1;
                 d27 += (t.dbh[i] as f64).powi(2);
+                vol += stem_volume_m3(ff[t.species[i] as usize], t.dbh[i], t.height[i]);
             }
             let p = pidx[t.species[i] as usize];
             sba[p] += b;
             sn[p] += 1.0;
         }
-        (n, ns, ba, hs, d2, n7, d27, sba, sn)
+        (n, ns, ba, hs, d2, n7, d27, sba, sn, vol)
     };
-    let ((n, ns, ba, hs, d2, n7, d27, sba, sn), h100) = rayon::join(sums, || top_height(&t.dbh, &t.height, a));
-    let _ = DeathCause::ALL;
+    let ((n, ns, ba, hs, d2, n7, d27, sba, sn, vol), h100) = rayon::join(sums, || top_height(&t.dbh, &t.height, a));
+    let (dt, pf) = w.climate_change.of_year(year);
     StandRow {
         year,
         stems_ha: n as f64 / a,
@@ -176,5 +222,10 @@ pub fn row_of(site: &Site, year: u32, t: &TreeStore, regeneration_stems: u64, de
         regen_germinated: regen_year.germinated,
         regen_recruited: regen_year.recruited,
         regen_deaths: regen_year.dead,
+        volume_m3_ha: vol / a,
+        harvest_stems_ha: harvest.0 as f64 / a,
+        harvest_volume_m3_ha: harvest.1 / a,
+        temperature_offset_k: dt,
+        precipitation_factor: pf,
     }
 }

@@ -3,7 +3,7 @@
 //! closes, and the function that hands it the parts of the [`World`] it reads and writes.
 
 use super::density;
-use super::phases::{growth, light, mortality, regen, reproduction};
+use super::phases::{climate, growth, light, management, mortality, regen, reproduction};
 use super::scenario::Scenario;
 use super::stats::{stand_row, StandRow};
 use super::world::World;
@@ -54,17 +54,38 @@ pub enum Halo {
 }
 
 /// Number of phases.
-pub const N_PHASES: usize = 6;
+pub const N_PHASES: usize = 8;
 
 /// The year, in order. ARCHITECTURE.md quotes this list (checked by `tests/layers.rs`).
 pub const PHASES: [Phase; N_PHASES] = [
+    Phase { name: "climate", summary: "the year's temperature offset and precipitation factor move T and F; suitability of every cell and tree (nothing under a constant climate)", ends: None, run: run_climate, halo: Halo::None },
     Phase { name: "light", summary: "canopy grid from the trees at the start of the year; light of every tree and of the ground", ends: None, run: run_light, halo: Halo::Crowns },
     Phase { name: "regeneration", summary: "spring: germination, growth, thinning and recruitment of the sapling cohorts", ends: Some(Season::Spring), run: run_regeneration, halo: Halo::None },
     Phase { name: "growth", summary: "summer: crowding of every tree's neighbourhood; height, DBH and crown increments", ends: Some(Season::Summer), run: run_growth, halo: Halo::Crowding },
     Phase { name: "reproduction", summary: "autumn: seed production and dispersal onto the seed grids", ends: Some(Season::Autumn), run: run_reproduction, halo: Halo::SeedSources },
     Phase { name: "mortality", summary: "winter: senescence, background, stress and wind deaths", ends: None, run: run_mortality, halo: Halo::None },
+    Phase { name: "management", summary: "the year's end: thinnings, harvests (cause `harvest`) and plantings of the scenario's `[[management]]` entries due", ends: None, run: run_management, halo: Halo::None },
     Phase { name: "stats", summary: "the year ends: stand-table row of the year", ends: Some(Season::Winter), run: run_stats, halo: Halo::None },
 ];
+
+fn run_climate(w: &mut World, _: &mut YearReport) {
+    climate::run(climate::ClimatePhase {
+        year: w.stand.year,
+        change: &w.site.climate_change,
+        site: &w.site.conditions,
+        lib: &w.site.lib,
+        pool: &w.site.pool,
+        suitability: &mut w.site.suitability,
+        trees: &mut w.stand.trees,
+    });
+}
+
+fn run_management(w: &mut World, _: &mut YearReport) {
+    if w.site.management.is_empty() {
+        return;
+    }
+    management::run(management::Manage { seed: w.site.seed, year: w.stand.year, site: &w.site, trees: &mut w.stand.trees, dead: &mut w.scratch.dead, deaths_total: &mut w.tallies.deaths_total });
+}
 
 fn run_light(w: &mut World, _: &mut YearReport) {
     light::run(light::Light {

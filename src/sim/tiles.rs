@@ -17,6 +17,9 @@
 //!    of the seed cells within reach: the *mature* trees (the only seed sources) within
 //!    `(⌈max_m / cell⌉ + 2)` seed cells, after this summer's growth;
 //! 5. **mortality** draws each tree from its own stream: no exchange;
+//!    (**climate**, first in the year, sets each cell's and each own tree's suitability from
+//!    the whole site every tile holds: no exchange; **management** is refused over more than
+//!    one tile, [`Layout::with_halo`];)
 //! 6. **stats**: the stand table row needs every tree (sums in id order, the top height): the
 //!    ranks send their trees' id, species, height and DBH to rank 0 ([`Tile::step`]).
 //!
@@ -256,9 +259,19 @@ impl Layout {
 
     /// As [`Layout::new`] with a given halo width `halo_m` (m).
     ///
-    /// Errors: [`Error::Invalid`] for the tile counts (as [`Layout::new`]) and for a halo
-    /// narrower than [`min_halo_m`] (a tiled run would differ from one process).
+    /// Errors: [`Error::Invalid`] for the tile counts (as [`Layout::new`]), for a halo
+    /// narrower than [`min_halo_m`] (a tiled run would differ from one process), and for a site
+    /// with management entries over more than one tile (not supported: a thinning's figures are
+    /// over its whole area).
     pub fn with_halo(site: &Site, nx: usize, ny: usize, halo_m: f64) -> Result<Layout> {
+        if !site.management.is_empty() && nx * ny > 1 {
+            return Err(Error::Invalid {
+                context: "tiled run".into(),
+                field: "management".into(),
+                value: format!("{} [[management]] entries over {} tiles", site.management.len(), nx * ny),
+                expected: "a run in one process (no --tiles, no mpirun): a thinning's target and triggers are figures over its whole area, which the tiles do not yet gather; management in tiled and MPI runs is not supported".into(),
+            });
+        }
         let min = min_halo_m(site);
         if !(halo_m >= min) {
             return Err(Error::Invalid {
@@ -427,43 +440,6 @@ impl<'a> Dec<'a> {
     }
 }
 
-/// The trees of `parts` in one store sorted by id (each part sorted by id, ids unique), and the
-/// part each row came from. Lean parts (id, species, height and DBH only) give a lean store.
-/// `next_id` is `next_id`.
-fn merge_by_id(parts: &[TreeStore], next_id: u64) -> (TreeStore, Vec<usize>) {
-    // k-way merge of the sorted parts (a heap of their next ids): O(n log k)
-    let mut all: Vec<(u64, usize, usize)> = Vec::with_capacity(parts.iter().map(|p| p.len()).sum());
-    let mut heap: std::collections::BinaryHeap<std::cmp::Reverse<(u64, usize, usize)>> = parts.iter().enumerate().filter(|(_, p)| !p.is_empty()).map(|(k, p)| std::cmp::Reverse((p.id[0], k, 0))).collect();
-    while let Some(std::cmp::Reverse((id, k, i))) = heap.pop() {
-        all.push((id, k, i));
-        if let Some(&next) = parts[k].id.get(i + 1) {
-            heap.push(std::cmp::Reverse((next, k, i + 1)));
-        }
-    }
-    let full = parts.iter().all(|p| p.x.len() == p.len());
-    let mut t = TreeStore { next_id, ..Default::default() };
-    t.id = all.iter().map(|e| e.0).collect();
-    t.species = all.iter().map(|e| parts[e.1].species[e.2]).collect();
-    t.height = all.iter().map(|e| parts[e.1].height[e.2]).collect();
-    t.dbh = all.iter().map(|e| parts[e.1].dbh[e.2]).collect();
-    if full {
-        let col = |f: fn(&TreeStore) -> &Vec<f32>| all.iter().map(|e| f(&parts[e.1])[e.2]).collect::<Vec<f32>>();
-        t.x = col(|p| &p.x);
-        t.y = col(|p| &p.y);
-        t.z = col(|p| &p.z);
-        t.age = col(|p| &p.age);
-        t.crown_radius = col(|p| &p.crown_radius);
-        t.crown_base = col(|p| &p.crown_base);
-        t.light = col(|p| &p.light);
-        t.vigour = col(|p| &p.vigour);
-        t.suitability = col(|p| &p.suitability);
-        // cached growth factors where a part has them (the tile's own rows), NaN (drawn again
-        // when needed, the same bits) for halo copies, which arrive without
-        t.growth_factor.0 = all.iter().map(|e| if parts[e.1].growth_factor.0.len() == parts[e.1].len() { parts[e.1].growth_factor.0[e.2] } else { f32::NAN }).collect();
-    }
-    (t, all.iter().map(|e| e.1).collect())
-}
-
 /// One tile of a tiled run: a [`World`] whose stand holds only the tile's trees and cohorts,
 /// and the layout it belongs to.
 pub struct Tile {
@@ -586,7 +562,7 @@ impl Tile {
         let own = std::mem::take(&mut self.world.stand.trees);
         let next = own.next_id;
         parts.push(own);
-        let (merged, from) = merge_by_id(&parts, next);
+        let (merged, from) = TreeStore::merge_by_id(&parts, next);
         self.world.stand.trees = merged;
         self.own = from.iter().map(|&k| k == parts.len() - 1).collect();
         Ok(())
@@ -657,13 +633,13 @@ impl Tile {
                     *v += d.u64()?;
                 }
             }
-            let (trees, _) = merge_by_id(&parts, 0);
+            let (trees, _) = TreeStore::merge_by_id(&parts, 0);
             report.trees = trees.len();
             report.established = est;
             report.died = died;
-            report.row = Some(super::stats::row_of(&self.world.site, self.world.stand.year, &trees, stems, deaths, ry));
+            report.row = Some(super::stats::row_of(&self.world.site, self.world.stand.year, &trees, stems, deaths, ry, (0, 0.0)));
         }
-        report.phase_seconds[5] = t0.elapsed().as_secs_f64();
+        report.phase_seconds[stats] = t0.elapsed().as_secs_f64();
         Ok(report)
     }
 
@@ -840,7 +816,7 @@ fn merge_parts(g: &mut World, base: &Tallies, layout: &Layout, parts: Vec<Part>)
         g.stand.year = w.year;
     }
     let next = g.stand.trees.next_id;
-    g.stand.trees = merge_by_id(&trees, next).0;
+    g.stand.trees = TreeStore::merge_by_id(&trees, next).0;
     cohorts.sort_unstable_by_key(|e| (e.0, e.1));
     let mut c = Cohorts::default();
     for (_, _, k, i) in cohorts {

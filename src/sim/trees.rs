@@ -44,6 +44,9 @@ pub enum DeathCause {
     /// Bugmann 2001) hit a tree younger than [`SENESCENT_AGE_SHARE`] of its maximum age —
     /// accidents, pathogens, lightning and other causes the model does not resolve.
     Background,
+    /// Removed by a thinning or a harvest of the scenario's management
+    /// (`sim::phases::management`).
+    Harvest,
 }
 
 /// Share of the species' maximum age from which an intrinsic mortality draw counts as
@@ -52,11 +55,11 @@ pub enum DeathCause {
 pub const SENESCENT_AGE_SHARE: f32 = 0.8;
 
 /// Number of death causes ([`DeathCause::ALL`]).
-pub const N_CAUSES: usize = 4;
+pub const N_CAUSES: usize = 5;
 
 impl DeathCause {
     /// All causes in output order.
-    pub const ALL: [DeathCause; N_CAUSES] = [DeathCause::Age, DeathCause::Stress, DeathCause::Wind, DeathCause::Background];
+    pub const ALL: [DeathCause; N_CAUSES] = [DeathCause::Age, DeathCause::Stress, DeathCause::Wind, DeathCause::Background, DeathCause::Harvest];
     /// Lower-case name used in outputs (`dead:<name>`).
     pub fn name(self) -> &'static str {
         match self {
@@ -64,6 +67,7 @@ impl DeathCause {
             DeathCause::Stress => "stress",
             DeathCause::Wind => "wind",
             DeathCause::Background => "background",
+            DeathCause::Harvest => "harvest",
         }
     }
     /// Index in [`DeathCause::ALL`].
@@ -249,6 +253,43 @@ impl TreeStore {
                 sc.spawn(move |_| r(v, keep));
             }
         });
+    }
+    /// The trees of `parts` in one store sorted by id (each part sorted by id, ids unique), and the
+    /// part each row came from. Lean parts (id, species, height and DBH only) give a lean store.
+    /// `next_id` is `next_id`. (Tiled runs merge halos and gather stand tables with it; the
+    /// management phase merges planted trees.)
+    pub fn merge_by_id(parts: &[TreeStore], next_id: u64) -> (TreeStore, Vec<usize>) {
+        // k-way merge of the sorted parts (a heap of their next ids): O(n log k)
+        let mut all: Vec<(u64, usize, usize)> = Vec::with_capacity(parts.iter().map(|p| p.len()).sum());
+        let mut heap: std::collections::BinaryHeap<std::cmp::Reverse<(u64, usize, usize)>> = parts.iter().enumerate().filter(|(_, p)| !p.is_empty()).map(|(k, p)| std::cmp::Reverse((p.id[0], k, 0))).collect();
+        while let Some(std::cmp::Reverse((id, k, i))) = heap.pop() {
+            all.push((id, k, i));
+            if let Some(&next) = parts[k].id.get(i + 1) {
+                heap.push(std::cmp::Reverse((next, k, i + 1)));
+            }
+        }
+        let full = parts.iter().all(|p| p.x.len() == p.len());
+        let mut t = TreeStore { next_id, ..Default::default() };
+        t.id = all.iter().map(|e| e.0).collect();
+        t.species = all.iter().map(|e| parts[e.1].species[e.2]).collect();
+        t.height = all.iter().map(|e| parts[e.1].height[e.2]).collect();
+        t.dbh = all.iter().map(|e| parts[e.1].dbh[e.2]).collect();
+        if full {
+            let col = |f: fn(&TreeStore) -> &Vec<f32>| all.iter().map(|e| f(&parts[e.1])[e.2]).collect::<Vec<f32>>();
+            t.x = col(|p| &p.x);
+            t.y = col(|p| &p.y);
+            t.z = col(|p| &p.z);
+            t.age = col(|p| &p.age);
+            t.crown_radius = col(|p| &p.crown_radius);
+            t.crown_base = col(|p| &p.crown_base);
+            t.light = col(|p| &p.light);
+            t.vigour = col(|p| &p.vigour);
+            t.suitability = col(|p| &p.suitability);
+            // cached growth factors where a part has them (the tile's own rows), NaN (drawn again
+            // when needed, the same bits) for halo copies, which arrive without
+            t.growth_factor.0 = all.iter().map(|e| if parts[e.1].growth_factor.0.len() == parts[e.1].len() { parts[e.1].growth_factor.0[e.2] } else { f32::NAN }).collect();
+        }
+        (t, all.iter().map(|e| e.1).collect())
     }
     /// Basal area of tree `i` (m²).
     #[inline]

@@ -76,7 +76,9 @@ pub struct Site {
     pub light_site: Vec<u32>,
     /// Relative insolation (cell insolation / median of unmasked cells, clamped 0.2–1.5) per site cell.
     pub rel_insolation: Vec<f32>,
-    /// Suitability (0–1) per pool species (outer, pool order) per site cell.
+    /// Suitability (0–1) per pool species (outer, pool order) per site cell: of the base climate,
+    /// or, under a changing climate, of the current year's (set by the climate phase,
+    /// `sim::phases::climate`; the only field of the site written after [`World::new`]).
     pub suitability: Vec<Vec<f32>>,
     /// External seed rain per pool species (seeds per m² and year).
     pub seed_rain: Vec<f32>,
@@ -89,6 +91,11 @@ pub struct Site {
     /// The light cells whose regeneration this world steps: a tile's (`sim::tiles`); `None`
     /// (one process): all.
     pub window: Option<super::light_grid::CellRect>,
+    /// The scenario's `[[management]]` entries resolved against the site
+    /// ([`super::management::resolve`]); empty when none.
+    pub management: Vec<super::management::Operation>,
+    /// The climate's change over the run (`[climate] warming_k_per_century`, `anomalies_file`).
+    pub climate_change: super::climate_change::ClimateChange,
 }
 
 /// The stand's state: everything that evolves from year to year and that a checkpoint keeps.
@@ -128,6 +135,65 @@ pub struct Tallies {
 }
 
 impl Site {
+    /// A new tree of species `s` at world point `(x, y)` of age `age` (yr): its potential height
+    /// at that age, the start DBH and open-grown crown of that height, its cell's suitability;
+    /// `None` on a masked cell, under a solid obstacle or for a species outside the pool.
+    pub fn new_tree(&self, s: SpeciesId, x: f64, y: f64, age: f32) -> Option<NewTree> {
+        let cell = self.site_cell(x, y)?;
+        if self.obstacles.iter().any(|o| o.solid_at_ground(x, y)) {
+            return None;
+        }
+        let p = self.pool_index(s)?;
+        let sp = self.species(s);
+        let h = allometry::potential_height(sp, age).max(0.3);
+        let d = super::rules::start_dbh(sp, h);
+        Some(NewTree { species: s, x: x as f32, y: y as f32, z: self.conditions.elevation_at(x, y), age: age.max(1.0), height: h, dbh: d, crown_radius: allometry::open_crown_radius(sp, h, d), suitability: self.suitability[p][cell] })
+    }
+
+    /// A planted square lattice: the points `x0 + (i + 0.5 + u) · spacing_m`, `y0 + (j + 0.5 + v)
+    /// · spacing_m` of `bbox = [x0, y0, x1, y1]` (m, clipped to the site; `u`, `v` uniform in
+    /// ±0.15, an age jitter of ±0.5 yr on `age_yr`), rows `j` then columns `i`, each drawn from
+    /// the stream `stream(i, j)` (three draws: x, y, age; then `species` draws the species), kept
+    /// where `inside(x, y)` and a tree may stand ([`Site::new_tree`]). The start's planted stands
+    /// and management plantings (`sim::phases::management`) both use it.
+    pub fn lattice(&self, bbox: [f64; 4], spacing_m: f64, age_yr: f32, stream: impl Fn(u64, u64) -> Stream, inside: impl Fn(f64, f64) -> bool, species: impl Fn(&mut Stream) -> SpeciesId) -> Vec<NewTree> {
+        let [x0, y0, x1, y1] = bbox;
+        let (x0, y0, x1, y1) = (x0.max(0.0), y0.max(0.0), x1.min(self.extent.0), y1.min(self.extent.1));
+        let nx = ((x1 - x0) / spacing_m).floor().max(0.0) as u64;
+        let ny = ((y1 - y0) / spacing_m).floor().max(0.0) as u64;
+        let mut out = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                let mut r = stream(i, j);
+                let x = x0 + (i as f64 + 0.5 + r.range(-0.15, 0.15)) * spacing_m;
+                let y = y0 + (j as f64 + 0.5 + r.range(-0.15, 0.15)) * spacing_m;
+                let a = (age_yr + r.range(-0.5, 0.5) as f32).max(1.0);
+                if !inside(x, y) {
+                    continue;
+                }
+                let s = species(&mut r);
+                if let Some(t) = self.new_tree(s, x, y, a) {
+                    out.push(t);
+                }
+            }
+        }
+        out
+    }
+
+    /// The trees management entry `op` plants in simulation year `y` (0: at the start): the
+    /// lattice of the start's planted stands ([`Site::lattice`]) over the entry's bounding box,
+    /// the points inside its region, each tree's species drawn from its mix (streams keyed by the
+    /// seed, the entry and the year). None for an entry that is not a planting.
+    pub fn plant(&self, op: &super::management::Operation, y: u32) -> Vec<NewTree> {
+        let super::management::Action::Planting { mix, spacing_m, age_yr } = &op.action else { return Vec::new() };
+        let key = (op.index as u64) << 48;
+        let pick = |r: &mut Stream| {
+            let u = r.uniform();
+            mix.iter().find(|(_, c)| u < *c).or(mix.last()).map(|m| m.0).unwrap_or(0)
+        };
+        self.lattice(op.region.bbox, *spacing_m, *age_yr, |i, j| Stream::new(self.seed, key | j << 24 | i, y as u64, salt::MANAGEMENT), |x, y| op.region.contains(x, y), pick)
+    }
+
     /// Position of species `s` in the pool.
     pub fn pool_index(&self, s: SpeciesId) -> Option<usize> {
         self.pool.iter().position(|&q| q == s)
@@ -151,7 +217,10 @@ impl World {
     /// (planted stands, seed-source trees) at year 0.
     ///
     /// Errors: unknown species names, seed-source points or planted areas outside the site
-    /// ([`Scenario::validate_extent`]) ([`crate::Error::Invalid`]).
+    /// ([`Scenario::validate_extent`]), management entries that do not resolve
+    /// ([`super::management::resolve`]: species, areas, area files), an unreadable or malformed
+    /// climate anomalies file ([`super::climate_change::ClimateChange::of`])
+    /// ([`crate::Error::Invalid`]).
     pub fn new(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
         let ctx = scenario.context();
         let pool = scenario.resolve_species(lib, &ctx)?;
@@ -194,12 +263,40 @@ impl World {
         let (obstacle_canopy, ground_free) = super::obstacle::light_cells(&scenario.obstacles, light.cols, light.rows, light.cell_m, super::light_grid::EXTINCTION_K);
         let np = pool.len();
         let mut w = World {
-            site: Site { conditions: site, lib: lib.clone(), pool, seed: scenario.seed, extent, area_ha, light, light_site, rel_insolation, suitability, seed_rain, obstacles: scenario.obstacles.clone(), obstacle_canopy, ground_free, window: None },
+            site: Site {
+                conditions: site,
+                lib: lib.clone(),
+                pool,
+                seed: scenario.seed,
+                extent,
+                area_ha,
+                light,
+                light_site,
+                rel_insolation,
+                suitability,
+                seed_rain,
+                obstacles: scenario.obstacles.clone(),
+                obstacle_canopy,
+                ground_free,
+                window: None,
+                management: Vec::new(),
+                climate_change: super::climate_change::ClimateChange::of(&scenario.climate, &ctx)?,
+            },
             stand: Stand { trees: TreeStore::default(), year: 0, cohorts: Cohorts::default(), seeds },
             scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], dead: Vec::new(), regen_year: RegenYear::default() },
             tallies: Tallies { deaths_total: [0; super::trees::N_CAUSES], regen_ledger: RegenLedger::new(np) },
         };
+        let view = super::management::SiteView { conditions: &w.site.conditions, extent: w.site.extent, light: &w.site.light, light_site: &w.site.light_site, pool: &w.site.pool };
+        w.site.management = super::management::resolve(&scenario.management, &view, lib, &ctx)?;
         w.place_start(scenario);
+        // plantings of year 0 stand with the start
+        for op in &w.site.management {
+            if op.spec.due(0).is_some() {
+                for t in w.site.plant(op, 0) {
+                    w.stand.trees.push(t);
+                }
+            }
+        }
         Ok(w)
     }
 
@@ -220,15 +317,7 @@ impl World {
     }
 
     fn new_tree(&self, s: SpeciesId, x: f64, y: f64, age: f32) -> Option<NewTree> {
-        let cell = self.site_cell(x, y)?;
-        if self.site.obstacles.iter().any(|o| o.solid_at_ground(x, y)) {
-            return None;
-        }
-        let p = self.pool_index(s)?;
-        let sp = self.species(s);
-        let h = allometry::potential_height(sp, age).max(0.3);
-        let d = super::rules::start_dbh(sp, h);
-        Some(NewTree { species: s, x: x as f32, y: y as f32, z: self.site.conditions.elevation_at(x, y), age: age.max(1.0), height: h, dbh: d, crown_radius: allometry::open_crown_radius(sp, h, d), suitability: self.site.suitability[p][cell] })
+        self.site.new_tree(s, x, y, age)
     }
 
     fn place_start(&mut self, scenario: &Scenario) {
@@ -236,20 +325,11 @@ impl World {
             let Some(s) = self.site.lib.find(st.species()) else { continue };
             match st {
                 Start::Planted { spacing_m, age_yr, area, .. } => {
-                    let [x0, y0, x1, y1] = area.unwrap_or([0.0, 0.0, self.site.extent.0, self.site.extent.1]);
-                    let (x0, y0, x1, y1) = (x0.max(0.0), y0.max(0.0), x1.min(self.site.extent.0), y1.min(self.site.extent.1));
-                    let nx = ((x1 - x0) / spacing_m).floor().max(0.0) as u64;
-                    let ny = ((y1 - y0) / spacing_m).floor().max(0.0) as u64;
-                    for j in 0..ny {
-                        for i in 0..nx {
-                            let mut r = Stream::new(self.site.seed, (k as u64) << 48 | j << 24 | i, 0, salt::INIT);
-                            let x = x0 + (i as f64 + 0.5 + r.range(-0.15, 0.15)) * spacing_m;
-                            let y = y0 + (j as f64 + 0.5 + r.range(-0.15, 0.15)) * spacing_m;
-                            let a = (*age_yr + r.range(-0.5, 0.5) as f32).max(1.0);
-                            if let Some(t) = self.new_tree(s, x, y, a) {
-                                self.stand.trees.push(t);
-                            }
-                        }
+                    let bbox = area.unwrap_or([0.0, 0.0, self.site.extent.0, self.site.extent.1]);
+                    let seed = self.site.seed;
+                    let trees = self.site.lattice(bbox, *spacing_m, *age_yr, |i, j| Stream::new(seed, (k as u64) << 48 | j << 24 | i, 0, salt::INIT), |_, _| true, |_| s);
+                    for t in trees {
+                        self.stand.trees.push(t);
                     }
                 }
                 Start::SeedSources { points, trees_per_source, .. } => {

@@ -432,8 +432,8 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
         }
     }
     for spec in schema::FIELDS {
-        if spec.path == "identity.sources" {
-            continue; // optional
+        if spec.path == "identity.sources" || spec.path == "life.form_factor" {
+            continue; // optional (form factor: default 0.5)
         }
         if leaves.iter().any(|(p, _)| p == spec.path) {
             continue;

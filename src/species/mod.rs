@@ -159,6 +159,18 @@ pub struct LifeHistory {
     pub allometry: Allometry,
     /// Maximum stand density (self-thinning line) of pure, fully stocked, unmanaged stands.
     pub density: Density,
+    /// Form factor f (0.3–0.7) of the merchantable stem (wood ≥ 7 cm), `V = f · g · h` with `g`
+    /// the basal area at 1.3 m and `h` the tree's height (Kramer & Akça 2008, Leitfaden zur
+    /// Waldmesslehre): the stem volumes of the stand table (`sim::stats::stem_volume_m3`).
+    /// Default 0.5 (ESTIMATE: the middle of the usual 0.45–0.55); the shipped files give each
+    /// species' source.
+    #[serde(default = "default_form_factor")]
+    pub form_factor: f32,
+}
+
+/// Default [`LifeHistory::form_factor`]: 0.5.
+pub fn default_form_factor() -> f32 {
+    0.5
 }
 
 /// Maximum stand density: the species' self-thinning line `ln N = ln SDI_max + b·ln(Dq / 25 cm)`

@@ -258,6 +258,12 @@ pub const FIELDS: &[FieldSpec] = &[
         "Slope b of ln N on ln Dq along the maximum-density line (Reineke 1933: −1.605; Pretzsch & Biber 2005 per species)",
     ),
     f(
+        "life.form_factor",
+        "",
+        r(0.3, 0.7),
+        "Form factor f of the merchantable stem (≥ 7 cm): stem volume V = f · g · h (g basal area at 1.3 m, h height; Kramer & Akça 2008); optional, default 0.5",
+    ),
+    f(
         "architecture.ecomod.strands",
         "",
         Kind::Int { min: 1, max: 10000 },

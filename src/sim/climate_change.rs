@@ -1,0 +1,156 @@
+//! A changing climate: the yearly temperature offset and precipitation factor of a scenario
+//! (`[climate] warming_k_per_century`, `anomalies_file`) and how they move the living
+//! conditions of every cell.
+//!
+//! How T follows temperature: a cell's mean annual temperature is
+//! `t = reference_temperature_c + lapse_rate_k_per_km · (z − reference_elevation_m) / 1000`
+//! (`terrain::fields`), and its temperature index is
+//! [`crate::conditions::temperature_index`]`(t) = clamp(1 + 8 (t + 2) / 20, 1, 9)`: 0.4 index
+//! units per kelvin ([`T_INDEX_PER_K`]). A warming of ΔT moves every cell's T by `0.4 ΔT`
+//! (clamped to 1–9), which is the T of the cell `ΔT / |lapse rate|` lower down: with the default
+//! −6.5 K/km, +1 K moves a temperature isoline about 154 m upslope (ECOLOGY.md). Species respond
+//! through their niche (the Ellenberg suitability of the shifted indices), which feeds growth
+//! (every tree's suitability) and establishment (every cell's suitability) from that year on.
+//! The terrain fields, the maps and the site's identity are those of the base climate.
+
+use crate::climate::Climate;
+use crate::conditions::factor;
+use crate::error::{Error, Result};
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// Temperature index units per kelvin: the slope `8 / 20` of
+/// [`crate::conditions::temperature_index`].
+pub const T_INDEX_PER_K: f32 = 0.4;
+
+/// Moisture index units per unit of precipitation factor: a year with precipitation factor `p`
+/// moves every cell's F by `5 (p − 1)` (clamped to 1–12), so 20 % less precipitation lowers F by
+/// one unit. Model choice (ESTIMATE): F is derived from the wetness index only
+/// ([`crate::conditions::moisture_index`]), which carries no precipitation; one Ellenberg F unit
+/// for a fifth of the precipitation is an order of magnitude, not a fit.
+pub const F_INDEX_PER_PRECIP: f32 = 5.0;
+
+/// Most a temperature anomaly may be (K, either sign).
+pub const MAX_ANOMALY_K: f64 = 30.0;
+
+/// The climate's change over the run: a linear ramp and yearly anomalies.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ClimateChange {
+    /// Warming (K per century) from year 0.
+    pub warming_k_per_century: f64,
+    /// Anomalies by simulation year: (temperature K, precipitation factor).
+    pub anomalies: BTreeMap<u32, (f64, f64)>,
+}
+
+impl ClimateChange {
+    /// The change of `climate`: its ramp, and its anomalies file read and checked
+    /// ([`parse_anomalies`]). `ctx` names the scenario.
+    ///
+    /// Errors: [`Error::Invalid`] naming `climate.anomalies_file` when the file cannot be read,
+    /// or the file and line of a malformed line.
+    pub fn of(climate: &Climate, ctx: &str) -> Result<ClimateChange> {
+        let mut c = ClimateChange { warming_k_per_century: climate.warming_k_per_century as f64, anomalies: BTreeMap::new() };
+        if let Some(p) = &climate.anomalies_file {
+            let text = std::fs::read_to_string(p).map_err(|e| Error::Invalid {
+                context: ctx.to_string(),
+                field: "climate.anomalies_file".into(),
+                value: p.display().to_string(),
+                expected: format!("a readable CSV file `year,temperature_k[,precipitation_factor]` ({e})"),
+            })?;
+            c.anomalies = parse_anomalies(&text, p)?;
+        }
+        Ok(c)
+    }
+
+    /// Whether the climate changes at all (a ramp or any anomaly).
+    pub fn is_active(&self) -> bool {
+        self.warming_k_per_century != 0.0 || !self.anomalies.is_empty()
+    }
+
+    /// Temperature offset (K) and precipitation factor of simulation year `year` (the stand
+    /// table's year: 1 = the first simulated year): `warming · year / 100` plus the year's
+    /// anomaly, and the anomaly's factor (1 when none).
+    pub fn of_year(&self, year: u32) -> (f64, f64) {
+        let (a, p) = self.anomalies.get(&year).copied().unwrap_or((0.0, 1.0));
+        (self.warming_k_per_century * year as f64 / 100.0 + a, p)
+    }
+}
+
+/// The indices `ix` (`[L, T, K, F, R, N]`) under a temperature offset `dt_k` (K) and a
+/// precipitation factor `precip`: T moved by [`T_INDEX_PER_K`]` · dt_k` (clamped 1–9), F by
+/// [`F_INDEX_PER_PRECIP`]` · (precip − 1)` (clamped 1–12), the others unchanged.
+pub fn shifted_indices(ix: &[f32; 6], dt_k: f64, precip: f64) -> [f32; 6] {
+    let mut v = *ix;
+    v[factor::T] = (v[factor::T] + T_INDEX_PER_K * dt_k as f32).clamp(1.0, 9.0);
+    if precip != 1.0 {
+        v[factor::F] = (v[factor::F] + F_INDEX_PER_PRECIP * (precip as f32 - 1.0)).clamp(1.0, 12.0);
+    }
+    v
+}
+
+/// Parses an anomalies CSV: lines `year,temperature_k[,precipitation_factor]` (year 0–10000,
+/// each once; temperature −30–30 K; factor 0.05–5, default 1); blank lines and `#` comments
+/// skipped; a first line starting with a letter is a header.
+///
+/// Errors: [`Error::Invalid`] whose context names `path` and the line number, with the line's
+/// text and what was expected.
+pub fn parse_anomalies(text: &str, path: &Path) -> Result<BTreeMap<u32, (f64, f64)>> {
+    let mut out = BTreeMap::new();
+    let mut first = true;
+    for (n, raw) in text.lines().enumerate() {
+        let line = raw.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        if std::mem::take(&mut first) && line.starts_with(|c: char| c.is_ascii_alphabetic()) {
+            continue;
+        }
+        let bad = |expected: &str| Error::Invalid { context: format!("{} line {}", path.display(), n + 1), field: "climate.anomalies_file".into(), value: line.to_string(), expected: expected.to_string() };
+        let f: Vec<&str> = line.split(',').map(str::trim).collect();
+        if !(2..=3).contains(&f.len()) {
+            return Err(bad("`year,temperature_k[,precipitation_factor]`: 2 or 3 comma-separated values"));
+        }
+        let year: u32 = f[0].parse().ok().filter(|y| *y <= 10_000).ok_or_else(|| bad("a year: a whole number 0–10000"))?;
+        let t: f64 = f[1].parse().ok().filter(|t: &f64| t.is_finite() && t.abs() <= MAX_ANOMALY_K).ok_or_else(|| bad("a temperature anomaly: a number −30–30 K"))?;
+        let p: f64 = match f.get(2) {
+            Some(s) => s.parse().ok().filter(|p: &f64| p.is_finite() && (0.05..=5.0).contains(p)).ok_or_else(|| bad("a precipitation factor: a number 0.05–5"))?,
+            None => 1.0,
+        };
+        if out.insert(year, (t, p)).is_some() {
+            return Err(bad("each year once"));
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ramp_anomalies_and_index_shift() {
+        let mut c = ClimateChange { warming_k_per_century: 4.0, anomalies: BTreeMap::new() };
+        assert_eq!(c.of_year(50), (2.0, 1.0));
+        c.anomalies.insert(50, (0.5, 0.8));
+        assert_eq!(c.of_year(50), (2.5, 0.8));
+        let ix = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0];
+        let s = shifted_indices(&ix, 2.5, 0.8);
+        assert_eq!(s[factor::T], 6.0);
+        assert!((s[factor::F] - 4.0).abs() < 1e-6);
+        assert_eq!(shifted_indices(&[5.0, 8.9, 2.0, 5.0, 6.0, 6.0], 5.0, 1.0)[factor::T], 9.0);
+        // the slope is temperature_index's
+        let d = crate::conditions::temperature_index(9.0) - crate::conditions::temperature_index(8.0);
+        assert!((d - T_INDEX_PER_K).abs() < 1e-6);
+    }
+
+    #[test]
+    fn anomalies_file_errors_name_line() {
+        let p = Path::new("a.csv");
+        let m = parse_anomalies("year,temperature_k\n1,0.5\n# c\n2,-1,0.9\n", p).unwrap();
+        assert_eq!(m[&2], (-1.0, 0.9));
+        let e = parse_anomalies("year,temperature_k\n1,0.5\n2,hot\n", p).unwrap_err().to_string();
+        assert!(e.contains("a.csv line 3") && e.contains("hot") && e.contains("temperature"), "{e}");
+        let e = parse_anomalies("1,0.5\n1,0.6\n", p).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("once"), "{e}");
+    }
+}

@@ -1,0 +1,603 @@
+//! Forest management in scenarios (`[[management]]` entries): thinnings, harvests and plantings,
+//! their areas (a rectangle, inline polygons or polygons of a GeoJSON file) and their timing.
+//! [`Management`] is the entry as written; [`Operation`] the entry resolved against the site and
+//! the species library (its region's polygons in world metres, its area, its species), which the
+//! management phase ([`super::phases::management`]) carries out.
+//!
+//! Timing: an entry acts in the simulation years `Y` (the stand table's year: 1 = the first
+//! simulated year) it lists (`year`, `years`) or from `from_year` every `every_years` (every
+//! year when omitted) up to `until_year`, at the end of the year, after mortality and before
+//! the year's stand-table row; a planting in year 0 is planted with the start. Thinnings may
+//! carry triggers (`trigger_relative_density`, `trigger_top_height_m`): in a scheduled year they
+//! act only when every trigger given holds over their area.
+
+use super::light_grid::LightGrid;
+use crate::conditions::SiteConditions;
+use crate::error::{Error, Result};
+use crate::species::{SpeciesId, SpeciesLibrary};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// One `[[management]]` entry as written in the scenario (fields by `kind`; see the module
+/// documentation for timing). Checked by [`Management::validate`].
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Management {
+    /// `"thinning"`, `"harvest"` or `"planting"`.
+    pub kind: String,
+    /// Thinning: `"from_below"` (smallest DBH first) or `"from_above"` (largest first).
+    /// Harvest: `"clear_cut"` (every tree of the area) or `"patch"` (square patches).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub method: Option<String>,
+    /// Thinning target: basal area (m²/ha, > 0) of the stems ≥ 1.3 m in the area.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_basal_area_m2_ha: Option<f64>,
+    /// Thinning target: relative density (0–2) against the species' maximum-density lines
+    /// ([`stand_rd`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_relative_density: Option<f64>,
+    /// Thinning target: stems/ha (≥ 1.3 m) left in the area.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub target_stems_ha: Option<f64>,
+    /// Thinning trigger: act only when the area's relative density is at least this (0–2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trigger_relative_density: Option<f64>,
+    /// Thinning trigger: act only when the area's top height H100 is at least this (m, 0–100).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trigger_top_height_m: Option<f64>,
+    /// A single year (0–10000).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub year: Option<u32>,
+    /// Years (each 0–10000).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub years: Option<Vec<u32>>,
+    /// First year of a recurring entry (1–10000).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub from_year: Option<u32>,
+    /// Interval (years, 1–1000) of a recurring entry; every year when omitted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub every_years: Option<u32>,
+    /// Last year of a recurring entry (≥ `from_year`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub until_year: Option<u32>,
+    /// Area as a rectangle `[x0, y0, x1, y1]` (m, world coordinates, origin SW corner, as the
+    /// `[[start]]` areas).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub area: Option<[f64; 4]>,
+    /// Area as polygons, each a list of rings of `[x, y]` points (m, world coordinates): the
+    /// first ring the outline, further rings holes (even-odd rule).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub polygons: Option<Vec<Vec<Vec<[f64; 2]>>>>,
+    /// Area as the (Multi)Polygons of a GeoJSON file in the DEM's CRS (world metres on a uniform
+    /// site); relative paths are relative to the scenario file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub area_file: Option<PathBuf>,
+    /// Only the features of `area_file` whose property equals a value.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub filter: Option<AreaFilter>,
+    /// Patch cut: side of the square patches (m, 5–1000).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub patch_size_m: Option<f64>,
+    /// Patch cut: share (0–1) of the area's patches cut at each entry (new patches each time).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub share: Option<f64>,
+    /// Planting: species mix, species id → share (> 0; normalised to sum 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mix: Option<BTreeMap<String, f64>>,
+    /// Planting: spacing of the square lattice (m, 0.5–50).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spacing_m: Option<f64>,
+    /// Planting: age of the planted trees (years, 0–1000; default 2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub age_yr: Option<f32>,
+}
+
+/// An attribute filter on the features of an `area_file`: a feature is kept when its property
+/// `property` equals `equals` (a text, or a number compared as a number).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AreaFilter {
+    /// Property name.
+    pub property: String,
+    /// Value the property must have.
+    pub equals: toml::Value,
+}
+
+/// Most trees all `planted` starts of a scenario may plant together, and one planting entry at
+/// a time (each is an individual; 5 M is about 2,000 ha at 2 m spacing).
+pub const MAX_PLANTED_TREES: u64 = 5_000_000;
+
+const KINDS: &str = "\"thinning\", \"harvest\" or \"planting\"";
+
+fn invalid(ctx: &str, i: usize, field: &str, value: impl ToString, expected: &str) -> Error {
+    Error::Invalid { context: ctx.to_string(), field: format!("management[{i}].{field}"), value: value.to_string(), expected: expected.to_string() }
+}
+
+impl Management {
+    /// Checks entry `i` of a scenario (`ctx` names the file): the kind, its method and target,
+    /// the fields the kind allows, ranges, timing and area.
+    ///
+    /// Errors: [`Error::Invalid`] naming `management[i].<field>`, the value and what was expected.
+    pub fn validate(&self, i: usize, ctx: &str) -> Result<()> {
+        let given = |o: bool| o;
+        let bad = |field: &str, value: String, expected: &str| invalid(ctx, i, field, value, expected);
+        // fields each kind may carry
+        let thinning_only = [("target_basal_area_m2_ha", self.target_basal_area_m2_ha.is_some()), ("target_relative_density", self.target_relative_density.is_some()), ("target_stems_ha", self.target_stems_ha.is_some()), ("trigger_relative_density", self.trigger_relative_density.is_some()), ("trigger_top_height_m", self.trigger_top_height_m.is_some())];
+        let harvest_only = [("patch_size_m", self.patch_size_m.is_some()), ("share", self.share.is_some())];
+        let planting_only = [("mix", self.mix.is_some()), ("spacing_m", self.spacing_m.is_some()), ("age_yr", self.age_yr.is_some())];
+        let refuse = |list: &[(&str, bool)], kind: &str| -> Result<()> {
+            for (f, g) in list {
+                if *g {
+                    return Err(bad(f, "given".into(), &format!("not with kind = \"{}\" (only with kind = \"{kind}\")", self.kind)));
+                }
+            }
+            Ok(())
+        };
+        let method = self.method.as_deref();
+        match self.kind.as_str() {
+            "thinning" => {
+                refuse(&harvest_only, "harvest")?;
+                refuse(&planting_only, "planting")?;
+                match method {
+                    Some("from_below" | "from_above") => {}
+                    Some(m) => return Err(bad("method", format!("{m:?}"), "\"from_below\" or \"from_above\"")),
+                    None => return Err(bad("method", "(missing)".into(), "\"from_below\" or \"from_above\"")),
+                }
+                let n = thinning_only[..3].iter().filter(|t| t.1).count();
+                if n != 1 {
+                    return Err(bad("target_*", format!("{n} targets"), "exactly one of target_basal_area_m2_ha, target_relative_density, target_stems_ha"));
+                }
+                let ranges = [
+                    ("target_basal_area_m2_ha", self.target_basal_area_m2_ha, 0.0, 200.0),
+                    ("target_relative_density", self.target_relative_density, 0.0, 2.0),
+                    ("target_stems_ha", self.target_stems_ha, 0.0, 1e6),
+                    ("trigger_relative_density", self.trigger_relative_density, 0.0, 2.0),
+                    ("trigger_top_height_m", self.trigger_top_height_m, 0.0, 100.0),
+                ];
+                for (f, v, lo, hi) in ranges {
+                    if let Some(v) = v {
+                        if !(v.is_finite() && v >= lo && v <= hi) {
+                            return Err(bad(f, v.to_string(), &format!("a number {lo}–{hi}")));
+                        }
+                    }
+                }
+            }
+            "harvest" => {
+                refuse(&thinning_only, "thinning")?;
+                refuse(&planting_only, "planting")?;
+                match method {
+                    Some("clear_cut") => refuse(&harvest_only, "harvest, method = \"patch\"")?,
+                    Some("patch") => {
+                        let s = self.patch_size_m.ok_or_else(|| bad("patch_size_m", "(missing)".into(), "the side of the square patches, 5–1000 m"))?;
+                        if !(s.is_finite() && (5.0..=1000.0).contains(&s)) {
+                            return Err(bad("patch_size_m", s.to_string(), "5–1000 m"));
+                        }
+                        let sh = self.share.ok_or_else(|| bad("share", "(missing)".into(), "the share of the area cut at each entry, > 0 and ≤ 1"))?;
+                        if !(sh > 0.0 && sh <= 1.0) {
+                            return Err(bad("share", sh.to_string(), "> 0 and ≤ 1"));
+                        }
+                    }
+                    Some(m) => return Err(bad("method", format!("{m:?}"), "\"clear_cut\" or \"patch\"")),
+                    None => return Err(bad("method", "(missing)".into(), "\"clear_cut\" or \"patch\"")),
+                }
+            }
+            "planting" => {
+                refuse(&thinning_only, "thinning")?;
+                refuse(&harvest_only, "harvest")?;
+                if let Some(m) = method {
+                    return Err(bad("method", format!("{m:?}"), "no method for a planting"));
+                }
+                let mix = self.mix.as_ref().ok_or_else(|| bad("mix", "(missing)".into(), "a species mix, e.g. mix = { beech = 0.7, sessile_oak = 0.3 }"))?;
+                if mix.is_empty() {
+                    return Err(bad("mix", "{}".into(), "at least one species with a share > 0"));
+                }
+                for (sp, s) in mix {
+                    if !(s.is_finite() && *s > 0.0 && *s <= 1e6) {
+                        return Err(bad(&format!("mix.{sp}"), s.to_string(), "a share > 0"));
+                    }
+                }
+                let sp = self.spacing_m.ok_or_else(|| bad("spacing_m", "(missing)".into(), "the lattice spacing, 0.5–50 m"))?;
+                if !(sp.is_finite() && (0.5..=50.0).contains(&sp)) {
+                    return Err(bad("spacing_m", sp.to_string(), "0.5–50 m"));
+                }
+                if let Some(a) = self.age_yr {
+                    if !(a.is_finite() && (0.0..=1000.0).contains(&a)) {
+                        return Err(bad("age_yr", a.to_string(), "0–1000 years"));
+                    }
+                }
+            }
+            k => return Err(bad("kind", format!("{k:?}"), KINDS)),
+        }
+        if self.kind != "thinning" && given(self.trigger_relative_density.is_some() || self.trigger_top_height_m.is_some()) {
+            return Err(bad("trigger_*", "given".into(), "triggers only with kind = \"thinning\""));
+        }
+        // timing
+        let n = self.year.is_some() as u8 + self.years.is_some() as u8 + self.from_year.is_some() as u8;
+        if n != 1 {
+            return Err(bad("year/years/from_year", format!("{n} given"), "exactly one of year = Y, years = [...], from_year = Y (with every_years, until_year)"));
+        }
+        if self.from_year.is_none() && (self.every_years.is_some() || self.until_year.is_some()) {
+            return Err(bad("every_years/until_year", "given".into(), "only with from_year"));
+        }
+        let min_year = if self.kind == "planting" { 0 } else { 1 };
+        let check_year = |f: &str, y: u32| -> Result<()> {
+            if !(min_year..=10_000).contains(&y) {
+                let why = if min_year == 1 { "1–10000 (a thinning or harvest acts at the end of a simulated year; year 0 is the start)" } else { "0–10000" };
+                return Err(bad(f, y.to_string(), why));
+            }
+            Ok(())
+        };
+        if let Some(y) = self.year {
+            check_year("year", y)?;
+        }
+        if let Some(ys) = &self.years {
+            if ys.is_empty() {
+                return Err(bad("years", "[]".into(), "at least one year"));
+            }
+            for (k, y) in ys.iter().enumerate() {
+                check_year(&format!("years[{k}]"), *y)?;
+                if ys[..k].contains(y) {
+                    return Err(bad(&format!("years[{k}]"), y.to_string(), "each year once"));
+                }
+            }
+        }
+        if let Some(f) = self.from_year {
+            check_year("from_year", f)?;
+            if let Some(e) = self.every_years {
+                if !(1..=1000).contains(&e) {
+                    return Err(bad("every_years", e.to_string(), "1–1000 years"));
+                }
+            }
+            if let Some(u) = self.until_year {
+                if u < f || u > 10_000 {
+                    return Err(bad("until_year", u.to_string(), &format!("{f}–10000 (from from_year)")));
+                }
+            }
+        }
+        // area
+        let n = self.area.is_some() as u8 + self.polygons.is_some() as u8 + self.area_file.is_some() as u8;
+        if n > 1 {
+            return Err(bad("area/polygons/area_file", format!("{n} given"), "at most one of area, polygons, area_file (the whole site when none)"));
+        }
+        if self.filter.is_some() && self.area_file.is_none() {
+            return Err(bad("filter", "given".into(), "only with area_file"));
+        }
+        if let Some(a) = self.area {
+            if !(a.iter().all(|v| v.is_finite()) && a[2] > a[0] && a[3] > a[1]) {
+                return Err(bad("area", format!("{a:?}"), "[x0, y0, x1, y1] with x1 > x0 and y1 > y0"));
+            }
+        }
+        if let Some(ps) = &self.polygons {
+            if ps.is_empty() {
+                return Err(bad("polygons", "[]".into(), "at least one polygon [[[x, y], ...]]"));
+            }
+            for (k, p) in ps.iter().enumerate() {
+                check_rings(p).map_err(|e| bad(&format!("polygons[{k}]"), format!("{p:?}"), &e))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether entry is due in year `year`, and if so the how-manieth time (0 the first).
+    pub fn due(&self, year: u32) -> Option<u32> {
+        if let Some(y) = self.year {
+            return (y == year).then_some(0);
+        }
+        if let Some(ys) = &self.years {
+            return ys.contains(&year).then(|| ys.iter().filter(|y| **y < year).count() as u32);
+        }
+        let f = self.from_year?;
+        let e = self.every_years.unwrap_or(1);
+        (year >= f && (year - f) % e == 0 && self.until_year.is_none_or(|u| year <= u)).then(|| (year - f) / e)
+    }
+}
+
+/// Checks a polygon's rings: at least one, each of at least 3 finite points.
+fn check_rings(rings: &[Vec<[f64; 2]>]) -> std::result::Result<(), String> {
+    if rings.is_empty() {
+        return Err("a polygon: a list of rings, the first the outline".into());
+    }
+    for r in rings {
+        let pts: Vec<&[f64; 2]> = r.iter().collect();
+        if pts.len() < 3 || pts.iter().any(|p| !(p[0].is_finite() && p[1].is_finite())) {
+            return Err("rings of at least 3 finite [x, y] points".into());
+        }
+    }
+    Ok(())
+}
+
+/// The area an entry acts on, in world metres.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Region {
+    /// Bounding box `[x0, y0, x1, y1]` (m), clipped to the site.
+    pub bbox: [f64; 4],
+    /// Polygons (each a list of rings, even-odd rule); `None`: the whole bounding box.
+    pub polygons: Option<Vec<Vec<Vec<[f64; 2]>>>>,
+    /// Unmasked area inside the region (ha), counted on the light grid's cells.
+    pub area_ha: f64,
+}
+
+impl Region {
+    /// Whether world point `(x, y)` lies in the region (inside the box and, where polygons are
+    /// given, inside one of them by the even-odd rule over its rings).
+    pub fn contains(&self, x: f64, y: f64) -> bool {
+        let b = &self.bbox;
+        if !(x >= b[0] && x < b[2] && y >= b[1] && y < b[3]) {
+            return false;
+        }
+        match &self.polygons {
+            None => true,
+            Some(ps) => ps.iter().any(|rings| rings.iter().filter(|r| ring_crosses(r, x, y)).count() % 2 == 1),
+        }
+    }
+}
+
+/// Ray casting: whether a ray from `(x, y)` towards +x crosses ring `r` an odd number of times
+/// (the ring closed implicitly).
+fn ring_crosses(r: &[[f64; 2]], x: f64, y: f64) -> bool {
+    let mut inside = false;
+    let n = r.len();
+    let mut j = n - 1;
+    for i in 0..n {
+        let (a, b) = (r[i], r[j]);
+        if (a[1] > y) != (b[1] > y) && x < (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1]) + a[0] {
+            inside = !inside;
+        }
+        j = i;
+    }
+    inside
+}
+
+/// What an [`Operation`] does.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Action {
+    /// A thinning to a target.
+    Thinning {
+        /// Smallest DBH first (`from_below`) or largest first (`from_above`).
+        from_below: bool,
+        /// What is thinned to.
+        target: Target,
+        /// Act only at or above this relative density of the area.
+        trigger_rd: Option<f64>,
+        /// Act only at or above this top height (m) of the area.
+        trigger_top_height_m: Option<f64>,
+    },
+    /// Every tree of the area.
+    ClearCut,
+    /// Square patches of side `size_m` (m), a share `share` of the area's patches each time.
+    Patch {
+        /// Side (m).
+        size_m: f64,
+        /// Share (0–1) per entry.
+        share: f64,
+    },
+    /// A planted lattice.
+    Planting {
+        /// Species and their cumulative shares (0–1, the last 1), in species-id order.
+        mix: Vec<(SpeciesId, f64)>,
+        /// Spacing (m).
+        spacing_m: f64,
+        /// Age (years).
+        age_yr: f32,
+    },
+}
+
+/// A thinning target over the thinned area.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Target {
+    /// Basal area (m²/ha) of the stems ≥ 1.3 m.
+    BasalArea(f64),
+    /// Relative density ([`stand_rd`]).
+    RelativeDensity(f64),
+    /// Stems/ha ≥ 1.3 m.
+    Stems(f64),
+}
+
+/// A `[[management]]` entry resolved against the site: what it does, where, and when.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Operation {
+    /// Position of the entry in the scenario (its random streams are keyed by it).
+    pub index: usize,
+    /// The entry as written (timing).
+    pub spec: Management,
+    /// What it does.
+    pub action: Action,
+    /// Where.
+    pub region: Region,
+}
+
+/// Converts a point of the DEM's CRS to world metres (origin SW corner) on `site`: through the
+/// grid's georeferencing (pixel coordinates times the cell size); a local grid's coordinates
+/// are world metres already.
+fn crs_to_world(site: &SiteConditions, x: f64, y: f64) -> [f64; 2] {
+    let g = &site.geo;
+    if g.crs == crate::grid::Crs::Local {
+        return [x, y];
+    }
+    let col = (x - g.origin_x) / g.pixel_w;
+    let row = (g.origin_y - y) / g.pixel_h;
+    [col * site.cell_x_m, (site.height() as f64 - row) * site.cell_y_m]
+}
+
+/// Whether a GeoJSON property value equals the filter's value (texts as texts, numbers as
+/// numbers, booleans as booleans).
+fn matches(v: &serde_json::Value, want: &toml::Value) -> bool {
+    match (v, want) {
+        (serde_json::Value::String(a), toml::Value::String(b)) => a == b,
+        (serde_json::Value::Number(a), toml::Value::Integer(b)) => a.as_f64() == Some(*b as f64),
+        (serde_json::Value::Number(a), toml::Value::Float(b)) => a.as_f64() == Some(*b),
+        (serde_json::Value::Bool(a), toml::Value::Boolean(b)) => a == b,
+        (serde_json::Value::Number(a), toml::Value::String(b)) => b.parse::<f64>().ok() == a.as_f64(),
+        (serde_json::Value::String(a), toml::Value::Integer(b)) => a.parse::<i64>().ok() == Some(*b),
+        _ => false,
+    }
+}
+
+/// The polygons (rings of `[x, y]` in the file's coordinates) of the Polygon and MultiPolygon
+/// features of GeoJSON file `path` that pass `filter`. `field` names the scenario field in
+/// messages.
+///
+/// Errors: [`Error::Invalid`] naming the scenario (`ctx`), `field`, the file and what is wrong:
+/// unreadable, not GeoJSON (with the parser's message), no polygon, or no feature passing the
+/// filter.
+pub fn read_geojson_polygons(path: &Path, filter: Option<&AreaFilter>, ctx: &str, field: &str) -> Result<Vec<Vec<Vec<[f64; 2]>>>> {
+    let bad = |expected: String| Error::Invalid { context: ctx.to_string(), field: field.to_string(), value: path.display().to_string(), expected };
+    let text = std::fs::read_to_string(path).map_err(|e| bad(format!("a readable GeoJSON file ({e})")))?;
+    let gj: geojson::GeoJson = text.parse().map_err(|e| bad(format!("a GeoJSON file of Polygon or MultiPolygon features (the file does not parse: {e})")))?;
+    let feats: Vec<(Option<serde_json::Map<String, serde_json::Value>>, Option<geojson::Geometry>)> = match gj {
+        geojson::GeoJson::FeatureCollection(fc) => fc.features.into_iter().map(|f| (f.properties, f.geometry)).collect(),
+        geojson::GeoJson::Feature(f) => vec![(f.properties, f.geometry)],
+        geojson::GeoJson::Geometry(g) => vec![(None, Some(g))],
+    };
+    let mut out = Vec::new();
+    let mut seen = 0usize;
+    fn rings_of(p: &[Vec<geojson::Position>]) -> Vec<Vec<[f64; 2]>> {
+        p.iter().map(|r| r.iter().map(|q| [q[0], q[1]]).collect()).collect()
+    }
+    for (props, geom) in feats {
+        let Some(g) = geom else { continue };
+        if let Some(f) = filter {
+            let v = props.as_ref().and_then(|p| p.get(&f.property));
+            if !v.is_some_and(|v| matches(v, &f.equals)) {
+                continue;
+            }
+        }
+        seen += 1;
+        match &g.value {
+            geojson::GeometryValue::Polygon { coordinates } => out.push(rings_of(coordinates)),
+            geojson::GeometryValue::MultiPolygon { coordinates } => out.extend(coordinates.iter().map(|p| rings_of(p))),
+            _ => {}
+        }
+    }
+    if out.is_empty() {
+        return Err(bad(match (filter, seen) {
+            (Some(f), 0) => format!("a feature whose property `{}` equals {} (none does)", f.property, f.equals),
+            _ => "at least one Polygon or MultiPolygon feature (none found)".into(),
+        }));
+    }
+    for (k, p) in out.iter().enumerate() {
+        check_rings(p).map_err(|e| bad(format!("polygon {k} of the file: {e}")))?;
+    }
+    Ok(out)
+}
+
+/// The parts of a site that [`resolve`] reads: its conditions (extent, georeferencing), light
+/// grid and the site cell of each light cell (`u32::MAX` where masked), and the species pool.
+pub struct SiteView<'a> {
+    /// Site conditions.
+    pub conditions: &'a SiteConditions,
+    /// World extent (m).
+    pub extent: (f64, f64),
+    /// The light grid.
+    pub light: &'a LightGrid,
+    /// Site cell of each light cell (`u32::MAX`: masked).
+    pub light_site: &'a [u32],
+    /// Pool species.
+    pub pool: &'a [SpeciesId],
+}
+
+/// Resolves the scenario's entries against the site (its extent, mask, light grid and
+/// georeferencing) and the species library: regions in world metres with their areas, species
+/// ids of plantings. Entries come out in scenario order.
+///
+/// Errors: [`Error::Invalid`] naming `management[i].<field>`: a planted species outside the
+/// library or the pool, an area outside the site or without unmasked ground, an area file that
+/// cannot be read ([`read_geojson_polygons`]).
+pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary, ctx: &str) -> Result<Vec<Operation>> {
+    let (ex, ey) = site.extent;
+    let mut ops = Vec::with_capacity(entries.len());
+    for (i, m) in entries.iter().enumerate() {
+        let polygons = match (&m.polygons, &m.area_file) {
+            (Some(p), _) => Some(p.clone()),
+            (_, Some(f)) => {
+                let ps = read_geojson_polygons(f, m.filter.as_ref(), ctx, &format!("management[{i}].area_file"))?;
+                Some(ps.into_iter().map(|rings| rings.into_iter().map(|r| r.into_iter().map(|p| crs_to_world(site.conditions, p[0], p[1])).collect()).collect()).collect())
+            }
+            _ => None,
+        };
+        let bbox = match (&m.area, &polygons) {
+            (Some(a), _) => *a,
+            (_, Some(ps)) => {
+                let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+                for p in ps.iter().flatten().flatten() {
+                    b = [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])];
+                }
+                b
+            }
+            _ => [0.0, 0.0, ex, ey],
+        };
+        let clipped = [bbox[0].max(0.0), bbox[1].max(0.0), bbox[2].min(ex), bbox[3].min(ey)];
+        let mut region = Region { bbox: clipped, polygons, area_ha: 0.0 };
+        let l = site.light;
+        let cells = (0..l.len()).filter(|&c| site.light_site[c] != u32::MAX && {
+            let (x, y) = l.centre(c);
+            region.contains(x, y)
+        });
+        region.area_ha = cells.count() as f64 * l.cell_m * l.cell_m / 10_000.0;
+        if region.area_ha <= 0.0 {
+            let field = if m.area.is_some() { "area" } else if m.area_file.is_some() { "area_file" } else { "polygons" };
+            return Err(invalid(ctx, i, field, format!("{bbox:?} (bounding box, m)"), &format!("an area covering unmasked ground of the site, 0 ≤ x < {ex} m and 0 ≤ y < {ey} m (origin SW corner; an area file in the DEM's CRS)")));
+        }
+        let action = match (m.kind.as_str(), m.method.as_deref()) {
+            ("thinning", method) => Action::Thinning {
+                from_below: method == Some("from_below"),
+                target: match (m.target_basal_area_m2_ha, m.target_relative_density, m.target_stems_ha) {
+                    (Some(b), _, _) => Target::BasalArea(b),
+                    (_, Some(r), _) => Target::RelativeDensity(r),
+                    (_, _, s) => Target::Stems(s.unwrap_or(0.0)),
+                },
+                trigger_rd: m.trigger_relative_density,
+                trigger_top_height_m: m.trigger_top_height_m,
+            },
+            ("harvest", Some("patch")) => Action::Patch { size_m: m.patch_size_m.unwrap_or(50.0), share: m.share.unwrap_or(1.0) },
+            ("harvest", _) => Action::ClearCut,
+            _ => {
+                let mix = m.mix.clone().unwrap_or_default();
+                let total: f64 = mix.values().sum();
+                let mut acc = 0.0;
+                let mut out = Vec::new();
+                for (sp, s) in &mix {
+                    let id = lib.find(sp).ok_or_else(|| invalid(ctx, i, &format!("mix.{sp}"), sp, "a species id of the library"))?;
+                    if !site.pool.contains(&id) {
+                        return Err(invalid(ctx, i, &format!("mix.{sp}"), sp, "a species of the scenario's pool (add it to `species`)"));
+                    }
+                    acc += s / total;
+                    out.push((id, acc));
+                }
+                if let Some(last) = out.last_mut() {
+                    last.1 = 1.0;
+                }
+                let sp = m.spacing_m.unwrap_or(2.0);
+                let n = ((clipped[2] - clipped[0]) / sp).floor().max(0.0) * ((clipped[3] - clipped[1]) / sp).floor().max(0.0);
+                if n > MAX_PLANTED_TREES as f64 {
+                    return Err(invalid(ctx, i, "spacing_m", sp, &format!("a spacing that plants at most {} trees ({n} on this area)", MAX_PLANTED_TREES)));
+                }
+                Action::Planting { mix: out, spacing_m: m.spacing_m.unwrap_or(2.0), age_yr: m.age_yr.unwrap_or(2.0) }
+            }
+        };
+        ops.push(Operation { index: i, spec: m.clone(), action, region });
+    }
+    Ok(ops)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polygons_even_odd_and_schedule() {
+        let sq = vec![vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]], vec![[4.0, 4.0], [6.0, 4.0], [6.0, 6.0], [4.0, 6.0]]];
+        let r = Region { bbox: [0.0, 0.0, 10.0, 10.0], polygons: Some(vec![sq]), area_ha: 0.0 };
+        assert!(r.contains(1.0, 1.0));
+        assert!(!r.contains(5.0, 5.0), "hole");
+        assert!(!r.contains(11.0, 5.0));
+        let m = Management { from_year: Some(15), every_years: Some(5), until_year: Some(30), ..Default::default() };
+        assert_eq!(m.due(15), Some(0));
+        assert_eq!(m.due(25), Some(2));
+        assert_eq!(m.due(26), None);
+        assert_eq!(m.due(35), None);
+        let m = Management { years: Some(vec![30, 10]), ..Default::default() };
+        assert_eq!(m.due(30), Some(1));
+    }
+}

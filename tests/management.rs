@@ -1,0 +1,287 @@
+//! Management and a changing climate (issue 35): thinnings reach their targets in the right
+//! order, clear-cuts clear and regeneration returns, plantings stay inside their polygons
+//! (GeoJSON read), runs are the same for 1 and 2 threads and across a checkpoint, bad input is
+//! refused naming file and field, and warming moves the temperature index and establishment.
+mod common;
+
+use common::ScenarioToml;
+use std::path::Path;
+use sylva::sim::checkpoint::{restore, to_bytes};
+use sylva::sim::stats::StandRow;
+use sylva::sim::trees::DeathCause;
+use sylva::sim::{Scenario, World};
+
+/// A 1 ha beech stand planted at 1.5 m, aged 30 at the start: about 4,400 stems with DBHs.
+fn beech_stand(extra: &str, years: u32) -> String {
+    ScenarioToml::new("manage", years, 7).species(&["beech", "silver_birch"]).uniform(5, 5, 20.0, 200.0).planted("beech", 1.5, 30.0).build() + extra
+}
+
+fn world(toml: &str) -> (Scenario, World) {
+    common::world_with(toml, &common::embedded())
+}
+
+fn stand_table(rows: &[StandRow], w: &World) -> String {
+    let names: Vec<&str> = w.site.pool.iter().map(|&p| w.site.lib.species[p as usize].id.as_str()).collect();
+    sylva::output::stand_table::stand_table_csv(rows, &names)
+}
+
+/// The first year's basal area (m²/ha) of the stand without management.
+fn unmanaged_ba() -> f64 {
+    let (sc, mut w) = world(&beech_stand("", 1));
+    common::run(&sc, &mut w, 1)[0].basal_area_m2_ha
+}
+
+/// Stems ≥ 1.3 m left and harvested in the year just simulated: (remaining DBHs, harvested DBHs).
+fn dbhs(w: &World) -> (Vec<f32>, Vec<f32>) {
+    let t = &w.stand.trees;
+    let left = (0..t.len()).filter(|&i| t.height[i] >= 1.3).map(|i| t.dbh[i]).collect();
+    let cut = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).map(|d| d.dbh).collect();
+    (left, cut)
+}
+
+#[test]
+fn thinning_from_below_removes_the_smallest_first_and_reaches_its_target() {
+    let ba0 = unmanaged_ba();
+    let target = 0.7 * ba0;
+    let (sc, mut w) = world(&beech_stand(&format!("[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_basal_area_m2_ha = {target}\nyears = [1]\n"), 1));
+    let row = common::run(&sc, &mut w, 1).remove(0);
+    let (left, cut) = dbhs(&w);
+    assert!(!cut.is_empty());
+    let max_cut = cut.iter().cloned().fold(0f32, f32::max);
+    let min_left = left.iter().cloned().fold(f32::MAX, f32::min);
+    assert!(max_cut <= min_left, "from below: largest removed DBH {max_cut} cm above the smallest left {min_left} cm");
+    let err = (row.basal_area_m2_ha - target).abs() / target;
+    assert!(err < 0.05, "basal area {:.2} m²/ha against the target {target:.2} (unthinned {ba0:.2}): {:.1} % off", row.basal_area_m2_ha, err * 100.0);
+    assert_eq!(row.deaths[DeathCause::Harvest.index()] as usize, cut.len());
+    assert!((row.harvest_stems_ha - cut.len() as f64).abs() < 1e-9, "1 ha: stems/ha = stems");
+    assert!(row.harvest_volume_m3_ha > 0.0 && row.volume_m3_ha > row.harvest_volume_m3_ha, "{row:?}");
+    eprintln!("from below: {:.2} → {:.2} m²/ha (target {target:.2}), {} stems removed (DBH ≤ {max_cut:.1} cm), {:.1} m³/ha removed", ba0, row.basal_area_m2_ha, cut.len(), row.harvest_volume_m3_ha);
+}
+
+#[test]
+fn thinning_from_above_to_stems_and_relative_density_targets() {
+    // from above to 1,500 stems/ha: the thickest go
+    let (sc, mut w) = world(&beech_stand("[[management]]\nkind = \"thinning\"\nmethod = \"from_above\"\ntarget_stems_ha = 1500\nfrom_year = 1\nevery_years = 10\n", 1));
+    let row = common::run(&sc, &mut w, 1).remove(0);
+    let (left, cut) = dbhs(&w);
+    let min_cut = cut.iter().cloned().fold(f32::MAX, f32::min);
+    let max_left = left.iter().cloned().fold(0f32, f32::max);
+    assert!(min_cut >= max_left, "from above: smallest removed {min_cut} below the largest left {max_left}");
+    assert!((row.stems_ha - 1500.0).abs() / 1500.0 < 0.05, "stems/ha {}", row.stems_ha);
+    // to a relative density against beech's maximum-density line
+    let (sc, mut w) = world(&beech_stand("[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.45\nyear = 1\ntrigger_top_height_m = 5.0\n", 1));
+    common::run(&sc, &mut w, 1);
+    let rd = sylva::sim::density::stand_density(&w, 7.0).rd;
+    assert!((rd - 0.45).abs() / 0.45 < 0.05, "relative density {rd:.3}, target 0.45");
+    // a trigger that does not hold leaves the stand alone
+    let (sc, mut w) = world(&beech_stand("[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.45\nyear = 1\ntrigger_top_height_m = 60.0\n", 1));
+    common::run(&sc, &mut w, 1);
+    assert!(dbhs(&w).1.is_empty(), "top height below the trigger: nothing thinned");
+}
+
+#[test]
+fn clear_cut_leaves_no_tree_in_its_area_and_regeneration_starts_again() {
+    let toml = ScenarioToml::new("cut", 10, 5)
+        .species(&["beech", "silver_birch"])
+        .uniform(6, 6, 20.0, 200.0)
+        .planted("beech", 3.0, 40.0)
+        .seed_rain("silver_birch", 20000.0)
+        .build()
+        + "[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\narea = [0.0, 0.0, 60.0, 120.0]\nyears = [2]\n";
+    let (sc, mut w) = world(&toml);
+    let rows = common::run(&sc, &mut w, 2);
+    let t = &w.stand.trees;
+    let inside = |x: f32, y: f32| x < 60.0 && y < 120.0;
+    assert_eq!((0..t.len()).filter(|&i| inside(t.x[i], t.y[i]) && t.height[i] >= 1.3).count(), 0, "trees ≥ 1.3 m left in the clear-cut");
+    assert!((0..t.len()).filter(|&i| !inside(t.x[i], t.y[i])).count() > 500, "the other half stands");
+    assert!(rows[1].harvest_stems_ha > 0.0 && rows[0].harvest_stems_ha == 0.0);
+    let regen_in = |w: &World| -> u64 {
+        let c = &w.stand.cohorts;
+        (0..c.cell.len()).filter(|&k| w.site.light.centre(c.cell[k] as usize).0 < 60.0).map(|k| c.stems[k] as u64).sum()
+    };
+    let before = regen_in(&w);
+    common::run(&sc, &mut w, 8);
+    let after = regen_in(&w);
+    let t = &w.stand.trees;
+    let recruits = (0..t.len()).filter(|&i| inside(t.x[i], t.y[i])).count();
+    assert!(after > before && after + recruits as u64 > 100, "regeneration in the clear-cut: {before} → {after} sapling stems, {recruits} trees");
+    eprintln!("clear-cut: regeneration {before} → {after} sapling stems in 8 years, {recruits} recruits");
+}
+
+/// Even-odd point-in-polygon (a second implementation, for the test).
+fn in_poly(p: &[[f64; 2]], x: f64, y: f64) -> bool {
+    let mut c = false;
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[(i + 1) % p.len()]);
+        if (a[1] > y) != (b[1] > y) && x < a[0] + (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1]) {
+            c = !c;
+        }
+    }
+    c
+}
+
+#[test]
+fn polygon_planting_from_geojson_plants_only_inside_its_polygon() {
+    let d = tempfile::tempdir().unwrap();
+    let tri = [[10.0, 10.0], [110.0, 20.0], [40.0, 100.0]];
+    let other = [[70.0, 70.0], [115.0, 70.0], [115.0, 115.0], [70.0, 115.0]];
+    let ring = |p: &[[f64; 2]]| {
+        let mut v: Vec<String> = p.iter().map(|q| format!("[{}, {}]", q[0], q[1])).collect();
+        v.push(v[0].clone());
+        v.join(", ")
+    };
+    let gj = format!(
+        r#"{{"type": "FeatureCollection", "features": [
+          {{"type": "Feature", "properties": {{"parcel": "A", "n": 1}}, "geometry": {{"type": "Polygon", "coordinates": [[{}]]}}}},
+          {{"type": "Feature", "properties": {{"parcel": "B", "n": 2}}, "geometry": {{"type": "MultiPolygon", "coordinates": [[[{}]]]}}}}
+        ]}}"#,
+        ring(&tri),
+        ring(&other)
+    );
+    let f = d.path().join("parcels.geojson");
+    std::fs::write(&f, gj).unwrap();
+    let base = ScenarioToml::new("parcels", 4, 3).species(&["beech", "sessile_oak"]).uniform(6, 6, 20.0, 200.0).build();
+    let toml = format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 0.5, sessile_oak = 0.5 }}\nspacing_m = 2.0\nage_yr = 4.0\nyear = 0\narea_file = {:?}\nfilter = {{ property = \"parcel\", equals = \"A\" }}\n", f.display().to_string());
+    let (sc, mut w) = world(&toml);
+    let t = &w.stand.trees;
+    assert!(t.len() > 500, "{} trees planted", t.len());
+    assert!((0..t.len()).all(|i| in_poly(&tri, t.x[i] as f64, t.y[i] as f64)), "a tree outside polygon A");
+    let oaks = t.species.iter().filter(|&&s| w.site.lib.species[s as usize].id == "sessile_oak").count();
+    assert!(oaks > t.len() / 3 && oaks < 2 * t.len() / 3, "mix 50:50: {oaks} oaks of {}", t.len());
+    // the second parcel by a numeric filter, planted in year 3 into the running stand
+    let toml2 = format!("{toml}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.5\nyear = 3\narea_file = {:?}\nfilter = {{ property = \"n\", equals = 2 }}\n", f.display().to_string());
+    let (sc2, mut w2) = world(&toml2);
+    let n0 = w2.stand.trees.len();
+    common::run(&sc2, &mut w2, 3);
+    let t = &w2.stand.trees;
+    let in_b = (0..t.len()).filter(|&i| in_poly(&other, t.x[i] as f64, t.y[i] as f64)).count();
+    assert!(in_b > 250, "{in_b} trees in parcel B after its planting");
+    assert!((0..t.len()).all(|i| in_poly(&tri, t.x[i] as f64, t.y[i] as f64) || in_poly(&other, t.x[i] as f64, t.y[i] as f64)));
+    assert!(t.id.windows(2).all(|p| p[0] < p[1]), "ids ascending after a planting during the run");
+    assert!(t.len() > n0);
+    common::run(&sc, &mut w, 1);
+}
+
+/// A scenario with every kind of management and a warming climate.
+fn busy(years: u32) -> String {
+    ScenarioToml::new("busy", years, 11)
+        .species(&["beech", "silver_birch", "norway_spruce"])
+        .uniform(6, 6, 20.0, 200.0)
+        .planted("beech", 2.0, 25.0)
+        .seed_rain("silver_birch", 5000.0)
+        .line("climate = { warming_k_per_century = 4.0 }")
+        .build()
+        + "[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.5\nfrom_year = 2\nevery_years = 3\n\
+           [[management]]\nkind = \"harvest\"\nmethod = \"patch\"\npatch_size_m = 30.0\nshare = 0.25\narea = [0.0, 0.0, 120.0, 60.0]\nyears = [4, 8]\n\
+           [[management]]\nkind = \"planting\"\nmix = { norway_spruce = 0.6, beech = 0.4 }\nspacing_m = 2.0\nage_yr = 3.0\nyear = 5\npolygons = [[[[5.0, 5.0], [60.0, 5.0], [60.0, 55.0], [5.0, 55.0]]]]\n"
+}
+
+fn busy_table(threads: usize, years: u32) -> String {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    pool.install(|| {
+        let (sc, mut w) = world(&busy(years));
+        let rows = common::run(&sc, &mut w, years);
+        stand_table(&rows, &w)
+    })
+}
+
+#[test]
+fn management_and_warming_are_the_same_for_one_and_two_threads_and_across_a_checkpoint() {
+    let a = busy_table(1, 10);
+    let b = busy_table(2, 10);
+    assert_eq!(a, b, "stand tables differ between 1 and 2 threads");
+    let last: Vec<&str> = a.lines().last().unwrap().split(',').collect();
+    let head: Vec<&str> = a.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| last[head.iter().position(|h| *h == n).unwrap()].parse::<f64>().unwrap();
+    assert_eq!(col("temperature_offset_k"), 0.4, "4 K per century, year 10");
+    let harvests: f64 = a.lines().skip(1).map(|l| l.split(',').nth(head.iter().position(|h| *h == "harvest_stems_ha").unwrap()).unwrap().parse::<f64>().unwrap()).sum();
+    assert!(harvests > 0.0);
+    // checkpoint after 4 years, restored into a fresh world, 6 more years
+    let (sc, mut w) = world(&busy(10));
+    let mut rows = common::run(&sc, &mut w, 4);
+    let bytes = to_bytes(&w, &rows);
+    let (sc2, mut w2) = world(&busy(10));
+    rows = restore(&mut w2, &bytes, Path::new("ck.bin")).unwrap();
+    rows.extend(common::run(&sc2, &mut w2, 6));
+    assert_eq!(stand_table(&rows, &w2), a, "resumed run differs");
+    // a resume with other management is refused, naming it
+    let (_, mut w3) = world(&busy(10).replace("share = 0.25", "share = 0.5"));
+    let e = restore(&mut w3, &bytes, Path::new("ck.bin")).unwrap_err().to_string();
+    assert!(e.contains("management"), "{e}");
+}
+
+#[test]
+fn tiled_runs_refuse_management() {
+    let (_, w) = world(&busy(3));
+    let e = sylva::sim::tiles::Layout::new(&w.site, 2, 1).unwrap_err().to_string();
+    assert!(e.contains("management") && e.contains("one process"), "{e}");
+    assert!(sylva::sim::tiles::Layout::new(&w.site, 1, 1).is_ok());
+}
+
+fn err(toml: &str) -> String {
+    let sc = match Scenario::from_toml_str(toml, "bad.toml") {
+        Err(e) => return e.to_string(),
+        Ok(s) => s,
+    };
+    match World::new(sc.site().unwrap(), &common::embedded(), &sc) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("accepted: {toml}"),
+    }
+}
+
+#[test]
+fn bad_management_and_climate_input_is_refused_naming_file_and_field() {
+    let base = ScenarioToml::new("bad", 3, 1).species(&["beech"]).uniform(4, 4, 20.0, 200.0).build();
+    let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"sideways\"\ntarget_stems_ha = 100\nyear = 1\n"));
+    assert!(e.contains("bad.toml") && e.contains("management[0].method") && e.contains("sideways") && e.contains("from_below"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\nyear = 1\n"));
+    assert!(e.contains("bad.toml") && e.contains("management[0].target_") && e.contains("exactly one of"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\n"));
+    assert!(e.contains("management[0].year/years/from_year"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"coppice\"\nyear = 1\n"));
+    assert!(e.contains("management[0].kind") && e.contains("coppice"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 1\narea_file = \"/nonexistent/parcels.geojson\"\n"));
+    assert!(e.contains("bad.toml") && e.contains("management[0].area_file") && e.contains("/nonexistent/parcels.geojson"), "{e}");
+    let d = tempfile::tempdir().unwrap();
+    let f = d.path().join("broken.geojson");
+    std::fs::write(&f, "{\"type\": \"FeatureCollection\", \"features\": [").unwrap();
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 1\narea_file = {:?}\n", f.display().to_string()));
+    assert!(e.contains("management[0].area_file") && e.contains("broken.geojson") && e.contains("does not parse"), "{e}");
+    std::fs::write(&f, r#"{"type": "Feature", "properties": {}, "geometry": {"type": "Point", "coordinates": [1, 2]}}"#).unwrap();
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 1\narea_file = {:?}\n", f.display().to_string()));
+    assert!(e.contains("Polygon"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ oak = 1.0 }}\nspacing_m = 2.0\nyear = 1\n"));
+    assert!(e.contains("management[0].mix.oak"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 1\narea = [500.0, 500.0, 600.0, 600.0]\n"));
+    assert!(e.contains("management[0].area") && e.contains("unmasked ground"), "{e}");
+    // climate
+    let c = base.replace("species = [\"beech\"]", "species = [\"beech\"]\nclimate = { warming_k_per_century = 99.0 }");
+    let e = err(&c);
+    assert!(e.contains("bad.toml") && e.contains("climate.warming_k_per_century") && e.contains("99"), "{e}");
+    let a = d.path().join("anomalies.csv");
+    std::fs::write(&a, "year,temperature_k,precipitation_factor\n1,0.5,1.0\n2,warm,1.0\n").unwrap();
+    let c = base.replace("species = [\"beech\"]", &format!("species = [\"beech\"]\nclimate = {{ anomalies_file = {:?} }}", a.display().to_string()));
+    let e = err(&c);
+    assert!(e.contains("anomalies.csv line 3") && e.contains("climate.anomalies_file") && e.contains("warm"), "{e}");
+}
+
+#[test]
+fn warming_raises_the_temperature_index_and_establishment_on_a_cold_site() {
+    // a cold site (T = 3) for beech (T 5): 20 K per century is +2 K by year 10, T + 0.8
+    let cold = [5.0, 3.0, 2.0, 5.0, 6.0, 6.0];
+    let toml = |w: f64| ScenarioToml::new("warm", 10, 2).species(&["beech"]).uniform_indices(4, 4, 20.0, 900.0, cold).planted("beech", 4.0, 20.0).seed_rain("beech", 200000.0).line(&format!("climate = {{ warming_k_per_century = {w} }}")).build();
+    let (sc, mut w0) = world(&toml(0.0));
+    let (sc1, mut w1) = world(&toml(20.0));
+    let s0 = w1.site.suitability[0][0];
+    let r0 = common::run(&sc, &mut w0, 10);
+    let r1 = common::run(&sc1, &mut w1, 10);
+    assert_eq!(r1[9].temperature_offset_k, 2.0);
+    assert_eq!(r0[9].temperature_offset_k, 0.0);
+    let s1 = w1.site.suitability[0][0];
+    assert!(s1 > s0 && w0.site.suitability[0][0] == s0, "beech's suitability on the cold site: {s0:.3} → {s1:.3}");
+    assert!((0..w1.stand.trees.len()).all(|i| w1.stand.trees.suitability[i] == s1), "trees follow their cell");
+    let g0: u64 = r0.iter().map(|r| r.regen_germinated).sum();
+    let g1: u64 = r1.iter().map(|r| r.regen_germinated).sum();
+    assert!(g1 > g0, "germinated {g0} without warming, {g1} with");
+    eprintln!("cold site: beech suitability {s0:.3} → {s1:.3}, germinated {g0} → {g1} in 10 years");
+}

@@ -1,0 +1,32 @@
+#!/usr/bin/env python3
+"""Compares a run of scenarios/thinning_beech.toml with the Wiedemann (1931) moderate-thinning
+beech table, yield class I: N, Dq and basal area of the stems >= 7 cm DBH at the given ages.
+
+    python3 tools/thinning_check.py OUT_DIR [PLANT_AGE] [AGES...]
+
+OUT_DIR/stand_table.csv is the run's stand table (age = PLANT_AGE + year, default 3);
+ages default to 50 and 100. Prints a Markdown table."""
+import csv, math, sys
+from pathlib import Path
+
+out = Path(sys.argv[1])
+plant = float(sys.argv[2]) if len(sys.argv) > 2 else 3.0
+ages = [float(a) for a in sys.argv[3:]] or [50.0, 100.0]
+root = Path(__file__).resolve().parent.parent
+table = {}
+with open(root / "tests/data/stands/ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv") as f:
+    for r in csv.DictReader(f):
+        if float(r["site_index"]) == 1.0:
+            table[float(r["age"])] = (float(r["n_ha"]), float(r["d_q_cm"]), float(r["ba_m2_ha"]), float(r["h_q_m"]))
+rows = {}
+with open(out / "stand_table.csv") as f:
+    for r in csv.DictReader(f):
+        rows[plant + float(r["year"])] = r
+print("| age | N sim | N table | ΔN | Dq sim (cm) | Dq table | ΔDq | BA sim (m²/ha) | BA table | ΔBA | top height sim (m) | h_q table (m) |")
+print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+for a in ages:
+    r, t = rows[a], table[a]
+    n, dq = float(r["stems_7cm_ha"]), float(r["qmd_7cm_cm"])
+    ba = math.pi / 4 * n * dq * dq / 1e4
+    d = lambda s, x: f"{(s - x) / x * 100:+.0f} %"
+    print(f"| {a:.0f} | {n:.0f} | {t[0]:.0f} | {d(n, t[0])} | {dq:.1f} | {t[1]:.1f} | {d(dq, t[1])} | {ba:.1f} | {t[2]:.1f} | {d(ba, t[2])} | {float(r['top_height_m']):.1f} | {t[3]:.1f} |")
