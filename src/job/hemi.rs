@@ -442,8 +442,9 @@ mod tests {
         let flat = vec![0.0f32; 720];
         let t = transmission(&grid, &[c], &flat, [0.0, 0.0, 1.0]);
         assert!((t - (-K_EXT * lai).exp()).abs() < 1e-4, "{t}");
-        // a ray that leaves the crown through its side crosses less of it
-        let d = [0.6f32.sin(), 0.0, 0.6f32.cos()];
+        // a ray that leaves the crown through its side crosses less of it (away from the stem
+        // at x = 0.5 m, which a ray towards +x would hit)
+        let d = [-(0.6f32.sin()), 0.0, 0.6f32.cos()];
         let t2 = transmission(&grid, &[c], &flat, d);
         assert!(t2 > t && t2 < 1.0, "{t2}");
         // a low ray beside it sees the sky; one into the stem is dark; below the horizon dark
