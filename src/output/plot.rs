@@ -139,8 +139,10 @@ pub fn species_color(w: &World, s: u16) -> [u8; 3] {
     }
 }
 
-/// A 2×2 figure of the stand table: stems/ha (individual trees, and the regeneration layer's
-/// sapling stems below the recruitment height), basal area, heights, species basal-area shares.
+/// A figure of the stand table: stems/ha (individual trees, and the regeneration layer's
+/// sapling stems below the recruitment height), basal area, heights, species basal-area shares,
+/// and the wood: standing stem volume and the volume harvested so far (cumulative, m³/ha; issue
+/// 35's thinnings and harvests).
 pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()> {
     let x = |f: &dyn Fn(&StandRow) -> f64| rows.iter().map(|r| (r.year as f64, f(r))).collect::<Vec<_>>();
     let s = |name: &str, pts, color| Series { name: name.into(), points: pts, color, markers: false };
@@ -153,8 +155,20 @@ pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()>
         Panel { title: "Basal area".into(), x_label: "year".into(), y_label: "m²/ha".into(), series: vec![s("basal area", x(&|r| r.basal_area_m2_ha), [40, 120, 40])] },
         Panel { title: "Height and diameter".into(), x_label: "year".into(), y_label: "m, cm".into(), series: vec![s("top height H100 (m)", x(&|r| r.top_height_m), [40, 120, 40]), s("mean height (m)", x(&|r| r.mean_height_m), [120, 160, 60]), s("QMD (cm)", x(&|r| r.qmd_cm), [150, 60, 40])] },
         Panel { title: "Species share of basal area".into(), x_label: "year".into(), y_label: "share".into(), series: shares },
+        Panel { title: "Stem volume".into(), x_label: "year".into(), y_label: "m³/ha".into(), series: vec![s("standing", x(&|r| r.volume_m3_ha), [40, 120, 40]), s("harvested (cumulative)", cumulative(rows, |r| r.harvest_volume_m3_ha), [170, 90, 30])] },
     ];
-    plot_panels_png(path, &panels, 2, (1200, 900))
+    plot_panels_png(path, &panels, 2, (1200, 1350))
+}
+
+/// The running sum of `f` over the rows (year, Σ f up to that year).
+fn cumulative(rows: &[StandRow], f: impl Fn(&StandRow) -> f64) -> Vec<(f64, f64)> {
+    let mut sum = 0.0;
+    rows.iter()
+        .map(|r| {
+            sum += f(r);
+            (r.year as f64, sum)
+        })
+        .collect()
 }
 
 /// Map raster size: cells of `cell_m` so that the longer side has at most `max_px` pixels.
