@@ -209,6 +209,8 @@ pub fn hemispherical_photo(run_dir: &Path, library: &SpeciesLibrary, o: &HemiOpt
 struct CrownGrid {
     n: usize,
     half: f32,
+    /// The highest crown top above the camera (m, at least 0).
+    top: f32,
     start: Vec<u32>,
     items: Vec<u32>,
 }
@@ -234,7 +236,8 @@ impl CrownGrid {
             items.extend(l);
         }
         start.push(items.len() as u32);
-        CrownGrid { n, half, start, items }
+        let top = crowns.iter().map(|c| c.top).fold(0.0f32, f32::max);
+        CrownGrid { n, half, top, start, items }
     }
 }
 
@@ -252,7 +255,7 @@ fn transmission(grid: &CrownGrid, crowns: &[Crown], horizon: &[f32], d: [f32; 3]
     let hor = (d[0] * d[0] + d[1] * d[1]).sqrt();
     // ray parameter t (m along d); the ground track leaves the grid at t_max, the canopy above
     // the highest crown
-    let top = crowns.iter().map(|c| c.top).fold(0.0f32, f32::max);
+    let top = grid.top;
     let t_top = if d[2] > 1e-6 { top / d[2] } else { f32::INFINITY };
     let t_max = if hor > 1e-6 { (grid.half - GRID_M) / hor } else { f32::INFINITY }.min(t_top);
     let mut depth = 0.0f32;
