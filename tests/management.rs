@@ -250,6 +250,10 @@ fn bad_management_and_climate_input_is_refused_naming_file_and_field() {
     std::fs::write(&f, r#"{"type": "Feature", "properties": {}, "geometry": {"type": "Point", "coordinates": [1, 2]}}"#).unwrap();
     let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 1\narea_file = {:?}\n", f.display().to_string()));
     assert!(e.contains("Polygon"), "{e}");
+    // positions of one number (found by a break-it pass: it used to panic)
+    std::fs::write(&f, r#"{"type": "Feature", "properties": {}, "geometry": {"type": "Polygon", "coordinates": [[[0], [100], [100], [0]]]}}"#).unwrap();
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 1\narea_file = {:?}\n", f.display().to_string()));
+    assert!(e.contains("management[0].area_file") && e.contains("two numbers"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ oak = 1.0 }}\nspacing_m = 2.0\nyear = 1\n"));
     assert!(e.contains("management[0].mix.oak"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 1\narea = [500.0, 500.0, 600.0, 600.0]\n"));

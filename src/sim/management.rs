@@ -452,9 +452,13 @@ pub fn read_geojson_polygons(path: &Path, filter: Option<&AreaFilter>, ctx: &str
     };
     let mut out = Vec::new();
     let mut seen = 0usize;
-    fn rings_of(p: &[Vec<geojson::Position>]) -> Vec<Vec<[f64; 2]>> {
-        p.iter().map(|r| r.iter().map(|q| [q[0], q[1]]).collect()).collect()
-    }
+    // a position needs x and y (a third number, the height, is ignored)
+    let rings_of = |p: &[Vec<geojson::Position>]| -> Result<Vec<Vec<[f64; 2]>>> {
+        p.iter()
+            .map(|r| r.iter().map(|q| if q.len() >= 2 { Ok([q[0], q[1]]) } else { Err(bad(format!("positions of two numbers [x, y] (one has {}: {q:?})", q.len()))) }).collect::<std::result::Result<Vec<_>, _>>())
+            .collect::<std::result::Result<Vec<_>, _>>()
+            .map_err(Into::into)
+    };
     for (props, geom) in feats {
         let Some(g) = geom else { continue };
         if let Some(f) = filter {
@@ -465,8 +469,12 @@ pub fn read_geojson_polygons(path: &Path, filter: Option<&AreaFilter>, ctx: &str
         }
         seen += 1;
         match &g.value {
-            geojson::GeometryValue::Polygon { coordinates } => out.push(rings_of(coordinates)),
-            geojson::GeometryValue::MultiPolygon { coordinates } => out.extend(coordinates.iter().map(|p| rings_of(p))),
+            geojson::GeometryValue::Polygon { coordinates } => out.push(rings_of(coordinates)?),
+            geojson::GeometryValue::MultiPolygon { coordinates } => {
+                for p in coordinates {
+                    out.push(rings_of(p)?);
+                }
+            }
             _ => {}
         }
     }

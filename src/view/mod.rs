@@ -88,6 +88,12 @@ pub struct Viewer {
     pub status: Option<String>,
     view_rect: egui::Rect,
     pixels_per_point: f32,
+    /// The camera of the last frame drawn ([`Viewer::in_motion`]).
+    last_camera: Option<crate::render::camera::Camera>,
+    /// When the viewer was made, and the frames drawn since (the first three are logged: a frame
+    /// has been shown when the next one starts).
+    opened: std::time::Instant,
+    frames_drawn: u64,
 }
 
 impl Viewer {
@@ -107,11 +113,7 @@ impl Viewer {
         let base_colours = scene.terrain.colors.clone();
         let mut gpu = gpu;
         if let Some(g) = gpu.as_mut() {
-            // as the stills (`job::pictures::Stage`): lower switch sizes keep mid-distance crowns as
-            // meshes, and no far-field triangle budget (only trees under 6 px go to the canopy
-            // layer); the default budget of 6 M triangles per frame stays
-            g.renderer.lod.switch_px = [110.0, 45.0, 18.0];
-            g.renderer.lod.max_geometry_triangles = 0;
+            g.renderer.lod = still_lod();
         }
         let year = data.span().1 as f32;
         let plot_column = PLOT_COLUMNS.iter().map(|c| c.0).find(|c| data.stand_table.columns.iter().any(|x| x == c)).unwrap_or("basal_area_m2_ha").to_string();
@@ -138,6 +140,9 @@ impl Viewer {
             status: None,
             view_rect: egui::Rect::NOTHING,
             pixels_per_point: 1.0,
+            last_camera: None,
+            opened: std::time::Instant::now(),
+            frames_drawn: 0,
         })
     }
 
@@ -446,6 +451,16 @@ impl Viewer {
         }
     }
 
+    /// Whether this frame is drawn in motion ([`motion_lod`]): the first frame, and every frame
+    /// whose camera differs from the last one's or while the years play; a still frame then
+    /// follows at full detail ([`still_lod`]). With a `--screenshot` pending every frame is
+    /// still, so screenshots show the full detail.
+    fn in_motion(&mut self, cam: &crate::render::camera::Camera) -> bool {
+        let moved = self.last_camera.as_ref() != Some(cam) || self.playing;
+        self.last_camera = Some(*cam);
+        moved && !self.screenshot.as_ref().is_some_and(|s| s.pending())
+    }
+
     fn view_3d(&mut self, ui: &mut egui::Ui) {
         let size = ui.available_size();
         let (rect, resp) = ui.allocate_exact_size(size, egui::Sense::click_and_drag());
@@ -461,7 +476,19 @@ impl Viewer {
         self.scene.instances = std::mem::take(&mut self.current);
         let (w, h) = ((rect.width() * self.pixels_per_point) as u32, (rect.height() * self.pixels_per_point) as u32);
         let cam = self.rig.camera();
+        let motion = self.in_motion(&cam);
+        if let Some(g) = self.gpu.as_mut() {
+            g.renderer.lod = if motion { motion_lod() } else { still_lod() };
+        }
+        if motion {
+            // the full-detail frame once the camera rests
+            ui.ctx().request_repaint();
+        }
         let drawn = self.gpu.as_mut().map(|g| g.draw(&self.scene, &cam, w, h));
+        self.frames_drawn += 1;
+        if self.frames_drawn <= 3 {
+            tracing::info!("frame {} ({}) drawn {:.1} s after the viewer opened its data", self.frames_drawn, if motion { "in motion" } else { "still" }, self.opened.elapsed().as_secs_f32());
+        }
         self.current = std::mem::take(&mut self.scene.instances);
         match drawn {
             Some(Ok(tex)) => {
@@ -551,6 +578,24 @@ impl Viewer {
         }
     }
 }
+
+/// Level-of-detail settings of a still frame, as the stills (`job::pictures::Stage`): lower
+/// switch sizes keep mid-distance crowns as meshes, and no far-field triangle budget (only
+/// trees under 6 px go to the canopy layer); the default budget of 6 M triangles per frame stays.
+pub fn still_lod() -> crate::render::lod::LodParams {
+    crate::render::lod::LodParams { switch_px: [110.0, 45.0, 18.0], max_geometry_triangles: 0, ..Default::default() }
+}
+
+/// Level-of-detail settings of a frame in motion (issue 36's frame budget): the renderer's
+/// defaults, so coarser levels and at most [`MOTION_GEOMETRY_TRIANGLES`] triangles of tree
+/// geometry, the rest of the forest in the canopy layer.
+pub fn motion_lod() -> crate::render::lod::LodParams {
+    crate::render::lod::LodParams { max_geometry_triangles: MOTION_GEOMETRY_TRIANGLES, ..Default::default() }
+}
+
+/// Tree triangles drawn as geometry while the camera moves (the far-field switch rises until
+/// they fit; `render::lod`).
+pub const MOTION_GEOMETRY_TRIANGLES: u32 = 100_000;
 
 /// One prototype per species of `library` (in library order, as the instances index them): the
 /// EcoMod model of [`scene::prototypes`] for the species of `pool`, the renderer's cheap stand-in
