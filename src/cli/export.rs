@@ -57,6 +57,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let levels = sylva::job::export::parse_levels(&a.lod)?;
     if let Some(p) = &a.stats {
         super::check_stats_path(p)?;
+        anyhow::ensure!(p != &a.out, "--stats {}: the same file as --out; give the statistics their own file (e.g. stats.json)", p.display());
     }
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;

@@ -158,6 +158,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     // leave the picture without its statistics
     if let Some(p) = &a.stats {
         super::check_stats_path(p)?;
+        anyhow::ensure!(p != &a.out, "--stats {}: the same file as --out; give the statistics their own file (e.g. stats.json)", p.display());
     }
     let camera = match a.camera {
         RenderCamera::Preset(p) => p,

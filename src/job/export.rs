@@ -392,11 +392,22 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     use crate::output::gltf::{InstanceGroup, InstancedScene};
     let (sc, site, year, area) = open_export(run_dir, o.year, &o.levels, o.area)?;
     let [x0, y0, x1, y1] = area;
+    let mut unknown = 0usize;
     let rows = super::pictures::snapshot_rows_where(run_dir, year, |r| {
-        r.status == "alive" && r.height_m >= super::scene::MIN_DRAWN_HEIGHT_M && r.x_m >= x0 && r.x_m < x1 && r.y_m >= y0 && r.y_m < y1 && library.find(&r.species).is_some()
+        let live = r.status == "alive" && r.height_m >= super::scene::MIN_DRAWN_HEIGHT_M && r.x_m >= x0 && r.x_m < x1 && r.y_m >= y0 && r.y_m < y1;
+        let known = library.find(&r.species).is_some();
+        unknown += (live && !known) as usize;
+        live && known
     })?;
+    if unknown > 0 {
+        tracing::warn!("{unknown} live trees are of species not in the library and are left out (give their species files with --species-dir)");
+    }
     if rows.is_empty() {
-        return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}: no live tree in year {year}"), "an area (or a year) with live trees of the species library at least 1 m tall".into()));
+        let why = if unknown > 0 { format!(" of the species library ({unknown} of unknown species)") } else { String::new() };
+        return Err(match o.area {
+            Some(_) => invalid("--area", format!("{x0},{y0},{x1},{y1}: no live tree{why} in year {year}"), "an area (or a year) with live trees of the species library at least 1 m tall".into()),
+            None => invalid("--year", format!("{year}: no live tree{why} on the site"), "a year with live trees of the species library at least 1 m tall (or --species-dir with the run's species files)".into()),
+        });
     }
     let (terrain, z0) = terrain_patch(&site, area);
     let origin = Vec3::new(((x0 + x1) * 0.5) as f32, ((y0 + y1) * 0.5) as f32, z0);

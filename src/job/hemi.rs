@@ -22,7 +22,7 @@
 //! phase's relative light (0–1.5) at that place and 1.3 m, from the same snapshot's trees (the
 //! crowns stamped on the scenario's light cells, `LAI_above` and the zenith/sun mix of
 //! `sim::phases::light`, times the place's relative insolation; the scenario's obstacles are
-//! left out).
+//! left out of this figure, though the picture shows them: they are opaque to the rays).
 
 use super::Result;
 use crate::conditions::SiteConditions;
@@ -133,9 +133,16 @@ pub fn hemispherical_photo(run_dir: &Path, library: &SpeciesLibrary, o: &HemiOpt
         None => super::inventory::snapshots(run_dir)?.iter().map(|s| s.0).max().ok_or_else(|| Error::format(run_dir, "no inventory snapshots (inventory/year_NNNN.csv)"))?,
     };
     let r2 = VIEW_RADIUS_M * VIEW_RADIUS_M;
+    let mut unknown = 0usize;
     let rows = super::pictures::snapshot_rows_where(run_dir, year, |r| {
-        r.status == "alive" && library.find(&r.species).is_some() && (r.x_m - o.x_m).powi(2) + (r.y_m - o.y_m).powi(2) < r2 && r.height_m > 0.0 && r.crown_radius_m > 0.0
+        let near = r.status == "alive" && (r.x_m - o.x_m).powi(2) + (r.y_m - o.y_m).powi(2) < r2 && r.height_m > 0.0 && r.crown_radius_m > 0.0;
+        let known = library.find(&r.species).is_some();
+        unknown += (near && !known) as usize;
+        near && known
     })?;
+    if unknown > 0 {
+        tracing::warn!("{unknown} trees within {VIEW_RADIUS_M} m are of species not in the library and are left out of the photograph (give their species files with --species-dir)");
+    }
     let crowns: Vec<Crown> = rows
         .iter()
         .filter_map(|r| {
@@ -148,7 +155,9 @@ pub fn hemispherical_photo(run_dir: &Path, library: &SpeciesLibrary, o: &HemiOpt
             Some(Crown { x: (r.x_m - o.x_m) as f32, y: (r.y_m - o.y_m) as f32, r: r.crown_radius_m, base: g + base - eye_h, top: g + r.height_m - eye_h, kd, stem_r: (r.dbh_cm / 200.0).max(0.0), ground: g - eye_h })
         })
         .collect();
-    let grid = CrownGrid::new(&crowns);
+    // obstacles relative to the camera
+    let eye = glam::Vec3::new(o.x_m as f32, o.y_m as f32, eye_h);
+    let grid = CrownGrid::new(&crowns, super::adapted::solids(&sc.obstacles, &site), eye);
     let horizon = horizon_angles(&site, o.x_m, o.y_m, eye_h);
     let n = o.size_px as usize;
     let half = n as f32 * 0.5;
@@ -211,12 +220,15 @@ struct CrownGrid {
     half: f32,
     /// The highest crown top above the camera (m, at least 0).
     top: f32,
+    /// The scenario's obstacles as solids (world coordinates, m) and the camera among them.
+    solids: Vec<crate::obstacle::Obstacle>,
+    eye: glam::Vec3,
     start: Vec<u32>,
     items: Vec<u32>,
 }
 
 impl CrownGrid {
-    fn new(crowns: &[Crown]) -> CrownGrid {
+    fn new(crowns: &[Crown], solids: Vec<crate::obstacle::Obstacle>, eye: glam::Vec3) -> CrownGrid {
         let half = VIEW_RADIUS_M as f32 + 20.0;
         let n = (2.0 * half / GRID_M).ceil() as usize;
         let cell = |v: f32| (((v + half) / GRID_M).floor().max(0.0) as usize).min(n - 1);
@@ -237,7 +249,7 @@ impl CrownGrid {
         }
         start.push(items.len() as u32);
         let top = crowns.iter().map(|c| c.top).fold(0.0f32, f32::max);
-        CrownGrid { n, half, top, start, items }
+        CrownGrid { n, half, top, solids, eye, start, items }
     }
 }
 
@@ -250,6 +262,10 @@ fn transmission(grid: &CrownGrid, crowns: &[Crown], horizon: &[f32], d: [f32; 3]
     let az = d[0].atan2(d[1]).rem_euclid(std::f32::consts::TAU);
     let elev = d[2].clamp(-1.0, 1.0).asin();
     if elev <= horizon[((az / std::f32::consts::TAU * horizon.len() as f32) as usize).min(horizon.len() - 1)] {
+        return 0.0;
+    }
+    // the scenario's obstacles: opaque
+    if grid.solids.iter().any(|o| o.ray_hits(grid.eye, glam::Vec3::from(d), f32::INFINITY)) {
         return 0.0;
     }
     let hor = (d[0] * d[0] + d[1] * d[1]).sqrt();
@@ -441,7 +457,7 @@ mod tests {
         // one crown of LAI 4.5 overhead (k·LAD over its 8 m length): exp(−0.5 · 4.5) straight up
         let lai = 4.5;
         let c = Crown { x: 0.5, y: 0.0, r: 4.0, base: 4.0, top: 12.0, kd: K_EXT * lai / 8.0, stem_r: 0.2, ground: -1.3 };
-        let grid = CrownGrid::new(&[c]);
+        let grid = CrownGrid::new(&[c], Vec::new(), glam::Vec3::ZERO);
         let flat = vec![0.0f32; 720];
         let t = transmission(&grid, &[c], &flat, [0.0, 0.0, 1.0]);
         assert!((t - (-K_EXT * lai).exp()).abs() < 1e-4, "{t}");
@@ -453,9 +469,16 @@ mod tests {
         // a low ray beside it sees the sky; one into the stem is dark; below the horizon dark
         assert_eq!(transmission(&grid, &[c], &flat, [0.0, 0.995, 0.0998]), 1.0);
         let stem = Crown { x: 3.0, y: 0.0, r: 0.0, base: 5.0, top: 5.0, kd: 0.0, stem_r: 0.3, ground: -1.3 };
-        let g2 = CrownGrid::new(&[stem]);
+        let g2 = CrownGrid::new(&[stem], Vec::new(), glam::Vec3::ZERO);
         assert_eq!(transmission(&g2, &[stem], &flat, [0.995, 0.0, 0.0998]), 0.0);
         let high = vec![0.3f32; 720];
         assert_eq!(transmission(&grid, &[c], &high, [0.0, 0.995, 0.0998]), 0.0);
+        // an obstacle (a 10 m box 2 m north of a camera at (100, 100, 1.3)) is opaque; the sky
+        // beside it is not
+        let eye = glam::Vec3::new(100.0, 100.0, 1.3);
+        let wall = crate::obstacle::Obstacle::Box { min: glam::Vec3::new(95.0, 102.0, 0.0), max: glam::Vec3::new(105.0, 104.0, 10.0) };
+        let g3 = CrownGrid::new(&[], vec![wall], eye);
+        assert_eq!(transmission(&g3, &[], &flat, [0.0, 0.8, 0.6]), 0.0);
+        assert_eq!(transmission(&g3, &[], &flat, [0.0, -0.8, 0.6]), 1.0);
     }
 }
