@@ -369,6 +369,13 @@ pub struct Renderer {
     pub lod: LodParams,
     /// Where culling and level selection run (default [`Culling::Auto`]).
     pub culling: Culling,
+    /// Keep the sun's shadow map of the last frame instead of drawing it again (default false):
+    /// the map depends on the scene and the sun, not on the camera, so a viewer moving its
+    /// camera over an unchanged scene can skip the shadow pass (it is drawn anew after the
+    /// terrain or the tree models change, and whenever this is false).
+    pub reuse_shadow_map: bool,
+    /// Whether the shadow map holds a frame of the current terrain and models.
+    shadow_ok: bool,
     last: FrameStats,
 }
 
@@ -544,6 +551,8 @@ impl Renderer {
             format,
             lod: LodParams::default(),
             culling: Culling::Auto,
+            reuse_shadow_map: false,
+            shadow_ok: false,
             last: FrameStats::default(),
         })
     }
@@ -839,7 +848,13 @@ impl Renderer {
             }
             self.encode_cull(&mut enc, f);
         }
-        self.encode_shadow(&mut enc, &draws);
+        if uploaded_terrain || uploaded_prototypes {
+            self.shadow_ok = false;
+        }
+        if !(self.reuse_shadow_map && self.shadow_ok) {
+            self.encode_shadow(&mut enc, &draws);
+            self.shadow_ok = true;
+        }
         let tree_draws = self.encode_main(&mut enc, &draws, view);
         let Some(gpu) = &self.scene else { return Err(RenderError::Internal("uploaded scene").into()) };
         let cull_rb = match (&draws, &self.cull) {

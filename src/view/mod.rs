@@ -94,6 +94,9 @@ pub struct Viewer {
     /// has been shown when the next one starts).
     opened: std::time::Instant,
     frames_drawn: u64,
+    /// `SYLVA_VIEW_SPIN` is set: turn the camera every frame and log the frame times.
+    spin: bool,
+    spin_clock: std::time::Instant,
 }
 
 impl Viewer {
@@ -143,6 +146,8 @@ impl Viewer {
             last_camera: None,
             opened: std::time::Instant::now(),
             frames_drawn: 0,
+            spin: std::env::var_os("SYLVA_VIEW_SPIN").is_some(),
+            spin_clock: std::time::Instant::now(),
         })
     }
 
@@ -467,6 +472,12 @@ impl Viewer {
         self.view_rect = rect;
         self.pixels_per_point = ui.ctx().pixels_per_point();
         self.rig.drive(ui, &resp, rect.height());
+        // `SYLVA_VIEW_SPIN=1`: the camera turns a little every frame and the frame times are
+        // logged (how fast the viewer draws in motion, BENCHMARKS.md)
+        if self.spin {
+            self.rig.rotate(4.0, 0.0);
+            ui.ctx().request_repaint();
+        }
         if resp.clicked() {
             if let Some(p) = resp.interact_pointer_pos() {
                 self.pick_at(p.x - rect.left(), p.y - rect.top());
@@ -479,13 +490,22 @@ impl Viewer {
         let motion = self.in_motion(&cam);
         if let Some(g) = self.gpu.as_mut() {
             g.renderer.lod = if motion { motion_lod() } else { still_lod() };
+            // the sun's shadows do not move with the camera: in motion the last map serves
+            g.renderer.reuse_shadow_map = motion;
         }
         if motion {
             // the full-detail frame once the camera rests
             ui.ctx().request_repaint();
         }
+        // in motion at half the resolution (a quarter of the pixels to rasterise: on a software
+        // adapter the frame is spent there), egui scales it to the view
+        let (w, h) = if motion { ((w / 2).max(16), (h / 2).max(16)) } else { (w, h) };
         let drawn = self.gpu.as_mut().map(|g| g.draw(&self.scene, &cam, w, h));
         self.frames_drawn += 1;
+        if self.spin && self.frames_drawn % 10 == 0 {
+            tracing::info!("frames {}–{}: {:.0} ms per frame", self.frames_drawn - 9, self.frames_drawn, self.spin_clock.elapsed().as_secs_f32() * 100.0);
+            self.spin_clock = std::time::Instant::now();
+        }
         if self.frames_drawn <= 3 {
             tracing::info!("frame {} ({}) drawn {:.1} s after the viewer opened its data", self.frames_drawn, if motion { "in motion" } else { "still" }, self.opened.elapsed().as_secs_f32());
         }
@@ -588,7 +608,8 @@ pub fn still_lod() -> crate::render::lod::LodParams {
 
 /// Level-of-detail settings of a frame in motion (issue 36's frame budget): the renderer's
 /// defaults, so coarser levels and at most [`MOTION_GEOMETRY_TRIANGLES`] triangles of tree
-/// geometry, the rest of the forest in the canopy layer.
+/// geometry, the rest of the forest in the canopy layer; such a frame is also drawn at half the
+/// view's resolution.
 pub fn motion_lod() -> crate::render::lod::LodParams {
     crate::render::lod::LodParams { max_geometry_triangles: MOTION_GEOMETRY_TRIANGLES, ..Default::default() }
 }
