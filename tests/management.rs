@@ -267,6 +267,14 @@ fn bad_management_and_climate_input_is_refused_naming_file_and_field() {
     let c = base.replace("species = [\"beech\"]", &format!("species = [\"beech\"]\nclimate = {{ anomalies_file = {:?} }}", a.display().to_string()));
     let e = err(&c);
     assert!(e.contains("anomalies.csv line 3") && e.contains("climate.anomalies_file") && e.contains("warm"), "{e}");
+    // a byte-order mark before the header (spreadsheet programs write one) is read past: the
+    // same error, on the same line
+    std::fs::write(&a, "\u{feff}year,temperature_k,precipitation_factor\n1,0.5,1.0\n2,warm,1.0\n").unwrap();
+    let e = err(&c);
+    assert!(e.contains("anomalies.csv line 3") && e.contains("warm"), "{e}");
+    // a planting older than its species lives
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nage_yr = 900.0\nyear = 1\n"));
+    assert!(e.contains("management[0].age_yr") && e.contains("maximum age of beech"), "{e}");
 }
 
 #[test]

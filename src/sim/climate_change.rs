@@ -57,7 +57,8 @@ impl ClimateChange {
                 value: p.display().to_string(),
                 expected: format!("a readable CSV file `year,temperature_k[,precipitation_factor]` ({e})"),
             })?;
-            c.anomalies = parse_anomalies(&text, p)?;
+            // a byte-order mark (files saved by spreadsheet programs) is not part of the header
+            c.anomalies = parse_anomalies(text.strip_prefix('\u{feff}').unwrap_or(&text), p)?;
         }
         Ok(c)
     }

@@ -570,6 +570,13 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
                     if !site.pool.contains(&id) {
                         return Err(invalid(ctx, i, &format!("mix.{sp}"), sp, "a species of the scenario's pool (add it to `species`)"));
                     }
+                    // a planted tree older than its species lives dies at once (found by a
+                    // break-it pass: 1,000-year spruce all died in year 2)
+                    let age = m.age_yr.unwrap_or(2.0);
+                    let max_age = lib.species[id as usize].life.max_age_yr;
+                    if age > max_age {
+                        return Err(invalid(ctx, i, "age_yr", age, &format!("at most the maximum age of {sp} ({max_age} years, `life.max_age_yr` in its species file)")));
+                    }
                     acc += s / total;
                     out.push((id, acc));
                 }
