@@ -341,3 +341,31 @@ fn warming_moves_beech_recruits_upslope_and_spruce_out_of_the_lowlands() {
     assert!(z1 > z0 + 2.0, "beech recruits' mean elevation {z0:.1} m without warming, {z1:.1} m with");
     assert!(s1 < 0.8 * s0, "spruce basal area in the lowest third {s0:.2} m² without warming, {s1:.2} m² with");
 }
+
+/// A project folder moved elsewhere (the scenario and its area file together) keeps the
+/// checkpoint's identity, so `--resume` works there; an edited entry changes the identity of
+/// that entry only, named `management[i]` (found by a break-it pass: the resolved absolute path
+/// of the area file was part of it).
+#[test]
+fn the_checkpoint_identity_survives_a_moved_project_folder_and_names_the_changed_entry() {
+    let geo = r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},"geometry":{"type":"Polygon","coordinates":[[[10,10],[60,10],[60,60],[10,60],[10,10]]]}}]}"#;
+    let toml = |spacing: f64| format!("name = \"mv\"\nyears = 3\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = {{ width = 10, height = 10, cell_m = 10.0, elevation_m = 300.0, indices = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0] }}\n[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = {spacing:?}\nyear = 0\narea_file = \"p.geojson\"\n[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 2\narea = [0.0, 0.0, 20.0, 20.0]\n");
+    let identity = |dir: &std::path::Path, spacing: f64| {
+        std::fs::create_dir_all(dir).unwrap();
+        std::fs::write(dir.join("p.geojson"), geo).unwrap();
+        std::fs::write(dir.join("s.toml"), toml(spacing)).unwrap();
+        let sc = sylva::sim::Scenario::load(&dir.join("s.toml")).unwrap();
+        let site = sc.site().unwrap();
+        let w = sylva::sim::World::new(site, &common::embedded(), &sc).unwrap();
+        sylva::sim::checkpoint::identity(&w).into_iter().find(|(k, _)| k == "management").unwrap().1
+    };
+    let d = tempfile::tempdir().unwrap();
+    let a = identity(&d.path().join("A"), 2.0);
+    assert_eq!(a, identity(&d.path().join("elsewhere/B"), 2.0), "the same entries and areas in another folder");
+    let edited = identity(&d.path().join("C"), 3.0);
+    assert_ne!(a, edited);
+    // the harvest entry is unchanged: its CRC is the same
+    let tail = |s: &str| s.split("management[1]").nth(1).unwrap().to_string();
+    assert_eq!(tail(&a), tail(&edited), "{a} / {edited}");
+    assert!(a.contains("management[0]") && a.contains("management[1]"), "{a}");
+}

@@ -138,7 +138,8 @@ fn crc_f32(h: &mut crc32fast::Hasher, v: &[f32]) {
 /// `site conditions` (CRC-32 of the per-cell indices L T K F R N, insolation, temperature,
 /// wind exposure and TWI: changes with the climate and soil constants); `seed rain`
 /// (seeds per m² and year per pool species); `obstacles` (count and CRC-32); where the
-/// scenario has them, `management` (the entries and their resolved areas, CRC-32) and
+/// scenario has them, `management` (a CRC-32 per entry of the entry and its resolved area, the
+/// area file's path left out) and
 /// `climate change` (the ramp and a CRC-32 of the anomalies).
 pub fn identity(w: &World) -> Vec<(String, String)> {
     let s = &w.site;
@@ -173,7 +174,20 @@ pub fn identity(w: &World) -> Vec<(String, String)> {
     // management and a changing climate, only where the scenario has them (so that the identity
     // of other runs keeps its fields)
     if !s.management.is_empty() {
-        out.push(("management".into(), format!("{} entries, CRC-32 {:08x} of the entries and their resolved areas", s.management.len(), crc32fast::hash(format!("{:?}", s.management).as_bytes()))));
+        // one CRC per entry (so a refusal shows which entry changed), of the entry and its
+        // resolved area without the area file's path (a project folder moved elsewhere with
+        // the same file resumes; found by a break-it pass)
+        let crcs: Vec<String> = s
+            .management
+            .iter()
+            .enumerate()
+            .map(|(i, op)| {
+                let mut op = op.clone();
+                op.spec.area_file = None;
+                format!("management[{i}] {:08x}", crc32fast::hash(format!("{op:?}").as_bytes()))
+            })
+            .collect();
+        out.push(("management".into(), format!("{} entries, CRC-32 of each with its resolved area: {}", s.management.len(), crcs.join(", "))));
     }
     if s.climate_change.is_active() {
         let c = &s.climate_change;
