@@ -272,6 +272,15 @@ struct Xvfb {
 
 impl Drop for Xvfb {
     fn drop(&mut self) {
+        // SIGTERM, so that the server removes its lock file and socket (SIGKILL left them,
+        // and the display numbers ran out over many runs); SIGKILL if it is still there
+        let _ = Command::new("kill").arg(self.child.id().to_string()).status();
+        for _ in 0..40 {
+            if self.child.try_wait().ok().flatten().is_some() {
+                return;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(25));
+        }
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
@@ -284,18 +293,43 @@ fn xvfb(n: u32) -> Option<Xvfb> {
         eprintln!("skipping: Xvfb is not installed (apt-get install xvfb)");
         return None;
     }
-    // the first free display number from n on
-    let n = (n..n + 40).find(|k| !Path::new(&format!("/tmp/.X11-unix/X{k}")).exists() && !Path::new(&format!("/tmp/.X{k}-lock")).exists()).unwrap_or(n);
-    let display = format!(":{n}");
-    let child = Command::new("Xvfb").args([display.as_str(), "-screen", "0", "1400x900x24", "-nolisten", "tcp"]).stderr(std::process::Stdio::null()).spawn().unwrap();
-    let sock = PathBuf::from(format!("/tmp/.X11-unix/X{n}"));
+    // display numbers handed out once per process, from 57 on (`n` is a hint kept for the
+    // callers), skipping those in use; a server that fails to start (another one took its
+    // number meanwhile) is replaced by the next number. Tests start servers in parallel: with
+    // a "first free number from n on" per test, two could pick the same one (seen in CI).
+    static NEXT: std::sync::Mutex<u32> = std::sync::Mutex::new(57);
+    let _ = n;
+    let mut next = NEXT.lock().unwrap_or_else(|e| e.into_inner());
     for _ in 0..200 {
-        if sock.exists() {
-            break;
+        let k = *next;
+        *next += 1;
+        // a live server's socket: taken (a stale lock of a killed server, Xvfb removes itself)
+        let sock = PathBuf::from(format!("/tmp/.X11-unix/X{k}"));
+        if sock.exists() && Path::new(&format!("/tmp/.X{k}-lock")).exists() {
+            continue;
         }
-        std::thread::sleep(std::time::Duration::from_millis(25));
+        let display = format!(":{k}");
+        let mut child = Command::new("Xvfb").args([display.as_str(), "-screen", "0", "1400x900x24", "-nolisten", "tcp"]).stderr(std::process::Stdio::null()).spawn().unwrap();
+        let mut up = false;
+        for _ in 0..400 {
+            if sock.exists() {
+                // a server that finds its display taken exits at once: give it that moment
+                std::thread::sleep(std::time::Duration::from_millis(150));
+                up = child.try_wait().ok().flatten().is_none();
+                break;
+            }
+            if child.try_wait().ok().flatten().is_some() {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(25));
+        }
+        if up {
+            return Some(Xvfb { child, display });
+        }
+        let _ = child.kill();
+        let _ = child.wait();
     }
-    Some(Xvfb { child, display })
+    panic!("no virtual display could be started (Xvfb on :57 to :256)");
 }
 
 /// Runs `sylva ARGS` on the display with a private runtime folder; returns (success, stderr).
