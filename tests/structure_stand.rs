@@ -6,7 +6,7 @@
 use glam::Vec3;
 use sylva::species::SpeciesLibrary;
 use sylva::structure::grow::space::Obstacle;
-use sylva::structure::stand::{adapt_stand, age_class, cluster_overlap, fit, AdaptedTree, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
+use sylva::structure::stand::{adapt_stand, age_class, cluster_overlap, crown_base_class, FULL_STRANDS, fit, AdaptedTree, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
 
 fn lib() -> SpeciesLibrary {
     SpeciesLibrary::embedded().unwrap()
@@ -52,12 +52,17 @@ fn crown_base_and_width(a: &AdaptedTree, base: Vec3) -> (f32, f32) {
 #[test]
 fn fitted_tree_has_the_simulated_height_crown_and_crown_base() {
     let lib = lib();
-    let mut cache = SkeletonCache::new(7, DEFAULT_MAX_STRANDS);
+    let mut cache = SkeletonCache::new(7, FULL_STRANDS);
     let s = lib.find("beech").unwrap();
-    cache.prepare(&lib, &[(s, age_class(60.0))]).unwrap();
-    let g = cache.get(s, age_class(60.0)).unwrap();
+    cache.prepare(&lib, &[(s, age_class(60.0), crown_base_class(20.0, 8.0))]).unwrap();
+    let g = cache.get((s, age_class(60.0), crown_base_class(20.0, 8.0))).unwrap();
     let (sk, lv) = fit(g, 20.0, 4.0, 8.0);
     assert!((sk.height() - 20.0).abs() < 0.05, "height {}", sk.height());
+    // grown as a forest tree: its crown stands above the crown base, so shedding the branches
+    // below it keeps every node (round 16 grew the open tree and shed four fifths of it)
+    assert_eq!(sk.nodes.len(), g.skeleton.nodes.len());
+    let first_branch = sk.nodes.iter().filter_map(|c| c.parent.map(|p| (&sk.nodes[p as usize], c))).filter(|(par, c)| par.gravelius == 0 && c.gravelius > 0).map(|(par, _)| par.pos.z).fold(f32::INFINITY, f32::min);
+    assert!((8.0..8.6).contains(&first_branch), "first branch at {first_branch} m, crown base 8 m");
     let r = sylva::structure::crown_radius(&sk, &Default::default());
     assert!(r <= 4.0 + 1e-3 && r > 2.0, "crown radius {r}");
     // no branch leaves the stem below the crown base
@@ -70,9 +75,9 @@ fn fitted_tree_has_the_simulated_height_crown_and_crown_base() {
     assert!(lv.leaves.iter().all(|l| (l.node as usize) < sk.nodes.len()));
     assert!(lv.leaves.iter().map(|l| l.pos.z).fold(f32::INFINITY, f32::min) > 6.0);
     // another scenario seed grows another tree
-    let mut other = SkeletonCache::new(8, DEFAULT_MAX_STRANDS);
-    other.prepare(&lib, &[(s, age_class(60.0))]).unwrap();
-    assert_ne!(other.get(s, age_class(60.0)).unwrap().skeleton, g.skeleton);
+    let mut other = SkeletonCache::new(8, FULL_STRANDS);
+    other.prepare(&lib, &[(s, age_class(60.0), crown_base_class(20.0, 8.0))]).unwrap();
+    assert_ne!(other.get((s, age_class(60.0), crown_base_class(20.0, 8.0))).unwrap().skeleton, g.skeleton);
 }
 
 #[test]

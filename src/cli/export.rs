@@ -38,6 +38,16 @@ pub struct Args {
     /// exist.
     #[arg(long)]
     pub stats: Option<PathBuf>,
+    /// Most EcoMod strands of a tree's skeleton in a stand export (2 nodes a strand; at least
+    /// 8; default 48): more gives finer branching and larger files (BENCHMARKS.md).
+    #[arg(long, conflicts_with = "full_detail")]
+    pub max_strands: Option<u32>,
+    /// Every tree of a stand export with its species' strand count at its age, as `sylva tree
+    /// grow` gives it (hundreds to thousands of nodes a canopy tree): slower and larger files;
+    /// Plastic Trees then prunes the branches the neighbours shade, so crowns are more open
+    /// than with the default spread leaf cards.
+    #[arg(long)]
+    pub full_detail: bool,
     /// Folder of extra or edited species files, over the shipped library and the run's own
     /// `species/` folder.
     #[arg(long)]
@@ -72,6 +82,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         o.year = a.year;
         o.season = a.season;
         o.levels = levels;
+        if a.full_detail {
+            o.max_strands = sylva::structure::stand::FULL_STRANDS;
+        }
+        if let Some(m) = a.max_strands {
+            anyhow::ensure!(m >= 8, "--max-strands {m}: expected at least 8 strands");
+            o.max_strands = m;
+        }
         sylva::job::export::export_stand(&a.run_dir, &lib, &o, &a.out)?
     };
     if let Some(p) = &a.stats {

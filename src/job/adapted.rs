@@ -18,7 +18,7 @@ use crate::render::scene::{Camera, Prototype, TreeInstance};
 use crate::sim::obstacle::ObstacleSpec;
 use crate::species::{Season, SpeciesLibrary};
 use crate::obstacle::Obstacle;
-use crate::structure::stand::{adapt_stand, AdaptedTree, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
+use crate::structure::stand::{adapt_stand, AdaptedTree, SkeletonCache, StandOptions, StandTree, FULL_STRANDS};
 use crate::structure::{Leaves, Skeleton};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -34,13 +34,44 @@ pub struct AdaptOptions {
     pub cell_m: f32,
     /// See [`StandOptions::halo_m`].
     pub halo_m: f32,
+    /// Height (px) of the picture the near field is drawn into.
+    pub image_height_px: f32,
+    /// Smallest projected height (px, [`Camera::projected_size_px`] of the tree's height at
+    /// its middle) of a tree adapted at full detail (its species' strand count at its age,
+    /// [`crate::structure::stand::FULL_STRANDS`]); smaller ones, which the picture draws at the
+    /// coarser levels, get at most [`FAR_MAX_STRANDS`]. Default: where the renderer's full
+    /// level begins to fade in, `switch_px[0] · (1 − band)` of
+    /// [`crate::render::lod::LodParams::default`] (180 px).
+    pub full_px: f32,
+    /// Most trees adapted at full detail (the largest on screen first; the others of
+    /// [`AdaptOptions::full_px`] get at most [`FAR_MAX_STRANDS`]): the adaptation's time grows
+    /// with the nodes (BENCHMARKS.md round 17).
+    pub max_full_trees: usize,
 }
 
+/// Most EcoMod strands of the adapted trees under [`AdaptOptions::full_px`] (about 60 nodes
+/// after shedding: the stand skeletons of round 16, enough for the crown hull and billboard
+/// levels they are drawn at).
+pub const FAR_MAX_STRANDS: u32 = 48;
+
 impl Default for AdaptOptions {
-    /// 80 m, 400 trees, cells of 12 m with a halo of 6 m.
+    /// 80 m, 400 trees, cells of 12 m with a halo of 6 m, a picture 1,080 px tall, full detail
+    /// from 180 px for at most 100 trees.
     fn default() -> Self {
-        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0 }
+        let lod = crate::render::lod::LodParams::default();
+        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0, image_height_px: 1080.0, full_px: lod.switch_px[0] * (1.0 - lod.band), max_full_trees: 100 }
     }
+}
+
+/// The open-grown skeletons of the near field for one scenario seed: full detail for the trees
+/// drawn at the full level ([`AdaptOptions::full_px`]), at most [`FAR_MAX_STRANDS`] for the
+/// others.
+#[derive(Debug, Clone)]
+pub struct NearCaches {
+    /// Trees drawn at the full level.
+    pub full: SkeletonCache,
+    /// The others.
+    pub far: SkeletonCache,
 }
 
 /// Height (m) from which a tree counts in the node-count figures of `--stats`
@@ -142,7 +173,7 @@ pub fn solids(obstacles: &[ObstacleSpec], site: &SiteConditions) -> Vec<Obstacle
 ///
 /// Errors: those of [`adapt_stand`] (invalid obstacles or trees).
 #[allow(clippy::too_many_arguments)]
-pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes: &mut Vec<Prototype>, library: &SpeciesLibrary, site: &SiteConditions, obstacles: &[ObstacleSpec], camera: &Camera, season: Season, cache: &mut SkeletonCache, o: &AdaptOptions) -> crate::Result<AdaptStats> {
+pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes: &mut Vec<Prototype>, library: &SpeciesLibrary, site: &SiteConditions, obstacles: &[ObstacleSpec], camera: &Camera, season: Season, cache: &mut NearCaches, o: &AdaptOptions) -> crate::Result<AdaptStats> {
     let t0 = std::time::Instant::now();
     let eye = Vec3::from(camera.eye);
     let fwd = (Vec3::from(camera.target) - eye).with_z(0.0).normalize_or(Vec3::Y);
@@ -164,14 +195,35 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         return Ok(AdaptStats::default());
     }
     let trees: Vec<StandTree> = stand.iter().map(|(_, t)| *t).collect();
-    let targets: Vec<usize> = near.iter().map(|n| n.2).collect();
     let opts = StandOptions { cell_m: o.cell_m, halo_m: o.halo_m, latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(obstacles, site) };
-    let st = adapt_stand(&trees, &targets, library, cache, &opts)?;
+    // the full-detail trees first (nearest first), then the coarser ones (each adapted among all)
+    let px = |n: &(f32, usize, usize)| {
+        let t = &inst[n.1];
+        camera.projected_size_px(Vec3::from(t.position) + Vec3::Z * (0.5 * t.height), t.height, o.image_height_px)
+    };
+    // the largest on screen (ties: nearest first) of those over full_px
+    let mut by_size: Vec<(f32, usize)> = near.iter().enumerate().map(|(k, n)| (px(n), k)).filter(|(p, _)| *p >= o.full_px).collect();
+    by_size.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let mut is_full = vec![false; near.len()];
+    by_size.iter().take(o.max_full_trees).for_each(|&(_, k)| is_full[k] = true);
+    let (mut near, rest): (Vec<_>, Vec<_>) = near.into_iter().zip(is_full).partition(|(_, f)| *f);
+    let split = near.len();
+    near.extend(rest);
+    let near: Vec<(f32, usize, usize)> = near.into_iter().map(|(n, _)| n).collect();
+    let mut st_trees = Vec::with_capacity(near.len());
+    let mut trees_in_groups = 0;
+    for (part, c) in [(&near[..split], &mut cache.full), (&near[split..], &mut cache.far)] {
+        if !part.is_empty() {
+            let targets: Vec<usize> = part.iter().map(|n| n.2).collect();
+            let st = adapt_stand(&trees, &targets, library, c, &opts)?;
+            trees_in_groups += st.trees_in_groups;
+            st_trees.extend(st.trees);
+        }
+    }
     let adapt_s = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
     #[allow(clippy::type_complexity)]
-    let meshed: Vec<Option<(Prototype, f32, f32, bool, usize, usize)>> = st
-        .trees
+    let meshed: Vec<Option<(Prototype, f32, f32, bool, usize, usize)>> = st_trees
         .par_iter()
         .map(|a| {
             let t = &trees[a.index];
@@ -221,7 +273,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         prototypes.push(p);
         adapted += 1;
     }
-    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups: st.trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards })
+    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards })
 }
 
 /// The level-of-detail chain of the adapted tree `a` from its skeleton `sk` and leaves `lv` in
@@ -253,9 +305,9 @@ pub fn tree_frame(a: &AdaptedTree, base: Vec3) -> Option<(Skeleton, Leaves, f32)
     (h > 0.1).then_some((sk, lv, h))
 }
 
-/// A new open-grown tree cache for scenario seed `seed` ([`SkeletonCache`]).
-pub fn cache(seed: u64) -> SkeletonCache {
-    SkeletonCache::new(seed, DEFAULT_MAX_STRANDS)
+/// New open-grown tree caches for scenario seed `seed` ([`NearCaches`]).
+pub fn cache(seed: u64) -> NearCaches {
+    NearCaches { full: SkeletonCache::new(seed, FULL_STRANDS), far: SkeletonCache::new(seed, FAR_MAX_STRANDS) }
 }
 
 /// Grey of the obstacles (sRGB 150, 146, 140: weathered stone and concrete).

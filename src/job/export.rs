@@ -59,12 +59,18 @@ pub struct ExportOptions {
     pub levels: Vec<usize>,
     /// Most trees (refused beyond: [`DEFAULT_MAX_TREES`] by default).
     pub max_trees: usize,
+    /// Most EcoMod strands of a tree's skeleton (≥ 8; 2 nodes a strand):
+    /// [`crate::structure::stand::DEFAULT_MAX_STRANDS`] by default;
+    /// [`crate::structure::stand::FULL_STRANDS`] gives every tree its species' strand count at
+    /// its age, as `sylva tree grow` gives it (`--full-detail`, `--max-strands`).
+    pub max_strands: u32,
 }
 
 impl ExportOptions {
-    /// The last year, summer, the full-detail level only, [`DEFAULT_MAX_TREES`].
+    /// The last year, summer, the full-detail level only, [`DEFAULT_MAX_TREES`], the default
+    /// strand cap.
     pub fn new(area: [f64; 4]) -> ExportOptions {
-        ExportOptions { year: None, area, season: Season::Summer, levels: vec![0], max_trees: DEFAULT_MAX_TREES }
+        ExportOptions { year: None, area, season: Season::Summer, levels: vec![0], max_trees: DEFAULT_MAX_TREES, max_strands: crate::structure::stand::DEFAULT_MAX_STRANDS }
     }
 }
 
@@ -132,8 +138,27 @@ pub struct ExportStats {
     /// Leaf cards of the full-detail meshes of all trees written (each tree counted, shared
     /// meshes too).
     pub leaf_cards: usize,
-    /// Wall time of the adaptation (s).
+    /// Wall time of the adaptation (s): growing and analysing the open-grown trees
+    /// ([`ExportStats::analysis_s`]) and adapting the neighbourhoods
+    /// ([`ExportStats::adaptation_s`]).
     pub adapt_s: f64,
+    /// Wall time (s) of growing the open-grown skeletons and their Plastic Trees analyses
+    /// (`000_*.txt` section 4; one per class of species, age, height, crown radius and crown
+    /// base).
+    pub analysis_s: f64,
+    /// Wall time (s) of adapting the trees with their neighbours (section 5).
+    pub adaptation_s: f64,
+    /// Distinct analyses.
+    pub analyses: usize,
+    /// Skeleton nodes of all the adapted trees together.
+    pub nodes_total: usize,
+    /// Nodes of the fitted skeletons before the adaptation, all trees together
+    /// ([`crate::structure::plastic::PlasticReport::nodes_before`]).
+    pub nodes_before_adaptation: usize,
+    /// Nodes the adaptation pruned for too little light (eq. 10 threshold), all trees.
+    pub pruned_light: usize,
+    /// Nodes pruned inside obstacles or neighbours' wood, all trees.
+    pub pruned_collision: usize,
     /// Triangles of the written levels of all trees (each tree counted, shared meshes too;
     /// billboards as drawn, two crossed cards) plus the terrain and obstacles.
     pub triangles: usize,
@@ -230,7 +255,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}: {} trees", targets.len()), format!("at most {} trees: a smaller area", o.max_trees)));
     }
     let t0 = std::time::Instant::now();
-    let mut cache = super::adapted::cache(sc.seed);
+    let mut cache = crate::structure::stand::SkeletonCache::new(sc.seed, o.max_strands);
     let st = adapt_stand(&trees, &targets, library, &mut cache, &opts)?;
     let adapt_s = t0.elapsed().as_secs_f64();
 
@@ -336,6 +361,13 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         nodes_median: median_usize(&mut tall_nodes),
         leaf_cards,
         adapt_s,
+        analysis_s: st.analysis_s,
+        adaptation_s: st.adaptation_s,
+        analyses: st.analyses,
+        nodes_total: st.trees.iter().map(|a| a.skeleton.nodes.len()).sum(),
+        nodes_before_adaptation: st.trees.iter().map(|a| a.report.nodes_before).sum(),
+        pruned_light: st.trees.iter().map(|a| a.report.pruned_light).sum(),
+        pruned_collision: st.trees.iter().map(|a| a.report.pruned_collision).sum(),
         triangles,
         levels: o.levels.clone(),
     };
@@ -494,7 +526,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     };
     let counts = crate::output::gltf::write_instanced_glb(out, &scene)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
-    let stats = ExportStats { trees, trees_15m: tall_nodes.len(), nodes_min: tall_nodes.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut tall_nodes), leaf_cards, adapt_s: 0.0, triangles, levels: o.levels.clone() };
+    let stats = ExportStats { trees, trees_15m: tall_nodes.len(), nodes_min: tall_nodes.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut tall_nodes), leaf_cards, triangles, levels: o.levels.clone(), ..Default::default() };
     Ok(ExportReport { out: out.to_path_buf(), year, trees, models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s: 0.0, bytes, stats })
 }
 

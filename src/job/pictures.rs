@@ -9,7 +9,6 @@ use crate::render::headless::Renderer;
 use crate::render::scene::{Prototype, Scene, TreeInstance};
 use super::adapted::{self, AdaptOptions, AdaptStats};
 use crate::sim::obstacle::ObstacleSpec;
-use crate::structure::stand::SkeletonCache;
 use crate::render::timelapse;
 use crate::species::{Season, SpeciesLibrary};
 use super::Result;
@@ -40,7 +39,7 @@ pub struct Stage {
     /// Instances of the obstacles.
     obstacle_instances: Vec<TreeInstance>,
     /// Open-grown trees per species and age class (the scenario's seed).
-    cache: SkeletonCache,
+    cache: adapted::NearCaches,
     /// The ground drawn: the site and its surroundings ([`Stage::set_surroundings`]), recoloured
     /// by each frame's canopy (forest floor under crowns).
     landscape: scene::Landscape,
@@ -150,9 +149,10 @@ impl Stage {
     pub fn render_plants_with(&mut self, plants: &[Plant], saplings: &[scene::SaplingCohort], season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
         let mut inst = scene::instances_with_saplings(plants, saplings, &self.library, &self.site, season);
         self.last_adapt = AdaptStats::default();
-        let Some(o) = self.adapt.clone() else {
+        let Some(mut o) = self.adapt.clone() else {
             return self.render_instances(inst, season, camera, width, height);
         };
+        o.image_height_px = height as f32;
         let mut protos = self.base_prototypes.clone();
         self.last_adapt = adapted::adapt_near_field(plants, &mut inst, &mut protos, &self.library, &self.site, &self.obstacles, camera, season, &mut self.cache, &o)?;
         if self.last_adapt.adapted_trees == 0 {

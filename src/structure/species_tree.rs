@@ -39,6 +39,18 @@ pub struct GrownTree {
     pub space: Option<(f32, f32)>,
 }
 
+/// Age (years) from which an EcoMod tree has its species' full strand count ([`ecomod_strands_at`]).
+pub const ECOMOD_FULL_AGE_YR: f32 = 80.0;
+
+/// Strand count of an EcoMod tree of `age_yr` years whose species has `full` strands:
+/// S·min(1, a/[`ECOMOD_FULL_AGE_YR`])², at least 8 (and not more than `full` when that is at
+/// least 8). Ours (EcoMod, `004_*.txt`, grows a tree of a given strand count, not an age): the
+/// strands stand for the shoots, whose number grows with the crown's surface.
+pub fn ecomod_strands_at(full: u32, age_yr: f32) -> u32 {
+    let f = (age_yr / ECOMOD_FULL_AGE_YR).clamp(0.0, 1.0);
+    ((full as f32 * f * f).round() as u32).max(8).min(full.max(8))
+}
+
 /// Grows one tree of `sp` at `age_yr` years (> 0) with `model` among `obstacles` (ignored by
 /// EcoMod), seed `seed`. Light-guided runs `age` cycles (1–60), lateral shoots at 80° from the
 /// parent and plagiotropic side branches for conifers, 45° for broadleaves, with an internode of
@@ -57,8 +69,7 @@ pub fn grow_species_tree(sp: &Species, model: Model, age_yr: f32, obstacles: &[O
     match model {
         Model::EcoMod => {
             let mut p: EcoModParams = sp.architecture.ecomod.clone();
-            let f = (age_yr / 80.0).min(1.0);
-            p.strands = ((p.strands as f32 * f * f).round() as u32).max(8).min(p.strands.max(8));
+            p.strands = ecomod_strands_at(p.strands, age_yr);
             let (skeleton, leaves) = ecomod::try_grow(&p, seed, 0.0)?;
             Ok(GrownTree { skeleton, leaves, envelope: None, space: None })
         }

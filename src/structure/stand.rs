@@ -5,15 +5,21 @@
 //! the global light of the site's latitude, the terrain slope and the obstacles.
 //!
 //! Steps of [`adapt_stand`]:
-//! 1. **Open-grown skeleton per species and age class** ([`SkeletonCache`]): the EcoMod tree
-//!    (`004_*.txt`, Algorithm 1) of the species with S·min(1, a/80)² strands (a the class age,
-//!    S the species' strand count; at least 8, at most [`StandOptions::max_strands`] so that a
-//!    stand of thousands of trees stays affordable), grown with a seed drawn from the scenario's
+//! 1. **Forest-grown skeleton per species, age class and crown-base class** ([`SkeletonCache`]):
+//!    the EcoMod tree (`004_*.txt`, Algorithm 1) of the species with S·min(1, a/80)² strands
+//!    ([`crate::structure::species_tree::ecomod_strands_at`], a the middle of the tree's
+//!    5-year age class, S the species' strand count: what `sylva tree grow` gives at that age;
+//!    at most [`SkeletonCache::new`]'s `max_strands`), and with no cap ([`FULL_STRANDS`])
+//!    grown as a forest tree: its bole (EcoMod's first segment) is lengthened so that the first branch leaves the
+//!    stem just above the simulated crown base and every strand stands in the crown (issue 32;
+//!    until round 16 the open-grown tree was shed below the crown base, which removed four
+//!    fifths of its nodes). Grown with a seed drawn from the scenario's
 //!    seed, the species and the class ([`crate::rng::hash`]; EcoMod uses it for the wind sway,
-//!    and the tree is turned about its stem by an angle drawn from it), normalised to 1 m height. A small
-//!    cache: one entry per (species, age class) met. With fewer strands than the full tree the
-//!    leaves are made √(S_full/S_used) times longer (at most [`MAX_LEAF_GROWTH`]) so that the
-//!    foliage area stays near that of the full tree.
+//!    and the tree is turned about its stem by an angle drawn from it), normalised to 1 m
+//!    height. A small cache: one entry per class met. With fewer strands than the full tree
+//!    the leaves are made √(S_full/S_used) times longer (at most [`MAX_LEAF_GROWTH`]) so that
+//!    the foliage area stays near that of the full tree. The context trees of step 3 (which
+//!    only shade and block) have at most [`CONTEXT_MAX_STRANDS`].
 //! 2. **Fitted to the tree**: positions scaled about the base by H vertically and by
 //!    R / r₁ horizontally (H height, R crown radius from the simulation, r₁ the normalised
 //!    tree's crown radius), radii and leaves by H; every branch leaving the main stem (Gravelius
@@ -37,6 +43,7 @@
 //!    own trees, so the stand is the same for a seed whatever the thread count.
 
 use super::grow::ecomod;
+use super::species_tree::{ecomod_strands_at, ECOMOD_FULL_AGE_YR};
 use crate::obstacle::Obstacle;
 use super::plastic::{adapt_group_among, Environment, Fate, Ground, LeafCluster, PlasticReport, PlasticTree, Sky};
 use super::skeleton::{Leaves, Skeleton};
@@ -70,15 +77,42 @@ pub struct StandTree {
     pub aspect_deg: f32,
 }
 
-/// Upper bounds (years, exclusive) of the age classes; the last class holds every older tree.
-pub const AGE_CLASS_BOUNDS: [f32; 5] = [15.0, 30.0, 50.0, 80.0, 120.0];
-/// The age (years) each class grows its open-grown tree at.
-pub const AGE_CLASS_AGES: [f32; 6] = [10.0, 22.0, 40.0, 65.0, 100.0, 150.0];
+/// Width of the age classes (years) of the open-grown skeletons: a tree of age a is grown at
+/// the middle of its class, so its strand count is within a few per cent of what `sylva tree
+/// grow` gives the species at age a.
+pub const AGE_CLASS_YR: f32 = 5.0;
+/// The last age class: every tree of [`ECOMOD_FULL_AGE_YR`] (80 years) or older has the full
+/// strand count and shares it.
+pub const LAST_AGE_CLASS: u16 = (ECOMOD_FULL_AGE_YR / AGE_CLASS_YR) as u16;
 
-/// Age class (0–5) of a tree of `age_yr` years ([`AGE_CLASS_BOUNDS`]).
+/// Age class (0–[`LAST_AGE_CLASS`]) of a tree of `age_yr` years: ⌊a / [`AGE_CLASS_YR`]⌋.
 pub fn age_class(age_yr: f32) -> u16 {
-    AGE_CLASS_BOUNDS.iter().position(|&b| age_yr < b).unwrap_or(AGE_CLASS_BOUNDS.len()) as u16
+    ((age_yr.max(0.0) / AGE_CLASS_YR).floor() as u16).min(LAST_AGE_CLASS)
 }
+
+/// The age (years) each class grows its open-grown tree at: the middle of the class, and
+/// [`ECOMOD_FULL_AGE_YR`] for the last.
+pub fn class_age(class: u16) -> f32 {
+    if class >= LAST_AGE_CLASS {
+        ECOMOD_FULL_AGE_YR
+    } else {
+        (class as f32 + 0.5) * AGE_CLASS_YR
+    }
+}
+
+/// Crown-base classes per tree height: a tree's crown-base ratio cb/h (0–0.9) is taken in
+/// steps of 1/20.
+pub const CROWN_BASE_CLASSES: f32 = 20.0;
+
+/// Crown-base class (0–18) of a tree of height `height_m` with its crown base at `crown_base_m`
+/// (m): cb/h in steps of 1/[`CROWN_BASE_CLASSES`], rounded, at most 0.9.
+pub fn crown_base_class(height_m: f32, crown_base_m: f32) -> u16 {
+    ((crown_base_m / height_m.max(0.1)).clamp(0.0, 0.9) * CROWN_BASE_CLASSES).round() as u16
+}
+
+/// Key of an open-grown skeleton in the [`SkeletonCache`]: species (index into the library),
+/// age class ([`age_class`]) and crown-base class ([`crown_base_class`]).
+pub type FormKey = (u16, u16, u16);
 
 /// Relative step (5 %) of the height and crown-radius classes that share one analysis.
 pub const DIM_STEP: f32 = 1.05;
@@ -121,19 +155,37 @@ pub struct OpenGrown {
 pub struct SkeletonCache {
     seed: u64,
     max_strands: u32,
-    map: BTreeMap<(u16, u16), Arc<OpenGrown>>,
+    map: BTreeMap<FormKey, Arc<OpenGrown>>,
+    /// The context trees' skeletons (at most [`CONTEXT_MAX_STRANDS`] strands).
+    context: BTreeMap<FormKey, Arc<OpenGrown>>,
 }
+
+/// Most strands of a context tree's skeleton (a neighbour that shades and blocks the adapted
+/// trees but is not itself adapted or drawn from this adaptation, [`adapt_stand`] step 3): its
+/// leaf clusters and wood are all the adaptation reads of it, and 250 strands (500 nodes, the
+/// leaves lengthened as in [`SkeletonCache::prepare`]) give them; the full strand count made
+/// the context trees' analyses half the cost of a stand export (BENCHMARKS.md, round 17).
+pub const CONTEXT_MAX_STRANDS: u32 = 250;
 
 /// Largest factor by which the leaves of a stand skeleton grow to make up for its fewer tips.
 pub const MAX_LEAF_GROWTH: f32 = 2.0;
 
-/// Default most EcoMod strands of a stand skeleton (about 2 nodes per strand).
+/// No cap on the strands of a stand skeleton: every tree has its species' strand count at its
+/// age, as `sylva tree grow` gives it (2 nodes per strand).
+pub const FULL_STRANDS: u32 = u32::MAX;
+
+/// Default most EcoMod strands of a stand skeleton of a stand export: 48 (about 100 nodes).
+/// [`FULL_STRANDS`] (`sylva export --full-detail`, and the trees a picture draws at the full
+/// level) gives the detail of a tree grown alone, but after Plastic Trees has pruned it among
+/// its neighbours its foliage covers less of the simulated crown than the 48-strand tree's
+/// spread leaf cards (Blender's top view of a 40-year beech plantation: 0.40 against the crown
+/// discs' 0.75, 48 strands 0.62; BENCHMARKS.md round 17), so it is not the default yet.
 pub const DEFAULT_MAX_STRANDS: u32 = 48;
 
 impl SkeletonCache {
     /// An empty cache for scenario seed `seed`, trees of at most `max_strands` strands (≥ 8).
     pub fn new(seed: u64, max_strands: u32) -> SkeletonCache {
-        SkeletonCache { seed, max_strands: max_strands.max(8), map: BTreeMap::new() }
+        SkeletonCache { seed, max_strands: max_strands.max(8), map: BTreeMap::new(), context: BTreeMap::new() }
     }
 
     /// Number of (species, age class) trees held.
@@ -147,32 +199,61 @@ impl SkeletonCache {
     }
 
     /// Seed of the tree of `species` in age class `class`: a hash of the scenario's seed, the
-    /// species, the class and the architecture salt.
+    /// species, the class and the architecture salt (the crown-base classes of one age class
+    /// share it: the same tree with a longer bole).
     pub fn seed_of(&self, species: u16, class: u16) -> u64 {
-        crate::rng::hash(&[self.seed, species as u64, class as u64, crate::rng::salt::ARCHITECTURE])
+        form_seed(self.seed, species, class)
     }
 
-    /// Grows the missing trees of `keys` (species, age class) in parallel.
+    /// Grows the missing trees of `keys` ([`FormKey`]: species, age class, crown-base class) in
+    /// parallel. In a cache of [`FULL_STRANDS`], a tree of crown-base class q > 0 is grown as a
+    /// forest tree: its EcoMod trunk
+    /// (the first segment, `trunk_length_m`) is lengthened to T′ = (q + ε)·C/(1 − q − ε), C the
+    /// length of the open-grown crown above the first split and ε = 0.01, so that its first
+    /// branch leaves the stem just above the crown base once normalised, and the whole
+    /// open-grown crown (every strand) stands above it; a species whose own trunk is longer
+    /// keeps it. A capped cache grows the open-grown tree for every crown-base class.
     ///
     /// Errors: [`Error::Invalid`] for a species index outside `lib` or bad EcoMod parameters.
-    pub fn prepare(&mut self, lib: &SpeciesLibrary, keys: &[(u16, u16)]) -> Result<()> {
-        let mut missing: Vec<(u16, u16)> = keys.iter().copied().filter(|k| !self.map.contains_key(k)).collect();
+    pub fn prepare(&mut self, lib: &SpeciesLibrary, keys: &[FormKey]) -> Result<()> {
+        let (seed, cap) = (self.seed, self.max_strands);
+        Self::grow_missing(&mut self.map, seed, cap, lib, keys)
+    }
+
+    /// [`SkeletonCache::prepare`] for context trees: at most [`CONTEXT_MAX_STRANDS`] strands.
+    ///
+    /// Errors: those of [`SkeletonCache::prepare`].
+    pub fn prepare_context(&mut self, lib: &SpeciesLibrary, keys: &[FormKey]) -> Result<()> {
+        let (seed, cap) = (self.seed, self.max_strands.min(CONTEXT_MAX_STRANDS));
+        Self::grow_missing(&mut self.context, seed, cap, lib, keys)
+    }
+
+    fn grow_missing(map: &mut BTreeMap<FormKey, Arc<OpenGrown>>, seed: u64, max_strands: u32, lib: &SpeciesLibrary, keys: &[FormKey]) -> Result<()> {
+        let seed_of = |s: u16, c: u16| form_seed(seed, s, c);
+        let mut missing: Vec<FormKey> = keys.iter().copied().filter(|k| !map.contains_key(k)).collect();
         missing.sort_unstable();
         missing.dedup();
-        let grown: Vec<((u16, u16), OpenGrown)> = missing
+        let grown: Vec<(FormKey, OpenGrown)> = missing
             .par_iter()
-            .map(|&(s, c)| {
+            .map(|&(s, c, q)| {
                 let sp = lib.species.get(s as usize).ok_or_else(|| Error::Invalid { context: "stand skeletons".into(), field: "species".into(), value: s.to_string(), expected: format!("a species index below {}", lib.species.len()) })?;
                 let mut p = sp.architecture.ecomod.clone();
-                let age = AGE_CLASS_AGES[(c as usize).min(AGE_CLASS_AGES.len() - 1)];
-                let f = (age / 80.0).min(1.0);
-                let full = ((p.strands as f32 * f * f).round() as u32).max(8);
-                p.strands = full.min(self.max_strands);
-                let (sk, lv) = ecomod::try_grow(&p, self.seed_of(s, c), 0.0)?;
+                let full = ecomod_strands_at(p.strands, class_age(c));
+                p.strands = full.min(max_strands);
+                let (mut sk, mut lv) = ecomod::try_grow(&p, seed_of(s, c), 0.0)?;
+                let qf = (q as f32 / CROWN_BASE_CLASSES).min(0.9) + 0.01;
+                let crown = sk.height() - p.trunk_length_m;
+                let trunk = qf * crown / (1.0 - qf);
+                // a capped cache keeps the open-grown tree, shed below the crown base by [`fit`]
+                // (its spread leaf cards fill the crown; see [`DEFAULT_MAX_STRANDS`])
+                if max_strands == FULL_STRANDS && crown > 0.0 && trunk > p.trunk_length_m {
+                    p.trunk_length_m = trunk;
+                    (sk, lv) = ecomod::try_grow(&p, seed_of(s, c), 0.0)?;
+                }
                 let (mut sk, mut lv) = super::normalised(&sk, &lv, 1.0)?;
                 // EcoMod draws only its wind sway from the seed: the seed also turns the tree
                 // about its stem, so that each scenario seed shows its own trees
-                let turn = glam::Quat::from_rotation_z((self.seed_of(s, c) >> 11) as f32 / (1u64 << 53) as f32 * std::f32::consts::TAU);
+                let turn = glam::Quat::from_rotation_z((seed_of(s, c) >> 11) as f32 / (1u64 << 53) as f32 * std::f32::consts::TAU);
                 sk.nodes.iter_mut().for_each(|n| n.pos = turn * n.pos);
                 lv.leaves.iter_mut().for_each(|l| {
                     l.pos = turn * l.pos;
@@ -183,19 +264,29 @@ impl SkeletonCache {
                 // fewer strands, fewer tips: larger leaves keep the foliage area of the full tree
                 let grow_leaf = (full as f32 / p.strands as f32).sqrt().min(MAX_LEAF_GROWTH);
                 lv.leaves.iter_mut().for_each(|l| l.size *= grow_leaf);
-                Ok(((s, c), OpenGrown { skeleton: sk, leaves: lv, crown_radius }))
+                Ok(((s, c, q), OpenGrown { skeleton: sk, leaves: lv, crown_radius }))
             })
             .collect::<Result<_>>()?;
         for (k, g) in grown {
-            self.map.insert(k, Arc::new(g));
+            map.insert(k, Arc::new(g));
         }
         Ok(())
     }
 
-    /// The tree of `species` in age class `class`, if grown.
-    pub fn get(&self, species: u16, class: u16) -> Option<&OpenGrown> {
-        self.map.get(&(species, class)).map(|a| a.as_ref())
+    /// The tree of `key` (species, age class, crown-base class), if grown.
+    pub fn get(&self, key: FormKey) -> Option<&OpenGrown> {
+        self.map.get(&key).map(|a| a.as_ref())
     }
+
+    /// The context tree of `key` ([`SkeletonCache::prepare_context`]), if grown.
+    pub fn get_context(&self, key: FormKey) -> Option<&OpenGrown> {
+        self.context.get(&key).map(|a| a.as_ref())
+    }
+}
+
+/// Seed of the open-grown tree of `species` in age class `class` for scenario seed `seed`.
+fn form_seed(seed: u64, species: u16, class: u16) -> u64 {
+    crate::rng::hash(&[seed, species as u64, class as u64, crate::rng::salt::ARCHITECTURE])
 }
 
 /// The open-grown tree `g` fitted to height `h`, crown radius `r` and crown base `cb` (m): the
@@ -267,20 +358,23 @@ pub struct Stand {
     pub trees_in_groups: usize,
     /// Distinct analyses (shared by trees of the same class).
     pub analyses: usize,
+    /// Wall time (s) of growing the open-grown trees and analysing the classes (steps 1–2).
+    pub analysis_s: f64,
+    /// Wall time (s) of adapting the cells (step 3).
+    pub adaptation_s: f64,
 }
 
 /// Analysis class of a tree: species, age class, height, crown radius and crown-base classes.
-type ClassKey = (u16, u16, i32, i32, i32);
+type ClassKey = (u16, u16, i32, i32, u16, bool);
 
-fn class_of(t: &StandTree) -> ClassKey {
+fn class_of(t: &StandTree, context: bool) -> ClassKey {
     let q = |v: f32| (v.max(0.05).ln() / DIM_STEP.ln()).round() as i32;
-    let cbq = ((t.crown_base_m / t.height_m.max(0.1)).clamp(0.0, 0.9) * 20.0).round() as i32;
-    (t.species, age_class(t.age_yr), q(t.height_m), q(t.crown_radius_m), cbq)
+    (t.species, age_class(t.age_yr), q(t.height_m), q(t.crown_radius_m), crown_base_class(t.height_m, t.crown_base_m), context)
 }
 
 fn class_dims(k: &ClassKey) -> (f32, f32, f32) {
     let h = DIM_STEP.powi(k.2);
-    (h, DIM_STEP.powi(k.3), k.4 as f32 / 20.0 * h)
+    (h, DIM_STEP.powi(k.3), k.4 as f32 / CROWN_BASE_CLASSES * h)
 }
 
 /// Checks one stand tree.
@@ -372,21 +466,24 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
         }
     }
     // 1. open-grown trees
-    let mut keys: Vec<(u16, u16)> = groups.iter().flat_map(|g| g.2.iter().map(|&i| (trees[i].species, age_class(trees[i].age_yr)))).collect();
-    keys.sort_unstable();
-    keys.dedup();
-    cache.prepare(lib, &keys)?;
+    let t0 = std::time::Instant::now();
+    // each cell's own trees at full detail, its context trees at [`CONTEXT_MAX_STRANDS`]
+    let class_in = |g: &((i64, i64), Vec<usize>, Vec<usize>), j: usize| class_of(&trees[g.2[j]], j >= g.1.len());
+    let mut classes: Vec<ClassKey> = groups.iter().flat_map(|g| (0..g.2.len()).map(move |j| class_in(g, j))).collect();
+    classes.sort_unstable();
+    classes.dedup();
+    let form = |k: &ClassKey| (k.0, k.1, k.4);
+    cache.prepare(lib, &classes.iter().filter(|k| !k.5).map(form).collect::<Vec<_>>())?;
+    cache.prepare_context(lib, &classes.iter().filter(|k| k.5).map(form).collect::<Vec<_>>())?;
     // 2. one analysis per class
     let sky = Sky::from_latitude(opts.latitude_deg);
     let alone = Environment { obstacles: Vec::new(), ground: Some(Ground::flat(0.0)), sky: sky.clone() };
-    let mut classes: Vec<ClassKey> = groups.iter().flat_map(|g| g.2.iter().map(|&i| class_of(&trees[i]))).collect();
-    classes.sort_unstable();
-    classes.dedup();
     let cache = &*cache;
     let analysed: Vec<(ClassKey, (PlasticTree, Leaves))> = classes
         .par_iter()
         .map(|k| {
-            let g = cache.get(k.0, k.1).ok_or_else(|| bad("species/age class", format!("{}/{}", k.0, k.1), "a grown open-grown tree"))?;
+            let g = if k.5 { cache.get_context(form(k)) } else { cache.get(form(k)) };
+            let g = g.ok_or_else(|| bad("species/age class", format!("{}/{}", k.0, k.1), "a grown open-grown tree"))?;
             let (h, r, cb) = class_dims(k);
             let (sk, lv) = fit(g, h, r, cb);
             let sp = &lib.species[k.0 as usize];
@@ -396,19 +493,21 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
         })
         .collect::<Result<_>>()?;
     let analysed: BTreeMap<ClassKey, (PlasticTree, Leaves)> = analysed.into_iter().collect();
+    let analysis_s = t0.elapsed().as_secs_f64();
     // 3. the cells, in parallel
+    let t1 = std::time::Instant::now();
     let per_cell: Vec<Vec<(usize, AdaptedTree)>> = groups
         .par_iter()
         .map(|((cx, cy), ks, members)| {
-            let placed = |&i: &usize| {
-                let (t, _) = &analysed[&class_of(&trees[i])];
+            let placed = |(j, &i): (usize, &usize)| {
+                let (t, _) = &analysed[&class_of(&trees[i], j >= ks.len())];
                 let mut t = t.clone();
                 t.translate(trees[i].base);
                 t
             };
             // the cell's trees are adapted; the context trees stand as they are
-            let mut group: Vec<PlasticTree> = members[..ks.len()].iter().map(placed).collect();
-            let context: Vec<PlasticTree> = members[ks.len()..].iter().map(placed).collect();
+            let mut group: Vec<PlasticTree> = members[..ks.len()].iter().enumerate().map(placed).collect();
+            let context: Vec<PlasticTree> = members.iter().enumerate().skip(ks.len()).map(placed).collect();
             let first = &trees[members[0]];
             let mut ground = Ground::slope(first.base, first.slope_deg, first.aspect_deg);
             let lowest = members.iter().map(|&i| ground.height_of(trees[i].base)).fold(0.0f32, f32::min);
@@ -424,7 +523,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
             for (j, &k) in ks.iter().enumerate() {
                 let i = members[j];
                 let st = &trees[i];
-                let key = class_of(st);
+                let key = class_of(st, false);
                 let (h, r, _) = class_dims(&key);
                 let t = &group[j];
                 let (skeleton, leaves) = adapted_with_leaves(t, &analysed[&key].1, st.base);
@@ -445,7 +544,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     for (k, a) in per_cell.into_iter().flatten() {
         slots[k] = Some(a);
     }
-    Ok(Stand { trees: slots.into_iter().flatten().collect(), cells: groups.len(), trees_in_groups: groups.iter().map(|g| g.2.len()).sum(), analyses: analysed.len() })
+    Ok(Stand { trees: slots.into_iter().flatten().collect(), cells: groups.len(), trees_in_groups: groups.iter().map(|g| g.2.len()).sum(), analyses: analysed.len(), analysis_s, adaptation_s: t1.elapsed().as_secs_f64() })
 }
 
 /// The adapted skeleton of `t` ([`PlasticTree::skeleton`]) and the leaves `lv` of its input
@@ -532,9 +631,14 @@ mod tests {
     #[test]
     fn age_classes() {
         assert_eq!(age_class(0.0), 0);
-        assert_eq!(age_class(14.9), 0);
-        assert_eq!(age_class(15.0), 1);
-        assert_eq!(age_class(79.0), 3);
-        assert_eq!(age_class(500.0), 5);
+        assert_eq!(age_class(4.9), 0);
+        assert_eq!(age_class(5.0), 1);
+        assert_eq!(age_class(79.0), 15);
+        assert_eq!(age_class(80.0), LAST_AGE_CLASS);
+        assert_eq!(age_class(500.0), LAST_AGE_CLASS);
+        assert_eq!(class_age(15), 77.5);
+        assert_eq!(class_age(LAST_AGE_CLASS), 80.0);
+        assert_eq!(crown_base_class(20.0, 8.0), 8);
+        assert_eq!(crown_base_class(20.0, 19.9), 18);
     }
 }
