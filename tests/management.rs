@@ -586,3 +586,44 @@ fn a_refused_scenario_leaves_no_folder_behind() {
     assert!(e.contains("patch_size_m"), "{e}");
     assert!(!out.exists());
 }
+
+/// The shipped example of crop trees and shelterwood (`scenarios/shelterwood_beech.toml`) loads
+/// and its entries act in their years: the crop-tree thinnings remove stems, each shelterwood
+/// stage its share of the overstorey's basal area, and after the final removal the stand is the
+/// regeneration that established under the shelter. Figures in docs/management.md.
+#[test]
+fn the_shelterwood_example_raises_crop_trees_and_regenerates_under_its_shelter() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/shelterwood_beech.toml");
+    let sc = Scenario::load(&path).unwrap();
+    let mut w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    assert!(sylva::sim::management::warnings(&w.site.management, sc.years, "x").is_empty());
+    let mut rows: Vec<StandRow> = Vec::new();
+    let mut shares = Vec::new();
+    for y in 1..=sc.years {
+        let r = common::run(&sc, &mut w, 1).remove(0);
+        let cut_ba: f64 = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).map(|d| std::f64::consts::FRAC_PI_4 * (d.dbh as f64 / 100.0).powi(2)).sum::<f64>() / w.site.area_ha;
+        if [97, 107].contains(&y) {
+            // the overstorey left: trees at least half the top height before the stage tall
+            let h = 0.5 * rows[y as usize - 2].top_height_m as f32;
+            let t = &w.stand.trees;
+            let over: f64 = (0..t.len()).filter(|&i| t.height[i] >= h).map(|i| t.basal_area_m2(i)).sum::<f64>() / w.site.area_ha;
+            shares.push(cut_ba / (cut_ba + over));
+        }
+        if y == 117 {
+            let h = 0.55 * rows[115].top_height_m as f32;
+            let tallest = w.stand.trees.height.iter().cloned().fold(0f32, f32::max);
+            assert!(tallest < h, "the final removal leaves no overstorey: a tree of {tallest:.1} m (0.55 of the top height before it: {h:.1} m)");
+        }
+        if [17, 37, 47, 57, 67, 77, 97, 107, 117].contains(&y) || y % 10 == 0 {
+            eprintln!("year {y} (age {}): {:.0} stems/ha ≥ 1.3 m, BA {:.1} m²/ha, Dq(≥7 cm) {:.1} cm, top height {:.1} m, harvested {:.0} stems/ha {:.1} m³/ha ({:.1} m²/ha), saplings {:.0}/ha", y + 3, r.stems_ha, r.basal_area_m2_ha, r.qmd_7cm_cm, r.top_height_m, r.harvest_stems_ha, r.harvest_volume_m3_ha, cut_ba, r.regeneration_ha + r.seedlings_ha);
+        }
+        rows.push(r);
+    }
+    for y in [37u32, 47, 57, 67, 77] {
+        assert!(rows[y as usize - 1].harvest_stems_ha > 0.0, "crop-tree thinning of year {y} removed nothing");
+    }
+    assert!((shares[0] - 0.3).abs() < 0.05 && (shares[1] - 0.5).abs() < 0.05, "stage shares {shares:?}");
+    eprintln!("stage shares of the overstorey's basal area: {shares:?}");
+    let last = rows.last().unwrap();
+    assert!(last.regeneration_ha + last.stems_ha > 1000.0, "a new stand: {:.0} saplings and {:.0} stems/ha", last.regeneration_ha, last.stems_ha);
+}
