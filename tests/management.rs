@@ -457,6 +457,11 @@ fn crop_tree_thinning_keeps_the_crop_trees_and_lowers_their_competition() {
     assert!(cut3.len() < cut.len() && cut3.iter().all(|id| cut.binary_search(id).is_ok()), "the target stops among the same competitors");
 }
 
+/// Basal area (m²/ha of the world's area) of the trees harvested in the year just simulated.
+fn harvested_ba(w: &World) -> f64 {
+    w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).map(|d| std::f64::consts::FRAC_PI_4 * (d.dbh as f64 / 100.0).powi(2)).sum::<f64>() / w.site.area_ha
+}
+
 /// Basal area (m²/ha) of the stems ≥ 1.3 m of a world on 1 ha.
 fn twin_ba(w: &World) -> f64 {
     let t = &w.stand.trees;
@@ -474,7 +479,7 @@ fn shelterwood_removes_the_shares_of_basal_area_and_regeneration_comes_under_the
     for y in 1..=16u32 {
         let r = common::run(&sc, &mut w, 1).remove(0);
         rows0.push(common::run(&sc0, &mut w0, 1).remove(0));
-        let cut_ba: f64 = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).map(|d| std::f64::consts::FRAC_PI_4 * (d.dbh as f64 / 100.0).powi(2)).sum::<f64>() / w.site.area_ha;
+        let cut_ba = harvested_ba(&w);
         if let Some(share) = [(1, 0.4), (8, 0.5)].iter().find(|s| s.0 == y).map(|s| s.1) {
             // the stand is all overstorey (a planted even-aged stand)
             let removed = cut_ba / (cut_ba + r.basal_area_m2_ha);
@@ -601,7 +606,7 @@ fn the_shelterwood_example_raises_crop_trees_and_regenerates_under_its_shelter()
     let mut shares = Vec::new();
     for y in 1..=sc.years {
         let r = common::run(&sc, &mut w, 1).remove(0);
-        let cut_ba: f64 = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).map(|d| std::f64::consts::FRAC_PI_4 * (d.dbh as f64 / 100.0).powi(2)).sum::<f64>() / w.site.area_ha;
+        let cut_ba = harvested_ba(&w);
         if [97, 107].contains(&y) {
             // the overstorey left: trees at least half the top height before the stage tall
             let h = 0.5 * rows[y as usize - 2].top_height_m as f32;

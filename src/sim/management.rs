@@ -442,7 +442,9 @@ fn check_rings(rings: &[Vec<[f64; 2]>]) -> std::result::Result<(), String> {
 /// compared; touching without crossing is allowed. Edges are compared pairwise after a
 /// bounding-box test (quadratic in the edges; fine for parcel outlines).
 fn crossing_edges(rings: &[Vec<[f64; 2]>]) -> Option<((usize, usize), (usize, usize))> {
-    let mut edges: Vec<((usize, usize), [f64; 2], [f64; 2])> = Vec::new();
+    // (ring, edge index) and its end points
+    type Edge = ((usize, usize), [f64; 2], [f64; 2]);
+    let mut edges: Vec<Edge> = Vec::new();
     for (ri, r) in rings.iter().enumerate() {
         for k in 0..r.len() {
             let (a, b) = (r[k], r[(k + 1) % r.len()]);
