@@ -34,7 +34,7 @@ pub struct Management {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_basal_area_m2_ha: Option<f64>,
     /// Thinning target: relative density (0–2) against the species' maximum-density lines
-    /// ([`stand_rd`]).
+    /// ([`super::phases::management::stand_rd`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_relative_density: Option<f64>,
     /// Thinning target: stems/ha (≥ 1.3 m) left in the area.
@@ -584,7 +584,7 @@ pub fn patch_squares(region: &Region, size_m: f64) -> (usize, usize, Vec<usize>)
 pub enum Target {
     /// Basal area (m²/ha) of the stems ≥ 1.3 m.
     BasalArea(f64),
-    /// Relative density ([`stand_rd`]).
+    /// Relative density ([`super::phases::management::stand_rd`]).
     RelativeDensity(f64),
     /// Stems/ha ≥ 1.3 m.
     Stems(f64),
