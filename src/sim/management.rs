@@ -845,5 +845,36 @@ mod tests {
         assert_eq!(m.due(35), None);
         let m = Management { years: Some(vec![30, 10]), ..Default::default() };
         assert_eq!(m.due(30), Some(1));
+        let m = Management { stages: Some(vec![Stage { year: 10, share: 0.5 }, Stage { year: 20, share: 1.0 }]), ..Default::default() };
+        assert_eq!((m.due(10), m.due(20), m.due(15)), (Some(0), Some(1), None));
+        assert_eq!(m.first_year(), 10);
+        assert_eq!(m.years_beyond(15), vec![("stages[1].year".to_string(), 20)]);
+    }
+
+    #[test]
+    fn entries_serialise_to_toml_for_the_checkpoint_identity() {
+        // the identity hashes the entry's TOML form: it must serialise (tables after values)
+        let m = Management {
+            kind: "harvest".into(),
+            method: Some("shelterwood".into()),
+            stages: Some(vec![Stage { year: 10, share: 0.5 }]),
+            mix: Some([("beech".to_string(), 1.0)].into()),
+            filter: Some(AreaFilter { property: "n".into(), equals: toml::Value::Integer(2) }),
+            polygons: Some(vec![vec![vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]]]),
+            ..Default::default()
+        };
+        let t = toml::to_string(&m).unwrap();
+        assert!(t.contains("shelterwood") && !t.contains("crop_trees_ha"), "{t}");
+        assert_eq!(toml::from_str::<Management>(&t).unwrap(), m);
+    }
+
+    #[test]
+    fn crossing_edges_find_bowties_and_pass_holes() {
+        let bowtie = vec![vec![[0.0, 0.0], [10.0, 10.0], [10.0, 0.0], [0.0, 10.0]]];
+        assert!(crossing_edges(&bowtie).is_some());
+        let holed = vec![vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [0.0, 0.0]], vec![[4.0, 4.0], [6.0, 4.0], [6.0, 6.0], [4.0, 6.0]]];
+        assert!(crossing_edges(&holed).is_none());
+        let crossing_hole = vec![holed[0].clone(), vec![[8.0, 4.0], [12.0, 4.0], [12.0, 6.0], [8.0, 6.0]]];
+        assert_eq!(crossing_edges(&crossing_hole).map(|(a, b)| (a.0, b.0)), Some((0, 1)));
     }
 }
