@@ -558,6 +558,14 @@ fn silent_failures_are_refused_or_warned() {
     assert_eq!(warn.len(), 2, "{warn:?}");
     assert!(warn[0].contains("late.toml") && warn[0].contains("management[0].years[1] = 30") && warn[0].contains("last year 20"), "{warn:?}");
     assert!(warn[1].contains("management[1].stages[1].year = 25"), "{warn:?}");
+    // a patch cut scheduled more often than it has squares: 16 squares of 20 m, 8 per entry,
+    // every 5 years from year 5: the entries of years 15 and 20 cut nothing
+    let patches = format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"patch\"\npatch_size_m = 20.0\nshare = 0.5\nfrom_year = 5\nevery_years = 5\n");
+    let sc = Scenario::from_toml_str(&patches, "patches.toml").unwrap();
+    let w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    let warn = sylva::sim::management::warnings(&w.site.management, sc.years, "patches.toml");
+    assert_eq!(warn.len(), 1, "{warn:?}");
+    assert!(warn[0].contains("management[0]") && warn[0].contains("16 squares") && warn[0].contains("after 2 entries (year 10)") && warn[0].contains("2 later entries"), "{warn:?}");
     // (b) a year-0 anomaly: refused naming the file and line
     let a = d.path().join("anomalies.csv");
     std::fs::write(&a, "year,temperature_k\n0,1.5\n1,0.5\n").unwrap();

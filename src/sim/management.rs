@@ -815,13 +815,24 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
 
 /// Warnings about resolved entries `ops` of a run of `last_year` years (`ctx` names the
 /// scenario): every year an entry lists beyond the last ([`Management::years_beyond`]), which
-/// never comes (found by a break-it pass: such entries were ignored without a word). A warning,
-/// not an error: a run shortened with `--years` keeps its scenario's later entries.
+/// never comes (found by a break-it pass: such entries were ignored without a word), and a
+/// patch cut scheduled more often in the run than it has squares to open (the later entries
+/// find every square cut and cut nothing). Warnings, not errors: a run shortened with
+/// `--years` keeps its scenario's later entries, and a patch cut may be meant to stop.
 pub fn warnings(ops: &[Operation], last_year: u32, ctx: &str) -> Vec<String> {
     let mut out = Vec::new();
     for op in ops {
         for (f, y) in op.spec.years_beyond(last_year) {
             out.push(format!("{ctx}: management[{}].{f} = {y} lies beyond the run's last year {last_year}: the entry does not act in that year", op.index));
+        }
+        if let Action::Patch { size_m, share } = op.action {
+            let n = patch_squares(&op.region, size_m).2.len();
+            let per = ((share * n as f64).round() as usize).max(1);
+            let needed = n.div_ceil(per);
+            let due: Vec<u32> = (1..=last_year).filter(|&y| op.spec.due(y).is_some()).collect();
+            if due.len() > needed {
+                out.push(format!("{ctx}: management[{}]: a patch cut of {n} squares of {size_m} m, {per} per entry, has cut them all after {needed} entries (year {}); its {} later entries in the run cut nothing", op.index, due[needed - 1], due.len() - needed));
+            }
         }
     }
     out
