@@ -666,22 +666,9 @@ fn a_managed_run_stopped_and_resumed_writes_the_same_files() {
     let full_dir = tempfile::tempdir().unwrap();
     let full = run_scenario(&sc, sc.site().unwrap(), &lib, RunOptions::new(full_dir.path())).unwrap();
     let dir = tempfile::tempdir().unwrap();
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let s2 = stop.clone();
     // stopped after year 6: between the shelterwood's stages (5, 9) and the crop-tree thinnings (3, 7)
-    let mut cb = move |p: &sylva::job::run::Progress| {
-        if p.year == 5 {
-            s2.store(true, std::sync::atomic::Ordering::SeqCst);
-        }
-    };
-    let mut o = RunOptions::new(dir.path());
-    o.stop = Some(stop);
-    o.progress = Some(&mut cb);
-    let part = run_scenario(&sc, sc.site().unwrap(), &lib, o).unwrap();
-    assert!(part.stopped && part.world.stand.year == 6);
-    let mut o = RunOptions::new(dir.path());
-    o.resume = true;
-    let resumed = run_scenario(&sc, sc.site().unwrap(), &lib, o).unwrap();
+    let (stopped, resumed) = common::run_stopped_and_resumed(&sc, || sc.site().unwrap(), &lib, dir.path(), 5);
+    assert_eq!(stopped, 6);
     assert_eq!(resumed.rows, full.rows);
     assert!(full.rows.iter().map(|r| r.harvest_stems_ha).sum::<f64>() > 0.0);
     for f in ["stand_table.csv", "inventory/year_0012.parquet", "inventory/year_0012.geojson"] {
