@@ -162,7 +162,8 @@ fn polygon_planting_from_geojson_plants_only_inside_its_polygon() {
     common::run(&sc, &mut w, 1);
 }
 
-/// A scenario with every kind of management and a warming climate.
+/// A scenario with every kind of management (crop-tree thinning and shelterwood included) and a
+/// warming climate.
 fn busy(years: u32) -> String {
     ScenarioToml::new("busy", years, 11)
         .species(&["beech", "silver_birch", "norway_spruce"])
@@ -173,7 +174,9 @@ fn busy(years: u32) -> String {
         .build()
         + "[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.5\nfrom_year = 2\nevery_years = 3\n\
            [[management]]\nkind = \"harvest\"\nmethod = \"patch\"\npatch_size_m = 30.0\nshare = 0.25\narea = [0.0, 0.0, 120.0, 60.0]\nyears = [4, 8]\n\
-           [[management]]\nkind = \"planting\"\nmix = { norway_spruce = 0.6, beech = 0.4 }\nspacing_m = 2.0\nage_yr = 3.0\nyear = 5\npolygons = [[[[5.0, 5.0], [60.0, 5.0], [60.0, 55.0], [5.0, 55.0]]]]\n"
+           [[management]]\nkind = \"planting\"\nmix = { norway_spruce = 0.6, beech = 0.4 }\nspacing_m = 2.0\nage_yr = 3.0\nyear = 5\npolygons = [[[[5.0, 5.0], [60.0, 5.0], [60.0, 55.0], [5.0, 55.0]]]]\n\
+           [[management]]\nkind = \"thinning\"\nmethod = \"crop_trees\"\ncrop_trees_ha = 80\narea = [0.0, 60.0, 120.0, 120.0]\nyears = [3, 7]\n\
+           [[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\narea = [60.0, 0.0, 120.0, 60.0]\nstages = [{ year = 5, share = 0.4 }, { year = 9, share = 1.0 }]\n"
 }
 
 fn busy_table(threads: usize, years: u32) -> String {
@@ -208,6 +211,13 @@ fn management_and_warming_are_the_same_for_one_and_two_threads_and_across_a_chec
     let (_, mut w3) = world(&busy(10).replace("share = 0.25", "share = 0.5"));
     let e = restore(&mut w3, &bytes, Path::new("ck.bin")).unwrap_err().to_string();
     assert!(e.contains("management"), "{e}");
+    // so is one with another shelterwood stage, naming that entry
+    let (_, mut w4) = world(&busy(10).replace("share = 0.4 }", "share = 0.3 }"));
+    let e = restore(&mut w4, &bytes, Path::new("ck.bin")).unwrap_err().to_string();
+    let crcs = |part: &str| part.split(", ").filter(|c| c.starts_with("management[")).map(str::to_string).collect::<Vec<_>>();
+    let (then, now) = e.split_once(", now ").unwrap();
+    let changed: Vec<String> = crcs(then).into_iter().zip(crcs(now)).filter(|(a, b)| a != b).map(|(a, _)| a[..13].to_string()).collect();
+    assert_eq!(changed, vec!["management[4]".to_string()], "{e}");
 }
 
 #[test]
@@ -368,4 +378,300 @@ fn the_checkpoint_identity_survives_a_moved_project_folder_and_names_the_changed
     let tail = |s: &str| s.split("management[1]").nth(1).unwrap().to_string();
     assert_eq!(tail(&a), tail(&edited), "{a} / {edited}");
     assert!(a.contains("management[0]") && a.contains("management[1]"), "{a}");
+}
+
+/// Hegyi's competition index of tree `i`: `Σ (DBH_j / DBH_i) / distance` over the other stems
+/// (≥ 1.3 m) within 6 m.
+fn hegyi(t: &sylva::sim::trees::TreeStore, i: usize) -> f64 {
+    (0..t.len())
+        .filter(|&j| j != i && t.height[j] >= 1.3)
+        .filter(|&j| ((t.x[j] - t.x[i]) as f64).hypot((t.y[j] - t.y[i]) as f64) <= 6.0)
+        .map(|j| sylva::sim::phases::management::hegyi_term(t, i, j))
+        .sum()
+}
+
+/// Ids of the trees harvested in the year just simulated, ascending.
+fn harvested_ids(w: &World) -> Vec<u64> {
+    let mut v: Vec<u64> = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).map(|d| d.id).collect();
+    v.sort_unstable();
+    v
+}
+
+#[test]
+fn crop_tree_thinning_keeps_the_crop_trees_and_lowers_their_competition() {
+    // the unmanaged twin holds the stand as the thinning finds it (management acts last in the
+    // year), so the crop trees can be chosen on it by the same rule
+    let entry = "[[management]]\nkind = \"thinning\"\nmethod = \"crop_trees\"\ncrop_trees_ha = 100\nyear = 1\n";
+    let (sc0, mut twin) = world(&beech_stand("", 1));
+    common::run(&sc0, &mut twin, 1);
+    let (sc, mut w) = world(&beech_stand(entry, 1));
+    let row = common::run(&sc, &mut w, 1).remove(0);
+    let op = &w.site.management[0];
+    let sylva::sim::management::Action::CropTrees { n_ha, distance_m, .. } = op.action else { panic!("{:?}", op.action) };
+    assert!((distance_m - 7.5).abs() < 1e-9, "0.75 · 100 / √100 m");
+    let t0 = &twin.stand.trees;
+    let crops = sylva::sim::phases::management::crop_trees(t0, op, n_ha, distance_m);
+    assert!(crops.len() >= 90 && crops.len() <= 100, "{} crop trees on 1 ha", crops.len());
+    for (k, &a) in crops.iter().enumerate() {
+        for &b in &crops[..k] {
+            assert!(((t0.x[a] - t0.x[b]) as f64).hypot((t0.y[a] - t0.y[b]) as f64) >= distance_m);
+        }
+    }
+    // the crop trees survive; the harvested are the twin's trees that are gone
+    let t1 = &w.stand.trees;
+    let alive: std::collections::HashMap<u64, usize> = (0..t1.len()).map(|i| (t1.id[i], i)).collect();
+    assert!(crops.iter().all(|&c| alive.contains_key(&t0.id[c])), "a crop tree was removed");
+    let cut = harvested_ids(&w);
+    let mut gone: Vec<u64> = (0..t0.len()).map(|i| t0.id[i]).filter(|id| !alive.contains_key(id)).collect();
+    gone.sort_unstable();
+    assert_eq!(cut, gone, "the twin's stand is the one thinned");
+    assert!(cut.len() > 300, "{} competitors removed", cut.len());
+    // the crop trees' competition falls
+    let before: f64 = crops.iter().map(|&c| hegyi(t0, c)).sum::<f64>() / crops.len() as f64;
+    let after: f64 = crops.iter().map(|&c| hegyi(t1, alive[&t0.id[c]])).sum::<f64>() / crops.len() as f64;
+    assert!(after < 0.8 * before, "mean Hegyi index of the crop trees {before:.2} → {after:.2}");
+    // the largest vigorous stems first: each vigorous stem at least as thick as the thinnest
+    // crop tree is a crop tree or stands within the distance of one
+    let dmin = crops.iter().map(|&c| t0.dbh[c]).fold(f32::MAX, f32::min);
+    let near_crop = |i: usize| crops.iter().any(|&c| ((t0.x[i] - t0.x[c]) as f64).hypot((t0.y[i] - t0.y[c]) as f64) < distance_m);
+    let passed = (0..t0.len()).filter(|&i| t0.height[i] >= 1.3 && t0.vigour[i] >= sylva::sim::phases::management::CROP_MIN_VIGOUR && t0.dbh[i] >= dmin).filter(|&i| !crops.contains(&i)).collect::<Vec<_>>();
+    assert!(passed.iter().all(|&i| near_crop(i)), "a thick vigorous stem passed over");
+    let mean_d = |ix: &mut dyn Iterator<Item = usize>| {
+        let v: Vec<f64> = ix.map(|i| t0.dbh[i] as f64).collect();
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    let (dc, ds) = (mean_d(&mut crops.iter().copied()), mean_d(&mut (0..t0.len()).filter(|&i| t0.height[i] >= 1.3)));
+    assert!(dc > ds, "crop trees' mean DBH {dc:.1} cm, the stand's {ds:.1} cm");
+    // deterministic
+    let (sc2, mut w2) = world(&beech_stand(entry, 1));
+    common::run(&sc2, &mut w2, 1);
+    assert_eq!(harvested_ids(&w2), cut);
+    eprintln!("crop trees: {} chosen ({distance_m} m apart, mean DBH {dc:.1} cm against {ds:.1} cm), {} competitors removed ({:.1} m³/ha), their Hegyi index {before:.2} → {after:.2}; BA {:.1} m²/ha after", crops.len(), cut.len(), row.harvest_volume_m3_ha, row.basal_area_m2_ha);
+    // to a target: the competitors go, strongest first, until the basal area is reached
+    let ba0 = twin_ba(&twin);
+    let target = 0.85 * ba0;
+    let (sc3, mut w3) = world(&beech_stand(&format!("[[management]]\nkind = \"thinning\"\nmethod = \"crop_trees\"\ncrop_trees_ha = 100\ntarget_basal_area_m2_ha = {target}\nyear = 1\n"), 1));
+    let r3 = common::run(&sc3, &mut w3, 1).remove(0);
+    assert!((r3.basal_area_m2_ha - target).abs() / target < 0.05, "basal area {:.2} against the target {target:.2} (before {ba0:.2})", r3.basal_area_m2_ha);
+    let cut3 = harvested_ids(&w3);
+    assert!(cut3.len() < cut.len() && cut3.iter().all(|id| cut.binary_search(id).is_ok()), "the target stops among the same competitors");
+    // released, the crop trees put on more diameter over the next 10 years than the same trees
+    // in the unthinned twin
+    let ids: Vec<u64> = crops.iter().map(|&c| t0.id[c]).collect();
+    let d0: Vec<f32> = crops.iter().map(|&c| t0.dbh[c]).collect();
+    common::run(&sc0, &mut twin, 10);
+    common::run(&sc, &mut w, 10);
+    let growth = |w: &World| {
+        let t = &w.stand.trees;
+        let at: std::collections::HashMap<u64, usize> = (0..t.len()).map(|i| (t.id[i], i)).collect();
+        let g: Vec<f64> = ids.iter().zip(&d0).filter_map(|(id, d)| at.get(id).map(|&i| (t.dbh[i] - d) as f64)).collect();
+        (g.iter().sum::<f64>() / g.len().max(1) as f64, g.len())
+    };
+    let ((g_rel, n_rel), (g_twin, n_twin)) = (growth(&w), growth(&twin));
+    eprintln!("10 years on: released crop trees +{g_rel:.2} cm DBH ({n_rel} alive), the same trees unthinned +{g_twin:.2} cm ({n_twin} alive)");
+    assert!(g_rel > 1.1 * g_twin, "released +{g_rel:.2} cm, unthinned +{g_twin:.2} cm");
+}
+
+/// Basal area (m²/ha of the world's area) of the trees harvested in the year just simulated.
+fn harvested_ba(w: &World) -> f64 {
+    w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).map(|d| std::f64::consts::FRAC_PI_4 * (d.dbh as f64 / 100.0).powi(2)).sum::<f64>() / w.site.area_ha
+}
+
+/// Basal area (m²/ha) of the stems ≥ 1.3 m of a world on 1 ha.
+fn twin_ba(w: &World) -> f64 {
+    let t = &w.stand.trees;
+    (0..t.len()).filter(|&i| t.height[i] >= 1.3).map(|i| t.basal_area_m2(i)).sum::<f64>() / w.site.area_ha
+}
+
+#[test]
+fn shelterwood_removes_the_shares_of_basal_area_and_regeneration_comes_under_the_shelter() {
+    let stand = |extra: &str| ScenarioToml::new("shelter", 16, 3).species(&["beech"]).uniform(5, 5, 20.0, 200.0).planted("beech", 6.0, 90.0).build() + extra;
+    let entry = "[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nstages = [{ year = 1, share = 0.4 }, { year = 8, share = 0.5 }, { year = 15, share = 1.0 }]\n";
+    let (sc, mut w) = world(&stand(entry));
+    let (sc0, mut w0) = world(&stand(""));
+    let mut rows = Vec::new();
+    let mut rows0 = Vec::new();
+    for y in 1..=16u32 {
+        let r = common::run(&sc, &mut w, 1).remove(0);
+        rows0.push(common::run(&sc0, &mut w0, 1).remove(0));
+        let cut_ba = harvested_ba(&w);
+        if let Some(share) = [(1, 0.4), (8, 0.5)].iter().find(|s| s.0 == y).map(|s| s.1) {
+            // the stand is all overstorey (a planted even-aged stand)
+            let removed = cut_ba / (cut_ba + r.basal_area_m2_ha);
+            assert!((removed - share).abs() < 0.03, "stage of year {y}: removed {:.1} % of the basal area, the share {:.0} %", removed * 100.0, share * 100.0);
+            eprintln!("year {y}: {:.1} → {:.1} m²/ha ({:.1} % removed, share {:.0} %)", cut_ba + r.basal_area_m2_ha, r.basal_area_m2_ha, removed * 100.0, share * 100.0);
+        } else if y != 15 {
+            assert_eq!(cut_ba, 0.0, "year {y}: no stage");
+        }
+        rows.push(r);
+    }
+    // the final removal leaves no overstorey; the regeneration stays
+    let t = &w.stand.trees;
+    assert!((0..t.len()).all(|i| t.height[i] < 15.0), "an overstorey tree is left after the removal cut");
+    let regen = |rows: &[StandRow]| rows[..14].iter().map(|r| r.regen_germinated).sum::<u64>();
+    let (g, g0) = (regen(&rows), regen(&rows0));
+    let (s, s0) = (rows[13].seedlings_ha + rows[13].regeneration_ha, rows0[13].seedlings_ha + rows0[13].regeneration_ha);
+    eprintln!("years 1–14: germinated {g} under the shelter against {g0} unmanaged; seedlings and saplings at year 14 {s:.0}/ha against {s0:.0}/ha; year 16: {} trees, {:.0} seedlings and saplings/ha", t.len(), rows[15].seedlings_ha + rows[15].regeneration_ha);
+    // beech regeneration in the model is limited by seed more than by light: the shelter's
+    // fewer mother trees give somewhat fewer saplings than the closed stand (7,976 against
+    // 9,901/ha at year 14), but a regeneration establishes under it and carries the stand on
+    assert!(s > 0.6 * s0 && s > 3000.0, "regeneration under the shelter {s:.0}/ha, unmanaged {s0:.0}/ha");
+    assert!(rows[15].seedlings_ha + rows[15].regeneration_ha > 0.8 * s, "the regeneration survives the removal cut");
+    let recruits: u64 = rows[14..].iter().map(|r| r.regen_recruited).sum();
+    assert!(recruits > 20 && rows[15].stems_ha > 20.0, "saplings grow into the new stand after the removal cut: {recruits} recruits, {:.0} stems/ha", rows[15].stems_ha);
+}
+
+#[test]
+fn silent_failures_are_refused_or_warned() {
+    let base = ScenarioToml::new("bad", 20, 1).species(&["beech"]).uniform(4, 4, 20.0, 200.0).build();
+    // (a) a patch larger than its area, and one whose squares have no centre in the area
+    let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"patch\"\npatch_size_m = 50.0\nshare = 0.5\nyear = 1\narea = [0.0, 0.0, 40.0, 80.0]\n"));
+    assert!(e.contains("bad.toml") && e.contains("management[0].patch_size_m") && e.contains("50") && e.contains("at most 40.0 m"), "{e}");
+    // an L of 8 m wide strips: light cells inside, no centre of a 20 m square
+    let sliver = "polygons = [[[[0.0, 0.0], [60.0, 0.0], [60.0, 8.0], [8.0, 8.0], [8.0, 60.0], [0.0, 60.0]]]]";
+    let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"patch\"\npatch_size_m = 20.0\nshare = 0.5\nyear = 1\n{sliver}\n"));
+    assert!(e.contains("management[0].patch_size_m") && e.contains("centre inside the area"), "{e}");
+    // (c) a bowtie, inline and in a GeoJSON file
+    let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 1\npolygons = [[[[0.0, 0.0], [60.0, 60.0], [60.0, 0.0], [0.0, 60.0]]]]\n"));
+    assert!(e.contains("bad.toml") && e.contains("management[0].polygons[0]") && e.contains("bowtie") && e.contains("[0.0, 0.0]"), "{e}");
+    let d = tempfile::tempdir().unwrap();
+    let f = d.path().join("bowtie.geojson");
+    std::fs::write(&f, r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},"geometry":{"type":"Polygon","coordinates":[[[0,0],[60,60],[60,0],[0,60],[0,0]]]}}]}"#).unwrap();
+    let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 1\narea_file = {:?}\n", f.display().to_string()));
+    assert!(e.contains("management[0].area_file") && e.contains("bowtie.geojson") && e.contains("polygon 0") && e.contains("do not cross"), "{e}");
+    // a square with a hole and a closing point is fine
+    let ok = format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 1\npolygons = [[[[0.0, 0.0], [60.0, 0.0], [60.0, 60.0], [0.0, 60.0], [0.0, 0.0]], [[20.0, 20.0], [40.0, 20.0], [40.0, 40.0], [20.0, 40.0]]]]\n");
+    let sc = Scenario::from_toml_str(&ok, "ok.toml").unwrap();
+    World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    // (b) a planting wholly inside a building: refused
+    let building = "[[obstacle]]\nkind = \"footprint\"\npoints = [[10.0, 10.0], [70.0, 10.0], [70.0, 70.0], [10.0, 70.0]]\nheight_m = 10.0\n";
+    let e = err(&format!("{base}{building}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 3\narea = [20.0, 20.0, 60.0, 60.0]\n"));
+    assert!(e.contains("management[0].area") && e.contains("0 trees") && e.contains("obstacles"), "{e}");
+    // … and a polygon smaller than the lattice's spacing
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 20.0\nyear = 3\npolygons = [[[[1.0, 1.0], [6.0, 1.0], [6.0, 6.0], [1.0, 6.0]]]]\n"));
+    assert!(e.contains("management[0].polygons") && e.contains("0 trees"), "{e}");
+    // (b) years beyond the run's last: warned
+    let late = format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\nyears = [5, 30]\n[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nstages = [{{ year = 10, share = 0.5 }}, {{ year = 25, share = 1.0 }}]\n");
+    let sc = Scenario::from_toml_str(&late, "late.toml").unwrap();
+    let w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    let warn = sylva::sim::management::warnings(&w.site.management, sc.years, "late.toml");
+    assert_eq!(warn.len(), 2, "{warn:?}");
+    assert!(warn[0].contains("late.toml") && warn[0].contains("management[0].years[1] = 30") && warn[0].contains("last year 20"), "{warn:?}");
+    assert!(warn[1].contains("management[1].stages[1].year = 25"), "{warn:?}");
+    // a patch cut scheduled more often than it has squares: 16 squares of 20 m, 8 per entry,
+    // every 5 years from year 5: the entries of years 15 and 20 cut nothing
+    let patches = format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"patch\"\npatch_size_m = 20.0\nshare = 0.5\nfrom_year = 5\nevery_years = 5\n");
+    let sc = Scenario::from_toml_str(&patches, "patches.toml").unwrap();
+    let w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    let warn = sylva::sim::management::warnings(&w.site.management, sc.years, "patches.toml");
+    assert_eq!(warn.len(), 1, "{warn:?}");
+    assert!(warn[0].contains("management[0]") && warn[0].contains("16 squares") && warn[0].contains("after 2 entries (year 10)") && warn[0].contains("2 later entries"), "{warn:?}");
+    // (b) a year-0 anomaly: refused naming the file and line
+    let a = d.path().join("anomalies.csv");
+    std::fs::write(&a, "year,temperature_k\n0,1.5\n1,0.5\n").unwrap();
+    let c = base.replace("species = [\"beech\"]", &format!("species = [\"beech\"]\nclimate = {{ anomalies_file = {:?} }}", a.display().to_string()));
+    let e = err(&c);
+    assert!(e.contains("anomalies.csv line 2") && e.contains("climate.anomalies_file") && e.contains("1–10000") && e.contains("year 0"), "{e}");
+    // crop trees and shelterwood fields are checked like the others
+    let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"crop_trees\"\nyear = 1\n"));
+    assert!(e.contains("management[0].crop_trees_ha") && e.contains("(missing)"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"crop_trees\"\ncrop_trees_ha = 5000\nyear = 1\n"));
+    assert!(e.contains("management[0].crop_trees_ha") && e.contains("5000") && e.contains("1–1000"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ncrop_trees_ha = 50\ntarget_stems_ha = 100\nyear = 1\n"));
+    assert!(e.contains("management[0].crop_trees_ha") && e.contains("crop_trees"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nstages = [{{ year = 10, share = 0.5 }}, {{ year = 10, share = 1.0 }}]\n"));
+    assert!(e.contains("management[0].stages[1].year") && e.contains("after the previous stage"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nstages = [{{ year = 10, share = 1.5 }}]\n"));
+    assert!(e.contains("management[0].stages[0].share") && e.contains("1.5"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nyear = 3\nstages = [{{ year = 10, share = 1.0 }}]\n"));
+    assert!(e.contains("management[0].year/years/from_year") && e.contains("stages carry"), "{e}");
+    let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nyear = 3\n"));
+    assert!(e.contains("management[0].stages") && e.contains("(missing)"), "{e}");
+}
+
+#[test]
+fn a_refused_scenario_leaves_no_folder_behind() {
+    let base = ScenarioToml::new("bad", 3, 1).species(&["beech"]).uniform(4, 4, 20.0, 200.0).build();
+    let bad = format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"patch\"\npatch_size_m = 500.0\nshare = 0.5\nyear = 1\n");
+    let sc = Scenario::from_toml_str(&bad, "bad.toml").unwrap();
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let opts = sylva::job::main_job::SimulateOptions::new(&out);
+    let chain = |e: &dyn std::error::Error| {
+        let mut s = e.to_string();
+        let mut c = e.source();
+        while let Some(x) = c {
+            s += &format!(": {x}");
+            c = x.source();
+        }
+        s
+    };
+    let e = chain(&sylva::job::main_job::simulate(&sc, sc.site().unwrap(), &common::embedded(), opts, sylva::job::main_job::Stepping::One, None, &mut |_| {}).unwrap_err());
+    assert!(e.contains("patch_size_m"), "{e}");
+    assert!(!out.exists(), "{:?}", std::fs::read_dir(&out).map(|r| r.flatten().map(|e| e.file_name()).collect::<Vec<_>>()));
+    // the library's run too
+    let e = chain(&sylva::job::run::run_scenario(&sc, sc.site().unwrap(), &common::embedded(), sylva::job::run::RunOptions::new(&out)).unwrap_err());
+    assert!(e.contains("patch_size_m"), "{e}");
+    assert!(!out.exists());
+}
+
+/// The shipped example of crop trees and shelterwood (`scenarios/shelterwood_beech.toml`) loads
+/// and its entries act in their years: the crop-tree thinnings remove stems, each shelterwood
+/// stage its share of the overstorey's basal area, and after the final removal the stand is the
+/// regeneration that established under the shelter. Figures in docs/management.md.
+#[test]
+fn the_shelterwood_example_raises_crop_trees_and_regenerates_under_its_shelter() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/shelterwood_beech.toml");
+    let sc = Scenario::load(&path).unwrap();
+    let mut w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    assert!(sylva::sim::management::warnings(&w.site.management, sc.years, "x").is_empty());
+    let mut rows: Vec<StandRow> = Vec::new();
+    let mut shares = Vec::new();
+    for y in 1..=sc.years {
+        let r = common::run(&sc, &mut w, 1).remove(0);
+        let cut_ba = harvested_ba(&w);
+        if [97, 107].contains(&y) {
+            // the overstorey left: trees at least half the top height before the stage tall
+            let h = 0.5 * rows[y as usize - 2].top_height_m as f32;
+            let t = &w.stand.trees;
+            let over: f64 = (0..t.len()).filter(|&i| t.height[i] >= h).map(|i| t.basal_area_m2(i)).sum::<f64>() / w.site.area_ha;
+            shares.push(cut_ba / (cut_ba + over));
+        }
+        if y == 117 {
+            let h = 0.55 * rows[115].top_height_m as f32;
+            let tallest = w.stand.trees.height.iter().cloned().fold(0f32, f32::max);
+            assert!(tallest < h, "the final removal leaves no overstorey: a tree of {tallest:.1} m (0.55 of the top height before it: {h:.1} m)");
+        }
+        if [17, 37, 47, 57, 67, 77, 97, 107, 117].contains(&y) || y % 10 == 0 {
+            eprintln!("year {y} (age {}): {:.0} stems/ha ≥ 1.3 m, BA {:.1} m²/ha, Dq(≥7 cm) {:.1} cm, top height {:.1} m, harvested {:.0} stems/ha {:.1} m³/ha ({:.1} m²/ha), saplings {:.0}/ha", y + 3, r.stems_ha, r.basal_area_m2_ha, r.qmd_7cm_cm, r.top_height_m, r.harvest_stems_ha, r.harvest_volume_m3_ha, cut_ba, r.regeneration_ha + r.seedlings_ha);
+        }
+        rows.push(r);
+    }
+    for y in [37u32, 47, 57, 67, 77] {
+        assert!(rows[y as usize - 1].harvest_stems_ha > 0.0, "crop-tree thinning of year {y} removed nothing");
+    }
+    assert!((shares[0] - 0.3).abs() < 0.05 && (shares[1] - 0.5).abs() < 0.05, "stage shares {shares:?}");
+    eprintln!("stage shares of the overstorey's basal area: {shares:?}");
+    let last = rows.last().unwrap();
+    assert!(last.regeneration_ha + last.stems_ha > 1000.0, "a new stand: {:.0} saplings and {:.0} stems/ha", last.regeneration_ha, last.stems_ha);
+}
+
+/// A run with every kind of management (crop trees and shelterwood included) stopped and
+/// resumed from its checkpoint writes the same files as the run that was not stopped.
+#[test]
+fn a_managed_run_stopped_and_resumed_writes_the_same_files() {
+    use sylva::job::run::{run_scenario, RunOptions};
+    let sc = Scenario::from_toml_str(&busy(12), "busy.toml").unwrap();
+    let lib = common::embedded();
+    let full_dir = tempfile::tempdir().unwrap();
+    let full = run_scenario(&sc, sc.site().unwrap(), &lib, RunOptions::new(full_dir.path())).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    // stopped after year 6: between the shelterwood's stages (5, 9) and the crop-tree thinnings (3, 7)
+    let (stopped, resumed) = common::run_stopped_and_resumed(&sc, || sc.site().unwrap(), &lib, dir.path(), 5);
+    assert_eq!(stopped, 6);
+    assert_eq!(resumed.rows, full.rows);
+    assert!(full.rows.iter().map(|r| r.harvest_stems_ha).sum::<f64>() > 0.0);
+    for f in ["stand_table.csv", "inventory/year_0012.parquet", "inventory/year_0012.geojson"] {
+        assert!(std::fs::read(full_dir.path().join(f)).unwrap() == std::fs::read(dir.path().join(f)).unwrap(), "{f} differs");
+    }
 }

@@ -46,22 +46,8 @@ fn resume_equals_uninterrupted() {
     let full = run_scenario(&sc, site(&sc), &lib, RunOptions::new(full_dir.path())).unwrap();
     // interrupted run: stop after year 17 (checkpoints at 15 and on stop)
     let dir = tempfile::tempdir().unwrap();
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let s2 = stop.clone();
-    let mut cb = move |p: &sylva::job::run::Progress| {
-        if p.year == 16 {
-            s2.store(true, std::sync::atomic::Ordering::SeqCst);
-        }
-    };
-    let mut o = RunOptions::new(dir.path());
-    o.stop = Some(stop);
-    o.progress = Some(&mut cb);
-    let part = run_scenario(&sc, site(&sc), &lib, o).unwrap();
-    assert!(part.stopped);
-    assert_eq!(part.world.stand.year, 17, "stops after the year in which the flag was set");
-    let mut o = RunOptions::new(dir.path());
-    o.resume = true;
-    let resumed = run_scenario(&sc, site(&sc), &lib, o).unwrap();
+    let (stopped, resumed) = common::run_stopped_and_resumed(&sc, || site(&sc), &lib, dir.path(), 16);
+    assert_eq!(stopped, 17, "stops after the year in which the flag was set");
     assert_eq!(resumed.world.stand.year, 40);
     assert_eq!(resumed.world.stand.trees, full.world.stand.trees, "tree store differs after resume");
     assert!(!full.world.stand.cohorts.is_empty(), "the run should have a regeneration layer");

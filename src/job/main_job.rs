@@ -308,6 +308,9 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
         }
         sink(&Event::Year(p));
     };
+    // the scenario is checked against its site before any folder is made (a refused scenario
+    // left `inventory/`, `maps/` and `species/` behind; found by a break-it pass)
+    context(World::check(&site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
     // a resumed run keeps the species files it was simulated with (a changed species is
     // refused by the checkpoint before anything is written)
     if !(opts.resume && super::checkpoint::exists(&out)) {
@@ -459,12 +462,14 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     let t0 = Instant::now();
     let out = opts.out.clone();
     check_out(&out)?;
-    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
     sink(&Event::Begin { name: &sc.name, years: sc.years, seed: sc.seed, out: &out });
 
-    // 1. Living conditions.
+    // 1. Living conditions. The scenario is checked against the site before any folder is
+    // made, so a refused one leaves none behind.
     let t_site = Instant::now();
     let site = context(sc.site().map_err(JobError::from), || format!("terrain of scenario {}", sc.name))?;
+    context(World::check(&site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
+    std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
     let maps = super::maps::write_site_maps(&site, &out.join("maps").join("conditions"))?;
     let site_s = t_site.elapsed().as_secs_f64();
     sink(&Event::Conditions { width: site.width(), height: site.height(), extent_m: site.extent_m(), maps: &maps, seconds: site_s });

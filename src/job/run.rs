@@ -301,6 +301,8 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
 /// Errors: as [`run_scenario`], and the stepper's.
 pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut opts: RunOptions, stepper: &mut dyn Stepper) -> Result<RunSummary> {
     let dir = opts.out_dir.clone();
+    // the world first: a refused scenario makes no folder
+    let mut world = World::new(site, lib, scenario)?;
     mkdir(&dir)?;
     if opts.write_snapshots {
         mkdir(&dir.join("inventory"))?;
@@ -310,7 +312,6 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     for sub in [dir.clone(), dir.join("inventory"), dir.join("maps"), dir.join("maps").join("conditions"), dir.join("species"), dir.join(checkpoint::RANK_DIR)] {
         crate::output::remove_stale_temporaries(&sub)?;
     }
-    let mut world = World::new(site, lib, scenario)?;
     let ck = dir.join(checkpoint::FILE);
     let gj_years = opts.geojson_years.clone();
     let last_year = scenario.years;

@@ -138,8 +138,8 @@ fn crc_f32(h: &mut crc32fast::Hasher, v: &[f32]) {
 /// `site conditions` (CRC-32 of the per-cell indices L T K F R N, insolation, temperature,
 /// wind exposure and TWI: changes with the climate and soil constants); `seed rain`
 /// (seeds per m² and year per pool species); `obstacles` (count and CRC-32); where the
-/// scenario has them, `management` (a CRC-32 per entry of the entry and its resolved area, the
-/// area file's path left out) and
+/// scenario has them, `management` (a CRC-32 per entry of the entry as TOML, the area file's
+/// path left out, with its resolved action and area) and
 /// `climate change` (the ramp and a CRC-32 of the anomalies).
 pub fn identity(w: &World) -> Vec<(String, String)> {
     let s = &w.site;
@@ -182,9 +182,13 @@ pub fn identity(w: &World) -> Vec<(String, String)> {
             .iter()
             .enumerate()
             .map(|(i, op)| {
-                let mut op = op.clone();
-                op.spec.area_file = None;
-                format!("management[{i}] {:08x}", crc32fast::hash(format!("{op:?}").as_bytes()))
+                // the entry as TOML (the fields given only, so an optional field added in a
+                // later version leaves the CRC of entries without it alone), what it does and
+                // where
+                let mut spec = op.spec.clone();
+                spec.area_file = None;
+                let written = toml::to_string(&spec).unwrap_or_else(|_| format!("{spec:?}"));
+                format!("management[{i}] {:08x}", crc32fast::hash(format!("{written}{:?}{:?}", op.action, op.region).as_bytes()))
             })
             .collect();
         out.push(("management".into(), format!("{} entries, CRC-32 of each with its resolved area: {}", s.management.len(), crcs.join(", "))));

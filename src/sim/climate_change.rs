@@ -89,7 +89,7 @@ pub fn shifted_indices(ix: &[f32; 6], dt_k: f64, precip: f64) -> [f32; 6] {
     v
 }
 
-/// Parses an anomalies CSV: lines `year,temperature_k[,precipitation_factor]` (year 0–10000,
+/// Parses an anomalies CSV: lines `year,temperature_k[,precipitation_factor]` (year 1–10000,
 /// each once; temperature −30–30 K; factor 0.05–5, default 1); blank lines and `#` comments
 /// skipped; a first line starting with a letter is a header.
 ///
@@ -111,7 +111,9 @@ pub fn parse_anomalies(text: &str, path: &Path) -> Result<BTreeMap<u32, (f64, f6
         if !(2..=3).contains(&f.len()) {
             return Err(bad("`year,temperature_k[,precipitation_factor]`: 2 or 3 comma-separated values"));
         }
-        let year: u32 = f[0].parse().ok().filter(|y| *y <= 10_000).ok_or_else(|| bad("a year: a whole number 0–10000"))?;
+        // year 0 is the start, simulated under the base climate: an anomaly there would never
+        // act (found by a break-it pass: it was ignored without a word)
+        let year: u32 = f[0].parse().ok().filter(|y| (1..=10_000).contains(y)).ok_or_else(|| bad("a year: a whole number 1–10000 (year Y is the Y-th simulated year, the stand table's; year 0, the start, keeps the base climate and takes no anomaly)"))?;
         let t: f64 = f[1].parse().ok().filter(|t: &f64| t.is_finite() && t.abs() <= MAX_ANOMALY_K).ok_or_else(|| bad("a temperature anomaly: a number −30–30 K"))?;
         let p: f64 = match f.get(2) {
             Some(s) => s.parse().ok().filter(|p: &f64| p.is_finite() && (0.05..=5.0).contains(p)).ok_or_else(|| bad("a precipitation factor: a number 0.05–5"))?,

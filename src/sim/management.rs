@@ -34,7 +34,7 @@ pub struct Management {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_basal_area_m2_ha: Option<f64>,
     /// Thinning target: relative density (0–2) against the species' maximum-density lines
-    /// ([`stand_rd`]).
+    /// ([`super::phases::management::stand_rd`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub target_relative_density: Option<f64>,
     /// Thinning target: stems/ha (≥ 1.3 m) left in the area.
@@ -91,6 +91,52 @@ pub struct Management {
     /// Planting: age of the planted trees (years, 0–1000; default 2).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub age_yr: Option<f32>,
+    /// Thinning `crop_trees`: crop trees per hectare (1–1000) selected in the area, the largest
+    /// vigorous stems at least `crop_tree_distance_m` apart, whose strongest competitors are
+    /// removed ([`crop_tree_distance`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crop_trees_ha: Option<f64>,
+    /// Thinning `crop_trees`: least distance between two crop trees (m, 1–100); by default
+    /// [`crop_tree_distance`] of `crop_trees_ha`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crop_tree_distance_m: Option<f64>,
+    /// Harvest `shelterwood`: the stages (seed cut, removal cuts), each a year and the share of
+    /// the overstorey's basal area it removes; they are the entry's timing (no `year`, `years`
+    /// or `from_year`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stages: Option<Vec<Stage>>,
+}
+
+/// One stage of a shelterwood harvest: in simulation year `year` (1–10000) it removes `share`
+/// (> 0, ≤ 1) of the basal area of the overstorey standing in the area then (trees at least
+/// half the area's top height tall; [`SHELTER_OVERSTOREY`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Stage {
+    /// Simulation year (the stand table's year).
+    pub year: u32,
+    /// Share (> 0, ≤ 1) of the overstorey basal area removed; 1 is the final removal cut.
+    pub share: f64,
+}
+
+/// Shelterwood: the overstorey a stage cuts are the trees at least this share of the area's top
+/// height (H100) tall; shorter trees, the regeneration establishing under the shelter, are left.
+pub const SHELTER_OVERSTOREY: f32 = 0.5;
+
+/// Shelterwood: radius (m) of the neighbourhood whose basal area ranks the trees of a stage
+/// (densest neighbourhood first, so the shelter is opened evenly); about a crown diameter of a
+/// mature beech or spruce.
+pub const SHELTER_RADIUS_M: f64 = 10.0;
+
+/// The default least distance (m) between crop trees at `n_ha` crop trees per hectare:
+/// `0.75 · 100 / √n`. `100 / √n` is the spacing of `n` trees per hectare on a square lattice,
+/// the usual planning figure for crop trees (e.g. 100 beech crop trees/ha ≈ 10 m apart; Abetz &
+/// Klädtke 2002, *Die Z-Baum-Kontrollmethode*, Forstw. Cbl. 121); a greedy selection among
+/// irregularly placed trees packs at most about 0.7 trees per square of the exclusion distance
+/// (random sequential adsorption of disks), so the distance is shortened by a quarter for the
+/// selection to reach `n` in a stand that has enough candidates.
+pub fn crop_tree_distance(n_ha: f64) -> f64 {
+    0.75 * 100.0 / n_ha.sqrt()
 }
 
 /// An attribute filter on the features of an `area_file`: a feature is kept when its property
@@ -124,7 +170,8 @@ impl Management {
         let bad = |field: &str, value: String, expected: &str| invalid(ctx, i, field, value, expected);
         // fields each kind may carry
         let thinning_only = [("target_basal_area_m2_ha", self.target_basal_area_m2_ha.is_some()), ("target_relative_density", self.target_relative_density.is_some()), ("target_stems_ha", self.target_stems_ha.is_some()), ("trigger_relative_density", self.trigger_relative_density.is_some()), ("trigger_top_height_m", self.trigger_top_height_m.is_some())];
-        let harvest_only = [("patch_size_m", self.patch_size_m.is_some()), ("share", self.share.is_some())];
+        let harvest_only = [("patch_size_m", self.patch_size_m.is_some()), ("share", self.share.is_some()), ("stages", self.stages.is_some())];
+        let crop_only = [("crop_trees_ha", self.crop_trees_ha.is_some()), ("crop_tree_distance_m", self.crop_tree_distance_m.is_some())];
         let planting_only = [("mix", self.mix.is_some()), ("spacing_m", self.spacing_m.is_some()), ("age_yr", self.age_yr.is_some())];
         let refuse = |list: &[(&str, bool)], kind: &str| -> Result<()> {
             for (f, g) in list {
@@ -139,13 +186,28 @@ impl Management {
             "thinning" => {
                 refuse(&harvest_only, "harvest")?;
                 refuse(&planting_only, "planting")?;
+                const METHODS: &str = "\"from_below\", \"from_above\" or \"crop_trees\"";
                 match method {
-                    Some("from_below" | "from_above") => {}
-                    Some(m) => return Err(bad("method", format!("{m:?}"), "\"from_below\" or \"from_above\"")),
-                    None => return Err(bad("method", "(missing)".into(), "\"from_below\" or \"from_above\"")),
+                    Some("from_below" | "from_above") => refuse(&crop_only, "thinning, method = \"crop_trees\"")?,
+                    Some("crop_trees") => {
+                        let n = self.crop_trees_ha.ok_or_else(|| bad("crop_trees_ha", "(missing)".into(), "the crop trees per hectare, 1–1000"))?;
+                        if !(n.is_finite() && (1.0..=1000.0).contains(&n)) {
+                            return Err(bad("crop_trees_ha", n.to_string(), "1–1000 crop trees per hectare"));
+                        }
+                        if let Some(d) = self.crop_tree_distance_m {
+                            if !(d.is_finite() && (1.0..=100.0).contains(&d)) {
+                                return Err(bad("crop_tree_distance_m", d.to_string(), "1–100 m"));
+                            }
+                        }
+                    }
+                    Some(m) => return Err(bad("method", format!("{m:?}"), METHODS)),
+                    None => return Err(bad("method", "(missing)".into(), METHODS)),
                 }
                 let n = thinning_only[..3].iter().filter(|t| t.1).count();
-                if n != 1 {
+                if method == Some("crop_trees") && n > 1 {
+                    return Err(bad("target_*", format!("{n} targets"), "at most one of target_basal_area_m2_ha, target_relative_density, target_stems_ha with method = \"crop_trees\" (none: every competitor whose crown touches a crop tree's goes)"));
+                }
+                if method != Some("crop_trees") && n != 1 {
                     return Err(bad("target_*", format!("{n} targets"), "exactly one of target_basal_area_m2_ha, target_relative_density, target_stems_ha"));
                 }
                 let ranges = [
@@ -166,9 +228,30 @@ impl Management {
             "harvest" => {
                 refuse(&thinning_only, "thinning")?;
                 refuse(&planting_only, "planting")?;
+                refuse(&crop_only, "thinning, method = \"crop_trees\"")?;
+                const METHODS: &str = "\"clear_cut\", \"patch\" or \"shelterwood\"";
                 match method {
-                    Some("clear_cut") => refuse(&harvest_only, "harvest, method = \"patch\"")?,
+                    Some("clear_cut") => refuse(&harvest_only, "harvest, method = \"patch\" or \"shelterwood\"")?,
+                    Some("shelterwood") => {
+                        refuse(&harvest_only[..2], "harvest, method = \"patch\"")?;
+                        let st = self.stages.as_ref().ok_or_else(|| bad("stages", "(missing)".into(), "the stages, e.g. stages = [{ year = 100, share = 0.5 }, { year = 110, share = 0.5 }, { year = 120, share = 1.0 }]"))?;
+                        if st.is_empty() {
+                            return Err(bad("stages", "[]".into(), "at least one stage { year = Y, share = S }"));
+                        }
+                        for (k, g) in st.iter().enumerate() {
+                            if !(1..=10_000).contains(&g.year) {
+                                return Err(bad(&format!("stages[{k}].year"), g.year.to_string(), "1–10000 (a harvest acts at the end of a simulated year)"));
+                            }
+                            if k > 0 && g.year <= st[k - 1].year {
+                                return Err(bad(&format!("stages[{k}].year"), g.year.to_string(), &format!("a year after the previous stage's ({})", st[k - 1].year)));
+                            }
+                            if !(g.share > 0.0 && g.share <= 1.0) {
+                                return Err(bad(&format!("stages[{k}].share"), g.share.to_string(), "> 0 and ≤ 1 (the share of the overstorey's basal area the stage removes)"));
+                            }
+                        }
+                    }
                     Some("patch") => {
+                        refuse(&harvest_only[2..], "harvest, method = \"shelterwood\"")?;
                         let s = self.patch_size_m.ok_or_else(|| bad("patch_size_m", "(missing)".into(), "the side of the square patches, 5–1000 m"))?;
                         if !(s.is_finite() && (5.0..=1000.0).contains(&s)) {
                             return Err(bad("patch_size_m", s.to_string(), "5–1000 m"));
@@ -178,13 +261,14 @@ impl Management {
                             return Err(bad("share", sh.to_string(), "> 0 and ≤ 1"));
                         }
                     }
-                    Some(m) => return Err(bad("method", format!("{m:?}"), "\"clear_cut\" or \"patch\"")),
-                    None => return Err(bad("method", "(missing)".into(), "\"clear_cut\" or \"patch\"")),
+                    Some(m) => return Err(bad("method", format!("{m:?}"), METHODS)),
+                    None => return Err(bad("method", "(missing)".into(), METHODS)),
                 }
             }
             "planting" => {
                 refuse(&thinning_only, "thinning")?;
                 refuse(&harvest_only, "harvest")?;
+                refuse(&crop_only, "thinning, method = \"crop_trees\"")?;
                 if let Some(m) = method {
                     return Err(bad("method", format!("{m:?}"), "no method for a planting"));
                 }
@@ -212,9 +296,12 @@ impl Management {
         if self.kind != "thinning" && given(self.trigger_relative_density.is_some() || self.trigger_top_height_m.is_some()) {
             return Err(bad("trigger_*", "given".into(), "triggers only with kind = \"thinning\""));
         }
-        // timing
+        // timing (a shelterwood's stages carry its years)
         let n = self.year.is_some() as u8 + self.years.is_some() as u8 + self.from_year.is_some() as u8;
-        if n != 1 {
+        if self.stages.is_some() && n > 0 {
+            return Err(bad("year/years/from_year", format!("{n} given"), "none with method = \"shelterwood\": its stages carry the years"));
+        }
+        if self.stages.is_none() && n != 1 {
             return Err(bad("year/years/from_year", format!("{n} given"), "exactly one of year = Y, years = [...], from_year = Y (with every_years, until_year)"));
         }
         if self.from_year.is_none() && (self.every_years.is_some() || self.until_year.is_some()) {
@@ -279,8 +366,12 @@ impl Management {
         Ok(())
     }
 
-    /// Whether entry is due in year `year`, and if so the how-manieth time (0 the first).
+    /// Whether entry is due in year `year`, and if so the how-manieth time (0 the first; a
+    /// shelterwood's stage).
     pub fn due(&self, year: u32) -> Option<u32> {
+        if let Some(st) = &self.stages {
+            return st.iter().position(|g| g.year == year).map(|k| k as u32);
+        }
         if let Some(y) = self.year {
             return (y == year).then_some(0);
         }
@@ -293,7 +384,42 @@ impl Management {
     }
 }
 
-/// Checks a polygon's rings: at least one, each of at least 3 finite points.
+impl Management {
+    /// The years this entry lists that lie beyond a run's last year `last` (the stand table's
+    /// year), as `(field, year)`: `year`, `years[k]`, `from_year` or `stages[k].year`. Such years
+    /// never come; a recurring entry's `until_year` beyond the run is not listed (it is open).
+    pub fn years_beyond(&self, last: u32) -> Vec<(String, u32)> {
+        let mut out = Vec::new();
+        let mut add = |f: String, y: u32| {
+            if y > last {
+                out.push((f, y));
+            }
+        };
+        if let Some(y) = self.year {
+            add("year".into(), y);
+        }
+        for (k, y) in self.years.iter().flatten().enumerate() {
+            add(format!("years[{k}]"), *y);
+        }
+        if let Some(y) = self.from_year {
+            add("from_year".into(), y);
+        }
+        for (k, g) in self.stages.iter().flatten().enumerate() {
+            add(format!("stages[{k}].year"), g.year);
+        }
+        out
+    }
+
+    /// The first year the entry acts in (its earliest listed year, `from_year` or first stage).
+    pub fn first_year(&self) -> u32 {
+        let listed = self.year.into_iter().chain(self.years.iter().flatten().copied()).chain(self.from_year).chain(self.stages.iter().flatten().map(|g| g.year));
+        listed.min().unwrap_or(0)
+    }
+}
+
+/// Checks a polygon's rings: at least one, each of at least 3 finite points, and no two edges
+/// of its rings crossing (a self-intersecting "bowtie" outline, or a hole crossing the outline,
+/// has no well-defined inside). A ring may repeat its first point at its end (GeoJSON does).
 fn check_rings(rings: &[Vec<[f64; 2]>]) -> std::result::Result<(), String> {
     if rings.is_empty() {
         return Err("a polygon: a list of rings, the first the outline".into());
@@ -304,7 +430,46 @@ fn check_rings(rings: &[Vec<[f64; 2]>]) -> std::result::Result<(), String> {
             return Err("rings of at least 3 finite [x, y] points".into());
         }
     }
+    if let Some((a, b)) = crossing_edges(rings) {
+        return Err(format!("a simple polygon: edges that do not cross (ring {} edge {} crosses ring {} edge {}: a self-intersecting outline such as a bowtie has no well-defined inside; split it into polygons)", a.0, a.1, b.0, b.1));
+    }
     Ok(())
+}
+
+/// The first pair of edges of `rings` that cross properly (each edge's end points strictly on
+/// either side of the other's line), as `((ring, edge), (ring, edge))`; `None` for a simple
+/// polygon. Edges sharing an end point (neighbours in a ring) and zero-length edges are not
+/// compared; touching without crossing is allowed. Edges are compared pairwise after a
+/// bounding-box test (quadratic in the edges; fine for parcel outlines).
+fn crossing_edges(rings: &[Vec<[f64; 2]>]) -> Option<((usize, usize), (usize, usize))> {
+    // (ring, edge index) and its end points
+    type Edge = ((usize, usize), [f64; 2], [f64; 2]);
+    let mut edges: Vec<Edge> = Vec::new();
+    for (ri, r) in rings.iter().enumerate() {
+        for k in 0..r.len() {
+            let (a, b) = (r[k], r[(k + 1) % r.len()]);
+            if a != b {
+                edges.push(((ri, k), a, b));
+            }
+        }
+    }
+    let orient = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).signum();
+    for i in 0..edges.len() {
+        let (ei, a, b) = edges[i];
+        for &(ej, c, d) in &edges[i + 1..] {
+            if a[0].max(b[0]) < c[0].min(d[0]) || c[0].max(d[0]) < a[0].min(b[0]) {
+                continue;
+            }
+            if a == c || a == d || b == c || b == d {
+                continue;
+            }
+            let (o1, o2, o3, o4) = (orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b));
+            if o1 * o2 < 0.0 && o3 * o4 < 0.0 {
+                return Some((ei, ej));
+            }
+        }
+    }
+    None
 }
 
 /// The area an entry acts on, in world metres.
@@ -363,8 +528,28 @@ pub enum Action {
         /// Act only at or above this top height (m) of the area.
         trigger_top_height_m: Option<f64>,
     },
+    /// A crop-tree thinning: the release of crop trees by removing their competitors
+    /// (`sim::phases::management`).
+    CropTrees {
+        /// Crop trees per hectare.
+        n_ha: f64,
+        /// Least distance between crop trees (m).
+        distance_m: f64,
+        /// What is thinned to; `None`: every competitor whose crown touches a crop tree's.
+        target: Option<Target>,
+        /// Act only at or above this relative density of the area.
+        trigger_rd: Option<f64>,
+        /// Act only at or above this top height (m) of the area.
+        trigger_top_height_m: Option<f64>,
+    },
     /// Every tree of the area.
     ClearCut,
+    /// A shelterwood harvest in stages: the share (0–1) of the overstorey's basal area each
+    /// stage removes, in stage order (the years are the entry's `stages`).
+    Shelterwood {
+        /// Share per stage.
+        shares: Vec<f64>,
+    },
     /// Square patches of side `size_m` (m), a share `share` of the area's patches each time.
     Patch {
         /// Side (m).
@@ -383,12 +568,23 @@ pub enum Action {
     },
 }
 
+/// The square patches of side `size_m` (m) over `region`'s bounding box, laid from its SW
+/// corner: `(columns, rows, the squares whose centre lies in the region)`, squares numbered
+/// row-major from the SW corner.
+pub fn patch_squares(region: &Region, size_m: f64) -> (usize, usize, Vec<usize>) {
+    let b = region.bbox;
+    let nx = (((b[2] - b[0]) / size_m).ceil() as usize).max(1);
+    let ny = (((b[3] - b[1]) / size_m).ceil() as usize).max(1);
+    let inside = (0..nx * ny).filter(|&p| region.contains(b[0] + ((p % nx) as f64 + 0.5) * size_m, b[1] + ((p / nx) as f64 + 0.5) * size_m)).collect();
+    (nx, ny, inside)
+}
+
 /// A thinning target over the thinned area.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Target {
     /// Basal area (m²/ha) of the stems ≥ 1.3 m.
     BasalArea(f64),
-    /// Relative density ([`stand_rd`]).
+    /// Relative density ([`super::phases::management::stand_rd`]).
     RelativeDensity(f64),
     /// Stems/ha ≥ 1.3 m.
     Stems(f64),
@@ -548,6 +744,15 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
             return Err(invalid(ctx, i, field, format!("{bbox:?} (bounding box, m)"), &format!("an area covering unmasked ground of the site, 0 ≤ x < {ex} m and 0 ≤ y < {ey} m (origin SW corner; an area file in the DEM's CRS)")));
         }
         let action = match (m.kind.as_str(), m.method.as_deref()) {
+            ("thinning", Some("crop_trees")) => {
+                let n_ha = m.crop_trees_ha.unwrap_or(100.0);
+                let target = match (m.target_basal_area_m2_ha, m.target_relative_density, m.target_stems_ha) {
+                    (Some(b), _, _) => Some(Target::BasalArea(b)),
+                    (_, Some(r), _) => Some(Target::RelativeDensity(r)),
+                    (_, _, s) => s.map(Target::Stems),
+                };
+                Action::CropTrees { n_ha, distance_m: m.crop_tree_distance_m.unwrap_or_else(|| crop_tree_distance(n_ha)), target, trigger_rd: m.trigger_relative_density, trigger_top_height_m: m.trigger_top_height_m }
+            }
             ("thinning", method) => Action::Thinning {
                 from_below: method == Some("from_below"),
                 target: match (m.target_basal_area_m2_ha, m.target_relative_density, m.target_stems_ha) {
@@ -558,7 +763,19 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
                 trigger_rd: m.trigger_relative_density,
                 trigger_top_height_m: m.trigger_top_height_m,
             },
-            ("harvest", Some("patch")) => Action::Patch { size_m: m.patch_size_m.unwrap_or(50.0), share: m.share.unwrap_or(1.0) },
+            ("harvest", Some("patch")) => {
+                let size_m = m.patch_size_m.unwrap_or(50.0);
+                let (w, h) = (clipped[2] - clipped[0], clipped[3] - clipped[1]);
+                // found by a break-it pass: such patches never cut and nothing said so
+                if size_m > w.min(h) {
+                    return Err(invalid(ctx, i, "patch_size_m", size_m, &format!("a patch that fits in the area: at most {:.1} m, the shorter side of the area's bounding box ({w:.1} m × {h:.1} m on the site)", w.min(h))));
+                }
+                if patch_squares(&region, size_m).2.is_empty() {
+                    return Err(invalid(ctx, i, "patch_size_m", size_m, "a patch size whose squares (laid from the SW corner of the area's bounding box) have at least one centre inside the area (none has: use smaller patches)"));
+                }
+                Action::Patch { size_m, share: m.share.unwrap_or(1.0) }
+            }
+            ("harvest", Some("shelterwood")) => Action::Shelterwood { shares: m.stages.iter().flatten().map(|g| g.share).collect() },
             ("harvest", _) => Action::ClearCut,
             _ => {
                 let mix = m.mix.clone().unwrap_or_default();
@@ -596,6 +813,31 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
     Ok(ops)
 }
 
+/// Warnings about resolved entries `ops` of a run of `last_year` years (`ctx` names the
+/// scenario): every year an entry lists beyond the last ([`Management::years_beyond`]), which
+/// never comes (found by a break-it pass: such entries were ignored without a word), and a
+/// patch cut scheduled more often in the run than it has squares to open (the later entries
+/// find every square cut and cut nothing). Warnings, not errors: a run shortened with
+/// `--years` keeps its scenario's later entries, and a patch cut may be meant to stop.
+pub fn warnings(ops: &[Operation], last_year: u32, ctx: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for op in ops {
+        for (f, y) in op.spec.years_beyond(last_year) {
+            out.push(format!("{ctx}: management[{}].{f} = {y} lies beyond the run's last year {last_year}: the entry does not act in that year", op.index));
+        }
+        if let Action::Patch { size_m, share } = op.action {
+            let n = patch_squares(&op.region, size_m).2.len();
+            let per = ((share * n as f64).round() as usize).max(1);
+            let needed = n.div_ceil(per);
+            let due: Vec<u32> = (1..=last_year).filter(|&y| op.spec.due(y).is_some()).collect();
+            if due.len() > needed {
+                out.push(format!("{ctx}: management[{}]: a patch cut of {n} squares of {size_m} m, {per} per entry, has cut them all after {needed} entries (year {}); its {} later entries in the run cut nothing", op.index, due[needed - 1], due.len() - needed));
+            }
+        }
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -614,5 +856,36 @@ mod tests {
         assert_eq!(m.due(35), None);
         let m = Management { years: Some(vec![30, 10]), ..Default::default() };
         assert_eq!(m.due(30), Some(1));
+        let m = Management { stages: Some(vec![Stage { year: 10, share: 0.5 }, Stage { year: 20, share: 1.0 }]), ..Default::default() };
+        assert_eq!((m.due(10), m.due(20), m.due(15)), (Some(0), Some(1), None));
+        assert_eq!(m.first_year(), 10);
+        assert_eq!(m.years_beyond(15), vec![("stages[1].year".to_string(), 20)]);
+    }
+
+    #[test]
+    fn entries_serialise_to_toml_for_the_checkpoint_identity() {
+        // the identity hashes the entry's TOML form: it must serialise (tables after values)
+        let m = Management {
+            kind: "harvest".into(),
+            method: Some("shelterwood".into()),
+            stages: Some(vec![Stage { year: 10, share: 0.5 }]),
+            mix: Some([("beech".to_string(), 1.0)].into()),
+            filter: Some(AreaFilter { property: "n".into(), equals: toml::Value::Integer(2) }),
+            polygons: Some(vec![vec![vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]]]),
+            ..Default::default()
+        };
+        let t = toml::to_string(&m).unwrap();
+        assert!(t.contains("shelterwood") && !t.contains("crop_trees_ha"), "{t}");
+        assert_eq!(toml::from_str::<Management>(&t).unwrap(), m);
+    }
+
+    #[test]
+    fn crossing_edges_find_bowties_and_pass_holes() {
+        let bowtie = vec![vec![[0.0, 0.0], [10.0, 10.0], [10.0, 0.0], [0.0, 10.0]]];
+        assert!(crossing_edges(&bowtie).is_some());
+        let holed = vec![vec![[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0], [0.0, 0.0]], vec![[4.0, 4.0], [6.0, 4.0], [6.0, 6.0], [4.0, 6.0]]];
+        assert!(crossing_edges(&holed).is_none());
+        let crossing_hole = vec![holed[0].clone(), vec![[8.0, 4.0], [12.0, 4.0], [12.0, 6.0], [8.0, 6.0]]];
+        assert_eq!(crossing_edges(&crossing_hole).map(|(a, b)| (a.0, b.0)), Some((0, 1)));
     }
 }

@@ -218,10 +218,62 @@ impl World {
     ///
     /// Errors: unknown species names, seed-source points or planted areas outside the site
     /// ([`Scenario::validate_extent`]), management entries that do not resolve
-    /// ([`super::management::resolve`]: species, areas, area files), an unreadable or malformed
-    /// climate anomalies file ([`super::climate_change::ClimateChange::of`])
-    /// ([`crate::Error::Invalid`]).
+    /// ([`super::management::resolve`]: species, areas, area files), a planting where no tree of
+    /// its lattice can stand ([`World::check`]), an unreadable or malformed climate anomalies
+    /// file ([`super::climate_change::ClimateChange::of`]) ([`crate::Error::Invalid`]).
+    ///
+    /// Logs a warning (`tracing::warn`) for every management year beyond the run's last year
+    /// ([`super::management::warnings`]).
     pub fn new(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
+        let mut w = World::bare(site, lib, scenario)?;
+        w.check_plantings(&scenario.context())?;
+        for m in super::management::warnings(&w.site.management, scenario.years, &scenario.context()) {
+            tracing::warn!("{m}");
+        }
+        w.place_start(scenario);
+        // plantings of year 0 stand with the start
+        for op in &w.site.management {
+            if op.spec.due(0).is_some() {
+                for t in w.site.plant(op, 0) {
+                    w.stand.trees.push(t);
+                }
+            }
+        }
+        Ok(w)
+    }
+
+    /// Checks `scenario` against `site` and `lib` as [`World::new`] does, without placing its
+    /// start (cheap): a run calls it before it creates any output folder, so a refused scenario
+    /// leaves none behind.
+    ///
+    /// Errors: as [`World::new`].
+    pub fn check(site: &SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<()> {
+        World::bare(site.clone(), lib, scenario)?.check_plantings(&scenario.context())
+    }
+
+    /// Refuses a planting none of whose lattice points (in its first year) lies on unmasked
+    /// ground inside its area and outside solid obstacles (found by a break-it pass: a planting
+    /// wholly inside a building planted nothing and said nothing).
+    fn check_plantings(&self, ctx: &str) -> Result<()> {
+        for op in &self.site.management {
+            let super::management::Action::Planting { spacing_m, .. } = op.action else { continue };
+            if self.site.plant(op, op.spec.first_year()).is_empty() {
+                let m = &op.spec;
+                let field = if m.area.is_some() { "area" } else if m.area_file.is_some() { "area_file" } else if m.polygons.is_some() { "polygons" } else { "spacing_m" };
+                let under = if self.site.obstacles.is_empty() { "" } else { ", outside the scenario's solid obstacles" };
+                return Err(crate::Error::Invalid {
+                    context: ctx.to_string(),
+                    field: format!("management[{}].{field}", op.index),
+                    value: format!("{:?} (bounding box, m; 0 trees of a {spacing_m} m lattice)", op.region.bbox),
+                    expected: format!("an area where the planting's lattice has at least one point on unmasked ground inside it{under} (a smaller spacing, or another area)"),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The world of `scenario` with its site, species and resolved management, and no trees.
+    fn bare(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
         let ctx = scenario.context();
         let pool = scenario.resolve_species(lib, &ctx)?;
         let extent = site.extent_m();
@@ -288,15 +340,6 @@ impl World {
         };
         let view = super::management::SiteView { conditions: &w.site.conditions, extent: w.site.extent, light: &w.site.light, light_site: &w.site.light_site, pool: &w.site.pool };
         w.site.management = super::management::resolve(&scenario.management, &view, lib, &ctx)?;
-        w.place_start(scenario);
-        // plantings of year 0 stand with the start
-        for op in &w.site.management {
-            if op.spec.due(0).is_some() {
-                for t in w.site.plant(op, 0) {
-                    w.stand.trees.push(t);
-                }
-            }
-        }
         Ok(w)
     }
 

@@ -42,6 +42,28 @@ pub fn slope(pts: &[(f64, f64)]) -> f64 {
     sxy / sxx
 }
 
+/// Runs `sc` into `dir`, stopped by its stop flag set after year `stop_after` (the run stops
+/// after the next year and writes a checkpoint), then resumed there to its end: (the stopped
+/// run's last year, the resumed run's summary).
+pub fn run_stopped_and_resumed(sc: &Scenario, site: impl Fn() -> sylva::conditions::SiteConditions, lib: &SpeciesLibrary, dir: &std::path::Path, stop_after: u32) -> (u32, sylva::job::run::RunSummary) {
+    use sylva::job::run::{run_scenario, RunOptions};
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let s2 = stop.clone();
+    let mut cb = move |p: &sylva::job::run::Progress| {
+        if p.year == stop_after {
+            s2.store(true, std::sync::atomic::Ordering::SeqCst);
+        }
+    };
+    let mut o = RunOptions::new(dir);
+    o.stop = Some(stop);
+    o.progress = Some(&mut cb);
+    let part = run_scenario(sc, site(), lib, o).unwrap();
+    assert!(part.stopped);
+    let mut o = RunOptions::new(dir);
+    o.resume = true;
+    (part.world.stand.year, run_scenario(sc, site(), lib, o).unwrap())
+}
+
 /// Scenario TOML for the sim tests, built from parts instead of repeating the preamble in every
 /// test: top-level keys, one terrain, then the start conditions.
 ///

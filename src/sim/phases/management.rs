@@ -6,7 +6,7 @@
 //! sum runs in tree order, so the result does not depend on the thread count.
 
 use crate::rng::{mix64, salt};
-use crate::sim::management::{Action, Operation, Target};
+use crate::sim::management::{patch_squares, Action, Operation, Target, SHELTER_OVERSTOREY, SHELTER_RADIUS_M};
 use crate::sim::trees::{birth_id, DeadTree, DeathCause, NewTree, TreeStore, N_CAUSES};
 use crate::sim::world::Site;
 use crate::species::SpeciesLibrary;
@@ -44,7 +44,9 @@ pub fn run(m: Manage<'_>) -> usize {
         let t = &*m.trees;
         let remove: Vec<bool> = match &op.action {
             Action::Thinning { from_below, target, trigger_rd, trigger_top_height_m } => thinning(m.site, t, op, *from_below, *target, *trigger_rd, *trigger_top_height_m),
+            Action::CropTrees { n_ha, distance_m, target, trigger_rd, trigger_top_height_m } => crop_tree_thinning(m.site, t, op, *n_ha, *distance_m, *target, *trigger_rd, *trigger_top_height_m),
             Action::ClearCut => (0..t.len()).map(|i| op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect(),
+            Action::Shelterwood { shares } => shelterwood(t, op, shares.get(k as usize).copied().unwrap_or(1.0)),
             Action::Patch { size_m, share } => patches(m.seed, t, op, *size_m, *share, k),
             Action::Planting { .. } => {
                 planted.extend(m.site.plant(op, y).into_iter().map(|nt| (m.site.light.cell_of(nt.x, nt.y) as u32, nt)));
@@ -115,33 +117,53 @@ pub fn stand_rd(lib: &SpeciesLibrary, n: &[f64], d2: &[f64], area_ha: f64) -> f6
     rd
 }
 
-/// The trees a thinning removes: none unless its triggers hold over its area; else the stems
-/// (≥ 1.3 m) of its area from the smallest DBH (`from_below`) or the largest, ties by id,
-/// until the area's figure is at or below the target.
-fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target: Target, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> Vec<bool> {
-    let mut remove = vec![false; t.len()];
-    let a = op.region.area_ha.max(1e-9);
-    let mut cand: Vec<usize> = (0..t.len()).filter(|&i| t.height[i] >= 1.3 && t.dbh[i] > 0.0 && op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect();
+/// The stems (≥ 1.3 m, with a DBH) of an entry's area, in store order.
+fn stems_in(t: &TreeStore, op: &Operation) -> Vec<usize> {
+    (0..t.len()).filter(|&i| t.height[i] >= 1.3 && t.dbh[i] > 0.0 && op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect()
+}
+
+/// The figures of stems `cand` of an area, and whether the thinning's triggers hold there (the
+/// area's relative density and top height at least the triggers').
+fn figures_and_triggers(site: &Site, t: &TreeStore, cand: &[usize], a: f64, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Figures, bool) {
     let ns = site.lib.species.len();
     let mut f = Figures { stems: 0.0, ba_m2: 0.0, n7: vec![0.0; ns], d2_7: vec![0.0; ns] };
-    for &i in &cand {
+    for &i in cand {
         f.add(t, i, 1.0);
     }
     if let Some(rd) = trigger_rd {
         if f.value(site, Target::RelativeDensity(rd), a) < rd {
-            return remove;
+            return (f, false);
         }
     }
     if let Some(h) = trigger_h {
         let dbh: Vec<f32> = cand.iter().map(|&i| t.dbh[i]).collect();
         let height: Vec<f32> = cand.iter().map(|&i| t.height[i]).collect();
         if crate::sim::stats::top_height(&dbh, &height, a) < h {
-            return remove;
+            return (f, false);
         }
     }
-    let goal = match target {
+    (f, true)
+}
+
+/// The value of a target.
+fn goal(target: Target) -> f64 {
+    match target {
         Target::BasalArea(v) | Target::Stems(v) | Target::RelativeDensity(v) => v,
-    };
+    }
+}
+
+/// The trees a thinning removes: none unless its triggers hold over its area; else the stems
+/// (≥ 1.3 m) of its area from the smallest DBH (`from_below`) or the largest, ties by id,
+/// until the area's figure is at or below the target.
+fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target: Target, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> Vec<bool> {
+    let mut remove = vec![false; t.len()];
+    let a = op.region.area_ha.max(1e-9);
+    let mut cand = stems_in(t, op);
+    let (mut f, act) = figures_and_triggers(site, t, &cand, a, trigger_rd, trigger_h);
+    if !act {
+        return remove;
+    }
+    let goal = goal(target);
     cand.sort_by(|&i, &j| {
         let o = t.dbh[i].total_cmp(&t.dbh[j]);
         (if from_below { o } else { o.reverse() }).then(t.id[i].cmp(&t.id[j]))
@@ -156,16 +178,203 @@ fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target
     remove
 }
 
+/// Crop trees are chosen among the stems whose vigour (realised over potential growth, 0–1) is at
+/// least this: a suppressed tree responds little to a release (crop trees are chosen for
+/// vitality, quality and spacing; Abetz & Klädtke 2002).
+pub const CROP_MIN_VIGOUR: f32 = 0.5;
+
+/// A crop tree's competitors are the trees whose crowns touch its crown or come within this
+/// distance (m) of it. In the model the crowns of a closed stand abut rather than overlap
+/// (crowding narrows them: 0.8 m radii at 1.5 m spacing), so touching alone finds few; a
+/// release frees the crop tree's crown on all sides (the Z-Baum release, Abetz & Klädtke
+/// 2002). A model choice, not fitted.
+pub const RELEASE_GAP_M: f64 = 1.0;
+
+/// Trees `idx` of a store bucketed in square cells of `cell_m` (m) over `bbox`, for neighbour
+/// searches.
+struct Buckets {
+    x0: f64,
+    y0: f64,
+    cell_m: f64,
+    nx: usize,
+    ny: usize,
+    cells: Vec<Vec<usize>>,
+}
+
+impl Buckets {
+    fn new(t: &TreeStore, idx: &[usize], bbox: [f64; 4], cell_m: f64) -> Buckets {
+        let nx = (((bbox[2] - bbox[0]) / cell_m).ceil() as usize).max(1);
+        let ny = (((bbox[3] - bbox[1]) / cell_m).ceil() as usize).max(1);
+        let mut b = Buckets { x0: bbox[0], y0: bbox[1], cell_m, nx, ny, cells: vec![Vec::new(); nx * ny] };
+        for &i in idx {
+            let c = b.cell(t.x[i] as f64, t.y[i] as f64);
+            b.cells[c.1 * nx + c.0].push(i);
+        }
+        b
+    }
+    fn cell(&self, x: f64, y: f64) -> (usize, usize) {
+        let c = ((x - self.x0) / self.cell_m).floor().clamp(0.0, (self.nx - 1) as f64) as usize;
+        let r = ((y - self.y0) / self.cell_m).floor().clamp(0.0, (self.ny - 1) as f64) as usize;
+        (c, r)
+    }
+    /// The trees within `r` (m) of `(x, y)` (the point's own tree included), in bucket order
+    /// (rows, columns, then insertion): deterministic.
+    fn near(&self, t: &TreeStore, x: f64, y: f64, r: f64) -> Vec<usize> {
+        let k = (r / self.cell_m).ceil() as usize;
+        let (c, rr) = self.cell(x, y);
+        let mut out = Vec::new();
+        for row in rr.saturating_sub(k)..=(rr + k).min(self.ny - 1) {
+            for col in c.saturating_sub(k)..=(c + k).min(self.nx - 1) {
+                for &j in &self.cells[row * self.nx + col] {
+                    if (t.x[j] as f64 - x).hypot(t.y[j] as f64 - y) <= r {
+                        out.push(j);
+                    }
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The crop trees of an area (store indices, in selection order): among its stems (≥ 1.3 m)
+/// with a vigour of at least [`CROP_MIN_VIGOUR`], from the largest DBH (ties by id), each
+/// taken when no crop tree taken before stands within `distance_m` (m), until
+/// `round(n_ha · area)` are taken (fewer where the stand has too few candidates).
+pub fn crop_trees(t: &TreeStore, op: &Operation, n_ha: f64, distance_m: f64) -> Vec<usize> {
+    let mut cand: Vec<usize> = stems_in(t, op).into_iter().filter(|&i| t.vigour[i] >= CROP_MIN_VIGOUR).collect();
+    cand.sort_by(|&i, &j| t.dbh[j].total_cmp(&t.dbh[i]).then(t.id[i].cmp(&t.id[j])));
+    let want = (n_ha * op.region.area_ha).round() as usize;
+    let mut chosen = Buckets::new(t, &[], op.region.bbox, distance_m.max(1.0));
+    let mut out = Vec::new();
+    for i in cand {
+        if out.len() >= want {
+            break;
+        }
+        let (x, y) = (t.x[i] as f64, t.y[i] as f64);
+        if chosen.near(t, x, y, distance_m).is_empty() {
+            let c = chosen.cell(x, y);
+            chosen.cells[c.1 * chosen.nx + c.0].push(i);
+            out.push(i);
+        }
+    }
+    out
+}
+
+/// Hegyi's competition index term of tree `j` on tree `i`: `(DBH_j / DBH_i) / distance` (1/m;
+/// distance at least 0.1 m); Hegyi 1974, *A simulation model for managing jack-pine stands*.
+pub fn hegyi_term(t: &TreeStore, i: usize, j: usize) -> f64 {
+    let d = (t.x[j] as f64 - t.x[i] as f64).hypot(t.y[j] as f64 - t.y[i] as f64).max(0.1);
+    t.dbh[j] as f64 / (t.dbh[i] as f64).max(0.1) / d
+}
+
+/// The trees a crop-tree thinning removes (none unless its triggers hold): the crop trees of
+/// the area ([`crop_trees`], chosen anew at each entry by the same rule; released crop trees,
+/// the largest, are mostly chosen again) are kept; their competitors are the other stems of the
+/// area whose crown touches a crop tree's or comes within [`RELEASE_GAP_M`] of it (distance
+/// below the sum of the crown radii plus the gap) and that reach into it (at least as tall as
+/// its crown base). Without a target every competitor goes;
+/// with one they go in order of their largest Hegyi term on a crop tree ([`hegyi_term`]; ties
+/// by id) until the area's figure is at or below the target (or no competitor is left).
+#[allow(clippy::too_many_arguments)]
+fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, distance_m: f64, target: Option<Target>, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> Vec<bool> {
+    let mut remove = vec![false; t.len()];
+    let a = op.region.area_ha.max(1e-9);
+    let cand = stems_in(t, op);
+    let (mut f, act) = figures_and_triggers(site, t, &cand, a, trigger_rd, trigger_h);
+    if !act {
+        return remove;
+    }
+    let crops = crop_trees(t, op, n_ha, distance_m);
+    let mut is_crop = vec![false; t.len()];
+    for &c in &crops {
+        is_crop[c] = true;
+    }
+    let max_cr = cand.iter().map(|&i| t.crown_radius[i] as f64).fold(0.0, f64::max);
+    let grid = Buckets::new(t, &cand, op.region.bbox, (2.0 * max_cr + RELEASE_GAP_M).max(2.0));
+    // each competitor with its strongest Hegyi term on a crop tree
+    let mut strength: std::collections::BTreeMap<usize, f64> = std::collections::BTreeMap::new();
+    for &c in &crops {
+        for j in grid.near(t, t.x[c] as f64, t.y[c] as f64, t.crown_radius[c] as f64 + max_cr + RELEASE_GAP_M) {
+            let d = (t.x[j] as f64 - t.x[c] as f64).hypot(t.y[j] as f64 - t.y[c] as f64);
+            if is_crop[j] || d >= (t.crown_radius[c] + t.crown_radius[j]) as f64 + RELEASE_GAP_M || t.height[j] < t.crown_base[c] {
+                continue;
+            }
+            let h = hegyi_term(t, c, j);
+            let e = strength.entry(j).or_insert(0.0);
+            *e = e.max(h);
+        }
+    }
+    let mut order: Vec<(usize, f64)> = strength.into_iter().collect();
+    order.sort_by(|a, b| b.1.total_cmp(&a.1).then(t.id[a.0].cmp(&t.id[b.0])));
+    for (j, _) in order {
+        if let Some(tg) = target {
+            if f.value(site, tg, a) <= goal(tg) {
+                break;
+            }
+        }
+        remove[j] = true;
+        f.add(t, j, -1.0);
+    }
+    remove
+}
+
+/// The trees a shelterwood stage removes: of the area's overstorey (stems at least
+/// [`SHELTER_OVERSTOREY`] of the area's top height tall; the regeneration below is left),
+/// `share` of the basal area: with `share` 1 all of it, else the tree with the densest
+/// neighbourhood first (the basal area of the overstorey within [`SHELTER_RADIUS_M`], its own
+/// included; ties by the larger DBH, then id), the neighbours' figures updated after each, until
+/// the removed basal area reaches the share. So the canopy is opened evenly and the
+/// best-spaced trees are left as the shelter.
+fn shelterwood(t: &TreeStore, op: &Operation, share: f64) -> Vec<bool> {
+    let mut remove = vec![false; t.len()];
+    let cand = stems_in(t, op);
+    let dbh: Vec<f32> = cand.iter().map(|&i| t.dbh[i]).collect();
+    let height: Vec<f32> = cand.iter().map(|&i| t.height[i]).collect();
+    let h100 = crate::sim::stats::top_height(&dbh, &height, op.region.area_ha.max(1e-9)) as f32;
+    let over: Vec<usize> = cand.into_iter().filter(|&i| t.height[i] >= SHELTER_OVERSTOREY * h100).collect();
+    if share >= 1.0 {
+        for &i in &over {
+            remove[i] = true;
+        }
+        return remove;
+    }
+    let total: f64 = over.iter().map(|&i| t.basal_area_m2(i)).sum();
+    let grid = Buckets::new(t, &over, op.region.bbox, SHELTER_RADIUS_M);
+    let mut score = vec![0.0f64; t.len()];
+    let mut heap = std::collections::BinaryHeap::new();
+    let key = |s: f64| s.max(0.0).to_bits();
+    for &i in &over {
+        score[i] = grid.near(t, t.x[i] as f64, t.y[i] as f64, SHELTER_RADIUS_M).iter().map(|&j| t.basal_area_m2(j)).sum();
+        heap.push((key(score[i]), t.dbh[i].to_bits(), std::cmp::Reverse(t.id[i]), i));
+    }
+    let mut removed = 0.0;
+    while removed < share * total {
+        let Some((s, _, _, i)) = heap.pop() else { break };
+        if remove[i] || s != key(score[i]) {
+            continue;
+        }
+        remove[i] = true;
+        let b = t.basal_area_m2(i);
+        removed += b;
+        for j in grid.near(t, t.x[i] as f64, t.y[i] as f64, SHELTER_RADIUS_M) {
+            if !remove[j] {
+                score[j] -= b;
+                heap.push((key(score[j]), t.dbh[j].to_bits(), std::cmp::Reverse(t.id[j]), j));
+            }
+        }
+    }
+    remove
+}
+
 /// The trees of a patch cut's `k`-th entry: the area's bounding box is cut into squares of
 /// `size_m`; the squares whose centre lies in the area are put in an order drawn once per entry
 /// (seed, entry); entry `k` cuts the next `round(share · n)` (at least 1) of them, so each entry
 /// opens new patches until all are cut. Every tree of a cut square inside the area goes.
 fn patches(seed: u64, t: &TreeStore, op: &Operation, size_m: f64, share: f64, k: u32) -> Vec<bool> {
     let b = op.region.bbox;
-    let nx = (((b[2] - b[0]) / size_m).ceil() as usize).max(1);
-    let ny = (((b[3] - b[1]) / size_m).ceil() as usize).max(1);
-    let mut eligible: Vec<(u64, usize)> = (0..nx * ny)
-        .filter(|&p| op.region.contains(b[0] + ((p % nx) as f64 + 0.5) * size_m, b[1] + ((p / nx) as f64 + 0.5) * size_m))
+    let (nx, ny, squares) = patch_squares(&op.region, size_m);
+    let mut eligible: Vec<(u64, usize)> = squares
+        .into_iter()
         .map(|p| (mix64(seed ^ mix64(salt::MANAGEMENT ^ ((op.index as u64) << 40) ^ p as u64)), p))
         .collect();
     eligible.sort_unstable();
