@@ -21,7 +21,8 @@ use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
 use super::camera::Camera;
-use super::instanced::{build_batches, instance_record, level_triangles, Batches, InstanceRaw};
+use super::farfield::FarField;
+use super::instanced::{build_batches_of, instance_record, level_triangles, Batches, InstanceRaw};
 use super::lod::{drawn_levels, Frustum, LodParams, Silhouette, SILHOUETTE_BINS};
 use super::scene::{Scene, TreeInstance};
 use crate::mesh::LOD_LEVELS;
@@ -376,6 +377,27 @@ pub struct Renderer {
     pub reuse_shadow_map: bool,
     /// Whether the shadow map holds a frame of the current terrain and models.
     shadow_ok: bool,
+    /// The sun's view-projection the shadow map was drawn with (what a frame that reuses the
+    /// map looks it up with).
+    shadow_light: (Mat4, f32, f32),
+    /// A far field baked for this scene (default `None`): when set, the renderer draws its
+    /// trees instead of the scene's instances. Each frame takes from it the trees of the tiles
+    /// that may show as geometry ([`FarField::near`], at most [`Renderer::max_near_trees`]) and
+    /// culls only those; every other tree is drawn by the baked canopy layer. Its canopy grid
+    /// must be the one of the scene's terrain (it is baked for a terrain, [`FarField::new`]);
+    /// when it is not, the far field is not used.
+    pub far_field: Option<std::sync::Arc<FarField>>,
+    /// At most this many trees of [`Renderer::far_field`] are culled and drawn as geometry in a
+    /// frame (0 = every tree that may be taller on screen than the far-field switch): the tiles
+    /// whose trees may look tallest first, and the frame's far-field switch rises above the
+    /// trees left to the canopy layer. For frames in motion.
+    pub max_near_trees: usize,
+    /// Cheaper shading (default false): one shadow-map tap for the sun and one for the sky light
+    /// under the canopy instead of 9 and 9 per pixel; harder shadow edges, for frames in motion
+    /// on a software adapter, where the terrain's pixels are most of a frame.
+    pub fast_shading: bool,
+    /// The far field the shadow map was drawn with (a new one redraws it).
+    shadow_far: Option<std::sync::Arc<FarField>>,
     last: FrameStats,
 }
 
@@ -553,6 +575,11 @@ impl Renderer {
             culling: Culling::Auto,
             reuse_shadow_map: false,
             shadow_ok: false,
+            shadow_light: (Mat4::IDENTITY, 1.0, 1.0),
+            far_field: None,
+            max_near_trees: 0,
+            fast_shading: false,
+            shadow_far: None,
             last: FrameStats::default(),
         })
     }
@@ -806,8 +833,19 @@ impl Renderer {
     fn render_inner(&mut self, scene: &Scene, camera: &Camera, view: &wgpu::TextureView, width: u32, height: u32) -> Result<FrameStats> {
         let (uploaded_terrain, uploaded_prototypes) = self.upload(scene)?;
         self.ensure_targets(width, height);
+        // a far field baked for this terrain: its near trees instead of the scene's instances
+        let far = self.far_field.clone().filter(|f| self.scene.as_ref().is_some_and(|g| g.canopy_grid == f.grid && f.sums().len() == f.grid.len()));
+        let near = far.as_ref().map(|f| f.near(camera, width, height, &self.lod, self.max_near_trees));
+        let instances: &[TreeInstance] = near.as_ref().map_or(&scene.instances, |n| &n.instances);
+        // trees left in the baked layer go wholly to the canopy layer in this frame too
+        let lod = match &near {
+            Some(n) if self.lod.canopy_px > 0.0 => LodParams { canopy_px: self.lod.canopy_px.max(n.floor_px * (1.0 + self.lod.band.max(0.0))), ..self.lod },
+            _ => self.lod,
+        };
         let gpu_frame = match self.culling {
             Culling::Cpu => None,
+            // the near trees of a far field are few: culled on the CPU
+            Culling::Auto if far.is_some() => None,
             Culling::Auto => {
                 if self.cull.is_some() {
                     self.prepare_gpu_cull(scene, camera, width, height)?
@@ -819,6 +857,9 @@ impl Renderer {
                 if self.cull.is_none() {
                     return Err(RenderError::GpuCullingUnavailable(format!("{} lacks compute shaders or indirect draws", self.adapter_info.name)).into());
                 }
+                if far.is_some() {
+                    return Err(RenderError::GpuCullingUnavailable("a baked far field is culled on the CPU".into()).into());
+                }
                 match self.prepare_gpu_cull(scene, camera, width, height)? {
                     Some(f) => Some(f),
                     None => return Err(RenderError::GpuCullingUnavailable(format!("{} instances exceed the adapter's storage buffer limits", scene.instances.len())).into()),
@@ -828,19 +869,33 @@ impl Renderer {
         let draws = match gpu_frame {
             Some(f) => FrameDraws::Gpu(f),
             None => {
-                let b = build_batches(scene, camera, width, height, &self.lod);
+                let b = build_batches_of(instances, &scene.prototypes, camera, width, height, &lod);
                 self.write_instances(&b);
-                if !b.canopy.is_empty() {
+                if let Some(f) = &far {
+                    self.write_far_canopy(f, instances, &scene.prototypes, &b);
+                } else if !b.canopy.is_empty() {
                     self.write_canopy(&b);
                 }
                 FrameDraws::Cpu(b)
             }
         };
         let canopy_used = match &draws {
-            FrameDraws::Cpu(b) => !b.canopy.is_empty(),
+            FrameDraws::Cpu(b) => far.is_some() || !b.canopy.is_empty(),
             FrameDraws::Gpu(_) => true,
         };
-        self.write_globals(scene, camera, width, height, canopy_used);
+        if uploaded_terrain || uploaded_prototypes || !same_far(&far, &self.shadow_far) {
+            self.shadow_ok = false;
+        }
+        let redraw_shadow = !(self.reuse_shadow_map && self.shadow_ok);
+        let (extent, light_height) = match &far {
+            Some(f) => (f.tree_bounds, f.light_height),
+            None => (tree_extent(&scene.instances), canopy_light_height(&scene.instances)),
+        };
+        if redraw_shadow {
+            self.shadow_light = Self::light_matrix(scene, extent);
+            self.shadow_far = far.clone();
+        }
+        self.write_globals(scene, camera, width, height, canopy_used, self.shadow_light, light_height);
         let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         if let FrameDraws::Gpu(f) = &draws {
             if let Some(gs) = &self.scene {
@@ -848,10 +903,7 @@ impl Renderer {
             }
             self.encode_cull(&mut enc, f);
         }
-        if uploaded_terrain || uploaded_prototypes {
-            self.shadow_ok = false;
-        }
-        if !(self.reuse_shadow_map && self.shadow_ok) {
+        if redraw_shadow {
             self.encode_shadow(&mut enc, &draws);
             self.shadow_ok = true;
         }
@@ -889,7 +941,7 @@ impl Renderer {
                 }
                 lod_scale = b.lod_scale;
                 canopy_px = b.canopy_px;
-                canopy_trees = b.canopy_only;
+                canopy_trees = b.canopy_only + near.as_ref().map_or(0, |n| n.far_trees);
                 (b.triangles, b.culled, b.invalid, b.per_level.iter().sum())
             }
             FrameDraws::Gpu(f) => {
@@ -1085,17 +1137,16 @@ impl Renderer {
 
     /// The sun's orthographic view-projection over the scene's bounding sphere (radius r, depth
     /// range r..3r from an eye 2r towards the sun), the world size of a shadow texel (m) and the
-    /// depth range (m).
-    fn light_matrix(scene: &Scene) -> (Mat4, f32, f32) {
+    /// depth range (m). `trees`: the bounds of the trees' stems and the tallest tree
+    /// ([`tree_extent`]).
+    fn light_matrix(scene: &Scene, trees: Option<([f32; 3], [f32; 3], f32)>) -> (Mat4, f32, f32) {
         let (lo, hi) = scene.terrain.bounds();
         let (mut lo, mut hi) = (Vec3::from(lo), Vec3::from(hi));
-        let tallest = scene.instances.iter().map(|t| t.height).filter(|h| h.is_finite()).fold(0.0f32, f32::max);
-        for t in &scene.instances {
-            let p = Vec3::from(t.position);
-            if p.is_finite() {
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
+        let mut tallest = 0.0f32;
+        if let Some((a, b, t)) = trees {
+            lo = lo.min(Vec3::from(a));
+            hi = hi.max(Vec3::from(b));
+            tallest = t;
         }
         hi.z += tallest;
         let c = (lo + hi) * 0.5;
@@ -1108,11 +1159,13 @@ impl Renderer {
     }
 
     /// `canopy_used`: whether the terrain shader reads the canopy layer (false when the CPU
-    /// path splatted nothing this frame).
-    fn write_globals(&self, scene: &Scene, camera: &Camera, w: u32, h: u32, canopy_used: bool) {
+    /// path splatted nothing this frame); `light`: the sun's matrix of the shadow map
+    /// ([`Renderer::light_matrix`]); `light_height`: [`canopy_light_height`] of the trees.
+    #[allow(clippy::too_many_arguments)]
+    fn write_globals(&self, scene: &Scene, camera: &Camera, w: u32, h: u32, canopy_used: bool, light: (Mat4, f32, f32), light_height: f32) {
         let aspect = w as f32 / h as f32;
         let vp = camera.view_proj(aspect);
-        let (lvp, texel_m, depth_m) = Self::light_matrix(scene);
+        let (lvp, texel_m, depth_m) = light;
         let (lo, hi) = scene.terrain.bounds();
         let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0);
         let ortho = matches!(camera.projection, super::camera::Projection::Orthographic { .. });
@@ -1132,13 +1185,13 @@ impl Renderer {
             params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.1 / size],
             canopy0: [0.0; 4],
             canopy1: [0.0; 4],
-            shadow: [1.0 / SHADOW_SIZE as f32, 0.5 * texel_m / depth_m, texel_m, 0.0],
+            shadow: [1.0 / SHADOW_SIZE as f32, 0.5 * texel_m / depth_m, texel_m, if self.fast_shading { 1.0 } else { 0.0 }],
             facing: if ortho { v3((Vec3::from(camera.eye) - Vec3::from(camera.target)).normalize_or(Vec3::Z).to_array(), 1.0) } else { [0.0; 4] },
         };
         if let Some(gs) = &self.scene {
             let cg = gs.canopy_grid;
             g.canopy0 = [cg.origin[0], cg.origin[1], cg.texel, if self.lod.canopy_px > 0.0 && canopy_used { 1.0 } else { 0.0 }];
-            g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, canopy_light_height(&scene.instances)];
+            g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, light_height];
         }
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         g.view_proj = g.light_view_proj;
@@ -1166,6 +1219,25 @@ impl Renderer {
         let Some(gs) = &self.scene else { return };
         let g = gs.canopy_grid;
         let mut sums = vec![[0u32; 4]; g.len()];
+        for c in &b.canopy {
+            g.splat(&mut sums, c.x, c.y, c.r, c.w, c.rgb);
+        }
+        self.queue.write_buffer(&gs.canopy_buf, 0, bytemuck::cast_slice(&sums));
+    }
+
+    /// The canopy layer of a frame drawn from far field `far`: its baked sums, less the full
+    /// splats of the `near` trees the frame culled itself, plus the splats of those of them
+    /// the frame put in the canopy layer (`b.canopy`); uploaded.
+    fn write_far_canopy(&self, far: &FarField, near: &[TreeInstance], prototypes: &[super::scene::Prototype], b: &Batches) {
+        let Some(gs) = &self.scene else { return };
+        let g = gs.canopy_grid;
+        let mut sums = far.sums().to_vec();
+        let crown_r0: Vec<f32> = prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
+        for t in near {
+            if let Some(c) = super::farfield::full_splat(t, prototypes, &crown_r0) {
+                g.unsplat(&mut sums, c.x, c.y, c.r, c.w, c.rgb);
+            }
+        }
         for c in &b.canopy {
             g.splat(&mut sums, c.x, c.y, c.r, c.w, c.rgb);
         }
@@ -1273,6 +1345,22 @@ impl std::fmt::Debug for Renderer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Renderer").field("adapter", &self.adapter_description()).finish()
     }
+}
+
+/// Whether two far fields are the same one (both `None` counts).
+fn same_far(a: &Option<std::sync::Arc<FarField>>, b: &Option<std::sync::Arc<FarField>>) -> bool {
+    match (a, b) {
+        (Some(a), Some(b)) => std::sync::Arc::ptr_eq(a, b),
+        (None, None) => true,
+        _ => false,
+    }
+}
+
+/// Bounds of the stems of `instances` (m, those with a finite position) and the tallest
+/// finite height (m, over all of them); `None` when no position is finite.
+pub fn tree_extent(instances: &[TreeInstance]) -> Option<([f32; 3], [f32; 3], f32)> {
+    let (lo, hi) = crate::mesh::points_bounds(instances.iter().map(|t| &t.position).filter(|p| p.iter().all(|v| v.is_finite())))?;
+    Some((lo, hi, instances.iter().map(|t| t.height).filter(|h| h.is_finite()).fold(0.0f32, f32::max)))
 }
 
 /// Height above the ground (m) at which the canopy layer's crowns take their sun visibility from

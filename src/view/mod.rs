@@ -8,17 +8,27 @@
 //! plotted beside the view (egui_plot); the help panel (F1 or H) lists the shortcuts; the frame
 //! time is shown in the top bar.
 //!
+//! The ground is the stills' ([`scene::Landscape`]): the terrain beyond the simulated window
+//! (from the scenario's DEM, [`Viewer::set_surroundings`]) with the window's trees mirrored onto
+//! it, fading into the sky and the haze as in `sylva render`. Every tree of a year (a million
+//! in the default run, several million with the surroundings) is baked once into a
+//! [`FarField`]; a frame culls only the trees that may show as geometry, at most
+//! [`MOTION_NEAR_TREES`] while the camera moves.
+//!
 //! A shell module: the core names none of it (`tests/layers.rs`).
 
 pub mod camera;
 pub mod data;
 
 
+use std::sync::Arc;
+
 use eframe::egui;
 use glam::Vec3;
 
 use crate::gui::{self, FrameClock, GuiError, Screenshot, Viewport3d, WindowOptions};
 use crate::job::scene;
+use crate::render::farfield::FarField;
 use crate::render::scene::{Scene, TreeInstance};
 use crate::species::Season;
 use camera::{CameraRig, Mode};
@@ -74,6 +84,10 @@ pub struct Viewer {
     pub overlay: Overlay,
     painted: Option<(Overlay, i64)>,
     shown: Option<(i64, Season)>,
+    /// The ground drawn: the site and its surroundings, as in the stills.
+    landscape: scene::Landscape,
+    /// The year (× 1000) and season the ground colours and the far field were made for.
+    baked: Option<(i64, Season)>,
     current: Vec<TreeInstance>,
     /// The selected tree's id.
     pub selected: Option<u64>,
@@ -106,7 +120,8 @@ impl Viewer {
     /// # Errors
     /// [`GuiError::Render`] when the terrain mesh cannot be built.
     pub fn new(data: RunData, sea_level_m: f32, gpu: Option<Viewport3d>) -> gui::Result<Self> {
-        let terrain = scene::terrain_mesh(&data.site, 10.0, sea_level_m).map_err(|e| GuiError::Render(crate::render::RenderError::Input(e)))?;
+        let landscape = scene::Landscape::new(&data.site, None, 10.0, sea_level_m).map_err(input_error)?;
+        let terrain = landscape.mesh(&[]).map_err(input_error)?;
         let prototypes = pool_prototypes(&data.library, &data.pool);
         let site = &data.site;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
@@ -133,6 +148,8 @@ impl Viewer {
             overlay: Overlay::None,
             painted: None,
             shown: None,
+            landscape,
+            baked: None,
             current: Vec::new(),
             selected: None,
             info: None,
@@ -149,6 +166,21 @@ impl Viewer {
             spin: std::env::var_os("SYLVA_VIEW_SPIN").is_some(),
             spin_clock: std::time::Instant::now(),
         })
+    }
+
+    /// Draws the terrain beyond the simulated window around it, as the stills do
+    /// (`job::pictures::Stage::set_surroundings`): `full` is the whole terrain the site was cut
+    /// from with `window` (`[col0, row0, width, height]` in its cells).
+    ///
+    /// # Errors
+    /// [`GuiError::Render`] when the window leaves `full`'s grid.
+    pub fn set_surroundings(&mut self, full: &crate::terrain::Terrain, window: [usize; 4]) -> gui::Result<()> {
+        self.landscape = scene::Landscape::new(&self.data.site, Some((full, window)), 10.0, self.landscape.cover.sea_level).map_err(input_error)?;
+        self.scene.set_terrain(self.landscape.mesh(&[]).map_err(input_error)?);
+        self.base_colours = self.scene.terrain.colors.clone();
+        self.painted = None;
+        self.baked = None;
+        Ok(())
     }
 
     /// Takes a `--screenshot` after the given frames.
@@ -185,8 +217,14 @@ impl Viewer {
                 self.info = self.data.tree_info(id, self.year).ok().flatten();
             }
         }
-        // species and basal-area overlays change with the snapshot shown, condition maps never
+        // the ground and the far field: for the year shown, or while the years play for the
+        // snapshot nearest to it (baking millions of trees takes longer than a frame)
         let (k0, k1, t) = self.data.bracket(self.year);
+        let bake_key = if self.playing { ((self.data.years[if t >= 0.5 { k1 } else { k0 }] as f32 * 1000.0).round() as i64, self.season) } else { key };
+        if self.baked != Some(bake_key) {
+            self.bake(bake_key);
+        }
+        // species and basal-area overlays change with the snapshot shown, condition maps never
         let snap = match self.overlay {
             Overlay::Species | Overlay::BasalArea => self.data.years[if t >= 0.5 { k1 } else { k0 }] as i64,
             _ => -1,
@@ -204,6 +242,43 @@ impl Viewer {
             self.scene.terrain_changed();
             self.painted = Some((self.overlay, snap));
         }
+    }
+
+    /// Makes the ground and the far field for `key` (year × 1000, season): the trees of that
+    /// year with their mirror images on the surroundings ([`scene::Landscape::surroundings`]),
+    /// the ground under their crowns coloured as forest floor ([`scene::Landscape::mesh`]), and
+    /// with a GPU viewport all of them baked into the renderer's [`FarField`].
+    fn bake(&mut self, key: (i64, Season)) {
+        let trees = if key.0 == (self.year * 1000.0).round() as i64 && Some(key) == self.shown {
+            Ok(self.current.clone())
+        } else {
+            self.data.instances_at(key.0 as f32 / 1000.0, key.1)
+        };
+        let mut all = match trees {
+            Ok(v) => v,
+            Err(e) => {
+                self.status = Some(e.to_string());
+                return;
+            }
+        };
+        let t0 = std::time::Instant::now();
+        let far = self.landscape.surroundings(&all);
+        all.extend(far);
+        match self.landscape.mesh(&all) {
+            Ok(m) => {
+                self.scene.set_terrain(m);
+                self.base_colours = self.scene.terrain.colors.clone();
+                self.painted = None;
+            }
+            Err(e) => self.status = Some(e.to_string()),
+        }
+        let t1 = std::time::Instant::now();
+        let n = all.len();
+        if let Some(g) = self.gpu.as_mut() {
+            g.renderer.far_field = Some(Arc::new(FarField::new(all, &self.scene.prototypes, &self.scene.terrain)));
+        }
+        tracing::info!("year {:.1}: {n} trees with the surroundings' (ground {:.2} s), far field baked in {:.2} s", key.0 as f32 / 1000.0, (t1 - t0).as_secs_f32(), t1.elapsed().as_secs_f32());
+        self.baked = Some(key);
     }
 
     /// Moves to year `y` (clamped to the snapshots).
@@ -490,6 +565,8 @@ impl Viewer {
         let motion = self.in_motion(&cam);
         if let Some(g) = self.gpu.as_mut() {
             g.renderer.lod = if motion { motion_lod() } else { still_lod() };
+            g.renderer.max_near_trees = if motion { MOTION_NEAR_TREES } else { 0 };
+            g.renderer.fast_shading = motion;
             // the sun's shadows do not move with the camera: in motion the last map serves
             g.renderer.reuse_shadow_map = motion;
         }
@@ -503,7 +580,8 @@ impl Viewer {
         let drawn = self.gpu.as_mut().map(|g| g.draw(&self.scene, &cam, w, h));
         self.frames_drawn += 1;
         if self.spin && self.frames_drawn % 10 == 0 {
-            tracing::info!("frames {}–{}: {:.0} ms per frame", self.frames_drawn - 9, self.frames_drawn, self.spin_clock.elapsed().as_secs_f32() * 100.0);
+            let st = self.gpu.as_ref().map(|g| (g.last_ms, g.renderer.last_stats())).unwrap_or_default();
+            tracing::info!("frames {}–{}: {:.0} ms per frame (last: 3-D {:.0} ms on the CPU side, {} trees as geometry, {} k triangles, far-field switch {:.0} px)", self.frames_drawn - 9, self.frames_drawn, self.spin_clock.elapsed().as_secs_f32() * 100.0, st.0, st.1.instances_drawn, st.1.triangles / 1000, st.1.canopy_px);
             self.spin_clock = std::time::Instant::now();
         }
         if self.frames_drawn <= 3 {
@@ -614,9 +692,17 @@ pub fn motion_lod() -> crate::render::lod::LodParams {
     crate::render::lod::LodParams { max_geometry_triangles: MOTION_GEOMETRY_TRIANGLES, ..Default::default() }
 }
 
+/// Trees culled and drawn as geometry while the camera moves (the rest of the far field is its
+/// baked canopy layer, [`crate::render::renderer::Renderer::max_near_trees`]).
+pub const MOTION_NEAR_TREES: usize = 30_000;
+
 /// Tree triangles drawn as geometry while the camera moves (the far-field switch rises until
 /// they fit; `render::lod`).
 pub const MOTION_GEOMETRY_TRIANGLES: u32 = 100_000;
+
+fn input_error(e: crate::Error) -> GuiError {
+    GuiError::Render(crate::render::RenderError::Input(e))
+}
 
 /// One prototype per species of `library` (in library order, as the instances index them): the
 /// EcoMod model of [`scene::prototypes`] for the species of `pool`, the renderer's cheap stand-in
@@ -646,15 +732,19 @@ impl eframe::App for Viewer {
 }
 
 /// Opens the viewer window on `data` and returns when it is closed (or, with
-/// `opts.screenshot`, after the screenshot is written).
+/// `opts.screenshot`, after the screenshot is written). `surroundings`: the whole terrain the
+/// site was cut from and the window it was cut with ([`Viewer::set_surroundings`]).
 ///
 /// # Errors
 /// As [`gui::run_window`]; [`GuiError::Render`] when the renderer cannot be built on the
-/// window's device.
-pub fn run(data: RunData, sea_level_m: f32, opts: &WindowOptions) -> gui::Result<()> {
+/// window's device or the window leaves the terrain.
+pub fn run(data: RunData, sea_level_m: f32, surroundings: Option<(crate::terrain::Terrain, [usize; 4])>, opts: &WindowOptions) -> gui::Result<()> {
     let title = format!("Sylva — {}", data.dir.display());
     gui::run_viewport_window(&title, opts, data, move |d, vp, shot| {
         let mut v = Viewer::new(d, sea_level_m, Some(vp))?;
+        if let Some((full, window)) = &surroundings {
+            v.set_surroundings(full, *window)?;
+        }
         if let Some(s) = shot {
             v = v.with_screenshot(s);
         }
