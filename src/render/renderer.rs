@@ -39,6 +39,8 @@ pub(super) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8U
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const SHADOW_SIZE: u32 = 2048;
 const SAMPLES: u32 = 4;
+/// Triangles of the coarse terrain mesh of [`Renderer::coarse_terrain`] (at most about).
+pub const COARSE_TERRAIN_TRIANGLES: usize = 100_000;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -237,6 +239,8 @@ struct GpuScene {
     terrain_vb: Option<wgpu::Buffer>,
     terrain_ib: Option<wgpu::Buffer>,
     terrain_count: u32,
+    /// The coarse terrain of frames in motion ([`Renderer::coarse_terrain`]) and its index count.
+    terrain_coarse: Option<(wgpu::Buffer, u32)>,
     water_vb: Option<wgpu::Buffer>,
     /// Drawn levels per prototype (chain meshes, then the billboard).
     protos: Vec<Vec<GpuLevel>>,
@@ -254,6 +258,7 @@ struct GpuTerrain {
     vb: Option<wgpu::Buffer>,
     ib: Option<wgpu::Buffer>,
     count: u32,
+    coarse: Option<(wgpu::Buffer, u32)>,
     water_vb: Option<wgpu::Buffer>,
     canopy_grid: super::canopy::CanopyGrid,
     canopy_buf: wgpu::Buffer,
@@ -396,6 +401,13 @@ pub struct Renderer {
     /// under the canopy instead of 9 and 9 per pixel; harder shadow edges, for frames in motion
     /// on a software adapter, where the terrain's pixels are most of a frame.
     pub fast_shading: bool,
+    /// Draw the terrain's coarse mesh in the main pass (default false): a grid terrain of more
+    /// than [`COARSE_TERRAIN_TRIANGLES`] triangles over every k-th vertex so that it has about
+    /// that many ([`TerrainMesh::coarse_indices`]); the shadow pass keeps the full mesh. For
+    /// frames in motion on a software adapter, where triangle setup is a fixed cost per frame.
+    ///
+    /// [`TerrainMesh::coarse_indices`]: super::terrain::TerrainMesh::coarse_indices
+    pub coarse_terrain: bool,
     /// The far field the shadow map was drawn with (a new one redraws it).
     shadow_far: Option<std::sync::Arc<FarField>>,
     last: FrameStats,
@@ -579,6 +591,7 @@ impl Renderer {
             far_field: None,
             max_near_trees: 0,
             fast_shading: false,
+            coarse_terrain: false,
             shadow_far: None,
             last: FrameStats::default(),
         })
@@ -634,7 +647,7 @@ impl Renderer {
         let (mut terrain, mut protos) = (None, None);
         if let Some(g) = old {
             if g.terrain_version == tfp {
-                terrain = Some(GpuTerrain { vb: g.terrain_vb, ib: g.terrain_ib, count: g.terrain_count, water_vb: g.water_vb, canopy_grid: g.canopy_grid, canopy_buf: g.canopy_buf });
+                terrain = Some(GpuTerrain { vb: g.terrain_vb, ib: g.terrain_ib, count: g.terrain_count, coarse: g.terrain_coarse, water_vb: g.water_vb, canopy_grid: g.canopy_grid, canopy_buf: g.canopy_buf });
             }
             if g.protos_version == pfp {
                 protos = Some((g.protos, g.sil_buf));
@@ -673,8 +686,8 @@ impl Renderer {
                 wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(&self.leaf_sampler) },
             ],
         });
-        let GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: terrain_count, water_vb, canopy_grid, canopy_buf } = terrain;
-        self.scene = Some(GpuScene { terrain_version: tfp, protos_version: pfp, terrain_vb, terrain_ib, terrain_count, water_vb, protos, sil_buf, canopy_grid, canopy_buf, bind_main, bind_shadow });
+        let GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: terrain_count, coarse: terrain_coarse, water_vb, canopy_grid, canopy_buf } = terrain;
+        self.scene = Some(GpuScene { terrain_version: tfp, protos_version: pfp, terrain_vb, terrain_ib, terrain_count, terrain_coarse, water_vb, protos, sil_buf, canopy_grid, canopy_buf, bind_main, bind_shadow });
         Ok(uploaded)
     }
 
@@ -708,7 +721,13 @@ impl Renderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: t.indices.len() as u32, water_vb, canopy_grid, canopy_buf })
+        // a grid of more than COARSE_TERRAIN_TRIANGLES triangles: every stride-th vertex too
+        let coarse = (t.triangle_count() > COARSE_TERRAIN_TRIANGLES)
+            .then(|| t.coarse_indices((t.triangle_count() as f64 / COARSE_TERRAIN_TRIANGLES as f64).sqrt().ceil() as usize))
+            .flatten()
+            .filter(|ix| !ix.is_empty())
+            .map(|ix| (d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("terrain ib (coarse)"), contents: bytemuck::cast_slice(&ix), usage: wgpu::BufferUsages::INDEX }), ix.len() as u32));
+        Ok(GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: t.indices.len() as u32, coarse, water_vb, canopy_grid, canopy_buf })
     }
 
     /// The prototypes part: one vertex and index buffer per drawn level (chain meshes, then the
@@ -972,7 +991,7 @@ impl Renderer {
             }
         };
         self.last = FrameStats {
-            triangles: tree_tris + gpu.terrain_count as u64 / 3 + if gpu.water_vb.is_some() { 2 } else { 0 },
+            triangles: tree_tris + u64::from(match &gpu.terrain_coarse { Some((_, n)) if self.coarse_terrain => *n, _ => gpu.terrain_count }) / 3 + if gpu.water_vb.is_some() { 2 } else { 0 },
             tree_triangles: tree_tris,
             tree_draws,
             instances_drawn: drawn,
@@ -1327,8 +1346,16 @@ impl Renderer {
         if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
             pass.set_pipeline(&self.terrain);
             pass.set_vertex_buffer(0, vb.slice(..));
-            pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
+            match &gpu.terrain_coarse {
+                Some((cib, n)) if self.coarse_terrain => {
+                    pass.set_index_buffer(cib.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..*n, 0, 0..1);
+                }
+                _ => {
+                    pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
+                }
+            }
         }
         pass.set_pipeline(&self.tree);
         let r = self.draw_trees(&mut pass, draws);

@@ -111,6 +111,13 @@ pub struct Viewer {
     /// `SYLVA_VIEW_SPIN` is set: turn the camera every frame and log the frame times.
     spin: bool,
     spin_clock: std::time::Instant,
+    /// Divisor of the resolution of frames in motion (1 ..= [`MOTION_SCALE_MAX`]), adapted to
+    /// the time between them.
+    motion_scale: f32,
+    /// Whether the last frame was drawn in motion.
+    motion_before: bool,
+    /// Seconds between the last two frames.
+    frame_dt: f32,
 }
 
 impl Viewer {
@@ -165,6 +172,9 @@ impl Viewer {
             frames_drawn: 0,
             spin: std::env::var_os("SYLVA_VIEW_SPIN").is_some(),
             spin_clock: std::time::Instant::now(),
+            motion_scale: 2.0,
+            motion_before: false,
+            frame_dt: 0.0,
         })
     }
 
@@ -567,6 +577,7 @@ impl Viewer {
             g.renderer.lod = if motion { motion_lod() } else { still_lod() };
             g.renderer.max_near_trees = if motion { MOTION_NEAR_TREES } else { 0 };
             g.renderer.fast_shading = motion;
+            g.renderer.coarse_terrain = motion;
             // the sun's shadows do not move with the camera: in motion the last map serves
             g.renderer.reuse_shadow_map = motion;
         }
@@ -574,14 +585,24 @@ impl Viewer {
             // the full-detail frame once the camera rests
             ui.ctx().request_repaint();
         }
-        // in motion at half the resolution (a quarter of the pixels to rasterise: on a software
-        // adapter the frame is spent there), egui scales it to the view
-        let (w, h) = if motion { ((w / 2).max(16), (h / 2).max(16)) } else { (w, h) };
+        // in motion at a fraction of the resolution (on a software adapter the frame is spent
+        // rasterising), egui scales it to the view; the fraction follows the time between
+        // frames in motion: coarser while they take longer than MOTION_FRAME_S, finer while
+        // they take less than 60 % of it
+        if motion && self.motion_before && self.frame_dt > 0.0 {
+            if self.frame_dt > MOTION_FRAME_S {
+                self.motion_scale = (self.motion_scale * 1.2).min(MOTION_SCALE_MAX);
+            } else if self.frame_dt < 0.6 * MOTION_FRAME_S {
+                self.motion_scale = (self.motion_scale / 1.2).max(1.0);
+            }
+        }
+        self.motion_before = motion;
+        let (w, h) = if motion { (((w as f32 / self.motion_scale) as u32).max(16), ((h as f32 / self.motion_scale) as u32).max(16)) } else { (w, h) };
         let drawn = self.gpu.as_mut().map(|g| g.draw(&self.scene, &cam, w, h));
         self.frames_drawn += 1;
         if self.spin && self.frames_drawn % 10 == 0 {
             let st = self.gpu.as_ref().map(|g| (g.last_ms, g.renderer.last_stats())).unwrap_or_default();
-            tracing::info!("frames {}–{}: {:.0} ms per frame (last: 3-D {:.0} ms on the CPU side, {} trees as geometry, {} k triangles, far-field switch {:.0} px)", self.frames_drawn - 9, self.frames_drawn, self.spin_clock.elapsed().as_secs_f32() * 100.0, st.0, st.1.instances_drawn, st.1.triangles / 1000, st.1.canopy_px);
+            tracing::info!("frames {}–{}: {:.0} ms per frame (last: 3-D {:.0} ms on the CPU side, {} trees as geometry, {} k triangles, far-field switch {:.0} px), 1/{:.2} resolution)", self.frames_drawn - 9, self.frames_drawn, self.spin_clock.elapsed().as_secs_f32() * 100.0, st.0, st.1.instances_drawn, st.1.triangles / 1000, st.1.canopy_px, self.motion_scale);
             self.spin_clock = std::time::Instant::now();
         }
         if self.frames_drawn <= 3 {
@@ -643,6 +664,7 @@ impl Viewer {
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let ctx = ui.ctx().clone();
         let dt = self.clock.tick();
+        self.frame_dt = dt;
         if self.playing {
             let (a, b) = self.data.span();
             self.year += dt * self.speed;
@@ -686,11 +708,19 @@ pub fn still_lod() -> crate::render::lod::LodParams {
 
 /// Level-of-detail settings of a frame in motion (issue 36's frame budget): the renderer's
 /// defaults, so coarser levels and at most [`MOTION_GEOMETRY_TRIANGLES`] triangles of tree
-/// geometry, the rest of the forest in the canopy layer; such a frame is also drawn at half the
-/// view's resolution.
+/// geometry, the rest of the forest in the baked canopy layer (at most [`MOTION_NEAR_TREES`]
+/// trees culled); such a frame is also drawn at a fraction of the view's resolution (half at
+/// first, then adapted to [`MOTION_FRAME_S`]), with the renderer's one-tap shadows
+/// (`Renderer::fast_shading`) and its coarse terrain mesh (`Renderer::coarse_terrain`).
 pub fn motion_lod() -> crate::render::lod::LodParams {
     crate::render::lod::LodParams { max_geometry_triangles: MOTION_GEOMETRY_TRIANGLES, ..Default::default() }
 }
+
+/// Time between frames in motion the viewer aims at (s): 5 frames per second (issue 36).
+pub const MOTION_FRAME_S: f32 = 0.2;
+
+/// Largest divisor of the resolution of frames in motion (they start at half the view's).
+pub const MOTION_SCALE_MAX: f32 = 4.0;
 
 /// Trees culled and drawn as geometry while the camera moves (the rest of the far field is its
 /// baked canopy layer, [`crate::render::renderer::Renderer::max_near_trees`]).
@@ -698,7 +728,7 @@ pub const MOTION_NEAR_TREES: usize = 30_000;
 
 /// Tree triangles drawn as geometry while the camera moves (the far-field switch rises until
 /// they fit; `render::lod`).
-pub const MOTION_GEOMETRY_TRIANGLES: u32 = 100_000;
+pub const MOTION_GEOMETRY_TRIANGLES: u32 = 50_000;
 
 fn input_error(e: crate::Error) -> GuiError {
     GuiError::Render(crate::render::RenderError::Input(e))
