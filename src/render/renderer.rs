@@ -296,6 +296,16 @@ struct Targets {
     size: (u32, u32),
     msaa: wgpu::TextureView,
     depth: wgpu::TextureView,
+    /// Depth of single-sample frames ([`Renderer::single_sample`]).
+    depth1: wgpu::TextureView,
+}
+
+/// The main pass's pipelines without multisampling (sky, terrain, water, trees).
+struct SinglePipelines {
+    sky: wgpu::RenderPipeline,
+    terrain: wgpu::RenderPipeline,
+    water: wgpu::RenderPipeline,
+    tree: wgpu::RenderPipeline,
 }
 
 /// The headless output ([`super::headless`]): a texture to draw into and a buffer to read it
@@ -380,6 +390,10 @@ pub struct Renderer {
     /// camera over an unchanged scene can skip the shadow pass (it is drawn anew after the
     /// terrain or the tree models change, and whenever this is false).
     pub reuse_shadow_map: bool,
+    single: SinglePipelines,
+    /// Draw the main pass without multisampling (default false: 4× MSAA): a quarter of the
+    /// samples to rasterise, jagged edges; for frames in motion on a software adapter.
+    pub single_sample: bool,
     /// Whether the shadow map holds a frame of the current terrain and models.
     shadow_ok: bool,
     /// The sun's view-projection the shadow map was drawn with (what a frame that reuses the
@@ -528,6 +542,12 @@ impl Renderer {
         let sb = wgpu::DepthBiasState { constant: 2, slope_scale: 2.5, clamp: 0.0 };
         let sky = make("sky", &pl_main, "vs_sky", &[], Some(("fs_sky", &opaque)), depth(false, wgpu::CompareFunction::Always, nob), true, None);
         let terrain = make("terrain", &pl_main, "vs_terrain", &tl, Some(("fs_terrain", &opaque)), depth(true, wgpu::CompareFunction::Less, nob), true, None);
+        let single = SinglePipelines {
+            sky: make("sky 1x", &pl_main, "vs_sky", &[], Some(("fs_sky", &opaque)), depth(false, wgpu::CompareFunction::Always, nob), false, None),
+            terrain: make("terrain 1x", &pl_main, "vs_terrain", &tl, Some(("fs_terrain", &opaque)), depth(true, wgpu::CompareFunction::Less, nob), false, None),
+            water: make("water 1x", &pl_main, "vs_terrain", &tl, Some(("fs_water", &blended)), depth(false, wgpu::CompareFunction::Less, nob), false, None),
+            tree: make("tree 1x", &pl_main, "vs_tree", &trl, Some(("fs_tree", &opaque)), depth(true, wgpu::CompareFunction::Less, nob), false, None),
+        };
         let water = make("water", &pl_main, "vs_terrain", &tl, Some(("fs_water", &blended)), depth(false, wgpu::CompareFunction::Less, nob), true, None);
         let tree = make("tree", &pl_main, "vs_tree", &trl, Some(("fs_tree", &opaque)), depth(true, wgpu::CompareFunction::Less, nob), true, None);
         let terrain_shadow = make("terrain shadow", &pl_shadow, "vs_terrain", &tl, None, depth(true, wgpu::CompareFunction::Less, sb), false, None);
@@ -586,6 +606,8 @@ impl Renderer {
             lod: LodParams::default(),
             culling: Culling::Auto,
             reuse_shadow_map: false,
+            single,
+            single_sample: false,
             shadow_ok: false,
             shadow_light: (Mat4::IDENTITY, 1.0, 1.0),
             far_field: None,
@@ -819,7 +841,8 @@ impl Renderer {
         let tex = |label: &str, format, usage| d.create_texture(&wgpu::TextureDescriptor { label: Some(label), size, mip_level_count: 1, sample_count: SAMPLES, dimension: wgpu::TextureDimension::D2, format, usage, view_formats: &[] });
         let msaa = tex("msaa", self.format, wgpu::TextureUsages::RENDER_ATTACHMENT).create_view(&Default::default());
         let depth = tex("depth", DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT).create_view(&Default::default());
-        self.targets = Some(Targets { size: (w, h), msaa, depth });
+        let depth1 = d.create_texture(&wgpu::TextureDescriptor { label: Some("depth 1x"), size, mip_level_count: 1, sample_count: 1, dimension: wgpu::TextureDimension::D2, format: DEPTH_FORMAT, usage: wgpu::TextureUsages::RENDER_ATTACHMENT, view_formats: &[] }).create_view(&Default::default());
+        self.targets = Some(Targets { size: (w, h), msaa, depth, depth1 });
     }
 
     pub(super) fn check_size(&self, width: u32, height: u32) -> Result<()> {
@@ -1334,17 +1357,22 @@ impl Renderer {
         let (Some(t), Some(gpu)) = (&self.targets, &self.scene) else { return 0 };
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("main"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment { view: &t.msaa, depth_slice: None, resolve_target: Some(view), ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard } })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: &t.depth, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }), stencil_ops: None }),
+            color_attachments: &[Some(if self.single_sample {
+                wgpu::RenderPassColorAttachment { view, depth_slice: None, resolve_target: None, ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store } }
+            } else {
+                wgpu::RenderPassColorAttachment { view: &t.msaa, depth_slice: None, resolve_target: Some(view), ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard } }
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: if self.single_sample { &t.depth1 } else { &t.depth }, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }), stencil_ops: None }),
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
         });
         pass.set_bind_group(0, &gpu.bind_main, &[]);
-        pass.set_pipeline(&self.sky);
+        let (sky, terrain, water, tree) = if self.single_sample { (&self.single.sky, &self.single.terrain, &self.single.water, &self.single.tree) } else { (&self.sky, &self.terrain, &self.water, &self.tree) };
+        pass.set_pipeline(sky);
         pass.draw(0..3, 0..1);
         if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
-            pass.set_pipeline(&self.terrain);
+            pass.set_pipeline(terrain);
             pass.set_vertex_buffer(0, vb.slice(..));
             match &gpu.terrain_coarse {
                 Some((cib, n)) if self.coarse_terrain => {
@@ -1357,10 +1385,10 @@ impl Renderer {
                 }
             }
         }
-        pass.set_pipeline(&self.tree);
+        pass.set_pipeline(tree);
         let r = self.draw_trees(&mut pass, draws);
         if let Some(vb) = &gpu.water_vb {
-            pass.set_pipeline(&self.water);
+            pass.set_pipeline(water);
             pass.set_vertex_buffer(0, vb.slice(..));
             pass.draw(0..6, 0..1);
         }

@@ -578,6 +578,7 @@ impl Viewer {
             g.renderer.max_near_trees = if motion { MOTION_NEAR_TREES } else { 0 };
             g.renderer.fast_shading = motion;
             g.renderer.coarse_terrain = motion;
+            g.renderer.single_sample = motion;
             // the sun's shadows do not move with the camera: in motion the last map serves
             g.renderer.reuse_shadow_map = motion;
         }
@@ -711,7 +712,8 @@ pub fn still_lod() -> crate::render::lod::LodParams {
 /// geometry, the rest of the forest in the baked canopy layer (at most [`MOTION_NEAR_TREES`]
 /// trees culled); such a frame is also drawn at a fraction of the view's resolution (half at
 /// first, then adapted to [`MOTION_FRAME_S`]), with the renderer's one-tap shadows
-/// (`Renderer::fast_shading`) and its coarse terrain mesh (`Renderer::coarse_terrain`).
+/// (`Renderer::fast_shading`), its coarse terrain mesh (`Renderer::coarse_terrain`) and without
+/// multisampling (`Renderer::single_sample`).
 pub fn motion_lod() -> crate::render::lod::LodParams {
     crate::render::lod::LodParams { max_geometry_triangles: MOTION_GEOMETRY_TRIANGLES, ..Default::default() }
 }
