@@ -466,7 +466,7 @@ species = ["beech"]
 
 [terrain]
 embedded = "coweeta"
-window = [150, 100, 20, 20]
+window = [250, 280, 20, 20]
 
 [[start]]
 kind = "planted"
