@@ -118,6 +118,8 @@ pub struct Viewer {
     motion_before: bool,
     /// Seconds between the last two frames.
     frame_dt: f32,
+    /// Whether the year shown changed in the last [`Viewer::refresh`] (drawn as in motion).
+    year_moving: bool,
 }
 
 impl Viewer {
@@ -175,6 +177,7 @@ impl Viewer {
             motion_scale: 2.0,
             motion_before: false,
             frame_dt: 0.0,
+            year_moving: false,
         })
     }
 
@@ -216,6 +219,8 @@ impl Viewer {
     /// Brings the scene up to date with the year, season and overlay.
     pub fn refresh(&mut self) {
         let key = ((self.year * 1000.0).round() as i64, self.season);
+        // the year moved since the last frame (the slider dragged, the years playing)
+        self.year_moving = self.shown.is_some() && self.shown != Some(key);
         if self.shown != Some(key) {
             match self.data.instances_at(self.year, self.season) {
                 Ok(v) => self.current = v,
@@ -227,10 +232,11 @@ impl Viewer {
                 self.info = self.data.tree_info(id, self.year).ok().flatten();
             }
         }
-        // the ground and the far field: for the year shown, or while the years play for the
-        // snapshot nearest to it (baking millions of trees takes longer than a frame)
+        // the ground and the far field: for the year shown, or while the year moves (the years
+        // play, the slider is dragged) for the snapshot nearest to it (baking millions of trees
+        // takes longer than a frame); the frame after it stops bakes the year shown
         let (k0, k1, t) = self.data.bracket(self.year);
-        let bake_key = if self.playing { ((self.data.years[if t >= 0.5 { k1 } else { k0 }] as f32 * 1000.0).round() as i64, self.season) } else { key };
+        let bake_key = if self.playing || self.year_moving { ((self.data.years[if t >= 0.5 { k1 } else { k0 }] as f32 * 1000.0).round() as i64, self.season) } else { key };
         if self.baked != Some(bake_key) {
             self.bake(bake_key);
         }
@@ -542,11 +548,12 @@ impl Viewer {
     }
 
     /// Whether this frame is drawn in motion ([`motion_lod`]): the first frame, and every frame
-    /// whose camera differs from the last one's or while the years play; a still frame then
+    /// whose camera differs from the last one's, while the years play or the year shown moves
+    /// (the slider dragged); a still frame then
     /// follows at full detail ([`still_lod`]). With a `--screenshot` pending every frame is
     /// still, so screenshots show the full detail.
     fn in_motion(&mut self, cam: &crate::render::camera::Camera) -> bool {
-        let moved = self.last_camera.as_ref() != Some(cam) || self.playing;
+        let moved = self.last_camera.as_ref() != Some(cam) || self.playing || self.year_moving;
         self.last_camera = Some(*cam);
         moved && !self.screenshot.as_ref().is_some_and(|s| s.pending())
     }
