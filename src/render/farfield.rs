@@ -185,7 +185,8 @@ impl FarField {
         let floor = if lod.canopy_px > 0.0 { lod.canopy_px / (1.0 + lod.band.max(0.0)) } else { -1.0 };
         let mut cand: Vec<(f32, usize)> = Vec::new();
         for (k, t) in self.tiles.iter().enumerate() {
-            if self.starts[k] == self.starts[k + 1] || !(t.max_h > 0.0) {
+            // max_h is a maximum of finite heights from 0: never NaN
+            if self.starts[k] == self.starts[k + 1] || t.max_h <= 0.0 {
                 continue;
             }
             let mid = 0.5 * (t.lo + t.hi);

@@ -900,7 +900,7 @@ impl Renderer {
                     return Err(RenderError::GpuCullingUnavailable(format!("{} lacks compute shaders or indirect draws", self.adapter_info.name)).into());
                 }
                 if far.is_some() {
-                    return Err(RenderError::GpuCullingUnavailable("a baked far field is culled on the CPU".into()).into());
+                    return Err(RenderError::GpuCullingUnavailable("a baked far field is culled on the CPU".into()));
                 }
                 match self.prepare_gpu_cull(scene, camera, width, height)? {
                     Some(f) => Some(f),
