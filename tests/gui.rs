@@ -450,3 +450,73 @@ fn without_a_display_or_adapter_the_windows_fail_with_a_clear_message() {
     let (ok, err) = sylva_on(Some(&x.display), &["view", run.to_str().unwrap(), "--screenshot", "/tmp/never.png"], &[("WGPU_BACKEND", "dx12")]);
     assert!(!ok && err.contains("adapter") && !err.contains("panicked"), "{err}");
 }
+
+/// A run on a 200 m window of the embedded Coweeta DEM (issue 36: the viewer draws the terrain
+/// around the window as the stills do), made once.
+fn dem_run_dir() -> &'static Path {
+    static DIR: OnceLock<tempfile::TempDir> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let d = tempfile::tempdir().unwrap();
+        let sc = r#"name = "gui surroundings"
+years = 5
+seed = 3
+snapshot_every = 5
+checkpoint_every = 0
+species = ["beech"]
+
+[terrain]
+embedded = "coweeta"
+window = [250, 280, 20, 20]
+
+[[start]]
+kind = "planted"
+species = "beech"
+spacing_m = 8.0
+age_yr = 40.0
+"#;
+        std::fs::write(d.path().join("s.toml"), sc).unwrap();
+        let out = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["simulate", "s.toml", "--out", "run"]).current_dir(d.path()).output().unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        d
+    })
+    .path()
+}
+
+/// Share of pixels of `img` inside `r` that are sky: bluer than they are red or green.
+fn sky_share(img: &image::RgbaImage, r: (u32, u32, u32, u32)) -> f64 {
+    let mut n = 0;
+    let mut s = 0;
+    for y in r.1..r.3 {
+        for x in r.0..r.2 {
+            let p = img.get_pixel(x, y).0;
+            n += 1;
+            if p[2] as i32 > p[0] as i32 + 20 && p[2] as i32 >= p[1] as i32 {
+                s += 1;
+            }
+        }
+    }
+    s as f64 / n.max(1) as f64
+}
+
+/// Issue 36 item 3: the viewer shows the landscape as the stills do, not as a slab in an empty
+/// sky: above the horizon the sky, below it the terrain around the window (the DEM beyond it,
+/// the window's trees mirrored onto it, fading into the haze) out to the view's edges.
+#[test]
+fn the_viewer_draws_the_terrain_around_the_window_and_the_sky_above_it() {
+    let Some(x) = xvfb(60) else { return };
+    let out = tempfile::tempdir().unwrap();
+    let run = dem_run_dir().join("run");
+    let shot = out.path().join("view.png");
+    let (ok, err) = sylva_on(Some(&x.display), &["view", run.to_str().unwrap(), "--screenshot", shot.to_str().unwrap(), "--frames", "2", "--window", "1000x640"], &[]);
+    assert!(ok && !err.contains("panicked"), "{err}");
+    let img = image::open(&shot).unwrap().to_rgba8();
+    let _ = img.save(std::env::temp_dir().join("sylva_gui_surroundings.png"));
+    // the 3-D view is left of the 340 px side panel, under the top bar
+    let top = sky_share(&img, (20, 40, 640, 50));
+    let lower = sky_share(&img, (20, 320, 640, 600));
+    let corners = [sky_share(&img, (20, 500, 120, 600)), sky_share(&img, (540, 500, 640, 600))];
+    eprintln!("sky share: top {top:.3}, lower half {lower:.3}, bottom corners {corners:?}");
+    assert!(top > 0.9, "the sky above the horizon: {top:.3}");
+    assert!(lower < 0.02, "the ground below it, out to the view's edges: sky share {lower:.3}");
+    assert!(corners.iter().all(|&c| c < 0.02), "the terrain around the window in the bottom corners: {corners:?}");
+}

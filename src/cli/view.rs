@@ -70,7 +70,12 @@ pub fn view(a: ViewArgs) -> anyhow::Result<()> {
     dirs.extend(a.species_dir.as_deref());
     let lib = super::simulate::library(&dirs)?;
     let data = sylva::view::data::RunData::open(&a.run_dir, site, lib, sc.species.clone())?;
-    sylva::view::run(data, sc.climate.sea_level_m, &opts)?;
+    // the terrain around a window cut from a DEM, drawn as the stills draw it
+    let surroundings = match sc.terrain.window {
+        Some(w) => sc.full_terrain().context("reading the terrain around the simulated window")?.map(|t| (t, w)),
+        None => None,
+    };
+    sylva::view::run(data, sc.climate.sea_level_m, surroundings, &opts)?;
     said_screenshot(&opts);
     Ok(())
 }

@@ -70,7 +70,38 @@ impl CanopyGrid {
     /// plan coverage is area-true for crowns smaller or larger than a texel. Mirrors `splat` in
     /// `shaders/cull.wgsl`. Crowns outside the grid are clipped.
     pub fn splat(&self, sums: &mut [[u32; 4]], x: f32, y: f32, r: f32, w: f32, rgb: [f32; 3]) {
-        if !(w > 0.0 && r > 0.0) || sums.len() < self.len() {
+        if sums.len() < self.len() {
+            return;
+        }
+        self.footprint(x, y, r, w, rgb, |k, add| {
+            let s = &mut sums[k];
+            for ch in 0..4 {
+                s[ch] = s[ch].saturating_add(add[ch]);
+            }
+        });
+    }
+
+    /// Takes back what [`CanopyGrid::splat`] with the same arguments added (the same integer
+    /// texel amounts, so a crown splatted and taken back leaves the sums as they were, whatever
+    /// else was splatted in between, as long as no sum saturated); for a canopy layer baked once
+    /// from many trees (`render::farfield`) from which the trees drawn as geometry in a frame
+    /// are taken out. Sums never go below 0.
+    pub fn unsplat(&self, sums: &mut [[u32; 4]], x: f32, y: f32, r: f32, w: f32, rgb: [f32; 3]) {
+        if sums.len() < self.len() {
+            return;
+        }
+        self.footprint(x, y, r, w, rgb, |k, sub| {
+            let s = &mut sums[k];
+            for ch in 0..4 {
+                s[ch] = s[ch].saturating_sub(sub[ch]);
+            }
+        });
+    }
+
+    /// Calls `at(texel index, [coverage, r, g, b])` with the integer amounts one crown adds to
+    /// each texel it covers (see [`CanopyGrid::splat`]).
+    fn footprint(&self, x: f32, y: f32, r: f32, w: f32, rgb: [f32; 3], mut at: impl FnMut(usize, [u32; 4])) {
+        if !(w > 0.0 && r > 0.0) {
             return;
         }
         let t = self.texel;
@@ -101,11 +132,11 @@ impl CanopyGrid {
                 if !(c > 0.0) {
                     continue;
                 }
-                let s = &mut sums[j as usize * self.nx as usize + i as usize];
-                s[0] = s[0].saturating_add(c.round() as u32);
+                let mut add = [c.round() as u32, 0, 0, 0];
                 for ch in 0..3 {
-                    s[ch + 1] = s[ch + 1].saturating_add((c * rgb[ch].clamp(0.0, 1.0)).round() as u32);
+                    add[ch + 1] = (c * rgb[ch].clamp(0.0, 1.0)).round() as u32;
                 }
+                at(j as usize * self.nx as usize + i as usize, add);
             }
         }
     }
@@ -153,6 +184,18 @@ mod tests {
         assert!(s.iter().all(|v| v[0] == 0));
         g.splat(&mut s, 0.5, 0.5, 3.0, 0.0, [1.0; 3]);
         assert!(s.iter().all(|v| v[0] == 0));
+    }
+
+    #[test]
+    fn a_crown_taken_back_leaves_the_other_sums_as_they_were() {
+        let g = CanopyGrid::for_bounds([0.0, 0.0, 0.0], [200.0, 100.0, 10.0]);
+        let mut s = vec![[0u32; 4]; g.len()];
+        g.splat(&mut s, 50.3, 40.1, 3.2, 0.8, [0.2, 0.5, 0.1]);
+        let before = s.clone();
+        g.splat(&mut s, 51.7, 41.9, 5.1, 0.6, [0.3, 0.4, 0.2]);
+        assert_ne!(s, before);
+        g.unsplat(&mut s, 51.7, 41.9, 5.1, 0.6, [0.3, 0.4, 0.2]);
+        assert_eq!(s, before);
     }
 
     #[test]

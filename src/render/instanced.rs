@@ -147,16 +147,21 @@ pub fn instance_record(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32])
 /// at the next coarser level with fade side 1, both with the same fade threshold `blend`, so
 /// that the shader's complementary Bayer masks split the pixels between them.
 pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, params: &LodParams) -> Batches {
+    build_batches_of(&scene.instances, &scene.prototypes, camera, width, height, params)
+}
+
+/// [`build_batches`] of `instances` drawn with `prototypes` (a scene's, or the near trees of a
+/// [`super::farfield::FarField`]).
+pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], camera: &Camera, width: u32, height: u32, params: &LodParams) -> Batches {
     let aspect = width.max(1) as f32 / height.max(1) as f32;
     let frustum = Frustum::from_view_proj(camera.view_proj(aspect));
-    let levels: Vec<usize> = scene.prototypes.iter().map(|p| drawn_levels(p.lods.levels.len())).collect();
-    let crown_r0: Vec<f32> = scene.prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
+    let levels: Vec<usize> = prototypes.iter().map(|p| drawn_levels(p.lods.levels.len())).collect();
+    let crown_r0: Vec<f32> = prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
     // Err = invalid, Ok(None) = culled by the frustum; else (projected size px, record)
-    let seen: Vec<Result<Option<(f32, InstanceRaw)>, ()>> = scene
-        .instances
+    let seen: Vec<Result<Option<(f32, InstanceRaw)>, ()>> = instances
         .par_iter()
         .map(|t| {
-            let Some(rec) = instance_record(t, &scene.prototypes, &crown_r0) else { return Err(()) };
+            let Some(rec) = instance_record(t, prototypes, &crown_r0) else { return Err(()) };
             let (c, r) = bounding_sphere(t);
             if !frustum.sphere_visible(c, r) {
                 return Ok(None);
@@ -176,7 +181,7 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
             }
         }
     }
-    let costs: Vec<[u32; LOD_LEVELS]> = scene.prototypes.iter().map(level_costs).collect();
+    let costs: Vec<[u32; LOD_LEVELS]> = prototypes.iter().map(level_costs).collect();
     let canopy_px = canopy_threshold(&hist, &costs, &levels, params);
     let floor = if canopy_px > 0.0 { canopy_px / (1.0 + params.band.max(0.0)) } else { 0.0 };
     let scale = if params.max_triangles > 0 {
@@ -210,7 +215,7 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
     let mut out = Batches { lod_scale: scale, canopy_px, canopy, canopy_only, ..Batches::default() };
     let max_levels = levels.iter().copied().max().unwrap_or(0);
     out.per_level = vec![0; max_levels];
-    for (t, pick) in scene.instances.iter().zip(&picks) {
+    for (t, pick) in instances.iter().zip(&picks) {
         let (pick, mut base) = match pick {
             Err(()) => {
                 out.invalid += 1;
@@ -240,7 +245,7 @@ pub fn build_batches(scene: &Scene, camera: &Camera, width: u32, height: u32, pa
             if v.is_empty() {
                 continue;
             }
-            out.triangles += level_triangles(&scene.prototypes[p], l) * v.len() as u64;
+            out.triangles += level_triangles(&prototypes[p], l) * v.len() as u64;
             out.draws.push(DrawBatch { prototype: p, level: l, first: out.instances.len() as u32, count: v.len() as u32 });
             out.instances.extend(v);
         }

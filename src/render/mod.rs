@@ -28,6 +28,8 @@
 //! [`canopy`] layer: splatted per frame into a terrain-texel grid of colour and coverage that
 //! the terrain shader blends in, cross-faded with the billboards, so triangles per frame level
 //! off as the tree count grows.
+//! - [`farfield`]: the canopy layer baked once for a set of trees (a year of the viewer), the
+//!   trees sorted into plan tiles so that a frame culls only those that may show as geometry.
 //! - [`timelapse`]: interpolation of snapshots and frame sequences (the GIF/PNG/MP4 writers are
 //!   in [`crate::output::pictures`]).
 
@@ -36,6 +38,7 @@ pub use error::{RenderError, Result};
 
 pub mod camera;
 pub mod canopy;
+pub mod farfield;
 pub mod headless;
 pub mod instanced;
 pub mod lod;

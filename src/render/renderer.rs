@@ -21,7 +21,8 @@ use glam::{Mat4, Vec3};
 use wgpu::util::DeviceExt;
 
 use super::camera::Camera;
-use super::instanced::{build_batches, instance_record, level_triangles, Batches, InstanceRaw};
+use super::farfield::FarField;
+use super::instanced::{build_batches_of, instance_record, level_triangles, Batches, InstanceRaw};
 use super::lod::{drawn_levels, Frustum, LodParams, Silhouette, SILHOUETTE_BINS};
 use super::scene::{Scene, TreeInstance};
 use crate::mesh::LOD_LEVELS;
@@ -38,6 +39,8 @@ pub(super) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8U
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const SHADOW_SIZE: u32 = 2048;
 const SAMPLES: u32 = 4;
+/// Triangles of the coarse terrain mesh of [`Renderer::coarse_terrain`] (at most about).
+pub const COARSE_TERRAIN_TRIANGLES: usize = 100_000;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -236,6 +239,8 @@ struct GpuScene {
     terrain_vb: Option<wgpu::Buffer>,
     terrain_ib: Option<wgpu::Buffer>,
     terrain_count: u32,
+    /// The coarse terrain of frames in motion ([`Renderer::coarse_terrain`]) and its index count.
+    terrain_coarse: Option<(wgpu::Buffer, u32)>,
     water_vb: Option<wgpu::Buffer>,
     /// Drawn levels per prototype (chain meshes, then the billboard).
     protos: Vec<Vec<GpuLevel>>,
@@ -253,6 +258,7 @@ struct GpuTerrain {
     vb: Option<wgpu::Buffer>,
     ib: Option<wgpu::Buffer>,
     count: u32,
+    coarse: Option<(wgpu::Buffer, u32)>,
     water_vb: Option<wgpu::Buffer>,
     canopy_grid: super::canopy::CanopyGrid,
     canopy_buf: wgpu::Buffer,
@@ -290,6 +296,16 @@ struct Targets {
     size: (u32, u32),
     msaa: wgpu::TextureView,
     depth: wgpu::TextureView,
+    /// Depth of single-sample frames ([`Renderer::single_sample`]).
+    depth1: wgpu::TextureView,
+}
+
+/// The main pass's pipelines without multisampling (sky, terrain, water, trees).
+struct SinglePipelines {
+    sky: wgpu::RenderPipeline,
+    terrain: wgpu::RenderPipeline,
+    water: wgpu::RenderPipeline,
+    tree: wgpu::RenderPipeline,
 }
 
 /// The headless output ([`super::headless`]): a texture to draw into and a buffer to read it
@@ -374,8 +390,40 @@ pub struct Renderer {
     /// camera over an unchanged scene can skip the shadow pass (it is drawn anew after the
     /// terrain or the tree models change, and whenever this is false).
     pub reuse_shadow_map: bool,
+    single: SinglePipelines,
+    /// Draw the main pass without multisampling (default false: 4× MSAA): a quarter of the
+    /// samples to rasterise, jagged edges; for frames in motion on a software adapter.
+    pub single_sample: bool,
     /// Whether the shadow map holds a frame of the current terrain and models.
     shadow_ok: bool,
+    /// The sun's view-projection the shadow map was drawn with (what a frame that reuses the
+    /// map looks it up with).
+    shadow_light: (Mat4, f32, f32),
+    /// A far field baked for this scene (default `None`): when set, the renderer draws its
+    /// trees instead of the scene's instances. Each frame takes from it the trees of the tiles
+    /// that may show as geometry ([`FarField::near`], at most [`Renderer::max_near_trees`]) and
+    /// culls only those; every other tree is drawn by the baked canopy layer. Its canopy grid
+    /// must be the one of the scene's terrain (it is baked for a terrain, [`FarField::new`]);
+    /// when it is not, the far field is not used.
+    pub far_field: Option<std::sync::Arc<FarField>>,
+    /// At most this many trees of [`Renderer::far_field`] are culled and drawn as geometry in a
+    /// frame (0 = every tree that may be taller on screen than the far-field switch): the tiles
+    /// whose trees may look tallest first, and the frame's far-field switch rises above the
+    /// trees left to the canopy layer. For frames in motion.
+    pub max_near_trees: usize,
+    /// Cheaper shading (default false): one shadow-map tap for the sun and one for the sky light
+    /// under the canopy instead of 9 and 9 per pixel; harder shadow edges, for frames in motion
+    /// on a software adapter, where the terrain's pixels are most of a frame.
+    pub fast_shading: bool,
+    /// Draw the terrain's coarse mesh in the main pass (default false): a grid terrain of more
+    /// than [`COARSE_TERRAIN_TRIANGLES`] triangles over every k-th vertex so that it has about
+    /// that many ([`TerrainMesh::coarse_indices`]); the shadow pass keeps the full mesh. For
+    /// frames in motion on a software adapter, where triangle setup is a fixed cost per frame.
+    ///
+    /// [`TerrainMesh::coarse_indices`]: super::terrain::TerrainMesh::coarse_indices
+    pub coarse_terrain: bool,
+    /// The far field the shadow map was drawn with (a new one redraws it).
+    shadow_far: Option<std::sync::Arc<FarField>>,
     last: FrameStats,
 }
 
@@ -494,6 +542,12 @@ impl Renderer {
         let sb = wgpu::DepthBiasState { constant: 2, slope_scale: 2.5, clamp: 0.0 };
         let sky = make("sky", &pl_main, "vs_sky", &[], Some(("fs_sky", &opaque)), depth(false, wgpu::CompareFunction::Always, nob), true, None);
         let terrain = make("terrain", &pl_main, "vs_terrain", &tl, Some(("fs_terrain", &opaque)), depth(true, wgpu::CompareFunction::Less, nob), true, None);
+        let single = SinglePipelines {
+            sky: make("sky 1x", &pl_main, "vs_sky", &[], Some(("fs_sky", &opaque)), depth(false, wgpu::CompareFunction::Always, nob), false, None),
+            terrain: make("terrain 1x", &pl_main, "vs_terrain", &tl, Some(("fs_terrain", &opaque)), depth(true, wgpu::CompareFunction::Less, nob), false, None),
+            water: make("water 1x", &pl_main, "vs_terrain", &tl, Some(("fs_water", &blended)), depth(false, wgpu::CompareFunction::Less, nob), false, None),
+            tree: make("tree 1x", &pl_main, "vs_tree", &trl, Some(("fs_tree", &opaque)), depth(true, wgpu::CompareFunction::Less, nob), false, None),
+        };
         let water = make("water", &pl_main, "vs_terrain", &tl, Some(("fs_water", &blended)), depth(false, wgpu::CompareFunction::Less, nob), true, None);
         let tree = make("tree", &pl_main, "vs_tree", &trl, Some(("fs_tree", &opaque)), depth(true, wgpu::CompareFunction::Less, nob), true, None);
         let terrain_shadow = make("terrain shadow", &pl_shadow, "vs_terrain", &tl, None, depth(true, wgpu::CompareFunction::Less, sb), false, None);
@@ -552,7 +606,15 @@ impl Renderer {
             lod: LodParams::default(),
             culling: Culling::Auto,
             reuse_shadow_map: false,
+            single,
+            single_sample: false,
             shadow_ok: false,
+            shadow_light: (Mat4::IDENTITY, 1.0, 1.0),
+            far_field: None,
+            max_near_trees: 0,
+            fast_shading: false,
+            coarse_terrain: false,
+            shadow_far: None,
             last: FrameStats::default(),
         })
     }
@@ -607,7 +669,7 @@ impl Renderer {
         let (mut terrain, mut protos) = (None, None);
         if let Some(g) = old {
             if g.terrain_version == tfp {
-                terrain = Some(GpuTerrain { vb: g.terrain_vb, ib: g.terrain_ib, count: g.terrain_count, water_vb: g.water_vb, canopy_grid: g.canopy_grid, canopy_buf: g.canopy_buf });
+                terrain = Some(GpuTerrain { vb: g.terrain_vb, ib: g.terrain_ib, count: g.terrain_count, coarse: g.terrain_coarse, water_vb: g.water_vb, canopy_grid: g.canopy_grid, canopy_buf: g.canopy_buf });
             }
             if g.protos_version == pfp {
                 protos = Some((g.protos, g.sil_buf));
@@ -646,8 +708,8 @@ impl Renderer {
                 wgpu::BindGroupEntry { binding: 6, resource: wgpu::BindingResource::Sampler(&self.leaf_sampler) },
             ],
         });
-        let GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: terrain_count, water_vb, canopy_grid, canopy_buf } = terrain;
-        self.scene = Some(GpuScene { terrain_version: tfp, protos_version: pfp, terrain_vb, terrain_ib, terrain_count, water_vb, protos, sil_buf, canopy_grid, canopy_buf, bind_main, bind_shadow });
+        let GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: terrain_count, coarse: terrain_coarse, water_vb, canopy_grid, canopy_buf } = terrain;
+        self.scene = Some(GpuScene { terrain_version: tfp, protos_version: pfp, terrain_vb, terrain_ib, terrain_count, terrain_coarse, water_vb, protos, sil_buf, canopy_grid, canopy_buf, bind_main, bind_shadow });
         Ok(uploaded)
     }
 
@@ -681,7 +743,13 @@ impl Renderer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        Ok(GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: t.indices.len() as u32, water_vb, canopy_grid, canopy_buf })
+        // a grid of more than COARSE_TERRAIN_TRIANGLES triangles: every stride-th vertex too
+        let coarse = (t.triangle_count() > COARSE_TERRAIN_TRIANGLES)
+            .then(|| t.coarse_indices((t.triangle_count() as f64 / COARSE_TERRAIN_TRIANGLES as f64).sqrt().ceil() as usize))
+            .flatten()
+            .filter(|ix| !ix.is_empty())
+            .map(|ix| (d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("terrain ib (coarse)"), contents: bytemuck::cast_slice(&ix), usage: wgpu::BufferUsages::INDEX }), ix.len() as u32));
+        Ok(GpuTerrain { vb: terrain_vb, ib: terrain_ib, count: t.indices.len() as u32, coarse, water_vb, canopy_grid, canopy_buf })
     }
 
     /// The prototypes part: one vertex and index buffer per drawn level (chain meshes, then the
@@ -773,7 +841,8 @@ impl Renderer {
         let tex = |label: &str, format, usage| d.create_texture(&wgpu::TextureDescriptor { label: Some(label), size, mip_level_count: 1, sample_count: SAMPLES, dimension: wgpu::TextureDimension::D2, format, usage, view_formats: &[] });
         let msaa = tex("msaa", self.format, wgpu::TextureUsages::RENDER_ATTACHMENT).create_view(&Default::default());
         let depth = tex("depth", DEPTH_FORMAT, wgpu::TextureUsages::RENDER_ATTACHMENT).create_view(&Default::default());
-        self.targets = Some(Targets { size: (w, h), msaa, depth });
+        let depth1 = d.create_texture(&wgpu::TextureDescriptor { label: Some("depth 1x"), size, mip_level_count: 1, sample_count: 1, dimension: wgpu::TextureDimension::D2, format: DEPTH_FORMAT, usage: wgpu::TextureUsages::RENDER_ATTACHMENT, view_formats: &[] }).create_view(&Default::default());
+        self.targets = Some(Targets { size: (w, h), msaa, depth, depth1 });
     }
 
     pub(super) fn check_size(&self, width: u32, height: u32) -> Result<()> {
@@ -806,8 +875,19 @@ impl Renderer {
     fn render_inner(&mut self, scene: &Scene, camera: &Camera, view: &wgpu::TextureView, width: u32, height: u32) -> Result<FrameStats> {
         let (uploaded_terrain, uploaded_prototypes) = self.upload(scene)?;
         self.ensure_targets(width, height);
+        // a far field baked for this terrain: its near trees instead of the scene's instances
+        let far = self.far_field.clone().filter(|f| self.scene.as_ref().is_some_and(|g| g.canopy_grid == f.grid && f.sums().len() == f.grid.len()));
+        let near = far.as_ref().map(|f| f.near(camera, width, height, &self.lod, self.max_near_trees));
+        let instances: &[TreeInstance] = near.as_ref().map_or(&scene.instances, |n| &n.instances);
+        // trees left in the baked layer go wholly to the canopy layer in this frame too
+        let lod = match &near {
+            Some(n) if self.lod.canopy_px > 0.0 => LodParams { canopy_px: self.lod.canopy_px.max(n.floor_px * (1.0 + self.lod.band.max(0.0))), ..self.lod },
+            _ => self.lod,
+        };
         let gpu_frame = match self.culling {
             Culling::Cpu => None,
+            // the near trees of a far field are few: culled on the CPU
+            Culling::Auto if far.is_some() => None,
             Culling::Auto => {
                 if self.cull.is_some() {
                     self.prepare_gpu_cull(scene, camera, width, height)?
@@ -819,6 +899,9 @@ impl Renderer {
                 if self.cull.is_none() {
                     return Err(RenderError::GpuCullingUnavailable(format!("{} lacks compute shaders or indirect draws", self.adapter_info.name)).into());
                 }
+                if far.is_some() {
+                    return Err(RenderError::GpuCullingUnavailable("a baked far field is culled on the CPU".into()));
+                }
                 match self.prepare_gpu_cull(scene, camera, width, height)? {
                     Some(f) => Some(f),
                     None => return Err(RenderError::GpuCullingUnavailable(format!("{} instances exceed the adapter's storage buffer limits", scene.instances.len())).into()),
@@ -828,19 +911,33 @@ impl Renderer {
         let draws = match gpu_frame {
             Some(f) => FrameDraws::Gpu(f),
             None => {
-                let b = build_batches(scene, camera, width, height, &self.lod);
+                let b = build_batches_of(instances, &scene.prototypes, camera, width, height, &lod);
                 self.write_instances(&b);
-                if !b.canopy.is_empty() {
+                if let Some(f) = &far {
+                    self.write_far_canopy(f, instances, &scene.prototypes, &b);
+                } else if !b.canopy.is_empty() {
                     self.write_canopy(&b);
                 }
                 FrameDraws::Cpu(b)
             }
         };
         let canopy_used = match &draws {
-            FrameDraws::Cpu(b) => !b.canopy.is_empty(),
+            FrameDraws::Cpu(b) => far.is_some() || !b.canopy.is_empty(),
             FrameDraws::Gpu(_) => true,
         };
-        self.write_globals(scene, camera, width, height, canopy_used);
+        if uploaded_terrain || uploaded_prototypes || !same_far(&far, &self.shadow_far) {
+            self.shadow_ok = false;
+        }
+        let redraw_shadow = !(self.reuse_shadow_map && self.shadow_ok);
+        let (extent, light_height) = match &far {
+            Some(f) => (f.tree_bounds, f.light_height),
+            None => (tree_extent(&scene.instances), canopy_light_height(&scene.instances)),
+        };
+        if redraw_shadow {
+            self.shadow_light = Self::light_matrix(scene, extent);
+            self.shadow_far = far.clone();
+        }
+        self.write_globals(scene, camera, width, height, canopy_used, self.shadow_light, light_height);
         let mut enc = self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
         if let FrameDraws::Gpu(f) = &draws {
             if let Some(gs) = &self.scene {
@@ -848,10 +945,7 @@ impl Renderer {
             }
             self.encode_cull(&mut enc, f);
         }
-        if uploaded_terrain || uploaded_prototypes {
-            self.shadow_ok = false;
-        }
-        if !(self.reuse_shadow_map && self.shadow_ok) {
+        if redraw_shadow {
             self.encode_shadow(&mut enc, &draws);
             self.shadow_ok = true;
         }
@@ -889,7 +983,7 @@ impl Renderer {
                 }
                 lod_scale = b.lod_scale;
                 canopy_px = b.canopy_px;
-                canopy_trees = b.canopy_only;
+                canopy_trees = b.canopy_only + near.as_ref().map_or(0, |n| n.far_trees);
                 (b.triangles, b.culled, b.invalid, b.per_level.iter().sum())
             }
             FrameDraws::Gpu(f) => {
@@ -920,7 +1014,7 @@ impl Renderer {
             }
         };
         self.last = FrameStats {
-            triangles: tree_tris + gpu.terrain_count as u64 / 3 + if gpu.water_vb.is_some() { 2 } else { 0 },
+            triangles: tree_tris + u64::from(match &gpu.terrain_coarse { Some((_, n)) if self.coarse_terrain => *n, _ => gpu.terrain_count }) / 3 + if gpu.water_vb.is_some() { 2 } else { 0 },
             tree_triangles: tree_tris,
             tree_draws,
             instances_drawn: drawn,
@@ -1085,17 +1179,16 @@ impl Renderer {
 
     /// The sun's orthographic view-projection over the scene's bounding sphere (radius r, depth
     /// range r..3r from an eye 2r towards the sun), the world size of a shadow texel (m) and the
-    /// depth range (m).
-    fn light_matrix(scene: &Scene) -> (Mat4, f32, f32) {
+    /// depth range (m). `trees`: the bounds of the trees' stems and the tallest tree
+    /// ([`tree_extent`]).
+    fn light_matrix(scene: &Scene, trees: Option<([f32; 3], [f32; 3], f32)>) -> (Mat4, f32, f32) {
         let (lo, hi) = scene.terrain.bounds();
         let (mut lo, mut hi) = (Vec3::from(lo), Vec3::from(hi));
-        let tallest = scene.instances.iter().map(|t| t.height).filter(|h| h.is_finite()).fold(0.0f32, f32::max);
-        for t in &scene.instances {
-            let p = Vec3::from(t.position);
-            if p.is_finite() {
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
+        let mut tallest = 0.0f32;
+        if let Some((a, b, t)) = trees {
+            lo = lo.min(Vec3::from(a));
+            hi = hi.max(Vec3::from(b));
+            tallest = t;
         }
         hi.z += tallest;
         let c = (lo + hi) * 0.5;
@@ -1108,11 +1201,13 @@ impl Renderer {
     }
 
     /// `canopy_used`: whether the terrain shader reads the canopy layer (false when the CPU
-    /// path splatted nothing this frame).
-    fn write_globals(&self, scene: &Scene, camera: &Camera, w: u32, h: u32, canopy_used: bool) {
+    /// path splatted nothing this frame); `light`: the sun's matrix of the shadow map
+    /// ([`Renderer::light_matrix`]); `light_height`: [`canopy_light_height`] of the trees.
+    #[allow(clippy::too_many_arguments)]
+    fn write_globals(&self, scene: &Scene, camera: &Camera, w: u32, h: u32, canopy_used: bool, light: (Mat4, f32, f32), light_height: f32) {
         let aspect = w as f32 / h as f32;
         let vp = camera.view_proj(aspect);
-        let (lvp, texel_m, depth_m) = Self::light_matrix(scene);
+        let (lvp, texel_m, depth_m) = light;
         let (lo, hi) = scene.terrain.bounds();
         let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0);
         let ortho = matches!(camera.projection, super::camera::Projection::Orthographic { .. });
@@ -1132,13 +1227,13 @@ impl Renderer {
             params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.1 / size],
             canopy0: [0.0; 4],
             canopy1: [0.0; 4],
-            shadow: [1.0 / SHADOW_SIZE as f32, 0.5 * texel_m / depth_m, texel_m, 0.0],
+            shadow: [1.0 / SHADOW_SIZE as f32, 0.5 * texel_m / depth_m, texel_m, if self.fast_shading { 1.0 } else { 0.0 }],
             facing: if ortho { v3((Vec3::from(camera.eye) - Vec3::from(camera.target)).normalize_or(Vec3::Z).to_array(), 1.0) } else { [0.0; 4] },
         };
         if let Some(gs) = &self.scene {
             let cg = gs.canopy_grid;
             g.canopy0 = [cg.origin[0], cg.origin[1], cg.texel, if self.lod.canopy_px > 0.0 && canopy_used { 1.0 } else { 0.0 }];
-            g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, canopy_light_height(&scene.instances)];
+            g.canopy1 = [cg.nx as f32, cg.ny as f32, 2.5, light_height];
         }
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         g.view_proj = g.light_view_proj;
@@ -1166,6 +1261,25 @@ impl Renderer {
         let Some(gs) = &self.scene else { return };
         let g = gs.canopy_grid;
         let mut sums = vec![[0u32; 4]; g.len()];
+        for c in &b.canopy {
+            g.splat(&mut sums, c.x, c.y, c.r, c.w, c.rgb);
+        }
+        self.queue.write_buffer(&gs.canopy_buf, 0, bytemuck::cast_slice(&sums));
+    }
+
+    /// The canopy layer of a frame drawn from far field `far`: its baked sums, less the full
+    /// splats of the `near` trees the frame culled itself, plus the splats of those of them
+    /// the frame put in the canopy layer (`b.canopy`); uploaded.
+    fn write_far_canopy(&self, far: &FarField, near: &[TreeInstance], prototypes: &[super::scene::Prototype], b: &Batches) {
+        let Some(gs) = &self.scene else { return };
+        let g = gs.canopy_grid;
+        let mut sums = far.sums().to_vec();
+        let crown_r0: Vec<f32> = prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
+        for t in near {
+            if let Some(c) = super::farfield::full_splat(t, prototypes, &crown_r0) {
+                g.unsplat(&mut sums, c.x, c.y, c.r, c.w, c.rgb);
+            }
+        }
         for c in &b.canopy {
             g.splat(&mut sums, c.x, c.y, c.r, c.w, c.rgb);
         }
@@ -1243,25 +1357,38 @@ impl Renderer {
         let (Some(t), Some(gpu)) = (&self.targets, &self.scene) else { return 0 };
         let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("main"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment { view: &t.msaa, depth_slice: None, resolve_target: Some(view), ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard } })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: &t.depth, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }), stencil_ops: None }),
+            color_attachments: &[Some(if self.single_sample {
+                wgpu::RenderPassColorAttachment { view, depth_slice: None, resolve_target: None, ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store } }
+            } else {
+                wgpu::RenderPassColorAttachment { view: &t.msaa, depth_slice: None, resolve_target: Some(view), ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard } }
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: if self.single_sample { &t.depth1 } else { &t.depth }, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }), stencil_ops: None }),
             timestamp_writes: None,
             occlusion_query_set: None,
             multiview_mask: None,
         });
         pass.set_bind_group(0, &gpu.bind_main, &[]);
-        pass.set_pipeline(&self.sky);
+        let (sky, terrain, water, tree) = if self.single_sample { (&self.single.sky, &self.single.terrain, &self.single.water, &self.single.tree) } else { (&self.sky, &self.terrain, &self.water, &self.tree) };
+        pass.set_pipeline(sky);
         pass.draw(0..3, 0..1);
         if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
-            pass.set_pipeline(&self.terrain);
+            pass.set_pipeline(terrain);
             pass.set_vertex_buffer(0, vb.slice(..));
-            pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
+            match &gpu.terrain_coarse {
+                Some((cib, n)) if self.coarse_terrain => {
+                    pass.set_index_buffer(cib.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..*n, 0, 0..1);
+                }
+                _ => {
+                    pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
+                }
+            }
         }
-        pass.set_pipeline(&self.tree);
+        pass.set_pipeline(tree);
         let r = self.draw_trees(&mut pass, draws);
         if let Some(vb) = &gpu.water_vb {
-            pass.set_pipeline(&self.water);
+            pass.set_pipeline(water);
             pass.set_vertex_buffer(0, vb.slice(..));
             pass.draw(0..6, 0..1);
         }
@@ -1273,6 +1400,22 @@ impl std::fmt::Debug for Renderer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Renderer").field("adapter", &self.adapter_description()).finish()
     }
+}
+
+/// Whether two far fields are the same one (both `None` counts).
+fn same_far(a: &Option<std::sync::Arc<FarField>>, b: &Option<std::sync::Arc<FarField>>) -> bool {
+    match (a, b) {
+        (Some(a), Some(b)) => std::sync::Arc::ptr_eq(a, b),
+        (None, None) => true,
+        _ => false,
+    }
+}
+
+/// Bounds of the stems of `instances` (m, those with a finite position) and the tallest
+/// finite height (m, over all of them); `None` when no position is finite.
+pub fn tree_extent(instances: &[TreeInstance]) -> Option<([f32; 3], [f32; 3], f32)> {
+    let (lo, hi) = crate::mesh::points_bounds(instances.iter().map(|t| &t.position).filter(|p| p.iter().all(|v| v.is_finite())))?;
+    Some((lo, hi, instances.iter().map(|t| t.height).filter(|h| h.is_finite()).fold(0.0f32, f32::max)))
 }
 
 /// Height above the ground (m) at which the canopy layer's crowns take their sun visibility from

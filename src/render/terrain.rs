@@ -25,6 +25,10 @@ pub struct TerrainMesh {
     /// surroundings: [`TerrainMesh::bounds`] (camera presets, shadow map, canopy layer) covers
     /// only the vertices inside it. `None`: the whole mesh is the site.
     pub focus: Option<([f32; 2], [f32; 2])>,
+    /// `[columns, rows]` when the positions are a row-major grid of that many vertices (north
+    /// row first, as [`from_ground`] builds them): [`TerrainMesh::coarse_indices`] can then
+    /// draw it with fewer triangles. `None`: any triangle mesh.
+    pub grid: Option<[usize; 2]>,
 }
 
 impl TerrainMesh {
@@ -40,6 +44,39 @@ impl TerrainMesh {
     /// unit box at the origin for an empty mesh.
     pub fn full_bounds(&self) -> ([f32; 3], [f32; 3]) {
         crate::mesh::points_bounds(self.positions.iter()).unwrap_or(([0.0; 3], [1.0; 3]))
+    }
+
+    /// The triangles of a grid mesh ([`TerrainMesh::grid`]) over every `stride`-th column and
+    /// row (and the last ones), for a coarser drawing of the same vertices (frames in motion):
+    /// a quad where its four corners have finite positions, split as the full mesh's quads are.
+    /// `None` for a mesh that is not a grid or a stride below 2.
+    pub fn coarse_indices(&self, stride: usize) -> Option<Vec<u32>> {
+        let [w, h] = self.grid?;
+        if stride < 2 || w < 2 || h < 2 || self.positions.len() != w * h {
+            return None;
+        }
+        let steps = |n: usize| -> Vec<usize> {
+            let mut v: Vec<usize> = (0..n).step_by(stride).collect();
+            if v.last() != Some(&(n - 1)) {
+                v.push(n - 1);
+            }
+            v
+        };
+        let (cols, rows) = (steps(w), steps(h));
+        let ok = |c: usize, r: usize| self.positions[r * w + c].iter().all(|v| v.is_finite());
+        let mut out = Vec::with_capacity(cols.len() * rows.len() * 6);
+        for rr in rows.windows(2) {
+            for cc in cols.windows(2) {
+                let (c0, c1, r0, r1) = (cc[0], cc[1], rr[0], rr[1]);
+                if !(ok(c0, r0) && ok(c1, r0) && ok(c0, r1) && ok(c1, r1)) {
+                    continue;
+                }
+                let i = |c: usize, r: usize| (r * w + c) as u32;
+                let (sw, se, ne, nw) = (i(c0, r1), i(c1, r1), i(c1, r0), i(c0, r0));
+                out.extend_from_slice(&[sw, se, ne, sw, ne, nw]);
+            }
+        }
+        Some(out)
     }
 
     /// Number of triangles.
@@ -279,7 +316,7 @@ pub fn from_ground(g: &GroundGrid, cover: &LandCover, canopy: &dyn Fn(f32, f32) 
         }
     };
     let ok = |c: usize, r: usize| g.heights.get(c, r).is_finite();
-    let mut m = TerrainMesh { positions: Vec::with_capacity(n), normals: Vec::with_capacity(n), colors: Vec::with_capacity(n), fade: Vec::with_capacity(n), focus: g.focus, ..TerrainMesh::default() };
+    let mut m = TerrainMesh { positions: Vec::with_capacity(n), normals: Vec::with_capacity(n), colors: Vec::with_capacity(n), fade: Vec::with_capacity(n), focus: g.focus, grid: Some([w, h]), ..TerrainMesh::default() };
     for r in 0..h {
         for c in 0..w {
             let i = r * w + c;

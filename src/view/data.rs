@@ -295,12 +295,18 @@ impl RunData {
 /// Colours (linear RGB) of terrain vertices at `positions` for an overlay `field` of `cell` m
 /// cells (row 0 north, over a site `extent_y` m tall): ramp colour of the value scaled into
 /// `range`, or the species palette (value = pool position + 1, 0 = beige "no tree") when
-/// `species` is set; mixed 85 % over the land-cover colour `base`, which NaN cells keep.
+/// `species` is set; mixed 85 % over the land-cover colour `base`, which NaN cells and the
+/// vertices beyond the site (the surroundings) keep.
 pub fn overlay_colours(positions: &[[f32; 3]], base: &[[f32; 3]], field: &Grid<f32>, cell: f64, extent_y: f64, ramp: crate::output::maps::Ramp, range: (f32, f32), species: bool) -> Vec<[f32; 3]> {
     positions
         .iter()
         .zip(base)
         .map(|(p, b)| {
+            // the surroundings beyond the site keep their colours
+            let (x, y) = (p[0] as f64, p[1] as f64);
+            if x < 0.0 || y < 0.0 || x > field.width as f64 * cell || y > extent_y {
+                return *b;
+            }
             let c = ((p[0] as f64 / cell).floor().max(0.0) as usize).min(field.width - 1);
             let r = (((extent_y - p[1] as f64) / cell).floor().max(0.0) as usize).min(field.height - 1);
             let v = field.data[r * field.width + c];
@@ -344,10 +350,12 @@ mod tests {
     fn overlay_colours_follow_the_field_and_keep_nan_cells() {
         // 2 × 1 cells of 10 m over a 10 m tall site: west 0, east NaN
         let g = Grid { width: 2, height: 1, data: vec![0.0, f32::NAN] };
-        let pos = [[5.0, 5.0, 0.0], [15.0, 5.0, 0.0]];
-        let base = [[0.1, 0.2, 0.3]; 2];
+        let pos = [[5.0, 5.0, 0.0], [15.0, 5.0, 0.0], [-20.0, 5.0, 0.0], [5.0, 30.0, 0.0]];
+        let base = [[0.1, 0.2, 0.3]; 4];
         let c = overlay_colours(&pos, &base, &g, 10.0, 10.0, crate::output::maps::Ramp::Grey, (0.0, 1.0), false);
         assert_eq!(c[1], base[1]);
+        // beyond the site (the surroundings): the land-cover colour
+        assert_eq!((c[2], c[3]), (base[2], base[3]));
         // grey ramp at 0 is black: 15 % of the base remains
         assert!((c[0][0] - 0.015).abs() < 1e-3 && (c[0][2] - 0.045).abs() < 1e-3, "{:?}", c[0]);
     }

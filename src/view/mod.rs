@@ -8,17 +8,27 @@
 //! plotted beside the view (egui_plot); the help panel (F1 or H) lists the shortcuts; the frame
 //! time is shown in the top bar.
 //!
+//! The ground is the stills' ([`scene::Landscape`]): the terrain beyond the simulated window
+//! (from the scenario's DEM, [`Viewer::set_surroundings`]) with the window's trees mirrored onto
+//! it, fading into the sky and the haze as in `sylva render`. Every tree of a year (a million
+//! in the default run, several million with the surroundings) is baked once into a
+//! [`FarField`]; a frame culls only the trees that may show as geometry, at most
+//! [`MOTION_NEAR_TREES`] while the camera moves.
+//!
 //! A shell module: the core names none of it (`tests/layers.rs`).
 
 pub mod camera;
 pub mod data;
 
 
+use std::sync::Arc;
+
 use eframe::egui;
 use glam::Vec3;
 
 use crate::gui::{self, FrameClock, GuiError, Screenshot, Viewport3d, WindowOptions};
 use crate::job::scene;
+use crate::render::farfield::FarField;
 use crate::render::scene::{Scene, TreeInstance};
 use crate::species::Season;
 use camera::{CameraRig, Mode};
@@ -74,6 +84,10 @@ pub struct Viewer {
     pub overlay: Overlay,
     painted: Option<(Overlay, i64)>,
     shown: Option<(i64, Season)>,
+    /// The ground drawn: the site and its surroundings, as in the stills.
+    landscape: scene::Landscape,
+    /// The year (× 1000) and season the ground colours and the far field were made for.
+    baked: Option<(i64, Season)>,
     current: Vec<TreeInstance>,
     /// The selected tree's id.
     pub selected: Option<u64>,
@@ -97,6 +111,15 @@ pub struct Viewer {
     /// `SYLVA_VIEW_SPIN` is set: turn the camera every frame and log the frame times.
     spin: bool,
     spin_clock: std::time::Instant,
+    /// Divisor of the resolution of frames in motion (1 ..= [`MOTION_SCALE_MAX`]), adapted to
+    /// the time between them.
+    motion_scale: f32,
+    /// Whether the last frame was drawn in motion.
+    motion_before: bool,
+    /// Seconds between the last two frames.
+    frame_dt: f32,
+    /// Whether the year shown changed in the last [`Viewer::refresh`] (drawn as in motion).
+    year_moving: bool,
 }
 
 impl Viewer {
@@ -106,7 +129,8 @@ impl Viewer {
     /// # Errors
     /// [`GuiError::Render`] when the terrain mesh cannot be built.
     pub fn new(data: RunData, sea_level_m: f32, gpu: Option<Viewport3d>) -> gui::Result<Self> {
-        let terrain = scene::terrain_mesh(&data.site, 10.0, sea_level_m).map_err(|e| GuiError::Render(crate::render::RenderError::Input(e)))?;
+        let landscape = scene::Landscape::new(&data.site, None, 10.0, sea_level_m).map_err(input_error)?;
+        let terrain = landscape.mesh(&[]).map_err(input_error)?;
         let prototypes = pool_prototypes(&data.library, &data.pool);
         let site = &data.site;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
@@ -133,6 +157,8 @@ impl Viewer {
             overlay: Overlay::None,
             painted: None,
             shown: None,
+            landscape,
+            baked: None,
             current: Vec::new(),
             selected: None,
             info: None,
@@ -148,7 +174,26 @@ impl Viewer {
             frames_drawn: 0,
             spin: std::env::var_os("SYLVA_VIEW_SPIN").is_some(),
             spin_clock: std::time::Instant::now(),
+            motion_scale: 2.0,
+            motion_before: false,
+            frame_dt: 0.0,
+            year_moving: false,
         })
+    }
+
+    /// Draws the terrain beyond the simulated window around it, as the stills do
+    /// (`job::pictures::Stage::set_surroundings`): `full` is the whole terrain the site was cut
+    /// from with `window` (`[col0, row0, width, height]` in its cells).
+    ///
+    /// # Errors
+    /// [`GuiError::Render`] when the window leaves `full`'s grid.
+    pub fn set_surroundings(&mut self, full: &crate::terrain::Terrain, window: [usize; 4]) -> gui::Result<()> {
+        self.landscape = scene::Landscape::new(&self.data.site, Some((full, window)), 10.0, self.landscape.cover.sea_level).map_err(input_error)?;
+        self.scene.set_terrain(self.landscape.mesh(&[]).map_err(input_error)?);
+        self.base_colours = self.scene.terrain.colors.clone();
+        self.painted = None;
+        self.baked = None;
+        Ok(())
     }
 
     /// Takes a `--screenshot` after the given frames.
@@ -174,6 +219,8 @@ impl Viewer {
     /// Brings the scene up to date with the year, season and overlay.
     pub fn refresh(&mut self) {
         let key = ((self.year * 1000.0).round() as i64, self.season);
+        // the year moved since the last frame (the slider dragged, the years playing)
+        self.year_moving = self.shown.is_some() && self.shown != Some(key);
         if self.shown != Some(key) {
             match self.data.instances_at(self.year, self.season) {
                 Ok(v) => self.current = v,
@@ -185,8 +232,15 @@ impl Viewer {
                 self.info = self.data.tree_info(id, self.year).ok().flatten();
             }
         }
-        // species and basal-area overlays change with the snapshot shown, condition maps never
+        // the ground and the far field: for the year shown, or while the year moves (the years
+        // play, the slider is dragged) for the snapshot nearest to it (baking millions of trees
+        // takes longer than a frame); the frame after it stops bakes the year shown
         let (k0, k1, t) = self.data.bracket(self.year);
+        let bake_key = if self.playing || self.year_moving { ((self.data.years[if t >= 0.5 { k1 } else { k0 }] as f32 * 1000.0).round() as i64, self.season) } else { key };
+        if self.baked != Some(bake_key) {
+            self.bake(bake_key);
+        }
+        // species and basal-area overlays change with the snapshot shown, condition maps never
         let snap = match self.overlay {
             Overlay::Species | Overlay::BasalArea => self.data.years[if t >= 0.5 { k1 } else { k0 }] as i64,
             _ => -1,
@@ -204,6 +258,43 @@ impl Viewer {
             self.scene.terrain_changed();
             self.painted = Some((self.overlay, snap));
         }
+    }
+
+    /// Makes the ground and the far field for `key` (year × 1000, season): the trees of that
+    /// year with their mirror images on the surroundings ([`scene::Landscape::surroundings`]),
+    /// the ground under their crowns coloured as forest floor ([`scene::Landscape::mesh`]), and
+    /// with a GPU viewport all of them baked into the renderer's [`FarField`].
+    fn bake(&mut self, key: (i64, Season)) {
+        let trees = if key.0 == (self.year * 1000.0).round() as i64 && Some(key) == self.shown {
+            Ok(self.current.clone())
+        } else {
+            self.data.instances_at(key.0 as f32 / 1000.0, key.1)
+        };
+        let mut all = match trees {
+            Ok(v) => v,
+            Err(e) => {
+                self.status = Some(e.to_string());
+                return;
+            }
+        };
+        let t0 = std::time::Instant::now();
+        let far = self.landscape.surroundings(&all);
+        all.extend(far);
+        match self.landscape.mesh(&all) {
+            Ok(m) => {
+                self.scene.set_terrain(m);
+                self.base_colours = self.scene.terrain.colors.clone();
+                self.painted = None;
+            }
+            Err(e) => self.status = Some(e.to_string()),
+        }
+        let t1 = std::time::Instant::now();
+        let n = all.len();
+        if let Some(g) = self.gpu.as_mut() {
+            g.renderer.far_field = Some(Arc::new(FarField::new(all, &self.scene.prototypes, &self.scene.terrain)));
+        }
+        tracing::info!("year {:.1}: {n} trees with the surroundings' (ground {:.2} s), far field baked in {:.2} s", key.0 as f32 / 1000.0, (t1 - t0).as_secs_f32(), t1.elapsed().as_secs_f32());
+        self.baked = Some(key);
     }
 
     /// Moves to year `y` (clamped to the snapshots).
@@ -457,11 +548,12 @@ impl Viewer {
     }
 
     /// Whether this frame is drawn in motion ([`motion_lod`]): the first frame, and every frame
-    /// whose camera differs from the last one's or while the years play; a still frame then
+    /// whose camera differs from the last one's, while the years play or the year shown moves
+    /// (the slider dragged); a still frame then
     /// follows at full detail ([`still_lod`]). With a `--screenshot` pending every frame is
     /// still, so screenshots show the full detail.
     fn in_motion(&mut self, cam: &crate::render::camera::Camera) -> bool {
-        let moved = self.last_camera.as_ref() != Some(cam) || self.playing;
+        let moved = self.last_camera.as_ref() != Some(cam) || self.playing || self.year_moving;
         self.last_camera = Some(*cam);
         moved && !self.screenshot.as_ref().is_some_and(|s| s.pending())
     }
@@ -490,6 +582,10 @@ impl Viewer {
         let motion = self.in_motion(&cam);
         if let Some(g) = self.gpu.as_mut() {
             g.renderer.lod = if motion { motion_lod() } else { still_lod() };
+            g.renderer.max_near_trees = if motion { MOTION_NEAR_TREES } else { 0 };
+            g.renderer.fast_shading = motion;
+            g.renderer.coarse_terrain = motion;
+            g.renderer.single_sample = motion;
             // the sun's shadows do not move with the camera: in motion the last map serves
             g.renderer.reuse_shadow_map = motion;
         }
@@ -497,13 +593,24 @@ impl Viewer {
             // the full-detail frame once the camera rests
             ui.ctx().request_repaint();
         }
-        // in motion at half the resolution (a quarter of the pixels to rasterise: on a software
-        // adapter the frame is spent there), egui scales it to the view
-        let (w, h) = if motion { ((w / 2).max(16), (h / 2).max(16)) } else { (w, h) };
+        // in motion at a fraction of the resolution (on a software adapter the frame is spent
+        // rasterising), egui scales it to the view; the fraction follows the time between
+        // frames in motion: coarser while they take longer than MOTION_FRAME_S, finer while
+        // they take less than 60 % of it
+        if motion && self.motion_before && self.frame_dt > 0.0 {
+            if self.frame_dt > MOTION_FRAME_S {
+                self.motion_scale = (self.motion_scale * 1.2).min(MOTION_SCALE_MAX);
+            } else if self.frame_dt < 0.6 * MOTION_FRAME_S {
+                self.motion_scale = (self.motion_scale / 1.2).max(1.0);
+            }
+        }
+        self.motion_before = motion;
+        let (w, h) = if motion { (((w as f32 / self.motion_scale) as u32).max(16), ((h as f32 / self.motion_scale) as u32).max(16)) } else { (w, h) };
         let drawn = self.gpu.as_mut().map(|g| g.draw(&self.scene, &cam, w, h));
         self.frames_drawn += 1;
         if self.spin && self.frames_drawn % 10 == 0 {
-            tracing::info!("frames {}–{}: {:.0} ms per frame", self.frames_drawn - 9, self.frames_drawn, self.spin_clock.elapsed().as_secs_f32() * 100.0);
+            let st = self.gpu.as_ref().map(|g| (g.last_ms, g.renderer.last_stats())).unwrap_or_default();
+            tracing::info!("frames {}–{}: {:.0} ms per frame (last: 3-D {:.0} ms on the CPU side, {} trees as geometry, {} k triangles, far-field switch {:.0} px), 1/{:.2} resolution)", self.frames_drawn - 9, self.frames_drawn, self.spin_clock.elapsed().as_secs_f32() * 100.0, st.0, st.1.instances_drawn, st.1.triangles / 1000, st.1.canopy_px, self.motion_scale);
             self.spin_clock = std::time::Instant::now();
         }
         if self.frames_drawn <= 3 {
@@ -565,6 +672,7 @@ impl Viewer {
     pub fn ui(&mut self, ui: &mut egui::Ui) {
         let ctx = ui.ctx().clone();
         let dt = self.clock.tick();
+        self.frame_dt = dt;
         if self.playing {
             let (a, b) = self.data.span();
             self.year += dt * self.speed;
@@ -608,15 +716,32 @@ pub fn still_lod() -> crate::render::lod::LodParams {
 
 /// Level-of-detail settings of a frame in motion (issue 36's frame budget): the renderer's
 /// defaults, so coarser levels and at most [`MOTION_GEOMETRY_TRIANGLES`] triangles of tree
-/// geometry, the rest of the forest in the canopy layer; such a frame is also drawn at half the
-/// view's resolution.
+/// geometry, the rest of the forest in the baked canopy layer (at most [`MOTION_NEAR_TREES`]
+/// trees culled); such a frame is also drawn at a fraction of the view's resolution (half at
+/// first, then adapted to [`MOTION_FRAME_S`]), with the renderer's one-tap shadows
+/// (`Renderer::fast_shading`), its coarse terrain mesh (`Renderer::coarse_terrain`) and without
+/// multisampling (`Renderer::single_sample`).
 pub fn motion_lod() -> crate::render::lod::LodParams {
     crate::render::lod::LodParams { max_geometry_triangles: MOTION_GEOMETRY_TRIANGLES, ..Default::default() }
 }
 
+/// Time between frames in motion the viewer aims at (s): 5 frames per second (issue 36).
+pub const MOTION_FRAME_S: f32 = 0.2;
+
+/// Largest divisor of the resolution of frames in motion (they start at half the view's).
+pub const MOTION_SCALE_MAX: f32 = 4.0;
+
+/// Trees culled and drawn as geometry while the camera moves (the rest of the far field is its
+/// baked canopy layer, [`crate::render::renderer::Renderer::max_near_trees`]).
+pub const MOTION_NEAR_TREES: usize = 30_000;
+
 /// Tree triangles drawn as geometry while the camera moves (the far-field switch rises until
 /// they fit; `render::lod`).
-pub const MOTION_GEOMETRY_TRIANGLES: u32 = 100_000;
+pub const MOTION_GEOMETRY_TRIANGLES: u32 = 50_000;
+
+fn input_error(e: crate::Error) -> GuiError {
+    GuiError::Render(crate::render::RenderError::Input(e))
+}
 
 /// One prototype per species of `library` (in library order, as the instances index them): the
 /// EcoMod model of [`scene::prototypes`] for the species of `pool`, the renderer's cheap stand-in
@@ -646,15 +771,19 @@ impl eframe::App for Viewer {
 }
 
 /// Opens the viewer window on `data` and returns when it is closed (or, with
-/// `opts.screenshot`, after the screenshot is written).
+/// `opts.screenshot`, after the screenshot is written). `surroundings`: the whole terrain the
+/// site was cut from and the window it was cut with ([`Viewer::set_surroundings`]).
 ///
 /// # Errors
 /// As [`gui::run_window`]; [`GuiError::Render`] when the renderer cannot be built on the
-/// window's device.
-pub fn run(data: RunData, sea_level_m: f32, opts: &WindowOptions) -> gui::Result<()> {
+/// window's device or the window leaves the terrain.
+pub fn run(data: RunData, sea_level_m: f32, surroundings: Option<(crate::terrain::Terrain, [usize; 4])>, opts: &WindowOptions) -> gui::Result<()> {
     let title = format!("Sylva — {}", data.dir.display());
     gui::run_viewport_window(&title, opts, data, move |d, vp, shot| {
         let mut v = Viewer::new(d, sea_level_m, Some(vp))?;
+        if let Some((full, window)) = &surroundings {
+            v.set_surroundings(full, *window)?;
+        }
         if let Some(s) = shot {
             v = v.with_screenshot(s);
         }

@@ -15,7 +15,7 @@ struct Globals {
     facing: vec4<f32>,       // xyz towards the viewer for billboards when w = 1 (ortho, sun); w = 0: use eye
     canopy0: vec4<f32>,      // canopy grid origin x, y (m), texel (m), on (1) / off (0)
     canopy1: vec4<f32>,      // canopy grid nx, ny, oblique-view factor k, crown light height m
-    shadow: vec4<f32>,       // shadow map: texel (uv), depth bias (depth units), texel (m), unused
+    shadow: vec4<f32>,       // shadow map: texel (uv), depth bias (depth units), texel (m), fast shading (1: one tap)
 };
 
 // Billboard outline of one prototype (render/lod.rs, Silhouette).
@@ -63,6 +63,10 @@ fn shadow_factor(world: vec3<f32>, n: vec3<f32>) -> f32 {
     if (c.w < 0.5) {
         return 1.0;
     }
+    // frames in motion (Renderer::fast_shading): one bilinear tap
+    if (g.shadow.w > 0.5) {
+        return shadow_tap(c.xy, c.z);
+    }
     let t = g.shadow.x;
     var s = 0.0;
     for (var j = -1; j <= 1; j = j + 1) {
@@ -81,6 +85,9 @@ fn sky_visibility(world: vec3<f32>, n: vec3<f32>) -> f32 {
     let c = shadow_coord(world, n);
     if (c.w < 0.5) {
         return 1.0;
+    }
+    if (g.shadow.w > 0.5) {
+        return mix(0.45, 1.0, shadow_tap(c.xy, c.z));
     }
     let t = g.shadow.x * 6.0;
     var s = 2.0 * shadow_tap(c.xy, c.z);
