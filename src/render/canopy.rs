@@ -160,6 +160,32 @@ pub fn crown_albedo(leaf: [f32; 3], la: f32, bark: [f32; 3]) -> ([f32; 3], f32) 
     (c, cover)
 }
 
+/// Bounds of the stems of `instances` (m, those with a finite position) and the tallest
+/// finite height (m, over all of them); `None` when no position is finite.
+pub fn tree_extent(instances: &[super::scene::TreeInstance]) -> Option<([f32; 3], [f32; 3], f32)> {
+    let (lo, hi) = crate::mesh::points_bounds(instances.iter().map(|t| &t.position).filter(|p| p.iter().all(|v| v.is_finite())))?;
+    Some((lo, hi, instances.iter().map(|t| t.height).filter(|h| h.is_finite()).fold(0.0f32, f32::max)))
+}
+
+/// Height above the ground (m) at which the canopy layer's crowns take their sun visibility from
+/// the shadow map: 0.85 × the crown-area-weighted mean height of `instances` (about the sunlit
+/// upper crown of the mean tree; 0 without trees). Looked up at the ground instead, the layer
+/// would lie in the shadow of every tree drawn as geometry above it and read darker than the
+/// same crowns drawn as billboards.
+pub fn canopy_light_height(instances: &[super::scene::TreeInstance]) -> f32 {
+    let (mut a, mut ah) = (0.0f64, 0.0f64);
+    for t in instances.iter().filter(|t| t.height.is_finite() && t.height > 0.0 && t.crown_radius.is_finite()) {
+        let w = f64::from(t.crown_radius * t.crown_radius * t.opacity.clamp(0.0, 1.0));
+        a += w;
+        ah += w * f64::from(t.height);
+    }
+    if a > 0.0 {
+        (0.85 * ah / a) as f32
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -52,9 +52,9 @@ pub struct FarField {
     pub grid: CanopyGrid,
     /// The baked sums, [`CanopyGrid::splat`] of every valid tree with its full weight.
     sums: Vec<[u32; 4]>,
-    /// [`super::renderer::canopy_light_height`] of all the trees (m).
+    /// [`super::canopy::canopy_light_height`] of all the trees (m).
     pub light_height: f32,
-    /// Bounds of the trees' stems (m) and the tallest tree (m), [`super::renderer::tree_extent`].
+    /// Bounds of the trees' stems (m) and the tallest tree (m), [`super::canopy::tree_extent`].
     pub tree_bounds: Option<([f32; 3], [f32; 3], f32)>,
 }
 
@@ -112,9 +112,9 @@ impl FarField {
                     a
                 },
             );
-        let light_height = super::renderer::canopy_light_height(&trees);
+        let light_height = super::canopy::canopy_light_height(&trees);
         // plan bounds of the stems, then a counting sort by tile
-        let tree_bounds = super::renderer::tree_extent(&trees);
+        let tree_bounds = super::canopy::tree_extent(&trees);
         let (origin, nx, ny) = match tree_bounds {
             Some((a, b, _)) => ([a[0], a[1]], (((b[0] - a[0]) / TILE_M).floor() as usize + 1).min(4096), (((b[1] - a[1]) / TILE_M).floor() as usize + 1).min(4096)),
             None => ([0.0, 0.0], 1, 1),

@@ -22,6 +22,7 @@ use wgpu::util::DeviceExt;
 
 use super::camera::Camera;
 use super::farfield::FarField;
+pub use super::canopy::{canopy_light_height, tree_extent};
 use super::instanced::{build_batches_of, instance_record, level_triangles, Batches, InstanceRaw};
 use super::lod::{drawn_levels, Frustum, LodParams, Silhouette, SILHOUETTE_BINS};
 use super::scene::{Scene, TreeInstance};
@@ -1411,28 +1412,3 @@ fn same_far(a: &Option<std::sync::Arc<FarField>>, b: &Option<std::sync::Arc<FarF
     }
 }
 
-/// Bounds of the stems of `instances` (m, those with a finite position) and the tallest
-/// finite height (m, over all of them); `None` when no position is finite.
-pub fn tree_extent(instances: &[TreeInstance]) -> Option<([f32; 3], [f32; 3], f32)> {
-    let (lo, hi) = crate::mesh::points_bounds(instances.iter().map(|t| &t.position).filter(|p| p.iter().all(|v| v.is_finite())))?;
-    Some((lo, hi, instances.iter().map(|t| t.height).filter(|h| h.is_finite()).fold(0.0f32, f32::max)))
-}
-
-/// Height above the ground (m) at which the canopy layer's crowns take their sun visibility from
-/// the shadow map: 0.85 × the crown-area-weighted mean height of `instances` (about the sunlit
-/// upper crown of the mean tree; 0 without trees). Looked up at the ground instead, the layer
-/// would lie in the shadow of every tree drawn as geometry above it and read darker than the
-/// same crowns drawn as billboards.
-pub fn canopy_light_height(instances: &[TreeInstance]) -> f32 {
-    let (mut a, mut ah) = (0.0f64, 0.0f64);
-    for t in instances.iter().filter(|t| t.height.is_finite() && t.height > 0.0 && t.crown_radius.is_finite()) {
-        let w = f64::from(t.crown_radius * t.crown_radius * t.opacity.clamp(0.0, 1.0));
-        a += w;
-        ah += w * f64::from(t.height);
-    }
-    if a > 0.0 {
-        (0.85 * ah / a) as f32
-    } else {
-        0.0
-    }
-}
