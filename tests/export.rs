@@ -393,6 +393,15 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--area", "20,15,45", "--out"]).arg(&cli).output().unwrap();
     assert!(!st.status.success());
     assert!(String::from_utf8_lossy(&st.stderr).contains("four numbers"), "{}", String::from_utf8_lossy(&st.stderr));
+    // a refused export leaves no folder it made for --out; --instances takes no strand options
+    let deep = dir.path().join("new").join("deeper").join("x.glb");
+    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--year", "7", "--area", "20,15,45,45", "--out"]).arg(&deep).output().unwrap();
+    assert!(!st.status.success() && String::from_utf8_lossy(&st.stderr).contains("year 7"), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(!dir.path().join("new").exists());
+    for extra in [&["--max-strands", "100"][..], &["--full-detail"][..]] {
+        let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).arg("--instances").args(extra).arg("--out").arg(dir.path().join("i.glb")).output().unwrap();
+        assert!(!st.status.success() && String::from_utf8_lossy(&st.stderr).contains("cannot be used with"), "{extra:?}: {}", String::from_utf8_lossy(&st.stderr));
+    }
 }
 
 #[test]

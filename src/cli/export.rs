@@ -34,19 +34,25 @@ pub struct Args {
     #[arg(long, default_value = "0")]
     pub lod: String,
     /// Write the export's figures as JSON (trees, trees_15m, nodes_median and nodes_min over
-    /// the trees of 15 m and taller, leaf_cards, adapt_s, triangles, levels). Its folder must
-    /// exist.
+    /// the trees of 15 m and taller, leaf_cards, adapt_s, triangles, levels; for a stand
+    /// export also analysis_s and adaptation_s (the two parts of adapt_s), analyses (distinct
+    /// Plastic Trees analyses: one per class of species, 5-year age, 5 % height and crown
+    /// radius and crown base, of the exported trees and of their neighbours within the halo),
+    /// nodes_total and nodes_before_adaptation (all exported trees), pruned_light and
+    /// pruned_collision (nodes the adaptation removed)). Its folder must exist.
     #[arg(long)]
     pub stats: Option<PathBuf>,
-    /// Most EcoMod strands of a tree's skeleton in a stand export (2 nodes a strand; at least
-    /// 8; default 48): more gives finer branching and larger files (BENCHMARKS.md).
-    #[arg(long, conflicts_with = "full_detail")]
+    /// Most EcoMod strands of the open-grown skeleton of a stand export's trees (at least 8;
+    /// default 48), which is then shed below the simulated crown base, so a tree keeps far fewer
+    /// nodes than 2 a strand (48 strands: about 25–60 nodes). Only `--full-detail` grows each
+    /// tree as a forest tree with every strand in its crown.
+    #[arg(long, conflicts_with_all = ["full_detail", "instances"])]
     pub max_strands: Option<u32>,
     /// Every tree of a stand export with its species' strand count at its age, as `sylva tree
     /// grow` gives it (hundreds to thousands of nodes a canopy tree): slower and larger files;
     /// Plastic Trees then prunes the branches the neighbours shade, so crowns are more open
     /// than with the default spread leaf cards.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "instances")]
     pub full_detail: bool,
     /// Folder of extra or edited species files, over the shipped library and the run's own
     /// `species/` folder.
@@ -69,9 +75,20 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         super::check_stats_path(p)?;
         anyhow::ensure!(p != &a.out, "--stats {}: the same file as --out; give the statistics their own file (e.g. stats.json)", p.display());
     }
+    // the folders made for the output (from the topmost missing one) are removed again when
+    // the export is refused: nothing is left behind
+    let made = a.out.ancestors().skip(1).filter(|d| !d.as_os_str().is_empty() && !d.exists()).last().map(|d| d.to_path_buf());
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
+    let r = export(&a, area, levels);
+    if let (Err(_), Some(dir)) = (&r, &made) {
+        let _ = std::fs::remove_dir_all(dir);
+    }
+    r
+}
+
+fn export(a: &Args, area: Option<[f64; 4]>, levels: Vec<usize>) -> anyhow::Result<()> {
     let lib = super::simulate::run_library(&a.run_dir, a.species_dir.as_deref())?;
     let r = if a.instances {
         let o = sylva::job::export::InstanceOptions { year: a.year, area, season: a.season, levels };

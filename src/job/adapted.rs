@@ -45,7 +45,11 @@ pub struct AdaptOptions {
     pub full_px: f32,
     /// Most trees adapted at full detail (the largest on screen first; the others of
     /// [`AdaptOptions::full_px`] get at most [`FAR_MAX_STRANDS`]): the adaptation's time grows
-    /// with the nodes (BENCHMARKS.md round 17).
+    /// with the nodes (BENCHMARKS.md round 17). Default 0: adapted among their neighbours,
+    /// full-detail trees of light-demanding species (silver birch, Scots pine) lose every leafy
+    /// branch to Plastic Trees' light pruning and stand bare in a summer close-up (round 17
+    /// trial), so the stills keep the 48-strand trees until the pruning respects the simulated
+    /// crown.
     pub max_full_trees: usize,
 }
 
@@ -56,10 +60,10 @@ pub const FAR_MAX_STRANDS: u32 = 48;
 
 impl Default for AdaptOptions {
     /// 80 m, 400 trees, cells of 12 m with a halo of 6 m, a picture 1,080 px tall, full detail
-    /// from 180 px for at most 100 trees.
+    /// from 180 px but for no tree ([`AdaptOptions::max_full_trees`]).
     fn default() -> Self {
         let lod = crate::render::lod::LodParams::default();
-        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0, image_height_px: 1080.0, full_px: lod.switch_px[0] * (1.0 - lod.band), max_full_trees: 100 }
+        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0, image_height_px: 1080.0, full_px: lod.switch_px[0] * (1.0 - lod.band), max_full_trees: 0 }
     }
 }
 
