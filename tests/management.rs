@@ -566,6 +566,18 @@ fn silent_failures_are_refused_or_warned() {
     let warn = sylva::sim::management::warnings(&w.site.management, sc.years, "patches.toml");
     assert_eq!(warn.len(), 1, "{warn:?}");
     assert!(warn[0].contains("management[0]") && warn[0].contains("16 squares") && warn[0].contains("after 2 entries (year 10)") && warn[0].contains("2 later entries"), "{warn:?}");
+    // crop trees that round to none, and shelterwood stages after a full cut: warned (a trial
+    // found both silent)
+    let none = format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"crop_trees\"\ncrop_trees_ha = 1\nyear = 5\narea = [0.0, 0.0, 10.0, 10.0]\n[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nstages = [{{ year = 6, share = 1.0 }}, {{ year = 8, share = 0.5 }}]\n");
+    let sc = Scenario::from_toml_str(&none, "none.toml").unwrap();
+    let w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    let warn = sylva::sim::management::warnings(&w.site.management, sc.years, "none.toml");
+    assert_eq!(warn.len(), 2, "{warn:?}");
+    assert!(warn[0].contains("management[0]") && warn[0].contains("less than one crop tree"), "{warn:?}");
+    assert!(warn[1].contains("management[1].stages[0]") && warn[1].contains("1 later stages find nothing"), "{warn:?}");
+    // a field of another kind names the kind and method it belongs to, quoted once
+    let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\ncrop_tree_distance_m = 5.0\nyear = 3\n"));
+    assert!(e.contains("management[0].crop_tree_distance_m") && e.contains("(only with kind = \"thinning\", method = \"crop_trees\")"), "{e}");
     // (b) a year-0 anomaly: refused naming the file and line
     let a = d.path().join("anomalies.csv");
     std::fs::write(&a, "year,temperature_k\n0,1.5\n1,0.5\n").unwrap();

@@ -176,7 +176,7 @@ impl Management {
         let refuse = |list: &[(&str, bool)], kind: &str| -> Result<()> {
             for (f, g) in list {
                 if *g {
-                    return Err(bad(f, "given".into(), &format!("not with kind = \"{}\" (only with kind = \"{kind}\")", self.kind)));
+                    return Err(bad(f, "given".into(), &format!("not with kind = \"{}\" (only with {kind})", self.kind)));
                 }
             }
             Ok(())
@@ -184,11 +184,11 @@ impl Management {
         let method = self.method.as_deref();
         match self.kind.as_str() {
             "thinning" => {
-                refuse(&harvest_only, "harvest")?;
-                refuse(&planting_only, "planting")?;
+                refuse(&harvest_only, "kind = \"harvest\"")?;
+                refuse(&planting_only, "kind = \"planting\"")?;
                 const METHODS: &str = "\"from_below\", \"from_above\" or \"crop_trees\"";
                 match method {
-                    Some("from_below" | "from_above") => refuse(&crop_only, "thinning, method = \"crop_trees\"")?,
+                    Some("from_below" | "from_above") => refuse(&crop_only, "kind = \"thinning\", method = \"crop_trees\"")?,
                     Some("crop_trees") => {
                         let n = self.crop_trees_ha.ok_or_else(|| bad("crop_trees_ha", "(missing)".into(), "the crop trees per hectare, 1–1000"))?;
                         if !(n.is_finite() && (1.0..=1000.0).contains(&n)) {
@@ -226,14 +226,14 @@ impl Management {
                 }
             }
             "harvest" => {
-                refuse(&thinning_only, "thinning")?;
-                refuse(&planting_only, "planting")?;
-                refuse(&crop_only, "thinning, method = \"crop_trees\"")?;
+                refuse(&thinning_only, "kind = \"thinning\"")?;
+                refuse(&planting_only, "kind = \"planting\"")?;
+                refuse(&crop_only, "kind = \"thinning\", method = \"crop_trees\"")?;
                 const METHODS: &str = "\"clear_cut\", \"patch\" or \"shelterwood\"";
                 match method {
-                    Some("clear_cut") => refuse(&harvest_only, "harvest, method = \"patch\" or \"shelterwood\"")?,
+                    Some("clear_cut") => refuse(&harvest_only, "kind = \"harvest\", method = \"patch\" or \"shelterwood\"")?,
                     Some("shelterwood") => {
-                        refuse(&harvest_only[..2], "harvest, method = \"patch\"")?;
+                        refuse(&harvest_only[..2], "kind = \"harvest\", method = \"patch\"")?;
                         let st = self.stages.as_ref().ok_or_else(|| bad("stages", "(missing)".into(), "the stages, e.g. stages = [{ year = 100, share = 0.5 }, { year = 110, share = 0.5 }, { year = 120, share = 1.0 }]"))?;
                         if st.is_empty() {
                             return Err(bad("stages", "[]".into(), "at least one stage { year = Y, share = S }"));
@@ -251,7 +251,7 @@ impl Management {
                         }
                     }
                     Some("patch") => {
-                        refuse(&harvest_only[2..], "harvest, method = \"shelterwood\"")?;
+                        refuse(&harvest_only[2..], "kind = \"harvest\", method = \"shelterwood\"")?;
                         let s = self.patch_size_m.ok_or_else(|| bad("patch_size_m", "(missing)".into(), "the side of the square patches, 5–1000 m"))?;
                         if !(s.is_finite() && (5.0..=1000.0).contains(&s)) {
                             return Err(bad("patch_size_m", s.to_string(), "5–1000 m"));
@@ -266,9 +266,9 @@ impl Management {
                 }
             }
             "planting" => {
-                refuse(&thinning_only, "thinning")?;
-                refuse(&harvest_only, "harvest")?;
-                refuse(&crop_only, "thinning, method = \"crop_trees\"")?;
+                refuse(&thinning_only, "kind = \"thinning\"")?;
+                refuse(&harvest_only, "kind = \"harvest\"")?;
+                refuse(&crop_only, "kind = \"thinning\", method = \"crop_trees\"")?;
                 if let Some(m) = method {
                     return Err(bad("method", format!("{m:?}"), "no method for a planting"));
                 }
@@ -824,6 +824,17 @@ pub fn warnings(ops: &[Operation], last_year: u32, ctx: &str) -> Vec<String> {
     for op in ops {
         for (f, y) in op.spec.years_beyond(last_year) {
             out.push(format!("{ctx}: management[{}].{f} = {y} lies beyond the run's last year {last_year}: the entry does not act in that year", op.index));
+        }
+        // found by a trial: these entries acted on nothing and said nothing
+        if let Action::CropTrees { n_ha, .. } = op.action {
+            if (n_ha * op.region.area_ha).round() < 1.0 {
+                out.push(format!("{ctx}: management[{}]: {n_ha} crop trees per hectare on {:.4} ha is less than one crop tree: the entry releases none (a larger area or more crop trees per hectare)", op.index, op.region.area_ha));
+            }
+        }
+        if let Action::Shelterwood { shares } = &op.action {
+            if let Some(k) = shares.iter().position(|&s| s >= 1.0).filter(|&k| k + 1 < shares.len()) {
+                out.push(format!("{ctx}: management[{}].stages[{k}] removes the whole overstorey (share 1): the {} later stages find nothing to cut", op.index, shares.len() - k - 1));
+            }
         }
         if let Action::Patch { size_m, share } = op.action {
             let n = patch_squares(&op.region, size_m).2.len();
