@@ -226,6 +226,15 @@ fn tiled_runs_refuse_management() {
     let e = sylva::sim::tiles::Layout::new(&w.site, 2, 1).unwrap_err().to_string();
     assert!(e.contains("management") && e.contains("one process"), "{e}");
     assert!(sylva::sim::tiles::Layout::new(&w.site, 1, 1).is_ok());
+    // the main job refuses it before writing anything, naming the scenario (a trial found
+    // `species/` left behind and no file named)
+    let sc = Scenario::from_toml_str(&busy(3), "busy.toml").unwrap();
+    let d = tempfile::tempdir().unwrap();
+    let out = d.path().join("out");
+    let r = sylva::job::main_job::simulate(&sc, sc.site().unwrap(), &common::embedded(), sylva::job::main_job::SimulateOptions::new(&out), sylva::job::main_job::Stepping::Local(2), None, &mut |_| {});
+    let e = format!("{:#}", anyhow::Error::from(r.unwrap_err()));
+    assert!(e.contains("busy.toml") && e.contains("management") && e.contains("one process"), "{e}");
+    assert!(!out.join("species").exists());
 }
 
 fn err(toml: &str) -> String {
