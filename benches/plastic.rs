@@ -127,7 +127,7 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     for i in 0..extra {
         m.adapt(&env_with(&[if i % 2 == 0 { wall } else { moved }])).expect("adapt");
     }
-    println!("{} nodes: analysis {:.1} ms, adapt {:.1} ms CPU, {wall_ms:.1} ms wall ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
+    println!("{} nodes, {} seasons: analysis {:.1} ms, adapt {:.1} ms CPU, {wall_ms:.1} ms wall ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), tree.analysis().seasons, t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
 }
 
 fn main() {

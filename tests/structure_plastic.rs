@@ -502,3 +502,22 @@ fn leaf_cluster_density_follows_eq12() {
     assert_eq!(dens.len(), t.skeleton().len());
     assert!(dens.iter().all(|d| d.is_finite() && *d >= 0.0));
 }
+
+/// Eq. (2) read as section 4.1 defines the growth rate (internodes per season, the slowest
+/// branch one): the seasons reconstructed from light-guided trees (Yi et al., the paper
+/// parameters, as `benches/plastic.rs` grows them) are their growth cycles within one, for
+/// trees of 6 to 14 cycles (the reading of rounds 1–17, one internode per season on the
+/// fastest axis, gave about four seasons per cycle: 30, 44 and 55 for 8, 11 and 14 cycles).
+#[test]
+fn seasons_of_light_guided_trees_are_their_growth_cycles() {
+    use sylva::structure::grow::light_guided::{self, LightOptions};
+    let lp = sylva::structure::params::light_guided_paper();
+    let lo = LightOptions { extent_m: 12.0, height_m: 22.0, ..LightOptions::default() };
+    let p = tree1(&beech());
+    for (cycles, seed) in [(6u32, 2u64), (8, 5), (11, 4), (14, 5)] {
+        let sk = light_guided::grow(&lp, &lo, &[], seed, cycles).expect("grow");
+        let t = PlasticTree::analyse(&sk, &p, &Environment::default(), None).expect("analyse");
+        let seasons = t.analysis().seasons as i64;
+        assert!((seasons - cycles as i64).abs() <= 1, "{cycles} cycles (seed {seed}, {} nodes): {seasons} seasons", sk.len());
+    }
+}

@@ -252,18 +252,28 @@ pub fn growth_rates(sk: &Skeleton) -> Vec<f32> {
     nu
 }
 
-/// Seasons of creation by eq. (2), t_s = t_{s_p} + (l_s/l_i)·(1/ν̂_s), rounded down (root 0),
-/// clamped to [`MAX_SEASONS`]. Our reading of eq. (2): the paper prints the factor as
-/// ν_s = ν̂_s/ν̂_min, but eq. (1) is defined so that "all branches reach their leaf nodes at the
-/// same time", which holds when a branch growing ν̂_s times as fast as the fastest axis needs
-/// 1/ν̂_s seasons per internode; with that factor every tip ends near season d_r/l_i.
+/// Seasons of creation by eq. (2), t_s = t_{s_p} + (l_s/l_i)/ν_s with ν_s = ν̂_s/ν̂_min,
+/// rounded down (root 0), clamped to [`MAX_SEASONS`]; ν̂_min is the smallest relative growth
+/// rate of eq. (1) over the tree.
+///
+/// Our reading of eq. (2): section 4.1 defines a branch's growth rate as "how many internodes a
+/// given branch produces in one season" and normalises it to ν_s = ν̂_s/ν̂_min, so the slowest
+/// branch grows one internode per season and a branch growing ν_s internodes per season needs
+/// 1/ν_s seasons per internode (the printed product (l_s/l_i)·ν_s would give the fastest axis
+/// the most seasons, against eq. (1)'s "all branches reach their leaf nodes at the same time").
+/// Every tip then ends near season ν̂_min·d_r/l_i. Measured on the light-guided bench trees
+/// (`benches/plastic.rs`) grown 8, 11 and 14 cycles: 8, 12 and 15 seasons (rounds 1–17 divided
+/// by ν̂_s alone, one internode per season on the fastest axis, which gave them 30, 44 and 55
+/// seasons: four levels per year of growth). Test:
+/// `seasons_of_light_guided_trees_are_their_growth_cycles`.
 pub fn seasons(sk: &Skeleton, internode_m: f32, rates: &[f32]) -> Vec<u16> {
     let n = sk.nodes.len();
     let mut t = vec![0.0f32; n];
     let mut out = vec![0u16; n];
+    let nu_min = rates.iter().skip(1).copied().fold(1.0f32, f32::min).max(1e-3);
     for k in 1..n {
         let p = sk.nodes[k].parent.unwrap_or(0) as usize;
-        t[k] = t[p] + sk.segment_length(k) / internode_m / rates[k].max(1e-3);
+        t[k] = t[p] + sk.segment_length(k) / internode_m * nu_min / rates[k].max(1e-3);
         out[k] = (t[k].floor().max(0.0) as u32).min(MAX_SEASONS as u32) as u16;
     }
     out

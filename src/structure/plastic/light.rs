@@ -283,16 +283,39 @@ struct DirGrid {
     cell: f32,
     nx: usize,
     ny: usize,
+    /// First block of every cell (cells in row order), and the end of the last.
     start: Vec<u32>,
-    /// The casters of every cell, cells in row order and each cell's casters in occluder order
-    /// (so the product of eq. 4 is taken in the same order whatever the grid).
-    cas: Casters,
+    /// The casters of every cell in blocks of [`LANES`], each cell's casters in descending depth
+    /// along `d` (ties in occluder order), so a query stops at the first block behind it and
+    /// the product of eq. 4 is taken in the same order whatever the grid; runs padded with
+    /// casters that never hit.
+    blocks: Vec<Block>,
+    /// Transmittance of every slot of `blocks` (read only for the hits).
+    gamma: Vec<[f32; LANES]>,
+    /// Owner of every slot of `blocks`; empty when the occluders are not tagged.
+    owner: Vec<[u32; LANES]>,
 }
+
+/// [`LANES`] casters of a grid cell in the coordinates of its direction's grid: `u`, `v` on
+/// the plane ⟂ d and `w` along d (m; centre · axis), and the squared radius (m²). One block
+/// is two cache lines; a padding slot has `r2` −1 (never hit) and `w` −∞ (behind every
+/// receiver).
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct Block {
+    u: [f32; LANES],
+    v: [f32; LANES],
+    w: [f32; LANES],
+    r2: [f32; LANES],
+}
+
+const PAD_BLOCK: Block = Block { u: [0.0; LANES], v: [0.0; LANES], w: [f32::NEG_INFINITY; LANES], r2: [-1.0; LANES] };
 
 /// Casters copied inline as structure-of-arrays (centre x, y, z (m), squared radius (m²),
 /// transmittance, owner) so a query reads contiguous runs and tests [`LANES`] casters at a
 /// time; runs are padded to whole blocks of [`LANES`] with casters that never hit (squared
-/// radius −1: `l2 − along² ≤ −1` is false; transmittance 1; owner `u32::MAX`).
+/// radius −1: `l2 − along² ≤ −1` is false; transmittance 1; owner `u32::MAX`). Used for the
+/// few occluders scanned whole ([`SCAN_MAX`]); grids hold [`Block`]s.
 #[derive(Debug, Clone, Default)]
 struct Casters {
     x: Vec<f32>,
@@ -317,7 +340,7 @@ impl DirGrid {
     fn new(d: Vec3, occ: &[Occluder], owners: &[u32]) -> DirGrid {
         let (u, v) = d.any_orthonormal_pair();
         if occ.is_empty() {
-            return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], cas: Casters::default() };
+            return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], blocks: Vec::new(), gamma: Vec::new(), owner: Vec::new() };
         }
         let proj: Vec<Vec2> = occ.iter().map(|o| Vec2::new(o.center.dot(u), o.center.dot(v))).collect();
         let mut lo = Vec2::splat(f32::INFINITY);
@@ -356,50 +379,110 @@ impl DirGrid {
                 }
             }
         }
-        // every cell's run padded to whole blocks of LANES with casters that never hit
-        // (squared radius −1: `l2 − along² ≤ −1` is false; transmittance 1)
+        // slot offsets: every cell's run padded to whole blocks
         for i in 1..count.len() {
             count[i] = count[i - 1] + count[i].div_ceil(LANES as u32) * LANES as u32;
         }
         let mut fill = count.clone();
-        let len = count[nx * ny] as usize;
-        let (mut ix, mut iy, mut iz, mut ir2, mut ig) = (vec![0.0; len], vec![0.0; len], vec![0.0; len], vec![-1.0; len], vec![1.0; len]);
+        let len = count[nx * ny] as usize / LANES;
+        let mut blocks = vec![PAD_BLOCK; len];
+        let mut gamma = vec![[1.0f32; LANES]; len];
         let tagged = owners.len() == occ.len();
-        let mut iow = if tagged { vec![u32::MAX; len] } else { Vec::new() };
-        for (j, (&[x0, x1, y0, y1], o)) in ranges.iter().zip(occ).enumerate() {
+        let mut owner = if tagged { vec![[u32::MAX; LANES]; len] } else { Vec::new() };
+        // each cell's casters in descending depth along d (farthest ahead of any receiver first;
+        // ties in occluder order), so a query can stop at the first block that lies behind it
+        let depth: Vec<f32> = occ.iter().map(|o| o.center.dot(d)).collect();
+        let mut order: Vec<u32> = (0..occ.len() as u32).collect();
+        order.sort_unstable_by(|&a, &b| depth[b as usize].total_cmp(&depth[a as usize]).then(a.cmp(&b)));
+        for &j in &order {
+            let j = j as usize;
+            let ([x0, x1, y0, y1], o) = (ranges[j], &occ[j]);
             let r2 = o.radius * o.radius;
             for y in y0 as usize..=y1 as usize {
                 for x in x0 as usize..=x1 as usize {
                     let c = y * nx + x;
                     let f = fill[c] as usize;
-                    (ix[f], iy[f], iz[f], ir2[f], ig[f]) = (o.center.x, o.center.y, o.center.z, r2, o.gamma);
+                    let (bi, l) = (f / LANES, f % LANES);
+                    let b = &mut blocks[bi];
+                    (b.u[l], b.v[l], b.w[l], b.r2[l]) = (proj[j].x, proj[j].y, depth[j], r2);
+                    gamma[bi][l] = o.gamma;
                     if tagged {
-                        iow[f] = owners[j];
+                        owner[bi][l] = owners[j];
                     }
                     fill[c] += 1;
                 }
             }
         }
-        DirGrid { d, u, v, lo, cell, nx, ny, start: count, cas: Casters { x: ix, y: iy, z: iz, r2: ir2, gamma: ig, owner: iow } }
+        for c in &mut count {
+            *c /= LANES as u32;
+        }
+        DirGrid { d, u, v, lo, cell, nx, ny, start: count, blocks, gamma, owner }
     }
 
-    /// Item range of the cell containing the projection of `p` (empty outside the grid).
-    fn candidates(&self, p: Vec3) -> std::ops::Range<usize> {
+    /// Π γ of the casters hit by the ray from `p` along the grid's direction (the ray passes
+    /// through a caster's sphere ahead of `p`, and `p` is outside it: in the grid's coordinates,
+    /// along = w − p·d > 0, lateral² = Δu² + Δv² ≤ r², lateral² + along² > r²), multiplied in
+    /// the cell's depth order, leaving out `skip`'s casters; `None` as soon as the product falls
+    /// below `stop`. Scans the blocks of the cell of `p` and stops after the first block whose
+    /// last caster lies more than [`DEPTH_SLACK`] behind `p` (every later caster is further
+    /// behind; none can be hit).
+    #[inline]
+    fn product(&self, p: Vec3, stop: f32, skip: Option<u32>) -> Option<f32> {
         if self.nx == 0 {
-            return 0..0;
+            return Some(1.0);
         }
-        let q = (Vec2::new(p.dot(self.u), p.dot(self.v)) - self.lo) / self.cell;
+        let (pu, pv) = (p.dot(self.u), p.dot(self.v));
+        let q = (Vec2::new(pu, pv) - self.lo) / self.cell;
         if q.x < 0.0 || q.y < 0.0 {
-            return 0..0;
+            return Some(1.0);
         }
         let (x, y) = (q.x as usize, q.y as usize);
         if x >= self.nx || y >= self.ny {
-            return 0..0;
+            return Some(1.0);
         }
         let c = y * self.nx + x;
-        self.start[c] as usize..self.start[c + 1] as usize
+        let pw = p.dot(self.d);
+        let mut t = 1.0f32;
+        for bi in self.start[c] as usize..self.start[c + 1] as usize {
+            let b = &self.blocks[bi];
+            let mut hit = [false; LANES];
+            for k in 0..LANES {
+                let (du, dv, along) = (b.u[k] - pu, b.v[k] - pv, b.w[k] - pw);
+                let lat2 = du * du + dv * dv;
+                hit[k] = (along > 0.0) & (lat2 <= b.r2[k]) & (lat2 + along * along > b.r2[k]);
+            }
+            if let Some(own) = skip {
+                let os = &self.owner[bi];
+                for k in 0..LANES {
+                    hit[k] &= os[k] != own;
+                }
+            }
+            if hit.iter().fold(false, |a, &h| a | h) {
+                // branch-free: a caster missed multiplies by exactly 1, so the product is the
+                // hits' product in slot order, bit for bit
+                let gs = &self.gamma[bi];
+                let mut m = [1.0f32; LANES];
+                for k in 0..LANES {
+                    m[k] = if hit[k] { gs[k] } else { 1.0 };
+                }
+                for mk in m {
+                    t *= mk;
+                }
+                if t < stop {
+                    return None;
+                }
+            }
+            if b.w[LANES - 1] - pw < -DEPTH_SLACK {
+                break;
+            }
+        }
+        Some(t)
     }
 }
+
+/// Distance (m) behind a query point beyond which a depth-sorted scan stops: far above the
+/// rounding of the along-ray distances (metres at f32), so no caster ahead is ever skipped.
+const DEPTH_SLACK: f32 = 1e-3;
 
 impl Casters {
     /// Every occluder of `occ` in order, tagged with `owners` when it holds one per occluder,
@@ -451,10 +534,9 @@ impl Casters {
         }
         // most blocks hit nothing: one test of the whole block, then the hits in order
         if hit.iter().fold(false, |a, &h| a | h) {
+            // branch-free: a caster missed multiplies by exactly 1 (the hits' product, in order)
             for k in 0..LANES {
-                if hit[k] {
-                    t *= gs[k];
-                }
+                t *= if hit[k] { gs[k] } else { 1.0 };
             }
         }
         t
@@ -552,10 +634,7 @@ impl ShadowVolumes {
     fn product_until_except(&self, k: usize, p: Vec3, stop: f32, skip: Option<u32>) -> Option<f32> {
         match &self.flat {
             Some(c) => c.product_until(self.dirs[k], 0..c.x.len(), p, stop, skip),
-            None => {
-                let g = self.grid(k);
-                g.cas.product_until(g.d, g.candidates(p), p, stop, skip)
-            }
+            None => self.grid(k).product(p, stop, skip),
         }
     }
 }
@@ -858,7 +937,8 @@ mod tests {
     }
 
     /// The grid path (lazy grids, padded blocks) against the product over every occluder in
-    /// occluder order, and `light_many` against `light_at`: equal bit for bit.
+    /// occluder order (the grids: in their depth order and coordinates), and `light_many`
+    /// against `light_at`: equal bit for bit.
     #[test]
     fn grid_products_equal_the_plain_product() {
         // 300 occluders: the grid path; 40: the whole run scanned (SCAN_MAX)
@@ -885,12 +965,28 @@ mod tests {
             let p = Vec3::new((f * 0.43).cos() * 3.5, (f * 0.61).sin() * 3.5, 1.0 + (f * 0.17).sin().abs() * 6.0);
             for (k, &d) in sky.dirs.iter().enumerate() {
                 let mut t = 1.0f32;
-                for o in &occ {
-                    let oc = o.center - p;
-                    let along = oc.dot(d);
-                    let l2 = oc.length_squared();
-                    if along > 0.0 && l2 > o.radius * o.radius && l2 - along * along <= o.radius * o.radius {
-                        t *= o.gamma;
+                if n > SCAN_MAX {
+                    // the grid's order and arithmetic: descending depth along d (ties in
+                    // occluder order), coordinates on the plane ⟂ d and along d
+                    let (u, v) = d.any_orthonormal_pair();
+                    let mut order: Vec<usize> = (0..n).collect();
+                    order.sort_by(|&a, &b| occ[b].center.dot(d).total_cmp(&occ[a].center.dot(d)).then(a.cmp(&b)));
+                    for &j in &order {
+                        let o = &occ[j];
+                        let (du, dv, along) = (o.center.dot(u) - p.dot(u), o.center.dot(v) - p.dot(v), o.center.dot(d) - p.dot(d));
+                        let (lat2, r2) = (du * du + dv * dv, o.radius * o.radius);
+                        if along > 0.0 && lat2 <= r2 && lat2 + along * along > r2 {
+                            t *= o.gamma;
+                        }
+                    }
+                } else {
+                    for o in &occ {
+                        let oc = o.center - p;
+                        let along = oc.dot(d);
+                        let l2 = oc.length_squared();
+                        if along > 0.0 && l2 > o.radius * o.radius && l2 - along * along <= o.radius * o.radius {
+                            t *= o.gamma;
+                        }
                     }
                 }
                 let plain = if t < 1e-4 { 0.0 } else { t };

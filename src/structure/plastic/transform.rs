@@ -521,22 +521,34 @@ struct Work {
 }
 
 /// Places the nodes created in season `s` where they stand before the level bends them: a node
-/// to be recomputed follows its parent's current rotation rigidly (its own turn is what the
-/// level computes), a node kept follows its parent's displacement with its own rotation. So the
-/// stage's clusters cast their shadows from the stage tree as adapted so far, not from where the
+/// that may be recomputed (its own signature changed, or its chain down from the older wood
+/// holds such a node or starts at an older node that moved) continues the older wood rigidly:
+/// it takes the rotation of its nearest ancestor of an earlier season (its own turn is what the
+/// level computes); a node kept follows its parent with its own rotation. So the stage's
+/// clusters cast their shadows from the stage tree as adapted so far, not from where the
 /// previous call left the young nodes (with that, an adaptation back to the environment of the
-/// analysis restores the input exactly).
+/// analysis restores the input: a season holds several internodes along a shoot, and their
+/// same-season parents are not bent yet when the level's shadows are built).
 fn preposition(t: &mut PlasticTree, s: usize, w: &Work) {
-    for k in 1..t.input.nodes.len() {
+    let n = t.input.nodes.len();
+    // per node of the season: (may be recomputed, rotation carried down the season's chain)
+    let mut carry: Vec<(bool, Quat)> = vec![(false, Quat::IDENTITY); n];
+    for k in 1..n {
         if t.analysis.season[k] as usize != s {
             continue;
         }
         let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
+        let same = par != 0 && t.analysis.season[par] as usize == s;
+        let (rec_par, q_par) = if same { carry[par] } else { (w.moved[par], t.rot[par]) };
         let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
-        if w.own[k] || w.moved[par] {
-            t.pos[k] = t.pos[par] + t.rot[par] * seg;
-        } else if w.shifted[par] {
-            t.pos[k] = t.pos[par] + t.rot[k] * seg;
+        if w.own[k] || rec_par {
+            t.pos[k] = t.pos[par] + q_par * seg;
+            carry[k] = (true, q_par);
+        } else {
+            if same || w.shifted[par] {
+                t.pos[k] = t.pos[par] + t.rot[k] * seg;
+            }
+            carry[k] = (false, t.rot[k]);
         }
     }
 }
