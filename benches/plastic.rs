@@ -130,6 +130,60 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     println!("{} nodes, {} seasons: analysis {:.1} ms, adapt {:.1} ms CPU, {wall_ms:.1} ms wall ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), tree.analysis().seasons, t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
 }
 
+/// Issue 31, Build 3 (the paper's ecosystem demo ran at 5 fps): 50 trees of the ≈ 2,500-node
+/// bench skeleton (five turns of it about the vertical, analysed once each) on a 10 × 5 lattice
+/// 1.5 crown radii apart, adapted together (`adapt_group`) beside a wall 20 cm thick, as long as
+/// the stand is deep and 1.2 times the trees' height, standing between the 5th and 6th columns;
+/// then the wall moved 10 cm per step for 10 steps, each step re-adapted. Prints wall-clock
+/// times (the goal is steps per second on the machine's cores) and the stand's fingerprint.
+fn stand_case(sk: &Skeleton, p: &sylva::species::PlasticParams, prints: &mut Vec<String>) {
+    let (lo_b, hi_b) = sk.bounds().expect("nodes");
+    let r = 0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y);
+    let h = hi_b.z - lo_b.z;
+    let root = sk.nodes[0].pos;
+    let variants: Vec<PlasticTree> = (0..5)
+        .map(|i| {
+            let q = glam::Quat::from_rotation_z(i as f32 * std::f32::consts::TAU / 5.0);
+            let mut turned = sk.clone();
+            for n in &mut turned.nodes {
+                n.pos = root + q * (n.pos - root);
+            }
+            PlasticTree::analyse(&turned, p, &env_with(&[]), None).expect("analyse")
+        })
+        .collect();
+    let s = 1.5 * r;
+    let mut trees = Vec::new();
+    for c in 0..10 {
+        for row in 0..5 {
+            let mut t = variants[(c * 3 + row) % 5].clone();
+            t.translate(Vec3::new(c as f32 * s, (row as f32 - 2.0) * s, 0.0) - root);
+            trees.push(t);
+        }
+    }
+    let wall_at = |x: f32| Obstacle::OrientedBox { center: Vec3::new(x, 0.0, 0.6 * h), half: Vec3::new(0.1, 3.0 * s, 0.6 * h), yaw_deg: 0.0 };
+    let x0 = 4.5 * s;
+    let t0 = std::time::Instant::now();
+    let first = adapt_group(&mut trees, &env_with(&[wall_at(x0)])).expect("stand");
+    let first_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let steps = 10;
+    let mut rec = 0;
+    let t1 = std::time::Instant::now();
+    for i in 1..=steps {
+        rec += adapt_group(&mut trees, &env_with(&[wall_at(x0 + 0.1 * i as f32)])).expect("stand").recomputed_nodes;
+    }
+    let steps_ms = t1.elapsed().as_secs_f64() * 1e3;
+    let nodes: usize = trees.iter().map(|t| t.positions().len()).sum();
+    println!(
+        "\nstand of 50 {}-node trees ({nodes} nodes, 10 × 5 at {s:.2} m), a wall through it moved 10 cm per step: first adaptation {first_ms:.0} ms ({} nodes recomputed); {steps} steps {steps_ms:.0} ms = {:.1} steps/s ({} nodes recomputed per step; wall-clock, threads: {})",
+        sk.len(),
+        first.recomputed_nodes,
+        steps as f64 / (steps_ms * 1e-3),
+        rec / steps,
+        rayon::current_num_threads()
+    );
+    prints.push(format!("stand: {:016x}", fingerprint(&trees)));
+}
+
 fn main() {
     let lib = SpeciesLibrary::embedded().expect("embedded species");
     let sp = &lib.species[lib.find("beech").expect("beech") as usize];
@@ -209,7 +263,7 @@ fn main() {
             mid = Some(sk.clone());
         }
     }
-    if let Some(sk) = mid {
+    if let Some(sk) = &mid {
         let (lo_b, hi_b) = sk.bounds().expect("nodes");
         let r = 0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y);
         let a = PlasticTree::analyse(&sk, &p, &env_with(&[]), None).expect("analyse");
@@ -225,6 +279,7 @@ fn main() {
         });
         prints.push(format!("two trees: {:016x}", fingerprint(&last)));
         println!("\ntwo {}-node trees {:.2} m apart (1.5 crown radii) adapted together: {ms:.2} ms ({rec} nodes recomputed)", sk.len(), 1.5 * r);
+        stand_case(sk, &p, &mut prints);
     }
     println!("\nresult fingerprints (FNV-1a of positions, bend angles, fates): {}", prints.join("; "));
 }

@@ -266,11 +266,19 @@ pub struct ShadowVolumes {
     /// [`SCAN_MAX`] of them (then no grid is built: for a few casters, building up to 32 grids
     /// costs more than the queries they save).
     flat: Option<Casters>,
+    /// Region (min, max corners, m) holding the query points, when known
+    /// ([`ShadowVolumes::within`]): the grids then hold only the casters that can shade a point
+    /// of it; a query outside it uses `full`.
+    region: Option<(Vec3, Vec3)>,
+    /// Grids of every occluder, built only for queries outside `region`.
+    full: Vec<std::sync::OnceLock<DirGrid>>,
 }
 
 impl Clone for ShadowVolumes {
     fn clone(&self) -> Self {
-        ShadowVolumes::from_dirs(self.dirs.clone(), self.occ.clone(), self.owners.clone())
+        let mut c = ShadowVolumes::from_dirs(self.dirs.clone(), self.occ.clone(), self.owners.clone());
+        c.region = self.region;
+        c
     }
 }
 
@@ -392,10 +400,20 @@ impl DirGrid {
         // each cell's casters in descending depth along d (farthest ahead of any receiver first;
         // ties in occluder order), so a query can stop at the first block that lies behind it
         let depth: Vec<f32> = occ.iter().map(|o| o.center.dot(d)).collect();
-        let mut order: Vec<u32> = (0..occ.len() as u32).collect();
-        order.sort_unstable_by(|&a, &b| depth[b as usize].total_cmp(&depth[a as usize]).then(a.cmp(&b)));
-        for &j in &order {
-            let j = j as usize;
+        // keys that sort as (depth descending, index ascending): the depth's bits mapped to an
+        // unsigned order (f32::total_cmp's), inverted, above the index
+        let mut order: Vec<u64> = depth
+            .iter()
+            .enumerate()
+            .map(|(j, z)| {
+                let b = z.to_bits() as i32;
+                let ordered = (b ^ ((((b >> 31) as u32) >> 1) as i32)) as u32 ^ 0x8000_0000;
+                ((!ordered as u64) << 32) | j as u64
+            })
+            .collect();
+        order.sort_unstable();
+        for &key in &order {
+            let j = (key & u32::MAX as u64) as usize;
             let ([x0, x1, y0, y1], o) = (ranges[j], &occ[j]);
             let r2 = o.radius * o.radius;
             for y in y0 as usize..=y1 as usize {
@@ -590,7 +608,22 @@ impl ShadowVolumes {
     fn from_dirs(dirs: Vec<Vec3>, occ: Vec<Occluder>, owners: Vec<u32>) -> ShadowVolumes {
         let grids = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
         let flat = (occ.len() <= SCAN_MAX).then(|| Casters::flat(&occ, &owners));
-        ShadowVolumes { occ, owners, dirs, grids, flat }
+        let full = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
+        ShadowVolumes { occ, owners, dirs, grids, flat, region: None, full }
+    }
+
+    /// The same shadow volumes, told that queries come from inside the box `lo`–`hi` (m): each
+    /// direction's grid then holds only the casters that can shade a point of the box (a
+    /// caster's disc on the plane ⟂ d overlaps the box's projection, and its centre lies ahead
+    /// of the box's nearest corner along d), so a few receivers among many casters (a stand
+    /// where a wall moved near some trees) do not build grids of every caster. The answers are
+    /// the same bit for bit: the casters left out are never hit, and those kept keep their
+    /// order. A query outside the box is answered from grids of every caster.
+    pub fn within(mut self, lo: Vec3, hi: Vec3) -> ShadowVolumes {
+        if lo.cmple(hi).all() && lo.is_finite() && hi.is_finite() {
+            self.region = Some((lo, hi));
+        }
+        self
     }
 
     /// The occluders.
@@ -598,8 +631,61 @@ impl ShadowVolumes {
         &self.occ
     }
 
+    /// Builds, over the cores, the grids of the directions whose bit is set in `dirs` (bit k:
+    /// direction k) that are not built yet, so that the queries that follow do not wait for one
+    /// another's lazy builds (a query waits while another thread builds the grid it needs).
+    /// Nothing to do when the occluders are scanned whole ([`SCAN_MAX`]). The grids are the
+    /// ones a lazy build gives, so the answers do not change.
+    pub fn prepare(&self, dirs: u32) {
+        use rayon::prelude::*;
+        if self.flat.is_some() {
+            return;
+        }
+        (0..self.dirs.len()).into_par_iter().filter(|&k| dirs & (1 << k) != 0 && self.grids[k].get().is_none()).for_each(|k| {
+            self.grid(k);
+        });
+    }
+
     fn grid(&self, k: usize) -> &DirGrid {
-        self.grids[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners))
+        self.grids[k].get_or_init(|| match self.region {
+            None => DirGrid::new(self.dirs[k], &self.occ, &self.owners),
+            Some((lo, hi)) => {
+                let d = self.dirs[k];
+                let (u, v) = d.any_orthonormal_pair();
+                let corners = (0..8).map(|i| Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z }));
+                let (mut plo, mut phi, mut near) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY), f32::INFINITY);
+                for c in corners {
+                    let q = Vec2::new(c.dot(u), c.dot(v));
+                    (plo, phi, near) = (plo.min(q), phi.max(q), near.min(c.dot(d)));
+                }
+                // slack far above the rounding of the projections (m)
+                let e = 1e-3;
+                let keep = |o: &Occluder| {
+                    let q = Vec2::new(o.center.dot(u), o.center.dot(v));
+                    o.center.dot(d) > near - e && (q + o.radius + e).cmpge(plo).all() && (q - o.radius - e).cmple(phi).all()
+                };
+                let tagged = self.owners.len() == self.occ.len();
+                let (mut occ, mut owners) = (Vec::new(), Vec::new());
+                for (j, o) in self.occ.iter().enumerate() {
+                    if keep(o) {
+                        occ.push(*o);
+                        if tagged {
+                            owners.push(self.owners[j]);
+                        }
+                    }
+                }
+                DirGrid::new(d, &occ, &owners)
+            }
+        })
+    }
+
+    /// The grid of direction `k` for a query at `p`: the region's, or every caster's when `p`
+    /// lies outside the region.
+    fn grid_for(&self, k: usize, p: Vec3) -> &DirGrid {
+        match self.region {
+            Some((lo, hi)) if !(p.cmpge(lo).all() && p.cmple(hi).all()) => self.full[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners)),
+            _ => self.grid(k),
+        }
     }
 
     /// [`ShadowVolumes::shaded`] counting only the occluders not owned by `owner`: the answer
@@ -634,7 +720,7 @@ impl ShadowVolumes {
     fn product_until_except(&self, k: usize, p: Vec3, stop: f32, skip: Option<u32>) -> Option<f32> {
         match &self.flat {
             Some(c) => c.product_until(self.dirs[k], 0..c.x.len(), p, stop, skip),
-            None => self.grid(k).product(p, stop, skip),
+            None => self.grid_for(k, p).product(p, stop, skip),
         }
     }
 }
@@ -1001,6 +1087,39 @@ mod tests {
             let (i2, d2) = light_at(&sky, *m, &vols, *p);
             assert_eq!((i.to_bits(), d.to_array().map(f32::to_bits)), (i2.to_bits(), d2.to_array().map(f32::to_bits)));
         }
+    }
+
+    /// Shadow volumes told where their queries come from ([`ShadowVolumes::within`]) give the
+    /// answers of the plain ones bit for bit, inside the region (grids of the casters that can
+    /// reach it) and outside it (grids of every caster); and inside, the grids hold fewer casters.
+    #[test]
+    fn region_grids_answer_as_the_full_grids() {
+        let sky = Sky::from_latitude(50.0);
+        let occ: Vec<Occluder> = (0..600)
+            .map(|i| {
+                let f = i as f32;
+                let r = 0.2 + 0.3 * (f * 0.37).sin().abs();
+                Occluder { center: Vec3::new((f * 0.71).sin() * 20.0, (f * 0.53).cos() * 20.0, 2.0 + (f * 0.29).sin().abs() * 8.0), radius: r, gamma: 0.5f32.powf(r) }
+            })
+            .collect();
+        let (lo, hi) = (Vec3::new(-3.0, -3.0, 0.0), Vec3::new(3.0, 3.0, 6.0));
+        let plain = ShadowVolumes::new(&sky, occ.clone());
+        let near = ShadowVolumes::new(&sky, occ).within(lo, hi);
+        let (mut inside, mut outside, mut shaded) = (0, 0, 0);
+        for j in 0..400 {
+            let f = j as f32;
+            let p = Vec3::new((f * 0.43).cos() * 4.5, (f * 0.61).sin() * 4.5, 1.0 + (f * 0.17).sin().abs() * 5.0);
+            let within = p.cmpge(lo).all() && p.cmple(hi).all();
+            (inside, outside) = (inside + within as usize, outside + !within as usize);
+            for k in 0..sky.dirs.len() {
+                let t = plain.transmittance(k, p);
+                assert_eq!(near.transmittance(k, p).to_bits(), t.to_bits(), "point {p}, direction {k}");
+                shaded += (t < 1.0) as usize;
+            }
+        }
+        assert!(inside > 50 && outside > 50 && shaded > 500, "{inside} inside, {outside} outside, {shaded} shaded");
+        let held = |v: &ShadowVolumes| v.grids.iter().filter_map(|g| g.get()).map(|g| g.blocks.len()).sum::<usize>();
+        assert!(held(&near) * 2 < held(&plain), "region grids {} blocks, full {}", held(&near), held(&plain));
     }
 
     /// Shadow volumes of three owners' occluders, queried leaving one owner out, against shadow

@@ -172,6 +172,10 @@ pub struct PlasticTree {
     pub(crate) fate: Vec<Fate>,
     pub(crate) light_cache: Vec<Vec<f32>>,
     pub(crate) sig: Vec<u64>,
+    /// Key of the neighbours and fixed trees whose shade the high half of `sig` holds (0: none
+    /// yet): the shade of the other trees' input-time clusters does not change while they
+    /// and the sky stay as they are, so a call that only moves an obstacle reuses it.
+    pub(crate) shade_key: u64,
     pub(crate) sky: Sky,
     /// Occluders of the full-grown stage's clusters after the last adaptation (empty before).
     pub(crate) final_occ: Vec<Option<Occluder>>,
@@ -193,6 +197,7 @@ impl PlasticTree {
             params: *params,
             light_cache: analysis.stage_light.clone(),
             sig: analysis.mask.iter().map(|&m| m as u64).collect(),
+            shade_key: 0,
             sky: analysis.sky.clone(),
             final_occ: Vec::new(),
             analysis,

@@ -98,6 +98,9 @@ struct Wood {
     segs: Vec<(Vec3, Vec3, f32)>,
     cell: f32,
     grid: HashMap<IVec3, Vec<u32>>,
+    /// Bounds of every capsule (m): points outside touch no wood of the tree.
+    lo: Vec3,
+    hi: Vec3,
 }
 
 impl Wood {
@@ -112,7 +115,10 @@ impl Wood {
         }
         let cell = (2.0 * t.analysis.internode_m).max(0.1);
         let mut grid: HashMap<IVec3, Vec<u32>> = HashMap::new();
+        let (mut lo_b, mut hi_b) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for (i, &(a, b, r)) in segs.iter().enumerate() {
+            lo_b = lo_b.min(a.min(b) - r);
+            hi_b = hi_b.max(a.max(b) + r);
             let lo = ((a.min(b) - r) / cell).floor().as_ivec3();
             let hi = ((a.max(b) + r) / cell).floor().as_ivec3();
             for z in lo.z..=hi.z {
@@ -123,10 +129,13 @@ impl Wood {
                 }
             }
         }
-        Wood { segs, cell, grid }
+        Wood { segs, cell, grid, lo: lo_b, hi: hi_b }
     }
 
     fn contains(&self, p: Vec3) -> bool {
+        if !(p.cmpge(self.lo).all() && p.cmple(self.hi).all()) {
+            return false;
+        }
         let Some(list) = self.grid.get(&(p / self.cell).floor().as_ivec3()) else { return false };
         list.iter().any(|&i| {
             let (a, b, r) = self.segs[i as usize];
@@ -265,6 +274,28 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         ShadowVolumes::new(sky, occ)
     });
     let fixed_vols = fixed_vols.as_ref();
+    // what the other trees' shade depends on: the sky, every tree's input (its clusters stand
+    // where the input has them) and translucency, the fixed trees as they stand now
+    let shade_key = {
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        let mut eat = |v: u64| h = (h ^ v).wrapping_mul(0x0000_0100_0000_01b3);
+        sky.dirs.iter().chain(std::iter::once(&sky.brightest)).for_each(|d| d.to_array().iter().for_each(|v| eat(v.to_bits() as u64)));
+        sky.weights.iter().for_each(|w| eat(w.to_bits() as u64));
+        eat(trees.len() as u64);
+        for t in trees.iter() {
+            eat(t.input.nodes.len() as u64);
+            eat(t.params.translucency_gamma_c0.to_bits() as u64);
+            t.input.nodes.iter().for_each(|nd| nd.pos.to_array().iter().for_each(|v| eat(v.to_bits() as u64)));
+        }
+        eat(fixed.len() as u64);
+        for t in fixed {
+            eat(t.pos.len() as u64);
+            eat(t.params.translucency_gamma_c0.to_bits() as u64);
+            t.pos.iter().for_each(|p| p.to_array().iter().for_each(|v| eat(v.to_bits() as u64)));
+            t.fate.iter().for_each(|f| eat(*f as u64));
+        }
+        h.max(1)
+    };
     let own: Vec<Vec<bool>> = trees
         .par_iter_mut()
         .enumerate()
@@ -272,17 +303,25 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             let n = t.input.nodes.len();
             let all = t.force || t.sky != *sky;
             let mut dirty = vec![false; n];
+            // the others' shade is the one of the last call when nothing it depends on changed
+            let key = (shade_key ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)).max(1);
+            let same_shade = t.shade_key == key;
             for k in 0..n {
                 let p = t.input.nodes[k].pos;
                 let mut sig = solids.mask(p) as u64;
-                for d in 0..sky.dirs.len() {
-                    if others.as_ref().is_some_and(|o| o.shaded_except(d, p, i as u32)) || fixed_vols.is_some_and(|f| f.shaded(d, p)) {
-                        sig |= 1u64 << (32 + d);
+                if same_shade {
+                    sig |= t.sig[k] & !(u32::MAX as u64);
+                } else {
+                    for d in 0..sky.dirs.len() {
+                        if others.as_ref().is_some_and(|o| o.shaded_except(d, p, i as u32)) || fixed_vols.is_some_and(|f| f.shaded(d, p)) {
+                            sig |= 1u64 << (32 + d);
+                        }
                     }
                 }
                 dirty[k] = all || sig != t.sig[k];
                 t.sig[k] = sig;
             }
+            t.shade_key = key;
             // every node may be shed anew: light pruning is re-evaluated each call
             for f in &mut t.fate {
                 *f = Fate::Alive;
@@ -292,6 +331,21 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             dirty
         })
         .collect();
+    // where this call's light queries can come from: the trees with a node to recompute, as
+    // they stand and as grown, widened by their largest cluster and 2 m for the bending within
+    // the call (a query outside is still answered exactly, from grids of every caster)
+    let region = {
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for (t, own) in trees.iter().zip(&own) {
+            if own.iter().any(|&x| x) {
+                let r = 2.0 + t.analysis.stages.iter().flatten().map(|c| c.radius).fold(0.0f32, f32::max);
+                for &p in t.pos.iter().chain(t.input.nodes.iter().map(|nd| &nd.pos)) {
+                    (lo, hi) = (lo.min(p - r), hi.max(p + r));
+                }
+            }
+        }
+        (lo, hi)
+    };
     // 2.–4. levels; a node is recomputed when its own signature changed or its parent moved
     let mut work: Vec<Work> = own.into_iter().zip(trees.iter()).map(|(own, t)| Work { before: t.pos.clone(), moved: vec![false; own.len()], shifted: vec![false; own.len()], done: vec![false; own.len()], own }).collect();
     let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
@@ -356,8 +410,8 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         // reuse pays while the changes are a minority of the casters
         // (measured on the bench trees: below 60 % changed casters the check is cheaper than the
         // products it saves; above, it is not)
-        let delta = (5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta));
-        let vols = ShadowVolumes::new(sky, casters);
+        let delta = (5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(region.0, region.1));
+        let vols = ShadowVolumes::new(sky, casters).within(region.0, region.1);
         let next: Vec<Option<Prev>> = trees
             .par_iter_mut()
             .zip(&mut work)
@@ -430,15 +484,21 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
 /// while in cache.
 fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3]) -> Vec<(f32, Vec3)> {
     let mut out = vec![(0.0f32, Vec3::ZERO); at.len()];
-    out.par_chunks_mut(LIGHT_CHUNK).zip(at.par_chunks(LIGHT_CHUNK)).for_each(|(out, at)| {
-        let masks: Vec<u32> = at.iter().map(|&p| solids.mask(p)).collect();
+    let masks: Vec<u32> = at.par_iter().map(|&p| solids.mask(p)).collect();
+    // the grids of the directions open at some point, built over the cores first
+    let open = !masks.iter().fold(u32::MAX, |a, &m| a & m);
+    vols.prepare(open);
+    if let Some(f) = fixed {
+        f.prepare(open);
+    }
+    out.par_chunks_mut(LIGHT_CHUNK).zip(at.par_chunks(LIGHT_CHUNK).zip(masks.par_chunks(LIGHT_CHUNK))).for_each(|(out, (at, masks))| {
         for k in 0..sky.dirs.len() {
             let wk = sky.weights[k];
             if wk == 0.0 {
                 continue;
             }
             let d = sky.dirs[k];
-            for ((o, &p), &m) in out.iter_mut().zip(at).zip(&masks) {
+            for ((o, &p), &m) in out.iter_mut().zip(at).zip(masks) {
                 if m & (1 << k) != 0 {
                     continue;
                 }
@@ -690,6 +750,16 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         })
         .collect();
     let mut sums = vec![0.0f32; lit.len()];
+    // the grids of the directions open at some cluster to be computed, built over the cores
+    // first (of the changed casters too, which the reused values are checked against)
+    let open = !from.iter().fold(u32::MAX, |a, &(m, _)| a & m);
+    vols.prepare(open);
+    if let Some(f) = fixed {
+        f.prepare(open);
+    }
+    if let Some(r) = reuse.as_ref() {
+        r.delta.prepare(open);
+    }
     // chunks of clusters over the cores; within a chunk direction by direction (each direction's
     // grid read while in cache), every cluster's sum taken in direction order as before, so the
     // values are the same bit for bit whatever the thread count
