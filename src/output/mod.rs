@@ -54,6 +54,18 @@ pub fn write_atomic_with(path: &Path, f: impl FnOnce(&mut std::io::BufWriter<std
     Ok(())
 }
 
+/// Finishes a file another library wrote at `tmp` (SQLite writes the GeoPackage through its
+/// own file handle; [`temporary_path`] names `tmp`): syncs it (`fsync`) and renames it to
+/// `path`, as [`write_atomic_with`] does, fault injection included.
+///
+/// Errors: the I/O error (the caller names `path` and removes `tmp`).
+pub fn finish_temporary(tmp: &Path, path: &Path) -> std::io::Result<()> {
+    let file = std::fs::OpenOptions::new().write(true).open(tmp)?;
+    fault::maybe_kill(&file);
+    file.sync_all()?;
+    std::fs::rename(tmp, path)
+}
+
 /// Makes the entries of folder `dir` (files renamed into it) durable: `fsync` of the folder on
 /// Unix, nothing elsewhere. The run driver calls it before each checkpoint, so that after a
 /// power cut no output the checkpoint counts as written is missing.
