@@ -139,12 +139,15 @@ pub fn csv_to_points(csv: impl std::io::Read, what: &str, out: &Path, table: &Ta
 
 fn write_points(csv: impl std::io::Read, what: &str, path: &Path, table: &Table, geo: &PointGeoRef, description: &str) -> std::io::Result<()> {
     let bad = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidData, m);
-    let sql = |e: rusqlite::Error| std::io::Error::other(format!("SQLite: {e}"));
     let mut rdr = csv::Reader::from_reader(csv);
     let names = crate::output::parquet::check_header(&mut rdr, what, table)?;
     let ix = names.iter().position(|n| *n == "x_m").unwrap_or(0);
     let iy = names.iter().position(|n| *n == "y_m").unwrap_or(0);
-    let mut db = Connection::open(path).map_err(sql)?;
+    let mut db = Connection::open(path).map_err(|e| std::io::Error::other(format!("SQLite: {e}")))?;
+    // SAFETY: the raw handle is only read by `sqlite3_system_errno`, while `db` is open (every
+    // use of `sql` below comes before `db` is closed, or gets it back from a failed close).
+    let handle = unsafe { db.handle() };
+    let sql = |e: rusqlite::Error| system_error(e, handle);
     // atomicity comes from the rename: no journal, no syncs until the file is whole
     db.execute_batch(&format!("PRAGMA journal_mode = OFF; PRAGMA synchronous = OFF; PRAGMA application_id = {APPLICATION_ID}; PRAGMA user_version = {USER_VERSION};")).map_err(sql)?;
     let tx = db.transaction().map_err(sql)?;
@@ -207,6 +210,23 @@ fn write_points(csv: impl std::io::Read, what: &str, path: &Path, table: &Table,
     tx.execute("INSERT INTO gpkg_geometry_columns VALUES (?1, ?2, 'POINT', ?3, 0, 0)", params![table.name, GEOMETRY_COLUMN, srs_id]).map_err(sql)?;
     tx.commit().map_err(sql)?;
     db.close().map_err(|(_, e)| sql(e))
+}
+
+/// The I/O error behind SQLite error `e` on connection `handle`: for an I/O failure, a full
+/// disk or a file that cannot be opened, the operating system's error (`sqlite3_system_errno`:
+/// "File too large", "No space left on device", …) with SQLite's message; otherwise SQLite's
+/// message.
+fn system_error(e: rusqlite::Error, handle: *mut rusqlite::ffi::sqlite3) -> std::io::Error {
+    use rusqlite::ErrorCode::{CannotOpen, DiskFull, SystemIoFailure};
+    if matches!(e.sqlite_error_code(), Some(SystemIoFailure | DiskFull | CannotOpen)) {
+        // SAFETY: `handle` is an open connection (see `write_points`).
+        let errno = unsafe { rusqlite::ffi::sqlite3_system_errno(handle) };
+        if errno != 0 {
+            let os = std::io::Error::from_raw_os_error(errno);
+            return std::io::Error::new(os.kind(), format!("{os} (SQLite: {e})"));
+        }
+    }
+    std::io::Error::other(format!("SQLite: {e}"))
 }
 
 // ---- reading polygon layers
