@@ -1,7 +1,7 @@
 //! GeoPackage files (OGC GeoPackage Encoding Standard 1.3.1, OGC 12-128r18), written and read
 //! with SQLite (`rusqlite`, SQLite bundled) and no GDAL:
-//! - [`csv_to_points`] writes a table of points (the final year's tree inventory) as a feature
-//!   layer that GDAL/OGR and QGIS open;
+//! - [`crate::output::gpkg::csv_to_points`] writes a table of points (the final year's tree
+//!   inventory) as a feature layer that GDAL/OGR and QGIS open;
 //! - [`read_polygons`] reads the Polygon and MultiPolygon features of a layer (management
 //!   areas, `area_file = "parcels.gpkg"`), as GDAL's `ogr2ogr` or QGIS write them.
 //!
@@ -11,7 +11,7 @@
 //! - §1.1.2 (Req 10, 11): `gpkg_spatial_ref_sys` with the three rows every GeoPackage has
 //!   (EPSG 4326 WGS 84, −1 undefined Cartesian, 0 undefined geographic) and the CRS of the
 //!   layer: `srs_id` = its EPSG code, `definition` its OGC WKT 1 where Sylva can write it
-//!   ([`wkt`]; `undefined` for other EPSG codes);
+//!   ([`crate::output::gpkg::wkt`]; `undefined` for other EPSG codes);
 //! - §1.1.3 (Req 13–18): `gpkg_contents`, one row per layer: `data_type` `features`, the
 //!   points' bounds, the `srs_id`;
 //! - §2.1.5 (Req 21–28): `gpkg_geometry_columns`: column `geom`, type `POINT`, z 0, m 0;
@@ -22,12 +22,12 @@
 //!   5 extended type), the `srs_id` (int32), an optional envelope, then ISO WKB (§2.1.4, ISO
 //!   13249-3 / OGC 06-103r4).
 //!
-//! The bytes of a written file depend on its rows only (`last_change` is the fixed time
-//! [`LAST_CHANGE`], not the clock), so two runs of a scenario write the same file.
+//! This module knows nothing of Sylva's outputs or simulation (the writer of the inventory is
+//! [`crate::output::gpkg`]). The bytes of a written file depend on its rows only (`last_change`
+//! is the fixed time [`LAST_CHANGE`], not the clock), so two runs of a scenario write the same
+//! file.
 
-use crate::output::georef::{utm_zone, KnownDatum, PointGeoRef, WGS84};
-use crate::output::parquet::{Kind, Table};
-use rusqlite::{params, Connection, OpenFlags};
+use rusqlite::{Connection, OpenFlags};
 use std::path::Path;
 
 /// `PRAGMA application_id` of a GeoPackage: ASCII "GPKG" (§1.1.1.1.1, Req 2).
@@ -39,33 +39,6 @@ pub const USER_VERSION: i32 = 10300;
 pub const LAST_CHANGE: &str = "2000-01-01T00:00:00.000Z";
 /// The geometry column of the layers Sylva writes.
 pub const GEOMETRY_COLUMN: &str = "geom";
-
-/// OGC WKT 1 (OGC 01-009) of a geographic CRS.
-fn geogcs_wkt(d: &KnownDatum) -> String {
-    format!(
-        "GEOGCS[\"{}\",DATUM[\"{}\",SPHEROID[\"{}\",6378137,{},AUTHORITY[\"EPSG\",\"{}\"]],AUTHORITY[\"EPSG\",\"{}\"]],PRIMEM[\"Greenwich\",0,AUTHORITY[\"EPSG\",\"8901\"]],UNIT[\"degree\",0.0174532925199433,AUTHORITY[\"EPSG\",\"9122\"]],AXIS[\"Latitude\",NORTH],AXIS[\"Longitude\",EAST],AUTHORITY[\"EPSG\",\"{}\"]]",
-        d.name, d.wkt_datum, d.ellipsoid, d.inv_f, d.ellipsoid_code, d.datum_code, d.code
-    )
-}
-
-/// The OGC WKT 1 definition (`gpkg_spatial_ref_sys.definition`, §1.1.2.1.1) of EPSG code
-/// `code`, where Sylva can write it without PROJ: WGS 84 (4326) and the UTM zones of WGS 84,
-/// NAD83 and ETRS89 ([`utm_zone`]); `None` for other codes.
-pub fn wkt(code: u32) -> Option<String> {
-    if code == 4326 {
-        return Some(geogcs_wkt(&WGS84));
-    }
-    let (d, zone, north) = utm_zone(code)?;
-    let hemi = if north { "N" } else { "S" };
-    Some(format!(
-        "PROJCS[\"{} / UTM zone {zone}{hemi}\",{},PROJECTION[\"Transverse_Mercator\"],PARAMETER[\"latitude_of_origin\",0],PARAMETER[\"central_meridian\",{}],PARAMETER[\"scale_factor\",0.9996],PARAMETER[\"false_easting\",500000],PARAMETER[\"false_northing\",{}],UNIT[\"metre\",1,AUTHORITY[\"EPSG\",\"9001\"]],AXIS[\"Easting\",EAST],AXIS[\"Northing\",NORTH],AUTHORITY[\"EPSG\",\"{code}\"]]",
-        d.name,
-        geogcs_wkt(&d),
-        -183 + 6 * zone as i64,
-        if north { 0 } else { 10_000_000 },
-    ))
-}
-
 /// The GeoPackageBinary of a 2-D point (§2.1.3): `GP`, version 0, flags 0b0000_0001
 /// (little-endian, envelope indicator 0: no envelope, as the standard allows and GDAL writes
 /// for points; not empty; standard type), `srs_id` (int32 LE), then the ISO WKB point
@@ -82,153 +55,19 @@ pub fn geometry_blob(srs_id: i32, x: f64, y: f64) -> Vec<u8> {
     b.extend_from_slice(&y.to_le_bytes());
     b
 }
-
-/// The SRS of points mapped by `geo`: (srs_id, srs_name, organization, organization_coordsys_id,
-/// definition). An EPSG code gives `srs_id` = the code; a local grid the undefined Cartesian
-/// SRS −1 (§1.1.2.1.2, Req 11).
-fn srs_row(geo: &PointGeoRef) -> (i32, String, &'static str, i32, String) {
-    match geo.epsg {
-        Some(code) => {
-            let name = match (code, utm_zone(code)) {
-                (4326, _) => "WGS 84".to_string(),
-                (_, Some((d, zone, north))) => format!("{} / UTM zone {zone}{}", d.name, if north { "N" } else { "S" }),
-                _ => format!("EPSG:{code}"),
-            };
-            (code as i32, name, "EPSG", code as i32, wkt(code).unwrap_or_else(|| "undefined".into()))
-        }
-        None => (-1, "Undefined Cartesian SRS".into(), "NONE", -1, "undefined".into()),
-    }
-}
-
 /// SQL of the GeoPackage's own tables (§1.1.2.1.1, §1.1.3.1.1, §2.1.5.1.1; Annex C of the
 /// standard) and the three SRS rows every GeoPackage holds (§1.1.2.1.2, Req 11).
-const SCHEMA: &str = "
+pub const SCHEMA: &str = "
 CREATE TABLE gpkg_spatial_ref_sys (srs_name TEXT NOT NULL, srs_id INTEGER NOT NULL PRIMARY KEY, organization TEXT NOT NULL, organization_coordsys_id INTEGER NOT NULL, definition TEXT NOT NULL, description TEXT);
 CREATE TABLE gpkg_contents (table_name TEXT NOT NULL PRIMARY KEY, data_type TEXT NOT NULL, identifier TEXT UNIQUE, description TEXT DEFAULT '', last_change DATETIME NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ','now')), min_x DOUBLE, min_y DOUBLE, max_x DOUBLE, max_y DOUBLE, srs_id INTEGER, CONSTRAINT fk_gc_r_srs_id FOREIGN KEY (srs_id) REFERENCES gpkg_spatial_ref_sys(srs_id));
 CREATE TABLE gpkg_geometry_columns (table_name TEXT NOT NULL, column_name TEXT NOT NULL, geometry_type_name TEXT NOT NULL, srs_id INTEGER NOT NULL, z TINYINT NOT NULL, m TINYINT NOT NULL, CONSTRAINT pk_geom_cols PRIMARY KEY (table_name, column_name), CONSTRAINT uk_gc_table_name UNIQUE (table_name), CONSTRAINT fk_gc_tn FOREIGN KEY (table_name) REFERENCES gpkg_contents(table_name), CONSTRAINT fk_gc_srs FOREIGN KEY (srs_id) REFERENCES gpkg_spatial_ref_sys (srs_id));
 INSERT INTO gpkg_spatial_ref_sys VALUES ('Undefined Cartesian SRS', -1, 'NONE', -1, 'undefined', 'undefined Cartesian coordinate reference system');
 INSERT INTO gpkg_spatial_ref_sys VALUES ('Undefined geographic SRS', 0, 'NONE', 0, 'undefined', 'undefined geographic coordinate reference system');
 ";
-
 /// Quotes an SQL identifier (`"name"`, inner quotes doubled).
-fn quote(name: &str) -> String {
+pub fn quote(name: &str) -> String {
     format!("\"{}\"", name.replace('"', "\"\""))
 }
-
-/// Writes the CSV text `csv` (header and rows of `table`, as Sylva writes them: the inventory)
-/// as the GeoPackage `out` with one point layer named `table.name`, atomically (SQLite writes a
-/// temporary file beside `out` that is synced and renamed, [`crate::output::finish_temporary`];
-/// nothing half-written at `out`). The layer's attribute columns are the table's, same names
-/// and order (texts `TEXT`, integers `INTEGER`, `Double` columns `DOUBLE`, `Float` columns
-/// `FLOAT`, each holding the CSV's decimal value), after `fid` and `geom`: the point
-/// (`x_m`, `y_m`) mapped by `geo` into the DEM's CRS (`srs_id` as [`srs_row`]). `description`
-/// goes to `gpkg_contents`.
-///
-/// Errors: I/O errors (the caller names `out`): a header other than `table`'s columns or a
-/// value that does not parse (naming `what`, the CSV line and the column), SQLite failing
-/// (its message).
-pub fn csv_to_points(csv: impl std::io::Read, what: &str, out: &Path, table: &Table, geo: &PointGeoRef, description: &str) -> std::io::Result<()> {
-    let tmp = crate::output::temporary_path(out);
-    let _ = std::fs::remove_file(&tmp);
-    let r = write_points(csv, what, &tmp, table, geo, description).and_then(|_| crate::output::finish_temporary(&tmp, out));
-    if r.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    r
-}
-
-fn write_points(csv: impl std::io::Read, what: &str, path: &Path, table: &Table, geo: &PointGeoRef, description: &str) -> std::io::Result<()> {
-    let bad = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidData, m);
-    let mut rdr = csv::Reader::from_reader(csv);
-    let names = crate::output::parquet::check_header(&mut rdr, what, table)?;
-    let ix = names.iter().position(|n| *n == "x_m").unwrap_or(0);
-    let iy = names.iter().position(|n| *n == "y_m").unwrap_or(0);
-    let mut db = Connection::open(path).map_err(|e| std::io::Error::other(format!("SQLite: {e}")))?;
-    // SAFETY: the raw handle is only read by `sqlite3_system_errno`, while `db` is open (every
-    // use of `sql` below comes before `db` is closed, or gets it back from a failed close).
-    let handle = unsafe { db.handle() };
-    let sql = |e: rusqlite::Error| system_error(e, handle);
-    // atomicity comes from the rename: no journal, no syncs until the file is whole
-    db.execute_batch(&format!("PRAGMA journal_mode = OFF; PRAGMA synchronous = OFF; PRAGMA application_id = {APPLICATION_ID}; PRAGMA user_version = {USER_VERSION};")).map_err(sql)?;
-    let tx = db.transaction().map_err(sql)?;
-    tx.execute_batch(SCHEMA).map_err(sql)?;
-    let (srs_id, srs_name, org, org_id, def) = srs_row(geo);
-    if srs_id != 4326 {
-        tx.execute("INSERT INTO gpkg_spatial_ref_sys VALUES ('WGS 84 geodetic', 4326, 'EPSG', 4326, ?1, 'longitude/latitude coordinates in decimal degrees on the WGS 84 spheroid')", [geogcs_wkt(&WGS84)]).map_err(sql)?;
-    }
-    if srs_id != -1 {
-        tx.execute("INSERT INTO gpkg_spatial_ref_sys VALUES (?1, ?2, ?3, ?4, ?5, NULL)", params![srs_name, srs_id, org, org_id, def]).map_err(sql)?;
-    }
-    let cols: Vec<String> = table
-        .columns
-        .iter()
-        .map(|(n, k)| {
-            let ty = match k {
-                Kind::Int64 => "INTEGER",
-                Kind::Utf8 => "TEXT",
-                Kind::Double => "DOUBLE",
-                Kind::Float => "FLOAT",
-            };
-            format!("{} {ty} NOT NULL", quote(n))
-        })
-        .collect();
-    let t = quote(table.name);
-    tx.execute_batch(&format!("CREATE TABLE {t} (fid INTEGER PRIMARY KEY AUTOINCREMENT NOT NULL, {GEOMETRY_COLUMN} POINT, {});", cols.join(", "))).map_err(sql)?;
-    let mut bbox: Option<[f64; 4]> = None;
-    {
-        let marks: Vec<String> = (0..=table.columns.len()).map(|k| format!("?{}", k + 1)).collect();
-        let names_sql: Vec<String> = std::iter::once(GEOMETRY_COLUMN.to_string()).chain(table.columns.iter().map(|c| quote(c.0))).collect();
-        let mut ins = tx.prepare(&format!("INSERT INTO {t} ({}) VALUES ({})", names_sql.join(", "), marks.join(", "))).map_err(sql)?;
-        let mut rec = csv::StringRecord::new();
-        let mut line = 1usize;
-        while rdr.read_record(&mut rec).map_err(|e| bad(format!("{what}: {e}")))? {
-            line += 1;
-            let num = |k: usize| -> std::io::Result<f64> { rec[k].parse::<f64>().map_err(|_| bad(format!("{what} line {line}: column {} is {:?}, expected a number", names[k], &rec[k]))) };
-            let (mx, my) = geo.map(num(ix)?, num(iy)?);
-            bbox = Some(match bbox {
-                None => [mx, my, mx, my],
-                Some(b) => [b[0].min(mx), b[1].min(my), b[2].max(mx), b[3].max(my)],
-            });
-            ins.raw_bind_parameter(1, geometry_blob(srs_id, mx, my)).map_err(sql)?;
-            for (k, (n, kind)) in table.columns.iter().enumerate() {
-                let r = match kind {
-                    Kind::Int64 => ins.raw_bind_parameter(k + 2, rec[k].parse::<i64>().map_err(|_| bad(format!("{what} line {line}: column {n} is {:?}, expected an integer", &rec[k])))?),
-                    Kind::Utf8 => ins.raw_bind_parameter(k + 2, &rec[k]),
-                    Kind::Double | Kind::Float => ins.raw_bind_parameter(k + 2, num(k)?),
-                };
-                r.map_err(sql)?;
-            }
-            ins.raw_execute().map_err(sql)?;
-        }
-    }
-    let b = bbox.map(|b| b.map(Some)).unwrap_or([None; 4]);
-    tx.execute(
-        "INSERT INTO gpkg_contents (table_name, data_type, identifier, description, last_change, min_x, min_y, max_x, max_y, srs_id) VALUES (?1, 'features', ?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8)",
-        params![table.name, description, LAST_CHANGE, b[0], b[1], b[2], b[3], srs_id],
-    )
-    .map_err(sql)?;
-    tx.execute("INSERT INTO gpkg_geometry_columns VALUES (?1, ?2, 'POINT', ?3, 0, 0)", params![table.name, GEOMETRY_COLUMN, srs_id]).map_err(sql)?;
-    tx.commit().map_err(sql)?;
-    db.close().map_err(|(_, e)| sql(e))
-}
-
-/// The I/O error behind SQLite error `e` on connection `handle`: for an I/O failure, a full
-/// disk or a file that cannot be opened, the operating system's error (`sqlite3_system_errno`:
-/// "File too large", "No space left on device", …) with SQLite's message; otherwise SQLite's
-/// message.
-fn system_error(e: rusqlite::Error, handle: *mut rusqlite::ffi::sqlite3) -> std::io::Error {
-    use rusqlite::ErrorCode::{CannotOpen, DiskFull, SystemIoFailure};
-    if matches!(e.sqlite_error_code(), Some(SystemIoFailure | DiskFull | CannotOpen)) {
-        // SAFETY: `handle` is an open connection (see `write_points`).
-        let errno = unsafe { rusqlite::ffi::sqlite3_system_errno(handle) };
-        if errno != 0 {
-            let os = std::io::Error::from_raw_os_error(errno);
-            return std::io::Error::new(os.kind(), format!("{os} (SQLite: {e})"));
-        }
-    }
-    std::io::Error::other(format!("SQLite: {e}"))
-}
-
 // ---- reading polygon layers
 
 /// A polygon: rings of `[x, y]` points in the layer's coordinates, the first ring the outline,
@@ -554,14 +393,5 @@ mod tests {
         assert!(wkb_polygons(&huge).unwrap_err().contains("a count of 4294967295 needs"));
         assert!(blob_wkb(b"XX\x00\x01\x00\x00\x00\x00").unwrap_err().contains("\"GP\""));
         assert_eq!(blob_wkb(b"GP\x00\x11\x00\x00\x00\x00").unwrap(), None, "empty geometry");
-    }
-
-    #[test]
-    fn wkt_of_utm_and_wgs84() {
-        let w = wkt(26917).unwrap();
-        assert!(w.starts_with("PROJCS[\"NAD83 / UTM zone 17N\",GEOGCS[\"NAD83\"") && w.contains("PARAMETER[\"central_meridian\",-81]") && w.ends_with("AUTHORITY[\"EPSG\",\"26917\"]]"), "{w}");
-        assert!(wkt(32733).unwrap().contains("PARAMETER[\"false_northing\",10000000]"));
-        assert!(wkt(4326).unwrap().starts_with("GEOGCS[\"WGS 84\""));
-        assert_eq!(wkt(2056), None);
     }
 }

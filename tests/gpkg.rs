@@ -5,7 +5,7 @@
 //!   (OGC GeoPackage 1.3: application_id, user_version, SRS with the DEM's EPSG code and WKT,
 //!   contents with bounds, geometry columns) and one feature per tree of the world with the
 //!   attributes of the CSV inventory; GDAL's `ogrinfo` opens it with the same feature count and
-//!   CRS. Skipped (with a message) when `ogrinfo` is missing, unless `SYLVA_REQUIRE_OGRINFO` is
+//!   CRS, and GDAL's `validate_gpkg.py` finds nothing wrong (where python3-gdal ships it). Skipped (with a message) when `ogrinfo` is missing, unless `SYLVA_REQUIRE_OGRINFO` is
 //!   set (CI sets it), in which case a missing `ogrinfo` fails the test.
 //! - Plantings into the polygons of a GeoPackage plant only inside them: a file written here
 //!   with SQLite (Polygon, MultiPolygon Z, big-endian WKB, envelopes), one GDAL wrote
@@ -138,6 +138,17 @@ fn final_inventory_geopackage_holds_every_tree_and_opens_in_gdal() {
         assert!(out.contains(&format!("Feature Count: {}", recs.len())), "{out}");
         assert!(out.contains(&format!("ID[\"EPSG\",{epsg}]]")) || out.contains(&format!("AUTHORITY[\"EPSG\",\"{epsg}\"]]")), "CRS EPSG:{epsg}: {out}");
         assert!(out.contains("species: String") && out.contains("dbh_cm: Real") && out.contains("id: Integer64"), "{out}");
+        // GDAL's GeoPackage validator (python3-gdal, which gdal-bin depends on) checks the
+        // standard's requirements one by one
+        let script = ["/usr/lib/python3/dist-packages/osgeo_utils/samples/validate_gpkg.py", "/usr/share/doc/python3-gdal/examples/validate_gpkg.py"].into_iter().map(Path::new).find(|p| p.is_file());
+        match script {
+            Some(s) => {
+                let o = Command::new("python3").arg(s).arg(&path).output().unwrap();
+                let text = format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+                assert!(o.status.success() && text.trim().is_empty(), "validate_gpkg.py: {text}");
+            }
+            None => println!("skipped: GDAL's validate_gpkg.py not found"),
+        }
     }
 }
 

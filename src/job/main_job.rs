@@ -500,7 +500,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
             last_rows = inventory::rows_from_world(w);
         }
     };
-    // the GeoPackage (≈ 110 bytes per tree, ≈ 110 MB at the end of the default run) only for
+    // the GeoPackage (≈ 115 bytes per tree, ≈ 120 MB at the end of the default run) only for
     // the final year; the Parquet (or CSV) inventory is written at every snapshot
     let so = SimulateOptions { out: out.clone(), resume: false, gpkg_years: Some(vec![sc.years]), stop: opts.stop.clone(), inventory: opts.inventory };
     let sim = simulate(sc, site.clone(), lib, so, Stepping::One, Some(&mut keep), sink)?;

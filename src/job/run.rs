@@ -58,7 +58,7 @@ pub struct RunOptions<'a> {
     /// Write inventories, maps and plots (false: stand table and checkpoint only).
     pub write_snapshots: bool,
     /// Years whose snapshots also get the GeoPackage inventory `year_NNNN.gpkg` (`None`: every
-    /// snapshot). The last year and a year stopped at always get it. A GeoPackage is ~110 bytes
+    /// snapshot). The last year and a year stopped at always get it. A GeoPackage is ~115 bytes
     /// per tree (uncompressed), so the main job
     /// limits it to the years it renders; the CSV inventory is written at every snapshot.
     pub gpkg_years: Option<Vec<u32>>,

@@ -1,5 +1,5 @@
 //! Tree inventories: CSV (columns fixed by ARCHITECTURE.md), Parquet ([`super::parquet`]) and
-//! the final year's GeoPackage point layer ([`crate::gpkg`]).
+//! the final year's GeoPackage point layer ([`super::gpkg`]).
 
 use super::Result;
 use crate::sim::World;
@@ -147,7 +147,7 @@ pub fn csv_file_to_parquet(csv: &Path, table: &super::parquet::Table, w: &World)
 
 pub use super::georef::PointGeoRef;
 
-/// Writes the inventory of `w` as a GeoPackage ([`crate::gpkg::csv_to_points`]) atomically: one
+/// Writes the inventory of `w` as a GeoPackage ([`super::gpkg::csv_to_points`]) atomically: one
 /// point layer `inventory` with the columns and values of [`inventory_csv`] (names and units of
 /// [`super::parquet::INVENTORY`]) and the point (`x_m`, `y_m`) in the terrain's CRS
 /// ([`PointGeoRef::of`]; EPSG code as `srs_id`, or the undefined Cartesian SRS −1 on a local
@@ -170,7 +170,7 @@ pub fn csv_file_to_gpkg(csv: &Path, gpkg: &Path, w: &World) -> Result<()> {
 /// The inventory GeoPackage `path` from CSV text `csv` (of `what`) on `w`'s site.
 fn gpkg_from(csv: impl std::io::Read, what: &str, path: &Path, w: &World) -> Result<()> {
     let desc = "Sylva tree inventory (columns and units as the CSV and Parquet inventories: ARCHITECTURE.md)";
-    crate::gpkg::csv_to_points(csv, what, path, &super::parquet::INVENTORY, &PointGeoRef::of(w), desc).map_err(|e| super::OutputError::io(path, e))
+    super::gpkg::csv_to_points(csv, what, path, &super::parquet::INVENTORY, &PointGeoRef::of(w), desc).map_err(|e| super::OutputError::io(path, e))
 }
 
 // ---- parts of a tiled run (issue 17): each rank writes the lines of its own trees and

@@ -5,6 +5,7 @@ mod error;
 pub use error::{OutputError, Result};
 
 pub mod georef;
+pub mod gpkg;
 pub mod inventory;
 pub mod parquet;
 pub mod plot;
