@@ -14,6 +14,7 @@ pub mod conditions;
 pub mod edit;
 pub mod error;
 pub mod grid;
+pub mod gpkg;
 pub mod gui;
 pub mod job;
 pub mod mesh;

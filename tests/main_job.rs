@@ -109,7 +109,7 @@ fn main_job_reduced_scenario_writes_every_output() {
         "inventory/year_0000.parquet",
         "inventory/year_0006.parquet",
         "inventory/year_0006_regeneration.parquet",
-        "inventory/year_0006.geojson",
+        "inventory/year_0006.gpkg",
         "maps/conditions/elevation.png",
         "maps/conditions/elevation.tif",
         "maps/conditions/L.png",
@@ -148,15 +148,15 @@ fn main_job_reduced_scenario_writes_every_output() {
         assert!(r.height_m > 0.0 && r.dbh_cm >= 0.0 && r.crown_radius_m > 0.0);
     }
 
-    // GeoJSON parses and has one feature per tree.
-    let gj: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("inventory/year_0006.geojson")).unwrap()).unwrap();
-    assert_eq!(gj["type"], "FeatureCollection");
-    assert_eq!(gj["features"].as_array().unwrap().len(), rows.len());
-    // georeferenced like the map GeoTIFFs: UTM 16N eastings/northings, a constant offset from
-    // the local metres of the CSV
-    assert_eq!(gj["crs"]["properties"]["name"], "urn:ogc:def:crs:EPSG::32616");
-    let feats = gj["features"].as_array().unwrap();
-    let off = |f: &serde_json::Value| (f["geometry"]["coordinates"][0].as_f64().unwrap() - f["properties"]["x_m"].as_f64().unwrap(), f["geometry"]["coordinates"][1].as_f64().unwrap() - f["properties"]["y_m"].as_f64().unwrap());
+    // The final year's GeoPackage has one feature per tree, georeferenced like the map
+    // GeoTIFFs: UTM 16N eastings/northings, a constant offset from the local metres of the
+    // inventory (tests/gpkg.rs checks the file in full and with GDAL)
+    let db = rusqlite::Connection::open(out.join("inventory/year_0006.gpkg")).unwrap();
+    let srs: i64 = db.query_row("SELECT srs_id FROM gpkg_geometry_columns WHERE table_name = 'inventory'", [], |r| r.get(0)).unwrap();
+    assert_eq!(srs, 32616);
+    let feats: Vec<(f64, f64, Vec<u8>)> = db.prepare("SELECT x_m, y_m, geom FROM inventory ORDER BY fid").unwrap().query_map([], |r| Ok((r.get(0)?, r.get(1)?, r.get(2)?))).unwrap().map(|r| r.unwrap()).collect();
+    assert_eq!(feats.len(), rows.len());
+    let off = |f: &(f64, f64, Vec<u8>)| (f64::from_le_bytes(f.2[13..21].try_into().unwrap()) - f.0, f64::from_le_bytes(f.2[21..29].try_into().unwrap()) - f.1);
     let (ox, oy) = off(&feats[0]);
     assert!((700_000.0..800_000.0).contains(&ox) && (4_000_000.0..4_100_000.0).contains(&oy), "offset {ox} {oy}");
     assert!(feats.iter().all(|f| (off(f).0 - ox).abs() < 0.02 && (off(f).1 - oy).abs() < 0.02));
@@ -191,7 +191,7 @@ fn sylva_run_binary_smoke() {
     assert!(res.status.success(), "sylva run failed:\n{stdout}\n{stderr}");
     assert!(stdout.contains("basal area") && stdout.contains("outputs in"), "summary table printed: {stdout}");
     assert!(stderr.contains("[1/4] conditions") && stderr.contains("[2/4] simulating 2 years"), "steps reported: {stderr}");
-    assert!(out.join("summary.md").is_file() && out.join("inventory/year_0002.geojson").is_file() && !out.join("stills").exists());
+    assert!(out.join("summary.md").is_file() && out.join("inventory/year_0002.gpkg").is_file() && !out.join("stills").exists());
 }
 
 /// Without any graphics adapter (here: wgpu limited to a backend this machine lacks), `sylva
@@ -211,7 +211,7 @@ fn without_an_adapter_sylva_run_writes_what_needs_no_rendering_and_fails() {
     let warn = stderr.find("mesa-vulkan-drivers").expect("names the package to install");
     let sim = stderr.find("[2/4] simulating").expect("simulates");
     assert!(warn < sim, "told before the simulation: {stderr}");
-    for f in ["stand_table.csv", "inventory/year_0002.parquet", "inventory/year_0002.geojson", "maps/conditions/elevation.tif", "summary.md"] {
+    for f in ["stand_table.csv", "inventory/year_0002.parquet", "inventory/year_0002.gpkg", "maps/conditions/elevation.tif", "summary.md"] {
         assert!(out.join(f).is_file(), "{f} written without an adapter");
     }
     assert!(!out.join("stills").exists() && !out.join("timelapse.gif").exists());

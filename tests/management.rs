@@ -4,7 +4,7 @@
 //! refused naming file and field, and warming moves the temperature index and establishment.
 mod common;
 
-use common::ScenarioToml;
+use common::{in_poly, ScenarioToml};
 use std::path::Path;
 use sylva::sim::checkpoint::{restore, to_bytes};
 use sylva::sim::stats::StandRow;
@@ -106,18 +106,6 @@ fn clear_cut_leaves_no_tree_in_its_area_and_regeneration_starts_again() {
     let recruits = (0..t.len()).filter(|&i| inside(t.x[i], t.y[i])).count();
     assert!(after > before && after + recruits as u64 > 100, "regeneration in the clear-cut: {before} → {after} sapling stems, {recruits} trees");
     eprintln!("clear-cut: regeneration {before} → {after} sapling stems in 8 years, {recruits} recruits");
-}
-
-/// Even-odd point-in-polygon (a second implementation, for the test).
-fn in_poly(p: &[[f64; 2]], x: f64, y: f64) -> bool {
-    let mut c = false;
-    for i in 0..p.len() {
-        let (a, b) = (p[i], p[(i + 1) % p.len()]);
-        if (a[1] > y) != (b[1] > y) && x < a[0] + (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1]) {
-            c = !c;
-        }
-    }
-    c
 }
 
 #[test]
@@ -692,7 +680,7 @@ fn a_managed_run_stopped_and_resumed_writes_the_same_files() {
     assert_eq!(stopped, 6);
     assert_eq!(resumed.rows, full.rows);
     assert!(full.rows.iter().map(|r| r.harvest_stems_ha).sum::<f64>() > 0.0);
-    for f in ["stand_table.csv", "inventory/year_0012.parquet", "inventory/year_0012.geojson"] {
+    for f in ["stand_table.csv", "inventory/year_0012.parquet", "inventory/year_0012.gpkg"] {
         assert!(std::fs::read(full_dir.path().join(f)).unwrap() == std::fs::read(dir.path().join(f)).unwrap(), "{f} differs");
     }
 }

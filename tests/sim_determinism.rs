@@ -54,7 +54,7 @@ fn resume_equals_uninterrupted() {
     assert_eq!(resumed.world.stand.cohorts, full.world.stand.cohorts, "regeneration cohorts differ after resume");
     assert_eq!(resumed.world.tallies.regen_ledger, full.world.tallies.regen_ledger, "regeneration ledger differs after resume");
     assert_eq!(resumed.rows, full.rows);
-    for f in ["stand_table.csv", "inventory/year_0040.parquet", "inventory/year_0040.geojson", "inventory/year_0040_regeneration.parquet"] {
+    for f in ["stand_table.csv", "inventory/year_0040.parquet", "inventory/year_0040.gpkg", "inventory/year_0040_regeneration.parquet"] {
         let a = std::fs::read(full_dir.path().join(f)).unwrap();
         let b = std::fs::read(dir.path().join(f)).unwrap();
         assert!(a == b, "{f} differs");

@@ -36,7 +36,7 @@ fn fresh_run_removes_old_snapshots() {
     let maps = dir.path().join("maps");
     std::fs::create_dir_all(&inv).unwrap();
     std::fs::create_dir_all(&maps).unwrap();
-    for f in ["year_0050.csv", "year_0050.geojson"] {
+    for f in ["year_0050.csv", "year_0050.geojson", "year_0050.gpkg"] {
         std::fs::write(inv.join(f), "old").unwrap();
     }
     for f in ["species_year_0050.png", "basal_area_year_0050.png", "notes.txt"] {

@@ -3,7 +3,7 @@
 # unchanged). Usage:
 #   tools/compare_run.sh BASELINE_DIR [SYLVA_BINARY]
 # BASELINE_DIR holds scenario.toml (the shortened default scenario), stand_table.csv and
-# inventory/*.csv|*.geojson from the reference binary. The binary (default target/debug/sylva)
+# inventory/* (csv, parquet, gpkg) from the reference binary. The binary (default target/debug/sylva)
 # simulates the same scenario into a temporary run directory and every file is compared with cmp.
 # Make a baseline with: tools/compare_run.sh --make BASELINE_DIR YEARS [SYLVA_BINARY]
 set -euo pipefail

@@ -148,7 +148,7 @@ impl SimBar {
 /// `sylva simulate` into `out` stepped as `stepping` says, with a progress bar and a Ctrl-C
 /// handler (stop after the current year: [`super::Interrupted`]).
 fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: PathBuf, resume: bool, inventory: sylva::output::inventory::InventoryFormat, stepping: Stepping) -> anyhow::Result<()> {
-    let opts = SimulateOptions { out, resume, geojson_years: None, stop: Some(stop_on_ctrl_c()), inventory };
+    let opts = SimulateOptions { out, resume, gpkg_years: None, stop: Some(stop_on_ctrl_c()), inventory };
     let mut bar = SimBar::default();
     let s = main_job::simulate(sc, site, lib, opts, stepping, None, &mut |e| bar.show(e))?;
     if s.stopped {

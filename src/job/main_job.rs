@@ -79,16 +79,16 @@ pub struct Output {
 
 /// Every file a run directory may hold, with its schedule (tests/main_job.rs checks that a
 /// run writes nothing else). `sylva simulate` ([`simulate`]) writes those with
-/// `main_job_only` false; [`main_job`] all of them (GeoJSON inventories only for the last
+/// `main_job_only` false; [`main_job`] all of them (GeoPackage inventories only for the last
 /// year).
 pub const OUTPUTS: &[Output] = &[
     Output { path: "scenario.toml", when: When::Start, main_job_only: false, what: "the scenario as run (`years` included)" },
     Output { path: "species/*.toml", when: When::Start, main_job_only: false, what: "the species files of the pool, as simulated" },
     Output { path: "maps/conditions/*.{png,tif}", when: When::Start, main_job_only: true, what: "condition maps with legends and GeoTIFFs" },
     Output { path: "inventory/year_NNNN.{parquet,csv}", when: When::Snapshot, main_job_only: false, what: "every tree (GeoParquet by default; CSV with `--inventory csv`)" },
-    Output { path: "inventory/year_NNNN.geojson", when: When::Snapshot, main_job_only: false, what: "every tree as GeoJSON points (the main job: the last year only)" },
+    Output { path: "inventory/year_NNNN.gpkg", when: When::Snapshot, main_job_only: false, what: "every tree as a GeoPackage point layer `inventory` (the main job: the last year only)" },
     Output { path: "inventory/year_NNNN_regeneration.{parquet,csv}", when: When::Snapshot, main_job_only: false, what: "the sapling cohorts of the regeneration layer" },
-    Output { path: "inventory/year_NNNN_{spring,summer,autumn}.{parquet,csv,geojson}", when: When::Season, main_job_only: false, what: "seasonal inventories" },
+    Output { path: "inventory/year_NNNN_{spring,summer,autumn}.{parquet,csv,gpkg}", when: When::Season, main_job_only: false, what: "seasonal inventories" },
     Output { path: "maps/{species,basal_area}_year_NNNN.{png,tif}", when: When::Snapshot, main_job_only: false, what: "dominant species and basal-area maps" },
     Output { path: "maps/species_codes.csv", when: When::Snapshot, main_job_only: false, what: "the codes of the species GeoTIFFs" },
     Output { path: "stand_table.{csv,png}", when: When::Checkpoint, main_job_only: false, what: "one row per year, and its plot (also at every snapshot)" },
@@ -214,8 +214,8 @@ pub struct SimulateOptions {
     pub out: PathBuf,
     /// Continue from the run directory's checkpoint ([`RunOptions::resume`]).
     pub resume: bool,
-    /// Years whose snapshots also get a GeoJSON inventory (`None`: all; the last year always).
-    pub geojson_years: Option<Vec<u32>>,
+    /// Years whose snapshots also get a GeoPackage inventory (`None`: all; the last year always).
+    pub gpkg_years: Option<Vec<u32>>,
     /// Stop after the current year when set (e.g. by a Ctrl-C handler); the outputs so far are
     /// complete and a checkpoint is written.
     pub stop: Option<Arc<AtomicBool>>,
@@ -224,9 +224,9 @@ pub struct SimulateOptions {
 }
 
 impl SimulateOptions {
-    /// A fresh run into `out`: no resume, GeoJSON at every snapshot, no stop flag.
+    /// A fresh run into `out`: no resume, GeoPackage at every snapshot, no stop flag.
     pub fn new(out: impl Into<PathBuf>) -> Self {
-        SimulateOptions { out: out.into(), resume: false, geojson_years: None, stop: None, inventory: InventoryFormat::Parquet }
+        SimulateOptions { out: out.into(), resume: false, gpkg_years: None, stop: None, inventory: InventoryFormat::Parquet }
     }
 }
 
@@ -324,7 +324,7 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
     }
     let mut ro = RunOptions::new(&out);
     ro.resume = opts.resume;
-    ro.geojson_years = opts.geojson_years;
+    ro.gpkg_years = opts.gpkg_years;
     ro.inventory = opts.inventory;
     ro.stop = opts.stop;
     ro.progress = Some(&mut cb);
@@ -454,7 +454,7 @@ impl MainJobSummary {
 
 /// The whole of `sylva run`: derives the living conditions of `sc`'s terrain and writes their
 /// maps, simulates the forest with species from `lib` ([`simulate`]: stand table, inventories
-/// with GeoJSON for the last year, species and basal-area maps, checkpoints), then, with
+/// with a GeoPackage for the last year, species and basal-area maps, checkpoints), then, with
 /// `opts.render`, stills from an oblique and a top-down camera at [`STILL_YEARS`] (and the last
 /// snapshot), a close view into the last year's forest with its near field adapted, a
 /// timelapse of every snapshot, and `summary.md`. [`OUTPUTS`] lists the files. Reports every
@@ -500,9 +500,9 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
             last_rows = inventory::rows_from_world(w);
         }
     };
-    // GeoJSON (≈ 280 bytes per tree, ≈ 250 MB at the end of the default run) only for the
-    // final year; the CSV inventory is written at every snapshot
-    let so = SimulateOptions { out: out.clone(), resume: false, geojson_years: Some(vec![sc.years]), stop: opts.stop.clone(), inventory: opts.inventory };
+    // the GeoPackage (≈ 115 bytes per tree, ≈ 120 MB at the end of the default run) only for
+    // the final year; the Parquet (or CSV) inventory is written at every snapshot
+    let so = SimulateOptions { out: out.clone(), resume: false, gpkg_years: Some(vec![sc.years]), stop: opts.stop.clone(), inventory: opts.inventory };
     let sim = simulate(sc, site.clone(), lib, so, Stepping::One, Some(&mut keep), sink)?;
     let sim_s = t_sim.elapsed().as_secs_f64();
     let mut summary = MainJobSummary { sim, scenario: sc.clone(), maps, stills: Vec::new(), film: None, site_s, sim_s, pictures_s: 0.0, total_s: 0.0 };
@@ -646,7 +646,7 @@ mod tests {
 
     #[test]
     fn output_patterns() {
-        for ok in ["scenario.toml", "inventory/year_0030.csv", "inventory/year_0030_regeneration.csv", "inventory/year_0030.parquet", "inventory/year_0030_regeneration.parquet", "inventory/year_0005_spring.geojson", "maps/basal_area_year_0010.tif", "maps/conditions/L.png", "stills/year_0030_closeup.png", "frames/frame_00012.png", "timelapse.mp4", "checkpoint/rank_0001.bin", "species/beech.toml"] {
+        for ok in ["scenario.toml", "inventory/year_0030.csv", "inventory/year_0030_regeneration.csv", "inventory/year_0030.parquet", "inventory/year_0030_regeneration.parquet", "inventory/year_0005_spring.gpkg", "maps/basal_area_year_0010.tif", "maps/conditions/L.png", "stills/year_0030_closeup.png", "frames/frame_00012.png", "timelapse.mp4", "checkpoint/rank_0001.bin", "species/beech.toml"] {
             assert!(is_output(ok), "{ok}");
         }
         for bad in ["notes.txt", "inventory/year_30.csv", "maps/conditions/sub/L.png", "stills/year_0030_side.png", "frames/frame_0001.png", "species/beech.txt"] {

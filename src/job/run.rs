@@ -57,10 +57,11 @@ pub struct RunOptions<'a> {
     pub map_px: usize,
     /// Write inventories, maps and plots (false: stand table and checkpoint only).
     pub write_snapshots: bool,
-    /// Years whose snapshots also get the GeoJSON inventory (`None`: every snapshot). The last
-    /// year and a year stopped at always get it. GeoJSON is ~250 bytes per tree, so the main job
+    /// Years whose snapshots also get the GeoPackage inventory `year_NNNN.gpkg` (`None`: every
+    /// snapshot). The last year and a year stopped at always get it. A GeoPackage is ~115 bytes
+    /// per tree (uncompressed), so the main job
     /// limits it to the years it renders; the CSV inventory is written at every snapshot.
-    pub geojson_years: Option<Vec<u32>>,
+    pub gpkg_years: Option<Vec<u32>>,
     /// Called with the year and the in-memory world at every plain snapshot (year 0 of a fresh
     /// run, every `snapshot_every` years, the end, a year stopped at), after its files are
     /// written; the main job builds its pictures' instances here instead of reading the
@@ -73,7 +74,7 @@ pub struct RunOptions<'a> {
 impl RunOptions<'_> {
     /// Defaults: no resume, no stop flag, no progress callback, 1024-pixel maps, snapshots on.
     pub fn new(out_dir: impl Into<PathBuf>) -> Self {
-        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, geojson_years: None, on_snapshot: None, inventory: InventoryFormat::Parquet }
+        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, gpkg_years: None, on_snapshot: None, inventory: InventoryFormat::Parquet }
     }
 }
 
@@ -164,14 +165,14 @@ fn remove_prefixed(dir: &Path, subs: &[(&str, &[&str])]) -> Result<()> {
     Ok(())
 }
 
-fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize, geojson: bool, format: InventoryFormat) -> Result<()> {
+fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize, gpkg: bool, format: InventoryFormat) -> Result<()> {
     let inv = dir.join("inventory");
     match format {
         InventoryFormat::Csv => inventory::write_inventory_csv(&inv.join(format!("{label}.csv")), w)?,
         InventoryFormat::Parquet => inventory::write_inventory_parquet(&inv.join(format!("{label}.parquet")), w)?,
     }
-    if geojson {
-        inventory::write_inventory_geojson(&dir.join("inventory").join(format!("{label}.geojson")), w)?;
+    if gpkg {
+        inventory::write_inventory_gpkg(&inv.join(format!("{label}.gpkg")), w)?;
     }
     if maps {
         match format {
@@ -237,14 +238,14 @@ pub trait Stepper {
         true
     }
     /// Writes the plain snapshot `label` (e.g. `year_0010`) into run directory `dir`: the
-    /// inventory CSV, the GeoJSON inventory when `geojson`, and with `maps` the
+    /// inventory, the GeoPackage inventory when `gpkg`, and with `maps` the
     /// regeneration-layer CSV and the species and basal-area maps (longest side `map_px`).
     /// Default: from `world`.
     ///
     /// Errors: I/O errors naming the file; the stepper's.
     #[allow(clippy::too_many_arguments)]
-    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool, format: InventoryFormat) -> Result<()> {
-        snapshot(dir, world, label, maps, map_px, geojson, format)
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, gpkg: bool, format: InventoryFormat) -> Result<()> {
+        snapshot(dir, world, label, maps, map_px, gpkg, format)
     }
     /// True when [`Stepper::snapshot`] reads `world` (so a snapshot year steps with `full`);
     /// false when the stepper writes snapshots from its own state (a tiled run's ranks).
@@ -271,7 +272,8 @@ impl Stepper for OneProcess {
 
 /// Runs `scenario` on `site` with species from `lib`, writing the run directory.
 ///
-/// Snapshots (inventory CSV + GeoJSON, regeneration-layer CSV `year_NNNN_regeneration.csv`,
+/// Snapshots (inventory Parquet or CSV, GeoPackage `year_NNNN.gpkg` in the years of
+/// `gpkg_years`, regeneration layer `year_NNNN_regeneration.{parquet,csv}`,
 /// species and basal-area maps) at year 0, every
 /// `snapshot_every` years and at the end, labelled `year_NNNN` (plus `_spring`, `_summer`,
 /// `_autumn` when `seasonal_snapshots`); checkpoint every `checkpoint_every` years and at the end.
@@ -313,9 +315,9 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         crate::output::remove_stale_temporaries(&sub)?;
     }
     let ck = dir.join(checkpoint::FILE);
-    let gj_years = opts.geojson_years.clone();
+    let gp_years = opts.gpkg_years.clone();
     let last_year = scenario.years;
-    let gj = move |y: u32| y == last_year || gj_years.as_ref().is_none_or(|ys| ys.contains(&y));
+    let gp = move |y: u32| y == last_year || gp_years.as_ref().is_none_or(|ys| ys.contains(&y));
     let mut rows = Vec::new();
     let resume = opts.resume && (checkpoint::exists(&dir) || !started_here(&dir, &ck)?);
     if opts.resume && !resume {
@@ -355,7 +357,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         checkpoint::remove_all(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {
-            snapshot(&dir, &world, "year_0000", true, opts.map_px, gj(0), format)?;
+            snapshot(&dir, &world, "year_0000", true, opts.map_px, gp(0), format)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(0, &world);
             }
@@ -377,7 +379,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         let mut rep = YearReport::default();
         let mut err: Option<super::JobError> = None;
         let seasonal = snap_year && scenario.seasonal_snapshots;
-        let (d, px, gj_y, fmt) = (dir.clone(), opts.map_px, gj(y), format);
+        let (d, px, gp_y, fmt) = (dir.clone(), opts.map_px, gp(y), format);
         let checkpoint_year = y == scenario.years || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0);
         let stop_before = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
         let full = (snap_year && snap_world) || (checkpoint_year && save_world) || (stop_before && (snap_world || save_world));
@@ -388,7 +390,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
                     Season::Summer => "summer",
                     _ => "autumn",
                 };
-                if let Err(e) = snapshot(&d, w, &format!("year_{y:04}_{name}"), false, px, gj_y, fmt) {
+                if let Err(e) = snapshot(&d, w, &format!("year_{y:04}_{name}"), false, px, gp_y, fmt) {
                     err = Some(e);
                 }
             }
@@ -403,7 +405,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         }
         let t_out = Instant::now();
         if snap_year {
-            stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, gj(y), format)?;
+            stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, gp(y), format)?;
             tables(&dir, &rows, &world, true)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(y, &world);

@@ -4,10 +4,12 @@
 //! single process writes, byte for byte, except the checkpoint (one file per rank, below):
 //! - `stand_table.csv`, `stand_table.png`, `scenario.toml`, `species/`, year 0's snapshot:
 //!   rank 0 (the stand table's columns are gathered to it every year);
-//! - `inventory/year_NNNN.csv`, `.geojson`, `_regeneration.csv`: every rank writes the lines
+//! - `inventory/year_NNNN.csv`, `_regeneration.csv`: every rank writes the lines
 //!   of its own trees (living in id order, then this year's dead in id order) and cohorts into
 //!   part files `.NAME.rankRRRR.PID.tmp` beside the file; after all have, rank 0 merges them
 //!   by tree id (cohorts by light cell), streaming, into the file ([`write_parts`]);
+//! - `inventory/year_NNNN.gpkg`, `.parquet`: rank 0 writes them from the merged CSV, streaming
+//!   (the CSV of a Parquet run is removed after);
 //! - `maps/species_*.png`, `maps/basal_area_*.png`: drawn by rank 0 from the basal area per
 //!   map pixel and species: each rank sums its own trees per bin; a bin with trees on one rank
 //!   takes that rank's sum, and only the trees of bins with trees on several ranks are sent to
@@ -153,8 +155,6 @@ struct Snap {
     label: String,
     /// Regeneration layer and maps too.
     maps: bool,
-    /// GeoJSON inventory too.
-    geojson: bool,
     /// Longest side of the maps (pixels).
     map_px: usize,
 }
@@ -162,7 +162,7 @@ struct Snap {
 impl Snap {
     fn encode(&self) -> Result<Vec<u8>> {
         let dir = self.dir.to_str().ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "run directory".into(), value: self.dir.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() })?;
-        let mut m = vec![self.maps as u8 | (self.geojson as u8) << 1];
+        let mut m = vec![self.maps as u8];
         m.extend_from_slice(&(self.map_px as u64).to_le_bytes());
         m.extend_from_slice(&(self.label.len() as u64).to_le_bytes());
         m.extend_from_slice(self.label.as_bytes());
@@ -179,7 +179,7 @@ impl Snap {
         let label = m.get(17..17 + n).ok_or_else(|| bad("label cut short"))?;
         let label = std::str::from_utf8(label).map_err(|_| bad("label not UTF-8"))?.to_string();
         let dir = std::str::from_utf8(&m[17 + n..]).map_err(|_| bad("folder not UTF-8"))?;
-        Ok(Snap { dir: PathBuf::from(dir), label, maps: m[0] & 1 != 0, geojson: m[0] & 2 != 0, map_px })
+        Ok(Snap { dir: PathBuf::from(dir), label, maps: m[0] & 1 != 0, map_px })
     }
     /// This process's part file of rank `rank` for the output `name` in `sub`:
     /// `.{name}.rank{rank}.{pid}.tmp`, a temporary file that a later run removes if this one
@@ -190,16 +190,16 @@ impl Snap {
 }
 
 /// What rank 0 gets from [`write_parts`]: every rank's part files (inventory CSV, then
-/// GeoJSON, then regeneration, those written) and, with maps, the basal area per map bin.
+/// regeneration, those written) and, with maps, the basal area per map bin.
 type SnapParts = (Vec<Vec<PathBuf>>, Option<Vec<f64>>);
 
 /// The ranks' part of a snapshot: rank 0 sends every rank `snap` (others pass `None`); every
-/// rank writes the inventory lines of its own trees (and GeoJSON features, and its cohorts'
-/// regeneration lines with `maps`) into its part files ([`Snap::part`]); all agree; the part
+/// rank writes the inventory lines of its own trees (and its cohorts' regeneration lines
+/// with `maps`) into its part files ([`Snap::part`]); all agree; the part
 /// paths and, with `maps`, the basal area per map bin ([`crate::output::plot::map_bin`],
 /// summed exactly as one process: [`Tile::gather_bin_sums`]) go to rank 0, which gets them
-/// back: per rank its part files (inventory CSV, then GeoJSON, then regeneration, those
-/// written), and the sums.
+/// back: per rank its part files (inventory CSV, then regeneration, those written), and the
+/// sums.
 ///
 /// Errors: [`Error::Exchange`] from the transport or naming a rank that failed to write its
 /// parts (with its I/O error naming the file).
@@ -213,11 +213,10 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
     let s = Snap::decode(got.first().map(|m| m.as_slice()).unwrap_or(&[]))?;
     let me = t.rank();
     let csv = s.part("inventory", &format!("{}.csv", s.label), me);
-    let gj = s.geojson.then(|| s.part("inventory", &format!("{}.geojson", s.label), me));
     let regen = s.maps.then(|| s.part("inventory", &format!("{}_regeneration.csv", s.label), me));
     let r = (|| -> Result<()> {
         let layout = &tile.layout;
-        crate::output::inventory::write_inventory_part(&csv, gj.as_deref(), &tile.world, |x, y| layout.owner_of(x, y) == me)?;
+        crate::output::inventory::write_inventory_part(&csv, &tile.world, |x, y| layout.owner_of(x, y) == me)?;
         if let Some(p) = &regen {
             crate::output::inventory::write_regeneration_part(p, &tile.world)?;
         }
@@ -226,7 +225,7 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
     let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
     r?;
     a?;
-    let mine: Vec<PathBuf> = std::iter::once(csv).chain(gj).chain(regen).collect();
+    let mine: Vec<PathBuf> = std::iter::once(csv).chain(regen).collect();
     let text: Vec<&str> = mine.iter().filter_map(|p| p.to_str()).collect();
     let mut out = vec![Vec::new(); n];
     out[0] = text.join("\n").into_bytes();
@@ -440,8 +439,8 @@ impl Stepper for Root<'_> {
     /// by tree id (cohorts by light cell) into the files of one process and draws the maps from
     /// the gathered map columns.
     #[allow(clippy::too_many_arguments)]
-    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, geojson: bool, format: crate::output::inventory::InventoryFormat) -> Result<()> {
-        let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), maps, geojson, map_px };
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, gpkg: bool, format: crate::output::inventory::InventoryFormat) -> Result<()> {
+        let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), maps, map_px };
         command(self.t, Some(Command::Snapshot))?;
         let Some((parts, cols)) = self.collective(|tile, t| write_parts(tile, t, Some(&snap)))? else {
             return Err(Error::Exchange { peer: 0, reason: "rank 0 got no snapshot parts".into() }.into());
@@ -450,13 +449,12 @@ impl Stepper for Root<'_> {
         let inv = dir.join("inventory");
         use crate::output::inventory as inventory_out;
         inventory_out::merge_inventory_csv(&inv.join(format!("{label}.csv")), &column(0))?;
-        let mut i = 1;
-        if geojson {
-            inventory_out::merge_inventory_geojson(&inv.join(format!("{label}.geojson")), world, &column(i))?;
-            i += 1;
+        // the GeoPackage from the merged CSV: the bytes one process writes
+        if gpkg {
+            inventory_out::csv_file_to_gpkg(&inv.join(format!("{label}.csv")), &inv.join(format!("{label}.gpkg")), world)?;
         }
         if maps {
-            inventory_out::merge_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), &column(i))?;
+            inventory_out::merge_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), &column(1))?;
             let ba = cols.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map sums gathered".into() })?;
             let m = dir.join("maps");
             crate::output::plot::write_maps_from(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px, &ba)?;

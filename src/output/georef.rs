@@ -44,3 +44,46 @@ impl PointGeoRef {
     }
 }
 
+
+/// A geographic CRS Sylva can describe without PROJ (for PROJJSON in GeoParquet and WKT in
+/// GeoPackage): names and EPSG codes as the EPSG dataset gives them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KnownDatum {
+    /// Name of the geographic CRS (`WGS 84`).
+    pub name: &'static str,
+    /// Name of the datum (`World Geodetic System 1984`).
+    pub datum: &'static str,
+    /// Datum name in OGC WKT 1 style (`WGS_1984`).
+    pub wkt_datum: &'static str,
+    /// EPSG code of the datum (6326).
+    pub datum_code: u32,
+    /// Name of the ellipsoid (`WGS 84`).
+    pub ellipsoid: &'static str,
+    /// EPSG code of the ellipsoid (7030).
+    pub ellipsoid_code: u32,
+    /// Inverse flattening of the ellipsoid (semi-major axis 6 378 137 m for all three).
+    pub inv_f: f64,
+    /// EPSG code of the geographic CRS (4326).
+    pub code: u32,
+}
+
+/// WGS 84 (EPSG 4326).
+pub const WGS84: KnownDatum = KnownDatum { name: "WGS 84", datum: "World Geodetic System 1984", wkt_datum: "WGS_1984", datum_code: 6326, ellipsoid: "WGS 84", ellipsoid_code: 7030, inv_f: 298.257223563, code: 4326 };
+/// NAD83 (EPSG 4269).
+pub const NAD83: KnownDatum = KnownDatum { name: "NAD83", datum: "North American Datum 1983", wkt_datum: "North_American_Datum_1983", datum_code: 6269, ellipsoid: "GRS 1980", ellipsoid_code: 7019, inv_f: 298.257222101, code: 4269 };
+/// ETRS89 (EPSG 4258).
+pub const ETRS89: KnownDatum = KnownDatum { name: "ETRS89", datum: "European Terrestrial Reference System 1989", wkt_datum: "European_Terrestrial_Reference_System_1989", datum_code: 6258, ellipsoid: "GRS 1980", ellipsoid_code: 7019, inv_f: 298.257222101, code: 4258 };
+
+/// The UTM zone of EPSG code `code`: (datum, zone 1–60, north) for the UTM zones of WGS 84
+/// (32601–32660 north, 32701–32760 south), NAD83 (26901–26923) and ETRS89 (25828–25838);
+/// `None` for other codes. UTM: Transverse Mercator, central meridian 6·zone − 183°, scale
+/// 0.9996, false easting 500 000 m, false northing 0 (10 000 000 m south).
+pub fn utm_zone(code: u32) -> Option<(KnownDatum, u32, bool)> {
+    match code {
+        32601..=32660 => Some((WGS84, code - 32600, true)),
+        32701..=32760 => Some((WGS84, code - 32700, false)),
+        26901..=26923 => Some((NAD83, code - 26900, true)),
+        25828..=25838 => Some((ETRS89, code - 25800, true)),
+        _ => None,
+    }
+}

@@ -1,4 +1,5 @@
-//! Tree inventories: CSV (columns fixed by ARCHITECTURE.md) and GeoJSON points.
+//! Tree inventories: CSV (columns fixed by ARCHITECTURE.md), Parquet ([`super::parquet`]) and
+//! the final year's GeoPackage point layer ([`super::gpkg`]).
 
 use super::Result;
 use crate::sim::World;
@@ -146,55 +147,30 @@ pub fn csv_file_to_parquet(csv: &Path, table: &super::parquet::Table, w: &World)
 
 pub use super::georef::PointGeoRef;
 
-/// Writes the inventory as a GeoJSON FeatureCollection of points `[x, y, ground elevation m]`
-/// in the terrain's coordinate reference system, so the trees overlay the map GeoTIFFs in a GIS:
-/// - geographic terrain: WGS 84 longitude/latitude (RFC 7946, no `crs` member);
-/// - projected terrain with an EPSG code (e.g. UTM): eastings/northings in metres with the
-///   GeoJSON 2008 `crs` member `urn:ogc:def:crs:EPSG::<code>` (read by GDAL/QGIS);
-/// - otherwise local metres from the site's south-west corner, with no `crs`.
+/// Writes the inventory of `w` as a GeoPackage ([`super::gpkg::csv_to_points`]) atomically: one
+/// point layer `inventory` with the columns and values of [`inventory_csv`] (names and units of
+/// [`super::parquet::INVENTORY`]) and the point (`x_m`, `y_m`) in the terrain's CRS
+/// ([`PointGeoRef::of`]; EPSG code as `srs_id`, or the undefined Cartesian SRS −1 on a local
+/// grid), so the trees overlay the map GeoTIFFs in QGIS.
 ///
-/// Every feature also carries the local `x_m`, `y_m` of the CSV inventory.
-pub fn write_inventory_geojson(path: &Path, w: &World) -> Result<()> {
-    let geo = PointGeoRef::of(w);
-    let head = geojson_head(w);
-    crate::output::write_atomic_with(path, |f| {
-        f.write_all(head.as_bytes())?;
-        for (k, r) in records(w).iter().enumerate() {
-            if k > 0 {
-                f.write_all(b",\n")?;
-            }
-            geojson_feature(f, r, &geo)?;
-        }
-        f.write_all(GEOJSON_END)
-    })
+/// Errors: [`super::OutputError::Io`] naming `path`.
+pub fn write_inventory_gpkg(path: &Path, w: &World) -> Result<()> {
+    gpkg_from(inventory_csv(w).as_bytes(), "the inventory", path, w)
 }
 
-/// What ends the GeoJSON inventory after its last feature.
-const GEOJSON_END: &[u8] = b"\n]}\n";
-
-/// The GeoJSON inventory up to its first feature (the `crs` member as [`PointGeoRef::of`] `w`).
-fn geojson_head(w: &World) -> String {
-    let geo = PointGeoRef::of(w);
-    let mut s = String::from("{\"type\":\"FeatureCollection\",");
-    match geo.epsg {
-        Some(code) if !geo.degrees => s.push_str(&format!("\"crs\":{{\"type\":\"name\",\"properties\":{{\"name\":\"urn:ogc:def:crs:EPSG::{code}\"}}}},")),
-        None => s.push_str("\"sylva_coordinates\":\"local metres from the site's south-west corner (no georeferencing)\","),
-        _ => {}
-    }
-    s.push_str("\"features\":[\n");
-    s
+/// Writes the inventory CSV file `csv` as the GeoPackage `gpkg` ([`write_inventory_gpkg`]'s
+/// bytes for the same rows; a tiled run's rank 0 writes it from the merged CSV). The CSV stays.
+///
+/// Errors: [`super::OutputError::Io`] naming `gpkg` (and the CSV in the message).
+pub fn csv_file_to_gpkg(csv: &Path, gpkg: &Path, w: &World) -> Result<()> {
+    let f = std::fs::File::open(csv).map_err(|e| super::OutputError::io(csv, e))?;
+    gpkg_from(std::io::BufReader::new(f), &csv.display().to_string(), gpkg, w)
 }
 
-/// Writes the GeoJSON feature of `r` (one line, no separator).
-fn geojson_feature(f: &mut impl Write, r: &Rec, geo: &PointGeoRef) -> std::io::Result<()> {
-    let v = r.v;
-    let (mx, my) = geo.map(v[0] as f64, v[1] as f64);
-    let prec = if geo.degrees { 7 } else { 2 };
-    write!(
-        f,
-        "{{\"type\":\"Feature\",\"geometry\":{{\"type\":\"Point\",\"coordinates\":[{mx:.prec$},{my:.prec$},{:.2}]}},\"properties\":{{\"id\":{},\"species\":\"{}\",\"x_m\":{:.2},\"y_m\":{:.2},\"age_yr\":{:.0},\"height_m\":{:.2},\"dbh_cm\":{:.2},\"crown_radius_m\":{:.2},\"crown_base_m\":{:.2},\"status\":\"{}\"}}}}",
-        v[2], r.id, r.species, v[0], v[1], v[3], v[4], v[5], v[6], v[7], r.status
-    )
+/// The inventory GeoPackage `path` from CSV text `csv` (of `what`) on `w`'s site.
+fn gpkg_from(csv: impl std::io::Read, what: &str, path: &Path, w: &World) -> Result<()> {
+    let desc = "Sylva tree inventory (columns and units as the CSV and Parquet inventories: ARCHITECTURE.md)";
+    super::gpkg::csv_to_points(csv, what, path, &super::parquet::INVENTORY, &PointGeoRef::of(w), desc).map_err(|e| super::OutputError::io(path, e))
 }
 
 // ---- parts of a tiled run (issue 17): each rank writes the lines of its own trees and
@@ -202,13 +178,12 @@ fn geojson_feature(f: &mut impl Write, r: &Rec, geo: &PointGeoRef) -> std::io::R
 // one process writes, byte for byte.
 
 /// Writes a rank's part of the inventory: the CSV lines (no header) of the trees of `w`
-/// standing where `keep(x, y)` to `csv`, and their GeoJSON features (one a line, no
-/// separators) to `geojson` when given; living trees in id order, then the dead in id order.
+/// standing where `keep(x, y)` to `csv`; living trees in id order, then the dead in id order.
 /// Written atomically like every file ([`crate::output::write_atomic_with`]); the part files
-/// are temporaries that [`merge_inventory_csv`] and [`merge_inventory_geojson`] read.
+/// are temporaries that [`merge_inventory_csv`] reads.
 ///
 /// Errors: [`super::OutputError::Io`] naming the part file.
-pub fn write_inventory_part(csv: &Path, geojson: Option<&Path>, w: &World, keep: impl Fn(f32, f32) -> bool) -> Result<()> {
+pub fn write_inventory_part(csv: &Path, w: &World, keep: impl Fn(f32, f32) -> bool) -> Result<()> {
     let recs = records_where(w, keep);
     crate::output::write_atomic_with(csv, |f| {
         let mut s = String::with_capacity(96);
@@ -218,18 +193,7 @@ pub fn write_inventory_part(csv: &Path, geojson: Option<&Path>, w: &World, keep:
             f.write_all(s.as_bytes())?;
         }
         Ok(())
-    })?;
-    if let Some(g) = geojson {
-        let geo = PointGeoRef::of(w);
-        crate::output::write_atomic_with(g, |f| {
-            for r in &recs {
-                geojson_feature(f, r, &geo)?;
-                f.write_all(b"\n")?;
-            }
-            Ok(())
-        })?;
-    }
-    Ok(())
+    })
 }
 
 /// Writes a rank's part of the regeneration CSV: the lines (no header) of every cohort of `w`
@@ -322,25 +286,6 @@ fn merge_csv(path: &Path, header: &str, parts: &[std::path::PathBuf], key: impl 
     })
 }
 
-/// Writes the GeoJSON inventory `path` atomically from the ranks' parts
-/// ([`write_inventory_part`]) with the head of `w`'s site: the bytes
-/// [`write_inventory_geojson`] writes for the whole world.
-///
-/// Errors: [`super::OutputError::Io`] naming `path` (and in the message the part file).
-pub fn merge_inventory_geojson(path: &Path, w: &World, parts: &[std::path::PathBuf]) -> Result<()> {
-    let head = geojson_head(w);
-    crate::output::write_atomic_with(path, |f| {
-        f.write_all(head.as_bytes())?;
-        merge_lines(f, parts, |l| inventory_key(l, "\"status\":\"alive\"}}", geojson_id), b",\n")?;
-        f.write_all(GEOJSON_END)
-    })
-}
-
-/// The tree id of a GeoJSON feature line.
-fn geojson_id(l: &str) -> Option<&str> {
-    l.split_once("\"properties\":{\"id\":").and_then(|(_, r)| r.split(',').next())
-}
-
 /// Writes the regeneration CSV `path` atomically from the ranks' parts
 /// ([`write_regeneration_part`]): the bytes [`write_regeneration_csv`] writes for the whole
 /// world (cohorts in light-cell order; a cell's cohorts all come from the rank owning it).
@@ -365,7 +310,8 @@ mod tests {
     use crate::sim::{step_year, Scenario, YearReport};
 
     /// Parts split by position (the tiles of a tiled run), merged: the bytes of the whole
-    /// inventory CSV, GeoJSON and regeneration CSV; with no trees at all, the header only.
+    /// inventory CSV and regeneration CSV, and the GeoPackage written from the merged CSV is the
+    /// one written from the whole world, byte for byte; with no trees at all, the header only.
     #[test]
     fn merged_parts_are_the_whole_files() {
         let toml = "name = \"parts\"\nyears = 22\nseed = 3\nspecies = [\"beech\"]\nlight_cell_m = 10.0\n\
@@ -386,15 +332,15 @@ mod tests {
                 w.scratch.dead.clear();
                 w.stand.cohorts = Default::default();
             }
-            let (csv, gj, rg) = (d.join(format!("{case}.csv")), d.join(format!("{case}.geojson")), d.join(format!("{case}_r.csv")));
+            let (csv, gp, rg) = (d.join(format!("{case}.csv")), d.join(format!("{case}.gpkg")), d.join(format!("{case}_r.csv")));
             write_inventory_csv(&csv, &w).unwrap();
-            write_inventory_geojson(&gj, &w).unwrap();
+            write_inventory_gpkg(&gp, &w).unwrap();
             write_regeneration_csv(&rg, &w).unwrap();
-            let mut parts = (Vec::new(), Vec::new(), Vec::new());
+            let mut parts = (Vec::new(), Vec::new());
             for k in 0..3 {
                 let band = move |x: f32, _: f32| ((x / 134.0) as usize).min(2) == k;
-                let (pc, pg, pr) = (d.join(format!("{case}.{k}.csv.part")), d.join(format!("{case}.{k}.gj.part")), d.join(format!("{case}.{k}.r.part")));
-                write_inventory_part(&pc, Some(&pg), &w, band).unwrap();
+                let (pc, pr) = (d.join(format!("{case}.{k}.csv.part")), d.join(format!("{case}.{k}.r.part")));
+                write_inventory_part(&pc, &w, band).unwrap();
                 let mut wk = w.clone();
                 let light = wk.site.light;
                 let c = &w.stand.cohorts;
@@ -408,15 +354,14 @@ mod tests {
                 wk.stand.cohorts = own;
                 write_regeneration_part(&pr, &wk).unwrap();
                 parts.0.push(pc);
-                parts.1.push(pg);
-                parts.2.push(pr);
+                parts.1.push(pr);
             }
-            let (mc, mg, mr) = (d.join(format!("{case}.m.csv")), d.join(format!("{case}.m.geojson")), d.join(format!("{case}_r.m.csv")));
+            let (mc, mg, mr) = (d.join(format!("{case}.m.csv")), d.join(format!("{case}.m.gpkg")), d.join(format!("{case}_r.m.csv")));
             merge_inventory_csv(&mc, &parts.0).unwrap();
-            merge_inventory_geojson(&mg, &w, &parts.1).unwrap();
-            merge_regeneration_csv(&mr, &parts.2).unwrap();
-            for (a, b) in [(&csv, &mc), (&gj, &mg), (&rg, &mr)] {
-                assert_eq!(std::fs::read_to_string(a).unwrap(), std::fs::read_to_string(b).unwrap(), "{case}: {}", a.display());
+            csv_file_to_gpkg(&mc, &mg, &w).unwrap();
+            merge_regeneration_csv(&mr, &parts.1).unwrap();
+            for (a, b) in [(&csv, &mc), (&gp, &mg), (&rg, &mr)] {
+                assert!(std::fs::read(a).unwrap() == std::fs::read(b).unwrap(), "{case}: {} and {} differ", a.display(), b.display());
             }
             if !trees {
                 assert_eq!(std::fs::read_to_string(&mc).unwrap(), format!("{HEADER}\n"));

@@ -5,6 +5,7 @@ mod error;
 pub use error::{OutputError, Result};
 
 pub mod georef;
+pub mod gpkg;
 pub mod inventory;
 pub mod parquet;
 pub mod plot;
@@ -52,6 +53,18 @@ pub fn write_atomic_with(path: &Path, f: impl FnOnce(&mut std::io::BufWriter<std
         return Err(OutputError::io(path, e));
     }
     Ok(())
+}
+
+/// Finishes a file another library wrote at `tmp` (SQLite writes the GeoPackage through its
+/// own file handle; [`temporary_path`] names `tmp`): syncs it (`fsync`) and renames it to
+/// `path`, as [`write_atomic_with`] does, fault injection included.
+///
+/// Errors: the I/O error (the caller names `path` and removes `tmp`).
+pub fn finish_temporary(tmp: &Path, path: &Path) -> std::io::Result<()> {
+    let file = std::fs::OpenOptions::new().write(true).open(tmp)?;
+    fault::maybe_kill(&file);
+    file.sync_all()?;
+    std::fs::rename(tmp, path)
 }
 
 /// Makes the entries of folder `dir` (files renamed into it) durable: `fsync` of the folder on

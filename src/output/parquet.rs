@@ -144,18 +144,16 @@ fn wkb_point(x: f64, y: f64) -> ByteArray {
 /// otherwise. UTM: Transverse Mercator, central meridian 6·zone − 183°, scale 0.9996, false
 /// easting 500 000 m, false northing 0 (10 000 000 m south).
 pub fn projjson(geo: &PointGeoRef) -> Option<serde_json::Value> {
+    use super::georef::{utm_zone, KnownDatum, WGS84};
     use serde_json::json;
-    const WGS84: (&str, &str, &str, f64, u32) = ("WGS 84", "World Geodetic System 1984", "WGS 84", 298.257223563, 4326);
-    const NAD83: (&str, &str, &str, f64, u32) = ("NAD83", "North American Datum 1983", "GRS 1980", 298.257222101, 4269);
-    const ETRS89: (&str, &str, &str, f64, u32) = ("ETRS89", "European Terrestrial Reference System 1989", "GRS 1980", 298.257222101, 4258);
-    let geographic = |(name, datum, ellipsoid, inv_f, code): (&str, &str, &str, f64, u32)| {
+    let geographic = |d: KnownDatum| {
         json!({
-            "type": "GeographicCRS", "name": name,
-            "datum": {"type": "GeodeticReferenceFrame", "name": datum, "ellipsoid": {"name": ellipsoid, "semi_major_axis": 6378137, "inverse_flattening": inv_f}},
+            "type": "GeographicCRS", "name": d.name,
+            "datum": {"type": "GeodeticReferenceFrame", "name": d.datum, "ellipsoid": {"name": d.ellipsoid, "semi_major_axis": 6378137, "inverse_flattening": d.inv_f}},
             "coordinate_system": {"subtype": "ellipsoidal", "axis": [
                 {"name": "Geodetic latitude", "abbreviation": "Lat", "direction": "north", "unit": "degree"},
                 {"name": "Geodetic longitude", "abbreviation": "Lon", "direction": "east", "unit": "degree"}]},
-            "id": {"authority": "EPSG", "code": code}
+            "id": {"authority": "EPSG", "code": d.code}
         })
     };
     let schema = json!("https://proj.org/schemas/v0.7/projjson.schema.json");
@@ -167,19 +165,13 @@ pub fn projjson(geo: &PointGeoRef) -> Option<serde_json::Value> {
             g
         });
     }
-    let (base, zone, north) = match code {
-        32601..=32660 => (WGS84, code - 32600, true),
-        32701..=32760 => (WGS84, code - 32700, false),
-        26901..=26923 => (NAD83, code - 26900, true),
-        25828..=25838 => (ETRS89, code - 25800, true),
-        _ => return None,
-    };
+    let (base, zone, north) = utm_zone(code)?;
     let lon0 = -183.0 + 6.0 * zone as f64;
     let hemi = if north { "N" } else { "S" };
     Some(json!({
         "$schema": schema,
         "type": "ProjectedCRS",
-        "name": format!("{} / UTM zone {zone}{hemi}", base.0),
+        "name": format!("{} / UTM zone {zone}{hemi}", base.name),
         "base_crs": geographic(base),
         "conversion": {
             "name": format!("UTM zone {zone}{hemi}"),
@@ -212,6 +204,19 @@ fn geo_metadata(geo: &PointGeoRef, bbox: Option<[f64; 4]>) -> String {
     serde_json::json!({"version": "1.1.0", "primary_column": "geometry", "columns": {"geometry": col}}).to_string()
 }
 
+/// The column names of `table` after checking that the header of the CSV `rdr` (of `what`)
+/// names them, in order.
+///
+/// Errors: `InvalidData` naming `what`, the header found and the one expected.
+pub fn check_header<R: std::io::Read>(rdr: &mut csv::Reader<R>, what: &str, table: &Table) -> std::io::Result<Vec<&'static str>> {
+    let header = rdr.headers().map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{what}: {e}")))?.clone();
+    let names: Vec<&'static str> = table.columns.iter().map(|c| c.0).collect();
+    if header.iter().collect::<Vec<_>>() != names {
+        return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{what}: header {:?}, expected {:?}", header.iter().collect::<Vec<_>>(), names)));
+    }
+    Ok(names)
+}
+
 /// Writes the CSV text `csv` (header and rows of `table`, as Sylva writes them) as the Parquet
 /// file `out`, atomically (a temporary file renamed; nothing half-written at `out`), with the
 /// GeoParquet `geo` metadata of `geo`. Streams: one row group in memory.
@@ -223,11 +228,7 @@ pub fn csv_to_parquet(csv: impl std::io::Read, what: &str, out: &Path, table: &T
     let bad = |m: String| std::io::Error::new(std::io::ErrorKind::InvalidData, m);
     crate::output::write_atomic_with(out, |f| {
         let mut rdr = csv::Reader::from_reader(csv);
-        let header = rdr.headers().map_err(|e| bad(format!("{what}: {e}")))?.clone();
-        let names: Vec<&str> = table.columns.iter().map(|c| c.0).collect();
-        if header.iter().collect::<Vec<_>>() != names {
-            return Err(bad(format!("{what}: header {:?}, expected {:?}", header.iter().collect::<Vec<_>>(), names)));
-        }
+        let names = check_header(&mut rdr, what, table)?;
         let ix = names.iter().position(|n| *n == "x_m").unwrap_or(0);
         let iy = names.iter().position(|n| *n == "y_m").unwrap_or(0);
         let ty = Arc::new(parquet::schema::parser::parse_message_type(&schema(table)).map_err(std::io::Error::other)?);

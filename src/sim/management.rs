@@ -1,5 +1,6 @@
 //! Forest management in scenarios (`[[management]]` entries): thinnings, harvests and plantings,
-//! their areas (a rectangle, inline polygons or polygons of a GeoJSON file) and their timing.
+//! their areas (a rectangle, inline polygons or polygons of a GeoJSON or GeoPackage file) and
+//! their timing.
 //! [`Management`] is the entry as written; [`Operation`] the entry resolved against the site and
 //! the species library (its region's polygons in world metres, its area, its species), which the
 //! management phase ([`super::phases::management`]) carries out.
@@ -69,10 +70,15 @@ pub struct Management {
     /// first ring the outline, further rings holes (even-odd rule).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub polygons: Option<Vec<Vec<Vec<[f64; 2]>>>>,
-    /// Area as the (Multi)Polygons of a GeoJSON file in the DEM's CRS (world metres on a uniform
-    /// site); relative paths are relative to the scenario file.
+    /// Area as the (Multi)Polygons of a vector file in the DEM's CRS (world metres on a uniform
+    /// site): a GeoPackage (`.gpkg`, [`read_gpkg_polygons`]) or else GeoJSON
+    /// ([`read_geojson_polygons`]); relative paths are relative to the scenario file.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub area_file: Option<PathBuf>,
+    /// The feature layer (table) of a GeoPackage `area_file`; its first feature layer when
+    /// omitted.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub layer: Option<String>,
     /// Only the features of `area_file` whose property equals a value.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub filter: Option<AreaFilter>,
@@ -349,6 +355,11 @@ impl Management {
         }
         if self.filter.is_some() && self.area_file.is_none() {
             return Err(bad("filter", "given".into(), "only with area_file"));
+        }
+        if let Some(l) = &self.layer {
+            if !self.area_file.as_deref().is_some_and(is_gpkg) {
+                return Err(bad("layer", format!("{l:?}"), "only with a GeoPackage area_file (`.gpkg`)"));
+            }
         }
         if let Some(a) = self.area {
             if !(a.iter().all(|v| v.is_finite()) && a[2] > a[0] && a[3] > a[1]) {
@@ -686,6 +697,49 @@ pub fn read_geojson_polygons(path: &Path, filter: Option<&AreaFilter>, ctx: &str
     Ok(out)
 }
 
+/// Whether `path` names a GeoPackage (extension `.gpkg`, any case).
+pub fn is_gpkg(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("gpkg"))
+}
+
+/// The polygons (rings of `[x, y]` in the file's coordinates) of the Polygon and MultiPolygon
+/// features of layer `layer` (the first feature layer when `None`) of GeoPackage `path`
+/// (OGC GeoPackage 1.3 §2.1: [`crate::gpkg::read_polygons`]) whose attribute column passes
+/// `filter` (the property is a column: texts as texts, numbers as numbers, `BOOLEAN` columns
+/// as booleans). When the DEM has an EPSG code (`dem_epsg`) a layer whose SRS is an EPSG code
+/// must have that one. `field` names the scenario field in messages.
+///
+/// Errors: [`Error::Invalid`] naming the scenario (`ctx`), `field`, the file and what is wrong:
+/// not a readable GeoPackage, no such layer (the layers listed), no such filter column (the
+/// columns listed), a geometry other than Polygon/MultiPolygon (naming the layer, the feature
+/// id and the type found), the layer in another CRS, no polygon, or no feature passing the
+/// filter.
+pub fn read_gpkg_polygons(path: &Path, layer: Option<&str>, filter: Option<&AreaFilter>, dem_epsg: Option<u32>, ctx: &str, field: &str) -> Result<Vec<Vec<Vec<[f64; 2]>>>> {
+    let bad = |expected: String| Error::Invalid { context: ctx.to_string(), field: field.to_string(), value: path.display().to_string(), expected };
+    let keep = filter.map(|f| move |v: &serde_json::Value| matches(v, &f.equals));
+    let fil = filter.zip(keep.as_ref()).map(|(f, k)| (f.property.as_str(), k as &dyn Fn(&serde_json::Value) -> bool));
+    let got = crate::gpkg::read_polygons(path, layer, fil).map_err(|e| bad(e.0))?;
+    let info = got.layer.clone();
+    if let (Some(want), Some((org, code))) = (dem_epsg, &info.organization) {
+        if org.eq_ignore_ascii_case("EPSG") && *code != want as i64 {
+            return Err(bad(format!("polygons in the DEM's CRS, EPSG:{want} (layer `{}` is in EPSG:{code}; reproject it, e.g. `ogr2ogr -t_srs EPSG:{want} out.gpkg {}`)", info.table, path.display())).into());
+        }
+    }
+    if got.polygons.is_empty() {
+        return Err(bad(match (filter, got.features) {
+            (Some(f), 0) => format!("a feature of layer `{}` whose column `{}` equals {} (none does)", info.table, f.property, f.equals),
+            _ => format!("at least one Polygon or MultiPolygon feature in layer `{}` (none found)", info.table),
+        })
+        .into());
+    }
+    let mut out = Vec::with_capacity(got.polygons.len());
+    for (k, (fid, p)) in got.polygons.into_iter().enumerate() {
+        check_rings(&p).map_err(|e| bad(format!("polygon {k} of the file (layer `{}`, feature {fid}): {e}", info.table)))?;
+        out.push(p);
+    }
+    Ok(out)
+}
+
 /// The parts of a site that [`resolve`] reads: its conditions (extent, georeferencing), light
 /// grid and the site cell of each light cell (`u32::MAX` where masked), and the species pool.
 pub struct SiteView<'a> {
@@ -707,7 +761,7 @@ pub struct SiteView<'a> {
 ///
 /// Errors: [`Error::Invalid`] naming `management[i].<field>`: a planted species outside the
 /// library or the pool, an area outside the site or without unmasked ground, an area file that
-/// cannot be read ([`read_geojson_polygons`]).
+/// cannot be read ([`read_geojson_polygons`], [`read_gpkg_polygons`]).
 pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary, ctx: &str) -> Result<Vec<Operation>> {
     let (ex, ey) = site.extent;
     let mut ops = Vec::with_capacity(entries.len());
@@ -715,7 +769,14 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
         let polygons = match (&m.polygons, &m.area_file) {
             (Some(p), _) => Some(p.clone()),
             (_, Some(f)) => {
-                let ps = read_geojson_polygons(f, m.filter.as_ref(), ctx, &format!("management[{i}].area_file"))?;
+                let field = format!("management[{i}].area_file");
+                let ps = if is_gpkg(f) {
+                    let g = &site.conditions.geo;
+                    let epsg = if g.crs == crate::grid::Crs::Local { None } else { g.epsg };
+                    read_gpkg_polygons(f, m.layer.as_deref(), m.filter.as_ref(), epsg, ctx, &field)?
+                } else {
+                    read_geojson_polygons(f, m.filter.as_ref(), ctx, &field)?
+                };
                 Some(ps.into_iter().map(|rings| rings.into_iter().map(|r| r.into_iter().map(|p| crs_to_world(site.conditions, p[0], p[1])).collect()).collect()).collect())
             }
             _ => None,

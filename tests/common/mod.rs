@@ -171,3 +171,16 @@ pub fn assert_same_run(one: &std::path::Path, tiled: &std::path::Path, template:
     assert!(sylva::sim::checkpoint::to_bytes(&w, &rows) == fa["checkpoint.bin"], "{what}: the per-rank checkpoints assembled differ from checkpoint.bin");
     m
 }
+
+/// Even-odd point-in-polygon (a second implementation, for the tests: the simulator's is
+/// `sim::management::Region::contains`).
+pub fn in_poly(p: &[[f64; 2]], x: f64, y: f64) -> bool {
+    let mut c = false;
+    for i in 0..p.len() {
+        let (a, b) = (p[i], p[(i + 1) % p.len()]);
+        if (a[1] > y) != (b[1] > y) && x < a[0] + (b[0] - a[0]) * (y - a[1]) / (b[1] - a[1]) {
+            c = !c;
+        }
+    }
+    c
+}
