@@ -1,20 +1,33 @@
-//! Tree inventories: CSV (columns fixed by ARCHITECTURE.md) and GeoJSON points.
+//! Tree inventories: CSV and GeoJSON points, columns as [`super::schema::INVENTORY`].
 
+use super::schema::{INVENTORY_MEASURES, N_MEASURES};
 use super::Result;
+use crate::sim::trees::{DeadTree, TreeStore};
 use crate::sim::World;
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
 
-/// The inventory CSV header (ARCHITECTURE.md).
+/// The inventory CSV header ([`super::schema::INVENTORY`]'s names; a test holds them equal).
 pub const HEADER: &str = "id,species,x_m,y_m,z_m,age_yr,height_m,dbh_cm,crown_radius_m,crown_base_m,status";
 
 /// One inventory record.
 struct Rec<'a> {
     id: u64,
     species: &'a str,
-    v: [f32; 8],
+    v: [f32; N_MEASURES],
     status: String,
+}
+
+/// The inventory's measured values ([`INVENTORY_MEASURES`]: x, y, z, age, height, DBH, crown
+/// radius, crown base) of living tree `i` of `t`.
+pub fn tree_measures(t: &TreeStore, i: usize) -> [f32; N_MEASURES] {
+    [t.x[i], t.y[i], t.z[i], t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i]]
+}
+
+/// The inventory's measured values ([`INVENTORY_MEASURES`]) of dead tree `d`.
+fn dead_measures(d: &DeadTree) -> [f32; N_MEASURES] {
+    [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base]
 }
 
 fn records(w: &World) -> Vec<Rec<'_>> {
@@ -27,9 +40,9 @@ fn records_where(w: &World, keep: impl Fn(f32, f32) -> bool) -> Vec<Rec<'_>> {
     let t = &w.stand.trees;
     let mut out: Vec<Rec> = (0..t.len())
         .filter(|&i| keep(t.x[i], t.y[i]))
-        .map(|i| Rec { id: t.id[i], species: &w.site.lib.species[t.species[i] as usize].id, v: [t.x[i], t.y[i], t.z[i], t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i]], status: "alive".into() })
+        .map(|i| Rec { id: t.id[i], species: &w.site.lib.species[t.species[i] as usize].id, v: tree_measures(t, i), status: "alive".into() })
         .collect();
-    let mut dead: Vec<Rec> = w.scratch.dead.iter().filter(|d| keep(d.x, d.y)).map(|d| Rec { id: d.id, species: &w.site.lib.species[d.species as usize].id, v: [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base], status: format!("dead:{}", d.cause.name()) }).collect();
+    let mut dead: Vec<Rec> = w.scratch.dead.iter().filter(|d| keep(d.x, d.y)).map(|d| Rec { id: d.id, species: &w.site.lib.species[d.species as usize].id, v: dead_measures(d), status: format!("dead:{}", d.cause.name()) }).collect();
     dead.sort_by_key(|r| r.id);
     out.extend(dead);
     out
@@ -47,10 +60,14 @@ pub fn inventory_csv(w: &World) -> String {
     s
 }
 
-/// Appends the inventory CSV line of `r` (with its newline) to `s`.
+/// Appends the inventory CSV line of `r` (with its newline) to `s`: the measures with their
+/// columns' decimals.
 fn csv_line(s: &mut String, r: &Rec) {
-    let v = r.v;
-    let _ = writeln!(s, "{},{},{:.2},{:.2},{:.2},{:.0},{:.2},{:.2},{:.2},{:.2},{}", r.id, r.species, v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], r.status);
+    let _ = write!(s, "{},{}", r.id, r.species);
+    for (v, c) in r.v.iter().zip(&INVENTORY_MEASURES) {
+        let _ = write!(s, ",{v:.*}", c.decimals);
+    }
+    let _ = writeln!(s, ",{}", r.status);
 }
 
 /// The regeneration-layer CSV header.
@@ -185,15 +202,23 @@ fn geojson_head(w: &World) -> String {
     s
 }
 
-/// Writes the GeoJSON feature of `r` (one line, no separator).
+/// Writes the GeoJSON feature of `r` (one line, no separator): the point (x, y in the map's
+/// coordinates, z) and as properties id, species, the measures but z (with their columns'
+/// decimals) and status.
 fn geojson_feature(f: &mut impl Write, r: &Rec, geo: &PointGeoRef) -> std::io::Result<()> {
     let v = r.v;
     let (mx, my) = geo.map(v[0] as f64, v[1] as f64);
     let prec = if geo.degrees { 7 } else { 2 };
+    let mut props = String::with_capacity(160);
+    for (v, c) in v.iter().zip(&INVENTORY_MEASURES) {
+        if c.name != "z_m" {
+            let _ = write!(props, ",\"{}\":{v:.*}", c.name, c.decimals);
+        }
+    }
     write!(
         f,
-        "{{\"type\":\"Feature\",\"geometry\":{{\"type\":\"Point\",\"coordinates\":[{mx:.prec$},{my:.prec$},{:.2}]}},\"properties\":{{\"id\":{},\"species\":\"{}\",\"x_m\":{:.2},\"y_m\":{:.2},\"age_yr\":{:.0},\"height_m\":{:.2},\"dbh_cm\":{:.2},\"crown_radius_m\":{:.2},\"crown_base_m\":{:.2},\"status\":\"{}\"}}}}",
-        v[2], r.id, r.species, v[0], v[1], v[3], v[4], v[5], v[6], v[7], r.status
+        "{{\"type\":\"Feature\",\"geometry\":{{\"type\":\"Point\",\"coordinates\":[{mx:.prec$},{my:.prec$},{:.*}]}},\"properties\":{{\"id\":{},\"species\":\"{}\"{props},\"status\":\"{}\"}}}}",
+        INVENTORY_MEASURES[2].decimals, v[2], r.id, r.species, r.status
     )
 }
 
@@ -357,9 +382,8 @@ mod tests {
     fn csv_headers_are_the_parquet_tables_columns() {
         // one list of columns: the CSV headers and the Parquet schemas name the same columns in
         // the same order (output::parquet::INVENTORY, REGENERATION)
-        let names = |t: &super::super::parquet::Table| t.columns.iter().map(|c| c.0).collect::<Vec<_>>().join(",");
-        assert_eq!(HEADER, names(&super::super::parquet::INVENTORY));
-        assert_eq!(REGENERATION_HEADER, names(&super::super::parquet::REGENERATION));
+        assert_eq!(HEADER, super::super::schema::INVENTORY.header());
+        assert_eq!(REGENERATION_HEADER, super::super::schema::REGENERATION.header());
     }
     use super::*;
     use crate::sim::{step_year, Scenario, YearReport};

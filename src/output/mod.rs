@@ -8,6 +8,7 @@ pub mod georef;
 pub mod inventory;
 pub mod parquet;
 pub mod plot;
+pub mod schema;
 pub mod stand_table;
 
 use std::io::Write;
