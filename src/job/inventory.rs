@@ -1,9 +1,11 @@
 //! Reading inventory snapshots back from a run directory (ARCHITECTURE.md "Run directory").
 
+use crate::output::schema::{INVENTORY_MEASURES, N_MEASURES};
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 
-/// One row of `inventory/year_NNNN.parquet` (or `.csv`).
+/// One row of `inventory/year_NNNN.parquet` (or `.csv`): the columns of
+/// [`crate::output::schema::INVENTORY`] (the field names are the column names).
 #[derive(Debug, Clone, PartialEq, serde::Deserialize)]
 pub struct InventoryRow {
     /// Stable tree id.
@@ -28,6 +30,20 @@ pub struct InventoryRow {
     pub crown_base_m: f32,
     /// `alive` or `dead:<cause>`.
     pub status: String,
+}
+
+impl InventoryRow {
+    /// A row from its id, species, measured values ([`INVENTORY_MEASURES`] order) and status.
+    pub fn new(id: u64, species: String, v: [f32; N_MEASURES], status: String) -> InventoryRow {
+        InventoryRow { id, species, x_m: v[0] as f64, y_m: v[1] as f64, z_m: v[2] as f64, age_yr: v[3], height_m: v[4], dbh_cm: v[5], crown_radius_m: v[6], crown_base_m: v[7], status }
+    }
+    /// The measured values in [`INVENTORY_MEASURES`] order, with the text a reader quotes for
+    /// each (the value as its column's type prints it).
+    fn measures(&self) -> [(f64, String); N_MEASURES] {
+        let d = |v: f64| (v, v.to_string());
+        let f = |v: f32| (v as f64, v.to_string());
+        [d(self.x_m), d(self.y_m), d(self.z_m), f(self.age_yr), f(self.height_m), f(self.dbh_cm), f(self.crown_radius_m), f(self.crown_base_m)]
+    }
 }
 
 /// Reads one inventory: Parquet (`.parquet`, [`crate::output::parquet::INVENTORY`]) or CSV
@@ -87,34 +103,19 @@ fn parquet_error(path: &Path, e: crate::output::OutputError) -> Error {
     }
 }
 
-/// Checks that the values of inventory row `r` (at `at()`, e.g. "line 7") can be a tree:
-/// finite positions (|x|, |y| < 10⁷ m), age 0–10,000 years, height 0–200 m, DBH 0–1,000 cm,
-/// crown radius 0–100 m, crown base 0–200 m, status `alive` or `dead:<cause>`.
+/// Checks that the values of inventory row `r` (at `at()`, e.g. "line 7") can be a tree: each
+/// measure within its column's accepted values ([`INVENTORY_MEASURES`]: finite positions
+/// (|x|, |y| ≤ 10⁷ m), age 0–10,000 years, height 0–200 m, DBH 0–1,000 cm, crown radius 0–100 m,
+/// crown base 0–200 m), status `alive` or `dead:<cause>`.
 ///
 /// # Errors
 /// [`Error::Format`] naming the file, the row, the tree id, the column, the value and what was
 /// expected.
 fn check_row(path: &Path, at: impl Fn() -> String, r: &InventoryRow) -> Result<()> {
     let bad = |col: &str, v: String, want: &str| -> Result<()> { Err(Error::format(path, format!("{} (tree id {}): column {col} = {v}: expected {want}", at(), r.id)).into()) };
-    let within = |v: f64, lo: f64, hi: f64| v.is_finite() && v >= lo && v <= hi;
-    if !within(r.x_m, -1e7, 1e7) {
-        return bad("x_m", r.x_m.to_string(), "a finite easting in metres");
-    }
-    if !within(r.y_m, -1e7, 1e7) {
-        return bad("y_m", r.y_m.to_string(), "a finite northing in metres");
-    }
-    if !r.z_m.is_finite() {
-        return bad("z_m", r.z_m.to_string(), "a finite ground elevation in metres");
-    }
-    for (col, v, hi, want) in [
-        ("age_yr", r.age_yr, 10_000.0, "an age of 0–10,000 years"),
-        ("height_m", r.height_m, 200.0, "a height of 0–200 m"),
-        ("dbh_cm", r.dbh_cm, 1000.0, "a DBH of 0–1,000 cm"),
-        ("crown_radius_m", r.crown_radius_m, 100.0, "a crown radius of 0–100 m"),
-        ("crown_base_m", r.crown_base_m, 200.0, "a crown base height of 0–200 m"),
-    ] {
-        if !within(v as f64, 0.0, hi) {
-            return bad(col, v.to_string(), want);
+    for ((v, text), c) in r.measures().into_iter().zip(&INVENTORY_MEASURES) {
+        if !c.accepts(v) {
+            return bad(c.name, text, c.expect);
         }
     }
     if r.status != "alive" && !r.status.starts_with("dead:") {
@@ -207,21 +208,7 @@ pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
 /// inventory CSV of the same year would hold them.
 pub fn rows_from_world(w: &crate::sim::World) -> Vec<InventoryRow> {
     let t = &w.stand.trees;
-    (0..t.len())
-        .map(|i| InventoryRow {
-            id: t.id[i],
-            species: w.site.lib.species[t.species[i] as usize].id.clone(),
-            x_m: t.x[i] as f64,
-            y_m: t.y[i] as f64,
-            z_m: t.z[i] as f64,
-            age_yr: t.age[i],
-            height_m: t.height[i],
-            dbh_cm: t.dbh[i],
-            crown_radius_m: t.crown_radius[i],
-            crown_base_m: t.crown_base[i],
-            status: "alive".into(),
-        })
-        .collect()
+    (0..t.len()).map(|i| InventoryRow::new(t.id[i], w.site.lib.species[t.species[i] as usize].id.clone(), crate::output::inventory::tree_measures(t, i), "alive".into())).collect()
 }
 
 /// One row of `inventory/year_NNNN_regeneration.csv` (the regeneration layer: one sapling

@@ -95,7 +95,8 @@ fn write_points(csv: impl std::io::Read, what: &str, path: &Path, table: &Table,
     let cols: Vec<String> = table
         .columns
         .iter()
-        .map(|(n, k)| {
+        .map(|c| {
+            let (n, k) = (c.name, c.kind);
             let ty = match k {
                 Kind::Int64 => "INTEGER",
                 Kind::Utf8 => "TEXT",
@@ -110,7 +111,7 @@ fn write_points(csv: impl std::io::Read, what: &str, path: &Path, table: &Table,
     let mut bbox: Option<[f64; 4]> = None;
     {
         let marks: Vec<String> = (0..=table.columns.len()).map(|k| format!("?{}", k + 1)).collect();
-        let names_sql: Vec<String> = std::iter::once(GEOMETRY_COLUMN.to_string()).chain(table.columns.iter().map(|c| quote(c.0))).collect();
+        let names_sql: Vec<String> = std::iter::once(GEOMETRY_COLUMN.to_string()).chain(table.columns.iter().map(|c| quote(c.name))).collect();
         let mut ins = tx.prepare(&format!("INSERT INTO {t} ({}) VALUES ({})", names_sql.join(", "), marks.join(", "))).map_err(sql)?;
         let mut rec = csv::StringRecord::new();
         let mut line = 1usize;
@@ -123,8 +124,9 @@ fn write_points(csv: impl std::io::Read, what: &str, path: &Path, table: &Table,
                 Some(b) => [b[0].min(mx), b[1].min(my), b[2].max(mx), b[3].max(my)],
             });
             ins.raw_bind_parameter(1, geometry_blob(srs_id, mx, my)).map_err(sql)?;
-            for (k, (n, kind)) in table.columns.iter().enumerate() {
-                let r = match kind {
+            for (k, c) in table.columns.iter().enumerate() {
+                let n = c.name;
+                let r = match c.kind {
                     Kind::Int64 => ins.raw_bind_parameter(k + 2, rec[k].parse::<i64>().map_err(|_| bad(format!("{what} line {line}: column {n} is {:?}, expected an integer", &rec[k])))?),
                     Kind::Utf8 => ins.raw_bind_parameter(k + 2, &rec[k]),
                     Kind::Double | Kind::Float => ins.raw_bind_parameter(k + 2, num(k)?),

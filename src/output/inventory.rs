@@ -1,21 +1,34 @@
-//! Tree inventories: CSV (columns fixed by ARCHITECTURE.md), Parquet ([`super::parquet`]) and
-//! the final year's GeoPackage point layer ([`super::gpkg`]).
+//! Tree inventories: CSV, Parquet ([`super::parquet`]) and the final year's GeoPackage point
+//! layer ([`super::gpkg`]), columns as [`super::schema::INVENTORY`].
 
+use super::schema::{INVENTORY_MEASURES, N_MEASURES};
 use super::Result;
+use crate::sim::trees::{DeadTree, TreeStore};
 use crate::sim::World;
 use std::fmt::Write as _;
 use std::io::Write;
 use std::path::Path;
 
-/// The inventory CSV header (ARCHITECTURE.md).
+/// The inventory CSV header ([`super::schema::INVENTORY`]'s names; a test holds them equal).
 pub const HEADER: &str = "id,species,x_m,y_m,z_m,age_yr,height_m,dbh_cm,crown_radius_m,crown_base_m,status";
 
 /// One inventory record.
 struct Rec<'a> {
     id: u64,
     species: &'a str,
-    v: [f32; 8],
+    v: [f32; N_MEASURES],
     status: String,
+}
+
+/// The inventory's measured values ([`INVENTORY_MEASURES`]: x, y, z, age, height, DBH, crown
+/// radius, crown base) of living tree `i` of `t`.
+pub fn tree_measures(t: &TreeStore, i: usize) -> [f32; N_MEASURES] {
+    [t.x[i], t.y[i], t.z[i], t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i]]
+}
+
+/// The inventory's measured values ([`INVENTORY_MEASURES`]) of dead tree `d`.
+fn dead_measures(d: &DeadTree) -> [f32; N_MEASURES] {
+    [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base]
 }
 
 fn records(w: &World) -> Vec<Rec<'_>> {
@@ -28,9 +41,9 @@ fn records_where(w: &World, keep: impl Fn(f32, f32) -> bool) -> Vec<Rec<'_>> {
     let t = &w.stand.trees;
     let mut out: Vec<Rec> = (0..t.len())
         .filter(|&i| keep(t.x[i], t.y[i]))
-        .map(|i| Rec { id: t.id[i], species: &w.site.lib.species[t.species[i] as usize].id, v: [t.x[i], t.y[i], t.z[i], t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i]], status: "alive".into() })
+        .map(|i| Rec { id: t.id[i], species: &w.site.lib.species[t.species[i] as usize].id, v: tree_measures(t, i), status: "alive".into() })
         .collect();
-    let mut dead: Vec<Rec> = w.scratch.dead.iter().filter(|d| keep(d.x, d.y)).map(|d| Rec { id: d.id, species: &w.site.lib.species[d.species as usize].id, v: [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base], status: format!("dead:{}", d.cause.name()) }).collect();
+    let mut dead: Vec<Rec> = w.scratch.dead.iter().filter(|d| keep(d.x, d.y)).map(|d| Rec { id: d.id, species: &w.site.lib.species[d.species as usize].id, v: dead_measures(d), status: format!("dead:{}", d.cause.name()) }).collect();
     dead.sort_by_key(|r| r.id);
     out.extend(dead);
     out
@@ -48,10 +61,14 @@ pub fn inventory_csv(w: &World) -> String {
     s
 }
 
-/// Appends the inventory CSV line of `r` (with its newline) to `s`.
+/// Appends the inventory CSV line of `r` (with its newline) to `s`: the measures with their
+/// columns' decimals.
 fn csv_line(s: &mut String, r: &Rec) {
-    let v = r.v;
-    let _ = writeln!(s, "{},{},{:.2},{:.2},{:.2},{:.0},{:.2},{:.2},{:.2},{:.2},{}", r.id, r.species, v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], r.status);
+    let _ = write!(s, "{},{}", r.id, r.species);
+    for (v, c) in r.v.iter().zip(&INVENTORY_MEASURES) {
+        let _ = write!(s, ",{v:.*}", c.decimals);
+    }
+    let _ = writeln!(s, ",{}", r.status);
 }
 
 /// The regeneration-layer CSV header.
@@ -302,9 +319,8 @@ mod tests {
     fn csv_headers_are_the_parquet_tables_columns() {
         // one list of columns: the CSV headers and the Parquet schemas name the same columns in
         // the same order (output::parquet::INVENTORY, REGENERATION)
-        let names = |t: &super::super::parquet::Table| t.columns.iter().map(|c| c.0).collect::<Vec<_>>().join(",");
-        assert_eq!(HEADER, names(&super::super::parquet::INVENTORY));
-        assert_eq!(REGENERATION_HEADER, names(&super::super::parquet::REGENERATION));
+        assert_eq!(HEADER, super::super::schema::INVENTORY.header());
+        assert_eq!(REGENERATION_HEADER, super::super::schema::REGENERATION.header());
     }
     use super::*;
     use crate::sim::{step_year, Scenario, YearReport};

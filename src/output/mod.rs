@@ -9,6 +9,7 @@ pub mod gpkg;
 pub mod inventory;
 pub mod parquet;
 pub mod plot;
+pub mod schema;
 pub mod stand_table;
 
 use std::io::Write;

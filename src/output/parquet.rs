@@ -2,8 +2,8 @@
 //! inventory and the regeneration layer of every snapshot, so that pandas/geopandas, R
 //! (`arrow`, `sfarrow`), DuckDB and QGIS read them directly.
 //!
-//! A file holds the columns of the CSV table of the same name (names and units as
-//! ARCHITECTURE.md and `output::inventory::HEADER` give them; the values are the CSV's, so a
+//! A file holds the columns of the CSV table of the same name (names, types and units as
+//! [`super::schema`] gives them; the values are the CSV's, so a
 //! Parquet and a CSV run hold the same numbers), zstd-compressed, in row groups of
 //! [`ROW_GROUP_ROWS`] rows, plus a `geometry` column: the point (`x_m`, `y_m`) in the DEM's
 //! coordinate reference system as WKB (ISO 19125 well-known binary, little-endian 2-D point),
@@ -33,64 +33,7 @@ pub const ROW_GROUP_ROWS: usize = 131_072;
 /// tenfold against CSV).
 const ZSTD_LEVEL: i32 = 3;
 
-/// Physical type of a column.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Kind {
-    /// 64-bit integer.
-    Int64,
-    /// UTF-8 text.
-    Utf8,
-    /// 64-bit float.
-    Double,
-    /// 32-bit float.
-    Float,
-}
-
-/// A table's columns, in file order: (name, kind). The CSV of the table has the same columns in
-/// the same order; the Parquet file adds `geometry` after them.
-#[derive(Debug, Clone, Copy)]
-pub struct Table {
-    /// Message name of the Parquet schema.
-    pub name: &'static str,
-    /// Columns (name as in the CSV header, kind).
-    pub columns: &'static [(&'static str, Kind)],
-}
-
-/// The tree inventory (`inventory/year_NNNN.parquet`): id, species id, position x_m, y_m (m
-/// from the site's south-west corner), ground elevation z_m (m), age_yr (years), height_m (m),
-/// dbh_cm (cm), crown_radius_m (m), crown_base_m (m), status (`alive` or `dead:<cause>`).
-pub const INVENTORY: Table = Table {
-    name: "inventory",
-    columns: &[
-        ("id", Kind::Int64),
-        ("species", Kind::Utf8),
-        ("x_m", Kind::Double),
-        ("y_m", Kind::Double),
-        ("z_m", Kind::Double),
-        ("age_yr", Kind::Float),
-        ("height_m", Kind::Float),
-        ("dbh_cm", Kind::Float),
-        ("crown_radius_m", Kind::Float),
-        ("crown_base_m", Kind::Float),
-        ("status", Kind::Utf8),
-    ],
-};
-
-/// The regeneration layer (`inventory/year_NNNN_regeneration.parquet`): light cell index,
-/// species id, cell centre x_m, y_m (m), stems, stems_per_ha, mean height_m (m), age_yr.
-pub const REGENERATION: Table = Table {
-    name: "regeneration",
-    columns: &[
-        ("cell", Kind::Int64),
-        ("species", Kind::Utf8),
-        ("x_m", Kind::Double),
-        ("y_m", Kind::Double),
-        ("stems", Kind::Int64),
-        ("stems_per_ha", Kind::Double),
-        ("height_m", Kind::Float),
-        ("age_yr", Kind::Float),
-    ],
-};
+pub use super::schema::{Kind, Table, INVENTORY, REGENERATION};
 
 /// One column's values while a row group fills.
 enum Col {
@@ -114,14 +57,15 @@ impl Col {
 /// The Parquet schema of `t` (every column required, plus `geometry` as binary).
 fn schema(t: &Table) -> String {
     let mut s = format!("message {} {{\n", t.name);
-    for (name, k) in t.columns {
+    for c in t.columns {
+        let (name, k) = (c.name, c.kind);
         let ty = match k {
             Kind::Int64 => "int64",
             Kind::Utf8 => "binary",
             Kind::Double => "double",
             Kind::Float => "float",
         };
-        let ann = if *k == Kind::Utf8 { " (UTF8)" } else { "" };
+        let ann = if k == Kind::Utf8 { " (UTF8)" } else { "" };
         s.push_str(&format!("  required {ty} {name}{ann};\n"));
     }
     s.push_str("  required binary geometry;\n}\n");
@@ -210,7 +154,7 @@ fn geo_metadata(geo: &PointGeoRef, bbox: Option<[f64; 4]>) -> String {
 /// Errors: `InvalidData` naming `what`, the header found and the one expected.
 pub fn check_header<R: std::io::Read>(rdr: &mut csv::Reader<R>, what: &str, table: &Table) -> std::io::Result<Vec<&'static str>> {
     let header = rdr.headers().map_err(|e| std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{what}: {e}")))?.clone();
-    let names: Vec<&'static str> = table.columns.iter().map(|c| c.0).collect();
+    let names: Vec<&'static str> = table.columns.iter().map(|c| c.name).collect();
     if header.iter().collect::<Vec<_>>() != names {
         return Err(std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{what}: header {:?}, expected {:?}", header.iter().collect::<Vec<_>>(), names)));
     }
@@ -234,7 +178,7 @@ pub fn csv_to_parquet(csv: impl std::io::Read, what: &str, out: &Path, table: &T
         let ty = Arc::new(parquet::schema::parser::parse_message_type(&schema(table)).map_err(std::io::Error::other)?);
         let props = WriterProperties::builder().set_compression(Compression::ZSTD(ZstdLevel::try_new(ZSTD_LEVEL).map_err(std::io::Error::other)?)).set_created_by(format!("sylva {}", env!("CARGO_PKG_VERSION"))).build();
         let mut w = SerializedFileWriter::new(f, ty, Arc::new(props)).map_err(std::io::Error::other)?;
-        let mut cols: Vec<Col> = table.columns.iter().map(|c| Col::of(c.1)).collect();
+        let mut cols: Vec<Col> = table.columns.iter().map(|c| Col::of(c.kind)).collect();
         let mut geom: Vec<ByteArray> = Vec::new();
         let mut bbox: Option<[f64; 4]> = None;
         let mut rec = csv::StringRecord::new();
@@ -338,7 +282,8 @@ pub fn read_table(path: &Path, table: &Table) -> Result<Columns> {
         let reader = SerializedFileReader::new(file).map_err(|e| bad(format!("not a Parquet file ({e})")))?;
         let schema = reader.metadata().file_metadata().schema_descr_ptr();
         let mut idx = Vec::new();
-        for (name, kind) in table.columns {
+        for c in table.columns {
+            let (name, kind) = (&c.name, c.kind);
             let i = (0..schema.num_columns()).find(|&i| schema.column(i).name() == *name).ok_or_else(|| bad(format!("no column {name:?} (expected the columns of ARCHITECTURE.md's {} table)", table.name)))?;
             let phys = schema.column(i).physical_type();
             let want = match kind {
@@ -353,8 +298,9 @@ pub fn read_table(path: &Path, table: &Table) -> Result<Columns> {
             idx.push(i);
         }
         let mut out = Columns::default();
-        for ((name, kind), _) in table.columns.iter().zip(&idx) {
-            match kind {
+        for (c, _) in table.columns.iter().zip(&idx) {
+            let name = c.name;
+            match c.kind {
                 Kind::Int64 => out.ints.push((name.to_string(), Vec::new())),
                 Kind::Utf8 => out.texts.push((name.to_string(), Vec::new())),
                 Kind::Double => out.doubles.push((name.to_string(), Vec::new())),
@@ -364,7 +310,8 @@ pub fn read_table(path: &Path, table: &Table) -> Result<Columns> {
         for g in 0..reader.num_row_groups() {
             let rg = reader.get_row_group(g).map_err(std::io::Error::other)?;
             let n = rg.metadata().num_rows() as usize;
-            for ((name, kind), &i) in table.columns.iter().zip(&idx) {
+            for (c, &i) in table.columns.iter().zip(&idx) {
+                let (name, kind) = (&c.name, c.kind);
                 let cr = rg.get_column_reader(i).map_err(std::io::Error::other)?;
                 let max_def = schema.column(i).max_def_level();
                 match kind {

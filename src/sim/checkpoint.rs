@@ -14,8 +14,9 @@
 
 use super::stats::StandRow;
 use super::cohorts::{Cohorts, RegenLedger, N_REGEN_CAUSES};
-use super::trees::{TreeStore, N_CAUSES};
+use super::trees::{TreeStore, F32_COLUMN_NAMES, N_CAUSES};
 use super::world::World;
+use super::codec::{Count, Dec, Enc, Short, Sink};
 use crate::error::{Error, Result};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -272,28 +273,6 @@ fn check_identity(stored: &[(String, String)], w: &World, path: &Path) -> Result
     ))
 }
 
-/// Where the encoder puts its bytes: a counter (the file length, known before writing), or a
-/// writer that keeps the running CRC-32 and the first I/O error.
-trait Sink {
-    fn put(&mut self, b: &[u8]);
-    /// Counts `n` bytes without being given them (only a counter accepts this).
-    fn skip(&mut self, _n: u64) -> bool {
-        false
-    }
-}
-
-/// Counts bytes.
-struct Count(u64);
-impl Sink for Count {
-    fn put(&mut self, b: &[u8]) {
-        self.0 += b.len() as u64;
-    }
-    fn skip(&mut self, n: u64) -> bool {
-        self.0 += n;
-        true
-    }
-}
-
 /// Writes to `w`, hashing what it writes; after an error it writes nothing more.
 struct Out<'a, X: std::io::Write> {
     w: &'a mut X,
@@ -308,90 +287,6 @@ impl<X: std::io::Write> Sink for Out<'_, X> {
                 self.err = Some(e);
             }
         }
-    }
-}
-
-/// Little-endian encoding into a [`Sink`]; arrays go through a small buffer, so a store of
-/// millions of trees is streamed to the file without a copy of it in memory.
-struct W<'a, S: Sink>(&'a mut S);
-impl<S: Sink> W<'_, S> {
-    fn u64(&mut self, v: u64) {
-        self.0.put(&v.to_le_bytes());
-    }
-    fn each<T: Copy, const N: usize>(&mut self, v: &[T], f: impl Fn(T) -> [u8; N]) {
-        // the counting pass needs only the length
-        if self.0.skip((N * v.len()) as u64) {
-            return;
-        }
-        let mut buf = Vec::with_capacity(N * 4096);
-        for c in v.chunks(4096) {
-            buf.clear();
-            for &x in c {
-                buf.extend_from_slice(&f(x));
-            }
-            self.0.put(&buf);
-        }
-    }
-    fn f32s(&mut self, v: &[f32]) {
-        self.u64(v.len() as u64);
-        self.each(v, |x| x.to_bits().to_le_bytes());
-    }
-    fn f64(&mut self, v: f64) {
-        self.u64(v.to_bits());
-    }
-    fn u32s(&mut self, v: &[u32]) {
-        self.u64(v.len() as u64);
-        self.each(v, |x| x.to_le_bytes());
-    }
-    fn str(&mut self, s: &str) {
-        self.u64(s.len() as u64);
-        self.0.put(s.as_bytes());
-    }
-}
-
-struct R<'a> {
-    b: &'a [u8],
-    p: usize,
-    path: &'a Path,
-}
-impl R<'_> {
-    fn err(&self) -> Error {
-        Error::format(self.path, format!("checkpoint truncated or corrupt at byte {}", self.p))
-    }
-    fn u64(&mut self) -> Result<u64> {
-        let s = self.b.get(self.p..self.p + 8).ok_or_else(|| self.err())?;
-        self.p += 8;
-        let mut a = [0u8; 8];
-        a.copy_from_slice(s);
-        Ok(u64::from_le_bytes(a))
-    }
-    fn len(&mut self, elem: usize) -> Result<usize> {
-        let n = self.u64()? as usize;
-        if n.saturating_mul(elem) > self.b.len() - self.p.min(self.b.len()) {
-            return Err(self.err());
-        }
-        Ok(n)
-    }
-    fn f32s(&mut self) -> Result<Vec<f32>> {
-        let n = self.len(4)?;
-        let s = &self.b[self.p..self.p + 4 * n];
-        self.p += 4 * n;
-        Ok(s.chunks_exact(4).map(|c| f32::from_bits(u32::from_le_bytes([c[0], c[1], c[2], c[3]]))).collect())
-    }
-    fn f64(&mut self) -> Result<f64> {
-        Ok(f64::from_bits(self.u64()?))
-    }
-    fn u32s(&mut self) -> Result<Vec<u32>> {
-        let n = self.len(4)?;
-        let s = &self.b[self.p..self.p + 4 * n];
-        self.p += 4 * n;
-        Ok(s.chunks_exact(4).map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect())
-    }
-    fn str(&mut self) -> Result<String> {
-        let n = self.len(1)?;
-        let s = &self.b[self.p..self.p + n];
-        self.p += n;
-        String::from_utf8(s.to_vec()).map_err(|_| self.err())
     }
 }
 
@@ -412,12 +307,12 @@ pub fn to_bytes(w: &World, rows: &[StandRow]) -> Vec<u8> {
 pub fn write_to(w: &World, rows: &[StandRow], out: &mut impl std::io::Write) -> std::io::Result<()> {
     let id = identity(w);
     let mut count = Count(0);
-    encode(w, rows, &id, &mut W(&mut count));
+    encode(w, rows, &id, &mut Enc(&mut count));
     let len = PREFIX as u64 + count.0 + CRC_LEN as u64;
     let mut o = Out { w: out, crc: crc32fast::Hasher::new(), err: None };
     o.put(&header());
     o.put(&len.to_le_bytes());
-    encode(w, rows, &id, &mut W(&mut o));
+    encode(w, rows, &id, &mut Enc(&mut o));
     if let Some(e) = o.err {
         return Err(e);
     }
@@ -426,7 +321,7 @@ pub fn write_to(w: &World, rows: &[StandRow], out: &mut impl std::io::Write) -> 
 }
 
 /// The identity and the body (everything between the file length and the checksum).
-fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mut W<'_, S>) {
+fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mut Enc<S>) {
     o.u64(id.len() as u64);
     for (k, v) in id {
         o.str(k);
@@ -493,6 +388,11 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
     }
 }
 
+/// The error of a checkpoint that ends early or holds a malformed value at byte `at`.
+fn corrupt(path: &Path, at: usize) -> Error {
+    Error::format(path, format!("checkpoint truncated or corrupt at byte {at}"))
+}
+
 /// Restores a checkpoint into `w` (built from the same scenario) and returns the stand table.
 ///
 /// Errors: [`Error::Format`] naming `path` when the bytes are not a checkpoint (or of another
@@ -504,8 +404,9 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     check_header(bytes, path)?;
     let end = check_seal(bytes, path)?;
     let bytes = &bytes[..end];
-    let mut r = R { b: bytes, p: PREFIX, path };
-    let n_id = r.len(16)?;
+    let fail = |s: Short| corrupt(path, s.at());
+    let mut r = Dec::at(bytes, PREFIX, &fail);
+    let n_id = r.count(16)?;
     let mut stored = Vec::with_capacity(n_id);
     for _ in 0..n_id {
         stored.push((r.str()?, r.str()?));
@@ -513,12 +414,10 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     check_identity(&stored, w, path)?;
     let year = r.u64()? as u32;
     let mut t = TreeStore { next_id: r.u64()?, ..Default::default() };
-    let n = r.len(8)?;
-    t.id = (0..n).map(|_| r.u64()).collect::<Result<_>>()?;
-    let n = r.len(2)?;
-    let s = &bytes[r.p..r.p + 2 * n];
-    r.p += 2 * n;
-    t.species = s.chunks_exact(2).map(|c| u16::from_le_bytes([c[0], c[1]])).collect();
+    let n = r.count(8)?;
+    t.id = r.u64s_n(n)?;
+    let n = r.count(2)?;
+    t.species = r.u16s_n(n)?;
     if t.species.len() != t.id.len() {
         return Err(Error::format(path, format!("checkpoint has {} tree ids but {} tree species (corrupt)", t.id.len(), t.species.len())));
     }
@@ -526,7 +425,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     for c in t.f32_columns_mut() {
         *c = r.f32s()?;
         if c.len() != n_trees {
-            return Err(r.err());
+            return Err(corrupt(path, r.pos()));
         }
     }
     if t.species.iter().any(|&s| s as usize >= w.site.lib.species.len()) {
@@ -535,9 +434,10 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     // positions inside the terrain, sizes finite and non-negative: a corrupt value would
     // otherwise index outside the light grid or spread NaN through the stand
     let (ex, ey) = (w.site.extent.0 as f32, w.site.extent.1 as f32);
+    // (every column finite and, but for the elevation z, non-negative)
+    let columns = t.f32_columns();
     for i in 0..t.id.len() {
-        let ok = (0.0..=ex).contains(&t.x[i]) && (0.0..=ey).contains(&t.y[i]) && t.z[i].is_finite()
-            && [t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i], t.light[i], t.vigour[i], t.suitability[i]].iter().all(|v| v.is_finite() && *v >= 0.0);
+        let ok = t.x[i] <= ex && t.y[i] <= ey && columns.iter().zip(F32_COLUMN_NAMES).all(|(c, name)| c[i].is_finite() && (name == "z" || c[i] >= 0.0));
         if !ok {
             return Err(Error::format(path, format!("checkpoint tree {} (id {}): position or size out of range (x {}, y {}, height {}, dbh {}): corrupt", i, t.id[i], t.x[i], t.y[i], t.height[i], t.dbh[i])));
         }
@@ -566,7 +466,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     cohorts.vigour = r.f32s()?;
     let nc = cohorts.cell.len();
     if [cohorts.pool.len(), cohorts.stems.len(), cohorts.height.len(), cohorts.age.len(), cohorts.vigour.len()].iter().any(|&l| l != nc) {
-        return Err(r.err());
+        return Err(corrupt(path, r.pos()));
     }
     let bad_f = |v: &[f32]| v.iter().any(|x| !(x.is_finite() && *x >= 0.0));
     if bad_f(&cohorts.height) || bad_f(&cohorts.age) || bad_f(&cohorts.vigour) || seeds.iter().any(|g| bad_f(&g.data)) {
@@ -577,7 +477,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     }
     let np = r.u64()? as usize;
     if np != w.site.pool.len() {
-        return Err(r.err());
+        return Err(corrupt(path, r.pos()));
     }
     let mut ledger = RegenLedger::new(np);
     for p in 0..np {
@@ -587,7 +487,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             *d = r.u64()?;
         }
     }
-    let nr = r.len(8)?;
+    let nr = r.count(8)?;
     let mut rows = Vec::with_capacity(nr);
     for _ in 0..nr {
         let year = r.u64()? as u32;
@@ -595,7 +495,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
         for x in v.iter_mut() {
             *x = r.f64()?;
         }
-        let k = r.len(16)?;
+        let k = r.count(16)?;
         let (mut a, mut b) = (Vec::new(), Vec::new());
         for _ in 0..k {
             a.push(r.f64()?);
@@ -639,8 +539,8 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             precipitation_factor: m[4],
         });
     }
-    if r.p != bytes.len() {
-        return Err(Error::format(path, format!("checkpoint has {} bytes after its stand table: corrupt", bytes.len() - r.p)));
+    if r.rest() != 0 {
+        return Err(Error::format(path, format!("checkpoint has {} bytes after its stand table: corrupt", r.rest())));
     }
     w.stand.trees = t;
     w.stand.year = year;

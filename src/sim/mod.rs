@@ -9,6 +9,7 @@
 
 pub mod bucket;
 pub mod checkpoint;
+pub mod codec;
 pub mod climate_change;
 pub mod cohorts;
 pub mod density;

@@ -36,6 +36,7 @@ use super::density;
 use super::step::{Halo, PHASES};
 use super::light_grid::{CellRect, LightGrid};
 use super::step::YearReport;
+use super::codec::{self, Dec, Short};
 use super::trees::{DeadTree, DeathCause, TreeStore, N_CAUSES, N_F32_COLUMNS};
 use super::world::{Site, Tallies, World, KERNEL_CELLS, SEED_CELL_M};
 use crate::error::{Error, Result};
@@ -343,101 +344,66 @@ impl Layout {
     }
 }
 
-/// Little-endian writer of the messages.
-#[derive(Default)]
-struct Enc(Vec<u8>);
+/// A message under way ([`super::codec`]).
+type Enc = codec::Enc<Vec<u8>>;
 
-impl Enc {
-    fn u64(&mut self, v: u64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
+/// The trees `idx` of `t`: count, ids, species, then each of [`TreeStore::f32_columns`].
+fn put_trees(e: &mut Enc, t: &TreeStore, idx: &[usize]) {
+    e.u64(idx.len() as u64);
+    for &i in idx {
+        e.u64(t.id[i]);
     }
-    fn f32(&mut self, v: f32) {
-        self.0.extend_from_slice(&v.to_le_bytes());
+    for &i in idx {
+        e.u16(t.species[i]);
     }
-    fn trees(&mut self, t: &TreeStore, idx: &[usize]) {
-        self.u64(idx.len() as u64);
+    for c in t.f32_columns() {
         for &i in idx {
-            self.u64(t.id[i]);
+            e.f32(c[i]);
         }
-        for &i in idx {
-            self.0.extend_from_slice(&t.species[i].to_le_bytes());
-        }
-        for c in t.f32_columns() {
-            for &i in idx {
-                self.f32(c[i]);
-            }
-        }
-    }
-    /// The columns the stand table reads: id, species, height, DBH.
-    fn lean_trees(&mut self, t: &TreeStore) {
-        self.u64(t.len() as u64);
-        t.id.iter().for_each(|&v| self.u64(v));
-        t.species.iter().for_each(|&v| self.0.extend_from_slice(&v.to_le_bytes()));
-        t.height.iter().for_each(|&v| self.f32(v));
-        t.dbh.iter().for_each(|&v| self.f32(v));
     }
 }
 
-/// Reader of the messages of [`Enc`]; every read checks the length.
-struct Dec<'a> {
-    b: &'a [u8],
-    p: usize,
-    peer: usize,
+/// The columns the stand table reads: id, species, height, DBH.
+fn put_lean_trees(e: &mut Enc, t: &TreeStore) {
+    e.u64(t.len() as u64);
+    e.each(&t.id, |v| v.to_le_bytes());
+    e.each(&t.species, |v| v.to_le_bytes());
+    for c in [&t.height, &t.dbh] {
+        e.each(c, |v| v.to_bits().to_le_bytes());
+    }
 }
 
-impl<'a> Dec<'a> {
-    fn new(b: &'a [u8], peer: usize) -> Self {
-        Dec { b, p: 0, peer }
+/// How a message from rank `peer` that ends early or holds too large a count is refused.
+fn short_message(peer: usize) -> impl Fn(Short) -> Error {
+    move |s| Error::Exchange {
+        peer,
+        reason: match s {
+            Short::End { len, at, need } => format!("message of {len} bytes ends at byte {at} (expected {need} more)"),
+            Short::Count { n, rest, .. } => format!("count {n} larger than the rest of the message ({rest} bytes)"),
+            Short::Utf8 { at } => format!("text that is not UTF-8 ending at byte {at}"),
+        },
     }
-    fn take(&mut self, n: usize) -> Result<&'a [u8]> {
-        if self.b.len() - self.p < n {
-            return Err(Error::Exchange { peer: self.peer, reason: format!("message of {} bytes ends at byte {} (expected {n} more)", self.b.len(), self.p) });
-        }
-        let s = &self.b[self.p..self.p + n];
-        self.p += n;
-        Ok(s)
+}
+
+/// The trees of [`put_trees`].
+fn get_trees(d: &mut Dec<'_>) -> Result<TreeStore> {
+    let n = d.count(8 + 2 + N_F32_COLUMNS * 4)?;
+    let mut t = TreeStore { id: d.u64s_n(n)?, ..Default::default() };
+    t.species = d.u16s_n(n)?;
+    for c in t.f32_columns_mut() {
+        *c = d.f32s_n(n)?;
     }
-    fn u64(&mut self) -> Result<u64> {
-        let s = self.take(8)?;
-        let mut a = [0u8; 8];
-        a.copy_from_slice(s);
-        Ok(u64::from_le_bytes(a))
-    }
-    fn u16(&mut self) -> Result<u16> {
-        let s = self.take(2)?;
-        Ok(u16::from_le_bytes([s[0], s[1]]))
-    }
-    fn f32(&mut self) -> Result<f32> {
-        let s = self.take(4)?;
-        Ok(f32::from_le_bytes([s[0], s[1], s[2], s[3]]))
-    }
-    fn count(&mut self, item_bytes: usize) -> Result<usize> {
-        let n = self.u64()? as usize;
-        if n.saturating_mul(item_bytes) > self.b.len() - self.p {
-            return Err(Error::Exchange { peer: self.peer, reason: format!("count {n} larger than the rest of the message ({} bytes)", self.b.len() - self.p) });
-        }
-        Ok(n)
-    }
-    fn f32s(&mut self, n: usize) -> Result<Vec<f32>> {
-        (0..n).map(|_| self.f32()).collect()
-    }
-    fn trees(&mut self) -> Result<TreeStore> {
-        let n = self.count(8 + 2 + N_F32_COLUMNS * 4)?;
-        let mut t = TreeStore { id: (0..n).map(|_| self.u64()).collect::<Result<_>>()?, ..Default::default() };
-        t.species = (0..n).map(|_| self.u16()).collect::<Result<_>>()?;
-        for c in t.f32_columns_mut() {
-            *c = self.f32s(n)?;
-        }
-        Ok(t)
-    }
-    fn lean_trees(&mut self) -> Result<TreeStore> {
-        let n = self.count(8 + 2 + 2 * 4)?;
-        let mut t = TreeStore { id: (0..n).map(|_| self.u64()).collect::<Result<_>>()?, ..Default::default() };
-        t.species = (0..n).map(|_| self.u16()).collect::<Result<_>>()?;
-        t.height = self.f32s(n)?;
-        t.dbh = self.f32s(n)?;
-        Ok(t)
-    }
+    Ok(t)
+}
+
+/// The trees of [`put_lean_trees`].
+fn get_lean_trees(d: &mut Dec<'_>) -> Result<TreeStore> {
+    let n = d.count(8 + 2 + 2 * 4)?;
+    let mut t = TreeStore { id: d.u64s_n(n)?, ..Default::default() };
+    t.species = d.u16s_n(n)?;
+    t.height = d.f32s_n(n)?;
+    t.dbh = d.f32s_n(n)?;
+    Ok(t)
 }
 
 /// One tile of a tiled run: a [`World`] whose stand holds only the tile's trees and cohorts,
@@ -526,13 +492,13 @@ impl Tile {
         let source = |i: usize| halo != Halo::SeedSources || tr.age[i] >= lib.species[tr.species[i] as usize].life.maturity_age_yr;
         let mut out = Vec::with_capacity(n);
         for k in 0..n {
-            let mut e = Enc::default();
+            let mut e = codec::Enc(Vec::new());
             e.f32(max_r);
             if k != self.me {
                 let idx: Vec<usize> = (0..tr.len()).filter(|&i| source(i) && self.layout.in_halo(k, tr.x[i], tr.y[i], m)).collect();
-                e.trees(tr, &idx);
+                put_trees(&mut e, tr, &idx);
             } else {
-                e.trees(tr, &[]);
+                put_trees(&mut e, tr, &[]);
             }
             out.push(e.0);
         }
@@ -542,9 +508,10 @@ impl Tile {
         let mut parts = Vec::with_capacity(n);
         let mut crown = 0f32;
         for (k, m) in got.iter().enumerate() {
-            let mut d = Dec::new(m, k);
+            let fail = short_message(k);
+            let mut d = Dec::new(m, &fail);
             crown = crown.max(d.f32()?);
-            let p = d.trees()?;
+            let p = get_trees(&mut d)?;
             if k != self.me {
                 parts.push(p);
             }
@@ -601,8 +568,8 @@ impl Tile {
         let t0 = Instant::now();
         (PHASES[stats].run)(&mut self.world, &mut report);
         report.row = None;
-        let mut e = Enc::default();
-        e.lean_trees(&self.world.stand.trees);
+        let mut e = codec::Enc(Vec::new());
+        put_lean_trees(&mut e, &self.world.stand.trees);
         for c in DeathCause::ALL {
             e.u64(self.world.scratch.dead.iter().filter(|d| d.cause == c).count() as u64);
         }
@@ -619,8 +586,9 @@ impl Tile {
             let mut deaths = [0u64; N_CAUSES];
             let (mut stems, mut ry, mut est, mut died) = (0u64, RegenYear::default(), 0usize, 0usize);
             for (k, m) in got.iter().enumerate() {
-                let mut d = Dec::new(m, k);
-                parts.push(d.lean_trees()?);
+                let fail = short_message(k);
+                let mut d = Dec::new(m, &fail);
+                parts.push(get_lean_trees(&mut d)?);
                 for v in deaths.iter_mut() {
                     *v += d.u64()?;
                 }
@@ -663,7 +631,7 @@ impl Tile {
         }
         let mut pairs: Vec<(usize, f64)> = sums.into_iter().collect();
         pairs.sort_unstable_by_key(|p| p.0);
-        let mut e = Enc::default();
+        let mut e = codec::Enc(Vec::new());
         e.u64(pairs.len() as u64);
         for (b, v) in &pairs {
             e.u64(*b as u64);
@@ -679,7 +647,8 @@ impl Tile {
             acc = vec![0f64; bins];
             let mut seen = vec![0u8; bins];
             for (k, m) in got.iter().enumerate() {
-                let mut d = Dec::new(m, k);
+                let fail = short_message(k);
+                let mut d = Dec::new(m, &fail);
                 let c = d.count(16)?;
                 for _ in 0..c {
                     let b = d.u64()? as usize;
@@ -693,14 +662,15 @@ impl Tile {
             }
             shared = (0..bins).filter(|&b| seen[b] > 1).collect::<Vec<usize>>();
         }
-        let mut e = Enc::default();
+        let mut e = codec::Enc(Vec::new());
         e.u64(shared.len() as u64);
         shared.iter().for_each(|&b| e.u64(b as u64));
         let got = t.exchange(vec![e.0; n])?;
-        let mut d = Dec::new(&got[0], 0);
+        let fail = short_message(0);
+        let mut d = Dec::new(&got[0], &fail);
         let c = d.count(8)?;
         let shared: std::collections::HashSet<usize> = (0..c).map(|_| d.u64().map(|b| b as usize)).collect::<Result<_>>()?;
-        let mut e = Enc::default();
+        let mut e = codec::Enc(Vec::new());
         let mine: Vec<usize> = (0..tr.len()).filter(|&i| shared.contains(&of[i])).collect();
         e.u64(mine.len() as u64);
         for &i in &mine {
@@ -716,7 +686,8 @@ impl Tile {
         }
         let mut trees: Vec<(u64, usize, f64)> = Vec::new();
         for (k, m) in got.iter().enumerate() {
-            let mut d = Dec::new(m, k);
+            let fail = short_message(k);
+            let mut d = Dec::new(m, &fail);
             let c = d.count(24)?;
             for _ in 0..c {
                 let (id, b, v) = (d.u64()?, d.u64()? as usize, f64::from_bits(d.u64()?));
@@ -875,11 +846,11 @@ fn keep_own(w: &mut World, layout: &Layout, me: usize) {
 /// The part of `w` that tile `k` owns: year, trees, cohorts, seed grids (whole: the receiver
 /// keeps the cells it needs), this year's dead, tallies, this year's regeneration counts.
 fn encode_part(w: &World, layout: &Layout, k: usize) -> Vec<u8> {
-    let mut e = Enc::default();
+    let mut e = codec::Enc(Vec::new());
     e.u64(w.stand.year as u64);
     let t = &w.stand.trees;
     let idx: Vec<usize> = (0..t.len()).filter(|&i| layout.owner_of(t.x[i], t.y[i]) == k).collect();
-    e.trees(t, &idx);
+    put_trees(&mut e, t, &idx);
     let c = &w.stand.cohorts;
     let own: Vec<usize> = (0..c.len()).filter(|&i| {
         let (col, row) = layout.light.col_row(c.cell[i] as usize);
@@ -939,11 +910,12 @@ struct Part {
 
 /// Reads a message of [`encode_part`] from rank `peer`.
 fn decode_part(m: &[u8], peer: usize) -> Result<Part> {
-    let mut d = Dec::new(m, peer);
+    let fail = short_message(peer);
+    let mut d = Dec::new(m, &fail);
     let bad = |what: &str, v: u64| Error::Exchange { peer, reason: format!("{what} {v} out of range") };
     let year = d.u64()?;
     let year = u32::try_from(year).map_err(|_| bad("year", year))?;
-    let trees = d.trees()?;
+    let trees = get_trees(&mut d)?;
     let n = d.count(3 * 8 + 3 * 4)?;
     let mut cohorts = Cohorts::default();
     for _ in 0..n {
@@ -955,13 +927,13 @@ fn decode_part(m: &[u8], peer: usize) -> Result<Part> {
     let mut seeds = Vec::with_capacity(ns);
     for _ in 0..ns {
         let n = d.count(4)?;
-        seeds.push(d.f32s(n)?);
+        seeds.push(d.f32s_n(n)?);
     }
     let n = d.count(8 * 4 + 8 * 4)?;
     let mut dead = Vec::with_capacity(n);
     for _ in 0..n {
         let (id, species) = (d.u64()?, d.u64()?);
-        let v = d.f32s(8)?;
+        let v = d.f32s_n(8)?;
         let (year, cause) = (d.u64()?, d.u64()?);
         let cause = *DeathCause::ALL.get(cause as usize).ok_or_else(|| bad("cause of death", cause))?;
         dead.push(DeadTree { id, species: species as u16, x: v[0], y: v[1], z: v[2], age: v[3], height: v[4], dbh: v[5], crown_radius: v[6], crown_base: v[7], year: year as u32, cause });

@@ -183,6 +183,18 @@ pub struct NewTree {
     pub suitability: f32,
 }
 
+/// Names of the [`TreeStore::f32_columns`], in their order (the fields' names).
+pub const F32_COLUMN_NAMES: [&str; N_F32_COLUMNS] = ["x", "y", "z", "age", "height", "dbh", "crown_radius", "crown_base", "light", "vigour", "suitability"];
+
+impl NewTree {
+    /// The tree's values of the [`TreeStore::f32_columns`] when it joins a store with light
+    /// `light` and vigour `vigour`: its crown base [`super::rules::start_crown_base`].
+    #[inline]
+    pub fn f32_columns(&self, light: f32, vigour: f32) -> [f32; N_F32_COLUMNS] {
+        [self.x, self.y, self.z, self.age, self.height, self.dbh, self.crown_radius, super::rules::start_crown_base(self.height), light, vigour, self.suitability]
+    }
+}
+
 impl TreeStore {
     /// Number of living trees.
     pub fn len(&self) -> usize {
@@ -195,8 +207,9 @@ impl TreeStore {
     /// The per-tree `f32` columns, in the one order the checkpoint (`sim::checkpoint`) and the
     /// tile messages (`sim::tiles`) store them: x, y, z, age, height, DBH, crown radius, crown
     /// base, light, vigour, suitability (units at the fields). A new `f32` attribute is added
-    /// here, in [`TreeStore::f32_columns_mut`] and in [`TreeStore::push`] (and the checkpoint
-    /// layout version raised); `retain`, the checkpoint and the tile codec follow.
+    /// here, in [`TreeStore::columns_mut`], in [`F32_COLUMN_NAMES`] and in
+    /// [`NewTree::f32_columns`] (and the checkpoint layout version raised); `push`, `retain`,
+    /// `merge_by_id`, regeneration's recruits, the checkpoint and the tile codec follow.
     pub fn f32_columns(&self) -> [&Vec<f32>; N_F32_COLUMNS] {
         [&self.x, &self.y, &self.z, &self.age, &self.height, &self.dbh, &self.crown_radius, &self.crown_base, &self.light, &self.vigour, &self.suitability]
     }
@@ -206,7 +219,7 @@ impl TreeStore {
     }
     /// Every column, mutable: ids, species, the [`TreeStore::f32_columns`], the growth-factor
     /// cache.
-    fn columns_mut(&mut self) -> (&mut Vec<TreeId>, &mut Vec<SpeciesId>, [&mut Vec<f32>; N_F32_COLUMNS], &mut Vec<f32>) {
+    pub fn columns_mut(&mut self) -> (&mut Vec<TreeId>, &mut Vec<SpeciesId>, [&mut Vec<f32>; N_F32_COLUMNS], &mut Vec<f32>) {
         let TreeStore { id, species, x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability, growth_factor, next_id: _ } = self;
         (id, species, [x, y, z, age, height, dbh, crown_radius, crown_base, light, vigour, suitability], &mut growth_factor.0)
     }
@@ -216,17 +229,9 @@ impl TreeStore {
         self.next_id += 1;
         self.id.push(id);
         self.species.push(t.species);
-        self.x.push(t.x);
-        self.y.push(t.y);
-        self.z.push(t.z);
-        self.age.push(t.age);
-        self.height.push(t.height);
-        self.dbh.push(t.dbh);
-        self.crown_radius.push(t.crown_radius);
-        self.crown_base.push(super::rules::start_crown_base(t.height));
-        self.light.push(1.0);
-        self.vigour.push(1.0);
-        self.suitability.push(t.suitability);
+        for (c, v) in self.f32_columns_mut().into_iter().zip(t.f32_columns(1.0, 1.0)) {
+            c.push(v);
+        }
         self.growth_factor.0.push(f32::NAN);
         id
     }
@@ -272,22 +277,19 @@ impl TreeStore {
         let mut t = TreeStore { next_id, ..Default::default() };
         t.id = all.iter().map(|e| e.0).collect();
         t.species = all.iter().map(|e| parts[e.1].species[e.2]).collect();
-        t.height = all.iter().map(|e| parts[e.1].height[e.2]).collect();
-        t.dbh = all.iter().map(|e| parts[e.1].dbh[e.2]).collect();
+        let of_parts: Vec<[&Vec<f32>; N_F32_COLUMNS]> = parts.iter().map(|p| p.f32_columns()).collect();
+        let col = |k: usize| all.iter().map(|e| of_parts[e.1][k][e.2]).collect::<Vec<f32>>();
         if full {
-            let col = |f: fn(&TreeStore) -> &Vec<f32>| all.iter().map(|e| f(&parts[e.1])[e.2]).collect::<Vec<f32>>();
-            t.x = col(|p| &p.x);
-            t.y = col(|p| &p.y);
-            t.z = col(|p| &p.z);
-            t.age = col(|p| &p.age);
-            t.crown_radius = col(|p| &p.crown_radius);
-            t.crown_base = col(|p| &p.crown_base);
-            t.light = col(|p| &p.light);
-            t.vigour = col(|p| &p.vigour);
-            t.suitability = col(|p| &p.suitability);
+            for (k, c) in t.f32_columns_mut().into_iter().enumerate() {
+                *c = col(k);
+            }
             // cached growth factors where a part has them (the tile's own rows), NaN (drawn again
             // when needed, the same bits) for halo copies, which arrive without
             t.growth_factor.0 = all.iter().map(|e| if parts[e.1].growth_factor.0.len() == parts[e.1].len() { parts[e.1].growth_factor.0[e.2] } else { f32::NAN }).collect();
+        } else {
+            // a lean store: the columns the stand table reads
+            t.height = all.iter().map(|e| parts[e.1].height[e.2]).collect();
+            t.dbh = all.iter().map(|e| parts[e.1].dbh[e.2]).collect();
         }
         (t, all.iter().map(|e| e.1).collect())
     }

@@ -331,9 +331,9 @@ pub fn run(w: Regen<'_>) -> usize {
         let bl = &blocks[..];
         let (co, re) = (cohorts_of as fn(&Block) -> &[Cohort], recruits_of as fn(&Block) -> &[(NewTree, f32, f32, TreeId)]);
         let Cohorts { cell, pool, stems, height, age, vigour } = &mut cohorts;
-        let TreeStore { id, species, x, y, z, age: t_age, height: t_height, dbh, crown_radius, crown_base, light, vigour: t_vigour, suitability, growth_factor, next_id: _ } = t;
+        let (id, species, columns, growth_factor) = t.columns_mut();
         // factors drawn when the recruits first grow (NaN: not yet drawn)
-        growth_factor.0.resize(id.len(), f32::NAN);
+        growth_factor.resize(id.len(), f32::NAN);
         rayon::scope(|sc| {
             sc.spawn(move |_| column(bl, ncoh, co, |k| k.cell, cell));
             sc.spawn(move |_| column(bl, ncoh, co, |k| k.pool, pool));
@@ -343,19 +343,11 @@ pub fn run(w: Regen<'_>) -> usize {
             sc.spawn(move |_| column(bl, ncoh, co, |k| k.vigour, vigour));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.3, id));
             sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.species, species));
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.x, x));
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.y, y));
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.z, z));
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.age, t_age));
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.height, t_height));
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.dbh, dbh));
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.crown_radius, crown_radius));
-            // as TreeStore::push
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| rules::start_crown_base(r.0.height), crown_base));
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.1, light));
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.2, t_vigour));
-            sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.suitability, suitability));
-            sc.spawn(move |_| growth_factor.0.resize(growth_factor.0.len() + n_recruits, f32::NAN));
+            // each of the store's f32 columns, as TreeStore::push with the recruit's light and vigour
+            for (k, c) in columns.into_iter().enumerate() {
+                sc.spawn(move |_| column(bl, n_recruits, re, |r| r.0.f32_columns(r.1, r.2)[k], c));
+            }
+            sc.spawn(move |_| growth_factor.resize(growth_factor.len() + n_recruits, f32::NAN));
         });
     }
     *w.cohorts = cohorts;

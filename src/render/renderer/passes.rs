@@ -1,0 +1,138 @@
+//! The passes of a frame: the sun's light matrix, the shadow pass, the main pass and the tree draws
+//! in them.
+
+use super::*;
+
+impl Renderer {
+    /// The sun's orthographic view-projection over the scene's bounding sphere (radius r, depth
+    /// range r..3r from an eye 2r towards the sun), the world size of a shadow texel (m) and the
+    /// depth range (m). `trees`: the bounds of the trees' stems and the tallest tree
+    /// ([`tree_extent`]).
+    pub(super) fn light_matrix(scene: &Scene, trees: Option<([f32; 3], [f32; 3], f32)>) -> (Mat4, f32, f32) {
+        let (lo, hi) = scene.terrain.bounds();
+        let (mut lo, mut hi) = (Vec3::from(lo), Vec3::from(hi));
+        let mut tallest = 0.0f32;
+        if let Some((a, b, t)) = trees {
+            lo = lo.min(Vec3::from(a));
+            hi = hi.max(Vec3::from(b));
+            tallest = t;
+        }
+        hi.z += tallest;
+        let c = (lo + hi) * 0.5;
+        let r = ((hi - lo).length() * 0.5).max(1.0);
+        let sun = Vec3::from(scene.sun.direction).normalize_or(Vec3::Z);
+        let up = if sun.z.abs() > 0.99 { Vec3::Y } else { Vec3::Z };
+        let view = glam::camera::rh::view::look_at_mat4(c + sun * 2.0 * r, c, up);
+        let proj = glam::camera::rh::proj::directx::orthographic(-r, r, -r, r, 0.9 * r, 3.1 * r);
+        (proj * view, 2.0 * r / SHADOW_SIZE as f32, 2.2 * r)
+    }
+
+    /// Records the tree draws; returns the number of draw calls.
+    pub(super) fn draw_trees<'a>(&'a self, pass: &mut wgpu::RenderPass<'a>, draws: &FrameDraws) -> u32 {
+        let Some(gpu) = &self.scene else { return 0 };
+        let mut n = 0u32;
+        match draws {
+            FrameDraws::Cpu(b) => {
+                let Some((ibuf, _)) = &self.instance_buf else { return 0 };
+                pass.set_vertex_buffer(1, ibuf.slice(..));
+                for d in &b.draws {
+                    let Some(level) = gpu.protos.get(d.prototype).and_then(|p| p.get(d.level)) else { continue };
+                    pass.set_vertex_buffer(0, level.vb.slice(..));
+                    pass.set_index_buffer(level.ib.slice(..), wgpu::IndexFormat::Uint32);
+                    let inst = d.first..d.first + d.count;
+                    for r in [&level.bark, &level.leaves] {
+                        if !r.is_empty() {
+                            pass.draw_indexed(r.clone(), 0, inst.clone());
+                            n += 1;
+                        }
+                    }
+                }
+            }
+            FrameDraws::Gpu(f) => {
+                let Some(GpuCull { dst: Some((dst, _)), args: Some((args, _)), .. }) = &self.cull else { return 0 };
+                let rec = std::mem::size_of::<InstanceRaw>() as u64;
+                for (k, s) in f.slots.iter().enumerate() {
+                    if s.cap == 0 {
+                        continue;
+                    }
+                    let Some(level) = gpu.protos.get(s.prototype).and_then(|p| p.get(s.level)) else { continue };
+                    pass.set_vertex_buffer(0, level.vb.slice(..));
+                    pass.set_index_buffer(level.ib.slice(..), wgpu::IndexFormat::Uint32);
+                    // indirect first_instance must be 0 without INDIRECT_FIRST_INSTANCE: bind the
+                    // slot's range of the compacted buffer instead
+                    pass.set_vertex_buffer(1, dst.slice(s.base as u64 * rec..(s.base as u64 + s.cap as u64) * rec));
+                    for (m, r) in [&level.bark, &level.leaves].into_iter().enumerate() {
+                        if !r.is_empty() {
+                            pass.draw_indexed_indirect(args, (k * 40 + m * 20) as u64);
+                            n += 1;
+                        }
+                    }
+                }
+            }
+        }
+        n
+    }
+
+    pub(super) fn encode_shadow(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws) {
+        let Some(gpu) = &self.scene else { return };
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("shadow"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: &self.shadow_view, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }), stencil_ops: None }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &gpu.bind_shadow, &[]);
+        if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
+            pass.set_pipeline(&self.terrain_shadow);
+            pass.set_vertex_buffer(0, vb.slice(..));
+            pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
+        }
+        pass.set_pipeline(&self.tree_shadow);
+        self.draw_trees(&mut pass, draws);
+    }
+
+    pub(super) fn encode_main(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws, view: &wgpu::TextureView) -> u32 {
+        let (Some(t), Some(gpu)) = (&self.targets, &self.scene) else { return 0 };
+        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("main"),
+            color_attachments: &[Some(if self.single_sample {
+                wgpu::RenderPassColorAttachment { view, depth_slice: None, resolve_target: None, ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store } }
+            } else {
+                wgpu::RenderPassColorAttachment { view: &t.msaa, depth_slice: None, resolve_target: Some(view), ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard } }
+            })],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: if self.single_sample { &t.depth1 } else { &t.depth }, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }), stencil_ops: None }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_bind_group(0, &gpu.bind_main, &[]);
+        let (sky, terrain, water, tree) = if self.single_sample { (&self.single.sky, &self.single.terrain, &self.single.water, &self.single.tree) } else { (&self.sky, &self.terrain, &self.water, &self.tree) };
+        pass.set_pipeline(sky);
+        pass.draw(0..3, 0..1);
+        if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
+            pass.set_pipeline(terrain);
+            pass.set_vertex_buffer(0, vb.slice(..));
+            match &gpu.terrain_coarse {
+                Some((cib, n)) if self.coarse_terrain => {
+                    pass.set_index_buffer(cib.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..*n, 0, 0..1);
+                }
+                _ => {
+                    pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
+                }
+            }
+        }
+        pass.set_pipeline(tree);
+        let r = self.draw_trees(&mut pass, draws);
+        if let Some(vb) = &gpu.water_vb {
+            pass.set_pipeline(water);
+            pass.set_vertex_buffer(0, vb.slice(..));
+            pass.draw(0..6, 0..1);
+        }
+        r
+    }
+}
