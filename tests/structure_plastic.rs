@@ -521,3 +521,27 @@ fn seasons_of_light_guided_trees_are_their_growth_cycles() {
         assert!((seasons - cycles as i64).abs() <= 1, "{cycles} cycles (seed {seed}, {} nodes): {seasons} seasons", sk.len());
     }
 }
+
+/// A wall closer to the trunk than the collision clearance (the species' leaf size, as `sylva
+/// tree adapt` sets it) sheds the branches on its side, not the whole tree: the main stem is
+/// shed only where it crosses the wall (a new user's trial: a wall 0.2 m from a 10-year beech
+/// left 1 node of 831).
+#[test]
+fn a_wall_beside_the_trunk_sheds_one_side_not_the_tree() {
+    let sp = beech();
+    let g = grow(&sp, 10.0, 1);
+    let sk = &g.skeleton;
+    let mut t = PlasticTree::analyse(sk, &tree1(&sp), &Environment::open(), None).unwrap();
+    t.clearance_m = sp.architecture.ecomod.leaf_size_m.max(0.0);
+    let trunk_x = sk.nodes.iter().filter(|n| n.gravelius == 0).map(|n| n.pos.x.abs()).fold(0.0f32, f32::max);
+    assert!(trunk_x < 0.1, "trunk reaches x = {trunk_x}");
+    let rep = t.adapt(&Environment::with_obstacles(&[Obstacle::Wall { x: 0.2 }])).unwrap();
+    let stem = sk.nodes.iter().filter(|n| n.gravelius == 0).count();
+    eprintln!("{rep:?}, {stem} stem nodes");
+    assert!(rep.nodes_after >= stem, "{rep:?}: fewer nodes than the stem's {stem}");
+    // the open side keeps most of its nodes
+    let open = sk.nodes.iter().filter(|n| n.pos.x < -0.5).count();
+    let kept_open = t.positions().iter().zip(t.fates()).filter(|(p, f)| p.x < -0.5 && **f == Fate::Alive).count();
+    assert!(kept_open * 2 > open, "{kept_open} of {open} nodes on the open side kept");
+    assert!(rep.pruned_collision > 0);
+}

@@ -146,21 +146,38 @@ impl Wood {
     }
 }
 
-/// True when node position `p` (segment from `a`) collides: closer than `clear` to an obstacle,
-/// below the ground, or the segment crosses an obstacle.
+/// True when node position `p` (segment from `a`) collides: inside an obstacle, closer than
+/// `clear` to one while coming nearer to it than `a` is (a segment growing away from an
+/// obstacle out of the clearance zone is kept: the branches leaving a trunk that stands within
+/// the clearance of a wall on its open side), below the ground, or the segment crosses an
+/// obstacle.
 fn collides(env: &Environment, a: Vec3, p: Vec3, clear: f32) -> bool {
     if env.ground.is_some_and(|g| g.height_of(p) < 0.0) {
         return true;
     }
     let mid = 0.5 * (a + p);
     env.obstacles.iter().any(|o| {
-        if o.signed_distance(p) < clear || o.signed_distance(mid) < clear {
+        let (dp, dm) = (o.signed_distance(p), o.signed_distance(mid));
+        if dp < 0.0 || dm < 0.0 || ((dp < clear || dm < clear) && dp < o.signed_distance(a)) {
             return true;
         }
         let d = p - a;
         let l = d.length();
         l > 0.0 && o.ray_hits(a, d / l, l)
     })
+}
+
+/// Clearance (m) node `k` of `t` keeps from obstacles: the tree's `clearance_m` for branches,
+/// none for the main stem (Gravelius order 0), which is shed only where it crosses an obstacle.
+/// Our addition, as for light (the stem is never shed for light): with the clearance (the
+/// species' leaf size) a wall 0.2 m from a 10-year beech's trunk cut the stem at its base and
+/// shed the whole tree (830 of 831 nodes).
+fn clearance(t: &PlasticTree, k: usize) -> f32 {
+    if t.input.nodes[k].gravelius == 0 {
+        0.0
+    } else {
+        t.clearance_m
+    }
 }
 
 /// Smallest signed distance from `c` to the obstacles (m; +∞ without obstacles).
@@ -668,7 +685,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
                 if w.shifted[par] {
                     t.pos[k] = t.pos[par] + t.rot[k] * (t.input.nodes[k].pos - t.input.nodes[par].pos);
                     w.shifted[k] = t.pos[k] != w.before[k];
-                    if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
+                    if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], clearance(t, k)) {
                         t.fate[k] = Fate::Collision;
                     }
                 }
@@ -715,7 +732,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             // the children are recomputed when this node turned by more than ROTATION_EPS
             let turn = 2.0 * (t.rot[k] * old_rot.inverse()).xyz().length().min(1.0).asin();
             w.moved[k] = turn > ROTATION_EPS;
-            if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], t.clearance_m) {
+            if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], clearance(t, k)) {
                 t.fate[k] = Fate::Collision;
             }
         }
