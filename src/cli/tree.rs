@@ -490,8 +490,9 @@ fn before_after(before: &[PlasticTree], after: &[PlasticTree], obstacles: &[Obst
             let (a, b) = match *o {
                 Obstacle::Box { min, max } => (min, max),
                 Obstacle::Sphere { center, radius } => (center - radius, center + radius),
-                Obstacle::Wall { x } => (Vec3::new(x, 0.0, lo.z), Vec3::new(if x > 0.0 { hi.x.max(x) + 10.0 } else { x }, 0.0, hi.z + 10.0)),
-                Obstacle::FiniteWall { x, height, .. } => (Vec3::new(x, 0.0, 0.0), Vec3::new(if x > 0.0 { hi.x.max(x) + 10.0 } else { x }, 0.0, height.min(hi.z + 10.0))),
+                // the half-space beyond x, away from the origin: towards +x or towards −x
+                Obstacle::Wall { x } => (Vec3::new(if x > 0.0 { x } else { lo.x.min(x) - 10.0 }, 0.0, lo.z), Vec3::new(if x > 0.0 { hi.x.max(x) + 10.0 } else { x }, 0.0, hi.z + 10.0)),
+                Obstacle::FiniteWall { x, height, .. } => (Vec3::new(if x > 0.0 { x } else { lo.x.min(x) - 10.0 }, 0.0, 0.0), Vec3::new(if x > 0.0 { hi.x.max(x) + 10.0 } else { x }, 0.0, height.min(hi.z + 10.0))),
                 Obstacle::OrientedBox { .. } | Obstacle::Prism { .. } => o.bounds(),
             };
             let (a, b) = (a.min(b), a.max(b));

@@ -1,6 +1,6 @@
 //! The one schema of a run's tables of trees and saplings: each column's name, type, unit,
 //! decimals in the text files and the values a reader accepts. The writers
-//! ([`super::inventory`]: CSV, GeoJSON and, through [`super::parquet`], Parquet) and the readers
+//! ([`super::inventory`]: CSV, through [`super::parquet`] Parquet, and the final year's GeoPackage) and the readers
 //! (`job::inventory`: CSV and Parquet; `sylva view`, `sylva export`, the pictures) take the
 //! columns from here; ARCHITECTURE.md ("Run directory") points here.
 //!
@@ -22,8 +22,8 @@
 //! | `crown_base_m` | float | m (height of the crown base) | 2 | 0–200 |
 //! | `status` | text | `alive` or `dead:<cause>` | – | either form |
 //!
-//! The GeoJSON inventory carries the same values as properties, but for `z_m`, which is the
-//! point's third coordinate.
+//! The GeoPackage inventory (`inventory/year_NNNN.gpkg`, layer `inventory`) carries the same
+//! columns, with a point geometry in the DEM's CRS.
 //!
 //! **Regeneration layer** (`inventory/year_NNNN_regeneration.parquet` or `.csv`;
 //! [`REGENERATION`]), one row a sapling cohort, in (light cell, pool) order: `cell` (int64, light
