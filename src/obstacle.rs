@@ -130,6 +130,12 @@ fn segments_cross(a: Vec2, b: Vec2, c: Vec2, d: Vec2) -> bool {
 /// frame of an [`Obstacle::OrientedBox`]).
 fn unyaw(v: Vec3, yaw: f32) -> Vec3 {
     let (s, c) = yaw.sin_cos();
+    unyaw_sc(v, s, c)
+}
+
+/// [`unyaw`] with the yaw's sine and cosine given (so a caller turning many vectors by one yaw
+/// takes them once; the same values bit for bit).
+pub(crate) fn unyaw_sc(v: Vec3, s: f32, c: f32) -> Vec3 {
     Vec3::new(c * v.x + s * v.y, -s * v.x + c * v.y, v.z)
 }
 

@@ -758,6 +758,10 @@ pub struct SkyMask<'a> {
     inv: Vec<Vec3>,
     below_ground: u32,
     slabs: Vec<(Vec3, Vec3)>,
+    /// Oriented boxes: (centre (m), sine and cosine of the yaw, half extents (m), the sky
+    /// directions and their inverses in the box's frame), so a point is turned into the frame
+    /// once and each direction is a slab test, as `Obstacle::ray_hits` tests them.
+    oriented: Vec<(Vec3, f32, f32, Vec3, Vec<(Vec3, Vec3)>)>,
     others: Vec<Obstacle>,
 }
 
@@ -770,15 +774,26 @@ impl<'a> SkyMask<'a> {
             Some(g) => dirs.iter().enumerate().filter(|(_, d)| d.dot(g.normal) <= 0.0).fold(0u32, |m, (k, _)| m | 1 << k),
             None => 0,
         };
-        let (mut slabs, mut others) = (Vec::new(), Vec::new());
+        let (mut slabs, mut oriented, mut others) = (Vec::new(), Vec::new(), Vec::new());
         for &o in solids.obstacles {
             match (o, o.as_box()) {
                 // boxes and finite walls as `Obstacle::ray_hits` tests them (`space.rs`, `as_box`)
                 (Obstacle::Box { .. } | Obstacle::FiniteWall { .. }, Some(b)) => slabs.push(b),
+                (Obstacle::OrientedBox { center, half, yaw_deg }, _) => {
+                    let (s, c) = yaw_deg.to_radians().sin_cos();
+                    let turned = dirs
+                        .iter()
+                        .map(|&d| {
+                            let t = crate::obstacle::unyaw_sc(d, s, c);
+                            (t, Vec3::new(1.0 / t.x, 1.0 / t.y, 1.0 / t.z))
+                        })
+                        .collect();
+                    oriented.push((center, s, c, half, turned));
+                }
                 _ => others.push(o),
             }
         }
-        SkyMask { solids, dirs, inv, below_ground, slabs, others }
+        SkyMask { solids, dirs, inv, below_ground, slabs, oriented, others }
     }
 
     /// Bit k set when sky direction k is blocked at `p` by an obstacle or the terrain (equal to
@@ -796,6 +811,16 @@ impl<'a> SkyMask<'a> {
             let (a, b) = (lo - p, hi - p);
             for k in 0..n {
                 if m & (1 << k) == 0 && slab_hits(p, self.dirs[k], self.inv[k], lo, hi, a, b) {
+                    m |= 1 << k;
+                }
+            }
+        }
+        for (centre, s, c, half, turned) in &self.oriented {
+            let q = crate::obstacle::unyaw_sc(p - *centre, *s, *c);
+            let (lo, hi) = (-*half, *half);
+            let (a, b) = (lo - q, hi - q);
+            for (k, &(d, inv)) in turned.iter().enumerate() {
+                if m & (1 << k) == 0 && slab_hits(q, d, inv, lo, hi, a, b) {
                     m |= 1 << k;
                 }
             }
@@ -1001,6 +1026,8 @@ mod tests {
             Obstacle::Box { min: Vec3::new(-1.0, 1.0, 0.5), max: Vec3::new(0.5, 2.0, 4.0) },
             Obstacle::Sphere { center: Vec3::new(0.0, -2.0, 3.0), radius: 0.7 },
             Obstacle::Wall { x: 3.0 },
+            Obstacle::OrientedBox { center: Vec3::new(1.5, 0.5, 1.0), half: Vec3::new(0.1, 2.0, 1.5), yaw_deg: 0.0 },
+            Obstacle::OrientedBox { center: Vec3::new(-1.0, 1.5, 2.0), half: Vec3::new(0.8, 0.3, 2.5), yaw_deg: 37.0 },
         ];
         for sky in [Sky::default(), Sky::from_latitude(50.0)] {
             for (i, o) in obstacles.iter().enumerate() {

@@ -256,6 +256,14 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
 ///
 /// Errors: as [`adapt_group`].
 pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment) -> Result<GroupReport> {
+    // called from outside the thread pool (a program's main thread), every parallel loop below
+    // would be injected into the pool and block this thread on a latch: one cross-thread wake-up
+    // per loop, and a level has a loop per depth batch (measured: a fifth of the first
+    // adaptation of the 9,133-node bench tree on one thread went to waking the worker). Run the
+    // whole call on a worker instead, where the loops fork and join in place.
+    if rayon::current_thread_index().is_none() {
+        return rayon::scope(|_| adapt_group_among(trees, fixed, env));
+    }
     env.validate()?;
     let sky = &env.sky;
     let solids = SkyMask::new(Solids { obstacles: &env.obstacles, ground: env.ground }, sky);
@@ -497,7 +505,7 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
 /// `fixed` trees (their transmittances multiplied in), with the solids' mask at each point:
 /// (i in 0–1, average light direction) per point, bit for bit what [`super::light::light_by`] gives point by
 /// point (each point's sums in direction order). The points are split over the cores in chunks
-/// of [`LIGHT_CHUNK`], each chunk taken direction by direction so a direction's grid is read
+/// of [`light_chunk`], each chunk taken direction by direction so a direction's grid is read
 /// while in cache.
 fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3]) -> Vec<(f32, Vec3)> {
     let mut out = vec![(0.0f32, Vec3::ZERO); at.len()];
@@ -508,7 +516,8 @@ fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolu
     if let Some(f) = fixed {
         f.prepare(open);
     }
-    out.par_chunks_mut(LIGHT_CHUNK).zip(at.par_chunks(LIGHT_CHUNK).zip(masks.par_chunks(LIGHT_CHUNK))).for_each(|(out, (at, masks))| {
+    let chunk = light_chunk(at.len());
+    out.par_chunks_mut(chunk).zip(at.par_chunks(chunk).zip(masks.par_chunks(chunk))).for_each(|(out, (at, masks))| {
         for k in 0..sky.dirs.len() {
             let wk = sky.weights[k];
             if wk == 0.0 {
@@ -630,9 +639,18 @@ fn preposition(t: &mut PlasticTree, s: usize, w: &Work) {
     }
 }
 
-/// Clusters whose light one task of a level evaluates ([`level`]: the level's clusters are split
-/// into chunks of this many over the cores).
+/// Most points whose light one task of a level evaluates ([`level`]: the level's clusters and
+/// each depth batch of its nodes are split into chunks over the cores).
 const LIGHT_CHUNK: usize = 64;
+
+/// Points per task for a batch of `n` light queries: about four tasks per thread, 8 to
+/// [`LIGHT_CHUNK`] points each. A depth batch of a level holds a few dozen nodes; with the old
+/// fixed chunks of 64 it was one task, and a second core had nothing to take (measured on the
+/// 9,133-node bench tree: two threads 50 ms against 53 ms on one). Every point's sums are its
+/// own, so the values do not depend on the chunks.
+fn light_chunk(n: usize) -> usize {
+    n.div_ceil(4 * rayon::current_num_threads()).clamp(8, LIGHT_CHUNK)
+}
 
 /// Turn (radians, 0.057°) below which a recomputed node's children are not recomputed: they keep
 /// their rotation and follow the node's displacement.
@@ -781,7 +799,8 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     // grid read while in cache), every cluster's sum taken in direction order as before, so the
     // values are the same bit for bit whatever the thread count
     let reuse_ref = reuse.as_ref();
-    rows.t.par_chunks_mut(LIGHT_CHUNK * nd.max(1)).zip(sums.par_chunks_mut(LIGHT_CHUNK)).zip(lit.par_chunks(LIGHT_CHUNK).zip(from.par_chunks(LIGHT_CHUNK))).for_each(|((t_rows, sums), (lit, from))| {
+    let chunk = light_chunk(lit.len());
+    rows.t.par_chunks_mut(chunk * nd.max(1)).zip(sums.par_chunks_mut(chunk)).zip(lit.par_chunks(chunk).zip(from.par_chunks(chunk))).for_each(|((t_rows, sums), (lit, from))| {
         for k in 0..nd {
             let wk = sky.weights[k];
             if wk == 0.0 {
