@@ -234,13 +234,15 @@ fn write_gpkg(path: &Path, layers: &[(&str, &str, i32, Vec<(i64, &str, i64, Vec<
 }
 
 /// The parcels of the tests: a triangle A, a square B (a MultiPolygon Z) and a square with a
-/// square hole C, on a 120 m × 120 m uniform site.
+/// square hole C, on a 120 m × 120 m uniform site, in world metres (origin SW corner).
 const TRI: [[f64; 2]; 3] = [[10.0, 10.0], [110.0, 20.0], [40.0, 100.0]];
 const SQUARE: [[f64; 2]; 4] = [[70.0, 70.0], [115.0, 70.0], [115.0, 115.0], [70.0, 115.0]];
 
+/// Ring `p` (world metres) closed, in the coordinates an area file of the 120 m site is in:
+/// the outputs' (origin NW corner, y = world y − 120 m; `sim::management::crs_to_world`).
 fn closed(p: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let mut v = p.to_vec();
-    v.push(p[0]);
+    let mut v: Vec<[f64; 2]> = p.iter().map(|q| [q[0], q[1] - 120.0]).collect();
+    v.push(v[0]);
     v
 }
 

@@ -113,8 +113,9 @@ fn polygon_planting_from_geojson_plants_only_inside_its_polygon() {
     let d = tempfile::tempdir().unwrap();
     let tri = [[10.0, 10.0], [110.0, 20.0], [40.0, 100.0]];
     let other = [[70.0, 70.0], [115.0, 70.0], [115.0, 115.0], [70.0, 115.0]];
+    // the file in the outputs' coordinates: y = world y − 120 m (origin at the NW corner)
     let ring = |p: &[[f64; 2]]| {
-        let mut v: Vec<String> = p.iter().map(|q| format!("[{}, {}]", q[0], q[1])).collect();
+        let mut v: Vec<String> = p.iter().map(|q| format!("[{}, {}]", q[0], q[1] - 120.0)).collect();
         v.push(v[0].clone());
         v.join(", ")
     };
@@ -355,7 +356,7 @@ fn warming_moves_beech_recruits_upslope_and_spruce_out_of_the_lowlands() {
 /// of the area file was part of it).
 #[test]
 fn the_checkpoint_identity_survives_a_moved_project_folder_and_names_the_changed_entry() {
-    let geo = r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},"geometry":{"type":"Polygon","coordinates":[[[10,10],[60,10],[60,60],[10,60],[10,10]]]}}]}"#;
+    let geo = r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},"geometry":{"type":"Polygon","coordinates":[[[10,-90],[60,-90],[60,-40],[10,-40],[10,-90]]]}}]}"#;
     let toml = |spacing: f64| format!("name = \"mv\"\nyears = 3\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = {{ width = 10, height = 10, cell_m = 10.0, elevation_m = 300.0, indices = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0] }}\n[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = {spacing:?}\nyear = 0\narea_file = \"p.geojson\"\n[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 2\narea = [0.0, 0.0, 20.0, 20.0]\n");
     let identity = |dir: &std::path::Path, spacing: f64| {
         std::fs::create_dir_all(dir).unwrap();
@@ -683,4 +684,74 @@ fn a_managed_run_stopped_and_resumed_writes_the_same_files() {
     for f in ["stand_table.csv", "inventory/year_0012.parquet", "inventory/year_0012.gpkg"] {
         assert!(std::fs::read(full_dir.path().join(f)).unwrap() == std::fs::read(dir.path().join(f)).unwrap(), "{f} differs");
     }
+}
+
+/// The trees of a run's final GeoPackage inventory (`inventory/year_NNNN.gpkg`): id, status and
+/// the point as written (the outputs' coordinates).
+fn gpkg_points(path: &Path) -> Vec<(u64, String, [f64; 2])> {
+    let db = rusqlite::Connection::open(path).unwrap();
+    let mut q = db.prepare(&format!("SELECT id, status, {} FROM inventory ORDER BY fid", sylva::gpkg::GEOMETRY_COLUMN)).unwrap();
+    let rows = q.query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, String>(1)?, r.get::<_, Vec<u8>>(2)?))).unwrap();
+    rows.map(|r| {
+        let (id, status, blob) = r.unwrap();
+        // WKB Point: byte order, type, x, y (little-endian as the writer writes it)
+        let wkb = sylva::gpkg::blob_wkb(&blob).unwrap().unwrap();
+        let f = |k: usize| f64::from_le_bytes(wkb[k..k + 8].try_into().unwrap());
+        (id as u64, status, [f(5), f(13)])
+    })
+    .collect()
+}
+
+/// Issue 35: on a site without georeferencing an area file is in the outputs' coordinates (y
+/// from −H to 0, origin NW corner), so a polygon taken from a run's written inventory (the
+/// bounding box of some trees' points, as one would draw it in QGIS over the GeoPackage) clears
+/// exactly the trees inside it and plants only inside it. The box lies at y < 0: read as world
+/// metres (before this convention) it was refused as outside the site.
+#[test]
+fn an_area_file_drawn_over_the_outputs_acts_exactly_where_those_trees_are() {
+    use sylva::job::run::{run_scenario, RunOptions};
+    let lib = common::embedded();
+    let base = ScenarioToml::new("drawn", 2, 9).species(&["beech", "sessile_oak"]).uniform(6, 6, 20.0, 200.0).planted("beech", 3.0, 30.0).line("snapshot_every = 0").build();
+    let sc = Scenario::from_toml_str(&base, "drawn.toml").unwrap();
+    let d = tempfile::tempdir().unwrap();
+    let a = d.path().join("a");
+    run_scenario(&sc, sc.site().unwrap(), &lib, RunOptions::new(&a)).unwrap();
+    let trees = gpkg_points(&a.join("inventory/year_0002.gpkg"));
+    let alive: Vec<&(u64, String, [f64; 2])> = trees.iter().filter(|t| t.1 == "alive").collect();
+    assert!(alive.len() > 1000, "{} trees", alive.len());
+    assert!(alive.iter().all(|t| (0.0..=120.0).contains(&t.2[0]) && (-120.0..=0.0).contains(&t.2[1])), "outputs in x 0…120, y −120…0");
+    // the 25 trees nearest (50, −80) in the outputs' coordinates, their box widened by a margin
+    // that leaves no tree within 2 cm of its edges (the outputs round positions to 1 cm)
+    let mut near: Vec<&(u64, String, [f64; 2])> = alive.clone();
+    near.sort_by(|p, q| (p.2[0] - 50.0).hypot(p.2[1] + 80.0).total_cmp(&(q.2[0] - 50.0).hypot(q.2[1] + 80.0)).then(p.0.cmp(&q.0)));
+    let picked: Vec<u64> = near[..25].iter().map(|t| t.0).collect();
+    let mut b = [f64::MAX, f64::MAX, f64::MIN, f64::MIN];
+    for t in &near[..25] {
+        b = [b[0].min(t.2[0]), b[1].min(t.2[1]), b[2].max(t.2[0]), b[3].max(t.2[1])];
+    }
+    let near_edge = |b: [f64; 4]| alive.iter().any(|t| (0..4).any(|k| (t.2[k % 2] - b[k]).abs() < 0.02));
+    let b = (1..20).map(|k| k as f64 * 0.05).map(|m| [b[0] - m, b[1] - m, b[2] + m, b[3] + m]).find(|&b| !near_edge(b)).unwrap();
+    assert!(b[3] < 0.0, "{b:?}");
+    let inside = |p: [f64; 2]| p[0] > b[0] && p[0] < b[2] && p[1] > b[1] && p[1] < b[3];
+    let mut want: Vec<u64> = alive.iter().filter(|t| inside(t.2)).map(|t| t.0).collect();
+    want.sort_unstable();
+    assert!(picked.iter().all(|id| want.contains(id)) && want.len() >= 25);
+    let gj = format!(r#"{{"type":"FeatureCollection","features":[{{"type":"Feature","properties":{{}},"geometry":{{"type":"Polygon","coordinates":[[[{0},{1}],[{2},{1}],[{2},{3}],[{0},{3}],[{0},{1}]]]}}}}]}}"#, b[0], b[1], b[2], b[3]);
+    std::fs::write(d.path().join("drawn.geojson"), gj).unwrap();
+    // the same run with a clear-cut and an oak planting in that box at the end of year 2
+    let managed = format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 2\narea_file = \"drawn.geojson\"\n[[management]]\nkind = \"planting\"\nmix = {{ sessile_oak = 1.0 }}\nspacing_m = 1.0\nyear = 2\narea_file = \"drawn.geojson\"\n");
+    std::fs::write(d.path().join("drawn.toml"), managed).unwrap();
+    let sc = Scenario::load(&d.path().join("drawn.toml")).unwrap();
+    let m = d.path().join("m");
+    run_scenario(&sc, sc.site().unwrap(), &lib, RunOptions::new(&m)).unwrap();
+    let after = gpkg_points(&m.join("inventory/year_0002.gpkg"));
+    let mut cut: Vec<u64> = after.iter().filter(|t| t.1 == "dead:harvest").map(|t| t.0).collect();
+    cut.sort_unstable();
+    assert_eq!(cut, want, "the clear-cut took the trees inside the drawn box, and only them");
+    let db = rusqlite::Connection::open(m.join("inventory/year_0002.gpkg")).unwrap();
+    let oaks: i64 = db.query_row("SELECT COUNT(*) FROM inventory WHERE species = 'sessile_oak'", [], |r| r.get(0)).unwrap();
+    let oak_points: Vec<[f64; 2]> = after.iter().filter(|t| t.1 == "alive" && !alive.iter().any(|a| a.0 == t.0)).map(|t| t.2).collect();
+    assert_eq!(oaks as usize, oak_points.len(), "the new trees are the oaks");
+    assert!(oak_points.len() >= ((b[2] - b[0]) * (b[3] - b[1]) * 0.5) as usize && oak_points.iter().all(|&p| inside(p)), "{} oaks planted, all inside the box {b:?}", oak_points.len());
+    eprintln!("drawn box {b:?}: {} trees cleared, {} oaks planted", cut.len(), oak_points.len());
 }

@@ -70,9 +70,12 @@ pub struct Management {
     /// first ring the outline, further rings holes (even-odd rule).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub polygons: Option<Vec<Vec<Vec<[f64; 2]>>>>,
-    /// Area as the (Multi)Polygons of a vector file in the DEM's CRS (world metres on a uniform
-    /// site): a GeoPackage (`.gpkg`, [`read_gpkg_polygons`]) or else GeoJSON
-    /// ([`read_geojson_polygons`]); relative paths are relative to the scenario file.
+    /// Area as the (Multi)Polygons of a vector file in the DEM's CRS: a GeoPackage (`.gpkg`,
+    /// [`read_gpkg_polygons`]) or else GeoJSON ([`read_geojson_polygons`]); relative paths are
+    /// relative to the scenario file. On a site without georeferencing (uniform or generated
+    /// terrain) the file is in the coordinates of the run's outputs (m): x 0 to W east, y −H
+    /// (south edge) to 0 (north edge), origin the NW corner, as the inventories and GeoTIFFs
+    /// are written (not the world metres of `area` and `polygons`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub area_file: Option<PathBuf>,
     /// The feature layer (table) of a GeoPackage `area_file`; its first feature layer when
@@ -615,13 +618,18 @@ pub struct Operation {
 }
 
 /// Converts a point of the DEM's CRS to world metres (origin SW corner) on `site`: through the
-/// grid's georeferencing (pixel coordinates times the cell size); a local grid's coordinates
-/// are world metres already.
+/// grid's georeferencing (pixel coordinates times the cell size).
+///
+/// A site without georeferencing (a uniform or generated terrain, [`crate::grid::Crs::Local`])
+/// has the local GeoRef of [`crate::grid::GeoRef::local`]: origin (0, 0) at the top-left (NW)
+/// corner, one CRS unit a metre, rows going south. So its area files are read in the
+/// coordinates the run's outputs are written in (the GeoPackage and GeoParquet inventories,
+/// the GeoTIFF maps; [`crate::output::georef::PointGeoRef`]): x from 0 to the width W east,
+/// y from −H (the south edge) to 0 (the north edge), so a polygon drawn in QGIS over the
+/// outputs lands where it was drawn; world y = H + file y. (Inline `area` and `polygons` are
+/// world metres, origin the SW corner, y from 0 to H, as the `[[start]]` areas.)
 fn crs_to_world(site: &SiteConditions, x: f64, y: f64) -> [f64; 2] {
     let g = &site.geo;
-    if g.crs == crate::grid::Crs::Local {
-        return [x, y];
-    }
     let col = (x - g.origin_x) / g.pixel_w;
     let row = (g.origin_y - y) / g.pixel_h;
     [col * site.cell_x_m, (site.height() as f64 - row) * site.cell_y_m]
