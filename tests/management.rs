@@ -755,3 +755,62 @@ fn an_area_file_drawn_over_the_outputs_acts_exactly_where_those_trees_are() {
     assert!(oak_points.len() >= ((b[2] - b[0]) * (b[3] - b[1]) * 0.5) as usize && oak_points.iter().all(|&p| inside(p)), "{} oaks planted, all inside the box {b:?}", oak_points.len());
     eprintln!("drawn box {b:?}: {} trees cleared, {} oaks planted", cut.len(), oak_points.len());
 }
+
+/// Issue 35: a GeoJSON area file is checked as a GeoPackage is. Its legacy `crs` member must
+/// name the DEM's EPSG code (refused naming the file, both codes and the `ogr2ogr -t_srs` fix);
+/// a folder, a feature without geometry, a geometry type other than Polygon/MultiPolygon and a
+/// polygon wholly outside the site are refused naming the file and the feature.
+#[test]
+fn geojson_area_files_are_checked_for_crs_geometry_and_site() {
+    use sylva::sim::management::{geojson_crs_epsg, read_geojson_polygons};
+    let d = tempfile::tempdir().unwrap();
+    let square = r#"{"type":"Feature","properties":{"parcel":"A"},"geometry":{"type":"Polygon","coordinates":[[[10,-70],[60,-70],[60,-20],[10,-20],[10,-70]]]}}"#;
+    let with_crs = |name: &str| format!(r#"{{"type":"FeatureCollection","crs":{{"type":"name","properties":{{"name":"{name}"}}}},"features":[{square}]}}"#);
+    // the legacy forms GDAL and others write
+    for (name, code) in [("urn:ogc:def:crs:EPSG::26917", 26917), ("EPSG:26917", 26917), ("urn:ogc:def:crs:EPSG:9.8.1:3035", 3035), ("urn:ogc:def:crs:OGC:1.3:CRS84", 4326)] {
+        assert_eq!(geojson_crs_epsg(&serde_json::json!({"type": "name", "properties": {"name": name}})), Ok(code), "{name}");
+    }
+    let f = d.path().join("wgs.geojson");
+    std::fs::write(&f, with_crs("urn:ogc:def:crs:EPSG::4326")).unwrap();
+    let e = read_geojson_polygons(&f, None, Some(26917), "x.toml", "management[0].area_file").unwrap_err().to_string();
+    assert!(e.contains("x.toml") && e.contains("management[0].area_file") && e.contains("wgs.geojson") && e.contains("EPSG:26917") && e.contains("names EPSG:4326") && e.contains("ogr2ogr -t_srs EPSG:26917"), "{e}");
+    std::fs::write(&f, with_crs("my local grid")).unwrap();
+    let e = read_geojson_polygons(&f, None, Some(26917), "x.toml", "f").unwrap_err().to_string();
+    assert!(e.contains("\"my local grid\", not an EPSG code") && e.contains("ogr2ogr -t_srs"), "{e}");
+    // the DEM's code in either form is read; a site without an EPSG code reads any
+    for name in ["EPSG:26917", "urn:ogc:def:crs:EPSG::26917"] {
+        std::fs::write(&f, with_crs(name)).unwrap();
+        assert_eq!(read_geojson_polygons(&f, None, Some(26917), "x.toml", "f").unwrap().len(), 1, "{name}");
+    }
+    std::fs::write(&f, with_crs("urn:ogc:def:crs:EPSG::4326")).unwrap();
+    assert_eq!(read_geojson_polygons(&f, None, None, "x.toml", "f").unwrap().len(), 1);
+
+    // through a scenario on a 120 m uniform site (the file in the outputs' coordinates)
+    let base = ScenarioToml::new("bad", 3, 1).species(&["beech"]).uniform(6, 6, 20.0, 200.0).build();
+    let harvest = |file: &Path| format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 1\narea_file = {:?}\n", file.display().to_string());
+    let e = err(&harvest(d.path()));
+    assert!(e.contains("bad.toml") && e.contains("management[0].area_file") && e.contains(&d.path().display().to_string()) && e.contains("it is a folder"), "{e}");
+    let collection = |feats: &[&str]| format!(r#"{{"type":"FeatureCollection","features":[{}]}}"#, feats.join(","));
+    let f = d.path().join("parcels.geojson");
+    // a feature without geometry, named by its index and id
+    std::fs::write(&f, collection(&[square, r#"{"type":"Feature","id":"P7","properties":{"parcel":"B"},"geometry":null}"#])).unwrap();
+    let e = err(&harvest(&f));
+    assert!(e.contains("parcels.geojson") && e.contains("feature 1 (id \"P7\") has none: its geometry is null"), "{e}");
+    // … which a filter may leave out
+    let ok = format!("{}filter = {{ property = \"parcel\", equals = \"A\" }}\n", harvest(&f));
+    let sc = Scenario::from_toml_str(&ok, "ok.toml").unwrap();
+    let w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    assert_eq!(w.site.management[0].region.bbox, [10.0, 50.0, 60.0, 100.0], "file y −70…−20 is world y 50…100");
+    // a CurvePolygon (not a GeoJSON type) and a LineString name the feature, the type and the
+    // accepted types
+    std::fs::write(&f, collection(&[square, r#"{"type":"Feature","id":3,"properties":{},"geometry":{"type":"CurvePolygon","coordinates":[]}}"#])).unwrap();
+    let e = err(&harvest(&f));
+    assert!(e.contains("parcels.geojson") && e.contains("feature 1 (id 3) is a CurvePolygon") && e.contains("Polygon or MultiPolygon (the only geometry types") && e.contains("linearise"), "{e}");
+    std::fs::write(&f, collection(&[r#"{"type":"Feature","properties":{},"geometry":{"type":"LineString","coordinates":[[0,-5],[50,-5]]}}"#, square])).unwrap();
+    let e = err(&harvest(&f));
+    assert!(e.contains("feature 0 is a LineString") && !e.contains("linearise"), "{e}");
+    // a polygon wholly outside the site: the world's y (0…120) read as the outputs' lies north
+    std::fs::write(&f, collection(&[square, r#"{"type":"Feature","id":"old","properties":{},"geometry":{"type":"Polygon","coordinates":[[[10,10],[60,10],[60,60],[10,60],[10,10]]]}}"#])).unwrap();
+    let e = err(&harvest(&f));
+    assert!(e.contains("parcels.geojson") && e.contains("polygon 1 of the file (feature 1 (id \"old\")) lies wholly outside") && e.contains("x 10.00–60.00, y 10.00–60.00") && e.contains("the site covers x 0.00–120.00, y -120.00–0.00") && e.contains("y = −H at its south edge"), "{e}");
+}
