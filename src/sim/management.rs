@@ -635,6 +635,13 @@ fn crs_to_world(site: &SiteConditions, x: f64, y: f64) -> [f64; 2] {
     [col * site.cell_x_m, (site.height() as f64 - row) * site.cell_y_m]
 }
 
+/// The inverse of [`crs_to_world`]: the DEM's CRS coordinates of world point `(x, y)` (m,
+/// origin SW corner) on `site` (for messages).
+fn world_to_crs(site: &SiteConditions, x: f64, y: f64) -> [f64; 2] {
+    let g = &site.geo;
+    [g.origin_x + x / site.cell_x_m * g.pixel_w, g.origin_y - (site.height() as f64 - y / site.cell_y_m) * g.pixel_h]
+}
+
 /// Whether a GeoJSON property value equals the filter's value (texts as texts, numbers as
 /// numbers, booleans as booleans).
 fn matches(v: &serde_json::Value, want: &toml::Value) -> bool {
@@ -959,19 +966,18 @@ fn read_area_file(f: &Path, m: &Management, site: &SiteView<'_>, (ex, ey): (f64,
     let g = &site.conditions.geo;
     let epsg = if g.crs == crate::grid::Crs::Local { None } else { g.epsg };
     let ps = if is_gpkg(f) { read_gpkg_area(f, m.layer.as_deref(), m.filter.as_ref(), epsg, ctx, field)? } else { read_geojson_area(f, m.filter.as_ref(), epsg, ctx, field)? };
-    let map = crate::output::georef::PointGeoRef::of_site(site.conditions);
     let mut out = Vec::with_capacity(ps.len());
     for (k, (name, rings)) in ps.into_iter().enumerate() {
         let world: Vec<Vec<[f64; 2]>> = rings.iter().map(|r| r.iter().map(|p| crs_to_world(site.conditions, p[0], p[1])).collect()).collect();
         let w = bbox_of(world.iter().flatten());
         if w[2] <= 0.0 || w[3] <= 0.0 || w[0] >= ex || w[1] >= ey {
             let fb = bbox_of(rings.iter().flatten());
-            let (s0, s1) = (map.map(0.0, 0.0), map.map(ex, ey));
+            let (s0, s1) = (world_to_crs(site.conditions, 0.0, 0.0), world_to_crs(site.conditions, ex, ey));
             let crs = match epsg {
                 Some(c) => format!("EPSG:{c}"),
                 None => "the coordinates of the run's outputs: a site without georeferencing runs from y = −H at its south edge to 0 at its north edge, x from 0 to W".into(),
             };
-            return Err(bad(format!("polygons on the site: polygon {k} of the file ({name}) lies wholly outside it (its bounding box x {:.2}–{:.2}, y {:.2}–{:.2}; the site covers x {:.2}–{:.2}, y {:.2}–{:.2} in the file's CRS, {crs})", fb[0], fb[2], fb[1], fb[3], s0.0, s1.0, s0.1, s1.1)).into());
+            return Err(bad(format!("polygons on the site: polygon {k} of the file ({name}) lies wholly outside it (its bounding box x {:.2}–{:.2}, y {:.2}–{:.2}; the site covers x {:.2}–{:.2}, y {:.2}–{:.2} in the file's CRS, {crs})", fb[0], fb[2], fb[1], fb[3], s0[0], s1[0], s0[1], s1[1])).into());
         }
         out.push(world);
     }
