@@ -709,7 +709,7 @@ pub fn read_geojson_area(path: &Path, filter: Option<&AreaFilter>, dem_epsg: Opt
             Err(name) => Some(format!("{name}, not an EPSG code")),
         };
         if let Some(found) = found {
-            return Err(bad(format!("polygons in the DEM's CRS, EPSG:{want} (the file's `crs` member names {found}; reproject it, e.g. `ogr2ogr -t_srs EPSG:{want} out.geojson {}`)", path.display())).into());
+            return Err(bad(format!("polygons in the DEM's CRS, EPSG:{want} (the file's `crs` member names {found}; reproject it, e.g. `ogr2ogr -t_srs EPSG:{want} out.geojson {}`)", path.display())));
         }
     }
     let kind = v.get("type").and_then(|t| t.as_str()).unwrap_or("");
@@ -742,13 +742,13 @@ pub fn read_geojson_area(path: &Path, filter: Option<&AreaFilter>, dem_epsg: Opt
         }
         seen += 1;
         let Some(g) = geom.filter(|g| !g.is_null()) else {
-            return Err(bad(format!("{ACCEPTED} geometries ({name} has none: its geometry is null; give it a polygon, or leave it out with a `filter`)")).into());
+            return Err(bad(format!("{ACCEPTED} geometries ({name} has none: its geometry is null; give it a polygon, or leave it out with a `filter`)")));
         };
         let ty = g.get("type").and_then(|t| t.as_str()).unwrap_or("(no type)");
         if ty != "Polygon" && ty != "MultiPolygon" {
             let curved = ["CurvePolygon", "MultiSurface", "CompoundCurve", "CircularString", "MultiCurve"].contains(&ty);
             let hint = if curved { "; curved geometries are not read: linearise them, e.g. `ogr2ogr -nlt MULTIPOLYGON out.geojson in.geojson`" } else { "" };
-            return Err(bad(format!("{ACCEPTED} geometries ({name} is a {ty}{hint})")).into());
+            return Err(bad(format!("{ACCEPTED} geometries ({name} is a {ty}{hint})")));
         }
         let parsed: geojson::Geometry = serde_json::from_value(g.clone()).map_err(|e| bad(format!("a GeoJSON {ty} ({name} does not parse: {e})")))?;
         // a position needs x and y (a third number, the height, is ignored)
@@ -756,7 +756,6 @@ pub fn read_geojson_area(path: &Path, filter: Option<&AreaFilter>, dem_epsg: Opt
             p.iter()
                 .map(|r| r.iter().map(|q| if q.len() >= 2 { Ok([q[0], q[1]]) } else { Err(bad(format!("positions of two numbers [x, y] ({name} has one of {}: {q:?})", q.len()))) }).collect::<std::result::Result<Vec<_>, _>>())
                 .collect::<std::result::Result<Vec<_>, _>>()
-                .map_err(Into::into)
         };
         match &parsed.value {
             geojson::GeometryValue::Polygon { coordinates } => out.push((name.clone(), rings_of(coordinates)?)),
@@ -772,8 +771,7 @@ pub fn read_geojson_area(path: &Path, filter: Option<&AreaFilter>, dem_epsg: Opt
         return Err(bad(match (filter, seen) {
             (Some(f), 0) => format!("a feature whose property `{}` equals {} (none does)", f.property, f.equals),
             _ => format!("at least one {ACCEPTED} feature (none found)"),
-        })
-        .into());
+        }));
     }
     for (k, (name, p)) in out.iter().enumerate() {
         check_rings(p).map_err(|e| bad(format!("polygon {k} of the file ({name}): {e}")))?;
@@ -814,15 +812,14 @@ pub fn read_gpkg_area(path: &Path, layer: Option<&str>, filter: Option<&AreaFilt
     let info = got.layer.clone();
     if let (Some(want), Some((org, code))) = (dem_epsg, &info.organization) {
         if org.eq_ignore_ascii_case("EPSG") && *code != want as i64 {
-            return Err(bad(format!("polygons in the DEM's CRS, EPSG:{want} (layer `{}` is in EPSG:{code}; reproject it, e.g. `ogr2ogr -t_srs EPSG:{want} out.gpkg {}`)", info.table, path.display())).into());
+            return Err(bad(format!("polygons in the DEM's CRS, EPSG:{want} (layer `{}` is in EPSG:{code}; reproject it, e.g. `ogr2ogr -t_srs EPSG:{want} out.gpkg {}`)", info.table, path.display())));
         }
     }
     if got.polygons.is_empty() {
         return Err(bad(match (filter, got.features) {
             (Some(f), 0) => format!("a feature of layer `{}` whose column `{}` equals {} (none does)", info.table, f.property, f.equals),
             _ => format!("at least one Polygon or MultiPolygon feature in layer `{}` (none found)", info.table),
-        })
-        .into());
+        }));
     }
     let mut out = Vec::with_capacity(got.polygons.len());
     for (k, (fid, p)) in got.polygons.into_iter().enumerate() {
@@ -977,7 +974,7 @@ fn read_area_file(f: &Path, m: &Management, site: &SiteView<'_>, (ex, ey): (f64,
                 Some(c) => format!("EPSG:{c}"),
                 None => "the coordinates of the run's outputs: a site without georeferencing runs from y = −H at its south edge to 0 at its north edge, x from 0 to W".into(),
             };
-            return Err(bad(format!("polygons on the site: polygon {k} of the file ({name}) lies wholly outside it (its bounding box x {:.2}–{:.2}, y {:.2}–{:.2}; the site covers x {:.2}–{:.2}, y {:.2}–{:.2} in the file's CRS, {crs})", fb[0], fb[2], fb[1], fb[3], s0[0], s1[0], s0[1], s1[1])).into());
+            return Err(bad(format!("polygons on the site: polygon {k} of the file ({name}) lies wholly outside it (its bounding box x {:.2}–{:.2}, y {:.2}–{:.2}; the site covers x {:.2}–{:.2}, y {:.2}–{:.2} in the file's CRS, {crs})", fb[0], fb[2], fb[1], fb[3], s0[0], s1[0], s0[1], s1[1])));
         }
         out.push(world);
     }
