@@ -1,6 +1,7 @@
 //! Management and a changing climate (issue 35): thinnings reach their targets in the right
 //! order, clear-cuts clear and regeneration returns, plantings stay inside their polygons
-//! (GeoJSON read), runs are the same for 1 and 2 threads and across a checkpoint, bad input is
+//! (GeoJSON read), runs are the same for 1 and 2 threads, across a checkpoint and over tiles
+//! (`--tiles N`; over MPI ranks in tests/mpi.rs), bad input is
 //! refused naming file and field, and warming moves the temperature index and establishment.
 mod common;
 
@@ -209,21 +210,77 @@ fn management_and_warming_are_the_same_for_one_and_two_threads_and_across_a_chec
     assert_eq!(changed, vec!["management[4]".to_string()], "{e}");
 }
 
+/// Every kind of management (thinnings to targets with triggers, patch cuts, crop trees,
+/// shelterwood, a polygon planting) under warming, run as 2, 3 and 2 × 2 tiles in threads,
+/// equals one process byte for byte: stand table, trees, inventory with the year's harvested
+/// dead, checkpoint. Year 9 is the shelterwood's removal cut, so its dead are in the inventory.
 #[test]
-fn tiled_runs_refuse_management() {
-    let (_, w) = world(&busy(3));
-    let e = sylva::sim::tiles::Layout::new(&w.site, 2, 1).unwrap_err().to_string();
-    assert!(e.contains("management") && e.contains("one process"), "{e}");
-    assert!(sylva::sim::tiles::Layout::new(&w.site, 1, 1).is_ok());
-    // the main job refuses it before writing anything, naming the scenario (a trial found
-    // `species/` left behind and no file named)
-    let sc = Scenario::from_toml_str(&busy(3), "busy.toml").unwrap();
-    let d = tempfile::tempdir().unwrap();
-    let out = d.path().join("out");
-    let r = sylva::job::main_job::simulate(&sc, sc.site().unwrap(), &common::embedded(), sylva::job::main_job::SimulateOptions::new(&out), sylva::job::main_job::Stepping::Local(2), None, &mut |_| {});
-    let e = format!("{:#}", anyhow::Error::from(r.unwrap_err()));
-    assert!(e.contains("busy.toml") && e.contains("management") && e.contains("one process"), "{e}");
-    assert!(!out.join("species").exists());
+fn every_kind_of_management_over_tiles_equals_one_process() {
+    use sylva::sim::tiles::{run_local, Layout};
+    let (sc, w0) = world(&busy(10));
+    let mut w = w0.clone();
+    let rows = common::run(&sc, &mut w, 9);
+    assert!(rows[8].harvest_stems_ha > 0.0 && rows.iter().filter(|r| r.harvest_stems_ha > 0.0).count() >= 5, "{rows:?}");
+    assert!(w.scratch.dead.iter().any(|d| d.cause == DeathCause::Harvest));
+    for (nx, ny) in [(2, 1), (3, 1), (2, 2)] {
+        let layout = Layout::new(&w0.site, nx, ny).unwrap();
+        let (wt, rt, _) = run_local(&w0, &layout, 9).unwrap();
+        assert_eq!(rt, rows, "{nx} × {ny} tiles: stand table");
+        assert_eq!(wt.stand.trees, w.stand.trees, "{nx} × {ny} tiles: trees");
+        assert!(sylva::output::inventory::inventory_csv(&wt) == sylva::output::inventory::inventory_csv(&w), "{nx} × {ny} tiles: inventory");
+        assert!(to_bytes(&wt, &rt) == to_bytes(&w, &rows), "{nx} × {ny} tiles: checkpoint");
+        assert_eq!(wt.tallies.deaths_total, w.tallies.deaths_total, "{nx} × {ny} tiles: deaths by cause");
+    }
+}
+
+/// [`common::short_thinning_toml`] as a scenario.
+fn short_thinning(years: u32) -> Scenario {
+    Scenario::from_toml_str(&common::short_thinning_toml(years), "thinning_beech.toml").unwrap()
+}
+
+/// Issue 35: `scenarios/thinning_beech.toml` (shortened to 33 years) on 2 tiles (`sylva
+/// simulate --tiles 2`) writes the run directory of one process byte for byte (stand table,
+/// inventories with the harvested trees, maps; the per-rank checkpoints assembled equal its
+/// checkpoint), and so does a run stopped after year 22 (right after a thinning) on 2 tiles
+/// and resumed on 2 or on 1.
+#[test]
+fn thinning_beech_over_two_tiles_and_resumed_equals_one_process() {
+    use sylva::job::run::{run_scenario, RunOptions};
+    use sylva::job::tiled::run_local_tiles;
+    let lib = common::embedded();
+    let (long, short) = (short_thinning(33), short_thinning(22));
+    let template = World::new(long.site().unwrap(), &lib, &long).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let one = tmp.path().join("one");
+    let a = run_scenario(&long, long.site().unwrap(), &lib, RunOptions::new(&one)).unwrap();
+    let thinned: Vec<u32> = a.rows.iter().filter(|r| r.harvest_stems_ha > 0.0).map(|r| r.year).collect();
+    assert_eq!(thinned, vec![22, 27, 32], "thinning years");
+    let inv = sylva::job::inventory::read(&one.join("inventory/year_0022.parquet")).unwrap();
+    let cut = inv.iter().filter(|r| r.status == "dead:harvest").count();
+    assert!(cut > 50, "{cut} thinned trees in year 22's inventory");
+    let two = tmp.path().join("two");
+    let (b, bytes) = run_local_tiles(&long, long.site().unwrap(), &lib, RunOptions::new(&two), 2).unwrap();
+    assert_eq!(b.rows, a.rows, "2 tiles: stand table");
+    assert!(bytes.iter().all(|&n| n > 0));
+    common::assert_same_run(&one, &two, &template, "thinning_beech on 2 tiles");
+    for then in [2, 1] {
+        let d = tmp.path().join(format!("split_{then}"));
+        run_local_tiles(&short, short.site().unwrap(), &lib, RunOptions::new(&d), 2).unwrap();
+        let mut o = RunOptions::new(&d);
+        o.resume = true;
+        let r = if then == 2 { run_local_tiles(&long, long.site().unwrap(), &lib, o, 2).unwrap().0 } else { run_scenario(&long, long.site().unwrap(), &lib, o).unwrap() };
+        assert_eq!(r.rows, a.rows, "stopped after 22 years on 2 tiles, resumed on {then}: stand table");
+        if then == 2 {
+            common::assert_same_run(&one, &d, &template, "thinning_beech stopped on 2 tiles, resumed on 2");
+        } else {
+            let (fa, fb) = (common::files(&one), common::files(&d));
+            assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>());
+            for (k, v) in &fa {
+                assert!(v == &fb[k], "stopped on 2 tiles, resumed on 1: {k} differs");
+            }
+        }
+    }
+    eprintln!("thinning_beech, 33 years: {} trees, thinned in years {thinned:?}, {cut} trees in year 22; 2 tiles sent {bytes:?} bytes of halo copies", a.trees);
 }
 
 fn err(toml: &str) -> String {
