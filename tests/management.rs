@@ -211,15 +211,23 @@ fn management_and_warming_are_the_same_for_one_and_two_threads_and_across_a_chec
 }
 
 /// Every kind of management (thinnings to targets with triggers, patch cuts, crop trees,
-/// shelterwood, a polygon planting) under warming, run as 2, 3 and 2 × 2 tiles in threads,
-/// equals one process byte for byte: stand table, trees, inventory with the year's harvested
-/// dead, checkpoint. Year 9 is the shelterwood's removal cut, so its dead are in the inventory.
+/// shelterwood, a polygon planting) under warming, and a planting alone in year 6 (no trees
+/// exchanged that year) across the tile edges, run as 2, 3 and 2 × 2 tiles in threads, equals
+/// one process byte for byte: stand table, trees, inventory with the year's harvested dead,
+/// checkpoint. Year 9 is the shelterwood's removal cut, so its dead are in the inventory.
 #[test]
 fn every_kind_of_management_over_tiles_equals_one_process() {
     use sylva::sim::tiles::{run_local, Layout};
-    let (sc, w0) = world(&busy(10));
+    let toml = busy(10) + "[[management]]\nkind = \"planting\"\nmix = { beech = 0.5, silver_birch = 0.5 }\nspacing_m = 3.0\nyear = 6\narea = [30.0, 30.0, 100.0, 100.0]\n";
+    let (sc, w0) = world(&toml);
     let mut w = w0.clone();
-    let rows = common::run(&sc, &mut w, 9);
+    let mut rows = common::run(&sc, &mut w, 5);
+    let n5 = w.stand.trees.len();
+    rows.extend(common::run(&sc, &mut w, 1));
+    let n6 = w.stand.trees.len();
+    // 70 m × 70 m at 3 m: about 540 planted
+    assert!(rows[5].harvest_stems_ha == 0.0 && n6 > n5 + 400, "year 6 plants and cuts nothing: {n5} → {n6} trees");
+    rows.extend(common::run(&sc, &mut w, 3));
     assert!(rows[8].harvest_stems_ha > 0.0 && rows.iter().filter(|r| r.harvest_stems_ha > 0.0).count() >= 5, "{rows:?}");
     assert!(w.scratch.dead.iter().any(|d| d.cause == DeathCause::Harvest));
     for (nx, ny) in [(2, 1), (3, 1), (2, 2)] {
