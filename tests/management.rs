@@ -879,3 +879,25 @@ fn geojson_area_files_are_checked_for_crs_geometry_and_site() {
     let e = err(&harvest(&f));
     assert!(e.contains("parcels.geojson") && e.contains("polygon 1 of the file (feature 1 (id \"old\")) lies wholly outside") && e.contains("x 10.00–60.00, y 10.00–60.00") && e.contains("the site covers x 0.00–120.00, y -120.00–0.00") && e.contains("y = −H at its south edge"), "{e}");
 }
+
+/// Issue 35's yield validation for Norway spruce: the shipped `scenarios/thinning_spruce.toml`
+/// (thinned from below to the relative density the Wiedemann 1936/42 moderate-thinning table
+/// holds) follows the table's basal area within 10 % and its height within 1.5 m at ages 50
+/// and 100; its stem number and Dq miss the table's ±20 % (N −36 % and −34 %, Dq +28 % and
+/// +27 %; docs/management.md), which is printed, not asserted.
+#[test]
+fn thinning_spruce_follows_the_wiedemann_basal_area_and_height() {
+    let sc = Scenario::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thinning_spruce.toml")).unwrap();
+    let mut w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    let rows = common::run(&sc, &mut w, 97);
+    // Wiedemann 1936/42, class I: (age, N, Dq cm, BA m²/ha, h_q m)
+    for (age, n_t, dq_t, ba_t, h_t) in [(50, 1326.0, 19.3, 38.7, 21.2), (100, 435.0, 37.6, 48.3, 33.3)] {
+        let r = &rows[age - 3 - 1];
+        let (n, dq) = (r.stems_7cm_ha, r.qmd_7cm_cm);
+        let ba = std::f64::consts::PI / 4.0 * n * dq * dq / 1e4;
+        eprintln!("age {age}: N {n:.0} ({:+.0} %), Dq {dq:.1} cm ({:+.0} %), BA {ba:.1} m²/ha ({:+.0} %), top height {:.1} m (h_q {h_t})", (n / n_t - 1.0) * 100.0, (dq / dq_t - 1.0) * 100.0, (ba / ba_t - 1.0) * 100.0, r.top_height_m);
+        assert!((ba / ba_t - 1.0).abs() < 0.10, "age {age}: basal area {ba:.1} m²/ha against the table's {ba_t}");
+        assert!((r.top_height_m - h_t).abs() < 1.5, "age {age}: top height {:.1} m against h_q {h_t}", r.top_height_m);
+    }
+    assert!(rows.iter().filter(|r| r.harvest_stems_ha > 0.0).count() >= 15, "thinned every 5 years");
+}
