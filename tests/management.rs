@@ -250,7 +250,7 @@ fn short_thinning(years: u32) -> Scenario {
 /// simulate --tiles 2`) writes the run directory of one process byte for byte (stand table,
 /// inventories with the harvested trees, maps; the per-rank checkpoints assembled equal its
 /// checkpoint), and so does a run stopped after year 22 (right after a thinning) on 2 tiles
-/// and resumed on 2 or on 1.
+/// and resumed on 2 or on 1, and one stopped as by Ctrl-C after year 25 and resumed on 2.
 #[test]
 fn thinning_beech_over_two_tiles_and_resumed_equals_one_process() {
     use sylva::job::run::{run_scenario, RunOptions};
@@ -288,6 +288,25 @@ fn thinning_beech_over_two_tiles_and_resumed_equals_one_process() {
             }
         }
     }
+    // stopped as by Ctrl-C during year 24 (the run ends after year 25: between two thinnings,
+    // not a checkpoint year) on 2 tiles, then `--resume` on 2
+    let d = tmp.path().join("stopped");
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let s2 = stop.clone();
+    let mut cb = move |p: &sylva::job::run::Progress| {
+        if p.year == 24 {
+            s2.store(true, std::sync::atomic::Ordering::SeqCst);
+        }
+    };
+    let mut o = RunOptions::new(&d);
+    o.stop = Some(stop);
+    o.progress = Some(&mut cb);
+    let part = run_local_tiles(&long, long.site().unwrap(), &lib, o, 2).unwrap().0;
+    assert!(part.stopped && part.rows.len() == 25, "stopped after {} years", part.rows.len());
+    let mut o = RunOptions::new(&d);
+    o.resume = true;
+    assert_eq!(run_local_tiles(&long, long.site().unwrap(), &lib, o, 2).unwrap().0.rows, a.rows, "stopped after year 25 on 2 tiles, resumed on 2");
+    common::assert_same_run(&one, &d, &template, "thinning_beech stopped after year 25 on 2 tiles, resumed on 2");
     eprintln!("thinning_beech, 33 years: {} trees, thinned in years {thinned:?}, {cut} trees in year 22; 2 tiles sent {bytes:?} bytes of halo copies", a.trees);
 }
 
