@@ -112,6 +112,14 @@ fn wkb_type_name(base: u32) -> String {
         5 => "MultiLineString".into(),
         6 => "MultiPolygon".into(),
         7 => "GeometryCollection".into(),
+        8 => "CircularString".into(),
+        9 => "CompoundCurve".into(),
+        10 => "CurvePolygon".into(),
+        11 => "MultiCurve".into(),
+        12 => "MultiSurface".into(),
+        15 => "PolyhedralSurface".into(),
+        16 => "TIN".into(),
+        17 => "Triangle".into(),
         t => format!("geometry of WKB type {t}"),
     }
 }
@@ -205,7 +213,9 @@ pub fn wkb_polygons(wkb: &[u8]) -> Result<Vec<Polygon>, String> {
             }
             Ok(out)
         }
-        t => Err(format!("a Polygon or MultiPolygon (it is a {})", wkb_type_name(t))),
+        // the curved types of ISO SQL/MM (GeoPackage 1.3 Annex E): not linearised here
+        t @ 8..=12 => Err(format!("a Polygon or MultiPolygon, the only geometry types an area is read from (it is a {}; curved geometries are not read: linearise them, e.g. `ogr2ogr -nlt MULTIPOLYGON out.gpkg in.gpkg`)", wkb_type_name(t))),
+        t => Err(format!("a Polygon or MultiPolygon, the only geometry types an area is read from (it is a {})", wkb_type_name(t))),
     }
 }
 
@@ -246,15 +256,14 @@ pub struct ReadError(pub String);
 
 /// Reads the Polygon and MultiPolygon features of a GeoPackage feature layer: `layer` by name,
 /// or the first feature layer of `gpkg_contents` (in the order its rows were written) when
-/// `None`. `filter`: only features whose attribute column `.0` equals (by `keep`) the value;
-/// features with an empty geometry (or none) are skipped. Coordinates as stored (the layer's
-/// CRS, [`LayerInfo`]).
+/// `None`. `filter`: only features whose attribute column `.0` equals (by `keep`) the value.
+/// Coordinates as stored (the layer's CRS, [`LayerInfo`]).
 ///
 /// Errors: [`ReadError`] saying what was expected: a readable SQLite file with the GeoPackage
 /// tables (`gpkg_contents`, `gpkg_geometry_columns`), a feature layer (of that name: the
 /// layers there are listed), a filter column the layer has (its columns listed), geometries
 /// that are GeoPackageBinary Polygons or MultiPolygons (naming the layer, the feature's fid
-/// and the type found).
+/// and the type found; a NULL or empty geometry of a feature the filter keeps is refused too).
 pub fn read_polygons(path: &Path, layer: Option<&str>, filter: Option<(&str, &dyn Fn(&Attribute) -> bool)>) -> Result<PolygonLayer, ReadError> {
     let e = |m: String| ReadError(m);
     if !path.is_file() {
@@ -317,12 +326,14 @@ pub fn read_polygons(path: &Path, layer: Option<&str>, filter: Option<(&str, &dy
         }
         let feature = |m: String| e(format!("Polygon or MultiPolygon geometries in layer `{}` (feature {fid} = {id}: {m})", info.table));
         let blob = match r.get_ref(1).map_err(sqlerr)? {
-            rusqlite::types::ValueRef::Null => continue,
+            rusqlite::types::ValueRef::Null => return Err(feature("the geometry is NULL; give it a polygon, or leave the feature out with a `filter`".into())),
             rusqlite::types::ValueRef::Blob(b) => b,
             other => return Err(feature(format!("the geometry is a {:?} value, not a blob", other.data_type()))),
         };
         out.features += 1;
-        let Some(wkb) = blob_wkb(blob).map_err(feature)? else { continue };
+        let Some(wkb) = blob_wkb(blob).map_err(feature)? else {
+            return Err(feature("the geometry is empty; give it a polygon, or leave the feature out with a `filter`".into()));
+        };
         for p in wkb_polygons(wkb).map_err(feature)? {
             out.polygons.push((id, p));
         }

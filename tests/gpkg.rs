@@ -234,13 +234,15 @@ fn write_gpkg(path: &Path, layers: &[(&str, &str, i32, Vec<(i64, &str, i64, Vec<
 }
 
 /// The parcels of the tests: a triangle A, a square B (a MultiPolygon Z) and a square with a
-/// square hole C, on a 120 m × 120 m uniform site.
+/// square hole C, on a 120 m × 120 m uniform site, in world metres (origin SW corner).
 const TRI: [[f64; 2]; 3] = [[10.0, 10.0], [110.0, 20.0], [40.0, 100.0]];
 const SQUARE: [[f64; 2]; 4] = [[70.0, 70.0], [115.0, 70.0], [115.0, 115.0], [70.0, 115.0]];
 
+/// Ring `p` (world metres) closed, in the coordinates an area file of the 120 m site is in:
+/// the outputs' (origin NW corner, y = world y − 120 m; `sim::management::crs_to_world`).
 fn closed(p: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let mut v = p.to_vec();
-    v.push(p[0]);
+    let mut v: Vec<[f64; 2]> = p.iter().map(|q| [q[0], q[1] - 120.0]).collect();
+    v.push(v[0]);
     v
 }
 
@@ -323,6 +325,28 @@ fn polygon_planting_from_geopackage_plants_only_inside_its_polygons() {
     let e = sylva::sim::management::read_gpkg_polygons(&wgs, None, None, Some(26917), "x.toml", "management[0].area_file").unwrap_err().to_string();
     assert!(e.contains("EPSG:26917") && e.contains("EPSG:4326") && e.contains("ogr2ogr -t_srs"), "{e}");
     assert_eq!(sylva::sim::management::read_gpkg_polygons(&wgs, None, None, None, "x.toml", "f").unwrap().len(), 1);
+    // a CurvePolygon (ISO SQL/MM type 10) names the type and the types that are accepted
+    let curved = d.path().join("curved.gpkg");
+    let mut curve = vec![1u8];
+    curve.extend_from_slice(&10u32.to_le_bytes());
+    curve.extend_from_slice(&0u32.to_le_bytes());
+    write_gpkg(&curved, &[("parcels", "CURVEPOLYGON", -1, vec![(3, "A", 1, blob(&curve, -1, false))])]);
+    let e = plant(&planting(&curved, "")).unwrap_err();
+    assert!(e.contains("management[0].area_file") && e.contains("curved.gpkg") && e.contains("feature fid = 3") && e.contains("it is a CurvePolygon") && e.contains("only geometry types an area is read from") && e.contains("ogr2ogr -nlt MULTIPOLYGON"), "{e}");
+    // a NULL geometry names its feature (it was skipped without a word); left out by a filter
+    // it is no matter
+    let nulls = d.path().join("nulls.gpkg");
+    write_gpkg(&nulls, &[("parcels", "POLYGON", -1, vec![(4, "A", 1, blob(&wkb_polygon(true, &[closed(&TRI)]), -1, false)), (5, "B", 2, Vec::new())])]);
+    rusqlite::Connection::open(&nulls).unwrap().execute("UPDATE parcels SET shape = NULL WHERE fid = 5", []).unwrap();
+    let e = plant(&planting(&nulls, "")).unwrap_err();
+    assert!(e.contains("nulls.gpkg") && e.contains("layer `parcels`") && e.contains("feature fid = 5") && e.contains("the geometry is NULL"), "{e}");
+    assert!(plant(&planting(&nulls, "filter = { property = \"parcel\", equals = \"A\" }\n")).unwrap().len() > 500);
+    // a polygon wholly outside the site names the file, its feature, and both extents
+    let outside = d.path().join("outside.gpkg");
+    let north = [[10.0, 130.0], [50.0, 130.0], [50.0, 170.0], [10.0, 170.0]];
+    write_gpkg(&outside, &[("parcels", "POLYGON", -1, vec![(1, "A", 1, blob(&wkb_polygon(true, &[closed(&TRI)]), -1, false)), (2, "B", 2, blob(&wkb_polygon(true, &[closed(&north)]), -1, false))])]);
+    let e = plant(&planting(&outside, "")).unwrap_err();
+    assert!(e.contains("outside.gpkg") && e.contains("polygon 1 of the file (layer `parcels`, feature 2) lies wholly outside") && e.contains("x 10.00–50.00, y 10.00–50.00") && e.contains("x 0.00–120.00, y -120.00–0.00"), "{e}");
 }
 
 /// Parcels as GDAL writes them: the committed `tests/data/gis/parcels_ogr.gpkg` (made by
@@ -360,7 +384,7 @@ fn shipped_parcels_geopackage_equals_its_geojson() {
     for parcel in ["north", "east", "central"] {
         let f = AreaFilter { property: "parcel".into(), equals: toml::Value::String(parcel.into()) };
         let g = read_gpkg_polygons(&dir.join("parcels.gpkg"), None, Some(&f), Some(26917), "parcels.toml", "area_file").unwrap();
-        let j = read_geojson_polygons(&dir.join("parcels.geojson"), Some(&f), "parcels.toml", "area_file").unwrap();
+        let j = read_geojson_polygons(&dir.join("parcels.geojson"), Some(&f), Some(26917), "parcels.toml", "area_file").unwrap();
         assert_eq!(g, j, "parcel {parcel}");
     }
     let sc = std::fs::read_to_string(dir.join("parcels.toml")).unwrap();

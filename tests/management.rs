@@ -1,6 +1,7 @@
 //! Management and a changing climate (issue 35): thinnings reach their targets in the right
 //! order, clear-cuts clear and regeneration returns, plantings stay inside their polygons
-//! (GeoJSON read), runs are the same for 1 and 2 threads and across a checkpoint, bad input is
+//! (GeoJSON read), runs are the same for 1 and 2 threads, across a checkpoint and over tiles
+//! (`--tiles N`; over MPI ranks in tests/mpi.rs), bad input is
 //! refused naming file and field, and warming moves the temperature index and establishment.
 mod common;
 
@@ -113,8 +114,9 @@ fn polygon_planting_from_geojson_plants_only_inside_its_polygon() {
     let d = tempfile::tempdir().unwrap();
     let tri = [[10.0, 10.0], [110.0, 20.0], [40.0, 100.0]];
     let other = [[70.0, 70.0], [115.0, 70.0], [115.0, 115.0], [70.0, 115.0]];
+    // the file in the outputs' coordinates: y = world y − 120 m (origin at the NW corner)
     let ring = |p: &[[f64; 2]]| {
-        let mut v: Vec<String> = p.iter().map(|q| format!("[{}, {}]", q[0], q[1])).collect();
+        let mut v: Vec<String> = p.iter().map(|q| format!("[{}, {}]", q[0], q[1] - 120.0)).collect();
         v.push(v[0].clone());
         v.join(", ")
     };
@@ -208,21 +210,104 @@ fn management_and_warming_are_the_same_for_one_and_two_threads_and_across_a_chec
     assert_eq!(changed, vec!["management[4]".to_string()], "{e}");
 }
 
+/// Every kind of management (thinnings to targets with triggers, patch cuts, crop trees,
+/// shelterwood, a polygon planting) under warming, and a planting alone in year 6 (no trees
+/// exchanged that year) across the tile edges, run as 2, 3 and 2 × 2 tiles in threads, equals
+/// one process byte for byte: stand table, trees, inventory with the year's harvested dead,
+/// checkpoint. Year 9 is the shelterwood's removal cut, so its dead are in the inventory.
 #[test]
-fn tiled_runs_refuse_management() {
-    let (_, w) = world(&busy(3));
-    let e = sylva::sim::tiles::Layout::new(&w.site, 2, 1).unwrap_err().to_string();
-    assert!(e.contains("management") && e.contains("one process"), "{e}");
-    assert!(sylva::sim::tiles::Layout::new(&w.site, 1, 1).is_ok());
-    // the main job refuses it before writing anything, naming the scenario (a trial found
-    // `species/` left behind and no file named)
-    let sc = Scenario::from_toml_str(&busy(3), "busy.toml").unwrap();
-    let d = tempfile::tempdir().unwrap();
-    let out = d.path().join("out");
-    let r = sylva::job::main_job::simulate(&sc, sc.site().unwrap(), &common::embedded(), sylva::job::main_job::SimulateOptions::new(&out), sylva::job::main_job::Stepping::Local(2), None, &mut |_| {});
-    let e = format!("{:#}", anyhow::Error::from(r.unwrap_err()));
-    assert!(e.contains("busy.toml") && e.contains("management") && e.contains("one process"), "{e}");
-    assert!(!out.join("species").exists());
+fn every_kind_of_management_over_tiles_equals_one_process() {
+    use sylva::sim::tiles::{run_local, Layout};
+    let toml = busy(10) + "[[management]]\nkind = \"planting\"\nmix = { beech = 0.5, silver_birch = 0.5 }\nspacing_m = 3.0\nyear = 6\narea = [30.0, 30.0, 100.0, 100.0]\n";
+    let (sc, w0) = world(&toml);
+    let mut w = w0.clone();
+    let mut rows = common::run(&sc, &mut w, 5);
+    let n5 = w.stand.trees.len();
+    rows.extend(common::run(&sc, &mut w, 1));
+    let n6 = w.stand.trees.len();
+    // 70 m × 70 m at 3 m: about 540 planted
+    assert!(rows[5].harvest_stems_ha == 0.0 && n6 > n5 + 400, "year 6 plants and cuts nothing: {n5} → {n6} trees");
+    rows.extend(common::run(&sc, &mut w, 3));
+    assert!(rows[8].harvest_stems_ha > 0.0 && rows.iter().filter(|r| r.harvest_stems_ha > 0.0).count() >= 5, "{rows:?}");
+    assert!(w.scratch.dead.iter().any(|d| d.cause == DeathCause::Harvest));
+    for (nx, ny) in [(2, 1), (3, 1), (2, 2)] {
+        let layout = Layout::new(&w0.site, nx, ny).unwrap();
+        let (wt, rt, _) = run_local(&w0, &layout, 9).unwrap();
+        assert_eq!(rt, rows, "{nx} × {ny} tiles: stand table");
+        assert_eq!(wt.stand.trees, w.stand.trees, "{nx} × {ny} tiles: trees");
+        assert!(sylva::output::inventory::inventory_csv(&wt) == sylva::output::inventory::inventory_csv(&w), "{nx} × {ny} tiles: inventory");
+        assert!(to_bytes(&wt, &rt) == to_bytes(&w, &rows), "{nx} × {ny} tiles: checkpoint");
+        assert_eq!(wt.tallies.deaths_total, w.tallies.deaths_total, "{nx} × {ny} tiles: deaths by cause");
+    }
+}
+
+/// [`common::short_thinning_toml`] as a scenario.
+fn short_thinning(years: u32) -> Scenario {
+    Scenario::from_toml_str(&common::short_thinning_toml(years), "thinning_beech.toml").unwrap()
+}
+
+/// Issue 35: `scenarios/thinning_beech.toml` (shortened to 33 years) on 2 tiles (`sylva
+/// simulate --tiles 2`) writes the run directory of one process byte for byte (stand table,
+/// inventories with the harvested trees, maps; the per-rank checkpoints assembled equal its
+/// checkpoint), and so does a run stopped after year 22 (right after a thinning) on 2 tiles
+/// and resumed on 2 or on 1, and one stopped as by Ctrl-C after year 25 and resumed on 2.
+#[test]
+fn thinning_beech_over_two_tiles_and_resumed_equals_one_process() {
+    use sylva::job::run::{run_scenario, RunOptions};
+    use sylva::job::tiled::run_local_tiles;
+    let lib = common::embedded();
+    let (long, short) = (short_thinning(33), short_thinning(22));
+    let template = World::new(long.site().unwrap(), &lib, &long).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let one = tmp.path().join("one");
+    let a = run_scenario(&long, long.site().unwrap(), &lib, RunOptions::new(&one)).unwrap();
+    let thinned: Vec<u32> = a.rows.iter().filter(|r| r.harvest_stems_ha > 0.0).map(|r| r.year).collect();
+    assert_eq!(thinned, vec![22, 27, 32], "thinning years");
+    let inv = sylva::job::inventory::read(&one.join("inventory/year_0022.parquet")).unwrap();
+    let cut = inv.iter().filter(|r| r.status == "dead:harvest").count();
+    assert!(cut > 50, "{cut} thinned trees in year 22's inventory");
+    let two = tmp.path().join("two");
+    let (b, bytes) = run_local_tiles(&long, long.site().unwrap(), &lib, RunOptions::new(&two), 2).unwrap();
+    assert_eq!(b.rows, a.rows, "2 tiles: stand table");
+    assert!(bytes.iter().all(|&n| n > 0));
+    common::assert_same_run(&one, &two, &template, "thinning_beech on 2 tiles");
+    for then in [2, 1] {
+        let d = tmp.path().join(format!("split_{then}"));
+        run_local_tiles(&short, short.site().unwrap(), &lib, RunOptions::new(&d), 2).unwrap();
+        let mut o = RunOptions::new(&d);
+        o.resume = true;
+        let r = if then == 2 { run_local_tiles(&long, long.site().unwrap(), &lib, o, 2).unwrap().0 } else { run_scenario(&long, long.site().unwrap(), &lib, o).unwrap() };
+        assert_eq!(r.rows, a.rows, "stopped after 22 years on 2 tiles, resumed on {then}: stand table");
+        if then == 2 {
+            common::assert_same_run(&one, &d, &template, "thinning_beech stopped on 2 tiles, resumed on 2");
+        } else {
+            let (fa, fb) = (common::files(&one), common::files(&d));
+            assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>());
+            for (k, v) in &fa {
+                assert!(v == &fb[k], "stopped on 2 tiles, resumed on 1: {k} differs");
+            }
+        }
+    }
+    // stopped as by Ctrl-C during year 24 (the run ends after year 25: between two thinnings,
+    // not a checkpoint year) on 2 tiles, then `--resume` on 2
+    let d = tmp.path().join("stopped");
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let s2 = stop.clone();
+    let mut cb = move |p: &sylva::job::run::Progress| {
+        if p.year == 24 {
+            s2.store(true, std::sync::atomic::Ordering::SeqCst);
+        }
+    };
+    let mut o = RunOptions::new(&d);
+    o.stop = Some(stop);
+    o.progress = Some(&mut cb);
+    let part = run_local_tiles(&long, long.site().unwrap(), &lib, o, 2).unwrap().0;
+    assert!(part.stopped && part.rows.len() == 25, "stopped after {} years", part.rows.len());
+    let mut o = RunOptions::new(&d);
+    o.resume = true;
+    assert_eq!(run_local_tiles(&long, long.site().unwrap(), &lib, o, 2).unwrap().0.rows, a.rows, "stopped after year 25 on 2 tiles, resumed on 2");
+    common::assert_same_run(&one, &d, &template, "thinning_beech stopped after year 25 on 2 tiles, resumed on 2");
+    eprintln!("thinning_beech, 33 years: {} trees, thinned in years {thinned:?}, {cut} trees in year 22; 2 tiles sent {bytes:?} bytes of halo copies", a.trees);
 }
 
 fn err(toml: &str) -> String {
@@ -355,7 +440,7 @@ fn warming_moves_beech_recruits_upslope_and_spruce_out_of_the_lowlands() {
 /// of the area file was part of it).
 #[test]
 fn the_checkpoint_identity_survives_a_moved_project_folder_and_names_the_changed_entry() {
-    let geo = r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},"geometry":{"type":"Polygon","coordinates":[[[10,10],[60,10],[60,60],[10,60],[10,10]]]}}]}"#;
+    let geo = r#"{"type":"FeatureCollection","features":[{"type":"Feature","properties":{},"geometry":{"type":"Polygon","coordinates":[[[10,-90],[60,-90],[60,-40],[10,-40],[10,-90]]]}}]}"#;
     let toml = |spacing: f64| format!("name = \"mv\"\nyears = 3\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = {{ width = 10, height = 10, cell_m = 10.0, elevation_m = 300.0, indices = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0] }}\n[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = {spacing:?}\nyear = 0\narea_file = \"p.geojson\"\n[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 2\narea = [0.0, 0.0, 20.0, 20.0]\n");
     let identity = |dir: &std::path::Path, spacing: f64| {
         std::fs::create_dir_all(dir).unwrap();
@@ -683,4 +768,155 @@ fn a_managed_run_stopped_and_resumed_writes_the_same_files() {
     for f in ["stand_table.csv", "inventory/year_0012.parquet", "inventory/year_0012.gpkg"] {
         assert!(std::fs::read(full_dir.path().join(f)).unwrap() == std::fs::read(dir.path().join(f)).unwrap(), "{f} differs");
     }
+}
+
+/// The trees of a run's final GeoPackage inventory (`inventory/year_NNNN.gpkg`): id, status and
+/// the point as written (the outputs' coordinates).
+fn gpkg_points(path: &Path) -> Vec<(u64, String, [f64; 2])> {
+    let db = rusqlite::Connection::open(path).unwrap();
+    let mut q = db.prepare(&format!("SELECT id, status, {} FROM inventory ORDER BY fid", sylva::gpkg::GEOMETRY_COLUMN)).unwrap();
+    let rows = q.query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, String>(1)?, r.get::<_, Vec<u8>>(2)?))).unwrap();
+    rows.map(|r| {
+        let (id, status, blob) = r.unwrap();
+        // WKB Point: byte order, type, x, y (little-endian as the writer writes it)
+        let wkb = sylva::gpkg::blob_wkb(&blob).unwrap().unwrap();
+        let f = |k: usize| f64::from_le_bytes(wkb[k..k + 8].try_into().unwrap());
+        (id as u64, status, [f(5), f(13)])
+    })
+    .collect()
+}
+
+/// Issue 35: on a site without georeferencing an area file is in the outputs' coordinates (y
+/// from −H to 0, origin NW corner), so a polygon taken from a run's written inventory (the
+/// bounding box of some trees' points, as one would draw it in QGIS over the GeoPackage) clears
+/// exactly the trees inside it and plants only inside it. The box lies at y < 0: read as world
+/// metres (before this convention) it was refused as outside the site.
+#[test]
+fn an_area_file_drawn_over_the_outputs_acts_exactly_where_those_trees_are() {
+    use sylva::job::run::{run_scenario, RunOptions};
+    let lib = common::embedded();
+    let base = ScenarioToml::new("drawn", 2, 9).species(&["beech", "sessile_oak"]).uniform(6, 6, 20.0, 200.0).planted("beech", 3.0, 30.0).line("snapshot_every = 0").build();
+    let sc = Scenario::from_toml_str(&base, "drawn.toml").unwrap();
+    let d = tempfile::tempdir().unwrap();
+    let a = d.path().join("a");
+    run_scenario(&sc, sc.site().unwrap(), &lib, RunOptions::new(&a)).unwrap();
+    let trees = gpkg_points(&a.join("inventory/year_0002.gpkg"));
+    let alive: Vec<&(u64, String, [f64; 2])> = trees.iter().filter(|t| t.1 == "alive").collect();
+    assert!(alive.len() > 1000, "{} trees", alive.len());
+    assert!(alive.iter().all(|t| (0.0..=120.0).contains(&t.2[0]) && (-120.0..=0.0).contains(&t.2[1])), "outputs in x 0…120, y −120…0");
+    // the 25 trees nearest (50, −80) in the outputs' coordinates, their box widened by a margin
+    // that leaves no tree within 2 cm of its edges (the outputs round positions to 1 cm)
+    let mut near: Vec<&(u64, String, [f64; 2])> = alive.clone();
+    near.sort_by(|p, q| (p.2[0] - 50.0).hypot(p.2[1] + 80.0).total_cmp(&(q.2[0] - 50.0).hypot(q.2[1] + 80.0)).then(p.0.cmp(&q.0)));
+    let picked: Vec<u64> = near[..25].iter().map(|t| t.0).collect();
+    let mut b = [f64::MAX, f64::MAX, f64::MIN, f64::MIN];
+    for t in &near[..25] {
+        b = [b[0].min(t.2[0]), b[1].min(t.2[1]), b[2].max(t.2[0]), b[3].max(t.2[1])];
+    }
+    let near_edge = |b: [f64; 4]| alive.iter().any(|t| (0..4).any(|k| (t.2[k % 2] - b[k]).abs() < 0.02));
+    let b = (1..20).map(|k| k as f64 * 0.05).map(|m| [b[0] - m, b[1] - m, b[2] + m, b[3] + m]).find(|&b| !near_edge(b)).unwrap();
+    assert!(b[3] < 0.0, "{b:?}");
+    let inside = |p: [f64; 2]| p[0] > b[0] && p[0] < b[2] && p[1] > b[1] && p[1] < b[3];
+    let mut want: Vec<u64> = alive.iter().filter(|t| inside(t.2)).map(|t| t.0).collect();
+    want.sort_unstable();
+    assert!(picked.iter().all(|id| want.contains(id)) && want.len() >= 25);
+    let gj = format!(r#"{{"type":"FeatureCollection","features":[{{"type":"Feature","properties":{{}},"geometry":{{"type":"Polygon","coordinates":[[[{0},{1}],[{2},{1}],[{2},{3}],[{0},{3}],[{0},{1}]]]}}}}]}}"#, b[0], b[1], b[2], b[3]);
+    std::fs::write(d.path().join("drawn.geojson"), gj).unwrap();
+    // the same run with a clear-cut and an oak planting in that box at the end of year 2
+    let managed = format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 2\narea_file = \"drawn.geojson\"\n[[management]]\nkind = \"planting\"\nmix = {{ sessile_oak = 1.0 }}\nspacing_m = 1.0\nyear = 2\narea_file = \"drawn.geojson\"\n");
+    std::fs::write(d.path().join("drawn.toml"), managed).unwrap();
+    let sc = Scenario::load(&d.path().join("drawn.toml")).unwrap();
+    let m = d.path().join("m");
+    run_scenario(&sc, sc.site().unwrap(), &lib, RunOptions::new(&m)).unwrap();
+    let after = gpkg_points(&m.join("inventory/year_0002.gpkg"));
+    let mut cut: Vec<u64> = after.iter().filter(|t| t.1 == "dead:harvest").map(|t| t.0).collect();
+    cut.sort_unstable();
+    assert_eq!(cut, want, "the clear-cut took the trees inside the drawn box, and only them");
+    let db = rusqlite::Connection::open(m.join("inventory/year_0002.gpkg")).unwrap();
+    let oaks: i64 = db.query_row("SELECT COUNT(*) FROM inventory WHERE species = 'sessile_oak'", [], |r| r.get(0)).unwrap();
+    let oak_points: Vec<[f64; 2]> = after.iter().filter(|t| t.1 == "alive" && !alive.iter().any(|a| a.0 == t.0)).map(|t| t.2).collect();
+    assert_eq!(oaks as usize, oak_points.len(), "the new trees are the oaks");
+    assert!(oak_points.len() >= ((b[2] - b[0]) * (b[3] - b[1]) * 0.5) as usize && oak_points.iter().all(|&p| inside(p)), "{} oaks planted, all inside the box {b:?}", oak_points.len());
+    eprintln!("drawn box {b:?}: {} trees cleared, {} oaks planted", cut.len(), oak_points.len());
+}
+
+/// Issue 35: a GeoJSON area file is checked as a GeoPackage is. Its legacy `crs` member must
+/// name the DEM's EPSG code (refused naming the file, both codes and the `ogr2ogr -t_srs` fix);
+/// a folder, a feature without geometry, a geometry type other than Polygon/MultiPolygon and a
+/// polygon wholly outside the site are refused naming the file and the feature.
+#[test]
+fn geojson_area_files_are_checked_for_crs_geometry_and_site() {
+    use sylva::sim::management::{geojson_crs_epsg, read_geojson_polygons};
+    let d = tempfile::tempdir().unwrap();
+    let square = r#"{"type":"Feature","properties":{"parcel":"A"},"geometry":{"type":"Polygon","coordinates":[[[10,-70],[60,-70],[60,-20],[10,-20],[10,-70]]]}}"#;
+    let with_crs = |name: &str| format!(r#"{{"type":"FeatureCollection","crs":{{"type":"name","properties":{{"name":"{name}"}}}},"features":[{square}]}}"#);
+    // the legacy forms GDAL and others write
+    for (name, code) in [("urn:ogc:def:crs:EPSG::26917", 26917), ("EPSG:26917", 26917), ("urn:ogc:def:crs:EPSG:9.8.1:3035", 3035), ("urn:ogc:def:crs:OGC:1.3:CRS84", 4326)] {
+        assert_eq!(geojson_crs_epsg(&serde_json::json!({"type": "name", "properties": {"name": name}})), Ok(code), "{name}");
+    }
+    let f = d.path().join("wgs.geojson");
+    std::fs::write(&f, with_crs("urn:ogc:def:crs:EPSG::4326")).unwrap();
+    let e = read_geojson_polygons(&f, None, Some(26917), "x.toml", "management[0].area_file").unwrap_err().to_string();
+    assert!(e.contains("x.toml") && e.contains("management[0].area_file") && e.contains("wgs.geojson") && e.contains("EPSG:26917") && e.contains("names EPSG:4326") && e.contains("ogr2ogr -t_srs EPSG:26917"), "{e}");
+    std::fs::write(&f, with_crs("my local grid")).unwrap();
+    let e = read_geojson_polygons(&f, None, Some(26917), "x.toml", "f").unwrap_err().to_string();
+    assert!(e.contains("\"my local grid\", not an EPSG code") && e.contains("ogr2ogr -t_srs"), "{e}");
+    // the DEM's code in either form is read; a site without an EPSG code reads any
+    for name in ["EPSG:26917", "urn:ogc:def:crs:EPSG::26917"] {
+        std::fs::write(&f, with_crs(name)).unwrap();
+        assert_eq!(read_geojson_polygons(&f, None, Some(26917), "x.toml", "f").unwrap().len(), 1, "{name}");
+    }
+    std::fs::write(&f, with_crs("urn:ogc:def:crs:EPSG::4326")).unwrap();
+    assert_eq!(read_geojson_polygons(&f, None, None, "x.toml", "f").unwrap().len(), 1);
+
+    // through a scenario on a 120 m uniform site (the file in the outputs' coordinates)
+    let base = ScenarioToml::new("bad", 3, 1).species(&["beech"]).uniform(6, 6, 20.0, 200.0).build();
+    let harvest = |file: &Path| format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 1\narea_file = {:?}\n", file.display().to_string());
+    let e = err(&harvest(d.path()));
+    assert!(e.contains("bad.toml") && e.contains("management[0].area_file") && e.contains(&d.path().display().to_string()) && e.contains("it is a folder"), "{e}");
+    let collection = |feats: &[&str]| format!(r#"{{"type":"FeatureCollection","features":[{}]}}"#, feats.join(","));
+    let f = d.path().join("parcels.geojson");
+    // a feature without geometry, named by its index and id
+    std::fs::write(&f, collection(&[square, r#"{"type":"Feature","id":"P7","properties":{"parcel":"B"},"geometry":null}"#])).unwrap();
+    let e = err(&harvest(&f));
+    assert!(e.contains("parcels.geojson") && e.contains("feature 1 (id \"P7\") has none: its geometry is null"), "{e}");
+    // … which a filter may leave out
+    let ok = format!("{}filter = {{ property = \"parcel\", equals = \"A\" }}\n", harvest(&f));
+    let sc = Scenario::from_toml_str(&ok, "ok.toml").unwrap();
+    let w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    assert_eq!(w.site.management[0].region.bbox, [10.0, 50.0, 60.0, 100.0], "file y −70…−20 is world y 50…100");
+    // a CurvePolygon (not a GeoJSON type) and a LineString name the feature, the type and the
+    // accepted types
+    std::fs::write(&f, collection(&[square, r#"{"type":"Feature","id":3,"properties":{},"geometry":{"type":"CurvePolygon","coordinates":[]}}"#])).unwrap();
+    let e = err(&harvest(&f));
+    assert!(e.contains("parcels.geojson") && e.contains("feature 1 (id 3) is a CurvePolygon") && e.contains("Polygon or MultiPolygon (the only geometry types") && e.contains("linearise"), "{e}");
+    std::fs::write(&f, collection(&[r#"{"type":"Feature","properties":{},"geometry":{"type":"LineString","coordinates":[[0,-5],[50,-5]]}}"#, square])).unwrap();
+    let e = err(&harvest(&f));
+    assert!(e.contains("feature 0 is a LineString") && !e.contains("linearise"), "{e}");
+    // a polygon wholly outside the site: the world's y (0…120) read as the outputs' lies north
+    std::fs::write(&f, collection(&[square, r#"{"type":"Feature","id":"old","properties":{},"geometry":{"type":"Polygon","coordinates":[[[10,10],[60,10],[60,60],[10,60],[10,10]]]}}"#])).unwrap();
+    let e = err(&harvest(&f));
+    assert!(e.contains("parcels.geojson") && e.contains("polygon 1 of the file (feature 1 (id \"old\")) lies wholly outside") && e.contains("x 10.00–60.00, y 10.00–60.00") && e.contains("the site covers x 0.00–120.00, y -120.00–0.00") && e.contains("y = −H at its south edge"), "{e}");
+}
+
+/// Issue 35's yield validation for Norway spruce: the shipped `scenarios/thinning_spruce.toml`
+/// (thinned from below to the relative density the Wiedemann 1936/42 moderate-thinning table
+/// holds) follows the table's basal area within 10 % and its height within 1.5 m at ages 50
+/// and 100; its stem number and Dq miss the table's ±20 % (N −36 % and −34 %, Dq +28 % and
+/// +27 %; docs/management.md), which is printed, not asserted.
+#[test]
+fn thinning_spruce_follows_the_wiedemann_basal_area_and_height() {
+    let sc = Scenario::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thinning_spruce.toml")).unwrap();
+    let mut w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    let rows = common::run(&sc, &mut w, 97);
+    // Wiedemann 1936/42, class I: (age, N, Dq cm, BA m²/ha, h_q m)
+    for (age, n_t, dq_t, ba_t, h_t) in [(50, 1326.0, 19.3, 38.7, 21.2), (100, 435.0, 37.6, 48.3, 33.3)] {
+        let r = &rows[age - 3 - 1];
+        let (n, dq) = (r.stems_7cm_ha, r.qmd_7cm_cm);
+        let ba = std::f64::consts::PI / 4.0 * n * dq * dq / 1e4;
+        eprintln!("age {age}: N {n:.0} ({:+.0} %), Dq {dq:.1} cm ({:+.0} %), BA {ba:.1} m²/ha ({:+.0} %), top height {:.1} m (h_q {h_t})", (n / n_t - 1.0) * 100.0, (dq / dq_t - 1.0) * 100.0, (ba / ba_t - 1.0) * 100.0, r.top_height_m);
+        assert!((ba / ba_t - 1.0).abs() < 0.10, "age {age}: basal area {ba:.1} m²/ha against the table's {ba_t}");
+        assert!((r.top_height_m - h_t).abs() < 1.5, "age {age}: top height {:.1} m against h_q {h_t}", r.top_height_m);
+    }
+    assert!(rows.iter().filter(|r| r.harvest_stems_ha > 0.0).count() >= 15, "thinned every 5 years");
 }

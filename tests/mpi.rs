@@ -2,7 +2,9 @@
 //! `mpirun`): `mpirun -np 2` and `-np 3` of `sylva simulate` write the run directory of one
 //! process byte for byte (each rank's checkpoint its own file: assembled, they are the one
 //! process's `checkpoint.bin`); a run stopped on 3 ranks and resumed on 2, and one stopped on
-//! 2 and resumed on 2 (each rank reading its own checkpoint), end as the unbroken run.
+//! 2 and resumed on 2 (each rank reading its own checkpoint), end as the unbroken run; a
+//! managed run (issue 35: `scenarios/thinning_beech.toml` shortened, thinned from below over
+//! the whole site) on 2 ranks, and stopped and resumed on 2, writes the one process's run too.
 #![cfg(feature = "mpi")]
 
 mod common;
@@ -110,4 +112,41 @@ fn stopped_on_two_ranks_resumed_on_two() {
     simulate(2, &long, &d, true);
     let m = common::assert_same_run(&one, &d, &template(18), "2 ranks for 9 years, resumed on 2 for 18");
     assert_eq!((m.year, m.ranks), (18, 2));
+}
+
+/// [`common::short_thinning_toml`] written into `dir`.
+fn write_thinning(dir: &Path, years: u32) -> PathBuf {
+    let p = dir.join(format!("thinning_{years}.toml"));
+    std::fs::write(&p, common::short_thinning_toml(years)).unwrap();
+    p
+}
+
+#[test]
+fn a_thinned_stand_on_two_ranks_and_stopped_and_resumed_writes_the_run_of_one_process() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (short, long) = (write_thinning(tmp.path(), 22), write_thinning(tmp.path(), 33));
+    let one = tmp.path().join("one");
+    simulate(0, &long, &one, false);
+    // a meaningful run: thinnings remove trees in years 22, 27 and 32; year 22's inventory
+    // holds the thinned trees
+    let table = std::fs::read_to_string(one.join("stand_table.csv")).unwrap();
+    let head: Vec<&str> = table.lines().next().unwrap().split(',').collect();
+    let col = head.iter().position(|h| *h == "harvest_stems_ha").unwrap();
+    let thinned: Vec<u32> = table.lines().skip(1).filter(|l| l.split(',').nth(col).unwrap().parse::<f64>().unwrap() > 0.0).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    assert_eq!(thinned, vec![22, 27, 32]);
+    let inv = sylva::job::inventory::read(&one.join("inventory/year_0022.parquet")).unwrap();
+    assert!(inv.iter().filter(|r| r.status == "dead:harvest").count() > 50);
+    let lib = common::embedded();
+    let sc = sylva::sim::Scenario::load(&long).unwrap();
+    let template = sylva::sim::World::new(sc.site().unwrap(), &lib, &sc).unwrap();
+    let d = tmp.path().join("np2");
+    simulate(2, &long, &d, false);
+    let m = common::assert_same_run(&one, &d, &template, "thinning_beech on 2 ranks");
+    assert_eq!((m.year, m.ranks), (33, 2));
+    // stopped after the thinning of year 22 on 2 ranks, resumed on 2
+    let d = tmp.path().join("split");
+    simulate(2, &short, &d, false);
+    simulate(2, &long, &d, true);
+    let m = common::assert_same_run(&one, &d, &template, "thinning_beech on 2 ranks for 22 years, resumed on 2 for 33");
+    assert_eq!((m.year, m.ranks), (33, 2));
 }

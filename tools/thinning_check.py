@@ -1,20 +1,27 @@
 #!/usr/bin/env python3
 """Compares a run of scenarios/thinning_beech.toml with the Wiedemann (1931) moderate-thinning
-beech table, yield class I: N, Dq and basal area of the stems >= 7 cm DBH at the given ages.
+beech table (or, with --species spruce, a run of scenarios/thinning_spruce.toml with the
+Wiedemann 1936/42 moderate-thinning Norway spruce table), yield class I: N, Dq and basal area
+of the stems >= 7 cm DBH at the given ages.
 
-    python3 tools/thinning_check.py OUT_DIR [PLANT_AGE] [AGES...]
+    python3 tools/thinning_check.py [--species beech|spruce] OUT_DIR [PLANT_AGE] [AGES...]
 
 OUT_DIR/stand_table.csv is the run's stand table (age = PLANT_AGE + year, default 3);
 ages default to 50 and 100. Prints a Markdown table."""
 import csv, math, sys
 from pathlib import Path
 
-out = Path(sys.argv[1])
-plant = float(sys.argv[2]) if len(sys.argv) > 2 else 3.0
-ages = [float(a) for a in sys.argv[3:]] or [50.0, 100.0]
+args = sys.argv[1:]
+species = "beech"
+if args[:1] == ["--species"]:
+    species, args = args[1], args[2:]
+tables = {"beech": "ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv", "spruce": "ForestElementsR_fe_ytable_spruce_wiedemann_moderate_1936_42.csv"}
+out = Path(args[0])
+plant = float(args[1]) if len(args) > 1 else 3.0
+ages = [float(a) for a in args[2:]] or [50.0, 100.0]
 root = Path(__file__).resolve().parent.parent
 table = {}
-with open(root / "tests/data/stands/ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv") as f:
+with open(root / "tests/data/stands" / tables[species]) as f:
     for r in csv.DictReader(f):
         if float(r["site_index"]) == 1.0:
             table[float(r["age"])] = (float(r["n_ha"]), float(r["d_q_cm"]), float(r["ba_m2_ha"]), float(r["h_q_m"]))

@@ -311,12 +311,6 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
     // the scenario is checked against its site before any folder is made (a refused scenario
     // left `inventory/`, `maps/` and `species/` behind; found by a break-it pass)
     context(World::check(&site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
-    // … and so is management in a run of local tiles, which `sim::tiles::Layout` refuses (a
-    // trial found the refusal coming after `species/` was written, and naming no file); over
-    // MPI every rank refuses it in the layout, so that no rank waits for rank 0
-    if matches!(stepping, Stepping::Local(n) if n > 1) && !sc.management.is_empty() {
-        return Err(crate::Error::Invalid { context: sc.context(), field: "management".into(), value: format!("{} [[management]] entries in a tiled run", sc.management.len()), expected: "a run in one process (no --tiles, no mpirun): management in tiled and MPI runs is not supported".into() }.into());
-    }
     // a resumed run keeps the species files it was simulated with (a changed species is
     // refused by the checkpoint before anything is written)
     if !(opts.resume && super::checkpoint::exists(&out)) {

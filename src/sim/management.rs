@@ -70,9 +70,12 @@ pub struct Management {
     /// first ring the outline, further rings holes (even-odd rule).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub polygons: Option<Vec<Vec<Vec<[f64; 2]>>>>,
-    /// Area as the (Multi)Polygons of a vector file in the DEM's CRS (world metres on a uniform
-    /// site): a GeoPackage (`.gpkg`, [`read_gpkg_polygons`]) or else GeoJSON
-    /// ([`read_geojson_polygons`]); relative paths are relative to the scenario file.
+    /// Area as the (Multi)Polygons of a vector file in the DEM's CRS: a GeoPackage (`.gpkg`,
+    /// [`read_gpkg_polygons`]) or else GeoJSON ([`read_geojson_polygons`]); relative paths are
+    /// relative to the scenario file. On a site without georeferencing (uniform or generated
+    /// terrain) the file is in the coordinates of the run's outputs (m): x 0 to W east, y −H
+    /// (south edge) to 0 (north edge), origin the NW corner, as the inventories and GeoTIFFs
+    /// are written (not the world metres of `area` and `polygons`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub area_file: Option<PathBuf>,
     /// The feature layer (table) of a GeoPackage `area_file`; its first feature layer when
@@ -615,16 +618,28 @@ pub struct Operation {
 }
 
 /// Converts a point of the DEM's CRS to world metres (origin SW corner) on `site`: through the
-/// grid's georeferencing (pixel coordinates times the cell size); a local grid's coordinates
-/// are world metres already.
+/// grid's georeferencing (pixel coordinates times the cell size).
+///
+/// A site without georeferencing (a uniform or generated terrain, [`crate::grid::Crs::Local`])
+/// has the local GeoRef of [`crate::grid::GeoRef::local`]: origin (0, 0) at the top-left (NW)
+/// corner, one CRS unit a metre, rows going south. So its area files are read in the
+/// coordinates the run's outputs are written in (the GeoPackage and GeoParquet inventories,
+/// the GeoTIFF maps; [`crate::output::georef::PointGeoRef`]): x from 0 to the width W east,
+/// y from −H (the south edge) to 0 (the north edge), so a polygon drawn in QGIS over the
+/// outputs lands where it was drawn; world y = H + file y. (Inline `area` and `polygons` are
+/// world metres, origin the SW corner, y from 0 to H, as the `[[start]]` areas.)
 fn crs_to_world(site: &SiteConditions, x: f64, y: f64) -> [f64; 2] {
     let g = &site.geo;
-    if g.crs == crate::grid::Crs::Local {
-        return [x, y];
-    }
     let col = (x - g.origin_x) / g.pixel_w;
     let row = (g.origin_y - y) / g.pixel_h;
     [col * site.cell_x_m, (site.height() as f64 - row) * site.cell_y_m]
+}
+
+/// The inverse of [`crs_to_world`]: the DEM's CRS coordinates of world point `(x, y)` (m,
+/// origin SW corner) on `site` (for messages).
+fn world_to_crs(site: &SiteConditions, x: f64, y: f64) -> [f64; 2] {
+    let g = &site.geo;
+    [g.origin_x + x / site.cell_x_m * g.pixel_w, g.origin_y - (site.height() as f64 - y / site.cell_y_m) * g.pixel_h]
 }
 
 /// Whether a GeoJSON property value equals the filter's value (texts as texts, numbers as
@@ -641,45 +656,112 @@ fn matches(v: &serde_json::Value, want: &toml::Value) -> bool {
     }
 }
 
+/// A polygon of an area file (rings of `[x, y]` in the file's coordinates) with the feature it
+/// came from, as messages name it (`feature 2 (id "B")`, `layer `parcels`, feature 7`).
+pub type FilePolygon = (String, Vec<Vec<[f64; 2]>>);
+
+/// The geometry types an area file's features may have.
+const ACCEPTED: &str = "Polygon or MultiPolygon (the only geometry types an area is read from)";
+
+/// The EPSG code a GeoJSON `crs` member names (the legacy named CRS of GeoJSON 2008, §3.1, as
+/// GDAL writes it): `urn:ogc:def:crs:EPSG::NNNN`, `urn:ogc:def:crs:EPSG:V:NNNN`, `EPSG:NNNN`,
+/// or OGC's CRS84 (longitude/latitude on WGS 84: 4326). `Err` with the name (or the member as
+/// JSON) where it names none of these.
+pub fn geojson_crs_epsg(crs: &serde_json::Value) -> std::result::Result<u32, String> {
+    let name = crs.get("properties").and_then(|p| p.get("name")).and_then(|n| n.as_str()).ok_or_else(|| crs.to_string())?;
+    let upper = name.trim().to_ascii_uppercase();
+    if upper.ends_with("CRS84") {
+        return Ok(4326);
+    }
+    let code = upper.strip_prefix("URN:OGC:DEF:CRS:EPSG:").map(|r| r.rsplit(':').next().unwrap_or("")).or_else(|| upper.strip_prefix("EPSG:"));
+    code.and_then(|c| c.parse::<u32>().ok()).ok_or_else(|| format!("{name:?}"))
+}
+
 /// The polygons (rings of `[x, y]` in the file's coordinates) of the Polygon and MultiPolygon
-/// features of GeoJSON file `path` that pass `filter`. `field` names the scenario field in
-/// messages.
+/// features of GeoJSON file `path` that pass `filter` ([`read_geojson_area`] without the
+/// features' names).
+///
+/// Errors: as [`read_geojson_area`].
+pub fn read_geojson_polygons(path: &Path, filter: Option<&AreaFilter>, dem_epsg: Option<u32>, ctx: &str, field: &str) -> Result<Vec<Vec<Vec<[f64; 2]>>>> {
+    Ok(read_geojson_area(path, filter, dem_epsg, ctx, field)?.into_iter().map(|p| p.1).collect())
+}
+
+/// The polygons of the features of GeoJSON file `path` (a FeatureCollection, a Feature or a
+/// bare geometry) that pass `filter`, each with its feature (`feature k`, its index in the
+/// file, and its `id` where it has one). When the DEM has an EPSG code (`dem_epsg`) and the
+/// file a `crs` member, the member must name that code ([`geojson_crs_epsg`]); a file without
+/// one is taken to be in the DEM's CRS. `field` names the scenario field in messages.
 ///
 /// Errors: [`Error::Invalid`] naming the scenario (`ctx`), `field`, the file and what is wrong:
-/// unreadable, not GeoJSON (with the parser's message), no polygon, or no feature passing the
-/// filter.
-pub fn read_geojson_polygons(path: &Path, filter: Option<&AreaFilter>, ctx: &str, field: &str) -> Result<Vec<Vec<Vec<[f64; 2]>>>> {
+/// unreadable, not JSON (with the parser's message), a `crs` other than the DEM's (found and
+/// expected, with the `ogr2ogr -t_srs` command that reprojects it), a feature passing the
+/// filter without a geometry (null) or with another type than Polygon or MultiPolygon (naming
+/// the feature and the type), malformed coordinates, a self-crossing polygon, no polygon, or no
+/// feature passing the filter.
+pub fn read_geojson_area(path: &Path, filter: Option<&AreaFilter>, dem_epsg: Option<u32>, ctx: &str, field: &str) -> Result<Vec<FilePolygon>> {
     let bad = |expected: String| Error::Invalid { context: ctx.to_string(), field: field.to_string(), value: path.display().to_string(), expected };
     let text = std::fs::read_to_string(path).map_err(|e| bad(format!("a readable GeoJSON file ({e})")))?;
-    let gj: geojson::GeoJson = text.parse().map_err(|e| bad(format!("a GeoJSON file of Polygon or MultiPolygon features (the file does not parse: {e})")))?;
-    let feats: Vec<(Option<serde_json::Map<String, serde_json::Value>>, Option<geojson::Geometry>)> = match gj {
-        geojson::GeoJson::FeatureCollection(fc) => fc.features.into_iter().map(|f| (f.properties, f.geometry)).collect(),
-        geojson::GeoJson::Feature(f) => vec![(f.properties, f.geometry)],
-        geojson::GeoJson::Geometry(g) => vec![(None, Some(g))],
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(format!("a GeoJSON file of Polygon or MultiPolygon features (the file does not parse: {e})")))?;
+    if let (Some(want), Some(crs)) = (dem_epsg, v.get("crs")) {
+        let found = match geojson_crs_epsg(crs) {
+            Ok(code) if code == want => None,
+            Ok(code) => Some(format!("EPSG:{code}")),
+            Err(name) => Some(format!("{name}, not an EPSG code")),
+        };
+        if let Some(found) = found {
+            return Err(bad(format!("polygons in the DEM's CRS, EPSG:{want} (the file's `crs` member names {found}; reproject it, e.g. `ogr2ogr -t_srs EPSG:{want} out.geojson {}`)", path.display())));
+        }
+    }
+    let kind = v.get("type").and_then(|t| t.as_str()).unwrap_or("");
+    // (feature name, properties, geometry)
+    let feats: Vec<(String, Option<&serde_json::Value>, Option<&serde_json::Value>)> = match kind {
+        "FeatureCollection" => {
+            let fs = v.get("features").and_then(|f| f.as_array()).ok_or_else(|| bad("a FeatureCollection with a `features` array".into()))?;
+            fs.iter()
+                .enumerate()
+                .map(|(k, f)| {
+                    let name = match f.get("id") {
+                        Some(id) if !id.is_null() => format!("feature {k} (id {id})"),
+                        _ => format!("feature {k}"),
+                    };
+                    (name, f.get("properties"), f.get("geometry"))
+                })
+                .collect()
+        }
+        "Feature" => vec![("feature 0".into(), v.get("properties"), v.get("geometry"))],
+        _ => vec![("the file's geometry".into(), None, Some(&v))],
     };
     let mut out = Vec::new();
     let mut seen = 0usize;
-    // a position needs x and y (a third number, the height, is ignored)
-    let rings_of = |p: &[Vec<geojson::Position>]| -> Result<Vec<Vec<[f64; 2]>>> {
-        p.iter()
-            .map(|r| r.iter().map(|q| if q.len() >= 2 { Ok([q[0], q[1]]) } else { Err(bad(format!("positions of two numbers [x, y] (one has {}: {q:?})", q.len()))) }).collect::<std::result::Result<Vec<_>, _>>())
-            .collect::<std::result::Result<Vec<_>, _>>()
-            .map_err(Into::into)
-    };
-    for (props, geom) in feats {
-        let Some(g) = geom else { continue };
+    for (name, props, geom) in feats {
         if let Some(f) = filter {
-            let v = props.as_ref().and_then(|p| p.get(&f.property));
-            if !v.is_some_and(|v| matches(v, &f.equals)) {
+            let p = props.and_then(|p| p.get(&f.property));
+            if !p.is_some_and(|p| matches(p, &f.equals)) {
                 continue;
             }
         }
         seen += 1;
-        match &g.value {
-            geojson::GeometryValue::Polygon { coordinates } => out.push(rings_of(coordinates)?),
+        let Some(g) = geom.filter(|g| !g.is_null()) else {
+            return Err(bad(format!("{ACCEPTED} geometries ({name} has none: its geometry is null; give it a polygon, or leave it out with a `filter`)")));
+        };
+        let ty = g.get("type").and_then(|t| t.as_str()).unwrap_or("(no type)");
+        if ty != "Polygon" && ty != "MultiPolygon" {
+            let curved = ["CurvePolygon", "MultiSurface", "CompoundCurve", "CircularString", "MultiCurve"].contains(&ty);
+            let hint = if curved { "; curved geometries are not read: linearise them, e.g. `ogr2ogr -nlt MULTIPOLYGON out.geojson in.geojson`" } else { "" };
+            return Err(bad(format!("{ACCEPTED} geometries ({name} is a {ty}{hint})")));
+        }
+        let parsed: geojson::Geometry = serde_json::from_value(g.clone()).map_err(|e| bad(format!("a GeoJSON {ty} ({name} does not parse: {e})")))?;
+        // a position needs x and y (a third number, the height, is ignored)
+        let rings_of = |p: &[Vec<geojson::Position>]| -> Result<Vec<Vec<[f64; 2]>>> {
+            p.iter()
+                .map(|r| r.iter().map(|q| if q.len() >= 2 { Ok([q[0], q[1]]) } else { Err(bad(format!("positions of two numbers [x, y] ({name} has one of {}: {q:?})", q.len()))) }).collect::<std::result::Result<Vec<_>, _>>())
+                .collect::<std::result::Result<Vec<_>, _>>()
+        };
+        match &parsed.value {
+            geojson::GeometryValue::Polygon { coordinates } => out.push((name.clone(), rings_of(coordinates)?)),
             geojson::GeometryValue::MultiPolygon { coordinates } => {
                 for p in coordinates {
-                    out.push(rings_of(p)?);
+                    out.push((name.clone(), rings_of(p)?));
                 }
             }
             _ => {}
@@ -688,11 +770,11 @@ pub fn read_geojson_polygons(path: &Path, filter: Option<&AreaFilter>, ctx: &str
     if out.is_empty() {
         return Err(bad(match (filter, seen) {
             (Some(f), 0) => format!("a feature whose property `{}` equals {} (none does)", f.property, f.equals),
-            _ => "at least one Polygon or MultiPolygon feature (none found)".into(),
+            _ => format!("at least one {ACCEPTED} feature (none found)"),
         }));
     }
-    for (k, p) in out.iter().enumerate() {
-        check_rings(p).map_err(|e| bad(format!("polygon {k} of the file: {e}")))?;
+    for (k, (name, p)) in out.iter().enumerate() {
+        check_rings(p).map_err(|e| bad(format!("polygon {k} of the file ({name}): {e}")))?;
     }
     Ok(out)
 }
@@ -715,6 +797,14 @@ pub fn is_gpkg(path: &Path) -> bool {
 /// id and the type found), the layer in another CRS, no polygon, or no feature passing the
 /// filter.
 pub fn read_gpkg_polygons(path: &Path, layer: Option<&str>, filter: Option<&AreaFilter>, dem_epsg: Option<u32>, ctx: &str, field: &str) -> Result<Vec<Vec<Vec<[f64; 2]>>>> {
+    Ok(read_gpkg_area(path, layer, filter, dem_epsg, ctx, field)?.into_iter().map(|p| p.1).collect())
+}
+
+/// As [`read_gpkg_polygons`], each polygon with its feature (`layer `parcels`, feature 7`: the
+/// layer and the feature's fid).
+///
+/// Errors: as [`read_gpkg_polygons`].
+pub fn read_gpkg_area(path: &Path, layer: Option<&str>, filter: Option<&AreaFilter>, dem_epsg: Option<u32>, ctx: &str, field: &str) -> Result<Vec<FilePolygon>> {
     let bad = |expected: String| Error::Invalid { context: ctx.to_string(), field: field.to_string(), value: path.display().to_string(), expected };
     let keep = filter.map(|f| move |v: &serde_json::Value| matches(v, &f.equals));
     let fil = filter.zip(keep.as_ref()).map(|(f, k)| (f.property.as_str(), k as &dyn Fn(&serde_json::Value) -> bool));
@@ -722,20 +812,20 @@ pub fn read_gpkg_polygons(path: &Path, layer: Option<&str>, filter: Option<&Area
     let info = got.layer.clone();
     if let (Some(want), Some((org, code))) = (dem_epsg, &info.organization) {
         if org.eq_ignore_ascii_case("EPSG") && *code != want as i64 {
-            return Err(bad(format!("polygons in the DEM's CRS, EPSG:{want} (layer `{}` is in EPSG:{code}; reproject it, e.g. `ogr2ogr -t_srs EPSG:{want} out.gpkg {}`)", info.table, path.display())).into());
+            return Err(bad(format!("polygons in the DEM's CRS, EPSG:{want} (layer `{}` is in EPSG:{code}; reproject it, e.g. `ogr2ogr -t_srs EPSG:{want} out.gpkg {}`)", info.table, path.display())));
         }
     }
     if got.polygons.is_empty() {
         return Err(bad(match (filter, got.features) {
             (Some(f), 0) => format!("a feature of layer `{}` whose column `{}` equals {} (none does)", info.table, f.property, f.equals),
             _ => format!("at least one Polygon or MultiPolygon feature in layer `{}` (none found)", info.table),
-        })
-        .into());
+        }));
     }
     let mut out = Vec::with_capacity(got.polygons.len());
     for (k, (fid, p)) in got.polygons.into_iter().enumerate() {
-        check_rings(&p).map_err(|e| bad(format!("polygon {k} of the file (layer `{}`, feature {fid}): {e}", info.table)))?;
-        out.push(p);
+        let name = format!("layer `{}`, feature {fid}", info.table);
+        check_rings(&p).map_err(|e| bad(format!("polygon {k} of the file ({name}): {e}")))?;
+        out.push((name, p));
     }
     Ok(out)
 }
@@ -768,28 +858,12 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
     for (i, m) in entries.iter().enumerate() {
         let polygons = match (&m.polygons, &m.area_file) {
             (Some(p), _) => Some(p.clone()),
-            (_, Some(f)) => {
-                let field = format!("management[{i}].area_file");
-                let ps = if is_gpkg(f) {
-                    let g = &site.conditions.geo;
-                    let epsg = if g.crs == crate::grid::Crs::Local { None } else { g.epsg };
-                    read_gpkg_polygons(f, m.layer.as_deref(), m.filter.as_ref(), epsg, ctx, &field)?
-                } else {
-                    read_geojson_polygons(f, m.filter.as_ref(), ctx, &field)?
-                };
-                Some(ps.into_iter().map(|rings| rings.into_iter().map(|r| r.into_iter().map(|p| crs_to_world(site.conditions, p[0], p[1])).collect()).collect()).collect())
-            }
+            (_, Some(f)) => Some(read_area_file(f, m, site, (ex, ey), ctx, &format!("management[{i}].area_file"))?),
             _ => None,
         };
         let bbox = match (&m.area, &polygons) {
             (Some(a), _) => *a,
-            (_, Some(ps)) => {
-                let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
-                for p in ps.iter().flatten().flatten() {
-                    b = [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])];
-                }
-                b
-            }
+            (_, Some(ps)) => bbox_of(ps.iter().flatten().flatten()),
             _ => [0.0, 0.0, ex, ey],
         };
         let clipped = [bbox[0].max(0.0), bbox[1].max(0.0), bbox[2].min(ex), bbox[3].min(ey)];
@@ -872,6 +946,48 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
         ops.push(Operation { index: i, spec: m.clone(), action, region });
     }
     Ok(ops)
+}
+
+/// The polygons of entry `m`'s `area_file` `f` in world metres on `site` (extent `(ex, ey)`,
+/// m): read as a GeoPackage ([`read_gpkg_area`]) or GeoJSON ([`read_geojson_area`]) in the
+/// DEM's CRS, converted by [`crs_to_world`]. `field` names the scenario field in messages.
+///
+/// Errors: [`Error::Invalid`] naming `ctx`, `field` and the file: a folder where a file is
+/// expected, the readers' errors, and a polygon wholly outside the site (naming its feature,
+/// its bounding box and the site's in the file's coordinates).
+fn read_area_file(f: &Path, m: &Management, site: &SiteView<'_>, (ex, ey): (f64, f64), ctx: &str, field: &str) -> Result<Vec<Vec<Vec<[f64; 2]>>>> {
+    let bad = |expected: String| Error::Invalid { context: ctx.to_string(), field: field.to_string(), value: f.display().to_string(), expected };
+    if f.is_dir() {
+        return Err(bad("a GeoPackage (`.gpkg`) or GeoJSON file (it is a folder: name the file in it)".into()));
+    }
+    let g = &site.conditions.geo;
+    let epsg = if g.crs == crate::grid::Crs::Local { None } else { g.epsg };
+    let ps = if is_gpkg(f) { read_gpkg_area(f, m.layer.as_deref(), m.filter.as_ref(), epsg, ctx, field)? } else { read_geojson_area(f, m.filter.as_ref(), epsg, ctx, field)? };
+    let mut out = Vec::with_capacity(ps.len());
+    for (k, (name, rings)) in ps.into_iter().enumerate() {
+        let world: Vec<Vec<[f64; 2]>> = rings.iter().map(|r| r.iter().map(|p| crs_to_world(site.conditions, p[0], p[1])).collect()).collect();
+        let w = bbox_of(world.iter().flatten());
+        if w[2] <= 0.0 || w[3] <= 0.0 || w[0] >= ex || w[1] >= ey {
+            let fb = bbox_of(rings.iter().flatten());
+            let (s0, s1) = (world_to_crs(site.conditions, 0.0, 0.0), world_to_crs(site.conditions, ex, ey));
+            let crs = match epsg {
+                Some(c) => format!("EPSG:{c}"),
+                None => "the coordinates of the run's outputs: a site without georeferencing runs from y = −H at its south edge to 0 at its north edge, x from 0 to W".into(),
+            };
+            return Err(bad(format!("polygons on the site: polygon {k} of the file ({name}) lies wholly outside it (its bounding box x {:.2}–{:.2}, y {:.2}–{:.2}; the site covers x {:.2}–{:.2}, y {:.2}–{:.2} in the file's CRS, {crs})", fb[0], fb[2], fb[1], fb[3], s0[0], s1[0], s0[1], s1[1])));
+        }
+        out.push(world);
+    }
+    Ok(out)
+}
+
+/// The bounding box `[x0, y0, x1, y1]` of points.
+fn bbox_of<'a>(points: impl IntoIterator<Item = &'a [f64; 2]>) -> [f64; 4] {
+    let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
+    for p in points {
+        b = [b[0].min(p[0]), b[1].min(p[1]), b[2].max(p[0]), b[3].max(p[1])];
+    }
+    b
 }
 
 /// Warnings about resolved entries `ops` of a run of `last_year` years (`ctx` names the

@@ -51,6 +51,10 @@ pub enum Halo {
     Crowding,
     /// Seed sources (reproduction): the mature trees within the longest seed reach.
     SeedSources,
+    /// The areas of the management entries due this year (management): a thinning's target,
+    /// triggers and choice of trees are over its whole area, so every tile gets every tree of
+    /// the areas of the year's thinnings and harvests (`sim::tiles`).
+    Areas,
 }
 
 /// Number of phases.
@@ -64,7 +68,7 @@ pub const PHASES: [Phase; N_PHASES] = [
     Phase { name: "growth", summary: "summer: crowding of every tree's neighbourhood; height, DBH and crown increments", ends: Some(Season::Summer), run: run_growth, halo: Halo::Crowding },
     Phase { name: "reproduction", summary: "autumn: seed production and dispersal onto the seed grids", ends: Some(Season::Autumn), run: run_reproduction, halo: Halo::SeedSources },
     Phase { name: "mortality", summary: "winter: senescence, background, stress and wind deaths", ends: None, run: run_mortality, halo: Halo::None },
-    Phase { name: "management", summary: "the year's end: thinnings, harvests (cause `harvest`) and plantings of the scenario's `[[management]]` entries due", ends: None, run: run_management, halo: Halo::None },
+    Phase { name: "management", summary: "the year's end: thinnings, harvests (cause `harvest`) and plantings of the scenario's `[[management]]` entries due", ends: None, run: run_management, halo: Halo::Areas },
     Phase { name: "stats", summary: "the year ends: stand-table row of the year", ends: Some(Season::Winter), run: run_stats, halo: Halo::None },
 ];
 

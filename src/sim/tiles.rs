@@ -18,10 +18,22 @@
 //!    `(⌈max_m / cell⌉ + 2)` seed cells, after this summer's growth;
 //! 5. **mortality** draws each tree from its own stream: no exchange;
 //!    (**climate**, first in the year, sets each cell's and each own tree's suitability from
-//!    the whole site every tile holds: no exchange; **management** is refused over more than
-//!    one tile, [`Layout::with_halo`];)
-//! 6. **stats**: the stand table row needs every tree (sums in id order, the top height): the
-//!    ranks send their trees' id, species, height and DBH to rank 0 ([`Tile::step`]).
+//!    the whole site every tile holds: no exchange;)
+//! 6. **management** (in a year with thinnings or harvests due): a thinning's target and
+//!    triggers (basal area, stems/ha, relative density, top height) are figures over its whole
+//!    area, and which trees it takes (smallest first, ties by id; crop trees and their
+//!    competitors; a shelterwood's densest neighbourhoods) depends on every tree there; so every
+//!    rank sends its trees standing in the areas of the year's thinnings and harvests to every
+//!    other rank, each rank merges them with its own by id (the single process's store
+//!    restricted to those areas and the rank's own trees, in the same order), carries out the
+//!    year's entries on that store exactly as one process does (same sums in the same order,
+//!    same choice, identically on every rank) and keeps its own trees, its own harvested dead
+//!    and its own cells' plantings ([`Tile::step`]); plantings alone need no exchange (a
+//!    lattice is drawn from the seed, the entry and the position);
+//! 7. **stats**: the stand table row needs every tree (sums in id order, the top height): the
+//!    ranks send their trees' id, species, height and DBH to rank 0 ([`Tile::step`]); the
+//!    year's harvest (stems, volume) is rank 0's sum over every harvested tree it saw in step 6,
+//!    in the single process's order.
 //!
 //! Why the result is the same: every random stream is keyed by the scenario seed, a tree id or a
 //! global cell index and the year; tree ids do not depend on the partition; the tree store is
@@ -214,6 +226,8 @@ impl Reach {
             Halo::Crowns => self.crowns_m,
             Halo::Crowding => self.crowding_m,
             Halo::SeedSources => self.seeds_m,
+            // exchanged by area, not by reach (`Tile::manage`)
+            Halo::Areas => 0.0,
         }
     }
     /// Every reach capped at `m` metres.
@@ -260,19 +274,9 @@ impl Layout {
 
     /// As [`Layout::new`] with a given halo width `halo_m` (m).
     ///
-    /// Errors: [`Error::Invalid`] for the tile counts (as [`Layout::new`]), for a halo
-    /// narrower than [`min_halo_m`] (a tiled run would differ from one process), and for a site
-    /// with management entries over more than one tile (not supported: a thinning's figures are
-    /// over its whole area).
+    /// Errors: [`Error::Invalid`] for the tile counts (as [`Layout::new`]) and for a halo
+    /// narrower than [`min_halo_m`] (a tiled run would differ from one process).
     pub fn with_halo(site: &Site, nx: usize, ny: usize, halo_m: f64) -> Result<Layout> {
-        if !site.management.is_empty() && nx * ny > 1 {
-            return Err(Error::Invalid {
-                context: "tiled run".into(),
-                field: "management".into(),
-                value: format!("{} [[management]] entries over {} tiles", site.management.len(), nx * ny),
-                expected: "a run in one process (no --tiles, no mpirun): a thinning's target and triggers are figures over its whole area, which the tiles do not yet gather; management in tiled and MPI runs is not supported".into(),
-            });
-        }
         let min = min_halo_m(site);
         if !(halo_m >= min) {
             return Err(Error::Invalid {
@@ -420,6 +424,10 @@ pub struct Tile {
     pub halo_bytes: u64,
     /// While halo copies are merged in: which rows are the tile's own.
     own: Vec<bool>,
+    /// This year's harvest of the whole landscape (stems ≥ 1.3 m, volume m³;
+    /// [`super::stats::harvest_sums`]), as the management phase found it (every rank sees every
+    /// harvested tree); rank 0 puts it in the stand-table row.
+    harvest: (u64, f64),
 }
 
 impl Tile {
@@ -434,7 +442,7 @@ impl Tile {
         world.tallies.deaths_total = [0; N_CAUSES];
         world.tallies.regen_ledger = RegenLedger::new(world.site.pool.len());
         world.scratch.dead.clear();
-        Tile { world, layout, me, halo_bytes: 0, own: Vec::new() }
+        Tile { world, layout, me, halo_bytes: 0, own: Vec::new(), harvest: (0, 0.0) }
     }
 
     /// Tile `me` of `layout` from `world`, a tile's world as it was saved (its own trees and
@@ -443,7 +451,7 @@ impl Tile {
     pub fn resumed(mut world: World, layout: Layout, me: usize) -> Tile {
         world.site.window = Some(layout.rect(me));
         world.scratch.dead.clear();
-        Tile { world, layout, me, halo_bytes: 0, own: Vec::new() }
+        Tile { world, layout, me, halo_bytes: 0, own: Vec::new(), harvest: (0, 0.0) }
     }
 
     /// Rank 0 sends every rank its part of `global` (rank 0's world after a fresh start or a
@@ -552,9 +560,15 @@ impl Tile {
     pub fn step(&mut self, t: &mut dyn Transport) -> Result<YearReport> {
         let mut report = YearReport::default();
         self.world.scratch.dead.clear();
+        self.harvest = (0, 0.0);
         let stats = PHASES.len() - 1;
         for (k, phase) in PHASES.iter().enumerate().take(stats) {
             let t0 = Instant::now();
+            if phase.halo == Halo::Areas {
+                self.manage(t, phase.run, &mut report)?;
+                report.phase_seconds[k] = t0.elapsed().as_secs_f64();
+                continue;
+            }
             if phase.halo != Halo::None {
                 self.add_halo(t, phase.halo)?;
             }
@@ -605,10 +619,59 @@ impl Tile {
             report.trees = trees.len();
             report.established = est;
             report.died = died;
-            report.row = Some(super::stats::row_of(&self.world.site, self.world.stand.year, &trees, stems, deaths, ry, (0, 0.0)));
+            report.row = Some(super::stats::row_of(&self.world.site, self.world.stand.year, &trees, stems, deaths, ry, self.harvest));
         }
         report.phase_seconds[stats] = t0.elapsed().as_secs_f64();
         Ok(report)
+    }
+
+    /// The management phase `run` over tiles (module docs, step 6): in a year with thinnings or
+    /// harvests due, every rank's trees standing in their areas go to every other rank and are
+    /// merged with the rank's own by id; `run` carries out the year's entries on that store as
+    /// one process does; the rank keeps its own trees (planted ones on its cells included) and
+    /// the harvested dead it owns (the harvest tally follows), and records the year's harvest
+    /// sums over every harvested tree (in the order one process records them) for the stand
+    /// table. One exchange in such a year, none otherwise; every rank calls it in the same year.
+    ///
+    /// Errors: [`Error::Exchange`] from the transport or a malformed message.
+    fn manage(&mut self, t: &mut dyn Transport, run: fn(&mut World, &mut YearReport), report: &mut YearReport) -> Result<()> {
+        let year = self.world.stand.year + 1;
+        let site = &self.world.site;
+        let areas: Vec<&super::management::Region> = site.management.iter().filter(|op| op.spec.due(year).is_some() && !matches!(op.action, super::management::Action::Planting { .. })).map(|op| &op.region).collect();
+        if !areas.is_empty() {
+            let tr = &self.world.stand.trees;
+            let idx: Vec<usize> = (0..tr.len()).filter(|&i| areas.iter().any(|r| r.contains(tr.x[i] as f64, tr.y[i] as f64))).collect();
+            let mut e = codec::Enc(Vec::new());
+            put_trees(&mut e, tr, &idx);
+            let mut out = vec![e.0; t.size()];
+            out[self.me] = Vec::new();
+            let got = t.exchange(out)?;
+            let mut parts = Vec::with_capacity(got.len());
+            for (k, m) in got.iter().enumerate().filter(|&(k, _)| k != self.me) {
+                let fail = short_message(k);
+                parts.push(get_trees(&mut Dec::new(m, &fail))?);
+            }
+            let own = std::mem::take(&mut self.world.stand.trees);
+            let next = own.next_id;
+            parts.push(own);
+            self.world.stand.trees = TreeStore::merge_by_id(&parts, next).0;
+        }
+        let dead0 = self.world.scratch.dead.len();
+        run(&mut self.world, report);
+        let w = &mut self.world;
+        self.harvest = super::stats::harvest_sums(&w.site, &w.scratch.dead[dead0..]);
+        let (layout, me) = (&self.layout, self.me);
+        let tr = &w.stand.trees;
+        let keep: Vec<bool> = (0..tr.len()).map(|i| layout.owner_of(tr.x[i], tr.y[i]) == me).collect();
+        w.stand.trees.retain(&keep);
+        let mut k = 0;
+        let before = w.scratch.dead.len();
+        w.scratch.dead.retain(|d| {
+            k += 1;
+            k <= dead0 || layout.owner_of(d.x, d.y) == me
+        });
+        w.tallies.deaths_total[DeathCause::Harvest.index()] -= (before - w.scratch.dead.len()) as u64;
+        Ok(())
     }
 
     /// Sums per bin over every tile's trees, exactly as one process sums them (f64, in id

@@ -184,3 +184,13 @@ pub fn in_poly(p: &[[f64; 2]], x: f64, y: f64) -> bool {
     }
     c
 }
+
+/// The shipped `scenarios/thinning_beech.toml` shortened to `years` years (its thinnings from
+/// below over the whole 1 ha site are due in years 17, 22, 27, 32, …; the first finds the stand
+/// below its target), with snapshots and checkpoints every 11 years (year 22's inventory holds
+/// that year's thinned trees), as TOML.
+pub fn short_thinning_toml(years: u32) -> String {
+    let text = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/thinning_beech.toml")).unwrap();
+    assert!(text.contains("\nyears = 137\n") && text.contains("snapshot_every = 0") && text.contains("checkpoint_every = 0"));
+    text.replace("\nyears = 137\n", &format!("\nyears = {years}\n")).replace("snapshot_every = 0", "snapshot_every = 11").replace("checkpoint_every = 0", "checkpoint_every = 11")
+}
