@@ -191,7 +191,8 @@ fn obstacle_distance(obs: &[Obstacle], c: Vec3) -> f32 {
 fn stage_occluders(t: &PlasticTree, s: usize, env: &Environment) -> Vec<Option<Occluder>> {
     let a = &t.analysis;
     a.stages[s]
-        .iter()
+        .par_iter()
+        .with_min_len(SIG_CHUNK)
         .map(|c| {
             let (n_c, n_0) = alive_counts(t, c);
             if n_c == 0 {
@@ -331,18 +332,27 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             // the others' shade is the one of the last call when nothing it depends on changed
             let key = (shade_key ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)).max(1);
             let same_shade = t.shade_key == key;
-            for k in 0..n {
-                let p = t.input.nodes[k].pos;
-                let mut sig = solids.mask(p) as u64;
-                if same_shade {
-                    sig |= t.sig[k] & !(u32::MAX as u64);
-                } else {
-                    for d in 0..sky.dirs.len() {
-                        if others.as_ref().is_some_and(|o| o.shaded_except(d, p, i as u32)) || fixed_vols.is_some_and(|f| f.shaded(d, p)) {
-                            sig |= 1u64 << (32 + d);
+            // every node's signature over the cores (a tree adapted alone has only its own
+            // nodes to split), then compared in node order
+            let sigs: Vec<u64> = (0..n)
+                .into_par_iter()
+                .with_min_len(SIG_CHUNK)
+                .map(|k| {
+                    let p = t.input.nodes[k].pos;
+                    let mut sig = solids.mask(p) as u64;
+                    if same_shade {
+                        sig |= t.sig[k] & !(u32::MAX as u64);
+                    } else {
+                        for d in 0..sky.dirs.len() {
+                            if others.as_ref().is_some_and(|o| o.shaded_except(d, p, i as u32)) || fixed_vols.is_some_and(|f| f.shaded(d, p)) {
+                                sig |= 1u64 << (32 + d);
+                            }
                         }
                     }
-                }
+                    sig
+                })
+                .collect();
+            for (k, sig) in sigs.into_iter().enumerate() {
                 dirty[k] = all || sig != t.sig[k];
                 t.sig[k] = sig;
             }
@@ -638,6 +648,10 @@ fn preposition(t: &mut PlasticTree, s: usize, w: &Work) {
         }
     }
 }
+
+/// Fewest nodes (or stage clusters) per task when a tree's signatures (or stage occluders) are
+/// split over the cores.
+const SIG_CHUNK: usize = 256;
 
 /// Most points whose light one task of a level evaluates ([`level`]: the level's clusters and
 /// each depth batch of its nodes are split into chunks over the cores).
