@@ -8,11 +8,11 @@
 
 use crate::output::inventory::InventoryFormat;
 use super::adapted::AdaptStats;
+use super::keyframes::KeyFrames;
 use super::pictures::{self, Stage, TimelapseOptions};
 use super::run::{run_scenario, OnSnapshot, Progress, RunOptions};
-use super::{inventory, scene, JobError, Result};
+use super::{scene, JobError, Result};
 use crate::render::camera::{Camera, CameraPreset};
-use crate::render::scene::TreeInstance;
 use crate::sim::scenario::Scenario;
 use crate::sim::stats::StandRow;
 use crate::sim::tiles::Transport;
@@ -485,19 +485,30 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     // 2. Simulation. The pictures' key frames come from the in-memory world at each snapshot
     // (summer instances of the visible trees), not from the inventory files.
     let t_sim = Instant::now();
-    let mut keys: Vec<(u32, Vec<TreeInstance>)> = Vec::new();
+    // the key frames wait on disk, not in memory (about 1.2 GB for the default run's 31
+    // snapshots; issue 34)
+    let mut keys = if render { Some(KeyFrames::new(&out)?) } else { None };
+    let mut keys_err: Option<Error> = None;
     // the living trees of the last kept snapshot, for the adapted close-up
-    let mut last_rows: Vec<inventory::InventoryRow> = Vec::new();
+    let mut last = LastTrees::default();
     let mut keep = |y: u32, w: &World| {
-        if render {
-            keys.push((y, scene::instances_with_saplings(&scene::plants_from_world(w), &scene::saplings_from_world(w), lib, &site, Season::Summer)));
-            last_rows = inventory::rows_from_world(w);
+        if let Some(k) = keys.as_mut() {
+            let plants = scene::plants_from_world(w);
+            let inst = scene::instances_with_saplings(&plants, &scene::saplings_from_world(w), lib, &site, Season::Summer);
+            if let Err(e) = k.push(y, &inst) {
+                keys_err.get_or_insert(e);
+            }
+            drop(inst);
+            last = LastTrees::of(w, &plants);
         }
     };
     // the GeoPackage (≈ 115 bytes per tree, ≈ 120 MB at the end of the default run) only for
     // the final year; the Parquet (or CSV) inventory is written at every snapshot
     let so = SimulateOptions { out: out.clone(), resume: false, gpkg_years: Some(vec![sc.years]), stop: opts.stop.clone(), inventory: opts.inventory };
     let sim = simulate(sc, site.clone(), lib, so, Stepping::One, Some(&mut keep), sink)?;
+    if let Some(e) = keys_err {
+        return context(Err(e.into()), || "keeping the key frames of the pictures".into());
+    }
     let sim_s = t_sim.elapsed().as_secs_f64();
     let mut summary = MainJobSummary { sim, scenario: sc.clone(), maps, stills: Vec::new(), film: None, site_s, sim_s, pictures_s: 0.0, total_s: 0.0 };
     if summary.sim.stopped {
@@ -507,8 +518,8 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
 
     // 3 + 4. Pictures.
     let t_pic = Instant::now();
-    if render {
-        let (stills, film) = pictures_of(sc, site, lib, keys, &last_rows, opts, sink)?;
+    if let Some(keys) = keys {
+        let (stills, film) = pictures_of(sc, site, lib, keys, &last.plants(), opts, sink)?;
         summary.stills = stills;
         summary.film = Some(film);
     }
@@ -523,14 +534,15 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
 
 /// The main job's pictures: stills at the still years, the close-up of the last one, the
 /// timelapse of the key frames `keys` (year, summer instances), in `opts.out`.
-fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut keys: Vec<(u32, Vec<TreeInstance>)>, last_rows: &[inventory::InventoryRow], opts: &MainJobOptions, sink: &mut Sink) -> Result<(Vec<Still>, Film)> {
+fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut keys: KeyFrames, last: &[scene::Plant], opts: &MainJobOptions, sink: &mut Sink) -> Result<(Vec<Still>, Film)> {
     let out = &opts.out;
     let (w, h) = opts.size;
     let mut stage = context(Stage::for_scenario(sc, site.clone(), lib.clone()), || "setting up the renderer (install mesa-vulkan-drivers for the CPU adapter)".into())?;
     // the stills from afar draw instanced prototypes; the close-up adapts its near field
     let adapt = stage.set_adapt(None);
-    let mut years: Vec<u32> = STILL_YEARS.iter().copied().filter(|y| keys.iter().any(|k| k.0 == *y)).collect();
-    if let Some(last) = keys.iter().map(|k| k.0).max() {
+    let key_years = keys.years();
+    let mut years: Vec<u32> = STILL_YEARS.iter().copied().filter(|y| key_years.contains(y)).collect();
+    if let Some(&last) = key_years.iter().max() {
         if !years.contains(&last) {
             years.push(last);
         }
@@ -540,11 +552,10 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     std::fs::create_dir_all(&stills_dir).map_err(|e| Error::io(&stills_dir, e))?;
     remove_old_stills(&stills_dir)?;
     let mut stills = Vec::new();
-    let key = |y: u32| keys.iter().find(|k| k.0 == y).map(|k| k.1.clone()).unwrap_or_default();
     for &y in &years {
         for (preset, name) in [(CameraPreset::Oblique, "oblique"), (CameraPreset::Map, "topdown")] {
             let cam = stage.camera_sized(preset, w, h);
-            let img = stage.render_instances(key(y), Season::Summer, &cam, w, h)?;
+            let img = stage.render_instances(keys.get_year(y)?, Season::Summer, &cam, w, h)?;
             let path = stills_dir.join(format!("year_{y:04}_{name}.png"));
             crate::output::pictures::write_png(&path, &img)?;
             stills.push(Still { year: y, view: name.to_string(), path });
@@ -560,7 +571,7 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
         let z1 = site.elevation_at(x1, y1) + 5.0;
         let cam = Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0);
         stage.set_adapt(adapt);
-        let img = stage.render_rows(last_rows, Season::Summer, &cam, w, h)?;
+        let img = stage.render_plants(last, Season::Summer, &cam, w, h)?;
         stage.set_adapt(None);
         sink(&Event::CloseUp(&stage.last_adapt));
         let path = stills_dir.join(format!("year_{y:04}_closeup.png"));
@@ -571,11 +582,35 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     sink(&Event::Timelapse);
     let topts = TimelapseOptions { width: opts.timelapse_size.0, height: opts.timelapse_size.1, fps: opts.fps, frames_between: opts.frames_between, camera: None, season: Season::Summer };
     let gif = out.join("timelapse.gif");
-    let key_years: Vec<u32> = keys.iter().map(|k| k.0).collect();
-    let mut key_frames: Vec<Vec<TreeInstance>> = std::mem::take(&mut keys).into_iter().map(|k| k.1).collect();
-    let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, &mut |_, k| Ok(std::mem::take(&mut key_frames[k])), &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
+    let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, &mut |_, k| Ok(keys.get(k)?), &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
     sink(&Event::TimelapseDone);
     Ok((stills, Film { gif, frames, mp4 }))
+}
+
+/// The living trees of the last snapshot, for the adapted close-up: what [`scene::Plant`]
+/// holds, with the species as an index into the world's species names (about 40 bytes a tree
+/// instead of an inventory row's 170).
+#[derive(Default)]
+struct LastTrees {
+    /// Species ids of the world's library.
+    names: Vec<String>,
+    /// id, species index, x and y (m), height, crown radius (m), age (years), crown base (m).
+    trees: Vec<(u64, u16, [f32; 6])>,
+}
+
+impl LastTrees {
+    /// The trees of `plants` ([`scene::plants_from_world`] of `w`).
+    fn of(w: &World, plants: &[scene::Plant]) -> Self {
+        let names: Vec<String> = w.site.lib.species.iter().map(|s| s.id.clone()).collect();
+        let t = &w.stand.trees;
+        let trees = plants.iter().enumerate().map(|(i, p)| (p.id, t.species[i], [t.x[i], t.y[i], p.height_m, p.crown_radius_m, p.age_yr, p.crown_base_m])).collect();
+        LastTrees { names, trees }
+    }
+
+    /// The trees as [`scene::Plant`]s, equal to those [`LastTrees::of`] was given.
+    fn plants(&self) -> Vec<scene::Plant<'_>> {
+        self.trees.iter().map(|&(id, s, [x, y, h, r, a, cb])| scene::Plant { id, species: self.names[s as usize].as_str(), x_m: x as f64, y_m: y as f64, height_m: h, crown_radius_m: r, age_yr: a, crown_base_m: cb, alive: true }).collect()
+    }
 }
 
 fn rel(out: &Path, p: &Path) -> String {

@@ -11,6 +11,7 @@ pub mod checkpoint;
 pub mod export;
 pub mod hemi;
 pub mod inventory;
+pub mod keyframes;
 pub mod main_job;
 pub mod maps;
 pub mod pictures;

@@ -6,7 +6,7 @@ use super::scene::{self, Plant};
 use crate::conditions::SiteConditions;
 use crate::render::camera::{Camera, CameraPreset};
 use crate::render::headless::Renderer;
-use crate::render::scene::{Prototype, Scene, TreeInstance};
+use crate::render::scene::{Scene, TreeInstance};
 use super::adapted::{self, AdaptOptions, AdaptStats};
 use crate::sim::obstacle::ObstacleSpec;
 use crate::render::timelapse;
@@ -34,8 +34,10 @@ pub struct Stage {
     pub adapt: Option<AdaptOptions>,
     /// What the last [`Stage::render_plants`] adapted.
     pub last_adapt: AdaptStats,
-    /// Prototypes of the species and obstacles (the scene's, without adapted trees).
-    base_prototypes: Vec<Prototype>,
+    /// Prototypes of the species and obstacles: the first this many of the scene's (those
+    /// after them, the adapted trees of one frame, are dropped after it). Not held twice:
+    /// a second copy of the species' level-of-detail chains took about 200 MB (issue 34).
+    n_base: usize,
     /// Instances of the obstacles.
     obstacle_instances: Vec<TreeInstance>,
     /// Open-grown trees per species and age class (the scenario's seed).
@@ -64,10 +66,13 @@ impl Stage {
         // no far-field triangle budget for stills: only trees under `canopy_px` (6 px) go to
         // the canopy layer
         renderer.lod.max_geometry_triangles = 0;
+        // the tree draws over render passes of at most ~2 M triangles each: a software adapter
+        // binned all 12.8 M of the year-150 still at once, 2.2 GB (issue 34)
+        renderer.pass_triangles = 2_000_000;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
-        let base_prototypes = prototypes.clone();
+        let n_base = prototypes.len();
         let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));
-        Ok(Stage { site, library, scene, renderer, obstacles: Vec::new(), adapt: Some(AdaptOptions::default()), last_adapt: AdaptStats::default(), base_prototypes, obstacle_instances: Vec::new(), cache: adapted::cache(0), landscape })
+        Ok(Stage { site, library, scene, renderer, obstacles: Vec::new(), adapt: Some(AdaptOptions::default()), last_adapt: AdaptStats::default(), n_base, obstacle_instances: Vec::new(), cache: adapted::cache(0), landscape })
     }
 
     /// The stage of a scenario's pictures: [`Stage::new`] with its sea level, its seed and
@@ -119,11 +124,13 @@ impl Stage {
         self.cache = adapted::cache(seed);
         self.obstacles = obstacles.to_vec();
         let n = self.library.species.len();
-        self.base_prototypes.truncate(n);
+        let mut protos = std::mem::take(&mut self.scene.prototypes);
+        protos.truncate(n);
         let (p, i) = adapted::obstacle_models(obstacles, &self.site, n as u32);
-        self.base_prototypes.extend(p);
+        protos.extend(p);
+        self.n_base = protos.len();
         self.obstacle_instances = i;
-        self.scene.set_prototypes(self.base_prototypes.clone());
+        self.scene.set_prototypes(protos);
     }
 
     /// Renders `rows` (an inventory snapshot) in `season` from `camera` at `width × height`.
@@ -153,16 +160,26 @@ impl Stage {
             return self.render_instances(inst, season, camera, width, height);
         };
         o.image_height_px = height as f32;
-        let mut protos = self.base_prototypes.clone();
-        self.last_adapt = adapted::adapt_near_field(plants, &mut inst, &mut protos, &self.library, &self.site, &self.obstacles, camera, season, &mut self.cache, &o)?;
-        if self.last_adapt.adapted_trees == 0 {
+        // the adapted trees' prototypes are appended to the scene's own (taken out meanwhile, not
+        // copied) and dropped after the frame
+        let base = self.n_base;
+        let mut protos = std::mem::take(&mut self.scene.prototypes);
+        let adapt = adapted::adapt_near_field(plants, &mut inst, &mut protos, &self.library, &self.site, &self.obstacles, camera, season, &mut self.cache, &o);
+        let unchanged = !matches!(adapt, Ok(ref a) if a.adapted_trees > 0);
+        if unchanged {
+            // the base prototypes back, as they were (same version: nothing to upload again)
+            protos.truncate(base);
+            self.scene.prototypes = protos;
+            self.last_adapt = adapt?;
             return self.render_instances(inst, season, camera, width, height);
         }
-        let base = self.base_prototypes.len();
+        self.last_adapt = adapt?;
         let adapted: Vec<(TreeInstance, usize)> = inst.iter().filter(|t| t.species as usize >= base).map(|t| (*t, protos[t.species as usize].lods.levels.len())).collect();
         self.scene.set_prototypes(protos);
         let img = self.render_instances(inst, season, camera, width, height);
-        self.scene.set_prototypes(self.base_prototypes.clone());
+        let mut protos = std::mem::take(&mut self.scene.prototypes);
+        protos.truncate(base);
+        self.scene.set_prototypes(protos);
         self.last_adapt.per_level = drawn_levels_of(&adapted, camera, width, height, &self.renderer.lod, &self.renderer.last_stats());
         img
     }
@@ -171,14 +188,18 @@ impl Stage {
     pub fn render_instances(&mut self, inst: Vec<TreeInstance>, season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
         // the window's trees mirrored into the surroundings (scene::Landscape::surroundings)
         let far = self.landscape.surroundings(&inst);
-        self.scene.instances = inst;
-        self.scene.instances.extend(far);
-        self.scene.instances.extend_from_slice(&self.obstacle_instances);
+        let mut all = inst;
+        // grown once to its size (a doubling growth held up to twice the frame's instances)
+        all.reserve_exact(far.len() + self.obstacle_instances.len());
+        all.extend(far);
+        all.extend_from_slice(&self.obstacle_instances);
+        self.scene.instances = all;
         // the ground under this frame's crowns: forest floor instead of grass
         self.scene.set_terrain(self.landscape.mesh(&self.scene.instances)?);
         self.scene.sun = scene::season_sun(self.site.geo.latitude_deg, season);
         let img = self.renderer.render(&self.scene, camera, width, height);
         self.scene.instances = Vec::new();
+        release_freed_memory();
         Ok(img?)
     }
 
@@ -239,6 +260,18 @@ impl Stage {
         let mut moved = Camera::look_at([x, y, gz + 1.7], [x, cam.target[1], tz + 8.0], 60.0);
         moved.near = cam.near;
         moved
+    }
+}
+
+/// Hands the memory freed by a frame back to the operating system (glibc on Linux:
+/// `malloc_trim`). A software adapter's rasteriser threads free the triangles they binned
+/// (about 200 bytes each, 1.3 GB for a still of the default run's year 150) into their own
+/// malloc arenas, which kept them resident between frames (issue 34). Elsewhere nothing.
+fn release_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only returns free heap pages to the system; it takes no pointers
+    unsafe {
+        libc::malloc_trim(0);
     }
 }
 

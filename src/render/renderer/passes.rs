@@ -27,15 +27,30 @@ impl Renderer {
         (proj * view, 2.0 * r / SHADOW_SIZE as f32, 2.2 * r)
     }
 
-    /// Records the tree draws; returns the number of draw calls.
-    pub(super) fn draw_trees<'a>(&'a self, pass: &mut wgpu::RenderPass<'a>, draws: &FrameDraws) -> u32 {
+    /// The tree draws of a frame in groups of one render pass each ([`Renderer::pass_triangles`]):
+    /// consecutive ranges of the GPU path's slots or the CPU path's draws that cover them all in
+    /// order; one range when the frame is not split.
+    pub(super) fn tree_pass_groups(&self, draws: &FrameDraws) -> Vec<std::ops::Range<usize>> {
+        let levels = self.scene.as_ref().map(|g| &g.protos);
+        let tris = |p: usize, l: usize| levels.and_then(|g| g.get(p)).and_then(|p| p.get(l)).map_or(0, |l| (l.bark.len() + l.leaves.len()) as u64 / 3);
+        // an upper bound of the triangles of each slot or draw
+        let cost: Vec<u64> = match draws {
+            FrameDraws::Cpu(b) => b.draws.iter().map(|d| d.count as u64 * tris(d.prototype, d.level)).collect(),
+            FrameDraws::Gpu(f) => f.slots.iter().map(|s| s.cap as u64 * tris(s.prototype, s.level)).collect(),
+        };
+        split_by_cost(&cost, self.pass_triangles)
+    }
+
+    /// Records the tree draws of the slots (GPU path) or draws (CPU path) in `range`; returns the
+    /// number of draw calls.
+    pub(super) fn draw_trees<'a>(&'a self, pass: &mut wgpu::RenderPass<'a>, draws: &FrameDraws, range: std::ops::Range<usize>) -> u32 {
         let Some(gpu) = &self.scene else { return 0 };
         let mut n = 0u32;
         match draws {
             FrameDraws::Cpu(b) => {
                 let Some((ibuf, _)) = &self.instance_buf else { return 0 };
                 pass.set_vertex_buffer(1, ibuf.slice(..));
-                for d in &b.draws {
+                for d in b.draws.get(range).unwrap_or(&[]) {
                     let Some(level) = gpu.protos.get(d.prototype).and_then(|p| p.get(d.level)) else { continue };
                     pass.set_vertex_buffer(0, level.vb.slice(..));
                     pass.set_index_buffer(level.ib.slice(..), wgpu::IndexFormat::Uint32);
@@ -51,7 +66,7 @@ impl Renderer {
             FrameDraws::Gpu(f) => {
                 let Some(GpuCull { dst: Some((dst, _)), args: Some((args, _)), .. }) = &self.cull else { return 0 };
                 let rec = std::mem::size_of::<InstanceRaw>() as u64;
-                for (k, s) in f.slots.iter().enumerate() {
+                for (k, s) in f.slots.iter().enumerate().skip(range.start).take(range.len()) {
                     if s.cap == 0 {
                         continue;
                     }
@@ -75,41 +90,82 @@ impl Renderer {
 
     pub(super) fn encode_shadow(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws) {
         let Some(gpu) = &self.scene else { return };
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("shadow"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: &self.shadow_view, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }), stencil_ops: None }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_bind_group(0, &gpu.bind_shadow, &[]);
-        if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
-            pass.set_pipeline(&self.terrain_shadow);
-            pass.set_vertex_buffer(0, vb.slice(..));
-            pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
-            pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
+        for (g, range) in self.tree_pass_groups(draws).into_iter().enumerate() {
+            let load = if g == 0 { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load };
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("shadow"),
+                color_attachments: &[],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: &self.shadow_view, depth_ops: Some(wgpu::Operations { load, store: wgpu::StoreOp::Store }), stencil_ops: None }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &gpu.bind_shadow, &[]);
+            if g == 0 {
+                if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
+                    pass.set_pipeline(&self.terrain_shadow);
+                    pass.set_vertex_buffer(0, vb.slice(..));
+                    pass.set_index_buffer(ib.slice(..), wgpu::IndexFormat::Uint32);
+                    pass.draw_indexed(0..gpu.terrain_count, 0, 0..1);
+                }
+            }
+            pass.set_pipeline(&self.tree_shadow);
+            self.draw_trees(&mut pass, draws, range);
         }
-        pass.set_pipeline(&self.tree_shadow);
-        self.draw_trees(&mut pass, draws);
     }
 
     pub(super) fn encode_main(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws, view: &wgpu::TextureView) -> u32 {
         let (Some(t), Some(gpu)) = (&self.targets, &self.scene) else { return 0 };
-        let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("main"),
-            color_attachments: &[Some(if self.single_sample {
-                wgpu::RenderPassColorAttachment { view, depth_slice: None, resolve_target: None, ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store } }
-            } else {
-                wgpu::RenderPassColorAttachment { view: &t.msaa, depth_slice: None, resolve_target: Some(view), ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Discard } }
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: if self.single_sample { &t.depth1 } else { &t.depth }, depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }), stencil_ops: None }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_bind_group(0, &gpu.bind_main, &[]);
+        let groups = self.tree_pass_groups(draws);
+        let n = groups.len();
+        let mut r = 0;
+        for (g, range) in groups.into_iter().enumerate() {
+            let (first, last) = (g == 0, g + 1 == n);
+            let color_load = if first { wgpu::LoadOp::Clear(wgpu::Color::BLACK) } else { wgpu::LoadOp::Load };
+            let depth_load = if first { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load };
+            // the multisampled colour and the depth are kept for the next pass, resolved after the last
+            let keep = if last { wgpu::StoreOp::Discard } else { wgpu::StoreOp::Store };
+            let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("main"),
+                color_attachments: &[Some(if self.single_sample {
+                    wgpu::RenderPassColorAttachment { view, depth_slice: None, resolve_target: None, ops: wgpu::Operations { load: color_load, store: wgpu::StoreOp::Store } }
+                } else {
+                    wgpu::RenderPassColorAttachment { view: &t.msaa, depth_slice: None, resolve_target: last.then_some(view), ops: wgpu::Operations { load: color_load, store: keep } }
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment { view: if self.single_sample { &t.depth1 } else { &t.depth }, depth_ops: Some(wgpu::Operations { load: depth_load, store: keep }), stencil_ops: None }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &gpu.bind_main, &[]);
+            r += self.encode_main_pass(&mut pass, draws, range, first, last);
+        }
+        r
+    }
+
+    /// The draws of one of the main pass's render passes: the sky and the terrain in the
+    /// `first`, the trees of `range`, the water in the `last`.
+    fn encode_main_pass<'a>(&'a self, pass: &mut wgpu::RenderPass<'a>, draws: &FrameDraws, range: std::ops::Range<usize>, first: bool, last: bool) -> u32 {
+        let Some(gpu) = &self.scene else { return 0 };
         let (sky, terrain, water, tree) = if self.single_sample { (&self.single.sky, &self.single.terrain, &self.single.water, &self.single.tree) } else { (&self.sky, &self.terrain, &self.water, &self.tree) };
+        if first {
+            self.encode_ground(pass, sky, terrain);
+        }
+        pass.set_pipeline(tree);
+        let r = self.draw_trees(pass, draws, range);
+        if last {
+            if let Some(vb) = &gpu.water_vb {
+                pass.set_pipeline(water);
+                pass.set_vertex_buffer(0, vb.slice(..));
+                pass.draw(0..6, 0..1);
+            }
+        }
+        r
+    }
+
+    /// The sky and the terrain of the main pass.
+    fn encode_ground<'a>(&'a self, pass: &mut wgpu::RenderPass<'a>, sky: &'a wgpu::RenderPipeline, terrain: &'a wgpu::RenderPipeline) {
+        let Some(gpu) = &self.scene else { return };
         pass.set_pipeline(sky);
         pass.draw(0..3, 0..1);
         if let (Some(vb), Some(ib)) = (&gpu.terrain_vb, &gpu.terrain_ib) {
@@ -126,13 +182,37 @@ impl Renderer {
                 }
             }
         }
-        pass.set_pipeline(tree);
-        let r = self.draw_trees(&mut pass, draws);
-        if let Some(vb) = &gpu.water_vb {
-            pass.set_pipeline(water);
-            pass.set_vertex_buffer(0, vb.slice(..));
-            pass.draw(0..6, 0..1);
+    }
+}
+
+/// Consecutive ranges covering `cost` in order, each of total cost at most `budget` where it
+/// holds more than one item (an item over it stands alone); `budget` 0: one range of all.
+pub(super) fn split_by_cost(cost: &[u64], budget: u64) -> Vec<std::ops::Range<usize>> {
+    if budget == 0 || cost.is_empty() {
+        return std::iter::once(0..cost.len()).collect();
+    }
+    let mut out = Vec::new();
+    let (mut start, mut sum) = (0, 0u64);
+    for (i, &c) in cost.iter().enumerate() {
+        if i > start && sum + c > budget {
+            out.push(start..i);
+            (start, sum) = (i, 0);
         }
-        r
+        sum += c;
+    }
+    out.push(start..cost.len());
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::split_by_cost;
+
+    #[test]
+    fn passes_split_by_cost_in_order() {
+        assert_eq!(split_by_cost(&[5, 5, 5], 0), vec![0..3]);
+        assert_eq!(split_by_cost(&[], 10), vec![0..0]);
+        assert_eq!(split_by_cost(&[4, 4, 4, 30, 1, 1], 10), vec![0..2, 2..3, 3..4, 4..6]);
+        assert_eq!(split_by_cost(&[30], 10), vec![0..1]);
     }
 }

@@ -168,6 +168,7 @@ impl Renderer {
             max_near_trees: 0,
             fast_shading: false,
             coarse_terrain: false,
+            pass_triangles: 0,
             shadow_far: None,
             last: FrameStats::default(),
         })
