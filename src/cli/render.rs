@@ -107,8 +107,8 @@ pub struct TimelapseArgs {
     /// Camera preset (overview, oblique, ground, map); a slow orbit when omitted.
     #[arg(long, value_parser = parse_camera)]
     pub camera: Option<CameraPreset>,
-    /// Frames per second.
-    #[arg(long, default_value_t = 12.0)]
+    /// Frames per second (1–100; checked before any frame is drawn).
+    #[arg(long, default_value_t = 12.0, value_parser = super::run::parse_fps)]
     pub fps: f32,
     /// Interpolated frames between consecutive snapshots (0–50; 0: one frame per snapshot).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=50))]

@@ -45,7 +45,8 @@ pub struct Args {
     pub inventory: sylva::output::inventory::InventoryFormat,
 }
 
-fn parse_fps(s: &str) -> Result<f32, String> {
+/// `--fps` of `sylva run` and `sylva timelapse`: 1–100 frames per second.
+pub(crate) fn parse_fps(s: &str) -> Result<f32, String> {
     let v: f32 = s.parse().map_err(|_| format!("fps `{s}`: expected a number"))?;
     if !(1.0..=100.0).contains(&v) {
         return Err(format!("fps `{s}`: expected 1–100 frames per second"));
@@ -68,7 +69,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let mut bars = Bars::default();
     let summary = main_job::main_job(&sc, &lib, &opts, &mut |e| bars.show(e))?;
     if summary.sim.stopped {
-        return Err(super::simulate::interrupted(&summary.sim).into());
+        // `sylva run` itself starts over: the simulation continues with `simulate --resume`
+        let out = a.out.display();
+        return Err(super::simulate::interrupted(&summary.sim, &format!("continue the simulation with `sylva simulate {out}/scenario.toml --out {out} --resume`, then draw the pictures with `sylva render {out}` and `sylva timelapse {out}`")).into());
     }
     let (table, shares) = summary.tables();
     println!("\n{}\n{}", table, shares);

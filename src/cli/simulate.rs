@@ -97,9 +97,9 @@ pub fn stop_on_ctrl_c() -> Arc<AtomicBool> {
     stop
 }
 
-/// The message of a run stopped early (exit status 130).
-pub fn interrupted(s: &Simulated) -> super::Interrupted {
-    super::Interrupted(format!("stopped (Ctrl-C or SIGTERM) after year {}: outputs so far are complete in {}; continue with --resume", s.year, s.out.display()))
+/// The message of a run stopped early (exit status 130), ending with `how` to continue it.
+pub fn interrupted(s: &Simulated, how: &str) -> super::Interrupted {
+    super::Interrupted(format!("stopped (Ctrl-C or SIGTERM) after year {}: outputs so far are complete in {}; {how}", s.year, s.out.display()))
 }
 
 /// The simulation's progress on stderr: a bar over the years, then one line with the final
@@ -152,7 +152,7 @@ fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: Path
     let mut bar = SimBar::default();
     let s = main_job::simulate(sc, site, lib, opts, stepping, None, &mut |e| bar.show(e))?;
     if s.stopped {
-        return Err(interrupted(&s).into());
+        return Err(interrupted(&s, "continue with the same command and --resume").into());
     }
     Ok(())
 }

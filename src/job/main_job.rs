@@ -275,16 +275,16 @@ pub fn run_species_dir(run_dir: &Path) -> PathBuf {
 }
 
 /// Writes the pool's species files into `RUN/species/` (so `render`, `timelapse` and a
-/// `--resume` find the same species later, also edited or custom ones).
+/// `--resume` find the same species later, also edited or custom ones). A scenario with
+/// `species = []` pools every species of the library, and all of them are written.
 ///
 /// Errors: I/O errors naming the folder or file; serialising a species.
 pub fn save_run_species(sc: &Scenario, lib: &SpeciesLibrary, run_dir: &Path) -> Result<()> {
     let dir = run_species_dir(run_dir);
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-    for name in &sc.species {
-        if let Some(sp) = lib.get(name) {
-            crate::output::write_atomic(&dir.join(format!("{}.toml", sp.id)), sp.to_toml_string()?.as_bytes())?;
-        }
+    let pool: Vec<&crate::species::Species> = if sc.species.is_empty() { lib.species.iter().collect() } else { sc.species.iter().filter_map(|name| lib.get(name)).collect() };
+    for sp in pool {
+        crate::output::write_atomic(&dir.join(format!("{}.toml", sp.id)), sp.to_toml_string()?.as_bytes())?;
     }
     Ok(())
 }
@@ -681,6 +681,24 @@ mod tests {
         for bad in ["notes.txt", "inventory/year_30.csv", "maps/conditions/sub/L.png", "stills/year_0030_side.png", "frames/frame_0001.png", "species/beech.txt"] {
             assert!(!is_output(bad), "{bad}");
         }
+    }
+
+    /// `species = []` pools the whole library: every species file is written (the run's
+    /// `render`, `export` and `--resume` read them back), and a named pool writes only its own.
+    #[test]
+    fn an_empty_species_list_saves_the_whole_library() {
+        let lib = SpeciesLibrary::embedded().unwrap();
+        let dir = std::env::temp_dir().join(format!("sylva_run_species_{}", std::process::id()));
+        let mut sc = default_scenario().unwrap();
+        for (pool, expected) in [(Vec::new(), lib.species.len()), (vec!["beech".to_string(), "silver_birch".to_string()], 2)] {
+            let _ = std::fs::remove_dir_all(&dir);
+            sc.species = pool;
+            save_run_species(&sc, &lib, &dir).unwrap();
+            let n = std::fs::read_dir(run_species_dir(&dir)).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "toml")).count();
+            assert_eq!(n, expected);
+        }
+        assert!(lib.species.len() > 2);
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]
