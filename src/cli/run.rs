@@ -67,7 +67,11 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let opts = MainJobOptions { out: a.out.clone(), size: a.size, timelapse_size: a.timelapse_size, frames_between: a.frames_between, fps: a.fps, render: !a.no_pictures, stop: Some(super::simulate::stop_on_ctrl_c()), inventory: a.inventory };
     let mut bars = Bars::default();
-    let summary = main_job::main_job(&sc, &lib, &opts, &mut |e| bars.show(e))?;
+    let summary = match main_job::main_job(&sc, &lib, &opts, &mut |e| bars.show(e)) {
+        // Ctrl-C during the pictures: exit status 130 like a stop during the simulation
+        Err(e @ sylva::job::JobError::Stopped(_)) => return Err(super::Interrupted(e.to_string()).into()),
+        r => r?,
+    };
     if summary.sim.stopped {
         // `sylva run` itself starts over: the simulation continues with `simulate --resume`
         let out = a.out.display();

@@ -17,6 +17,11 @@ pub enum JobError {
     /// Rendering on the GPU ([`RenderError`]: no adapter, device, validation, readback).
     #[error("render: {0}")]
     Render(RenderError),
+    /// The pictures phase of the main job stopped by its stop flag (Ctrl-C, SIGTERM): the
+    /// simulation's outputs are complete in the run directory; the message says how to draw
+    /// the pictures.
+    #[error("pictures stopped (Ctrl-C or SIGTERM): the simulation's outputs are complete in {out}; draw the pictures with `sylva render {out}` and `sylva timelapse {out}`", out = .0.display())]
+    Stopped(std::path::PathBuf),
     /// An error of a step of the main job under the step's name (e.g. "simulating NAME"), as
     /// the command line prints it: the step, then the cause.
     #[error("{what}")]

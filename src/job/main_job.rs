@@ -453,7 +453,8 @@ impl MainJobSummary {
 /// snapshot), a close view into the last year's forest with its near field adapted, a
 /// timelapse of every snapshot, and `summary.md`. [`OUTPUTS`] lists the files. Reports every
 /// step to `sink`. A run stopped by `opts.stop` returns after the simulation with
-/// [`Simulated::stopped`] set (no pictures, no `summary.md`).
+/// [`Simulated::stopped`] set (no pictures, no `summary.md`); stopped during the pictures, it
+/// returns [`JobError::Stopped`] between two pictures (those written are whole).
 ///
 /// Errors: [`Error::Format`] when `opts.out` is a file; I/O errors naming the file; reading the
 /// terrain (under "terrain of scenario NAME"); the simulation's (under "simulating NAME");
@@ -551,8 +552,14 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     let stills_dir = out.join("stills");
     std::fs::create_dir_all(&stills_dir).map_err(|e| Error::io(&stills_dir, e))?;
     remove_old_stills(&stills_dir)?;
+    // Ctrl-C during the pictures: stop between pictures (each written whole)
+    let stopped = || opts.stop.as_ref().is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
+    let stop_here = || Err(JobError::Stopped(out.clone()));
     let mut stills = Vec::new();
     for &y in &years {
+        if stopped() {
+            return stop_here();
+        }
         for (preset, name) in [(CameraPreset::Oblique, "oblique"), (CameraPreset::Map, "topdown")] {
             let cam = stage.camera_sized(preset, w, h);
             let img = stage.render_instances(keys.get_year(y)?, Season::Summer, &cam, w, h)?;
@@ -561,6 +568,9 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
             stills.push(Still { year: y, view: name.to_string(), path });
             sink(&Event::Still);
         }
+    }
+    if stopped() {
+        return stop_here();
     }
     // A close view into the final forest, where the species' architectures show.
     if let Some(&y) = years.last() {
@@ -582,7 +592,7 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     sink(&Event::Timelapse);
     let topts = TimelapseOptions { width: opts.timelapse_size.0, height: opts.timelapse_size.1, fps: opts.fps, frames_between: opts.frames_between, camera: None, season: Season::Summer };
     let gif = out.join("timelapse.gif");
-    let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, &mut |_, k| Ok(keys.get(k)?), &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
+    let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, &mut |_, k| if stopped() { Err(JobError::Stopped(out.clone())) } else { Ok(keys.get(k)?) }, &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
     sink(&Event::TimelapseDone);
     Ok((stills, Film { gif, frames, mp4 }))
 }
