@@ -476,6 +476,13 @@ fn resume_with_a_changed_run_is_refused_by_name_and_more_years_continue() {
     assert!(!o.status.success() && err.contains(&format!("species `beech` changed: life.max_age_yr: checkpoint {old}, now 123.0")), "{err}");
     assert!(files(&d.join("run")) == edited, "edited species: the run directory changed");
     std::fs::write(&beech, text).unwrap();
+    // fewer years than the checkpoint's: refused, naming the field and the checkpoint's year
+    // (it reported success and left `scenario.toml` at 2 years beside a 4-year stand table)
+    write("shorter.toml", scenario(2, 7, POOL, 5.0, terrain));
+    let o = simulate(d, "shorter.toml", "run", true).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("field `years` = 2: expected at least 4") && !err.contains("panicked"), "{err}");
+    assert!(files(&d.join("run")) == before, "fewer years: the run directory changed");
 
     // more years continue the run: the same files as an unbroken 8-year run
     write("longer.toml", scenario(8, 7, POOL, 5.0, terrain));

@@ -335,6 +335,17 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     }
     if resume {
         rows = stepper.resume(&dir, &mut world)?;
+        // a run cannot be resumed to fewer years than it has already simulated: nothing would
+        // be run, and `scenario.toml` would disagree with the stand table and the snapshots
+        if world.stand.year > scenario.years {
+            return Err(Error::Invalid {
+                context: format!("--resume of {}", dir.display()),
+                field: "years".into(),
+                value: scenario.years.to_string(),
+                expected: format!("at least {}, the year of the run's checkpoint (to run it longer, set years higher; to end it earlier, start a fresh run)", world.stand.year),
+            }
+            .into());
+        }
         // a snapshot off this run's schedule at the checkpoint's year (one a stopped run wrote
         // so its state could be viewed, or the end of a shorter run now extended) is not one an
         // unbroken run writes: removed, so the resumed directory equals the unbroken run's
