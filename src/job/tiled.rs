@@ -288,7 +288,17 @@ fn check(scenario: &Scenario) -> Result<()> {
 /// Errors: [`Error::Invalid`] when the light grid has fewer columns or rows than the tiles.
 pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
     let (nx, ny) = grid_for(n, world.site.light.cols, world.site.light.rows);
-    Ok(Layout::new(&world.site, nx, ny)?)
+    // the message names the count asked for, not only the grid it was cut into
+    let (cols, rows) = (world.site.light.cols, world.site.light.rows);
+    Ok(Layout::new(&world.site, nx, ny).map_err(|e| match e {
+        Error::Invalid { context, field, value, expected } if field == "tiles" => Error::Invalid {
+            context,
+            field,
+            value: format!("{n} (cut into {value} tiles)"),
+            expected: format!("a count whose near-square grid of tiles fits this site's light grid of {cols} × {rows} cells ({expected})"),
+        },
+        e => e,
+    })?)
 }
 
 /// Rank 0's [`Stepper`]: its own tile, the transport, the tallies at the start (zero once
