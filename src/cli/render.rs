@@ -7,6 +7,15 @@ use sylva::render::camera::CameraPreset;
 use sylva::sim::Scenario;
 use sylva::species::Season;
 
+/// `--fps` of `sylva run` and `sylva timelapse`: 1–100 frames per second.
+pub(crate) fn parse_fps(s: &str) -> Result<f32, String> {
+    let v: f32 = s.parse().map_err(|_| format!("fps `{s}`: expected a number"))?;
+    if !(1.0..=100.0).contains(&v) {
+        return Err(format!("fps `{s}`: expected 1–100 frames per second"));
+    }
+    Ok(v)
+}
+
 /// Parses `WIDTHxHEIGHT`.
 pub fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s.split_once(['x', 'X']).ok_or_else(|| format!("size `{s}`: expected WIDTHxHEIGHT, e.g. 1920x1080"))?;
@@ -108,7 +117,7 @@ pub struct TimelapseArgs {
     #[arg(long, value_parser = parse_camera)]
     pub camera: Option<CameraPreset>,
     /// Frames per second (1–100; checked before any frame is drawn).
-    #[arg(long, default_value_t = 12.0, value_parser = super::run::parse_fps)]
+    #[arg(long, default_value_t = 12.0, value_parser = parse_fps)]
     pub fps: f32,
     /// Interpolated frames between consecutive snapshots (0–50; 0: one frame per snapshot).
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=50))]

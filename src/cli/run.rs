@@ -30,7 +30,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=50))]
     pub frames_between: u32,
     /// Timelapse frames per second (1–100).
-    #[arg(long, default_value_t = 8.0, value_parser = parse_fps)]
+    #[arg(long, default_value_t = 8.0, value_parser = super::render::parse_fps)]
     pub fps: f32,
     /// Skip stills and timelapse (no GPU or software adapter needed).
     #[arg(long, alias = "no-render")]
@@ -45,14 +45,6 @@ pub struct Args {
     pub inventory: sylva::output::inventory::InventoryFormat,
 }
 
-/// `--fps` of `sylva run` and `sylva timelapse`: 1–100 frames per second.
-pub(crate) fn parse_fps(s: &str) -> Result<f32, String> {
-    let v: f32 = s.parse().map_err(|_| format!("fps `{s}`: expected a number"))?;
-    if !(1.0..=100.0).contains(&v) {
-        return Err(format!("fps `{s}`: expected 1–100 frames per second"));
-    }
-    Ok(v)
-}
 
 /// Runs the main job.
 pub fn run(a: Args) -> anyhow::Result<()> {
