@@ -103,6 +103,9 @@ fn folders_and_files_mixed_up_get_plain_errors() {
         let (ok, err) = run(args);
         assert!(!ok && err.contains(want), "{args:?}: {err}");
     }
+    // a DEM that is not there leaves no empty maps folder behind
+    let (ok, err) = run(&["terrain", "maps", "nothere.tif", "--out", "maps_out"]);
+    assert!(!ok && err.contains("nothere.tif") && !d.join("maps_out").exists(), "{err}");
     // without ./species, `species check` checks the shipped library
     let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["species", "check"]).current_dir(d).output().unwrap();
     assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("shipped library: 17 species"));

@@ -893,6 +893,15 @@ fn geojson_area_files_are_checked_for_crs_geometry_and_site() {
     std::fs::write(&f, collection(&[r#"{"type":"Feature","properties":{},"geometry":{"type":"LineString","coordinates":[[0,-5],[50,-5]]}}"#, square])).unwrap();
     let e = err(&harvest(&f));
     assert!(e.contains("feature 0 is a LineString") && !e.contains("linearise"), "{e}");
+    // a ring left open (RFC 7946 §3.1.6: closed rings) is refused, naming the ring and feature;
+    // a Shapefile (not read) names the formats read and how to convert it
+    std::fs::write(&f, collection(&[square, r#"{"type":"Feature","id":"open","properties":{},"geometry":{"type":"Polygon","coordinates":[[[10,-70],[60,-70],[60,-20],[10,-20]]]}}"#])).unwrap();
+    let e = err(&harvest(&f));
+    assert!(e.contains("parcels.geojson") && e.contains("closed linear rings") && e.contains("ring 0 of feature 1 (id \"open\")") && e.contains("ends at [10.0, -20.0]"), "{e}");
+    let shp = d.path().join("parcels.shp");
+    std::fs::write(&shp, b"not read").unwrap();
+    let e = err(&harvest(&shp));
+    assert!(e.contains("management[0].area_file") && e.contains("parcels.shp") && e.contains("a `.shp` file is not read") && e.contains("ogr2ogr -f GPKG"), "{e}");
     // a polygon wholly outside the site: the world's y (0…120) read as the outputs' lies north
     std::fs::write(&f, collection(&[square, r#"{"type":"Feature","id":"old","properties":{},"geometry":{"type":"Polygon","coordinates":[[[10,10],[60,10],[60,60],[10,60],[10,10]]]}}"#])).unwrap();
     let e = err(&harvest(&f));

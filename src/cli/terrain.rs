@@ -155,8 +155,10 @@ fn info(s: &Source, tolerance: f64) -> anyhow::Result<()> {
 }
 
 fn maps_cmd(s: &Source, out: &Path) -> anyhow::Result<()> {
-    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    // the DEM is read first, so that a missing or unreadable one leaves no empty output folder
+    // behind (found by a trial: `sylva terrain maps nothere.tif` made the folder, then failed)
     let t = s.load()?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let climate = s.climate();
     let stages = 16u64;
     let pb = super::progress(stages, "terrain");

@@ -752,9 +752,19 @@ pub fn read_geojson_area(path: &Path, filter: Option<&AreaFilter>, dem_epsg: Opt
         }
         let parsed: geojson::Geometry = serde_json::from_value(g.clone()).map_err(|e| bad(format!("a GeoJSON {ty} ({name} does not parse: {e})")))?;
         // a position needs x and y (a third number, the height, is ignored)
+        // RFC 7946 §3.1.6: a linear ring is closed, its first and last positions the same (a
+        // ring left open is refused rather than closed silently: found by a break-it pass)
         let rings_of = |p: &[Vec<geojson::Position>]| -> Result<Vec<Vec<[f64; 2]>>> {
             p.iter()
-                .map(|r| r.iter().map(|q| if q.len() >= 2 { Ok([q[0], q[1]]) } else { Err(bad(format!("positions of two numbers [x, y] ({name} has one of {}: {q:?})", q.len()))) }).collect::<std::result::Result<Vec<_>, _>>())
+                .enumerate()
+                .map(|(k, r)| {
+                    let ring = r.iter().map(|q| if q.len() >= 2 { Ok([q[0], q[1]]) } else { Err(bad(format!("positions of two numbers [x, y] ({name} has one of {}: {q:?})", q.len()))) }).collect::<std::result::Result<Vec<_>, _>>()?;
+                    match (ring.first(), ring.last()) {
+                        (Some(a), Some(b)) if ring.len() >= 4 && a == b => Ok(ring),
+                        (Some(a), Some(b)) if ring.len() >= 2 && a != b => Err(bad(format!("closed linear rings, the last position equal to the first (RFC 7946 §3.1.6; ring {k} of {name} starts at {a:?} and ends at {b:?})"))),
+                        _ => Err(bad(format!("linear rings of at least four positions, the last equal to the first (RFC 7946 §3.1.6; ring {k} of {name} has {})", ring.len()))),
+                    }
+                })
                 .collect::<std::result::Result<Vec<_>, _>>()
         };
         match &parsed.value {
@@ -962,6 +972,10 @@ fn read_area_file(f: &Path, m: &Management, site: &SiteView<'_>, (ex, ey): (f64,
     }
     let g = &site.conditions.geo;
     let epsg = if g.crs == crate::grid::Crs::Local { None } else { g.epsg };
+    let ext = f.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    if !is_gpkg(f) && !["geojson", "json"].contains(&ext.as_str()) {
+        return Err(bad(format!("a GeoPackage (`.gpkg`) or GeoJSON file (`.geojson`, `.json`); a {} is not read: convert it, e.g. `ogr2ogr -f GPKG parcels.gpkg {}`", if ext.is_empty() { "file without an extension".to_string() } else { format!("`.{ext}` file") }, f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default())));
+    }
     let ps = if is_gpkg(f) { read_gpkg_area(f, m.layer.as_deref(), m.filter.as_ref(), epsg, ctx, field)? } else { read_geojson_area(f, m.filter.as_ref(), epsg, ctx, field)? };
     let mut out = Vec::with_capacity(ps.len());
     for (k, (name, rings)) in ps.into_iter().enumerate() {
