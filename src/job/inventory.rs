@@ -208,7 +208,7 @@ pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
 /// inventory CSV of the same year would hold them.
 pub fn rows_from_world(w: &crate::sim::World) -> Vec<InventoryRow> {
     let t = &w.stand.trees;
-    (0..t.len()).map(|i| InventoryRow::new(t.id[i], w.site.lib.species[t.species[i] as usize].id.clone(), crate::output::inventory::tree_measures(t, i), "alive".into())).collect()
+    (0..t.len()).map(|i| InventoryRow::new(t.id[i], w.site.lib.species[t.species[i] as usize].id.clone(), crate::output::inventory::tree_measures(&w.site.lib, t, i), "alive".into())).collect()
 }
 
 /// One row of `inventory/year_NNNN_regeneration.csv` (the regeneration layer: one sapling

@@ -21,9 +21,10 @@ struct Rec<'a> {
 }
 
 /// The inventory's measured values ([`INVENTORY_MEASURES`]: x, y, z, age, height, DBH, crown
-/// radius, crown base) of living tree `i` of `t`.
-pub fn tree_measures(t: &TreeStore, i: usize) -> [f32; N_MEASURES] {
-    [t.x[i], t.y[i], t.z[i], t.age[i], t.height[i], t.dbh[i], t.crown_radius[i], t.crown_base[i]]
+/// radius, crown base) of living tree `i` of `t`, species from `lib`; the crown radius is the
+/// crown's outline as it stands ([`TreeStore::crown_outline`]).
+pub fn tree_measures(lib: &crate::species::SpeciesLibrary, t: &TreeStore, i: usize) -> [f32; N_MEASURES] {
+    [t.x[i], t.y[i], t.z[i], t.age[i], t.height[i], t.dbh[i], t.crown_outline(lib, i), t.crown_base[i]]
 }
 
 /// The inventory's measured values ([`INVENTORY_MEASURES`]) of dead tree `d`.
@@ -41,7 +42,7 @@ fn records_where(w: &World, keep: impl Fn(f32, f32) -> bool) -> Vec<Rec<'_>> {
     let t = &w.stand.trees;
     let mut out: Vec<Rec> = (0..t.len())
         .filter(|&i| keep(t.x[i], t.y[i]))
-        .map(|i| Rec { id: t.id[i], species: &w.site.lib.species[t.species[i] as usize].id, v: tree_measures(t, i), status: "alive".into() })
+        .map(|i| Rec { id: t.id[i], species: &w.site.lib.species[t.species[i] as usize].id, v: tree_measures(&w.site.lib, t, i), status: "alive".into() })
         .collect();
     let mut dead: Vec<Rec> = w.scratch.dead.iter().filter(|d| keep(d.x, d.y)).map(|d| Rec { id: d.id, species: &w.site.lib.species[d.species as usize].id, v: dead_measures(d), status: format!("dead:{}", d.cause.name()) }).collect();
     dead.sort_by_key(|r| r.id);

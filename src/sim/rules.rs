@@ -36,6 +36,35 @@ pub fn shaded_crown(light: f32) -> f32 {
     0.5 + 0.5 * light.clamp(0.0, 1.0)
 }
 
+/// Crown radius (m) of a tree as it stands in the forest (its crown's outline seen from above,
+/// what inventories report, pictures draw and the light phase spreads the tree's leaf area
+/// over): the larger of its crown-space radius `space_radius` (the simulated state,
+/// `TreeStore::crown_radius`: the open-grown radius shrunk by crowding and shade, whose
+/// projection × crown LAI is the tree's leaf area) and its species' stand-grown crown radius
+/// ([`crate::species::allometry::stand_crown_radius`]: the published crown-width functions of
+/// trees in closed stands, Döbbeler et al. 2001/2002 as in BWINPro/TreeGrOSS, at DBH `dbh` (cm),
+/// height `h` (m), crown base `cb` (m)), at most the open-grown radius, in full while the crown
+/// gets at least 0.4 of full light `light` and narrowing in shade to 0.71 of it: factor
+/// `min(1, shaded_crown(L) / shaded_crown(0.4))` (ESTIMATE: the functions are fitted on the
+/// trees of closed stands, whose crowns are not in full light; 0.4 of full light is a
+/// co-dominant crown's in the model's closed pure stands, where 0.5 left the thinnest canopy
+/// trees of beech, 10–20 cm at age 80, at 0.78 of the function: tests/sim_crowns.rs).
+///
+/// Crowns of closed stands interlock and overlap their neighbours' (their projections sum to
+/// more than the ground: Pretzsch 2009 ch. 8), so the outline is wider than the tree's share of
+/// the canopy; the leaf area stays that of the share. A species without a stand-grown function
+/// has the crown-space radius.
+#[inline]
+pub fn crown_outline_radius(sp: &crate::species::Species, h: f32, dbh: f32, cb: f32, light: f32, space_radius: f32) -> f32 {
+    match crate::species::allometry::stand_crown_radius(sp, dbh, h, cb) {
+        Some(rs) => {
+            let open = crate::species::allometry::open_crown_radius(sp, h, dbh);
+            space_radius.max(rs.min(open) * (shaded_crown(light) / shaded_crown(0.4)).min(1.0))
+        }
+        None => space_radius,
+    }
+}
+
 /// Vigour memory of trees (`growth`) and sapling cohorts (`regen`, with `m` = 1): the new
 /// vigour from last year's `vigour` and this year's growth response `f` (light response × site
 /// suitability) under crowding modifier `m` (1: none):

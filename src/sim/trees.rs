@@ -95,7 +95,8 @@ pub struct DeadTree {
     pub height: f32,
     /// DBH at death (cm).
     pub dbh: f32,
-    /// Crown radius at death (m).
+    /// Crown radius at death (m): the crown's outline as it stood
+    /// ([`TreeStore::crown_outline`]), as the inventories report it.
     pub crown_radius: f32,
     /// Crown base height at death (m).
     pub crown_base: f32,
@@ -128,7 +129,9 @@ pub struct TreeStore {
     pub height: Vec<f32>,
     /// Diameter at breast height (cm); 0 below 1.3 m.
     pub dbh: Vec<f32>,
-    /// Crown radius (m).
+    /// Crown-space radius (m): the open-grown crown radius shrunk by crowding and shade
+    /// (`sim::phases::growth`), whose projection × the species' crown LAI is the tree's leaf area.
+    /// The crown's outline, wider in closed stands, is [`TreeStore::crown_outline`].
     pub crown_radius: Vec<f32>,
     /// Crown base height (m).
     pub crown_base: Vec<f32>,
@@ -196,6 +199,14 @@ impl NewTree {
 }
 
 impl TreeStore {
+    /// Crown radius (m) of tree `i` as it stands ([`super::rules::crown_outline_radius`] of its
+    /// species in `lib`): what inventories report and pictures draw; `crown_radius[i]` holds its
+    /// crown-space radius (leaf area).
+    #[inline]
+    pub fn crown_outline(&self, lib: &crate::species::SpeciesLibrary, i: usize) -> f32 {
+        super::rules::crown_outline_radius(&lib.species[self.species[i] as usize], self.height[i], self.dbh[i], self.crown_base[i], self.light[i], self.crown_radius[i])
+    }
+
     /// Number of living trees.
     pub fn len(&self) -> usize {
         self.id.len()

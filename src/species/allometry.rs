@@ -199,6 +199,21 @@ pub fn crown_radius(sp: &Species, dbh: f32) -> f32 {
     a.crown_c0 + a.crown_c1 * dbh.max(0.0)
 }
 
+/// Stand-grown crown radius (m) of a tree of DBH `dbh` (cm), height `h` (m) and crown base `cb`
+/// (m): half the crown width of the species' [`crate::species::StandCrown`],
+/// `CW = (a + b · d^p) · (1 − e^(−(d / c)^e)) · (h − cb)^g` (Döbbeler et al. 2001/2002 as in
+/// BWINPro/TreeGrOSS), at least 0 m; `None` for a species without one. 0 m below breast height
+/// (no DBH).
+pub fn stand_crown_radius(sp: &Species, dbh: f32, h: f32, cb: f32) -> Option<f32> {
+    let c = sp.life.stand_crown?;
+    if dbh <= 0.0 {
+        return Some(0.0);
+    }
+    let sat = 1.0 - (-(dbh / c.c).powf(c.e)).exp();
+    let len = if c.g == 0.0 { 1.0 } else { (h - cb).max(0.1).powf(c.g) };
+    Some((0.5 * (c.a + c.b * dbh.powf(c.p)) * sat * len).max(0.0))
+}
+
 /// Open-grown crown radius (m) of a tree of height `h` (m) and diameter `dbh` (cm):
 /// [`crown_radius`] at and above breast height; below it (no DBH yet) `c0 · h / 1.3`, at least
 /// 0.05 m.

@@ -166,6 +166,43 @@ pub struct LifeHistory {
     /// species' source.
     #[serde(default = "default_form_factor")]
     pub form_factor: f32,
+    /// Crown width of stand-grown trees (published crown-width function, BWINPro/TreeGrOSS):
+    /// the crown radius a canopy tree of a closed stand keeps against crowding
+    /// ([`crate::species::allometry::stand_crown_radius`]). Optional: without it crowding
+    /// shrinks crowns as far as the neighbourhood's crown competition factor asks.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stand_crown: Option<StandCrown>,
+}
+
+/// Crown width (diameter, m) of a tree of DBH `d` (cm), height `h` (m) and crown base `cb` (m)
+/// grown in a stand: `CW = (a + b · d^p) · (1 − e^(−(d / c)^e)) · (h − cb)^g` — with `p = 1`,
+/// `g = 0` the form of Döbbeler, Albert & Schmidt (2001/2002, the BWINPro/TreeGrOSS crown
+/// widths of the NW-FVA), fitted on trees of permanent plots in managed stands of NW Germany;
+/// with `a = 0`, `c → 0` and `g > 0` the crown-length form (Schröder, TreeGrOSS black alder).
+/// Coefficients as published in the TreeGrOSS species file `ForestSimulatorNWGermany6.xml`
+/// (Nagel, Duda & Hansen 2006, Forest Simulator BWINPro7; read from github:rnuske/TreeGrOSSinR
+/// @ 659d30d, `data-raw/`); each species file names its block.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StandCrown {
+    /// Intercept a (m).
+    pub a: f32,
+    /// Slope b (m per cm^p of DBH).
+    pub b: f32,
+    /// DBH exponent p of the slope term (default 1).
+    #[serde(default = "one")]
+    pub p: f32,
+    /// Scale c (cm) of the saturating factor `1 − e^(−(d/c)^e)` (1e-6: the factor is 1).
+    pub c: f32,
+    /// Shape e of the saturating factor.
+    pub e: f32,
+    /// Exponent g of the crown length `h − cb` (m) (default 0: crown width from DBH alone).
+    #[serde(default)]
+    pub g: f32,
+}
+
+fn one() -> f32 {
+    1.0
 }
 
 /// Default [`LifeHistory::form_factor`]: 0.5.

@@ -263,6 +263,12 @@ pub const FIELDS: &[FieldSpec] = &[
         r(0.3, 0.7),
         "Form factor f of the merchantable stem (≥ 7 cm): stem volume V = f · g · h (g basal area at 1.3 m, h height; Kramer & Akça 2008); optional, default 0.5",
     ),
+    f("life.stand_crown.a", "m", r(-10.0, 30.0), "Stand-grown crown width CW = (a + b·d^p)(1 − e^(−(d/c)^e))(h − cb)^g (Döbbeler et al. 2001/2002, BWINPro/TreeGrOSS; optional): intercept a"),
+    f("life.stand_crown.b", "m/cm^p", r(-1.0, 2.0), "Stand-grown crown width: slope b"),
+    f("life.stand_crown.p", "", r(0.2, 2.0), "Stand-grown crown width: DBH exponent p of the slope term (default 1)"),
+    f("life.stand_crown.c", "cm", rx(0.0, 200.0), "Stand-grown crown width: scale c of the saturating factor 1 − e^(−(d/c)^e) (1e-6: factor 1)"),
+    f("life.stand_crown.e", "", rx(0.0, 5.0), "Stand-grown crown width: shape e of the saturating factor"),
+    f("life.stand_crown.g", "", r(0.0, 1.0), "Stand-grown crown width: exponent g of the crown length h − cb (m) (default 0)"),
     f(
         "architecture.ecomod.strands",
         "",

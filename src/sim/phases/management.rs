@@ -53,7 +53,7 @@ pub fn run(m: Manage<'_>) -> usize {
                 continue;
             }
         };
-        harvest(t, &remove, m.year, m.dead, m.deaths_total);
+        harvest(&m.site.lib, t, &remove, m.year, m.dead, m.deaths_total);
         let keep: Vec<bool> = remove.iter().map(|r| !r).collect();
         m.trees.retain(&keep);
     }
@@ -65,9 +65,9 @@ pub fn run(m: Manage<'_>) -> usize {
 }
 
 /// Records trees flagged in `remove` as harvested in `year`.
-fn harvest(t: &TreeStore, remove: &[bool], year: u32, dead: &mut Vec<DeadTree>, totals: &mut [u64; N_CAUSES]) {
+fn harvest(lib: &crate::species::SpeciesLibrary, t: &TreeStore, remove: &[bool], year: u32, dead: &mut Vec<DeadTree>, totals: &mut [u64; N_CAUSES]) {
     for i in (0..t.len()).filter(|&i| remove[i]) {
-        dead.push(DeadTree { id: t.id[i], species: t.species[i], x: t.x[i], y: t.y[i], z: t.z[i], age: t.age[i], height: t.height[i], dbh: t.dbh[i], crown_radius: t.crown_radius[i], crown_base: t.crown_base[i], year, cause: DeathCause::Harvest });
+        dead.push(DeadTree { id: t.id[i], species: t.species[i], x: t.x[i], y: t.y[i], z: t.z[i], age: t.age[i], height: t.height[i], dbh: t.dbh[i], crown_radius: t.crown_outline(lib, i), crown_base: t.crown_base[i], year, cause: DeathCause::Harvest });
         totals[DeathCause::Harvest.index()] += 1;
     }
 }

@@ -113,6 +113,7 @@ pub fn run(w: Mortality<'_>) {
     let keep: Vec<bool> = causes.par_iter().with_min_len(1 << 14).map(|c| c.is_none()).collect();
     // the dead in index order (an order-keeping parallel collect), then counted by cause
     let year = w.year;
+    let lib = w.lib;
     let dead: Vec<DeadTree> = causes
         .par_iter()
         .enumerate()
@@ -127,7 +128,7 @@ pub fn run(w: Mortality<'_>) {
                 age: t.age[i],
                 height: t.height[i],
                 dbh: t.dbh[i],
-                crown_radius: t.crown_radius[i],
+                crown_radius: t.crown_outline(lib, i),
                 crown_base: t.crown_base[i],
                 year,
                 cause,

@@ -1,0 +1,61 @@
+#!/usr/bin/env python3
+"""Crown radii of a run's inventory against the stand-grown crown-width functions of its species.
+
+Usage: python3 tools/crown_check.py RUN_DIR YEAR [SPECIES_DIR]
+
+Reads RUN_DIR/inventory/year_YYYY.csv (a run made with `--inventory csv`) and the
+`life.stand_crown` coefficients of species/*.toml; canopy trees are the living trees of
+DBH >= 10 cm whose height is at least 0.8 x the top height of their 50 m x 50 m cell (the mean
+height of its 25 tallest trees, i.e. 100 per hectare). Prints, per species and 10 cm DBH class
+with at least 20 canopy trees, the median crown radius of the simulation, the function's radius
+at the class's trees, and their ratio (mean of per-tree ratios).
+"""
+import csv, math, sys, tomllib, glob, os
+from collections import defaultdict
+
+run, year = sys.argv[1], int(sys.argv[2])
+sp_dir = sys.argv[3] if len(sys.argv) > 3 else os.path.join(os.path.dirname(__file__), "..", "species")
+coef = {}
+for f in glob.glob(os.path.join(sp_dir, "*.toml")):
+    with open(f, "rb") as fh:
+        t = tomllib.load(fh)
+    sc = t.get("life", {}).get("stand_crown")
+    if sc:
+        coef[t["identity"]["id"] if "id" in t.get("identity", {}) else os.path.basename(f)[:-5]] = sc
+
+def ref(sp, d, h, cb):
+    c = coef[sp]
+    sat = 1.0 - math.exp(-((d / c["c"]) ** c["e"]))
+    ln = 1.0 if c.get("g", 0.0) == 0.0 else max(h - cb, 0.1) ** c["g"]
+    return 0.5 * (c["a"] + c["b"] * d ** c.get("p", 1.0)) * sat * ln
+
+rows = []
+with open(os.path.join(run, "inventory", f"year_{year:04d}.csv")) as fh:
+    for r in csv.DictReader(fh):
+        if r["status"] != "alive":
+            continue
+        rows.append((r["species"], float(r["x_m"]), float(r["y_m"]), float(r["height_m"]), float(r["dbh_cm"]), float(r["crown_radius_m"]), float(r["crown_base_m"])))
+cells = defaultdict(list)
+for i, r in enumerate(rows):
+    cells[(int(r[1] // 50), int(r[2] // 50))].append(r[3])
+top = {k: sum(sorted(v)[-25:]) / min(25, len(v)) for k, v in cells.items()}
+classes = defaultdict(list)
+for sp, x, y, h, d, cr, cb in rows:
+    if d < 10 or sp not in coef or h < 0.8 * top[(int(x // 50), int(y // 50))]:
+        continue
+    rr = ref(sp, d, h, cb)
+    if rr > 0:
+        classes[(sp, int(d // 10))].append((cr, rr))
+print("| species | DBH class (cm) | canopy trees | crown radius sim, median (m) | function (m) | ratio (mean) |")
+print("|---|---|---|---|---|---|")
+worst = []
+for (sp, k), v in sorted(classes.items()):
+    if len(v) < 20:
+        continue
+    sims = sorted(a for a, _ in v)
+    refs = sorted(b for _, b in v)
+    ratio = sum(a / b for a, b in v) / len(v)
+    worst.append(ratio)
+    print(f"| {sp} | {k*10}-{k*10+10} | {len(v)} | {sims[len(v)//2]:.2f} | {refs[len(v)//2]:.2f} | {ratio:.2f} |")
+if worst:
+    print(f"\n{len(worst)} classes; ratios {min(worst):.2f}-{max(worst):.2f}; within +-20 %: {sum(0.8 <= w <= 1.2 for w in worst)}")
