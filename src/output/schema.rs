@@ -18,7 +18,7 @@
 //! | `age_yr` | float | years | 0 | 0–10,000 |
 //! | `height_m` | float | m | 2 | 0–200 |
 //! | `dbh_cm` | float | cm (0 below 1.3 m) | 2 | 0–1,000 |
-//! | `crown_radius_m` | float | m | 2 | 0–100 |
+//! | `crown_radius_m` | float | m (the crown's outline: `sim::TreeStore::crown_outline`) | 2 | 0–100 |
 //! | `crown_base_m` | float | m (height of the crown base) | 2 | 0–200 |
 //! | `status` | text | `alive` or `dead:<cause>` | – | either form |
 //!
