@@ -103,6 +103,14 @@ fn folders_and_files_mixed_up_get_plain_errors() {
         let (ok, err) = run(args);
         assert!(!ok && err.contains(want), "{args:?}: {err}");
     }
+    // more tiles than one process can hold are refused before anything is written (4,000
+    // overflowed a thread's stack, 1,000 were killed for memory)
+    let (ok, err) = run(&["simulate", "nothere.toml", "--tiles", "4000", "--out", "t4000"]);
+    assert!(!ok && err.contains("--tiles") && err.contains("1 to 64 tiles") && err.contains("got 4000") && err.contains("mpirun") && !d.join("t4000").exists(), "{err}");
+    // a tile count the site's light grid cannot hold leaves no run folder (it left species/)
+    std::fs::write(d.join("tiny.toml"), "name = \"tiny\"\nyears = 2\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = { width = 2, height = 2, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n").unwrap();
+    let (ok, err) = run(&["simulate", "tiny.toml", "--tiles", "64", "--out", "tiny_out"]);
+    assert!(!ok && err.contains("`tiles` = 64 (cut into 8 × 8 tiles)") && err.contains("light grid of 4 × 4 cells") && !d.join("tiny_out").exists(), "{err}");
     // a DEM that is not there leaves no empty maps folder behind
     let (ok, err) = run(&["terrain", "maps", "nothere.tif", "--out", "maps_out"]);
     assert!(!ok && err.contains("nothere.tif") && !d.join("maps_out").exists(), "{err}");

@@ -42,11 +42,21 @@ pub struct Args {
     pub inventory: sylva::output::inventory::InventoryFormat,
 }
 
-/// Parses `--tiles`: an integer 1–4096.
+/// Most tiles `--tiles` steps in one process. Each tile is a thread holding its own trees plus
+/// a halo as wide as the pool's longest seed reach (875 m for birch), so memory grows with the
+/// count: `scenarios/parcels.toml` held 9 GB by its year 14 with 256 tiles, and 1,000 tiles
+/// were killed for memory on a 24 GiB machine (4,000 overflowed a thread's stack). More ranks
+/// than this belong on a cluster (`mpirun`, docs/SCALING.md).
+pub const MAX_LOCAL_TILES: usize = 64;
+
+/// Parses `--tiles`: an integer 1–[`MAX_LOCAL_TILES`].
 pub fn parse_tiles(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
-        Ok(n) if (1..=4096).contains(&n) => Ok(n),
-        _ => Err(format!("expected a whole number of tiles from 1 to 4096, got '{s}'")),
+        Ok(n) if (1..=MAX_LOCAL_TILES).contains(&n) => Ok(n),
+        Ok(n) if n > MAX_LOCAL_TILES => Err(format!(
+            "expected 1 to {MAX_LOCAL_TILES} tiles in one process, got {n}: each tile is a thread holding its trees and a halo as wide as the longest seed reach, so memory grows with the count (256 tiles of scenarios/parcels.toml held 9 GB); run more ranks with mpirun"
+        )),
+        _ => Err(format!("expected a whole number of tiles from 1 to {MAX_LOCAL_TILES}, got '{s}'")),
     }
 }
 

@@ -311,6 +311,11 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
     // the scenario is checked against its site before any folder is made (a refused scenario
     // left `inventory/`, `maps/` and `species/` behind; found by a break-it pass)
     context(World::check(&site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
+    // a tile count the site cannot hold is refused before any folder is made (the ranks of an
+    // MPI run are told by `tiled::run_tiled`, which checks the same before any rank waits)
+    if let Stepping::Local(n) = stepping {
+        context(super::tiled::check_tile_count(&site, sc, n), || format!("simulating {}", sc.name))?;
+    }
     // a resumed run keeps the species files it was simulated with (a changed species is
     // refused by the checkpoint before anything is written)
     if !(opts.resume && super::checkpoint::exists(&out)) {

@@ -301,6 +301,27 @@ pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
     })?)
 }
 
+/// Checks, before anything is written, that `n` tiles fit the light grid of `site` under
+/// `scenario` (the check [`layout_for`] makes once the world is built; a refused count used to
+/// leave the run's `species/` behind: found by a trial).
+///
+/// Errors: [`Error::Invalid`] naming the count, the grid of tiles it is cut into and the light
+/// grid's columns and rows.
+pub fn check_tile_count(site: &SiteConditions, scenario: &Scenario, n: usize) -> Result<()> {
+    let light = crate::sim::LightGrid::new(site.extent_m(), scenario.light_cell_m);
+    let (nx, ny) = grid_for(n, light.cols, light.rows);
+    if nx == 0 || ny == 0 || nx > light.cols || ny > light.rows {
+        return Err(Error::Invalid {
+            context: "tiled run".into(),
+            field: "tiles".into(),
+            value: format!("{n} (cut into {nx} × {ny} tiles)"),
+            expected: format!("a count whose near-square grid of tiles fits this site's light grid of {} × {} cells (1–{} across and 1–{} up (the light grid's columns and rows))", light.cols, light.rows, light.cols, light.rows),
+        }
+        .into());
+    }
+    Ok(())
+}
+
 /// Rank 0's [`Stepper`]: its own tile, the transport, the tallies at the start (zero once
 /// they are in rank 0's tile: its tallies then count from the run's start).
 pub struct Root<'t> {
