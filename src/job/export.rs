@@ -215,6 +215,14 @@ fn open_export(run_dir: &Path, year: Option<u32>, levels: &[usize], area: Option
     Ok((sc, site, year, area))
 }
 
+/// Whether `(x, y)` (m) lies in `area` `[x0, y0, x1, y1]` of a site `w` × `h` m: half-open
+/// (`x0 ≤ x < x1`), except that an edge of the area on the site's east or north edge is
+/// closed, so that trees standing exactly on the site's edge (seeded or planted there) are
+/// exported with the whole site (`--instances` dropped them: found by a trial).
+fn in_area(x: f64, y: f64, [x0, y0, x1, y1]: [f64; 4], w: f64, h: f64) -> bool {
+    x >= x0 && (x < x1 || (x1 >= w && x <= x1)) && y >= y0 && (y < y1 || (y1 >= h && y <= y1))
+}
+
 /// Exports the area of a run directory's snapshot to `out` (`.glb`, atomically). `library`:
 /// the species as simulated (the caller overlays the run's `species/` folder).
 ///
@@ -242,7 +250,8 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let plants = plants_from_rows(&rows);
     let stand = stand_trees(&plants, library, &site);
     let trees: Vec<_> = stand.iter().map(|(_, t)| *t).collect();
-    let inside = |x: f32, y: f32| (x as f64) >= x0 && (x as f64) < x1 && (y as f64) >= y0 && (y as f64) < y1;
+    let (sw, sh) = (site.width() as f64 * site.cell_x_m, site.height() as f64 * site.cell_y_m);
+    let inside = |x: f32, y: f32| in_area(x as f64, y as f64, [x0, y0, x1, y1], sw, sh);
     let targets: Vec<usize> = (0..trees.len()).filter(|&k| inside(trees[k].base.x, trees[k].base.y)).collect();
     if targets.is_empty() {
         let where_ = match span {
@@ -424,9 +433,10 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     use crate::output::gltf::{InstanceGroup, InstancedScene};
     let (sc, site, year, area) = open_export(run_dir, o.year, &o.levels, o.area)?;
     let [x0, y0, x1, y1] = area;
+    let (sw, sh) = (site.width() as f64 * site.cell_x_m, site.height() as f64 * site.cell_y_m);
     let mut unknown = 0usize;
     let rows = super::pictures::snapshot_rows_where(run_dir, year, |r| {
-        let live = r.status == "alive" && r.height_m >= super::scene::MIN_DRAWN_HEIGHT_M && r.x_m >= x0 && r.x_m < x1 && r.y_m >= y0 && r.y_m < y1;
+        let live = r.status == "alive" && r.height_m >= super::scene::MIN_DRAWN_HEIGHT_M && in_area(r.x_m, r.y_m, area, sw, sh);
         let known = library.find(&r.species).is_some();
         unknown += (live && !known) as usize;
         live && known
@@ -651,6 +661,16 @@ pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn area_edges_on_the_site_edge_are_closed() {
+        let site = [0.0, 0.0, 2400.0, 1800.0];
+        // on the east and north edges of the site: in
+        assert!(in_area(2400.0, 900.0, site, 2400.0, 1800.0) && in_area(100.0, 1800.0, site, 2400.0, 1800.0) && in_area(2400.0, 1800.0, site, 2400.0, 1800.0));
+        // an inner area stays half-open: its east edge belongs to the next area
+        assert!(!in_area(1200.0, 900.0, [0.0, 0.0, 1200.0, 1800.0], 2400.0, 1800.0) && in_area(1200.0, 900.0, [1200.0, 0.0, 2400.0, 1800.0], 2400.0, 1800.0));
+        assert!(!in_area(-0.01, 5.0, site, 2400.0, 1800.0) && !in_area(5.0, 1800.01, site, 2400.0, 1800.0));
+    }
     use crate::structure::{Leaf, Leaves};
 
     #[test]
