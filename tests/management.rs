@@ -59,6 +59,26 @@ fn thinning_from_below_removes_the_smallest_first_and_reaches_its_target() {
     eprintln!("from below: {:.2} → {:.2} m²/ha (target {target:.2}), {} stems removed (DBH ≤ {max_cut:.1} cm), {:.1} m³/ha removed", ba0, row.basal_area_m2_ha, cut.len(), row.harvest_volume_m3_ha);
 }
 
+/// A thinning takes stems of the growing stock (DBH ≥ 7 cm) only: an understorey planted under
+/// the stand (beech of 4 years, no stem of 7 cm) is left whole, and the relative density of
+/// the stems ≥ 7 cm reaches the target (taking the smallest first used to clear every stem
+/// under 7 cm first, which the relative density does not count: found by a trial).
+#[test]
+fn thinning_from_below_leaves_the_understorey() {
+    let extra = "[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 2.0\nage_yr = 4.0\nyear = 0\n[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.45\nyear = 2\n";
+    let (sc, mut w) = world(&beech_stand(extra, 2));
+    let rows = common::run(&sc, &mut w, 2);
+    let t = &w.stand.trees;
+    let small = (0..t.len()).filter(|&i| t.height[i] >= 1.3 && t.dbh[i] < 7.0).count();
+    let cut_small = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest && d.dbh < 7.0).count();
+    let cut = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).count();
+    assert!(small > 500, "{small} understorey stems under 7 cm");
+    assert_eq!(cut_small, 0, "{cut_small} stems under 7 cm thinned (of {cut})");
+    assert!(cut > 0 && rows[1].harvest_stems_ha > 0.0);
+    let rd = sylva::sim::density::stand_density(&w, 7.0).rd;
+    assert!((rd - 0.45).abs() / 0.45 < 0.05, "relative density {rd:.3}, target 0.45");
+}
+
 #[test]
 fn thinning_from_above_to_stems_and_relative_density_targets() {
     // from above to 1,500 stems/ha: the thickest go

@@ -152,13 +152,19 @@ fn goal(target: Target) -> f64 {
     }
 }
 
-/// The trees a thinning removes: none unless its triggers hold over its area; else the stems
-/// (≥ 1.3 m) of its area from the smallest DBH (`from_below`) or the largest, ties by id,
-/// until the area's figure is at or below the target.
+/// The trees a thinning removes: none unless its triggers hold over its area; else the stems of
+/// the growing stock (DBH ≥ [`crate::sim::density::MIN_DBH_CM`], 7 cm) of its area from the
+/// smallest DBH (`from_below`) or the largest, ties by id, until the area's figure (basal area,
+/// stems or relative density of those stems) is at or below the target. Smaller trees (the
+/// understorey, the regeneration) are left.
 fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target: Target, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> Vec<bool> {
     let mut remove = vec![false; t.len()];
     let a = op.region.area_ha.max(1e-9);
-    let mut cand = stems_in(t, op);
+    // a thinning acts on the growing stock, the stems of at least 7 cm DBH (as the yield tables
+    // and the relative density count them); the understorey and the regeneration below stay
+    // (taking the smallest stems first used to clear every stem under 7 cm at each entry before
+    // the relative density, which does not count them, moved at all: found by a trial)
+    let mut cand: Vec<usize> = stems_in(t, op).into_iter().filter(|&i| t.dbh[i] >= crate::sim::density::MIN_DBH_CM).collect();
     let (mut f, act) = figures_and_triggers(site, t, &cand, a, trigger_rd, trigger_h);
     if !act {
         return remove;
