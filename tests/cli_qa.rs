@@ -111,6 +111,14 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     std::fs::write(d.join("tiny.toml"), "name = \"tiny\"\nyears = 2\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = { width = 2, height = 2, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n").unwrap();
     let (ok, err) = run(&["simulate", "tiny.toml", "--tiles", "64", "--out", "tiny_out"]);
     assert!(!ok && err.contains("`tiles` = 64 (cut into 8 × 8 tiles)") && err.contains("light grid of 4 × 4 cells") && !d.join("tiny_out").exists(), "{err}");
+    // `sylva simulate` writes the GeoPackage of the final year only, unless asked for every
+    // snapshot (2.1 GB for the default scenario's 31 snapshots)
+    std::fs::write(d.join("snap.toml"), "name = \"snap\"\nyears = 2\nseed = 1\nsnapshot_every = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = { width = 4, height = 4, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n").unwrap();
+    let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_final"]);
+    assert!(ok, "{err}");
+    assert!(d.join("snap_final/inventory/year_0002.gpkg").is_file() && !d.join("snap_final/inventory/year_0001.gpkg").exists() && d.join("snap_final/inventory/year_0001.parquet").is_file());
+    let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all", "--gpkg", "every-snapshot"]);
+    assert!(ok && d.join("snap_all/inventory/year_0001.gpkg").is_file() && d.join("snap_all/inventory/year_0002.gpkg").is_file(), "{err}");
     // a DEM that is not there leaves no empty maps folder behind
     let (ok, err) = run(&["terrain", "maps", "nothere.tif", "--out", "maps_out"]);
     assert!(!ok && err.contains("nothere.tif") && !d.join("maps_out").exists(), "{err}");

@@ -73,7 +73,8 @@ fn two_and_three_ranks_write_the_run_directory_of_one_process() {
     let recruits: Vec<f64> = inv.iter().filter(|r| r.id >= 1 << 44).map(|r| r.x_m).collect();
     assert!(recruits.len() > 20, "only {} recruits", recruits.len());
     assert!(recruits.iter().any(|&x| x < 267.0) && recruits.iter().any(|&x| x > 400.0), "recruits on one side only");
-    assert!(f.contains_key("checkpoint.bin") && f.contains_key("stand_table.csv") && f.contains_key("inventory/year_0010.gpkg"));
+    // the GeoPackage of the final year only (`sylva simulate --gpkg final`, the default)
+    assert!(f.contains_key("checkpoint.bin") && f.contains_key("stand_table.csv") && f.contains_key("inventory/year_0020.gpkg") && !f.contains_key("inventory/year_0010.gpkg"));
     for n in [2, 3] {
         let d = tmp.path().join(format!("np{n}"));
         simulate(n, &sc, &d, false);

@@ -353,6 +353,20 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         let scheduled = yc == 0 || yc == scenario.years || (scenario.snapshot_every > 0 && yc % scenario.snapshot_every == 0);
         if !scheduled {
             remove_snapshot(&dir, &format!("year_{yc:04}"))?;
+        } else if !gp(yc) {
+            // the GeoPackages of a shorter run's final year, now extended, are not ones the
+            // unbroken run writes (only its final year's, unless every snapshot's are asked for)
+            let inv = dir.join("inventory");
+            let stem = format!("year_{yc:04}");
+            if inv.is_dir() {
+                for e in std::fs::read_dir(&inv).map_err(|err| Error::io(&inv, err))? {
+                    let e = e.map_err(|err| Error::io(&inv, err))?;
+                    let (name, p) = (e.file_name().to_string_lossy().into_owned(), e.path());
+                    if name.starts_with(&stem) && name.ends_with(".gpkg") && p.is_file() {
+                        std::fs::remove_file(&p).map_err(|err| Error::io(&p, err))?;
+                    }
+                }
+            }
         }
         // the scenario as run, `years` included (a resume may extend the run)
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
