@@ -325,6 +325,16 @@ fn polygon_planting_from_geopackage_plants_only_inside_its_polygons() {
     let e = sylva::sim::management::read_gpkg_polygons(&wgs, None, None, Some(26917), "x.toml", "management[0].area_file").unwrap_err().to_string();
     assert!(e.contains("EPSG:26917") && e.contains("EPSG:4326") && e.contains("ogr2ogr -t_srs"), "{e}");
     assert_eq!(sylva::sim::management::read_gpkg_polygons(&wgs, None, None, None, "x.toml", "f").unwrap().len(), 1);
+    // srs_id 0 (the undefined geographic SRS: degrees) and an srs_id the file does not define
+    // are refused, on a georeferenced DEM or not (both were read as the DEM's metres)
+    for (srs, file, want) in [(0, "geo0.gpkg", "srs_id 0, the GeoPackage's undefined geographic SRS"), (999_999, "srs999999.gpkg", "srs_id 999999, which the file does not define")] {
+        let f = d.path().join(file);
+        write_gpkg(&f, &[("parcels", "POLYGON", srs, vec![(1, "A", 1, blob(&wkb_polygon(true, &[closed(&TRI)]), srs, false))])]);
+        for dem in [Some(26917), None] {
+            let e = sylva::sim::management::read_gpkg_polygons(&f, None, None, dem, "x.toml", "management[0].area_file").unwrap_err().to_string();
+            assert!(e.contains(file) && e.contains("management[0].area_file") && e.contains("layer `parcels`") && e.contains(want), "{e}");
+        }
+    }
     // a CurvePolygon (ISO SQL/MM type 10) names the type and the types that are accepted
     let curved = d.path().join("curved.gpkg");
     let mut curve = vec![1u8];

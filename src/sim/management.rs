@@ -820,6 +820,16 @@ pub fn read_gpkg_area(path: &Path, layer: Option<&str>, filter: Option<&AreaFilt
     let fil = filter.zip(keep.as_ref()).map(|(f, k)| (f.property.as_str(), k as &dyn Fn(&serde_json::Value) -> bool));
     let got = crate::gpkg::read_polygons(path, layer, fil).map_err(|e| bad(e.0))?;
     let info = got.layer.clone();
+    // OGC GeoPackage 1.3 §1.1.2.1.1: srs_id 0 is the undefined geographic SRS (longitude and
+    // latitude in degrees, never the DEM's metres), and a layer's srs_id must be a row of
+    // gpkg_spatial_ref_sys (an id without one says nothing of its coordinates); both were read
+    // as the DEM's CRS (found by a trial)
+    if info.srs_id == 0 {
+        return Err(bad(format!("a layer in the DEM's projected CRS{} (layer `{}` has srs_id 0, the GeoPackage's undefined geographic SRS: degrees of longitude and latitude; reproject it, e.g. `ogr2ogr -s_srs EPSG:4326 -t_srs {} out.gpkg {}`)", dem_epsg.map(|c| format!(", EPSG:{c}")).unwrap_or_default(), info.table, dem_epsg.map(|c| format!("EPSG:{c}")).unwrap_or_else(|| "EPSG:<the DEM's code>".into()), path.display())));
+    }
+    if info.organization.is_none() && info.srs_id != -1 {
+        return Err(bad(format!("a layer whose srs_id is defined in gpkg_spatial_ref_sys (layer `{}` has srs_id {}, which the file does not define)", info.table, info.srs_id)));
+    }
     if let (Some(want), Some((org, code))) = (dem_epsg, &info.organization) {
         if org.eq_ignore_ascii_case("EPSG") && *code != want as i64 {
             return Err(bad(format!("polygons in the DEM's CRS, EPSG:{want} (layer `{}` is in EPSG:{code}; reproject it, e.g. `ogr2ogr -t_srs EPSG:{want} out.gpkg {}`)", info.table, path.display())));
