@@ -46,6 +46,11 @@ fn bad_obstacles_are_refused_naming_the_option() {
         assert!(err.contains(opt) && err.contains(want), "{opt} {arg}: {err}");
         assert!(!out.exists());
     }
+    // EcoMod grows without obstacles: --obstacle is refused, pointing at --adapt-to (it was
+    // ignored with a warning shown only with -v)
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "5", "--obstacle", "wall:1.5", "--out", out.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&res.stderr).into_owned();
+    assert!(!res.status.success() && err.contains("--obstacle wall:1.5") && err.contains("--adapt-to") && !out.exists(), "{err}");
 }
 
 /// Largest x (m) of the LOD0 bark vertices in an OBJ written by `sylva tree grow`.

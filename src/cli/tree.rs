@@ -157,9 +157,13 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     let t0 = std::time::Instant::now();
     let m = match model {
         Model::Ecomod => {
-            if !obs.is_empty() {
-                tracing::warn!("EcoMod ignores obstacles");
-            }
+            // refused rather than ignored with a warning few saw (found by a trial): EcoMod's
+            // strands grow without an environment (Zamuda et al.)
+            anyhow::ensure!(
+                obs.is_empty(),
+                "--obstacle {}: the EcoMod model grows without obstacles; use --adapt-to with the same obstacle to bend and prune the grown tree away from it (Plastic Trees), or --model light or laplacian to grow among it",
+                obstacles.join(" --obstacle ")
+            );
             species_tree::Model::EcoMod
         }
         Model::Light => species_tree::Model::Light,
