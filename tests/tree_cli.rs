@@ -155,6 +155,7 @@ fn tree_adapt_refuses_bad_input_clearly() {
         (vec!["--sky-rings", "-4"], "invalid value '-4' for '--sky-rings"),
         (vec!["--latitude", "95"], "from -90 to 90"),
         (vec!["--neighbour", "beech@1e30,0"], "within 100 m"),
+        (vec!["--neighbour", "beech@-3,0,100000"], "age 100000: expected at most the maximum age of beech (600 years"),
     ];
     for (extra, want) in cases {
         let mut args = vec!["tree", "adapt", "--species", "beech", "--age", "5", "--out", o];

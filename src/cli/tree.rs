@@ -385,6 +385,8 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     let mut spots = vec![Vec3::ZERO];
     for (i, (name, at, age)) in neighbours.iter().enumerate() {
         let nsp = find(name).with_context(|| format!("--neighbour {}", a.neighbour[i]))?;
+        // refused as --age is (it was cut to the maximum age without a word: found by a trial)
+        anyhow::ensure!(*age <= nsp.life.max_age_yr, "--neighbour {}: age {age}: expected at most the maximum age of {} ({} years, `life.max_age_yr` in its species file)", a.neighbour[i], nsp.id, nsp.life.max_age_yr);
         for (j, s) in spots.iter().enumerate() {
             anyhow::ensure!(s.distance(*at) >= 0.5, "--neighbour {}: at {:.2} m from {} at ({}, {}); expected trees at least 0.5 m apart", a.neighbour[i], s.distance(*at), if j == 0 { "the tree".to_string() } else { format!("neighbour {j}") }, s.x, s.y);
         }
