@@ -79,6 +79,10 @@ pub fn plot_panels_png(path: &Path, panels: &[Panel], cols: usize, size: (u32, u
             let mut mesh = ch.configure_mesh();
             mesh.x_desc(&p.x_label).y_desc(&p.y_label).label_style(("sans-serif", 13));
             let year_fmt = |v: &f64| format!("{v:.0}");
+            // the y labels with as many decimals as the axis' range needs ("3500", not "3500.0";
+            // found by a trial)
+            let y_fmt = move |v: &f64| axis_label(*v, y1);
+            mesh.y_label_formatter(&y_fmt);
             if p.x_label == "year" {
                 // whole years only: at most one tick per year, integer labels
                 mesh.x_labels(((x1 - x0).round() as usize + 1).clamp(2, 11)).x_label_formatter(&year_fmt);
@@ -348,4 +352,28 @@ pub fn map_georef(w: &World, rows: usize, cell: f64) -> crate::grid::GeoRef {
     let sy = g.pixel_h / w.site.conditions.cell_y_m.max(1e-12);
     let south = g.origin_y - w.site.conditions.height() as f64 * g.pixel_h;
     crate::grid::GeoRef { pixel_w: cell * sx, pixel_h: cell * sy, origin_x: g.origin_x, origin_y: south + rows as f64 * cell * sy, ..g.clone() }
+}
+
+/// A y-axis label of value `v` on an axis reaching `top`: whole numbers from a top of 50 up,
+/// one decimal from 5, two below; trailing zeros of the decimals dropped (`2.50` → `2.5`).
+fn axis_label(v: f64, top: f64) -> String {
+    let d = if top >= 50.0 { 0 } else if top >= 5.0 { 1 } else { 2 };
+    let s = format!("{v:.d$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn axis_labels_have_the_decimals_the_range_needs() {
+        assert_eq!(super::axis_label(3500.0, 4000.0), "3500");
+        assert_eq!(super::axis_label(12.5, 30.0), "12.5");
+        assert_eq!(super::axis_label(10.0, 30.0), "10");
+        assert_eq!(super::axis_label(0.25, 1.0), "0.25");
+        assert_eq!(super::axis_label(0.0, 1.0), "0");
+    }
 }
