@@ -756,6 +756,9 @@ pub fn write_skeleton_sidecar(glb: &Path, sk: &crate::structure::Skeleton) -> Re
     crate::output::write_atomic(&skeleton_sidecar_path(glb), doc.to_string().as_bytes())
 }
 
+/// Largest distance (m) of a skeleton sidecar's node from the tree's base along any axis.
+pub const SKELETON_MAX_M: f64 = 1000.0;
+
 /// Reads the skeleton sidecar of `glb` written by [`write_skeleton_sidecar`]; roles are
 /// rebuilt (Gravelius 0 = trunk, childless = tip).
 ///
@@ -788,6 +791,19 @@ pub fn parse_skeleton_sidecar(text: &str, path: &Path) -> Result<crate::structur
         if f.iter().any(|x| !x.is_finite()) {
             return Err(fmt(format!("node {i}: expected finite numbers")));
         }
+        // the values of a tree (a position of 1e30 m was taken: found by a trial)
+        if let Some(c) = f[..3].iter().find(|c| c.abs() > SKELETON_MAX_M) {
+            return Err(fmt(format!("node {i}: position coordinate {c:e}: expected within ±{SKELETON_MAX_M} m of the tree's base")));
+        }
+        if !(0.0..=20.0).contains(&f[4]) {
+            return Err(fmt(format!("node {i}: radius {}: expected 0–20 m", f[4])));
+        }
+        if !(0.0..=10_000.0).contains(&f[5]) {
+            return Err(fmt(format!("node {i}: age {}: expected 0–10,000 years", f[5])));
+        }
+        if !(0.0..=65_535.0).contains(&f[6]) || !(0.0..=65_535.0).contains(&f[7]) || !(0.0..=u32::MAX as f64).contains(&f[8]) {
+            return Err(fmt(format!("node {i}: gravelius, weibull and strands: expected whole numbers ≥ 0 (got {}, {}, {})", f[6], f[7], f[8])));
+        }
         let parent = if f[3] < 0.0 { None } else { Some(f[3] as u32) };
         match parent {
             None if i != 0 => return Err(fmt(format!("node {i}: parent -1 (only node 0 is the root)"))),
@@ -815,4 +831,32 @@ pub fn parse_skeleton_sidecar(text: &str, path: &Path) -> Result<crate::structur
     }
     sk.mark_tips();
     Ok(sk)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A sidecar of a root and one child, with the child's fields replaced by `child`.
+    fn sidecar(child: &str) -> String {
+        format!(r#"{{"format": "{SKELETON_FORMAT}", "nodes": [[0, 0, 0, -1, 0.1, 5, 0, 0, 10], {child}]}}"#)
+    }
+
+    #[test]
+    fn skeleton_sidecars_are_checked_for_values_a_tree_can_have() {
+        let p = Path::new("t.skeleton.json");
+        let sk = parse_skeleton_sidecar(&sidecar("[0, 0, 1.5, 0, 0.05, 4, 0, 0, 10]"), p).unwrap();
+        assert_eq!(sk.nodes.len(), 2);
+        assert_eq!(sk.nodes[1].pos, glam::Vec3::new(0.0, 0.0, 1.5));
+        for (child, want) in [
+            ("[0, 0, 1e30, 0, 0.05, 4, 0, 0, 10]", "node 1: position coordinate 1e30: expected within ±1000 m"),
+            ("[0, 0, 1, 0, -0.1, 4, 0, 0, 10]", "node 1: radius -0.1: expected 0–20 m"),
+            ("[0, 0, 1, 0, 0.05, 1e9, 0, 0, 10]", "node 1: age 1000000000: expected 0–10,000 years"),
+            ("[0, 0, 1, 0, 0.05, 4, -1, 0, 10]", "whole numbers ≥ 0"),
+            ("[0, 0, 1, 1, 0.05, 4, 0, 0, 10]", "node 1: parent 1 must precede the node"),
+        ] {
+            let e = parse_skeleton_sidecar(&sidecar(child), p).unwrap_err().to_string();
+            assert!(e.contains("t.skeleton.json") && e.contains(want), "{child}: {e}");
+        }
+    }
 }
