@@ -40,6 +40,11 @@ pub struct Stage {
     n_base: usize,
     /// Instances of the obstacles.
     obstacle_instances: Vec<TreeInstance>,
+    /// Index of the first stump prototype ([`scene::stump_prototypes`], after the species'
+    /// and the obstacles').
+    stump_first: u32,
+    /// Instances of the stumps drawn in every picture until changed ([`Stage::set_stumps`]).
+    stump_instances: Vec<TreeInstance>,
     /// Open-grown trees per species and age class (the scenario's seed).
     cache: adapted::NearCaches,
     /// The ground drawn: the site and its surroundings ([`Stage::set_surroundings`]), recoloured
@@ -56,7 +61,9 @@ impl Stage {
     pub fn new(site: SiteConditions, library: SpeciesLibrary, sea_level_m: f32) -> Result<Self> {
         let landscape = scene::Landscape::new(&site, None, 10.0, sea_level_m)?;
         let terrain = landscape.mesh(&[])?;
-        let prototypes = scene::prototypes(&library);
+        let mut prototypes = scene::prototypes(&library);
+        let stump_first = prototypes.len() as u32;
+        prototypes.extend(scene::stump_prototypes());
         let mut renderer = Renderer::new()?;
         // Offline stills: a larger triangle budget than the interactive default keeps the trees
         // near the camera at full detail (trunks and branches) in the close views, and lower switch
@@ -72,7 +79,7 @@ impl Stage {
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
         let n_base = prototypes.len();
         let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));
-        Ok(Stage { site, library, scene, renderer, obstacles: Vec::new(), adapt: Some(AdaptOptions::default()), last_adapt: AdaptStats::default(), n_base, obstacle_instances: Vec::new(), cache: adapted::cache(0), landscape })
+        Ok(Stage { site, library, scene, renderer, obstacles: Vec::new(), adapt: Some(AdaptOptions::default()), last_adapt: AdaptStats::default(), n_base, obstacle_instances: Vec::new(), stump_first, stump_instances: Vec::new(), cache: adapted::cache(0), landscape })
     }
 
     /// The stage of a scenario's pictures: [`Stage::new`] with its sea level, its seed and
@@ -128,9 +135,25 @@ impl Stage {
         protos.truncate(n);
         let (p, i) = adapted::obstacle_models(obstacles, &self.site, n as u32);
         protos.extend(p);
+        self.stump_first = protos.len() as u32;
+        protos.extend(scene::stump_prototypes());
         self.n_base = protos.len();
+        self.stump_instances.clear();
         self.obstacle_instances = i;
         self.scene.set_prototypes(protos);
+    }
+
+    /// Sets the stumps drawn in the following pictures: those of `stumps` shown in a picture of
+    /// `year` ([`scene::stump_instances`]: cut in the [`scene::STUMP_YEARS`] years up to it);
+    /// an empty list draws none.
+    pub fn set_stumps(&mut self, stumps: &[scene::Stump], year: u32) {
+        self.stump_instances = scene::stump_instances(stumps, year, &self.site, self.stump_first);
+    }
+
+    /// Number of stump instances the following pictures draw (two per stump: bark and cut
+    /// face).
+    pub fn stump_instance_count(&self) -> usize {
+        self.stump_instances.len()
     }
 
     /// Renders `rows` (an inventory snapshot) in `season` from `camera` at `width × height`.
@@ -196,6 +219,8 @@ impl Stage {
         self.scene.instances = all;
         // the ground under this frame's crowns: forest floor instead of grass
         self.scene.set_terrain(self.landscape.mesh(&self.scene.instances)?);
+        // the stumps after the ground's colouring (no crowns) and not mirrored around
+        self.scene.instances.extend_from_slice(&self.stump_instances);
         self.scene.sun = scene::season_sun(self.site.geo.latitude_deg, season);
         let img = self.renderer.render(&self.scene, camera, width, height);
         self.scene.instances = Vec::new();
@@ -296,6 +321,26 @@ fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: u32,
         }
     }
     out
+}
+
+/// The stumps a picture of `year` of the run in `run_dir` draws: the trees removed by
+/// management (`dead:harvest` with a DBH, [`scene::stumps_from_rows`]) in the plain snapshots
+/// of the [`scene::STUMP_YEARS`] years up to `year`. A run writes a snapshot in every year its
+/// management removed trees (`job::run::run_scenario`), so these are all of them; a run
+/// directory written before that holds only the harvests of its scheduled snapshot years.
+///
+/// # Errors
+/// As [`inventory::snapshots`] and [`inventory::read_filtered`] (naming the file).
+pub fn harvest_stumps(run_dir: &Path, year: u32) -> Result<Vec<scene::Stump>> {
+    let status = format!("dead:{}", crate::sim::trees::DeathCause::Harvest.name());
+    let mut out = Vec::new();
+    for (y, season, path) in inventory::snapshots(run_dir)? {
+        if season.is_empty() && scene::stump_shown(y, year) {
+            let rows = inventory::read_filtered(&path, |r| r.status == status)?;
+            out.extend(scene::stumps_from_rows(&rows, y));
+        }
+    }
+    Ok(out)
 }
 
 /// Inventory snapshot of `year` (plain, not seasonal) in `run_dir`.
