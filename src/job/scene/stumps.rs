@@ -26,6 +26,13 @@ pub const STUMP_FLARE: f32 = 1.1;
 pub const STUMP_CLASSES: usize = 4;
 /// Number of stump prototypes ([`stump_prototypes`]): a bark and a cut-face prototype per class.
 pub const STUMP_PROTOTYPES: usize = 2 * STUMP_CLASSES;
+/// Height of the normalised stump models' top (their base at 0): an instance is
+/// `1 / STUMP_MODEL_TOP` times as tall as the stump it draws. The renderer picks a model's level
+/// (mesh, billboard, canopy layer) by the instance's height on screen, which suits trees; a
+/// stump is wider than tall and would go to the canopy layer (under 6 px) already 13 m from a
+/// 50° camera, so its instance stands for an object ten times as tall and the model fills its
+/// lowest tenth (a billboard is carved from the model's outline, so it keeps the stump's shape).
+pub const STUMP_MODEL_TOP: f32 = 0.1;
 /// Radius of the normalised stump models (m per m of height): the renderer's horizontal scale
 /// of a prototype without foliage is the instance's crown radius over 0.3
 /// ([`Prototype::normalised_crown_radius`]), so with this radius an instance's crown radius is
@@ -103,8 +110,8 @@ pub fn stump_colors(k: usize) -> ([f32; 3], [f32; 3]) {
     (lerp_rgb(BARK_RGB, WEATHERED_RGB, 0.5 * t), lerp_rgb(FACE_RGB, WEATHERED_RGB, t))
 }
 
-/// The normalised bark of a stump: the side of a cylinder of radius [`UNIT_RADIUS`] from 0 to 1
-/// m, and a ring on top from [`FACE_SHARE`] of the radius out.
+/// The normalised bark of a stump: the side of a cylinder of radius [`UNIT_RADIUS`] from 0 to
+/// [`STUMP_MODEL_TOP`], and a ring on top from [`FACE_SHARE`] of the radius out.
 fn bark_mesh() -> TriMesh {
     let mut m = TriMesh::default();
     let tau = std::f32::consts::TAU;
@@ -112,7 +119,7 @@ fn bark_mesh() -> TriMesh {
         let a = tau * i as f32 / SIDES as f32;
         let (s, c) = a.sin_cos();
         for z in [0.0, 1.0] {
-            m.positions.push([UNIT_RADIUS * c, UNIT_RADIUS * s, z]);
+            m.positions.push([UNIT_RADIUS * c, UNIT_RADIUS * s, z * STUMP_MODEL_TOP]);
             m.normals.push([c, s, 0.0]);
             m.uvs.push([i as f32 / SIDES as f32, 0.0]);
         }
@@ -126,7 +133,7 @@ fn bark_mesh() -> TriMesh {
         let a = tau * i as f32 / SIDES as f32;
         let (s, c) = a.sin_cos();
         for r in [FACE_SHARE * UNIT_RADIUS, UNIT_RADIUS] {
-            m.positions.push([r * c, r * s, 1.0]);
+            m.positions.push([r * c, r * s, STUMP_MODEL_TOP]);
             m.normals.push([0.0, 0.0, 1.0]);
             m.uvs.push([i as f32 / SIDES as f32, 0.0]);
         }
@@ -138,28 +145,44 @@ fn bark_mesh() -> TriMesh {
     m
 }
 
-/// The normalised cut face: a disc of [`FACE_SHARE`] × [`UNIT_RADIUS`] at height 1.
+/// The normalised cut face: a disc of [`FACE_SHARE`] × [`UNIT_RADIUS`] at [`STUMP_MODEL_TOP`].
 fn face_mesh() -> TriMesh {
     let mut m = TriMesh::default();
-    m.positions.push([0.0, 0.0, 1.0]);
+    m.positions.push([0.0, 0.0, STUMP_MODEL_TOP]);
     m.normals.push([0.0, 0.0, 1.0]);
     m.uvs.push([0.5, 0.0]);
     let tau = std::f32::consts::TAU;
     for i in 0..SIDES {
         let (s, c) = (tau * i as f32 / SIDES as f32).sin_cos();
-        m.positions.push([FACE_SHARE * UNIT_RADIUS * c, FACE_SHARE * UNIT_RADIUS * s, 1.0]);
+        m.positions.push([FACE_SHARE * UNIT_RADIUS * c, FACE_SHARE * UNIT_RADIUS * s, STUMP_MODEL_TOP]);
         m.normals.push([0.0, 0.0, 1.0]);
         m.uvs.push([i as f32 / SIDES as f32, 0.0]);
     }
     for i in 0..SIDES as u32 {
         m.indices.extend_from_slice(&[0, 1 + i, 1 + (i + 1) % SIDES as u32]);
     }
+    // a skirt inside the bark, a tenth of the stump deep: hidden, but it gives the face's
+    // outline a height, which the billboard is carved from (a flat outline would give the
+    // renderer's default crown, as tall as the instance)
+    let base = m.positions.len() as u32;
+    for i in 0..=SIDES {
+        let (s, c) = (tau * i as f32 / SIDES as f32).sin_cos();
+        for z in [0.9, 1.0] {
+            m.positions.push([FACE_SHARE * UNIT_RADIUS * c, FACE_SHARE * UNIT_RADIUS * s, z * STUMP_MODEL_TOP]);
+            m.normals.push([c, s, 0.0]);
+            m.uvs.push([i as f32 / SIDES as f32, 0.0]);
+        }
+    }
+    for i in 0..SIDES as u32 {
+        let (b0, t0, b1, t1) = (base + 2 * i, base + 2 * i + 1, base + 2 * i + 2, base + 2 * i + 3);
+        m.indices.extend_from_slice(&[b0, b1, t1, b0, t1, t0]);
+    }
     m
 }
 
 /// The stump prototypes, [`STUMP_PROTOTYPES`] of them: for weathering class `k` (0 fresh ..
-/// [`STUMP_CLASSES`] − 1), `2k` the bark and `2k + 1` the cut face. Normalised to 1 m height
-/// (instances scale them to the stump's height), bark only at every mesh level (no foliage,
+/// [`STUMP_CLASSES`] − 1), `2k` the bark and `2k + 1` the cut face. Normalised to a height of
+/// [`STUMP_MODEL_TOP`] in a model 1 m tall (instances scale them), bark only at every mesh level (no foliage,
 /// stiff: no sway), as the obstacles' models are.
 pub fn stump_prototypes() -> Vec<Prototype> {
     let mut out = Vec::with_capacity(STUMP_PROTOTYPES);
@@ -177,7 +200,8 @@ pub fn stump_prototypes() -> Vec<Prototype> {
 /// ([`stump_shown`]), standing on the ground of `cond`, with the prototypes of
 /// [`stump_prototypes`] from index `first`. A stump cut `a` years before `year` (0..19) is of
 /// weathering class `a · STUMP_CLASSES / STUMP_YEARS`, [`STUMP_HEIGHT_M`] × (1 − a / 40) tall
-/// (settling to 0.16 m) and its radius shrinks likewise by up to 15 %. Ids: the tree's id
+/// (settling to 0.16 m; the instance's height is that over [`STUMP_MODEL_TOP`]) and its radius
+/// shrinks likewise by up to 15 % (not below [`STUMP_MIN_RADIUS_M`]). Ids: the tree's id
 /// with the top bit set (the cut face's also with the next bit), so that they never match a
 /// living tree's in the timelapse or the viewer. The instances' leaf colour is the part's
 /// colour with full leaf amount, so that the billboard and the canopy layer of a stump far off
@@ -189,12 +213,12 @@ pub fn stump_instances(stumps: &[Stump], year: u32, cond: &SiteConditions, first
         let k = ((age * STUMP_CLASSES as f32 / STUMP_YEARS as f32) as usize).min(STUMP_CLASSES - 1);
         let shrink = 1.0 - age / (2.0 * STUMP_YEARS as f32);
         let h = STUMP_HEIGHT_M * shrink;
-        let r = s.radius_m() * (1.0 - 0.3 * (1.0 - shrink));
+        let r = (s.radius_m() * (1.0 - 0.3 * (1.0 - shrink))).max(STUMP_MIN_RADIUS_M);
         let z = cond.elevation_at(s.x_m, s.y_m);
         let (bark, face) = stump_colors(k);
         for (part, rgb) in [(0u32, bark), (1, face)] {
             let id = s.id | (1 << 63) | ((part as u64) << 62);
-            let mut t = TreeInstance::new(id, [s.x_m as f32, s.y_m as f32, z], h, r, first + 2 * k as u32 + part, rgb);
+            let mut t = TreeInstance::new(id, [s.x_m as f32, s.y_m as f32, z], h / STUMP_MODEL_TOP, r, first + 2 * k as u32 + part, rgb);
             t.rotation = 0.0;
             out.push(t);
         }
@@ -220,18 +244,23 @@ mod tests {
         assert_eq!(fresh.len(), 2);
         assert_eq!(fresh[0].species, 3);
         assert_eq!(fresh[1].species, 4);
-        assert!((fresh[0].crown_radius - 0.22).abs() < 1e-6 && (fresh[0].height - STUMP_HEIGHT_M).abs() < 1e-6);
+        assert!((fresh[0].crown_radius - 0.22).abs() < 1e-6 && (fresh[0].height * STUMP_MODEL_TOP - STUMP_HEIGHT_M).abs() < 1e-6);
         assert!(fresh.iter().all(is_stump) && fresh[0].id != fresh[1].id);
         let later = stump_instances(&s, 69, &cond, 3);
         assert_eq!(later.len(), 4);
         assert_eq!(later[0].species, 3 + 2 * (STUMP_CLASSES as u32 - 1));
-        assert!(later[0].height < 0.6 * STUMP_HEIGHT_M && later[0].crown_radius < 0.22);
+        assert!(later[0].height * STUMP_MODEL_TOP < 0.6 * STUMP_HEIGHT_M && later[0].crown_radius < 0.22);
         // the 2 cm tree: the smallest stump
         assert!((later[2].crown_radius - STUMP_MIN_RADIUS_M).abs() < 1e-6);
         assert_eq!(stump_instances(&s, 70, &cond, 3).len(), 2);
         let p = stump_prototypes();
         assert_eq!(p.len(), STUMP_PROTOTYPES);
         assert!(p.iter().all(|p| (p.normalised_crown_radius() - UNIT_RADIUS).abs() < 1e-6));
+        // the billboards' outlines end at the stump's top, not at the instance's
+        for p in &p {
+            let sil = crate::render::lod::Silhouette::from_chain(&p.lods);
+            assert!(sil.crown_top <= STUMP_MODEL_TOP + 1e-6 && sil.crown_top > sil.crown_bottom, "{}: {sil:?}", p.name);
+        }
         // the cut face lighter than the bark when fresh, both greyer later
         let lum = |c: [f32; 3]| c[0] + c[1] + c[2];
         let ((b0, f0), (b3, f3)) = (stump_colors(0), stump_colors(STUMP_CLASSES - 1));
