@@ -1,7 +1,8 @@
 //! Harvested areas in the pictures (issue 35, Build 4): a year whose management removed trees
 //! gets a snapshot (so every harvested tree is in an inventory as `dead:harvest`), also when it
 //! is off the `snapshot_every` schedule and across a stop and `--resume`; a picture of a later
-//! year within 20 years draws a stump at every harvested tree (the stage's, the viewer's), and
+//! year within 20 years draws a stump at every harvested tree (the stage's, the viewer's data
+//! and its scene), and
 //! the stumps show in a rendered picture (software adapter; without one the render part is
 //! skipped unless `SYLVA_REQUIRE_ADAPTER` is set).
 mod common;
@@ -65,6 +66,16 @@ fn a_clear_cut_off_the_schedule_is_in_an_inventory_and_its_stumps_are_drawn() {
     let mut data = sylva::view::data::RunData::open(&dir, site.clone(), lib.clone(), vec!["beech".into()]).unwrap();
     assert_eq!(data.stumps_at(12.4).unwrap(), stumps);
     assert!(data.stumps_at(6.9).unwrap().is_empty());
+    // the viewer at year 12 draws them (two instances each) besides its trees, at year 6 none
+    let mut viewer = sylva::view::Viewer::new(sylva::view::data::RunData::open(&dir, site.clone(), lib.clone(), vec!["beech".into()]).unwrap(), 0.0, None).unwrap();
+    viewer.set_year(12.0);
+    viewer.refresh();
+    let shown: Vec<_> = viewer.trees().iter().filter(|t| scene::is_stump(t)).collect();
+    assert_eq!(shown.len(), 2 * stumps.len());
+    assert!(viewer.trees().len() > shown.len(), "the trees of the uncut half too");
+    viewer.set_year(6.0);
+    viewer.refresh();
+    assert!(!viewer.trees().iter().any(scene::is_stump));
     // the instances: two per stump (bark, cut face), where the trees stood, on the ground
     let first = lib.species.len() as u32;
     let inst = scene::stump_instances(&stumps, 12, &site, first);
