@@ -60,6 +60,7 @@ fn a_clear_cut_off_the_schedule_is_in_an_inventory_and_its_stumps_are_drawn() {
         assert_eq!((s.id, s.x_m, s.y_m, s.dbh_cm, s.year), (r.id, r.x_m, r.y_m, r.dbh_cm, CUT_YEAR));
     }
     assert!(harvest_stumps(&dir, CUT_YEAR - 1).unwrap().is_empty());
+    assert_eq!(sylva::job::pictures::harvest_years(&dir), Some(vec![CUT_YEAR]));
     assert_eq!(harvest_stumps(&dir, CUT_YEAR).unwrap().len(), cut.len());
     // the viewer's year 12.4: the same stumps
     let site = sc.site().unwrap();
@@ -76,6 +77,11 @@ fn a_clear_cut_off_the_schedule_is_in_an_inventory_and_its_stumps_are_drawn() {
     viewer.set_year(6.0);
     viewer.refresh();
     assert!(!viewer.trees().iter().any(scene::is_stump));
+    // without a stand table every inventory of the 20 years is read: the same stumps
+    std::fs::rename(dir.join("stand_table.csv"), dir.join("stand_table.bak")).unwrap();
+    assert_eq!(sylva::job::pictures::harvest_years(&dir), None);
+    assert_eq!(harvest_stumps(&dir, 12).unwrap(), stumps);
+    std::fs::rename(dir.join("stand_table.bak"), dir.join("stand_table.csv")).unwrap();
     // the instances: two per stump (bark, cut face), where the trees stood, on the ground
     let first = lib.species.len() as u32;
     let inst = scene::stump_instances(&stumps, 12, &site, first);

@@ -333,14 +333,35 @@ fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: u32,
 /// As [`inventory::snapshots`] and [`inventory::read_filtered`] (naming the file).
 pub fn harvest_stumps(run_dir: &Path, year: u32) -> Result<Vec<scene::Stump>> {
     let status = format!("dead:{}", crate::sim::trees::DeathCause::Harvest.name());
+    // only the inventories of years that removed trees are read (a run without management:
+    // none), when the stand table tells
+    let cut = harvest_years(run_dir);
     let mut out = Vec::new();
     for (y, season, path) in inventory::snapshots(run_dir)? {
-        if season.is_empty() && scene::stump_shown(y, year) {
+        if season.is_empty() && scene::stump_shown(y, year) && cut.as_ref().is_none_or(|c| c.contains(&y)) {
             let rows = inventory::read_filtered(&path, |r| r.status == status)?;
             out.extend(scene::stumps_from_rows(&rows, y));
         }
     }
     Ok(out)
+}
+
+/// The years whose management removed trees (`deaths_harvest` > 0) by the stand table of
+/// `run_dir` (`stand_table.csv`); `None` when it cannot be read or has no such column (the
+/// caller then reads every inventory).
+pub fn harvest_years(run_dir: &Path) -> Option<Vec<u32>> {
+    let mut rdr = csv::Reader::from_path(run_dir.join("stand_table.csv")).ok()?;
+    let head = rdr.headers().ok()?.clone();
+    let (ky, kh) = (head.iter().position(|c| c == "year")?, head.iter().position(|c| c == "deaths_harvest")?);
+    let mut out = Vec::new();
+    for rec in rdr.records() {
+        let rec = rec.ok()?;
+        let n: f64 = rec.get(kh)?.trim().parse().ok()?;
+        if n > 0.0 {
+            out.push(rec.get(ky)?.trim().parse().ok()?);
+        }
+    }
+    Some(out)
 }
 
 /// Inventory snapshot of `year` (plain, not seasonal) in `run_dir`.

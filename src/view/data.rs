@@ -163,17 +163,21 @@ impl RunData {
 
     /// The stumps drawn at `year` (its whole part): the trees removed by management
     /// (`dead:harvest`, [`scene::stumps_from_rows`]) in the snapshots of the
-    /// [`scene::STUMP_YEARS`] years up to it. Each snapshot's are read once, on first use.
+    /// [`scene::STUMP_YEARS`] years up to it. Each snapshot's are read once, on first use, and
+    /// only those of years whose `deaths_harvest` in the stand table is above 0 (every
+    /// snapshot's when the run has no stand table).
     ///
     /// # Errors
     /// As [`inventory::read_filtered`] (naming the file).
     pub fn stumps_at(&mut self, year: f32) -> Result<Vec<scene::Stump>> {
         let y = year.max(0.0).floor() as u32;
         let status = format!("dead:{}", crate::sim::trees::DeathCause::Harvest.name());
+        // only the snapshots of years that removed trees by the stand table (all without one)
+        let cut: Option<Vec<u32>> = self.stand_table.columns.iter().any(|c| c == "deaths_harvest").then(|| self.stand_table.series("deaths_harvest").iter().filter(|p| p[1] > 0.0).map(|p| p[0] as u32).collect());
         let mut out = Vec::new();
         for k in 0..self.years.len() {
             let sy = self.years[k];
-            if !scene::stump_shown(sy, y) {
+            if !scene::stump_shown(sy, y) || cut.as_ref().is_some_and(|c| !c.contains(&sy)) {
                 continue;
             }
             if !self.stumps.contains_key(&sy) {
