@@ -540,7 +540,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
 
 /// The main job's pictures: stills at the still years (with the stumps of `stumps` cut in the
 /// 20 years up to each), the close-up of the last one, the timelapse of the key frames `keys`
-/// (year, summer instances; no stumps), in `opts.out`.
+/// (year, summer instances; each with the stumps of its 20 years), in `opts.out`.
 #[allow(clippy::too_many_arguments)]
 fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut keys: KeyFrames, last: &[scene::Plant], stumps: &[scene::Stump], opts: &MainJobOptions, sink: &mut Sink) -> Result<(Vec<Still>, Film)> {
     let out = &opts.out;
@@ -601,7 +601,16 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     stage.set_stumps(&[], 0);
     let topts = TimelapseOptions { width: opts.timelapse_size.0, height: opts.timelapse_size.1, fps: opts.fps, frames_between: opts.frames_between, camera: None, season: Season::Summer };
     let gif = out.join("timelapse.gif");
-    let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, &mut |_, k| if stopped() { Err(JobError::Stopped(out.clone())) } else { Ok(keys.get(k)?) }, &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
+    // each key frame with the stumps of its 20 years (fading in and out between key frames)
+    let key = &mut |st: &pictures::Stage, k: usize| -> Result<Vec<crate::render::scene::TreeInstance>> {
+        if stopped() {
+            return Err(JobError::Stopped(out.clone()));
+        }
+        let mut inst = keys.get(k)?;
+        inst.extend(st.stump_instances_of(stumps, key_years[k]));
+        Ok(inst)
+    };
+    let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, key, &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
     sink(&Event::TimelapseDone);
     Ok((stills, Film { gif, frames, mp4 }))
 }

@@ -150,6 +150,12 @@ impl Stage {
         self.stump_instances = scene::stump_instances(stumps, year, &self.site, self.stump_first);
     }
 
+    /// The instances of the stumps of `stumps` shown in a picture of `year`, with this stage's
+    /// stump prototypes ([`scene::stump_instances`]), e.g. to add to a timelapse's key frame.
+    pub fn stump_instances_of(&self, stumps: &[scene::Stump], year: u32) -> Vec<TreeInstance> {
+        scene::stump_instances(stumps, year, &self.site, self.stump_first)
+    }
+
     /// Number of stump instances the following pictures draw (two per stump: bark and cut
     /// face).
     pub fn stump_instance_count(&self) -> usize {
@@ -332,13 +338,21 @@ fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: u32,
 /// # Errors
 /// As [`inventory::snapshots`] and [`inventory::read_filtered`] (naming the file).
 pub fn harvest_stumps(run_dir: &Path, year: u32) -> Result<Vec<scene::Stump>> {
+    harvest_stumps_where(run_dir, |y| scene::stump_shown(y, year))
+}
+
+/// The stumps of the trees removed by management in the plain snapshots of `run_dir` whose
+/// year passes `keep_year`, as [`harvest_stumps`].
+///
+/// Errors: as [`harvest_stumps`].
+pub fn harvest_stumps_where(run_dir: &Path, keep_year: impl Fn(u32) -> bool) -> Result<Vec<scene::Stump>> {
     let status = format!("dead:{}", crate::sim::trees::DeathCause::Harvest.name());
     // only the inventories of years that removed trees are read (a run without management:
     // none), when the stand table tells
     let cut = harvest_years(run_dir);
     let mut out = Vec::new();
     for (y, season, path) in inventory::snapshots(run_dir)? {
-        if season.is_empty() && scene::stump_shown(y, year) && cut.as_ref().is_none_or(|c| c.contains(&y)) {
+        if season.is_empty() && keep_year(y) && cut.as_ref().is_none_or(|c| c.contains(&y)) {
             let rows = inventory::read_filtered(&path, |r| r.status == status)?;
             out.extend(scene::stumps_from_rows(&rows, y));
         }
@@ -425,7 +439,8 @@ pub struct TimelapseOptions {
 }
 
 /// Renders a timelapse of all plain snapshots of `run_dir` into `out_gif` (frames as PNG in
-/// `frames_dir`, an MP4 beside the GIF when `ffmpeg` is on PATH). Growth between snapshots is
+/// `frames_dir`, an MP4 beside the GIF when `ffmpeg` is on PATH), with the stumps of the trees
+/// harvested in the 20 years up to each key frame's year ([`harvest_stumps`]). Growth between snapshots is
 /// interpolated per tree id ([`timelapse::interpolate`]); every frame is captioned with its
 /// (interpolated) year. Frames of an earlier film in `frames_dir` are removed first. Calls
 /// `progress(done, total)` per frame.
@@ -437,12 +452,18 @@ pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: 
     }
     let years: Vec<u32> = snaps.iter().map(|s| s.0).collect();
     let season = opts.season;
+    // every stump of the run, each key frame drawing those of its 20 years (they fade in and
+    // out between key frames as trees do)
+    let stumps = harvest_stumps_where(run_dir, |_| true)?;
+    stage.set_stumps(&[], 0);
     timelapse_from(
         stage,
         &years,
         &mut |stage, k| {
             let regen = inventory::read_regeneration(run_dir, years[k])?.unwrap_or_default();
-            Ok(scene::instances_with_saplings(&scene::plants_from_rows(&inventory::read(&snaps[k].1)?), &scene::saplings_from_rows(&regen), &stage.library, &stage.site, season))
+            let mut inst = scene::instances_with_saplings(&scene::plants_from_rows(&inventory::read(&snaps[k].1)?), &scene::saplings_from_rows(&regen), &stage.library, &stage.site, season);
+            inst.extend(stage.stump_instances_of(&stumps, years[k]));
+            Ok(inst)
         },
         frames_dir,
         out_gif,
