@@ -103,7 +103,9 @@ pub struct RenderArgs {
     /// instanced_trees, triangles (drawn), per_level (instances drawn per level),
     /// adapted_per_level (the adapted trees among them), frame_s; trees (live trees of the
     /// snapshot), trees_15m, nodes_median and nodes_min (skeleton nodes of the adapted trees of
-    /// 15 m and taller), leaf_cards (of the adapted trees)). Its folder must exist.
+    /// 15 m and taller), leaf_cards (of the adapted trees), stumps (harvested trees drawn as
+    /// stumps: cut in the 20 years up to the year; their two instances each are among the
+    /// instances drawn)). Its folder must exist.
     #[arg(long)]
     pub stats: Option<PathBuf>,
 }
@@ -190,6 +192,10 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     let t = std::time::Instant::now();
     // the regeneration layer of the same snapshot, drawn as saplings (runs without it: none)
     let regen = sylva::job::inventory::read_regeneration(&a.run_dir, year)?.unwrap_or_default();
+    // the stumps of the trees harvested in the 20 years up to the picture's year
+    let stumps = pictures::harvest_stumps(&a.run_dir, year)?;
+    stage.set_stumps(&stumps, year);
+    let stumps_drawn = stage.stump_instance_count() / 2;
     let img = stage.render_plants_with(&sylva::job::scene::plants_from_rows(&rows), &sylva::job::scene::saplings_from_rows(&regen), a.season, &cam, a.size.0, a.size.1)?;
     let frame_s = t.elapsed().as_secs_f64();
     sylva::output::pictures::write_png(&a.out, &img)?;
@@ -202,11 +208,12 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
             "cluster_hulls": ad.cluster_hulls, "hull_triangles": ad.hull_triangles, "per_level": st.per_level, "adapted_per_level": ad.per_level,
             "instanced_trees": st.instances_drawn.saturating_sub(ad.adapted_trees), "instances_drawn": st.instances_drawn, "triangles": st.triangles, "frame_s": frame_s,
             "trees": rows.iter().filter(|r| r.status == "alive" && stage.library.find(&r.species).is_some()).count(),
-            "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards,
+            "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards,
         });
         sylva::output::write_atomic(path, serde_json::to_string_pretty(&j)?.as_bytes())?;
     }
-    eprintln!("year {year}: {} trees drawn as meshes or billboards, {} more in the far-field canopy layer, {} triangles → {}", st.instances_drawn, st.canopy_trees, st.triangles, a.out.display());
+    let stumps_note = if stumps_drawn > 0 { format!(", {stumps_drawn} stumps of harvested trees") } else { String::new() };
+    eprintln!("year {year}: {} trees drawn as meshes or billboards, {} more in the far-field canopy layer{stumps_note}, {} triangles → {}", st.instances_drawn, st.canopy_trees, st.triangles, a.out.display());
     Ok(())
 }
 

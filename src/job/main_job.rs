@@ -49,8 +49,9 @@ pub const STILL_YEARS: [u32; 6] = [0, 10, 25, 50, 100, 150];
 pub enum When {
     /// Once, when the run starts (a resumed run rewrites `scenario.toml` only).
     Start,
-    /// At every plain snapshot: year 0 of a fresh run, every `snapshot_every` years, the last
-    /// year, a year stopped at.
+    /// At every plain snapshot: year 0 of a fresh run, every `snapshot_every` years, every
+    /// year whose management removed trees (thinning, harvest), the last year, a year stopped
+    /// at.
     Snapshot,
     /// At the snapshots of `seasonal_snapshots` runs, after spring, summer and autumn.
     Season,
@@ -497,8 +498,12 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     let mut keys_err: Option<Error> = None;
     // the living trees of the last kept snapshot, for the adapted close-up
     let mut last = LastTrees::default();
+    // the trees management removed, from every snapshot (a year that removed trees is one),
+    // for the stumps of the stills
+    let mut stumps: Vec<scene::Stump> = Vec::new();
     let mut keep = |y: u32, w: &World| {
         if let Some(k) = keys.as_mut() {
+            stumps.extend(scene::stumps_from_world(w));
             let plants = scene::plants_from_world(w);
             let inst = scene::instances_with_saplings(&plants, &scene::saplings_from_world(w), lib, &site, Season::Summer);
             if let Err(e) = k.push(y, &inst) {
@@ -525,7 +530,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     // 3 + 4. Pictures.
     let t_pic = Instant::now();
     if let Some(keys) = keys {
-        let (stills, film) = pictures_of(sc, site, lib, keys, &last.plants(), opts, sink)?;
+        let (stills, film) = pictures_of(sc, site, lib, keys, &last.plants(), &stumps, opts, sink)?;
         summary.stills = stills;
         summary.film = Some(film);
     }
@@ -538,9 +543,11 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     }
 }
 
-/// The main job's pictures: stills at the still years, the close-up of the last one, the
-/// timelapse of the key frames `keys` (year, summer instances), in `opts.out`.
-fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut keys: KeyFrames, last: &[scene::Plant], opts: &MainJobOptions, sink: &mut Sink) -> Result<(Vec<Still>, Film)> {
+/// The main job's pictures: stills at the still years (with the stumps of `stumps` cut in the
+/// 20 years up to each), the close-up of the last one, the timelapse of the key frames `keys`
+/// (year, summer instances; each with the stumps of its 20 years), in `opts.out`.
+#[allow(clippy::too_many_arguments)]
+fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut keys: KeyFrames, last: &[scene::Plant], stumps: &[scene::Stump], opts: &MainJobOptions, sink: &mut Sink) -> Result<(Vec<Still>, Film)> {
     let out = &opts.out;
     let (w, h) = opts.size;
     let mut stage = context(Stage::for_scenario(sc, site.clone(), lib.clone()), || "setting up the renderer (install mesa-vulkan-drivers for the CPU adapter)".into())?;
@@ -565,6 +572,7 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
         if stopped() {
             return stop_here();
         }
+        stage.set_stumps(stumps, y);
         for (preset, name) in [(CameraPreset::Oblique, "oblique"), (CameraPreset::Map, "topdown")] {
             let cam = stage.camera_sized(preset, w, h);
             let img = stage.render_instances(keys.get_year(y)?, Season::Summer, &cam, w, h)?;
@@ -595,9 +603,19 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     }
     sink(&Event::StillsDone);
     sink(&Event::Timelapse);
+    stage.set_stumps(&[], 0);
     let topts = TimelapseOptions { width: opts.timelapse_size.0, height: opts.timelapse_size.1, fps: opts.fps, frames_between: opts.frames_between, camera: None, season: Season::Summer };
     let gif = out.join("timelapse.gif");
-    let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, &mut |_, k| if stopped() { Err(JobError::Stopped(out.clone())) } else { Ok(keys.get(k)?) }, &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
+    // each key frame with the stumps of its 20 years (fading in and out between key frames)
+    let key = &mut |st: &pictures::Stage, k: usize| -> Result<Vec<crate::render::scene::TreeInstance>> {
+        if stopped() {
+            return Err(JobError::Stopped(out.clone()));
+        }
+        let mut inst = keys.get(k)?;
+        inst.extend(st.stump_instances_of(stumps, key_years[k]));
+        Ok(inst)
+    };
+    let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, key, &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
     sink(&Event::TimelapseDone);
     Ok((stills, Film { gif, frames, mp4 }))
 }

@@ -40,6 +40,11 @@ pub struct Stage {
     n_base: usize,
     /// Instances of the obstacles.
     obstacle_instances: Vec<TreeInstance>,
+    /// Index of the first stump prototype ([`scene::stump_prototypes`], after the species'
+    /// and the obstacles').
+    stump_first: u32,
+    /// Instances of the stumps drawn in every picture until changed ([`Stage::set_stumps`]).
+    stump_instances: Vec<TreeInstance>,
     /// Open-grown trees per species and age class (the scenario's seed).
     cache: adapted::NearCaches,
     /// The ground drawn: the site and its surroundings ([`Stage::set_surroundings`]), recoloured
@@ -56,7 +61,9 @@ impl Stage {
     pub fn new(site: SiteConditions, library: SpeciesLibrary, sea_level_m: f32) -> Result<Self> {
         let landscape = scene::Landscape::new(&site, None, 10.0, sea_level_m)?;
         let terrain = landscape.mesh(&[])?;
-        let prototypes = scene::prototypes(&library);
+        let mut prototypes = scene::prototypes(&library);
+        let stump_first = prototypes.len() as u32;
+        prototypes.extend(scene::stump_prototypes());
         let mut renderer = Renderer::new()?;
         // Offline stills: a larger triangle budget than the interactive default keeps the trees
         // near the camera at full detail (trunks and branches) in the close views, and lower switch
@@ -72,7 +79,7 @@ impl Stage {
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
         let n_base = prototypes.len();
         let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));
-        Ok(Stage { site, library, scene, renderer, obstacles: Vec::new(), adapt: Some(AdaptOptions::default()), last_adapt: AdaptStats::default(), n_base, obstacle_instances: Vec::new(), cache: adapted::cache(0), landscape })
+        Ok(Stage { site, library, scene, renderer, obstacles: Vec::new(), adapt: Some(AdaptOptions::default()), last_adapt: AdaptStats::default(), n_base, obstacle_instances: Vec::new(), stump_first, stump_instances: Vec::new(), cache: adapted::cache(0), landscape })
     }
 
     /// The stage of a scenario's pictures: [`Stage::new`] with its sea level, its seed and
@@ -128,9 +135,31 @@ impl Stage {
         protos.truncate(n);
         let (p, i) = adapted::obstacle_models(obstacles, &self.site, n as u32);
         protos.extend(p);
+        self.stump_first = protos.len() as u32;
+        protos.extend(scene::stump_prototypes());
         self.n_base = protos.len();
+        self.stump_instances.clear();
         self.obstacle_instances = i;
         self.scene.set_prototypes(protos);
+    }
+
+    /// Sets the stumps drawn in the following pictures: those of `stumps` shown in a picture of
+    /// `year` ([`scene::stump_instances`]: cut in the [`scene::STUMP_YEARS`] years up to it);
+    /// an empty list draws none.
+    pub fn set_stumps(&mut self, stumps: &[scene::Stump], year: u32) {
+        self.stump_instances = scene::stump_instances(stumps, year, &self.site, self.stump_first);
+    }
+
+    /// The instances of the stumps of `stumps` shown in a picture of `year`, with this stage's
+    /// stump prototypes ([`scene::stump_instances`]), e.g. to add to a timelapse's key frame.
+    pub fn stump_instances_of(&self, stumps: &[scene::Stump], year: u32) -> Vec<TreeInstance> {
+        scene::stump_instances(stumps, year, &self.site, self.stump_first)
+    }
+
+    /// Number of stump instances the following pictures draw (two per stump: bark and cut
+    /// face).
+    pub fn stump_instance_count(&self) -> usize {
+        self.stump_instances.len()
     }
 
     /// Renders `rows` (an inventory snapshot) in `season` from `camera` at `width × height`.
@@ -196,6 +225,8 @@ impl Stage {
         self.scene.instances = all;
         // the ground under this frame's crowns: forest floor instead of grass
         self.scene.set_terrain(self.landscape.mesh(&self.scene.instances)?);
+        // the stumps after the ground's colouring (no crowns) and not mirrored around
+        self.scene.instances.extend_from_slice(&self.stump_instances);
         self.scene.sun = scene::season_sun(self.site.geo.latitude_deg, season);
         let img = self.renderer.render(&self.scene, camera, width, height);
         self.scene.instances = Vec::new();
@@ -298,6 +329,55 @@ fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: u32,
     out
 }
 
+/// The stumps a picture of `year` of the run in `run_dir` draws: the trees removed by
+/// management (`dead:harvest` with a DBH, [`scene::stumps_from_rows`]) in the plain snapshots
+/// of the [`scene::STUMP_YEARS`] years up to `year`. A run writes a snapshot in every year its
+/// management removed trees (`job::run::run_scenario`), so these are all of them; a run
+/// directory written before that holds only the harvests of its scheduled snapshot years.
+///
+/// # Errors
+/// As [`inventory::snapshots`] and [`inventory::read_filtered`] (naming the file).
+pub fn harvest_stumps(run_dir: &Path, year: u32) -> Result<Vec<scene::Stump>> {
+    harvest_stumps_where(run_dir, |y| scene::stump_shown(y, year))
+}
+
+/// The stumps of the trees removed by management in the plain snapshots of `run_dir` whose
+/// year passes `keep_year`, as [`harvest_stumps`].
+///
+/// Errors: as [`harvest_stumps`].
+pub fn harvest_stumps_where(run_dir: &Path, keep_year: impl Fn(u32) -> bool) -> Result<Vec<scene::Stump>> {
+    let status = format!("dead:{}", crate::sim::trees::DeathCause::Harvest.name());
+    // only the inventories of years that removed trees are read (a run without management:
+    // none), when the stand table tells
+    let cut = harvest_years(run_dir);
+    let mut out = Vec::new();
+    for (y, season, path) in inventory::snapshots(run_dir)? {
+        if season.is_empty() && keep_year(y) && cut.as_ref().is_none_or(|c| c.contains(&y)) {
+            let rows = inventory::read_filtered(&path, |r| r.status == status)?;
+            out.extend(scene::stumps_from_rows(&rows, y));
+        }
+    }
+    Ok(out)
+}
+
+/// The years whose management removed trees (`deaths_harvest` > 0) by the stand table of
+/// `run_dir` (`stand_table.csv`); `None` when it cannot be read or has no such column (the
+/// caller then reads every inventory).
+pub fn harvest_years(run_dir: &Path) -> Option<Vec<u32>> {
+    let mut rdr = csv::Reader::from_path(run_dir.join("stand_table.csv")).ok()?;
+    let head = rdr.headers().ok()?.clone();
+    let (ky, kh) = (head.iter().position(|c| c == "year")?, head.iter().position(|c| c == "deaths_harvest")?);
+    let mut out = Vec::new();
+    for rec in rdr.records() {
+        let rec = rec.ok()?;
+        let n: f64 = rec.get(kh)?.trim().parse().ok()?;
+        if n > 0.0 {
+            out.push(rec.get(ky)?.trim().parse().ok()?);
+        }
+    }
+    Some(out)
+}
+
 /// Inventory snapshot of `year` (plain, not seasonal) in `run_dir`.
 ///
 /// # Errors
@@ -359,7 +439,8 @@ pub struct TimelapseOptions {
 }
 
 /// Renders a timelapse of all plain snapshots of `run_dir` into `out_gif` (frames as PNG in
-/// `frames_dir`, an MP4 beside the GIF when `ffmpeg` is on PATH). Growth between snapshots is
+/// `frames_dir`, an MP4 beside the GIF when `ffmpeg` is on PATH), with the stumps of the trees
+/// harvested in the 20 years up to each key frame's year ([`harvest_stumps`]). Growth between snapshots is
 /// interpolated per tree id ([`timelapse::interpolate`]); every frame is captioned with its
 /// (interpolated) year. Frames of an earlier film in `frames_dir` are removed first. Calls
 /// `progress(done, total)` per frame.
@@ -371,12 +452,18 @@ pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: 
     }
     let years: Vec<u32> = snaps.iter().map(|s| s.0).collect();
     let season = opts.season;
+    // every stump of the run, each key frame drawing those of its 20 years (they fade in and
+    // out between key frames as trees do)
+    let stumps = harvest_stumps_where(run_dir, |_| true)?;
+    stage.set_stumps(&[], 0);
     timelapse_from(
         stage,
         &years,
         &mut |stage, k| {
             let regen = inventory::read_regeneration(run_dir, years[k])?.unwrap_or_default();
-            Ok(scene::instances_with_saplings(&scene::plants_from_rows(&inventory::read(&snaps[k].1)?), &scene::saplings_from_rows(&regen), &stage.library, &stage.site, season))
+            let mut inst = scene::instances_with_saplings(&scene::plants_from_rows(&inventory::read(&snaps[k].1)?), &scene::saplings_from_rows(&regen), &stage.library, &stage.site, season);
+            inst.extend(stage.stump_instances_of(&stumps, years[k]));
+            Ok(inst)
         },
         frames_dir,
         out_gif,

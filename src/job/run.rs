@@ -185,6 +185,13 @@ fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize, gpkg:
     Ok(())
 }
 
+/// Whether the year of stand table row `r` removed trees by management (thinning or harvest:
+/// [`DeathCause::Harvest`](crate::sim::trees::DeathCause::Harvest) deaths). Such a year gets a
+/// plain snapshot besides the scheduled ones ([`run_scenario`]).
+pub fn harvested(r: &StandRow) -> bool {
+    r.deaths[crate::sim::trees::DeathCause::Harvest.index()] > 0
+}
+
 fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
     let names: Vec<&str> = w.site.pool.iter().map(|&s| w.site.lib.species[s as usize].id.as_str()).collect();
     stand_table::write_stand_table(&dir.join("stand_table.csv"), rows, &names)?;
@@ -275,8 +282,10 @@ impl Stepper for OneProcess {
 /// Snapshots (inventory Parquet or CSV, GeoPackage `year_NNNN.gpkg` in the years of
 /// `gpkg_years`, regeneration layer `year_NNNN_regeneration.{parquet,csv}`,
 /// species and basal-area maps) at year 0, every
-/// `snapshot_every` years and at the end, labelled `year_NNNN` (plus `_spring`, `_summer`,
-/// `_autumn` when `seasonal_snapshots`); checkpoint every `checkpoint_every` years and at the end.
+/// `snapshot_every` years, in every year whose management removed trees ([`harvested`]: so
+/// every harvested tree is in some inventory as `dead:harvest`) and at the end, labelled
+/// `year_NNNN` (plus `_spring`, `_summer`, `_autumn` when `seasonal_snapshots`, in the
+/// scheduled years only); checkpoint every `checkpoint_every` years and at the end.
 ///
 /// A fresh run (not `resume`) first removes the snapshots and the checkpoint of an earlier run
 /// in the same directory ([`clear_snapshots`]), after checking that the run, inventory and
@@ -350,7 +359,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         // so its state could be viewed, or the end of a shorter run now extended) is not one an
         // unbroken run writes: removed, so the resumed directory equals the unbroken run's
         let yc = world.stand.year;
-        let scheduled = yc == 0 || yc == scenario.years || (scenario.snapshot_every > 0 && yc % scenario.snapshot_every == 0);
+        let scheduled = yc == 0 || yc == scenario.years || (scenario.snapshot_every > 0 && yc % scenario.snapshot_every == 0) || rows.last().is_some_and(|r| r.year == yc && harvested(r));
         if !scheduled {
             remove_snapshot(&dir, &format!("year_{yc:04}"))?;
         } else if !gp(yc) {
@@ -429,6 +438,13 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
             rows.push(r);
         }
         let t_out = Instant::now();
+        // a year whose management removed trees is a snapshot year too: its inventory holds
+        // the removed trees (`dead:harvest`), whose stumps the pictures draw (issue 35)
+        let cut = opts.write_snapshots && !snap_year && rows.last().is_some_and(|r| r.year == y && harvested(r));
+        if cut && !full && snap_world {
+            stepper.complete(&mut world)?;
+        }
+        let snap_year = snap_year || cut;
         if snap_year {
             stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, gp(y), format)?;
             tables(&dir, &rows, &world, true)?;
@@ -437,7 +453,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
             }
         }
         let stop_now = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
-        if stop_now && !full && ((opts.write_snapshots && snap_world) || save_world) {
+        if stop_now && !full && !cut && ((opts.write_snapshots && snap_world) || save_world) {
             stepper.complete(&mut world)?;
         }
         if checkpoint_year || stop_now {

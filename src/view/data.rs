@@ -95,6 +95,8 @@ pub struct RunData {
     paths: Vec<PathBuf>,
     rows: HashMap<u32, Vec<InventoryRow>>,
     instances: HashMap<(u32, u8), Vec<TreeInstance>>,
+    /// The stumps of each snapshot's harvested trees (read on first use).
+    stumps: HashMap<u32, Vec<scene::Stump>>,
     /// The stand table (empty when the run has none).
     pub stand_table: StandTable,
     /// Condition maps of the site (names, fields, ramps, ranges).
@@ -126,7 +128,7 @@ impl RunData {
         let stand_table = if st.is_file() { StandTable::read(&st)? } else { StandTable::default() };
         let layers = crate::job::maps::site_layers(&site, None, None);
         let pool = if pool.is_empty() { library.species.iter().map(|s| s.id.clone()).collect() } else { pool };
-        Ok(RunData { dir: dir.to_path_buf(), site, library, pool, years: snaps.iter().map(|s| s.0).collect(), paths: snaps.into_iter().map(|s| s.1).collect(), rows: HashMap::new(), instances: HashMap::new(), stand_table, layers })
+        Ok(RunData { dir: dir.to_path_buf(), site, library, pool, years: snaps.iter().map(|s| s.0).collect(), paths: snaps.into_iter().map(|s| s.1).collect(), rows: HashMap::new(), instances: HashMap::new(), stumps: HashMap::new(), stand_table, layers })
     }
 
     /// First and last snapshot years.
@@ -157,6 +159,37 @@ impl RunData {
         let inst = scene::instances(&scene::plants_from_rows(rows), &self.library, &self.site, season);
         self.instances.insert(key, inst.clone());
         Ok(inst)
+    }
+
+    /// The stumps drawn at `year` (its whole part): the trees removed by management
+    /// (`dead:harvest`, [`scene::stumps_from_rows`]) in the snapshots of the
+    /// [`scene::STUMP_YEARS`] years up to it. Each snapshot's are read once, on first use, and
+    /// only those of years whose `deaths_harvest` in the stand table is above 0 (every
+    /// snapshot's when the run has no stand table).
+    ///
+    /// # Errors
+    /// As [`inventory::read_filtered`] (naming the file).
+    pub fn stumps_at(&mut self, year: f32) -> Result<Vec<scene::Stump>> {
+        let y = year.max(0.0).floor() as u32;
+        let status = format!("dead:{}", crate::sim::trees::DeathCause::Harvest.name());
+        // only the snapshots of years that removed trees by the stand table (all without one)
+        let cut: Option<Vec<u32>> = self.stand_table.columns.iter().any(|c| c == "deaths_harvest").then(|| self.stand_table.series("deaths_harvest").iter().filter(|p| p[1] > 0.0).map(|p| p[0] as u32).collect());
+        let mut out = Vec::new();
+        for k in 0..self.years.len() {
+            let sy = self.years[k];
+            if !scene::stump_shown(sy, y) || cut.as_ref().is_some_and(|c| !c.contains(&sy)) {
+                continue;
+            }
+            if !self.stumps.contains_key(&sy) {
+                let rows = match self.rows.get(&sy) {
+                    Some(r) => r.iter().filter(|r| r.status == status).cloned().collect(),
+                    None => inventory::read_filtered(&self.paths[k], |r| r.status == status)?,
+                };
+                self.stumps.insert(sy, scene::stumps_from_rows(&rows, sy));
+            }
+            out.extend_from_slice(&self.stumps[&sy]);
+        }
+        Ok(out)
     }
 
     /// The snapshots around `year`: `(k0, k1, t)` with `years[k0] ≤ year ≤ years[k1]` and

@@ -131,7 +131,9 @@ impl Viewer {
     pub fn new(data: RunData, sea_level_m: f32, gpu: Option<Viewport3d>) -> gui::Result<Self> {
         let landscape = scene::Landscape::new(&data.site, None, 10.0, sea_level_m).map_err(input_error)?;
         let terrain = landscape.mesh(&[]).map_err(input_error)?;
-        let prototypes = pool_prototypes(&data.library, &data.pool);
+        let mut prototypes = pool_prototypes(&data.library, &data.pool);
+        // the stumps of harvested trees after the species (Viewer::refresh)
+        prototypes.extend(scene::stump_prototypes());
         let site = &data.site;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
         let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));
@@ -226,6 +228,12 @@ impl Viewer {
                 Ok(v) => self.current = v,
                 Err(e) => self.status = Some(e.to_string()),
             }
+            // the stumps of the trees harvested in the 20 years up to the year shown (drawn
+            // near and far as the trees are; not on the ground's colouring nor mirrored)
+            match self.data.stumps_at(self.year) {
+                Ok(s) => self.current.extend(scene::stump_instances(&s, self.year.max(0.0).floor() as u32, &self.data.site, self.data.library.species.len() as u32)),
+                Err(e) => self.status = Some(e.to_string()),
+            }
             self.scene.sun = scene::season_sun(self.data.site.geo.latitude_deg, self.season);
             self.shown = Some(key);
             if let Some(id) = self.selected {
@@ -277,6 +285,10 @@ impl Viewer {
                 return;
             }
         };
+        // the stumps go into the far field (which the renderer draws instead of the scene's
+        // instances) but neither into the ground's colouring nor into the mirrored surroundings
+        let stumps: Vec<TreeInstance> = all.iter().filter(|t| scene::is_stump(t)).copied().collect();
+        all.retain(|t| !scene::is_stump(t));
         let t0 = std::time::Instant::now();
         let far = self.landscape.surroundings(&all);
         all.extend(far);
@@ -290,6 +302,7 @@ impl Viewer {
         }
         let t1 = std::time::Instant::now();
         let n = all.len();
+        all.extend(stumps);
         if let Some(g) = self.gpu.as_mut() {
             g.renderer.far_field = Some(Arc::new(FarField::new(all, &self.scene.prototypes, &self.scene.terrain)));
         }
@@ -318,7 +331,7 @@ impl Viewer {
         let (w, h) = (self.view_rect.width(), self.view_rect.height());
         let (o, d) = self.rig.ray(px, py, w, h);
         // trees faded out to nothing (dead between the snapshots shown) are not hit
-        let seen: Vec<&TreeInstance> = self.current.iter().filter(|t| t.opacity > 0.05).collect();
+        let seen: Vec<&TreeInstance> = self.current.iter().filter(|t| t.opacity > 0.05 && !scene::is_stump(t)).collect();
         let trees: Vec<(Vec3, f32, f32)> = seen.iter().map(|t| (Vec3::from(t.position), t.height, t.crown_radius)).collect();
         let hit = camera::pick(o, d, &trees).map(|i| seen[i].id);
         self.selected = hit;
@@ -448,7 +461,7 @@ impl Viewer {
 
     fn side_panel(&mut self, ui: &mut egui::Ui) {
         ui.heading(format!("Year {:.1}", self.year));
-        let alive = self.current.iter().filter(|t| t.opacity > 0.5).count();
+        let alive = self.current.iter().filter(|t| t.opacity > 0.5 && !scene::is_stump(t)).count();
         ui.label(format!("{} trees in the scene (live, at least 1 m tall, not hidden under taller crowns), from the snapshots of {}", alive, {
             let (k0, k1, _) = self.data.bracket(self.year);
             if k0 == k1 { format!("year {}", self.data.years[k0]) } else { format!("years {}–{}", self.data.years[k0], self.data.years[k1]) }

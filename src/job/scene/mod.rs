@@ -22,6 +22,7 @@ mod colour;
 mod instances;
 mod prototypes;
 mod saplings;
+mod stumps;
 mod surroundings;
 
 pub use canopy::*;
@@ -29,6 +30,7 @@ pub use colour::*;
 pub use instances::*;
 pub use prototypes::*;
 pub use saplings::*;
+pub use stumps::*;
 pub use surroundings::*;
 
 /// A full scene for one snapshot: terrain, prototypes, instances, the sun of the site's
