@@ -9,12 +9,26 @@ DBH >= 10 cm whose height is at least 0.8 x the top height of their 50 m x 50 m 
 height of its 25 tallest trees, i.e. 100 per hectare). Prints, per species and 10 cm DBH class
 with at least 20 canopy trees, the median crown radius of the simulation, the function's radius
 at the class's trees, and their ratio (mean of per-tree ratios).
+
+The inventories' crown radius is the crown's outline, at least the function's radius for a crown
+in light (sim::rules::crown_outline_radius), so canopy ratios near 1 come largely by construction:
+this checks what a run reports and draws, not an independent allometry. Ratios well below 1 mark
+shaded crowns; above 1, crowns wider from open growth.
 """
 import csv, math, sys, tomllib, glob, os
 from collections import defaultdict
 
+if len(sys.argv) < 3 or not sys.argv[2].isdigit():
+    sys.exit(__doc__.strip().split("\n\n")[1] + "\n(YEAR: a snapshot year of the run, a whole number)")
 run, year = sys.argv[1], int(sys.argv[2])
 sp_dir = sys.argv[3] if len(sys.argv) > 3 else os.path.join(os.path.dirname(__file__), "..", "species")
+inv_csv = os.path.join(run, "inventory", f"year_{year:04d}.csv")
+if not os.path.isfile(inv_csv):
+    inv = os.path.join(run, "inventory")
+    years = sorted({n[5:9] for n in (os.listdir(inv) if os.path.isdir(inv) else []) if n.startswith("year_") and n[5:9].isdigit() and n.endswith(".csv") and len(n) == 13})
+    if os.path.isfile(os.path.join(inv, f"year_{year:04d}.parquet")):
+        sys.exit(f"{inv_csv}: not there; this run wrote Parquet inventories: simulate it with `--inventory csv` to check it with this script")
+    sys.exit(f"{inv_csv}: no CSV inventory for year {year} in {run} (CSV years present: {', '.join(str(int(y)) for y in years) or 'none'})")
 coef = {}
 for f in glob.glob(os.path.join(sp_dir, "*.toml")):
     with open(f, "rb") as fh:
@@ -30,7 +44,7 @@ def ref(sp, d, h, cb):
     return 0.5 * (c["a"] + c["b"] * d ** c.get("p", 1.0)) * sat * ln
 
 rows = []
-with open(os.path.join(run, "inventory", f"year_{year:04d}.csv")) as fh:
+with open(inv_csv) as fh:
     for r in csv.DictReader(fh):
         if r["status"] != "alive":
             continue
@@ -59,3 +73,5 @@ for (sp, k), v in sorted(classes.items()):
     print(f"| {sp} | {k*10}-{k*10+10} | {len(v)} | {sims[len(v)//2]:.2f} | {refs[len(v)//2]:.2f} | {ratio:.2f} |")
 if worst:
     print(f"\n{len(worst)} classes; ratios {min(worst):.2f}-{max(worst):.2f}; within +-20 %: {sum(0.8 <= w <= 1.2 for w in worst)}")
+else:
+    print("\n0 classes: no species and 10 cm DBH class holds 20 canopy trees (DBH >= 10 cm, >= 0.8 x the local top height) in this year")
