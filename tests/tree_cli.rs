@@ -31,6 +31,17 @@ fn light_and_laplacian_trees_grow_with_age_to_the_species_height() {
     }
 }
 
+/// Light-guided growth stops at 60 cycles; an older age says so (it looked like that many
+/// years of growth).
+#[test]
+fn light_guided_growth_beyond_60_cycles_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("old.glb");
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "silver_birch", "--model", "light", "--age", "70", "--seed", "1", "--out", out.to_str().unwrap()]).output().unwrap();
+    let so = String::from_utf8_lossy(&res.stdout);
+    assert!(res.status.success() && so.contains("light-guided: 60 cycles, the model's most, inside the crown envelope of a 70-year tree"), "{so}{}", String::from_utf8_lossy(&res.stderr));
+}
+
 #[test]
 fn bad_obstacles_are_refused_naming_the_option() {
     let dir = tempfile::tempdir().unwrap();

@@ -209,6 +209,11 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
     sylva::output::write_atomic(&png, &bytes)?;
     println!("species {} ({}), model {:?}, seed {seed}, age {age} yr", sp.id, sp.identity.scientific_name, model);
+    // said where the model's cycles stop short of the age (found by a trial: `--age 500` looked
+    // like 500 years of light-guided growth)
+    if matches!(model, Model::Light) && age.round() > 60.0 {
+        println!("light-guided: 60 cycles, the model's most, inside the crown envelope of a {age}-year tree");
+    }
     println!("nodes {}, leaves {}, height {:.2} m, crown radius {:.2} m", sk.len(), leaves.len(), sk.height(), sylva::structure::crown_radius(&sk, &leaves));
     for (i, l) in chain.levels.iter().enumerate() {
         println!("LOD{i}: {:>8} triangles (bark {}, foliage {})", l.triangle_count(), l.bark.triangle_count(), l.leaves.triangle_count());
