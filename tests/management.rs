@@ -677,6 +677,18 @@ fn silent_failures_are_refused_or_warned() {
     assert_eq!(warn.len(), 2, "{warn:?}");
     assert!(warn[0].contains("management[0]") && warn[0].contains("less than one crop tree"), "{warn:?}");
     assert!(warn[1].contains("management[1].stages[0]") && warn[1].contains("1 later stages find nothing"), "{warn:?}");
+    // planting shares that do not sum to 1 are scaled and said (a trial found them silent);
+    // shares summing to 1 say nothing
+    for (mix, want) in [("{ beech = 0.5, sessile_oak = 0.3 }", Some("sum to 0.8 rather than 1: they are scaled to beech 0.625, sessile_oak 0.375")), ("{ beech = 0.7, sessile_oak = 0.3 }", None)] {
+        let toml = format!("{base}[[management]]\nkind = \"planting\"\nmix = {mix}\nspacing_m = 2.0\nyear = 3\n").replace("species = [\"beech\"]", "species = [\"beech\", \"sessile_oak\"]");
+        let sc = Scenario::from_toml_str(&toml, "mix.toml").unwrap();
+        let w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+        let warn = sylva::sim::management::warnings(&w.site.management, sc.years, "mix.toml");
+        match want {
+            Some(w) => assert!(warn.len() == 1 && warn[0].contains("mix.toml: management[0].mix") && warn[0].contains(w), "{warn:?}"),
+            None => assert!(warn.is_empty(), "{warn:?}"),
+        }
+    }
     // a field of another kind names the kind and method it belongs to, quoted once
     let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\ncrop_tree_distance_m = 5.0\nyear = 3\n"));
     assert!(e.contains("management[0].crop_tree_distance_m") && e.contains("(only with kind = \"thinning\", method = \"crop_trees\")"), "{e}");

@@ -1026,6 +1026,15 @@ pub fn warnings(ops: &[Operation], last_year: u32, ctx: &str) -> Vec<String> {
         for (f, y) in op.spec.years_beyond(last_year) {
             out.push(format!("{ctx}: management[{}].{f} = {y} lies beyond the run's last year {last_year}: the entry does not act in that year", op.index));
         }
+        // a planting's shares are scaled to sum 1; shares that do not add up (0.5 and 0.3, or
+        // 30 and 20) may be a typo, so it is said (found by a trial)
+        if let Some(mix) = &op.spec.mix {
+            let total: f64 = mix.values().sum();
+            if (total - 1.0).abs() > 0.005 {
+                let scaled: Vec<String> = mix.iter().map(|(sp, s)| format!("{sp} {:.3}", s / total)).collect();
+                out.push(format!("{ctx}: management[{}].mix: the shares sum to {total} rather than 1: they are scaled to {}", op.index, scaled.join(", ")));
+            }
+        }
         // found by a trial: these entries acted on nothing and said nothing
         if let Action::CropTrees { n_ha, .. } = op.action {
             if (n_ha * op.region.area_ha).round() < 1.0 {
