@@ -4,8 +4,9 @@
 //! is nearest in node count) beside a finite wall; analysis (once), adaptation and the
 //! time our light-guided model takes to regrow the same tree beside the same wall; two
 //! ≈2,540-node trees adapted together; moving the wall by 10 cm and re-adapting. Plain program:
-//! `RAYON_NUM_THREADS=1 cargo bench --bench plastic`. Process CPU time (not wall time: the
-//! machine is shared), medians over repeated runs (regrowth: one run). `SYLVA_PLASTIC_NO_REGROW=1`
+//! `RAYON_NUM_THREADS=1 cargo bench --bench plastic`. Process CPU time (hardly affected when
+//! the machine is shared) and, in the last columns, wall-clock time (the figure of a goal on
+//! several cores), medians over repeated runs (regrowth: one run). `SYLVA_PLASTIC_NO_REGROW=1`
 //! skips the regrowth (for profiling). Each case also prints a fingerprint (FNV-1a over the bits
 //! of every adapted position, bend angle and fate) so a speed-up can be checked to compute the
 //! same trees bit for bit.
@@ -26,17 +27,21 @@ fn cpu_ms() -> f64 {
     ts.tv_sec as f64 * 1e3 + ts.tv_nsec as f64 * 1e-6
 }
 
-/// Median process CPU time (ms) of `runs` calls of `f` (see [`cpu_ms`]).
-fn median_ms(runs: usize, mut f: impl FnMut()) -> f64 {
-    let mut t: Vec<f64> = (0..runs)
+/// Median process CPU time (ms) of `runs` calls of `f` (see [`cpu_ms`]), and the median
+/// wall-clock time (ms) of the same calls: with more than one thread the CPU time adds the
+/// threads' times, so the wall time is the figure of a multi-core goal. The clones a call makes
+/// of its input are inside both.
+fn median_ms(runs: usize, mut f: impl FnMut()) -> (f64, f64) {
+    let (mut t, mut w): (Vec<f64>, Vec<f64>) = (0..runs)
         .map(|_| {
-            let s = cpu_ms();
+            let (s, c) = (cpu_ms(), std::time::Instant::now());
             f();
-            cpu_ms() - s
+            (cpu_ms() - s, c.elapsed().as_secs_f64() * 1e3)
         })
-        .collect();
+        .unzip();
     t.sort_by(f64::total_cmp);
-    t[t.len() / 2]
+    w.sort_by(f64::total_cmp);
+    (t[t.len() / 2], w[w.len() / 2])
 }
 
 /// FNV-1a over the bits of the adapted positions, bend angles and fates of `trees`.
@@ -130,6 +135,26 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     println!("{} nodes, {} seasons: analysis {:.1} ms, adapt {:.1} ms CPU, {wall_ms:.1} ms wall ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), tree.analysis().seasons, t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
 }
 
+/// `SYLVA_PLASTIC_PROFILE=stand`: the stand case alone. `SYLVA_PLASTIC_PROFILE=two,N`: the two ≈ 2,540-node trees (11 cycles, seed 4) 1.5 crown
+/// radii apart adapted together N times (for a profiler), printing the CPU time of each call.
+fn two_case(lp: &sylva::species::LightGuidedParams, lo: &LightOptions, p: &sylva::species::PlasticParams, reps: usize) {
+    let sk = light_guided::grow(lp, lo, &[], 4, 11).expect("grow");
+    let (lo_b, hi_b) = sk.bounds().expect("nodes");
+    let r = 0.5 * (hi_b.x - lo_b.x).max(hi_b.y - lo_b.y);
+    let a = PlasticTree::analyse(&sk, p, &env_with(&[]), None).expect("analyse");
+    let mut b = a.clone();
+    b.translate(Vec3::new(1.5 * r, 0.0, 0.0));
+    let env = env_with(&[]);
+    let mut last = Vec::new();
+    let t0 = cpu_ms();
+    for _ in 0..reps.max(1) {
+        let mut pair = vec![a.clone(), b.clone()];
+        adapt_group(&mut pair, &env).expect("group");
+        last = pair;
+    }
+    println!("two {}-node trees adapted together {reps} times: {:.2} ms CPU each; fingerprint {:016x}", sk.len(), (cpu_ms() - t0) / reps.max(1) as f64, fingerprint(&last));
+}
+
 /// Issue 31, Build 3 (the paper's ecosystem demo ran at 5 fps): 50 trees of the ≈ 2,500-node
 /// bench skeleton (five turns of it about the vertical, analysed once each) on a 10 × 5 lattice
 /// 1.5 crown radii apart, adapted together (`adapt_group`) beside a wall 20 cm thick, as long as
@@ -194,10 +219,19 @@ fn main() {
     // the light-guided model (Yi et al.) with the paper parameters in a 24 m × 24 m × 22 m space
     let lo = LightOptions { extent_m: 12.0, height_m: 22.0, ..LightOptions::default() };
     println!("# Plastic Trees benchmark (light-guided trees beside a finite wall; threads: {})", rayon::current_num_threads());
-    println!("| target nodes | cycles | seed | nodes | analysis ms | adapt ms | regrow ms | regrow / adapt | bent | pruned | move wall 10 cm: ms (recomputed nodes) |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| target nodes | cycles | seed | nodes | analysis ms | adapt ms | regrow ms | regrow / adapt | bent | pruned | move wall 10 cm: ms (recomputed nodes) | adapt wall-clock ms | move wall-clock ms |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     if let Some(case) = std::env::var_os("SYLVA_PLASTIC_PROFILE") {
-        profile_case(&case.to_string_lossy(), &lp, &lo, &p);
+        let case = case.to_string_lossy();
+        if case == "stand" {
+            // the stand case alone (for a profiler)
+            let sk = light_guided::grow(&lp, &lo, &[], 4, 11).expect("grow");
+            stand_case(&sk, &p, &mut Vec::new());
+        } else if let Some(reps) = case.strip_prefix("two") {
+            two_case(&lp, &lo, &p, reps.trim_start_matches(',').parse().unwrap_or(50));
+        } else {
+            profile_case(&case, &lp, &lo, &p);
+        }
         return;
     }
     let regrow = std::env::var_os("SYLVA_PLASTIC_NO_REGROW").is_none();
@@ -228,7 +262,7 @@ fn main() {
         let tree = PlasticTree::analyse(&sk, &p, &env_with(&[]), None).expect("analyse");
         let analysis_ms = cpu_ms() - t0;
         let mut rep = None;
-        let adapt_ms = median_ms(7, || {
+        let (adapt_ms, adapt_wall) = median_ms(7, || {
             let mut t = tree.clone();
             rep = Some(t.adapt(&env).expect("adapt"));
         });
@@ -241,7 +275,7 @@ fn main() {
             o => o,
         };
         let mut after_move = adapted.clone();
-        let move_ms = median_ms(7, || {
+        let (move_ms, move_wall) = median_ms(7, || {
             let mut t = adapted.clone();
             rec = t.adapt(&env_with(&[moved])).expect("adapt").recomputed_nodes;
             after_move = t;
@@ -253,7 +287,7 @@ fn main() {
         }
         let regrow_ms = cpu_ms() - t1;
         println!(
-            "| {target} | {years} | {seed} | {} | {analysis_ms:.1} | {adapt_ms:.2} | {regrow_ms:.0} | {:.0}× | {} | {} | {move_ms:.2} ({rec}) |",
+            "| {target} | {years} | {seed} | {} | {analysis_ms:.1} | {adapt_ms:.2} | {regrow_ms:.0} | {:.0}× | {} | {} | {move_ms:.2} ({rec}) | {adapt_wall:.2} | {move_wall:.2} |",
             sk.len(),
             regrow_ms / adapt_ms,
             rep.bent,
@@ -272,13 +306,13 @@ fn main() {
         let env = env_with(&[]);
         let mut rec = 0;
         let mut last = Vec::new();
-        let ms = median_ms(7, || {
+        let (ms, wall_ms) = median_ms(7, || {
             let mut pair = vec![a.clone(), b.clone()];
             rec = adapt_group(&mut pair, &env).expect("group").recomputed_nodes;
             last = pair;
         });
         prints.push(format!("two trees: {:016x}", fingerprint(&last)));
-        println!("\ntwo {}-node trees {:.2} m apart (1.5 crown radii) adapted together: {ms:.2} ms ({rec} nodes recomputed)", sk.len(), 1.5 * r);
+        println!("\ntwo {}-node trees {:.2} m apart (1.5 crown radii) adapted together: {ms:.2} ms ({rec} nodes recomputed; wall-clock {wall_ms:.2} ms)", sk.len(), 1.5 * r);
         stand_case(sk, &p, &mut prints);
     }
     println!("\nresult fingerprints (FNV-1a of positions, bend angles, fates): {}", prints.join("; "));

@@ -284,10 +284,27 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
     // one set of grids over every tree's clusters, each tagged with its tree; tree i's queries
     // leave its own out (the same casters, in the same order, as shadow volumes of the other
     // trees' clusters alone, without building a set per tree: O(N) grid entries, not O(N²))
-    let others = group.then(|| {
+    let others = (group && trees.len() > OWN_OTHERS_MAX).then(|| {
         let owners = neighbours.iter().map(|(j, _)| *j as u32).collect();
         ShadowVolumes::with_owners(sky, neighbours.iter().map(|(_, o)| *o).collect(), owners)
     });
+    // a small group: per tree, shadow volumes of the other trees' clusters alone, told the
+    // tree's bounds, so a query scans no cell full of its own tree's clusters (a signature bit
+    // is whether any caster is hit, so the answers are the same as the shared grids')
+    let own_others: Vec<Option<ShadowVolumes>> = trees
+        .iter()
+        .enumerate()
+        .map(|(i, t)| {
+            (group && trees.len() <= OWN_OTHERS_MAX).then(|| {
+                let occ: Vec<Occluder> = neighbours.iter().filter(|(j, _)| *j != i).map(|(_, o)| *o).collect();
+                let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+                for nd in &t.input.nodes {
+                    (lo, hi) = (lo.min(nd.pos), hi.max(nd.pos));
+                }
+                ShadowVolumes::new(sky, occ).within(lo, hi)
+            })
+        })
+        .collect();
     // the fixed trees' full-grown clusters as they stand: one set of shadow volumes for the call
     let fixed_vols = (!fixed.is_empty()).then(|| {
         let occ: Vec<Occluder> = fixed
@@ -344,7 +361,7 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
                         sig |= t.sig[k] & !(u32::MAX as u64);
                     } else {
                         for d in 0..sky.dirs.len() {
-                            if others.as_ref().is_some_and(|o| o.shaded_except(d, p, i as u32)) || fixed_vols.is_some_and(|f| f.shaded(d, p)) {
+                            if others.as_ref().is_some_and(|o| o.shaded_except(d, p, i as u32)) || own_others[i].as_ref().is_some_and(|o| o.shaded(d, p)) || fixed_vols.is_some_and(|f| f.shaded(d, p)) {
                                 sig |= 1u64 << (32 + d);
                             }
                         }
@@ -374,8 +391,18 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         for (t, own) in trees.iter().zip(&own) {
             if own.iter().any(|&x| x) {
                 let r = 2.0 + t.analysis.stages.iter().flatten().map(|c| c.radius).fold(0.0f32, f32::max);
-                for &p in t.pos.iter().chain(t.input.nodes.iter().map(|nd| &nd.pos)) {
-                    (lo, hi) = (lo.min(p - r), hi.max(p + r));
+                // only the subtrees below a node whose signature changed are recomputed (a
+                // node is recomputed when its own signature changed or its parent turned), and
+                // the clusters lit are theirs (parents precede their children)
+                let mut below = vec![false; own.len()];
+                for k in 0..own.len() {
+                    let par = t.input.nodes[k].parent.map_or(k, |p| p as usize);
+                    below[k] = own[k] || (par < k && below[par]);
+                    if below[k] {
+                        for p in [t.pos[k], t.input.nodes[k].pos] {
+                            (lo, hi) = (lo.min(p - r), hi.max(p + r));
+                        }
+                    }
                 }
             }
         }
@@ -470,13 +497,22 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         let wood: Vec<Wood> = trees.iter().map(Wood::of).collect();
         let fixed_wood: Vec<Wood> = fixed.iter().map(Wood::of).collect();
         trees.par_iter_mut().enumerate().for_each(|(i, t)| {
+            // the other trees' wood whose bounds meet this tree's (a point outside a wood's
+            // bounds touches none of it)
+            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+            for &p in &t.pos {
+                (lo, hi) = (lo.min(p), hi.max(p));
+            }
+            let near = |w: &&Wood| w.lo.cmple(hi).all() && w.hi.cmpge(lo).all();
+            let wood: Vec<&Wood> = wood.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, w)| w).filter(near).collect();
+            let fixed_wood: Vec<&Wood> = fixed_wood.iter().filter(near).collect();
             for k in 1..t.input.nodes.len() {
                 let p = t.input.nodes[k].parent.unwrap_or(0) as usize;
                 if t.fate[p] != Fate::Alive {
                     if t.fate[k] == Fate::Alive {
                         t.fate[k] = t.fate[p];
                     }
-                } else if t.fate[k] == Fate::Alive && (wood.iter().enumerate().any(|(j, w)| j != i && w.contains(t.pos[k])) || fixed_wood.iter().any(|w| w.contains(t.pos[k]))) {
+                } else if t.fate[k] == Fate::Alive && (wood.iter().any(|w| w.contains(t.pos[k])) || fixed_wood.iter().any(|w| w.contains(t.pos[k]))) {
                     t.fate[k] = Fate::Collision;
                 }
             }
@@ -648,6 +684,12 @@ fn preposition(t: &mut PlasticTree, s: usize, w: &Work) {
         }
     }
 }
+
+/// Largest group whose signatures use shadow volumes of the other trees' clusters built per
+/// tree (O(N²) caster copies and grid filtering) instead of one shared set whose queries skip
+/// the tree's own clusters: per tree, a query then scans no cell full of its own clusters
+/// (measured on the bench's two 2,506-node trees: the signatures took 18 % of the call).
+const OWN_OTHERS_MAX: usize = 8;
 
 /// Fewest nodes (or stage clusters) per task when a tree's signatures (or stage occluders) are
 /// split over the cores.
