@@ -557,11 +557,11 @@ fn hemispherical_photograph_sees_the_gaps_the_stand_leaves() {
 /// Issue 32 Must-show: with full detail (`--full-detail`), the trees of a stand export start from skeletons with the nodes `sylva
 /// tree grow` (EcoMod) gives their species at their age, grown as forest trees (the crown above
 /// the simulated crown base), not open-grown trees shed of four fifths of their branches
-/// (round 16: a median of 43 nodes against 2,000). Plastic Trees then prunes the branches its
-/// neighbours leave too little light (eq. 10): measured, beech of 91 years at 6 m keeps a median
-/// of 63 % of the nodes grown alone, the light-demanding sessile oak of 51 years 43 %; the
-/// issue's 80 % after adaptation is not met (BENCHMARKS.md round 17), so this test holds the
-/// skeletons to 80 % before the adaptation and to 30 % after it.
+/// (round 16: a median of 43 nodes against 2,000), and after the adaptation among their
+/// neighbours still at least 80 % of them: forest-grown trees are bent and pruned by collisions
+/// but not shed by light (eq. 11), the simulated crown base being the stand's shedding (round 17
+/// shed them by light too: beech of 91 years at 6 m kept a median of 63 %, sessile oak of 51
+/// years 43 %).
 #[test]
 fn stand_export_trees_have_the_nodes_of_a_tree_grown_alone() {
     let dir = tempfile::tempdir().unwrap();
@@ -586,11 +586,13 @@ fn stand_export_trees_have_the_nodes_of_a_tree_grown_alone() {
         assert!(r.stats.trees_15m >= 4 && r.stats.trees_15m == r.stats.trees, "{sp}: {:?}", r.stats);
         let before = r.stats.nodes_before_adaptation as f64 / r.stats.trees as f64;
         assert!(before >= 0.8 * alone as f64, "{sp} at {age} years: {before} nodes a tree before the adaptation, {alone} grown alone ({:?})", r.stats);
-        assert!(r.stats.nodes_median as f64 >= 0.3 * alone as f64, "{sp} at {age} years: median {} nodes in the stand, {alone} grown alone ({:?})", r.stats.nodes_median, r.stats);
+        // issue 32: the adapted trees keep at least 80 % of the nodes of the tree grown alone
+        // (forest-grown trees are not shed by light: only collisions prune them)
+        assert!(r.stats.nodes_median as f64 >= 0.8 * alone as f64, "{sp} at {age} years: median {} nodes in the stand, {alone} grown alone ({:?})", r.stats.nodes_median, r.stats);
         eprintln!("{sp} at {age} years: median {} nodes adapted, {before:.0} before, {alone} grown alone", r.stats.nodes_median);
         // the analyses and the adaptation are timed apart, and every tree was adapted
         assert!(r.stats.analyses >= 1 && r.stats.nodes_total >= r.stats.nodes_min * r.stats.trees, "{:?}", r.stats);
-        assert!(r.stats.nodes_total < r.stats.nodes_before_adaptation && r.stats.pruned_light > 0, "{:?}", r.stats);
+        assert!(r.stats.nodes_total == r.stats.nodes_before_adaptation - r.stats.pruned_collision && r.stats.pruned_light == 0, "{:?}", r.stats);
         // a cap on the strands is a cap on the nodes (2 a strand)
         o.max_strands = 32;
         let capped = sylva::job::export::export_stand(&run, &lib, &o, &dir.path().join(format!("{sp}_capped.glb"))).unwrap();

@@ -44,14 +44,20 @@ pub struct AdaptOptions {
     /// [`crate::render::lod::LodParams::default`] (180 px).
     pub full_px: f32,
     /// Most trees adapted at full detail (the largest on screen first; the others of
-    /// [`AdaptOptions::full_px`] get at most [`FAR_MAX_STRANDS`]): the adaptation's time grows
-    /// with the nodes (BENCHMARKS.md round 17). Default 0: adapted among their neighbours,
-    /// full-detail trees of light-demanding species (silver birch, Scots pine) lose every leafy
-    /// branch to Plastic Trees' light pruning and stand bare in a summer close-up (round 17
-    /// trial), so the stills keep the 48-strand trees until the pruning respects the simulated
-    /// crown.
+    /// [`AdaptOptions::full_px`] get at most [`FAR_MAX_STRANDS`]): the adaptation's time and
+    /// the frame's memory grow with the nodes and leaf cards. Default [`DEFAULT_MAX_FULL_TREES`].
     pub max_full_trees: usize,
 }
+
+/// Default of [`AdaptOptions::max_full_trees`]: 200. The ground view of the default run's
+/// year 150 (1280 × 720, `sylva render … --camera ground`) draws 210 adapted trees at the full
+/// level; with 200 of them at full detail (median 2,000 nodes for the trees of 15 m and taller,
+/// 1.3 M leaf cards) it took 10.3 s to adapt and 4.0 GiB at its peak, with every one of them
+/// 4.5 GiB, with none 3.1 GiB (BENCHMARKS.md, round 21). Until round 20 it was 0: the
+/// full-detail trees of light-demanding species were shed bare by Plastic Trees' light pruning
+/// among their neighbours, which forest-grown trees no longer get
+/// ([`crate::structure::stand`], step 4).
+pub const DEFAULT_MAX_FULL_TREES: usize = 200;
 
 /// Most EcoMod strands of the adapted trees under [`AdaptOptions::full_px`] (about 60 nodes
 /// after shedding: the stand skeletons of round 16, enough for the crown hull and billboard
@@ -60,10 +66,10 @@ pub const FAR_MAX_STRANDS: u32 = 48;
 
 impl Default for AdaptOptions {
     /// 80 m, 400 trees, cells of 12 m with a halo of 6 m, a picture 1,080 px tall, full detail
-    /// from 180 px but for no tree ([`AdaptOptions::max_full_trees`]).
+    /// from 180 px for the [`DEFAULT_MAX_FULL_TREES`] largest on screen.
     fn default() -> Self {
         let lod = crate::render::lod::LodParams::default();
-        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0, image_height_px: 1080.0, full_px: lod.switch_px[0] * (1.0 - lod.band), max_full_trees: 0 }
+        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0, image_height_px: 1080.0, full_px: lod.switch_px[0] * (1.0 - lod.band), max_full_trees: DEFAULT_MAX_FULL_TREES }
     }
 }
 
