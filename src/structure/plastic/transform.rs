@@ -494,8 +494,8 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
     }
     // 6. wood of the other trees, then the report
     if group || !fixed.is_empty() {
-        let wood: Vec<Wood> = trees.iter().map(Wood::of).collect();
-        let fixed_wood: Vec<Wood> = fixed.iter().map(Wood::of).collect();
+        let wood: Vec<Wood> = trees.par_iter().map(Wood::of).collect();
+        let fixed_wood: Vec<Wood> = fixed.par_iter().map(Wood::of).collect();
         trees.par_iter_mut().enumerate().for_each(|(i, t)| {
             // the other trees' wood whose bounds meet this tree's (a point outside a wood's
             // bounds touches none of it)
