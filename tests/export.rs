@@ -221,7 +221,7 @@ fn obj_has_mtl_and_textures() {
 fn stand_writer_instances_one_model_on_many_nodes() {
     let lib = lib();
     let (sp, chain) = tree(&lib, "beech");
-    let model = StandModel { name: "beech_a".into(), chain, look: 0 };
+    let model = StandModel { name: "beech_a".into(), chain, look: 0, sprigs: Default::default() };
     let trees: Vec<StandNode> = (0..5).map(|k| StandNode { name: format!("beech_{k}"), model: 0, translation: [k as f32 * 4.0, 0.0, 0.0], scale: [1.0, 1.0, 1.0 + 0.1 * k as f32] }).collect();
     let ground = sylva::mesh::TriMesh { positions: vec![[-10.0, -10.0, 0.0], [30.0, -10.0, 0.0], [30.0, 10.0, 0.0], [-10.0, 10.0, 0.0]], normals: vec![[0.0, 0.0, 1.0]; 4], uvs: vec![], indices: vec![0, 1, 2, 0, 2, 3] };
     let scene = StandScene { name: "s".into(), looks: vec![Look::for_species(&sp, Season::Summer)], models: vec![model], trees, statics: vec![StaticMesh { name: "terrain".into(), mesh: ground, rgb: [90, 80, 60], roughness: 0.9 }], levels: vec![0, 1, 2, 3], extras: serde_json::Value::Null };
@@ -593,6 +593,9 @@ fn stand_export_trees_have_the_nodes_of_a_tree_grown_alone() {
         // the analyses and the adaptation are timed apart, and every tree was adapted
         assert!(r.stats.analyses >= 1 && r.stats.nodes_total >= r.stats.nodes_min * r.stats.trees, "{:?}", r.stats);
         assert!(r.stats.nodes_total == r.stats.nodes_before_adaptation - r.stats.pruned_collision && r.stats.pruned_light == 0, "{:?}", r.stats);
+        // the crowns' leaf area beyond the leaf cards as sprigs (leaf-cluster cards), a few
+        // hundred a tree, not tens of thousands of copied leaf cards
+        assert!(r.stats.sprig_cards > 0 && r.stats.leaf_cards < 20_000 * r.stats.trees, "{:?}", r.stats);
         // a cap on the strands is a cap on the nodes (2 a strand)
         o.max_strands = 32;
         let capped = sylva::job::export::export_stand(&run, &lib, &o, &dir.path().join(format!("{sp}_capped.glb"))).unwrap();

@@ -138,6 +138,9 @@ pub struct ExportStats {
     /// Leaf cards of the full-detail meshes of all trees written (each tree counted, shared
     /// meshes too).
     pub leaf_cards: usize,
+    /// Leaf-cluster cards (sprigs, [`sprig_cards`]) of the full-detail meshes of all trees
+    /// written (`--full-detail`; 0 otherwise).
+    pub sprig_cards: usize,
     /// Wall time of the adaptation (s): growing and analysing the open-grown trees
     /// ([`ExportStats::analysis_s`]) and adapting the neighbourhoods
     /// ([`ExportStats::adaptation_s`]).
@@ -274,10 +277,12 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
 
     // the share of a leaf card its leaf texture covers, per species (fill_leaf_area)
     let card_cover: Vec<f32> = library.species.iter().map(|sp| crate::structure::texture::leaf_card_cover(crate::structure::texture::LeafShape::of_species(sp))).collect();
+    let full = o.max_strands == crate::structure::stand::FULL_STRANDS;
+    let sprig_cover: Vec<f32> = if full { library.species.iter().map(|sp| crate::structure::texture::cluster_card_cover(crate::structure::texture::LeafShape::of_species(sp))).collect() } else { Vec::new() };
     // each tree in its own frame, with its topology key and canonical shape
     // per tree also (skeleton nodes, leaf cards of the full level, triangles of the levels written)
     #[allow(clippy::type_complexity)]
-    let meshed: Vec<Option<(u64, Vec<f32>, StandModel, [f32; 3], Vec3, usize, [usize; 3])>> = st
+    let meshed: Vec<Option<(u64, Vec<f32>, StandModel, [f32; 3], Vec3, usize, [usize; 4])>> = st
         .trees
         .par_iter()
         .map(|a| {
@@ -285,11 +290,20 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             let (sk, mut lv, hgt) = tree_frame(a, t.base)?;
             let r = t.crown_radius_m.max(0.2);
             let sp = &library.species[t.species as usize];
-            fill_leaf_area(&mut lv, crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m), card_cover[t.species as usize], t.crown_radius_m, t.species as u64);
+            let leaf_area = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m);
+            // full detail: the leaves grown to at most MAX_CARD_GROWTH, the rest of the leaf
+            // area as sprigs; else copies of the few tips' cards
+            let sprigs = if full {
+                sprig_cards(&mut lv, leaf_area, card_cover[t.species as usize], sprig_cover[t.species as usize], t.crown_radius_m, t.species as u64)
+            } else {
+                fill_leaf_area(&mut lv, leaf_area, card_cover[t.species as usize], t.crown_radius_m, t.species as u64);
+                TriMesh::default()
+            };
             let s = Vec3::new(r, r, hgt);
             let mut topology = vec![t.species as u64, sk.nodes.len() as u64];
             topology.extend(sk.nodes.iter().map(|n| n.parent.map_or(u64::MAX, |p| p as u64)));
             topology.extend(lv.leaves.iter().map(|l| l.node as u64));
+            topology.push(sprigs.positions.len() as u64);
             let mut canon = Vec::with_capacity(sk.nodes.len() * 4 + lv.leaves.len() * 10);
             for n in &sk.nodes {
                 let p = n.pos / s;
@@ -299,13 +313,17 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
                 let p = l.pos / s;
                 canon.extend([p.x, p.y, p.z, l.size / hgt, l.dir.x, l.dir.y, l.dir.z, l.normal.x, l.normal.y, l.normal.z]);
             }
+            for q in &sprigs.positions {
+                let p = Vec3::from(*q) / s;
+                canon.extend([p.x, p.y, p.z]);
+            }
             // the mid level: the crown hull of the adapted clusters, as in the pictures
             let (chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
             let billboard = LOD_LEVELS - 1;
             // billboards are drawn as the shared two crossed cards (4 triangles)
-            let tris = o.levels.iter().map(|&l| if l == billboard { 4 } else { chain.levels.get(l).map_or(0, |m| m.triangle_count()) }).sum();
-            let figures = [sk.nodes.len(), lv.leaves.len(), tris];
-            Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize }, s.to_array(), t.base - origin, t.species as usize, figures))
+            let tris = o.levels.iter().map(|&l| if l == billboard { 4 } else { chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 } }).sum();
+            let figures = [sk.nodes.len(), lv.leaves.len(), tris, sprigs.positions.len() / 4];
+            Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize, sprigs }, s.to_array(), t.base - origin, t.species as usize, figures))
         })
         .collect();
 
@@ -315,9 +333,10 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     // topology key → (model, its size, its canonical shape) of the models with that topology
     let mut model_of: HashMap<u64, Vec<(usize, [f32; 3], Vec<f32>)>> = HashMap::new();
     let mut nodes = Vec::new();
-    let (mut tall_nodes, mut leaf_cards, mut triangles) = (Vec::new(), 0usize, 0usize);
+    let (mut tall_nodes, mut leaf_cards, mut triangles, mut sprig_cards_n) = (Vec::new(), 0usize, 0usize, 0usize);
     for (m, a) in meshed.into_iter().zip(&st.trees) {
-        let Some((key, canon, mut model, size, pos, sp, [n_nodes, n_leaves, n_tris])) = m else { continue };
+        let Some((key, canon, mut model, size, pos, sp, [n_nodes, n_leaves, n_tris, n_sprigs])) = m else { continue };
+        sprig_cards_n += n_sprigs;
         if trees[a.index].height_m >= STATS_MIN_HEIGHT_M {
             tall_nodes.push(n_nodes);
         }
@@ -369,6 +388,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         nodes_min: tall_nodes.iter().copied().min().unwrap_or(0),
         nodes_median: median_usize(&mut tall_nodes),
         leaf_cards,
+        sprig_cards: sprig_cards_n,
         adapt_s,
         analysis_s: st.analysis_s,
         adaptation_s: st.adaptation_s,
@@ -471,7 +491,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
             let chain = crate::structure::mesh::lod_chain(&sk, &lv, &LodOptions::default());
             let tris = [0, 1, 2, 3].map(|l| chain.levels.get(l).map_or(0, |m| m.triangle_count()));
             let cards = chain.levels.first().map_or(0, |m| m.leaves.triangle_count() / 2);
-            Some((StandModel { name: format!("{}_age{}", sp.id, AGE_CLASSES_YR[class] as u32), chain, look: sp_i }, r, sk.nodes.len(), tris, cards))
+            Some((StandModel { name: format!("{}_age{}", sp.id, AGE_CLASSES_YR[class] as u32), chain, look: sp_i, sprigs: TriMesh::default() }, r, sk.nodes.len(), tris, cards))
         })
         .collect();
     // looks of the species used, and the groups
@@ -609,6 +629,58 @@ pub fn fill_leaf_area(lv: &mut crate::structure::Leaves, leaf_area_m2: f32, card
     lv.leaves = out;
 }
 
+/// Gives a full-detail tree the leaf area `leaf_area_m2` (one-sided, m²; the crown's leaf-area
+/// index over its projection, [`crate::sim::phases::light::crown_leaf_area`]) with few cards:
+/// its leaf cards (`card_cover` of each `size × size/2` card shows leaf) are lengthened by up
+/// to [`MAX_CARD_GROWTH`] (or shrunk when the tree has more leaf than that), and the rest of
+/// the area comes as sprigs: square leaf-cluster cards (the cluster texture, 36 leaves,
+/// `sprig_cover` of the card shows leaf, [`crate::structure::texture::cluster_card_cover`])
+/// whose leaves are as long as the tree's cards (side = card length /
+/// [`crate::structure::texture::cluster_leaf_length`] of a broad leaf, 0.26), each standing at
+/// a leaf picked by a hash of `seed` and its index, moved by up to half a side and kept within
+/// `crown_radius_m` of the stem axis, turned about the vertical and tilted by hashed angles.
+/// One sprig holds the leaf area of about twenty leaf cards, so a crown of 2,000 nodes carries
+/// its leaf area with a few thousand cards, not the 30,000 copies of [`fill_leaf_area`]
+/// (BENCHMARKS.md round 21). Returns the sprigs as a mesh (4 vertices and 2 triangles each, UV
+/// 0–1 over the card, normals facing the card's front; the glTF cluster material is
+/// double-sided). Deterministic; a tree without leaves, or a target of 0, gets none.
+pub fn sprig_cards(lv: &mut crate::structure::Leaves, leaf_area_m2: f32, card_cover: f32, sprig_cover: f32, crown_radius_m: f32, seed: u64) -> TriMesh {
+    let mut m = TriMesh::default();
+    let cover = card_cover.clamp(0.05, 1.0);
+    let now: f32 = lv.leaves.iter().map(|l| 0.5 * l.size * l.size * cover).sum();
+    if now <= 0.0 || !(leaf_area_m2 > 0.0) {
+        return m;
+    }
+    let k = (leaf_area_m2 / now).sqrt().min(MAX_CARD_GROWTH);
+    lv.leaves.iter_mut().for_each(|l| l.size *= k);
+    let rest = leaf_area_m2 - now * k * k;
+    let mean_len = lv.leaves.iter().map(|l| l.size).sum::<f32>() / lv.leaves.len() as f32;
+    let side = mean_len / 0.26;
+    let per = side * side * sprig_cover.clamp(0.05, 1.0);
+    if !(rest > 0.5 * per) {
+        return m;
+    }
+    let n = (rest / per).round() as usize;
+    let rmax = crown_radius_m.max(0.05);
+    let nl = lv.leaves.len() as u64;
+    m.positions.reserve(4 * n);
+    for j in 0..n as u64 {
+        let u = |c: u64| crate::rng::unit_f32(crate::rng::hash(&[seed, 0x5971_6753, j, c]));
+        let l = &lv.leaves[(crate::rng::hash(&[seed, 0x5971_6753, j]) % nl) as usize];
+        let mut c = l.pos + Vec3::new(u(1) - 0.5, u(2) - 0.5, u(3) - 0.5) * side;
+        let rho = c.truncate().length();
+        if rho > rmax {
+            c = (c.truncate() * (rmax / rho)).extend(c.z);
+        }
+        let yaw = u(4) * std::f32::consts::TAU;
+        let tilt = (u(5) - 0.5) * 1.2;
+        let h = Vec3::new(yaw.cos(), yaw.sin(), 0.0) * (0.5 * side);
+        let v = (glam::Quat::from_axis_angle(h.normalize(), tilt) * Vec3::Z) * (0.5 * side);
+        crate::structure::mesh::quad(&mut m, c, h, v);
+    }
+    m
+}
+
 /// Largest vertex spacing of the terrain patch (m): finer than the DEM's cells so that the
 /// patch follows the bilinear surface the trees stand on ([`SiteConditions::elevation_at`]).
 pub const TERRAIN_STEP_M: f64 = 5.0;
@@ -704,4 +776,31 @@ mod tests {
             assert!((0.05..1.0).contains(&c), "{s:?} {c}");
         }
     }
+
+    /// `sprig_cards`: the leaf cards grow by at most 1.5 and the sprigs carry the rest of the
+    /// leaf area (each side² × cover), within half a sprig's share; the same call gives the same
+    /// mesh; a target the cards reach needs no sprig.
+    #[test]
+    fn sprigs_carry_the_leaf_area_beyond_the_cards() {
+        use crate::structure::{Leaf, Leaves};
+        let leaf = |i: usize| Leaf { pos: Vec3::new(0.1 * (i % 10) as f32, 0.1 * (i / 10) as f32, 5.0), dir: Vec3::Z, normal: Vec3::X, size: 0.1, node: i as u32 };
+        let make = || Leaves { leaves: (0..200).map(leaf).collect() };
+        let (cover, sprig_cover) = (0.6, 0.45);
+        let mut lv = make();
+        let m = sprig_cards(&mut lv, 20.0, cover, sprig_cover, 3.0, 7);
+        assert!(lv.leaves.iter().all(|l| (l.size - 0.15).abs() < 1e-6));
+        let cards: f32 = lv.leaves.iter().map(|l| 0.5 * l.size * l.size * cover).sum();
+        let side = 0.15 / 0.26;
+        let n = m.positions.len() / 4;
+        let total = cards + n as f32 * side * side * sprig_cover;
+        assert!((total - 20.0).abs() <= 0.5 * side * side * sprig_cover, "{cards} + {n} sprigs = {total}");
+        assert_eq!((m.indices.len(), m.uvs.len()), (6 * n, 4 * n));
+        assert!(m.positions.iter().all(|p| (p[0] * p[0] + p[1] * p[1]).sqrt() <= 3.0 + side));
+        let mut again = make();
+        assert_eq!(sprig_cards(&mut again, 20.0, cover, sprig_cover, 3.0, 7).positions, m.positions);
+        let mut small = make();
+        assert!(sprig_cards(&mut small, 0.5, cover, sprig_cover, 3.0, 7).positions.is_empty());
+        assert!(small.leaves[0].size < 0.15);
+    }
+
 }

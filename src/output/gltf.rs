@@ -277,6 +277,13 @@ impl Doc {
     /// The meshes of a LOD chain, `<name>_LOD<i>`, for the levels in `levels` (`None`: empty or
     /// not written).
     fn chain(&mut self, name: &str, chain: &LodChain, mats: LookMaterials, levels: &[usize]) -> Vec<Option<usize>> {
+        self.chain_with_sprigs(name, chain, &TriMesh::default(), mats, levels)
+    }
+
+    /// [`Doc::chain`] with leaf-cluster cards `sprigs` added to the full level (LOD0) as a
+    /// third primitive in the look's cluster material (created by [`Doc::look`] when level 1
+    /// is among its levels; without it the sprigs are left out).
+    fn chain_with_sprigs(&mut self, name: &str, chain: &LodChain, sprigs: &TriMesh, mats: LookMaterials, levels: &[usize]) -> Vec<Option<usize>> {
         chain
             .levels
             .iter()
@@ -288,7 +295,8 @@ impl Doc {
                 let bark = mats.bark.and_then(|m| self.primitive(&level.bark, m, true));
                 let scale = if i == 2 { CROWN_REPEAT } else { [1.0, 1.0] };
                 let leaves = mats.foliage[i.min(3)].and_then(|m| self.primitive_uv(&level.leaves, m, true, scale));
-                self.mesh(&format!("{name}_LOD{i}"), vec![bark, leaves])
+                let extra = if i == 0 && !sprigs.indices.is_empty() { mats.foliage[1].and_then(|m| self.primitive(sprigs, m, true)) } else { None };
+                self.mesh(&format!("{name}_LOD{i}"), vec![bark, leaves, extra])
             })
             .collect()
     }
@@ -406,6 +414,10 @@ pub struct StandModel {
     pub chain: LodChain,
     /// Index into [`StandScene::looks`].
     pub look: usize,
+    /// Leaf-cluster cards drawn with the full level (LOD0) in the look's cluster material (a
+    /// sprig of leaves each, UV 0–1 over the card): the leaf area of a full-detail export's
+    /// crown beyond its leaf cards (`job::export::sprig_cards`); empty for none.
+    pub sprigs: TriMesh,
 }
 
 /// One tree of a stand: a node drawing a [`StandModel`].
@@ -494,7 +506,13 @@ pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
     let used_looks: std::collections::BTreeSet<usize> = s.trees.iter().map(|t| s.models[t.model].look).collect();
     let mut mats: Vec<Option<LookMaterials>> = vec![None; s.looks.len()];
     for &l in &used_looks {
-        mats[l] = Some(d.look(&s.looks[l], &s.levels)?);
+        // a look whose models carry sprigs at the full level needs its cluster material
+        let sprigs = s.levels.contains(&0) && s.models.iter().any(|m| m.look == l && !m.sprigs.indices.is_empty());
+        let mut levels = s.levels.clone();
+        if sprigs && !levels.contains(&1) {
+            levels.push(1);
+        }
+        mats[l] = Some(d.look(&s.looks[l], &levels)?);
     }
     let billboard = crate::mesh::LOD_LEVELS - 1;
     // the shared unit billboard of each look
@@ -515,7 +533,7 @@ pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
         let m = &s.models[mi];
         let Some(lm) = mats[m.look] else { continue };
         let levels: Vec<usize> = s.levels.iter().copied().filter(|&l| l != billboard).collect();
-        model_meshes[mi] = d.chain(&m.name, &m.chain, lm, &levels);
+        model_meshes[mi] = d.chain_with_sprigs(&m.name, &m.chain, &m.sprigs, lm, &levels);
         model_card[mi] = m.chain.levels.get(billboard).and_then(|l| l.leaves.bounds());
     }
     let mut mesh_nodes = 0;

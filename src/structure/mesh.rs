@@ -153,7 +153,7 @@ pub fn leaf_mesh(leaves: &Leaves) -> TriMesh {
 }
 
 /// Appends an axis-aligned-ish card: a quad centred at `c` spanned by half-vectors `u`, `v`.
-fn quad(m: &mut TriMesh, c: Vec3, u: Vec3, v: Vec3) {
+pub(crate) fn quad(m: &mut TriMesh, c: Vec3, u: Vec3, v: Vec3) {
     let nrm = u.cross(v).normalize_or(Vec3::Z);
     let base = m.positions.len() as u32;
     for (p, uv) in [(c - u - v, [0.0, 0.0]), (c + u - v, [1.0, 0.0]), (c + u + v, [1.0, 1.0]), (c - u + v, [0.0, 1.0])] {

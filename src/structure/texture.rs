@@ -467,7 +467,7 @@ fn to_image(px: &[[f32; 2]], size: u32, background: Option<f32>) -> RgbaImage {
 /// outwards, the lower ones darker (self-shading), placed by hashes of `salt`.
 fn cluster_leaves(shape: LeafShape, salt: u64) -> Vec<Placed> {
     let n = 36;
-    let len = if shape.is_needle() { 0.36 } else { 0.26 };
+    let len = cluster_leaf_length(shape);
     (0..n)
         .map(|i| {
             let k = i as u64;
@@ -489,6 +489,24 @@ pub fn leaf_card_cover(shape: LeafShape) -> f32 {
     let img = leaf_texture(shape);
     let n = img.pixels().filter(|p| p.0[3] as f32 >= ALPHA_CUTOFF * 255.0).count();
     (n as f32 / (img.width() * img.height()).max(1) as f32).max(0.05)
+}
+
+/// Share (0–1) of a cluster card ([`cluster_texture`]) its leaves cover: the fraction of the
+/// texels of a 128-texel cluster texture whose coverage reaches [`ALPHA_CUTOFF`]. At least 0.05.
+pub fn cluster_card_cover(shape: LeafShape) -> f32 {
+    let img = cluster_texture(shape, 128);
+    let n = img.pixels().filter(|p| p.0[3] as f32 >= ALPHA_CUTOFF * 255.0).count();
+    (n as f32 / (img.width() * img.height()).max(1) as f32).max(0.05)
+}
+
+/// Leaf length on a cluster card, in card sides ([`cluster_texture`]): 0.36 for needle shoots,
+/// 0.26 for leaves.
+pub fn cluster_leaf_length(shape: LeafShape) -> f32 {
+    if shape.is_needle() {
+        0.36
+    } else {
+        0.26
+    }
 }
 
 /// The cluster card texture of `shape` (LOD1 leaf clusters): `size` × `size`, grey shading and

@@ -1,0 +1,55 @@
+# Renders a stand export of `sylva export` in Blender as an artist would first look at it: a
+# perspective view from the south (the camera DIST metres south of the export area's centre and
+# HEIGHT metres up, looking north and slightly down), a sun and a sky-blue world, Cycles on the
+# CPU without denoising (Debian's Blender 3.4 is built without OpenImageDenoise).
+#
+#   xvfb-run -a blender -b --factory-startup --python tools/blender_render_stand.py -- \
+#       STAND.glb OUT.png [--dist 40] [--height 14] [--size 640x360] [--samples 16]
+#
+# Blender 3.4 with numpy 1.24: the glTF importer needs `np.bool`.
+import math
+import sys
+
+import bpy
+import numpy as np
+
+if not hasattr(np, "bool"):
+    np.bool = bool  # the glTF importer of Blender 3.4 still uses the alias numpy 1.24 removed
+
+argv = sys.argv[sys.argv.index("--") + 1:]
+glb, png = argv[0], argv[1]
+opts = dict(zip(argv[2::2], argv[3::2]))
+dist = float(opts.get("--dist", "40"))
+height = float(opts.get("--height", "14"))
+w, h = (int(v) for v in opts.get("--size", "640x360").split("x"))
+samples = int(opts.get("--samples", "16"))
+
+bpy.ops.wm.read_factory_settings(use_empty=True)
+bpy.ops.import_scene.gltf(filepath=glb)
+scene = bpy.context.scene
+cam_data = bpy.data.cameras.new("cam")
+cam_data.lens = 24
+cam = bpy.data.objects.new("cam", cam_data)
+scene.collection.objects.link(cam)
+# the glTF's y-up scene comes in z-up, the export area's centre at the origin
+cam.location = (0.0, -dist, height)
+cam.rotation_euler = (math.radians(82), 0.0, 0.0)
+scene.camera = cam
+sun = bpy.data.lights.new("sun", "SUN")
+sun.energy = 4.0
+sun_obj = bpy.data.objects.new("sun", sun)
+sun_obj.rotation_euler = (math.radians(40), math.radians(20), math.radians(30))
+scene.collection.objects.link(sun_obj)
+world = bpy.data.worlds.new("sky")
+scene.world = world
+world.use_nodes = True
+world.node_tree.nodes["Background"].inputs[0].default_value = (0.55, 0.7, 0.9, 1.0)
+scene.render.engine = "CYCLES"
+scene.cycles.samples = samples
+scene.cycles.device = "CPU"
+scene.cycles.use_denoising = False
+scene.render.resolution_x = w
+scene.render.resolution_y = h
+scene.render.resolution_percentage = 100
+scene.render.filepath = png
+bpy.ops.render.render(write_still=True)
