@@ -39,7 +39,8 @@ pub struct Args {
     /// Plastic Trees analyses: one per class of species, 5-year age, 5 % height and crown
     /// radius and crown base, of the exported trees and of their neighbours within the halo),
     /// nodes_total and nodes_before_adaptation (all exported trees), pruned_light and
-    /// pruned_collision (nodes the adaptation removed)). Its folder must exist.
+    /// pruned_collision (nodes the adaptation removed), sprig_cards (leaf-cluster cards of
+    /// `--full-detail`)). Its folder must exist.
     #[arg(long)]
     pub stats: Option<PathBuf>,
     /// Most EcoMod strands of the open-grown skeleton of a stand export's trees (at least 8;
@@ -49,9 +50,10 @@ pub struct Args {
     #[arg(long, conflicts_with_all = ["full_detail", "instances"])]
     pub max_strands: Option<u32>,
     /// Every tree of a stand export with its species' strand count at its age, as `sylva tree
-    /// grow` gives it (hundreds to thousands of nodes a canopy tree): slower and larger files;
-    /// Plastic Trees then prunes the branches the neighbours shade, so crowns are more open
-    /// than with the default spread leaf cards.
+    /// grow` gives it (hundreds to thousands of nodes a canopy tree), grown as a forest tree
+    /// above the simulated crown base, bent by Plastic Trees and pruned where it meets its
+    /// neighbours' wood; its crown's leaf area as its leaf cards plus leaf-cluster cards
+    /// (sprigs). Slower and larger files (0.25 ha: about 50 s and 450 MB).
     #[arg(long, conflicts_with = "instances")]
     pub full_detail: bool,
     /// Folder of extra or edited species files, over the shipped library and the run's own
