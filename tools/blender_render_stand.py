@@ -1,6 +1,7 @@
 # Renders a stand export of `sylva export` in Blender as an artist would first look at it: a
 # perspective view from the south (the camera DIST metres south of the export area's centre and
-# HEIGHT metres up, looking north and slightly down), a sun and a sky-blue world, Cycles on the
+# HEIGHT metres up, looking north and slightly down), a sun behind the camera and a sky-blue
+# world, Cycles on the
 # CPU without denoising (Debian's Blender 3.4 is built without OpenImageDenoise).
 #
 #   xvfb-run -a blender -b --factory-startup --python tools/blender_render_stand.py -- \
@@ -38,12 +39,15 @@ scene.camera = cam
 sun = bpy.data.lights.new("sun", "SUN")
 sun.energy = 4.0
 sun_obj = bpy.data.objects.new("sun", sun)
-sun_obj.rotation_euler = (math.radians(40), math.radians(20), math.radians(30))
+# from the south-east behind the camera, 55 degrees up: the camera sees the lit side of the
+# crowns (the leaf material is opaque: a card lit from behind reads dark)
+sun_obj.rotation_euler = (math.radians(35), 0.0, math.radians(25))
 scene.collection.objects.link(sun_obj)
 world = bpy.data.worlds.new("sky")
 scene.world = world
 world.use_nodes = True
 world.node_tree.nodes["Background"].inputs[0].default_value = (0.55, 0.7, 0.9, 1.0)
+world.node_tree.nodes["Background"].inputs[1].default_value = 1.5
 scene.render.engine = "CYCLES"
 scene.cycles.samples = samples
 scene.cycles.device = "CPU"
