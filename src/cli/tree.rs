@@ -42,7 +42,7 @@ pub enum Command {
         /// branches per year (≤ 4000).
         #[arg(long, default_value_t = 80.0)]
         age: f32,
-        /// Obstacles (light and laplacian models): box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x
+        /// Obstacles (light and laplacian models): box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x[,length[,height]]
         #[arg(long)]
         obstacle: Vec<String>,
         /// Obstacles that appear AFTER the tree has grown (any model; same forms as --obstacle):

@@ -119,7 +119,7 @@ pub fn hemispherical_photo(run_dir: &Path, library: &SpeciesLibrary, o: &HemiOpt
     let (w, h) = (site.width() as f64 * site.cell_x_m, site.height() as f64 * site.cell_y_m);
     let place = format!("hemi:{},{}", o.x_m, o.y_m);
     if !(o.x_m >= 0.0 && o.y_m >= 0.0 && o.x_m < w && o.y_m < h) || !site.elevation_at(o.x_m, o.y_m).is_finite() {
-        return Err(invalid("--camera", place, format!("a place on the site: 0–{w:.1} m east, 0–{h:.1} m north, on valid terrain")));
+        return Err(invalid("--camera", place, format!("a place on the site: 0 ≤ X < {w:.1} m east, 0 ≤ Y < {h:.1} m north, on valid terrain")));
     }
     let ground = site.elevation_at(o.x_m, o.y_m);
     let eye_h = ground + CAMERA_HEIGHT_M;
