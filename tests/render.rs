@@ -598,3 +598,28 @@ fn showcase_real_species_levels_for_inspection() {
         eprintln!("species levels: {:?}", r.last_stats());
     });
 }
+
+/// A frame split over many render passes ([`Renderer::pass_triangles`]: the CPU path's draws cut
+/// into instance ranges, each pass submitted and waited for on a software adapter; issue 34)
+/// is the frame drawn in one pass, pixel for pixel, with the same statistics.
+#[test]
+fn split_passes_draw_the_same_picture() {
+    let scene = demo_scene(3000, 600.0, 3);
+    let cams = [Camera::preset(CameraPreset::Oblique, &scene.terrain), Camera::preset(CameraPreset::Ground, &scene.terrain)];
+    with_renderer(|r| {
+        for (k, cam) in cams.iter().enumerate() {
+            r.pass_triangles = 0;
+            let one = render_with(r, Culling::Cpu, &scene, cam, 240, 160).unwrap();
+            let s1 = r.last_stats();
+            // a few thousand triangles a pass: draws cut into many pieces, dozens of passes
+            r.pass_triangles = (s1.tree_triangles / 40).max(1);
+            let split = render_with(r, Culling::Cpu, &scene, cam, 240, 160).unwrap();
+            let s2 = r.last_stats();
+            r.pass_triangles = 0;
+            assert!(s2.tree_draws > s1.tree_draws, "camera {k}: the split frame drew {} calls, the single one {}", s2.tree_draws, s1.tree_draws);
+            assert_eq!((s1.per_level, s1.tree_triangles, s1.instances_drawn, s1.culled), (s2.per_level, s2.tree_triangles, s2.instances_drawn, s2.culled), "camera {k}");
+            let off = one.pixels().zip(split.pixels()).filter(|(p, q)| p != q).count();
+            assert_eq!(off, 0, "camera {k}: {off} pixels differ between one pass and split passes");
+        }
+    });
+}

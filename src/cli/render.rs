@@ -196,7 +196,24 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     let stumps = pictures::harvest_stumps(&a.run_dir, year)?;
     stage.set_stumps(&stumps, year);
     let stumps_drawn = stage.stump_instance_count() / 2;
-    let img = stage.render_plants_with(&sylva::job::scene::plants_from_rows(&rows), &sylva::job::scene::saplings_from_rows(&regen), a.season, &cam, a.size.0, a.size.1)?;
+    // the rows' figures for the statistics now: the rows (two strings a tree) and the
+    // regeneration table are not held while the frame is drawn (issue 34)
+    let trees = rows.iter().filter(|r| r.status == "alive" && stage.library.find(&r.species).is_some()).count();
+    let mut names: Vec<String> = rows.iter().map(|r| r.species.as_str()).chain(regen.iter().map(|r| r.species.as_str())).collect::<std::collections::BTreeSet<_>>().into_iter().map(String::from).collect();
+    names.shrink_to_fit();
+    let name = |s: &str| names.binary_search_by(|n| n.as_str().cmp(s)).map_or("", |i| names[i].as_str());
+    let plants: Vec<sylva::job::scene::Plant> = sylva::job::scene::plants_from_rows(&rows)
+        .into_iter()
+        .map(|p| sylva::job::scene::Plant { id: p.id, species: name(p.species), x_m: p.x_m, y_m: p.y_m, height_m: p.height_m, crown_radius_m: p.crown_radius_m, age_yr: p.age_yr, crown_base_m: p.crown_base_m, alive: p.alive })
+        .collect();
+    drop(rows);
+    let saplings: Vec<sylva::job::scene::SaplingCohort> = sylva::job::scene::saplings_from_rows(&regen)
+        .into_iter()
+        .map(|c| sylva::job::scene::SaplingCohort { cell: c.cell, species: name(c.species), x_m: c.x_m, y_m: c.y_m, cell_m: c.cell_m, stems: c.stems, height_m: c.height_m })
+        .collect();
+    drop(regen);
+    let img = stage.render_plants_with(&plants, &saplings, a.season, &cam, a.size.0, a.size.1)?;
+    drop((plants, saplings));
     let frame_s = t.elapsed().as_secs_f64();
     sylva::output::pictures::write_png(&a.out, &img)?;
     let st = stage.renderer.last_stats();
@@ -207,7 +224,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
             "trees_in_groups": ad.trees_in_groups, "unique_meshes": stage.library.species.len() + stage.obstacles.len() + ad.adapted_trees,
             "cluster_hulls": ad.cluster_hulls, "hull_triangles": ad.hull_triangles, "per_level": st.per_level, "adapted_per_level": ad.per_level,
             "instanced_trees": st.instances_drawn.saturating_sub(ad.adapted_trees), "instances_drawn": st.instances_drawn, "triangles": st.triangles, "frame_s": frame_s,
-            "trees": rows.iter().filter(|r| r.status == "alive" && stage.library.find(&r.species).is_some()).count(),
+            "trees": trees,
             "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards,
         });
         sylva::output::write_atomic(path, serde_json::to_string_pretty(&j)?.as_bytes())?;

@@ -73,9 +73,12 @@ impl Stage {
         // no far-field triangle budget for stills: only trees under `canopy_px` (6 px) go to
         // the canopy layer
         renderer.lod.max_geometry_triangles = 0;
-        // the tree draws over render passes of at most ~2 M triangles each: a software adapter
-        // binned all 12.8 M of the year-150 still at once, 2.2 GB (issue 34)
-        renderer.pass_triangles = 2_000_000;
+        // the tree draws over render passes of at most ~250,000 triangles each, each submitted
+        // and waited for on a software adapter: lavapipe binned up to 64 scenes of 36 MB
+        // (2.3 GB) of the year-150 still ahead of its rasterisers; now about 150 MB
+        // (issue 34: 2,000,000 a pass, 1.9 GB resident in all; 500,000, 1.6 GB; 250,000,
+        // 1.5 GB; 125,000, 1.46 GB; the frame's time the same within the machine's noise)
+        renderer.pass_triangles = 250_000;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
         let n_base = prototypes.len();
         let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));

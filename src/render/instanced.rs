@@ -117,14 +117,21 @@ pub fn level_costs(proto: &Prototype) -> [u32; LOD_LEVELS] {
     c
 }
 
-/// The GPU record of `t` before level selection (fade and level fields zero), or `None` for
-/// invalid data (species index out of range, non-positive or non-finite height or position).
-/// `crown_r0` is the prototype's [`Prototype::normalised_crown_radius`].
-pub fn instance_record(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32]) -> Option<InstanceRaw> {
+/// The prototype of `t` when [`instance_record`] makes a record of it (`None`: invalid data, a
+/// bad species index, a non-positive or non-finite height or position), without making it.
+pub fn record_prototype(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32]) -> Option<usize> {
     let s = t.species as usize;
     if s >= protos.len() || s >= crown_r0.len() || !(t.height > 0.0) || !t.height.is_finite() || !t.position.iter().all(|v| v.is_finite()) {
         return None;
     }
+    Some(s)
+}
+
+/// The GPU record of `t` before level selection (fade and level fields zero), or `None` for
+/// invalid data (species index out of range, non-positive or non-finite height or position).
+/// `crown_r0` is the prototype's [`Prototype::normalised_crown_radius`].
+pub fn instance_record(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32]) -> Option<InstanceRaw> {
+    let s = record_prototype(t, protos, crown_r0)?;
     let proto = &protos[s];
     let valid_r = t.crown_radius > 0.0 && t.crown_radius.is_finite();
     let sxy = if valid_r { t.crown_radius / crown_r0[s] } else { t.height };
@@ -157,16 +164,19 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
     let frustum = Frustum::from_view_proj(camera.view_proj(aspect));
     let levels: Vec<usize> = prototypes.iter().map(|p| drawn_levels(p.lods.levels.len())).collect();
     let crown_r0: Vec<f32> = prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
-    // Err = invalid, Ok(None) = culled by the frustum; else (projected size px, record)
-    let seen: Vec<Result<Option<(f32, InstanceRaw)>, ()>> = instances
+    // per instance: invalid, culled by the frustum, or its projected size (px); no record yet
+    // (2.8 M records of the default run's mirrored year 150 were 330 MB twice over; issue 34)
+    let seen: Vec<Seen> = instances
         .par_iter()
         .map(|t| {
-            let Some(rec) = instance_record(t, prototypes, &crown_r0) else { return Err(()) };
+            if record_prototype(t, prototypes, &crown_r0).is_none() {
+                return Seen::Invalid;
+            }
             let (c, r) = bounding_sphere(t);
             if !frustum.sphere_visible(c, r) {
-                return Ok(None);
+                return Seen::Culled;
             }
-            Ok(Some((camera.projected_size_px(c, t.height, height as f32), rec)))
+            Seen::Visible(camera.projected_size_px(c, t.height, height as f32))
         })
         .collect();
     // histogram of projected sizes per prototype (trees of at least min_px), then the far-field
@@ -175,9 +185,11 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
     let need_hist = params.max_triangles > 0 || (canopy_on && params.max_geometry_triangles > 0);
     let mut hist = vec![[0u32; SIZE_BINS]; levels.len()];
     if need_hist {
-        for (px, rec) in seen.iter().flatten().flatten() {
-            if *px >= params.min_px {
-                hist[rec.p3[0] as usize][size_bin(*px)] += 1;
+        for (t, v) in instances.iter().zip(&seen) {
+            if let Seen::Visible(px) = *v {
+                if px >= params.min_px {
+                    hist[t.species as usize][size_bin(px)] += 1;
+                }
             }
         }
     }
@@ -189,66 +201,106 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
     } else {
         1.0
     };
-    let mut canopy = Vec::new();
-    let mut canopy_only = 0usize;
-    let picks: Vec<Result<Option<(LodPick, InstanceRaw)>, ()>> = seen
-        .into_iter()
-        .map(|v| {
-            v.map(|o| {
-                o.and_then(|(px, mut rec)| {
-                    let wc = canopy_weight(px, canopy_px, params.band);
-                    if wc > 0.0 {
-                        let (rgb, cover) = crown_albedo([rec.leaf[0], rec.leaf[1], rec.leaf[2]], rec.leaf[3], [rec.bark[0], rec.bark[1], rec.bark[2]]);
-                        canopy.push(CanopySplat { x: rec.pos_h[0], y: rec.pos_h[1], r: rec.p3[3], w: wc * rec.p2[0] * cover, rgb });
-                        if wc >= 1.0 {
-                            canopy_only += 1;
-                            return None;
-                        }
-                        rec.p2[0] *= 1.0 - wc;
-                    }
-                    select_lod_scaled(px, scale, params, levels[rec.p3[0] as usize]).map(|p| (p, rec))
-                })
-            })
-        })
-        .collect();
-    let mut buckets: Vec<Vec<Vec<InstanceRaw>>> = levels.iter().map(|&n| vec![Vec::new(); n]).collect();
-    let mut out = Batches { lod_scale: scale, canopy_px, canopy, canopy_only, ..Batches::default() };
+    let mut out = Batches { lod_scale: scale, canopy_px, ..Batches::default() };
     let max_levels = levels.iter().copied().max().unwrap_or(0);
     out.per_level = vec![0; max_levels];
-    for (t, pick) in instances.iter().zip(&picks) {
-        let (pick, mut base) = match pick {
-            Err(()) => {
+    // the record of a visible instance as drawn: its canopy-layer share taken out of its
+    // opacity, its level picked; `None` when it goes wholly to the canopy layer or is too small
+    let pick = |t: &TreeInstance, px: f32, canopy: Option<&mut Vec<CanopySplat>>| -> Option<(LodPick, InstanceRaw, bool)> {
+        let mut rec = instance_record(t, prototypes, &crown_r0)?;
+        let wc = canopy_weight(px, canopy_px, params.band);
+        if wc > 0.0 {
+            if let Some(c) = canopy {
+                let (rgb, cover) = crown_albedo([rec.leaf[0], rec.leaf[1], rec.leaf[2]], rec.leaf[3], [rec.bark[0], rec.bark[1], rec.bark[2]]);
+                c.push(CanopySplat { x: rec.pos_h[0], y: rec.pos_h[1], r: rec.p3[3], w: wc * rec.p2[0] * cover, rgb });
+            }
+            if wc >= 1.0 {
+                return Some((LodPick { level: 0, blend: 0.0 }, rec, true));
+            }
+            rec.p2[0] *= 1.0 - wc;
+        }
+        select_lod_scaled(px, scale, params, levels[rec.p3[0] as usize]).map(|p| (p, rec, false))
+    };
+    // the canopy splats reserved to their number (a doubling growth held up to twice them:
+    // most of the 2.3 M trees of a 640 × 360 timelapse frame of the default run; issue 34)
+    if canopy_px > 0.0 {
+        let n = seen.par_iter().filter(|v| matches!(v, Seen::Visible(px) if canopy_weight(*px, canopy_px, params.band) > 0.0)).count();
+        out.canopy.reserve_exact(n);
+    }
+    // first pass: the canopy splats (in instance order), the statistics and the size of each
+    // (prototype, level) range
+    let mut counts: Vec<Vec<usize>> = levels.iter().map(|&n| vec![0; n]).collect();
+    for (t, v) in instances.iter().zip(&seen) {
+        let px = match *v {
+            Seen::Invalid => {
                 out.invalid += 1;
                 continue;
             }
-            Ok(None) => {
+            Seen::Culled => {
                 out.culled += 1;
                 continue;
             }
-            Ok(Some(p)) => *p,
+            Seen::Visible(px) => px,
         };
+        let Some((p, _, canopy_only)) = pick(t, px, Some(&mut out.canopy)) else {
+            out.culled += 1;
+            continue;
+        };
+        if canopy_only {
+            out.canopy_only += 1;
+            out.culled += 1;
+            continue;
+        }
+        let s = t.species as usize;
+        counts[s][p.level] += 1;
+        out.per_level[p.level] += 1;
+        if p.blend > 0.0 && p.level + 1 < levels[s] {
+            counts[s][p.level + 1] += 1;
+        }
+    }
+    out.culled = out.culled.saturating_sub(out.canopy_only);
+    // the ranges in (prototype, level) order, then the records written into them in instance
+    // order (the same records again: one list of exactly the drawn records, no buckets)
+    let mut next: Vec<Vec<usize>> = counts.iter().map(|c| vec![0; c.len()]).collect();
+    let mut total = 0usize;
+    for (p, lv) in counts.iter().enumerate() {
+        for (l, &n) in lv.iter().enumerate() {
+            next[p][l] = total;
+            if n == 0 {
+                continue;
+            }
+            out.triangles += level_triangles(&prototypes[p], l) * n as u64;
+            out.draws.push(DrawBatch { prototype: p, level: l, first: total as u32, count: n as u32 });
+            total += n;
+        }
+    }
+    out.instances = vec![<InstanceRaw as bytemuck::Zeroable>::zeroed(); total];
+    for (t, v) in instances.iter().zip(&seen) {
+        let Seen::Visible(px) = *v else { continue };
+        let Some((pick, mut base, false)) = pick(t, px, None) else { continue };
         let s = t.species as usize;
         base.p1[2] = pick.blend;
         base.p3[1] = pick.level as f32;
-        buckets[s][pick.level].push(base);
-        out.per_level[pick.level] += 1;
+        out.instances[next[s][pick.level]] = base;
+        next[s][pick.level] += 1;
         if pick.blend > 0.0 && pick.level + 1 < levels[s] {
             let mut coarse = base;
             coarse.p1[3] = 1.0;
             coarse.p3[1] = (pick.level + 1) as f32;
-            buckets[s][pick.level + 1].push(coarse);
-        }
-    }
-    out.culled = out.culled.saturating_sub(out.canopy_only);
-    for (p, lv) in buckets.into_iter().enumerate() {
-        for (l, v) in lv.into_iter().enumerate() {
-            if v.is_empty() {
-                continue;
-            }
-            out.triangles += level_triangles(&prototypes[p], l) * v.len() as u64;
-            out.draws.push(DrawBatch { prototype: p, level: l, first: out.instances.len() as u32, count: v.len() as u32 });
-            out.instances.extend(v);
+            out.instances[next[s][pick.level + 1]] = coarse;
+            next[s][pick.level + 1] += 1;
         }
     }
     out
+}
+
+/// What the first pass of [`build_batches_of`] found of an instance.
+#[derive(Clone, Copy)]
+enum Seen {
+    /// Invalid data ([`record_prototype`]).
+    Invalid,
+    /// Outside the frustum.
+    Culled,
+    /// Visible, this many pixels tall on screen.
+    Visible(f32),
 }

@@ -9,14 +9,31 @@ impl Renderer {
     pub(super) fn prepare_gpu_cull(&mut self, scene: &Scene, camera: &Camera, width: u32, height: u32) -> Result<Option<GpuFrame>> {
         use rayon::prelude::*;
         let crown_r0: Vec<f32> = scene.prototypes.iter().map(|p| p.normalised_crown_radius()).collect();
-        // the valid records in instance order, without a second list of them all (issue 34)
-        let src: Vec<InstanceRaw> = scene.instances.par_iter().filter_map(|t| instance_record(t, &scene.prototypes, &crown_r0)).collect();
-        let invalid = scene.instances.len() - src.len();
         let n_protos = scene.prototypes.len();
-        let mut per_proto = vec![0u32; n_protos];
-        for r in &src {
-            per_proto[r.p3[0] as usize] += 1;
-        }
+        // the valid instances per prototype, counted before any record is made: a frame whose
+        // compacted buffers exceed the limits falls back to the CPU path without building the
+        // records first (260 MB for the default run's year 150 on lavapipe; issue 34)
+        let per_proto: Vec<u32> = scene
+            .instances
+            .par_iter()
+            .fold(
+                || vec![0u32; n_protos],
+                |mut c, t| {
+                    if let Some(s) = crate::render::instanced::record_prototype(t, &scene.prototypes, &crown_r0) {
+                        c[s] += 1;
+                    }
+                    c
+                },
+            )
+            .reduce(
+                || vec![0u32; n_protos],
+                |mut a, b| {
+                    a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+                    a
+                },
+            );
+        let valid = per_proto.iter().map(|&n| n as usize).sum::<usize>();
+        let invalid = scene.instances.len() - valid;
         // slots: (prototype, level), capacity = instances of the prototype
         let mut slots = Vec::new();
         let mut proto_words: Vec<[u32; 4]> = Vec::with_capacity(n_protos);
@@ -32,11 +49,13 @@ impl Renderer {
         let limits = self.device.limits();
         let rec = std::mem::size_of::<InstanceRaw>() as u64;
         let dst_bytes = (base * rec).max(256);
-        let src_bytes = (src.len() as u64 * rec).max(256);
+        let src_bytes = (valid as u64 * rec).max(256);
         let max_bind = limits.max_storage_buffer_binding_size;
         if dst_bytes > max_bind || dst_bytes > limits.max_buffer_size || src_bytes > max_bind || base > u32::MAX as u64 / 2 {
             return Ok(None);
         }
+        // the valid records in instance order, without a second list of them all (issue 34)
+        let src: Vec<InstanceRaw> = scene.instances.par_iter().filter_map(|t| instance_record(t, &scene.prototypes, &crown_r0)).collect();
         // slot bases packed after the prototype records, 4 per record
         for c in slots.chunks(4) {
             let mut w = [0u32; 4];
@@ -113,7 +132,6 @@ impl Renderer {
             self.queue.write_buffer(ab, 0, bytemuck::cast_slice(&args));
         }
         self.queue.write_buffer(&cull.params, 0, bytemuck::bytes_of(&params));
-        let valid = src.len();
         let budget = self.lod.max_triangles > 0 || (self.lod.canopy_px > 0.0 && self.lod.max_geometry_triangles > 0);
         Ok(Some(GpuFrame { slots, budget, invalid, valid, args_bytes }))
     }

@@ -22,7 +22,7 @@ use wgpu::util::DeviceExt;
 use super::camera::Camera;
 use super::farfield::FarField;
 pub use super::canopy::{canopy_light_height, tree_extent};
-use super::instanced::{build_batches_of, instance_record, level_triangles, Batches, InstanceRaw};
+use super::instanced::{build_batches_of, instance_record, level_triangles, Batches, DrawBatch, InstanceRaw};
 use super::lod::{drawn_levels, Frustum, LodParams, Silhouette, SILHOUETTE_BINS};
 use super::scene::{Scene, TreeInstance};
 use crate::mesh::LOD_LEVELS;
@@ -167,12 +167,14 @@ pub struct Renderer {
     pub coarse_terrain: bool,
     /// Split the tree draws of the shadow and main passes over several render passes of at most
     /// about this many triangles each (an upper bound: every instance a slot may hold at its
-    /// level; a slot over it gets a pass of its own); 0 (default): one pass each. A software
-    /// adapter (lavapipe) bins every triangle of a render pass before it rasterises any, about
-    /// 200 bytes each: 2.2 GB for the 12.8 M triangles of the default run's year 150 at
-    /// 1920 × 1080 (issue 34). The picture is the same (the draws keep their order; the
-    /// multisampled colour and the depth are stored between the passes and resolved after the
-    /// last); each extra pass stores and loads the targets once more.
+    /// level); 0 (default): one pass each. The CPU path's draws are cut into instance ranges to
+    /// fit; a GPU-path slot over it gets a pass of its own. On a software adapter each pass is
+    /// submitted and waited for before the next is recorded ([`Renderer::wait_between_passes`]):
+    /// lavapipe's binning thread otherwise runs ahead of its rasterisers, up to 64 binned scenes
+    /// of 36 MB (2.3 GB) for the default run's year 150 at 1920 × 1080 (issue 34). The picture
+    /// is the same (the draws keep their order; the multisampled colour and the depth are
+    /// stored between the passes and resolved after the last); each extra pass stores and loads
+    /// the targets once more.
     pub pass_triangles: u64,
     /// The far field the shadow map was drawn with (a new one redraws it).
     shadow_far: Option<std::sync::Arc<FarField>>,
@@ -288,8 +290,11 @@ impl Renderer {
         let draws = match gpu_frame {
             Some(f) => FrameDraws::Gpu(f),
             None => {
-                let b = build_batches_of(instances, &scene.prototypes, camera, width, height, &lod);
+                let mut b = build_batches_of(instances, &scene.prototypes, camera, width, height, &lod);
+                b.draws = self.split_draws(&b.draws);
                 self.write_instances(&b);
+                // on their way to the device (the queue's staging copy): not held for the frame
+                b.instances = Vec::new();
                 if let Some(f) = &far {
                     self.write_far_canopy(f, instances, &scene.prototypes, &b);
                 } else if !b.canopy.is_empty() {
@@ -323,10 +328,10 @@ impl Renderer {
             self.encode_cull(&mut enc, f);
         }
         if redraw_shadow {
-            self.encode_shadow(&mut enc, &draws);
+            self.encode_shadow(&mut enc, &draws)?;
             self.shadow_ok = true;
         }
-        let tree_draws = self.encode_main(&mut enc, &draws, view);
+        let tree_draws = self.encode_main(&mut enc, &draws, view)?;
         let Some(gpu) = &self.scene else { return Err(RenderError::Internal("uploaded scene").into()) };
         let cull_rb = match (&draws, &self.cull) {
             (FrameDraws::Gpu(f), Some(GpuCull { args: Some((args, _)), readback: Some((rb, _)), .. })) => {

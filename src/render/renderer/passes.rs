@@ -31,14 +31,60 @@ impl Renderer {
     /// consecutive ranges of the GPU path's slots or the CPU path's draws that cover them all in
     /// order; one range when the frame is not split.
     pub(super) fn tree_pass_groups(&self, draws: &FrameDraws) -> Vec<std::ops::Range<usize>> {
-        let levels = self.scene.as_ref().map(|g| &g.protos);
-        let tris = |p: usize, l: usize| levels.and_then(|g| g.get(p)).and_then(|p| p.get(l)).map_or(0, |l| (l.bark.len() + l.leaves.len()) as u64 / 3);
+        let tris = |p: usize, l: usize| self.level_tris(p, l);
         // an upper bound of the triangles of each slot or draw
         let cost: Vec<u64> = match draws {
             FrameDraws::Cpu(b) => b.draws.iter().map(|d| d.count as u64 * tris(d.prototype, d.level)).collect(),
             FrameDraws::Gpu(f) => f.slots.iter().map(|s| s.cap as u64 * tris(s.prototype, s.level)).collect(),
         };
         split_by_cost(&cost, self.pass_triangles)
+    }
+
+    /// Triangles of one instance of uploaded prototype `p` at drawn level `l` (both materials).
+    fn level_tris(&self, p: usize, l: usize) -> u64 {
+        self.scene.as_ref().and_then(|g| g.protos.get(p)).and_then(|p| p.get(l)).map_or(0, |l| (l.bark.len() + l.leaves.len()) as u64 / 3)
+    }
+
+    /// The CPU path's draws cut into consecutive instance ranges of at most about
+    /// [`Renderer::pass_triangles`] triangles each, so that no render pass holds more than that
+    /// (a draw of 600,000 billboards or 6,000 full meshes is several; issue 34). The instances
+    /// keep their order, so the picture is the same. Unchanged when the frame is not split.
+    pub(super) fn split_draws(&self, draws: &[DrawBatch]) -> Vec<DrawBatch> {
+        if self.pass_triangles == 0 {
+            return draws.to_vec();
+        }
+        let mut out = Vec::with_capacity(draws.len());
+        for d in draws {
+            let per = self.level_tris(d.prototype, d.level).max(1);
+            let step = (self.pass_triangles / per).clamp(1, u32::MAX as u64) as u32;
+            let mut first = d.first;
+            let end = d.first + d.count;
+            while first < end {
+                let count = step.min(end - first);
+                out.push(DrawBatch { first, count, ..*d });
+                first += count;
+            }
+        }
+        out
+    }
+
+    /// Whether each render pass of a split frame ([`Renderer::pass_triangles`]) is submitted
+    /// and waited for before the next is recorded: on a software adapter. lavapipe (llvmpipe)
+    /// bins the triangles of a command buffer into scenes of up to 36 MB each and queues them
+    /// to its rasteriser threads without waiting, allocating new scenes (up to 64, 2.3 GB)
+    /// while the rasterisers lag behind; the binning thread runs far ahead of a 4× MSAA frame's
+    /// shading, so the default run's year 150 held all 64 (issue 34). A wait after each pass
+    /// bounds what is binned and not yet drawn to one pass's triangles.
+    pub(super) fn wait_between_passes(&self) -> bool {
+        self.pass_triangles > 0 && self.is_software()
+    }
+
+    /// Submits what `enc` holds and waits until the device has executed it; `enc` starts anew.
+    pub(super) fn submit_and_wait(&self, enc: &mut wgpu::CommandEncoder) -> Result<()> {
+        let done = std::mem::replace(enc, self.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") }));
+        let sub = self.queue.submit(Some(done.finish()));
+        self.device.poll(wgpu::PollType::Wait { submission_index: Some(sub), timeout: None }).map_err(|e| RenderError::Readback { stage: "poll", message: e.to_string() })?;
+        Ok(())
     }
 
     /// Records the tree draws of the slots (GPU path) or draws (CPU path) in `range`; returns the
@@ -49,7 +95,14 @@ impl Renderer {
         match draws {
             FrameDraws::Cpu(b) => {
                 let Some((ibuf, _)) = &self.instance_buf else { return 0 };
-                pass.set_vertex_buffer(1, ibuf.slice(..));
+                // the records written this frame, not the whole buffer: wgpu zeroes a bound
+                // range that was never written first (the rest of a power-of-two capacity,
+                // 59 MB of a 128 MiB buffer at the default run's year 150; issue 34)
+                let end = b.draws.iter().map(|d| u64::from(d.first) + u64::from(d.count)).max().unwrap_or(0) * std::mem::size_of::<InstanceRaw>() as u64;
+                if end == 0 {
+                    return 0;
+                }
+                pass.set_vertex_buffer(1, ibuf.slice(..end));
                 for d in b.draws.get(range).unwrap_or(&[]) {
                     let Some(level) = gpu.protos.get(d.prototype).and_then(|p| p.get(d.level)) else { continue };
                     pass.set_vertex_buffer(0, level.vb.slice(..));
@@ -88,9 +141,15 @@ impl Renderer {
         n
     }
 
-    pub(super) fn encode_shadow(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws) {
-        let Some(gpu) = &self.scene else { return };
+    /// The shadow pass; with [`Renderer::wait_between_passes`] each of its render passes is
+    /// submitted and waited for (the last too: the main pass follows).
+    pub(super) fn encode_shadow(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws) -> Result<()> {
+        let Some(gpu) = &self.scene else { return Ok(()) };
+        let wait = self.wait_between_passes();
         for (g, range) in self.tree_pass_groups(draws).into_iter().enumerate() {
+            if g > 0 && wait {
+                self.submit_and_wait(enc)?;
+            }
             let load = if g == 0 { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load };
             let mut pass = enc.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("shadow"),
@@ -112,14 +171,24 @@ impl Renderer {
             pass.set_pipeline(&self.tree_shadow);
             self.draw_trees(&mut pass, draws, range);
         }
+        if wait {
+            self.submit_and_wait(enc)?;
+        }
+        Ok(())
     }
 
-    pub(super) fn encode_main(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws, view: &wgpu::TextureView) -> u32 {
-        let (Some(t), Some(gpu)) = (&self.targets, &self.scene) else { return 0 };
+    /// The main pass; with [`Renderer::wait_between_passes`] each of its render passes but the
+    /// last is submitted and waited for (the caller submits the last).
+    pub(super) fn encode_main(&self, enc: &mut wgpu::CommandEncoder, draws: &FrameDraws, view: &wgpu::TextureView) -> Result<u32> {
+        let (Some(t), Some(gpu)) = (&self.targets, &self.scene) else { return Ok(0) };
         let groups = self.tree_pass_groups(draws);
         let n = groups.len();
+        let wait = self.wait_between_passes();
         let mut r = 0;
         for (g, range) in groups.into_iter().enumerate() {
+            if g > 0 && wait {
+                self.submit_and_wait(enc)?;
+            }
             let (first, last) = (g == 0, g + 1 == n);
             let color_load = if first { wgpu::LoadOp::Clear(wgpu::Color::BLACK) } else { wgpu::LoadOp::Load };
             let depth_load = if first { wgpu::LoadOp::Clear(1.0) } else { wgpu::LoadOp::Load };
@@ -140,7 +209,7 @@ impl Renderer {
             pass.set_bind_group(0, &gpu.bind_main, &[]);
             r += self.encode_main_pass(&mut pass, draws, range, first, last);
         }
-        r
+        Ok(r)
     }
 
     /// The draws of one of the main pass's render passes: the sky and the terrain in the
