@@ -181,6 +181,12 @@ pub struct PlasticTree {
     pub(crate) final_occ: Vec<Option<Occluder>>,
     pub(crate) force: bool,
     pub(crate) report: PlasticReport,
+    /// The levels of the last call in which no node of this tree was recomputed (none of its
+    /// signatures changed), recorded so that the next such call replays them instead of
+    /// re-evaluating the pruning of every node at every level (see
+    /// [`transform::QuietLevels`]); cleared by any call with work and by every change of the
+    /// tree's state outside a call.
+    pub(crate) quiet: Option<Box<transform::QuietLevels>>,
 }
 
 impl PlasticTree {
@@ -209,12 +215,14 @@ impl PlasticTree {
             fate: vec![Fate::Alive; n],
             force: false,
             report: PlasticReport { nodes_before: n, nodes_after: n, ..Default::default() },
+            quiet: None,
         })
     }
 
     /// Moves the tree (input, analysis and state) by `offset` (m). Obstacles of the
     /// environment it grew in are not moved; call before adapting it among others.
     pub fn translate(&mut self, offset: Vec3) {
+        self.quiet = None;
         for nd in &mut self.input.nodes {
             nd.pos += offset;
         }
@@ -244,6 +252,7 @@ impl PlasticTree {
         if !(factor > 0.0 && factor.is_finite()) {
             return Err(Error::Invalid { context: "PlasticTree::scale".into(), field: "scale".into(), value: factor.to_string(), expected: "a finite factor > 0".into() });
         }
+        self.quiet = None;
         let root = self.input.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO);
         let about = |p: Vec3| root + (p - root) * factor;
         for nd in &mut self.input.nodes {
@@ -311,6 +320,7 @@ impl PlasticTree {
 
     /// Makes the next adaptation recompute every node (not only the changed subtrees).
     pub fn invalidate(&mut self) {
+        self.quiet = None;
         self.force = true;
     }
 

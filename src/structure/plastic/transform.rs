@@ -409,7 +409,20 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         (lo, hi)
     };
     // 2.–4. levels; a node is recomputed when its own signature changed or its parent moved
-    let mut work: Vec<Work> = own.into_iter().zip(trees.iter()).map(|(own, t)| Work { before: t.pos.clone(), moved: vec![false; own.len()], shifted: vec![false; own.len()], done: vec![false; own.len()], own }).collect();
+    let mut work: Vec<Work> = own
+        .into_iter()
+        .zip(trees.iter_mut())
+        .map(|(own, t)| {
+            let n = own.len();
+            // a tree with nothing to recompute replays the levels of its last such call, or
+            // records this one's (QuietLevels); any other call forgets them
+            let quiet = !own.iter().any(|&x| x);
+            let replay = if quiet { t.quiet.take() } else { None };
+            t.quiet = None;
+            let record = (quiet && replay.is_none()).then(|| QuietLevels { live: vec![Vec::new(); t.analysis.stages.len()], set: Vec::new(), last: vec![Fate::Alive; n] });
+            Work { before: t.pos.clone(), moved: vec![false; n], shifted: vec![false; n], done: vec![false; n], own, replay, replayed: 0, record }
+        })
+        .collect();
     let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
     // per tree: the previous level's occluders, shade casters and per-direction cluster
     // transmittances
@@ -486,11 +499,44 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
                     (Some(d), Some(p)) => Some(Reuse { delta: d, occ: &p.occ, rows: &p.rows, map }),
                     _ => None,
                 };
+                if let Some(q) = w.replay.as_ref() {
+                    if q.live.get(s).is_some_and(|l| l.len() == occ.len() && l.iter().zip(&occ).all(|(&l, o)| l == o.is_some())) {
+                        // the level as recorded: the same live clusters, the same fates
+                        while let Some(&(st, k, f)) = q.set.get(w.replayed) {
+                            if st as usize != s {
+                                break;
+                            }
+                            t.fate[k as usize] = f;
+                            w.replayed += 1;
+                        }
+                        let rows = Rows { start: vec![u32::MAX; occ.len()], t: Vec::new() };
+                        return Some(Prev { occ, shade, rows });
+                    }
+                    // another cluster lives or died (an obstacle reached it): evaluated as
+                    // usual from this level on
+                    w.replay = None;
+                }
                 let rows = level(t, s, w, &occ, env, &solids, &vols, fixed_vols, reuse);
+                if let Some(r) = w.record.as_mut() {
+                    r.live[s] = occ.iter().map(Option::is_some).collect();
+                    for (k, (f, last)) in t.fate.iter().zip(&mut r.last).enumerate() {
+                        if f != last {
+                            r.set.push((s as u32, k as u32, *f));
+                            *last = *f;
+                        }
+                    }
+                }
                 Some(Prev { occ, shade, rows })
             })
             .collect();
         prev = next;
+    }
+    // the quiet trees keep the levels they replayed whole or recorded
+    for (t, w) in trees.iter_mut().zip(&mut work) {
+        t.quiet = w.replay.take().or_else(|| w.record.take().map(|mut r| {
+            r.last = Vec::new();
+            Box::new(r)
+        }));
     }
     // 6. wood of the other trees, then the report
     if group || !fixed.is_empty() {
@@ -641,9 +687,35 @@ fn same_occluder(a: &Option<Occluder>, b: &Option<Occluder>) -> bool {
     }
 }
 
+/// The levels of a call in which a tree had nothing to recompute (no signature changed, no
+/// recomputation forced): at each level, which of its stage clusters were alive (had an
+/// occluder: not shed, not inside an obstacle) and the fates the level set. In such a call a
+/// level moves no node and lights no cluster of the tree; it only re-evaluates the pruning of
+/// eqs. (10)–(11) (Pirk et al. 2012) from the tree's unchanged stage light, so the fates it sets
+/// follow from the tree's state and from which stage clusters are alive. The next call that
+/// again recomputes nothing of the tree replays them level by level while the live clusters are
+/// the same (the same fates, bit for bit, without a pass over every node at every level), and
+/// evaluates the levels as usual from the first where they differ. A call with work, and
+/// every change of the tree outside a call (translation, scaling, invalidation), forgets them.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct QuietLevels {
+    /// Per stage: whether each stage cluster had an occluder.
+    live: Vec<Vec<bool>>,
+    /// (stage, node, fate) of every fate set by the levels, in stage order.
+    set: Vec<(u32, u32, Fate)>,
+    /// While recording: every node's fate after the last level recorded.
+    last: Vec<Fate>,
+}
+
 /// Per-tree flags of one [`adapt_group`] call: `own` (signature changed), `moved` (position or
 /// rotation changed by this call), `done` (recomputed).
 struct Work {
+    /// Levels of the tree's last quiet call, replayed in this quiet call ([`QuietLevels`]).
+    replay: Option<Box<QuietLevels>>,
+    /// Entries of `replay.set` applied so far.
+    replayed: usize,
+    /// Levels of this quiet call, recorded for the next.
+    record: Option<QuietLevels>,
     /// Positions at the start of the call.
     before: Vec<Vec3>,
     own: Vec<bool>,
