@@ -968,3 +968,62 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         }
     }    rows
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::species::SpeciesLibrary;
+    use crate::structure::grow::space::Obstacle;
+    use crate::structure::species_tree::{grow_species_tree, Model};
+
+    /// Three 25-year beeches, the second and third 2 m apart (they shade each other and shed
+    /// by light) 20 m from the first, and a wall moved beside the first only: from the third
+    /// call on, the second and third trees have nothing to recompute and replay the levels
+    /// recorded in the second call ([`QuietLevels`]). Their fates (light pruning included) and
+    /// positions, and the first tree's, are bit for bit those of the same calls evaluated level
+    /// by level (every record forgotten before each call).
+    #[test]
+    fn quiet_levels_replay_what_the_levels_give() {
+        let lib = SpeciesLibrary::embedded().unwrap();
+        let sp = &lib.species[lib.find("beech").unwrap() as usize];
+        let p = sp.architecture.plastic;
+        let trees: Vec<PlasticTree> = [(7u64, 0.0f32), (8, 20.0), (9, 22.0)]
+            .iter()
+            .map(|&(seed, x)| {
+                let g = grow_species_tree(sp, Model::Light, 25.0, &[], seed).unwrap();
+                let mut t = PlasticTree::analyse(&g.skeleton, &p, &Environment::open(), None).unwrap();
+                t.translate(Vec3::new(x, 0.0, 0.0));
+                t
+            })
+            .collect();
+        let wall = |x: f32| Environment::with_obstacles(&[Obstacle::OrientedBox { center: Vec3::new(x, 0.0, 3.0), half: Vec3::new(0.1, 4.0, 3.0), yaw_deg: 0.0 }]);
+        let (mut replayed, mut evaluated) = (trees.clone(), trees);
+        let mut replays = 0;
+        for step in 0..4 {
+            let env = wall(1.2 + 0.1 * step as f32);
+            for t in &mut evaluated {
+                t.quiet = None;
+            }
+            let quiet_before = replayed[1].quiet.is_some();
+            let a = adapt_group(&mut replayed, &env).unwrap();
+            let b = adapt_group(&mut evaluated, &env).unwrap();
+            if step > 0 {
+                assert!(a.trees[0].recomputed_nodes > 0, "the wall moved beside the first tree");
+            }
+            if step >= 1 {
+                for k in 1..3 {
+                    assert_eq!(a.trees[k].recomputed_nodes, 0, "the far trees have nothing to recompute");
+                    assert!(replayed[k].quiet.is_some(), "a quiet call records or keeps its levels");
+                }
+            }
+            replays += quiet_before as usize;
+            assert!(a.trees[1].pruned_light + a.trees[2].pruned_light > 0, "the far trees shed by light, so their fates must be replayed");
+            assert_eq!(a.trees, b.trees);
+            for (r, e) in replayed.iter().zip(&evaluated) {
+                assert_eq!(r.fate, e.fate);
+                assert!(r.pos.iter().zip(&e.pos).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits)));
+            }
+        }
+        assert_eq!(replays, 2, "calls 3 and 4 replay the far trees' levels");
+    }
+}
