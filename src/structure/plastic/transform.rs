@@ -420,7 +420,10 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             let replay = if quiet { t.quiet.take() } else { None };
             t.quiet = None;
             let record = (quiet && replay.is_none()).then(|| QuietLevels { live: vec![Vec::new(); t.analysis.stages.len()], set: Vec::new(), last: vec![Fate::Alive; n] });
-            Work { before: t.pos.clone(), moved: vec![false; n], shifted: vec![false; n], done: vec![false; n], own, replay, replayed: 0, record }
+            // ψ ≥ 0 (eq. 10), so eq. (11) sheds no node whose ψ_min is 0 or below (every node
+            // of a tree with c_ψ = 0, the stand's forest-grown trees)
+            let prunes = t.analysis.psi_min.iter().any(|&m| m > 0.0);
+            Work { before: t.pos.clone(), moved: vec![false; n], shifted: vec![false; n], done: vec![false; n], own, replay, replayed: 0, record, prunes }
         })
         .collect();
     let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
@@ -716,6 +719,9 @@ struct Work {
     replayed: usize,
     /// Levels of this quiet call, recorded for the next.
     record: Option<QuietLevels>,
+    /// Whether eq. (11) can shed a node of the tree (some ψ_min > 0): else the light of its
+    /// stage clusters is evaluated at the last level only, and no ψ at all.
+    prunes: bool,
     /// Positions at the start of the call.
     before: Vec<Vec3>,
     own: Vec<bool>,
@@ -883,10 +889,13 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             }
         }
     }
-    // light on this stage's clusters that were recomputed
+    // light on this stage's clusters that were recomputed: the pruning of eq. (11) at this
+    // level needs it, and the last level's is the leaf clusters' light (eqs. 12–13); a tree
+    // that eq. (11) cannot shed (`Work::prunes`) needs the last level's only
     let clusters = &a.stages[s];
+    let needs_light = w.prunes || s == a.seasons as usize;
     let mut lit = Vec::new();
-    for (ci, c) in clusters.iter().enumerate() {
+    for (ci, c) in clusters.iter().enumerate().filter(|_| needs_light) {
         let touched = match c.lobe {
             Some(l) => a.lobes[l as usize].nodes.iter().any(|&k| w.done[k as usize]),
             None => w.done[c.anchor as usize],
@@ -952,18 +961,22 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         rows.start[ci] = (j * nd) as u32;
         t.light_cache[s][ci] = sums[j];
     }
-    // pruning (eqs. 10–11)
-    let alive: Vec<bool> = t.fate.iter().map(|f| *f == Fate::Alive).collect();
-    let (mut zeta, mut len, mut psi) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    let light = normalised(&t.light_cache[s], |ci| occ[ci].is_some());
-    psi_at_stage(&t.input, &a.season, s as u16, clusters, &light, &alive, &mut zeta, &mut len, &mut psi);
+    // pruning (eqs. 10–11); the fates of shed parents are inherited in any case
+    let mut psi = Vec::new();
+    if w.prunes {
+        let alive: Vec<bool> = t.fate.iter().map(|f| *f == Fate::Alive).collect();
+        let (mut zeta, mut len) = (vec![0.0; n], vec![0.0; n]);
+        psi = vec![0.0; n];
+        let light = normalised(&t.light_cache[s], |ci| occ[ci].is_some());
+        psi_at_stage(&t.input, &a.season, s as u16, clusters, &light, &alive, &mut zeta, &mut len, &mut psi);
+    }
     for k in 1..n {
         let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
         if t.fate[par] != Fate::Alive {
             if t.fate[k] == Fate::Alive && a.season[k] as usize <= s {
                 t.fate[k] = t.fate[par];
             }
-        } else if t.fate[k] == Fate::Alive && judged(a.season[k], s as u16) && psi[k] < a.psi_min[k] {
+        } else if w.prunes && t.fate[k] == Fate::Alive && judged(a.season[k], s as u16) && psi[k] < a.psi_min[k] {
             t.fate[k] = Fate::Light;
         }
     }    rows
