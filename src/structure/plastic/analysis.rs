@@ -93,7 +93,9 @@ pub struct Analysis {
     pub lobes: Vec<Lobe>,
     /// Leaf clusters per stage t = 0..=T (index t); stage T holds one cluster per lobe.
     pub stages: Vec<Vec<StageCluster>>,
-    /// Light i_c (0–1, eq. 3) on every stage cluster in the environment the tree grew in.
+    /// Light i_c (0–1, eq. 3) on every stage cluster in the environment the tree grew in. With
+    /// c_ψ = 0 (nothing shed for light: eq. 11's thresholds are all 0) only the last stage's
+    /// light is needed (the leaf clusters', eqs. 12–13) and the earlier stages hold NaN.
     pub stage_light: Vec<Vec<f32>>,
     /// Average light direction (unit, eq. 3) at every node in the stage it was created.
     pub light_dir: Vec<Vec3>,
@@ -110,6 +112,7 @@ pub struct Analysis {
     /// foliage lobes ([`FOLIAGE_REACH`]) more than 5 % of the values are 0, fully dark, which made
     /// ψ_ref 0 and so every threshold ψ_s,min 0: measured on the 9,133-node bench tree, ψ_ref
     /// 8·10⁻⁵ and nothing shed for light beside a wall; with the lit values 1,624 nodes shed).
+    /// 0 when c_ψ = 0 (not evaluated: every threshold is 0 whatever it is).
     pub psi_ref: f32,
     /// Pruning threshold ψ_s,min = c_ψ·min(ψ_ref, min_t ψ_s(t)) per node (eq. 11; m of leaf
     /// area per m of branch); 0 (never shed) on the main stem (Gravelius order 0) and the root.
@@ -575,8 +578,20 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
         for (&k, (_, dir)) in by_season[t].iter().zip(light_many(&sky, &vols, &at_nodes)) {
             light_dir[k as usize] = dir;
         }
+        // the clusters' light: ψ of eq. (10) for the thresholds of eq. (11), and the last
+        // stage's for the leaf clusters; with c_ψ = 0 every threshold is 0 and only the last
+        // stage's is needed
+        let prunes = p.pruning_c_psi > 0.0;
+        if !prunes && t != last as usize {
+            stage_light.push(vec![f32::NAN; clusters.len()]);
+            continue;
+        }
         let at_centres: Vec<(Vec3, u32)> = centres.iter().map(|&c| (c, solids.mask(c))).collect();
         let li: Vec<f32> = light_many(&sky, &vols, &at_centres).into_iter().map(|(i, _)| i).collect();
+        if !prunes {
+            stage_light.push(li);
+            continue;
+        }
         psi_at_stage(sk, &season, t as u16, clusters, &normalised(&li, |_| true), &alive, &mut zeta, &mut len, &mut psi);
         for k in 1..n {
             if psi[k].is_finite() && judged(season[k], t as u16) {
