@@ -29,9 +29,10 @@ use std::sync::Arc;
 /// Rows per row group (a reader holds one row group of a column at a time).
 pub const ROW_GROUP_ROWS: usize = 131_072;
 
-/// zstd level of the pages. 6 (issue 34, disk): the default run's year-150 inventory is 2 %
-/// smaller than at zstd's default 3 for 1.5 times the compression time; 9 saved 1.5 % more for
-/// twice the time again (BENCHMARKS.md, round 22).
+/// zstd level of the pages. 6 (issue 34, disk): the default run's year-150 inventory is 7 %
+/// smaller than at zstd's default 3 (23.7 against 25.4 MB, same encodings) for twice the
+/// compression time (0.9 s); 9 and 12 saved 0.5 and 2.3 % more for 1.6 and 3.9 times the time
+/// of 6 (BENCHMARKS.md, round 22).
 const ZSTD_LEVEL: i32 = 6;
 
 /// Columns written with `DELTA_BINARY_PACKED` and no dictionary: integers in ascending order
@@ -47,7 +48,7 @@ const PLAIN_COLUMNS: [&str; 4] = ["x_m", "y_m", "z_m", "geometry"];
 /// The writer properties of a table (zstd at [`ZSTD_LEVEL`], encodings by column:
 /// [`DELTA_COLUMNS`], [`PLAIN_COLUMNS`], a dictionary for the others). Sizes of the default
 /// run's year-150 inventory (1.03 M trees): 30.9 MB with dictionaries everywhere at zstd 3 as
-/// before, 22.3 MB so (BENCHMARKS.md, round 22).
+/// before, 23.7 MB so, the same values (BENCHMARKS.md, round 22).
 fn writer_properties(table: &Table) -> std::io::Result<WriterProperties> {
     use parquet::basic::Encoding;
     use parquet::schema::types::ColumnPath;
