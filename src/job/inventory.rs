@@ -37,12 +37,16 @@ impl InventoryRow {
     pub fn new(id: u64, species: String, v: [f32; N_MEASURES], status: String) -> InventoryRow {
         InventoryRow { id, species, x_m: v[0] as f64, y_m: v[1] as f64, z_m: v[2] as f64, age_yr: v[3], height_m: v[4], dbh_cm: v[5], crown_radius_m: v[6], crown_base_m: v[7], status }
     }
-    /// The measured values in [`INVENTORY_MEASURES`] order, with the text a reader quotes for
-    /// each (the value as its column's type prints it).
-    fn measures(&self) -> [(f64, String); N_MEASURES] {
-        let d = |v: f64| (v, v.to_string());
-        let f = |v: f32| (v as f64, v.to_string());
-        [d(self.x_m), d(self.y_m), d(self.z_m), f(self.age_yr), f(self.height_m), f(self.dbh_cm), f(self.crown_radius_m), f(self.crown_base_m)]
+    /// The measured values in [`INVENTORY_MEASURES`] order.
+    fn measures(&self) -> [f64; N_MEASURES] {
+        [self.x_m, self.y_m, self.z_m, self.age_yr as f64, self.height_m as f64, self.dbh_cm as f64, self.crown_radius_m as f64, self.crown_base_m as f64]
+    }
+    /// The text a reader quotes for measure `k` (the value as its column's type prints it).
+    fn measure_text(&self, k: usize) -> String {
+        match k {
+            0..=2 => self.measures()[k].to_string(),
+            _ => (self.measures()[k] as f32).to_string(),
+        }
     }
 }
 
@@ -113,9 +117,11 @@ fn parquet_error(path: &Path, e: crate::output::OutputError) -> Error {
 /// expected.
 fn check_row(path: &Path, at: impl Fn() -> String, r: &InventoryRow) -> Result<()> {
     let bad = |col: &str, v: String, want: &str| -> Result<()> { Err(Error::format(path, format!("{} (tree id {}): column {col} = {v}: expected {want}", at(), r.id)).into()) };
-    for ((v, text), c) in r.measures().into_iter().zip(&INVENTORY_MEASURES) {
+    // the text of a value only for the error (formatting every value of a million rows took
+    // most of `sylva render`'s reading time; issue 34)
+    for (k, (v, c)) in r.measures().into_iter().zip(&INVENTORY_MEASURES).enumerate() {
         if !c.accepts(v) {
-            return bad(c.name, text, c.expect);
+            return bad(c.name, r.measure_text(k), c.expect);
         }
     }
     if r.status != "alive" && !r.status.starts_with("dead:") {
@@ -136,14 +142,17 @@ fn column<'a, T>(c: Option<&'a [T]>, path: &Path, name: &str) -> Result<&'a [T]>
 
 /// [`read_filtered`] of a Parquet inventory.
 fn read_parquet(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -> Result<Vec<InventoryRow>> {
-    let c = crate::output::parquet::read_table(path, &crate::output::parquet::INVENTORY).map_err(|e| parquet_error(path, e))?;
-    let (id, sp, st) = (column(c.int("id"), path, "id")?, column(c.text("species"), path, "species")?, column(c.text("status"), path, "status")?);
+    let mut c = crate::output::parquet::read_table(path, &crate::output::parquet::INVENTORY).map_err(|e| parquet_error(path, e))?;
+    // the text columns moved into the rows, not copied
+    let mut take = |name: &str| c.texts.iter_mut().find(|t| t.0 == name).map(|t| std::mem::take(&mut t.1)).ok_or_else(|| Error::format(path, format!("no column {name:?}")));
+    let (sp, st) = (take("species")?, take("status")?);
+    let id = column(c.int("id"), path, "id")?;
     let (x, y, z) = (column(c.double("x_m"), path, "x_m")?, column(c.double("y_m"), path, "y_m")?, column(c.double("z_m"), path, "z_m")?);
     let f = |n: &str| column(c.float(n), path, n);
     let (age, h, d, cr, cb) = (f("age_yr")?, f("height_m")?, f("dbh_cm")?, f("crown_radius_m")?, f("crown_base_m")?);
     let mut rows = Vec::new();
-    for i in 0..c.rows {
-        let row = InventoryRow { id: id[i] as u64, species: sp[i].clone(), x_m: x[i], y_m: y[i], z_m: z[i], age_yr: age[i], height_m: h[i], dbh_cm: d[i], crown_radius_m: cr[i], crown_base_m: cb[i], status: st[i].clone() };
+    for (i, (species, status)) in sp.into_iter().zip(st).enumerate().take(c.rows) {
+        let row = InventoryRow { id: id[i] as u64, species, x_m: x[i], y_m: y[i], z_m: z[i], age_yr: age[i], height_m: h[i], dbh_cm: d[i], crown_radius_m: cr[i], crown_base_m: cb[i], status };
         check_row(path, || format!("row {}", i + 1), &row)?;
         if keep(&row) {
             rows.push(row);

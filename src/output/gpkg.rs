@@ -81,8 +81,9 @@ fn write_points(csv: impl std::io::Read, what: &str, path: &Path, table: &Table,
     // use of `sql` below comes before `db` is closed, or gets it back from a failed close).
     let handle = unsafe { db.handle() };
     let sql = |e: rusqlite::Error| system_error(e, handle);
-    // atomicity comes from the rename: no journal, no syncs until the file is whole
-    db.execute_batch(&format!("PRAGMA journal_mode = OFF; PRAGMA synchronous = OFF; PRAGMA application_id = {APPLICATION_ID}; PRAGMA user_version = {USER_VERSION};")).map_err(sql)?;
+    // atomicity comes from the rename: no journal, no syncs until the file is whole; pages of
+    // 16 KiB (SQLite's default 4 KiB: the default run's year-150 layer 1.4 % larger; issue 34)
+    db.execute_batch(&format!("PRAGMA page_size = 16384; PRAGMA journal_mode = OFF; PRAGMA synchronous = OFF; PRAGMA application_id = {APPLICATION_ID}; PRAGMA user_version = {USER_VERSION};")).map_err(sql)?;
     let tx = db.transaction().map_err(sql)?;
     tx.execute_batch(SCHEMA).map_err(sql)?;
     let (srs_id, srs_name, org, org_id, def) = srs_row(geo);

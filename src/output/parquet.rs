@@ -29,9 +29,42 @@ use std::sync::Arc;
 /// Rows per row group (a reader holds one row group of a column at a time).
 pub const ROW_GROUP_ROWS: usize = 131_072;
 
-/// zstd level of the pages (3: zstd's default; the inventories of the default run shrink about
-/// tenfold against CSV).
-const ZSTD_LEVEL: i32 = 3;
+/// zstd level of the pages. 6 (issue 34, disk): the default run's year-150 inventory is 7 %
+/// smaller than at zstd's default 3 (23.7 against 25.4 MB, same encodings) for twice the
+/// compression time (0.9 s); 9 and 12 saved 0.5 and 2.3 % more for 1.6 and 3.9 times the time
+/// of 6 (BENCHMARKS.md, round 22).
+const ZSTD_LEVEL: i32 = 6;
+
+/// Columns written with `DELTA_BINARY_PACKED` and no dictionary: integers in ascending order
+/// (tree ids; the regeneration layer's light cells), whose differences are small.
+const DELTA_COLUMNS: [&str; 2] = ["id", "cell"];
+
+/// Columns written as plain values without a dictionary: positions (`x_m`, `y_m`, `z_m` and the
+/// `geometry` points), nearly every value distinct, so a dictionary costs more than it saves;
+/// the plain values compress by the id order's spatial locality. Every other column keeps a
+/// dictionary (species, status, sizes, ages, stem counts: few distinct values).
+const PLAIN_COLUMNS: [&str; 4] = ["x_m", "y_m", "z_m", "geometry"];
+
+/// The writer properties of a table (zstd at [`ZSTD_LEVEL`], encodings by column:
+/// [`DELTA_COLUMNS`], [`PLAIN_COLUMNS`], a dictionary for the others). Sizes of the default
+/// run's year-150 inventory (1.03 M trees): 30.9 MB with dictionaries everywhere at zstd 3 as
+/// before, 23.7 MB so, the same values (BENCHMARKS.md, round 22).
+fn writer_properties(table: &Table) -> std::io::Result<WriterProperties> {
+    use parquet::basic::Encoding;
+    use parquet::schema::types::ColumnPath;
+    let mut b = WriterProperties::builder()
+        .set_compression(Compression::ZSTD(ZstdLevel::try_new(ZSTD_LEVEL).map_err(std::io::Error::other)?))
+        .set_created_by(format!("sylva {}", env!("CARGO_PKG_VERSION")));
+    for name in table.columns.iter().map(|c| c.name).chain(["geometry"]) {
+        let path = ColumnPath::from(name);
+        if DELTA_COLUMNS.contains(&name) {
+            b = b.set_column_dictionary_enabled(path.clone(), false).set_column_encoding(path, Encoding::DELTA_BINARY_PACKED);
+        } else if PLAIN_COLUMNS.contains(&name) {
+            b = b.set_column_dictionary_enabled(path, false);
+        }
+    }
+    Ok(b.build())
+}
 
 pub use super::schema::{Kind, Table, INVENTORY, REGENERATION};
 
@@ -176,7 +209,7 @@ pub fn csv_to_parquet(csv: impl std::io::Read, what: &str, out: &Path, table: &T
         let ix = names.iter().position(|n| *n == "x_m").unwrap_or(0);
         let iy = names.iter().position(|n| *n == "y_m").unwrap_or(0);
         let ty = Arc::new(parquet::schema::parser::parse_message_type(&schema(table)).map_err(std::io::Error::other)?);
-        let props = WriterProperties::builder().set_compression(Compression::ZSTD(ZstdLevel::try_new(ZSTD_LEVEL).map_err(std::io::Error::other)?)).set_created_by(format!("sylva {}", env!("CARGO_PKG_VERSION"))).build();
+        let props = writer_properties(table)?;
         let mut w = SerializedFileWriter::new(f, ty, Arc::new(props)).map_err(std::io::Error::other)?;
         let mut cols: Vec<Col> = table.columns.iter().map(|c| Col::of(c.kind)).collect();
         let mut geom: Vec<ByteArray> = Vec::new();
@@ -404,6 +437,64 @@ mod tests {
         assert_eq!(col["bbox"], serde_json::json!([270_000.0, 3_880_001.0, 270_010.25, 3_880_020.5]));
         assert_eq!(col["crs"]["id"]["code"], 32617);
         assert_eq!(col["crs"]["conversion"]["parameters"][1]["value"], -81.0);
+    }
+
+    /// Three row groups of trees with the encodings of [`writer_properties`] (delta-coded ids,
+    /// plain positions and points, dictionaries for the rest) read back bit for bit, points
+    /// included; the column chunks carry those encodings.
+    #[test]
+    fn many_rows_with_the_column_encodings_read_back_equal() {
+        use parquet::basic::Encoding;
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("big.parquet");
+        let n = 2 * ROW_GROUP_ROWS + 1234;
+        let species = ["beech", "sessile_oak", "silver_birch"];
+        let mut csv = format!("{}\n", INVENTORY.header());
+        let mut want = Vec::new();
+        for i in 0..n {
+            // ids ascending with gaps, positions wandering in cm steps, sizes from a few values
+            let id = i as i64 * 3 + (i as i64 % 7);
+            let (x, y) = (((i * 7919) % 240_000) as f64 / 100.0, ((i * 104_729) % 180_000) as f64 / 100.0);
+            let (sp, st) = (species[i % 3], if i % 50 == 0 { "dead:stress" } else { "alive" });
+            let line = format!("{id},{sp},{x:.2},{y:.2},{:.2},{},{:.2},{:.2},{:.2},{:.2},{st}\n", 700.0 + (i % 9000) as f64 / 100.0, i % 150, (i % 4000) as f32 / 100.0, (i % 9000) as f32 / 100.0, (i % 700) as f32 / 100.0, (i % 2000) as f32 / 100.0);
+            csv.push_str(&line);
+            want.push((id, sp, x, y));
+        }
+        let g = utm17();
+        csv_to_parquet(csv.as_bytes(), "test csv", &out, &INVENTORY, &g).unwrap();
+        let c = read_table(&out, &INVENTORY).unwrap();
+        assert_eq!(c.rows, n);
+        let (ids, xs, ys, sps) = (c.int("id").unwrap(), c.double("x_m").unwrap(), c.double("y_m").unwrap(), c.text("species").unwrap());
+        for (i, (id, sp, x, y)) in want.iter().enumerate() {
+            assert_eq!((ids[i], sps[i].as_str(), xs[i].to_bits(), ys[i].to_bits()), (*id, *sp, x.to_bits(), y.to_bits()), "row {i}");
+        }
+        assert_eq!(c.float("dbh_cm").unwrap()[8999], 89.99);
+        assert_eq!(c.float("crown_radius_m").unwrap()[1234], 5.34);
+        assert_eq!(c.double("z_m").unwrap()[12], 700.12);
+        assert_eq!(c.text("status").unwrap().iter().filter(|s| *s == "dead:stress").count(), n.div_ceil(50));
+        // the WKB points: the map coordinates of (x_m, y_m)
+        let reader = SerializedFileReader::new(std::fs::File::open(&out).unwrap()).unwrap();
+        let schema = reader.metadata().file_metadata().schema_descr_ptr();
+        let gi = (0..schema.num_columns()).find(|&i| schema.column(i).name() == "geometry").unwrap();
+        let mut row = 0;
+        for k in 0..reader.num_row_groups() {
+            let rg = reader.get_row_group(k).unwrap();
+            let m = rg.metadata().num_rows() as usize;
+            for p in read_column::<ByteArrayType>(rg.get_column_reader(gi).unwrap(), m, "geometry", k, 0).unwrap() {
+                let (x, y) = g.map(want[row].2, want[row].3);
+                assert_eq!(p.data(), wkb_point(x, y).data(), "point of row {row}");
+                row += 1;
+            }
+            let enc = |name: &str| rg.metadata().columns().iter().find(|c| c.column_path().string() == name).unwrap().encodings().collect::<Vec<_>>();
+            assert!(enc("id").contains(&Encoding::DELTA_BINARY_PACKED) && !enc("id").contains(&Encoding::RLE_DICTIONARY), "id: {:?}", enc("id"));
+            for name in ["x_m", "y_m", "z_m", "geometry"] {
+                assert!(enc(name).contains(&Encoding::PLAIN) && !enc(name).contains(&Encoding::RLE_DICTIONARY), "{name}: {:?}", enc(name));
+            }
+            for name in ["species", "dbh_cm", "status"] {
+                assert!(enc(name).contains(&Encoding::RLE_DICTIONARY), "{name}: {:?}", enc(name));
+            }
+        }
+        assert_eq!((row, reader.num_row_groups()), (n, 3));
     }
 
     #[test]

@@ -22,13 +22,26 @@ pub fn write_png_frames(dir: &Path, frames: &[image::RgbaImage]) -> Result<Vec<P
     Ok(paths)
 }
 
-/// Writes one image as PNG atomically.
+/// Writes one image as PNG atomically: an opaque image (every alpha 255: the renderer's
+/// frames, stills and maps) as 8-bit RGB, others as RGBA, zlib's default level with adaptive
+/// filters. Lossless either way; a reader's RGBA is the image given. Issue 34: the default
+/// run's stills and frames are 13–20 % smaller than as RGBA at `image`'s fast default.
 ///
 /// # Errors
 /// [`OutputError::Io`] / [`OutputError::Encode`] as for [`write_png_frames`].
 pub fn write_png(path: &Path, img: &image::RgbaImage) -> Result<()> {
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
+    use image::{ExtendedColorType, ImageEncoder};
     let mut bytes = Vec::new();
-    img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "PNG", message: e.to_string() })?;
+    let enc = PngEncoder::new_with_quality(&mut bytes, CompressionType::Default, FilterType::Adaptive);
+    let (w, h) = img.dimensions();
+    let res = if img.pixels().all(|p| p.0[3] == 255) {
+        let rgb: Vec<u8> = img.as_raw().chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+        enc.write_image(&rgb, w, h, ExtendedColorType::Rgb8)
+    } else {
+        enc.write_image(img.as_raw(), w, h, ExtendedColorType::Rgba8)
+    };
+    res.map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "PNG", message: e.to_string() })?;
     super::write_atomic(path, &bytes)
 }
 
@@ -122,6 +135,15 @@ mod tests {
         let paths = write_png_frames(&dir.path().join("frames"), &frames).unwrap();
         assert_eq!(paths.len(), 3);
         assert_eq!(image::open(&paths[2]).unwrap().to_rgba8().get_pixel(0, 0).0, [160, 100, 50, 255]);
+        // opaque images as RGB, the others as RGBA; both read back as given
+        assert_eq!(image::open(&paths[2]).unwrap().color(), image::ColorType::Rgb8);
+        let mut see_through = frames[1].clone();
+        see_through.put_pixel(3, 2, image::Rgba([1, 2, 3, 4]));
+        let p = dir.path().join("alpha.png");
+        write_png(&p, &see_through).unwrap();
+        let back = image::open(&p).unwrap();
+        assert_eq!((back.color(), back.to_rgba8()), (image::ColorType::Rgba8, see_through));
+        assert_eq!(image::open(&paths[1]).unwrap().to_rgba8(), frames[1]);
         assert!(write_gif(&gif, &[], 12.0).is_err());
         assert!(write_gif(&gif, &frames, 0.0).is_err());
     }
