@@ -10,11 +10,14 @@
 //! of the targets) so a speed-up can be checked to compute the same stand bit for bit.
 //! `SYLVA_STAND_TARGETS=N` adapts the N nearest trees instead of 1,000 (for a profiler);
 //! `SYLVA_STAND_ONCE=1` skips the second call; `SYLVA_STAND_CELL=M` sets the neighbourhood
-//! cell side (m, default 12; other cells group the trees otherwise, so the stand differs).
+//! cell side (m, default 12; other cells group the trees otherwise, so the stand differs);
+//! `SYLVA_STAND_FULL=1` adapts the targets at full detail (`FULL_STRANDS`: every strand of
+//! their species at their age, forest-grown, as stills and `--full-detail` exports draw them;
+//! issue 32's near field) instead of `DEFAULT_MAX_STRANDS`.
 use glam::Vec3;
 use sylva::rng::Stream;
 use sylva::species::SpeciesLibrary;
-use sylva::structure::stand::{adapt_stand, Stand, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
+use sylva::structure::stand::{adapt_stand, Stand, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS, FULL_STRANDS};
 
 /// FNV-1a over the bits of the adapted trees of `st`: node positions and radii, leaf positions,
 /// clusters after adaptation, and the report counts.
@@ -77,7 +80,8 @@ fn main() {
     if let Some(c) = std::env::var("SYLVA_STAND_CELL").ok().and_then(|v| v.parse().ok()) {
         opts.cell_m = c;
     }
-    let mut cache = SkeletonCache::new(42, DEFAULT_MAX_STRANDS);
+    let full = std::env::var_os("SYLVA_STAND_FULL").is_some();
+    let mut cache = SkeletonCache::new(42, if full { FULL_STRANDS } else { DEFAULT_MAX_STRANDS });
     let t = std::time::Instant::now();
     let st = adapt_stand(&trees, &targets, &lib, &mut cache, &opts).expect("adapt");
     let cold = t.elapsed().as_secs_f64();
@@ -92,9 +96,10 @@ fn main() {
     };
     let nodes: usize = st.trees.iter().map(|a| a.report.nodes_before).sum();
     let pruned: usize = st.trees.iter().map(|a| a.report.pruned_light + a.report.pruned_collision).sum();
-    println!("# stand adaptation (threads: {})", rayon::current_num_threads());
+    println!("# stand adaptation (threads: {}; {})", rayon::current_num_threads(), if full { "full detail" } else { "at most DEFAULT_MAX_STRANDS strands" });
     println!("| targets | trees in groups | cells | analyses | open-grown trees | nodes (targets) | pruned | first call s | second call s |");
     println!("|---|---|---|---|---|---|---|---|---|");
     println!("| {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} |", st.trees.len(), st.trees_in_groups, st.cells, st.analyses, cache.len(), nodes, pruned, cold, warm);
+    println!("first call: open-grown trees {:.2} s, analyses {:.2} s, adaptation {:.2} s", cold - st.analysis_s - st.adaptation_s, st.analysis_s, st.adaptation_s);
     println!("fingerprint {fp:016x}");
 }

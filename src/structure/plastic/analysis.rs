@@ -211,8 +211,16 @@ pub fn internode_length(sk: &Skeleton) -> f32 {
         (w, if w > 0.0 { wx / w } else { x })
     };
     let mut best = (f64::NEG_INFINITY, mean);
+    // a start equal to an earlier one follows the same path to the same mode, which cannot
+    // beat itself: skipped (the samples are sorted, so equal starts are consecutive)
+    let mut prev_start = None;
     for q in 0..64 {
-        let mut x = samples[(q * samples.len()) / 64] as f64;
+        let start = samples[(q * samples.len()) / 64];
+        if prev_start == Some(start.to_bits()) {
+            continue;
+        }
+        prev_start = Some(start.to_bits());
+        let mut x = start as f64;
         for _ in 0..100 {
             let (_, nx) = density_and_shift(x);
             let done = (nx - x).abs() < 1e-6 * h;
