@@ -5,11 +5,13 @@
 //! - one visible mesh object per tree plus the ground (the terrain patch; no obstacle here);
 //! - a top-down orthographic render (Cycles, transparent film, ground hidden) of the central
 //!   20 m × 20 m of the area: the share of covered pixels lies within ±0.10 of the simulation's
-//!   crown cover on the same square, the union of the inventory's crown discs. The export's
-//!   leaf cards carry each tree's leaf area as the light model has it (crown LAI × crown
-//!   projection, `job::export::fill_leaf_area`): measured 0.710 against 0.745 (before the leaf
-//!   area was filled: 0.429 against 0.745 with the export's plain cards; 0.147 against 0.636
-//!   with `--lod 0` on main `35fe786`).
+//!   crown cover on the same square, the union of the inventory's crown discs. Since round 22
+//!   the default export is full detail (every strand, forest-grown), each crown's leaf area
+//!   (crown LAI × crown projection) as its leaf cards plus planophile sprigs
+//!   (`job::export::sprig_cards`), each tree fitted to the simulated crown radius as the mean
+//!   of eight radii (`structure::stand::mean_crown_radius`): measured 0.684 against 0.745 (0.629
+//!   fitted to the largest radius; the 48-strand export of round 20 with enlarged leaf cards
+//!   0.710; 0.147 against 0.636 with `--lod 0` on main `35fe786`).
 //!
 //! `SYLVA_BLENDER_KEEP=DIR` keeps the export (`stand.glb`) and the top-down render
 //! (`blender_top.png`) in DIR for a look.
