@@ -57,8 +57,8 @@ pub struct RunOptions<'a> {
     pub map_px: usize,
     /// Write inventories, maps and plots (false: stand table and checkpoint only).
     pub write_snapshots: bool,
-    /// Years whose snapshots also get the GeoPackage inventory `year_NNNN.gpkg` (`None`: every
-    /// snapshot). The last year and a year stopped at always get it. A GeoPackage is ~115 bytes
+    /// Years whose inventory snapshots also get the GeoPackage inventory `year_NNNN.gpkg`
+    /// (`None`: every snapshot with an inventory). The last year and a year stopped at always get it. A GeoPackage is ~115 bytes
     /// per tree (uncompressed), so the main job
     /// limits it to the years it renders; the CSV inventory is written at every snapshot.
     pub gpkg_years: Option<Vec<u32>>,
@@ -302,13 +302,15 @@ impl Stepper for OneProcess {
 
 /// Runs `scenario` on `site` with species from `lib`, writing the run directory.
 ///
-/// Snapshots (inventory Parquet or CSV, GeoPackage `year_NNNN.gpkg` in the years of
-/// `gpkg_years`, regeneration layer `year_NNNN_regeneration.{parquet,csv}`,
-/// species and basal-area maps) at year 0, every
-/// `snapshot_every` years, in every year whose management removed trees ([`harvested`]: so
-/// every harvested tree is in some inventory as `dead:harvest`) and at the end, labelled
-/// `year_NNNN` (plus `_spring`, `_summer`, `_autumn` when `seasonal_snapshots`, in the
-/// scheduled years only); checkpoint every `checkpoint_every` years and at the end.
+/// Snapshots (species and basal-area maps; with the tree inventory, Parquet or CSV, the
+/// GeoPackage `year_NNNN.gpkg` in the years of `gpkg_years` and the regeneration layer
+/// `year_NNNN_regeneration.{parquet,csv}`) at year 0, every `snapshot_every` years, in every
+/// year whose management removed trees ([`harvested`]: so every harvested tree is in some
+/// inventory as `dead:harvest`) and at the end, labelled `year_NNNN`; the tree inventory only
+/// at year 0, every `inventory_every` years ([`Scenario::inventory_year`]), harvest years, the
+/// end and a year stopped at (plus `_spring`, `_summer`, `_autumn` when `seasonal_snapshots`,
+/// in the scheduled inventory years only); checkpoint every `checkpoint_every` years and at the
+/// end.
 ///
 /// A fresh run (not `resume`) first removes the snapshots and the checkpoint of an earlier run
 /// in the same directory ([`clear_snapshots`]), after checking that the run, inventory and
