@@ -323,7 +323,7 @@ impl Scenario {
     /// and the last (year 0 always has one; so do years whose management removed trees and a
     /// year stopped at, which the run driver adds).
     pub fn snapshot_year(&self, y: u32) -> bool {
-        y == 0 || y == self.years || (self.snapshot_every > 0 && y % self.snapshot_every == 0)
+        y == 0 || y == self.years || (self.snapshot_every > 0 && y.is_multiple_of(self.snapshot_every))
     }
 
     /// Whether the scheduled snapshot of year `y` also writes the tree inventory and
@@ -332,7 +332,7 @@ impl Scenario {
     /// at).
     pub fn inventory_year(&self, y: u32) -> bool {
         let every = self.inventory_interval();
-        y == 0 || y == self.years || (every > 0 && y % every == 0)
+        y == 0 || y == self.years || (every > 0 && y.is_multiple_of(every))
     }
 
     /// Checks ranges; `ctx` names the file.
@@ -410,7 +410,7 @@ impl Scenario {
             // inventories are written at snapshots: their years must be snapshot years
             let ok = match self.snapshot_every {
                 0 => n == 0,
-                s => n % s == 0,
+                s => n.is_multiple_of(s),
             };
             if !ok {
                 let expected = match self.snapshot_every {
