@@ -4,7 +4,8 @@
 //! process's `checkpoint.bin`); a run stopped on 3 ranks and resumed on 2, and one stopped on
 //! 2 and resumed on 2 (each rank reading its own checkpoint), end as the unbroken run; a
 //! managed run (issue 35: `scenarios/thinning_beech.toml` shortened, thinned from below over
-//! the whole site) on 2 ranks, and stopped and resumed on 2, writes the one process's run too.
+//! the whole site) on 2 ranks, and stopped and resumed on 2, writes the one process's run too;
+//! so does a run with tree inventories every 10 years and maps every 5 (`inventory_every`).
 #![cfg(feature = "mpi")]
 
 mod common;
@@ -150,4 +151,22 @@ fn a_thinned_stand_on_two_ranks_and_stopped_and_resumed_writes_the_run_of_one_pr
     simulate(2, &long, &d, true);
     let m = common::assert_same_run(&one, &d, &template, "thinning_beech on 2 ranks for 22 years, resumed on 2 for 33");
     assert_eq!((m.year, m.ranks), (33, 2));
+}
+
+#[test]
+fn inventories_every_ten_years_on_two_ranks_write_the_run_directory_of_one_process() {
+    // `inventory_every` (issue 34): the ranks write their inventory parts only in the
+    // inventory years, the maps at every snapshot
+    let tmp = tempfile::tempdir().unwrap();
+    let sc = tmp.path().join("mpi_inv.toml");
+    let text = scenario(20).replace("snapshot_every = 5\n", "snapshot_every = 5\ninventory_every = 10\n");
+    std::fs::write(&sc, &text).unwrap();
+    let one = tmp.path().join("one");
+    simulate(0, &sc, &one, false);
+    let f = common::files(&one);
+    assert!(f.contains_key("inventory/year_0010.parquet") && !f.contains_key("inventory/year_0015.parquet") && f.contains_key("maps/species_year_0015.png"), "{:?}", f.keys());
+    let d = tmp.path().join("np2");
+    simulate(2, &sc, &d, false);
+    let m = common::assert_same_run(&one, &d, &common::world_with(&text, &common::embedded()).1, "inventory_every on 2 ranks");
+    assert_eq!((m.year, m.ranks), (20, 2));
 }

@@ -41,8 +41,9 @@ pub struct Args {
     #[arg(long, default_value = "parquet")]
     pub inventory: sylva::output::inventory::InventoryFormat,
     /// Which snapshots also get a GeoPackage inventory (`inventory/year_NNNN.gpkg`): `final`
-    /// (the last year only, as `sylva run`) or `every-snapshot` (uncompressed: 129 MB for the
-    /// default run's year 150, 2.1 GB over its 31 snapshots).
+    /// (the last year only, as `sylva run`) or `every-snapshot` (every snapshot with a tree
+    /// inventory, `inventory_every`; uncompressed: 133 MB for the default run's year 150,
+    /// ≈ 0.5 GB over its 7 inventory years).
     #[arg(long, value_enum, default_value = "final")]
     pub gpkg: GpkgWhen,
 }
@@ -52,7 +53,7 @@ pub struct Args {
 pub enum GpkgWhen {
     /// The final year only.
     Final,
-    /// Every snapshot.
+    /// Every snapshot with a tree inventory.
     EverySnapshot,
 }
 

@@ -53,7 +53,12 @@ pub enum When {
     /// year whose management removed trees (thinning, harvest), the last year, a year stopped
     /// at.
     Snapshot,
-    /// At the snapshots of `seasonal_snapshots` runs, after spring, summer and autumn.
+    /// At the plain snapshots that hold the tree inventory: year 0 of a fresh run, every
+    /// `inventory_every` years (absent: every snapshot), every year whose management removed
+    /// trees, the last year, a year stopped at.
+    Inventory,
+    /// At the inventory snapshots of `seasonal_snapshots` runs, after spring, summer and
+    /// autumn.
     Season,
     /// At every checkpoint: every `checkpoint_every` years, the last year, a year stopped at.
     Checkpoint,
@@ -86,9 +91,9 @@ pub const OUTPUTS: &[Output] = &[
     Output { path: "scenario.toml", when: When::Start, main_job_only: false, what: "the scenario as run (`years` included)" },
     Output { path: "species/*.toml", when: When::Start, main_job_only: false, what: "the species files of the pool, as simulated" },
     Output { path: "maps/conditions/*.{png,tif}", when: When::Start, main_job_only: true, what: "condition maps with legends and GeoTIFFs" },
-    Output { path: "inventory/year_NNNN.{parquet,csv}", when: When::Snapshot, main_job_only: false, what: "every tree (GeoParquet by default; CSV with `--inventory csv`)" },
-    Output { path: "inventory/year_NNNN.gpkg", when: When::Snapshot, main_job_only: false, what: "every tree as a GeoPackage point layer `inventory` (the main job: the last year only)" },
-    Output { path: "inventory/year_NNNN_regeneration.{parquet,csv}", when: When::Snapshot, main_job_only: false, what: "the sapling cohorts of the regeneration layer" },
+    Output { path: "inventory/year_NNNN.{parquet,csv}", when: When::Inventory, main_job_only: false, what: "every tree (GeoParquet by default; CSV with `--inventory csv`)" },
+    Output { path: "inventory/year_NNNN.gpkg", when: When::Inventory, main_job_only: false, what: "every tree as a GeoPackage point layer `inventory` (the main job: the last year only)" },
+    Output { path: "inventory/year_NNNN_regeneration.{parquet,csv}", when: When::Inventory, main_job_only: false, what: "the sapling cohorts of the regeneration layer" },
     Output { path: "inventory/year_NNNN_{spring,summer,autumn}.{parquet,csv,gpkg}", when: When::Season, main_job_only: false, what: "seasonal inventories" },
     Output { path: "maps/{species,basal_area}_year_NNNN.{png,tif}", when: When::Snapshot, main_job_only: false, what: "dominant species and basal-area maps" },
     Output { path: "maps/species_codes.csv", when: When::Snapshot, main_job_only: false, what: "the codes of the species GeoTIFFs" },
@@ -514,7 +519,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
         }
     };
     // the GeoPackage (≈ 115 bytes per tree, ≈ 120 MB at the end of the default run) only for
-    // the final year; the Parquet (or CSV) inventory is written at every snapshot
+    // the final year; the Parquet (or CSV) inventory at every inventory snapshot (`inventory_every`)
     let so = SimulateOptions { out: out.clone(), resume: false, gpkg_years: Some(vec![sc.years]), stop: opts.stop.clone(), inventory: opts.inventory };
     let sim = simulate(sc, site.clone(), lib, so, Stepping::One, Some(&mut keep), sink)?;
     if let Some(e) = keys_err {

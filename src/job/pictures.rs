@@ -399,14 +399,25 @@ pub fn snapshot_rows_where(run_dir: &Path, year: u32, keep: impl FnMut(&Inventor
         .iter()
         .find(|(y, s, _)| *y == year && s.is_empty())
         .map(|(_, _, p)| p.clone())
-        .ok_or_else(|| Error::format(run_dir, format!("no inventory snapshot for year {year} (years present: {})", years_list(&snaps))))?;
+        .ok_or_else(|| Error::format(run_dir, no_inventory(run_dir, year, &snaps)))?;
     Ok(inventory::read_filtered(&path, keep)?)
 }
 
-fn years_list(snaps: &[(u32, String, PathBuf)]) -> String {
-    let mut ys: Vec<u32> = snaps.iter().map(|s| s.0).collect();
+/// Why `year` has no tree inventory in `run_dir`, with the years that have one: a snapshot
+/// year (its maps are there) of a run that writes inventories every `inventory_every` years is
+/// said to be one. A picture or export of such a year is refused rather than drawn from
+/// another year's trees under this year's name.
+fn no_inventory(run_dir: &Path, year: u32, snaps: &[(u32, String, PathBuf)]) -> String {
+    let mut ys: Vec<u32> = snaps.iter().filter(|s| s.1.is_empty()).map(|s| s.0).collect();
     ys.dedup();
-    ys.iter().map(|y| y.to_string()).collect::<Vec<_>>().join(", ")
+    let list = ys.iter().map(|y| y.to_string()).collect::<Vec<_>>().join(", ");
+    let maps = run_dir.join("maps").join(format!("species_year_{year:04}.png")).is_file();
+    let every = crate::sim::Scenario::load(&run_dir.join("scenario.toml")).ok().and_then(|s| s.inventory_every);
+    match (maps, every) {
+        (true, Some(n)) => format!("year {year} is a snapshot (maps) without a tree inventory: this run writes inventories every {n} years (`inventory_every` in scenario.toml), plus year 0, the last year and harvest years; years with an inventory: {list}"),
+        (true, None) => format!("year {year} is a snapshot (maps) without a tree inventory; years with an inventory: {list}"),
+        _ => format!("no inventory snapshot for year {year} (years with an inventory: {list})"),
+    }
 }
 
 /// Removes the `frame_NNNNN.png` files Sylva wrote into `dir` (nothing else).

@@ -57,8 +57,8 @@ pub struct RunOptions<'a> {
     pub map_px: usize,
     /// Write inventories, maps and plots (false: stand table and checkpoint only).
     pub write_snapshots: bool,
-    /// Years whose snapshots also get the GeoPackage inventory `year_NNNN.gpkg` (`None`: every
-    /// snapshot). The last year and a year stopped at always get it. A GeoPackage is ~115 bytes
+    /// Years whose inventory snapshots also get the GeoPackage inventory `year_NNNN.gpkg`
+    /// (`None`: every snapshot with an inventory). The last year and a year stopped at always get it. A GeoPackage is ~115 bytes
     /// per tree (uncompressed), so the main job
     /// limits it to the years it renders; the CSV inventory is written at every snapshot.
     pub gpkg_years: Option<Vec<u32>>,
@@ -165,19 +165,44 @@ fn remove_prefixed(dir: &Path, subs: &[(&str, &[&str])]) -> Result<()> {
     Ok(())
 }
 
-fn snapshot(dir: &Path, w: &World, label: &str, maps: bool, map_px: usize, gpkg: bool, format: InventoryFormat) -> Result<()> {
+/// Removes the tree inventory files of the snapshot `label` (`inventory/{label}.*`,
+/// `inventory/{label}_*`: regeneration layer, seasons); its maps are kept.
+///
+/// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
+fn remove_inventory(dir: &Path, label: &str) -> Result<()> {
+    let (i1, i2) = (format!("{label}."), format!("{label}_"));
+    remove_prefixed(dir, &[("inventory", &[&i1, &i2])])
+}
+
+/// What a snapshot writes ([`Stepper::snapshot`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Parts {
+    /// The tree inventory (Parquet or CSV), and with `maps` the regeneration table.
+    pub inventory: bool,
+    /// The GeoPackage inventory too (only with `inventory`).
+    pub gpkg: bool,
+    /// A plain snapshot: the species and basal-area maps (and with `inventory` the
+    /// regeneration table); false for a seasonal snapshot (inventories only).
+    pub maps: bool,
+}
+
+fn snapshot(dir: &Path, w: &World, label: &str, parts: Parts, map_px: usize, format: InventoryFormat) -> Result<()> {
     let inv = dir.join("inventory");
-    match format {
-        InventoryFormat::Csv => inventory::write_inventory_csv(&inv.join(format!("{label}.csv")), w)?,
-        InventoryFormat::Parquet => inventory::write_inventory_parquet(&inv.join(format!("{label}.parquet")), w)?,
-    }
-    if gpkg {
-        inventory::write_inventory_gpkg(&inv.join(format!("{label}.gpkg")), w)?;
-    }
-    if maps {
+    if parts.inventory {
         match format {
-            InventoryFormat::Csv => inventory::write_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), w)?,
-            InventoryFormat::Parquet => inventory::write_regeneration_parquet(&inv.join(format!("{label}_regeneration.parquet")), w)?,
+            InventoryFormat::Csv => inventory::write_inventory_csv(&inv.join(format!("{label}.csv")), w)?,
+            InventoryFormat::Parquet => inventory::write_inventory_parquet(&inv.join(format!("{label}.parquet")), w)?,
+        }
+        if parts.gpkg {
+            inventory::write_inventory_gpkg(&inv.join(format!("{label}.gpkg")), w)?;
+        }
+    }
+    if parts.maps {
+        if parts.inventory {
+            match format {
+                InventoryFormat::Csv => inventory::write_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), w)?,
+                InventoryFormat::Parquet => inventory::write_regeneration_parquet(&inv.join(format!("{label}_regeneration.parquet")), w)?,
+            }
         }
         let m = dir.join("maps");
         plot::write_maps(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), w, map_px)?;
@@ -244,15 +269,13 @@ pub trait Stepper {
     fn save_reads_world(&self) -> bool {
         true
     }
-    /// Writes the plain snapshot `label` (e.g. `year_0010`) into run directory `dir`: the
-    /// inventory, the GeoPackage inventory when `gpkg`, and with `maps` the
-    /// regeneration-layer CSV and the species and basal-area maps (longest side `map_px`).
-    /// Default: from `world`.
+    /// Writes the snapshot `label` (e.g. `year_0010`) into run directory `dir`: what `parts`
+    /// asks for of the inventory, the GeoPackage inventory, the regeneration table and the
+    /// species and basal-area maps (longest side `map_px`). Default: from `world`.
     ///
     /// Errors: I/O errors naming the file; the stepper's.
-    #[allow(clippy::too_many_arguments)]
-    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, gpkg: bool, format: InventoryFormat) -> Result<()> {
-        snapshot(dir, world, label, maps, map_px, gpkg, format)
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, parts: Parts, map_px: usize, format: InventoryFormat) -> Result<()> {
+        snapshot(dir, world, label, parts, map_px, format)
     }
     /// True when [`Stepper::snapshot`] reads `world` (so a snapshot year steps with `full`);
     /// false when the stepper writes snapshots from its own state (a tiled run's ranks).
@@ -279,13 +302,15 @@ impl Stepper for OneProcess {
 
 /// Runs `scenario` on `site` with species from `lib`, writing the run directory.
 ///
-/// Snapshots (inventory Parquet or CSV, GeoPackage `year_NNNN.gpkg` in the years of
-/// `gpkg_years`, regeneration layer `year_NNNN_regeneration.{parquet,csv}`,
-/// species and basal-area maps) at year 0, every
-/// `snapshot_every` years, in every year whose management removed trees ([`harvested`]: so
-/// every harvested tree is in some inventory as `dead:harvest`) and at the end, labelled
-/// `year_NNNN` (plus `_spring`, `_summer`, `_autumn` when `seasonal_snapshots`, in the
-/// scheduled years only); checkpoint every `checkpoint_every` years and at the end.
+/// Snapshots (species and basal-area maps; with the tree inventory, Parquet or CSV, the
+/// GeoPackage `year_NNNN.gpkg` in the years of `gpkg_years` and the regeneration layer
+/// `year_NNNN_regeneration.{parquet,csv}`) at year 0, every `snapshot_every` years, in every
+/// year whose management removed trees ([`harvested`]: so every harvested tree is in some
+/// inventory as `dead:harvest`) and at the end, labelled `year_NNNN`; the tree inventory only
+/// at year 0, every `inventory_every` years ([`Scenario::inventory_year`]), harvest years, the
+/// end and a year stopped at (plus `_spring`, `_summer`, `_autumn` when `seasonal_snapshots`,
+/// in the scheduled inventory years only); checkpoint every `checkpoint_every` years and at the
+/// end.
 ///
 /// A fresh run (not `resume`) first removes the snapshots and the checkpoint of an earlier run
 /// in the same directory ([`clear_snapshots`]), after checking that the run, inventory and
@@ -359,9 +384,13 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         // so its state could be viewed, or the end of a shorter run now extended) is not one an
         // unbroken run writes: removed, so the resumed directory equals the unbroken run's
         let yc = world.stand.year;
-        let scheduled = yc == 0 || yc == scenario.years || (scenario.snapshot_every > 0 && yc % scenario.snapshot_every == 0) || rows.last().is_some_and(|r| r.year == yc && harvested(r));
-        if !scheduled {
+        let cut = rows.last().is_some_and(|r| r.year == yc && harvested(r));
+        if !(scenario.snapshot_year(yc) || cut) {
             remove_snapshot(&dir, &format!("year_{yc:04}"))?;
+        } else if !(scenario.inventory_year(yc) || cut) {
+            // a snapshot year of this run without a tree inventory (`inventory_every`): the
+            // inventory a stopped run wrote there is removed, its maps stay
+            remove_inventory(&dir, &format!("year_{yc:04}"))?;
         } else if !gp(yc) {
             // the GeoPackages of a shorter run's final year, now extended, are not ones the
             // unbroken run writes (only its final year's, unless every snapshot's are asked for)
@@ -391,7 +420,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         checkpoint::remove_all(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {
-            snapshot(&dir, &world, "year_0000", true, opts.map_px, gp(0), format)?;
+            snapshot(&dir, &world, "year_0000", Parts { inventory: true, gpkg: gp(0), maps: true }, opts.map_px, format)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(0, &world);
             }
@@ -405,14 +434,16 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     // a caller that reads the world at snapshots); a tiled run writes them from the ranks
     let snap_world = stepper.snapshot_reads_world() || opts.on_snapshot.is_some();
     let save_world = stepper.save_reads_world();
-    let every = scenario.snapshot_every;
     while world.stand.year < scenario.years {
         let y = world.stand.year + 1;
-        let snap_year = opts.write_snapshots && (y == scenario.years || (every > 0 && y % every == 0));
+        let snap_year = opts.write_snapshots && scenario.snapshot_year(y);
+        // the tree inventory (and regeneration table) of a snapshot year: every
+        // `inventory_every` years, the last year; a harvest year and a stop add theirs below
+        let inv_year = snap_year && scenario.inventory_year(y);
         let ty = Instant::now();
         let mut rep = YearReport::default();
         let mut err: Option<super::JobError> = None;
-        let seasonal = snap_year && scenario.seasonal_snapshots;
+        let seasonal = inv_year && scenario.seasonal_snapshots;
         let (d, px, gp_y, fmt) = (dir.clone(), opts.map_px, gp(y), format);
         let checkpoint_year = y == scenario.years || (scenario.checkpoint_every > 0 && y % scenario.checkpoint_every == 0);
         let stop_before = opts.stop.as_ref().is_some_and(|s| s.load(Ordering::SeqCst));
@@ -424,7 +455,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
                     Season::Summer => "summer",
                     _ => "autumn",
                 };
-                if let Err(e) = snapshot(&d, w, &format!("year_{y:04}_{name}"), false, px, gp_y, fmt) {
+                if let Err(e) = snapshot(&d, w, &format!("year_{y:04}_{name}"), Parts { inventory: true, gpkg: gp_y, maps: false }, px, fmt) {
                     err = Some(e);
                 }
             }
@@ -445,8 +476,9 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
             stepper.complete(&mut world)?;
         }
         let snap_year = snap_year || cut;
+        let inv_year = inv_year || cut;
         if snap_year {
-            stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, gp(y), format)?;
+            stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), Parts { inventory: inv_year, gpkg: gp(y), maps: true }, opts.map_px, format)?;
             tables(&dir, &rows, &world, true)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(y, &world);
@@ -473,10 +505,14 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         }
         if stop_now && y < scenario.years {
             stopped = true;
-            if opts.write_snapshots && !snap_year {
-                stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), true, opts.map_px, true, format)?;
-                if let Some(f) = opts.on_snapshot.as_mut() {
-                    f(y, &world);
+            // the year stopped at gets a whole snapshot, its tree inventory included, so its
+            // state can be viewed; a resume removes what is off the schedule
+            if opts.write_snapshots && !inv_year {
+                stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), Parts { inventory: true, gpkg: true, maps: true }, opts.map_px, format)?;
+                if !snap_year {
+                    if let Some(f) = opts.on_snapshot.as_mut() {
+                        f(y, &world);
+                    }
                 }
             }
             break;

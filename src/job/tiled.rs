@@ -33,7 +33,7 @@
 //! order.
 
 use super::checkpoint::{self, Found, Manifest};
-use super::run::{run_scenario_with, RunOptions, RunSummary, Stepper};
+use super::run::{run_scenario_with, Parts, RunOptions, RunSummary, Stepper};
 use super::Result;
 use crate::sim::cohorts::RegenLedger;
 use crate::sim::stats::StandRow;
@@ -153,7 +153,9 @@ struct Snap {
     dir: PathBuf,
     /// Snapshot label (`year_NNNN`).
     label: String,
-    /// Regeneration layer and maps too.
+    /// The tree inventory (and with `maps` the regeneration layer).
+    inventory: bool,
+    /// Maps too (a plain snapshot).
     maps: bool,
     /// Longest side of the maps (pixels).
     map_px: usize,
@@ -162,7 +164,7 @@ struct Snap {
 impl Snap {
     fn encode(&self) -> Result<Vec<u8>> {
         let dir = self.dir.to_str().ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "run directory".into(), value: self.dir.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() })?;
-        let mut m = vec![self.maps as u8];
+        let mut m = vec![self.maps as u8 | (self.inventory as u8) << 1];
         m.extend_from_slice(&(self.map_px as u64).to_le_bytes());
         m.extend_from_slice(&(self.label.len() as u64).to_le_bytes());
         m.extend_from_slice(self.label.as_bytes());
@@ -179,7 +181,7 @@ impl Snap {
         let label = m.get(17..17 + n).ok_or_else(|| bad("label cut short"))?;
         let label = std::str::from_utf8(label).map_err(|_| bad("label not UTF-8"))?.to_string();
         let dir = std::str::from_utf8(&m[17 + n..]).map_err(|_| bad("folder not UTF-8"))?;
-        Ok(Snap { dir: PathBuf::from(dir), label, maps: m[0] & 1 != 0, map_px })
+        Ok(Snap { dir: PathBuf::from(dir), label, inventory: m[0] & 2 != 0, maps: m[0] & 1 != 0, map_px })
     }
     /// This process's part file of rank `rank` for the output `name` in `sub`:
     /// `.{name}.rank{rank}.{pid}.tmp`, a temporary file that a later run removes if this one
@@ -212,11 +214,13 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
     let got = t.exchange(out)?;
     let s = Snap::decode(got.first().map(|m| m.as_slice()).unwrap_or(&[]))?;
     let me = t.rank();
-    let csv = s.part("inventory", &format!("{}.csv", s.label), me);
-    let regen = s.maps.then(|| s.part("inventory", &format!("{}_regeneration.csv", s.label), me));
+    let csv = s.inventory.then(|| s.part("inventory", &format!("{}.csv", s.label), me));
+    let regen = (s.inventory && s.maps).then(|| s.part("inventory", &format!("{}_regeneration.csv", s.label), me));
     let r = (|| -> Result<()> {
         let layout = &tile.layout;
-        crate::output::inventory::write_inventory_part(&csv, &tile.world, |x, y| layout.owner_of(x, y) == me)?;
+        if let Some(p) = &csv {
+            crate::output::inventory::write_inventory_part(p, &tile.world, |x, y| layout.owner_of(x, y) == me)?;
+        }
         if let Some(p) = &regen {
             crate::output::inventory::write_regeneration_part(p, &tile.world)?;
         }
@@ -225,7 +229,7 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
     let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
     r?;
     a?;
-    let mine: Vec<PathBuf> = std::iter::once(csv).chain(regen).collect();
+    let mine: Vec<PathBuf> = csv.into_iter().chain(regen).collect();
     let text: Vec<&str> = mine.iter().filter_map(|p| p.to_str()).collect();
     let mut out = vec![Vec::new(); n];
     out[0] = text.join("\n").into_bytes();
@@ -243,7 +247,7 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
     let mut paths = Vec::with_capacity(n);
     for (k, m) in got.iter().enumerate() {
         let text = std::str::from_utf8(m).map_err(|_| Error::Exchange { peer: k, reason: "part file paths not UTF-8".into() })?;
-        let ps: Vec<PathBuf> = text.split('\n').map(PathBuf::from).collect();
+        let ps: Vec<PathBuf> = text.split('\n').filter(|p| !p.is_empty()).map(PathBuf::from).collect();
         if ps.len() != mine.len() {
             return Err(Error::Exchange { peer: k, reason: format!("{} part files, expected {}", ps.len(), mine.len()) }.into());
         }
@@ -470,8 +474,9 @@ impl Stepper for Root<'_> {
     /// by tree id (cohorts by light cell) into the files of one process and draws the maps from
     /// the gathered map columns.
     #[allow(clippy::too_many_arguments)]
-    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, maps: bool, map_px: usize, gpkg: bool, format: crate::output::inventory::InventoryFormat) -> Result<()> {
-        let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), maps, map_px };
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, parts: Parts, map_px: usize, format: crate::output::inventory::InventoryFormat) -> Result<()> {
+        let Parts { inventory, gpkg, maps } = parts;
+        let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), inventory, maps, map_px };
         command(self.t, Some(Command::Snapshot))?;
         let Some((parts, cols)) = self.collective(|tile, t| write_parts(tile, t, Some(&snap)))? else {
             return Err(Error::Exchange { peer: 0, reason: "rank 0 got no snapshot parts".into() }.into());
@@ -479,13 +484,17 @@ impl Stepper for Root<'_> {
         let column = |i: usize| parts.iter().map(|p| p[i].clone()).collect::<Vec<PathBuf>>();
         let inv = dir.join("inventory");
         use crate::output::inventory as inventory_out;
-        inventory_out::merge_inventory_csv(&inv.join(format!("{label}.csv")), &column(0))?;
-        // the GeoPackage from the merged CSV: the bytes one process writes
-        if gpkg {
-            inventory_out::csv_file_to_gpkg(&inv.join(format!("{label}.csv")), &inv.join(format!("{label}.gpkg")), world)?;
+        if inventory {
+            inventory_out::merge_inventory_csv(&inv.join(format!("{label}.csv")), &column(0))?;
+            // the GeoPackage from the merged CSV: the bytes one process writes
+            if gpkg {
+                inventory_out::csv_file_to_gpkg(&inv.join(format!("{label}.csv")), &inv.join(format!("{label}.gpkg")), world)?;
+            }
+        }
+        if inventory && maps {
+            inventory_out::merge_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), &column(1))?;
         }
         if maps {
-            inventory_out::merge_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), &column(1))?;
             let ba = cols.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map sums gathered".into() })?;
             let m = dir.join("maps");
             crate::output::plot::write_maps_from(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px, &ba)?;
@@ -494,7 +503,7 @@ impl Stepper for Root<'_> {
             std::fs::remove_file(p).map_err(|e| Error::io(p, e))?;
         }
         // Parquet from the merged CSV: the bytes one process writes
-        if format == crate::output::inventory::InventoryFormat::Parquet {
+        if inventory && format == crate::output::inventory::InventoryFormat::Parquet {
             inventory_out::csv_file_to_parquet(&inv.join(format!("{label}.csv")), &crate::output::parquet::INVENTORY, world)?;
             if maps {
                 inventory_out::csv_file_to_parquet(&inv.join(format!("{label}_regeneration.csv")), &crate::output::parquet::REGENERATION, world)?;

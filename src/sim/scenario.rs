@@ -30,9 +30,16 @@ pub struct Scenario {
     /// Random seed.
     #[serde(default)]
     pub seed: u64,
-    /// Write an inventory snapshot every N years (0 = only the first and last year).
+    /// Write a snapshot (species and basal-area maps, the main job's key frame) every N years
+    /// (0 = only the first and last year); tree inventories follow `inventory_every`.
     #[serde(default = "default_snapshot_every")]
     pub snapshot_every: u32,
+    /// Write the tree inventories and regeneration tables every N years, at snapshots
+    /// (absent: every snapshot, `snapshot_every`; 0 = only the first and last year); a
+    /// multiple of `snapshot_every`. Year 0, the last year, every year whose management
+    /// removed trees and a year stopped at get one whatever this is ([`Scenario::inventory_year`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inventory_every: Option<u32>,
     /// Also write snapshots after spring, summer and autumn of snapshot years.
     #[serde(default)]
     pub seasonal_snapshots: bool,
@@ -307,6 +314,27 @@ impl Scenario {
         toml::to_string_pretty(self).map_err(|e| Error::Serialize { what: format!("scenario {}", self.name), format: "TOML", message: e.to_string() })
     }
 
+    /// Years between tree inventories: `inventory_every`, or `snapshot_every` when absent.
+    pub fn inventory_interval(&self) -> u32 {
+        self.inventory_every.unwrap_or(self.snapshot_every)
+    }
+
+    /// Whether year `y` (1..=years) is a scheduled snapshot year: every `snapshot_every` years
+    /// and the last (year 0 always has one; so do years whose management removed trees and a
+    /// year stopped at, which the run driver adds).
+    pub fn snapshot_year(&self, y: u32) -> bool {
+        y == 0 || y == self.years || (self.snapshot_every > 0 && y.is_multiple_of(self.snapshot_every))
+    }
+
+    /// Whether the scheduled snapshot of year `y` also writes the tree inventory and
+    /// regeneration table: year 0, the last year and every [`Scenario::inventory_interval`]
+    /// years (the run driver adds the years whose management removed trees and a year stopped
+    /// at).
+    pub fn inventory_year(&self, y: u32) -> bool {
+        let every = self.inventory_interval();
+        y == 0 || y == self.years || (every > 0 && y.is_multiple_of(every))
+    }
+
     /// Checks ranges; `ctx` names the file.
     pub fn validate(&self, ctx: &str) -> Result<()> {
         let t = &self.terrain;
@@ -377,6 +405,20 @@ impl Scenario {
         validate_climate(&self.climate, ctx)?;
         if !(1..=10_000).contains(&self.years) {
             return Err(invalid(ctx, "years", self.years, "1–10000"));
+        }
+        if let Some(n) = self.inventory_every {
+            // inventories are written at snapshots: their years must be snapshot years
+            let ok = match self.snapshot_every {
+                0 => n == 0,
+                s => n.is_multiple_of(s),
+            };
+            if !ok {
+                let expected = match self.snapshot_every {
+                    0 => "0 (only the first and last year), as snapshot_every = 0".to_string(),
+                    s => format!("a multiple of snapshot_every = {s} (e.g. {}, {}), or 0 for only the first and last year", s, 5 * s),
+                };
+                return Err(invalid(ctx, "inventory_every", n, &expected));
+            }
         }
         if !(self.light_cell_m >= 2.0 && self.light_cell_m <= 20.0) {
             return Err(invalid(ctx, "light_cell_m", self.light_cell_m, "2–20 m"));
@@ -550,6 +592,24 @@ spacing_m = 2.0
         assert!(e.contains("start[0].spacing_m") && e.contains("0.1"), "{e}");
         let e = Scenario::from_toml_str(&OK.replace("seed = 3", "seed = 3\nbogus = 1"), "t.toml").unwrap_err().to_string();
         assert!(e.contains("bogus"), "{e}");
+    }
+
+    #[test]
+    fn inventory_every_defaults_to_snapshot_every_and_must_be_a_multiple() {
+        let s = Scenario::from_toml_str(&OK.replace("seed = 3", "seed = 3\nsnapshot_every = 2"), "t.toml").unwrap();
+        assert_eq!((s.inventory_every, s.inventory_interval()), (None, 2));
+        // absent stays absent in the scenario written to a run directory
+        assert!(!s.to_toml_string().unwrap().contains("inventory_every"));
+        let s = Scenario::from_toml_str(&OK.replace("seed = 3", "seed = 3\nsnapshot_every = 2\ninventory_every = 4"), "t.toml").unwrap();
+        assert_eq!(s.inventory_interval(), 4);
+        assert_eq!((1..=5).filter(|&y| s.snapshot_year(y)).collect::<Vec<_>>(), vec![2, 4, 5]);
+        assert_eq!((0..=5).filter(|&y| s.inventory_year(y)).collect::<Vec<_>>(), vec![0, 4, 5]);
+        assert!(s.to_toml_string().unwrap().contains("inventory_every = 4"));
+        for (snap, inv) in [(2, 3), (5, 1), (0, 5)] {
+            let e = Scenario::from_toml_str(&OK.replace("seed = 3", &format!("seed = 3\nsnapshot_every = {snap}\ninventory_every = {inv}")), "t.toml").unwrap_err().to_string();
+            assert!(e.contains("t.toml") && e.contains("inventory_every") && e.contains(&inv.to_string()) && e.contains("snapshot_every"), "{e}");
+        }
+        assert!(Scenario::from_toml_str(&OK.replace("seed = 3", "seed = 3\nsnapshot_every = 5\ninventory_every = 0"), "t.toml").is_ok());
     }
 }
 

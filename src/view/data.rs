@@ -90,7 +90,8 @@ pub struct RunData {
     pub library: SpeciesLibrary,
     /// Species ids of the run's pool, in the order of the run's maps and legends.
     pub pool: Vec<String>,
-    /// Snapshot years (plain snapshots), ascending.
+    /// Snapshot years (plain snapshots with a tree inventory: with `inventory_every` the
+    /// other snapshot years have maps only), ascending.
     pub years: Vec<u32>,
     paths: Vec<PathBuf>,
     rows: HashMap<u32, Vec<InventoryRow>>,
