@@ -119,10 +119,36 @@ fn from_total_key(k: u32) -> f32 {
 /// 2²⁰ over 2⁴³ trees.
 pub const FIXED_BITS: i32 = 64;
 
-/// `v` (≥ 0, below 2⁶³) in units of 2^-[`FIXED_BITS`], rounded to nearest.
+/// `v` (|v| below 2⁶³) in units of 2^-[`FIXED_BITS`], rounded to nearest, ties away from
+/// zero: `(v · 2^64).round() as i128`, from the bits (a float-to-i128 conversion is a library
+/// call, several times slower); 0 for NaN, saturated for larger values.
 #[inline]
 pub fn fixed(v: f64) -> i128 {
-    (v * 2f64.powi(FIXED_BITS)).round() as i128
+    let b = v.to_bits();
+    let exp = ((b >> 52) & 0x7ff) as i32;
+    if exp == 0 || v.is_nan() {
+        // zero or subnormal (below 2^-1022): 0 at 2^-64
+        return 0;
+    }
+    let m = (b & ((1u64 << 52) - 1)) | (1u64 << 52);
+    // |v| = m · 2^(exp - 1075), so |v| · 2^64 = m · 2^sh
+    let sh = exp - 1075 + FIXED_BITS;
+    let r: i128 = if sh >= 0 {
+        if sh > 127 - 53 {
+            i128::MAX
+        } else {
+            (m as i128) << sh
+        }
+    } else if -sh <= 64 {
+        (((m >> (-sh - 1)) + 1) >> 1) as i128
+    } else {
+        0
+    };
+    if b >> 63 == 1 {
+        -r
+    } else {
+        r
+    }
 }
 
 /// The f64 nearest the fixed-point sum `s` ([`fixed`]).
@@ -487,6 +513,17 @@ mod tests {
             }
         }
         assert_eq!(top_height(&[], &[], 1.0), 0.0);
+    }
+
+    #[test]
+    fn fixed_is_the_rounded_product() {
+        let (d, h) = trees(2_000);
+        let mut vals: Vec<f64> = d.iter().chain(&h).flat_map(|&x| [x as f64, (x as f64).powi(2), std::f64::consts::FRAC_PI_4 * (x as f64 / 100.0).powi(2), x as f64 * 1e-9]).collect();
+        vals.extend([0.0, 1.0, 0.5, 2f64.powi(-64), 2f64.powi(-65), 1.5 * 2f64.powi(-65), 2f64.powi(-66), 2f64.powi(40) + 0.25, -3.75, 1e-300, 123456.789]);
+        for v in vals {
+            assert_eq!(fixed(v), (v * 2f64.powi(64)).round() as i128, "{v:e}");
+        }
+        assert_eq!(fixed(f64::NAN), 0);
     }
 
     #[test]
