@@ -220,36 +220,47 @@ impl RowSums {
     /// The sums over the trees `t` of `site` (in parallel: the integers do not depend on the
     /// order).
     pub fn of(site: &Site, t: &TreeStore) -> RowSums {
-        let np = site.pool.len();
         let pidx: Vec<usize> = (0..site.lib.species.len() as u16).map(|s| site.pool_index(s).unwrap_or(0)).collect();
         let ff: Vec<f32> = site.lib.species.iter().map(|s| s.life.form_factor).collect();
-        (0..t.len())
+        RowSums::over(t, site.pool.len(), &pidx, &ff)
+    }
+
+    /// [`RowSums::of`] with `np` pool species, each species' pool index `pidx` and form factor
+    /// `ff`: chunks of trees summed into local integers, the chunks' sums added.
+    pub fn over(t: &TreeStore, np: usize, pidx: &[usize], ff: &[f32]) -> RowSums {
+        const CHUNK: usize = 1 << 14;
+        (0..t.len().div_ceil(CHUNK))
             .into_par_iter()
-            .with_min_len(1 << 14)
-            .fold(
-                || RowSums::zero(np),
-                |mut s, i| {
-                    s.trees += 1;
-                    if t.height[i] < 1.3 {
-                        return s;
+            .map(|c| {
+                let mut s = RowSums::zero(np);
+                let (mut stems, mut stems_7) = (0u64, 0u64);
+                let (mut ba, mut height, mut d2, mut d2_7, mut vol) = (0i128, 0i128, 0i128, 0i128, 0i128);
+                let range = c * CHUNK..((c + 1) * CHUNK).min(t.len());
+                s.trees = range.len() as u64;
+                for i in range {
+                    let h = t.height[i];
+                    if h < 1.3 {
+                        continue;
                     }
-                    s.stems += 1;
+                    let d = t.dbh[i];
+                    stems += 1;
                     let b = fixed(t.basal_area_m2(i));
-                    s.ba += b;
-                    s.height += fixed(t.height[i] as f64);
-                    let d2 = fixed((t.dbh[i] as f64).powi(2));
-                    s.d2 += d2;
-                    if t.dbh[i] >= 7.0 {
-                        s.stems_7 += 1;
-                        s.d2_7 += d2;
-                        s.vol += fixed(stem_volume_m3(ff[t.species[i] as usize], t.dbh[i], t.height[i]));
+                    ba += b;
+                    height += fixed(h as f64);
+                    let q = fixed((d as f64) * (d as f64));
+                    d2 += q;
+                    if d >= 7.0 {
+                        stems_7 += 1;
+                        d2_7 += q;
+                        vol += fixed(stem_volume_m3(ff[t.species[i] as usize], d, h));
                     }
                     let p = pidx[t.species[i] as usize];
                     s.ba_sp[p] += b;
                     s.stems_sp[p] += 1;
-                    s
-                },
-            )
+                }
+                (s.stems, s.stems_7, s.ba, s.height, s.d2, s.d2_7, s.vol) = (stems, stems_7, ba, height, d2, d2_7, vol);
+                s
+            })
             .reduce(|| RowSums::zero(np), |a, b| a.plus(&b))
     }
 
@@ -373,8 +384,8 @@ pub fn top_height_by(dbh: &[f32], height: &[f32], a: f64, stems: u64, reduce: &m
             }
             acc += hist[b];
         }
-        sum += cand.iter().filter(|&&key| (key >> shift) & mask > pick).map(|&key| h_of(key)).sum::<i128>();
-        cand.retain(|&key| (key >> shift) & mask == pick);
+        sum += cand.par_iter().with_min_len(1 << 14).filter(|&&key| (key >> shift) & mask > pick).map(|&key| h_of(key)).sum::<i128>();
+        cand = cand.into_par_iter().with_min_len(1 << 14).filter(|&key| (key >> shift) & mask == pick).collect();
         prefix |= pick << shift;
         need -= acc;
         count = hist[pick as usize];
@@ -537,5 +548,42 @@ mod tests {
             total.iter_mut().zip(&w).for_each(|(a, b)| *a += b);
         }
         assert_eq!(from_limbs(&total), vals.iter().sum::<i128>());
+    }
+
+    /// Timing of the stand table's sums and top height against the serial f64 sums of earlier
+    /// versions (`cargo test --lib stats::tests::timing -- --ignored --nocapture`).
+    #[test]
+    #[ignore]
+    fn timing() {
+        let (d, h) = trees(1_200_000);
+        let n = d.len();
+        let t = TreeStore { id: (0..n as u64).collect(), species: (0..n).map(|i| (i % 3) as u16).collect(), dbh: d.clone(), height: h.clone(), ..Default::default() };
+        let t0 = std::time::Instant::now();
+        let mut x = 0.0;
+        for _ in 0..10 {
+            let s = RowSums::over(&t, 3, &[0, 1, 2], &[0.5, 0.5, 0.5]);
+            x += unfixed(s.ba);
+        }
+        let t1 = t0.elapsed().as_secs_f64() / 10.0;
+        let t0 = std::time::Instant::now();
+        for _ in 0..10 {
+            let (mut ba, mut hs, mut d2) = (0f64, 0f64, 0f64);
+            for i in 0..n {
+                if t.height[i] < 1.3 {
+                    continue;
+                }
+                ba += t.basal_area_m2(i);
+                hs += t.height[i] as f64;
+                d2 += (t.dbh[i] as f64).powi(2);
+            }
+            x += ba + hs + d2;
+        }
+        let t2 = t0.elapsed().as_secs_f64() / 10.0;
+        let t0 = std::time::Instant::now();
+        for _ in 0..10 {
+            x += top_height(&d, &h, 992.0);
+        }
+        let t3 = t0.elapsed().as_secs_f64() / 10.0;
+        println!("{n} trees: RowSums {:.1} ms, serial f64 sums (3 of them) {:.1} ms, top height {:.1} ms ({x})", t1 * 1e3, t2 * 1e3, t3 * 1e3);
     }
 }
