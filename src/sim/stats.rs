@@ -314,6 +314,12 @@ impl RowSums {
     }
 }
 
+/// Whether a tree of height `h` counts as a stem (≥ 1.3 m; NaN counts, as in [`RowSums`]).
+#[inline]
+fn is_stem(h: f32) -> bool {
+    h.partial_cmp(&1.3) != Some(std::cmp::Ordering::Less)
+}
+
 /// Widths (bits) of the digits [`top_height_by`] selects by, from the top of the 64-bit key
 /// (DBH's [`total_key`], then height's): histograms of 1,024–2,048 counts per round.
 const DIGITS: [u32; 6] = [10, 11, 11, 11, 11, 10];
@@ -323,7 +329,7 @@ const DIGITS: [u32; 6] = [10, 11, 11, 11, 11, 10];
 /// stand; the heights summed exactly ([`fixed`]), so any selection of the same trees gives the
 /// same bits. One process ([`alone`]); [`top_height_by`] over the parts of a stand.
 pub(crate) fn top_height(dbh: &[f32], height: &[f32], a: f64) -> f64 {
-    let stems = height.iter().filter(|h| !(**h < 1.3)).count() as u64;
+    let stems = height.iter().filter(|&&h| is_stem(h)).count() as u64;
     top_height_by(dbh, height, a, stems, &mut alone).unwrap_or(0.0)
 }
 
@@ -346,7 +352,7 @@ pub fn top_height_by(dbh: &[f32], height: &[f32], a: f64, stems: u64, reduce: &m
     let mut cand: Vec<u64> = (0..dbh.len())
         .into_par_iter()
         .with_min_len(1 << 14)
-        .filter(|&i| !(height[i] < 1.3))
+        .filter(|&i| is_stem(height[i]))
         .map(|i| (total_key(dbh[i]) as u64) << 32 | total_key(height[i]) as u64)
         .collect();
     let h_of = |key: u64| fixed(from_total_key(key as u32) as f64);
