@@ -3,7 +3,8 @@
 //! length (`MPI_Alltoall` of one `u64` per rank), then the messages point to point
 //! (non-blocking sends, blocking receives of the announced lengths; empty messages are not
 //! sent at all). Messages between two ranks never overtake each other (same communicator and
-//! tag, MPI's ordering rule), and the collective count exchange separates the rounds.
+//! tag, MPI's ordering rule), and the collective count exchange separates the rounds. Sums
+//! (the stand table's, `Transport::all_sum`) are one `MPI_Allreduce`.
 
 use crate::sim::tiles::Transport;
 use crate::Error;
@@ -80,5 +81,18 @@ impl Transport for MpiTransport {
     }
     fn bytes_sent(&self) -> u64 {
         self.sent
+    }
+    /// `MPI_Allreduce` with `MPI_SUM` over u64 (wrapping). Counted as the bytes of `v` sent
+    /// (what each rank contributes; the traffic of Open MPI's algorithm for it is of that
+    /// order: a recursive doubling sends it log₂ ranks times, a ring about twice).
+    fn all_sum(&mut self, v: Vec<u64>) -> crate::Result<Vec<u64>> {
+        let mut out = vec![0u64; v.len()];
+        if self.size > 1 {
+            self.world.all_reduce_into(&v[..], &mut out[..], mpi::collective::SystemOperation::sum());
+            self.sent += 8 * v.len() as u64;
+        } else {
+            out = v;
+        }
+        Ok(out)
     }
 }

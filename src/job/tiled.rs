@@ -3,7 +3,8 @@
 //! rank 0 also runs the run driver ([`run_scenario_with`]). The run directory is the one a
 //! single process writes, byte for byte, except the checkpoint (one file per rank, below):
 //! - `stand_table.csv`, `stand_table.png`, `scenario.toml`, `species/`, year 0's snapshot:
-//!   rank 0 (the stand table's columns are gathered to it every year);
+//!   rank 0 (the stand table's row from the ranks' exact sums, added up every year:
+//!   [`crate::sim::tiles::Tile::step`]);
 //! - `inventory/year_NNNN.csv`, `_regeneration.csv`: every rank writes the lines
 //!   of its own trees (living in id order, then this year's dead in id order) and cohorts into
 //!   part files `.NAME.rankRRRR.PID.tmp` beside the file; after all have, rank 0 merges them
@@ -52,7 +53,7 @@ use crate::Error;
 pub enum Command {
     /// Take your part of rank 0's world ([`Tile::scatter`]).
     Begin = 1,
-    /// Step a year, sending rank 0 the stand table's columns.
+    /// Step a year (the stand table's sums added up over the ranks).
     Step = 2,
     /// Step a year, then send rank 0 the whole stand ([`Tile::gather`]).
     StepFull = 3,

@@ -103,107 +103,342 @@ fn total_key(v: f32) -> u32 {
     }
 }
 
-/// Top height: mean height of the `round(100 · a)` largest-DBH trees of at least 1.3 m
-/// (ties by height), summed in descending (DBH, height) order; all of them where fewer stand.
-/// The candidates are found by a histogram of the DBHs' leading 16 bits (in parallel; counts
-/// do not depend on the order), so only about the `k` thickest trees are sorted.
-pub(crate) fn top_height(dbh: &[f32], height: &[f32], a: f64) -> f64 {
-    const CH: usize = 1 << 16;
-    let n = dbh.len();
-    let eligible = |i: usize| !(height[i] < 1.3);
-    let hist: Vec<u32> = (0..n.div_ceil(CH))
-        .into_par_iter()
-        .map(|c| {
-            let mut h = vec![0u32; 1 << 16];
-            for i in c * CH..((c + 1) * CH).min(n) {
-                if eligible(i) {
-                    h[(total_key(dbh[i]) >> 16) as usize] += 1;
-                }
-            }
-            h
-        })
-        .reduce(|| vec![0u32; 1 << 16], |mut x, y| {
-            x.iter_mut().zip(&y).for_each(|(a, b)| *a += b);
-            x
-        });
-    let m: usize = hist.iter().map(|&c| c as usize).sum();
-    let k = ((100.0 * a).round() as usize).clamp(1, m.max(1));
-    // lowest bin such that the bins from it upwards hold at least k trees
-    let mut acc = 0usize;
-    let mut bin = 0usize;
-    for b in (0..hist.len()).rev() {
-        acc += hist[b] as usize;
-        if acc >= k {
-            bin = b;
-            break;
+/// The f32 of a [`total_key`].
+#[inline]
+fn from_total_key(k: u32) -> f32 {
+    f32::from_bits(if k >> 31 == 1 { k & 0x7fff_ffff } else { !k })
+}
+
+/// Binary digits below the unit of the stand table's exact sums ([`RowSums`], [`top_height`]):
+/// every tree's value (height m, DBH² cm², basal area m², volume m³) enters as the integer
+/// nearest to `value · 2^64`, so sums are exact integers that do not depend on the order of
+/// addition (threads, ranks, partial sums) and are rounded once, to the f64 nearest the exact
+/// sum of the fixed-point values. 2⁻⁶⁴ (5.4 · 10⁻²⁰) is far below the printed precision
+/// (10⁻³); heights of stems (≥ 1.3 m, f32: multiples of 2⁻²³) and DBH² of DBHs from 2⁻⁹ cm
+/// (f32 squared: multiples of 2⁻⁶⁴ there) enter exactly. An i128 holds any sum of values below
+/// 2²⁰ over 2⁴³ trees.
+pub const FIXED_BITS: i32 = 64;
+
+/// `v` (|v| below 2⁶³) in units of 2^-[`FIXED_BITS`], rounded to nearest, ties away from
+/// zero: `(v · 2^64).round() as i128`, from the bits (a float-to-i128 conversion is a library
+/// call, several times slower); 0 for NaN, saturated for larger values.
+#[inline]
+pub fn fixed(v: f64) -> i128 {
+    let b = v.to_bits();
+    let exp = ((b >> 52) & 0x7ff) as i32;
+    if exp == 0 || v.is_nan() {
+        // zero or subnormal (below 2^-1022): 0 at 2^-64
+        return 0;
+    }
+    let m = (b & ((1u64 << 52) - 1)) | (1u64 << 52);
+    // |v| = m · 2^(exp - 1075), so |v| · 2^64 = m · 2^sh
+    let sh = exp - 1075 + FIXED_BITS;
+    let r: i128 = if sh >= 0 {
+        if sh > 127 - 53 {
+            i128::MAX
+        } else {
+            (m as i128) << sh
         }
-    }
-    let lo = (bin as u32) << 16;
-    let mut top: Vec<(f32, f32)> = (0..n).into_par_iter().with_min_len(1 << 14).filter(|&i| eligible(i) && total_key(dbh[i]) >= lo).map(|i| (dbh[i], height[i])).collect();
-    let by_dbh_desc = |x: &(f32, f32), y: &(f32, f32)| y.0.total_cmp(&x.0).then(y.1.total_cmp(&x.1));
-    if k < top.len() {
-        // the k thickest first (O(n) selection), then sorted for a fixed summation order
-        top.select_nth_unstable_by(k - 1, by_dbh_desc);
-        top.truncate(k);
-    }
-    top.sort_by(by_dbh_desc);
-    if top.is_empty() {
-        0.0
+    } else if -sh <= 64 {
+        (((m >> (-sh - 1)) + 1) >> 1) as i128
     } else {
-        top.iter().map(|x| x.1 as f64).sum::<f64>() / top.len() as f64
+        0
+    };
+    if b >> 63 == 1 {
+        -r
+    } else {
+        r
     }
 }
 
-/// Computes the stand-table row of the world's current state (deaths from `w.scratch.dead`).
-/// The sums over the trees run serially in tree order (f64) on one thread while the top height
-/// ([`top_height`]) is found on the others.
+/// The f64 nearest the fixed-point sum `s` ([`fixed`]).
+#[inline]
+pub fn unfixed(s: i128) -> f64 {
+    s as f64 * 2f64.powi(-FIXED_BITS)
+}
+
+/// Bits per limb when an i128 travels as u64 words ([`RowSums::words`]): 3 limbs of 43 bits
+/// (129 ≥ 128), so the limbs of up to 2²¹ ranks add up in a u64 without overflow.
+const LIMB_BITS: u32 = 43;
+
+/// `v` as 3 limbs of [`LIMB_BITS`] (two's complement, low limb first).
+fn push_limbs(out: &mut Vec<u64>, v: i128) {
+    let u = v as u128;
+    for j in 0..3 {
+        out.push(((u >> (LIMB_BITS * j)) & ((1u128 << LIMB_BITS) - 1)) as u64);
+    }
+}
+
+/// The i128 whose limbs, summed over the parts, are `w[..3]` (the wrapping sum of the parts'
+/// values: exact when the sum fits).
+fn from_limbs(w: &[u64]) -> i128 {
+    w.iter().take(3).enumerate().fold(0u128, |s, (j, &l)| s.wrapping_add((l as u128).wrapping_shl(LIMB_BITS * j as u32))) as i128
+}
+
+/// An element-wise sum of u64 words over every part of a stand (the ranks of a tiled run:
+/// `Transport::all_sum`, an MPI_Allreduce): every part passes words of the same length and
+/// gets the sums. One process: the words themselves ([`alone`]).
+pub type Reduce<'a> = dyn FnMut(Vec<u64>) -> crate::Result<Vec<u64>> + 'a;
+
+/// The [`Reduce`] of a stand in one part.
+pub fn alone(v: Vec<u64>) -> crate::Result<Vec<u64>> {
+    Ok(v)
+}
+
+/// The sums of a stand-table row over trees, exact ([`FIXED_BITS`]): the same integers
+/// whatever the order, so the sums of a tiled run's parts add up to one process's bit for bit.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RowSums {
+    /// Trees (every height).
+    pub trees: u64,
+    /// Stems (≥ 1.3 m).
+    pub stems: u64,
+    /// Stems with DBH ≥ 7 cm.
+    pub stems_7: u64,
+    /// Basal area of the stems (m², fixed point).
+    pub ba: i128,
+    /// Heights of the stems (m, fixed point).
+    pub height: i128,
+    /// DBH² of the stems (cm², fixed point).
+    pub d2: i128,
+    /// DBH² of the stems with DBH ≥ 7 cm (cm², fixed point).
+    pub d2_7: i128,
+    /// Stem volume ([`stem_volume_m3`], m³, fixed point).
+    pub vol: i128,
+    /// Basal area of the stems per pool species (m², fixed point).
+    pub ba_sp: Vec<i128>,
+    /// Stems per pool species.
+    pub stems_sp: Vec<u64>,
+}
+
+impl RowSums {
+    /// Zero sums for `np` pool species.
+    pub fn zero(np: usize) -> RowSums {
+        RowSums { trees: 0, stems: 0, stems_7: 0, ba: 0, height: 0, d2: 0, d2_7: 0, vol: 0, ba_sp: vec![0; np], stems_sp: vec![0; np] }
+    }
+
+    /// The sums over the trees `t` of `site` (in parallel: the integers do not depend on the
+    /// order).
+    pub fn of(site: &Site, t: &TreeStore) -> RowSums {
+        let pidx: Vec<usize> = (0..site.lib.species.len() as u16).map(|s| site.pool_index(s).unwrap_or(0)).collect();
+        let ff: Vec<f32> = site.lib.species.iter().map(|s| s.life.form_factor).collect();
+        RowSums::over(t, site.pool.len(), &pidx, &ff)
+    }
+
+    /// [`RowSums::of`] with `np` pool species, each species' pool index `pidx` and form factor
+    /// `ff`: chunks of trees summed into local integers, the chunks' sums added.
+    pub fn over(t: &TreeStore, np: usize, pidx: &[usize], ff: &[f32]) -> RowSums {
+        const CHUNK: usize = 1 << 14;
+        (0..t.len().div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut s = RowSums::zero(np);
+                let (mut stems, mut stems_7) = (0u64, 0u64);
+                let (mut ba, mut height, mut d2, mut d2_7, mut vol) = (0i128, 0i128, 0i128, 0i128, 0i128);
+                let range = c * CHUNK..((c + 1) * CHUNK).min(t.len());
+                s.trees = range.len() as u64;
+                for i in range {
+                    let h = t.height[i];
+                    if h < 1.3 {
+                        continue;
+                    }
+                    let d = t.dbh[i];
+                    stems += 1;
+                    let b = fixed(t.basal_area_m2(i));
+                    ba += b;
+                    height += fixed(h as f64);
+                    let q = fixed((d as f64) * (d as f64));
+                    d2 += q;
+                    if d >= 7.0 {
+                        stems_7 += 1;
+                        d2_7 += q;
+                        vol += fixed(stem_volume_m3(ff[t.species[i] as usize], d, h));
+                    }
+                    let p = pidx[t.species[i] as usize];
+                    s.ba_sp[p] += b;
+                    s.stems_sp[p] += 1;
+                }
+                (s.stems, s.stems_7, s.ba, s.height, s.d2, s.d2_7, s.vol) = (stems, stems_7, ba, height, d2, d2_7, vol);
+                s
+            })
+            .reduce(|| RowSums::zero(np), |a, b| a.plus(&b))
+    }
+
+    /// `self` and `o` added.
+    pub fn plus(mut self, o: &RowSums) -> RowSums {
+        self.trees += o.trees;
+        self.stems += o.stems;
+        self.stems_7 += o.stems_7;
+        self.ba += o.ba;
+        self.height += o.height;
+        self.d2 += o.d2;
+        self.d2_7 += o.d2_7;
+        self.vol += o.vol;
+        self.ba_sp.iter_mut().zip(&o.ba_sp).for_each(|(a, b)| *a += b);
+        self.stems_sp.iter_mut().zip(&o.stems_sp).for_each(|(a, b)| *a += b);
+        self
+    }
+
+    /// The sums as u64 words whose element-wise sums over parts are the words of the parts'
+    /// sums ([`RowSums::from_words`]): counts as they are, fixed-point sums as 3 limbs.
+    pub fn words(&self) -> Vec<u64> {
+        let mut w = vec![self.trees, self.stems, self.stems_7];
+        w.extend(&self.stems_sp);
+        for v in [self.ba, self.height, self.d2, self.d2_7, self.vol].iter().chain(&self.ba_sp) {
+            push_limbs(&mut w, *v);
+        }
+        w
+    }
+
+    /// Number of [`RowSums::words`] for `np` pool species.
+    pub fn n_words(np: usize) -> usize {
+        3 + np + 3 * (5 + np)
+    }
+
+    /// The sums of [`RowSums::words`] (summed over parts) for `np` pool species; `w` holds
+    /// [`RowSums::n_words`] words.
+    pub fn from_words(w: &[u64], np: usize) -> RowSums {
+        let l = |k: usize| from_limbs(&w[3 + np + 3 * k..]);
+        RowSums {
+            trees: w[0],
+            stems: w[1],
+            stems_7: w[2],
+            stems_sp: w[3..3 + np].to_vec(),
+            ba: l(0),
+            height: l(1),
+            d2: l(2),
+            d2_7: l(3),
+            vol: l(4),
+            ba_sp: (0..np).map(|p| l(5 + p)).collect(),
+        }
+    }
+}
+
+/// Whether a tree of height `h` counts as a stem (≥ 1.3 m; NaN counts, as in [`RowSums`]).
+#[inline]
+fn is_stem(h: f32) -> bool {
+    h.partial_cmp(&1.3) != Some(std::cmp::Ordering::Less)
+}
+
+/// Widths (bits) of the digits [`top_height_by`] selects by, from the top of the 64-bit key
+/// (DBH's [`total_key`], then height's): histograms of 1,024–2,048 counts per round.
+const DIGITS: [u32; 6] = [10, 11, 11, 11, 11, 10];
+
+/// Top height: mean height of the `round(100 · a)` largest-DBH trees of at least 1.3 m
+/// (ties by height; trees of equal DBH and height are interchangeable), all of them where fewer
+/// stand; the heights summed exactly ([`fixed`]), so any selection of the same trees gives the
+/// same bits. One process ([`alone`]); [`top_height_by`] over the parts of a stand.
+pub(crate) fn top_height(dbh: &[f32], height: &[f32], a: f64) -> f64 {
+    let stems = height.iter().filter(|&&h| is_stem(h)).count() as u64;
+    top_height_by(dbh, height, a, stems, &mut alone).unwrap_or(0.0)
+}
+
+/// [`top_height`] over a stand in parts (the ranks of a tiled run), each passing its own trees
+/// (`dbh`, `height`) and `stems`, the stems (≥ 1.3 m) of the whole stand; nothing per tree is
+/// passed: the `k` thickest are found by a radix selection over the 64-bit key (DBH, height),
+/// descending, digit by digit ([`DIGITS`]): every part counts its candidates per digit value,
+/// the counts are summed (`reduce`), and every part keeps the candidates in the digit value
+/// where the `k`-th tree falls, adding the heights of those above it to its partial sum. It
+/// stops when the candidates left are all taken, or when the whole key is fixed (trees of the
+/// same DBH and height: as many as are still needed, each of that height). Then the partial
+/// sums are summed. At most 7 reductions, usually 3–4.
+///
+/// Errors: those of `reduce`.
+pub fn top_height_by(dbh: &[f32], height: &[f32], a: f64, stems: u64, reduce: &mut Reduce) -> crate::Result<f64> {
+    if stems == 0 {
+        return Ok(0.0);
+    }
+    let k = ((100.0 * a).round() as u64).clamp(1, stems);
+    let mut cand: Vec<u64> = (0..dbh.len())
+        .into_par_iter()
+        .with_min_len(1 << 14)
+        .filter(|&i| is_stem(height[i]))
+        .map(|i| (total_key(dbh[i]) as u64) << 32 | total_key(height[i]) as u64)
+        .collect();
+    let h_of = |key: u64| fixed(from_total_key(key as u32) as f64);
+    let (mut need, mut count) = (k, stems);
+    let (mut shift, mut prefix) = (64u32, 0u64);
+    let mut sum: i128 = 0;
+    let mut extra: i128 = 0;
+    for &w in DIGITS.iter() {
+        if need == count {
+            break;
+        }
+        shift -= w;
+        let mask = (1u64 << w) - 1;
+        let bins = 1usize << w;
+        let hist = cand
+            .par_chunks(1 << 16)
+            .map(|c| {
+                let mut h = vec![0u64; bins];
+                for &key in c {
+                    h[((key >> shift) & mask) as usize] += 1;
+                }
+                h
+            })
+            .reduce(|| vec![0u64; bins], |mut x, y| {
+                x.iter_mut().zip(&y).for_each(|(a, b)| *a = a.wrapping_add(*b));
+                x
+            });
+        let hist = reduce(hist)?;
+        let mut acc = 0u64;
+        let mut pick = 0u64;
+        for b in (0..bins).rev() {
+            if acc + hist[b] >= need {
+                pick = b as u64;
+                break;
+            }
+            acc += hist[b];
+        }
+        sum += cand.par_iter().with_min_len(1 << 14).filter(|&&key| (key >> shift) & mask > pick).map(|&key| h_of(key)).sum::<i128>();
+        cand = cand.into_par_iter().with_min_len(1 << 14).filter(|&key| (key >> shift) & mask == pick).collect();
+        prefix |= pick << shift;
+        need -= acc;
+        count = hist[pick as usize];
+        if shift == 0 && need < count {
+            // the whole key fixed: `count` trees of one DBH and height, `need` of them taken
+            extra = need as i128 * h_of(prefix);
+            cand.clear();
+            need = 0;
+            count = 0;
+        }
+    }
+    debug_assert_eq!(need, count);
+    sum += cand.iter().map(|&key| h_of(key)).sum::<i128>();
+    let mut w = Vec::with_capacity(3);
+    push_limbs(&mut w, sum);
+    let total = from_limbs(&reduce(w)?) + extra;
+    Ok(unfixed(total) / k as f64)
+}
+
+/// Computes the stand-table row of the world's current state (deaths from `w.scratch.dead`):
+/// exact sums ([`RowSums`]) and the top height ([`top_height`]).
 pub fn stand_row(w: &World) -> StandRow {
     let mut deaths = [0u64; super::trees::N_CAUSES];
     for d in &w.scratch.dead {
         deaths[d.cause.index()] += 1;
     }
-    row_of(&w.site, w.stand.year, &w.stand.trees, w.stand.cohorts.total_stems(), deaths, w.scratch.regen_year, harvest_sums(&w.site, &w.scratch.dead))
+    let t = &w.stand.trees;
+    let sums = RowSums::of(&w.site, t);
+    let h100 = top_height_by(&t.dbh, &t.height, w.site.area_ha.max(1e-9), sums.stems, &mut alone).unwrap_or(0.0);
+    row_of(&w.site, w.stand.year, &sums, h100, w.stand.cohorts.total_stems(), deaths, w.scratch.regen_year, harvest_sums(&w.site, &w.scratch.dead))
 }
 
-/// The stand-table row of `site` in `year` from the trees `t` (only their ids, species, heights
-/// and DBHs are read, in store order), the regeneration layer's stems, this year's deaths by
-/// cause and regeneration counts, and the year's harvest (stems ≥ 1.3 m, volume m³:
-/// [`harvest_sums`]) ([`stand_row`] on a world; a tiled run's rank 0 gathers these,
+/// The stand-table row of `site` in `year` from the sums over its trees ([`RowSums`]), the top
+/// height (m, [`top_height_by`]), the regeneration layer's stems, this year's deaths by cause
+/// and regeneration counts, and the year's harvest (stems ≥ 1.3 m, volume m³:
+/// [`harvest_sums`]) ([`stand_row`] on a world; a tiled run's ranks sum these,
 /// `sim::tiles`). The year's temperature offset and precipitation factor come from the site's
 /// climate change.
-pub fn row_of(site: &Site, year: u32, t: &TreeStore, regeneration_stems: u64, deaths: [u64; super::trees::N_CAUSES], regen_year: RegenYear, harvest: (u64, f64)) -> StandRow {
+#[allow(clippy::too_many_arguments)]
+pub fn row_of(site: &Site, year: u32, s: &RowSums, h100: f64, regeneration_stems: u64, deaths: [u64; super::trees::N_CAUSES], regen_year: RegenYear, harvest: (u64, f64)) -> StandRow {
     let w = site;
     let a = w.area_ha.max(1e-9);
-    let np = w.pool.len();
-    let pidx: Vec<usize> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s).unwrap_or(0)).collect();
-    let ff: Vec<f32> = w.lib.species.iter().map(|s| s.life.form_factor).collect();
-    let sums = || {
-        let (mut n, mut ns, mut ba, mut hs, mut d2) = (0usize, 0usize, 0f64, 0f64, 0f64);
-        let (mut n7, mut d27, mut vol) = (0usize, 0f64, 0f64);
-        let mut sba = vec![0f64; np];
-        let mut sn = vec![0f64; np];
-        for i in 0..t.len() {
-            if t.height[i] < 1.3 {
-                ns += 1;
-                continue;
-            }
-            n += 1;
-            let b = t.basal_area_m2(i);
-            ba += b;
-            hs += t.height[i] as f64;
-            d2 += (t.dbh[i] as f64).powi(2);
-            if t.dbh[i] >= 7.0 {
-                n7 += 1;
-                d27 += (t.dbh[i] as f64).powi(2);
-                vol += stem_volume_m3(ff[t.species[i] as usize], t.dbh[i], t.height[i]);
-            }
-            let p = pidx[t.species[i] as usize];
-            sba[p] += b;
-            sn[p] += 1.0;
-        }
-        (n, ns, ba, hs, d2, n7, d27, sba, sn, vol)
-    };
-    let ((n, ns, ba, hs, d2, n7, d27, sba, sn, vol), h100) = rayon::join(sums, || top_height(&t.dbh, &t.height, a));
+    let (n, n7) = (s.stems, s.stems_7);
+    let ns = s.trees - s.stems;
+    let (ba, hs, d2, d27, vol) = (unfixed(s.ba), unfixed(s.height), unfixed(s.d2), unfixed(s.d2_7), unfixed(s.vol));
+    let sba: Vec<f64> = s.ba_sp.iter().map(|&v| unfixed(v)).collect();
+    let sn: Vec<f64> = s.stems_sp.iter().map(|&v| v as f64).collect();
     let (dt, pf) = w.climate_change.of_year(year);
     StandRow {
         year,
@@ -227,5 +462,134 @@ pub fn row_of(site: &Site, year: u32, t: &TreeStore, regeneration_stems: u64, de
         harvest_volume_m3_ha: harvest.1 / a,
         temperature_offset_k: dt,
         precipitation_factor: pf,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::tiles::{LocalTransport, Transport};
+
+    /// DBHs and heights with ties (equal DBH; equal DBH and height) and saplings below 1.3 m.
+    fn trees(n: usize) -> (Vec<f32>, Vec<f32>) {
+        let mut x = 0x2545_f491_4f6c_dd1du64;
+        let mut r = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (mut d, mut h) = (Vec::new(), Vec::new());
+        for i in 0..n {
+            let (a, b) = (r(), r());
+            let dbh = if i % 7 == 0 { 30.0 } else { (a * 60.0 * 64.0).round() / 64.0 };
+            let height = if i % 11 == 0 { 25.5 } else if i % 13 == 0 { 0.9 } else { 1.3 + b * 35.0 };
+            d.push(dbh);
+            h.push(height);
+        }
+        (d, h)
+    }
+
+    /// The mean height of the k thickest (ties by height), by a sort.
+    fn by_sort(d: &[f32], h: &[f32], a: f64) -> f64 {
+        let mut t: Vec<(f32, f32)> = d.iter().zip(h).filter(|(_, h)| **h >= 1.3).map(|(d, h)| (*d, *h)).collect();
+        if t.is_empty() {
+            return 0.0;
+        }
+        t.sort_by(|x, y| y.0.total_cmp(&x.0).then(y.1.total_cmp(&x.1)));
+        let k = ((100.0 * a).round() as usize).clamp(1, t.len());
+        unfixed(t[..k].iter().map(|x| fixed(x.1 as f64)).sum()) / k as f64
+    }
+
+    #[test]
+    fn top_height_over_parts_is_one_stands() {
+        let (d, h) = trees(5_000);
+        let stems = h.iter().filter(|h| **h >= 1.3).count() as u64;
+        // k from 1 to beyond the stems, through the tie of 30 cm
+        for a in [0.01, 0.5, 3.0, 7.77, 20.0, 44.0, 100.0] {
+            let one = top_height(&d, &h, a);
+            assert_eq!(one.to_bits(), by_sort(&d, &h, a).to_bits(), "a = {a}");
+            for parts in [2usize, 3] {
+                let got: Vec<f64> = std::thread::scope(|s| {
+                    let hs: Vec<_> = LocalTransport::group(parts)
+                        .into_iter()
+                        .map(|mut t| {
+                            let (d, h) = (&d, &h);
+                            s.spawn(move || {
+                                let me = t.rank();
+                                let idx: Vec<usize> = (0..d.len()).filter(|i| i % parts == me).collect();
+                                let pd: Vec<f32> = idx.iter().map(|&i| d[i]).collect();
+                                let ph: Vec<f32> = idx.iter().map(|&i| h[i]).collect();
+                                top_height_by(&pd, &ph, a, stems, &mut |v| t.all_sum(v)).unwrap()
+                            })
+                        })
+                        .collect();
+                    hs.into_iter().map(|h| h.join().unwrap()).collect()
+                });
+                assert!(got.iter().all(|v| v.to_bits() == one.to_bits()), "a = {a}, {parts} parts: {got:?} vs {one}");
+            }
+        }
+        assert_eq!(top_height(&[], &[], 1.0), 0.0);
+    }
+
+    #[test]
+    fn fixed_is_the_rounded_product() {
+        let (d, h) = trees(2_000);
+        let mut vals: Vec<f64> = d.iter().chain(&h).flat_map(|&x| [x as f64, (x as f64).powi(2), std::f64::consts::FRAC_PI_4 * (x as f64 / 100.0).powi(2), x as f64 * 1e-9]).collect();
+        vals.extend([0.0, 1.0, 0.5, 2f64.powi(-64), 2f64.powi(-65), 1.5 * 2f64.powi(-65), 2f64.powi(-66), 2f64.powi(40) + 0.25, -3.75, 1e-300, 123456.789]);
+        for v in vals {
+            assert_eq!(fixed(v), (v * 2f64.powi(64)).round() as i128, "{v:e}");
+        }
+        assert_eq!(fixed(f64::NAN), 0);
+    }
+
+    #[test]
+    fn limbs_add_up_to_the_sum() {
+        let vals = [0i128, 1, (1 << 100) + 12345, i64::MAX as i128 * 3, 7 << 80];
+        let mut total = vec![0u64; 3];
+        for v in vals {
+            let mut w = Vec::new();
+            push_limbs(&mut w, v);
+            assert_eq!(from_limbs(&w), v);
+            total.iter_mut().zip(&w).for_each(|(a, b)| *a += b);
+        }
+        assert_eq!(from_limbs(&total), vals.iter().sum::<i128>());
+    }
+
+    /// Timing of the stand table's sums and top height against the serial f64 sums of earlier
+    /// versions (`cargo test --lib stats::tests::timing -- --ignored --nocapture`).
+    #[test]
+    #[ignore]
+    fn timing() {
+        let (d, h) = trees(1_200_000);
+        let n = d.len();
+        let t = TreeStore { id: (0..n as u64).collect(), species: (0..n).map(|i| (i % 3) as u16).collect(), dbh: d.clone(), height: h.clone(), ..Default::default() };
+        let t0 = std::time::Instant::now();
+        let mut x = 0.0;
+        for _ in 0..10 {
+            let s = RowSums::over(&t, 3, &[0, 1, 2], &[0.5, 0.5, 0.5]);
+            x += unfixed(s.ba);
+        }
+        let t1 = t0.elapsed().as_secs_f64() / 10.0;
+        let t0 = std::time::Instant::now();
+        for _ in 0..10 {
+            let (mut ba, mut hs, mut d2) = (0f64, 0f64, 0f64);
+            for i in 0..n {
+                if t.height[i] < 1.3 {
+                    continue;
+                }
+                ba += t.basal_area_m2(i);
+                hs += t.height[i] as f64;
+                d2 += (t.dbh[i] as f64).powi(2);
+            }
+            x += ba + hs + d2;
+        }
+        let t2 = t0.elapsed().as_secs_f64() / 10.0;
+        let t0 = std::time::Instant::now();
+        for _ in 0..10 {
+            x += top_height(&d, &h, 992.0);
+        }
+        let t3 = t0.elapsed().as_secs_f64() / 10.0;
+        println!("{n} trees: RowSums {:.1} ms, serial f64 sums (3 of them) {:.1} ms, top height {:.1} ms ({x})", t1 * 1e3, t2 * 1e3, t3 * 1e3);
     }
 }

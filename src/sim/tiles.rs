@@ -30,10 +30,14 @@
 //!    same choice, identically on every rank) and keeps its own trees, its own harvested dead
 //!    and its own cells' plantings ([`Tile::step`]); plantings alone need no exchange (a
 //!    lattice is drawn from the seed, the entry and the position);
-//! 7. **stats**: the stand table row needs every tree (sums in id order, the top height): the
-//!    ranks send their trees' id, species, height and DBH to rank 0 ([`Tile::step`]); the
-//!    year's harvest (stems, volume) is rank 0's sum over every harvested tree it saw in step 6,
-//!    in the single process's order.
+//! 7. **stats**: the stand table row is made of exact sums ([`super::stats::RowSums`]:
+//!    integers, fixed point at 2⁻⁶⁴, whose order of addition does not matter): every rank sums
+//!    its own trees and the sums of all ranks are added up ([`Transport::all_sum`], an
+//!    `MPI_Allreduce`), so they are one process's bit for bit; the top height is found by a
+//!    radix selection over summed counts ([`super::stats::top_height_by`]) and the heights of
+//!    the selected trees summed the same way: nothing per tree crosses ranks ([`Tile::step`]).
+//!    The year's harvest (stems, volume) is rank 0's sum over every harvested tree it saw in
+//!    step 6, in the single process's order.
 //!
 //! Why the result is the same: every random stream is keyed by the scenario seed, a tree id or a
 //! global cell index and the year; tree ids do not depend on the partition; the tree store is
@@ -69,6 +73,44 @@ pub trait Transport {
     fn exchange(&mut self, out: Vec<Vec<u8>>) -> Result<Vec<Vec<u8>>>;
     /// Bytes this rank has sent to other ranks so far.
     fn bytes_sent(&self) -> u64;
+    /// Element-wise wrapping sums of `v` over every rank, returned on every rank (every rank
+    /// passes the same number of words): an `MPI_Allreduce` with `MPI_SUM`. This default
+    /// passes every rank's words to rank 0 and the sums back (two exchanges).
+    ///
+    /// Errors: [`Error::Exchange`] from the transport, or naming a rank whose words are not as
+    /// many as this one's.
+    fn all_sum(&mut self, v: Vec<u64>) -> Result<Vec<u64>> {
+        let (me, n, len) = (self.rank(), self.size(), v.len());
+        let bytes = |w: &[u64]| w.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+        let words = |k: usize, m: &[u8]| -> Result<Vec<u64>> {
+            if m.len() != 8 * len {
+                return Err(Error::Exchange { peer: k, reason: format!("{} bytes of sums, expected {}", m.len(), 8 * len) });
+            }
+            Ok(m.chunks_exact(8).map(|c| u64::from_le_bytes(c.try_into().unwrap_or_default())).collect())
+        };
+        let mut out = vec![Vec::new(); n];
+        out[0] = bytes(&v);
+        let got = self.exchange(out)?;
+        let mut back = vec![Vec::new(); n];
+        let mut sums = Vec::new();
+        if me == 0 {
+            sums = vec![0u64; len];
+            for (k, m) in got.iter().enumerate() {
+                for (s, w) in sums.iter_mut().zip(words(k, m)?) {
+                    *s = s.wrapping_add(w);
+                }
+            }
+            let b = bytes(&sums);
+            back = vec![b; n];
+            back[0] = Vec::new();
+        }
+        let got = self.exchange(back)?;
+        if me == 0 {
+            Ok(sums)
+        } else {
+            words(0, &got[0])
+        }
+    }
 }
 
 /// All ranks in one process, one thread each ([`LocalTransport::group`]): a shared mailbox and a
@@ -367,16 +409,6 @@ fn put_trees(e: &mut Enc, t: &TreeStore, idx: &[usize]) {
     }
 }
 
-/// The columns the stand table reads: id, species, height, DBH.
-fn put_lean_trees(e: &mut Enc, t: &TreeStore) {
-    e.u64(t.len() as u64);
-    e.each(&t.id, |v| v.to_le_bytes());
-    e.each(&t.species, |v| v.to_le_bytes());
-    for c in [&t.height, &t.dbh] {
-        e.each(c, |v| v.to_bits().to_le_bytes());
-    }
-}
-
 /// How a message from rank `peer` that ends early or holds too large a count is refused.
 fn short_message(peer: usize) -> impl Fn(Short) -> Error {
     move |s| Error::Exchange {
@@ -397,16 +429,6 @@ fn get_trees(d: &mut Dec<'_>) -> Result<TreeStore> {
     for c in t.f32_columns_mut() {
         *c = d.f32s_n(n)?;
     }
-    Ok(t)
-}
-
-/// The trees of [`put_lean_trees`].
-fn get_lean_trees(d: &mut Dec<'_>) -> Result<TreeStore> {
-    let n = d.count(8 + 2 + 2 * 4)?;
-    let mut t = TreeStore { id: d.u64s_n(n)?, ..Default::default() };
-    t.species = d.u16s_n(n)?;
-    t.height = d.f32s_n(n)?;
-    t.dbh = d.f32s_n(n)?;
     Ok(t)
 }
 
@@ -552,8 +574,8 @@ impl Tile {
 
     /// Simulates one year of the tile (the phases of [`crate::sim::step::PHASES`], with the halo
     /// exchanges of the module docs). Every rank calls it in the same year. On rank 0 the
-    /// report carries the stand-table row of the whole landscape and the whole landscape's
-    /// counts; on the others the row is `None` and the counts are the tile's.
+    /// report carries the stand-table row of the whole landscape; on the others the row is
+    /// `None`. The counts (trees, established, died) are the whole landscape's on every rank.
     ///
     /// Errors: [`Error::Exchange`] from the transport; [`Error::Invalid`] when a crown grew
     /// wider than the halo allows.
@@ -578,49 +600,41 @@ impl Tile {
             }
             report.phase_seconds[k] = t0.elapsed().as_secs_f64();
         }
-        // stats: the stand table's columns to rank 0 (the tile's own row is not the landscape's)
+        // stats: the stand table's row from every rank's sums (exact, so their sum is one
+        // process's) and counts, added up by all_sum; the top height by a selection over all_sum
+        // of counts (`stats::top_height_by`); nothing per tree crosses ranks
         let t0 = Instant::now();
-        (PHASES[stats].run)(&mut self.world, &mut report);
-        report.row = None;
-        let mut e = codec::Enc(Vec::new());
-        put_lean_trees(&mut e, &self.world.stand.trees);
+        self.world.stand.year += 1;
+        let w = &self.world;
+        let np = w.site.pool.len();
+        let mut words = super::stats::RowSums::of(&w.site, &w.stand.trees).words();
         for c in DeathCause::ALL {
-            e.u64(self.world.scratch.dead.iter().filter(|d| d.cause == c).count() as u64);
+            words.push(w.scratch.dead.iter().filter(|d| d.cause == c).count() as u64);
         }
-        let ry = &self.world.scratch.regen_year;
-        for v in [self.world.stand.cohorts.total_stems(), ry.germinated, ry.recruited, report.established as u64, report.died as u64] {
-            e.u64(v);
+        let ry = &w.scratch.regen_year;
+        words.extend([w.stand.cohorts.total_stems(), ry.germinated, ry.recruited, report.established as u64, w.scratch.dead.len() as u64]);
+        words.extend(ry.dead);
+        let got = t.all_sum(words)?;
+        let nw = super::stats::RowSums::n_words(np);
+        let sums = super::stats::RowSums::from_words(&got, np);
+        let mut rest = got[nw..].iter().copied();
+        let mut next = || rest.next().ok_or_else(|| Error::Exchange { peer: 0, reason: "stand-table sums cut short".into() });
+        let mut deaths = [0u64; N_CAUSES];
+        for v in deaths.iter_mut() {
+            *v = next()?;
         }
-        ry.dead.iter().for_each(|&v| e.u64(v));
-        let mut out = vec![Vec::new(); t.size()];
-        out[0] = e.0;
-        let got = t.exchange(out)?;
-        if t.rank() == 0 {
-            let mut parts = Vec::with_capacity(got.len());
-            let mut deaths = [0u64; N_CAUSES];
-            let (mut stems, mut ry, mut est, mut died) = (0u64, RegenYear::default(), 0usize, 0usize);
-            for (k, m) in got.iter().enumerate() {
-                let fail = short_message(k);
-                let mut d = Dec::new(m, &fail);
-                parts.push(get_lean_trees(&mut d)?);
-                for v in deaths.iter_mut() {
-                    *v += d.u64()?;
-                }
-                stems += d.u64()?;
-                ry.germinated += d.u64()?;
-                ry.recruited += d.u64()?;
-                est += d.u64()? as usize;
-                died += d.u64()? as usize;
-                for v in ry.dead.iter_mut() {
-                    *v += d.u64()?;
-                }
-            }
-            let (trees, _) = TreeStore::merge_by_id(&parts, 0);
-            report.trees = trees.len();
-            report.established = est;
-            report.died = died;
-            report.row = Some(super::stats::row_of(&self.world.site, self.world.stand.year, &trees, stems, deaths, ry, self.harvest));
+        let stems = next()?;
+        let mut ry = RegenYear { germinated: next()?, recruited: next()?, ..Default::default() };
+        let (est, died) = (next()? as usize, next()? as usize);
+        for v in ry.dead.iter_mut() {
+            *v = next()?;
         }
+        let tr = &w.stand.trees;
+        let h100 = super::stats::top_height_by(&tr.dbh, &tr.height, w.site.area_ha.max(1e-9), sums.stems, &mut |v| t.all_sum(v))?;
+        report.trees = sums.trees as usize;
+        report.established = est;
+        report.died = died;
+        report.row = (t.rank() == 0).then(|| super::stats::row_of(&w.site, w.stand.year, &sums, h100, stems, deaths, ry, self.harvest));
         report.phase_seconds[stats] = t0.elapsed().as_secs_f64();
         Ok(report)
     }
