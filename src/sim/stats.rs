@@ -555,41 +555,4 @@ mod tests {
         }
         assert_eq!(from_limbs(&total), vals.iter().sum::<i128>());
     }
-
-    /// Timing of the stand table's sums and top height against the serial f64 sums of earlier
-    /// versions (`cargo test --lib stats::tests::timing -- --ignored --nocapture`).
-    #[test]
-    #[ignore]
-    fn timing() {
-        let (d, h) = trees(1_200_000);
-        let n = d.len();
-        let t = TreeStore { id: (0..n as u64).collect(), species: (0..n).map(|i| (i % 3) as u16).collect(), dbh: d.clone(), height: h.clone(), ..Default::default() };
-        let t0 = std::time::Instant::now();
-        let mut x = 0.0;
-        for _ in 0..10 {
-            let s = RowSums::over(&t, 3, &[0, 1, 2], &[0.5, 0.5, 0.5]);
-            x += unfixed(s.ba);
-        }
-        let t1 = t0.elapsed().as_secs_f64() / 10.0;
-        let t0 = std::time::Instant::now();
-        for _ in 0..10 {
-            let (mut ba, mut hs, mut d2) = (0f64, 0f64, 0f64);
-            for i in 0..n {
-                if t.height[i] < 1.3 {
-                    continue;
-                }
-                ba += t.basal_area_m2(i);
-                hs += t.height[i] as f64;
-                d2 += (t.dbh[i] as f64).powi(2);
-            }
-            x += ba + hs + d2;
-        }
-        let t2 = t0.elapsed().as_secs_f64() / 10.0;
-        let t0 = std::time::Instant::now();
-        for _ in 0..10 {
-            x += top_height(&d, &h, 992.0);
-        }
-        let t3 = t0.elapsed().as_secs_f64() / 10.0;
-        println!("{n} trees: RowSums {:.1} ms, serial f64 sums (3 of them) {:.1} ms, top height {:.1} ms ({x})", t1 * 1e3, t2 * 1e3, t3 * 1e3);
-    }
 }
