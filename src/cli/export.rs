@@ -44,8 +44,8 @@ pub struct Args {
     #[arg(long)]
     pub stats: Option<PathBuf>,
     /// A lighter stand export: the open-grown skeleton of each tree capped at this many EcoMod
-    /// strands (at least 8; 48 was the default until round 22), shed below the simulated crown
-    /// base, so a tree keeps far fewer nodes than 2 a strand (48 strands: about 25–60 nodes),
+    /// strands (at least 8; 48 was the default before full detail), shed below the simulated
+    /// crown base, so a tree keeps far fewer than two nodes a strand (48 strands: about 25–60 nodes),
     /// its leaf cards enlarged to the crown's leaf area. By default every tree has full detail
     /// (see `--full-detail`).
     #[arg(long, conflicts_with_all = ["full_detail", "instances"])]
@@ -55,7 +55,7 @@ pub struct Args {
     /// tree), grown as a forest tree above the simulated crown base, bent by Plastic Trees and
     /// pruned where it meets its neighbours' wood; its crown's leaf area as its leaf cards
     /// plus leaf-cluster cards (sprigs). The 0.25 ha `1150,850,1200,900` of the default run's
-    /// year 150: about 10 s and 460 MB (`--max-strands 48`: about 5 s and 32 MB).
+    /// year 150: about 10 s and 460 MB (`--max-strands 48`: about 4 s and 50 MB).
     #[arg(long, conflicts_with = "instances")]
     pub full_detail: bool,
     /// Folder of extra or edited species files, over the shipped library and the run's own
