@@ -30,6 +30,11 @@ impl TriMesh {
     pub fn triangle_count(&self) -> usize {
         self.indices.len() / 3
     }
+    /// Bytes of the vertex and index data (positions and normals 12 B, texture coordinates 8 B
+    /// per vertex, 4 B per index); the vectors' unused capacity is not counted.
+    pub fn byte_size(&self) -> usize {
+        12 * (self.positions.len() + self.normals.len()) + 8 * self.uvs.len() + 4 * self.indices.len()
+    }
     /// Appends `other`, offsetting its indices.
     pub fn append(&mut self, other: &TriMesh) {
         let base = self.positions.len() as u32;
@@ -85,6 +90,56 @@ pub const LOD_LEVELS: usize = 4;
 /// clusters, crown hull, billboard impostor).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct LodChain {
-    /// Meshes, index 0 = full detail.
+    /// Meshes, index 0 = full detail (empty after [`LodChain::free_meshes`]).
     pub levels: Vec<TreeMesh>,
+    /// The figures of the meshes [`LodChain::free_meshes`] let go of (the renderer holds its
+    /// own copy of them); `None` while the meshes are here.
+    #[serde(skip)]
+    pub freed: Option<FreedMeshes>,
+}
+
+/// What a chain keeps of the meshes it freed ([`LodChain::free_meshes`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FreedMeshes {
+    /// Triangles of each level (bark and leaves).
+    pub triangles: Vec<usize>,
+    /// Largest horizontal distance (m per m of height) of a level-0 foliage vertex from the axis.
+    pub leaf_radius0: f32,
+}
+
+impl LodChain {
+    /// A chain of the level meshes `levels`, finest first.
+    pub fn new(levels: Vec<TreeMesh>) -> LodChain {
+        LodChain { levels, freed: None }
+    }
+
+    /// Triangles of level `level` (0 when there is no such level), also after
+    /// [`LodChain::free_meshes`].
+    pub fn level_triangles(&self, level: usize) -> usize {
+        match &self.freed {
+            Some(f) => f.triangles.get(level).copied().unwrap_or(0),
+            None => self.levels.get(level).map_or(0, |l| l.triangle_count()),
+        }
+    }
+
+    /// Largest horizontal distance of a level-0 foliage vertex from the axis (0 without
+    /// foliage), also after [`LodChain::free_meshes`].
+    pub fn leaf_radius0(&self) -> f32 {
+        match &self.freed {
+            Some(f) => f.leaf_radius0,
+            None => self.levels.first().map(|l| l.leaves.positions.iter().map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt()).fold(0.0f32, f32::max)).unwrap_or(0.0),
+        }
+    }
+
+    /// Lets go of the level meshes once a renderer holds its own copy of them (issue 34: the
+    /// adapted near field's meshes, 0.35 GB for the default run's ground view, were held twice
+    /// during the frame), keeping the level count, each level's triangles and the level-0
+    /// foliage radius. The chain cannot be uploaded again afterwards (its levels are empty).
+    pub fn free_meshes(&mut self) {
+        if self.freed.is_none() {
+            let f = FreedMeshes { triangles: (0..self.levels.len()).map(|l| self.level_triangles(l)).collect(), leaf_radius0: self.leaf_radius0() };
+            self.levels.iter_mut().for_each(|l| *l = TreeMesh::default());
+            self.freed = Some(f);
+        }
+    }
 }

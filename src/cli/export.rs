@@ -40,7 +40,7 @@ pub struct Args {
     /// radius and crown base, of the exported trees and of their neighbours within the halo),
     /// nodes_total and nodes_before_adaptation (all exported trees), pruned_light and
     /// pruned_collision (nodes the adaptation removed), sprig_cards (leaf-cluster cards of
-    /// `--full-detail`)). Its folder must exist.
+    /// `--full-detail`)). Its folder is made when missing.
     #[arg(long)]
     pub stats: Option<PathBuf>,
     /// A lighter stand export: the open-grown skeleton of each tree capped at this many EcoMod
@@ -113,7 +113,7 @@ fn export(a: &Args, area: Option<[f64; 4]>, levels: Vec<usize>) -> anyhow::Resul
         sylva::job::export::export_stand(&a.run_dir, &lib, &o, &a.out)?
     };
     if let Some(p) = &a.stats {
-        sylva::output::write_atomic(p, serde_json::to_string_pretty(&r.stats.to_json())?.as_bytes())?;
+        super::write_stats(p, &r.stats.to_json())?;
     }
     println!(
         "year {}: {} trees ({} tree models), {} obstacles, terrain {} triangles; {} meshes, {} mesh nodes, {} images; adapt {:.2} s → {} ({:.1} MB)",

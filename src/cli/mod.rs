@@ -66,14 +66,23 @@ fn quiet_mesa_runtime_dir() {
     }
 }
 
-/// Checks a `--stats FILE.json` path before any work: not a folder, and its folder exists
-/// (nothing is written when it does not, rather than a folder made by mistake).
+/// Checks a `--stats FILE.json` path before any work: not a folder. A missing folder is made
+/// when the figures are written ([`write_stats`]), as `--out`'s is.
 ///
 /// Errors: naming `--stats` and the path.
 pub fn check_stats_path(p: &std::path::Path) -> anyhow::Result<()> {
-    anyhow::ensure!(!p.is_dir(), "--stats {}: is a folder; expected a .json file name in an existing folder", p.display());
+    anyhow::ensure!(!p.is_dir(), "--stats {}: is a folder; expected a .json file name", p.display());
+    Ok(())
+}
+
+/// Writes the `--stats` figures `json` to `p` whole (a temporary file renamed), making its
+/// folder first when missing.
+///
+/// Errors: the folder cannot be made or the file written (naming the path).
+pub fn write_stats(p: &std::path::Path, json: &serde_json::Value) -> anyhow::Result<()> {
     if let Some(dir) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-        anyhow::ensure!(dir.is_dir(), "--stats {}: the folder {} does not exist; create it first or give a file in an existing folder", p.display(), dir.display());
+        std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("--stats {}: cannot make its folder {}: {e}", p.display(), dir.display()))?;
     }
+    sylva::output::write_atomic(p, serde_json::to_string_pretty(json)?.as_bytes())?;
     Ok(())
 }

@@ -103,9 +103,9 @@ pub struct RenderArgs {
     /// instanced_trees, triangles (drawn), per_level (instances drawn per level),
     /// adapted_per_level (the adapted trees among them), frame_s; trees (live trees of the
     /// snapshot), trees_15m, nodes_median and nodes_min (skeleton nodes of the adapted trees of
-    /// 15 m and taller), leaf_cards (of the adapted trees), stumps (harvested trees drawn as
+    /// 15 m and taller), leaf_cards (of the adapted trees), mesh_bytes (CPU bytes of the adapted trees' level meshes), stumps (harvested trees drawn as
     /// stumps: cut in the 20 years up to the year; their two instances each are among the
-    /// instances drawn)). Its folder must exist.
+    /// instances drawn)). Its folder is made when missing.
     #[arg(long)]
     pub stats: Option<PathBuf>,
 }
@@ -225,9 +225,9 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
             "cluster_hulls": ad.cluster_hulls, "hull_triangles": ad.hull_triangles, "per_level": st.per_level, "adapted_per_level": ad.per_level,
             "instanced_trees": st.instances_drawn.saturating_sub(ad.adapted_trees), "instances_drawn": st.instances_drawn, "triangles": st.triangles, "frame_s": frame_s,
             "trees": trees,
-            "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards,
+            "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards, "mesh_bytes": ad.mesh_bytes,
         });
-        sylva::output::write_atomic(path, serde_json::to_string_pretty(&j)?.as_bytes())?;
+        super::write_stats(path, &j)?;
     }
     let stumps_note = if stumps_drawn > 0 { format!(", {stumps_drawn} stumps of harvested trees") } else { String::new() };
     eprintln!("year {year}: {} trees drawn as meshes or billboards, {} more in the far-field canopy layer{stumps_note}, {} triangles → {}", st.instances_drawn, st.canopy_trees, st.triangles, a.out.display());
@@ -241,7 +241,7 @@ fn hemi(a: &RenderArgs, x: f64, y: f64) -> anyhow::Result<()> {
     let (img, st) = sylva::job::hemi::hemispherical_photo(&a.run_dir, &lib, &o)?;
     sylva::output::pictures::write_png(&a.out, &image::DynamicImage::ImageRgb8(img).to_rgba8())?;
     if let Some(path) = &a.stats {
-        sylva::output::write_atomic(path, serde_json::to_string_pretty(&st)?.as_bytes())?;
+        super::write_stats(path, &serde_json::to_value(&st)?)?;
     }
     eprintln!("year {}: hemispherical photograph at {x},{y} ({} trees within {} m): gap fraction {:.3}, simulated light {:.3} → {}", st.year, st.trees, sylva::job::hemi::VIEW_RADIUS_M, st.gap_fraction, st.simulated_light, a.out.display());
     Ok(())

@@ -131,6 +131,10 @@ pub struct AdaptStats {
     pub nodes_min: usize,
     /// Leaf cards of the adapted trees' full-detail skeletons together.
     pub leaf_cards: usize,
+    /// Bytes of the adapted trees' level meshes on the CPU side (positions, normals, texture
+    /// coordinates and indices of every level), held during the frame; the renderer's vertex
+    /// and index buffers hold about as much again.
+    pub mesh_bytes: usize,
 }
 
 /// The level of an adapted tree's chain that is its crown hull (LOD2: 40–100 px tall on screen
@@ -233,12 +237,14 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
     let adapt_s = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
     #[allow(clippy::type_complexity)]
+    // each adapted tree's skeleton and leaves are moved into its meshing and freed with it, not
+    // held beside every tree's meshes (issue 34)
     let meshed: Vec<Option<(Prototype, f32, f32, bool, usize, usize)>> = st_trees
-        .par_iter()
-        .map(|a| {
+        .into_par_iter()
+        .map(|mut a| {
             let t = &trees[a.index];
             let sp = &library.species[t.species as usize];
-            let (mut sk, mut lv, h) = tree_frame(a, t.base)?;
+            let (mut sk, mut lv, h) = frame_of(std::mem::take(&mut a.skeleton), std::mem::take(&mut a.leaves), t.base)?;
             let (n_nodes, n_leaves) = (sk.nodes.len(), lv.leaves.len());
             let s = 1.0 / h;
             sk.nodes.iter_mut().for_each(|n| {
@@ -249,7 +255,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
                 l.pos *= s;
                 l.size *= s;
             });
-            let (lods, hulled) = adapted_lod_chain(&sk, &lv, a, t.base, s, &crate::structure::mesh::LodOptions::default());
+            let (lods, hulled) = adapted_lod_chain(&sk, &lv, &a, t.base, s, &crate::structure::mesh::LodOptions::default());
             if lods.levels.is_empty() {
                 return None;
             }
@@ -259,13 +265,14 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         })
         .collect();
     let (mut adapted, mut hulls, mut hull_triangles) = (0, 0, 0);
-    let (mut nodes_15m, mut leaf_cards) = (Vec::new(), 0);
+    let (mut nodes_15m, mut leaf_cards, mut mesh_bytes) = (Vec::new(), 0, 0);
     for (m, n) in meshed.into_iter().zip(&near) {
         let Some((p, h, r0, hulled, n_nodes, n_leaves)) = m else { continue };
         if trees[n.2].height_m >= STATS_MIN_HEIGHT_M {
             nodes_15m.push(n_nodes);
         }
         leaf_cards += n_leaves;
+        mesh_bytes += p.lods.levels.iter().map(|l| l.bark.byte_size() + l.leaves.byte_size()).sum::<usize>();
         if hulled {
             hulls += 1;
             hull_triangles += p.lods.levels.get(CLUSTER_HULL_LEVEL).map_or(0, |l| l.triangle_count());
@@ -283,7 +290,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         prototypes.push(p);
         adapted += 1;
     }
-    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards })
+    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards, mesh_bytes })
 }
 
 /// The level-of-detail chain of the adapted tree `a` from its skeleton `sk` and leaves `lv` in
@@ -307,8 +314,11 @@ pub fn adapted_lod_chain(sk: &Skeleton, lv: &Leaves, a: &AdaptedTree, base: Vec3
 /// The adapted tree `a` in its own frame (stem base `base` moved to the origin) with its height
 /// (m, highest node or leaf); `None` for a tree under 0.1 m.
 pub fn tree_frame(a: &AdaptedTree, base: Vec3) -> Option<(Skeleton, Leaves, f32)> {
-    let mut sk = a.skeleton.clone();
-    let mut lv = a.leaves.clone();
+    frame_of(a.skeleton.clone(), a.leaves.clone(), base)
+}
+
+/// [`tree_frame`] of a skeleton `sk` and leaves `lv` taken by value (moved, not copied).
+fn frame_of(mut sk: Skeleton, mut lv: Leaves, base: Vec3) -> Option<(Skeleton, Leaves, f32)> {
     sk.nodes.iter_mut().for_each(|n| n.pos -= base);
     lv.leaves.iter_mut().for_each(|l| l.pos -= base);
     let h = sk.nodes.iter().map(|n| n.pos.z).fold(0.0f32, f32::max).max(lv.leaves.iter().map(|l| l.pos.z).fold(0.0, f32::max));
@@ -463,7 +473,7 @@ pub fn obstacle_models(obstacles: &[ObstacleSpec], site: &SiteConditions, first:
             *p = ((Vec3::from(*p) - base) / top).to_array();
         }
         let level = TreeMesh { bark: mesh, leaves: TriMesh::default() };
-        let p = Prototype { name: format!("obstacle {k} ({})", o.kind()), lods: LodChain { levels: vec![level; LOD_LEVELS - 1] }, bark_color: srgb_to_linear(OBSTACLE_RGB), leaf_color: [0.0; 3], stiffness: 1.0, look: None };
+        let p = Prototype { name: format!("obstacle {k} ({})", o.kind()), lods: LodChain::new(vec![level; LOD_LEVELS - 1]), bark_color: srgb_to_linear(OBSTACLE_RGB), leaf_color: [0.0; 3], stiffness: 1.0, look: None };
         let r0 = p.normalised_crown_radius();
         protos.push(p);
         let mut t = TreeInstance::new(u64::MAX - k as u64, base.to_array(), top, r0 * top, first + k as u32, [0.0; 3]);

@@ -197,6 +197,8 @@ impl Stage {
         let base = self.n_base;
         let mut protos = std::mem::take(&mut self.scene.prototypes);
         let adapt = adapted::adapt_near_field(plants, &mut inst, &mut protos, &self.library, &self.site, &self.obstacles, camera, season, &mut self.cache, &o);
+        // the adaptation's working memory back to the system before the meshes are uploaded
+        release_freed_memory();
         let unchanged = !matches!(adapt, Ok(ref a) if a.adapted_trees > 0);
         if unchanged {
             // the base prototypes back, as they were (same version: nothing to upload again)
@@ -208,6 +210,15 @@ impl Stage {
         self.last_adapt = adapt?;
         let adapted: Vec<(TreeInstance, usize)> = inst.iter().filter(|t| t.species as usize >= base).map(|t| (*t, protos[t.species as usize].lods.levels.len())).collect();
         self.scene.set_prototypes(protos);
+        // the adapted trees' meshes are held once, by the renderer, during the frame (issue 34)
+        if let Err(e) = self.renderer.upload_scene(&self.scene) {
+            let mut protos = std::mem::take(&mut self.scene.prototypes);
+            protos.truncate(base);
+            self.scene.set_prototypes(protos);
+            return Err(e.into());
+        }
+        self.scene.prototypes[base..].iter_mut().for_each(|p| p.lods.free_meshes());
+        release_freed_memory();
         let img = self.render_instances(inst, season, camera, width, height);
         let mut protos = std::mem::take(&mut self.scene.prototypes);
         protos.truncate(base);

@@ -104,7 +104,7 @@ pub fn level_triangles(proto: &Prototype, level: usize) -> u64 {
     if level + 1 >= n {
         BILLBOARD_TRIANGLES as u64
     } else {
-        proto.lods.levels.get(level).map(|l| l.triangle_count() as u64).unwrap_or(0)
+        proto.lods.level_triangles(level) as u64
     }
 }
 

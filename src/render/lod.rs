@@ -595,7 +595,7 @@ pub fn placeholder_chain(conifer: bool) -> LodChain {
     }
     imp.leaves.append(&top);
     levels.push(imp);
-    LodChain { levels }
+    LodChain::new(levels)
 }
 
 #[cfg(test)]

@@ -31,12 +31,7 @@ impl Prototype {
     /// Crown radius of the normalised model (m per m of height): the largest horizontal
     /// distance of a foliage vertex of level 0 from the axis; 0.3 when the model has no leaves.
     pub fn normalised_crown_radius(&self) -> f32 {
-        let r = self
-            .lods
-            .levels
-            .first()
-            .map(|l| l.leaves.positions.iter().map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt()).fold(0.0f32, f32::max))
-            .unwrap_or(0.0);
+        let r = self.lods.leaf_radius0();
         if r > 1e-4 {
             r
         } else {

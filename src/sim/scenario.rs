@@ -251,6 +251,32 @@ fn plain_type_words(msg: &str) -> String {
     m
 }
 
+/// The key of the `key = value` line of `text` holding byte `at` (`None` when that line is no
+/// such line, e.g. inside a table header or an inline table).
+fn key_at(text: &str, at: usize) -> Option<String> {
+    let at = at.min(text.len());
+    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let line = text[start..].lines().next()?;
+    let (key, _) = line.split_once('=')?;
+    let key = key.trim();
+    (!key.is_empty() && key.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')).then(|| key.to_string())
+}
+
+/// What the top-level scenario field `key` holds, for a type error on it (the type alone, e.g.
+/// "a whole number from 0 to 4294967295", does not say which values make sense).
+fn field_hint(key: &str) -> Option<&'static str> {
+    Some(match key {
+        "years" => "the number of years to simulate, a whole number 1–10000",
+        "seed" => "the random seed, a whole number ≥ 0",
+        "snapshot_every" => "years between snapshots (maps, key frames), a whole number ≥ 0 (0: only the first and last year)",
+        "inventory_every" => "years between tree inventories, a whole number: a multiple of snapshot_every, or 0 for only the first and last year (omit it for every snapshot)",
+        "checkpoint_every" => "years between checkpoints, a whole number ≥ 0 (0: only at the end)",
+        "light_cell_m" => "the light grid's cell size, a number 2–20 (m)",
+        "seasonal_snapshots" => "true or false",
+        _ => return None,
+    })
+}
+
 impl Scenario {
     /// Context for error messages: the scenario file (or source name) and the scenario's `name`.
     pub fn context(&self) -> String {
@@ -269,7 +295,14 @@ impl Scenario {
     /// Errors: [`Error::Format`] for TOML syntax, unknown fields or wrong types (with line);
     /// [`Error::Invalid`] for out-of-range values.
     pub fn from_toml_str(text: &str, name: &str) -> Result<Scenario> {
-        let mut s: Scenario = toml::from_str(text).map_err(|e| Error::format(name, plain_type_words(&e.to_string())))?;
+        let mut s: Scenario = toml::from_str(text).map_err(|e| {
+            let mut msg = plain_type_words(&e.to_string());
+            // a wrong type on a top-level field: what the field holds besides its type
+            if let Some(hint) = e.span().and_then(|sp| key_at(text, sp.start)).and_then(|k| field_hint(&k).map(|h| (k, h))) {
+                msg = format!("{}\n`{}`: {}", msg.trim_end(), hint.0, hint.1);
+            }
+            Error::format(name, msg)
+        })?;
         s.validate(name)?;
         s.source = name.to_string();
         Ok(s)
@@ -610,6 +643,11 @@ spacing_m = 2.0
             assert!(e.contains("t.toml") && e.contains("inventory_every") && e.contains(&inv.to_string()) && e.contains("snapshot_every"), "{e}");
         }
         assert!(Scenario::from_toml_str(&OK.replace("seed = 3", "seed = 3\nsnapshot_every = 5\ninventory_every = 0"), "t.toml").is_ok());
+        // a wrong type says what the field holds, not only the type's range
+        for bad in ["-1", "\"x\"", "2.5"] {
+            let e = Scenario::from_toml_str(&OK.replace("seed = 3", &format!("seed = 3\nsnapshot_every = 5\ninventory_every = {bad}")), "t.toml").unwrap_err().to_string();
+            assert!(e.contains("t.toml") && e.contains("`inventory_every`: years between tree inventories") && e.contains("multiple of snapshot_every"), "{e}");
+        }
     }
 }
 

@@ -418,5 +418,5 @@ pub fn full_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
 /// dozen nodes).
 pub fn lod_chain(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> LodChain {
     let levels: [TreeMesh; LOD_LEVELS] = [full_mesh(sk, leaves, o), reduced_mesh(sk, leaves, o), hull_mesh(sk, leaves, o), impostor_mesh(sk, leaves)];
-    LodChain { levels: levels.into() }
+    LodChain::new(levels.into())
 }

@@ -251,6 +251,15 @@ impl Renderer {
         r
     }
 
+    /// Uploads what changed of `scene`'s terrain and prototypes now rather than at the next
+    /// frame (so that the caller may free its meshes, [`crate::mesh::LodChain::free_meshes`],
+    /// before drawing).
+    ///
+    /// Errors: as [`Renderer::render`]'s upload (an inconsistent mesh, a lost device).
+    pub fn upload_scene(&mut self, scene: &Scene) -> Result<()> {
+        self.upload(scene).map(|_| ())
+    }
+
     fn render_inner(&mut self, scene: &Scene, camera: &Camera, view: &wgpu::TextureView, width: u32, height: u32) -> Result<FrameStats> {
         let (uploaded_terrain, uploaded_prototypes) = self.upload(scene)?;
         self.ensure_targets(width, height);

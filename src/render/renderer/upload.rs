@@ -87,7 +87,25 @@ pub(super) fn billboard_vertices(s: &Silhouette) -> (Vec<TreeVertex>, Vec<u32>) 
     (verts, vec![0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7])
 }
 
+/// Bytes of prototype meshes uploaded between two flushes of the staging copies
+/// ([`Renderer::flush_uploads`]): 64 MiB. A buffer created with its contents is filled through a
+/// staging buffer that the device frees only after the next submission has run, so uploading
+/// the meshes of a near field of adapted trees (about 0.7 GB for the 400 trees of the default
+/// run's ground view, 200 at full detail) in one go held every staging copy beside its buffer
+/// (issue 34).
+pub const UPLOAD_FLUSH_BYTES: usize = 64 << 20;
+
 impl Renderer {
+    /// Submits the uploads recorded so far and waits until the device has run them, so that
+    /// their staging copies are freed.
+    ///
+    /// Errors: [`RenderError::Readback`] (stage `poll`) when the device is lost.
+    pub(super) fn flush_uploads(&self) -> Result<()> {
+        let sub = self.queue.submit(std::iter::empty());
+        self.device.poll(wgpu::PollType::Wait { submission_index: Some(sub), timeout: None }).map_err(|e| RenderError::Readback { stage: "poll", message: e.to_string() })?;
+        Ok(())
+    }
+
     /// Uploads what changed of the scene's static data: the terrain part when its version
     /// ([`Scene::terrain_version`]) differs from the uploaded one, the prototypes when theirs
     /// does, nothing when neither does (no pass over the meshes).
@@ -203,7 +221,13 @@ impl Renderer {
             })
             .collect();
         let mut protos = Vec::new();
+        // bytes handed to the device since the staging copies were last flushed
+        let mut staged = 0usize;
         for (pi, p) in scene.prototypes.iter().enumerate() {
+            if staged >= UPLOAD_FLUSH_BYTES {
+                self.flush_uploads()?;
+                staged = 0;
+            }
             let mut levels = Vec::new();
             let n_mesh = drawn_levels(p.lods.levels.len()) - 1;
             for (li, l) in p.lods.levels.iter().take(n_mesh).enumerate() {
@@ -240,6 +264,7 @@ impl Renderer {
                     idx.extend_from_slice(&[0, 0, 0]);
                     verts.push(TreeVertex { pos: [0.0; 3], normal: [0.0, 0.0, 1.0], mat: 0.0, uv: [-1.0, -1.0] });
                 }
+                staged += std::mem::size_of_val(verts.as_slice()) + std::mem::size_of_val(idx.as_slice());
                 levels.push(GpuLevel {
                     vb: d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("tree vb"), contents: bytemuck::cast_slice(&verts), usage: wgpu::BufferUsages::VERTEX }),
                     ib: d.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some("tree ib"), contents: bytemuck::cast_slice(&idx), usage: wgpu::BufferUsages::INDEX }),
