@@ -355,6 +355,10 @@ impl<'t> Root<'t> {
         if !self.done {
             self.done = true;
             command(self.t, Some(Command::End))?;
+            if let Some(tl) = self.tile.as_ref() {
+                // rank 0's outputs are timed by the run driver (`output` in its phase times)
+                print_phase_times(tl, None);
+            }
         }
         Ok(())
     }
@@ -528,10 +532,18 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
     let layout = layout_for(&world, t.size())?;
     let me = t.rank();
     let mut tile: Option<Tile> = None;
+    // wall time (s) in the snapshots' and checkpoints' collective steps (SYLVA_PHASE_TIMES=1)
+    let mut output_s = 0.0;
     loop {
         let c = command(t, None)?;
+        let t0 = std::time::Instant::now();
         match (c, tile.as_mut()) {
-            (Command::End, _) => return Ok(()),
+            (Command::End, _) => {
+                if let Some(tl) = tile.as_ref() {
+                    print_phase_times(tl, Some(output_s));
+                }
+                return Ok(());
+            }
             (Command::Begin, _) => {
                 let mut tl = Tile::new(&world, layout.clone(), me);
                 tl.scatter(None, t)?;
@@ -565,6 +577,20 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
             (Command::Resume, Some(_)) => return Err(Error::Exchange { peer: 0, reason: "command Resume after the run began".into() }.into()),
             (c, None) => return Err(Error::Exchange { peer: 0, reason: format!("command {c:?} before the run began") }.into()),
         }
+        if matches!(c, Command::Save | Command::Snapshot) {
+            output_s += t0.elapsed().as_secs_f64();
+        }
+    }
+}
+
+/// With `SYLVA_PHASE_TIMES=1` in the environment, prints `tile`'s wall time per phase
+/// ([`Tile::phase_line`]) and `output_s`, the seconds of its snapshots and checkpoints (rank 0:
+/// `None`, its run driver times them), to stderr in one write.
+fn print_phase_times(tile: &Tile, output_s: Option<f64>) {
+    if std::env::var_os("SYLVA_PHASE_TIMES").is_some() {
+        let out = output_s.map_or(String::new(), |s| format!(", outputs {s:.1} s"));
+        let line = format!("{}{out}\n", tile.phase_line());
+        let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
     }
 }
 
