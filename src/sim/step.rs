@@ -102,6 +102,7 @@ fn run_light(w: &mut World, _: &mut YearReport) {
         trees: &mut w.stand.trees,
         ground_light: &mut w.scratch.ground_light,
         grid: &mut w.scratch.grid,
+        window: w.site.window,
     });
 }
 

@@ -531,8 +531,8 @@ pub struct Tile {
     /// Bytes sent for halo copies since the start (the stand-table and output gathers not
     /// counted).
     pub halo_bytes: u64,
-    /// While halo copies are merged in: which rows are the tile's own.
-    own: Vec<bool>,
+    /// While halo copies are merged in: their rows, ascending.
+    halo_rows: Vec<usize>,
     /// This year's harvest of the whole landscape (stems ≥ 1.3 m, volume m³;
     /// [`super::stats::harvest_sums`]), as the management phase found it (every rank sees every
     /// harvested tree); rank 0 puts it in the stand-table row.
@@ -557,7 +557,7 @@ impl Tile {
         world.tallies.deaths_total = [0; N_CAUSES];
         world.tallies.regen_ledger = RegenLedger::new(world.site.pool.len());
         world.scratch.dead.clear();
-        Tile { world, layout, me, halo_bytes: 0, own: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] }
+        Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] }
     }
 
     /// Tile `me` of `layout` from `world`, a tile's world as it was saved (its own trees and
@@ -566,7 +566,7 @@ impl Tile {
     pub fn resumed(mut world: World, layout: Layout, me: usize) -> Tile {
         world.site.window = Some(layout.rect(me));
         world.scratch.dead.clear();
-        Tile { world, layout, me, halo_bytes: 0, own: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] }
+        Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] }
     }
 
     /// Rank 0 sends every rank its part of `global` (rank 0's world after a fresh start or a
@@ -649,20 +649,17 @@ impl Tile {
                 expected: format!("at least {reach} m: a crown of {crown} m radius plus two light cells"),
             });
         }
-        let own = std::mem::take(&mut self.world.stand.trees);
-        let next = own.next_id;
-        parts.push(own);
-        let (merged, from) = TreeStore::merge_by_id(&parts, next);
-        self.world.stand.trees = merged;
-        self.own = from.iter().map(|&k| k == parts.len() - 1).collect();
+        // the copies merged among themselves by id (few), then inserted among the tile's own
+        // trees by id (runs moved, [`TreeStore::insert_by_id`]): the order of merge_by_id
+        let copies = if parts.len() == 1 { parts.pop().unwrap_or_default() } else { TreeStore::merge_by_id(&parts, 0).0 };
+        self.halo_rows = self.world.stand.trees.insert_by_id(&copies);
         Ok(())
     }
 
     /// Drops the halo copies, keeping the tile's own trees (their order kept).
     fn drop_halo(&mut self) {
-        let keep = std::mem::take(&mut self.own);
-        debug_assert_eq!(keep.len(), self.world.stand.trees.len());
-        self.world.stand.trees.retain(&keep);
+        let rows = std::mem::take(&mut self.halo_rows);
+        self.world.stand.trees.remove_rows(&rows);
     }
 
     /// Simulates one year of the tile (the phases of [`crate::sim::step::PHASES`], with the halo
