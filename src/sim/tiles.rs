@@ -5,7 +5,10 @@
 //! its own stand: the trees standing on its light cells, the sapling cohorts of its cells.
 //! Each year it runs the phases of [`crate::sim::step::PHASES`] on its own trees; what a phase
 //! reads across a tile edge comes from copies of the neighbours' trees within the halo, passed
-//! once before each phase that reads neighbours, through a [`Transport`]:
+//! once before each phase that reads neighbours (seeds: a grid of sums), through a
+//! [`Transport`]. Per-cell passes that only feed the tile's own cells run on them only (the
+//! ground light, the spreading of seeds); the others (the canopy and crowding grids, the site
+//! conditions) still cover the whole site on every rank:
 //! 1. **light**: the canopy of a cell holds every crown that covers it, and a tree's light
 //!    reads its cell and the next cell towards the equator: trees within the largest crown
 //!    radius plus two light cells of the tile;
@@ -13,9 +16,13 @@
 //!    no exchange; recruits get partition-independent ids ([`crate::sim::trees::birth_id`]);
 //! 3. **growth** reads the crowding of the 3 × 3 block of 10 m cells around each tree
 //!    ([`crate::sim::density`]): trees within 30 m, after this spring's recruitment;
-//! 4. **reproduction** gathers seeds over each species' dispersal kernel from the seed sources
-//!    of the seed cells within reach: the *mature* trees (the only seed sources) within
-//!    `(⌈max_m / cell⌉ + 2)` seed cells, after this summer's growth;
+//! 4. **reproduction** gathers seeds over each species' dispersal kernel from the seed
+//!    production of the seed cells within reach: no trees are copied (since issue 37; before,
+//!    the *mature* trees within `(⌈max_m / cell⌉ + 2)` seed cells, 875 m for silver birch);
+//!    every rank sums its own seed trees' production per seed cell and passes the sums of the
+//!    cells within the other ranks' reach, a grid; seed cells across a tile edge, whose sum
+//!    depends on the order of addition, get the (id, seeds) of their trees from every rank,
+//!    summed in id order ([`Tile::reproduce`]);
 //! 5. **mortality** draws each tree from its own stream: no exchange;
 //!    (**climate**, first in the year, sets each cell's and each own tree's suitability from
 //!    the whole site every tile holds: no exchange;)
@@ -698,7 +705,9 @@ impl Tile {
                 self.drop_halo();
             }
             report.phase_seconds[k] = t0.elapsed().as_secs_f64();
-            self.halo_seconds[k] += report.phase_seconds[k] - (t2 - t1).as_secs_f64();
+            if phase.halo != Halo::None {
+                self.halo_seconds[k] += report.phase_seconds[k] - (t2 - t1).as_secs_f64();
+            }
         }
         // stats: the stand table's row from every rank's sums (exact, so their sum is one
         // process's) and counts, added up by all_sum; the top height by a selection over all_sum
@@ -891,6 +900,11 @@ impl Tile {
     ///
     /// Errors: [`Error::Exchange`] from the transport or a malformed message.
     fn manage(&mut self, t: &mut dyn Transport, run: fn(&mut World, &mut YearReport), report: &mut YearReport) -> Result<()> {
+        if self.world.site.management.is_empty() {
+            // nothing to do (as `run` finds): no exchange, no pass over the trees
+            self.harvest = super::stats::harvest_sums(&self.world.site, &[]);
+            return Ok(());
+        }
         let year = self.world.stand.year + 1;
         let site = &self.world.site;
         let areas: Vec<&super::management::Region> = site.management.iter().filter(|op| op.spec.due(year).is_some() && !matches!(op.action, super::management::Action::Planting { .. })).map(|op| &op.region).collect();
