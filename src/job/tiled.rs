@@ -9,8 +9,9 @@
 //!   of its own trees (living in id order, then this year's dead in id order) and cohorts into
 //!   part files `.NAME.rankRRRR.PID.tmp` beside the file; after all have, rank 0 merges them
 //!   by tree id (cohorts by light cell), streaming, into the file ([`write_parts`]);
-//! - `inventory/year_NNNN.gpkg`, `.parquet`: rank 0 writes them from the merged CSV, streaming
-//!   (the CSV of a Parquet run is removed after);
+//! - `inventory/year_NNNN.gpkg`, `.parquet`: written from the merged CSV, streaming, the
+//!   GeoPackage by the last rank ([`Command::Gpkg`]) while rank 0 writes the Parquet file, the
+//!   regeneration table and the maps (the CSV of a Parquet run is removed once both are done);
 //! - `maps/species_*.png`, `maps/basal_area_*.png`: drawn by rank 0 from the basal area per
 //!   map pixel and species: each rank sums its own trees per bin; a bin with trees on one rank
 //!   takes that rank's sum, and only the trees of bins with trees on several ranks are sent to
