@@ -258,3 +258,34 @@ fn map_sums_over_tiles_are_one_process_sums() {
     assert!(got.iter().zip(&want).all(|(a, b)| a.to_bits() == b.to_bits()), "the sums differ from one process's");
     assert!(want.iter().sum::<f64>() > 0.0);
 }
+
+#[test]
+fn halo_copies_inserted_by_id_and_removed_as_a_merge_and_a_retain() {
+    // the tiles' halo copies (issue 37): `insert_by_id` gives the store `merge_by_id` gives,
+    // and `remove_rows` of the rows it returns gives the store back
+    let toml = edges();
+    let (sc, mut w) = common::world(&toml);
+    common::run(&sc, &mut w, YEARS);
+    let all = w.stand.trees.clone();
+    assert!(all.len() > 100, "{} trees", all.len());
+    // every third tree is a "halo copy" (arriving without growth factors), the rest the tile's
+    let keep: Vec<bool> = (0..all.len()).map(|i| i % 3 != 1).collect();
+    let mut own = all.clone();
+    own.retain(&keep);
+    let mut copies = all.clone();
+    copies.retain(&keep.iter().map(|k| !k).collect::<Vec<_>>());
+    copies.growth_factor.0.clear();
+    let (want, from) = sylva::sim::trees::TreeStore::merge_by_id(&[copies.clone(), own.clone()], own.next_id);
+    let mut got = own.clone();
+    let rows = got.insert_by_id(&copies);
+    assert_eq!(rows, (0..all.len()).filter(|&i| from[i] == 0).collect::<Vec<_>>());
+    assert_eq!(got.id, all.id, "ids not in order");
+    assert_eq!(got.id, want.id);
+    assert_eq!(got.species, want.species);
+    assert!(got.f32_columns().iter().zip(want.f32_columns()).all(|(a, b)| a.iter().map(|v| v.to_bits()).eq(b.iter().map(|v| v.to_bits()))), "columns differ from merge_by_id's");
+    // the copies' growth factors are NaN, the tile's kept
+    assert!(rows.iter().all(|&i| got.growth_factor.0[i].is_nan()));
+    got.remove_rows(&rows);
+    assert_eq!(got.id, own.id);
+    assert!(got.f32_columns().iter().zip(own.f32_columns()).all(|(a, b)| a.iter().map(|v| v.to_bits()).eq(b.iter().map(|v| v.to_bits()))));
+}

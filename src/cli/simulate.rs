@@ -188,16 +188,36 @@ fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: Path
     Ok(())
 }
 
-/// Prints one line per rank of a tiled run to stderr: wall time, peak resident memory
+/// CPU time (s, user + system) of this process so far (getrusage); `None` where unknown.
+#[cfg_attr(not(feature = "mpi"), allow(dead_code))]
+fn cpu_seconds() -> Option<f64> {
+    #[cfg(unix)]
+    {
+        // SAFETY: getrusage writes into the zeroed struct we own.
+        let mut u: libc::rusage = unsafe { std::mem::zeroed() };
+        // SAFETY: a valid pointer to a rusage struct.
+        if unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) } != 0 {
+            return None;
+        }
+        let s = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+        Some(s(u.ru_utime) + s(u.ru_stime))
+    }
+    #[cfg(not(unix))]
+    None
+}
+
+/// Prints one line per rank of a tiled run to stderr: wall time and the part of it spent in
+/// exchanges (passing messages, waiting for the other ranks), CPU time (user + system),
+/// peak resident memory
 /// (VmHWM of /proc/self/status) and the bytes sent to other ranks (in all and per year of
 /// `years`), the figures of docs/SCALING.md.
 #[cfg_attr(not(feature = "mpi"), allow(dead_code))]
-fn rank_stats(rank: usize, size: usize, seconds: f64, sent: u64, years: u32) {
+fn rank_stats(rank: usize, size: usize, seconds: f64, in_exchanges: f64, sent: u64, years: u32) {
     let hwm = std::fs::read_to_string("/proc/self/status").ok().and_then(|s| s.lines().find(|l| l.starts_with("VmHWM:")).and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok()));
     let mib = hwm.map_or("?".to_string(), |k| format!("{:.0}", k as f64 / 1024.0));
     // one write of the whole line: stderr is unbuffered, and `eprintln!` writes each piece of
     // its format on its own, so the lines of ranks sharing mpirun's stderr came interleaved
-    let line = format!("rank {rank}/{size}: {seconds:.1} s, peak RSS {mib} MiB, sent {sent} bytes ({:.0} per year)\n", sent as f64 / years.max(1) as f64);
+    let line = format!("rank {rank}/{size}: {seconds:.1} s ({in_exchanges:.1} s of it in exchanges), CPU {} s, peak RSS {mib} MiB, sent {sent} bytes ({:.0} per year)\n", cpu_seconds().map_or("?".to_string(), |s| format!("{s:.1}")), sent as f64 / years.max(1) as f64);
     let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
 }
 
@@ -226,7 +246,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             } else {
                 simulate(&sc, site, &lib, a.out.clone(), a.resume, a.inventory, a.gpkg, Stepping::Ranks(&mut t))
             };
-            rank_stats(t.rank(), t.size(), t0.elapsed().as_secs_f64(), t.bytes_sent(), sc.years);
+            rank_stats(t.rank(), t.size(), t0.elapsed().as_secs_f64(), t.seconds_in_exchanges(), t.bytes_sent(), sc.years);
             return r;
         }
     }

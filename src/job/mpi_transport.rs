@@ -17,6 +17,9 @@ pub struct MpiTransport {
     rank: usize,
     size: usize,
     sent: u64,
+    /// Wall time (s) spent in exchanges and all-reduces so far, waits for the other ranks
+    /// included ([`MpiTransport::seconds_in_exchanges`]).
+    in_exchanges: f64,
     // dropped last: finalises MPI
     _universe: mpi::environment::Universe,
 }
@@ -33,7 +36,15 @@ impl MpiTransport {
         let universe = mpi::initialize()?;
         let world = universe.world();
         let (rank, size) = (world.rank().max(0) as usize, world.size().max(1) as usize);
-        Some(MpiTransport { world, rank, size, sent: 0, _universe: universe })
+        Some(MpiTransport { world, rank, size, sent: 0, in_exchanges: 0.0, _universe: universe })
+    }
+
+    /// Wall time (s) this rank has spent in exchanges and all-reduces so far: passing the
+    /// messages and waiting for the other ranks to arrive (what the rank's wall time minus it
+    /// leaves is its own work; Open MPI polls while it waits, so the CPU time counts the waits
+    /// too).
+    pub fn seconds_in_exchanges(&self) -> f64 {
+        self.in_exchanges
     }
 }
 
@@ -52,6 +63,7 @@ impl Transport for MpiTransport {
         if let Some((p, m)) = out.iter().enumerate().find(|(_, m)| m.len() > i32::MAX as usize) {
             return Err(Error::Exchange { peer: p, reason: format!("message of {} bytes, more than MPI's {} per message", m.len(), i32::MAX) });
         }
+        let t0 = std::time::Instant::now();
         let lens: Vec<u64> = out.iter().map(|m| m.len() as u64).collect();
         let mut incoming = vec![0u64; n];
         self.world.all_to_all_into(&lens[..], &mut incoming[..]);
@@ -77,6 +89,7 @@ impl Transport for MpiTransport {
             }
         });
         self.sent += lens.iter().enumerate().filter(|(p, _)| *p != me).map(|(_, l)| *l).sum::<u64>();
+        self.in_exchanges += t0.elapsed().as_secs_f64();
         Ok(got)
     }
     fn bytes_sent(&self) -> u64 {
@@ -88,8 +101,10 @@ impl Transport for MpiTransport {
     fn all_sum(&mut self, v: Vec<u64>) -> crate::Result<Vec<u64>> {
         let mut out = vec![0u64; v.len()];
         if self.size > 1 {
+            let t0 = std::time::Instant::now();
             self.world.all_reduce_into(&v[..], &mut out[..], mpi::collective::SystemOperation::sum());
             self.sent += 8 * v.len() as u64;
+            self.in_exchanges += t0.elapsed().as_secs_f64();
         } else {
             out = v;
         }

@@ -9,8 +9,9 @@
 //!   of its own trees (living in id order, then this year's dead in id order) and cohorts into
 //!   part files `.NAME.rankRRRR.PID.tmp` beside the file; after all have, rank 0 merges them
 //!   by tree id (cohorts by light cell), streaming, into the file ([`write_parts`]);
-//! - `inventory/year_NNNN.gpkg`, `.parquet`: rank 0 writes them from the merged CSV, streaming
-//!   (the CSV of a Parquet run is removed after);
+//! - `inventory/year_NNNN.gpkg`, `.parquet`: written from the merged CSV, streaming, the
+//!   GeoPackage by the last rank ([`Command::Gpkg`]) while rank 0 writes the Parquet file, the
+//!   regeneration table and the maps (the CSV of a Parquet run is removed once both are done);
 //! - `maps/species_*.png`, `maps/basal_area_*.png`: drawn by rank 0 from the basal area per
 //!   map pixel and species: each rank sums its own trees per bin; a bin with trees on one rank
 //!   takes that rank's sum, and only the trees of bins with trees on several ranks are sent to
@@ -67,11 +68,13 @@ pub enum Command {
     Resume = 7,
     /// Write your tile's part of the snapshot that follows ([`write_parts`]).
     Snapshot = 8,
+    /// The last rank writes the GeoPackage of the merged inventory that follows ([`send_gpkg`]).
+    Gpkg = 9,
 }
 
 impl Command {
     fn from_byte(b: u8) -> Option<Command> {
-        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot].into_iter().find(|c| *c as u8 == b)
+        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Gpkg].into_iter().find(|c| *c as u8 == b)
     }
 }
 
@@ -86,7 +89,7 @@ fn command(t: &mut dyn Transport, c: Option<Command>) -> Result<Command> {
     };
     let got = t.exchange(out)?;
     let b = got.first().and_then(|m| m.first()).copied().unwrap_or(0);
-    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–8)") })?)
+    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–9)") })?)
 }
 
 /// Rank 0 sends every rank `k` the year and `paths[k]` (a per-rank checkpoint file); the others
@@ -130,6 +133,29 @@ fn agree(t: &mut dyn Transport, failed: Option<String>) -> Result<()> {
         Some((k, m)) => Err(Error::Exchange { peer: k, reason: format!("rank {k} failed: {}", String::from_utf8_lossy(m)) }.into()),
         None => Ok(()),
     }
+}
+
+/// Rank 0 passes `job`, the merged inventory CSV and the GeoPackage to write from it, to the
+/// last rank (others pass `None`); returns this rank's job: the pair on the last rank, `None`
+/// on the others. The last rank writes the GeoPackage while rank 0 writes the snapshot's other
+/// files (a tiled run's rank 0 wrote all of them before).
+///
+/// Errors: [`Error::Exchange`] from the transport or a malformed message; [`Error::Invalid`]
+/// naming a path that is not UTF-8.
+fn send_gpkg(t: &mut dyn Transport, job: Option<(&Path, &Path)>) -> Result<Option<(PathBuf, PathBuf)>> {
+    let n = t.size();
+    let mut out = vec![Vec::new(); n];
+    if let Some((csv, gpkg)) = job {
+        let utf8 = |p: &Path| p.to_str().map(str::to_string).ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "inventory path".into(), value: p.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() });
+        out[n - 1] = format!("{}\0{}", utf8(csv)?, utf8(gpkg)?).into_bytes();
+    }
+    let got = t.exchange(out)?;
+    if t.rank() != n - 1 {
+        return Ok(None);
+    }
+    let m = std::str::from_utf8(&got[0]).map_err(|_| Error::Exchange { peer: 0, reason: "GeoPackage paths not UTF-8".into() })?;
+    let (csv, gpkg) = m.split_once('\0').ok_or_else(|| Error::Exchange { peer: 0, reason: format!("GeoPackage job of {} bytes without two paths", m.len()) })?;
+    Ok(Some((PathBuf::from(csv), PathBuf::from(gpkg))))
 }
 
 /// Reads tile `me` of `layout` from the per-rank checkpoint `path` of `year` into a copy of
@@ -355,6 +381,10 @@ impl<'t> Root<'t> {
         if !self.done {
             self.done = true;
             command(self.t, Some(Command::End))?;
+            if let Some(tl) = self.tile.as_ref() {
+                // rank 0's outputs are timed by the run driver (`output` in its phase times)
+                print_phase_times(tl, None);
+            }
         }
         Ok(())
     }
@@ -484,31 +514,55 @@ impl Stepper for Root<'_> {
         };
         let column = |i: usize| parts.iter().map(|p| p[i].clone()).collect::<Vec<PathBuf>>();
         let inv = dir.join("inventory");
+        let csv = inv.join(format!("{label}.csv"));
         use crate::output::inventory as inventory_out;
         if inventory {
-            inventory_out::merge_inventory_csv(&inv.join(format!("{label}.csv")), &column(0))?;
-            // the GeoPackage from the merged CSV: the bytes one process writes
-            if gpkg {
-                inventory_out::csv_file_to_gpkg(&inv.join(format!("{label}.csv")), &inv.join(format!("{label}.gpkg")), world)?;
+            inventory_out::merge_inventory_csv(&csv, &column(0))?;
+        }
+        // the GeoPackage from the merged CSV (the bytes one process writes), by the last rank
+        // while rank 0 writes the rest
+        let gpkg_path = (inventory && gpkg).then(|| inv.join(format!("{label}.gpkg")));
+        let by_last = gpkg_path.is_some() && self.t.size() > 1;
+        if let Some(g) = &gpkg_path {
+            if by_last {
+                command(self.t, Some(Command::Gpkg))?;
+                self.collective(|_, t| send_gpkg(t, Some((&csv, g))))?;
+            } else {
+                inventory_out::csv_file_to_gpkg(&csv, g, world)?;
             }
         }
-        if inventory && maps {
-            inventory_out::merge_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), &column(1))?;
-        }
-        if maps {
-            let ba = cols.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map sums gathered".into() })?;
-            let m = dir.join("maps");
-            crate::output::plot::write_maps_from(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px, &ba)?;
-        }
-        for p in parts.iter().flatten() {
-            std::fs::remove_file(p).map_err(|e| Error::io(p, e))?;
-        }
-        // Parquet from the merged CSV: the bytes one process writes
-        if inventory && format == crate::output::inventory::InventoryFormat::Parquet {
-            inventory_out::csv_file_to_parquet(&inv.join(format!("{label}.csv")), &crate::output::parquet::INVENTORY, world)?;
+        let parquet = inventory && format == crate::output::inventory::InventoryFormat::Parquet;
+        let r = (|| -> Result<()> {
+            if inventory && maps {
+                inventory_out::merge_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), &column(1))?;
+            }
             if maps {
-                inventory_out::csv_file_to_parquet(&inv.join(format!("{label}_regeneration.csv")), &crate::output::parquet::REGENERATION, world)?;
+                let ba = cols.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map sums gathered".into() })?;
+                let m = dir.join("maps");
+                crate::output::plot::write_maps_from(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px, &ba)?;
             }
+            for p in parts.iter().flatten() {
+                std::fs::remove_file(p).map_err(|e| Error::io(p, e))?;
+            }
+            // Parquet from the merged CSV: the bytes one process writes (the CSV is removed
+            // once the GeoPackage has been written from it too)
+            if parquet {
+                inventory_out::csv_file_to_parquet_beside(&csv, &crate::output::parquet::INVENTORY, world)?;
+                if maps {
+                    inventory_out::csv_file_to_parquet(&inv.join(format!("{label}_regeneration.csv")), &crate::output::parquet::REGENERATION, world)?;
+                }
+            }
+            Ok(())
+        })();
+        if by_last {
+            let a = self.collective(|_, t| agree(t, r.as_ref().err().map(|e| e.to_string())));
+            r?;
+            a?;
+        } else {
+            r?;
+        }
+        if parquet {
+            std::fs::remove_file(&csv).map_err(|e| Error::io(&csv, e))?;
         }
         Ok(())
     }
@@ -528,10 +582,18 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
     let layout = layout_for(&world, t.size())?;
     let me = t.rank();
     let mut tile: Option<Tile> = None;
+    // wall time (s) in the snapshots' and checkpoints' collective steps (SYLVA_PHASE_TIMES=1)
+    let mut output_s = 0.0;
     loop {
         let c = command(t, None)?;
+        let t0 = std::time::Instant::now();
         match (c, tile.as_mut()) {
-            (Command::End, _) => return Ok(()),
+            (Command::End, _) => {
+                if let Some(tl) = tile.as_ref() {
+                    print_phase_times(tl, Some(output_s));
+                }
+                return Ok(());
+            }
             (Command::Begin, _) => {
                 let mut tl = Tile::new(&world, layout.clone(), me);
                 tl.scatter(None, t)?;
@@ -562,9 +624,32 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
             (Command::Snapshot, Some(tl)) => {
                 write_parts(tl, t, None)?;
             }
+            (Command::Gpkg, Some(tl)) => {
+                // the last rank writes it; every rank then agrees with rank 0's other outputs
+                let r = send_gpkg(t, None).and_then(|job| match job {
+                    Some((csv, gpkg)) => Ok(crate::output::inventory::csv_file_to_gpkg(&csv, &gpkg, &tl.world)?),
+                    None => Ok(()),
+                });
+                agree(t, r.as_ref().err().map(|e| e.to_string()))?;
+                r?;
+            }
             (Command::Resume, Some(_)) => return Err(Error::Exchange { peer: 0, reason: "command Resume after the run began".into() }.into()),
             (c, None) => return Err(Error::Exchange { peer: 0, reason: format!("command {c:?} before the run began") }.into()),
         }
+        if matches!(c, Command::Save | Command::Snapshot | Command::Gpkg) {
+            output_s += t0.elapsed().as_secs_f64();
+        }
+    }
+}
+
+/// With `SYLVA_PHASE_TIMES=1` in the environment, prints `tile`'s wall time per phase
+/// ([`Tile::phase_line`]) and `output_s`, the seconds of its snapshots and checkpoints (rank 0:
+/// `None`, its run driver times them), to stderr in one write.
+fn print_phase_times(tile: &Tile, output_s: Option<f64>) {
+    if std::env::var_os("SYLVA_PHASE_TIMES").is_some() {
+        let out = output_s.map_or(String::new(), |s| format!(", outputs {s:.1} s"));
+        let line = format!("{}{out}\n", tile.phase_line());
+        let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
     }
 }
 
@@ -647,7 +732,7 @@ mod tests {
         assert_eq!(grid_for(4, 100, 100), (2, 2));
         assert_eq!(grid_for(8, 100, 50), (4, 2));
         assert_eq!(grid_for(6, 40, 120), (2, 3), "a tie (1 × 6, 2 × 3) goes to more tiles across");
-        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot] {
+        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Gpkg] {
             assert_eq!(Command::from_byte(c as u8), Some(c));
         }
         assert_eq!(Command::from_byte(0), None);

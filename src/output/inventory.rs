@@ -158,9 +158,17 @@ pub fn write_regeneration_parquet(path: &Path, w: &World) -> Result<()> {
 ///
 /// Errors: [`super::OutputError::Io`] naming the file.
 pub fn csv_file_to_parquet(csv: &Path, table: &super::parquet::Table, w: &World) -> Result<()> {
-    let f = std::fs::File::open(csv).map_err(|e| super::OutputError::io(csv, e))?;
-    super::parquet::csv_to_parquet(std::io::BufReader::new(f), &csv.display().to_string(), &csv.with_extension("parquet"), table, &PointGeoRef::of(w))?;
+    csv_file_to_parquet_beside(csv, table, w)?;
     std::fs::remove_file(csv).map_err(|e| super::OutputError::io(csv, e))
+}
+
+/// As [`csv_file_to_parquet`], keeping the CSV (a tiled run's last rank writes the GeoPackage
+/// from it meanwhile).
+///
+/// Errors: [`super::OutputError::Io`] naming the file.
+pub fn csv_file_to_parquet_beside(csv: &Path, table: &super::parquet::Table, w: &World) -> Result<()> {
+    let f = std::fs::File::open(csv).map_err(|e| super::OutputError::io(csv, e))?;
+    super::parquet::csv_to_parquet(std::io::BufReader::new(f), &csv.display().to_string(), &csv.with_extension("parquet"), table, &PointGeoRef::of(w))
 }
 
 pub use super::georef::PointGeoRef;

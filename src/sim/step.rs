@@ -49,7 +49,8 @@ pub enum Halo {
     Crowns,
     /// Crowding neighbourhoods (growth): every tree within three 10 m crowding cells.
     Crowding,
-    /// Seed sources (reproduction): the mature trees within the longest seed reach.
+    /// Seed sources (reproduction): the mature trees within the longest seed reach; a tiled
+    /// run passes their production per seed cell instead of the trees (`sim::tiles`).
     SeedSources,
     /// The areas of the management entries due this year (management): a thinning's target,
     /// triggers and choice of trees are over its whole area, so every tile gets every tree of
@@ -102,6 +103,7 @@ fn run_light(w: &mut World, _: &mut YearReport) {
         trees: &mut w.stand.trees,
         ground_light: &mut w.scratch.ground_light,
         grid: &mut w.scratch.grid,
+        window: w.site.window,
     });
 }
 

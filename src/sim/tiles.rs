@@ -5,7 +5,10 @@
 //! its own stand: the trees standing on its light cells, the sapling cohorts of its cells.
 //! Each year it runs the phases of [`crate::sim::step::PHASES`] on its own trees; what a phase
 //! reads across a tile edge comes from copies of the neighbours' trees within the halo, passed
-//! once before each phase that reads neighbours, through a [`Transport`]:
+//! once before each phase that reads neighbours (seeds: a grid of sums), through a
+//! [`Transport`]. Per-cell passes that only feed the tile's own cells run on them only (the
+//! ground light, the spreading of seeds); the others (the canopy and crowding grids, the site
+//! conditions) still cover the whole site on every rank:
 //! 1. **light**: the canopy of a cell holds every crown that covers it, and a tree's light
 //!    reads its cell and the next cell towards the equator: trees within the largest crown
 //!    radius plus two light cells of the tile;
@@ -13,9 +16,13 @@
 //!    no exchange; recruits get partition-independent ids ([`crate::sim::trees::birth_id`]);
 //! 3. **growth** reads the crowding of the 3 × 3 block of 10 m cells around each tree
 //!    ([`crate::sim::density`]): trees within 30 m, after this spring's recruitment;
-//! 4. **reproduction** gathers seeds over each species' dispersal kernel from the seed sources
-//!    of the seed cells within reach: the *mature* trees (the only seed sources) within
-//!    `(⌈max_m / cell⌉ + 2)` seed cells, after this summer's growth;
+//! 4. **reproduction** gathers seeds over each species' dispersal kernel from the seed
+//!    production of the seed cells within reach: no trees are copied (since issue 37; before,
+//!    the *mature* trees within `(⌈max_m / cell⌉ + 2)` seed cells, 875 m for silver birch);
+//!    every rank sums its own seed trees' production per seed cell and passes the sums of the
+//!    cells within the other ranks' reach, a grid; seed cells across a tile edge, whose sum
+//!    depends on the order of addition, get the (id, seeds) of their trees from every rank,
+//!    summed in id order ([`Tile::reproduce`]);
 //! 5. **mortality** draws each tree from its own stream: no exchange;
 //!    (**climate**, first in the year, sets each cell's and each own tree's suitability from
 //!    the whole site every tile holds: no exchange;)
@@ -54,6 +61,7 @@ use super::light_grid::{CellRect, LightGrid};
 use super::step::YearReport;
 use super::codec::{self, Dec, Short};
 use super::trees::{DeadTree, DeathCause, TreeStore, N_CAUSES, N_F32_COLUMNS};
+use super::phases::reproduction;
 use super::world::{Site, Tallies, World, KERNEL_CELLS, SEED_CELL_M};
 use crate::error::{Error, Result};
 use std::sync::{Arc, Condvar, Mutex};
@@ -432,6 +440,92 @@ fn get_trees(d: &mut Dec<'_>) -> Result<TreeStore> {
     Ok(t)
 }
 
+/// [`SeedPlan::owner`] of a seed cell across a tile edge.
+const SHARED: u32 = u32::MAX;
+
+/// A rectangle of seed cells, columns `c0..c1`, rows `r0..r1` (row 0 south).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct SeedRect {
+    c0: usize,
+    c1: usize,
+    r0: usize,
+    r1: usize,
+}
+
+impl SeedRect {
+    /// Its cells' indices (`row · cols + col`) in row-major order.
+    fn cells(self, cols: usize) -> impl Iterator<Item = usize> {
+        (self.r0..self.r1).flat_map(move |r| (self.c0..self.c1).map(move |c| r * cols + c))
+    }
+    /// True when cell index `cell` of a grid of `cols` columns lies in the rectangle.
+    fn contains_cell(self, cell: usize, cols: usize) -> bool {
+        let (c, r) = (cell % cols, cell / cols);
+        c >= self.c0 && c < self.c1 && r >= self.r0 && r < self.r1
+    }
+}
+
+/// How one pool species' seed grid lies over the tiles of a layout ([`Tile::reproduce`]).
+struct SeedPlan {
+    /// Columns and rows of the seed grid, its cell (m).
+    cols: usize,
+    rows: usize,
+    cell_m: f64,
+    /// The kernel's reach in seed cells (largest `|dc|`, `|dr|` of its offsets).
+    reach: usize,
+    /// Per seed cell, the tile that owns every light cell a tree in it can stand on (a tree's
+    /// seed cell and light cell both come from its position, [`reproduction::source_cell`],
+    /// [`LightGrid::cell_of`]; one light cell of margin on each side), or [`SHARED`].
+    owner: Vec<u32>,
+}
+
+impl SeedPlan {
+    /// The plan of seed grid `g` with kernel `k` over `layout`'s tiles.
+    fn new(layout: &Layout, g: &super::world::SeedGrid, k: &[(isize, isize, f32)]) -> SeedPlan {
+        let reach = k.iter().map(|o| o.0.unsigned_abs().max(o.1.unsigned_abs())).max().unwrap_or(0);
+        let lc = layout.light.cell_m;
+        // light cells (first, last) under seed cells `i` of `n` along an axis of `ln` light cells
+        let span = |i: usize, n: usize, ln: usize| -> (usize, usize) {
+            let lo = ((i as f64 * g.cell_m / lc) as usize).saturating_sub(1).min(ln - 1);
+            let hi = if i + 1 == n { ln - 1 } else { ((((i + 1) as f64 * g.cell_m / lc) as usize) + 1).min(ln - 1) };
+            (lo, hi)
+        };
+        let mut owner = vec![SHARED; g.cols * g.rows];
+        for r in 0..g.rows {
+            let (rl, rh) = span(r, g.rows, layout.light.rows);
+            for c in 0..g.cols {
+                let (cl, ch) = span(c, g.cols, layout.light.cols);
+                let a = layout.owner_of_cell(cl, rl);
+                if a == layout.owner_of_cell(ch, rh) {
+                    owner[r * g.cols + c] = a as u32;
+                }
+            }
+        }
+        SeedPlan { cols: g.cols, rows: g.rows, cell_m: g.cell_m, reach, owner }
+    }
+
+    /// The seed cells tile `k` reads: those of its light cells' centres (regeneration) and
+    /// those whose centre it owns (its part of an assembled world, [`merge_parts`]), with one
+    /// cell of margin, and to the grid's edge where the tile is at the light grid's edge.
+    fn read(&self, layout: &Layout, k: usize) -> SeedRect {
+        let t = layout.rect(k);
+        let lc = layout.light.cell_m;
+        let axis = |a0: usize, a1: usize, la: usize, n: usize| -> (usize, usize) {
+            let lo = if a0 == 0 { 0 } else { ((a0 as f64 * lc / self.cell_m) as usize).saturating_sub(1).min(n - 1) };
+            let hi = if a1 >= la { n } else { (((a1 as f64 * lc / self.cell_m) as usize) + 2).min(n) };
+            (lo, hi)
+        };
+        let (c0, c1) = axis(t.col0, t.col1, layout.light.cols, self.cols);
+        let (r0, r1) = axis(t.row0, t.row1, layout.light.rows, self.rows);
+        SeedRect { c0, c1, r0, r1 }
+    }
+
+    /// The seed cells whose production tile `k` needs: [`SeedPlan::read`] widened by the reach.
+    fn need(&self, layout: &Layout, k: usize) -> SeedRect {
+        let r = self.read(layout, k);
+        SeedRect { c0: r.c0.saturating_sub(self.reach), c1: (r.c1 + self.reach).min(self.cols), r0: r.r0.saturating_sub(self.reach), r1: (r.r1 + self.reach).min(self.rows) }
+    }
+}
+
 /// One tile of a tiled run: a [`World`] whose stand holds only the tile's trees and cohorts,
 /// and the layout it belongs to.
 pub struct Tile {
@@ -444,12 +538,18 @@ pub struct Tile {
     /// Bytes sent for halo copies since the start (the stand-table and output gathers not
     /// counted).
     pub halo_bytes: u64,
-    /// While halo copies are merged in: which rows are the tile's own.
-    own: Vec<bool>,
+    /// While halo copies are merged in: their rows, ascending.
+    halo_rows: Vec<usize>,
     /// This year's harvest of the whole landscape (stems ≥ 1.3 m, volume m³;
     /// [`super::stats::harvest_sums`]), as the management phase found it (every rank sees every
     /// harvested tree); rank 0 puts it in the stand-table row.
     harvest: (u64, f64),
+    /// Wall time (s) per phase of [`PHASES`] summed over the years stepped, exchanges and the
+    /// waits in them included (for profiling: `SYLVA_PHASE_TIMES=1`, [`Tile::phase_line`]).
+    pub phase_seconds: [f64; super::step::N_PHASES],
+    /// The part of [`Tile::phase_seconds`] spent passing halos (encoding, the exchange and the
+    /// wait in it, merging the copies in, dropping them after).
+    pub halo_seconds: [f64; super::step::N_PHASES],
 }
 
 impl Tile {
@@ -464,7 +564,7 @@ impl Tile {
         world.tallies.deaths_total = [0; N_CAUSES];
         world.tallies.regen_ledger = RegenLedger::new(world.site.pool.len());
         world.scratch.dead.clear();
-        Tile { world, layout, me, halo_bytes: 0, own: Vec::new(), harvest: (0, 0.0) }
+        Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] }
     }
 
     /// Tile `me` of `layout` from `world`, a tile's world as it was saved (its own trees and
@@ -473,7 +573,7 @@ impl Tile {
     pub fn resumed(mut world: World, layout: Layout, me: usize) -> Tile {
         world.site.window = Some(layout.rect(me));
         world.scratch.dead.clear();
-        Tile { world, layout, me, halo_bytes: 0, own: Vec::new(), harvest: (0, 0.0) }
+        Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] }
     }
 
     /// Rank 0 sends every rank its part of `global` (rank 0's world after a fresh start or a
@@ -556,20 +656,17 @@ impl Tile {
                 expected: format!("at least {reach} m: a crown of {crown} m radius plus two light cells"),
             });
         }
-        let own = std::mem::take(&mut self.world.stand.trees);
-        let next = own.next_id;
-        parts.push(own);
-        let (merged, from) = TreeStore::merge_by_id(&parts, next);
-        self.world.stand.trees = merged;
-        self.own = from.iter().map(|&k| k == parts.len() - 1).collect();
+        // the copies merged among themselves by id (few), then inserted among the tile's own
+        // trees by id (runs moved, [`TreeStore::insert_by_id`]): the order of merge_by_id
+        let copies = if parts.len() == 1 { parts.pop().unwrap_or_default() } else { TreeStore::merge_by_id(&parts, 0).0 };
+        self.halo_rows = self.world.stand.trees.insert_by_id(&copies);
         Ok(())
     }
 
     /// Drops the halo copies, keeping the tile's own trees (their order kept).
     fn drop_halo(&mut self) {
-        let keep = std::mem::take(&mut self.own);
-        debug_assert_eq!(keep.len(), self.world.stand.trees.len());
-        self.world.stand.trees.retain(&keep);
+        let rows = std::mem::take(&mut self.halo_rows);
+        self.world.stand.trees.remove_rows(&rows);
     }
 
     /// Simulates one year of the tile (the phases of [`crate::sim::step::PHASES`], with the halo
@@ -591,14 +688,26 @@ impl Tile {
                 report.phase_seconds[k] = t0.elapsed().as_secs_f64();
                 continue;
             }
+            if phase.halo == Halo::SeedSources {
+                // seeds by grid, not by copies of the seed trees (module docs, step 4)
+                let halo_s = self.reproduce(t)?;
+                report.phase_seconds[k] = t0.elapsed().as_secs_f64();
+                self.halo_seconds[k] += halo_s;
+                continue;
+            }
             if phase.halo != Halo::None {
                 self.add_halo(t, phase.halo)?;
             }
+            let t1 = Instant::now();
             (phase.run)(&mut self.world, &mut report);
+            let t2 = Instant::now();
             if phase.halo != Halo::None {
                 self.drop_halo();
             }
             report.phase_seconds[k] = t0.elapsed().as_secs_f64();
+            if phase.halo != Halo::None {
+                self.halo_seconds[k] += report.phase_seconds[k] - (t2 - t1).as_secs_f64();
+            }
         }
         // stats: the stand table's row from every rank's sums (exact, so their sum is one
         // process's) and counts, added up by all_sum; the top height by a selection over all_sum
@@ -636,7 +745,149 @@ impl Tile {
         report.died = died;
         report.row = (t.rank() == 0).then(|| super::stats::row_of(&w.site, w.stand.year, &sums, h100, stems, deaths, ry, self.harvest));
         report.phase_seconds[stats] = t0.elapsed().as_secs_f64();
+        for (a, b) in self.phase_seconds.iter_mut().zip(report.phase_seconds) {
+            *a += b;
+        }
         Ok(report)
+    }
+
+    /// Reproduction over tiles (module docs, step 4): seeds are passed as a grid, not as
+    /// copies of the seed trees. Per pool species every seed cell is either *pure* (every light
+    /// cell a tree in it can stand on belongs to one tile, [`SeedPlan`]) or *shared* (across a
+    /// tile edge). Each rank sums its own seed trees' production ([`reproduction::seeds_of`])
+    /// per pure cell in id order (f32, as one process adds them) and sends every other rank
+    /// the sums of the pure cells it owns within that rank's reach (the cells the rank reads,
+    /// [`SeedPlan::read`], widened by the kernel), 4 bytes per cell, and its seed trees in
+    /// shared cells there as (cell, id, seeds), 20 bytes each; a rank sums each shared cell's
+    /// trees in id order, so every seed cell's production is one process's bit for bit. Then it
+    /// spreads the production by the kernel ([`reproduction::gather`]) onto the cells it reads
+    /// (the cells of its light cells' centres, and of the seed cells whose centre it owns);
+    /// the other cells of its seed grids keep last year's values, which nothing reads. One
+    /// exchange a year whatever the kernel's length; no seed tree crosses ranks unless it
+    /// stands in a seed cell across a tile edge. Returns the seconds spent passing the sums.
+    ///
+    /// Errors: [`Error::Exchange`] from the transport or a malformed message.
+    fn reproduce(&mut self, t: &mut dyn Transport) -> Result<f64> {
+        let (n, me) = (t.size(), self.me);
+        let w = &mut self.world;
+        let (site, stand) = (&w.site, &mut w.stand);
+        let (lib, tr) = (&site.lib, &stand.trees);
+        let np = site.pool.len();
+        let kernels: Vec<Vec<(isize, isize, f32)>> = (0..np).map(|p| reproduction::kernel(&lib.species[site.pool[p] as usize].life.dispersal, stand.seeds[p].cell_m)).collect();
+        let plans: Vec<SeedPlan> = (0..np).map(|p| SeedPlan::new(&self.layout, &stand.seeds[p], &kernels[p])).collect();
+        let pidx: Vec<Option<usize>> = (0..lib.species.len()).map(|s| site.pool_index(s as u16)).collect();
+        // own production: per pure cell (whole grid, this tile's cells filled), and the trees in
+        // shared cells (cell, id, seeds), in id order
+        let mut pure: Vec<Vec<f32>> = stand.seeds.iter().map(|g| vec![0f32; g.data.len()]).collect();
+        let mut shared: Vec<Vec<(u64, u64, f32)>> = vec![Vec::new(); np];
+        for i in 0..tr.len() {
+            let Some(p) = pidx[tr.species[i] as usize] else { continue };
+            let Some(v) = reproduction::seeds_of(tr, i, lib) else { continue };
+            let g = &stand.seeds[p];
+            let (c, r) = reproduction::source_cell(g, tr.x[i], tr.y[i]);
+            let cell = r * g.cols + c;
+            match plans[p].owner[cell] {
+                SHARED => shared[p].push((cell as u64, tr.id[i], v)),
+                o if o as usize == me => pure[p][cell] += v,
+                o => {
+                    return Err(Error::Exchange { peer: o as usize, reason: format!("tree {} of tile {me} at ({}, {}) m in a seed cell of tile {o}", tr.id[i], tr.x[i], tr.y[i]) });
+                }
+            }
+        }
+        let t0 = Instant::now();
+        let mut out = Vec::with_capacity(n);
+        for k in 0..n {
+            let mut e = codec::Enc(Vec::new());
+            if k != me {
+                for p in 0..np {
+                    let (plan, cols) = (&plans[p], stand.seeds[p].cols);
+                    let need = plan.need(&self.layout, k);
+                    let vals: Vec<f32> = need.cells(cols).filter(|&c| plan.owner[c] as usize == me).map(|c| pure[p][c]).collect();
+                    e.f32s(&vals);
+                    let sh: Vec<&(u64, u64, f32)> = shared[p].iter().filter(|x| need.contains_cell(x.0 as usize, cols)).collect();
+                    e.u64(sh.len() as u64);
+                    for x in sh {
+                        e.u64(x.0);
+                        e.u64(x.1);
+                        e.f32(x.2);
+                    }
+                }
+            }
+            out.push(e.0);
+        }
+        let sent0 = t.bytes_sent();
+        let got = t.exchange(out)?;
+        self.halo_bytes += t.bytes_sent() - sent0;
+        let halo_s = t0.elapsed().as_secs_f64();
+        let fails: Vec<_> = (0..n).map(short_message).collect();
+        let mut decs: Vec<Dec<'_>> = got.iter().enumerate().map(|(k, m)| Dec::new(m, &fails[k])).collect();
+        for p in 0..np {
+            let plan = &plans[p];
+            let g = &mut stand.seeds[p];
+            let (cols, rows) = (g.cols, g.rows);
+            let need = plan.need(&self.layout, me);
+            // the production of every cell within reach: pure cells from their owners, in the
+            // order they were sent; shared cells summed over every rank's trees in id order
+            let mut theirs: Vec<std::vec::IntoIter<f32>> = Vec::with_capacity(n);
+            let mut entries: Vec<(u64, u64, f32)> = shared[p].iter().filter(|x| need.contains_cell(x.0 as usize, cols)).copied().collect();
+            for (k, d) in decs.iter_mut().enumerate() {
+                if k == me {
+                    theirs.push(Vec::new().into_iter());
+                    continue;
+                }
+                theirs.push(d.f32s()?.into_iter());
+                let m = d.count(20)?;
+                for _ in 0..m {
+                    let (cell, id, v) = (d.u64()?, d.u64()?, d.f32()?);
+                    if !need.contains_cell(cell as usize, cols) || plan.owner.get(cell as usize) != Some(&SHARED) {
+                        return Err(Error::Exchange { peer: k, reason: format!("seeds of tree {id} in seed cell {cell}, not a shared cell within reach") });
+                    }
+                    entries.push((cell, id, v));
+                }
+            }
+            let (w_n, h_n) = (need.c1 - need.c0, need.r1 - need.r0);
+            let mut src = vec![0f32; w_n * h_n];
+            for (j, c) in need.cells(cols).enumerate() {
+                let o = plan.owner[c];
+                if o == SHARED {
+                    continue;
+                }
+                src[j] = if o as usize == me {
+                    pure[p][c]
+                } else {
+                    theirs[o as usize].next().ok_or_else(|| Error::Exchange { peer: o as usize, reason: format!("seed production cut short for pool species {p}") })?
+                };
+            }
+            entries.sort_unstable_by_key(|x| (x.0, x.1));
+            for &(cell, _, v) in &entries {
+                let (c, r) = (cell as usize % cols, cell as usize / cols);
+                src[(r - need.r0) * w_n + (c - need.c0)] += v;
+            }
+            if let Some(k) = theirs.iter().position(|it| it.len() > 0) {
+                return Err(Error::Exchange { peer: k, reason: format!("{} seed production values too many for pool species {p}", theirs[k].len()) });
+            }
+            let area = (g.cell_m * g.cell_m) as f32;
+            let read = plan.read(&self.layout, me);
+            let k = &kernels[p];
+            for r in read.r0..read.r1 {
+                for c in read.c0..read.c1 {
+                    g.data[r * cols + c] = reproduction::gather(k, cols, rows, area, c, r, |cc, rr| src[(rr - need.r0) * w_n + (cc - need.c0)]);
+                }
+            }
+        }
+        Ok(halo_s)
+    }
+
+    /// One line of this rank's wall time per phase over the years stepped, with the part spent
+    /// on halos in brackets (`phase times rank R: light 3.1 s (halo 0.4 s), …`), for
+    /// `SYLVA_PHASE_TIMES=1`.
+    pub fn phase_line(&self) -> String {
+        let list: Vec<String> = PHASES
+            .iter()
+            .enumerate()
+            .map(|(k, p)| if self.halo_seconds[k] > 0.0 { format!("{} {:.1} s (halo {:.1} s)", p.name, self.phase_seconds[k], self.halo_seconds[k]) } else { format!("{} {:.1} s", p.name, self.phase_seconds[k]) })
+            .collect();
+        format!("phase times rank {}: {}", self.me, list.join(", "))
     }
 
     /// The management phase `run` over tiles (module docs, step 6): in a year with thinnings or
@@ -649,6 +900,11 @@ impl Tile {
     ///
     /// Errors: [`Error::Exchange`] from the transport or a malformed message.
     fn manage(&mut self, t: &mut dyn Transport, run: fn(&mut World, &mut YearReport), report: &mut YearReport) -> Result<()> {
+        if self.world.site.management.is_empty() {
+            // nothing to do (as `run` finds): no exchange, no pass over the trees
+            self.harvest = super::stats::harvest_sums(&self.world.site, &[]);
+            return Ok(());
+        }
         let year = self.world.stand.year + 1;
         let site = &self.world.site;
         let areas: Vec<&super::management::Region> = site.management.iter().filter(|op| op.spec.due(year).is_some() && !matches!(op.action, super::management::Action::Planting { .. })).map(|op| &op.region).collect();

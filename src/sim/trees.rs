@@ -304,6 +304,71 @@ impl TreeStore {
         }
         (t, all.iter().map(|e| e.1).collect())
     }
+    /// Inserts the rows of `extra` (sorted by id, none of its ids in `self`) into `self` (sorted
+    /// by id) so that the result is sorted by id: the rows of `merge_by_id(&[self, extra])`
+    /// in place, each column moved by runs (memmove) instead of row by row. Growth factors of
+    /// `extra` are NaN (drawn again when needed) unless it has them for every row; `next_id` is
+    /// kept. Returns the rows of `extra` in the result, ascending (for [`TreeStore::remove_rows`]).
+    pub fn insert_by_id(&mut self, extra: &TreeStore) -> Vec<usize> {
+        let m = extra.len();
+        if m == 0 {
+            return Vec::new();
+        }
+        // insertion point of each extra row among self's rows (non-decreasing)
+        let pos: Vec<usize> = extra.id.iter().map(|id| self.id.partition_point(|x| x < id)).collect();
+        fn ins<T: Copy + Send>(v: &mut Vec<T>, pos: &[usize], val: impl Fn(usize) -> T) {
+            let (n, m) = (v.len(), pos.len());
+            v.resize(n + m, val(0));
+            let mut end = n;
+            for j in (0..m).rev() {
+                let p = pos[j];
+                v.copy_within(p..end, p + j + 1);
+                v[p + j] = val(j);
+                end = p;
+            }
+        }
+        let gf_extra = extra.growth_factor.0.len() == m;
+        let ex_cols = extra.f32_columns();
+        let n = self.len();
+        let (id, species, columns, growth_factor) = self.columns_mut();
+        growth_factor.resize(n, f32::NAN);
+        let pos = &pos[..];
+        rayon::scope(|sc| {
+            sc.spawn(|_| ins(id, pos, |j| extra.id[j]));
+            sc.spawn(|_| ins(species, pos, |j| extra.species[j]));
+            for (v, e) in columns.into_iter().zip(ex_cols) {
+                sc.spawn(move |_| ins(v, pos, |j| e[j]));
+            }
+            sc.spawn(|_| ins(growth_factor, pos, |j| if gf_extra { extra.growth_factor.0[j] } else { f32::NAN }));
+        });
+        pos.iter().enumerate().map(|(j, &p)| p + j).collect()
+    }
+    /// Removes the rows `rows` (ascending, each below `len()`), keeping the order of the rest:
+    /// `retain` with those rows false, each column moved by runs.
+    pub fn remove_rows(&mut self, rows: &[usize]) {
+        if rows.is_empty() {
+            return;
+        }
+        fn rm<T: Copy + Send>(v: &mut Vec<T>, rows: &[usize]) {
+            let mut w = rows[0];
+            for (j, &q) in rows.iter().enumerate() {
+                let end = rows.get(j + 1).copied().unwrap_or(v.len());
+                v.copy_within(q + 1..end, w);
+                w += end - q - 1;
+            }
+            v.truncate(w);
+        }
+        let n = self.len();
+        let (id, species, columns, growth_factor) = self.columns_mut();
+        growth_factor.resize(n, f32::NAN);
+        rayon::scope(|sc| {
+            sc.spawn(|_| rm(id, rows));
+            sc.spawn(|_| rm(species, rows));
+            for v in columns.into_iter().chain([growth_factor]) {
+                sc.spawn(move |_| rm(v, rows));
+            }
+        });
+    }
     /// Basal area of tree `i` (m²).
     #[inline]
     pub fn basal_area_m2(&self, i: usize) -> f64 {

@@ -96,6 +96,10 @@ pub struct Light<'a> {
     pub ground_light: &'a mut Vec<f32>,
     /// Written: spatial hash of the trees on the light grid.
     pub grid: &'a mut SpatialGrid,
+    /// Only these light cells' ground light is computed (a tile's, [`crate::sim::tiles`]:
+    /// regeneration reads it on the tile's cells only); the others are set to 1. `None`: every
+    /// cell.
+    pub window: Option<crate::sim::light_grid::CellRect>,
 }
 
 /// The trees' slots of the light column, written from several threads: every tree index
@@ -168,7 +172,13 @@ pub fn run(w: Light<'_>) {
             }
         });
     }
-    let ground: Vec<f32> = (0..ncell).into_par_iter().map(|c| light_at(c, 0.0, rel_of(c, ls, ri))).collect();
+    let ground: Vec<f32> = (0..ncell)
+        .into_par_iter()
+        .map(|c| match w.window {
+            Some(r) if !r.contains(c % cols, c / cols) => 1.0,
+            _ => light_at(c, 0.0, rel_of(c, ls, ri)),
+        })
+        .collect();
     w.trees.light = light;
     *w.ground_light = ground;
     *w.grid = grid;

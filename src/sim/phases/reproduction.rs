@@ -60,23 +60,56 @@ impl Reproduction<'_> {
     }
 }
 
+/// Seeds tree `i` of `t` produces this autumn (a species of `lib`):
+/// `seeds_per_m2_crown · π r² · min(L, 1)` with crown radius `r` (m) and light `L`, for a tree
+/// at or above its species' maturity age; `None` below it (no seed source).
+#[inline]
+pub fn seeds_of(t: &TreeStore, i: usize, lib: &SpeciesLibrary) -> Option<f32> {
+    let sp = &lib.species[t.species[i] as usize];
+    if t.age[i] < sp.life.maturity_age_yr {
+        return None;
+    }
+    let r = t.crown_radius[i];
+    Some(sp.life.seeds_per_m2_crown * std::f32::consts::PI * r * r * t.light[i].min(1.0))
+}
+
+/// The seed cell `(col, row)` of `g` that a source at world point `(x, y)` (m) puts its seeds
+/// in (clamped to the grid).
+#[inline]
+pub fn source_cell(g: &SeedGrid, x: f32, y: f32) -> (usize, usize) {
+    (((x as f64 / g.cell_m) as usize).min(g.cols - 1), ((y as f64 / g.cell_m) as usize).min(g.rows - 1))
+}
+
+/// Seeds per m² that land on cell `(col, row)` of a `cols × rows` seed grid of cell area
+/// `area` (m²) from the seeds produced per cell, `src(col, row)` (cells off the grid are not
+/// asked: their seeds are lost): the sum over the kernel `k` ([`kernel`]) in its order,
+/// `Σ src(col − dc, row − dr) · w`, divided by `area`. One process and the tiles of a tiled run
+/// (`sim::tiles`) both use it, so the same sources give the same bits.
+#[inline]
+pub fn gather(k: &[(isize, isize, f32)], cols: usize, rows: usize, area: f32, col: usize, row: usize, src: impl Fn(usize, usize) -> f32) -> f32 {
+    let (r0, c0) = (row as isize, col as isize);
+    let mut acc = 0f32;
+    for &(dc, dr, wt) in k {
+        let (rr, cc) = (r0 - dr, c0 - dc);
+        if rr >= 0 && cc >= 0 && (rr as usize) < rows && (cc as usize) < cols {
+            acc += src(cc as usize, rr as usize) * wt;
+        }
+    }
+    acc / area
+}
+
 /// Produces and disperses this year's seeds into `w.seeds` (seeds per m² per pool species).
-/// Seeds per tree: `seeds_per_m2_crown · π r² · min(L, 1)` for trees at or above maturity age.
+/// Seeds per tree: [`seeds_of`], summed per seed cell in tree order ([`source_cell`]), then
+/// spread by the kernel ([`gather`]).
 pub fn run(w: Reproduction<'_>) {
     let t = &w.trees;
     let mut src: Vec<Vec<f32>> = w.seeds.iter().map(|g| vec![0f32; g.data.len()]).collect();
     let pidx: Vec<Option<usize>> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s)).collect();
     for i in 0..t.len() {
-        let sp = &w.lib.species[t.species[i] as usize];
-        if t.age[i] < sp.life.maturity_age_yr {
-            continue;
-        }
         let Some(p) = pidx[t.species[i] as usize] else { continue };
-        let r = t.crown_radius[i];
-        let n = sp.life.seeds_per_m2_crown * std::f32::consts::PI * r * r * t.light[i].min(1.0);
+        let Some(n) = seeds_of(t, i, w.lib) else { continue };
         let g = &w.seeds[p];
-        let c = ((t.x[i] as f64 / g.cell_m) as usize).min(g.cols - 1);
-        let rw = ((t.y[i] as f64 / g.cell_m) as usize).min(g.rows - 1);
+        let (c, rw) = source_cell(g, t.x[i], t.y[i]);
         src[p][rw * g.cols + c] += n;
     }
     for (p, s) in src.iter().enumerate() {
@@ -89,20 +122,7 @@ pub fn run(w: Reproduction<'_>) {
         let (cols, rows) = (g.cols, g.rows);
         let area = (g.cell_m * g.cell_m) as f32;
         let k = kernel(&sp.life.dispersal, g.cell_m);
-        g.data = (0..cols * rows)
-            .into_par_iter()
-            .map(|c| {
-                let (r0, c0) = ((c / cols) as isize, (c % cols) as isize);
-                let mut acc = 0f32;
-                for &(dc, dr, wt) in &k {
-                    let (rr, cc) = (r0 - dr, c0 - dc);
-                    if rr >= 0 && cc >= 0 && (rr as usize) < rows && (cc as usize) < cols {
-                        acc += s[rr as usize * cols + cc as usize] * wt;
-                    }
-                }
-                acc / area
-            })
-            .collect();
+        g.data = (0..cols * rows).into_par_iter().map(|c| gather(&k, cols, rows, area, c % cols, c / cols, |cc, rr| s[rr * cols + cc])).collect();
     }
 }
 
