@@ -345,37 +345,66 @@ const MAX_CELLS_PER_AXIS: usize = 96;
 
 impl DirGrid {
     /// The grid of `occ` for direction `d`; `owners` is empty or holds one owner per occluder.
-    fn new(d: Vec3, occ: &[Occluder], owners: &[u32]) -> DirGrid {
+    /// With `region` (the box `lo`–`hi`, m) only the casters that can shade a point of the box
+    /// are kept (see [`ShadowVolumes::within`]), tested on the projections the grid is built
+    /// from (one pass, no copy of the casters kept).
+    fn new(d: Vec3, occ: &[Occluder], owners: &[u32], region: Option<(Vec3, Vec3)>) -> DirGrid {
         let (u, v) = d.any_orthonormal_pair();
-        if occ.is_empty() {
+        // every caster's projection on the plane ⟂ d and depth along d, then the ones kept
+        let (mut proj, mut depth, mut kept): (Vec<Vec2>, Vec<f32>, Vec<u32>) = (Vec::with_capacity(occ.len()), Vec::with_capacity(occ.len()), Vec::with_capacity(occ.len()));
+        let bounds = region.map(|(lo, hi)| {
+            let corners = (0..8).map(|i| Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z }));
+            let (mut plo, mut phi, mut near) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY), f32::INFINITY);
+            for c in corners {
+                let q = Vec2::new(c.dot(u), c.dot(v));
+                (plo, phi, near) = (plo.min(q), phi.max(q), near.min(c.dot(d)));
+            }
+            (plo, phi, near)
+        });
+        // slack far above the rounding of the projections (m)
+        let e = 1e-3;
+        for (j, o) in occ.iter().enumerate() {
+            let q = Vec2::new(o.center.dot(u), o.center.dot(v));
+            let z = o.center.dot(d);
+            if let Some((plo, phi, near)) = bounds {
+                if !(z > near - e && (q + o.radius + e).cmpge(plo).all() && (q - o.radius - e).cmple(phi).all()) {
+                    continue;
+                }
+            }
+            proj.push(q);
+            depth.push(z);
+            kept.push(j as u32);
+        }
+        if kept.is_empty() {
             return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], blocks: Vec::new(), gamma: Vec::new(), owner: Vec::new() };
         }
-        let proj: Vec<Vec2> = occ.iter().map(|o| Vec2::new(o.center.dot(u), o.center.dot(v))).collect();
+        let radius: Vec<f32> = kept.iter().map(|&j| occ[j as usize].radius).collect();
         let mut lo = Vec2::splat(f32::INFINITY);
         let mut hi = Vec2::splat(f32::NEG_INFINITY);
         let mut rsum = 0.0;
-        for (p, o) in proj.iter().zip(occ) {
-            lo = lo.min(*p - o.radius);
-            hi = hi.max(*p + o.radius);
-            rsum += o.radius;
+        for (p, &r) in proj.iter().zip(&radius) {
+            lo = lo.min(*p - r);
+            hi = hi.max(*p + r);
+            rsum += r;
         }
         let ext = (hi - lo).max(Vec2::splat(1e-3));
-        let mean_r = rsum / occ.len() as f32;
+        let mean_r = rsum / kept.len() as f32;
         // about CELLS_PER_CASTER cells per cluster: the grid's size follows the cluster count
-        let by_count = (ext.x * ext.y / (CELLS_PER_CASTER * occ.len() as f32)).sqrt();
+        let by_count = (ext.x * ext.y / (CELLS_PER_CASTER * kept.len() as f32)).sqrt();
         let cell = (CELL_RADII * mean_r).max(by_count).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
         let nx = ((ext.x / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
         let ny = ((ext.y / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
-        // cell range of each caster's disc; `as usize` truncates, which equals the floor for the
-        // non-negative values kept by `max(0.0)` (and avoids a libm call per bound)
-        let cx = |x: f32, n: usize| (x.max(0.0) as usize).min(n - 1);
+        // cell range of each caster's disc; `as u32` truncates, which equals the floor for the
+        // non-negative values kept by `max(0.0)` (and avoids a libm call per bound), clamped to
+        // the last cell before the conversion (the floor of a value above it is above it too)
+        let cx = |x: f32, n: usize| x.max(0.0).min((n - 1) as f32) as u32;
         let ranges: Vec<[u32; 4]> = proj
             .iter()
-            .zip(occ)
-            .map(|(p, o)| {
-                let a = (*p - o.radius - lo) / cell;
-                let b = (*p + o.radius - lo) / cell;
-                [cx(a.x, nx) as u32, cx(b.x, nx) as u32, cx(a.y, ny) as u32, cx(b.y, ny) as u32]
+            .zip(&radius)
+            .map(|(p, &r)| {
+                let a = (*p - r - lo) / cell;
+                let b = (*p + r - lo) / cell;
+                [cx(a.x, nx), cx(b.x, nx), cx(a.y, ny), cx(b.y, ny)]
             })
             .collect();
         let mut count = vec![0u32; nx * ny + 1];
@@ -399,7 +428,6 @@ impl DirGrid {
         let mut owner = if tagged { vec![[u32::MAX; LANES]; len] } else { Vec::new() };
         // each cell's casters in descending depth along d (farthest ahead of any receiver first;
         // ties in occluder order), so a query can stop at the first block that lies behind it
-        let depth: Vec<f32> = occ.iter().map(|o| o.center.dot(d)).collect();
         // keys that sort as (depth descending, index ascending): the depth's bits mapped to an
         // unsigned order (f32::total_cmp's), inverted, above the index
         let mut order: Vec<u64> = depth
@@ -414,7 +442,7 @@ impl DirGrid {
         order.sort_unstable();
         for &key in &order {
             let j = (key & u32::MAX as u64) as usize;
-            let ([x0, x1, y0, y1], o) = (ranges[j], &occ[j]);
+            let ([x0, x1, y0, y1], o) = (ranges[j], &occ[kept[j] as usize]);
             let r2 = o.radius * o.radius;
             for y in y0 as usize..=y1 as usize {
                 for x in x0 as usize..=x1 as usize {
@@ -425,7 +453,7 @@ impl DirGrid {
                     (b.u[l], b.v[l], b.w[l], b.r2[l]) = (proj[j].x, proj[j].y, depth[j], r2);
                     gamma[bi][l] = o.gamma;
                     if tagged {
-                        owner[bi][l] = owners[j];
+                        owner[bi][l] = owners[kept[j] as usize];
                     }
                     fill[c] += 1;
                 }
@@ -647,43 +675,14 @@ impl ShadowVolumes {
     }
 
     fn grid(&self, k: usize) -> &DirGrid {
-        self.grids[k].get_or_init(|| match self.region {
-            None => DirGrid::new(self.dirs[k], &self.occ, &self.owners),
-            Some((lo, hi)) => {
-                let d = self.dirs[k];
-                let (u, v) = d.any_orthonormal_pair();
-                let corners = (0..8).map(|i| Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z }));
-                let (mut plo, mut phi, mut near) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY), f32::INFINITY);
-                for c in corners {
-                    let q = Vec2::new(c.dot(u), c.dot(v));
-                    (plo, phi, near) = (plo.min(q), phi.max(q), near.min(c.dot(d)));
-                }
-                // slack far above the rounding of the projections (m)
-                let e = 1e-3;
-                let keep = |o: &Occluder| {
-                    let q = Vec2::new(o.center.dot(u), o.center.dot(v));
-                    o.center.dot(d) > near - e && (q + o.radius + e).cmpge(plo).all() && (q - o.radius - e).cmple(phi).all()
-                };
-                let tagged = self.owners.len() == self.occ.len();
-                let (mut occ, mut owners) = (Vec::new(), Vec::new());
-                for (j, o) in self.occ.iter().enumerate() {
-                    if keep(o) {
-                        occ.push(*o);
-                        if tagged {
-                            owners.push(self.owners[j]);
-                        }
-                    }
-                }
-                DirGrid::new(d, &occ, &owners)
-            }
-        })
+        self.grids[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, self.region))
     }
 
     /// The grid of direction `k` for a query at `p`: the region's, or every caster's when `p`
     /// lies outside the region.
     fn grid_for(&self, k: usize, p: Vec3) -> &DirGrid {
         match self.region {
-            Some((lo, hi)) if !(p.cmpge(lo).all() && p.cmple(hi).all()) => self.full[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners)),
+            Some((lo, hi)) if !(p.cmpge(lo).all() && p.cmple(hi).all()) => self.full[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, None)),
             _ => self.grid(k),
         }
     }
@@ -755,21 +754,81 @@ impl Solids<'_> {
 pub struct SkyMask<'a> {
     solids: Solids<'a>,
     dirs: Vec<Vec3>,
-    inv: Vec<Vec3>,
     below_ground: u32,
+    /// The sky directions as lanes for the boxes' slab tests ([`SlabLanes`]).
+    lanes: SlabLanes,
     slabs: Vec<(Vec3, Vec3)>,
     /// Oriented boxes: (centre (m), sine and cosine of the yaw, half extents (m), the sky
-    /// directions and their inverses in the box's frame), so a point is turned into the frame
-    /// once and each direction is a slab test, as `Obstacle::ray_hits` tests them.
-    oriented: Vec<(Vec3, f32, f32, Vec3, Vec<(Vec3, Vec3)>)>,
+    /// directions in the box's frame as lanes), so a point is turned into the frame once and
+    /// the directions are slab tests, as `Obstacle::ray_hits` tests them.
+    oriented: Vec<(Vec3, f32, f32, Vec3, SlabLanes)>,
     others: Vec<Obstacle>,
+}
+
+/// Up to [`MAX_SKY_DIRS`] ray directions laid out for [`slab_mask`]: per axis, 1/d of every
+/// direction (one lane each, ±∞ where d is 0 on the axis; 0 in unused lanes) and the bits of
+/// the directions whose d is 0 on the axis.
+#[derive(Debug, Clone)]
+struct SlabLanes {
+    inv: [[f32; MAX_SKY_DIRS]; 3],
+    zero: [u32; 3],
+    /// Bits of the lanes in use.
+    used: u32,
+}
+
+impl SlabLanes {
+    fn new(dirs: impl Iterator<Item = Vec3>) -> SlabLanes {
+        let mut l = SlabLanes { inv: [[0.0; MAX_SKY_DIRS]; 3], zero: [0; 3], used: 0 };
+        for (k, d) in dirs.take(MAX_SKY_DIRS).enumerate() {
+            for ax in 0..3 {
+                l.inv[ax][k] = 1.0 / d[ax];
+                l.zero[ax] |= ((d[ax] == 0.0) as u32) << k;
+            }
+            l.used |= 1 << k;
+        }
+        l
+    }
+}
+
+/// [`slab_hits`] for every direction of `lanes` at once: bit k set when the unbounded ray from
+/// `p` along direction k hits the box `lo`–`hi`. The same operations on the same values as
+/// [`slab_hits`], lane by lane, without its branches: the entry distance only grows and the exit
+/// distance only shrinks as the axes narrow them (`f32::max`/`min` ignore NaN), so the span is
+/// empty at the end exactly when it was empty after some axis. An axis where d is 0 fails the
+/// ray when `p` is outside that slab (the lanes of `zero`); inside it (lo − p ≤ 0 ≤ hi − p) the
+/// distances times 1/d = ±∞ are −∞ and +∞, or NaN on a face, which leave the span as it is,
+/// as [`slab_hits`] skipping the axis does. So the same bits, and the lanes vectorise.
+#[inline]
+fn slab_mask(lanes: &SlabLanes, p: Vec3, lo: Vec3, hi: Vec3) -> u32 {
+    let (a, b) = (lo - p, hi - p);
+    let mut near = [0.0f32; MAX_SKY_DIRS];
+    let mut far = [f32::INFINITY; MAX_SKY_DIRS];
+    let mut outside = 0u32;
+    for ax in 0..3 {
+        let (aa, bb) = (a[ax], b[ax]);
+        let inv = &lanes.inv[ax];
+        for k in 0..MAX_SKY_DIRS {
+            let (ta, tb) = (aa * inv[k], bb * inv[k]);
+            let (n, f) = if ta > tb { (tb, ta) } else { (ta, tb) };
+            near[k] = near[k].max(n);
+            far[k] = far[k].min(f);
+        }
+        if p[ax] < lo[ax] || p[ax] > hi[ax] {
+            outside |= lanes.zero[ax];
+        }
+    }
+    let mut m = 0u32;
+    for k in (0..MAX_SKY_DIRS).rev() {
+        m = (m << 1) | !(near[k] > far[k]) as u32;
+    }
+    m & !outside & lanes.used
 }
 
 impl<'a> SkyMask<'a> {
     /// Prepares the mask of `solids` for the directions of `sky` (at most 32).
     pub fn new(solids: Solids<'a>, sky: &Sky) -> SkyMask<'a> {
         let dirs = sky.dirs.clone();
-        let inv = dirs.iter().map(|d| Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z)).collect();
+        let lanes = SlabLanes::new(dirs.iter().copied());
         let below_ground = match solids.ground {
             Some(g) => dirs.iter().enumerate().filter(|(_, d)| d.dot(g.normal) <= 0.0).fold(0u32, |m, (k, _)| m | 1 << k),
             None => 0,
@@ -781,19 +840,13 @@ impl<'a> SkyMask<'a> {
                 (Obstacle::Box { .. } | Obstacle::FiniteWall { .. }, Some(b)) => slabs.push(b),
                 (Obstacle::OrientedBox { center, half, yaw_deg }, _) => {
                     let (s, c) = yaw_deg.to_radians().sin_cos();
-                    let turned = dirs
-                        .iter()
-                        .map(|&d| {
-                            let t = crate::obstacle::unyaw_sc(d, s, c);
-                            (t, Vec3::new(1.0 / t.x, 1.0 / t.y, 1.0 / t.z))
-                        })
-                        .collect();
+                    let turned = SlabLanes::new(dirs.iter().map(|&d| crate::obstacle::unyaw_sc(d, s, c)));
                     oriented.push((center, s, c, half, turned));
                 }
                 _ => others.push(o),
             }
         }
-        SkyMask { solids, dirs, inv, below_ground, slabs, oriented, others }
+        SkyMask { solids, dirs, below_ground, lanes, slabs, oriented, others }
     }
 
     /// Bit k set when sky direction k is blocked at `p` by an obstacle or the terrain (equal to
@@ -808,22 +861,11 @@ impl<'a> SkyMask<'a> {
             m = self.below_ground;
         }
         for &(lo, hi) in &self.slabs {
-            let (a, b) = (lo - p, hi - p);
-            for k in 0..n {
-                if m & (1 << k) == 0 && slab_hits(p, self.dirs[k], self.inv[k], lo, hi, a, b) {
-                    m |= 1 << k;
-                }
-            }
+            m |= slab_mask(&self.lanes, p, lo, hi);
         }
         for (centre, s, c, half, turned) in &self.oriented {
             let q = crate::obstacle::unyaw_sc(p - *centre, *s, *c);
-            let (lo, hi) = (-*half, *half);
-            let (a, b) = (lo - q, hi - q);
-            for (k, &(d, inv)) in turned.iter().enumerate() {
-                if m & (1 << k) == 0 && slab_hits(q, d, inv, lo, hi, a, b) {
-                    m |= 1 << k;
-                }
-            }
+            m |= slab_mask(turned, q, -*half, *half);
         }
         for o in &self.others {
             for k in 0..n {
@@ -837,8 +879,9 @@ impl<'a> SkyMask<'a> {
 }
 
 /// The slab test of `Obstacle::ray_hits` for an unbounded ray from `p` along `d` (1/d per axis
-/// `inv`) against the box `lo`–`hi`, with `a = lo − p`, `b = hi − p`.
-#[inline]
+/// `inv`) against the box `lo`–`hi`, with `a = lo − p`, `b = hi − p`: the reference of
+/// [`slab_mask`].
+#[cfg(test)]
 fn slab_hits(p: Vec3, d: Vec3, inv: Vec3, lo: Vec3, hi: Vec3, a: Vec3, b: Vec3) -> bool {
     // the entry and exit distances (t0, t1) narrowed axis by axis; parallel axes test the slab
     let mut span = (0.0f32, f32::INFINITY);
@@ -1047,6 +1090,40 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// [`slab_mask`] against [`slab_hits`] direction by direction: the same bits, for points
+    /// inside, outside and on the faces of boxes, and directions with zero components (the
+    /// default sky's, exact) and without (a sky 40° high, turned by a yaw).
+    #[test]
+    fn slab_mask_equals_slab_hits() {
+        let boxes = [(Vec3::new(-1.0, -2.0, 0.0), Vec3::new(1.0, 2.0, 3.0)), (Vec3::new(0.5, -0.1, 0.0), Vec3::new(0.7, 0.1, 6.0))];
+        let turned: Vec<Vec3> = Sky::from_latitude(50.0).dirs.iter().map(|&d| crate::obstacle::unyaw_sc(d, 0.6f32.sin(), 0.6f32.cos())).collect();
+        let (mut hits, mut total) = (0, 0);
+        for dirs in [Sky::default().dirs, turned] {
+            assert!(dirs.len() <= MAX_SKY_DIRS);
+            let lanes = SlabLanes::new(dirs.iter().copied());
+            for (lo, hi) in boxes {
+                for j in 0..600 {
+                    let f = j as f32;
+                    // every tenth point on a face of the box, the others scattered around it
+                    let mut p = Vec3::new((f * 0.37).sin() * 3.0, (f * 0.71).cos() * 3.0, (f * 0.13).sin() * 2.0 + 1.5);
+                    if j % 10 == 0 {
+                        p[j / 10 % 3] = if j % 20 == 0 { lo[j / 10 % 3] } else { hi[j / 10 % 3] };
+                    }
+                    let m = slab_mask(&lanes, p, lo, hi);
+                    for (k, &d) in dirs.iter().enumerate() {
+                        let inv = Vec3::new(1.0 / d.x, 1.0 / d.y, 1.0 / d.z);
+                        let h = slab_hits(p, d, inv, lo, hi, lo - p, hi - p);
+                        assert_eq!(m & (1 << k) != 0, h, "point {p}, direction {d}, box {lo}–{hi}");
+                        (hits, total) = (hits + h as usize, total + 1);
+                    }
+                    assert_eq!(m >> dirs.len(), 0, "unused lanes are clear");
+                }
+            }
+        }
+        // the cases test something: rays that hit (measured: 4,760 of 54,000) and rays that miss
+        assert!(hits > 1000 && hits < total - 1000, "{hits} hits of {total}");
     }
 
     /// The grid path (lazy grids, padded blocks) against the product over every occluder in
