@@ -263,6 +263,13 @@ pub fn timelapse(a: TimelapseArgs) -> anyhow::Result<()> {
         pb.set_message(format!("{:.1} frames/s", done as f64 / t0.elapsed().as_secs_f64().max(1e-3)));
     })?;
     pb.finish();
-    eprintln!("{n} frames → {}{}", a.out.display(), if mp4 { " (+ MP4)" } else { "" });
+    let mp4_note = if mp4 {
+        " (+ MP4)"
+    } else if sylva::output::pictures::find_ffmpeg().is_none() {
+        " (no MP4: ffmpeg is not on PATH)"
+    } else {
+        " (no MP4: ffmpeg failed)"
+    };
+    eprintln!("{n} frames → {}{mp4_note}", a.out.display());
     Ok(())
 }

@@ -57,6 +57,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         sc.validate("--years")?;
     }
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
+    super::simulate::note_replaced_run(&a.out);
     let opts = MainJobOptions { out: a.out.clone(), size: a.size, timelapse_size: a.timelapse_size, frames_between: a.frames_between, fps: a.fps, render: !a.no_pictures, stop: Some(super::simulate::stop_on_ctrl_c()), inventory: a.inventory };
     let mut bars = Bars::default();
     let summary = match main_job::main_job(&sc, &lib, &opts, &mut |e| bars.show(e)) {

@@ -108,7 +108,7 @@ pub fn run_library(run_dir: &Path, species_dir: Option<&Path>) -> anyhow::Result
 
 /// Loads the site conditions a scenario names (window applied).
 pub fn load_site(sc: &Scenario) -> anyhow::Result<SiteConditions> {
-    Ok(sc.site().with_context(|| format!("terrain of scenario {}", sc.name))?)
+    Ok(sc.site().with_context(|| format!("[terrain] of {}", sc.context()))?)
 }
 
 /// A stop flag set by Ctrl-C, SIGTERM or SIGHUP: the run stops after the current year with its
@@ -221,9 +221,24 @@ fn rank_stats(rank: usize, size: usize, seconds: f64, in_exchanges: f64, sent: u
     let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
 }
 
+/// Says on stderr that `out` holds an earlier run whose files a new run (not `--resume`)
+/// replaces: its scenario's name and file, so that a mistyped `--out` is seen before the old
+/// run's inventories, maps and checkpoint are gone (they are replaced file by file as the new
+/// run writes them).
+pub fn note_replaced_run(out: &Path) {
+    let old = out.join("scenario.toml");
+    if old.is_file() {
+        let name = Scenario::load(&old).map(|s| s.name).unwrap_or_else(|_| "unreadable scenario.toml".into());
+        eprintln!("note: {} holds an earlier run ({name}); this run replaces its files (use another --out to keep it, or --resume to continue it)", out.display());
+    }
+}
+
 /// Runs a simulation.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let sc = Scenario::load(&a.scenario)?;
+    if !a.resume {
+        note_replaced_run(&a.out);
+    }
     let run_species = run_species_dir(&a.out);
     let mut dirs: Vec<&Path> = Vec::new();
     // the run's own species files count once it has a checkpoint (a run killed before that

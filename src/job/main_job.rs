@@ -468,7 +468,7 @@ impl MainJobSummary {
 /// returns [`JobError::Stopped`] between two pictures (those written are whole).
 ///
 /// Errors: [`Error::Format`] when `opts.out` is a file; I/O errors naming the file; reading the
-/// terrain (under "terrain of scenario NAME"); the simulation's (under "simulating NAME");
+/// terrain (under "[terrain] of FILE (scenario NAME)"); the simulation's (under "simulating NAME");
 /// [`JobError::Render`] when no adapter is found (under "setting up the renderer").
 pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink: &mut Sink) -> Result<MainJobSummary> {
     let t0 = Instant::now();
@@ -479,7 +479,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     // 1. Living conditions. The scenario is checked against the site before any folder is
     // made, so a refused one leaves none behind.
     let t_site = Instant::now();
-    let site = context(sc.site().map_err(JobError::from), || format!("terrain of scenario {}", sc.name))?;
+    let site = context(sc.site().map_err(JobError::from), || format!("[terrain] of {}", sc.context()))?;
     context(World::check(&site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
     std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
     let maps = super::maps::write_site_maps(&site, &out.join("maps").join("conditions"))?;
@@ -535,7 +535,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     // 3 + 4. Pictures.
     let t_pic = Instant::now();
     if let Some(keys) = keys {
-        let (stills, film) = pictures_of(sc, site, lib, keys, &last.plants(), &stumps, opts, sink)?;
+        let (stills, film) = pictures_of(sc, site, lib, keys, last, &stumps, opts, sink)?;
         summary.stills = stills;
         summary.film = Some(film);
     }
@@ -552,7 +552,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
 /// 20 years up to each), the close-up of the last one, the timelapse of the key frames `keys`
 /// (year, summer instances; each with the stumps of its 20 years), in `opts.out`.
 #[allow(clippy::too_many_arguments)]
-fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut keys: KeyFrames, last: &[scene::Plant], stumps: &[scene::Stump], opts: &MainJobOptions, sink: &mut Sink) -> Result<(Vec<Still>, Film)> {
+fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut keys: KeyFrames, last: LastTrees, stumps: &[scene::Stump], opts: &MainJobOptions, sink: &mut Sink) -> Result<(Vec<Still>, Film)> {
     let out = &opts.out;
     let (w, h) = opts.size;
     let mut stage = context(Stage::for_scenario(sc, site.clone(), lib.clone()), || "setting up the renderer (install mesa-vulkan-drivers for the CPU adapter)".into())?;
@@ -599,7 +599,9 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
         let z1 = site.elevation_at(x1, y1) + 5.0;
         let cam = Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0);
         stage.set_adapt(adapt);
-        let img = stage.render_plants(last, Season::Summer, &cam, w, h)?;
+        let img = stage.render_plants(&last.plants(), Season::Summer, &cam, w, h)?;
+        // the close-up's trees and open-grown skeletons are not needed by the film (issue 34)
+        drop(last);
         stage.set_adapt(None);
         sink(&Event::CloseUp(&stage.last_adapt));
         let path = stills_dir.join(format!("year_{y:04}_closeup.png"));

@@ -99,8 +99,14 @@ impl Stage {
     }
 
     /// Sets the adaptation of the near field ([`Stage::adapt`]; `None`: every tree an instanced
-    /// prototype); returns the one it replaces.
+    /// prototype, and the open-grown skeletons grown for it so far are let go of); returns the
+    /// one it replaces.
     pub fn set_adapt(&mut self, adapt: Option<AdaptOptions>) -> Option<AdaptOptions> {
+        if adapt.is_none() {
+            // the open-grown skeletons of the near field (full detail: thousands of nodes a class)
+            // are grown again when adaptation is switched back on (issue 34)
+            self.cache = adapted::cache(self.cache.full.seed());
+        }
         std::mem::replace(&mut self.adapt, adapt)
     }
 
@@ -425,6 +431,7 @@ fn no_inventory(run_dir: &Path, year: u32, snaps: &[(u32, String, PathBuf)]) -> 
     let maps = run_dir.join("maps").join(format!("species_year_{year:04}.png")).is_file();
     let every = crate::sim::Scenario::load(&run_dir.join("scenario.toml")).ok().and_then(|s| s.inventory_every);
     match (maps, every) {
+        (true, Some(0)) => format!("year {year} is a snapshot (maps) without a tree inventory: this run writes inventories only for the first and last year (`inventory_every = 0` in scenario.toml), plus harvest years; years with an inventory: {list}"),
         (true, Some(n)) => format!("year {year} is a snapshot (maps) without a tree inventory: this run writes inventories every {n} years (`inventory_every` in scenario.toml), plus year 0, the last year and harvest years; years with an inventory: {list}"),
         (true, None) => format!("year {year} is a snapshot (maps) without a tree inventory; years with an inventory: {list}"),
         _ => format!("no inventory snapshot for year {year} (years with an inventory: {list})"),
@@ -512,7 +519,9 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
     remove_frames(frames_dir)?;
     let steps = opts.frames_between as usize + 1;
     let total = if snaps.len() == 1 { 1 } else { (snaps.len() - 1) * steps + 1 };
-    let mut frames = Vec::with_capacity(total);
+    // the GIF is encoded as the frames come (issue 34: not every frame held to the end)
+    let mut gif = crate::output::pictures::GifWriter::new(out_gif, opts.fps)?;
+    let mut frames = 0usize;
     let mut prev = key(stage, 0)?;
     let mut k = 0usize;
     let emit = |stage: &mut Stage, inst: Vec<TreeInstance>, k: usize, year: f32| -> Result<image::RgbaImage> {
@@ -526,7 +535,8 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
         crate::output::pictures::write_png(&frames_dir.join(format!("frame_{k:05}.png")), &img)?;
         Ok(img)
     };
-    frames.push(emit(stage, prev.clone(), k, snaps[0] as f32)?);
+    gif.add(emit(stage, prev.clone(), k, snaps[0] as f32)?)?;
+    frames += 1;
     progress(1, total);
     for (j, w) in snaps.windows(2).enumerate() {
         let (y0, y1) = (&w[0], &w[1]);
@@ -535,13 +545,14 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
             k += 1;
             let t = s as f32 / steps as f32;
             let inst = timelapse::interpolate(&prev, &next, t);
-            frames.push(emit(stage, inst, k, *y0 as f32 + t * (*y1 as f32 - *y0 as f32))?);
+            gif.add(emit(stage, inst, k, *y0 as f32 + t * (*y1 as f32 - *y0 as f32))?)?;
+            frames += 1;
             progress(k + 1, total);
         }
         prev = next;
     }
-    crate::output::pictures::write_gif(out_gif, &frames, opts.fps)?;
+    gif.finish()?;
     let mp4 = out_gif.with_extension("mp4");
     let wrote_mp4 = crate::output::pictures::write_mp4(frames_dir, opts.fps, &mp4).unwrap_or(false);
-    Ok((frames.len(), wrote_mp4))
+    Ok((frames, wrote_mp4))
 }

@@ -45,33 +45,91 @@ pub fn write_png(path: &Path, img: &image::RgbaImage) -> Result<()> {
     super::write_atomic(path, &bytes)
 }
 
-/// Writes `frames` as an endlessly looping animated GIF at `fps` frames per second (1..=100).
+/// Writes `frames` as an endlessly looping animated GIF at `fps` frames per second (1..=100)
+/// ([`GifWriter`] with every frame).
 ///
 /// # Errors
 /// [`Error::Invalid`] (in [`OutputError::Input`]) for no frames, frames of different sizes or a bad `fps`;
 /// [`OutputError::Encode`] when encoding fails; [`OutputError::Io`] when writing fails.
 pub fn write_gif(path: &Path, frames: &[image::RgbaImage], fps: f32) -> Result<()> {
-    let inv = |field: &str, value: String, expected: &str| OutputError::from(Error::Invalid { context: path.display().to_string(), field: field.into(), value, expected: expected.into() });
-    if frames.is_empty() {
-        return Err(inv("frames", "0".into(), "at least one frame"));
+    let mut w = GifWriter::new(path, fps)?;
+    for f in frames {
+        w.add(f.clone())?;
     }
-    if !(fps >= 1.0 && fps <= 100.0) {
-        return Err(inv("fps", fps.to_string(), "1..=100 frames per second"));
+    w.finish()
+}
+
+/// The encoded bytes of a [`GifWriter`], shared with its encoder.
+#[derive(Clone, Default)]
+struct SharedBytes(std::rc::Rc<std::cell::RefCell<Vec<u8>>>);
+
+impl std::io::Write for SharedBytes {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.borrow_mut().extend_from_slice(buf);
+        Ok(buf.len())
     }
-    let (w, h) = frames[0].dimensions();
-    if let Some(f) = frames.iter().find(|f| f.dimensions() != (w, h)) {
-        return Err(inv("frame size", format!("{:?}", f.dimensions()), &format!("all frames {w}x{h}")));
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
     }
-    let mut bytes = Vec::new();
-    {
-        let mut enc = image::codecs::gif::GifEncoder::new_with_speed(&mut bytes, 10);
-        enc.set_repeat(image::codecs::gif::Repeat::Infinite).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "GIF", message: e.to_string() })?;
-        let delay = image::Delay::from_numer_denom_ms((1000.0 / fps).round() as u32, 1);
-        for f in frames {
-            enc.encode_frame(image::Frame::from_parts(f.clone(), 0, 0, delay)).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "GIF", message: e.to_string() })?;
+}
+
+/// An endlessly looping animated GIF encoded frame by frame as the frames are made, so that
+/// only the encoded file is held, not every frame (issue 34: the default run's 61 frames of
+/// 640 × 360 were 56 MB held until the end of the film); written atomically by
+/// [`GifWriter::finish`].
+pub struct GifWriter {
+    path: PathBuf,
+    bytes: SharedBytes,
+    enc: image::codecs::gif::GifEncoder<SharedBytes>,
+    delay: image::Delay,
+    size: Option<(u32, u32)>,
+}
+
+impl GifWriter {
+    /// A GIF to be written to `path` at `fps` frames per second (1..=100).
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] (in [`OutputError::Input`]) for a bad `fps`; [`OutputError::Encode`]
+    /// when the encoder refuses the loop setting.
+    pub fn new(path: &Path, fps: f32) -> Result<GifWriter> {
+        if !(fps >= 1.0 && fps <= 100.0) {
+            return Err(Error::Invalid { context: path.display().to_string(), field: "fps".into(), value: fps.to_string(), expected: "1..=100 frames per second".into() }.into());
         }
+        let bytes = SharedBytes::default();
+        let mut enc = image::codecs::gif::GifEncoder::new_with_speed(bytes.clone(), 10);
+        enc.set_repeat(image::codecs::gif::Repeat::Infinite).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "GIF", message: e.to_string() })?;
+        Ok(GifWriter { path: path.to_path_buf(), bytes, enc, delay: image::Delay::from_numer_denom_ms((1000.0 / fps).round() as u32, 1), size: None })
     }
-    super::write_atomic(path, &bytes)
+
+    /// Encodes the next frame.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] (in [`OutputError::Input`]) for a frame of another size than the
+    /// first; [`OutputError::Encode`] when encoding fails.
+    pub fn add(&mut self, frame: image::RgbaImage) -> Result<()> {
+        let dims = frame.dimensions();
+        if let Some((w, h)) = self.size.filter(|&s| s != dims) {
+            return Err(Error::Invalid { context: self.path.display().to_string(), field: "frame size".into(), value: format!("{dims:?}"), expected: format!("all frames {w}x{h}") }.into());
+        }
+        self.size = Some(dims);
+        self.enc.encode_frame(image::Frame::from_parts(frame, 0, 0, self.delay)).map_err(|e| OutputError::Encode { path: self.path.clone(), format: "GIF", message: e.to_string() })
+    }
+
+    /// Ends the GIF and writes it atomically.
+    ///
+    /// # Errors
+    /// [`Error::Invalid`] (in [`OutputError::Input`]) when no frame was added; [`OutputError::Io`]
+    /// when writing fails.
+    pub fn finish(self) -> Result<()> {
+        let GifWriter { path, bytes, enc, size, .. } = self;
+        if size.is_none() {
+            return Err(Error::Invalid { context: path.display().to_string(), field: "frames".into(), value: "0".into(), expected: "at least one frame".into() }.into());
+        }
+        // the encoder writes the GIF trailer when dropped
+        drop(enc);
+        let bytes = std::mem::take(&mut *bytes.0.borrow_mut());
+        super::write_atomic(&path, &bytes)
+    }
 }
 
 /// Path of `ffmpeg` when it is found on `PATH`.

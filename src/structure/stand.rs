@@ -200,6 +200,11 @@ impl SkeletonCache {
         SkeletonCache { seed, max_strands: max_strands.max(8), map: BTreeMap::new(), context: BTreeMap::new() }
     }
 
+    /// The scenario seed the trees are grown with.
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
     /// Number of (species, age class) trees held.
     pub fn len(&self) -> usize {
         self.map.len()
