@@ -385,11 +385,18 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     assert_eq!(js["levels"], serde_json::json!([0, 1, 2, 3]));
     let missing = dir.path().join("no_such_folder").join("s.json");
     let never = dir.path().join("never.glb");
-    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--year", "1", "--area", "20,15,45,45", "--stats"]).arg(&missing).arg("--out").arg(&never).output().unwrap();
+    // a missing folder of --stats is made, as --out's is
+    let made = dir.path().join("made.glb");
+    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--year", "1", "--area", "20,15,45,45", "--max-strands", "48", "--stats"]).arg(&missing).arg("--out").arg(&made).output().unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let js: serde_json::Value = serde_json::from_slice(&std::fs::read(&missing).unwrap()).unwrap();
+    assert_eq!(js["trees"], r.trees);
+    // --stats naming a folder is refused before anything is written
+    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--year", "1", "--area", "20,15,45,45", "--stats"]).arg(dir.path()).arg("--out").arg(&never).output().unwrap();
     assert!(!st.status.success());
     let e = String::from_utf8_lossy(&st.stderr);
-    assert!(e.contains("--stats") && e.contains("does not exist"), "{e}");
-    assert!(!never.exists() && !missing.parent().unwrap().exists());
+    assert!(e.contains("--stats") && e.contains("is a folder"), "{e}");
+    assert!(!never.exists());
     let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--area", "20,15,45", "--out"]).arg(&cli).output().unwrap();
     assert!(!st.status.success());
     assert!(String::from_utf8_lossy(&st.stderr).contains("four numbers"), "{}", String::from_utf8_lossy(&st.stderr));

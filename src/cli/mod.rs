@@ -72,6 +72,24 @@ fn quiet_mesa_runtime_dir() {
 /// Errors: naming `--stats` and the path.
 pub fn check_stats_path(p: &std::path::Path) -> anyhow::Result<()> {
     anyhow::ensure!(!p.is_dir(), "--stats {}: is a folder; expected a .json file name", p.display());
+    check_out_file(p, "--stats")
+}
+
+/// Checks before any work that the output file `p` of option `option` (e.g. `--out`) can be
+/// written: not a folder, its folder (when it exists) a folder that takes a new file (a
+/// temporary file made there and removed). A missing folder is left to the writer, which makes
+/// it.
+///
+/// Errors: naming the option, the path and what is wrong.
+pub fn check_out_file(p: &std::path::Path, option: &str) -> anyhow::Result<()> {
+    anyhow::ensure!(!p.is_dir(), "{option} {}: is a folder; expected a file name", p.display());
+    let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
+    if dir.exists() {
+        anyhow::ensure!(dir.is_dir(), "{option} {}: {} is a file, not a folder", p.display(), dir.display());
+        let probe = sylva::output::temporary_path(p);
+        std::fs::File::create(&probe).map_err(|e| anyhow::anyhow!("{option} {}: cannot write into the folder {}: {e}", p.display(), dir.display()))?;
+        let _ = std::fs::remove_file(&probe);
+    }
     Ok(())
 }
 

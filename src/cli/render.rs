@@ -165,6 +165,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
     }
+    super::check_out_file(&a.out, "--out")?;
     // the statistics file is checked before the picture is drawn, so that a bad path does not
     // leave the picture without its statistics
     if let Some(p) = &a.stats {
@@ -252,6 +253,7 @@ pub fn timelapse(a: TimelapseArgs) -> anyhow::Result<()> {
     if a.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) != Some("gif".into()) {
         anyhow::bail!("--out {}: the timelapse is written as an animated GIF (plus an MP4 beside it when ffmpeg is installed); give a file name ending in .gif", a.out.display());
     }
+    super::check_out_file(&a.out, "--out")?;
     let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
     let frames_dir = a.out.parent().unwrap_or(Path::new(".")).join("frames");
     let opts = TimelapseOptions { width: a.size.0, height: a.size.1, fps: a.fps, frames_between: a.frames_between, camera: a.camera, season: a.season };

@@ -31,6 +31,7 @@ impl WindowArgs {
             if p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) != Some("png".into()) {
                 anyhow::bail!("--screenshot {}: screenshots are written as PNG; give a file name ending in .png", p.display());
             }
+            super::check_out_file(p, "--screenshot")?;
         }
         Ok(WindowOptions { size: self.window, screenshot: self.screenshot.clone(), frames: self.frames })
     }
