@@ -119,6 +119,15 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     assert!(d.join("snap_final/inventory/year_0002.gpkg").is_file() && !d.join("snap_final/inventory/year_0001.gpkg").exists() && d.join("snap_final/inventory/year_0001.parquet").is_file());
     let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all", "--gpkg", "every-snapshot"]);
     assert!(ok && d.join("snap_all/inventory/year_0001.gpkg").is_file() && d.join("snap_all/inventory/year_0002.gpkg").is_file(), "{err}");
+    // a second run into a run's folder says that it replaces the earlier run's files
+    let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all"]);
+    assert!(ok && err.contains("snap_all holds an earlier run (snap)") && err.contains("--resume"), "{err}");
+    // output files whose folder is a file are refused before any work, naming the option
+    for (args, opt) in [(&["render", "snap_final", "--out", "afile/x.png"][..], "--out"), (&["timelapse", "snap_final", "--out", "afile/t.gif"][..], "--out"), (&["export", "snap_final", "--out", "afile/s.glb"][..], "--out"), (&["render", "snap_final", "--out", "x.png", "--stats", "afile/s.json"][..], "--stats")] {
+        let (ok, err) = run(args);
+        assert!(!ok && err.contains(opt) && err.contains("afile is a file, not a folder"), "{args:?}: {err}");
+    }
+    assert!(!d.join("x.png").exists());
     // a DEM that is not there leaves no empty maps folder behind
     let (ok, err) = run(&["terrain", "maps", "nothere.tif", "--out", "maps_out"]);
     assert!(!ok && err.contains("nothere.tif") && !d.join("maps_out").exists(), "{err}");

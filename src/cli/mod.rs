@@ -86,9 +86,7 @@ pub fn check_out_file(p: &std::path::Path, option: &str) -> anyhow::Result<()> {
     let dir = p.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(std::path::Path::new("."));
     if dir.exists() {
         anyhow::ensure!(dir.is_dir(), "{option} {}: {} is a file, not a folder", p.display(), dir.display());
-        let probe = sylva::output::temporary_path(p);
-        std::fs::File::create(&probe).map_err(|e| anyhow::anyhow!("{option} {}: cannot write into the folder {}: {e}", p.display(), dir.display()))?;
-        let _ = std::fs::remove_file(&probe);
+        sylva::job::run::check_writable(dir).map_err(|e| anyhow::anyhow!("{option} {}: cannot write into the folder {}: {e}", p.display(), dir.display()))?;
     }
     Ok(())
 }

@@ -162,6 +162,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     if a.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) != Some("png".into()) {
         anyhow::bail!("--out {}: stills are written as PNG; give a file name ending in .png", a.out.display());
     }
+    super::check_out_file(&a.out, "--out")?;
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
     }

@@ -103,7 +103,7 @@ fn mkdir(p: &Path) -> Result<()> {
 /// fails before it removes anything of an earlier run.
 ///
 /// Errors: [`Error::Io`] naming the folder.
-fn check_writable(dir: &Path) -> Result<()> {
+pub fn check_writable(dir: &Path) -> Result<()> {
     let probe = dir.join(format!(".sylva_write_probe.{}.tmp", std::process::id()));
     std::fs::write(&probe, b"").map_err(|e| Error::io(dir, e))?;
     Ok(std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))?)
