@@ -6,7 +6,13 @@
 # system all ranks share and can write (the cluster's parallel or network file system). Each rank holds the whole
 # site (terrain, conditions, per-cell grids) and its own tile's trees: size --mem-per-cpu from
 # a one-process run's memory at the site's size plus the tile's share of the trees
-# (docs/SCALING.md). Build once on the cluster with MPI:
+# (docs/SCALING.md). Sizing from round 23's measured costs (docs/SCALING.md, "Round 23 update"):
+# the site costs each rank about 30 KiB per hectare (100,000 ha: ~2.9 GiB a rank; 1,000,000 ha:
+# ~29 GiB, so there run one rank per node with --cpus-per-task=32 and --mem=0, not 8 ranks a
+# node), the trees about 130 bytes each (2,400 per ha at year 100) divided over the ranks, and
+# the CPU about 0.28 microseconds per tree-year (100,000 ha x 100 years: ~1 core-hour), so
+# --time is set by the output years (rank 0 still merges the inventories), not the simulation.
+# Build once on the cluster with MPI:
 #   cargo build --release --features mpi      (needs libopenmpi-dev or the site's MPI, libclang)
 # Submit:  sbatch docs/slurm_sylva.sh scenarios/region.toml /scratch/$USER/region
 #SBATCH --job-name=sylva-region
