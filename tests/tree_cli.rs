@@ -203,11 +203,26 @@ fn tree_adapt_refuses_bad_input_clearly() {
     let res = sylva(&["tree", "grow", "--species", "beech", "--model", "light", "--age", "5", "--out", grown.to_str().unwrap()]);
     assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
     let side = sylva::output::gltf::skeleton_sidecar_path(&grown);
+    // the sidecar names the species the tree was grown as: adapting it as another is refused,
+    // and so is the PNG preview beside it given as the tree (both found by a trial)
+    assert_eq!(sylva::output::gltf::read_skeleton_sidecar_species(&grown).unwrap().as_deref(), Some("beech"));
+    let res = sylva(&["tree", "adapt", "--input", grown.to_str().unwrap(), "--species", "norway_spruce", "--obstacle", "wall:1.0", "--out", o]);
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(!res.status.success() && err.contains("was grown as beech") && err.contains("expected --species beech"), "{err}");
+    let res = sylva(&["tree", "adapt", "--input", grown.with_extension("png").to_str().unwrap(), "--species", "beech", "--obstacle", "wall:1.0", "--out", o]);
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(!res.status.success() && err.contains("moved.png: expected a .glb"), "{err}");
+    // a negative age reaches Sylva's own check (clap took `-5` for an option: found by a trial)
+    for cmd in [vec!["tree", "grow", "--species", "beech", "--age", "-5", "--out", o], vec!["tree", "adapt", "--species", "beech", "--age", "-5", "--out", o]] {
+        let res = sylva(&cmd);
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert!(!res.status.success() && err.contains("--age -5: expected a positive number of years"), "{cmd:?}: {err}");
+    }
     let mut sk = sylva::output::gltf::read_skeleton_sidecar(&grown).unwrap();
     for n in &mut sk.nodes {
         n.pos.x += 5.0;
     }
-    sylva::output::gltf::write_skeleton_sidecar(&grown, &sk).unwrap();
+    sylva::output::gltf::write_skeleton_sidecar(&grown, &sk, Some("beech")).unwrap();
     assert!(side.is_file());
     let res = sylva(&["tree", "adapt", "--input", grown.to_str().unwrap(), "--species", "beech", "--obstacle", "box:4,-1,0,6,1,3", "--out", o]);
     let err = String::from_utf8_lossy(&res.stderr);

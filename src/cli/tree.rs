@@ -40,7 +40,7 @@ pub enum Command {
         /// grow inside the species' crown envelope at that age (height, crown radius and length
         /// from the species file); light-guided runs `age` cycles (≤ 60); Laplacian adds 25
         /// branches per year (≤ 4000).
-        #[arg(long, default_value_t = 80.0)]
+        #[arg(long, default_value_t = 80.0, allow_negative_numbers = true)]
         age: f32,
         /// Obstacles (light and laplacian models): box:x0,y0,z0,x1,y1,z1 | sphere:x,y,z,r | wall:x[,length[,height]]
         #[arg(long)]
@@ -83,7 +83,7 @@ pub struct AdaptArgs {
     model: Model,
     /// Age (years) of a tree grown here, of neighbours without their own age, and of the
     /// light-guided regrowth timed for `regrow_ms` (also with --input).
-    #[arg(long, default_value_t = 20.0)]
+    #[arg(long, default_value_t = 20.0, allow_negative_numbers = true)]
     age: f32,
     /// Random seed of a tree grown here and of its regrowth (neighbours use seed + 1, + 2, …).
     #[arg(long, default_value_t = 1)]
@@ -199,7 +199,7 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     match ext.as_str() {
         "glb" => {
             sylva::output::gltf::write_glb(out, &chain, &glb_options(&sp))?;
-            sylva::output::gltf::write_skeleton_sidecar(out, &sk)?;
+            sylva::output::gltf::write_skeleton_sidecar(out, &sk, Some(&sp.id))?;
         }
         "obj" => sylva::output::obj::write_obj(out, &chain, None, &sp.id, &sylva::output::gltf::Look::for_species(&sp, sylva::species::Season::Summer))?,
         _ => anyhow::bail!("--out {}: expected a .glb or .obj file name", out.display()),
@@ -363,9 +363,18 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
         Some(glb) => {
             anyhow::ensure!(!glb.is_dir(), "--input {}: is a folder; expected a .glb written by `sylva tree grow`", glb.display());
             anyhow::ensure!(glb.is_file(), "--input {}: no such file", glb.display());
+            // a PNG preview (or any other file) beside the tree shares its skeleton's name, so
+            // its extension is checked (a trial gave the PNG and got the tree adapted)
+            let in_ext = glb.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+            anyhow::ensure!(in_ext == "glb", "--input {}: expected a .glb written by `sylva tree grow` or `sylva tree adapt`", glb.display());
             let side = sylva::output::gltf::skeleton_sidecar_path(glb);
             anyhow::ensure!(side.is_file(), "--input {}: no skeleton beside it (expected {}, written by `sylva tree grow --out NAME.glb`)", glb.display(), side.display());
             let sk = sylva::output::gltf::read_skeleton_sidecar(glb)?;
+            // a tree grown as another species would be adapted with this species' parameters
+            // and leaves without a word (found by a trial); sidecars before round 24 carry no id
+            if let Some(grown_as) = sylva::output::gltf::read_skeleton_sidecar_species(glb)? {
+                anyhow::ensure!(grown_as == sp.id, "--species {}: the tree in --input {} was grown as {grown_as} (its skeleton sidecar {}); expected --species {grown_as}", a.species, glb.display(), side.display());
+            }
             check_base(sk.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO))?;
             sk
         }
@@ -422,7 +431,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
         std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
     }
     sylva::output::gltf::write_glb(&a.out, &chain, &glb_options(&sp))?;
-    sylva::output::gltf::write_skeleton_sidecar(&a.out, &adapted)?;
+    sylva::output::gltf::write_skeleton_sidecar(&a.out, &adapted, Some(&sp.id))?;
     let png = a.out.with_extension("png");
     let (drawing, along) = before_after(&before, &trees, &obstacles, 420, 480);
     // a strip above the drawing for its caption

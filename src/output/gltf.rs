@@ -758,19 +758,23 @@ pub fn skeleton_sidecar_path(glb: &Path) -> std::path::PathBuf {
 const SKELETON_FORMAT: &str = "sylva-skeleton";
 
 /// Writes the skeleton of the tree in `glb` to its sidecar ([`skeleton_sidecar_path`]) as JSON:
-/// `{"format": "sylva-skeleton", "version": 1, "nodes": [[x, y, z, parent, radius, age,
-/// gravelius, weibull, strands], …]}` with Sylva's z-up metres, parent −1 for the root, radius in
-/// m, age in years; written to a temporary file then renamed. `sylva tree adapt` reads it back
-/// with [`read_skeleton_sidecar`].
+/// `{"format": "sylva-skeleton", "version": 1, "species": "beech", "nodes": [[x, y, z, parent,
+/// radius, age, gravelius, weibull, strands], …]}` with Sylva's z-up metres, parent −1 for the
+/// root, radius in m, age in years; `species` (the species id the tree was grown as) is written
+/// when given. Written to a temporary file then renamed. `sylva tree adapt` reads it back with
+/// [`read_skeleton_sidecar`] and [`read_skeleton_sidecar_species`].
 ///
 /// Errors: [`OutputError::Io`] when the file cannot be written.
-pub fn write_skeleton_sidecar(glb: &Path, sk: &crate::structure::Skeleton) -> Result<()> {
+pub fn write_skeleton_sidecar(glb: &Path, sk: &crate::structure::Skeleton, species: Option<&str>) -> Result<()> {
     let nodes: Vec<Value> = sk
         .nodes
         .iter()
         .map(|n| json!([n.pos.x, n.pos.y, n.pos.z, n.parent.map(|p| p as i64).unwrap_or(-1), n.radius, n.age, n.gravelius, n.weibull, n.strands]))
         .collect();
-    let doc = json!({ "format": SKELETON_FORMAT, "version": 1, "nodes": nodes });
+    let mut doc = json!({ "format": SKELETON_FORMAT, "version": 1, "nodes": nodes });
+    if let Some(id) = species {
+        doc["species"] = json!(id);
+    }
     crate::output::write_atomic(&skeleton_sidecar_path(glb), doc.to_string().as_bytes())
 }
 
@@ -787,6 +791,23 @@ pub fn read_skeleton_sidecar(glb: &Path) -> Result<crate::structure::Skeleton> {
     let path = skeleton_sidecar_path(glb);
     let text = std::fs::read_to_string(&path).map_err(|source| Error::Io { path: path.clone(), source })?;
     parse_skeleton_sidecar(&text, &path)
+}
+
+/// The species id recorded in the skeleton sidecar of `glb` (`"species"`, written by
+/// [`write_skeleton_sidecar`] since round 24), or `None` for a sidecar without one.
+///
+/// Errors: [`Error::Io`] when the sidecar is missing or unreadable; [`Error::Format`] naming the
+/// sidecar when it is not JSON or its `species` is not a string.
+pub fn read_skeleton_sidecar_species(glb: &Path) -> Result<Option<String>> {
+    let path = skeleton_sidecar_path(glb);
+    let text = std::fs::read_to_string(&path).map_err(|source| Error::Io { path: path.clone(), source })?;
+    let fmt = |message: String| OutputError::from(Error::Format { path: path.clone(), message });
+    let doc: Value = serde_json::from_str(&text).map_err(|e| fmt(format!("not JSON: {e}")))?;
+    match doc.get("species") {
+        None => Ok(None),
+        Some(Value::String(s)) => Ok(Some(s.clone())),
+        Some(v) => Err(fmt(format!("field `species`: {v}: expected a species id as a string"))),
+    }
 }
 
 /// Parses the text of a skeleton sidecar as [`read_skeleton_sidecar`] does; `path` (the
