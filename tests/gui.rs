@@ -383,8 +383,10 @@ fn window_screenshots(x: &Xvfb, backend: Option<&str>) -> (image::RgbaImage, ima
     let out = tempfile::tempdir().unwrap();
     let run = run_dir().join("run");
     let shot = out.path().join("view.png");
-    let (ok, err) = sylva_on(Some(&x.display), &["view", run.to_str().unwrap(), "--screenshot", shot.to_str().unwrap(), "--frames", "2", "--window", "1000x640"], &env);
+    let (ok, err) = sylva_on(Some(&x.display), &["view", run.to_str().unwrap(), "--screenshot", shot.to_str().unwrap(), "--frames", "2", "--window", "1000x640", "-v"], &env);
     assert!(ok && !err.contains("panicked"), "backend {backend:?}: {err}");
+    // --frames 2 draws two frames of the 3-D view, not three (found by a trial)
+    assert!(err.contains("frame 2 (") && !err.contains("frame 3 ("), "backend {backend:?}: {err}");
     let view_img = image::open(&shot).unwrap().to_rgba8();
     assert_eq!(view_img.dimensions(), (1000, 640), "the whole window");
     // the 3-D view (left of the 340 px side panel, under the top bar): terrain and crowns

@@ -20,7 +20,7 @@ pub struct WindowArgs {
     /// Draw --frames frames, write a PNG of the whole window to this file and exit.
     #[arg(long)]
     pub screenshot: Option<PathBuf>,
-    /// Frames drawn before the screenshot (1–1000).
+    /// Frames drawn before the screenshot (1–1000); the screenshot shows the last of them.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub frames: u32,
 }

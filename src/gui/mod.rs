@@ -59,7 +59,9 @@ pub struct WindowOptions {
     /// `--screenshot PATH`: write a PNG of the whole window after [`WindowOptions::frames`]
     /// frames, then close.
     pub screenshot: Option<PathBuf>,
-    /// `--frames N` (≥ 1): frames drawn before the screenshot.
+    /// `--frames N` (≥ 1): frames drawn before the screenshot; the screenshot shows the N-th
+    /// (the window then takes one or two more UI passes to receive the image, in which the
+    /// viewer's 3-D view is not drawn again).
     pub frames: u32,
 }
 
@@ -183,6 +185,14 @@ impl Screenshot {
     /// Whether the window is still drawing the frames before its screenshot.
     pub fn pending(&self) -> bool {
         !self.done
+    }
+
+    /// Whether the screenshot has been asked of the window system: the last of the `frames`
+    /// frames has been drawn, and the frames until the image arrives (one or two UI passes)
+    /// need not draw the 3-D view again (a trial saw `--frames 2` draw three full-detail frames
+    /// of 16–18 s each).
+    pub fn requested(&self) -> bool {
+        self.requested_at.is_some()
     }
 
     /// Call once per frame, after the UI is laid out.

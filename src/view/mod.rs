@@ -108,6 +108,9 @@ pub struct Viewer {
     /// has been shown when the next one starts).
     opened: std::time::Instant,
     frames_drawn: u64,
+    /// The texture of the last 3-D frame drawn, shown again (not redrawn) while a requested
+    /// screenshot is on its way.
+    last_frame: Option<egui::TextureId>,
     /// `SYLVA_VIEW_SPIN` is set: turn the camera every frame and log the frame times.
     spin: bool,
     spin_clock: std::time::Instant,
@@ -174,6 +177,7 @@ impl Viewer {
             last_camera: None,
             opened: std::time::Instant::now(),
             frames_drawn: 0,
+            last_frame: None,
             spin: std::env::var_os("SYLVA_VIEW_SPIN").is_some(),
             spin_clock: std::time::Instant::now(),
             motion_scale: 2.0,
@@ -588,6 +592,12 @@ impl Viewer {
                 self.pick_at(p.x - rect.left(), p.y - rect.top());
             }
         }
+        // `--screenshot`: once the last of the --frames frames is drawn and its screenshot asked
+        // for, the passes until the image arrives show that frame again instead of drawing it
+        if let (Some(tex), true) = (self.last_frame, self.screenshot.as_ref().is_some_and(|s| s.requested())) {
+            ui.painter().image(tex, rect, egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)), egui::Color32::WHITE);
+            return;
+        }
         self.refresh();
         self.scene.instances = std::mem::take(&mut self.current);
         let (w, h) = ((rect.width() * self.pixels_per_point) as u32, (rect.height() * self.pixels_per_point) as u32);
@@ -632,6 +642,7 @@ impl Viewer {
         self.current = std::mem::take(&mut self.scene.instances);
         match drawn {
             Some(Ok(tex)) => {
+                self.last_frame = Some(tex);
                 ui.painter().image(tex, rect, egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)), egui::Color32::WHITE);
             }
             Some(Err(e)) => {
