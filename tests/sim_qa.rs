@@ -162,6 +162,25 @@ fn maps_are_large_with_legend_and_distinct_species_colours() {
         assert!(cols[..i].iter().all(|b| b != a), "{cols:?}");
     }
     assert_eq!(cols[0], SPECIES_PALETTE[0]);
+    // every two colours of the palette are told apart: CIE 1976 ΔE*ab ≥ 25 (sRGB → CIELAB, D65;
+    // the palette before round 24 had black alder and silver birch at 12.9)
+    let lab = |c: [u8; 3]| {
+        let lin = |u: u8| {
+            let u = u as f64 / 255.0;
+            if u > 0.04045 { ((u + 0.055) / 1.055).powf(2.4) } else { u / 12.92 }
+        };
+        let (r, g, b) = (lin(c[0]), lin(c[1]), lin(c[2]));
+        let f = |t: f64| if t > 0.008856 { t.cbrt() } else { 7.787 * t + 16.0 / 116.0 };
+        let (x, y, z) = (f((0.4124 * r + 0.3576 * g + 0.1805 * b) / 0.95047), f(0.2126 * r + 0.7152 * g + 0.0722 * b), f((0.0193 * r + 0.1192 * g + 0.9505 * b) / 1.08883));
+        [116.0 * y - 16.0, 500.0 * (x - y), 200.0 * (y - z)]
+    };
+    for (i, a) in SPECIES_PALETTE.iter().enumerate() {
+        for b in &SPECIES_PALETTE[..i] {
+            let (p, q) = (lab(*a), lab(*b));
+            let de = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+            assert!(de >= 25.0, "{a:?} and {b:?}: ΔE*ab {de:.1}");
+        }
+    }
     for name in ["species_year_0003.png", "basal_area_year_0003.png"] {
         let p = dir.path().join("maps").join(name);
         let img = image::open(&p).unwrap().to_rgb8();

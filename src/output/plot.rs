@@ -111,9 +111,14 @@ fn write_rgb_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> Result<()> {
 }
 
 /// Categorical palette for species: the 7 colours of Okabe & Ito (2008, "Color Universal
-/// Design", colour-blind safe; black left out) followed by Tableau 10 (Tableau Software).
+/// Design", colour-blind safe; black left out), then 10 picked greedily from Kelly's (1965)
+/// colours of maximum contrast and Tableau 20 (Tableau Software), each the candidate farthest
+/// in CIELAB (CIE 1976 ΔE*ab) from the colours before it and from the maps' own grey (outside),
+/// beige (no tree) and dark grey (not in the pool). Any two colours of the palette differ by
+/// ΔE*ab ≥ 26 (the earlier Okabe–Ito + Tableau 10 palette had pairs at 12–13: black alder and
+/// silver birch, both blue, were hard to tell apart on the default run's species map).
 /// Ordered so that neighbours in a pool differ in hue and lightness (blue, orange, green,
-/// purple, sky blue, yellow, vermillion).
+/// purple, sky blue, yellow, vermillion, crimson, …).
 pub const SPECIES_PALETTE: [[u8; 3]; 17] = [
     [0, 114, 178],
     [230, 159, 0],
@@ -122,16 +127,16 @@ pub const SPECIES_PALETTE: [[u8; 3]; 17] = [
     [86, 180, 233],
     [240, 228, 66],
     [213, 94, 0],
-    [78, 121, 167],
-    [242, 142, 43],
-    [225, 87, 89],
+    [190, 0, 50],
+    [249, 147, 121],
+    [44, 160, 44],
+    [152, 223, 138],
+    [148, 103, 189],
+    [141, 182, 0],
+    [136, 45, 23],
+    [101, 69, 34],
+    [197, 176, 213],
     [118, 183, 178],
-    [89, 161, 79],
-    [237, 201, 72],
-    [176, 122, 161],
-    [255, 157, 167],
-    [156, 117, 95],
-    [186, 176, 172],
 ];
 
 /// Species colour for plots and maps: [`SPECIES_PALETTE`] by the species' position in the pool
