@@ -262,12 +262,6 @@ pub struct ShadowVolumes {
     owners: Vec<u32>,
     dirs: Vec<Vec3>,
     grids: Vec<std::sync::OnceLock<DirGrid>>,
-    /// Per direction, the casters a scan tests ([`DirScan`]): built by
-    /// [`ShadowVolumes::prepare_for`] while the queries announced for the direction are fewer
-    /// than [`SCAN_QUERIES`], and the source of the direction's grid.
-    scans: Vec<std::sync::OnceLock<DirScan>>,
-    /// Per direction, the queries announced so far ([`ShadowVolumes::prepare_for`]).
-    announced: Vec<std::sync::atomic::AtomicU32>,
     /// Every occluder in one run, scanned whole by every query, when there are at most
     /// [`SCAN_MAX`] of them (then no grid is built: for a few casters, building up to 32 grids
     /// costs more than the queries they save).
@@ -349,68 +343,12 @@ const LANES: usize = 8;
 const MAX_CELLS_PER_AXIS: usize = 96;
 
 
-/// One sky direction's casters as a query scans them whole ([`DirScan::product`]): the casters
-/// that a [`DirGrid`] of the direction would hold, in occluder order, each with the range of
-/// grid cells its disc covers, so the grid (built from it when a direction has enough queries,
-/// [`DirGrid::from_scan`]) and the scan answer every query from the same casters in the same
-/// order. Building it costs the projections alone (no sort, no binning); a query tests every
-/// caster, so it pays for a direction with few queries (the first levels of a wall move).
-#[derive(Debug, Clone)]
-struct DirScan {
-    d: Vec3,
-    u: Vec3,
-    v: Vec3,
-    /// Grid geometry of [`DirGrid`]: lower corner (m), cell size (m), cells per axis (0 when no
-    /// caster is kept).
-    lo: Vec2,
-    cell: f32,
-    nx: usize,
-    ny: usize,
-    /// The kept casters in blocks of [`LANES`] (padding never hits: `r2` −1, empty cell range).
-    blocks: Vec<ScanBlock>,
-    /// Transmittance of every slot.
-    gamma: Vec<[f32; LANES]>,
-    /// Owner of every slot; empty when the occluders are not tagged.
-    owner: Vec<[u32; LANES]>,
-    /// Order key of every slot: the grid's order (depth along d descending, then occluder
-    /// order), as an unsigned sort key ([`depth_key`]).
-    key: Vec<u64>,
-    /// Number of kept casters (the slots before the padding).
-    n: usize,
-}
-
-/// [`LANES`] casters of a [`DirScan`]: `u`, `v`, `w`, `r2` as in [`Block`], and the cell range
-/// (x0..=x1, y0..=y1) of the caster's disc in the direction's grid.
-#[derive(Debug, Clone, Copy)]
-#[repr(C, align(64))]
-struct ScanBlock {
-    u: [f32; LANES],
-    v: [f32; LANES],
-    w: [f32; LANES],
-    r2: [f32; LANES],
-    x0: [f32; LANES],
-    x1: [f32; LANES],
-    y0: [f32; LANES],
-    y1: [f32; LANES],
-}
-
-const PAD_SCAN: ScanBlock = ScanBlock { u: [0.0; LANES], v: [0.0; LANES], w: [f32::NEG_INFINITY; LANES], r2: [-1.0; LANES], x0: [1.0; LANES], x1: [0.0; LANES], y0: [1.0; LANES], y1: [0.0; LANES] };
-
-/// Sort key of the caster at index `j` (of the kept casters) with depth `z` along a direction:
-/// ascending keys are descending depth (f32::total_cmp's order of the bits, inverted), ties in
-/// index order.
-#[inline]
-fn depth_key(z: f32, j: usize) -> u64 {
-    let b = z.to_bits() as i32;
-    let ordered = (b ^ ((((b >> 31) as u32) >> 1) as i32)) as u32 ^ 0x8000_0000;
-    ((!ordered as u64) << 32) | j as u64
-}
-
-impl DirScan {
-    /// The casters of `occ` for direction `d` that a grid keeps; `owners` is empty or holds one
-    /// owner per occluder. With `region` (the box `lo`–`hi`, m) only the casters that can shade
-    /// a point of the box are kept (see [`ShadowVolumes::within`]), tested on the projections.
-    fn new(d: Vec3, occ: &[Occluder], owners: &[u32], region: Option<(Vec3, Vec3)>) -> DirScan {
+impl DirGrid {
+    /// The grid of `occ` for direction `d`; `owners` is empty or holds one owner per occluder.
+    /// With `region` (the box `lo`–`hi`, m) only the casters that can shade a point of the box
+    /// are kept (see [`ShadowVolumes::within`]), tested on the projections the grid is built
+    /// from (one pass, no copy of the casters kept).
+    fn new(d: Vec3, occ: &[Occluder], owners: &[u32], region: Option<(Vec3, Vec3)>) -> DirGrid {
         let (u, v) = d.any_orthonormal_pair();
         // every caster's projection on the plane ⟂ d and depth along d, then the ones kept
         let (mut proj, mut depth, mut kept): (Vec<Vec2>, Vec<f32>, Vec<u32>) = (Vec::with_capacity(occ.len()), Vec::with_capacity(occ.len()), Vec::with_capacity(occ.len()));
@@ -437,15 +375,14 @@ impl DirScan {
             depth.push(z);
             kept.push(j as u32);
         }
-        let empty = DirScan { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, blocks: Vec::new(), gamma: Vec::new(), owner: Vec::new(), key: Vec::new(), n: 0 };
         if kept.is_empty() {
-            return empty;
+            return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], blocks: Vec::new(), gamma: Vec::new(), owner: Vec::new() };
         }
+        let radius: Vec<f32> = kept.iter().map(|&j| occ[j as usize].radius).collect();
         let mut lo = Vec2::splat(f32::INFINITY);
         let mut hi = Vec2::splat(f32::NEG_INFINITY);
         let mut rsum = 0.0;
-        for (p, &j) in proj.iter().zip(&kept) {
-            let r = occ[j as usize].radius;
+        for (p, &r) in proj.iter().zip(&radius) {
             lo = lo.min(*p - r);
             hi = hi.max(*p + r);
             rsum += r;
@@ -460,134 +397,21 @@ impl DirScan {
         // cell range of each caster's disc; `as u32` truncates, which equals the floor for the
         // non-negative values kept by `max(0.0)` (and avoids a libm call per bound), clamped to
         // the last cell before the conversion (the floor of a value above it is above it too)
-        let cx = |x: f32, n: usize| x.max(0.0).min((n - 1) as f32) as u32 as f32;
-        let len = kept.len().div_ceil(LANES);
-        let tagged = owners.len() == occ.len();
-        let mut s = DirScan { lo, cell, nx, ny, blocks: vec![PAD_SCAN; len], gamma: vec![[1.0; LANES]; len], owner: if tagged { vec![[u32::MAX; LANES]; len] } else { Vec::new() }, key: vec![u64::MAX; len * LANES], n: kept.len(), ..empty };
-        for (j, (&q, &z)) in proj.iter().zip(&depth).enumerate() {
-            let o = &occ[kept[j] as usize];
-            let r = o.radius;
-            let a = (q - r - lo) / cell;
-            let b = (q + r - lo) / cell;
-            let (bi, l) = (j / LANES, j % LANES);
-            let blk = &mut s.blocks[bi];
-            (blk.u[l], blk.v[l], blk.w[l], blk.r2[l]) = (q.x, q.y, z, r * r);
-            (blk.x0[l], blk.x1[l], blk.y0[l], blk.y1[l]) = (cx(a.x, nx), cx(b.x, nx), cx(a.y, ny), cx(b.y, ny));
-            s.gamma[bi][l] = o.gamma;
-            if tagged {
-                s.owner[bi][l] = owners[kept[j] as usize];
-            }
-            s.key[j] = depth_key(z, j);
-        }
-        s
-    }
-
-    /// The cell of the grid at `p` and `p`'s coordinates (u, v, w) in the direction's frame, or
-    /// `None` when `p` lies outside the grid (no caster can be hit): [`DirGrid::product`]'s
-    /// arithmetic.
-    #[inline]
-    fn locate(&self, p: Vec3) -> Option<(usize, usize, f32, f32, f32)> {
-        if self.nx == 0 {
-            return None;
-        }
-        let (pu, pv) = (p.dot(self.u), p.dot(self.v));
-        let q = (Vec2::new(pu, pv) - self.lo) / self.cell;
-        if q.x < 0.0 || q.y < 0.0 {
-            return None;
-        }
-        let (x, y) = (q.x as usize, q.y as usize);
-        if x >= self.nx || y >= self.ny {
-            return None;
-        }
-        Some((x, y, pu, pv, p.dot(self.d)))
-    }
-
-    /// [`DirGrid::product`] by a scan of every kept caster: the casters binned in the cell of
-    /// `p` (its cell lies in their cell range) that the ray hits, by the same test on the same
-    /// values, multiplied in the grid's order (the hits sorted by [`depth_key`]), leaving out
-    /// `skip`'s casters; `None` when the product is below `stop`. The grid stops as soon as the
-    /// product falls below `stop`; with transmittances in 0–1 the product never rises again, so
-    /// the answer is the same.
-    fn product(&self, p: Vec3, stop: f32, skip: Option<u32>) -> Option<f32> {
-        let Some((x, y, pu, pv, pw)) = self.locate(p) else { return Some(1.0) };
-        let (x, y) = (x as f32, y as f32);
-        // (key, γ) of the hits: few per ray, kept inline
-        let mut hits = [(0u64, 0.0f32); 64];
-        let mut more: Vec<(u64, f32)> = Vec::new();
-        let mut n = 0;
-        for (bi, b) in self.blocks.iter().enumerate() {
-            let mut hit = [false; LANES];
-            for k in 0..LANES {
-                let (du, dv, along) = (b.u[k] - pu, b.v[k] - pv, b.w[k] - pw);
-                let lat2 = du * du + dv * dv;
-                let cell = (b.x0[k] <= x) & (x <= b.x1[k]) & (b.y0[k] <= y) & (y <= b.y1[k]);
-                hit[k] = cell & (along > 0.0) & (lat2 <= b.r2[k]) & (lat2 + along * along > b.r2[k]);
-            }
-            if let Some(own) = skip {
-                let os = &self.owner[bi];
-                for k in 0..LANES {
-                    hit[k] &= os[k] != own;
-                }
-            }
-            if hit.iter().fold(false, |a, &h| a | h) {
-                for k in 0..LANES {
-                    if hit[k] {
-                        let e = (self.key[bi * LANES + k], self.gamma[bi][k]);
-                        if n < hits.len() {
-                            hits[n] = e;
-                        } else {
-                            more.push(e);
-                        }
-                        n += 1;
-                    }
-                }
-            }
-        }
-        let mut t = 1.0f32;
-        if more.is_empty() {
-            let h = &mut hits[..n];
-            h.sort_unstable_by_key(|e| e.0);
-            for e in h.iter() {
-                t *= e.1;
-            }
-        } else {
-            more.extend_from_slice(&hits);
-            more.sort_unstable_by_key(|e| e.0);
-            for e in &more {
-                t *= e.1;
-            }
-        }
-        if t < stop {
-            None
-        } else {
-            Some(t)
-        }
-    }
-}
-
-impl DirGrid {
-    /// The grid of `occ` for direction `d`; `owners` is empty or holds one owner per occluder.
-    /// With `region` (the box `lo`–`hi`, m) only the casters that can shade a point of the box
-    /// are kept (see [`ShadowVolumes::within`]).
-    fn new(d: Vec3, occ: &[Occluder], owners: &[u32], region: Option<(Vec3, Vec3)>) -> DirGrid {
-        DirGrid::from_scan(&DirScan::new(d, occ, owners, region))
-    }
-
-    /// The grid of the casters of `s`: each binned in the cells of its range, every cell's
-    /// casters in the order of their keys (depth along d descending, ties in occluder order).
-    fn from_scan(s: &DirScan) -> DirGrid {
-        let (nx, ny, n) = (s.nx, s.ny, s.n);
-        let tagged = !s.owner.is_empty();
-        if n == 0 {
-            return DirGrid { d: s.d, u: s.u, v: s.v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], blocks: Vec::new(), gamma: Vec::new(), owner: Vec::new() };
-        }
-        let slot = |j: usize| (&s.blocks[j / LANES], j % LANES);
+        let cx = |x: f32, n: usize| x.max(0.0).min((n - 1) as f32) as u32;
+        let ranges: Vec<[u32; 4]> = proj
+            .iter()
+            .zip(&radius)
+            .map(|(p, &r)| {
+                let a = (*p - r - lo) / cell;
+                let b = (*p + r - lo) / cell;
+                [cx(a.x, nx), cx(b.x, nx), cx(a.y, ny), cx(b.y, ny)]
+            })
+            .collect();
         let mut count = vec![0u32; nx * ny + 1];
-        for j in 0..n {
-            let (b, l) = slot(j);
-            for y in b.y0[l] as usize..=b.y1[l] as usize {
+        for &[x0, x1, y0, y1] in &ranges {
+            for y in y0 as usize..=y1 as usize {
                 let row = &mut count[y * nx + 1..];
-                for c in &mut row[b.x0[l] as usize..=b.x1[l] as usize] {
+                for c in &mut row[x0 as usize..=x1 as usize] {
                     *c += 1;
                 }
             }
@@ -600,24 +424,36 @@ impl DirGrid {
         let len = count[nx * ny] as usize / LANES;
         let mut blocks = vec![PAD_BLOCK; len];
         let mut gamma = vec![[1.0f32; LANES]; len];
+        let tagged = owners.len() == occ.len();
         let mut owner = if tagged { vec![[u32::MAX; LANES]; len] } else { Vec::new() };
         // each cell's casters in descending depth along d (farthest ahead of any receiver first;
         // ties in occluder order), so a query can stop at the first block that lies behind it
-        let mut order: Vec<u64> = s.key[..n].to_vec();
+        // keys that sort as (depth descending, index ascending): the depth's bits mapped to an
+        // unsigned order (f32::total_cmp's), inverted, above the index
+        let mut order: Vec<u64> = depth
+            .iter()
+            .enumerate()
+            .map(|(j, z)| {
+                let b = z.to_bits() as i32;
+                let ordered = (b ^ ((((b >> 31) as u32) >> 1) as i32)) as u32 ^ 0x8000_0000;
+                ((!ordered as u64) << 32) | j as u64
+            })
+            .collect();
         order.sort_unstable();
         for &key in &order {
             let j = (key & u32::MAX as u64) as usize;
-            let (b, l) = slot(j);
-            for y in b.y0[l] as usize..=b.y1[l] as usize {
-                for x in b.x0[l] as usize..=b.x1[l] as usize {
+            let ([x0, x1, y0, y1], o) = (ranges[j], &occ[kept[j] as usize]);
+            let r2 = o.radius * o.radius;
+            for y in y0 as usize..=y1 as usize {
+                for x in x0 as usize..=x1 as usize {
                     let c = y * nx + x;
                     let f = fill[c] as usize;
-                    let (bi, lf) = (f / LANES, f % LANES);
-                    let g = &mut blocks[bi];
-                    (g.u[lf], g.v[lf], g.w[lf], g.r2[lf]) = (b.u[l], b.v[l], b.w[l], b.r2[l]);
-                    gamma[bi][lf] = s.gamma[j / LANES][l];
+                    let (bi, l) = (f / LANES, f % LANES);
+                    let b = &mut blocks[bi];
+                    (b.u[l], b.v[l], b.w[l], b.r2[l]) = (proj[j].x, proj[j].y, depth[j], r2);
+                    gamma[bi][l] = o.gamma;
                     if tagged {
-                        owner[bi][lf] = s.owner[j / LANES][l];
+                        owner[bi][l] = owners[kept[j] as usize];
                     }
                     fill[c] += 1;
                 }
@@ -626,7 +462,7 @@ impl DirGrid {
         for c in &mut count {
             *c /= LANES as u32;
         }
-        DirGrid { d: s.d, u: s.u, v: s.v, lo: s.lo, cell: s.cell, nx, ny, start: count, blocks, gamma, owner }
+        DirGrid { d, u, v, lo, cell, nx, ny, start: count, blocks, gamma, owner }
     }
 
     /// Π γ of the casters hit by the ray from `p` along the grid's direction (the ray passes
@@ -776,16 +612,6 @@ impl Casters {
 /// the instructions against always building grids; 256 costs 49 % more).
 const SCAN_MAX: usize = 64;
 
-/// Queries of one direction from which [`ShadowVolumes::prepare_for`] builds the direction's
-/// grid rather than scanning its casters.
-const SCAN_QUERIES: usize = 64;
-
-/// [`SCAN_QUERIES`], or `SYLVA_SCAN_QUERIES` while measuring.
-fn scan_queries() -> usize {
-    static V: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    *V.get_or_init(|| std::env::var("SYLVA_SCAN_QUERIES").ok().and_then(|v| v.parse().ok()).unwrap_or(SCAN_QUERIES))
-}
-
 /// Grid cell size, in mean cluster radii, at least.
 const CELL_RADII: f32 = 2.0;
 /// Grid cells per cluster over the grid's area, at most (the cell is at least that coarse).
@@ -809,11 +635,9 @@ impl ShadowVolumes {
 
     fn from_dirs(dirs: Vec<Vec3>, occ: Vec<Occluder>, owners: Vec<u32>) -> ShadowVolumes {
         let grids = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
-        let scans = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
-        let announced = dirs.iter().map(|_| std::sync::atomic::AtomicU32::new(0)).collect();
         let flat = (occ.len() <= SCAN_MAX).then(|| Casters::flat(&occ, &owners));
         let full = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
-        ShadowVolumes { occ, owners, dirs, grids, scans, announced, flat, region: None, full }
+        ShadowVolumes { occ, owners, dirs, grids, flat, region: None, full }
     }
 
     /// The same shadow volumes, told that queries come from inside the box `lo`–`hi` (m): each
@@ -850,36 +674,17 @@ impl ShadowVolumes {
         });
     }
 
-    /// [`ShadowVolumes::prepare`] told how many queries of each direction follow (`counts[k]`
-    /// for direction k, added to those announced before): a direction whose announced queries
-    /// stay below [`SCAN_QUERIES`] gets only its [`DirScan`] (its casters projected, neither
-    /// sorted nor binned), which answers each query by testing every caster; at
-    /// [`SCAN_QUERIES`] the direction's grid is built from it, and the later queries use the
-    /// grid. Scan and grid give the same answers bit for bit (see [`DirScan::product`]), so
-    /// this only decides what the queries cost: a level of a wall move asks 10–20 queries of a
-    /// direction at its first levels, too few to pay for sorting and binning its casters.
-    pub fn prepare_for(&self, counts: &[u32]) {
-        use rayon::prelude::*;
-        use std::sync::atomic::Ordering;
-        if self.flat.is_some() {
-            return;
-        }
-        (0..self.dirs.len()).into_par_iter().filter(|&k| counts.get(k).is_some_and(|&c| c > 0) && self.grids[k].get().is_none()).for_each(|k| {
-            let total = self.announced[k].fetch_add(counts[k], Ordering::Relaxed) + counts[k];
-            if total as usize >= scan_queries() {
-                self.grid(k);
-            } else {
-                self.scan(k);
-            }
-        });
-    }
-
-    fn scan(&self, k: usize) -> &DirScan {
-        self.scans[k].get_or_init(|| DirScan::new(self.dirs[k], &self.occ, &self.owners, self.region))
-    }
-
     fn grid(&self, k: usize) -> &DirGrid {
-        self.grids[k].get_or_init(|| DirGrid::from_scan(self.scan(k)))
+        self.grids[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, self.region))
+    }
+
+    /// The grid of direction `k` for a query at `p`: the region's, or every caster's when `p`
+    /// lies outside the region.
+    fn grid_for(&self, k: usize, p: Vec3) -> &DirGrid {
+        match self.region {
+            Some((lo, hi)) if !(p.cmpge(lo).all() && p.cmple(hi).all()) => self.full[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, None)),
+            _ => self.grid(k),
+        }
     }
 
     /// [`ShadowVolumes::shaded`] counting only the occluders not owned by `owner`: the answer
@@ -912,20 +717,9 @@ impl ShadowVolumes {
     /// run of occluders when they are few ([`SCAN_MAX`]), else the casters of the grid cell of
     /// `p` (the same casters hit, in the same order).
     fn product_until_except(&self, k: usize, p: Vec3, stop: f32, skip: Option<u32>) -> Option<f32> {
-        if let Some(c) = &self.flat {
-            return c.product_until(self.dirs[k], 0..c.x.len(), p, stop, skip);
-        }
-        // outside the region: the grid of every caster
-        if let Some((lo, hi)) = self.region {
-            if !(p.cmpge(lo).all() && p.cmple(hi).all()) {
-                return self.full[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, None)).product(p, stop, skip);
-            }
-        }
-        // the grid when built; else the scan when `prepare_for` chose it; else the grid, built now
-        match (self.grids[k].get(), self.scans[k].get()) {
-            (Some(g), _) => g.product(p, stop, skip),
-            (None, Some(s)) => s.product(p, stop, skip),
-            (None, None) => self.grid(k).product(p, stop, skip),
+        match &self.flat {
+            Some(c) => c.product_until(self.dirs[k], 0..c.x.len(), p, stop, skip),
+            None => self.grid_for(k, p).product(p, stop, skip),
         }
     }
 }
@@ -1430,52 +1224,6 @@ mod tests {
         assert!(inside > 50 && outside > 50 && shaded > 500, "{inside} inside, {outside} outside, {shaded} shaded");
         let held = |v: &ShadowVolumes| v.grids.iter().filter_map(|g| g.get()).map(|g| g.blocks.len()).sum::<usize>();
         assert!(held(&near) * 2 < held(&plain), "region grids {} blocks, full {}", held(&near), held(&plain));
-    }
-
-    /// Directions answered by scanning their casters ([`ShadowVolumes::prepare_for`] told of
-    /// few queries) give the grids' answers bit for bit: transmittances, shading and shading
-    /// leaving one owner out, inside a region and outside it; told of [`SCAN_QUERIES`] queries
-    /// in all, a direction builds its grid.
-    #[test]
-    fn scanned_directions_answer_as_the_grids() {
-        let sky = Sky::from_latitude(50.0);
-        let occ: Vec<Occluder> = (0..400)
-            .map(|i| {
-                let f = i as f32;
-                let r = 0.2 + 0.4 * (f * 0.37).sin().abs();
-                Occluder { center: Vec3::new((f * 0.71).sin() * 5.0, (f * 0.53).cos() * 5.0, 2.0 + (f * 0.29).sin().abs() * 7.0), radius: r, gamma: 0.6f32.powf(r) }
-            })
-            .collect();
-        let owners: Vec<u32> = (0..occ.len() as u32).map(|i| i % 3).collect();
-        let (lo, hi) = (Vec3::new(-3.0, -3.0, 0.0), Vec3::new(3.0, 3.0, 6.0));
-        let grids = ShadowVolumes::with_owners(&sky, occ.clone(), owners.clone()).within(lo, hi);
-        let scans = ShadowVolumes::with_owners(&sky, occ, owners).within(lo, hi);
-        let few = vec![1u32; sky.dirs.len()];
-        scans.prepare_for(&few);
-        assert!((0..sky.dirs.len()).all(|k| scans.scans[k].get().is_some() && scans.grids[k].get().is_none()));
-        let (mut shaded, mut dark, mut skipped) = (0, 0, 0);
-        for j in 0..300 {
-            let f = j as f32;
-            let p = Vec3::new((f * 0.43).cos() * 4.0, (f * 0.61).sin() * 4.0, 0.5 + (f * 0.17).sin().abs() * 7.0);
-            for k in 0..sky.dirs.len() {
-                let t = grids.transmittance(k, p);
-                assert_eq!(scans.transmittance(k, p).to_bits(), t.to_bits(), "point {p}, direction {k}");
-                assert_eq!(scans.shaded(k, p), grids.shaded(k, p));
-                for own in 0..3 {
-                    let s = grids.shaded_except(k, p, own);
-                    assert_eq!(scans.shaded_except(k, p, own), s, "point {p}, direction {k}, owner {own}");
-                    skipped += (s != grids.shaded(k, p)) as usize;
-                }
-                (shaded, dark) = (shaded + (t < 1.0) as usize, dark + (t == 0.0) as usize);
-            }
-        }
-        // the cases test something: lit, shaded and dark rays, and rays only one owner shades
-        assert!(shaded > 1000 && shaded < 300 * sky.dirs.len() - 500 && skipped > 100, "{shaded} shaded, {dark} dark, {skipped}");
-        // the grids are still not built (every query above inside the region was scanned)
-        assert!((0..sky.dirs.len()).all(|k| scans.grids[k].get().is_none()));
-        // enough queries announced in all: the grid is built
-        scans.prepare_for(&vec![SCAN_QUERIES as u32 - 1; sky.dirs.len()]);
-        assert!((0..sky.dirs.len()).all(|k| scans.grids[k].get().is_some()));
     }
 
     /// Shadow volumes of three owners' occluders, queried leaving one owner out, against shadow

@@ -605,10 +605,9 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
 fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3]) -> Vec<(f32, Vec3)> {
     let mut out = vec![(0.0f32, Vec3::ZERO); at.len()];
     let masks: Vec<u32> = at.par_iter().map(|&p| solids.mask(p)).collect();
-    // the grids (or scans, for few queries) of the directions open at some point, built over
-    // the cores first
+    // the grids of the directions open at some point, built over the cores first
     let open = !masks.iter().fold(u32::MAX, |a, &m| a & m);
-    vols.prepare_for(&open_counts(sky, &masks));
+    vols.prepare(open);
     if let Some(f) = fixed {
         f.prepare(open);
     }
@@ -637,12 +636,6 @@ fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolu
         }
     });
     out
-}
-
-/// Per sky direction k, how many of the points whose [`Solids::mask`] are `masks` have
-/// direction k open (the queries of direction k that follow); 0 for a direction of weight 0.
-fn open_counts(sky: &super::light::Sky, masks: &[u32]) -> Vec<u32> {
-    (0..sky.dirs.len()).map(|k| if sky.weights[k] == 0.0 { 0 } else { masks.iter().filter(|&&m| m & (1 << k) == 0).count() as u32 }).collect()
 }
 
 /// Per-direction transmittances (eq. 4 products) of the clusters of one stage as evaluated at
@@ -929,58 +922,38 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         })
         .collect();
     let mut sums = vec![0.0f32; lit.len()];
+    // the grids of the directions open at some cluster to be computed, built over the cores
+    // first (of the changed casters too, which the reused values are checked against)
+    let open = !from.iter().fold(u32::MAX, |a, &(m, _)| a & m);
+    vols.prepare(open);
+    if let Some(f) = fixed {
+        f.prepare(open);
+    }
+    if let Some(r) = reuse.as_ref() {
+        r.delta.prepare(open);
+    }
+    // chunks of clusters over the cores; within a chunk direction by direction (each direction's
+    // grid read while in cache), every cluster's sum taken in direction order as before, so the
+    // values are the same bit for bit whatever the thread count
     let reuse_ref = reuse.as_ref();
     let chunk = light_chunk(lit.len());
-    // 1. the values kept from the previous level (the same occluder, no changed caster on the
-    // ray; the fixed trees' part is unchanged: they do not move), and per cluster the bits of
-    // the directions to compute; the changed casters' grids or scans first, told the queries
-    let mut need = vec![0u32; lit.len()];
-    if let Some(r) = reuse_ref {
-        let checked: Vec<u32> = from.iter().map(|&(m, old)| old.map_or(u32::MAX, |o| (0..nd).fold(m, |m, k| if o[k].is_nan() { m | 1 << k } else { m }))).collect();
-        r.delta.prepare_for(&open_counts(sky, &checked));
-    }
-    rows.t.par_chunks_mut(chunk * nd.max(1)).zip(need.par_chunks_mut(chunk)).zip(lit.par_chunks(chunk).zip(from.par_chunks(chunk))).for_each(|((t_rows, need), (lit, from))| {
+    rows.t.par_chunks_mut(chunk * nd.max(1)).zip(sums.par_chunks_mut(chunk)).zip(lit.par_chunks(chunk).zip(from.par_chunks(chunk))).for_each(|((t_rows, sums), (lit, from))| {
         for k in 0..nd {
-            if sky.weights[k] == 0.0 {
+            let wk = sky.weights[k];
+            if wk == 0.0 {
                 continue;
             }
             for (j, (&(_, c), &(mask, old))) in lit.iter().zip(from).enumerate() {
                 if mask & (1 << k) != 0 {
                     continue;
                 }
-                match (old, reuse_ref) {
-                    (Some(o), Some(r)) if !o[k].is_nan() && !r.delta.shaded(k, c) => t_rows[j * nd + k] = o[k],
-                    _ => need[j] |= 1 << k,
-                }
-            }
-        }
-    });
-    // 2. the other values: the grids (or scans, for few queries) of the directions to compute,
-    // built over the cores first; then chunks of clusters over the cores, within a chunk
-    // direction by direction (each direction's grid read while in cache); every cluster's sum
-    // taken in direction order as before, so the values are the same bit for bit whatever the
-    // thread count
-    vols.prepare_for(&open_counts(sky, &need.iter().map(|&b| !b).collect::<Vec<u32>>()));
-    if let Some(f) = fixed {
-        f.prepare(need.iter().fold(0, |a, &b| a | b));
-    }
-    rows.t.par_chunks_mut(chunk * nd.max(1)).zip(sums.par_chunks_mut(chunk)).zip(lit.par_chunks(chunk).zip(from.par_chunks(chunk).zip(need.par_chunks(chunk)))).for_each(|((t_rows, sums), (lit, (from, need)))| {
-        for k in 0..nd {
-            if sky.weights[k] == 0.0 {
-                continue;
-            }
-            for (j, (&(_, c), &bits)) in lit.iter().zip(need).enumerate() {
-                if bits & (1 << k) != 0 {
-                    t_rows[j * nd + k] = vols.transmittance(k, c) * fixed.map_or(1.0, |f| f.transmittance(k, c));
-                }
-            }
-        }
-        for (j, &(mask, _)) in from.iter().enumerate() {
-            for k in 0..nd {
-                let wk = sky.weights[k];
-                if wk != 0.0 && mask & (1 << k) == 0 {
-                    sums[j] += wk * t_rows[j * nd + k];
-                }
+                // the fixed trees' part of a reused value is unchanged: they do not move
+                let tk = match (old, reuse_ref) {
+                    (Some(o), Some(r)) if !o[k].is_nan() && !r.delta.shaded(k, c) => o[k],
+                    _ => vols.transmittance(k, c) * fixed.map_or(1.0, |f| f.transmittance(k, c)),
+                };
+                t_rows[j * nd + k] = tk;
+                sums[j] += wk * tk;
             }
         }
     });
