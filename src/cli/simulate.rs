@@ -226,6 +226,12 @@ fn rank_stats(rank: usize, size: usize, seconds: f64, in_exchanges: f64, sent: u
 /// run's inventories, maps and checkpoint are gone (they are replaced file by file as the new
 /// run writes them).
 pub fn note_replaced_run(out: &Path) {
+    // said once: by rank 0 of an `mpirun` (Open MPI and MPICH/PMI name the rank in the
+    // environment before MPI starts), not once per rank
+    let rank = ["OMPI_COMM_WORLD_RANK", "PMI_RANK"].iter().find_map(|k| std::env::var(k).ok());
+    if rank.is_some_and(|r| r.trim() != "0") {
+        return;
+    }
     let old = out.join("scenario.toml");
     if old.is_file() {
         let name = Scenario::load(&old).map(|s| s.name).unwrap_or_else(|_| "unreadable scenario.toml".into());
