@@ -212,6 +212,12 @@ fn tree_adapt_refuses_bad_input_clearly() {
     let res = sylva(&["tree", "adapt", "--input", grown.with_extension("png").to_str().unwrap(), "--species", "beech", "--obstacle", "wall:1.0", "--out", o]);
     let err = String::from_utf8_lossy(&res.stderr);
     assert!(!res.status.success() && err.contains("moved.png: expected a .glb"), "{err}");
+    // without --species the sidecar's species is taken; without either, --species is asked for
+    let res = sylva(&["tree", "adapt", "--input", grown.to_str().unwrap(), "--obstacle", "wall:1.0", "--out", o, "--json"]);
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    let res = sylva(&["tree", "adapt", "--obstacle", "wall:1.0", "--out", o]);
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(!res.status.success() && err.contains("--species: expected the species of the tree"), "{err}");
     // a negative age reaches Sylva's own check (clap took `-5` for an option: found by a trial)
     for cmd in [vec!["tree", "grow", "--species", "beech", "--age", "-5", "--out", o], vec!["tree", "adapt", "--species", "beech", "--age", "-5", "--out", o]] {
         let res = sylva(&cmd);

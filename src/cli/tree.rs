@@ -74,10 +74,11 @@ pub struct AdaptArgs {
     /// without it the tree is grown here from --species/--model/--age/--seed.
     #[arg(long)]
     input: Option<PathBuf>,
-    /// Species id or name (the tree's species: its Plastic Trees parameters and leaves, also for
-    /// a tree read with --input).
+    /// Species id or name (the tree's species: its Plastic Trees parameters and leaves). With
+    /// --input it may be left out: the species recorded in the tree's skeleton sidecar is used
+    /// (given, it must be that species).
     #[arg(long)]
-    species: String,
+    species: Option<String>,
     /// Growth model of a tree grown here and of the neighbours (with --input: of the neighbours).
     #[arg(long, value_enum, default_value = "light")]
     model: Model,
@@ -338,7 +339,18 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     }
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let find = |name: &str| find_species(&lib, name, "species");
-    let sp = find_species(&lib, &a.species, "--species")?;
+    // the species: given, or (with --input) the one the tree's sidecar records
+    let recorded = match &a.input {
+        Some(glb) if glb.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) && sylva::output::gltf::skeleton_sidecar_path(glb).is_file() => sylva::output::gltf::read_skeleton_sidecar_species(glb)?,
+        _ => None,
+    };
+    let species = match (&a.species, &recorded) {
+        (Some(s), _) => s.clone(),
+        (None, Some(r)) => r.clone(),
+        (None, None) if a.input.is_some() => anyhow::bail!("--species: expected the tree's species (the skeleton sidecar of --input records none: it was written before round 24)"),
+        (None, None) => anyhow::bail!("--species: expected the species of the tree to grow and adapt (e.g. --species beech), or --input with a tree written by `sylva tree grow`"),
+    };
+    let sp = find_species(&lib, &species, "--species")?;
     if a.input.is_none() {
         check_age(a.age, &sp)?;
     }
@@ -373,7 +385,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
             // a tree grown as another species would be adapted with this species' parameters
             // and leaves without a word (found by a trial); sidecars before round 24 carry no id
             if let Some(grown_as) = sylva::output::gltf::read_skeleton_sidecar_species(glb)? {
-                anyhow::ensure!(grown_as == sp.id, "--species {}: the tree in --input {} was grown as {grown_as} (its skeleton sidecar {}); expected --species {grown_as}", a.species, glb.display(), side.display());
+                anyhow::ensure!(grown_as == sp.id, "--species {species}: the tree in --input {} was grown as {grown_as} (its skeleton sidecar {}); expected --species {grown_as} (or no --species)", glb.display(), side.display());
             }
             check_base(sk.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO))?;
             sk
