@@ -122,6 +122,13 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     // a second run into a run's folder says that it replaces the earlier run's files
     let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all"]);
     assert!(ok && err.contains("snap_all holds an earlier run (snap)") && err.contains("--resume"), "{err}");
+    // an --out below a file is refused naming the option and the file in the way (it named
+    // the run's species/ folder: found by a trial)
+    for cmd in ["simulate", "run"] {
+        let args: Vec<&str> = if cmd == "run" { vec!["run", "snap.toml", "--out", "snap.toml/sub", "--no-pictures"] } else { vec!["simulate", "snap.toml", "--out", "snap.toml/sub"] };
+        let (ok, err) = run(&args);
+        assert!(!ok && err.contains("--out snap.toml/sub: snap.toml is a file, not a folder"), "{cmd}: {err}");
+    }
     // under mpirun only rank 0 says it (each rank printed it in round 23); rank 0 still does
     for (rank, said) in [("1", false), ("0", true)] {
         let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["simulate", "snap.toml", "--out", "snap_all"]).env("OMPI_COMM_WORLD_RANK", rank).current_dir(d).output().unwrap();

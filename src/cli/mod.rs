@@ -91,6 +91,26 @@ pub fn check_out_file(p: &std::path::Path, option: &str) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// Checks before any work that the output folder `p` of option `option` (e.g. `--out` of a
+/// run) can be made or written: not a file, and its nearest existing ancestor a folder that
+/// takes a new file (a temporary file made there and removed). The folder itself is left to
+/// the run, which makes it.
+///
+/// Errors: naming the option, the path and what is wrong (a trial got `base.toml/sub/species:
+/// Not a directory`, naming neither the option nor the file in the way).
+pub fn check_out_dir(p: &std::path::Path, option: &str) -> anyhow::Result<()> {
+    anyhow::ensure!(!p.exists() || p.is_dir(), "{option} {}: is a file; expected a folder", p.display());
+    let mut dir = p;
+    while !dir.exists() {
+        match dir.parent() {
+            Some(up) if !up.as_os_str().is_empty() => dir = up,
+            _ => return Ok(()),
+        }
+    }
+    anyhow::ensure!(dir.is_dir(), "{option} {}: {} is a file, not a folder", p.display(), dir.display());
+    sylva::job::run::check_writable(dir).map_err(|e| anyhow::anyhow!("{option} {}: cannot write into the folder {}: {e}", p.display(), dir.display()))
+}
+
 /// Writes the `--stats` figures `json` to `p` whole (a temporary file renamed), making its
 /// folder first when missing.
 ///

@@ -242,6 +242,7 @@ pub fn note_replaced_run(out: &Path) {
 /// Runs a simulation.
 pub fn run(a: Args) -> anyhow::Result<()> {
     let sc = Scenario::load(&a.scenario)?;
+    super::check_out_dir(&a.out, "--out")?;
     if !a.resume {
         note_replaced_run(&a.out);
     }
