@@ -175,6 +175,7 @@ fn main_job_reduced_scenario_writes_every_output() {
     assert_eq!(&gif[..6], b"GIF89a");
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("stills/year_0006_oblique.png") && md.contains("timelapse.gif"));
+    assert!(md.contains("(maps/species_year_0006.png)") && md.contains("(maps/basal_area_year_0006.png)"), "{md}");
 }
 
 /// The binary's `sylva run`: argument parsing, the printed summary, the exit status

@@ -73,6 +73,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     let (table, shares) = summary.tables();
     println!("\n{}\n{}", table, shares);
+    if summary.film.as_ref().is_some_and(|f| !f.mp4) {
+        println!("timelapse.gif written; no MP4: ffmpeg is not on PATH");
+    }
     println!("outputs in {} (see summary.md)", a.out.display());
     Ok(())
 }

@@ -669,7 +669,18 @@ fn write_summary_md(out: &Path, s: &MainJobSummary) -> Result<()> {
     let _ = writeln!(md, "## Result\n\n{table}\n{shares}");
     let _ = writeln!(md, "## Stand development\n\n![stand table](stand_table.png)\n\nData: `stand_table.csv`; inventories: `inventory/`.\n");
     if let Some(f) = &s.film {
-        let _ = writeln!(md, "## Timelapse\n\n![timelapse]({})\n\n{} frames{}.\n", rel(out, &f.gif), f.frames, if f.mp4 { ", also as `timelapse.mp4`" } else { "" });
+        let _ = writeln!(md, "## Timelapse\n\n![timelapse]({})\n\n{} frames{}.\n", rel(out, &f.gif), f.frames, if f.mp4 { ", also as `timelapse.mp4`" } else { "; no MP4 (ffmpeg was not on PATH)" });
+    }
+    // the final year's species and basal-area maps (a trial missed them in the page that
+    // claims every picture)
+    let label = format!("year_{:04}", s.sim.year);
+    let maps: Vec<String> = ["species", "basal_area"].iter().map(|m| format!("maps/{m}_{label}.png")).filter(|p| out.join(p).is_file()).collect();
+    if !maps.is_empty() {
+        let _ = writeln!(md, "## Species and basal area, year {}\n", s.sim.year);
+        for m in &maps {
+            let _ = writeln!(md, "![{m}]({m})");
+        }
+        let _ = writeln!(md, "\nEvery {} years: `maps/species_year_NNNN.png`, `maps/basal_area_year_NNNN.png` (GeoTIFF twins `.tif`, codes in `maps/species_codes.csv`).\n", sc.snapshot_every);
     }
     let stills = &s.stills;
     if !stills.is_empty() {
