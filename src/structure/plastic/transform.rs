@@ -266,6 +266,9 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         return rayon::scope(|_| adapt_group_among(trees, fixed, env));
     }
     env.validate()?;
+    if let Some(i) = trees.iter().position(|t| t.standing) {
+        return Err(crate::Error::Invalid { context: "Plastic Trees adaptation".into(), field: format!("tree {i}"), value: "a standing tree (shape only)".into(), expected: "a tree of PlasticTree::analyse (a standing tree can only be among the fixed trees)".into() });
+    }
     let sky = &env.sky;
     let solids = SkyMask::new(Solids { obstacles: &env.obstacles, ground: env.ground }, sky);
     // 1. signatures: solids and the other trees' input-time clusters at the final stage
