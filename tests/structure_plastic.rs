@@ -243,6 +243,79 @@ A {:.3} -> {:.3}", mean(&ca0).x, mean(&ca1).x);
     assert_ne!(pair[0].positions(), one[0].positions());
 }
 
+/// A standing neighbour (`PlasticTree::standing`: shape only, no light) shades and blocks as
+/// the fully analysed one does: the tree adapted beside it ends bit for bit where it ends beside
+/// the analysed neighbour, and moved away from it. A standing tree cannot be adapted.
+#[test]
+fn a_standing_neighbour_acts_as_the_analysed_one_and_cannot_be_adapted() {
+    let (a, b) = two_beeches_3m_apart();
+    let sp = beech();
+    let p = tree1(&sp);
+    let mut s = PlasticTree::standing(&grow(&sp, 30.0, 8).skeleton, &p, &Environment::open().sky, None).unwrap();
+    s.translate(Vec3::new(3.0, 0.0, 0.0));
+    assert!(s.is_standing() && !b.is_standing());
+    assert_eq!(s.analysis().lobes, b.analysis().lobes);
+    assert_eq!(s.analysis().internode_m, b.analysis().internode_m);
+    let (mut with_b, mut with_s) = (vec![a.clone()], vec![a.clone()]);
+    let rb = adapt_group_among(&mut with_b, std::slice::from_ref(&b), &Environment::open()).unwrap();
+    let rs = adapt_group_among(&mut with_s, std::slice::from_ref(&s), &Environment::open()).unwrap();
+    assert_eq!(rb, rs);
+    assert!(rs.trees[0].bent > 0);
+    assert_eq!(with_b[0].skeleton(), with_s[0].skeleton());
+    let e = adapt_group(&mut [a, s], &Environment::open()).unwrap_err().to_string();
+    assert!(e.contains("tree 1") && e.contains("standing"), "{e}");
+}
+
+/// Section 4.1's internode length is the main mode of the distances between branching nodes:
+/// a stem of 60 internodes of 0.5 m (±2 cm) with a twig at every node whose lengths spread
+/// evenly over 0.1–1.5 m gives 0.5 m (the twigs' tips are samples too, but spread thin);
+/// a second stem of 1.4 m internodes beside it, half as many, is a lower mode and does not
+/// win (with 0.8 m the two modes of the kernel density, bandwidth ≈ 0.13 m, merge: 0.54 m).
+#[test]
+fn the_internode_length_is_the_main_mode_of_the_branch_distances() {
+    use sylva::structure::plastic::analysis::internode_length;
+    let mut sk = Skeleton::new();
+    let root = sk.add_root(Vec3::ZERO, 0.3);
+    let stem = |sk: &mut Skeleton, x: f32, n: usize, step: f32| {
+        let mut k = root;
+        let mut z = 0.0;
+        for i in 0..n {
+            z += step + 0.02 * ((i as f32 * 2.3).sin());
+            k = sk.add_child(k, Vec3::new(x, 0.0, z), 0.1, false).unwrap();
+            let len = 0.1 + 1.4 * (i as f32 * 0.618_034).fract();
+            sk.add_child(k, Vec3::new(x + len, 0.0, z), 0.01, true).unwrap();
+        }
+    };
+    stem(&mut sk, 0.0, 60, 0.5);
+    let one = internode_length(&sk);
+    assert!((one - 0.5).abs() < 0.015, "internode {one} m");
+    stem(&mut sk, 5.0, 30, 1.4);
+    let two = internode_length(&sk);
+    assert!((two - 0.5).abs() < 0.015, "internode {two} m with a second mode at 1.4 m");
+}
+
+/// A tree analysed on open ground and scaled by `scale_grown_on_open_ground` keeps its
+/// signatures: adapted again to the open it recomputes no node and stands as its scaled input
+/// (within the rounding of the kept nodes following their parents); `scale` recomputes every
+/// node.
+#[test]
+fn a_tree_scaled_on_open_ground_keeps_its_signatures() {
+    let (a, _) = two_beeches_3m_apart();
+    let n = a.input().nodes.len();
+    let (mut kept, mut forced) = (a.clone(), a);
+    kept.scale_grown_on_open_ground(1.2).unwrap();
+    forced.scale(1.2).unwrap();
+    assert_eq!(kept.input(), forced.input());
+    let rk = kept.adapt(&Environment::open()).unwrap();
+    let rf = forced.adapt(&Environment::open()).unwrap();
+    // every node but the root, which is never bent
+    assert_eq!((rk.recomputed_nodes, rf.recomputed_nodes), (0, n - 1));
+    assert_eq!(rk.nodes_after, n);
+    assert!(kept.positions().iter().zip(&kept.input().nodes).all(|(p, nd)| p.distance(nd.pos) < 1e-4));
+    let off = forced.positions().iter().zip(kept.positions()).map(|(p, q)| p.distance(*q)).fold(0.0f32, f32::max);
+    assert!(off < 1e-3, "recomputed nodes up to {off} m from the scaled input");
+}
+
 /// Trees growing together, a small one under a big one: an 8-year beech (436 nodes, 2.9 m)
 /// 1.2 m from the trunk of a 40-year one (16 m), both grown in the open and adapted together.
 /// The big crown's foliage lobes shade the sapling: its mean cluster light (eq. 3) falls to

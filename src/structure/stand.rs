@@ -25,9 +25,19 @@
 //!    tree's crown radius), radii and leaves by H; every branch leaving the main stem (Gravelius
 //!    order 0) below the crown base is removed with its subtree (lower branches shed in the
 //!    stand, as the simulation's crown base says). Trees are analysed (Plastic Trees section 4)
-//!    alone on flat ground under the site's sky; trees of the same species, age class and
-//!    dimensions within [`DIM_STEP`] (5 %) share one analysis, and the adapted tree is scaled
-//!    back to its exact height and crown radius afterwards (at most ±2.5 %).
+//!    alone on flat ground under the site's sky, one analysis per class and shared by the
+//!    class's trees through uniform scaling about the base ([`PlasticTree::scale`], section 4's
+//!    quantities scale with the tree): a class is the species, age class, crown-base class, the
+//!    crown's shape R/H within [`DIM_STEP`] (5 %) and, for the adapted trees, the height within
+//!    [`HEIGHT_STEP`] (25 %). An adapted tree is its class's analysed tree scaled to its exact
+//!    height (a factor within ±12 %: its clusters keep the transmittance of the class's
+//!    clusters, γ_c0 of eq. 4 becoming γ_c0^(1/factor)), and after the adaptation its crown is
+//!    stretched to its exact radius (at most ±2.5 %). A context tree (step 3) is analysed
+//!    without light ([`PlasticTree::standing`]: it only shades and blocks), scaled to its exact
+//!    height and given back its species' γ_c0, so it casts the shade of the tree at its size.
+//!    Until round 23 a class was the height and the crown radius within 5 % each and every
+//!    tree of the full-detail near field had nearly its own analysis (1,503 analyses for 1,000
+//!    targets and 3,274 context trees in the stand bench, 40 % of its time).
 //! 3. **Neighbourhoods**: the trees to adapt are binned into square cells of
 //!    [`StandOptions::cell_m`]; each cell's trees are adapted together
 //!    ([`super::plastic::adapt_group_among`]) among every other tree whose base lies within
@@ -125,8 +135,19 @@ pub fn crown_base_class(height_m: f32, crown_base_m: f32) -> u16 {
 /// age class ([`age_class`]) and crown-base class ([`crown_base_class`]).
 pub type FormKey = (u16, u16, u16);
 
-/// Relative step (5 %) of the height and crown-radius classes that share one analysis.
+/// Relative step (5 %) of the crown-shape classes (crown radius over height, R/H) that share
+/// one analysis ([`adapt_stand`] step 2).
 pub const DIM_STEP: f32 = 1.05;
+
+/// Relative step (25 %) of the height classes of the adapted trees that share one analysis
+/// ([`adapt_stand`] step 2): a tree is its class's tree scaled by a factor within
+/// 1.25^(±1/2) (±12 %), which raises the translucency base γ_c0 of eq. (4) to the power
+/// 1/factor ([`PlasticTree::scale`]).
+pub const HEIGHT_STEP: f32 = 1.25;
+
+/// Height (m) a context tree's class is analysed at before it is scaled to each tree's height
+/// (any height would do: its shape-only analysis scales exactly).
+const CONTEXT_CLASS_HEIGHT_M: f32 = 20.0;
 
 /// Options of [`adapt_stand`].
 #[derive(Debug, Clone, PartialEq)]
@@ -407,17 +428,21 @@ pub struct Stand {
     pub adaptation_s: f64,
 }
 
-/// Analysis class of a tree: species, age class, height, crown radius and crown-base classes.
-type ClassKey = (u16, u16, i32, i32, u16, bool);
+/// Analysis class of a tree ([`adapt_stand`] step 2): species, age class, crown-shape class
+/// (R/H in steps of [`DIM_STEP`]), crown-base class, height class (steps of [`HEIGHT_STEP`];
+/// 0 for a context tree) and whether it is a context tree.
+type ClassKey = (u16, u16, i32, u16, i32, bool);
 
 fn class_of(t: &StandTree, context: bool) -> ClassKey {
-    let q = |v: f32| (v.max(0.05).ln() / DIM_STEP.ln()).round() as i32;
-    (t.species, age_class(t.age_yr), q(t.height_m), q(t.crown_radius_m), crown_base_class(t.height_m, t.crown_base_m), context)
+    let q = |v: f32, step: f32| (v.max(1e-3).ln() / step.ln()).round() as i32;
+    let height = if context { 0 } else { q(t.height_m, HEIGHT_STEP) };
+    (t.species, age_class(t.age_yr), q(t.crown_radius_m / t.height_m, DIM_STEP), crown_base_class(t.height_m, t.crown_base_m), height, context)
 }
 
+/// Height, crown radius and crown base (m) a class is analysed at.
 fn class_dims(k: &ClassKey) -> (f32, f32, f32) {
-    let h = DIM_STEP.powi(k.2);
-    (h, DIM_STEP.powi(k.3), k.4 as f32 / CROWN_BASE_CLASSES * h)
+    let h = if k.5 { CONTEXT_CLASS_HEIGHT_M } else { HEIGHT_STEP.powi(k.4) };
+    (h, DIM_STEP.powi(k.2) * h, k.3 as f32 / CROWN_BASE_CLASSES * h)
 }
 
 /// Checks one stand tree.
@@ -515,7 +540,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     let mut classes: Vec<ClassKey> = groups.iter().flat_map(|g| (0..g.2.len()).map(move |j| class_in(g, j))).collect();
     classes.sort_unstable();
     classes.dedup();
-    let form = |k: &ClassKey| (k.0, k.1, k.4);
+    let form = |k: &ClassKey| (k.0, k.1, k.3);
     cache.prepare(lib, &classes.iter().filter(|k| !k.5).map(form).collect::<Vec<_>>())?;
     cache.prepare_context(lib, &classes.iter().filter(|k| k.5).map(form).collect::<Vec<_>>())?;
     // 2. one analysis per class
@@ -523,6 +548,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     let alone = Environment { obstacles: Vec::new(), ground: Some(Ground::flat(0.0)), sky: sky.clone() };
     let forest_grown = cache.max_strands == FULL_STRANDS;
     let cache = &*cache;
+    // (the analysed tree, its leaves; none for a context tree)
     let analysed: Vec<(ClassKey, (PlasticTree, Leaves))> = classes
         .par_iter()
         .map(|k| {
@@ -538,7 +564,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
             if forest_grown && !k.5 {
                 params.pruning_c_psi = 0.0;
             }
-            let mut t = PlasticTree::analyse(&sk, &params, &alone, None)?;
+            let (mut t, lv) = if k.5 { (PlasticTree::standing(&sk, &params, &sky, None)?, Leaves::default()) } else { (PlasticTree::analyse(&sk, &params, &alone, None)?, lv) };
             t.clearance_m = sp.architecture.ecomod.leaf_size_m.max(0.0);
             Ok((*k, (t, lv)))
         })
@@ -550,15 +576,26 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     let per_cell: Vec<Vec<(usize, AdaptedTree)>> = groups
         .par_iter()
         .map(|((cx, cy), ks, members)| {
-            let placed = |(j, &i): (usize, &usize)| {
-                let (t, _) = &analysed[&class_of(&trees[i], j >= ks.len())];
-                let mut t = t.clone();
+            // the class's tree scaled to the tree's height (an adapted tree keeps its
+            // class's signatures and cluster transmittance; a context tree gets its species'
+            // γ_c0 back: its shape-only analysis holds no light to stay consistent with) and
+            // placed at its base
+            let placed = |(j, &i): (usize, &usize)| -> Result<PlasticTree> {
+                let key = class_of(&trees[i], j >= ks.len());
+                let mut t = analysed[&key].0.clone();
+                let f = trees[i].height_m / class_dims(&key).0;
+                if key.5 {
+                    t.scale(f)?;
+                    t.params.translucency_gamma_c0 = lib.species[key.0 as usize].architecture.plastic.translucency_gamma_c0;
+                } else {
+                    t.scale_grown_on_open_ground(f)?;
+                }
                 t.translate(trees[i].base);
-                t
+                Ok(t)
             };
             // the cell's trees are adapted; the context trees stand as they are
-            let mut group: Vec<PlasticTree> = members[..ks.len()].iter().enumerate().map(placed).collect();
-            let context: Vec<PlasticTree> = members.iter().enumerate().skip(ks.len()).map(placed).collect();
+            let mut group: Vec<PlasticTree> = members[..ks.len()].iter().enumerate().map(placed).collect::<Result<_>>()?;
+            let context: Vec<PlasticTree> = members.iter().enumerate().skip(ks.len()).map(placed).collect::<Result<_>>()?;
             let first = &trees[members[0]];
             let mut ground = Ground::slope(first.base, first.slope_deg, first.aspect_deg);
             let lowest = members.iter().map(|&i| ground.height_of(trees[i].base)).fold(0.0f32, f32::min);
@@ -576,10 +613,13 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
                 let st = &trees[i];
                 let key = class_of(st, false);
                 let (h, r, _) = class_dims(&key);
+                let f = st.height_m / h;
                 let t = &group[j];
-                let (skeleton, leaves) = adapted_with_leaves(t, &analysed[&key].1, st.base);
-                // exact dimensions: scale about the base by the class rounding
-                let s = Vec3::new(st.crown_radius_m / r, st.crown_radius_m / r, st.height_m / h);
+                let (skeleton, leaves) = adapted_with_leaves(t, &analysed[&key].1, f, st.base);
+                // the exact crown radius: stretched about the base by the crown-shape class's
+                // rounding (the height is exact)
+                let sx = st.crown_radius_m / (r * f);
+                let s = Vec3::new(sx, sx, 1.0);
                 let at = |p: Vec3| st.base + (p - st.base) * s;
                 let mut skeleton = skeleton;
                 skeleton.nodes.iter_mut().for_each(|n| n.pos = at(n.pos));
@@ -599,9 +639,10 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
 }
 
 /// The adapted skeleton of `t` ([`PlasticTree::skeleton`]) and the leaves `lv` of its input
-/// (in the tree's analysis frame, base at the origin; `base` the translation applied), each leaf
-/// moved by its node's displacement and dropped with its node.
-fn adapted_with_leaves(t: &PlasticTree, lv: &Leaves, base: Vec3) -> (Skeleton, Leaves) {
+/// (in the frame of its class's analysis, base at the origin; `f` the uniform scale and `base`
+/// the translation applied to the tree since), each leaf scaled, moved by its node's
+/// displacement and dropped with its node.
+fn adapted_with_leaves(t: &PlasticTree, lv: &Leaves, f: f32, base: Vec3) -> (Skeleton, Leaves) {
     let sk = t.skeleton();
     let input = t.input();
     let fates = t.fates();
@@ -624,7 +665,7 @@ fn adapted_with_leaves(t: &PlasticTree, lv: &Leaves, base: Vec3) -> (Skeleton, L
         let k = l.node as usize;
         if let Some(Some(nk)) = map.get(k) {
             let d = pos[k] - input.nodes[k].pos;
-            leaves.leaves.push(super::Leaf { pos: l.pos + base + d, node: *nk, ..*l });
+            leaves.leaves.push(super::Leaf { pos: l.pos * f + base + d, size: l.size * f, node: *nk, ..*l });
         }
     }
     (sk, leaves)

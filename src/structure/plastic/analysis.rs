@@ -165,11 +165,19 @@ pub(crate) fn validate_params(p: &PlasticParams) -> Result<()> {
     Ok(())
 }
 
+/// Reach of the Gaussian kernel of [`internode_length`]'s mean-shift, in bandwidths: samples
+/// further from the point weigh less than e^(−KERNEL_REACH²/2) = e^(−50) ≈ 2·10⁻²² each
+/// (at most 4,000 of them: far below the weight of the samples near a mode), and are skipped.
+pub const KERNEL_REACH: f64 = 10.0;
+
 /// Internode length (section 4.1): the distances from every branching node and tip to its
 /// nearest branching ancestor (or the root), and the most significant mode of their
 /// distribution by mean-shift with a Gaussian kernel (bandwidth by Silverman's rule,
-/// 1.06·σ·n^(−1/5), at least 1 % of the mean); 64 starting points at the quantiles. Returns
-/// the mean segment length when the tree has no branching, and at least 1 mm.
+/// 1.06·σ·n^(−1/5), at least 1 % of the mean; cut at [`KERNEL_REACH`] bandwidths), started
+/// from the eight highest local maxima of the density binned on a grid of a quarter bandwidth
+/// (until round 23 from 64 samples at the quantiles: 64 mean-shift paths over every sample,
+/// 70 % of the analyses of the full-detail stand bench; BENCHMARKS.md, round 24). Returns the
+/// mean segment length when the tree has no branching, and at least 1 mm.
 pub fn internode_length(sk: &Skeleton) -> f32 {
     let n = sk.nodes.len();
     if n < 2 {
@@ -201,26 +209,46 @@ pub fn internode_length(sk: &Skeleton) -> f32 {
     let mean = samples.iter().map(|&x| x as f64).sum::<f64>() / m;
     let sd = (samples.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / m).sqrt();
     let h = (1.06 * sd * m.powf(-0.2)).max(0.01 * mean).max(1e-6);
+    // the samples within KERNEL_REACH bandwidths of x (sorted: a window found by bisection);
+    // the others weigh less than e^(−KERNEL_REACH²/2) each
+    let reach = KERNEL_REACH * h;
     let density_and_shift = |x: f64| {
         let (mut w, mut wx) = (0.0f64, 0.0f64);
-        for &s in &samples {
+        let lo = samples.partition_point(|&s| (s as f64) < x - reach);
+        let hi = samples.partition_point(|&s| (s as f64) <= x + reach);
+        for &s in &samples[lo..hi] {
             let k = (-0.5 * ((s as f64 - x) / h).powi(2)).exp();
             w += k;
             wx += k * s as f64;
         }
         (w, if w > 0.0 { wx / w } else { x })
     };
+    // the starting points: the local maxima of the density on a grid of step h/4 (at most
+    // MAX_GRID points), from the samples binned linearly onto it (binned kernel density
+    // estimation, Wand 1994, J. Comput. Graph. Stat. 3: 433–445), the densest
+    // MODE_STARTS of them; each is then carried to its mode by the exact mean-shift
+    const MAX_GRID: usize = 16_384;
+    const MODE_STARTS: usize = 8;
+    let (x0, x1) = (samples[0] as f64 - 3.0 * h, samples[samples.len() - 1] as f64 + 3.0 * h);
+    let grid = (((x1 - x0) / (0.25 * h)).ceil() as usize + 1).clamp(2, MAX_GRID);
+    let step = (x1 - x0) / (grid - 1) as f64;
+    let mut counts = vec![0.0f64; grid];
+    for &s in &samples {
+        let u = ((s as f64 - x0) / step).clamp(0.0, (grid - 1) as f64);
+        let i = (u.floor() as usize).min(grid - 2);
+        let frac = u - i as f64;
+        counts[i] += 1.0 - frac;
+        counts[i + 1] += frac;
+    }
+    let reach_cells = ((KERNEL_REACH * h / step).ceil() as usize).min(grid);
+    let kernel: Vec<f64> = (0..=reach_cells).map(|j| (-0.5 * (j as f64 * step / h).powi(2)).exp()).collect();
+    let dens: Vec<f64> = (0..grid).map(|i| (i.saturating_sub(reach_cells)..(i + reach_cells + 1).min(grid)).map(|j| counts[j] * kernel[i.abs_diff(j)]).sum()).collect();
+    let mut peaks: Vec<usize> = (0..grid).filter(|&i| (i == 0 || dens[i] > dens[i - 1]) && (i + 1 == grid || dens[i] >= dens[i + 1])).collect();
+    peaks.sort_by(|&a, &b| dens[b].total_cmp(&dens[a]).then(a.cmp(&b)));
+    peaks.truncate(MODE_STARTS);
     let mut best = (f64::NEG_INFINITY, mean);
-    // a start equal to an earlier one follows the same path to the same mode, which cannot
-    // beat itself: skipped (the samples are sorted, so equal starts are consecutive)
-    let mut prev_start = None;
-    for q in 0..64 {
-        let start = samples[(q * samples.len()) / 64];
-        if prev_start == Some(start.to_bits()) {
-            continue;
-        }
-        prev_start = Some(start.to_bits());
-        let mut x = start as f64;
+    for &i in &peaks {
+        let mut x = x0 + i as f64 * step;
         for _ in 0..100 {
             let (_, nx) = density_and_shift(x);
             let done = (nx - x).abs() < 1e-6 * h;
@@ -326,14 +354,7 @@ fn lobes(sk: &Skeleton, season: &[u16], last: u16, internode_m: f32) -> Vec<Lobe
 fn stage_clusters(sk: &Skeleton, season: &[u16], last: u16, lobes: &[Lobe], internode_m: f32) -> Vec<Vec<StageCluster>> {
     let root = sk.nodes[0].pos;
     let mut stages = vec![Vec::new(); last as usize + 1];
-    let mut cur: Vec<(StageCluster, Vec3)> = lobes
-        .iter()
-        .enumerate()
-        .map(|(i, l)| {
-            let ms = l.nodes.iter().map(|&k| season[k as usize]).max().unwrap_or(0);
-            (StageCluster { anchor: l.nodes[0], radius: l.radius, lobe: Some(i as u32), max_season: ms }, l.center)
-        })
-        .collect();
+    let mut cur: Vec<(StageCluster, Vec3)> = full_grown_clusters(season, lobes).into_iter().zip(lobes.iter().map(|l| l.center)).collect();
     stages[last as usize] = cur.iter().map(|c| c.0).collect();
     for t in (0..last).rev() {
         let mut keep = Vec::with_capacity(cur.len());
@@ -374,6 +395,18 @@ fn stage_clusters(sk: &Skeleton, season: &[u16], last: u16, lobes: &[Lobe], inte
         cur = keep;
     }
     stages
+}
+
+/// The leaf clusters of the full-grown stage T: one per terminal lobe, in lobe order.
+fn full_grown_clusters(season: &[u16], lobes: &[Lobe]) -> Vec<StageCluster> {
+    lobes
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            let ms = l.nodes.iter().map(|&k| season[k as usize]).max().unwrap_or(0);
+            StageCluster { anchor: l.nodes[0], radius: l.radius, lobe: Some(i as u32), max_season: ms }
+        })
+        .collect()
 }
 
 /// Foliage lobe of every node (see [`FOLIAGE_REACH`]): node k starts a lobe when the path from
@@ -544,6 +577,23 @@ pub(crate) fn psi_at_stage(sk: &Skeleton, season: &[u16], t: u16, clusters: &[St
     psi[0] = f32::NAN;
 }
 
+/// The tree's shape as the analysis reads it: internode length l_i (`internode_m`, checked, or
+/// the mean-shift estimate), growth rates (eq. 1), seasons (eq. 2), the last season T and the
+/// terminal lobes.
+#[allow(clippy::type_complexity)]
+fn shape_of(sk: &Skeleton, internode_m: Option<f32>) -> Result<(f32, Vec<f32>, Vec<u16>, u16, Vec<Lobe>)> {
+    let l_i = match internode_m {
+        Some(l) if l > 0.0 && l.is_finite() => l,
+        Some(l) => return Err(Error::Invalid { context: "Plastic Trees".into(), field: "internode_m".into(), value: l.to_string(), expected: "a finite length > 0 m".into() }),
+        None => internode_length(sk),
+    };
+    let rates = growth_rates(sk);
+    let season = seasons(sk, l_i, &rates);
+    let last = season.iter().copied().max().unwrap_or(0);
+    let lobes = lobes(sk, &season, last, l_i);
+    Ok((l_i, rates, season, last, lobes))
+}
+
 /// Runs the analysis of section 4 on `sk` grown in `grown_in` (its obstacles and sky; the
 /// tree alone, without neighbours). `internode_m` overrides the mean-shift estimate when given.
 ///
@@ -553,16 +603,8 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
     validate_skeleton(sk)?;
     validate_params(p)?;
     grown_in.validate()?;
-    let l_i = match internode_m {
-        Some(l) if l > 0.0 && l.is_finite() => l,
-        Some(l) => return Err(Error::Invalid { context: "Plastic Trees".into(), field: "internode_m".into(), value: l.to_string(), expected: "a finite length > 0 m".into() }),
-        None => internode_length(sk),
-    };
+    let (l_i, rates, season, last, lobes) = shape_of(sk, internode_m)?;
     let n = sk.nodes.len();
-    let rates = growth_rates(sk);
-    let season = seasons(sk, l_i, &rates);
-    let last = season.iter().copied().max().unwrap_or(0);
-    let lobes = lobes(sk, &season, last, l_i);
     let stages = stage_clusters(sk, &season, last, &lobes, l_i);
     let foliage_of = foliage_lobes(sk);
     let sky = grown_in.sky.clone();
@@ -643,6 +685,30 @@ pub fn analyse(sk: &Skeleton, p: &PlasticParams, grown_in: &Environment, interno
         }
     }
     Ok(Analysis { internode_m: l_i, growth_rate: rates, season, seasons: last, lobes, stages, stage_light, light_dir, w_s, d_o, residual, psi_ref, psi_min, mask, sky, foliage_of })
+}
+
+/// The part of the analysis (section 4) that a tree standing unadapted among adapted ones
+/// needs (the `fixed` trees of [`super::transform::adapt_group_among`], a stand's context
+/// trees, which only shade and block): the internode length (`internode_m` or the mean-shift
+/// estimate), growth rates, seasons, terminal lobes, the full-grown stage's clusters
+/// (`stages[T]`; the earlier stages are empty) and the foliage lobes, without any light: the
+/// light fields are empty (`stage_light[T]` NaN, `light_dir`, `w_s`, `d_o`, `residual` and
+/// `mask` empty), ψ_ref is 0 and every ψ_s,min 0, the sky is `sky`. Such a tree cannot be
+/// adapted ([`super::PlasticTree::standing`]). The light of the full analysis was most of a
+/// context tree's cost and none of it was read.
+///
+/// Errors: as [`analyse`] (skeleton, parameters, internode).
+pub fn analyse_shape(sk: &Skeleton, p: &PlasticParams, sky: &super::Sky, internode_m: Option<f32>) -> Result<Analysis> {
+    validate_skeleton(sk)?;
+    validate_params(p)?;
+    let (l_i, rates, season, last, lobes) = shape_of(sk, internode_m)?;
+    let n = sk.nodes.len();
+    let mut stages = vec![Vec::new(); last as usize + 1];
+    stages[last as usize] = full_grown_clusters(&season, &lobes);
+    let mut stage_light = vec![Vec::new(); last as usize + 1];
+    stage_light[last as usize] = vec![f32::NAN; lobes.len()];
+    let foliage_of = foliage_lobes(sk);
+    Ok(Analysis { internode_m: l_i, growth_rate: rates, season, seasons: last, lobes, stages, stage_light, light_dir: Vec::new(), w_s: Vec::new(), d_o: Vec::new(), residual: Vec::new(), psi_ref: 0.0, psi_min: vec![0.0; n], mask: Vec::new(), sky: sky.clone(), foliage_of })
 }
 
 #[cfg(test)]

@@ -187,6 +187,9 @@ pub struct PlasticTree {
     /// [`transform::QuietLevels`]); cleared by any call with work and by every change of the
     /// tree's state outside a call.
     pub(crate) quiet: Option<Box<transform::QuietLevels>>,
+    /// True for a tree made by [`PlasticTree::standing`] (shape only, no light): it can stand
+    /// among adapted trees but cannot be adapted.
+    pub(crate) standing: bool,
 }
 
 impl PlasticTree {
@@ -197,12 +200,18 @@ impl PlasticTree {
     /// Errors: see [`analysis::analyse`].
     pub fn analyse(sk: &Skeleton, params: &PlasticParams, grown_in: &Environment, internode_m: Option<f32>) -> Result<PlasticTree> {
         let analysis = analysis::analyse(sk, params, grown_in, internode_m)?;
+        let sig = analysis.mask.iter().map(|&m| m as u64).collect();
+        Ok(PlasticTree::with_analysis(sk, params, analysis, sig, false))
+    }
+
+    /// A tree of input `sk` with `analysis`, signatures `sig`, its adapted state the input.
+    fn with_analysis(sk: &Skeleton, params: &PlasticParams, analysis: Analysis, sig: Vec<u64>, standing: bool) -> PlasticTree {
         let n = sk.nodes.len();
-        Ok(PlasticTree {
+        PlasticTree {
             input: sk.clone(),
             params: *params,
             light_cache: analysis.stage_light.clone(),
-            sig: analysis.mask.iter().map(|&m| m as u64).collect(),
+            sig,
             shade_key: 0,
             sky: analysis.sky.clone(),
             final_occ: Vec::new(),
@@ -216,7 +225,27 @@ impl PlasticTree {
             force: false,
             report: PlasticReport { nodes_before: n, nodes_after: n, ..Default::default() },
             quiet: None,
-        })
+            standing,
+        }
+    }
+
+    /// A tree that only stands among adapted ones, unadapted (the `fixed` trees of
+    /// [`adapt_group_among`]): its shade (its full-grown leaf clusters, grouped by foliage lobe)
+    /// and its wood are those of [`PlasticTree::analyse`]'s tree, bit for bit, but its analysis
+    /// holds no light ([`analysis::analyse_shape`]; `sky` is recorded as the analysis sky), so
+    /// it costs a fraction of a full analysis. Adapting it (as one of the `trees` of
+    /// [`adapt_group`] or [`adapt_group_among`]) is an error.
+    ///
+    /// Errors: see [`analysis::analyse_shape`].
+    pub fn standing(sk: &Skeleton, params: &PlasticParams, sky: &Sky, internode_m: Option<f32>) -> Result<PlasticTree> {
+        let analysis = analysis::analyse_shape(sk, params, sky, internode_m)?;
+        Ok(PlasticTree::with_analysis(sk, params, analysis, Vec::new(), true))
+    }
+
+    /// True for a tree of [`PlasticTree::standing`], which can stand among adapted trees but
+    /// not be adapted.
+    pub fn is_standing(&self) -> bool {
+        self.standing
     }
 
     /// Moves the tree (input, analysis and state) by `offset` (m). Obstacles of the
@@ -280,6 +309,22 @@ impl PlasticTree {
         self.final_occ.clear();
         self.force = true;
         self.report = PlasticReport { nodes_before: n, nodes_after: n, ..Default::default() };
+        Ok(())
+    }
+
+    /// [`PlasticTree::scale`] for a tree analysed on a ground plane through its root and
+    /// without obstacles (as [`crate::structure::stand`] analyses its classes): the sky
+    /// directions blocked at a node are then those of the side of the plane it stands on
+    /// ([`Ground::blocks`]), which scaling about the root keeps, so every node keeps its
+    /// signature and the next adaptation recomputes, as for the tree analysed at that size,
+    /// only the nodes whose light changed (`scale` recomputes every node: with obstacles a
+    /// scaled node can move into or out of their shadow). The caller vouches for the
+    /// environment of the analysis.
+    ///
+    /// Errors: as [`PlasticTree::scale`].
+    pub fn scale_grown_on_open_ground(&mut self, factor: f32) -> Result<()> {
+        self.scale(factor)?;
+        self.force = false;
         Ok(())
     }
 

@@ -240,7 +240,8 @@ fn stage_casters(t: &PlasticTree, s: usize, fine: &[Option<Occluder>], env: &Env
 /// again after a change recomputes only the subtrees whose light or obstacles changed; the
 /// report says how many nodes that was.
 ///
-/// Errors: [`crate::Error::Invalid`] for an invalid environment (obstacle or ground).
+/// Errors: [`crate::Error::Invalid`] for an invalid environment (obstacle or ground), or a
+/// tree of [`PlasticTree::standing`] among `trees` (field `tree i`).
 pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<GroupReport> {
     adapt_group_among(trees, &[], env)
 }
@@ -253,7 +254,8 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
 /// their wood is solid. Used for the context trees around a stand's neighbourhood
 /// ([`crate::structure::stand`]): they shade and block the adapted trees without being adapted
 /// themselves, so one set of shadow volumes serves every level instead of their clusters being
-/// rebuilt at each level.
+/// rebuilt at each level. A fixed tree may be a [`PlasticTree::standing`] one (shape only,
+/// without light): it casts the same shade and blocks with the same wood.
 ///
 /// Errors: as [`adapt_group`].
 pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment) -> Result<GroupReport> {
@@ -266,6 +268,9 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         return rayon::scope(|_| adapt_group_among(trees, fixed, env));
     }
     env.validate()?;
+    if let Some(i) = trees.iter().position(|t| t.standing) {
+        return Err(crate::Error::Invalid { context: "Plastic Trees adaptation".into(), field: format!("tree {i}"), value: "a standing tree (shape only)".into(), expected: "a tree of PlasticTree::analyse (a standing tree can only be among the fixed trees)".into() });
+    }
     let sky = &env.sky;
     let solids = SkyMask::new(Solids { obstacles: &env.obstacles, ground: env.ground }, sky);
     // 1. signatures: solids and the other trees' input-time clusters at the final stage
