@@ -111,32 +111,33 @@ fn write_rgb_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> Result<()> {
 }
 
 /// Categorical palette for species: the 7 colours of Okabe & Ito (2008, "Color Universal
-/// Design", colour-blind safe; black left out), then 10 picked greedily from Kelly's (1965)
-/// colours of maximum contrast and Tableau 20 (Tableau Software), each the candidate farthest
-/// in CIELAB (CIE 1976 ΔE*ab) from the colours before it and from the maps' own grey (outside),
-/// beige (no tree) and dark grey (not in the pool). Any two colours of the palette differ by
-/// ΔE*ab ≥ 26 (the earlier Okabe–Ito + Tableau 10 palette had pairs at 12–13: black alder and
-/// silver birch, both blue, were hard to tell apart on the default run's species map).
-/// Ordered so that neighbours in a pool differ in hue and lightness (blue, orange, green,
-/// purple, sky blue, yellow, vermillion, crimson, …).
+/// Design", colour-blind safe; black left out) and 10 picked greedily from Kelly's (1965)
+/// colours of maximum contrast and Tableau 20 (Tableau Software), each the candidate farthest in
+/// CIELAB (CIE 1976 ΔE*ab) from the colours before it and from the maps' own grey (outside),
+/// beige (no tree) and dark grey (not in the pool). Ordered greedily too (from Okabe–Ito's blue,
+/// each next colour the one farthest from those before it), so that a pool of the first k
+/// species is told apart as well as this set allows: any two of the first 8 differ by
+/// ΔE*ab ≥ 36, any two of all 17 by ≥ 26. The palette before round 24 (Okabe–Ito then
+/// Tableau 10 in their own orders) had pairs at 12.9 (beech and sycamore of the default run,
+/// both blue) and orange next to vermillion (black alder and silver birch, 33).
 pub const SPECIES_PALETTE: [[u8; 3]; 17] = [
     [0, 114, 178],
-    [230, 159, 0],
-    [0, 158, 115],
-    [204, 121, 167],
-    [86, 180, 233],
     [240, 228, 66],
-    [213, 94, 0],
     [190, 0, 50],
+    [0, 158, 115],
+    [101, 69, 34],
+    [204, 121, 167],
+    [213, 94, 0],
     [249, 147, 121],
     [44, 160, 44],
+    [230, 159, 0],
     [152, 223, 138],
+    [118, 183, 178],
     [148, 103, 189],
     [141, 182, 0],
     [136, 45, 23],
-    [101, 69, 34],
     [197, 176, 213],
-    [118, 183, 178],
+    [86, 180, 233],
 ];
 
 /// Species colour for plots and maps: [`SPECIES_PALETTE`] by the species' position in the pool
