@@ -159,7 +159,14 @@ fn tiles_in_threads_write_the_run_directory_of_one_process() {
     let o = InstanceOptions { year: Some(12), area: None, season: sylva::species::Season::Summer, levels: vec![0] };
     let (ga, gb) = (tmp.path().join("a.glb"), tmp.path().join("b.glb"));
     let emb = common::embedded();
-    let (ra, rb) = (export_instances(&one, &emb, &o, &ga).unwrap(), export_instances(&three, &emb, &o, &gb).unwrap());
+    // (the file names the run directory: both exported from the same path)
+    let ra = export_instances(&one, &emb, &o, &ga).unwrap();
+    let aside = tmp.path().join("one_aside");
+    std::fs::rename(&one, &aside).unwrap();
+    std::fs::rename(&three, &one).unwrap();
+    let rb = export_instances(&one, &emb, &o, &gb).unwrap();
+    std::fs::rename(&one, &three).unwrap();
+    std::fs::rename(&aside, &one).unwrap();
     assert!(ra.trees > 0 && ra.trees == rb.trees);
     assert!(std::fs::read(&ga).unwrap() == std::fs::read(&gb).unwrap(), "the instanced exports differ");
     assert_eq!(m.files, ["year_0012_rank_0000.bin", "year_0012_rank_0001.bin", "year_0012_rank_0002.bin"]);
@@ -333,7 +340,7 @@ fn tiles_cut_by_forest_on_a_half_masked_site_write_the_run_of_one_process() {
         .line("snapshot_every = 7")
         .line("checkpoint_every = 7")
         .uniform(40, 12, 20.0, 300.0)
-        .seed_sources("beech", &[[60.0, 118.0], [190.0, 60.0], [210.0, 200.0], [330.0, 120.0]], 3)
+        .seed_sources("beech", &[[60.0, 118.0], [190.0, 60.0], [210.0, 200.0], [330.0, 120.0], [100.0, 40.0], [290.0, 210.0], [250.0, 110.0], [150.0, 160.0]], 4)
         .build();
     let sc = Scenario::from_toml_str(&toml, "half").unwrap();
     let lib = sylva::sim::fixtures::library();

@@ -189,19 +189,52 @@ fn inventory_csv_where(w: &World, keep: impl Fn(f32, f32) -> bool) -> String {
 /// GeoParquet metadata, its bounding box that of its rows), and with `gpkg` the same rows as the
 /// GeoPackage `gpkg` ([`write_inventory_gpkg`]'s layer). The parts of all ranks, read back as one
 /// table ([`crate::job::inventory::read`] merges them by status and id), are the rows of one
-/// process's file. Written atomically.
+/// process's file. Written atomically; the CSV lines are streamed to a temporary file
+/// (`.NAME.csv.PID.tmp` beside `path`, removed after) that the Parquet and GeoPackage writers
+/// read, so the rank's inventory text is never held in memory.
 ///
 /// Errors: [`super::OutputError::Io`] naming the file.
 pub fn write_inventory_part(path: &Path, gpkg: Option<&Path>, w: &World, keep: impl Fn(f32, f32) -> bool, format: InventoryFormat) -> Result<()> {
-    let text = inventory_csv_where(w, keep);
-    match format {
-        InventoryFormat::Csv => crate::output::write_atomic(path, text.as_bytes())?,
-        InventoryFormat::Parquet => super::parquet::csv_to_parquet(text.as_bytes(), "the inventory part", path, &super::parquet::INVENTORY, &PointGeoRef::of(w))?,
+    use std::io::Write as _;
+    let recs = records_where(w, keep);
+    let lines = |f: &mut std::io::BufWriter<std::fs::File>| -> std::io::Result<()> {
+        f.write_all(HEADER.as_bytes())?;
+        f.write_all(b"\n")?;
+        let mut s = String::with_capacity(96);
+        for r in &recs {
+            s.clear();
+            csv_line(&mut s, r);
+            f.write_all(s.as_bytes())?;
+        }
+        f.flush()
+    };
+    let csv = match format {
+        InventoryFormat::Csv => {
+            crate::output::write_atomic_with(path, lines)?;
+            path.to_path_buf()
+        }
+        InventoryFormat::Parquet => {
+            let tmp = crate::output::temporary_path(&path.with_extension("csv"));
+            let f = std::fs::File::create(&tmp).map_err(|e| super::OutputError::io(&tmp, e))?;
+            lines(&mut std::io::BufWriter::new(f)).map_err(|e| super::OutputError::io(&tmp, e))?;
+            tmp
+        }
+    };
+    drop(recs);
+    let open = || std::fs::File::open(&csv).map(std::io::BufReader::new).map_err(|e| super::OutputError::io(&csv, e));
+    let r = (|| -> Result<()> {
+        if format == InventoryFormat::Parquet {
+            super::parquet::csv_to_parquet(open()?, "the inventory part", path, &super::parquet::INVENTORY, &PointGeoRef::of(w))?;
+        }
+        if let Some(g) = gpkg {
+            gpkg_from(open()?, "the inventory part", g, w)?;
+        }
+        Ok(())
+    })();
+    if format == InventoryFormat::Parquet {
+        let _ = std::fs::remove_file(&csv);
     }
-    if let Some(g) = gpkg {
-        gpkg_from(text.as_bytes(), "the inventory part", g, w)?;
-    }
-    Ok(())
+    r
 }
 
 /// Writes a rank's part of a regeneration table: every cohort of `w` (a rank's tile holds only
@@ -300,7 +333,9 @@ mod tests {
                     // the parts split the trees: each holds some, none all
                     let sizes: Vec<usize> = (0..3).map(|k| crate::job::inventory::read(&fol.join(part_name(k, ext))).unwrap().len()).collect();
                     assert!(sizes.iter().all(|&n| n > 0 && n < a.len()), "{sizes:?}");
-                    assert_eq!(b.last().map(|r| (r.id, r.status.starts_with("dead:"))), Some((1, true)));
+                    // living first, then the dead (id 1 among them, from the east part)
+                    let first_dead = b.iter().position(|r| r.status != "alive").unwrap();
+                    assert!(first_dead > 0 && b[first_dead..].iter().all(|r| r.status.starts_with("dead:")) && b[first_dead..].iter().any(|r| r.id == 1));
                 }
                 // the regeneration layer: the whole file (read as year 21) and the parts (year 22)
                 let ra = crate::job::inventory::read_regeneration(d.parent().unwrap(), 21).unwrap().unwrap();

@@ -164,7 +164,7 @@ fn gpkg_rows(paths: &[std::path::PathBuf]) -> Vec<Vec<String>> {
         let db = rusqlite::Connection::open(p).unwrap();
         let mut st = db.prepare("SELECT * FROM inventory").unwrap();
         let n = st.column_count();
-        let names: Vec<String> = st.column_names().iter().map(|c| c.to_string()).collect();
+        let names: Vec<String> = st.column_names().map(|c| c.to_string()).collect();
         let id = names.iter().position(|c| c == "id").unwrap_or_else(|| panic!("{}: no id column in {names:?}", p.display()));
         let fid = names.iter().position(|c| c == "fid");
         let got: Vec<(i64, Vec<String>)> = st
