@@ -214,9 +214,9 @@ pub fn write_inventory_part(path: &Path, gpkg: Option<&Path>, w: &World, keep: i
             path.to_path_buf()
         }
         InventoryFormat::Parquet => {
+            // (through write_atomic like every file: a killed run leaves only temporaries)
             let tmp = crate::output::temporary_path(&path.with_extension("csv"));
-            let f = std::fs::File::create(&tmp).map_err(|e| super::OutputError::io(&tmp, e))?;
-            lines(&mut std::io::BufWriter::new(f)).map_err(|e| super::OutputError::io(&tmp, e))?;
+            crate::output::write_atomic_with(&tmp, lines)?;
             tmp
         }
     };
