@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Slurm batch script for a regional Sylva run over MPI (issue 17; docs/SCALING.md).
 # One tile per MPI rank; the run directory holds the files of one process, byte for byte,
-# except the checkpoint (one file per rank in OUT/checkpoint/). Every rank writes into OUT (its
-# checkpoint, its part files of the inventories, which rank 0 merges), so OUT must be on a file
+# except the checkpoint (one file per rank in OUT/checkpoint/) and the inventories (one part per
+# rank: OUT/inventory/year_NNNN/part-RRRRR.parquet, read as one dataset by sylva, pyarrow and
+# DuckDB). Every rank writes into OUT (its checkpoint and its inventory parts), so OUT must be on a file
 # system all ranks share and can write (the cluster's parallel or network file system). Each rank holds the whole
 # site (terrain, conditions, per-cell grids) and its own tile's trees: size --mem-per-cpu from
 # a one-process run's memory at the site's size plus the tile's share of the trees
@@ -11,7 +12,8 @@
 # ~29 GiB, so there run one rank per node with --cpus-per-task=32 and --mem=0, not 8 ranks a
 # node), the trees about 130 bytes each (2,400 per ha at year 100) divided over the ranks, and
 # the CPU about 0.28 microseconds per tree-year (100,000 ha x 100 years: ~1 core-hour), so
-# --time is set by the output years (rank 0 still merges the inventories), not the simulation.
+# --time is set by the output years (each rank writes its own inventory parts since issue 37
+# round 24, ~115 B a tree for a GeoPackage year), not the simulation.
 # Build once on the cluster with MPI:
 #   cargo build --release --features mpi      (needs libopenmpi-dev or the site's MPI, libclang)
 # Submit:  sbatch docs/slurm_sylva.sh scenarios/region.toml /scratch/$USER/region

@@ -11,7 +11,11 @@
 //! `SYLVA_TILES_RANKS` (default 2), `SYLVA_TILES_ONE_THREAD` (default 1: also run one process
 //! with 1 thread, the ranks' yardstick; 0: not), `SYLVA_BIN` (the `sylva` binary; default the one beside
 //! this example's folder), `SYLVA_PHASE_TIMES=1` (also print the wall time per phase of the one
-//! process and of rank 0).
+//! process and of rank 0), `SYLVA_TILES_FOREST` (default 1: the share of the site, its west
+//! part, where forest can grow; below 1 the rest is masked out (no data in the DEM, an ESRI
+//! ASCII grid of the same flat 500 m) so the forest is uneven over the tiles: issue 37 Build 5),
+//! `SYLVA_TILES_SNAPSHOTS` (default 0: snapshots off; N: a snapshot, with the inventory, every
+//! N years).
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::Instant;
@@ -40,10 +44,27 @@ fn main() {
         let exe = std::env::current_exe().expect("path of this example");
         exe.parent().and_then(|d| d.parent()).expect("target folder").join("sylva")
     });
+    let forest: f64 = env("SYLVA_TILES_FOREST", 1.0);
+    let snapshots: u32 = env("SYLVA_TILES_SNAPSHOTS", 0);
     let side = ((ha * 10_000.0).sqrt() / 50.0).round().max(1.0) as usize;
-    let terrain = format!("uniform = {{ width = {side}, height = {side}, cell_m = 50.0, elevation_m = 500.0, indices = [5, 5, 3, 5, 6, 6] }}");
-    let toml = common::afforestation_toml("tiles", years, "snapshot_every = 0\ncheckpoint_every = 0", &terrain);
     let tmp = tempfile::tempdir().expect("temporary folder");
+    let terrain = if forest >= 1.0 {
+        format!("uniform = {{ width = {side}, height = {side}, cell_m = 50.0, elevation_m = 500.0, indices = [5, 5, 3, 5, 6, 6] }}")
+    } else {
+        // the west `forest` share of the columns at 500 m, the rest no data (masked)
+        let west = ((side as f64 * forest).round() as usize).clamp(1, side);
+        let mut asc = format!("ncols {side}\nnrows {side}\nxllcorner 0\nyllcorner 0\ncellsize 50\nNODATA_value -9999\n");
+        for _ in 0..side {
+            let row: Vec<&str> = (0..side).map(|c| if c < west { "500" } else { "-9999" }).collect();
+            asc.push_str(&row.join(" "));
+            asc.push('\n');
+        }
+        std::fs::write(tmp.path().join("tiles.asc"), asc).expect("DEM file");
+        println!("forest on the west {west} of {side} columns ({:.0} %), the rest masked", 100.0 * west as f64 / side as f64);
+        "path = \"tiles.asc\"".to_string()
+    };
+    let head = format!("snapshot_every = {snapshots}\ncheckpoint_every = 0");
+    let toml = common::afforestation_toml("tiles", years, &head, &terrain);
     let sc = tmp.path().join("tiles.toml");
     std::fs::write(&sc, toml).expect("scenario file");
     println!("tiles bench: {side} × {side} cells of 50 m ({:.0} ha), {years} years, {} (one process, 2 threads) vs mpirun -np {ranks} (1 thread each)", (side * side) as f64 * 0.25, bin.display());

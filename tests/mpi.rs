@@ -81,6 +81,13 @@ fn two_and_three_ranks_write_the_run_directory_of_one_process() {
         simulate(n, &sc, &d, false);
         let m = common::assert_same_run(&one, &d, &template(20), &format!("{n} ranks"));
         assert_eq!((m.year, m.ranks, m.tiles_across, m.tiles_up), (20, n, n, 1));
+        // issue 37 Build 4: one inventory part per rank, nothing merged on rank 0
+        let parts: Vec<String> = std::fs::read_dir(d.join("inventory/year_0020")).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        let want: Vec<String> = (0..n).map(|k| format!("part-{k:05}.parquet")).collect();
+        let mut parts = parts;
+        parts.sort();
+        assert_eq!(parts, want, "{n} ranks");
+        assert!(!d.join("inventory/year_0020.parquet").exists() && d.join(format!("inventory/year_0020_gpkg/part-{:05}.gpkg", n - 1)).is_file());
     }
 }
 

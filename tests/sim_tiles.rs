@@ -129,6 +129,46 @@ fn tiles_in_threads_write_the_run_directory_of_one_process() {
     let template = sylva::sim::World::new(sc.site().unwrap(), &lib, &sc).unwrap();
     let m = common::assert_same_run(&one, &three, &template, "one process and 3 tiles");
     assert_eq!((m.year, m.ranks, m.tiles_across, m.tiles_up), (12, 3, 3, 1), "{m:?}");
+    // issue 37 Build 4: the tiles' snapshots are partitioned, one Parquet part per rank (and
+    // its regeneration and GeoPackage parts), nothing merged; year 0 (rank 0) a single file
+    let fb = common::files(&three);
+    for k in 0..3 {
+        for f in [format!("inventory/year_0010/part-0000{k}.parquet"), format!("inventory/year_0010_regeneration/part-0000{k}.parquet"), format!("inventory/year_0012_gpkg/part-0000{k}.gpkg")] {
+            assert!(fb.contains_key(&f), "{f} missing: {:?}", fb.keys());
+        }
+    }
+    assert!(fb.contains_key("inventory/year_0000.parquet") && !fb.contains_key("inventory/year_0010.parquet") && !fb.contains_key("inventory/year_0012.gpkg"));
+    let parts: Vec<usize> = (0..3).map(|k| sylva::job::inventory::read(&three.join(format!("inventory/year_0012/part-0000{k}.parquet"))).unwrap().len()).collect();
+    assert!(parts.iter().filter(|&&n| n > 0).count() >= 2, "trees on fewer than 2 tiles: {parts:?}");
+    // every reader reads both layouts alike: the snapshots' list, the rows of `render` and
+    // `export` (`pictures::snapshot_rows`), the regeneration layer, the viewer's years and
+    // inventories, the instanced export's trees
+    let snaps = |d: &std::path::Path| sylva::job::inventory::snapshots(d).unwrap().into_iter().map(|s| (s.0, s.1)).collect::<Vec<_>>();
+    assert_eq!(snaps(&one), snaps(&three));
+    for y in [0, 5, 10, 12] {
+        let a = sylva::job::pictures::snapshot_rows(&one, y).unwrap();
+        assert!(a == sylva::job::pictures::snapshot_rows(&three, y).unwrap(), "year {y}: rows read back differ");
+        assert_eq!(sylva::job::inventory::read_regeneration(&one, y).unwrap(), sylva::job::inventory::read_regeneration(&three, y).unwrap(), "year {y}");
+    }
+    let (mut va, mut vb) = (sylva::view::data::RunData::open(&one, sc.site().unwrap(), lib.clone(), vec![]).unwrap(), sylva::view::data::RunData::open(&three, sc.site().unwrap(), lib.clone(), vec![]).unwrap());
+    assert_eq!(va.years, vb.years);
+    for k in 0..va.years.len() {
+        assert!(va.rows(k).unwrap().to_vec() == vb.rows(k).unwrap().to_vec(), "the viewer's snapshot {k}");
+    }
+    use sylva::job::export::{export_instances, InstanceOptions};
+    let o = InstanceOptions { year: Some(12), area: None, season: sylva::species::Season::Summer, levels: vec![0] };
+    let (ga, gb) = (tmp.path().join("a.glb"), tmp.path().join("b.glb"));
+    let emb = common::embedded();
+    // (the file names the run directory: both exported from the same path)
+    let ra = export_instances(&one, &emb, &o, &ga).unwrap();
+    let aside = tmp.path().join("one_aside");
+    std::fs::rename(&one, &aside).unwrap();
+    std::fs::rename(&three, &one).unwrap();
+    let rb = export_instances(&one, &emb, &o, &gb).unwrap();
+    std::fs::rename(&one, &three).unwrap();
+    std::fs::rename(&aside, &one).unwrap();
+    assert!(ra.trees > 0 && ra.trees == rb.trees);
+    assert!(std::fs::read(&ga).unwrap() == std::fs::read(&gb).unwrap(), "the instanced exports differ");
     assert_eq!(m.files, ["year_0012_rank_0000.bin", "year_0012_rank_0001.bin", "year_0012_rank_0002.bin"]);
     // seasonal snapshots need every tile in the middle of a year: refused
     let seasonal = Scenario::from_toml_str(&toml.replace("snapshot_every = 5", "snapshot_every = 5\nseasonal_snapshots = true"), "tiles_dir").unwrap();
@@ -192,11 +232,9 @@ fn per_rank_checkpoints_resume_on_the_same_and_other_counts() {
         assert_eq!(s.trees, unbroken.trees, "{first} then {then}: living trees");
         let what = format!("{first} tiles for 9 years, resumed on {then} for 18");
         if then == 1 {
-            let (fa, fb) = (common::files(&one), common::files(&d));
-            assert_eq!(fa.keys().collect::<Vec<_>>(), fb.keys().collect::<Vec<_>>(), "{what}");
-            for (k, v) in &fa {
-                assert!(v == &fb[k], "{what}: {k} differs");
-            }
+            // the years written by 3 tiles have partitioned inventories (read back the same),
+            // the rest byte for byte, checkpoint.bin included
+            common::assert_same_outputs(&one, &d, &what, |_| false);
         } else {
             let m = common::assert_same_run(&one, &d, &template, &what);
             assert_eq!((m.year, m.ranks), (18, then));
@@ -288,4 +326,67 @@ fn halo_copies_inserted_by_id_and_removed_as_a_merge_and_a_retain() {
     got.remove_rows(&rows);
     assert_eq!(got.id, own.id);
     assert!(got.f32_columns().iter().zip(own.f32_columns()).all(|(a, b)| a.iter().map(|v| v.to_bits()).eq(b.iter().map(|v| v.to_bits()))));
+}
+
+/// Issue 37 Build 5: on a site whose east half is masked (no forest can grow there), the tiles
+/// are cut by the light cells where forest can grow, not by area: 2 tiles split the west half
+/// (the area cut would give the east tile nothing to do), and the runs on 2 and 3 such tiles
+/// write the run of one process.
+#[test]
+fn tiles_cut_by_forest_on_a_half_masked_site_write_the_run_of_one_process() {
+    let toml = common::ScenarioToml::new("half", 14, 7)
+        .species(&["beech"])
+        .line("light_cell_m = 10.0")
+        .line("snapshot_every = 7")
+        .line("checkpoint_every = 7")
+        .uniform(40, 12, 20.0, 300.0)
+        .seed_sources("beech", &[[60.0, 118.0], [190.0, 60.0], [210.0, 200.0], [330.0, 120.0], [100.0, 40.0], [290.0, 210.0], [250.0, 110.0], [150.0, 160.0]], 4)
+        .build();
+    let sc = Scenario::from_toml_str(&toml, "half").unwrap();
+    let lib = sylva::sim::fixtures::library();
+    // the east half (x ≥ 400 m) masked
+    let site = || {
+        let mut s = sc.site().unwrap();
+        let w = s.width();
+        for r in 0..s.height() {
+            for c in w / 2..w {
+                let i = s.mask.idx(c, r);
+                s.mask.data[i] = false;
+            }
+        }
+        s
+    };
+    let template = World::new(site(), &lib, &sc).unwrap();
+    let (wc, wr) = sylva::sim::tiles::work_weights(&template.site);
+    assert_eq!(wc.iter().filter(|&&v| v > 0).count(), 40, "forest on the west 40 of 80 light columns");
+    assert!(wc[..40].iter().all(|&v| v == 24) && wr.iter().all(|&v| v == 40), "{wc:?} {wr:?}");
+    // by forest: 2 tiles of 20 columns of forest each (area: 40 and 40, all forest on tile 0)
+    assert_eq!(sylva::job::tiled::layout_for(&template, 2).unwrap().col_bounds, vec![0, 20, 80]);
+    assert_eq!(sylva::job::tiled::layout_for(&template, 3).unwrap().col_bounds, vec![0, 13, 26, 80]);
+    // an even site is cut by area as before
+    let even = World::new(sc.site().unwrap(), &lib, &sc).unwrap();
+    assert_eq!(sylva::job::tiled::layout_for(&even, 3).unwrap().col_bounds, vec![0, 26, 53, 80]);
+    let tmp = tempfile::tempdir().unwrap();
+    let one = tmp.path().join("one");
+    let a = sylva::job::run::run_scenario(&sc, site(), &lib, sylva::job::run::RunOptions::new(&one)).unwrap();
+    let xs: Vec<f32> = a.world.stand.trees.x.clone();
+    assert!(xs.len() > 20 && xs.iter().all(|&x| x < 400.0), "{} trees, some in the masked half", xs.len());
+    // both tiles of 2 hold trees (the area cut's east tile would hold none)
+    assert!(xs.iter().any(|&x| x < 200.0) && xs.iter().any(|&x| x >= 200.0), "trees on one side of x = 200 m only");
+    for n in [2, 3] {
+        let d = tmp.path().join(format!("n{n}"));
+        let (b, _) = sylva::job::tiled::run_local_tiles(&sc, site(), &lib, sylva::job::run::RunOptions::new(&d), n).unwrap();
+        assert_eq!(a.rows, b.rows, "{n} tiles: stand table");
+        let m = common::assert_same_run(&one, &d, &template, &format!("{n} tiles cut by forest"));
+        assert_eq!(m.col_bounds, if n == 2 { vec![0, 20, 80] } else { vec![0, 13, 26, 80] });
+    }
+    // stopped on 3 such tiles, resumed on 2: the manifest's bounds are read back
+    let (short, long) = (Scenario::from_toml_str(&toml.replace("years = 14", "years = 7"), "half").unwrap(), sc.clone());
+    let d = tmp.path().join("split");
+    sylva::job::tiled::run_local_tiles(&short, site(), &lib, sylva::job::run::RunOptions::new(&d), 3).unwrap();
+    let mut o = sylva::job::run::RunOptions::new(&d);
+    o.resume = true;
+    let (b, _) = sylva::job::tiled::run_local_tiles(&long, site(), &lib, o, 2).unwrap();
+    assert_eq!(a.rows, b.rows, "3 tiles then 2: stand table");
+    common::assert_same_run(&one, &d, &template, "3 tiles cut by forest, resumed on 2");
 }

@@ -3,7 +3,9 @@
 
 Usage: python3 tools/crown_check.py RUN_DIR YEAR [SPECIES_DIR]
 
-Reads RUN_DIR/inventory/year_YYYY.csv (a run made with `--inventory csv`) and the
+Reads the inventory of YEAR in RUN_DIR: inventory/year_YYYY.csv, year_YYYY.parquet (needs
+pyarrow), or the folder year_YYYY/ of a tiled run (`mpirun -np N sylva simulate`: one part per
+rank, part-RRRRR.parquet or .csv, read as one table); and the
 `life.stand_crown` coefficients of species/*.toml; canopy trees are the living trees of
 DBH >= 10 cm whose height is at least 0.8 x the top height of their 50 m x 50 m cell (the mean
 height of its 25 tallest trees, i.e. 100 per hectare). Prints, per species and 10 cm DBH class
@@ -22,13 +24,39 @@ if len(sys.argv) < 3 or not sys.argv[2].isdigit():
     sys.exit(__doc__.strip().split("\n\n")[1] + "\n(YEAR: a snapshot year of the run, a whole number)")
 run, year = sys.argv[1], int(sys.argv[2])
 sp_dir = sys.argv[3] if len(sys.argv) > 3 else os.path.join(os.path.dirname(__file__), "..", "species")
-inv_csv = os.path.join(run, "inventory", f"year_{year:04d}.csv")
-if not os.path.isfile(inv_csv):
-    inv = os.path.join(run, "inventory")
-    years = sorted({n[5:9] for n in (os.listdir(inv) if os.path.isdir(inv) else []) if n.startswith("year_") and n[5:9].isdigit() and n.endswith(".csv") and len(n) == 13})
-    if os.path.isfile(os.path.join(inv, f"year_{year:04d}.parquet")):
-        sys.exit(f"{inv_csv}: not there; this run wrote Parquet inventories: simulate it with `--inventory csv` to check it with this script")
-    sys.exit(f"{inv_csv}: no CSV inventory for year {year} in {run} (CSV years present: {', '.join(str(int(y)) for y in years) or 'none'})")
+inv = os.path.join(run, "inventory")
+base = os.path.join(inv, f"year_{year:04d}")
+
+
+def inventory_files():
+    """The files of the inventory of YEAR: the single file (CSV before Parquet) or a tiled
+    run's parts (Parquet before CSV, in rank order)."""
+    for ext in ("csv", "parquet"):
+        if os.path.isfile(f"{base}.{ext}"):
+            return [f"{base}.{ext}"]
+    if os.path.isdir(base):
+        return sorted(glob.glob(os.path.join(base, "part-*.parquet"))) or sorted(glob.glob(os.path.join(base, "part-*.csv")))
+    return []
+
+
+def read_rows(paths):
+    """The rows of the inventory files `paths` as dicts (column name -> value)."""
+    for p in paths:
+        if p.endswith(".parquet"):
+            try:
+                import pyarrow.parquet as pq
+            except ImportError:
+                sys.exit(f"{p}: reading Parquet needs pyarrow (pip install pyarrow); or simulate with `--inventory csv`")
+            yield from pq.read_table(p).to_pylist()
+        else:
+            with open(p) as fh:
+                yield from csv.DictReader(fh)
+
+
+files = inventory_files()
+if not files:
+    years = sorted({int(n[5:9]) for n in (os.listdir(inv) if os.path.isdir(inv) else []) if n.startswith("year_") and n[5:9].isdigit() and (n.endswith((".csv", ".parquet")) or len(n) == 9)})
+    sys.exit(f"{base}: no inventory for year {year} in {run} (.csv, .parquet or a folder of parts; years present: {', '.join(str(y) for y in years) or 'none'})")
 coef = {}
 for f in glob.glob(os.path.join(sp_dir, "*.toml")):
     with open(f, "rb") as fh:
@@ -44,11 +72,10 @@ def ref(sp, d, h, cb):
     return 0.5 * (c["a"] + c["b"] * d ** c.get("p", 1.0)) * sat * ln
 
 rows = []
-with open(inv_csv) as fh:
-    for r in csv.DictReader(fh):
-        if r["status"] != "alive":
-            continue
-        rows.append((r["species"], float(r["x_m"]), float(r["y_m"]), float(r["height_m"]), float(r["dbh_cm"]), float(r["crown_radius_m"]), float(r["crown_base_m"])))
+for r in read_rows(files):
+    if r["status"] != "alive":
+        continue
+    rows.append((r["species"], float(r["x_m"]), float(r["y_m"]), float(r["height_m"]), float(r["dbh_cm"]), float(r["crown_radius_m"]), float(r["crown_base_m"])))
 cells = defaultdict(list)
 for i, r in enumerate(rows):
     cells[(int(r[1] // 50), int(r[2] // 50))].append(r[3])

@@ -246,9 +246,11 @@ pub fn load_rank(dir: &Path, m: &Manifest, rank: usize, template: &World) -> Res
 /// is not one of this site's light grid.
 pub fn load_ranks(dir: &Path, m: &Manifest, w: &mut World) -> Result<Vec<StandRow>> {
     let mp = dir.join(RANK_DIR).join(MANIFEST);
-    let layout = Layout::new(&w.site, m.tiles_across, m.tiles_up).map_err(|e| Error::format(&mp, format!("tiles_across, tiles_up: {e}")))?;
+    // the manifest's bounds (tiles cut by area, or by work since issue 37 Build 5), checked
+    // against this site's light grid
+    let layout = Layout::with_bounds(&w.site, m.col_bounds.clone(), m.row_bounds.clone()).map_err(|e| Error::format(&mp, format!("col_bounds, row_bounds: {e}")))?;
     if !m.same_layout(&layout) {
-        return Err(Error::format(&mp, format!("col_bounds {:?}, row_bounds {:?}: not the {} × {} tiles of this site's light grid ({:?}, {:?})", m.col_bounds, m.row_bounds, m.tiles_across, m.tiles_up, layout.col_bounds, layout.row_bounds)).into());
+        return Err(Error::format(&mp, format!("col_bounds {:?}, row_bounds {:?}: not the {} × {} tiles they bound", m.col_bounds, m.row_bounds, m.tiles_across, m.tiles_up)).into());
     }
     let mut tiles = Vec::with_capacity(m.ranks);
     let mut rows = Vec::new();

@@ -50,23 +50,73 @@ impl InventoryRow {
     }
 }
 
-/// Reads one inventory: Parquet (`.parquet`, [`crate::output::parquet::INVENTORY`]) or CSV
-/// (any other name).
+/// Reads one inventory: a file, Parquet (`.parquet`, [`crate::output::parquet::INVENTORY`]) or
+/// CSV (any other name), or a partitioned snapshot of a tiled run, the folder `year_NNNN/` of
+/// one part per rank (`part-RRRRR.parquet` or `.csv`, [`parts`]): its rows in the order of one
+/// process's file (living trees in id order, then this year's dead in id order), so both
+/// layouts read back the same rows.
 ///
 /// # Errors
-/// [`Error::Io`] when the file cannot be read; [`Error::Format`] naming the line (CSV) or the
-/// column (Parquet) when the file does not have the columns of ARCHITECTURE.md.
+/// [`Error::Io`] when the file or folder cannot be read; [`Error::Format`] naming the line (CSV)
+/// or the column (Parquet) when a file does not have the columns of ARCHITECTURE.md, or naming
+/// a folder without parts.
 pub fn read(path: &Path) -> Result<Vec<InventoryRow>> {
     read_filtered(path, |_| true)
 }
 
-/// Reads the rows of one inventory CSV for which `keep` is true, in file order, streaming: the
-/// rows left out are never held (an area of a snapshot of a million trees keeps only its own;
+/// The part files of the partitioned snapshot folder `dir` (a tiled run's
+/// `inventory/year_NNNN/` or `year_NNNN_regeneration/`): `part-*.parquet`, else `part-*.csv`,
+/// sorted by name (rank order). Other files (a part being written, `.part-….tmp`) are skipped.
+///
+/// # Errors
+/// [`Error::Io`] when `dir` cannot be listed; [`Error::Format`] naming `dir` when it holds no
+/// part.
+pub fn parts(dir: &Path) -> Result<Vec<PathBuf>> {
+    let rd = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+    let (mut pq, mut csv) = (Vec::new(), Vec::new());
+    for e in rd {
+        let e = e.map_err(|err| Error::io(dir, err))?;
+        let name = e.file_name().to_string_lossy().into_owned();
+        if !name.starts_with("part-") {
+            continue;
+        }
+        if name.ends_with(".parquet") {
+            pq.push(e.path());
+        } else if name.ends_with(".csv") {
+            csv.push(e.path());
+        }
+    }
+    let mut out = if pq.is_empty() { csv } else { pq };
+    if out.is_empty() {
+        return Err(Error::format(dir, "a partitioned snapshot folder without parts (expected part-RRRRR.parquet or part-RRRRR.csv files)").into());
+    }
+    out.sort();
+    Ok(out)
+}
+
+/// Reads the rows of one inventory (a file or a partitioned folder, as [`read`]) for which
+/// `keep` is true, in the order of one process's file, streaming within each file: the rows left
+/// out are never held (an area of a snapshot of a million trees keeps only its own;
 /// `sylva export`).
 ///
 /// # Errors
 /// As [`read`]; every row is parsed and checked, kept or not.
 pub fn read_filtered(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -> Result<Vec<InventoryRow>> {
+    if path.is_dir() {
+        let mut rows = Vec::new();
+        for p in parts(path)? {
+            rows.extend(read_file_filtered(&p, &mut keep)?);
+        }
+        // each part is in (alive before dead, id) order: the parts merged in that order are the
+        // rows of one process's file (a stable sort; ids are unique)
+        rows.sort_by_key(|r| (r.status != "alive", r.id));
+        return Ok(rows);
+    }
+    read_file_filtered(path, keep)
+}
+
+/// [`read_filtered`] of one inventory file, Parquet or CSV, in file order.
+fn read_file_filtered(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -> Result<Vec<InventoryRow>> {
     if is_parquet(path) {
         return read_parquet(path, keep);
     }
@@ -162,9 +212,11 @@ fn read_parquet(path: &Path, mut keep: impl FnMut(&InventoryRow) -> bool) -> Res
 }
 
 /// Snapshot files of a run directory as `(year, season suffix or "", path)`, sorted by year then
-/// season order (spring, summer, autumn, winter, then plain); `year_NNNN.parquet` or, from
-/// runs written with `--inventory csv` or before Parquet, `year_NNNN.csv` (the Parquet file
-/// when both are there); the regeneration-layer files `year_NNNN_regeneration.*` are not tree
+/// season order (spring, summer, autumn, winter, then plain); `year_NNNN.parquet`, the folder
+/// `year_NNNN/` of a tiled run's parts (one per rank, [`parts`]; [`read`] reads it as one
+/// table) or, from runs written with `--inventory csv` or before Parquet, `year_NNNN.csv` (when
+/// several are there: the Parquet file, then the folder, then the CSV); the regeneration-layer
+/// files `year_NNNN_regeneration.*` and the GeoPackage parts `year_NNNN_gpkg/` are not tree
 /// inventories and are skipped.
 pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
     let dir = run_dir.join("inventory");
@@ -173,13 +225,20 @@ pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
     for entry in rd {
         let entry = entry.map_err(|e| Error::io(&dir, e))?;
         let name = entry.file_name().to_string_lossy().into_owned();
-        let Some(stem) = name.strip_prefix("year_").and_then(|s| s.strip_suffix(".parquet").or_else(|| s.strip_suffix(".csv"))) else { continue };
+        // a partitioned snapshot of a tiled run: the folder `year_NNNN/` of its ranks' parts
+        let folder = entry.path().is_dir();
+        let stem = match folder {
+            true => name.strip_prefix("year_"),
+            false => name.strip_prefix("year_").and_then(|s| s.strip_suffix(".parquet").or_else(|| s.strip_suffix(".csv"))),
+        };
+        let Some(stem) = stem else { continue };
         let (num, season) = match stem.split_once('_') {
             Some((n, s)) => (n, s.to_string()),
             None => (stem, String::new()),
         };
-        if season == "regeneration" {
-            // the regeneration layer's cohorts (`year_NNNN_regeneration.csv`), not a tree inventory
+        if season == "regeneration" || season == "gpkg" {
+            // the regeneration layer's cohorts (`year_NNNN_regeneration.csv`) and a tiled run's
+            // GeoPackage parts (`year_NNNN_gpkg/`), not tree inventories
             continue;
         }
         if let Ok(y) = num.parse::<u32>() {
@@ -193,8 +252,10 @@ pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
         "winter" => 3,
         _ => 4,
     };
-    // Parquet before CSV within a snapshot, then one file per snapshot
-    out.sort_by_key(|a| (a.0, order(&a.1), !is_parquet(&a.2)));
+    // Parquet file, then partitioned folder, then CSV file within a snapshot; then one per
+    // snapshot
+    let kind = |p: &Path| if is_parquet(p) { 0 } else if p.is_dir() { 1 } else { 2 };
+    out.sort_by_key(|a| (a.0, order(&a.1), kind(&a.2)));
     out.dedup_by(|b, a| {
         let same = a.0 == b.0 && a.1 == b.1;
         if same {
@@ -203,7 +264,7 @@ pub fn snapshots(run_dir: &Path) -> Result<Vec<(u32, String, PathBuf)>> {
             static TOLD: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
             if let Ok(mut told) = TOLD.lock() {
                 if !told.contains(&b.2) {
-                    tracing::warn!("{} and {} hold the same snapshot: reading the Parquet file, not the CSV", a.2.display(), b.2.display());
+                    tracing::warn!("{} and {} hold the same snapshot: reading the first, not the second", a.2.display(), b.2.display());
                     told.push(b.2.clone());
                 }
             }
@@ -243,38 +304,62 @@ pub struct RegenRow {
 }
 
 /// The regeneration-layer file of the plain snapshot of `year` in `run_dir`
-/// (`inventory/year_NNNN_regeneration.parquet`, else `.csv`), read when it exists; `None` when
-/// neither does (runs written without it).
+/// (`inventory/year_NNNN_regeneration.parquet`, else `.csv`, else a tiled run's folder
+/// `year_NNNN_regeneration/` of one part per rank, read as one table in light-cell order as one
+/// process writes it), read when it exists; `None` when none does (runs written without it).
 ///
 /// # Errors
 /// [`Error::Format`] naming the file and line of a row without the columns of ARCHITECTURE.md.
 pub fn read_regeneration(run_dir: &Path, year: u32) -> Result<Option<Vec<RegenRow>>> {
-    let pq = run_dir.join("inventory").join(format!("year_{year:04}_regeneration.parquet"));
+    let inv = run_dir.join("inventory");
+    let pq = inv.join(format!("year_{year:04}_regeneration.parquet"));
+    let path = inv.join(format!("year_{year:04}_regeneration.csv"));
+    let folder = inv.join(format!("year_{year:04}_regeneration"));
     if pq.is_file() {
-        let c = crate::output::parquet::read_table(&pq, &crate::output::parquet::REGENERATION).map_err(|e| parquet_error(&pq, e))?;
-        let (cell, sp, stems) = (column(c.int("cell"), &pq, "cell")?, column(c.text("species"), &pq, "species")?, column(c.int("stems"), &pq, "stems")?);
-        let (x, y, per_ha) = (column(c.double("x_m"), &pq, "x_m")?, column(c.double("y_m"), &pq, "y_m")?, column(c.double("stems_per_ha"), &pq, "stems_per_ha")?);
-        let (h, age) = (column(c.float("height_m"), &pq, "height_m")?, column(c.float("age_yr"), &pq, "age_yr")?);
-        let rows = (0..c.rows).map(|i| RegenRow { cell: cell[i] as u32, species: sp[i].clone(), x_m: x[i], y_m: y[i], stems: stems[i] as u32, stems_per_ha: per_ha[i], height_m: h[i], age_yr: age[i] }).collect();
+        return Ok(Some(read_regeneration_file(&pq)?));
+    }
+    if path.is_file() {
+        return Ok(Some(read_regeneration_file(&path)?));
+    }
+    if folder.is_dir() {
+        let mut rows = Vec::new();
+        for p in parts(&folder)? {
+            rows.extend(read_regeneration_file(&p)?);
+        }
+        // all of a light cell's cohorts are in its owner's part, in pool order: a stable sort
+        // by cell gives one process's order
+        rows.sort_by_key(|r| r.cell);
         return Ok(Some(rows));
     }
-    let path = run_dir.join("inventory").join(format!("year_{year:04}_regeneration.csv"));
-    if !path.is_file() {
-        // a run that wrote the layer for other years lost this one: say so (the saplings of that
-        // year are not drawn), rather than thinning the pictures without a word
-        let others = std::fs::read_dir(run_dir.join("inventory")).map(|rd| rd.flatten().any(|e| e.file_name().to_string_lossy().contains("_regeneration."))).unwrap_or(false);
-        if others {
-            tracing::warn!("{}: no regeneration layer for year {year} (neither {} nor {}); its saplings are left out", run_dir.display(), pq.display(), path.display());
-        }
-        return Ok(None);
+    // a run that wrote the layer for other years lost this one: say so (the saplings of that
+    // year are not drawn), rather than thinning the pictures without a word
+    let others = std::fs::read_dir(&inv).map(|rd| rd.flatten().any(|e| e.file_name().to_string_lossy().contains("_regeneration"))).unwrap_or(false);
+    if others {
+        tracing::warn!("{}: no regeneration layer for year {year} (neither {}, {} nor {}); its saplings are left out", run_dir.display(), pq.display(), path.display(), folder.display());
     }
-    let mut rdr = csv::Reader::from_path(&path).map_err(|e| Error::format(&path, e.to_string()))?;
+    Ok(None)
+}
+
+/// The rows of one regeneration-layer file, Parquet (`.parquet`) or CSV.
+///
+/// # Errors
+/// [`Error::Io`] / [`Error::Format`] naming the file (and the line of a bad CSV row).
+fn read_regeneration_file(path: &Path) -> Result<Vec<RegenRow>> {
+    if is_parquet(path) {
+        let pq = path;
+        let c = crate::output::parquet::read_table(pq, &crate::output::parquet::REGENERATION).map_err(|e| parquet_error(pq, e))?;
+        let (cell, sp, stems) = (column(c.int("cell"), pq, "cell")?, column(c.text("species"), pq, "species")?, column(c.int("stems"), pq, "stems")?);
+        let (x, y, per_ha) = (column(c.double("x_m"), pq, "x_m")?, column(c.double("y_m"), pq, "y_m")?, column(c.double("stems_per_ha"), pq, "stems_per_ha")?);
+        let (h, age) = (column(c.float("height_m"), pq, "height_m")?, column(c.float("age_yr"), pq, "age_yr")?);
+        return Ok((0..c.rows).map(|i| RegenRow { cell: cell[i] as u32, species: sp[i].clone(), x_m: x[i], y_m: y[i], stems: stems[i] as u32, stems_per_ha: per_ha[i], height_m: h[i], age_yr: age[i] }).collect());
+    }
+    let mut rdr = csv::Reader::from_path(path).map_err(|e| Error::format(path, e.to_string()))?;
     let mut rows = Vec::new();
     for (i, rec) in rdr.deserialize().enumerate() {
-        let row: RegenRow = rec.map_err(|e| Error::format(&path, format!("line {}: {e}", i + 2)))?;
+        let row: RegenRow = rec.map_err(|e| Error::format(path, format!("line {}: {e}", i + 2)))?;
         rows.push(row);
     }
-    Ok(Some(rows))
+    Ok(rows)
 }
 
 #[cfg(test)]

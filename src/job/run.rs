@@ -141,8 +141,10 @@ fn remove_snapshot(dir: &Path, label: &str) -> Result<()> {
     remove_prefixed(dir, &[("inventory", &[&i1, &i2]), ("maps", &[&m1, &m2])])
 }
 
-/// Removes the plain files of each `dir/sub` whose name starts with one of its prefixes (a
-/// missing folder is skipped).
+/// Removes the plain files of each `dir/sub` whose name starts with one of its prefixes, and
+/// the folders (with their files) whose name starts with one or is one without its final `.`
+/// (a tiled run's partitioned snapshot `inventory/year_NNNN/` for the prefix `year_NNNN.`);
+/// a missing folder is skipped.
 ///
 /// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
 fn remove_prefixed(dir: &Path, subs: &[(&str, &[&str])]) -> Result<()> {
@@ -159,6 +161,8 @@ fn remove_prefixed(dir: &Path, subs: &[(&str, &[&str])]) -> Result<()> {
             let p = e.path();
             if prefixes.iter().any(|pre| name.starts_with(pre)) && p.is_file() {
                 std::fs::remove_file(&p).map_err(|err| Error::io(&p, err))?;
+            } else if p.is_dir() && prefixes.iter().any(|pre| name.starts_with(pre) || pre.strip_suffix('.') == Some(&*name)) {
+                std::fs::remove_dir_all(&p).map_err(|err| Error::io(&p, err))?;
             }
         }
     }
@@ -345,7 +349,18 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         mkdir(&dir.join("maps"))?;
     }
     // temporary files a killed run left behind (never read, but they would pile up)
-    for sub in [dir.clone(), dir.join("inventory"), dir.join("maps"), dir.join("maps").join("conditions"), dir.join("species"), dir.join(checkpoint::RANK_DIR)] {
+    // (the folders of a tiled run's partitioned snapshots too: `inventory/year_NNNN/`)
+    let inv_dir = dir.join("inventory");
+    let mut subs = vec![dir.clone(), inv_dir.clone(), dir.join("maps"), dir.join("maps").join("conditions"), dir.join("species"), dir.join(checkpoint::RANK_DIR)];
+    if inv_dir.is_dir() {
+        for e in std::fs::read_dir(&inv_dir).map_err(|err| Error::io(&inv_dir, err))? {
+            let p = e.map_err(|err| Error::io(&inv_dir, err))?.path();
+            if p.is_dir() && p.file_name().is_some_and(|n| n.to_string_lossy().starts_with("year_")) {
+                subs.push(p);
+            }
+        }
+    }
+    for sub in subs {
         crate::output::remove_stale_temporaries(&sub)?;
     }
     let ck = dir.join(checkpoint::FILE);
@@ -402,6 +417,9 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
                     let (name, p) = (e.file_name().to_string_lossy().into_owned(), e.path());
                     if name.starts_with(&stem) && name.ends_with(".gpkg") && p.is_file() {
                         std::fs::remove_file(&p).map_err(|err| Error::io(&p, err))?;
+                    } else if name == format!("{stem}_gpkg") && p.is_dir() {
+                        // a tiled run's GeoPackage parts
+                        std::fs::remove_dir_all(&p).map_err(|err| Error::io(&p, err))?;
                     }
                 }
             }

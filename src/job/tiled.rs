@@ -1,17 +1,21 @@
 //! Tiled runs with outputs (`mpirun -np N sylva simulate …`, `sylva simulate --tiles N`): the
 //! landscape cut into one tile per rank ([`crate::sim::tiles`]); every rank steps its tile;
-//! rank 0 also runs the run driver ([`run_scenario_with`]). The run directory is the one a
-//! single process writes, byte for byte, except the checkpoint (one file per rank, below):
-//! - `stand_table.csv`, `stand_table.png`, `scenario.toml`, `species/`, year 0's snapshot:
-//!   rank 0 (the stand table's row from the ranks' exact sums, added up every year:
-//!   [`crate::sim::tiles::Tile::step`]);
-//! - `inventory/year_NNNN.csv`, `_regeneration.csv`: every rank writes the lines
-//!   of its own trees (living in id order, then this year's dead in id order) and cohorts into
-//!   part files `.NAME.rankRRRR.PID.tmp` beside the file; after all have, rank 0 merges them
-//!   by tree id (cohorts by light cell), streaming, into the file ([`write_parts`]);
-//! - `inventory/year_NNNN.gpkg`, `.parquet`: written from the merged CSV, streaming, the
-//!   GeoPackage by the last rank ([`Command::Gpkg`]) while rank 0 writes the Parquet file, the
-//!   regeneration table and the maps (the CSV of a Parquet run is removed once both are done);
+//! rank 0 also runs the run driver ([`run_scenario_with`]). The run directory holds what a
+//! single process writes, byte for byte where the layout is the same; the checkpoint (one file
+//! per rank, below) and the inventories (one part per rank) are laid out by rank and read back
+//! as one process's (issue 37 Build 4):
+//! - `stand_table.csv`, `stand_table.png`, `scenario.toml`, `species/`, year 0's snapshot
+//!   (single files, as one process): rank 0 (the stand table's row from the ranks' exact sums,
+//!   added up every year: [`crate::sim::tiles::Tile::step`]);
+//! - the inventories of the later snapshots, partitioned: every rank writes its own trees
+//!   (living in id order, then this year's dead in id order) as a complete file,
+//!   `inventory/year_NNNN/part-RRRRR.parquet` (or `.csv` with `--inventory csv`; each Parquet
+//!   part with its GeoParquet metadata, so the folder is one dataset for pyarrow, DuckDB and
+//!   GDAL), its cohorts as `inventory/year_NNNN_regeneration/part-RRRRR.parquet` and, in the
+//!   GeoPackage years, `inventory/year_NNNN_gpkg/part-RRRRR.gpkg` ([`write_parts`]); nothing
+//!   is merged or gathered on rank 0 (until Build 4 rank 0 merged the ranks' CSV lines into one
+//!   file). [`crate::job::inventory::read`] reads a folder as one table, in one process's row
+//!   order;
 //! - `maps/species_*.png`, `maps/basal_area_*.png`: drawn by rank 0 from the basal area per
 //!   map pixel and species: each rank sums its own trees per bin; a bin with trees on one rank
 //!   takes that rank's sum, and only the trees of bins with trees on several ranks are sent to
@@ -41,6 +45,7 @@ use crate::sim::cohorts::RegenLedger;
 use crate::sim::stats::StandRow;
 use std::path::{Path, PathBuf};
 use crate::conditions::SiteConditions;
+use crate::output::inventory::InventoryFormat;
 use crate::sim::scenario::Scenario;
 use crate::sim::step::YearReport;
 use crate::sim::tiles::{Layout, LocalTransport, Tile, Transport};
@@ -68,13 +73,11 @@ pub enum Command {
     Resume = 7,
     /// Write your tile's part of the snapshot that follows ([`write_parts`]).
     Snapshot = 8,
-    /// The last rank writes the GeoPackage of the merged inventory that follows ([`send_gpkg`]).
-    Gpkg = 9,
 }
 
 impl Command {
     fn from_byte(b: u8) -> Option<Command> {
-        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Gpkg].into_iter().find(|c| *c as u8 == b)
+        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot].into_iter().find(|c| *c as u8 == b)
     }
 }
 
@@ -89,7 +92,7 @@ fn command(t: &mut dyn Transport, c: Option<Command>) -> Result<Command> {
     };
     let got = t.exchange(out)?;
     let b = got.first().and_then(|m| m.first()).copied().unwrap_or(0);
-    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–9)") })?)
+    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–8)") })?)
 }
 
 /// Rank 0 sends every rank `k` the year and `paths[k]` (a per-rank checkpoint file); the others
@@ -135,29 +138,6 @@ fn agree(t: &mut dyn Transport, failed: Option<String>) -> Result<()> {
     }
 }
 
-/// Rank 0 passes `job`, the merged inventory CSV and the GeoPackage to write from it, to the
-/// last rank (others pass `None`); returns this rank's job: the pair on the last rank, `None`
-/// on the others. The last rank writes the GeoPackage while rank 0 writes the snapshot's other
-/// files (a tiled run's rank 0 wrote all of them before).
-///
-/// Errors: [`Error::Exchange`] from the transport or a malformed message; [`Error::Invalid`]
-/// naming a path that is not UTF-8.
-fn send_gpkg(t: &mut dyn Transport, job: Option<(&Path, &Path)>) -> Result<Option<(PathBuf, PathBuf)>> {
-    let n = t.size();
-    let mut out = vec![Vec::new(); n];
-    if let Some((csv, gpkg)) = job {
-        let utf8 = |p: &Path| p.to_str().map(str::to_string).ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "inventory path".into(), value: p.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() });
-        out[n - 1] = format!("{}\0{}", utf8(csv)?, utf8(gpkg)?).into_bytes();
-    }
-    let got = t.exchange(out)?;
-    if t.rank() != n - 1 {
-        return Ok(None);
-    }
-    let m = std::str::from_utf8(&got[0]).map_err(|_| Error::Exchange { peer: 0, reason: "GeoPackage paths not UTF-8".into() })?;
-    let (csv, gpkg) = m.split_once('\0').ok_or_else(|| Error::Exchange { peer: 0, reason: format!("GeoPackage job of {} bytes without two paths", m.len()) })?;
-    Ok(Some((PathBuf::from(csv), PathBuf::from(gpkg))))
-}
-
 /// Reads tile `me` of `layout` from the per-rank checkpoint `path` of `year` into a copy of
 /// `template` (the world of the scenario at its start); returns it with the rows the file holds
 /// (rank 0's: the stand table).
@@ -182,16 +162,21 @@ struct Snap {
     label: String,
     /// The tree inventory (and with `maps` the regeneration layer).
     inventory: bool,
+    /// The GeoPackage parts of the inventory too (only with `inventory`).
+    gpkg: bool,
     /// Maps too (a plain snapshot).
     maps: bool,
     /// Longest side of the maps (pixels).
     map_px: usize,
+    /// File format of the inventory and regeneration parts.
+    format: InventoryFormat,
 }
 
 impl Snap {
     fn encode(&self) -> Result<Vec<u8>> {
         let dir = self.dir.to_str().ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "run directory".into(), value: self.dir.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() })?;
-        let mut m = vec![self.maps as u8 | (self.inventory as u8) << 1];
+        let csv = self.format == InventoryFormat::Csv;
+        let mut m = vec![self.maps as u8 | (self.inventory as u8) << 1 | (self.gpkg as u8) << 2 | (csv as u8) << 3];
         m.extend_from_slice(&(self.map_px as u64).to_le_bytes());
         m.extend_from_slice(&(self.label.len() as u64).to_le_bytes());
         m.extend_from_slice(self.label.as_bytes());
@@ -208,31 +193,32 @@ impl Snap {
         let label = m.get(17..17 + n).ok_or_else(|| bad("label cut short"))?;
         let label = std::str::from_utf8(label).map_err(|_| bad("label not UTF-8"))?.to_string();
         let dir = std::str::from_utf8(&m[17 + n..]).map_err(|_| bad("folder not UTF-8"))?;
-        Ok(Snap { dir: PathBuf::from(dir), label, inventory: m[0] & 2 != 0, maps: m[0] & 1 != 0, map_px })
+        let format = if m[0] & 8 != 0 { InventoryFormat::Csv } else { InventoryFormat::Parquet };
+        Ok(Snap { dir: PathBuf::from(dir), label, inventory: m[0] & 2 != 0, gpkg: m[0] & 4 != 0, maps: m[0] & 1 != 0, map_px, format })
     }
-    /// This process's part file of rank `rank` for the output `name` in `sub`:
-    /// `.{name}.rank{rank}.{pid}.tmp`, a temporary file that a later run removes if this one
-    /// is killed ([`crate::output::remove_stale_temporaries`]).
-    fn part(&self, sub: &str, name: &str, rank: usize) -> PathBuf {
-        self.dir.join(sub).join(format!(".{name}.rank{rank:04}.{}.tmp", std::process::id()))
+    /// Rank `rank`'s part of the partitioned output `folder` (e.g. `year_0150`) of the
+    /// snapshot: `inventory/{folder}/part-RRRRR.{ext}`; the folder is made if missing.
+    ///
+    /// Errors: [`Error::Io`] naming the folder that cannot be made.
+    fn part(&self, folder: &str, rank: usize, ext: &str) -> Result<PathBuf> {
+        let d = self.dir.join("inventory").join(folder);
+        std::fs::create_dir_all(&d).map_err(|e| Error::io(&d, e))?;
+        Ok(d.join(crate::output::inventory::part_name(rank, ext)))
     }
 }
 
-/// What rank 0 gets from [`write_parts`]: every rank's part files (inventory CSV, then
-/// regeneration, those written) and, with maps, the basal area per map bin.
-type SnapParts = (Vec<Vec<PathBuf>>, Option<Vec<f64>>);
-
 /// The ranks' part of a snapshot: rank 0 sends every rank `snap` (others pass `None`); every
-/// rank writes the inventory lines of its own trees (and its cohorts' regeneration lines
-/// with `maps`) into its part files ([`Snap::part`]); all agree; the part
-/// paths and, with `maps`, the basal area per map bin ([`crate::output::plot::map_bin`],
-/// summed exactly as one process: [`Tile::gather_bin_sums`]) go to rank 0, which gets them
-/// back: per rank its part files (inventory CSV, then regeneration, those written), and the
-/// sums.
+/// rank writes its own trees' inventory as its part of the partitioned snapshot,
+/// `inventory/year_NNNN/part-RRRRR.parquet` (or `.csv`), with `gpkg` also
+/// `inventory/year_NNNN_gpkg/part-RRRRR.gpkg`, and with `maps` its cohorts as
+/// `inventory/year_NNNN_regeneration/part-RRRRR.parquet` ([`crate::output::inventory::write_inventory_part`]);
+/// nothing is merged. All agree; then, with `maps`, the basal area per map bin
+/// ([`crate::output::plot::map_bin`], summed exactly as one process: [`Tile::gather_bin_sums`])
+/// goes to rank 0, which gets the sums back.
 ///
 /// Errors: [`Error::Exchange`] from the transport or naming a rank that failed to write its
 /// parts (with its I/O error naming the file).
-fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Result<Option<SnapParts>> {
+fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Result<Option<Vec<f64>>> {
     let n = t.size();
     let mut out = vec![Vec::new(); n];
     if let Some(s) = snap {
@@ -241,46 +227,29 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
     let got = t.exchange(out)?;
     let s = Snap::decode(got.first().map(|m| m.as_slice()).unwrap_or(&[]))?;
     let me = t.rank();
-    let csv = s.inventory.then(|| s.part("inventory", &format!("{}.csv", s.label), me));
-    let regen = (s.inventory && s.maps).then(|| s.part("inventory", &format!("{}_regeneration.csv", s.label), me));
+    let ext = s.format.extension();
     let r = (|| -> Result<()> {
         let layout = &tile.layout;
-        if let Some(p) = &csv {
-            crate::output::inventory::write_inventory_part(p, &tile.world, |x, y| layout.owner_of(x, y) == me)?;
-        }
-        if let Some(p) = &regen {
-            crate::output::inventory::write_regeneration_part(p, &tile.world)?;
+        if s.inventory {
+            let p = s.part(&s.label, me, ext)?;
+            let g = if s.gpkg { Some(s.part(&format!("{}_gpkg", s.label), me, "gpkg")?) } else { None };
+            crate::output::inventory::write_inventory_part(&p, g.as_deref(), &tile.world, |x, y| layout.owner_of(x, y) == me, s.format)?;
+            if s.maps {
+                let p = s.part(&format!("{}_regeneration", s.label), me, ext)?;
+                crate::output::inventory::write_regeneration_part(&p, &tile.world, s.format)?;
+            }
         }
         Ok(())
     })();
     let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
     r?;
     a?;
-    let mine: Vec<PathBuf> = csv.into_iter().chain(regen).collect();
-    let text: Vec<&str> = mine.iter().filter_map(|p| p.to_str()).collect();
-    let mut out = vec![Vec::new(); n];
-    out[0] = text.join("\n").into_bytes();
-    let got = t.exchange(out)?;
-    let cols = if s.maps {
-        let dims = crate::output::plot::map_dims(&tile.world, s.map_px);
-        let np = tile.world.site.lib.species.len();
-        tile.gather_bin_sums(t, dims.0 * dims.1 * np, |tr, i| crate::output::plot::map_bin(tr, i, dims, np), |tr, i| tr.basal_area_m2(i))?
-    } else {
-        None
-    };
-    if me != 0 {
+    if !s.maps {
         return Ok(None);
     }
-    let mut paths = Vec::with_capacity(n);
-    for (k, m) in got.iter().enumerate() {
-        let text = std::str::from_utf8(m).map_err(|_| Error::Exchange { peer: k, reason: "part file paths not UTF-8".into() })?;
-        let ps: Vec<PathBuf> = text.split('\n').filter(|p| !p.is_empty()).map(PathBuf::from).collect();
-        if ps.len() != mine.len() {
-            return Err(Error::Exchange { peer: k, reason: format!("{} part files, expected {}", ps.len(), mine.len()) }.into());
-        }
-        paths.push(ps);
-    }
-    Ok(Some((paths, cols)))
+    let dims = crate::output::plot::map_dims(&tile.world, s.map_px);
+    let np = tile.world.site.lib.species.len();
+    Ok(tile.gather_bin_sums(t, dims.0 * dims.1 * np, |tr, i| crate::output::plot::map_bin(tr, i, dims, np), |tr, i| tr.basal_area_m2(i))?)
 }
 
 /// Tallies of zero for `world`'s pool.
@@ -314,14 +283,20 @@ fn check(scenario: &Scenario) -> Result<()> {
     Ok(())
 }
 
-/// The layout of a run of `n` ranks on `world`'s site ([`grid_for`], [`Layout::new`]).
+/// The layout of a run of `n` ranks on `world`'s site: a near-square grid of tiles
+/// ([`grid_for`]) whose columns and rows are cut by the work of the scenario's start (issue 37
+/// Build 5: [`crate::sim::tiles::work_weights`], the light cells where forest can grow;
+/// [`crate::sim::tiles::cut_by_weight`]), so an uneven site (half of it masked or above the
+/// tree line) gives each rank about as much forest; an even site is cut by area as before
+/// ([`Layout::new`]). Only the site counts, not `world`'s trees: rank 0 calls this with a
+/// resumed world, the other ranks with the scenario's start, and all must cut the same tiles.
 ///
 /// Errors: [`Error::Invalid`] when the light grid has fewer columns or rows than the tiles.
 pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
     let (nx, ny) = grid_for(n, world.site.light.cols, world.site.light.rows);
     // the message names the count asked for, not only the grid it was cut into
     let (cols, rows) = (world.site.light.cols, world.site.light.rows);
-    Ok(Layout::new(&world.site, nx, ny).map_err(|e| match e {
+    let named = |e: Error| match e {
         Error::Invalid { context, field, value, expected } if field == "tiles" => Error::Invalid {
             context,
             field,
@@ -329,7 +304,14 @@ pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
             expected: format!("a count whose near-square grid of tiles fits this site's light grid of {cols} × {rows} cells ({expected})"),
         },
         e => e,
-    })?)
+    };
+    let even = Layout::new(&world.site, nx, ny).map_err(named)?;
+    let (wc, wr) = crate::sim::tiles::work_weights(&world.site);
+    let (cb, rb) = (crate::sim::tiles::cut_by_weight(&wc, nx), crate::sim::tiles::cut_by_weight(&wr, ny));
+    if cb == even.col_bounds && rb == even.row_bounds {
+        return Ok(even);
+    }
+    Ok(Layout::with_bounds(&world.site, cb, rb)?)
 }
 
 /// Checks, before anything is written, that `n` tiles fit the light grid of `site` under
@@ -501,68 +483,18 @@ impl Stepper for Root<'_> {
     fn save_reads_world(&self) -> bool {
         false
     }
-    /// Every rank writes its part files of the snapshot ([`write_parts`]); rank 0 merges them
-    /// by tree id (cohorts by light cell) into the files of one process and draws the maps from
-    /// the gathered map columns.
+    /// Every rank writes its parts of the snapshot ([`write_parts`]: its inventory, GeoPackage
+    /// and regeneration parts); rank 0 draws the maps from the ranks' basal area per map bin.
     #[allow(clippy::too_many_arguments)]
-    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, parts: Parts, map_px: usize, format: crate::output::inventory::InventoryFormat) -> Result<()> {
+    fn snapshot(&mut self, dir: &Path, world: &mut World, label: &str, parts: Parts, map_px: usize, format: InventoryFormat) -> Result<()> {
         let Parts { inventory, gpkg, maps } = parts;
-        let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), inventory, maps, map_px };
+        let snap = Snap { dir: dir.to_path_buf(), label: label.to_string(), inventory, gpkg: inventory && gpkg, maps, map_px, format };
         command(self.t, Some(Command::Snapshot))?;
-        let Some((parts, cols)) = self.collective(|tile, t| write_parts(tile, t, Some(&snap)))? else {
-            return Err(Error::Exchange { peer: 0, reason: "rank 0 got no snapshot parts".into() }.into());
-        };
-        let column = |i: usize| parts.iter().map(|p| p[i].clone()).collect::<Vec<PathBuf>>();
-        let inv = dir.join("inventory");
-        let csv = inv.join(format!("{label}.csv"));
-        use crate::output::inventory as inventory_out;
-        if inventory {
-            inventory_out::merge_inventory_csv(&csv, &column(0))?;
-        }
-        // the GeoPackage from the merged CSV (the bytes one process writes), by the last rank
-        // while rank 0 writes the rest
-        let gpkg_path = (inventory && gpkg).then(|| inv.join(format!("{label}.gpkg")));
-        let by_last = gpkg_path.is_some() && self.t.size() > 1;
-        if let Some(g) = &gpkg_path {
-            if by_last {
-                command(self.t, Some(Command::Gpkg))?;
-                self.collective(|_, t| send_gpkg(t, Some((&csv, g))))?;
-            } else {
-                inventory_out::csv_file_to_gpkg(&csv, g, world)?;
-            }
-        }
-        let parquet = inventory && format == crate::output::inventory::InventoryFormat::Parquet;
-        let r = (|| -> Result<()> {
-            if inventory && maps {
-                inventory_out::merge_regeneration_csv(&inv.join(format!("{label}_regeneration.csv")), &column(1))?;
-            }
-            if maps {
-                let ba = cols.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map sums gathered".into() })?;
-                let m = dir.join("maps");
-                crate::output::plot::write_maps_from(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px, &ba)?;
-            }
-            for p in parts.iter().flatten() {
-                std::fs::remove_file(p).map_err(|e| Error::io(p, e))?;
-            }
-            // Parquet from the merged CSV: the bytes one process writes (the CSV is removed
-            // once the GeoPackage has been written from it too)
-            if parquet {
-                inventory_out::csv_file_to_parquet_beside(&csv, &crate::output::parquet::INVENTORY, world)?;
-                if maps {
-                    inventory_out::csv_file_to_parquet(&inv.join(format!("{label}_regeneration.csv")), &crate::output::parquet::REGENERATION, world)?;
-                }
-            }
-            Ok(())
-        })();
-        if by_last {
-            let a = self.collective(|_, t| agree(t, r.as_ref().err().map(|e| e.to_string())));
-            r?;
-            a?;
-        } else {
-            r?;
-        }
-        if parquet {
-            std::fs::remove_file(&csv).map_err(|e| Error::io(&csv, e))?;
+        let ba = self.collective(|tile, t| write_parts(tile, t, Some(&snap)))?;
+        if maps {
+            let ba = ba.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map sums gathered".into() })?;
+            let m = dir.join("maps");
+            crate::output::plot::write_maps_from(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px, &ba)?;
         }
         Ok(())
     }
@@ -624,19 +556,10 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
             (Command::Snapshot, Some(tl)) => {
                 write_parts(tl, t, None)?;
             }
-            (Command::Gpkg, Some(tl)) => {
-                // the last rank writes it; every rank then agrees with rank 0's other outputs
-                let r = send_gpkg(t, None).and_then(|job| match job {
-                    Some((csv, gpkg)) => Ok(crate::output::inventory::csv_file_to_gpkg(&csv, &gpkg, &tl.world)?),
-                    None => Ok(()),
-                });
-                agree(t, r.as_ref().err().map(|e| e.to_string()))?;
-                r?;
-            }
             (Command::Resume, Some(_)) => return Err(Error::Exchange { peer: 0, reason: "command Resume after the run began".into() }.into()),
             (c, None) => return Err(Error::Exchange { peer: 0, reason: format!("command {c:?} before the run began") }.into()),
         }
-        if matches!(c, Command::Save | Command::Snapshot | Command::Gpkg) {
+        if matches!(c, Command::Save | Command::Snapshot) {
             output_s += t0.elapsed().as_secs_f64();
         }
     }
@@ -732,7 +655,7 @@ mod tests {
         assert_eq!(grid_for(4, 100, 100), (2, 2));
         assert_eq!(grid_for(8, 100, 50), (4, 2));
         assert_eq!(grid_for(6, 40, 120), (2, 3), "a tie (1 × 6, 2 × 3) goes to more tiles across");
-        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Gpkg] {
+        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot] {
             assert_eq!(Command::from_byte(c as u8), Some(c));
         }
         assert_eq!(Command::from_byte(0), None);

@@ -6,7 +6,6 @@ use super::Result;
 use crate::sim::trees::{DeadTree, TreeStore};
 use crate::sim::World;
 use std::fmt::Write as _;
-use std::io::Write;
 use std::path::Path;
 
 /// The inventory CSV header ([`super::schema::INVENTORY`]'s names; a test holds them equal).
@@ -32,10 +31,6 @@ fn dead_measures(d: &DeadTree) -> [f32; N_MEASURES] {
     [d.x, d.y, d.z, d.age, d.height, d.dbh, d.crown_radius, d.crown_base]
 }
 
-fn records(w: &World) -> Vec<Rec<'_>> {
-    records_where(w, |_, _| true)
-}
-
 /// The records of the living and this year's dead trees of `w` standing at `(x, y)` (m) where
 /// `keep(x, y)`: living in store (id) order, then the dead in id order.
 fn records_where(w: &World, keep: impl Fn(f32, f32) -> bool) -> Vec<Rec<'_>> {
@@ -53,13 +48,7 @@ fn records_where(w: &World, keep: impl Fn(f32, f32) -> bool) -> Vec<Rec<'_>> {
 /// The inventory as CSV text: living trees (status `alive`) in id order, then the trees that
 /// died in the current year (`dead:<cause>`). Positions and sizes in metres (DBH cm), 2 decimals.
 pub fn inventory_csv(w: &World) -> String {
-    let mut s = String::with_capacity(80 * (w.stand.trees.len() + 1));
-    s.push_str(HEADER);
-    s.push('\n');
-    for r in records(w) {
-        csv_line(&mut s, &r);
-    }
-    s
+    inventory_csv_where(w, |_, _| true)
 }
 
 /// Appends the inventory CSV line of `r` (with its newline) to `s`: the measures with their
@@ -152,25 +141,6 @@ pub fn write_regeneration_parquet(path: &Path, w: &World) -> Result<()> {
     super::parquet::csv_to_parquet(regeneration_csv(w).as_bytes(), "the regeneration layer", path, &super::parquet::REGENERATION, &PointGeoRef::of(w))
 }
 
-/// Rewrites the CSV table `csv` (an inventory or regeneration table, by `table`) as the Parquet
-/// file beside it (same name, `.parquet`) and removes the CSV: a tiled run's rank 0 merges
-/// the ranks' CSV parts, then this (the same bytes as one process's Parquet file).
-///
-/// Errors: [`super::OutputError::Io`] naming the file.
-pub fn csv_file_to_parquet(csv: &Path, table: &super::parquet::Table, w: &World) -> Result<()> {
-    csv_file_to_parquet_beside(csv, table, w)?;
-    std::fs::remove_file(csv).map_err(|e| super::OutputError::io(csv, e))
-}
-
-/// As [`csv_file_to_parquet`], keeping the CSV (a tiled run's last rank writes the GeoPackage
-/// from it meanwhile).
-///
-/// Errors: [`super::OutputError::Io`] naming the file.
-pub fn csv_file_to_parquet_beside(csv: &Path, table: &super::parquet::Table, w: &World) -> Result<()> {
-    let f = std::fs::File::open(csv).map_err(|e| super::OutputError::io(csv, e))?;
-    super::parquet::csv_to_parquet(std::io::BufReader::new(f), &csv.display().to_string(), &csv.with_extension("parquet"), table, &PointGeoRef::of(w))
-}
-
 pub use super::georef::PointGeoRef;
 
 /// Writes the inventory of `w` as a GeoPackage ([`super::gpkg::csv_to_points`]) atomically: one
@@ -184,141 +154,98 @@ pub fn write_inventory_gpkg(path: &Path, w: &World) -> Result<()> {
     gpkg_from(inventory_csv(w).as_bytes(), "the inventory", path, w)
 }
 
-/// Writes the inventory CSV file `csv` as the GeoPackage `gpkg` ([`write_inventory_gpkg`]'s
-/// bytes for the same rows; a tiled run's rank 0 writes it from the merged CSV). The CSV stays.
-///
-/// Errors: [`super::OutputError::Io`] naming `gpkg` (and the CSV in the message).
-pub fn csv_file_to_gpkg(csv: &Path, gpkg: &Path, w: &World) -> Result<()> {
-    let f = std::fs::File::open(csv).map_err(|e| super::OutputError::io(csv, e))?;
-    gpkg_from(std::io::BufReader::new(f), &csv.display().to_string(), gpkg, w)
-}
-
 /// The inventory GeoPackage `path` from CSV text `csv` (of `what`) on `w`'s site.
 fn gpkg_from(csv: impl std::io::Read, what: &str, path: &Path, w: &World) -> Result<()> {
     let desc = "Sylva tree inventory (columns and units as the CSV and Parquet inventories: ARCHITECTURE.md)";
     super::gpkg::csv_to_points(csv, what, path, &super::parquet::INVENTORY, &PointGeoRef::of(w), desc).map_err(|e| super::OutputError::io(path, e))
 }
 
-// ---- parts of a tiled run (issue 17): each rank writes the lines of its own trees and
-// cohorts, in the order of the whole file; rank 0 merges the parts by their keys into the file
-// one process writes, byte for byte.
+// ---- parts of a tiled run (issue 37 Build 4): each rank writes its own trees and cohorts as
+// a complete file of the snapshot's partitioned dataset; nothing is merged (until Build 4 the
+// ranks wrote CSV lines that rank 0 merged by tree id into the file of one process).
 
-/// Writes a rank's part of the inventory: the CSV lines (no header) of the trees of `w`
-/// standing where `keep(x, y)` to `csv`; living trees in id order, then the dead in id order.
-/// Written atomically like every file ([`crate::output::write_atomic_with`]); the part files
-/// are temporaries that [`merge_inventory_csv`] reads.
-///
-/// Errors: [`super::OutputError::Io`] naming the part file.
-pub fn write_inventory_part(csv: &Path, w: &World, keep: impl Fn(f32, f32) -> bool) -> Result<()> {
+/// The file name of rank `rank`'s part of a partitioned snapshot (`part-RRRRR.EXT`, five
+/// digits: the names sort in rank order), `ext` e.g. `parquet`, `csv`, `gpkg`.
+pub fn part_name(rank: usize, ext: &str) -> String {
+    format!("part-{rank:05}.{ext}")
+}
+
+/// The inventory CSV text (header and lines, as [`inventory_csv`]) of the trees of `w` standing
+/// where `keep(x, y)` (m): living trees in id order, then this year's dead in id order.
+fn inventory_csv_where(w: &World, keep: impl Fn(f32, f32) -> bool) -> String {
     let recs = records_where(w, keep);
-    crate::output::write_atomic_with(csv, |f| {
+    let mut s = String::with_capacity(80 * (recs.len() + 1));
+    s.push_str(HEADER);
+    s.push('\n');
+    for r in &recs {
+        csv_line(&mut s, r);
+    }
+    s
+}
+
+/// Writes a rank's part of an inventory snapshot: the trees of `w` standing where `keep(x, y)`
+/// (m; a rank's own trees) as a complete inventory file of `format` at `path` (header, living
+/// trees in id order, then this year's dead in id order; the Parquet part with its own
+/// GeoParquet metadata, its bounding box that of its rows), and with `gpkg` the same rows as the
+/// GeoPackage `gpkg` ([`write_inventory_gpkg`]'s layer). The parts of all ranks, read back as one
+/// table ([`crate::job::inventory::read`] merges them by status and id), are the rows of one
+/// process's file. Written atomically; the CSV lines are streamed to a temporary file
+/// (`.NAME.csv.PID.tmp` beside `path`, removed after) that the Parquet and GeoPackage writers
+/// read, so the rank's inventory text is never held in memory.
+///
+/// Errors: [`super::OutputError::Io`] naming the file.
+pub fn write_inventory_part(path: &Path, gpkg: Option<&Path>, w: &World, keep: impl Fn(f32, f32) -> bool, format: InventoryFormat) -> Result<()> {
+    use std::io::Write as _;
+    let recs = records_where(w, keep);
+    let lines = |f: &mut std::io::BufWriter<std::fs::File>| -> std::io::Result<()> {
+        f.write_all(HEADER.as_bytes())?;
+        f.write_all(b"\n")?;
         let mut s = String::with_capacity(96);
         for r in &recs {
             s.clear();
             csv_line(&mut s, r);
             f.write_all(s.as_bytes())?;
         }
-        Ok(())
-    })
-}
-
-/// Writes a rank's part of the regeneration CSV: the lines (no header) of every cohort of `w`
-/// (the rank's own), in (light cell, pool) order.
-///
-/// Errors: [`super::OutputError::Io`] naming the part file.
-pub fn write_regeneration_part(path: &Path, w: &World) -> Result<()> {
-    let text = regeneration_csv(w);
-    let body = text.split_once('\n').map_or("", |(_, b)| b);
-    crate::output::write_atomic(path, body.as_bytes())
-}
-
-/// Merge key of an inventory line: living (0, `alive_end` ends the line) before dead (1),
-/// then the tree id.
-fn inventory_key(line: &str, alive_end: &str, id_field: impl Fn(&str) -> Option<&str>) -> Option<(u8, u64)> {
-    let dead = !line.ends_with(alive_end);
-    let id = id_field(line)?.parse().ok()?;
-    Some((dead as u8, id))
-}
-
-/// A part file being merged: its reader, its current line, the line's number.
-type PartReader = (std::io::BufReader<std::fs::File>, String, usize);
-/// A part's current line in the merge heap: its key and the part's index, least first.
-type HeapEntry = std::cmp::Reverse<((u8, u64), usize)>;
-
-/// Merges the sorted part files `parts` (one line per record, each sorted by `key`) into `out`,
-/// writing `sep` between records; records of equal key keep their part's order (a light cell's
-/// cohorts come from one part). Streams: one line per part in memory.
-///
-/// Errors: I/O errors; a line without a key (`InvalidData`, naming the part file and line).
-fn merge_lines(out: &mut impl Write, parts: &[std::path::PathBuf], key: impl Fn(&str) -> Option<(u8, u64)>, sep: &[u8]) -> std::io::Result<()> {
-    use std::io::BufRead;
-    let mut readers = Vec::with_capacity(parts.len());
-    for p in parts {
-        let f = std::fs::File::open(p).map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", p.display())))?;
-        readers.push((std::io::BufReader::new(f), String::new(), 0usize));
-    }
-    let mut heap = std::collections::BinaryHeap::new();
-    let next = |k: usize, r: &mut PartReader| -> std::io::Result<Option<HeapEntry>> {
-        r.1.clear();
-        if r.0.read_line(&mut r.1)? == 0 {
-            return Ok(None);
-        }
-        r.2 += 1;
-        let k2 = key(r.1.trim_end_matches('\n')).ok_or_else(|| std::io::Error::new(std::io::ErrorKind::InvalidData, format!("{} line {}: no key in {:?}", parts[k].display(), r.2, r.1)))?;
-        Ok(Some(std::cmp::Reverse((k2, k))))
+        f.flush()
     };
-    for (k, r) in readers.iter_mut().enumerate() {
-        if let Some(e) = next(k, r)? {
-            heap.push(e);
+    let csv = match format {
+        InventoryFormat::Csv => {
+            crate::output::write_atomic_with(path, lines)?;
+            path.to_path_buf()
         }
-    }
-    let mut first = true;
-    while let Some(std::cmp::Reverse((_, k))) = heap.pop() {
-        if !first {
-            out.write_all(sep)?;
+        InventoryFormat::Parquet => {
+            // (through write_atomic like every file: a killed run leaves only temporaries)
+            let tmp = crate::output::temporary_path(&path.with_extension("csv"));
+            crate::output::write_atomic_with(&tmp, lines)?;
+            tmp
         }
-        first = false;
-        let r = &mut readers[k];
-        out.write_all(r.1.trim_end_matches('\n').as_bytes())?;
-        if let Some(e) = next(k, r)? {
-            heap.push(e);
+    };
+    drop(recs);
+    let open = || std::fs::File::open(&csv).map(std::io::BufReader::new).map_err(|e| super::OutputError::io(&csv, e));
+    let r = (|| -> Result<()> {
+        if format == InventoryFormat::Parquet {
+            super::parquet::csv_to_parquet(open()?, "the inventory part", path, &super::parquet::INVENTORY, &PointGeoRef::of(w))?;
         }
-    }
-    Ok(())
-}
-
-/// Writes the inventory CSV `path` atomically from the ranks' parts ([`write_inventory_part`]):
-/// the bytes [`write_inventory_csv`] writes for the whole world.
-///
-/// Errors: [`super::OutputError::Io`] naming `path` (and in the message the part file).
-pub fn merge_inventory_csv(path: &Path, parts: &[std::path::PathBuf]) -> Result<()> {
-    merge_csv(path, HEADER, parts, |l| inventory_key(l, ",alive", |l| l.split(',').next()))
-}
-
-/// Writes the CSV `path` atomically: `header`, then the lines of the sorted `parts` merged by
-/// `key` ([`merge_lines`]), every line ending with a newline (none after the header when no
-/// part has a line).
-///
-/// Errors: [`super::OutputError::Io`] naming `path` (and in the message the part file).
-fn merge_csv(path: &Path, header: &str, parts: &[std::path::PathBuf], key: impl Fn(&str) -> Option<(u8, u64)>) -> Result<()> {
-    crate::output::write_atomic_with(path, |f| {
-        f.write_all(header.as_bytes())?;
-        f.write_all(b"\n")?;
-        merge_lines(f, parts, key, b"\n")?;
-        if parts.iter().any(|p| std::fs::metadata(p).is_ok_and(|m| m.len() > 0)) {
-            f.write_all(b"\n")?;
+        if let Some(g) = gpkg {
+            gpkg_from(open()?, "the inventory part", g, w)?;
         }
         Ok(())
-    })
+    })();
+    if format == InventoryFormat::Parquet {
+        let _ = std::fs::remove_file(&csv);
+    }
+    r
 }
 
-/// Writes the regeneration CSV `path` atomically from the ranks' parts
-/// ([`write_regeneration_part`]): the bytes [`write_regeneration_csv`] writes for the whole
-/// world (cohorts in light-cell order; a cell's cohorts all come from the rank owning it).
+/// Writes a rank's part of a regeneration table: every cohort of `w` (a rank's tile holds only
+/// its own) as a complete regeneration file of `format` at `path`, in (light cell, pool) order.
 ///
-/// Errors: [`super::OutputError::Io`] naming `path` (and in the message the part file).
-pub fn merge_regeneration_csv(path: &Path, parts: &[std::path::PathBuf]) -> Result<()> {
-    merge_csv(path, REGENERATION_HEADER, parts, |l| l.split(',').next()?.parse().ok().map(|c| (0, c)))
+/// Errors: [`super::OutputError::Io`] naming the file.
+pub fn write_regeneration_part(path: &Path, w: &World, format: InventoryFormat) -> Result<()> {
+    match format {
+        InventoryFormat::Csv => write_regeneration_csv(path, w),
+        InventoryFormat::Parquet => write_regeneration_parquet(path, w),
+    }
 }
 
 #[cfg(test)]
@@ -334,11 +261,13 @@ mod tests {
     use super::*;
     use crate::sim::{step_year, Scenario, YearReport};
 
-    /// Parts split by position (the tiles of a tiled run), merged: the bytes of the whole
-    /// inventory CSV and regeneration CSV, and the GeoPackage written from the merged CSV is the
-    /// one written from the whole world, byte for byte; with no trees at all, the header only.
+    /// Parts split by position (the tiles of a tiled run), each a complete file in its
+    /// partitioned folder: read back as one table ([`crate::job::inventory::read`],
+    /// [`crate::job::inventory::read_regeneration`]) they are the rows of the whole world's file,
+    /// in its order, in both formats; each GeoPackage part holds its band's trees; with no
+    /// trees at all, the parts hold no rows.
     #[test]
-    fn merged_parts_are_the_whole_files() {
+    fn parts_read_back_as_the_whole_files() {
         let toml = "name = \"parts\"\nyears = 22\nseed = 3\nspecies = [\"beech\"]\nlight_cell_m = 10.0\n\
             [terrain]\nuniform = { width = 20, height = 12, cell_m = 20.0, elevation_m = 300.0, indices = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0] }\n\
             [[start]]\nkind = \"seed_sources\"\nspecies = \"beech\"\npoints = [[100.0, 100.0], [300.0, 150.0]]\ntrees_per_source = 4\n";
@@ -348,54 +277,75 @@ mod tests {
             step_year(&mut w, &sc, &mut YearReport::default());
         }
         assert!(w.stand.trees.len() > 8 && !w.stand.cohorts.is_empty(), "{} trees, {} cohorts", w.stand.trees.len(), w.stand.cohorts.len());
+        // a dead tree of this year among them: the parts' dead come after every part's living
+        let dead = DeadTree { id: 1, species: 0, x: 390.0, y: 10.0, z: 300.0, age: 5.0, height: 2.0, dbh: 1.0, crown_radius: 1.0, crown_base: 0.5, year: 22, cause: crate::sim::trees::DeathCause::Stress };
+        w.scratch.dead.push(dead);
         let tmp = tempfile::tempdir().unwrap();
-        let d = tmp.path();
         for (case, trees) in [("trees", true), ("empty", false)] {
-            let mut w = w.clone();
-            if !trees {
-                w.stand.trees = Default::default();
-                w.scratch.dead.clear();
-                w.stand.cohorts = Default::default();
-            }
-            let (csv, gp, rg) = (d.join(format!("{case}.csv")), d.join(format!("{case}.gpkg")), d.join(format!("{case}_r.csv")));
-            write_inventory_csv(&csv, &w).unwrap();
-            write_inventory_gpkg(&gp, &w).unwrap();
-            write_regeneration_csv(&rg, &w).unwrap();
-            let mut parts = (Vec::new(), Vec::new());
-            for k in 0..3 {
-                let band = move |x: f32, _: f32| ((x / 134.0) as usize).min(2) == k;
-                let (pc, pr) = (d.join(format!("{case}.{k}.csv.part")), d.join(format!("{case}.{k}.r.part")));
-                write_inventory_part(&pc, &w, band).unwrap();
-                let mut wk = w.clone();
-                let light = wk.site.light;
-                let c = &w.stand.cohorts;
-                let mut own = crate::sim::cohorts::Cohorts::default();
-                for i in 0..c.len() {
-                    let (x, y) = light.centre(c.cell[i] as usize);
-                    if band(x as f32, y as f32) {
-                        own.push(c.get(i));
-                    }
+            for format in [InventoryFormat::Parquet, InventoryFormat::Csv] {
+                let d = tmp.path().join(format!("{case}_{}", format.extension())).join("inventory");
+                let (fol, rfol, gfol) = (d.join("year_0022"), d.join("year_0022_regeneration"), d.join("year_0022_gpkg"));
+                for f in [&fol, &rfol, &gfol] {
+                    std::fs::create_dir_all(f).unwrap();
                 }
-                wk.stand.cohorts = own;
-                write_regeneration_part(&pr, &wk).unwrap();
-                parts.0.push(pc);
-                parts.1.push(pr);
-            }
-            let (mc, mg, mr) = (d.join(format!("{case}.m.csv")), d.join(format!("{case}.m.gpkg")), d.join(format!("{case}_r.m.csv")));
-            merge_inventory_csv(&mc, &parts.0).unwrap();
-            csv_file_to_gpkg(&mc, &mg, &w).unwrap();
-            merge_regeneration_csv(&mr, &parts.1).unwrap();
-            for (a, b) in [(&csv, &mc), (&gp, &mg), (&rg, &mr)] {
-                assert!(std::fs::read(a).unwrap() == std::fs::read(b).unwrap(), "{case}: {} and {} differ", a.display(), b.display());
-            }
-            if !trees {
-                assert_eq!(std::fs::read_to_string(&mc).unwrap(), format!("{HEADER}\n"));
+                let mut w = w.clone();
+                if !trees {
+                    w.stand.trees = Default::default();
+                    w.scratch.dead.clear();
+                    w.stand.cohorts = Default::default();
+                }
+                let ext = format.extension();
+                let whole = d.join(format!("year_0022.{ext}"));
+                match format {
+                    InventoryFormat::Parquet => write_inventory_parquet(&whole, &w).unwrap(),
+                    InventoryFormat::Csv => write_inventory_csv(&whole, &w).unwrap(),
+                }
+                let rwhole = d.join(format!("year_0021_regeneration.{ext}"));
+                write_regeneration_part(&rwhole, &w, format).unwrap();
+                let mut gpkg_rows = 0;
+                for k in 0..3 {
+                    let band = move |x: f32, _: f32| ((x / 134.0) as usize).min(2) == k;
+                    let g = gfol.join(part_name(k, "gpkg"));
+                    write_inventory_part(&fol.join(part_name(k, ext)), Some(&g), &w, band, format).unwrap();
+                    let conn = rusqlite::Connection::open(&g).unwrap();
+                    let n: i64 = conn.query_row("SELECT count(*) FROM inventory", [], |r| r.get(0)).unwrap();
+                    let want = (0..w.stand.trees.len()).filter(|&i| band(w.stand.trees.x[i], w.stand.trees.y[i])).count() + w.scratch.dead.iter().filter(|t| band(t.x, t.y)).count();
+                    assert_eq!(n as usize, want, "{case} {ext}: GeoPackage part {k}");
+                    gpkg_rows += n as usize;
+                    let mut wk = w.clone();
+                    let light = wk.site.light;
+                    let c = &w.stand.cohorts;
+                    let mut own = crate::sim::cohorts::Cohorts::default();
+                    for i in 0..c.len() {
+                        let (x, y) = light.centre(c.cell[i] as usize);
+                        if band(x as f32, y as f32) {
+                            own.push(c.get(i));
+                        }
+                    }
+                    wk.stand.cohorts = own;
+                    write_regeneration_part(&rfol.join(part_name(k, ext)), &wk, format).unwrap();
+                }
+                assert_eq!(gpkg_rows, w.stand.trees.len() + w.scratch.dead.len());
+                let (a, b) = (crate::job::inventory::read(&whole).unwrap(), crate::job::inventory::read(&fol).unwrap());
+                assert_eq!(a.len(), w.stand.trees.len() + w.scratch.dead.len());
+                assert!(a == b, "{case} {ext}: the parts read back differ from the whole file");
+                if trees {
+                    // the parts split the trees: each holds some, none all
+                    let sizes: Vec<usize> = (0..3).map(|k| crate::job::inventory::read(&fol.join(part_name(k, ext))).unwrap().len()).collect();
+                    assert!(sizes.iter().all(|&n| n > 0 && n < a.len()), "{sizes:?}");
+                    // living first, then the dead (id 1 among them, from the east part)
+                    let first_dead = b.iter().position(|r| r.status != "alive").unwrap();
+                    assert!(first_dead > 0 && b[first_dead..].iter().all(|r| r.status.starts_with("dead:")) && b[first_dead..].iter().any(|r| r.id == 1));
+                }
+                // the regeneration layer: the whole file (read as year 21) and the parts (year 22)
+                let ra = crate::job::inventory::read_regeneration(d.parent().unwrap(), 21).unwrap().unwrap();
+                let rb = crate::job::inventory::read_regeneration(d.parent().unwrap(), 22).unwrap().unwrap();
+                assert_eq!(ra.len(), w.stand.cohorts.len());
+                assert!(ra == rb, "{case} {ext}: the regeneration parts read back differ");
             }
         }
-        // a part line without a key is refused naming the part
-        let bad = d.join("bad.part");
-        std::fs::write(&bad, "not-an-id,beech\n").unwrap();
-        let e = merge_inventory_csv(&d.join("bad.csv"), &[bad]).unwrap_err().to_string();
-        assert!(e.contains("bad.part line 1"), "{e}");
+        // a folder without parts is refused naming it
+        let e = crate::job::inventory::read(tmp.path()).unwrap_err().to_string();
+        assert!(e.contains("without parts"), "{e}");
     }
 }

@@ -12,8 +12,9 @@
 //! WGS 84 and the UTM zones of WGS 84, NAD83 and ETRS89 ([`projjson`]); `null`, "unknown", for other codes and
 //! for local grids, with the EPSG code, when there is one, under `sylva:epsg`).
 //!
-//! The files are made from the CSV text of the table ([`csv_to_parquet`]), so a tiled run's
-//! merged CSV and one process's CSV give the same bytes.
+//! The files are made from the CSV text of the table ([`csv_to_parquet`]); a tiled run's ranks
+//! each write their own part this way (`inventory/year_NNNN/part-RRRRR.parquet`, each with its
+//! own `geo` metadata and bounding box).
 
 use super::georef::PointGeoRef;
 use super::Result;

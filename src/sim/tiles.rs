@@ -359,6 +359,23 @@ impl Layout {
         Ok(Layout { light, nx, ny, col_bounds, row_bounds, halo_m, reach: Reach { crowns_m: halo_m, crowding_m: halo_m, seeds_m: halo_m } })
     }
 
+    /// Tiles over the light grid of `site` with the given boundaries (light cells; e.g. from
+    /// [`cut_by_weight`] or a checkpoint's manifest) and the halo [`min_halo_m`].
+    ///
+    /// Errors: [`Error::Invalid`] naming `col_bounds` or `row_bounds` unless each runs strictly
+    /// upwards from 0 to the light grid's columns (rows) with at least two values.
+    pub fn with_bounds(site: &Site, col_bounds: Vec<usize>, row_bounds: Vec<usize>) -> Result<Layout> {
+        for (name, b, end) in [("col_bounds", &col_bounds, site.light.cols), ("row_bounds", &row_bounds, site.light.rows)] {
+            if b.len() < 2 || b[0] != 0 || b[b.len() - 1] != end || b.windows(2).any(|w| w[0] >= w[1]) {
+                return Err(Error::Invalid { context: "tiled run".into(), field: name.into(), value: format!("{b:?}"), expected: format!("at least 2 values rising strictly from 0 to {end} (the light grid's cells)") });
+            }
+        }
+        let mut l = Layout::new(site, col_bounds.len() - 1, row_bounds.len() - 1)?;
+        l.col_bounds = col_bounds;
+        l.row_bounds = row_bounds;
+        Ok(l)
+    }
+
     /// Number of tiles.
     pub fn len(&self) -> usize {
         self.nx * self.ny
@@ -396,6 +413,49 @@ impl Layout {
         let (x, y) = (x as f64, y as f64);
         x >= r.col0 as f64 * c - m && x < r.col1 as f64 * c + m && y >= r.row0 as f64 * c - m && y < r.row1 as f64 * c + m
     }
+}
+
+/// The work of a tiled run per light-grid column and per row of `site` (issue 37 Build 5), to
+/// cut tiles by ([`cut_by_weight`]): the light cells where forest can grow, those whose site
+/// cell is unmasked and where some species of the pool has a positive suitability (not masked
+/// out, not above the tree line). Returns `(per column, per row)`, `light.cols` and
+/// `light.rows` counts. From the site alone, so every rank and every resume cuts the same
+/// tiles; a heuristic of where the trees will be (a planted part of an otherwise open site is
+/// not seen: its trees are not the site's).
+pub fn work_weights(site: &Site) -> (Vec<u64>, Vec<u64>) {
+    let light = &site.light;
+    let (mut cols, mut rows) = (vec![0u64; light.cols], vec![0u64; light.rows]);
+    for (k, &s) in site.light_site.iter().enumerate() {
+        let grows = s != u32::MAX && site.suitability.iter().any(|sp| sp.get(s as usize).is_some_and(|&v| v > 0.0));
+        if grows {
+            let (c, r) = light.col_row(k);
+            cols[c] += 1;
+            rows[r] += 1;
+        }
+    }
+    (cols, rows)
+}
+
+/// Boundaries that cut the `w.len()` columns (or rows) of weights `w` into `n` runs of whole
+/// columns of about equal weight: boundary `i` (of `n + 1`, from 0 to `w.len()`) is the last
+/// column `c` whose weight before it is at most `i / n` of the total, `Σ w[..c] · n ≤ total ·
+/// i` in integers, so equal weights give the area cut `w.len() · i / n` ([`Layout::new`]); then
+/// every run keeps at least one column. All weights zero: the area cut. `n` must be 1 to
+/// `w.len()`.
+pub fn cut_by_weight(w: &[u64], n: usize) -> Vec<usize> {
+    let len = w.len();
+    let total: u128 = w.iter().map(|&v| v as u128).sum();
+    let mut b = vec![0usize; n + 1];
+    b[n] = len;
+    let mut cum = vec![0u128; len + 1];
+    for (c, &v) in w.iter().enumerate() {
+        cum[c + 1] = cum[c] + v as u128;
+    }
+    for i in 1..n {
+        let c = if total == 0 { len * i / n } else { cum.partition_point(|&s| s * n as u128 <= total * i as u128) - 1 };
+        b[i] = c.max(b[i - 1] + 1).min(len - (n - i));
+    }
+    b
 }
 
 /// A message under way ([`super::codec`]).

@@ -148,18 +148,112 @@ pub fn files(dir: &std::path::Path) -> std::collections::BTreeMap<String, Vec<u8
     m
 }
 
-/// Asserts that the tiled run directory `tiled` (per-rank checkpoints) is the one-process run
-/// directory `one` (`checkpoint.bin`): every other file byte for byte, the same file names,
-/// and the per-rank checkpoints, assembled into a copy of `template` (the scenario's world at
-/// its start), encode to `checkpoint.bin`'s bytes. Returns the manifest.
-pub fn assert_same_run(one: &std::path::Path, tiled: &std::path::Path, template: &World, what: &str) -> sylva::job::checkpoint::Manifest {
-    let is_ck = |k: &String| k == "checkpoint.bin" || k.starts_with("checkpoint/");
-    let (fa, fb) = (files(one), files(tiled));
-    let (ka, kb): (Vec<_>, Vec<_>) = (fa.keys().filter(|k| !is_ck(k)).collect(), fb.keys().filter(|k| !is_ck(k)).collect());
-    assert_eq!(ka, kb, "{what}: different files");
-    for k in ka {
-        assert!(fa[k] == fb[k], "{what}: {k} differs");
+/// The snapshot folder a tiled run's part `inventory/{label}/part-RRRRR.{ext}` belongs to
+/// (`inventory/{label}`, where `label` is `year_NNNN`, `year_NNNN_regeneration` or
+/// `year_NNNN_gpkg`), or `None` for any other file.
+fn part_folder(k: &str) -> Option<&str> {
+    let (folder, name) = k.rsplit_once('/')?;
+    (folder.starts_with("inventory/year_") && name.starts_with("part-")).then_some(folder)
+}
+
+/// The rows of the `inventory` layer of the GeoPackages `paths` (a file, or a tiled run's
+/// parts) as text, sorted by the tree id (the first column after the feature id).
+fn gpkg_rows(paths: &[std::path::PathBuf]) -> Vec<Vec<String>> {
+    let mut rows = Vec::new();
+    for p in paths {
+        let db = rusqlite::Connection::open(p).unwrap();
+        let mut st = db.prepare("SELECT * FROM inventory").unwrap();
+        let n = st.column_count();
+        let names: Vec<String> = st.column_names().map(|c| c.to_string()).collect();
+        let id = names.iter().position(|c| c == "id").unwrap_or_else(|| panic!("{}: no id column in {names:?}", p.display()));
+        let fid = names.iter().position(|c| c == "fid");
+        let got: Vec<(i64, Vec<String>)> = st
+            .query_map([], |r| {
+                let v: Vec<String> = (0..n).filter(|&i| Some(i) != fid).map(|i| format!("{:?}", r.get::<_, rusqlite::types::Value>(i).unwrap())).collect();
+                Ok((r.get::<_, i64>(id).unwrap(), v))
+            })
+            .unwrap()
+            .map(|r| r.unwrap())
+            .collect();
+        rows.extend(got);
     }
+    rows.sort_by_key(|r| r.0);
+    rows.into_iter().map(|r| r.1).collect()
+}
+
+/// Asserts that run directory `other` holds the outputs of run directory `one` (files for which
+/// `skip` is true left out): every file of the same name byte for byte; where `other` is a tiled
+/// run's partitioned snapshot (`inventory/year_NNNN/part-RRRRR.parquet`, `_regeneration/`,
+/// `_gpkg/`; issue 37 Build 4) and `one` has the single file, what the readers read back
+/// (`sylva::job::inventory::read`, `read_regeneration`) is the same, and the GeoPackage parts'
+/// rows are the file's (sorted by tree id; the feature ids differ). Every file of either side
+/// is accounted for.
+pub fn assert_same_outputs(one: &std::path::Path, other: &std::path::Path, what: &str, skip: impl Fn(&str) -> bool) {
+    let (fa, fb) = (files(one), files(other));
+    let (fa, fb): (std::collections::BTreeMap<_, _>, std::collections::BTreeMap<_, _>) = (fa.into_iter().filter(|(k, _)| !skip(k)).collect(), fb.into_iter().filter(|(k, _)| !skip(k)).collect());
+    // byte for byte where both have the file
+    for (k, v) in &fa {
+        if let Some(w) = fb.get(k) {
+            assert!(v == w, "{what}: {k} differs");
+        }
+    }
+    // the folders of parts on either side, each against the other side's single file
+    let folders = |f: &std::collections::BTreeMap<String, Vec<u8>>| -> std::collections::BTreeSet<String> { f.keys().filter_map(|k| part_folder(k)).map(str::to_string).collect() };
+    let (pa, pb) = (folders(&fa), folders(&fb));
+    for (side, parts, whole) in [("one", &pa, &fb), ("other", &pb, &fa)] {
+        for folder in parts {
+            let (dir, tdir) = if side == "one" { (one, other) } else { (other, one) };
+            let label = folder.strip_prefix("inventory/").unwrap();
+            let single: Vec<&String> = whole.keys().filter(|k| k.strip_prefix("inventory/").and_then(|n| n.rsplit_once('.')).is_some_and(|(stem, ext)| stem == label && (ext == "parquet" || ext == "csv"))).collect();
+            if let Some(year) = label.strip_suffix("_regeneration") {
+                let y: u32 = year.strip_prefix("year_").unwrap().parse().unwrap();
+                assert_eq!(single.len(), 1, "{what}: {folder} ({side}) against {single:?}");
+                let (a, b) = (sylva::job::inventory::read_regeneration(dir, y).unwrap(), sylva::job::inventory::read_regeneration(tdir, y).unwrap());
+                assert!(a.is_some() && a == b, "{what}: the regeneration layer of year {y} reads back differently");
+            } else if let Some(stem) = label.strip_suffix("_gpkg") {
+                let file = format!("inventory/{stem}.gpkg");
+                assert!(whole.contains_key(&file), "{what}: {folder} ({side}) without {file} on the other side");
+                let mut ps: Vec<std::path::PathBuf> = std::fs::read_dir(dir.join(folder)).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "gpkg")).collect();
+                ps.sort();
+                let (a, b) = (gpkg_rows(&ps), gpkg_rows(&[tdir.join(&file)]));
+                assert!(!b.is_empty() || a.is_empty(), "{what}: {file}");
+                assert!(a == b, "{what}: the GeoPackage parts {folder} and {file} hold different rows");
+            } else {
+                assert_eq!(single.len(), 1, "{what}: {folder} ({side}) against {single:?}");
+                let (a, b) = (sylva::job::inventory::read(&dir.join(folder)).unwrap(), sylva::job::inventory::read(&tdir.join(single[0])).unwrap());
+                assert!(a == b, "{what}: {folder} and {} read back differently ({} and {} rows)", single[0], a.len(), b.len());
+            }
+        }
+    }
+    // no file on one side only but for those accounted for by the folders of parts
+    let stem_of = |k: &str| k.strip_prefix("inventory/").and_then(|n| n.rsplit_once('.')).map(|(s, _)| format!("inventory/{s}"));
+    for (side, f, other_folders, other_files) in [("one", &fa, &pb, &fb), ("other", &fb, &pa, &fa)] {
+        for k in f.keys() {
+            if other_files.contains_key(k) {
+                continue;
+            }
+            let covered = match part_folder(k) {
+                Some(folder) => {
+                    let label = folder.strip_prefix("inventory/").unwrap();
+                    other_files.keys().any(|o| stem_of(o).as_deref() == Some(folder) || (label.ends_with("_gpkg") && o == &format!("inventory/{}.gpkg", label.trim_end_matches("_gpkg"))))
+                }
+                None => stem_of(k).is_some_and(|s| other_folders.contains(&s) || (k.ends_with(".gpkg") && other_folders.contains(&format!("{s}_gpkg")))),
+            };
+            assert!(covered, "{what}: {k} only in {side}");
+        }
+    }
+}
+
+/// Asserts that the tiled run directory `tiled` (per-rank checkpoints, partitioned inventories)
+/// holds the outputs of the one-process run directory `one` (`checkpoint.bin`): every other
+/// file as [`assert_same_outputs`] (byte for byte, or read back the same where the tiled run
+/// wrote one part per rank), and the per-rank checkpoints, assembled into a copy of `template`
+/// (the scenario's world at its start), encode to `checkpoint.bin`'s bytes. Returns the
+/// manifest.
+pub fn assert_same_run(one: &std::path::Path, tiled: &std::path::Path, template: &World, what: &str) -> sylva::job::checkpoint::Manifest {
+    let is_ck = |k: &str| k == "checkpoint.bin" || k.starts_with("checkpoint/");
+    assert_same_outputs(one, tiled, what, is_ck);
+    let (fa, fb) = (files(one), files(tiled));
     assert!(fa.contains_key("checkpoint.bin"), "{what}: one process wrote no checkpoint.bin");
     assert!(!fb.contains_key("checkpoint.bin"), "{what}: the tiled run wrote checkpoint.bin");
     let m = sylva::job::checkpoint::read_manifest(tiled).unwrap();
