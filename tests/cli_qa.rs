@@ -129,6 +129,13 @@ fn folders_and_files_mixed_up_get_plain_errors() {
         let (ok, err) = run(&args);
         assert!(!ok && err.contains("--out snap.toml/sub: snap.toml is a file, not a folder"), "{cmd}: {err}");
     }
+    // `simulate --years` runs a scenario for fewer years (a trial could not try the shipped
+    // management scenarios briefly); the run directory's scenario records them
+    let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_y", "--years", "1"]);
+    assert!(ok && d.join("snap_y/inventory/year_0001.parquet").is_file() && !d.join("snap_y/inventory/year_0002.parquet").exists(), "{err}");
+    assert!(std::fs::read_to_string(d.join("snap_y/scenario.toml")).unwrap().lines().any(|l| l.trim() == "years = 1"));
+    let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_y0", "--years", "0"]);
+    assert!(!ok && err.contains("--years") && !d.join("snap_y0").exists(), "{err}");
     // under mpirun only rank 0 says it (each rank printed it in round 23); rank 0 still does
     for (rank, said) in [("1", false), ("0", true)] {
         let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["simulate", "snap.toml", "--out", "snap_all"]).env("OMPI_COMM_WORLD_RANK", rank).current_dir(d).output().unwrap();

@@ -191,8 +191,20 @@ fn sylva_run_binary_smoke() {
     let stderr = String::from_utf8_lossy(&res.stderr);
     assert!(res.status.success(), "sylva run failed:\n{stdout}\n{stderr}");
     assert!(stdout.contains("basal area") && stdout.contains("outputs in"), "summary table printed: {stdout}");
+
     assert!(stderr.contains("[1/4] conditions") && stderr.contains("[2/4] simulating 2 years"), "steps reported: {stderr}");
     assert!(out.join("summary.md").is_file() && out.join("inventory/year_0002.gpkg").is_file() && !out.join("stills").exists());
+    // a run without pictures into an earlier run's folder removes that run's pictures (they
+    // would pass for this run's: found by a trial); files Sylva did not write stay
+    let again = dir.path().join("again");
+    for f in ["stills/year_0150_oblique.png", "frames/frame_00001.png", "timelapse.gif", "stills/notes.txt"] {
+        std::fs::create_dir_all(again.join(f).parent().unwrap()).unwrap();
+        std::fs::write(again.join(f), b"old").unwrap();
+    }
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["run", sc.to_str().unwrap(), "--out", again.to_str().unwrap(), "--years", "1", "--no-pictures"]).output().unwrap();
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    assert!(!again.join("stills/year_0150_oblique.png").exists() && !again.join("frames/frame_00001.png").exists() && !again.join("timelapse.gif").exists(), "an earlier run's pictures are left");
+    assert!(again.join("stills/notes.txt").is_file(), "a file Sylva did not write was removed");
 }
 
 /// Without any graphics adapter (here: wgpu limited to a backend this machine lacks), `sylva

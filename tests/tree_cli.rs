@@ -218,6 +218,14 @@ fn tree_adapt_refuses_bad_input_clearly() {
     let res = sylva(&["tree", "adapt", "--obstacle", "wall:1.0", "--out", o]);
     let err = String::from_utf8_lossy(&res.stderr);
     assert!(!res.status.success() && err.contains("--species: expected the species of the tree"), "{err}");
+    // `tree grow` makes a missing output folder; a file in its way is named with --out
+    let nested = dir.path().join("g/h/t.glb");
+    let res = sylva(&["tree", "grow", "--species", "beech", "--age", "5", "--out", nested.to_str().unwrap()]);
+    assert!(res.status.success() && nested.is_file() && nested.with_extension("png").is_file(), "{}", String::from_utf8_lossy(&res.stderr));
+    std::fs::write(dir.path().join("gfile"), b"x").unwrap();
+    let res = sylva(&["tree", "grow", "--species", "beech", "--age", "5", "--out", dir.path().join("gfile/t.glb").to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(!res.status.success() && err.contains("--out") && err.contains("creating its folder"), "{err}");
     // a negative age reaches Sylva's own check (clap took `-5` for an option: found by a trial)
     for cmd in [vec!["tree", "grow", "--species", "beech", "--age", "-5", "--out", o], vec!["tree", "adapt", "--species", "beech", "--age", "-5", "--out", o]] {
         let res = sylva(&cmd);

@@ -20,6 +20,10 @@ pub struct Args {
     /// Run directory.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
+    /// Override the scenario's number of years (1–10,000), e.g. to try a shipped scenario for
+    /// a few years; the run directory's `scenario.toml` records the years run.
+    #[arg(long)]
+    pub years: Option<u32>,
     /// Continue an interrupted run from its checkpoint (OUT/checkpoint.bin, or a tiled run's
     /// per-rank OUT/checkpoint/).
     #[arg(long)]
@@ -241,7 +245,11 @@ pub fn note_replaced_run(out: &Path) {
 
 /// Runs a simulation.
 pub fn run(a: Args) -> anyhow::Result<()> {
-    let sc = Scenario::load(&a.scenario)?;
+    let mut sc = Scenario::load(&a.scenario)?;
+    if let Some(y) = a.years {
+        sc.years = y;
+        sc.validate("--years")?;
+    }
     super::check_out_dir(&a.out, "--out")?;
     if !a.resume {
         note_replaced_run(&a.out);

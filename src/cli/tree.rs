@@ -197,6 +197,13 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     let bark = sp.appearance.bark;
     let leaf = sp.appearance.leaf_summer;
+    // a missing output folder is made (as `tree adapt`, `render` and `run` do), naming the
+    // option when it cannot be (a bare OS error was all a trial got)
+    if matches!(ext.as_str(), "glb" | "obj") {
+        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", out.display(), dir.display()))?;
+        }
+    }
     match ext.as_str() {
         "glb" => {
             sylva::output::gltf::write_glb(out, &chain, &glb_options(&sp))?;

@@ -493,6 +493,11 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
         sink(&Event::NoAdapter { message: e.to_string() });
     }
     let render = opts.render && no_adapter.is_none();
+    if !render {
+        // a run without pictures into an earlier run's folder: that run's pictures would stand
+        // beside this run's data as if they were its own (found by a trial), so they go
+        remove_earlier_pictures(&out)?;
+    }
 
     // 2. Simulation. The pictures' key frames come from the in-memory world at each snapshot
     // (summer instances of the visible trees), not from the inventory files.
@@ -701,6 +706,28 @@ fn write_summary_md(out: &Path, s: &MainJobSummary) -> Result<()> {
         let _ = writeln!(md, "![{m}](maps/conditions/{m}.png)");
     }
     crate::output::write_atomic(&out.join("summary.md"), md.as_bytes())?;
+    Ok(())
+}
+
+/// Removes the pictures an earlier run wrote into the run directory `out`: its stills
+/// (`stills/year_NNNN_<view>.png`), film frames (`frames/frame_NNNNN.png`) and
+/// `timelapse.gif`/`timelapse.mp4`; nothing else (other files in those folders are kept).
+///
+/// Errors: I/O errors naming the folder or file.
+fn remove_earlier_pictures(out: &Path) -> Result<()> {
+    let (stills, frames) = (out.join("stills"), out.join("frames"));
+    if stills.is_dir() {
+        remove_old_stills(&stills)?;
+    }
+    if frames.is_dir() {
+        pictures::remove_frames(&frames)?;
+    }
+    for f in ["timelapse.gif", "timelapse.mp4"] {
+        let p = out.join(f);
+        if p.is_file() {
+            std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
+        }
+    }
     Ok(())
 }
 

@@ -441,7 +441,7 @@ fn no_inventory(run_dir: &Path, year: u32, snaps: &[(u32, String, PathBuf)]) -> 
 /// Removes the `frame_NNNNN.png` files Sylva wrote into `dir` (nothing else).
 ///
 /// Errors: [`Error::Io`] naming the folder or file.
-fn remove_frames(dir: &Path) -> Result<()> {
+pub(crate) fn remove_frames(dir: &Path) -> Result<()> {
     for e in std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))? {
         let p = e.map_err(|e| Error::io(dir, e))?.path();
         let name = p.file_name().and_then(|n| n.to_str()).unwrap_or("");
