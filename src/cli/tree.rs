@@ -391,8 +391,8 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
             let sk = sylva::output::gltf::read_skeleton_sidecar(glb)?;
             // a tree grown as another species would be adapted with this species' parameters
             // and leaves without a word (found by a trial); sidecars before round 24 carry no id
-            if let Some(grown_as) = sylva::output::gltf::read_skeleton_sidecar_species(glb)? {
-                anyhow::ensure!(grown_as == sp.id, "--species {species}: the tree in --input {} was grown as {grown_as} (its skeleton sidecar {}); expected --species {grown_as} (or no --species)", glb.display(), side.display());
+            if let Some(grown_as) = &recorded {
+                anyhow::ensure!(*grown_as == sp.id, "--species {species}: the tree in --input {} was grown as {grown_as} (its skeleton sidecar {}); expected --species {grown_as} (or no --species)", glb.display(), side.display());
             }
             check_base(sk.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO))?;
             sk
