@@ -299,7 +299,13 @@ impl Scenario {
             let mut msg = plain_type_words(&e.to_string());
             // a wrong type on a top-level field: what the field holds besides its type
             if let Some(hint) = e.span().and_then(|sp| key_at(text, sp.start)).and_then(|k| field_hint(&k).map(|h| (k, h))) {
-                msg = format!("{}\n`{}`: {}", msg.trim_end(), hint.0, hint.1);
+                // the type's own range ("from 0 to 4294967295") gives way to the field's (a
+                // trial read two ranges in one message for `years = -5`)
+                let msg_type = match msg.trim_end().rfind(", expected ") {
+                    Some(i) => msg[..i].to_string(),
+                    None => msg.trim_end().to_string(),
+                };
+                msg = format!("{msg_type}\n`{}`: expected {}", hint.0, hint.1);
             }
             Error::format(name, msg)
         })?;
@@ -422,6 +428,12 @@ impl Scenario {
         // a start listing a species outside the pool would grow a species the scenario excludes
         for (i, st) in self.start.iter().enumerate() {
             if !self.species.is_empty() && !self.species.iter().any(|p| p == st.species()) {
+                // a pool entry one or two letters from the start's species is most likely the
+                // misspelt one (a trial's `species = ["beeech"]` was blamed on the start)
+                let near = self.species.iter().enumerate().find(|(_, p)| strsim::damerau_levenshtein(p, st.species()) <= 2);
+                if let Some((j, p)) = near {
+                    return Err(invalid(ctx, &format!("species[{j}]"), p, &format!("a species id of the library; start[{i}] names `{}`: is that meant? (`sylva species list` lists the ids)", st.species())));
+                }
                 return Err(invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("one of the scenario's species = {:?} (add it there)", self.species)));
             }
         }
