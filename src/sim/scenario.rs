@@ -251,6 +251,34 @@ fn plain_type_words(msg: &str) -> String {
     m
 }
 
+/// The length `N` of serde's "invalid length …, expected an array of length N" in `msg`.
+fn wrong_length(msg: &str) -> Option<usize> {
+    let rest = msg.split("expected an array of length ").nth(1)?;
+    rest.split(|c: char| !c.is_ascii_digit()).next()?.parse().ok()
+}
+
+/// The first key, in the TOML table whose header or line holds byte `at` of `text`, whose value
+/// is a one-line array of numbers with a length other than `want` (`None` when there is none).
+fn key_with_array_len_not(text: &str, at: usize, want: usize) -> Option<String> {
+    let at = at.min(text.len());
+    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    for (i, line) in text[start..].lines().enumerate() {
+        let t = line.trim();
+        if i > 0 && t.starts_with('[') {
+            break;
+        }
+        let Some((key, value)) = t.split_once('=') else { continue };
+        let value = value.trim();
+        if let Some(inner) = value.strip_prefix('[').and_then(|v| v.split(']').next()) {
+            let n = inner.split(',').filter(|x| !x.trim().is_empty()).count();
+            if n != want {
+                return Some(key.trim().to_string());
+            }
+        }
+    }
+    None
+}
+
 /// The key of the `key = value` line of `text` holding byte `at` (`None` when that line is no
 /// such line, e.g. inside a table header or an inline table).
 fn key_at(text: &str, at: usize) -> Option<String> {
@@ -306,6 +334,14 @@ impl Scenario {
                     None => msg.trim_end().to_string(),
                 };
                 msg = format!("{msg_type}\n`{}`: expected {}", hint.0, hint.1);
+            }
+            // a wrong-length array inside a tagged table (an `[[obstacle]]`): serde points at
+            // the table and names no field, so the field is found in the table's lines (a trial
+            // could not tell which of `center` and `half` was meant)
+            if let Some((want, sp)) = wrong_length(&msg).zip(e.span()) {
+                if let Some(key) = key_with_array_len_not(text, sp.start, want) {
+                    msg = format!("{}\n`{key}`: expected an array of {want} numbers", msg.trim_end());
+                }
             }
             Error::format(name, msg)
         })?;
