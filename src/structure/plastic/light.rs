@@ -430,8 +430,18 @@ impl DirGrid {
         // ties in occluder order), so a query can stop at the first block that lies behind it
         // keys that sort as (depth descending, index ascending): the depth's bits mapped to an
         // unsigned order (f32::total_cmp's), inverted, above the index
-        for j in depth_order(&depth) {
-            let j = j as usize;
+        let mut order: Vec<u64> = depth
+            .iter()
+            .enumerate()
+            .map(|(j, z)| {
+                let b = z.to_bits() as i32;
+                let ordered = (b ^ ((((b >> 31) as u32) >> 1) as i32)) as u32 ^ 0x8000_0000;
+                ((!ordered as u64) << 32) | j as u64
+            })
+            .collect();
+        order.sort_unstable();
+        for &key in &order {
+            let j = (key & u32::MAX as u64) as usize;
             let ([x0, x1, y0, y1], o) = (ranges[j], &occ[kept[j] as usize]);
             let r2 = o.radius * o.radius;
             for y in y0 as usize..=y1 as usize {
@@ -514,45 +524,6 @@ impl DirGrid {
         }
         Some(t)
     }
-}
-
-/// Indices of `depth` in descending depth (ties in index order; the order of
-/// [`f32::total_cmp`], reversed): a stable LSD radix sort, 8 bits a pass, of the depths' bits
-/// mapped to an unsigned order and inverted, skipping the passes whose byte is the same in every
-/// key (the high bytes of depths within a crown). The order of sorting the keys
-/// (depth key, index) as `u64`, in O(n) instead of O(n log n) comparisons.
-fn depth_order(depth: &[f32]) -> Vec<u32> {
-    let mut keys: Vec<u32> = depth
-        .iter()
-        .map(|z| {
-            let b = z.to_bits() as i32;
-            !((b ^ ((((b >> 31) as u32) >> 1) as i32)) as u32 ^ 0x8000_0000)
-        })
-        .collect();
-    let mut idx: Vec<u32> = (0..depth.len() as u32).collect();
-    let (mut k2, mut i2) = (vec![0u32; keys.len()], vec![0u32; keys.len()]);
-    for shift in [0u32, 8, 16, 24] {
-        let mut at = [0u32; 256];
-        for &k in &keys {
-            at[(k >> shift & 0xff) as usize] += 1;
-        }
-        if at.iter().any(|&c| c as usize == keys.len()) {
-            continue; // one byte value in every key: this pass keeps the order
-        }
-        let mut sum = 0;
-        for c in &mut at {
-            (*c, sum) = (sum, sum + *c);
-        }
-        for (&k, &i) in keys.iter().zip(&idx) {
-            let b = (k >> shift & 0xff) as usize;
-            let f = at[b] as usize;
-            (k2[f], i2[f]) = (k, i);
-            at[b] += 1;
-        }
-        std::mem::swap(&mut keys, &mut k2);
-        std::mem::swap(&mut idx, &mut i2);
-    }
-    idx
 }
 
 /// Distance (m) behind a query point beyond which a depth-sorted scan stops: far above the
@@ -1219,21 +1190,6 @@ mod tests {
         for ((p, m), (i, d)) in points.iter().zip(light_many(&sky, &vols, &points)) {
             let (i2, d2) = light_at(&sky, *m, &vols, *p);
             assert_eq!((i.to_bits(), d.to_array().map(f32::to_bits)), (i2.to_bits(), d2.to_array().map(f32::to_bits)));
-        }
-    }
-
-    /// The radix depth order is the order of sorting (depth descending by `f32::total_cmp`,
-    /// index ascending): depths with ties, signed zeros, infinities and a wide range of
-    /// magnitudes (every byte of the keys varies), and depths within a crown (the high bytes
-    /// equal, their passes skipped).
-    #[test]
-    fn depth_order_is_the_sorted_order() {
-        let wide: Vec<f32> = (0..500).map(|i| { let f = i as f32; (f * 0.37).sin() * 10f32.powi(i % 9 - 4) }).chain([0.0, -0.0, 0.0, f32::INFINITY, f32::NEG_INFINITY, 1.5, 1.5]).collect();
-        let crown: Vec<f32> = (0..400).map(|i| 6.0 + ((i * 7 % 23) as f32) * 0.125).collect();
-        for depth in [wide, crown, vec![2.0], Vec::new()] {
-            let mut want: Vec<u32> = (0..depth.len() as u32).collect();
-            want.sort_by(|&a, &b| depth[b as usize].total_cmp(&depth[a as usize]).then(a.cmp(&b)));
-            assert_eq!(depth_order(&depth), want);
         }
     }
 

@@ -388,6 +388,31 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             dirty
         })
         .collect();
+    // where this call's light queries can come from: the trees with a node to recompute, as
+    // they stand and as grown, widened by their largest cluster and 2 m for the bending within
+    // the call (a query outside is still answered exactly, from grids of every caster)
+    let region = {
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for (t, own) in trees.iter().zip(&own) {
+            if own.iter().any(|&x| x) {
+                let r = 2.0 + t.analysis.stages.iter().flatten().map(|c| c.radius).fold(0.0f32, f32::max);
+                // only the subtrees below a node whose signature changed are recomputed (a
+                // node is recomputed when its own signature changed or its parent turned), and
+                // the clusters lit are theirs (parents precede their children)
+                let mut below = vec![false; own.len()];
+                for k in 0..own.len() {
+                    let par = t.input.nodes[k].parent.map_or(k, |p| p as usize);
+                    below[k] = own[k] || (par < k && below[par]);
+                    if below[k] {
+                        for p in [t.pos[k], t.input.nodes[k].pos] {
+                            (lo, hi) = (lo.min(p - r), hi.max(p + r));
+                        }
+                    }
+                }
+            }
+        }
+        (lo, hi)
+    };
     // 2.–4. levels; a node is recomputed when its own signature changed or its parent moved
     let mut work: Vec<Work> = own
         .into_iter()
@@ -468,17 +493,8 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         // reuse pays while the changes are a minority of the casters
         // (measured on the bench trees: below 60 % changed casters the check is cheaper than the
         // products it saves; above, it is not)
-        // where this level's light queries can come from: its grids hold only the casters
-        // that can shade a point of it (a query outside it is answered from grids of every
-        // caster)
-        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        for ((t, w), (occ, _)) in trees.iter().zip(&work).zip(&occ) {
-            if let Some(s) = stage_of(t) {
-                level_region(t, s, w, occ, &mut lo, &mut hi);
-            }
-        }
-        let delta = (5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(lo, hi));
-        let vols = ShadowVolumes::new(sky, casters).within(lo, hi);
+        let delta = (5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(region.0, region.1));
+        let vols = ShadowVolumes::new(sky, casters).within(region.0, region.1);
         let next: Vec<Option<Prev>> = trees
             .par_iter_mut()
             .zip(&mut work)
@@ -748,52 +764,6 @@ fn preposition(t: &mut PlasticTree, s: usize, w: &Work) {
                 t.pos[k] = t.pos[par] + t.rot[k] * seg;
             }
             carry[k] = (false, t.rot[k]);
-        }
-    }
-}
-
-/// Widens the box `lo`–`hi` (m) to hold every point where level `s` of `t` queries light
-/// ([`level`]): the unbent positions of the season-`s` nodes it may bend (a node is bent when
-/// its own signature changed or its parent turned, so those below a same-season node that may
-/// be bent may be too) and the centres of the stage clusters it may light. A bent node's query
-/// point lies within the summed segment lengths of its same-season chain from the older node
-/// the chain starts at (older wood does not move at this level; rotations keep lengths), so the
-/// box holds that ball, with 1 % and 1 cm to spare. A point missed would still be answered
-/// exactly (from grids of every caster, [`ShadowVolumes::within`]); the box only decides which
-/// casters the level's grids hold.
-fn level_region(t: &PlasticTree, s: usize, w: &Work, occ: &[Option<Occluder>], lo: &mut Vec3, hi: &mut Vec3) {
-    let a = &t.analysis;
-    let n = t.input.nodes.len();
-    // per node of the season: may be bent, the chain's older start, summed segment length
-    let mut maybe = vec![false; n];
-    let mut chain: Vec<(u32, f32)> = vec![(0, 0.0); n];
-    for k in 1..n {
-        if a.season[k] as usize != s {
-            continue;
-        }
-        let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
-        let same = par != 0 && a.season[par] as usize == s;
-        let (from, reach, rec_par) = if same { (chain[par].0, chain[par].1, maybe[par]) } else { (par as u32, 0.0, w.moved[par]) };
-        let reach = reach + (t.input.nodes[k].pos - t.input.nodes[par].pos).length();
-        chain[k] = (from, reach);
-        maybe[k] = w.own[k] || rec_par;
-        if maybe[k] {
-            let (c, r) = (t.pos[from as usize], reach * 1.01 + 0.01);
-            (*lo, *hi) = (lo.min(c - r), hi.max(c + r));
-        }
-    }
-    if !(w.prunes || s == a.seasons as usize) {
-        return;
-    }
-    let may = |k: u32| w.done[k as usize] || maybe[k as usize];
-    for (c, o) in a.stages[s].iter().zip(occ) {
-        let Some(o) = o else { continue };
-        let touched = match c.lobe {
-            Some(l) => a.lobes[l as usize].nodes.iter().any(|&k| may(k)),
-            None => may(c.anchor),
-        };
-        if touched {
-            (*lo, *hi) = (lo.min(o.center - 0.01), hi.max(o.center + 0.01));
         }
     }
 }
