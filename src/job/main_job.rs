@@ -609,12 +609,7 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     }
     // A close view into the final forest, where the species' architectures show.
     if let Some(&y) = years.last() {
-        let (ex, ey) = site.extent_m();
-        let (x0, y0) = (0.3 * ex, 0.3 * ey);
-        let (x1, y1) = (0.45 * ex, 0.45 * ey);
-        let z0 = site.elevation_at(x0, y0) + 45.0;
-        let z1 = site.elevation_at(x1, y1) + 5.0;
-        let cam = Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0);
+        let cam = closeup_camera(&site);
         drop(stage);
         stage = new_stage()?;
         stage.set_stumps(stumps, y);
@@ -646,6 +641,18 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, key, &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
     sink(&Event::TimelapseDone);
     Ok((stills, Film { gif, frames, mp4 }))
+}
+
+/// The camera of the close-up still (`stills/year_NNNN_closeup.png`; `sylva render --camera
+/// closeup`): from 45 m above the ground at 30 % of the site's width and height towards 5 m
+/// above the ground at 45 %, a 50° field of view.
+pub fn closeup_camera(site: &SiteConditions) -> Camera {
+    let (ex, ey) = site.extent_m();
+    let (x0, y0) = (0.3 * ex, 0.3 * ey);
+    let (x1, y1) = (0.45 * ex, 0.45 * ey);
+    let z0 = site.elevation_at(x0, y0) + 45.0;
+    let z1 = site.elevation_at(x1, y1) + 5.0;
+    Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0)
 }
 
 /// The living trees of the last snapshot, for the adapted close-up: what [`scene::Plant`]
