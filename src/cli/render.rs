@@ -198,7 +198,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
     let year = match a.year {
         Some(y) => y,
-        None => sylva::job::inventory::snapshots(&a.run_dir)?.iter().map(|s| s.0).max().with_context(|| format!("{}: the run directory has no snapshots (inventory/year_NNNN.csv)", a.run_dir.display()))?,
+        None => sylva::job::inventory::snapshots(&a.run_dir)?.iter().map(|s| s.0).max().with_context(|| format!("{}: the run directory has no snapshots (inventory/year_NNNN.parquet or .csv)", a.run_dir.display()))?,
     };
     let rows = pictures::snapshot_rows(&a.run_dir, year)?;
     let unknown = rows.iter().filter(|r| stage.library.find(&r.species).is_none()).count();

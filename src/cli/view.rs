@@ -77,9 +77,10 @@ fn parse_view_camera(s: &str) -> Result<sylva::render::camera::CameraPreset, Str
 /// Opens the viewer.
 pub fn view(a: ViewArgs) -> anyhow::Result<()> {
     let opts = a.window.options()?;
-    sylva::gui::check_display()?;
+    // the run directory first: a mistyped one is named as such, with or without a display
     let sc_path = a.run_dir.join("scenario.toml");
     let sc = Scenario::load(&sc_path).with_context(|| format!("{} is not a Sylva run directory", a.run_dir.display()))?;
+    sylva::gui::check_display()?;
     let site = super::simulate::load_site(&sc)?;
     let run_species = super::simulate::run_species_dir(&a.run_dir);
     let mut dirs: Vec<&std::path::Path> = Vec::new();

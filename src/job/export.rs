@@ -206,7 +206,7 @@ fn open_export(run_dir: &Path, year: Option<u32>, levels: &[usize], area: Option
     let site = sc.site()?;
     let year = match year {
         Some(y) => y,
-        None => super::inventory::snapshots(run_dir)?.iter().map(|s| s.0).max().ok_or_else(|| Error::format(run_dir, "no inventory snapshots (inventory/year_NNNN.csv)"))?,
+        None => super::inventory::snapshots(run_dir)?.iter().map(|s| s.0).max().ok_or_else(|| Error::format(run_dir, "no inventory snapshots (inventory/year_NNNN.parquet or .csv)"))?,
     };
     if let Some(&l) = levels.iter().find(|&&l| l >= LOD_LEVELS) {
         return Err(invalid("--lod", l.to_string(), format!("levels 0–{}", LOD_LEVELS - 1)));

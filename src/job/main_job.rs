@@ -322,6 +322,11 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
     if let Stepping::Local(n) = stepping {
         context(super::tiled::check_tile_count(&site, sc, n), || format!("simulating {}", sc.name))?;
     }
+    // `--resume` into a folder that holds no run (a mistyped --out) is refused before the
+    // species files below would make it look like one (a trial's resume started from year 0)
+    if opts.resume && !super::checkpoint::exists(&out) {
+        context(super::run::started_here(&out, &out.join(super::checkpoint::FILE)).map_err(JobError::from), || format!("simulating {}", sc.name))?;
+    }
     // a resumed run keeps the species files it was simulated with (a changed species is
     // refused by the checkpoint before anything is written)
     if !(opts.resume && super::checkpoint::exists(&out)) {
@@ -434,9 +439,12 @@ impl MainJobSummary {
         let mut table = String::new();
         let _ = writeln!(table, "| quantity | value |\n|---|---|");
         let _ = writeln!(table, "| year | {} |", s.year);
-        let _ = writeln!(table, "| trees alive (all sizes) | {} |", s.trees_alive);
+        // the tree list holds every individual tree; natural regeneration enters it at 4 m, its
+        // saplings below are cohorts counted apart (a trial read "all sizes" as including them)
+        let _ = writeln!(table, "| trees alive (the tree list: planted and seeded trees, recruits ≥ 4 m) | {} |", s.trees_alive);
         if let Some(r) = last {
-            let _ = writeln!(table, "| stems ≥ 1.3 m per ha | {:.0} |", r.stems_ha);
+            let _ = writeln!(table, "| stems ≥ 1.3 m per ha (tree list) | {:.0} |", r.stems_ha);
+            let _ = writeln!(table, "| saplings below 4 m per ha (regeneration cohorts) | {:.0} |", r.regeneration_ha);
             let _ = writeln!(table, "| basal area (m²/ha) | {:.1} |", r.basal_area_m2_ha);
             let _ = writeln!(table, "| top height H100 (m) | {:.1} |", r.top_height_m);
             let _ = writeln!(table, "| quadratic mean DBH (cm) | {:.1} |", r.qmd_cm);
