@@ -319,11 +319,11 @@ impl LeafCover {
 /// ([`crate::sim::phases::light::crown_leaf_area`]: LAI `2 + 0.5 · shade tolerance` × π r²,
 /// the leaf area the light model shades with), its leaf cards `lv` (in the tree's own frame,
 /// stem base at the origin, m) lengthened by at most 1.5 and the rest as leaf-cluster cards
-/// ([`super::export::sprig_cards`], which returns them as a mesh in the same frame).
+/// ([`super::leaf_area::sprig_cards`], which returns them as a mesh in the same frame).
 pub fn crown_leaf_cards(lv: &mut Leaves, t: &StandTree, sp: &crate::species::Species, cover: &LeafCover) -> TriMesh {
     let k = t.species as usize;
     let leaf_area = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m);
-    super::export::sprig_cards(lv, leaf_area, cover.card[k], cover.sprig[k], t.crown_radius_m, t.species as u64)
+    super::leaf_area::sprig_cards(lv, leaf_area, cover.card[k], cover.sprig[k], t.crown_radius_m, t.species as u64)
 }
 
 /// One adapted tree meshed for drawing ([`adapted_model`]).

@@ -12,6 +12,7 @@ pub mod export;
 pub mod hemi;
 pub mod inventory;
 pub mod keyframes;
+pub mod leaf_area;
 pub mod main_job;
 pub mod maps;
 pub mod pictures;
