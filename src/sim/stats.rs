@@ -320,6 +320,47 @@ fn is_stem(h: f32) -> bool {
     h.partial_cmp(&1.3) != Some(std::cmp::Ordering::Less)
 }
 
+/// Widths (bits) of the digits [`kth_smallest_by`] selects by, from the top of the 32-bit key.
+const DIGITS_32: [u32; 3] = [11, 11, 10];
+
+/// The `k`-th smallest (0-based) of values held in parts (the ranks of a tiled run, or one
+/// part), in `f32::total_cmp`'s order, each part passing its own `values`; `None` when the parts
+/// hold `k` values or fewer. Nothing per value is passed: a radix selection over the monotone
+/// 32-bit key of the values ([`total_key`]) digit by digit ([`DIGITS_32`]: 11, 11, 10 bits):
+/// every part counts its candidates per digit value, the counts are summed (`reduce`), and
+/// every part keeps the candidates of the digit value where the `k`-th falls. Three reductions
+/// of 1,024–2,048 counts; the value found is the one a sort of all the parts' values puts at
+/// `k`, bit for bit (e.g. the site's median insolation, [`super::world::insolation_median_by`]).
+///
+/// Errors: those of `reduce`.
+pub fn kth_smallest_by(values: &[f32], k: u64, reduce: &mut Reduce) -> crate::Result<Option<f32>> {
+    let mut cand: Vec<u32> = values.iter().map(|&v| total_key(v)).collect();
+    let (mut k, mut shift, mut prefix) = (k, 32u32, 0u32);
+    for &w in DIGITS_32.iter() {
+        shift -= w;
+        let mask = (1u32 << w) - 1;
+        let mut hist = vec![0u64; 1 << w];
+        for &key in &cand {
+            hist[((key >> shift) & mask) as usize] += 1;
+        }
+        let hist = reduce(hist)?;
+        let mut acc = 0u64;
+        let Some(pick) = (0..hist.len()).find(|&b| {
+            if acc + hist[b] > k {
+                return true;
+            }
+            acc += hist[b];
+            false
+        }) else {
+            return Ok(None);
+        };
+        k -= acc;
+        prefix |= (pick as u32) << shift;
+        cand.retain(|&key| (key >> shift) & mask == pick as u32);
+    }
+    Ok(Some(from_total_key(prefix)))
+}
+
 /// Widths (bits) of the digits [`top_height_by`] selects by, from the top of the 64-bit key
 /// (DBH's [`total_key`], then height's): histograms of 1,024–2,048 counts per round.
 const DIGITS: [u32; 6] = [10, 11, 11, 11, 11, 10];
