@@ -296,3 +296,56 @@ fn the_median_insolation_by_selection_over_windows_equals_the_sorted_median() {
         assert_eq!(one.to_bits(), want.to_bits(), "{file}");
     }
 }
+
+/// Bit equality of two sites' every grid and scalar.
+fn assert_same_site(a: &conditions::SiteConditions, b: &conditions::SiteConditions, what: &str) {
+    assert_eq!((&a.geo, a.cell_x_m.to_bits(), a.cell_y_m.to_bits(), &a.mask), (&b.geo, b.cell_x_m.to_bits(), b.cell_y_m.to_bits(), &b.mask), "{what}");
+    for (name, x, y) in [
+        ("elevation", &a.elevation_m, &b.elevation_m),
+        ("slope", &a.slope_deg, &b.slope_deg),
+        ("aspect", &a.aspect_deg, &b.aspect_deg),
+        ("TWI", &a.twi, &b.twi),
+        ("insolation", &a.insolation_kwh_m2, &b.insolation_kwh_m2),
+        ("wind", &a.wind_exposure, &b.wind_exposure),
+        ("temperature", &a.temperature_c, &b.temperature_c),
+    ] {
+        assert_bits(x, y, &format!("{what}: {name}"));
+    }
+    assert!(a.indices.data.iter().zip(&b.indices.data).all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)) && a.indices.data.len() == b.indices.data.len(), "{what}: indices");
+}
+
+#[test]
+fn ranks_deriving_their_bands_of_a_geotiff_site_hold_the_site_of_one_process() {
+    // `job::site_ranks::site_by_ranks` over the in-process transport (the exchanges of an
+    // `mpirun`): a scenario's window of a file, a whole stripped file with nodata corners, the
+    // geographic DEM; 2, 3 and 5 ranks (5 bands of a 40-row site: some bands lie wholly in
+    // another's halo)
+    use sylva::sim::tiles::LocalTransport;
+    for (terrain, what) in [
+        (format!("path = \"{}\"\nwindow = [140, 100, 60, 40]", root("terrains/coweeta_10m_utm17n.tif").display()), "Coweeta window"),
+        (format!("path = \"{}\"", root("terrains/jacksboro_fault_dem_utm16n.tif").display()), "default DEM"),
+        (format!("path = \"{}\"\nwindow = [10, 20, 200, 150]", root("terrains/jacksboro_fault_dem.tif").display()), "geographic window"),
+    ] {
+        let toml = format!("name = \"bands\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\nlight_cell_m = 10.0\n[terrain]\n{terrain}\n");
+        let sc = sylva::sim::Scenario::from_toml_str(&toml, "bands").unwrap();
+        let one = sc.site().unwrap();
+        for n in [2, 3, 5] {
+            let got: Vec<conditions::SiteConditions> = std::thread::scope(|s| {
+                let hs: Vec<_> = LocalTransport::group(n).into_iter().map(|mut t| { let sc = &sc; s.spawn(move || sylva::job::site_ranks::site_by_ranks(sc, &mut t).unwrap()) }).collect();
+                hs.into_iter().map(|h| h.join().unwrap()).collect()
+            });
+            for (k, site) in got.iter().enumerate() {
+                assert_same_site(site, &one, &format!("{what}, rank {k} of {n}"));
+            }
+        }
+    }
+    // a window outside the file fails on every rank as one process fails
+    let toml = format!("name = \"bands\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\n[terrain]\npath = \"{}\"\nwindow = [300, 0, 100, 10]\n", root("terrains/coweeta_10m_utm17n.tif").display());
+    let sc = sylva::sim::Scenario::from_toml_str(&toml, "bands").unwrap();
+    let want = sc.site().unwrap_err().to_string();
+    let errs: Vec<String> = std::thread::scope(|s| {
+        let hs: Vec<_> = LocalTransport::group(2).into_iter().map(|mut t| { let sc = &sc; s.spawn(move || sylva::job::site_ranks::site_by_ranks(sc, &mut t).unwrap_err().to_string()) }).collect();
+        hs.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert!(errs.iter().all(|e| *e == want), "{errs:?} vs {want}");
+}
