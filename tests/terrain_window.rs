@@ -349,3 +349,37 @@ fn ranks_deriving_their_bands_of_a_geotiff_site_hold_the_site_of_one_process() {
     });
     assert!(errs.iter().all(|e| *e == want), "{errs:?} vs {want}");
 }
+
+#[test]
+fn the_kth_smallest_by_counts_is_the_sorted_kth_for_every_k() {
+    use sylva::sim::stats::{alone, kth_smallest_by};
+    use sylva::sim::tiles::{LocalTransport, Transport};
+    // duplicates, both zeros, negatives, infinities, subnormals and a NaN, in total_cmp order
+    let mut x = 99u64;
+    let mut v: Vec<f32> = (0..400)
+        .map(|_| {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            ((x % 2001) as f32 - 1000.0) / 8.0
+        })
+        .collect();
+    v.extend([0.0, -0.0, f32::INFINITY, f32::NEG_INFINITY, f32::MIN_POSITIVE / 4.0, f32::NAN, 3.0, 3.0]);
+    let mut sorted = v.clone();
+    sorted.sort_by(|a, b| a.total_cmp(b));
+    for k in 0..v.len() {
+        let got = kth_smallest_by(&v, k as u64, &mut alone).unwrap().unwrap();
+        assert_eq!(got.to_bits(), sorted[k].to_bits(), "k = {k}: {got} vs {}", sorted[k]);
+    }
+    assert_eq!(kth_smallest_by(&v, v.len() as u64, &mut alone).unwrap(), None);
+    assert_eq!(kth_smallest_by(&[], 0, &mut alone).unwrap(), None);
+    // in three parts of different sizes, over the in-process transport
+    let parts = [&v[..50], &v[50..51], &v[51..]];
+    for k in [0, 1, 203, 204, v.len() - 1] {
+        let got: Vec<Option<f32>> = std::thread::scope(|s| {
+            let hs: Vec<_> = LocalTransport::group(3).into_iter().zip(parts).map(|(mut t, p)| s.spawn(move || kth_smallest_by(p, k as u64, &mut |c| t.all_sum(c)).unwrap())).collect();
+            hs.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        assert!(got.iter().all(|g| g.map(f32::to_bits) == Some(sorted[k].to_bits())), "k = {k}: {got:?} vs {}", sorted[k]);
+    }
+}
