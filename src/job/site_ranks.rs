@@ -151,14 +151,17 @@ pub fn site_by_ranks(sc: &Scenario, t: &mut dyn Transport) -> Result<SiteConditi
             m
         }
     };
-    let got = t.exchange(vec![mine; n])?;
+    // a copy for every other rank; this rank's own goes to itself without one
+    let mut out: Vec<Vec<u8>> = (0..n).map(|k| if k == me { Vec::new() } else { mine.clone() }).collect();
+    out[me] = mine;
+    let got = t.exchange(out)?;
     part?;
     for (k, m) in got.iter().enumerate() {
         if m.first() != Some(&0) {
             return Err(Error::Exchange { peer: k, reason: format!("rank {k} failed: {}", String::from_utf8_lossy(m.get(1..).unwrap_or(&[]))) });
         }
     }
-    assemble(&got, &bands, w, h, geo)
+    assemble(got, &bands, w, h, geo)
 }
 
 /// Every rank learns whether `r` (each rank's own result, e.g. reading the DEM's header) failed
@@ -190,19 +193,20 @@ fn encode(e: &mut Enc<Vec<u8>>, c: &SiteConditions) {
 }
 
 /// The site of `w × h` cells from the ranks' bands (`got[k]`: rank `k`'s message, [`encode`]d
-/// after a 0 byte), rows in rank order.
+/// after a 0 byte), rows in rank order; each message is dropped once read, so the peak is about
+/// the site plus one band's message.
 ///
 /// Errors: [`Error::Exchange`] naming a rank whose message is short or of the wrong size.
-fn assemble(got: &[Vec<u8>], bands: &[Window], w: usize, h: usize, geo: crate::grid::GeoRef) -> Result<SiteConditions> {
+fn assemble(got: Vec<Vec<u8>>, bands: &[Window], w: usize, h: usize, geo: crate::grid::GeoRef) -> Result<SiteConditions> {
     let mut grids: Vec<Vec<f32>> = vec![Vec::with_capacity(w * h); 8];
     let mut ix: Vec<[f32; 6]> = Vec::with_capacity(w * h);
     let (mut cx, mut cy) = (None, None);
-    for (k, (m, b)) in got.iter().zip(bands).enumerate() {
+    for (k, (m, b)) in got.into_iter().zip(bands).enumerate() {
         if b.height == 0 {
             continue;
         }
         let fail = |s: Short| Error::Exchange { peer: k, reason: format!("site band message cut short at byte {}", s.at()) };
-        let mut d = Dec::at(m, 1, &fail);
+        let mut d = Dec::at(&m, 1, &fail);
         let cells = b.width * b.height;
         let bad = |what: &str, len: usize| Error::Exchange { peer: k, reason: format!("site band {b} of rank {k}: {len} {what}, expected {cells}") };
         for g in grids.iter_mut() {
