@@ -219,6 +219,12 @@ fn pool_and_png_terrain_keys_are_checked() {
     // a start whose species is not in the pool, and a species listed twice
     let e = Scenario::from_toml_str(&format!("species = [\"silver_birch\"]\n{SC}"), "p.toml").unwrap_err().to_string();
     assert!(e.contains("p.toml") && e.contains("start[0].species") && e.contains("beech"), "{e}");
+    // a pool entry misspelt (two letters from the start's species) is named, not the start
+    let e = Scenario::from_toml_str(&format!("species = [\"silver_birch\", \"beeech\"]\n{SC}"), "p.toml").unwrap_err().to_string();
+    assert!(e.contains("species[1]") && e.contains("beeech") && !e.contains("start[0].species"), "{e}");
+    // a negative year count: the field's range, not the type's as well
+    let e = Scenario::from_toml_str(&SC.replace("years = 2", "years = -5"), "p.toml").unwrap_err().to_string();
+    assert!(e.contains("`years`: expected the number of years to simulate") && e.contains("1–10000") && !e.contains("4294967295"), "{e}");
     let e = Scenario::from_toml_str(&format!("species = [\"beech\", \"beech\"]\n{SC}"), "p.toml").unwrap_err().to_string();
     assert!(e.contains("species[1]") && e.contains("once"), "{e}");
     // cell size and height range only for PNG heightmaps, and then they are used

@@ -25,7 +25,7 @@ pub struct Args {
     /// 4.1+), not adapted one by one: the whole forest for a game engine.
     #[arg(long)]
     pub instances: bool,
-    /// Season of the foliage colours: spring, summer, autumn, winter.
+    /// Season of the foliage colours: spring, summer, autumn (or fall), winter.
     #[arg(long, default_value = "summer", value_parser = super::render::parse_season)]
     pub season: Season,
     /// Levels of detail to write: `0`, the default, one full-detail mesh per tree (what

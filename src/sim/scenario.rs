@@ -251,6 +251,34 @@ fn plain_type_words(msg: &str) -> String {
     m
 }
 
+/// The length `N` of serde's "invalid length …, expected an array of length N" in `msg`.
+fn wrong_length(msg: &str) -> Option<usize> {
+    let rest = msg.split("expected an array of length ").nth(1)?;
+    rest.split(|c: char| !c.is_ascii_digit()).next()?.parse().ok()
+}
+
+/// The first key, in the TOML table whose header or line holds byte `at` of `text`, whose value
+/// is a one-line array of numbers with a length other than `want` (`None` when there is none).
+fn key_with_array_len_not(text: &str, at: usize, want: usize) -> Option<String> {
+    let at = at.min(text.len());
+    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    for (i, line) in text[start..].lines().enumerate() {
+        let t = line.trim();
+        if i > 0 && t.starts_with('[') {
+            break;
+        }
+        let Some((key, value)) = t.split_once('=') else { continue };
+        let value = value.trim();
+        if let Some(inner) = value.strip_prefix('[').and_then(|v| v.split(']').next()) {
+            let n = inner.split(',').filter(|x| !x.trim().is_empty()).count();
+            if n != want {
+                return Some(key.trim().to_string());
+            }
+        }
+    }
+    None
+}
+
 /// The key of the `key = value` line of `text` holding byte `at` (`None` when that line is no
 /// such line, e.g. inside a table header or an inline table).
 fn key_at(text: &str, at: usize) -> Option<String> {
@@ -299,7 +327,21 @@ impl Scenario {
             let mut msg = plain_type_words(&e.to_string());
             // a wrong type on a top-level field: what the field holds besides its type
             if let Some(hint) = e.span().and_then(|sp| key_at(text, sp.start)).and_then(|k| field_hint(&k).map(|h| (k, h))) {
-                msg = format!("{}\n`{}`: {}", msg.trim_end(), hint.0, hint.1);
+                // the type's own range ("from 0 to 4294967295") gives way to the field's (a
+                // trial read two ranges in one message for `years = -5`)
+                let msg_type = match msg.trim_end().rfind(", expected ") {
+                    Some(i) => msg[..i].to_string(),
+                    None => msg.trim_end().to_string(),
+                };
+                msg = format!("{msg_type}\n`{}`: expected {}", hint.0, hint.1);
+            }
+            // a wrong-length array inside a tagged table (an `[[obstacle]]`): serde points at
+            // the table and names no field, so the field is found in the table's lines (a trial
+            // could not tell which of `center` and `half` was meant)
+            if let Some((want, sp)) = wrong_length(&msg).zip(e.span()) {
+                if let Some(key) = key_with_array_len_not(text, sp.start, want) {
+                    msg = format!("{}\n`{key}`: expected an array of {want} numbers", msg.trim_end());
+                }
             }
             Error::format(name, msg)
         })?;
@@ -422,6 +464,12 @@ impl Scenario {
         // a start listing a species outside the pool would grow a species the scenario excludes
         for (i, st) in self.start.iter().enumerate() {
             if !self.species.is_empty() && !self.species.iter().any(|p| p == st.species()) {
+                // a pool entry one or two letters from the start's species is most likely the
+                // misspelt one (a trial's `species = ["beeech"]` was blamed on the start)
+                let near = self.species.iter().enumerate().find(|(_, p)| strsim::damerau_levenshtein(p, st.species()) <= 2);
+                if let Some((j, p)) = near {
+                    return Err(invalid(ctx, &format!("species[{j}]"), p, &format!("a species id of the library; start[{i}] names `{}`: is that meant? (`sylva species list` lists the ids)", st.species())));
+                }
                 return Err(invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("one of the scenario's species = {:?} (add it there)", self.species)));
             }
         }
