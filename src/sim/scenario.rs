@@ -694,7 +694,7 @@ spacing_m = 2.0
         // a wrong type says what the field holds, not only the type's range
         for bad in ["-1", "\"x\"", "2.5"] {
             let e = Scenario::from_toml_str(&OK.replace("seed = 3", &format!("seed = 3\nsnapshot_every = 5\ninventory_every = {bad}")), "t.toml").unwrap_err().to_string();
-            assert!(e.contains("t.toml") && e.contains("`inventory_every`: years between tree inventories") && e.contains("multiple of snapshot_every"), "{e}");
+            assert!(e.contains("t.toml") && e.contains("`inventory_every`: expected years between tree inventories") && e.contains("multiple of snapshot_every"), "{e}");
         }
     }
 }
