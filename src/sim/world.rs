@@ -138,15 +138,15 @@ pub struct Tallies {
 /// unmasked cells' insolation (the value at index `n / 2` of the `n` unmasked cells sorted in
 /// `f32::total_cmp` order), or 1 when that is not positive or no cell is unmasked. `insolation`
 /// and `mask` are a part of the site (a rank's window, or the whole site); `reduce` sums counts
-/// over the parts ([`super::stats::alone`] for one part), and the count of unmasked cells and
-/// the selection ([`super::stats::kth_smallest_by`], 3 reductions) pass counts, no values, so
+/// over the parts ([`super::select::alone`] for one part), and the count of unmasked cells and
+/// the selection ([`super::select::kth_smallest_by`], 3 reductions) pass counts, no values, so
 /// the parts find the whole site's median bit for bit.
 ///
 /// Errors: those of `reduce`.
-pub fn insolation_median_by(insolation: &crate::grid::Grid<f32>, mask: &crate::grid::Grid<bool>, reduce: &mut super::stats::Reduce) -> Result<f32> {
+pub fn insolation_median_by(insolation: &crate::grid::Grid<f32>, mask: &crate::grid::Grid<bool>, reduce: &mut super::select::Reduce) -> Result<f32> {
     let ins: Vec<f32> = insolation.data.iter().zip(&mask.data).filter(|(_, m)| **m).map(|(v, _)| *v).collect();
     let n = reduce(vec![ins.len() as u64])?.first().copied().unwrap_or(0);
-    Ok(super::stats::kth_smallest_by(&ins, n / 2, reduce)?.filter(|m| *m > 0.0).unwrap_or(1.0))
+    Ok(super::select::kth_smallest_by(&ins, n / 2, reduce)?.filter(|m| *m > 0.0).unwrap_or(1.0))
 }
 
 impl Site {
@@ -304,7 +304,7 @@ impl World {
                 }
             })
             .collect();
-        let median = insolation_median_by(&site.insolation_kwh_m2, &site.mask, &mut super::stats::alone)?;
+        let median = insolation_median_by(&site.insolation_kwh_m2, &site.mask, &mut super::select::alone)?;
         let rel_insolation = site.insolation_kwh_m2.data.iter().map(|v| (v / median).clamp(0.2, 1.5)).collect();
         let suitability = pool.iter().map(|&s| site.indices.data.par_iter().zip(&site.mask.data).map(|(ix, m)| if *m { lib.species[s as usize].suitability(ix) } else { 0.0 }).collect()).collect();
         let valid = site.mask.data.iter().filter(|m| **m).count();
