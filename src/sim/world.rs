@@ -73,6 +73,8 @@ pub struct Site {
     /// The light grid (canopy, ground light, spatial hash and regeneration cells; row 0 south).
     pub light: LightGrid,
     /// Site cell index (row-major, row 0 north) of each light cell; `u32::MAX` where masked.
+    /// One process: every light cell; a tile ([`super::tiles::Tile`], `window` set): its own
+    /// cells only, indexed by [`super::light_grid::Span`] (issue 37 Build 1).
     pub light_site: Vec<u32>,
     /// Relative insolation (cell insolation / median of unmasked cells, clamped 0.2–1.5) per site cell.
     pub rel_insolation: Vec<f32>,
@@ -86,7 +88,8 @@ pub struct Site {
     pub obstacles: Vec<super::obstacle::ObstacleSpec>,
     /// Canopy entries of the obstacles on the light grid ([`super::obstacle::light_cells`]).
     pub obstacle_canopy: Vec<(u64, f32)>,
-    /// Fraction (0–1) of each light cell's ground not covered by a solid obstacle.
+    /// Fraction (0–1) of each light cell's ground not covered by a solid obstacle. A tile holds
+    /// its own cells only, as `light_site`.
     pub ground_free: Vec<f32>,
     /// The light cells whose regeneration this world steps: a tile's (`sim::tiles`); `None`
     /// (one process): all.
@@ -117,7 +120,8 @@ pub struct Stand {
 pub struct Scratch {
     /// Spatial hash of the trees at the last light phase (cells of the light grid).
     pub grid: SpatialGrid,
-    /// Relative light at the ground (0–1.5) per light cell, from the last light phase.
+    /// Relative light at the ground (0–1.5) per light cell, from the last light phase; a tile
+    /// ([`Site::window`] set) holds its own cells only, as [`Site::light_site`].
     pub ground_light: Vec<f32>,
     /// Trees that died in the current year (cleared at the start of each year).
     pub dead: Vec<DeadTree>,
