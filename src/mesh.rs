@@ -78,6 +78,12 @@ impl TreeMesh {
     }
 }
 
+/// Offset of the texture coordinate u (0–1 on a card) that marks a leaf-cluster card among a
+/// level's leaf cards: the renderer draws a card whose u runs from `CLUSTER_CARD_U` to
+/// `CLUSTER_CARD_U + 1` with its species' leaf-cluster texture instead of its leaf texture (the
+/// sprigs that carry a full-detail tree's crown leaf area, `job::adapted::adapted_model`).
+pub const CLUSTER_CARD_U: f32 = 2.0;
+
 /// Number of levels of detail, defined once: the chain `structure::mesh::lod_chain` builds
 /// (full mesh, reduced skeleton with leaf clusters, crown hull, impostor) and the levels the
 /// renderer draws (`render::lod::drawn_levels`: the first three meshes, then its own billboard).

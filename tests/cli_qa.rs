@@ -119,6 +119,10 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     assert!(d.join("snap_final/inventory/year_0002.gpkg").is_file() && !d.join("snap_final/inventory/year_0001.gpkg").exists() && d.join("snap_final/inventory/year_0001.parquet").is_file());
     let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all", "--gpkg", "every-snapshot"]);
     assert!(ok && d.join("snap_all/inventory/year_0001.gpkg").is_file() && d.join("snap_all/inventory/year_0002.gpkg").is_file(), "{err}");
+    // --resume into a folder that holds no run (a mistyped --out) is refused, and makes no
+    // folder (a trial's resume started a new run from year 0)
+    let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_typo", "--resume"]);
+    assert!(!ok && err.contains("no checkpoint in the run directory") && err.contains("no run started there") && !d.join("snap_typo/species").exists(), "{err}");
     // a second run into a run's folder says that it replaces the earlier run's files
     let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all"]);
     assert!(ok && err.contains("snap_all holds an earlier run (snap)") && err.contains("--resume"), "{err}");

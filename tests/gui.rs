@@ -522,3 +522,36 @@ fn the_viewer_draws_the_terrain_around_the_window_and_the_sky_above_it() {
     assert!(lower < 0.02, "the ground below it, out to the view's edges: sky share {lower:.3}");
     assert!(corners.iter().all(|&c| c < 0.02), "the terrain around the window in the bottom corners: {corners:?}");
 }
+
+/// Issue 32: `sylva view --camera ground --screenshot` waits for the adapted near field and the
+/// screenshot draws it: the trees near the camera that the frame draws at the full level are
+/// their own adapted full-detail meshes (the viewer logs them by the level the frame drew them
+/// at), not the species' models, with the skeleton nodes of full-detail trees (hundreds; the
+/// stills' 48-strand trees have about 60).
+#[test]
+fn the_viewer_screenshot_shows_the_adapted_near_field() {
+    let Some(x) = xvfb(61) else { return };
+    let out = tempfile::tempdir().unwrap();
+    let run = run_dir().join("run");
+    let shot = out.path().join("near.png");
+    let (ok, err) = sylva_on(Some(&x.display), &["view", run.to_str().unwrap(), "--camera", "ground", "--screenshot", shot.to_str().unwrap(), "--frames", "2", "--window", "1000x640", "-v"], &[]);
+    assert!(ok && !err.contains("panicked"), "{err}");
+    let line = err.lines().find(|l| l.contains("near field drawn:")).unwrap_or_else(|| panic!("no near field drawn: {err}"));
+    eprintln!("{line}");
+    let num_after = |key: &str| -> usize {
+        let rest = &line[line.find(key).unwrap_or_else(|| panic!("`{key}` in {line}")) + key.len()..];
+        rest.trim_start().split(|c: char| !c.is_ascii_digit()).next().unwrap().parse().unwrap()
+    };
+    let adapted = num_after("near field drawn:");
+    let full = num_after("adapted trees,");
+    let nodes = num_after("median");
+    assert!(adapted >= 1 && full >= 1 && full <= adapted, "{line}");
+    assert!(nodes >= 200, "full-detail skeletons: median {nodes} nodes ({line})");
+    // the screenshot was taken after them: two frames drawn, the first with the adapted trees
+    let pos = |s: &str| err.find(s).unwrap_or_else(|| panic!("`{s}` in {err}"));
+    assert!(pos("near field of year 10:") < pos("frame 1 ("), "the first frame waits for the near field: {err}");
+    assert!(err.contains("frame 2 (") && !err.contains("frame 3 ("), "{err}");
+    let img = image::open(&shot).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (1000, 640));
+    assert!(greenish(&img, (20, 60, 640, 600)) > 0.05, "green share {:.3}", greenish(&img, (20, 60, 640, 600)));
+}

@@ -176,6 +176,25 @@ fn main_job_reduced_scenario_writes_every_output() {
     let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
     assert!(md.contains("stills/year_0006_oblique.png") && md.contains("timelapse.gif"));
     assert!(md.contains("(maps/species_year_0006.png)") && md.contains("(maps/basal_area_year_0006.png)"), "{md}");
+
+    // `sylva render --camera closeup` draws the run's close-up again from the run directory:
+    // the same camera, trees and near field, so nearly the same picture (the inventory's
+    // rounded positions and heights aside); the oblique preset is another view
+    let again = dir.path().join("closeup.png");
+    let oblique = dir.path().join("oblique.png");
+    for (cam, png) in [("closeup", &again), ("oblique", &oblique)] {
+        let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["render", out.to_str().unwrap(), "--camera", cam, "--size", "320x180", "--out", png.to_str().unwrap()]).output().unwrap();
+        assert!(res.status.success(), "render --camera {cam}: {}", String::from_utf8_lossy(&res.stderr));
+    }
+    let still = image::open(out.join("stills/year_0006_closeup.png")).unwrap().to_rgb8();
+    let diff = |p: &Path| {
+        let img = image::open(p).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), still.dimensions());
+        img.pixels().zip(still.pixels()).map(|(a, b)| (0..3).map(|k| (a[k] as f64 - b[k] as f64).abs()).sum::<f64>() / 3.0).sum::<f64>() / (320.0 * 180.0)
+    };
+    let (d_close, d_obl) = (diff(&again), diff(&oblique));
+    eprintln!("mean |Δ| against the run's close-up: render --camera closeup {d_close:.2}, oblique {d_obl:.2} grey levels");
+    assert!(d_close < 2.0 && d_obl > 4.0 * d_close.max(1.0), "closeup {d_close:.2}, oblique {d_obl:.2}");
 }
 
 /// The binary's `sylva run`: argument parsing, the printed summary, the exit status

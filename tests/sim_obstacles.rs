@@ -32,7 +32,7 @@ fn obstacle_entries_parse_and_bad_ones_name_file_field_and_expected() {
     assert!(e.contains("t.toml") && e.contains("radius"), "{e}");
     // a 2-element centre: the field named, not only the table
     let e = err("[[obstacle]]\nkind = \"sphere\"\nradius_m = 2.0\ncenter = [20, 20]\n");
-    assert!(e.contains("`center`: expected an array of 3 numbers"), "{e}");
+    assert!(e.contains("`obstacle[0].center` (line ") && e.contains("): expected an array of 3 numbers"), "{e}");
     // outside the site: checked when the world is built
     let sc = Scenario::from_toml_str(&scenario("[[obstacle]]\nkind = \"box\"\nmin = [500.0, 5.0, 0.0]\nmax = [510.0, 8.0, 3.0]\n"), "t.toml").unwrap();
     let lib = sylva::sim::fixtures::library();

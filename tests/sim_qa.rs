@@ -222,6 +222,23 @@ fn pool_and_png_terrain_keys_are_checked() {
     // a pool entry misspelt (two letters from the start's species) is named, not the start
     let e = Scenario::from_toml_str(&format!("species = [\"silver_birch\", \"beeech\"]\n{SC}"), "p.toml").unwrap_err().to_string();
     assert!(e.contains("species[1]") && e.contains("beeech") && !e.contains("start[0].species"), "{e}");
+    // and a start's species misspelt is named, not the pool entry it is near (round 26 trial)
+    let e = Scenario::from_toml_str(&format!("species = [\"beech\", \"silver_birch\"]\n{}", SC.replace("species = \"beech\"", "species = \"beeech\"")), "p.toml").unwrap_err().to_string();
+    assert!(e.contains("`start[0].species` = beeech") && e.contains("did you mean `beech`"), "{e}");
+    // a wrong-length array in the second [[start]] (serde points at the first one): the
+    // table's index, the key and its line (round 26 trial); an inner array too short as well
+    let two = format!("{SC}[[start]]\nkind = \"planted\"\nspecies = \"beech\"\nspacing_m = 2.0\narea = [10, 10, 50]\n");
+    let line = two.lines().position(|l| l.starts_with("area")).unwrap() + 1;
+    let e = Scenario::from_toml_str(&two, "p.toml").unwrap_err().to_string();
+    assert!(e.contains(&format!("`start[1].area` (line {line}): expected an array of 4 numbers")), "{e}");
+    let line = SC.lines().position(|l| l.starts_with("points")).unwrap() + 1;
+    let e = Scenario::from_toml_str(&SC.replace("[80.0, 50.0]]", "[80.0, 50.0, 3.0]]"), "p.toml").unwrap_err().to_string();
+    assert!(e.contains(&format!("`start[0].points` (line {line}): expected an array of 2 numbers")), "{e}");
+    // a blank name and a height no land has are refused (round 26 trial)
+    let e = Scenario::from_toml_str(&SC.replace("name = \"qa\"", "name = \" \""), "p.toml").unwrap_err().to_string();
+    assert!(e.contains("`name`") && e.contains("a name for the scenario"), "{e}");
+    let e = Scenario::from_toml_str(&SC.replace("elevation_m = 300.0", "elevation_m = nan"), "p.toml").unwrap_err().to_string();
+    assert!(e.contains("`terrain.uniform.elevation_m` = NaN") && e.contains("-500–9000 m"), "{e}");
     // a negative year count: the field's range, not the type's as well
     let e = Scenario::from_toml_str(&SC.replace("years = 2", "years = -5"), "p.toml").unwrap_err().to_string();
     assert!(e.contains("`years`: expected the number of years to simulate") && e.contains("1–10000") && !e.contains("4294967295"), "{e}");

@@ -489,3 +489,15 @@ fn every_shipped_species_grows_an_ecomod_tree() {
         let _ = sk;
     }
 }
+
+/// An empty (or blank) species file is one problem naming the file, not every field missing
+/// (a trial got 88 lines of `missing field`).
+#[test]
+fn an_empty_species_file_is_one_problem() {
+    let d = tempfile::tempdir().unwrap();
+    write(d.path(), "empty.toml", " \n\n");
+    let p = species::check_dir(d.path());
+    assert_eq!(p.len(), 1, "{p:?}");
+    let msg = p[0].to_string();
+    assert!(msg.contains("empty.toml") && msg.contains("the file is empty"), "{msg}");
+}

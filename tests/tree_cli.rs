@@ -175,6 +175,16 @@ fn tree_adapt_refuses_bad_input_clearly() {
         let err = String::from_utf8_lossy(&res.stderr);
         assert!(!res.status.success() && err.contains(want), "{extra:?}: {err}");
     }
+    // without --species, a missing input, another file type or a tree with no skeleton is named
+    // as such (a trial was told the sidecar records no species: round 26)
+    let missing = dir.path().join("nope.glb");
+    let obj = dir.path().join("tree.obj");
+    std::fs::write(&obj, b"v 0 0 0\n").unwrap();
+    for (input, want) in [(missing.to_str().unwrap(), "no such file"), (obj.to_str().unwrap(), "expected a .glb"), (glb.to_str().unwrap(), "no skeleton beside it")] {
+        let res = sylva(&["tree", "adapt", "--input", input, "--obstacle", "wall:1.5", "--out", o]);
+        let err = String::from_utf8_lossy(&res.stderr);
+        assert!(!res.status.success() && err.contains(want) && !err.contains("records none"), "{input}: {err}");
+    }
     // an age beyond the species' maximum is refused, as `tree grow` refuses it
     let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "1e9", "--out", o]);
     let err = String::from_utf8_lossy(&res.stderr);

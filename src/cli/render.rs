@@ -48,13 +48,18 @@ pub enum RenderCamera {
     Preset(CameraPreset),
     /// `hemi:X,Y`: an upward fisheye from 1.3 m at (X, Y) (m, world coordinates).
     Hemi(f64, f64),
+    /// `closeup`: the close-up of `sylva run` (`stills/year_NNNN_closeup.png`,
+    /// [`sylva::job::main_job::closeup_camera`]), drawn as the run draws it (without the
+    /// regeneration layer).
+    CloseUp,
 }
 
 fn parse_render_camera(s: &str) -> Result<RenderCamera, String> {
     match sylva::job::hemi::parse_hemi(s) {
         Some(Ok((x, y))) => Ok(RenderCamera::Hemi(x, y)),
         Some(Err(e)) => Err(e.to_string()),
-        None => s.parse::<CameraPreset>().map(RenderCamera::Preset).map_err(|_| format!("camera `{s}`: expected overview, oblique, ground, map or hemi:X,Y")),
+        None if s.eq_ignore_ascii_case("closeup") || s.eq_ignore_ascii_case("close-up") => Ok(RenderCamera::CloseUp),
+        None => s.parse::<CameraPreset>().map(RenderCamera::Preset).map_err(|_| format!("camera `{s}`: expected overview, oblique, ground, map, closeup or hemi:X,Y")),
     }
 }
 
@@ -85,7 +90,8 @@ pub struct RenderArgs {
     /// Snapshot year (default: the last one).
     #[arg(long)]
     pub year: Option<u32>,
-    /// Camera preset: overview, oblique, ground, map; or `hemi:X,Y`, a virtual hemispherical
+    /// Camera preset: overview, oblique, ground, map, closeup (the close-up still of `sylva run`,
+    /// drawn as the run draws it); or `hemi:X,Y`, a virtual hemispherical
     /// photograph (upward equisolid fisheye from 1.3 m at X, Y in metres; a square image of the
     /// size's smaller side; `--stats` gives gap_fraction, openness and simulated_light).
     #[arg(long, default_value = "oblique", value_parser = parse_render_camera)]
@@ -113,7 +119,7 @@ pub struct RenderArgs {
     /// instanced_trees, triangles (drawn), per_level (instances drawn per level),
     /// adapted_per_level (the adapted trees among them), frame_s; trees (live trees of the
     /// snapshot), trees_15m, nodes_median and nodes_min (skeleton nodes of the adapted trees of
-    /// 15 m and taller), leaf_cards (of the adapted trees), mesh_bytes (CPU bytes of the adapted trees' level meshes), stumps (harvested trees drawn as
+    /// 15 m and taller), leaf_cards (of the adapted trees), sprig_cards (leaf-cluster cards carrying the rest of the full-detail trees' crown leaf area, as exports do), adapted_leaf_area_m2 and leaf_area_m2 (one-sided leaf area of the full-detail trees: their adapted leaf cards, and what their full level carries: the crowns' leaf area), mesh_bytes (CPU bytes of the adapted trees' level meshes), stumps (harvested trees drawn as
     /// stumps: cut in the 20 years up to the year; their two instances each are among the
     /// instances drawn)). Its folder is made when missing.
     #[arg(long)]
@@ -184,27 +190,28 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
         anyhow::ensure!(p != &a.out, "--stats {}: the same file as --out; give the statistics their own file (e.g. stats.json)", p.display());
     }
     warn_large_size(a.size);
-    let camera = match a.camera {
-        RenderCamera::Preset(p) => p,
+    let (camera, closeup) = match a.camera {
+        RenderCamera::Preset(p) => (p, false),
+        RenderCamera::CloseUp => (CameraPreset::Oblique, true),
         RenderCamera::Hemi(x, y) => return hemi(&a, x, y),
     };
     let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
     let year = match a.year {
         Some(y) => y,
-        None => sylva::job::inventory::snapshots(&a.run_dir)?.iter().map(|s| s.0).max().with_context(|| format!("{}: the run directory has no snapshots (inventory/year_NNNN.csv)", a.run_dir.display()))?,
+        None => sylva::job::inventory::snapshots(&a.run_dir)?.iter().map(|s| s.0).max().with_context(|| format!("{}: the run directory has no snapshots (inventory/year_NNNN.parquet or .csv)", a.run_dir.display()))?,
     };
     let rows = pictures::snapshot_rows(&a.run_dir, year)?;
     let unknown = rows.iter().filter(|r| stage.library.find(&r.species).is_none()).count();
     if unknown > 0 {
         tracing::warn!("{unknown} trees of species not in the library are not drawn (give their species files with --species-dir)");
     }
-    let cam = stage.camera_for(camera, &rows, a.size.0, a.size.1);
+    let cam = if closeup { sylva::job::main_job::closeup_camera(&stage.site) } else { stage.camera_for(camera, &rows, a.size.0, a.size.1) };
     if !a.adapt {
         stage.set_adapt(None);
     }
     let t = std::time::Instant::now();
     // the regeneration layer of the same snapshot, drawn as saplings (runs without it: none)
-    let regen = sylva::job::inventory::read_regeneration(&a.run_dir, year)?.unwrap_or_default();
+    let regen = if closeup { Vec::new() } else { sylva::job::inventory::read_regeneration(&a.run_dir, year)?.unwrap_or_default() };
     // the stumps of the trees harvested in the 20 years up to the picture's year
     let stumps = pictures::harvest_stumps(&a.run_dir, year)?;
     stage.set_stumps(&stumps, year);
@@ -238,7 +245,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
             "cluster_hulls": ad.cluster_hulls, "hull_triangles": ad.hull_triangles, "per_level": st.per_level, "adapted_per_level": ad.per_level,
             "instanced_trees": st.instances_drawn.saturating_sub(ad.adapted_trees), "instances_drawn": st.instances_drawn, "triangles": st.triangles, "frame_s": frame_s,
             "trees": trees,
-            "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards, "mesh_bytes": ad.mesh_bytes,
+            "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards, "sprig_cards": ad.sprig_cards, "adapted_leaf_area_m2": ad.adapted_leaf_area_m2, "leaf_area_m2": ad.leaf_area_m2, "mesh_bytes": ad.mesh_bytes,
         });
         super::write_stats(path, &j)?;
     }

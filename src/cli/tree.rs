@@ -346,10 +346,26 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     }
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let find = |name: &str| find_species(&lib, name, "species");
+    // the input tree is read first, so that a missing or wrong file is named as such (a trial
+    // was told that the sidecar of a missing file records no species)
+    let input_skeleton = match &a.input {
+        Some(glb) => {
+            anyhow::ensure!(!glb.is_dir(), "--input {}: is a folder; expected a .glb written by `sylva tree grow`", glb.display());
+            anyhow::ensure!(glb.is_file(), "--input {}: no such file", glb.display());
+            // a PNG preview (or any other file) beside the tree shares its skeleton's name, so
+            // its extension is checked (a trial gave the PNG and got the tree adapted)
+            let in_ext = glb.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+            anyhow::ensure!(in_ext == "glb", "--input {}: expected a .glb written by `sylva tree grow` or `sylva tree adapt`", glb.display());
+            let side = sylva::output::gltf::skeleton_sidecar_path(glb);
+            anyhow::ensure!(side.is_file(), "--input {}: no skeleton beside it (expected {}, written by `sylva tree grow --out NAME.glb`)", glb.display(), side.display());
+            Some(sylva::output::gltf::read_skeleton_sidecar(glb)?)
+        }
+        None => None,
+    };
     // the species: given, or (with --input) the one the tree's sidecar records
     let recorded = match &a.input {
-        Some(glb) if glb.extension().is_some_and(|e| e.eq_ignore_ascii_case("glb")) && sylva::output::gltf::skeleton_sidecar_path(glb).is_file() => sylva::output::gltf::read_skeleton_sidecar_species(glb)?,
-        _ => None,
+        Some(glb) => sylva::output::gltf::read_skeleton_sidecar_species(glb)?,
+        None => None,
     };
     let species = match (&a.species, &recorded) {
         (Some(s), _) => s.clone(),
@@ -378,17 +394,9 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
         Model::Light => species_tree::Model::Light,
         Model::Laplacian => species_tree::Model::Laplacian,
     };
-    let sk = match &a.input {
-        Some(glb) => {
-            anyhow::ensure!(!glb.is_dir(), "--input {}: is a folder; expected a .glb written by `sylva tree grow`", glb.display());
-            anyhow::ensure!(glb.is_file(), "--input {}: no such file", glb.display());
-            // a PNG preview (or any other file) beside the tree shares its skeleton's name, so
-            // its extension is checked (a trial gave the PNG and got the tree adapted)
-            let in_ext = glb.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-            anyhow::ensure!(in_ext == "glb", "--input {}: expected a .glb written by `sylva tree grow` or `sylva tree adapt`", glb.display());
+    let sk = match (&a.input, input_skeleton) {
+        (Some(glb), Some(sk)) => {
             let side = sylva::output::gltf::skeleton_sidecar_path(glb);
-            anyhow::ensure!(side.is_file(), "--input {}: no skeleton beside it (expected {}, written by `sylva tree grow --out NAME.glb`)", glb.display(), side.display());
-            let sk = sylva::output::gltf::read_skeleton_sidecar(glb)?;
             // a tree grown as another species would be adapted with this species' parameters
             // and leaves without a word (found by a trial); sidecars before round 24 carry no id
             if let Some(grown_as) = &recorded {
@@ -397,7 +405,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
             check_base(sk.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO))?;
             sk
         }
-        None => species_tree::grow_species_tree(&sp, model, a.age, &[], a.seed)?.skeleton,
+        _ => species_tree::grow_species_tree(&sp, model, a.age, &[], a.seed)?.skeleton,
     };
     // the sky the trees grew under (brightest point at the zenith) and the one they adapt to
     // (global light from --latitude), both with the --sky-rings quadrature, so that the

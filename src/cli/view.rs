@@ -52,16 +52,35 @@ pub struct ViewArgs {
     /// `species/` folder.
     #[arg(long)]
     pub species_dir: Option<PathBuf>,
+    /// First camera: a preset of the stills (overview, oblique or ground: the ground view steps
+    /// into the nearest clearing of the last snapshot, as `sylva render --camera ground` does);
+    /// by default the whole terrain framed by the orbit camera.
+    #[arg(long, value_parser = parse_view_camera)]
+    pub camera: Option<sylva::render::camera::CameraPreset>,
+    /// The trees near a resting camera drawn with their own full-detail meshes, adapted to their
+    /// neighbours (Plastic Trees, as in the stills): on (default) or off (every tree its
+    /// species' model).
+    #[arg(long, default_value = "on", value_parser = ["on", "off"])]
+    pub adapt: String,
     #[command(flatten)]
     pub window: WindowArgs,
+}
+
+fn parse_view_camera(s: &str) -> Result<sylva::render::camera::CameraPreset, String> {
+    use sylva::render::camera::CameraPreset;
+    match s.parse::<CameraPreset>() {
+        Ok(CameraPreset::Map) | Err(_) => Err(format!("camera `{s}`: expected overview, oblique or ground")),
+        Ok(p) => Ok(p),
+    }
 }
 
 /// Opens the viewer.
 pub fn view(a: ViewArgs) -> anyhow::Result<()> {
     let opts = a.window.options()?;
-    sylva::gui::check_display()?;
+    // the run directory first: a mistyped one is named as such, with or without a display
     let sc_path = a.run_dir.join("scenario.toml");
     let sc = Scenario::load(&sc_path).with_context(|| format!("{} is not a Sylva run directory", a.run_dir.display()))?;
+    sylva::gui::check_display()?;
     let site = super::simulate::load_site(&sc)?;
     let run_species = super::simulate::run_species_dir(&a.run_dir);
     let mut dirs: Vec<&std::path::Path> = Vec::new();
@@ -76,7 +95,8 @@ pub fn view(a: ViewArgs) -> anyhow::Result<()> {
         Some(w) => sc.full_terrain().context("reading the terrain around the simulated window")?.map(|t| (t, w)),
         None => None,
     };
-    sylva::view::run(data, sc.climate.sea_level_m, surroundings, &opts)?;
+    let start = sylva::view::ViewStart { seed: sc.seed, obstacles: sc.obstacles.clone(), camera: a.camera, adapt: a.adapt == "on" };
+    sylva::view::run(data, sc.climate.sea_level_m, surroundings, &start, &opts)?;
     said_screenshot(&opts);
     Ok(())
 }

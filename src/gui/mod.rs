@@ -173,13 +173,17 @@ pub struct Screenshot {
     image: Arc<Mutex<Option<Arc<egui::ColorImage>>>>,
     failure: Arc<Mutex<Option<GuiError>>>,
     done: bool,
+    /// This pass does not count ([`Screenshot::hold`]).
+    held: bool,
+    /// Passes held in a row.
+    holds: u32,
 }
 
 impl Screenshot {
     /// A screenshot of the window into `path` after `frames` frames (at least 1); errors go to
     /// `failure`, which [`run_window`] returns.
     pub fn new(path: &Path, frames: u32, failure: Arc<Mutex<Option<GuiError>>>) -> Self {
-        Screenshot { path: path.to_path_buf(), frames: frames.max(1), frame: 0, requested_at: None, image: Arc::new(Mutex::new(None)), failure, done: false }
+        Screenshot { path: path.to_path_buf(), frames: frames.max(1), frame: 0, requested_at: None, image: Arc::new(Mutex::new(None)), failure, done: false, held: false, holds: 0 }
     }
 
     /// Whether the window is still drawing the frames before its screenshot.
@@ -195,9 +199,26 @@ impl Screenshot {
         self.requested_at.is_some()
     }
 
+    /// The app waits for something the screenshot must show (the viewer's adapted near field):
+    /// this pass does not count among the `frames`, unless the app has held for
+    /// [`MAX_HOLD_PASSES`] passes in a row (then it is logged and the frames count again). Call
+    /// before [`Screenshot::frame`].
+    pub fn hold(&mut self) {
+        if self.holds < MAX_HOLD_PASSES {
+            self.held = true;
+        } else if self.holds == MAX_HOLD_PASSES {
+            tracing::warn!("screenshot {}: waited {MAX_HOLD_PASSES} passes; taken without what the window waited for", self.path.display());
+        }
+    }
+
     /// Call once per frame, after the UI is laid out.
     pub fn frame(&mut self, ctx: &egui::Context) {
         if self.done {
+            return;
+        }
+        if std::mem::take(&mut self.held) {
+            self.holds += 1;
+            ctx.request_repaint_after(std::time::Duration::from_millis(50));
             return;
         }
         self.frame += 1;
@@ -237,6 +258,10 @@ impl Screenshot {
         }
     }
 }
+
+/// Most passes in a row a [`Screenshot`] waits for the app ([`Screenshot::hold`]): 12,000
+/// (at least 10 minutes: a held pass is repainted after 50 ms at the soonest).
+pub const MAX_HOLD_PASSES: u32 = 12_000;
 
 /// Writes an egui screenshot (sRGB, unmultiplied alpha made opaque) as PNG (atomically).
 ///

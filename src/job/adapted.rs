@@ -131,6 +131,15 @@ pub struct AdaptStats {
     pub nodes_min: usize,
     /// Leaf cards of the adapted trees' full-detail skeletons together.
     pub leaf_cards: usize,
+    /// Leaf-cluster cards (sprigs, [`crown_leaf_cards`]) of the full-detail trees together:
+    /// the rest of their crowns' leaf area, drawn on their full level.
+    pub sprig_cards: usize,
+    /// Leaf area (m², one-sided) of the full-detail trees' leaf cards as Plastic Trees left them
+    /// (what the stills drew of them until round 25), together.
+    pub adapted_leaf_area_m2: f64,
+    /// Leaf area (m², one-sided) the full-detail trees' full levels carry (their crowns' leaf
+    /// area, [`crown_leaf_cards`]), together.
+    pub leaf_area_m2: f64,
     /// Bytes of the adapted trees' level meshes on the CPU side (positions, normals, texture
     /// coordinates and indices of every level), held during the frame; the renderer's vertex
     /// and index buffers hold about as much again.
@@ -225,7 +234,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
     near.extend(rest);
     let near: Vec<(f32, usize, usize)> = near.into_iter().map(|(n, _)| n).collect();
     let mut st_trees = Vec::with_capacity(near.len());
-    let mut trees_in_groups = 0;
+    let (mut trees_in_groups, mut n_full) = (0, 0);
     for (part, c) in [(&near[..split], &mut cache.full), (&near[split..], &mut cache.far)] {
         if !part.is_empty() {
             let targets: Vec<usize> = part.iter().map(|n| n.2).collect();
@@ -233,64 +242,176 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
             trees_in_groups += st.trees_in_groups;
             st_trees.extend(st.trees);
         }
+        // the full-detail trees are the first adapted
+        n_full = n_full.max(st_trees.len().min(split));
     }
     let adapt_s = t0.elapsed().as_secs_f64();
     let t1 = std::time::Instant::now();
-    #[allow(clippy::type_complexity)]
+    // the full-detail trees (the first `n_full` adapted) carry their crown's leaf area, as the
+    // stand export's do (crown_leaf_cards)
+    let cover = LeafCover::of(library);
     // each adapted tree's skeleton and leaves are moved into its meshing and freed with it, not
     // held beside every tree's meshes (issue 34)
-    let meshed: Vec<Option<(Prototype, f32, f32, bool, usize, usize)>> = st_trees
+    let meshed: Vec<Option<AdaptedModel>> = st_trees
         .into_par_iter()
-        .map(|mut a| {
+        .enumerate()
+        .map(|(k, a)| {
             let t = &trees[a.index];
-            let sp = &library.species[t.species as usize];
-            let (mut sk, mut lv, h) = frame_of(std::mem::take(&mut a.skeleton), std::mem::take(&mut a.leaves), t.base)?;
-            let (n_nodes, n_leaves) = (sk.nodes.len(), lv.leaves.len());
-            let s = 1.0 / h;
-            sk.nodes.iter_mut().for_each(|n| {
-                n.pos *= s;
-                n.radius *= s;
-            });
-            lv.leaves.iter_mut().for_each(|l| {
-                l.pos *= s;
-                l.size *= s;
-            });
-            let (lods, hulled) = adapted_lod_chain(&sk, &lv, &a, t.base, s, &crate::structure::mesh::LodOptions::default());
-            if lods.levels.is_empty() {
-                return None;
-            }
-            let p = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0), look: Some(super::scene::crown_look(sp)) };
-            let r0 = p.normalised_crown_radius();
-            Some((p, h, r0, hulled, n_nodes, n_leaves))
+            adapted_model(a, t, &library.species[t.species as usize], (k < n_full).then_some(&cover))
         })
         .collect();
     let (mut adapted, mut hulls, mut hull_triangles) = (0, 0, 0);
-    let (mut nodes_15m, mut leaf_cards, mut mesh_bytes) = (Vec::new(), 0, 0);
-    for (m, n) in meshed.into_iter().zip(&near) {
-        let Some((p, h, r0, hulled, n_nodes, n_leaves)) = m else { continue };
+    let (mut nodes_15m, mut leaf_cards, mut sprigs, mut mesh_bytes) = (Vec::new(), 0, 0, 0);
+    let (mut adapted_area, mut area) = (0.0f64, 0.0f64);
+    for (k, (m, n)) in meshed.into_iter().zip(&near).enumerate() {
+        let Some(m) = m else { continue };
         if trees[n.2].height_m >= STATS_MIN_HEIGHT_M {
-            nodes_15m.push(n_nodes);
+            nodes_15m.push(m.nodes);
         }
-        leaf_cards += n_leaves;
-        mesh_bytes += p.lods.levels.iter().map(|l| l.bark.byte_size() + l.leaves.byte_size()).sum::<usize>();
-        if hulled {
+        leaf_cards += m.leaf_cards;
+        sprigs += m.sprig_cards;
+        if k < n_full {
+            adapted_area += m.adapted_leaf_area_m2 as f64;
+            area += m.leaf_area_m2 as f64;
+        }
+        mesh_bytes += m.prototype.lods.levels.iter().map(|l| l.bark.byte_size() + l.leaves.byte_size()).sum::<usize>();
+        if m.hulled {
             hulls += 1;
-            hull_triangles += p.lods.levels.get(CLUSTER_HULL_LEVEL).map_or(0, |l| l.triangle_count());
+            hull_triangles += m.prototype.lods.levels.get(CLUSTER_HULL_LEVEL).map_or(0, |l| l.triangle_count());
         }
-        let i = &mut inst[n.1];
-        let sp = &library.species[trees[n.2].species as usize];
-        let (col, amount) = foliage(sp, season);
-        i.species = prototypes.len() as u32;
-        i.height = h;
-        i.crown_radius = r0 * h;
-        i.rotation = 0.0;
-        i.position[2] = trees[n.2].base.z;
-        i.leaf_color = col;
-        i.leaf_amount = amount;
-        prototypes.push(p);
+        let t = &trees[n.2];
+        m.place(&mut inst[n.1], t, &library.species[t.species as usize], season, prototypes.len() as u32);
+        prototypes.push(m.prototype);
         adapted += 1;
     }
-    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards, mesh_bytes })
+    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards, sprig_cards: sprigs, adapted_leaf_area_m2: adapted_area, leaf_area_m2: area, mesh_bytes })
+}
+
+/// The share of a leaf card and of a leaf-cluster card that their textures cover, per species
+/// of a library ([`crate::structure::texture::leaf_card_cover`],
+/// [`crate::structure::texture::cluster_card_cover`] of its leaf shape): what
+/// [`crown_leaf_cards`] needs to give a tree its crown's leaf area.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LeafCover {
+    /// Leaf card cover (0–1) per species index.
+    pub card: Vec<f32>,
+    /// Leaf-cluster card cover (0–1) per species index.
+    pub sprig: Vec<f32>,
+}
+
+impl LeafCover {
+    /// The covers of every species of `library`, in library order.
+    pub fn of(library: &SpeciesLibrary) -> LeafCover {
+        let (card, sprig) = library.species.iter().map(Self::of_species).unzip();
+        LeafCover { card, sprig }
+    }
+
+    /// The leaf card's and the leaf-cluster card's cover of species `sp`.
+    pub fn of_species(sp: &crate::species::Species) -> (f32, f32) {
+        use crate::structure::texture::{cluster_card_cover, leaf_card_cover, LeafShape};
+        let s = LeafShape::of_species(sp);
+        (leaf_card_cover(s), cluster_card_cover(s))
+    }
+}
+
+/// Gives the full-detail tree `t` (of species `sp`) its crown's leaf area, as the stand export
+/// and the stills draw it: the species' crown leaf-area index over its crown projection
+/// ([`crate::sim::phases::light::crown_leaf_area`]: LAI `2 + 0.5 · shade tolerance` × π r²,
+/// the leaf area the light model shades with), its leaf cards `lv` (in the tree's own frame,
+/// stem base at the origin, m) lengthened by at most 1.5 and the rest as leaf-cluster cards
+/// ([`super::export::sprig_cards`], which returns them as a mesh in the same frame).
+pub fn crown_leaf_cards(lv: &mut Leaves, t: &StandTree, sp: &crate::species::Species, cover: &LeafCover) -> TriMesh {
+    let k = t.species as usize;
+    let leaf_area = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m);
+    super::export::sprig_cards(lv, leaf_area, cover.card[k], cover.sprig[k], t.crown_radius_m, t.species as u64)
+}
+
+/// One adapted tree meshed for drawing ([`adapted_model`]).
+#[derive(Debug, Clone)]
+pub struct AdaptedModel {
+    /// Its own prototype (normalised to 1 m: the instance scales it to [`AdaptedModel::height`]).
+    pub prototype: Prototype,
+    /// Height (m, highest node or leaf above the stem base).
+    pub height: f32,
+    /// Crown radius of the normalised model (m per m of height).
+    pub r0: f32,
+    /// Whether its mid level is the crown hull of its adapted leaf clusters.
+    pub hulled: bool,
+    /// Skeleton nodes.
+    pub nodes: usize,
+    /// Leaf cards of the full level.
+    pub leaf_cards: usize,
+    /// Leaf-cluster cards (sprigs) of the full level ([`crown_leaf_cards`]; 0 unless given the
+    /// crown's leaf area).
+    pub sprig_cards: usize,
+    /// Leaf area (m², one-sided: each card's area times the share its texture covers) of the
+    /// adapted tree's own leaf cards as Plastic Trees left them.
+    pub adapted_leaf_area_m2: f32,
+    /// Leaf area (m², one-sided) of the full level drawn: its leaf cards and sprigs (with the
+    /// crown's leaf area: [`crate::sim::phases::light::crown_leaf_area`] within half a sprig);
+    /// without, the adapted cards'.
+    pub leaf_area_m2: f32,
+}
+
+impl AdaptedModel {
+    /// Makes `inst` (the instance of stand tree `t` of species `sp`) draw this model as
+    /// prototype `proto` ([`place_adapted`]).
+    pub fn place(&self, inst: &mut TreeInstance, t: &StandTree, sp: &crate::species::Species, season: Season, proto: u32) {
+        place_adapted(inst, self.height, self.r0, t, sp, season, proto);
+    }
+}
+
+/// Makes `inst` (the instance of stand tree `t` of species `sp`) draw an adapted model of
+/// height `height` (m) and normalised crown radius `r0` as prototype `proto`: its height, crown
+/// radius, ground elevation and foliage of `season`, unturned (the skeleton stands as it was
+/// adapted).
+pub fn place_adapted(inst: &mut TreeInstance, height: f32, r0: f32, t: &StandTree, sp: &crate::species::Species, season: Season, proto: u32) {
+    let (col, amount) = foliage(sp, season);
+    inst.species = proto;
+    inst.height = height;
+    inst.crown_radius = r0 * height;
+    inst.rotation = 0.0;
+    inst.position[2] = t.base.z;
+    inst.leaf_color = col;
+    inst.leaf_amount = amount;
+}
+
+/// Meshes the adapted tree `a` (of stand tree `t`, species `sp`; its skeleton and leaves are
+/// moved in, not copied): its level-of-detail chain ([`adapted_lod_chain`]) normalised to 1 m.
+/// With `leaf_area` (full-detail trees), its leaf cards first carry the crown's leaf area
+/// ([`crown_leaf_cards`]) and the leaf-cluster cards join the full level's leaves, marked by
+/// [`crate::mesh::CLUSTER_CARD_U`] (drawn with the leaf-cluster texture). `None` for a tree
+/// under 0.1 m or without levels.
+pub fn adapted_model(mut a: AdaptedTree, t: &StandTree, sp: &crate::species::Species, leaf_area: Option<&LeafCover>) -> Option<AdaptedModel> {
+    let (mut sk, mut lv, h) = frame_of(std::mem::take(&mut a.skeleton), std::mem::take(&mut a.leaves), t.base)?;
+    let k = t.species as usize;
+    let (card, sprig) = leaf_area.map_or_else(|| { let c = LeafCover::of_species(sp); (c.0, c.1) }, |c| (c.card[k], c.sprig[k]));
+    let cards_area = |lv: &Leaves| lv.leaves.iter().map(|l| 0.5 * l.size * l.size * card.clamp(0.05, 1.0)).sum::<f32>();
+    let adapted_leaf_area_m2 = cards_area(&lv);
+    let mut sprigs = leaf_area.map(|c| crown_leaf_cards(&mut lv, t, sp, c)).unwrap_or_default();
+    let (n_nodes, n_leaves, n_sprigs) = (sk.nodes.len(), lv.leaves.len(), sprigs.positions.len() / 4);
+    // a sprig's side² × its cover (quad: half-diagonals u, v of the card)
+    let sprig_area: f32 = sprigs.positions.chunks(4).map(|q| (Vec3::from(q[1]) - Vec3::from(q[0])).length() * (Vec3::from(q[3]) - Vec3::from(q[0])).length() * sprig.clamp(0.05, 1.0)).sum();
+    let leaf_area_m2 = cards_area(&lv) + sprig_area;
+    let s = 1.0 / h;
+    sk.nodes.iter_mut().for_each(|n| {
+        n.pos *= s;
+        n.radius *= s;
+    });
+    lv.leaves.iter_mut().for_each(|l| {
+        l.pos *= s;
+        l.size *= s;
+    });
+    let (mut lods, hulled) = adapted_lod_chain(&sk, &lv, &a, t.base, s, &crate::structure::mesh::LodOptions::default());
+    let full = lods.levels.first_mut()?;
+    if n_sprigs > 0 && full.leaves.uvs.len() == full.leaves.positions.len() {
+        sprigs.positions.iter_mut().for_each(|p| *p = (Vec3::from(*p) * s).to_array());
+        sprigs.uvs.iter_mut().for_each(|uv| uv[0] += crate::mesh::CLUSTER_CARD_U);
+        full.leaves.append(&sprigs);
+    }
+    let prototype = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0), look: Some(super::scene::crown_look(sp)) };
+    let r0 = prototype.normalised_crown_radius();
+    Some(AdaptedModel { prototype, height: h, r0, hulled, nodes: n_nodes, leaf_cards: n_leaves, sprig_cards: n_sprigs, adapted_leaf_area_m2, leaf_area_m2 })
 }
 
 /// The level-of-detail chain of the adapted tree `a` from its skeleton `sk` and leaves `lv` in

@@ -206,7 +206,7 @@ fn open_export(run_dir: &Path, year: Option<u32>, levels: &[usize], area: Option
     let site = sc.site()?;
     let year = match year {
         Some(y) => y,
-        None => super::inventory::snapshots(run_dir)?.iter().map(|s| s.0).max().ok_or_else(|| Error::format(run_dir, "no inventory snapshots (inventory/year_NNNN.csv)"))?,
+        None => super::inventory::snapshots(run_dir)?.iter().map(|s| s.0).max().ok_or_else(|| Error::format(run_dir, "no inventory snapshots (inventory/year_NNNN.parquet or .csv)"))?,
     };
     if let Some(&l) = levels.iter().find(|&&l| l >= LOD_LEVELS) {
         return Err(invalid("--lod", l.to_string(), format!("levels 0–{}", LOD_LEVELS - 1)));
@@ -277,10 +277,9 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let (terrain, z0) = terrain_patch(&site, o.area);
     let origin = Vec3::new(((x0 + x1) * 0.5) as f32, ((y0 + y1) * 0.5) as f32, z0);
 
-    // the share of a leaf card its leaf texture covers, per species (fill_leaf_area)
-    let card_cover: Vec<f32> = library.species.iter().map(|sp| crate::structure::texture::leaf_card_cover(crate::structure::texture::LeafShape::of_species(sp))).collect();
+    // the share of a leaf card and of a leaf-cluster card their textures cover, per species
+    let cover = super::adapted::LeafCover::of(library);
     let full = o.max_strands == crate::structure::stand::FULL_STRANDS;
-    let sprig_cover: Vec<f32> = if full { library.species.iter().map(|sp| crate::structure::texture::cluster_card_cover(crate::structure::texture::LeafShape::of_species(sp))).collect() } else { Vec::new() };
     // each tree in its own frame, with its topology key and canonical shape
     // per tree also (skeleton nodes, leaf cards of the full level, triangles of the levels written)
     #[allow(clippy::type_complexity)]
@@ -292,13 +291,13 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             let (sk, mut lv, hgt) = tree_frame(a, t.base)?;
             let r = t.crown_radius_m.max(0.2);
             let sp = &library.species[t.species as usize];
-            let leaf_area = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m);
             // full detail: the leaves grown to at most MAX_CARD_GROWTH, the rest of the leaf
-            // area as sprigs; else copies of the few tips' cards
+            // area as sprigs (as the stills draw them); else copies of the few tips' cards
             let sprigs = if full {
-                sprig_cards(&mut lv, leaf_area, card_cover[t.species as usize], sprig_cover[t.species as usize], t.crown_radius_m, t.species as u64)
+                super::adapted::crown_leaf_cards(&mut lv, t, sp, &cover)
             } else {
-                fill_leaf_area(&mut lv, leaf_area, card_cover[t.species as usize], t.crown_radius_m, t.species as u64);
+                let leaf_area = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m);
+                fill_leaf_area(&mut lv, leaf_area, cover.card[t.species as usize], t.crown_radius_m, t.species as u64);
                 TriMesh::default()
             };
             let s = Vec3::new(r, r, hgt);

@@ -130,7 +130,7 @@ pub fn hemispherical_photo(run_dir: &Path, library: &SpeciesLibrary, o: &HemiOpt
     }
     let year = match o.year {
         Some(y) => y,
-        None => super::inventory::snapshots(run_dir)?.iter().map(|s| s.0).max().ok_or_else(|| Error::format(run_dir, "no inventory snapshots (inventory/year_NNNN.csv)"))?,
+        None => super::inventory::snapshots(run_dir)?.iter().map(|s| s.0).max().ok_or_else(|| Error::format(run_dir, "no inventory snapshots (inventory/year_NNNN.parquet or .csv)"))?,
     };
     let r2 = VIEW_RADIUS_M * VIEW_RADIUS_M;
     let mut unknown = 0usize;

@@ -322,6 +322,11 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
     if let Stepping::Local(n) = stepping {
         context(super::tiled::check_tile_count(&site, sc, n), || format!("simulating {}", sc.name))?;
     }
+    // `--resume` into a folder that holds no run (a mistyped --out) is refused before the
+    // species files below would make it look like one (a trial's resume started from year 0)
+    if opts.resume && !super::checkpoint::exists(&out) {
+        context(super::run::started_here(&out, &out.join(super::checkpoint::FILE)).map_err(JobError::from), || format!("simulating {}", sc.name))?;
+    }
     // a resumed run keeps the species files it was simulated with (a changed species is
     // refused by the checkpoint before anything is written)
     if !(opts.resume && super::checkpoint::exists(&out)) {
@@ -434,9 +439,12 @@ impl MainJobSummary {
         let mut table = String::new();
         let _ = writeln!(table, "| quantity | value |\n|---|---|");
         let _ = writeln!(table, "| year | {} |", s.year);
-        let _ = writeln!(table, "| trees alive (all sizes) | {} |", s.trees_alive);
+        // the tree list holds every individual tree; natural regeneration enters it at 4 m, its
+        // saplings below are cohorts counted apart (a trial read "all sizes" as including them)
+        let _ = writeln!(table, "| trees alive (the tree list: planted and seeded trees, recruits ≥ 4 m) | {} |", s.trees_alive);
         if let Some(r) = last {
-            let _ = writeln!(table, "| stems ≥ 1.3 m per ha | {:.0} |", r.stems_ha);
+            let _ = writeln!(table, "| stems ≥ 1.3 m per ha (tree list) | {:.0} |", r.stems_ha);
+            let _ = writeln!(table, "| saplings below 4 m per ha (regeneration cohorts) | {:.0} |", r.regeneration_ha);
             let _ = writeln!(table, "| basal area (m²/ha) | {:.1} |", r.basal_area_m2_ha);
             let _ = writeln!(table, "| top height H100 (m) | {:.1} |", r.top_height_m);
             let _ = writeln!(table, "| quadratic mean DBH (cm) | {:.1} |", r.qmd_cm);
@@ -601,12 +609,7 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     }
     // A close view into the final forest, where the species' architectures show.
     if let Some(&y) = years.last() {
-        let (ex, ey) = site.extent_m();
-        let (x0, y0) = (0.3 * ex, 0.3 * ey);
-        let (x1, y1) = (0.45 * ex, 0.45 * ey);
-        let z0 = site.elevation_at(x0, y0) + 45.0;
-        let z1 = site.elevation_at(x1, y1) + 5.0;
-        let cam = Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0);
+        let cam = closeup_camera(&site);
         drop(stage);
         stage = new_stage()?;
         stage.set_stumps(stumps, y);
@@ -638,6 +641,18 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, key, &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
     sink(&Event::TimelapseDone);
     Ok((stills, Film { gif, frames, mp4 }))
+}
+
+/// The camera of the close-up still (`stills/year_NNNN_closeup.png`; `sylva render --camera
+/// closeup`): from 45 m above the ground at 30 % of the site's width and height towards 5 m
+/// above the ground at 45 %, a 50° field of view.
+pub fn closeup_camera(site: &SiteConditions) -> Camera {
+    let (ex, ey) = site.extent_m();
+    let (x0, y0) = (0.3 * ex, 0.3 * ey);
+    let (x1, y1) = (0.45 * ex, 0.45 * ey);
+    let z0 = site.elevation_at(x0, y0) + 45.0;
+    let z1 = site.elevation_at(x1, y1) + 5.0;
+    Camera::look_at([x0 as f32, y0 as f32, z0], [x1 as f32, y1 as f32, z1], 50.0)
 }
 
 /// The living trees of the last snapshot, for the adapted close-up: what [`scene::Plant`]

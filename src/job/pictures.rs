@@ -283,7 +283,16 @@ impl Stage {
         if preset != CameraPreset::Ground {
             return cam;
         }
-        let (ex, ey) = self.site.extent_m();
+        step_into_clearing(cam, &self.site, &self.scene.terrain, rows)
+    }
+}
+
+/// The ground camera `cam` of [`Stage::camera_for`] on `site` (whose terrain mesh is
+/// `terrain`) stepped into the nearest clearing among `rows` (the viewer's `--camera ground`
+/// too).
+pub fn step_into_clearing(cam: Camera, site: &SiteConditions, terrain: &crate::render::terrain::TerrainMesh, rows: &[Plant]) -> Camera {
+    {
+        let (ex, ey) = site.extent_m();
         let size = ex.max(ey) as f32;
         let tall: Vec<(f32, f32, f32)> = rows.iter().filter(|r| r.alive && r.height_m > 1.7).map(|r| (r.x_m as f32, r.y_m as f32, r.crown_radius_m)).collect();
         let clearance = |x: f32, y: f32| tall.iter().map(|&(tx, ty, cr)| ((tx - x).hypot(ty - y) - cr).max(0.0)).fold(f32::INFINITY, f32::min);
@@ -306,8 +315,8 @@ impl Stage {
             }
         }
         let (_, _, x, y) = best;
-        let gz = self.scene.terrain.nearest_height(x, y).unwrap_or(cam.eye[2] - 1.7);
-        let tz = self.scene.terrain.nearest_height(x, cam.target[1]).unwrap_or(cam.target[2] - 8.0);
+        let gz = terrain.nearest_height(x, y).unwrap_or(cam.eye[2] - 1.7);
+        let tz = terrain.nearest_height(x, cam.target[1]).unwrap_or(cam.target[2] - 8.0);
         let mut moved = Camera::look_at([x, y, gz + 1.7], [x, cam.target[1], tz + 8.0], 60.0);
         moved.near = cam.near;
         moved
@@ -329,7 +338,7 @@ fn release_freed_memory() {
 /// Instances `trees` (with their chains' level counts) by the level a frame of `width` ×
 /// `height` seen by `camera` with level parameters `lod` drew them at, from its stats `st`
 /// ([`AdaptStats::per_level`]).
-fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: u32, height: u32, lod: &crate::render::lod::LodParams, st: &crate::render::renderer::FrameStats) -> [usize; crate::mesh::LOD_LEVELS] {
+pub fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: u32, height: u32, lod: &crate::render::lod::LodParams, st: &crate::render::renderer::FrameStats) -> [usize; crate::mesh::LOD_LEVELS] {
     use crate::render::lod::{canopy_weight, drawn_levels, select_lod_scaled, Frustum};
     let frustum = Frustum::from_view_proj(camera.view_proj(width.max(1) as f32 / height.max(1) as f32));
     let mut out = [0; crate::mesh::LOD_LEVELS];

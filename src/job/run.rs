@@ -114,7 +114,7 @@ pub fn check_writable(dir: &Path) -> Result<()> {
 /// stopped before its first checkpoint, so the resumed run starts from year 0.
 ///
 /// Errors: [`Error::Format`] naming the checkpoint when `dir` holds no started run either.
-fn started_here(dir: &Path, ck: &Path) -> Result<bool> {
+pub(crate) fn started_here(dir: &Path, ck: &Path) -> Result<bool> {
     if dir.join("scenario.toml").is_file() || dir.join("species").is_dir() {
         return Ok(true);
     }

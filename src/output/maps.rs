@@ -84,7 +84,9 @@ pub struct MapStyle<'a> {
 }
 
 /// Writes a colour-mapped PNG of `grid` with a title, a colour bar and its units. Cells that are
-/// NaN or `false` in `mask` are light grey. Range: 1st–99th percentile of valid values.
+/// NaN or `false` in `mask` are light grey. Range: 1st–99th percentile of valid values; where
+/// the data reach beyond it, the bar's end labels read "≤ lo" / "≥ hi" and a line under the
+/// units gives the data's whole range ("data 748–1281").
 ///
 /// Errors: [`Error::Invalid`] (in [`OutputError::Input`]) for an empty grid or a mask of another size; [`OutputError::Io`].
 pub fn write_field_png(grid: &Grid<f32>, mask: Option<&Grid<bool>>, ramp: Ramp, title: &str, units: &str, path: &Path) -> Result<()> {
@@ -128,6 +130,9 @@ pub fn render_field(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyl
     }
     let (lo, hi) = style.range.or_else(|| percentile_range(grid, mask, 0.01, 0.99)).unwrap_or((0.0, 1.0));
     let hi = if hi > lo { hi } else { lo + 1.0 };
+    // the data's whole range, for the bar's labels
+    let (vmin, vmax) = grid.data.iter().enumerate().filter(|(i, x)| x.is_finite() && mask.is_none_or(|m| m.data[*i])).fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), (_, &x)| (a.min(x), b.max(x)));
+    let fmt = |v: f32| if (hi - lo).abs() >= 20.0 { format!("{v:.0}") } else if (hi - lo).abs() >= 2.0 { format!("{v:.1}") } else { format!("{v:.2}") };
     // Map scale: enlarge small grids to ≥ 600 px, shrink grids over 2000 px.
     let (num, den) = if w.max(h) > 2000 { (1, w.max(h).div_ceil(2000)) } else { ((600 / w.max(1)).max(1), 1) };
     let (mw, mh) = (w * num / den, h * num / den);
@@ -174,10 +179,20 @@ pub fn render_field(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyl
             img.put_pixel((bx + x) as u32, y as u32, Rgb([0, 0, 0]));
         }
         let v = lo + (hi - lo) * t;
-        let label = if (hi - lo).abs() >= 20.0 { format!("{v:.0}") } else if (hi - lo).abs() >= 2.0 { format!("{v:.1}") } else { format!("{v:.2}") };
+        let mut label = fmt(v);
+        // the bar's ends clip the data: said at the ends (a trial read the 1st–99th percentile
+        // bar as the slope's whole range and missed the steepest 52° cells)
+        if k == 0 && vmin < lo {
+            label = format!("≤ {label}");
+        } else if k == 4 && vmax > hi {
+            label = format!("≥ {label}");
+        }
         draw_text(&mut img, &font, (bx + bw + 8) as f32, y as f32 - 8.0, 14.0, &label);
     }
     draw_text(&mut img, &font, bx as f32, (by + bh + 8) as f32, 14.0, &style.units);
+    if vmin < lo || vmax > hi {
+        draw_text(&mut img, &font, bx as f32, (by + bh + 28) as f32, 12.0, &format!("data {}–{}", fmt(vmin), fmt(vmax)));
+    }
     Ok(img)
 }
 
@@ -263,5 +278,23 @@ mod tests {
         let img = render_field(&g, None, &st).unwrap();
         assert_eq!(img.get_pixel(12, 44).0, [215, 215, 215]);
         assert_eq!(img.get_pixel(12 + 60, 44).0, [255, 255, 255]);
+    }
+
+    /// A bar that clips the data says so under its units ("data lo–hi"); one that holds the
+    /// data draws nothing there.
+    #[test]
+    fn clipped_bar_gives_the_data_range() {
+        let mut g = Grid::filled(10, 10, 0.0f32);
+        for (i, v) in g.data.iter_mut().enumerate() {
+            *v = i as f32;
+        }
+        g.data[99] = 1000.0; // an outlier above the 99th percentile
+        // 600 × 600 px map: the bar at x 632, 54–433 px; the data line at y 462
+        let ink = |img: &RgbImage| (462..478).flat_map(|y| (632..760).map(move |x| (x, y))).filter(|&(x, y)| img.get_pixel(x, y).0[0] < 128).count();
+        let style = |range| MapStyle { ramp: Ramp::Grey, title: "t".into(), units: "m".into(), range, hillshade: None, shade_strength: 0.0 };
+        let clipped = render_field(&g, None, &style(None)).unwrap();
+        let whole = render_field(&g, None, &style(Some((0.0, 1000.0)))).unwrap();
+        assert!(ink(&clipped) > 40, "{}", ink(&clipped));
+        assert_eq!(ink(&whole), 0);
     }
 }

@@ -161,7 +161,7 @@ pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()>
         shares.push(s(&w.site.lib.species[sp as usize].id, x(&|r| r.share_ba.get(p).copied().unwrap_or(0.0)), species_color(w, sp)));
     }
     let panels = vec![
-        Panel { title: "Stems".into(), x_label: "year".into(), y_label: "stems/ha".into(), series: vec![s("trees ≥ 1.3 m", x(&|r| r.stems_ha), [30, 90, 160]), s("DBH ≥ 7 cm", x(&|r| r.stems_7cm_ha), [200, 80, 40]), s("regeneration < 4 m (cohorts)", x(&|r| r.regeneration_ha), [120, 170, 60])] },
+        Panel { title: "Stems".into(), x_label: "year".into(), y_label: "stems/ha".into(), series: vec![s("trees ≥ 1.3 m (tree list)", x(&|r| r.stems_ha), [30, 90, 160]), s("DBH ≥ 7 cm", x(&|r| r.stems_7cm_ha), [200, 80, 40]), s("regeneration < 4 m (cohorts)", x(&|r| r.regeneration_ha), [120, 170, 60])] },
         Panel { title: "Basal area".into(), x_label: "year".into(), y_label: "m²/ha".into(), series: vec![s("basal area", x(&|r| r.basal_area_m2_ha), [40, 120, 40])] },
         Panel { title: "Height and diameter".into(), x_label: "year".into(), y_label: "m, cm".into(), series: vec![s("top height H100 (m)", x(&|r| r.top_height_m), [40, 120, 40]), s("mean height (m)", x(&|r| r.mean_height_m), [120, 160, 60]), s("QMD (cm)", x(&|r| r.qmd_cm), [150, 60, 40])] },
         Panel { title: "Species share of basal area".into(), x_label: "year".into(), y_label: "share".into(), series: shares },

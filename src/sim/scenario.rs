@@ -202,6 +202,12 @@ fn invalid(ctx: &str, field: &str, value: impl ToString, expected: &str) -> Erro
     Error::Invalid { context: ctx.to_string(), field: field.to_string(), value: value.to_string(), expected: expected.to_string() }
 }
 
+/// Whether `id` is the id of a species of the embedded library (`species/*.toml`, the file stem);
+/// a hint for telling which of two near names is misspelt, before any library is loaded.
+fn is_embedded_id(id: &str) -> bool {
+    crate::species::EMBEDDED_FILES.iter().any(|(f, _)| f.strip_suffix(".toml") == Some(id))
+}
+
 /// Checks `[climate]`: every value finite; latitude −90–90°, lapse rate −15–5 K/km,
 /// reference temperature −30–40 °C, K/R/N 1–9, wind direction 0–360°, elevations
 /// (reference, sea level) −500–9000 m. `ctx` names the scenario file.
@@ -251,32 +257,81 @@ fn plain_type_words(msg: &str) -> String {
     m
 }
 
-/// The length `N` of serde's "invalid length …, expected an array of length N" in `msg`.
-fn wrong_length(msg: &str) -> Option<usize> {
-    let rest = msg.split("expected an array of length ").nth(1)?;
-    rest.split(|c: char| !c.is_ascii_digit()).next()?.parse().ok()
+/// The lengths `(G, N)` of serde's "invalid length G, expected an array of length N" (or
+/// "expected N elements in sequence", for an array inside an array) in `msg`; `G` is `None`
+/// where the message does not give it.
+fn wrong_length(msg: &str) -> Option<(Option<usize>, usize)> {
+    let num = |rest: &str| rest.split(|c: char| !c.is_ascii_digit()).next()?.parse().ok();
+    // the length given ("invalid length 3"), where serde says it
+    let got = msg.split("invalid length ").nth(1).and_then(num);
+    if let Some(rest) = msg.split("expected an array of length ").nth(1) {
+        return num(rest).map(|want| (got, want));
+    }
+    // serde's words for a fixed-size array inside an array (`points = [[50, 50, 3]]`)
+    let before = msg.split(" elements in sequence").next().filter(|b| b.len() < msg.len())?;
+    num(before.rsplit("expected ").next()?).map(|want| (got, want))
 }
 
-/// The first key, in the TOML table whose header or line holds byte `at` of `text`, whose value
-/// is a one-line array of numbers with a length other than `want` (`None` when there is none).
-fn key_with_array_len_not(text: &str, at: usize, want: usize) -> Option<String> {
-    let at = at.min(text.len());
-    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
-    for (i, line) in text[start..].lines().enumerate() {
-        let t = line.trim();
-        if i > 0 && t.starts_with('[') {
-            break;
-        }
-        let Some((key, value)) = t.split_once('=') else { continue };
-        let value = value.trim();
-        if let Some(inner) = value.strip_prefix('[').and_then(|v| v.split(']').next()) {
-            let n = inner.split(',').filter(|x| !x.trim().is_empty()).count();
-            if n != want {
-                return Some(key.trim().to_string());
+/// The lengths of the innermost one-line arrays of a TOML value (`[1, 2]` → [2];
+/// `[[1, 2], [3, 4, 5]]` → [2, 3]).
+fn innermost_array_lengths(value: &str) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut open: Option<usize> = None;
+    for (i, c) in value.char_indices() {
+        match c {
+            '[' => open = Some(i + 1),
+            ']' => {
+                if let Some(o) = open.take() {
+                    out.push(value[o..i].split(',').filter(|x| !x.trim().is_empty()).count());
+                }
             }
+            _ => {}
         }
     }
-    None
+    out
+}
+
+/// The first key whose value holds a one-line array of numbers with a length other than
+/// `want` (of length `got` where that is known; `None` when there is none), in backquotes, in the TOML table whose header or line
+/// holds byte `at` of `text`. When that table is one of an array of tables (`[[start]]`, whose errors serde
+/// places at the first `[[start]]`), every table of the array is searched and the key is named
+/// with its index and line: "`start[1].area` (line 22)".
+fn key_with_array_len_not(text: &str, at: usize, got: Option<usize>, want: usize) -> Option<String> {
+    let at = at.min(text.len());
+    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let bad_key_in = |from: usize| -> Option<(String, usize)> {
+        for (i, line) in text[from..].lines().enumerate() {
+            let t = line.trim();
+            if i > 0 && t.starts_with('[') {
+                break;
+            }
+            let Some((key, value)) = t.split_once('=') else { continue };
+            // an array of the length given where serde says it (another key of another table of
+            // the array may rightly hold arrays of other lengths: `points` beside `area`)
+            if innermost_array_lengths(value.trim()).iter().any(|&n| n != want && got.is_none_or(|g| g == n)) {
+                return Some((key.trim().to_string(), text[..from].lines().count() + i + 1));
+            }
+        }
+        None
+    };
+    let header = text[start..].lines().next().unwrap_or("").trim();
+    if let Some(name) = header.strip_prefix("[[").and_then(|h| h.strip_suffix("]]")).map(str::trim) {
+        // every `[[name]]` of the file, in order
+        let mut k = 0;
+        let mut pos = 0;
+        for line in text.split_inclusive('\n') {
+            let t = line.trim();
+            if t.strip_prefix("[[").and_then(|h| h.strip_suffix("]]")).map(str::trim) == Some(name) {
+                if let Some((key, line_no)) = bad_key_in(pos) {
+                    return Some(format!("`{name}[{k}].{key}` (line {line_no})"));
+                }
+                k += 1;
+            }
+            pos += line.len();
+        }
+        return None;
+    }
+    bad_key_in(start).map(|(key, _)| format!("`{key}`"))
 }
 
 /// The key of the `key = value` line of `text` holding byte `at` (`None` when that line is no
@@ -338,9 +393,9 @@ impl Scenario {
             // a wrong-length array inside a tagged table (an `[[obstacle]]`): serde points at
             // the table and names no field, so the field is found in the table's lines (a trial
             // could not tell which of `center` and `half` was meant)
-            if let Some((want, sp)) = wrong_length(&msg).zip(e.span()) {
-                if let Some(key) = key_with_array_len_not(text, sp.start, want) {
-                    msg = format!("{}\n`{key}`: expected an array of {want} numbers", msg.trim_end());
+            if let Some(((got, want), sp)) = wrong_length(&msg).zip(e.span()) {
+                if let Some(key) = key_with_array_len_not(text, sp.start, got, want) {
+                    msg = format!("{}\n{key}: expected an array of {want} numbers", msg.trim_end());
                 }
             }
             Error::format(name, msg)
@@ -412,6 +467,10 @@ impl Scenario {
 
     /// Checks ranges; `ctx` names the file.
     pub fn validate(&self, ctx: &str) -> Result<()> {
+        // the name heads every progress line and summary (a blank one printed " year 5: …")
+        if self.name.trim().is_empty() {
+            return Err(invalid(ctx, "name", format!("{:?}", self.name), "a name for the scenario (e.g. \"coweeta\")"));
+        }
         let t = &self.terrain;
         let n = t.default.filter(|d| *d).is_some() as u8 + t.embedded.is_some() as u8 + t.path.is_some() as u8 + t.generate.is_some() as u8 + t.uniform.is_some() as u8;
         if n != 1 {
@@ -440,6 +499,10 @@ impl Scenario {
             if !(u.cell_m > 0.0 && u.cell_m <= 1000.0) {
                 return Err(invalid(ctx, "terrain.uniform.cell_m", u.cell_m, "> 0 and ≤ 1000 m"));
             }
+            // NaN or infinity ran (a trial), as a height no land has
+            if !(u.elevation_m >= -500.0 && u.elevation_m <= 9000.0) {
+                return Err(invalid(ctx, "terrain.uniform.elevation_m", u.elevation_m, "-500–9000 m"));
+            }
             for (i, v) in u.indices.iter().enumerate() {
                 let max = if i == crate::conditions::factor::F { 12.0 } else { 9.0 };
                 if !(*v >= 1.0 && *v <= max) {
@@ -465,10 +528,15 @@ impl Scenario {
         for (i, st) in self.start.iter().enumerate() {
             if !self.species.is_empty() && !self.species.iter().any(|p| p == st.species()) {
                 // a pool entry one or two letters from the start's species is most likely the
-                // misspelt one (a trial's `species = ["beeech"]` was blamed on the start)
+                // misspelt one (a trial's `species = ["beeech"]` was blamed on the start); which
+                // of the two is misspelt is told by the embedded library's ids where one of them
+                // is one (a start's `species = "beeech"` was then blamed on the pool, round 26)
                 let near = self.species.iter().enumerate().find(|(_, p)| strsim::damerau_levenshtein(p, st.species()) <= 2);
                 if let Some((j, p)) = near {
-                    return Err(invalid(ctx, &format!("species[{j}]"), p, &format!("a species id of the library; start[{i}] names `{}`: is that meant? (`sylva species list` lists the ids)", st.species())));
+                    if is_embedded_id(st.species()) && !is_embedded_id(p) {
+                        return Err(invalid(ctx, &format!("species[{j}]"), p, &format!("a species id of the library; start[{i}] names `{}`: is that meant? (`sylva species list` lists the ids)", st.species())));
+                    }
+                    return Err(invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("one of the scenario's species = {:?}; did you mean `{p}` (species[{j}])?", self.species)));
                 }
                 return Err(invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("one of the scenario's species = {:?} (add it there)", self.species)));
             }

@@ -455,6 +455,17 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
 /// and all problems.
 pub fn parse_text(text: &str, file: &Path) -> (Option<Species>, Vec<Problem>) {
     let mut problems = Vec::new();
+    // an empty file is one problem, not every field missing (a trial got 88 lines)
+    if text.trim().is_empty() {
+        problems.push(Problem {
+            file: file.into(),
+            line: None,
+            field: String::new(),
+            value: String::new(),
+            expected: "the file is empty; expected a species file (start from a copy: `sylva species new ID --from beech`)".into(),
+        });
+        return (None, problems);
+    }
     let doc = match DeTable::parse(text) {
         Ok(d) => d,
         Err(e) => {

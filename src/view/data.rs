@@ -123,7 +123,7 @@ impl RunData {
     pub fn open(dir: &Path, site: SiteConditions, library: SpeciesLibrary, pool: Vec<String>) -> Result<Self> {
         let snaps: Vec<(u32, PathBuf)> = inventory::snapshots(dir)?.into_iter().filter(|(_, s, _)| s.is_empty()).map(|(y, _, p)| (y, p)).collect();
         if snaps.is_empty() {
-            return Err(Error::format(dir, "no inventory snapshots (inventory/year_NNNN.csv): is this a run directory of `sylva run` or `sylva simulate`?"));
+            return Err(Error::format(dir, "no inventory snapshots (inventory/year_NNNN.parquet or .csv): is this a run directory of `sylva run` or `sylva simulate`?"));
         }
         let st = dir.join("stand_table.csv");
         let stand_table = if st.is_file() { StandTable::read(&st)? } else { StandTable::default() };

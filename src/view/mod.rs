@@ -19,6 +19,7 @@
 
 pub mod camera;
 pub mod data;
+pub mod near;
 
 
 use std::sync::Arc;
@@ -123,7 +124,39 @@ pub struct Viewer {
     frame_dt: f32,
     /// Whether the year shown changed in the last [`Viewer::refresh`] (drawn as in motion).
     year_moving: bool,
+    /// The adapted near field ([`near`]): its worker (started on the first request), the
+    /// scenario's seed and obstacles it adapts with, the trees shown with their own meshes
+    /// (prototypes `n_base..` of the scene), the request under way and what was last asked.
+    near: Option<near::NearField>,
+    near_on: bool,
+    near_scenario: (u64, Vec<crate::sim::obstacle::ObstacleSpec>),
+    near_shown: Vec<ShownTree>,
+    n_base: usize,
+    near_pending: Option<(u64, std::time::Instant)>,
+    near_key: Option<(u32, crate::render::camera::Camera, u32, u32)>,
+    /// The replaced instances must be made again (the trees or the season changed).
+    near_dirty: bool,
+    /// Log what the next still frame draws of the near field.
+    near_report: bool,
+    /// What the last 3-D frame drawn showed (camera, size, year, season, overlay, ground):
+    /// while the near field is on its way an unchanged frame is not drawn again.
+    frame_sig: Option<FrameSig>,
 }
+
+/// A tree of the near field shown with its own adapted meshes.
+#[derive(Debug, Clone, Copy)]
+struct ShownTree {
+    id: u64,
+    year: u32,
+    tree: crate::structure::stand::StandTree,
+    height: f32,
+    r0: f32,
+    nodes: usize,
+    leaf_cards: usize,
+    sprig_cards: usize,
+}
+
+type FrameSig = (crate::render::camera::Camera, u32, u32, Option<(i64, Season)>, Overlay, Option<(i64, Season)>, usize);
 
 impl Viewer {
     /// The viewer of `data`, drawing the sea at `sea_level_m` where cells are water, with a GPU
@@ -139,6 +172,7 @@ impl Viewer {
         prototypes.extend(scene::stump_prototypes());
         let site = &data.site;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
+        let n_base = prototypes.len();
         let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));
         let (lo, hi) = scene.terrain.bounds();
         let rig = CameraRig::framing(lo, hi);
@@ -184,6 +218,16 @@ impl Viewer {
             motion_before: false,
             frame_dt: 0.0,
             year_moving: false,
+            near: None,
+            near_on: true,
+            near_scenario: (0, Vec::new()),
+            near_shown: Vec::new(),
+            n_base,
+            near_pending: None,
+            near_key: None,
+            near_dirty: false,
+            near_report: false,
+            frame_sig: None,
         })
     }
 
@@ -206,6 +250,65 @@ impl Viewer {
     pub fn with_screenshot(mut self, s: Screenshot) -> Self {
         self.screenshot = Some(s);
         self
+    }
+
+    /// The scenario's seed and obstacles, with which the near field's trees are grown and
+    /// adapted ([`near`]; by default seed 0 and no obstacles).
+    pub fn set_scenario(&mut self, seed: u64, obstacles: Vec<crate::sim::obstacle::ObstacleSpec>) {
+        self.near = None;
+        self.near_scenario = (seed, obstacles);
+        self.clear_near();
+    }
+
+    /// Whether the trees near a resting camera get their adapted full-detail meshes ([`near`];
+    /// default on): off, every tree is drawn with its species' model.
+    pub fn set_adapt(&mut self, on: bool) {
+        self.near_on = on;
+        if !on {
+            self.clear_near();
+            self.near = None;
+        }
+    }
+
+    /// Looks as `cam` does (its eye, target and vertical field of view when perspective) with
+    /// the fly camera.
+    pub fn look(&mut self, cam: &crate::render::camera::Camera) {
+        let (lo, hi) = self.scene.terrain.bounds();
+        let size = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        self.rig = CameraRig::looking(Vec3::from(cam.eye), Vec3::from(cam.target), size);
+        if let crate::render::camera::Projection::Perspective { fov_y_deg } = cam.projection {
+            self.rig.fov_y_deg = fov_y_deg;
+        }
+        self.rig.set_mode(Mode::Fly);
+    }
+
+    /// The camera of a still's preset on this run ([`crate::render::camera::Camera::preset_sized`]
+    /// for a view of `width` × `height` px; the ground preset stepped into the nearest clearing
+    /// of the last snapshot, as the stills do, [`crate::job::pictures::step_into_clearing`]).
+    ///
+    /// # Errors
+    /// As [`RunData::rows`].
+    pub fn preset_camera(&mut self, preset: crate::render::camera::CameraPreset, width: u32, height: u32) -> crate::Result<crate::render::camera::Camera> {
+        let cam = crate::render::camera::Camera::preset_sized(preset, &self.scene.terrain, width, height);
+        if preset != crate::render::camera::CameraPreset::Ground {
+            return Ok(cam);
+        }
+        let k = self.data.years.len() - 1;
+        let site = self.data.site.clone();
+        let rows = self.data.rows(k)?;
+        Ok(crate::job::pictures::step_into_clearing(cam, &site, &self.scene.terrain, &scene::plants_from_rows(rows)))
+    }
+
+    /// Trees shown with their own adapted meshes ([`near`]) and the median of their skeleton
+    /// nodes (0 when none).
+    pub fn adapted_shown(&self) -> (usize, usize) {
+        let mut n: Vec<usize> = self.near_shown.iter().map(|t| t.nodes).collect();
+        (n.len(), crate::job::adapted::median_usize(&mut n))
+    }
+
+    /// Whether adapted meshes of the near field are on their way.
+    pub fn near_pending(&self) -> bool {
+        self.near_pending.is_some()
     }
 
     /// The trees drawn now (interpolated at [`Viewer::year`]).
@@ -240,6 +343,7 @@ impl Viewer {
             }
             self.scene.sun = scene::season_sun(self.data.site.geo.latitude_deg, self.season);
             self.shown = Some(key);
+            self.near_dirty = true;
             if let Some(id) = self.selected {
                 self.info = self.data.tree_info(id, self.year).ok().flatten();
             }
@@ -575,6 +679,144 @@ impl Viewer {
         moved && !self.screenshot.as_ref().is_some_and(|s| s.pending())
     }
 
+    /// The snapshot year shown when [`Viewer::year`] sits on one and the years do not play.
+    fn snapshot_shown(&self) -> Option<u32> {
+        if self.playing {
+            return None;
+        }
+        self.data.years.iter().copied().find(|&y| (y as f32 - self.year).abs() < 1e-3)
+    }
+
+    /// Lets go of the adapted near field: the trees drawn with their species' models again.
+    fn clear_near(&mut self) {
+        if let Some(n) = &self.near {
+            n.cancel();
+        }
+        self.near_pending = None;
+        self.near_key = None;
+        if !self.near_shown.is_empty() {
+            self.near_shown.clear();
+            let mut p = std::mem::take(&mut self.scene.prototypes);
+            p.truncate(self.n_base);
+            self.scene.set_prototypes(p);
+        }
+        if let Some(g) = self.gpu.as_mut() {
+            g.renderer.replaced.clear();
+        }
+    }
+
+    /// The near field for this frame ([`near`]): takes the worker's results, and when the camera
+    /// rests on a snapshot year asks for the trees of this view (superseding what was asked
+    /// before); a camera in motion supersedes the request under way.
+    fn update_near(&mut self, cam: &crate::render::camera::Camera, motion: bool, w: u32, h: u32) {
+        if self.gpu.is_none() || !self.near_on {
+            return;
+        }
+        self.take_near_results();
+        let snap = self.snapshot_shown();
+        if self.near_shown.first().is_some_and(|t| Some(t.year) != snap) {
+            self.clear_near();
+        }
+        if self.near_dirty {
+            self.rebuild_replaced();
+        }
+        if motion || snap.is_none() {
+            if let (Some(n), Some(_)) = (&self.near, self.near_pending.take()) {
+                n.cancel();
+            }
+            self.near_key = None;
+            return;
+        }
+        let Some(year) = snap else { return };
+        let key = (year, *cam, w, h);
+        if self.near_key == Some(key) {
+            return;
+        }
+        self.near_key = Some(key);
+        let sel = near::select_near(&self.current, cam, w as f32, h as f32, &still_lod(), scene::is_stump);
+        let wanted: Vec<u64> = sel.iter().map(|t| t.id).collect();
+        let shown: Vec<u64> = self.near_shown.iter().map(|t| t.id).collect();
+        if wanted == shown {
+            if let (Some(n), Some(_)) = (&self.near, self.near_pending.take()) {
+                n.cancel();
+            }
+            return;
+        }
+        // the snapshot's trees within reach: the wanted ones and their neighbours
+        let Some(k) = self.data.years.iter().position(|&y| y == year) else { return };
+        let so = crate::structure::stand::StandOptions::default();
+        let reach = near::NEAR_M + so.cell_m + so.halo_m + 2.0;
+        let eye = Vec3::from(cam.eye);
+        let rows = match self.data.rows(k) {
+            Ok(r) => r.iter().filter(|r| r.status == "alive" && ((r.x_m - eye.x as f64).hypot(r.y_m - eye.y as f64) as f32) <= reach).cloned().collect(),
+            Err(e) => {
+                self.status = Some(e.to_string());
+                return;
+            }
+        };
+        let (seed, obstacles) = self.near_scenario.clone();
+        let (lib, site) = (&self.data.library, &self.data.site);
+        let nf = self.near.get_or_insert_with(|| near::NearField::start(lib.clone(), site.clone(), obstacles, seed));
+        let g = nf.request(near::NearRequest { generation: 0, year, wanted, shown, rows });
+        self.near_pending = Some((g, std::time::Instant::now()));
+    }
+
+    /// Installs the worker's latest answer (older ones are dropped).
+    fn take_near_results(&mut self) {
+        let Some(nf) = &self.near else { return };
+        let mut latest = None;
+        while let Some(r) = nf.poll() {
+            if r.generation == nf.generation() {
+                latest = Some(r);
+            }
+        }
+        let Some(r) = latest else { return };
+        let since = self.near_pending.take().map_or(0.0, |p| p.1.elapsed().as_secs_f64());
+        if let Some(e) = &r.error {
+            self.status = Some(format!("near field: {e}"));
+        }
+        // the trees still wanted keep their meshes; the new ones join; the others go
+        let mut protos = std::mem::take(&mut self.scene.prototypes);
+        let old = protos.split_off(self.n_base);
+        let mut had: std::collections::HashMap<u64, (ShownTree, crate::render::scene::Prototype)> = self.near_shown.drain(..).zip(old).map(|(t, p)| (t.id, (t, p))).collect();
+        let mut new: std::collections::HashMap<u64, near::NearModel> = r.models.into_iter().map(|m| (m.id, m)).collect();
+        for id in &r.wanted {
+            let (t, p) = match (had.remove(id), new.remove(id)) {
+                (Some(x), _) => x,
+                (None, Some(m)) => (ShownTree { id: *id, year: r.year, tree: m.tree, height: m.model.height, r0: m.model.r0, nodes: m.model.nodes, leaf_cards: m.model.leaf_cards, sprig_cards: m.model.sprig_cards }, m.model.prototype),
+                _ => continue,
+            };
+            self.near_shown.push(t);
+            protos.push(p);
+        }
+        drop(had);
+        self.scene.set_prototypes(protos);
+        self.rebuild_replaced();
+        self.near_report = true;
+        let (n, med) = self.adapted_shown();
+        tracing::info!("near field of year {}: {n} trees with their adapted full-detail meshes ({} adapted with their neighbours, {} from the cache; adapting {:.2} s, meshing {:.2} s), median {med} nodes, {:.2} s after the camera came to rest", r.year, r.adapted, r.from_cache, r.adapt_s, r.mesh_s, since);
+    }
+
+    /// The instances the renderer draws instead of the near field's trees
+    /// ([`crate::render::renderer::Renderer::replaced`]).
+    fn rebuild_replaced(&mut self) {
+        self.near_dirty = false;
+        let Some(g) = self.gpu.as_mut() else { return };
+        g.renderer.replaced.clear();
+        if self.near_shown.is_empty() {
+            return;
+        }
+        let at: std::collections::HashMap<u64, usize> = self.near_shown.iter().enumerate().map(|(k, t)| (t.id, k)).collect();
+        for inst in &self.current {
+            let Some(&k) = at.get(&inst.id) else { continue };
+            let t = &self.near_shown[k];
+            let Some(sp) = self.data.library.species.get(t.tree.species as usize) else { continue };
+            let mut i = *inst;
+            crate::job::adapted::place_adapted(&mut i, t.height, t.r0, &t.tree, sp, self.season, (self.n_base + k) as u32);
+            g.renderer.replaced.insert(t.id, i);
+        }
+    }
+
     fn view_3d(&mut self, ui: &mut egui::Ui) {
         let size = ui.available_size();
         let (rect, resp) = ui.allocate_exact_size(size, egui::Sense::click_and_drag());
@@ -599,10 +841,33 @@ impl Viewer {
             return;
         }
         self.refresh();
-        self.scene.instances = std::mem::take(&mut self.current);
         let (w, h) = ((rect.width() * self.pixels_per_point) as u32, (rect.height() * self.pixels_per_point) as u32);
         let cam = self.rig.camera();
         let motion = self.in_motion(&cam);
+        self.update_near(&cam, motion, w, h);
+        if self.near_pending.is_some() {
+            // the worker's answer is polled while the UI waits
+            ui.ctx().request_repaint_after(std::time::Duration::from_millis(100));
+        }
+        // while the near field is on its way, an unchanged still frame is shown again, not
+        // drawn again; with a --screenshot pending nothing is drawn before it has arrived
+        let sig: FrameSig = (cam, w, h, self.shown, self.overlay, self.baked, self.scene.prototypes.len());
+        let waiting = self.near_pending.is_some() && !motion;
+        let shot = self.screenshot.as_ref().is_some_and(|s| s.pending());
+        if waiting && (shot || self.frame_sig == Some(sig)) {
+            match self.last_frame.filter(|_| self.frame_sig == Some(sig)) {
+                Some(tex) => {
+                    ui.painter().image(tex, rect, egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)), egui::Color32::WHITE);
+                }
+                None => {
+                    ui.painter().rect_filled(rect, 0.0, egui::Color32::from_gray(40));
+                    ui.painter().text(rect.center(), egui::Align2::CENTER_CENTER, "adapting the trees near the camera…", egui::FontId::proportional(16.0), egui::Color32::LIGHT_GRAY);
+                }
+            }
+            return;
+        }
+        self.frame_sig = Some(sig);
+        self.scene.instances = std::mem::take(&mut self.current);
         if let Some(g) = self.gpu.as_mut() {
             g.renderer.lod = if motion { motion_lod() } else { still_lod() };
             g.renderer.max_near_trees = if motion { MOTION_NEAR_TREES } else { 0 };
@@ -638,6 +903,17 @@ impl Viewer {
         }
         if self.frames_drawn <= 3 {
             tracing::info!("frame {} ({}) drawn {:.1} s after the viewer opened its data", self.frames_drawn, if motion { "in motion" } else { "still" }, self.opened.elapsed().as_secs_f32());
+        }
+        // the near field drawn: its adapted trees by the level the frame drew them at
+        if self.near_report && !motion && drawn.as_ref().is_some_and(|d| d.is_ok()) {
+            self.near_report = false;
+            if let Some(g) = self.gpu.as_ref() {
+                let trees: Vec<(TreeInstance, usize)> = self.near_shown.iter().enumerate().filter_map(|(k, t)| Some((*g.renderer.replaced.get(&t.id)?, self.scene.prototypes.get(self.n_base + k)?.lods.levels.len()))).collect();
+                let levels = crate::job::pictures::drawn_levels_of(&trees, &cam, w, h, &g.renderer.lod, &g.renderer.last_stats());
+                let (n, med) = self.adapted_shown();
+                let (cards, sprigs): (usize, usize) = self.near_shown.iter().fold((0, 0), |a, t| (a.0 + t.leaf_cards, a.1 + t.sprig_cards));
+                tracing::info!("near field drawn: {n} adapted trees, {} at the full level (per level {levels:?}), median {med} nodes, {cards} leaf cards and {sprigs} leaf-cluster cards", levels[0]);
+            }
         }
         self.current = std::mem::take(&mut self.scene.instances);
         match drawn {
@@ -726,6 +1002,10 @@ impl Viewer {
         egui::CentralPanel::no_frame().show(ui, |ui| self.view_3d(ui));
         self.help(&ctx);
         if let Some(s) = self.screenshot.as_mut() {
+            // --screenshot waits for the adapted near field
+            if self.near_pending.is_some() && !s.requested() {
+                s.hold();
+            }
             s.frame(&ctx);
         }
     }
@@ -794,19 +1074,44 @@ impl eframe::App for Viewer {
     }
 }
 
+/// How the viewer starts: the scenario's seed and obstacles (the near field's trees are grown
+/// and adapted with them, [`near`]) and a camera preset of the stills (`None`: the whole
+/// terrain framed by the orbit camera).
+#[derive(Debug, Clone, Default)]
+pub struct ViewStart {
+    /// Scenario seed.
+    pub seed: u64,
+    /// Scenario obstacles.
+    pub obstacles: Vec<crate::sim::obstacle::ObstacleSpec>,
+    /// Camera preset (`sylva view --camera`).
+    pub camera: Option<crate::render::camera::CameraPreset>,
+    /// Whether the near field is adapted ([`Viewer::set_adapt`]; `sylva view --adapt`).
+    pub adapt: bool,
+}
+
 /// Opens the viewer window on `data` and returns when it is closed (or, with
 /// `opts.screenshot`, after the screenshot is written). `surroundings`: the whole terrain the
-/// site was cut from and the window it was cut with ([`Viewer::set_surroundings`]).
+/// site was cut from and the window it was cut with ([`Viewer::set_surroundings`]); `start`:
+/// the scenario's seed and obstacles and the first camera.
 ///
 /// # Errors
 /// As [`gui::run_window`]; [`GuiError::Render`] when the renderer cannot be built on the
 /// window's device or the window leaves the terrain.
-pub fn run(data: RunData, sea_level_m: f32, surroundings: Option<(crate::terrain::Terrain, [usize; 4])>, opts: &WindowOptions) -> gui::Result<()> {
+pub fn run(data: RunData, sea_level_m: f32, surroundings: Option<(crate::terrain::Terrain, [usize; 4])>, start: &ViewStart, opts: &WindowOptions) -> gui::Result<()> {
     let title = format!("Sylva — {}", data.dir.display());
+    let start = start.clone();
+    let size = opts.size;
     gui::run_viewport_window(&title, opts, data, move |d, vp, shot| {
         let mut v = Viewer::new(d, sea_level_m, Some(vp))?;
         if let Some((full, window)) = &surroundings {
             v.set_surroundings(full, *window)?;
+        }
+        v.set_scenario(start.seed, start.obstacles.clone());
+        v.set_adapt(start.adapt);
+        if let Some(p) = start.camera {
+            // the 3-D view's size is not known yet: the window's less the side panel
+            let cam = v.preset_camera(p, ((size.0 - 340.0).max(64.0)) as u32, ((size.1 - 60.0).max(64.0)) as u32).map_err(input_error)?;
+            v.look(&cam);
         }
         if let Some(s) = shot {
             v = v.with_screenshot(s);

@@ -154,6 +154,12 @@ pub struct Renderer {
     /// whose trees may look tallest first, and the frame's far-field switch rises above the
     /// trees left to the canopy layer. For frames in motion.
     pub max_near_trees: usize,
+    /// Trees drawn as another instance (default none): a culled tree whose id is a key is drawn
+    /// as the instance it maps to (e.g. the viewer's adapted near field: the tree's own
+    /// prototype, height and crown, `view::near`), on the CPU culling path (a frame with
+    /// replacements is culled on the CPU). The far field's canopy layer still takes out the
+    /// tree as it was baked.
+    pub replaced: std::collections::HashMap<u64, TreeInstance>,
     /// Cheaper shading (default false): one shadow-map tap for the sun and one for the sky light
     /// under the canopy instead of 9 and 9 per pixel; harder shadow edges, for frames in motion
     /// on a software adapter, where the terrain's pixels are most of a frame.
@@ -267,6 +273,9 @@ impl Renderer {
         let far = self.far_field.clone().filter(|f| self.scene.as_ref().is_some_and(|g| g.canopy_grid == f.grid && f.sums().len() == f.grid.len()));
         let near = far.as_ref().map(|f| f.near(camera, width, height, &self.lod, self.max_near_trees));
         let instances: &[TreeInstance] = near.as_ref().map_or(&scene.instances, |n| &n.instances);
+        // the trees drawn as another instance (Renderer::replaced); `instances` stay as baked
+        let swapped: Option<Vec<TreeInstance>> = (!self.replaced.is_empty()).then(|| instances.iter().map(|t| self.replaced.get(&t.id).copied().unwrap_or(*t)).collect());
+        let drawn_inst: &[TreeInstance] = swapped.as_deref().unwrap_or(instances);
         // trees left in the baked layer go wholly to the canopy layer in this frame too
         let lod = match &near {
             Some(n) if self.lod.canopy_px > 0.0 => LodParams { canopy_px: self.lod.canopy_px.max(n.floor_px * (1.0 + self.lod.band.max(0.0))), ..self.lod },
@@ -275,7 +284,7 @@ impl Renderer {
         let gpu_frame = match self.culling {
             Culling::Cpu => None,
             // the near trees of a far field are few: culled on the CPU
-            Culling::Auto if far.is_some() => None,
+            Culling::Auto if far.is_some() || swapped.is_some() => None,
             Culling::Auto => {
                 if self.cull.is_some() {
                     self.prepare_gpu_cull(scene, camera, width, height)?
@@ -299,7 +308,7 @@ impl Renderer {
         let draws = match gpu_frame {
             Some(f) => FrameDraws::Gpu(f),
             None => {
-                let mut b = build_batches_of(instances, &scene.prototypes, camera, width, height, &lod);
+                let mut b = build_batches_of(drawn_inst, &scene.prototypes, camera, width, height, &lod);
                 b.draws = self.split_draws(&b.draws);
                 self.write_instances(&b);
                 // on their way to the device (the queue's staging copy): not held for the frame

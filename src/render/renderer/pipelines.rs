@@ -166,6 +166,7 @@ impl Renderer {
             shadow_light: (Mat4::IDENTITY, 1.0, 1.0),
             far_field: None,
             max_near_trees: 0,
+            replaced: std::collections::HashMap::new(),
             fast_shading: false,
             coarse_terrain: false,
             pass_triangles: 0,

@@ -56,7 +56,9 @@ pub(super) fn is_cards(m: &crate::mesh::TriMesh) -> bool {
         && m.indices.len() == n / 4 * 6
         && m.uvs.chunks(4).all(|q| {
             let want = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-            q.iter().zip(want).all(|(a, b)| (a[0] - b[0]).abs() < 1e-4 && (a[1] - b[1]).abs() < 1e-4)
+            // a leaf card, or a leaf-cluster card (u offset by CLUSTER_CARD_U)
+            let du = if q[0][0] > 0.5 * crate::mesh::CLUSTER_CARD_U { crate::mesh::CLUSTER_CARD_U } else { 0.0 };
+            q.iter().zip(want).all(|(a, b)| (a[0] - du - b[0]).abs() < 1e-4 && (a[1] - b[1]).abs() < 1e-4)
         })
 }
 

@@ -473,9 +473,20 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     return o;
 }
 
-// The leaf texture texel of a leaf card (full level: the leaf, reduced level: the leaf
-// cluster) of a prototype with a leaf shape; a = −1 when it has none or this is not a card.
-// Texture rows run from the leaf tip down (v flipped).
+// Whether a card is a leaf-cluster card among the full level's leaf cards: its u runs from
+// 2 to 3 (mesh.rs CLUSTER_CARD_U, the sprigs of a full-detail tree's crown leaf area).
+fn cluster_card(i: TreeOut) -> bool {
+    return i.uv.x > 1.5;
+}
+
+// A card's own coordinates 0..1 (a leaf-cluster card's u less CLUSTER_CARD_U).
+fn card_uv(i: TreeOut) -> vec2<f32> {
+    return select(i.uv, i.uv - vec2<f32>(2.0, 0.0), cluster_card(i));
+}
+
+// The leaf texture texel of a leaf card (full level: the leaf, reduced level and the full
+// level's leaf-cluster cards: the leaf cluster) of a prototype with a leaf shape; a = −1 when
+// it has none or this is not a card. Texture rows run from the leaf tip down (v flipped).
 fn card_texel(i: TreeOut) -> vec4<f32> {
     if (i.uv.x < -0.5 || i.mat_s.x < 0.5 || i.mat_s.x > 1.5 || i.info.y > 1.5) {
         return vec4<f32>(1.0, 1.0, 1.0, -1.0);
@@ -484,8 +495,9 @@ fn card_texel(i: TreeOut) -> vec4<f32> {
     if (layer < -0.5) {
         return vec4<f32>(1.0, 1.0, 1.0, -1.0);
     }
-    let l = i32(layer + 0.5) + i32(i.info.y + 0.5);
-    return textureSampleLevel(leaf_tex, leaf_samp, vec2<f32>(i.uv.x, 1.0 - i.uv.y), l, 0.0);
+    let l = i32(layer + 0.5) + max(i32(i.info.y + 0.5), select(0, 1, cluster_card(i)));
+    let uv = card_uv(i);
+    return textureSampleLevel(leaf_tex, leaf_samp, vec2<f32>(uv.x, 1.0 - uv.y), l, 0.0);
 }
 
 // Leaf cards: alpha-tested against the species' leaf texture (cutoff 0.5, structure/texture.rs
@@ -500,7 +512,7 @@ fn card_kept(i: TreeOut) -> bool {
     if (t.a > -0.5) {
         return t.a >= 0.5;
     }
-    let d = length(i.uv * 2.0 - vec2<f32>(1.0, 1.0));
+    let d = length(card_uv(i) * 2.0 - vec2<f32>(1.0, 1.0));
     return d < 1.0 - 0.3 * hash2(i.clip.xy, i.salt + 17.0);
 }
 
