@@ -5,11 +5,14 @@
 # rank: OUT/inventory/year_NNNN/part-RRRRR.parquet, read as one dataset by sylva, pyarrow and
 # DuckDB). Every rank writes into OUT (its checkpoint and its inventory parts), so OUT must be on a file
 # system all ranks share and can write (the cluster's parallel or network file system). Each rank holds the whole
-# site (terrain, conditions, per-cell grids) and its own tile's trees: size --mem-per-cpu from
-# a one-process run's memory at the site's size plus the tile's share of the trees
-# (docs/SCALING.md). Sizing from round 23's measured costs (docs/SCALING.md, "Round 23 update"):
-# the site costs each rank about 30 KiB per hectare (100,000 ha: ~2.9 GiB a rank; 1,000,000 ha:
-# ~29 GiB, so there run one rank per node with --cpus-per-task=32 and --mem=0, not 8 ranks a
+# site's conditions and most per-cell grids (since issue 37 round 26 a tile keeps three of its
+# light-cell arrays for its own cells only, and ranks other than 0 no longer keep the start's
+# world beside their tile; docs/SCALING.md, "What a rank holds") and its own tile's trees: size
+# --mem-per-cpu from a one-process run's memory at the site's size plus the tile's share of the
+# trees. Sizing from the measured costs (docs/SCALING.md, "Round 23 update" and its round 26
+# line): the site costs each rank about 20 KiB per hectare (rank 0 about 30 KiB: it keeps the
+# whole world; 100,000 ha: ~1.9 GiB a rank, ~2.9 GiB on rank 0; 1,000,000 ha: ~19 GiB, ~29 GiB
+# on rank 0, so there run one rank per node with --cpus-per-task=32 and --mem=0, not 8 ranks a
 # node), the trees about 130 bytes each (2,400 per ha at year 100) divided over the ranks, and
 # the CPU about 0.28 microseconds per tree-year (100,000 ha x 100 years: ~1 core-hour), so
 # --time is set by the output years (each rank writes its own inventory parts since issue 37

@@ -156,7 +156,26 @@ pub fn derive_with_progress(terrain: &crate::terrain::Terrain, climate: &Climate
 
 /// Builds [`SiteConditions`] from already computed fields (see [`derive_with_progress`]).
 pub fn from_fields(terrain: &crate::terrain::Terrain, climate: &Climate, f: crate::terrain::fields::Fields) -> SiteConditions {
-    let (w, h) = (terrain.elevation.width, terrain.elevation.height);
+    from_fields_of(&terrain.elevation, &terrain.geo, terrain.elevation.height, climate, f)
+}
+
+/// [`SiteConditions`] of window `out` of a raster, from its DEM window `dem` (`out` and
+/// [`crate::terrain::fields::window_halo_cells`] around it) and the window's hydrology
+/// ([`crate::terrain::fields::hydrology_windows`]): [`crate::terrain::fields::compute_window`]
+/// mapped to the indices as [`derive`] does, with the whole raster's georeferencing and mean
+/// cell width. Every grid is `out`'s cells and equals the same window of [`derive`]'s
+/// conditions of the whole raster bit for bit.
+///
+/// Errors: as [`crate::terrain::fields::compute_window`].
+pub fn derive_window(dem: &crate::terrain::io::DemWindow, out: &crate::grid::Window, climate: &Climate, filled: Grid<f32>, flow_acc: Grid<f32>) -> crate::Result<SiteConditions> {
+    let f = crate::terrain::fields::compute_window(dem, out, climate, filled, flow_acc)?;
+    Ok(from_fields_of(&out.cut(&dem.elevation, &dem.window), &dem.geo, dem.full_height, climate, f))
+}
+
+/// [`from_fields`] of the cells `elevation` (a window of a raster of `full_h` rows, or the
+/// whole) with the raster's georeferencing `geo`.
+fn from_fields_of(elevation: &Grid<f32>, geo: &GeoRef, full_h: usize, climate: &Climate, f: crate::terrain::fields::Fields) -> SiteConditions {
+    let (w, h) = (elevation.width, elevation.height);
     let flat = f.flat_insolation_kwh_m2.max(1e-9);
     let mut indices = Grid::filled(w, h, [0f32; 6]);
     for i in 0..w * h {
@@ -172,12 +191,12 @@ pub fn from_fields(terrain: &crate::terrain::Terrain, climate: &Climate, f: crat
         v[factor::N] = climate.nitrogen_n;
         indices.data[i] = v;
     }
-    let cell_x_m = (0..h).map(|r| terrain.geo.cell_x_m_at_row(r)).sum::<f64>() / h.max(1) as f64;
+    let cell_x_m = (0..full_h).map(|r| geo.cell_x_m_at_row(r)).sum::<f64>() / full_h.max(1) as f64;
     SiteConditions {
-        geo: terrain.geo.clone(),
+        geo: geo.clone(),
         cell_x_m,
-        cell_y_m: terrain.geo.cell_y_m(),
-        elevation_m: terrain.elevation.map(|z| if z.is_finite() { *z } else { 0.0 }),
+        cell_y_m: geo.cell_y_m(),
+        elevation_m: elevation.map(|z| if z.is_finite() { *z } else { 0.0 }),
         mask: f.mask,
         slope_deg: f.slope_deg,
         aspect_deg: f.aspect_deg,

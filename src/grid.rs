@@ -139,6 +139,66 @@ impl<T> Grid<T> {
     }
 }
 
+/// A rectangle of cells of a larger grid (row 0 north): columns `col0 .. col0 + width`, rows
+/// `row0 .. row0 + height`. A rank's part of the site, and the part of a DEM read by window.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub struct Window {
+    /// First column (west).
+    pub col0: usize,
+    /// First row (north).
+    pub row0: usize,
+    /// Columns.
+    pub width: usize,
+    /// Rows.
+    pub height: usize,
+}
+
+impl Window {
+    /// The whole of a `width × height` grid.
+    pub fn full(width: usize, height: usize) -> Window {
+        Window { col0: 0, row0: 0, width, height }
+    }
+    /// One past the last column.
+    pub fn col1(&self) -> usize {
+        self.col0 + self.width
+    }
+    /// One past the last row.
+    pub fn row1(&self) -> usize {
+        self.row0 + self.height
+    }
+    /// This window widened by `halo` cells on every side, clipped to a `full_w × full_h` grid.
+    pub fn with_halo(&self, halo: usize, full_w: usize, full_h: usize) -> Window {
+        let (c0, r0) = (self.col0.saturating_sub(halo), self.row0.saturating_sub(halo));
+        let (c1, r1) = (self.col1().saturating_add(halo).min(full_w), self.row1().saturating_add(halo).min(full_h));
+        Window { col0: c0, row0: r0, width: c1.saturating_sub(c0), height: r1.saturating_sub(r0) }
+    }
+    /// True when `other` lies wholly inside this window.
+    pub fn contains(&self, other: &Window) -> bool {
+        other.col0 >= self.col0 && other.row0 >= self.row0 && other.col1() <= self.col1() && other.row1() <= self.row1()
+    }
+    /// True when the window is non-empty and lies inside a `full_w × full_h` grid.
+    pub fn inside(&self, full_w: usize, full_h: usize) -> bool {
+        self.width > 0 && self.height > 0 && self.col0.checked_add(self.width).is_some_and(|e| e <= full_w) && self.row0.checked_add(self.height).is_some_and(|e| e <= full_h)
+    }
+    /// The cells of `g` (a grid laid over `outer`, which contains this window) under this
+    /// window, as a grid of `width × height`. Panics when `outer` does not contain it.
+    pub fn cut<T: Clone>(&self, g: &Grid<T>, outer: &Window) -> Grid<T> {
+        assert!(outer.contains(self) && g.width == outer.width && g.height == outer.height, "window {self:?} not inside {outer:?}");
+        let mut data = Vec::with_capacity(self.width * self.height);
+        for r in self.row0..self.row1() {
+            let i = (r - outer.row0) * g.width + (self.col0 - outer.col0);
+            data.extend_from_slice(&g.data[i..i + self.width]);
+        }
+        Grid { width: self.width, height: self.height, data }
+    }
+}
+
+impl std::fmt::Display for Window {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "columns {}..{}, rows {}..{}", self.col0, self.col1(), self.row0, self.row1())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

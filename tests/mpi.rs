@@ -5,7 +5,9 @@
 //! 2 and resumed on 2 (each rank reading its own checkpoint), end as the unbroken run; a
 //! managed run (issue 35: `scenarios/thinning_beech.toml` shortened, thinned from below over
 //! the whole site) on 2 ranks, and stopped and resumed on 2, writes the one process's run too;
-//! so does a run with tree inventories every 10 years and maps every 5 (`inventory_every`).
+//! so does a run with tree inventories every 10 years and maps every 5 (`inventory_every`);
+//! and a run on a GeoTIFF site (issue 37 Build 1), whose ranks each derive their band of the
+//! site from a window of the DEM read by window, on 2 and 3 ranks and resumed 3 → 2.
 #![cfg(feature = "mpi")]
 
 mod common;
@@ -176,4 +178,63 @@ fn inventories_every_ten_years_on_two_ranks_write_the_run_directory_of_one_proce
     simulate(2, &sc, &d, false);
     let m = common::assert_same_run(&one, &d, &common::world_with(&text, &common::embedded()).1, "inventory_every on 2 ranks");
     assert_eq!((m.year, m.ranks), (20, 2));
+}
+
+/// Beech seed trees on a 600 m × 400 m window of the Coweeta DEM (10 m cells, slopes of
+/// 10–40°: the conditions vary cell by cell), read from the GeoTIFF file.
+fn dem_scenario(years: u32) -> String {
+    let dem = Path::new(env!("CARGO_MANIFEST_DIR")).join("terrains/coweeta_10m_utm17n.tif");
+    format!(
+        "name = \"mpi_dem\"\nyears = {years}\nseed = 7\nspecies = [\"beech\"]\nlight_cell_m = 10.0\nsnapshot_every = 5\ncheckpoint_every = 4\n\
+         [terrain]\npath = \"{}\"\nwindow = [140, 100, 60, 40]\n\
+         [[start]]\nkind = \"seed_sources\"\nspecies = \"beech\"\npoints = [[298.0, 198.0], [304.0, 60.0], [198.0, 300.0], [202.0, 40.0], [60.0, 300.0], [500.0, 200.0]]\ntrees_per_source = 3\n",
+        dem.display()
+    )
+}
+
+/// Runs as [`simulate`] and returns stderr, which must name every rank's band of the site.
+fn simulate_dem(ranks: usize, sc: &Path, out: &Path, resume: bool) {
+    let mut c = Command::new("mpirun");
+    c.args(["--allow-run-as-root", "--oversubscribe", "-np", &ranks.to_string(), sylva()]);
+    c.arg("simulate").arg(sc).arg("--out").arg(out).args(["--threads", "1"]);
+    if resume {
+        c.arg("--resume");
+    }
+    let o = c.output().unwrap_or_else(|e| panic!("cannot start mpirun (is Open MPI's mpirun installed?): {e}"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{ranks} ranks failed: {}\n{err}", String::from_utf8_lossy(&o.stdout));
+    for r in 0..ranks {
+        let (r0, r1) = (r * 40 / ranks, (r + 1) * 40 / ranks);
+        assert!(err.contains(&format!("rank {r}/{ranks}: site rows {r0}..{r1} of 40 derived from a window of")), "rank {r} of {ranks} did not derive its band: {err}");
+    }
+}
+
+#[test]
+fn a_dem_read_by_window_on_two_and_three_ranks_writes_the_run_of_one_process() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (short, long) = (tmp.path().join("dem_11.toml"), tmp.path().join("dem_24.toml"));
+    std::fs::write(&short, dem_scenario(11)).unwrap();
+    std::fs::write(&long, dem_scenario(24)).unwrap();
+    let one = tmp.path().join("one");
+    simulate(0, &long, &one, false);
+    let (_, template) = common::world_with(&dem_scenario(24), &common::embedded());
+    // a meaningful site: the conditions vary over the window
+    let s = &template.site.conditions;
+    let (lo, hi) = s.slope_deg.data.iter().fold((f32::MAX, f32::MIN), |(a, b), &v| (a.min(v), b.max(v)));
+    assert!(hi - lo > 10.0 && s.mask.data.iter().all(|m| *m), "slopes {lo}–{hi}°");
+    // recruits (ids from 2^44 on) in the last inventory, on more than one band and tile
+    let inv = sylva::job::inventory::read(&one.join("inventory/year_0024.parquet")).unwrap();
+    let recruits: Vec<f64> = inv.iter().filter(|r| r.id >= 1 << 44).map(|r| r.x_m).collect();
+    assert!(recruits.len() > 100 && recruits.iter().any(|&x| x < 200.0) && recruits.iter().any(|&x| x > 400.0), "{} recruits", recruits.len());
+    for n in [2, 3] {
+        let d = tmp.path().join(format!("np{n}"));
+        simulate_dem(n, &long, &d, false);
+        let m = common::assert_same_run(&one, &d, &template, &format!("DEM site on {n} ranks"));
+        assert_eq!((m.year, m.ranks), (24, n));
+    }
+    let d = tmp.path().join("split");
+    simulate_dem(3, &short, &d, false);
+    simulate_dem(2, &long, &d, true);
+    let m = common::assert_same_run(&one, &d, &template, "DEM site on 3 ranks for 11 years, resumed on 2 for 24");
+    assert_eq!((m.year, m.ranks), (24, 2));
 }

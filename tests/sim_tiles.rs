@@ -96,6 +96,42 @@ fn a_tile_without_trees() {
 }
 
 #[test]
+fn a_tile_holds_the_light_cells_site_arrays_of_its_own_cells_only() {
+    // issue 37 Build 1: the site cell per light cell, the ground free of obstacles and the ground
+    // light are held for the tile's rectangle only, in light-cell order; a building across the
+    // tile edge at x = 200 m (its ground free of 0 under the roof) and beech regenerating by
+    // it: 2 and 2 × 2 tiles end as one process
+    let building = "[[obstacle]]\nkind = \"footprint\"\npoints = [[180.0, 80.0], [225.0, 80.0], [225.0, 150.0], [180.0, 150.0]]\nheight_m = 12.0\n";
+    let toml = format!("{}{building}", edges());
+    let (_, w0) = common::world(&toml);
+    let (lg, whole) = (w0.site.light, &w0.site.light_site);
+    assert_eq!(whole.len(), lg.len());
+    let roofed = w0.site.ground_free.iter().filter(|&&f| f == 0.0).count();
+    assert!(roofed > 20, "{roofed} light cells under the roof");
+    for (nx, ny) in [(2, 1), (2, 2)] {
+        let layout = Layout::new(&w0.site, nx, ny).unwrap();
+        let mut held = 0;
+        let mut roofed_held = 0;
+        for k in 0..layout.len() {
+            let r = layout.rect(k);
+            let tile = Tile::new(&w0, layout.clone(), k);
+            let s = &tile.world.site;
+            let cells: Vec<usize> = (r.row0..r.row1).flat_map(|row| (r.col0..r.col1).map(move |col| row * lg.cols + col)).collect();
+            assert_eq!((s.light_site.len(), s.ground_free.len(), tile.world.scratch.ground_light.len()), (r.len(), r.len(), r.len()), "tile {k} of {nx} × {ny}");
+            assert_eq!(s.light_site, cells.iter().map(|&c| whole[c]).collect::<Vec<u32>>(), "tile {k}");
+            assert!(s.ground_free.iter().zip(&cells).all(|(f, &c)| f.to_bits() == w0.site.ground_free[c].to_bits()), "tile {k}");
+            held += r.len();
+            roofed_held += s.ground_free.iter().filter(|&&f| f == 0.0).count();
+        }
+        assert_eq!((held, roofed_held), (lg.len(), roofed), "{nx} × {ny}: every light cell held by one tile");
+    }
+    let one = one_process(&toml, YEARS);
+    assert!(one.1.stand.cohorts.len() > 50, "{} cohorts", one.1.stand.cohorts.len());
+    assert_tiles_equal(&toml, 2, 1, YEARS, &one);
+    assert_tiles_equal(&toml, 2, 2, YEARS, &one);
+}
+
+#[test]
 fn a_too_narrow_halo_is_refused_and_would_differ() {
     let toml = edges();
     let (_, w0) = common::world(&toml);

@@ -263,12 +263,13 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     dirs.extend(a.species_dir.as_deref());
     let lib = library(&dirs)?;
-    let site = load_site(&sc)?;
     #[cfg(feature = "mpi")]
     if let Some(mut t) = sylva::job::mpi_transport::MpiTransport::from_env() {
         use sylva::sim::tiles::Transport;
         if t.size() > 1 {
             let t0 = std::time::Instant::now();
+            // issue 37 Build 1: a GeoTIFF site derived by the ranks, each from a window of the DEM
+            let site = sylva::job::site_ranks::site_by_ranks(&sc, &mut t).with_context(|| format!("[terrain] of {} (rank {})", sc.context(), t.rank()))?;
             let r = if t.rank() != 0 {
                 // a stop (Ctrl-C, SIGTERM from mpirun) is rank 0's to decide; the others follow it
                 let _ = ctrlc::set_handler(|| {});
@@ -280,6 +281,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             return r;
         }
     }
+    let site = load_site(&sc)?;
     let stepping = || match a.tiles {
         Some(n) if n > 1 => Stepping::Local(n),
         _ => Stepping::One,

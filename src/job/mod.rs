@@ -18,6 +18,7 @@ pub mod maps;
 pub mod pictures;
 pub mod run;
 pub mod scene;
+pub mod site_ranks;
 pub mod tiled;
 #[cfg(feature = "mpi")]
 pub mod mpi_transport;

@@ -138,14 +138,14 @@ fn agree(t: &mut dyn Transport, failed: Option<String>) -> Result<()> {
     }
 }
 
-/// Reads tile `me` of `layout` from the per-rank checkpoint `path` of `year` into a copy of
-/// `template` (the world of the scenario at its start); returns it with the rows the file holds
+/// Reads tile `me` of `layout` from the per-rank checkpoint `path` of `year` into `template`
+/// (the world of the scenario at its start, or a copy); returns it with the rows the file holds
 /// (rank 0's: the stand table).
 ///
 /// Errors: as [`checkpoint::load`]; [`Error::Format`] naming the file when its year is not
 /// `year` (the manifest's).
-fn load_tile(template: &World, layout: &Layout, me: usize, path: &Path, year: u32) -> Result<(Tile, Vec<StandRow>)> {
-    let mut w = template.clone();
+fn load_tile(template: World, layout: &Layout, me: usize, path: &Path, year: u32) -> Result<(Tile, Vec<StandRow>)> {
+    let mut w = template;
     let rows = checkpoint::load(path, &mut w)?;
     if w.stand.year != year {
         return Err(Error::format(path, format!("year {} in a checkpoint whose manifest says year {year}", w.stand.year)).into());
@@ -445,7 +445,7 @@ impl Stepper for Root<'_> {
         let cd = dir.join(checkpoint::RANK_DIR);
         let r = (|| -> Result<(Tile, Vec<StandRow>)> {
             let (year, p) = send_paths(self.t, Some((m.year, m.files.iter().map(|f| cd.join(f)).collect())))?;
-            let r = load_tile(world, &layout, 0, &p, year);
+            let r = load_tile(world.clone(), &layout, 0, &p, year);
             let a = agree(self.t, r.as_ref().err().map(|e| e.to_string()));
             let r = r?;
             a?;
@@ -513,6 +513,10 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
     let world = World::new(site, lib, scenario)?;
     let layout = layout_for(&world, t.size())?;
     let me = t.rank();
+    // the world of the scenario's start, until this rank's tile is made from it (Begin) or
+    // from a checkpoint read into it (Resume): then the tile holds the only copy of the site
+    let mut world = Some(world);
+    let template = |w: &mut Option<World>, c: Command| w.take().ok_or_else(|| Error::Exchange { peer: 0, reason: format!("command {c:?} after this rank's tile was made") });
     let mut tile: Option<Tile> = None;
     // wall time (s) in the snapshots' and checkpoints' collective steps (SYLVA_PHASE_TIMES=1)
     let mut output_s = 0.0;
@@ -527,7 +531,7 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 return Ok(());
             }
             (Command::Begin, _) => {
-                let mut tl = Tile::new(&world, layout.clone(), me);
+                let mut tl = Tile::own(template(&mut world, c)?, layout.clone(), me);
                 tl.scatter(None, t)?;
                 tile = Some(tl);
             }
@@ -547,7 +551,7 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
             }
             (Command::Resume, None) => {
                 let (year, p) = send_paths(t, None)?;
-                let r = load_tile(&world, &layout, me, &p, year);
+                let r = template(&mut world, c).map_err(super::JobError::from).and_then(|w| load_tile(w, &layout, me, &p, year));
                 let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
                 let (tl, _) = r?;
                 a?;

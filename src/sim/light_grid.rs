@@ -98,6 +98,70 @@ impl CellRect {
     }
 }
 
+/// The light cells a world steps, and the cells its per-light-cell site arrays hold (issue 37
+/// Build 1): a tile's rectangle ([`crate::sim::World`]'s `site.window`), or the whole grid (one
+/// process). Array index `k` of a span is its `k`-th cell in ascending light-cell order (rows
+/// of the rectangle south to north, each west to east), so a tile's arrays hold its own cells
+/// in one process's order and nothing else.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Span {
+    /// Columns of the whole light grid.
+    cols: usize,
+    /// Cells of the whole light grid.
+    all: usize,
+    /// The rectangle; `None`: the whole grid.
+    rect: Option<CellRect>,
+}
+
+impl Span {
+    /// The span of `window` (`None`: every cell) on `grid`. A rectangle reaching beyond the
+    /// grid is clipped to it.
+    pub fn new(window: Option<CellRect>, grid: &LightGrid) -> Span {
+        let rect = window.map(|r| CellRect { col0: r.col0.min(grid.cols), row0: r.row0.min(grid.rows), col1: r.col1.min(grid.cols), row1: r.row1.min(grid.rows) });
+        Span { cols: grid.cols, all: grid.len(), rect }
+    }
+    /// Number of cells (the length of the arrays over the span).
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.rect.map_or(self.all, |r| if r.col1 > r.col0 && r.row1 > r.row0 { r.len() } else { 0 })
+    }
+    /// True when the span has no cell.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// The light cell (index of the whole grid, `row · cols + col`) at index `k` of the span
+    /// (`k < len()`).
+    #[inline]
+    pub fn cell(&self, k: usize) -> usize {
+        match self.rect {
+            None => k,
+            Some(r) => {
+                let w = r.col1 - r.col0;
+                (r.row0 + k / w) * self.cols + r.col0 + k % w
+            }
+        }
+    }
+    /// The index in the span of light cell `c` (of the whole grid), or `None` outside it.
+    #[inline]
+    pub fn index(&self, c: usize) -> Option<usize> {
+        match self.rect {
+            None => (c < self.all).then_some(c),
+            Some(r) => {
+                let (col, row) = (c % self.cols, c / self.cols);
+                r.contains(col, row).then(|| (row - r.row0) * (r.col1 - r.col0) + col - r.col0)
+            }
+        }
+    }
+    /// The values of `whole` (one per light cell of the whole grid) over the span, in span
+    /// order; an empty `whole` stays empty.
+    pub fn cut<T: Copy>(&self, whole: &[T]) -> Vec<T> {
+        if whole.is_empty() || self.rect.is_none() {
+            return whole.to_vec();
+        }
+        (0..self.len()).map(|k| whole[self.cell(k)]).collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -112,5 +176,29 @@ mod tests {
         assert_eq!(g.centre(5), (12.5, 7.5));
         assert_eq!(g.cell_of(-3.0, 100.0), 3, "clamped");
         assert_eq!(g.cell_area_m2(), 25.0);
+    }
+
+    #[test]
+    fn a_span_indexes_its_rectangle_in_light_cell_order() {
+        // 5 × 4 cells; the rectangle of columns 1..3, rows 2..4 holds cells 11, 12, 16, 17
+        let g = LightGrid::new((25.0, 20.0), 5.0);
+        let s = Span::new(Some(CellRect { col0: 1, row0: 2, col1: 3, row1: 4 }), &g);
+        assert_eq!(s.len(), 4);
+        assert_eq!((0..4).map(|k| s.cell(k)).collect::<Vec<_>>(), vec![11, 12, 16, 17]);
+        let idx: Vec<Option<usize>> = (0..g.len()).map(|c| s.index(c)).collect();
+        for (c, i) in idx.iter().enumerate() {
+            assert_eq!(*i, [11, 12, 16, 17].iter().position(|&x| x == c), "cell {c}");
+        }
+        let whole: Vec<u32> = (0..g.len() as u32).map(|c| c * 10).collect();
+        assert_eq!(s.cut(&whole), vec![110, 120, 160, 170]);
+        assert!(s.cut::<u32>(&[]).is_empty());
+        // the whole grid: the identity
+        let a = Span::new(None, &g);
+        assert_eq!((a.len(), a.cell(7), a.index(7), a.index(20)), (20, 7, Some(7), None));
+        assert_eq!(a.cut(&whole), whole);
+        // a rectangle beyond the grid is clipped; an empty one has no cells
+        let c = Span::new(Some(CellRect { col0: 3, row0: 3, col1: 9, row1: 9 }), &g);
+        assert_eq!((c.len(), c.cell(0), c.cell(1)), (2, 18, 19));
+        assert!(Span::new(Some(CellRect { col0: 2, row0: 0, col1: 2, row1: 4 }), &g).is_empty());
     }
 }

@@ -21,6 +21,7 @@ pub mod phases;
 pub mod pure_stand;
 pub mod rules;
 pub mod scenario;
+pub mod select;
 pub mod stats;
 pub mod step;
 pub mod tiles;

@@ -775,13 +775,8 @@ pub fn crop_site(site: &crate::conditions::SiteConditions, window: [usize; 4]) -
     if w == 0 || h == 0 || c0 + w > site.width() || r0 + h > site.height() {
         return Err(invalid("scenario", "terrain.window", format!("{window:?}"), &format!("inside the {} x {} terrain grid", site.width(), site.height())));
     }
-    fn cut<T: Clone>(g: &crate::grid::Grid<T>, c0: usize, r0: usize, w: usize, h: usize) -> crate::grid::Grid<T> {
-        let mut data = Vec::with_capacity(w * h);
-        for r in r0..r0 + h {
-            data.extend_from_slice(&g.data[r * g.width + c0..r * g.width + c0 + w]);
-        }
-        crate::grid::Grid { width: w, height: h, data }
-    }
+    let (win, full) = (crate::grid::Window { col0: c0, row0: r0, width: w, height: h }, crate::grid::Window::full(site.width(), site.height()));
+    let cut = |g: &crate::grid::Grid<f32>| win.cut(g, &full);
     let mut geo = site.geo.clone();
     geo.origin_x += c0 as f64 * geo.pixel_w;
     geo.origin_y -= r0 as f64 * geo.pixel_h;
@@ -789,15 +784,15 @@ pub fn crop_site(site: &crate::conditions::SiteConditions, window: [usize; 4]) -
         geo,
         cell_x_m: site.cell_x_m,
         cell_y_m: site.cell_y_m,
-        mask: cut(&site.mask, c0, r0, w, h),
-        elevation_m: cut(&site.elevation_m, c0, r0, w, h),
-        slope_deg: cut(&site.slope_deg, c0, r0, w, h),
-        aspect_deg: cut(&site.aspect_deg, c0, r0, w, h),
-        twi: cut(&site.twi, c0, r0, w, h),
-        insolation_kwh_m2: cut(&site.insolation_kwh_m2, c0, r0, w, h),
-        wind_exposure: cut(&site.wind_exposure, c0, r0, w, h),
-        temperature_c: cut(&site.temperature_c, c0, r0, w, h),
-        indices: cut(&site.indices, c0, r0, w, h),
+        mask: win.cut(&site.mask, &full),
+        elevation_m: cut(&site.elevation_m),
+        slope_deg: cut(&site.slope_deg),
+        aspect_deg: cut(&site.aspect_deg),
+        twi: cut(&site.twi),
+        insolation_kwh_m2: cut(&site.insolation_kwh_m2),
+        wind_exposure: cut(&site.wind_exposure),
+        temperature_c: cut(&site.temperature_c),
+        indices: win.cut(&site.indices, &full),
     })
 }
 

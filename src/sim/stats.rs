@@ -4,6 +4,9 @@ use super::trees::DeathCause;
 use super::cohorts::RegenYear;
 use super::trees::TreeStore;
 use super::world::{Site, World};
+// the selection by summed counts and the reduction it takes (sim::select), at their former paths
+pub use super::select::{alone, kth_smallest_by, Reduce};
+use super::select::{from_total_key, total_key};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -92,23 +95,6 @@ pub fn harvest_sums(site: &Site, dead: &[super::trees::DeadTree]) -> (u64, f64) 
     (n, v)
 }
 
-/// Order-preserving key of an f32 under [`f32::total_cmp`] (as an unsigned integer).
-#[inline]
-fn total_key(v: f32) -> u32 {
-    let b = v.to_bits();
-    if b >> 31 == 1 {
-        !b
-    } else {
-        b | 0x8000_0000
-    }
-}
-
-/// The f32 of a [`total_key`].
-#[inline]
-fn from_total_key(k: u32) -> f32 {
-    f32::from_bits(if k >> 31 == 1 { k & 0x7fff_ffff } else { !k })
-}
-
 /// Binary digits below the unit of the stand table's exact sums ([`RowSums`], [`top_height`]):
 /// every tree's value (height m, DBH² cm², basal area m², volume m³) enters as the integer
 /// nearest to `value · 2^64`, so sums are exact integers that do not depend on the order of
@@ -173,16 +159,6 @@ fn push_limbs(out: &mut Vec<u64>, v: i128) {
 /// values: exact when the sum fits).
 fn from_limbs(w: &[u64]) -> i128 {
     w.iter().take(3).enumerate().fold(0u128, |s, (j, &l)| s.wrapping_add((l as u128).wrapping_shl(LIMB_BITS * j as u32))) as i128
-}
-
-/// An element-wise sum of u64 words over every part of a stand (the ranks of a tiled run:
-/// `Transport::all_sum`, an MPI_Allreduce): every part passes words of the same length and
-/// gets the sums. One process: the words themselves ([`alone`]).
-pub type Reduce<'a> = dyn FnMut(Vec<u64>) -> crate::Result<Vec<u64>> + 'a;
-
-/// The [`Reduce`] of a stand in one part.
-pub fn alone(v: Vec<u64>) -> crate::Result<Vec<u64>> {
-    Ok(v)
 }
 
 /// The sums of a stand-table row over trees, exact ([`FIXED_BITS`]): the same integers

@@ -618,9 +618,15 @@ impl Tile {
     /// part). The tile's tallies start at zero ([`Tile::gather`] adds them to the global
     /// world's).
     pub fn new(global: &World, layout: Layout, me: usize) -> Tile {
-        let mut world = global.clone();
+        Tile::own(global.clone(), layout, me)
+    }
+
+    /// As [`Tile::new`], taking `world` (the world of one process) instead of copying it: a rank
+    /// that no longer needs the whole world (every rank but 0, once its tile exists) then holds
+    /// one copy of the site, not two, and not the start's trees of other tiles.
+    pub fn own(mut world: World, layout: Layout, me: usize) -> Tile {
         keep_own(&mut world, &layout, me);
-        world.site.window = Some(layout.rect(me));
+        hold_own_cells(&mut world, layout.rect(me));
         world.tallies.deaths_total = [0; N_CAUSES];
         world.tallies.regen_ledger = RegenLedger::new(world.site.pool.len());
         world.scratch.dead.clear();
@@ -631,7 +637,7 @@ impl Tile {
     /// cohorts, the seed grids it held, its tallies: a run's per-rank checkpoint read back);
     /// tallies are kept, this year's dead cleared.
     pub fn resumed(mut world: World, layout: Layout, me: usize) -> Tile {
-        world.site.window = Some(layout.rect(me));
+        hold_own_cells(&mut world, layout.rect(me));
         world.scratch.dead.clear();
         Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] }
     }
@@ -1218,6 +1224,28 @@ pub fn assemble(global: &mut World, layout: &Layout, tiles: Vec<World>) -> Resul
         })
         .collect();
     merge_parts(global, &zero, layout, parts)
+}
+
+/// Makes `w` the world of the tile whose light cells are `rect` (its `site.window`) and cuts
+/// the per-light-cell arrays that a tile reads on its own cells only to them (issue 37 Build 1,
+/// [`super::light_grid::Span`]): the site cell of each light cell (`site.light_site`: the light
+/// phase lights the tile's trees by it, regeneration steps its cells by it), the ground free
+/// of obstacles (`site.ground_free`) and the ground light (`scratch.ground_light`, written by
+/// the light phase on the tile's cells, read by regeneration there). Arrays already cut (a
+/// world that is a tile's) are left as they are.
+fn hold_own_cells(w: &mut World, rect: super::light_grid::CellRect) {
+    let light = w.site.light;
+    let span = super::light_grid::Span::new(Some(rect), &light);
+    if w.site.light_site.len() == light.len() {
+        w.site.light_site = span.cut(&w.site.light_site);
+    }
+    if w.site.ground_free.len() == light.len() {
+        w.site.ground_free = span.cut(&w.site.ground_free);
+    }
+    if w.scratch.ground_light.len() == light.len() {
+        w.scratch.ground_light = span.cut(&w.scratch.ground_light);
+    }
+    w.site.window = Some(rect);
 }
 
 /// Keeps in `w` only the trees and cohorts of tile `me` of `layout`.

@@ -73,6 +73,8 @@ pub struct Site {
     /// The light grid (canopy, ground light, spatial hash and regeneration cells; row 0 south).
     pub light: LightGrid,
     /// Site cell index (row-major, row 0 north) of each light cell; `u32::MAX` where masked.
+    /// One process: every light cell; a tile ([`super::tiles::Tile`], `window` set): its own
+    /// cells only, indexed by [`super::light_grid::Span`] (issue 37 Build 1).
     pub light_site: Vec<u32>,
     /// Relative insolation (cell insolation / median of unmasked cells, clamped 0.2–1.5) per site cell.
     pub rel_insolation: Vec<f32>,
@@ -86,7 +88,8 @@ pub struct Site {
     pub obstacles: Vec<super::obstacle::ObstacleSpec>,
     /// Canopy entries of the obstacles on the light grid ([`super::obstacle::light_cells`]).
     pub obstacle_canopy: Vec<(u64, f32)>,
-    /// Fraction (0–1) of each light cell's ground not covered by a solid obstacle.
+    /// Fraction (0–1) of each light cell's ground not covered by a solid obstacle. A tile holds
+    /// its own cells only, as `light_site`.
     pub ground_free: Vec<f32>,
     /// The light cells whose regeneration this world steps: a tile's (`sim::tiles`); `None`
     /// (one process): all.
@@ -117,7 +120,8 @@ pub struct Stand {
 pub struct Scratch {
     /// Spatial hash of the trees at the last light phase (cells of the light grid).
     pub grid: SpatialGrid,
-    /// Relative light at the ground (0–1.5) per light cell, from the last light phase.
+    /// Relative light at the ground (0–1.5) per light cell, from the last light phase; a tile
+    /// ([`Site::window`] set) holds its own cells only, as [`Site::light_site`].
     pub ground_light: Vec<f32>,
     /// Trees that died in the current year (cleared at the start of each year).
     pub dead: Vec<DeadTree>,
@@ -132,6 +136,21 @@ pub struct Tallies {
     pub deaths_total: [u64; super::trees::N_CAUSES],
     /// Cumulative counts of the regeneration layer per pool species.
     pub regen_ledger: RegenLedger,
+}
+
+/// The insolation (kWh/m²/yr) that [`Site::rel_insolation`] divides by: the median of the
+/// unmasked cells' insolation (the value at index `n / 2` of the `n` unmasked cells sorted in
+/// `f32::total_cmp` order), or 1 when that is not positive or no cell is unmasked. `insolation`
+/// and `mask` are a part of the site (a rank's window, or the whole site); `reduce` sums counts
+/// over the parts ([`super::select::alone`] for one part), and the count of unmasked cells and
+/// the selection ([`super::select::kth_smallest_by`], 3 reductions) pass counts, no values, so
+/// the parts find the whole site's median bit for bit.
+///
+/// Errors: those of `reduce`.
+pub fn insolation_median_by(insolation: &crate::grid::Grid<f32>, mask: &crate::grid::Grid<bool>, reduce: &mut super::select::Reduce) -> Result<f32> {
+    let ins: Vec<f32> = insolation.data.iter().zip(&mask.data).filter(|(_, m)| **m).map(|(v, _)| *v).collect();
+    let n = reduce(vec![ins.len() as u64])?.first().copied().unwrap_or(0);
+    Ok(super::select::kth_smallest_by(&ins, n / 2, reduce)?.filter(|m| *m > 0.0).unwrap_or(1.0))
 }
 
 impl Site {
@@ -289,9 +308,7 @@ impl World {
                 }
             })
             .collect();
-        let mut ins: Vec<f32> = site.insolation_kwh_m2.data.iter().zip(&site.mask.data).filter(|(_, m)| **m).map(|(v, _)| *v).collect();
-        ins.sort_by(|a, b| a.total_cmp(b));
-        let median = ins.get(ins.len() / 2).copied().filter(|m| *m > 0.0).unwrap_or(1.0);
+        let median = insolation_median_by(&site.insolation_kwh_m2, &site.mask, &mut super::select::alone)?;
         let rel_insolation = site.insolation_kwh_m2.data.iter().map(|v| (v / median).clamp(0.2, 1.5)).collect();
         let suitability = pool.iter().map(|&s| site.indices.data.par_iter().zip(&site.mask.data).map(|(ix, m)| if *m { lib.species[s as usize].suitability(ix) } else { 0.0 }).collect()).collect();
         let valid = site.mask.data.iter().filter(|m| **m).count();

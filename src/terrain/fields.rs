@@ -9,7 +9,7 @@
 use super::Terrain;
 use crate::climate::Climate;
 use crate::error::{Error, Result};
-use crate::grid::{Crs, GeoRef, Grid};
+use crate::grid::{Crs, GeoRef, Grid, Window};
 use rayon::prelude::*;
 use std::collections::VecDeque;
 
@@ -18,16 +18,72 @@ pub fn mask(t: &Terrain, sea_level_m: f32) -> Grid<bool> {
     t.elevation.map(|z| z.is_finite() && *z > sea_level_m)
 }
 
-/// The 3×3 window around `(c, r)` in gdaldem's order `[a b c; d e f; g h i]` (row above first).
-/// Neighbours outside the grid or masked take the centre's value (edge replication).
+/// A part of a DEM and where it lies in the whole raster: the elevations `z` and mask `m`
+/// (both `at.width × at.height`) of the window `at` of a `full_w × full_h` raster whose
+/// georeferencing is `geo` (the whole raster's: rows and latitudes are the raster's). The
+/// whole raster is the patch `at = Window::full(w, h)` ([`Patch::whole`]); a rank's part is its
+/// cells plus the halo a field needs ([`halo_cells`]). The field functions derive cells of an
+/// output window inside the patch, with the raster's edges (not the patch's) as edges, so a
+/// window derived from a large enough patch equals the same window of the whole raster's field
+/// bit for bit.
+#[derive(Debug, Clone, Copy)]
+pub struct Patch<'a> {
+    /// Elevations (m; NaN invalid) of the patch's cells, row 0 its northern row.
+    pub z: &'a Grid<f32>,
+    /// Mask ([`mask`]) of the patch's cells.
+    pub m: &'a Grid<bool>,
+    /// Where the patch lies in the raster.
+    pub at: Window,
+    /// Columns of the whole raster.
+    pub full_w: usize,
+    /// Rows of the whole raster.
+    pub full_h: usize,
+    /// Georeferencing of the whole raster.
+    pub geo: &'a GeoRef,
+}
+
+impl<'a> Patch<'a> {
+    /// The whole of terrain `t` with its mask `m`.
+    pub fn whole(t: &'a Terrain, m: &'a Grid<bool>) -> Patch<'a> {
+        Patch { z: &t.elevation, m, at: Window::full(m.width, m.height), full_w: m.width, full_h: m.height, geo: &t.geo }
+    }
+    /// Index in the patch's grids of raster cell `(c, r)` (inside the patch).
+    #[inline]
+    fn idx(&self, c: usize, r: usize) -> usize {
+        (r - self.at.row0) * self.at.width + (c - self.at.col0)
+    }
+    /// Refuses an output window `out` whose cells and `halo` cells around them (clipped to the
+    /// raster) are not all in the patch.
+    ///
+    /// Errors: [`Error::Invalid`] naming the field, the window, the halo and the patch.
+    fn check(&self, out: &Window, halo: usize, field: &str) -> Result<()> {
+        let need = out.with_halo(halo, self.full_w, self.full_h);
+        if !out.inside(self.full_w, self.full_h) || !self.at.contains(&need) || self.z.width != self.at.width || self.z.height != self.at.height || self.m.width != self.at.width || self.m.height != self.at.height {
+            return Err(Error::Invalid {
+                context: format!("{field} of a {} x {} raster", self.full_w, self.full_h),
+                field: "window".into(),
+                value: format!("{out} from a patch of {} ({} x {} elevations, {} x {} mask)", self.at, self.z.width, self.z.height, self.m.width, self.m.height),
+                expected: format!("a patch holding the window and {halo} cells around it ({need})"),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// The 3×3 window around raster cell `(c, r)` of patch `p` in gdaldem's order
+/// `[a b c; d e f; g h i]` (row above first). Neighbours outside the raster or masked take the
+/// centre's value (edge replication). The patch must hold the cell's neighbours in the raster.
 #[inline]
-fn window3(z: &Grid<f32>, m: &Grid<bool>, c: usize, r: usize) -> [f32; 9] {
-    let e = *z.get(c, r);
+fn window3(p: &Patch, c: usize, r: usize) -> [f32; 9] {
+    let e = p.z.data[p.idx(c, r)];
     let mut w = [e; 9];
     for (k, (dc, dr)) in [(-1i64, -1i64), (0, -1), (1, -1), (-1, 0), (0, 0), (1, 0), (-1, 1), (0, 1), (1, 1)].iter().enumerate() {
         let (cc, rr) = (c as i64 + dc, r as i64 + dr);
-        if cc >= 0 && rr >= 0 && (cc as usize) < z.width && (rr as usize) < z.height && *m.get(cc as usize, rr as usize) {
-            w[k] = *z.get(cc as usize, rr as usize);
+        if cc >= 0 && rr >= 0 && (cc as usize) < p.full_w && (rr as usize) < p.full_h {
+            let i = p.idx(cc as usize, rr as usize);
+            if p.m.data[i] {
+                w[k] = p.z.data[i];
+            }
         }
     }
     w
@@ -61,22 +117,34 @@ pub fn aspect_from_gradient(gx: f64, gy: f64) -> f32 {
 /// cells next to masked cells are computed with edge replication instead of left nodata.
 /// Masked cells are NaN.
 pub fn slope_aspect(t: &Terrain, m: &Grid<bool>) -> (Grid<f32>, Grid<f32>) {
-    let (w, h) = (t.elevation.width, t.elevation.height);
-    let mut slope = Grid::filled(w, h, f32::NAN);
-    let mut aspect = Grid::filled(w, h, f32::NAN);
-    let dy = t.geo.cell_y_m();
-    slope.data.par_chunks_mut(w).zip(aspect.data.par_chunks_mut(w)).enumerate().for_each(|(r, (sr, ar))| {
-        let dx = t.geo.cell_x_m_at_row(r);
-        for c in 0..w {
-            if !*m.get(c, r) {
+    let p = Patch::whole(t, m);
+    slope_aspect_window(&p, &p.at).expect("the whole raster is its own patch")
+}
+
+/// [`slope_aspect`] of the cells of window `out` (raster columns and rows) from patch `p`,
+/// which must hold `out` and one cell around it (clipped to the raster): equal bit for bit to
+/// the same window of the whole raster's fields. Grids of `out.width × out.height`.
+///
+/// Errors: [`Error::Invalid`] when the patch lacks the window or its 1-cell halo.
+pub fn slope_aspect_window(p: &Patch, out: &Window) -> Result<(Grid<f32>, Grid<f32>)> {
+    p.check(out, 1, "slope and aspect")?;
+    let w = out.width;
+    let mut slope = Grid::filled(w, out.height, f32::NAN);
+    let mut aspect = Grid::filled(w, out.height, f32::NAN);
+    let dy = p.geo.cell_y_m();
+    slope.data.par_chunks_mut(w).zip(aspect.data.par_chunks_mut(w)).enumerate().for_each(|(i, (sr, ar))| {
+        let r = out.row0 + i;
+        let dx = p.geo.cell_x_m_at_row(r);
+        for (j, c) in (out.col0..out.col1()).enumerate() {
+            if !p.m.data[p.idx(c, r)] {
                 continue;
             }
-            let (gx, gy) = horn_gradient(&window3(&t.elevation, m, c, r), dx, dy);
-            sr[c] = (gx * gx + gy * gy).sqrt().atan().to_degrees() as f32;
-            ar[c] = aspect_from_gradient(gx, gy);
+            let (gx, gy) = horn_gradient(&window3(p, c, r), dx, dy);
+            sr[j] = (gx * gx + gy * gy).sqrt().atan().to_degrees() as f32;
+            ar[j] = aspect_from_gradient(gx, gy);
         }
     });
-    (slope, aspect)
+    Ok((slope, aspect))
 }
 
 /// The next representable f32 above `x` (C `nextafterf(x, +inf)`).
@@ -319,11 +387,18 @@ pub const MIN_TAN_SLOPE: f64 = 0.001;
 /// unit contour width = accumulation · cell area / east–west cell width (m; D8, one cell width
 /// of contour), β = Horn slope, tan β ≥ [`MIN_TAN_SLOPE`]. Dimensionless; NaN where masked.
 pub fn twi(acc: &Grid<f32>, slope_deg: &Grid<f32>, geo: &GeoRef, m: &Grid<bool>) -> Grid<f32> {
+    twi_window(acc, slope_deg, geo, m, 0)
+}
+
+/// [`twi`] of a window of the raster whose first row is raster row `row0` (`acc`, `slope_deg`
+/// and `m` the window's cells; `geo` the whole raster's): cell-local given the window's flow
+/// accumulation and slope, so equal bit for bit to the same window of the whole raster's TWI.
+pub fn twi_window(acc: &Grid<f32>, slope_deg: &Grid<f32>, geo: &GeoRef, m: &Grid<bool>, row0: usize) -> Grid<f32> {
     let (w, h) = (m.width, m.height);
     let mut out = Grid::filled(w, h, f32::NAN);
     let dy = geo.cell_y_m();
     out.data.par_chunks_mut(w).enumerate().for_each(|(r, row)| {
-        let dx = geo.cell_x_m_at_row(r);
+        let dx = geo.cell_x_m_at_row(row0 + r);
         for c in 0..w {
             if *m.get(c, r) {
                 let a = *acc.get(c, r) as f64 * dx * dy / dx;
@@ -547,32 +622,61 @@ const LANES: usize = 8;
 /// (degrees; H_wind interpolated toward `wind_from_deg`), exposure = clamp(0.5 − x/30°, 0, 1):
 /// flat open ground 0.5, a 15°-sheltered hollow 0, a ridge 15° above its surroundings 1.
 pub fn insolation_and_wind(t: &Terrain, m: &Grid<bool>, climate_lat: f64, wind_from_deg: f64, p: &SkyParams) -> (Grid<f32>, Grid<f32>) {
-    let (w, h) = (m.width, m.height);
-    let mut ins = Grid::filled(w, h, f32::NAN);
-    let mut wind = Grid::filled(w, h, f32::NAN);
-    let z = &t.elevation;
-    let dy = t.geo.cell_y_m();
-    let geographic = t.geo.crs == Crs::Geographic;
-    let shared_sun = if geographic { None } else { Some(SunSoA::new(&sun_table(row_latitude(&t.geo, 0, climate_lat), p))) };
+    let patch = Patch::whole(t, m);
+    insolation_and_wind_window(&patch, &patch.at, climate_lat, wind_from_deg, p).expect("the whole raster is its own patch")
+}
+
+/// Cells of the horizon search's reach around a cell (and at least 1, for the slope): the
+/// largest of the geometric steps up to `horizon_max_cells` whose distance along a row or a
+/// column, at the raster's smallest cell size, stays within `horizon_max_m`. A patch holding a
+/// window and this many cells around it gives the window's insolation and wind exposure of the
+/// whole raster ([`insolation_and_wind_window`]): 86 cells with the defaults on 10–80 m cells
+/// (the geometric steps 1, 2, 3, 5, 8, 11, 17, 26, 38, 58, 86 within the 128-cell cap).
+pub fn horizon_halo_cells(geo: &GeoRef, full_h: usize, p: &SkyParams) -> usize {
+    // the east–west size is smallest at one end of the rows (cos is concave on ±90°)
+    let dx = geo.cell_x_m_at_row(0).min(geo.cell_x_m_at_row(full_h.saturating_sub(1)));
+    let d1 = dx.min(geo.cell_y_m());
+    horizon_steps(p.horizon_max_cells).into_iter().take_while(|&s| s as f64 * d1 <= p.horizon_max_m).last().unwrap_or(0).max(1)
+}
+
+/// [`insolation_and_wind`] of the cells of window `out` (raster columns and rows) from patch
+/// `patch`, which must hold `out` and [`horizon_halo_cells`] around it (clipped to the raster):
+/// the horizon march and its truncation at the raster's edges run in raster coordinates, so the
+/// result equals the same window of the whole raster's fields bit for bit. Grids of
+/// `out.width × out.height`.
+///
+/// Errors: [`Error::Invalid`] when the patch lacks the window or its halo.
+pub fn insolation_and_wind_window(patch: &Patch, out: &Window, climate_lat: f64, wind_from_deg: f64, p: &SkyParams) -> Result<(Grid<f32>, Grid<f32>)> {
+    patch.check(out, horizon_halo_cells(patch.geo, patch.full_h, p), "insolation and wind exposure")?;
+    let (w, h) = (patch.full_w, patch.full_h);
+    let (ow, pw) = (out.width, patch.at.width);
+    let mut ins = Grid::filled(ow, out.height, f32::NAN);
+    let mut wind = Grid::filled(ow, out.height, f32::NAN);
+    let geo = patch.geo;
+    let dy = geo.cell_y_m();
+    let geographic = geo.crs == Crs::Geographic;
+    let shared_sun = if geographic { None } else { Some(SunSoA::new(&sun_table(row_latitude(geo, 0, climate_lat), p))) };
     let steps = horizon_steps(p.horizon_max_cells);
     let wsec = (wind_from_deg.rem_euclid(360.0)) / 45.0;
     let (wk, wf) = ((wsec.floor() as usize) % 8, wsec - wsec.floor());
     // Masked cells read as NaN so that they never raise a horizon.
-    let zm: Vec<f32> = z.data.iter().zip(&m.data).map(|(v, ok)| if *ok { *v } else { f32::NAN }).collect();
-    ins.data.par_chunks_mut(w).zip(wind.data.par_chunks_mut(w)).enumerate().for_each(|(r, (irow, wrow))| {
+    let zm: Vec<f32> = patch.z.data.iter().zip(&patch.m.data).map(|(v, ok)| if *ok { *v } else { f32::NAN }).collect();
+    ins.data.par_chunks_mut(ow).zip(wind.data.par_chunks_mut(ow)).enumerate().for_each(|(i, (irow, wrow))| {
+        let r = out.row0 + i;
         let own_sun;
         let suns: &SunSoA = match &shared_sun {
             Some(s) => s,
             None => {
-                own_sun = SunSoA::new(&sun_table(row_latitude(&t.geo, r, climate_lat), p));
+                own_sun = SunSoA::new(&sun_table(row_latitude(geo, r, climate_lat), p));
                 &own_sun
             }
         };
-        let dx = t.geo.cell_x_m_at_row(r);
-        let z0 = &zm[r * w..(r + 1) * w];
-        // hz[k][c]: horizon tangent of direction k for column c; complete[k][c]: whether the
-        // march in k went the whole way inside the grid.
-        let mut hz = vec![vec![f32::NEG_INFINITY; w]; 8];
+        let dx = geo.cell_x_m_at_row(r);
+        // row r of the patch, from raster column patch.at.col0
+        let prow = |rr: usize| &zm[(rr - patch.at.row0) * pw..(rr - patch.at.row0 + 1) * pw];
+        let z0 = prow(r);
+        // hz[k][j]: horizon tangent of direction k for column out.col0 + j
+        let mut hz = vec![vec![f32::NEG_INFINITY; ow]; 8];
         let mut nsteps = [0usize; 8];
         for (k, &(dc, dr)) in D8.iter().enumerate() {
             let d1 = ((dc as f64 * dx).powi(2) + (dr as f64 * dy).powi(2)).sqrt();
@@ -585,30 +689,30 @@ pub fn insolation_and_wind(t: &Terrain, m: &Grid<bool>, climate_lat: f64, wind_f
                     break;
                 }
                 let shift = dc * s as i64;
-                // Columns c with 0 ≤ c + shift < w.
-                let (c0, c1) = if shift >= 0 { (0usize, w.saturating_sub(shift as usize)) } else { (((-shift) as usize).min(w), w) };
+                // Raster columns c of the window with 0 ≤ c + shift < w.
+                let (c0, c1) = if shift >= 0 { (out.col0, out.col1().min(w.saturating_sub(shift as usize))) } else { (out.col0.max(((-shift) as usize).min(w)), out.col1()) };
                 if c0 >= c1 {
                     continue;
                 }
-                let src = &zm[rr as usize * w..(rr as usize + 1) * w];
-                let src = &src[(c0 as i64 + shift) as usize..(c1 as i64 + shift) as usize];
+                let src = prow(rr as usize);
+                let src = &src[(c0 as i64 + shift) as usize - patch.at.col0..(c1 as i64 + shift) as usize - patch.at.col0];
                 let inv = (1.0 / (d1 * s as f64)) as f32;
-                for ((b, &zz), &zc) in best[c0..c1].iter_mut().zip(src).zip(&z0[c0..c1]) {
+                for ((b, &zz), &zc) in best[c0 - out.col0..c1 - out.col0].iter_mut().zip(src).zip(&z0[c0 - patch.at.col0..c1 - patch.at.col0]) {
                     *b = b.max((zz - zc) * inv);
                 }
             }
         }
-        for c in 0..w {
-            if !m.data[r * w + c] {
+        for (j, c) in (out.col0..out.col1()).enumerate() {
+            if !patch.m.data[patch.idx(c, r)] {
                 continue;
             }
             let mut hc = [0f32; 8];
             let mut covered = [0f32; 8];
             let (mut sum, mut cnt) = (0f32, 0u32);
             for k in 0..8 {
-                hc[k] = hz[k][c];
+                hc[k] = hz[k][j];
                 let (dc, dr) = D8[k];
-                // Steps of the march that stay inside the grid.
+                // Steps of the march that stay inside the raster.
                 let room_c = if dc > 0 { (w - 1 - c) as i64 } else if dc < 0 { c as i64 } else { i64::MAX };
                 let room_r = if dr > 0 { (h - 1 - r) as i64 } else if dr < 0 { r as i64 } else { i64::MAX };
                 let room = room_c.min(room_r);
@@ -630,21 +734,21 @@ pub fn insolation_and_wind(t: &Terrain, m: &Grid<bool>, climate_lat: f64, wind_f
                     }
                 }
             }
-            let (gx, gy) = horn_gradient(&window3(z, m, c, r), dx, dy);
+            let (gx, gy) = horn_gradient(&window3(patch, c, r), dx, dy);
             let nl = (gx * gx + gy * gy + 1.0).sqrt();
             let nv = [(-gx / nl) as f32, (-gy / nl) as f32, (1.0 / nl) as f32];
             let beam = suns.beam(nv, &hc) as f64;
             let horizon_v: f64 = hc.iter().map(|&tn| 1.0 / (1.0 + (tn.max(0.0) as f64).powi(2))).sum::<f64>() / 8.0;
             let svf = (1.0 + nv[2] as f64) / 2.0 * horizon_v;
-            irow[c] = ((beam + suns.diffuse_wh * svf) / 1000.0) as f32;
+            irow[j] = ((beam + suns.diffuse_wh * svf) / 1000.0) as f32;
             let ang = hc.map(|tn| atan_deg(tn) as f64);
             let h_wind = ang[wk] * (1.0 - wf) + ang[(wk + 1) % 8] * wf;
             let mean = ang.iter().sum::<f64>() / 8.0;
             let x = 0.7 * h_wind + 0.3 * mean;
-            wrow[c] = (0.5 - x / 30.0).clamp(0.0, 1.0) as f32;
+            wrow[j] = (0.5 - x / 30.0).clamp(0.0, 1.0) as f32;
         }
     });
-    (ins, wind)
+    Ok((ins, wind))
 }
 
 /// Mean annual air temperature (°C): `ref + lapse · (z − z_ref) / 1000` (lapse in K/km, default
@@ -667,11 +771,12 @@ pub fn hillshade(t: &Terrain, m: &Grid<bool>, azimuth_deg: f64, altitude_deg: f6
     let l = [az.sin() * alt.cos(), az.cos() * alt.cos(), alt.sin()];
     let dy = t.geo.cell_y_m();
     let mut out = Grid::filled(w, h, f32::NAN);
+    let p = Patch::whole(t, m);
     out.data.par_chunks_mut(w).enumerate().for_each(|(r, row)| {
         let dx = t.geo.cell_x_m_at_row(r);
         for c in 0..w {
             if *m.get(c, r) {
-                let (gx, gy) = horn_gradient(&window3(&t.elevation, m, c, r), dx, dy);
+                let (gx, gy) = horn_gradient(&window3(&p, c, r), dx, dy);
                 let nl = (gx * gx + gy * gy + 1.0).sqrt();
                 row[c] = (255.0 * ((-gx * l[0] - gy * l[1] + l[2]) / nl).max(0.0)) as f32;
             }
@@ -736,6 +841,73 @@ pub fn compute(t: &Terrain, climate: &Climate, progress: &dyn Fn(&str)) -> Resul
     let twi = twi(&flow_acc_cells, &slope_deg, &t.geo, &m);
     let flat_insolation_kwh_m2 = flat_insolation(row_latitude(&t.geo, m.height / 2, climate.latitude_deg), &p);
     Ok(Fields { mask: m, slope_deg, aspect_deg, filled_m, flow_acc_cells, twi, insolation_kwh_m2, flat_insolation_kwh_m2, wind_exposure, temperature_c })
+}
+
+/// Halo (cells) a window's fields need around it ([`compute_window`]): the horizon search's
+/// reach ([`horizon_halo_cells`], at least the slope's 1 cell).
+pub fn window_halo_cells(geo: &GeoRef, full_h: usize) -> usize {
+    horizon_halo_cells(geo, full_h, &SkyParams::default())
+}
+
+/// The depression-filled elevation (m) and D8 flow accumulation (cells) of windows of a raster:
+/// **derived on the whole raster** ([`fill_depressions`], [`flow_directions`],
+/// [`flow_accumulation`]) and cut to each window. Priority-Flood with its ε steps and the
+/// accumulation along the drainage depend on the whole raster; Barnes (2016, "Parallel
+/// priority-flood depression filling for trillion cell DEMs", Environmental Modelling &
+/// Software 86:27–38) and Barnes (2017, "Parallel non-divergent flow accumulation for trillion
+/// cell DEMs", Computers & Geosciences 109:28–41) do both per tile plus an exchange of the
+/// tiles' perimeters, but the ε-filled elevations of this serial fill (each raised to the next
+/// f32 above the cell it is reached from, in the queue's order) are not reproduced bit for bit
+/// by a per-tile fill, so a regional run uses this fallback: one rank holds the whole DEM once,
+/// derives the hydrology and sends every rank its window. Returns one `(filled, accumulation)`
+/// pair per window, each `width × height`.
+///
+/// Errors: [`Error::Invalid`] naming a window that leaves the raster.
+pub fn hydrology_windows(t: &Terrain, m: &Grid<bool>, windows: &[Window]) -> Result<Vec<(Grid<f32>, Grid<f32>)>> {
+    let full = Window::full(m.width, m.height);
+    if let Some(w) = windows.iter().find(|w| !w.inside(full.width, full.height)) {
+        return Err(Error::Invalid { context: t.source.clone(), field: "window".into(), value: w.to_string(), expected: format!("a non-empty window inside the {} x {} raster", full.width, full.height) });
+    }
+    let filled = fill_depressions(t, m);
+    let dir = flow_directions(&filled, &t.geo, m);
+    let acc = flow_accumulation(&dir, m);
+    Ok(windows.iter().map(|w| (w.cut(&filled, &full), w.cut(&acc, &full))).collect())
+}
+
+/// Every field of window `out` of a raster, from `dem` (a window of the raster holding `out`
+/// and [`window_halo_cells`] around it, clipped to the raster: read with
+/// [`crate::terrain::io::read_geotiff_window`]) and the window's hydrology from
+/// [`hydrology_windows`] (`filled`, `flow_acc`: `out`'s cells). Per field: the mask, temperature
+/// and TWI cell by cell; slope and aspect with a 1-cell halo ([`slope_aspect_window`]);
+/// insolation and wind exposure with the horizon's halo ([`insolation_and_wind_window`]); the
+/// flat-ground insolation at the raster's middle row. Equal bit for bit to the same window of
+/// [`compute`]'s fields of the whole raster. Unlike [`compute`], a window with no cell above sea
+/// level is accepted (a part of a site may be water).
+///
+/// Errors: [`Error::Invalid`] when `dem` lacks `out` or its halo, or the hydrology grids are
+/// not `out`'s size.
+pub fn compute_window(dem: &crate::terrain::io::DemWindow, out: &Window, climate: &Climate, filled: Grid<f32>, flow_acc: Grid<f32>) -> Result<Fields> {
+    let (ow, oh) = (out.width, out.height);
+    if (filled.width, filled.height, flow_acc.width, flow_acc.height) != (ow, oh, ow, oh) {
+        return Err(Error::Invalid {
+            context: dem.source.clone(),
+            field: "hydrology of the window".into(),
+            value: format!("filled {} x {}, accumulation {} x {}", filled.width, filled.height, flow_acc.width, flow_acc.height),
+            expected: format!("the window's {ow} x {oh} cells ({out})"),
+        });
+    }
+    let t = Terrain { elevation: dem.elevation.clone(), geo: dem.geo.clone(), nodata: dem.nodata, source: dem.source.clone() };
+    let pm = mask(&t, climate.sea_level_m);
+    let patch = Patch { z: &t.elevation, m: &pm, at: dem.window, full_w: dem.full_width, full_h: dem.full_height, geo: &dem.geo };
+    let p = SkyParams::default();
+    let (slope_deg, aspect_deg) = slope_aspect_window(&patch, out)?;
+    let (insolation_kwh_m2, wind_exposure) = insolation_and_wind_window(&patch, out, climate.latitude_deg, climate.wind_from_deg as f64, &p)?;
+    let ot = Terrain { elevation: out.cut(&t.elevation, &dem.window), geo: dem.geo.clone(), nodata: dem.nodata, source: dem.source.clone() };
+    let m = out.cut(&pm, &dem.window);
+    let temperature_c = temperature(&ot, &m, climate);
+    let twi = twi_window(&flow_acc, &slope_deg, &dem.geo, &m, out.row0);
+    let flat_insolation_kwh_m2 = flat_insolation(row_latitude(&dem.geo, dem.full_height / 2, climate.latitude_deg), &p);
+    Ok(Fields { mask: m, slope_deg, aspect_deg, filled_m: filled, flow_acc_cells: flow_acc, twi, insolation_kwh_m2, flat_insolation_kwh_m2, wind_exposure, temperature_c })
 }
 
 #[cfg(test)]

@@ -87,7 +87,8 @@ fn check_size(path: &Path, w: u64, h: u64) -> Result<()> {
     Ok(())
 }
 
-/// Checks that the grid has at least one finite cell; counts are reported in the error.
+/// Checks that the grid has at least one finite cell and every finite cell in
+/// [`ELEVATION_RANGE_M`]; counts are reported in the error.
 fn check_valid(path: &Path, g: &Grid<f32>) -> Result<()> {
     if !g.data.iter().any(|v| v.is_finite()) {
         return Err(Error::Invalid {
@@ -97,10 +98,16 @@ fn check_valid(path: &Path, g: &Grid<f32>) -> Result<()> {
             expected: "at least one finite elevation".into(),
         });
     }
+    check_range(path, g, 0, 0)
+}
+
+/// Checks that every finite cell of `g` lies in [`ELEVATION_RANGE_M`]; the error names the cell
+/// as column `col0 + c`, row `row0 + r` (`g` a window at `(col0, row0)` of a raster).
+fn check_range(path: &Path, g: &Grid<f32>, col0: usize, row0: usize) -> Result<()> {
     if let Some(i) = g.data.iter().position(|v| v.is_finite() && !(ELEVATION_RANGE_M.0..=ELEVATION_RANGE_M.1).contains(v)) {
         return Err(Error::Invalid {
             context: path.display().to_string(),
-            field: format!("elevation at column {}, row {} (0-based, row 0 north)", i % g.width, i / g.width),
+            field: format!("elevation at column {}, row {} (0-based, row 0 north)", col0 + i % g.width, row0 + i / g.width),
             value: g.data[i].to_string(),
             expected: format!("{} … {} m on Earth (an undeclared nodata value? declare it in the file's nodata field)", ELEVATION_RANGE_M.0, ELEVATION_RANGE_M.1),
         });
@@ -116,18 +123,36 @@ fn tiff_err(path: &Path, what: &str, e: tiff::TiffError) -> Error {
     Error::format(path, format!("GeoTIFF {what}: {e} (truncated or corrupt file?)"))
 }
 
-/// Reads a single-band GeoTIFF (Int16, UInt16, Int32, Float32 or Float64 samples) from `r`.
-///
-/// Georeferencing: ModelPixelScale (33550), ModelTiepoint (33922) and the GeoKeyDirectory
-/// (34735): GTModelTypeGeoKey (1024) 2 = geographic, 1 = projected; EPSG from
-/// ProjectedCSTypeGeoKey (3072) or GeographicTypeGeoKey (2048). GDAL_NODATA (42113, text) marks
-/// invalid cells, which become NaN. `path` is only used in messages.
-pub fn read_geotiff<R: Read + Seek>(mut r: R, path: &Path) -> Result<Terrain> {
+/// The tags of a GeoTIFF that the readers use, read before the image data.
+struct GeoTiffTags {
+    scale: Option<Vec<f64>>,
+    transform: Option<Vec<f64>>,
+    tie: Option<Vec<f64>>,
+    keys: Option<Vec<u16>>,
+    nodata: Option<f64>,
+}
+
+/// Opens a single-band GeoTIFF: its decoder (with limits for up to [`MAX_CELLS`] samples),
+/// raster size and tags. `cells`: the cells the caller will read (the whole raster or a
+/// window), checked against [`MAX_CELLS`]; the raster's declared size is checked against what
+/// the file's length can hold at the compression's largest expansion.
+fn open_geotiff<R: Read + Seek>(mut r: R, path: &Path, window: Option<crate::grid::Window>) -> Result<(tiff::decoder::Decoder<R>, u32, u32, GeoTiffTags)> {
     use tiff::tags::Tag;
     let file_len = r.seek(std::io::SeekFrom::End(0)).and_then(|n| r.seek(std::io::SeekFrom::Start(0)).map(|_| n)).map_err(|e| Error::io(path, e))?;
     let mut dec = tiff::decoder::Decoder::new(r).map_err(|e| tiff_err(path, "header", e))?;
     let (w, h) = dec.dimensions().map_err(|e| tiff_err(path, "dimensions", e))?;
-    check_size(path, w as u64, h as u64)?;
+    match window {
+        None => check_size(path, w as u64, h as u64)?,
+        Some(win) => {
+            if w == 0 || h == 0 {
+                return Err(Error::format(path, format!("grid has zero size ({w} x {h} cells)")));
+            }
+            if !win.inside(w as usize, h as usize) {
+                return Err(Error::Invalid { context: path.display().to_string(), field: "window".into(), value: win.to_string(), expected: format!("a non-empty window inside the {w} x {h} raster (columns 0..{w}, rows 0..{h}, row 0 north)") });
+            }
+            check_size(path, win.width as u64, win.height as u64)?;
+        }
+    }
     // before the decoder allocates w × h samples: can a file of this length hold them? (largest
     // expansion of each compression: none 1, PackBits 64, Deflate 1032, LZW 4096 bytes a code,
     // others 32768)
@@ -167,7 +192,11 @@ pub fn read_geotiff<R: Read + Seek>(mut r: R, path: &Path) -> Result<Terrain> {
         }
         None => None,
     };
-    let img = dec.read_image().map_err(|e| tiff_err(path, "image data", e))?;
+    Ok((dec, w, h, GeoTiffTags { scale, transform, tie, keys, nodata }))
+}
+
+/// Decoded samples as f32 elevations, nodata (within 10⁻⁶ relative) and non-finite values NaN.
+fn tiff_samples(img: tiff::decoder::DecodingResult, nodata: Option<f64>, path: &Path) -> Result<Vec<f32>> {
     use tiff::decoder::DecodingResult as D;
     let data: Vec<f32> = match img {
         D::I16(v) => v.into_iter().map(|x| x as f32).collect(),
@@ -178,20 +207,16 @@ pub fn read_geotiff<R: Read + Seek>(mut r: R, path: &Path) -> Result<Terrain> {
         D::F64(v) => v.into_iter().map(|x| x as f32).collect(),
         _ => return Err(Error::format(path, "sample format: expected Int16, UInt16, Int32, Float32 or Float64")),
     };
-    let n = w as usize * h as usize;
-    if data.len() != n {
-        return Err(Error::format(path, format!("image data holds {} samples: expected {w} x {h} = {n}", data.len())));
-    }
-    let data: Vec<f32> = data
-        .into_iter()
-        .map(|x| if nodata.is_some_and(|nd| (x as f64 - nd).abs() <= 1e-6 * nd.abs().max(1.0)) || !x.is_finite() { f32::NAN } else { x })
-        .collect();
-    let mut elevation = Grid { width: w as usize, height: h as usize, data };
-    check_valid(path, &elevation)?;
+    Ok(data.into_iter().map(|x| if nodata.is_some_and(|nd| (x as f64 - nd).abs() <= 1e-6 * nd.abs().max(1.0)) || !x.is_finite() { f32::NAN } else { x }).collect())
+}
 
+/// Georeferencing of a `w × h` GeoTIFF from its tags, and whether its rows run south-up (the
+/// caller flips them so that row 0 is north).
+fn geotiff_georef(tags: &GeoTiffTags, w: u32, h: u32, path: &Path) -> Result<(GeoRef, bool)> {
+    let (scale, transform, tie, keys) = (&tags.scale, &tags.transform, &tags.tie, &tags.keys);
     // GeoKeys: header (version, rev, minor, count) then (key, location, count, value) quadruples.
     let (mut model, mut epsg, mut raster_type) = (0u16, None, 1u16);
-    if let Some(k) = &keys {
+    if let Some(k) = keys {
         for q in k.get(4..).unwrap_or(&[]).chunks_exact(4) {
             match (q[0], q[1]) {
                 (1024, 0) => model = q[3],
@@ -205,16 +230,16 @@ pub fn read_geotiff<R: Read + Seek>(mut r: R, path: &Path) -> Result<Terrain> {
             }
         }
     }
-    let crs = match (model, &scale, &transform) {
+    let crs = match (model, scale, transform) {
         (2, _, _) => Crs::Geographic,
         (1, _, _) => Crs::Projected,
         (_, Some(_), _) | (_, _, Some(_)) => Crs::Projected,
         _ => Crs::Local,
     };
     // (pw, ph): cell size east and south (m or degrees); (ox, oy): north-west corner of cell (0, 0)
-    let (pw, ph, mut ox, mut oy) = match (&scale, &transform) {
+    let (pw, ph, mut ox, mut oy) = match (scale, transform) {
         (Some(s), _) if s.len() >= 2 && s[0] > 0.0 && s[1] > 0.0 && s[0].is_finite() && s[1].is_finite() => {
-            let (ox, oy) = match &tie {
+            let (ox, oy) = match tie {
                 Some(t) if t.len() >= 6 => (t[3] - t[0] * s[0], t[4] + t[1] * s[1]),
                 _ => (0.0, h as f64 * s[1]),
             };
@@ -235,11 +260,9 @@ pub fn read_geotiff<R: Read + Seek>(mut r: R, path: &Path) -> Result<Terrain> {
         (None, Some(m)) => return Err(Error::format(path, format!("ModelTransformation has {} values: expected 16", m.len()))),
         (None, None) => (1.0, 1.0, 0.0, h as f64),
     };
-    let ph = if ph < 0.0 {
-        // south-up rows (row 0 is the southern edge): flip them so that row 0 is north
-        let wu = w as usize;
-        let rows: Vec<&[f32]> = elevation.data.chunks_exact(wu).rev().collect();
-        elevation.data = rows.concat();
+    let south_up = ph < 0.0;
+    let ph = if south_up {
+        // south-up rows (row 0 is the southern edge): the caller flips them so that row 0 is north
         oy += -ph * h as f64;
         -ph
     } else {
@@ -253,7 +276,133 @@ pub fn read_geotiff<R: Read + Seek>(mut r: R, path: &Path) -> Result<Terrain> {
     let mut geo = GeoRef { crs, epsg, origin_x: ox, origin_y: oy, pixel_w: pw, pixel_h: ph, latitude_deg: FALLBACK_LATITUDE_DEG };
     let proj = epsg.and_then(epsg_projection);
     geo.latitude_deg = centre_latitude(&geo, w as usize, h as usize, proj.as_ref(), path)?;
-    Ok(Terrain { elevation, geo, nodata, source: path.display().to_string() })
+    Ok((geo, south_up))
+}
+
+/// Reads a single-band GeoTIFF (Int16, UInt16, Int32, Float32 or Float64 samples) from `r`.
+///
+/// Georeferencing: ModelPixelScale (33550), ModelTiepoint (33922) and the GeoKeyDirectory
+/// (34735): GTModelTypeGeoKey (1024) 2 = geographic, 1 = projected; EPSG from
+/// ProjectedCSTypeGeoKey (3072) or GeographicTypeGeoKey (2048). GDAL_NODATA (42113, text) marks
+/// invalid cells, which become NaN. `path` is only used in messages.
+pub fn read_geotiff<R: Read + Seek>(r: R, path: &Path) -> Result<Terrain> {
+    let (mut dec, w, h, tags) = open_geotiff(r, path, None)?;
+    let img = dec.read_image().map_err(|e| tiff_err(path, "image data", e))?;
+    let data = tiff_samples(img, tags.nodata, path)?;
+    let n = w as usize * h as usize;
+    if data.len() != n {
+        return Err(Error::format(path, format!("image data holds {} samples: expected {w} x {h} = {n}", data.len())));
+    }
+    let mut elevation = Grid { width: w as usize, height: h as usize, data };
+    check_valid(path, &elevation)?;
+    let (geo, south_up) = geotiff_georef(&tags, w, h, path)?;
+    if south_up {
+        let rows: Vec<&[f32]> = elevation.data.chunks_exact(w as usize).rev().collect();
+        elevation.data = rows.concat();
+    }
+    Ok(Terrain { elevation, geo, nodata: tags.nodata, source: path.display().to_string() })
+}
+
+/// A window of a DEM, read without the rest of the raster ([`read_geotiff_window`]).
+#[derive(Debug, Clone)]
+pub struct DemWindow {
+    /// Elevations of the window's cells (m; nodata NaN), `window.width × window.height`, row 0
+    /// the window's northern row.
+    pub elevation: Grid<f32>,
+    /// Where the window lies in the raster (row 0 north).
+    pub window: crate::grid::Window,
+    /// Columns of the whole raster.
+    pub full_width: usize,
+    /// Rows of the whole raster.
+    pub full_height: usize,
+    /// Georeferencing of the **whole** raster (origin at its north-west corner, latitude of its
+    /// centre), as [`read_geotiff`] gives it: the fields derived on a window use the whole
+    /// raster's rows and latitude, so that they equal the whole raster's bit for bit.
+    pub geo: GeoRef,
+    /// Nodata value declared by the file, if any.
+    pub nodata: Option<f64>,
+    /// The file.
+    pub source: String,
+}
+
+/// Reads the cells of `window` (row 0 north) of a single-band GeoTIFF and nothing else of its
+/// image: only the strips or tiles the window overlaps are read and decoded (the `tiff`
+/// crate's `read_chunk`), so a rank of a regional run holds its part of a raster of any size
+/// (the whole raster may exceed [`MAX_CELLS`]; the window may not). Samples, nodata and
+/// georeferencing as [`read_geotiff`]; a south-up file's window is read from the mirrored rows.
+/// The window's elevations are checked against [`ELEVATION_RANGE_M`] (the error names the cell
+/// in the whole raster's columns and rows); a window of nodata only is accepted (a rank's part
+/// may lie outside the DEM's outline).
+///
+/// Errors: [`Error::Invalid`] naming the file, the window and the raster's size when the window
+/// is empty or leaves the raster; as [`read_geotiff`] for the header, the chunks' data and the
+/// georeferencing.
+pub fn read_geotiff_window<R: Read + Seek>(r: R, path: &Path, window: crate::grid::Window) -> Result<DemWindow> {
+    use tiff::decoder::ChunkType;
+    let (mut dec, w, h, tags) = open_geotiff(r, path, Some(window))?;
+    let (wu, hu) = (w as usize, h as usize);
+    let (geo, south_up) = geotiff_georef(&tags, w, h, path)?;
+    // the window's rows in the file's row order
+    let (fr0, fr1) = if south_up { (hu - window.row1(), hu - window.row0) } else { (window.row0, window.row1()) };
+    let mut file_rows = vec![f32::NAN; window.width * window.height];
+    let (cw, ch) = dec.chunk_dimensions();
+    let (cw, ch) = (cw as usize, ch as usize);
+    if cw == 0 || ch == 0 {
+        return Err(Error::format(path, format!("chunks of {cw} x {ch} cells: expected a positive strip height or tile size")));
+    }
+    let tiles = dec.get_chunk_type() == ChunkType::Tile;
+    let across = if tiles { wu.div_ceil(cw) } else { 1 };
+    let (tx0, tx1) = if tiles { (window.col0 / cw, (window.col1() - 1) / cw) } else { (0, 0) };
+    for ty in fr0 / ch..=(fr1 - 1) / ch {
+        for tx in tx0..=tx1 {
+            let idx = ty * across + tx;
+            let what = format!("{} {idx} (rows {}..{}{})", if tiles { "tile" } else { "strip" }, ty * ch, ((ty + 1) * ch).min(hu), if tiles { format!(", columns {}..{}", tx * cw, ((tx + 1) * cw).min(wu)) } else { String::new() });
+            let idx32 = u32::try_from(idx).map_err(|_| Error::format(path, format!("{what}: chunk index beyond u32")))?;
+            let img = dec.read_chunk(idx32).map_err(|e| tiff_err(path, &what, e))?;
+            let data = tiff_samples(img, tags.nodata, path)?;
+            // the chunk's data without padding: rows of `dw` samples
+            let (c_start, r_start) = (if tiles { tx * cw } else { 0 }, ty * ch);
+            let dw = if tiles { cw.min(wu - c_start) } else { wu };
+            let dh = ch.min(hu - r_start);
+            if data.len() != dw * dh {
+                return Err(Error::format(path, format!("{what} holds {} samples: expected {dw} x {dh} = {}", data.len(), dw * dh)));
+            }
+            // overlap of the chunk with the window (file rows, columns)
+            let (ra, rb) = (r_start.max(fr0), (r_start + dh).min(fr1));
+            let (ca, cb) = (c_start.max(window.col0), (c_start + dw).min(window.col1()));
+            for fr in ra..rb {
+                let src = &data[(fr - r_start) * dw + (ca - c_start)..(fr - r_start) * dw + (cb - c_start)];
+                let o = (fr - fr0) * window.width + (ca - window.col0);
+                file_rows[o..o + (cb - ca)].copy_from_slice(src);
+            }
+        }
+    }
+    let mut elevation = Grid { width: window.width, height: window.height, data: file_rows };
+    if south_up {
+        let rows: Vec<&[f32]> = elevation.data.chunks_exact(window.width).rev().collect();
+        elevation.data = rows.concat();
+    }
+    check_range(path, &elevation, window.col0, window.row0)?;
+    Ok(DemWindow { elevation, window, full_width: wu, full_height: hu, geo, nodata: tags.nodata, source: path.display().to_string() })
+}
+
+/// Reads `window` of the DEM at `path` ([`load`]'s formats): a GeoTIFF by window
+/// ([`read_geotiff_window`], only the chunks it overlaps); an ESRI ASCII grid or PNG heightmap
+/// (formats without random access) read whole and cut.
+///
+/// Errors: as [`load`] and [`read_geotiff_window`].
+pub fn load_window(path: &Path, window: crate::grid::Window) -> Result<DemWindow> {
+    let ext = path.extension().map(|e| e.to_string_lossy().to_ascii_lowercase()).unwrap_or_default();
+    if matches!(ext.as_str(), "tif" | "tiff") && !path.is_dir() {
+        let f = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        return read_geotiff_window(std::io::BufReader::new(f), path, window);
+    }
+    let t = load(path)?;
+    let (fw, fh) = (t.elevation.width, t.elevation.height);
+    if !window.inside(fw, fh) {
+        return Err(Error::Invalid { context: path.display().to_string(), field: "window".into(), value: window.to_string(), expected: format!("a non-empty window inside the {fw} x {fh} raster (columns 0..{fw}, rows 0..{fh}, row 0 north)") });
+    }
+    Ok(DemWindow { elevation: window.cut(&t.elevation, &crate::grid::Window::full(fw, fh)), window, full_width: fw, full_height: fh, geo: t.geo, nodata: t.nodata, source: t.source })
 }
 
 /// A projected coordinate reference system as the readers understand it: its name and the
@@ -525,11 +674,7 @@ pub fn window(t: &Terrain, col0: usize, row0: usize, w: usize, h: usize) -> Resu
             expected: format!("a non-empty window inside {} x {}", g.width, g.height),
         });
     }
-    let mut data = Vec::with_capacity(w * h);
-    for r in row0..row0 + h {
-        data.extend_from_slice(&g.data[r * g.width + col0..r * g.width + col0 + w]);
-    }
-    let elevation = Grid { width: w, height: h, data };
+    let elevation = crate::grid::Window { col0, row0, width: w, height: h }.cut(g, &crate::grid::Window::full(g.width, g.height));
     check_valid(&PathBuf::from(&t.source), &elevation)?;
     let mut geo = t.geo.clone();
     geo.origin_x += col0 as f64 * geo.pixel_w;

@@ -83,7 +83,10 @@ pub struct Light<'a> {
     pub site: &'a SiteConditions,
     /// Species library (crown leaf-area index from the shade tolerance).
     pub lib: &'a SpeciesLibrary,
-    /// Site cell per light cell (`u32::MAX` where masked).
+    /// Site cell per light cell of the span of `window` (`u32::MAX` where masked;
+    /// [`crate::sim::light_grid::Span`]: the whole grid for one process, the tile's cells for a
+    /// tile). A tree on a cell outside the span (a halo copy, whose light is dropped with it) is
+    /// lit as if unmasked.
     pub light_site: &'a [u32],
     /// Relative insolation per site cell.
     pub rel_insolation: &'a [f32],
@@ -92,13 +95,13 @@ pub struct Light<'a> {
     pub obstacles: &'a [(u64, f32)],
     /// Trees: read; `light` written.
     pub trees: &'a mut TreeStore,
-    /// Written: relative light at the ground per light cell.
+    /// Written: relative light at the ground per light cell of the span of `window`.
     pub ground_light: &'a mut Vec<f32>,
     /// Written: spatial hash of the trees on the light grid.
     pub grid: &'a mut SpatialGrid,
-    /// Only these light cells' ground light is computed (a tile's, [`crate::sim::tiles`]:
-    /// regeneration reads it on the tile's cells only); the others are set to 1. `None`: every
-    /// cell.
+    /// Only these light cells' ground light is computed and held (a tile's,
+    /// [`crate::sim::tiles`]: regeneration reads it on the tile's cells only), and `light_site`
+    /// is over them. `None`: every cell.
     pub window: Option<crate::sim::light_grid::CellRect>,
 }
 
@@ -146,8 +149,9 @@ pub fn run(w: Light<'_>) {
         let sun = if r >= 0 && (r as usize) < rows { canopy.lai_above(r as usize * cols + c % cols, z + rise) } else { 0.0 };
         rel * (W_ZENITH * (-K_EXT * own).exp() + (1.0 - W_ZENITH) * (-K_EXT * (0.5 * own + 0.5 * sun) / sin_e).exp())
     };
+    let span = crate::sim::light_grid::Span::new(w.window, w.light);
     let rel_of = |c: usize, site: &[u32], ins: &[f32]| -> f32 {
-        let s = site[c];
+        let s = span.index(c).map_or(u32::MAX, |k| site[k]);
         if s == u32::MAX {
             1.0
         } else {
@@ -172,11 +176,12 @@ pub fn run(w: Light<'_>) {
             }
         });
     }
-    let ground: Vec<f32> = (0..ncell)
+    // the ground light of the span's cells only (a tile's: the cells regeneration reads)
+    let ground: Vec<f32> = (0..span.len())
         .into_par_iter()
-        .map(|c| match w.window {
-            Some(r) if !r.contains(c % cols, c / cols) => 1.0,
-            _ => light_at(c, 0.0, rel_of(c, ls, ri)),
+        .map(|k| {
+            let c = span.cell(k);
+            light_at(c, 0.0, rel_of(c, ls, ri))
         })
         .collect();
     w.trees.light = light;

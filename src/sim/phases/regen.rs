@@ -106,7 +106,8 @@ pub struct Regen<'a> {
     pub year: u32,
     /// The light grid (row 0 south).
     pub light: &'a LightGrid,
-    /// Site cell per light cell (`u32::MAX` where masked).
+    /// Site cell per light cell of the span of `window` (`u32::MAX` where masked;
+    /// [`crate::sim::light_grid::Span`]).
     pub light_site: &'a [u32],
     /// Site conditions (elevation of the recruits, unmasked cells).
     pub site: &'a SiteConditions,
@@ -118,10 +119,11 @@ pub struct Regen<'a> {
     pub suitability: &'a [Vec<f32>],
     /// External seed rain per pool species (seeds per m² and year).
     pub seed_rain: &'a [f32],
-    /// Relative light at the ground per light cell (this year's light phase).
+    /// Relative light at the ground per light cell of the span of `window` (this year's light
+    /// phase).
     pub ground_light: &'a [f32],
-    /// Fraction (0–1) of each light cell's ground free of solid obstacles (germination scales
-    /// with it).
+    /// Fraction (0–1) of the ground free of solid obstacles per light cell of the span of
+    /// `window` (germination scales with it; an empty array: free everywhere).
     pub ground_free: &'a [f32],
     /// Seeds per m² per pool species (last autumn).
     pub seeds: &'a [SeedGrid],
@@ -132,7 +134,8 @@ pub struct Regen<'a> {
     /// Incremented: cumulative counts per pool species.
     pub regen_ledger: &'a mut RegenLedger,
     /// Only these light cells (a tile's, [`crate::sim::tiles`]); `None`: every cell. Cells
-    /// outside keep no cohorts and recruit nothing.
+    /// outside are not visited (they keep no cohorts and recruit nothing), and the per-cell
+    /// arrays above hold these cells only.
     pub window: Option<CellRect>,
     /// Written: this year's counts.
     pub regen_year: &'a mut RegenYear,
@@ -151,8 +154,10 @@ impl Regen<'_> {
 /// from the cohort) and the year's counts to `w.regen_ledger` / `w.regen_year`. Returns the
 /// number of recruits.
 pub fn run(w: Regen<'_>) -> usize {
-    let ncell = w.light_site.len();
     let lg = *w.light;
+    // the cells stepped, in ascending order: a tile's own, or all
+    let span = crate::sim::light_grid::Span::new(w.window, &lg);
+    let ncell = span.len();
     let cell = lg.cell_m;
     let area = lg.cell_area_m2();
     let np = w.pool.len();
@@ -167,11 +172,16 @@ pub fn run(w: Regen<'_>) -> usize {
     let blocks: Vec<Block> = (0..ncell.div_ceil(BLOCK))
         .into_par_iter()
         .map(|b| {
-            let (c0, c1) = (b * BLOCK, ((b + 1) * BLOCK).min(ncell));
+            let (s0, s1) = (b * BLOCK, ((b + 1) * BLOCK).min(ncell));
             let mut out = Block { germinated: vec![0; np], recruited: vec![0; np], dead: vec![[0; N_REGEN_CAUSES]; np], ..Default::default() };
-            let mut i = coh.cell.partition_point(|&c| (c as usize) < c0);
+            let mut i = coh.cell.partition_point(|&c| (c as usize) < span.cell(s0));
             let mut local: Vec<Cohort> = Vec::new();
-            for c in c0..c1 {
+            for si in s0..s1 {
+                let c = span.cell(si);
+                // cohorts of cells the span skips (none on a tile, which holds its own only)
+                while i < coh.cell.len() && (coh.cell[i] as usize) < c {
+                    i += 1;
+                }
                 let mut j = i;
                 while j < coh.cell.len() && coh.cell[j] as usize == c {
                     j += 1;
@@ -180,16 +190,13 @@ pub fn run(w: Regen<'_>) -> usize {
                 local.extend((i..j).map(|k| coh.get(k)));
                 i = j;
                 let (col, row) = lg.col_row(c);
-                if wr.window.is_some_and(|r| !r.contains(col, row)) {
-                    continue;
-                }
-                let site = wr.light_site[c];
+                let site = wr.light_site[si];
                 if site == u32::MAX {
                     // masked light cell: no regeneration (cohorts never arise here)
                     continue;
                 }
                 let site = site as usize;
-                let gl = wr.ground_light[c];
+                let gl = wr.ground_light[si];
                 let (cx, cy) = lg.centre(c);
                 // 1. germination
                 let mut r = Stream::new(seed, c as u64, year, salt::ESTABLISH);
@@ -200,7 +207,7 @@ pub fn run(w: Regen<'_>) -> usize {
                         continue;
                     }
                     let seeds = (wr.seeds[p].at(cx, cy) + wr.seed_rain[p]) as f64 * area;
-                    let lambda = seeds * sp.life.establishment_rate as f64 * suit as f64 * wr.ground_free.get(c).copied().unwrap_or(1.0) as f64;
+                    let lambda = seeds * sp.life.establishment_rate as f64 * suit as f64 * wr.ground_free.get(si).copied().unwrap_or(1.0) as f64;
                     let n = r.poisson(lambda.min(4.0 * cap0)) as u32;
                     if n == 0 {
                         continue;

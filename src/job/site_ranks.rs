@@ -1,0 +1,244 @@
+//! The site of a tiled run derived by its ranks (issue 37 Build 1, first part): for a scenario
+//! whose terrain is a GeoTIFF file, every rank reads its band of rows of the DEM **by window**
+//! (only the strips or tiles it overlaps, [`crate::terrain::io::read_geotiff_window`]) with the
+//! halo its fields need, derives its band's conditions
+//! ([`crate::conditions::derive_window`]), and the bands are exchanged so that every rank
+//! holds the site of one process, bit for bit ([`site_by_ranks`]).
+//!
+//! Per field: mask, elevation, temperature, TWI and the indices cell by cell; slope and aspect
+//! with 1 cell of halo; insolation and wind exposure with the horizon's halo
+//! ([`crate::terrain::fields::window_halo_cells`], 86 cells); depression filling and flow
+//! accumulation on rank 0 over the whole DEM, each rank sent its band
+//! ([`crate::terrain::fields::hydrology_windows`]: the fallback, a per-tile Priority-Flood does
+//! not give the serial ε-fill's bits). What is not done yet: the ranks then hold the whole site
+//! (the bands are gathered on every rank, as `World::new` and the tiles read the whole site);
+//! rank 0 reads the whole DEM once for the hydrology.
+
+use crate::conditions::SiteConditions;
+use crate::error::{Error, Result};
+use crate::grid::{Crs, Grid, Window};
+use crate::sim::codec::{Dec, Enc, Short};
+use crate::sim::scenario::{Scenario, TerrainSpec};
+use crate::sim::tiles::Transport;
+
+/// The GeoTIFF a scenario's site is read from, if it is one: the file and the scenario's
+/// window of it (`[terrain] window`, or `None`).
+pub fn geotiff_of(sc: &Scenario) -> Option<(std::path::PathBuf, Option<[usize; 4]>)> {
+    match sc.terrain_spec() {
+        TerrainSpec::Path(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("tif") || e.eq_ignore_ascii_case("tiff")) && p.is_file() => Some((p, sc.terrain.window)),
+        _ => None,
+    }
+}
+
+/// Rows `row0..row1` of an `h`-row site for rank `k` of `n`: `k · h / n` to `(k + 1) · h / n`.
+pub fn band(k: usize, n: usize, w: usize, h: usize) -> Window {
+    let (r0, r1) = (k * h / n, (k + 1) * h / n);
+    Window { col0: 0, row0: r0, width: w, height: r1 - r0 }
+}
+
+/// The site conditions of `sc` on every rank of `t`, equal bit for bit to [`Scenario::site`]:
+/// for a GeoTIFF terrain each rank derives the band of rows [`band`] from a window of the DEM
+/// (module documentation) and the bands are exchanged; any other terrain is derived whole by
+/// every rank ([`Scenario::site`]). Prints one line per rank to stderr (`rank k/n: site rows
+/// …`). Every rank fails when one does.
+///
+/// Errors: as [`Scenario::site`]; [`Error::Exchange`] from the transport, naming the rank that
+/// failed.
+pub fn site_by_ranks(sc: &Scenario, t: &mut dyn Transport) -> Result<SiteConditions> {
+    let Some((path, sw)) = geotiff_of(sc) else {
+        return sc.site();
+    };
+    let (me, n) = (t.rank(), t.size());
+    // the site's raster: the scenario's window of the file, or the file
+    let head = crate::terrain::io::load_window(&path, Window { col0: 0, row0: 0, width: 1, height: 1 });
+    let head = agreed(t, head)?;
+    let base = match sw {
+        Some([c0, r0, w, h]) => Window { col0: c0, row0: r0, width: w, height: h },
+        None => Window::full(head.full_width, head.full_height),
+    };
+    if !base.inside(head.full_width, head.full_height) {
+        // as the whole read refuses it (io::window)
+        return sc.site();
+    }
+    let (w, h) = (base.width, base.height);
+    let mut geo = head.geo.clone();
+    if sw.is_some() {
+        // as crate::terrain::io::window re-bases a window
+        geo.origin_x += base.col0 as f64 * geo.pixel_w;
+        geo.origin_y -= base.row0 as f64 * geo.pixel_h;
+        if geo.crs == Crs::Geographic {
+            geo.latitude_deg = geo.origin_y - geo.pixel_h * h as f64 / 2.0;
+        }
+    }
+    let bands: Vec<Window> = (0..n).map(|k| band(k, n, w, h)).collect();
+    // rank 0: the hydrology of the whole site, each rank's band of it (the fallback)
+    let mut out = vec![Vec::new(); n];
+    if me == 0 {
+        let hydro = (|| {
+            let t = sc.full_terrain()?.ok_or_else(|| Error::Invalid { context: "scenario".into(), field: "terrain".into(), value: "uniform".into(), expected: "a terrain with elevations".into() })?;
+            let t = match sw {
+                Some([c0, r0, ww, hh]) => crate::terrain::io::window(&t, c0, r0, ww, hh)?,
+                None => t,
+            };
+            let m = crate::terrain::fields::mask(&t, sc.climate.sea_level_m);
+            if !m.data.iter().any(|v| *v) {
+                // as fields::compute refuses it
+                return crate::conditions::derive(&t, &sc.climate).map(|_| Vec::new());
+            }
+            let non_empty: Vec<Window> = bands.iter().copied().filter(|b| b.height > 0).collect();
+            let mut hy = crate::terrain::fields::hydrology_windows(&t, &m, &non_empty)?.into_iter();
+            Ok(bands.iter().map(|b| if b.height > 0 { hy.next() } else { None }).collect::<Vec<_>>())
+        })();
+        match hydro {
+            Ok(hy) => {
+                for (o, x) in out.iter_mut().zip(hy) {
+                    let mut e = Enc(vec![0u8]);
+                    if let Some((filled, acc)) = x {
+                        e.f32s(&filled.data);
+                        e.f32s(&acc.data);
+                    }
+                    *o = e.0;
+                }
+            }
+            Err(e) => {
+                let mut m = vec![1u8];
+                m.extend_from_slice(e.to_string().as_bytes());
+                out = vec![m; n];
+            }
+        }
+    }
+    let got = t.exchange(out)?;
+    let msg = got.first().map(|m| m.as_slice()).unwrap_or(&[]);
+    let me_band = bands[me];
+    let fail = |s: Short| Error::Exchange { peer: 0, reason: format!("hydrology message cut short at byte {}", s.at()) };
+    let part = match msg.first() {
+        Some(0) => (|| {
+            if me_band.height == 0 {
+                return Ok(None);
+            }
+            let mut d = Dec::at(msg, 1, &fail);
+            let (filled, acc) = (d.f32s()?, d.f32s()?);
+            let g = |v: Vec<f32>| Grid::from_vec(me_band.width, me_band.height, v).ok_or_else(|| Error::Exchange { peer: 0, reason: format!("hydrology of {me_band}: wrong number of cells") });
+            let (filled, acc) = (g(filled)?, g(acc)?);
+            // the band and its halo, read by window from the file
+            let halo = crate::terrain::fields::window_halo_cells(&geo, h);
+            let patch = me_band.with_halo(halo, w, h);
+            let file_win = Window { col0: base.col0 + patch.col0, row0: base.row0 + patch.row0, width: patch.width, height: patch.height };
+            let mut dem = crate::terrain::io::load_window(&path, file_win)?;
+            dem.window = patch;
+            (dem.full_width, dem.full_height) = (w, h);
+            dem.geo = geo.clone();
+            let c = crate::conditions::derive_window(&dem, &me_band, &sc.climate, filled, acc)?;
+            let line = format!("rank {me}/{n}: site rows {}..{} of {h} derived from a window of {} ({} of {} cells read, halo {halo})\n", me_band.row0, me_band.row1(), path.display(), patch.width * patch.height, w * h);
+            let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
+            Ok(Some(c))
+        })(),
+        Some(1) => Err(Error::Exchange { peer: 0, reason: format!("rank 0 failed: {}", String::from_utf8_lossy(&msg[1..])) }),
+        _ => Err(Error::Exchange { peer: 0, reason: format!("hydrology message of {} bytes", msg.len()) }),
+    };
+    // every rank sends every other its band's conditions (or its error)
+    let mine = match &part {
+        Ok(c) => {
+            let mut e = Enc(vec![0u8]);
+            if let Some(c) = c {
+                encode(&mut e, c);
+            }
+            e.0
+        }
+        Err(err) => {
+            let mut m = vec![1u8];
+            m.extend_from_slice(err.to_string().as_bytes());
+            m
+        }
+    };
+    // a copy for every other rank; this rank's own goes to itself without one
+    let mut out: Vec<Vec<u8>> = (0..n).map(|k| if k == me { Vec::new() } else { mine.clone() }).collect();
+    out[me] = mine;
+    let got = t.exchange(out)?;
+    part?;
+    for (k, m) in got.iter().enumerate() {
+        if m.first() != Some(&0) {
+            return Err(Error::Exchange { peer: k, reason: format!("rank {k} failed: {}", String::from_utf8_lossy(m.get(1..).unwrap_or(&[]))) });
+        }
+    }
+    assemble(got, &bands, w, h, geo)
+}
+
+/// Every rank learns whether `r` (each rank's own result, e.g. reading the DEM's header) failed
+/// on some rank; returns this rank's value when none did.
+///
+/// Errors: the first failure, naming its rank; [`Error::Exchange`] from the transport.
+fn agreed<T>(t: &mut dyn Transport, r: Result<T>) -> Result<T> {
+    let n = t.size();
+    let msg = r.as_ref().err().map(|e| e.to_string().into_bytes()).unwrap_or_default();
+    let got = t.exchange(vec![msg; n])?;
+    let v = r?;
+    match got.iter().enumerate().find(|(_, m)| !m.is_empty()) {
+        Some((k, m)) => Err(Error::Exchange { peer: k, reason: format!("rank {k} failed: {}", String::from_utf8_lossy(m)) }),
+        None => Ok(v),
+    }
+}
+
+/// The per-cell grids of a band's conditions, in a fixed order.
+fn encode(e: &mut Enc<Vec<u8>>, c: &SiteConditions) {
+    let mask: Vec<f32> = c.mask.data.iter().map(|&m| if m { 1.0 } else { 0.0 }).collect();
+    e.f32s(&mask);
+    for g in [&c.elevation_m, &c.slope_deg, &c.aspect_deg, &c.twi, &c.insolation_kwh_m2, &c.wind_exposure, &c.temperature_c] {
+        e.f32s(&g.data);
+    }
+    let ix: Vec<f32> = c.indices.data.iter().flatten().copied().collect();
+    e.f32s(&ix);
+    e.f64(c.cell_x_m);
+    e.f64(c.cell_y_m);
+}
+
+/// The site of `w × h` cells from the ranks' bands (`got[k]`: rank `k`'s message, [`encode`]d
+/// after a 0 byte), rows in rank order; each message is dropped once read, so the peak is about
+/// the site plus one band's message.
+///
+/// Errors: [`Error::Exchange`] naming a rank whose message is short or of the wrong size.
+fn assemble(got: Vec<Vec<u8>>, bands: &[Window], w: usize, h: usize, geo: crate::grid::GeoRef) -> Result<SiteConditions> {
+    let mut grids: Vec<Vec<f32>> = vec![Vec::with_capacity(w * h); 8];
+    let mut ix: Vec<[f32; 6]> = Vec::with_capacity(w * h);
+    let (mut cx, mut cy) = (None, None);
+    for (k, (m, b)) in got.into_iter().zip(bands).enumerate() {
+        if b.height == 0 {
+            continue;
+        }
+        let fail = |s: Short| Error::Exchange { peer: k, reason: format!("site band message cut short at byte {}", s.at()) };
+        let mut d = Dec::at(&m, 1, &fail);
+        let cells = b.width * b.height;
+        let bad = |what: &str, len: usize| Error::Exchange { peer: k, reason: format!("site band {b} of rank {k}: {len} {what}, expected {cells}") };
+        for g in grids.iter_mut() {
+            let v = d.f32s()?;
+            if v.len() != cells {
+                return Err(bad("cells", v.len()));
+            }
+            g.extend_from_slice(&v);
+        }
+        let v = d.f32s()?;
+        if v.len() != 6 * cells {
+            return Err(bad("index values / 6", v.len() / 6));
+        }
+        ix.extend(v.chunks_exact(6).map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]]));
+        (cx, cy) = (Some(d.f64()?), Some(d.f64()?));
+    }
+    let mut it = grids.into_iter().map(|data| Grid { width: w, height: h, data });
+    let mut next = || it.next().unwrap_or(Grid { width: w, height: h, data: Vec::new() });
+    let mask = next().map(|v| *v != 0.0);
+    let (cell_x_m, cell_y_m) = (cx.unwrap_or(geo.pixel_w), cy.unwrap_or(geo.cell_y_m()));
+    Ok(SiteConditions {
+        geo,
+        cell_x_m,
+        cell_y_m,
+        mask,
+        elevation_m: next(),
+        slope_deg: next(),
+        aspect_deg: next(),
+        twi: next(),
+        insolation_kwh_m2: next(),
+        wind_exposure: next(),
+        temperature_c: next(),
+        indices: Grid { width: w, height: h, data: ix },
+    })
+}
