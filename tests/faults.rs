@@ -487,7 +487,12 @@ fn resume_with_a_changed_run_is_refused_by_name_and_more_years_continue() {
 
     // more years continue the run: the same files as an unbroken 8-year run
     write("longer.toml", scenario(8, 7, POOL, 5.0, terrain));
-    ok(simulate(d, "longer.toml", "run", true));
+    let o = ok(simulate(d, "longer.toml", "run", true));
+    // the 4-year run's final GeoPackages are removed, and it says so (found by a trial: they
+    // went without a word)
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(before.contains_key("inventory/year_0004.gpkg"), "{:?}", before.keys().collect::<Vec<_>>());
+    assert!(err.contains("note: --resume removed inventory/year_0004.gpkg") && err.contains("GeoPackages are written for a run's final year (now year 8), and year 4 was the earlier run's"), "{err}");
     ok(simulate(d, "longer.toml", "unbroken", false));
     let unbroken = files(&d.join("unbroken"));
     assert_same(&d.join("run"), &unbroken, "4 years, resumed to 8");
@@ -525,7 +530,14 @@ fn ctrl_c_then_resume_is_byte_identical_to_an_unbroken_run() {
         assert!(files(&d.join("run")).contains_key(&extra), "the stopped run has no snapshot of year {stopped_at}");
         assert!(!unbroken.contains_key(&extra));
     }
-    ok(simulate(d, "s.toml", "run", true));
+    let o = ok(simulate(d, "s.toml", "run", true));
+    // the stopped run's extra snapshot is removed, and it says so, naming the files
+    let err = String::from_utf8_lossy(&o.stderr);
+    if stopped_at % 7 != 0 {
+        assert!(err.contains("note: --resume removed ") && err.contains(&extra) && err.contains(&format!("year {stopped_at}, where the earlier run stopped, is not a snapshot year of this run (snapshot_every = 7)")), "{err}");
+    } else {
+        assert!(!err.contains("note: --resume removed"), "{err}");
+    }
     assert_same(&d.join("run"), &unbroken, &format!("stopped by Ctrl-C after year {stopped_at}, resumed"));
     eprintln!("Ctrl-C after year {stopped_at} of 60, resumed: byte-identical to the unbroken run");
 }

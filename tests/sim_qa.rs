@@ -212,6 +212,20 @@ fn maps_are_large_with_legend_and_distinct_species_colours() {
     let img = image::open(dir.path().join("maps/species_year_0003.png")).unwrap().to_rgb8();
     let found = img.pixels().filter(|p| p.0 == cols[0]).count();
     assert!(found >= 16 * 12, "legend swatch missing: {found} px");
+
+    // the basal-area map carries the species map's caption under its map ("… m × … m, map cell
+    // … m"; found by a trial: it had none): the caption's pixels, cut from under the species
+    // map (its left edge at x = 12, the map starting at y = 44), recur in the basal-area map
+    // (to within 2 levels of 255: the anti-aliasing rounds alike, not bit for bit)
+    let white = [255u8, 255, 255];
+    let mh = (44..img.height()).take_while(|&y| img.get_pixel(12, y).0 != white).count() as u32;
+    let (cx0, cx1) = (12u32, 260u32);
+    let band: Vec<Vec<[u8; 3]>> = (44 + mh + 1..44 + mh + 21).map(|y| (cx0..cx1).map(|x| img.get_pixel(x, y).0).collect()).collect();
+    let dark = band.iter().flatten().filter(|p| p[0] < 100).count();
+    assert!(dark > 100, "the species map's caption: {dark} dark pixels");
+    let ba_img = image::open(dir.path().join("maps/basal_area_year_0003.png")).unwrap().to_rgb8();
+    let found = (0..ba_img.height().saturating_sub(band.len() as u32)).find(|&y0| band.iter().enumerate().all(|(i, row)| row.iter().enumerate().all(|(j, p)| ba_img.get_pixel(cx0 + j as u32, y0 + i as u32).0.iter().zip(p).all(|(a, b)| a.abs_diff(*b) <= 2))));
+    assert!(found.is_some_and(|y| y > 44), "the basal-area map lacks the species map's caption");
 }
 
 #[test]

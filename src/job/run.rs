@@ -127,15 +127,16 @@ pub(crate) fn started_here(dir: &Path, ck: &Path) -> Result<bool> {
 ///
 /// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
 pub fn clear_snapshots(dir: &Path) -> Result<()> {
-    remove_prefixed(dir, &[("inventory", &["year_"]), ("maps", &["species_", "basal_area_"])])
+    remove_prefixed(dir, &[("inventory", &["year_"]), ("maps", &["species_", "basal_area_"])]).map(drop)
 }
 
 /// Removes the files of the snapshot `label` (e.g. `year_0037`): `inventory/{label}.*`,
 /// `inventory/{label}_*` (regeneration layer, seasons) and `maps/species_{label}.*`,
-/// `maps/basal_area_{label}.*`; other files are kept.
+/// `maps/basal_area_{label}.*`; other files are kept. Returns what it removed, as
+/// [`remove_prefixed`].
 ///
 /// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
-fn remove_snapshot(dir: &Path, label: &str) -> Result<()> {
+fn remove_snapshot(dir: &Path, label: &str) -> Result<Vec<String>> {
     let (i1, i2) = (format!("{label}."), format!("{label}_"));
     let (m1, m2) = (format!("species_{label}."), format!("basal_area_{label}."));
     remove_prefixed(dir, &[("inventory", &[&i1, &i2]), ("maps", &[&m1, &m2])])
@@ -144,38 +145,56 @@ fn remove_snapshot(dir: &Path, label: &str) -> Result<()> {
 /// Removes the plain files of each `dir/sub` whose name starts with one of its prefixes, and
 /// the folders (with their files) whose name starts with one or is one without its final `.`
 /// (a tiled run's partitioned snapshot `inventory/year_NNNN/` for the prefix `year_NNNN.`);
-/// a missing folder is skipped.
+/// a missing folder is skipped. Returns the paths it removed relative to `dir` (`/`-separated,
+/// a folder's with a trailing `/`), in each folder's name order.
 ///
 /// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
-fn remove_prefixed(dir: &Path, subs: &[(&str, &[&str])]) -> Result<()> {
+fn remove_prefixed(dir: &Path, subs: &[(&str, &[&str])]) -> Result<Vec<String>> {
+    let mut removed = Vec::new();
     for (sub, prefixes) in subs {
         let d = dir.join(sub);
         if !d.is_dir() {
             continue;
         }
-        let entries = std::fs::read_dir(&d).map_err(|e| Error::io(&d, e))?;
-        for e in entries {
+        let mut entries = Vec::new();
+        for e in std::fs::read_dir(&d).map_err(|e| Error::io(&d, e))? {
             let e = e.map_err(|err| Error::io(&d, err))?;
-            let name = e.file_name();
-            let name = name.to_string_lossy();
-            let p = e.path();
+            entries.push((e.file_name().to_string_lossy().into_owned(), e.path()));
+        }
+        entries.sort();
+        for (name, p) in entries {
             if prefixes.iter().any(|pre| name.starts_with(pre)) && p.is_file() {
                 std::fs::remove_file(&p).map_err(|err| Error::io(&p, err))?;
+                removed.push(format!("{sub}/{name}"));
             } else if p.is_dir() && prefixes.iter().any(|pre| name.starts_with(pre) || pre.strip_suffix('.') == Some(&*name)) {
                 std::fs::remove_dir_all(&p).map_err(|err| Error::io(&p, err))?;
+                removed.push(format!("{sub}/{name}/"));
             }
         }
     }
-    Ok(())
+    Ok(removed)
 }
 
 /// Removes the tree inventory files of the snapshot `label` (`inventory/{label}.*`,
-/// `inventory/{label}_*`: regeneration layer, seasons); its maps are kept.
+/// `inventory/{label}_*`: regeneration layer, seasons); its maps are kept. Returns what it
+/// removed, as [`remove_prefixed`].
 ///
 /// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
-fn remove_inventory(dir: &Path, label: &str) -> Result<()> {
+fn remove_inventory(dir: &Path, label: &str) -> Result<Vec<String>> {
     let (i1, i2) = (format!("{label}."), format!("{label}_"));
     remove_prefixed(dir, &[("inventory", &[&i1, &i2])])
+}
+
+/// The `note:` a resumed run prints when it removes files the earlier run wrote: what (the
+/// paths of `removed`, relative to `dir`), why (`why`), and that the run then holds exactly the
+/// files of an unbroken run.
+fn resume_removal_note(dir: &Path, removed: &[String], why: &str) -> String {
+    format!(
+        "note: --resume removed {} from {}: {why}, so an unbroken run does not write {}; the resumed run's folder holds exactly an unbroken run's files",
+        removed.join(", "),
+        dir.display(),
+        if removed.len() == 1 { "it" } else { "them" }
+    )
 }
 
 /// What a snapshot writes ([`Stepper::snapshot`]).
@@ -400,12 +419,17 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         // unbroken run writes: removed, so the resumed directory equals the unbroken run's
         let yc = world.stand.year;
         let cut = rows.last().is_some_and(|r| r.year == yc && harvested(r));
+        // said on stderr, naming the files (found by a trial: they went without a word)
+        let mut removed = Vec::new();
+        let mut why = String::new();
         if !(scenario.snapshot_year(yc) || cut) {
-            remove_snapshot(&dir, &format!("year_{yc:04}"))?;
+            removed = remove_snapshot(&dir, &format!("year_{yc:04}"))?;
+            why = format!("year {yc}, where the earlier run stopped, is not a snapshot year of this run (snapshot_every = {})", scenario.snapshot_every);
         } else if !(scenario.inventory_year(yc) || cut) {
             // a snapshot year of this run without a tree inventory (`inventory_every`): the
             // inventory a stopped run wrote there is removed, its maps stay
-            remove_inventory(&dir, &format!("year_{yc:04}"))?;
+            removed = remove_inventory(&dir, &format!("year_{yc:04}"))?;
+            why = format!("year {yc}, where the earlier run stopped, is not a tree-inventory year of this run (inventory_every)");
         } else if !gp(yc) {
             // the GeoPackages of a shorter run's final year, now extended, are not ones the
             // unbroken run writes (only its final year's, unless every snapshot's are asked for)
@@ -417,12 +441,19 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
                     let (name, p) = (e.file_name().to_string_lossy().into_owned(), e.path());
                     if name.starts_with(&stem) && name.ends_with(".gpkg") && p.is_file() {
                         std::fs::remove_file(&p).map_err(|err| Error::io(&p, err))?;
+                        removed.push(format!("inventory/{name}"));
                     } else if name == format!("{stem}_gpkg") && p.is_dir() {
                         // a tiled run's GeoPackage parts
                         std::fs::remove_dir_all(&p).map_err(|err| Error::io(&p, err))?;
+                        removed.push(format!("inventory/{name}/"));
                     }
                 }
             }
+            removed.sort();
+            why = format!("GeoPackages are written for a run's final year (now year {}), and year {yc} was the earlier run's", scenario.years);
+        }
+        if !removed.is_empty() {
+            eprintln!("{}", resume_removal_note(&dir, &removed, &why));
         }
         // the scenario as run, `years` included (a resume may extend the run)
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;

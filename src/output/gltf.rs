@@ -106,7 +106,7 @@ const REPEAT: u32 = 10497;
 /// Repeats of the crown texture round (u) and up (v) the LOD2 hull, whose texture coordinates
 /// go once round it (`structure::mesh::hull_mesh`): about one picture per metre of a crown
 /// 6 m across.
-const CROWN_REPEAT: [f32; 2] = [6.0, 3.0];
+pub const CROWN_REPEAT: [f32; 2] = [6.0, 3.0];
 /// Sampler indices of [`Doc::new`].
 const SAMPLER_CLAMP: usize = 0;
 const SAMPLER_REPEAT: usize = 1;

@@ -158,3 +158,4 @@ pub mod obj;
 pub mod geotiff;
 pub mod maps;
 pub mod pictures;
+pub mod tree_preview;

@@ -322,7 +322,13 @@ pub fn write_maps_from(species_png: &Path, ba_png: &Path, w: &World, max_px: usi
         hillshade: None,
         shade_strength: 0.0,
     };
-    super::maps::write_field_png_styled(&ba_grid, Some(&mask), &style, ba_png)?;
+    // the caption the species map has under its map (found by a trial: the basal-area map had
+    // none); no hillshade, as the species map has none
+    let caption = format!("{:.0} m × {:.0} m, map cell {:.0} m", w.site.extent.0, w.site.extent.1, cell);
+    let ba_img = with_caption_under_map(super::maps::render_field(&ba_grid, Some(&mask), &style)?, (cols, rows), &font, &caption);
+    let mut bytes = Vec::new();
+    ba_img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png).map_err(|e| perr(ba_png, e))?;
+    crate::output::write_atomic(ba_png, &bytes)?;
     let geo = map_georef(w, rows, cell);
     let ba_tif: Vec<f32> = ba_grid.data.iter().zip(&mask.data).map(|(v, ok)| if *ok { *v } else { f32::NAN }).collect();
     super::geotiff::write_f32(&ba_png.with_extension("tif"), &crate::grid::Grid { width: cols, height: rows, data: ba_tif }, &geo)?;
@@ -333,6 +339,23 @@ pub fn write_maps_from(species_png: &Path, ba_png: &Path, w: &World, max_px: usi
     }
     let codes_path = species_png.with_file_name("species_codes.csv");
     crate::output::write_atomic(&codes_path, codes.as_bytes())
+}
+
+/// `img`, a map that [`super::maps::render_field`] drew of a `cols × rows` grid, with `caption`
+/// written under the map (13 px, as the species map's), the image 20 px taller when the
+/// caption would not fit below the map otherwise. The map's place repeats `render_field`'s
+/// layout: 44 px title band, 12 px left pad, grids enlarged to at least 600 px (whole factor)
+/// or shrunk to at most 2000 px.
+fn with_caption_under_map(img: image::RgbImage, (cols, rows): (usize, usize), font: &ab_glyph::FontRef, caption: &str) -> image::RgbImage {
+    let (top, pad) = (44usize, 12usize);
+    let long = cols.max(rows).max(1);
+    let (num, den) = if long > 2000 { (1, long.div_ceil(2000)) } else { ((600 / long).max(1), 1) };
+    let map_bottom = top + rows * num / den;
+    let need = (map_bottom + 4 + 20) as u32;
+    let mut out = image::RgbImage::from_pixel(img.width(), img.height().max(need), image::Rgb([255, 255, 255]));
+    image::imageops::replace(&mut out, &img, 0, 0);
+    super::maps::draw_text(&mut out, font, pad as f32, (map_bottom + 4) as f32, 13.0, caption);
+    out
 }
 
 /// Top of the basal-area colour scale (m²/ha): the 99th percentile of the non-empty cells,
