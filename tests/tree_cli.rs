@@ -276,3 +276,32 @@ fn tree_adapt_global_light_bends_and_the_quadrature_alone_does_not() {
     let (bent, _, n) = run(&["--latitude", "50"]);
     assert!(bent > 0, "the sun at 50 N bent none of {n} nodes");
 }
+
+/// The preview's billboard (LOD3, the right-hand panel) is the impostor texture alpha-tested:
+/// the sky shows between its leaves (found by a trial: it was a flat-filled rectangle, the
+/// LOD1 clusters flat squares, though the `.glb` has textured `MASK` materials).
+#[test]
+fn tree_grow_preview_draws_the_billboard_alpha_tested() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("beech.glb");
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "beech", "--out", out.to_str().unwrap()]).output().unwrap();
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    let img = image::open(out.with_extension("png")).unwrap().to_rgb8();
+    let sky = img.get_pixel(0, 0).0;
+    let w = img.width() / 4;
+    let drawn: Vec<(u32, u32)> = (3 * w..4 * w).flat_map(|x| (0..img.height()).map(move |y| (x, y))).filter(|&(x, y)| img.get_pixel(x, y).0 != sky).collect();
+    let (x0, x1) = (drawn.iter().map(|p| p.0).min().unwrap(), drawn.iter().map(|p| p.0).max().unwrap());
+    let (y0, y1) = (drawn.iter().map(|p| p.1).min().unwrap(), drawn.iter().map(|p| p.1).max().unwrap());
+    // the crown: the upper 60 % of the billboard (the trunk below it is narrow)
+    let crown_y1 = y0 + (y1 - y0) * 6 / 10;
+    let (mut n, mut sky_px) = (0u32, 0u32);
+    for x in x0..=x1 {
+        for y in y0..crown_y1 {
+            n += 1;
+            sky_px += (img.get_pixel(x, y).0 == sky) as u32;
+        }
+    }
+    let frac = sky_px as f64 / n as f64;
+    // the flat rectangle had none; the beech's impostor texture leaves about a third clear
+    assert!(frac > 0.1 && frac < 0.9, "sky in the billboard's crown: {frac:.3} of {n} px");
+}

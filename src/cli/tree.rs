@@ -7,7 +7,6 @@ use anyhow::Context;
 use clap::{Subcommand, ValueEnum};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
-use sylva::mesh::{LodChain, TreeMesh};
 use sylva::structure::grow::space::Obstacle;
 use sylva::structure::species_tree;
 use sylva::structure::mesh::{lod_chain, LodOptions};
@@ -195,8 +194,6 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     let chain = lod_chain(&sk, &leaves, &LodOptions::default());
     let mesh_s = t1.elapsed().as_secs_f64();
     let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
-    let bark = sp.appearance.bark;
-    let leaf = sp.appearance.leaf_summer;
     // a missing output folder is made (as `tree adapt`, `render` and `run` do), naming the
     // option when it cannot be (a bare OS error was all a trial got)
     if matches!(ext.as_str(), "glb" | "obj") {
@@ -212,7 +209,7 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         "obj" => sylva::output::obj::write_obj(out, &chain, None, &sp.id, &sylva::output::gltf::Look::for_species(&sp, sylva::species::Season::Summer))?,
         _ => anyhow::bail!("--out {}: expected a .glb or .obj file name", out.display()),
     }
-    let img = preview(&chain, bark, leaf, 360, 540);
+    let img = sylva::output::tree_preview::lod_preview(&chain, &glb_options(&sp).look, 360, 540);
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
     sylva::output::write_atomic(&png, &bytes)?;
@@ -250,73 +247,6 @@ fn mean_internode(sk: &Skeleton) -> f32 {
     }
     ((1..n).map(|k| sk.segment_length(k)).sum::<f32>() / (n - 1) as f32).max(0.05)
 }
-
-/// Side views (looking along +y, orthographic, z up) of every LOD level side by side, flat
-/// shaded with a z-buffer.
-fn preview(chain: &LodChain, bark: [u8; 3], leaf: [u8; 3], w: u32, h: u32) -> image::RgbImage {
-    let n = chain.levels.len().max(1) as u32;
-    let mut img = image::RgbImage::from_pixel(w * n, h, image::Rgb([205, 225, 240]));
-    for (li, level) in chain.levels.iter().enumerate() {
-        draw_level(&mut img, level, li as u32 * w, w, h, bark, leaf);
-    }
-    img
-}
-
-fn draw_level(img: &mut image::RgbImage, m: &TreeMesh, x0: u32, w: u32, h: u32, bark: [u8; 3], leaf: [u8; 3]) {
-    let mut lo = Vec3::splat(f32::MAX);
-    let mut hi = Vec3::splat(f32::MIN);
-    for p in m.bark.positions.iter().chain(&m.leaves.positions) {
-        lo = lo.min(Vec3::from(*p));
-        hi = hi.max(Vec3::from(*p));
-    }
-    if lo.x > hi.x {
-        return;
-    }
-    let margin = 10.0;
-    let s = ((w as f32 - 2.0 * margin) / (hi.x - lo.x).max(1e-3)).min((h as f32 - 2.0 * margin) / (hi.z - lo.z).max(1e-3));
-    let cx = 0.5 * (lo.x + hi.x);
-    let to_px = |p: [f32; 3]| -> (f32, f32, f32) { (x0 as f32 + w as f32 * 0.5 + (p[0] - cx) * s, h as f32 - margin - (p[2] - lo.z) * s, p[1]) };
-    let mut zbuf = vec![f32::MAX; (w * h) as usize];
-    let light = Vec3::new(-0.4, -0.6, 0.7).normalize();
-    for (mesh, col) in [(&m.bark, bark), (&m.leaves, leaf)] {
-        for t in mesh.indices.chunks_exact(3) {
-            let (a, b, c) = (to_px(mesh.positions[t[0] as usize]), to_px(mesh.positions[t[1] as usize]), to_px(mesh.positions[t[2] as usize]));
-            let nrm = Vec3::from(mesh.normals[t[0] as usize]) + Vec3::from(mesh.normals[t[1] as usize]) + Vec3::from(mesh.normals[t[2] as usize]);
-            let shade = 0.35 + 0.65 * nrm.normalize_or(Vec3::Z).dot(light).abs();
-            let px = image::Rgb([(col[0] as f32 * shade) as u8, (col[1] as f32 * shade) as u8, (col[2] as f32 * shade) as u8]);
-            let minx = a.0.min(b.0).min(c.0).floor().max(x0 as f32) as i64;
-            let maxx = a.0.max(b.0).max(c.0).ceil().min((x0 + w - 1) as f32) as i64;
-            let miny = a.1.min(b.1).min(c.1).floor().max(0.0) as i64;
-            let maxy = a.1.max(b.1).max(c.1).ceil().min((h - 1) as f32) as i64;
-            let area = (b.0 - a.0) * (c.1 - a.1) - (c.0 - a.0) * (b.1 - a.1);
-            if area.abs() < 1e-9 {
-                // degenerate on screen: plot the vertex so thin twigs stay visible
-                if minx <= maxx && miny <= maxy {
-                    img.put_pixel(minx as u32, miny as u32, px);
-                }
-                continue;
-            }
-            for y in miny..=maxy {
-                for x in minx..=maxx {
-                    let (fx, fy) = (x as f32 + 0.5, y as f32 + 0.5);
-                    let w0 = ((b.0 - fx) * (c.1 - fy) - (c.0 - fx) * (b.1 - fy)) / area;
-                    let w1 = ((c.0 - fx) * (a.1 - fy) - (a.0 - fx) * (c.1 - fy)) / area;
-                    let w2 = 1.0 - w0 - w1;
-                    if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
-                        continue;
-                    }
-                    let z = w0 * a.2 + w1 * b.2 + w2 * c.2;
-                    let zi = (y as u32 * w + (x as u32 - x0)) as usize;
-                    if z < zbuf[zi] {
-                        zbuf[zi] = z;
-                        img.put_pixel(x as u32, y as u32, px);
-                    }
-                }
-            }
-        }
-    }
-}
-
 
 /// A `--neighbour SPECIES@X,Y[,AGE]`.
 /// Farthest a `--neighbour` may stand from the adapted tree (m).
