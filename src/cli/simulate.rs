@@ -110,9 +110,26 @@ pub fn run_library(run_dir: &Path, species_dir: Option<&Path>) -> anyhow::Result
     library(&dirs)
 }
 
-/// Loads the site conditions a scenario names (window applied).
+/// Loads the site conditions a scenario names (window applied), after checking that the
+/// machine's available memory can hold the site ([`Scenario::check_site_memory`], where
+/// `/proc/meminfo` tells it).
 pub fn load_site(sc: &Scenario) -> anyhow::Result<SiteConditions> {
+    if let Some(avail) = available_memory_bytes() {
+        sc.check_site_memory(avail)?;
+    }
     Ok(sc.site().with_context(|| format!("[terrain] of {}", sc.context()))?)
+}
+
+/// The machine's available memory (bytes): `MemAvailable` of `/proc/meminfo`, or
+/// `SYLVA_MEM_AVAILABLE` (bytes) where set (tests); `None` where neither tells.
+fn available_memory_bytes() -> Option<u64> {
+    if let Some(v) = std::env::var("SYLVA_MEM_AVAILABLE").ok().and_then(|v| v.trim().parse().ok()) {
+        return Some(v);
+    }
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = text.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
 }
 
 /// A stop flag set by Ctrl-C, SIGTERM or SIGHUP: the run stops after the current year with its
