@@ -466,6 +466,15 @@ fn cli_check_new_list_show() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("already exists"));
     assert_eq!(std::fs::read(d.path().join("red_beech.toml")).unwrap(), before);
+    // A name that is not an id is refused as the name, with an id offered; no file written.
+    let o = run(&["species", "new", "Bad Name", "--from", "beech", "--dir", dir]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("species name \"Bad Name\"") && e.contains("e.g. `bad_name`"), "{e}");
+    assert!(!d.path().join("Bad Name.toml").exists());
+    assert!(sylva::species::is_species_id("oak2") && !sylva::species::is_species_id("2oak") && !sylva::species::is_species_id(""));
+    assert_eq!(sylva::species::species_id_suggestion("  Red-Oak 2 "), "red_oak_2");
+    assert_eq!(sylva::species::species_id_suggestion("2 Oak"), "sp_2_oak");
     // check exits non-zero and prints every problem.
     write(
         d.path(),

@@ -145,6 +145,12 @@ pub fn run(c: Command) -> anyhow::Result<()> {
             }
         }
         Command::New { name, from, dir } => {
+            if !species::is_species_id(&name) {
+                anyhow::bail!(
+                    "species name {name:?}: expected lower-case letters, digits and `_`, starting with a letter (it becomes the id and the file name NAME.toml), e.g. `{}`",
+                    species::species_id_suggestion(&name)
+                );
+            }
             let dir = dir.unwrap_or_else(|| PathBuf::from("species"));
             let target = dir.join(format!("{name}.toml"));
             if target.exists() {

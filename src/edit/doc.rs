@@ -267,8 +267,7 @@ impl SpeciesDoc {
     /// [`Error::Invalid`] when `new_id` is not a species id (lower-case letters, digits, `_`,
     /// starting with a letter) or the file exists; [`Error::Io`] when it cannot be written.
     pub fn save_as_new(&mut self, new_id: &str, dir: &Path) -> Result<PathBuf> {
-        let ok = new_id.chars().next().is_some_and(|c| c.is_ascii_lowercase()) && new_id.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
-        if !ok {
+        if !crate::species::is_species_id(new_id) {
             return Err(Error::Invalid { context: "save as new species".into(), field: "id".into(), value: new_id.into(), expected: "lower-case letters, digits and `_`, starting with a letter".into() }.into());
         }
         let target = dir.join(format!("{new_id}.toml"));

@@ -299,7 +299,7 @@ impl Editor {
     }
 
     fn top_bar(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             ui.strong(format!("{}{}", self.doc.path.display(), if self.doc.is_dirty() { " (modified)" } else { "" }));
             ui.separator();
             if ui.add_enabled(self.doc.can_undo(), egui::Button::new("Undo")).on_hover_text("Ctrl+Z").clicked() {

@@ -182,11 +182,7 @@ fn check_leaf(kind: &Kind, v: &toml::Value) -> std::result::Result<(), String> {
             _ => bad(),
         },
         Kind::Ident => match v.as_str() {
-            Some(s)
-                if s.chars().next().is_some_and(|c| c.is_ascii_lowercase()) && s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_') =>
-            {
-                Ok(())
-            }
+            Some(s) if super::is_species_id(s) => Ok(()),
             _ => bad(),
         },
         Kind::TextList => match v.as_array() {

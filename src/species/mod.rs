@@ -205,6 +205,32 @@ fn one() -> f32 {
     1.0
 }
 
+/// Whether `s` is a species id: lower-case ASCII letters, digits and `_`, starting with a
+/// letter (e.g. `beech`, `norway_spruce`, `oak2`). Species files, `sylva species new` and the
+/// editor's "save as new species" accept only such ids (they name the file `ID.toml`).
+pub fn is_species_id(s: &str) -> bool {
+    s.chars().next().is_some_and(|c| c.is_ascii_lowercase()) && s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+}
+
+/// A species id made from `s` (lower-cased; every run of other characters one `_`; a leading
+/// digit or `_` prefixed by `sp_`), offered when `s` is not one ([`is_species_id`]).
+pub fn species_id_suggestion(s: &str) -> String {
+    let mut out = String::new();
+    for c in s.trim().chars().flat_map(char::to_lowercase) {
+        if c.is_ascii_lowercase() || c.is_ascii_digit() {
+            out.push(c);
+        } else if !out.ends_with('_') {
+            out.push('_');
+        }
+    }
+    let out = out.trim_end_matches('_').to_string();
+    if out.chars().next().is_some_and(|c| c.is_ascii_lowercase()) {
+        out
+    } else {
+        format!("sp_{}", out.trim_start_matches('_'))
+    }
+}
+
 /// Default [`LifeHistory::form_factor`]: 0.5.
 pub fn default_form_factor() -> f32 {
     0.5

@@ -525,7 +525,7 @@ impl Viewer {
     }
 
     fn top_bar(&mut self, ui: &mut egui::Ui) {
-        ui.horizontal(|ui| {
+        ui.horizontal_wrapped(|ui| {
             let (a, b) = self.data.span();
             if ui.button(if self.playing { "Pause" } else { "Play" }).on_hover_text("Space").clicked() {
                 self.playing = !self.playing;
