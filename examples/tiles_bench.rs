@@ -15,7 +15,9 @@
 //! part, where forest can grow; below 1 the rest is masked out (no data in the DEM, an ESRI
 //! ASCII grid of the same flat 500 m) so the forest is uneven over the tiles: issue 37 Build 5),
 //! `SYLVA_TILES_SNAPSHOTS` (default 0: snapshots off; N: a snapshot, with the inventory, every
-//! N years).
+//! N years), `SYLVA_TILES_CELL_M` (default 50: the site's cell size in m, for the uniform site;
+//! a finer grid makes the site conditions a rank holds larger for the same hectares: issue 37
+//! Build 1).
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::Instant;
@@ -46,10 +48,12 @@ fn main() {
     });
     let forest: f64 = env("SYLVA_TILES_FOREST", 1.0);
     let snapshots: u32 = env("SYLVA_TILES_SNAPSHOTS", 0);
-    let side = ((ha * 10_000.0).sqrt() / 50.0).round().max(1.0) as usize;
+    let cell_m: f64 = env("SYLVA_TILES_CELL_M", 50.0);
+    let cell_m = if forest >= 1.0 { cell_m } else { 50.0 };
+    let side = ((ha * 10_000.0).sqrt() / cell_m).round().max(1.0) as usize;
     let tmp = tempfile::tempdir().expect("temporary folder");
     let terrain = if forest >= 1.0 {
-        format!("uniform = {{ width = {side}, height = {side}, cell_m = 50.0, elevation_m = 500.0, indices = [5, 5, 3, 5, 6, 6] }}")
+        format!("uniform = {{ width = {side}, height = {side}, cell_m = {cell_m:?}, elevation_m = 500.0, indices = [5, 5, 3, 5, 6, 6] }}")
     } else {
         // the west `forest` share of the columns at 500 m, the rest no data (masked)
         let west = ((side as f64 * forest).round() as usize).clamp(1, side);
@@ -67,7 +71,7 @@ fn main() {
     let toml = common::afforestation_toml("tiles", years, &head, &terrain);
     let sc = tmp.path().join("tiles.toml");
     std::fs::write(&sc, toml).expect("scenario file");
-    println!("tiles bench: {side} × {side} cells of 50 m ({:.0} ha), {years} years, {} (one process, 2 threads) vs mpirun -np {ranks} (1 thread each)", (side * side) as f64 * 0.25, bin.display());
+    println!("tiles bench: {side} × {side} cells of {cell_m} m ({:.0} ha), {years} years, {} (one process, 2 threads) vs mpirun -np {ranks} (1 thread each)", (side * side) as f64 * cell_m * cell_m / 10_000.0, bin.display());
     // one process
     let one = tmp.path().join("one");
     let t0 = Instant::now();

@@ -4,7 +4,7 @@
 //! simulation; fields may be added, not renamed.
 
 pub use crate::climate::Climate;
-use crate::grid::{GeoRef, Grid};
+use crate::grid::{GeoRef, Grid, Window};
 
 /// Index of each Ellenberg factor in `[L, T, K, F, R, N]` arrays.
 pub mod factor {
@@ -51,16 +51,81 @@ pub struct SiteConditions {
     pub temperature_c: Grid<f32>,
     /// Ellenberg-style indices per cell, `[L, T, K, F, R, N]`, each on its 1–9 (F: 1–12) scale.
     pub indices: Grid<[f32; 6]>,
+    /// The cells of the site's grid that the grids above hold (columns and rows of the whole
+    /// grid, row 0 north): the whole grid ([`Window::full`] of [`SiteConditions::full`]), or, on
+    /// a tile of a tiled run ([`SiteConditions::hold`], issue 37 Build 1), the tile's cells plus
+    /// a halo. Cell `(col, row)` of the whole grid is element [`SiteConditions::held_index`] of
+    /// every grid above.
+    pub held: Window,
+    /// Columns and rows of the whole site's grid (what [`SiteConditions::width`] and
+    /// [`SiteConditions::height`] return; `held` lies inside it).
+    pub full: (usize, usize),
 }
 
 impl SiteConditions {
-    /// Width of the grid (columns).
+    /// Width of the whole site's grid (columns; the grids held may be a window of it).
     pub fn width(&self) -> usize {
-        self.mask.width
+        self.full.0
     }
-    /// Height of the grid (rows).
+    /// Height of the whole site's grid (rows; the grids held may be a window of it).
     pub fn height(&self) -> usize {
-        self.mask.height
+        self.full.1
+    }
+    /// True when the grids hold the whole site (one process; not a tile's window).
+    pub fn holds_all(&self) -> bool {
+        self.held.width == self.full.0 && self.held.height == self.full.1
+    }
+    /// Element of the held grids of cell `(col, row)` of the whole grid (row 0 north), or
+    /// `None` when the cell is not held.
+    #[inline]
+    pub fn held_index(&self, col: usize, row: usize) -> Option<usize> {
+        let h = &self.held;
+        (col >= h.col0 && col < h.col1() && row >= h.row0 && row < h.row1()).then(|| (row - h.row0) * h.width + (col - h.col0))
+    }
+    /// Element of the held grids of site cell `cell` (row-major over the whole grid, as
+    /// [`SiteConditions::unmasked_cell`] gives it): `cell` itself when the whole site is held.
+    /// Panics, naming the cell and the window, when the cell is not held (a reader outside the
+    /// tile and halo its tiled run gave it: a defect, not bad input).
+    #[inline]
+    pub fn held(&self, cell: usize) -> usize {
+        if self.holds_all() {
+            return cell;
+        }
+        let (col, row) = (cell % self.full.0, cell / self.full.0);
+        self.held_index(col, row).unwrap_or_else(|| panic!("site cell {cell} (column {col}, row {row}) outside the cells held ({})", self.held))
+    }
+    /// Site cell (row-major over the whole grid) of world point `(x, y)` (m, origin SW corner)
+    /// when it is held and unmasked; `None` outside the site, on a masked cell or on a cell
+    /// outside the held window.
+    #[inline]
+    pub fn unmasked_cell(&self, x: f64, y: f64) -> Option<usize> {
+        let (c, r) = self.cell_at(x, y)?;
+        let i = self.held_index(c, r)?;
+        self.mask.data[i].then(|| r * self.full.0 + c)
+    }
+    /// Keeps of every grid only the cells of `w` (columns and rows of the whole grid, row 0
+    /// north), which must lie inside the cells held: a tile's part of the site (issue 37
+    /// Build 1). Readers then find cell `(col, row)` at [`SiteConditions::held_index`].
+    /// Panics when `w` is not inside [`SiteConditions::held`].
+    pub fn hold(&mut self, w: Window) {
+        let o = self.held;
+        self.mask = w.cut(&self.mask, &o);
+        for g in [&mut self.elevation_m, &mut self.slope_deg, &mut self.aspect_deg, &mut self.twi, &mut self.insolation_kwh_m2, &mut self.wind_exposure, &mut self.temperature_c] {
+            *g = w.cut(g, &o);
+        }
+        self.indices = w.cut(&self.indices, &o);
+        self.held = w;
+    }
+    /// The cells of the whole grid (a window, row 0 north) that cover the world rectangle
+    /// `[x0, x1) × [y0, y1)` (m, origin SW corner), widened by `halo` cells on every side and
+    /// clipped to the grid.
+    pub fn window_of(&self, x0: f64, y0: f64, x1: f64, y1: f64, halo: usize) -> Window {
+        let (w, h) = self.full;
+        let col = |x: f64| ((x.max(0.0) / self.cell_x_m) as usize).min(w.saturating_sub(1));
+        let rs = |y: f64| ((y.max(0.0) / self.cell_y_m) as usize).min(h.saturating_sub(1));
+        let (c0, c1) = (col(x0), col(x1));
+        let (r0, r1) = (h - 1 - rs(y1), h - 1 - rs(y0));
+        Window { col0: c0, row0: r0, width: c1 - c0 + 1, height: r1 - r0 + 1 }.with_halo(halo, w, h)
     }
     /// World extent (m): `(width · cell_x_m, height · cell_y_m)`.
     pub fn extent_m(&self) -> (f64, f64) {
@@ -78,7 +143,8 @@ impl SiteConditions {
         }
         Some((col, self.height() - 1 - rs))
     }
-    /// Bilinear elevation (m) at world point `(x, y)`, clamped to the grid.
+    /// Bilinear elevation (m) at world point `(x, y)`, clamped to the grid (and to the cells
+    /// held: a tile reads points of its own cells, whose four neighbours its halo holds).
     pub fn elevation_at(&self, x: f64, y: f64) -> f32 {
         let w = self.width();
         let h = self.height();
@@ -87,9 +153,13 @@ impl SiteConditions {
         let (c0, r0) = (fx.floor() as usize, fy.floor() as usize);
         let (c1, r1) = ((c0 + 1).min(w - 1), (r0 + 1).min(h - 1));
         let (tx, ty) = ((fx - c0 as f64) as f32, (fy - r0 as f64) as f32);
-        let e = &self.elevation_m;
-        let a = e.get(c0, r0) * (1.0 - tx) + e.get(c1, r0) * tx;
-        let b = e.get(c0, r1) * (1.0 - tx) + e.get(c1, r1) * tx;
+        let hw = &self.held;
+        let at = |c: usize, r: usize| {
+            let (c, r) = (c.clamp(hw.col0, hw.col1() - 1) - hw.col0, r.clamp(hw.row0, hw.row1() - 1) - hw.row0);
+            self.elevation_m.data[r * hw.width + c]
+        };
+        let a = at(c0, r0) * (1.0 - tx) + at(c1, r0) * tx;
+        let b = at(c0, r1) * (1.0 - tx) + at(c1, r1) * tx;
         a * (1.0 - ty) + b * ty
     }
 
@@ -109,6 +179,8 @@ impl SiteConditions {
             wind_exposure: Grid::filled(width, height, 0.3),
             temperature_c: Grid::filled(width, height, 8.0),
             indices: Grid::filled(width, height, indices),
+            held: Window::full(width, height),
+            full: (width, height),
         }
     }
 }
@@ -205,6 +277,8 @@ fn from_fields_of(elevation: &Grid<f32>, geo: &GeoRef, full_h: usize, climate: &
         wind_exposure: f.wind_exposure,
         temperature_c: f.temperature_c,
         indices,
+        held: Window::full(w, h),
+        full: (w, h),
     }
 }
 

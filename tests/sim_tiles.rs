@@ -132,6 +132,72 @@ fn a_tile_holds_the_light_cells_site_arrays_of_its_own_cells_only() {
 }
 
 #[test]
+fn a_tile_holds_the_site_grids_of_its_cells_and_halo_only() {
+    // issue 37 Build 1: a tile keeps the site conditions, relative insolation and suitability
+    // of the site cells under its light cells plus a halo of SITE_HALO_CELLS, read through
+    // offsets; on a window of the default DEM (80 m cells: elevation, wind exposure and indices
+    // vary) under a warming climate (the climate phase rewrites the suitability of every cell
+    // and tree held every year), with beech and birch seeding in across the tile edges, 2 and
+    // 2 x 2 tiles end as one process
+    let toml = common::ScenarioToml::new("held", 15, 11)
+        .species(&["beech", "birch"])
+        .line("light_cell_m = 10.0")
+        .line("climate = { warming_k_per_century = 4.0 }")
+        .default_terrain([150, 150, 12, 10])
+        .seed_sources("beech", &[[478.0, 402.0], [485.0, 300.0], [200.0, 600.0]], 3)
+        .seed_sources("birch", &[[470.0, 395.0], [700.0, 420.0]], 3)
+        .build();
+    let (_, w0) = common::world(&toml);
+    let c0 = &w0.site.conditions;
+    assert!(c0.holds_all() && (c0.width(), c0.height()) == (12, 10));
+    let wind: Vec<u32> = c0.wind_exposure.data.iter().map(|v| v.to_bits()).collect();
+    assert!(wind.iter().any(|&v| v != wind[0]), "the window's wind exposure should vary");
+    let whole_id = sylva::sim::checkpoint::site_identity(c0);
+    let (lg, light_cell) = (w0.site.light, w0.site.light.cell_m);
+    for (nx, ny) in [(2, 1), (2, 2)] {
+        let layout = Layout::new(&w0.site, nx, ny).unwrap();
+        for k in 0..layout.len() {
+            let r = layout.rect(k);
+            let tile = Tile::new(&w0, layout.clone(), k);
+            let s = &tile.world.site;
+            let c = &s.conditions;
+            let h = c.held;
+            // the whole site's size, a part of its cells: those under the tile plus the halo
+            assert_eq!((c.width(), c.height(), c.extent_m()), (12, 10, c0.extent_m()), "tile {k} of {nx} x {ny}");
+            assert!(!c.holds_all() && h.width * h.height < 12 * 10, "tile {k} of {nx} x {ny} holds {h}");
+            let under = c0.window_of(r.col0 as f64 * light_cell, r.row0 as f64 * light_cell, r.col1 as f64 * light_cell, r.row1 as f64 * light_cell, 0);
+            assert_eq!(h, under.with_halo(sylva::sim::tiles::SITE_HALO_CELLS, 12, 10), "tile {k} of {nx} x {ny}");
+            let n = h.width * h.height;
+            assert_eq!((c.mask.data.len(), c.indices.data.len(), s.rel_insolation.len()), (n, n, n));
+            assert!(s.suitability.iter().all(|v| v.len() == n));
+            for row in h.row0..h.row1() {
+                for col in h.col0..h.col1() {
+                    let (i, g) = (c.held_index(col, row).unwrap(), c0.mask.idx(col, row));
+                    assert_eq!(c.held(g), i);
+                    assert_eq!((c.mask.data[i], c.elevation_m.data[i].to_bits(), c.wind_exposure.data[i].to_bits(), c.indices.data[i].map(f32::to_bits)), (c0.mask.data[g], c0.elevation_m.data[g].to_bits(), c0.wind_exposure.data[g].to_bits(), c0.indices.data[g].map(f32::to_bits)), "tile {k}, cell ({col}, {row})");
+                    assert_eq!(s.rel_insolation[i].to_bits(), w0.site.rel_insolation[g].to_bits());
+                    assert!(s.suitability.iter().zip(&w0.site.suitability).all(|(a, b)| a[i].to_bits() == b[g].to_bits()));
+                }
+            }
+            assert_eq!(c.held_index(h.col1(), h.row0), None);
+            // every point of the tile's own light cells reads its cell and elevation as the whole site does
+            for lc in (r.row0..r.row1).flat_map(|row| (r.col0..r.col1).map(move |col| row * lg.cols + col)) {
+                let (x, y) = lg.centre(lc);
+                assert_eq!(s.site_cell(x, y), w0.site.site_cell(x, y));
+                assert_eq!(c.elevation_at(x + 4.9, y - 4.9).to_bits(), c0.elevation_at(x + 4.9, y - 4.9).to_bits());
+            }
+            // the checkpoint identity stays the whole site's
+            assert_eq!(s.whole_identity.as_ref(), Some(&whole_id));
+            assert_eq!(sylva::sim::checkpoint::identity(&tile.world), sylva::sim::checkpoint::identity(&w0));
+        }
+    }
+    let one = one_process(&toml, 15);
+    assert!(one.1.stand.trees.len() > 40 && one.1.stand.cohorts.len() > 50, "{} trees, {} cohorts", one.1.stand.trees.len(), one.1.stand.cohorts.len());
+    assert_tiles_equal(&toml, 2, 1, 15, &one);
+    assert_tiles_equal(&toml, 2, 2, 15, &one);
+}
+
+#[test]
 fn a_too_narrow_halo_is_refused_and_would_differ() {
     let toml = edges();
     let (_, w0) = common::world(&toml);

@@ -240,5 +240,7 @@ fn assemble(got: Vec<Vec<u8>>, bands: &[Window], w: usize, h: usize, geo: crate:
         wind_exposure: next(),
         temperature_c: next(),
         indices: Grid { width: w, height: h, data: ix },
+        held: crate::grid::Window::full(w, h),
+        full: (w, h),
     })
 }

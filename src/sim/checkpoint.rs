@@ -145,6 +145,31 @@ fn crc_f32(h: &mut crc32fast::Hasher, v: &[f32]) {
     }
 }
 
+/// The `terrain` and `site conditions` entries of [`identity`] for the site `c` (the whole
+/// site: a tile keeps them from before its cut, [`super::world::Site::whole_identity`]).
+pub fn site_identity(c: &crate::conditions::SiteConditions) -> Vec<(String, String)> {
+    let mut out = Vec::with_capacity(2);
+    let mut h = crc32fast::Hasher::new();
+    h.update(&(c.width() as u64).to_le_bytes());
+    h.update(&(c.height() as u64).to_le_bytes());
+    h.update(&c.cell_x_m.to_bits().to_le_bytes());
+    h.update(&c.cell_y_m.to_bits().to_le_bytes());
+    crc_f32(&mut h, &c.elevation_m.data);
+    h.update(&c.mask.data.iter().map(|&m| m as u8).collect::<Vec<u8>>());
+    let valid: Vec<f32> = c.elevation_m.data.iter().zip(&c.mask.data).filter(|(_, m)| **m).map(|(e, _)| *e).collect();
+    let (lo, hi) = valid.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &e| (a.min(e), b.max(e)));
+    out.push(("terrain".to_string(), format!("{} × {} cells of {} m × {} m, {} valid, elevation {lo:.2}–{hi:.2} m, CRC-32 {:08x}", c.width(), c.height(), c.cell_x_m, c.cell_y_m, valid.len(), h.finalize())));
+    let mut h = crc32fast::Hasher::new();
+    for ix in &c.indices.data {
+        crc_f32(&mut h, ix);
+    }
+    for g in [&c.insolation_kwh_m2, &c.temperature_c, &c.wind_exposure, &c.twi] {
+        crc_f32(&mut h, &g.data);
+    }
+    out.push(("site conditions".into(), format!("CRC-32 {:08x} of the per-cell indices, insolation, temperature, wind exposure and TWI", h.finalize())));
+    out
+}
+
 /// The identity of the run of `w`: what a resumed run must share with the one that wrote the
 /// checkpoint, as (field, value) pairs in a fixed order. Fields: `seed`; `light_cell_m`;
 /// `species pool` (ids in pool order); `species <id>` (the species' parameters as TOML, so a
@@ -165,25 +190,7 @@ pub fn identity(w: &World) -> Vec<(String, String)> {
         let sp = &s.lib.species[p as usize];
         out.push((format!("species {}", sp.id), sp.to_toml_string().unwrap_or_else(|_| format!("{sp:?}"))));
     }
-    let c = &s.conditions;
-    let mut h = crc32fast::Hasher::new();
-    h.update(&(c.width() as u64).to_le_bytes());
-    h.update(&(c.height() as u64).to_le_bytes());
-    h.update(&c.cell_x_m.to_bits().to_le_bytes());
-    h.update(&c.cell_y_m.to_bits().to_le_bytes());
-    crc_f32(&mut h, &c.elevation_m.data);
-    h.update(&c.mask.data.iter().map(|&m| m as u8).collect::<Vec<u8>>());
-    let valid: Vec<f32> = c.elevation_m.data.iter().zip(&c.mask.data).filter(|(_, m)| **m).map(|(e, _)| *e).collect();
-    let (lo, hi) = valid.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &e| (a.min(e), b.max(e)));
-    out.push(("terrain".into(), format!("{} × {} cells of {} m × {} m, {} valid, elevation {lo:.2}–{hi:.2} m, CRC-32 {:08x}", c.width(), c.height(), c.cell_x_m, c.cell_y_m, valid.len(), h.finalize())));
-    let mut h = crc32fast::Hasher::new();
-    for ix in &c.indices.data {
-        crc_f32(&mut h, ix);
-    }
-    for g in [&c.insolation_kwh_m2, &c.temperature_c, &c.wind_exposure, &c.twi] {
-        crc_f32(&mut h, &g.data);
-    }
-    out.push(("site conditions".into(), format!("CRC-32 {:08x} of the per-cell indices, insolation, temperature, wind exposure and TWI", h.finalize())));
+    out.extend(s.whole_identity.clone().unwrap_or_else(|| site_identity(&s.conditions)));
     out.push(("seed rain".into(), format!("{:?} seeds/m²/yr", s.seed_rain)));
     out.push(("obstacles".into(), format!("{} obstacles, CRC-32 {:08x}", s.obstacles.len(), crc32fast::hash(format!("{:?}", s.obstacles).as_bytes()))));
     // management and a changing climate, only where the scenario has them (so that the identity

@@ -839,6 +839,8 @@ pub fn crop_site(site: &crate::conditions::SiteConditions, window: [usize; 4]) -
         wind_exposure: cut(&site.wind_exposure),
         temperature_c: cut(&site.temperature_c),
         indices: win.cut(&site.indices, &full),
+        held: crate::grid::Window::full(w, h),
+        full: (w, h),
     })
 }
 

@@ -426,7 +426,7 @@ pub fn work_weights(site: &Site) -> (Vec<u64>, Vec<u64>) {
     let light = &site.light;
     let (mut cols, mut rows) = (vec![0u64; light.cols], vec![0u64; light.rows]);
     for (k, &s) in site.light_site.iter().enumerate() {
-        let grows = s != u32::MAX && site.suitability.iter().any(|sp| sp.get(s as usize).is_some_and(|&v| v > 0.0));
+        let grows = s != u32::MAX && site.suitability.iter().any(|sp| sp.get(site.conditions.held(s as usize)).is_some_and(|&v| v > 0.0));
         if grows {
             let (c, r) = light.col_row(k);
             cols[c] += 1;
@@ -1246,6 +1246,39 @@ fn hold_own_cells(w: &mut World, rect: super::light_grid::CellRect) {
         w.scratch.ground_light = span.cut(&w.scratch.ground_light);
     }
     w.site.window = Some(rect);
+    hold_own_site(w, rect);
+}
+
+/// Site cells a tile holds around its own light cells (issue 37 Build 1): its trees and
+/// recruits stand on its own cells, and a point there reads its site cell and (the bilinear
+/// elevation of a new tree) the next cell on each side; one more for the rounding of the cell
+/// boundaries.
+pub const SITE_HALO_CELLS: usize = 2;
+
+/// Cuts the site grids of `w` (the conditions, relative insolation and suitability, per site
+/// cell) to the site cells under the light cells `rect` plus [`SITE_HALO_CELLS`] (issue 37
+/// Build 1): what a tile's phases read of the site (the light of its trees and its ground, its
+/// regeneration and recruits, the suitability of its trees under a changing climate, the wind
+/// exposure of its trees, the plantings on its cells). The checkpoint identity of the whole
+/// site is kept first ([`Site::whole_identity`]). A site already cut is left as it is.
+fn hold_own_site(w: &mut World, rect: CellRect) {
+    let c = &w.site.conditions;
+    if !c.holds_all() {
+        return;
+    }
+    let l = w.site.light.cell_m;
+    let win = c.window_of(rect.col0 as f64 * l, rect.row0 as f64 * l, rect.col1 as f64 * l, rect.row1 as f64 * l, SITE_HALO_CELLS);
+    if win == c.held {
+        return;
+    }
+    w.site.whole_identity = Some(super::checkpoint::site_identity(c));
+    let full = c.held;
+    let cut = |v: Vec<f32>| win.cut(&crate::grid::Grid { width: full.width, height: full.height, data: v }, &full).data;
+    w.site.rel_insolation = cut(std::mem::take(&mut w.site.rel_insolation));
+    for s in w.site.suitability.iter_mut() {
+        *s = cut(std::mem::take(s));
+    }
+    w.site.conditions.hold(win);
 }
 
 /// Keeps in `w` only the trees and cohorts of tile `me` of `layout`.

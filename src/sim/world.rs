@@ -76,12 +76,19 @@ pub struct Site {
     /// One process: every light cell; a tile ([`super::tiles::Tile`], `window` set): its own
     /// cells only, indexed by [`super::light_grid::Span`] (issue 37 Build 1).
     pub light_site: Vec<u32>,
-    /// Relative insolation (cell insolation / median of unmasked cells, clamped 0.2–1.5) per site cell.
+    /// Relative insolation (cell insolation / median of unmasked cells, clamped 0.2–1.5) per site
+    /// cell held (element [`SiteConditions::held`] of a site cell: every cell in one process, a
+    /// tile's cells plus halo on a tile, [`super::tiles::Tile`]; issue 37 Build 1).
     pub rel_insolation: Vec<f32>,
-    /// Suitability (0–1) per pool species (outer, pool order) per site cell: of the base climate,
-    /// or, under a changing climate, of the current year's (set by the climate phase,
-    /// `sim::phases::climate`; the only field of the site written after [`World::new`]).
+    /// Suitability (0–1) per pool species (outer, pool order) per site cell held (as
+    /// `rel_insolation`): of the base climate, or, under a changing climate, of the current
+    /// year's (set by the climate phase, `sim::phases::climate`; the only field of the site
+    /// written after [`World::new`]).
     pub suitability: Vec<Vec<f32>>,
+    /// The checkpoint identity's `terrain` and `site conditions` entries of the whole site
+    /// ([`super::checkpoint::identity`]), kept when the site is cut to a tile's cells (which no
+    /// longer give them); `None` while the whole site is held.
+    pub whole_identity: Option<Vec<(String, String)>>,
     /// External seed rain per pool species (seeds per m² and year).
     pub seed_rain: Vec<f32>,
     /// The scenario's obstacles ([`super::obstacle`]).
@@ -166,7 +173,7 @@ impl Site {
         let sp = self.species(s);
         let h = allometry::potential_height(sp, age).max(0.3);
         let d = super::rules::start_dbh(sp, h);
-        Some(NewTree { species: s, x: x as f32, y: y as f32, z: self.conditions.elevation_at(x, y), age: age.max(1.0), height: h, dbh: d, crown_radius: allometry::open_crown_radius(sp, h, d), suitability: self.suitability[p][cell] })
+        Some(NewTree { species: s, x: x as f32, y: y as f32, z: self.conditions.elevation_at(x, y), age: age.max(1.0), height: h, dbh: d, crown_radius: allometry::open_crown_radius(sp, h, d), suitability: self.suitability[p][self.conditions.held(cell)] })
     }
 
     /// A planted square lattice: the points `x0 + (i + 0.5 + u) · spacing_m`, `y0 + (j + 0.5 + v)
@@ -224,10 +231,10 @@ impl Site {
         &self.lib.species[s as usize]
     }
 
-    /// Site cell index (row-major) of world point `(x, y)` when unmasked.
+    /// Site cell index (row-major over the whole site) of world point `(x, y)` when unmasked
+    /// (and held: [`SiteConditions::unmasked_cell`]).
     pub fn site_cell(&self, x: f64, y: f64) -> Option<usize> {
-        let (c, r) = self.conditions.cell_at(x, y)?;
-        (*self.conditions.mask.get(c, r)).then(|| self.conditions.mask.idx(c, r))
+        self.conditions.unmasked_cell(x, y)
     }
 }
 
@@ -343,6 +350,7 @@ impl World {
                 light_site,
                 rel_insolation,
                 suitability,
+                whole_identity: None,
                 seed_rain,
                 obstacles: scenario.obstacles.clone(),
                 obstacle_canopy,

@@ -23,7 +23,8 @@ pub struct ClimatePhase<'a> {
     pub lib: &'a SpeciesLibrary,
     /// Pool species.
     pub pool: &'a [SpeciesId],
-    /// Written: suitability per pool species per site cell under this year's climate.
+    /// Written: suitability per pool species per site cell held (the cells of `site`'s grids)
+    /// under this year's climate.
     pub suitability: &'a mut [Vec<f32>],
     /// Written: each tree's suitability (its cell's, for its species).
     pub trees: &'a mut TreeStore,
@@ -47,7 +48,8 @@ pub fn run(c: ClimatePhase<'_>) -> (f64, f64) {
     let t = &mut *c.trees;
     let (x, y, species) = (&t.x, &t.y, &t.species);
     t.suitability.par_iter_mut().enumerate().with_min_len(4096).for_each(|(i, s)| {
-        let cell = site.cell_at(x[i] as f64, y[i] as f64).filter(|&(col, row)| *site.mask.get(col, row)).map(|(col, row)| site.mask.idx(col, row));
+        // the tree's cell among the cells held (a tile's own trees stand on its cells)
+        let cell = site.cell_at(x[i] as f64, y[i] as f64).and_then(|(col, row)| site.held_index(col, row)).filter(|&k| site.mask.data[k]);
         if let (Some(cell), Some(p)) = (cell, pidx[species[i] as usize]) {
             *s = suit[p][cell];
         }

@@ -88,7 +88,7 @@ pub struct Light<'a> {
     /// tile). A tree on a cell outside the span (a halo copy, whose light is dropped with it) is
     /// lit as if unmasked.
     pub light_site: &'a [u32],
-    /// Relative insolation per site cell.
+    /// Relative insolation per site cell held (element [`SiteConditions::held`] of a site cell).
     pub rel_insolation: &'a [f32],
     /// Opaque canopy entries of the scenario's obstacles (`sim::obstacle::light_cells`: key
     /// cell << 32 | inverted top height bits, leaf-area index), stamped with the trees'.
@@ -155,7 +155,7 @@ pub fn run(w: Light<'_>) {
         if s == u32::MAX {
             1.0
         } else {
-            ins[s as usize]
+            ins[w.site.held(s as usize)]
         }
     };
     let (ls, ri) = (&w.light_site, &w.rel_insolation);

@@ -102,7 +102,7 @@ pub fn run(w: Mortality<'_>) {
             if t.vigour[i] < stress_threshold(sp.life.shade_tolerance) && r.chance(P_STRESS) {
                 return Some(DeathCause::Stress);
             }
-            let exp = site.cell_at(t.x[i] as f64, t.y[i] as f64).map(|(c, rw)| *site.wind_exposure.get(c, rw)).unwrap_or(0.0);
+            let exp = site.cell_at(t.x[i] as f64, t.y[i] as f64).and_then(|(c, rw)| site.held_index(c, rw)).map(|k| site.wind_exposure.data[k]).unwrap_or(0.0);
             let pw = p_wind(exp, t.height[i]);
             if pw > 0.0 && Stream::new(seed, t.id[i], year, salt::WIND).chance(pw) {
                 return Some(DeathCause::Wind);

@@ -142,10 +142,10 @@ pub struct Regen<'a> {
 }
 
 impl Regen<'_> {
-    /// Site cell index (row-major) of world point `(x, y)` when unmasked.
+    /// Element of the held site grids (`suitability`) of world point `(x, y)` when unmasked.
     fn site_cell(&self, x: f64, y: f64) -> Option<usize> {
         let (c, r) = self.site.cell_at(x, y)?;
-        (*self.site.mask.get(c, r)).then(|| self.site.mask.idx(c, r))
+        self.site.held_index(c, r).filter(|&k| self.site.mask.data[k])
     }
 }
 
@@ -195,7 +195,8 @@ pub fn run(w: Regen<'_>) -> usize {
                     // masked light cell: no regeneration (cohorts never arise here)
                     continue;
                 }
-                let site = site as usize;
+                // its element of the held site grids (the tile's cells plus halo, or all)
+                let site = wr.site.held(site as usize);
                 let gl = wr.ground_light[si];
                 let (cx, cy) = lg.centre(c);
                 // 1. germination
