@@ -500,6 +500,15 @@ fn sky_share(img: &image::RgbaImage, r: (u32, u32, u32, u32)) -> f64 {
     s as f64 / n.max(1) as f64
 }
 
+/// First row (px from the top) of the 3-D view under the viewer's top bar: the first row from the
+/// top whose pixels in columns 20–640 have a mean brightness above 100 (the bar is dark grey with
+/// light text; the view's top rows are sky or lit terrain); the image height if none.
+fn view_top(img: &image::RgbaImage) -> u32 {
+    (0..img.height())
+        .find(|&y| (20..640).map(|x| img.get_pixel(x, y).0[..3].iter().map(|&c| c as u32).sum::<u32>() / 3).sum::<u32>() / 620 > 100)
+        .unwrap_or(img.height())
+}
+
 /// Issue 36 item 3: the viewer shows the landscape as the stills do, not as a slab in an empty
 /// sky: above the horizon the sky, below it the terrain around the window (the DEM beyond it,
 /// the window's trees mirrored onto it, fading into the haze) out to the view's edges.
@@ -513,8 +522,11 @@ fn the_viewer_draws_the_terrain_around_the_window_and_the_sky_above_it() {
     assert!(ok && !err.contains("panicked"), "{err}");
     let img = image::open(&shot).unwrap().to_rgba8();
     let _ = img.save(std::env::temp_dir().join("sylva_gui_surroundings.png"));
-    // the 3-D view is left of the 340 px side panel, under the top bar
-    let top = sky_share(&img, (20, 40, 640, 50));
+    // the 3-D view is left of the 340 px side panel, under the top bar (whose height depends on
+    // how its controls wrap at this width: one or two rows)
+    let v = view_top(&img);
+    assert!((20..=120).contains(&v), "the 3-D view starts under the top bar, at y {v}");
+    let top = sky_share(&img, (20, v + 2, 640, v + 12));
     let lower = sky_share(&img, (20, 320, 640, 600));
     let corners = [sky_share(&img, (20, 500, 120, 600)), sky_share(&img, (540, 500, 640, 600))];
     eprintln!("sky share: top {top:.3}, lower half {lower:.3}, bottom corners {corners:?}");
