@@ -235,3 +235,39 @@ fn pure_stand_dq_at_100_is_plausible() {
     }
     assert!(bad.is_empty(), "implausible Dq at age 100: {bad:?}");
 }
+
+/// The crowding grid is held over the trees' 10 m cells plus one (a tile's trees and halo
+/// copies, issue 37 Build 1), not the whole site: the crowding of the trees in a rectangle,
+/// computed from them and every tree within 30 m around (what a tile holds), equals the whole
+/// stand's at those trees bit for bit, in the middle of the site and at its clipped corners
+/// (a 205 m site: the last cells 5 m wide), with two species and stems on both sides of 7 cm.
+#[test]
+fn crowding_of_a_rectangle_and_its_halo_is_the_whole_stands() {
+    let (_, mut w) = common::world(&common::ScenarioToml::new("rd_held", 1, 1).species(&["beech", "birch"]).uniform(41, 41, 5.0, 200.0).planted("beech", 2.5, 30.0).build());
+    let pool = w.site.pool.clone();
+    assert!(pool.len() == 2, "{pool:?}");
+    let t = &mut w.stand.trees;
+    for i in 0..t.len() {
+        t.dbh[i] = 2.0 + (i * 7 % 41) as f32;
+        t.species[i] = pool[i % 2];
+    }
+    let whole = sylva::sim::density::crowding(&w.site, &w.stand.trees);
+    assert!(whole.rd.iter().all(|v| v.is_finite() && *v > 0.0));
+    for [x0, y0, x1, y1] in [[70.0f32, 60.0, 130.0, 110.0], [0.0, 0.0, 40.0, 30.0], [170.0, 180.0, 205.0, 205.0], [0.0, 150.0, 205.0, 205.0]] {
+        let t = &w.stand.trees;
+        let inside = |i: usize, m: f32| (x0 - m..x1 + m).contains(&t.x[i]) && (y0 - m..y1 + m).contains(&t.y[i]);
+        let mut part = t.clone();
+        part.retain(&(0..t.len()).map(|i| inside(i, 30.0)).collect::<Vec<_>>());
+        let c = sylva::sim::density::crowding(&w.site, &part);
+        let own: Vec<usize> = (0..t.len()).filter(|&i| inside(i, 0.0)).collect();
+        assert!(own.len() > 50 && part.len() > own.len() && part.len() < t.len() / 2, "{} of {} held", part.len(), t.len());
+        let mut k = 0;
+        for &i in &own {
+            while part.id[k] != t.id[i] {
+                k += 1;
+            }
+            let (a, b) = ([whole.rd[i], whole.dq_cm[i], whole.ccf[i]], [c.rd[k], c.dq_cm[k], c.ccf[k]]);
+            assert!(a.iter().zip(&b).all(|(a, b)| a.to_bits() == b.to_bits()), "rectangle {x0},{y0}..{x1},{y1}, tree {i} at ({}, {}): whole {a:?} held {b:?}", t.x[i], t.y[i]);
+        }
+    }
+}

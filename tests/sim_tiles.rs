@@ -492,3 +492,40 @@ fn tiles_cut_by_forest_on_a_half_masked_site_write_the_run_of_one_process() {
     assert_eq!(a.rows, b.rows, "3 tiles then 2: stand table");
     common::assert_same_run(&one, &d, &template, "3 tiles cut by forest, resumed on 2");
 }
+
+#[test]
+fn the_light_phase_holds_its_grids_over_the_tiles_trees_and_cells() {
+    // issue 37 Build 1: the spatial hash (and the canopy on its cells) of a tile covers the
+    // cells of its trees and halo copies and its own cells, one row wider on each side, not the
+    // whole grid; one process holds the whole grid
+    use sylva::sim::light_grid::{CellRect, LightGrid};
+    use sylva::sim::phases::light::held_cells;
+    use sylva::sim::trees::{NewTree, SpatialGrid, TreeStore};
+    let lg = LightGrid::new((40.0, 30.0), 5.0); // 8 × 6 cells
+    let mut t = TreeStore::default();
+    for (x, y) in [(6.0, 11.0), (12.0, 12.0), (18.0, 14.0), (24.0, 6.0), (13.0, 13.0)] {
+        t.push(NewTree { species: 0, x, y, z: 0.0, age: 1.0, height: 1.0, dbh: 0.0, crown_radius: 0.3, suitability: 1.0 });
+    }
+    assert_eq!(held_cells(&t, &lg, None), CellRect { col0: 0, row0: 0, col1: 8, row1: 6 });
+    // trees in columns 1..5, rows 1..3; the tile's own cells columns 2..4, rows 3..4
+    let win = CellRect { col0: 2, row0: 3, col1: 4, row1: 4 };
+    let rect = held_cells(&t, &lg, Some(win));
+    assert_eq!(rect, CellRect { col0: 1, row0: 0, col1: 5, row1: 5 });
+    // no trees: the own cells and a row either side; neither: one cell
+    assert_eq!(held_cells(&TreeStore::default(), &lg, Some(win)), CellRect { col0: 2, row0: 2, col1: 4, row1: 5 });
+    assert_eq!(held_cells(&TreeStore::default(), &lg, Some(CellRect::default())).len(), 1);
+    // the grid over it: cell indices of the rectangle, the same neighbours as the whole grid's
+    let h = SpatialGrid::build_in(&t, &lg, rect);
+    let g = SpatialGrid::build(&t, &lg);
+    assert_eq!((h.cols, h.rows, h.col0, h.row0, h.start.len(), g.start.len()), (4, 5, 1, 0, 21, 49));
+    assert_eq!(h.cell_of(6.5, 1.0), 0);
+    assert_eq!(h.cell(h.cell_of(12.0, 12.0)), &[1, 4]);
+    let (mut a, mut b) = (Vec::new(), Vec::new());
+    for (x, y, r) in [(13.0, 12.0, 6.0), (20.0, 10.0, 8.0), (0.0, 0.0, 2.0), (39.0, 29.0, 3.0), (10.0, 10.0, 40.0)] {
+        h.within(&t, x, y, r, &mut a);
+        g.within(&t, x, y, r, &mut b);
+        a.sort();
+        b.sort();
+        assert_eq!(a, b, "within {r} m of ({x}, {y})");
+    }
+}

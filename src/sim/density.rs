@@ -63,18 +63,30 @@ pub struct Crowding {
 /// Per-tree relative density and neighbourhood quadratic mean DBH of `trees` on the site `w`
 /// (its extent, pool and species; see the module docs). Sums run sequentially in tree order
 /// (f64; cells in parallel, each cell's trees in index order: [`super::bucket::bucket`]), so the
-/// result does not depend on thread count. Cost O(n + cells).
+/// result does not depend on thread count. The grid is held over the rectangle of the trees'
+/// cells plus one cell on every side, clipped to the site (a tile's trees and halo copies in a
+/// tiled run, not the whole site: issue 37 Build 1), with the whole grid's sums. Cost O(n +
+/// cells of that rectangle); no trees: empty vectors.
 pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
     let t = trees;
+    if t.is_empty() {
+        return Crowding::default();
+    }
     let (ex, ey) = w.extent;
-    let cols = ((ex / CROWD_CELL_M).ceil() as usize).max(1);
-    let rows = ((ey / CROWD_CELL_M).ceil() as usize).max(1);
+    let gcols = ((ex / CROWD_CELL_M).ceil() as usize).max(1);
+    let grows = ((ey / CROWD_CELL_M).ceil() as usize).max(1);
+    let col_of = |x: f32| ((x as f64 / CROWD_CELL_M) as isize).clamp(0, gcols as isize - 1) as usize;
+    let row_of = |y: f32| ((y as f64 / CROWD_CELL_M) as isize).clamp(0, grows as isize - 1) as usize;
+    // the grid is held over the trees' cells only, one cell wider on every side (their 3 × 3
+    // neighbourhoods), clipped to the world: a tile's trees and halo copies, not the whole site
+    // (issue 37 Build 1); every tree's neighbourhood lies inside, so the sums are the whole
+    // grid's
+    let span = |v: &[f32], of: &(dyn Fn(f32) -> usize + Sync)| v.par_iter().with_min_len(1 << 14).map(|&a| (of(a), of(a))).reduce(|| (usize::MAX, 0), |a, b| (a.0.min(b.0), a.1.max(b.1)));
+    let ((c0, c1), (r0, r1)) = (span(&t.x, &col_of), span(&t.y, &row_of));
+    let (c0, c1, r0, r1) = (c0.saturating_sub(1), (c1 + 2).min(gcols), r0.saturating_sub(1), (r1 + 2).min(grows));
+    let (cols, rows) = (c1 - c0, r1 - r0);
     let ncell = cols * rows;
-    let cell_of = |x: f32, y: f32| -> usize {
-        let c = ((x as f64 / CROWD_CELL_M) as isize).clamp(0, cols as isize - 1) as usize;
-        let r = ((y as f64 / CROWD_CELL_M) as isize).clamp(0, rows as isize - 1) as usize;
-        r * cols + c
-    };
+    let cell_of = |x: f32, y: f32| -> usize { (row_of(y) - r0) * cols + (col_of(x) - c0) };
     // pool index of each library species (trees only ever belong to pool species)
     let np = w.pool.len().max(1);
     let pidx: Vec<usize> = (0..w.lib.species.len()).map(|s| w.pool_index(s as u16).unwrap_or(0)).collect();
@@ -124,15 +136,18 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
     let mut nb_rd = vec![0f32; ncell];
     let mut nb_dq = vec![0f32; ncell];
     let mut nb_ccf = vec![0f32; ncell];
-    nb_rd.par_chunks_mut(cols).zip(nb_dq.par_chunks_mut(cols)).zip(nb_ccf.par_chunks_mut(cols)).enumerate().for_each(|(r, ((row_rd, row_dq), row_ccf))| {
+    nb_rd.par_chunks_mut(cols).zip(nb_dq.par_chunks_mut(cols)).zip(nb_ccf.par_chunks_mut(cols)).enumerate().for_each(|(lr, ((row_rd, row_dq), row_ccf))| {
         let mut ns = vec![0u32; np];
-        for c in 0..cols {
+        let r = lr + r0;
+        for (lc, c) in (c0..c1).enumerate() {
             let (mut a, mut s_d2, mut s_n, mut s_cr) = (0f64, 0f64, 0u32, 0f64);
             let (mut s_d2a, mut s_na, mut s_small) = (0f64, 0u32, 0f64);
             ns.iter_mut().for_each(|v| *v = 0);
-            for rr in r.saturating_sub(1)..(r + 2).min(rows) {
-                for cc in c.saturating_sub(1)..(c + 2).min(cols) {
-                    let k = rr * cols + cc;
+            // the whole grid's neighbourhood (rows, then columns, ascending), within the cells
+            // held (a cell at the margin has no trees: its value is not read)
+            for rr in r.saturating_sub(1).max(r0)..(r + 2).min(r1) {
+                for cc in c.saturating_sub(1).max(c0)..(c + 2).min(c1) {
+                    let k = (rr - r0) * cols + (cc - c0);
                     let q = &sums[k];
                     a += side(cc, ex) * side(rr, ey);
                     s_d2 += q.d2;
@@ -155,12 +170,12 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
                 let dq = (s_d2 / s_n as f64).sqrt();
                 let x = dq / D_REF_CM;
                 rd += (0..np).filter(|&p| ns[p] > 0).map(|p| ns[p] as f64 * x.powf(ex_b[p]) * inv[p]).sum::<f64>();
-                row_dq[c] = dq as f32;
+                row_dq[lc] = dq as f32;
             } else if s_na > 0 {
-                row_dq[c] = (s_d2a / s_na as f64).sqrt() as f32;
+                row_dq[lc] = (s_d2a / s_na as f64).sqrt() as f32;
             }
-            row_rd[c] = (rd / a_ha) as f32;
-            row_ccf[c] = (s_cr / a) as f32;
+            row_rd[lc] = (rd / a_ha) as f32;
+            row_ccf[lc] = (s_cr / a) as f32;
         }
     });
     let (rd, (dq_cm, ccf)) = rayon::join(

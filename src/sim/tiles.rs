@@ -1,14 +1,18 @@
 //! Tiled runs: the landscape cut into rectangular tiles of light cells, each stepped by its own
 //! process (an MPI rank) or thread, with the same result, byte for byte, as one process.
 //!
-//! Every tile holds the whole site (conditions, species, per-cell grids: read-only) but only
-//! its own stand: the trees standing on its light cells, the sapling cohorts of its cells.
+//! Every tile holds the species and the site's per-cell grids of its own cells plus a halo
+//! (read-only; issue 37 Build 1: the site conditions, relative insolation and suitability,
+//! [`SITE_HALO_CELLS`]; the light cells' site arrays of its own cells) and only its own stand:
+//! the trees standing on its light cells, the sapling cohorts of its cells.
 //! Each year it runs the phases of [`crate::sim::step::PHASES`] on its own trees; what a phase
 //! reads across a tile edge comes from copies of the neighbours' trees within the halo, passed
 //! once before each phase that reads neighbours (seeds: a grid of sums), through a
 //! [`Transport`]. Per-cell passes that only feed the tile's own cells run on them only (the
-//! ground light, the spreading of seeds); the others (the canopy and crowding grids, the site
-//! conditions) still cover the whole site on every rank:
+//! ground light, the spreading of seeds); the spatial hash and canopy of the light phase and the
+//! crowding grid of growth are held over the cells of the tile's trees and halo copies
+//! (`sim::phases::light::held_cells`, `sim::density::crowding`); the seed grids still cover the
+//! whole site on every rank:
 //! 1. **light**: the canopy of a cell holds every crown that covers it, and a tree's light
 //!    reads its cell and the next cell towards the equator: trees within the largest crown
 //!    radius plus two light cells of the tile;
@@ -25,7 +29,7 @@
 //!    summed in id order ([`Tile::reproduce`]);
 //! 5. **mortality** draws each tree from its own stream: no exchange;
 //!    (**climate**, first in the year, sets each cell's and each own tree's suitability from
-//!    the whole site every tile holds: no exchange;)
+//!    the site cells every tile holds: no exchange;)
 //! 6. **management** (in a year with thinnings or harvests due): a thinning's target and
 //!    triggers (basal area, stems/ha, relative density, top height) are figures over its whole
 //!    area, and which trees it takes (smallest first, ties by id; crop trees and their

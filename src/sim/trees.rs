@@ -381,16 +381,23 @@ impl TreeStore {
     }
 }
 
-/// A spatial hash grid over the world on the [`LightGrid`] (cells of `cell_m` metres, row 0
-/// south), trees listed per cell (counting sort, O(trees)); rebuilt every year.
+/// A spatial hash grid on the [`LightGrid`] (cells of `cell_m` metres, row 0 south), trees
+/// listed per cell (counting sort, O(trees)); rebuilt every year. It holds the rectangle of
+/// light cells `col0..col0 + cols`, `row0..row0 + rows` of the whole grid: the whole grid in one
+/// process, a tile's trees' and own cells in a tiled run ([`SpatialGrid::build_in`]; issue 37
+/// Build 1). Cell indices (`c = row * cols + col`) are the rectangle's.
 #[derive(Debug, Clone, Default)]
 pub struct SpatialGrid {
     /// Cell size (m).
     pub cell_m: f64,
-    /// Columns.
+    /// Columns held.
     pub cols: usize,
-    /// Rows.
+    /// Rows held.
     pub rows: usize,
+    /// Column of the whole light grid of the first column held.
+    pub col0: usize,
+    /// Row of the whole light grid of the first row held (southernmost).
+    pub row0: usize,
     /// `start[c]..start[c+1]` indexes `items` for cell `c = row * cols + col`.
     pub start: Vec<u32>,
     /// Tree indices, grouped by cell, ascending within a cell.
@@ -398,19 +405,27 @@ pub struct SpatialGrid {
 }
 
 impl SpatialGrid {
-    /// Cell index of world point `(x, y)`, clamped to the grid.
+    /// Cell index of world point `(x, y)`, clamped to the cells held (for a point of a cell
+    /// held, the whole grid's clamped cell: [`LightGrid::cell_of`]).
     #[inline]
     pub fn cell_of(&self, x: f32, y: f32) -> usize {
-        let c = ((x as f64 / self.cell_m) as isize).clamp(0, self.cols as isize - 1) as usize;
-        let r = ((y as f64 / self.cell_m) as isize).clamp(0, self.rows as isize - 1) as usize;
+        let c = (((x as f64 / self.cell_m) as isize) - self.col0 as isize).clamp(0, self.cols as isize - 1) as usize;
+        let r = (((y as f64 / self.cell_m) as isize) - self.row0 as isize).clamp(0, self.rows as isize - 1) as usize;
         r * self.cols + c
     }
-    /// Builds the grid of `trees` on the light grid `light` (a stable parallel counting sort,
-    /// [`super::bucket::bucket`]: the trees of a cell in ascending index order).
+    /// The grid of all of `light`'s cells.
     pub fn build(trees: &TreeStore, light: &LightGrid) -> SpatialGrid {
-        let LightGrid { cell_m, cols, rows } = *light;
-        let mut g = SpatialGrid { cell_m, cols, rows, start: Vec::new(), items: Vec::new() };
-        let (start, items) = super::bucket::bucket(trees.len(), cols * rows, |i| g.cell_of(trees.x[i], trees.y[i]) as u32, |i| i as u32);
+        Self::build_in(trees, light, super::light_grid::CellRect { col0: 0, row0: 0, col1: light.cols, row1: light.rows })
+    }
+    /// The grid of the cells `rect` of `light` (clipped to it; at least one cell): `rect` must
+    /// hold every tree's cell ([`LightGrid::cell_of`]), or the trees outside are listed in its
+    /// nearest edge cell.
+    pub fn build_in(trees: &TreeStore, light: &LightGrid, rect: super::light_grid::CellRect) -> SpatialGrid {
+        let col1 = rect.col1.min(light.cols).max(1);
+        let row1 = rect.row1.min(light.rows).max(1);
+        let (col0, row0) = (rect.col0.min(col1 - 1), rect.row0.min(row1 - 1));
+        let mut g = SpatialGrid { cell_m: light.cell_m, cols: col1 - col0, rows: row1 - row0, col0, row0, start: Vec::new(), items: Vec::new() };
+        let (start, items) = super::bucket::bucket(trees.len(), g.cols * g.rows, |i| g.cell_of(trees.x[i], trees.y[i]) as u32, |i| i as u32);
         g.start = start;
         g.items = items;
         g
@@ -423,10 +438,11 @@ impl SpatialGrid {
     /// Indices of trees within `r` metres of `(x, y)` (ascending cell order).
     pub fn within(&self, trees: &TreeStore, x: f32, y: f32, r: f32, out: &mut Vec<u32>) {
         out.clear();
-        let c0 = crate::grid::floor_index((x - r) as f64 / self.cell_m).max(0);
-        let c1 = crate::grid::floor_index((x + r) as f64 / self.cell_m).min(self.cols as isize - 1);
-        let r0 = crate::grid::floor_index((y - r) as f64 / self.cell_m).max(0);
-        let r1 = crate::grid::floor_index((y + r) as f64 / self.cell_m).min(self.rows as isize - 1);
+        let (oc, or) = (self.col0 as isize, self.row0 as isize);
+        let c0 = (crate::grid::floor_index((x - r) as f64 / self.cell_m) - oc).max(0);
+        let c1 = (crate::grid::floor_index((x + r) as f64 / self.cell_m) - oc).min(self.cols as isize - 1);
+        let r0 = (crate::grid::floor_index((y - r) as f64 / self.cell_m) - or).max(0);
+        let r1 = (crate::grid::floor_index((y + r) as f64 / self.cell_m) - or).min(self.rows as isize - 1);
         for row in r0..=r1 {
             for col in c0..=c1 {
                 for &i in self.cell(row as usize * self.cols + col as usize) {

@@ -21,7 +21,7 @@
 //! then O(log) per tree.
 
 use crate::conditions::SiteConditions;
-use crate::sim::light_grid::LightGrid;
+use crate::sim::light_grid::{CellRect, LightGrid};
 use crate::sim::trees::{SpatialGrid, TreeStore};
 use crate::species::SpeciesLibrary;
 use rayon::prelude::*;
@@ -125,15 +125,47 @@ impl Slots {
 /// on its own, in parallel).
 const BAND_ROWS: usize = 32;
 
-/// Builds the spatial grid and canopy, and sets every tree's light and the ground light.
+/// The light cells whose canopy the light phase builds and reads: every cell of `light` when
+/// `window` is `None` (one process); else the cells of `trees` (a tile's own trees and halo
+/// copies, [`crate::sim::tiles`]) and of `window` (its ground light), one row wider on each side
+/// (the row towards the equator that a cell's light also reads), clipped to the grid (issue 37
+/// Build 1). Every canopy entry a tree or ground cell there reads lies inside: its entries come
+/// from the crowns of `trees` only.
+pub fn held_cells(trees: &TreeStore, light: &LightGrid, window: Option<CellRect>) -> CellRect {
+    let Some(win) = window else {
+        return CellRect { col0: 0, row0: 0, col1: light.cols, row1: light.rows };
+    };
+    let (mut c0, mut r0, mut c1, mut r1) = (win.col0.min(light.cols), win.row0.min(light.rows), win.col1.min(light.cols), win.row1.min(light.rows));
+    if c0 >= c1 || r0 >= r1 {
+        (c0, r0, c1, r1) = (usize::MAX, usize::MAX, 0, 0);
+    }
+    let cr = |x: f32, y: f32| light.col_row(light.cell_of(x, y));
+    let (tc0, tr0, tc1, tr1) = trees.x.par_iter().zip(&trees.y).with_min_len(1 << 14).map(|(&x, &y)| {
+        let (c, r) = cr(x, y);
+        (c, r, c + 1, r + 1)
+    }).reduce(|| (usize::MAX, usize::MAX, 0, 0), |a, b| (a.0.min(b.0), a.1.min(b.1), a.2.max(b.2), a.3.max(b.3)));
+    (c0, r0, c1, r1) = (c0.min(tc0), r0.min(tr0), c1.max(tc1), r1.max(tr1));
+    if c0 >= c1 {
+        // no tree and an empty window: one cell
+        return CellRect { col0: 0, row0: 0, col1: 1, row1: 1 };
+    }
+    CellRect { col0: c0, row0: r0.saturating_sub(1), col1: c1, row1: (r1 + 1).min(light.rows) }
+}
+
+/// Builds the spatial grid and canopy over the cells [`held_cells`] (the whole grid in one
+/// process, a tile's trees' and own cells in a tiled run), and sets every tree's light and the
+/// ground light of the cells of `window`.
 pub fn run(w: Light<'_>) {
     let cell = w.light.cell_m;
-    let grid = SpatialGrid::build(&w.trees, &w.light);
-    let (cols, rows) = (grid.cols, grid.rows);
+    let grid = SpatialGrid::build_in(&w.trees, &w.light, held_cells(&w.trees, &w.light, w.window));
+    let (cols, rows, col0, row0) = (grid.cols, grid.rows, grid.col0, grid.row0);
     let t = &w.trees;
     let lai_c: Vec<f32> = w.lib.species.iter().map(|s| crown_lai(s.life.shade_tolerance)).collect();
-    let canopy = build_canopy(t, &grid, &lai_c, w.obstacles);
+    let canopy = build_canopy(t, &grid, w.light.cols, &lai_c, w.obstacles);
     let ncell = cols * rows;
+    // the whole grid's cell of held cell `c`, and the held cell of the whole grid's cell `g`
+    let whole_of = |c: usize| (row0 + c / cols) * w.light.cols + col0 + c % cols;
+    let held_of = |g: usize| (g / w.light.cols - row0) * cols + g % w.light.cols - col0;
     // 2. sun geometry
     let lat = w.site.geo.latitude_deg as f32;
     // the equinox's noon sun (crate::sun), kept within 10–80° above the horizon: the shading
@@ -145,8 +177,10 @@ pub fn run(w: Light<'_>) {
     let rise = cell as f32 * tan_e;
     let light_at = |c: usize, z: f32, rel: f32| -> f32 {
         let own = canopy.lai_above(c, z);
+        // the next row towards the equator, if the whole grid has it (then it is held)
         let r = (c / cols) as isize + drow;
-        let sun = if r >= 0 && (r as usize) < rows { canopy.lai_above(r as usize * cols + c % cols, z + rise) } else { 0.0 };
+        let g = row0 as isize + r;
+        let sun = if g >= 0 && (g as usize) < w.light.rows { canopy.lai_above(r as usize * cols + c % cols, z + rise) } else { 0.0 };
         rel * (W_ZENITH * (-K_EXT * own).exp() + (1.0 - W_ZENITH) * (-K_EXT * (0.5 * own + 0.5 * sun) / sin_e).exp())
     };
     let span = crate::sim::light_grid::Span::new(w.window, w.light);
@@ -169,7 +203,7 @@ pub fn run(w: Light<'_>) {
         (0..ncell.div_ceil(BLOCK)).into_par_iter().for_each(|b| {
             let (c0, c1) = (b * BLOCK, ((b + 1) * BLOCK).min(ncell));
             for c in c0..c1 {
-                let rel = rel_of(c, ls, ri);
+                let rel = rel_of(whole_of(c), ls, ri);
                 for &i in grid.cell(c) {
                     out.set(i as usize, light_at(c, t.height[i as usize], rel));
                 }
@@ -181,7 +215,7 @@ pub fn run(w: Light<'_>) {
         .into_par_iter()
         .map(|k| {
             let c = span.cell(k);
-            light_at(c, 0.0, rel_of(c, ls, ri))
+            light_at(held_of(c), 0.0, rel_of(c, ls, ri))
         })
         .collect();
     w.trees.light = light;
@@ -189,12 +223,23 @@ pub fn run(w: Light<'_>) {
     *w.grid = grid;
 }
 
-/// The canopy of `t` on the cells of `grid` plus the obstacles' entries: per band of
+/// The canopy of `t` on the cells of `grid` (those it holds, of a light grid of `whole_cols`
+/// columns) plus the obstacles' entries there: per band of
 /// [`BAND_ROWS`] rows (in parallel) the entries of every tree whose crown reaches the band
 /// (found through `grid`), bucketed by cell and sorted within a cell by (key, leaf area), a
 /// total order, so the canopy does not depend on the scheduling or on the order of stamping.
-fn build_canopy(t: &TreeStore, grid: &SpatialGrid, lai_c: &[f32], obstacles: &[(u64, f32)]) -> Canopy {
+fn build_canopy(t: &TreeStore, grid: &SpatialGrid, whole_cols: usize, lai_c: &[f32], obstacles: &[(u64, f32)]) -> Canopy {
     let (cols, rows, cell) = (grid.cols, grid.rows, grid.cell_m);
+    let (oc, or) = (grid.col0 as isize, grid.row0 as isize);
+    // the obstacles' entries on the cells held, keyed by held cell
+    let obstacles: Vec<(u64, f32)> = obstacles
+        .iter()
+        .filter_map(|&(k, v)| {
+            let g = (k >> 32) as usize;
+            let (col, row) = ((g % whole_cols) as isize - oc, (g / whole_cols) as isize - or);
+            ((0..cols as isize).contains(&col) && (0..rows as isize).contains(&row)).then(|| (((row as usize * cols + col as usize) as u64) << 32 | (k & 0xffff_ffff), v))
+        })
+        .collect();
     let cell_area = (cell * cell) as f32;
     let ncell = cols * rows;
     // rows beyond its own that a crown can reach (half side of the equal-area square)
@@ -213,21 +258,24 @@ fn build_canopy(t: &TreeStore, grid: &SpatialGrid, lai_c: &[f32], obstacles: &[(
                     let r = t.crown_radius[i].max(0.05);
                     let s = r * 0.886_226_9; // half side of the equal-area square
                     let (x, y) = (t.x[i], t.y[i]);
-                    let r0 = crate::grid::floor_index((y - s) as f64 / cell).max(ra as isize);
-                    let r1 = crate::grid::floor_index((y + s) as f64 / cell).min(rows as isize - 1).min(rb as isize - 1);
+                    // held rows and columns (the whole grid's less the offset)
+                    let r0 = (crate::grid::floor_index((y - s) as f64 / cell) - or).max(ra as isize);
+                    let r1 = (crate::grid::floor_index((y + s) as f64 / cell) - or).min(rows as isize - 1).min(rb as isize - 1);
                     if r0 > r1 {
                         continue;
                     }
                     // crown_leaf_area, with the species' crown LAI looked up once
                     let la = std::f32::consts::PI * r * r * lai_c[t.species[i] as usize];
-                    let c0 = crate::grid::floor_index((x - s) as f64 / cell).max(0);
-                    let c1 = crate::grid::floor_index((x + s) as f64 / cell).min(cols as isize - 1);
+                    let c0 = (crate::grid::floor_index((x - s) as f64 / cell) - oc).max(0);
+                    let c1 = (crate::grid::floor_index((x + s) as f64 / cell) - oc).min(cols as isize - 1);
                     let inv = u32::MAX - t.height[i].max(0.0).to_bits();
                     let sq = 4.0 * s * s;
                     for row in r0..=r1 {
-                        let oy = ((y + s).min((row + 1) as f32 * cell as f32) - (y - s).max(row as f32 * cell as f32)).max(0.0);
+                        let gr = row + or; // the whole grid's row and column, for the overlaps
+                        let oy = ((y + s).min((gr + 1) as f32 * cell as f32) - (y - s).max(gr as f32 * cell as f32)).max(0.0);
                         for col in c0..=c1 {
-                            let ox = ((x + s).min((col + 1) as f32 * cell as f32) - (x - s).max(col as f32 * cell as f32)).max(0.0);
+                            let gc = col + oc;
+                            let ox = ((x + s).min((gc + 1) as f32 * cell as f32) - (x - s).max(gc as f32 * cell as f32)).max(0.0);
                             let f = ox * oy / sq;
                             if f > 0.0 {
                                 let c = row as u64 * cols as u64 + col as u64;
