@@ -344,6 +344,20 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         }
         h.max(1)
     };
+    let key_of = |i: usize| (shade_key ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)).max(1);
+    // every direction of the shade grids that the signatures query, built over the cores before
+    // the signatures (which query every direction at every node): built lazily inside the
+    // parallel loop over the nodes, a grid is wanted by both cores at once and one core waits
+    // on the other's build (a `OnceLock`) instead of working. The same grids, so the same answers
+    let every_dir = sky_bits(sky);
+    if trees.iter().enumerate().any(|(i, t)| t.shade_key != key_of(i)) {
+        if let Some(o) = others.as_ref() {
+            o.prepare(every_dir);
+        }
+        if let Some(f) = fixed_vols {
+            f.prepare(every_dir);
+        }
+    }
     let own: Vec<Vec<bool>> = trees
         .par_iter_mut()
         .enumerate()
@@ -352,8 +366,13 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             let all = t.force || t.sky != *sky;
             let mut dirty = vec![false; n];
             // the others' shade is the one of the last call when nothing it depends on changed
-            let key = (shade_key ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)).max(1);
+            let key = key_of(i);
             let same_shade = t.shade_key == key;
+            if !same_shade {
+                if let Some(o) = own_others[i].as_ref() {
+                    o.prepare(every_dir);
+                }
+            }
             // every node's signature over the cores (a tree adapted alone has only its own
             // nodes to split), then compared in node order
             let sigs: Vec<u64> = (0..n)
@@ -495,6 +514,14 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         // products it saves; above, it is not)
         let delta = (5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(region.0, region.1));
         let vols = ShadowVolumes::new(sky, casters).within(region.0, region.1);
+        // trees at work at this level share its grids: built over the cores before the trees'
+        // levels run side by side (else each tree's first batch builds them, and a core wanting
+        // a grid that the other core is building waits for it); only with two or more such
+        // trees, as a lone tree's batches ask for exactly the directions they need. Every
+        // direction above the terrain: nearly every one is open at some receiver of a tree
+        if trees.iter().zip(&work).filter(|(t, w)| stage_of(t).is_some() && w.own.iter().any(|&x| x)).take(2).count() == 2 {
+            vols.prepare(every_dir & !solids.below_ground());
+        }
         let next: Vec<Option<Prev>> = trees
             .par_iter_mut()
             .zip(&mut work)
@@ -789,6 +816,16 @@ const LIGHT_CHUNK: usize = 64;
 /// own, so the values do not depend on the chunks.
 fn light_chunk(n: usize) -> usize {
     n.div_ceil(4 * rayon::current_num_threads()).clamp(8, LIGHT_CHUNK)
+}
+
+/// Bits of every direction of `sky` (bit k: direction k), for [`ShadowVolumes::prepare`].
+fn sky_bits(sky: &super::light::Sky) -> u32 {
+    let n = sky.dirs.len().min(32);
+    if n == 32 {
+        u32::MAX
+    } else {
+        (1u32 << n) - 1
+    }
 }
 
 /// Turn (radians, 0.057°) below which a recomputed node's children are not recomputed: they keep
