@@ -356,16 +356,42 @@ fn form_seed(seed: u64, species: u16, class: u16) -> u64 {
 /// The open-grown tree `g` fitted to height `h`, crown radius `r` and crown base `cb` (m): the
 /// scaling and crown-base shedding of step 2 of the module documentation, base at the origin.
 pub fn fit(g: &OpenGrown, h: f32, r: f32, cb: f32) -> (Skeleton, Leaves) {
+    let (sk, lf) = fit_skeleton(g, h, r, cb);
+    let mut lv = Leaves { leaves: Vec::with_capacity(g.leaves.len()) };
+    lv.leaves.extend(g.leaves.leaves.iter().filter_map(|l| lf.leaf(l)));
+    (sk, lv)
+}
+
+/// How [`fit`] turns the open-grown tree's leaves into the fitted tree's: each leaf's position
+/// scaled by `s`, its size by `h`, its node renumbered by `map` (`None`: the nodes kept as they
+/// are; a leaf whose node was shed is dropped). Kept per class instead of the fitted leaves
+/// themselves, which the adapted trees' leaves are made from one tree at a time
+/// ([`adapted_with_leaves`]): a class's leaves are about 18 per node at full detail, and holding
+/// them for every class took about 2 GiB of the near field bench's 6.6 GiB peak (round 27).
+struct LeafFit {
+    s: Vec3,
+    h: f32,
+    map: Option<Vec<Option<u32>>>,
+}
+
+impl LeafFit {
+    /// Leaf `l` of the open-grown tree as [`fit`] gives it: `None` when its node was shed.
+    fn leaf(&self, l: &super::Leaf) -> Option<super::Leaf> {
+        let node = match &self.map {
+            Some(m) => m[l.node as usize]?,
+            None => l.node,
+        };
+        Some(super::Leaf { pos: l.pos * self.s, size: l.size * self.h, node, ..*l })
+    }
+}
+
+/// The skeleton of [`fit`], and how its leaves follow ([`LeafFit`]).
+fn fit_skeleton(g: &OpenGrown, h: f32, r: f32, cb: f32) -> (Skeleton, LeafFit) {
     let s = Vec3::new(r / g.crown_radius, r / g.crown_radius, h);
     let mut sk = g.skeleton.clone();
     for n in &mut sk.nodes {
         n.pos *= s;
         n.radius *= h;
-    }
-    let mut lv = g.leaves.clone();
-    for l in &mut lv.leaves {
-        l.pos *= s;
-        l.size *= h;
     }
     let cb = cb.clamp(0.0, 0.9 * h);
     let remove: Vec<bool> = sk
@@ -379,12 +405,12 @@ pub fn fit(g: &OpenGrown, h: f32, r: f32, cb: f32) -> (Skeleton, Leaves) {
             None => false,
         })
         .collect();
+    let mut map = None;
     if remove.iter().any(|&x| x) {
-        let map = sk.prune(&remove);
+        map = Some(sk.prune(&remove));
         sk.mark_tips();
-        lv.leaves = lv.leaves.iter().filter_map(|l| map[l.node as usize].map(|n| super::Leaf { node: n, ..*l })).collect();
     }
-    (sk, lv)
+    (sk, LeafFit { s, h, map })
 }
 
 /// One adapted tree of [`adapt_stand`].
@@ -548,14 +574,15 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     let alone = Environment { obstacles: Vec::new(), ground: Some(Ground::flat(0.0)), sky: sky.clone() };
     let forest_grown = cache.max_strands == FULL_STRANDS;
     let cache = &*cache;
-    // (the analysed tree, its leaves; none for a context tree)
-    let analysed: Vec<(ClassKey, (PlasticTree, Leaves))> = classes
+    // (the analysed tree, how its leaves follow from the open-grown tree's; none for a context
+    // tree)
+    let analysed: Vec<(ClassKey, (PlasticTree, Option<LeafFit>))> = classes
         .par_iter()
         .map(|k| {
             let g = if k.5 { cache.get_context(form(k)) } else { cache.get(form(k)) };
             let g = g.ok_or_else(|| bad("species/age class", format!("{}/{}", k.0, k.1), "a grown open-grown tree"))?;
             let (h, r, cb) = class_dims(k);
-            let (sk, lv) = fit(g, h, r, cb);
+            let (sk, lf) = fit_skeleton(g, h, r, cb);
             let sp = &lib.species[k.0 as usize];
             // a forest-grown tree (a cache of every strand) is not shed by light (eq. 11): its
             // bole already ends at the simulated crown base, the light-driven shedding of the
@@ -564,12 +591,12 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
             if forest_grown && !k.5 {
                 params.pruning_c_psi = 0.0;
             }
-            let (mut t, lv) = if k.5 { (PlasticTree::standing(&sk, &params, &sky, None)?, Leaves::default()) } else { (PlasticTree::analyse(&sk, &params, &alone, None)?, lv) };
+            let (mut t, lf) = if k.5 { (PlasticTree::standing(&sk, &params, &sky, None)?, None) } else { (PlasticTree::analyse(&sk, &params, &alone, None)?, Some(lf)) };
             t.clearance_m = sp.architecture.ecomod.leaf_size_m.max(0.0);
-            Ok((*k, (t, lv)))
+            Ok((*k, (t, lf)))
         })
         .collect::<Result<_>>()?;
-    let analysed: BTreeMap<ClassKey, (PlasticTree, Leaves)> = analysed.into_iter().collect();
+    let analysed: BTreeMap<ClassKey, (PlasticTree, Option<LeafFit>)> = analysed.into_iter().collect();
     let analysis_s = t0.elapsed().as_secs_f64();
     // 3. the cells, in parallel
     let t1 = std::time::Instant::now();
@@ -615,7 +642,8 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
                 let (h, r, _) = class_dims(&key);
                 let f = st.height_m / h;
                 let t = &group[j];
-                let (skeleton, leaves) = adapted_with_leaves(t, &analysed[&key].1, f, st.base);
+                let open = cache.get(form(&key)).map_or(&[][..], |g| &g.leaves.leaves[..]);
+                let (skeleton, leaves) = adapted_with_leaves(t, open, analysed[&key].1.as_ref(), f, st.base);
                 // the exact crown radius: stretched about the base by the crown-shape class's
                 // rounding (the height is exact)
                 let sx = st.crown_radius_m / (r * f);
@@ -638,11 +666,13 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     Ok(Stand { trees: slots.into_iter().flatten().collect(), cells: groups.len(), trees_in_groups: groups.iter().map(|g| g.2.len()).sum(), analyses: analysed.len(), analysis_s, adaptation_s: t1.elapsed().as_secs_f64() })
 }
 
-/// The adapted skeleton of `t` ([`PlasticTree::skeleton`]) and the leaves `lv` of its input
-/// (in the frame of its class's analysis, base at the origin; `f` the uniform scale and `base`
-/// the translation applied to the tree since), each leaf scaled, moved by its node's
-/// displacement and dropped with its node.
-fn adapted_with_leaves(t: &PlasticTree, lv: &Leaves, f: f32, base: Vec3) -> (Skeleton, Leaves) {
+/// The adapted skeleton of `t` ([`PlasticTree::skeleton`]) and the leaves of its input: the
+/// open-grown tree's leaves `open` as its class's fit gives them (`fit`: [`LeafFit::leaf`], in
+/// the frame of the class's analysis, base at the origin; no leaves without it), then, with `f`
+/// the uniform scale and `base` the translation applied to the tree since, each leaf scaled,
+/// moved by its node's displacement and dropped with its node. The same leaves, bit for bit, as
+/// from the class's fitted leaves held whole.
+fn adapted_with_leaves(t: &PlasticTree, open: &[super::Leaf], fit: Option<&LeafFit>, f: f32, base: Vec3) -> (Skeleton, Leaves) {
     let sk = t.skeleton();
     let input = t.input();
     let fates = t.fates();
@@ -660,14 +690,18 @@ fn adapted_with_leaves(t: &PlasticTree, lv: &Leaves, f: f32, base: Vec3) -> (Ske
             next += 1;
         }
     }
-    let mut leaves = Leaves::default();
-    for l in &lv.leaves {
+    let Some(fit) = fit else { return (sk, Leaves::default()) };
+    // sized once: grown by doubling, the leaves (most of the near field's memory) held up to
+    // twice their size and were copied at every doubling
+    let mut leaves = Leaves { leaves: Vec::with_capacity(open.len()) };
+    for l in open.iter().filter_map(|l| fit.leaf(l)) {
         let k = l.node as usize;
         if let Some(Some(nk)) = map.get(k) {
             let d = pos[k] - input.nodes[k].pos;
-            leaves.leaves.push(super::Leaf { pos: l.pos * f + base + d, size: l.size * f, node: *nk, ..*l });
+            leaves.leaves.push(super::Leaf { pos: l.pos * f + base + d, size: l.size * f, node: *nk, ..l });
         }
     }
+    leaves.leaves.shrink_to_fit();
     (sk, leaves)
 }
 

@@ -554,7 +554,15 @@ pub(crate) fn judged(season: u16, t: u16) -> bool {
 /// masks pruned nodes; `zeta`/`len` are scratch of the tree's size. ψ is written for nodes of
 /// season ≤ t with length > 0, NaN elsewhere.
 pub(crate) fn psi_at_stage(sk: &Skeleton, season: &[u16], t: u16, clusters: &[StageCluster], light: &[f32], alive: &[bool], zeta: &mut [f32], len: &mut [f32], psi: &mut [f32]) {
-    let n = sk.nodes.len();
+    psi_over((1..sk.nodes.len()).rev(), sk, season, t, clusters, light, alive, zeta, len, psi);
+}
+
+/// [`psi_at_stage`] visiting only `nodes` (indices ≥ 1 in descending order, a child before
+/// its parent): ψ is written for those of them of season ≤ `t` as [`psi_at_stage`] writes it,
+/// bit for bit when `nodes` holds every node of season ≤ `t` (their sums are taken in the same
+/// order; the nodes left out add nothing); the other entries of `psi` are left as they are.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn psi_over(nodes: impl Iterator<Item = usize>, sk: &Skeleton, season: &[u16], t: u16, clusters: &[StageCluster], light: &[f32], alive: &[bool], zeta: &mut [f32], len: &mut [f32], psi: &mut [f32]) {
     zeta.iter_mut().for_each(|z| *z = 0.0);
     len.iter_mut().for_each(|z| *z = 0.0);
     for (c, &i) in clusters.iter().zip(light) {
@@ -562,7 +570,7 @@ pub(crate) fn psi_at_stage(sk: &Skeleton, season: &[u16], t: u16, clusters: &[St
             zeta[c.anchor as usize] += 2.0 * std::f32::consts::PI * c.radius * c.radius * i;
         }
     }
-    for k in (1..n).rev() {
+    for k in nodes {
         if season[k] > t || !alive[k] {
             psi[k] = f32::NAN;
             continue;

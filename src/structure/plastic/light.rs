@@ -849,6 +849,12 @@ impl<'a> SkyMask<'a> {
         SkyMask { solids, dirs, below_ground, lanes, slabs, oriented, others }
     }
 
+    /// Bits of the sky directions that point below the terrain (blocked at every point; 0
+    /// without terrain).
+    pub fn below_ground(&self) -> u32 {
+        self.below_ground
+    }
+
     /// Bit k set when sky direction k is blocked at `p` by an obstacle or the terrain (equal to
     /// [`Solids::mask`]).
     pub fn mask(&self, p: Vec3) -> u32 {

@@ -53,7 +53,7 @@
 //! Approximation: a node whose signature did not change keeps its state even when moved
 //! clusters of recomputed subtrees now shade it differently.
 
-use super::analysis::{cluster_center, input_casters, judged, normalised, psi_at_stage, shade_casters, StageCluster};
+use super::analysis::{cluster_center, input_casters, judged, normalised, psi_over, shade_casters, StageCluster};
 use super::light::{Occluder, ShadowVolumes, SkyMask, Solids};
 use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
 use crate::error::Result;
@@ -344,6 +344,20 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         }
         h.max(1)
     };
+    let key_of = |i: usize| (shade_key ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)).max(1);
+    // every direction of the shade grids that the signatures query, built over the cores before
+    // the signatures (which query every direction at every node): built lazily inside the
+    // parallel loop over the nodes, a grid is wanted by both cores at once and one core waits
+    // on the other's build (a `OnceLock`) instead of working. The same grids, so the same answers
+    let every_dir = sky_bits(sky);
+    if trees.iter().enumerate().any(|(i, t)| t.shade_key != key_of(i)) {
+        if let Some(o) = others.as_ref() {
+            o.prepare(every_dir);
+        }
+        if let Some(f) = fixed_vols {
+            f.prepare(every_dir);
+        }
+    }
     let own: Vec<Vec<bool>> = trees
         .par_iter_mut()
         .enumerate()
@@ -352,8 +366,13 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             let all = t.force || t.sky != *sky;
             let mut dirty = vec![false; n];
             // the others' shade is the one of the last call when nothing it depends on changed
-            let key = (shade_key ^ (i as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)).max(1);
+            let key = key_of(i);
             let same_shade = t.shade_key == key;
+            if !same_shade {
+                if let Some(o) = own_others[i].as_ref() {
+                    o.prepare(every_dir);
+                }
+            }
             // every node's signature over the cores (a tree adapted alone has only its own
             // nodes to split), then compared in node order
             let sigs: Vec<u64> = (0..n)
@@ -428,7 +447,23 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             // ψ ≥ 0 (eq. 10), so eq. (11) sheds no node whose ψ_min is 0 or below (every node
             // of a tree with c_ψ = 0, the stand's forest-grown trees)
             let prunes = t.analysis.psi_min.iter().any(|&m| m > 0.0);
-            Work { before: t.pos.clone(), moved: vec![false; n], shifted: vec![false; n], done: vec![false; n], own, replay, replayed: 0, record, prunes }
+            // the nodes (root left out) by season, each season's in index order (a counting sort)
+            let last = t.analysis.seasons as usize;
+            let mut season_start = vec![0u32; last + 2];
+            for &sn in &t.analysis.season[1..] {
+                season_start[sn as usize + 1] += 1;
+            }
+            for i in 1..season_start.len() {
+                season_start[i] += season_start[i - 1];
+            }
+            let mut fill = season_start.clone();
+            let mut by_season = vec![0u32; n.saturating_sub(1)];
+            for k in 1..n {
+                let sn = t.analysis.season[k] as usize;
+                by_season[fill[sn] as usize] = k as u32;
+                fill[sn] += 1;
+            }
+            Work { before: t.pos.clone(), moved: vec![false; n], shifted: vec![false; n], done: vec![false; n], own, replay, replayed: 0, record, prunes, by_season, season_start, stage: Vec::new(), stage_upto: None, carry: vec![(false, Quat::IDENTITY); n], depth: vec![0; n] }
         })
         .collect();
     let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
@@ -439,7 +474,7 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
         let occ: Vec<(Vec<Option<Occluder>>, Vec<(u64, Occluder)>)> = trees
             .par_iter_mut()
-            .zip(&work)
+            .zip(&mut work)
             .map(|(t, w)| match stage_of(t) {
                 Some(s) => {
                     preposition(t, s, w);
@@ -495,6 +530,14 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         // products it saves; above, it is not)
         let delta = (5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(region.0, region.1));
         let vols = ShadowVolumes::new(sky, casters).within(region.0, region.1);
+        // trees at work at this level share its grids: built over the cores before the trees'
+        // levels run side by side (else each tree's first batch builds them, and a core wanting
+        // a grid that the other core is building waits for it); only with two or more such
+        // trees, as a lone tree's batches ask for exactly the directions they need. Every
+        // direction above the terrain: nearly every one is open at some receiver of a tree
+        if trees.iter().zip(&work).filter(|(t, w)| stage_of(t).is_some() && w.own.iter().any(|&x| x)).take(2).count() == 2 {
+            vols.prepare(every_dir & !solids.below_ground());
+        }
         let next: Vec<Option<Prev>> = trees
             .par_iter_mut()
             .zip(&mut work)
@@ -733,6 +776,54 @@ struct Work {
     moved: Vec<bool>,
     shifted: Vec<bool>,
     done: Vec<bool>,
+    /// Every node but the root, by season (season s: `by_season[season_start[s]..season_start[s
+    /// + 1]]`), each season's nodes in index order: the per-level passes visit the nodes of
+    /// their season or stage only, not every node at every level.
+    by_season: Vec<u32>,
+    season_start: Vec<u32>,
+    /// The nodes of season ≤ `stage_upto` (root left out), in index order.
+    stage: Vec<u32>,
+    stage_upto: Option<usize>,
+    /// Scratch of [`preposition`] (per node; written for a season's node before it is read).
+    carry: Vec<(bool, Quat)>,
+    /// Scratch of [`level`] (depth of a season's node below the older wood; likewise).
+    depth: Vec<u32>,
+}
+
+impl Work {
+    /// The nodes created in season `s`, in index order.
+    fn season(&self, s: usize) -> &[u32] {
+        match (self.season_start.get(s), self.season_start.get(s + 1)) {
+            (Some(&a), Some(&b)) => &self.by_season[a as usize..b as usize],
+            _ => &[],
+        }
+    }
+
+    /// Brings [`Work::stage`] up to season `s` (the nodes of season ≤ `s`, in index order),
+    /// merging in the seasons not yet in it.
+    fn stage_to(&mut self, s: usize) {
+        let from = self.stage_upto.map_or(0, |u| u + 1);
+        if from > s {
+            return;
+        }
+        let (a, b) = (self.season_start[from.min(self.season_start.len() - 1)] as usize, self.season_start[(s + 1).min(self.season_start.len() - 1)] as usize);
+        let mut add = self.by_season[a..b].to_vec();
+        add.sort_unstable();
+        let old = std::mem::take(&mut self.stage);
+        let mut merged = Vec::with_capacity(old.len() + add.len());
+        let (mut i, mut j) = (0, 0);
+        while i < old.len() || j < add.len() {
+            if j >= add.len() || (i < old.len() && old[i] < add[j]) {
+                merged.push(old[i]);
+                i += 1;
+            } else {
+                merged.push(add[j]);
+                j += 1;
+            }
+        }
+        self.stage = merged;
+        self.stage_upto = Some(s);
+    }
 }
 
 /// Places the nodes created in season `s` where they stand before the level bends them: a node
@@ -744,14 +835,11 @@ struct Work {
 /// previous call left the young nodes (with that, an adaptation back to the environment of the
 /// analysis restores the input: a season holds several internodes along a shoot, and their
 /// same-season parents are not bent yet when the level's shadows are built).
-fn preposition(t: &mut PlasticTree, s: usize, w: &Work) {
-    let n = t.input.nodes.len();
+fn preposition(t: &mut PlasticTree, s: usize, w: &mut Work) {
     // per node of the season: (may be recomputed, rotation carried down the season's chain)
-    let mut carry: Vec<(bool, Quat)> = vec![(false, Quat::IDENTITY); n];
-    for k in 1..n {
-        if t.analysis.season[k] as usize != s {
-            continue;
-        }
+    let mut carry = std::mem::take(&mut w.carry);
+    for &k in w.season(s) {
+        let k = k as usize;
         let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
         let same = par != 0 && t.analysis.season[par] as usize == s;
         let (rec_par, q_par) = if same { carry[par] } else { (w.moved[par], t.rot[par]) };
@@ -766,6 +854,7 @@ fn preposition(t: &mut PlasticTree, s: usize, w: &Work) {
             carry[k] = (false, t.rot[k]);
         }
     }
+    w.carry = carry;
 }
 
 /// Largest group whose signatures use shadow volumes of the other trees' clusters built per
@@ -791,6 +880,16 @@ fn light_chunk(n: usize) -> usize {
     n.div_ceil(4 * rayon::current_num_threads()).clamp(8, LIGHT_CHUNK)
 }
 
+/// Bits of every direction of `sky` (bit k: direction k), for [`ShadowVolumes::prepare`].
+fn sky_bits(sky: &super::light::Sky) -> u32 {
+    let n = sky.dirs.len().min(32);
+    if n == 32 {
+        u32::MAX
+    } else {
+        (1u32 << n) - 1
+    }
+}
+
 /// Turn (radians, 0.057°) below which a recomputed node's children are not recomputed: they keep
 /// their rotation and follow the node's displacement.
 pub const ROTATION_EPS: f32 = 1e-3;
@@ -814,11 +913,9 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     // order as before, bit for bit the values of a node-by-node pass
     let mut buckets: Vec<Vec<usize>> = Vec::new();
     {
-        let mut depth = vec![0u32; n];
-        for k in 1..n {
-            if a.season[k] as usize != s {
-                continue;
-            }
+        let mut depth = std::mem::take(&mut w.depth);
+        for &k in w.season(s) {
+            let k = k as usize;
             let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
             let d = if par > 0 && a.season[par] as usize == s { depth[par] + 1 } else { 0 };
             depth[k] = d;
@@ -827,6 +924,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             }
             buckets[d as usize].push(k);
         }
+        w.depth = depth;
     }
     let mut at: Vec<Vec3> = Vec::new();
     for bucket in &buckets {
@@ -967,15 +1065,18 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         t.light_cache[s][ci] = sums[j];
     }
     // pruning (eqs. 10–11); the fates of shed parents are inherited in any case
+    // the nodes of season ≤ s: the pruning below changes no other node
+    w.stage_to(s);
     let mut psi = Vec::new();
     if w.prunes {
         let alive: Vec<bool> = t.fate.iter().map(|f| *f == Fate::Alive).collect();
         let (mut zeta, mut len) = (vec![0.0; n], vec![0.0; n]);
         psi = vec![0.0; n];
         let light = normalised(&t.light_cache[s], |ci| occ[ci].is_some());
-        psi_at_stage(&t.input, &a.season, s as u16, clusters, &light, &alive, &mut zeta, &mut len, &mut psi);
+        psi_over(w.stage.iter().rev().map(|&k| k as usize), &t.input, &a.season, s as u16, clusters, &light, &alive, &mut zeta, &mut len, &mut psi);
     }
-    for k in 1..n {
+    for &k in &w.stage {
+        let k = k as usize;
         let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
         if t.fate[par] != Fate::Alive {
             if t.fate[k] == Fate::Alive && a.season[k] as usize <= s {
