@@ -7,16 +7,15 @@
 //! (docs/management.md, "Validation"). The same figures: `sylva simulate` of the scenario, then
 //! `python3 tools/thinning_check.py [--species spruce] OUT 3 50 100`.
 //!
-//! Both are ignored: neither is met by the model of main. Run them with
-//! `cargo test --release --test yield_thinned -- --ignored`, and with the experiment switch of
-//! branch h35w in front, `SYLVA_HDX` (competition-dependent allocation between height and
-//! diameter after iLand; `sim::phases::growth::HD_ALLOCATION_SWITCH`): with `SYLVA_HDX=67`
-//! (iLand's form) beech misses by N −68 % / −68 %, Dq +81 % / +82 % and spruce by N −34 % /
-//! −28 %; at the lever's bound `SYLVA_HDX=85` (every tree on the dense-stand allocation) beech
-//! by N −49 % / −59 %, Dq +40 % / +59 %, spruce only on N at 50 (−23 %); every such variant fails
-//! unmanaged density tests (docs/management.md, "Height–diameter allocation by competition
-//! (branch h35w)"). Branches h35y/h35z measured size-asymmetric competition and crown closure
-//! (docs/management.md of those branches).
+//! Both are ignored: neither is met by the model. Run them with
+//! `cargo test --test yield_thinned -- --ignored --nocapture` to read the figures. With the
+//! species' dense-stand height bound (`life.dense_hd`, issue 35 round 28, on for every species
+//! that has one) beech misses by N −73 % / −70 %, Dq +98 % / +87 % and spruce by N −36 % / −30 %,
+//! Dq +28 % / +22 % at ages 50 / 100 (before it: −72 % / −69 %, +96 % / +86 % and −35 % / −30 %,
+//! +28 % / +22 %): the thinned model stems are stouter than Wiedemann's (median H/D 67 against
+//! 129 for beech at 50), so bounding slender trees cannot close the gap (docs/management.md,
+//! "Dense-stand height bound"). Branches h35w (height–diameter allocation after iLand),
+//! h35y/h35z (size-asymmetric competition, crown closure) measured other levers there.
 mod common;
 
 /// The table's (N, Dq, BA) at `age`, yield class I.
@@ -56,13 +55,13 @@ fn check(name: &str, table: &str) {
 }
 
 #[test]
-#[ignore = "issue 35: not met (N -72 %, Dq +96 % at age 50 on main; -49 %, +40 % at the bound of the h35w allocation switch, SYLVA_HDX=85): docs/management.md"]
+#[ignore = "issue 35: not met (N -73 %, Dq +98 % at age 50 with the dense-stand height bound; -72 %, +96 % without): docs/management.md"]
 fn thinned_beech_follows_wiedemanns_moderate_thinning_table() {
     check("thinning_beech", "ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv");
 }
 
 #[test]
-#[ignore = "issue 35: not met (N -35 % at age 50 on main; -23 % with SYLVA_HDX=85, which fails unmanaged density tests): docs/management.md"]
+#[ignore = "issue 35: not met (N -36 %, Dq +28 % at age 50 with the dense-stand height bound; -35 %, +28 % without): docs/management.md"]
 fn thinned_spruce_follows_wiedemanns_moderate_thinning_table() {
     check("thinning_spruce", "ForestElementsR_fe_ytable_spruce_wiedemann_moderate_1936_42.csv");
 }
