@@ -172,6 +172,30 @@ pub struct LifeHistory {
     /// shrinks crowns as far as the neighbourhood's crown competition factor asks.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stand_crown: Option<StandCrown>,
+    /// Dense-stand height–diameter curve ([`DenseHd`], from iLand's `HDhigh`): the slenderest
+    /// stem a tree of the species keeps in a densely stocked stand; the growth phase bounds a
+    /// tree's height by it ([`crate::sim::phases::growth::dense_height_bound`]). Optional:
+    /// without it a tree's height is not bounded by its DBH.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dense_hd: Option<DenseHd>,
+}
+
+/// Dense-stand height–diameter curve of a species, `h/d = k · D^c` (h in m, D the DBH in cm,
+/// h/d in m/m, i.e. `100 h / D`), so the tallest a tree of DBH D grows is
+/// `h_max(D) = k · D^(1 + c) / 100` m. From iLand's species parameter `HDhigh` (Seidl et al.
+/// 2012, Ecol. Model. 231:87–100; iland-model.org "stem growth"; the `species_param_europe`
+/// table transcribed in species/sources/species_traits.csv), fitted on densely stocked even-aged
+/// (yield-table) stands: iLand writes it `a · b · (1 + c) · d^c` and uses it as the H/D of a
+/// year's increments, i.e. the derivative `dh/dD` of the curve `h = a · b · D^(1 + c)`; here the
+/// curve itself is stored, `k = a · b` (the factor `1 + c` dropped). Each species file names the
+/// iLand species and expression it takes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DenseHd {
+    /// Coefficient k: the curve's H/D (m/m) at D = 1 cm, in (0, 1000].
+    pub k: f32,
+    /// DBH exponent c, in [−1, 0] (the curve's H/D falls with DBH).
+    pub c: f32,
 }
 
 /// Crown width (diameter, m) of a tree of DBH `d` (cm), height `h` (m) and crown base `cb` (m)

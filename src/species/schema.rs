@@ -269,6 +269,8 @@ pub const FIELDS: &[FieldSpec] = &[
     f("life.stand_crown.c", "cm", rx(0.0, 200.0), "Stand-grown crown width: scale c of the saturating factor 1 − e^(−(d/c)^e) (1e-6: factor 1)"),
     f("life.stand_crown.e", "", rx(0.0, 5.0), "Stand-grown crown width: shape e of the saturating factor"),
     f("life.stand_crown.g", "", r(0.0, 1.0), "Stand-grown crown width: exponent g of the crown length h − cb (m) (default 0)"),
+    f("life.dense_hd.k", "m/m", rx(0.0, 1000.0), "Dense-stand height–diameter curve h/d = k·D^c (h m, D cm; a tree's height is bounded by k·D^(1+c)/100 m; iLand HDhigh a·b·(1+c)·d^c is its derivative, k = a·b; Seidl et al. 2012; optional): coefficient k"),
+    f("life.dense_hd.c", "", r(-1.0, 0.0), "Dense-stand height–diameter curve: DBH exponent c"),
     f(
         "architecture.ecomod.strands",
         "",

@@ -6,7 +6,7 @@ use crate::sim::density::Crowding;
 use crate::sim::rules;
 use crate::sim::trees::TreeStore;
 use crate::species::allometry::{HeightIncrement, OpenDbh, Table};
-use crate::species::{Species, SpeciesId, SpeciesLibrary};
+use crate::species::{DenseHd, Species, SpeciesId, SpeciesLibrary};
 pub use crate::species::allometry::{effective_age, open_crown_radius, open_dbh, potential_height, potential_increment};
 use rayon::prelude::*;
 
@@ -90,6 +90,22 @@ pub fn crown_space(ccf: f32) -> f32 {
     }
 }
 
+/// Breast height (m): a tree with a DBH is at least this tall, so the dense-stand bound
+/// [`dense_height_bound`] never holds a tree below it.
+pub const BREAST_HEIGHT_M: f32 = 1.3;
+
+/// Tallest height (m) a tree of DBH `d_cm` (> 0) may reach under the species' dense-stand
+/// height–diameter curve `h/d = k · D^c` ([`DenseHd`], iLand's `HDhigh` curve, Seidl et al.
+/// 2012): `max(BREAST_HEIGHT_M, k · D^(1 + c) / 100)`. Suppressed trees stall in height as
+/// their stems stop thickening (Seidl et al. 2012, "stem growth": the H/D of trees stays
+/// within the species' dense-stand curve). The floor at breast height is the rule for tiny
+/// DBH: the curve, fitted on stems of yield-table stands, falls below 1.3 m for DBH under
+/// 0.2–0.7 cm (0.7 cm for birch), where a tree with a DBH must stand at least 1.3 m; a tree
+/// without a DBH (below breast height) is not bounded (see [`run`]).
+pub fn dense_height_bound(hd: DenseHd, d_cm: f32) -> f32 {
+    (hd.k * d_cm.powf(1.0 + hd.c) / 100.0).max(BREAST_HEIGHT_M)
+}
+
 /// Updated state of one tree after a growing season.
 #[derive(Clone, Copy)]
 struct Grown {
@@ -133,6 +149,14 @@ pub struct Growth<'a> {
 /// stands along the species' maximum-density line. `H(t_eff + 1) − H(t_eff)` and `D_open` are
 /// read from the species' tables ([`crate::species::allometry::Table`], within 5 · 10⁻⁵ of
 /// the curves' ranges; since session 11 of issue 16).
+///
+/// Dense-stand height bound (issue 35; for species with `life.dense_hd`, none without): after
+/// the season, a tree with a DBH `D₁ > 0` may not be taller than [`dense_height_bound`]`(D₁)`: `H₁ ← max(H, min(H₁, h_max(D₁)))` — the height increment is cut
+/// to what the species' dense-stand H/D curve allows at the new DBH, and a tree already above
+/// it (planted, recruited or grown so before) keeps its height until its DBH catches up (trees
+/// do not shrink). Trees below breast height (no DBH) are not bounded. The diameter increment
+/// is main's (it reads the height before the season and the potential height increment, not
+/// the bounded one).
 pub fn run(w: Growth<'_>) {
     let crowd = w.crowd;
     let lib = &w.lib;
@@ -147,11 +171,11 @@ pub fn run(w: Growth<'_>) {
         .enumerate()
         .map(|(s, sp)| {
             let (inc, dbh) = (HeightIncrement::of(sp), OpenDbh::of(sp));
-            if w.pool.contains(&(s as SpeciesId)) {
-                (inc.table(), dbh.table())
-            } else {
-                (Table::exact(inc), Table::exact(dbh))
-            }
+            let (inc, dbh) = if w.pool.contains(&(s as SpeciesId)) { (inc.table(), dbh.table()) } else { (Table::exact(inc), Table::exact(dbh)) };
+            // the curve's H/D at the species' largest DBH: the lowest it reaches, so a tree no
+            // slenderer than that is never bounded (its power is not evaluated)
+            let bound = sp.life.dense_hd.map(|hd| (hd, hd.k * sp.life.max_dbh_cm.powf(hd.c)));
+            (inc, dbh, bound)
         })
         .collect();
     let curves = &curves[..];
@@ -174,8 +198,9 @@ pub fn run(w: Growth<'_>) {
         });
 }
 
-/// A species' height-increment and open-grown DBH curves (tabulated).
-type Curves = (Table<HeightIncrement>, Table<OpenDbh>);
+/// A species' height-increment and open-grown DBH curves (tabulated), and, where the species
+/// has a dense-stand height–diameter curve, that curve with its H/D at the species' largest DBH.
+type Curves = (Table<HeightIncrement>, Table<OpenDbh>, Option<(DenseHd, f32)>);
 
 /// One tree's season ([`run`]): species `s`, light `l`, suitability, id, height `h`, DBH `d`,
 /// crown base and vigour before it, its cached [`growth_factor`] (NaN until first drawn, then
@@ -184,7 +209,7 @@ type Curves = (Table<HeightIncrement>, Table<OpenDbh>);
 #[inline]
 fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s: u16, l: f32, suitability: f32, id: u64, h: f32, d: f32, crown_base: f32, vigour: f32, factor: &mut f32, i: usize) -> Grown {
     let sp = &lib.species[s as usize];
-    let (inc, dbh_of) = &curves[s as usize];
+    let (inc, dbh_of, bound) = &curves[s as usize];
     let f = light_response(l, sp.life.shade_tolerance) * suitability;
     let dq = crowd.dq_cm[i];
     let s = if d > 0.0 && dq > 0.0 { d / dq } else { 1.0 };
@@ -196,7 +221,7 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
     // is, so its open-grown curve (two powers and two logarithms) is not evaluated.
     if f == 0.0 || m == 0.0 {
         // `d + 0.0`, as `d + dd` below with dd = +0 (−0 becomes +0 there too)
-        return finish(sp, dbh_of, crowd.ccf[i], l, h1, d + 0.0, crown_base, vigour, f, m);
+        return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d + 0.0, crown_base, vigour, f, m);
     }
     let hp = (h + dh_pot).min(sp.life.max_height_m * 0.999);
     let dd_open = (dbh_of.at(hp) - dbh_of.at(h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
@@ -231,19 +256,25 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
         }
         dd * *factor
     };
-    finish(sp, dbh_of, crowd.ccf[i], l, h1, d1, crown_base, vigour, f, m)
+    finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, f, m)
 }
 
 /// The end of [`grow`] from the new height `h1` and diameter `d1` (before its floor and cap):
-/// a first DBH for a tree that passed breast height without one, the crown radius, crown base
-/// and vigour.
+/// a first DBH for a tree that passed breast height without one, the dense-stand height bound
+/// (`bound`: the species' curve and its H/D at the largest DBH, where it has one; `h` the
+/// height before the season), the crown radius, crown base and vigour.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-fn finish(sp: &Species, dbh_of: &Table<OpenDbh>, ccf: f32, l: f32, h1: f32, mut d1: f32, crown_base: f32, vigour: f32, f: f32, m: f32) -> Grown {
+fn finish(sp: &Species, dbh_of: &Table<OpenDbh>, bound: Option<(DenseHd, f32)>, ccf: f32, l: f32, h: f32, h1: f32, mut d1: f32, crown_base: f32, vigour: f32, f: f32, m: f32) -> Grown {
     if d1 == 0.0 && h1 > 1.3 {
         d1 = dbh_of.at(h1) * 0.5;
     }
     let d1 = d1.min(sp.life.max_dbh_cm);
+    let h1 = match bound {
+        // a tree no slenderer than the curve's lowest H/D is within it at any DBH
+        Some((hd, hd_min)) if d1 > 0.0 && h1 * 100.0 > hd_min * d1 => h1.min(dense_height_bound(hd, d1)).max(h),
+        _ => h1,
+    };
     let lc = l.clamp(0.0, 1.0);
     let r = open_crown_radius(sp, h1, d1) * rules::shaded_crown(l) * crown_space(ccf);
     let cb = crown_base.max(h1 * (1.0 - sp.life.allometry.crown_ratio * (0.4 + 0.6 * lc))).min(h1 * 0.95);
@@ -290,5 +321,33 @@ mod tests {
         let mean_ln = g.iter().map(|v| (*v as f64).ln()).sum::<f64>() / g.len() as f64;
         assert!(mean_ln.abs() < 0.02 && g.iter().all(|v| (0.6..=1.6).contains(v)), "{mean_ln}");
         assert!(light_response(1.0, 1.0) > 0.99 && light_response(0.1, 1.0) < 0.05 && light_response(0.1, 5.0) > 0.15);
+    }
+
+    /// The dense-stand height bound: beech's curve (iLand fasy `HDhigh` without its factor
+    /// 1 + c) at 10 cm and 2 cm DBH, the breast-height floor at tiny DBH, and a season's
+    /// [`finish`]: a suppressed tree above the curve stalls, one below it grows to the curve,
+    /// one within it and a tree below breast height keep their increment.
+    #[test]
+    fn dense_height_bound_holds() {
+        let hd = DenseHd { k: 323.63, c: -0.3676 };
+        // 323.63 · 10^0.6324 / 100 = 13.882 m (H/D 139); 2 cm: 5.017 m (H/D 251)
+        assert!((dense_height_bound(hd, 10.0) - 13.882).abs() < 0.01, "{}", dense_height_bound(hd, 10.0));
+        assert!((dense_height_bound(hd, 2.0) - 5.017).abs() < 0.01, "{}", dense_height_bound(hd, 2.0));
+        assert_eq!(dense_height_bound(hd, 0.1), BREAST_HEIGHT_M);
+        let mut b = beech_like();
+        b.life.dense_hd = Some(hd);
+        let dbh_of = Table::exact(OpenDbh::of(&b));
+        let bound = Some((hd, hd.k * b.life.max_dbh_cm.powf(hd.c)));
+        let grown = |h: f32, h1: f32, d1: f32| finish(&b, &dbh_of, bound, 0.5, 0.5, h, h1, d1, 0.0, 1.0, 1.0, 1.0).h;
+        // 9.68 m on 2 cm (H/D 484, the round-27 trial's birch): no height growth until the DBH catches up
+        assert_eq!(grown(9.68, 9.9, 2.0), 9.68);
+        // 4 m growing to 5.5 m on 2 cm: cut to the curve
+        assert!((grown(4.0, 5.5, 2.0) - 5.017).abs() < 0.01);
+        // within the curve (20 m on 30 cm, H/D 67; the curve allows 27.8 m): unchanged
+        assert_eq!(grown(19.5, 20.0, 30.0), 20.0);
+        // below breast height, no DBH: unchanged
+        assert_eq!(grown(0.8, 1.1, 0.0), 1.1);
+        // a species without the curve: the unbounded height
+        assert_eq!(finish(&b, &dbh_of, None, 0.5, 0.5, 9.68, 9.9, 2.0, 0.0, 1.0, 1.0, 1.0).h, 9.9);
     }
 }

@@ -289,7 +289,10 @@ pub fn run(w: Regen<'_>) -> usize {
                             x: x as f32,
                             y: y as f32,
                             z: wr.site.elevation_at(x, y),
-                            age: k.age,
+                            // the cohort aged this spring (2. above) and the growth phase ages every
+                            // tree again this summer: one year less here, so a recruit's age after
+                            // the season is the cohort's (not one year more)
+                            age: (k.age - 1.0).max(0.0),
                             height: k.height,
                             dbh: d,
                             crown_radius: open_crown_radius(sp, k.height, d) * rules::shaded_crown(gl),

@@ -1,0 +1,67 @@
+//! Issue 35's yield validation: the shipped thinning scenarios follow Wiedemann's
+//! moderate-thinning tables, yield class I (tests/data/stands/), within ±20 % in stems/ha N,
+//! quadratic mean DBH Dq and basal area BA (stems ≥ 7 cm DBH) at ages 50 and 100:
+//! `scenarios/thinning_beech.toml` against the beech table (Wiedemann 1931) and
+//! `scenarios/thinning_spruce.toml` against the Norway spruce table (Wiedemann 1936/42).
+//! Both are planted at age 3 (age = 3 + simulated year) and thinned from below every 5 years
+//! (docs/management.md, "Validation"). The same figures: `sylva simulate` of the scenario, then
+//! `python3 tools/thinning_check.py [--species spruce] OUT 3 50 100`.
+//!
+//! Both are ignored: neither is met by the model. Run them with
+//! `cargo test --test yield_thinned -- --ignored --nocapture` to read the figures. With the
+//! species' dense-stand height bound (`life.dense_hd`, issue 35 round 28, on for every species
+//! that has one) beech misses by N −73 % / −70 %, Dq +98 % / +87 % and spruce by N −36 % / −30 %,
+//! Dq +28 % / +22 % at ages 50 / 100 (before it: −72 % / −69 %, +96 % / +86 % and −35 % / −30 %,
+//! +28 % / +22 %): the thinned model stems are stouter than Wiedemann's (median H/D 67 against
+//! 129 for beech at 50), so bounding slender trees cannot close the gap (docs/management.md,
+//! "Dense-stand height bound"). Branches h35w (height–diameter allocation after iLand),
+//! h35y/h35z (size-asymmetric competition, crown closure) measured other levers there.
+mod common;
+
+/// The table's (N, Dq, BA) at `age`, yield class I.
+fn table_row(file: &str, age: f64) -> (f64, f64, f64) {
+    let text = std::fs::read_to_string(format!("{}/tests/data/stands/{file}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let ix = |n: &str| head.iter().position(|h| *h == n).unwrap_or_else(|| panic!("{file}: no column {n}"));
+    let (si, a, n, dq, ba) = (ix("site_index"), ix("age"), ix("n_ha"), ix("d_q_cm"), ix("ba_m2_ha"));
+    lines
+        .map(|l| l.split(',').map(|x| x.parse::<f64>().unwrap_or(f64::NAN)).collect::<Vec<_>>())
+        .find(|f| f[si] == 1.0 && f[a] == age)
+        .map(|f| (f[n], f[dq], f[ba]))
+        .unwrap_or_else(|| panic!("{file}: no class I row at age {age}"))
+}
+
+/// Runs `scenarios/<name>.toml` in full and checks N, Dq, BA at ages 50 and 100 against `table`.
+fn check(name: &str, table: &str) {
+    let text = std::fs::read_to_string(format!("{}/scenarios/{name}.toml", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let (sc, mut w) = common::world_with(&text, &common::embedded());
+    let rows = common::run(&sc, &mut w, sc.years);
+    let mut bad = Vec::new();
+    for age in [50.0, 100.0] {
+        let r = rows.iter().find(|r| r.year as f64 + 3.0 == age).unwrap();
+        let (n, dq) = (r.stems_7cm_ha, r.qmd_7cm_cm);
+        let ba = std::f64::consts::PI / 4.0 * n * dq * dq / 1e4;
+        let t = table_row(table, age);
+        eprintln!("{name} age {age}: N {n:.0} (table {}), Dq {dq:.1} cm ({}), BA {ba:.1} m²/ha ({})", t.0, t.1, t.2);
+        for (lab, s, x) in [("N", n, t.0), ("Dq", dq, t.1), ("BA", ba, t.2)] {
+            let rel = s / x - 1.0;
+            if rel.abs() > 0.2 {
+                bad.push(format!("age {age}: {lab} {s:.1} vs table {x} ({:+.0} %)", rel * 100.0));
+            }
+        }
+    }
+    assert!(bad.is_empty(), "{name} misses Wiedemann's table by more than 20 %: {bad:?}");
+}
+
+#[test]
+#[ignore = "issue 35: not met (N -73 %, Dq +98 % at age 50 with the dense-stand height bound; -72 %, +96 % without): docs/management.md"]
+fn thinned_beech_follows_wiedemanns_moderate_thinning_table() {
+    check("thinning_beech", "ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv");
+}
+
+#[test]
+#[ignore = "issue 35: not met (N -36 %, Dq +28 % at age 50 with the dense-stand height bound; -35 %, +28 % without): docs/management.md"]
+fn thinned_spruce_follows_wiedemanns_moderate_thinning_table() {
+    check("thinning_spruce", "ForestElementsR_fe_ytable_spruce_wiedemann_moderate_1936_42.csv");
+}
