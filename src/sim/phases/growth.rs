@@ -151,12 +151,13 @@ pub struct Growth<'a> {
 /// the curves' ranges; since session 11 of issue 16).
 ///
 /// Dense-stand height bound (issue 35; for species with `life.dense_hd`, none without): after
-/// the season, a tree with a DBH `D₁ > 0` may not be taller than [`dense_height_bound`]`(D₁)`: `H₁ ← max(H, min(H₁, h_max(D₁)))` — the height increment is cut
-/// to what the species' dense-stand H/D curve allows at the new DBH, and a tree already above
-/// it (planted, recruited or grown so before) keeps its height until its DBH catches up (trees
-/// do not shrink). Trees below breast height (no DBH) are not bounded. The diameter increment
-/// is main's (it reads the height before the season and the potential height increment, not
-/// the bounded one).
+/// the season, a tree with a DBH `D₁ > 0` may not be taller than
+/// [`dense_height_bound`]`(D₁)`: `H₁ ← max(H, min(H₁, h_max(D₁)))` — the height increment is
+/// cut to what the species' dense-stand H/D curve allows at the new DBH, and a tree already
+/// above it (planted, recruited or grown so before) keeps its height until its DBH catches up
+/// (trees do not shrink). Trees below breast height (no DBH) are not bounded. The diameter
+/// increment does not see the bound: it reads the height before the season and the potential
+/// height increment.
 pub fn run(w: Growth<'_>) {
     let crowd = w.crowd;
     let lib = &w.lib;
