@@ -63,6 +63,13 @@ impl ClimateChange {
         Ok(c)
     }
 
+    /// The anomaly years after `last_year` (ascending): they never come in a run of
+    /// `last_year` years (a run shortened with `--years` keeps its file, so a warning, not an
+    /// error).
+    pub fn years_beyond(&self, last_year: u32) -> Vec<u32> {
+        self.anomalies.range(last_year.saturating_add(1)..).map(|(&y, _)| y).collect()
+    }
+
     /// Whether the climate changes at all (a ramp or any anomaly).
     pub fn is_active(&self) -> bool {
         self.warming_k_per_century != 0.0 || !self.anomalies.is_empty()
@@ -91,10 +98,14 @@ pub fn shifted_indices(ix: &[f32; 6], dt_k: f64, precip: f64) -> [f32; 6] {
 
 /// Parses an anomalies CSV: lines `year,temperature_k[,precipitation_factor]` (year 1–10000,
 /// each once; temperature −30–30 K; factor 0.05–5, default 1); blank lines and `#` comments
-/// skipped; a first line starting with a letter is a header.
+/// skipped; a first line starting with a letter is a header, which must name the columns in
+/// that order (`year,temperature_k` or `year,temperature_k,precipitation_factor`, any case):
+/// a header in another order or with other names is refused rather than read by position
+/// (round 30: `year,precipitation_factor` gave its factors as temperatures without a word).
 ///
 /// Errors: [`Error::Invalid`] whose context names `path` and the line number, with the line's
-/// text and what was expected.
+/// text and what was expected; a file with no data line is refused too (its context names the
+/// file).
 pub fn parse_anomalies(text: &str, path: &Path) -> Result<BTreeMap<u32, (f64, f64)>> {
     let mut out = BTreeMap::new();
     let mut first = true;
@@ -103,10 +114,14 @@ pub fn parse_anomalies(text: &str, path: &Path) -> Result<BTreeMap<u32, (f64, f6
         if line.is_empty() || line.starts_with('#') {
             continue;
         }
+        let bad = |expected: &str| Error::Invalid { context: format!("{} line {}", path.display(), n + 1), field: "climate.anomalies_file".into(), value: line.to_string(), expected: expected.to_string() };
         if std::mem::take(&mut first) && line.starts_with(|c: char| c.is_ascii_alphabetic()) {
+            let names: Vec<String> = line.split(',').map(|c| c.trim().to_ascii_lowercase()).collect();
+            if names != ["year", "temperature_k"] && names != ["year", "temperature_k", "precipitation_factor"] {
+                return Err(bad("a header `year,temperature_k` or `year,temperature_k,precipitation_factor` (the columns in this order), or no header"));
+            }
             continue;
         }
-        let bad = |expected: &str| Error::Invalid { context: format!("{} line {}", path.display(), n + 1), field: "climate.anomalies_file".into(), value: line.to_string(), expected: expected.to_string() };
         let f: Vec<&str> = line.split(',').map(str::trim).collect();
         if !(2..=3).contains(&f.len()) {
             return Err(bad("`year,temperature_k[,precipitation_factor]`: 2 or 3 comma-separated values"));
@@ -123,6 +138,9 @@ pub fn parse_anomalies(text: &str, path: &Path) -> Result<BTreeMap<u32, (f64, f6
             return Err(bad("each year once"));
         }
     }
+    if out.is_empty() {
+        return Err(Error::Invalid { context: path.display().to_string(), field: "climate.anomalies_file".into(), value: "no data line".into(), expected: "at least one line `year,temperature_k[,precipitation_factor]`".into() });
+    }
     Ok(out)
 }
 
@@ -136,6 +154,9 @@ mod tests {
         assert_eq!(c.of_year(50), (2.0, 1.0));
         c.anomalies.insert(50, (0.5, 0.8));
         assert_eq!(c.of_year(50), (2.5, 0.8));
+        c.anomalies.insert(500, (1.0, 1.0));
+        assert_eq!(c.years_beyond(100), vec![500]);
+        assert_eq!(c.years_beyond(500), Vec::<u32>::new());
         let ix = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0];
         let s = shifted_indices(&ix, 2.5, 0.8);
         assert_eq!(s[factor::T], 6.0);
@@ -155,5 +176,14 @@ mod tests {
         assert!(e.contains("a.csv line 3") && e.contains("hot") && e.contains("temperature"), "{e}");
         let e = parse_anomalies("1,0.5\n1,0.6\n", p).unwrap_err().to_string();
         assert!(e.contains("line 2") && e.contains("once"), "{e}");
+        // a header is checked, not skipped: a factor column read as temperatures was a silent
+        // wrong climate (round 30's trial)
+        let e = parse_anomalies("year,precipitation_factor\n1,0.8\n", p).unwrap_err().to_string();
+        assert!(e.contains("a.csv line 1") && e.contains("year,temperature_k"), "{e}");
+        let e = parse_anomalies("temperature_k,year\n2,3\n", p).unwrap_err().to_string();
+        assert!(e.contains("line 1"), "{e}");
+        assert_eq!(parse_anomalies("Year, Temperature_K, Precipitation_Factor\n3,1.5,1.1\n", p).unwrap()[&3], (1.5, 1.1));
+        let e = parse_anomalies("year,temperature_k\n# none yet\n", p).unwrap_err().to_string();
+        assert!(e.contains("a.csv") && e.contains("at least one line"), "{e}");
     }
 }

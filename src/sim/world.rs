@@ -249,12 +249,17 @@ impl World {
     /// file ([`super::climate_change::ClimateChange::of`]) ([`crate::Error::Invalid`]).
     ///
     /// Logs a warning (`tracing::warn`) for every management year beyond the run's last year
-    /// ([`super::management::warnings`]).
+    /// ([`super::management::warnings`]) and for climate anomalies of years beyond it
+    /// ([`super::climate_change::ClimateChange::years_beyond`]).
     pub fn new(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
         let mut w = World::bare(site, lib, scenario)?;
         w.check_plantings(&scenario.context())?;
         for m in super::management::warnings(&w.site.management, scenario.years, &scenario.context()) {
             tracing::warn!("{m}");
+        }
+        let late = w.site.climate_change.years_beyond(scenario.years);
+        if let Some(first) = late.first() {
+            tracing::warn!("{}: climate.anomalies_file has {} year(s) beyond the run's last year {} (from year {first}): they do not act", scenario.context(), late.len(), scenario.years);
         }
         w.place_start(scenario);
         // plantings of year 0 stand with the start
