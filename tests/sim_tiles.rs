@@ -88,9 +88,9 @@ fn a_tile_without_trees() {
     let toml = common::ScenarioToml::new("empty", 12, 5).species(&["beech"]).line("light_cell_m = 10.0").uniform(20, 12, 20.0, 300.0).seed_sources("beech", &[[40.0, 60.0], [90.0, 180.0]], 3).build();
     let (_, w0) = common::world(&toml);
     let layout = Layout::new(&w0.site, 4, 1).unwrap();
-    let east = Tile::new(&w0, layout.clone(), 3);
+    let east = Tile::new(&w0, layout.clone(), 3).unwrap();
     assert_eq!(east.world.stand.trees.len(), 0, "the eastern tile should start without trees");
-    assert!(Tile::new(&w0, layout, 0).world.stand.trees.len() > 0);
+    assert!(Tile::new(&w0, layout, 0).unwrap().world.stand.trees.len() > 0);
     let one = one_process(&toml, 12);
     assert_tiles_equal(&toml, 4, 1, 12, &one);
 }
@@ -114,7 +114,7 @@ fn a_tile_holds_the_light_cells_site_arrays_of_its_own_cells_only() {
         let mut roofed_held = 0;
         for k in 0..layout.len() {
             let r = layout.rect(k);
-            let tile = Tile::new(&w0, layout.clone(), k);
+            let tile = Tile::new(&w0, layout.clone(), k).unwrap();
             let s = &tile.world.site;
             let cells: Vec<usize> = (r.row0..r.row1).flat_map(|row| (r.col0..r.col1).map(move |col| row * lg.cols + col)).collect();
             assert_eq!((s.light_site.len(), s.ground_free.len(), tile.world.scratch.ground_light.len()), (r.len(), r.len(), r.len()), "tile {k} of {nx} × {ny}");
@@ -158,7 +158,7 @@ fn a_tile_holds_the_site_grids_of_its_cells_and_halo_only() {
         let layout = Layout::new(&w0.site, nx, ny).unwrap();
         for k in 0..layout.len() {
             let r = layout.rect(k);
-            let tile = Tile::new(&w0, layout.clone(), k);
+            let tile = Tile::new(&w0, layout.clone(), k).unwrap();
             let s = &tile.world.site;
             let c = &s.conditions;
             let h = c.held;
@@ -385,7 +385,7 @@ fn map_sums_over_tiles_are_one_process_sums() {
                 let (w, layout) = (&w, layout.clone());
                 s.spawn(move || {
                     use sylva::sim::tiles::Transport;
-                    let tile = Tile::new(w, layout, tr.rank());
+                    let tile = Tile::new(w, layout, tr.rank()).unwrap();
                     tile.gather_bin_sums(&mut tr, bins, |t, i| map_bin(t, i, dims, np), |t, i| t.basal_area_m2(i)).unwrap()
                 })
             })
@@ -528,4 +528,70 @@ fn the_light_phase_holds_its_grids_over_the_tiles_trees_and_cells() {
         b.sort();
         assert_eq!(a, b, "within {r} m of ({x}, {y})");
     }
+}
+
+#[test]
+fn a_tile_holds_its_window_of_the_seed_grids_only() {
+    // issue 37 Build 1 and 3: a tile keeps of each seed grid the cells of its light cells'
+    // centres and those whose centre it owns (one cell of margin), not the whole grid; the
+    // production of the cells within the kernel's reach is passed as sums and spread onto the
+    // window only, and the runs stay one process's (the tests above)
+    use sylva::sim::light_grid::CellRect;
+    use sylva::sim::tiles::{hold_own_seeds, seed_window};
+    let toml = edges();
+    let (_, w0) = common::world(&toml);
+    // a world with seeds on its grid (8 years of beech seeding)
+    let one = one_process(&toml, 8);
+    let g1 = &one.1.stand.seeds[0];
+    assert!(g1.holds_all() && (g1.cols, g1.rows, g1.cell_m) == (20, 12, 20.0));
+    assert!(g1.data.iter().filter(|&&v| v > 0.0).count() > 20, "seeds on too few cells");
+    let lg = w0.site.light;
+    for (nx, ny) in [(2, 1), (3, 1), (5, 1), (10, 1), (2, 2)] {
+        let layout = Layout::new(&w0.site, nx, ny).unwrap();
+        let mut owners = vec![0u32; g1.cols * g1.rows];
+        for k in 0..layout.len() {
+            let tile = Tile::new(&one.1, layout.clone(), k).unwrap();
+            let g = &tile.world.stand.seeds[0];
+            let win = seed_window(&layout, k, g1);
+            assert_eq!((g.held, g.data.len(), g.cols, g.rows), (win, win.len(), 20, 12), "tile {k} of {nx} × {ny}");
+            assert!(!g.holds_all() && win.len() < 20 * 12, "tile {k} of {nx} × {ny} holds {win:?}");
+            // its values are the whole grid's
+            for cell in win.cells(20) {
+                let (c, r) = (cell % 20, cell / 20);
+                assert_eq!(g.data[g.index(c, r).unwrap()].to_bits(), g1.data[cell].to_bits(), "tile {k}, seed cell ({c}, {r})");
+            }
+            // regeneration reads the seed cells of its light cells' centres
+            let rect = layout.rect(k);
+            for lc in rect.cells(lg.cols) {
+                let (x, y) = lg.centre(lc);
+                assert_eq!(g.at(x, y).to_bits(), g1.at(x, y).to_bits());
+            }
+            // the cells whose centre it owns (its part of an assembled world) lie in it
+            for cell in 0..20 * 12 {
+                let (c, r) = (cell % 20, cell / 20);
+                if layout.owner_of(((c as f64 + 0.5) * 20.0) as f32, ((r as f64 + 0.5) * 20.0) as f32) == k {
+                    assert!(win.contains(c, r), "tile {k} of {nx} × {ny}: seed cell ({c}, {r})");
+                    owners[cell] += 1;
+                }
+            }
+        }
+        assert!(owners.iter().all(|&n| n == 1), "{nx} × {ny}: every seed cell owned once");
+    }
+    // 2 tiles of 20 light columns (200 m): seed columns 0..10 (+ 2 of margin) and 10..20 (− 1)
+    let layout = Layout::new(&w0.site, 2, 1).unwrap();
+    assert_eq!(seed_window(&layout, 0, g1), CellRect { col0: 0, row0: 0, col1: 12, row1: 12 });
+    assert_eq!(seed_window(&layout, 1, g1), CellRect { col0: 9, row0: 0, col1: 20, row1: 12 });
+    // a per-rank checkpoint that holds the whole grid (an earlier Sylva's) read into a tile's
+    // window: cut to it
+    let bytes = to_bytes(&one.1, &one.2);
+    let mut t = w0.clone();
+    hold_own_seeds(&mut t, &layout, 1).unwrap();
+    sylva::sim::checkpoint::restore(&mut t, &bytes, std::path::Path::new("rank_0001.bin")).unwrap();
+    let g = &t.stand.seeds[0];
+    assert_eq!((g.held, g.data.clone()), (seed_window(&layout, 1, g1), g1.window(seed_window(&layout, 1, g1)).unwrap()));
+    // a world holding another tile's window is refused
+    let mut t0 = w0.clone();
+    hold_own_seeds(&mut t0, &layout, 0).unwrap();
+    let e = hold_own_seeds(&mut t0, &layout, 1).unwrap_err().to_string();
+    assert!(e.contains("seed grid") && e.contains("tile 1"), "{e}");
 }

@@ -139,18 +139,20 @@ fn agree(t: &mut dyn Transport, failed: Option<String>) -> Result<()> {
 }
 
 /// Reads tile `me` of `layout` from the per-rank checkpoint `path` of `year` into `template`
-/// (the world of the scenario at its start, or a copy); returns it with the rows the file holds
-/// (rank 0's: the stand table).
+/// (the world of the scenario at its start, or a copy; its seed grids cut to the tile's window
+/// first, as the rank saved them); returns it with the rows the file holds (rank 0's: the
+/// stand table).
 ///
-/// Errors: as [`checkpoint::load`]; [`Error::Format`] naming the file when its year is not
-/// `year` (the manifest's).
+/// Errors: as [`checkpoint::load`] and [`Tile::resumed`]; [`Error::Format`] naming the file
+/// when its year is not `year` (the manifest's).
 fn load_tile(template: World, layout: &Layout, me: usize, path: &Path, year: u32) -> Result<(Tile, Vec<StandRow>)> {
     let mut w = template;
+    crate::sim::tiles::hold_own_seeds(&mut w, layout, me)?;
     let rows = checkpoint::load(path, &mut w)?;
     if w.stand.year != year {
         return Err(Error::format(path, format!("year {} in a checkpoint whose manifest says year {year}", w.stand.year)).into());
     }
-    Ok((Tile::resumed(w, layout.clone(), me), rows))
+    Ok((Tile::resumed(w, layout.clone(), me)?, rows))
 }
 
 /// A snapshot written by the ranks ([`write_parts`]).
@@ -401,7 +403,7 @@ impl Stepper for Root<'_> {
         }
         let layout = layout_for(world, self.t.size())?;
         command(self.t, Some(Command::Begin))?;
-        self.tile = Some(Tile::new(world, layout, 0));
+        self.tile = Some(Tile::new(world, layout, 0)?);
         self.collective(|tile, t| Ok(tile.scatter(Some(world), t)?))?;
         // the tallies so far go into rank 0's tile, so the ranks' tallies add up to the run's
         // (what each rank's checkpoint holds)
@@ -531,7 +533,7 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 return Ok(());
             }
             (Command::Begin, _) => {
-                let mut tl = Tile::own(template(&mut world, c)?, layout.clone(), me);
+                let mut tl = Tile::own(template(&mut world, c)?, layout.clone(), me)?;
                 tl.scatter(None, t)?;
                 tile = Some(tl);
             }
