@@ -226,6 +226,14 @@ fn tiles_in_threads_write_the_run_directory_of_one_process() {
     let (b, bytes) = sylva::job::tiled::run_local_tiles(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&three), 3).unwrap();
     assert_eq!(a.rows, b.rows);
     assert!(bytes.len() == 3 && bytes.iter().all(|&n| n > 0), "bytes sent per rank: {bytes:?}");
+    // issue 37 Build 1: rank 0's run driver holds its tile, not the whole site, once the
+    // tiles hold the stand (the maps, below, are still the whole site's, byte for byte)
+    let (ws, wa) = (&b.world.site, &a.world.site);
+    assert!(wa.conditions.holds_all() && !ws.conditions.holds_all(), "rank 0's driver still holds the whole site: {}", ws.conditions.held);
+    assert!(ws.conditions.held.width < ws.conditions.width(), "{} of {} columns", ws.conditions.held.width, ws.conditions.width());
+    assert!(ws.light_site.len() * 2 < wa.light_site.len() && ws.rel_insolation.len() * 2 < wa.rel_insolation.len(), "{} of {} light cells", ws.light_site.len(), wa.light_site.len());
+    assert!(b.world.stand.seeds.iter().all(|g| !g.holds_all()));
+    assert_eq!((b.world.stand.trees.len(), b.world.stand.cohorts.len(), b.world.stand.year, b.trees), (0, 0, 12, a.trees));
     let fa = common::files(&one);
     assert!(fa.contains_key("checkpoint.bin") && fa.contains_key("inventory/year_0010.parquet") && fa.len() > 10, "{:?}", fa.keys());
     let template = sylva::sim::World::new(sc.site().unwrap(), &lib, &sc).unwrap();

@@ -11,8 +11,9 @@
 //! [`Transport`]. Per-cell passes that only feed the tile's own cells run on them only (the
 //! ground light, the spreading of seeds); the spatial hash and canopy of the light phase and the
 //! crowding grid of growth are held over the cells of the tile's trees and halo copies
-//! (`sim::phases::light::held_cells`, `sim::density::crowding`); the seed grids still cover the
-//! whole site on every rank:
+//! (`sim::phases::light::held_cells`, `sim::density::crowding`); the seed grids over the tile's
+//! window ([`seed_window`]), the seed production within the kernel's reach of it only while it
+//! is spread:
 //! 1. **light**: the canopy of a cell holds every crown that covers it, and a tree's light
 //!    reads its cell and the next cell towards the equator: trees within the largest crown
 //!    radius plus two light cells of the tile;
@@ -1338,6 +1339,27 @@ fn hold_own_site(w: &mut World, rect: CellRect) {
         *s = cut(std::mem::take(s));
     }
     w.site.conditions.hold(win);
+}
+
+/// Cuts `w`, the world of one process that a tiled run's driver keeps on rank 0 besides its
+/// tile, to what the driver reads once the tiles hold the stand (issue 37 Build 1,
+/// `job::run::Stepper::shed`): the site cut to tile `me`'s cells as [`Tile::own`] cuts it (the
+/// light cells' arrays to its rectangle, the conditions, relative insolation and suitability
+/// to its site cells plus [`SITE_HALO_CELLS`], the whole site's checkpoint identity kept), the
+/// seed grids to its window ([`seed_window`]), and no trees or cohorts (the tiles hold them;
+/// the next tree id is kept). The year, tallies, pool, library, extent and georeferencing are
+/// kept. Arrays already cut are left as they are.
+///
+/// Errors: as [`hold_own_seeds`].
+pub fn shed_to_tile(w: &mut World, layout: &Layout, me: usize) -> Result<()> {
+    let next_id = w.stand.trees.next_id;
+    w.stand.trees = TreeStore::default();
+    w.stand.trees.next_id = next_id;
+    w.stand.cohorts = Cohorts::default();
+    w.scratch.grid = Default::default();
+    w.scratch.dead = Vec::new();
+    hold_own_cells(w, layout.rect(me));
+    hold_own_seeds(w, layout, me)
 }
 
 /// Keeps in `w` only the trees and cohorts of tile `me` of `layout`.
