@@ -186,6 +186,19 @@ fn a_tile_holds_the_site_grids_of_its_cells_and_halo_only() {
                 assert_eq!(s.site_cell(x, y), w0.site.site_cell(x, y));
                 assert_eq!(c.elevation_at(x + 4.9, y - 4.9).to_bits(), c0.elevation_at(x + 4.9, y - 4.9).to_bits());
             }
+            // Tile::new copies only the tile's part of the site (rank 0's tile is made so from
+            // the run driver's whole world): the same tile as one cut from a whole copy
+            let owned = Tile::own(w0.clone(), layout.clone(), k).unwrap();
+            let (o, oc) = (&owned.world.site, &owned.world.site.conditions);
+            assert_eq!((h, c.full), (oc.held, oc.full));
+            for (a, b) in [(&c.slope_deg, &oc.slope_deg), (&c.aspect_deg, &oc.aspect_deg), (&c.twi, &oc.twi), (&c.insolation_kwh_m2, &oc.insolation_kwh_m2), (&c.temperature_c, &oc.temperature_c), (&c.elevation_m, &oc.elevation_m), (&c.wind_exposure, &oc.wind_exposure)] {
+                assert!(a.data.iter().map(|v| v.to_bits()).eq(b.data.iter().map(|v| v.to_bits())), "tile {k} of {nx} x {ny}");
+            }
+            assert!(s.rel_insolation.iter().chain(s.suitability.iter().flatten()).map(|v| v.to_bits()).eq(o.rel_insolation.iter().chain(o.suitability.iter().flatten()).map(|v| v.to_bits())));
+            assert_eq!((&s.light_site, &s.ground_free, s.window, &s.whole_identity), (&o.light_site, &o.ground_free, o.window, &o.whole_identity));
+            assert_eq!((&tile.world.stand.seeds, &tile.world.scratch.ground_light), (&owned.world.stand.seeds, &owned.world.scratch.ground_light));
+            assert!(tile.world.stand.seeds.iter().all(|g| !g.holds_all()) || layout.len() == 1);
+            assert_eq!(sylva::sim::checkpoint::to_bytes(&tile.world, &[]), sylva::sim::checkpoint::to_bytes(&owned.world, &[]), "tile {k} of {nx} x {ny}");
             // the checkpoint identity stays the whole site's
             assert_eq!(s.whole_identity.as_ref(), Some(&whole_id));
             assert_eq!(sylva::sim::checkpoint::identity(&tile.world), sylva::sim::checkpoint::identity(&w0));

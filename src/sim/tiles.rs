@@ -659,7 +659,7 @@ impl Tile {
     /// Errors: [`Error::Invalid`] when `global`'s seed grids hold neither the whole grid nor the
     /// tile's window ([`hold_own_seeds`]).
     pub fn new(global: &World, layout: Layout, me: usize) -> Result<Tile> {
-        Tile::own(global.clone(), layout, me)
+        Tile::own(clone_for_tile(global, &layout, me)?, layout, me)
     }
 
     /// As [`Tile::new`], taking `world` (the world of one process) instead of copying it: a rank
@@ -1360,6 +1360,88 @@ pub fn shed_to_tile(w: &mut World, layout: &Layout, me: usize) -> Result<()> {
     w.scratch.dead = Vec::new();
     hold_own_cells(w, layout.rect(me));
     hold_own_seeds(w, layout, me)
+}
+
+/// A copy of `global` for tile `me` of `layout` that copies only the tile's part of the site
+/// and seed grids (issue 37 Build 1: rank 0 makes its tile from the run driver's world, which
+/// stays whole until [`shed_to_tile`]; copying it whole first held the whole site twice for a
+/// moment): the conditions, relative insolation and suitability of the site cells
+/// [`hold_own_site`] keeps, the light cells' arrays of the tile's rectangle, each seed grid's
+/// window ([`seed_window`]), with the whole site's checkpoint identity; the stand's trees and
+/// cohorts and the rest copied as they are (the tile keeps its own, [`Tile::own`]). The values
+/// are those [`Tile::own`] cuts from a whole copy. A `global` whose site is already cut is
+/// copied whole.
+///
+/// Errors: [`Error::Invalid`] naming the pool species whose seed grid holds neither the whole
+/// grid nor the tile's window (as [`hold_own_seeds`]).
+fn clone_for_tile(global: &World, layout: &Layout, me: usize) -> Result<World> {
+    let g = &global.site;
+    let c = &g.conditions;
+    if !c.holds_all() {
+        return Ok(global.clone());
+    }
+    let rect = layout.rect(me);
+    let light = g.light;
+    let span = super::light_grid::Span::new(Some(rect), &light);
+    let l = light.cell_m;
+    let win = c.window_of(rect.col0 as f64 * l, rect.row0 as f64 * l, rect.col1 as f64 * l, rect.row1 as f64 * l, SITE_HALO_CELLS);
+    let full = c.held;
+    // the window's cells of a per-site-cell vector over the whole grid (as `hold_own_site`)
+    let cut = |v: &[f32]| -> Vec<f32> {
+        let mut out = Vec::with_capacity(win.width * win.height);
+        for r in win.row0..win.row1() {
+            let i = (r - full.row0) * full.width + (win.col0 - full.col0);
+            out.extend_from_slice(&v[i..i + win.width]);
+        }
+        out
+    };
+    let conditions = crate::conditions::SiteConditions {
+        geo: c.geo.clone(),
+        cell_x_m: c.cell_x_m,
+        cell_y_m: c.cell_y_m,
+        mask: win.cut(&c.mask, &full),
+        elevation_m: win.cut(&c.elevation_m, &full),
+        slope_deg: win.cut(&c.slope_deg, &full),
+        aspect_deg: win.cut(&c.aspect_deg, &full),
+        twi: win.cut(&c.twi, &full),
+        insolation_kwh_m2: win.cut(&c.insolation_kwh_m2, &full),
+        wind_exposure: win.cut(&c.wind_exposure, &full),
+        temperature_c: win.cut(&c.temperature_c, &full),
+        indices: win.cut(&c.indices, &full),
+        held: win,
+        full: c.full,
+    };
+    let whole_identity = if win == full { g.whole_identity.clone() } else { Some(super::checkpoint::site_identity(c)) };
+    let per_light = |v: &[f32]| if v.len() == light.len() { span.cut(v) } else { v.to_vec() };
+    let site = Site {
+        conditions,
+        lib: g.lib.clone(),
+        pool: g.pool.clone(),
+        seed: g.seed,
+        extent: g.extent,
+        area_ha: g.area_ha,
+        light,
+        light_site: if g.light_site.len() == light.len() { span.cut(&g.light_site) } else { g.light_site.clone() },
+        rel_insolation: cut(&g.rel_insolation),
+        suitability: g.suitability.iter().map(|v| cut(v)).collect(),
+        whole_identity,
+        seed_rain: g.seed_rain.clone(),
+        obstacles: g.obstacles.clone(),
+        obstacle_canopy: g.obstacle_canopy.clone(),
+        ground_free: per_light(&g.ground_free),
+        window: Some(rect),
+        management: g.management.clone(),
+        climate_change: g.climate_change.clone(),
+    };
+    let mut seeds = Vec::with_capacity(global.stand.seeds.len());
+    for (p, sg) in global.stand.seeds.iter().enumerate() {
+        let r = seed_window(layout, me, sg);
+        let data = sg.window(r).ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: format!("seed grid of pool species {p}"), value: format!("cells {:?} of {} × {}", sg.held, sg.cols, sg.rows), expected: format!("the whole grid or tile {me}'s window {r:?}") })?;
+        seeds.push(super::world::SeedGrid { cell_m: sg.cell_m, cols: sg.cols, rows: sg.rows, held: r, data });
+    }
+    let stand = super::world::Stand { trees: global.stand.trees.clone(), year: global.stand.year, cohorts: global.stand.cohorts.clone(), seeds };
+    let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone() };
+    Ok(World { site, stand, scratch, tallies: global.tallies.clone() })
 }
 
 /// Keeps in `w` only the trees and cohorts of tile `me` of `layout`.
