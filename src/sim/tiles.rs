@@ -653,7 +653,8 @@ pub struct Tile {
 
 impl Tile {
     /// Tile `me` of `layout`, cut from `global`, the world of one process (its trees and
-    /// cohorts on the tile's cells; its window of the seed grids, [`seed_window`]). The tile's
+    /// cohorts on the tile's cells; its window of the seed grids, [`seed_window`]), copying only
+    /// the tile's part of the site (`clone_for_tile`), not the whole world first. The tile's
     /// tallies start at zero ([`Tile::gather`] adds them to the global world's).
     ///
     /// Errors: [`Error::Invalid`] when `global`'s seed grids hold neither the whole grid nor the
