@@ -88,9 +88,9 @@ fn a_tile_without_trees() {
     let toml = common::ScenarioToml::new("empty", 12, 5).species(&["beech"]).line("light_cell_m = 10.0").uniform(20, 12, 20.0, 300.0).seed_sources("beech", &[[40.0, 60.0], [90.0, 180.0]], 3).build();
     let (_, w0) = common::world(&toml);
     let layout = Layout::new(&w0.site, 4, 1).unwrap();
-    let east = Tile::new(&w0, layout.clone(), 3);
+    let east = Tile::new(&w0, layout.clone(), 3).unwrap();
     assert_eq!(east.world.stand.trees.len(), 0, "the eastern tile should start without trees");
-    assert!(Tile::new(&w0, layout, 0).world.stand.trees.len() > 0);
+    assert!(Tile::new(&w0, layout, 0).unwrap().world.stand.trees.len() > 0);
     let one = one_process(&toml, 12);
     assert_tiles_equal(&toml, 4, 1, 12, &one);
 }
@@ -114,7 +114,7 @@ fn a_tile_holds_the_light_cells_site_arrays_of_its_own_cells_only() {
         let mut roofed_held = 0;
         for k in 0..layout.len() {
             let r = layout.rect(k);
-            let tile = Tile::new(&w0, layout.clone(), k);
+            let tile = Tile::new(&w0, layout.clone(), k).unwrap();
             let s = &tile.world.site;
             let cells: Vec<usize> = (r.row0..r.row1).flat_map(|row| (r.col0..r.col1).map(move |col| row * lg.cols + col)).collect();
             assert_eq!((s.light_site.len(), s.ground_free.len(), tile.world.scratch.ground_light.len()), (r.len(), r.len(), r.len()), "tile {k} of {nx} × {ny}");
@@ -158,7 +158,7 @@ fn a_tile_holds_the_site_grids_of_its_cells_and_halo_only() {
         let layout = Layout::new(&w0.site, nx, ny).unwrap();
         for k in 0..layout.len() {
             let r = layout.rect(k);
-            let tile = Tile::new(&w0, layout.clone(), k);
+            let tile = Tile::new(&w0, layout.clone(), k).unwrap();
             let s = &tile.world.site;
             let c = &s.conditions;
             let h = c.held;
@@ -186,6 +186,19 @@ fn a_tile_holds_the_site_grids_of_its_cells_and_halo_only() {
                 assert_eq!(s.site_cell(x, y), w0.site.site_cell(x, y));
                 assert_eq!(c.elevation_at(x + 4.9, y - 4.9).to_bits(), c0.elevation_at(x + 4.9, y - 4.9).to_bits());
             }
+            // Tile::new copies only the tile's part of the site (rank 0's tile is made so from
+            // the run driver's whole world): the same tile as one cut from a whole copy
+            let owned = Tile::own(w0.clone(), layout.clone(), k).unwrap();
+            let (o, oc) = (&owned.world.site, &owned.world.site.conditions);
+            assert_eq!((h, c.full), (oc.held, oc.full));
+            for (a, b) in [(&c.slope_deg, &oc.slope_deg), (&c.aspect_deg, &oc.aspect_deg), (&c.twi, &oc.twi), (&c.insolation_kwh_m2, &oc.insolation_kwh_m2), (&c.temperature_c, &oc.temperature_c), (&c.elevation_m, &oc.elevation_m), (&c.wind_exposure, &oc.wind_exposure)] {
+                assert!(a.data.iter().map(|v| v.to_bits()).eq(b.data.iter().map(|v| v.to_bits())), "tile {k} of {nx} x {ny}");
+            }
+            assert!(s.rel_insolation.iter().chain(s.suitability.iter().flatten()).map(|v| v.to_bits()).eq(o.rel_insolation.iter().chain(o.suitability.iter().flatten()).map(|v| v.to_bits())));
+            assert_eq!((&s.light_site, &s.ground_free, s.window, &s.whole_identity), (&o.light_site, &o.ground_free, o.window, &o.whole_identity));
+            assert_eq!((&tile.world.stand.seeds, &tile.world.scratch.ground_light), (&owned.world.stand.seeds, &owned.world.scratch.ground_light));
+            assert!(tile.world.stand.seeds.iter().all(|g| !g.holds_all()) || layout.len() == 1);
+            assert_eq!(sylva::sim::checkpoint::to_bytes(&tile.world, &[]), sylva::sim::checkpoint::to_bytes(&owned.world, &[]), "tile {k} of {nx} x {ny}");
             // the checkpoint identity stays the whole site's
             assert_eq!(s.whole_identity.as_ref(), Some(&whole_id));
             assert_eq!(sylva::sim::checkpoint::identity(&tile.world), sylva::sim::checkpoint::identity(&w0));
@@ -226,6 +239,14 @@ fn tiles_in_threads_write_the_run_directory_of_one_process() {
     let (b, bytes) = sylva::job::tiled::run_local_tiles(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&three), 3).unwrap();
     assert_eq!(a.rows, b.rows);
     assert!(bytes.len() == 3 && bytes.iter().all(|&n| n > 0), "bytes sent per rank: {bytes:?}");
+    // issue 37 Build 1: rank 0's run driver holds its tile, not the whole site, once the
+    // tiles hold the stand (the maps, below, are still the whole site's, byte for byte)
+    let (ws, wa) = (&b.world.site, &a.world.site);
+    assert!(wa.conditions.holds_all() && !ws.conditions.holds_all(), "rank 0's driver still holds the whole site: {}", ws.conditions.held);
+    assert!(ws.conditions.held.width < ws.conditions.width(), "{} of {} columns", ws.conditions.held.width, ws.conditions.width());
+    assert!(ws.light_site.len() * 2 < wa.light_site.len() && ws.rel_insolation.len() * 2 < wa.rel_insolation.len(), "{} of {} light cells", ws.light_site.len(), wa.light_site.len());
+    assert!(b.world.stand.seeds.iter().all(|g| !g.holds_all()));
+    assert_eq!((b.world.stand.trees.len(), b.world.stand.cohorts.len(), b.world.stand.year, b.trees), (0, 0, 12, a.trees));
     let fa = common::files(&one);
     assert!(fa.contains_key("checkpoint.bin") && fa.contains_key("inventory/year_0010.parquet") && fa.len() > 10, "{:?}", fa.keys());
     let template = sylva::sim::World::new(sc.site().unwrap(), &lib, &sc).unwrap();
@@ -385,7 +406,7 @@ fn map_sums_over_tiles_are_one_process_sums() {
                 let (w, layout) = (&w, layout.clone());
                 s.spawn(move || {
                     use sylva::sim::tiles::Transport;
-                    let tile = Tile::new(w, layout, tr.rank());
+                    let tile = Tile::new(w, layout, tr.rank()).unwrap();
                     tile.gather_bin_sums(&mut tr, bins, |t, i| map_bin(t, i, dims, np), |t, i| t.basal_area_m2(i)).unwrap()
                 })
             })
@@ -528,4 +549,70 @@ fn the_light_phase_holds_its_grids_over_the_tiles_trees_and_cells() {
         b.sort();
         assert_eq!(a, b, "within {r} m of ({x}, {y})");
     }
+}
+
+#[test]
+fn a_tile_holds_its_window_of_the_seed_grids_only() {
+    // issue 37 Build 1 and 3: a tile keeps of each seed grid the cells of its light cells'
+    // centres and those whose centre it owns (one cell of margin), not the whole grid; the
+    // production of the cells within the kernel's reach is passed as sums and spread onto the
+    // window only, and the runs stay one process's (the tests above)
+    use sylva::sim::light_grid::CellRect;
+    use sylva::sim::tiles::{hold_own_seeds, seed_window};
+    let toml = edges();
+    let (_, w0) = common::world(&toml);
+    // a world with seeds on its grid (8 years of beech seeding)
+    let one = one_process(&toml, 8);
+    let g1 = &one.1.stand.seeds[0];
+    assert!(g1.holds_all() && (g1.cols, g1.rows, g1.cell_m) == (20, 12, 20.0));
+    assert!(g1.data.iter().filter(|&&v| v > 0.0).count() > 20, "seeds on too few cells");
+    let lg = w0.site.light;
+    for (nx, ny) in [(2, 1), (3, 1), (5, 1), (10, 1), (2, 2)] {
+        let layout = Layout::new(&w0.site, nx, ny).unwrap();
+        let mut owners = vec![0u32; g1.cols * g1.rows];
+        for k in 0..layout.len() {
+            let tile = Tile::new(&one.1, layout.clone(), k).unwrap();
+            let g = &tile.world.stand.seeds[0];
+            let win = seed_window(&layout, k, g1);
+            assert_eq!((g.held, g.data.len(), g.cols, g.rows), (win, win.len(), 20, 12), "tile {k} of {nx} × {ny}");
+            assert!(!g.holds_all() && win.len() < 20 * 12, "tile {k} of {nx} × {ny} holds {win:?}");
+            // its values are the whole grid's
+            for cell in win.cells(20) {
+                let (c, r) = (cell % 20, cell / 20);
+                assert_eq!(g.data[g.index(c, r).unwrap()].to_bits(), g1.data[cell].to_bits(), "tile {k}, seed cell ({c}, {r})");
+            }
+            // regeneration reads the seed cells of its light cells' centres
+            let rect = layout.rect(k);
+            for lc in rect.cells(lg.cols) {
+                let (x, y) = lg.centre(lc);
+                assert_eq!(g.at(x, y).to_bits(), g1.at(x, y).to_bits());
+            }
+            // the cells whose centre it owns (its part of an assembled world) lie in it
+            for cell in 0..20 * 12 {
+                let (c, r) = (cell % 20, cell / 20);
+                if layout.owner_of(((c as f64 + 0.5) * 20.0) as f32, ((r as f64 + 0.5) * 20.0) as f32) == k {
+                    assert!(win.contains(c, r), "tile {k} of {nx} × {ny}: seed cell ({c}, {r})");
+                    owners[cell] += 1;
+                }
+            }
+        }
+        assert!(owners.iter().all(|&n| n == 1), "{nx} × {ny}: every seed cell owned once");
+    }
+    // 2 tiles of 20 light columns (200 m): seed columns 0..10 (+ 2 of margin) and 10..20 (− 1)
+    let layout = Layout::new(&w0.site, 2, 1).unwrap();
+    assert_eq!(seed_window(&layout, 0, g1), CellRect { col0: 0, row0: 0, col1: 12, row1: 12 });
+    assert_eq!(seed_window(&layout, 1, g1), CellRect { col0: 9, row0: 0, col1: 20, row1: 12 });
+    // a per-rank checkpoint that holds the whole grid (an earlier Sylva's) read into a tile's
+    // window: cut to it
+    let bytes = to_bytes(&one.1, &one.2);
+    let mut t = w0.clone();
+    hold_own_seeds(&mut t, &layout, 1).unwrap();
+    sylva::sim::checkpoint::restore(&mut t, &bytes, std::path::Path::new("rank_0001.bin")).unwrap();
+    let g = &t.stand.seeds[0];
+    assert_eq!((g.held, g.data.clone()), (seed_window(&layout, 1, g1), g1.window(seed_window(&layout, 1, g1)).unwrap()));
+    // a world holding another tile's window is refused
+    let mut t0 = w0.clone();
+    hold_own_seeds(&mut t0, &layout, 0).unwrap();
+    let e = hold_own_seeds(&mut t0, &layout, 1).unwrap_err().to_string();
+    assert!(e.contains("seed grid") && e.contains("tile 1"), "{e}");
 }

@@ -220,16 +220,20 @@ pub fn remove_all(dir: &Path) -> Result<()> {
 }
 
 /// Reads rank `rank`'s file of `m` in `dir` into a copy of `template` (a world of the same
-/// scenario, at its start) and returns it with the rows it holds (rank 0: the stand table).
+/// scenario, at its start) and returns it with the rows it holds (rank 0: the stand table);
+/// its seed grids hold the rank's window ([`crate::sim::tiles::seed_window`] of the
+/// manifest's layout), as the rank saved them.
 ///
 /// Errors: as [`load`], naming the file; [`Error::Format`] naming it when its year is not the
-/// manifest's.
+/// manifest's, or naming the manifest when its layout is not one of this site's light grid.
 pub fn load_rank(dir: &Path, m: &Manifest, rank: usize, template: &World) -> Result<(World, Vec<StandRow>)> {
     let Some(name) = m.files.get(rank) else {
         return Err(Error::format(dir.join(RANK_DIR).join(MANIFEST), format!("files: no file of rank {rank} ({} ranks)", m.ranks)).into());
     };
     let p = dir.join(RANK_DIR).join(name);
+    let layout = manifest_layout(dir, m, template)?;
     let mut w = template.clone();
+    crate::sim::tiles::hold_own_seeds(&mut w, &layout, rank)?;
     let rows = load(&p, &mut w)?;
     if w.stand.year != m.year {
         return Err(Error::format(&p, format!("year {} in a checkpoint whose manifest says year {}", w.stand.year, m.year)).into());
@@ -245,13 +249,7 @@ pub fn load_rank(dir: &Path, m: &Manifest, rank: usize, template: &World) -> Res
 /// Errors: as [`load_rank`] for each file; [`Error::Format`] naming the manifest when its layout
 /// is not one of this site's light grid.
 pub fn load_ranks(dir: &Path, m: &Manifest, w: &mut World) -> Result<Vec<StandRow>> {
-    let mp = dir.join(RANK_DIR).join(MANIFEST);
-    // the manifest's bounds (tiles cut by area, or by work since issue 37 Build 5), checked
-    // against this site's light grid
-    let layout = Layout::with_bounds(&w.site, m.col_bounds.clone(), m.row_bounds.clone()).map_err(|e| Error::format(&mp, format!("col_bounds, row_bounds: {e}")))?;
-    if !m.same_layout(&layout) {
-        return Err(Error::format(&mp, format!("col_bounds {:?}, row_bounds {:?}: not the {} × {} tiles they bound", m.col_bounds, m.row_bounds, m.tiles_across, m.tiles_up)).into());
-    }
+    let layout = manifest_layout(dir, m, w)?;
     let mut tiles = Vec::with_capacity(m.ranks);
     let mut rows = Vec::new();
     let mut next_id = w.stand.trees.next_id;
@@ -268,6 +266,20 @@ pub fn load_ranks(dir: &Path, m: &Manifest, w: &mut World) -> Result<Vec<StandRo
     w.scratch.dead.clear();
     w.scratch.regen_year = Default::default();
     Ok(rows)
+}
+
+/// The layout of manifest `m` of `dir` on `w`'s site: its bounds (tiles cut by area, or by
+/// work since issue 37 Build 5), checked against this site's light grid.
+///
+/// Errors: [`Error::Format`] naming the manifest when its bounds do not fit the light grid or
+/// are not the tiles it names.
+fn manifest_layout(dir: &Path, m: &Manifest, w: &World) -> Result<Layout> {
+    let mp = dir.join(RANK_DIR).join(MANIFEST);
+    let layout = Layout::with_bounds(&w.site, m.col_bounds.clone(), m.row_bounds.clone()).map_err(|e| Error::format(&mp, format!("col_bounds, row_bounds: {e}")))?;
+    if !m.same_layout(&layout) {
+        return Err(Error::format(&mp, format!("col_bounds {:?}, row_bounds {:?}: not the {} × {} tiles they bound", m.col_bounds, m.row_bounds, m.tiles_across, m.tiles_up)).into());
+    }
+    Ok(layout)
 }
 
 /// Reads the checkpoint of `dir` ([`find`]) into `w`: `checkpoint.bin`, or the per-rank

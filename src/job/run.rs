@@ -81,9 +81,12 @@ impl RunOptions<'_> {
 /// What a run did.
 #[derive(Debug, Clone)]
 pub struct RunSummary {
-    /// The world at the end. In a tiled run (rank 0) the year is the last one simulated, the
-    /// rest as of the last year whose outputs needed the whole world (a snapshot, a stop), or
-    /// as started when none did.
+    /// The world at the end. In a tiled run (rank 0) the year is the last one simulated; with
+    /// an `on_snapshot` caller the rest as of the last year whose outputs needed the whole world
+    /// (a snapshot, a stop), or as started when none did; without one (nothing reads the world
+    /// whole: [`Stepper::shed`]) its site is rank 0's tile's cells, its stand holds no trees or
+    /// cohorts (the ranks held them; `trees` counts them), its pool, library and extent the
+    /// run's.
     pub world: World,
     /// Living trees at the end (the whole landscape's, in a tiled run too).
     pub trees: usize,
@@ -305,6 +308,17 @@ pub trait Stepper {
     fn snapshot_reads_world(&self) -> bool {
         true
     }
+    /// Called once after [`Stepper::begin`] when nothing reads `world` whole again (the
+    /// stepper neither snapshots nor saves from it, and no `on_snapshot` caller reads it): the
+    /// stepper may cut `world` to what the run driver still reads of it (the year, the pool
+    /// and library, the extent and georeferencing) and what [`Stepper::snapshot`] needs, with
+    /// maps of longest side `map_px` (issue 37 Build 1: a tiled run's rank 0 then holds its
+    /// tile, not the whole site). Default: nothing.
+    ///
+    /// Errors: the stepper's.
+    fn shed(&mut self, _world: &mut World, _map_px: usize) -> Result<()> {
+        Ok(())
+    }
 }
 
 /// The stepper of one process: [`step_year_with`] on the whole world.
@@ -483,6 +497,11 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     // a caller that reads the world at snapshots); a tiled run writes them from the ranks
     let snap_world = stepper.snapshot_reads_world() || opts.on_snapshot.is_some();
     let save_world = stepper.save_reads_world();
+    if !snap_world && !save_world {
+        // nothing reads the world whole again (`complete` is never called): the stepper may
+        // cut it to what the driver reads (a tiled run's rank 0: its tile, issue 37 Build 1)
+        stepper.shed(&mut world, opts.map_px)?;
+    }
     while world.stand.year < scenario.years {
         let y = world.stand.year + 1;
         let snap_year = opts.write_snapshots && scenario.snapshot_year(y);

@@ -1,9 +1,12 @@
 //! Tiled runs with outputs (`mpirun -np N sylva simulate …`, `sylva simulate --tiles N`): the
 //! landscape cut into one tile per rank ([`crate::sim::tiles`]); every rank steps its tile;
-//! rank 0 also runs the run driver ([`run_scenario_with`]). The run directory holds what a
-//! single process writes, byte for byte where the layout is the same; the checkpoint (one file
-//! per rank, below) and the inventories (one part per rank) are laid out by rank and read back
-//! as one process's (issue 37 Build 4):
+//! rank 0 also runs the run driver ([`run_scenario_with`]), whose world is cut to rank 0's
+//! tile once the tiles hold the stand ([`Root`]'s [`Stepper::shed`]; unless a caller reads the
+//! world at every snapshot), so no rank keeps the whole site's grids for the run (issue 37
+//! Build 1; every rank still builds the scenario's whole world at the start). The run
+//! directory holds what a single process writes, byte for byte where the layout is the same;
+//! the checkpoint (one file per rank, below) and the inventories (one part per rank) are laid
+//! out by rank and read back as one process's (issue 37 Build 4):
 //! - `stand_table.csv`, `stand_table.png`, `scenario.toml`, `species/`, year 0's snapshot
 //!   (single files, as one process): rank 0 (the stand table's row from the ranks' exact sums,
 //!   added up every year: [`crate::sim::tiles::Tile::step`]);
@@ -21,8 +24,10 @@
 //!   takes that rank's sum, and only the trees of bins with trees on several ranks are sent to
 //!   rank 0 and summed in id order ([`crate::sim::tiles::Tile::gather_bin_sums`]), so every
 //!   bin is the f64 sum of one process;
-//! - the whole world is gathered to rank 0 only at a stop (Ctrl-C) or when a caller reads the
-//!   world at every snapshot (`RunOptions::on_snapshot`).
+//! - the whole world is gathered to rank 0 only when a caller reads the world at every
+//!   snapshot (`RunOptions::on_snapshot`; then also at a stop, Ctrl-C); without one, the
+//!   stop's snapshot is written by the ranks too, and the run driver's world holds rank 0's
+//!   tile of the site only.
 //!
 //! Checkpoints and `--resume` per rank ([`super::checkpoint`]): in a checkpoint year every
 //! rank writes its own tile's checkpoint, `checkpoint/year_YYYY_rank_RRRR.bin` (rank 0's with
@@ -139,18 +144,20 @@ fn agree(t: &mut dyn Transport, failed: Option<String>) -> Result<()> {
 }
 
 /// Reads tile `me` of `layout` from the per-rank checkpoint `path` of `year` into `template`
-/// (the world of the scenario at its start, or a copy); returns it with the rows the file holds
-/// (rank 0's: the stand table).
+/// (the world of the scenario at its start, or a copy; its seed grids cut to the tile's window
+/// first, as the rank saved them); returns it with the rows the file holds (rank 0's: the
+/// stand table).
 ///
-/// Errors: as [`checkpoint::load`]; [`Error::Format`] naming the file when its year is not
-/// `year` (the manifest's).
+/// Errors: as [`checkpoint::load`] and [`Tile::resumed`]; [`Error::Format`] naming the file
+/// when its year is not `year` (the manifest's).
 fn load_tile(template: World, layout: &Layout, me: usize, path: &Path, year: u32) -> Result<(Tile, Vec<StandRow>)> {
     let mut w = template;
+    crate::sim::tiles::hold_own_seeds(&mut w, layout, me)?;
     let rows = checkpoint::load(path, &mut w)?;
     if w.stand.year != year {
         return Err(Error::format(path, format!("year {} in a checkpoint whose manifest says year {year}", w.stand.year)).into());
     }
-    Ok((Tile::resumed(w, layout.clone(), me), rows))
+    Ok((Tile::resumed(w, layout.clone(), me)?, rows))
 }
 
 /// A snapshot written by the ranks ([`write_parts`]).
@@ -343,12 +350,16 @@ pub struct Root<'t> {
     base: Tallies,
     /// The other ranks were told to end (or failed with rank 0 in a collective step).
     done: bool,
+    /// Once the run driver's world is cut to rank 0's tile ([`Stepper::shed`]): the maps'
+    /// longest side and, per map pixel, whether its centre is masked
+    /// ([`crate::output::plot::map_masked_centres`] of the whole site, taken before the cut).
+    map_masked: Option<(usize, Vec<bool>)>,
 }
 
 impl<'t> Root<'t> {
     /// Rank 0 of the transport `t`.
     pub fn new(t: &'t mut dyn Transport) -> Self {
-        Root { t, tile: None, base: Tallies::default(), done: false }
+        Root { t, tile: None, base: Tallies::default(), done: false, map_masked: None }
     }
 
     /// Bytes rank 0 has sent to other ranks (halo copies, its part of the gathers, commands).
@@ -401,7 +412,7 @@ impl Stepper for Root<'_> {
         }
         let layout = layout_for(world, self.t.size())?;
         command(self.t, Some(Command::Begin))?;
-        self.tile = Some(Tile::new(world, layout, 0));
+        self.tile = Some(Tile::new(world, layout, 0)?);
         self.collective(|tile, t| Ok(tile.scatter(Some(world), t)?))?;
         // the tallies so far go into rank 0's tile, so the ranks' tallies add up to the run's
         // (what each rank's checkpoint holds)
@@ -494,12 +505,33 @@ impl Stepper for Root<'_> {
         if maps {
             let ba = ba.ok_or_else(|| Error::Exchange { peer: 0, reason: "no map sums gathered".into() })?;
             let m = dir.join("maps");
-            crate::output::plot::write_maps_from(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), world, map_px, &ba)?;
+            let (sp, bp) = (m.join(format!("species_{label}.png")), m.join(format!("basal_area_{label}.png")));
+            match &self.map_masked {
+                Some((px, masked)) if *px == map_px => crate::output::plot::write_maps_masked(&sp, &bp, world, map_px, &ba, masked)?,
+                Some((px, _)) => return Err(Error::Invalid { context: "tiled run".into(), field: "map_px".into(), value: map_px.to_string(), expected: format!("{px}, the maps' size the run began with (rank 0 holds the masked pixels of that size only)") }.into()),
+                None => crate::output::plot::write_maps_from(&sp, &bp, world, map_px, &ba)?,
+            }
         }
         Ok(())
     }
     fn snapshot_reads_world(&self) -> bool {
         false
+    }
+    /// Cuts the run driver's world to rank 0's tile ([`crate::sim::tiles::shed_to_tile`]):
+    /// every output of the run comes from the ranks' parts (inventories, the maps' basal area
+    /// per bin, the stand table's sums, per-rank checkpoints), and the maps' masked pixels
+    /// (from the whole site) are kept first, so rank 0 holds no whole-site array for the rest
+    /// of the run (issue 37 Build 1).
+    ///
+    /// Errors: [`Error::Exchange`] before the run began; as [`crate::sim::tiles::shed_to_tile`].
+    fn shed(&mut self, world: &mut World, map_px: usize) -> Result<()> {
+        let Some(tile) = self.tile.as_ref() else {
+            return Err(Error::Exchange { peer: 0, reason: "the run driver's world cut before the run began".into() }.into());
+        };
+        if self.map_masked.is_none() {
+            self.map_masked = Some((map_px, crate::output::plot::map_masked_centres(world, map_px)));
+        }
+        Ok(crate::sim::tiles::shed_to_tile(world, &tile.layout, 0)?)
     }
 }
 
@@ -531,7 +563,7 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 return Ok(());
             }
             (Command::Begin, _) => {
-                let mut tl = Tile::own(template(&mut world, c)?, layout.clone(), me);
+                let mut tl = Tile::own(template(&mut world, c)?, layout.clone(), me)?;
                 tl.scatter(None, t)?;
                 tile = Some(tl);
             }

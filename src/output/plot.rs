@@ -252,7 +252,37 @@ pub fn map_basal_area(w: &World, max_px: usize) -> Vec<f64> {
 /// Errors: as [`write_maps`]; [`OutputError::Io`] naming the species map when `ba` is not
 /// one value per bin.
 pub fn write_maps_from(species_png: &Path, ba_png: &Path, w: &World, max_px: usize, ba: &[f64]) -> Result<()> {
+    write_maps_masked(species_png, ba_png, w, max_px, ba, &map_masked_centres(w, max_px))
+}
+
+/// Per pixel of the maps of `w` with longest side `max_px` ([`map_dims`]: `cols × rows`,
+/// row-major, row 0 north): true where the pixel's centre lies on no unmasked site cell
+/// ([`World::site_cell`]). A pixel so flagged is drawn masked unless it holds trees. Read from
+/// the site cells `w` holds: the whole site's flags need the whole site (a tiled run's rank 0
+/// keeps them from before its run driver's world is cut to its tile, `job::tiled`).
+pub fn map_masked_centres(w: &World, max_px: usize) -> Vec<bool> {
     let (cols, rows, cell) = map_dims(w, max_px);
+    let mut m = Vec::with_capacity(cols * rows);
+    for r in 0..rows {
+        for c in 0..cols {
+            let (x, y) = ((c as f64 + 0.5) * cell, (rows - r) as f64 * cell - 0.5 * cell);
+            m.push(w.site_cell(x, y).is_none());
+        }
+    }
+    m
+}
+
+/// [`write_maps_from`] with the pixels whose centre is masked given (`centre_masked`, one per
+/// pixel: [`map_masked_centres`] of the whole site); `w` gives the extent, georeferencing,
+/// pool and library only, so it may hold a part of the site's cells (issue 37 Build 1).
+///
+/// Errors: as [`write_maps_from`]; [`OutputError::Io`] naming the species map when
+/// `centre_masked` is not one flag per pixel.
+pub fn write_maps_masked(species_png: &Path, ba_png: &Path, w: &World, max_px: usize, ba: &[f64], centre_masked: &[bool]) -> Result<()> {
+    let (cols, rows, cell) = map_dims(w, max_px);
+    if centre_masked.len() != cols * rows {
+        return Err(OutputError::io(species_png, std::io::Error::new(std::io::ErrorKind::InvalidInput, format!("{} masked-pixel flags for a {cols} × {rows} map", centre_masked.len()))));
+    }
     let np = w.site.lib.species.len();
     if ba.len() != cols * rows * np {
         return Err(OutputError::io(species_png, std::io::Error::new(std::io::ErrorKind::InvalidInput, format!("{} basal-area bins for a {cols} × {rows} map of {np} species", ba.len()))));
@@ -266,11 +296,10 @@ pub fn write_maps_from(species_png: &Path, ba_png: &Path, w: &World, max_px: usi
     let mut mask = crate::grid::Grid::filled(cols, rows, true);
     for r in 0..rows {
         for c in 0..cols {
-            let (x, y) = ((c as f64 + 0.5) * cell, (rows - r) as f64 * cell - 0.5 * cell);
             let v = &ba[(r * cols + c) * np..(r * cols + c + 1) * np];
             let tot: f64 = v.iter().sum();
             // a cell whose centre is masked but that holds trees keeps them (mass balance)
-            let masked = w.site_cell(x, y).is_none() && tot <= 0.0;
+            let masked = centre_masked[r * cols + c] && tot <= 0.0;
             let dom = v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map(|(k, _)| k).unwrap_or(0);
             sp_cells[r * cols + c] = if masked { masked_px } else if tot <= 0.0 { empty_px } else { species_color(w, dom as u16) };
             ba_grid.data[r * cols + c] = (tot / area_ha) as f32;

@@ -520,13 +520,24 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     if ns != w.site.pool.len() {
         return Err(Error::format(path, format!("checkpoint has {ns} species in the pool, the scenario {}", w.site.pool.len())));
     }
+    // each grid as `w` holds it: whole, or a tile's window (a per-rank checkpoint, issue 37
+    // Build 1); a whole grid read into a window (a per-rank checkpoint of an earlier Sylva,
+    // which saved the whole grids) is cut to it
     let mut seeds = w.stand.seeds.clone();
     for g in seeds.iter_mut() {
         let s = r.f32s()?;
-        if s.len() != g.data.len() {
+        if s.len() == g.data.len() {
+            g.data = s;
+        } else if s.len() == g.cols * g.rows {
+            let win = g.held;
+            let mut whole = super::world::SeedGrid { data: s, ..super::world::SeedGrid::new(g.cell_m, g.cols, g.rows) };
+            if !whole.hold(win) {
+                return Err(Error::format(path, "checkpoint seed grid does not match the terrain"));
+            }
+            *g = whole;
+        } else {
             return Err(Error::format(path, "checkpoint seed grid does not match the terrain"));
         }
-        g.data = s;
     }
     let mut deaths = [0u64; super::trees::N_CAUSES];
     for d in deaths.iter_mut() {

@@ -96,6 +96,11 @@ impl CellRect {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+    /// Its cells' indices in a grid of `cols` columns (`row · cols + col`), row-major (rows
+    /// south to north, each west to east).
+    pub fn cells(self, cols: usize) -> impl Iterator<Item = usize> {
+        (self.row0..self.row1).flat_map(move |r| (self.col0..self.col1).map(move |c| r * cols + c))
+    }
 }
 
 /// The light cells a world steps, and the cells its per-light-cell site arrays hold (issue 37

@@ -11,8 +11,9 @@
 //! [`Transport`]. Per-cell passes that only feed the tile's own cells run on them only (the
 //! ground light, the spreading of seeds); the spatial hash and canopy of the light phase and the
 //! crowding grid of growth are held over the cells of the tile's trees and halo copies
-//! (`sim::phases::light::held_cells`, `sim::density::crowding`); the seed grids still cover the
-//! whole site on every rank:
+//! (`sim::phases::light::held_cells`, `sim::density::crowding`); the seed grids over the tile's
+//! window ([`seed_window`]), the seed production within the kernel's reach of it only while it
+//! is spread:
 //! 1. **light**: the canopy of a cell holds every crown that covers it, and a tree's light
 //!    reads its cell and the next cell towards the equator: trees within the largest crown
 //!    radius plus two light cells of the tile;
@@ -507,25 +508,46 @@ fn get_trees(d: &mut Dec<'_>) -> Result<TreeStore> {
 /// [`SeedPlan::owner`] of a seed cell across a tile edge.
 const SHARED: u32 = u32::MAX;
 
-/// A rectangle of seed cells, columns `c0..c1`, rows `r0..r1` (row 0 south).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct SeedRect {
-    c0: usize,
-    c1: usize,
-    r0: usize,
-    r1: usize,
+/// The seed cells tile `k` of `layout` holds of a seed grid of `cols × rows` cells of `cell_m`
+/// metres (columns and rows of seed cells, row 0 south): those of its light cells' centres
+/// (regeneration reads them) and those whose centre it owns (its part of an assembled world,
+/// [`merge_parts`]), with one cell of margin on each side, and to the grid's edge where the
+/// tile is at the light grid's edge. Contains every seed cell the tile owns whole
+/// ([`SeedPlan::owner`]).
+fn seed_rect(layout: &Layout, k: usize, cols: usize, rows: usize, cell_m: f64) -> CellRect {
+    let t = layout.rect(k);
+    let lc = layout.light.cell_m;
+    let axis = |a0: usize, a1: usize, la: usize, n: usize| -> (usize, usize) {
+        let lo = if a0 == 0 { 0 } else { ((a0 as f64 * lc / cell_m) as usize).saturating_sub(1).min(n - 1) };
+        let hi = if a1 >= la { n } else { (((a1 as f64 * lc / cell_m) as usize) + 2).min(n) };
+        (lo, hi)
+    };
+    let (col0, col1) = axis(t.col0, t.col1, layout.light.cols, cols);
+    let (row0, row1) = axis(t.row0, t.row1, layout.light.rows, rows);
+    CellRect { col0, row0, col1, row1 }
 }
 
-impl SeedRect {
-    /// Its cells' indices (`row · cols + col`) in row-major order.
-    fn cells(self, cols: usize) -> impl Iterator<Item = usize> {
-        (self.r0..self.r1).flat_map(move |r| (self.c0..self.c1).map(move |c| r * cols + c))
+/// The window of seed grid `g` that tile `k` of `layout` holds in a tiled run (issue 37 Build 1
+/// and 3): the seed cells of its light cells' centres and those whose centre it owns, with one
+/// cell of margin (to the grid's edge at the light grid's edge): about the tile's area, not the
+/// site's. Columns and rows of `g`'s whole grid.
+pub fn seed_window(layout: &Layout, k: usize, g: &super::world::SeedGrid) -> CellRect {
+    seed_rect(layout, k, g.cols, g.rows, g.cell_m)
+}
+
+/// Cuts the seed grids of `w` to the windows tile `me` of `layout` holds ([`seed_window`]);
+/// grids already cut to them are left as they are. A world whose seed grids hold other cells
+/// (not the whole grid, not the window) is refused.
+///
+/// Errors: [`Error::Invalid`] naming the pool species whose grid does not hold the window.
+pub fn hold_own_seeds(w: &mut World, layout: &Layout, me: usize) -> Result<()> {
+    for (p, g) in w.stand.seeds.iter_mut().enumerate() {
+        let r = seed_window(layout, me, g);
+        if g.held != r && !g.hold(r) {
+            return Err(Error::Invalid { context: "tiled run".into(), field: format!("seed grid of pool species {p}"), value: format!("cells {:?} of {} × {}", g.held, g.cols, g.rows), expected: format!("the whole grid or tile {me}'s window {r:?}") });
+        }
     }
-    /// True when cell index `cell` of a grid of `cols` columns lies in the rectangle.
-    fn contains_cell(self, cell: usize, cols: usize) -> bool {
-        let (c, r) = (cell % cols, cell / cols);
-        c >= self.c0 && c < self.c1 && r >= self.r0 && r < self.r1
-    }
+    Ok(())
 }
 
 /// How one pool species' seed grid lies over the tiles of a layout ([`Tile::reproduce`]).
@@ -536,10 +558,14 @@ struct SeedPlan {
     cell_m: f64,
     /// The kernel's reach in seed cells (largest `|dc|`, `|dr|` of its offsets).
     reach: usize,
-    /// Per seed cell, the tile that owns every light cell a tree in it can stand on (a tree's
-    /// seed cell and light cell both come from its position, [`reproduction::source_cell`],
-    /// [`LightGrid::cell_of`]; one light cell of margin on each side), or [`SHARED`].
-    owner: Vec<u32>,
+    /// Tiles across in the layout.
+    nx: usize,
+    /// Per seed column (row), the column (row) of tiles that owns every light column (row) a
+    /// tree in it can stand on (a tree's seed cell and light cell both come from its position,
+    /// [`reproduction::source_cell`], [`LightGrid::cell_of`]; one light cell of margin on each
+    /// side), or [`SHARED`]: `cols + rows` entries, not one per cell.
+    col_tile: Vec<u32>,
+    row_tile: Vec<u32>,
 }
 
 impl SeedPlan {
@@ -553,41 +579,50 @@ impl SeedPlan {
             let hi = if i + 1 == n { ln - 1 } else { ((((i + 1) as f64 * g.cell_m / lc) as usize) + 1).min(ln - 1) };
             (lo, hi)
         };
-        let mut owner = vec![SHARED; g.cols * g.rows];
-        for r in 0..g.rows {
-            let (rl, rh) = span(r, g.rows, layout.light.rows);
-            for c in 0..g.cols {
-                let (cl, ch) = span(c, g.cols, layout.light.cols);
-                let a = layout.owner_of_cell(cl, rl);
-                if a == layout.owner_of_cell(ch, rh) {
-                    owner[r * g.cols + c] = a as u32;
-                }
-            }
-        }
-        SeedPlan { cols: g.cols, rows: g.rows, cell_m: g.cell_m, reach, owner }
+        let nx = layout.nx;
+        // the tiles' column of a light column, the tiles' row of a light row
+        let tx = |col: usize| layout.owner_of_cell(col, 0) % nx;
+        let ty = |row: usize| layout.owner_of_cell(0, row) / nx;
+        let one = |lo: usize, hi: usize, f: &dyn Fn(usize) -> usize| if f(lo) == f(hi) { f(lo) as u32 } else { SHARED };
+        let col_tile = (0..g.cols).map(|c| {
+            let (lo, hi) = span(c, g.cols, layout.light.cols);
+            one(lo, hi, &tx)
+        }).collect();
+        let row_tile = (0..g.rows).map(|r| {
+            let (lo, hi) = span(r, g.rows, layout.light.rows);
+            one(lo, hi, &ty)
+        }).collect();
+        SeedPlan { cols: g.cols, rows: g.rows, cell_m: g.cell_m, reach, nx, col_tile, row_tile }
     }
 
-    /// The seed cells tile `k` reads: those of its light cells' centres (regeneration) and
-    /// those whose centre it owns (its part of an assembled world, [`merge_parts`]), with one
-    /// cell of margin, and to the grid's edge where the tile is at the light grid's edge.
-    fn read(&self, layout: &Layout, k: usize) -> SeedRect {
-        let t = layout.rect(k);
-        let lc = layout.light.cell_m;
-        let axis = |a0: usize, a1: usize, la: usize, n: usize| -> (usize, usize) {
-            let lo = if a0 == 0 { 0 } else { ((a0 as f64 * lc / self.cell_m) as usize).saturating_sub(1).min(n - 1) };
-            let hi = if a1 >= la { n } else { (((a1 as f64 * lc / self.cell_m) as usize) + 2).min(n) };
-            (lo, hi)
-        };
-        let (c0, c1) = axis(t.col0, t.col1, layout.light.cols, self.cols);
-        let (r0, r1) = axis(t.row0, t.row1, layout.light.rows, self.rows);
-        SeedRect { c0, c1, r0, r1 }
+    /// The tile that owns every light cell a tree in seed cell `cell` (`row · cols + col`) can
+    /// stand on, or [`SHARED`] for a cell across a tile edge.
+    #[inline]
+    fn owner(&self, cell: usize) -> u32 {
+        let (a, b) = (self.col_tile[cell % self.cols], self.row_tile[cell / self.cols]);
+        if a == SHARED || b == SHARED {
+            SHARED
+        } else {
+            b * self.nx as u32 + a
+        }
+    }
+
+    /// The seed cells tile `k` reads and holds ([`seed_window`]).
+    fn read(&self, layout: &Layout, k: usize) -> CellRect {
+        seed_rect(layout, k, self.cols, self.rows, self.cell_m)
     }
 
     /// The seed cells whose production tile `k` needs: [`SeedPlan::read`] widened by the reach.
-    fn need(&self, layout: &Layout, k: usize) -> SeedRect {
+    fn need(&self, layout: &Layout, k: usize) -> CellRect {
         let r = self.read(layout, k);
-        SeedRect { c0: r.c0.saturating_sub(self.reach), c1: (r.c1 + self.reach).min(self.cols), r0: r.r0.saturating_sub(self.reach), r1: (r.r1 + self.reach).min(self.rows) }
+        CellRect { col0: r.col0.saturating_sub(self.reach), col1: (r.col1 + self.reach).min(self.cols), row0: r.row0.saturating_sub(self.reach), row1: (r.row1 + self.reach).min(self.rows) }
     }
+}
+
+/// True when cell index `cell` of a grid of `cols` columns lies in `r`.
+#[inline]
+fn contains_cell(r: CellRect, cell: usize, cols: usize) -> bool {
+    r.contains(cell % cols, cell / cols)
 }
 
 /// One tile of a tiled run: a [`World`] whose stand holds only the tile's trees and cohorts,
@@ -618,32 +653,41 @@ pub struct Tile {
 
 impl Tile {
     /// Tile `me` of `layout`, cut from `global`, the world of one process (its trees and
-    /// cohorts on the tile's cells; the seed grids whole, of which the tile reads its own
-    /// part). The tile's tallies start at zero ([`Tile::gather`] adds them to the global
-    /// world's).
-    pub fn new(global: &World, layout: Layout, me: usize) -> Tile {
-        Tile::own(global.clone(), layout, me)
+    /// cohorts on the tile's cells; its window of the seed grids, [`seed_window`]), copying only
+    /// the tile's part of the site (`clone_for_tile`), not the whole world first. The tile's
+    /// tallies start at zero ([`Tile::gather`] adds them to the global world's).
+    ///
+    /// Errors: [`Error::Invalid`] when `global`'s seed grids hold neither the whole grid nor the
+    /// tile's window ([`hold_own_seeds`]).
+    pub fn new(global: &World, layout: Layout, me: usize) -> Result<Tile> {
+        Tile::own(clone_for_tile(global, &layout, me)?, layout, me)
     }
 
     /// As [`Tile::new`], taking `world` (the world of one process) instead of copying it: a rank
     /// that no longer needs the whole world (every rank but 0, once its tile exists) then holds
     /// one copy of the site, not two, and not the start's trees of other tiles.
-    pub fn own(mut world: World, layout: Layout, me: usize) -> Tile {
+    ///
+    /// Errors: as [`Tile::new`].
+    pub fn own(mut world: World, layout: Layout, me: usize) -> Result<Tile> {
         keep_own(&mut world, &layout, me);
         hold_own_cells(&mut world, layout.rect(me));
+        hold_own_seeds(&mut world, &layout, me)?;
         world.tallies.deaths_total = [0; N_CAUSES];
         world.tallies.regen_ledger = RegenLedger::new(world.site.pool.len());
         world.scratch.dead.clear();
-        Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] }
+        Ok(Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] })
     }
 
     /// Tile `me` of `layout` from `world`, a tile's world as it was saved (its own trees and
-    /// cohorts, the seed grids it held, its tallies: a run's per-rank checkpoint read back);
-    /// tallies are kept, this year's dead cleared.
-    pub fn resumed(mut world: World, layout: Layout, me: usize) -> Tile {
+    /// cohorts, the window of the seed grids it held, its tallies: a run's per-rank checkpoint
+    /// read back); tallies are kept, this year's dead cleared.
+    ///
+    /// Errors: as [`Tile::new`].
+    pub fn resumed(mut world: World, layout: Layout, me: usize) -> Result<Tile> {
         hold_own_cells(&mut world, layout.rect(me));
+        hold_own_seeds(&mut world, &layout, me)?;
         world.scratch.dead.clear();
-        Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] }
+        Ok(Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] })
     }
 
     /// Rank 0 sends every rank its part of `global` (rank 0's world after a fresh start or a
@@ -656,14 +700,14 @@ impl Tile {
         let mut out = vec![Vec::new(); n];
         if let (0, Some(g)) = (t.rank(), global) {
             for (k, m) in out.iter_mut().enumerate() {
-                *m = encode_part(g, &self.layout, k);
+                *m = encode_part(g, &self.layout, k)?;
             }
         }
         let got = t.exchange(out)?;
         let p = decode_part(&got[0], 0)?;
         let w = &mut self.world;
         if p.seeds.len() != w.stand.seeds.len() || p.seeds.iter().zip(&w.stand.seeds).any(|(a, b)| a.len() != b.data.len()) {
-            return Err(Error::Exchange { peer: 0, reason: "seed grids of another shape than this rank's".into() });
+            return Err(Error::Exchange { peer: 0, reason: "seed grids of another shape than this rank's window".into() });
         }
         w.stand.year = p.year;
         let next = w.stand.trees.next_id;
@@ -830,11 +874,14 @@ impl Tile {
     /// [`SeedPlan::read`], widened by the kernel), 4 bytes per cell, and its seed trees in
     /// shared cells there as (cell, id, seeds), 20 bytes each; a rank sums each shared cell's
     /// trees in id order, so every seed cell's production is one process's bit for bit. Then it
-    /// spreads the production by the kernel ([`reproduction::gather`]) onto the cells it reads
-    /// (the cells of its light cells' centres, and of the seed cells whose centre it owns);
-    /// the other cells of its seed grids keep last year's values, which nothing reads. One
-    /// exchange a year whatever the kernel's length; no seed tree crosses ranks unless it
-    /// stands in a seed cell across a tile edge. Returns the seconds spent passing the sums.
+    /// spreads the production by the kernel ([`reproduction::gather`]) onto the cells it holds,
+    /// its window ([`seed_window`]: the cells of its light cells' centres, and of the seed cells
+    /// whose centre it owns). What a rank holds of each species grows with its tile, not the
+    /// site (issue 37 Build 1): its window (kept), its own production over the window and the
+    /// production within the kernel's reach of it (for the year's spreading only), and the
+    /// plan's owner per seed column and row. One exchange a year whatever the kernel's length;
+    /// no seed tree crosses ranks unless it stands in a seed cell across a tile edge. Returns
+    /// the seconds spent passing the sums.
     ///
     /// Errors: [`Error::Exchange`] from the transport or a malformed message.
     fn reproduce(&mut self, t: &mut dyn Transport) -> Result<f64> {
@@ -846,9 +893,10 @@ impl Tile {
         let kernels: Vec<Vec<(isize, isize, f32)>> = (0..np).map(|p| reproduction::kernel(&lib.species[site.pool[p] as usize].life.dispersal, stand.seeds[p].cell_m)).collect();
         let plans: Vec<SeedPlan> = (0..np).map(|p| SeedPlan::new(&self.layout, &stand.seeds[p], &kernels[p])).collect();
         let pidx: Vec<Option<usize>> = (0..lib.species.len()).map(|s| site.pool_index(s as u16)).collect();
-        // own production: per pure cell (whole grid, this tile's cells filled), and the trees in
-        // shared cells (cell, id, seeds), in id order
-        let mut pure: Vec<Vec<f32>> = stand.seeds.iter().map(|g| vec![0f32; g.data.len()]).collect();
+        // own production: per pure cell it owns (over its window, which holds them all), and
+        // the trees in shared cells (cell, id, seeds), in id order
+        let wins: Vec<CellRect> = plans.iter().map(|pl| pl.read(&self.layout, me)).collect();
+        let mut pure: Vec<Vec<f32>> = wins.iter().map(|r| vec![0f32; r.len()]).collect();
         let mut shared: Vec<Vec<(u64, u64, f32)>> = vec![Vec::new(); np];
         for i in 0..tr.len() {
             let Some(p) = pidx[tr.species[i] as usize] else { continue };
@@ -856,14 +904,16 @@ impl Tile {
             let g = &stand.seeds[p];
             let (c, r) = reproduction::source_cell(g, tr.x[i], tr.y[i]);
             let cell = r * g.cols + c;
-            match plans[p].owner[cell] {
+            match plans[p].owner(cell) {
                 SHARED => shared[p].push((cell as u64, tr.id[i], v)),
-                o if o as usize == me => pure[p][cell] += v,
+                o if o as usize == me && wins[p].contains(c, r) => pure[p][(r - wins[p].row0) * (wins[p].col1 - wins[p].col0) + (c - wins[p].col0)] += v,
                 o => {
-                    return Err(Error::Exchange { peer: o as usize, reason: format!("tree {} of tile {me} at ({}, {}) m in a seed cell of tile {o}", tr.id[i], tr.x[i], tr.y[i]) });
+                    return Err(Error::Exchange { peer: o as usize, reason: format!("tree {} of tile {me} at ({}, {}) m in a seed cell of tile {o} (this tile's window {:?})", tr.id[i], tr.x[i], tr.y[i], wins[p]) });
                 }
             }
         }
+        // the production of pure cell `(c, r)` owned by this tile
+        let own = |p: usize, c: usize, r: usize| pure[p][(r - wins[p].row0) * (wins[p].col1 - wins[p].col0) + (c - wins[p].col0)];
         let t0 = Instant::now();
         let mut out = Vec::with_capacity(n);
         for k in 0..n {
@@ -872,9 +922,12 @@ impl Tile {
                 for p in 0..np {
                     let (plan, cols) = (&plans[p], stand.seeds[p].cols);
                     let need = plan.need(&self.layout, k);
-                    let vals: Vec<f32> = need.cells(cols).filter(|&c| plan.owner[c] as usize == me).map(|c| pure[p][c]).collect();
+                    // the cells it owns lie in its window: `need` row-major, cut to the window
+                    let w = &wins[p];
+                    let (c0, c1, r0, r1) = (need.col0.max(w.col0), need.col1.min(w.col1), need.row0.max(w.row0), need.row1.min(w.row1));
+                    let vals: Vec<f32> = (r0..r1.max(r0)).flat_map(|r| (c0..c1.max(c0)).map(move |c| (c, r))).filter(|&(c, r)| plan.owner(r * cols + c) as usize == me).map(|(c, r)| own(p, c, r)).collect();
                     e.f32s(&vals);
-                    let sh: Vec<&(u64, u64, f32)> = shared[p].iter().filter(|x| need.contains_cell(x.0 as usize, cols)).collect();
+                    let sh: Vec<&(u64, u64, f32)> = shared[p].iter().filter(|x| contains_cell(need, x.0 as usize, cols)).collect();
                     e.u64(sh.len() as u64);
                     for x in sh {
                         e.u64(x.0);
@@ -893,13 +946,13 @@ impl Tile {
         let mut decs: Vec<Dec<'_>> = got.iter().enumerate().map(|(k, m)| Dec::new(m, &fails[k])).collect();
         for p in 0..np {
             let plan = &plans[p];
-            let g = &mut stand.seeds[p];
-            let (cols, rows) = (g.cols, g.rows);
+            let (cols, rows) = (stand.seeds[p].cols, stand.seeds[p].rows);
             let need = plan.need(&self.layout, me);
-            // the production of every cell within reach: pure cells from their owners, in the
-            // order they were sent; shared cells summed over every rank's trees in id order
+            // the production of every cell within reach (the window plus the kernel's reach):
+            // pure cells from their owners, in the order they were sent; shared cells summed
+            // over every rank's trees in id order
             let mut theirs: Vec<std::vec::IntoIter<f32>> = Vec::with_capacity(n);
-            let mut entries: Vec<(u64, u64, f32)> = shared[p].iter().filter(|x| need.contains_cell(x.0 as usize, cols)).copied().collect();
+            let mut entries: Vec<(u64, u64, f32)> = shared[p].iter().filter(|x| contains_cell(need, x.0 as usize, cols)).copied().collect();
             for (k, d) in decs.iter_mut().enumerate() {
                 if k == me {
                     theirs.push(Vec::new().into_iter());
@@ -909,21 +962,21 @@ impl Tile {
                 let m = d.count(20)?;
                 for _ in 0..m {
                     let (cell, id, v) = (d.u64()?, d.u64()?, d.f32()?);
-                    if !need.contains_cell(cell as usize, cols) || plan.owner.get(cell as usize) != Some(&SHARED) {
+                    if !contains_cell(need, cell as usize, cols) || plan.owner(cell as usize) != SHARED {
                         return Err(Error::Exchange { peer: k, reason: format!("seeds of tree {id} in seed cell {cell}, not a shared cell within reach") });
                     }
                     entries.push((cell, id, v));
                 }
             }
-            let (w_n, h_n) = (need.c1 - need.c0, need.r1 - need.r0);
+            let (w_n, h_n) = (need.col1 - need.col0, need.row1 - need.row0);
             let mut src = vec![0f32; w_n * h_n];
             for (j, c) in need.cells(cols).enumerate() {
-                let o = plan.owner[c];
+                let o = plan.owner(c);
                 if o == SHARED {
                     continue;
                 }
                 src[j] = if o as usize == me {
-                    pure[p][c]
+                    own(p, c % cols, c / cols)
                 } else {
                     theirs[o as usize].next().ok_or_else(|| Error::Exchange { peer: o as usize, reason: format!("seed production cut short for pool species {p}") })?
                 };
@@ -931,19 +984,20 @@ impl Tile {
             entries.sort_unstable_by_key(|x| (x.0, x.1));
             for &(cell, _, v) in &entries {
                 let (c, r) = (cell as usize % cols, cell as usize / cols);
-                src[(r - need.r0) * w_n + (c - need.c0)] += v;
+                src[(r - need.row0) * w_n + (c - need.col0)] += v;
             }
             if let Some(k) = theirs.iter().position(|it| it.len() > 0) {
                 return Err(Error::Exchange { peer: k, reason: format!("{} seed production values too many for pool species {p}", theirs[k].len()) });
             }
+            let g = &mut stand.seeds[p];
             let area = (g.cell_m * g.cell_m) as f32;
-            let read = plan.read(&self.layout, me);
-            let k = &kernels[p];
-            for r in read.r0..read.r1 {
-                for c in read.c0..read.c1 {
-                    g.data[r * cols + c] = reproduction::gather(k, cols, rows, area, c, r, |cc, rr| src[(rr - need.r0) * w_n + (cc - need.c0)]);
-                }
+            let read = wins[p];
+            if g.held != read {
+                return Err(Error::Exchange { peer: me, reason: format!("seed grid of pool species {p} holds {:?}, not this tile's window {read:?}", g.held) });
             }
+            let k = &kernels[p];
+            // onto the window, row-major: the grid's data in its order
+            g.data = read.cells(cols).map(|c| reproduction::gather(k, cols, rows, area, c % cols, c / cols, |cc, rr| src[(rr - need.row0) * w_n + (cc - need.col0)])).collect();
         }
         Ok(halo_s)
     }
@@ -1118,7 +1172,7 @@ impl Tile {
     /// Errors: [`Error::Exchange`] from the transport or a malformed message.
     pub fn gather(&self, global: Option<(&mut World, &Tallies)>, t: &mut dyn Transport) -> Result<()> {
         let mut out = vec![Vec::new(); t.size()];
-        out[0] = encode_part(&self.world, &self.layout, self.me);
+        out[0] = encode_part(&self.world, &self.layout, self.me)?;
         let got = t.exchange(out)?;
         let Some((g, base)) = global else { return Ok(()) };
         if t.rank() != 0 {
@@ -1131,7 +1185,8 @@ impl Tile {
 
 /// Writes into `g` the world of one process made of the tile parts `parts` (part `k` from tile
 /// `k` of `layout`): trees merged by id, cohorts sorted by (cell, species), each seed cell from
-/// the tile owning its centre, this year's dead sorted by id, tallies `base` plus every part's,
+/// the tile owning its centre (part `k`'s seeds: its window, [`seed_window`]; `g`'s grids
+/// whole), this year's dead sorted by id, tallies `base` plus every part's,
 /// the year of the last part. `g.stand.trees.next_id` is kept.
 ///
 /// Errors: [`Error::Exchange`] naming the part whose seed grids have another shape than `g`'s.
@@ -1170,20 +1225,20 @@ fn merge_parts(g: &mut World, base: &Tallies, layout: &Layout, parts: Vec<Part>)
         for q in 0..N_REGEN_CAUSES {
             ry.dead[q] += w.regen_year.dead[q];
         }
-        // the seed cells this tile owns (the tile of the seed cell's centre)
+        // the seed cells this tile owns (the tile of the seed cell's centre), all in its window
         if w.seeds.len() != g.stand.seeds.len() {
             return Err(Error::Exchange { peer: k, reason: format!("{} seed grids, expected {}", w.seeds.len(), g.stand.seeds.len()) });
         }
         for (gs, s) in g.stand.seeds.iter_mut().zip(&w.seeds) {
-            if s.len() != gs.data.len() {
-                return Err(Error::Exchange { peer: k, reason: format!("seed grid of {} cells, expected {}", s.len(), gs.data.len()) });
+            let win = seed_window(layout, k, gs);
+            if s.len() != win.len() || !gs.holds_all() {
+                return Err(Error::Exchange { peer: k, reason: format!("seed window of {} cells, expected {} (of a whole grid of {} × {})", s.len(), win.len(), gs.cols, gs.rows) });
             }
-            for r in 0..gs.rows {
-                for c in 0..gs.cols {
-                    let (x, y) = (((c as f64 + 0.5) * gs.cell_m) as f32, ((r as f64 + 0.5) * gs.cell_m) as f32);
-                    if layout.owner_of(x, y) == k {
-                        gs.data[r * gs.cols + c] = s[r * gs.cols + c];
-                    }
+            for (j, cell) in win.cells(gs.cols).enumerate() {
+                let (c, r) = (cell % gs.cols, cell / gs.cols);
+                let (x, y) = (((c as f64 + 0.5) * gs.cell_m) as f32, ((r as f64 + 0.5) * gs.cell_m) as f32);
+                if layout.owner_of(x, y) == k {
+                    gs.data[cell] = s[j];
                 }
             }
         }
@@ -1216,9 +1271,11 @@ pub fn assemble(global: &mut World, layout: &Layout, tiles: Vec<World>) -> Resul
     let zero = Tallies { deaths_total: [0; N_CAUSES], regen_ledger: RegenLedger::new(global.site.pool.len()) };
     let parts = tiles
         .into_iter()
-        .map(|w| Part {
+        .enumerate()
+        .map(|(k, w)| Part {
             year: w.stand.year,
-            seeds: w.stand.seeds.into_iter().map(|g| g.data).collect(),
+            // the tile's window (a tile world holds it; a whole grid is cut to it)
+            seeds: w.stand.seeds.into_iter().map(|g| g.window(seed_window(layout, k, &g)).unwrap_or_default()).collect(),
             trees: w.stand.trees,
             cohorts: w.stand.cohorts,
             dead: w.scratch.dead,
@@ -1285,6 +1342,109 @@ fn hold_own_site(w: &mut World, rect: CellRect) {
     w.site.conditions.hold(win);
 }
 
+/// Cuts `w`, the world of one process that a tiled run's driver keeps on rank 0 besides its
+/// tile, to what the driver reads once the tiles hold the stand (issue 37 Build 1,
+/// `job::run::Stepper::shed`): the site cut to tile `me`'s cells as [`Tile::own`] cuts it (the
+/// light cells' arrays to its rectangle, the conditions, relative insolation and suitability
+/// to its site cells plus [`SITE_HALO_CELLS`], the whole site's checkpoint identity kept), the
+/// seed grids to its window ([`seed_window`]), and no trees or cohorts (the tiles hold them;
+/// the next tree id is kept). The year, tallies, pool, library, extent and georeferencing are
+/// kept. Arrays already cut are left as they are.
+///
+/// Errors: as [`hold_own_seeds`].
+pub fn shed_to_tile(w: &mut World, layout: &Layout, me: usize) -> Result<()> {
+    let next_id = w.stand.trees.next_id;
+    w.stand.trees = TreeStore::default();
+    w.stand.trees.next_id = next_id;
+    w.stand.cohorts = Cohorts::default();
+    w.scratch.grid = Default::default();
+    w.scratch.dead = Vec::new();
+    hold_own_cells(w, layout.rect(me));
+    hold_own_seeds(w, layout, me)
+}
+
+/// A copy of `global` for tile `me` of `layout` that copies only the tile's part of the site
+/// and seed grids (issue 37 Build 1: rank 0 makes its tile from the run driver's world, which
+/// stays whole until [`shed_to_tile`]; copying it whole first held the whole site twice for a
+/// moment): the conditions, relative insolation and suitability of the site cells
+/// [`hold_own_site`] keeps, the light cells' arrays of the tile's rectangle, each seed grid's
+/// window ([`seed_window`]), with the whole site's checkpoint identity; the stand's trees and
+/// cohorts and the rest copied as they are (the tile keeps its own, [`Tile::own`]). The values
+/// are those [`Tile::own`] cuts from a whole copy. A `global` whose site is already cut is
+/// copied whole.
+///
+/// Errors: [`Error::Invalid`] naming the pool species whose seed grid holds neither the whole
+/// grid nor the tile's window (as [`hold_own_seeds`]).
+fn clone_for_tile(global: &World, layout: &Layout, me: usize) -> Result<World> {
+    let g = &global.site;
+    let c = &g.conditions;
+    if !c.holds_all() {
+        return Ok(global.clone());
+    }
+    let rect = layout.rect(me);
+    let light = g.light;
+    let span = super::light_grid::Span::new(Some(rect), &light);
+    let l = light.cell_m;
+    let win = c.window_of(rect.col0 as f64 * l, rect.row0 as f64 * l, rect.col1 as f64 * l, rect.row1 as f64 * l, SITE_HALO_CELLS);
+    let full = c.held;
+    // the window's cells of a per-site-cell vector over the whole grid (as `hold_own_site`)
+    let cut = |v: &[f32]| -> Vec<f32> {
+        let mut out = Vec::with_capacity(win.width * win.height);
+        for r in win.row0..win.row1() {
+            let i = (r - full.row0) * full.width + (win.col0 - full.col0);
+            out.extend_from_slice(&v[i..i + win.width]);
+        }
+        out
+    };
+    let conditions = crate::conditions::SiteConditions {
+        geo: c.geo.clone(),
+        cell_x_m: c.cell_x_m,
+        cell_y_m: c.cell_y_m,
+        mask: win.cut(&c.mask, &full),
+        elevation_m: win.cut(&c.elevation_m, &full),
+        slope_deg: win.cut(&c.slope_deg, &full),
+        aspect_deg: win.cut(&c.aspect_deg, &full),
+        twi: win.cut(&c.twi, &full),
+        insolation_kwh_m2: win.cut(&c.insolation_kwh_m2, &full),
+        wind_exposure: win.cut(&c.wind_exposure, &full),
+        temperature_c: win.cut(&c.temperature_c, &full),
+        indices: win.cut(&c.indices, &full),
+        held: win,
+        full: c.full,
+    };
+    let whole_identity = if win == full { g.whole_identity.clone() } else { Some(super::checkpoint::site_identity(c)) };
+    let per_light = |v: &[f32]| if v.len() == light.len() { span.cut(v) } else { v.to_vec() };
+    let site = Site {
+        conditions,
+        lib: g.lib.clone(),
+        pool: g.pool.clone(),
+        seed: g.seed,
+        extent: g.extent,
+        area_ha: g.area_ha,
+        light,
+        light_site: if g.light_site.len() == light.len() { span.cut(&g.light_site) } else { g.light_site.clone() },
+        rel_insolation: cut(&g.rel_insolation),
+        suitability: g.suitability.iter().map(|v| cut(v)).collect(),
+        whole_identity,
+        seed_rain: g.seed_rain.clone(),
+        obstacles: g.obstacles.clone(),
+        obstacle_canopy: g.obstacle_canopy.clone(),
+        ground_free: per_light(&g.ground_free),
+        window: Some(rect),
+        management: g.management.clone(),
+        climate_change: g.climate_change.clone(),
+    };
+    let mut seeds = Vec::with_capacity(global.stand.seeds.len());
+    for (p, sg) in global.stand.seeds.iter().enumerate() {
+        let r = seed_window(layout, me, sg);
+        let data = sg.window(r).ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: format!("seed grid of pool species {p}"), value: format!("cells {:?} of {} × {}", sg.held, sg.cols, sg.rows), expected: format!("the whole grid or tile {me}'s window {r:?}") })?;
+        seeds.push(super::world::SeedGrid { cell_m: sg.cell_m, cols: sg.cols, rows: sg.rows, held: r, data });
+    }
+    let stand = super::world::Stand { trees: global.stand.trees.clone(), year: global.stand.year, cohorts: global.stand.cohorts.clone(), seeds };
+    let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone() };
+    Ok(World { site, stand, scratch, tallies: global.tallies.clone() })
+}
+
 /// Keeps in `w` only the trees and cohorts of tile `me` of `layout`.
 fn keep_own(w: &mut World, layout: &Layout, me: usize) {
     let t = &w.stand.trees;
@@ -1301,9 +1461,12 @@ fn keep_own(w: &mut World, layout: &Layout, me: usize) {
     w.stand.cohorts = own;
 }
 
-/// The part of `w` that tile `k` owns: year, trees, cohorts, seed grids (whole: the receiver
-/// keeps the cells it needs), this year's dead, tallies, this year's regeneration counts.
-fn encode_part(w: &World, layout: &Layout, k: usize) -> Vec<u8> {
+/// The part of `w` that tile `k` owns: year, trees, cohorts, tile `k`'s window of each seed
+/// grid ([`seed_window`]; `w` holds the whole grids, or is tile `k`'s world), this year's
+/// dead, tallies, this year's regeneration counts.
+///
+/// Errors: [`Error::Exchange`] naming tile `k` when a seed grid of `w` does not hold its window.
+fn encode_part(w: &World, layout: &Layout, k: usize) -> Result<Vec<u8>> {
     let mut e = codec::Enc(Vec::new());
     e.u64(w.stand.year as u64);
     let t = &w.stand.trees;
@@ -1325,8 +1488,10 @@ fn encode_part(w: &World, layout: &Layout, k: usize) -> Vec<u8> {
     }
     e.u64(w.stand.seeds.len() as u64);
     for s in &w.stand.seeds {
-        e.u64(s.data.len() as u64);
-        s.data.iter().for_each(|&v| e.f32(v));
+        let r = seed_window(layout, k, s);
+        let v = s.window(r).ok_or_else(|| Error::Exchange { peer: k, reason: format!("seed grid holding {:?}, not tile {k}'s window {r:?}", s.held) })?;
+        e.u64(v.len() as u64);
+        v.iter().for_each(|&x| e.f32(x));
     }
     let dead: Vec<&DeadTree> = w.scratch.dead.iter().filter(|d| layout.owner_of(d.x, d.y) == k).collect();
     e.u64(dead.len() as u64);
@@ -1351,7 +1516,7 @@ fn encode_part(w: &World, layout: &Layout, k: usize) -> Vec<u8> {
     e.u64(ry.germinated);
     e.u64(ry.recruited);
     ry.dead.iter().for_each(|&v| e.u64(v));
-    e.0
+    Ok(e.0)
 }
 
 /// A tile's part of a world, as passed by [`encode_part`].
@@ -1433,7 +1598,7 @@ pub fn run_local(world: &World, layout: &Layout, years: u32) -> Result<(World, V
                 let base = base.clone();
                 s.spawn(move || -> Result<(Option<(World, Vec<super::stats::StandRow>)>, u64)> {
                     let me = tr.rank();
-                    let mut tile = Tile::new(world, layout, me);
+                    let mut tile = Tile::new(world, layout, me)?;
                     let mut rows = Vec::new();
                     for _ in 0..years {
                         let r = tile.step(&mut tr)?;

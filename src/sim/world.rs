@@ -1,6 +1,6 @@
 //! The simulated world: site conditions, species pool, trees and the grids the phases share.
 
-use super::light_grid::LightGrid;
+use super::light_grid::{CellRect, LightGrid};
 use super::cohorts::{Cohorts, RegenLedger, RegenYear};
 use super::scenario::{Scenario, Start};
 use super::trees::{DeadTree, NewTree, SpatialGrid, TreeStore};
@@ -16,26 +16,77 @@ pub const SEED_CELL_M: f64 = 20.0;
 /// `max(SEED_CELL_M, max_m / KERNEL_CELLS)`, so the kernel has at most `(2·8+1)²` offsets.
 pub const KERNEL_CELLS: f64 = 8.0;
 
-/// Seeds per m² of one species on its own seed grid (row 0 south).
+/// Seeds per m² of one species on its own seed grid (row 0 south): the whole grid in one
+/// process; in a tiled run a tile holds the window of it that it reads (issue 37 Build 1 and 3,
+/// [`crate::sim::tiles::seed_window`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SeedGrid {
     /// Cell size (m).
     pub cell_m: f64,
-    /// Columns.
+    /// Columns of the whole grid.
     pub cols: usize,
-    /// Rows.
+    /// Rows of the whole grid.
     pub rows: usize,
-    /// Seeds per m², `row * cols + col`.
+    /// The cells held (columns and rows of the whole grid): all of them, or a tile's window.
+    pub held: CellRect,
+    /// Seeds per m² of the cells held, row-major over `held`: cell `(col, row)` of the whole
+    /// grid at `(row − held.row0) · held width + (col − held.col0)` ([`SeedGrid::index`]).
     pub data: Vec<f32>,
 }
 
 impl SeedGrid {
-    /// Seeds per m² at world point `(x, y)`.
+    /// The whole `cols × rows` grid of cells of `cell_m` metres, no seeds.
+    pub fn new(cell_m: f64, cols: usize, rows: usize) -> SeedGrid {
+        SeedGrid { cell_m, cols, rows, held: CellRect { col0: 0, row0: 0, col1: cols, row1: rows }, data: vec![0.0; cols * rows] }
+    }
+
+    /// True when the whole grid is held.
+    pub fn holds_all(&self) -> bool {
+        self.held == CellRect { col0: 0, row0: 0, col1: self.cols, row1: self.rows }
+    }
+
+    /// Element of [`SeedGrid::data`] of cell `(col, row)` of the whole grid, or `None` when the
+    /// cell is not held.
+    #[inline]
+    pub fn index(&self, col: usize, row: usize) -> Option<usize> {
+        let h = &self.held;
+        h.contains(col, row).then(|| (row - h.row0) * (h.col1 - h.col0) + (col - h.col0))
+    }
+
+    /// Seeds per m² at world point `(x, y)` (clamped to the grid). Panics, naming the cell and
+    /// the window, when its cell is not held (a tile reads the cells of its own light cells).
     #[inline]
     pub fn at(&self, x: f64, y: f64) -> f32 {
         let c = ((x / self.cell_m) as usize).min(self.cols - 1);
         let r = ((y / self.cell_m) as usize).min(self.rows - 1);
-        self.data[r * self.cols + c]
+        match self.index(c, r) {
+            Some(i) => self.data[i],
+            None => panic!("seed cell (column {c}, row {r}) outside the cells held ({:?})", self.held),
+        }
+    }
+
+    /// The values of the cells of `r` (row-major over `r`), or `None` when `r` does not lie
+    /// inside the cells held.
+    pub fn window(&self, r: CellRect) -> Option<Vec<f32>> {
+        let h = &self.held;
+        if r.col0 < h.col0 || r.row0 < h.row0 || r.col1 > h.col1 || r.row1 > h.row1 || r.col0 > r.col1 || r.row0 > r.row1 {
+            return None;
+        }
+        let w = h.col1 - h.col0;
+        Some((r.row0..r.row1).flat_map(|row| self.data[(row - h.row0) * w + (r.col0 - h.col0)..][..r.col1 - r.col0].iter().copied()).collect())
+    }
+
+    /// Keeps only the cells of `r` (issue 37 Build 1: a tile's window). Returns `false`, keeping
+    /// the grid as it is, when `r` does not lie inside the cells held.
+    pub fn hold(&mut self, r: CellRect) -> bool {
+        match self.window(r) {
+            Some(v) => {
+                self.data = v;
+                self.held = r;
+                true
+            }
+            None => false,
+        }
     }
 }
 
@@ -330,7 +381,7 @@ impl World {
             .map(|&s| {
                 let cell = SEED_CELL_M.max(lib.species[s as usize].life.dispersal.max_m as f64 / KERNEL_CELLS);
                 let (cols, rows) = (((extent.0 / cell).ceil() as usize).max(1), ((extent.1 / cell).ceil() as usize).max(1));
-                SeedGrid { cell_m: cell, cols, rows, data: vec![0.0; cols * rows] }
+                SeedGrid::new(cell, cols, rows)
             })
             .collect();
         let mut seed_rain = vec![0.0f32; pool.len()];

@@ -98,12 +98,13 @@ pub fn gather(k: &[(isize, isize, f32)], cols: usize, rows: usize, area: f32, co
     acc / area
 }
 
-/// Produces and disperses this year's seeds into `w.seeds` (seeds per m² per pool species).
+/// Produces and disperses this year's seeds into `w.seeds` (seeds per m² per pool species),
+/// on the cells each grid holds (one process: the whole grid).
 /// Seeds per tree: [`seeds_of`], summed per seed cell in tree order ([`source_cell`]), then
 /// spread by the kernel ([`gather`]).
 pub fn run(w: Reproduction<'_>) {
     let t = &w.trees;
-    let mut src: Vec<Vec<f32>> = w.seeds.iter().map(|g| vec![0f32; g.data.len()]).collect();
+    let mut src: Vec<Vec<f32>> = w.seeds.iter().map(|g| vec![0f32; g.cols * g.rows]).collect();
     let pidx: Vec<Option<usize>> = (0..w.lib.species.len() as u16).map(|s| w.pool_index(s)).collect();
     for i in 0..t.len() {
         let Some(p) = pidx[t.species[i] as usize] else { continue };
@@ -119,10 +120,12 @@ pub fn run(w: Reproduction<'_>) {
             g.data.iter_mut().for_each(|v| *v = 0.0);
             continue;
         }
-        let (cols, rows) = (g.cols, g.rows);
+        let (cols, rows, h) = (g.cols, g.rows, g.held);
         let area = (g.cell_m * g.cell_m) as f32;
         let k = kernel(&sp.life.dispersal, g.cell_m);
-        g.data = (0..cols * rows).into_par_iter().map(|c| gather(&k, cols, rows, area, c % cols, c / cols, |cc, rr| s[rr * cols + cc])).collect();
+        // onto the cells held (one process: every cell)
+        let hw = h.col1 - h.col0;
+        g.data = (0..h.len()).into_par_iter().map(|i| gather(&k, cols, rows, area, h.col0 + i % hw, h.row0 + i / hw, |cc, rr| s[rr * cols + cc])).collect();
     }
 }
 
