@@ -131,7 +131,7 @@ fn run_regeneration(w: &mut World, report: &mut YearReport) {
 
 fn run_growth(w: &mut World, _: &mut YearReport) {
     let crowd = density::crowding(&w.site, &w.stand.trees);
-    growth::run(growth::Growth { seed: w.site.seed, lib: &w.site.lib, pool: &w.site.pool, crowd: &crowd, trees: &mut w.stand.trees });
+    growth::run(growth::Growth { seed: w.site.seed, year: w.stand.year, lib: &w.site.lib, pool: &w.site.pool, crowd: &crowd, trees: &mut w.stand.trees });
 }
 
 fn run_reproduction(w: &mut World, _: &mut YearReport) {

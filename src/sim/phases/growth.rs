@@ -4,7 +4,7 @@
 use crate::rng::{salt, Stream};
 use crate::sim::density::Crowding;
 use crate::sim::rules;
-use crate::sim::trees::TreeStore;
+use crate::sim::trees::{birth_id, TreeStore};
 use crate::species::allometry::{HeightIncrement, OpenDbh, Table};
 use crate::species::{DenseHd, Species, SpeciesId, SpeciesLibrary};
 pub use crate::species::allometry::{effective_age, open_crown_radius, open_dbh, potential_height, potential_increment};
@@ -121,6 +121,10 @@ struct Grown {
 pub struct Growth<'a> {
     /// Scenario seed (each tree's persistent [`growth_factor`]).
     pub seed: u64,
+    /// The year being simulated (years completed before it): trees recruited this spring
+    /// (ids from [`birth_id`]`(year, 0, 0)` on) have had this year's season in their cohort and
+    /// are not grown again.
+    pub year: u32,
     /// Species library.
     pub lib: &'a SpeciesLibrary,
     /// Species taking part (their curves are tabulated once a year).
@@ -158,10 +162,17 @@ pub struct Growth<'a> {
 /// (trees do not shrink). Trees below breast height (no DBH) are not bounded. The diameter
 /// increment does not see the bound: it reads the height before the season and the potential
 /// height increment.
+///
+/// This year's recruits (ids ≥ [`birth_id`]`(year, 0, 0)`: recruits of this spring; trees
+/// planted by management get their ids after the growth phase, at the year's end) are left as
+/// they are: their cohort grew them and aged them this spring
+/// ([`crate::sim::phases::regen`]), so a second season the same year would double their first
+/// year's height growth and age (issue 35, round 29).
 pub fn run(w: Growth<'_>) {
     let crowd = w.crowd;
     let lib = &w.lib;
     let seed = w.seed;
+    let recruited = birth_id(w.year, 0, 0);
     let t = &mut *w.trees;
     // the species' curves, tabulated once per species (`allometry::Table`: within 5 · 10⁻⁵ of
     // the curves' ranges, without their powers and logarithms per tree)
@@ -189,6 +200,9 @@ pub fn run(w: Growth<'_>) {
         .enumerate()
         .with_min_len(1024)
         .for_each(|(i, (hr, dr, rr, cbr, vr, ar, gr))| {
+            if id[i] >= recruited {
+                return;
+            }
             let g = grow(lib, curves, crowd, seed, species[i], light[i], suitability[i], id[i], *hr, *dr, *cbr, *vr, gr, i);
             *hr = g.h;
             *dr = g.d;

@@ -31,7 +31,8 @@
 //! 5. **Recruitment**: a cohort reaching [`RECRUIT_HEIGHT_M`] becomes individual trees (all its
 //!    stems) at random positions in the light cell on unmasked site cells, with the cohort's
 //!    height and age, 0.8 × open-grown DBH (as planted trees), and a crown shrunk by the ground
-//!    light like shaded trees.
+//!    light like shaded trees. The cohort's growth this spring is the recruit's season: the
+//!    growth phase leaves the year's recruits alone ([`super::growth::run`]).
 //!
 //! Mass balance per species (tested): germinated = alive in cohorts + dead (shade, crowding) +
 //! recruited, kept in [`RegenLedger`].
@@ -289,10 +290,10 @@ pub fn run(w: Regen<'_>) -> usize {
                             x: x as f32,
                             y: y as f32,
                             z: wr.site.elevation_at(x, y),
-                            // the cohort aged this spring (2. above) and the growth phase ages every
-                            // tree again this summer: one year less here, so a recruit's age after
-                            // the season is the cohort's (not one year more)
-                            age: (k.age - 1.0).max(0.0),
+                            // the cohort grew and aged this spring (2. above); the growth phase
+                            // leaves this year's recruits alone (`growth::run`), so the recruit
+                            // keeps the cohort's height and age
+                            age: k.age,
                             height: k.height,
                             dbh: d,
                             crown_radius: open_crown_radius(sp, k.height, d) * rules::shaded_crown(gl),
