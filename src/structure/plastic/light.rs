@@ -337,188 +337,13 @@ struct Casters {
 
 /// Casters tested together by [`ShadowVolumes::transmittance`] (the hit test vectorises); every
 /// cell's run of casters is padded to a multiple of it.
-const LANES: usize = 4;
+const LANES: usize = 8;
 
 
 const MAX_CELLS_PER_AXIS: usize = 96;
 
 
-/// The projection of the region box `lo`–`hi` (m) for a grid of direction `d` with plane axes
-/// `u`, `v`: (lowest and highest corner projection on the plane ⟂ d, nearest corner depth along
-/// d), or `None` without a region. See [`ShadowVolumes::within`].
-fn region_bounds(region: Option<(Vec3, Vec3)>, d: Vec3, u: Vec3, v: Vec3) -> Option<(Vec2, Vec2, f32)> {
-    region.map(|(lo, hi)| {
-        let corners = (0..8).map(|i| Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z }));
-        let (mut plo, mut phi, mut near) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY), f32::INFINITY);
-        for c in corners {
-            let q = Vec2::new(c.dot(u), c.dot(v));
-            (plo, phi, near) = (plo.min(q), phi.max(q), near.min(c.dot(d)));
-        }
-        (plo, phi, near)
-    })
-}
-
-/// Whether a caster projected at `q` (m, on the plane ⟂ d) at depth `z` (m, along d) of radius
-/// `r` (m) can shade a point of the region of `bounds` ([`region_bounds`]; always without one):
-/// its disc overlaps the region's projection and its centre lies ahead of the region's nearest
-/// corner, with a slack of 1 mm, far above the rounding of the projections.
-fn can_shade(bounds: Option<(Vec2, Vec2, f32)>, q: Vec2, z: f32, r: f32) -> bool {
-    let e = 1e-3;
-    bounds.is_none_or(|(plo, phi, near)| z > near - e && (q + r + e).cmpge(plo).all() && (q - r - e).cmple(phi).all())
-}
-
-/// Cells `[x0, x1, y0, y1]` (inclusive) that the disc of radius `r` (m) at `q` (m, on the plane
-/// ⟂ d) covers in a grid of `nx` × `ny` cells of `cell` m from `lo`, clamped to the grid, and
-/// whether the disc lies within the grid unclamped. `as u32` truncates, which equals the floor
-/// for the non-negative values kept by `max(0.0)` (and avoids a libm call per bound), clamped
-/// to the last cell before the conversion (the floor of a value above it is above it too).
-fn cell_range(q: Vec2, r: f32, lo: Vec2, cell: f32, nx: usize, ny: usize) -> ([u32; 4], bool) {
-    let cx = |x: f32, n: usize| x.max(0.0).min((n - 1) as f32) as u32;
-    let a = (q - r - lo) / cell;
-    let b = (q + r - lo) / cell;
-    let inside = a.x >= 0.0 && a.y >= 0.0 && b.x < nx as f32 && b.y < ny as f32;
-    ([cx(a.x, nx), cx(b.x, nx), cx(a.y, ny), cx(b.y, ny)], inside)
-}
-
-/// Sort key of a caster at depth `z` (m, along d) and index `j`: ascending keys are descending
-/// depth, ties in index order (the depth's bits mapped to an unsigned order, `f32::total_cmp`'s,
-/// inverted, above the index).
-fn depth_key(z: f32, j: u32) -> u64 {
-    let b = z.to_bits() as i32;
-    let ordered = (b ^ ((((b >> 31) as u32) >> 1) as i32)) as u32 ^ 0x8000_0000;
-    ((!ordered as u64) << 32) | j as u64
-}
-
-/// One grid slot's caster: `u`, `v`, `w` (m), squared radius (m²), transmittance.
-type Slot = [f32; 5];
-
-/// Bitwise equality of two slots.
-fn same_slot(a: &Slot, b: &Slot) -> bool {
-    a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits())
-}
-
 impl DirGrid {
-    /// The grid of the same direction, geometry and region after the casters `gone` left and
-    /// the casters `came` (each with its index in the new occluder list) arrived, when the old
-    /// casters that stay keep their order in the new list (the grid of [`DirGrid::new`] of the
-    /// new list, but the cells of the old grid): each cell's casters are the old ones less
-    /// those gone, merged with the new ones in descending depth (ties in index order), so a
-    /// query multiplies the same casters in the same order as in a grid built anew. `None`
-    /// (build it anew) for an empty or tagged grid, a new caster whose disc leaves the grid's
-    /// cells, a new caster at the same depth as an old one of its cell (their order would need
-    /// the old one's index), or a caster gone that is not in the cells it covers.
-    fn patched(&self, gone: &[Occluder], came: &[(u32, Occluder)], region: Option<(Vec3, Vec3)>) -> Option<DirGrid> {
-        if self.nx == 0 || !self.owner.is_empty() {
-            return None;
-        }
-        let (d, u, v) = (self.d, self.u, self.v);
-        let bounds = region_bounds(region, d, u, v);
-        // (cell, slot) of every caster gone, and (cell, order key, slot) of every caster come,
-        // over the cells each covers
-        let mut rem: Vec<(u32, Slot)> = Vec::new();
-        for o in gone {
-            let (q, z) = (Vec2::new(o.center.dot(u), o.center.dot(v)), o.center.dot(d));
-            if !can_shade(bounds, q, z, o.radius) {
-                continue;
-            }
-            let ([x0, x1, y0, y1], _) = cell_range(q, o.radius, self.lo, self.cell, self.nx, self.ny);
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    rem.push((y * self.nx as u32 + x, [q.x, q.y, z, o.radius * o.radius, o.gamma]));
-                }
-            }
-        }
-        let mut add: Vec<(u32, u64, Slot)> = Vec::new();
-        for &(j, o) in came {
-            let (q, z) = (Vec2::new(o.center.dot(u), o.center.dot(v)), o.center.dot(d));
-            if !can_shade(bounds, q, z, o.radius) {
-                continue;
-            }
-            let ([x0, x1, y0, y1], inside) = cell_range(q, o.radius, self.lo, self.cell, self.nx, self.ny);
-            if !inside {
-                return None;
-            }
-            for y in y0..=y1 {
-                for x in x0..=x1 {
-                    add.push((y * self.nx as u32 + x, depth_key(z, j), [q.x, q.y, z, o.radius * o.radius, o.gamma]));
-                }
-            }
-        }
-        rem.sort_unstable_by_key(|r| r.0);
-        add.sort_unstable_by_key(|a| (a.0, a.1));
-        let cells = self.nx * self.ny;
-        let mut start = Vec::with_capacity(cells + 1);
-        let mut blocks = Vec::with_capacity(self.blocks.len() + add.len());
-        let mut gamma = Vec::with_capacity(self.blocks.len() + add.len());
-        let (mut ir, mut ia) = (0, 0);
-        let mut slots: Vec<Slot> = Vec::new();
-        // the cells from `copy` on are unchanged up to the next changed cell: copied in one run
-        let mut copy = 0usize;
-        for c in 0..cells {
-            let (r0, a0) = (ir, ia);
-            while ir < rem.len() && rem[ir].0 as usize == c {
-                ir += 1;
-            }
-            while ia < add.len() && add[ia].0 as usize == c {
-                ia += 1;
-            }
-            if r0 == ir && a0 == ia {
-                start.push((blocks.len() + self.start[c] as usize - self.start[copy] as usize) as u32);
-                continue;
-            }
-            let (s0, s1) = (self.start[copy] as usize, self.start[c] as usize);
-            blocks.extend_from_slice(&self.blocks[s0..s1]);
-            gamma.extend_from_slice(&self.gamma[s0..s1]);
-            copy = c + 1;
-            // the cell's casters less those gone
-            slots.clear();
-            for bi in self.start[c] as usize..self.start[c + 1] as usize {
-                let b = &self.blocks[bi];
-                for l in 0..LANES {
-                    if b.r2[l] >= 0.0 {
-                        slots.push([b.u[l], b.v[l], b.w[l], b.r2[l], self.gamma[bi][l]]);
-                    }
-                }
-            }
-            for (_, g) in &rem[r0..ir] {
-                let i = slots.iter().position(|s| same_slot(s, g))?;
-                slots.remove(i);
-            }
-            // merged with those come, in descending depth
-            let mut merged: Vec<Slot> = Vec::with_capacity(slots.len() + ia - a0);
-            let mut old = slots.iter().peekable();
-            for &(_, key, slot) in &add[a0..ia] {
-                while let Some(s) = old.peek() {
-                    let k = depth_key(s[2], 0) >> 32;
-                    if k == key >> 32 {
-                        return None;
-                    }
-                    if k > key >> 32 {
-                        break;
-                    }
-                    merged.push(**s);
-                    old.next();
-                }
-                merged.push(slot);
-            }
-            merged.extend(old);
-            start.push(blocks.len() as u32);
-            for run in merged.chunks(LANES) {
-                let (mut b, mut g) = (PAD_BLOCK, [1.0f32; LANES]);
-                for (l, s) in run.iter().enumerate() {
-                    (b.u[l], b.v[l], b.w[l], b.r2[l], g[l]) = (s[0], s[1], s[2], s[3], s[4]);
-                }
-                blocks.push(b);
-                gamma.push(g);
-            }
-        }
-        let (s0, s1) = (self.start[copy] as usize, self.start[cells] as usize);
-        start.push((blocks.len() + s1 - s0) as u32);
-        blocks.extend_from_slice(&self.blocks[s0..s1]);
-        gamma.extend_from_slice(&self.gamma[s0..s1]);
-        Some(DirGrid { d, u, v, lo: self.lo, cell: self.cell, nx: self.nx, ny: self.ny, start, blocks, gamma, owner: Vec::new() })
-    }
-
     /// The grid of `occ` for direction `d`; `owners` is empty or holds one owner per occluder.
     /// With `region` (the box `lo`–`hi`, m) only the casters that can shade a point of the box
     /// are kept (see [`ShadowVolumes::within`]), tested on the projections the grid is built
@@ -527,12 +352,24 @@ impl DirGrid {
         let (u, v) = d.any_orthonormal_pair();
         // every caster's projection on the plane ⟂ d and depth along d, then the ones kept
         let (mut proj, mut depth, mut kept): (Vec<Vec2>, Vec<f32>, Vec<u32>) = (Vec::with_capacity(occ.len()), Vec::with_capacity(occ.len()), Vec::with_capacity(occ.len()));
-        let bounds = region_bounds(region, d, u, v);
+        let bounds = region.map(|(lo, hi)| {
+            let corners = (0..8).map(|i| Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z }));
+            let (mut plo, mut phi, mut near) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY), f32::INFINITY);
+            for c in corners {
+                let q = Vec2::new(c.dot(u), c.dot(v));
+                (plo, phi, near) = (plo.min(q), phi.max(q), near.min(c.dot(d)));
+            }
+            (plo, phi, near)
+        });
+        // slack far above the rounding of the projections (m)
+        let e = 1e-3;
         for (j, o) in occ.iter().enumerate() {
             let q = Vec2::new(o.center.dot(u), o.center.dot(v));
             let z = o.center.dot(d);
-            if !can_shade(bounds, q, z, o.radius) {
-                continue;
+            if let Some((plo, phi, near)) = bounds {
+                if !(z > near - e && (q + o.radius + e).cmpge(plo).all() && (q - o.radius - e).cmple(phi).all()) {
+                    continue;
+                }
             }
             proj.push(q);
             depth.push(z);
@@ -560,7 +397,16 @@ impl DirGrid {
         // cell range of each caster's disc; `as u32` truncates, which equals the floor for the
         // non-negative values kept by `max(0.0)` (and avoids a libm call per bound), clamped to
         // the last cell before the conversion (the floor of a value above it is above it too)
-        let ranges: Vec<[u32; 4]> = proj.iter().zip(&radius).map(|(p, &r)| cell_range(*p, r, lo, cell, nx, ny).0).collect();
+        let cx = |x: f32, n: usize| x.max(0.0).min((n - 1) as f32) as u32;
+        let ranges: Vec<[u32; 4]> = proj
+            .iter()
+            .zip(&radius)
+            .map(|(p, &r)| {
+                let a = (*p - r - lo) / cell;
+                let b = (*p + r - lo) / cell;
+                [cx(a.x, nx), cx(b.x, nx), cx(a.y, ny), cx(b.y, ny)]
+            })
+            .collect();
         let mut count = vec![0u32; nx * ny + 1];
         for &[x0, x1, y0, y1] in &ranges {
             for y in y0 as usize..=y1 as usize {
@@ -584,7 +430,15 @@ impl DirGrid {
         // ties in occluder order), so a query can stop at the first block that lies behind it
         // keys that sort as (depth descending, index ascending): the depth's bits mapped to an
         // unsigned order (f32::total_cmp's), inverted, above the index
-        let mut order: Vec<u64> = depth.iter().enumerate().map(|(j, &z)| depth_key(z, j as u32)).collect();
+        let mut order: Vec<u64> = depth
+            .iter()
+            .enumerate()
+            .map(|(j, z)| {
+                let b = z.to_bits() as i32;
+                let ordered = (b ^ ((((b >> 31) as u32) >> 1) as i32)) as u32 ^ 0x8000_0000;
+                ((!ordered as u64) << 32) | j as u64
+            })
+            .collect();
         order.sort_unstable();
         for &key in &order {
             let j = (key & u32::MAX as u64) as usize;
@@ -798,34 +652,6 @@ impl ShadowVolumes {
             self.region = Some((lo, hi));
         }
         self
-    }
-
-    /// Shadow volumes of `occ` for the directions and region of `prev` (untagged), where `occ`
-    /// is `prev`'s occluders less `gone` plus `came` (each with its index in `occ`), the
-    /// occluders of `prev` that stay keeping their order in `occ` (the casters of one level of
-    /// Plastic Trees and of the next). Every direction whose grid `prev` has built gets its grid
-    /// patched over the cores ([`DirGrid::patched`]: the old casters less those gone, merged with
-    /// those come in the cells of the old grid) instead of built anew, when at most half as many
-    /// casters changed as there are; the other directions are built anew when queried. The
-    /// answers are those of `ShadowVolumes::new(sky, occ).within(..)` bit for bit: a query
-    /// multiplies the same casters in the same order, whatever the cells.
-    pub fn patched(prev: &ShadowVolumes, occ: Vec<Occluder>, gone: &[Occluder], came: &[(u32, Occluder)]) -> ShadowVolumes {
-        use rayon::prelude::*;
-        let mut s = ShadowVolumes::from_dirs(prev.dirs.clone(), occ, Vec::new());
-        s.region = prev.region;
-        if s.flat.is_some() || prev.flat.is_some() || !prev.owners.is_empty() || 2 * (gone.len() + came.len()) > s.occ.len() {
-            return s;
-        }
-        let grids: Vec<(usize, Option<DirGrid>)> = (0..prev.dirs.len())
-            .into_par_iter()
-            .filter_map(|k| prev.grids[k].get().map(|g| (k, g.patched(gone, came, s.region))))
-            .collect();
-        for (k, g) in grids {
-            if let Some(g) = g {
-                let _ = s.grids[k].set(g);
-            }
-        }
-        s
     }
 
     /// The occluders.
@@ -1404,74 +1230,6 @@ mod tests {
         assert!(inside > 50 && outside > 50 && shaded > 500, "{inside} inside, {outside} outside, {shaded} shaded");
         let held = |v: &ShadowVolumes| v.grids.iter().filter_map(|g| g.get()).map(|g| g.blocks.len()).sum::<usize>();
         assert!(held(&near) * 2 < held(&plain), "region grids {} blocks, full {}", held(&near), held(&plain));
-    }
-
-    /// Shadow volumes patched from the previous set ([`ShadowVolumes::patched`]: casters gone,
-    /// moved and come, the ones that stay in their order) answer as shadow volumes built anew
-    /// from the new occluders, bit for bit, inside and outside the region; most directions'
-    /// grids are patched (not built anew), and a caster come outside the old grids falls back
-    /// to grids built anew with the same answers.
-    #[test]
-    fn patched_grids_answer_as_grids_built_anew() {
-        let sky = Sky::from_latitude(50.0);
-        let make = |i: usize, shift: f32| {
-            let f = i as f32;
-            let r = 0.2 + 0.3 * (f * 0.37).sin().abs();
-            Occluder { center: Vec3::new((f * 0.71).sin() * 4.0 + shift, (f * 0.53).cos() * 4.0, 2.0 + (f * 0.29).sin().abs() * 6.0), radius: r, gamma: 0.5f32.powf(r) }
-        };
-        let (lo, hi) = (Vec3::new(-4.0, -4.0, 0.0), Vec3::new(4.0, 4.0, 8.0));
-        let old: Vec<Occluder> = (0..400).map(|i| make(i, 0.0)).collect();
-        for far in [false, true] {
-            let prev = ShadowVolumes::new(&sky, old.clone()).within(lo, hi);
-            prev.prepare(u32::MAX);
-            // every 7th caster gone, every 11th moved by 5 cm, one come after every 13th; with
-            // `far`, one come far outside the old grids
-            let (mut occ, mut gone, mut came) = (Vec::new(), Vec::new(), Vec::new());
-            for (i, &o) in old.iter().enumerate() {
-                if i % 7 == 0 {
-                    gone.push(o);
-                    continue;
-                }
-                if i % 11 == 0 {
-                    gone.push(o);
-                    let m = Occluder { center: o.center + Vec3::new(0.05, -0.03, 0.02), ..o };
-                    came.push((occ.len() as u32, m));
-                    occ.push(m);
-                } else {
-                    occ.push(o);
-                }
-                if i % 13 == 0 {
-                    let n = make(1000 + i, 0.3);
-                    came.push((occ.len() as u32, n));
-                    occ.push(n);
-                }
-            }
-            if far {
-                let n = Occluder { center: Vec3::new(0.0, 0.0, 7.0), radius: 9.0, gamma: 0.7 };
-                came.push((occ.len() as u32, n));
-                occ.push(n);
-            }
-            let patched = ShadowVolumes::patched(&prev, occ.clone(), &gone, &came);
-            let set = patched.grids.iter().filter(|g| g.get().is_some()).count();
-            if far {
-                assert!(set < sky.dirs.len(), "a caster outside the old grids: some grids built anew ({set} patched)");
-            } else {
-                assert_eq!(set, sky.dirs.len(), "every direction patched");
-            }
-            let fresh = ShadowVolumes::new(&sky, occ).within(lo, hi);
-            let (mut shaded, mut outside) = (0, 0);
-            for j in 0..400 {
-                let f = j as f32;
-                let p = Vec3::new((f * 0.43).cos() * 4.6, (f * 0.61).sin() * 4.6, 1.0 + (f * 0.17).sin().abs() * 7.0);
-                outside += !(p.cmpge(lo).all() && p.cmple(hi).all()) as usize;
-                for k in 0..sky.dirs.len() {
-                    let t = fresh.transmittance(k, p);
-                    assert_eq!(patched.transmittance(k, p).to_bits(), t.to_bits(), "far {far}, point {p}, direction {k}");
-                    shaded += (t < 1.0) as usize;
-                }
-            }
-            assert!(shaded > 1000 && outside > 20, "{shaded} shaded, {outside} outside");
-        }
     }
 
     /// Shadow volumes of three owners' occluders, queried leaving one owner out, against shadow

@@ -470,8 +470,6 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
     // per tree: the previous level's occluders, shade casters and per-direction cluster
     // transmittances
     let mut prev: Vec<Option<Prev>> = vec![None; trees.len()];
-    // the previous level's shadow volumes of every tree's casters
-    let mut prev_vols: Option<ShadowVolumes> = None;
     for g in 0..=g_max {
         let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
         let occ: Vec<(Vec<Option<Occluder>>, Vec<(u64, Occluder)>)> = trees
@@ -496,10 +494,7 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
         }).collect();
         // the casters that differ from the previous level's (removed, added or changed): both
         // lists are sorted by key
-        // (gone: the old versions, came: the new ones with their index in `casters`)
         let mut delta = Vec::new();
-        let (mut gone, mut came) = (Vec::new(), Vec::new());
-        let mut offset = 0u32;
         for ((_, cur), pr) in occ.iter().zip(&prev) {
             let old: &[(u64, Occluder)] = pr.as_ref().map_or(&[], |p| &p.shade);
             let (mut i, mut j) = (0, 0);
@@ -515,36 +510,26 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
                         if !same_occluder(&Some(old[i].1), &Some(cur[j].1)) {
                             delta.push(old[i].1);
                             delta.push(cur[j].1);
-                            gone.push(old[i].1);
-                            came.push((offset + j as u32, cur[j].1));
                         }
                         i += 1;
                         j += 1;
                     }
                     Ordering::Less => {
                         delta.push(old[i].1);
-                        gone.push(old[i].1);
                         i += 1;
                     }
                     Ordering::Greater => {
                         delta.push(cur[j].1);
-                        came.push((offset + j as u32, cur[j].1));
                         j += 1;
                     }
                 }
             }
-            offset += cur.len() as u32;
         }
         // reuse pays while the changes are a minority of the casters
         // (measured on the bench trees: below 60 % changed casters the check is cheaper than the
         // products it saves; above, it is not)
         let delta = (5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(region.0, region.1));
-        // the previous level's grids patched with the casters that changed (the same answers
-        // as grids built anew, bit for bit; ShadowVolumes::patched), else built anew
-        let vols = match prev_vols.take() {
-            Some(p) => ShadowVolumes::patched(&p, casters, &gone, &came),
-            None => ShadowVolumes::new(sky, casters).within(region.0, region.1),
-        };
+        let vols = ShadowVolumes::new(sky, casters).within(region.0, region.1);
         // trees at work at this level share its grids: built over the cores before the trees'
         // levels run side by side (else each tree's first batch builds them, and a core wanting
         // a grid that the other core is building waits for it); only with two or more such
@@ -596,7 +581,6 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             })
             .collect();
         prev = next;
-        prev_vols = Some(vols);
     }
     // the quiet trees keep the levels they replayed whole or recorded
     for (t, w) in trees.iter_mut().zip(&mut work) {
