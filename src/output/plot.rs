@@ -69,6 +69,13 @@ pub fn plot_panels_png(path: &Path, panels: &[Panel], cols: usize, size: (u32, u
                 x1 = x0 + 1.0;
             }
             let y1 = if y1 <= 0.0 { 1.0 } else { y1 * 1.08 };
+            // the legend goes where it hides no data (round 30's trial: top left, it hid the
+            // seed trees' QMD and beech's share of the first years)
+            let (aw, ah) = area.dim_in_pixel();
+            let plot_px = (aw as f64 - 16.0 - 56.0, ah as f64 - 16.0 - 36.0 - 26.0);
+            let labels: Vec<&str> = p.series.iter().map(|s| s.name.as_str()).collect();
+            let all: Vec<(f64, f64)> = p.series.iter().flat_map(|s| s.points.iter().copied()).filter(|q| q.0.is_finite() && q.1.is_finite()).collect();
+            let (corner, y1) = legend_place(&all, &labels, (x0, x1), y1, plot_px);
             let mut ch = ChartBuilder::on(area)
                 .caption(&p.title, ("sans-serif", 18))
                 .margin(8)
@@ -96,11 +103,78 @@ pub fn plot_panels_png(path: &Path, panels: &[Panel], cols: usize, size: (u32, u
                     ch.draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2))).map_err(|e| perr(path, e))?.label(&s.name).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], c.stroke_width(2)));
                 }
             }
-            ch.configure_series_labels().border_style(BLACK).background_style(WHITE.mix(0.8)).label_font(("sans-serif", 12)).position(SeriesLabelPosition::UpperLeft).draw().map_err(|e| perr(path, e))?;
+            ch.configure_series_labels().border_style(BLACK).background_style(WHITE.mix(0.8)).label_font(("sans-serif", 12)).position(corner.position()).draw().map_err(|e| perr(path, e))?;
         }
         root.present().map_err(|e| perr(path, e))?;
     }
     write_rgb_png(path, w, h, buf)
+}
+
+/// A corner of a panel's plotting area for its legend.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Corner {
+    UpperLeft,
+    UpperRight,
+    LowerRight,
+    LowerLeft,
+}
+
+impl Corner {
+    fn position(self) -> SeriesLabelPosition {
+        match self {
+            Corner::UpperLeft => SeriesLabelPosition::UpperLeft,
+            Corner::UpperRight => SeriesLabelPosition::UpperRight,
+            Corner::LowerRight => SeriesLabelPosition::LowerRight,
+            Corner::LowerLeft => SeriesLabelPosition::LowerLeft,
+        }
+    }
+}
+
+/// Where a panel's legend goes: the corner of the plotting area (`plot_px`: width, height in
+/// pixels; x from `xr.0` to `xr.1`, y from 0 to `y1`) whose legend box (about 50 + 7.5 px per
+/// character of the longest label wide, 20 + 21 px per label tall, 10 px from the corner: plotters'
+/// box at 12-point labels, measured on the stand table's picture) covers
+/// the fewest of `points`, first of upper left, upper right, lower right, lower left among equals.
+/// When every corner hides some, the y axis is raised (`y1` returned larger, at most 2.5 ×) so
+/// that the upper corner needing the least headroom hides none. Returns the corner and `y1`.
+fn legend_place(points: &[(f64, f64)], labels: &[&str], xr: (f64, f64), y1: f64, plot_px: (f64, f64)) -> (Corner, f64) {
+    if labels.is_empty() || points.is_empty() || plot_px.0 <= 0.0 || plot_px.1 <= 0.0 {
+        return (Corner::UpperLeft, y1);
+    }
+    let chars = labels.iter().map(|l| l.chars().count()).max().unwrap_or(0) as f64;
+    let (bw, bh) = ((50.0 + 7.5 * chars + 10.0) / plot_px.0, (20.0 + 21.0 * labels.len() as f64 + 10.0) / plot_px.1);
+    let span = (xr.1 - xr.0).max(f64::MIN_POSITIVE);
+    // fractions of the plotting area: u from the left, v from the bottom
+    let frac = |q: &(f64, f64), y1: f64| ((q.0 - xr.0) / span, q.1 / y1);
+    let left = |u: f64| u <= bw;
+    let right = |u: f64| u >= 1.0 - bw;
+    let hidden = |c: Corner, y1: f64| {
+        points
+            .iter()
+            .filter(|q| {
+                let (u, v) = frac(q, y1);
+                match c {
+                    Corner::UpperLeft => left(u) && v >= 1.0 - bh,
+                    Corner::UpperRight => right(u) && v >= 1.0 - bh,
+                    Corner::LowerRight => right(u) && v <= bh,
+                    Corner::LowerLeft => left(u) && v <= bh,
+                }
+            })
+            .count()
+    };
+    let corners = [Corner::UpperLeft, Corner::UpperRight, Corner::LowerRight, Corner::LowerLeft];
+    let best = corners.iter().copied().min_by_key(|&c| hidden(c, y1)).unwrap_or(Corner::UpperLeft);
+    if hidden(best, y1) == 0 || bh >= 0.6 {
+        return (best, y1);
+    }
+    // raise the axis: the highest point under an upper corner's box then sits below it
+    let need = |side: &dyn Fn(f64) -> bool| points.iter().filter(|q| side(frac(q, y1).0)).map(|q| q.1).fold(0.0f64, f64::max) / (1.0 - bh) * 1.02;
+    let (c, y) = [(Corner::UpperLeft, need(&left)), (Corner::UpperRight, need(&right))].into_iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap_or((Corner::UpperLeft, y1));
+    if y <= 2.5 * y1 {
+        (c, y.max(y1))
+    } else {
+        (best, y1)
+    }
 }
 
 fn write_rgb_png(path: &Path, w: u32, h: u32, buf: Vec<u8>) -> Result<()> {
@@ -433,5 +507,28 @@ mod tests {
         assert_eq!(super::axis_label(10.0, 30.0), "10");
         assert_eq!(super::axis_label(0.25, 1.0), "0.25");
         assert_eq!(super::axis_label(0.0, 1.0), "0");
+    }
+
+    #[test]
+    fn legend_goes_where_it_hides_no_data() {
+        use super::{legend_place, Corner};
+        let px = (500.0, 330.0);
+        // the default run's "Height and diameter": seed trees' 30 cm at the start, then a
+        // curve rising to 25 by year 150: the top left hides data, the top right does not
+        let mut pts: Vec<(f64, f64)> = (1..=150).map(|y| (y as f64, 5.0 + 15.0 * y as f64 / 150.0)).collect();
+        pts.extend([(1.0, 30.0), (2.0, 29.5), (3.0, 29.0)]);
+        let (c, y1) = legend_place(&pts, &["top height H100 (m)", "mean height (m)", "QMD (cm)"], (1.0, 150.0), 32.4, px);
+        assert_eq!((c, y1), (Corner::UpperRight, 32.4), "the top right is empty here");
+        // a curve high at both ends and low in the middle: both upper corners hide it, the
+        // lower ones are empty (the lower right first)
+        let u: Vec<(f64, f64)> = (0..=100).map(|x| (x as f64, 10.0 + 0.004 * ((x - 50) * (x - 50)) as f64)).collect();
+        assert_eq!(legend_place(&u, &["a", "b"], (0.0, 100.0), 21.6, px), (Corner::LowerRight, 21.6));
+        // data in every corner: the axis is raised so an upper corner is clear
+        let full: Vec<(f64, f64)> = (0..=100).flat_map(|x| [(x as f64, 0.0), (x as f64, 10.0)]).collect();
+        let (c, y1) = legend_place(&full, &["one", "two"], (0.0, 100.0), 10.8, px);
+        assert_eq!(c, Corner::UpperLeft);
+        assert!(y1 > 10.8 && y1 < 27.0, "{y1}");
+        let bh = (20.0 + 42.0 + 10.0) / 330.0;
+        assert!(10.0 / y1 < 1.0 - bh, "the top data line below the legend box: {y1}");
     }
 }
