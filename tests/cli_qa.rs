@@ -132,6 +132,18 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     // a second run into a run's folder says that it replaces the earlier run's files
     let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all"]);
     assert!(ok && err.contains("snap_all holds an earlier run (snap)") && err.contains("--resume"), "{err}");
+    // ... but not before refusing a scenario (round 30's trial: the note came first, then the
+    // refusal, though nothing of the earlier run was touched)
+    std::fs::write(d.join("snap_bad.toml"), std::fs::read_to_string(d.join("snap.toml")).unwrap().replace("species = [\"beech\"]", "species = [\"beech\"]\nclimate = { anomalies_file = \"missing.csv\" }")).unwrap();
+    let table = std::fs::read(d.join("snap_all/stand_table.csv")).unwrap();
+    for args in [&["simulate", "snap_bad.toml", "--out", "snap_all"][..], &["run", "snap_bad.toml", "--out", "snap_all", "--no-pictures"][..]] {
+        let (ok, err) = run(args);
+        assert!(!ok && err.contains("missing.csv") && !err.contains("holds an earlier run"), "{args:?}: {err}");
+    }
+    assert_eq!(std::fs::read(d.join("snap_all/stand_table.csv")).unwrap(), table, "the earlier run's stand table is kept");
+    // and `sylva run` says it once the scenario is checked (after the conditions' step)
+    let (ok, err) = run(&["run", "snap.toml", "--out", "snap_all", "--no-pictures"]);
+    assert!(ok && err.contains("snap_all holds an earlier run (snap)"), "{err}");
     // an --out below a file is refused naming the option and the file in the way (it named
     // the run's species/ folder: found by a trial)
     for cmd in ["simulate", "run"] {

@@ -58,7 +58,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     super::check_out_dir(&a.out, "--out")?;
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
-    super::simulate::note_replaced_run(&a.out);
     let opts = MainJobOptions { out: a.out.clone(), size: a.size, timelapse_size: a.timelapse_size, frames_between: a.frames_between, fps: a.fps, render: !a.no_pictures, stop: Some(super::simulate::stop_on_ctrl_c()), inventory: a.inventory };
     let mut bars = Bars::default();
     let summary = match main_job::main_job(&sc, &lib, &opts, &mut |e| bars.show(e)) {
@@ -87,13 +86,25 @@ struct Bars {
     sim: super::simulate::SimBar,
     bar: Option<indicatif::ProgressBar>,
     t0: Option<Instant>,
+    /// The run directory (from [`Event::Begin`]).
+    out: Option<std::path::PathBuf>,
 }
 
 impl Bars {
     fn show(&mut self, e: &Event) {
         match e {
-            Event::Begin { name, years, seed, out } => eprintln!("Sylva · {name} · {years} years · seed {seed} → {}", out.display()),
-            Event::Conditions { width, height, extent_m: (ex, ey), maps, seconds } => eprintln!("[1/4] conditions: {width} × {height} cells, {:.2} km × {:.2} km, {} maps ({seconds:.1} s)", ex / 1000.0, ey / 1000.0, maps.len()),
+            Event::Begin { name, years, seed, out } => {
+                eprintln!("Sylva · {name} · {years} years · seed {seed} → {}", out.display());
+                self.out = Some(out.to_path_buf());
+            }
+            Event::Conditions { width, height, extent_m: (ex, ey), maps, seconds } => {
+                // said once the scenario has been checked against its site (before, a refused
+                // scenario was preceded by this note; round 30's trial)
+                if let Some(out) = &self.out {
+                    super::simulate::note_replaced_run(out);
+                }
+                eprintln!("[1/4] conditions: {width} × {height} cells, {:.2} km × {:.2} km, {} maps ({seconds:.1} s)", ex / 1000.0, ey / 1000.0, maps.len());
+            }
             Event::Simulating { years } => {
                 eprintln!("[2/4] simulating {years} years");
                 self.sim.show(e);

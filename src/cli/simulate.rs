@@ -200,9 +200,16 @@ fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: Path
         GpkgWhen::Final => Some(Vec::new()),
         GpkgWhen::EverySnapshot => None,
     };
-    let opts = SimulateOptions { out, resume, gpkg_years, stop: Some(stop_on_ctrl_c()), inventory };
+    let opts = SimulateOptions { out: out.clone(), resume, gpkg_years, stop: Some(stop_on_ctrl_c()), inventory };
     let mut bar = SimBar::default();
-    let s = main_job::simulate(sc, site, lib, opts, stepping, None, &mut |e| bar.show(e))?;
+    let s = main_job::simulate(sc, site, lib, opts, stepping, None, &mut |e| {
+        // said once the scenario has been checked (before, a refused scenario was preceded by
+        // a note that the folder's earlier run is replaced; round 30's trial)
+        if !resume && matches!(e, Event::Simulating { .. }) {
+            note_replaced_run(&out);
+        }
+        bar.show(e)
+    })?;
     if s.stopped {
         return Err(interrupted(&s, "continue with the same command and --resume").into());
     }
@@ -268,9 +275,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         sc.validate("--years")?;
     }
     super::check_out_dir(&a.out, "--out")?;
-    if !a.resume {
-        note_replaced_run(&a.out);
-    }
     let run_species = run_species_dir(&a.out);
     let mut dirs: Vec<&Path> = Vec::new();
     // the run's own species files count once it has a checkpoint (a run killed before that

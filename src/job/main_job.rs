@@ -157,7 +157,8 @@ pub enum Event<'a> {
         /// Wall time (s).
         seconds: f64,
     },
-    /// The simulation of `years` years starts.
+    /// The simulation of `years` years starts: the scenario has been checked against its site
+    /// (a refused one ends before this event).
     Simulating {
         /// Years of the scenario.
         years: u32,
@@ -306,14 +307,6 @@ pub fn save_run_species(sc: &Scenario, lib: &SpeciesLibrary, run_dir: &Path) -> 
 pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts: SimulateOptions, stepping: Stepping, on_snapshot: Option<&mut OnSnapshot>, sink: &mut Sink) -> Result<Simulated> {
     let out = opts.out;
     check_out(&out)?;
-    sink(&Event::Simulating { years: sc.years });
-    let mut phase_sums = [0f64; crate::sim::step::N_PHASES + 1];
-    let mut cb = |p: &Progress| {
-        for (k, s) in p.phase_seconds.iter().chain([&p.output_seconds]).enumerate() {
-            phase_sums[k] += s;
-        }
-        sink(&Event::Year(p));
-    };
     // the scenario is checked against its site before any folder is made (a refused scenario
     // left `inventory/`, `maps/` and `species/` behind; found by a break-it pass)
     context(World::check(&site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
@@ -327,6 +320,16 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
     if opts.resume && !super::checkpoint::exists(&out) {
         context(super::run::started_here(&out, &out.join(super::checkpoint::FILE)).map_err(JobError::from), || format!("simulating {}", sc.name))?;
     }
+    // said once the scenario is known to run (a caller's note that the folder's earlier run
+    // is replaced came before a refusal; round 30's trial)
+    sink(&Event::Simulating { years: sc.years });
+    let mut phase_sums = [0f64; crate::sim::step::N_PHASES + 1];
+    let mut cb = |p: &Progress| {
+        for (k, s) in p.phase_seconds.iter().chain([&p.output_seconds]).enumerate() {
+            phase_sums[k] += s;
+        }
+        sink(&Event::Year(p));
+    };
     // a resumed run keeps the species files it was simulated with (a changed species is
     // refused by the checkpoint before anything is written)
     if !(opts.resume && super::checkpoint::exists(&out)) {
