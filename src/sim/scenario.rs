@@ -343,6 +343,31 @@ fn key_with_array_len_not(text: &str, at: usize, got: Option<usize>, want: usize
     bad_key_in(start).map(|(key, _)| format!("`{key}`"))
 }
 
+/// The field named by a serde "unknown field `NAME`" message.
+fn unknown_field(msg: &str) -> Option<String> {
+    let rest = &msg[msg.find("unknown field `")? + "unknown field `".len()..];
+    Some(rest[..rest.find('`')?].to_string())
+}
+
+/// The line number (1-based) of the `key = value` line of `text` in the table that holds byte
+/// `at` (from `at`'s line to the next table header), or `None` when that table has no such line
+/// or `at`'s line is itself such a line (serde's span already points at it).
+fn key_line_in_table(text: &str, at: usize, key: &str) -> Option<usize> {
+    let at = at.min(text.len());
+    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let first = text[..start].lines().count();
+    for (i, line) in text[start..].lines().enumerate() {
+        let t = line.trim();
+        if i > 0 && t.starts_with('[') {
+            break;
+        }
+        if t.split_once('=').is_some_and(|(k, _)| k.trim().trim_matches('"') == key) {
+            return (i > 0).then_some(first + i + 1);
+        }
+    }
+    None
+}
+
 /// The key of the `key = value` line of `text` holding byte `at` (`None` when that line is no
 /// such line, e.g. inside a table header or an inline table).
 fn key_at(text: &str, at: usize) -> Option<String> {
@@ -406,6 +431,13 @@ impl Scenario {
                 if let Some(key) = key_with_array_len_not(text, sp.start, got, want) {
                     msg = format!("{}\n{key}: expected an array of {want} numbers", msg.trim_end());
                 }
+            }
+            // an unknown field inside a tagged table (`[[start]]`, `[[obstacle]]`): serde points
+            // at the table's header, so the field's own line is found in the table's lines
+            // (round 30's trial: `spaceing_m` on line 26 was reported at line 23)
+            if let Some((key, line_no)) = unknown_field(&msg).zip(e.span()).and_then(|(k, sp)| key_line_in_table(text, sp.start, &k).map(|l| (k, l))) {
+                msg = format!("{}
+the unknown field `{key}` is on line {line_no}", msg.trim_end());
             }
             Error::format(name, msg)
         })?;
@@ -787,6 +819,12 @@ spacing_m = 2.0
         assert!(e.contains("start[0].spacing_m") && e.contains("0.1"), "{e}");
         let e = Scenario::from_toml_str(&OK.replace("seed = 3", "seed = 3\nbogus = 1"), "t.toml").unwrap_err().to_string();
         assert!(e.contains("bogus"), "{e}");
+        // a misspelt field of a tagged table is named with its own line (line 10 of OK: the
+        // table's header is line 7), not only the header's (round 30's trial)
+        let e = Scenario::from_toml_str(&OK.replace("spacing_m = 2.0", "spaceing_m = 2.0"), "t.toml").unwrap_err().to_string();
+        assert!(e.contains("unknown field `spaceing_m`") && e.contains("the unknown field `spaceing_m` is on line 10"), "{e}");
+        assert_eq!(key_line_in_table("[[a]]\nx = 1\n[[b]]\ny = 2\n", 0, "y"), None, "another table's line is not taken");
+        assert_eq!(key_line_in_table("[[a]]\nx = 1\ny = 2\n", 0, "y"), Some(3));
     }
 
     #[test]
