@@ -49,6 +49,24 @@ pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
     pb
 }
 
+/// Progress as plain lines where stderr is not a terminal (a log, `nohup`, CI), where the
+/// bars of [`progress`] are not drawn: `what: done/total msg` at every tenth of `total` passed
+/// (`last` keeps the tenth said last; start it at 0), once the process has run 3 s (a short
+/// run says nothing). Nothing on a terminal.
+pub fn plain_progress(what: &str, done: u64, total: u64, last: &mut u64, msg: &str) {
+    use std::io::IsTerminal;
+    static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+    let t0 = *START.get_or_init(std::time::Instant::now);
+    if total == 0 || std::io::stderr().is_terminal() {
+        return;
+    }
+    let tenth = done.min(total) * 10 / total;
+    if tenth > *last && t0.elapsed().as_secs_f64() >= 3.0 {
+        *last = tenth;
+        eprintln!("  {what}: {done}/{total} {msg}");
+    }
+}
+
 /// Mesa prints "XDG_RUNTIME_DIR is invalid or not set" on headless machines; give it a private
 /// folder (mode 0700) in the temporary directory when the variable is missing.
 fn quiet_mesa_runtime_dir() {

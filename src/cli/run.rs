@@ -88,6 +88,11 @@ struct Bars {
     t0: Option<Instant>,
     /// The run directory (from [`Event::Begin`]).
     out: Option<std::path::PathBuf>,
+    /// Stills drawn and their count, and the tenth said last where stderr is no terminal
+    /// ([`super::plain_progress`]).
+    stills: (u64, u64, u64),
+    /// The tenth of the timelapse's frames said last where stderr is no terminal.
+    frames_said: u64,
 }
 
 impl Bars {
@@ -113,23 +118,30 @@ impl Bars {
             Event::Stills { count, adapter } => {
                 eprintln!("[3/4] stills on {adapter}");
                 self.bar = Some(super::progress(*count as u64, "stills"));
+                self.stills = (0, *count as u64, 0);
             }
             Event::Still => {
                 if let Some(pb) = &self.bar {
                     pb.inc(1);
                 }
+                let (done, total, said) = &mut self.stills;
+                *done += 1;
+                super::plain_progress("stills", *done, *total, said, "");
             }
             Event::CloseUp(ad) => eprintln!("close-up: {} trees adapted to their neighbours ({:.1} s adaptation, {:.1} s meshes)", ad.adapted_trees, ad.adapt_s, ad.mesh_s),
             Event::Timelapse => {
                 eprintln!("[4/4] timelapse");
                 self.bar = Some(super::progress(1, "timelapse"));
                 self.t0 = Some(Instant::now());
+                self.frames_said = 0;
             }
             Event::Frame { done, total } => {
                 if let (Some(pb), Some(t0)) = (&self.bar, self.t0) {
+                    let msg = format!("{:.1} frames/s", *done as f64 / t0.elapsed().as_secs_f64().max(1e-3));
+                    super::plain_progress("timelapse frames", *done as u64, *total as u64, &mut self.frames_said, &msg);
                     pb.set_length(*total as u64);
                     pb.set_position(*done as u64);
-                    pb.set_message(format!("{:.1} frames/s", *done as f64 / t0.elapsed().as_secs_f64().max(1e-3)));
+                    pb.set_message(msg);
                 }
             }
             Event::StillsDone | Event::TimelapseDone => {

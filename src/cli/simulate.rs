@@ -148,21 +148,27 @@ pub fn interrupted(s: &Simulated, how: &str) -> super::Interrupted {
     super::Interrupted(format!("stopped (Ctrl-C or SIGTERM) after year {}: outputs so far are complete in {}; {how}", s.year, s.out.display()))
 }
 
-/// The simulation's progress on stderr: a bar over the years, then one line with the final
-/// year's figures (and the phase times with `SYLVA_PHASE_TIMES=1`).
+/// The simulation's progress on stderr: a bar over the years (where stderr is not a terminal,
+/// a line at every tenth of the years instead: [`super::plain_progress`]), then one line with
+/// the final year's figures (and the phase times with `SYLVA_PHASE_TIMES=1`).
 #[derive(Default)]
-pub struct SimBar(Option<indicatif::ProgressBar>);
+pub struct SimBar(Option<indicatif::ProgressBar>, u64, u64);
 
 impl SimBar {
     /// Draws `e` ([`Event::Simulating`], [`Event::Year`], [`Event::Simulated`]; others are
     /// ignored).
     pub fn show(&mut self, e: &Event) {
         match e {
-            Event::Simulating { years } => self.0 = Some(super::progress(*years as u64, "simulate")),
+            Event::Simulating { years } => {
+                self.0 = Some(super::progress(*years as u64, "simulate"));
+                (self.1, self.2) = (*years as u64, 0);
+            }
             Event::Year(p) => {
+                let msg = format!("year {} · {} trees · {:.0} trees/s", p.year, p.trees, p.trees_per_s);
+                super::plain_progress("simulate", p.year as u64, self.1, &mut self.2, &msg);
                 if let Some(pb) = &self.0 {
                     pb.set_position(p.year as u64);
-                    pb.set_message(format!("year {} · {} trees · {:.0} trees/s", p.year, p.trees, p.trees_per_s));
+                    pb.set_message(msg);
                 }
             }
             Event::Simulated(s) => {
