@@ -141,6 +141,22 @@ fn folders_and_files_mixed_up_get_plain_errors() {
         assert!(!ok && err.contains("missing.csv") && !err.contains("holds an earlier run"), "{args:?}: {err}");
     }
     assert_eq!(std::fs::read(d.join("snap_all/stand_table.csv")).unwrap(), table, "the earlier run's stand table is kept");
+    // a run directory that does not exist, or is a file, is called so (round 30's trial: "not
+    // a Sylva run directory" for a mistyped path)
+    for cmd in ["render", "export", "timelapse"] {
+        let out = if cmd == "timelapse" { "t.gif" } else if cmd == "export" { "s.glb" } else { "x.png" };
+        let (ok, err) = run(&[cmd, "no_such_run", "--out", out]);
+        assert!(!ok && err.contains("no_such_run: no such folder"), "{cmd}: {err}");
+        let (ok, err) = run(&[cmd, "snap.toml", "--out", out]);
+        assert!(!ok && err.contains("snap.toml is a file, not a run directory"), "{cmd}: {err}");
+    }
+    // a scenario with nothing to grow from is said to be so
+    std::fs::write(d.join("empty.toml"), "name = \"empty\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = { width = 4, height = 4, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n").unwrap();
+    let (ok, err) = run(&["simulate", "empty.toml", "--out", "empty_out"]);
+    assert!(ok && err.contains("no [[start]]") && err.contains("nothing will grow"), "{err}");
+    std::fs::write(d.join("rain.toml"), std::fs::read_to_string(d.join("empty.toml")).unwrap() + "[[start]]\nkind = \"seed_rain\"\nspecies = \"beech\"\nseeds_per_ha = 100.0\n").unwrap();
+    let (ok, err) = run(&["simulate", "rain.toml", "--out", "rain_out"]);
+    assert!(ok && !err.contains("nothing will grow"), "{err}");
     // and `sylva run` says it once the scenario is checked (after the conditions' step)
     let (ok, err) = run(&["run", "snap.toml", "--out", "snap_all", "--no-pictures"]);
     assert!(ok && err.contains("snap_all holds an earlier run (snap)"), "{err}");

@@ -49,6 +49,19 @@ pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
     pb
 }
 
+/// Refuses a run directory argument (`what`: the command) that does not exist or is a file,
+/// before it is read as a run (a missing folder was called "not a Sylva run directory"; round
+/// 30's trial).
+pub fn check_run_dir(dir: &std::path::Path, what: &str) -> anyhow::Result<()> {
+    if !dir.exists() {
+        anyhow::bail!("{what}: {}: no such folder (expected a run directory: the --out of `sylva run` or `sylva simulate`)", dir.display());
+    }
+    if !dir.is_dir() {
+        anyhow::bail!("{what}: {} is a file, not a run directory (the --out folder of `sylva run` or `sylva simulate`)", dir.display());
+    }
+    Ok(())
+}
+
 /// Progress as plain lines where stderr is not a terminal (a log, `nohup`, CI), where the
 /// bars of [`progress`] are not drawn: `what: done/total msg` at every tenth of `total` passed
 /// (`last` keeps the tenth said last; start it at 0), once the process has run 3 s (a short

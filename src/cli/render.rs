@@ -160,6 +160,7 @@ pub struct TimelapseArgs {
 /// Species: the shipped library, overlaid by the run's `species/` folder when it has one, then
 /// by `species_dir`.
 pub fn stage_for(run_dir: &Path, species_dir: Option<&Path>) -> anyhow::Result<Stage> {
+    super::check_run_dir(run_dir, "RUN")?;
     let sc_path = run_dir.join("scenario.toml");
     let sc = Scenario::load(&sc_path).with_context(|| format!("{} is not a Sylva run directory", run_dir.display()))?;
     let site = super::simulate::load_site(&sc)?;

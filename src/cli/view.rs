@@ -78,6 +78,7 @@ fn parse_view_camera(s: &str) -> Result<sylva::render::camera::CameraPreset, Str
 pub fn view(a: ViewArgs) -> anyhow::Result<()> {
     let opts = a.window.options()?;
     // the run directory first: a mistyped one is named as such, with or without a display
+    super::check_run_dir(&a.run_dir, "sylva view")?;
     let sc_path = a.run_dir.join("scenario.toml");
     let sc = Scenario::load(&sc_path).with_context(|| format!("{} is not a Sylva run directory", a.run_dir.display()))?;
     sylva::gui::check_display()?;

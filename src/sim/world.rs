@@ -301,12 +301,18 @@ impl World {
     ///
     /// Logs a warning (`tracing::warn`) for every management year beyond the run's last year
     /// ([`super::management::warnings`]) and for climate anomalies of years beyond it
-    /// ([`super::climate_change::ClimateChange::years_beyond`]).
+    /// ([`super::climate_change::ClimateChange::years_beyond`]), and when the scenario has
+    /// neither a start nor a planting (nothing would grow).
     pub fn new(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
         let mut w = World::bare(site, lib, scenario)?;
         w.check_plantings(&scenario.context())?;
         for m in super::management::warnings(&w.site.management, scenario.years, &scenario.context()) {
             tracing::warn!("{m}");
+        }
+        // nothing to grow from: no start and no planting (round 30's trial ran such a
+        // scenario for a minute to no tree, without a word)
+        if scenario.start.is_empty() && !scenario.management.iter().any(|m| m.kind == "planting") {
+            tracing::warn!("{}: no [[start]] (seed sources, seed rain, a planted stand) and no planting in [[management]]: nothing will grow on this site", scenario.context());
         }
         let late = w.site.climate_change.years_beyond(scenario.years);
         if let Some(first) = late.first() {
