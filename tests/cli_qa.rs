@@ -174,6 +174,10 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     assert!(std::fs::read_to_string(d.join("snap_y/scenario.toml")).unwrap().lines().any(|l| l.trim() == "years = 1"));
     let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_y0", "--years", "0"]);
     assert!(!ok && err.contains("--years") && !d.join("snap_y0").exists(), "{err}");
+    // a negative count is read as one and refused with the option's range (clap's tip was to
+    // write `-- -3`, which names a scenario: round 30's trial)
+    let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_y0", "--years", "-3"]);
+    assert!(!ok && err.contains("-3 is not in 1..=10000") && !err.contains("-- -3") && !d.join("snap_y0").exists(), "{err}");
     // under mpirun only rank 0 says it (each rank printed it in round 23); rank 0 still does
     for (rank, said) in [("1", false), ("0", true)] {
         let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["simulate", "snap.toml", "--out", "snap_all"]).env("OMPI_COMM_WORLD_RANK", rank).current_dir(d).output().unwrap();

@@ -17,8 +17,10 @@ pub struct Args {
     /// Output folder.
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
-    /// Override the scenario's number of years.
-    #[arg(long)]
+    /// Override the scenario's number of years (1–10,000).
+    // a range of its own, and a negative value read as one (clap's tip for `--years -3` was
+    // to pass `-- -3`, which names a scenario; round 30's trial)
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub years: Option<u32>,
     /// Size of the stills WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = super::render::parse_size)]

@@ -22,7 +22,9 @@ pub struct Args {
     pub out: PathBuf,
     /// Override the scenario's number of years (1–10,000), e.g. to try a shipped scenario for
     /// a few years; the run directory's `scenario.toml` records the years run.
-    #[arg(long)]
+    // a range of its own, and a negative value read as one (clap's tip for `--years -3` was
+    // to pass `-- -3`, which names a scenario; round 30's trial)
+    #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub years: Option<u32>,
     /// Continue an interrupted run from its checkpoint (OUT/checkpoint.bin, or a tiled run's
     /// per-rank OUT/checkpoint/).

@@ -390,6 +390,9 @@ fn field_hint(key: &str) -> Option<&'static str> {
         "checkpoint_every" => "years between checkpoints, a whole number ≥ 0 (0: only at the end)",
         "light_cell_m" => "the light grid's cell size, a number 2–20 (m)",
         "seasonal_snapshots" => "true or false",
+        // [[management]]'s years (round 30's trial read "0 to 4294967295" for every_years)
+        "every_years" => "years between two operations of a [[management]] entry, a whole number 1–1000",
+        "year" | "from_year" | "until_year" => "a simulated year of a [[management]] entry, a whole number 0–10000 (1–10000 for thinnings and harvests: they act at a year's end)",
         _ => return None,
     })
 }
@@ -819,6 +822,12 @@ spacing_m = 2.0
         assert!(e.contains("start[0].spacing_m") && e.contains("0.1"), "{e}");
         let e = Scenario::from_toml_str(&OK.replace("seed = 3", "seed = 3\nbogus = 1"), "t.toml").unwrap_err().to_string();
         assert!(e.contains("bogus"), "{e}");
+        // a management year of the wrong type names the field and its range, not u32's
+        let m = format!("{OK}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 500.0\nfrom_year = 5\nevery_years = \"5\"\n");
+        let e = Scenario::from_toml_str(&m, "t.toml").unwrap_err().to_string();
+        assert!(e.contains("`every_years`: expected") && e.contains("1–1000") && !e.contains("4294967295"), "{e}");
+        let e = Scenario::from_toml_str(&m.replace("from_year = 5", "from_year = -3").replace("\"5\"", "5"), "t.toml").unwrap_err().to_string();
+        assert!(e.contains("`from_year`: expected") && e.contains("0–10000") && !e.contains("4294967295"), "{e}");
         // a misspelt field of a tagged table is named with its own line (line 10 of OK: the
         // table's header is line 7), not only the header's (round 30's trial)
         let e = Scenario::from_toml_str(&OK.replace("spacing_m = 2.0", "spaceing_m = 2.0"), "t.toml").unwrap_err().to_string();
