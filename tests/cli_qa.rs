@@ -157,6 +157,10 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     std::fs::write(d.join("rain.toml"), std::fs::read_to_string(d.join("empty.toml")).unwrap() + "[[start]]\nkind = \"seed_rain\"\nspecies = \"beech\"\nseeds_per_ha = 100.0\n").unwrap();
     let (ok, err) = run(&["simulate", "rain.toml", "--out", "rain_out"]);
     assert!(ok && !err.contains("nothing will grow"), "{err}");
+    // `sylva edit` of an unknown species says so before it looks for a display
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["edit", "no_such_species"]).env_remove("DISPLAY").env_remove("WAYLAND_DISPLAY").current_dir(d).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("no_such_species") && err.contains("beech"), "{err}");
     // and `sylva run` says it once the scenario is checked (after the conditions' step)
     let (ok, err) = run(&["run", "snap.toml", "--out", "snap_all", "--no-pictures"]);
     assert!(ok && err.contains("snap_all holds an earlier run (snap)"), "{err}");

@@ -138,8 +138,10 @@ pub fn edit(a: EditArgs) -> anyhow::Result<()> {
     if !(1.0..=150.0).contains(&a.age) {
         anyhow::bail!("--age {}: expected 1–150 years", a.age);
     }
-    sylva::gui::check_display()?;
+    // the species is looked up before the display (a misspelt id was told "no display" first;
+    // round 30's trial)
     let doc = sylva::edit::open_target(a.species.as_deref(), &a.dir)?;
+    sylva::gui::check_display()?;
     eprintln!("editing {} (saves there)", doc.path.display());
     sylva::edit::run(doc, a.dir.clone(), a.model, a.age, &opts)?;
     said_screenshot(&opts);
