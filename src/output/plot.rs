@@ -232,7 +232,7 @@ pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()>
     let s = |name: &str, pts, color| Series { name: name.into(), points: pts, color, markers: false };
     let mut shares = Vec::new();
     for (p, &sp) in w.site.pool.iter().enumerate() {
-        shares.push(s(&w.site.lib.species[sp as usize].id, x(&|r| r.share_ba.get(p).copied().unwrap_or(0.0)), species_color(w, sp)));
+        shares.push(s(&w.site.lib.species[sp as usize].identity.common_name, x(&|r| r.share_ba.get(p).copied().unwrap_or(0.0)), species_color(w, sp)));
     }
     let panels = vec![
         Panel { title: "Stems".into(), x_label: "year".into(), y_label: "stems/ha".into(), series: vec![s("trees ≥ 1.3 m (tree list)", x(&|r| r.stems_ha), [30, 90, 160]), s("DBH ≥ 7 cm", x(&|r| r.stems_7cm_ha), [200, 80, 40]), s("regeneration < 4 m (cohorts)", x(&|r| r.regeneration_ha), [120, 170, 60])] },
@@ -400,7 +400,8 @@ pub fn write_maps_masked(species_png: &Path, ba_png: &Path, w: &World, max_px: u
     super::maps::draw_text(&mut img, &font, pad as f32, (top + mh + 4) as f32, 13.0, &format!("{:.0} m × {:.0} m, map cell {:.0} m", w.site.extent.0, w.site.extent.1, cell));
     let lx = pad + mw + 16;
     super::maps::draw_text(&mut img, &font, lx as f32, top as f32, 15.0, "Species");
-    let mut entries: Vec<(String, [u8; 3])> = w.site.pool.iter().map(|&s| (w.site.lib.species[s as usize].id.clone(), species_color(w, s))).collect();
+    // common names (a trial read `norway_maple` in the legends); species_codes.csv keeps the ids
+    let mut entries: Vec<(String, [u8; 3])> = w.site.pool.iter().map(|&s| (w.site.lib.species[s as usize].identity.common_name.clone(), species_color(w, s))).collect();
     entries.push(("no tree ≥ 1.3 m".into(), empty_px));
     entries.push(("outside / water".into(), masked_px));
     for (e, (name, col)) in entries.iter().enumerate() {
