@@ -64,8 +64,8 @@ pub fn check_run_dir(dir: &std::path::Path, what: &str) -> anyhow::Result<()> {
 
 /// Progress as plain lines where stderr is not a terminal (a log, `nohup`, CI), where the
 /// bars of [`progress`] are not drawn: `what: done/total msg` at every tenth of `total` passed
-/// (`last` keeps the tenth said last; start it at 0), once the process has run 3 s (a short
-/// run says nothing). Nothing on a terminal.
+/// (`last` keeps the tenth said last; start it at 0), from 3 s after the process's first
+/// progress report on (a short run says nothing). Nothing on a terminal.
 pub fn plain_progress(what: &str, done: u64, total: u64, last: &mut u64, msg: &str) {
     use std::io::IsTerminal;
     static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();

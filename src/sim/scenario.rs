@@ -300,47 +300,69 @@ fn innermost_array_lengths(value: &str) -> Vec<usize> {
     out
 }
 
-/// The first key whose value holds a one-line array of numbers with a length other than
-/// `want` (of length `got` where that is known; `None` when there is none), in backquotes, in the TOML table whose header or line
-/// holds byte `at` of `text`. When that table is one of an array of tables (`[[start]]`, whose errors serde
-/// places at the first `[[start]]`), every table of the array is searched and the key is named
-/// with its index and line: "`start[1].area` (line 22)".
-fn key_with_array_len_not(text: &str, at: usize, got: Option<usize>, want: usize) -> Option<String> {
-    let at = at.min(text.len());
-    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
-    let bad_key_in = |from: usize| -> Option<(String, usize)> {
+/// A `key = value` line of a TOML table ([`table_entries`]).
+struct Entry<'a> {
+    /// The array of tables and the table's index in it (`[[start]]` #1: `("start", 1)`), or
+    /// `None` for a plain table.
+    array: Option<(&'a str, usize)>,
+    /// The key and its value as written (trimmed).
+    key: &'a str,
+    value: &'a str,
+    /// Line number (1-based).
+    line: usize,
+}
+
+/// The `key = value` lines of the TOML table whose header or line holds byte `at` of `text`
+/// (from `at`'s line to the next table header). When `at`'s line is the header of an array of
+/// tables (`[[start]]`: serde places the errors of any of its tables at the first header),
+/// those of every table of the array, in order.
+fn table_entries(text: &str, at: usize) -> Vec<Entry<'_>> {
+    fn array_name(line: &str) -> Option<&str> {
+        line.trim().strip_prefix("[[").and_then(|h| h.strip_suffix("]]")).map(str::trim)
+    }
+    fn table_at<'a>(text: &'a str, from: usize, array: Option<(&'a str, usize)>, out: &mut Vec<Entry<'a>>) {
+        let first = text[..from].lines().count();
         for (i, line) in text[from..].lines().enumerate() {
             let t = line.trim();
             if i > 0 && t.starts_with('[') {
                 break;
             }
-            let Some((key, value)) = t.split_once('=') else { continue };
-            // an array of the length given where serde says it (another key of another table of
-            // the array may rightly hold arrays of other lengths: `points` beside `area`)
-            if innermost_array_lengths(value.trim()).iter().any(|&n| n != want && got.is_none_or(|g| g == n)) {
-                return Some((key.trim().to_string(), text[..from].lines().count() + i + 1));
+            if let Some((key, value)) = t.split_once('=') {
+                out.push(Entry { array, key: key.trim().trim_matches('"'), value: value.trim(), line: first + i + 1 });
             }
         }
-        None
-    };
-    let header = text[start..].lines().next().unwrap_or("").trim();
-    if let Some(name) = header.strip_prefix("[[").and_then(|h| h.strip_suffix("]]")).map(str::trim) {
-        // every `[[name]]` of the file, in order
-        let mut k = 0;
-        let mut pos = 0;
-        for line in text.split_inclusive('\n') {
-            let t = line.trim();
-            if t.strip_prefix("[[").and_then(|h| h.strip_suffix("]]")).map(str::trim) == Some(name) {
-                if let Some((key, line_no)) = bad_key_in(pos) {
-                    return Some(format!("`{name}[{k}].{key}` (line {line_no})"));
-                }
-                k += 1;
-            }
-            pos += line.len();
-        }
-        return None;
     }
-    bad_key_in(start).map(|(key, _)| format!("`{key}`"))
+    let at = at.min(text.len());
+    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let mut out = Vec::new();
+    match array_name(text[start..].lines().next().unwrap_or("")) {
+        Some(name) => {
+            let (mut k, mut pos) = (0, 0);
+            for line in text.split_inclusive('\n') {
+                if array_name(line) == Some(name) {
+                    table_at(text, pos, Some((name, k)), &mut out);
+                    k += 1;
+                }
+                pos += line.len();
+            }
+        }
+        None => table_at(text, start, None, &mut out),
+    }
+    out
+}
+
+/// The first key whose value holds a one-line array of numbers with a length other than
+/// `want` (of length `got` where that is known; `None` when there is none), in backquotes, in
+/// the TOML table whose header or line holds byte `at` of `text` ([`table_entries`]); a key of
+/// an array of tables is named with its index and line: "`start[1].area` (line 22)".
+fn key_with_array_len_not(text: &str, at: usize, got: Option<usize>, want: usize) -> Option<String> {
+    // an array of the length given where serde says it (another key of another table of the
+    // array may rightly hold arrays of other lengths: `points` beside `area`)
+    let e = table_entries(text, at).into_iter().find(|e| innermost_array_lengths(e.value).iter().any(|&n| n != want && got.is_none_or(|g| g == n)))?;
+    Some(match e.array {
+        Some((name, k)) => format!("`{name}[{k}].{}` (line {})", e.key, e.line),
+        None => format!("`{}`", e.key),
+    })
 }
 
 /// The field named by a serde "unknown field `NAME`" message.
@@ -349,41 +371,12 @@ fn unknown_field(msg: &str) -> Option<String> {
     Some(rest[..rest.find('`')?].to_string())
 }
 
-/// The line number (1-based) of the `key = value` line of `text` in the table that holds byte
-/// `at` (from `at`'s line to the next table header), or `None` when that table has no such line
-/// or `at`'s line is itself such a line (serde's span already points at it). When `at`'s line
-/// is the header of an array of tables (`[[start]]`), every table of that array is searched in
-/// order (serde points at the array's first header whichever table holds the field).
+/// The line number (1-based) of the `key = value` line of `text` in the table (or array of
+/// tables) that holds byte `at` ([`table_entries`]), or `None` when it has no such line or
+/// that line is `at`'s own (serde's span already points at it).
 fn key_line_in_table(text: &str, at: usize, key: &str) -> Option<usize> {
-    let at = at.min(text.len());
-    let start = text[..at].rfind('\n').map_or(0, |i| i + 1);
-    let in_table = |from: usize| -> Option<usize> {
-        let first = text[..from].lines().count();
-        for (i, line) in text[from..].lines().enumerate() {
-            let t = line.trim();
-            if i > 0 && t.starts_with('[') {
-                break;
-            }
-            if i > 0 && t.split_once('=').is_some_and(|(k, _)| k.trim().trim_matches('"') == key) {
-                return Some(first + i + 1);
-            }
-        }
-        None
-    };
-    let header = text[start..].lines().next().unwrap_or("").trim();
-    if let Some(name) = header.strip_prefix("[[").and_then(|h| h.strip_suffix("]]")).map(str::trim) {
-        let mut pos = 0;
-        for line in text.split_inclusive('\n') {
-            if line.trim().strip_prefix("[[").and_then(|h| h.strip_suffix("]]")).map(str::trim) == Some(name) {
-                if let Some(n) = in_table(pos) {
-                    return Some(n);
-                }
-            }
-            pos += line.len();
-        }
-        return None;
-    }
-    in_table(start)
+    let own = text[..at.min(text.len())].matches('\n').count() + 1;
+    table_entries(text, at).into_iter().find(|e| e.key == key).map(|e| e.line).filter(|&l| l != own)
 }
 
 /// The key of the `key = value` line of `text` holding byte `at` (`None` when that line is no
