@@ -81,6 +81,9 @@ pub struct MapStyle<'a> {
     pub hillshade: Option<&'a Grid<f32>>,
     /// Strength of the hillshade (0 none … 1 full).
     pub shade_strength: f32,
+    /// East–west size of one grid cell in metres (at the map's centre row for geographic
+    /// grids); `Some` draws a scale bar and a north arrow on the map ([`draw_scale_bar`]).
+    pub cell_m: Option<f64>,
 }
 
 /// Writes a colour-mapped PNG of `grid` with a title, a colour bar and its units. Cells that are
@@ -90,7 +93,7 @@ pub struct MapStyle<'a> {
 ///
 /// Errors: [`Error::Invalid`] (in [`OutputError::Input`]) for an empty grid or a mask of another size; [`OutputError::Io`].
 pub fn write_field_png(grid: &Grid<f32>, mask: Option<&Grid<bool>>, ramp: Ramp, title: &str, units: &str, path: &Path) -> Result<()> {
-    let style = MapStyle { ramp, title: title.into(), units: units.into(), range: None, hillshade: None, shade_strength: 0.0 };
+    let style = MapStyle { ramp, title: title.into(), units: units.into(), range: None, hillshade: None, shade_strength: 0.0, cell_m: None };
     write_field_png_styled(grid, mask, &style, path)
 }
 
@@ -162,6 +165,9 @@ pub fn render_field(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyl
         }
     }
     let font = FontRef::try_from_slice(FONT).map_err(|e| OutputError::Bundled { what: "font", message: e.to_string() })?;
+    if let Some(c) = style.cell_m {
+        draw_scale_bar(&mut img, &font, (pad, top), (mw, mh), c * den as f64 / num as f64);
+    }
     draw_text(&mut img, &font, pad as f32, 10.0, 22.0, &style.title);
     // Colour bar.
     let (bx, by, bw, bh) = (pad + mw + 20, top + 10, 22usize, mh.clamp(200, 400) - 20);
@@ -194,6 +200,74 @@ pub fn render_field(grid: &Grid<f32>, mask: Option<&Grid<bool>>, style: &MapStyl
         draw_text(&mut img, &font, bx as f32, (by + bh + 28) as f32, 12.0, &format!("data {}–{}", fmt(vmin), fmt(vmax)));
     }
     Ok(img)
+}
+
+/// Length of a map's scale bar in metres: the longest 1, 2 or 5 × 10ⁿ m not over a quarter of
+/// `map_m` (the map's width in metres, > 0); 0 for a map under 4 m.
+pub fn scale_bar_length_m(map_m: f64) -> f64 {
+    let target = map_m / 4.0;
+    if !(target >= 1.0) {
+        return 0.0;
+    }
+    let p = 10f64.powi(target.log10().floor() as i32);
+    [5.0, 2.0, 1.0].into_iter().map(|k| k * p).find(|&l| l <= target * (1.0 + 1e-9)).unwrap_or(p)
+}
+
+/// Draws a scale bar (lower-left) and a north arrow (upper-right) on the map drawn at pixel
+/// `origin` with size `size` (pixels), `m_per_px` metres per map pixel (east–west), each on a
+/// white box so they read on any colour. The bar is [`scale_bar_length_m`] of the map's width,
+/// in four alternating black and white segments, labelled in m or km. Maps are drawn north up
+/// (row 0 north, [`Grid`]). Draws nothing where the map is under 120 px wide.
+pub fn draw_scale_bar(img: &mut RgbImage, font: &FontRef, origin: (usize, usize), size: (usize, usize), m_per_px: f64) {
+    let ((x0, y0), (mw, mh)) = (origin, size);
+    if mw < 120 || mh < 80 || !(m_per_px > 0.0) {
+        return;
+    }
+    let len_m = scale_bar_length_m(mw as f64 * m_per_px);
+    let bar = (len_m / m_per_px).round() as usize;
+    if len_m <= 0.0 || bar < 20 {
+        return;
+    }
+    let label = if len_m >= 1000.0 { format!("{} km", len_m / 1000.0) } else { format!("{len_m} m") };
+    let sf = font.as_scaled(PxScale::from(13.0));
+    let text_w: f32 = label.chars().map(|c| sf.h_advance(sf.glyph_id(c))).sum();
+    let fill = |x: usize, y: usize, w: usize, h: usize, col: [u8; 3], img: &mut RgbImage| {
+        for yy in y..(y + h).min(img.height() as usize) {
+            for xx in x..(x + w).min(img.width() as usize) {
+                img.put_pixel(xx as u32, yy as u32, Rgb(col));
+            }
+        }
+    };
+    // scale bar: box 8 px in from the map's lower-left corner
+    let (bw, bh) = (8 + bar + 6 + text_w.ceil() as usize + 8, 26usize);
+    let (bx, by) = (x0 + 8, y0 + mh - 8 - bh);
+    fill(bx, by, bw, bh, [255, 255, 255], img);
+    let (sx, sy, sh) = (bx + 8, by + 10, 7usize);
+    fill(sx, sy, bar, sh, [0, 0, 0], img);
+    for k in 0..4 {
+        let (a, b) = (sx + bar * k / 4, sx + bar * (k + 1) / 4);
+        if k % 2 == 1 && b > a + 2 {
+            fill(a + 1, sy + 1, b - a - 1, sh - 2, [255, 255, 255], img);
+        }
+    }
+    draw_text(img, font, (sx + bar + 6) as f32, (by + 5) as f32, 13.0, &label);
+    // north arrow: box 8 px in from the map's upper-right corner
+    let (aw, ah) = (24usize, 40usize);
+    let (ax, ay) = (x0 + mw - 8 - aw, y0 + 8);
+    fill(ax, ay, aw, ah, [255, 255, 255], img);
+    let tip = ay + 18;
+    for dy in 0..18usize {
+        let half = dy * 7 / 17;
+        let cx = ax + aw / 2;
+        // left half black, right half outlined: the common north arrow
+        fill(cx - half, tip + dy, half + 1, 1, [0, 0, 0], img);
+        if half > 0 {
+            fill(cx + half, tip + dy, 1, 1, [0, 0, 0], img);
+        }
+    }
+    fill(ax + aw / 2 - 7, tip + 17, 15, 1, [0, 0, 0], img);
+    let nw: f32 = sf.h_advance(sf.glyph_id('N'));
+    draw_text(img, font, (ax + aw / 2) as f32 - nw / 2.0, (ay + 2) as f32, 13.0, "N");
 }
 
 /// Draws `text` (black) with its top-left at `(x, y)` pixels, `px` pixels high.
@@ -274,7 +348,7 @@ mod tests {
         assert_eq!(Ramp::Grey.color(0.5), [128, 128, 128]);
         let mut g = Grid::filled(10, 10, 1.0f32);
         g.data[0] = f32::NAN;
-        let st = MapStyle { ramp: Ramp::Grey, title: "t".into(), units: "m".into(), range: Some((0.0, 1.0)), hillshade: None, shade_strength: 0.0 };
+        let st = MapStyle { ramp: Ramp::Grey, title: "t".into(), units: "m".into(), range: Some((0.0, 1.0)), hillshade: None, shade_strength: 0.0, cell_m: None };
         let img = render_field(&g, None, &st).unwrap();
         assert_eq!(img.get_pixel(12, 44).0, [215, 215, 215]);
         assert_eq!(img.get_pixel(12 + 60, 44).0, [255, 255, 255]);
@@ -291,10 +365,37 @@ mod tests {
         g.data[99] = 1000.0; // an outlier above the 99th percentile
         // 600 × 600 px map: the bar at x 632, 54–433 px; the data line at y 462
         let ink = |img: &RgbImage| (462..478).flat_map(|y| (632..760).map(move |x| (x, y))).filter(|&(x, y)| img.get_pixel(x, y).0[0] < 128).count();
-        let style = |range| MapStyle { ramp: Ramp::Grey, title: "t".into(), units: "m".into(), range, hillshade: None, shade_strength: 0.0 };
+        let style = |range| MapStyle { ramp: Ramp::Grey, title: "t".into(), units: "m".into(), range, hillshade: None, shade_strength: 0.0, cell_m: None };
         let clipped = render_field(&g, None, &style(None)).unwrap();
         let whole = render_field(&g, None, &style(Some((0.0, 1000.0)))).unwrap();
         assert!(ink(&clipped) > 40, "{}", ink(&clipped));
         assert_eq!(ink(&whole), 0);
+    }
+
+    /// The scale bar's length: 1, 2 or 5 × 10ⁿ m, at most a quarter of the map.
+    #[test]
+    fn scale_bar_lengths() {
+        assert_eq!(scale_bar_length_m(2400.0), 500.0);
+        assert_eq!(scale_bar_length_m(1999.0), 200.0);
+        assert_eq!(scale_bar_length_m(4000.0), 1000.0);
+        assert_eq!(scale_bar_length_m(799.0), 100.0);
+        assert_eq!(scale_bar_length_m(12_000.0), 2000.0);
+        assert_eq!(scale_bar_length_m(30.0), 5.0);
+        assert_eq!(scale_bar_length_m(3.0), 0.0);
+    }
+
+    /// A map with its cell size gets a bar of the right pixel length in its lower-left corner
+    /// (black pixels along the bar's top edge) and nothing there without it.
+    #[test]
+    fn scale_bar_drawn_to_scale() {
+        let g = Grid::filled(100, 100, 0.5f32); // 600 × 600 px, 6 px a cell
+        let st = |cell_m| MapStyle { ramp: Ramp::Grey, title: "t".into(), units: "m".into(), range: Some((0.0, 1.0)), hillshade: None, shade_strength: 0.0, cell_m };
+        // 10 m cells: 1,000 m map, bar 200 m (≤ 250) = 120 px, from x 12+16 at y 44+600-8-26+10
+        let img = render_field(&g, None, &st(Some(10.0))).unwrap();
+        let y = 44 + 600 - 8 - 26 + 10;
+        let black: Vec<u32> = (12..150).filter(|&x| img.get_pixel(x, y).0 == [0, 0, 0]).collect();
+        assert_eq!((black.first().copied(), black.last().copied()), (Some(28), Some(28 + 119)), "{black:?}");
+        let plain = render_field(&g, None, &st(None)).unwrap();
+        assert!((12..400).all(|x| plain.get_pixel(x, y).0 == [128, 128, 128]));
     }
 }

@@ -396,6 +396,7 @@ pub fn write_maps_masked(species_png: &Path, ba_png: &Path, w: &World, max_px: u
             img.put_pixel((pad + x) as u32, (top + y) as u32, image::Rgb(sp_cells[(y / k) * cols + x / k]));
         }
     }
+    super::maps::draw_scale_bar(&mut img, &font, (pad, top), (mw, mh), cell / k as f64);
     super::maps::draw_text(&mut img, &font, pad as f32, 10.0, 20.0, &format!("Dominant species by basal area, {when}"));
     super::maps::draw_text(&mut img, &font, pad as f32, (top + mh + 4) as f32, 13.0, &format!("{:.0} m × {:.0} m, map cell {:.0} m", w.site.extent.0, w.site.extent.1, cell));
     let lx = pad + mw + 16;
@@ -425,6 +426,7 @@ pub fn write_maps_masked(species_png: &Path, ba_png: &Path, w: &World, max_px: u
         range: Some((0.0, ba_scale_top(&ba_grid.data) as f32)),
         hillshade: None,
         shade_strength: 0.0,
+        cell_m: Some(cell),
     };
     // the caption the species map has under its map (found by a trial: the basal-area map had
     // none); no hillshade, as the species map has none
