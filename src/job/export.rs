@@ -552,7 +552,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
                 "origin_m": [origin.x, origin.y, origin.z],
                 "origin_map": [mx, my, origin.z], "epsg": geo.epsg,
                 "age_classes_yr": AGE_CLASSES_YR,
-                "note": "scene coordinates are metres from origin_m (run world coordinates: x east, y north from the terrain's south-west corner, z elevation), y up; origin_map is the same point in the terrain's map coordinates (EPSG code epsg); each tree is an EXT_mesh_gpu_instancing instance of the model of its species and age class, _ID its inventory id",
+                "note": "scene coordinates are metres from origin_m (run world coordinates: x east, y north from the terrain's south-west corner, z elevation), y up; origin_map is the same point in the terrain's map coordinates (EPSG code epsg); each tree is an EXT_mesh_gpu_instancing instance of the model of its species and age class, _ID its inventory id (or, where an id exceeds 32 bits, _ID_LO and _ID_HI: id = _ID_HI * 2^32 + _ID_LO)",
             }
         }),
     };

@@ -315,9 +315,10 @@ pub fn step_into_clearing(cam: Camera, site: &SiteConditions, terrain: &crate::r
             }
         }
         let (_, _, x, y) = best;
-        let gz = terrain.nearest_height(x, y).unwrap_or(cam.eye[2] - 1.7);
-        let tz = terrain.nearest_height(x, cam.target[1]).unwrap_or(cam.target[2] - 8.0);
-        let mut moved = Camera::look_at([x, y, gz + 1.7], [x, cam.target[1], tz + 8.0], 60.0);
+        let mut moved = Camera::ground_at(terrain, x, y, cam.target[1]);
+        if terrain.height_at(x, y).is_none() {
+            moved.eye[2] = cam.eye[2];
+        }
         moved.near = cam.near;
         moved
     }

@@ -582,7 +582,10 @@ pub struct InstanceGroup {
     /// Scale of the model along Sylva's x, y, z (> 0).
     pub scales: Vec<[f32; 3]>,
     /// Tree ids (the inventory's `id`), written as the custom instance attribute `_ID`
-    /// (unsigned 32-bit) when every id fits; empty to leave it out.
+    /// (unsigned 32-bit) when every id of the group fits, otherwise as `_ID_LO` and `_ID_HI`
+    /// (its low and high 32 bits: id = `_ID_HI` · 2³² + `_ID_LO`; a run's ids use the high
+    /// bits, and the 64-bit ids were left out without a word, found by a trial); empty to
+    /// leave them out.
     pub ids: Vec<u64>,
 }
 
@@ -610,7 +613,8 @@ pub struct InstancedScene {
 
 /// Encodes an [`InstancedScene`] as GLB bytes: node `trees` holds, per model and level, one node
 /// `<model>_LOD<i>` drawing the level's mesh with the extension's `TRANSLATION`, `ROTATION`
-/// (about the vertical) and `SCALE` attributes (and `_ID`), one entry per tree; node `ground` the
+/// (about the vertical) and `SCALE` attributes (and `_ID`, or `_ID_LO` and `_ID_HI`:
+/// [`InstanceGroup::ids`]), one entry per tree; node `ground` the
 /// static meshes. The extension is used, not required: a viewer without it shows each model
 /// once at the origin.
 ///
@@ -672,10 +676,17 @@ pub fn instanced_glb_bytes(s: &InstancedScene) -> Result<(Vec<u8>, StandCounts)>
         let sv = d.view(bytemuck::cast_slice(&sc), None, None);
         let sa = d.accessor(sv, n, F32, "VEC3", None);
         let mut attributes = json!({"TRANSLATION": ta, "ROTATION": ra, "SCALE": sa});
-        if !g.ids.is_empty() && g.ids.iter().all(|&i| i <= u32::MAX as u64) {
-            let ids: Vec<u32> = g.ids.iter().map(|&i| i as u32).collect();
-            let iv = d.view(bytemuck::cast_slice(&ids), None, None);
-            attributes["_ID"] = json!(d.accessor(iv, n, U32, "SCALAR", None));
+        if !g.ids.is_empty() {
+            let mut id_attribute = |name: &str, ids: Vec<u32>| {
+                let iv = d.view(bytemuck::cast_slice(&ids), None, None);
+                attributes[name] = json!(d.accessor(iv, n, U32, "SCALAR", None));
+            };
+            if g.ids.iter().all(|&i| i <= u32::MAX as u64) {
+                id_attribute("_ID", g.ids.iter().map(|&i| i as u32).collect());
+            } else {
+                id_attribute("_ID_LO", g.ids.iter().map(|&i| i as u32).collect());
+                id_attribute("_ID_HI", g.ids.iter().map(|&i| (i >> 32) as u32).collect());
+            }
         }
         for (i, mesh) in meshes.iter().enumerate() {
             if let Some(mesh) = *mesh {
@@ -875,6 +886,47 @@ pub fn parse_skeleton_sidecar(text: &str, path: &Path) -> Result<crate::structur
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Ids that fit in 32 bits are `_ID`; a group with a larger id gets `_ID_LO` and `_ID_HI`,
+    /// from which every id comes back exactly.
+    #[test]
+    fn instance_ids_of_64_bits_are_written_in_two_halves() {
+        let mut sk = crate::structure::Skeleton::new();
+        sk.add_root(glam::Vec3::ZERO, 0.1);
+        sk.add_child(0, glam::Vec3::new(0.0, 0.0, 2.0), 0.05, false).unwrap();
+        let chain = crate::structure::mesh::lod_chain(&sk, &Default::default(), &Default::default());
+        let big: Vec<u64> = vec![246_290_789_933_056, 7, (1 << 40) | 0xdead_beef];
+        for (ids, want) in [(vec![3u64, 9, u32::MAX as u64], vec!["_ID"]), (big.clone(), vec!["_ID_LO", "_ID_HI"])] {
+            let n = ids.len();
+            let scene = InstancedScene {
+                name: "t".into(),
+                looks: vec![Look::default()],
+                models: vec![StandModel { name: "m".into(), chain: chain.clone(), look: 0, sprigs: TriMesh::default() }],
+                groups: vec![InstanceGroup { model: 0, translations: vec![[0.0; 3]; n], yaw: vec![0.0; n], scales: vec![[1.0; 3]; n], ids: ids.clone() }],
+                statics: vec![],
+                levels: vec![0],
+                extras: json!({}),
+            };
+            let (bytes, _) = instanced_glb_bytes(&scene).unwrap();
+            let jl = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+            let js: Value = serde_json::from_slice(&bytes[20..20 + jl]).unwrap();
+            let bin_at = 20 + jl + 8;
+            let node = js["nodes"].as_array().unwrap().iter().find(|n| n["name"] == "m_LOD0").unwrap();
+            let attrs = node["extensions"]["EXT_mesh_gpu_instancing"]["attributes"].as_object().unwrap();
+            let u32s = |name: &str| -> Vec<u64> {
+                let a = &js["accessors"][attrs[name].as_u64().unwrap() as usize];
+                let v = &js["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+                let off = bin_at + v["byteOffset"].as_u64().unwrap_or(0) as usize;
+                bytes[off..off + 4 * n].chunks(4).map(|c| u32::from_le_bytes(c.try_into().unwrap()) as u64).collect()
+            };
+            let names: Vec<&str> = attrs.keys().map(|k| k.as_str()).filter(|k| k.starts_with("_ID")).collect();
+            let mut sorted = want.clone();
+            sorted.sort();
+            assert_eq!(names, sorted);
+            let back: Vec<u64> = if want.len() == 1 { u32s("_ID") } else { u32s("_ID_LO").iter().zip(u32s("_ID_HI")).map(|(lo, hi)| hi << 32 | lo).collect() };
+            assert_eq!(back, ids);
+        }
+    }
 
     /// A sidecar of a root and one child, with the child's fields replaced by `child`.
     fn sidecar(child: &str) -> String {

@@ -75,6 +75,22 @@ impl Camera {
         Camera { eye, target, up: [0.0, 0.0, 1.0], projection: Projection::Perspective { fov_y_deg }, near: (d * 0.002).max(0.05), far: d * 8.0 + 1000.0 }
     }
 
+    /// A person's view from the ground: the eye 1.7 m above the drawn surface at `(x, y)`
+    /// ([`TerrainMesh::height_at`]), looking north towards `y = target_y` at 60° field of
+    /// view, pitched at the point 8 m above the surface there but never more than 12° up or
+    /// 6° down (a hill or valley between would otherwise fill the frame with slope or sky),
+    /// near plane 0.1 m.
+    pub fn ground_at(terrain: &TerrainMesh, x: f32, y: f32, target_y: f32) -> Self {
+        let gz = terrain.height_at(x, y).unwrap_or(0.0);
+        let eye = [x, y, gz + 1.7];
+        let tz = terrain.height_at(x, target_y).map_or(eye[2], |h| h + 8.0);
+        let run = (target_y - y).abs().max(1.0);
+        let rise = (tz - eye[2]).clamp(-run * 6f32.to_radians().tan(), run * 12f32.to_radians().tan());
+        let mut cam = Camera::look_at(eye, [x, target_y.max(y + 1.0), eye[2] + rise], 60.0);
+        cam.near = 0.1;
+        cam
+    }
+
     /// A preset framing the terrain's bounds ([`TerrainMesh::bounds`]: the simulated window
     /// without its surroundings) for a square picture; see [`Camera::preset_sized`].
     pub fn preset(p: CameraPreset, terrain: &TerrainMesh) -> Self {
@@ -103,10 +119,10 @@ impl Camera {
             CameraPreset::Ground => {
                 let x = c.x;
                 let y = lo.y + 0.05 * size;
-                let gz = terrain.nearest_height(x, y).unwrap_or(lo.z);
-                let tz = terrain.nearest_height(x, c.y).unwrap_or(c.z);
-                let mut cam = Camera::look_at([x, y, gz + 1.7], [x, c.y, tz + 8.0], 60.0);
-                cam.near = 0.1;
+                let mut cam = Camera::ground_at(terrain, x, y, c.y);
+                if terrain.height_at(x, y).is_none() {
+                    cam.eye[2] = lo.z + 1.7;
+                }
                 cam
             }
             CameraPreset::Map => {
@@ -177,6 +193,31 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The ground view stands 1.7 m above the drawn surface of a 35° slope of 30 m cells
+    /// (between vertices; the nearest vertex put it metres under the slope, a trial's ground
+    /// view from below the terrain) and looks north at most 12° up.
+    #[test]
+    fn ground_view_stands_on_a_steep_slope() {
+        use crate::grid::Grid;
+        use crate::render::terrain::{from_grid, LandCover};
+        let (w, h, cell) = (40, 40, 30.0f32);
+        let plane = |x: f32, y: f32| 0.7 * x + 0.9 * y;
+        let mut g = Grid::filled(w, h, 0.0f32);
+        for r in 0..h {
+            for c in 0..w {
+                *g.get_mut(c, r) = plane((c as f32 + 0.5) * cell, ((h - 1 - r) as f32 + 0.5) * cell);
+            }
+        }
+        let t = from_grid(&g, cell, cell, &LandCover::default(), None).unwrap();
+        let cam = Camera::preset(CameraPreset::Ground, &t);
+        let [x, y, z] = cam.eye;
+        assert!((z - plane(x, y) - 1.7).abs() < 1e-2, "eye {:?}, surface {}", cam.eye, plane(x, y));
+        let d = Vec3::from(cam.target) - Vec3::from(cam.eye);
+        assert!(d.y > 0.0 && d.x.abs() < 1e-3, "looks north: {d:?}");
+        let pitch = d.z.atan2(d.y).to_degrees();
+        assert!(pitch <= 12.0 + 1e-3 && pitch >= -6.0 - 1e-3, "pitch {pitch}");
+    }
 
     /// A flat terrain mesh of `w` × `h` m (four corner vertices, z 0–10 m).
     fn window(w: f32, h: f32) -> TerrainMesh {

@@ -119,8 +119,35 @@ impl TerrainMesh {
         self.fade.get(i).copied().unwrap_or(0.0)
     }
 
+    /// Height (m) of the drawn surface at `(x, y)` in plan: the triangle that holds the point,
+    /// interpolated linearly (barycentric), the highest where triangles overlap; the nearest
+    /// vertex's height ([`TerrainMesh::nearest_height`]) where no triangle holds it; `None`
+    /// for an empty mesh. O(triangles), for camera placement: an eye put at this height plus
+    /// 1.7 m stands on the surface that is drawn (one put on the nearest vertex stood up to
+    /// metres under Coweeta's slopes between coarse vertices, a trial's ground view from
+    /// below the terrain).
+    pub fn height_at(&self, x: f32, y: f32) -> Option<f32> {
+        let mut best: Option<f32> = None;
+        for t in self.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| self.positions[i as usize]);
+            let det = (b[1] - c[1]) * (a[0] - c[0]) + (c[0] - b[0]) * (a[1] - c[1]);
+            if det.abs() < 1e-12 {
+                continue;
+            }
+            let l1 = ((b[1] - c[1]) * (x - c[0]) + (c[0] - b[0]) * (y - c[1])) / det;
+            let l2 = ((c[1] - a[1]) * (x - c[0]) + (a[0] - c[0]) * (y - c[1])) / det;
+            let l3 = 1.0 - l1 - l2;
+            const E: f32 = -1e-5;
+            if l1 >= E && l2 >= E && l3 >= E {
+                let z = l1 * a[2] + l2 * b[2] + l3 * c[2];
+                best = Some(best.map_or(z, |m: f32| m.max(z)));
+            }
+        }
+        best.or_else(|| self.nearest_height(x, y))
+    }
+
     /// Height (m) of the vertex nearest to `(x, y)` in plan, or `None` for an empty mesh.
-    /// A coarse lookup for camera placement, O(vertices).
+    /// A coarse lookup, O(vertices); [`TerrainMesh::height_at`] gives the drawn surface.
     pub fn nearest_height(&self, x: f32, y: f32) -> Option<f32> {
         self.positions
             .iter()
@@ -469,6 +496,34 @@ pub fn from_tin(vertices: &[[f32; 3]], triangles: &[[u32; 3]], cover: &LandCover
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The drawn surface's height on a 35° plane of 30 m cells (z = 0.7·x + 0.1·y): exact
+    /// between vertices (linear triangles on a plane), where the nearest vertex is metres off;
+    /// outside the mesh the nearest vertex; an empty mesh `None`.
+    #[test]
+    fn height_at_interpolates_the_drawn_surface() {
+        let (w, h, cell) = (6, 5, 30.0f32);
+        let plane = |x: f32, y: f32| 0.7 * x + 0.1 * y;
+        let mut g = Grid::filled(w, h, 0.0f32);
+        for r in 0..h {
+            for c in 0..w {
+                // cell centres at x = (c + 0.5)·cell, y = (h − 1 − r + 0.5)·cell
+                *g.get_mut(c, r) = plane((c as f32 + 0.5) * cell, ((h - 1 - r) as f32 + 0.5) * cell);
+            }
+        }
+        let m = from_grid(&g, cell, cell, &LandCover::default(), None).unwrap();
+        assert_eq!(m.positions[0], [15.0, 135.0, plane(15.0, 135.0)]);
+        for (x, y) in [(29.0, 29.0), (44.9, 100.2), (100.0, 60.0), (15.0, 15.0), (160.0, 130.0)] {
+            let z = m.height_at(x, y).unwrap();
+            assert!((z - plane(x, y)).abs() < 1e-3, "({x}, {y}): {z} vs {}", plane(x, y));
+        }
+        // half a cell from a vertex the nearest vertex is 0.7·15 = 10.5 m off: an eye 1.7 m over
+        // it stood under the drawn slope
+        assert!((m.nearest_height(29.0, 29.0).unwrap() - plane(29.0, 29.0)).abs() > 5.0);
+        assert_eq!(m.height_at(-50.0, 15.0), m.nearest_height(-50.0, 15.0));
+        let empty = TerrainMesh { positions: vec![], normals: vec![], colors: vec![], indices: vec![], fade: vec![], focus: None, grid: None };
+        assert_eq!(empty.height_at(0.0, 0.0), None);
+    }
 
     #[test]
     fn plane_grid_has_analytic_normals_and_positions() {
