@@ -191,7 +191,7 @@ fn obstacle_distance(obs: &[Obstacle], c: Vec3) -> f32 {
 /// obstacles, with translucency by eqs. (4) and (13); dead clusters are left out. Returns
 /// (occluder or None per stage cluster).
 fn stage_occluders(t: &PlasticTree, s: usize, env: &Environment) -> Vec<Option<Occluder>> {
-    stage_occluders_with(t, s, env, None).into_iter().map(|c| c.occ).collect()
+    stage_occluders_with(t, s, env, None, false).into_iter().map(|c| c.occ).collect()
 }
 
 /// One stage cluster at a level ([`stage_occluders_with`]): its occluder (None when dead), its
@@ -209,9 +209,16 @@ struct StageOcc {
 /// [`stage_occluders`] with each cluster's alive share (so [`stage_casters`] does not count the
 /// lobe's nodes again) and its eq. (4) base γ_c0^r; `earlier` is (index in the previous stage of
 /// every cluster of stage `s` that is the same stage cluster, [`match_stage`]; the previous
-/// level's clusters): a cluster whose radius is the one it had there takes γ_c0^r from it, not
-/// from `powf` again (the same value).
-fn stage_occluders_with(t: &PlasticTree, s: usize, env: &Environment, earlier: Option<(&[Option<u32>], &[StageOcc])>) -> Vec<StageOcc> {
+/// level's clusters). Reused from the previous level, the same values bit for bit:
+/// - γ_c0^r of a cluster whose radius is the one it had there (no `powf` again);
+/// - the centre of a cluster none of whose nodes is younger than season s − 2: a level moves
+///   only the nodes of its season (placed by [`preposition`], bent by [`level`]), so the nodes
+///   of such a cluster stand where they stood when the previous level took its centre (the
+///   same positions summed in the same order).
+///
+/// With `all_alive` (no node of `t` shed or removed) a cluster's (n_c, n_0) of eq. (13) is its
+/// node count twice, not counted.
+fn stage_occluders_with(t: &PlasticTree, s: usize, env: &Environment, earlier: Option<(&[Option<u32>], &[StageOcc])>, all_alive: bool) -> Vec<StageOcc> {
     let a = &t.analysis;
     let dead = StageOcc { occ: None, share: 0.0, r: f32::NAN, base: f32::NAN };
     a.stages[s]
@@ -219,16 +226,24 @@ fn stage_occluders_with(t: &PlasticTree, s: usize, env: &Environment, earlier: O
         .enumerate()
         .with_min_len(SIG_CHUNK)
         .map(|(ci, c)| {
-            let (n_c, n_0) = alive_counts(t, c);
+            let (n_c, n_0) = match (all_alive, c.lobe) {
+                (true, Some(l)) => (a.lobes[l as usize].nodes.len(), a.lobes[l as usize].nodes.len()),
+                (true, None) => (1, 1),
+                _ => alive_counts(t, c),
+            };
             if n_c == 0 {
                 return dead;
             }
-            let centre = cluster_center(c, &a.lobes, &t.input, &t.pos);
+            let same = earlier.and_then(|(map, prev)| map.get(ci).copied().flatten().and_then(|j| prev.get(j as usize)));
+            let centre = match same.and_then(|p| p.occ) {
+                Some(o) if c.max_season as usize + 2 <= s => o.center,
+                _ => cluster_center(c, &a.lobes, &t.input, &t.pos),
+            };
             let r = c.radius.min(obstacle_distance(&env.obstacles, centre));
             if !(r > 0.0) {
                 return dead;
             }
-            let before = earlier.and_then(|(map, prev)| map.get(ci).copied().flatten().and_then(|j| prev.get(j as usize))).filter(|p| p.r.to_bits() == r.to_bits());
+            let before = same.filter(|p| p.r.to_bits() == r.to_bits());
             let base = match before {
                 Some(p) => p.base,
                 None => t.params.translucency_gamma_c0.powf(r),
@@ -521,7 +536,8 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             .map(|((t, w), (pr, map))| match stage_of(t) {
                 Some(s) => {
                     preposition(t, s, w);
-                    let stage = stage_occluders_with(t, s, env, pr.as_ref().map(|p| (&map[..], &p.stage[..])));
+                    let all_alive = t.fate.iter().all(|f| *f == Fate::Alive);
+                    let stage = stage_occluders_with(t, s, env, pr.as_ref().map(|p| (&map[..], &p.stage[..])), all_alive);
                     let fine: Vec<Option<Occluder>> = stage.iter().map(|c| c.occ).collect();
                     let shade = stage_casters_of(t, s, &fine, &stage, env);
                     (fine, shade, stage)
