@@ -457,7 +457,10 @@ pub(crate) fn shade_key(foliage_of: &[u32], c: &StageCluster) -> u64 {
 /// one cluster is that cluster's occluder. Returns (key, occluder) pairs.
 pub(crate) fn shade_casters(foliage_of: &[u32], clusters: &[StageCluster], fine: &[Option<Occluder>], alive: impl Fn(usize) -> f32, gamma_c0: f32, obstacles: &[crate::structure::grow::space::Obstacle]) -> Vec<(u64, Occluder)> {
     let mut members: Vec<(u64, usize, Occluder)> = fine.iter().enumerate().filter_map(|(ci, o)| o.map(|o| (shade_key(foliage_of, &clusters[ci]), ci, o))).collect();
-    members.sort_unstable_by_key(|m| (m.0, m.1));
+    // by (key, cluster): a stable sort by key alone gives that order (the clusters come in
+    // index order), and finds the runs of keys already in order (a stage's clusters are in
+    // anchor order, which mostly is their foliage lobes' order) instead of sorting them again
+    members.sort_by_key(|m| m.0);
     let mut out = Vec::new();
     let mut i = 0;
     while i < members.len() {

@@ -87,7 +87,9 @@ pub fn cluster_density(rho0: f32, i0: f32, i: f32) -> f32 {
 
 /// Translucency of a cluster after losing nodes, eq. (13): γ_c' = γ_c^(n_c/n_0).
 pub fn thinned_translucency(gamma_c: f32, n_c: usize, n_0: usize) -> f32 {
-    if n_0 == 0 {
+    // γ^1 = γ: a cluster that lost no node (nearly every cluster at nearly every level) costs
+    // no `powf` (glibc's powf(γ, 1) is γ, so the value is the same)
+    if n_0 == 0 || n_c == n_0 {
         return gamma_c;
     }
     gamma_c.powf(n_c as f32 / n_0 as f32)
@@ -189,22 +191,65 @@ fn obstacle_distance(obs: &[Obstacle], c: Vec3) -> f32 {
 /// obstacles, with translucency by eqs. (4) and (13); dead clusters are left out. Returns
 /// (occluder or None per stage cluster).
 fn stage_occluders(t: &PlasticTree, s: usize, env: &Environment) -> Vec<Option<Occluder>> {
+    stage_occluders_with(t, s, env, None, false).into_iter().map(|c| c.occ).collect()
+}
+
+/// One stage cluster at a level ([`stage_occluders_with`]): its occluder (None when dead), its
+/// share of input nodes alive n_c/n_0 (eq. 13; 0 when dead), and the radius r (m) and γ_c0^r of
+/// eq. (4) its occluder was made with (NaN when none), which the next level reuses for the same
+/// stage cluster at the same radius.
+#[derive(Debug, Clone, Copy)]
+struct StageOcc {
+    occ: Option<Occluder>,
+    share: f32,
+    r: f32,
+    base: f32,
+}
+
+/// [`stage_occluders`] with each cluster's alive share (so [`stage_casters`] does not count the
+/// lobe's nodes again) and its eq. (4) base γ_c0^r; `earlier` is (index in the previous stage of
+/// every cluster of stage `s` that is the same stage cluster, [`match_stage`]; the previous
+/// level's clusters). Reused from the previous level, the same values bit for bit:
+/// - γ_c0^r of a cluster whose radius is the one it had there (no `powf` again);
+/// - the centre of a cluster none of whose nodes is younger than season s − 2: a level moves
+///   only the nodes of its season (placed by [`preposition`], bent by [`level`]), so the nodes
+///   of such a cluster stand where they stood when the previous level took its centre (the
+///   same positions summed in the same order).
+///
+/// With `all_alive` (no node of `t` shed or removed) a cluster's (n_c, n_0) of eq. (13) is its
+/// node count twice, not counted.
+fn stage_occluders_with(t: &PlasticTree, s: usize, env: &Environment, earlier: Option<(&[Option<u32>], &[StageOcc])>, all_alive: bool) -> Vec<StageOcc> {
     let a = &t.analysis;
+    let dead = StageOcc { occ: None, share: 0.0, r: f32::NAN, base: f32::NAN };
     a.stages[s]
         .par_iter()
+        .enumerate()
         .with_min_len(SIG_CHUNK)
-        .map(|c| {
-            let (n_c, n_0) = alive_counts(t, c);
+        .map(|(ci, c)| {
+            let (n_c, n_0) = match (all_alive, c.lobe) {
+                (true, Some(l)) => (a.lobes[l as usize].nodes.len(), a.lobes[l as usize].nodes.len()),
+                (true, None) => (1, 1),
+                _ => alive_counts(t, c),
+            };
             if n_c == 0 {
-                return None;
+                return dead;
             }
-            let centre = cluster_center(c, &a.lobes, &t.input, &t.pos);
+            let same = earlier.and_then(|(map, prev)| map.get(ci).copied().flatten().and_then(|j| prev.get(j as usize)));
+            let centre = match same.and_then(|p| p.occ) {
+                Some(o) if c.max_season as usize + 2 <= s => o.center,
+                _ => cluster_center(c, &a.lobes, &t.input, &t.pos),
+            };
             let r = c.radius.min(obstacle_distance(&env.obstacles, centre));
             if !(r > 0.0) {
-                return None;
+                return dead;
             }
-            let gamma = thinned_translucency(t.params.translucency_gamma_c0.powf(r), n_c, n_0);
-            Some(Occluder { center: centre, radius: r, gamma })
+            let before = same.filter(|p| p.r.to_bits() == r.to_bits());
+            let base = match before {
+                Some(p) => p.base,
+                None => t.params.translucency_gamma_c0.powf(r),
+            };
+            let gamma = thinned_translucency(base, n_c, n_0);
+            StageOcc { occ: Some(Occluder { center: centre, radius: r, gamma }), share: n_c as f32 / n_0.max(1) as f32, r, base }
         })
         .collect()
 }
@@ -231,6 +276,12 @@ fn stage_casters(t: &PlasticTree, s: usize, fine: &[Option<Occluder>], env: &Env
         n_c as f32 / n_0.max(1) as f32
     };
     shade_casters(&t.analysis.foliage_of, clusters, fine, share, t.params.translucency_gamma_c0, &env.obstacles)
+}
+
+/// [`stage_casters`] from [`stage_occluders_with`]'s clusters, whose alive shares it reads
+/// instead of counting the lobes' nodes again (the same casters).
+fn stage_casters_of(t: &PlasticTree, s: usize, fine: &[Option<Occluder>], stage: &[StageOcc], env: &Environment) -> Vec<(u64, Occluder)> {
+    shade_casters(&t.analysis.foliage_of, &t.analysis.stages[s], fine, |ci| stage[ci].share, t.params.translucency_gamma_c0, &env.obstacles)
 }
 
 /// Adapts several trees together to `env` and to each other (sections 5–6; see the module
@@ -472,30 +523,33 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
     let mut prev: Vec<Option<Prev>> = vec![None; trees.len()];
     for g in 0..=g_max {
         let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
-        let occ: Vec<(Vec<Option<Occluder>>, Vec<(u64, Occluder)>)> = trees
-            .par_iter_mut()
-            .zip(&mut work)
-            .map(|(t, w)| match stage_of(t) {
-                Some(s) => {
-                    preposition(t, s, w);
-                    let fine = stage_occluders(t, s, env);
-                    let shade = stage_casters(t, s, &fine, env);
-                    (fine, shade)
-                }
-                None => Default::default(),
-            })
-            .collect();
-        let casters: Vec<Occluder> = occ.iter().flat_map(|(_, c)| c.iter().map(|(_, o)| *o)).collect();
         // the receivers that are the same stage cluster as at the previous level
         let maps: Vec<Vec<Option<u32>>> = trees.iter().zip(&prev).map(|(t, pr)| match (stage_of(t), pr) {
             (Some(s), Some(_)) if s > 0 => match_stage(&t.analysis.stages[s - 1], &t.analysis.stages[s]),
             (Some(s), _) => vec![None; t.analysis.stages[s].len()],
             _ => Vec::new(),
         }).collect();
+        let occ: Vec<(Vec<Option<Occluder>>, Vec<(u64, Occluder)>, Vec<StageOcc>)> = trees
+            .par_iter_mut()
+            .zip(&mut work)
+            .zip(prev.par_iter().zip(&maps))
+            .map(|((t, w), (pr, map))| match stage_of(t) {
+                Some(s) => {
+                    preposition(t, s, w);
+                    let all_alive = t.fate.iter().all(|f| *f == Fate::Alive);
+                    let stage = stage_occluders_with(t, s, env, pr.as_ref().map(|p| (&map[..], &p.stage[..])), all_alive);
+                    let fine: Vec<Option<Occluder>> = stage.iter().map(|c| c.occ).collect();
+                    let shade = stage_casters_of(t, s, &fine, &stage, env);
+                    (fine, shade, stage)
+                }
+                None => Default::default(),
+            })
+            .collect();
+        let casters: Vec<Occluder> = occ.iter().flat_map(|(_, c, _)| c.iter().map(|(_, o)| *o)).collect();
         // the casters that differ from the previous level's (removed, added or changed): both
         // lists are sorted by key
         let mut delta = Vec::new();
-        for ((_, cur), pr) in occ.iter().zip(&prev) {
+        for ((_, cur, _), pr) in occ.iter().zip(&prev) {
             let old: &[(u64, Occluder)] = pr.as_ref().map_or(&[], |p| &p.shade);
             let (mut i, mut j) = (0, 0);
             while i < old.len() || j < cur.len() {
@@ -544,7 +598,7 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             .zip(occ)
             .zip(&prev)
             .zip(&maps)
-            .map(|((((t, w), (occ, shade)), pr), map)| {
+            .map(|((((t, w), (occ, shade, stage)), pr), map)| {
                 let s = stage_of(t)?;
                 let reuse = match (&delta, pr) {
                     (Some(d), Some(p)) => Some(Reuse { delta: d, occ: &p.occ, rows: &p.rows, map }),
@@ -561,7 +615,7 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
                             w.replayed += 1;
                         }
                         let rows = Rows { start: vec![u32::MAX; occ.len()], t: Vec::new() };
-                        return Some(Prev { occ, shade, rows });
+                        return Some(Prev { occ, shade, rows, stage });
                     }
                     // another cluster lives or died (an obstacle reached it): evaluated as
                     // usual from this level on
@@ -577,7 +631,7 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
                         }
                     }
                 }
-                Some(Prev { occ, shade, rows })
+                Some(Prev { occ, shade, rows, stage })
             })
             .collect();
         prev = next;
@@ -696,12 +750,14 @@ struct Rows {
 }
 
 /// One tree's state of the previous level: its stage occluders (the receivers), its shade
-/// casters (by key) and the receivers' per-direction transmittances.
+/// casters (by key), the receivers' per-direction transmittances and its stage clusters.
 #[derive(Debug, Clone)]
 struct Prev {
     occ: Vec<Option<Occluder>>,
     shade: Vec<(u64, Occluder)>,
     rows: Rows,
+    /// The stage's clusters as [`stage_occluders_with`] made them (their γ_c0^r reused).
+    stage: Vec<StageOcc>,
 }
 
 /// What a level may reuse from the level before: the casters that changed since (`delta`),
@@ -1065,7 +1121,12 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         t.light_cache[s][ci] = sums[j];
     }
     // pruning (eqs. 10–11); the fates of shed parents are inherited in any case
-    // the nodes of season ≤ s: the pruning below changes no other node
+    // the nodes of season ≤ s: the pruning below changes no other node. A tree that eq. (11)
+    // cannot shed and whose nodes are all alive has nothing to prune or pass on (the loop below
+    // would change no fate): skipped, its stage list brought up to date when next needed
+    if !w.prunes && t.fate.iter().all(|f| *f == Fate::Alive) {
+        return rows;
+    }
     w.stage_to(s);
     let mut psi = Vec::new();
     if w.prunes {
