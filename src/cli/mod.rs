@@ -109,7 +109,8 @@ pub fn check_stats_path(p: &std::path::Path) -> anyhow::Result<()> {
 /// Checks before any work that the output file `p` of option `option` (e.g. `--out`) can be
 /// written: not a folder, its folder (when it exists) a folder that takes a new file (a
 /// temporary file made there and removed). A missing folder is left to the writer, which makes
-/// it.
+/// it. Temporaries of this file that a killed earlier write left are removed
+/// ([`sylva::output::remove_stale_temporaries_of`]).
 ///
 /// Errors: naming the option, the path and what is wrong.
 pub fn check_out_file(p: &std::path::Path, option: &str) -> anyhow::Result<()> {
@@ -118,6 +119,8 @@ pub fn check_out_file(p: &std::path::Path, option: &str) -> anyhow::Result<()> {
     if dir.exists() {
         anyhow::ensure!(dir.is_dir(), "{option} {}: {} is a file, not a folder", p.display(), dir.display());
         sylva::job::run::check_writable(dir).map_err(|e| anyhow::anyhow!("{option} {}: cannot write into the folder {}: {e}", p.display(), dir.display()))?;
+        // what an earlier, killed write of this file left beside it
+        sylva::output::remove_stale_temporaries_of(p)?;
     }
     Ok(())
 }

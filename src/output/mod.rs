@@ -105,6 +105,23 @@ fn process_alive(pid: u32) -> bool {
 ///
 /// Errors: [`OutputError::Io`] naming the folder or file that cannot be listed or removed.
 pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
+    remove_stale_where(dir, |_| true)
+}
+
+/// [`remove_stale_temporaries`] for one output file `path`: only its own temporaries
+/// `.<name>.<pid>.tmp` of processes no longer running (an export killed while writing left a
+/// 207 MB hidden file beside its `--out`, found by a trial); other files are left alone.
+///
+/// Errors: as [`remove_stale_temporaries`].
+pub fn remove_stale_temporaries_of(path: &Path) -> Result<usize> {
+    let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let Some(name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else { return Ok(0) };
+    remove_stale_where(dir, |stem| stem == name)
+}
+
+/// The temporaries of dead processes in `dir` whose file name (`stem` of `.<stem>.<pid>.tmp`)
+/// `name_ok` accepts, removed.
+fn remove_stale_where(dir: &Path, name_ok: impl Fn(&str) -> bool) -> Result<usize> {
     if !dir.is_dir() {
         return Ok(0);
     }
@@ -114,8 +131,8 @@ pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
         let name = e.file_name();
         let name = name.to_string_lossy();
         let Some(stem) = name.strip_prefix('.').and_then(|s| s.strip_suffix(".tmp")) else { continue };
-        let Some(pid) = stem.rsplit_once('.').and_then(|(_, p)| p.parse::<u32>().ok()) else { continue };
-        if pid == std::process::id() || process_alive(pid) {
+        let Some((file, pid)) = stem.rsplit_once('.').and_then(|(f, p)| Some((f, p.parse::<u32>().ok()?))) else { continue };
+        if !name_ok(file) || pid == std::process::id() || process_alive(pid) {
             continue;
         }
         let p = e.path();
@@ -159,3 +176,26 @@ pub mod geotiff;
 pub mod maps;
 pub mod pictures;
 pub mod tree_preview;
+
+#[cfg(test)]
+mod stale_tests {
+    use super::*;
+
+    /// Only the output file's own temporaries of dead processes go: not another file's, not
+    /// this process's, not a user's file of another pattern.
+    #[test]
+    fn an_outputs_stale_temporaries_are_removed_and_nothing_else() {
+        let d = std::env::temp_dir().join(format!("sylva_stale_{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let dead = 4_000_000_000u32; // above any pid: no such process
+        let files = [format!(".a.glb.{dead}.tmp"), format!(".b.glb.{dead}.tmp"), format!(".a.glb.{}.tmp", std::process::id()), "a.glb.tmp".into(), format!(".a.glb.{dead}.tmp.keep")];
+        for f in &files {
+            std::fs::write(d.join(f), b"x").unwrap();
+        }
+        assert_eq!(remove_stale_temporaries_of(&d.join("a.glb")).unwrap(), 1);
+        let left: Vec<bool> = files.iter().map(|f| d.join(f).exists()).collect();
+        assert_eq!(left, [false, true, true, true, true]);
+        assert_eq!(remove_stale_temporaries(&d).unwrap(), 1, "the whole folder's: b's");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+}
