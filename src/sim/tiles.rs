@@ -428,17 +428,39 @@ impl Layout {
 /// tiles; a heuristic of where the trees will be (a planted part of an otherwise open site is
 /// not seen: its trees are not the site's).
 pub fn work_weights(site: &Site) -> (Vec<u64>, Vec<u64>) {
+    work_weights_in(site, 0..site.light.rows)
+}
+
+/// The part of [`work_weights`] from the light rows `rows` (row 0 south) of `site`: the same
+/// `light.cols` and `light.rows` counts, those of the light cells outside `rows` not counted
+/// (the rows outside are 0). The counts are integers, so the parts of any cut of the rows into
+/// ranges, added up in any order, are [`work_weights`] exactly (issue 37 Build 1: a rank counts
+/// its band, [`weight_band`], and the ranks' parts are all-summed, `job::tiled::layout_by`).
+/// `site` must hold the light cells of `rows` (one process's site: all of them; rows beyond
+/// the grid are ignored).
+pub fn work_weights_in(site: &Site, rows: std::ops::Range<usize>) -> (Vec<u64>, Vec<u64>) {
     let light = &site.light;
-    let (mut cols, mut rows) = (vec![0u64; light.cols], vec![0u64; light.rows]);
-    for (k, &s) in site.light_site.iter().enumerate() {
+    let (mut wc, mut wr) = (vec![0u64; light.cols], vec![0u64; light.rows]);
+    let rows = rows.start.min(light.rows)..rows.end.min(light.rows);
+    let lo = rows.start * light.cols;
+    let hi = rows.end.max(rows.start) * light.cols;
+    for (k, &s) in site.light_site.iter().enumerate().take(hi).skip(lo) {
         let grows = s != u32::MAX && site.suitability.iter().any(|sp| sp.get(site.conditions.held(s as usize)).is_some_and(|&v| v > 0.0));
         if grows {
             let (c, r) = light.col_row(k);
-            cols[c] += 1;
-            rows[r] += 1;
+            wc[c] += 1;
+            wr[r] += 1;
         }
     }
-    (cols, rows)
+    (wc, wr)
+}
+
+/// The light rows (row 0 south) whose part of the layout's weights rank `k` of `n` counts
+/// ([`work_weights_in`]): `k · rows / n` to `(k + 1) · rows / n`, so the `n` bands cover the
+/// `rows` rows once.
+pub fn weight_band(k: usize, n: usize, rows: usize) -> std::ops::Range<usize> {
+    let n = n.max(1);
+    k * rows / n..(k + 1) * rows / n
 }
 
 /// Boundaries that cut the `w.len()` columns (or rows) of weights `w` into `n` runs of whole
