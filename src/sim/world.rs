@@ -342,12 +342,17 @@ impl World {
     }
 
     /// Checks `scenario` against `site` and `lib` as [`World::new`] does, without placing its
-    /// start (cheap): a run calls it before it creates any output folder, so a refused scenario
-    /// leaves none behind.
+    /// start: a run calls it before it creates any output folder, so a refused scenario leaves
+    /// none behind. Takes the site and gives it back (it is not copied: until round 31 a copy
+    /// of the whole site's conditions, 53 B a site cell, was held beside the site for the
+    /// check, which set the start's peak memory of one process and of a tiled run's rank 0 on
+    /// a fine grid; issue 37); the site's derived grids are built for the check and dropped.
     ///
     /// Errors: as [`World::new`].
-    pub fn check(site: &SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<()> {
-        World::bare(site.clone(), lib, scenario)?.check_plantings(&scenario.context())
+    pub fn check(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<SiteConditions> {
+        let w = World::bare(site, lib, scenario)?;
+        w.check_plantings(&scenario.context())?;
+        Ok(w.site.conditions)
     }
 
     /// Refuses a planting none of whose lattice points (in its first year) lies on unmasked
