@@ -476,6 +476,34 @@ impl Stepper for Root<'_> {
         }
         Ok(())
     }
+    /// [`Stepper::begin`] and [`Stepper::shed`] without a copy of rank 0's tile beside the
+    /// whole world (issue 37 Build 1): every rank's part of the stand is encoded from the whole
+    /// world ([`Tile::parts`]) and the maps' masked pixels taken, then the driver's world is
+    /// cut to rank 0's tile ([`crate::sim::tiles::shed_to_tile`]) and rank 0's tile made from
+    /// a copy of what is left (the tile's site, no trees) before the parts are exchanged. The
+    /// tile and the driver's world are those of `begin` then `shed`.
+    ///
+    /// Errors: as [`Stepper::begin`] and [`Stepper::shed`].
+    fn begin_shed(&mut self, world: &mut World, map_px: usize) -> Result<()> {
+        if self.tile.is_some() {
+            // resumed from the per-rank checkpoints: every rank holds its tile already
+            return self.shed(world, map_px);
+        }
+        let layout = self.layout(world)?;
+        command(self.t, Some(Command::Begin))?;
+        let parts = Tile::parts(world, &layout, self.t.size())?;
+        if self.map_masked.is_none() {
+            self.map_masked = Some((map_px, crate::output::plot::map_masked_centres(world, map_px)));
+        }
+        crate::sim::tiles::shed_to_tile(world, &layout, 0)?;
+        self.tile = Some(Tile::own(world.clone(), layout, 0)?);
+        self.collective(|tile, t| Ok(tile.scatter_parts(parts, t)?))?;
+        self.base = zero_tallies(world);
+        if let Some(tile) = self.tile.as_mut() {
+            tile.world.tallies = world.tallies.clone();
+        }
+        Ok(())
+    }
     fn step(&mut self, world: &mut World, _: &Scenario, report: &mut YearReport, full: bool, _: &mut dyn FnMut(Season, &World)) -> Result<()> {
         command(self.t, Some(if full { Command::StepFull } else { Command::Step }))?;
         let base = self.base.clone();

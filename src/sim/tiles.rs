@@ -721,10 +721,27 @@ impl Tile {
         let n = t.size();
         let mut out = vec![Vec::new(); n];
         if let (0, Some(g)) = (t.rank(), global) {
-            for (k, m) in out.iter_mut().enumerate() {
-                *m = encode_part(g, &self.layout, k)?;
-            }
+            out = Tile::parts(g, &self.layout, n)?;
         }
+        self.scatter_parts(out, t)
+    }
+
+    /// The messages of [`Tile::scatter`] from `global` (rank 0's world): every tile's part of
+    /// its stand (trees, cohorts, seed windows, year) for tiles `0..n` of `layout`. Encoded
+    /// before the scatter, they let rank 0 cut its world to its tile before the exchange
+    /// (`job::tiled`'s `Root::begin_shed`), so the whole world and its tile's copy are not
+    /// held at once.
+    ///
+    /// Errors: [`Error::Invalid`] from the encoding (a seed grid that does not hold a window).
+    pub fn parts(global: &World, layout: &Layout, n: usize) -> Result<Vec<Vec<u8>>> {
+        (0..n).map(|k| encode_part(global, layout, k)).collect()
+    }
+
+    /// [`Tile::scatter`] with the messages `out` already encoded ([`Tile::parts`] on rank 0;
+    /// empty messages on the others).
+    ///
+    /// Errors: as [`Tile::scatter`].
+    pub fn scatter_parts(&mut self, out: Vec<Vec<u8>>, t: &mut dyn Transport) -> Result<()> {
         let got = t.exchange(out)?;
         let p = decode_part(&got[0], 0)?;
         let w = &mut self.world;
