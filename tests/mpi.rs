@@ -238,3 +238,38 @@ fn a_dem_read_by_window_on_two_and_three_ranks_writes_the_run_of_one_process() {
     let m = common::assert_same_run(&one, &d, &template, "DEM site on 3 ranks for 11 years, resumed on 2 for 24");
     assert_eq!((m.year, m.ranks), (24, 2));
 }
+
+/// The scenario's warnings ([`sylva::sim::World::new`]: nothing to grow from, a management year
+/// beyond the run) are printed once, by rank 0's run driver, not once per rank: on 3 MPI ranks
+/// and on 3 tiles in one process (`--tiles 3`), as by one process.
+#[test]
+fn the_scenarios_warnings_are_printed_once_on_three_ranks() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sc = tmp.path().join("bare.toml");
+    std::fs::write(
+        &sc,
+        "name = \"bare\"\nyears = 2\nseed = 7\nspecies = [\"beech\"]\nlight_cell_m = 10.0\n\
+         [terrain]\nuniform = { width = 40, height = 12, cell_m = 20.0, elevation_m = 300.0, indices = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0] }\n\
+         [[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\nyears = [1, 30]\n",
+    )
+    .unwrap();
+    for (how, ranks) in [("one process", 0), ("mpirun -np 3", 3), ("--tiles 3", 0)] {
+        let out = tmp.path().join(how.replace(' ', "_"));
+        let mut c = if ranks == 0 { Command::new(sylva()) } else { Command::new("mpirun") };
+        if ranks > 0 {
+            c.args(["--allow-run-as-root", "--oversubscribe", "-np", &ranks.to_string(), sylva()]);
+        }
+        c.arg("simulate").arg(&sc).arg("--out").arg(&out).args(["--threads", "1"]);
+        if how == "--tiles 3" {
+            c.args(["--tiles", "3"]);
+        }
+        let o = c.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{how} failed: {err}");
+        if ranks > 0 {
+            assert!(err.contains("rank 2/3: "), "{how}: no line of rank 2: {err}");
+        }
+        assert_eq!(err.matches("nothing will grow").count(), 1, "{how}: {err}");
+        assert_eq!(err.matches("management[0].years[1] = 30").count(), 1, "{how}: {err}");
+    }
+}

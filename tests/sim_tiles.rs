@@ -486,6 +486,40 @@ fn tiles_cut_by_forest_on_a_half_masked_site_write_the_run_of_one_process() {
     // by forest: 2 tiles of 20 columns of forest each (area: 40 and 40, all forest on tile 0)
     assert_eq!(sylva::job::tiled::layout_for(&template, 2).unwrap().col_bounds, vec![0, 20, 80]);
     assert_eq!(sylva::job::tiled::layout_for(&template, 3).unwrap().col_bounds, vec![0, 13, 26, 80]);
+    // issue 37 Build 1: the ranks count the weights of their bands of light rows and add them
+    // up; the parts cover the rows once and add up to the whole site's counts
+    let rows = template.site.light.rows;
+    assert_eq!(rows, 24);
+    for n in 1..=5 {
+        let (mut sc_, mut sr) = (vec![0u64; wc.len()], vec![0u64; wr.len()]);
+        for k in 0..n {
+            let band = sylva::sim::tiles::weight_band(k, n, rows);
+            let (pc, pr) = sylva::sim::tiles::work_weights_in(&template.site, band.clone());
+            // a band counts its own rows only: 40 forest cells each, the others 0
+            assert!(pr.iter().enumerate().all(|(r, &v)| v == if band.contains(&r) { 40 } else { 0 }), "rank {k} of {n}: {pr:?}");
+            assert_eq!(pc.iter().sum::<u64>(), 40 * band.len() as u64);
+            sc_.iter_mut().zip(&pc).for_each(|(a, b)| *a += b);
+            sr.iter_mut().zip(&pr).for_each(|(a, b)| *a += b);
+        }
+        assert_eq!((&sc_, &sr), (&wc, &wr), "{n} bands");
+    }
+    // the layout the ranks cut from their parts (all-summed over a LocalTransport) is
+    // layout_for's of the whole site on every rank
+    for n in [2, 3, 4] {
+        let want = sylva::job::tiled::layout_for(&template, n).unwrap();
+        let got: Vec<Layout> = std::thread::scope(|s| {
+            let hs: Vec<_> = sylva::sim::tiles::LocalTransport::group(n)
+                .into_iter()
+                .map(|mut t| {
+                    let w = &template;
+                    s.spawn(move || sylva::job::tiled::layout_by(w, &mut t).unwrap())
+                })
+                .collect();
+            hs.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        assert_eq!(got.len(), n);
+        assert!(got.iter().all(|l| *l == want), "{n} ranks: {:?} vs {:?}", got.iter().map(|l| &l.col_bounds).collect::<Vec<_>>(), want.col_bounds);
+    }
     // an even site is cut by area as before
     let even = World::new(sc.site().unwrap(), &lib, &sc).unwrap();
     assert_eq!(sylva::job::tiled::layout_for(&even, 3).unwrap().col_bounds, vec![0, 26, 53, 80]);

@@ -309,7 +309,7 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
     check_out(&out)?;
     // the scenario is checked against its site before any folder is made (a refused scenario
     // left `inventory/`, `maps/` and `species/` behind; found by a break-it pass)
-    context(World::check(&site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
+    let site = context(World::check(site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
     // a tile count the site cannot hold is refused before any folder is made (the ranks of an
     // MPI run are told by `tiled::run_tiled`, which checks the same before any rank waits)
     if let Stepping::Local(n) = stepping {
@@ -491,7 +491,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     // made, so a refused one leaves none behind.
     let t_site = Instant::now();
     let site = context(sc.site().map_err(JobError::from), || format!("[terrain] of {}", sc.context()))?;
-    context(World::check(&site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
+    let site = context(World::check(site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
     std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
     let maps = super::maps::write_site_maps(&site, &out.join("maps").join("conditions"))?;
     let site_s = t_site.elapsed().as_secs_f64();

@@ -319,6 +319,16 @@ pub trait Stepper {
     fn shed(&mut self, _world: &mut World, _map_px: usize) -> Result<()> {
         Ok(())
     }
+    /// [`Stepper::begin`] then [`Stepper::shed`], for a run in which nothing reads `world`
+    /// whole after the start (the driver calls this instead of the two): a stepper may then
+    /// cut `world` while it begins (a tiled run's rank 0: its world becomes its tile's without
+    /// a copy of its tile beside the whole world). Default: the two in turn.
+    ///
+    /// Errors: as the two.
+    fn begin_shed(&mut self, world: &mut World, map_px: usize) -> Result<()> {
+        self.begin(world)?;
+        self.shed(world, map_px)
+    }
 }
 
 /// The stepper of one process: [`step_year_with`] on the whole world.
@@ -489,9 +499,6 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
             }
         }
     }
-    stepper.begin(&world)?;
-    let t0 = Instant::now();
-    let mut stopped = false;
     let mut trees = world.stand.trees.len();
     // whether snapshots and checkpoints need the world whole on this process (one process, or
     // a caller that reads the world at snapshots); a tiled run writes them from the ranks
@@ -500,8 +507,13 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     if !snap_world && !save_world {
         // nothing reads the world whole again (`complete` is never called): the stepper may
         // cut it to what the driver reads (a tiled run's rank 0: its tile, issue 37 Build 1)
-        stepper.shed(&mut world, opts.map_px)?;
+        // as it begins
+        stepper.begin_shed(&mut world, opts.map_px)?;
+    } else {
+        stepper.begin(&world)?;
     }
+    let t0 = Instant::now();
+    let mut stopped = false;
     while world.stand.year < scenario.years {
         let y = world.stand.year + 1;
         let snap_year = opts.write_snapshots && scenario.snapshot_year(y);

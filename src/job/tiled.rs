@@ -1,9 +1,10 @@
 //! Tiled runs with outputs (`mpirun -np N sylva simulate …`, `sylva simulate --tiles N`): the
 //! landscape cut into one tile per rank ([`crate::sim::tiles`]); every rank steps its tile;
 //! rank 0 also runs the run driver ([`run_scenario_with`]), whose world is cut to rank 0's
-//! tile once the tiles hold the stand ([`Root`]'s [`Stepper::shed`]; unless a caller reads the
-//! world at every snapshot), so no rank keeps the whole site's grids for the run (issue 37
-//! Build 1; every rank still builds the scenario's whole world at the start). The run
+//! tile as the tiles take the stand ([`Root`]'s [`Stepper::begin_shed`], before rank 0's tile
+//! is copied from it; unless a caller reads the world at every snapshot), so no rank keeps the
+//! whole site's grids for the run (issue 37 Build 1; every rank still builds the scenario's
+//! whole world at the start; the layout is cut from the ranks' summed weights, [`layout_by`]). The run
 //! directory holds what a single process writes, byte for byte where the layout is the same;
 //! the checkpoint (one file per rank, below) and the inventories (one part per rank) are laid
 //! out by rank and read back as one process's (issue 37 Build 4):
@@ -78,11 +79,14 @@ pub enum Command {
     Resume = 7,
     /// Write your tile's part of the snapshot that follows ([`write_parts`]).
     Snapshot = 8,
+    /// Count your band's part of the layout's weights; the parts are all-summed and every
+    /// rank cuts the same layout ([`layout_by`]).
+    Layout = 9,
 }
 
 impl Command {
     fn from_byte(b: u8) -> Option<Command> {
-        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot].into_iter().find(|c| *c as u8 == b)
+        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout].into_iter().find(|c| *c as u8 == b)
     }
 }
 
@@ -97,7 +101,7 @@ fn command(t: &mut dyn Transport, c: Option<Command>) -> Result<Command> {
     };
     let got = t.exchange(out)?;
     let b = got.first().and_then(|m| m.first()).copied().unwrap_or(0);
-    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–8)") })?)
+    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–9)") })?)
 }
 
 /// Rank 0 sends every rank `k` the year and `paths[k]` (a per-rank checkpoint file); the others
@@ -295,11 +299,41 @@ fn check(scenario: &Scenario) -> Result<()> {
 /// Build 5: [`crate::sim::tiles::work_weights`], the light cells where forest can grow;
 /// [`crate::sim::tiles::cut_by_weight`]), so an uneven site (half of it masked or above the
 /// tree line) gives each rank about as much forest; an even site is cut by area as before
-/// ([`Layout::new`]). Only the site counts, not `world`'s trees: rank 0 calls this with a
-/// resumed world, the other ranks with the scenario's start, and all must cut the same tiles.
+/// ([`Layout::new`]). Only the site counts, not `world`'s trees: a resumed world and the
+/// scenario's start cut the same tiles. A tiled run's ranks cut it from their parts of the
+/// weights ([`layout_by`]); this one counts the whole site (`--tiles`' check before the threads
+/// start, tests).
 ///
 /// Errors: [`Error::Invalid`] when the light grid has fewer columns or rows than the tiles.
 pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
+    let (wc, wr) = crate::sim::tiles::work_weights(&world.site);
+    layout_weighted(world, n, &wc, &wr)
+}
+
+/// [`layout_for`] with the weights counted by the ranks of `t` (issue 37 Build 1): rank `k` of
+/// `N` counts the light rows of its band ([`crate::sim::tiles::weight_band`],
+/// [`crate::sim::tiles::work_weights_in`]) and the parts are all-summed
+/// ([`Transport::all_sum`], `light.cols + light.rows` words), so no rank reads the whole
+/// site's weights; the counts are integers, so every rank gets [`layout_for`]'s layout of
+/// `world` exactly. Every rank of `t` must call it at the same point (rank 0 after
+/// [`Command::Layout`]).
+///
+/// Errors: [`Error::Exchange`] from the transport or parts of another length (a rank with
+/// another light grid); as [`layout_for`].
+pub fn layout_by(world: &World, t: &mut dyn Transport) -> Result<Layout> {
+    let light = &world.site.light;
+    let (mut v, wr) = crate::sim::tiles::work_weights_in(&world.site, crate::sim::tiles::weight_band(t.rank(), t.size(), light.rows));
+    v.extend(wr);
+    let sums = t.all_sum(v)?;
+    if sums.len() != light.cols + light.rows {
+        return Err(Error::Exchange { peer: 0, reason: format!("{} summed weights, expected {} (light columns and rows)", sums.len(), light.cols + light.rows) }.into());
+    }
+    let (wc, wr) = sums.split_at(light.cols);
+    layout_weighted(world, t.size(), wc, wr)
+}
+
+/// The layout of [`layout_for`] from the weights per light column `wc` and row `wr`.
+fn layout_weighted(world: &World, n: usize, wc: &[u64], wr: &[u64]) -> Result<Layout> {
     let (nx, ny) = grid_for(n, world.site.light.cols, world.site.light.rows);
     // the message names the count asked for, not only the grid it was cut into
     let (cols, rows) = (world.site.light.cols, world.site.light.rows);
@@ -313,8 +347,7 @@ pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
         e => e,
     };
     let even = Layout::new(&world.site, nx, ny).map_err(named)?;
-    let (wc, wr) = crate::sim::tiles::work_weights(&world.site);
-    let (cb, rb) = (crate::sim::tiles::cut_by_weight(&wc, nx), crate::sim::tiles::cut_by_weight(&wr, ny));
+    let (cb, rb) = (crate::sim::tiles::cut_by_weight(wc, nx), crate::sim::tiles::cut_by_weight(wr, ny));
     if cb == even.col_bounds && rb == even.row_bounds {
         return Ok(even);
     }
@@ -354,12 +387,34 @@ pub struct Root<'t> {
     /// longest side and, per map pixel, whether its centre is masked
     /// ([`crate::output::plot::map_masked_centres`] of the whole site, taken before the cut).
     map_masked: Option<(usize, Vec<bool>)>,
+    /// The layout, once the ranks have cut it ([`Root::layout`]).
+    layout: Option<Layout>,
 }
 
 impl<'t> Root<'t> {
     /// Rank 0 of the transport `t`.
     pub fn new(t: &'t mut dyn Transport) -> Self {
-        Root { t, tile: None, base: Tallies::default(), done: false, map_masked: None }
+        Root { t, tile: None, base: Tallies::default(), done: false, map_masked: None, layout: None }
+    }
+
+    /// The run's layout: the first call tells the ranks [`Command::Layout`] and cuts it with
+    /// them from their parts of the weights ([`layout_by`], `world` the site's); later calls
+    /// return it. A failure there is every rank's (the same sums, the same error), so the
+    /// others are not told to end afterwards.
+    ///
+    /// Errors: as [`layout_by`].
+    fn layout(&mut self, world: &World) -> Result<Layout> {
+        if let Some(l) = &self.layout {
+            return Ok(l.clone());
+        }
+        command(self.t, Some(Command::Layout))?;
+        let r = layout_by(world, self.t);
+        if r.is_err() {
+            self.done = true;
+        }
+        let l = r?;
+        self.layout = Some(l.clone());
+        Ok(l)
     }
 
     /// Bytes rank 0 has sent to other ranks (halo copies, its part of the gathers, commands).
@@ -410,12 +465,40 @@ impl Stepper for Root<'_> {
             // resumed from the per-rank checkpoints: every rank holds its tile already
             return Ok(());
         }
-        let layout = layout_for(world, self.t.size())?;
+        let layout = self.layout(world)?;
         command(self.t, Some(Command::Begin))?;
         self.tile = Some(Tile::new(world, layout, 0)?);
         self.collective(|tile, t| Ok(tile.scatter(Some(world), t)?))?;
         // the tallies so far go into rank 0's tile, so the ranks' tallies add up to the run's
         // (what each rank's checkpoint holds)
+        self.base = zero_tallies(world);
+        if let Some(tile) = self.tile.as_mut() {
+            tile.world.tallies = world.tallies.clone();
+        }
+        Ok(())
+    }
+    /// [`Stepper::begin`] and [`Stepper::shed`] without a copy of rank 0's tile beside the
+    /// whole world (issue 37 Build 1): every rank's part of the stand is encoded from the whole
+    /// world ([`Tile::parts`]) and the maps' masked pixels taken, then the driver's world is
+    /// cut to rank 0's tile ([`crate::sim::tiles::shed_to_tile`]) and rank 0's tile made from
+    /// a copy of what is left (the tile's site, no trees) before the parts are exchanged. The
+    /// tile and the driver's world are those of `begin` then `shed`.
+    ///
+    /// Errors: as [`Stepper::begin`] and [`Stepper::shed`].
+    fn begin_shed(&mut self, world: &mut World, map_px: usize) -> Result<()> {
+        if self.tile.is_some() {
+            // resumed from the per-rank checkpoints: every rank holds its tile already
+            return self.shed(world, map_px);
+        }
+        let layout = self.layout(world)?;
+        command(self.t, Some(Command::Begin))?;
+        let parts = Tile::parts(world, &layout, self.t.size())?;
+        if self.map_masked.is_none() {
+            self.map_masked = Some((map_px, crate::output::plot::map_masked_centres(world, map_px)));
+        }
+        crate::sim::tiles::shed_to_tile(world, &layout, 0)?;
+        self.tile = Some(Tile::own(world.clone(), layout, 0)?);
+        self.collective(|tile, t| Ok(tile.scatter_parts(parts, t)?))?;
         self.base = zero_tallies(world);
         if let Some(tile) = self.tile.as_mut() {
             tile.world.tallies = world.tallies.clone();
@@ -448,7 +531,7 @@ impl Stepper for Root<'_> {
             Found::Ranks(m) => m,
             _ => return checkpoint::load_any(dir, world),
         };
-        let layout = layout_for(world, self.t.size())?;
+        let layout = self.layout(world)?;
         if m.ranks != self.t.size() || !m.same_layout(&layout) {
             return checkpoint::load_ranks(dir, &m, world);
         }
@@ -542,9 +625,12 @@ impl Stepper for Root<'_> {
 /// (a halo too narrow, a failed exchange); a command out of order.
 pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: &mut dyn Transport) -> Result<()> {
     check(scenario)?;
-    let world = World::new(site, lib, scenario)?;
-    let layout = layout_for(&world, t.size())?;
+    // rank 0's run driver prints the scenario's warnings, once
+    let world = World::build(site, lib, scenario, false)?;
     let me = t.rank();
+    // the layout, cut with the other ranks on [`Command::Layout`]
+    let mut layout: Option<Layout> = None;
+    let laid = |l: &Option<Layout>, c: Command| l.clone().ok_or_else(|| Error::Exchange { peer: 0, reason: format!("command {c:?} before the layout was cut (command Layout)") });
     // the world of the scenario's start, until this rank's tile is made from it (Begin) or
     // from a checkpoint read into it (Resume): then the tile holds the only copy of the site
     let mut world = Some(world);
@@ -562,8 +648,12 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 }
                 return Ok(());
             }
+            (Command::Layout, _) => {
+                let w = world.as_ref().ok_or_else(|| Error::Exchange { peer: 0, reason: "command Layout after this rank's tile was made".into() })?;
+                layout = Some(layout_by(w, t)?);
+            }
             (Command::Begin, _) => {
-                let mut tl = Tile::own(template(&mut world, c)?, layout.clone(), me)?;
+                let mut tl = Tile::own(template(&mut world, c)?, laid(&layout, c)?, me)?;
                 tl.scatter(None, t)?;
                 tile = Some(tl);
             }
@@ -583,7 +673,7 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
             }
             (Command::Resume, None) => {
                 let (year, p) = send_paths(t, None)?;
-                let r = template(&mut world, c).map_err(super::JobError::from).and_then(|w| load_tile(w, &layout, me, &p, year));
+                let r = laid(&layout, c).and_then(|l| Ok((template(&mut world, c)?, l))).map_err(super::JobError::from).and_then(|(w, l)| load_tile(w, &l, me, &p, year));
                 let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
                 let (tl, _) = r?;
                 a?;
@@ -638,8 +728,9 @@ pub fn run_tiled(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary
 /// Errors: as [`run_tiled`]; the light grid too small for `n` tiles.
 pub fn run_local_tiles(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts: RunOptions, n: usize) -> Result<(RunSummary, Vec<u64>)> {
     check(scenario)?;
-    // the layout is checked before any thread waits for another
-    layout_for(&World::new(site.clone(), lib, scenario)?, n)?;
+    // the layout is checked before any thread waits for another (quietly: the run driver
+    // prints the scenario's warnings)
+    layout_for(&World::build(site.clone(), lib, scenario, false)?, n)?;
     let mut ends = LocalTransport::group(n.max(1)).into_iter();
     let Some(mut t0) = ends.next() else {
         return Err(Error::Exchange { peer: 0, reason: "no ranks".into() }.into());
@@ -691,7 +782,7 @@ mod tests {
         assert_eq!(grid_for(4, 100, 100), (2, 2));
         assert_eq!(grid_for(8, 100, 50), (4, 2));
         assert_eq!(grid_for(6, 40, 120), (2, 3), "a tie (1 × 6, 2 × 3) goes to more tiles across");
-        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot] {
+        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout] {
             assert_eq!(Command::from_byte(c as u8), Some(c));
         }
         assert_eq!(Command::from_byte(0), None);

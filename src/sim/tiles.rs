@@ -428,17 +428,39 @@ impl Layout {
 /// tiles; a heuristic of where the trees will be (a planted part of an otherwise open site is
 /// not seen: its trees are not the site's).
 pub fn work_weights(site: &Site) -> (Vec<u64>, Vec<u64>) {
+    work_weights_in(site, 0..site.light.rows)
+}
+
+/// The part of [`work_weights`] from the light rows `rows` (row 0 south) of `site`: the same
+/// `light.cols` and `light.rows` counts, those of the light cells outside `rows` not counted
+/// (the rows outside are 0). The counts are integers, so the parts of any cut of the rows into
+/// ranges, added up in any order, are [`work_weights`] exactly (issue 37 Build 1: a rank counts
+/// its band, [`weight_band`], and the ranks' parts are all-summed, `job::tiled::layout_by`).
+/// `site` must hold the light cells of `rows` (one process's site: all of them; rows beyond
+/// the grid are ignored).
+pub fn work_weights_in(site: &Site, rows: std::ops::Range<usize>) -> (Vec<u64>, Vec<u64>) {
     let light = &site.light;
-    let (mut cols, mut rows) = (vec![0u64; light.cols], vec![0u64; light.rows]);
-    for (k, &s) in site.light_site.iter().enumerate() {
+    let (mut wc, mut wr) = (vec![0u64; light.cols], vec![0u64; light.rows]);
+    let rows = rows.start.min(light.rows)..rows.end.min(light.rows);
+    let lo = rows.start * light.cols;
+    let hi = rows.end.max(rows.start) * light.cols;
+    for (k, &s) in site.light_site.iter().enumerate().take(hi).skip(lo) {
         let grows = s != u32::MAX && site.suitability.iter().any(|sp| sp.get(site.conditions.held(s as usize)).is_some_and(|&v| v > 0.0));
         if grows {
             let (c, r) = light.col_row(k);
-            cols[c] += 1;
-            rows[r] += 1;
+            wc[c] += 1;
+            wr[r] += 1;
         }
     }
-    (cols, rows)
+    (wc, wr)
+}
+
+/// The light rows (row 0 south) whose part of the layout's weights rank `k` of `n` counts
+/// ([`work_weights_in`]): `k · rows / n` to `(k + 1) · rows / n`, so the `n` bands cover the
+/// `rows` rows once.
+pub fn weight_band(k: usize, n: usize, rows: usize) -> std::ops::Range<usize> {
+    let n = n.max(1);
+    k * rows / n..(k + 1) * rows / n
 }
 
 /// Boundaries that cut the `w.len()` columns (or rows) of weights `w` into `n` runs of whole
@@ -699,10 +721,27 @@ impl Tile {
         let n = t.size();
         let mut out = vec![Vec::new(); n];
         if let (0, Some(g)) = (t.rank(), global) {
-            for (k, m) in out.iter_mut().enumerate() {
-                *m = encode_part(g, &self.layout, k)?;
-            }
+            out = Tile::parts(g, &self.layout, n)?;
         }
+        self.scatter_parts(out, t)
+    }
+
+    /// The messages of [`Tile::scatter`] from `global` (rank 0's world): every tile's part of
+    /// its stand (trees, cohorts, seed windows, year) for tiles `0..n` of `layout`. Encoded
+    /// before the scatter, they let rank 0 cut its world to its tile before the exchange
+    /// (`job::tiled`'s `Root::begin_shed`), so the whole world and its tile's copy are not
+    /// held at once.
+    ///
+    /// Errors: [`Error::Invalid`] from the encoding (a seed grid that does not hold a window).
+    pub fn parts(global: &World, layout: &Layout, n: usize) -> Result<Vec<Vec<u8>>> {
+        (0..n).map(|k| encode_part(global, layout, k)).collect()
+    }
+
+    /// [`Tile::scatter`] with the messages `out` already encoded ([`Tile::parts`] on rank 0;
+    /// empty messages on the others).
+    ///
+    /// Errors: as [`Tile::scatter`].
+    pub fn scatter_parts(&mut self, out: Vec<Vec<u8>>, t: &mut dyn Transport) -> Result<()> {
         let got = t.exchange(out)?;
         let p = decode_part(&got[0], 0)?;
         let w = &mut self.world;

@@ -304,19 +304,30 @@ impl World {
     /// ([`super::climate_change::ClimateChange::years_beyond`]), and when the scenario has
     /// neither a start nor a planting (nothing would grow).
     pub fn new(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
+        World::build(site, lib, scenario, true)
+    }
+
+    /// [`World::new`], logging its warnings only when `warn` is true: the ranks of a tiled run
+    /// other than 0 build the same world and stay quiet, so a warning is printed once, by rank
+    /// 0's run driver, not once per rank (`job::tiled::work`).
+    ///
+    /// Errors: as [`World::new`].
+    pub fn build(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario, warn: bool) -> Result<World> {
         let mut w = World::bare(site, lib, scenario)?;
         w.check_plantings(&scenario.context())?;
-        for m in super::management::warnings(&w.site.management, scenario.years, &scenario.context()) {
-            tracing::warn!("{m}");
-        }
-        // nothing to grow from: no start and no planting (round 30's trial ran such a
-        // scenario for a minute to no tree, without a word)
-        if scenario.start.is_empty() && !scenario.management.iter().any(|m| m.kind == "planting") {
-            tracing::warn!("{}: no [[start]] (seed sources, seed rain, a planted stand) and no planting in [[management]]: nothing will grow on this site", scenario.context());
-        }
-        let late = w.site.climate_change.years_beyond(scenario.years);
-        if let Some(first) = late.first() {
-            tracing::warn!("{}: climate.anomalies_file has {} year(s) beyond the run's last year {} (from year {first}): they do not act", scenario.context(), late.len(), scenario.years);
+        if warn {
+            for m in super::management::warnings(&w.site.management, scenario.years, &scenario.context()) {
+                tracing::warn!("{m}");
+            }
+            // nothing to grow from: no start and no planting (round 30's trial ran such a
+            // scenario for a minute to no tree, without a word)
+            if scenario.start.is_empty() && !scenario.management.iter().any(|m| m.kind == "planting") {
+                tracing::warn!("{}: no [[start]] (seed sources, seed rain, a planted stand) and no planting in [[management]]: nothing will grow on this site", scenario.context());
+            }
+            let late = w.site.climate_change.years_beyond(scenario.years);
+            if let Some(first) = late.first() {
+                tracing::warn!("{}: climate.anomalies_file has {} year(s) beyond the run's last year {} (from year {first}): they do not act", scenario.context(), late.len(), scenario.years);
+            }
         }
         w.place_start(scenario);
         // plantings of year 0 stand with the start
@@ -331,12 +342,17 @@ impl World {
     }
 
     /// Checks `scenario` against `site` and `lib` as [`World::new`] does, without placing its
-    /// start (cheap): a run calls it before it creates any output folder, so a refused scenario
-    /// leaves none behind.
+    /// start: a run calls it before it creates any output folder, so a refused scenario leaves
+    /// none behind. Takes the site and gives it back (it is not copied: until round 31 a copy
+    /// of the whole site's conditions, 53 B a site cell, was held beside the site for the
+    /// check, which set the start's peak memory of one process and of a tiled run's rank 0 on
+    /// a fine grid; issue 37); the site's derived grids are built for the check and dropped.
     ///
     /// Errors: as [`World::new`].
-    pub fn check(site: &SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<()> {
-        World::bare(site.clone(), lib, scenario)?.check_plantings(&scenario.context())
+    pub fn check(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<SiteConditions> {
+        let w = World::bare(site, lib, scenario)?;
+        w.check_plantings(&scenario.context())?;
+        Ok(w.site.conditions)
     }
 
     /// Refuses a planting none of whose lattice points (in its first year) lies on unmasked
