@@ -149,7 +149,16 @@ fn folders_and_files_mixed_up_get_plain_errors() {
         assert!(!ok && err.contains("no_such_run: no such folder"), "{cmd}: {err}");
         let (ok, err) = run(&[cmd, "snap.toml", "--out", out]);
         assert!(!ok && err.contains("snap.toml is a file, not a run directory"), "{cmd}: {err}");
+        // a folder without scenario.toml: the same words from every command (round 31's
+        // trial: an OS error from render and timelapse)
+        std::fs::create_dir_all(d.join("not_a_run")).unwrap();
+        let (ok, err) = run(&[cmd, "not_a_run", "--out", out]);
+        assert!(!ok && err.contains("not_a_run: not a Sylva run directory (no scenario.toml"), "{cmd}: {err}");
     }
+    // a year without an inventory is refused before the site is loaded, with the years there
+    let (ok, err) = run(&["render", "snap_all", "--year", "999", "--out", "y.png"]);
+    assert!(!ok && err.contains("year 999") && err.contains("years with an inventory"), "{err}");
+    assert!(!d.join("y.png").exists());
     // a scenario with nothing to grow from is said to be so
     std::fs::write(d.join("empty.toml"), "name = \"empty\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = { width = 4, height = 4, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n").unwrap();
     let (ok, err) = run(&["simulate", "empty.toml", "--out", "empty_out"]);

@@ -73,7 +73,6 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         anyhow::bail!("--out {}: the stand is written as binary glTF; give a file name ending in .glb", a.out.display());
     }
     super::check_run_dir(&a.run_dir, "sylva export")?;
-    anyhow::ensure!(a.run_dir.join("scenario.toml").is_file(), "{}: not a Sylva run directory (no scenario.toml)", a.run_dir.display());
     super::check_out_file(&a.out, "--out")?;
     let area = a.area.as_deref().map(sylva::job::export::parse_area).transpose()?;
     let levels = sylva::job::export::parse_levels(&a.lod)?;

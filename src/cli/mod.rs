@@ -49,15 +49,19 @@ pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
     pb
 }
 
-/// Refuses a run directory argument (`what`: the command) that does not exist or is a file,
-/// before it is read as a run (a missing folder was called "not a Sylva run directory"; round
-/// 30's trial).
+/// Refuses a run directory argument (`what`: the command) that does not exist, is a file or
+/// holds no `scenario.toml`, before it is read as a run (a missing folder was called "not a
+/// Sylva run directory", round 30's trial; a folder without a scenario got an OS error from
+/// `render` and `timelapse` and a different message from `export`, round 31's).
 pub fn check_run_dir(dir: &std::path::Path, what: &str) -> anyhow::Result<()> {
     if !dir.exists() {
         anyhow::bail!("{what}: {}: no such folder (expected a run directory: the --out of `sylva run` or `sylva simulate`)", dir.display());
     }
     if !dir.is_dir() {
         anyhow::bail!("{what}: {} is a file, not a run directory (the --out folder of `sylva run` or `sylva simulate`)", dir.display());
+    }
+    if !dir.join("scenario.toml").is_file() {
+        anyhow::bail!("{what}: {}: not a Sylva run directory (no scenario.toml; expected the --out folder of `sylva run` or `sylva simulate`)", dir.display());
     }
     Ok(())
 }

@@ -196,6 +196,10 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
         RenderCamera::CloseUp => (CameraPreset::Oblique, true),
         RenderCamera::Hemi(x, y) => return hemi(&a, x, y),
     };
+    super::check_run_dir(&a.run_dir, "RUN")?;
+    if let Some(y) = a.year {
+        pictures::check_snapshot_year(&a.run_dir, y)?;
+    }
     let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
     let year = match a.year {
         Some(y) => y,
