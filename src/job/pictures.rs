@@ -234,7 +234,9 @@ impl Stage {
     }
 
     /// Renders prepared instances.
-    pub fn render_instances(&mut self, inst: Vec<TreeInstance>, season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
+    pub fn render_instances(&mut self, mut inst: Vec<TreeInstance>, season: Season, camera: &Camera, width: u32, height: u32) -> Result<image::RgbaImage> {
+        // every tree standing on the drawn ground (issue 32)
+        self.landscape.stand_on_ground(&mut inst);
         // the window's trees mirrored into the surroundings (scene::Landscape::surroundings)
         let far = self.landscape.surroundings(&inst);
         let mut all = inst;

@@ -309,6 +309,33 @@ pub struct GroundGrid {
     pub focus: Option<([f32; 2], [f32; 2])>,
 }
 
+impl GroundGrid {
+    /// Height (m) of the surface [`from_ground`] draws over the plan point `(x, y)` (m): the
+    /// quad of samples around it split south-west to north-east into two triangles, linear on
+    /// each. `None` outside the samples' centres or where a corner has no ground (NaN). A tree
+    /// put at this height stands on the drawn ground (issue 32), where the site's own bilinear
+    /// elevation ([`crate::conditions::SiteConditions::elevation_at`]) differs from the drawn
+    /// triangles by up to a quarter of the quad's twist.
+    pub fn height_at(&self, x: f32, y: f32) -> Option<f32> {
+        let (w, h) = (self.heights.width, self.heights.height);
+        if w < 2 || h < 2 || !(self.cell_x > 0.0 && self.cell_y > 0.0) {
+            return None;
+        }
+        let fc = (x - self.origin[0]) / self.cell_x - 0.5;
+        let fr = h as f32 - (y - self.origin[1]) / self.cell_y - 0.5;
+        if !(fc >= 0.0 && fr >= 0.0 && fc <= (w - 1) as f32 && fr <= (h - 1) as f32) {
+            return None;
+        }
+        let (c, r) = ((fc as usize).min(w - 2), (fr as usize).min(h - 2));
+        // east of the west column, north of the south row (r + 1)
+        let (u, v) = (fc - c as f32, (r + 1) as f32 - fr);
+        let z = |c: usize, r: usize| *self.heights.get(c, r);
+        let (sw, se, ne, nw) = (z(c, r + 1), z(c + 1, r + 1), z(c + 1, r), z(c, r));
+        let zz = if u >= v { sw + u * (se - sw) + v * (ne - se) } else { sw + v * (nw - sw) + u * (ne - nw) };
+        zz.is_finite().then_some(zz)
+    }
+}
+
 /// Meshes a [`GroundGrid`]: vertices at the samples, normals from central differences, albedo
 /// from [`LandCover::ground_color`] with the plan canopy cover `canopy(x, y)` (0..1) of the
 /// frame's trees, fade and focus copied. Quads with a NaN corner are left out.

@@ -325,7 +325,7 @@ impl Renderer {
             eye: v3(camera.eye, if ortho { 1.0 } else { 0.0 }),
             sun_dir: v3(sun, 0.0),
             sun_color: v3(scene.sun.color, 0.0),
-            sky_zenith: v3(scene.sky.zenith, 0.0),
+            sky_zenith: v3(scene.sky.zenith, pixel_m_per_depth(camera, h)),
             sky_horizon: v3(scene.sky.horizon, 0.0),
             wind: [wd.x, wd.y, scene.wind.directed, scene.wind.undirected],
             params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.1 / size],
@@ -342,6 +342,8 @@ impl Renderer {
         self.queue.write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         g.view_proj = g.light_view_proj;
         g.facing = v3(sun, 1.0);
+        // no stem widening in the sun's shadow map
+        g.sky_zenith[3] = 0.0;
         self.queue.write_buffer(&self.shadow_globals, 0, bytemuck::bytes_of(&g));
     }
 
@@ -388,5 +390,17 @@ impl Renderer {
             g.splat(&mut sums, c.x, c.y, c.r, c.w, c.rgb);
         }
         self.queue.write_buffer(&gs.canopy_buf, 0, bytemuck::cast_slice(&sums));
+    }
+}
+
+/// World size (m) of one pixel of a `height_px` tall frame per metre of clip-space w (view
+/// depth) of `camera`: `2 tan(fov_y / 2) / height_px` in perspective, `2 · half_height /
+/// height_px` orthographic (clip w = 1). The tree shader widens the stems of coarse levels to
+/// `MIN_STEM_PX` with it (`shaders/scene.wgsl`, issue 32).
+pub(crate) fn pixel_m_per_depth(camera: &Camera, height_px: u32) -> f32 {
+    let h = height_px.max(1) as f32;
+    match camera.projection {
+        crate::render::camera::Projection::Perspective { fov_y_deg } => 2.0 * (fov_y_deg.to_radians() * 0.5).tan() / h,
+        crate::render::camera::Projection::Orthographic { half_height } => 2.0 * half_height.max(0.0) / h,
     }
 }

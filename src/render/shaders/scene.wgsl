@@ -8,7 +8,7 @@ struct Globals {
     eye: vec4<f32>,          // xyz eye, w = 1 for orthographic
     sun_dir: vec4<f32>,      // xyz towards the sun
     sun_color: vec4<f32>,
-    sky_zenith: vec4<f32>,
+    sky_zenith: vec4<f32>,   // rgb; w: world size (m) of one pixel per metre of clip w (0: no stem widening)
     sky_horizon: vec4<f32>,
     wind: vec4<f32>,         // direction x, y; directed w_g; undirected w_s
     params: vec4<f32>,       // time s, sea level m, shadow texel size, fog density 1/m
@@ -422,6 +422,10 @@ fn crown_unmap(z: f32, b0: f32, b: f32) -> f32 {
     return two_piece(z, b, b0);
 }
 
+// Least width (px) of a tree's stem drawn at the crown-hull or billboard level (issue 32: small
+// trees' stems, thinner than a pixel, vanished and their crowns floated over the ground).
+const MIN_STEM_PX: f32 = 1.2;
+
 // `top_scale`: size of the billboard's top quad (1: the crown's plan disc, in both passes).
 fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     var o: TreeOut;
@@ -450,7 +454,18 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     } else {
         let c = cos(v.p1.y);
         let s = sin(v.p1.y);
-        let lp = vec3<f32>(v.pos.x * sxy, v.pos.y * sxy, zd * h);
+        var lp = vec3<f32>(v.pos.x * sxy, v.pos.y * sxy, zd * h);
+        // the stem of the crown-hull level (and coarser meshes) at least MIN_STEM_PX wide on
+        // screen: a small tree's real stem is thinner than a pixel, and without it its crown
+        // floats over the ground (issue 32)
+        if (v.mat < 0.5 && v.p3.y > 1.5 && g.sky_zenith.w > 0.0) {
+            let cw = (g.view_proj * vec4<f32>(v.pos_h.xyz + vec3<f32>(0.0, 0.0, lp.z), 1.0)).w;
+            let rmin = 0.5 * MIN_STEM_PX * max(cw, 0.0) * g.sky_zenith.w;
+            let r = length(lp.xy);
+            if (r > 1e-6 && r < rmin) {
+                lp = vec3<f32>(lp.xy * (rmin / r), lp.z);
+            }
+        }
         let rp = vec3<f32>(c * lp.x - s * lp.y, s * lp.x + c * lp.y, lp.z);
         w = sway(v, rp, v.pos.z);
         let ln = vec3<f32>(v.normal.x / max(sxy, 1e-4), v.normal.y / max(sxy, 1e-4), v.normal.z / max(h, 1e-4));
@@ -587,7 +602,9 @@ struct Carve {
     z: f32,
 };
 
-fn carve(i: TreeOut) -> Carve {
+// `apx`: outline units (`i.bb.x`) per pixel across the quad (fwidth, taken in uniform control
+// flow by the caller): the trunk is at least MIN_STEM_PX wide.
+fn carve(i: TreeOut, apx: f32) -> Carve {
     var r: Carve;
     r.kind = 0u;
     r.n = vec3<f32>(0.0, 0.0, 1.0);
@@ -616,7 +633,7 @@ fn carve(i: TreeOut) -> Carve {
             r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.3 * nz + 0.35) + f * sqrt(max(1.0 - na * na, 0.0)));
             // each lump is a small dome of its own: its shading bends the normal about it
             r.n = normalize(r.n + right_of(f) * (l - 0.5) * look.z * 1.5);
-        } else if (abs(a) < s.info.z && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
+        } else if (abs(a) < max(s.info.z, 0.5 * MIN_STEM_PX * apx) && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
             r.kind = 2u;
             r.n = normalize(i.normal);
         }
@@ -695,6 +712,7 @@ fn fine_twig_color(bark: vec3<f32>) -> vec3<f32> {
 
 @fragment
 fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32> {
+    let apx = fwidth(i.bb.x);
     if (!keep(i) || !card_kept(i)) {
         discard;
     }
@@ -708,7 +726,7 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
     }
     var hz = i.mat_s.y;
     if (i.mat_s.x > 1.5) {
-        let c = carve(i);
+        let c = carve(i, apx);
         if (c.kind == 0u) {
             discard;
         }
@@ -797,7 +815,7 @@ fn fs_tree_shadow(i: TreeOut) {
     }
     var leafy = i.mat_s.x > 0.5;
     if (i.mat_s.x > 1.5) {
-        let c = carve(i);
+        let c = carve(i, 0.0);
         if (c.kind == 0u) {
             discard;
         }
