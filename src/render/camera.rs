@@ -199,17 +199,8 @@ mod tests {
     /// view from below the terrain) and looks north at most 12° up.
     #[test]
     fn ground_view_stands_on_a_steep_slope() {
-        use crate::grid::Grid;
-        use crate::render::terrain::{from_grid, LandCover};
-        let (w, h, cell) = (40, 40, 30.0f32);
         let plane = |x: f32, y: f32| 0.7 * x + 0.9 * y;
-        let mut g = Grid::filled(w, h, 0.0f32);
-        for r in 0..h {
-            for c in 0..w {
-                *g.get_mut(c, r) = plane((c as f32 + 0.5) * cell, ((h - 1 - r) as f32 + 0.5) * cell);
-            }
-        }
-        let t = from_grid(&g, cell, cell, &LandCover::default(), None).unwrap();
+        let t = crate::render::terrain::tests::plane_mesh(40, 40, 30.0, plane);
         let cam = Camera::preset(CameraPreset::Ground, &t);
         let [x, y, z] = cam.eye;
         assert!((z - plane(x, y) - 1.7).abs() < 1e-2, "eye {:?}, surface {}", cam.eye, plane(x, y));

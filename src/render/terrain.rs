@@ -521,24 +521,28 @@ pub fn from_tin(vertices: &[[f32; 3]], triangles: &[[u32; 3]], cover: &LandCover
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// A mesh of `w` × `h` cells of `cell` m ([`from_grid`]) whose cell centres lie on `plane`
+    /// (x = (c + 0.5)·cell east, y = (h − 1 − r + 0.5)·cell north).
+    pub(crate) fn plane_mesh(w: usize, h: usize, cell: f32, plane: impl Fn(f32, f32) -> f32) -> TerrainMesh {
+        let mut g = Grid::filled(w, h, 0.0f32);
+        for r in 0..h {
+            for c in 0..w {
+                *g.get_mut(c, r) = plane((c as f32 + 0.5) * cell, ((h - 1 - r) as f32 + 0.5) * cell);
+            }
+        }
+        from_grid(&g, cell, cell, &LandCover::default(), None).unwrap()
+    }
 
     /// The drawn surface's height on a 35° plane of 30 m cells (z = 0.7·x + 0.1·y): exact
     /// between vertices (linear triangles on a plane), where the nearest vertex is metres off;
     /// outside the mesh the nearest vertex; an empty mesh `None`.
     #[test]
     fn height_at_interpolates_the_drawn_surface() {
-        let (w, h, cell) = (6, 5, 30.0f32);
         let plane = |x: f32, y: f32| 0.7 * x + 0.1 * y;
-        let mut g = Grid::filled(w, h, 0.0f32);
-        for r in 0..h {
-            for c in 0..w {
-                // cell centres at x = (c + 0.5)·cell, y = (h − 1 − r + 0.5)·cell
-                *g.get_mut(c, r) = plane((c as f32 + 0.5) * cell, ((h - 1 - r) as f32 + 0.5) * cell);
-            }
-        }
-        let m = from_grid(&g, cell, cell, &LandCover::default(), None).unwrap();
+        let m = plane_mesh(6, 5, 30.0, plane);
         assert_eq!(m.positions[0], [15.0, 135.0, plane(15.0, 135.0)]);
         for (x, y) in [(29.0, 29.0), (44.9, 100.2), (100.0, 60.0), (15.0, 15.0), (160.0, 130.0)] {
             let z = m.height_at(x, y).unwrap();
