@@ -47,6 +47,41 @@ impl TriMesh {
     pub fn bounds(&self) -> Option<([f32; 3], [f32; 3])> {
         points_bounds(self.positions.iter())
     }
+    /// Whether any triangle is a leaf-cluster card marked by [`CLUSTER_CARD_U`] (its first
+    /// vertex's u above `CLUSTER_CARD_U / 2`, as the renderer tells them apart).
+    pub fn has_cluster_cards(&self) -> bool {
+        self.uvs.len() == self.positions.len() && self.indices.chunks_exact(3).any(|t| self.uvs[t[0] as usize][0] > 0.5 * CLUSTER_CARD_U)
+    }
+    /// Splits a level's foliage into its leaf cards and its leaf-cluster cards (the triangles
+    /// marked by [`CLUSTER_CARD_U`], [`TriMesh::has_cluster_cards`]), the latter with u moved back
+    /// to 0–1, so that writers can give each its own material (the glTF and OBJ writers, the
+    /// previews). Each part keeps only the vertices its triangles use, in their first order.
+    pub fn split_cluster_cards(&self) -> (TriMesh, TriMesh) {
+        let mut parts = (TriMesh::default(), TriMesh::default());
+        if !self.has_cluster_cards() {
+            parts.0 = self.clone();
+            return parts;
+        }
+        let mut remap = vec![[u32::MAX; 2]; self.positions.len()];
+        for t in self.indices.chunks_exact(3) {
+            let k = usize::from(self.uvs[t[0] as usize][0] > 0.5 * CLUSTER_CARD_U);
+            let m = if k == 0 { &mut parts.0 } else { &mut parts.1 };
+            for &i in t {
+                let i = i as usize;
+                if remap[i][k] == u32::MAX {
+                    remap[i][k] = m.positions.len() as u32;
+                    m.positions.push(self.positions[i]);
+                    if self.normals.len() == self.positions.len() {
+                        m.normals.push(self.normals[i]);
+                    }
+                    let [u, v] = self.uvs[i];
+                    m.uvs.push([if k == 1 { u - CLUSTER_CARD_U } else { u }, v]);
+                }
+                m.indices.push(remap[i][k]);
+            }
+        }
+        parts
+    }
 }
 
 /// Axis-aligned bounds `(min, max)` of points; `None` when there is none.
@@ -147,5 +182,44 @@ impl LodChain {
             self.levels.iter_mut().for_each(|l| *l = TreeMesh::default());
             self.freed = Some(f);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn card(m: &mut TriMesh, x: f32, du: f32) {
+        let b = m.positions.len() as u32;
+        for (p, uv) in [([x, 0.0, 0.0], [0.0, 0.0]), ([x + 1.0, 0.0, 0.0], [1.0, 0.0]), ([x + 1.0, 0.0, 1.0], [1.0, 1.0]), ([x, 0.0, 1.0], [0.0, 1.0])] {
+            m.positions.push(p);
+            m.normals.push([0.0, -1.0, 0.0]);
+            m.uvs.push([uv[0] + du, uv[1]]);
+        }
+        m.indices.extend_from_slice(&[b, b + 1, b + 2, b, b + 2, b + 3]);
+    }
+
+    #[test]
+    fn cluster_cards_split_from_leaf_cards_with_their_u_restored() {
+        let mut m = TriMesh::default();
+        card(&mut m, 0.0, 0.0);
+        card(&mut m, 5.0, CLUSTER_CARD_U);
+        card(&mut m, 10.0, 0.0);
+        assert!(m.has_cluster_cards());
+        let (cards, sprigs) = m.split_cluster_cards();
+        assert_eq!((cards.triangle_count(), sprigs.triangle_count()), (4, 2));
+        assert_eq!((cards.positions.len(), sprigs.positions.len()), (8, 4));
+        // the sprig is the card at x = 5 with u back in 0–1
+        assert_eq!(sprigs.positions[0], [5.0, 0.0, 0.0]);
+        assert_eq!(sprigs.uvs.iter().map(|uv| uv[0]).fold(f32::MIN, f32::max), 1.0);
+        assert_eq!(cards.positions[4], [10.0, 0.0, 0.0]);
+        assert!(cards.indices.iter().all(|&i| (i as usize) < cards.positions.len()));
+        // a mesh of leaf cards alone is returned whole
+        let mut plain = TriMesh::default();
+        card(&mut plain, 0.0, 0.0);
+        assert!(!plain.has_cluster_cards());
+        let (same, none) = plain.split_cluster_cards();
+        assert_eq!(same, plain);
+        assert!(none.indices.is_empty());
     }
 }

@@ -305,3 +305,49 @@ fn tree_grow_preview_draws_the_billboard_alpha_tested() {
     // the flat rectangle had none; the beech's impostor texture leaves about a third clear
     assert!(frac > 0.1 && frac < 0.9, "sky in the billboard's crown: {frac:.3} of {n} px");
 }
+
+/// Drawn (non-sky) pixels of each of the four panels of a `tree grow` preview.
+fn drawn_per_panel(png: &std::path::Path) -> [u32; 4] {
+    let img = image::open(png).unwrap().to_rgb8();
+    let sky = img.get_pixel(0, 0).0;
+    let w = img.width() / 4;
+    let mut n = [0u32; 4];
+    for (x, _, p) in img.enumerate_pixels() {
+        n[((x / w) as usize).min(3)] += (p.0 != sky) as u32;
+    }
+    n
+}
+
+/// The full level (LOD0) of a tree adapted to a wall carries its crown's leaf area (the
+/// species' crown LAI over its crown projection, as the simulation's crowns do): found by a
+/// trial, its tips' leaf cards alone drew a beech at LOD0 with 0.35 of the foliage of its LOD1
+/// and a spruce "a dead snag". Now the beech's LOD0 shows ≥ 0.75 of its LOD1's side view
+/// (measured 0.88; before 0.35), the `.glb` has the crown's leaf-cluster cards as a third
+/// primitive of LOD0 in the cluster material, and the printed leaf area is LAI × projection.
+#[test]
+fn tree_grow_adapted_full_level_carries_the_crowns_leaf_area() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("beech_wall.glb");
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva"))
+        .args(["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "60", "--adapt-to", "wall:1.5", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&res.stdout).into_owned();
+    assert!(res.status.success(), "{stdout}\n{}", String::from_utf8_lossy(&res.stderr));
+    let n = drawn_per_panel(&out.with_extension("png"));
+    let ratio = n[0] as f64 / n[1] as f64;
+    assert!(ratio >= 0.75, "LOD0 drew {} px, LOD1 {} px: {ratio:.2}", n[0], n[1]);
+    // "leaf area A m² (crown LAI L over a crown projection of P m²): leaf cards C m², K ..."
+    let line = stdout.lines().find(|l| l.starts_with("leaf area")).unwrap_or_else(|| panic!("{stdout}"));
+    let num = |after: &str| -> f64 { line.split(after).nth(1).unwrap().trim_start().split([' ', 'm']).next().unwrap().parse().unwrap() };
+    let (a, lai, p, c) = (num("leaf area"), num("crown LAI"), num("projection of"), num("leaf cards"));
+    assert!((a - lai * p).abs() <= 0.06 * a + 0.1, "{line}");
+    assert!(c < a, "{line}");
+    // the crown's leaf-cluster cards: LOD0's third primitive, in the cluster material
+    let bytes = std::fs::read(&out).unwrap();
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
+    let lod0 = js["meshes"].as_array().unwrap().iter().find(|m| m["name"] == "beech_LOD0").unwrap();
+    let mats: Vec<&str> = lod0["primitives"].as_array().unwrap().iter().map(|p| js["materials"][p["material"].as_u64().unwrap() as usize]["name"].as_str().unwrap()).collect();
+    assert_eq!(mats, ["beech_bark", "beech_leaf", "beech_cluster"]);
+}

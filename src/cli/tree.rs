@@ -191,7 +191,7 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         adapted = Some((rep, adapt_s, tr.elapsed().as_secs_f64()));
     }
     let t1 = std::time::Instant::now();
-    let chain = lod_chain(&sk, &leaves, &LodOptions::default());
+    let (chain, fill) = lone_chain(&sk, &mut leaves, &sp);
     let mesh_s = t1.elapsed().as_secs_f64();
     let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     // a missing output folder is made (as `tree adapt`, `render` and `run` do), naming the
@@ -220,6 +220,7 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         println!("light-guided: 60 cycles, the model's most, inside the crown envelope of a {age}-year tree");
     }
     println!("nodes {}, leaves {}, height {:.2} m, crown radius {:.2} m", sk.len(), leaves.len(), sk.height(), sylva::structure::crown_radius(&sk, &leaves));
+    print_fill(&fill, &sp);
     for (i, l) in chain.levels.iter().enumerate() {
         println!("LOD{i}: {:>8} triangles (bark {}, foliage {})", l.triangle_count(), l.bark.triangle_count(), l.leaves.triangle_count());
     }
@@ -230,6 +231,32 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     }
     println!("wrote {} and {}", out.display(), png.display());
     Ok(())
+}
+
+/// The level-of-detail chain of a lone tree (`sk` with its leaf cards `leaves`, of species
+/// `sp`) whose full level carries the crown's leaf area as the simulation gives it
+/// (`job::leaf_area::lone_tree_sprigs`: the species' crown LAI over the tree's own crown
+/// projection; its leaf cards lengthened, the rest as leaf-cluster cards), so that LOD0 is as
+/// dense as LOD1 (issue 32).
+fn lone_chain(sk: &Skeleton, leaves: &mut Leaves, sp: &sylva::species::Species) -> (sylva::mesh::LodChain, sylva::job::leaf_area::LoneLeafArea) {
+    let (sprigs, fill) = sylva::job::leaf_area::lone_tree_sprigs(sk, leaves, sp);
+    let mut chain = lod_chain(sk, leaves, &LodOptions::default());
+    if let Some(full) = chain.levels.first_mut() {
+        full.leaves.append(&sprigs);
+    }
+    (chain, fill)
+}
+
+/// Prints what [`lone_chain`] gave the full level.
+fn print_fill(f: &sylva::job::leaf_area::LoneLeafArea, sp: &sylva::species::Species) {
+    println!(
+        "leaf area {:.1} m² (crown LAI {:.1} over a crown projection of {:.1} m²): leaf cards {:.1} m², {} leaf-cluster cards added",
+        f.target_m2.max(f.cards_m2),
+        sylva::sim::phases::light::crown_lai(sp.life.shade_tolerance),
+        f.projection_m2,
+        f.cards_m2,
+        f.sprigs
+    );
 }
 
 /// glTF options of a tree of `sp`: named by its species id, its summer look, LOD levels on top
@@ -380,8 +407,8 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     species_tree::grow_species_tree(&sp, species_tree::Model::Light, a.age.min(sp.life.max_age_yr), &obstacles, a.seed)?;
     let regrow_ms = tr.elapsed().as_secs_f64() * 1e3;
     let adapted = trees[0].skeleton();
-    let leaves = species_tree::tip_leaves(&adapted, &sp.architecture.ecomod);
-    let chain = lod_chain(&adapted, &leaves, &LodOptions::default());
+    let mut leaves = species_tree::tip_leaves(&adapted, &sp.architecture.ecomod);
+    let (chain, fill) = lone_chain(&adapted, &mut leaves, &sp);
     // a missing output folder is created (as `sylva render` and `sylva run` do) once the
     // input has been checked, just before the files are written
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -410,11 +437,13 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
             "pruned": r.pruned_light + r.pruned_collision, "pruned_light": r.pruned_light, "pruned_collision": r.pruned_collision,
             "recomputed_nodes": rep.recomputed_nodes, "adapt_ms": adapt_ms, "regrow_ms": regrow_ms, "neighbours": neighbours.len(),
             "trunk_base_radius_m": base_r, "out": a.out.display().to_string(), "png": png.display().to_string(),
+            "crown_projection_m2": fill.projection_m2, "leaf_area_m2": fill.target_m2.max(fill.cards_m2), "leaf_cluster_cards": fill.sprigs,
         });
         println!("{j}");
     } else {
         println!("species {}: {} -> {} nodes, bent {}, pruned {} for light + {} in obstacles, {} nodes recomputed", sp.id, r.nodes_before, r.nodes_after, r.bent, r.pruned_light, r.pruned_collision, rep.recomputed_nodes);
         println!("adapt {adapt_ms:.1} ms, regrowing it{} {regrow_ms:.1} ms", if obstacles.is_empty() { "" } else { " among the obstacles" });
+        print_fill(&fill, &sp);
         println!("wrote {}, {} and {}", a.out.display(), sylva::output::gltf::skeleton_sidecar_path(&a.out).display(), png.display());
     }
     Ok(())

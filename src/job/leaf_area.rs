@@ -118,3 +118,117 @@ pub fn sprig_cards(lv: &mut crate::structure::Leaves, leaf_area_m2: f32, card_co
     }
     m
 }
+
+/// What [`lone_tree_sprigs`] gave a lone tree.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct LoneLeafArea {
+    /// Crown projection area (m², [`crate::structure::crown_projection_area`]).
+    pub projection_m2: f32,
+    /// The leaf area the crown carries in the simulation (m², one-sided): the species' crown
+    /// leaf-area index ([`crate::sim::phases::light::crown_lai`]) over the projection.
+    pub target_m2: f32,
+    /// Leaf area (m², one-sided) of the tree's leaf cards before.
+    pub cards_m2: f32,
+    /// Leaf-cluster cards (sprigs) added.
+    pub sprigs: usize,
+}
+
+/// Gives a lone tree (`sylva tree grow`, `sylva tree adapt`: a skeleton `sk` of species `sp`
+/// with its leaf cards `lv`, no simulation crown around it) the leaf area its crown carries in
+/// the simulation, so that its full level (LOD0) is as dense as its leaf-cluster level (LOD1)
+/// and as the stills' and the stand exports' full-detail trees (issue 32: the full level of an
+/// adapted tree, re-leafed at its tips only, read sparser than its mid level, "a dead snag"):
+/// the crown leaf-area index of the species ([`crate::sim::phases::light::crown_lai`]) over
+/// the crown projection of the tree itself ([`crate::structure::crown_projection_area`], eight
+/// crown radii, so a crown made one-sided by a wall gets the leaf area of what it has),
+/// given by [`sprig_cards`] (cards lengthened by at most [`MAX_CARD_GROWTH`], the rest as
+/// sprigs within the crown's reach of the stem axis). Only adds: a tree whose cards already
+/// carry that much is left as it is. Returns the sprigs in the tree's frame with u offset by
+/// [`crate::mesh::CLUSTER_CARD_U`], to be appended to the full level's leaves (the writers and
+/// the renderer draw them with the leaf-cluster texture), and the figures. Deterministic (the
+/// sprigs hash the species id).
+pub fn lone_tree_sprigs(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Leaves, sp: &crate::species::Species) -> (TriMesh, LoneLeafArea) {
+    let (card, sprig) = super::adapted::LeafCover::of_species(sp);
+    let cards_m2: f32 = lv.leaves.iter().map(|l| 0.5 * l.size * l.size * card.clamp(0.05, 1.0)).sum();
+    let projection_m2 = crate::structure::crown_projection_area(sk, lv);
+    let target_m2 = crate::sim::phases::light::crown_lai(sp.life.shade_tolerance) * projection_m2;
+    let mut out = LoneLeafArea { projection_m2, target_m2, cards_m2, sprigs: 0 };
+    if !(target_m2 > cards_m2) || lv.leaves.is_empty() {
+        return (TriMesh::default(), out);
+    }
+    // sprig_cards keeps sprigs within the crown's reach of the stem axis at the origin
+    let root = sk.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO);
+    let reach = crate::structure::crown_radius(sk, lv);
+    lv.leaves.iter_mut().for_each(|l| l.pos -= root);
+    let seed = crate::rng::hash(&sp.id.bytes().map(u64::from).collect::<Vec<_>>());
+    let mut m = sprig_cards(lv, target_m2, card, sprig, reach, seed);
+    lv.leaves.iter_mut().for_each(|l| l.pos += root);
+    m.positions.iter_mut().for_each(|p| *p = (Vec3::from(*p) + root).to_array());
+    m.uvs.iter_mut().for_each(|uv| uv[0] += crate::mesh::CLUSTER_CARD_U);
+    out.sprigs = m.positions.len() / 4;
+    (m, out)
+}
+
+#[cfg(test)]
+mod lone_tree_tests {
+    use super::*;
+    use crate::structure::species_tree::{grow_species_tree, tip_leaves, Model};
+
+    /// One-sided leaf area (m²) of leaf cards (`card_cover` of each card shows leaf) and of
+    /// sprigs (square cards, `sprig_cover` of each shows leaf).
+    fn area(lv: &crate::structure::Leaves, sprigs: &TriMesh, card_cover: f32, sprig_cover: f32) -> f32 {
+        let cards: f32 = lv.leaves.iter().map(|l| 0.5 * l.size * l.size * card_cover).sum();
+        let s: f32 = sprigs.positions.chunks(4).map(|q| (Vec3::from(q[1]) - Vec3::from(q[0])).length() * (Vec3::from(q[3]) - Vec3::from(q[0])).length() * sprig_cover).sum();
+        cards + s
+    }
+
+    #[test]
+    fn a_lone_trees_full_level_carries_its_crown_lai_over_its_projection() {
+        let lib = crate::species::SpeciesLibrary::embedded().unwrap();
+        let mut with_sprigs = 0;
+        for (id, model, age) in [("beech", Model::EcoMod, 60.0), ("norway_spruce", Model::Light, 40.0), ("scots_pine", Model::Light, 30.0)] {
+            let sp = lib.species.iter().find(|s| s.id == id).unwrap();
+            let g = grow_species_tree(sp, model, age, &[], 3).unwrap();
+            // re-leafed at its tips, as `tree grow --adapt-to` does after Plastic Trees
+            let mut lv = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
+            let (card, sprig) = crate::job::adapted::LeafCover::of_species(sp);
+            let before = area(&lv, &TriMesh::default(), card, sprig);
+            let (m, f) = lone_tree_sprigs(&g.skeleton, &mut lv, sp);
+            let lai = crate::sim::phases::light::crown_lai(sp.life.shade_tolerance);
+            assert!((f.target_m2 - lai * f.projection_m2).abs() < 1e-3 * f.target_m2);
+            assert!((f.cards_m2 - before).abs() < 1e-3 * before);
+            assert!(f.target_m2 > before, "{id}: the tips' cards alone carry {before} m², the crown {} m²", f.target_m2);
+            assert_eq!(f.sprigs, m.positions.len() / 4);
+            // the sprigs are marked as leaf-cluster cards; unmarked, the leaf area is the target
+            // within half a sprig (the cards alone, lengthened, when they can carry it)
+            assert!(m.uvs.iter().all(|uv| uv[0] >= crate::mesh::CLUSTER_CARD_U));
+            let (_, plain) = m.split_cluster_cards();
+            let side = plain.positions.get(1).map_or(0.0, |p| (Vec3::from(*p) - Vec3::from(plain.positions[0])).length());
+            let got = area(&lv, &plain, card, sprig);
+            assert!((got - f.target_m2).abs() <= 0.5 * side * side * sprig + 1e-3 * f.target_m2, "{id}: {got} m² against {} m² ({} sprigs)", f.target_m2, f.sprigs);
+            // within the crown's reach of the stem
+            let reach = crate::structure::crown_radius(&g.skeleton, &lv) + side;
+            assert!(plain.positions.iter().all(|p| (p[0] * p[0] + p[1] * p[1]).sqrt() <= reach));
+            // deterministic
+            let mut again = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
+            assert_eq!(lone_tree_sprigs(&g.skeleton, &mut again, sp).0, m);
+            with_sprigs += usize::from(f.sprigs > 0);
+        }
+        // the EcoMod beech's tip leaves carry less than 1.5² of the crown's leaf area alone
+        assert!(with_sprigs >= 1);
+    }
+
+    #[test]
+    fn a_tree_whose_cards_carry_enough_is_left_as_it_is() {
+        let lib = crate::species::SpeciesLibrary::embedded().unwrap();
+        let sp = lib.species.iter().find(|s| s.id == "beech").unwrap();
+        let g = grow_species_tree(sp, Model::Light, 30.0, &[], 3).unwrap();
+        let mut lv = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
+        lv.leaves.iter_mut().for_each(|l| l.size *= 20.0);
+        let copy = lv.clone();
+        let (m, f) = lone_tree_sprigs(&g.skeleton, &mut lv, sp);
+        assert!(f.cards_m2 > f.target_m2);
+        assert!(m.indices.is_empty());
+        assert_eq!(lv, copy);
+    }
+}

@@ -282,7 +282,9 @@ impl Doc {
 
     /// [`Doc::chain`] with leaf-cluster cards `sprigs` added to the full level (LOD0) as a
     /// third primitive in the look's cluster material (created by [`Doc::look`] when level 1
-    /// is among its levels; without it the sprigs are left out).
+    /// is among its levels; without it the sprigs are left out), together with the cards of
+    /// the full level's leaves marked by [`crate::mesh::CLUSTER_CARD_U`]
+    /// ([`TriMesh::split_cluster_cards`]).
     fn chain_with_sprigs(&mut self, name: &str, chain: &LodChain, sprigs: &TriMesh, mats: LookMaterials, levels: &[usize]) -> Vec<Option<usize>> {
         chain
             .levels
@@ -294,7 +296,15 @@ impl Doc {
                 }
                 let bark = mats.bark.and_then(|m| self.primitive(&level.bark, m, true));
                 let scale = if i == 2 { CROWN_REPEAT } else { [1.0, 1.0] };
-                let leaves = mats.foliage[i.min(3)].and_then(|m| self.primitive_uv(&level.leaves, m, true, scale));
+                // leaf-cluster cards marked among the full level's leaves (a lone tree's crown
+                // leaf area, `job::leaf_area::lone_tree_sprigs`) go with the given sprigs
+                let split = (i == 0 && level.leaves.has_cluster_cards()).then(|| {
+                    let (cards, mut marked) = level.leaves.split_cluster_cards();
+                    marked.append(sprigs);
+                    (cards, marked)
+                });
+                let (cards, sprigs) = split.as_ref().map_or((&level.leaves, sprigs), |(c, s)| (c, s));
+                let leaves = mats.foliage[i.min(3)].and_then(|m| self.primitive_uv(cards, m, true, scale));
                 let extra = if i == 0 && !sprigs.indices.is_empty() { mats.foliage[1].and_then(|m| self.primitive(sprigs, m, true)) } else { None };
                 self.mesh(&format!("{name}_LOD{i}"), vec![bark, leaves, extra])
             })

@@ -63,7 +63,9 @@ pub fn write_obj(path: &Path, chain: &LodChain, levels: Option<&[usize]>, name: 
                 continue;
             }
             writeln!(w, "o {name}_LOD{i}")?;
-            for (part, mtl, m) in [("bark", "bark", &level.bark), ("leaf", FOLIAGE[i.min(3)], &level.leaves)] {
+            // leaf-cluster cards marked among the full level's leaves get the cluster material
+            let (cards, sprigs) = if i == 0 && level.leaves.has_cluster_cards() { level.leaves.split_cluster_cards() } else { (level.leaves.clone(), crate::mesh::TriMesh::default()) };
+            for (part, mtl, m) in [("bark", "bark", &level.bark), ("leaf", FOLIAGE[i.min(3)], &cards), ("sprig", FOLIAGE[1], &sprigs)] {
                 if m.indices.is_empty() {
                     continue;
                 }

@@ -81,7 +81,10 @@ fn draw_level(img: &mut RgbImage, m: &TreeMesh, level: usize, look: &Look, x0: u
     };
     let mut zbuf = vec![f32::MAX; (w * h) as usize];
     let light = Vec3::new(-0.4, -0.6, 0.7).normalize();
-    for (mesh, skin) in [(&m.bark, &bark), (&m.leaves, &foliage)] {
+    // the full level's leaf-cluster cards (a lone tree's crown leaf area) with the cluster card
+    let (cards, sprigs) = if level == 0 && m.leaves.has_cluster_cards() { m.leaves.split_cluster_cards() } else { (m.leaves.clone(), TriMesh::default()) };
+    let cluster = Skin { img: &t.cluster, uv_scale: [1.0, 1.0], repeat: false, mask: true };
+    for (mesh, skin) in [(&m.bark, &bark), (&cards, &foliage), (&sprigs, &cluster)] {
         draw_mesh(img, &mut zbuf, mesh, skin, &to_px, light, x0, w, h);
     }
 }
