@@ -197,6 +197,25 @@ fn folders_and_files_mixed_up_get_plain_errors() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(o.status.success() && err.contains("holds an earlier run") == said, "rank {rank}: {err}");
     }
+    // a second run into a folder another run is writing into is refused (round 32's trial: two
+    // runs into one --out mixed their files, both ending well); the lock is the folder's flock,
+    // held here as a running `sylva simulate` holds it, and gone with its holder
+    {
+        use std::os::unix::io::AsRawFd;
+        let held = std::fs::File::open(d.join("snap_all")).unwrap();
+        // SAFETY: flock on a descriptor this test owns
+        assert_eq!(unsafe { libc::flock(held.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) }, 0);
+        let before = std::fs::read(d.join("snap_all/stand_table.csv")).unwrap();
+        for cmd in ["simulate", "run"] {
+            let args: Vec<&str> = if cmd == "run" { vec!["run", "snap.toml", "--out", "snap_all", "--no-pictures"] } else { vec!["simulate", "snap.toml", "--out", "snap_all", "--resume"] };
+            let (ok, err) = run(&args);
+            assert!(!ok && err.contains("--out snap_all: another Sylva run is writing into this folder"), "{cmd}: {err}");
+        }
+        assert_eq!(std::fs::read(d.join("snap_all/stand_table.csv")).unwrap(), before);
+        drop(held);
+        let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all"]);
+        assert!(ok, "{err}");
+    }
     // output files whose folder is a file are refused before any work, naming the option
     for (args, opt) in [(&["render", "snap_final", "--out", "afile/x.png"][..], "--out"), (&["timelapse", "snap_final", "--out", "afile/t.gif"][..], "--out"), (&["export", "snap_final", "--out", "afile/s.glb"][..], "--out"), (&["render", "snap_final", "--out", "x.png", "--stats", "afile/s.json"][..], "--stats")] {
         let (ok, err) = run(args);

@@ -149,6 +149,73 @@ pub fn check_out_dir(p: &std::path::Path, option: &str) -> anyhow::Result<()> {
     sylva::job::run::check_writable(dir).map_err(|e| anyhow::anyhow!("{option} {}: cannot write into the folder {}: {e}", p.display(), dir.display()))
 }
 
+/// An exclusive lock on a run folder, held while a run (`sylva simulate`, `sylva run`) writes
+/// into it ([`lock_run_dir`]); let go when dropped, and by the system when the process ends in
+/// any way (a killed run leaves no stale lock). Folders the lock made for the run are removed
+/// again when they are still empty (a run refused before it wrote anything leaves nothing).
+pub struct RunDirLock {
+    _dir: Option<std::fs::File>,
+    /// Folders made by [`lock_run_dir`], outermost first.
+    made: Vec<std::path::PathBuf>,
+}
+
+impl Drop for RunDirLock {
+    fn drop(&mut self) {
+        for d in self.made.iter().rev() {
+            // only while empty: remove_dir refuses a folder with anything in it
+            let _ = std::fs::remove_dir(d);
+        }
+    }
+}
+
+/// The MPI rank this process has under `mpirun`, read from the environment before MPI starts
+/// (Open MPI's and MPICH/PMI's variables); `None` outside `mpirun`.
+pub fn mpi_rank_from_env() -> Option<String> {
+    ["OMPI_COMM_WORLD_RANK", "PMI_RANK"].iter().find_map(|k| std::env::var(k).ok()).map(|r| r.trim().to_string())
+}
+
+/// Locks the run folder `out` (made when missing) for this run: a second `sylva simulate` or
+/// `sylva run` into the same folder while this one writes is refused, rather than mixing the
+/// two runs' files (round 32's trial: two runs into one `--out` both ended well, the folder
+/// holding one's scenario and the other's stand table and checkpoint). An advisory `flock` on
+/// the folder itself (Linux and other Unix; no file is added to the run). The ranks of an
+/// `mpirun` write one run together: rank 0 holds the lock, the others take none.
+///
+/// Errors: the folder cannot be made or opened, or another process holds its lock (naming
+/// `option` and the folder).
+pub fn lock_run_dir(out: &std::path::Path, option: &str) -> anyhow::Result<RunDirLock> {
+    let mut made = Vec::new();
+    let mut missing = Vec::new();
+    let mut d = out;
+    while !d.as_os_str().is_empty() && !d.exists() {
+        missing.push(d.to_path_buf());
+        d = d.parent().unwrap_or(std::path::Path::new(""));
+    }
+    for m in missing.into_iter().rev() {
+        std::fs::create_dir(&m).map_err(|e| anyhow::anyhow!("{option} {}: cannot make the folder {}: {e}", out.display(), m.display()))?;
+        made.push(m);
+    }
+    let mut lock = RunDirLock { _dir: None, made };
+    if mpi_rank_from_env().is_some_and(|r| r != "0") {
+        return Ok(lock);
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::io::AsRawFd;
+        let f = std::fs::File::open(out).map_err(|e| anyhow::anyhow!("{option} {}: cannot open the folder: {e}", out.display()))?;
+        // SAFETY: flock on a file descriptor this function owns (open until the guard drops).
+        if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+            let e = std::io::Error::last_os_error();
+            if e.raw_os_error() == Some(libc::EWOULDBLOCK) {
+                anyhow::bail!("{option} {}: another Sylva run is writing into this folder; wait until it ends, or use another {option}", out.display());
+            }
+            anyhow::bail!("{option} {}: cannot lock the folder for this run: {e}", out.display());
+        }
+        lock._dir = Some(f);
+    }
+    Ok(lock)
+}
+
 /// Writes the `--stats` figures `json` to `p` whole (a temporary file renamed), making its
 /// folder first when missing.
 ///

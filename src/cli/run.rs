@@ -59,6 +59,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         sc.validate("--years")?;
     }
     super::check_out_dir(&a.out, "--out")?;
+    let _lock = super::lock_run_dir(&a.out, "--out")?;
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let opts = MainJobOptions { out: a.out.clone(), size: a.size, timelapse_size: a.timelapse_size, frames_between: a.frames_between, fps: a.fps, render: !a.no_pictures, stop: Some(super::simulate::stop_on_ctrl_c()), inventory: a.inventory };
     let mut bars = Bars::default();

@@ -264,8 +264,7 @@ fn rank_stats(rank: usize, size: usize, seconds: f64, in_exchanges: f64, sent: u
 pub fn note_replaced_run(out: &Path) {
     // said once: by rank 0 of an `mpirun` (Open MPI and MPICH/PMI name the rank in the
     // environment before MPI starts), not once per rank
-    let rank = ["OMPI_COMM_WORLD_RANK", "PMI_RANK"].iter().find_map(|k| std::env::var(k).ok());
-    if rank.is_some_and(|r| r.trim() != "0") {
+    if super::mpi_rank_from_env().is_some_and(|r| r != "0") {
         return;
     }
     let old = out.join("scenario.toml");
@@ -283,6 +282,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         sc.validate("--years")?;
     }
     super::check_out_dir(&a.out, "--out")?;
+    let _lock = super::lock_run_dir(&a.out, "--out")?;
     let run_species = run_species_dir(&a.out);
     let mut dirs: Vec<&Path> = Vec::new();
     // the run's own species files count once it has a checkpoint (a run killed before that

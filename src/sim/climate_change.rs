@@ -97,8 +97,10 @@ pub fn shifted_indices(ix: &[f32; 6], dt_k: f64, precip: f64) -> [f32; 6] {
 }
 
 /// Parses an anomalies CSV: lines `year,temperature_k[,precipitation_factor]` (year 1–10000,
-/// each once; temperature −30–30 K; factor 0.05–5, default 1); blank lines and `#` comments
-/// skipped; a first line starting with a letter is a header, which must name the columns in
+/// each once; temperature −30–30 K; factor 0.05–5, default 1), every line with as many values
+/// as the header names (or, without one, as the first data line has: a decimal comma is an
+/// error, not a third value); blank lines and `#` comments (whole lines, or from `#` to the end
+/// of a line) skipped; a first line starting with a letter is a header, which must name the columns in
 /// that order (`year,temperature_k` or `year,temperature_k,precipitation_factor`, any case):
 /// a header in another order or with other names is refused rather than read by position
 /// (round 30: `year,precipitation_factor` gave its factors as temperatures without a word).
@@ -109,9 +111,13 @@ pub fn shifted_indices(ix: &[f32; 6], dt_k: f64, precip: f64) -> [f32; 6] {
 pub fn parse_anomalies(text: &str, path: &Path) -> Result<BTreeMap<u32, (f64, f64)>> {
     let mut out = BTreeMap::new();
     let mut first = true;
+    // values a line must have: the header's columns, else the first data line's
+    let mut columns: Option<usize> = None;
+    let mut from_header = false;
     for (n, raw) in text.lines().enumerate() {
-        let line = raw.trim();
-        if line.is_empty() || line.starts_with('#') {
+        // a comment runs from `#` to the end of the line (whole lines or after the values)
+        let line = raw.split('#').next().unwrap_or("").trim();
+        if line.is_empty() {
             continue;
         }
         let bad = |expected: &str| Error::Invalid { context: format!("{} line {}", path.display(), n + 1), field: "climate.anomalies_file".into(), value: line.to_string(), expected: expected.to_string() };
@@ -120,11 +126,23 @@ pub fn parse_anomalies(text: &str, path: &Path) -> Result<BTreeMap<u32, (f64, f6
             if names != ["year", "temperature_k"] && names != ["year", "temperature_k", "precipitation_factor"] {
                 return Err(bad("a header `year,temperature_k` or `year,temperature_k,precipitation_factor` (the columns in this order), or no header"));
             }
+            columns = Some(names.len());
+            from_header = true;
             continue;
         }
         let f: Vec<&str> = line.split(',').map(str::trim).collect();
         if !(2..=3).contains(&f.len()) {
-            return Err(bad("`year,temperature_k[,precipitation_factor]`: 2 or 3 comma-separated values"));
+            return Err(bad("`year,temperature_k[,precipitation_factor]`: 2 or 3 comma-separated values (numbers with a decimal point: 0.5, not 0,5)"));
+        }
+        // every line as many values as the header names (or as the first line has): a decimal
+        // comma (`1,0,5` for 0.5 K) read as a precipitation factor of 5 was a silent wrong
+        // climate (round 32's trial)
+        match columns {
+            Some(c) if c != f.len() => {
+                return Err(bad(&format!("{c} comma-separated values, as the {} has (`year,temperature_k{}`; numbers with a decimal point: 0.5, not 0,5)", if from_header { "header" } else { "first data line" }, if c == 3 { ",precipitation_factor" } else { "" })));
+            }
+            None => columns = Some(f.len()),
+            _ => {}
         }
         // year 0 is the start, simulated under the base climate: an anomaly there would never
         // act (found by a break-it pass: it was ignored without a word)
@@ -142,6 +160,18 @@ pub fn parse_anomalies(text: &str, path: &Path) -> Result<BTreeMap<u32, (f64, f6
         return Err(Error::Invalid { context: path.display().to_string(), field: "climate.anomalies_file".into(), value: "no data line".into(), expected: "at least one line `year,temperature_k[,precipitation_factor]`".into() });
     }
     Ok(out)
+}
+
+impl ClimateChange {
+    /// The years between the first and the last anomaly that the file has no line for
+    /// (ascending): they take no anomaly (0 K, precipitation factor 1), which a file with a
+    /// forgotten line does not mean (World::new warns; round 32's trial found them silent).
+    pub fn anomaly_gaps(&self) -> Vec<u32> {
+        match (self.anomalies.keys().next(), self.anomalies.keys().next_back()) {
+            (Some(&a), Some(&b)) => (a..=b).filter(|y| !self.anomalies.contains_key(y)).collect(),
+            _ => Vec::new(),
+        }
+    }
 }
 
 #[cfg(test)]
@@ -170,8 +200,8 @@ mod tests {
     #[test]
     fn anomalies_file_errors_name_line() {
         let p = Path::new("a.csv");
-        let m = parse_anomalies("year,temperature_k\n1,0.5\n# c\n2,-1,0.9\n", p).unwrap();
-        assert_eq!(m[&2], (-1.0, 0.9));
+        let m = parse_anomalies("year,temperature_k,precipitation_factor\n1,0.5,1\n# c\n2,-1,0.9\n", p).unwrap();
+        assert_eq!((m[&1], m[&2]), ((0.5, 1.0), (-1.0, 0.9)));
         let e = parse_anomalies("year,temperature_k\n1,0.5\n2,hot\n", p).unwrap_err().to_string();
         assert!(e.contains("a.csv line 3") && e.contains("hot") && e.contains("temperature"), "{e}");
         let e = parse_anomalies("1,0.5\n1,0.6\n", p).unwrap_err().to_string();
@@ -185,5 +215,20 @@ mod tests {
         assert_eq!(parse_anomalies("Year, Temperature_K, Precipitation_Factor\n3,1.5,1.1\n", p).unwrap()[&3], (1.5, 1.1));
         let e = parse_anomalies("year,temperature_k\n# none yet\n", p).unwrap_err().to_string();
         assert!(e.contains("a.csv") && e.contains("at least one line"), "{e}");
+        // a decimal comma makes one value more than the header names (round 32's trial: `1,0,5`
+        // was read as 0 K and a precipitation factor of 5)
+        let e = parse_anomalies("year,temperature_k\n1,0,5\n", p).unwrap_err().to_string();
+        assert!(e.contains("a.csv line 2") && e.contains("2 comma-separated values") && e.contains("header") && e.contains("0.5, not 0,5"), "{e}");
+        let e = parse_anomalies("year,temperature_k,precipitation_factor\n1,0.5\n", p).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("3 comma-separated values"), "{e}");
+        // without a header, every line as many values as the first
+        let e = parse_anomalies("1,0.5\n2,0,5\n", p).unwrap_err().to_string();
+        assert!(e.contains("line 2") && e.contains("first data line"), "{e}");
+        // comments after the values
+        let m = parse_anomalies("# hot decade\nyear,temperature_k\n1,0.5 # hot\n3,1.5#hotter\n", p).unwrap();
+        assert_eq!((m[&1], m[&3]), ((0.5, 1.0), (1.5, 1.0)));
+        let c = ClimateChange { warming_k_per_century: 0.0, anomalies: m };
+        assert_eq!(c.anomaly_gaps(), vec![2]);
+        assert_eq!(ClimateChange::default().anomaly_gaps(), Vec::<u32>::new());
     }
 }

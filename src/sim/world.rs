@@ -328,6 +328,11 @@ impl World {
             if let Some(first) = late.first() {
                 tracing::warn!("{}: climate.anomalies_file has {} year(s) beyond the run's last year {} (from year {first}): they do not act", scenario.context(), late.len(), scenario.years);
             }
+            let gaps = w.site.climate_change.anomaly_gaps();
+            if !gaps.is_empty() {
+                let shown: Vec<String> = gaps.iter().take(8).map(u32::to_string).collect();
+                tracing::warn!("{}: climate.anomalies_file has no line for {} year(s) between its first and last ({}{}): they take no anomaly (0 K, precipitation factor 1)", scenario.context(), gaps.len(), shown.join(", "), if gaps.len() > 8 { ", …" } else { "" });
+            }
         }
         w.place_start(scenario);
         // plantings of year 0 stand with the start
