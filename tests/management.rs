@@ -129,6 +129,29 @@ fn clear_cut_leaves_no_tree_in_its_area_and_regeneration_starts_again() {
     eprintln!("clear-cut: regeneration {before} → {after} sapling stems in 8 years, {recruits} recruits");
 }
 
+/// A strip narrower than a light cell (a 4 m skid trail between two rows of 5 m cell centres)
+/// is cut, not refused as lying off the site (round 32's trial): its area is measured on a
+/// finer lattice, and only the trees in it go.
+#[test]
+fn a_clear_cut_strip_narrower_than_a_light_cell_cuts_only_its_trees() {
+    let toml = ScenarioToml::new("strip", 2, 5).species(&["beech"]).uniform(6, 6, 20.0, 200.0).planted("beech", 2.0, 40.0).build()
+        + "[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\narea = [0.0, 48.0, 120.0, 52.0]\nyears = [2]\n";
+    let (sc, mut w) = world(&toml);
+    let before: Vec<(f32, f32)> = (0..w.stand.trees.len()).map(|i| (w.stand.trees.x[i], w.stand.trees.y[i])).collect();
+    let in_strip = |y: f32| (48.0..52.0).contains(&y);
+    let n_strip = before.iter().filter(|p| in_strip(p.1)).count();
+    assert!(n_strip >= 60, "{n_strip} trees planted in the strip");
+    let rows = common::run(&sc, &mut w, 2);
+    let t = &w.stand.trees;
+    assert_eq!((0..t.len()).filter(|&i| in_strip(t.y[i]) && t.height[i] >= 1.3).count(), 0, "trees ≥ 1.3 m left in the strip");
+    let cut: Vec<f32> = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).map(|d| d.y).collect();
+    assert!(!cut.is_empty() && cut.iter().all(|&y| in_strip(y)), "harvested outside the strip: {:?}", cut.iter().filter(|&&y| !in_strip(y)).collect::<Vec<_>>());
+    assert!(rows[1].harvest_stems_ha > 0.0);
+    // the rest stands (crowding takes some of the dense planting in two years, the cut none)
+    let rest = (0..t.len()).filter(|&i| !in_strip(t.y[i])).count();
+    assert!(rest as f64 >= 0.8 * (before.len() - n_strip) as f64, "the rest stands: {rest} of {}", before.len() - n_strip);
+}
+
 #[test]
 fn polygon_planting_from_geojson_plants_only_inside_its_polygon() {
     let d = tempfile::tempdir().unwrap();

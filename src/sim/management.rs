@@ -865,6 +865,34 @@ pub struct SiteView<'a> {
     pub pool: &'a [SpeciesId],
 }
 
+/// Sub-samples per light-cell side of [`fine_area_ha`] (8: 64 points a cell, 0.6 m apart in 5 m
+/// cells).
+const FINE_SAMPLES: usize = 8;
+
+/// Area (ha) of the unmasked ground of `region` measured on a lattice of [`FINE_SAMPLES`]²
+/// points in every light cell its box touches: for regions that hold no light-cell centre
+/// (narrower than a cell), whose area the count of cell centres gives as 0.
+fn fine_area_ha(region: &Region, site: &SiteView<'_>) -> f64 {
+    let l = site.light;
+    let step = l.cell_m / FINE_SAMPLES as f64;
+    let point_ha = step * step / 10_000.0;
+    let mut n = 0usize;
+    for c in (0..l.len()).filter(|&c| site.light_site[c] != u32::MAX) {
+        let (cx, cy) = l.centre(c);
+        let (x0, y0) = (cx - 0.5 * l.cell_m, cy - 0.5 * l.cell_m);
+        let b = &region.bbox;
+        if x0 >= b[2] || y0 >= b[3] || x0 + l.cell_m <= b[0] || y0 + l.cell_m <= b[1] {
+            continue;
+        }
+        for j in 0..FINE_SAMPLES {
+            for k in 0..FINE_SAMPLES {
+                n += usize::from(region.contains(x0 + (k as f64 + 0.5) * step, y0 + (j as f64 + 0.5) * step));
+            }
+        }
+    }
+    n as f64 * point_ha
+}
+
 /// Resolves the scenario's entries against the site (its extent, mask, light grid and
 /// georeferencing) and the species library: regions in world metres with their areas, species
 /// ids of plantings. Entries come out in scenario order.
@@ -895,8 +923,16 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
         });
         region.area_ha = cells.count() as f64 * l.cell_m * l.cell_m / 10_000.0;
         if region.area_ha <= 0.0 {
+            // narrower than a light cell (a skid trail, a small square between cell centres):
+            // its unmasked ground measured finer (round 32's trial: a 4 m strip inside the site
+            // was refused as if it lay outside it)
+            region.area_ha = fine_area_ha(&region, site);
+        }
+        if region.area_ha <= 0.0 {
             let field = if m.area.is_some() { "area" } else if m.area_file.is_some() { "area_file" } else { "polygons" };
-            return Err(invalid(ctx, i, field, format!("{bbox:?} (bounding box, m)"), &format!("an area covering unmasked ground of the site, 0 ≤ x < {ex} m and 0 ≤ y < {ey} m (origin SW corner; an area file in the DEM's CRS)")));
+            let inside = clipped[0] < clipped[2] && clipped[1] < clipped[3];
+            let expected = if inside { "an area that covers unmasked ground: this one lies on the site but only where its DEM has no data (masked cells)".to_string() } else { format!("an area covering unmasked ground of the site, 0 ≤ x < {ex} m and 0 ≤ y < {ey} m (origin SW corner; an area file in the DEM's CRS)") };
+            return Err(invalid(ctx, i, field, format!("{bbox:?} (bounding box, m)"), &expected));
         }
         let action = match (m.kind.as_str(), m.method.as_deref()) {
             ("thinning", Some("crop_trees")) => {
