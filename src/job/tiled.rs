@@ -3,8 +3,9 @@
 //! rank 0 also runs the run driver ([`run_scenario_with`]), whose world is cut to rank 0's
 //! tile as the tiles take the stand ([`Root`]'s [`Stepper::begin_shed`], before rank 0's tile
 //! is copied from it; unless a caller reads the world at every snapshot), so no rank keeps the
-//! whole site's grids for the run (issue 37 Build 1; every rank still builds the scenario's
-//! whole world at the start; the layout is cut from the ranks' summed weights, [`layout_by`]). The run
+//! whole site's grids for the run (issue 37 Build 1; rank 0 still builds the scenario's whole
+//! world at the start, the other ranks only their tile's part of the site from the conditions,
+//! [`work`]; the layout is cut from the ranks' summed weights, [`layout_by`]). The run
 //! directory holds what a single process writes, byte for byte where the layout is the same;
 //! the checkpoint (one file per rank, below) and the inventories (one part per rank) are laid
 //! out by rank and read back as one process's (issue 37 Build 4):

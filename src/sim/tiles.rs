@@ -467,14 +467,14 @@ pub fn work_weights_of(c: &crate::conditions::SiteConditions, lib: &crate::speci
     let (mut wc, mut wr) = (vec![0u64; light.cols], vec![0u64; light.rows]);
     let rows = rows.start.min(light.rows)..rows.end.min(light.rows);
     for r in rows {
-        for col in 0..light.cols {
+        for (col, n) in wc.iter_mut().enumerate() {
             let s = crate::sim::world::light_site_cell(c, light, r * light.cols + col);
             if s == u32::MAX {
                 continue;
             }
             let ix = &c.indices.data[c.held(s as usize)];
             if pool.iter().any(|&p| lib.species[p as usize].suitability(ix) > 0.0) {
-                wc[col] += 1;
+                *n += 1;
                 wr[r] += 1;
             }
         }
