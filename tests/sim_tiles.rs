@@ -95,6 +95,87 @@ fn a_tile_without_trees() {
     assert_tiles_equal(&toml, 4, 1, 12, &one);
 }
 
+/// Issue 37 Build 1 (a): the part of the site that a rank other than 0 derives for tile `k`
+/// from a skeleton of the scenario's world (`World::skeleton`, `tiles::derive_tile_site`; no
+/// whole-site grid derived, no start trees) equals, bit for bit, the tile `Tile::own` cuts from
+/// the world of one process: every conditions grid, the relative insolation, suitability, light
+/// cells' arrays, seed windows, identity, area, management and the checkpoint bytes; the
+/// median from the ranks' bands (`layout_by` over a `LocalTransport`) is `World::new`'s.
+fn assert_derived_tiles_equal_cut_tiles(toml: &str, nx: usize, ny: usize) {
+    let (sc, w0) = common::world(toml);
+    let lib = sylva::sim::fixtures::library();
+    let layout = Layout::new(&w0.site, nx, ny).unwrap();
+    let n = layout.len();
+    let want = sylva::sim::world::insolation_median_by(&w0.site.conditions.insolation_kwh_m2, &w0.site.conditions.mask, &mut sylva::sim::select::alone).unwrap();
+    // the ranks' bands select the median with each other (the weights' layout: tested below)
+    let medians: Vec<f32> = std::thread::scope(|s| {
+        let hs: Vec<_> = sylva::sim::tiles::LocalTransport::group(n)
+            .into_iter()
+            .map(|mut t| {
+                let (sc, lib) = (&sc, &lib);
+                s.spawn(move || sylva::job::tiled::layout_by(&World::skeleton(sc.site().unwrap(), lib, sc).unwrap(), &mut t).unwrap().1)
+            })
+            .collect();
+        hs.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    assert!(medians.iter().all(|m| m.to_bits() == want.to_bits()), "{medians:?} vs {want}");
+    for k in 0..n {
+        let owned = Tile::own(w0.clone(), layout.clone(), k).unwrap();
+        let mut w = World::skeleton(sc.site().unwrap(), &lib, &sc).unwrap();
+        assert!(w.site.light_site.is_empty() && w.site.rel_insolation.is_empty() && w.stand.seeds.is_empty() && w.stand.trees.is_empty());
+        sylva::sim::tiles::derive_tile_site(&mut w, &sc, &layout, k, medians[k]).unwrap();
+        // the start's trees come from rank 0's scatter: compare the site and the empty stand
+        let mut o = owned.world;
+        o.stand.trees = Default::default();
+        o.stand.trees.next_id = w.stand.trees.next_id;
+        o.stand.cohorts = Default::default();
+        let d = Tile::own(w, layout.clone(), k).unwrap().world;
+        let (a, b) = (&d.site, &o.site);
+        let (ca, cb) = (&a.conditions, &b.conditions);
+        let what = format!("tile {k} of {nx} × {ny}");
+        assert_eq!((ca.held, ca.full, &ca.mask), (cb.held, cb.full, &cb.mask), "{what}");
+        for (x, y) in [(&ca.slope_deg, &cb.slope_deg), (&ca.aspect_deg, &cb.aspect_deg), (&ca.twi, &cb.twi), (&ca.insolation_kwh_m2, &cb.insolation_kwh_m2), (&ca.temperature_c, &cb.temperature_c), (&ca.elevation_m, &cb.elevation_m), (&ca.wind_exposure, &cb.wind_exposure)] {
+            assert!(x.data.iter().map(|v| v.to_bits()).eq(y.data.iter().map(|v| v.to_bits())), "{what}");
+        }
+        assert!(ca.indices.data.iter().flatten().map(|v| v.to_bits()).eq(cb.indices.data.iter().flatten().map(|v| v.to_bits())), "{what}");
+        assert!(a.rel_insolation.iter().chain(a.suitability.iter().flatten()).map(|v| v.to_bits()).eq(b.rel_insolation.iter().chain(b.suitability.iter().flatten()).map(|v| v.to_bits())), "{what}: relative insolation or suitability");
+        assert_eq!((&a.light_site, a.window, &a.whole_identity, a.area_ha.to_bits(), &a.obstacle_canopy), (&b.light_site, b.window, &b.whole_identity, b.area_ha.to_bits(), &b.obstacle_canopy), "{what}");
+        assert!(a.ground_free.iter().map(|v| v.to_bits()).eq(b.ground_free.iter().map(|v| v.to_bits())), "{what}: ground free");
+        assert_eq!((&a.management, &a.seed_rain, &a.pool), (&b.management, &b.seed_rain, &b.pool), "{what}");
+        assert_eq!((&d.stand.seeds, &d.scratch.ground_light), (&o.stand.seeds, &o.scratch.ground_light), "{what}");
+        assert_eq!(sylva::sim::checkpoint::identity(&d), sylva::sim::checkpoint::identity(&w0), "{what}");
+        assert!(sylva::sim::checkpoint::to_bytes(&d, &[]) == sylva::sim::checkpoint::to_bytes(&o, &[]), "{what}: checkpoint bytes");
+        // the band weights from the conditions equal those of the derived world of one process
+        let band = sylva::sim::tiles::weight_band(k, n, w0.site.light.rows);
+        assert_eq!(sylva::sim::tiles::work_weights_of(&w0.site.conditions, &lib, &w0.site.pool, &w0.site.light, band.clone()), sylva::sim::tiles::work_weights_in(&w0.site, band), "{what}");
+    }
+}
+
+#[test]
+fn a_rank_derives_only_its_tiles_part_of_the_site() {
+    // a building across the tile edges (ground free, obstacle canopy)
+    let building = "[[obstacle]]\nkind = \"footprint\"\npoints = [[180.0, 80.0], [225.0, 80.0], [225.0, 150.0], [180.0, 150.0]]\nheight_m = 12.0\n";
+    let toml = format!("{}{building}", edges());
+    for (nx, ny) in [(2, 1), (3, 1), (2, 2)] {
+        assert_derived_tiles_equal_cut_tiles(&toml, nx, ny);
+    }
+    // a window of the default DEM (insolation, wind, indices vary; beech and birch) with a
+    // planting area and a thinning (management resolved against the whole site)
+    let dem = common::ScenarioToml::new("held", 15, 11)
+        .species(&["beech", "birch"])
+        .line("light_cell_m = 10.0")
+        .default_terrain([150, 150, 12, 10])
+        .seed_sources("beech", &[[478.0, 402.0], [485.0, 300.0], [200.0, 600.0]], 3)
+        .build();
+    let mgmt = "[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 4.0\nage_yr = 4.0\nyear = 0\narea = [100.0, 100.0, 500.0, 400.0]\n[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.45\nyear = 10\n";
+    let toml = format!("{dem}{mgmt}");
+    let (_, w0) = common::world(&toml);
+    assert!(w0.site.rel_insolation.iter().any(|&v| v != w0.site.rel_insolation[0]) && w0.site.management.len() == 2);
+    for (nx, ny) in [(2, 1), (2, 2), (3, 2)] {
+        assert_derived_tiles_equal_cut_tiles(&toml, nx, ny);
+    }
+}
+
 #[test]
 fn a_tile_holds_the_light_cells_site_arrays_of_its_own_cells_only() {
     // issue 37 Build 1: the site cell per light cell, the ground free of obstacles and the ground
@@ -512,7 +593,7 @@ fn tiles_cut_by_forest_on_a_half_masked_site_write_the_run_of_one_process() {
                 .into_iter()
                 .map(|mut t| {
                     let w = &template;
-                    s.spawn(move || sylva::job::tiled::layout_by(w, &mut t).unwrap())
+                    s.spawn(move || sylva::job::tiled::layout_by(w, &mut t).unwrap().0)
                 })
                 .collect();
             hs.into_iter().map(|h| h.join().unwrap()).collect()

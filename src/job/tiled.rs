@@ -3,8 +3,9 @@
 //! rank 0 also runs the run driver ([`run_scenario_with`]), whose world is cut to rank 0's
 //! tile as the tiles take the stand ([`Root`]'s [`Stepper::begin_shed`], before rank 0's tile
 //! is copied from it; unless a caller reads the world at every snapshot), so no rank keeps the
-//! whole site's grids for the run (issue 37 Build 1; every rank still builds the scenario's
-//! whole world at the start; the layout is cut from the ranks' summed weights, [`layout_by`]). The run
+//! whole site's grids for the run (issue 37 Build 1; rank 0 still builds the scenario's whole
+//! world at the start, the other ranks only their tile's part of the site from the conditions,
+//! [`work`]; the layout is cut from the ranks' summed weights, [`layout_by`]). The run
 //! directory holds what a single process writes, byte for byte where the layout is the same;
 //! the checkpoint (one file per rank, below) and the inventories (one part per rank) are laid
 //! out by rank and read back as one process's (issue 37 Build 4):
@@ -310,26 +311,38 @@ pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
     layout_weighted(world, n, &wc, &wr)
 }
 
-/// [`layout_for`] with the weights counted by the ranks of `t` (issue 37 Build 1): rank `k` of
-/// `N` counts the light rows of its band ([`crate::sim::tiles::weight_band`],
-/// [`crate::sim::tiles::work_weights_in`]) and the parts are all-summed
-/// ([`Transport::all_sum`], `light.cols + light.rows` words), so no rank reads the whole
-/// site's weights; the counts are integers, so every rank gets [`layout_for`]'s layout of
-/// `world` exactly. Every rank of `t` must call it at the same point (rank 0 after
-/// [`Command::Layout`]).
+/// [`layout_for`] with the weights counted by the ranks of `t` (issue 37 Build 1), and the
+/// median of the site's unmasked insolation that its relative insolation divides by: rank `k`
+/// of `N` counts the light rows of its band ([`crate::sim::tiles::weight_band`],
+/// [`crate::sim::tiles::work_weights_of`], from the site conditions and the pool: `world` may
+/// be a [`World::skeleton`]) and the parts are all-summed ([`Transport::all_sum`],
+/// `light.cols + light.rows` words), so no rank reads the whole site's weights; the counts are
+/// integers, so every rank gets [`layout_for`]'s layout of `world` exactly. Then every rank
+/// takes the site rows `k · h / N .. (k + 1) · h / N` of the conditions and the ranks select
+/// the median over them ([`crate::sim::world::insolation_median_by`]: a count and three
+/// all-sums of 1–2 K counts), which is [`World::new`]'s median bit for bit. Every rank of `t`
+/// must call it at the same point (rank 0 after [`Command::Layout`]); `world`'s conditions
+/// must hold the rank's band of site rows (the whole site, today).
 ///
 /// Errors: [`Error::Exchange`] from the transport or parts of another length (a rank with
 /// another light grid); as [`layout_for`].
-pub fn layout_by(world: &World, t: &mut dyn Transport) -> Result<Layout> {
-    let light = &world.site.light;
-    let (mut v, wr) = crate::sim::tiles::work_weights_in(&world.site, crate::sim::tiles::weight_band(t.rank(), t.size(), light.rows));
+pub fn layout_by(world: &World, t: &mut dyn Transport) -> Result<(Layout, f32)> {
+    let site = &world.site;
+    let light = &site.light;
+    let (mut v, wr) = crate::sim::tiles::work_weights_of(&site.conditions, &site.lib, &site.pool, light, crate::sim::tiles::weight_band(t.rank(), t.size(), light.rows));
     v.extend(wr);
     let sums = t.all_sum(v)?;
     if sums.len() != light.cols + light.rows {
         return Err(Error::Exchange { peer: 0, reason: format!("{} summed weights, expected {} (light columns and rows)", sums.len(), light.cols + light.rows) }.into());
     }
     let (wc, wr) = sums.split_at(light.cols);
-    layout_weighted(world, t.size(), wc, wr)
+    let layout = layout_weighted(world, t.size(), wc, wr)?;
+    let c = &site.conditions;
+    let band = crate::sim::tiles::weight_band(t.rank(), t.size(), c.height());
+    let win = crate::grid::Window { col0: 0, row0: band.start, width: c.width(), height: band.len() };
+    let (ins, mask) = (win.cut(&c.insolation_kwh_m2, &c.held), win.cut(&c.mask, &c.held));
+    let median = crate::sim::world::insolation_median_by(&ins, &mask, &mut |v| t.all_sum(v))?;
+    Ok((layout, median))
 }
 
 /// The layout of [`layout_for`] from the weights per light column `wc` and row `wr`.
@@ -408,7 +421,8 @@ impl<'t> Root<'t> {
             return Ok(l.clone());
         }
         command(self.t, Some(Command::Layout))?;
-        let r = layout_by(world, self.t);
+        // the median is rank 0's part of the ranks' selection; its world has it already
+        let r = layout_by(world, self.t).map(|(l, _)| l);
         if r.is_err() {
             self.done = true;
         }
@@ -618,21 +632,27 @@ impl Stepper for Root<'_> {
     }
 }
 
-/// A rank other than 0: builds the world of `scenario` (for the site), then follows rank 0's
-/// commands until [`Command::End`]. Writes no files.
+/// A rank other than 0: holds `site` in a [`World::skeleton`] of `scenario` (nothing derived
+/// from the site, no trees), cuts the layout with the other ranks ([`layout_by`]: the weights
+/// and the insolation's median from its band), derives only its tile's part of the site into
+/// it ([`crate::sim::tiles::derive_tile_site`]; issue 37 Build 1: until round 32 every rank
+/// built the whole world of one process, `World::new`, and cut its tile from it), then follows
+/// rank 0's commands until [`Command::End`]. Its tile's stand and the next tree id come from
+/// rank 0 ([`Tile::scatter`]) or from its checkpoint. Writes no files. The scenario's checks
+/// and warnings are rank 0's (its run driver builds the world of one process).
 ///
-/// Errors: unknown species or points outside the site (as [`World::new`]); the tiles' errors
-/// (a halo too narrow, a failed exchange); a command out of order.
+/// Errors: unknown species or points outside the site (as [`World::skeleton`]); management
+/// entries that do not resolve; the tiles' errors (a halo too narrow, a failed exchange); a
+/// command out of order.
 pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: &mut dyn Transport) -> Result<()> {
     check(scenario)?;
-    // rank 0's run driver prints the scenario's warnings, once
-    let world = World::build(site, lib, scenario, false)?;
+    let world = World::skeleton(site, lib, scenario)?;
     let me = t.rank();
-    // the layout, cut with the other ranks on [`Command::Layout`]
-    let mut layout: Option<Layout> = None;
-    let laid = |l: &Option<Layout>, c: Command| l.clone().ok_or_else(|| Error::Exchange { peer: 0, reason: format!("command {c:?} before the layout was cut (command Layout)") });
-    // the world of the scenario's start, until this rank's tile is made from it (Begin) or
-    // from a checkpoint read into it (Resume): then the tile holds the only copy of the site
+    // the layout and the insolation's median, found with the other ranks on [`Command::Layout`]
+    let mut layout: Option<(Layout, f32)> = None;
+    let laid = |l: &Option<(Layout, f32)>, c: Command| l.clone().ok_or_else(|| Error::Exchange { peer: 0, reason: format!("command {c:?} before the layout was cut (command Layout)") });
+    // the skeleton of the scenario's world, until this rank's tile's site is derived into it
+    // (Begin, or Resume before its checkpoint is read into it): then the tile holds the site
     let mut world = Some(world);
     let template = |w: &mut Option<World>, c: Command| w.take().ok_or_else(|| Error::Exchange { peer: 0, reason: format!("command {c:?} after this rank's tile was made") });
     let mut tile: Option<Tile> = None;
@@ -653,7 +673,10 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 layout = Some(layout_by(w, t)?);
             }
             (Command::Begin, _) => {
-                let mut tl = Tile::own(template(&mut world, c)?, laid(&layout, c)?, me)?;
+                let (l, median) = laid(&layout, c)?;
+                let mut w = template(&mut world, c)?;
+                crate::sim::tiles::derive_tile_site(&mut w, scenario, &l, me, median)?;
+                let mut tl = Tile::own(w, l, me)?;
                 tl.scatter(None, t)?;
                 tile = Some(tl);
             }
@@ -673,7 +696,10 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
             }
             (Command::Resume, None) => {
                 let (year, p) = send_paths(t, None)?;
-                let r = laid(&layout, c).and_then(|l| Ok((template(&mut world, c)?, l))).map_err(super::JobError::from).and_then(|(w, l)| load_tile(w, &l, me, &p, year));
+                let r = laid(&layout, c).and_then(|l| Ok((template(&mut world, c)?, l))).map_err(super::JobError::from).and_then(|(mut w, (l, median))| {
+                    crate::sim::tiles::derive_tile_site(&mut w, scenario, &l, me, median)?;
+                    load_tile(w, &l, me, &p, year)
+                });
                 let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
                 let (tl, _) = r?;
                 a?;

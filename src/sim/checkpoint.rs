@@ -557,7 +557,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     if bad_f(&cohorts.height) || bad_f(&cohorts.age) || bad_f(&cohorts.vigour) || seeds.iter().any(|g| bad_f(&g.data)) {
         return Err(Error::format(path, "checkpoint holds a negative, NaN or infinite cohort height, age, vigour or seed count: corrupt"));
     }
-    if cohorts.cell.iter().any(|&c| c as usize >= w.site.light_site.len()) || cohorts.pool.iter().any(|&p| p as usize >= w.site.pool.len()) {
+    if cohorts.cell.iter().any(|&c| c as usize >= w.site.light.len()) || cohorts.pool.iter().any(|&p| p as usize >= w.site.pool.len()) {
         return Err(Error::format(path, "checkpoint cohorts lie outside the light grid or the species pool"));
     }
     let np = r.u64()? as usize;

@@ -455,6 +455,91 @@ pub fn work_weights_in(site: &Site, rows: std::ops::Range<usize>) -> (Vec<u64>, 
     (wc, wr)
 }
 
+/// [`work_weights_in`] from the site conditions `c` and the pool `pool` of `lib` on the light
+/// grid `light`, without a derived [`Site`] (no light cells' site cells, no suitability grids):
+/// a light cell counts when the site cell under its centre is held and unmasked
+/// ([`crate::sim::world::light_site_cell`]) and some pool species' suitability of that cell's
+/// indices is positive (`Species::suitability`, what [`Site::suitability`] holds there). Equal
+/// to [`work_weights_in`] of the world built on `c` for every range of rows whose site cells
+/// `c` holds (tests/sim_tiles.rs); a tiled run's ranks count their band so before any world is
+/// derived (`job::tiled::layout_by`, issue 37 Build 1).
+pub fn work_weights_of(c: &crate::conditions::SiteConditions, lib: &crate::species::SpeciesLibrary, pool: &[crate::species::SpeciesId], light: &LightGrid, rows: std::ops::Range<usize>) -> (Vec<u64>, Vec<u64>) {
+    let (mut wc, mut wr) = (vec![0u64; light.cols], vec![0u64; light.rows]);
+    let rows = rows.start.min(light.rows)..rows.end.min(light.rows);
+    for r in rows {
+        for (col, n) in wc.iter_mut().enumerate() {
+            let s = crate::sim::world::light_site_cell(c, light, r * light.cols + col);
+            if s == u32::MAX {
+                continue;
+            }
+            let ix = &c.indices.data[c.held(s as usize)];
+            if pool.iter().any(|&p| lib.species[p as usize].suitability(ix) > 0.0) {
+                *n += 1;
+                wr[r] += 1;
+            }
+        }
+    }
+    (wc, wr)
+}
+
+/// Derives into `w` (a [`World::skeleton`] holding the whole site's conditions) the part of
+/// the site that tile `me` of `layout` holds, as [`Tile::own`] cuts it from the world of one
+/// process (issue 37 Build 1, item (a): the whole site's derived grids are never built on a
+/// rank other than 0): the light cells' site cells, ground free of obstacles and ground light
+/// of the tile's rectangle ([`super::light_grid::Span`]); the conditions cut to the site
+/// cells under it plus [`SITE_HALO_CELLS`], with the whole site's checkpoint identity kept;
+/// the relative insolation (÷ `median`, the whole site's median of unmasked insolation: from
+/// [`super::world::insolation_median_by`] over the ranks' bands) and the pool's suitability
+/// of those cells; each seed grid's window ([`seed_window`], no seeds: the scatter fills
+/// them); the whole site's unmasked area; the management entries resolved against the whole
+/// site (only when the scenario has some: they count light cells per area, so the light cells'
+/// site cells are derived whole for that, transiently); no trees or cohorts. Every value is
+/// the one [`Tile::own`] of [`World::new`] holds (tests/sim_tiles.rs).
+///
+/// Errors: [`Error::Invalid`] when `w`'s conditions are not whole; as
+/// [`super::management::resolve`].
+pub fn derive_tile_site(w: &mut World, scenario: &super::scenario::Scenario, layout: &Layout, me: usize, median: f32) -> Result<()> {
+    let c = &w.site.conditions;
+    if !c.holds_all() {
+        return Err(Error::Invalid { context: "tiled run".into(), field: "site conditions".into(), value: format!("cells {} of {} × {}", c.held, c.full.0, c.full.1), expected: "the whole site, to derive a tile's part from".into() });
+    }
+    let light = w.site.light;
+    let rect = layout.rect(me);
+    let span = super::light_grid::Span::new(Some(rect), &light);
+    let valid = c.mask.data.iter().filter(|m| **m).count();
+    w.site.area_ha = valid as f64 * c.cell_x_m * c.cell_y_m / 10_000.0;
+    w.site.light_site = (0..span.len()).map(|k| super::world::light_site_cell(c, &light, span.cell(k))).collect();
+    let (canopy, ground_free) = super::obstacle::light_cells(&w.site.obstacles, light.cols, light.rows, light.cell_m, super::light_grid::EXTINCTION_K);
+    w.site.obstacle_canopy = canopy;
+    w.site.ground_free = span.cut(&ground_free);
+    drop(ground_free);
+    if !scenario.management.is_empty() {
+        let whole: Vec<u32> = (0..light.len()).map(|k| super::world::light_site_cell(c, &light, k)).collect();
+        let view = super::management::SiteView { conditions: c, extent: w.site.extent, light: &light, light_site: &whole, pool: &w.site.pool };
+        w.site.management = super::management::resolve(&scenario.management, &view, &w.site.lib, &scenario.context())?;
+    }
+    let l = light.cell_m;
+    let win = c.window_of(rect.col0 as f64 * l, rect.row0 as f64 * l, rect.col1 as f64 * l, rect.row1 as f64 * l, SITE_HALO_CELLS);
+    if win != c.held {
+        w.site.whole_identity = Some(super::checkpoint::site_identity(c));
+        w.site.conditions.hold(win);
+    }
+    let c = &w.site.conditions;
+    w.site.rel_insolation = c.insolation_kwh_m2.data.iter().map(|v| (v / median).clamp(0.2, 1.5)).collect();
+    let lib = &w.site.lib;
+    w.site.suitability = w.site.pool.iter().map(|&s| c.indices.data.iter().zip(&c.mask.data).map(|(ix, m)| if *m { lib.species[s as usize].suitability(ix) } else { 0.0 }).collect()).collect();
+    w.stand.seeds = super::world::seed_grids(lib, &w.site.pool, w.site.extent)
+        .into_iter()
+        .map(|g| {
+            let r = seed_window(layout, me, &g);
+            super::world::SeedGrid { data: vec![0.0; (r.col1 - r.col0) * (r.row1 - r.row0)], held: r, ..g }
+        })
+        .collect();
+    w.scratch.ground_light = vec![1.0; span.len()];
+    w.site.window = Some(rect);
+    Ok(())
+}
+
 /// The light rows (row 0 south) whose part of the layout's weights rank `k` of `n` counts
 /// ([`work_weights_in`]): `k · rows / n` to `(k + 1) · rows / n`, so the `n` bands cover the
 /// `rows` rows once.
@@ -749,9 +834,9 @@ impl Tile {
             return Err(Error::Exchange { peer: 0, reason: "seed grids of another shape than this rank's window".into() });
         }
         w.stand.year = p.year;
-        let next = w.stand.trees.next_id;
+        // rank 0's next tree id: a tile built without the start's trees has none of its own
         w.stand.trees = p.trees;
-        w.stand.trees.next_id = next;
+        w.stand.trees.next_id = p.next_id;
         w.stand.cohorts = p.cohorts;
         for (g, d) in w.stand.seeds.iter_mut().zip(p.seeds) {
             g.data = d;
@@ -1313,6 +1398,7 @@ pub fn assemble(global: &mut World, layout: &Layout, tiles: Vec<World>) -> Resul
         .enumerate()
         .map(|(k, w)| Part {
             year: w.stand.year,
+            next_id: w.stand.trees.next_id,
             // the tile's window (a tile world holds it; a whole grid is cut to it)
             seeds: w.stand.seeds.into_iter().map(|g| g.window(seed_window(layout, k, &g)).unwrap_or_default()).collect(),
             trees: w.stand.trees,
@@ -1508,6 +1594,7 @@ fn keep_own(w: &mut World, layout: &Layout, me: usize) {
 fn encode_part(w: &World, layout: &Layout, k: usize) -> Result<Vec<u8>> {
     let mut e = codec::Enc(Vec::new());
     e.u64(w.stand.year as u64);
+    e.u64(w.stand.trees.next_id);
     let t = &w.stand.trees;
     let idx: Vec<usize> = (0..t.len()).filter(|&i| layout.owner_of(t.x[i], t.y[i]) == k).collect();
     put_trees(&mut e, t, &idx);
@@ -1561,6 +1648,10 @@ fn encode_part(w: &World, layout: &Layout, k: usize) -> Result<Vec<u8>> {
 /// A tile's part of a world, as passed by [`encode_part`].
 struct Part {
     year: u32,
+    /// The sender's next tree id ([`TreeStore::next_id`]): rank 0's whole world's in a
+    /// scatter, which a tile built without the start's trees takes
+    /// ([`World::skeleton`], [`derive_tile_site`]).
+    next_id: u64,
     trees: TreeStore,
     cohorts: Cohorts,
     seeds: Vec<Vec<f32>>,
@@ -1577,6 +1668,7 @@ fn decode_part(m: &[u8], peer: usize) -> Result<Part> {
     let bad = |what: &str, v: u64| Error::Exchange { peer, reason: format!("{what} {v} out of range") };
     let year = d.u64()?;
     let year = u32::try_from(year).map_err(|_| bad("year", year))?;
+    let next_id = d.u64()?;
     let trees = get_trees(&mut d)?;
     let n = d.count(3 * 8 + 3 * 4)?;
     let mut cohorts = Cohorts::default();
@@ -1617,7 +1709,7 @@ fn decode_part(m: &[u8], peer: usize) -> Result<Part> {
     for q in 0..N_REGEN_CAUSES {
         regen_year.dead[q] = d.u64()?;
     }
-    Ok(Part { year, trees, cohorts, seeds, dead, deaths_total, ledger, regen_year })
+    Ok(Part { year, next_id, trees, cohorts, seeds, dead, deaths_total, ledger, regen_year })
 }
 
 /// Runs `years` years of `world` as `nx × ny` tiles, one thread per tile, over a

@@ -211,6 +211,47 @@ pub fn insolation_median_by(insolation: &crate::grid::Grid<f32>, mask: &crate::g
     Ok(super::select::kth_smallest_by(&ins, n / 2, reduce)?.filter(|m| *m > 0.0).unwrap_or(1.0))
 }
 
+/// The seed grids of `pool` over a site of `extent` (m): per pool species a whole grid of cells
+/// of `max(SEED_CELL_M, max_m / KERNEL_CELLS)` metres (its dispersal kernel's longest reach
+/// `max_m`), at least one cell each way, no seeds.
+pub fn seed_grids(lib: &SpeciesLibrary, pool: &[SpeciesId], extent: (f64, f64)) -> Vec<SeedGrid> {
+    pool.iter()
+        .map(|&s| {
+            let cell = SEED_CELL_M.max(lib.species[s as usize].life.dispersal.max_m as f64 / KERNEL_CELLS);
+            let (cols, rows) = (((extent.0 / cell).ceil() as usize).max(1), ((extent.1 / cell).ceil() as usize).max(1));
+            SeedGrid::new(cell, cols, rows)
+        })
+        .collect()
+}
+
+/// External seed rain per pool species (seeds per m² and year): the scenario's `seed_rain`
+/// starts (seeds per ha) of each pool species, summed, ÷ 10,000.
+fn seed_rain(scenario: &Scenario, lib: &SpeciesLibrary, pool: &[SpeciesId]) -> Vec<f32> {
+    let mut seed_rain = vec![0.0f32; pool.len()];
+    for st in &scenario.start {
+        if let Start::SeedRain { species, seeds_per_ha } = st {
+            if let Some(p) = lib.find(species).and_then(|id| pool.iter().position(|&q| q == id)) {
+                seed_rain[p] += (*seeds_per_ha / 10_000.0) as f32;
+            }
+        }
+    }
+    seed_rain
+}
+
+/// The site cell (row-major over the whole site, row 0 north) under the centre of light cell
+/// `c` of `light` when it is held and unmasked, else `u32::MAX`: an element of
+/// [`Site::light_site`].
+pub fn light_site_cell(site: &SiteConditions, light: &LightGrid, c: usize) -> u32 {
+    let (x, y) = light.centre(c);
+    match site.cell_at(x, y) {
+        Some((sc, sr)) => match site.held_index(sc, sr) {
+            Some(i) if site.mask.data[i] => (sr * site.width() + sc) as u32,
+            _ => u32::MAX,
+        },
+        None => u32::MAX,
+    }
+}
+
 impl Site {
     /// A new tree of species `s` at world point `(x, y)` of age `age` (yr): its potential height
     /// at that age, the start DBH and open-grown crown of that height, its cell's suitability;
@@ -403,22 +444,8 @@ impl World {
         let suitability = pool.iter().map(|&s| site.indices.data.par_iter().zip(&site.mask.data).map(|(ix, m)| if *m { lib.species[s as usize].suitability(ix) } else { 0.0 }).collect()).collect();
         let valid = site.mask.data.iter().filter(|m| **m).count();
         let area_ha = valid as f64 * site.cell_x_m * site.cell_y_m / 10_000.0;
-        let seeds = pool
-            .iter()
-            .map(|&s| {
-                let cell = SEED_CELL_M.max(lib.species[s as usize].life.dispersal.max_m as f64 / KERNEL_CELLS);
-                let (cols, rows) = (((extent.0 / cell).ceil() as usize).max(1), ((extent.1 / cell).ceil() as usize).max(1));
-                SeedGrid::new(cell, cols, rows)
-            })
-            .collect();
-        let mut seed_rain = vec![0.0f32; pool.len()];
-        for st in &scenario.start {
-            if let Start::SeedRain { species, seeds_per_ha } = st {
-                if let Some(p) = lib.find(species).and_then(|id| pool.iter().position(|&q| q == id)) {
-                    seed_rain[p] += (*seeds_per_ha / 10_000.0) as f32;
-                }
-            }
-        }
+        let seeds = seed_grids(lib, &pool, extent);
+        let seed_rain = seed_rain(scenario, lib, &pool);
         let (obstacle_canopy, ground_free) = super::obstacle::light_cells(&scenario.obstacles, light.cols, light.rows, light.cell_m, super::light_grid::EXTINCTION_K);
         let np = pool.len();
         let mut w = World {
@@ -449,6 +476,52 @@ impl World {
         let view = super::management::SiteView { conditions: &w.site.conditions, extent: w.site.extent, light: &w.site.light, light_site: &w.site.light_site, pool: &w.site.pool };
         w.site.management = super::management::resolve(&scenario.management, &view, lib, &ctx)?;
         Ok(w)
+    }
+
+    /// The world of `scenario` on `site` with its pool, extent, light grid, seed rain,
+    /// obstacles and climate change, and nothing derived from the site: no light cells' arrays,
+    /// relative insolation, suitability, seed grids or management (all empty), `area_ha` 0, no
+    /// trees. A tiled run's rank other than 0 holds it until its tile's part of the site is
+    /// derived into it ([`super::tiles::derive_tile_site`], issue 37 Build 1): the whole site's
+    /// derived grids (relative insolation, suitability, the light cells' site cells, ground free
+    /// and ground light, seed grids) and the start's trees are never built on that rank. `site`
+    /// is moved in, not copied.
+    ///
+    /// Errors: unknown species names, an extent the scenario's points do not fit
+    /// ([`Scenario::validate_extent`]), a malformed climate anomalies file
+    /// ([`super::climate_change::ClimateChange::of`]).
+    pub fn skeleton(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<World> {
+        let ctx = scenario.context();
+        let pool = scenario.resolve_species(lib, &ctx)?;
+        let extent = site.extent_m();
+        scenario.validate_extent(extent, &ctx)?;
+        let light = LightGrid::new(extent, scenario.light_cell_m);
+        let np = pool.len();
+        Ok(World {
+            site: Site {
+                conditions: site,
+                lib: lib.clone(),
+                seed_rain: seed_rain(scenario, lib, &pool),
+                pool,
+                seed: scenario.seed,
+                extent,
+                area_ha: 0.0,
+                light,
+                light_site: Vec::new(),
+                rel_insolation: Vec::new(),
+                suitability: Vec::new(),
+                whole_identity: None,
+                obstacles: scenario.obstacles.clone(),
+                obstacle_canopy: Vec::new(),
+                ground_free: Vec::new(),
+                window: None,
+                management: Vec::new(),
+                climate_change: super::climate_change::ClimateChange::of(&scenario.climate, &ctx)?,
+            },
+            stand: Stand::default(),
+            scratch: Scratch::default(),
+            tallies: Tallies { deaths_total: [0; super::trees::N_CAUSES], regen_ledger: RegenLedger::new(np) },
+        })
     }
 
     /// Position of species `s` in the pool ([`Site::pool_index`]).
