@@ -213,8 +213,18 @@ fn folders_and_files_mixed_up_get_plain_errors() {
         }
         assert_eq!(std::fs::read(d.join("snap_all/stand_table.csv")).unwrap(), before);
         drop(held);
+        // an earlier `sylva run`'s pictures, condition maps and summary do not stay beside a new
+        // simulation (round 32's trial); files that are not Sylva's stay
+        for f in ["summary.md", "stills/year_0002_oblique.png", "maps/conditions/L.png", "frames/frame_00001.png", "timelapse.gif", "notes.txt", "stills/mine.png"] {
+            std::fs::create_dir_all(d.join("snap_all").join(f).parent().unwrap()).unwrap();
+            std::fs::write(d.join("snap_all").join(f), b"old").unwrap();
+        }
         let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all"]);
-        assert!(ok, "{err}");
+        assert!(ok && err.contains("removed 5 file(s) of the earlier run"), "{err}");
+        for gone in ["summary.md", "stills/year_0002_oblique.png", "maps/conditions", "frames", "timelapse.gif"] {
+            assert!(!d.join("snap_all").join(gone).exists(), "{gone}");
+        }
+        assert!(d.join("snap_all/notes.txt").is_file() && d.join("snap_all/stills/mine.png").is_file());
     }
     // output files whose folder is a file are refused before any work, naming the option
     for (args, opt) in [(&["render", "snap_final", "--out", "afile/x.png"][..], "--out"), (&["timelapse", "snap_final", "--out", "afile/t.gif"][..], "--out"), (&["export", "snap_final", "--out", "afile/s.glb"][..], "--out"), (&["render", "snap_final", "--out", "x.png", "--stats", "afile/s.json"][..], "--stats")] {

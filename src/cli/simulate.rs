@@ -215,6 +215,13 @@ fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, out: Path
         // a note that the folder's earlier run is replaced; round 30's trial)
         if !resume && matches!(e, Event::Simulating { .. }) {
             note_replaced_run(&out);
+            // an earlier `sylva run`'s pictures, condition maps and summary would describe
+            // another run beside this one's tables (round 32's trial): gone before it writes
+            match main_job::clear_main_job_outputs(&out) {
+                Ok(r) if !r.is_empty() => eprintln!("note: removed {} file(s) of the earlier run that `sylva simulate` does not write again ({}{})", r.len(), r.iter().take(3).cloned().collect::<Vec<_>>().join(", "), if r.len() > 3 { ", …" } else { "" }),
+                Ok(_) => {}
+                Err(err) => eprintln!("warning: {err}"),
+            }
         }
         bar.show(e)
     })?;

@@ -113,6 +113,43 @@ pub fn is_output(rel: &str) -> bool {
     OUTPUTS.iter().any(|o| expand(o.path).iter().any(|p| matches_pattern(p.as_bytes(), rel.as_bytes())))
 }
 
+/// Removes from the run directory `dir` the files an earlier `sylva run` wrote that only the
+/// main job writes ([`OUTPUTS`] with `main_job_only`: condition maps, stills, the timelapse and
+/// its frames, `summary.md`), and the folders `maps/conditions`, `stills` and `frames` when that
+/// leaves them empty; other files are kept. A fresh run into the folder calls it once its
+/// scenario is known to run ([`main_job`] before its condition maps; `sylva simulate`, which
+/// writes none of them, when it starts simulating), so that a new run never sits beside
+/// another run's pictures and summary (round 32's trial: `summary.md` and the condition maps
+/// of a Coweeta run stayed beside a new 1 ha run). Returns what it removed (paths relative to
+/// `dir`, `/`-separated, sorted).
+///
+/// Errors: [`Error::Io`] naming the folder or file that cannot be listed or removed.
+pub fn clear_main_job_outputs(dir: &Path) -> Result<Vec<String>> {
+    let mut removed = Vec::new();
+    for sub in ["", "maps/conditions", "stills", "frames"] {
+        let d = if sub.is_empty() { dir.to_path_buf() } else { dir.join(sub) };
+        if !d.is_dir() {
+            continue;
+        }
+        for e in std::fs::read_dir(&d).map_err(|e| Error::io(&d, e))? {
+            let e = e.map_err(|err| Error::io(&d, err))?;
+            let name = e.file_name().to_string_lossy().into_owned();
+            let rel = if sub.is_empty() { name } else { format!("{sub}/{name}") };
+            let main_only = OUTPUTS.iter().filter(|o| o.main_job_only).any(|o| expand(o.path).iter().any(|p| matches_pattern(p.as_bytes(), rel.as_bytes())));
+            if main_only && e.path().is_file() {
+                std::fs::remove_file(e.path()).map_err(|err| Error::io(&e.path(), err))?;
+                removed.push(rel);
+            }
+        }
+        if !sub.is_empty() {
+            // only while empty
+            let _ = std::fs::remove_dir(&d);
+        }
+    }
+    removed.sort();
+    Ok(removed)
+}
+
 /// The patterns of `p` with its `{a,b}` groups expanded.
 fn expand(p: &str) -> Vec<String> {
     let (Some(i), Some(j)) = (p.find('{'), p.find('}')) else { return vec![p.to_string()] };
@@ -493,6 +530,8 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     let site = context(sc.site().map_err(JobError::from), || format!("[terrain] of {}", sc.context()))?;
     let site = context(World::check(site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
     std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
+    // an earlier run's pictures and summary go before this run writes its own
+    clear_main_job_outputs(&out)?;
     let maps = super::maps::write_site_maps(&site, &out.join("maps").join("conditions"))?;
     let site_s = t_site.elapsed().as_secs_f64();
     sink(&Event::Conditions { width: site.width(), height: site.height(), extent_m: site.extent_m(), maps: &maps, seconds: site_s });
