@@ -90,6 +90,8 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     let d = dir.path();
     std::fs::create_dir(d.join("empty")).unwrap();
     std::fs::write(d.join("afile"), b"x").unwrap();
+    std::fs::create_dir(d.join("with_file")).unwrap();
+    std::fs::write(d.join("with_file/inventory"), b"x").unwrap();
     let run = |args: &[&str]| {
         let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).current_dir(d).output().unwrap();
         (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
@@ -114,6 +116,13 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     // `sylva simulate` writes the GeoPackage of the final year only, unless asked for every
     // snapshot (2.1 GB for the default scenario's 31 snapshots)
     std::fs::write(d.join("snap.toml"), "name = \"snap\"\nyears = 2\nseed = 1\nsnapshot_every = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = { width = 4, height = 4, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n").unwrap();
+    // a file where the run writes one of its folders is refused before anything is written
+    for cmd in ["simulate", "run"] {
+        let args: Vec<&str> = if cmd == "run" { vec!["run", "snap.toml", "--out", "with_file", "--no-pictures"] } else { vec!["simulate", "snap.toml", "--out", "with_file"] };
+        let (ok, err) = run(&args);
+        assert!(!ok && err.contains("with_file/inventory is a file where the run writes its folder inventory/"), "{cmd}: {err}");
+        assert_eq!(std::fs::read_dir(d.join("with_file")).unwrap().count(), 1, "{cmd}: only the file is there");
+    }
     let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_final"]);
     assert!(ok, "{err}");
     assert!(d.join("snap_final/inventory/year_0002.gpkg").is_file() && !d.join("snap_final/inventory/year_0001.gpkg").exists() && d.join("snap_final/inventory/year_0001.parquet").is_file());

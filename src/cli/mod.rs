@@ -138,6 +138,12 @@ pub fn check_out_file(p: &std::path::Path, option: &str) -> anyhow::Result<()> {
 /// Not a directory`, naming neither the option nor the file in the way).
 pub fn check_out_dir(p: &std::path::Path, option: &str) -> anyhow::Result<()> {
     anyhow::ensure!(!p.exists() || p.is_dir(), "{option} {}: is a file; expected a folder", p.display());
+    // the run's own folders in it must be folders (round 32's trial: a file `inventory` gave
+    // "File exists (os error 17)" after `species/` had been written)
+    for sub in ["species", "inventory", "maps", "stills", "frames", "checkpoint"] {
+        let q = p.join(sub);
+        anyhow::ensure!(!q.exists() || q.is_dir(), "{option} {}: {} is a file where the run writes its folder {sub}/; move or rename it, or use another {option}", p.display(), q.display());
+    }
     let mut dir = p;
     while !dir.exists() {
         match dir.parent() {
