@@ -224,9 +224,12 @@ pub fn species_color(w: &World, s: u16) -> [u8; 3] {
 }
 
 /// A figure of the stand table: stems/ha (individual trees, and the regeneration layer's
-/// sapling stems below the recruitment height), basal area, heights, species basal-area shares,
-/// and the wood: standing stem volume and the volume harvested so far (cumulative, m³/ha; issue
-/// 35's thinnings and harvests).
+/// sapling stems below the recruitment height), basal area, heights and diameters (QMD of every
+/// stem ≥ 1.3 m, and Dq of the stems ≥ 7 cm DBH, the yield tables' measure, which ingrowth
+/// under a thinned stand does not pull down), species basal-area shares, the wood: standing
+/// stem volume and the volume harvested so far (cumulative, m³/ha; issue 35's thinnings and
+/// harvests), and under a changing climate the year's temperature offset and precipitation
+/// factor.
 pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()> {
     let x = |f: &dyn Fn(&StandRow) -> f64| rows.iter().map(|r| (r.year as f64, f(r))).collect::<Vec<_>>();
     let s = |name: &str, pts, color| Series { name: name.into(), points: pts, color, markers: false };
@@ -234,13 +237,18 @@ pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()>
     for (p, &sp) in w.site.pool.iter().enumerate() {
         shares.push(s(&w.site.lib.species[sp as usize].identity.common_name, x(&|r| r.share_ba.get(p).copied().unwrap_or(0.0)), species_color(w, sp)));
     }
-    let panels = vec![
+    let mut panels = vec![
         Panel { title: "Stems".into(), x_label: "year".into(), y_label: "stems/ha".into(), series: vec![s("trees ≥ 1.3 m (tree list)", x(&|r| r.stems_ha), [30, 90, 160]), s("DBH ≥ 7 cm", x(&|r| r.stems_7cm_ha), [200, 80, 40]), s("regeneration < 4 m (cohorts)", x(&|r| r.regeneration_ha), [120, 170, 60])] },
         Panel { title: "Basal area".into(), x_label: "year".into(), y_label: "m²/ha".into(), series: vec![s("basal area", x(&|r| r.basal_area_m2_ha), [40, 120, 40])] },
-        Panel { title: "Height and diameter".into(), x_label: "year".into(), y_label: "m, cm".into(), series: vec![s("top height H100 (m)", x(&|r| r.top_height_m), [40, 120, 40]), s("mean height (m)", x(&|r| r.mean_height_m), [120, 160, 60]), s("QMD (cm)", x(&|r| r.qmd_cm), [150, 60, 40])] },
+        Panel { title: "Height and diameter".into(), x_label: "year".into(), y_label: "m, cm".into(), series: vec![s("top height H100 (m)", x(&|r| r.top_height_m), [40, 120, 40]), s("mean height (m)", x(&|r| r.mean_height_m), [120, 160, 60]), s("QMD (cm)", x(&|r| r.qmd_cm), [150, 60, 40]), s("Dq, DBH ≥ 7 cm (cm)", x(&|r| r.qmd_7cm_cm), [210, 140, 60])] },
         Panel { title: "Species share of basal area".into(), x_label: "year".into(), y_label: "share".into(), series: shares },
         Panel { title: "Stem volume".into(), x_label: "year".into(), y_label: "m³/ha".into(), series: vec![s("standing", x(&|r| r.volume_m3_ha), [40, 120, 40]), s("harvested (cumulative)", cumulative(rows, |r| r.harvest_volume_m3_ha), [170, 90, 30])] },
     ];
+    // a changing climate: the year's temperature offset and precipitation factor (round 32's
+    // trial: the warming run's figure did not show its climate)
+    if w.site.climate_change.is_active() {
+        panels.push(Panel { title: "Climate".into(), x_label: "year".into(), y_label: "K, factor".into(), series: vec![s("temperature offset (K)", x(&|r| r.temperature_offset_k), [200, 60, 40]), s("precipitation factor", x(&|r| r.precipitation_factor), [40, 90, 180])] });
+    }
     plot_panels_png(path, &panels, 2, (1200, 1350))
 }
 
