@@ -525,6 +525,41 @@ fn the_checkpoint_identity_survives_a_moved_project_folder_and_names_the_changed
     assert!(a.contains("management[0]") && a.contains("management[1]"), "{a}");
 }
 
+/// A thinning entry due in a year that removes no tree says so once in the run's log (standard
+/// error): the year, the entry and why (here the stand below the target already; a trigger
+/// that does not hold, with the stand's figure); an entry that removes trees says nothing. In
+/// one process and over 2 tiles (where every rank thins the same trees: rank 0 writes).
+#[test]
+fn a_thinning_that_removes_nothing_says_so_once_in_the_log() {
+    let entries = "[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100000\nyear = 1\n\
+                   [[management]]\nkind = \"thinning\"\nmethod = \"from_above\"\ntrigger_relative_density = 1.9\ntarget_relative_density = 0.5\nyear = 1\n\
+                   [[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 1000\nyear = 1\n";
+    let toml = ScenarioToml::new("quiet", 1, 7).species(&["beech"]).line("snapshot_every = 0").line("checkpoint_every = 0").uniform(5, 5, 20.0, 200.0).planted("beech", 1.5, 30.0).build() + entries;
+    let (sc, mut w) = world(&toml);
+    let mut r = sylva::sim::YearReport::default();
+    sylva::sim::step_year(&mut w, &sc, &mut r);
+    assert!(r.row.as_ref().unwrap().harvest_stems_ha > 1000.0, "the third entry thins: {:?}", r.row);
+    eprintln!("{:#?}", r.notes);
+    assert_eq!(r.notes.len(), 2, "{:?}", r.notes);
+    assert!(r.notes[0].starts_with("year 1: management[0] (thinning from_below) removed nothing: the area's ") && r.notes[0].ends_with(" stems/ha are at or below the target 100000 stems/ha already"), "{}", r.notes[0]);
+    assert!(r.notes[1].starts_with("year 1: management[1] (thinning from_above) removed nothing: the area's relative density ") && r.notes[1].ends_with(" is below trigger_relative_density 1.9"), "{}", r.notes[1]);
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(d.path().join("q.toml"), &toml).unwrap();
+    for tiles in [None, Some("2")] {
+        let mut args = vec!["simulate", "q.toml", "--out", if tiles.is_some() { "tiled" } else { "one" }];
+        if let Some(n) = tiles {
+            args.extend(["--tiles", n]);
+        }
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_sylva")).args(&args).current_dir(d.path()).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{tiles:?}: {err}");
+        for n in &r.notes {
+            assert_eq!(err.matches(n.as_str()).count(), 1, "{tiles:?}: {n:?} in {err}");
+        }
+        assert!(!err.contains("management[2]"), "{tiles:?}: {err}");
+    }
+}
+
 /// Hegyi's competition index of tree `i`: `Σ (DBH_j / DBH_i) / distance` over the other stems
 /// (≥ 1.3 m) within 6 m.
 fn hegyi(t: &sylva::sim::trees::TreeStore, i: usize) -> f64 {
