@@ -1020,7 +1020,7 @@ fn geojson_area_files_are_checked_for_crs_geometry_and_site() {
 
 /// Mean height h_q (m) of the stems ≥ 7 cm DBH of `t`: the height of the tree of their quadratic
 /// mean DBH `dq_cm`, read from the stand's height curve h = 1.3 + a·exp(−b/D) (h m, D cm;
-/// Michailoff 1943, Forstw. Cbl. 65:273–279) fitted by least squares of ln(h − 1.3) on 1/D over
+/// Michailoff 1943, Forstwiss. Centralbl. / Tharandter Forstl. Jahrb.) fitted by least squares of ln(h − 1.3) on 1/D over
 /// those stems. The yield tables' mean height is defined so (Wiedemann's h_q, "mean height of
 /// the Dq tree", tests/data/stands/README.md; NW-FVA 2021's Hg), not as the arithmetic mean
 /// height nor as the top height H100 of the 100 largest stems/ha (H100 − h_q ≈ 1–2 m in
