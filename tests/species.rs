@@ -247,7 +247,11 @@ fn beech_and_pine_carry_ecomod_published_values_exactly() {
 
 #[test]
 fn readme_documents_every_field_of_the_schema() {
-    let beech = SpeciesLibrary::embedded().unwrap().get("beech").unwrap().clone();
+    let lib = SpeciesLibrary::embedded().unwrap();
+    let mut beech = lib.get("beech").unwrap().clone();
+    // beech has every optional table but PROGNAUS's competition terms (Norway spruce's only)
+    beech.life.bai_competition = lib.get("norway_spruce").unwrap().life.bai_competition;
+    assert!(beech.life.bai_competition.is_some());
     let mut leaves: Vec<String> = species::leaf_fields(&beech).unwrap().into_iter().map(|(p, _)| p).collect();
     let mut fields: Vec<String> = schema::FIELDS.iter().map(|f| f.path.to_string()).collect();
     leaves.sort();

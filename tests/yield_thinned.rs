@@ -7,21 +7,24 @@
 //! (docs/management.md, "Validation"). The same figures: `sylva simulate` of the scenario, then
 //! `python3 tools/thinning_check.py [--species spruce] OUT 3 50 100`.
 //!
-//! Both are ignored: neither is met by the model. Run them with
+//! The beech test is ignored: the model does not meet it. Run it with
 //! `cargo test --test yield_thinned -- --ignored --nocapture` to read the figures. With the
 //! species' dense-stand height bound (`life.dense_hd`, issue 35 round 28, on for every species
-//! that has one) beech misses by N −73 % / −70 %, Dq +98 % / +87 % and spruce by N −36 % / −30 %,
-//! Dq +28 % / +22 % at ages 50 / 100 (before it: −72 % / −69 %, +96 % / +86 % and −35 % / −30 %,
-//! +28 % / +22 %): the thinned model stems are stouter than Wiedemann's (median H/D 67 against
-//! 129 for beech at 50), so bounding slender trees cannot close the gap (docs/management.md,
-//! "Dense-stand height bound"). Branches h35w (height–diameter allocation after iLand),
-//! h35y/h35z (size-asymmetric competition, crown closure) measured other levers there.
-//! Round 31 (docs/management.md, "Where the thinned stands' growth goes"): the thinned beech
-//! stand loses its stems to the thinnings at ages 25–50 (3,403/ha, none to crowding) because
-//! its young trees put on 2–4 times PROGNAUS's basal-area increment; with PROGNAUS's competition
-//! response (Monserud & Sterba 1996) in place of the crowding modifier the spruce scenario meets
-//! the table (N −11 % / −9 %, Dq +6 % / +4 %), beech does not (−60 % / −56 %); measured with
-//! `tools/experiments/r31_stand_grown_diameter.patch`, not part of the model, so both stay ignored.
+//! that has one) beech misses by N −73 % / −70 %, Dq +98 % / +87 % at ages 50 / 100 (before it:
+//! −72 % / −69 %, +96 % / +86 %): the thinned model stems are stouter than Wiedemann's (median
+//! H/D 67 against 129 for beech at 50), so bounding slender trees cannot close the gap
+//! (docs/management.md, "Dense-stand height bound"). Branches h35w (height–diameter allocation
+//! after iLand), h35y/h35z (size-asymmetric competition, crown closure) measured other levers
+//! there. Round 31 (docs/management.md, "Where the thinned stands' growth goes"): the thinned
+//! beech stand loses its stems to the thinnings at ages 25–50 (3,403/ha, none to crowding)
+//! because its young trees put on 2–4 times PROGNAUS's basal-area increment.
+//!
+//! The spruce test passes since round 32: Norway spruce's diameter increment takes PROGNAUS's
+//! competition response (Monserud & Sterba 1996; `life.bai_competition` in
+//! species/norway_spruce.toml) in place of the crowding modifier: N 1,176 / 397 (−11 % / −9 %),
+//! Dq 20.4 / 39.2 cm (+6 % / +4 %), BA 38.5 / 47.9 m²/ha (0 % / −1 %) at ages 50 / 100 (before
+//! it N −36 % / −30 %, Dq +28 % / +23 %). Its mean height is 2.2 / 2.1 m below the table's
+//! (tests/management.rs, `thinning_spruce_follows_the_wiedemann_mean_height`, ignored).
 mod common;
 
 /// The table's (N, Dq, BA) at `age`, yield class I.
@@ -66,8 +69,9 @@ fn thinned_beech_follows_wiedemanns_moderate_thinning_table() {
     check("thinning_beech", "ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv");
 }
 
+/// Met since round 32: Norway spruce's diameter increment takes PROGNAUS's competition response
+/// (`life.bai_competition`; docs/management.md).
 #[test]
-#[ignore = "issue 35: not met (N -36 %, Dq +28 % at age 50 with the dense-stand height bound; -35 %, +28 % without; met with round 31's PROGNAUS competition response, not adopted): docs/management.md"]
 fn thinned_spruce_follows_wiedemanns_moderate_thinning_table() {
     check("thinning_spruce", "ForestElementsR_fe_ytable_spruce_wiedemann_moderate_1936_42.csv");
 }

@@ -543,6 +543,11 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         if let Some(e) = err {
             return Err(e);
         }
+        // the year's notes (a thinning that removed nothing, and why), once: this loop runs on
+        // rank 0 only, with rank 0's report
+        for n in &rep.notes {
+            eprintln!("{n}");
+        }
         let trees_yr = rep.trees.max(1) as f64;
         trees = rep.trees;
         if let Some(r) = rep.row {

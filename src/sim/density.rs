@@ -58,6 +58,10 @@ pub struct Crowding {
     /// Crown competition factor of the neighbourhood: open-grown crown projection area of all
     /// trees per ground area (Krajicek, Brinkman & Gingrich 1961, Forest Science 7:35–42), 0–∞.
     pub ccf: Vec<f32>,
+    /// Basal area (m²/ha, ≥ 0) of the trees with a larger DBH than the tree's in its
+    /// neighbourhood (BAL, Wykoff 1990), over the neighbourhood's area; computed only when a
+    /// pool species has `life.bai_competition` (PROGNAUS's competition terms), else empty.
+    pub bal: Vec<f32>,
 }
 
 /// Per-tree relative density and neighbourhood quadratic mean DBH of `trees` on the site `w`
@@ -129,6 +133,29 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
             }
         }
     });
+    // per cell, for BAL: its trees' DBHs (> 0) in descending order and the cumulative basal
+    // area (m², f64) of the first k of them, k = 0..; only where a pool species needs BAL
+    let need_bal = w.pool.iter().any(|&s| w.lib.species[s as usize].life.bai_competition.is_some());
+    let by_size: Vec<(Vec<f32>, Vec<f64>)> = if need_bal {
+        (0..ncell)
+            .into_par_iter()
+            .with_min_len(256)
+            .map(|k| {
+                let mut ds: Vec<f32> = items[start[k] as usize..start[k + 1] as usize].iter().map(|&i| t.dbh[i as usize]).filter(|&d| d > 0.0).collect();
+                ds.sort_by(|a, b| b.total_cmp(a));
+                let mut cum = Vec::with_capacity(ds.len() + 1);
+                cum.push(0.0f64);
+                let mut acc = 0.0f64;
+                for &d in &ds {
+                    acc += std::f64::consts::PI / 4.0 * (d as f64) * (d as f64) / 1e4;
+                    cum.push(acc);
+                }
+                (ds, cum)
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     drop(items);
     // cell sides (m), clipped to the extent
     let side = |i: usize, e: f64| ((i as f64 + 1.0) * CROWD_CELL_M).min(e) - i as f64 * CROWD_CELL_M;
@@ -182,7 +209,36 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
         || cells.par_iter().with_min_len(1 << 14).map(|&k| nb_rd[k as usize]).collect(),
         || rayon::join(|| cells.par_iter().with_min_len(1 << 14).map(|&k| nb_dq[k as usize]).collect(), || cells.par_iter().with_min_len(1 << 14).map(|&k| nb_ccf[k as usize]).collect()),
     );
-    Crowding { rd, dq_cm, ccf }
+    // BAL: per tree, the basal area of the larger trees of each cell of its 3 × 3 neighbourhood
+    // (cells in ascending rows, then columns: a fixed order of the f64 sums), over the
+    // neighbourhood's area as for RD
+    let bal = if need_bal {
+        (0..t.len())
+            .into_par_iter()
+            .with_min_len(1 << 12)
+            .map(|i| {
+                let k = cells[i] as usize;
+                let (r, c) = (k / cols + r0, k % cols + c0);
+                let d = t.dbh[i];
+                let (mut a, mut g) = (0f64, 0f64);
+                for rr in r.saturating_sub(1).max(r0)..(r + 2).min(r1) {
+                    for cc in c.saturating_sub(1).max(c0)..(c + 2).min(c1) {
+                        a += side(cc, ex) * side(rr, ey);
+                        let (ds, cum) = &by_size[(rr - r0) * cols + (cc - c0)];
+                        g += cum[ds.partition_point(|&x| x > d)];
+                    }
+                }
+                if a > 0.0 {
+                    (g / (a / 10_000.0)) as f32
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    Crowding { rd, dq_cm, ccf, bal }
 }
 
 /// Stand density of a world, per hectare of unmasked area, for the stand tables and the tests.

@@ -23,6 +23,10 @@ pub struct YearReport {
     pub trees: usize,
     /// Wall time (s) of each phase in [`PHASES`] order (for profiling; not part of the state).
     pub phase_seconds: [f64; N_PHASES],
+    /// Notes for the run's log, one line each: a thinning entry due this year that removed
+    /// nothing, and why ([`management::run`]). In a tiled run every rank has them (the
+    /// management phase acts on the same trees on every rank); the run writes rank 0's.
+    pub notes: Vec<String>,
 }
 
 /// One phase of the year.
@@ -85,11 +89,12 @@ fn run_climate(w: &mut World, _: &mut YearReport) {
     });
 }
 
-fn run_management(w: &mut World, _: &mut YearReport) {
+fn run_management(w: &mut World, report: &mut YearReport) {
     if w.site.management.is_empty() {
         return;
     }
-    management::run(management::Manage { seed: w.site.seed, year: w.stand.year, site: &w.site, trees: &mut w.stand.trees, dead: &mut w.scratch.dead, deaths_total: &mut w.tallies.deaths_total });
+    let (_, notes) = management::run(management::Manage { seed: w.site.seed, year: w.stand.year, site: &w.site, trees: &mut w.stand.trees, dead: &mut w.scratch.dead, deaths_total: &mut w.tallies.deaths_total });
+    report.notes.extend(notes);
 }
 
 fn run_light(w: &mut World, _: &mut YearReport) {

@@ -178,6 +178,30 @@ pub struct LifeHistory {
     /// without it a tree's height is not bounded by its DBH.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dense_hd: Option<DenseHd>,
+    /// Competition response of the basal-area increment ([`BaiCompetition`], PROGNAUS): where
+    /// given, it replaces the crowding modifier of the diameter increment
+    /// ([`crate::sim::phases::growth::bai_competition_modifier`]). Optional: without it the
+    /// crowding modifier of the neighbourhood's relative density acts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bai_competition: Option<BaiCompetition>,
+}
+
+/// Competition terms of an individual-tree basal-area increment model,
+/// `ln BAI = … + b3 ln CR + c1 BAL + c2 CCF` (PROGNAUS: Monserud & Sterba 1996, For. Ecol.
+/// Manage. 80:57–80, Eq. 3; coefficients by species group in Hasenauer 2000, *Die simultanen
+/// Eigenschaften von Waldwachstumsmodellen*; CR the crown ratio, BAL the basal area of larger
+/// trees in m²/ha, CCF the crown competition factor in %). The growth phase takes the model's
+/// response relative to an open-grown tree (BAL 0, CCF 0, the species' open-grown crown ratio)
+/// as the diameter increment's competition modifier. Each species file names its source.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BaiCompetition {
+    /// Exponent b3 of the crown ratio, in [0, 2].
+    pub crown_ratio: f32,
+    /// Coefficient c1 of the basal area of larger trees (per m²/ha), in [−1, 0].
+    pub bal: f32,
+    /// Coefficient c2 of the crown competition factor (per %), in [−0.1, 0].
+    pub ccf: f32,
 }
 
 /// Dense-stand height–diameter curve of a species, `h/d = k · D^c` (h in m, D the DBH in cm,

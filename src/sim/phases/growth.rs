@@ -6,7 +6,7 @@ use crate::sim::density::Crowding;
 use crate::sim::rules;
 use crate::sim::trees::{birth_id, TreeStore};
 use crate::species::allometry::{HeightIncrement, OpenDbh, Table};
-use crate::species::{DenseHd, Species, SpeciesId, SpeciesLibrary};
+use crate::species::{BaiCompetition, DenseHd, Species, SpeciesId, SpeciesLibrary};
 pub use crate::species::allometry::{effective_age, open_crown_radius, open_dbh, potential_height, potential_increment};
 use rayon::prelude::*;
 
@@ -65,6 +65,20 @@ pub fn crowding_modifier(rd: f32, s: f32) -> f32 {
 /// lose up to half of it and fall behind.
 pub fn height_share(m: f32, s: f32) -> f32 {
     1.0 - 0.5 * (1.0 - m) * ((1.2 - s) / 0.7).clamp(0.0, 1.0)
+}
+
+/// Competition modifier (0–1) of the diameter increment of a species with PROGNAUS's
+/// competition terms `bc` ([`BaiCompetition`]): the basal-area increment model's response
+/// relative to an open-grown tree, `min(1, (CR / CR_open)^b3 · exp(c1 BAL + c2 CCF))`
+/// (Monserud & Sterba 1996, For. Ecol. Manage. 80:57–80, Eq. 3; coefficients Hasenauer 2000),
+/// with `cr_rel = CR / CR_open` the tree's crown ratio over the species' open-grown one
+/// (clamped to [0.01, 1]), `bal` the basal area of larger trees in its neighbourhood (m²/ha,
+/// [`crate::sim::density::Crowding::bal`]) and `ccf` the neighbourhood's crown competition
+/// factor (ratio; 1 = 100 %). A basal-area ratio at the same DBH is the same diameter-increment
+/// ratio to first order, so it scales the diameter increment as the crowding modifier does.
+pub fn bai_competition_modifier(bc: BaiCompetition, cr_rel: f32, bal: f32, ccf: f32) -> f32 {
+    let cr = cr_rel.clamp(0.01, 1.0);
+    (bc.crown_ratio * cr.ln() + bc.bal * bal + bc.ccf * ccf * 100.0).exp().min(1.0)
 }
 
 /// Persistent diameter-growth factor of tree `id` (lognormal, median 1, σ = [`GROWTH_SIGMA`],
@@ -153,6 +167,12 @@ pub struct Growth<'a> {
 /// stands along the species' maximum-density line. `H(t_eff + 1) − H(t_eff)` and `D_open` are
 /// read from the species' tables ([`crate::species::allometry::Table`], within 5 · 10⁻⁵ of
 /// the curves' ranges; since session 11 of issue 16).
+///
+/// Species with PROGNAUS's competition terms (`life.bai_competition`; issue 35, round 31: Norway
+/// spruce) take [`bai_competition_modifier`] of the tree's crown ratio, basal area of larger
+/// trees and the neighbourhood's CCF in place of `m` in the DBH increment (trees with a DBH
+/// above breast height; `m` still sets the height share and vigour, and a tree with `m = 0`
+/// does not grow in diameter).
 ///
 /// Dense-stand height bound (issue 35; for species with `life.dense_hd`, none without): after
 /// the season, a tree with a DBH `D₁ > 0` may not be taller than
@@ -262,7 +282,13 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
     // the tree's growth factor only matters for a non-zero increment (a zero times the factor,
     // which is finite and > 0, is that same zero), so it is not drawn for trees that do not
     // grow; once drawn it is kept (a pure function of seed and id: the same bits every year)
-    let dd = dd_pot * f * m;
+    // PROGNAUS's competition response in place of the crowding modifier, for species with
+    // `life.bai_competition` (issue 35, round 31): trees with a DBH above breast height
+    let m_d = match sp.life.bai_competition {
+        Some(bc) if d > 0.0 && h > 1.3 => bai_competition_modifier(bc, (h - crown_base) / h / sp.life.allometry.crown_ratio, crowd.bal[i], crowd.ccf[i]),
+        _ => m,
+    };
+    let dd = dd_pot * f * m_d;
     let d1 = d + if dd == 0.0 {
         dd
     } else {
@@ -336,6 +362,18 @@ mod tests {
         let mean_ln = g.iter().map(|v| (*v as f64).ln()).sum::<f64>() / g.len() as f64;
         assert!(mean_ln.abs() < 0.02 && g.iter().all(|v| (0.6..=1.6).contains(v)), "{mean_ln}");
         assert!(light_response(1.0, 1.0) > 0.99 && light_response(0.1, 1.0) < 0.05 && light_response(0.1, 5.0) > 0.15);
+    }
+
+    /// PROGNAUS's competition response (Norway spruce's terms, Hasenauer 2000): an open-grown
+    /// tree keeps its increment, a crown ratio half the open-grown one with 20 m²/ha of larger
+    /// trees at CCF 250 % keeps 0.402 of it; a crown ratio above the open-grown one counts as it.
+    #[test]
+    fn bai_competition_modifier_values() {
+        let bc = BaiCompetition { crown_ratio: 0.634179, bal: -0.017369, ccf: -0.000497 };
+        assert_eq!(bai_competition_modifier(bc, 1.0, 0.0, 0.0), 1.0);
+        assert!((bai_competition_modifier(bc, 0.5, 20.0, 2.5) - 0.40203).abs() < 1e-4, "{}", bai_competition_modifier(bc, 0.5, 20.0, 2.5));
+        assert_eq!(bai_competition_modifier(bc, 1.7, 0.0, 0.0), 1.0);
+        assert!(bai_competition_modifier(bc, 0.5, 30.0, 2.5) < bai_competition_modifier(bc, 0.5, 20.0, 2.5));
     }
 
     /// The dense-stand height bound: beech's curve (iLand fasy `HDhigh` without its factor

@@ -35,24 +35,40 @@ pub struct Manage<'a> {
     pub deaths_total: &'a mut [u64; N_CAUSES],
 }
 
-/// Carries out the entries due this year. Returns the number of trees planted.
-pub fn run(m: Manage<'_>) -> usize {
+/// Carries out the entries due this year. Returns the number of trees planted and one note per
+/// thinning entry (`thinning` or crop trees) due this year that removed no tree, saying so:
+/// `year Y: management[i] (thinning METHOD) removed nothing: WHY`, WHY being a trigger that
+/// does not hold (with the area's figure), the area's figure at or below the target already,
+/// or no stems of the growing stock (≥ 7 cm DBH) in its area; the run writes each to its log
+/// (standard error) once.
+pub fn run(m: Manage<'_>) -> (usize, Vec<String>) {
     let y = m.year + 1;
     let mut planted: Vec<(u32, NewTree)> = Vec::new();
-    for op in &m.site.management {
+    let mut notes = Vec::new();
+    for (e, op) in m.site.management.iter().enumerate() {
         let Some(k) = op.spec.due(y) else { continue };
         let t = &*m.trees;
-        let remove: Vec<bool> = match &op.action {
+        let (remove, why): (Vec<bool>, Option<String>) = match &op.action {
             Action::Thinning { from_below, target, trigger_rd, trigger_top_height_m } => thinning(m.site, t, op, *from_below, *target, *trigger_rd, *trigger_top_height_m),
             Action::CropTrees { n_ha, distance_m, target, trigger_rd, trigger_top_height_m } => crop_tree_thinning(m.site, t, op, *n_ha, *distance_m, *target, *trigger_rd, *trigger_top_height_m),
-            Action::ClearCut => (0..t.len()).map(|i| op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect(),
-            Action::Shelterwood { shares } => shelterwood(t, op, shares.get(k as usize).copied().unwrap_or(1.0)),
-            Action::Patch { size_m, share } => patches(m.seed, t, op, *size_m, *share, k),
+            Action::ClearCut => ((0..t.len()).map(|i| op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect(), None),
+            Action::Shelterwood { shares } => (shelterwood(t, op, shares.get(k as usize).copied().unwrap_or(1.0)), None),
+            Action::Patch { size_m, share } => (patches(m.seed, t, op, *size_m, *share, k), None),
             Action::Planting { .. } => {
                 planted.extend(m.site.plant(op, y).into_iter().map(|nt| (m.site.light.cell_of(nt.x, nt.y) as u32, nt)));
                 continue;
             }
         };
+        if let Some(why) = why {
+            if !remove.iter().any(|&r| r) {
+                let method = match &op.action {
+                    Action::Thinning { from_below: true, .. } => "from_below",
+                    Action::Thinning { from_below: false, .. } => "from_above",
+                    _ => "crop_trees",
+                };
+                notes.push(format!("year {y}: management[{e}] (thinning {method}) removed nothing: {why}"));
+            }
+        }
         harvest(&m.site.lib, t, &remove, m.year, m.dead, m.deaths_total);
         let keep: Vec<bool> = remove.iter().map(|r| !r).collect();
         m.trees.retain(&keep);
@@ -61,7 +77,7 @@ pub fn run(m: Manage<'_>) -> usize {
     if n > 0 {
         insert_planted(m.trees, planted, m.year);
     }
-    n
+    (n, notes)
 }
 
 /// Records trees flagged in `remove` as harvested in `year`.
@@ -122,27 +138,40 @@ fn stems_in(t: &TreeStore, op: &Operation) -> Vec<usize> {
     (0..t.len()).filter(|&i| t.height[i] >= 1.3 && t.dbh[i] > 0.0 && op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect()
 }
 
-/// The figures of stems `cand` of an area, and whether the thinning's triggers hold there (the
-/// area's relative density and top height at least the triggers').
-fn figures_and_triggers(site: &Site, t: &TreeStore, cand: &[usize], a: f64, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Figures, bool) {
+/// The figures of stems `cand` of an area, and, where the thinning's triggers do not hold there
+/// (the area's relative density and top height at least the triggers'), why not.
+fn figures_and_triggers(site: &Site, t: &TreeStore, cand: &[usize], a: f64, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Figures, Option<String>) {
     let ns = site.lib.species.len();
     let mut f = Figures { stems: 0.0, ba_m2: 0.0, n7: vec![0.0; ns], d2_7: vec![0.0; ns] };
     for &i in cand {
         f.add(t, i, 1.0);
     }
     if let Some(rd) = trigger_rd {
-        if f.value(site, Target::RelativeDensity(rd), a) < rd {
-            return (f, false);
+        let v = f.value(site, Target::RelativeDensity(rd), a);
+        if v < rd {
+            return (f, Some(format!("the area's relative density {v:.3} is below trigger_relative_density {rd}")));
         }
     }
     if let Some(h) = trigger_h {
         let dbh: Vec<f32> = cand.iter().map(|&i| t.dbh[i]).collect();
         let height: Vec<f32> = cand.iter().map(|&i| t.height[i]).collect();
-        if crate::sim::stats::top_height(&dbh, &height, a) < h {
-            return (f, false);
+        let v = crate::sim::stats::top_height(&dbh, &height, a);
+        if v < h {
+            return (f, Some(format!("the area's top height {v:.2} m is below trigger_top_height_m {h}")));
         }
     }
-    (f, true)
+    (f, None)
+}
+
+/// Why a thinning to `target` removes nothing from an area whose figure is `value`: at or below
+/// the target already.
+fn at_target(target: Target, value: f64) -> String {
+    let g = goal(target);
+    match target {
+        Target::BasalArea(_) => format!("the area's basal area {value:.2} m²/ha is at or below the target {g} m²/ha already"),
+        Target::Stems(_) => format!("the area's {value:.0} stems/ha are at or below the target {g} stems/ha already"),
+        Target::RelativeDensity(_) => format!("the area's relative density {value:.3} is at or below the target {g} already"),
+    }
 }
 
 /// The value of a target.
@@ -156,8 +185,9 @@ fn goal(target: Target) -> f64 {
 /// the growing stock (DBH ≥ [`crate::sim::density::MIN_DBH_CM`], 7 cm) of its area from the
 /// smallest DBH (`from_below`) or the largest, ties by id, until the area's figure (basal area,
 /// stems or relative density of those stems) is at or below the target. Smaller trees (the
-/// understorey, the regeneration) are left.
-fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target: Target, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> Vec<bool> {
+/// understorey, the regeneration) are left. With the trees, why none is removed where none is
+/// (a trigger, the target held already, no stems ≥ 7 cm in the area).
+fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target: Target, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Vec<bool>, Option<String>) {
     let mut remove = vec![false; t.len()];
     let a = op.region.area_ha.max(1e-9);
     // a thinning acts on the growing stock, the stems of at least 7 cm DBH (as the yield tables
@@ -165,10 +195,14 @@ fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target
     // (taking the smallest stems first used to clear every stem under 7 cm at each entry before
     // the relative density, which does not count them, moved at all: found by a trial)
     let mut cand: Vec<usize> = stems_in(t, op).into_iter().filter(|&i| t.dbh[i] >= crate::sim::density::MIN_DBH_CM).collect();
-    let (mut f, act) = figures_and_triggers(site, t, &cand, a, trigger_rd, trigger_h);
-    if !act {
-        return remove;
+    if cand.is_empty() {
+        return (remove, Some("no stems of 7 cm DBH or more in its area".into()));
     }
+    let (mut f, why) = figures_and_triggers(site, t, &cand, a, trigger_rd, trigger_h);
+    if why.is_some() {
+        return (remove, why);
+    }
+    let v0 = f.value(site, target, a);
     let goal = goal(target);
     cand.sort_by(|&i, &j| {
         let o = t.dbh[i].total_cmp(&t.dbh[j]);
@@ -181,7 +215,8 @@ fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target
         remove[i] = true;
         f.add(t, i, -1.0);
     }
-    remove
+    let why = (v0 <= goal).then(|| at_target(target, v0));
+    (remove, why)
 }
 
 /// Crop trees are chosen among the stems whose vigour (realised over potential growth, 0–1) is at
@@ -282,14 +317,15 @@ pub fn hegyi_term(t: &TreeStore, i: usize, j: usize) -> f64 {
 /// with one they go in order of their largest Hegyi term on a crop tree ([`hegyi_term`]; ties
 /// by id) until the area's figure is at or below the target (or no competitor is left).
 #[allow(clippy::too_many_arguments)]
-fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, distance_m: f64, target: Option<Target>, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> Vec<bool> {
+fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, distance_m: f64, target: Option<Target>, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Vec<bool>, Option<String>) {
     let mut remove = vec![false; t.len()];
     let a = op.region.area_ha.max(1e-9);
     let cand = stems_in(t, op);
-    let (mut f, act) = figures_and_triggers(site, t, &cand, a, trigger_rd, trigger_h);
-    if !act {
-        return remove;
+    let (mut f, why) = figures_and_triggers(site, t, &cand, a, trigger_rd, trigger_h);
+    if why.is_some() {
+        return (remove, why);
     }
+    let v0 = target.map(|tg| (tg, f.value(site, tg, a)));
     let crops = crop_trees(t, op, n_ha, distance_m);
     let mut is_crop = vec![false; t.len()];
     for &c in &crops {
@@ -321,7 +357,11 @@ fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, dis
         remove[j] = true;
         f.add(t, j, -1.0);
     }
-    remove
+    let why = match v0 {
+        Some((tg, v)) if v <= goal(tg) => at_target(tg, v),
+        _ => "its crop trees have no competitors to remove".into(),
+    };
+    (remove, Some(why))
 }
 
 /// The trees a shelterwood stage removes: of the area's overstorey (stems at least
