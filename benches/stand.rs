@@ -13,7 +13,11 @@
 //! cell side (m, default 12; other cells group the trees otherwise, so the stand differs);
 //! `SYLVA_STAND_FULL=1` adapts the targets at full detail (`FULL_STRANDS`: every strand of
 //! their species at their age, forest-grown, as stills and `--full-detail` exports draw them;
-//! issue 32's near field) instead of `DEFAULT_MAX_STRANDS`.
+//! issue 32's near field) instead of `DEFAULT_MAX_STRANDS`. `SYLVA_STAND_SKY_RINGS=4,8` sets the
+//! sky's rings (`StandOptions::sky_rings`, default 4,8,12: 24 directions); `SYLVA_STAND_DUMP=FILE`
+//! writes every target's leaf clusters (`AdaptedTree::leaf_clusters`, in order) as
+//! little-endian f32 rows (tree index, centre x, y, z (m), light i, light in the analysis i_l0,
+//! radius (m)), so two runs' adapted trees can be compared (BENCHMARKS.md, round 32).
 use glam::Vec3;
 use sylva::rng::Stream;
 use sylva::species::SpeciesLibrary;
@@ -80,12 +84,26 @@ fn main() {
     if let Some(c) = std::env::var("SYLVA_STAND_CELL").ok().and_then(|v| v.parse().ok()) {
         opts.cell_m = c;
     }
+    if let Ok(v) = std::env::var("SYLVA_STAND_SKY_RINGS") {
+        opts.sky_rings = v.split(',').map(|x| x.trim().parse().expect("SYLVA_STAND_SKY_RINGS: comma-separated ring sizes, e.g. 4,8")).collect();
+    }
     let full = std::env::var_os("SYLVA_STAND_FULL").is_some();
     let mut cache = SkeletonCache::new(42, if full { FULL_STRANDS } else { DEFAULT_MAX_STRANDS });
     let t = std::time::Instant::now();
     let st = adapt_stand(&trees, &targets, &lib, &mut cache, &opts).expect("adapt");
     let cold = t.elapsed().as_secs_f64();
     let fp = fingerprint(&st);
+    if let Some(path) = std::env::var_os("SYLVA_STAND_DUMP") {
+        let mut out = Vec::new();
+        for a in &st.trees {
+            for c in &a.leaf_clusters {
+                for v in [a.index as f32, c.center.x, c.center.y, c.center.z, c.light, c.light_input, c.radius] {
+                    out.extend_from_slice(&v.to_le_bytes());
+                }
+            }
+        }
+        std::fs::write(&path, out).expect("SYLVA_STAND_DUMP: a writable file");
+    }
     let warm = if std::env::var_os("SYLVA_STAND_ONCE").is_some() {
         f64::NAN
     } else {
@@ -96,7 +114,7 @@ fn main() {
     };
     let nodes: usize = st.trees.iter().map(|a| a.report.nodes_before).sum();
     let pruned: usize = st.trees.iter().map(|a| a.report.pruned_light + a.report.pruned_collision).sum();
-    println!("# stand adaptation (threads: {}; {})", rayon::current_num_threads(), if full { "full detail" } else { "at most DEFAULT_MAX_STRANDS strands" });
+    println!("# stand adaptation (threads: {}; {}; sky rings {:?})", rayon::current_num_threads(), if full { "full detail" } else { "at most DEFAULT_MAX_STRANDS strands" }, opts.sky_rings);
     println!("| targets | trees in groups | cells | analyses | open-grown trees | nodes (targets) | pruned | first call s | second call s |");
     println!("|---|---|---|---|---|---|---|---|---|");
     println!("| {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} |", st.trees.len(), st.trees_in_groups, st.cells, st.analyses, cache.len(), nodes, pruned, cold, warm);

@@ -64,7 +64,9 @@ fn main() {
                 ("zen 4,4".into(), Sky::zenith_rings(b, &[4, 4]).expect("rings")),
                 ("imp 4,8,8,12".into(), Sky::with_rings(b, &[4, 8, 8, 12]).expect("rings")),
                 ("imp 4,8,12".into(), Sky::with_rings(b, &[4, 8, 12]).expect("rings")),
+                ("imp 4,8,8".into(), Sky::with_rings(b, &[4, 8, 8]).expect("rings")),
                 ("imp 4,4,8".into(), Sky::with_rings(b, &[4, 4, 8]).expect("rings")),
+                ("imp 8,8".into(), Sky::with_rings(b, &[8, 8]).expect("rings")),
                 ("imp 4,8".into(), Sky::with_rings(b, &[4, 8]).expect("rings")),
                 ("imp 4,4".into(), Sky::with_rings(b, &[4, 4]).expect("rings")),
             ];

@@ -193,3 +193,31 @@ fn bad_trees_are_refused_with_the_field() {
 }
 
 
+
+/// `StandOptions::sky_rings` (issue 32): the default is `Sky::from_latitude`'s sky bit for bit;
+/// other rings give the importance-sampled sky of that many directions about the same brightest
+/// point; bad rings are refused naming the field, before any work.
+#[test]
+fn stand_sky_rings_default_fewer_and_refused() {
+    use sylva::structure::plastic::light::DEFAULT_RINGS;
+    use sylva::structure::plastic::Sky;
+    use sylva::structure::stand::stand_sky;
+    assert_eq!(StandOptions::default().sky_rings, DEFAULT_RINGS.to_vec());
+    let d = stand_sky(47.0, &DEFAULT_RINGS).unwrap();
+    assert_eq!(d, Sky::from_latitude(47.0));
+    // 24 directions about the noon sun at 43° elevation (47° N), 3 of them below the horizon
+    assert_eq!(d.dirs.len(), 21);
+    // 12 about the same point, 2 below the horizon
+    let c = stand_sky(47.0, &[4, 8]).unwrap();
+    assert_eq!(c.brightest, d.brightest);
+    assert_eq!(c.dirs.len(), 10);
+    assert!((c.weights.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+    assert!(c.dirs.iter().all(|v| v.z > 0.0 && (v.length() - 1.0).abs() < 1e-5));
+    let lib = lib();
+    let t = vec![beech_tree(&lib, 1, 0.0, 0.0)];
+    for bad in [vec![4, 6], vec![], vec![16, 16, 4]] {
+        let opts = StandOptions { sky_rings: bad.clone(), ..Default::default() };
+        let e = adapt_stand(&t, &[0], &lib, &mut SkeletonCache::new(1, 48), &opts).unwrap_err().to_string();
+        assert!(e.contains("sky_rings"), "{bad:?}: {e}");
+    }
+}

@@ -218,7 +218,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         return Ok(AdaptStats::default());
     }
     let trees: Vec<StandTree> = stand.iter().map(|(_, t)| *t).collect();
-    let opts = StandOptions { cell_m: o.cell_m, halo_m: o.halo_m, latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(obstacles, site) };
+    let opts = StandOptions { cell_m: o.cell_m, halo_m: o.halo_m, latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(obstacles, site), ..StandOptions::default() };
     // the full-detail trees first (nearest first), then the coarser ones (each adapted among all)
     let px = |n: &(f32, usize, usize)| {
         let t = &inst[n.1];

@@ -66,6 +66,7 @@
 use super::grow::ecomod;
 use super::species_tree::{ecomod_strands_at, ECOMOD_FULL_AGE_YR};
 use crate::obstacle::Obstacle;
+use super::plastic::light::DEFAULT_RINGS;
 use super::plastic::{adapt_group_among, Environment, Fate, Ground, LeafCluster, PlasticReport, PlasticTree, Sky};
 use super::skeleton::{Leaves, Skeleton};
 use crate::error::{Error, Result};
@@ -160,13 +161,40 @@ pub struct StandOptions {
     pub latitude_deg: f32,
     /// Solid obstacles (world coordinates, m).
     pub obstacles: Vec<Obstacle>,
+    /// Rings of the importance-sampled sky of eq. (3) (Plastic Trees, `000_*.txt`) that the
+    /// analyses and the adaptation use: directions per ring around the brightest sky point,
+    /// innermost first, each a positive multiple of 4, 1–32 in all ([`Sky::with_rings`]).
+    /// Default [`DEFAULT_RINGS`] (`[4, 8, 12]`, 24 directions: [`Sky::from_latitude`]'s sky,
+    /// bit for bit). The cost of the near field is about linear in the directions (issue 32);
+    /// fewer are coarser: BENCHMARKS.md, rounds 11 and 32, gives the error of each ring set
+    /// against a reference of 5,872 directions (`examples/sky_quadrature`).
+    pub sky_rings: Vec<usize>,
 }
 
 impl Default for StandOptions {
-    /// Cells of 12 m, a halo of 6 m, latitude 47° N, no obstacles.
+    /// Cells of 12 m, a halo of 6 m, latitude 47° N, no obstacles, the default sky
+    /// ([`DEFAULT_RINGS`]).
     fn default() -> Self {
-        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new() }
+        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec() }
     }
+}
+
+/// The sky of [`adapt_stand`]: [`Sky::from_latitude`] (its brightest point the noon sun at the
+/// equinox) with the rings `rings`; exactly [`Sky::from_latitude`]'s sky for [`DEFAULT_RINGS`].
+///
+/// Errors: [`Error::Invalid`] naming `sky_rings` unless every ring is a positive multiple of 4
+/// and there are 1–32 directions in all.
+pub fn stand_sky(latitude_deg: f32, rings: &[usize]) -> Result<Sky> {
+    let sky = Sky::from_latitude(latitude_deg);
+    if rings == DEFAULT_RINGS {
+        return Ok(sky);
+    }
+    Sky::with_rings(sky.brightest, rings).map_err(|_| Error::Invalid {
+        context: "stand adaptation".into(),
+        field: "sky_rings".into(),
+        value: format!("{rings:?}"),
+        expected: "rings of positive multiples of 4 directions, 1–32 directions in all (e.g. [4, 8, 12])".into(),
+    })
 }
 
 /// The open-grown tree of one species and age class: EcoMod skeleton and leaves, 1 m tall, base
@@ -502,7 +530,8 @@ fn validate_tree(i: usize, t: &StandTree, lib: &SpeciesLibrary) -> Result<()> {
 /// (module documentation, steps 1–3); grows what `cache` lacks.
 ///
 /// Errors: [`Error::Invalid`] naming the bad tree field, a target index outside `trees`, bad
-/// options (cell ≤ 0 m, halo < 0 m, latitude outside −90–90°), an invalid obstacle, or the
+/// options (cell ≤ 0 m, halo < 0 m, latitude outside −90–90°, sky rings that are not positive
+/// multiples of 4 or not 1–32 directions, [`stand_sky`]), an invalid obstacle, or the
 /// errors of [`SkeletonCache::prepare`] and [`PlasticTree::analyse`].
 pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary, cache: &mut SkeletonCache, opts: &StandOptions) -> Result<Stand> {
     let bad = |field: &str, value: String, expected: &str| Error::Invalid { context: "stand adaptation".into(), field: field.into(), value, expected: expected.into() };
@@ -516,6 +545,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
         return Err(bad("latitude_deg", opts.latitude_deg.to_string(), "−90–90°"));
     }
     super::grow::space::validate_obstacles(&opts.obstacles)?;
+    let sky = stand_sky(opts.latitude_deg, &opts.sky_rings)?;
     for &i in targets {
         if i >= trees.len() {
             return Err(bad("targets", i.to_string(), &format!("tree indices below {}", trees.len())));
@@ -570,7 +600,6 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     cache.prepare(lib, &classes.iter().filter(|k| !k.5).map(form).collect::<Vec<_>>())?;
     cache.prepare_context(lib, &classes.iter().filter(|k| k.5).map(form).collect::<Vec<_>>())?;
     // 2. one analysis per class
-    let sky = Sky::from_latitude(opts.latitude_deg);
     let alone = Environment { obstacles: Vec::new(), ground: Some(Ground::flat(0.0)), sky: sky.clone() };
     let forest_grown = cache.max_strands == FULL_STRANDS;
     let cache = &*cache;
