@@ -241,6 +241,14 @@ fn folders_and_files_mixed_up_get_plain_errors() {
         assert!(!ok && err.contains(opt) && err.contains("afile is a file, not a folder"), "{args:?}: {err}");
     }
     assert!(!d.join("x.png").exists());
+    // a scenario's site mapped without simulating: the six Ellenberg indices among them
+    let (ok, err) = run(&["terrain", "maps", "--scenario", "snap.toml", "--out", "smaps"]);
+    assert!(ok, "{err}");
+    for f in ["L", "T", "K", "F", "R", "N"] {
+        assert!(d.join("smaps").join(format!("{f}.png")).is_file() && d.join("smaps").join(format!("{f}.tif")).is_file(), "{f}");
+    }
+    let (ok, err) = run(&["terrain", "maps", "x.tif", "--scenario", "snap.toml", "--out", "smaps2"]);
+    assert!(!ok && err.contains("--scenario") && !d.join("smaps2").exists(), "{err}");
     // a DEM that is not there leaves no empty maps folder behind
     let (ok, err) = run(&["terrain", "maps", "nothere.tif", "--out", "maps_out"]);
     assert!(!ok && err.contains("nothere.tif") && !d.join("maps_out").exists(), "{err}");

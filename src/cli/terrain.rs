@@ -101,6 +101,10 @@ pub enum Command {
         /// The terrain.
         #[command(flatten)]
         source: Source,
+        /// A scenario file: map its site (its terrain, window and `[climate]`) as `sylva run`
+        /// maps it into `maps/conditions/`, without simulating; instead of a DEM file.
+        #[arg(long, conflicts_with_all = ["file", "generate"])]
+        scenario: Option<PathBuf>,
         /// Output folder (created if missing).
         #[arg(long, default_value = "out/terrain")]
         out: PathBuf,
@@ -111,7 +115,8 @@ pub enum Command {
 pub fn run(c: Command) -> anyhow::Result<()> {
     match c {
         Command::Info { source, tolerance } => info(&source, tolerance),
-        Command::Maps { source, out } => maps_cmd(&source, &out),
+        Command::Maps { source, out, scenario: Some(sc) } => scenario_maps(&sc, &source, &out),
+        Command::Maps { source, out, scenario: None } => maps_cmd(&source, &out),
     }
 }
 
@@ -151,6 +156,20 @@ fn info(s: &Source, tolerance: f64) -> anyhow::Result<()> {
     println!("water:       {below} cells at or below sea level {} m", s.sea_level);
     let tin = Tin::build(&t, tolerance, usize::MAX)?;
     println!("TIN:         {} vertices, {} triangles at tolerance {tolerance} m (max error {:.3} m)", tin.num_vertices(), tin.num_triangles(), tin.max_error_m);
+    Ok(())
+}
+
+/// `sylva terrain maps --scenario FILE`: the living conditions of the scenario's site, the maps
+/// `sylva run` writes into `maps/conditions/` (round 32's trial: an ecologist had no way to see
+/// a scenario's Ellenberg maps but a one-year `sylva run`).
+fn scenario_maps(path: &Path, s: &Source, out: &Path) -> anyhow::Result<()> {
+    anyhow::ensure!(s.latitude.is_none(), "--latitude: not with --scenario (the scenario's [climate] latitude_deg sets it)");
+    let sc = sylva::sim::Scenario::load(path)?;
+    // the site is derived first, so that a refused scenario leaves no output folder behind
+    let site = sc.site().with_context(|| format!("[terrain] of {}", sc.context()))?;
+    std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    let names = job_maps::write_site_maps(&site, out)?;
+    println!("wrote {} maps (PNG + GeoTIFF) of the site of {} to {}: {}", names.len(), path.display(), out.display(), names.join(", "));
     Ok(())
 }
 
