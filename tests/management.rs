@@ -778,6 +778,16 @@ fn silent_failures_are_refused_or_warned() {
     assert_eq!(warn.len(), 2, "{warn:?}");
     assert!(warn[0].contains("management[0]") && warn[0].contains("less than one crop tree"), "{warn:?}");
     assert!(warn[1].contains("management[1].stages[0]") && warn[1].contains("1 later stages find nothing"), "{warn:?}");
+    // a relative-density trigger not above the target: warned (round 32's trial found it
+    // silent); one above it says nothing
+    for (trig, said) in [(0.5, true), (0.8, false)] {
+        let toml = format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntrigger_relative_density = {trig}\ntarget_relative_density = 0.6\nfrom_year = 5\nevery_years = 5\n");
+        let sc = Scenario::from_toml_str(&toml, "trig.toml").unwrap();
+        let w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+        let warn = sylva::sim::management::warnings(&w.site.management, sc.years, "trig.toml");
+        assert_eq!(warn.iter().any(|m| m.contains("trig.toml: management[0].trigger_relative_density = 0.5 is not above target_relative_density = 0.6")), said, "{warn:?}");
+        assert_eq!(warn.len(), usize::from(said), "{warn:?}");
+    }
     // planting shares that do not sum to 1 are scaled and said (a trial found them silent);
     // shares summing to 1 say nothing
     for (mix, want) in [("{ beech = 0.5, sessile_oak = 0.3 }", Some("sum to 0.8 rather than 1: they are scaled to beech 0.625, sessile_oak 0.375")), ("{ beech = 0.7, sessile_oak = 0.3 }", None)] {

@@ -1077,6 +1077,15 @@ pub fn warnings(ops: &[Operation], last_year: u32, ctx: &str) -> Vec<String> {
                 out.push(format!("{ctx}: management[{}]: {n_ha} crop trees per hectare on {:.4} ha is less than one crop tree: the entry releases none (a larger area or more crop trees per hectare)", op.index, op.region.area_ha));
             }
         }
+        // a relative-density trigger at or below the target: the stand is thinned to a
+        // density at which the entry would not have been triggered, so each entry may remove
+        // little or nothing and the trigger fires again at once (round 32's trial: accepted
+        // without a word)
+        if let (Some(trig), Some(target)) = (op.spec.trigger_relative_density, op.spec.target_relative_density) {
+            if trig <= target {
+                out.push(format!("{ctx}: management[{}].trigger_relative_density = {trig} is not above target_relative_density = {target}: a thinning is triggered at a density it does not lower the stand from (a trigger above the target, e.g. 0.8 with 0.65)", op.index));
+            }
+        }
         if let Action::Shelterwood { shares } = &op.action {
             if let Some(k) = shares.iter().position(|&s| s >= 1.0).filter(|&k| k + 1 < shares.len()) {
                 out.push(format!("{ctx}: management[{}].stages[{k}] removes the whole overstorey (share 1): the {} later stages find nothing to cut", op.index, shares.len() - k - 1));
