@@ -322,14 +322,22 @@ pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
 /// the median over them ([`crate::sim::world::insolation_median_by`]: a count and three
 /// all-sums of 1–2 K counts), which is [`World::new`]'s median bit for bit. Every rank of `t`
 /// must call it at the same point (rank 0 after [`Command::Layout`]); `world`'s conditions
-/// must hold the rank's band of site rows (the whole site, today).
+/// must hold the rank's band of site rows (rank 0 the whole site; since round 32 the others
+/// may hold their band only: the weights are counted over the light cells whose centre lies in
+/// the rank's band of site rows, [`crate::sim::tiles::work_weights_of_site_rows`]).
+///
+/// Then, when some rank holds less than the whole site, the ranks move the site cells each
+/// such tile needs from the bands' owners to it ([`tile_site_by`]): the third value, on a
+/// rank whose conditions are not whole, is its tile's conditions (the cells under its
+/// rectangle plus [`crate::sim::tiles::SITE_HALO_CELLS`]) with the whole site's identity and
+/// unmasked count ([`crate::sim::tiles::derive_tile_site_with`]).
 ///
 /// Errors: [`Error::Exchange`] from the transport or parts of another length (a rank with
-/// another light grid); as [`layout_for`].
-pub fn layout_by(world: &World, t: &mut dyn Transport) -> Result<(Layout, f32)> {
+/// another light grid); as [`layout_for`] and [`tile_site_by`].
+pub fn layout_by(world: &World, t: &mut dyn Transport) -> Result<(Layout, f32, Option<(SiteConditions, crate::sim::tiles::WholeSite)>)> {
     let site = &world.site;
     let light = &site.light;
-    let (mut v, wr) = crate::sim::tiles::work_weights_of(&site.conditions, &site.lib, &site.pool, light, crate::sim::tiles::weight_band(t.rank(), t.size(), light.rows));
+    let (mut v, wr) = crate::sim::tiles::work_weights_of_site_rows(&site.conditions, &site.lib, &site.pool, light, crate::sim::tiles::weight_band(t.rank(), t.size(), site.conditions.height()));
     v.extend(wr);
     let sums = t.all_sum(v)?;
     if sums.len() != light.cols + light.rows {
@@ -342,7 +350,153 @@ pub fn layout_by(world: &World, t: &mut dyn Transport) -> Result<(Layout, f32)> 
     let win = crate::grid::Window { col0: 0, row0: band.start, width: c.width(), height: band.len() };
     let (ins, mask) = (win.cut(&c.insolation_kwh_m2, &c.held), win.cut(&c.mask, &c.held));
     let median = crate::sim::world::insolation_median_by(&ins, &mask, &mut |v| t.all_sum(v))?;
-    Ok((layout, median))
+    let part = tile_site_by(world, &layout, t)?;
+    Ok((layout, median, part))
+}
+
+/// Moves to every rank whose site conditions are not whole (issue 37 Build 1, item (a),
+/// round 32: a rank other than 0 that keeps its band of site rows, [`work`]) its tile's
+/// window of them (the site cells under its rectangle of `layout` plus
+/// [`crate::sim::tiles::SITE_HALO_CELLS`]) from the ranks that own those rows: rank `k` owns
+/// the band of site rows [`crate::sim::tiles::weight_band`]`(k, N, height)` and sends each
+/// such tile the rows of its band that the window holds, all grids (mask, elevation, slope,
+/// aspect, TWI, insolation, wind exposure, temperature, indices) over the window's columns; a
+/// tile's rows come in rank order, so they are laid end to end. Rank 0 (which holds the whole
+/// site) sends the whole site's checkpoint identity with its rows; the count of unmasked cells
+/// is the all-sum of the bands' counts. One all-sum of `N + 1` words says which ranks need a
+/// window (none: nothing more is sent, `None` everywhere). Every value is the one of the whole
+/// site's cells, bit for bit. Returns this rank's window, when it needs one.
+///
+/// Errors: [`Error::Invalid`] when a rank does not hold its band; [`Error::Exchange`] from the
+/// transport, naming a rank whose message is short or whose rows do not follow.
+pub fn tile_site_by(world: &World, layout: &Layout, t: &mut dyn Transport) -> Result<Option<(SiteConditions, crate::sim::tiles::WholeSite)>> {
+    use crate::grid::{Grid, Window};
+    let c = &world.site.conditions;
+    let (me, n) = (t.rank(), t.size());
+    let (w, h) = c.full;
+    let band = crate::sim::tiles::weight_band(me, n, h);
+    let bw = Window { col0: 0, row0: band.start, width: w, height: band.len() };
+    if !c.held.contains(&bw) {
+        return Err(Error::Invalid { context: "tiled run".into(), field: "site conditions".into(), value: format!("cells {} of rank {me}", c.held), expected: format!("its band of site rows {bw}") }.into());
+    }
+    let valid: u64 = band.clone().map(|r| (0..w).filter(|&col| c.held_index(col, r).is_some_and(|i| c.mask.data[i])).count() as u64).sum();
+    let mut v = vec![0u64; n + 1];
+    v[0] = valid;
+    v[1 + me] = !c.holds_all() as u64;
+    let sums = t.all_sum(v)?;
+    if sums.len() != n + 1 {
+        return Err(Error::Exchange { peer: 0, reason: format!("{} summed words, expected {} (unmasked cells and the ranks' needs)", sums.len(), n + 1) }.into());
+    }
+    if sums[1..].iter().all(|&x| x == 0) {
+        return Ok(None);
+    }
+    let l = world.site.light.cell_m;
+    let win_of = |k: usize| {
+        let r = layout.rect(k);
+        c.window_of(r.col0 as f64 * l, r.row0 as f64 * l, r.col1 as f64 * l, r.row1 as f64 * l, crate::sim::tiles::SITE_HALO_CELLS)
+    };
+    let identity = if me != 0 {
+        Vec::new()
+    } else if c.holds_all() {
+        crate::sim::checkpoint::site_identity(c)
+    } else {
+        world.site.whole_identity.clone().unwrap_or_default()
+    };
+    let mut out = vec![Vec::new(); n];
+    for (k, o) in out.iter_mut().enumerate() {
+        if sums[1 + k] == 0 {
+            continue;
+        }
+        let mut e = crate::sim::codec::Enc(Vec::new());
+        if me == 0 {
+            e.u64(identity.len() as u64);
+            for (a, b) in &identity {
+                e.str(a);
+                e.str(b);
+            }
+        }
+        let win = win_of(k);
+        let (r0, r1) = (band.start.max(win.row0), band.end.min(win.row1()));
+        let piece = Window { col0: win.col0, row0: r0, width: win.width, height: r1.saturating_sub(r0) };
+        e.u64(piece.row0 as u64);
+        e.u64(piece.height as u64);
+        if piece.height > 0 {
+            let mask: Vec<f32> = piece.cut(&c.mask, &c.held).data.iter().map(|&m| if m { 1.0 } else { 0.0 }).collect();
+            e.f32s(&mask);
+            for g in [&c.elevation_m, &c.slope_deg, &c.aspect_deg, &c.twi, &c.insolation_kwh_m2, &c.wind_exposure, &c.temperature_c] {
+                e.f32s(&piece.cut(g, &c.held).data);
+            }
+            let ix: Vec<f32> = piece.cut(&c.indices, &c.held).data.iter().flatten().copied().collect();
+            e.f32s(&ix);
+        }
+        *o = e.0;
+    }
+    let got = t.exchange(out)?;
+    if sums[1 + me] == 0 {
+        return Ok(None);
+    }
+    let win = win_of(me);
+    let cells = win.width * win.height;
+    let mut grids: Vec<Vec<f32>> = vec![Vec::with_capacity(cells); 8];
+    let mut ix: Vec<[f32; 6]> = Vec::with_capacity(cells);
+    let mut identity = Vec::new();
+    let mut next_row = win.row0;
+    for (k, m) in got.iter().enumerate() {
+        let fail = |s: crate::sim::codec::Short| Error::Exchange { peer: k, reason: format!("site cells message cut short at byte {}", s.at()) };
+        let mut d = crate::sim::codec::Dec::at(m, 0, &fail);
+        if k == 0 {
+            let ni = d.count(16)?;
+            for _ in 0..ni {
+                identity.push((d.str()?, d.str()?));
+            }
+        }
+        let (row0, rows) = (d.u64()? as usize, d.u64()? as usize);
+        if rows == 0 {
+            continue;
+        }
+        let bad = |what: String| Error::Exchange { peer: k, reason: format!("site cells of rank {k} for {win}: {what}") };
+        if row0 != next_row {
+            return Err(bad(format!("rows from {row0}, expected from {next_row}")).into());
+        }
+        let piece = win.width * rows;
+        for g in grids.iter_mut() {
+            let v = d.f32s()?;
+            if v.len() != piece {
+                return Err(bad(format!("{} cells, expected {piece}", v.len())).into());
+            }
+            g.extend_from_slice(&v);
+        }
+        let v = d.f32s()?;
+        if v.len() != 6 * piece {
+            return Err(bad(format!("{} index values, expected {}", v.len(), 6 * piece)).into());
+        }
+        ix.extend(v.chunks_exact(6).map(|q| [q[0], q[1], q[2], q[3], q[4], q[5]]));
+        next_row += rows;
+    }
+    if next_row != win.row1() {
+        return Err(Error::Exchange { peer: 0, reason: format!("site cells for {win}: rows up to {next_row} arrived, expected up to {}", win.row1()) }.into());
+    }
+    drop(got);
+    let mut it = grids.into_iter().map(|data| Grid { width: win.width, height: win.height, data });
+    let mut next = || it.next().unwrap_or(Grid { width: win.width, height: win.height, data: Vec::new() });
+    let mask = next().map(|v| *v != 0.0);
+    let part = SiteConditions {
+        geo: c.geo.clone(),
+        cell_x_m: c.cell_x_m,
+        cell_y_m: c.cell_y_m,
+        mask,
+        elevation_m: next(),
+        slope_deg: next(),
+        aspect_deg: next(),
+        twi: next(),
+        insolation_kwh_m2: next(),
+        wind_exposure: next(),
+        temperature_c: next(),
+        indices: Grid { width: win.width, height: win.height, data: ix },
+        held: win,
+        full: c.full,
+    };
+    Ok(Some((part, crate::sim::tiles::WholeSite { identity, valid_cells: sums[0] })))
 }
 
 /// The layout of [`layout_for`] from the weights per light column `wc` and row `wr`.
@@ -422,7 +576,7 @@ impl<'t> Root<'t> {
         }
         command(self.t, Some(Command::Layout))?;
         // the median is rank 0's part of the ranks' selection; its world has it already
-        let r = layout_by(world, self.t).map(|(l, _)| l);
+        let r = layout_by(world, self.t).map(|(l, _, _)| l);
         if r.is_err() {
             self.done = true;
         }
@@ -646,8 +800,17 @@ impl Stepper for Root<'_> {
 /// command out of order.
 pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: &mut dyn Transport) -> Result<()> {
     check(scenario)?;
-    let world = World::skeleton(site, lib, scenario)?;
     let me = t.rank();
+    let mut site = site;
+    if scenario.management.is_empty() && t.size() > 1 && me != 0 && site.holds_all() {
+        // only this rank's band of site rows (what `site_ranks::site_by_ranks_held` gives an
+        // MPI rank); its tile's cells come from the bands' owners with the layout
+        let b = crate::sim::tiles::weight_band(me, t.size(), site.height());
+        site.hold(crate::grid::Window { col0: 0, row0: b.start, width: site.width(), height: b.len() });
+    }
+    let world = World::skeleton(site, lib, scenario)?;
+    // the whole site's identity and unmasked count, when this rank holds its tile's cells only
+    let mut whole: Option<crate::sim::tiles::WholeSite> = None;
     // the layout and the insolation's median, found with the other ranks on [`Command::Layout`]
     let mut layout: Option<(Layout, f32)> = None;
     let laid = |l: &Option<(Layout, f32)>, c: Command| l.clone().ok_or_else(|| Error::Exchange { peer: 0, reason: format!("command {c:?} before the layout was cut (command Layout)") });
@@ -669,13 +832,19 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 return Ok(());
             }
             (Command::Layout, _) => {
-                let w = world.as_ref().ok_or_else(|| Error::Exchange { peer: 0, reason: "command Layout after this rank's tile was made".into() })?;
-                layout = Some(layout_by(w, t)?);
+                let w = world.as_mut().ok_or_else(|| Error::Exchange { peer: 0, reason: "command Layout after this rank's tile was made".into() })?;
+                let (l, median, part) = layout_by(w, t)?;
+                if let Some((c, ws)) = part {
+                    // the band gives way to the tile's cells
+                    w.site.conditions = c;
+                    whole = Some(ws);
+                }
+                layout = Some((l, median));
             }
             (Command::Begin, _) => {
                 let (l, median) = laid(&layout, c)?;
                 let mut w = template(&mut world, c)?;
-                crate::sim::tiles::derive_tile_site(&mut w, scenario, &l, me, median)?;
+                crate::sim::tiles::derive_tile_site_with(&mut w, scenario, &l, me, median, whole.as_ref())?;
                 let mut tl = Tile::own(w, l, me)?;
                 tl.scatter(None, t)?;
                 tile = Some(tl);
@@ -697,7 +866,7 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
             (Command::Resume, None) => {
                 let (year, p) = send_paths(t, None)?;
                 let r = laid(&layout, c).and_then(|l| Ok((template(&mut world, c)?, l))).map_err(super::JobError::from).and_then(|(mut w, (l, median))| {
-                    crate::sim::tiles::derive_tile_site(&mut w, scenario, &l, me, median)?;
+                    crate::sim::tiles::derive_tile_site_with(&mut w, scenario, &l, me, median, whole.as_ref())?;
                     load_tile(w, &l, me, &p, year)
                 });
                 let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
