@@ -153,7 +153,7 @@ fn assert_derived_tiles_equal_cut_tiles(toml: &str, nx: usize, ny: usize) {
 
 /// Issue 37 Build 1 (a), round 32: ranks other than 0 that hold only their band of site rows
 /// (rank 0 the whole site) cut the layout with each other (`layout_by`: the weights from the
-/// bands, then each tile's cells plus halo moved from the bands' owners) and derive their
+/// bands; then `tile_site_by`: each tile's cells plus halo moved from the bands' owners) and derive their
 /// tile's part (`tiles::derive_tile_site_with`); each equals, bit for bit, the tile
 /// `Tile::own` cuts from the world of one process with `layout_for`'s layout: every
 /// conditions grid, the whole site's identity and area, the checkpoint bytes.
@@ -174,7 +174,14 @@ fn assert_band_ranks_equal_cut_tiles(toml: &str, n: usize) {
                         site.hold(sylva::grid::Window { col0: 0, row0: b.start, width: site.width(), height: b.len() });
                     }
                     let mut w = World::skeleton(site, lib, sc).unwrap();
-                    let (l, median, part) = sylva::job::tiled::layout_by(&w, &mut t).unwrap();
+                    let (l, median) = sylva::job::tiled::layout_by(&w, &mut t).unwrap();
+                    let c = std::mem::replace(&mut w.site.conditions, sylva::conditions::SiteConditions::uniform(1, 0, 1.0, 0.0, [0.0; 6], 0.0));
+                    let whole = k == 0;
+                    let c = if whole { std::borrow::Cow::Borrowed(&c) } else { std::borrow::Cow::Owned(c.clone()) };
+                    let part = sylva::job::tiled::tile_site_by(c, None, w.site.light.cell_m, &l, &mut t).unwrap();
+                    if whole {
+                        w.site.conditions = sc.site().unwrap();
+                    }
                     assert_eq!(part.is_some(), k != 0, "rank {k}");
                     let ws = part.map(|(c, ws)| {
                         w.site.conditions = c;

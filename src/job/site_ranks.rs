@@ -10,9 +10,12 @@
 //! ([`crate::terrain::fields::window_halo_cells`], 86 cells); depression filling and flow
 //! accumulation on rank 0 over the whole DEM, each rank sent its band
 //! ([`crate::terrain::fields::hydrology_windows`]: the fallback, a per-tile Priority-Flood does
-//! not give the serial ε-fill's bits). What is not done yet: the ranks then hold the whole site
-//! (the bands are gathered on every rank, as `World::new` and the tiles read the whole site);
-//! rank 0 reads the whole DEM once for the hydrology.
+//! not give the serial ε-fill's bits). [`site_by_ranks`] gathers the bands on every rank (the
+//! whole site of one process); [`site_by_ranks_held`] (what `sylva simulate` under `mpirun`
+//! uses for a scenario without management, round 32) gathers them on rank 0 only and every
+//! other rank keeps its band, from which `job::tiled::tile_site_by` moves each tile its cells.
+//! What is not done yet: rank 0 reads the whole DEM once for the hydrology and holds the whole
+//! site (its run driver builds the world of one process).
 
 use crate::conditions::SiteConditions;
 use crate::error::{Error, Result};

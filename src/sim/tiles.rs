@@ -527,7 +527,7 @@ pub fn derive_tile_site(w: &mut World, scenario: &super::scenario::Scenario, lay
 }
 
 /// What a rank holding only its tile's cells of the site conditions needs of the whole site
-/// (issue 37 Build 1, item (a), round 32; `job::tiled::layout_by` gathers it): the checkpoint
+/// (issue 37 Build 1, item (a), round 32; `job::tiled::tile_site_by` gathers it): the checkpoint
 /// identity ([`super::checkpoint::site_identity`] of the whole site, from rank 0, which holds
 /// it) and the count of unmasked site cells (the ranks' bands' counts all-summed).
 #[derive(Debug, Clone, PartialEq)]
@@ -540,7 +540,7 @@ pub struct WholeSite {
 
 /// [`derive_tile_site`] of a world whose conditions hold either the whole site (`whole`
 /// unused) or exactly tile `me`'s window of it (the site cells under its rectangle plus
-/// [`SITE_HALO_CELLS`], what `job::tiled::layout_by` moves to it from the ranks' bands) with
+/// [`SITE_HALO_CELLS`], what `job::tiled::tile_site_by` moves to it from the ranks' bands) with
 /// `whole` the whole site's identity and unmasked count; the values are the same bit for bit.
 /// A scenario with management needs the whole site (its areas count light cells over it).
 ///
