@@ -6,7 +6,7 @@ mod common;
 use sylva::output::inventory::inventory_csv;
 use sylva::sim::checkpoint::to_bytes;
 use sylva::sim::stats::StandRow;
-use sylva::sim::tiles::{min_halo_m, run_local, Layout, Tile};
+use sylva::sim::tiles::{Transport as _, min_halo_m, run_local, Layout, Tile};
 use sylva::sim::{Scenario, World};
 
 const YEARS: u32 = 25;
@@ -148,6 +148,94 @@ fn assert_derived_tiles_equal_cut_tiles(toml: &str, nx: usize, ny: usize) {
         // the band weights from the conditions equal those of the derived world of one process
         let band = sylva::sim::tiles::weight_band(k, n, w0.site.light.rows);
         assert_eq!(sylva::sim::tiles::work_weights_of(&w0.site.conditions, &lib, &w0.site.pool, &w0.site.light, band.clone()), sylva::sim::tiles::work_weights_in(&w0.site, band), "{what}");
+    }
+}
+
+/// Issue 37 Build 1 (a), round 32: ranks other than 0 that hold only their band of site rows
+/// (rank 0 the whole site) cut the layout with each other (`layout_by`: the weights from the
+/// bands; then `tile_site_by`: each tile's cells plus halo moved from the bands' owners) and derive their
+/// tile's part (`tiles::derive_tile_site_with`); each equals, bit for bit, the tile
+/// `Tile::own` cuts from the world of one process with `layout_for`'s layout: every
+/// conditions grid, the whole site's identity and area, the checkpoint bytes.
+fn assert_band_ranks_equal_cut_tiles(toml: &str, n: usize) {
+    let (sc, w0) = common::world(toml);
+    let lib = sylva::sim::fixtures::library();
+    let want = sylva::job::tiled::layout_for(&w0, n).unwrap();
+    let got: Vec<_> = std::thread::scope(|s| {
+        let hs: Vec<_> = sylva::sim::tiles::LocalTransport::group(n)
+            .into_iter()
+            .map(|mut t| {
+                let (sc, lib) = (&sc, &lib);
+                s.spawn(move || {
+                    let k = t.rank();
+                    let mut site = sc.site().unwrap();
+                    if k != 0 {
+                        let b = sylva::sim::tiles::weight_band(k, n, site.height());
+                        site.hold(sylva::grid::Window { col0: 0, row0: b.start, width: site.width(), height: b.len() });
+                    }
+                    let mut w = World::skeleton(site, lib, sc).unwrap();
+                    let (l, median) = sylva::job::tiled::layout_by(&w, &mut t).unwrap();
+                    let c = std::mem::replace(&mut w.site.conditions, sylva::conditions::SiteConditions::uniform(1, 0, 1.0, 0.0, [0.0; 6], 0.0));
+                    let whole = k == 0;
+                    let c = if whole { std::borrow::Cow::Borrowed(&c) } else { std::borrow::Cow::Owned(c.clone()) };
+                    let part = sylva::job::tiled::tile_site_by(c, None, w.site.light.cell_m, &l, &mut t).unwrap();
+                    if whole {
+                        w.site.conditions = sc.site().unwrap();
+                    }
+                    assert_eq!(part.is_some(), k != 0, "rank {k}");
+                    let ws = part.map(|(c, ws)| {
+                        w.site.conditions = c;
+                        ws
+                    });
+                    sylva::sim::tiles::derive_tile_site_with(&mut w, sc, &l, k, median, ws.as_ref()).unwrap();
+                    (l, w)
+                })
+            })
+            .collect();
+        hs.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    for (k, (l, w)) in got.into_iter().enumerate().skip(1) {
+        let what = format!("rank {k} of {n}");
+        assert_eq!((l.col_bounds.clone(), l.row_bounds.clone()), (want.col_bounds.clone(), want.row_bounds.clone()), "{what}");
+        let mut o = Tile::own(w0.clone(), want.clone(), k).unwrap().world;
+        o.stand.trees = Default::default();
+        let d = Tile::own(w, want.clone(), k).unwrap().world;
+        o.stand.trees.next_id = d.stand.trees.next_id;
+        o.stand.cohorts = Default::default();
+        let (a, b) = (&d.site, &o.site);
+        let (ca, cb) = (&a.conditions, &b.conditions);
+        assert_ne!(ca.held, sylva::grid::Window::full(ca.full.0, ca.full.1), "{what}: a tile's window");
+        assert_eq!((ca.held, ca.full, &ca.mask, ca.cell_x_m.to_bits(), ca.cell_y_m.to_bits()), (cb.held, cb.full, &cb.mask, cb.cell_x_m.to_bits(), cb.cell_y_m.to_bits()), "{what}");
+        for (x, y) in [(&ca.slope_deg, &cb.slope_deg), (&ca.aspect_deg, &cb.aspect_deg), (&ca.twi, &cb.twi), (&ca.insolation_kwh_m2, &cb.insolation_kwh_m2), (&ca.temperature_c, &cb.temperature_c), (&ca.elevation_m, &cb.elevation_m), (&ca.wind_exposure, &cb.wind_exposure)] {
+            assert!(x.data.iter().map(|v| v.to_bits()).eq(y.data.iter().map(|v| v.to_bits())), "{what}");
+        }
+        assert!(ca.indices.data.iter().flatten().map(|v| v.to_bits()).eq(cb.indices.data.iter().flatten().map(|v| v.to_bits())), "{what}");
+        assert!(a.rel_insolation.iter().chain(a.suitability.iter().flatten()).map(|v| v.to_bits()).eq(b.rel_insolation.iter().chain(b.suitability.iter().flatten()).map(|v| v.to_bits())), "{what}: relative insolation or suitability");
+        assert_eq!((&a.light_site, a.window, &a.whole_identity, a.area_ha.to_bits()), (&b.light_site, b.window, &b.whole_identity, b.area_ha.to_bits()), "{what}");
+        assert!(a.whole_identity.is_some(), "{what}");
+        assert_eq!(sylva::sim::checkpoint::identity(&d), sylva::sim::checkpoint::identity(&w0), "{what}");
+        assert!(sylva::sim::checkpoint::to_bytes(&d, &[]) == sylva::sim::checkpoint::to_bytes(&o, &[]), "{what}: checkpoint bytes");
+    }
+}
+
+#[test]
+fn ranks_holding_their_band_get_their_tiles_cells_from_the_bands_owners() {
+    let building = "[[obstacle]]\nkind = \"footprint\"\npoints = [[180.0, 80.0], [225.0, 80.0], [225.0, 150.0], [180.0, 150.0]]\nheight_m = 12.0\n";
+    let toml = format!("{}{building}", edges());
+    for n in [2, 3, 4] {
+        assert_band_ranks_equal_cut_tiles(&toml, n);
+    }
+    // a window of the default DEM (insolation, wind, indices vary), no management
+    let dem = common::ScenarioToml::new("bands", 15, 11)
+        .species(&["beech", "birch"])
+        .line("light_cell_m = 10.0")
+        .default_terrain([150, 150, 12, 10])
+        .seed_sources("beech", &[[478.0, 402.0], [485.0, 300.0], [200.0, 600.0]], 3)
+        .build();
+    let (_, w0) = common::world(&dem);
+    assert!(w0.site.rel_insolation.iter().any(|&v| v != w0.site.rel_insolation[0]));
+    for n in [2, 4, 6] {
+        assert_band_ranks_equal_cut_tiles(&dem, n);
     }
 }
 

@@ -314,6 +314,24 @@ fn assert_same_site(a: &conditions::SiteConditions, b: &conditions::SiteConditio
     assert!(a.indices.data.iter().zip(&b.indices.data).all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)) && a.indices.data.len() == b.indices.data.len(), "{what}: indices");
 }
 
+/// `site_ranks::site_by_ranks_held(.., false)` over `n` in-process ranks: rank 0 holds `one`,
+/// rank `k` its band of rows `k · h / n .. (k + 1) · h / n` of it, bit for bit.
+fn assert_bands_of(sc: &sylva::sim::Scenario, one: &conditions::SiteConditions, n: usize, what: &str) {
+    use sylva::sim::tiles::LocalTransport;
+    let got: Vec<conditions::SiteConditions> = std::thread::scope(|s| {
+        let hs: Vec<_> = LocalTransport::group(n).into_iter().map(|mut t| s.spawn(move || sylva::job::site_ranks::site_by_ranks_held(sc, &mut t, false).unwrap())).collect();
+        hs.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    for (k, site) in got.iter().enumerate() {
+        let mut want = one.clone();
+        if k != 0 {
+            want.hold(sylva::job::site_ranks::band(k, n, one.width(), one.height()));
+        }
+        assert_eq!((site.held, site.full), (want.held, want.full), "{what}, rank {k}");
+        assert_same_site(site, &want, &format!("{what}, rank {k} (band)"));
+    }
+}
+
 #[test]
 fn ranks_deriving_their_bands_of_a_geotiff_site_hold_the_site_of_one_process() {
     // `job::site_ranks::site_by_ranks` over the in-process transport (the exchanges of an
@@ -337,8 +355,27 @@ fn ranks_deriving_their_bands_of_a_geotiff_site_hold_the_site_of_one_process() {
             for (k, site) in got.iter().enumerate() {
                 assert_same_site(site, &one, &format!("{what}, rank {k} of {n}"));
             }
+            // issue 37 round 32: ranks other than 0 keep only their band (rank 0 the whole)
+            assert_bands_of(&sc, &one, n, &format!("{what}, {n} ranks"));
         }
     }
+    // a uniform site (its band built directly) and an ASCII grid (derived whole, then cut)
+    let asc = std::env::temp_dir().join(format!("sylva-bands-{}.asc", std::process::id()));
+    let mut grid = String::from("ncols 7\nnrows 9\nxllcorner 0\nyllcorner 0\ncellsize 25\nNODATA_value -9999\n");
+    for r in 0..9 {
+        grid.push_str(&(0..7).map(|c| if (r + c) % 5 == 0 { "-9999".to_string() } else { format!("{}", 400 + 3 * r + c) }).collect::<Vec<_>>().join(" "));
+        grid.push('\n');
+    }
+    std::fs::write(&asc, grid).unwrap();
+    for terrain in ["uniform = { width = 13, height = 11, cell_m = 20.0, elevation_m = 500.0, indices = [5, 5, 3, 5, 6, 6] }".to_string(), format!("path = \"{}\"", asc.display())] {
+        let toml = format!("name = \"bands\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\nlight_cell_m = 10.0\n[terrain]\n{terrain}\n");
+        let sc = sylva::sim::Scenario::from_toml_str(&toml, "bands").unwrap();
+        let one = sc.site().unwrap();
+        for n in [2, 3, 12] {
+            assert_bands_of(&sc, &one, n, &format!("{terrain}, {n} ranks"));
+        }
+    }
+    let _ = std::fs::remove_file(&asc);
     // a window outside the file fails on every rank as one process fails
     let toml = format!("name = \"bands\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\n[terrain]\npath = \"{}\"\nwindow = [300, 0, 100, 10]\n", root("terrains/coweeta_10m_utm17n.tif").display());
     let sc = sylva::sim::Scenario::from_toml_str(&toml, "bands").unwrap();

@@ -305,7 +305,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         if t.size() > 1 {
             let t0 = std::time::Instant::now();
             // issue 37 Build 1: a GeoTIFF site derived by the ranks, each from a window of the DEM
-            let site = sylva::job::site_ranks::site_by_ranks(&sc, &mut t).with_context(|| format!("[terrain] of {} (rank {})", sc.context(), t.rank()))?;
+            let site = sylva::job::site_ranks::site_by_ranks_held(&sc, &mut t, !sc.management.is_empty()).with_context(|| format!("[terrain] of {} (rank {})", sc.context(), t.rank()))?;
             let r = if t.rank() != 0 {
                 // a stop (Ctrl-C, SIGTERM from mpirun) is rank 0's to decide; the others follow it
                 let _ = ctrlc::set_handler(|| {});

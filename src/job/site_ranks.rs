@@ -10,9 +10,12 @@
 //! ([`crate::terrain::fields::window_halo_cells`], 86 cells); depression filling and flow
 //! accumulation on rank 0 over the whole DEM, each rank sent its band
 //! ([`crate::terrain::fields::hydrology_windows`]: the fallback, a per-tile Priority-Flood does
-//! not give the serial ε-fill's bits). What is not done yet: the ranks then hold the whole site
-//! (the bands are gathered on every rank, as `World::new` and the tiles read the whole site);
-//! rank 0 reads the whole DEM once for the hydrology.
+//! not give the serial ε-fill's bits). [`site_by_ranks`] gathers the bands on every rank (the
+//! whole site of one process); [`site_by_ranks_held`] (what `sylva simulate` under `mpirun`
+//! uses for a scenario without management, round 32) gathers them on rank 0 only and every
+//! other rank keeps its band, from which `job::tiled::tile_site_by` moves each tile its cells.
+//! What is not done yet: rank 0 reads the whole DEM once for the hydrology and holds the whole
+//! site (its run driver builds the world of one process).
 
 use crate::conditions::SiteConditions;
 use crate::error::{Error, Result};
@@ -45,10 +48,36 @@ pub fn band(k: usize, n: usize, w: usize, h: usize) -> Window {
 /// Errors: as [`Scenario::site`]; [`Error::Exchange`] from the transport, naming the rank that
 /// failed.
 pub fn site_by_ranks(sc: &Scenario, t: &mut dyn Transport) -> Result<SiteConditions> {
-    let Some((path, sw)) = geotiff_of(sc) else {
-        return sc.site();
-    };
+    site_by_ranks_held(sc, t, true)
+}
+
+/// [`site_by_ranks`], but with `whole` false a rank other than 0 keeps only its band of rows
+/// ([`band`]; [`SiteConditions::held`] the band, [`SiteConditions::full`] the site's size;
+/// every value the one of [`site_by_ranks`]'s site there) and rank 0 the whole site (issue 37
+/// Build 1, item (a), round 32): for a GeoTIFF terrain the ranks other than 0 send their band's
+/// conditions only to rank 0 (and their cell size to the others); any other terrain is
+/// derived whole and cut to the band (a uniform terrain: its band only, built directly).
+///
+/// Errors: as [`site_by_ranks`].
+pub fn site_by_ranks_held(sc: &Scenario, t: &mut dyn Transport, whole: bool) -> Result<SiteConditions> {
     let (me, n) = (t.rank(), t.size());
+    let keep_band = !whole && me != 0 && n > 1;
+    let Some((path, sw)) = geotiff_of(sc) else {
+        if keep_band && sc.terrain.window.is_none() {
+            if let TerrainSpec::Uniform(u) = sc.terrain_spec() {
+                // the band of a uniform site, equal cell by cell to the whole one's rows
+                let b = band(me, n, u.width, u.height);
+                let mut c = SiteConditions::uniform(u.width, b.height, u.cell_m, u.elevation_m, u.indices, sc.climate.latitude_deg);
+                (c.held, c.full) = (b, (u.width, u.height));
+                return Ok(c);
+            }
+        }
+        let mut c = sc.site()?;
+        if keep_band {
+            c.hold(band(me, n, c.width(), c.height()));
+        }
+        return Ok(c);
+    };
     // the site's raster: the scenario's window of the file, or the file
     let head = crate::terrain::io::load_window(&path, Window { col0: 0, row0: 0, width: 1, height: 1 });
     let head = agreed(t, head)?;
@@ -151,17 +180,54 @@ pub fn site_by_ranks(sc: &Scenario, t: &mut dyn Transport) -> Result<SiteConditi
             m
         }
     };
+    // the ranks that keep their band only (`whole` false: all but 0) get the others' cell
+    // size (a 0 byte, then `cell_x_m` and `cell_y_m` of a non-empty band) instead of the band
+    let short = |m: &Vec<u8>| -> Vec<u8> {
+        match (&part, m.first()) {
+            (Ok(Some(c)), Some(0)) => {
+                let mut e = Enc(vec![0u8]);
+                e.f64(c.cell_x_m);
+                e.f64(c.cell_y_m);
+                e.0
+            }
+            _ => m.clone(),
+        }
+    };
     // a copy for every other rank; this rank's own goes to itself without one
-    let mut out: Vec<Vec<u8>> = (0..n).map(|k| if k == me { Vec::new() } else { mine.clone() }).collect();
+    let mut out: Vec<Vec<u8>> = (0..n).map(|k| if k == me { Vec::new() } else if whole || k == 0 { mine.clone() } else { short(&mine) }).collect();
     out[me] = mine;
     let got = t.exchange(out)?;
-    part?;
+    let part = part?;
     for (k, m) in got.iter().enumerate() {
         if m.first() != Some(&0) {
             return Err(Error::Exchange { peer: k, reason: format!("rank {k} failed: {}", String::from_utf8_lossy(m.get(1..).unwrap_or(&[]))) });
         }
     }
-    assemble(got, &bands, w, h, geo)
+    if !keep_band {
+        return assemble(got, &bands, w, h, geo);
+    }
+    // this rank's band: the cell size is the last non-empty band's, as `assemble` takes it
+    let mut cell = (geo.pixel_w, geo.cell_y_m());
+    for (k, (m, b)) in got.iter().zip(&bands).enumerate() {
+        if b.height == 0 {
+            continue;
+        }
+        cell = match (k == me, &part) {
+            (true, Some(c)) => (c.cell_x_m, c.cell_y_m),
+            _ => {
+                let fail = |s: Short| Error::Exchange { peer: k, reason: format!("cell size message cut short at byte {}", s.at()) };
+                let mut d = Dec::at(m, 1, &fail);
+                (d.f64()?, d.f64()?)
+            }
+        };
+    }
+    let mut c = match part {
+        Some(c) => c,
+        // an empty band (more ranks than rows): no cells
+        None => assemble(Vec::new(), &[], w, 0, geo.clone())?,
+    };
+    (c.geo, c.cell_x_m, c.cell_y_m, c.held, c.full) = (geo, cell.0, cell.1, me_band, (w, h));
+    Ok(c)
 }
 
 /// Every rank learns whether `r` (each rank's own result, e.g. reading the DEM's header) failed

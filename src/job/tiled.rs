@@ -4,8 +4,9 @@
 //! tile as the tiles take the stand ([`Root`]'s [`Stepper::begin_shed`], before rank 0's tile
 //! is copied from it; unless a caller reads the world at every snapshot), so no rank keeps the
 //! whole site's grids for the run (issue 37 Build 1; rank 0 still builds the scenario's whole
-//! world at the start, the other ranks only their tile's part of the site from the conditions,
-//! [`work`]; the layout is cut from the ranks' summed weights, [`layout_by`]). The run
+//! world at the start, the other ranks only their tile's part of the site from their band of
+//! the conditions and the cells the band owners send them, [`work`], [`tile_site_by`]; the
+//! layout is cut from the ranks' summed weights, [`layout_by`]). The run
 //! directory holds what a single process writes, byte for byte where the layout is the same;
 //! the checkpoint (one file per rank, below) and the inventories (one part per rank) are laid
 //! out by rank and read back as one process's (issue 37 Build 4):
@@ -322,14 +323,18 @@ pub fn layout_for(world: &World, n: usize) -> Result<Layout> {
 /// the median over them ([`crate::sim::world::insolation_median_by`]: a count and three
 /// all-sums of 1–2 K counts), which is [`World::new`]'s median bit for bit. Every rank of `t`
 /// must call it at the same point (rank 0 after [`Command::Layout`]); `world`'s conditions
-/// must hold the rank's band of site rows (the whole site, today).
+/// must hold the rank's band of site rows (rank 0 the whole site; since round 32 the others
+/// may hold their band only: the weights are counted over the light cells whose centre lies in
+/// the rank's band of site rows, [`crate::sim::tiles::work_weights_of_site_rows`]).
+///
+/// Then the ranks move each tile whose rank holds its band only its cells ([`tile_site_by`]).
 ///
 /// Errors: [`Error::Exchange`] from the transport or parts of another length (a rank with
-/// another light grid); as [`layout_for`].
+/// another light grid); as [`layout_for`] and [`tile_site_by`].
 pub fn layout_by(world: &World, t: &mut dyn Transport) -> Result<(Layout, f32)> {
     let site = &world.site;
     let light = &site.light;
-    let (mut v, wr) = crate::sim::tiles::work_weights_of(&site.conditions, &site.lib, &site.pool, light, crate::sim::tiles::weight_band(t.rank(), t.size(), light.rows));
+    let (mut v, wr) = crate::sim::tiles::work_weights_of_site_rows(&site.conditions, &site.lib, &site.pool, light, crate::sim::tiles::weight_band(t.rank(), t.size(), site.conditions.height()));
     v.extend(wr);
     let sums = t.all_sum(v)?;
     if sums.len() != light.cols + light.rows {
@@ -343,6 +348,161 @@ pub fn layout_by(world: &World, t: &mut dyn Transport) -> Result<(Layout, f32)> 
     let (ins, mask) = (win.cut(&c.insolation_kwh_m2, &c.held), win.cut(&c.mask, &c.held));
     let median = crate::sim::world::insolation_median_by(&ins, &mask, &mut |v| t.all_sum(v))?;
     Ok((layout, median))
+}
+
+/// Moves to every rank whose site conditions are not whole (issue 37 Build 1, item (a),
+/// round 32: a rank other than 0 that keeps its band of site rows, [`work`]) its tile's
+/// window of them (the site cells under its rectangle of `layout` plus
+/// [`crate::sim::tiles::SITE_HALO_CELLS`]) from the ranks that own those rows: rank `k` owns
+/// the band of site rows [`crate::sim::tiles::weight_band`]`(k, N, height)` and sends each
+/// such tile the rows of its band that the window holds, over the window's columns; a tile's
+/// rows come in rank order, so they are laid end to end. One grid at a time (mask, elevation,
+/// slope, aspect, TWI, insolation, wind exposure, temperature, indices: nine exchanges), and a
+/// rank that owns its band (`c` owned) drops each grid of its band once that grid is sent, so
+/// it holds about its band plus its window at most, not both twice. Rank 0 (which holds the
+/// whole site) sends the whole site's checkpoint identity (`identity`, or
+/// [`crate::sim::checkpoint::site_identity`] of its conditions) with its first rows; the count
+/// of unmasked cells is the all-sum of the bands' counts. One all-sum of `N + 1` words first
+/// says which ranks need a window (none: nothing more is sent). Every value is the one of the
+/// whole site's cells, bit for bit. Every rank of `t` calls it after [`layout_by`], with the
+/// same layout and light cell size `light_cell_m` (m). Returns this rank's window with the
+/// whole site's identity and count when its conditions are not whole, else `None`.
+///
+/// Errors: [`Error::Invalid`] when a rank does not hold its band; [`Error::Exchange`] from the
+/// transport, naming a rank whose message is short or whose rows do not follow.
+pub fn tile_site_by(c: std::borrow::Cow<'_, SiteConditions>, identity: Option<&[(String, String)]>, light_cell_m: f64, layout: &Layout, t: &mut dyn Transport) -> Result<Option<(SiteConditions, crate::sim::tiles::WholeSite)>> {
+    use crate::grid::{Grid, Window};
+    let mut c = c;
+    let (me, n) = (t.rank(), t.size());
+    let (w, h) = c.full;
+    let band = crate::sim::tiles::weight_band(me, n, h);
+    let bw = Window { col0: 0, row0: band.start, width: w, height: band.len() };
+    if !c.held.contains(&bw) {
+        return Err(Error::Invalid { context: "tiled run".into(), field: "site conditions".into(), value: format!("cells {} of rank {me}", c.held), expected: format!("its band of site rows {bw}") }.into());
+    }
+    let valid: u64 = band.clone().map(|r| (0..w).filter(|&col| c.held_index(col, r).is_some_and(|i| c.mask.data[i])).count() as u64).sum();
+    let mut v = vec![0u64; n + 1];
+    v[0] = valid;
+    v[1 + me] = !c.holds_all() as u64;
+    let sums = t.all_sum(v)?;
+    if sums.len() != n + 1 {
+        return Err(Error::Exchange { peer: 0, reason: format!("{} summed words, expected {} (unmasked cells and the ranks' needs)", sums.len(), n + 1) }.into());
+    }
+    if sums[1..].iter().all(|&x| x == 0) {
+        return Ok(None);
+    }
+    let l = light_cell_m;
+    let win_of = |c: &SiteConditions, k: usize| {
+        let r = layout.rect(k);
+        c.window_of(r.col0 as f64 * l, r.row0 as f64 * l, r.col1 as f64 * l, r.row1 as f64 * l, crate::sim::tiles::SITE_HALO_CELLS)
+    };
+    let wins: Vec<Window> = (0..n).map(|k| win_of(&c, k)).collect();
+    let win = wins[me];
+    let need = sums[1 + me] != 0;
+    let mut identity_got = Vec::new();
+    // the window's grids, one field at a time: 0 mask, 1–7 the f32 grids, 8 the indices
+    let mut fields: Vec<Vec<f32>> = Vec::new();
+    const F32_GRIDS: usize = 7;
+    fn grid_of(c: &SiteConditions, f: usize) -> &Grid<f32> {
+        [&c.elevation_m, &c.slope_deg, &c.aspect_deg, &c.twi, &c.insolation_kwh_m2, &c.wind_exposure, &c.temperature_c][f - 1]
+    }
+    for f in 0..F32_GRIDS + 2 {
+        let mut out = vec![Vec::new(); n];
+        for (k, o) in out.iter_mut().enumerate() {
+            if sums[1 + k] == 0 {
+                continue;
+            }
+            let mut e = crate::sim::codec::Enc(Vec::new());
+            if me == 0 && f == 0 {
+                let own;
+                let id: &[(String, String)] = match identity {
+                    Some(i) => i,
+                    None => {
+                        own = crate::sim::checkpoint::site_identity(&c);
+                        &own
+                    }
+                };
+                e.u64(id.len() as u64);
+                for (a, b) in id {
+                    e.str(a);
+                    e.str(b);
+                }
+            }
+            let wk = wins[k];
+            let (r0, r1) = (band.start.max(wk.row0), band.end.min(wk.row1()));
+            let piece = Window { col0: wk.col0, row0: r0, width: wk.width, height: r1.saturating_sub(r0) };
+            e.u64(piece.row0 as u64);
+            e.u64(piece.height as u64);
+            if piece.height > 0 {
+                match f {
+                    0 => e.f32s(&piece.cut(&c.mask, &c.held).data.iter().map(|&m| if m { 1.0 } else { 0.0 }).collect::<Vec<f32>>()),
+                    8 => e.f32s(&piece.cut(&c.indices, &c.held).data.iter().flatten().copied().collect::<Vec<f32>>()),
+                    f => e.f32s(&piece.cut(grid_of(&c, f), &c.held).data),
+                }
+            }
+            *o = e.0;
+        }
+        let got = t.exchange(out)?;
+        // this field of the band is sent: an owned band gives it up
+        if let std::borrow::Cow::Owned(o) = &mut c {
+            match f {
+                0 => o.mask.data = Vec::new(),
+                8 => o.indices.data = Vec::new(),
+                1 => o.elevation_m.data = Vec::new(),
+                2 => o.slope_deg.data = Vec::new(),
+                3 => o.aspect_deg.data = Vec::new(),
+                4 => o.twi.data = Vec::new(),
+                5 => o.insolation_kwh_m2.data = Vec::new(),
+                6 => o.wind_exposure.data = Vec::new(),
+                _ => o.temperature_c.data = Vec::new(),
+            }
+        }
+        if !need {
+            continue;
+        }
+        let per = if f == 8 { 6 } else { 1 };
+        let mut data: Vec<f32> = Vec::with_capacity(per * win.width * win.height);
+        let mut next_row = win.row0;
+        for (k, m) in got.into_iter().enumerate() {
+            let fail = |s: crate::sim::codec::Short| Error::Exchange { peer: k, reason: format!("site cells message cut short at byte {}", s.at()) };
+            let mut d = crate::sim::codec::Dec::at(&m, 0, &fail);
+            if k == 0 && f == 0 {
+                let ni = d.count(16)?;
+                for _ in 0..ni {
+                    identity_got.push((d.str()?, d.str()?));
+                }
+            }
+            let (row0, rows) = (d.u64()? as usize, d.u64()? as usize);
+            if rows == 0 {
+                continue;
+            }
+            let bad = |what: String| Error::Exchange { peer: k, reason: format!("site cells of rank {k} for {win}, grid {f}: {what}") };
+            if row0 != next_row {
+                return Err(bad(format!("rows from {row0}, expected from {next_row}")).into());
+            }
+            let v = d.f32s()?;
+            if v.len() != per * win.width * rows {
+                return Err(bad(format!("{} values, expected {}", v.len(), per * win.width * rows)).into());
+            }
+            data.extend_from_slice(&v);
+            next_row += rows;
+        }
+        if next_row != win.row1() {
+            return Err(Error::Exchange { peer: 0, reason: format!("site cells for {win}, grid {f}: rows up to {next_row} arrived, expected up to {}", win.row1()) }.into());
+        }
+        fields.push(data);
+    }
+    if !need {
+        return Ok(None);
+    }
+    let g = |data: Vec<f32>| Grid { width: win.width, height: win.height, data };
+    let mut it = fields.into_iter();
+    let mut next = || it.next().unwrap_or_default();
+    let mask = g(next()).map(|v| *v != 0.0);
+    let (elevation_m, slope_deg, aspect_deg, twi, insolation_kwh_m2, wind_exposure, temperature_c) = (g(next()), g(next()), g(next()), g(next()), g(next()), g(next()), g(next()));
+    let indices = Grid { width: win.width, height: win.height, data: next().chunks_exact(6).map(|q| [q[0], q[1], q[2], q[3], q[4], q[5]]).collect() };
+    let part = SiteConditions { geo: c.geo.clone(), cell_x_m: c.cell_x_m, cell_y_m: c.cell_y_m, mask, elevation_m, slope_deg, aspect_deg, twi, insolation_kwh_m2, wind_exposure, temperature_c, indices, held: win, full: c.full };
+    Ok(Some((part, crate::sim::tiles::WholeSite { identity: identity_got, valid_cells: sums[0] })))
 }
 
 /// The layout of [`layout_for`] from the weights per light column `wc` and row `wr`.
@@ -422,7 +582,12 @@ impl<'t> Root<'t> {
         }
         command(self.t, Some(Command::Layout))?;
         // the median is rank 0's part of the ranks' selection; its world has it already
-        let r = layout_by(world, self.t).map(|(l, _)| l);
+        let r = layout_by(world, self.t).and_then(|(l, _)| {
+            // rank 0 holds the whole site: it sends the other ranks' tiles their cells
+            let c = &world.site.conditions;
+            tile_site_by(std::borrow::Cow::Borrowed(c), world.site.whole_identity.as_deref().filter(|_| !c.holds_all()), world.site.light.cell_m, &l, self.t)?;
+            Ok(l)
+        });
         if r.is_err() {
             self.done = true;
         }
@@ -633,9 +798,12 @@ impl Stepper for Root<'_> {
 }
 
 /// A rank other than 0: holds `site` in a [`World::skeleton`] of `scenario` (nothing derived
-/// from the site, no trees), cuts the layout with the other ranks ([`layout_by`]: the weights
-/// and the insolation's median from its band), derives only its tile's part of the site into
-/// it ([`crate::sim::tiles::derive_tile_site`]; issue 37 Build 1: until round 32 every rank
+/// from the site, no trees; a whole `site` cut to its band of site rows first unless the
+/// scenario has management, whose areas resolve against the whole site), cuts the layout
+/// with the other ranks ([`layout_by`]: the weights and the insolation's median from its
+/// band; then its tile's cells from the band owners, [`tile_site_by`]), derives only its
+/// tile's part of the site into it ([`crate::sim::tiles::derive_tile_site_with`]; issue 37
+/// Build 1: until round 32 every rank
 /// built the whole world of one process, `World::new`, and cut its tile from it), then follows
 /// rank 0's commands until [`Command::End`]. Its tile's stand and the next tree id come from
 /// rank 0 ([`Tile::scatter`]) or from its checkpoint. Writes no files. The scenario's checks
@@ -646,8 +814,17 @@ impl Stepper for Root<'_> {
 /// command out of order.
 pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: &mut dyn Transport) -> Result<()> {
     check(scenario)?;
-    let world = World::skeleton(site, lib, scenario)?;
     let me = t.rank();
+    let mut site = site;
+    if scenario.management.is_empty() && t.size() > 1 && me != 0 && site.holds_all() {
+        // only this rank's band of site rows (what `site_ranks::site_by_ranks_held` gives an
+        // MPI rank); its tile's cells come from the bands' owners with the layout
+        let b = crate::sim::tiles::weight_band(me, t.size(), site.height());
+        site.hold(crate::grid::Window { col0: 0, row0: b.start, width: site.width(), height: b.len() });
+    }
+    let world = World::skeleton(site, lib, scenario)?;
+    // the whole site's identity and unmasked count, when this rank holds its tile's cells only
+    let mut whole: Option<crate::sim::tiles::WholeSite> = None;
     // the layout and the insolation's median, found with the other ranks on [`Command::Layout`]
     let mut layout: Option<(Layout, f32)> = None;
     let laid = |l: &Option<(Layout, f32)>, c: Command| l.clone().ok_or_else(|| Error::Exchange { peer: 0, reason: format!("command {c:?} before the layout was cut (command Layout)") });
@@ -669,13 +846,27 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 return Ok(());
             }
             (Command::Layout, _) => {
-                let w = world.as_ref().ok_or_else(|| Error::Exchange { peer: 0, reason: "command Layout after this rank's tile was made".into() })?;
-                layout = Some(layout_by(w, t)?);
+                let w = world.as_mut().ok_or_else(|| Error::Exchange { peer: 0, reason: "command Layout after this rank's tile was made".into() })?;
+                let (l, median) = layout_by(w, t)?;
+                // a band gives way to the tile's cells (given up grid by grid as it is sent)
+                let c = &mut w.site.conditions;
+                let held = if c.holds_all() {
+                    tile_site_by(std::borrow::Cow::Borrowed(c), None, w.site.light.cell_m, &l, t)?;
+                    None
+                } else {
+                    let band = std::mem::replace(c, SiteConditions::uniform(c.width(), 0, c.cell_x_m, 0.0, [0.0; 6], 0.0));
+                    tile_site_by(std::borrow::Cow::Owned(band), None, w.site.light.cell_m, &l, t)?
+                };
+                if let Some((c, ws)) = held {
+                    w.site.conditions = c;
+                    whole = Some(ws);
+                }
+                layout = Some((l, median));
             }
             (Command::Begin, _) => {
                 let (l, median) = laid(&layout, c)?;
                 let mut w = template(&mut world, c)?;
-                crate::sim::tiles::derive_tile_site(&mut w, scenario, &l, me, median)?;
+                crate::sim::tiles::derive_tile_site_with(&mut w, scenario, &l, me, median, whole.as_ref())?;
                 let mut tl = Tile::own(w, l, me)?;
                 tl.scatter(None, t)?;
                 tile = Some(tl);
@@ -697,7 +888,7 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
             (Command::Resume, None) => {
                 let (year, p) = send_paths(t, None)?;
                 let r = laid(&layout, c).and_then(|l| Ok((template(&mut world, c)?, l))).map_err(super::JobError::from).and_then(|(mut w, (l, median))| {
-                    crate::sim::tiles::derive_tile_site(&mut w, scenario, &l, me, median)?;
+                    crate::sim::tiles::derive_tile_site_with(&mut w, scenario, &l, me, median, whole.as_ref())?;
                     load_tile(w, &l, me, &p, year)
                 });
                 let a = agree(t, r.as_ref().err().map(|e| e.to_string()));

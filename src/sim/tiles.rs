@@ -482,6 +482,30 @@ pub fn work_weights_of(c: &crate::conditions::SiteConditions, lib: &crate::speci
     (wc, wr)
 }
 
+/// The layout's weights per light column and row ([`work_weights_of`]) of the light cells
+/// whose centre's site cell lies in the site rows `site_rows` (row 0 north) and is held by
+/// `c`: the `n` ranks' bands of site rows ([`weight_band`] of the site's height) count every
+/// light cell once, so their sums are [`work_weights_in`]'s of the whole site, whether a rank
+/// holds its band only or the whole site (issue 37 Build 1, round 32).
+pub fn work_weights_of_site_rows(c: &crate::conditions::SiteConditions, lib: &crate::species::SpeciesLibrary, pool: &[crate::species::SpeciesId], light: &LightGrid, site_rows: std::ops::Range<usize>) -> (Vec<u64>, Vec<u64>) {
+    let (mut wc, mut wr) = (vec![0u64; light.cols], vec![0u64; light.rows]);
+    let w = c.width().max(1);
+    for (r, rn) in wr.iter_mut().enumerate() {
+        for (col, n) in wc.iter_mut().enumerate() {
+            let s = crate::sim::world::light_site_cell(c, light, r * light.cols + col);
+            if s == u32::MAX || !site_rows.contains(&(s as usize / w)) {
+                continue;
+            }
+            let ix = &c.indices.data[c.held(s as usize)];
+            if pool.iter().any(|&p| lib.species[p as usize].suitability(ix) > 0.0) {
+                *n += 1;
+                *rn += 1;
+            }
+        }
+    }
+    (wc, wr)
+}
+
 /// Derives into `w` (a [`World::skeleton`] holding the whole site's conditions) the part of
 /// the site that tile `me` of `layout` holds, as [`Tile::own`] cuts it from the world of one
 /// process (issue 37 Build 1, item (a): the whole site's derived grids are never built on a
@@ -499,14 +523,46 @@ pub fn work_weights_of(c: &crate::conditions::SiteConditions, lib: &crate::speci
 /// Errors: [`Error::Invalid`] when `w`'s conditions are not whole; as
 /// [`super::management::resolve`].
 pub fn derive_tile_site(w: &mut World, scenario: &super::scenario::Scenario, layout: &Layout, me: usize, median: f32) -> Result<()> {
+    derive_tile_site_with(w, scenario, layout, me, median, None)
+}
+
+/// What a rank holding only its tile's cells of the site conditions needs of the whole site
+/// (issue 37 Build 1, item (a), round 32; `job::tiled::tile_site_by` gathers it): the checkpoint
+/// identity ([`super::checkpoint::site_identity`] of the whole site, from rank 0, which holds
+/// it) and the count of unmasked site cells (the ranks' bands' counts all-summed).
+#[derive(Debug, Clone, PartialEq)]
+pub struct WholeSite {
+    /// [`super::checkpoint::site_identity`] of the whole site's conditions.
+    pub identity: Vec<(String, String)>,
+    /// Unmasked cells of the whole site (cells, 0 to width × height).
+    pub valid_cells: u64,
+}
+
+/// [`derive_tile_site`] of a world whose conditions hold either the whole site (`whole`
+/// unused) or exactly tile `me`'s window of it (the site cells under its rectangle plus
+/// [`SITE_HALO_CELLS`], what `job::tiled::tile_site_by` moves to it from the ranks' bands) with
+/// `whole` the whole site's identity and unmasked count; the values are the same bit for bit.
+/// A scenario with management needs the whole site (its areas count light cells over it).
+///
+/// Errors: [`Error::Invalid`] when `w`'s conditions hold neither the whole site nor the tile's
+/// window with `whole` given, or hold a window with management entries in the scenario; as
+/// [`super::management::resolve`].
+pub fn derive_tile_site_with(w: &mut World, scenario: &super::scenario::Scenario, layout: &Layout, me: usize, median: f32, whole: Option<&WholeSite>) -> Result<()> {
     let c = &w.site.conditions;
-    if !c.holds_all() {
-        return Err(Error::Invalid { context: "tiled run".into(), field: "site conditions".into(), value: format!("cells {} of {} × {}", c.held, c.full.0, c.full.1), expected: "the whole site, to derive a tile's part from".into() });
-    }
     let light = w.site.light;
     let rect = layout.rect(me);
+    let l = light.cell_m;
+    let win = c.window_of(rect.col0 as f64 * l, rect.row0 as f64 * l, rect.col1 as f64 * l, rect.row1 as f64 * l, SITE_HALO_CELLS);
+    let part = match whole {
+        Some(ws) if !c.holds_all() && c.held == win && scenario.management.is_empty() => Some(ws),
+        _ if c.holds_all() => None,
+        _ => return Err(Error::Invalid { context: "tiled run".into(), field: "site conditions".into(), value: format!("cells {} of {} × {}", c.held, c.full.0, c.full.1), expected: format!("the whole site, or tile {me}'s cells {win} with the whole site's identity (a scenario without management)") }),
+    };
     let span = super::light_grid::Span::new(Some(rect), &light);
-    let valid = c.mask.data.iter().filter(|m| **m).count();
+    let valid = match part {
+        Some(ws) => ws.valid_cells as usize,
+        None => c.mask.data.iter().filter(|m| **m).count(),
+    };
     w.site.area_ha = valid as f64 * c.cell_x_m * c.cell_y_m / 10_000.0;
     w.site.light_site = (0..span.len()).map(|k| super::world::light_site_cell(c, &light, span.cell(k))).collect();
     let (canopy, ground_free) = super::obstacle::light_cells(&w.site.obstacles, light.cols, light.rows, light.cell_m, super::light_grid::EXTINCTION_K);
@@ -518,9 +574,9 @@ pub fn derive_tile_site(w: &mut World, scenario: &super::scenario::Scenario, lay
         let view = super::management::SiteView { conditions: c, extent: w.site.extent, light: &light, light_site: &whole, pool: &w.site.pool };
         w.site.management = super::management::resolve(&scenario.management, &view, &w.site.lib, &scenario.context())?;
     }
-    let l = light.cell_m;
-    let win = c.window_of(rect.col0 as f64 * l, rect.row0 as f64 * l, rect.col1 as f64 * l, rect.row1 as f64 * l, SITE_HALO_CELLS);
-    if win != c.held {
+    if let Some(ws) = part {
+        w.site.whole_identity = Some(ws.identity.clone());
+    } else if win != c.held {
         w.site.whole_identity = Some(super::checkpoint::site_identity(c));
         w.site.conditions.hold(win);
     }
