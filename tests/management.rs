@@ -79,6 +79,101 @@ fn thinning_from_below_leaves_the_understorey() {
     assert!((rd - 0.45).abs() / 0.45 < 0.05, "relative density {rd:.3}, target 0.45");
 }
 
+/// A two-layered beech stand (1 ha), made by hand: 70 overstorey trees of 50–60 cm DBH and
+/// 36–40 m, with or without 210 intermediate stems of 15–25 cm and 16–24 m, over 490 stems of
+/// ingrowth of 7–10 cm and 6–10 m (under a third of top height: not of the main stand). Store
+/// order: every 63rd tree is of the overstorey, the next three intermediate, every 9th ingrowth;
+/// the others are made seedlings under 1.3 m.
+fn layered(intermediate: bool, target_rd: f64) -> World {
+    let extra = format!("[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = {target_rd}\nyear = 1\n");
+    let (_, mut w) = world(&beech_stand(&extra, 1));
+    let t = &mut w.stand.trees;
+    let n = t.len();
+    for i in 0..n {
+        let f = (i * 37 % 101) as f32 / 100.0;
+        let (d, h) = if i % 63 == 0 {
+            (50.0 + 10.0 * f, 36.0 + 4.0 * f)
+        } else if intermediate && (1..=3).contains(&(i % 63)) {
+            (15.0 + 10.0 * f, 16.0 + 8.0 * f)
+        } else if i % 9 == 4 {
+            (7.0 + 3.0 * f, 6.0 + 4.0 * f)
+        } else {
+            (0.5, 1.0)
+        };
+        t.dbh[i] = d;
+        t.height[i] = h;
+        t.crown_base[i] = 0.5 * h;
+    }
+    w
+}
+
+/// Relative density of the stems of `w` with a DBH ≥ 7 cm and a height ≥ `min_h` (m), over
+/// its area.
+fn rd_of(w: &World, min_h: f32) -> f64 {
+    let t = &w.stand.trees;
+    let ns = w.site.lib.species.len();
+    let (mut n, mut d2) = (vec![0.0; ns], vec![0.0; ns]);
+    for i in (0..t.len()).filter(|&i| t.dbh[i] >= 7.0 && t.height[i] >= min_h) {
+        n[t.species[i] as usize] += 1.0;
+        d2[t.species[i] as usize] += (t.dbh[i] as f64).powi(2);
+    }
+    sylva::sim::phases::management::stand_rd(&w.site.lib, &n, &d2, w.site.area_ha)
+}
+
+/// Runs the management due in year 1 on `w` as it stands: (harvested DBHs, notes).
+fn manage_now(w: &mut World) -> (Vec<f32>, Vec<String>) {
+    let World { site, stand, scratch, tallies, .. } = w;
+    let (_, notes) = sylva::sim::phases::management::run(sylva::sim::phases::management::Manage { seed: 7, year: 0, site, trees: &mut stand.trees, dead: &mut scratch.dead, deaths_total: &mut tallies.deaths_total });
+    (scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).map(|d| d.dbh).collect(), notes)
+}
+
+/// A thinning from below works on the main stand (issue 35, round 32's trial: from age ~80 it
+/// took 175–223 stems/ha of 7–9 cm ingrowth, then dominant trees, the ingrowth having used up
+/// the relative-density target): in a two-layered stand it takes the intermediate stems,
+/// smallest first, and no overstorey tree while intermediate stems are left; it takes none of
+/// the ingrowth under a third of top height, which does not count towards the target; an
+/// overstorey at its target already is left whole, however much ingrowth stands under it.
+#[test]
+fn thinning_from_below_works_on_the_main_stand_of_a_two_layered_stand() {
+    // overstorey and ingrowth, the overstorey's relative density 5 % under the target
+    let w0 = layered(false, 1.0);
+    let (rd_over, rd_all) = (rd_of(&w0, 12.0), rd_of(&w0, 1.3));
+    assert!(rd_all > 1.2 * rd_over, "the ingrowth counts: {rd_all:.3} against the overstorey's {rd_over:.3}");
+    let mut w = layered(false, 1.05 * rd_over);
+    let (cut, notes) = manage_now(&mut w);
+    assert!(cut.is_empty(), "the overstorey is at its target: nothing to thin, yet {} stems cut: {cut:?}", cut.len());
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(notes[0].contains("at or below the target"), "{notes:?}");
+    // with an intermediate layer, a target between the overstorey's and the main stand's
+    let w1 = layered(true, 1.0);
+    let rd_main = rd_of(&w1, 12.0);
+    assert!(rd_main > 1.1 * rd_over, "{rd_main:.3} vs {rd_over:.3}");
+    let target = 0.5 * (rd_over + rd_main);
+    let mut w = layered(true, target);
+    let (cut, _) = manage_now(&mut w);
+    assert!(!cut.is_empty());
+    assert!(cut.iter().all(|&d| (15.0..=25.0).contains(&d)), "only intermediate stems go: {cut:?}");
+    let t = &w.stand.trees;
+    let over = (0..t.len()).filter(|&i| t.dbh[i] >= 50.0).count();
+    let ingrowth = (0..t.len()).filter(|&i| t.dbh[i] >= 7.0 && t.dbh[i] <= 10.0).count();
+    assert_eq!((over, ingrowth), (w1.stand.trees.dbh.iter().filter(|&&d| d >= 50.0).count(), w1.stand.trees.dbh.iter().filter(|&&d| (7.0..=10.0).contains(&d)).count()), "no overstorey tree, no ingrowth stem cut");
+    let max_cut = cut.iter().cloned().fold(0f32, f32::max);
+    let min_left = (0..t.len()).filter(|&i| (15.0..=25.0).contains(&t.dbh[i])).map(|i| t.dbh[i]).fold(f32::MAX, f32::min);
+    assert!(max_cut <= min_left, "smallest first: {max_cut} cut, {min_left} left");
+    let rd_after = rd_of(&w, 12.0);
+    assert!(rd_after <= target && rd_after > 0.97 * target, "main stand's relative density {rd_after:.4} against the target {target:.4}");
+    // a target under the overstorey's alone: every intermediate stem goes before the first
+    // overstorey tree, the ingrowth stays
+    let mut w = layered(true, 0.9 * rd_over);
+    let (cut, _) = manage_now(&mut w);
+    let t = &w.stand.trees;
+    let inter_left = (0..t.len()).filter(|&i| (15.0..=25.0).contains(&t.dbh[i])).count();
+    let over_cut = cut.iter().filter(|&&d| d >= 50.0).count();
+    assert!(over_cut > 0 && inter_left == 0, "{over_cut} overstorey trees cut with {inter_left} intermediate stems left");
+    assert!(cut.iter().all(|&d| d >= 15.0), "no ingrowth cut: {cut:?}");
+    eprintln!("overstorey RD {rd_over:.3}, with ingrowth {rd_all:.3}, main stand {rd_main:.3}; target {target:.3} → {rd_after:.3}");
+}
+
 #[test]
 fn thinning_from_above_to_stems_and_relative_density_targets() {
     // from above to 1,500 stems/ha: the thickest go

@@ -13,7 +13,10 @@ use std::path::Path;
 /// temperature_offset_k,precipitation_factor` (regeneration-layer stems in the year, then tree
 /// deaths in the year by [`DeathCause`], then standing and harvested stem volume (m³/ha),
 /// harvested stems/ha and the year's climate: temperature offset (K) and precipitation factor)
-/// (`species` = pool ids in pool order).
+/// (`species` = pool ids in pool order). `top_height_m` is H100 over the upper layer (stems at
+/// least two thirds of the top height tall; [`StandRow::top_height_m`]), so a stand with fewer
+/// than 100 overstorey trees per ha reports their height, not that of ingrowth among the 100
+/// thickest.
 pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     let mut s = String::from("year,stems_ha,seedlings_ha,regeneration_ha,basal_area_m2_ha,mean_height_m,top_height_m,qmd_cm,stems_7cm_ha,qmd_7cm_cm");
     for sp in species {

@@ -30,8 +30,11 @@ pub struct StandRow {
     /// Mean height of stems ≥ 1.3 m (m).
     pub mean_height_m: f64,
     /// Top height H100 (m): mean height of the 100 largest-DBH trees (≥ 1.3 m) per ha of
-    /// unmasked area, i.e. of the `round(100 · area_ha)` thickest trees; where fewer trees stand,
-    /// the mean height of all of them (the H100 definition of the yield tables, Assmann 1970).
+    /// unmasked area, i.e. of the `round(100 · area_ha)` thickest trees (the H100 definition of
+    /// the yield tables, Assmann 1970), taken over the upper layer: the stems at least two
+    /// thirds of the top height tall (IUFRO tree classes, Leibundgut 1958; Pretzsch 2009); where
+    /// the upper layer holds fewer, the mean height of all of them, so ingrowth under a thin
+    /// overstorey does not lower it ([`top_height`]).
     pub top_height_m: f64,
     /// Quadratic mean DBH of stems ≥ 1.3 m (cm).
     pub qmd_cm: f64,
@@ -296,20 +299,61 @@ fn is_stem(h: f32) -> bool {
     h.partial_cmp(&1.3) != Some(std::cmp::Ordering::Less)
 }
 
-/// Widths (bits) of the digits [`top_height_by`] selects by, from the top of the 64-bit key
+/// Widths (bits) of the digits [`h100_by`] selects by, from the top of the 64-bit key
 /// (DBH's [`total_key`], then height's): histograms of 1,024–2,048 counts per round.
 const DIGITS: [u32; 6] = [10, 11, 11, 11, 11, 10];
 
-/// Top height: mean height of the `round(100 · a)` largest-DBH trees of at least 1.3 m
-/// (ties by height; trees of equal DBH and height are interchangeable), all of them where fewer
-/// stand; the heights summed exactly ([`fixed`]), so any selection of the same trees gives the
-/// same bits. One process ([`alone`]); [`top_height_by`] over the parts of a stand.
+/// Top height (m): Assmann's h100, the mean height of the `round(100 · a)` largest-DBH trees of
+/// at least 1.3 m (ties by height; trees of equal DBH and height are interchangeable), taken over
+/// the stand's upper layer, the stems at least [`UPPER_LAYER_SHARE`] (two thirds) of the top
+/// height tall (the IUFRO tree classes' upper layer, Leibundgut 1958, as in Assmann 1970 and
+/// Pretzsch 2009, §2): all of them where fewer than `round(100 · a)` stand. So a stand of 70
+/// trees/ha of 38 m over ingrowth of 7–11 m has a top height of 38 m, not the mean of the 70
+/// and 30 ingrowth stems (found by a trial: 34.6 → 29.0 m in an old thinned beech stand whose
+/// overstorey grew). In a stand whose 100 thickest per ha are all in the upper layer (even-aged,
+/// one layer) it is plain h100. Found by fixed point: h100 over all stems, then over the stems of
+/// at least two thirds of it, until the layer holds the same stems (at most
+/// [`UPPER_LAYER_ROUNDS`] rounds). The heights summed exactly ([`fixed`]), so any selection of
+/// the same trees gives the same bits. One process ([`alone`]); [`top_height_by`] over the
+/// parts of a stand. 0 without stems.
 pub(crate) fn top_height(dbh: &[f32], height: &[f32], a: f64) -> f64 {
     let stems = height.iter().filter(|&&h| is_stem(h)).count() as u64;
     top_height_by(dbh, height, a, stems, &mut alone).unwrap_or(0.0)
 }
 
+/// Share of the top height above which a stem is of the upper layer that the top height is
+/// taken over: two thirds (IUFRO tree classes, Leibundgut 1958; Pretzsch 2009, §2).
+pub const UPPER_LAYER_SHARE: f64 = 2.0 / 3.0;
+
+/// Most rounds of [`top_height_by`]'s fixed point (one usually; two with a lower layer).
+pub const UPPER_LAYER_ROUNDS: usize = 8;
+
 /// [`top_height`] over a stand in parts (the ranks of a tiled run), each passing its own trees
+/// (`dbh`, `height`) and `stems`, the stems (≥ 1.3 m) of the whole stand: each round of the
+/// fixed point is an h100 ([`h100_by`]) over the stems at least [`UPPER_LAYER_SHARE`] of the
+/// last round's result tall, their count summed over the parts (`reduce`); every part sees the
+/// same sums, so all take the same rounds.
+///
+/// Errors: those of `reduce`.
+pub fn top_height_by(dbh: &[f32], height: &[f32], a: f64, stems: u64, reduce: &mut Reduce) -> crate::Result<f64> {
+    let mut h = h100_by(dbh, height, a, stems, reduce)?;
+    let mut layer = stems;
+    for _ in 0..UPPER_LAYER_ROUNDS {
+        let low = (UPPER_LAYER_SHARE * h) as f32;
+        let keep: Vec<usize> = (0..dbh.len()).filter(|&i| is_stem(height[i]) && height[i] >= low).collect();
+        let n = reduce(vec![keep.len() as u64])?[0];
+        if n == layer || n == 0 {
+            break;
+        }
+        let d: Vec<f32> = keep.iter().map(|&i| dbh[i]).collect();
+        let hh: Vec<f32> = keep.iter().map(|&i| height[i]).collect();
+        h = h100_by(&d, &hh, a, n, reduce)?;
+        layer = n;
+    }
+    Ok(h)
+}
+
+/// Assmann's h100 over a stand in parts (the ranks of a tiled run), each passing its own trees
 /// (`dbh`, `height`) and `stems`, the stems (≥ 1.3 m) of the whole stand; nothing per tree is
 /// passed: the `k` thickest are found by a radix selection over the 64-bit key (DBH, height),
 /// descending, digit by digit ([`DIGITS`]): every part counts its candidates per digit value,
@@ -320,7 +364,7 @@ pub(crate) fn top_height(dbh: &[f32], height: &[f32], a: f64) -> f64 {
 /// sums are summed. At most 7 reductions, usually 3–4.
 ///
 /// Errors: those of `reduce`.
-pub fn top_height_by(dbh: &[f32], height: &[f32], a: f64, stems: u64, reduce: &mut Reduce) -> crate::Result<f64> {
+pub fn h100_by(dbh: &[f32], height: &[f32], a: f64, stems: u64, reduce: &mut Reduce) -> crate::Result<f64> {
     if stems == 0 {
         return Ok(0.0);
     }
@@ -477,6 +521,74 @@ mod tests {
         unfixed(t[..k].iter().map(|x| fixed(x.1 as f64)).sum()) / k as f64
     }
 
+    /// [`top_height`] by sorts: h100 ([`by_sort`]) over the stems at least two thirds of the
+    /// last result tall, until their count stays.
+    fn layered_by_sort(d: &[f32], h: &[f32], a: f64) -> f64 {
+        let mut top = by_sort(d, h, a);
+        let mut layer = h.iter().filter(|h| **h >= 1.3).count();
+        for _ in 0..UPPER_LAYER_ROUNDS {
+            let low = (UPPER_LAYER_SHARE * top) as f32;
+            let keep: Vec<usize> = (0..d.len()).filter(|&i| h[i] >= 1.3 && h[i] >= low).collect();
+            if keep.len() == layer || keep.is_empty() {
+                break;
+            }
+            let kd: Vec<f32> = keep.iter().map(|&i| d[i]).collect();
+            let kh: Vec<f32> = keep.iter().map(|&i| h[i]).collect();
+            top = by_sort(&kd, &kh, a);
+            layer = keep.len();
+        }
+        top
+    }
+
+    /// A stand of 70 trees/ha of 50–60 cm and 36–40 m over 500 stems/ha of ingrowth of
+    /// 7–10 cm and 7–11 m (1 ha, 2 ha): its top height is the mean height of the 70, not of
+    /// the 100 thickest (70 big and 30 ingrowth: about 29 m); with 150 big trees/ha it is
+    /// the h100 of the big trees.
+    #[test]
+    fn top_height_of_a_thin_overstorey_over_ingrowth_is_the_overstoreys() {
+        for a in [1.0, 2.0] {
+            for n_big in [70usize, 150] {
+                let (mut d, mut h) = (Vec::new(), Vec::new());
+                let nb = (n_big as f64 * a) as usize;
+                for i in 0..nb {
+                    d.push(50.0 + 10.0 * (i as f32 / nb as f32));
+                    h.push(36.0 + 4.0 * ((i * 7 % nb) as f32 / nb as f32));
+                }
+                let ni = (500.0 * a) as usize;
+                for i in 0..ni {
+                    d.push(7.0 + 3.0 * (i as f32 / ni as f32));
+                    h.push(7.0 + 4.0 * ((i * 13 % ni) as f32 / ni as f32));
+                }
+                let got = top_height(&d, &h, a);
+                let want = by_sort(&d[..nb], &h[..nb], a);
+                assert_eq!(got.to_bits(), want.to_bits(), "a {a}, {n_big} big/ha: {got} vs the big trees' h100 {want}");
+                assert!(got > 37.0 && got < 39.0, "{got}");
+                if n_big == 70 {
+                    let plain = by_sort(&d, &h, a);
+                    assert!(plain < 32.0, "plain h100 {plain} takes in the ingrowth");
+                    // the part of the stand with a third of the stems each still gives the same
+                    let got3: Vec<f64> = std::thread::scope(|s| {
+                        let hs: Vec<_> = LocalTransport::group(3)
+                            .into_iter()
+                            .map(|mut t| {
+                                let (d, h) = (&d, &h);
+                                s.spawn(move || {
+                                    let me = t.rank();
+                                    let idx: Vec<usize> = (0..d.len()).filter(|i| i % 3 == me).collect();
+                                    let pd: Vec<f32> = idx.iter().map(|&i| d[i]).collect();
+                                    let ph: Vec<f32> = idx.iter().map(|&i| h[i]).collect();
+                                    top_height_by(&pd, &ph, a, d.len() as u64, &mut |v| t.all_sum(v)).unwrap()
+                                })
+                            })
+                            .collect();
+                        hs.into_iter().map(|h| h.join().unwrap()).collect()
+                    });
+                    assert!(got3.iter().all(|v| v.to_bits() == got.to_bits()), "{got3:?} vs {got}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn top_height_over_parts_is_one_stands() {
         let (d, h) = trees(5_000);
@@ -484,7 +596,7 @@ mod tests {
         // k from 1 to beyond the stems, through the tie of 30 cm
         for a in [0.01, 0.5, 3.0, 7.77, 20.0, 44.0, 100.0] {
             let one = top_height(&d, &h, a);
-            assert_eq!(one.to_bits(), by_sort(&d, &h, a).to_bits(), "a = {a}");
+            assert_eq!(one.to_bits(), layered_by_sort(&d, &h, a).to_bits(), "a = {a}");
             for parts in [2usize, 3] {
                 let got: Vec<f64> = std::thread::scope(|s| {
                     let hs: Vec<_> = LocalTransport::group(parts)

@@ -39,7 +39,7 @@ pub struct Manage<'a> {
 /// thinning entry (`thinning` or crop trees) due this year that removed no tree, saying so:
 /// `year Y: management[i] (thinning METHOD) removed nothing: WHY`, WHY being a trigger that
 /// does not hold (with the area's figure), the area's figure at or below the target already,
-/// or no stems of the growing stock (≥ 7 cm DBH) in its area; the run writes each to its log
+/// or no stems of the growing stock (≥ 7 cm DBH) or of its main stand in its area; the run writes each to its log
 /// (standard error) once.
 pub fn run(m: Manage<'_>) -> (usize, Vec<String>) {
     let y = m.year + 1;
@@ -181,12 +181,25 @@ fn goal(target: Target) -> f64 {
     }
 }
 
-/// The trees a thinning removes: none unless its triggers hold over its area; else the stems of
-/// the growing stock (DBH ≥ [`crate::sim::density::MIN_DBH_CM`], 7 cm) of its area from the
-/// smallest DBH (`from_below`) or the largest, ties by id, until the area's figure (basal area,
-/// stems or relative density of those stems) is at or below the target. Smaller trees (the
-/// understorey, the regeneration) are left. With the trees, why none is removed where none is
-/// (a trigger, the target held already, no stems ≥ 7 cm in the area).
+/// Share of the area's top height ([`crate::sim::stats::top_height`]) below which a stem is
+/// not of the main stand a thinning works on: the IUFRO tree classes' lower layer (under a
+/// third of top height; upper layer above two thirds, middle layer between: Leibundgut 1958,
+/// as used by Assmann 1970 and Pretzsch 2009, *Forest Dynamics, Growth and Yield*, §2 and
+/// §9.3). The lower layer of an old stand is the ingrowth of the next generation, which the
+/// yield tables leave out of the main stand and which a thinning from below (grades A–C,
+/// Kraft classes 5, 4, then 3 of the main stand; Assmann 1970) does not work on.
+pub const MAIN_STAND_SHARE: f32 = 1.0 / 3.0;
+
+/// The trees a thinning removes: none unless its triggers hold over its area; else stems of
+/// the area's main stand: the growing stock (DBH ≥ [`crate::sim::density::MIN_DBH_CM`], 7 cm)
+/// at least [`MAIN_STAND_SHARE`] of the area's top height tall, from the smallest DBH
+/// (`from_below`) or the largest, ties by id, until the main stand's figure (basal area, stems
+/// or relative density of its stems) is at or below the target. The triggers and the target are
+/// measured on the main stand. Smaller trees (the understorey, the regeneration, the ingrowth
+/// under a third of top height) are left, so a thinning from below never takes a dominant tree
+/// while a smaller stem of the main stand stands, nor uses up its target on the understorey.
+/// With the trees, why none is removed where none is (a trigger, the target held already, no
+/// stems of the main stand in the area).
 fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target: Target, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Vec<bool>, Option<String>) {
     let mut remove = vec![false; t.len()];
     let a = op.region.area_ha.max(1e-9);
@@ -194,9 +207,18 @@ fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target
     // and the relative density count them); the understorey and the regeneration below stay
     // (taking the smallest stems first used to clear every stem under 7 cm at each entry before
     // the relative density, which does not count them, moved at all: found by a trial)
-    let mut cand: Vec<usize> = stems_in(t, op).into_iter().filter(|&i| t.dbh[i] >= crate::sim::density::MIN_DBH_CM).collect();
-    if cand.is_empty() {
+    let stock: Vec<usize> = stems_in(t, op).into_iter().filter(|&i| t.dbh[i] >= crate::sim::density::MIN_DBH_CM).collect();
+    if stock.is_empty() {
         return (remove, Some("no stems of 7 cm DBH or more in its area".into()));
+    }
+    // and on the main stand only: the ingrowth under a third of top height used up the target
+    // of a thinning from below in old stands, which then took dominant trees (found by a trial)
+    let dbh: Vec<f32> = stock.iter().map(|&i| t.dbh[i]).collect();
+    let height: Vec<f32> = stock.iter().map(|&i| t.height[i]).collect();
+    let low = MAIN_STAND_SHARE * crate::sim::stats::top_height(&dbh, &height, a) as f32;
+    let mut cand: Vec<usize> = stock.into_iter().filter(|&i| t.height[i] >= low).collect();
+    if cand.is_empty() {
+        return (remove, Some("no stems of the main stand (7 cm DBH or more, a third of top height or more) in its area".into()));
     }
     let (mut f, why) = figures_and_triggers(site, t, &cand, a, trigger_rd, trigger_h);
     if why.is_some() {
