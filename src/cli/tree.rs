@@ -250,11 +250,12 @@ fn lone_chain(sk: &Skeleton, leaves: &mut Leaves, sp: &sylva::species::Species) 
 /// Prints what [`lone_chain`] gave the full level.
 fn print_fill(f: &sylva::job::leaf_area::LoneLeafArea, sp: &sylva::species::Species) {
     println!(
-        "leaf area {:.1} m² (crown LAI {:.1} over a crown projection of {:.1} m²): leaf cards {:.1} m², {} leaf-cluster cards added",
+        "leaf area {:.1} m² (crown LAI {:.1} over a crown projection of {:.1} m²): leaf cards {:.1} m², lengthened ×{:.2}, and {} leaf-cluster cards added",
         f.target_m2.max(f.cards_m2),
         sylva::sim::phases::light::crown_lai(sp.life.shade_tolerance),
         f.projection_m2,
         f.cards_m2,
+        f.card_growth,
         f.sprigs
     );
 }

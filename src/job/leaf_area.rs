@@ -129,6 +129,8 @@ pub struct LoneLeafArea {
     pub target_m2: f32,
     /// Leaf area (m², one-sided) of the tree's leaf cards before.
     pub cards_m2: f32,
+    /// Factor (1–[`MAX_CARD_GROWTH`]) by which the leaf cards were lengthened (1: as they were).
+    pub card_growth: f32,
     /// Leaf-cluster cards (sprigs) added.
     pub sprigs: usize,
 }
@@ -152,7 +154,7 @@ pub fn lone_tree_sprigs(sk: &crate::structure::Skeleton, lv: &mut crate::structu
     let cards_m2: f32 = lv.leaves.iter().map(|l| 0.5 * l.size * l.size * card.clamp(0.05, 1.0)).sum();
     let projection_m2 = crate::structure::crown_projection_area(sk, lv);
     let target_m2 = crate::sim::phases::light::crown_lai(sp.life.shade_tolerance) * projection_m2;
-    let mut out = LoneLeafArea { projection_m2, target_m2, cards_m2, sprigs: 0 };
+    let mut out = LoneLeafArea { projection_m2, target_m2, cards_m2, card_growth: 1.0, sprigs: 0 };
     if !(target_m2 > cards_m2) || lv.leaves.is_empty() {
         return (TriMesh::default(), out);
     }
@@ -161,7 +163,12 @@ pub fn lone_tree_sprigs(sk: &crate::structure::Skeleton, lv: &mut crate::structu
     let reach = crate::structure::crown_radius(sk, lv);
     lv.leaves.iter_mut().for_each(|l| l.pos -= root);
     let seed = crate::rng::hash(&sp.id.bytes().map(u64::from).collect::<Vec<_>>());
+    let before = lv.leaves.first().map(|l| l.size);
     let mut m = sprig_cards(lv, target_m2, card, sprig, reach, seed);
+    out.card_growth = match (before, lv.leaves.first()) {
+        (Some(b), Some(l)) if b > 0.0 => l.size / b,
+        _ => 1.0,
+    };
     lv.leaves.iter_mut().for_each(|l| l.pos += root);
     m.positions.iter_mut().for_each(|p| *p = (Vec3::from(*p) + root).to_array());
     m.uvs.iter_mut().for_each(|uv| uv[0] += crate::mesh::CLUSTER_CARD_U);
@@ -199,6 +206,9 @@ mod lone_tree_tests {
             assert!((f.cards_m2 - before).abs() < 1e-3 * before);
             assert!(f.target_m2 > before, "{id}: the tips' cards alone carry {before} m², the crown {} m²", f.target_m2);
             assert_eq!(f.sprigs, m.positions.len() / 4);
+            assert!((1.0..=MAX_CARD_GROWTH + 1e-4).contains(&f.card_growth), "{id}: {}", f.card_growth);
+            // the sprigs come only once the cards are lengthened the most they may be
+            assert!(f.sprigs == 0 || (f.card_growth - MAX_CARD_GROWTH).abs() < 1e-4, "{id}: {}", f.card_growth);
             // the sprigs are marked as leaf-cluster cards; unmarked, the leaf area is the target
             // within half a sprig (the cards alone, lengthened, when they can carry it)
             assert!(m.uvs.iter().all(|uv| uv[0] >= crate::mesh::CLUSTER_CARD_U));
