@@ -60,7 +60,8 @@ pub struct Crowding {
     pub ccf: Vec<f32>,
     /// Basal area (m²/ha, ≥ 0) of the trees with a larger DBH than the tree's in its
     /// neighbourhood (BAL, Wykoff 1990), over the neighbourhood's area; computed only when a
-    /// pool species has `life.bai_competition` (PROGNAUS's competition terms), else empty.
+    /// pool species has `life.bai_competition` (PROGNAUS's competition terms), else empty, and
+    /// then only for the trees of such species (0 for the others, which do not read it).
     pub bal: Vec<f32>,
 }
 
@@ -135,12 +136,31 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
     });
     // per cell, for BAL: its trees' DBHs (> 0) in descending order and the cumulative basal
     // area (m², f64) of the first k of them, k = 0..; only where a pool species needs BAL
-    let need_bal = w.pool.iter().any(|&s| w.lib.species[s as usize].life.bai_competition.is_some());
+    let bal_sp: Vec<bool> = w.lib.species.iter().map(|sp| sp.life.bai_competition.is_some()).collect();
+    let need_bal = w.pool.iter().any(|&s| bal_sp[s as usize]);
+    // only the cells whose 3 × 3 neighbourhood holds a tree of such a species are sorted, and
+    // only those trees get a BAL (the only ones that read it): the same values, a fraction of
+    // the work where such species are few (round 32: the default run's spruce, 3 % of its
+    // trees, had every cell of a million trees sorted each year, +28 % simulation time)
+    let needed: Vec<bool> = if need_bal {
+        let has: Vec<bool> = (0..ncell).into_par_iter().with_min_len(256).map(|k| items[start[k] as usize..start[k + 1] as usize].iter().any(|&i| bal_sp[t.species[i as usize] as usize])).collect();
+        (0..ncell)
+            .map(|k| {
+                let (r, c) = (k / cols, k % cols);
+                (r.saturating_sub(1)..(r + 2).min(rows)).any(|rr| (c.saturating_sub(1)..(c + 2).min(cols)).any(|cc| has[rr * cols + cc]))
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     let by_size: Vec<(Vec<f32>, Vec<f64>)> = if need_bal {
         (0..ncell)
             .into_par_iter()
             .with_min_len(256)
             .map(|k| {
+                if !needed[k] {
+                    return (Vec::new(), vec![0.0]);
+                }
                 let mut ds: Vec<f32> = items[start[k] as usize..start[k + 1] as usize].iter().map(|&i| t.dbh[i as usize]).filter(|&d| d > 0.0).collect();
                 ds.sort_by(|a, b| b.total_cmp(a));
                 let mut cum = Vec::with_capacity(ds.len() + 1);
@@ -217,6 +237,9 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
             .into_par_iter()
             .with_min_len(1 << 12)
             .map(|i| {
+                if !bal_sp[t.species[i] as usize] {
+                    return 0.0;
+                }
                 let k = cells[i] as usize;
                 let (r, c) = (k / cols + r0, k % cols + c0);
                 let d = t.dbh[i];
