@@ -6,6 +6,7 @@ use sylva::conditions::{self, Climate};
 use sylva::grid::Crs;
 use sylva::job::maps as job_maps;
 use sylva::output::maps;
+use sylva::sim::Scenario;
 use sylva::terrain::{fields, generate, io, tin::Tin, Terrain};
 
 /// Where the terrain comes from.
@@ -164,7 +165,7 @@ fn info(s: &Source, tolerance: f64) -> anyhow::Result<()> {
 /// a scenario's Ellenberg maps but a one-year `sylva run`).
 fn scenario_maps(path: &Path, s: &Source, out: &Path) -> anyhow::Result<()> {
     anyhow::ensure!(s.latitude.is_none(), "--latitude: not with --scenario (the scenario's [climate] latitude_deg sets it)");
-    let sc = sylva::sim::Scenario::load(path)?;
+    let sc = Scenario::load(path)?;
     // the site is derived first, so that a refused scenario leaves no output folder behind
     let site = sc.site().with_context(|| format!("[terrain] of {}", sc.context()))?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;

@@ -220,7 +220,7 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         println!("light-guided: 60 cycles, the model's most, inside the crown envelope of a {age}-year tree");
     }
     println!("nodes {}, leaves {}, height {:.2} m, crown radius {:.2} m", sk.len(), leaves.len(), sk.height(), sylva::structure::crown_radius(&sk, &leaves));
-    print_fill(&fill, &sp);
+    print_fill(&fill);
     for (i, l) in chain.levels.iter().enumerate() {
         println!("LOD{i}: {:>8} triangles (bark {}, foliage {})", l.triangle_count(), l.bark.triangle_count(), l.leaves.triangle_count());
     }
@@ -248,11 +248,11 @@ fn lone_chain(sk: &Skeleton, leaves: &mut Leaves, sp: &sylva::species::Species) 
 }
 
 /// Prints what [`lone_chain`] gave the full level.
-fn print_fill(f: &sylva::job::leaf_area::LoneLeafArea, sp: &sylva::species::Species) {
+fn print_fill(f: &sylva::job::leaf_area::LoneLeafArea) {
     println!(
         "leaf area {:.1} m² (crown LAI {:.1} over a crown projection of {:.1} m²): leaf cards {:.1} m², lengthened ×{:.2}, and {} leaf-cluster cards added",
         f.target_m2.max(f.cards_m2),
-        sylva::sim::phases::light::crown_lai(sp.life.shade_tolerance),
+        f.lai,
         f.projection_m2,
         f.cards_m2,
         f.card_growth,
@@ -444,7 +444,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     } else {
         println!("species {}: {} -> {} nodes, bent {}, pruned {} for light + {} in obstacles, {} nodes recomputed", sp.id, r.nodes_before, r.nodes_after, r.bent, r.pruned_light, r.pruned_collision, rep.recomputed_nodes);
         println!("adapt {adapt_ms:.1} ms, regrowing it{} {regrow_ms:.1} ms", if obstacles.is_empty() { "" } else { " among the obstacles" });
-        print_fill(&fill, &sp);
+        print_fill(&fill);
         println!("wrote {}, {} and {}", a.out.display(), sylva::output::gltf::skeleton_sidecar_path(&a.out).display(), png.display());
     }
     Ok(())

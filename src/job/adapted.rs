@@ -308,9 +308,7 @@ impl LeafCover {
 
     /// The leaf card's and the leaf-cluster card's cover of species `sp`.
     pub fn of_species(sp: &crate::species::Species) -> (f32, f32) {
-        use crate::structure::texture::{cluster_card_cover, leaf_card_cover, LeafShape};
-        let s = LeafShape::of_species(sp);
-        (leaf_card_cover(s), cluster_card_cover(s))
+        super::leaf_area::card_covers(sp)
     }
 }
 

@@ -119,11 +119,23 @@ pub fn sprig_cards(lv: &mut crate::structure::Leaves, leaf_area_m2: f32, card_co
     m
 }
 
+/// The share of a leaf card and of a leaf-cluster card of species `sp` that their textures
+/// cover, `(card, cluster card)`, 0–1 ([`crate::structure::texture::leaf_card_cover`],
+/// [`crate::structure::texture::cluster_card_cover`] of its leaf shape).
+pub fn card_covers(sp: &crate::species::Species) -> (f32, f32) {
+    use crate::structure::texture::{cluster_card_cover, leaf_card_cover, LeafShape};
+    let s = LeafShape::of_species(sp);
+    (leaf_card_cover(s), cluster_card_cover(s))
+}
+
 /// What [`lone_tree_sprigs`] gave a lone tree.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct LoneLeafArea {
     /// Crown projection area (m², [`crate::structure::crown_projection_area`]).
     pub projection_m2: f32,
+    /// The species' crown leaf-area index (m² leaf per m² crown projection,
+    /// [`crate::sim::phases::light::crown_lai`]).
+    pub lai: f32,
     /// The leaf area the crown carries in the simulation (m², one-sided): the species' crown
     /// leaf-area index ([`crate::sim::phases::light::crown_lai`]) over the projection.
     pub target_m2: f32,
@@ -150,11 +162,12 @@ pub struct LoneLeafArea {
 /// the renderer draw them with the leaf-cluster texture), and the figures. Deterministic (the
 /// sprigs hash the species id).
 pub fn lone_tree_sprigs(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Leaves, sp: &crate::species::Species) -> (TriMesh, LoneLeafArea) {
-    let (card, sprig) = super::adapted::LeafCover::of_species(sp);
+    let (card, sprig) = card_covers(sp);
     let cards_m2: f32 = lv.leaves.iter().map(|l| 0.5 * l.size * l.size * card.clamp(0.05, 1.0)).sum();
     let projection_m2 = crate::structure::crown_projection_area(sk, lv);
-    let target_m2 = crate::sim::phases::light::crown_lai(sp.life.shade_tolerance) * projection_m2;
-    let mut out = LoneLeafArea { projection_m2, target_m2, cards_m2, card_growth: 1.0, sprigs: 0 };
+    let lai = crate::sim::phases::light::crown_lai(sp.life.shade_tolerance);
+    let target_m2 = lai * projection_m2;
+    let mut out = LoneLeafArea { projection_m2, lai, target_m2, cards_m2, card_growth: 1.0, sprigs: 0 };
     if !(target_m2 > cards_m2) || lv.leaves.is_empty() {
         return (TriMesh::default(), out);
     }
@@ -198,7 +211,7 @@ mod lone_tree_tests {
             let g = grow_species_tree(sp, model, age, &[], 3).unwrap();
             // re-leafed at its tips, as `tree grow --adapt-to` does after Plastic Trees
             let mut lv = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
-            let (card, sprig) = crate::job::adapted::LeafCover::of_species(sp);
+            let (card, sprig) = card_covers(sp);
             let before = area(&lv, &TriMesh::default(), card, sprig);
             let (m, f) = lone_tree_sprigs(&g.skeleton, &mut lv, sp);
             let lai = crate::sim::phases::light::crown_lai(sp.life.shade_tolerance);
