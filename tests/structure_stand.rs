@@ -221,3 +221,21 @@ fn stand_sky_rings_default_fewer_and_refused() {
         assert!(e.contains("sky_rings"), "{bad:?}: {e}");
     }
 }
+
+/// A stem a few centimetres from a neighbour's stem is kept: the main stem is not pruned for
+/// meeting another tree's wood (round 32's trial: an oak 0.21 m from a maple was pruned to its
+/// root, 1 node and no leaves, and the stand export left it out). Its branches inside the
+/// neighbour's wood still are.
+#[test]
+fn a_stem_beside_a_neighbours_stem_is_not_pruned_away() {
+    let lib = lib();
+    let t = |id, sp: &str, x: f32, h: f32, r: f32| StandTree { id, species: lib.find(sp).unwrap(), base: Vec3::new(x, 10.0, 100.0), age_yr: 60.0, height_m: h, crown_radius_m: r, crown_base_m: 0.4 * h, slope_deg: 0.0, aspect_deg: 180.0 };
+    let trees = vec![t(1, "norway_maple", 10.0, 22.0, 3.0), t(2, "sessile_oak", 10.05, 12.0, 1.5)];
+    for targets in [vec![1usize], vec![0, 1]] {
+        let mut cache = SkeletonCache::new(7, FULL_STRANDS);
+        let st = adapt_stand(&trees, &targets, &lib, &mut cache, &StandOptions::default()).unwrap();
+        let oak = st.trees.iter().find(|a| a.index == 1).unwrap();
+        let h = oak.skeleton.nodes.iter().map(|n| n.pos.z - 100.0).fold(0.0f32, f32::max);
+        assert!(oak.skeleton.nodes.len() > 500 && !oak.leaves.leaves.is_empty() && h > 11.0, "targets {targets:?}: {} nodes, {} leaves, {h:.2} m", oak.skeleton.nodes.len(), oak.leaves.leaves.len());
+    }
+}
