@@ -206,7 +206,8 @@ pub struct BaiCompetition {
 
 /// Dense-stand height–diameter curve of a species, `h/d = k · D^c` (h in m, D the DBH in cm,
 /// h/d in m/m, i.e. `100 h / D`), so the tallest a tree of DBH D grows is
-/// `h_max(D) = k · D^(1 + c) / 100` m. From iLand's species parameter `HDhigh` (Seidl et al.
+/// `h_max(D) = 1.3 + k · D^(1 + c) / 100` m (the curve counted from breast height, where a tree
+/// of DBH 0 stands; since issue 35 round 33). From iLand's species parameter `HDhigh` (Seidl et al.
 /// 2012, Ecol. Model. 231:87–100; iland-model.org "stem growth"; the `species_param_europe`
 /// table transcribed in species/sources/species_traits.csv), fitted on densely stocked even-aged
 /// (yield-table) stands: iLand writes it `a · b · (1 + c) · d^c` and uses it as the H/D of a

@@ -269,7 +269,7 @@ pub const FIELDS: &[FieldSpec] = &[
     f("life.stand_crown.c", "cm", rx(0.0, 200.0), "Stand-grown crown width: scale c of the saturating factor 1 − e^(−(d/c)^e) (1e-6: factor 1)"),
     f("life.stand_crown.e", "", rx(0.0, 5.0), "Stand-grown crown width: shape e of the saturating factor"),
     f("life.stand_crown.g", "", r(0.0, 1.0), "Stand-grown crown width: exponent g of the crown length h − cb (m) (default 0)"),
-    f("life.dense_hd.k", "m/m", rx(0.0, 1000.0), "Dense-stand height–diameter curve h/d = k·D^c (h m, D cm; a tree's height is bounded by k·D^(1+c)/100 m; iLand HDhigh a·b·(1+c)·d^c is its derivative, k = a·b; Seidl et al. 2012; optional): coefficient k"),
+    f("life.dense_hd.k", "m/m", rx(0.0, 1000.0), "Dense-stand height–diameter curve h/d = k·D^c (h m, D cm; a tree's height is bounded by 1.3 + k·D^(1+c)/100 m; iLand HDhigh a·b·(1+c)·d^c is its derivative, k = a·b; Seidl et al. 2012; optional): coefficient k"),
     f("life.dense_hd.c", "", r(-1.0, 0.0), "Dense-stand height–diameter curve: DBH exponent c"),
     f("life.bai_competition.crown_ratio", "", r(0.0, 2.0), "Basal-area increment's competition terms ln BAI = … + b3·ln CR + c1·BAL + c2·CCF (PROGNAUS, Monserud & Sterba 1996; Hasenauer 2000; optional): crown-ratio exponent b3"),
     f("life.bai_competition.bal", "1/(m²/ha)", r(-1.0, 0.0), "Basal-area increment's competition terms: coefficient c1 of the basal area of larger trees"),

@@ -105,19 +105,23 @@ pub fn crown_space(ccf: f32) -> f32 {
 }
 
 /// Breast height (m): a tree with a DBH is at least this tall, so the dense-stand bound
-/// [`dense_height_bound`] never holds a tree below it.
+/// [`dense_height_bound`] rises from it (a tree at DBH 0 is breast height tall).
 pub const BREAST_HEIGHT_M: f32 = 1.3;
 
 /// Tallest height (m) a tree of DBH `d_cm` (> 0) may reach under the species' dense-stand
-/// height–diameter curve `h/d = k · D^c` ([`DenseHd`], iLand's `HDhigh` curve, Seidl et al.
-/// 2012): `max(BREAST_HEIGHT_M, k · D^(1 + c) / 100)`. Suppressed trees stall in height as
-/// their stems stop thickening (Seidl et al. 2012, "stem growth": the H/D of trees stays
-/// within the species' dense-stand curve). The floor at breast height is the rule for tiny
-/// DBH: the curve, fitted on stems of yield-table stands, falls below 1.3 m for DBH under
-/// 0.2–0.7 cm (0.7 cm for birch), where a tree with a DBH must stand at least 1.3 m; a tree
+/// height–diameter curve ([`DenseHd`], iLand's `HDhigh`, Seidl et al. 2012):
+/// `BREAST_HEIGHT_M + k · D^(1 + c) / 100`. iLand grows a tree's height by its diameter
+/// increment times the H/D of the increments, which in a dense stand (LRI 0) is `HDhigh =
+/// (1 + c) · k · D^c` (`Tree::relative_height_growth`; Seidl et al. 2012, stem growth); a stem
+/// that has put on every increment since breast height at that H/D (the slenderest stem the
+/// curve allows) stands at the integral of it from `D = 0`, where a tree is breast height
+/// tall by the definition of DBH: `h = 1.3 + k · D^(1 + c) / 100`. Suppressed trees stall in
+/// height as their stems stop thickening. (Until issue 35 round 33 the bound was
+/// `max(1.3, k · D^(1 + c) / 100)`, the integral without its constant, 1.3 m lower at every
+/// DBH: it held Wiedemann's thinned spruce mean tree 2 m below the table's h_q.) A tree
 /// without a DBH (below breast height) is not bounded (see [`run`]).
 pub fn dense_height_bound(hd: DenseHd, d_cm: f32) -> f32 {
-    (hd.k * d_cm.powf(1.0 + hd.c) / 100.0).max(BREAST_HEIGHT_M)
+    BREAST_HEIGHT_M + hd.k * d_cm.powf(1.0 + hd.c) / 100.0
 }
 
 /// Updated state of one tree after a growing season.
@@ -376,17 +380,18 @@ mod tests {
         assert!(bai_competition_modifier(bc, 0.5, 30.0, 2.5) < bai_competition_modifier(bc, 0.5, 20.0, 2.5));
     }
 
-    /// The dense-stand height bound: beech's curve (iLand fasy `HDhigh` without its factor
-    /// 1 + c) at 10 cm and 2 cm DBH, the breast-height floor at tiny DBH, and a season's
+    /// The dense-stand height bound: beech's curve (iLand fasy `HDhigh` integrated from breast
+    /// height) at 10 cm, 2 cm and 0.1 cm DBH, and a season's
     /// [`finish`]: a suppressed tree above the curve stalls, one below it grows to the curve,
     /// one within it and a tree below breast height keep their increment.
     #[test]
     fn dense_height_bound_holds() {
         let hd = DenseHd { k: 323.63, c: -0.3676 };
-        // 323.63 · 10^0.6324 / 100 = 13.882 m (H/D 139); 2 cm: 5.017 m (H/D 251)
-        assert!((dense_height_bound(hd, 10.0) - 13.882).abs() < 0.01, "{}", dense_height_bound(hd, 10.0));
-        assert!((dense_height_bound(hd, 2.0) - 5.017).abs() < 0.01, "{}", dense_height_bound(hd, 2.0));
-        assert_eq!(dense_height_bound(hd, 0.1), BREAST_HEIGHT_M);
+        // 1.3 + 323.63 · 10^0.6324 / 100 = 15.182 m (H/D 152); 2 cm: 6.317 m (H/D 316); 0.1 cm:
+        // 2.055 m (a tree with a DBH stands above breast height)
+        assert!((dense_height_bound(hd, 10.0) - 15.182).abs() < 0.01, "{}", dense_height_bound(hd, 10.0));
+        assert!((dense_height_bound(hd, 2.0) - 6.317).abs() < 0.01, "{}", dense_height_bound(hd, 2.0));
+        assert!((dense_height_bound(hd, 0.1) - 2.055).abs() < 0.01, "{}", dense_height_bound(hd, 0.1));
         let mut b = beech_like();
         b.life.dense_hd = Some(hd);
         let dbh_of = Table::exact(OpenDbh::of(&b));
@@ -394,9 +399,10 @@ mod tests {
         let grown = |h: f32, h1: f32, d1: f32| finish(&b, &dbh_of, bound, 0.5, 0.5, h, h1, d1, 0.0, 1.0, 1.0, 1.0).h;
         // 9.68 m on 2 cm (H/D 484, the round-27 trial's birch): no height growth until the DBH catches up
         assert_eq!(grown(9.68, 9.9, 2.0), 9.68);
-        // 4 m growing to 5.5 m on 2 cm: cut to the curve
-        assert!((grown(4.0, 5.5, 2.0) - 5.017).abs() < 0.01);
-        // within the curve (20 m on 30 cm, H/D 67; the curve allows 27.8 m): unchanged
+        // 4 m growing to 7 m on 2 cm: cut to the curve; to 6 m: within it
+        assert!((grown(4.0, 7.0, 2.0) - 6.317).abs() < 0.01);
+        assert_eq!(grown(4.0, 6.0, 2.0), 6.0);
+        // within the curve (20 m on 30 cm, H/D 67; the curve allows 29.1 m): unchanged
         assert_eq!(grown(19.5, 20.0, 30.0), 20.0);
         // below breast height, no DBH: unchanged
         assert_eq!(grown(0.8, 1.1, 0.0), 1.1);
