@@ -187,8 +187,8 @@ pub fn mpi_rank_from_env() -> Option<String> {
 /// the folder itself (Linux and other Unix; no file is added to the run). The ranks of an
 /// `mpirun` write one run together: rank 0 holds the lock, the others take none.
 ///
-/// Errors: the folder cannot be made or opened, or another process holds its lock (naming
-/// `option` and the folder).
+/// Errors: the folder cannot be made or opened, or another process holds its lock for more
+/// than 2 s (naming `option` and the folder).
 pub fn lock_run_dir(out: &std::path::Path, option: &str) -> anyhow::Result<RunDirLock> {
     let mut made = Vec::new();
     let mut missing = Vec::new();
@@ -209,10 +209,20 @@ pub fn lock_run_dir(out: &std::path::Path, option: &str) -> anyhow::Result<RunDi
     {
         use std::os::unix::io::AsRawFd;
         let f = std::fs::File::open(out).map_err(|e| anyhow::anyhow!("{option} {}: cannot open the folder: {e}", out.display()))?;
+        // A lock held only for a moment is waited for (up to LOCK_WAIT): a process forked by
+        // another thread of the program that started this run holds a copy of every descriptor
+        // until its exec (close-on-exec), so a lock just released can still look held for some
+        // milliseconds on a loaded machine (CI's 2 cores at load 13 saw it: round 33).
+        const LOCK_WAIT: std::time::Duration = std::time::Duration::from_secs(2);
+        let start = std::time::Instant::now();
         // SAFETY: flock on a file descriptor this function owns (open until the guard drops).
-        if unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
+        while unsafe { libc::flock(f.as_raw_fd(), libc::LOCK_EX | libc::LOCK_NB) } != 0 {
             let e = std::io::Error::last_os_error();
             if e.raw_os_error() == Some(libc::EWOULDBLOCK) {
+                if start.elapsed() < LOCK_WAIT {
+                    std::thread::sleep(std::time::Duration::from_millis(50));
+                    continue;
+                }
                 anyhow::bail!("{option} {}: another Sylva run is writing into this folder; wait until it ends, or use another {option}", out.display());
             }
             anyhow::bail!("{option} {}: cannot lock the folder for this run: {e}", out.display());
