@@ -40,7 +40,8 @@
 //!    targets and 3,274 context trees in the stand bench, 40 % of its time).
 //! 3. **Neighbourhoods**: the trees to adapt are binned into square cells of
 //!    [`StandOptions::cell_m`]; each cell's trees are adapted together
-//!    ([`super::plastic::adapt_group_among`]) among every other tree whose base lies within
+//!    ([`super::plastic::adapt_group_among_once`]: they are adapted once, so each node's
+//!    signature is queried only until it is known to change) among every other tree whose base lies within
 //!    [`StandOptions::halo_m`] of the cell: those context trees are not adapted but stand as
 //!    they are for the whole life span, as obstacles do in the paper's tree–obstacle interaction
 //!    (section 6): their full-grown leaf clusters shade (eq. 4) and their wood blocks. (Until
@@ -67,7 +68,7 @@ use super::grow::ecomod;
 use super::species_tree::{ecomod_strands_at, ECOMOD_FULL_AGE_YR};
 use crate::obstacle::Obstacle;
 use super::plastic::light::DEFAULT_RINGS;
-use super::plastic::{adapt_group_among, Environment, Fate, Ground, LeafCluster, PlasticReport, PlasticTree, Sky};
+use super::plastic::{adapt_group_among_once, Environment, Fate, Ground, LeafCluster, PlasticReport, PlasticTree, Sky};
 use super::skeleton::{Leaves, Skeleton};
 use crate::error::{Error, Result};
 use crate::species::SpeciesLibrary;
@@ -169,13 +170,18 @@ pub struct StandOptions {
     /// fewer are coarser: BENCHMARKS.md, rounds 11 and 32, gives the error of each ring set
     /// against a reference of 5,872 directions (`examples/sky_quadrature`).
     pub sky_rings: Vec<usize>,
+    /// Spacing (m, finite, > 0) of the lattice on which the context trees' transmittance per
+    /// sky direction is taken once per neighbourhood and interpolated
+    /// ([`super::plastic::adapt_group_among_once`]), or `None` (default) for the exact
+    /// queries at every point. An approximation measured in BENCHMARKS.md (round 33).
+    pub fixed_lattice_m: Option<f32>,
 }
 
 impl Default for StandOptions {
     /// Cells of 12 m, a halo of 6 m, latitude 47° N, no obstacles, the default sky
     /// ([`DEFAULT_RINGS`]).
     fn default() -> Self {
-        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec() }
+        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec(), fixed_lattice_m: None }
     }
 }
 
@@ -531,7 +537,8 @@ fn validate_tree(i: usize, t: &StandTree, lib: &SpeciesLibrary) -> Result<()> {
 ///
 /// Errors: [`Error::Invalid`] naming the bad tree field, a target index outside `trees`, bad
 /// options (cell ≤ 0 m, halo < 0 m, latitude outside −90–90°, sky rings that are not positive
-/// multiples of 4 or not 1–32 directions, [`stand_sky`]), an invalid obstacle, or the
+/// multiples of 4 or not 1–32 directions, [`stand_sky`], a lattice spacing that is not finite
+/// and > 0), an invalid obstacle, or the
 /// errors of [`SkeletonCache::prepare`] and [`PlasticTree::analyse`].
 pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary, cache: &mut SkeletonCache, opts: &StandOptions) -> Result<Stand> {
     let bad = |field: &str, value: String, expected: &str| Error::Invalid { context: "stand adaptation".into(), field: field.into(), value, expected: expected.into() };
@@ -543,6 +550,11 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     }
     if !(-90.0..=90.0).contains(&opts.latitude_deg) {
         return Err(bad("latitude_deg", opts.latitude_deg.to_string(), "−90–90°"));
+    }
+    if let Some(h) = opts.fixed_lattice_m {
+        if !(h > 0.0 && h.is_finite()) {
+            return Err(bad("fixed_lattice_m", h.to_string(), "a finite lattice spacing > 0 m, or none"));
+        }
     }
     super::grow::space::validate_obstacles(&opts.obstacles)?;
     let sky = stand_sky(opts.latitude_deg, &opts.sky_rings)?;
@@ -662,7 +674,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
             let obstacles: Vec<Obstacle> = opts.obstacles.iter().copied().filter(|o| o.signed_distance(centre.with_z(centre.z + 0.5 * tallest)) < near).collect();
             let env = Environment { obstacles, ground: Some(ground), sky: sky.clone() };
             let before: Vec<Vec<(Vec3, f32)>> = group[..ks.len()].iter().map(|t| t.clusters()).collect();
-            let rep = adapt_group_among(&mut group, &context, &env)?;
+            let rep = adapt_group_among_once(&mut group, &context, &env, opts.fixed_lattice_m)?;
             let mut out = Vec::with_capacity(ks.len());
             for (j, &k) in ks.iter().enumerate() {
                 let i = members[j];
