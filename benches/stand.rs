@@ -18,8 +18,7 @@
 //! writes every target's leaf clusters (`AdaptedTree::leaf_clusters`, in order) as
 //! little-endian f32 rows (tree index, centre x, y, z (m), light i, light in the analysis i_l0,
 //! radius (m)), so two runs' adapted trees can be compared (BENCHMARKS.md, round 32).
-//! `SYLVA_STAND_FIXED_LATTICE=0.5` takes the context trees' transmittance on a lattice of that
-//! spacing (m; `StandOptions::fixed_lattice_m`, default exact; BENCHMARKS.md, round 33).
+//! Also prints the memory of the adapted trees' nodes and leaves.
 use glam::Vec3;
 use sylva::rng::Stream;
 use sylva::species::SpeciesLibrary;
@@ -89,9 +88,6 @@ fn main() {
     if let Ok(v) = std::env::var("SYLVA_STAND_SKY_RINGS") {
         opts.sky_rings = v.split(',').map(|x| x.trim().parse().expect("SYLVA_STAND_SKY_RINGS: comma-separated ring sizes, e.g. 4,8")).collect();
     }
-    if let Ok(v) = std::env::var("SYLVA_STAND_FIXED_LATTICE") {
-        opts.fixed_lattice_m = Some(v.trim().parse().expect("SYLVA_STAND_FIXED_LATTICE: a lattice spacing in m, e.g. 0.5"));
-    }
     let full = std::env::var_os("SYLVA_STAND_FULL").is_some();
     let mut cache = SkeletonCache::new(42, if full { FULL_STRANDS } else { DEFAULT_MAX_STRANDS });
     let t = std::time::Instant::now();
@@ -119,7 +115,7 @@ fn main() {
     };
     let nodes: usize = st.trees.iter().map(|a| a.report.nodes_before).sum();
     let pruned: usize = st.trees.iter().map(|a| a.report.pruned_light + a.report.pruned_collision).sum();
-    println!("# stand adaptation (threads: {}; {}; sky rings {:?}; context lattice {:?} m)", rayon::current_num_threads(), if full { "full detail" } else { "at most DEFAULT_MAX_STRANDS strands" }, opts.sky_rings, opts.fixed_lattice_m);
+    println!("# stand adaptation (threads: {}; {}; sky rings {:?})", rayon::current_num_threads(), if full { "full detail" } else { "at most DEFAULT_MAX_STRANDS strands" }, opts.sky_rings);
     println!("| targets | trees in groups | cells | analyses | open-grown trees | nodes (targets) | pruned | first call s | second call s |");
     println!("|---|---|---|---|---|---|---|---|---|");
     println!("| {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} |", st.trees.len(), st.trees_in_groups, st.cells, st.analyses, cache.len(), nodes, pruned, cold, warm);

@@ -170,18 +170,13 @@ pub struct StandOptions {
     /// fewer are coarser: BENCHMARKS.md, rounds 11 and 32, gives the error of each ring set
     /// against a reference of 5,872 directions (`examples/sky_quadrature`).
     pub sky_rings: Vec<usize>,
-    /// Spacing (m, finite, > 0) of the lattice on which the context trees' transmittance per
-    /// sky direction is taken once per neighbourhood and interpolated
-    /// ([`super::plastic::adapt_group_among_once`]), or `None` (default) for the exact
-    /// queries at every point. An approximation measured in BENCHMARKS.md (round 33).
-    pub fixed_lattice_m: Option<f32>,
 }
 
 impl Default for StandOptions {
     /// Cells of 12 m, a halo of 6 m, latitude 47° N, no obstacles, the default sky
     /// ([`DEFAULT_RINGS`]).
     fn default() -> Self {
-        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec(), fixed_lattice_m: None }
+        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec() }
     }
 }
 
@@ -537,8 +532,7 @@ fn validate_tree(i: usize, t: &StandTree, lib: &SpeciesLibrary) -> Result<()> {
 ///
 /// Errors: [`Error::Invalid`] naming the bad tree field, a target index outside `trees`, bad
 /// options (cell ≤ 0 m, halo < 0 m, latitude outside −90–90°, sky rings that are not positive
-/// multiples of 4 or not 1–32 directions, [`stand_sky`], a lattice spacing that is not finite
-/// and > 0), an invalid obstacle, or the
+/// multiples of 4 or not 1–32 directions, [`stand_sky`]), an invalid obstacle, or the
 /// errors of [`SkeletonCache::prepare`] and [`PlasticTree::analyse`].
 pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary, cache: &mut SkeletonCache, opts: &StandOptions) -> Result<Stand> {
     let bad = |field: &str, value: String, expected: &str| Error::Invalid { context: "stand adaptation".into(), field: field.into(), value, expected: expected.into() };
@@ -550,11 +544,6 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     }
     if !(-90.0..=90.0).contains(&opts.latitude_deg) {
         return Err(bad("latitude_deg", opts.latitude_deg.to_string(), "−90–90°"));
-    }
-    if let Some(h) = opts.fixed_lattice_m {
-        if !(h > 0.0 && h.is_finite()) {
-            return Err(bad("fixed_lattice_m", h.to_string(), "a finite lattice spacing > 0 m, or none"));
-        }
     }
     super::grow::space::validate_obstacles(&opts.obstacles)?;
     let sky = stand_sky(opts.latitude_deg, &opts.sky_rings)?;
@@ -674,7 +663,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
             let obstacles: Vec<Obstacle> = opts.obstacles.iter().copied().filter(|o| o.signed_distance(centre.with_z(centre.z + 0.5 * tallest)) < near).collect();
             let env = Environment { obstacles, ground: Some(ground), sky: sky.clone() };
             let before: Vec<Vec<(Vec3, f32)>> = group[..ks.len()].iter().map(|t| t.clusters()).collect();
-            let rep = adapt_group_among_once(&mut group, &context, &env, opts.fixed_lattice_m)?;
+            let rep = adapt_group_among_once(&mut group, &context, &env)?;
             let mut out = Vec::with_capacity(ks.len());
             for (j, &k) in ks.iter().enumerate() {
                 let i = members[j];

@@ -310,7 +310,7 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
 ///
 /// Errors: as [`adapt_group`].
 pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment) -> Result<GroupReport> {
-    adapt_among(trees, fixed, env, false, None)
+    adapt_among(trees, fixed, env, false)
 }
 
 /// [`adapt_group_among`] for trees that are adapted once and then only read (a stand's
@@ -325,134 +325,20 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
 /// The signatures kept are then partial, so every tree is left to recompute every node in a
 /// later call ([`PlasticTree::invalidate`]).
 ///
-/// With `fixed_lattice_m` = Some(h), the fixed trees' transmittance along each sky direction
-/// (the product of eq. 4 over their clusters, which do not move during the call) is taken at
-/// the vertices of a cubic lattice of spacing h (m) over the region the call's light queries
-/// come from, each vertex queried once when first needed, and interpolated trilinearly at the
-/// bending nodes and the leaf clusters, instead of one exact query of the fixed trees' shadow
-/// volumes per point and direction (the signatures stay exact). An approximation: the
-/// adapted trees differ from the exact call's by the interpolation's error (BENCHMARKS.md,
-/// round 33). A region whose lattice would hold more than [`LATTICE_MAX`] vertices, and a
-/// point outside it, use the exact queries.
-///
-/// Errors: as [`adapt_group`]; [`crate::Error::Invalid`] (field `fixed_lattice_m`) for a
-/// spacing that is not finite and > 0.
-pub fn adapt_group_among_once(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment, fixed_lattice_m: Option<f32>) -> Result<GroupReport> {
-    if let Some(h) = fixed_lattice_m {
-        if !(h > 0.0 && h.is_finite()) {
-            return Err(crate::Error::Invalid { context: "Plastic Trees adaptation".into(), field: "fixed_lattice_m".into(), value: h.to_string(), expected: "a finite lattice spacing > 0 m".into() });
-        }
-    }
-    adapt_among(trees, fixed, env, true, fixed_lattice_m)
-}
-
-/// Most vertices of one call's [`FixedLattice`] (its blocks are allocated only where points
-/// are queried).
-pub const LATTICE_MAX: usize = 1 << 24;
-
-/// Vertices per axis of a block of a [`FixedLattice`].
-const LATTICE_BLOCK: usize = 4;
-
-/// The fixed trees' transmittance per sky direction on a cubic lattice over a box
-/// ([`adapt_group_among_once`]): every value is that of [`ShadowVolumes::transmittance`] at
-/// the vertex, queried the first time a point of a lattice cell around it asks for it (threads
-/// that race on a vertex store the same bits), kept as its bits with the sign bit set (a
-/// transmittance is ≥ 0) so that 0 marks a vertex not yet queried. The values are held in
-/// blocks of [`LATTICE_BLOCK`]³ vertices × every direction, allocated when first read, so a
-/// lattice over a neighbourhood's whole crown space costs memory only where its trees are.
-struct FixedLattice {
-    lo: Vec3,
-    h: f32,
-    /// Vertices per axis.
-    n: [usize; 3],
-    /// Blocks per axis.
-    nb: [usize; 3],
-    dirs: usize,
-    blocks: Vec<std::sync::OnceLock<Box<[std::sync::atomic::AtomicU32]>>>,
-}
-
-impl FixedLattice {
-    /// The lattice of spacing `h` (m) over the box `lo`–`hi` for `dirs` directions; `None` for
-    /// an empty or unbounded box or one of more than [`LATTICE_MAX`] vertices.
-    fn new(lo: Vec3, hi: Vec3, h: f32, dirs: usize) -> Option<FixedLattice> {
-        if !(lo.cmple(hi).all() && lo.is_finite() && hi.is_finite()) {
-            return None;
-        }
-        let ext = (hi - lo) / h;
-        let n = [ext.x.ceil() as usize + 2, ext.y.ceil() as usize + 2, ext.z.ceil() as usize + 2];
-        if n[0].checked_mul(n[1])?.checked_mul(n[2])? > LATTICE_MAX {
-            return None;
-        }
-        let nb = n.map(|v| v.div_ceil(LATTICE_BLOCK));
-        Some(FixedLattice { lo, h, n, nb, dirs, blocks: (0..nb[0] * nb[1] * nb[2]).map(|_| std::sync::OnceLock::new()).collect() })
-    }
-
-    /// The transmittance of `f` along direction `k` at `p`: trilinear between the eight
-    /// vertices of the lattice cell holding `p`; the exact query outside the lattice.
-    fn at(&self, f: &ShadowVolumes, k: usize, p: Vec3) -> f32 {
-        let q = (p - self.lo) / self.h;
-        if !(q.x >= 0.0 && q.y >= 0.0 && q.z >= 0.0) {
-            return f.transmittance(k, p);
-        }
-        let (i, j, l) = (q.x as usize, q.y as usize, q.z as usize);
-        if i + 1 >= self.n[0] || j + 1 >= self.n[1] || l + 1 >= self.n[2] {
-            return f.transmittance(k, p);
-        }
-        let (fx, fy, fz) = (q.x - i as f32, q.y - j as f32, q.z - l as f32);
-        let v = |a: usize, b: usize, c: usize| self.vertex(f, k, i + a, j + b, l + c);
-        let lerp = |a: f32, b: f32, t: f32| a + t * (b - a);
-        let y0 = lerp(lerp(v(0, 0, 0), v(1, 0, 0), fx), lerp(v(0, 1, 0), v(1, 1, 0), fx), fy);
-        let y1 = lerp(lerp(v(0, 0, 1), v(1, 0, 1), fx), lerp(v(0, 1, 1), v(1, 1, 1), fx), fy);
-        lerp(y0, y1, fz)
-    }
-
-    /// The value of vertex (`i`, `j`, `l`) for direction `k`, queried when first read.
-    fn vertex(&self, f: &ShadowVolumes, k: usize, i: usize, j: usize, l: usize) -> f32 {
-        use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
-        const SIGN: u32 = 0x8000_0000;
-        let b = LATTICE_BLOCK;
-        let block = ((l / b) * self.nb[1] + j / b) * self.nb[0] + i / b;
-        let vals = self.blocks[block].get_or_init(|| (0..b * b * b * self.dirs).map(|_| AtomicU32::new(0)).collect());
-        let slot = &vals[(((l % b) * b + j % b) * b + i % b) * self.dirs + k];
-        let bits = slot.load(Relaxed);
-        if bits != 0 {
-            return f32::from_bits(bits & !SIGN);
-        }
-        let t = f.transmittance(k, self.lo + Vec3::new(i as f32, j as f32, l as f32) * self.h);
-        slot.store(t.to_bits() | SIGN, Relaxed);
-        t
-    }
-}
-
-/// The fixed trees' shade as the levels read it: their shadow volumes, exact, or their
-/// [`FixedLattice`].
-struct FixedShade<'a> {
-    vols: &'a ShadowVolumes,
-    lattice: Option<FixedLattice>,
-}
-
-impl FixedShade<'_> {
-    fn prepare(&self, dirs: u32) {
-        self.vols.prepare(dirs);
-    }
-
-    fn transmittance(&self, k: usize, p: Vec3) -> f32 {
-        match &self.lattice {
-            Some(l) => l.at(self.vols, k, p),
-            None => self.vols.transmittance(k, p),
-        }
-    }
+/// Errors: as [`adapt_group`].
+pub fn adapt_group_among_once(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment) -> Result<GroupReport> {
+    adapt_among(trees, fixed, env, true)
 }
 
 /// [`adapt_group_among`], and [`adapt_group_among_once`] when `once`.
-fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment, once: bool, lattice_m: Option<f32>) -> Result<GroupReport> {
+fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment, once: bool) -> Result<GroupReport> {
     // called from outside the thread pool (a program's main thread), every parallel loop below
     // would be injected into the pool and block this thread on a latch: one cross-thread wake-up
     // per loop, and a level has a loop per depth batch (measured: a fifth of the first
     // adaptation of the 9,133-node bench tree on one thread went to waking the worker). Run the
     // whole call on a worker instead, where the loops fork and join in place.
     if rayon::current_thread_index().is_none() {
-        return rayon::scope(|_| adapt_among(trees, fixed, env, once, lattice_m));
+        return rayon::scope(|_| adapt_among(trees, fixed, env, once));
     }
     env.validate()?;
     if let Some(i) = trees.iter().position(|t| t.standing) {
@@ -628,8 +514,6 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
         }
         (lo, hi)
     };
-    let fixed_shade = fixed_vols.map(|vols| FixedShade { vols, lattice: lattice_m.and_then(|h| FixedLattice::new(region.0, region.1, h, sky.dirs.len())) });
-    let fixed_shade = fixed_shade.as_ref();
     // 2.–4. levels; a node is recomputed when its own signature changed or its parent moved
     let mut work: Vec<Work> = own
         .into_iter()
@@ -768,7 +652,7 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
                     // usual from this level on
                     w.replay = None;
                 }
-                let rows = level(t, s, w, &occ, env, &solids, &vols, fixed_shade, reuse);
+                let rows = level(t, s, w, &occ, env, &solids, &vols, fixed_vols, reuse);
                 if let Some(r) = w.record.as_mut() {
                     r.live[s] = occ.iter().map(Option::is_some).collect();
                     for (k, (f, last)) in t.fate.iter().zip(&mut r.last).enumerate() {
@@ -861,7 +745,7 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
 /// point (each point's sums in direction order). The points are split over the cores in chunks
 /// of [`light_chunk`], each chunk taken direction by direction so a direction's grid is read
 /// while in cache.
-fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&FixedShade>, at: &[Vec3]) -> Vec<(f32, Vec3)> {
+fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3]) -> Vec<(f32, Vec3)> {
     let mut out = vec![(0.0f32, Vec3::ZERO); at.len()];
     let masks: Vec<u32> = at.par_iter().map(|&p| solids.mask(p)).collect();
     // the grids of the directions open at some point, built over the cores first
@@ -1115,7 +999,7 @@ pub const ROTATION_EPS: f32 = 1e-3;
 /// order, so the value is the one a recomputation gives, bit for bit. Returns the stage's
 /// transmittances.
 #[allow(clippy::too_many_arguments)]
-fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&FixedShade>, reuse: Option<Reuse>) -> Rows {
+fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, reuse: Option<Reuse>) -> Rows {
     let n = t.input.nodes.len();
     let a = &t.analysis;
     let last = a.seasons as f32;
