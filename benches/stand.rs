@@ -18,6 +18,7 @@
 //! writes every target's leaf clusters (`AdaptedTree::leaf_clusters`, in order) as
 //! little-endian f32 rows (tree index, centre x, y, z (m), light i, light in the analysis i_l0,
 //! radius (m)), so two runs' adapted trees can be compared (BENCHMARKS.md, round 32).
+//! Also prints the memory of the adapted trees' nodes and leaves.
 use glam::Vec3;
 use sylva::rng::Stream;
 use sylva::species::SpeciesLibrary;
@@ -119,5 +120,8 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|");
     println!("| {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} |", st.trees.len(), st.trees_in_groups, st.cells, st.analyses, cache.len(), nodes, pruned, cold, warm);
     println!("first call: open-grown trees {:.2} s, analyses {:.2} s, adaptation {:.2} s", cold - st.analysis_s - st.adaptation_s, st.analysis_s, st.adaptation_s);
+    let leaves: usize = st.trees.iter().map(|a| a.leaves.leaves.len()).sum();
+    let node_bytes: usize = st.trees.iter().map(|a| a.skeleton.nodes.len() * std::mem::size_of::<sylva::structure::Node>()).sum();
+    println!("adapted trees: {} nodes ({:.2} GB), {leaves} leaves ({:.2} GB)", st.trees.iter().map(|a| a.skeleton.nodes.len()).sum::<usize>(), node_bytes as f64 / 1e9, (leaves * std::mem::size_of::<sylva::structure::Leaf>()) as f64 / 1e9);
     println!("fingerprint {fp:016x}");
 }

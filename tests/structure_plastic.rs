@@ -4,7 +4,7 @@
 use glam::{Quat, Vec3};
 use sylva::species::PlasticParams;
 use sylva::structure::grow::space::Obstacle;
-use sylva::structure::plastic::{adapt, adapt_group, adapt_group_among, cluster_density, inverse_tropism, Environment, Fate, PlasticTree};
+use sylva::structure::plastic::{adapt, adapt_group, adapt_group_among, adapt_group_among_once, cluster_density, inverse_tropism, Environment, Fate, PlasticTree};
 use sylva::structure::species_tree::{tip_leaves, GrownTree};
 use sylva::structure::Skeleton;
 
@@ -241,6 +241,37 @@ A {:.3} -> {:.3}", mean(&ca0).x, mean(&ca1).x);
     let mut pair = vec![a, b];
     adapt_group(&mut pair, &Environment::open()).unwrap();
     assert_ne!(pair[0].positions(), one[0].positions());
+}
+
+/// `adapt_group_among_once` (a stand's neighbourhoods: each node's signature queried only until
+/// it is known to change) adapts two trees, one beside a fixed neighbour and one 40 m away that
+/// nothing shades, bit for bit as `adapt_group_among`, recomputing the first's nodes and not
+/// the second's; a later call on its trees recomputes every node, as one on invalidated trees
+/// does.
+#[test]
+fn adapting_once_is_adapting_among() {
+    let (a, b) = two_beeches_3m_apart();
+    let mut c = a.clone();
+    c.translate(Vec3::new(0.0, 40.0, 0.0));
+    let env = Environment::open();
+    let fixed = std::slice::from_ref(&b);
+    let (mut x, mut y) = (vec![a.clone(), c.clone()], vec![a.clone(), c.clone()]);
+    let rx = adapt_group_among(&mut x, fixed, &env).unwrap();
+    let ry = adapt_group_among_once(&mut y, fixed, &env).unwrap();
+    assert_eq!(rx, ry);
+    let nodes: usize = x.iter().map(|t| t.input().nodes.len()).sum();
+    assert!(rx.recomputed_nodes > nodes / 10 && rx.recomputed_nodes < nodes - 10, "recomputed {} of {nodes}", rx.recomputed_nodes);
+    for (p, q) in x.iter().zip(&y) {
+        assert_eq!(p.skeleton(), q.skeleton());
+        assert_eq!(p.leaf_clusters(), q.leaf_clusters());
+    }
+    // the next call: every node again, as for invalidated trees
+    x.iter_mut().for_each(|t| t.invalidate());
+    let rx2 = adapt_group_among(&mut x, fixed, &env).unwrap();
+    let ry2 = adapt_group_among(&mut y, fixed, &env).unwrap();
+    assert_eq!(rx2, ry2);
+    assert!(ry2.recomputed_nodes > rx.recomputed_nodes);
+    assert_eq!(x[0].skeleton(), y[0].skeleton());
 }
 
 /// A standing neighbour (`PlasticTree::standing`: shape only, no light) shades and blocks as

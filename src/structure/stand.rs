@@ -40,7 +40,8 @@
 //!    targets and 3,274 context trees in the stand bench, 40 % of its time).
 //! 3. **Neighbourhoods**: the trees to adapt are binned into square cells of
 //!    [`StandOptions::cell_m`]; each cell's trees are adapted together
-//!    ([`super::plastic::adapt_group_among`]) among every other tree whose base lies within
+//!    ([`super::plastic::adapt_group_among_once`]: they are adapted once, so each node's
+//!    signature is queried only until it is known to change) among every other tree whose base lies within
 //!    [`StandOptions::halo_m`] of the cell: those context trees are not adapted but stand as
 //!    they are for the whole life span, as obstacles do in the paper's tree–obstacle interaction
 //!    (section 6): their full-grown leaf clusters shade (eq. 4) and their wood blocks. (Until
@@ -67,7 +68,7 @@ use super::grow::ecomod;
 use super::species_tree::{ecomod_strands_at, ECOMOD_FULL_AGE_YR};
 use crate::obstacle::Obstacle;
 use super::plastic::light::DEFAULT_RINGS;
-use super::plastic::{adapt_group_among, Environment, Fate, Ground, LeafCluster, PlasticReport, PlasticTree, Sky};
+use super::plastic::{adapt_group_among_once, Environment, Fate, Ground, LeafCluster, PlasticReport, PlasticTree, Sky};
 use super::skeleton::{Leaves, Skeleton};
 use crate::error::{Error, Result};
 use crate::species::SpeciesLibrary;
@@ -662,7 +663,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
             let obstacles: Vec<Obstacle> = opts.obstacles.iter().copied().filter(|o| o.signed_distance(centre.with_z(centre.z + 0.5 * tallest)) < near).collect();
             let env = Environment { obstacles, ground: Some(ground), sky: sky.clone() };
             let before: Vec<Vec<(Vec3, f32)>> = group[..ks.len()].iter().map(|t| t.clusters()).collect();
-            let rep = adapt_group_among(&mut group, &context, &env)?;
+            let rep = adapt_group_among_once(&mut group, &context, &env)?;
             let mut out = Vec::with_capacity(ks.len());
             for (j, &k) in ks.iter().enumerate() {
                 let i = members[j];

@@ -28,7 +28,7 @@ pub mod transform;
 
 pub use analysis::{inverse_tropism, Analysis};
 pub use light::{Ground, Sky};
-pub use transform::{adapt_group, adapt_group_among, cluster_density, GroupReport};
+pub use transform::{adapt_group, adapt_group_among, adapt_group_among_once, cluster_density, GroupReport};
 
 use crate::error::{Error, Result};
 use crate::species::PlasticParams;

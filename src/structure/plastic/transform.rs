@@ -310,13 +310,35 @@ pub fn adapt_group(trees: &mut [PlasticTree], env: &Environment) -> Result<Group
 ///
 /// Errors: as [`adapt_group`].
 pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment) -> Result<GroupReport> {
+    adapt_among(trees, fixed, env, false)
+}
+
+/// [`adapt_group_among`] for trees that are adapted once and then only read (a stand's
+/// neighbourhood, [`crate::structure::stand`]): the same adapted trees and report, bit for
+/// bit, but a node's signature (step 1 of the module documentation: the sky directions in
+/// which the other trees' and the fixed trees' clusters shade it) is computed only as far as
+/// this call needs it. When a node's stored signature holds no shade (a tree fresh from its
+/// analysis, scaling or translation), the node is recomputed exactly when its solids' mask
+/// changed or some direction is shaded, so the directions are queried (nearest the horizon
+/// first, where neighbours shade most) until the first shaded one, not all of them; a node
+/// whose mask changed, or a tree whose recomputation is forced, needs no shade query at all.
+/// The signatures kept are then partial, so every tree is left to recompute every node in a
+/// later call ([`PlasticTree::invalidate`]).
+///
+/// Errors: as [`adapt_group`].
+pub fn adapt_group_among_once(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment) -> Result<GroupReport> {
+    adapt_among(trees, fixed, env, true)
+}
+
+/// [`adapt_group_among`], and [`adapt_group_among_once`] when `once`.
+fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environment, once: bool) -> Result<GroupReport> {
     // called from outside the thread pool (a program's main thread), every parallel loop below
     // would be injected into the pool and block this thread on a latch: one cross-thread wake-up
     // per loop, and a level has a loop per depth batch (measured: a fifth of the first
     // adaptation of the 9,133-node bench tree on one thread went to waking the worker). Run the
     // whole call on a worker instead, where the loops fork and join in place.
     if rayon::current_thread_index().is_none() {
-        return rayon::scope(|_| adapt_group_among(trees, fixed, env));
+        return rayon::scope(|_| adapt_among(trees, fixed, env, once));
     }
     env.validate()?;
     if let Some(i) = trees.iter().position(|t| t.standing) {
@@ -432,11 +454,20 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
                 .map(|k| {
                     let p = t.input.nodes[k].pos;
                     let mut sig = solids.mask(p) as u64;
+                    let shaded = |d: usize| others.as_ref().is_some_and(|o| o.shaded_except(d, p, i as u32)) || own_others[i].as_ref().is_some_and(|o| o.shaded(d, p)) || fixed_vols.is_some_and(|f| f.shaded(d, p));
                     if same_shade {
                         sig |= t.sig[k] & !(u32::MAX as u64);
+                    } else if once && t.sig[k] >> 32 == 0 {
+                        // only whether the node is recomputed (`dirty` below): with no shade
+                        // stored, exactly when the mask changed or any direction is shaded
+                        if !all && sig == t.sig[k] {
+                            if let Some(d) = (0..sky.dirs.len()).rev().find(|&d| shaded(d)) {
+                                sig |= 1u64 << (32 + d);
+                            }
+                        }
                     } else {
                         for d in 0..sky.dirs.len() {
-                            if others.as_ref().is_some_and(|o| o.shaded_except(d, p, i as u32)) || own_others[i].as_ref().is_some_and(|o| o.shaded(d, p)) || fixed_vols.is_some_and(|f| f.shaded(d, p)) {
+                            if shaded(d) {
                                 sig |= 1u64 << (32 + d);
                             }
                         }
@@ -636,12 +667,17 @@ pub fn adapt_group_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: 
             .collect();
         prev = next;
     }
-    // the quiet trees keep the levels they replayed whole or recorded
+    // the quiet trees keep the levels they replayed whole or recorded; a call `once` leaves
+    // partial signatures, so a later call recomputes everything
     for (t, w) in trees.iter_mut().zip(&mut work) {
         t.quiet = w.replay.take().or_else(|| w.record.take().map(|mut r| {
             r.last = Vec::new();
             Box::new(r)
         }));
+        if once {
+            t.shade_key = 0;
+            t.invalidate();
+        }
     }
     // 6. wood of the other trees, then the report
     if group || !fixed.is_empty() {
