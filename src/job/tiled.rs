@@ -594,7 +594,7 @@ pub fn tile_site_by(c: std::borrow::Cow<'_, SiteConditions>, identity: Option<&[
 
 /// The whole site's checkpoint identity ([`crate::sim::checkpoint::site_identity`]) on rank 0
 /// from the ranks' bands: every rank sends rank 0 the [`crate::sim::checkpoint::IdentityPart`]
-/// of its band, the held rows `rows` of `c` (72 bytes), and rank 0 joins them in rank order
+/// of its band, the held rows `rows` of `c` (136 bytes), and rank 0 joins them in rank order
 /// ([`crate::sim::checkpoint::site_identity_of`]); the strings are those of the whole site bit
 /// for bit. Every rank of `t` calls it at the same point. Returns `Some` on rank 0.
 ///
