@@ -819,3 +819,53 @@ fn a_tile_holds_its_window_of_the_seed_grids_only() {
     let e = hold_own_seeds(&mut t0, &layout, 1).unwrap_err().to_string();
     assert!(e.contains("seed grid") && e.contains("tile 1"), "{e}");
 }
+
+/// Issue 37 Build 1, round 33: a fresh tiled run's rank 0 builds its tile's world only (its
+/// band of the site, its tile's cells from the bands' owners, its own start's trees, ids from
+/// the ranks' counts) and year 0's snapshot comes from the ranks' start's trees and masked
+/// pixels: on a window of the default DEM with a planted start (3 m lattice, its rows jittered
+/// across the tile edges) and seed sources at the tile edges, on 2, 3 and 2 × 2 tiles the run
+/// directory is one process's byte for byte (year 0 included: ids in one process's order);
+/// the whole site's identity joined from bands is `site_identity`'s.
+#[test]
+fn rank_0_builds_its_tiles_world_only_and_the_start_ids_are_one_process() {
+    let toml = common::ScenarioToml::new("lean", 4, 5)
+        .species(&["beech", "birch"])
+        .line("light_cell_m = 10.0")
+        .line("snapshot_every = 2")
+        .default_terrain([150, 150, 12, 10])
+        .planted("birch", 3.0, 4.0)
+        .seed_sources("beech", &[[120.0, 100.0], [121.0, 60.0], [60.0, 101.0]], 3)
+        .build();
+    let sc = Scenario::from_toml_str(&toml, "lean").unwrap();
+    let lib = sylva::sim::fixtures::library();
+    let site = sc.site().unwrap();
+    // the identity from bands (any cut into rows) equals the whole site's
+    let h = site.height();
+    for cuts in [vec![0, h], vec![0, 3, h], vec![0, 0, 4, 7, h]] {
+        let parts: Vec<_> = cuts.windows(2).map(|r| {
+            let mut b = site.clone();
+            b.hold(sylva::grid::Window { col0: 0, row0: r[0], width: site.width(), height: r[1] - r[0] });
+            sylva::sim::checkpoint::identity_part(&b, 0..r[1] - r[0])
+        }).collect();
+        assert_eq!(sylva::sim::checkpoint::site_identity_of(site.width(), h, site.cell_x_m, site.cell_y_m, &parts), sylva::sim::checkpoint::site_identity(&site), "bands {cuts:?}");
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let one = tmp.path().join("one");
+    let a = sylva::job::run::run_scenario(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&one)).unwrap();
+    let template = World::new(sc.site().unwrap(), &lib, &sc).unwrap();
+    assert!(template.stand.trees.len() > 500, "{} start trees", template.stand.trees.len());
+    for n in [2, 3, 4] {
+        let d = tmp.path().join(format!("t{n}"));
+        let (b, _) = sylva::job::tiled::run_local_tiles(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&d), n).unwrap();
+        assert_eq!(a.rows, b.rows, "{n} tiles");
+        let ws = &b.world.site;
+        assert!(!ws.conditions.holds_all() && ws.whole_identity.as_ref() == Some(&sylva::sim::checkpoint::site_identity(&template.site.conditions)), "{n} tiles: {}", ws.conditions.held);
+        common::assert_same_run(&one, &d, &template, &format!("one process and {n} tiles"));
+        let fa = common::files(&one);
+        let fb = common::files(&d);
+        for f in ["inventory/year_0000.parquet", "maps/species_year_0000.png", "maps/basal_area_year_0000.png"] {
+            assert!(fa[f] == fb[f], "{n} tiles: {f} differs");
+        }
+    }
+}

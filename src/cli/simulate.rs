@@ -305,7 +305,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         if t.size() > 1 {
             let t0 = std::time::Instant::now();
             // issue 37 Build 1: a GeoTIFF site derived by the ranks, each from a window of the DEM
-            let site = sylva::job::site_ranks::site_by_ranks_held(&sc, &mut t, !sc.management.is_empty()).with_context(|| format!("[terrain] of {} (rank {})", sc.context(), t.rank()))?;
+            // a fresh run without management: rank 0 too holds its band only (its run driver
+            // builds its tile's world, issue 37 round 33)
+            let band0 = sc.management.is_empty() && !a.resume;
+            let site = sylva::job::site_ranks::site_by_ranks_banded(&sc, &mut t, !sc.management.is_empty(), band0).with_context(|| format!("[terrain] of {} (rank {})", sc.context(), t.rank()))?;
             let r = if t.rank() != 0 {
                 // a stop (Ctrl-C, SIGTERM from mpirun) is rank 0's to decide; the others follow it
                 let _ = ctrlc::set_handler(|| {});

@@ -213,6 +213,16 @@ pub struct Parts {
 }
 
 fn snapshot(dir: &Path, w: &World, label: &str, parts: Parts, map_px: usize, format: InventoryFormat) -> Result<()> {
+    snapshot_masked(dir, w, label, parts, map_px, format, None)
+}
+
+/// [`Stepper::snapshot`]'s default from `w`, with the maps' pixels whose centre is masked
+/// given (`masked`, [`plot::map_masked_centres`] of the whole site; `None`: from `w`'s site,
+/// which must then be whole): a tiled run's rank 0 that holds its tile's cells only writes
+/// year 0 so, from the start's trees gathered from the ranks (issue 37 Build 1, round 33).
+///
+/// Errors: I/O errors naming the file.
+pub(crate) fn snapshot_masked(dir: &Path, w: &World, label: &str, parts: Parts, map_px: usize, format: InventoryFormat, masked: Option<&[bool]>) -> Result<()> {
     let inv = dir.join("inventory");
     if parts.inventory {
         match format {
@@ -231,7 +241,11 @@ fn snapshot(dir: &Path, w: &World, label: &str, parts: Parts, map_px: usize, for
             }
         }
         let m = dir.join("maps");
-        plot::write_maps(&m.join(format!("species_{label}.png")), &m.join(format!("basal_area_{label}.png")), w, map_px)?;
+        let (sp, bp) = (m.join(format!("species_{label}.png")), m.join(format!("basal_area_{label}.png")));
+        match masked {
+            Some(masked) => plot::write_maps_masked(&sp, &bp, w, map_px, &plot::map_basal_area(w, map_px), masked)?,
+            None => plot::write_maps(&sp, &bp, w, map_px)?,
+        }
     }
     Ok(())
 }
@@ -256,6 +270,25 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
 /// on several ranks (`job::tiled`). The run driver ([`run_scenario_with`]) writes every output
 /// from the `world` it passes; a stepper makes that world whole whenever outputs follow.
 pub trait Stepper {
+    /// The world the run driver starts from: `scenario` on `site` at year 0 ([`World::new`],
+    /// the default). `lean` is `Some((map_px, year0))` when nothing will read the world whole
+    /// (a fresh run, no `on_snapshot` caller): a tiled run's rank 0 may then hold only its
+    /// band of `site` and build only its tile's world, with the start's trees of every rank
+    /// gathered when `year0` (the year-0 snapshot follows, [`Stepper::start_snapshot`]) and the
+    /// maps' masked pixels of longest side `map_px` (issue 37 Build 1, round 33).
+    ///
+    /// Errors: as [`World::new`]; the stepper's.
+    fn world(&mut self, site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario, lean: Option<(usize, bool)>) -> Result<World> {
+        let _ = lean;
+        Ok(World::new(site, lib, scenario)?)
+    }
+    /// Writes the year-0 snapshot `label` of `world` (as [`Stepper::snapshot`]'s default; a
+    /// stepper whose world holds a part of the site gives the maps' masked pixels).
+    ///
+    /// Errors: I/O errors naming the file.
+    fn start_snapshot(&mut self, dir: &Path, world: &World, label: &str, parts: Parts, map_px: usize, format: InventoryFormat) -> Result<()> {
+        snapshot(dir, world, label, parts, map_px, format)
+    }
     /// Called once before the first year with the world as started (year 0) or resumed.
     ///
     /// Errors: the stepper's (a tiled run's exchange).
@@ -384,8 +417,10 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
 /// Errors: as [`run_scenario`], and the stepper's.
 pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut opts: RunOptions, stepper: &mut dyn Stepper) -> Result<RunSummary> {
     let dir = opts.out_dir.clone();
-    // the world first: a refused scenario makes no folder
-    let mut world = World::new(site, lib, scenario)?;
+    // the world first: a refused scenario makes no folder (a tiled run's rank 0 of a fresh run
+    // that nothing reads whole builds its tile's world only: `lean`)
+    let lean = (!opts.resume && opts.on_snapshot.is_none()).then_some((opts.map_px, opts.write_snapshots));
+    let mut world = stepper.world(site, lib, scenario, lean)?;
     mkdir(&dir)?;
     if opts.write_snapshots {
         mkdir(&dir.join("inventory"))?;
@@ -493,7 +528,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         checkpoint::remove_all(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
         if opts.write_snapshots {
-            snapshot(&dir, &world, "year_0000", Parts { inventory: true, gpkg: gp(0), maps: true }, opts.map_px, format)?;
+            stepper.start_snapshot(&dir, &world, "year_0000", Parts { inventory: true, gpkg: gp(0), maps: true }, opts.map_px, format)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
                 f(0, &world);
             }

@@ -60,8 +60,19 @@ pub fn site_by_ranks(sc: &Scenario, t: &mut dyn Transport) -> Result<SiteConditi
 ///
 /// Errors: as [`site_by_ranks`].
 pub fn site_by_ranks_held(sc: &Scenario, t: &mut dyn Transport, whole: bool) -> Result<SiteConditions> {
+    site_by_ranks_banded(sc, t, whole, false)
+}
+
+/// [`site_by_ranks_held`], with `band0` (and `whole` false) rank 0 keeping its band too: no
+/// rank holds the whole site's conditions (issue 37 Build 1, round 33: a fresh run without
+/// management, whose rank 0 builds its tile's world only, `job::tiled`'s lean start). For a
+/// GeoTIFF terrain rank 0 still reads the whole DEM once for the hydrology (the fallback,
+/// module documentation) and drops it; every rank then sends every other only its cell size.
+///
+/// Errors: as [`site_by_ranks`].
+pub fn site_by_ranks_banded(sc: &Scenario, t: &mut dyn Transport, whole: bool, band0: bool) -> Result<SiteConditions> {
     let (me, n) = (t.rank(), t.size());
-    let keep_band = !whole && me != 0 && n > 1;
+    let keep_band = !whole && (me != 0 || band0) && n > 1;
     let Some((path, sw)) = geotiff_of(sc) else {
         if keep_band && sc.terrain.window.is_none() {
             if let TerrainSpec::Uniform(u) = sc.terrain_spec() {
@@ -194,7 +205,7 @@ pub fn site_by_ranks_held(sc: &Scenario, t: &mut dyn Transport, whole: bool) -> 
         }
     };
     // a copy for every other rank; this rank's own goes to itself without one
-    let mut out: Vec<Vec<u8>> = (0..n).map(|k| if k == me { Vec::new() } else if whole || k == 0 { mine.clone() } else { short(&mine) }).collect();
+    let mut out: Vec<Vec<u8>> = (0..n).map(|k| if k == me { Vec::new() } else if whole || (k == 0 && !band0) { mine.clone() } else { short(&mine) }).collect();
     out[me] = mine;
     let got = t.exchange(out)?;
     let part = part?;
@@ -245,15 +256,65 @@ fn agreed<T>(t: &mut dyn Transport, r: Result<T>) -> Result<T> {
     }
 }
 
-/// The per-cell grids of a band's conditions, in a fixed order.
-fn encode(e: &mut Enc<Vec<u8>>, c: &SiteConditions) {
-    let mask: Vec<f32> = c.mask.data.iter().map(|&m| if m { 1.0 } else { 0.0 }).collect();
-    e.f32s(&mask);
-    for g in [&c.elevation_m, &c.slope_deg, &c.aspect_deg, &c.twi, &c.insolation_kwh_m2, &c.wind_exposure, &c.temperature_c] {
-        e.f32s(&g.data);
+/// The per-cell fields of site conditions as the ranks exchange them ([`field_values`]): the
+/// mask, seven `f32` grids, the indices.
+pub const FIELDS: usize = 9;
+
+/// The `f32` grid of field `f` (1–7: elevation, slope, aspect, TWI, insolation, wind exposure,
+/// temperature) of `c`.
+fn f32_grid(c: &SiteConditions, f: usize) -> &Grid<f32> {
+    [&c.elevation_m, &c.slope_deg, &c.aspect_deg, &c.twi, &c.insolation_kwh_m2, &c.wind_exposure, &c.temperature_c][f - 1]
+}
+
+/// Field `f` of the [`FIELDS`] of `c` over the cells `win` (inside the cells held, row-major,
+/// row 0 north) as `f32`s, as the ranks send them: 0 the mask (1.0 unmasked, 0.0 masked), 1–7
+/// elevation (m), slope (°), aspect (°), TWI, insolation (kWh/m²/yr), wind exposure (0–1),
+/// temperature (°C), 8 the indices (6 values a cell, `[L, T, K, F, R, N]`). Shared by the
+/// bands' gather ([`site_by_ranks`]) and the tiles' windows (`job::tiled::tile_site_by`).
+/// Panics when `win` is not inside [`SiteConditions::held`].
+pub fn field_values(c: &SiteConditions, f: usize, win: Window) -> Vec<f32> {
+    match f {
+        0 => win.cut(&c.mask, &c.held).data.iter().map(|&m| if m { 1.0 } else { 0.0 }).collect(),
+        8 => win.cut(&c.indices, &c.held).data.iter().flatten().copied().collect(),
+        f => win.cut(f32_grid(c, f), &c.held).data,
     }
-    let ix: Vec<f32> = c.indices.data.iter().flatten().copied().collect();
-    e.f32s(&ix);
+}
+
+/// Gives up field `f` ([`field_values`]) of `c` (its grid emptied): a rank that has sent its
+/// band's field keeps no copy of it.
+pub fn drop_field(c: &mut SiteConditions, f: usize) {
+    match f {
+        0 => c.mask.data = Vec::new(),
+        8 => c.indices.data = Vec::new(),
+        1 => c.elevation_m.data = Vec::new(),
+        2 => c.slope_deg.data = Vec::new(),
+        3 => c.aspect_deg.data = Vec::new(),
+        4 => c.twi.data = Vec::new(),
+        5 => c.insolation_kwh_m2.data = Vec::new(),
+        6 => c.wind_exposure.data = Vec::new(),
+        _ => c.temperature_c.data = Vec::new(),
+    }
+}
+
+/// The site conditions holding the cells `held` of a grid of `full` (columns, rows) from the
+/// [`FIELDS`] fields `fields` in [`field_values`]' order and encoding (each
+/// `held.width · held.height` values, the indices 6 a cell; a missing field is an empty grid),
+/// with georeferencing `geo` and cell size `cell_x_m × cell_y_m` (m).
+pub fn conditions_of(geo: crate::grid::GeoRef, cell_x_m: f64, cell_y_m: f64, held: Window, full: (usize, usize), fields: Vec<Vec<f32>>) -> SiteConditions {
+    let (w, h) = (held.width, held.height);
+    let mut it = fields.into_iter();
+    let mut next = || Grid { width: w, height: h, data: it.next().unwrap_or_default() };
+    let mask = next().map(|v| *v != 0.0);
+    let (elevation_m, slope_deg, aspect_deg, twi, insolation_kwh_m2, wind_exposure, temperature_c) = (next(), next(), next(), next(), next(), next(), next());
+    let indices = Grid { width: w, height: h, data: next().data.chunks_exact(6).map(|q| [q[0], q[1], q[2], q[3], q[4], q[5]]).collect() };
+    SiteConditions { geo, cell_x_m, cell_y_m, mask, elevation_m, slope_deg, aspect_deg, twi, insolation_kwh_m2, wind_exposure, temperature_c, indices, held, full }
+}
+
+/// The per-cell grids of a band's conditions, in [`field_values`]' order, then its cell size.
+fn encode(e: &mut Enc<Vec<u8>>, c: &SiteConditions) {
+    for f in 0..FIELDS {
+        e.f32s(&field_values(c, f, c.held));
+    }
     e.f64(c.cell_x_m);
     e.f64(c.cell_y_m);
 }
@@ -264,8 +325,7 @@ fn encode(e: &mut Enc<Vec<u8>>, c: &SiteConditions) {
 ///
 /// Errors: [`Error::Exchange`] naming a rank whose message is short or of the wrong size.
 fn assemble(got: Vec<Vec<u8>>, bands: &[Window], w: usize, h: usize, geo: crate::grid::GeoRef) -> Result<SiteConditions> {
-    let mut grids: Vec<Vec<f32>> = vec![Vec::with_capacity(w * h); 8];
-    let mut ix: Vec<[f32; 6]> = Vec::with_capacity(w * h);
+    let mut fields: Vec<Vec<f32>> = (0..FIELDS).map(|f| Vec::with_capacity(if f == 8 { 6 } else { 1 } * w * h)).collect();
     let (mut cx, mut cy) = (None, None);
     for (k, (m, b)) in got.into_iter().zip(bands).enumerate() {
         if b.height == 0 {
@@ -274,39 +334,17 @@ fn assemble(got: Vec<Vec<u8>>, bands: &[Window], w: usize, h: usize, geo: crate:
         let fail = |s: Short| Error::Exchange { peer: k, reason: format!("site band message cut short at byte {}", s.at()) };
         let mut d = Dec::at(&m, 1, &fail);
         let cells = b.width * b.height;
-        let bad = |what: &str, len: usize| Error::Exchange { peer: k, reason: format!("site band {b} of rank {k}: {len} {what}, expected {cells}") };
-        for g in grids.iter_mut() {
+        for (f, g) in fields.iter_mut().enumerate() {
+            let per = if f == 8 { 6 } else { 1 };
             let v = d.f32s()?;
-            if v.len() != cells {
-                return Err(bad("cells", v.len()));
+            if v.len() != per * cells {
+                let what = if f == 8 { "index values / 6" } else { "cells" };
+                return Err(Error::Exchange { peer: k, reason: format!("site band {b} of rank {k}: {} {what}, expected {cells}", v.len() / per) });
             }
             g.extend_from_slice(&v);
         }
-        let v = d.f32s()?;
-        if v.len() != 6 * cells {
-            return Err(bad("index values / 6", v.len() / 6));
-        }
-        ix.extend(v.chunks_exact(6).map(|c| [c[0], c[1], c[2], c[3], c[4], c[5]]));
         (cx, cy) = (Some(d.f64()?), Some(d.f64()?));
     }
-    let mut it = grids.into_iter().map(|data| Grid { width: w, height: h, data });
-    let mut next = || it.next().unwrap_or(Grid { width: w, height: h, data: Vec::new() });
-    let mask = next().map(|v| *v != 0.0);
     let (cell_x_m, cell_y_m) = (cx.unwrap_or(geo.pixel_w), cy.unwrap_or(geo.cell_y_m()));
-    Ok(SiteConditions {
-        geo,
-        cell_x_m,
-        cell_y_m,
-        mask,
-        elevation_m: next(),
-        slope_deg: next(),
-        aspect_deg: next(),
-        twi: next(),
-        insolation_kwh_m2: next(),
-        wind_exposure: next(),
-        temperature_c: next(),
-        indices: Grid { width: w, height: h, data: ix },
-        held: crate::grid::Window::full(w, h),
-        full: (w, h),
-    })
+    Ok(conditions_of(geo, cell_x_m, cell_y_m, Window::full(w, h), (w, h), fields))
 }

@@ -84,11 +84,15 @@ pub enum Command {
     /// Count your band's part of the layout's weights; the parts are all-summed and every
     /// rank cuts the same layout ([`layout_by`]).
     Layout = 9,
+    /// Derive your tile's site and place your start's trees (ids from the ranks' counts); send
+    /// rank 0 what year 0's snapshot needs of your tile ([`start_tile`]; a fresh run whose rank
+    /// 0 holds its tile only, issue 37 Build 1, round 33: instead of [`Command::Begin`]).
+    Start = 10,
 }
 
 impl Command {
     fn from_byte(b: u8) -> Option<Command> {
-        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout].into_iter().find(|c| *c as u8 == b)
+        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout, Command::Start].into_iter().find(|c| *c as u8 == b)
     }
 }
 
@@ -103,7 +107,7 @@ fn command(t: &mut dyn Transport, c: Option<Command>) -> Result<Command> {
     };
     let got = t.exchange(out)?;
     let b = got.first().and_then(|m| m.first()).copied().unwrap_or(0);
-    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–9)") })?)
+    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–10)") })?)
 }
 
 /// Rank 0 sends every rank `k` the year and `paths[k]` (a per-rank checkpoint file); the others
@@ -265,6 +269,110 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
     Ok(tile.gather_bin_sums(t, dims.0 * dims.1 * np, |tr, i| crate::output::plot::map_bin(tr, i, dims, np), |tr, i| tr.basal_area_m2(i))?)
 }
 
+/// The start of a fresh tiled run on every rank (issue 37 Build 1, round 33; [`Command::Start`]):
+/// rank 0 sends every rank the maps' longest side and whether year 0's snapshot is written
+/// (`start`: `Some((map_px, year0))` on rank 0, `None` on the others); every rank derives its
+/// tile's site into `w` (its skeleton holding the tile's cells,
+/// [`crate::sim::tiles::derive_tile_site_with`]; a failure is every rank's), places its
+/// start's trees with one process's ids ([`World::place_start_tile`]: one all-sum of a word
+/// per run of the start's places) and makes its tile; then sends rank 0 the flags of the map
+/// pixels whose centre it owns (masked or not, 1 byte each; [`crate::output::plot::map_masked_centres`]
+/// of the whole site, assembled) and, with `year0`, its start's trees (54 bytes each). Rank 0
+/// gets `Some((trees, flags))`: every rank's start's trees merged by id (one process's store
+/// at year 0) and the whole map's flags; the others `None`. Nothing else of the stand is sent
+/// (the seed grids are zero and there are no cohorts at year 0; [`Tile::scatter`] sent them
+/// before).
+///
+/// Errors: [`Error::Exchange`] from the transport or a malformed message; as
+/// [`crate::sim::tiles::derive_tile_site_with`] (on every rank), [`World::place_start_tile`]
+/// and [`Tile::own`].
+#[allow(clippy::too_many_arguments)]
+fn start_tile(mut w: World, scenario: &Scenario, layout: &Layout, median: f32, whole: Option<&crate::sim::tiles::WholeSite>, start: Option<(usize, bool)>, t: &mut dyn Transport) -> Result<(Tile, Option<(crate::sim::TreeStore, Vec<bool>)>)> {
+    use crate::sim::codec::{Dec, Enc, Short};
+    let (me, n) = (t.rank(), t.size());
+    let mut out = vec![Vec::new(); n];
+    if let Some((px, year0)) = start {
+        let mut e = Enc(Vec::new());
+        e.u64(px as u64);
+        e.u64(year0 as u64);
+        out = vec![e.0; n];
+    }
+    let got = t.exchange(out)?;
+    let fail = |s: Short| Error::Exchange { peer: 0, reason: format!("start message cut short at byte {}", s.at()) };
+    let mut d = Dec::at(got.first().map(|m| m.as_slice()).unwrap_or(&[]), 0, &fail);
+    let (px, year0) = (d.u64()? as usize, d.u64()? != 0);
+    let r = crate::sim::tiles::derive_tile_site_with(&mut w, scenario, layout, me, median, whole);
+    let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
+    r?;
+    a?;
+    w.place_start_tile(scenario, &|x, y| layout.owner_of(x, y), me, &mut |v| t.all_sum(v))?;
+    let tile = Tile::own(w, layout.clone(), me)?;
+    let tw = &tile.world;
+    let dims = crate::output::plot::map_dims(tw, px);
+    let owner = |i: usize| {
+        let (x, y) = crate::output::plot::map_centre(dims, i);
+        (layout.owner_of(x as f32, y as f32), x, y)
+    };
+    let flags: Vec<u8> = (0..dims.0 * dims.1).filter_map(|i| {
+        let (k, x, y) = owner(i);
+        (k == me).then(|| tw.site_cell(x, y).is_none() as u8)
+    }).collect();
+    let mut e = Enc(Vec::new());
+    e.u64(flags.len() as u64);
+    e.bytes(&flags);
+    drop(flags);
+    if year0 {
+        let all: Vec<usize> = (0..tw.stand.trees.len()).collect();
+        crate::sim::tiles::put_trees(&mut e, &tw.stand.trees, &all);
+    }
+    let mut out = vec![Vec::new(); n];
+    out[0] = e.0;
+    let got = t.exchange(out)?;
+    if me != 0 {
+        return Ok((tile, None));
+    }
+    let mut parts = Vec::with_capacity(n);
+    let mut flag_parts: Vec<Vec<u8>> = Vec::with_capacity(n);
+    for (k, m) in got.iter().enumerate() {
+        let fail = crate::sim::tiles::short_message(k);
+        let mut d = Dec::at(m, 0, &fail);
+        let nf = d.count(1)?;
+        flag_parts.push(d.take(nf)?.to_vec());
+        parts.push(if year0 { crate::sim::tiles::get_trees(&mut d)? } else { crate::sim::TreeStore::default() });
+    }
+    let mut next = vec![0usize; n];
+    let mut masked = Vec::with_capacity(dims.0 * dims.1);
+    for i in 0..dims.0 * dims.1 {
+        let (k, ..) = owner(i);
+        let f = flag_parts[k].get(next[k]).ok_or_else(|| Error::Exchange { peer: k, reason: format!("{} map pixel flags from rank {k}, more expected", flag_parts[k].len()) })?;
+        next[k] += 1;
+        masked.push(*f != 0);
+    }
+    let trees = crate::sim::TreeStore::merge_by_id(&parts, tile.world.stand.trees.next_id).0;
+    Ok((tile, Some((trees, masked))))
+}
+
+/// The run driver's world on rank 0 of a lean start ([`Stepper::world`]) from its tile's world
+/// `w`: a copy of everything but the site's cells (the conditions an empty window at the
+/// tile's corner, no relative insolation, suitability, light cells' arrays or ground light) and
+/// the trees: what the driver reads of its world (the year, pool, library, extent, light grid,
+/// georeferencing, the whole site's identity) without a second copy of the tile's site (the
+/// copy `begin_shed` kept until round 33: about 70 bytes a site cell of the tile, rank 0's
+/// surplus over the other ranks). `w` is given back whole.
+fn driver_of(w: &mut World) -> World {
+    let c = &w.site.conditions;
+    let held = crate::grid::Window { col0: c.held.col0, row0: c.held.row0, width: 0, height: 0 };
+    let none = super::site_ranks::conditions_of(c.geo.clone(), c.cell_x_m, c.cell_y_m, held, c.full, Vec::new());
+    let conditions = std::mem::replace(&mut w.site.conditions, none);
+    let site = &mut w.site;
+    let kept = (std::mem::take(&mut site.rel_insolation), std::mem::take(&mut site.suitability), std::mem::take(&mut site.light_site), std::mem::take(&mut site.ground_free), std::mem::take(&mut w.scratch.ground_light), std::mem::take(&mut w.stand.trees));
+    let mut d = w.clone();
+    d.stand.trees.next_id = kept.5.next_id;
+    w.site.conditions = conditions;
+    (w.site.rel_insolation, w.site.suitability, w.site.light_site, w.site.ground_free, w.scratch.ground_light, w.stand.trees) = kept;
+    d
+}
+
 /// Tallies of zero for `world`'s pool.
 fn zero_tallies(world: &World) -> Tallies {
     Tallies { deaths_total: Default::default(), regen_ledger: RegenLedger::new(world.site.pool.len()) }
@@ -371,7 +479,7 @@ pub fn layout_by(world: &World, t: &mut dyn Transport) -> Result<(Layout, f32)> 
 /// Errors: [`Error::Invalid`] when a rank does not hold its band; [`Error::Exchange`] from the
 /// transport, naming a rank whose message is short or whose rows do not follow.
 pub fn tile_site_by(c: std::borrow::Cow<'_, SiteConditions>, identity: Option<&[(String, String)]>, light_cell_m: f64, layout: &Layout, t: &mut dyn Transport) -> Result<Option<(SiteConditions, crate::sim::tiles::WholeSite)>> {
-    use crate::grid::{Grid, Window};
+    use crate::grid::Window;
     let mut c = c;
     let (me, n) = (t.rank(), t.size());
     let (w, h) = c.full;
@@ -399,14 +507,13 @@ pub fn tile_site_by(c: std::borrow::Cow<'_, SiteConditions>, identity: Option<&[
     let wins: Vec<Window> = (0..n).map(|k| win_of(&c, k)).collect();
     let win = wins[me];
     let need = sums[1 + me] != 0;
+    // rank 0 holding its band only (a fresh run without management, round 33): the whole
+    // site's identity joined from every rank's band (every rank knows from the sums)
+    let joined = if sums[1] != 0 { identity_by(&c, band.start - c.held.row0..band.end - c.held.row0, t)? } else { None };
     let mut identity_got = Vec::new();
-    // the window's grids, one field at a time: 0 mask, 1–7 the f32 grids, 8 the indices
+    // the window's grids, one field at a time ([`super::site_ranks::field_values`])
     let mut fields: Vec<Vec<f32>> = Vec::new();
-    const F32_GRIDS: usize = 7;
-    fn grid_of(c: &SiteConditions, f: usize) -> &Grid<f32> {
-        [&c.elevation_m, &c.slope_deg, &c.aspect_deg, &c.twi, &c.insolation_kwh_m2, &c.wind_exposure, &c.temperature_c][f - 1]
-    }
-    for f in 0..F32_GRIDS + 2 {
+    for f in 0..super::site_ranks::FIELDS {
         let mut out = vec![Vec::new(); n];
         for (k, o) in out.iter_mut().enumerate() {
             if sums[1 + k] == 0 {
@@ -415,7 +522,7 @@ pub fn tile_site_by(c: std::borrow::Cow<'_, SiteConditions>, identity: Option<&[
             let mut e = crate::sim::codec::Enc(Vec::new());
             if me == 0 && f == 0 {
                 let own;
-                let id: &[(String, String)] = match identity {
+                let id: &[(String, String)] = match identity.or(joined.as_deref()) {
                     Some(i) => i,
                     None => {
                         own = crate::sim::checkpoint::site_identity(&c);
@@ -434,28 +541,14 @@ pub fn tile_site_by(c: std::borrow::Cow<'_, SiteConditions>, identity: Option<&[
             e.u64(piece.row0 as u64);
             e.u64(piece.height as u64);
             if piece.height > 0 {
-                match f {
-                    0 => e.f32s(&piece.cut(&c.mask, &c.held).data.iter().map(|&m| if m { 1.0 } else { 0.0 }).collect::<Vec<f32>>()),
-                    8 => e.f32s(&piece.cut(&c.indices, &c.held).data.iter().flatten().copied().collect::<Vec<f32>>()),
-                    f => e.f32s(&piece.cut(grid_of(&c, f), &c.held).data),
-                }
+                e.f32s(&super::site_ranks::field_values(&c, f, piece));
             }
             *o = e.0;
         }
         let got = t.exchange(out)?;
         // this field of the band is sent: an owned band gives it up
         if let std::borrow::Cow::Owned(o) = &mut c {
-            match f {
-                0 => o.mask.data = Vec::new(),
-                8 => o.indices.data = Vec::new(),
-                1 => o.elevation_m.data = Vec::new(),
-                2 => o.slope_deg.data = Vec::new(),
-                3 => o.aspect_deg.data = Vec::new(),
-                4 => o.twi.data = Vec::new(),
-                5 => o.insolation_kwh_m2.data = Vec::new(),
-                6 => o.wind_exposure.data = Vec::new(),
-                _ => o.temperature_c.data = Vec::new(),
-            }
+            super::site_ranks::drop_field(o, f);
         }
         if !need {
             continue;
@@ -495,14 +588,45 @@ pub fn tile_site_by(c: std::borrow::Cow<'_, SiteConditions>, identity: Option<&[
     if !need {
         return Ok(None);
     }
-    let g = |data: Vec<f32>| Grid { width: win.width, height: win.height, data };
-    let mut it = fields.into_iter();
-    let mut next = || it.next().unwrap_or_default();
-    let mask = g(next()).map(|v| *v != 0.0);
-    let (elevation_m, slope_deg, aspect_deg, twi, insolation_kwh_m2, wind_exposure, temperature_c) = (g(next()), g(next()), g(next()), g(next()), g(next()), g(next()), g(next()));
-    let indices = Grid { width: win.width, height: win.height, data: next().chunks_exact(6).map(|q| [q[0], q[1], q[2], q[3], q[4], q[5]]).collect() };
-    let part = SiteConditions { geo: c.geo.clone(), cell_x_m: c.cell_x_m, cell_y_m: c.cell_y_m, mask, elevation_m, slope_deg, aspect_deg, twi, insolation_kwh_m2, wind_exposure, temperature_c, indices, held: win, full: c.full };
+    let part = super::site_ranks::conditions_of(c.geo.clone(), c.cell_x_m, c.cell_y_m, win, c.full, fields);
     Ok(Some((part, crate::sim::tiles::WholeSite { identity: identity_got, valid_cells: sums[0] })))
+}
+
+/// The whole site's checkpoint identity ([`crate::sim::checkpoint::site_identity`]) on rank 0
+/// from the ranks' bands: every rank sends rank 0 the [`crate::sim::checkpoint::IdentityPart`]
+/// of its band, the held rows `rows` of `c` (136 bytes), and rank 0 joins them in rank order
+/// ([`crate::sim::checkpoint::site_identity_of`]); the strings are those of the whole site bit
+/// for bit. Every rank of `t` calls it at the same point. Returns `Some` on rank 0.
+///
+/// Errors: [`Error::Exchange`] from the transport or a message of another length.
+fn identity_by(c: &SiteConditions, rows: std::ops::Range<usize>, t: &mut dyn Transport) -> Result<Option<Vec<(String, String)>>> {
+    let p = crate::sim::checkpoint::identity_part(c, rows);
+    let mut e = crate::sim::codec::Enc(Vec::new());
+    for (crc, len) in p.crcs {
+        e.u64(crc as u64);
+        e.u64(len);
+    }
+    e.u64(p.valid);
+    e.u64(p.lo.to_bits() as u64);
+    e.u64(p.hi.to_bits() as u64);
+    let mut out = vec![Vec::new(); t.size()];
+    out[0] = e.0;
+    let got = t.exchange(out)?;
+    if t.rank() != 0 {
+        return Ok(None);
+    }
+    let mut parts = Vec::with_capacity(got.len());
+    for (k, m) in got.iter().enumerate() {
+        let fail = |s: crate::sim::codec::Short| Error::Exchange { peer: k, reason: format!("site identity part cut short at byte {}", s.at()) };
+        let mut d = crate::sim::codec::Dec::at(m, 0, &fail);
+        let mut crcs = [(0u32, 0u64); 7];
+        for x in crcs.iter_mut() {
+            *x = (d.u64()? as u32, d.u64()?);
+        }
+        let (valid, lo, hi) = (d.u64()?, f32::from_bits(d.u64()? as u32), f32::from_bits(d.u64()? as u32));
+        parts.push(crate::sim::checkpoint::IdentityPart { crcs, valid, lo, hi });
+    }
+    Ok(Some(crate::sim::checkpoint::site_identity_of(c.width(), c.height(), c.cell_x_m, c.cell_y_m, &parts)))
 }
 
 /// The layout of [`layout_for`] from the weights per light column `wc` and row `wr`.
@@ -562,12 +686,15 @@ pub struct Root<'t> {
     map_masked: Option<(usize, Vec<bool>)>,
     /// The layout, once the ranks have cut it ([`Root::layout`]).
     layout: Option<Layout>,
+    /// Rank 0 holds its tile's part of the site only, from the start ([`Stepper::world`] of a
+    /// fresh run, issue 37 Build 1, round 33).
+    lean: bool,
 }
 
 impl<'t> Root<'t> {
     /// Rank 0 of the transport `t`.
     pub fn new(t: &'t mut dyn Transport) -> Self {
-        Root { t, tile: None, base: Tallies::default(), done: false, map_masked: None, layout: None }
+        Root { t, tile: None, base: Tallies::default(), done: false, map_masked: None, layout: None, lean: false }
     }
 
     /// The run's layout: the first call tells the ranks [`Command::Layout`] and cuts it with
@@ -638,7 +765,86 @@ impl Drop for Root<'_> {
     }
 }
 
+impl Root<'_> {
+    /// [`Stepper::world`]'s lean start on rank 0 (`w` the skeleton of its band): the layout
+    /// with the ranks ([`layout_by`]), its tile's cells from the bands' owners
+    /// ([`tile_site_by`]), then [`start_tile`]. Returns the layout, rank 0's tile and what
+    /// year 0 needs (every rank's start's trees when `year0`, the maps' masked pixels).
+    ///
+    /// Errors: as [`layout_by`], [`tile_site_by`] and [`start_tile`].
+    fn lean_start(&mut self, mut w: World, scenario: &Scenario, map_px: usize, year0: bool) -> Result<(Layout, Tile, Option<(crate::sim::TreeStore, Vec<bool>)>)> {
+        command(self.t, Some(Command::Layout))?;
+        let (l, median) = layout_by(&w, self.t)?;
+        let c = &mut w.site.conditions;
+        let band = std::mem::replace(c, SiteConditions::uniform(c.width(), 0, c.cell_x_m, 0.0, [0.0; 6], 0.0));
+        let (c, ws) = tile_site_by(std::borrow::Cow::Owned(band), None, w.site.light.cell_m, &l, self.t)?.ok_or_else(|| Error::Exchange { peer: 0, reason: "rank 0 holds its band of the site but got no tile's cells".into() })?;
+        w.site.conditions = c;
+        command(self.t, Some(Command::Start))?;
+        let (tile, start) = start_tile(w, scenario, &l, median, Some(&ws), Some((map_px, year0)), self.t)?;
+        Ok((l, tile, start))
+    }
+}
+
 impl Stepper for Root<'_> {
+    /// With `lean` (a fresh run that nothing reads whole) and no management on 2 ranks or
+    /// more: rank 0 holds its band of `site` only (cut so when given whole), checks what needs
+    /// no whole site ([`World::skeleton`], [`World::warn`]) and builds its tile's world only,
+    /// as the other ranks do ([`Root::lean_start`]: the layout, its tile's cells from the bands'
+    /// owners, [`start_tile`]); the world it returns is its tile's without the site's cells
+    /// ([`driver_of`]) holding every rank's start's trees (year 0's snapshot reads them;
+    /// [`Stepper::begin_shed`] drops them), and
+    /// the maps' masked pixels are kept from the ranks (issue 37 Build 1, round 33: until then
+    /// rank 0 built the world of one process, [`World::new`], and cut its tile from it).
+    /// Otherwise [`World::new`] of the whole site.
+    ///
+    /// Errors: as [`World::new`] and [`Root::lean_start`]; [`Error::Invalid`] when `site` is
+    /// not whole and the start is not lean.
+    fn world(&mut self, site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario, lean: Option<(usize, bool)>) -> Result<World> {
+        let n = self.t.size();
+        let Some((map_px, year0)) = lean.filter(|_| n > 1 && scenario.management.is_empty()) else {
+            if !site.holds_all() {
+                return Err(Error::Invalid { context: scenario.context(), field: "site conditions".into(), value: format!("cells {} of {} × {} on rank 0", site.held, site.full.0, site.full.1), expected: "the whole site on rank 0 (a resumed run, a scenario with management or a caller that reads the world at snapshots)".into() }.into());
+            }
+            return Ok(World::new(site, lib, scenario)?);
+        };
+        let mut site = site;
+        if site.holds_all() {
+            let b = crate::sim::tiles::weight_band(0, n, site.height());
+            site.hold(crate::grid::Window { col0: 0, row0: b.start, width: site.width(), height: b.len() });
+        }
+        let w = World::skeleton(site, lib, scenario)?;
+        w.warn(scenario);
+        let r = self.lean_start(w, scenario, map_px, year0);
+        if r.is_err() {
+            self.done = true;
+        }
+        let (l, mut tile, start) = r?;
+        let mut world = driver_of(&mut tile.world);
+        if let Some((trees, masked)) = start {
+            if year0 {
+                world.stand.trees = trees;
+            }
+            self.map_masked = Some((map_px, masked));
+        }
+        self.base = zero_tallies(&world);
+        self.layout = Some(l);
+        self.tile = Some(tile);
+        self.lean = true;
+        Ok(world)
+    }
+    /// Year 0's snapshot: from `world` as one process writes it; when rank 0 holds its tile
+    /// only ([`Stepper::world`]'s lean start) `world` holds every rank's start's trees and the
+    /// maps' masked pixels come from the ranks.
+    ///
+    /// Errors: I/O errors naming the file; [`Error::Invalid`] for maps of another size than
+    /// the run began with.
+    fn start_snapshot(&mut self, dir: &Path, world: &World, label: &str, parts: Parts, map_px: usize, format: InventoryFormat) -> Result<()> {
+        match (&self.map_masked, self.lean) {
+            (_, false) => super::run::snapshot_masked(dir, world, label, parts, map_px, format, None),
+            (Some((px, masked)), true) if *px == map_px => super::run::snapshot_masked(dir, world, label, parts, map_px, format, Some(masked)),
+            _ => Err(Error::Invalid { context: "tiled run".into(), field: "map_px".into(), value: map_px.to_string(), expected: "the maps' size the run began with (rank 0 holds the masked pixels of that size only)".into() }.into()),
+        }
+    }
     fn begin(&mut self, world: &World) -> Result<()> {
         if self.tile.is_some() {
             // resumed from the per-rank checkpoints: every rank holds its tile already
@@ -871,6 +1077,11 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 tl.scatter(None, t)?;
                 tile = Some(tl);
             }
+            (Command::Start, None) => {
+                let (l, median) = laid(&layout, c)?;
+                let w = template(&mut world, c)?;
+                tile = Some(start_tile(w, scenario, &l, median, whole.as_ref(), None, t)?.0);
+            }
             (Command::Step, Some(tl)) => {
                 tl.step(t)?;
             }
@@ -900,6 +1111,7 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 write_parts(tl, t, None)?;
             }
             (Command::Resume, Some(_)) => return Err(Error::Exchange { peer: 0, reason: "command Resume after the run began".into() }.into()),
+            (Command::Start, Some(_)) => return Err(Error::Exchange { peer: 0, reason: "command Start after the run began".into() }.into()),
             (c, None) => return Err(Error::Exchange { peer: 0, reason: format!("command {c:?} before the run began") }.into()),
         }
         if matches!(c, Command::Save | Command::Snapshot) {
@@ -999,7 +1211,7 @@ mod tests {
         assert_eq!(grid_for(4, 100, 100), (2, 2));
         assert_eq!(grid_for(8, 100, 50), (4, 2));
         assert_eq!(grid_for(6, 40, 120), (2, 3), "a tie (1 × 6, 2 × 3) goes to more tiles across");
-        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout] {
+        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout, Command::Start] {
             assert_eq!(Command::from_byte(c as u8), Some(c));
         }
         assert_eq!(Command::from_byte(0), None);

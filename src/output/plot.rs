@@ -343,15 +343,18 @@ pub fn write_maps_from(species_png: &Path, ba_png: &Path, w: &World, max_px: usi
 /// the site cells `w` holds: the whole site's flags need the whole site (a tiled run's rank 0
 /// keeps them from before its run driver's world is cut to its tile, `job::tiled`).
 pub fn map_masked_centres(w: &World, max_px: usize) -> Vec<bool> {
-    let (cols, rows, cell) = map_dims(w, max_px);
-    let mut m = Vec::with_capacity(cols * rows);
-    for r in 0..rows {
-        for c in 0..cols {
-            let (x, y) = ((c as f64 + 0.5) * cell, (rows - r) as f64 * cell - 0.5 * cell);
-            m.push(w.site_cell(x, y).is_none());
-        }
-    }
-    m
+    let dims = map_dims(w, max_px);
+    (0..dims.0 * dims.1).map(|i| {
+        let (x, y) = map_centre(dims, i);
+        w.site_cell(x, y).is_none()
+    }).collect()
+}
+
+/// The centre (m, origin SW corner) of pixel `i` (row-major, row 0 north) of the maps' raster
+/// `(cols, rows, cell)` ([`map_dims`]): where [`map_masked_centres`] reads the site.
+pub fn map_centre((cols, rows, cell): (usize, usize, f64), i: usize) -> (f64, f64) {
+    let (c, r) = (i % cols, i / cols);
+    ((c as f64 + 0.5) * cell, (rows - r) as f64 * cell - 0.5 * cell)
 }
 
 /// [`write_maps_from`] with the pixels whose centre is masked given (`centre_masked`, one per

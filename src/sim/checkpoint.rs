@@ -145,29 +145,97 @@ fn crc_f32(h: &mut crc32fast::Hasher, v: &[f32]) {
     }
 }
 
-/// The `terrain` and `site conditions` entries of [`identity`] for the site `c` (the whole
-/// site: a tile keeps them from before its cut, [`super::world::Site::whole_identity`]).
-pub fn site_identity(c: &crate::conditions::SiteConditions) -> Vec<(String, String)> {
+/// A band of site rows' share of [`site_identity`] (issue 37 Build 1, round 33: a tiled run's
+/// rank 0 holds its band of the site only, so the whole site's identity is joined from the
+/// ranks' bands): per byte stream of the identity — elevations, mask, indices, insolation,
+/// temperature, wind exposure, TWI, each the band's cells in row order — its CRC-32 and length
+/// (bytes), with the band's count of unmasked cells and the lowest and highest elevation of
+/// those (∞ and −∞ when none). Joined in row order by [`site_identity_of`]
+/// (`crc32fast::Hasher::combine`), the bands give the whole site's strings bit for bit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct IdentityPart {
+    /// (CRC-32, bytes) of the seven streams, in the order above.
+    pub crcs: [(u32, u64); 7],
+    /// Unmasked cells of the band.
+    pub valid: u64,
+    /// Lowest elevation of the band's unmasked cells (m; `f32::INFINITY` when none).
+    pub lo: f32,
+    /// Highest elevation of the band's unmasked cells (m; `f32::NEG_INFINITY` when none).
+    pub hi: f32,
+}
+
+/// The [`IdentityPart`] of the held rows `rows` of `c` (rows of its held grids, 0 the first
+/// held row; a band of the site when `c` holds whole rows, [`SiteConditions::held`]).
+/// Panics when `rows` reaches past the rows held (a defect: a rank reads its own band).
+///
+/// [`SiteConditions::held`]: crate::conditions::SiteConditions::held
+pub fn identity_part(c: &crate::conditions::SiteConditions, rows: std::ops::Range<usize>) -> IdentityPart {
+    let hw = c.held.width;
+    let span = |r: usize| r * hw..(r + 1) * hw;
+    let stream = |f: &dyn Fn(&mut crc32fast::Hasher, std::ops::Range<usize>) -> u64| {
+        let mut h = crc32fast::Hasher::new();
+        let n: u64 = rows.clone().map(|r| f(&mut h, span(r))).sum();
+        (h.finalize(), n)
+    };
+    let f32s = |g: &crate::grid::Grid<f32>| stream(&|h, s| {
+        crc_f32(h, &g.data[s.clone()]);
+        4 * s.len() as u64
+    });
+    let mask = stream(&|h, s| {
+        h.update(&c.mask.data[s.clone()].iter().map(|&m| m as u8).collect::<Vec<u8>>());
+        s.len() as u64
+    });
+    let indices = stream(&|h, s| {
+        for ix in &c.indices.data[s.clone()] {
+            crc_f32(h, ix);
+        }
+        24 * s.len() as u64
+    });
+    let (mut valid, mut lo, mut hi) = (0u64, f32::INFINITY, f32::NEG_INFINITY);
+    for r in rows.clone() {
+        let s = span(r);
+        for (e, _) in c.elevation_m.data[s.clone()].iter().zip(&c.mask.data[s]).filter(|(_, m)| **m) {
+            valid += 1;
+            (lo, hi) = (lo.min(*e), hi.max(*e));
+        }
+    }
+    IdentityPart { crcs: [f32s(&c.elevation_m), mask, indices, f32s(&c.insolation_kwh_m2), f32s(&c.temperature_c), f32s(&c.wind_exposure), f32s(&c.twi)], valid, lo, hi }
+}
+
+/// The `terrain` and `site conditions` entries of [`identity`] of a site of `w × h` cells of
+/// `cell_x_m × cell_y_m` (m) from its bands' [`IdentityPart`]s, `parts` in row order (bands
+/// that together are the site's rows once: [`site_identity`] is this of one part).
+pub fn site_identity_of(w: usize, h: usize, cell_x_m: f64, cell_y_m: f64, parts: &[IdentityPart]) -> Vec<(String, String)> {
+    let join = |hs: &mut crc32fast::Hasher, s: usize| {
+        for p in parts {
+            hs.combine(&crc32fast::Hasher::new_with_initial_len(p.crcs[s].0, p.crcs[s].1));
+        }
+    };
     let mut out = Vec::with_capacity(2);
-    let mut h = crc32fast::Hasher::new();
-    h.update(&(c.width() as u64).to_le_bytes());
-    h.update(&(c.height() as u64).to_le_bytes());
-    h.update(&c.cell_x_m.to_bits().to_le_bytes());
-    h.update(&c.cell_y_m.to_bits().to_le_bytes());
-    crc_f32(&mut h, &c.elevation_m.data);
-    h.update(&c.mask.data.iter().map(|&m| m as u8).collect::<Vec<u8>>());
-    let valid: Vec<f32> = c.elevation_m.data.iter().zip(&c.mask.data).filter(|(_, m)| **m).map(|(e, _)| *e).collect();
-    let (lo, hi) = valid.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &e| (a.min(e), b.max(e)));
-    out.push(("terrain".to_string(), format!("{} × {} cells of {} m × {} m, {} valid, elevation {lo:.2}–{hi:.2} m, CRC-32 {:08x}", c.width(), c.height(), c.cell_x_m, c.cell_y_m, valid.len(), h.finalize())));
-    let mut h = crc32fast::Hasher::new();
-    for ix in &c.indices.data {
-        crc_f32(&mut h, ix);
+    let mut hs = crc32fast::Hasher::new();
+    hs.update(&(w as u64).to_le_bytes());
+    hs.update(&(h as u64).to_le_bytes());
+    hs.update(&cell_x_m.to_bits().to_le_bytes());
+    hs.update(&cell_y_m.to_bits().to_le_bytes());
+    join(&mut hs, 0);
+    join(&mut hs, 1);
+    let valid: u64 = parts.iter().map(|p| p.valid).sum();
+    let (lo, hi) = parts.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), p| (a.min(p.lo), b.max(p.hi)));
+    out.push(("terrain".to_string(), format!("{w} × {h} cells of {cell_x_m} m × {cell_y_m} m, {valid} valid, elevation {lo:.2}–{hi:.2} m, CRC-32 {:08x}", hs.finalize())));
+    let mut hs = crc32fast::Hasher::new();
+    for s in 2..7 {
+        join(&mut hs, s);
     }
-    for g in [&c.insolation_kwh_m2, &c.temperature_c, &c.wind_exposure, &c.twi] {
-        crc_f32(&mut h, &g.data);
-    }
-    out.push(("site conditions".into(), format!("CRC-32 {:08x} of the per-cell indices, insolation, temperature, wind exposure and TWI", h.finalize())));
+    out.push(("site conditions".into(), format!("CRC-32 {:08x} of the per-cell indices, insolation, temperature, wind exposure and TWI", hs.finalize())));
     out
+}
+
+/// The `terrain` and `site conditions` entries of [`identity`] for the site `c` (the whole
+/// site: a tile keeps them from before its cut, [`super::world::Site::whole_identity`]; a
+/// tiled run's rank 0 that holds its band joins them from the ranks' bands,
+/// [`site_identity_of`]).
+pub fn site_identity(c: &crate::conditions::SiteConditions) -> Vec<(String, String)> {
+    site_identity_of(c.width(), c.height(), c.cell_x_m, c.cell_y_m, &[identity_part(c, 0..c.held.height)])
 }
 
 /// The identity of the run of `w`: what a resumed run must share with the one that wrote the

@@ -630,7 +630,7 @@ pub fn cut_by_weight(w: &[u64], n: usize) -> Vec<usize> {
 type Enc = codec::Enc<Vec<u8>>;
 
 /// The trees `idx` of `t`: count, ids, species, then each of [`TreeStore::f32_columns`].
-fn put_trees(e: &mut Enc, t: &TreeStore, idx: &[usize]) {
+pub(crate) fn put_trees(e: &mut Enc, t: &TreeStore, idx: &[usize]) {
     e.u64(idx.len() as u64);
     for &i in idx {
         e.u64(t.id[i]);
@@ -646,7 +646,7 @@ fn put_trees(e: &mut Enc, t: &TreeStore, idx: &[usize]) {
 }
 
 /// How a message from rank `peer` that ends early or holds too large a count is refused.
-fn short_message(peer: usize) -> impl Fn(Short) -> Error {
+pub(crate) fn short_message(peer: usize) -> impl Fn(Short) -> Error {
     move |s| Error::Exchange {
         peer,
         reason: match s {
@@ -658,7 +658,9 @@ fn short_message(peer: usize) -> impl Fn(Short) -> Error {
 }
 
 /// The trees of [`put_trees`].
-fn get_trees(d: &mut Dec<'_>) -> Result<TreeStore> {
+///
+/// Errors: [`Error::Exchange`] (through `d`'s failure) when the message is short.
+pub(crate) fn get_trees(d: &mut Dec<'_>) -> Result<TreeStore> {
     let n = d.count(8 + 2 + N_F32_COLUMNS * 4)?;
     let mut t = TreeStore { id: d.u64s_n(n)?, ..Default::default() };
     t.species = d.u16s_n(n)?;

@@ -275,27 +275,65 @@ impl Site {
     /// where `inside(x, y)` and a tree may stand ([`Site::new_tree`]). The start's planted stands
     /// and management plantings (`sim::phases::management`) both use it.
     pub fn lattice(&self, bbox: [f64; 4], spacing_m: f64, age_yr: f32, stream: impl Fn(u64, u64) -> Stream, inside: impl Fn(f64, f64) -> bool, species: impl Fn(&mut Stream) -> SpeciesId) -> Vec<NewTree> {
+        let mut out = Vec::new();
+        self.lattice_each(bbox, spacing_m, age_yr, stream, |x, y, a, r| {
+            if !inside(x, y) {
+                return;
+            }
+            let s = species(r);
+            if let Some(t) = self.new_tree(s, x, y, a) {
+                out.push(t);
+            }
+        });
+        out
+    }
+
+    /// The points of [`Site::lattice`] before any is kept: `each(x, y, age, stream)` for every
+    /// lattice point (m, m, yr) in the lattice's order, with the point's stream after its three
+    /// draws. The lattice and a tiled run's start per tile ([`World::place_start_tile`]) both
+    /// walk it, so they draw the same numbers.
+    pub fn lattice_each(&self, bbox: [f64; 4], spacing_m: f64, age_yr: f32, stream: impl Fn(u64, u64) -> Stream, mut each: impl FnMut(f64, f64, f32, &mut Stream)) {
         let [x0, y0, x1, y1] = bbox;
         let (x0, y0, x1, y1) = (x0.max(0.0), y0.max(0.0), x1.min(self.extent.0), y1.min(self.extent.1));
         let nx = ((x1 - x0) / spacing_m).floor().max(0.0) as u64;
         let ny = ((y1 - y0) / spacing_m).floor().max(0.0) as u64;
-        let mut out = Vec::new();
         for j in 0..ny {
             for i in 0..nx {
                 let mut r = stream(i, j);
                 let x = x0 + (i as f64 + 0.5 + r.range(-0.15, 0.15)) * spacing_m;
                 let y = y0 + (j as f64 + 0.5 + r.range(-0.15, 0.15)) * spacing_m;
                 let a = (age_yr + r.range(-0.5, 0.5) as f32).max(1.0);
-                if !inside(x, y) {
-                    continue;
-                }
-                let s = species(&mut r);
-                if let Some(t) = self.new_tree(s, x, y, a) {
-                    out.push(t);
-                }
+                each(x, y, a, &mut r);
             }
         }
-        out
+    }
+
+    /// Every place a tree of `scenario`'s start may stand, `each(species, x, y, age)` (m, m,
+    /// yr), in the order of one process's tree ids: each `[[start]]` entry in turn, a planted
+    /// stand's lattice ([`Site::lattice_each`]), a seed source's trees (up to 10 m around each
+    /// point); seed rain places none. A tree stands where [`Site::new_tree`] gives one.
+    pub fn start_candidates(&self, scenario: &Scenario, mut each: impl FnMut(SpeciesId, f64, f64, f32)) {
+        for (k, st) in scenario.start.iter().enumerate() {
+            let Some(s) = self.lib.find(st.species()) else { continue };
+            match st {
+                Start::Planted { spacing_m, age_yr, area, .. } => {
+                    let bbox = area.unwrap_or([0.0, 0.0, self.extent.0, self.extent.1]);
+                    let seed = self.seed;
+                    self.lattice_each(bbox, *spacing_m, *age_yr, |i, j| Stream::new(seed, (k as u64) << 48 | j << 24 | i, 0, salt::INIT), |x, y, a, _| each(s, x, y, a));
+                }
+                Start::SeedSources { points, trees_per_source, .. } => {
+                    let age = self.species(s).life.maturity_age_yr + 20.0;
+                    for (pi, p) in points.iter().enumerate() {
+                        for t in 0..*trees_per_source as u64 {
+                            let mut r = Stream::new(self.seed, (k as u64) << 48 | (pi as u64) << 24 | t, 0, salt::INIT);
+                            let (a, d) = (r.range(0.0, std::f64::consts::TAU), 10.0 * r.uniform().sqrt());
+                            each(s, p[0] + d * a.cos(), p[1] + d * a.sin(), age);
+                        }
+                    }
+                }
+                Start::SeedRain { .. } => {}
+            }
+        }
     }
 
     /// The trees management entry `op` plants in simulation year `y` (0: at the start): the
@@ -357,23 +395,7 @@ impl World {
         let mut w = World::bare(site, lib, scenario)?;
         w.check_plantings(&scenario.context())?;
         if warn {
-            for m in super::management::warnings(&w.site.management, scenario.years, &scenario.context()) {
-                tracing::warn!("{m}");
-            }
-            // nothing to grow from: no start and no planting (round 30's trial ran such a
-            // scenario for a minute to no tree, without a word)
-            if scenario.start.is_empty() && !scenario.management.iter().any(|m| m.kind == "planting") {
-                tracing::warn!("{}: no [[start]] (seed sources, seed rain, a planted stand) and no planting in [[management]]: nothing will grow on this site", scenario.context());
-            }
-            let late = w.site.climate_change.years_beyond(scenario.years);
-            if let Some(first) = late.first() {
-                tracing::warn!("{}: climate.anomalies_file has {} year(s) beyond the run's last year {} (from year {first}): they do not act", scenario.context(), late.len(), scenario.years);
-            }
-            let gaps = w.site.climate_change.anomaly_gaps();
-            if !gaps.is_empty() {
-                let shown: Vec<String> = gaps.iter().take(8).map(u32::to_string).collect();
-                tracing::warn!("{}: climate.anomalies_file has no line for {} year(s) between its first and last ({}{}): they take no anomaly (0 K, precipitation factor 1)", scenario.context(), gaps.len(), shown.join(", "), if gaps.len() > 8 { ", …" } else { "" });
-            }
+            w.warn(scenario);
         }
         w.place_start(scenario);
         // plantings of year 0 stand with the start
@@ -396,6 +418,15 @@ impl World {
     ///
     /// Errors: as [`World::new`].
     pub fn check(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<SiteConditions> {
+        if !site.holds_all() {
+            // a band of the site (a tiled run's rank 0 of a fresh run without management,
+            // issue 37 round 33): what needs no whole site (species, extent, climate anomalies);
+            // the rest is checked by the ranks together as the run begins
+            if !scenario.management.is_empty() {
+                return Err(crate::Error::Invalid { context: scenario.context(), field: "site conditions".into(), value: format!("cells {} of {} × {}", site.held, site.full.0, site.full.1), expected: "the whole site (a scenario with management is checked against it)".into() });
+            }
+            return Ok(World::skeleton(site, lib, scenario)?.site.conditions);
+        }
         let w = World::bare(site, lib, scenario)?;
         w.check_plantings(&scenario.context())?;
         Ok(w.site.conditions)
@@ -540,37 +571,94 @@ impl World {
         self.site.site_cell(x, y)
     }
 
-    fn new_tree(&self, s: SpeciesId, x: f64, y: f64, age: f32) -> Option<NewTree> {
-        self.site.new_tree(s, x, y, age)
+    fn place_start(&mut self, scenario: &Scenario) {
+        let mut trees = Vec::new();
+        self.site.start_candidates(scenario, |s, x, y, a| trees.extend(self.site.new_tree(s, x, y, a)));
+        for t in trees {
+            self.stand.trees.push(t);
+        }
     }
 
-    fn place_start(&mut self, scenario: &Scenario) {
-        for (k, st) in scenario.start.iter().enumerate() {
-            let Some(s) = self.site.lib.find(st.species()) else { continue };
-            match st {
-                Start::Planted { spacing_m, age_yr, area, .. } => {
-                    let bbox = area.unwrap_or([0.0, 0.0, self.site.extent.0, self.site.extent.1]);
-                    let seed = self.site.seed;
-                    let trees = self.site.lattice(bbox, *spacing_m, *age_yr, |i, j| Stream::new(seed, (k as u64) << 48 | j << 24 | i, 0, salt::INIT), |_, _| true, |_| s);
-                    for t in trees {
-                        self.stand.trees.push(t);
-                    }
-                }
-                Start::SeedSources { points, trees_per_source, .. } => {
-                    let sp = self.species(s);
-                    let age = sp.life.maturity_age_yr + 20.0;
-                    for (pi, p) in points.iter().enumerate() {
-                        for t in 0..*trees_per_source as u64 {
-                            let mut r = Stream::new(self.site.seed, (k as u64) << 48 | (pi as u64) << 24 | t, 0, salt::INIT);
-                            let (a, d) = (r.range(0.0, std::f64::consts::TAU), 10.0 * r.uniform().sqrt());
-                            if let Some(nt) = self.new_tree(s, p[0] + d * a.cos(), p[1] + d * a.sin(), age) {
-                                self.stand.trees.push(nt);
-                            }
-                        }
-                    }
-                }
-                Start::SeedRain { .. } => {}
+    /// The start's trees of tile `me` placed into `self` (a tile's world:
+    /// [`super::tiles::derive_tile_site_with`]), with the ids one process gives them (issue 37
+    /// Build 1, round 33: a tiled run's ranks place their own start, no rank the whole): every
+    /// rank walks the start's places in id order ([`Site::start_candidates`]: positions only,
+    /// no site read) and cuts them into runs of consecutive places with one owning tile
+    /// (`owner_of(x, y)`, m: the layout's [`super::tiles::Layout::owner_of`]; a function, so
+    /// that the world does not import the tiles); the owner of a run counts the trees that stand in
+    /// it ([`Site::new_tree`], read from its own cells); the counts, one word a run, are summed
+    /// over the ranks by `sum` (an all-reduce: each run has one owner) and the exclusive prefix
+    /// sum of the summed counts is each run's first id, so every tree gets its id in one
+    /// process's order. The next id is the start's tree count. Every rank of the run calls it
+    /// with the same layout's owners (a collective step). Cost: every rank walks every place of the start
+    /// (three random draws each), not only its own: for a planted start of the whole site that is
+    /// the site's lattice on every rank, a CPU cost, not memory (the runs: 8 bytes per lattice
+    /// row and tile column).
+    ///
+    /// Errors: `sum`'s (a failed exchange), or its answer of another length
+    /// ([`crate::Error::Exchange`]).
+    pub fn place_start_tile(&mut self, scenario: &Scenario, owner_of: &dyn Fn(f32, f32) -> usize, me: usize, sum: &mut dyn FnMut(Vec<u64>) -> Result<Vec<u64>>) -> Result<()> {
+        let mut runs: Vec<u64> = Vec::new();
+        let mut owner: Option<usize> = None;
+        let mut mine: Vec<(usize, NewTree)> = Vec::new();
+        self.site.start_candidates(scenario, |s, x, y, a| {
+            let o = owner_of(x as f32, y as f32);
+            if owner != Some(o) {
+                runs.push(0);
+                owner = Some(o);
             }
+            if o == me {
+                if let Some(t) = self.site.new_tree(s, x, y, a) {
+                    let r = runs.len() - 1;
+                    runs[r] += 1;
+                    mine.push((r, t));
+                }
+            }
+        });
+        let n = runs.len();
+        let sums = sum(runs)?;
+        if sums.len() != n {
+            return Err(crate::Error::Exchange { peer: 0, reason: format!("{} summed counts of the start's runs, expected {n}", sums.len()) });
+        }
+        let mut first = Vec::with_capacity(n);
+        let mut total = 0u64;
+        for c in &sums {
+            first.push(total);
+            total += c;
+        }
+        let trees = &mut self.stand.trees;
+        let mut last = None;
+        let mut k = 0u64;
+        for (r, t) in mine {
+            k = if last == Some(r) { k + 1 } else { 0 };
+            last = Some(r);
+            trees.next_id = first[r] + k;
+            trees.push(t);
+        }
+        trees.next_id = total;
+        Ok(())
+    }
+
+    /// Logs [`World::new`]'s warnings about `scenario` (management years beyond the run, no
+    /// start and no planting, climate anomalies beyond the run or with gaps), once: by one
+    /// process, or by a tiled run's rank 0.
+    pub fn warn(&self, scenario: &Scenario) {
+        for m in super::management::warnings(&self.site.management, scenario.years, &scenario.context()) {
+            tracing::warn!("{m}");
+        }
+        // nothing to grow from: no start and no planting (round 30's trial ran such a
+        // scenario for a minute to no tree, without a word)
+        if scenario.start.is_empty() && !scenario.management.iter().any(|m| m.kind == "planting") {
+            tracing::warn!("{}: no [[start]] (seed sources, seed rain, a planted stand) and no planting in [[management]]: nothing will grow on this site", scenario.context());
+        }
+        let late = self.site.climate_change.years_beyond(scenario.years);
+        if let Some(first) = late.first() {
+            tracing::warn!("{}: climate.anomalies_file has {} year(s) beyond the run's last year {} (from year {first}): they do not act", scenario.context(), late.len(), scenario.years);
+        }
+        let gaps = self.site.climate_change.anomaly_gaps();
+        if !gaps.is_empty() {
+            let shown: Vec<String> = gaps.iter().take(8).map(u32::to_string).collect();
+            tracing::warn!("{}: climate.anomalies_file has no line for {} year(s) between its first and last ({}{}): they take no anomaly (0 K, precipitation factor 1)", scenario.context(), gaps.len(), shown.join(", "), if gaps.len() > 8 { ", …" } else { "" });
         }
     }
 }
