@@ -41,7 +41,8 @@
 //!    direction when no caster that changed between the two levels (added, removed, moved,
 //!    cut or thinned) lies on the ray, which is exactly the value a recomputation gives (the
 //!    same casters, multiplied in the same order); levels where most casters changed recompute
-//!    everything.
+//!    everything. Only in a group or among fixed trees: for one tree alone the level's grids are
+//!    built for every direction anyway, and the check costs more than the queries it saves.
 //! 5. **Leaf density (eq. 12)** ρ_l = ρ_l0·ρ(i)/ρ(i_l0) with ρ(i) = i (linear) for every leaf
 //!    cluster of the full-grown stage after the levels: [`PlasticTree::leaf_clusters`] (with the
 //!    obstacle-cut radius and the translucency of eqs. 4 and 13) and, per node of the adapted
@@ -552,6 +553,17 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
     // per tree: the previous level's occluders, shade casters and per-direction cluster
     // transmittances
     let mut prev: Vec<Option<Prev>> = vec![None; trees.len()];
+    // whether a cluster's value of the previous level is reused where no changed caster lies
+    // on its ray (`Reuse`): for one tree among no fixed trees it cannot pay, as every direction
+    // open at a lit cluster has its grid of the level's casters built anyway (`prepare` before
+    // the queries, and the level's bending asks for nearly every direction), so a reused value
+    // only trades a query of those grids for a query of the changed casters' grids, and those
+    // grids cost their builds on top (measured, callgrind, the wall move of the 9,133-node
+    // bench tree: 3.4 M instructions a move, 3.5 %, go with the reuse; the same trees bit for
+    // bit, as a reused value is the one recomputed). With fixed trees a reused value also
+    // saves the query of their grids, and in a group the changed casters are few against the
+    // shared grids' casters: kept there (not measured)
+    let reuse_pays = trees.len() > 1 || fixed_vols.is_some();
     for g in 0..=g_max {
         let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
         // the receivers that are the same stage cluster as at the previous level
@@ -578,9 +590,9 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
             .collect();
         let casters: Vec<Occluder> = occ.iter().flat_map(|(_, c, _)| c.iter().map(|(_, o)| *o)).collect();
         // the casters that differ from the previous level's (removed, added or changed): both
-        // lists are sorted by key
+        // lists are sorted by key; only where a reused value can pay (`reuse_pays`)
         let mut delta = Vec::new();
-        for ((_, cur, _), pr) in occ.iter().zip(&prev) {
+        for ((_, cur, _), pr) in occ.iter().zip(&prev).filter(|_| reuse_pays) {
             let old: &[(u64, Occluder)] = pr.as_ref().map_or(&[], |p| &p.shade);
             let (mut i, mut j) = (0, 0);
             while i < old.len() || j < cur.len() {
@@ -613,7 +625,7 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
         // reuse pays while the changes are a minority of the casters
         // (measured on the bench trees: below 60 % changed casters the check is cheaper than the
         // products it saves; above, it is not)
-        let delta = (5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(region.0, region.1));
+        let delta = (reuse_pays && 5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(region.0, region.1));
         let vols = ShadowVolumes::new(sky, casters).within(region.0, region.1);
         // trees at work at this level share its grids: built over the cores before the trees'
         // levels run side by side (else each tree's first batch builds them, and a core wanting
