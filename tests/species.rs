@@ -61,6 +61,17 @@ fn shipped_files_validate() {
     // Lookup by scientific and common name.
     assert_eq!(lib.get("Fagus sylvatica").unwrap().id, "beech");
     assert_eq!(lib.get("scots pine").unwrap().id, "scots_pine");
+    // One resolver: case, spaces, `_` and `-` do not matter (issue 32: `fagus_sylvatica` was refused).
+    for name in ["fagus_sylvatica", "FAGUS SYLVATICA", " Fagus-sylvatica ", "fagus  sylvatica", "European_Beech", "BEECH"] {
+        assert_eq!(lib.get(name).map(|s| s.id.as_str()), Some("beech"), "{name:?}");
+    }
+    assert_eq!(lib.get("Pinus sylvestris").unwrap().id, "scots_pine");
+    assert_eq!(lib.get("picea_abies").unwrap().id, "norway_spruce");
+    assert_eq!(lib.get("norway spruce").unwrap().id, "norway_spruce");
+    assert_eq!(lib.get("quercus petraea").unwrap().id, "sessile_oak");
+    assert!(lib.get("fagus").is_none());
+    assert!(lib.get("").is_none());
+    assert!(lib.get(" _ ").is_none());
 }
 
 #[test]

@@ -329,7 +329,9 @@ fn tree_grow_adapted_full_level_carries_the_crowns_leaf_area() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("beech_wall.glb");
     let res = Command::new(env!("CARGO_BIN_EXE_sylva"))
-        .args(["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "60", "--adapt-to", "wall:1.5", "--out", out.to_str().unwrap()])
+        // open-grown (round 33): the default stand-grown beech of 60 years has a crown of 2.7 m
+        // radius whose lengthened leaf cards alone carry its leaf area (no cluster cards needed)
+        .args(["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "60", "--open-grown", "--adapt-to", "wall:1.5", "--out", out.to_str().unwrap()])
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&res.stdout).into_owned();
@@ -350,4 +352,33 @@ fn tree_grow_adapted_full_level_carries_the_crowns_leaf_area() {
     let lod0 = js["meshes"].as_array().unwrap().iter().find(|m| m["name"] == "beech_LOD0").unwrap();
     let mats: Vec<&str> = lod0["primitives"].as_array().unwrap().iter().map(|p| js["materials"][p["material"].as_u64().unwrap() as usize]["name"].as_str().unwrap()).collect();
     assert_eq!(mats, ["beech_bark", "beech_leaf", "beech_cluster"]);
+}
+
+/// Issue 32: the EcoMod tree of `sylva tree grow` has the species' height at its age (round
+/// 32's previews were scaled to fit, and its trees were the strand model's own size whatever
+/// the age), and `--species` takes the scientific name in any case, with a space or `_`.
+#[test]
+fn ecomod_tree_height_follows_the_species_curve_and_scientific_names_are_accepted() {
+    let dir = tempfile::tempdir().unwrap();
+    let lib = sylva::species::SpeciesLibrary::embedded().unwrap();
+    for (name, id) in [("Fagus sylvatica", "beech"), ("pinus_sylvestris", "scots_pine"), ("PICEA ABIES", "norway_spruce"), ("quercus-petraea", "sessile_oak")] {
+        let sp = lib.get(id).unwrap();
+        for age in ["20", "80"] {
+            let h = grown_height("ecomod", name, age, dir.path());
+            let target = sp.potential_height_m(age.parse().unwrap());
+            assert!((h - target).abs() <= 0.02 * target, "{name} at {age}: {h} m, the species curve {target} m");
+        }
+    }
+    // the species' dimensions at the age are printed
+    let out = dir.path().join("pine.glb");
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "scots_pine", "--age", "80", "--out", out.to_str().unwrap()]).output().unwrap();
+    let so = String::from_utf8_lossy(&res.stdout).into_owned();
+    assert!(res.status.success(), "{so}");
+    let line = so.lines().find(|l| l.starts_with("species at 80 yr (stand-grown): height")).unwrap_or_else(|| panic!("{so}"));
+    assert!(line.contains("crown base") && line.contains("% of the height clear") && line.contains("crown width/length"), "{line}");
+    assert!(so.lines().any(|l| l.starts_with("measured tree: height")), "{so}");
+    // an unknown name is still refused, naming the option and the ids
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "Fagus", "--out", out.to_str().unwrap()]).output().unwrap();
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert!(!res.status.success() && err.contains("--species \"Fagus\"") && err.contains("beech"), "{err}");
 }

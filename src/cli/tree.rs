@@ -8,6 +8,7 @@ use clap::{Subcommand, ValueEnum};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 use sylva::structure::grow::space::Obstacle;
+use sylva::structure::forest_form;
 use sylva::structure::species_tree;
 use sylva::structure::mesh::{lod_chain, LodOptions};
 use sylva::structure::plastic::{adapt_group, Environment, Fate, PlasticTree, Sky};
@@ -53,6 +54,11 @@ pub enum Command {
         /// Random seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Grow the tree as a tree alone (open-grown: the species' open-grown DBH, crown ratio
+        /// and crown radius) instead of a tree of a closed stand (the default: DBH, crown base
+        /// and crown width of the species' stand-grown functions). EcoMod only.
+        #[arg(long)]
+        open_grown: bool,
         /// Folder of extra or edited species files, over the shipped library.
         #[arg(long)]
         species_dir: Option<PathBuf>,
@@ -124,7 +130,10 @@ pub struct AdaptArgs {
 /// Runs a tree subcommand.
 pub fn run(c: Command) -> anyhow::Result<()> {
     match c {
-        Command::Grow { species, model, age, obstacle, adapt_to, seed, species_dir, out } => grow(&species, model, age, &obstacle, &adapt_to, seed, species_dir.as_deref(), &out),
+        Command::Grow { species, model, age, obstacle, adapt_to, seed, open_grown, species_dir, out } => {
+            let habit = if open_grown { forest_form::Habit::Open } else { forest_form::Habit::Forest };
+            grow(&species, model, age, &obstacle, &adapt_to, seed, habit, species_dir.as_deref(), &out)
+        }
         Command::Adapt(a) => adapt(&a),
     }
 }
@@ -142,7 +151,7 @@ fn check_age(age: f32, sp: &sylva::species::Species) -> anyhow::Result<()> {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, species_dir: Option<&Path>, out: &Path) -> anyhow::Result<()> {
+fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, habit: forest_form::Habit, species_dir: Option<&Path>, out: &Path) -> anyhow::Result<()> {
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
     let lib = super::simulate::library(species_dir.as_slice())?;
     let sp = find_species(&lib, species, "--species")?;
@@ -169,7 +178,8 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         Model::Light => species_tree::Model::Light,
         Model::Laplacian => species_tree::Model::Laplacian,
     };
-    let grown = species_tree::grow_species_tree(&sp, m, age, &obs, seed)?;
+    anyhow::ensure!(habit == forest_form::Habit::Forest || m == species_tree::Model::EcoMod, "--open-grown: only the EcoMod model is sized to the species' open-grown dimensions; the light-guided and Laplacian models grow inside the open-grown crown envelope already");
+    let (grown, form) = forest_form::grow_formed_tree(&sp, m, age, &obs, seed, habit)?;
     let (mut sk, mut leaves): (Skeleton, Leaves) = (grown.skeleton, grown.leaves);
     let grow_s = t0.elapsed().as_secs_f64();
     let mut adapted = None;
@@ -220,6 +230,31 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         println!("light-guided: 60 cycles, the model's most, inside the crown envelope of a {age}-year tree");
     }
     println!("nodes {}, leaves {}, height {:.2} m, crown radius {:.2} m", sk.len(), leaves.len(), sk.height(), sylva::structure::crown_radius(&sk, &leaves));
+    // the species at this age (issue 32: previews scaled to fit hid whether the height followed
+    // the species' curve)
+    let habit_name = if form.habit == forest_form::Habit::Forest { "stand-grown" } else { "open-grown" };
+    println!(
+        "species at {age} yr ({habit_name}): height {:.2} m (site index h100 {:.1} m), DBH {:.1} cm, crown base {:.2} m ({:.0} % of the height clear), crown radius {:.2} m, crown length {:.2} m, crown width/length {:.2}",
+        form.height_m,
+        form.site_index_m,
+        form.dbh_cm,
+        form.crown_base_m,
+        100.0 * form.clear_bole_share(),
+        form.crown_radius_m,
+        form.crown_length_m(),
+        form.width_to_length()
+    );
+    let ms = forest_form::ArchitectureMeasures::of(&sk, &leaves);
+    println!(
+        "measured tree: height {:.2} m, crown base {:.2} m ({:.0} % clear), crown radius {:.2} m (mean of 8 sectors), crown width/length {:.2}, order-1 branches {} at {:.0}° from the vertical (mean)",
+        ms.height_m,
+        ms.crown_base_m,
+        100.0 * ms.clear_bole_share(),
+        ms.crown_radius_m,
+        ms.width_to_length(),
+        ms.branches,
+        ms.branch_angle_deg
+    );
     print_fill(&fill);
     for (i, l) in chain.levels.iter().enumerate() {
         println!("LOD{i}: {:>8} triangles (bark {}, foliage {})", l.triangle_count(), l.bark.triangle_count(), l.leaves.triangle_count());

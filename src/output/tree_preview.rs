@@ -66,11 +66,49 @@ impl Skin<'_> {
     }
 }
 
+/// Side views of the full level (level 0) of several trees at ONE scale, side by side, each in a
+/// `w × h` pixel panel (image `w · trees × h`) on [`BACKGROUND`], the ground of every panel at
+/// the same row, with a dark tick on the left edge of every panel every 5 m of height: trees of
+/// different ages or species compare by size, which [`lod_preview`] (each level scaled to fit)
+/// does not show. The scale is that of the tallest tree (or of `min_height_m`, m, if taller)
+/// filling a panel's height less the margins. Trees are centred on their base's x.
+pub fn same_scale_preview(trees: &[(&TreeMesh, &Look)], w: u32, h: u32, min_height_m: f32) -> RgbImage {
+    let n = trees.len().max(1) as u32;
+    let mut img = RgbImage::from_pixel(w * n, h, Rgb(BACKGROUND));
+    let tallest = trees
+        .iter()
+        .filter_map(|(m, _)| crate::mesh::points_bounds(m.bark.positions.iter().chain(&m.leaves.positions)))
+        .map(|(lo, hi)| hi[2] - lo[2].min(0.0))
+        .fold(min_height_m.max(1e-3), f32::max);
+    let s = (h as f32 - 2.0 * MARGIN) / tallest;
+    for (i, (m, look)) in trees.iter().enumerate() {
+        let x0 = i as u32 * w;
+        draw_level_at(&mut img, m, 0, look, x0, w, h, Some((s, 0.0, 0.0)));
+        let mut z = 0.0;
+        while z <= tallest + 1e-3 {
+            let y = (h as f32 - MARGIN - z * s).round();
+            if y >= 0.0 && (y as u32) < h {
+                for x in x0..(x0 + 8).min(img.width()) {
+                    img.put_pixel(x, y as u32, Rgb([40, 40, 40]));
+                }
+            }
+            z += 5.0;
+        }
+    }
+    img
+}
+
 fn draw_level(img: &mut RgbImage, m: &TreeMesh, level: usize, look: &Look, x0: u32, w: u32, h: u32) {
+    draw_level_at(img, m, level, look, x0, w, h, None)
+}
+
+/// [`draw_level`] at scale `fixed` = (pixels per metre, centre x, ground z) when given, else
+/// scaled to fit its panel.
+#[allow(clippy::too_many_arguments)]
+fn draw_level_at(img: &mut RgbImage, m: &TreeMesh, level: usize, look: &Look, x0: u32, w: u32, h: u32, fixed: Option<(f32, f32, f32)>) {
     let Some((lo, hi)) = crate::mesh::points_bounds(m.bark.positions.iter().chain(&m.leaves.positions)) else { return };
-    let s = ((w as f32 - 2.0 * MARGIN) / (hi[0] - lo[0]).max(1e-3)).min((h as f32 - 2.0 * MARGIN) / (hi[2] - lo[2]).max(1e-3));
-    let cx = 0.5 * (lo[0] + hi[0]);
-    let to_px = |p: [f32; 3]| -> [f32; 3] { [x0 as f32 + w as f32 * 0.5 + (p[0] - cx) * s, h as f32 - MARGIN - (p[2] - lo[2]) * s, p[1]] };
+    let (s, cx, z0) = fixed.unwrap_or_else(|| (((w as f32 - 2.0 * MARGIN) / (hi[0] - lo[0]).max(1e-3)).min((h as f32 - 2.0 * MARGIN) / (hi[2] - lo[2]).max(1e-3)), 0.5 * (lo[0] + hi[0]), lo[2]));
+    let to_px = |p: [f32; 3]| -> [f32; 3] { [x0 as f32 + w as f32 * 0.5 + (p[0] - cx) * s, h as f32 - MARGIN - (p[2] - z0) * s, p[1]] };
     let t = &look.textures;
     let bark = Skin { img: &t.bark, uv_scale: [1.0, 1.0], repeat: true, mask: false };
     let foliage = match level {

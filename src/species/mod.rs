@@ -172,6 +172,13 @@ pub struct LifeHistory {
     /// shrinks crowns as far as the neighbourhood's crown competition factor asks.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stand_crown: Option<StandCrown>,
+    /// Crown base of stand-grown trees (published crown-base function, BWINPro/TreeGrOSS,
+    /// [`StandCrownBase`]): the height of the lowest live branch of a tree of a closed stand,
+    /// which `sylva tree grow` gives the tree it grows ([`crate::structure::forest_form::tree_form`]).
+    /// Optional: without it the crown base is `(1 − allometry.crown_ratio)` of the height.
+    /// Not read by the simulation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stand_crown_base: Option<StandCrownBase>,
     /// Dense-stand height–diameter curve ([`DenseHd`], from iLand's `HDhigh`): the slenderest
     /// stem a tree of the species keeps in a densely stocked stand; the growth phase bounds a
     /// tree's height by it ([`crate::sim::phases::growth::dense_height_bound`]). Optional:
@@ -248,6 +255,39 @@ pub struct StandCrown {
     /// Exponent g of the crown length `h − cb` (m) (default 0: crown width from DBH alone).
     #[serde(default)]
     pub g: f32,
+}
+
+/// Crown base (height of the lowest live branch, m) of a tree of height `h` (m) and DBH `d`
+/// (cm) grown in a stand whose top height at age 100 (site index) is `h100` (m):
+/// `cb = h · (1 − e^(−|a + b · h/d + c · d + e · ln h100|))` (h/d in m/cm), the form of
+/// Döbbeler, Albert & Schmidt (2001/2002, the BWINPro/TreeGrOSS crown-base functions of the
+/// NW-FVA, fitted on trees of permanent plots in managed stands of NW Germany). Coefficients as
+/// published in the TreeGrOSS species file `ForestSimulatorNWGermany6.xml` (Nagel, Duda &
+/// Hansen 2006; read from github:rnuske/TreeGrOSSinR @ 659d30d, `data-raw/`), element
+/// `Crownbase`; each species file names its block.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StandCrownBase {
+    /// Intercept a.
+    pub a: f32,
+    /// Coefficient b of the slenderness h/d (m/cm).
+    pub b: f32,
+    /// Coefficient c of the DBH d (per cm).
+    pub c: f32,
+    /// Coefficient e of ln h100 (h100 in m).
+    pub e: f32,
+}
+
+impl StandCrownBase {
+    /// Crown base (m, in [0, h)) of a tree of height `h` (m, > 0), DBH `d` (cm, > 0) on a site of
+    /// top height `h100` (m, > 0) at age 100; 0 for non-positive or non-finite inputs.
+    pub fn crown_base_m(&self, h: f32, d: f32, h100: f32) -> f32 {
+        if !(h > 0.0 && d > 0.0 && h100 > 0.0) || !(h.is_finite() && d.is_finite() && h100.is_finite()) {
+            return 0.0;
+        }
+        let x = (self.a + self.b * h / d + self.c * d + self.e * h100.ln()).abs();
+        h * (1.0 - (-x).exp())
+    }
 }
 
 fn one() -> f32 {
@@ -534,14 +574,38 @@ pub struct SpeciesLibrary {
 }
 
 impl SpeciesLibrary {
-    /// Looks a species up by id or scientific/common name (case-insensitive).
+    /// Looks a species up by id, scientific name or common name: the one resolver of every
+    /// place a species is named (`--species`, `--neighbour`, scenario and management files,
+    /// inventories). Case, and spaces, `_` and `-` between words, do not matter
+    /// ([`species_name_key`]): `beech`, `Fagus sylvatica`, `fagus_sylvatica`, `FAGUS-SYLVATICA`
+    /// and `european beech` all give beech. An exact id is matched first (no allocation).
     pub fn find(&self, name: &str) -> Option<SpeciesId> {
-        let n = name.to_ascii_lowercase();
+        if let Some(i) = self.species.iter().position(|s| s.id == name) {
+            return Some(i as SpeciesId);
+        }
+        let n = species_name_key(name);
+        if n.is_empty() {
+            return None;
+        }
         self.species
             .iter()
-            .position(|s| s.id == n || s.identity.scientific_name.to_ascii_lowercase() == n || s.identity.common_name.to_ascii_lowercase() == n)
+            .position(|s| species_name_key(&s.id) == n || species_name_key(&s.identity.scientific_name) == n || species_name_key(&s.identity.common_name) == n)
             .map(|i| i as SpeciesId)
     }
+}
+
+/// The form in which [`SpeciesLibrary::find`] compares species names: lower case, every run of
+/// whitespace, `_` and `-` one space, no space at either end (`"Fagus_sylvatica "` →
+/// `"fagus sylvatica"`).
+pub fn species_name_key(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for w in s.split(|c: char| c.is_whitespace() || c == '_' || c == '-').filter(|w| !w.is_empty()) {
+        if !out.is_empty() {
+            out.push(' ');
+        }
+        out.extend(w.chars().flat_map(|c| c.to_lowercase()));
+    }
+    out
 }
 
 impl<'de> Deserialize<'de> for Indicator {

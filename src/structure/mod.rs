@@ -19,6 +19,7 @@
 
 pub mod crown_hull;
 pub mod edit_distance;
+pub mod forest_form;
 pub mod grow;
 pub mod mesh;
 pub mod params;

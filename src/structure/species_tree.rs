@@ -173,3 +173,4 @@ pub fn relax_lattice(sk: &mut Skeleton, voxel_m: f32, obstacles: &[Obstacle], se
         }
     }
 }
+
