@@ -64,14 +64,15 @@ impl TreeForm {
 }
 
 /// Stand-grown DBH (cm) of a tree `h` m tall: the species' dense-stand curve
-/// `h = k·D^(1+c)/100` solved for D (`life.dense_hd`, iLand HDhigh; see [`crate::species::DenseHd`]),
-/// or the open-grown DBH where the species has none; 0 below 1.3 m.
+/// `h = 1.3 + k·D^(1+c)/100` solved for D (`life.dense_hd`, iLand HDhigh counted from breast
+/// height, as the simulation's height bound `sim::phases::growth::dense_height_bound`; see
+/// [`crate::species::DenseHd`]), or the open-grown DBH where the species has none; 0 below 1.3 m.
 pub fn stand_dbh_cm(sp: &Species, h: f32) -> f32 {
     if h < 1.3 {
         return 0.0;
     }
     match sp.life.dense_hd {
-        Some(d) if d.k > 0.0 && d.c > -1.0 => (100.0 * h / d.k).powf(1.0 / (1.0 + d.c)),
+        Some(d) if d.k > 0.0 && d.c > -1.0 => (100.0 * (h - 1.3) / d.k).powf(1.0 / (1.0 + d.c)),
         _ => sp.dbh_from_height_cm(h),
     }
 }
