@@ -377,6 +377,10 @@ fn ecomod_tree_height_follows_the_species_curve_and_scientific_names_are_accepte
     let line = so.lines().find(|l| l.starts_with("species at 80 yr (stand-grown): height")).unwrap_or_else(|| panic!("{so}"));
     assert!(line.contains("crown base") && line.contains("% of the height clear") && line.contains("crown width/length"), "{line}");
     assert!(so.lines().any(|l| l.starts_with("measured tree: height")), "{so}");
+    // the pine's needle cards carried 7× its crown's leaf area (round 33's trial): shortened
+    // and thinned to the crown LAI over its projection
+    let fill = so.lines().find(|l| l.starts_with("leaf area")).unwrap_or_else(|| panic!("{so}"));
+    assert!(fill.contains("shortened ×0.67 and") && fill.contains("removed"), "{fill}");
     // an unknown name is still refused, naming the option and the ids
     let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "Fagus", "--out", out.to_str().unwrap()]).output().unwrap();
     let err = String::from_utf8_lossy(&res.stderr);

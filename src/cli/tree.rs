@@ -284,15 +284,12 @@ fn lone_chain(sk: &Skeleton, leaves: &mut Leaves, sp: &sylva::species::Species) 
 
 /// Prints what [`lone_chain`] gave the full level.
 fn print_fill(f: &sylva::job::leaf_area::LoneLeafArea) {
-    println!(
-        "leaf area {:.1} m² (crown LAI {:.1} over a crown projection of {:.1} m²): leaf cards {:.1} m², lengthened ×{:.2}, and {} leaf-cluster cards added",
-        f.target_m2.max(f.cards_m2),
-        f.lai,
-        f.projection_m2,
-        f.cards_m2,
-        f.card_growth,
-        f.sprigs
-    );
+    let what = if f.card_growth < 1.0 {
+        format!("shortened ×{:.2} and {} removed", f.card_growth, f.cards_removed)
+    } else {
+        format!("lengthened ×{:.2}, and {} leaf-cluster cards added", f.card_growth, f.sprigs)
+    };
+    println!("leaf area {:.1} m² (crown LAI {:.1} over a crown projection of {:.1} m²): leaf cards {:.1} m² before, {what}", f.target_m2, f.lai, f.projection_m2, f.cards_m2);
 }
 
 /// glTF options of a tree of `sp`: named by its species id, its summer look, LOD levels on top

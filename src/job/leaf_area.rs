@@ -141,8 +141,13 @@ pub struct LoneLeafArea {
     pub target_m2: f32,
     /// Leaf area (m², one-sided) of the tree's leaf cards before.
     pub cards_m2: f32,
-    /// Factor (1–[`MAX_CARD_GROWTH`]) by which the leaf cards were lengthened (1: as they were).
+    /// Factor (1 / [`MAX_CARD_GROWTH`] – [`MAX_CARD_GROWTH`]) by which the leaf cards were
+    /// lengthened (> 1) or shortened (< 1; 1: as they were).
     pub card_growth: f32,
+    /// Leaf cards removed (a crown whose cards, shortened by 1 / [`MAX_CARD_GROWTH`], still
+    /// carried more than the target, as the needle cards of conifers do: round 33's trial found
+    /// Scots pine's full level at 7× its crown's leaf area).
+    pub cards_removed: usize,
     /// Leaf-cluster cards (sprigs) added.
     pub sprigs: usize,
 }
@@ -156,8 +161,10 @@ pub struct LoneLeafArea {
 /// the crown projection of the tree itself ([`crate::structure::crown_projection_area`], eight
 /// crown radii, so a crown made one-sided by a wall gets the leaf area of what it has),
 /// given by [`sprig_cards`] (cards lengthened by at most [`MAX_CARD_GROWTH`], the rest as
-/// sprigs within the crown's reach of the stem axis). Only adds: a tree whose cards already
-/// carry that much is left as it is. Returns the sprigs in the tree's frame with u offset by
+/// sprigs within the crown's reach of the stem axis). A tree whose cards carry more than that
+/// gets them shortened by at most 1 / [`MAX_CARD_GROWTH`] and then, if they still carry more,
+/// thinned to the target: the cards kept are the first of an order drawn from a hash of their
+/// index (deterministic, spread over the crown), at least one. Returns the sprigs in the tree's frame with u offset by
 /// [`crate::mesh::CLUSTER_CARD_U`], to be appended to the full level's leaves (the writers and
 /// the renderer draw them with the leaf-cluster texture), and the figures. Deterministic (the
 /// sprigs hash the species id).
@@ -167,8 +174,30 @@ pub fn lone_tree_sprigs(sk: &crate::structure::Skeleton, lv: &mut crate::structu
     let projection_m2 = crate::structure::crown_projection_area(sk, lv);
     let lai = crate::sim::phases::light::crown_lai(sp.life.shade_tolerance);
     let target_m2 = lai * projection_m2;
-    let mut out = LoneLeafArea { projection_m2, lai, target_m2, cards_m2, card_growth: 1.0, sprigs: 0 };
-    if !(target_m2 > cards_m2) || lv.leaves.is_empty() {
+    let mut out = LoneLeafArea { projection_m2, lai, target_m2, cards_m2, card_growth: 1.0, sprigs: 0, cards_removed: 0 };
+    if lv.leaves.is_empty() || !(target_m2 > 0.0) || target_m2 == cards_m2 {
+        return (TriMesh::default(), out);
+    }
+    if cards_m2 > target_m2 {
+        let k = (target_m2 / cards_m2).sqrt().max(1.0 / MAX_CARD_GROWTH);
+        lv.leaves.iter_mut().for_each(|l| l.size *= k);
+        out.card_growth = k;
+        let now = cards_m2 * k * k;
+        if now > target_m2 {
+            let n = lv.leaves.len();
+            let keep_n = ((n as f64 * f64::from(target_m2 / now)).round() as usize).clamp(1, n);
+            let seed = crate::rng::hash(&sp.id.bytes().map(u64::from).collect::<Vec<_>>());
+            let mut order: Vec<(u64, usize)> = (0..n).map(|i| (crate::rng::hash(&[seed, 0x7411_6e5f, i as u64]), i)).collect();
+            order.sort_unstable();
+            let mut keep = vec![false; n];
+            order.iter().take(keep_n).for_each(|&(_, i)| keep[i] = true);
+            let mut i = 0;
+            lv.leaves.retain(|_| {
+                i += 1;
+                keep[i - 1]
+            });
+            out.cards_removed = n - keep_n;
+        }
         return (TriMesh::default(), out);
     }
     // sprig_cards keeps sprigs within the crown's reach of the stem axis at the origin
@@ -242,16 +271,39 @@ mod lone_tree_tests {
     }
 
     #[test]
-    fn a_tree_whose_cards_carry_enough_is_left_as_it_is() {
+    fn a_tree_whose_cards_carry_too_much_is_brought_to_its_crowns_leaf_area() {
         let lib = crate::species::SpeciesLibrary::embedded().unwrap();
         let sp = lib.species.iter().find(|s| s.id == "beech").unwrap();
+        let (card, sprig) = card_covers(sp);
         let g = grow_species_tree(sp, Model::Light, 30.0, &[], 3).unwrap();
+        // a little too much: the cards shortened, none removed
+        let mut lv = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
+        let (_, f0) = lone_tree_sprigs(&g.skeleton, &mut lv.clone(), sp);
+        let k = (1.6 * f0.target_m2 / f0.cards_m2).sqrt();
+        lv.leaves.iter_mut().for_each(|l| l.size *= k);
+        let n = lv.leaves.len();
+        let (m, f) = lone_tree_sprigs(&g.skeleton, &mut lv, sp);
+        assert!(m.indices.is_empty() && f.sprigs == 0 && f.cards_removed == 0 && lv.leaves.len() == n);
+        // (the projection grows with the cards' size, so the excess is under 1.6)
+        assert!(f.cards_m2 > 1.2 * f.target_m2 && (f.card_growth - (f.target_m2 / f.cards_m2).sqrt()).abs() < 1e-4, "{f:?}");
+        assert!((area(&lv, &m, card, sprig) - f.target_m2).abs() < 1e-3 * f.target_m2);
+        // far too much (needle cards of a conifer, 20² times): shortened by 1/1.5, then thinned
         let mut lv = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
         lv.leaves.iter_mut().for_each(|l| l.size *= 20.0);
-        let copy = lv.clone();
+        let n = lv.leaves.len();
         let (m, f) = lone_tree_sprigs(&g.skeleton, &mut lv, sp);
-        assert!(f.cards_m2 > f.target_m2);
-        assert!(m.indices.is_empty());
-        assert_eq!(lv, copy);
+        assert!(f.cards_m2 > 3.0 * f.target_m2 && f.cards_removed > 0 && m.indices.is_empty(), "{f:?}");
+        assert!((f.card_growth - 1.0 / MAX_CARD_GROWTH).abs() < 1e-6);
+        assert_eq!(f.cards_removed + lv.leaves.len(), n);
+        let mean = lv.leaves.iter().map(|l| 0.5 * l.size * l.size * card).sum::<f32>() / lv.leaves.len() as f32;
+        assert!((area(&lv, &m, card, sprig) - f.target_m2).abs() <= mean, "{} against {}", area(&lv, &m, card, sprig), f.target_m2);
+        // deterministic, and the kept cards spread over the crown (not its first branches)
+        let mut again = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
+        again.leaves.iter_mut().for_each(|l| l.size *= 20.0);
+        lone_tree_sprigs(&g.skeleton, &mut again, sp);
+        assert_eq!(again, lv);
+        let top = |v: &crate::structure::Leaves| v.leaves.iter().map(|l| l.pos.z).fold(f32::MIN, f32::max);
+        let all = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
+        assert!(top(&lv) > 0.9 * top(&all));
     }
 }
