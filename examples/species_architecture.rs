@@ -44,8 +44,8 @@ fn main() {
     std::fs::create_dir_all(&out).unwrap();
     let lib = SpeciesLibrary::embedded().unwrap();
     let (w, h) = (240, 420);
-    println!("| species | age | height m (curve) | DBH cm | crown base / height (TreeGrOSS) | crown width / length (TreeGrOSS) | measured: height m | clear bole | width/length | order-1 branches | mean angle from vertical |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| species | age | height m (curve) | DBH cm | crown base / height (TreeGrOSS) | crown width / length (TreeGrOSS) | measured: height m | clear bole | width/length | order-1 branches | mean angle from vertical | limb ends from vertical | widest at |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     let mut at80 = Vec::new();
     let mut ages = Vec::new();
     for id in IDS {
@@ -54,7 +54,7 @@ fn main() {
             let (g, f) = grow_formed_tree(sp, Model::EcoMod, age, &[], 1, Habit::Forest).unwrap();
             let m = ArchitectureMeasures::of(&g.skeleton, &g.leaves);
             println!(
-                "| {id} | {age} | {:.1} ({:.1}) | {:.1} | {:.2} | {:.2} | {:.1} | {:.2} | {:.2} | {} | {:.0}° |",
+                "| {id} | {age} | {:.1} ({:.1}) | {:.1} | {:.2} | {:.2} | {:.1} | {:.2} | {:.2} | {} | {:.0}° | {:.0}° | {:.2} |",
                 m.height_m,
                 f.height_m,
                 f.dbh_cm,
@@ -64,7 +64,9 @@ fn main() {
                 m.clear_bole_share(),
                 m.width_to_length(),
                 m.branches,
-                m.branch_angle_deg
+                m.branch_angle_deg,
+                m.limb_end_angle_deg,
+                m.widest_at
             );
             let mut lv = g.leaves.clone();
             let mesh = full_level(&g.skeleton, &mut lv, sp);

@@ -246,14 +246,16 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     );
     let ms = forest_form::ArchitectureMeasures::of(&sk, &leaves);
     println!(
-        "measured tree: height {:.2} m, crown base {:.2} m ({:.0} % clear), crown radius {:.2} m (mean of 8 sectors), crown width/length {:.2}, order-1 branches {} at {:.0}° from the vertical (mean)",
+        "measured tree: height {:.2} m, crown base {:.2} m ({:.0} % clear), crown radius {:.2} m (mean of 8 sectors), crown width/length {:.2}, order-1 branches {} at {:.0}° from the vertical (mean), their ends at {:.0}°, crown widest at {:.2} of its length",
         ms.height_m,
         ms.crown_base_m,
         100.0 * ms.clear_bole_share(),
         ms.crown_radius_m,
         ms.width_to_length(),
         ms.branches,
-        ms.branch_angle_deg
+        ms.branch_angle_deg,
+        ms.limb_end_angle_deg,
+        ms.widest_at
     );
     print_fill(&fill);
     for (i, l) in chain.levels.iter().enumerate() {

@@ -9,7 +9,8 @@ use super::species_tree::{ecomod_strands_at, grow_species_tree, GrownTree, Model
 use super::grow::ecomod;
 use crate::error::{Error, Result};
 use crate::obstacle::Obstacle;
-use crate::species::{EcoModParams, Species};
+use crate::species::{EcoModParams, LeafDistribution, PolyLine, Species};
+use crate::structure::params::eval_polyline;
 use glam::Vec3;
 
 /// How the tree of [`grow_formed_tree`] is dimensioned.
@@ -119,12 +120,24 @@ pub fn tree_form(sp: &Species, age_yr: f32, habit: Habit) -> Result<TreeForm> {
 ///
 /// Errors: those of [`grow_species_tree`] and [`tree_form`].
 pub fn grow_formed_tree(sp: &Species, model: Model, age_yr: f32, obstacles: &[Obstacle], seed: u64, habit: Habit) -> Result<(GrownTree, TreeForm)> {
+    grow_formed_tree_with(sp, model, age_yr, obstacles, seed, habit, MatureForm::for_species(sp))
+}
+
+/// [`grow_formed_tree`] with the EcoMod model changed by `mature` at the age
+/// ([`MatureForm::apply`]) instead of the species' own ([`MatureForm::for_species`]); `None`
+/// grows the species' (paper's) model at every age.
+///
+/// Errors: as [`grow_formed_tree`].
+pub fn grow_formed_tree_with(sp: &Species, model: Model, age_yr: f32, obstacles: &[Obstacle], seed: u64, habit: Habit, mature: Option<MatureForm>) -> Result<(GrownTree, TreeForm)> {
     let form = tree_form(sp, age_yr, habit)?;
     if model != Model::EcoMod {
         return Ok((grow_species_tree(sp, model, age_yr, obstacles, seed)?, form));
     }
     let mut p: EcoModParams = sp.architecture.ecomod.clone();
     p.strands = ecomod_strands_at(p.strands, age_yr);
+    if let Some(m) = mature {
+        m.apply(&mut p, age_yr);
+    }
     let (mut sk, mut lv) = ecomod::try_grow(&p, seed, 0.0)?;
     let qf = (form.crown_base_m / form.height_m).clamp(0.0, 0.89) + 0.01;
     let crown = sk.height() - p.trunk_length_m;
@@ -160,6 +173,92 @@ pub fn grow_formed_tree(sp: &Species, model: Model, age_yr: f32, obstacles: &[Ob
     Ok((GrownTree { skeleton, leaves, envelope: None, space: None }, form))
 }
 
+/// An age-dependent change of a species' EcoMod model (issue 32): the paper's model
+/// (`004_*.txt`) up to `from_age_yr`, blended linearly (t = (age − from)/(full − from), clamped to
+/// [0, 1]) to the values below from `full_age_yr` on. Each changes the model's poly-lines at ONE
+/// Gravelius order only (the values at every other order are kept exactly), so it is a change of
+/// the EcoMod parameters the model already has, not a new mechanism. Used by
+/// [`grow_formed_tree`] (what `sylva tree grow` draws) only; the stand skeletons and the
+/// simulation do not use it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MatureForm {
+    /// Age (years) up to which the species' (paper's) model is kept unchanged.
+    pub from_age_yr: f32,
+    /// Age (years) from which the values below hold in full (> `from_age_yr`).
+    pub full_age_yr: f32,
+    /// k_s^g at g = 0 (eq. 1, 0.5–1): the stem's (leader's) share of the strands at each of its
+    /// splits; lower = weaker apical control: fewer, heavier limbs and a leader that ends in the
+    /// crown.
+    pub trunk_k_s: f32,
+    /// α^g at g = 0 (eq. 2, degrees): the angle between the stem's continuation and a limb at
+    /// each of its splits (the limb's first segment leaves the stem at about (1 − k_c√(S₂/S₀))·α
+    /// from the vertical).
+    pub trunk_alpha_deg: f32,
+    /// α_m^g at g = 1 (eq. 3, degrees per split, + turns towards the vertical): the order-1
+    /// limbs' gravimorphism; positive = limbs that turn upward along their length.
+    pub limb_alpha_m_deg: f32,
+    /// Leaf distribution from `full_age_yr` (from the middle of the blend on).
+    pub leaf_distribution: LeafDistribution,
+}
+
+impl MatureForm {
+    /// Scots pine (*Pinus sylvestris*) past its youth. Silvics: the young pine is monopodial
+    /// with regular whorls and a conical crown (the paper's EcoMod pine, kept up to 30 years);
+    /// with age apical control weakens, the leader is lost in the crown and the crown of a
+    /// stand-grown tree becomes short, rounded to flat-topped, of few heavy limbs that turn
+    /// upward, the needles in tufts at the shoot ends (the habit as the silvics texts describe
+    /// it, paraphrased: Houston Durrant, de Rigo & Caudullo 2016, *Pinus sylvestris* in Europe,
+    /// European Atlas of Forest Tree Species; Schütt et al., Enzyklopädie der Holzgewächse,
+    /// *Pinus sylvestris*). No number is published for the EcoMod parameters: ESTIMATE, chosen by
+    /// eye on side views (BENCHMARKS.md, round 33, issue 32 pine) among k_s 0.65–0.8, α 80–115°,
+    /// α_m −5 … +12°: at 80 years the stem keeps 70 % of the strands at each split (the paper:
+    /// 95.5 %; 24 order-1 limbs instead of 57), the limbs part from it at 97° (the paper:
+    /// 128.8°) and sag by 1° a split (the paper: 4.3°), so the crown is flat-topped and widest
+    /// in its top fifth, its limbs' ends about 55° from the vertical (the paper's pine and the
+    /// spruce: ~100–117°, widest at the crown base; `tests/structure_architecture.rs`).
+    pub fn scots_pine() -> MatureForm {
+        MatureForm { from_age_yr: 30.0, full_age_yr: 80.0, trunk_k_s: 0.70, trunk_alpha_deg: 97.0, limb_alpha_m_deg: -1.0, leaf_distribution: LeafDistribution::Bunched }
+    }
+
+    /// The mature form of `sp`, if it has one (Scots pine only; every other species keeps its
+    /// EcoMod model at every age).
+    pub fn for_species(sp: &Species) -> Option<MatureForm> {
+        (sp.id == "scots_pine").then(MatureForm::scots_pine)
+    }
+
+    /// Share (0–1) of the change at `age_yr`.
+    pub fn share(&self, age_yr: f32) -> f32 {
+        ((age_yr - self.from_age_yr) / (self.full_age_yr - self.from_age_yr).max(1e-6)).clamp(0.0, 1.0)
+    }
+
+    /// Changes `p` (the species' EcoMod parameters) for a tree of `age_yr` years; leaves it
+    /// exactly as it is up to `from_age_yr`.
+    pub fn apply(&self, p: &mut EcoModParams, age_yr: f32) {
+        let t = self.share(age_yr);
+        if t <= 0.0 {
+            return;
+        }
+        let lerp = |a: f32, b: f32| a + t * (b - a);
+        let v = eval_polyline(&p.ks_g, 0.0);
+        p.ks_g = at_order(&p.ks_g, 0, lerp(v, self.trunk_k_s));
+        let v = eval_polyline(&p.alpha_g, 0.0);
+        p.alpha_g = at_order(&p.alpha_g, 0, lerp(v, self.trunk_alpha_deg));
+        let v = eval_polyline(&p.alpha_m_g, 1.0);
+        p.alpha_m_g = at_order(&p.alpha_m_g, 1, lerp(v, self.limb_alpha_m_deg));
+        if t >= 0.5 {
+            p.leaf_distribution = self.leaf_distribution;
+        }
+    }
+}
+
+/// `l` sampled at the integer orders 0 ..= max(15, its last abscissa) (where EcoMod evaluates
+/// it, eqs. 1–6), with the value at order `g` replaced by `v`: the same values at every other
+/// order.
+fn at_order(l: &PolyLine, g: u32, v: f32) -> PolyLine {
+    let last = l.last().map(|q| q[0].ceil().max(15.0)).unwrap_or(15.0) as u32;
+    (0..=last.max(g)).map(|k| [k as f32, if k == g { v } else { eval_polyline(l, k as f32) }]).collect()
+}
+
 /// Architecture of a grown tree as a forester would measure it, for comparing species
 /// ([`ArchitectureMeasures::of`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -177,6 +276,16 @@ pub struct ArchitectureMeasures {
     pub branch_angle_deg: f32,
     /// Order-1 branches counted for `branch_angle_deg`.
     pub branches: usize,
+    /// Mean angle (degrees, as `branch_angle_deg`) from the vertical of the LAST segments of
+    /// the order-1 axes (the segment ending where an order-1 axis ends: a node of Gravelius
+    /// order 1 none of whose children is of order 1): where the limbs point at their ends (a
+    /// spruce's hang out level or below, an old pine's turn upward); NaN when there are none.
+    pub limb_end_angle_deg: f32,
+    /// Relative height (0 = crown base, 1 = top) of the crown's widest point: the crown length
+    /// cut into 10 equal slices, in each the largest horizontal distance of a leaf from the
+    /// stem base's vertical, the middle of the slice where it is largest (the lowest on a tie);
+    /// 0.05 … 0.95 (a spruce's low, an old pine's high); NaN without leaves in the crown.
+    pub widest_at: f32,
 }
 
 impl ArchitectureMeasures {
@@ -198,7 +307,47 @@ impl ArchitectureMeasures {
                 }
             }
         }
+        let (mut esum, mut ek) = (0.0f64, 0usize);
+        let mut has_g1_child = vec![false; sk.nodes.len()];
+        for n in &sk.nodes {
+            if let Some(p) = n.parent {
+                if n.gravelius == 1 {
+                    has_g1_child[p as usize] = true;
+                }
+            }
+        }
+        for (i, n) in sk.nodes.iter().enumerate() {
+            let Some(p) = n.parent else { continue };
+            if n.gravelius == 1 && !has_g1_child[i] {
+                let d = (n.pos - sk.nodes[p as usize].pos).normalize_or_zero();
+                if d != Vec3::ZERO {
+                    esum += d.z.clamp(-1.0, 1.0).acos().to_degrees() as f64;
+                    ek += 1;
+                }
+            }
+        }
+        let root = sk.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO);
+        let cbz = if cb.is_finite() { cb.max(0.0) } else { h };
+        let len = h - cbz;
+        let mut widest = [f32::NEG_INFINITY; 10];
+        if len > 0.0 {
+            for l in &leaves.leaves {
+                let u = (l.pos.z - z0 - cbz) / len;
+                if (0.0..=1.0).contains(&u) {
+                    let i = ((u * 10.0) as usize).min(9);
+                    widest[i] = widest[i].max((l.pos.truncate() - root.truncate()).length());
+                }
+            }
+        }
+        let mut best: Option<usize> = None;
+        for (i, w) in widest.iter().enumerate() {
+            if w.is_finite() && best.is_none_or(|b| *w > widest[b]) {
+                best = Some(i);
+            }
+        }
         ArchitectureMeasures {
+            limb_end_angle_deg: if ek > 0 { (esum / ek as f64) as f32 } else { f32::NAN },
+            widest_at: best.map_or(f32::NAN, |b| (b as f32 + 0.5) / 10.0),
             height_m: h,
             crown_base_m: if cb.is_finite() { cb.max(0.0) } else { h },
             crown_radius_m: super::stand::mean_crown_radius(sk, leaves),
