@@ -193,6 +193,16 @@ fn obj_has_mtl_and_textures() {
     sylva::output::obj::write_obj(&path, &chain, None, "beech", &look).unwrap();
     let text = std::fs::read_to_string(&path).unwrap();
     assert!(text.lines().any(|l| l == "mtllib beech.mtl"));
+    // y up (round 33's trial: the z-up file lay on its side in Blender): the second coordinate
+    // spans the tree's height, the third is minus its northing
+    let vs: Vec<[f32; 3]> = text.lines().filter_map(|l| l.strip_prefix("v ")).map(|v| {
+        let c: Vec<f32> = v.split_whitespace().map(|x| x.parse().unwrap()).collect();
+        [c[0], c[1], c[2]]
+    }).collect();
+    let top = chain.levels.iter().flat_map(|l| l.bark.positions.iter().chain(&l.leaves.positions)).map(|p| p[2]).fold(f32::MIN, f32::max);
+    let south = chain.levels.iter().flat_map(|l| l.bark.positions.iter().chain(&l.leaves.positions)).map(|p| -p[1]).fold(f32::MIN, f32::max);
+    assert!((vs.iter().map(|v| v[1]).fold(f32::MIN, f32::max) - top).abs() < 1e-3 && top > 1.0);
+    assert!((vs.iter().map(|v| v[2]).fold(f32::MIN, f32::max) - south).abs() < 1e-3);
     let objects: Vec<&str> = text.lines().filter_map(|l| l.strip_prefix("o ")).collect();
     assert_eq!(objects, ["beech_LOD0", "beech_LOD1", "beech_LOD2", "beech_LOD3"]);
     let mtl = std::fs::read_to_string(dir.path().join("beech.mtl")).unwrap();
@@ -464,6 +474,8 @@ fn instanced_export_places_every_live_tree_of_the_run() {
     let instancing: Vec<String> = js["nodes"].as_array().unwrap().iter().filter_map(|n| n["extensions"]["EXT_mesh_gpu_instancing"]["attributes"].as_object()).flat_map(|a| a.values().map(|v| format!("/accessors/{v}"))).collect();
     validate_allowing(&[&out], &instancing);
     assert_eq!(js["extensionsUsed"], serde_json::json!(["EXT_mesh_gpu_instancing"]));
+    // required: an importer without it refuses the file rather than showing 40 trees at the origin
+    assert_eq!(js["extensionsRequired"], serde_json::json!(["EXT_mesh_gpu_instancing"]));
     let extras = &js["scenes"][0]["extras"]["sylva"];
     // the whole 100 m × 100 m site, origin at its centre at the lowest elevation
     assert_eq!(extras["origin_m"], serde_json::json!([50.0, 50.0, 310.0]), "{extras}");

@@ -1,7 +1,8 @@
 //! Wavefront OBJ writer for tree LOD chains, with its material library and textures.
 //!
 //! `NAME.obj` holds one object `<tree>_LOD<i>` per level, groups `LOD<i>_bark` and `LOD<i>_leaf`
-//! with `usemtl` names, z up as in Sylva (Blender's OBJ importer offers "Z up" in its options),
+//! with `usemtl` names, y up as OBJ importers expect (Blender's, game engines': Sylva's x east,
+//! y north, z up written as x, z, −y; round 33's trial found the z-up file lying on its side),
 //! vertices `v`, normals `vn`, texture coordinates `vt` (v up, OBJ's convention). Beside it,
 //! `NAME.mtl` (referenced by `mtllib`) defines the five materials of the [`Look`] as
 //! `output::gltf` does (`<look>_bark`, `<look>_leaf`, `<look>_cluster`, `<look>_crown`,
@@ -55,7 +56,7 @@ pub fn write_obj(path: &Path, chain: &LodChain, levels: Option<&[usize]>, name: 
         Ok(())
     })?;
     super::write_atomic_with(path, |w| {
-        writeln!(w, "# sylva tree, z up, metres")?;
+        writeln!(w, "# sylva tree, y up (x east, y up, z south), metres")?;
         writeln!(w, "mtllib {}", fname(&files[0]))?;
         let mut base = 1usize;
         for (i, level) in chain.levels.iter().enumerate() {
@@ -70,10 +71,10 @@ pub fn write_obj(path: &Path, chain: &LodChain, levels: Option<&[usize]>, name: 
                     continue;
                 }
                 writeln!(w, "g LOD{i}_{part}\nusemtl {l}_{mtl}")?;
-                for p in &m.positions {
+                for p in m.positions.iter().map(|&p| super::gltf::y_up(p)) {
                     writeln!(w, "v {} {} {}", p[0], p[1], p[2])?;
                 }
-                for n in &m.normals {
+                for n in m.normals.iter().map(|&n| super::gltf::y_up(n)) {
                     writeln!(w, "vn {} {} {}", n[0], n[1], n[2])?;
                 }
                 for t in &m.uvs {
