@@ -282,3 +282,83 @@ fn ground_camera_steps_out_of_a_trunk_into_a_clearing() {
     let far = [tree(1, 10.0, 190.0)];
     assert_eq!(stage.camera_for(CameraPreset::Ground, &far, 1280, 720).eye, preset.eye);
 }
+
+/// Round 33's trial, items 5–9: bad input named before any work, with the option or file and
+/// what is expected, leaving nothing behind.
+#[test]
+fn round_33_bad_outputs_runs_and_dems_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).current_dir(d).output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let files = || {
+        let mut v: Vec<String> = std::fs::read_dir(d).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+        v.sort();
+        v
+    };
+    std::fs::write(d.join("afile"), b"x").unwrap();
+    // item 6: `tree grow --out` a folder is refused before the tree is grown, in render's and
+    // export's words (it wrote d3.mtl and five textures, then "d3.obj: Is a directory")
+    for name in ["d3.obj", "dir.glb"] {
+        std::fs::create_dir(d.join(name)).unwrap();
+        let before = files();
+        let (ok, err) = run(&["tree", "grow", "--species", "beech", "--age", "20", "--out", name]);
+        assert!(!ok && err.contains(&format!("--out {name}: is a folder; expected a file name")), "{name}: {err}");
+        assert_eq!(files(), before, "{name}: nothing written");
+    }
+    // item 7: an --out under a file names the option and the file in the way
+    for cmd in ["grow", "adapt"] {
+        let (ok, err) = run(&["tree", cmd, "--species", "beech", "--age", "20", "--out", "afile/t.glb"]);
+        assert!(!ok && err.contains("--out afile/t.glb: afile is a file, not a folder"), "{cmd}: {err}");
+    }
+    let (ok, err) = run(&["tree", "grow", "--species", "beech", "--age", "20", "--out", "t.fbx"]);
+    assert!(!ok && err.contains("--out t.fbx: expected a .glb or .obj file name"), "{err}");
+    // a DEM with a 4 × 4-cell no-data hole (x, y 30–70 m) and no .prj
+    let mut asc = String::from("ncols 10\nnrows 10\nxllcorner 0\nyllcorner 0\ncellsize 10\nNODATA_value -9999\n");
+    for r in 0..10 {
+        let row: Vec<String> = (0..10).map(|c| if (3..7).contains(&r) && (3..7).contains(&c) { "-9999".into() } else { format!("{}", 300 + c) }).collect();
+        asc += &(row.join(" ") + "\n");
+    }
+    std::fs::write(d.join("holes.asc"), asc).unwrap();
+    // item 9: the missing .prj is said to be missing (it was "holes.prj: projected CRS without
+    // EPSG code not known")
+    let (ok, err) = run(&["terrain", "info", "holes.asc"]);
+    assert!(ok && err.contains("holes.asc: no .prj beside it (holes.prj is missing)") && !err.contains("without EPSG code"), "{err}");
+    // item 7: `terrain maps --out` an existing file ("creating holes.asc: File exists")
+    let (ok, err) = run(&["terrain", "maps", "holes.asc", "--out", "afile"]);
+    assert!(!ok && err.contains("--out afile: is a file; expected a folder"), "{err}");
+    std::fs::write(d.join("snap.toml"), "name = \"snap\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = { width = 4, height = 4, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n").unwrap();
+    let (ok, err) = run(&["terrain", "maps", "--scenario", "snap.toml", "--out", "afile"]);
+    assert!(!ok && err.contains("--out afile: is a file; expected a folder"), "{err}");
+    // item 7: a folder with a scenario but no inventory/, and one whose scenario.toml does not
+    // parse ("fake1/inventory: No such file or directory"; "years with an inventory: ")
+    std::fs::create_dir_all(d.join("fake1")).unwrap();
+    std::fs::copy(d.join("snap.toml"), d.join("fake1/scenario.toml")).unwrap();
+    std::fs::create_dir_all(d.join("fake4/inventory")).unwrap();
+    std::fs::write(d.join("fake4/scenario.toml"), "garbage [[[").unwrap();
+    for cmd in ["render", "export", "timelapse"] {
+        let out = if cmd == "timelapse" { "t.gif" } else if cmd == "export" { "s.glb" } else { "x.png" };
+        let year: &[&str] = if cmd == "timelapse" { &[] } else { &["--year", "0"] };
+        let (ok, err) = run(&[&[cmd, "fake1", "--out", out][..], year].concat());
+        assert!(!ok && err.contains("fake1: not a Sylva run directory (no inventory/ folder"), "{cmd}: {err}");
+        let (ok, err) = run(&[&[cmd, "fake4", "--out", out][..], year].concat());
+        assert!(!ok && err.contains("fake4: not a Sylva run directory (its scenario.toml does not parse") && !err.contains("years with an inventory"), "{cmd}: {err}");
+        assert!(!d.join(out).exists());
+    }
+    // item 5: a hemispherical photograph on a no-data cell is refused as one off the site is
+    std::fs::write(d.join("holes.toml"), "name = \"holes\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\n[terrain]\npath = \"holes.asc\"\n[[start]]\nkind = \"planted\"\nspecies = \"beech\"\nspacing_m = 5.0\nage_yr = 5.0\n").unwrap();
+    let (ok, err) = run(&["simulate", "holes.toml", "--out", "holes_run"]);
+    assert!(ok, "{err}");
+    let (ok, err) = run(&["render", "holes_run", "--year", "1", "--camera", "hemi:50,50", "--size", "64x64", "--out", "h1.png"]);
+    assert!(!ok && err.contains("--camera") && err.contains("hemi:50,50") && err.contains("no-data"), "{err}");
+    assert!(!d.join("h1.png").exists());
+    let (ok, err) = run(&["render", "holes_run", "--year", "1", "--camera", "hemi:15,85", "--size", "64x64", "--out", "h2.png"]);
+    assert!(ok && d.join("h2.png").is_file(), "a valid cell beside the hole: {err}");
+    // item 8: an 8-bit PNG is refused, saying why and what is expected (it was read as 256
+    // levels without a word)
+    image::ImageBuffer::<image::Luma<u8>, Vec<u8>>::from_fn(8, 8, |x, y| image::Luma([(x * 30 + y) as u8])).save(d.join("p8.png")).unwrap();
+    let (ok, err) = run(&["terrain", "info", "p8.png"]);
+    assert!(!ok && err.contains("p8.png") && err.contains("8-bit") && err.contains("256 height levels") && err.contains("16-bit grayscale PNG"), "{err}");
+}

@@ -204,7 +204,8 @@ fn tree_adapt_refuses_bad_input_clearly() {
     std::fs::write(dir.path().join("afile"), b"x").unwrap();
     let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "5", "--out", dir.path().join("afile/t.glb").to_str().unwrap()]);
     let err = String::from_utf8_lossy(&res.stderr);
-    assert!(!res.status.success() && err.contains("creating its folder") && err.contains("afile"), "{err}");
+    // in render's words, before any work (round 33's trial: "creating its folder afile")
+    assert!(!res.status.success() && err.contains("afile is a file, not a folder") && err.contains("--out"), "{err}");
     // bad input is refused before the output folder is created
     let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "5", "--latitude", "95", "--out", dir.path().join("never/t.glb").to_str().unwrap()]);
     assert!(!res.status.success() && !dir.path().join("never").exists());
@@ -235,7 +236,7 @@ fn tree_adapt_refuses_bad_input_clearly() {
     std::fs::write(dir.path().join("gfile"), b"x").unwrap();
     let res = sylva(&["tree", "grow", "--species", "beech", "--age", "5", "--out", dir.path().join("gfile/t.glb").to_str().unwrap()]);
     let err = String::from_utf8_lossy(&res.stderr);
-    assert!(!res.status.success() && err.contains("--out") && err.contains("creating its folder"), "{err}");
+    assert!(!res.status.success() && err.contains("--out") && err.contains("gfile is a file, not a folder"), "{err}");
     // a negative age reaches Sylva's own check (clap took `-5` for an option: found by a trial)
     for cmd in [vec!["tree", "grow", "--species", "beech", "--age", "-5", "--out", o], vec!["tree", "adapt", "--species", "beech", "--age", "-5", "--out", o]] {
         let res = sylva(&cmd);

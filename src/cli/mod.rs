@@ -9,6 +9,8 @@ pub mod terrain;
 pub mod tree;
 pub mod view;
 
+use sylva::sim::Scenario;
+
 /// Sets up `tracing` to stderr: warnings by default, `-v` info, `-vv` debug; `RUST_LOG` wins.
 pub fn init_logging(verbose: u8) {
     let level = match verbose {
@@ -49,8 +51,9 @@ pub fn progress(len: u64, what: &str) -> indicatif::ProgressBar {
     pb
 }
 
-/// Refuses a run directory argument (`what`: the command) that does not exist, is a file or
-/// holds no `scenario.toml`, before it is read as a run (a missing folder was called "not a
+/// Refuses a run directory argument (`what`: the command) that does not exist, is a file,
+/// holds no `scenario.toml`, one that does not parse ([`Scenario::load`]) or no
+/// `inventory/` folder, before it is read as a run (a missing folder was called "not a
 /// Sylva run directory", round 30's trial; a folder without a scenario got an OS error from
 /// `render` and `timelapse` and a different message from `export`, round 31's).
 pub fn check_run_dir(dir: &std::path::Path, what: &str) -> anyhow::Result<()> {
@@ -62,6 +65,16 @@ pub fn check_run_dir(dir: &std::path::Path, what: &str) -> anyhow::Result<()> {
     }
     if !dir.join("scenario.toml").is_file() {
         anyhow::bail!("{what}: {}: not a Sylva run directory (no scenario.toml; expected the --out folder of `sylva run` or `sylva simulate`)", dir.display());
+    }
+    // a scenario that does not parse is named with its error (round 33's trial: a garbage
+    // scenario.toml got "no inventory snapshot for year 150 (years with an inventory: )")
+    if let Err(e) = Scenario::load(&dir.join("scenario.toml")) {
+        anyhow::bail!("{what}: {}: not a Sylva run directory (its scenario.toml does not parse: {e}; expected the scenario.toml that `sylva run` or `sylva simulate` writes)", dir.display());
+    }
+    // round 33's trial: a folder with only scenario.toml got "fake1/inventory: No such file or
+    // directory (os error 2)"
+    if !dir.join("inventory").is_dir() {
+        anyhow::bail!("{what}: {}: not a Sylva run directory (no inventory/ folder; expected the --out folder of `sylva run` or `sylva simulate`, which writes the trees there)", dir.display());
     }
     Ok(())
 }

@@ -261,6 +261,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
 
 /// `sylva render --camera hemi:X,Y`: the hemispherical photograph ([`sylva::job::hemi`]).
 fn hemi(a: &RenderArgs, x: f64, y: f64) -> anyhow::Result<()> {
+    super::check_run_dir(&a.run_dir, "RUN")?;
     let lib = super::simulate::run_library(&a.run_dir, a.species_dir.as_deref())?;
     let o = sylva::job::hemi::HemiOptions { year: a.year, x_m: x, y_m: y, size_px: a.size.0.min(a.size.1) };
     let (img, st) = sylva::job::hemi::hemispherical_photo(&a.run_dir, &lib, &o)?;

@@ -165,6 +165,9 @@ fn info(s: &Source, tolerance: f64) -> anyhow::Result<()> {
 /// a scenario's Ellenberg maps but a one-year `sylva run`).
 fn scenario_maps(path: &Path, s: &Source, out: &Path) -> anyhow::Result<()> {
     anyhow::ensure!(s.latitude.is_none(), "--latitude: not with --scenario (the scenario's [climate] latitude_deg sets it)");
+    // an --out that is a file is named before any work (round 33's trial: "creating holes.asc:
+    // File exists"), as `run` and `simulate` name theirs
+    super::check_out_dir(out, "--out")?;
     let sc = Scenario::load(path)?;
     // the site is derived first, so that a refused scenario leaves no output folder behind
     let site = sc.site().with_context(|| format!("[terrain] of {}", sc.context()))?;
@@ -176,7 +179,10 @@ fn scenario_maps(path: &Path, s: &Source, out: &Path) -> anyhow::Result<()> {
 
 fn maps_cmd(s: &Source, out: &Path) -> anyhow::Result<()> {
     // the DEM is read first, so that a missing or unreadable one leaves no empty output folder
-    // behind (found by a trial: `sylva terrain maps nothere.tif` made the folder, then failed)
+    // behind (found by a trial: `sylva terrain maps nothere.tif` made the folder, then failed);
+    // an --out that is a file is named before it (round 33's trial: "creating holes.asc: File
+    // exists"), as `run` and `simulate` name theirs
+    super::check_out_dir(out, "--out")?;
     let t = s.load()?;
     std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     let climate = s.climate();

@@ -153,6 +153,12 @@ fn check_age(age: f32, sp: &sylva::species::Species) -> anyhow::Result<()> {
 #[allow(clippy::too_many_arguments)]
 fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, habit: forest_form::Habit, species_dir: Option<&Path>, out: &Path) -> anyhow::Result<()> {
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
+    // the output is checked before any work, as `render` and `export` check theirs (round 33's
+    // trial: a folder named d3.obj was found only after the tree was grown and its textures
+    // written, with a bare "Is a directory")
+    let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    anyhow::ensure!(matches!(ext.as_str(), "glb" | "obj"), "--out {}: expected a .glb or .obj file name", out.display());
+    super::check_out_file(out, "--out")?;
     let lib = super::simulate::library(species_dir.as_slice())?;
     let sp = find_species(&lib, species, "--species")?;
     check_age(age, &sp)?;
@@ -203,13 +209,10 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     let t1 = std::time::Instant::now();
     let (chain, fill) = lone_chain(&sk, &mut leaves, &sp);
     let mesh_s = t1.elapsed().as_secs_f64();
-    let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     // a missing output folder is made (as `tree adapt`, `render` and `run` do), naming the
     // option when it cannot be (a bare OS error was all a trial got)
-    if matches!(ext.as_str(), "glb" | "obj") {
-        if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", out.display(), dir.display()))?;
-        }
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", out.display(), dir.display()))?;
     }
     match ext.as_str() {
         "glb" => {
@@ -330,6 +333,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     anyhow::ensure!(a.age.is_finite() && a.age > 0.0, "--age {}: expected a positive number of years", a.age);
     let ext = a.out.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     anyhow::ensure!(ext == "glb", "--out {}: expected a .glb file name", a.out.display());
+    super::check_out_file(&a.out, "--out")?;
     // the three files written (glb, skeleton sidecar, before/after PNG), checked before any is
     // written, so that a bad path does not leave a partial set behind
     let outputs = [a.out.clone(), sylva::output::gltf::skeleton_sidecar_path(&a.out), a.out.with_extension("png")];

@@ -108,7 +108,8 @@ pub fn parse_hemi(s: &str) -> Option<Result<(f64, f64)>> {
 /// Takes the photograph (module documentation) of a run's snapshot.
 ///
 /// Errors: [`Error::Format`] / [`Error::Io`] when the run or snapshot cannot be read;
-/// [`Error::Invalid`] naming `--camera` for a place outside the site or inside an obstacle,
+/// [`Error::Invalid`] naming `--camera` for a place outside the site, on a masked cell
+/// (no-data or sea: [`crate::conditions::SiteConditions::unmasked_cell`]) or inside an obstacle,
 /// naming `--size` for a side outside 64–8192.
 pub fn hemispherical_photo(run_dir: &Path, library: &SpeciesLibrary, o: &HemiOptions) -> Result<(RgbImage, HemiStats)> {
     if !(64..=8192).contains(&o.size_px) {
@@ -120,6 +121,11 @@ pub fn hemispherical_photo(run_dir: &Path, library: &SpeciesLibrary, o: &HemiOpt
     let place = format!("hemi:{},{}", o.x_m, o.y_m);
     if !(o.x_m >= 0.0 && o.y_m >= 0.0 && o.x_m < w && o.y_m < h) || !site.elevation_at(o.x_m, o.y_m).is_finite() {
         return Err(invalid("--camera", place, format!("a place on the site: 0 ≤ X < {w:.1} m east, 0 ≤ Y < {h:.1} m north, on valid terrain")));
+    }
+    // a no-data (or sea) cell is refused as a place off the site is (round 33's trial: a photo
+    // was taken from the bottom of a hole filled with elevation 0, about 300 m down)
+    if site.unmasked_cell(o.x_m, o.y_m).is_none() {
+        return Err(invalid("--camera", place, format!("a place on valid terrain: the cell there is no-data (a hole in the DEM) or at or below sea level, where the site holds no terrain or trees; the site spans 0 ≤ X < {w:.1} m east, 0 ≤ Y < {h:.1} m north")));
     }
     let ground = site.elevation_at(o.x_m, o.y_m);
     let eye_h = ground + CAMERA_HEIGHT_M;

@@ -605,17 +605,29 @@ pub fn read_asc(text: &str, prj: Option<&str>, path: &Path) -> Result<Terrain> {
         pixel_h: cs,
         latitude_deg: FALLBACK_LATITUDE_DEG,
     };
-    geo.latitude_deg = centre_latitude(&geo, w, h, projection.as_ref(), &prj_path)?;
+    geo.latitude_deg = if prj.is_none() && !geographic {
+        // said as missing (round 33's trial: "holes.prj: projected CRS without EPSG code not
+        // known" named a .prj that was not there)
+        tracing::warn!(
+            "{}: no .prj beside it ({} is missing): read as metres in an unknown projected CRS; latitude for insolation set to {FALLBACK_LATITUDE_DEG}° (put a .prj beside the file or set climate.latitude_deg)",
+            path.display(),
+            prj_path.display()
+        );
+        FALLBACK_LATITUDE_DEG
+    } else {
+        centre_latitude(&geo, w, h, projection.as_ref(), &prj_path)?
+    };
     Ok(Terrain { elevation, geo, nodata, source: path.display().to_string() })
 }
 
-/// Reads a grayscale PNG heightmap (16-bit, or 8-bit widened) — the game-engine convention:
-/// value 0 is `min_h_m`, the largest code (65535 or 255) is `max_h_m`, cells are `cell_m`
-/// metres square, no georeferencing ([`Crs::Local`], latitude [`FALLBACK_LATITUDE_DEG`]).
+/// Reads a 16-bit grayscale PNG heightmap — the game-engine convention: value 0 is `min_h_m`,
+/// 65535 is `max_h_m`, cells are `cell_m` metres square, no georeferencing ([`Crs::Local`],
+/// latitude [`FALLBACK_LATITUDE_DEG`]).
 ///
 /// Errors: unreadable PNG, a colour (RGB/RGBA) PNG ([`Error::Format`] naming the file and the
-/// colour type), `cell_m ≤ 0`, `max_h_m < min_h_m`, too large. Gray+alpha PNGs use the gray
-/// channel.
+/// colour type), an 8-bit grayscale PNG ([`Error::Format`]: 256 levels make terraces; the
+/// README documents 16-bit PNG only), `cell_m ≤ 0`, `max_h_m < min_h_m`, too large.
+/// Gray+alpha PNGs use the gray channel.
 pub fn load_png_heightmap(path: &Path, cell_m: f64, min_h_m: f64, max_h_m: f64) -> Result<Terrain> {
     if !(cell_m > 0.0) || !cell_m.is_finite() {
         return Err(Error::Invalid { context: path.display().to_string(), field: "cell_m".into(), value: cell_m.to_string(), expected: "> 0 metres".into() });
@@ -648,11 +660,18 @@ pub fn read_png_heightmap<R: std::io::BufRead + Seek>(r: R, path: &Path, cell_m:
     let img = image::DynamicImage::from_decoder(dec).map_err(|e| Error::format(path, format!("PNG data: {e}")))?;
     let (vals, maxcode): (Vec<u16>, f64) = match img {
         image::DynamicImage::ImageLuma16(b) => (b.into_raw(), 65535.0),
-        image::DynamicImage::ImageLuma8(b) => (b.into_raw().into_iter().map(u16::from).collect(), 255.0),
         image::DynamicImage::ImageLumaA16(b) => (b.pixels().map(|p| p.0[0]).collect(), 65535.0),
-        image::DynamicImage::ImageLumaA8(b) => (b.pixels().map(|p| u16::from(p.0[0])).collect(), 255.0),
+        // refused rather than widened without a word (round 33's trial: an 8-bit PNG over
+        // 0–1000 m gave 3.9 m terraces, and its no-data cells became sea level)
+        image::DynamicImage::ImageLuma8(_) | image::DynamicImage::ImageLumaA8(_) => {
+            let step = (max_h_m - min_h_m) / 255.0;
+            return Err(Error::format(
+                path,
+                format!("8-bit grayscale PNG: it holds only 256 height levels (steps of {step:.2} m over {min_h_m}–{max_h_m} m), which turn slopes into terraces; expected a 16-bit grayscale PNG heightmap (65,536 levels), a GeoTIFF or an ESRI .asc grid; convert it, e.g. `gdal_translate -ot UInt16 -scale 0 255 0 65535 in.png out.png`, or export the heightmap at 16 bits"),
+            ));
+        }
         other => {
-            return Err(Error::format(path, format!("PNG colour type {:?}: a heightmap must be a grayscale PNG (16-bit Gray preferred, 8-bit Gray accepted); convert it, e.g. `gdal_translate -ot UInt16` or `convert -colorspace Gray -depth 16`", other.color())));
+            return Err(Error::format(path, format!("PNG colour type {:?}: a heightmap must be a 16-bit grayscale PNG; convert it, e.g. `gdal_translate -ot UInt16` or `convert -colorspace Gray -depth 16`", other.color())));
         }
     };
     let data = vals.into_iter().map(|v| (min_h_m + (max_h_m - min_h_m) * v as f64 / maxcode) as f32).collect();

@@ -138,7 +138,8 @@ pub fn seeds(target: &str) -> Vec<Vec<u8>> {
             "coweeta_nad83_utm17n.tif",
         ]),
         "asc" => gis(&["grid.asc", "grid_wrapped_center.asc", "coweeta_esri.asc"]),
-        "png" => vec![data("tests/data/fuzz/heightmap16.png"), data("tests/data/fuzz/heightmap8.png")],
+        // the 8-bit heightmap is no seed since 8-bit PNGs are refused (round 33's trial)
+        "png" => vec![data("tests/data/fuzz/heightmap16.png")],
         "checkpoint" => vec![ck_fixture().bytes.clone()],
         _ => vec![data("tests/data/fuzz/tree.skeleton.json")],
     }
