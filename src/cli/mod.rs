@@ -211,8 +211,13 @@ pub fn lock_run_dir(out: &std::path::Path, option: &str) -> anyhow::Result<RunDi
         d = d.parent().unwrap_or(std::path::Path::new(""));
     }
     for m in missing.into_iter().rev() {
-        std::fs::create_dir(&m).map_err(|e| anyhow::anyhow!("{option} {}: cannot make the folder {}: {e}", out.display(), m.display()))?;
-        made.push(m);
+        match std::fs::create_dir(&m) {
+            Ok(()) => made.push(m),
+            // made meanwhile by another process: the ranks of one `mpirun` start together
+            // (round 33's CI: rank 1 lost the race to rank 0 and stopped the run)
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && m.is_dir() => {}
+            Err(e) => anyhow::bail!("{option} {}: cannot make the folder {}: {e}", out.display(), m.display()),
+        }
     }
     let mut lock = RunDirLock { _dir: None, made };
     if mpi_rank_from_env().is_some_and(|r| r != "0") {
