@@ -217,11 +217,23 @@ fn impostor_crown_starts_at_the_crown_base_and_follows_a_shifted_crown() {
         assert!(lo[2].abs() < 1e-4 && (hi[2] - 6.0).abs() < 1e-3, "trunk from the root to the crown base: {} – {}", lo[2], hi[2]);
         assert!((lo[0] + hi[0]).abs() < 1e-4 && (lo[1] + hi[1]).abs() < 1e-4, "trunk centred on the root");
     }
+    // its foot centred on the root, its head under the crown's centre
+    let foot_head = |sk: &sylva::structure::Skeleton| -> Vec<(f32, f32)> {
+        let m = mesh::impostor_mesh(sk, &sylva::structure::Leaves::default()).leaves;
+        let mid = |a: [f32; 3], b: [f32; 3]| 0.5 * (a[0] + b[0]);
+        m.positions.chunks(4).skip(2).map(|q| (mid(q[0], q[1]), mid(q[2], q[3]))).collect()
+    };
     // the same crown shifted +1 m in x: the crown quads' centre moves +1 m, the trunk stays
     let (moved, trunk2) = impostor_quads(&tips_tree(&ring(1.0)));
     for (a, b) in crown.iter().zip(&moved) {
         let dx = 0.5 * (b.0[0] + b.1[0]) - 0.5 * (a.0[0] + a.1[0]);
         assert!((dx - 1.0).abs() < 1e-3, "crown centre moved {dx} m");
     }
-    assert_eq!(trunk, trunk2);
+    assert_eq!(trunk.len(), trunk2.len());
+    for (x0, x1) in foot_head(&tips_tree(&ring(0.0))) {
+        assert!(x0.abs() < 1e-4 && x1.abs() < 1e-4, "upright crown: upright trunk ({x0}, {x1})");
+    }
+    for (x0, x1) in foot_head(&tips_tree(&ring(1.0))) {
+        assert!(x0.abs() < 1e-4 && (x1 - 1.0).abs() < 1e-3, "shifted crown: trunk from the root (x {x0}) to under the crown (x {x1})");
+    }
 }

@@ -411,7 +411,8 @@ fn quad_uv(m: &mut TriMesh, c: Vec3, u: Vec3, v: Vec3, uv0: [f32; 2], uv1: [f32;
 /// [`crate::structure::texture::impostor_texture`] (the quad runs on to v 1), and horizontally
 /// the foliage's extent along the plane, centred on the foliage's centre (a leaning crown is
 /// drawn where it is), mapped to u 0.04–0.96 (the texture crown's width). The trunk quad runs
-/// from the root up to the crown base, centred on the root, as wide as the root's diameter (at
+/// from the root (its foot centred on the root) up to the crown base under the crown's centre
+/// (slanted for a leaning crown), as wide as the root's diameter (at
 /// most 15 % of the crown's width, at least 2 cm), mapped to the texture's trunk column
 /// ([`IMPOSTOR_TRUNK_U`], v 0–0.05, trunk only). Empty for a tree without nodes.
 pub fn impostor_mesh(sk: &Skeleton, leaves: &Leaves) -> TreeMesh {
@@ -435,11 +436,13 @@ pub fn impostor_mesh(sk: &Skeleton, leaves: &Leaves) -> TreeMesh {
     if base > r.z + 1e-3 {
         let rr = root.radius.max(sk.nodes.get(1).map(|n| n.radius).unwrap_or(0.0));
         let tw = rr.max(0.02).min(0.15 * hx.min(hy));
-        let th = 0.5 * (base - r.z);
-        let tc = Vec3::new(r.x, r.y, r.z + th);
+        // foot centred on the root, head under the crown's centre (a leaning tree's trunk
+        // slants to its crown rather than standing apart from it)
+        let head = Vec3::new(c.x, c.y, base);
+        let (tc, tv) = ((r + head) * 0.5, (head - r) * 0.5);
         let trunk_uv = ([IMPOSTOR_TRUNK_U[0], 0.0], [IMPOSTOR_TRUNK_U[1], 0.05]);
-        quad_uv(&mut m, tc, Vec3::X * tw, Vec3::Z * th, trunk_uv.0, trunk_uv.1);
-        quad_uv(&mut m, tc, Vec3::Y * tw, Vec3::Z * th, trunk_uv.0, trunk_uv.1);
+        quad_uv(&mut m, tc, Vec3::X * tw, tv, trunk_uv.0, trunk_uv.1);
+        quad_uv(&mut m, tc, Vec3::Y * tw, tv, trunk_uv.0, trunk_uv.1);
     }
     TreeMesh { bark: TriMesh::default(), leaves: m }
 }
