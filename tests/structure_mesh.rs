@@ -17,7 +17,7 @@ fn lod_chain_triangle_counts_decrease() {
     for w in t.windows(2) {
         assert!(w[0] > w[1], "{t:?}");
     }
-    assert_eq!(t[3], 4, "impostor = 2 crossed quads");
+    assert_eq!(t[3], 8, "impostor = 2 crossed crown quads + 2 crossed trunk quads");
     // LOD0 leaves: 2 triangles per leaf
     assert_eq!(chain.levels[0].leaves.triangle_count(), 2 * lv.len());
     for l in &chain.levels {
@@ -178,4 +178,62 @@ fn crown_hull_follows_a_conical_and_a_one_sided_crown() {
     let min_x = hull.positions.iter().map(|p| p[0]).fold(f32::MAX, f32::min);
     eprintln!("one-sided hull x {min_x:.2} .. {max_x:.2}");
     assert!(max_x > 2.0 && min_x > -1.5 && max_x > 2.0 * -min_x, "x {min_x} .. {max_x}");
+}
+
+/// The LOD3 impostor's quads (4 vertices each): crown quads (UV u spanning 0–1) and trunk
+/// quads (u within the texture's trunk column), each as (lo, hi) bounds.
+fn impostor_quads(sk: &sylva::structure::Skeleton) -> (Vec<([f32; 3], [f32; 3])>, Vec<([f32; 3], [f32; 3])>) {
+    let m = mesh::impostor_mesh(sk, &sylva::structure::Leaves::default()).leaves;
+    assert!(m.uvs.iter().all(|uv| uv.iter().all(|c| (0.0..=1.0).contains(c))), "UVs within 0–1");
+    let (mut crown, mut trunk) = (Vec::new(), Vec::new());
+    for (ps, uvs) in m.positions.chunks(4).zip(m.uvs.chunks(4)) {
+        let lo = ps.iter().fold([f32::MAX; 3], |a, p| [a[0].min(p[0]), a[1].min(p[1]), a[2].min(p[2])]);
+        let hi = ps.iter().fold([f32::MIN; 3], |a, p| [a[0].max(p[0]), a[1].max(p[1]), a[2].max(p[2])]);
+        let umax = uvs.iter().map(|uv| uv[0]).fold(0.0f32, f32::max);
+        if umax > 0.9 { crown.push((lo, hi)) } else { trunk.push((lo, hi)) }
+    }
+    (crown, trunk)
+}
+
+/// Issue 32: LOD3 draws the tree's own crown (from its base, where it leans) over a narrow
+/// trunk, not one card over the whole bounds centred on the root.
+#[test]
+fn impostor_crown_starts_at_the_crown_base_and_follows_a_shifted_crown() {
+    // a 10 m tree whose foliage spans 6–10 m (clear bole 60 %), crown 4 m wide
+    let ring = |dx: f32| -> Vec<glam::Vec3> {
+        [6.0f32, 8.0, 10.0].iter().flat_map(|&z| [(2.0f32, 0.0f32), (-2.0, 0.0), (0.0, 2.0), (0.0, -2.0)].map(|(x, y)| glam::Vec3::new(x + dx, y, z))).collect()
+    };
+    let (crown, trunk) = impostor_quads(&tips_tree(&ring(0.0)));
+    assert_eq!((crown.len(), trunk.len()), (2, 2));
+    for (lo, hi) in &crown {
+        assert!((lo[2] - 6.0).abs() < 0.05 * 10.0, "crown quad starts at {} m, crown base 6 m", lo[2]);
+        assert!(hi[2] >= 10.0 && hi[2] < 10.5, "crown quad top {} m", hi[2]);
+    }
+    let crown_w = (crown[0].1[0] - crown[0].0[0]).max(crown[0].1[1] - crown[0].0[1]);
+    assert!(crown_w > 4.0 && crown_w < 4.5, "crown width {crown_w}");
+    for (lo, hi) in &trunk {
+        let w = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        assert!(w < 0.2 * crown_w, "trunk quad {w} m wide, crown {crown_w} m");
+        assert!(lo[2].abs() < 1e-4 && (hi[2] - 6.0).abs() < 1e-3, "trunk from the root to the crown base: {} – {}", lo[2], hi[2]);
+        assert!((lo[0] + hi[0]).abs() < 1e-4 && (lo[1] + hi[1]).abs() < 1e-4, "trunk centred on the root");
+    }
+    // its foot centred on the root, its head under the crown's centre
+    let foot_head = |sk: &sylva::structure::Skeleton| -> Vec<(f32, f32)> {
+        let m = mesh::impostor_mesh(sk, &sylva::structure::Leaves::default()).leaves;
+        let mid = |a: [f32; 3], b: [f32; 3]| 0.5 * (a[0] + b[0]);
+        m.positions.chunks(4).skip(2).map(|q| (mid(q[0], q[1]), mid(q[2], q[3]))).collect()
+    };
+    // the same crown shifted +1 m in x: the crown quads' centre moves +1 m, the trunk stays
+    let (moved, trunk2) = impostor_quads(&tips_tree(&ring(1.0)));
+    for (a, b) in crown.iter().zip(&moved) {
+        let dx = 0.5 * (b.0[0] + b.1[0]) - 0.5 * (a.0[0] + a.1[0]);
+        assert!((dx - 1.0).abs() < 1e-3, "crown centre moved {dx} m");
+    }
+    assert_eq!(trunk.len(), trunk2.len());
+    for (x0, x1) in foot_head(&tips_tree(&ring(0.0))) {
+        assert!(x0.abs() < 1e-4 && x1.abs() < 1e-4, "upright crown: upright trunk ({x0}, {x1})");
+    }
+    for (x0, x1) in foot_head(&tips_tree(&ring(1.0))) {
+        assert!(x0.abs() < 1e-4 && (x1 - 1.0).abs() < 1e-3, "shifted crown: trunk from the root (x {x0}) to under the crown (x {x1})");
+    }
 }

@@ -12,6 +12,7 @@
 use crate::mesh::{LodChain, TreeMesh, TriMesh, LOD_LEVELS};
 use crate::structure::skeleton::{Leaves, Skeleton};
 use glam::Vec3;
+use crate::structure::texture::{IMPOSTOR_CROWN_V, IMPOSTOR_TRUNK_U};
 use std::f32::consts::TAU;
 
 /// Options of [`lod_chain`] and [`branch_mesh`].
@@ -392,19 +393,57 @@ pub(crate) fn hull_stem(sk: &Skeleton, top_z: f32, o: &LodOptions) -> TriMesh {
     bark
 }
 
-/// LOD3: billboard impostor, two crossed vertical quads spanning the tree's bounds (leaf
-/// material; UV 0–1 over each card, v up).
+/// A quad like [`quad`] whose UVs run from `uv0` (corner `c − u − v`) to `uv1` (corner
+/// `c + u + v`), both in 0–1.
+fn quad_uv(m: &mut TriMesh, c: Vec3, u: Vec3, v: Vec3, uv0: [f32; 2], uv1: [f32; 2]) {
+    let base = m.uvs.len();
+    quad(m, c, u, v);
+    for t in &mut m.uvs[base..] {
+        *t = [uv0[0] + t[0] * (uv1[0] - uv0[0]), uv0[1] + t[1] * (uv1[1] - uv0[1])];
+    }
+}
+
+/// LOD3: billboard impostor, per crossed vertical plane (x–z and y–z) a crown quad and a trunk
+/// quad, leaf material, UVs within 0–1, v up (8 triangles; 4 when the crown reaches the root).
+///
+/// The crown quad spans the tree's own crown: from its lowest to its highest foliage point
+/// (leaf tips, or branch tips when leafless) mapped to v [`IMPOSTOR_CROWN_V`]–0.98 of
+/// [`crate::structure::texture::impostor_texture`] (the quad runs on to v 1), and horizontally
+/// the foliage's extent along the plane, centred on the foliage's centre (a leaning crown is
+/// drawn where it is), mapped to u 0.04–0.96 (the texture crown's width). The trunk quad runs
+/// from the root (its foot centred on the root) up to the crown base under the crown's centre
+/// (slanted for a leaning crown), as wide as the root's diameter (at
+/// most 15 % of the crown's width, at least 2 cm), mapped to the texture's trunk column
+/// ([`IMPOSTOR_TRUNK_U`], v 0–0.05, trunk only). Empty for a tree without nodes.
 pub fn impostor_mesh(sk: &Skeleton, leaves: &Leaves) -> TreeMesh {
-    let mut pts: Vec<Vec3> = sk.nodes.iter().map(|n| n.pos).collect();
-    pts.extend(foliage_points(sk, leaves));
-    let Some((lo, hi)) = bounds(&pts) else { return TreeMesh::default() };
-    let root = sk.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO);
-    let half_w = ((hi.x - lo.x).max(hi.y - lo.y) * 0.5).max(1e-3);
-    let h = (hi.z - lo.z).max(1e-3) * 0.5;
-    let c = Vec3::new(root.x, root.y, lo.z + h);
+    let Some(root) = sk.nodes.first() else { return TreeMesh::default() };
+    let Some((lo, hi)) = bounds(&foliage_points(sk, leaves)) else { return TreeMesh::default() };
+    let r = root.pos;
+    let base = lo.z.max(r.z);
+    let top = hi.z.max(base + 1e-3);
+    // foliage z [base, top] ↔ v [IMPOSTOR_CROWN_V, 0.98]; the quad runs on to v 1
+    let per_v = (top - base) / (0.98 - IMPOSTOR_CROWN_V);
+    let crown_top = top + 0.02 * per_v;
+    let crown_h = 0.5 * (crown_top - base);
+    let c = Vec3::new(0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), base + crown_h);
+    // foliage extent ↔ u 0.04–0.96
+    let half = |e: f32| (0.5 * e / 0.92).max(1e-3);
+    let (hx, hy) = (half(hi.x - lo.x), half(hi.y - lo.y));
     let mut m = TriMesh::default();
-    quad(&mut m, c, Vec3::X * half_w, Vec3::Z * h);
-    quad(&mut m, c, Vec3::Y * half_w, Vec3::Z * h);
+    let crown_uv = ([0.0, IMPOSTOR_CROWN_V], [1.0, 1.0]);
+    quad_uv(&mut m, c, Vec3::X * hx, Vec3::Z * crown_h, crown_uv.0, crown_uv.1);
+    quad_uv(&mut m, c, Vec3::Y * hy, Vec3::Z * crown_h, crown_uv.0, crown_uv.1);
+    if base > r.z + 1e-3 {
+        let rr = root.radius.max(sk.nodes.get(1).map(|n| n.radius).unwrap_or(0.0));
+        let tw = rr.max(0.02).min(0.15 * hx.min(hy));
+        // foot centred on the root, head under the crown's centre (a leaning tree's trunk
+        // slants to its crown rather than standing apart from it)
+        let head = Vec3::new(c.x, c.y, base);
+        let (tc, tv) = ((r + head) * 0.5, (head - r) * 0.5);
+        let trunk_uv = ([IMPOSTOR_TRUNK_U[0], 0.0], [IMPOSTOR_TRUNK_U[1], 0.05]);
+        quad_uv(&mut m, tc, Vec3::X * tw, tv, trunk_uv.0, trunk_uv.1);
+        quad_uv(&mut m, tc, Vec3::Y * tw, tv, trunk_uv.0, trunk_uv.1);
+    }
     TreeMesh { bark: TriMesh::default(), leaves: m }
 }
 

@@ -528,9 +528,18 @@ pub fn crown_texture(shape: LeafShape, size: u32) -> RgbaImage {
     to_image(&scatter(&leaf, &leaves, size), size, Some(0.35))
 }
 
-/// The impostor texture of `shape` (LOD3 billboard, the card spanning the tree's bounds, v up):
-/// a crown of scattered leaves, a cone for needle shapes, an ellipse over the upper 70 % for
-/// broad ones, above a dark trunk; `size` × `size`.
+/// Texture v (0–1, up) where the impostor texture's crown starts, for every leaf shape: the
+/// crown (cone or ellipse) spans v [`IMPOSTOR_CROWN_V`, 0.98], only the trunk lies below.
+/// [`crate::structure::mesh::impostor_mesh`] maps the tree's crown base to this v.
+pub const IMPOSTOR_CROWN_V: f32 = 0.12;
+
+/// Texture u range (0–1) of the impostor texture's trunk column (opaque, centred), which
+/// [`crate::structure::mesh::impostor_mesh`] maps onto its trunk quads.
+pub const IMPOSTOR_TRUNK_U: [f32; 2] = [0.48, 0.52];
+
+/// The impostor texture of `shape` (LOD3 billboard, v up): a crown of scattered leaves over v
+/// [`IMPOSTOR_CROWN_V`]–0.98 (u 0.04–0.96), a cone for needle shapes, an ellipse for broad
+/// ones, above and over a dark trunk column (u 0.475–0.525, v below 0.6); `size` × `size`.
 pub fn impostor_texture(shape: LeafShape, size: u32) -> RgbaImage {
     let size = size.max(8);
     let leaf = leaf_texture_sized(shape, 64, 128);
@@ -538,9 +547,10 @@ pub fn impostor_texture(shape: LeafShape, size: u32) -> RgbaImage {
     let len = 0.12;
     let inside = |p: Vec2| {
         if conifer {
-            p.y > 0.12 && p.y < 0.98 && (p.x - 0.5).abs() < 0.46 * (0.98 - p.y) / 0.86
+            p.y > IMPOSTOR_CROWN_V && p.y < 0.98 && (p.x - 0.5).abs() < 0.46 * (0.98 - p.y) / (0.98 - IMPOSTOR_CROWN_V)
         } else {
-            let e = Vec2::new((p.x - 0.5) / 0.46, (p.y - 0.64) / 0.34);
+            // the same v span as the cone: centre (0.98 + 0.12) / 2, half-height (0.98 − 0.12) / 2
+            let e = Vec2::new((p.x - 0.5) / 0.46, (p.y - 0.5 * (0.98 + IMPOSTOR_CROWN_V)) / (0.5 * (0.98 - IMPOSTOR_CROWN_V)));
             e.length_squared() < 1.0
         }
     };
