@@ -27,26 +27,16 @@ life.allometry crown_c0 / crown_c1), read here as numbers, not parsed."""
 import csv, glob, math, re, sys
 from pathlib import Path
 
-args = sys.argv[1:]
-species = "beech"
-if args[:1] == ["--species"]:
-    species, args = args[1], args[2:]
+from wiedemann import class_one, species_args, species_number
+
+species, args = species_args(sys.argv[1:])
 out = Path(args[0])
 plant = float(args[1]) if len(args) > 1 else 3.0
 step = int(args[2]) if len(args) > 2 else 5
-root = Path(__file__).resolve().parent.parent
-tables = {"beech": "ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv", "spruce": "ForestElementsR_fe_ytable_spruce_wiedemann_moderate_1936_42.csv"}
 # species' maximum-density line and open-grown crown radius (species/beech.toml, norway_spruce.toml)
-sp_file = {"beech": "beech.toml", "spruce": "norway_spruce.toml"}[species]
-text = (root / "species" / sp_file).read_text()
-num = lambda key: float(re.search(rf"\b{key}\s*=\s*(-?[0-9.]+)", text).group(1))
-sdi_max, slope, c0, c1 = num("sdi_max"), num("reineke_slope"), num("crown_c0"), num("crown_c1")
+sdi_max, slope, c0, c1 = (species_number(species, k) for k in ("sdi_max", "reineke_slope", "crown_c0", "crown_c1"))
 
-table = {}
-with open(root / "tests/data/stands" / tables[species]) as f:
-    for r in csv.DictReader(f):
-        if float(r["site_index"]) == 1.0:
-            table[float(r["age"])] = (float(r["n_ha"]), float(r["d_q_cm"]), float(r["h_q_m"]))
+table = {float(r["age"]): (float(r["n_ha"]), float(r["d_q_cm"]), float(r["h_q_m"])) for r in class_one(species)}
 rows = {}
 with open(out / "stand_table.csv") as f:
     for r in csv.DictReader(f):

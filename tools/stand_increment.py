@@ -31,28 +31,23 @@ height V / G at the period's start (an approximation: removed trees, being small
 lower form height, so the table's figure is a lower bound).
 
 Prints Markdown. Reads files only; no model code."""
-import csv, math, re, sys
+import csv, math, sys
 from pathlib import Path
 
-args = sys.argv[1:]
-species = "beech"
-if args[:1] == ["--species"]:
-    species, args = args[1], args[2:]
+from wiedemann import class_one, print_table, run_area_ha, species_args, species_number
+from wiedemann import inventory as read_inventory
+
+species, args = species_args(sys.argv[1:])
 out = Path(args[0])
 plant = float(args[1]) if len(args) > 1 else 3.0
 step = int(args[2]) if len(args) > 2 else 5
 a_from = int(args[3]) if len(args) > 3 else 25
 a_to = int(args[4]) if len(args) > 4 else 100
-root = Path(__file__).resolve().parent.parent
-tables = {"beech": "ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv", "spruce": "ForestElementsR_fe_ytable_spruce_wiedemann_moderate_1936_42.csv"}
 table = {}
-with open(root / "tests/data/stands" / tables[species]) as f:
-    for r in csv.DictReader(f):
-        if float(r["site_index"]) == 1.0:
-            num = lambda k: float(r[k]) if r[k] not in ("", "NA") else float("nan")
-            table[float(r["age"])] = {k: num(k) for k in ("n_ha", "ba_m2_ha", "d_q_cm", "v_m3_ha", "pai_m3_ha_yr", "red_v_m3_ha", "red_pre_yield_m3_ha_10yr")}
-sp_text = (root / "species" / {"beech": "beech.toml", "spruce": "norway_spruce.toml"}[species]).read_text()
-crown_c0, crown_c1 = (float(re.search(rf"\b{k}\s*=\s*(-?[0-9.]+)", sp_text).group(1)) for k in ("crown_c0", "crown_c1"))
+for r in class_one(species):
+    num = lambda k: float(r[k]) if r[k] not in ("", "NA") else float("nan")
+    table[float(r["age"])] = {k: num(k) for k in ("n_ha", "ba_m2_ha", "d_q_cm", "v_m3_ha", "pai_m3_ha_yr", "red_v_m3_ha", "red_pre_yield_m3_ha_10yr")}
+crown_c0, crown_c1 = (species_number(species, k) for k in ("crown_c0", "crown_c1"))
 rows = {}
 with open(out / "stand_table.csv") as f:
     for r in csv.DictReader(f):
@@ -64,19 +59,13 @@ g_of = lambda d: math.pi / 4 * d * d / 1e4  # m² of a DBH in cm
 def inventory(year):
     """(living {id: dbh}, dead [(cause, dbh)], living {id: (dbh, height, crown base)}) of the
     inventory of `year`, or None."""
-    p = out / "inventory" / f"year_{year:04d}.csv"
-    if not p.exists():
+    inv = read_inventory(out, year)
+    if inv is None:
         return None
-    alive, dead, full = {}, [], {}
-    with open(p) as f:
-        for r in csv.DictReader(f):
-            d = float(r["dbh_cm"])
-            if r["status"] == "alive":
-                if d > 0:
-                    alive[r["id"]] = d
-                    full[r["id"]] = (d, float(r["height_m"]), float(r["crown_base_m"]))
-            elif r["status"].startswith("dead:") and d > 0:
-                dead.append((r["status"][5:], d))
+    living, died = inv
+    alive = {i: float(r["dbh_cm"]) for i, r in living.items()}
+    full = {i: (float(r["dbh_cm"]), float(r["height_m"]), float(r["crown_base_m"])) for i, r in living.items()}
+    dead = [(c, float(r["dbh_cm"])) for c, r in died if float(r["dbh_cm"]) > 0]
     return alive, dead, full
 
 
@@ -103,10 +92,7 @@ def prognaus_bai(d, cr, bal, ccf_pct):
     return math.exp(a0 + b1 * math.log(d) + b2 * d * d + b3 * math.log(max(cr, 0.01)) + c1 * bal + c2 * ccf_pct + site) / 5
 
 
-# area (ha): the uniform terrain's width x height cells of cell_m (the run's scenario.toml)
-text = (out / "scenario.toml").read_text()
-m = re.search(r"width\s*=\s*(\d+)\D+height\s*=\s*(\d+)\D+cell_m\s*=\s*([0-9.]+)", text)
-area_ha = int(m.group(1)) * int(m.group(2)) * float(m.group(3)) ** 2 / 1e4
+area_ha = run_area_ha(out)
 
 stand, trees = [], []
 for age in range(a_from, a_to + 1, step):
@@ -175,10 +161,6 @@ for age in range(a_from, a_to + 1, step):
     allb = [v for c in cls.values() for v in c]
     trees.append(f"| {age - step}–{age} | {dq_b:.1f}, {ccf_pct:.0f} % | {cell('sup')} | {cell('mean')} | {cell('dom')} | {sum(v[0] for v in allb) / len(allb):.1f} ({sum(v[1] for v in allb) / len(allb):.1f}) | {tab_inc} |")
 
-print("| period (age) | N / Dq (cm) / G (m²/ha), all stems | N7 / Dq7 | gross BA incr. (m²/ha/yr) | gross V incr. (m³/ha/yr) | removed: thinning (their Dq), stress, background (stems/ha) | table N / Dq / G | table gross BA incr. | table pai (m³/ha/yr) | table: stems lost, thinning volume |")
-print("|---|---|---|---|---|---|---|---|---|---|")
-print("\n".join(stand))
+print_table("| period (age) | N / Dq (cm) / G (m²/ha), all stems | N7 / Dq7 | gross BA incr. (m²/ha/yr) | gross V incr. (m³/ha/yr) | removed: thinning (their Dq), stress, background (stems/ha) | table N / Dq / G | table gross BA incr. | table pai (m³/ha/yr) | table: stems lost, thinning volume |", stand)
 print()
-print("| period (age) | Dq (cm), CCF at start | suppressed < 0.8 Dq: stems/ha, BAI (cm²/yr per tree) (PROGNAUS) | mean 0.8–1.2 | dominant ≥ 1.2 | all survivors' BAI (PROGNAUS) | table mean tree's gross BAI |")
-print("|---|---|---|---|---|---|---|")
-print("\n".join(trees))
+print_table("| period (age) | Dq (cm), CCF at start | suppressed < 0.8 Dq: stems/ha, BAI (cm²/yr per tree) (PROGNAUS) | mean 0.8–1.2 | dominant ≥ 1.2 | all survivors' BAI (PROGNAUS) | table mean tree's gross BAI |", trees)

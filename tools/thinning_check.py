@@ -11,20 +11,13 @@ ages default to 50 and 100. Prints a Markdown table."""
 import csv, math, sys
 from pathlib import Path
 
-args = sys.argv[1:]
-species = "beech"
-if args[:1] == ["--species"]:
-    species, args = args[1], args[2:]
-tables = {"beech": "ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv", "spruce": "ForestElementsR_fe_ytable_spruce_wiedemann_moderate_1936_42.csv"}
+from wiedemann import class_one, species_args
+
+species, args = species_args(sys.argv[1:])
 out = Path(args[0])
 plant = float(args[1]) if len(args) > 1 else 3.0
 ages = [float(a) for a in args[2:]] or [50.0, 100.0]
-root = Path(__file__).resolve().parent.parent
-table = {}
-with open(root / "tests/data/stands" / tables[species]) as f:
-    for r in csv.DictReader(f):
-        if float(r["site_index"]) == 1.0:
-            table[float(r["age"])] = (float(r["n_ha"]), float(r["d_q_cm"]), float(r["ba_m2_ha"]), float(r["h_q_m"]))
+table = {float(r["age"]): (float(r["n_ha"]), float(r["d_q_cm"]), float(r["ba_m2_ha"]), float(r["h_q_m"])) for r in class_one(species)}
 rows = {}
 with open(out / "stand_table.csv") as f:
     for r in csv.DictReader(f):
