@@ -803,6 +803,7 @@ type Analysed = (PlasticTree, Option<LeafFit>);
 /// the task of the smallest (kind, rank) ready: a ready cell before any analysis, the largest
 /// first.
 struct Graph {
+    /// The ready tasks, smallest (kind, rank) first.
     queue: Mutex<BinaryHeap<Reverse<(u8, usize, usize)>>>,
     /// Each class's analysis, from its task until the last cell that uses it is adapted.
     analysed: Vec<Mutex<Option<Arc<Analysed>>>>,
