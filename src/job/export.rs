@@ -148,11 +148,12 @@ pub struct ExportStats {
     /// ([`ExportStats::analysis_s`]) and adapting the neighbourhoods
     /// ([`ExportStats::adaptation_s`]).
     pub adapt_s: f64,
-    /// Wall time (s) of growing the open-grown skeletons and their Plastic Trees analyses
-    /// (`000_*.txt` section 4; one per class of species, age, height, crown radius and crown
-    /// base).
+    /// Wall time (s) from growing the open-grown skeletons until their last Plastic Trees
+    /// analysis is done (`000_*.txt` section 4; one per class of species, age, height, crown
+    /// radius and crown base); neighbourhoods whose classes are analysed are adapted meanwhile
+    /// ([`crate::structure::stand::Stand::analysis_s`]).
     pub analysis_s: f64,
-    /// Wall time (s) of adapting the trees with their neighbours (section 5).
+    /// Wall time (s) of adapting the neighbourhoods left after the last analysis (section 5).
     pub adaptation_s: f64,
     /// Distinct analyses.
     pub analyses: usize,

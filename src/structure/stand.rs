@@ -50,8 +50,11 @@
 //!    [`Environment`]: the sky of the
 //!    latitude ([`Sky::from_latitude`], section 6 global light), a ground plane with the slope
 //!    and aspect of the cell's first tree lowered 5 cm below the lowest tree base of the group,
-//!    and the obstacles. Cells run in parallel (rayon); each cell's result depends only on its
-//!    own trees, so the stand is the same for a seed whatever the thread count.
+//!    and the obstacles. Cells run in parallel (rayon), each as soon as the classes of its
+//!    trees are analysed (one graph of tasks for steps 2–3, the largest cells first; round 34:
+//!    until then every analysis came first and a core waited for the other's last one); each
+//!    cell's result depends only on its own trees, so the stand is the same for a seed
+//!    whatever the thread count or the order.
 //! 4. **Light pruning of forest-grown trees.** A tree grown as a forest tree (a cache of
 //!    [`FULL_STRANDS`]) bends toward the light (eq. 6) and loses the branches that collide with
 //!    its neighbours' wood and the obstacles, but is not shed by light (eq. 11: its c_ψ is 0):
@@ -74,8 +77,10 @@ use crate::error::{Error, Result};
 use crate::species::SpeciesLibrary;
 use glam::Vec3;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
-use std::sync::Arc;
+use std::cmp::Reverse;
+use std::collections::{BTreeMap, BinaryHeap};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
 /// One tree of the stand as the simulation describes it.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -477,9 +482,11 @@ pub struct Stand {
     pub trees_in_groups: usize,
     /// Distinct analyses (shared by trees of the same class).
     pub analyses: usize,
-    /// Wall time (s) of growing the open-grown trees and analysing the classes (steps 1–2).
+    /// Wall time (s) from the start of step 1 (growing the open-grown trees) until the last
+    /// class is analysed (step 2); cells whose classes are analysed already run meanwhile.
     pub analysis_s: f64,
-    /// Wall time (s) of adapting the cells (step 3).
+    /// Wall time (s) of adapting the cells left after the last analysis (step 3; the two
+    /// times add up to steps 1–3).
     pub adaptation_s: f64,
 }
 
@@ -600,100 +607,237 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     let form = |k: &ClassKey| (k.0, k.1, k.3);
     cache.prepare(lib, &classes.iter().filter(|k| !k.5).map(form).collect::<Vec<_>>())?;
     cache.prepare_context(lib, &classes.iter().filter(|k| k.5).map(form).collect::<Vec<_>>())?;
-    // 2. one analysis per class
+    // 2–3. one analysis per class and the cells, as one graph of tasks over the pool: a cell
+    // starts as soon as the classes of its trees are analysed (no barrier between the two
+    // steps: with one, a core waited for the other's last analysis), the largest cells first and
+    // each cell's analyses in the order of the first cell that needs them, so the last tasks
+    // are the small cells; a class's analysis is dropped after the last cell that uses it. Each
+    // task depends only on its inputs, so the stand is the same whatever the order or the
+    // thread count.
     let alone = Environment { obstacles: Vec::new(), ground: Some(Ground::flat(0.0)), sky: sky.clone() };
     let forest_grown = cache.max_strands == FULL_STRANDS;
     let cache = &*cache;
-    // (the analysed tree, how its leaves follow from the open-grown tree's; none for a context
-    // tree)
-    let analysed: Vec<(ClassKey, (PlasticTree, Option<LeafFit>))> = classes
-        .par_iter()
-        .map(|k| {
-            let g = if k.5 { cache.get_context(form(k)) } else { cache.get(form(k)) };
-            let g = g.ok_or_else(|| bad("species/age class", format!("{}/{}", k.0, k.1), "a grown open-grown tree"))?;
-            let (h, r, cb) = class_dims(k);
-            let (sk, lf) = fit_skeleton(g, h, r, cb);
-            let sp = &lib.species[k.0 as usize];
-            // a forest-grown tree (a cache of every strand) is not shed by light (eq. 11): its
-            // bole already ends at the simulated crown base, the light-driven shedding of the
-            // simulation; see the module docs, step 4
-            let mut params = sp.architecture.plastic;
-            if forest_grown && !k.5 {
-                params.pruning_c_psi = 0.0;
-            }
-            let (mut t, lf) = if k.5 { (PlasticTree::standing(&sk, &params, &sky, None)?, None) } else { (PlasticTree::analyse(&sk, &params, &alone, None)?, Some(lf)) };
-            t.clearance_m = sp.architecture.ecomod.leaf_size_m.max(0.0);
-            Ok((*k, (t, lf)))
+    let class_index = |k: &ClassKey| classes.binary_search(k).expect("every class of a group is listed");
+    let needs: Vec<Vec<usize>> = groups
+        .iter()
+        .map(|g| {
+            let mut v: Vec<usize> = (0..g.2.len()).map(|j| class_index(&class_in(g, j))).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
         })
-        .collect::<Result<_>>()?;
-    let analysed: BTreeMap<ClassKey, (PlasticTree, Option<LeafFit>)> = analysed.into_iter().collect();
-    let analysis_s = t0.elapsed().as_secs_f64();
-    // 3. the cells, in parallel
-    let t1 = std::time::Instant::now();
-    let per_cell: Vec<Vec<(usize, AdaptedTree)>> = groups
-        .par_iter()
-        .map(|((cx, cy), ks, members)| {
-            // the class's tree scaled to the tree's height (an adapted tree keeps its
-            // class's signatures and cluster transmittance; a context tree gets its species'
-            // γ_c0 back: its shape-only analysis holds no light to stay consistent with) and
-            // placed at its base
-            let placed = |(j, &i): (usize, &usize)| -> Result<PlasticTree> {
-                let key = class_of(&trees[i], j >= ks.len());
-                let mut t = analysed[&key].0.clone();
-                let f = trees[i].height_m / class_dims(&key).0;
-                if key.5 {
-                    t.scale(f)?;
-                    t.params.translucency_gamma_c0 = lib.species[key.0 as usize].architecture.plastic.translucency_gamma_c0;
-                } else {
-                    t.scale_grown_on_open_ground(f)?;
-                }
-                t.translate(trees[i].base);
-                Ok(t)
-            };
-            // the cell's trees are adapted; the context trees stand as they are
-            let mut group: Vec<PlasticTree> = members[..ks.len()].iter().enumerate().map(placed).collect::<Result<_>>()?;
-            let context: Vec<PlasticTree> = members.iter().enumerate().skip(ks.len()).map(placed).collect::<Result<_>>()?;
-            let first = &trees[members[0]];
-            let mut ground = Ground::slope(first.base, first.slope_deg, first.aspect_deg);
-            let lowest = members.iter().map(|&i| ground.height_of(trees[i].base)).fold(0.0f32, f32::min);
-            ground.point += ground.normal * (lowest - 0.05);
-            let centre = Vec3::new((*cx as f32 + 0.5) * opts.cell_m, (*cy as f32 + 0.5) * opts.cell_m, first.base.z);
-            let tallest = members.iter().map(|&i| trees[i].height_m + trees[i].crown_radius_m).fold(0.0f32, f32::max);
-            let near = opts.cell_m + opts.halo_m + 2.0 * tallest;
-            let obstacles: Vec<Obstacle> = opts.obstacles.iter().copied().filter(|o| o.signed_distance(centre.with_z(centre.z + 0.5 * tallest)) < near).collect();
-            let env = Environment { obstacles, ground: Some(ground), sky: sky.clone() };
-            let before: Vec<Vec<(Vec3, f32)>> = group[..ks.len()].iter().map(|t| t.clusters()).collect();
-            let rep = adapt_group_among_once(&mut group, &context, &env)?;
-            let mut out = Vec::with_capacity(ks.len());
-            for (j, &k) in ks.iter().enumerate() {
-                let i = members[j];
-                let st = &trees[i];
-                let key = class_of(st, false);
-                let (h, r, _) = class_dims(&key);
-                let f = st.height_m / h;
-                let t = &group[j];
-                let open = cache.get(form(&key)).map_or(&[][..], |g| &g.leaves.leaves[..]);
-                let (skeleton, leaves) = adapted_with_leaves(t, open, analysed[&key].1.as_ref(), f, st.base);
-                // the exact crown radius: stretched about the base by the crown-shape class's
-                // rounding (the height is exact)
-                let sx = st.crown_radius_m / (r * f);
-                let s = Vec3::new(sx, sx, 1.0);
-                let at = |p: Vec3| st.base + (p - st.base) * s;
-                let mut skeleton = skeleton;
-                skeleton.nodes.iter_mut().for_each(|n| n.pos = at(n.pos));
-                let mut leaves = leaves;
-                leaves.leaves.iter_mut().for_each(|l| l.pos = at(l.pos));
-                let scale_c = |v: Vec<(Vec3, f32)>| v.into_iter().map(|(c, rad)| (at(c), rad * s.x.max(s.z))).collect::<Vec<_>>();
-                out.push((k, AdaptedTree { index: i, skeleton, leaves, report: rep.trees[j], clusters_before: scale_c(before[j].clone()), clusters_after: scale_c(t.clusters()), leaf_clusters: t.leaf_clusters().into_iter().map(|c| LeafCluster { center: at(c.center), radius: c.radius * s.x.max(s.z), ..c }).collect() }));
-            }
-            Ok(out)
-        })
-        .collect::<Result<_>>()?;
-    let mut slots: Vec<Option<AdaptedTree>> = vec![None; targets.len()];
-    for (k, a) in per_cell.into_iter().flatten() {
-        slots[k] = Some(a);
+        .collect();
+    // sizes for the order: a class's open-grown nodes (a context tree's analysis holds no light:
+    // after the targets' classes), a cell's its targets' classes' nodes
+    let nodes_of = |k: &ClassKey| {
+        let g = if k.5 { cache.get_context(form(k)) } else { cache.get(form(k)) };
+        g.map_or(0, |g| g.skeleton.nodes.len())
+    };
+    let class_cost: Vec<(bool, usize)> = classes.iter().map(|k| (k.5, nodes_of(k))).collect();
+    let mut cell_order: Vec<usize> = (0..groups.len()).collect();
+    let cell_cost: Vec<usize> = groups.iter().map(|g| (0..g.1.len()).map(|j| class_cost[class_index(&class_in(g, j))].1).sum()).collect();
+    cell_order.sort_by_key(|&c| (std::cmp::Reverse(cell_cost[c]), c));
+    let mut cell_rank = vec![0usize; groups.len()];
+    let mut class_rank = vec![usize::MAX; classes.len()];
+    let mut next = 0;
+    for (r, &c) in cell_order.iter().enumerate() {
+        cell_rank[c] = r;
+        let mut fresh: Vec<usize> = needs[c].iter().copied().filter(|&k| class_rank[k] == usize::MAX).collect();
+        fresh.sort_by_key(|&k| (class_cost[k].0, std::cmp::Reverse(class_cost[k].1), k));
+        for k in fresh {
+            class_rank[k] = next;
+            next += 1;
+        }
     }
-    Ok(Stand { trees: slots.into_iter().flatten().collect(), cells: groups.len(), trees_in_groups: groups.iter().map(|g| g.2.len()).sum(), analyses: analysed.len(), analysis_s, adaptation_s: t1.elapsed().as_secs_f64() })
+    let mut by_rank: Vec<usize> = (0..classes.len()).collect();
+    by_rank.sort_by_key(|&k| class_rank[k]);
+    let mut cells_of: Vec<Vec<usize>> = vec![Vec::new(); classes.len()];
+    for (c, need) in needs.iter().enumerate() {
+        need.iter().for_each(|&k| cells_of[k].push(c));
+    }
+    let graph = Graph {
+        queue: Mutex::new(by_rank.iter().map(|&k| Reverse((1u8, class_rank[k], k))).collect()),
+        analysed: (0..classes.len()).map(|_| Mutex::new(None)).collect(),
+        users: cells_of.iter().map(|v| AtomicUsize::new(v.len())).collect(),
+        pending: needs.iter().map(|v| AtomicUsize::new(v.len())).collect(),
+        cells: (0..groups.len()).map(|_| Mutex::new(None)).collect(),
+        analysis_errors: Mutex::new(BTreeMap::new()),
+        analyses_left: AtomicUsize::new(classes.len()),
+        analyses_done: Mutex::new(None),
+    };
+    let analyse = |k: &ClassKey| -> Result<Analysed> {
+        let g = if k.5 { cache.get_context(form(k)) } else { cache.get(form(k)) };
+        let g = g.ok_or_else(|| bad("species/age class", format!("{}/{}", k.0, k.1), "a grown open-grown tree"))?;
+        let (h, r, cb) = class_dims(k);
+        let (sk, lf) = fit_skeleton(g, h, r, cb);
+        let sp = &lib.species[k.0 as usize];
+        // a forest-grown tree (a cache of every strand) is not shed by light (eq. 11): its
+        // bole already ends at the simulated crown base, the light-driven shedding of the
+        // simulation; see the module docs, step 4
+        let mut params = sp.architecture.plastic;
+        if forest_grown && !k.5 {
+            params.pruning_c_psi = 0.0;
+        }
+        let (mut t, lf) = if k.5 { (PlasticTree::standing(&sk, &params, &sky, None)?, None) } else { (PlasticTree::analyse(&sk, &params, &alone, None)?, Some(lf)) };
+        t.clearance_m = sp.architecture.ecomod.leaf_size_m.max(0.0);
+        Ok((t, lf))
+    };
+    // 3. one cell: its trees adapted together among its context trees
+    let adapt_cell = |c: usize| -> Result<Vec<(usize, AdaptedTree)>> {
+        let ((cx, cy), ks, members) = &groups[c];
+        let analysed: BTreeMap<ClassKey, Arc<Analysed>> = needs[c].iter().map(|&k| (classes[k], graph.analysed[k].lock().expect("analysis slot").clone().expect("analysed before its cells"))).collect();
+        // the class's tree scaled to the tree's height (an adapted tree keeps its
+        // class's signatures and cluster transmittance; a context tree gets its species'
+        // γ_c0 back: its shape-only analysis holds no light to stay consistent with) and
+        // placed at its base
+        let placed = |(j, &i): (usize, &usize)| -> Result<PlasticTree> {
+            let key = class_of(&trees[i], j >= ks.len());
+            let mut t = analysed[&key].0.clone();
+            let f = trees[i].height_m / class_dims(&key).0;
+            if key.5 {
+                t.scale(f)?;
+                t.params.translucency_gamma_c0 = lib.species[key.0 as usize].architecture.plastic.translucency_gamma_c0;
+            } else {
+                t.scale_grown_on_open_ground(f)?;
+            }
+            t.translate(trees[i].base);
+            Ok(t)
+        };
+        // the cell's trees are adapted; the context trees stand as they are
+        let mut group: Vec<PlasticTree> = members[..ks.len()].iter().enumerate().map(placed).collect::<Result<_>>()?;
+        let context: Vec<PlasticTree> = members.iter().enumerate().skip(ks.len()).map(placed).collect::<Result<_>>()?;
+        let first = &trees[members[0]];
+        let mut ground = Ground::slope(first.base, first.slope_deg, first.aspect_deg);
+        let lowest = members.iter().map(|&i| ground.height_of(trees[i].base)).fold(0.0f32, f32::min);
+        ground.point += ground.normal * (lowest - 0.05);
+        let centre = Vec3::new((*cx as f32 + 0.5) * opts.cell_m, (*cy as f32 + 0.5) * opts.cell_m, first.base.z);
+        let tallest = members.iter().map(|&i| trees[i].height_m + trees[i].crown_radius_m).fold(0.0f32, f32::max);
+        let near = opts.cell_m + opts.halo_m + 2.0 * tallest;
+        let obstacles: Vec<Obstacle> = opts.obstacles.iter().copied().filter(|o| o.signed_distance(centre.with_z(centre.z + 0.5 * tallest)) < near).collect();
+        let env = Environment { obstacles, ground: Some(ground), sky: sky.clone() };
+        let before: Vec<Vec<(Vec3, f32)>> = group[..ks.len()].iter().map(|t| t.clusters()).collect();
+        let rep = adapt_group_among_once(&mut group, &context, &env)?;
+        drop(context);
+        let mut out = Vec::with_capacity(ks.len());
+        for (j, &k) in ks.iter().enumerate() {
+            let i = members[j];
+            let st = &trees[i];
+            let key = class_of(st, false);
+            let (h, r, _) = class_dims(&key);
+            let f = st.height_m / h;
+            let t = &group[j];
+            let open = cache.get(form(&key)).map_or(&[][..], |g| &g.leaves.leaves[..]);
+            let (skeleton, leaves) = adapted_with_leaves(t, open, analysed[&key].1.as_ref(), f, st.base);
+            // the exact crown radius: stretched about the base by the crown-shape class's
+            // rounding (the height is exact)
+            let sx = st.crown_radius_m / (r * f);
+            let s = Vec3::new(sx, sx, 1.0);
+            let at = |p: Vec3| st.base + (p - st.base) * s;
+            let mut skeleton = skeleton;
+            skeleton.nodes.iter_mut().for_each(|n| n.pos = at(n.pos));
+            let mut leaves = leaves;
+            leaves.leaves.iter_mut().for_each(|l| l.pos = at(l.pos));
+            let scale_c = |v: Vec<(Vec3, f32)>| v.into_iter().map(|(c, rad)| (at(c), rad * s.x.max(s.z))).collect::<Vec<_>>();
+            out.push((k, AdaptedTree { index: i, skeleton, leaves, report: rep.trees[j], clusters_before: scale_c(before[j].clone()), clusters_after: scale_c(t.clusters()), leaf_clusters: t.leaf_clusters().into_iter().map(|c| LeafCluster { center: at(c.center), radius: c.radius * s.x.max(s.z), ..c }).collect() }));
+        }
+        Ok(out)
+    };
+    let run = |task: (u8, usize, usize)| -> Vec<(u8, usize, usize)> {
+        let (kind, _, x) = task;
+        let mut ready = Vec::new();
+        if kind == 1 {
+            match analyse(&classes[x]) {
+                Ok(a) => {
+                    *graph.analysed[x].lock().expect("analysis slot") = Some(Arc::new(a));
+                    for &c in &cells_of[x] {
+                        if graph.pending[c].fetch_sub(1, Ordering::AcqRel) == 1 {
+                            ready.push((0u8, cell_rank[c], c));
+                        }
+                    }
+                }
+                Err(e) => {
+                    graph.analysis_errors.lock().expect("errors").insert(x, e);
+                }
+            }
+            if graph.analyses_left.fetch_sub(1, Ordering::AcqRel) == 1 {
+                *graph.analyses_done.lock().expect("time") = Some(t0.elapsed().as_secs_f64());
+            }
+        } else {
+            let out = adapt_cell(x);
+            *graph.cells[x].lock().expect("cell slot") = Some(out);
+            // a class's analysis is dropped with the last cell that uses it
+            for &k in &needs[x] {
+                if graph.users[k].fetch_sub(1, Ordering::AcqRel) == 1 {
+                    graph.analysed[k].lock().expect("analysis slot").take();
+                }
+            }
+        }
+        ready
+    };
+    rayon::scope(|s| {
+        for _ in 0..classes.len() {
+            s.spawn(|s| graph.step(s, &run));
+        }
+    });
+    let errors = graph.analysis_errors.into_inner().expect("errors");
+    if let Some((_, e)) = errors.into_iter().next() {
+        return Err(e);
+    }
+    let total_s = t0.elapsed().as_secs_f64();
+    let analysis_s = graph.analyses_done.into_inner().expect("time").unwrap_or(0.0);
+    let mut slots: Vec<Option<AdaptedTree>> = vec![None; targets.len()];
+    for cell in graph.cells {
+        for (k, a) in cell.into_inner().expect("cell slot").expect("every cell adapted")? {
+            slots[k] = Some(a);
+        }
+    }
+    Ok(Stand { trees: slots.into_iter().flatten().collect(), cells: groups.len(), trees_in_groups: groups.iter().map(|g| g.2.len()).sum(), analyses: classes.len(), analysis_s, adaptation_s: total_s - analysis_s })
+}
+
+/// A class's analysed tree and how its leaves follow from the open-grown tree's (none for a
+/// context tree).
+type Analysed = (PlasticTree, Option<LeafFit>);
+
+/// The task graph of [`adapt_stand`]'s steps 2–3. A task is (kind, rank, index): kind 0 a cell
+/// (index into the groups), 1 a class's analysis (index into the classes); the pool's jobs take
+/// the task of the smallest (kind, rank) ready: a ready cell before any analysis, the largest
+/// first.
+struct Graph {
+    /// The ready tasks, smallest (kind, rank) first.
+    queue: Mutex<BinaryHeap<Reverse<(u8, usize, usize)>>>,
+    /// Each class's analysis, from its task until the last cell that uses it is adapted.
+    analysed: Vec<Mutex<Option<Arc<Analysed>>>>,
+    /// Cells still to adapt that use each class.
+    users: Vec<AtomicUsize>,
+    /// Classes each cell still waits for.
+    pending: Vec<AtomicUsize>,
+    /// Each cell's adapted trees (index in `targets`, tree).
+    cells: Vec<Mutex<Option<Result<Vec<(usize, AdaptedTree)>>>>>,
+    /// Failed analyses by class index (the first is reported; their cells never start).
+    analysis_errors: Mutex<BTreeMap<usize, Error>>,
+    analyses_left: AtomicUsize,
+    /// Wall time (s) from the start of step 2 until the last analysis was done.
+    analyses_done: Mutex<Option<f64>>,
+}
+
+impl Graph {
+    /// One job of the pool: runs the first ready task with `run`, which returns the tasks it
+    /// made ready; each gets a job of its own.
+    fn step<'s, F>(&'s self, s: &rayon::Scope<'s>, run: &'s F)
+    where
+        F: Fn((u8, usize, usize)) -> Vec<(u8, usize, usize)> + Sync,
+    {
+        let Some(Reverse(task)) = self.queue.lock().expect("task queue").pop() else { return };
+        let ready = run(task);
+        if ready.is_empty() {
+            return;
+        }
+        let mut q = self.queue.lock().expect("task queue");
+        for t in ready {
+            q.push(Reverse(t));
+            s.spawn(move |s| self.step(s, run));
+        }
+    }
 }
 
 /// The adapted skeleton of `t` ([`PlasticTree::skeleton`]) and the leaves of its input: the
