@@ -362,3 +362,48 @@ fn round_33_bad_outputs_runs_and_dems_are_named() {
     let (ok, err) = run(&["terrain", "info", "p8.png"]);
     assert!(!ok && err.contains("p8.png") && err.contains("8-bit") && err.contains("256 height levels") && err.contains("16-bit grayscale PNG"), "{err}");
 }
+
+/// Round 34's trial: `mpirun -np 2` of a build without the `mpi` feature ran the whole
+/// scenario on each rank into one folder, rc 0. The launcher's variables, set here on the
+/// child as mpirun/mpiexec/srun set them, now stop it before any folder is made, saying how to
+/// run; a launch of one process, and Slurm's `SLURM_NTASKS` without any `PMI_*` (a batch
+/// script's own variable), still run.
+#[test]
+fn an_mpi_launch_of_a_build_without_mpi_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("short.toml"), LONG.replace("years = 1000", "years = 1").replace("snapshot_every = 1\n", "")).unwrap();
+    let sylva = |args: &[&str], env: &[(&str, &str)]| {
+        let mut c = Command::new(env!("CARGO_BIN_EXE_sylva"));
+        c.args(args).current_dir(d);
+        for (k, v) in env {
+            c.env(k, v);
+        }
+        let o = c.output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let launches: [&[(&str, &str)]; 4] = [
+        &[("OMPI_COMM_WORLD_SIZE", "2"), ("OMPI_COMM_WORLD_RANK", "1")],
+        &[("PMI_SIZE", "4"), ("PMI_RANK", "0")],
+        &[("SLURM_NTASKS", "3"), ("PMI_FD", "5")],
+        &[("PMIX_RANK", "1")],
+    ];
+    for (i, env) in launches.iter().enumerate() {
+        let out = format!("o{i}");
+        // `sylva run` runs in one process in every build
+        let (ok, err) = sylva(&["run", "short.toml", "--out", &out, "--no-pictures"], env);
+        assert!(!ok && err.contains("started by an MPI launcher") && err.contains("runs in one process") && err.contains("sylva simulate"), "{env:?}: {err}");
+        assert!(!d.join(&out).exists(), "{env:?}");
+        if cfg!(feature = "mpi") {
+            continue;
+        }
+        let (ok, err) = sylva(&["simulate", "short.toml", "--out", &out], env);
+        let (n, var) = env.iter().find(|(k, _)| k.ends_with("SIZE") || *k == "SLURM_NTASKS").map_or(("2", "PMIX_RANK=1".to_string()), |(k, v)| (*v, format!("{k}={v}")));
+        assert!(!ok && err.contains(&format!("with {n} processes ({var})")) && err.contains("built without the `mpi` feature") && err.contains("--features mpi") && err.contains("--tiles N") && err.contains("without mpirun"), "{env:?}: {err}");
+        assert!(!d.join(&out).exists(), "{env:?}");
+    }
+    for env in [&[("OMPI_COMM_WORLD_SIZE", "1"), ("OMPI_COMM_WORLD_RANK", "0")][..], &[("SLURM_NTASKS", "8")][..]] {
+        let (ok, err) = sylva(&["simulate", "short.toml", "--out", "one"], env);
+        assert!(ok && d.join("one/stand_table.csv").is_file(), "{env:?}: {err}");
+    }
+}

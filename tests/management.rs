@@ -484,6 +484,14 @@ fn bad_management_and_climate_input_is_refused_naming_file_and_field() {
     assert!(e.contains("management[0].area_file") && e.contains("two numbers"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ oak = 1.0 }}\nspacing_m = 2.0\nyear = 1\n"));
     assert!(e.contains("management[0].mix.oak"), "{e}");
+    // a misspelt species gets the library's nearest names by edit distance, over ids and
+    // scientific names (round 34's trial: `silver_brich` listed 17 ids and named none)
+    let e = err(&base.replace("species = [\"beech\"]", "species = [\"beech\", \"silver_brich\"]"));
+    assert!(e.contains("bad.toml") && e.contains("species[1]") && e.contains("did you mean silver_birch, Betula pendula"), "{e}");
+    let e = err(&base.replace("species = [\"beech\"]", "species = [\"Fagus silvatica\"]"));
+    assert!(e.contains("species[0]") && e.contains("did you mean beech, Fagus sylvatica?"), "{e}");
+    let e = err(&base.replace("species = [\"beech\"]", "species = [\"qwertyuiop\"]"));
+    assert!(e.contains("species[0]") && e.contains("one of: ash") && !e.contains("did you mean"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 1\narea = [500.0, 500.0, 600.0, 600.0]\n"));
     assert!(e.contains("management[0].area") && e.contains("unmasked ground"), "{e}");
     // climate
@@ -860,6 +868,24 @@ fn silent_failures_are_refused_or_warned() {
     assert_eq!(warn.len(), 2, "{warn:?}");
     assert!(warn[0].contains("late.toml") && warn[0].contains("management[0].years[1] = 30") && warn[0].contains("last year 20"), "{warn:?}");
     assert!(warn[1].contains("management[1].stages[1].year = 25"), "{warn:?}");
+    // an area partly outside the site is warned of, naming the entry, the share outside and
+    // the site's extent (round 34's trial: a shifted polygon and a box half off the site were
+    // clipped without a word); one along the edge, or inside, is not
+    let part = format!(
+        "{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 3\narea = [40.0, 40.0, 120.0, 120.0]\n\
+         [[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 4\npolygons = [[[[-40.0, 0.0], [40.0, 0.0], [40.0, 80.0], [-40.0, 80.0]], [[-30.0, 10.0], [-10.0, 10.0], [-10.0, 30.0], [-30.0, 30.0]]]]\n\
+         [[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 5\narea = [0.0, 0.0, 80.0, 80.0]\n\
+         [[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 6\npolygons = [[[[10.0, 10.0], [70.0, 10.0], [40.0, 79.9]]]]\n"
+    );
+    let sc = Scenario::from_toml_str(&part, "part.toml").unwrap();
+    let w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+    let warn = sylva::sim::management::warnings(&w.site.management, sc.years, "part.toml");
+    assert_eq!(warn.len(), 2, "{warn:?}");
+    // 80 × 80 m of the box, 40 × 40 m on the site: 75 % (0.48 of 0.64 ha) outside
+    assert!(warn[0].contains("part.toml: management[0].area: 75 % of the area (0.48 of 0.64 ha) lies outside the site") && warn[0].contains("x 0–80 m, y 0–80 m") && warn[0].contains("0.16 ha inside only"), "{warn:?}");
+    // 80 × 80 m less a 20 × 20 m hole outside: 0.60 ha, of it 40 × 80 m inside: 47 % outside
+    assert!(warn[1].contains("management[1].polygons: 47 % of the area (0.28 of 0.60 ha)") && warn[1].contains("0.32 ha inside only"), "{warn:?}");
+    assert!((w.site.management[1].region.area_ha - 0.32).abs() < 1e-9, "the clipped part acts: {} ha", w.site.management[1].region.area_ha);
     // a patch cut scheduled more often than it has squares: 16 squares of 20 m, 8 per entry,
     // every 5 years from year 5: the entries of years 15 and 20 cut nothing
     let patches = format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"patch\"\npatch_size_m = 20.0\nshare = 0.5\nfrom_year = 5\nevery_years = 5\n");
@@ -917,6 +943,10 @@ fn silent_failures_are_refused_or_warned() {
     assert!(e.contains("management[0].crop_trees_ha") && e.contains("crop_trees"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nstages = [{{ year = 10, share = 0.5 }}, {{ year = 10, share = 1.0 }}]\n"));
     assert!(e.contains("management[0].stages[1].year") && e.contains("after the previous stage"), "{e}");
+    // `years` ascend like `stages` (round 34's trial: [30, 20] was accepted), naming the file,
+    // the entry and the field
+    let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\nyear = 1\n[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\nyears = [3, 2]\n"));
+    assert!(e.contains("bad.toml") && e.contains("field `management[1].years[1]` = 2") && e.contains("after the previous one (3)") && e.contains("ascending"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nstages = [{{ year = 10, share = 1.5 }}]\n"));
     assert!(e.contains("management[0].stages[0].share") && e.contains("1.5"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nyear = 3\nstages = [{{ year = 10, share = 1.0 }}]\n"));

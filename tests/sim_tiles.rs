@@ -527,6 +527,8 @@ fn per_rank_checkpoints_resume_on_the_same_and_other_counts() {
             // the years written by 3 tiles have partitioned inventories (read back the same),
             // the rest byte for byte, checkpoint.bin included
             common::assert_same_outputs(&one, &d, &what, |_| false);
+            // and no empty checkpoint/ of the tiles is left beside checkpoint.bin (round 34's trial)
+            assert!(d.join("checkpoint.bin").is_file() && !d.join("checkpoint").exists(), "{what}: checkpoint/ left");
         } else {
             let m = common::assert_same_run(&one, &d, &template, &what);
             assert_eq!((m.year, m.ranks), (18, then));

@@ -193,12 +193,64 @@ pub fn mpi_rank_from_env() -> Option<String> {
     ["OMPI_COMM_WORLD_RANK", "PMI_RANK"].iter().find_map(|k| std::env::var(k).ok()).map(|r| r.trim().to_string())
 }
 
+/// The number of processes an MPI launcher started together with this one, read from the
+/// environment before MPI starts: Open MPI's `OMPI_COMM_WORLD_SIZE`, MPICH/Hydra's (and
+/// Slurm PMI's) `PMI_SIZE`, Slurm's `SLURM_NTASKS` only where a `PMI_*` variable shows that
+/// `srun` started the tasks as MPI ranks (a batch script's own `SLURM_NTASKS` alone is not a
+/// launch), and PMIx's `PMIX_RANK` (which names no size: a rank above 0 means at least
+/// rank + 1 processes). Returns the size and the variable it came from; `None` outside a launcher
+/// or where the size is unknown.
+pub fn mpi_world_size_from_env() -> Option<(u64, String)> {
+    let num = |k: &str| std::env::var(k).ok().and_then(|v| v.trim().parse::<u64>().ok());
+    for k in ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE"] {
+        if let Some(n) = num(k) {
+            return Some((n, format!("{k}={n}")));
+        }
+    }
+    if std::env::vars_os().any(|(k, _)| k.to_str().is_some_and(|k| k.starts_with("PMI_"))) {
+        if let Some(n) = num("SLURM_NTASKS") {
+            return Some((n, format!("SLURM_NTASKS={n}")));
+        }
+    }
+    num("PMIX_RANK").filter(|&r| r > 0).map(|r| (r + 1, format!("PMIX_RANK={r}")))
+}
+
+/// Refuses to start `command` under an MPI launcher (`mpirun`, `mpiexec`, `srun`) of more than
+/// one process when this binary was built without the cargo feature `mpi`: every rank would
+/// simulate the whole scenario into the same folder (round 34's trial: rc 0, twice the CPU,
+/// and rank 0 said it replaced an earlier run that was rank 1's, being written). A build with
+/// the feature runs the ranks of `sylva simulate` as the tiles of one run and passes;
+/// `sylva run` (`over_mpi` false) runs in one process in any build and is refused too.
+///
+/// Errors: the launcher's size is above 1 in a build without `mpi`, or for a command that does
+/// not run over MPI (saying how to run instead).
+pub fn refuse_mpi_launch(command: &str, over_mpi: bool) -> anyhow::Result<()> {
+    let Some((n, var)) = mpi_world_size_from_env().filter(|(n, _)| *n > 1) else {
+        return Ok(());
+    };
+    if !over_mpi {
+        anyhow::bail!(
+            "sylva {command}: started by an MPI launcher with {n} processes ({var}), but `sylva {command}` runs in one process: each would run the whole job into the same folder. \
+             Run it without mpirun, or simulate over MPI with `mpirun -np N sylva simulate SCENARIO --out DIR` (a build with `--features mpi`) and draw the pictures with `sylva render DIR` and `sylva timelapse DIR`"
+        );
+    }
+    match cfg!(feature = "mpi") {
+        false => anyhow::bail!(
+            "sylva {command}: started by an MPI launcher with {n} processes ({var}), but this sylva was built without the `mpi` feature: \
+             each process would run the whole scenario into the same folder. Rebuild with `cargo build --release --features mpi` (needs Open MPI, see the README) \
+             to run the processes as the tiles of one run, run `sylva {command}` without mpirun, or split the site into tiles in one process with `--tiles N`"
+        ),
+        true => Ok(()),
+    }
+}
+
 /// Locks the run folder `out` (made when missing) for this run: a second `sylva simulate` or
 /// `sylva run` into the same folder while this one writes is refused, rather than mixing the
 /// two runs' files (round 32's trial: two runs into one `--out` both ended well, the folder
 /// holding one's scenario and the other's stand table and checkpoint). An advisory `flock` on
 /// the folder itself (Linux and other Unix; no file is added to the run). The ranks of an
-/// `mpirun` write one run together: rank 0 holds the lock, the others take none.
+/// `mpirun` of a build with the `mpi` feature write one run together: rank 0 holds the lock,
+/// the others take none.
 ///
 /// Errors: the folder cannot be made or opened, or another process holds its lock for more
 /// than 2 s (naming `option` and the folder).
@@ -220,7 +272,9 @@ pub fn lock_run_dir(out: &std::path::Path, option: &str) -> anyhow::Result<RunDi
         }
     }
     let mut lock = RunDirLock { _dir: None, made };
-    if mpi_rank_from_env().is_some_and(|r| r != "0") {
+    // only a build with MPI runs its ranks together (one without refuses an `mpirun` of more
+    // than one process: `refuse_mpi_launch`)
+    if cfg!(feature = "mpi") && mpi_rank_from_env().is_some_and(|r| r != "0") {
         return Ok(lock);
     }
     #[cfg(unix)]

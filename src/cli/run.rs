@@ -50,6 +50,7 @@ pub struct Args {
 
 /// Runs the main job.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    super::refuse_mpi_launch("run", false)?;
     let mut sc = match &a.scenario {
         Some(p) => Scenario::load(p)?,
         None => main_job::default_scenario()?,

@@ -283,6 +283,7 @@ pub fn note_replaced_run(out: &Path) {
 
 /// Runs a simulation.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    super::refuse_mpi_launch("simulate", true)?;
     let mut sc = Scenario::load(&a.scenario)?;
     if let Some(y) = a.years {
         sc.years = y;

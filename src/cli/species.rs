@@ -65,7 +65,8 @@ fn source_text(name: &str, dir: Option<&Path>) -> anyhow::Result<(String, String
     let lib = SpeciesLibrary::embedded()?;
     let s = lib.get(name).with_context(|| {
         format!(
-            "no species `{name}` (known: {})",
+            "no species `{name}`{} (known: {})",
+            lib.did_you_mean(name),
             lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")
         )
     })?;

@@ -141,7 +141,7 @@ pub fn run(c: Command) -> anyhow::Result<()> {
 /// The species `name` (id or name) of `lib`, or an error naming `what` (the option, or
 /// "species") and listing the ids.
 fn find_species(lib: &sylva::species::SpeciesLibrary, name: &str, what: &str) -> anyhow::Result<sylva::species::Species> {
-    lib.find(name).map(|i| lib.species[i as usize].clone()).with_context(|| format!("{what} {name:?}: not in the library (ids: {})", lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))
+    lib.find(name).map(|i| lib.species[i as usize].clone()).with_context(|| format!("{what} {name:?}: not in the library{} (ids: {})", lib.did_you_mean(name), lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))
 }
 
 /// Refuses `--age` beyond the species' maximum age.

@@ -195,7 +195,9 @@ fn remove_rank_files(cd: &Path, keep: &[String]) -> Result<()> {
 }
 
 /// Removes the per-rank checkpoints of `dir` (the manifest first, then the files), e.g. once a
-/// `checkpoint.bin` supersedes them or a fresh run starts. Other files of the folder are kept.
+/// `checkpoint.bin` supersedes them or a fresh run starts. Other files of the folder are kept;
+/// the folder itself is removed once empty (round 34's trial: a tiled run resumed in one
+/// process left an empty `checkpoint/` beside `checkpoint.bin`).
 ///
 /// Errors: [`Error::Io`] naming the file or folder.
 pub fn remove_ranks(dir: &Path) -> Result<()> {
@@ -204,7 +206,11 @@ pub fn remove_ranks(dir: &Path) -> Result<()> {
     if m.exists() {
         std::fs::remove_file(&m).map_err(|e| Error::io(&m, e))?;
     }
-    remove_rank_files(&cd, &[])
+    remove_rank_files(&cd, &[])?;
+    if cd.is_dir() && std::fs::read_dir(&cd).map_err(|e| Error::io(&cd, e))?.next().is_none() {
+        std::fs::remove_dir(&cd).map_err(|e| Error::io(&cd, e))?;
+    }
+    Ok(())
 }
 
 /// Removes every checkpoint of `dir` (`checkpoint.bin` and the per-rank ones): a fresh run

@@ -50,7 +50,7 @@ pub struct Management {
     /// A single year (0–10000).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub year: Option<u32>,
-    /// Years (each 0–10000).
+    /// Years (each 0–10000), ascending, each once.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub years: Option<Vec<u32>>,
     /// First year of a recurring entry (1–10000).
@@ -336,6 +336,10 @@ impl Management {
                 if ys[..k].contains(y) {
                     return Err(bad(&format!("years[{k}]"), y.to_string(), "each year once"));
                 }
+                // ascending, as `stages` must be (round 34's trial: [30, 20] was accepted)
+                if k > 0 && *y < ys[k - 1] {
+                    return Err(bad(&format!("years[{k}]"), y.to_string(), &format!("a year after the previous one ({}): list the years in ascending order", ys[k - 1])));
+                }
             }
         }
         if let Some(f) = self.from_year {
@@ -615,6 +619,10 @@ pub struct Operation {
     pub action: Action,
     /// Where.
     pub region: Region,
+    /// The warning that part of the area as given lies outside the site and was clipped off
+    /// (the field, its share and the site's extent, [`resolve`]; [`warnings`] gives it with the
+    /// scenario's name); `None` when it lies inside.
+    pub clipped: Option<String>,
 }
 
 /// Converts a point of the DEM's CRS to world metres (origin SW corner) on `site`: through the
@@ -974,7 +982,7 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
                 let mut acc = 0.0;
                 let mut out = Vec::new();
                 for (sp, s) in &mix {
-                    let id = lib.find(sp).ok_or_else(|| invalid(ctx, i, &format!("mix.{sp}"), sp, "a species id of the library"))?;
+                    let id = lib.find(sp).ok_or_else(|| invalid(ctx, i, &format!("mix.{sp}"), sp, &format!("a species id of the library{}", lib.did_you_mean(sp))))?;
                     if !site.pool.contains(&id) {
                         return Err(invalid(ctx, i, &format!("mix.{sp}"), sp, "a species of the scenario's pool (add it to `species`)"));
                     }
@@ -999,7 +1007,8 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
                 Action::Planting { mix: out, spacing_m: m.spacing_m.unwrap_or(2.0), age_yr: m.age_yr.unwrap_or(2.0) }
             }
         };
-        ops.push(Operation { index: i, spec: m.clone(), action, region });
+        let clipped = outside_note(m, bbox, region.polygons.as_deref(), site, i);
+        ops.push(Operation { index: i, spec: m.clone(), action, region, clipped });
     }
     Ok(ops)
 }
@@ -1041,6 +1050,93 @@ fn read_area_file(f: &Path, m: &Management, site: &SiteView<'_>, (ex, ey): (f64,
     Ok(out)
 }
 
+/// Shares (0–1) of an area cut off by the site's edge that are worth a warning: above 1 %
+/// (a polygon drawn along the site's edge may stick out by a sliver).
+const OUTSIDE_WARN_SHARE: f64 = 0.01;
+
+/// The warning (without the scenario's name, which [`warnings`] adds) for entry `i` (`m`, its bounding box `bbox` as given and its `polygons` in
+/// world metres) when more than [`OUTSIDE_WARN_SHARE`] of its area lies outside the site's
+/// extent (round 34's trial: a GeoJSON polygon shifted 300 m west, half of it off the site, and
+/// `area = [500, 500, 900, 900]` on a 600 m site, both clipped without a word): the field, the
+/// share and area outside, the area left and the site's extent (in the area file's CRS for an
+/// `area_file`). Geometric areas: a box's, or the polygons' (outer ring less holes, each ring
+/// clipped to the site by Sutherland–Hodgman); the site's masked cells do not count as outside.
+fn outside_note(m: &Management, bbox: [f64; 4], polygons: Option<&[Vec<Vec<[f64; 2]>>]>, site: &SiteView<'_>, i: usize) -> Option<String> {
+    let (ex, ey) = site.extent;
+    let (full, inside) = match polygons {
+        Some(ps) => ps.iter().fold((0.0, 0.0), |(f, n), rings| {
+            let area = |clip: bool| -> f64 {
+                let a: Vec<f64> = rings.iter().map(|r| if clip { ring_area(&clip_ring(r, ex, ey)) } else { ring_area(r) }).collect();
+                (a.first().copied().unwrap_or(0.0) - a.iter().skip(1).sum::<f64>()).max(0.0)
+            };
+            (f + area(false), n + area(true))
+        }),
+        None => {
+            let w = |a: f64, b: f64| (b - a).max(0.0);
+            (w(bbox[0], bbox[2]) * w(bbox[1], bbox[3]), w(bbox[0].max(0.0), bbox[2].min(ex)) * w(bbox[1].max(0.0), bbox[3].min(ey)))
+        }
+    };
+    if full <= 0.0 || 1.0 - inside / full <= OUTSIDE_WARN_SHARE {
+        return None;
+    }
+    let field = if m.area.is_some() { "area" } else if m.area_file.is_some() { "area_file" } else { "polygons" };
+    let g = &site.conditions.geo;
+    let extent = if m.area_file.is_some() {
+        // in the file's coordinates, as the message of a polygon wholly outside gives them
+        let (s0, s1) = (world_to_crs(site.conditions, 0.0, 0.0), world_to_crs(site.conditions, ex, ey));
+        let crs = match g.epsg.filter(|_| g.crs != crate::grid::Crs::Local) {
+            Some(c) => format!("EPSG:{c}"),
+            None => "the coordinates of the run's outputs".into(),
+        };
+        format!("x {:.2}–{:.2}, y {:.2}–{:.2} in {crs}", s0[0], s1[0], s0[1], s1[1])
+    } else {
+        format!("x 0–{ex:.0} m, y 0–{ey:.0} m from its SW corner")
+    };
+    Some(format!(
+        "management[{i}].{field}: {:.0} % of the area ({:.2} of {:.2} ha) lies outside the site, which covers {extent}; the entry acts on the {:.2} ha inside only (a shifted polygon or a wrong window?)",
+        100.0 * (1.0 - inside / full),
+        (full - inside) / 10_000.0,
+        full / 10_000.0,
+        inside / 10_000.0
+    ))
+}
+
+/// Area (m², ≥ 0) of a ring of points by the shoelace formula, either orientation, closed or
+/// not.
+fn ring_area(r: &[[f64; 2]]) -> f64 {
+    let n = r.len();
+    (0..n).map(|k| r[k][0] * r[(k + 1) % n][1] - r[(k + 1) % n][0] * r[k][1]).sum::<f64>().abs() / 2.0
+}
+
+/// Ring `r` clipped to the rectangle 0 ≤ x ≤ `ex`, 0 ≤ y ≤ `ey` (Sutherland–Hodgman, one edge of
+/// the rectangle at a time; a concave ring may come out with edges along the rectangle's sides,
+/// which add no area).
+fn clip_ring(r: &[[f64; 2]], ex: f64, ey: f64) -> Vec<[f64; 2]> {
+    // each edge: inside test and the crossing of segment p–q with it
+    let edges: [(usize, f64, bool); 4] = [(0, 0.0, true), (0, ex, false), (1, 0.0, true), (1, ey, false)];
+    let mut pts = r.to_vec();
+    for (axis, v, lower) in edges {
+        let inside = |p: &[f64; 2]| if lower { p[axis] >= v } else { p[axis] <= v };
+        let mut out = Vec::with_capacity(pts.len() + 4);
+        for k in 0..pts.len() {
+            let (p, q) = (pts[k], pts[(k + 1) % pts.len()]);
+            let (pi, qi) = (inside(&p), inside(&q));
+            if pi {
+                out.push(p);
+            }
+            if pi != qi {
+                let t = (v - p[axis]) / (q[axis] - p[axis]);
+                out.push([p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])]);
+            }
+        }
+        pts = out;
+        if pts.is_empty() {
+            break;
+        }
+    }
+    pts
+}
+
 /// The bounding box `[x0, y0, x1, y1]` of points.
 fn bbox_of<'a>(points: impl IntoIterator<Item = &'a [f64; 2]>) -> [f64; 4] {
     let mut b = [f64::INFINITY, f64::INFINITY, f64::NEG_INFINITY, f64::NEG_INFINITY];
@@ -1054,11 +1150,13 @@ fn bbox_of<'a>(points: impl IntoIterator<Item = &'a [f64; 2]>) -> [f64; 4] {
 /// scenario): every year an entry lists beyond the last ([`Management::years_beyond`]), which
 /// never comes (found by a break-it pass: such entries were ignored without a word), and a
 /// patch cut scheduled more often in the run than it has squares to open (the later entries
-/// find every square cut and cut nothing). Warnings, not errors: a run shortened with
+/// find every square cut and cut nothing), and an area partly outside the site
+/// ([`Operation::clipped`]). Warnings, not errors: a run shortened with
 /// `--years` keeps its scenario's later entries, and a patch cut may be meant to stop.
 pub fn warnings(ops: &[Operation], last_year: u32, ctx: &str) -> Vec<String> {
     let mut out = Vec::new();
     for op in ops {
+        out.extend(op.clipped.as_ref().map(|c| format!("{ctx}: {c}")));
         for (f, y) in op.spec.years_beyond(last_year) {
             out.push(format!("{ctx}: management[{}].{f} = {y} lies beyond the run's last year {last_year}: the entry does not act in that year", op.index));
         }

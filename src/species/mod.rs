@@ -592,6 +592,55 @@ impl SpeciesLibrary {
             .position(|s| species_name_key(&s.id) == n || species_name_key(&s.identity.scientific_name) == n || species_name_key(&s.identity.common_name) == n)
             .map(|i| i as SpeciesId)
     }
+
+    /// The species whose id, scientific or common name lies nearest `name` by edit distance
+    /// (Levenshtein, over [`species_name_key`] forms: one insertion, deletion or substitution
+    /// of a character each), for a "did you mean" under a misspelt name (round 34's trial:
+    /// `silver_brich` listed all 17 ids but named none). At most `max` ids, nearest first (ties
+    /// in id order), of those within a third of the name's length (at least 2, at most 4
+    /// edits); empty when none is that close.
+    pub fn nearest(&self, name: &str, max: usize) -> Vec<&Species> {
+        let n = species_name_key(name);
+        let limit = (n.chars().count() / 3).clamp(2, 4);
+        let mut found: Vec<(usize, &Species)> = self
+            .species
+            .iter()
+            .filter_map(|s| {
+                let d = [&s.id, &s.identity.scientific_name, &s.identity.common_name].iter().map(|c| edit_distance(&n, &species_name_key(c))).min()?;
+                (d <= limit).then_some((d, s))
+            })
+            .collect();
+        found.sort_by(|a, b| a.0.cmp(&b.0).then_with(|| a.1.id.cmp(&b.1.id)));
+        found.into_iter().take(max).map(|(_, s)| s).collect()
+    }
+
+    /// The " (did you mean …?)" to add to an unknown species `name`'s error: the [`nearest`]
+    /// ids with their scientific names; empty when none is near.
+    ///
+    /// [`nearest`]: SpeciesLibrary::nearest
+    pub fn did_you_mean(&self, name: &str) -> String {
+        let near = self.nearest(name, 3);
+        if near.is_empty() {
+            return String::new();
+        }
+        format!(" (did you mean {}?)", near.iter().map(|s| format!("{}, {}", s.id, s.identity.scientific_name)).collect::<Vec<_>>().join("; or "))
+    }
+}
+
+/// Levenshtein distance between `a` and `b` in characters (insertions, deletions and
+/// substitutions, each 1).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut prev: Vec<usize> = (0..=b.len()).collect();
+    let mut cur = vec![0; b.len() + 1];
+    for (i, ca) in a.chars().enumerate() {
+        cur[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            cur[j + 1] = (prev[j] + usize::from(ca != *cb)).min(prev[j + 1] + 1).min(cur[j] + 1);
+        }
+        std::mem::swap(&mut prev, &mut cur);
+    }
+    prev[b.len()]
 }
 
 /// The form in which [`SpeciesLibrary::find`] compares species names: lower case, every run of
