@@ -236,7 +236,7 @@ fn stand_writer_instances_one_model_on_many_nodes() {
     let ground = sylva::mesh::TriMesh { positions: vec![[-10.0, -10.0, 0.0], [30.0, -10.0, 0.0], [30.0, 10.0, 0.0], [-10.0, 10.0, 0.0]], normals: vec![[0.0, 0.0, 1.0]; 4], uvs: vec![], indices: vec![0, 1, 2, 0, 2, 3] };
     let scene = StandScene { name: "s".into(), looks: vec![Look::for_species(&sp, Season::Summer)], models: vec![model], trees, statics: vec![StaticMesh { name: "terrain".into(), mesh: ground, rgb: [90, 80, 60], roughness: 0.9 }], levels: vec![0, 1, 2, 3], extras: serde_json::Value::Null };
     let (bytes, counts) = sylva::output::gltf::stand_glb_bytes(&scene).unwrap();
-    // 3 tree levels + 1 shared billboard + terrain, whatever the number of trees
+    // the model's 4 levels (its own billboard among them) + terrain, whatever the number of trees
     assert_eq!(counts.meshes, 5);
     assert_eq!(counts.mesh_nodes, 5 * 4 + 1);
     let (doc, _, _) = gltf::import_slice(&bytes).unwrap();
@@ -313,8 +313,11 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     assert_eq!(r.obstacles, 1);
     // 25 m × 30 m at 5 m vertex spacing
     assert_eq!(r.terrain_triangles, 2 * 5 * 6);
-    // instancing: meshes are fewer than the nodes drawing them (one billboard per species)
-    assert!(r.counts.meshes < r.counts.mesh_nodes, "{:?}", r.counts);
+    // instancing: each model's four levels once (its billboard among them), however many
+    // trees use it, plus the terrain and the wall; a node per tree and level
+    assert_eq!(r.counts.meshes, 4 * r.models + 2, "{:?}, {} models", r.counts, r.models);
+    assert_eq!(r.counts.mesh_nodes, 4 * r.trees + 2, "{:?}, {} trees", r.counts, r.trees);
+    assert!(r.models <= r.trees);
     let (doc, _, _) = gltf::import(&out).unwrap();
     let names: Vec<&str> = doc.nodes().filter_map(|n| n.name()).collect();
     assert!(names.contains(&"terrain") && names.iter().any(|n| n.starts_with("obstacle_0_wall")));
@@ -322,9 +325,26 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     for k in 0..4 {
         assert!(names.contains(&format!("beech_{}_LOD{k}", beech.id).as_str()), "LOD{k} of beech {}", beech.id);
     }
-    let bill = doc.meshes().find(|m| m.name() == Some("beech_billboard")).unwrap().index();
-    let users = doc.nodes().filter(|n| n.mesh().map(|m| m.index()) == Some(bill)).count();
-    assert_eq!(users, rows.iter().filter(|t| t.species == "beech" && t.status == "alive" && (20.0..45.0).contains(&t.x_m) && (15.0..45.0).contains(&t.y_m)).count());
+    // each tree's billboard is its model's own impostor (round 34; was one pair of unit cards
+    // per species stretched from the root to the top): crown quads from the crown base up, a
+    // trunk quad from the root, 8 triangles, the same mesh as the model's chain's LOD3
+    let node = doc.nodes().find(|n| n.name() == Some(format!("beech_{}_LOD3", beech.id).as_str())).unwrap();
+    let mesh = node.mesh().unwrap();
+    assert!(mesh.name().is_some_and(|n| n.ends_with("_LOD3") && n.starts_with("beech_")), "{:?}", mesh.name());
+    let prims: Vec<_> = mesh.primitives().collect();
+    assert_eq!(prims.len(), 1);
+    assert_eq!(prims[0].indices().unwrap().count(), 8 * 3, "two crown quads and two trunk quads");
+    let bb = prims[0].bounding_box();
+    assert!(bb.min[1].abs() < 1e-3, "the trunk quad reaches the root: {:?}", bb);
+    let lod0 = doc.nodes().find(|n| n.name() == Some(format!("beech_{}_LOD0", beech.id).as_str())).unwrap().mesh().unwrap();
+    let top0 = lod0.primitives().map(|p| p.bounding_box().max[1]).fold(0.0f32, f32::max);
+    assert!((bb.max[1] - top0).abs() < 0.1 * top0, "billboard top {} m, tree {} m", bb.max[1], top0);
+    let (_, buffers, _) = gltf::import(&out).unwrap();
+    let reader = prims[0].reader(|b| Some(&buffers[b.index()].0[..]));
+    let (pos, uv): (Vec<[f32; 3]>, Vec<[f32; 2]>) = (reader.read_positions().unwrap().collect(), reader.read_tex_coords(0).unwrap().into_f32().collect());
+    // the crown quads (texture u over the whole crown) start well above the ground: the crown base
+    let crown_low = pos.iter().zip(&uv).filter(|(_, t)| t[0] > 0.9 || t[0] < 0.1).map(|(p, _)| p[1]).fold(f32::MAX, f32::min);
+    assert!(crown_low > 0.2 * top0, "the crown quads start at {crown_low} m of {top0} m");
     // the scene records where it is
     let bytes = std::fs::read(&out).unwrap();
     let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;

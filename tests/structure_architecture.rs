@@ -170,3 +170,31 @@ fn an_old_scots_pine_has_a_flat_top_and_upturned_limbs_a_spruce_does_not() {
         assert!(MatureForm::for_species(&species(id)).is_none(), "{id}");
     }
 }
+
+/// Round 34: 2–10-year-old stand-grown trees are saplings, not sticks with a disc or a tuft on
+/// top: crown base at most a third of the height (was 76–90 % from 5 years on, the TreeGrOSS
+/// crown-base function extrapolated below its data), crown width / height within ±25 % of the
+/// sapling ESTIMATE `sapling_width_to_height` (0.45 broadleaves, 0.5 conifers; was 0.02 for a
+/// 5-year beech, a 10 cm tuft on 1.7 m, and a 3-year spruce's crown 7.4 times as wide as long),
+/// measured on the grown skeleton (leaf tips). 20 years and older: the stand functions alone
+/// (the test above, unchanged).
+#[test]
+fn young_trees_have_the_sapling_form() {
+    use sylva::structure::forest_form::{sapling_weight, sapling_width_to_height, SAPLING_CLEAR_BOLE};
+    assert_eq!((sapling_weight(5.0), sapling_weight(10.0), sapling_weight(15.0), sapling_weight(20.0), sapling_weight(80.0)), (1.0, 1.0, 0.5, 0.0, 0.0));
+    for id in FOUR {
+        let sp = species(id);
+        let want = sapling_width_to_height(&sp);
+        for age in [3.0f32, 5.0, 7.0, 10.0] {
+            let f = tree_form(&sp, age, Habit::Forest).unwrap();
+            assert!((f.crown_base_m - SAPLING_CLEAR_BOLE * f.height_m).abs() < 1e-4 && (2.0 * f.crown_radius_m / f.height_m - want).abs() < 1e-4, "{id} {age}: {f:?}");
+            let (g, _) = grow_formed_tree(&sp, Model::EcoMod, age, &[], 1, Habit::Forest).unwrap();
+            let m = ArchitectureMeasures::of(&g.skeleton, &g.leaves);
+            let wh = 2.0 * m.crown_radius_m / m.height_m;
+            eprintln!("{id} {age}: height {:.2} m, clear bole {:.2}, crown width/height {wh:.2} (want {want})", m.height_m, m.clear_bole_share());
+            assert!((m.height_m - f.height_m).abs() < 0.05 * f.height_m, "{id} {age}: height {} vs {}", m.height_m, f.height_m);
+            assert!(m.clear_bole_share() < 0.34, "{id} {age}: clear bole {}", m.clear_bole_share());
+            assert!((wh / want - 1.0).abs() < 0.25, "{id} {age}: crown width/height {wh} vs {want}");
+        }
+    }
+}

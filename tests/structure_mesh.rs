@@ -237,3 +237,67 @@ fn impostor_crown_starts_at_the_crown_base_and_follows_a_shifted_crown() {
         assert!(x0.abs() < 1e-4 && (x1 - 1.0).abs() < 1e-3, "shifted crown: trunk from the root (x {x0}) to under the crown (x {x1})");
     }
 }
+
+/// A 10 m tree whose stem leans +x (x = 0.2·z, five segments) under a crown from 6 to 10 m:
+/// at each foliage height a ring of tips 2 m around the stem (twigs of order 1, so the stem is
+/// the order-0 chain).
+fn leaning_tree() -> sylva::structure::Skeleton {
+    let mut sk = sylva::structure::Skeleton::new();
+    let mut stem = vec![sk.add_root(glam::Vec3::ZERO, 0.2)];
+    for k in 1..=5 {
+        let z = 2.0 * k as f32;
+        let id = sk.add_child(*stem.last().unwrap(), glam::Vec3::new(0.2 * z, 0.0, z), 0.2 - 0.03 * k as f32, false).unwrap();
+        stem.push(id);
+    }
+    for (k, z) in [6.0f32, 7.0, 8.0, 9.0, 10.0].into_iter().enumerate() {
+        let at = stem[(z / 2.0).floor() as usize];
+        for j in 0..12 {
+            let a = j as f32 / 12.0 * std::f32::consts::TAU + 0.1 * k as f32;
+            sk.add_child(at, glam::Vec3::new(0.2 * z + 2.0 * a.cos(), 2.0 * a.sin(), z), 0.01, true).unwrap();
+        }
+    }
+    sk
+}
+
+/// Issue 32 (round 34): the LOD2 stem follows the skeleton's main stem under a leaning crown
+/// (it stood straight up from the root), and the crown hull's rings are centred on the stem
+/// where it crosses them, so a leaning crown keeps its width on both sides.
+#[test]
+fn crown_hull_and_its_stem_follow_a_leaning_stem() {
+    let o = LodOptions::default();
+    let sk = leaning_tree();
+    let lod2 = mesh::hull_mesh(&sk, &Default::default(), &o);
+    // the stem tube: every ring centred on the stem line x = 0.2·z (5 sides + seam vertex)
+    let bark = &lod2.bark;
+    assert!(!bark.positions.is_empty());
+    let (zmin, zmax) = bark.positions.iter().fold((f32::MAX, f32::MIN), |(a, b), p| (a.min(p[2]), b.max(p[2])));
+    assert!(zmin < 0.2 && zmax > 6.0, "stem from the root into the crown: z {zmin} .. {zmax}");
+    for ring in bark.positions.chunks(6) {
+        let cx = ring[..5].iter().map(|p| p[0]).sum::<f32>() / 5.0;
+        let cz = ring[..5].iter().map(|p| p[2]).sum::<f32>() / 5.0;
+        assert!((cx - 0.2 * cz).abs() < 0.05, "stem ring at z {cz:.2} centred at x {cx:.3}, the stem is at {:.3}", 0.2 * cz);
+    }
+    // the hull's band rings: centred on the stem (±0.3 m), about 2 m wide on both sides
+    let hull = &lod2.leaves;
+    let nl = o.hull_segments as usize;
+    let rings = (hull.positions.len() - 2) / nl;
+    for b in 1..rings - 2 {
+        let ring = &hull.positions[b * nl..(b + 1) * nl];
+        let z = ring[0][2];
+        let (lo, hi) = ring.iter().fold((f32::MAX, f32::MIN), |(a, c), p| (a.min(p[0]), c.max(p[0])));
+        let cx = 0.5 * (lo + hi);
+        let stem_x = 0.2 * z.min(10.0);
+        assert!((cx - stem_x).abs() < 0.3, "band ring at z {z:.2}: x {lo:.2} .. {hi:.2}, centre {cx:.2}, stem {stem_x:.2}");
+        assert!(hi - lo > 3.0, "band ring at z {z:.2} is {:.2} m wide, the crown 4 m", hi - lo);
+    }
+    // the stand's LOD2 (hull of adapted leaf clusters) sits on the same stem
+    let clusters: Vec<(glam::Vec3, f32)> = [6.5f32, 8.0, 9.5].iter().flat_map(|&z| [(1.5f32, 0.0f32), (-1.5, 0.0), (0.0, 1.5), (0.0, -1.5)].map(|(x, y)| (glam::Vec3::new(0.2 * z + x, y, z), 0.6))).collect();
+    let stand = sylva::structure::crown_hull::cluster_hull_mesh(&sk, &clusters, &o).unwrap();
+    let top = stand.bark.positions.chunks(6).last().unwrap();
+    let (cx, cz) = (top[..5].iter().map(|p| p[0]).sum::<f32>() / 5.0, top[..5].iter().map(|p| p[2]).sum::<f32>() / 5.0);
+    assert!(cz > 5.0 && (cx - 0.2 * cz).abs() < 0.05, "the stand hull's stem top at x {cx:.2}, z {cz:.2}");
+    // an upright tree's stem stays upright and at most HULL_STEM_SEGMENTS segments long
+    let upright = mesh::hull_mesh(&tips_tree(&[glam::Vec3::new(2.0, 0.0, 6.0), glam::Vec3::new(-2.0, 0.0, 8.0)]), &Default::default(), &o).bark;
+    assert!(upright.positions.iter().all(|p| (p[0] * p[0] + p[1] * p[1]).sqrt() < 0.21));
+    assert!(bark.positions.len() / 6 <= mesh::HULL_STEM_SEGMENTS + 1);
+}

@@ -5,7 +5,12 @@
 # CPU without denoising (Debian's Blender 3.4 is built without OpenImageDenoise).
 #
 #   xvfb-run -a blender -b --factory-startup --python tools/blender_render_stand.py -- \
-#       STAND.glb OUT.png [--dist 40] [--height 14] [--size 640x360] [--samples 16]
+#       STAND.glb OUT.png [--dist 40] [--height 14] [--pitch 82] [--lens 24] [--size 640x360] [--samples 16] \
+#       [--sun 2.5] [--sky 0.8] [--exposure 0]
+#
+# --pitch is the camera's tilt from straight down in degrees (90: level, as a person looks;
+# 82: slightly down, the default oblique view). An eye-height view from inside the stand's
+# southern edge: --dist 8 --height 1.7 --pitch 95 --lens 18.
 #
 # Blender 3.4 with numpy 1.24: the glTF importer needs `np.bool`.
 import math
@@ -24,20 +29,28 @@ dist = float(opts.get("--dist", "40"))
 height = float(opts.get("--height", "14"))
 w, h = (int(v) for v in opts.get("--size", "640x360").split("x"))
 samples = int(opts.get("--samples", "16"))
+pitch = float(opts.get("--pitch", "82"))
+lens = float(opts.get("--lens", "24"))
+# light: the sun's strength (W/m²) and the sky's; with Blender's default Filmic view the
+# earlier 4 and 1.5 washed out mid-grey bark (beech, sRGB 150) to white (round 34)
+sun_energy = float(opts.get("--sun", "2.5"))
+sky = float(opts.get("--sky", "0.8"))
+exposure = float(opts.get("--exposure", "0"))
 
 bpy.ops.wm.read_factory_settings(use_empty=True)
 bpy.ops.import_scene.gltf(filepath=glb)
 scene = bpy.context.scene
 cam_data = bpy.data.cameras.new("cam")
-cam_data.lens = 24
+cam_data.lens = lens
+cam_data.clip_start = 0.05
 cam = bpy.data.objects.new("cam", cam_data)
 scene.collection.objects.link(cam)
 # the glTF's y-up scene comes in z-up, the export area's centre at the origin
 cam.location = (0.0, -dist, height)
-cam.rotation_euler = (math.radians(82), 0.0, 0.0)
+cam.rotation_euler = (math.radians(pitch), 0.0, 0.0)
 scene.camera = cam
 sun = bpy.data.lights.new("sun", "SUN")
-sun.energy = 4.0
+sun.energy = sun_energy
 sun_obj = bpy.data.objects.new("sun", sun)
 # from the south-east behind the camera, 55 degrees up: the camera sees the lit side of the
 # crowns (the leaf material is opaque: a card lit from behind reads dark)
@@ -47,7 +60,8 @@ world = bpy.data.worlds.new("sky")
 scene.world = world
 world.use_nodes = True
 world.node_tree.nodes["Background"].inputs[0].default_value = (0.55, 0.7, 0.9, 1.0)
-world.node_tree.nodes["Background"].inputs[1].default_value = 1.5
+world.node_tree.nodes["Background"].inputs[1].default_value = sky
+scene.view_settings.exposure = exposure
 scene.render.engine = "CYCLES"
 scene.cycles.samples = samples
 scene.cycles.device = "CPU"

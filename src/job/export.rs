@@ -9,8 +9,8 @@
 //! **Instancing.** Trees whose adapted skeletons have the same topology and the same shape once
 //! divided by their crown radius (x, y) and height (z), within [`SAME_SHAPE`], share one mesh
 //! per level, each tree's node scaling it (trees of one species, age and size class that their
-//! neighbours did not touch: the analysis is shared, `structure::stand`); and the LOD3
-//! billboards of all trees of a species are one mesh ([`crate::output::gltf`]).
+//! neighbours did not touch: the analysis is shared, `structure::stand`), the LOD3 billboard
+//! (the model's own impostor: crown quads over its crown, a trunk quad to the root) included.
 //!
 //! **Coordinates.** The scene's origin is the area's centre at the lowest terrain elevation of
 //! the patch (metres; x east, y north, z up in Sylva, y up in the file); the scene's `extras`
@@ -166,8 +166,8 @@ pub struct ExportStats {
     pub pruned_light: usize,
     /// Nodes pruned inside obstacles or neighbours' wood, all trees.
     pub pruned_collision: usize,
-    /// Triangles of the written levels of all trees (each tree counted, shared meshes too;
-    /// billboards as drawn, two crossed cards) plus the terrain and obstacles.
+    /// Triangles of the written levels of all trees (each tree counted, shared meshes too)
+    /// plus the terrain and obstacles.
     pub triangles: usize,
     /// Levels of detail written.
     pub levels: Vec<usize>,
@@ -322,9 +322,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             }
             // the mid level: the crown hull of the adapted clusters, as in the pictures
             let (chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
-            let billboard = LOD_LEVELS - 1;
-            // billboards are drawn as the shared two crossed cards (4 triangles)
-            let tris = o.levels.iter().map(|&l| if l == billboard { 4 } else { chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 } }).sum();
+            let tris = o.levels.iter().map(|&l| chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 }).sum();
             let figures = [sk.nodes.len(), lv.leaves.len(), tris, sprigs.positions.len() / 4];
             Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize, sprigs }, s.to_array(), t.base - origin, t.species as usize, figures))
         })

@@ -506,9 +506,11 @@ pub struct StandCounts {
 
 /// Encodes a stand as GLB bytes (module documentation): node `trees` holds one node per tree,
 /// node `ground` the static meshes. Every [`StandModel`]'s meshes are written once however many
-/// trees use it, and the LOD3 billboard of all trees of one look is a single mesh (two crossed
-/// unit cards, 1 m wide and tall) placed and scaled by each tree's `_LOD3` node to the bounds of
-/// its model's billboard.
+/// trees use it, the LOD3 billboard included: the model's own impostor
+/// ([`crate::structure::mesh::impostor_mesh`]: crown quads over its foliage from the crown base
+/// to the top, where a leaning crown is, and a trunk quad slanting from the root to under the
+/// crown), the same mesh `sylva tree grow` writes (round 34; until then one pair of unit cards
+/// per look stretched over the model's bounds, root to top, drew the crown down to the ground).
 ///
 /// Errors: [`Error::Invalid`] for a node naming a missing model or look, a non-positive or
 /// non-finite scale, or nothing to draw; otherwise as [`glb_bytes`].
@@ -542,46 +544,24 @@ pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
         }
         mats[l] = Some(d.look(&s.looks[l], &levels)?);
     }
-    let billboard = crate::mesh::LOD_LEVELS - 1;
-    // the shared unit billboard of each look
-    let mut unit_billboard: Vec<Option<usize>> = vec![None; s.looks.len()];
-    if s.levels.contains(&billboard) {
-        for &l in &used_looks {
-            let Some(m) = mats[l] else { continue };
-            let card = unit_cards();
-            let p = m.foliage[3].and_then(|f| d.primitive(&card, f, true));
-            unit_billboard[l] = d.mesh(&format!("{}_billboard", s.looks[l].name), vec![p]);
-        }
-    }
-    // the models used, their meshes once (levels below the billboard)
+    // the models used, their meshes once (every level written, the billboard included: the
+    // chain's own impostor, `structure::mesh::impostor_mesh`, drawn over the model's crown)
     let used_models: std::collections::BTreeSet<usize> = s.trees.iter().map(|t| t.model).collect();
     let mut model_meshes: Vec<Vec<Option<usize>>> = vec![Vec::new(); s.models.len()];
-    let mut model_card: Vec<Option<([f32; 3], [f32; 3])>> = vec![None; s.models.len()];
     for &mi in &used_models {
         let m = &s.models[mi];
         let Some(lm) = mats[m.look] else { continue };
-        let levels: Vec<usize> = s.levels.iter().copied().filter(|&l| l != billboard).collect();
-        model_meshes[mi] = d.chain_with_sprigs(&m.name, &m.chain, &m.sprigs, lm, &levels);
-        model_card[mi] = m.chain.levels.get(billboard).and_then(|l| l.leaves.bounds());
+        model_meshes[mi] = d.chain_with_sprigs(&m.name, &m.chain, &m.sprigs, lm, &s.levels);
     }
     let mut mesh_nodes = 0;
     let mut tree_nodes = Vec::new();
     for t in &s.trees {
-        let m = &s.models[t.model];
         let mut children = Vec::new();
         for (i, mesh) in model_meshes[t.model].iter().enumerate() {
             if let Some(mesh) = *mesh {
                 children.push(d.node(json!({"name": format!("{}_LOD{i}", t.name), "mesh": mesh})));
                 mesh_nodes += 1;
             }
-        }
-        if let (Some(mesh), Some((lo, hi))) = (unit_billboard[m.look], model_card[t.model]) {
-            // the model's billboard spans its bounds: centre (x, y), half-width, z range
-            let c = [(lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5, lo[2]];
-            let w = ((hi[0] - lo[0]).max(hi[1] - lo[1]) * 0.5).max(1e-3);
-            let h = (hi[2] - lo[2]).max(1e-3);
-            children.push(d.node(json!({"name": format!("{}_LOD{billboard}", t.name), "mesh": mesh, "translation": y_up(c), "scale": [w, h, w]})));
-            mesh_nodes += 1;
         }
         let [sx, sy, sz] = t.scale;
         let mut node = json!({"name": t.name, "children": children, "translation": y_up(t.translation)});
@@ -737,22 +717,6 @@ pub fn write_instanced_glb(path: &Path, s: &InstancedScene) -> Result<StandCount
     let (bytes, counts) = instanced_glb_bytes(s)?;
     super::write_atomic(path, &bytes)?;
     Ok(counts)
-}
-
-/// Two crossed vertical unit cards (x and y planes, 2 m wide from −1 to 1, 0–1 m tall, z up),
-/// texture v up: the billboard all trees of a look share in a stand.
-fn unit_cards() -> TriMesh {
-    let mut m = TriMesh::default();
-    for (axis, normal) in [([1.0f32, 0.0, 0.0], [0.0f32, -1.0, 0.0]), ([0.0, 1.0, 0.0], [1.0, 0.0, 0.0])] {
-        let b = m.positions.len() as u32;
-        for (s, z) in [(-1.0f32, 0.0f32), (1.0, 0.0), (1.0, 1.0), (-1.0, 1.0)] {
-            m.positions.push([axis[0] * s, axis[1] * s, z]);
-            m.normals.push(normal);
-            m.uvs.push([(s + 1.0) * 0.5, z]);
-        }
-        m.indices.extend_from_slice(&[b, b + 1, b + 2, b, b + 2, b + 3]);
-    }
-    m
 }
 
 /// The end of a stand or forest document: the static meshes under node `ground`, the tree

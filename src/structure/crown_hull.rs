@@ -209,7 +209,7 @@ pub fn cluster_hull(clusters: &[(Vec3, f32)], subdivisions: u32) -> Option<Crown
 
 /// The crown-hull level (LOD2) of an adapted tree from its clusters: the [`cluster_hull`] of
 /// `clusters` (the frame of `sk`) at [`HULL_SUBDIVISIONS`] as foliage, on the stem of
-/// [`crate::structure::mesh::hull_mesh`] (5 sides, from the root to a quarter of the way up
+/// [`crate::structure::mesh::hull_mesh`] (5 sides, along the main stem from the root to a quarter of the way up
 /// the hull). `None` without a usable cluster (keep the chain's own hull then).
 pub fn cluster_hull_mesh(sk: &Skeleton, clusters: &[(Vec3, f32)], o: &LodOptions) -> Option<TreeMesh> {
     let h = cluster_hull(clusters, HULL_SUBDIVISIONS)?;

@@ -78,7 +78,47 @@ pub fn stand_dbh_cm(sp: &Species, h: f32) -> f32 {
     }
 }
 
-/// The dimensions of a tree of `sp` at `age_yr` years (> 0) of `habit` ([`TreeForm`]).
+/// Age (years) up to which a stand-grown tree of [`tree_form`] has the sapling form
+/// ([`SAPLING_CLEAR_BOLE`], [`sapling_width_to_height`]) in full.
+pub const SAPLING_FULL_AGE_YR: f32 = 10.0;
+/// Age (years) from which a stand-grown tree of [`tree_form`] follows the stand-grown
+/// functions alone (between [`SAPLING_FULL_AGE_YR`] and this age the two are blended linearly;
+/// the functions' own trees, 20 years and older in `tests/structure_architecture.rs`, are
+/// unchanged).
+pub const SAPLING_END_AGE_YR: f32 = 20.0;
+/// Clear bole (crown base / height) of a sapling of a young stand: ESTIMATE 0.1 (not from a
+/// published function). Before a young stand closes, its beech, oak, spruce and pine keep
+/// live branches nearly to the ground; self-pruning follows crown closure (the thicket and
+/// pole stages of the silvicultural literature, e.g. Burschel & Huss, *Grundriß des
+/// Waldbaus*; the number is not taken from it). The TreeGrOSS crown-base functions (Döbbeler
+/// et al.), fitted on stand trees with a DBH, give 80–90 % clear bole when extrapolated to a
+/// 2–5 m sapling.
+pub const SAPLING_CLEAR_BOLE: f32 = 0.1;
+
+/// Crown width / height of a sapling of `sp` (2–10 years, 0.3–6 m): ESTIMATE (not from a
+/// published function; no per-species sapling crown-width function of these species was found
+/// in round 34), 0.5 for conifers (a young spruce or pine: a cone whose lowest whorl is about
+/// half as wide as the tree is tall) and 0.45 for broadleaves (a young beech or oak of a
+/// thicket, narrower than an open-grown one). For comparison, the stand functions extrapolated
+/// to these ages give 0.02–0.8 and the open-grown `crown_c0 · h / 1.3` 0.6–0.8.
+pub fn sapling_width_to_height(sp: &Species) -> f32 {
+    match sp.identity.leaf_type {
+        crate::species::LeafType::Broadleaf => 0.45,
+        _ => 0.5,
+    }
+}
+
+/// Weight (0–1) of the sapling form at `age_yr` for a stand-grown tree: 1 up to
+/// [`SAPLING_FULL_AGE_YR`], falling linearly to 0 at [`SAPLING_END_AGE_YR`].
+pub fn sapling_weight(age_yr: f32) -> f32 {
+    ((SAPLING_END_AGE_YR - age_yr) / (SAPLING_END_AGE_YR - SAPLING_FULL_AGE_YR)).clamp(0.0, 1.0)
+}
+
+/// The dimensions of a tree of `sp` at `age_yr` years (> 0) of `habit` ([`TreeForm`]). A
+/// stand-grown tree younger than [`SAPLING_END_AGE_YR`] takes the sapling form (crown base
+/// [`SAPLING_CLEAR_BOLE`] of its height, crown width [`sapling_width_to_height`] of it) with
+/// weight [`sapling_weight`] (round 34: the stand functions alone gave 2–10-year-old trees a
+/// crown as wide as 7.4 times its length on a 90 % clear bole).
 ///
 /// Errors: [`Error::Invalid`] for an age that is not a positive finite number.
 pub fn tree_form(sp: &Species, age_yr: f32, habit: Habit) -> Result<TreeForm> {
@@ -101,7 +141,17 @@ pub fn tree_form(sp: &Species, age_yr: f32, habit: Habit) -> Result<TreeForm> {
             };
             let cb = cb.clamp(0.0, 0.9 * h);
             let r = if d > 0.0 { crate::species::allometry::stand_crown_radius(sp, d, h, cb) } else { None };
-            (d, cb, r.unwrap_or_else(|| crate::species::allometry::open_crown_radius(sp, h, d)))
+            let r = r.unwrap_or_else(|| crate::species::allometry::open_crown_radius(sp, h, d));
+            // a young tree: towards the sapling form (the stand functions are fitted on pole
+            // and timber trees; extrapolated to a few mm of DBH they give a 2 m stick with
+            // 90 % clear bole under a 1.3 m wide spruce disc or a 10 cm beech tuft)
+            let w = sapling_weight(age_yr);
+            if w > 0.0 {
+                let (scb, sr) = (SAPLING_CLEAR_BOLE * h, 0.5 * sapling_width_to_height(sp) * h);
+                (d, cb + w * (scb - cb), r + w * (sr - r))
+            } else {
+                (d, cb, r)
+            }
         }
     };
     Ok(TreeForm { age_yr, habit, height_m: h, site_index_m: h100, dbh_cm: dbh, crown_base_m: cb.clamp(0.0, 0.9 * h), crown_radius_m: r.max(0.05) })
@@ -115,7 +165,9 @@ pub fn tree_form(sp: &Species, age_yr: f32, habit: Habit) -> Result<TreeForm> {
 /// ([`crate::structure::stand::fit`]), its wood radii scaled so the stem base is the form's DBH
 /// (at least 1 cm) and its leaves kept at the species' leaf size (`leaf_size_m`), then its
 /// crown narrowed or widened about the stem until its crown radius to the leaf tips
-/// ([`crate::structure::stand::mean_crown_radius`]) is the form's (three passes). Light-guided
+/// ([`crate::structure::stand::mean_crown_radius`]) is the form's (three passes). A sapling
+/// (younger than [`SAPLING_END_AGE_YR`]) also gets its trunk shortened to its crown base and
+/// leaf cards at most half its crown radius long. Light-guided
 /// and Laplacian trees grow inside the species' crown envelope as before (not refitted).
 ///
 /// Errors: those of [`grow_species_tree`] and [`tree_form`].
@@ -142,7 +194,10 @@ pub fn grow_formed_tree_with(sp: &Species, model: Model, age_yr: f32, obstacles:
     let qf = (form.crown_base_m / form.height_m).clamp(0.0, 0.89) + 0.01;
     let crown = sk.height() - p.trunk_length_m;
     let trunk = qf * crown / (1.0 - qf);
-    if crown > 0.0 && trunk > p.trunk_length_m {
+    // a sapling's trunk is also shortened to its low crown base (round 34: the model's own
+    // trunk gave a 3-year beech 50 % clear bole); from SAPLING_END_AGE_YR on only lengthened
+    let young = sapling_weight(age_yr) > 0.0;
+    if crown > 0.0 && (trunk > p.trunk_length_m || (young && trunk > 0.0)) {
         p.trunk_length_m = trunk;
         (sk, lv) = ecomod::try_grow(&p, seed, 0.0)?;
     }
@@ -155,7 +210,10 @@ pub fn grow_formed_tree_with(sp: &Species, model: Model, age_yr: f32, obstacles:
         let s = 0.005 * form.dbh_cm.max(2.0) / r0;
         skeleton.nodes.iter_mut().for_each(|n| n.radius *= s);
     }
-    leaves.leaves.iter_mut().for_each(|l| l.size = p.leaf_size_m);
+    // a sapling's leaf cards at most half its crown radius (round 34: beech's 0.29 m cards,
+    // the paper's leaf size, on a 0.9 m beech of 0.2 m crown radius made it 0.6 m wide)
+    let leaf_size = if young { p.leaf_size_m.min(0.5 * form.crown_radius_m) } else { p.leaf_size_m };
+    leaves.leaves.iter_mut().for_each(|l| l.size = leaf_size);
     // the species' leaf size is not scaled with the tree: a young tree's crown radius (measured
     // to the leaf tips) grew by it; three horizontal rescalings about the stem bring it back to
     // the form's radius (each one exact for the wood, the leaves' reach converging)

@@ -263,10 +263,13 @@ fn bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
 /// reach of the band's foliage along it, at least 2 % of the crown radius; empty bands take the
 /// bands beside them; then one 5-point smoothing pass). Dome rings below and above (radii
 /// r·cos θ) round the crown off to a base point on the trunk axis and an apex over the highest
-/// foliage point. Unlike a bounding ellipsoid this keeps the crown's shape: conical spruces,
+/// foliage point. Each band's azimuths are taken around the skeleton's main stem where it
+/// crosses the band ([`main_stem`]; above the stem's tip, around its tip), so a leaning crown's
+/// rings follow the lean (round 34; until then around a vertical line over the root, which
+/// squeezed the far side of a leaning crown). Unlike a bounding ellipsoid this keeps the crown's shape: conical spruces,
 /// ovoid beeches, and crowns made one-sided by a neighbour or a wall (Plastic Trees). Normals
-/// are area-weighted face normals, outward. Sits on a 5-sided trunk from the root to the crown
-/// base.
+/// are area-weighted face normals, outward. Sits on a 5-sided trunk ([`hull_stem`]) that follows
+/// the main stem from the root to a quarter of the way up the crown.
 pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     let mut pts = foliage_points(sk, leaves);
     let Some((mut lo, mut hi)) = bounds(&pts) else { return TreeMesh::default() };
@@ -282,15 +285,20 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     let r = (0.5 * (hi - lo)).max(Vec3::splat(1e-3));
     let nlon = o.hull_segments.max(3) as usize;
     let nb = (o.hull_segments as usize / 2).max(4) - 2;
-    let axis = sk.nodes.first().map(|n| n.pos).unwrap_or(c);
     let (z0, dz) = (lo.z, (hi.z - lo.z).max(1e-3));
+    // each band's axis is the main stem where it crosses the band's middle height (a leaning
+    // stem carries its crown: the rings follow it rather than a vertical line over the root)
+    let stem = main_stem(sk);
+    let band_z = |b: usize| z0 + (b as f32 + 0.5) / nb as f32 * dz;
+    let axis_at = |z: f32| stem_xy_at(&stem, z).map_or(Vec3::new(c.x, c.y, z), |v| v.extend(z));
+    let band_axis: Vec<Vec3> = (0..nb).map(|b| axis_at(band_z(b))).collect();
     // support function per (band, sector): the farthest reach of the band's foliage along the
     // sector's direction (a convex outline per band; < 0: empty band)
     let dirs: Vec<(f32, f32)> = (0..nlon).map(|k| ((k as f32 + 0.5) / nlon as f32 * TAU).sin_cos()).map(|(s, c)| (c, s)).collect();
     let mut rad = vec![-1.0f32; nb * nlon];
     for p in &pts {
-        let d = (*p - axis).truncate();
         let b = (((p.z - z0) / dz * nb as f32) as usize).min(nb - 1);
+        let d = (*p - band_axis[b]).truncate();
         for (k, &(cx, cy)) in dirs.iter().enumerate() {
             let cell = &mut rad[b * nlon + k];
             *cell = cell.max(d.x * cx + d.y * cy);
@@ -330,21 +338,22 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     // rings: a dome ring below the lowest band, the band rings, two dome rings above the top
     // band (z = z_ring ± (end − z_ring)·sin θ, r = r_ring·cos θ at θ = 50° below, 45° and 75°
     // above), so broadleaf crowns are rounded while a cone's narrow top stays pointed
-    let band_z = |b: usize| z0 + (b as f32 + 0.5) / nb as f32 * dz;
     let (zb, zt) = (band_z(0), band_z(nb - 1));
-    let mut rings: Vec<(f32, Vec<f32>)> = Vec::new();
+    // (height, centre, radii): the dome rings take the centre of the band they round off
+    let mut rings: Vec<(f32, Vec3, Vec<f32>)> = Vec::new();
     let th = 50f32.to_radians();
-    rings.push((zb - (zb - lo.z) * th.sin(), (0..nlon).map(|k| rad[k] * th.cos()).collect()));
+    rings.push((zb - (zb - lo.z) * th.sin(), band_axis[0], (0..nlon).map(|k| rad[k] * th.cos()).collect()));
     for b in 0..nb {
-        rings.push((band_z(b), rad[b * nlon..(b + 1) * nlon].to_vec()));
+        rings.push((band_z(b), band_axis[b], rad[b * nlon..(b + 1) * nlon].to_vec()));
     }
     for deg in [45f32, 75.0] {
         let t = deg.to_radians();
-        rings.push((zt + (hi.z - zt) * t.sin(), (0..nlon).map(|k| rad[(nb - 1) * nlon + k] * t.cos()).collect()));
+        rings.push((zt + (hi.z - zt) * t.sin(), band_axis[nb - 1], (0..nlon).map(|k| rad[(nb - 1) * nlon + k] * t.cos()).collect()));
     }
     let nr = rings.len();
     let mut hull = TriMesh::default();
-    for (j, (z, rr)) in rings.iter().enumerate() {
+    let base_axis = axis_at(lo.z);
+    for (j, (z, axis, rr)) in rings.iter().enumerate() {
         for (k, &r_k) in rr.iter().enumerate() {
             let a = (k as f32 + 0.5) / nlon as f32 * TAU;
             hull.positions.push([axis.x + r_k * a.cos(), axis.y + r_k * a.sin(), *z]);
@@ -353,7 +362,7 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     }
     let (apex, base) = (hull.positions.len() as u32, hull.positions.len() as u32 + 1);
     hull.positions.push([top_xy.x, top_xy.y, hi.z]);
-    hull.positions.push([axis.x, axis.y, lo.z]);
+    hull.positions.push([base_axis.x, base_axis.y, lo.z]);
     hull.uvs.extend_from_slice(&[[0.5, 1.0], [0.5, 0.0]]);
     let v = |b: usize, k: usize| (b * nlon + k % nlon) as u32;
     for k in 0..nlon {
@@ -372,23 +381,94 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
         }
     }
     hull.normals = nrm.iter().map(|n| n.normalize_or(Vec3::Z).to_array()).collect();
-    // trunk: up to half-way into the crown, so the hull sits on it
+    // trunk: a quarter of the way up into the crown, so the hull sits on it
     TreeMesh { bark: hull_stem(sk, c.z - 0.5 * r.z, o), leaves: hull }
 }
 
+/// The skeleton's main stem: the root and then, from each node, its first child of the same
+/// Gravelius order (the stem's continuation, not a limb: [`Skeleton::add_child`],
+/// [`Skeleton::recompute_orders`]), up to the stem's tip; positions and radii (m, the
+/// skeleton's frame). Empty for an empty skeleton.
+pub(crate) fn main_stem(sk: &Skeleton) -> Vec<(Vec3, f32)> {
+    let mut out = Vec::new();
+    let mut cur = if sk.nodes.is_empty() { None } else { Some(0usize) };
+    while let Some(i) = cur {
+        let n = &sk.nodes[i];
+        out.push((n.pos, n.radius));
+        cur = n.children.iter().map(|&c| c as usize).find(|&c| c < sk.nodes.len() && c != i && sk.nodes[c].gravelius == n.gravelius);
+        if out.len() > sk.nodes.len() {
+            break;
+        }
+    }
+    out
+}
+
+/// Horizontal position (x, y; m) of the main stem `stem` ([`main_stem`]) at height `z`:
+/// interpolated between the two stem points around `z`; below the root the root's, above the
+/// stem's highest point that point's. The stem's heights need not rise monotonically (a
+/// bent stem): the first stretch that crosses `z` counts.
+pub(crate) fn stem_xy_at(stem: &[(Vec3, f32)], z: f32) -> Option<glam::Vec2> {
+    let (first, last) = (stem.first()?.0, stem.iter().map(|p| p.0).fold(stem[0].0, |a, p| if p.z > a.z { p } else { a }));
+    if z <= first.z {
+        return Some(first.truncate());
+    }
+    for w in stem.windows(2) {
+        let (a, b) = (w[0].0, w[1].0);
+        if (a.z <= z && z <= b.z) || (b.z <= z && z <= a.z) {
+            let t = if (b.z - a.z).abs() < 1e-6 { 0.0 } else { (z - a.z) / (b.z - a.z) };
+            return Some(a.truncate().lerp(b.truncate(), t));
+        }
+    }
+    Some(last.truncate())
+}
+
+/// Most segments of the crown-hull level's stem ([`hull_stem`]).
+pub const HULL_STEM_SEGMENTS: usize = 6;
+
 /// The stem of the crown-hull level: a 5-sided tapered tube (radius that of the root, or of its
-/// first child when larger, tapering to 70 %) from the skeleton's root straight up to height
-/// `top_z` (m, same frame; at least 1 mm above the root). Empty for an empty skeleton.
+/// first child when larger, tapering to 70 % at the top) that follows the skeleton's main stem
+/// ([`main_stem`]) from the root up to height `top_z` (m, same frame; at least 1 mm above the
+/// root), through at most [`HULL_STEM_SEGMENTS`] of its points spread evenly along it, so a
+/// leaning or bent stem carries the hull where the crown is (round 34; until then the tube
+/// stood straight up from the root under a leaning crown). Where the stem ends below `top_z`
+/// the tube goes on straight up from its tip. Empty for an empty skeleton.
 pub(crate) fn hull_stem(sk: &Skeleton, top_z: f32, o: &LodOptions) -> TriMesh {
     let mut bark = TriMesh::default();
-    if let Some(root) = sk.nodes.first() {
-        let top = Vec3::new(root.pos.x, root.pos.y, top_z.max(root.pos.z + 1e-3));
-        let rr = root.radius.max(sk.nodes.get(1).map(|n| n.radius).unwrap_or(0.0));
-        let mut t = Skeleton::new();
-        t.add_root(root.pos, rr);
-        if t.add_child(0, top, rr * 0.7, false).is_ok() {
-            bark = branch_mesh(&t, &LodOptions { sides: 5, min_sides: 5, ..*o }, None);
+    let Some(root) = sk.nodes.first() else { return bark };
+    let top_z = top_z.max(root.pos.z + 1e-3);
+    let rr = root.radius.max(sk.nodes.get(1).map(|n| n.radius).unwrap_or(0.0));
+    // the stem's points below top_z, then the point at top_z (interpolated, or straight above
+    // the stem's tip)
+    let stem = main_stem(sk);
+    let mut pts: Vec<Vec3> = vec![root.pos];
+    for w in stem.windows(2) {
+        let (a, b) = (w[0].0, w[1].0);
+        if b.z >= top_z {
+            let t = if b.z - a.z > 1e-6 { ((top_z - a.z) / (b.z - a.z)).clamp(0.0, 1.0) } else { 1.0 };
+            pts.push(a.lerp(b, t).with_z(top_z));
+            break;
         }
+        pts.push(b);
+    }
+    let last = *pts.last().unwrap_or(&root.pos);
+    if last.z < top_z - 1e-4 {
+        pts.push(last.with_z(top_z));
+    }
+    // at most HULL_STEM_SEGMENTS segments, points spread evenly along the stem (ends kept)
+    let n = pts.len();
+    let keep: Vec<Vec3> = if n - 1 <= HULL_STEM_SEGMENTS { pts } else { (0..=HULL_STEM_SEGMENTS).map(|k| pts[(k * (n - 1) + HULL_STEM_SEGMENTS / 2) / HULL_STEM_SEGMENTS]).collect() };
+    let mut t = Skeleton::new();
+    let mut parent = t.add_root(keep[0], rr);
+    let dz = (top_z - root.pos.z).max(1e-3);
+    for p in keep.iter().skip(1) {
+        let f = ((p.z - root.pos.z) / dz).clamp(0.0, 1.0);
+        match t.add_child(parent, *p, rr * (1.0 - 0.3 * f), false) {
+            Ok(id) => parent = id,
+            Err(_) => return bark,
+        }
+    }
+    if t.nodes.len() >= 2 {
+        bark = branch_mesh(&t, &LodOptions { sides: 5, min_sides: 5, ..*o }, None);
     }
     bark
 }
