@@ -216,7 +216,7 @@ impl RadixHeap {
 /// from it to an outlet of the highest elevation on the path (m). Every output value is one of
 /// the input elevations (a max/min of them, no arithmetic), so the result depends only on the
 /// DEM, not on the order cells are flooded: the same bits on one process, by bands or on any
-/// number of ranks ([`crate::terrain::hydrology::hydrology_of_rank`]). Filled depressions become exact flats; their flow
+/// number of ranks ([`crate::job::hydrology_ranks::hydrology_of_rank`]). Filled depressions become exact flats; their flow
 /// directions are resolved by [`flow_directions`] (Barnes, Lehman & Mulla 2014, flats). The
 /// priority queue is a radix heap ([`RadixHeap`]). Cells strictly uphill of a cell whose value
 /// is final are final themselves and are traced with a plain stack instead of the queue (Zhou,
@@ -328,11 +328,7 @@ pub(crate) const NOFLOW: u8 = 254;
 pub fn flow_directions(filled: &Grid<f32>, geo: &GeoRef, m: &Grid<bool>) -> Grid<u8> {
     let (w, h) = (m.width, m.height);
     let mut dir = Grid::filled(w, h, OUTLET);
-    let dy = geo.cell_y_m();
-    let dists = |r: usize| -> [f64; 8] {
-        let dx = geo.cell_x_m_at_row(r);
-        D8.map(|(dc, dr)| ((dc as f64 * dx).powi(2) + (dr as f64 * dy).powi(2)).sqrt())
-    };
+    let dists = |r: usize| d8_dists(geo, r);
     dir.data.par_chunks_mut(w).enumerate().for_each(|(r, row)| {
         let dist = dists(r);
         for c in 0..w {
@@ -369,6 +365,12 @@ pub(crate) fn steepest(z0: f32, dist: &[f64; 8], nb: impl Fn(usize) -> Option<f3
         }
     }
     best.1
+}
+
+/// The lengths (m) of the D8 steps ([`D8`]'s order) from a cell of raster row `r` of `geo`.
+pub(crate) fn d8_dists(geo: &GeoRef, r: usize) -> [f64; 8] {
+    let (dx, dy) = (geo.cell_x_m_at_row(r), geo.cell_y_m());
+    D8.map(|(dc, dr)| ((dc as f64 * dx).powi(2) + (dr as f64 * dy).powi(2)).sqrt())
 }
 
 /// The valid in-grid D8 neighbours `(k, index)` of cell `i` of a `w × h` grid.
@@ -1032,7 +1034,7 @@ pub fn window_halo_cells(geo: &GeoRef, full_h: usize) -> usize {
 /// [`flow_accumulation`]) and cut to each window (what rank 0 of a regional run still does for
 /// the other ranks: it holds the whole DEM once). Since round 34 the fill is exact (no ε) and the
 /// flats are routed by breadth-first distances, so the same values come from the bands alone
-/// ([`crate::terrain::hydrology::hydrology_by_bands`]: each band's rows, two rows of halo and
+/// ([`crate::job::hydrology_ranks::hydrology_by_bands`]: each band's rows, two rows of halo and
 /// three perimeter exchanges), bit for bit. Returns one `(filled, accumulation)` pair per window,
 /// each `width × height`.
 ///
@@ -1051,7 +1053,7 @@ pub fn hydrology_windows(t: &Terrain, m: &Grid<bool>, windows: &[Window]) -> Res
 /// Every field of window `out` of a raster, from `dem` (a window of the raster holding `out`
 /// and [`window_halo_cells`] around it, clipped to the raster: read with
 /// [`crate::terrain::io::read_geotiff_window`]) and the window's hydrology from
-/// [`hydrology_windows`] or [`crate::terrain::hydrology::hydrology_of_rank`] (`filled`,
+/// [`hydrology_windows`] or [`crate::job::hydrology_ranks::hydrology_of_rank`] (`filled`,
 /// `flow_acc`: `out`'s cells). Per field: the mask, temperature
 /// and TWI cell by cell; slope and aspect with a 1-cell halo ([`slope_aspect_window`]);
 /// insolation and wind exposure with the horizon's halo ([`insolation_and_wind_window`]); the
