@@ -255,7 +255,12 @@ pub(crate) fn directions_band(br: &BandRows, zf: &[f32], m: &[bool], geo: &GeoRe
     let dd = |g: usize| dir[g - d0 * w];
     // the band's flat cells, their flats (within the band) and whether each touches a band edge
     let own: Vec<usize> = (br.row0 * w..br.row1 * w).filter(|&g| dd(g) == NOFLOW).collect();
-    let mut slot: HashMap<usize, usize> = own.iter().enumerate().map(|(k, &g)| (g, k)).collect();
+    // position in `own` of each of the band's cells (NONE: not a flat cell), a dense index
+    let mut slot = vec![NONE; br.len()];
+    for (k, &g) in own.iter().enumerate() {
+        slot[g - br.row0 * w] = k as u32;
+    }
+    let at = |slot: &[u32], g: usize| br.own(g).map(|o| slot[o]).filter(|k| *k != NONE).map(|k| k as usize);
     let mut comp = vec![NONE; own.len()];
     let mut crossing: Vec<bool> = Vec::new();
     let mut queue = VecDeque::new();
@@ -269,7 +274,7 @@ pub(crate) fn directions_band(br: &BandRows, zf: &[f32], m: &[bool], geo: &GeoRe
         queue.push_back(s);
         while let Some(k) = queue.pop_front() {
             for (_, j) in fields::neighbours(own[k], w, h) {
-                if let Some(&q) = slot.get(&j) {
+                if let Some(q) = at(&slot, j) {
                     if comp[q] == NONE {
                         comp[q] = id;
                         queue.push_back(q);
@@ -285,8 +290,11 @@ pub(crate) fn directions_band(br: &BandRows, zf: &[f32], m: &[bool], geo: &GeoRe
     let (local, shared): (Vec<usize>, Vec<usize>) = (0..own.len()).partition(|&k| !crossing[comp[k] as usize]);
     let mut out: Vec<u8> = dir[(br.row0 - d0) * w..(br.row1 - d0) * w].to_vec();
     let lc: Vec<FlatCell> = local.iter().map(|&k| cells[k]).collect();
-    slot = lc.iter().enumerate().map(|(k, c)| (c.i, k)).collect();
-    for (c, d) in lc.iter().zip(fields::flat_dirs(&lc, w, h, &|i| slot.get(&i).copied(), &dists)) {
+    slot.fill(NONE);
+    for (k, c) in lc.iter().enumerate() {
+        slot[c.i - br.row0 * w] = k as u32;
+    }
+    for (c, d) in lc.iter().zip(fields::flat_dirs(&lc, w, h, &|i| at(&slot, i), &dists)) {
         out[c.i - br.row0 * w] = d;
     }
     (out, shared.iter().map(|&k| cells[k]).collect())
