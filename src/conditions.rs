@@ -233,7 +233,8 @@ pub fn from_fields(terrain: &crate::terrain::Terrain, climate: &Climate, f: crat
 
 /// [`SiteConditions`] of window `out` of a raster, from its DEM window `dem` (`out` and
 /// [`crate::terrain::fields::window_halo_cells`] around it) and the window's hydrology
-/// ([`crate::terrain::fields::hydrology_windows`]): [`crate::terrain::fields::compute_window`]
+/// ([`crate::terrain::fields::hydrology_windows`], or by band
+/// [`crate::job::hydrology_ranks::hydrology_of_rank`]): [`crate::terrain::fields::compute_window`]
 /// mapped to the indices as [`derive`] does, with the whole raster's georeferencing and mean
 /// cell width. Every grid is `out`'s cells and equals the same window of [`derive`]'s
 /// conditions of the whole raster bit for bit.

@@ -206,6 +206,9 @@ fn simulate_dem(ranks: usize, sc: &Path, out: &Path, resume: bool) {
     for r in 0..ranks {
         let (r0, r1) = (r * 40 / ranks, (r + 1) * 40 / ranks);
         assert!(err.contains(&format!("rank {r}/{ranks}: site rows {r0}..{r1} of 40 derived from a window of")), "rank {r} of {ranks} did not derive its band: {err}");
+        // round 34: its hydrology from its rows and two rows of halo, not the whole DEM on rank 0
+        let (h0, h1) = (r0.saturating_sub(2), (r1 + 2).min(40));
+        assert!(err.contains(&format!("hydrology from rows {h0}..{h1})")), "rank {r} of {ranks} did not read its band's rows for the hydrology: {err}");
     }
 }
 

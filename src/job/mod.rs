@@ -10,6 +10,7 @@ pub mod adapted;
 pub mod checkpoint;
 pub mod export;
 pub mod hemi;
+pub mod hydrology_ranks;
 pub mod inventory;
 pub mod keyframes;
 pub mod leaf_area;

@@ -7,15 +7,16 @@
 //!
 //! Per field: mask, elevation, temperature, TWI and the indices cell by cell; slope and aspect
 //! with 1 cell of halo; insolation and wind exposure with the horizon's halo
-//! ([`crate::terrain::fields::window_halo_cells`], 86 cells); depression filling and flow
-//! accumulation on rank 0 over the whole DEM, each rank sent its band
-//! ([`crate::terrain::fields::hydrology_windows`]: the fallback, a per-tile Priority-Flood does
-//! not give the serial ε-fill's bits). [`site_by_ranks`] gathers the bands on every rank (the
-//! whole site of one process); [`site_by_ranks_held`] (what `sylva simulate` under `mpirun`
-//! uses for a scenario without management, round 32) gathers them on rank 0 only and every
-//! other rank keeps its band, from which `job::tiled::tile_site_by` moves each tile its cells.
-//! What is not done yet: rank 0 reads the whole DEM once for the hydrology and holds the whole
-//! site (its run driver builds the world of one process).
+//! ([`crate::terrain::fields::window_halo_cells`], 86 cells); depression filling, flow
+//! directions and flow accumulation from the rank's rows and two rows of halo, read by window,
+//! with three exchanges of the bands' perimeters (round 34,
+//! [`crate::job::hydrology_ranks::hydrology_of_rank`]: Barnes 2016's fill, flats across band
+//! edges resolved on rank 0, Barnes 2017's accumulation), equal bit for bit to the whole DEM's.
+//! [`site_by_ranks`] gathers the bands on every rank (the whole site of one process);
+//! [`site_by_ranks_held`] (what `sylva simulate` under `mpirun` uses for a scenario without
+//! management, round 32) gathers them on rank 0 only and every other rank keeps its band, from
+//! which `job::tiled::tile_site_by` moves each tile its cells. No rank reads the whole DEM
+//! (until round 33 rank 0 did, for the hydrology).
 
 use crate::conditions::SiteConditions;
 use crate::error::{Error, Result};
@@ -66,8 +67,8 @@ pub fn site_by_ranks_held(sc: &Scenario, t: &mut dyn Transport, whole: bool) -> 
 /// [`site_by_ranks_held`], with `band0` (and `whole` false) rank 0 keeping its band too: no
 /// rank holds the whole site's conditions (issue 37 Build 1, round 33: a fresh run without
 /// management, whose rank 0 builds its tile's world only, `job::tiled`'s lean start). For a
-/// GeoTIFF terrain rank 0 still reads the whole DEM once for the hydrology (the fallback,
-/// module documentation) and drops it; every rank then sends every other only its cell size.
+/// GeoTIFF terrain every rank reads only its band's rows of the DEM (with the halos of the
+/// module documentation); every rank then sends every other only its cell size.
 ///
 /// Errors: as [`site_by_ranks`].
 pub fn site_by_ranks_banded(sc: &Scenario, t: &mut dyn Transport, whole: bool, band0: bool) -> Result<SiteConditions> {
@@ -111,71 +112,44 @@ pub fn site_by_ranks_banded(sc: &Scenario, t: &mut dyn Transport, whole: bool, b
         }
     }
     let bands: Vec<Window> = (0..n).map(|k| band(k, n, w, h)).collect();
-    // rank 0: the hydrology of the whole site, each rank's band of it (the fallback)
-    let mut out = vec![Vec::new(); n];
-    if me == 0 {
-        let hydro = (|| {
-            let t = sc.full_terrain()?.ok_or_else(|| Error::Invalid { context: "scenario".into(), field: "terrain".into(), value: "uniform".into(), expected: "a terrain with elevations".into() })?;
-            let t = match sw {
-                Some([c0, r0, ww, hh]) => crate::terrain::io::window(&t, c0, r0, ww, hh)?,
-                None => t,
-            };
-            let m = crate::terrain::fields::mask(&t, sc.climate.sea_level_m);
-            if !m.data.iter().any(|v| *v) {
-                // as fields::compute refuses it
-                return crate::conditions::derive(&t, &sc.climate).map(|_| Vec::new());
-            }
-            let non_empty: Vec<Window> = bands.iter().copied().filter(|b| b.height > 0).collect();
-            let mut hy = crate::terrain::fields::hydrology_windows(&t, &m, &non_empty)?.into_iter();
-            Ok(bands.iter().map(|b| if b.height > 0 { hy.next() } else { None }).collect::<Vec<_>>())
-        })();
-        match hydro {
-            Ok(hy) => {
-                for (o, x) in out.iter_mut().zip(hy) {
-                    let mut e = Enc(vec![0u8]);
-                    if let Some((filled, acc)) = x {
-                        e.f32s(&filled.data);
-                        e.f32s(&acc.data);
-                    }
-                    *o = e.0;
-                }
-            }
-            Err(e) => {
-                let mut m = vec![1u8];
-                m.extend_from_slice(e.to_string().as_bytes());
-                out = vec![m; n];
-            }
-        }
-    }
-    let got = t.exchange(out)?;
-    let msg = got.first().map(|m| m.as_slice()).unwrap_or(&[]);
+    // every rank: the hydrology of its band from its rows of the DEM and two rows of halo, read
+    // by window, and the ranks' perimeters (terrain::hydrology, round 34): no rank reads the
+    // whole DEM
     let me_band = bands[me];
-    let fail = |s: Short| Error::Exchange { peer: 0, reason: format!("hydrology message cut short at byte {}", s.at()) };
-    let part = match msg.first() {
-        Some(0) => (|| {
-            if me_band.height == 0 {
-                return Ok(None);
-            }
-            let mut d = Dec::at(msg, 1, &fail);
-            let (filled, acc) = (d.f32s()?, d.f32s()?);
-            let g = |v: Vec<f32>| Grid::from_vec(me_band.width, me_band.height, v).ok_or_else(|| Error::Exchange { peer: 0, reason: format!("hydrology of {me_band}: wrong number of cells") });
-            let (filled, acc) = (g(filled)?, g(acc)?);
-            // the band and its halo, read by window from the file
-            let halo = crate::terrain::fields::window_halo_cells(&geo, h);
-            let patch = me_band.with_halo(halo, w, h);
-            let file_win = Window { col0: base.col0 + patch.col0, row0: base.row0 + patch.row0, width: patch.width, height: patch.height };
-            let mut dem = crate::terrain::io::load_window(&path, file_win)?;
-            dem.window = patch;
-            (dem.full_width, dem.full_height) = (w, h);
-            dem.geo = geo.clone();
-            let c = crate::conditions::derive_window(&dem, &me_band, &sc.climate, filled, acc)?;
-            let line = format!("rank {me}/{n}: site rows {}..{} of {h} derived from a window of {} ({} of {} cells read, halo {halo})\n", me_band.row0, me_band.row1(), path.display(), patch.width * patch.height, w * h);
-            let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
-            Ok(Some(c))
-        })(),
-        Some(1) => Err(Error::Exchange { peer: 0, reason: format!("rank 0 failed: {}", String::from_utf8_lossy(&msg[1..])) }),
-        _ => Err(Error::Exchange { peer: 0, reason: format!("hydrology message of {} bytes", msg.len()) }),
-    };
+    let (r0, r1) = crate::terrain::hydrology::read_rows(&me_band, h);
+    let sea = sc.climate.sea_level_m;
+    let read = crate::terrain::io::load_window(&path, Window { col0: base.col0, row0: base.row0 + r0, width: w, height: r1 - r0 }).map(|d| {
+        let m: Vec<bool> = d.elevation.data.iter().map(|z| z.is_finite() && *z > sea).collect();
+        (d.elevation.data, m)
+    });
+    let (z, m) = agreed(t, read)?;
+    let own = (me_band.row0 - r0) * w..(me_band.row1() - r0) * w;
+    let valid = t.all_sum(vec![m[own].iter().filter(|v| **v).count() as u64])?;
+    if valid.first() == Some(&0) {
+        // as fields::compute refuses it
+        return Err(Error::Invalid { context: path.display().to_string(), field: "sea_level_m".into(), value: sea.to_string(), expected: "a sea level below some valid elevation (every cell is nodata or water)".into() });
+    }
+    let context = path.display().to_string();
+    let hydro = crate::job::hydrology_ranks::hydrology_of_rank(t, &bands, w, h, &z, &m, &geo, &context)?;
+    drop((z, m));
+    let part: Result<Option<SiteConditions>> = (|| {
+        if me_band.height == 0 {
+            return Ok(None);
+        }
+        let (filled, acc) = hydro;
+        // the band and its halo, read by window from the file
+        let halo = crate::terrain::fields::window_halo_cells(&geo, h);
+        let patch = me_band.with_halo(halo, w, h);
+        let file_win = Window { col0: base.col0 + patch.col0, row0: base.row0 + patch.row0, width: patch.width, height: patch.height };
+        let mut dem = crate::terrain::io::load_window(&path, file_win)?;
+        dem.window = patch;
+        (dem.full_width, dem.full_height) = (w, h);
+        dem.geo = geo.clone();
+        let c = crate::conditions::derive_window(&dem, &me_band, &sc.climate, filled, acc)?;
+        let line = format!("rank {me}/{n}: site rows {}..{} of {h} derived from a window of {} ({} of {} cells read, halo {halo}; hydrology from rows {r0}..{r1})\n", me_band.row0, me_band.row1(), path.display(), patch.width * patch.height, w * h);
+        let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
+        Ok(Some(c))
+    })();
     // every rank sends every other its band's conditions (or its error)
     let mine = match &part {
         Ok(c) => {

@@ -147,24 +147,11 @@ pub fn slope_aspect_window(p: &Patch, out: &Window) -> Result<(Grid<f32>, Grid<f
     Ok((slope, aspect))
 }
 
-/// The next representable f32 above `x` (C `nextafterf(x, +inf)`).
-#[inline]
-fn next_up(x: f32) -> f32 {
-    if x.is_nan() || x == f32::INFINITY {
-        return x;
-    }
-    if x == 0.0 {
-        return f32::from_bits(1);
-    }
-    let b = x.to_bits();
-    if x > 0.0 { f32::from_bits(b + 1) } else { f32::from_bits(b - 1) }
-}
-
 /// Column and row offsets (dc, dr) of the D8 neighbours in the order of [`flow_directions`]'
 /// codes 0–7: N, NE, E, SE, S, SW, W, NW (rows grow southwards).
 pub const D8: [(i64, i64); 8] = [(0, -1), (1, -1), (1, 0), (1, 1), (0, 1), (-1, 1), (-1, 0), (-1, -1)];
 
-fn is_seed(m: &Grid<bool>, c: usize, r: usize) -> bool {
+pub(crate) fn is_seed(m: &Grid<bool>, c: usize, r: usize) -> bool {
     if c == 0 || r == 0 || c + 1 == m.width || r + 1 == m.height {
         return true;
     }
@@ -176,14 +163,14 @@ fn is_seed(m: &Grid<bool>, c: usize, r: usize) -> bool {
 /// keys. Valid because Priority-Flood only ever pushes keys ≥ the last key popped; pushes are
 /// O(1) and each item moves down at most 32 buckets, with sequential memory access instead of
 /// a binary heap's scattered sifts. Equal keys pop last-in first-out (deterministic).
-struct RadixHeap {
+pub(crate) struct RadixHeap {
     last: u32,
     len: usize,
     buckets: Vec<Vec<(u32, u32)>>,
 }
 
 impl RadixHeap {
-    fn new() -> RadixHeap {
+    pub(crate) fn new() -> RadixHeap {
         RadixHeap { last: 0, len: 0, buckets: (0..33).map(|_| Vec::new()).collect() }
     }
     #[inline]
@@ -191,13 +178,13 @@ impl RadixHeap {
         (32 - (key ^ self.last).leading_zeros()) as usize
     }
     #[inline]
-    fn push(&mut self, key: u32, item: u32) {
+    pub(crate) fn push(&mut self, key: u32, item: u32) {
         debug_assert!(key >= self.last);
         let b = self.bucket(key);
         self.buckets[b].push((key, item));
         self.len += 1;
     }
-    fn pop(&mut self) -> Option<(u32, u32)> {
+    pub(crate) fn pop(&mut self) -> Option<(u32, u32)> {
         if self.len == 0 {
             return None;
         }
@@ -221,16 +208,21 @@ impl RadixHeap {
     }
 }
 
-/// Depression filling by Priority-Flood + ε (Barnes, Lehman & Mulla 2014, Computers &
-/// Geosciences 62:117–127, Algorithm 3): cells on the grid border or next to a masked cell are
-/// outlets; every other cell is raised to at least the next representable f32 above the cell
-/// it is reached from, so that every valid cell has a strictly descending path to an outlet.
-/// The priority queue is a radix heap ([`RadixHeap`]); ties pop in a fixed order (deterministic).
-/// Cells strictly uphill of a cell whose value is final are final themselves and are traced
-/// with a plain stack instead of the queue (Zhou, Sun & Fu 2016, "An efficient variant of the
-/// Priority-Flood algorithm for filling depressions in raster digital elevation models",
-/// Computers & Geosciences 90:87–96): most cells of real terrain lie on such slopes, so the
-/// queue holds only the cells next to depressions and the walk stays spatially coherent. Masked cells stay NaN.
+/// Depression filling to the exact spill levels: plain Priority-Flood (Barnes, Lehman & Mulla
+/// 2014, "Priority-flood: an optimal depression-filling and watershed-labeling algorithm for
+/// digital elevation models", Computers & Geosciences 62:117–127, Algorithm 2, without the ε of
+/// their Algorithm 3). Cells on the grid border or next to a masked cell are outlets (their own
+/// elevation); every other valid cell is raised to its spill level, the lowest over all D8 paths
+/// from it to an outlet of the highest elevation on the path (m). Every output value is one of
+/// the input elevations (a max/min of them, no arithmetic), so the result depends only on the
+/// DEM, not on the order cells are flooded: the same bits on one process, by bands or on any
+/// number of ranks ([`crate::job::hydrology_ranks::hydrology_of_rank`]). Filled depressions become exact flats; their flow
+/// directions are resolved by [`flow_directions`] (Barnes, Lehman & Mulla 2014, flats). The
+/// priority queue is a radix heap ([`RadixHeap`]). Cells strictly uphill of a cell whose value
+/// is final are final themselves and are traced with a plain stack instead of the queue (Zhou,
+/// Sun & Fu 2016, "An efficient variant of the Priority-Flood algorithm for filling depressions
+/// in raster digital elevation models", Computers & Geosciences 90:87–96). Shape: `m`'s
+/// `width × height`, row 0 north; masked cells stay NaN.
 pub fn fill_depressions(t: &Terrain, m: &Grid<bool>) -> Grid<f32> {
     let (w, h) = (m.width, m.height);
     let mut z: Vec<f32> = t.elevation.data.iter().zip(&m.data).map(|(v, ok)| if *ok { *v } else { f32::NAN }).collect();
@@ -244,17 +236,12 @@ pub fn fill_depressions(t: &Terrain, m: &Grid<bool>) -> Grid<f32> {
     let is_closed = |closed: &[u64], i: usize| closed[i / 64] >> (i % 64) & 1 != 0;
     let close = |closed: &mut [u64], i: usize| closed[i / 64] |= 1 << (i % 64);
     let mut open = RadixHeap::new();
-    let key = |v: f32| -> u32 {
-        // Monotone map of f32 to u32 (total order for finite values).
-        let b = v.to_bits();
-        if b & 0x8000_0000 != 0 { !b } else { b | 0x8000_0000 }
-    };
     for r in 0..h {
         for c in 0..w {
             let i = r * w + c;
             if m.data[i] && is_seed(m, c, r) {
                 close(&mut closed, i);
-                open.push(key(z[i]), i as u32);
+                open.push(f32_key(z[i]), i as u32);
             }
         }
     }
@@ -262,7 +249,7 @@ pub fn fill_depressions(t: &Terrain, m: &Grid<bool>) -> Grid<f32> {
     let mut trace: Vec<u32> = Vec::new();
     loop {
         // `ordered`: the cell's value is the current flood level (popped from the priority
-        // queue, or a pit cell filled to just above it), so lower neighbours may be filled to it.
+        // queue, or a pit cell filled to it), so lower neighbours may be filled to it.
         let (ci, ordered) = if let Some(p) = pit.pop_front() {
             (p as usize, true)
         } else if let Some(t) = trace.pop() {
@@ -274,7 +261,6 @@ pub fn fill_depressions(t: &Terrain, m: &Grid<bool>) -> Grid<f32> {
         };
         let (c, r) = ((ci % w) as i64, (ci / w) as i64);
         let zc = z[ci];
-        let up = next_up(zc);
         let mut deferred = false;
         for (dc, dr) in D8 {
             let (nc, nr) = (c + dc, r + dr);
@@ -285,9 +271,11 @@ pub fn fill_depressions(t: &Terrain, m: &Grid<bool>) -> Grid<f32> {
             if is_closed(&closed, ni) {
                 continue;
             }
-            if ordered && z[ni] <= up {
+            if ordered && z[ni] <= zc {
+                // In the depression or flat spilling over this cell: its spill level is the
+                // flood's level.
                 close(&mut closed, ni);
-                z[ni] = up;
+                z[ni] = zc;
                 pit.push_back(ni as u32);
             } else if z[ni] > zc {
                 // Strictly uphill of a cell whose value is final: it drains through it, so its
@@ -295,52 +283,244 @@ pub fn fill_depressions(t: &Terrain, m: &Grid<bool>) -> Grid<f32> {
                 close(&mut closed, ni);
                 trace.push(ni as u32);
             } else {
-                // A lower neighbour of a traced slope cell: its spill level is not known until
-                // the flood reaches this cell's level in order.
+                // A lower (or equal) neighbour of a traced slope cell: its spill level is not
+                // known until the flood reaches this cell's level in order.
                 deferred = true;
             }
         }
         if deferred {
-            open.push(key(zc), ci as u32);
+            open.push(f32_key(zc), ci as u32);
         }
     }
     Grid { width: w, height: h, data: z }
 }
 
+/// Monotone map of a finite f32 to u32 (the total order of finite values).
+#[inline]
+pub(crate) fn f32_key(v: f32) -> u32 {
+    let b = v.to_bits();
+    if b & 0x8000_0000 != 0 { !b } else { b | 0x8000_0000 }
+}
+
 /// Outlet marker in a D8 direction grid.
 pub const OUTLET: u8 = 255;
 
-/// D8 flow directions (O'Callaghan & Mark 1984) on a filled DEM: index 0–7 into N, NE, E, SE,
-/// S, SW, W, NW of the steepest strictly downhill neighbour (drop / distance, metres);
-/// [`OUTLET`] where no valid neighbour is lower (outlets at the border or next to masked
-/// cells) and for masked cells. Ties go to the first direction in that order.
+/// Marker of a cell with no downhill neighbour while [`flow_directions`] resolves flats.
+pub(crate) const NOFLOW: u8 = 254;
+
+/// D8 flow directions (O'Callaghan & Mark 1984) on a filled DEM ([`fill_depressions`]): index
+/// 0–7 into N, NE, E, SE, S, SW, W, NW ([`D8`]) of the steepest strictly downhill neighbour
+/// (drop / distance, metres; ties to the first in that order); [`OUTLET`] for masked cells and
+/// for outlets (cells on the border or next to a masked cell) with no lower valid neighbour.
+///
+/// Flats (an 8-connected set of valid non-outlet cells of equal filled elevation with no lower
+/// neighbour) drain by Barnes, Lehman & Mulla (2014, "An efficient assignment of drainage
+/// direction over flat surfaces in raster digital elevation models", Computers & Geosciences
+/// 62:128–135): each flat cell gets `2·t + (H − a)`, with `t` its breadth-first distance in
+/// cells (within the flat, 8-connected) from the flat's low edges (cells of equal elevation that
+/// drain: they have a lower neighbour or are outlets), `a` its distance from the flat's high
+/// edges (flat cells next to higher ground; `a = 1` there) and `H` the largest `a` of the flat
+/// (the term is 0 in a flat with no higher edge); low edges count as 0. A flat cell flows to
+/// the neighbour of its flat, or low edge, with the steepest fall of that value per metre
+/// (ties to the first in D8's order): towards the outlets and away from higher ground. Every
+/// step is an integer distance, so the directions depend only on the filled DEM, not on the
+/// order of any pass. Shape: `m`'s `width × height`.
 pub fn flow_directions(filled: &Grid<f32>, geo: &GeoRef, m: &Grid<bool>) -> Grid<u8> {
     let (w, h) = (m.width, m.height);
     let mut dir = Grid::filled(w, h, OUTLET);
-    let dy = geo.cell_y_m();
+    let dists = |r: usize| d8_dists(geo, r);
     dir.data.par_chunks_mut(w).enumerate().for_each(|(r, row)| {
-        let dx = geo.cell_x_m_at_row(r);
-        let dist: [f64; 8] = D8.map(|(dc, dr)| ((dc as f64 * dx).powi(2) + (dr as f64 * dy).powi(2)).sqrt());
+        let dist = dists(r);
         for c in 0..w {
             if !*m.get(c, r) {
                 continue;
             }
-            let z0 = *filled.get(c, r);
-            let mut best = (0.0f64, OUTLET);
-            for (k, (dc, dr)) in D8.iter().enumerate() {
-                let (nc, nr) = (c as i64 + dc, r as i64 + dr);
+            let code = steepest(*filled.get(c, r), &dist, |k| {
+                let (nc, nr) = (c as i64 + D8[k].0, r as i64 + D8[k].1);
                 if nc < 0 || nr < 0 || nc >= w as i64 || nr >= h as i64 || !*m.get(nc as usize, nr as usize) {
-                    continue;
+                    return None;
                 }
-                let drop = (z0 - *filled.get(nc as usize, nr as usize)) as f64 / dist[k];
-                if drop > best.0 {
-                    best = (drop, k as u8);
-                }
-            }
-            row[c] = best.1;
+                Some(*filled.get(nc as usize, nr as usize))
+            });
+            row[c] = if code == OUTLET && !is_seed(m, c, r) { NOFLOW } else { code };
         }
     });
+    resolve_flats(&mut dir, filled, m, &dists);
     dir
+}
+
+/// The D8 code of the steepest strictly downhill neighbour of a cell at filled level `z0`
+/// (drop / distance; ties to the first in [`D8`]'s order), [`OUTLET`] when none is lower.
+/// `dist`: the step lengths (m) of the cell's row; `nb(k)`: the filled level of neighbour `k`,
+/// `None` off the raster or masked.
+#[inline]
+pub(crate) fn steepest(z0: f32, dist: &[f64; 8], nb: impl Fn(usize) -> Option<f32>) -> u8 {
+    let mut best = (0.0f64, OUTLET);
+    for (k, d) in dist.iter().enumerate() {
+        if let Some(zn) = nb(k) {
+            let drop = (z0 - zn) as f64 / d;
+            if drop > best.0 {
+                best = (drop, k as u8);
+            }
+        }
+    }
+    best.1
+}
+
+/// The lengths (m) of the D8 steps ([`D8`]'s order) from a cell of raster row `r` of `geo`.
+pub(crate) fn d8_dists(geo: &GeoRef, r: usize) -> [f64; 8] {
+    let (dx, dy) = (geo.cell_x_m_at_row(r), geo.cell_y_m());
+    D8.map(|(dc, dr)| ((dc as f64 * dx).powi(2) + (dr as f64 * dy).powi(2)).sqrt())
+}
+
+/// The valid in-grid D8 neighbours `(k, index)` of cell `i` of a `w × h` grid.
+#[inline]
+pub(crate) fn neighbours(i: usize, w: usize, h: usize) -> impl Iterator<Item = (usize, usize)> {
+    let (c, r) = ((i % w) as i64, (i / w) as i64);
+    D8.iter().enumerate().filter_map(move |(k, (dc, dr))| {
+        let (nc, nr) = (c + dc, r + dr);
+        (nc >= 0 && nr >= 0 && nc < w as i64 && nr < h as i64).then(|| (k, nr as usize * w + nc as usize))
+    })
+}
+
+/// Gives every [`NOFLOW`] cell of `dir` a direction by Barnes, Lehman & Mulla's (2014) flat
+/// gradients (see [`flow_directions`]). `dists(r)`: the D8 step lengths (m) in row `r`.
+fn resolve_flats(dir: &mut Grid<u8>, filled: &Grid<f32>, m: &Grid<bool>, dists: &dyn Fn(usize) -> [f64; 8]) {
+    let (w, h) = (m.width, m.height);
+    let cells: Vec<FlatCell> = (0..w * h).filter(|&i| dir.data[i] == NOFLOW).map(|i| flat_cell(i, w, h, &|n| (m.data[n], filled.data[n], dir.data[n] != NOFLOW), filled.data[i])).collect();
+    if cells.is_empty() {
+        return;
+    }
+    let mut slot = vec![u32::MAX; w * h];
+    for (k, c) in cells.iter().enumerate() {
+        slot[c.i] = k as u32;
+    }
+    let dirs = flat_dirs(&cells, w, h, &|i| (slot[i] != u32::MAX).then(|| slot[i] as usize), dists);
+    for (c, d) in cells.iter().zip(dirs) {
+        dir.data[c.i] = d;
+    }
+}
+
+/// A cell of a flat (a [`NOFLOW`] cell) as [`flat_dirs`] sees it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct FlatCell {
+    /// Row-major index in the whole raster.
+    pub i: usize,
+    /// Next to higher ground (a valid neighbour with a higher filled elevation): a high edge.
+    pub high: bool,
+    /// Bit k set: neighbour k ([`D8`]) is a low edge (valid, equal filled elevation, drains).
+    pub low: u8,
+}
+
+/// The [`FlatCell`] of flat cell `i` (filled elevation `z`) of a `w × h` raster; `nb(n)`: for
+/// a neighbour `n`, (valid, filled elevation, drains: not [`NOFLOW`]).
+pub(crate) fn flat_cell(i: usize, w: usize, h: usize, nb: &dyn Fn(usize) -> (bool, f32, bool), z: f32) -> FlatCell {
+    let (mut high, mut low) = (false, 0u8);
+    for (k, n) in neighbours(i, w, h) {
+        let (ok, zn, drains) = nb(n);
+        if ok && zn > z {
+            high = true;
+        }
+        if ok && zn == z && drains {
+            low |= 1 << k;
+        }
+    }
+    FlatCell { i, high, low }
+}
+
+/// D8 codes of flat cells by Barnes, Lehman & Mulla's (2014) gradients towards lower and away
+/// from higher edges ([`flow_directions`]). `cells`: every cell of each flat they belong to
+/// (two flat cells side by side are in one flat: a cell next to a lower one would drain), in
+/// any order; `slot(i)`: the position in `cells` of raster cell `i`, `None` outside them;
+/// `dists(r)`: the D8 step lengths (m) of row `r` of the `w × h` raster. Breadth-first
+/// distances are exact integers, so the codes depend only on the set of cells and their flags,
+/// not on their order or on how the raster is cut. A flat with no low edge (only on a DEM that
+/// was not filled) gets [`OUTLET`].
+pub(crate) fn flat_dirs(cells: &[FlatCell], w: usize, h: usize, slot: &dyn Fn(usize) -> Option<usize>, dists: &dyn Fn(usize) -> [f64; 8]) -> Vec<u8> {
+    const NONE: u32 = u32::MAX;
+    let n = cells.len();
+    // the flat (8-connected component) of each cell
+    let mut label = vec![NONE; n];
+    let mut nlabels = 0u32;
+    let mut queue: VecDeque<usize> = VecDeque::new();
+    for s in 0..n {
+        if label[s] != NONE {
+            continue;
+        }
+        label[s] = nlabels;
+        queue.push_back(s);
+        while let Some(k) = queue.pop_front() {
+            for (_, j) in neighbours(cells[k].i, w, h) {
+                if let Some(q) = slot(j) {
+                    if label[q] == NONE {
+                        label[q] = nlabels;
+                        queue.push_back(q);
+                    }
+                }
+            }
+        }
+        nlabels += 1;
+    }
+    // breadth-first distance (1 at the seeds) within the flat from the seed cells
+    let bfs = |seed: &dyn Fn(&FlatCell) -> bool, height: &mut Vec<u32>| -> Vec<u32> {
+        let mut dist = vec![0u32; n];
+        let mut q: Vec<usize> = (0..n).filter(|&k| seed(&cells[k])).collect();
+        for &k in &q {
+            dist[k] = 1;
+        }
+        let mut d = 1u32;
+        while !q.is_empty() {
+            let mut next = Vec::new();
+            for &k in &q {
+                height[label[k] as usize] = d;
+                for (_, j) in neighbours(cells[k].i, w, h) {
+                    if let Some(p) = slot(j) {
+                        if dist[p] == 0 {
+                            dist[p] = d + 1;
+                            next.push(p);
+                        }
+                    }
+                }
+            }
+            q = next;
+            d += 1;
+        }
+        dist
+    };
+    // a: from the high edges, H per flat (its largest a; 0 with no high edge)
+    let mut height = vec![0u32; nlabels as usize];
+    let away = bfs(&|c| c.high, &mut height);
+    let mut unused = vec![0u32; nlabels as usize];
+    let toward = bfs(&|c| c.low != 0, &mut unused);
+    let value = |k: usize| -> u64 {
+        let hl = height[label[k] as usize] as u64;
+        2 * toward[k] as u64 + if hl > 0 { hl - away[k] as u64 } else { 0 }
+    };
+    (0..n)
+        .map(|k| {
+            let c = cells[k];
+            let v = value(k);
+            let dist = dists(c.i / w);
+            let mut best = (0.0f64, OUTLET);
+            for (d, j) in neighbours(c.i, w, h) {
+                // a low edge counts 0; a neighbour in the flat its value; any other is not a way out
+                let vn = if c.low >> d & 1 != 0 {
+                    0
+                } else if let Some(q) = slot(j) {
+                    value(q)
+                } else {
+                    continue;
+                };
+                if vn < v {
+                    let fall = (v - vn) as f64 / dist[d];
+                    if fall > best.0 {
+                        best = (fall, d as u8);
+                    }
+                }
+            }
+            best.1
+        })
+        .collect()
 }
 
 /// The cell (row-major index) that cell `i` of the D8 direction grid `dir` drains into; `None`
@@ -851,16 +1031,12 @@ pub fn window_halo_cells(geo: &GeoRef, full_h: usize) -> usize {
 
 /// The depression-filled elevation (m) and D8 flow accumulation (cells) of windows of a raster:
 /// **derived on the whole raster** ([`fill_depressions`], [`flow_directions`],
-/// [`flow_accumulation`]) and cut to each window. Priority-Flood with its ε steps and the
-/// accumulation along the drainage depend on the whole raster; Barnes (2016, "Parallel
-/// priority-flood depression filling for trillion cell DEMs", Environmental Modelling &
-/// Software 86:27–38) and Barnes (2017, "Parallel non-divergent flow accumulation for trillion
-/// cell DEMs", Computers & Geosciences 109:28–41) do both per tile plus an exchange of the
-/// tiles' perimeters, but the ε-filled elevations of this serial fill (each raised to the next
-/// f32 above the cell it is reached from, in the queue's order) are not reproduced bit for bit
-/// by a per-tile fill, so a regional run uses this fallback: one rank holds the whole DEM once,
-/// derives the hydrology and sends every rank its window. Returns one `(filled, accumulation)`
-/// pair per window, each `width × height`.
+/// [`flow_accumulation`]) and cut to each window (what rank 0 of a regional run still does for
+/// the other ranks: it holds the whole DEM once). Since round 34 the fill is exact (no ε) and the
+/// flats are routed by breadth-first distances, so the same values come from the bands alone
+/// ([`crate::job::hydrology_ranks::hydrology_by_bands`]: each band's rows, two rows of halo and
+/// three perimeter exchanges), bit for bit. Returns one `(filled, accumulation)` pair per window,
+/// each `width × height`.
 ///
 /// Errors: [`Error::Invalid`] naming a window that leaves the raster.
 pub fn hydrology_windows(t: &Terrain, m: &Grid<bool>, windows: &[Window]) -> Result<Vec<(Grid<f32>, Grid<f32>)>> {
@@ -877,7 +1053,8 @@ pub fn hydrology_windows(t: &Terrain, m: &Grid<bool>, windows: &[Window]) -> Res
 /// Every field of window `out` of a raster, from `dem` (a window of the raster holding `out`
 /// and [`window_halo_cells`] around it, clipped to the raster: read with
 /// [`crate::terrain::io::read_geotiff_window`]) and the window's hydrology from
-/// [`hydrology_windows`] (`filled`, `flow_acc`: `out`'s cells). Per field: the mask, temperature
+/// [`hydrology_windows`] or [`crate::job::hydrology_ranks::hydrology_of_rank`] (`filled`,
+/// `flow_acc`: `out`'s cells). Per field: the mask, temperature
 /// and TWI cell by cell; slope and aspect with a 1-cell halo ([`slope_aspect_window`]);
 /// insolation and wind exposure with the horizon's halo ([`insolation_and_wind_window`]); the
 /// flat-ground insolation at the raster's middle row. Equal bit for bit to the same window of
@@ -981,9 +1158,100 @@ mod tests {
         let acc = flow_accumulation(&d, &m);
         let total: f64 = (0..n * n).filter(|&i| d.data[i] == OUTLET).map(|i| acc.data[i] as f64).sum();
         assert_eq!(total, (n * n) as f64);
-        // the centre was raised to (just above) the lowest border cell
+        // the centre was raised exactly to the lowest border cell (the spill level)
         let rim = (0..n).map(|c| *t.elevation.get(c, 0)).fold(f32::INFINITY, f32::min);
-        assert!(*f.get(15, 15) > rim && *f.get(15, 15) < rim + 0.1);
+        assert_eq!(f.get(15, 15).to_bits(), rim.to_bits());
+        // the filled bowl is one flat at the rim's lowest level (the four mid-side border cells):
+        // every cell drains to an outlet on the border
+        for i in 0..n * n {
+            if d.data[i] == OUTLET {
+                let (c, r) = (i % n, i / n);
+                assert!(c == 0 || r == 0 || c == n - 1 || r == n - 1, "outlet inside at {c},{r}");
+            }
+        }
+    }
+
+    #[test]
+    fn tilted_plane_accumulates_its_rows() {
+        // z falls to the south: every cell drains south, so a cell gathers the cells above it
+        let (w, h) = (12usize, 9usize);
+        let t = terrain(w, h, 10.0, |_, y| (100.0 + 0.5 * y) as f32);
+        let m = mask(&t, 0.0);
+        let f = fill_depressions(&t, &m);
+        assert_eq!(f.data, t.elevation.data);
+        let d = flow_directions(&f, &t.geo, &m);
+        let acc = flow_accumulation(&d, &m);
+        for r in 0..h {
+            for c in 0..w {
+                assert_eq!(*acc.get(c, r), (r + 1) as f32, "cell {c},{r}");
+                assert_eq!(*d.get(c, r), if r + 1 == h { OUTLET } else { 4 }, "cell {c},{r}");
+            }
+        }
+    }
+
+    #[test]
+    fn cone_accumulation_is_mirror_symmetric() {
+        let n = 41;
+        let t = terrain(n, n, 10.0, |x, y| (1000.0 - ((x - 200.0).powi(2) + (y - 200.0).powi(2)).sqrt()) as f32);
+        let m = mask(&t, 0.0);
+        let d = flow_directions(&fill_depressions(&t, &m), &t.geo, &m);
+        let acc = flow_accumulation(&d, &m);
+        // the apex gathers nothing and drains north-east: its four diagonal neighbours fall
+        // 1.000001 m per metre in f32 against the cardinal ones' 1.0, and north-east is the
+        // first of them; the four axes from it run straight outwards to the border, so an axis
+        // cell k steps from the apex gathers at least the k − 1 cells before it and itself
+        assert_eq!(*acc.get(20, 20), 1.0);
+        assert_eq!(*d.get(20, 20), 1);
+        let axes = |k: usize| [((20 + k, 20), 2u8), ((20 - k, 20), 6), ((20, 20 + k), 4), ((20, 20 - k), 0)];
+        for k in 1..=20usize {
+            for ((c, r), code) in axes(k) {
+                // (the border cell, an outlet, falls along the border)
+                assert!(k == 20 || *d.get(c, r) == code, "axis cell {c},{r} runs outwards: {}", d.get(c, r));
+                assert!(*acc.get(c, r) >= k as f32, "axis cell {c},{r}: {}", acc.get(c, r));
+            }
+        }
+        // mirrored across the apex's diagonal (south-west to north-east), the accumulation is
+        // the same
+        for r in 0..n {
+            for c in 0..n {
+                assert_eq!(acc.get(c, r), acc.get(n - 1 - r, n - 1 - c), "mirror at {c},{r}");
+            }
+        }
+    }
+
+    #[test]
+    fn walled_flat_drains_to_its_notch() {
+        // A flat floor at 100 m inside walls at 110 m with one notch at 100 m in the west wall
+        // (0, 4): the fill leaves it as it is, and every cell drains through the notch, the
+        // floor's cells towards it and away from the walls (Barnes, Lehman & Mulla 2014).
+        let (w, h) = (11usize, 9usize);
+        let t = terrain(w, h, 10.0, |x, y| {
+            let (c, r) = ((x / 10.0).round() as usize, h - 1 - (y / 10.0).round() as usize);
+            if (c, r) == (0, 4) || (c > 0 && r > 0 && c + 1 < w && r + 1 < h) { 100.0 } else { 110.0 }
+        });
+        let m = mask(&t, 0.0);
+        let f = fill_depressions(&t, &m);
+        assert_eq!(f.data, t.elevation.data, "the floor's spill level is the notch's 100 m");
+        let d = flow_directions(&f, &t.geo, &m);
+        let acc = flow_accumulation(&d, &m);
+        assert_eq!(*d.get(0, 4), OUTLET);
+        assert_eq!(*acc.get(0, 4), (w * h) as f32, "every cell drains through the notch");
+        assert_eq!(*d.get(1, 4), 6, "next to the notch: west into it");
+        // (5, 1), under the north wall, 5 cells from the notch: south-west, one cell nearer the
+        // notch and one farther from the wall (value 2·5 + H − 1 against 2·4 + H − 2)
+        assert_eq!(*d.get(5, 1), 5);
+        for r in 0..h {
+            for c in 0..w {
+                let (mut cc, mut rr, mut steps) = (c as i64, r as i64, 0);
+                while *d.get(cc as usize, rr as usize) != OUTLET {
+                    let (dc, dr) = D8[*d.get(cc as usize, rr as usize) as usize];
+                    assert!(f.get((cc + dc) as usize, (rr + dr) as usize) <= f.get(cc as usize, rr as usize));
+                    (cc, rr, steps) = (cc + dc, rr + dr, steps + 1);
+                    assert!(steps < 40, "cycle from {c},{r}");
+                }
+                assert_eq!((cc, rr), (0, 4), "{c},{r} ends at {cc},{rr}");
+            }
+        }
     }
 
     #[test]
@@ -1027,8 +1295,9 @@ mod tests {
 
     #[test]
     fn filled_noise_terrain_drains_everywhere() {
-        // Every valid cell of a filled random terrain reaches an outlet by a strictly
-        // descending D8 path, and filling never lowers a cell.
+        // Every valid cell of a filled random terrain reaches an outlet on the border by a D8
+        // path that never rises (falling on slopes, level across the filled flats), and filling
+        // never lowers a cell.
         let t = terrain(40, 30, 10.0, |x, y| {
             let h = ((x * 7.0 + y * 131.0) as u64).wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (100.0 + (h >> 40) as f64 / (1u64 << 24) as f64 * 20.0) as f32
@@ -1042,7 +1311,7 @@ mod tests {
                 let (mut cc, mut rr, mut n) = (c as i64, r as i64, 0);
                 while *d.get(cc as usize, rr as usize) != OUTLET {
                     let (dc, dr) = D8[*d.get(cc as usize, rr as usize) as usize];
-                    assert!(f.get((cc + dc) as usize, (rr + dr) as usize) < f.get(cc as usize, rr as usize));
+                    assert!(f.get((cc + dc) as usize, (rr + dr) as usize) <= f.get(cc as usize, rr as usize));
                     cc += dc;
                     rr += dr;
                     n += 1;
@@ -1051,8 +1320,8 @@ mod tests {
                 assert!(cc == 0 || rr == 0 || cc == 39 || rr == 29, "({c},{r}) ends inside at ({cc},{rr})");
             }
         }
-        // Minimal: equal (up to the ε steps) to the spill level, the lowest over all paths to
-        // the border of the highest cell on the path, computed by a plain Dijkstra-like flood.
+        // Exact: equal bit for bit to the spill level, the lowest over all paths to the border of
+        // the highest cell on the path, computed by a plain Dijkstra-like flood.
         let (w, h) = (40usize, 30usize);
         let mut spill = vec![f32::INFINITY; w * h];
         let mut heap = std::collections::BinaryHeap::new();
@@ -1085,7 +1354,7 @@ mod tests {
         let raised = (0..w * h).filter(|&i| f.data[i] > t.elevation.data[i]).count();
         assert!(raised > 20, "the noise terrain has depressions: {raised} cells raised");
         for i in 0..w * h {
-            assert!((f.data[i] - spill[i]).abs() < 1e-3, "cell {i}: filled {} spill {}", f.data[i], spill[i]);
+            assert_eq!(f.data[i].to_bits(), spill[i].to_bits(), "cell {i}: filled {} spill {}", f.data[i], spill[i]);
         }
     }
 
@@ -1096,9 +1365,13 @@ mod tests {
         let m = mask(&t, 0.0);
         let f = fill_depressions(&t, &m);
         let lowest_nb = [(3, 3), (4, 3), (5, 3), (3, 4), (5, 4), (3, 5), (4, 5), (5, 5)].iter().map(|&(c, r)| *t.elevation.get(c, r)).fold(f32::INFINITY, f32::min);
-        assert!(*f.get(4, 4) > lowest_nb && *f.get(4, 4) < lowest_nb + 1e-3, "filled {}", f.get(4, 4));
+        // filled exactly to its spill level: the lowest neighbour, (3, 3) at 100.3 m
+        assert_eq!(f.get(4, 4).to_bits(), lowest_nb.to_bits(), "filled {}", f.get(4, 4));
+        assert_eq!(lowest_nb, 103.0);
+        // the pit, now level with its western neighbours (3, 3), (3, 4), (3, 5), drains into them:
+        // west (6) is the nearest, its value 2 against 0
         let d = flow_directions(&f, &t.geo, &m);
-        assert_ne!(d.get(4, 4), &OUTLET);
+        assert_eq!(*d.get(4, 4), 6);
         // untouched elsewhere
         assert_eq!(f.get(1, 1), t.elevation.get(1, 1));
     }

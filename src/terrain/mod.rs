@@ -25,5 +25,6 @@ impl Terrain {
 
 pub mod fields;
 pub mod generate;
+pub mod hydrology;
 pub mod io;
 pub mod tin;
