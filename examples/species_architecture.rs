@@ -14,7 +14,7 @@ use std::path::PathBuf;
 use sylva::output::gltf::Look;
 use sylva::species::{Season, Species, SpeciesLibrary};
 use sylva::structure::mesh::{lod_chain, LodOptions};
-use sylva::structure::forest_form::{grow_formed_tree, ArchitectureMeasures, Habit};
+use sylva::structure::forest_form::{grow_formed_tree, ArchitectureMeasures, CrownProportions, Habit};
 use sylva::structure::species_tree::{grow_species_tree, Model};
 use sylva::structure::{Leaves, Skeleton};
 

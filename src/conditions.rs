@@ -163,6 +163,63 @@ impl SiteConditions {
         a * (1.0 - ty) + b * ty
     }
 
+    /// Whether cell `(col, row)` (whole-grid indices, held) has no data: masked, and not water
+    /// below `sea_level` (m) — a no-data cell of the DEM holds 0 ([`from_fields`]), water its
+    /// own elevation at or below the sea level; with `f32::NEG_INFINITY` every masked cell.
+    pub fn is_no_data(&self, col: usize, row: usize, sea_level: f32) -> bool {
+        let Some(i) = self.held_index(col, row) else { return false };
+        let z = self.elevation_m.data[i];
+        !self.mask.data[i] && (z == 0.0 || !z.is_finite() || z > sea_level)
+    }
+
+    /// Elevation (m) at world point `(x, y)` for drawing the ground: NaN where the cell holding
+    /// the point has no data ([`SiteConditions::is_no_data`] with `sea_level`; a DEM's no-data
+    /// hole, drawn as a hole, round 34), else bilinear as [`SiteConditions::elevation_at`] over
+    /// those of the four surrounding cells that have data (weights renormalised), so that
+    /// valid cells beside a hole keep their height instead of being pulled towards the 0 the
+    /// site holds in a no-data cell (walls down into a pit: the "shafts" of round 33). Clamped to
+    /// the grid and the cells held as [`SiteConditions::elevation_at`]; NaN outside the grid.
+    pub fn elevation_at_valid(&self, x: f64, y: f64, sea_level: f32) -> f32 {
+        let (w, h) = (self.width(), self.height());
+        let Some((cc, rc)) = self.cell_at(x.min(self.cell_x_m * w as f64 - 1e-9), y.min(self.cell_y_m * h as f64 - 1e-9)) else { return f32::NAN };
+        let hw = &self.held;
+        let clamp = |c: usize, r: usize| (c.clamp(hw.col0, hw.col1() - 1), r.clamp(hw.row0, hw.row1() - 1));
+        let at = |c: usize, r: usize| {
+            let (c, r) = clamp(c, r);
+            if self.is_no_data(c, r, sea_level) {
+                return f32::NAN;
+            }
+            self.elevation_m.data[(r - hw.row0) * hw.width + (c - hw.col0)]
+        };
+        if !at(cc, rc).is_finite() {
+            return f32::NAN;
+        }
+        let fx = (x / self.cell_x_m - 0.5).clamp(0.0, (w - 1) as f64);
+        let fy = ((h as f64 - y / self.cell_y_m) - 0.5).clamp(0.0, (h - 1) as f64);
+        let (c0, r0) = (fx.floor() as usize, fy.floor() as usize);
+        let (c1, r1) = ((c0 + 1).min(w - 1), (r0 + 1).min(h - 1));
+        let (tx, ty) = ((fx - c0 as f64) as f32, (fy - r0 as f64) as f32);
+        let corners = [(c0, r0, (1.0 - tx) * (1.0 - ty)), (c1, r0, tx * (1.0 - ty)), (c0, r1, (1.0 - tx) * ty), (c1, r1, tx * ty)];
+        if corners.iter().all(|&(c, r, _)| at(c, r).is_finite()) {
+            // no no-data neighbour: exactly `elevation_at` (the ground of a DEM without holes is
+            // drawn as before, to the bit)
+            return self.elevation_at(x, y);
+        }
+        let (mut sum, mut wsum) = (0.0f32, 0.0f32);
+        for (c, r, wt) in corners {
+            let v = at(c, r);
+            if v.is_finite() && wt > 0.0 {
+                sum += v * wt;
+                wsum += wt;
+            }
+        }
+        if wsum > 0.0 {
+            sum / wsum
+        } else {
+            at(cc, rc)
+        }
+    }
+
     /// A flat, uniform site of `width × height` cells of `cell_m` metres with the given indices
     /// (for tests and stand-level scenarios).
     pub fn uniform(width: usize, height: usize, cell_m: f64, elevation_m: f32, indices: [f32; 6], latitude_deg: f64) -> Self {

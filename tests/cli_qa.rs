@@ -407,3 +407,36 @@ fn an_mpi_launch_of_a_build_without_mpi_is_refused() {
         assert!(ok && d.join("one/stand_table.csv").is_file(), "{env:?}: {err}");
     }
 }
+
+/// Round 34 (issue 32): a 1 × 1 DEM was described by `sylva terrain info` (then "TIN of one.asc:
+/// field `grid` = 1 x 1", exit 1) and drawn by `sylva terrain maps` (15 maps of one cell, exit
+/// 0). Both refuse it now with the same error, naming the file and the minimum size, and
+/// `maps` writes nothing; a 2 × 2 DEM passes both.
+#[test]
+fn terrain_info_and_maps_refuse_a_one_cell_dem_alike() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).current_dir(d).output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let head = "xllcorner 0\nyllcorner 0\ncellsize 10\nNODATA_value -9999\n";
+    std::fs::write(d.join("one.asc"), format!("ncols 1\nnrows 1\n{head}500\n")).unwrap();
+    std::fs::write(d.join("row.asc"), format!("ncols 3\nnrows 1\n{head}500 501 502\n")).unwrap();
+    std::fs::write(d.join("two.asc"), format!("ncols 2\nnrows 2\n{head}500 501\n502 503\n")).unwrap();
+    for (file, size) in [("one.asc", "1 x 1"), ("row.asc", "3 x 1")] {
+        let want = format!("DEM {file}: field `grid` = {size} cells: expected at least 2 x 2 cells");
+        let (ok, out, err) = run(&["terrain", "info", file]);
+        assert!(!ok && err.contains(&want), "info {file}: {err}");
+        assert!(out.is_empty(), "info describes nothing of a refused DEM: {out}");
+        let (ok, _, err2) = run(&["terrain", "maps", file, "--out", "maps1"]);
+        assert!(!ok && err2.contains(&want), "maps {file}: {err2}");
+        assert!(!d.join("maps1").exists(), "maps of a refused DEM leave no folder");
+        let line = |e: &str| e.lines().find(|l| l.contains("error:")).map(str::to_string);
+        assert_eq!(line(&err), line(&err2), "the same error from info and maps");
+    }
+    let (ok, out, err) = run(&["terrain", "info", "two.asc"]);
+    assert!(ok && out.contains("2 x 2 cells") && out.contains("TIN:"), "{out}{err}");
+    let (ok, _, err) = run(&["terrain", "maps", "two.asc", "--out", "maps2"]);
+    assert!(ok && d.join("maps2/elevation.png").is_file(), "{err}");
+}

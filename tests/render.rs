@@ -695,3 +695,58 @@ fn small_trees_stand_on_a_visible_stem_at_the_coarse_levels() {
         assert!(failures.is_empty(), "{failures:#?}");
     });
 }
+
+/// Round 34 (issue 32): a DEM's no-data hole in the top-down map still (`job::pictures::Stage`,
+/// as `sylva run`, `render` and `view` draw it) is drawn as a hole: no terrain there (one flat
+/// colour, the sky's seen through it), and no wall around it. It was drawn at the 0 m the site
+/// holds in a no-data cell: a dark shaft with bright walls at its rim. A 40 × 40 slope of 10 m
+/// cells with a 12 × 10-cell hole (x 150–270 m, y 180–280 m). Sea level −1 m: at a sea level at
+/// or above 0 m the site cannot tell a no-data cell (which it holds at 0 m) from water, so the
+/// stage draws its water plane and that shows through the hole (flat, no walls; a no-data flag
+/// in `SiteConditions` would tell them apart).
+#[test]
+fn no_data_hole_is_a_hole_in_the_map_still() {
+    let n = 40;
+    let mut e = sylva::grid::Grid::filled(n, n, 0.0f32);
+    let hole = |c: usize, r: usize| (15..27).contains(&c) && (12..22).contains(&r);
+    for r in 0..n {
+        for c in 0..n {
+            *e.get_mut(c, r) = if hole(c, r) { f32::NAN } else { 300.0 + 2.0 * c as f32 + 1.5 * r as f32 };
+        }
+    }
+    let t = sylva::terrain::Terrain { elevation: e, geo: sylva::grid::GeoRef::local(10.0, 47.0), nodata: Some(-9999.0), source: "holes".into() };
+    let site = sylva::conditions::derive(&t, &sylva::climate::Climate::default()).unwrap();
+    let mut stage = match sylva::job::pictures::Stage::new(site, sylva::species::SpeciesLibrary::embedded().unwrap(), -1.0) {
+        Ok(s) => s,
+        Err(e) if std::env::var_os("SYLVA_REQUIRE_ADAPTER").is_none() => return eprintln!("skipping: {e}"),
+        Err(e) => panic!("{e}"),
+    };
+    let (w, h) = (400u32, 400u32);
+    let cam = stage.camera_sized(CameraPreset::Map, w, h);
+    let img = stage.render_plants(&[], sylva::species::Season::Summer, &cam, w, h).unwrap();
+    img_save(&img, "no_data_hole_map.png");
+    let px = |x: f32, y: f32| {
+        let (u, v) = project(&cam, w, h, Vec3::new(x, y, 320.0));
+        img.get_pixel(u.clamp(0.0, w as f32 - 1.0) as u32, v.clamp(0.0, h as f32 - 1.0) as u32).0
+    };
+    // inside the hole (half a cell in from its edge: the quads touching it are left out too)
+    let inside: Vec<[u8; 4]> = (0..25).flat_map(|i| (0..25).map(move |j| (i, j))).map(|(i, j)| px(165.0 + 90.0 * i as f32 / 24.0, 195.0 + 70.0 * j as f32 / 24.0)).collect();
+    let ground: Vec<[u8; 4]> = (0..25).flat_map(|i| (0..25).map(move |j| (i, j))).map(|(i, j)| px(20.0 + 110.0 * i as f32 / 24.0, 20.0 + 110.0 * j as f32 / 24.0)).collect();
+    let spread = |v: &[[u8; 4]]| (0..3).map(|k| v.iter().map(|p| p[k]).max().unwrap() - v.iter().map(|p| p[k]).min().unwrap()).max().unwrap();
+    let mean = |v: &[[u8; 4]]| [0, 1, 2].map(|k| v.iter().map(|p| p[k] as f64).sum::<f64>() / v.len() as f64);
+    let (mh, mg) = (mean(&inside), mean(&ground));
+    eprintln!("hole: mean {mh:.0?}, spread {}; ground: mean {mg:.0?}", spread(&inside));
+    assert!(spread(&inside) <= 2, "the hole is one flat colour (no terrain drawn in it): spread {}", spread(&inside));
+    assert!((0..3).map(|k| (mh[k] - mg[k]).abs()).sum::<f64>() > 30.0, "the hole {mh:?} must not read as the ground {mg:?}");
+    // no wall: around the hole's rim (12 m outside its cells, 7 m outside the drawn hole, whose
+    // edge is the centres of the cells beside it) no pixel is brighter than the ground
+    // elsewhere by more than 12 levels (the walls were bright)
+    let bright = ground.iter().map(|p| p[0] as u32 + p[1] as u32 + p[2] as u32).max().unwrap();
+    let mut rim = Vec::new();
+    for k in 0..=40 {
+        let f = k as f32 / 40.0;
+        rim.extend([px(138.0, 168.0 + 124.0 * f), px(282.0, 168.0 + 124.0 * f), px(138.0 + 144.0 * f, 168.0), px(138.0 + 144.0 * f, 292.0)]);
+    }
+    let rim_max = rim.iter().map(|p| p[0] as u32 + p[1] as u32 + p[2] as u32).max().unwrap();
+    assert!(rim_max <= bright + 36, "a bright wall at the hole's rim: {rim_max} vs the ground's brightest {bright} (sum of sRGB levels)");
+}

@@ -263,6 +263,9 @@ fn readme_documents_every_field_of_the_schema() {
     // beech has every optional table but PROGNAUS's competition terms (Norway spruce's only)
     beech.life.bai_competition = lib.get("norway_spruce").unwrap().life.bai_competition;
     assert!(beech.life.bai_competition.is_some());
+    // nor the mature form (Scots pine's only)
+    beech.architecture.mature_form = lib.get("scots_pine").unwrap().architecture.mature_form;
+    assert!(beech.architecture.mature_form.is_some());
     let mut leaves: Vec<String> = species::leaf_fields(&beech).unwrap().into_iter().map(|(p, _)| p).collect();
     let mut fields: Vec<String> = schema::FIELDS.iter().map(|f| f.path.to_string()).collect();
     leaves.sort();
@@ -524,4 +527,55 @@ fn an_empty_species_file_is_one_problem() {
     assert_eq!(p.len(), 1, "{p:?}");
     let msg = p[0].to_string();
     assert!(msg.contains("empty.toml") && msg.contains("the file is empty"), "{msg}");
+}
+
+/// Issue 32 (round 34): Scots pine's mature form (the EcoMod model's change with age that `sylva
+/// tree grow` applies) is its species file's `[architecture.mature_form]`, not code: read from
+/// the file, checked like every field (errors naming the file, line and field), optional (no
+/// other shipped species has one; a user may give any species one).
+#[test]
+fn mature_form_is_read_from_the_species_file_and_checked() {
+    use sylva::species::MatureForm;
+    use sylva::structure::forest_form::MatureForm as FormMatureForm;
+    let lib = SpeciesLibrary::embedded().unwrap();
+    for s in &lib.species {
+        let want = (s.id == "scots_pine").then_some(MatureForm { from_age_yr: 30.0, full_age_yr: 80.0, trunk_k_s: 0.70, trunk_alpha_deg: 97.0, limb_alpha_m_deg: -1.0, leaf_distribution: LeafDistribution::Bunched });
+        assert_eq!(s.architecture.mature_form, want, "{}", s.id);
+        assert_eq!(FormMatureForm::for_species(s), want, "{}", s.id);
+    }
+    let pine = std::fs::read_to_string(species_dir().join("scots_pine.toml")).unwrap();
+    let pine_problems = |edit: &dyn Fn(&str) -> String| {
+        let d = tempfile::tempdir().unwrap();
+        write(d.path(), "pine.toml", &edit(&pine));
+        species::check_dir(d.path())
+    };
+    // out of range: file, line, field and range named
+    let p = pine_problems(&|t| t.replace("trunk_k_s = 0.70", "trunk_k_s = 1.5"));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert!(p[0].file.ends_with("pine.toml"));
+    assert_eq!((p[0].field.as_str(), p[0].value.as_str(), p[0].expected.as_str()), ("architecture.mature_form.trunk_k_s", "1.5", "a number in [0.5, 1]"));
+    assert_eq!(p[0].line, Some(line_of(&pine, "trunk_k_s")));
+    assert!(p[0].to_string().contains("pine.toml:") && p[0].to_string().contains("architecture.mature_form.trunk_k_s"), "{}", p[0]);
+    // the blend must end after it starts
+    let p = pine_problems(&|t| t.replace("full_age_yr = 80.0", "full_age_yr = 20.0"));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert_eq!(p[0].field, "architecture.mature_form.full_age_yr");
+    assert!(p[0].expected.contains("architecture.mature_form.from_age_yr = 30"), "{}", p[0].expected);
+    // a table given is given whole; an unknown field is named
+    let p = pine_problems(&|t| t.replace("trunk_alpha_deg = 97.0\n", ""));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert_eq!(p[0].field, "architecture.mature_form.trunk_alpha_deg");
+    assert!(p[0].expected.starts_with("missing field"), "{}", p[0].expected);
+    let p = pine_problems(&|t| t.replace("trunk_alpha_deg = 97.0\n", "trunk_alpha_deg = 97.0\nleader_deg = 3.0\n"));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert_eq!(p[0].field, "architecture.mature_form.leader_deg");
+    let p = pine_problems(&|t| t.replace("leaf_distribution = \"Bunched\"", "leaf_distribution = \"Tufted\""));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert_eq!(p[0].field, "architecture.mature_form.leaf_distribution");
+    // any species may have one; the value read is the one the tree is grown with
+    let text = beech_text().replace("[architecture.light_guided]", "[architecture.mature_form]\nfrom_age_yr = 50.0\nfull_age_yr = 120.0\ntrunk_k_s = 0.8\ntrunk_alpha_deg = 60.0\nlimb_alpha_m_deg = 5.0\nleaf_distribution = \"Spiral\"\n\n[architecture.light_guided]");
+    let b = Species::from_toml_str(&text, "beech_old.toml").unwrap();
+    let m = FormMatureForm::for_species(&b).unwrap();
+    assert_eq!((m.from_age_yr, m.full_age_yr, m.trunk_k_s, m.trunk_alpha_deg, m.limb_alpha_m_deg, m.leaf_distribution), (50.0, 120.0, 0.8, 60.0, 5.0, LeafDistribution::Spiral));
+    assert_eq!(Species::from_toml_str(&b.to_toml_string().unwrap(), "rt.toml").unwrap(), b, "round trip");
 }

@@ -3,7 +3,7 @@
 //! from the stand-grown functions the species files cite), and the species' architectures
 //! differ where a forester sees them differ: oak ≠ beech, Scots pine ≠ Norway spruce.
 use sylva::species::{Species, SpeciesLibrary};
-use sylva::structure::forest_form::{grow_formed_tree, tree_form, ArchitectureMeasures, Habit, TreeForm};
+use sylva::structure::forest_form::{grow_formed_tree, tree_form, ArchitectureMeasures, CrownProportions, Habit, TreeForm};
 use sylva::structure::species_tree::Model;
 
 fn species(id: &str) -> Species {

@@ -66,15 +66,20 @@ fn parse_finite_f32(s: &str) -> Result<f32, String> {
 }
 
 impl Source {
+    /// The terrain, refused (with the same error for `info` and `maps`) when smaller than
+    /// 2 × 2 cells ([`Terrain::check_min_size`]).
     fn load(&self) -> anyhow::Result<Terrain> {
-        if self.generate {
-            return Ok(generate::generate(self.size, self.cell, self.relief, self.seed)?);
-        }
-        Ok(match &self.file {
-            None => io::default_terrain()?,
-            Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) => io::load_png_heightmap(p, self.cell, self.min_height, self.max_height)?,
-            Some(p) => io::load(p)?,
-        })
+        let t = if self.generate {
+            generate::generate(self.size, self.cell, self.relief, self.seed)?
+        } else {
+            match &self.file {
+                None => io::default_terrain()?,
+                Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) => io::load_png_heightmap(p, self.cell, self.min_height, self.max_height)?,
+                Some(p) => io::load(p)?,
+            }
+        };
+        t.check_min_size()?;
+        Ok(t)
     }
     fn climate(&self) -> Climate {
         let mut c = Climate { sea_level_m: self.sea_level, ..Climate::default() };

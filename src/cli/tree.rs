@@ -8,7 +8,7 @@ use clap::{Subcommand, ValueEnum};
 use glam::Vec3;
 use std::path::{Path, PathBuf};
 use sylva::structure::grow::space::Obstacle;
-use sylva::structure::forest_form;
+use sylva::structure::forest_form::{self, CrownProportions};
 use sylva::structure::species_tree;
 use sylva::structure::mesh::{lod_chain, LodOptions};
 use sylva::structure::plastic::{adapt_group, Environment, Fate, PlasticTree, Sky};

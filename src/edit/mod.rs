@@ -56,6 +56,7 @@ const SECTIONS: &[(&str, &str)] = &[
     ("architecture.light_guided.", "Light-guided growth (Yi et al.)"),
     ("architecture.laplacian.", "Laplacian growth (Jinasena & Sonnadara)"),
     ("architecture.plastic.", "Plastic Trees (Pirk et al. 2012)"),
+    ("architecture.mature_form.", "Mature form (EcoMod with age; optional)"),
     ("appearance.", "Appearance"),
 ];
 

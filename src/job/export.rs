@@ -587,9 +587,9 @@ pub const TERRAIN_STEP_M: f64 = 5.0;
 
 /// The terrain under `area` (m, world coordinates) as a grid mesh with vertices every
 /// [`TERRAIN_STEP_M`] or the site's cell size if smaller (at most 256 × 256 quads, at least
-/// 0.5 m apart), elevations by [`SiteConditions::elevation_at`], normals from central
-/// differences; positions relative to the area's centre and the patch's lowest elevation,
-/// which is returned.
+/// 0.5 m apart), elevations by [`SiteConditions::elevation_at_valid`] (masked cells, no-data or
+/// sea: holes, their quads left out), normals from central differences; positions relative to the area's
+/// centre and the patch's lowest elevation, which is returned.
 pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
     let [x0, y0, x1, y1] = area;
     let step = site.cell_x_m.min(site.cell_y_m).min(TERRAIN_STEP_M).max((x1 - x0).max(y1 - y0) / 256.0).max(0.5);
@@ -601,11 +601,15 @@ pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
     for j in 0..=ny {
         for i in 0..=nx {
             let (x, y) = at(i, j);
-            z.push(site.elevation_at(x, y));
+            z.push(site.elevation_at_valid(x, y, f32::NEG_INFINITY));
         }
     }
     let z0 = z.iter().copied().fold(f32::INFINITY, f32::min);
     let z0 = if z0.is_finite() { z0 } else { 0.0 };
+    // no-data points (NaN) are holes: their quads are left out and their vertices, unused,
+    // put at z0 (a glTF position must be finite; round 34)
+    let ok: Vec<bool> = z.iter().map(|v| v.is_finite()).collect();
+    z.iter_mut().filter(|v| !v.is_finite()).for_each(|v| *v = z0);
     let mut m = TriMesh::default();
     let (dx, dy) = ((x1 - x0) as f32 / nx as f32, (y1 - y0) as f32 / ny as f32);
     let zi = |i: usize, j: usize| z[j * (nx + 1) + i];
@@ -623,6 +627,9 @@ pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
     let v = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
     for j in 0..ny {
         for i in 0..nx {
+            if ![v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j + 1)].iter().all(|&k| ok[k as usize]) {
+                continue;
+            }
             // counter-clockwise seen from above (x east, y north)
             m.indices.extend_from_slice(&[v(i, j), v(i + 1, j), v(i + 1, j + 1), v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
         }
@@ -707,4 +714,36 @@ mod tests {
         assert!(small.leaves[0].size < 0.15);
     }
 
+    /// Round 34: the terrain patch of an export over a DEM's no-data hole leaves the hole open
+    /// (no triangle over it, no wall) and writes no NaN position (it wrote NaN elevations,
+    /// which glTF does not allow); the ground beside the hole is there.
+    #[test]
+    fn terrain_patch_leaves_no_data_holes_open() {
+        let n = 12;
+        let mut e = crate::grid::Grid::filled(n, n, 0.0f32);
+        for r in 0..n {
+            for c in 0..n {
+                *e.get_mut(c, r) = if (4..7).contains(&c) && (4..7).contains(&r) { f32::NAN } else { 300.0 + c as f32 };
+            }
+        }
+        let t = crate::terrain::Terrain { elevation: e, geo: crate::grid::GeoRef::local(10.0, 47.0), nodata: Some(-9999.0), source: "test".into() };
+        let site = crate::conditions::derive(&t, &crate::climate::Climate::default()).unwrap();
+        let (m, z0) = terrain_patch(&site, [0.0, 0.0, 120.0, 120.0]);
+        assert_eq!(z0, 300.0);
+        assert!(m.positions.iter().all(|p| p.iter().all(|v| v.is_finite())), "a NaN position");
+        let (mut over, mut kept) = (0, 0);
+        for tri in m.indices.chunks(3) {
+            let p: Vec<Vec3> = tri.iter().map(|&k| Vec3::from(m.positions[k as usize])).collect();
+            // patch coordinates: from the area's centre (60, 60)
+            let c = (p[0] + p[1] + p[2]) / 3.0 + Vec3::new(60.0, 60.0, 0.0);
+            if (40.0..70.0).contains(&c.x) && (50.0..80.0).contains(&c.y) {
+                over += 1;
+            }
+            kept += 1;
+            let nz = (p[1] - p[0]).cross(p[2] - p[0]).normalize().z;
+            assert!(nz > 0.9, "a steep triangle (a wall?) at {c:?}");
+        }
+        assert_eq!(over, 0, "triangles over the hole");
+        assert!(kept > 300, "{kept} triangles: the ground around the hole");
+    }
 }

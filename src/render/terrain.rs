@@ -317,6 +317,29 @@ impl GroundGrid {
     /// elevation ([`crate::conditions::SiteConditions::elevation_at`]) differs from the drawn
     /// triangles by up to a quarter of the quad's twist.
     pub fn height_at(&self, x: f32, y: f32) -> Option<f32> {
+        self.quad_height(x, y).filter(|z| z.is_finite())
+    }
+
+    /// The ground next to a no-data hole: [`GroundGrid::height_at`] where the quad around
+    /// `(x, y)` is drawn, else the mean of those of its four samples that have ground (the quad
+    /// at a hole's rim is left out, and a tree standing on a valid cell there stood at the
+    /// 0 m a no-data cell holds, deep in the hole: round 34); `None` where none has.
+    /// Like [`GroundGrid::height_at`], `None` outside the samples' centres.
+    pub fn height_near(&self, x: f32, y: f32) -> Option<f32> {
+        let z = self.quad_height(x, y)?;
+        if z.is_finite() {
+            return Some(z);
+        }
+        let (w, h) = (self.heights.width, self.heights.height);
+        let fc = (x - self.origin[0]) / self.cell_x - 0.5;
+        let fr = h as f32 - (y - self.origin[1]) / self.cell_y - 0.5;
+        let (c, r) = ((fc as usize).min(w - 2), (fr as usize).min(h - 2));
+        let v: Vec<f32> = [(c, r), (c + 1, r), (c, r + 1), (c + 1, r + 1)].iter().map(|&(c, r)| *self.heights.get(c, r)).filter(|z| z.is_finite()).collect();
+        (!v.is_empty()).then(|| v.iter().sum::<f32>() / v.len() as f32)
+    }
+
+    /// The triangle interpolation of [`GroundGrid::height_at`], NaN where a corner is.
+    fn quad_height(&self, x: f32, y: f32) -> Option<f32> {
         let (w, h) = (self.heights.width, self.heights.height);
         if w < 2 || h < 2 || !(self.cell_x > 0.0 && self.cell_y > 0.0) {
             return None;
@@ -332,7 +355,7 @@ impl GroundGrid {
         let z = |c: usize, r: usize| *self.heights.get(c, r);
         let (sw, se, ne, nw) = (z(c, r + 1), z(c + 1, r + 1), z(c + 1, r), z(c, r));
         let zz = if u >= v { sw + u * (se - sw) + v * (ne - se) } else { sw + v * (nw - sw) + u * (ne - nw) };
-        zz.is_finite().then_some(zz)
+        Some(zz)
     }
 }
 
@@ -416,7 +439,8 @@ pub fn overlay_ramp(v: f32) -> [f32; 3] {
 /// Vertices sit at cell centres (`x = (col + 0.5) · cell_x`, `y = (height − row − 0.5) · cell_y`,
 /// grid.rs convention); normals from central differences; colours from `cover`, or from
 /// `overlay` (values 0..1 through [`overlay_ramp`], blended 70 % over the land cover) when given.
-/// NaN heights are replaced by the grid minimum.
+/// A NaN height (no data) puts its vertex at the grid minimum, and the quads touching it are
+/// left out: a hole, not a shaft down to the minimum (round 34).
 ///
 /// # Errors
 /// [`Error::Invalid`] for a grid smaller than 2 × 2, non-positive cell sizes or an overlay of
@@ -469,8 +493,13 @@ pub fn from_grid(heights: &Grid<f32>, cell_x: f32, cell_y: f32, cover: &LandCove
             m.colors.push(col);
         }
     }
+    let ok = |c: u32, r: u32| heights.get(c as usize, r as usize).is_finite();
     for r in 0..h as u32 - 1 {
         for c in 0..w as u32 - 1 {
+            // no-data holes stay holes (no walls down to the minimum), as in [`from_ground`]
+            if !(ok(c, r) && ok(c + 1, r) && ok(c, r + 1) && ok(c + 1, r + 1)) {
+                continue;
+            }
             let i = |c: u32, r: u32| r * w as u32 + c;
             // (c, r+1) is south-west; counter-clockwise seen from above
             let (sw, se, ne, nw) = (i(c, r + 1), i(c + 1, r + 1), i(c + 1, r), i(c, r));

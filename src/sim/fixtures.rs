@@ -39,6 +39,7 @@ fn arch() -> Architecture {
         light_guided: LightGuidedParams { lambda: 0.5, k: 1.0, b: 2.0, mu: 0.5, gamma: 0.2, theta_deg: 45.0, r_s: 0.1 },
         laplacian: LaplacianParams { eta: 1.0, base_width_m: 0.01, width_rate: 1.5 },
         plastic: PlasticParams { phototropism: 0.5, gravitropism: 0.3, pruning_c_psi: 0.8, translucency_gamma_c0: 0.5 },
+        mature_form: None,
     }
 }
 

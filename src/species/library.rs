@@ -325,6 +325,15 @@ impl Species {
                 out.push(Violation { field: field.into(), value: fmt_num(v as f64), expected: format!("a later day than {after} = {before}") });
             }
         }
+        if let Some(m) = &self.architecture.mature_form {
+            if m.full_age_yr.is_finite() && m.from_age_yr.is_finite() && m.full_age_yr <= m.from_age_yr {
+                out.push(Violation {
+                    field: "architecture.mature_form.full_age_yr".into(),
+                    value: fmt_num(m.full_age_yr as f64),
+                    expected: format!("more than architecture.mature_form.from_age_yr = {}", m.from_age_yr),
+                });
+            }
+        }
         if l.dispersal.max_m.is_finite() && l.dispersal.mean_m.is_finite() && l.dispersal.max_m < l.dispersal.mean_m {
             out.push(Violation {
                 field: "life.dispersal.max_m".into(),
@@ -430,6 +439,11 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
     for spec in schema::FIELDS {
         if spec.path == "identity.sources" || spec.path == "life.form_factor" || spec.path.starts_with("life.stand_crown.") || spec.path.starts_with("life.stand_crown_base.") || spec.path.starts_with("life.dense_hd.") || spec.path.starts_with("life.bai_competition.") {
             continue; // optional (form factor: default 0.5; stand crown, stand crown base, dense-stand H/D, BAI competition: none)
+        }
+        // the mature form is optional as a table; where it is given, each of its fields is
+        // required (none has a default)
+        if spec.path.starts_with("architecture.mature_form.") && !leaves.iter().any(|(p, _)| p.starts_with("architecture.mature_form.")) {
+            continue;
         }
         if leaves.iter().any(|(p, _)| p == spec.path) {
             continue;

@@ -496,6 +496,44 @@ pub struct Architecture {
     pub laplacian: LaplacianParams,
     /// Plastic Trees adaptation.
     pub plastic: PlasticParams,
+    /// The EcoMod model's change with age ([`MatureForm`]): the form an old tree of the species
+    /// takes that the paper's model (a young tree's) does not give. Optional: without it the
+    /// species' EcoMod model holds at every age. Read by `sylva tree grow`
+    /// ([`crate::structure::forest_form::grow_formed_tree`]) only, not by the simulation or the
+    /// stand skeletons.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mature_form: Option<MatureForm>,
+}
+
+/// An age-dependent change of a species' EcoMod model (`[architecture.mature_form]` of a
+/// species file; issue 32): the paper's model (`004_*.txt`) up to `from_age_yr`, blended
+/// linearly (t = (age − from)/(full − from), clamped to [0, 1]) to the values below from
+/// `full_age_yr` on. Each changes the model's poly-lines at ONE Gravelius order only (the values
+/// at every other order are kept exactly), so it is a change of the EcoMod parameters the model
+/// already has, not a new mechanism ([`MatureForm::apply`] in
+/// [`crate::structure::forest_form`]). Ranges: the schema's ([`schema::FIELDS`],
+/// `architecture.mature_form.*`); `full_age_yr` must exceed `from_age_yr` (checked by
+/// [`Species::validate`]). The shipped Scots pine file gives its source.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MatureForm {
+    /// Age (years, 0–1000) up to which the species' (paper's) model is kept unchanged.
+    pub from_age_yr: f32,
+    /// Age (years, 0–1000, > `from_age_yr`) from which the values below hold in full.
+    pub full_age_yr: f32,
+    /// k_s^g at g = 0 (eq. 1, 0.5–1): the stem's (leader's) share of the strands at each of its
+    /// splits; lower = weaker apical control: fewer, heavier limbs and a leader that ends in the
+    /// crown.
+    pub trunk_k_s: f32,
+    /// α^g at g = 0 (eq. 2, degrees, 0–180): the angle between the stem's continuation and a
+    /// limb at each of its splits (the limb's first segment leaves the stem at about
+    /// (1 − k_c√(S₂/S₀))·α from the vertical).
+    pub trunk_alpha_deg: f32,
+    /// α_m^g at g = 1 (eq. 3, degrees per split, −180–180, + turns towards the vertical): the
+    /// order-1 limbs' gravimorphism; positive = limbs that turn upward along their length.
+    pub limb_alpha_m_deg: f32,
+    /// Leaf distribution from the middle of the blend on.
+    pub leaf_distribution: LeafDistribution,
 }
 
 /// An sRGB colour (0–255 per channel, as [`Appearance`] gives them) as linear RGB (0–1), by the

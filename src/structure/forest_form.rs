@@ -9,7 +9,8 @@ use super::species_tree::{ecomod_strands_at, grow_species_tree, GrownTree, Model
 use super::grow::ecomod;
 use crate::error::{Error, Result};
 use crate::obstacle::Obstacle;
-use crate::species::{EcoModParams, LeafDistribution, PolyLine, Species};
+pub use crate::species::MatureForm;
+use crate::species::{EcoModParams, PolyLine, Species};
 use crate::structure::params::eval_polyline;
 use glam::Vec3;
 
@@ -49,18 +50,35 @@ pub struct TreeForm {
     pub crown_radius_m: f32,
 }
 
-impl TreeForm {
+/// The crown proportions a forester derives from a tree's height, crown base and crown radius
+/// (one implementation for [`TreeForm`], the dimensions a tree is grown to, and
+/// [`ArchitectureMeasures`], what a grown tree measures): crown length, the share of the height
+/// clear of live branches and the crown's width over its length.
+pub trait CrownProportions {
+    /// `[height, crown base, crown radius]` (m): the height, the height of the lowest live
+    /// branch (in [0, height]) and half the crown width.
+    fn crown_dims(&self) -> [f32; 3];
+
     /// Crown length (m): height − crown base.
-    pub fn crown_length_m(&self) -> f32 {
-        self.height_m - self.crown_base_m
+    fn crown_length_m(&self) -> f32 {
+        let [h, cb, _] = self.crown_dims();
+        h - cb
     }
-    /// Share (0–0.9) of the height clear of live branches: crown base / height.
-    pub fn clear_bole_share(&self) -> f32 {
-        self.crown_base_m / self.height_m.max(1e-6)
+    /// Share (0–1; a [`TreeForm`]'s at most 0.9) of the height clear of live branches: crown
+    /// base / height.
+    fn clear_bole_share(&self) -> f32 {
+        let [h, cb, _] = self.crown_dims();
+        cb / h.max(1e-6)
     }
-    /// Crown width / crown length (2·radius / (height − crown base)).
-    pub fn width_to_length(&self) -> f32 {
-        2.0 * self.crown_radius_m / self.crown_length_m().max(1e-6)
+    /// Crown width / crown length: 2·radius / (height − crown base).
+    fn width_to_length(&self) -> f32 {
+        2.0 * self.crown_dims()[2] / self.crown_length_m().max(1e-6)
+    }
+}
+
+impl CrownProportions for TreeForm {
+    fn crown_dims(&self) -> [f32; 3] {
+        [self.height_m, self.crown_base_m, self.crown_radius_m]
     }
 }
 
@@ -231,57 +249,16 @@ pub fn grow_formed_tree_with(sp: &Species, model: Model, age_yr: f32, obstacles:
     Ok((GrownTree { skeleton, leaves, envelope: None, space: None }, form))
 }
 
-/// An age-dependent change of a species' EcoMod model (issue 32): the paper's model
-/// (`004_*.txt`) up to `from_age_yr`, blended linearly (t = (age − from)/(full − from), clamped to
-/// [0, 1]) to the values below from `full_age_yr` on. Each changes the model's poly-lines at ONE
-/// Gravelius order only (the values at every other order are kept exactly), so it is a change of
-/// the EcoMod parameters the model already has, not a new mechanism. Used by
-/// [`grow_formed_tree`] (what `sylva tree grow` draws) only; the stand skeletons and the
-/// simulation do not use it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MatureForm {
-    /// Age (years) up to which the species' (paper's) model is kept unchanged.
-    pub from_age_yr: f32,
-    /// Age (years) from which the values below hold in full (> `from_age_yr`).
-    pub full_age_yr: f32,
-    /// k_s^g at g = 0 (eq. 1, 0.5–1): the stem's (leader's) share of the strands at each of its
-    /// splits; lower = weaker apical control: fewer, heavier limbs and a leader that ends in the
-    /// crown.
-    pub trunk_k_s: f32,
-    /// α^g at g = 0 (eq. 2, degrees): the angle between the stem's continuation and a limb at
-    /// each of its splits (the limb's first segment leaves the stem at about (1 − k_c√(S₂/S₀))·α
-    /// from the vertical).
-    pub trunk_alpha_deg: f32,
-    /// α_m^g at g = 1 (eq. 3, degrees per split, + turns towards the vertical): the order-1
-    /// limbs' gravimorphism; positive = limbs that turn upward along their length.
-    pub limb_alpha_m_deg: f32,
-    /// Leaf distribution from `full_age_yr` (from the middle of the blend on).
-    pub leaf_distribution: LeafDistribution,
-}
-
+/// Issue 32 (round 33, pine): the age-dependent change of a species' EcoMod model
+/// ([`MatureForm`], `[architecture.mature_form]` of its species file; the shipped Scots pine has
+/// one, with its source) as [`grow_formed_tree`] applies it. Used by [`grow_formed_tree`]
+/// (what `sylva tree grow` draws) only; the stand skeletons and the simulation do not use it.
 impl MatureForm {
-    /// Scots pine (*Pinus sylvestris*) past its youth. Silvics: the young pine is monopodial
-    /// with regular whorls and a conical crown (the paper's EcoMod pine, kept up to 30 years);
-    /// with age apical control weakens, the leader is lost in the crown and the crown of a
-    /// stand-grown tree becomes short, rounded to flat-topped, of few heavy limbs that turn
-    /// upward, the needles in tufts at the shoot ends (the habit as the silvics texts describe
-    /// it, paraphrased: Houston Durrant, de Rigo & Caudullo 2016, *Pinus sylvestris* in Europe,
-    /// European Atlas of Forest Tree Species; Schütt et al., Enzyklopädie der Holzgewächse,
-    /// *Pinus sylvestris*). No number is published for the EcoMod parameters: ESTIMATE, chosen by
-    /// eye on side views (BENCHMARKS.md, round 33, issue 32 pine) among k_s 0.65–0.8, α 80–115°,
-    /// α_m −5 … +12°: at 80 years the stem keeps 70 % of the strands at each split (the paper:
-    /// 95.5 %; 24 order-1 limbs instead of 57), the limbs part from it at 97° (the paper:
-    /// 128.8°) and sag by 1° a split (the paper: 4.3°), so the crown is flat-topped and widest
-    /// in its top fifth, its limbs' ends about 55° from the vertical (the paper's pine and the
-    /// spruce: ~100–117°, widest at the crown base; `tests/structure_architecture.rs`).
-    pub fn scots_pine() -> MatureForm {
-        MatureForm { from_age_yr: 30.0, full_age_yr: 80.0, trunk_k_s: 0.70, trunk_alpha_deg: 97.0, limb_alpha_m_deg: -1.0, leaf_distribution: LeafDistribution::Bunched }
-    }
-
-    /// The mature form of `sp`, if it has one (Scots pine only; every other species keeps its
-    /// EcoMod model at every age).
+    /// The mature form of `sp`: its species file's `[architecture.mature_form]`, if it has one
+    /// (the shipped library: Scots pine only; every other species keeps its EcoMod model at
+    /// every age).
     pub fn for_species(sp: &Species) -> Option<MatureForm> {
-        (sp.id == "scots_pine").then(MatureForm::scots_pine)
+        sp.architecture.mature_form
     }
 
     /// Share (0–1) of the change at `age_yr`.
@@ -413,16 +390,10 @@ impl ArchitectureMeasures {
             branches: k,
         }
     }
-    /// Crown length (m): height − crown base.
-    pub fn crown_length_m(&self) -> f32 {
-        self.height_m - self.crown_base_m
-    }
-    /// Share of the height clear of branches: crown base / height.
-    pub fn clear_bole_share(&self) -> f32 {
-        self.crown_base_m / self.height_m.max(1e-6)
-    }
-    /// Crown width / crown length.
-    pub fn width_to_length(&self) -> f32 {
-        2.0 * self.crown_radius_m / self.crown_length_m().max(1e-6)
+}
+
+impl CrownProportions for ArchitectureMeasures {
+    fn crown_dims(&self) -> [f32; 3] {
+        [self.height_m, self.crown_base_m, self.crown_radius_m]
     }
 }

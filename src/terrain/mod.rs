@@ -16,10 +16,35 @@ pub struct Terrain {
     pub source: String,
 }
 
+/// Fewest columns and rows of a DEM that `sylva terrain info` and `sylva terrain maps` accept
+/// ([`Terrain::check_min_size`]): slopes, flow directions and the TIN need a cell's neighbours.
+pub const MIN_GRID_CELLS: usize = 2;
+
 impl Terrain {
     /// `true` for cells holding a finite elevation.
     pub fn is_valid(&self, col: usize, row: usize) -> bool {
         self.elevation.get(col, row).is_finite()
+    }
+
+    /// Checks that the grid has at least [`MIN_GRID_CELLS`] × [`MIN_GRID_CELLS`] cells (a
+    /// 1 × 1 DEM was described by `sylva terrain info`, which then failed at its TIN, while
+    /// `sylva terrain maps` drew 15 maps of one flat cell; round 34 refuses it in both, with
+    /// this one error).
+    ///
+    /// # Errors
+    /// [`crate::Error::Invalid`] naming the file (`source`), the field `grid`, its size and
+    /// the minimum.
+    pub fn check_min_size(&self) -> crate::Result<()> {
+        let (w, h) = (self.elevation.width, self.elevation.height);
+        if w < MIN_GRID_CELLS || h < MIN_GRID_CELLS {
+            return Err(crate::Error::Invalid {
+                context: format!("DEM {}", self.source),
+                field: "grid".into(),
+                value: format!("{w} x {h} cells"),
+                expected: format!("at least {MIN_GRID_CELLS} x {MIN_GRID_CELLS} cells (slopes, flow and the TIN need a cell's neighbours)"),
+            });
+        }
+        Ok(())
     }
 }
 

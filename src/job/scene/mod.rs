@@ -362,4 +362,69 @@ mod tests {
         assert!(before > 0.05, "the test slope must be twisted enough to matter: {before} m");
         assert!(after < 0.01, "{after} m off the drawn ground");
     }
+
+    /// Round 34 (issue 32): a DEM's no-data hole is a hole in the ground drawn — no triangle over
+    /// it and no wall around it — in every view (the stills, `sylva render`, `sylva view` and the
+    /// export draw this mesh or the same samples). It was drawn at the 0 m the site holds in a
+    /// no-data cell: a shaft hundreds of metres deep, walled (the top-down map showed a dark
+    /// square with bright walls). A 30 × 30 slope of 10 m cells with a 6 × 4-cell hole (x
+    /// 100–160 m, y 150–190 m); the cells beside it keep their own heights.
+    #[test]
+    fn no_data_holes_are_drawn_as_holes_without_walls() {
+        use crate::grid::GeoRef;
+        let n = 30;
+        let mut e = Grid::filled(n, n, 0.0f32);
+        let in_hole = |c: usize, r: usize| (10..16).contains(&c) && (11..15).contains(&r);
+        for r in 0..n {
+            for c in 0..n {
+                *e.get_mut(c, r) = if in_hole(c, r) { f32::NAN } else { 400.0 + 2.0 * c as f32 + 1.0 * (n - r) as f32 };
+            }
+        }
+        let t = crate::terrain::Terrain { elevation: e, geo: GeoRef::local(10.0, 47.0), nodata: Some(-9999.0), source: "test".into() };
+        let site = crate::conditions::derive(&t, &crate::climate::Climate::default()).unwrap();
+        let l = Landscape::new(&site, None, 10.0, f32::NEG_INFINITY).unwrap();
+        let m = l.mesh(&[]).unwrap();
+        m.validate().unwrap();
+        let hole = |x: f32, y: f32| (100.0..160.0).contains(&x) && (150.0..190.0).contains(&y);
+        let (mut over, mut steep, mut beside) = (0, 0.0f32, 0usize);
+        for tri in m.indices.chunks(3) {
+            let p: Vec<glam::Vec3> = tri.iter().map(|&k| glam::Vec3::from(m.positions[k as usize])).collect();
+            let c = (p[0] + p[1] + p[2]) / 3.0;
+            if hole(c.x, c.y) {
+                over += 1;
+            }
+            // the slope of every triangle of the window (the ground's own: 12.6°): a wall would
+            // be near 90°
+            if (0.0..300.0).contains(&c.x) && (0.0..300.0).contains(&c.y) {
+                let nz = (p[1] - p[0]).cross(p[2] - p[0]).normalize().z;
+                steep = steep.max(nz.clamp(-1.0, 1.0).acos().to_degrees());
+            }
+            if (90.0..170.0).contains(&c.x) && (140.0..200.0).contains(&c.y) {
+                beside += 1;
+            }
+        }
+        assert_eq!(over, 0, "triangles over the no-data hole");
+        assert!(steep < 15.0, "steepest triangle {steep}° (the slope is 12.6°): a wall at the hole's rim");
+        assert!(beside > 0, "the ground beside the hole is drawn");
+        // the samples of the hole are NaN (no apron), those beside it on the slope
+        for (x, y) in [(130.0f32, 170.0f32), (105.0, 155.0), (155.0, 185.0)] {
+            assert!(l.ground.height_at(x, y).is_none(), "({x}, {y}) is in the hole");
+        }
+        for (x, y) in [(95.0f64, 165.0f64), (165.0, 165.0), (130.0, 145.0), (130.0, 195.0)] {
+            let want = 400.0 + 2.0 * (x / 10.0 - 0.5) + (n as f64 - (n as f64 - y / 10.0 - 0.5));
+            let got = site.elevation_at_valid(x, y, f32::NEG_INFINITY) as f64;
+            assert!((got - want).abs() < 1e-3, "({x}, {y}): {got} m, the slope there {want} m");
+        }
+        assert!(site.elevation_at_valid(130.0, 170.0, f32::NEG_INFINITY).is_nan());
+        // a tree on a valid cell at the hole's rim (its quad left out) stands on the ground
+        // beside the hole, not at the 0 m the site holds in the hole (it showed deep in it)
+        let rim = [(97.0f32, 170.0f32), (163.0, 152.0), (130.0, 192.0), (130.0, 147.0)];
+        let mut inst: Vec<TreeInstance> = rim.iter().enumerate().map(|(k, &(x, y))| TreeInstance::new(k as u64, [x, y, site.elevation_at(x as f64, y as f64)], 20.0, 3.0, 0, [0.1, 0.3, 0.1])).collect();
+        assert!(inst.iter().any(|t| t.position[2] < 400.0), "the site's bilinear elevation at the rim is pulled towards 0 m");
+        l.stand_on_ground(&mut inst);
+        for t in &inst {
+            let want = 400.0 + 2.0 * (t.position[0] / 10.0 - 0.5) + (t.position[1] / 10.0 + 0.5);
+            assert!((t.position[2] - want).abs() < 3.0, "{:?}: {} m, the slope there {want} m", t.position, t.position[2]);
+        }
+    }
 }

@@ -142,7 +142,10 @@ impl Landscape {
     /// window is half its longer side, at most 2 km; the surroundings fade into the sky from
     /// 35 % of the margin to its end, and over [`EDGE_FADE_M`] at the edge of the DEM (nodata or
     /// the end of the grid). Samples at most `max_cell_m` apart; inside the window their height
-    /// is the site's [`SiteConditions::elevation_at`], so trees stand on the ground drawn.
+    /// is the site's [`SiteConditions::elevation_at_valid`], so trees stand on the ground drawn,
+    /// and the window's no-data cells stay NaN: [`crate::render::terrain::from_ground`] leaves
+    /// their quads out, so a DEM's no-data hole is drawn as a hole (the sky's colour behind it,
+    /// no walls) in every view.
     /// Streams ([`crate::render::terrain::stream_strength`] of the D8 flow accumulation, drawn
     /// along corner-cut centre lines so that they do not show the D8 staircase) and
     /// wetness (topographic wetness index, [`crate::render::terrain::wetness`]) are computed on
@@ -217,7 +220,9 @@ impl Landscape {
                 let y = origin[1] + (nh as f64 - r as f64 - 0.5) * cy;
                 let inside = x >= 0.0 && y >= 0.0 && x <= ex && y <= ey;
                 let (fc, fr) = to_src(x, y);
-                heights[i] = if inside { site.elevation_at(x, y) } else { src_at(fc, fr) };
+                // a no-data cell of the window stays NaN: a hole in the ground drawn, no walls
+                // (round 34; it was drawn at the 0 m the site holds there: a walled shaft)
+                heights[i] = if inside { site.elevation_at_valid(x, y, sea_level) } else { src_at(fc, fr) };
                 let (dx, dy) = ((-x).max(x - ex).max(0.0), (-y).max(y - ey).max(0.0));
                 outside[i] = dx.hypot(dy);
                 let (sc, sr) = (fc.round() as i64 - sc0 as i64, fr.round() as i64 - sr0 as i64);
@@ -247,7 +252,8 @@ impl Landscape {
             }
         });
         stream.iter_mut().for_each(|v| *v = v.min(1.0));
-        // fill the samples without ground from the nearest ground (flat aprons) and fade them
+        // fill the samples without ground beyond the window from the nearest ground (flat
+        // aprons) and fade them; those inside the window stay holes
         let valid: Vec<bool> = heights.iter().map(|v| v.is_finite()).collect();
         let invalid: Vec<bool> = valid.iter().map(|v| !v).collect();
         let (d_out, near) = chamfer(nw, nh, &valid);
@@ -259,7 +265,7 @@ impl Landscape {
         };
         let mut fade = vec![0.0f32; n];
         for i in 0..n {
-            if !valid[i] {
+            if !valid[i] && outside[i] > 0.0 {
                 heights[i] = if near[i] == usize::MAX { 0.0 } else { heights[near[i]] };
             }
             if outside[i] <= 0.0 {
@@ -287,10 +293,11 @@ impl Landscape {
     /// ([`crate::render::terrain::GroundGrid::height_at`]): trees placed at the site's bilinear
     /// elevation stood centimetres above or below the drawn triangles on twisted slopes (6 cm
     /// on the slope of the test `trees_stand_on_the_drawn_ground`; issue 32). Instances off the
-    /// samples keep their height.
+    /// samples keep their height; those at the rim of a no-data hole, where the quad is left
+    /// out, stand on the ground beside it ([`crate::render::terrain::GroundGrid::height_near`]).
     pub fn stand_on_ground(&self, instances: &mut [TreeInstance]) {
         for t in instances {
-            if let Some(z) = self.ground.height_at(t.position[0], t.position[1]) {
+            if let Some(z) = self.ground.height_near(t.position[0], t.position[1]) {
                 t.position[2] = z;
             }
         }
