@@ -627,12 +627,13 @@ const SCAN_MAX: usize = 64;
 
 /// Grid cell size, in mean cluster radii, at least.
 const CELL_RADII: f32 = 2.0;
-/// Grid cell size, in mean cluster radii, at least, of [`ShadowVolumes::coarse`] volumes: half
-/// again as wide as [`CELL_RADII`], so about half as many cells and slots to build, and a
-/// query scans a little more (measured, callgrind, one thread, the 9,133-node bench tree, round
-/// 34: a 10 cm wall move −3.0 % instructions with every level's volumes coarse, the analysis
-/// and first adaptation +2.2 %, as their grids answer many more queries each).
-const COARSE_CELL_RADII: f32 = 3.0;
+/// Grid cell size, in mean cluster radii, at least, of [`ShadowVolumes::coarse`] volumes: twice
+/// [`CELL_RADII`], so fewer cells and slots to build, and a query scans a little more
+/// (measured, callgrind, one thread, the 9,133-node bench tree, round 34: a 10 cm wall move
+/// −3.0 % instructions with 3 radii, −3.9 % with 4; 3 radii in every call cost the analysis and
+/// first adaptation +2.2 %, as their grids answer many more queries each, so only calls that
+/// recompute part of their trees take them).
+const COARSE_CELL_RADII: f32 = 4.0;
 /// Grid cells per cluster over the grid's area, at most (the cell is at least that coarse).
 const CELLS_PER_CASTER: f32 = 2.0;
 
