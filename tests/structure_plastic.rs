@@ -649,3 +649,38 @@ fn a_wall_beside_the_trunk_sheds_one_side_not_the_tree() {
     assert!(kept_open * 2 > open, "{kept_open} of {open} nodes on the open side kept");
     assert!(rep.pruned_collision > 0);
 }
+
+/// Shadow volumes with coarse grid cells (`ShadowVolumes::coarse`, used by calls that recompute
+/// part of their trees) answer as the default ones, bit for bit, for every ray: 300 clusters,
+/// 200 points, every sky direction, with and without a query region.
+#[test]
+fn coarse_shadow_grids_answer_as_the_default_ones() {
+    use sylva::structure::plastic::light::{Occluder, ShadowVolumes, Sky};
+    let sky = Sky::from_latitude(50.0);
+    let occ: Vec<Occluder> = (0..300)
+        .map(|i| {
+            let f = i as f32;
+            let r = 0.2 + 0.3 * (f * 0.37).sin().abs();
+            Occluder { center: Vec3::new((f * 0.71).sin() * 3.0, (f * 0.53).cos() * 3.0, 2.0 + (f * 0.29).sin().abs() * 5.0), radius: r, gamma: 0.5f32.powf(r) }
+        })
+        .collect();
+    let (lo, hi) = (Vec3::new(-2.0, -2.0, 0.0), Vec3::new(2.0, 2.0, 5.0));
+    let fine = ShadowVolumes::new(&sky, occ.clone());
+    let coarse = ShadowVolumes::new(&sky, occ.clone()).coarse();
+    let coarse_within = ShadowVolumes::new(&sky, occ).within(lo, hi).coarse();
+    let (mut shaded, mut dark) = (0, 0);
+    for j in 0..200 {
+        let f = j as f32;
+        let p = Vec3::new((f * 0.43).cos() * 3.5, (f * 0.61).sin() * 3.5, 1.0 + (f * 0.17).sin().abs() * 6.0);
+        for k in 0..sky.dirs.len() {
+            let t = fine.transmittance(k, p);
+            assert_eq!(coarse.transmittance(k, p).to_bits(), t.to_bits(), "point {p}, direction {k}");
+            assert_eq!(coarse_within.transmittance(k, p).to_bits(), t.to_bits(), "within: point {p}, direction {k}");
+            assert_eq!(coarse.shaded(k, p), fine.shaded(k, p));
+            shaded += (t < 1.0) as usize;
+            dark += (t < 0.5) as usize;
+        }
+    }
+    // the rays tested are shaded and unshaded, some by several clusters
+    assert!(shaded > 300 && shaded < 200 * sky.dirs.len() - 300 && dark > 50, "{shaded} shaded, {dark} below 0.5");
+}

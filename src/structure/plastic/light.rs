@@ -272,12 +272,16 @@ pub struct ShadowVolumes {
     region: Option<(Vec3, Vec3)>,
     /// Grids of every occluder, built only for queries outside `region`.
     full: Vec<std::sync::OnceLock<DirGrid>>,
+    /// Grid cell size in mean cluster radii, at least ([`CELL_RADII`], or
+    /// [`COARSE_CELL_RADII`] after [`ShadowVolumes::coarse`]).
+    cell_radii: f32,
 }
 
 impl Clone for ShadowVolumes {
     fn clone(&self) -> Self {
         let mut c = ShadowVolumes::from_dirs(self.dirs.clone(), self.occ.clone(), self.owners.clone());
         c.region = self.region;
+        c.cell_radii = self.cell_radii;
         c
     }
 }
@@ -348,7 +352,8 @@ impl DirGrid {
     /// With `region` (the box `lo`–`hi`, m) only the casters that can shade a point of the box
     /// are kept (see [`ShadowVolumes::within`]), tested on the projections the grid is built
     /// from (one pass, no copy of the casters kept).
-    fn new(d: Vec3, occ: &[Occluder], owners: &[u32], region: Option<(Vec3, Vec3)>) -> DirGrid {
+    /// Cells are at least `cell_radii` mean caster radii wide.
+    fn new(d: Vec3, occ: &[Occluder], owners: &[u32], region: Option<(Vec3, Vec3)>, cell_radii: f32) -> DirGrid {
         let (u, v) = d.any_orthonormal_pair();
         // every caster's projection on the plane ⟂ d and depth along d, then the ones kept
         let (mut proj, mut depth, mut kept): (Vec<Vec2>, Vec<f32>, Vec<u32>) = (Vec::with_capacity(occ.len()), Vec::with_capacity(occ.len()), Vec::with_capacity(occ.len()));
@@ -391,7 +396,7 @@ impl DirGrid {
         let mean_r = rsum / kept.len() as f32;
         // about CELLS_PER_CASTER cells per cluster: the grid's size follows the cluster count
         let by_count = (ext.x * ext.y / (CELLS_PER_CASTER * kept.len() as f32)).sqrt();
-        let cell = (CELL_RADII * mean_r).max(by_count).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
+        let cell = (cell_radii * mean_r).max(by_count).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
         let nx = ((ext.x / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
         let ny = ((ext.y / cell).ceil() as usize).clamp(1, MAX_CELLS_PER_AXIS);
         // cell range of each caster's disc; `as u32` truncates, which equals the floor for the
@@ -622,6 +627,13 @@ const SCAN_MAX: usize = 64;
 
 /// Grid cell size, in mean cluster radii, at least.
 const CELL_RADII: f32 = 2.0;
+/// Grid cell size, in mean cluster radii, at least, of [`ShadowVolumes::coarse`] volumes: twice
+/// [`CELL_RADII`], so fewer cells and slots to build, and a query scans a little more
+/// (measured, callgrind, one thread, the 9,133-node bench tree, round 34: a 10 cm wall move
+/// −3.0 % instructions with 3 radii, −3.9 % with 4; 3 radii in every call cost the analysis and
+/// first adaptation +2.2 %, as their grids answer many more queries each, so only calls that
+/// recompute part of their trees take them).
+const COARSE_CELL_RADII: f32 = 4.0;
 /// Grid cells per cluster over the grid's area, at most (the cell is at least that coarse).
 const CELLS_PER_CASTER: f32 = 2.0;
 
@@ -645,7 +657,7 @@ impl ShadowVolumes {
         let grids = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
         let flat = (occ.len() <= SCAN_MAX).then(|| Casters::flat(&occ, &owners));
         let full = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
-        ShadowVolumes { occ, owners, dirs, grids, flat, region: None, full }
+        ShadowVolumes { occ, owners, dirs, grids, flat, region: None, full, cell_radii: CELL_RADII }
     }
 
     /// The same shadow volumes, told that queries come from inside the box `lo`–`hi` (m): each
@@ -659,6 +671,16 @@ impl ShadowVolumes {
         if lo.cmple(hi).all() && lo.is_finite() && hi.is_finite() {
             self.region = Some((lo, hi));
         }
+        self
+    }
+
+    /// The same shadow volumes with coarser grid cells ([`COARSE_CELL_RADII`] mean caster radii
+    /// at least, against [`CELL_RADII`]): cheaper to build, a little dearer to query, for
+    /// volumes asked few queries per direction (a call that recomputes part of a tree). The
+    /// answers are the same bit for bit: a query still tests every caster whose disc covers
+    /// its cell, in the same depth order.
+    pub fn coarse(mut self) -> ShadowVolumes {
+        self.cell_radii = COARSE_CELL_RADII;
         self
     }
 
@@ -683,14 +705,14 @@ impl ShadowVolumes {
     }
 
     fn grid(&self, k: usize) -> &DirGrid {
-        self.grids[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, self.region))
+        self.grids[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, self.region, self.cell_radii))
     }
 
     /// The grid of direction `k` for a query at `p`: the region's, or every caster's when `p`
     /// lies outside the region.
     fn grid_for(&self, k: usize, p: Vec3) -> &DirGrid {
         match self.region {
-            Some((lo, hi)) if !(p.cmpge(lo).all() && p.cmple(hi).all()) => self.full[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, None)),
+            Some((lo, hi)) if !(p.cmpge(lo).all() && p.cmple(hi).all()) => self.full[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, None, self.cell_radii)),
             _ => self.grid(k),
         }
     }

@@ -493,10 +493,16 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
     // where this call's light queries can come from: the trees with a node to recompute, as
     // they stand and as grown, widened by their largest cluster and 2 m for the bending within
     // the call (a query outside is still answered exactly, from grids of every caster)
+    // and whether the call recomputes only part of its trees (some node is below no changed
+    // signature): then each level's grids answer few queries, and coarser cells cost less
+    // (`ShadowVolumes::coarse`; the same answers)
+    let mut partial = false;
     let region = {
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for (t, own) in trees.iter().zip(&own) {
-            if own.iter().any(|&x| x) {
+            if !own.iter().any(|&x| x) {
+                partial = true;
+            } else {
                 let r = 2.0 + t.analysis.stages.iter().flatten().map(|c| c.radius).fold(0.0f32, f32::max);
                 // only the subtrees below a node whose signature changed are recomputed (a
                 // node is recomputed when its own signature changed or its parent turned), and
@@ -509,6 +515,8 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
                         for p in [t.pos[k], t.input.nodes[k].pos] {
                             (lo, hi) = (lo.min(p - r), hi.max(p + r));
                         }
+                    } else {
+                        partial = true;
                     }
                 }
             }
@@ -627,6 +635,7 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
         // products it saves; above, it is not)
         let delta = (reuse_pays && 5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(region.0, region.1));
         let vols = ShadowVolumes::new(sky, casters).within(region.0, region.1);
+        let vols = if partial { vols.coarse() } else { vols };
         // trees at work at this level share its grids: built over the cores before the trees'
         // levels run side by side (else each tree's first batch builds them, and a core wanting
         // a grid that the other core is building waits for it); only with two or more such
