@@ -14,15 +14,9 @@ use sylva::sim::tiles::{LocalTransport, Transport};
 use sylva::job::hydrology_ranks;
 use sylva::terrain::{fields, io};
 
-/// CPU seconds (user + system) of this process so far (getrusage).
-fn cpu() -> f64 {
-    // SAFETY: getrusage writes into the zeroed struct we own.
-    let mut u: libc::rusage = unsafe { std::mem::zeroed() };
-    // SAFETY: a valid pointer to a rusage struct.
-    unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut u) };
-    let s = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    s(u.ru_utime) + s(u.ru_stime)
-}
+#[path = "../benches/common/mod.rs"]
+mod common;
+use common::cpu;
 
 fn main() {
     let arg = std::env::args().nth(1).unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/terrains/coweeta_basin_10m_utm17n.tif").into());
