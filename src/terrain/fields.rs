@@ -526,28 +526,43 @@ pub(crate) fn flat_dirs(cells: &[FlatCell], w: usize, h: usize, slot: &dyn Fn(us
 /// The cell (row-major index) that cell `i` of the D8 direction grid `dir` drains into; `None`
 /// at an outlet ([`OUTLET`]), for a code that is not a direction, or for a step off the grid.
 pub fn downstream(dir: &Grid<u8>, i: usize) -> Option<usize> {
-    let (dc, dr) = *D8.get(*dir.data.get(i)? as usize)?;
-    let (c, r) = ((i % dir.width) as i64 + dc, (i / dir.width) as i64 + dr);
-    (c >= 0 && r >= 0 && (c as usize) < dir.width && (r as usize) < dir.height).then(|| r as usize * dir.width + c as usize)
+    d8_step(i, *dir.data.get(i)?, dir.width, dir.height)
+}
+
+/// The cell (row-major index) that cell `g` of a `w × h` raster drains into under the D8 code
+/// `d` (index into [`D8`]); `None` for [`OUTLET`], any other code that is not a direction, or a
+/// step off the raster.
+#[inline]
+pub(crate) fn d8_step(g: usize, d: u8, w: usize, h: usize) -> Option<usize> {
+    let (dc, dr) = *D8.get(d as usize)?;
+    let (c, r) = ((g % w) as i64 + dc, (g / w) as i64 + dr);
+    (c >= 0 && r >= 0 && (c as usize) < w && (r as usize) < h).then(|| r as usize * w + c as usize)
 }
 
 /// D8 flow accumulation (number of cells, including the cell itself, draining through each
 /// cell), by a topological sweep (Kahn) over the direction grid. Masked cells hold 0.
 /// Invariant: the sum over outlet cells equals the number of valid cells.
 pub fn flow_accumulation(dir: &Grid<u8>, m: &Grid<bool>) -> Grid<f32> {
-    let (w, h) = (m.width, m.height);
-    let n = w * h;
-    let down = |i: usize| downstream(dir, i);
+    let acc = accumulate(m.width * m.height, |i| m.data[i], |i| downstream(dir, i));
+    Grid { width: m.width, height: m.height, data: acc.into_iter().map(|v| v as f32).collect() }
+}
+
+/// The topological sweep (Kahn) of [`flow_accumulation`] over `n` cells: each cell `i` with
+/// `valid(i)` counts 1 and passes its count to `down(i)` (`None`: it leaves the cells swept);
+/// invalid cells hold 0. The order of the additions is fixed by the cells' indices, so the
+/// result is the same bit for bit wherever the sweep runs (the whole raster, or one band of it
+/// in `terrain::hydrology`).
+pub(crate) fn accumulate(n: usize, valid: impl Fn(usize) -> bool, down: impl Fn(usize) -> Option<usize>) -> Vec<f64> {
     let mut indeg = vec![0u8; n];
     for i in 0..n {
-        if m.data[i] {
+        if valid(i) {
             if let Some(j) = down(i) {
                 indeg[j] += 1;
             }
         }
     }
-    let mut acc: Vec<f64> = m.data.iter().map(|v| if *v { 1.0 } else { 0.0 }).collect();
-    let mut stack: Vec<usize> = (0..n).filter(|&i| m.data[i] && indeg[i] == 0).collect();
+    let mut acc: Vec<f64> = (0..n).map(|i| if valid(i) { 1.0 } else { 0.0 }).collect();
+    let mut stack: Vec<usize> = (0..n).filter(|&i| valid(i) && indeg[i] == 0).collect();
     while let Some(i) = stack.pop() {
         if let Some(j) = down(i) {
             acc[j] += acc[i];
@@ -557,7 +572,7 @@ pub fn flow_accumulation(dir: &Grid<u8>, m: &Grid<bool>) -> Grid<f32> {
             }
         }
     }
-    Grid { width: w, height: h, data: acc.into_iter().map(|v| v as f32).collect() }
+    acc
 }
 
 /// Minimum tan β used in the TWI so that flat cells stay finite (≈ 0.057°).

@@ -307,13 +307,9 @@ pub(crate) fn solve_flats(cells: &[FlatCell], w: usize, h: usize, geo: &GeoRef) 
     fields::flat_dirs(cells, w, h, &|i| slot.get(&i).copied(), &dists)
 }
 
-/// The raster cell that raster cell `g` of a `w × h` raster flows into under code `d`.
-#[inline]
-pub(crate) fn down(g: usize, d: u8, w: usize, h: usize) -> Option<usize> {
-    let (dc, dr) = *D8.get(d as usize)?;
-    let (c, r) = ((g % w) as i64 + dc, (g / w) as i64 + dr);
-    (c >= 0 && r >= 0 && (c as usize) < w && (r as usize) < h).then(|| r as usize * w + c as usize)
-}
+/// The raster cell that raster cell `g` of a `w × h` raster flows into under code `d`
+/// ([`fields::d8_step`]).
+pub(crate) use fields::d8_step as down;
 
 /// Pass 3 of a band: the accumulation of its own cells alone, the cells whose flow leaves it
 /// `(cell, count, cell it flows into)` and its entry cells `(cell, exit cell of its path or
@@ -325,25 +321,7 @@ pub(crate) fn accumulate_band(br: &BandRows, dir: &[u8], m: &[bool], halo_dirs: 
     let base = br.row0 * w;
     let valid = |i: usize| m[br.x(i % w, br.row0 + i / w)];
     let local_down = |i: usize| down(base + i, dir[i], w, h).and_then(|g| br.own(g));
-    let mut indeg = vec![0u8; n];
-    for i in 0..n {
-        if valid(i) {
-            if let Some(j) = local_down(i) {
-                indeg[j] += 1;
-            }
-        }
-    }
-    let mut acc: Vec<f64> = (0..n).map(|i| if valid(i) { 1.0 } else { 0.0 }).collect();
-    let mut stack: Vec<usize> = (0..n).filter(|&i| valid(i) && indeg[i] == 0).collect();
-    while let Some(i) = stack.pop() {
-        if let Some(j) = local_down(i) {
-            acc[j] += acc[i];
-            indeg[j] -= 1;
-            if indeg[j] == 0 {
-                stack.push(j);
-            }
-        }
-    }
+    let acc = fields::accumulate(n, &valid, &local_down);
     let exits: Vec<(usize, f64, usize)> = (0..n).filter(|&i| valid(i)).filter_map(|i| down(base + i, dir[i], w, h).filter(|g| br.own(*g).is_none()).map(|g| (base + i, acc[i], g))).collect();
     let mut entries: Vec<usize> = Vec::new();
     for (r, codes) in halo_dirs {
