@@ -231,3 +231,57 @@ fn embedded_coweeta_basin_and_its_valid_rectangle() {
     assert!((740.0..760.0).contains(&lo) && (1270.0..1290.0).contains(&hi), "{lo}–{hi} m");
     assert!(io::embedded_terrain("nowhere").unwrap_err().to_string().contains("coweeta"));
 }
+
+/// A 4 × 3 Float32 GeoTIFF with the given GeoKeys (after the header) and GDAL_METADATA.
+fn geotiff_with_keys(path: &Path, keys: &[u16], gdal_metadata: Option<&str>) {
+    use tiff::encoder::{colortype, TiffEncoder};
+    use tiff::tags::Tag;
+    let mut f = std::fs::File::create(path).unwrap();
+    let mut enc = TiffEncoder::new(&mut f).unwrap();
+    let mut img = enc.new_image::<colortype::Gray32Float>(4, 3).unwrap();
+    let e = img.encoder();
+    e.write_tag(Tag::ModelPixelScaleTag, &[10.0f64, 10.0, 0.0][..]).unwrap();
+    e.write_tag(Tag::ModelTiepointTag, &[0.0f64, 0.0, 0.0, 2_000_000.0, 700_000.0, 0.0][..]).unwrap();
+    let mut k = vec![1u16, 1, 0, (keys.len() / 4) as u16];
+    k.extend_from_slice(keys);
+    e.write_tag(Tag::GeoKeyDirectoryTag, &k[..]).unwrap();
+    if let Some(m) = gdal_metadata {
+        e.write_tag(Tag::Unknown(42112), m).unwrap();
+    }
+    img.write_data(&[1000.0f32, 1001.0, 1002.0, 1003.0, 1004.0, 1005.0, 1006.0, 1007.0, 1008.0, 1009.0, 1010.0, 1011.0]).unwrap();
+}
+
+#[test]
+fn dems_in_feet_are_refused_naming_the_unit() {
+    let dir = tempfile::tempdir().unwrap();
+    // NC State Plane (EPSG:2264) in US survey feet, as GDAL writes it: read as metres before
+    // round 35 (3.28× too wide, 10.8× the area; trial 35)
+    let p = dir.path().join("stateplane_ftus.tif");
+    geotiff_with_keys(&p, &[1024, 0, 1, 1, 3072, 0, 1, 2264, 3076, 0, 1, 9003], None);
+    let e = err_of(io::load(&p));
+    assert!(e.contains("stateplane_ftus.tif") && e.contains("3076") && e.contains("US survey foot") && e.contains("gdalwarp"), "{e}");
+    // the same file in metres (9001) is read
+    let p = dir.path().join("utm_m.tif");
+    geotiff_with_keys(&p, &[1024, 0, 1, 1, 3072, 0, 1, 32617, 3076, 0, 1, 9001, 4099, 0, 1, 9001], None);
+    let t = io::load(&p).unwrap();
+    assert_eq!((t.elevation.width, t.elevation.height, t.geo.pixel_w), (4, 3, 10.0));
+    // elevations in feet: the vertical key, and GDAL's band unit
+    let p = dir.path().join("vert_ft.tif");
+    geotiff_with_keys(&p, &[1024, 0, 1, 1, 3072, 0, 1, 32617, 4099, 0, 1, 9002], None);
+    let e = err_of(io::load(&p));
+    assert!(e.contains("vert_ft.tif") && e.contains("4099") && e.contains("foot"), "{e}");
+    let p = dir.path().join("band_ft.tif");
+    let md = "<GDALMetadata>\n  <Item name=\"DESCRIPTION\" sample=\"0\" role=\"description\">elev</Item>\n  <Item name=\"UNITTYPE\" sample=\"0\" role=\"unittype\">ft</Item>\n</GDALMetadata>";
+    geotiff_with_keys(&p, &[1024, 0, 1, 1, 3072, 0, 1, 32617], Some(md));
+    let e = err_of(io::load(&p));
+    assert!(e.contains("band_ft.tif") && e.contains("`ft`"), "{e}");
+    let p = dir.path().join("band_m.tif");
+    geotiff_with_keys(&p, &[1024, 0, 1, 1, 3072, 0, 1, 32617], Some(&md.replace(">ft<", ">m<")));
+    assert!(io::load(&p).is_ok());
+    // an ASCII grid whose .prj is in feet (ESRI WKT)
+    let grid = "ncols 3\nnrows 2\nxllcorner 2000000\nyllcorner 700000\ncellsize 30\n1 2 3\n4 5 6\n";
+    std::fs::write(dir.path().join("ft.asc"), grid).unwrap();
+    std::fs::write(dir.path().join("ft.prj"), "PROJCS[\"NAD_1983_StatePlane_North_Carolina_FIPS_3200_Feet\",GEOGCS[\"GCS_North_American_1983\",DATUM[\"D_North_American_1983\",SPHEROID[\"GRS_1980\",6378137.0,298.257222101]],PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]],PROJECTION[\"Lambert_Conformal_Conic\"],PARAMETER[\"False_Easting\",2000000.002616666],PARAMETER[\"False_Northing\",0.0],PARAMETER[\"Central_Meridian\",-79.0],PARAMETER[\"Standard_Parallel_1\",34.33333333333334],PARAMETER[\"Standard_Parallel_2\",36.16666666666666],PARAMETER[\"Latitude_Of_Origin\",33.75],UNIT[\"Foot_US\",0.3048006096012192]]").unwrap();
+    let e = err_of(io::load(&dir.path().join("ft.asc")));
+    assert!(e.contains("ft.prj") && e.contains("Foot_US") && e.contains("expected metres"), "{e}");
+}

@@ -60,7 +60,9 @@ pub fn embedded_terrain(name: &str) -> Result<Terrain> {
 /// 0–65.535 km scaled as raw/1 m; use [`load_png_heightmap`] to give cell size and height range).
 ///
 /// Errors: [`Error::Io`] (missing file), [`Error::Format`] (corrupt or unsupported content,
-/// naming the field or line), [`Error::TooLarge`], [`Error::Invalid`] (no valid cell).
+/// naming the field or line; a projected CRS or elevations in another unit than the metre,
+/// such as a US State Plane DEM in US survey feet, naming the unit and a `gdalwarp` /
+/// `gdal_calc.py` command to convert it), [`Error::TooLarge`], [`Error::Invalid`] (no valid cell).
 pub fn load(path: &Path) -> Result<Terrain> {
     if path.is_dir() {
         return Err(Error::format(path, "is a folder: expected a DEM file (.tif, .tiff, .asc or .png)"));
@@ -130,6 +132,8 @@ struct GeoTiffTags {
     tie: Option<Vec<f64>>,
     keys: Option<Vec<u16>>,
     nodata: Option<f64>,
+    /// GDAL_METADATA (42112) text, where GDAL keeps a band's unit (`role="unittype"`).
+    gdal_metadata: Option<String>,
 }
 
 /// Opens a single-band GeoTIFF: its decoder (with limits for up to [`MAX_CELLS`] samples),
@@ -192,7 +196,8 @@ fn open_geotiff<R: Read + Seek>(mut r: R, path: &Path, window: Option<crate::gri
         }
         None => None,
     };
-    Ok((dec, w, h, GeoTiffTags { scale, transform, tie, keys, nodata }))
+    let gdal_metadata = dec.find_tag(Tag::Unknown(42112)).ok().flatten().and_then(|v| v.into_string().ok());
+    Ok((dec, w, h, GeoTiffTags { scale, transform, tie, keys, nodata, gdal_metadata }))
 }
 
 /// Decoded samples as f32 elevations, nodata (within 10⁻⁶ relative) and non-finite values NaN.
@@ -210,6 +215,54 @@ fn tiff_samples(img: tiff::decoder::DecodingResult, nodata: Option<f64>, path: &
     Ok(data.into_iter().map(|x| if nodata.is_some_and(|nd| (x as f64 - nd).abs() <= 1e-6 * nd.abs().max(1.0)) || !x.is_finite() { f32::NAN } else { x }).collect())
 }
 
+/// EPSG unit-of-measure code of the metre (GeoTIFF 1.1, ProjLinearUnitsGeoKey and
+/// VerticalUnitsGeoKey values).
+const EPSG_METRE: u16 = 9001;
+
+/// Name of an EPSG linear unit code, for messages.
+fn epsg_unit_name(code: u16) -> &'static str {
+    match code {
+        9001 => "metre",
+        9002 => "foot",
+        9003 => "US survey foot",
+        9005 => "Clarke's foot",
+        9014 => "fathom",
+        9030 => "nautical mile",
+        9035 => "statute mile",
+        9036 => "kilometre",
+        9037 => "Clarke's yard",
+        9096 => "yard",
+        32767 => "user-defined",
+        _ => "not a metre",
+    }
+}
+
+/// The band unit GDAL writes into GDAL_METADATA (`<Item … role="unittype">ft</Item>`), if any.
+fn gdal_unit_type(xml: &str) -> Option<String> {
+    let i = xml.find("role=\"unittype\"")?;
+    let rest = &xml[i..];
+    let start = rest.find('>')? + 1;
+    let end = rest[start..].find('<')?;
+    Some(rest[start..start + end].trim().to_string())
+}
+
+/// Whether a unit name (a GDAL band unit, a WKT `UNIT` name) is a foot of any kind.
+fn is_feet(unit: &str) -> bool {
+    let u = unit.to_ascii_lowercase();
+    u == "ft" || u.contains("foot") || u.contains("feet") || u.starts_with("ft") || u.starts_with("us-ft") || u.contains("_ft") || u.contains("us_ft")
+}
+
+/// The linear unit of a projected CRS's WKT (OGC WKT 1, ESRI or WKT 2): the last `UNIT[` or
+/// `LENGTHUNIT[` of the text (in WKT 1 the projected CRS's own unit follows the projection's
+/// parameters; in WKT 2 the coordinate system's unit comes last), as (name, metres per unit).
+fn wkt_linear_unit(wkt: &str) -> Option<(String, f64)> {
+    let i = wkt.rfind("UNIT[\"")?;
+    let rest = &wkt[i + 6..];
+    let (name, rest) = rest.split_once('"')?;
+    let num: String = rest.trim_start_matches([',', ' ']).chars().take_while(|c| c.is_ascii_digit() || matches!(c, '.' | 'e' | 'E' | '-' | '+')).collect();
+    Some((name.to_string(), num.parse().ok()?))
+}
+
 /// Georeferencing of a `w × h` GeoTIFF from its tags, and whether its rows run south-up (the
 /// caller flips them so that row 0 is north).
 fn geotiff_georef(tags: &GeoTiffTags, w: u32, h: u32, path: &Path) -> Result<(GeoRef, bool)> {
@@ -221,6 +274,8 @@ fn geotiff_georef(tags: &GeoTiffTags, w: u32, h: u32, path: &Path) -> Result<(Ge
             match (q[0], q[1]) {
                 (1024, 0) => model = q[3],
                 (1025, 0) => raster_type = q[3],
+                (3076, 0) if q[3] != EPSG_METRE => return Err(Error::format(path, format!("ProjLinearUnitsGeoKey (3076) = {} ({}): expected {EPSG_METRE} (metre); Sylva reads a projected DEM's coordinates in metres: reproject it to a metre CRS first, e.g. `gdalwarp -t_srs EPSG:326NN in.tif out.tif` (NN: your UTM zone)", q[3], epsg_unit_name(q[3])))),
+                (4099, 0) if q[3] != EPSG_METRE => return Err(Error::format(path, format!("VerticalUnitsGeoKey (4099) = {} ({}): expected {EPSG_METRE} (metre); convert the elevations to metres first, e.g. `gdal_calc.py -A in.tif --calc=\"A*0.3048\" --outfile=out.tif` for feet", q[3], epsg_unit_name(q[3])))),
                 (3072, 0) | (2048, 0) if epsg.is_none() || q[0] == 3072 => {
                     if q[3] != 32767 && q[3] != 0 {
                         epsg = Some(q[3] as u32)
@@ -228,6 +283,11 @@ fn geotiff_georef(tags: &GeoTiffTags, w: u32, h: u32, path: &Path) -> Result<(Ge
                 }
                 _ => {}
             }
+        }
+    }
+    if let Some(unit) = tags.gdal_metadata.as_deref().and_then(gdal_unit_type) {
+        if is_feet(&unit) {
+            return Err(Error::format(path, format!("GDAL_METADATA band unit = `{unit}`: expected metres; convert the elevations to metres first, e.g. `gdal_calc.py -A in.tif --calc=\"A*0.3048\" --outfile=out.tif`")));
         }
     }
     let crs = match (model, scale, transform) {
@@ -284,7 +344,9 @@ fn geotiff_georef(tags: &GeoTiffTags, w: u32, h: u32, path: &Path) -> Result<(Ge
 /// Georeferencing: ModelPixelScale (33550), ModelTiepoint (33922) and the GeoKeyDirectory
 /// (34735): GTModelTypeGeoKey (1024) 2 = geographic, 1 = projected; EPSG from
 /// ProjectedCSTypeGeoKey (3072) or GeographicTypeGeoKey (2048). GDAL_NODATA (42113, text) marks
-/// invalid cells, which become NaN. `path` is only used in messages.
+/// invalid cells, which become NaN. `path` is only used in messages. A ProjLinearUnitsGeoKey
+/// (3076) or VerticalUnitsGeoKey (4099) other than 9001 (metre), or a GDAL band unit in feet
+/// (GDAL_METADATA, 42112), is refused with [`Error::Format`] naming the key and the unit.
 pub fn read_geotiff<R: Read + Seek>(r: R, path: &Path) -> Result<Terrain> {
     let (mut dec, w, h, tags) = open_geotiff(r, path, None)?;
     let img = dec.read_image().map_err(|e| tiff_err(path, "image data", e))?;
@@ -435,11 +497,16 @@ pub fn epsg_projection(epsg: u32) -> Option<Projection> {
 /// The projection described by a `.prj` in OGC or ESRI WKT (`PROJCS[...]`), converted to a
 /// PROJ string by `proj4wkt`; `None` for a geographic `.prj` (`GEOGCS` only).
 ///
-/// Errors: [`Error::Format`] naming `prj_path` when the WKT cannot be parsed or names a
-/// projection `proj4wkt` does not know.
+/// Errors: [`Error::Format`] naming `prj_path` when the WKT cannot be parsed, names a
+/// projection `proj4wkt` does not know, or its linear unit (the last `UNIT[`) is not the metre.
 pub fn wkt_projection(wkt: &str, prj_path: &Path) -> Result<Option<Projection>> {
     if !wkt.contains("PROJCS") {
         return Ok(None);
+    }
+    if let Some((unit, m)) = wkt_linear_unit(wkt) {
+        if (m - 1.0).abs() > 1e-9 {
+            return Err(Error::format(prj_path, format!("projected CRS unit = `{unit}` ({m} m): expected metres; Sylva reads a projected DEM's coordinates in metres: reproject it to a metre CRS first, e.g. `gdalwarp -t_srs EPSG:326NN in.asc out.tif` (NN: your UTM zone)")));
+        }
     }
     let name = wkt.split_once("PROJCS[\"").and_then(|(_, r)| r.split_once('"')).map(|(n, _)| n.replace('_', " ")).unwrap_or_else(|| "unnamed".into());
     let proj = proj4wkt::wkt_to_projstring(wkt.trim()).map_err(|e| Error::format(prj_path, format!("projection `{name}`: cannot read its WKT ({e}); expected OGC or ESRI WKT of a projected CRS")))?;
