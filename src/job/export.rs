@@ -139,10 +139,12 @@ pub struct ExportStats {
     /// Smallest skeleton node count among them (0 when there are none).
     pub nodes_min: usize,
     /// Leaf cards of the full-detail meshes of all trees written (each tree counted, shared
-    /// meshes too).
+    /// meshes too; conifers at full detail draw none: their shoot cards are counted in
+    /// [`ExportStats::sprig_cards`]).
     pub leaf_cards: usize,
-    /// Leaf-cluster cards (sprigs, [`sprig_cards`]) of the full-detail meshes of all trees
-    /// written (`--full-detail`; 0 otherwise).
+    /// Leaf-cluster cards of the full-detail meshes of all trees written: the sprigs of
+    /// broadleaves ([`sprig_cards`]) and the shoot cards of conifers
+    /// ([`super::leaf_area::shoot_cards`], two a shoot) at the full strand count; 0 otherwise.
     pub sprig_cards: usize,
     /// Wall time of the adaptation (s): growing and analysing the open-grown trees
     /// ([`ExportStats::analysis_s`]) and adapting the neighbourhoods
@@ -295,7 +297,14 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             let sp = &library.species[t.species as usize];
             // full detail: the leaves grown to at most MAX_CARD_GROWTH, the rest of the leaf
             // area as sprigs (as the stills draw them); else copies of the few tips' cards
-            let sprigs = if full {
+            // conifers: a pair of crossed shoot cards a shoot in place of the needle cards
+            // (round 35: 110,000 needle cards of 6 cm read as an empty crown), which stay for
+            // the lower levels
+            let needles = full && crate::structure::texture::LeafShape::of_species(sp).is_needle();
+            let sprigs = if needles {
+                let leaf_area = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m);
+                super::leaf_area::shoot_cards(&sk, &lv, leaf_area, cover.sprig[t.species as usize], t.crown_radius_m, t.species as u64).mesh
+            } else if full {
                 super::adapted::crown_leaf_cards(&mut lv, t, sp, &cover)
             } else {
                 let leaf_area = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m);
@@ -321,9 +330,12 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
                 canon.extend([p.x, p.y, p.z]);
             }
             // the mid level: the crown hull of the adapted clusters, as in the pictures
-            let (chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
+            let (mut chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
+            if needles {
+                chain.levels[0].leaves = TriMesh::default();
+            }
             let tris = o.levels.iter().map(|&l| chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 }).sum();
-            let figures = [sk.nodes.len(), lv.leaves.len(), tris, sprigs.positions.len() / 4];
+            let figures = [sk.nodes.len(), if needles { 0 } else { lv.leaves.len() }, tris, sprigs.positions.len() / 4];
             Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize, sprigs }, s.to_array(), t.base - origin, t.species as usize, figures))
         })
         .collect();

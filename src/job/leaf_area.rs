@@ -119,6 +119,134 @@ pub fn sprig_cards(lv: &mut crate::structure::Leaves, leaf_area_m2: f32, card_co
     m
 }
 
+/// Most shoots beyond a branch segment for [`shoot_cards`] to foliate it as a twig (16, ESTIMATE: the
+/// last few years' branchlets of a limb carry needles, not only its tips).
+pub const FOLIATED_TWIG_SHOOTS: u32 = 16;
+
+/// Largest side of a shoot card of [`shoot_cards`] (m, 0.8: a spray of a few years' shoots,
+/// not a board).
+pub const MAX_SHOOT_CARD_M: f32 = 0.8;
+
+/// What [`shoot_cards`] made of a conifer's needle cards.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ShootCards {
+    /// The cards: two crossed square cards a shoot (4 vertices and 2 triangles each, UV 0–1
+    /// over the card, the leaf-cluster texture), in the frame of the leaves given.
+    pub mesh: TriMesh,
+    /// Shoots and twigs foliated (skeleton segments), i.e. card pairs.
+    pub shoots: usize,
+    /// Needle cards the shoots replace.
+    pub needle_cards: usize,
+    /// Leaf area (m², one-sided) the cards carry: each card's side² times `cluster_cover`.
+    pub leaf_area_m2: f32,
+    /// Mean side of a card (m).
+    pub mean_side_m: f32,
+}
+
+/// The full-detail foliage of a conifer (issue 32, round 35): one pair of crossed shoot cards
+/// per shoot in place of its needle cards. EcoMod puts a conifer's needle cards on its tip
+/// segments (`leaf_distribution = "Coniferous"`: `leaf_density` cards of `leaf_size_m` along
+/// each tip, Norway spruce 30 of 10 cm); a 25 m spruce of a stand carries some 110,000 of
+/// them, shrunk to 6 × 3 cm by [`sprig_cards`] to its crown's leaf area, which drew a crown of
+/// fine needles that reads as empty from 5–50 m (the stem showing through; round 34 in
+/// Blender). Here each node that carries needle cards (a shoot) gets two square cards
+/// through the centre of its cards (leaf centres), and so does each branch segment (not the
+/// stem's) with at most [`FOLIATED_TWIG_SHOOTS`] shoots beyond it (a twig, through its
+/// segment's middle: a spruce keeps its needles for several years (ESTIMATE), so a limb is green
+/// along its last branchlets, not only at its tips), crossed along the segment's axis (from
+/// its parent node), the first turned about that axis by a hashed angle, the second a quarter
+/// turn from it, each drawn with the leaf-cluster texture (needle shoots over a disc,
+/// [`crate::structure::texture::cluster_texture`], of which `cluster_cover` shows needles). A
+/// card's side is proportional to its segment's length plus one needle card's, scaled for all shoots alike so that the cards carry
+/// `leaf_area_m2` (the crown's leaf area, [`crate::sim::phases::light::crown_leaf_area`], the
+/// leaf area the light model shades with), at most [`MAX_SHOOT_CARD_M`] (the leaf area is
+/// then short of the target, as `leaf_area_m2` in the result says); centres kept within
+/// `crown_radius_m` of the stem axis (the frame's origin, z up). `lv` is not changed (the
+/// needle cards remain the source of the lower levels of detail). Deterministic: the turns hash
+/// `seed` and the node. A tree without needle cards, or a target of 0, gets none.
+pub fn shoot_cards(sk: &crate::structure::Skeleton, lv: &crate::structure::Leaves, leaf_area_m2: f32, cluster_cover: f32, crown_radius_m: f32, seed: u64) -> ShootCards {
+    let mut out = ShootCards { needle_cards: lv.leaves.len(), ..Default::default() };
+    if lv.leaves.is_empty() || !(leaf_area_m2 > 0.0) {
+        return out;
+    }
+    // per node: (sum of leaf centres, cards, largest card)
+    let mut by_node: std::collections::BTreeMap<u32, (Vec3, u32, f32)> = std::collections::BTreeMap::new();
+    for l in &lv.leaves {
+        let e = by_node.entry(l.node as u32).or_insert((Vec3::ZERO, 0, 0.0));
+        e.0 += l.pos + l.dir * (0.5 * l.size);
+        e.1 += 1;
+        e.2 = e.2.max(l.size);
+    }
+    let seg = |node: usize| -> (Vec3, Vec3, f32) {
+        match sk.nodes.get(node).and_then(|nd| nd.parent.and_then(|p| sk.nodes.get(p as usize)).map(|par| (nd, par))) {
+            Some((nd, par)) => (0.5 * (nd.pos + par.pos), (nd.pos - par.pos).normalize_or(Vec3::Z), (nd.pos - par.pos).length()),
+            None => (Vec3::ZERO, Vec3::Z, 0.0),
+        }
+    };
+    // (node, centre, axis, relative side): the shoots, centred on their needle cards
+    let mut shoots: Vec<(u32, Vec3, Vec3, f32)> = by_node
+        .iter()
+        .map(|(&node, &(sum, n, size))| {
+            let (_, axis, len) = seg(node as usize);
+            (node, sum / n as f32, axis, len + size)
+        })
+        .collect();
+    // and the twigs that carry them: a branch segment (not the stem) with at most
+    // FOLIATED_TWIG_SHOOTS shoots beyond it, centred on the segment (parents precede children)
+    let mut beyond = vec![0u32; sk.nodes.len()];
+    for &n in by_node.keys() {
+        if let Some(b) = beyond.get_mut(n as usize) {
+            *b = 1;
+        }
+    }
+    for i in (1..sk.nodes.len()).rev() {
+        if let Some(p) = sk.nodes[i].parent {
+            if (p as usize) < i {
+                beyond[p as usize] += beyond[i];
+            }
+        }
+    }
+    let mean_size = lv.leaves.iter().map(|l| l.size).sum::<f32>() / lv.leaves.len() as f32;
+    for (i, n) in sk.nodes.iter().enumerate() {
+        if n.gravelius > 0 && !by_node.contains_key(&(i as u32)) && (1..=FOLIATED_TWIG_SHOOTS).contains(&beyond[i]) {
+            let (c, axis, len) = seg(i);
+            if len > 0.0 {
+                shoots.push((i as u32, c, axis, len + mean_size));
+            }
+        }
+    }
+    let cover = cluster_cover.clamp(0.05, 1.0);
+    let sum_sq: f32 = shoots.iter().map(|s| 2.0 * s.3 * s.3).sum();
+    if !(sum_sq > 0.0) {
+        return out;
+    }
+    let k = (leaf_area_m2 / (cover * sum_sq)).sqrt();
+    let rmax = crown_radius_m.max(0.05);
+    let m = &mut out.mesh;
+    m.positions.reserve(8 * shoots.len());
+    let (mut area, mut sides) = (0.0f32, 0.0f32);
+    for &(node, c, axis, rel) in &shoots {
+        let side = (k * rel).min(MAX_SHOOT_CARD_M);
+        let mut c = c;
+        let rho = c.truncate().length();
+        if rho > rmax {
+            c = (c.truncate() * (rmax / rho)).extend(c.z);
+        }
+        let turn = crate::rng::unit_f32(crate::rng::hash(&[seed, 0x5400_7c4d, node as u64])) * std::f32::consts::PI;
+        let across0 = axis.any_orthonormal_vector();
+        let q = glam::Quat::from_axis_angle(axis, turn);
+        for a in [q * across0, q * axis.cross(across0)] {
+            crate::structure::mesh::quad(m, c, a * (0.5 * side), axis * (0.5 * side));
+        }
+        area += 2.0 * side * side * cover;
+        sides += side;
+    }
+    out.shoots = shoots.len();
+    out.leaf_area_m2 = area;
+    out.mean_side_m = sides / shoots.len() as f32;
+    out
+}
+
 /// The share of a leaf card and of a leaf-cluster card of species `sp` that their textures
 /// cover, `(card, cluster card)`, 0–1 ([`crate::structure::texture::leaf_card_cover`],
 /// [`crate::structure::texture::cluster_card_cover`] of its leaf shape).

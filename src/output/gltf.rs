@@ -542,6 +542,11 @@ pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
         if sprigs && !levels.contains(&1) {
             levels.push(1);
         }
+        // no leaf material where no full level of the look has leaf cards (a conifer's full
+        // level draws shoot cards in the cluster material, `job::leaf_area::shoot_cards`)
+        if levels.iter().any(|&k| k != 0) && !s.models.iter().any(|m| m.look == l && m.chain.levels.first().is_some_and(|c| !c.leaves.indices.is_empty())) {
+            levels.retain(|&k| k != 0);
+        }
         mats[l] = Some(d.look(&s.looks[l], &levels)?);
     }
     // the models used, their meshes once (every level written, the billboard included: the

@@ -23,6 +23,11 @@
 //!    neighbours)`, never below the least radius of step 2 nor a quarter of the mean grown
 //!    cluster radius (a ray between clusters, or towards a wall that took the foliage, does not
 //!    collapse the surface to a spike); so every cluster centre stays inside.
+//!
+//! The LOD2 level itself ([`cluster_hull_mesh`]) is, since round 35, the hull of the same
+//! clusters by height ([`cluster_band_hull`]: rings of height slabs about the main stem), not
+//! this icosphere: star-shaped about one centre, the icosphere pinched the tall, narrow cones of
+//! spruce in their middle like an hourglass.
 
 use super::mesh::{hull_stem, LodOptions};
 use super::plastic::LeafCluster;
@@ -207,14 +212,115 @@ pub fn cluster_hull(clusters: &[(Vec3, f32)], subdivisions: u32) -> Option<Crown
     Some(CrownHull { mesh, centre, clusters: cl.len() })
 }
 
-/// The crown-hull level (LOD2) of an adapted tree from its clusters: the [`cluster_hull`] of
-/// `clusters` (the frame of `sk`) at [`HULL_SUBDIVISIONS`] as foliage, on the stem of
-/// [`crate::structure::mesh::hull_mesh`] (5 sides, along the main stem from the root to a quarter of the way up
-/// the hull). `None` without a usable cluster (keep the chain's own hull then).
+/// Azimuth sectors of [`cluster_band_hull`] (16).
+pub const BAND_HULL_SECTORS: usize = 16;
+/// Height bands of [`cluster_band_hull`] (7; with a dome ring below and two above, 10 rings:
+/// [`HULL_VERTICES`] vertices and [`HULL_TRIANGLES`] triangles, as the icosphere hull).
+pub const BAND_HULL_BANDS: usize = 7;
+
+/// The crown hull of the clusters `clusters` (centre (m), radius (m); radius ≤ 0 or
+/// non-finite ones ignored; the frame of `sk`) by height (round 35): the crown from the lowest
+/// to the highest point of the cluster spheres is cut into [`BAND_HULL_BANDS`] horizontal
+/// slabs and [`BAND_HULL_SECTORS`] azimuths about the skeleton's main stem where it crosses
+/// each slab's middle ([`super::mesh::main_stem`]; a leaning crown's rings follow it); a
+/// slab's ring lies, in each azimuth, at the support function of the discs the spheres cut
+/// from the slab (the farthest horizontal reach of any sphere within the slab along that
+/// azimuth; a sphere whose centre lies outside the slab counts with its disc at the slab's
+/// nearer face), at least 2 % of the widest ring (a one-sided crown's far side closes in
+/// near the stem); slabs no sphere reaches take the mean of the filled slabs beside them; one
+/// smoothing pass along each ring (½ the radius, ¼ each neighbour: the profile by height is
+/// kept as it is). Dome rings round it off as [`super::mesh::hull_mesh`]'s do (one below at
+/// 50°, two above at 45° and 75°), a base point on the stem at the lowest height and an apex
+/// over the highest sphere's centre at the highest ([`super::mesh::ring_hull`]). So the hull
+/// follows the crown's radius at each height, a spruce's cone widest near its crown base;
+/// the icosphere of [`cluster_hull`], star-shaped about one centre, pinched a tall narrow
+/// crown in its middle like an hourglass (round 34's stand export in Blender: its rays
+/// towards the crown's upper and lower parts leave the crown near the stem, and the smoothing
+/// over directions pulled the sides in). `None` without a usable cluster.
+pub fn cluster_band_hull(sk: &Skeleton, clusters: &[(Vec3, f32)]) -> Option<TriMesh> {
+    let cl: Vec<(Vec3, f32)> = clusters.iter().copied().filter(|(c, r)| c.is_finite() && r.is_finite() && *r > 0.0).collect();
+    if cl.is_empty() {
+        return None;
+    }
+    let lo = cl.iter().map(|(c, r)| c.z - r).fold(f32::INFINITY, f32::min);
+    let hi = cl.iter().map(|(c, r)| c.z + r).fold(f32::NEG_INFINITY, f32::max).max(lo + 1e-3);
+    let (nb, nlon) = (BAND_HULL_BANDS, BAND_HULL_SECTORS);
+    let dz = (hi - lo) / nb as f32;
+    let band_z = |b: usize| lo + (b as f32 + 0.5) * dz;
+    let stem = super::mesh::main_stem(sk);
+    let centre = cl.iter().map(|(c, _)| *c).sum::<Vec3>() / cl.len() as f32;
+    let axis_at = |z: f32| super::mesh::stem_xy_at(&stem, z).map_or(Vec3::new(centre.x, centre.y, z), |v| v.extend(z));
+    let band_axis: Vec<Vec3> = (0..nb).map(|b| axis_at(band_z(b))).collect();
+    let dirs: Vec<(f32, f32)> = (0..nlon).map(|k| ((k as f32 + 0.5) / nlon as f32 * TAU).sin_cos()).map(|(s, c)| (c, s)).collect();
+    // support function per (slab, azimuth); < 0: no sphere reaches the slab
+    let mut rad = vec![f32::NEG_INFINITY; nb * nlon];
+    for b in 0..nb {
+        let (z0, z1) = (band_z(b) - 0.5 * dz, band_z(b) + 0.5 * dz);
+        for (c, r) in &cl {
+            // the sphere's widest disc within the slab
+            let off = if c.z < z0 { z0 - c.z } else if c.z > z1 { c.z - z1 } else { 0.0 };
+            if off >= *r {
+                continue;
+            }
+            let disc = (r * r - off * off).sqrt();
+            let d = (*c - band_axis[b]).truncate();
+            for (k, &(cx, cy)) in dirs.iter().enumerate() {
+                let cell = &mut rad[b * nlon + k];
+                *cell = cell.max(d.x * cx + d.y * cy + disc);
+            }
+        }
+    }
+    let widest = rad.iter().copied().fold(0.0f32, f32::max);
+    let floor = (0.02 * widest).max(1e-3);
+    let filled: Vec<bool> = (0..nb).map(|b| rad[b * nlon..(b + 1) * nlon].iter().any(|r| r.is_finite())).collect();
+    for b in 0..nb {
+        if filled[b] {
+            rad[b * nlon..(b + 1) * nlon].iter_mut().for_each(|r| *r = r.max(floor));
+        }
+    }
+    for b in 0..nb {
+        if filled[b] {
+            continue;
+        }
+        let below = (0..b).rev().find(|&j| filled[j]);
+        let above = (b + 1..nb).find(|&j| filled[j]);
+        for k in 0..nlon {
+            let v: Vec<f32> = [below, above].iter().flatten().map(|&j| rad[j * nlon + k]).collect();
+            rad[b * nlon + k] = if v.is_empty() { floor } else { v.iter().sum::<f32>() / v.len() as f32 };
+        }
+    }
+    let src = rad.clone();
+    for b in 0..nb {
+        for k in 0..nlon {
+            let at = |kk: usize| src[b * nlon + kk % nlon];
+            rad[b * nlon + k] = (0.5 * at(k) + 0.25 * (at(k + 1) + at(k + nlon - 1))).max(floor);
+        }
+    }
+    let (zb, zt) = (band_z(0), band_z(nb - 1));
+    let mut rings: Vec<(f32, Vec3, Vec<f32>)> = Vec::with_capacity(nb + 3);
+    let th = 50f32.to_radians();
+    rings.push((zb - (zb - lo) * th.sin(), band_axis[0], (0..nlon).map(|k| rad[k] * th.cos()).collect()));
+    for b in 0..nb {
+        rings.push((band_z(b), band_axis[b], rad[b * nlon..(b + 1) * nlon].to_vec()));
+    }
+    for deg in [45f32, 75.0] {
+        let t = deg.to_radians();
+        rings.push((zt + (hi - zt) * t.sin(), band_axis[nb - 1], (0..nlon).map(|k| rad[(nb - 1) * nlon + k] * t.cos()).collect()));
+    }
+    let top = cl.iter().fold(cl[0], |a, p| if p.0.z + p.1 > a.0.z + a.1 { *p } else { a }).0;
+    Some(super::mesh::ring_hull(&rings, nlon, top.with_z(hi), axis_at(lo).with_z(lo)))
+}
+
+/// The crown-hull level (LOD2) of an adapted tree from its clusters: the hull by height of
+/// `clusters` ([`cluster_band_hull`], the frame of `sk`; round 35, until then the icosphere
+/// of [`cluster_hull`], which pinched conical crowns) as foliage, on the stem of
+/// [`crate::structure::mesh::hull_mesh`] (5 sides, along the main stem from the root to a
+/// quarter of the way up the hull). `None` without a usable cluster (keep the chain's own hull
+/// then).
 pub fn cluster_hull_mesh(sk: &Skeleton, clusters: &[(Vec3, f32)], o: &LodOptions) -> Option<TreeMesh> {
-    let h = cluster_hull(clusters, HULL_SUBDIVISIONS)?;
-    let (lo, hi) = h.mesh.positions.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| (lo.min(p[2]), hi.max(p[2])));
-    Some(TreeMesh { bark: hull_stem(sk, lo + 0.25 * (hi - lo), o), leaves: h.mesh })
+    let mesh = cluster_band_hull(sk, clusters)?;
+    let (lo, hi) = mesh.positions.iter().fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| (lo.min(p[2]), hi.max(p[2])));
+    Some(TreeMesh { bark: hull_stem(sk, lo + 0.25 * (hi - lo), o), leaves: mesh })
 }
 
 #[cfg(test)]

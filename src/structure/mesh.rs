@@ -350,9 +350,21 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
         let t = deg.to_radians();
         rings.push((zt + (hi.z - zt) * t.sin(), band_axis[nb - 1], (0..nlon).map(|k| rad[(nb - 1) * nlon + k] * t.cos()).collect()));
     }
+    let hull = ring_hull(&rings, nlon, top_xy.with_z(hi.z), axis_at(lo.z).with_z(lo.z));
+    // trunk: a quarter of the way up into the crown, so the hull sits on it
+    TreeMesh { bark: hull_stem(sk, c.z - 0.5 * r.z, o), leaves: hull }
+}
+
+/// The closed mesh of a ring hull ([`hull_mesh`], [`super::crown_hull::cluster_hull_mesh`]):
+/// `rings` from the bottom up, each (height (m), axis point (m; its x, y centre the ring),
+/// `nlon` radii (m) at azimuths (k + ½)/`nlon` · 2π), closed by a fan to `base` below the first
+/// ring and to `apex` above the last. UV: u = k / `nlon`, v = (ring + ½) / rings (0.5, 1 at the
+/// apex and 0.5, 0 at the base); area-weighted face normals, outward (counter-clockwise seen
+/// from outside for radii > 0). `nlon` (≥ 3) · rings + 2 vertices, 2 · `nlon` · rings
+/// triangles.
+pub(crate) fn ring_hull(rings: &[(f32, Vec3, Vec<f32>)], nlon: usize, apex: Vec3, base: Vec3) -> TriMesh {
     let nr = rings.len();
     let mut hull = TriMesh::default();
-    let base_axis = axis_at(lo.z);
     for (j, (z, axis, rr)) in rings.iter().enumerate() {
         for (k, &r_k) in rr.iter().enumerate() {
             let a = (k as f32 + 0.5) / nlon as f32 * TAU;
@@ -360,17 +372,17 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
             hull.uvs.push([k as f32 / nlon as f32, (j as f32 + 0.5) / nr as f32]);
         }
     }
-    let (apex, base) = (hull.positions.len() as u32, hull.positions.len() as u32 + 1);
-    hull.positions.push([top_xy.x, top_xy.y, hi.z]);
-    hull.positions.push([base_axis.x, base_axis.y, lo.z]);
+    let (apex_i, base_i) = (hull.positions.len() as u32, hull.positions.len() as u32 + 1);
+    hull.positions.push(apex.to_array());
+    hull.positions.push(base.to_array());
     hull.uvs.extend_from_slice(&[[0.5, 1.0], [0.5, 0.0]]);
     let v = |b: usize, k: usize| (b * nlon + k % nlon) as u32;
     for k in 0..nlon {
-        hull.indices.extend_from_slice(&[base, v(0, k + 1), v(0, k)]);
+        hull.indices.extend_from_slice(&[base_i, v(0, k + 1), v(0, k)]);
         for b in 0..nr - 1 {
             hull.indices.extend_from_slice(&[v(b, k), v(b, k + 1), v(b + 1, k + 1), v(b, k), v(b + 1, k + 1), v(b + 1, k)]);
         }
-        hull.indices.extend_from_slice(&[v(nr - 1, k), v(nr - 1, k + 1), apex]);
+        hull.indices.extend_from_slice(&[v(nr - 1, k), v(nr - 1, k + 1), apex_i]);
     }
     let mut nrm = vec![Vec3::ZERO; hull.positions.len()];
     for t in hull.indices.chunks_exact(3) {
@@ -381,8 +393,7 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
         }
     }
     hull.normals = nrm.iter().map(|n| n.normalize_or(Vec3::Z).to_array()).collect();
-    // trunk: a quarter of the way up into the crown, so the hull sits on it
-    TreeMesh { bark: hull_stem(sk, c.z - 0.5 * r.z, o), leaves: hull }
+    hull
 }
 
 /// The skeleton's main stem: the root and then, from each node, its first child of the same
