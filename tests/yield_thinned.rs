@@ -26,6 +26,12 @@
 //! there. Round 31 (docs/management.md, "Where the thinned stands' growth goes"): the thinned
 //! beech stand loses its stems to the thinnings at ages 25–50 (3,403/ha, none to crowding)
 //! because its young trees put on 2–4 times PROGNAUS's basal-area increment.
+//! Round 35 (docs/management.md, "Round 35"; measured, not adopted): with beech's diameter
+//! increment on the yield tables' thicket slenderness from crown closure
+//! (`tools/experiments/r35_thicket_allocation.patch`, HD 126 from Wiedemann's mean tree at 30)
+//! and the scenario planted at 1.0 m instead of 1.5 m, the main stand meets ±20 %: N −10 % /
+//! +8 %, Dq +1 % / −8 %, BA −8 % / −8 % at 50 / 100; either change alone does not (N −36 % to
+//! −46 % and −66 % at 50).
 //!
 //! The spruce test passes since round 32: Norway spruce's diameter increment takes PROGNAUS's
 //! competition response (Monserud & Sterba 1996; `life.bai_competition` in
