@@ -395,3 +395,36 @@ fn ecomod_tree_height_follows_the_species_curve_and_scientific_names_are_accepte
     let err = String::from_utf8_lossy(&res.stderr);
     assert!(!res.status.success() && err.contains("--species \"Fagus\"") && err.contains("beech"), "{err}");
 }
+
+/// Trial 35: `tree grow` wrote the whole LOD chain, which Blender showed stacked (the hull and
+/// billboard over the tree). Now `--lod 0` (the default) writes the full-detail mesh alone and
+/// `--lod all` the chain, as `sylva export` does; a bad level names the option.
+#[test]
+fn tree_grow_writes_the_full_level_alone_unless_lod_asks_for_the_chain() {
+    let dir = tempfile::tempdir().unwrap();
+    let meshes = |args: &[&str], name: &str| -> Vec<String> {
+        let out = dir.path().join(name);
+        let mut a = vec!["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "10", "--out", out.to_str().unwrap()];
+        a.extend_from_slice(args);
+        let res = sylva(&a);
+        assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+        let bytes = std::fs::read(&out).unwrap();
+        let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
+        js["nodes"].as_array().unwrap().iter().filter(|n| n.get("mesh").is_some()).map(|n| n["name"].as_str().unwrap().to_string()).collect()
+    };
+    assert_eq!(meshes(&[], "d.glb"), ["beech_LOD0"]);
+    assert_eq!(meshes(&["--lod", "all"], "a.glb"), ["beech_LOD0", "beech_LOD1", "beech_LOD2", "beech_LOD3"]);
+    assert_eq!(meshes(&["--lod", "0,3"], "b.glb"), ["beech_LOD0", "beech_LOD3"]);
+    let res = sylva(&["tree", "grow", "--species", "beech", "--age", "10", "--lod", "7", "--out", dir.path().join("x.glb").to_str().unwrap()]);
+    assert!(!res.status.success());
+    let e = String::from_utf8_lossy(&res.stderr);
+    assert!(e.contains("--lod") && e.contains("7"), "{e}");
+    assert!(!dir.path().join("x.glb").exists());
+    // an OBJ holds the asked levels only
+    let obj = dir.path().join("t.obj");
+    let res = sylva(&["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "10", "--out", obj.to_str().unwrap()]);
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    let objects: Vec<String> = std::fs::read_to_string(&obj).unwrap().lines().filter_map(|l| l.strip_prefix("o ")).map(String::from).collect();
+    assert_eq!(objects, ["beech_LOD0"]);
+}

@@ -66,6 +66,13 @@ pub enum Command {
         /// its skeleton beside it (`NAME.skeleton.json`) for `sylva tree adapt --input`.
         #[arg(long)]
         out: PathBuf,
+        /// Levels of detail written to `--out`, as `sylva export --lod`: `0`, the default, the
+        /// full-detail mesh alone (what Blender and glTF viewers show: they draw every node, so
+        /// the whole chain stacked the crown hull and billboard over the tree); `all` the chain
+        /// `<species>_LOD0…3` for a game engine's LOD group; or a list such as `0,3`. The
+        /// preview PNG always shows every level.
+        #[arg(long, default_value = "0")]
+        lod: String,
     },
     /// Adapt a grown tree to obstacles and neighbours by Plastic Trees (Pirk et al. 2012)
     /// instead of regrowing it; writes the adapted tree and a before/after PNG (Fig. 6).
@@ -130,9 +137,9 @@ pub struct AdaptArgs {
 /// Runs a tree subcommand.
 pub fn run(c: Command) -> anyhow::Result<()> {
     match c {
-        Command::Grow { species, model, age, obstacle, adapt_to, seed, open_grown, species_dir, out } => {
+        Command::Grow { species, model, age, obstacle, adapt_to, seed, open_grown, species_dir, out, lod } => {
             let habit = if open_grown { forest_form::Habit::Open } else { forest_form::Habit::Forest };
-            grow(&species, model, age, &obstacle, &adapt_to, seed, habit, species_dir.as_deref(), &out)
+            grow(&species, model, age, &obstacle, &adapt_to, seed, habit, species_dir.as_deref(), &out, &lod)
         }
         Command::Adapt(a) => adapt(&a),
     }
@@ -151,8 +158,9 @@ fn check_age(age: f32, sp: &sylva::species::Species) -> anyhow::Result<()> {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, habit: forest_form::Habit, species_dir: Option<&Path>, out: &Path) -> anyhow::Result<()> {
+fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, habit: forest_form::Habit, species_dir: Option<&Path>, out: &Path, lod: &str) -> anyhow::Result<()> {
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
+    let lod_levels = sylva::job::export::parse_levels(lod)?;
     // the output is checked before any work, as `render` and `export` check theirs (round 33's
     // trial: a folder named d3.obj was found only after the tree was grown and its textures
     // written, with a bare "Is a directory")
@@ -223,12 +231,14 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", out.display(), dir.display()))?;
     }
+    // the levels not asked for written empty (the writers skip levels without triangles)
+    let written = sylva::mesh::LodChain { levels: chain.levels.iter().enumerate().map(|(i, l)| if lod_levels.contains(&i) { l.clone() } else { Default::default() }).collect(), freed: None };
     match ext.as_str() {
         "glb" => {
-            sylva::output::gltf::write_glb(out, &chain, &glb_options(&sp))?;
+            sylva::output::gltf::write_glb(out, &written, &glb_options(&sp))?;
             sylva::output::gltf::write_skeleton_sidecar(out, &sk, Some(&sp.id))?;
         }
-        "obj" => sylva::output::obj::write_obj(out, &chain, None, &sp.id, &sylva::output::gltf::Look::for_species(&sp, sylva::species::Season::Summer))?,
+        "obj" => sylva::output::obj::write_obj(out, &chain, Some(&lod_levels), &sp.id, &sylva::output::gltf::Look::for_species(&sp, sylva::species::Season::Summer))?,
         _ => anyhow::bail!("--out {}: expected a .glb or .obj file name", out.display()),
     }
     let img = sylva::output::tree_preview::lod_preview(&chain, &glb_options(&sp).look, 360, 540);

@@ -387,7 +387,13 @@ pub fn glb_bytes(chain: &LodChain, o: &GlbOptions) -> Result<Vec<u8>> {
     }
     let mut d = Doc::new();
     let all: Vec<usize> = (0..chain.levels.len()).filter(|&i| chain.levels[i].triangle_count() > 0).collect();
-    let mats = d.look(&o.look, &all)?;
+    // the cluster material also where the full level alone carries leaf-cluster cards (`sylva
+    // tree grow --lod 0`), as the stand export does
+    let mut mat_levels = all.clone();
+    if all.contains(&0) && !all.contains(&1) && chain.levels[0].leaves.has_cluster_cards() {
+        mat_levels.push(1);
+    }
+    let mats = d.look(&o.look, &mat_levels)?;
     let meshes = d.chain(&o.name, chain, mats, &all);
     let mut children = Vec::new();
     for (i, m) in meshes.iter().enumerate() {
