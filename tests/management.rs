@@ -379,6 +379,78 @@ fn every_kind_of_management_over_tiles_equals_one_process() {
     }
 }
 
+/// Issue 37, round 35: in a year whose due removals are all thinnings to a target, a tile sends
+/// the other tiles only the keys (id, species, position, height, DBH: 26 bytes) of the growing
+/// stock of the thinned area (stems of at least 1.3 m and 7 cm DBH), not its every tree whole, and the run is still one process's: `thinning_beech`
+/// (shortened) on 2 and 3 tiles for 22 years: the entry is due in year 17 (below its target,
+/// it removes nothing) and 22 (its first cut). Each tile sends exactly its stock of those two
+/// years (from one process's run: year 17's stock as it stands after the year, year 22's
+/// stock still standing plus the stems the thinning took), fewer trees than the area's trees
+/// it holds.
+#[test]
+fn a_thinning_over_tiles_sends_only_the_growing_stock_of_its_area() {
+    use sylva::sim::tiles::{Layout, LocalTransport, Tile, Transport};
+    let sc = short_thinning(22);
+    let lib = common::embedded();
+    let w0 = World::new(sc.site().unwrap(), &lib, &sc).unwrap();
+    let region = &w0.site.management.iter().find(|op| op.spec.due(22).is_some()).unwrap().region;
+    assert!(w0.site.management.len() == 1 && w0.site.management[0].spec.due(17).is_some(), "one entry, due in years 17 and 22");
+    let stock = |h: f32, d: f32| h >= 1.3 && d >= 7.0;
+    // year 17: due, removes nothing (below its target); its stock is what stands after it
+    let mut w = w0.clone();
+    let mut rows = common::run(&sc, &mut w, 17);
+    let w17 = w.clone();
+    rows.extend(common::run(&sc, &mut w, 5));
+    assert!(rows[21].harvest_stems_ha > 0.0 && rows[..21].iter().all(|r| r.harvest_stems_ha == 0.0), "one thinning, in year 22");
+    for n in [2usize, 3] {
+        let layout = Layout::new(&w0.site, n, 1).unwrap();
+        let t = &w17.stand.trees;
+        let mut sent17 = vec![0u64; n];
+        for i in (0..t.len()).filter(|&i| stock(t.height[i], t.dbh[i]) && region.contains(t.x[i] as f64, t.y[i] as f64)) {
+            sent17[layout.owner_of(t.x[i], t.y[i])] += 1;
+        }
+        let t = &w.stand.trees;
+        let cut: Vec<_> = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).collect();
+        assert!(cut.len() > 50 && cut.iter().all(|d| stock(d.height, d.dbh)), "{} thinned", cut.len());
+        let mut want = vec![(0u64, 0u64); n];
+        for i in (0..t.len()).filter(|&i| region.contains(t.x[i] as f64, t.y[i] as f64)) {
+            let k = layout.owner_of(t.x[i], t.y[i]);
+            want[k].1 += 1;
+            want[k].0 += u64::from(stock(t.height[i], t.dbh[i]));
+        }
+        for d in cut.iter().filter(|d| region.contains(d.x as f64, d.y as f64)) {
+            let k = layout.owner_of(d.x, d.y);
+            want[k] = (want[k].0 + 1, want[k].1 + 1);
+        }
+        let got: Vec<(Vec<StandRow>, (u64, u64))> = std::thread::scope(|s| {
+            let hs: Vec<_> = LocalTransport::group(n)
+                .into_iter()
+                .map(|mut tr| {
+                    let layout = layout.clone();
+                    let w0 = &w0;
+                    s.spawn(move || {
+                        let mut tile = Tile::new(w0, layout, tr.rank()).unwrap();
+                        let rows: Vec<StandRow> = (0..22).flat_map(|_| tile.step(&mut tr).unwrap().row).collect();
+                        (rows, tile.manage_sent)
+                    })
+                })
+                .collect();
+            hs.into_iter().map(|h| h.join().unwrap()).collect()
+        });
+        assert_eq!(got[0].0, rows, "{n} tiles: stand table");
+        for k in 0..n {
+            // every other tile receives the stock: (n − 1) copies
+            let (trees, bytes) = got[k].1;
+            assert_eq!(trees, (sent17[k] + want[k].0) * (n as u64 - 1), "{n} tiles, tile {k}: trees sent (its stock in year 17 {}, in year 22 {}, its trees in the area in year 22 {})", sent17[k], want[k].0, want[k].1);
+            assert!(want[k].0 > 0 && want[k].0 < want[k].1, "{n} tiles, tile {k}: {want:?}");
+            // per year a count word, then 26 bytes a tree (id, species, x, y, height, DBH;
+            // the whole tree's 54 until round 35's keys)
+            assert_eq!(bytes, (16 + 26 * (sent17[k] + want[k].0)) * (n as u64 - 1), "{n} tiles, tile {k}: bytes sent");
+        }
+        eprintln!("{n} tiles: per tile stock in year 17 {sent17:?}, (stock, trees in the area) in year 22 {want:?}; sent (trees, bytes) {:?}", got.iter().map(|g| g.1).collect::<Vec<_>>());
+    }
+}
+
 /// [`common::short_thinning_toml`] as a scenario.
 fn short_thinning(years: u32) -> Scenario {
     Scenario::from_toml_str(&common::short_thinning_toml(years), "thinning_beech.toml").unwrap()

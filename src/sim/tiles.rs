@@ -41,7 +41,10 @@
 //!    year's entries on that store exactly as one process does (same sums in the same order,
 //!    same choice, identically on every rank) and keeps its own trees, its own harvested dead
 //!    and its own cells' plantings ([`Tile::step`]); plantings alone need no exchange (a
-//!    lattice is drawn from the seed, the entry and the position);
+//!    lattice is drawn from the seed, the entry and the position); in a year whose due
+//!    removals are all thinnings to a target only the keys of the areas' growing stock are
+//!    sent (stems of at least 1.3 m and 7 cm DBH: all a thinning reads or takes; id,
+//!    species, position, height, DBH: 26 bytes a tree; [`Tile::manage`]);
 //! 7. **stats**: the stand table row is made of exact sums ([`super::stats::RowSums`]:
 //!    integers, fixed point at 2⁻⁶⁴, whose order of addition does not matter): every rank sums
 //!    its own trees and the sums of all ranks are added up ([`Transport::all_sum`], an
@@ -670,6 +673,44 @@ pub(crate) fn get_trees(d: &mut Dec<'_>) -> Result<TreeStore> {
     Ok(t)
 }
 
+/// Writes what a thinning reads of trees `idx` of `t` (issue 37, round 35: [`Tile::manage`]):
+/// their count, ids, species, x, y (m), heights (m) and DBHs (cm): 26 bytes a tree, against
+/// [`put_trees`]' 54.
+pub(crate) fn put_stock(e: &mut Enc, t: &TreeStore, idx: &[usize]) {
+    e.u64(idx.len() as u64);
+    for &i in idx {
+        e.u64(t.id[i]);
+    }
+    for &i in idx {
+        e.u16(t.species[i]);
+    }
+    for c in [&t.x, &t.y, &t.height, &t.dbh] {
+        for &i in idx {
+            e.f32(c[i]);
+        }
+    }
+}
+
+/// Reads what [`put_stock`] wrote as a store whose other columns (z, age, crowns, light,
+/// vigour, suitability) are 0: the copies a rank merges in for a thinning and drops after it,
+/// which a thinning, its harvest record of the stand table ([`super::stats::harvest_sums`]:
+/// species, DBH, height) and nothing else reads.
+///
+/// Errors: [`Error::Exchange`] (through `d`) when the message ends early.
+pub(crate) fn get_stock(d: &mut Dec<'_>) -> Result<TreeStore> {
+    let n = d.count(8 + 2 + 4 * 4)?;
+    let mut t = TreeStore { id: d.u64s_n(n)?, ..Default::default() };
+    t.species = d.u16s_n(n)?;
+    t.x = d.f32s_n(n)?;
+    t.y = d.f32s_n(n)?;
+    t.height = d.f32s_n(n)?;
+    t.dbh = d.f32s_n(n)?;
+    for c in [&mut t.z, &mut t.age, &mut t.crown_radius, &mut t.crown_base, &mut t.light, &mut t.vigour, &mut t.suitability] {
+        *c = vec![0.0; n];
+    }
+    Ok(t)
+}
+
 /// [`SeedPlan::owner`] of a seed cell across a tile edge.
 const SHARED: u32 = u32::MAX;
 
@@ -808,6 +849,10 @@ pub struct Tile {
     /// [`super::stats::harvest_sums`]), as the management phase found it (every rank sees every
     /// harvested tree); rank 0 puts it in the stand-table row.
     harvest: (u64, f64),
+    /// Trees and bytes this rank has sent to other ranks for the management phase since the
+    /// start ([`Tile::manage`]): the trees of the due areas, or only their growing stock in a
+    /// year whose due removals are all thinnings to a target.
+    pub manage_sent: (u64, u64),
     /// Wall time (s) per phase of [`PHASES`] summed over the years stepped, exchanges and the
     /// waits in them included (for profiling: `SYLVA_PHASE_TIMES=1`, [`Tile::phase_line`]).
     pub phase_seconds: [f64; super::step::N_PHASES],
@@ -840,7 +885,7 @@ impl Tile {
         world.tallies.deaths_total = [0; N_CAUSES];
         world.tallies.regen_ledger = RegenLedger::new(world.site.pool.len());
         world.scratch.dead.clear();
-        Ok(Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] })
+        Ok(Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), manage_sent: (0, 0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] })
     }
 
     /// Tile `me` of `layout` from `world`, a tile's world as it was saved (its own trees and
@@ -852,7 +897,7 @@ impl Tile {
         hold_own_cells(&mut world, layout.rect(me));
         hold_own_seeds(&mut world, &layout, me)?;
         world.scratch.dead.clear();
-        Ok(Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] })
+        Ok(Tile { world, layout, me, halo_bytes: 0, halo_rows: Vec::new(), harvest: (0, 0.0), manage_sent: (0, 0), phase_seconds: [0.0; super::step::N_PHASES], halo_seconds: [0.0; super::step::N_PHASES] })
     }
 
     /// Rank 0 sends every rank its part of `global` (rank 0's world after a fresh start or a
@@ -1193,7 +1238,7 @@ impl Tile {
             .enumerate()
             .map(|(k, p)| if self.halo_seconds[k] > 0.0 { format!("{} {:.1} s (halo {:.1} s)", p.name, self.phase_seconds[k], self.halo_seconds[k]) } else { format!("{} {:.1} s", p.name, self.phase_seconds[k]) })
             .collect();
-        format!("phase times rank {}: {}", self.me, list.join(", "))
+        format!("phase times rank {}: {}; management sent {} trees, {} bytes", self.me, list.join(", "), self.manage_sent.0, self.manage_sent.1)
     }
 
     /// The management phase `run` over tiles (module docs, step 6): in a year with thinnings or
@@ -1204,6 +1249,20 @@ impl Tile {
     /// sums over every harvested tree (in the order one process records them) for the stand
     /// table. One exchange in such a year, none otherwise; every rank calls it in the same year.
     ///
+    /// In a year whose due removals are all thinnings to a target ([`Action::Thinning`]; issue
+    /// 37, round 35) only the areas' **growing stock** is sent, and only what a thinning reads
+    /// of it ([`put_stock`]: id, species, position, height, DBH; 26 bytes a tree instead of
+    /// 54): the stems of at least 1.3 m and [`super::density::MIN_DBH_CM`] DBH. A thinning
+    /// reads nothing else (its top height,
+    /// main stand, figures, ranking and cut are all over that stock, in id order,
+    /// `phases::management::thinning`), and it removes only such stems, so the harvest sums
+    /// and every removal are one process's; the understorey and regeneration of the areas
+    /// (most of the trees of a young stand) no longer cross ranks. Crop-tree thinnings,
+    /// shelterwood, patch and clear cuts (which read or remove trees of every size, or their
+    /// neighbours) keep the whole areas' trees.
+    ///
+    /// [`Action::Thinning`]: super::management::Action::Thinning
+    ///
     /// Errors: [`Error::Exchange`] from the transport or a malformed message.
     fn manage(&mut self, t: &mut dyn Transport, run: fn(&mut World, &mut YearReport), report: &mut YearReport) -> Result<()> {
         if self.world.site.management.is_empty() {
@@ -1213,19 +1272,29 @@ impl Tile {
         }
         let year = self.world.stand.year + 1;
         let site = &self.world.site;
-        let areas: Vec<&super::management::Region> = site.management.iter().filter(|op| op.spec.due(year).is_some() && !matches!(op.action, super::management::Action::Planting { .. })).map(|op| &op.region).collect();
-        if !areas.is_empty() {
+        use super::management::Action;
+        let due: Vec<&super::management::Operation> = site.management.iter().filter(|op| op.spec.due(year).is_some() && !matches!(op.action, Action::Planting { .. })).collect();
+        if !due.is_empty() {
+            let stock_only = due.iter().all(|op| matches!(op.action, Action::Thinning { .. }));
             let tr = &self.world.stand.trees;
-            let idx: Vec<usize> = (0..tr.len()).filter(|&i| areas.iter().any(|r| r.contains(tr.x[i] as f64, tr.y[i] as f64))).collect();
+            let idx: Vec<usize> = (0..tr.len()).filter(|&i| (!stock_only || (tr.height[i] >= 1.3 && tr.dbh[i] >= super::density::MIN_DBH_CM)) && due.iter().any(|op| op.region.contains(tr.x[i] as f64, tr.y[i] as f64))).collect();
             let mut e = codec::Enc(Vec::new());
-            put_trees(&mut e, tr, &idx);
+            if stock_only {
+                put_stock(&mut e, tr, &idx);
+            } else {
+                put_trees(&mut e, tr, &idx);
+            }
+            let k = t.size().saturating_sub(1) as u64;
+            self.manage_sent.0 += idx.len() as u64 * k;
+            self.manage_sent.1 += e.0.len() as u64 * k;
             let mut out = vec![e.0; t.size()];
             out[self.me] = Vec::new();
             let got = t.exchange(out)?;
             let mut parts = Vec::with_capacity(got.len());
             for (k, m) in got.iter().enumerate().filter(|&(k, _)| k != self.me) {
                 let fail = short_message(k);
-                parts.push(get_trees(&mut Dec::new(m, &fail))?);
+                let mut d = Dec::new(m, &fail);
+                parts.push(if stock_only { get_stock(&mut d)? } else { get_trees(&mut d)? });
             }
             let own = std::mem::take(&mut self.world.stand.trees);
             let next = own.next_id;
