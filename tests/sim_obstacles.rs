@@ -68,3 +68,23 @@ fn a_building_shades_the_light_grid_and_keeps_trees_off_its_footprint() {
     let open_north: Vec<usize> = (0..open.stand.trees.len()).filter(|&i| { let (x, y) = (open.stand.trees.x[i], open.stand.trees.y[i]); x > 42.0 && x < 58.0 && y > 60.5 && y < 64.0 }).collect();
     assert!(mean(&with, &north) < mean(&open, &open_north) - 0.02, "north of the building {} vs open {}", mean(&with, &north), mean(&open, &open_north));
 }
+
+/// Trial 35: hawthorns recruited from a hedge stood inside a 0.4 m wall, because a light cell's
+/// ground-free share is sampled at 4 × 4 points (1.25 m apart on 5 m cells) and misses a thin
+/// wall. Recruits are now placed where no obstacle is solid at their own position: birch
+/// regenerating on both sides of a 0.3 m wall has recruits beside it and none in it.
+#[test]
+fn recruits_stand_beside_a_thin_wall_not_in_it() {
+    let wall = "[[obstacle]]\nkind = \"wall\"\nstart = [0.0, 52.5]\nend = [100.0, 52.5]\nheight_m = 1.5\nthickness_m = 0.3\n";
+    let toml = common::ScenarioToml::new("thin_wall", 16, 4).species(&["silver_birch"]).line("light_cell_m = 5.0").uniform(4, 4, 25.0, 300.0).seed_rain("silver_birch", 200000.0).build() + wall;
+    let (sc, mut w) = common::world(&toml);
+    // the 4 × 4 samples of every cell miss the wall (the row of cells 50–55 m samples y at
+    // 50.625, 51.875, 53.125, 54.375): the cells count as free ground
+    assert!(w.site.ground_free.iter().all(|&f| f == 1.0));
+    common::run(&sc, &mut w, 16);
+    let t = &w.stand.trees;
+    let near = (0..t.len()).filter(|&i| (t.y[i] - 52.5).abs() < 2.5).count();
+    let inside: Vec<(f32, f32)> = (0..t.len()).filter(|&i| (t.y[i] - 52.5).abs() <= 0.15).map(|i| (t.x[i], t.y[i])).collect();
+    assert!(near > 30, "recruits within 2.5 m of the wall: {near} of {}", t.len());
+    assert!(inside.is_empty(), "{} recruits inside the wall, e.g. {:?}", inside.len(), &inside[..inside.len().min(3)]);
+}

@@ -125,6 +125,7 @@ fn run_regeneration(w: &mut World, report: &mut YearReport) {
         seed_rain: &w.site.seed_rain,
         ground_light: &w.scratch.ground_light,
         ground_free: &w.site.ground_free,
+        obstacles: &w.site.obstacles,
         seeds: &w.stand.seeds,
         cohorts: &mut w.stand.cohorts,
         trees: &mut w.stand.trees,
