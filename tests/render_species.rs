@@ -6,7 +6,7 @@
 
 use glam::Vec3;
 use sylva::render::camera::{Camera, CameraPreset};
-use sylva::render::headless::Renderer;
+use sylva::render::headless::{LightTerms, Renderer};
 use sylva::render::scene::{Scene, Sky, Sun, TreeInstance, Wind};
 use sylva::render::terrain::{from_grid, LandCover};
 use sylva::species::{Season, SpeciesLibrary};
@@ -363,4 +363,170 @@ fn crown_looks_follow_the_species_habit() {
         assert!(l.leaf_shape.is_some(), "{l:?}");
     }
     assert_ne!(beech.leaf_shape, oak.leaf_shape);
+}
+
+/// Linear luminance (Rec. 709) of an sRGB pixel, 0..1.
+fn lin_lum(p: &image::Rgba<u8>) -> f64 {
+    let l = |c: u8| {
+        let c = c as f64 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    0.2126 * l(p.0[0]) + 0.7152 * l(p.0[1]) + 0.0722 * l(p.0[2])
+}
+
+/// What a still's crowns show of the sun (issue 32, round 35), from renders of one view:
+/// `all` (the picture), `free` (no shadows), `sky` (the sky light alone) and `bare` (the same
+/// scene without trees: the pixels that differ are the trees'). Returns (share of the tree
+/// pixels in the sun's shadow: their sunlight `all − sky` under half of `free − sky`; mean over
+/// the crowns of (sun side − far side) / mean of each crown's linear luminance in its projected
+/// disc; the crowns counted).
+fn crown_light(all: &image::RgbaImage, free: &image::RgbaImage, sky: &image::RgbaImage, bare: &image::RgbaImage, trees: &[(usize, f32, f32, f32, f32, u64)], cam: &Camera, sun: Vec3) -> (f64, f64, usize) {
+    let (w, h) = all.dimensions();
+    let tree_px = |x: u32, y: u32| {
+        let (a, b) = (all.get_pixel(x, y).0, bare.get_pixel(x, y).0);
+        (0..3).any(|c| a[c].abs_diff(b[c]) > 4)
+    };
+    let (mut n, mut shaded) = (0usize, 0usize);
+    for y in 0..h {
+        for x in 0..w {
+            if !tree_px(x, y) {
+                continue;
+            }
+            let s = lin_lum(sky.get_pixel(x, y));
+            let (got, full) = (lin_lum(all.get_pixel(x, y)) - s, lin_lum(free.get_pixel(x, y)) - s);
+            if full > 0.01 {
+                n += 1;
+                shaded += (got < 0.5 * full) as usize;
+            }
+        }
+    }
+    let vp = cam.view_proj(w as f32 / h as f32);
+    let px = |p: Vec3| {
+        let c = vp * p.extend(1.0);
+        let ndc = c.truncate() / c.w;
+        glam::Vec2::new((ndc.x * 0.5 + 0.5) * w as f32, (0.5 - ndc.y * 0.5) * h as f32)
+    };
+    let sun_h = Vec3::new(sun.x, sun.y, 0.0).normalize_or(Vec3::X);
+    let (mut sum, mut k) = (0.0f64, 0usize);
+    for &(_, x, y, th, r, _) in trees {
+        let c3 = Vec3::new(x, y, 0.7 * th);
+        let c = px(c3);
+        let rho = (px(c3 + Vec3::new(0.0, 0.0, r)) - c).length();
+        let s = (px(c3 + sun_h * r) - c).normalize_or_zero();
+        if rho < 5.0 || c.x < rho || c.y < rho || c.x > w as f32 - rho || c.y > h as f32 - rho || s == glam::Vec2::ZERO {
+            continue;
+        }
+        let (mut ls, mut ns, mut lf, mut nf) = (0.0f64, 0usize, 0.0f64, 0usize);
+        for py in (c.y - rho) as u32..=(c.y + rho) as u32 {
+            for pxx in (c.x - rho) as u32..=(c.x + rho) as u32 {
+                let d = glam::Vec2::new(pxx as f32 + 0.5, py as f32 + 0.5) - c;
+                if d.length() > 0.8 * rho || !tree_px(pxx, py) {
+                    continue;
+                }
+                let l = lin_lum(all.get_pixel(pxx, py));
+                let t = d.dot(s) / rho;
+                if t > 0.25 {
+                    ls += l;
+                    ns += 1;
+                } else if t < -0.25 {
+                    lf += l;
+                    nf += 1;
+                }
+            }
+        }
+        if ns >= 4 && nf >= 4 {
+            let (a, b) = (ls / ns as f64, lf / nf as f64);
+            sum += (a - b) / (0.5 * (a + b)).max(1e-4);
+            k += 1;
+        }
+    }
+    (shaded as f64 / n.max(1) as f64, sum / k.max(1) as f64, k)
+}
+
+/// Standard deviation of the sRGB luminance (0..255) of the tree pixels of `all` (those that
+/// differ from `bare`, the scene without trees).
+fn canopy_sd(all: &image::RgbaImage, bare: &image::RgbaImage) -> f64 {
+    let v: Vec<f64> = all
+        .pixels()
+        .zip(bare.pixels())
+        .filter(|(a, b)| (0..3).any(|c| a.0[c].abs_diff(b.0[c]) > 4))
+        .map(|(a, _)| 0.2126 * a.0[0] as f64 + 0.7152 * a.0[1] as f64 + 0.0722 * a.0[2] as f64)
+        .collect();
+    let m = v.iter().sum::<f64>() / v.len().max(1) as f64;
+    (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / v.len().max(1) as f64).sqrt()
+}
+
+#[test]
+fn oblique_billboard_crowns_have_a_sunlit_and_a_shaded_side() {
+    // issue 32, round 35: the oblique still read as a carpet. A billboard crown took the sun's
+    // visibility on its camera-facing quad through the stem, in a shadow map of ~3 m a texel
+    // (the default run's site and surroundings, ~4.5 km, in 2048 texels) that cannot resolve a
+    // crown: the crowns were lit almost uniformly. Where the texels are coarse against the
+    // crown, the sun is now looked up at the crown surface the pixel shows, outside its own
+    // quad, and the crown shades its far side itself; with fine texels as before. The default run's canopy species (7 m mixed stand), every tree drawn as a
+    // billboard, seen obliquely from 200 m, the sun from the side (10:00, July, 47° N) and, for
+    // the record, behind the camera (14:00, the stills' sun), on a 320 m ground (shadow texel
+    // 0.2 m) and in the middle of a 4.5 km one (3.1 m, as the default run). Fails, not skips,
+    // without an adapter.
+    let all_sp = SpeciesLibrary::embedded().unwrap();
+    let lib = SpeciesLibrary { species: DEFAULT_RUN_SPECIES.iter().map(|(id, _, _)| all_sp.species[all_sp.find(id).unwrap() as usize].clone()).collect() };
+    let protos = sylva::job::scene::prototypes(&lib);
+    let stand = mixed_stand(0.6, &DEFAULT_RUN_SPECIES);
+    let (w, h) = (480, 270);
+    let mut r = Renderer::new().expect("this test renders: it needs an adapter (lavapipe on the CPU)");
+    still_lod(&mut r);
+    // every tree a billboard (the level of the stills' far crowns, under 18 px)
+    r.lod.switch_px = [1e9, 1e9, 1e9];
+    r.lod.canopy_px = 0.0;
+    // (ground m, hour, sun on the quad) → (shadow share, sun side − far side, crowns, sd)
+    let mut got = std::collections::HashMap::new();
+    for ground in [SIDE, 4500.0] {
+        let off = 0.5 * (ground - SIDE);
+        let trees: Vec<_> = stand.iter().map(|&(s, x, y, th, cr, id)| (s, x + off, y + off, th, cr, id)).collect();
+        let mut scene = scene(&lib, &protos, &trees, None);
+        let n = (ground / 50.0) as usize + 1;
+        scene.terrain = from_grid(&sylva::grid::Grid::filled(n, n, 0.0f32), ground / (n - 1) as f32, ground / (n - 1) as f32, &LandCover::default(), None).unwrap();
+        let mut bare = scene.clone();
+        bare.instances.clear();
+        let c = Vec3::new(0.5 * ground, 0.5 * ground, 15.0);
+        let eye = c + Vec3::new(-0.55, -0.7, 0.42).normalize() * 200.0;
+        let cam = Camera::look_at(eye.to_array(), c.to_array(), 45.0);
+        let mut shot = |terms: LightTerms, quad: bool, s: &Scene| {
+            r.light_terms = terms;
+            r.crown_sun_on_quad = quad;
+            r.render(s, &cam, w, h).unwrap()
+        };
+        let bare_img = shot(LightTerms::All, false, &bare);
+        for hour in [10.0, 14.0] {
+            scene.sun = Sun::from_position(47.0, 196.0, hour);
+            let sun = Vec3::from(scene.sun.direction);
+            for quad in [true, false] {
+                let all = shot(LightTerms::All, quad, &scene);
+                let free = shot(LightTerms::NoShadows, quad, &scene);
+                let sky = shot(LightTerms::SkyOnly, quad, &scene);
+                let name = format!("{}m_{hour}h_{}", ground as u32, if quad { "before" } else { "after" });
+                all.save(out_dir().join(format!("crown_light_{name}.png"))).unwrap();
+                let (shaded, contrast, crowns) = crown_light(&all, &free, &sky, &bare_img, &trees, &cam, sun);
+                let sd = canopy_sd(&all, &bare_img);
+                eprintln!("{name} (sun on the {}): {:.1} % of the tree pixels in shadow, crowns' sun side − far side {contrast:.3} of their mean ({crowns} crowns), canopy luminance sd {sd:.1}", if quad { "quad" } else { "crown surface" }, 100.0 * shaded);
+                got.insert((ground as u32, hour as u32, quad), (shaded, contrast, crowns, sd));
+            }
+        }
+    }
+    // the default run's coarse shadow map, sun from the side: crowns had hardly a shaded side
+    // (1.4 % of the tree pixels without sun, sun side 0.11 brighter than the far side); now
+    // they shade their far side themselves (round 35, lavapipe: 12.7 %, 0.19)
+    let ((s0, c0, _, sd0), (s1, c1, k1, sd1)) = (got[&(4500, 10, true)], got[&(4500, 10, false)]);
+    assert!(k1 > 100, "{k1} crowns measured");
+    assert!(c1 > 0.15 && c1 > c0 + 0.05, "sun side − far side of the crowns: {c0:.3} before, {c1:.3} now");
+    assert!(s1 > s0 + 0.05, "share of tree pixels in their own shade: {s0:.3} before, {s1:.3} now");
+    assert!(sd1 > sd0, "canopy luminance sd {sd0:.1} before, {sd1:.1} now");
+    // a fine shadow map (texels under a tenth of the crown radius): the quad's own shadow is a
+    // fair shaded side (0.25) and is kept as it was
+    let ((s0, c0, _, _), (s1, c1, _, _)) = (got[&(320, 10, true)], got[&(320, 10, false)]);
+    assert!(c1 > 0.2 && (c1 - c0).abs() < 0.01 && (s1 - s0).abs() < 0.01, "fine shadow map: shadow share {s0:.3} before, {s1:.3} now; sun side − far side {c0:.3}, {c1:.3}");
 }

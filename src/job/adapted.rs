@@ -151,7 +151,9 @@ pub struct AdaptStats {
 pub const CLUSTER_HULL_LEVEL: usize = 2;
 
 /// Stand trees of `plants` (live, of a species in `library`, at least 1 m tall) with the ground
-/// elevation, slope and aspect of `site`; returns (plant index, stand tree) pairs.
+/// elevation, slope and aspect of `site`, a tree younger than 20 years with the sapling form
+/// blended into its crown ([`crate::structure::forest_form::sapling_blend`], as `sylva tree
+/// grow`); returns (plant index, stand tree) pairs.
 pub fn stand_trees(plants: &[Plant], library: &SpeciesLibrary, site: &SiteConditions) -> Vec<(usize, StandTree)> {
     plants
         .iter()
@@ -165,6 +167,8 @@ pub fn stand_trees(plants: &[Plant], library: &SpeciesLibrary, site: &SiteCondit
             };
             let (slope, aspect) = if aspect < 0.0 || !slope.is_finite() { (0.0, 180.0) } else { (slope.clamp(0.0, 60.0), aspect) };
             let h = p.height_m;
+            // a young tree: the sapling form of `sylva tree grow` (round 35, issue 32)
+            let (cb, r) = crate::structure::forest_form::sapling_blend(&library.species[s as usize], p.age_yr.max(0.0), h, p.crown_base_m, p.crown_radius_m);
             Some((
                 i,
                 StandTree {
@@ -173,8 +177,8 @@ pub fn stand_trees(plants: &[Plant], library: &SpeciesLibrary, site: &SiteCondit
                     base: Vec3::new(p.x_m as f32, p.y_m as f32, site.elevation_at(p.x_m, p.y_m)),
                     age_yr: p.age_yr.max(0.0),
                     height_m: h,
-                    crown_radius_m: p.crown_radius_m.max(0.2),
-                    crown_base_m: p.crown_base_m.clamp(0.0, 0.9 * h),
+                    crown_radius_m: r.max(0.2),
+                    crown_base_m: cb.clamp(0.0, 0.9 * h),
                     slope_deg: slope,
                     aspect_deg: aspect,
                 },

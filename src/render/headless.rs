@@ -4,7 +4,7 @@
 //! stills, the timelapses and the tests use it; a window uses [`Renderer::from_device`] and
 //! [`Renderer::render_to_view`] directly.
 
-pub use super::renderer::{Culling, FrameStats, Renderer};
+pub use super::renderer::{Culling, FrameStats, LightTerms, Renderer};
 use super::camera::Camera;
 use super::renderer::{Readback, COLOR_FORMAT};
 use super::scene::Scene;

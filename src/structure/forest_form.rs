@@ -132,6 +132,23 @@ pub fn sapling_weight(age_yr: f32) -> f32 {
     ((SAPLING_END_AGE_YR - age_yr) / (SAPLING_END_AGE_YR - SAPLING_FULL_AGE_YR)).clamp(0.0, 1.0)
 }
 
+/// The crown of a stand-grown tree of `sp`, `age_yr` years old and `height_m` tall, whose
+/// stand functions (or the simulation) give it a crown base `crown_base_m` and a crown radius
+/// `crown_radius_m` (m), with the sapling form blended in: crown base
+/// [`SAPLING_CLEAR_BOLE`] × h and crown radius ½ [`sapling_width_to_height`] × h with weight
+/// [`sapling_weight`] (1 up to 10 years, 0 from 20). Returns (crown base m, crown radius m);
+/// unchanged from 20 years on. The one sapling form of `sylva tree grow` ([`tree_form`]) and
+/// of the trees and saplings the stills and exports draw (`job::scene`, `job::adapted`).
+pub fn sapling_blend(sp: &Species, age_yr: f32, height_m: f32, crown_base_m: f32, crown_radius_m: f32) -> (f32, f32) {
+    let w = sapling_weight(age_yr);
+    if w > 0.0 {
+        let (scb, sr) = (SAPLING_CLEAR_BOLE * height_m, 0.5 * sapling_width_to_height(sp) * height_m);
+        (crown_base_m + w * (scb - crown_base_m), crown_radius_m + w * (sr - crown_radius_m))
+    } else {
+        (crown_base_m, crown_radius_m)
+    }
+}
+
 /// The dimensions of a tree of `sp` at `age_yr` years (> 0) of `habit` ([`TreeForm`]). A
 /// stand-grown tree younger than [`SAPLING_END_AGE_YR`] takes the sapling form (crown base
 /// [`SAPLING_CLEAR_BOLE`] of its height, crown width [`sapling_width_to_height`] of it) with
@@ -163,13 +180,8 @@ pub fn tree_form(sp: &Species, age_yr: f32, habit: Habit) -> Result<TreeForm> {
             // a young tree: towards the sapling form (the stand functions are fitted on pole
             // and timber trees; extrapolated to a few mm of DBH they give a 2 m stick with
             // 90 % clear bole under a 1.3 m wide spruce disc or a 10 cm beech tuft)
-            let w = sapling_weight(age_yr);
-            if w > 0.0 {
-                let (scb, sr) = (SAPLING_CLEAR_BOLE * h, 0.5 * sapling_width_to_height(sp) * h);
-                (d, cb + w * (scb - cb), r + w * (sr - r))
-            } else {
-                (d, cb, r)
-            }
+            let (cb, r) = sapling_blend(sp, age_yr, h, cb, r);
+            (d, cb, r)
         }
     };
     Ok(TreeForm { age_yr, habit, height_m: h, site_index_m: h100, dbh_cm: dbh, crown_base_m: cb.clamp(0.0, 0.9 * h), crown_radius_m: r.max(0.05) })

@@ -129,7 +129,9 @@ pub fn instances(rows: &[Plant], library: &SpeciesLibrary, cond: &SiteConditions
     tree_instances(rows, &visible(rows, cond.extent_m()), library, cond, season)
 }
 
-/// Instances of the trees `keep` (indices into `rows`).
+/// Instances of the trees `keep` (indices into `rows`); a tree younger than
+/// [`crate::structure::forest_form::SAPLING_END_AGE_YR`] is drawn with the sapling form blended
+/// into its crown ([`crate::structure::forest_form::sapling_blend`], as `sylva tree grow`).
 pub(super) fn tree_instances(rows: &[Plant], keep: &[usize], library: &SpeciesLibrary, cond: &SiteConditions, season: Season) -> Vec<TreeInstance> {
     keep.iter()
         .map(|&i| &rows[i])
@@ -138,10 +140,13 @@ pub(super) fn tree_instances(rows: &[Plant], keep: &[usize], library: &SpeciesLi
             let sp = &library.species[sid as usize];
             let (col, amount) = foliage(sp, season);
             let z = cond.elevation_at(r.x_m, r.y_m);
-            let mut inst = TreeInstance::new(r.id, [r.x_m as f32, r.y_m as f32, z], r.height_m, r.crown_radius_m.max(0.2), sid as u32, col);
+            // a young tree drawn with the sapling form of `sylva tree grow` (round 35, issue 32:
+            // the simulation's crowns of 2–10-year trees drew round tufts on sticks)
+            let (cb_m, crown_r) = crate::structure::forest_form::sapling_blend(sp, r.age_yr, r.height_m, r.crown_base_m, r.crown_radius_m);
+            let mut inst = TreeInstance::new(r.id, [r.x_m as f32, r.y_m as f32, z], r.height_m, crown_r.max(0.2), sid as u32, col);
             inst.leaf_amount = amount;
             // the crown from where the simulation has its base
-            let cb = r.crown_base_m / r.height_m;
+            let cb = cb_m / r.height_m;
             if cb.is_finite() && cb > 0.0 {
                 inst.crown_base = cb.clamp(0.05, 0.85);
             }

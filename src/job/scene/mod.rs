@@ -88,8 +88,9 @@ mod tests {
         let area = |b: usize| inst.iter().filter(|t| band_of(t) == b && t.position[1] < 150.0).map(|t| PI * (t.crown_radius as f64).powi(2)).sum::<f64>();
         // one instance per stem in the sparse bands, none without stems
         assert_eq!((count(0), count(1), count(2)), (400, 800, 0));
-        // drawn plan cover = the Poisson cover of the cohorts' open-grown crowns
-        let r = crate::species::allometry::open_crown_radius(beech, 1.5, crate::species::allometry::open_dbh(beech, 1.5)) as f64;
+        // drawn plan cover = the Poisson cover of the cohorts' sapling-form crowns
+        let r = sapling_form(beech, 1.5).1 as f64;
+        assert!((r - 0.5 * 0.45 * 1.5).abs() < 1e-6, "beech sapling crown radius {r} m");
         let lambda = PI * r * r / 25.0;
         assert!(lambda > 0.005 && lambda < 0.5, "beech sapling crown radius {r} m");
         let want1 = 400.0 * 25.0 * (1.0 - (-lambda).exp());
@@ -106,6 +107,44 @@ mod tests {
         assert_eq!(inst, instances_with_saplings(&[], &cohorts, &lib, &cond, Season::Summer));
         for (t, c) in inst.iter().zip(cohorts.iter().filter(|c| c.stems > 0).flat_map(|c| std::iter::repeat_n(c, sapling_clumps(beech, c.stems, c.height_m, 5.0).0 as usize))) {
             assert!((t.position[0] as f64 - c.x_m).abs() <= 2.5 && (t.position[1] as f64 - c.y_m).abs() <= 2.5);
+        }
+    }
+
+    #[test]
+    fn young_trees_and_saplings_are_drawn_with_the_sapling_form_of_tree_grow() {
+        // issue 32, round 35: the stills drew the simulation's young trees and the cohorts'
+        // saplings as round tufts on sticks; now their crowns are the sapling form that `sylva
+        // tree grow` gives the species (one function, forest_form::sapling_blend)
+        use crate::structure::forest_form::{tree_form, Habit};
+        let lib = SpeciesLibrary::embedded().unwrap();
+        let cond = SiteConditions::uniform(20, 20, 10.0, 500.0, [5.0; 6], 47.0);
+        for (id, wh) in [("beech", 0.45), ("sessile_oak", 0.45), ("norway_spruce", 0.5), ("scots_pine", 0.5)] {
+            let sp = &lib.species[lib.find(id).unwrap() as usize];
+            // a 5-year tree of `tree grow`'s height, with a lollipop crown from the simulation
+            // (a 0.1 m tuft above a 60 % clear bole), and a 60-year tree
+            let form = tree_form(sp, 5.0, Habit::Forest).unwrap();
+            let h = form.height_m;
+            let young = Plant { id: 1, species: id, x_m: 52.0, y_m: 52.0, height_m: h, crown_radius_m: 0.1, age_yr: 5.0, crown_base_m: 0.6 * h, alive: true };
+            let old = Plant { id: 2, species: id, x_m: 152.0, y_m: 152.0, height_m: 25.0, crown_radius_m: 3.0, age_yr: 60.0, crown_base_m: 12.0, alive: true };
+            let inst = instances(&[young, old], &lib, &cond, Season::Summer);
+            let (y, o) = (inst.iter().find(|t| t.id == 1).unwrap(), inst.iter().find(|t| t.id == 2).unwrap());
+            let w = 2.0 * y.crown_radius / y.height;
+            assert!((w - wh).abs() < 1e-4 && (w - 2.0 * form.crown_radius_m / h).abs() < 0.02 * wh, "{id}: drawn crown width / height {w}, tree grow {}", 2.0 * form.crown_radius_m / h);
+            assert!((y.crown_base - 0.1).abs() < 1e-4 && (form.crown_base_m / h - 0.1).abs() < 1e-3, "{id}: crown base {} of the height", y.crown_base);
+            // a tree of 20 years or more keeps the simulation's crown
+            assert_eq!((o.crown_radius, o.crown_base), (3.0, 12.0 / 25.0), "{id}");
+            // the stand trees of the near field and the exports alike
+            let st = crate::job::adapted::stand_trees(&[young, old], &lib, &cond);
+            assert!((st[0].1.crown_radius_m - y.crown_radius).abs() < 1e-5 && (st[0].1.crown_base_m - 0.1 * h).abs() < 1e-4, "{id}: {:?}", st[0].1);
+            assert_eq!((st[1].1.crown_radius_m, st[1].1.crown_base_m), (3.0, 12.0), "{id}");
+            // a cohort's single sapling: crown width / cohort height 0.45–0.5 of the sapling form
+            // (its own height jittered ±15 %), live crown from 0.1 of its height
+            let c = SaplingCohort { cell: 0, species: id, x_m: 2.5, y_m: 2.5, cell_m: 5.0, stems: 1, height_m: 2.0 };
+            let s = sapling_instances(&[c], None, &lib, &cond, Season::Summer);
+            assert_eq!(s.len(), 1, "{id}");
+            let ws = 2.0 * s[0].crown_radius / 2.0;
+            // (the Poisson cover of one stem in its 5 m cell takes < 1 % off the radius)
+            assert!((ws - wh).abs() < 0.01 * wh && (s[0].crown_base - 0.1).abs() < 1e-4, "{id}: sapling width / cohort height {ws}, crown base {}", s[0].crown_base);
         }
     }
 

@@ -68,19 +68,26 @@ pub fn sapling_cover(stems: u32, r: f32, area_m2: f64) -> f64 {
     1.0 - (-(stems as f64) * std::f64::consts::PI * (r as f64).powi(2) / area_m2).exp()
 }
 
-/// The drawn saplings of one cohort: `(count, crown radius m)`. The open-grown crown radius of
-/// the species at the cohort's height ([`crate::species::allometry::open_crown_radius`] of
-/// [`crate::species::allometry::open_dbh`]) gives the cover ([`sapling_cover`]); the instances
+/// The sapling form of a cohort's stems of `sp`, `height_m` tall: (crown base m, crown radius m)
+/// of [`crate::structure::forest_form::sapling_blend`] in full (a cohort is below the
+/// recruitment height, 4 m: the form of 2–10-year trees), the form `sylva tree grow` gives a
+/// stand-grown sapling.
+pub fn sapling_form(sp: &Species, height_m: f32) -> (f32, f32) {
+    crate::structure::forest_form::sapling_blend(sp, 0.0, height_m, 0.0, 0.0)
+}
+
+/// The drawn saplings of one cohort: `(count, crown radius m)`. The sapling form's crown radius
+/// at the cohort's height ([`sapling_form`], as `sylva tree grow`; until round 35 the
+/// open-grown crown radius) gives the cover ([`sapling_cover`]); the instances
 /// share the covered area `cover · A` equally, as many as the stems up to
 /// [`MAX_SAPLINGS_PER_COHORT`] with crowns no wider than `1.0 · h + 0.3` m (a clump of a few
 /// stems), so the drawn plan area is the cohort's cover while it fits, and proportional to the
 /// stem density in sparse cohorts. `(0, 0)` below [`MIN_SAPLING_HEIGHT_M`] or without stems.
 pub fn sapling_clumps(sp: &Species, stems: u32, height_m: f32, cell_m: f64) -> (u32, f32) {
-    use crate::species::allometry::{open_crown_radius, open_dbh};
     if stems == 0 || !(height_m >= MIN_SAPLING_HEIGHT_M) {
         return (0, 0.0);
     }
-    let r = open_crown_radius(sp, height_m, open_dbh(sp, height_m)).max(0.05);
+    let r = sapling_form(sp, height_m).1.max(0.05);
     let area = cell_m * cell_m;
     let covered = sapling_cover(stems, r, area) * area;
     let r_max = (1.0 * height_m + 0.3).max(r);
@@ -93,7 +100,8 @@ pub fn sapling_clumps(sp: &Species, stems: u32, height_m: f32, cell_m: f64) -> (
 
 /// Render instances of the saplings of `cohorts` (the regeneration layer) for `season`: per
 /// cohort [`sapling_clumps`] instances of the species' prototype scaled to the cohort's height
-/// (± 15 %) and the clump's crown radius, scattered in the light cell by a hash of the cell,
+/// (± 15 %), the clump's crown radius and the sapling form's crown base ([`sapling_form`]),
+/// scattered in the light cell by a hash of the cell,
 /// species and index (deterministic, stable across snapshots; ids carry [`SAPLING_ID_BIT`]).
 /// Cohorts under a drawn canopy (`canopy`, [`visible_with_canopy`]) lower than
 /// [`UNDERSTORY_FRACTION`] of it are hidden, as understory trees are.
@@ -116,6 +124,8 @@ pub fn sapling_instances(cohorts: &[SaplingCohort], canopy: Option<&CanopyHeight
             let z = cond.elevation_at(x, y);
             let mut inst = TreeInstance::new(id, [x as f32, y as f32, z], h, r, sid as u32, col);
             inst.leaf_amount = amount;
+            // live branches nearly to the ground, as the sapling form has them
+            inst.crown_base = (sapling_form(sp, h).0 / h).clamp(0.05, 0.85);
             out.push(inst);
         }
     }

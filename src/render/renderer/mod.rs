@@ -182,9 +182,45 @@ pub struct Renderer {
     /// stored between the passes and resolved after the last); each extra pass stores and loads
     /// the targets once more.
     pub pass_triangles: u64,
+    /// The light terms drawn (default [`LightTerms::All`]): a diagnostic of the stills'
+    /// lighting (issue 32, round 35), e.g. the share of a still's crowns in the sun's shadow.
+    pub light_terms: LightTerms,
+    /// Billboard crowns take the sun's visibility on their camera-facing quad, as before round
+    /// 35 (default false: at the crown surface the pixel shows; `shaders/scene.wgsl`,
+    /// `fs_tree`). Kept to measure the change (`tests/render_species.rs`).
+    pub crown_sun_on_quad: bool,
     /// The far field the shadow map was drawn with (a new one redraws it).
     shadow_far: Option<std::sync::Arc<FarField>>,
     last: FrameStats,
+}
+
+/// Which light terms a frame draws ([`Renderer::light_terms`]): all (the pictures), or one term
+/// alone to see what lights what.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LightTerms {
+    /// Sun (shadow-mapped), sky light and the leaves' transmitted sunlight: the pictures.
+    #[default]
+    All,
+    /// As [`LightTerms::All`] with every point seeing the sun and the whole sky (no shadow map
+    /// lookups take effect).
+    NoShadows,
+    /// The sun alone (shadow-mapped, with the leaves' transmitted sunlight), no sky light.
+    SunOnly,
+    /// The sky light alone, no sun.
+    SkyOnly,
+}
+
+impl LightTerms {
+    /// The code `shaders/scene.wgsl` reads from `Globals::sun_dir.w`: 0 all, 1 no shadows,
+    /// 2 sun only, 3 sky only.
+    pub fn code(self) -> f32 {
+        match self {
+            LightTerms::All => 0.0,
+            LightTerms::NoShadows => 1.0,
+            LightTerms::SunOnly => 2.0,
+            LightTerms::SkyOnly => 3.0,
+        }
+    }
 }
 
 impl Renderer {

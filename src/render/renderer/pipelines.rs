@@ -19,7 +19,15 @@ pub(super) fn tree_layouts() -> [wgpu::VertexBufferLayout<'static>; 2] {
 impl Renderer {
     pub(in crate::render) fn with_device(device: wgpu::Device, queue: wgpu::Queue, adapter_info: wgpu::AdapterInfo, gpu_ok: bool, format: wgpu::TextureFormat) -> Result<Self> {
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("scene.wgsl"), source: wgpu::ShaderSource::Wgsl(include_str!("../shaders/scene.wgsl").into()) });
+        // a development aid: SYLVA_SCENE_WGSL names a file whose text replaces the built-in
+        // scene shader (to tune the pictures' look without rebuilding)
+        let source: std::borrow::Cow<'static, str> = match std::env::var_os("SYLVA_SCENE_WGSL") {
+            Some(path) => std::fs::read_to_string(&path)
+                .map_err(|e| RenderError::Create { what: "scene shader", adapter: adapter_info.name.clone(), message: format!("SYLVA_SCENE_WGSL = {}: {e}", std::path::Path::new(&path).display()) })?
+                .into(),
+            None => include_str!("../shaders/scene.wgsl").into(),
+        };
+        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor { label: Some("scene.wgsl"), source: wgpu::ShaderSource::Wgsl(source) });
         let uniform_entry = wgpu::BindGroupLayoutEntry {
             binding: 0,
             visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
@@ -170,6 +178,8 @@ impl Renderer {
             fast_shading: false,
             coarse_terrain: false,
             pass_triangles: 0,
+            light_terms: LightTerms::All,
+            crown_sun_on_quad: false,
             shadow_far: None,
             last: FrameStats::default(),
         })

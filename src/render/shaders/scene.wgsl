@@ -6,8 +6,8 @@ struct Globals {
     light_view_proj: mat4x4<f32>,
     inv_view_proj: mat4x4<f32>,
     eye: vec4<f32>,          // xyz eye, w = 1 for orthographic
-    sun_dir: vec4<f32>,      // xyz towards the sun
-    sun_color: vec4<f32>,
+    sun_dir: vec4<f32>,      // xyz towards the sun; w: light terms (render/renderer, LightTerms: 0 all, 1 no shadows, 2 sun only, 3 sky only)
+    sun_color: vec4<f32>,    // rgb; w = 1: billboard crowns take the sun on their quad (Renderer::crown_sun_on_quad)
     sky_zenith: vec4<f32>,   // rgb; w: world size (m) of one pixel per metre of clip w (0: no stem widening)
     sky_horizon: vec4<f32>,
     wind: vec4<f32>,         // direction x, y; directed w_g; undirected w_s
@@ -131,6 +131,19 @@ fn fog(c: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
     return mix(c, air, clamp(f, 0.0, 0.85));
 }
 
+// The light terms a frame draws (Renderer::light_terms, a diagnostic of the stills' lighting):
+// the sun's shadow-map visibility `sh` (1 with the shadows off), and the gains of the sun and
+// of the sky light.
+fn light_sh(sh: f32) -> f32 {
+    return select(sh, 1.0, abs(g.sun_dir.w - 1.0) < 0.5);
+}
+fn sun_gain() -> f32 {
+    return select(1.0, 0.0, abs(g.sun_dir.w - 3.0) < 0.5);
+}
+fn sky_gain() -> f32 {
+    return select(1.0, 0.0, abs(g.sun_dir.w - 2.0) < 0.5);
+}
+
 // Sun (Lambert with `wrap`, shadow-mapped) plus sky light: a hemisphere ambient between the
 // ground-bounced light (down-facing normals) and the sky (up-facing), occluded by the canopy above
 // (`sky_visibility`) and by `ao`.
@@ -149,9 +162,9 @@ fn shade_sh(albedo: vec3<f32>, n: vec3<f32>, world: vec3<f32>, wrap: f32, ao: f3
     // for the ground and stems under it
     var sv = 1.0;
     if (wrap < 0.3) {
-        sv = sky_visibility(world, n);
+        sv = light_sh(sky_visibility(world, n));
     }
-    let lit = g.sun_color.rgb * ndl * sh + sky_amb * ao * sv;
+    let lit = g.sun_color.rgb * ndl * light_sh(sh) * sun_gain() + sky_amb * ao * sv * sky_gain();
     return albedo * lit;
 }
 
@@ -265,6 +278,11 @@ fn canopy_view_cover(c: f32, world: vec3<f32>) -> f32 {
     return 1.0 - pow(1.0 - clamp(c, 0.0, 0.999), ex);
 }
 
+// Scale (m) of the canopy layer's crown bumps: about the crown spacing of a closed canopy
+// (crown radii 1.5–4 m; ESTIMATE), and how far the bumps tilt its normal.
+const CROWN_BUMP_M: f32 = 6.0;
+const CROWN_BUMP_TILT: f32 = 2.5;
+
 @fragment
 fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
     let n = normalize(i.normal);
@@ -300,7 +318,16 @@ fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
             // normal, the crown's mean ambient occlusion and self-shading; sun visibility at the
             // height of the upper crowns (render/renderer.rs, canopy_light_height), not in the
             // shadow the trees drawn as geometry cast on the ground
-            let cn = normalize(n + vec3<f32>(0.0, 0.0, 1.5));
+            // crowns as rounded bumps of CROWN_BUMP_M (round 35: the layer was lit as one flat
+            // sheet, a carpet): the normal tilts with the slope of a smooth noise of that
+            // scale, each bump lit on its sun side and shaded on the other; faded out where a
+            // pixel's footprint is wider than a bump (no aliasing into speckle)
+            let q = i.world.xy / CROWN_BUMP_M;
+            let e = 0.35;
+            let gx = vnoise(q + vec2<f32>(e, 0.0), 7.0) - vnoise(q - vec2<f32>(e, 0.0), 7.0);
+            let gy = vnoise(q + vec2<f32>(0.0, e), 7.0) - vnoise(q - vec2<f32>(0.0, e), 7.0);
+            let kb = 1.0 - smoothstep(0.5 * CROWN_BUMP_M, 1.2 * CROWN_BUMP_M, min(lx, ly));
+            let cn = normalize(n + vec3<f32>(0.0, 0.0, 1.5) - vec3<f32>(gx, gy, 0.0) * (CROWN_BUMP_TILT * kb));
             let top = i.world + vec3<f32>(0.0, 0.0, g.canopy1.w);
             let cc = shade(cv.rgb, cn, top + cn * 0.5, 0.35, 0.75) * 0.85;
             c = mix(c, cc, canopy_view_cover(cv.w, i.world));
@@ -347,6 +374,7 @@ struct TreeOut {
     @location(8) @interpolate(flat) bark: vec3<f32>,   // bark colour (billboard trunks, twigs)
     @location(9) cdir: vec3<f32>,                       // direction from the crown centre (meshes)
     @location(10) uv: vec2<f32>,                        // leaf-card coordinates (-1: not a card)
+    @location(11) @interpolate(flat) rad: f32,          // crown radius drawn (m)
 };
 
 // Direction from a tree towards the viewer (or the sun in the shadow pass).
@@ -426,6 +454,10 @@ fn crown_unmap(z: f32, b0: f32, b: f32) -> f32 {
 // trees' stems, thinner than a pixel, vanished and their crowns floated over the ground).
 const MIN_STEM_PX: f32 = 1.2;
 
+// Linear albedo of the shaded stand interior behind a distant tree's trunk (dark foliage and
+// twigs under the canopy): what a widened trunk's pixel shows beside the real trunk.
+const STAND_SHADE: vec3<f32> = vec3<f32>(0.035, 0.045, 0.03);
+
 // `top_scale`: size of the billboard's top quad (1: the crown's plan disc, in both passes).
 fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     var o: TreeOut;
@@ -485,6 +517,7 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     o.info = vec4<f32>(v.p3.xy, v.p4.x, v.p4.y);
     o.bark = v.bark.rgb;
     o.uv = v.uv;
+    o.rad = v.p3.w;
     return o;
 }
 
@@ -600,6 +633,15 @@ struct Carve {
     kind: u32,
     n: vec3<f32>,
     z: f32,
+    // side quad: how far the crown's surface seen at this pixel lies in front of the quad,
+    // towards the viewer (outline units, relative to the crown radius; × `rad`: m): w·√(1 −
+    // (a/w)²) of the crown's half-width w at this height, the crown taken as round in plan
+    depth: f32,
+    // trunk: the share of the drawn (widened) trunk's width the real trunk covers (0..1)
+    cover: f32,
+    // side quad's crown: the normal of the crown as a round solid (an ellipsoid about its
+    // middle, no lumps): where its surface turns from the sun
+    ns: vec3<f32>,
 };
 
 // `apx`: outline units (`i.bb.x`) per pixel across the quad (fwidth, taken in uniform control
@@ -608,6 +650,9 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
     var r: Carve;
     r.kind = 0u;
     r.n = vec3<f32>(0.0, 0.0, 1.0);
+    r.depth = 0.0;
+    r.cover = 1.0;
+    r.ns = vec3<f32>(0.0, 0.0, 1.0);
     let p = u32(i.info.x + 0.5);
     let s = sils[p];
     let look = s.look;
@@ -628,14 +673,17 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
             r.kind = 1u;
             let f = normalize(i.normal);
             let na = a / max(w, 1e-3);
+            r.depth = w * sqrt(max(1.0 - na * na, 0.0));
             let zc = 0.5 * (s.info.x + s.info.y);
             let nz = clamp((z - zc) / max(0.5 * (s.info.y - s.info.x), 1e-3), -1.0, 1.0);
+            r.ns = normalize(right_of(f) * na + vec3<f32>(0.0, 0.0, 0.8 * nz) + f * sqrt(max(1.0 - na * na, 0.0)));
             r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.3 * nz + 0.35) + f * sqrt(max(1.0 - na * na, 0.0)));
             // each lump is a small dome of its own: its shading bends the normal about it
             r.n = normalize(r.n + right_of(f) * (l - 0.5) * look.z * 1.5);
         } else if (abs(a) < max(s.info.z, 0.5 * MIN_STEM_PX * apx) && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
             r.kind = 2u;
             r.n = normalize(i.normal);
+            r.cover = clamp(s.info.z / max(0.5 * MIN_STEM_PX * apx, 1e-6), 0.0, 1.0);
         }
     } else {
         let q = i.bb;
@@ -725,6 +773,12 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         albedo = albedo * tex.rgb;
     }
     var hz = i.mat_s.y;
+    // where the sun's visibility is looked up: the fragment, or for a billboard's crown the
+    // point of the crown's surface it shows (below)
+    var sun_at = i.world;
+    var crown_bb = false;
+    var crown_k = 0.0;
+    var ns = n;
     if (i.mat_s.x > 1.5) {
         let c = carve(i, apx);
         if (c.kind == 0u) {
@@ -732,9 +786,34 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         }
         n = c.n;
         hz = c.z;
+        if (c.kind == 1u && i.mat_s.x < 2.5) {
+            // the side quad stands in the plane of the stem, facing the viewer, while in the
+            // sun's shadow map the same crown is a quad through its stem facing the sun. With
+            // texels under a tenth of the crown radius the quad's own shadow on the far half is
+            // a fair shaded side, and it is kept. With coarse texels (the default run's 3.1 m:
+            // 1–3 a crown) the map cannot resolve a crown, and the crowns were lit almost
+            // uniformly (issue 32, round 35: 1.4 % of the crown pixels out of the sun in
+            // `tests/render_species.rs`): there the sun is looked up at the crown surface the
+            // pixel shows, `depth` in front of the quad towards the viewer, then a quarter of
+            // the crown radius out along the pseudo-normal (only other crowns and the relief
+            // shade it), and the crown shades its far side itself (below); blended in from a
+            // tenth to half the crown radius. Renderer::crown_sun_on_quad (sun_color.w = 1)
+            // keeps the old lookup, to measure the change.
+            let kc = smoothstep(0.1, 0.5, g.shadow.z / max(i.rad, 1e-3));
+            if (g.sun_color.w < 0.5 && kc > 0.0) {
+                let fh = normalize(i.normal);
+                sun_at = i.world + (fh * (c.depth * i.rad) + n * (0.25 * i.rad)) * kc;
+                crown_bb = true;
+                crown_k = kc;
+                ns = c.ns;
+            }
+        }
         if (c.kind == 2u) {
             leafy = 0.0;
-            albedo = i.bark;
+            // a trunk widened to MIN_STEM_PX shows its bark over the share of the pixel the
+            // real trunk covers, the shaded stand behind it over the rest (round 35: a birch's
+            // white bark, 1.2 px wide on every distant birch, frosted the oblique still)
+            albedo = mix(STAND_SHADE, i.bark, c.cover);
         }
     } else {
         if (!ff) {
@@ -784,14 +863,28 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         albedo = mix(i.bark, fine_twig_color(i.bark), i.uv.y);
     }
     let ao = mix(1.0, mix(0.45, 1.0, clamp(hz * 1.3 - 0.2, 0.0, 1.0)), leafy);
-    let sh = shadow_factor(i.world, n);
-    var c = shade_sh(albedo, n, i.world, 0.35 * leafy, ao, sh) * mix(1.0, ao * 0.4 + 0.6, leafy);
+    let sh0 = shadow_factor(sun_at, n);
+    var sh = sh0;
+    var wrap = 0.35 * leafy;
+    // the share of the sun's transmitted light that reaches the leaves seen
+    var through = 1.0;
+    if (crown_bb && leafy > 0.5) {
+        // a billboard crown's own shade, now that its quad casts none on it (above): no sun where
+        // the crown's surface as a round solid turns away from it (a soft terminator), less
+        // wrapped light (0.3, still foliage to `shade_sh`), and the far side's leaves lit
+        // through the crown by a third of the transmitted light (ESTIMATE): a lit and a shaded
+        // side, as a rounded crown has
+        sh = sh0 * mix(1.0, smoothstep(-0.15, 0.25, dot(ns, g.sun_dir.xyz)), crown_k);
+        wrap = mix(0.35, 0.3, crown_k);
+        through = mix(1.0, 0.35, crown_k);
+    }
+    var c = shade_sh(albedo, n, i.world, wrap, ao, sh) * mix(1.0, ao * 0.4 + 0.6, leafy);
     if (leafy > 0.5) {
         // leaves are translucent: the side facing away from the sun glows with transmitted,
         // yellower light (a thin-leaf transmittance of ~0.3 of the sunlight), so crowns seen from
         // below or against the sun are not black
         let back = max(-dot(n, g.sun_dir.xyz), 0.0);
-        let trans = albedo * vec3<f32>(1.1, 1.15, 0.6) * g.sun_color.rgb * (0.3 * back * sh);
+        let trans = albedo * vec3<f32>(1.1, 1.15, 0.6) * g.sun_color.rgb * (0.3 * back * light_sh(sh0) * through * sun_gain());
         c = c + trans * ao;
     }
     // trees on the faded surroundings dissolve into the sky with their ground
