@@ -99,7 +99,8 @@ fn a_tree_beside_a_wall_stays_one_sided_at_the_mid_level() {
     // HULL_STEM_SEGMENTS; was one straight segment)
     let stem = stage.last_adapt.hull_triangles - sylva::structure::crown_hull::HULL_TRIANGLES;
     assert!(stem % 10 == 0 && (10..=10 * sylva::structure::mesh::HULL_STEM_SEGMENTS).contains(&stem), "hull triangles {}: the stem's {stem}", stage.last_adapt.hull_triangles);
-    assert_eq!(st.per_level, [0, 0, 2, 0], "the tree and the wall drawn at the mid level");
+    // the wall is drawn by its own mesh at any size (round 35: obstacles are rigid prototypes)
+    assert_eq!(st.per_level, [1, 0, 1, 0], "the wall at its mesh, the tree at the mid level");
     assert_eq!(stage.last_adapt.per_level, [0, 0, 1, 0], "the adapted tree among them");
     assert_one_sided(&mut stage, tree, &cam, &bg, &img, "wall_hull");
 }
@@ -132,4 +133,29 @@ fn a_still_draws_its_near_trees_at_full_detail() {
     assert_eq!((st.adapted_trees, st.trees_15m), (9, 9), "{st:?}");
     assert!(st.nodes_median as f64 >= 0.8 * alone as f64 && st.nodes_min > 200, "median {} nodes adapted, {alone} grown alone ({st:?})", st.nodes_median);
     assert!(st.leaf_cards > 9 * 1000, "{st:?}");
+}
+
+/// Trial 35: a scenario's building was in no still: 8 m tall and a kilometre away it is a few
+/// pixels "tall", so the level choice sent it to the far-field canopy layer (which draws tree
+/// crowns, not boxes) or to a tree billboard. Obstacles are now drawn by their own mesh at any
+/// size: a 40 m × 30 m footprint, 4 m tall, about 3 px tall and 30 px wide at 320 m, shows.
+#[test]
+fn a_distant_building_is_drawn_by_its_mesh() {
+    let Some(mut stage) = stage() else { return };
+    let cam = Camera::look_at([50.0, -200.0, 400.0], [50.0, 50.0, 200.0], 45.0);
+    let (w, h) = (240, 200);
+    stage.set_scenario(42, &[]);
+    let bg = stage.render_plants(&[], Season::Summer, &cam, w, h).unwrap();
+    let building = ObstacleSpec::Footprint { points: vec![[30.0, 35.0], [70.0, 35.0], [70.0, 65.0], [30.0, 65.0]], height_m: 4.0 };
+    stage.set_scenario(42, &[building]);
+    let img = stage.render_plants(&[], Season::Summer, &cam, w, h).unwrap();
+    let st = stage.renderer.last_stats();
+    let differ = img.pixels().zip(bg.pixels()).filter(|(a, b)| (0..3).map(|k| (a.0[k] as i32 - b.0[k] as i32).abs()).sum::<i32>() > 15).count();
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render");
+    std::fs::create_dir_all(&dir).unwrap();
+    img.save(dir.join("distant_building.png")).unwrap();
+    bg.save(dir.join("distant_building_bg.png")).unwrap();
+    eprintln!("building: {differ} pixels differ, per level {:?}", st.per_level);
+    assert_eq!(st.per_level[0], 1, "the building at its mesh level: {:?}", st.per_level);
+    assert!(differ >= 40, "the building shows: {differ} pixels differ from the empty site");
 }

@@ -240,7 +240,7 @@ impl Editor {
         let Some(g) = &self.grown else { return };
         let sp = &g.request.species;
         let srgb = crate::job::scene::srgb_to_linear;
-        let main = crate::render::scene::Prototype { name: sp.id.clone(), lods: g.lods.clone(), bark_color: srgb(sp.appearance.bark), leaf_color: srgb(sp.appearance.leaf_summer), stiffness: 1.0, look: Some(crate::job::scene::crown_look(sp)) };
+        let main = crate::render::scene::Prototype { name: sp.id.clone(), lods: g.lods.clone(), bark_color: srgb(sp.appearance.bark), leaf_color: srgb(sp.appearance.leaf_summer), stiffness: 1.0, look: Some(crate::job::scene::crown_look(sp)), rigid: false };
         let mut protos = vec![main];
         let hl = self.shown_highlight.and_then(|h| preview::highlight_prototype(&g.skeleton, h));
         let mut inst = vec![preview::instance(&protos[0], 0, g.height_m, if hl.is_some() { 0.35 } else { 1.0 })];

@@ -182,7 +182,7 @@ pub fn highlight_prototype(sk: &Skeleton, h: Highlight) -> Option<Prototype> {
     let bark = branch_mesh(&fat, &LodOptions::default(), None);
     let level = TreeMesh { bark, leaves: Default::default() };
     let levels: [TreeMesh; LOD_LEVELS] = std::array::from_fn(|_| level.clone());
-    Some(Prototype { name: "highlight".into(), lods: LodChain::new(levels.into()), bark_color: [1.0, 0.05, 0.7], leaf_color: [1.0, 0.05, 0.7], stiffness: 1.0, look: None })
+    Some(Prototype { name: "highlight".into(), lods: LodChain::new(levels.into()), bark_color: [1.0, 0.05, 0.7], leaf_color: [1.0, 0.05, 0.7], stiffness: 1.0, look: None, rigid: false })
 }
 
 /// The instance of a preview prototype `p` for a tree of `height_m` at the origin: scaled

@@ -411,7 +411,7 @@ pub fn adapted_model(mut a: AdaptedTree, t: &StandTree, sp: &crate::species::Spe
         sprigs.uvs.iter_mut().for_each(|uv| uv[0] += crate::mesh::CLUSTER_CARD_U);
         full.leaves.append(&sprigs);
     }
-    let prototype = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0), look: Some(super::scene::crown_look(sp)) };
+    let prototype = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0), look: Some(super::scene::crown_look(sp)), rigid: false };
     let r0 = prototype.normalised_crown_radius();
     Some(AdaptedModel { prototype, height: h, r0, hulled, nodes: n_nodes, leaf_cards: n_leaves, sprig_cards: n_sprigs, adapted_leaf_area_m2, leaf_area_m2 })
 }
@@ -596,7 +596,7 @@ pub fn obstacle_models(obstacles: &[ObstacleSpec], site: &SiteConditions, first:
             *p = ((Vec3::from(*p) - base) / top).to_array();
         }
         let level = TreeMesh { bark: mesh, leaves: TriMesh::default() };
-        let p = Prototype { name: format!("obstacle {k} ({})", o.kind()), lods: LodChain::new(vec![level; LOD_LEVELS - 1]), bark_color: srgb_to_linear(OBSTACLE_RGB), leaf_color: [0.0; 3], stiffness: 1.0, look: None };
+        let p = Prototype { name: format!("obstacle {k} ({})", o.kind()), lods: LodChain::new(vec![level; LOD_LEVELS - 1]), bark_color: srgb_to_linear(OBSTACLE_RGB), leaf_color: [0.0; 3], stiffness: 1.0, look: None, rigid: true };
         let r0 = p.normalised_crown_radius();
         protos.push(p);
         let mut t = TreeInstance::new(u64::MAX - k as u64, base.to_array(), top, r0 * top, first + k as u32, [0.0; 3]);

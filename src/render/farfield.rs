@@ -232,7 +232,7 @@ mod tests {
     use crate::render::camera::Camera;
 
     fn proto() -> Vec<Prototype> {
-        vec![Prototype { name: "p".into(), lods: crate::render::lod::placeholder_chain(false), bark_color: [0.3, 0.2, 0.1], leaf_color: [0.1, 0.4, 0.1], stiffness: 1.0, look: None }]
+        vec![Prototype { name: "p".into(), lods: crate::render::lod::placeholder_chain(false), bark_color: [0.3, 0.2, 0.1], leaf_color: [0.1, 0.4, 0.1], stiffness: 1.0, look: None, rigid: false }]
     }
 
     fn flat(size: f32) -> TerrainMesh {

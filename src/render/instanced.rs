@@ -208,6 +208,10 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
     // opacity, its level picked; `None` when it goes wholly to the canopy layer or is too small
     let pick = |t: &TreeInstance, px: f32, canopy: Option<&mut Vec<CanopySplat>>| -> Option<(LodPick, InstanceRaw, bool)> {
         let mut rec = instance_record(t, prototypes, &crown_r0)?;
+        // an obstacle: its own mesh at any size (no billboard, no canopy splat)
+        if prototypes[rec.p3[0] as usize].rigid {
+            return Some((LodPick { level: 0, blend: 0.0 }, rec, false));
+        }
         let wc = canopy_weight(px, canopy_px, params.band);
         if wc > 0.0 {
             if let Some(c) = canopy {

@@ -1063,7 +1063,7 @@ fn pool_prototypes(library: &crate::species::SpeciesLibrary, pool: &[String]) ->
                 }
             }
             let conifer = s.identity.leaf_type == crate::species::LeafType::Conifer;
-            crate::render::scene::Prototype { name: s.id.clone(), lods: crate::render::lod::placeholder_chain(conifer), bark_color: scene::srgb_to_linear(s.appearance.bark), leaf_color: scene::srgb_to_linear(s.appearance.leaf_summer), stiffness: 1.0, look: Some(scene::crown_look(s)) }
+            crate::render::scene::Prototype { name: s.id.clone(), lods: crate::render::lod::placeholder_chain(conifer), bark_color: scene::srgb_to_linear(s.appearance.bark), leaf_color: scene::srgb_to_linear(s.appearance.leaf_summer), stiffness: 1.0, look: Some(scene::crown_look(s)), rigid: false }
         })
         .collect()
 }

@@ -32,6 +32,7 @@ pub fn prototypes(library: &SpeciesLibrary) -> Vec<Prototype> {
                 leaf_color: srgb_to_linear(s.appearance.leaf_summer),
                 stiffness: s.architecture.ecomod.k_f.clamp(0.0, 1.0),
                 look: Some(crown_look(s)),
+                rigid: false,
             }
         })
         .collect()

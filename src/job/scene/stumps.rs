@@ -190,7 +190,7 @@ pub fn stump_prototypes() -> Vec<Prototype> {
         let (bark, face) = stump_colors(k);
         for (part, mesh, rgb) in [("bark", bark_mesh(), bark), ("cut face", face_mesh(), face)] {
             let level = TreeMesh { bark: mesh, leaves: TriMesh::default() };
-            out.push(Prototype { name: format!("stump {part} (weathering class {k})"), lods: LodChain::new(vec![level; LOD_LEVELS - 1]), bark_color: rgb, leaf_color: rgb, stiffness: 1.0, look: None });
+            out.push(Prototype { name: format!("stump {part} (weathering class {k})"), lods: LodChain::new(vec![level; LOD_LEVELS - 1]), bark_color: rgb, leaf_color: rgb, stiffness: 1.0, look: None, rigid: false });
         }
     }
     out

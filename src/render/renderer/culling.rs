@@ -40,7 +40,7 @@ impl Renderer {
         let mut base = 0u64;
         for (p, proto) in scene.prototypes.iter().enumerate() {
             let n = drawn_levels(proto.lods.levels.len());
-            proto_words.push([n as u32, slots.len() as u32, 0, 0]);
+            proto_words.push([n as u32, slots.len() as u32, proto.rigid as u32, 0]);
             for l in 0..n {
                 slots.push(GpuSlot { prototype: p, level: l, base: base as u32, cap: per_proto[p] });
                 base += per_proto[p] as u64;

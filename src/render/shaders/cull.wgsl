@@ -29,11 +29,12 @@ struct Params {
     canopy_n: vec4<u32>, // canopy grid nx, ny; geometry triangle budget of the far switch (0 none); unused
 };
 
-// Per prototype: number of drawn levels, first slot index.
+// Per prototype: number of drawn levels, first slot index, 1 for a rigid prototype (an
+// obstacle: drawn at level 0 whatever its size, never splatted; Prototype::rigid).
 struct Proto {
     n_levels: u32,
     first_slot: u32,
-    pad0: u32,
+    rigid: u32,
     pad1: u32,
 };
 
@@ -93,7 +94,7 @@ fn slot_base(slot: u32) -> u32 {
     let j = slot % 4u;
     if (j == 0u) { return p.n_levels; }
     if (j == 1u) { return p.first_slot; }
-    if (j == 2u) { return p.pad0; }
+    if (j == 2u) { return p.rigid; }
     return p.pad1;
 }
 
@@ -227,7 +228,7 @@ fn cost(p: u32, l: u32) -> u32 {
     let j = min(l, LOD_LEVELS - 1u);
     if (j == 0u) { return c.n_levels; }
     if (j == 1u) { return c.first_slot; }
-    if (j == 2u) { return c.pad0; }
+    if (j == 2u) { return c.rigid; }
     return c.pad1;
 }
 
@@ -301,6 +302,15 @@ fn cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     var t = src[idx];
     let px = visible_px(t);
     if (!(px >= 0.0)) {
+        return;
+    }
+    let pr0 = protos[u32(t.p3.x + 0.5)];
+    if (pr0.rigid == 1u) {
+        atomicAdd(&args[cp.counts.w], 1u);
+        t.p1.z = 0.0;
+        t.p1.w = 0.0;
+        t.p3.y = 0.0;
+        append(pr0.first_slot, t);
         return;
     }
     let wc = canopy_weight(px, bitcast<f32>(atomicLoad(&args[scale_word() + 1u])));
