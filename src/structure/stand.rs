@@ -447,6 +447,37 @@ fn fit_skeleton(g: &OpenGrown, h: f32, r: f32, cb: f32) -> (Skeleton, LeafFit) {
     (sk, LeafFit { s, h, map })
 }
 
+/// Lean of the main stem from the vertical (degrees, 0–180): (root → crown base, root → top),
+/// where the main stem is the path of Gravelius order 0 from the root (node 0) along each
+/// node's continuing child, the crown base its first node with a branch (a child of higher
+/// order; the top when it has none) and the top its last node. Real forest trees' stems are
+/// near vertical (a few degrees); issue 32's "tent poles" leaned 10–20° after the adaptation.
+/// (0, 0) for a skeleton of one node or a stem of zero length.
+pub fn stem_lean_deg(sk: &Skeleton) -> (f32, f32) {
+    let Some(root) = sk.nodes.first() else { return (0.0, 0.0) };
+    let mut k = 0usize;
+    let mut cb = None;
+    loop {
+        let nd = &sk.nodes[k];
+        if cb.is_none() && k != 0 && nd.children.iter().any(|&c| sk.nodes[c as usize].gravelius > 0) {
+            cb = Some(k);
+        }
+        match nd.children.iter().find(|&&c| sk.nodes[c as usize].gravelius == 0) {
+            Some(&c) => k = c as usize,
+            None => break,
+        }
+    }
+    let lean = |p: Vec3| {
+        let d = p - root.pos;
+        if d.length() <= 0.0 {
+            0.0
+        } else {
+            (d.z / d.length()).clamp(-1.0, 1.0).acos().to_degrees()
+        }
+    };
+    (lean(sk.nodes[cb.unwrap_or(k)].pos), lean(sk.nodes[k].pos))
+}
+
 /// One adapted tree of [`adapt_stand`].
 #[derive(Debug, Clone)]
 pub struct AdaptedTree {
