@@ -749,28 +749,31 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
         let before: Vec<Vec<(Vec3, f32)>> = group[..ks.len()].iter().map(|t| t.clusters()).collect();
         let rep = adapt_group_among_once(&mut group, &context, &env)?;
         drop(context);
-        let mut out = Vec::with_capacity(ks.len());
-        for (j, &k) in ks.iter().enumerate() {
-            let i = members[j];
-            let st = &trees[i];
-            let key = class_of(st, false);
-            let (h, r, _) = class_dims(&key);
-            let f = st.height_m / h;
-            let t = &group[j];
-            let open = cache.get(form(&key)).map_or(&[][..], |g| &g.leaves.leaves[..]);
-            let (skeleton, leaves) = adapted_with_leaves(t, open, analysed[&key].1.as_ref(), f, st.base);
-            // the exact crown radius: stretched about the base by the crown-shape class's
-            // rounding (the height is exact)
-            let sx = st.crown_radius_m / (r * f);
-            let s = Vec3::new(sx, sx, 1.0);
-            let at = |p: Vec3| st.base + (p - st.base) * s;
-            let mut skeleton = skeleton;
-            skeleton.nodes.iter_mut().for_each(|n| n.pos = at(n.pos));
-            let mut leaves = leaves;
-            leaves.leaves.iter_mut().for_each(|l| l.pos = at(l.pos));
-            let scale_c = |v: Vec<(Vec3, f32)>| v.into_iter().map(|(c, rad)| (at(c), rad * s.x.max(s.z))).collect::<Vec<_>>();
-            out.push((k, AdaptedTree { index: i, skeleton, leaves, report: rep.trees[j], clusters_before: scale_c(before[j].clone()), clusters_after: scale_c(t.clusters()), leaf_clusters: t.leaf_clusters().into_iter().map(|c| LeafCluster { center: at(c.center), radius: c.radius * s.x.max(s.z), ..c }).collect() }));
-        }
+        // each tree's output (its leaves are most of the near field's memory and the cell's
+        // last serial work) built as a task of its own, so the other core can take a share of
+        // a cell's trees (round 35); each tree's result depends only on its own inputs
+        let out: Vec<(usize, AdaptedTree)> = ks
+            .par_iter()
+            .zip(before.into_par_iter())
+            .enumerate()
+            .map(|(j, (&k, before))| {
+                let i = members[j];
+                let st = &trees[i];
+                let key = class_of(st, false);
+                let (h, r, _) = class_dims(&key);
+                let f = st.height_m / h;
+                let t = &group[j];
+                let open = cache.get(form(&key)).map_or(&[][..], |g| &g.leaves.leaves[..]);
+                // the exact crown radius: stretched about the base by the crown-shape class's
+                // rounding (the height is exact)
+                let sx = st.crown_radius_m / (r * f);
+                let s = Vec3::new(sx, sx, 1.0);
+                let at = |p: Vec3| st.base + (p - st.base) * s;
+                let (skeleton, leaves) = adapted_with_leaves(t, open, analysed[&key].1.as_ref(), f, st.base, at);
+                let scale_c = |v: Vec<(Vec3, f32)>| v.into_iter().map(|(c, rad)| (at(c), rad * s.x.max(s.z))).collect::<Vec<_>>();
+                (k, AdaptedTree { index: i, skeleton, leaves, report: rep.trees[j], clusters_before: scale_c(before), clusters_after: scale_c(t.clusters()), leaf_clusters: t.leaf_clusters().into_iter().map(|c| LeafCluster { center: at(c.center), radius: c.radius * s.x.max(s.z), ..c }).collect() })
+            })
+            .collect();
         Ok(out)
     };
     let run = |task: (u8, usize, usize)| -> Vec<(u8, usize, usize)> {
@@ -875,10 +878,12 @@ impl Graph {
 /// open-grown tree's leaves `open` as its class's fit gives them (`fit`: [`LeafFit::leaf`], in
 /// the frame of the class's analysis, base at the origin; no leaves without it), then, with `f`
 /// the uniform scale and `base` the translation applied to the tree since, each leaf scaled,
-/// moved by its node's displacement and dropped with its node. The same leaves, bit for bit, as
-/// from the class's fitted leaves held whole.
-fn adapted_with_leaves(t: &PlasticTree, open: &[super::Leaf], fit: Option<&LeafFit>, f: f32, base: Vec3) -> (Skeleton, Leaves) {
-    let sk = t.skeleton();
+/// moved by its node's displacement and dropped with its node; finally every node and leaf
+/// position p becomes `at(p)` (the crown's stretch to its exact radius), in the same pass. The
+/// same leaves, bit for bit, as from the class's fitted leaves held whole and stretched after.
+fn adapted_with_leaves(t: &PlasticTree, open: &[super::Leaf], fit: Option<&LeafFit>, f: f32, base: Vec3, at: impl Fn(Vec3) -> Vec3) -> (Skeleton, Leaves) {
+    let mut sk = t.skeleton();
+    sk.nodes.iter_mut().for_each(|n| n.pos = at(n.pos));
     let input = t.input();
     let fates = t.fates();
     let pos = t.positions();
@@ -903,7 +908,7 @@ fn adapted_with_leaves(t: &PlasticTree, open: &[super::Leaf], fit: Option<&LeafF
         let k = l.node as usize;
         if let Some(Some(nk)) = map.get(k) {
             let d = pos[k] - input.nodes[k].pos;
-            leaves.leaves.push(super::Leaf { pos: l.pos * f + base + d, size: l.size * f, node: *nk, ..l });
+            leaves.leaves.push(super::Leaf { pos: at(l.pos * f + base + d), size: l.size * f, node: *nk, ..l });
         }
     }
     leaves.leaves.shrink_to_fit();
