@@ -53,6 +53,14 @@ fn main() -> std::process::ExitCode {
     }
     let cli = Cli::parse();
     cli::init_logging(cli.verbose);
+    // commands without a stop flag of their own: a stop clears the file being written
+    if matches!(cli.command, Command::Export(_) | Command::Render(_) | Command::Timelapse(_) | Command::Tree(_) | Command::Terrain(_)) {
+        let _ = ctrlc::set_handler(|| {
+            sylva::output::remove_pending_temporaries();
+            eprintln!("stopped (Ctrl-C or SIGTERM): nothing half-written is left");
+            std::process::exit(130);
+        });
+    }
     let res = match cli.command {
         Command::Run(a) => cli::run::run(a),
         Command::Terrain(c) => cli::terrain::run(c),

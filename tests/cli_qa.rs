@@ -440,3 +440,19 @@ fn terrain_info_and_maps_refuse_a_one_cell_dem_alike() {
     let (ok, _, err) = run(&["terrain", "maps", "two.asc", "--out", "maps2"]);
     assert!(ok && d.join("maps2/elevation.png").is_file(), "{err}");
 }
+
+/// Trial 35: a SIGTERM during `sylva export` left its hidden temporary (up to 105 MB) beside the
+/// output. A command without a stop flag of its own now removes the file it is writing when
+/// stopped: here `tree grow` is sent SIGTERM (fault injection) while its `.glb` is written,
+/// before the rename, and exits with 130 leaving nothing in the output folder.
+#[test]
+fn sigterm_while_a_file_is_written_leaves_no_temporary() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t").join("beech.glb");
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "10", "--out", out.to_str().unwrap()]).env("SYLVA_FAULT_TERM_AT_WRITE", "1").output().unwrap();
+    let err = String::from_utf8_lossy(&res.stderr);
+    assert_eq!(res.status.code(), Some(130), "{err}");
+    assert!(err.contains("nothing half-written") && !err.contains("panicked"), "{err}");
+    let left: Vec<String> = std::fs::read_dir(dir.path().join("t")).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
