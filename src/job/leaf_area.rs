@@ -346,6 +346,27 @@ pub fn lone_tree_sprigs(sk: &crate::structure::Skeleton, lv: &mut crate::structu
     (m, out)
 }
 
+/// The level-of-detail chain of a lone tree (`sk` with its leaf cards `lv`, of species `sp`, in
+/// any frame and at any size) whose full level (LOD0) carries the crown's leaf area as the
+/// simulation gives it ([`lone_tree_sprigs`]: the species' crown LAI over the tree's own crown
+/// projection; its leaf cards lengthened, the rest as leaf-cluster cards marked by
+/// [`crate::mesh::CLUSTER_CARD_U`] among LOD0's leaves, which the glTF and OBJ writers put in
+/// the look's cluster material), so that LOD0 is as dense as LOD1 (issue 32). `lv` is changed
+/// as [`lone_tree_sprigs`] changes it, and the lower levels are meshed from it (default
+/// [`crate::structure::mesh::LodOptions`]). One code path for `sylva tree grow`, `sylva tree
+/// adapt` and the models of the instanced forest export (`job::export::export_instances`: a
+/// tree normalised to 1 m gets the same leaf area over the same projection, both scaled by the
+/// square of the size, and the same cards: their sides scale with the leaf cards').
+/// Deterministic.
+pub fn lone_chain(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Leaves, sp: &crate::species::Species) -> (crate::mesh::LodChain, LoneLeafArea) {
+    let (sprigs, fill) = lone_tree_sprigs(sk, lv, sp);
+    let mut chain = crate::structure::mesh::lod_chain(sk, lv, &crate::structure::mesh::LodOptions::default());
+    if let Some(full) = chain.levels.first_mut() {
+        full.leaves.append(&sprigs);
+    }
+    (chain, fill)
+}
+
 #[cfg(test)]
 mod lone_tree_tests {
     use super::*;
