@@ -249,11 +249,22 @@ pub fn shoot_cards(sk: &crate::structure::Skeleton, lv: &crate::structure::Leave
 
 /// The share of a leaf card and of a leaf-cluster card of species `sp` that their textures
 /// cover, `(card, cluster card)`, 0–1 ([`crate::structure::texture::leaf_card_cover`],
-/// [`crate::structure::texture::cluster_card_cover`] of its leaf shape).
+/// [`crate::structure::texture::cluster_card_cover`] of its leaf shape). Each shape's covers
+/// are measured once a process (they render its textures: the instanced export's 40 models took
+/// 3.5 s more without this) and kept; a pure function of the shape, so the same whatever the
+/// thread or the order of calls.
 pub fn card_covers(sp: &crate::species::Species) -> (f32, f32) {
     use crate::structure::texture::{cluster_card_cover, leaf_card_cover, LeafShape};
+    static COVERS: std::sync::OnceLock<std::sync::Mutex<std::collections::HashMap<LeafShape, (f32, f32)>>> = std::sync::OnceLock::new();
     let s = LeafShape::of_species(sp);
-    (leaf_card_cover(s), cluster_card_cover(s))
+    let covers = COVERS.get_or_init(Default::default);
+    if let Some(&c) = covers.lock().unwrap_or_else(|e| e.into_inner()).get(&s) {
+        return c;
+    }
+    // measured outside the lock (two threads may both measure a shape: the same values)
+    let c = (leaf_card_cover(s), cluster_card_cover(s));
+    covers.lock().unwrap_or_else(|e| e.into_inner()).insert(s, c);
+    c
 }
 
 /// What [`lone_tree_sprigs`] gave a lone tree.
