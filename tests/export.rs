@@ -537,6 +537,44 @@ fn instanced_export_places_every_live_tree_of_the_run() {
         seen += ids.len();
     }
     assert_eq!(seen, live.len(), "every live tree once");
+    // trial 35: the models' full level had only the tips' leaf cards (materials `_bark` and
+    // `_leaf`), crowns sparse and dark once expanded. Now the beech model's LOD0 carries the
+    // crown's leaf area as `sylva tree grow` gives it: leaf cards plus leaf-cluster cards in the
+    // `_cluster` material, together the crown LAI over the model's crown projection
+    // one-sided area (m²) of a primitive's triangles (u32 indices, the writer's)
+    let tri_area = |p: &serde_json::Value| -> f64 {
+        let pos = floats(p["attributes"]["POSITION"].as_u64().unwrap() as usize);
+        let idx = ids_of(p["indices"].as_u64().unwrap() as usize);
+        let v = |i: u32| glam::DVec3::new(pos[3 * i as usize] as f64, pos[3 * i as usize + 1] as f64, pos[3 * i as usize + 2] as f64);
+        idx.chunks(3).map(|t| 0.5 * (v(t[1]) - v(t[0])).cross(v(t[2]) - v(t[0])).length()).sum()
+    };
+    // the canopy beech of 30 years, and the spruce (whose 30-year needle cards also fall short)
+    for sp_id in ["beech", "norway_spruce"] {
+        let mesh = js["meshes"].as_array().unwrap().iter().find(|m| m["name"] == format!("{sp_id}_age20_LOD0").as_str()).unwrap();
+        let prims = mesh["primitives"].as_array().unwrap();
+        let mats: Vec<&str> = prims.iter().map(|p| js["materials"][p["material"].as_u64().unwrap() as usize]["name"].as_str().unwrap()).collect();
+        assert_eq!(mats, [format!("{sp_id}_bark"), format!("{sp_id}_leaf"), format!("{sp_id}_cluster")]);
+        let sp = lib.get(sp_id).unwrap();
+        let (card_cover, cluster_cover) = sylva::job::leaf_area::card_covers(sp);
+        let clusters = tri_area(&prims[2]) * cluster_cover as f64;
+        let carried = tri_area(&prims[1]) * card_cover as f64 + clusters;
+        // the model: the species' EcoMod tree at the class's age, normalised to 1 m (as the export grows it)
+        let sp_i = lib.find(sp_id).unwrap() as u64;
+        let g = grow_species_tree(sp, Model::EcoMod, sylva::job::export::class_age(1, sp.life.max_age_yr), &[], sylva::rng::hash(&[sp_i, 1])).unwrap();
+        let (sk, lv) = sylva::structure::normalised(&g.skeleton, &g.leaves, 1.0).unwrap();
+        let target = sylva::sim::phases::light::crown_lai(sp.life.shade_tolerance) as f64 * sylva::structure::crown_projection_area(&sk, &lv) as f64;
+        eprintln!("{sp_id}: LOD0 carries {carried:.5} m² (clusters {clusters:.5}) of LAI x projection {target:.5} m² (normalised model)");
+        assert!((carried - target).abs() <= 0.1 * target, "{sp_id}: LOD0 carries {carried:.5} m² of the crown's {target:.5} m² (normalised model)");
+        assert!(clusters > 0.2 * carried, "{sp_id}: leaf-cluster cards carry {clusters:.5} of {carried:.5} m²");
+    }
+    // and the figures count the cluster cards of every model, each tree once
+    let mut expected = 0;
+    for sp in ["beech", "norway_spruce"] {
+        let m = js["meshes"].as_array().unwrap().iter().find(|m| m["name"] == format!("{sp}_age20_LOD0").as_str()).unwrap();
+        let per_tree = m["primitives"].as_array().unwrap().iter().filter(|p| js["materials"][p["material"].as_u64().unwrap() as usize]["name"] == format!("{sp}_cluster").as_str()).map(|p| ids_of(p["indices"].as_u64().unwrap() as usize).len() / 6).sum::<usize>();
+        expected += per_tree * live.iter().filter(|t| t.species == sp).count();
+    }
+    assert!(expected > 0 && r.stats.sprig_cards == expected, "{} cluster cards counted, {expected} in the file", r.stats.sprig_cards);
     // the crown radius: the model's normalised crown radius times the horizontal scale is the
     // inventory's (checked through the report: two models whose scales differ per tree)
     // bad requests: an empty area, a level that does not exist

@@ -9,8 +9,8 @@ use glam::Vec3;
 use std::path::{Path, PathBuf};
 use sylva::structure::grow::space::Obstacle;
 use sylva::structure::forest_form::{self, CrownProportions};
+use sylva::job::leaf_area::lone_chain;
 use sylva::structure::species_tree;
-use sylva::structure::mesh::{lod_chain, LodOptions};
 use sylva::structure::plastic::{adapt_group, Environment, Fate, PlasticTree, Sky};
 use sylva::structure::{Leaves, Skeleton};
 
@@ -291,20 +291,6 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     }
     println!("wrote {} and {}", out.display(), png.display());
     Ok(())
-}
-
-/// The level-of-detail chain of a lone tree (`sk` with its leaf cards `leaves`, of species
-/// `sp`) whose full level carries the crown's leaf area as the simulation gives it
-/// (`job::leaf_area::lone_tree_sprigs`: the species' crown LAI over the tree's own crown
-/// projection; its leaf cards lengthened, the rest as leaf-cluster cards), so that LOD0 is as
-/// dense as LOD1 (issue 32).
-fn lone_chain(sk: &Skeleton, leaves: &mut Leaves, sp: &sylva::species::Species) -> (sylva::mesh::LodChain, sylva::job::leaf_area::LoneLeafArea) {
-    let (sprigs, fill) = sylva::job::leaf_area::lone_tree_sprigs(sk, leaves, sp);
-    let mut chain = lod_chain(sk, leaves, &LodOptions::default());
-    if let Some(full) = chain.levels.first_mut() {
-        full.leaves.append(&sprigs);
-    }
-    (chain, fill)
 }
 
 /// Prints what [`lone_chain`] gave the full level.

@@ -145,6 +145,8 @@ pub struct ExportStats {
     /// Leaf-cluster cards of the full-detail meshes of all trees written: the sprigs of
     /// broadleaves ([`sprig_cards`]) and the shoot cards of conifers
     /// ([`super::leaf_area::shoot_cards`], two a shoot) at the full strand count; 0 otherwise.
+    /// For [`export_instances`], the leaf-cluster cards of each tree's model at level 0
+    /// ([`super::leaf_area::lone_chain`]), each tree counted.
     pub sprig_cards: usize,
     /// Wall time of the adaptation (s): growing and analysing the open-grown trees
     /// ([`ExportStats::analysis_s`]) and adapting the neighbourhoods
@@ -452,7 +454,10 @@ pub struct InstanceOptions {
 /// snapshot, or of an area of it, to `out` (`.glb`, atomically) for game engines and Blender:
 /// each tree an instance (`EXT_mesh_gpu_instancing`) of the model of its species and age class
 /// ([`AGE_CLASSES_YR`]: the species' EcoMod tree, Zamuda et al. `004_*.txt`, grown at the class's
-/// representative age and normalised to 1 m), scaled to its height (vertical) and crown radius
+/// representative age and normalised to 1 m; its full level carries the crown's leaf area as
+/// `sylva tree grow` gives it, [`super::leaf_area::lone_chain`]: the species' crown LAI over the
+/// model's crown projection, as its leaf cards and leaf-cluster cards in the look's `_cluster`
+/// material), scaled to its height (vertical) and crown radius
 /// (horizontal: the inventory's `crown_radius_m` over the model's normalised crown radius),
 /// turned about the vertical by a hash of its id, with the terrain under the area and the
 /// obstacles. Coordinates as [`export_stand`]'s (metres from the area's centre at the lowest
@@ -490,21 +495,24 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     let mut keys: Vec<(usize, usize)> = rows.iter().filter_map(|r| Some((library.find(&r.species)? as usize, age_class(r.age_yr)))).collect();
     keys.sort_unstable();
     keys.dedup();
-    // per model: (model, normalised crown radius, skeleton nodes, triangles per level, leaf cards
-    // of level 0)
+    // per model: (model, normalised crown radius, skeleton nodes, triangles per level, (leaf
+    // cards, leaf-cluster cards) of level 0)
     #[allow(clippy::type_complexity)]
-    let built: Vec<Option<(StandModel, f32, usize, [usize; 4], usize)>> = keys
+    let built: Vec<Option<(StandModel, f32, usize, [usize; 4], [usize; 2])>> = keys
         .par_iter()
         .map(|&(sp_i, class)| {
             let sp = &library.species[sp_i];
             let age = class_age(class, sp.life.max_age_yr);
             let grown = crate::structure::species_tree::grow_species_tree(sp, crate::structure::species_tree::Model::EcoMod, age, &[], crate::rng::hash(&[sp_i as u64, class as u64])).ok()?;
-            let (sk, lv) = crate::structure::normalised(&grown.skeleton, &grown.leaves, 1.0).ok()?;
+            let (sk, mut lv) = crate::structure::normalised(&grown.skeleton, &grown.leaves, 1.0).ok()?;
             let r = crate::structure::crown_radius(&sk, &lv).max(0.05);
-            let chain = crate::structure::mesh::lod_chain(&sk, &lv, &LodOptions::default());
+            // the full level carries the crown's leaf area as `sylva tree grow` gives it (one
+            // code path: the crown LAI over the model's projection, its cards lengthened, the
+            // rest as leaf-cluster cards; trial 35: the instanced crowns were sparse and dark)
+            let (chain, fill) = super::leaf_area::lone_chain(&sk, &mut lv, sp);
             let tris = [0, 1, 2, 3].map(|l| chain.levels.get(l).map_or(0, |m| m.triangle_count()));
-            let cards = chain.levels.first().map_or(0, |m| m.leaves.triangle_count() / 2);
-            Some((StandModel { name: format!("{}_age{}", sp.id, AGE_CLASSES_YR[class] as u32), chain, look: sp_i, sprigs: TriMesh::default() }, r, sk.nodes.len(), tris, cards))
+            let quads = chain.levels.first().map_or(0, |m| m.leaves.triangle_count() / 2);
+            Some((StandModel { name: format!("{}_age{}", sp.id, AGE_CLASSES_YR[class] as u32), chain, look: sp_i, sprigs: TriMesh::default() }, r, sk.nodes.len(), tris, [quads.saturating_sub(fill.sprigs), fill.sprigs]))
         })
         .collect();
     // looks of the species used, and the groups
@@ -512,7 +520,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     let mut looks: Vec<Look> = Vec::new();
     let mut models: Vec<StandModel> = Vec::new();
     #[allow(clippy::type_complexity)]
-    let mut model_of: HashMap<(usize, usize), (usize, f32, usize, [usize; 4], usize)> = HashMap::new();
+    let mut model_of: HashMap<(usize, usize), (usize, f32, usize, [usize; 4], [usize; 2])> = HashMap::new();
     for (key, b) in keys.iter().zip(built) {
         let Some((mut m, r, nodes, tris, cards)) = b else {
             tracing::warn!("species {}: no model for age class {}; its trees are left out", library.species[key.0].id, key.1);
@@ -526,7 +534,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
         model_of.insert(*key, (models.len() - 1, r, nodes, tris, cards));
     }
     let mut groups: Vec<InstanceGroup> = (0..models.len()).map(|model| InstanceGroup { model, ..Default::default() }).collect();
-    let (mut tall_nodes, mut leaf_cards, mut triangles) = (Vec::new(), 0usize, 0usize);
+    let (mut tall_nodes, mut leaf_cards, mut sprig_cards, mut triangles) = (Vec::new(), 0usize, 0usize, 0usize);
     for r in &rows {
         let Some(sp_i) = library.find(&r.species) else { continue };
         let Some(&(mi, r0, nodes, tris, cards)) = model_of.get(&(sp_i as usize, age_class(r.age_yr))) else { continue };
@@ -540,7 +548,10 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
         if r.height_m >= STATS_MIN_HEIGHT_M {
             tall_nodes.push(nodes);
         }
-        leaf_cards += if o.levels.contains(&0) { cards } else { 0 };
+        if o.levels.contains(&0) {
+            leaf_cards += cards[0];
+            sprig_cards += cards[1];
+        }
         triangles += o.levels.iter().map(|&l| tris[l]).sum::<usize>();
     }
     let trees: usize = groups.iter().map(|g| g.translations.len()).sum();
@@ -569,7 +580,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     };
     let counts = crate::output::gltf::write_instanced_glb(out, &scene)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
-    let stats = ExportStats { trees, trees_15m: tall_nodes.len(), nodes_min: tall_nodes.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut tall_nodes), leaf_cards, triangles, levels: o.levels.clone(), ..Default::default() };
+    let stats = ExportStats { trees, trees_15m: tall_nodes.len(), nodes_min: tall_nodes.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut tall_nodes), leaf_cards, sprig_cards, triangles, levels: o.levels.clone(), ..Default::default() };
     Ok(ExportReport { out: out.to_path_buf(), year, trees, models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s: 0.0, bytes, stats })
 }
 

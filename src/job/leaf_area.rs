@@ -249,11 +249,22 @@ pub fn shoot_cards(sk: &crate::structure::Skeleton, lv: &crate::structure::Leave
 
 /// The share of a leaf card and of a leaf-cluster card of species `sp` that their textures
 /// cover, `(card, cluster card)`, 0–1 ([`crate::structure::texture::leaf_card_cover`],
-/// [`crate::structure::texture::cluster_card_cover`] of its leaf shape).
+/// [`crate::structure::texture::cluster_card_cover`] of its leaf shape). Each shape's covers
+/// are measured once a process (they render its textures: the instanced export's 40 models took
+/// 3.5 s more without this) and kept; a pure function of the shape, so the same whatever the
+/// thread or the order of calls.
 pub fn card_covers(sp: &crate::species::Species) -> (f32, f32) {
     use crate::structure::texture::{cluster_card_cover, leaf_card_cover, LeafShape};
+    static COVERS: std::sync::OnceLock<std::sync::Mutex<std::collections::HashMap<LeafShape, (f32, f32)>>> = std::sync::OnceLock::new();
     let s = LeafShape::of_species(sp);
-    (leaf_card_cover(s), cluster_card_cover(s))
+    let covers = COVERS.get_or_init(Default::default);
+    if let Some(&c) = covers.lock().unwrap_or_else(|e| e.into_inner()).get(&s) {
+        return c;
+    }
+    // measured outside the lock (two threads may both measure a shape: the same values)
+    let c = (leaf_card_cover(s), cluster_card_cover(s));
+    covers.lock().unwrap_or_else(|e| e.into_inner()).insert(s, c);
+    c
 }
 
 /// What [`lone_tree_sprigs`] gave a lone tree.
@@ -344,6 +355,27 @@ pub fn lone_tree_sprigs(sk: &crate::structure::Skeleton, lv: &mut crate::structu
     m.uvs.iter_mut().for_each(|uv| uv[0] += crate::mesh::CLUSTER_CARD_U);
     out.sprigs = m.positions.len() / 4;
     (m, out)
+}
+
+/// The level-of-detail chain of a lone tree (`sk` with its leaf cards `lv`, of species `sp`, in
+/// any frame and at any size) whose full level (LOD0) carries the crown's leaf area as the
+/// simulation gives it ([`lone_tree_sprigs`]: the species' crown LAI over the tree's own crown
+/// projection; its leaf cards lengthened, the rest as leaf-cluster cards marked by
+/// [`crate::mesh::CLUSTER_CARD_U`] among LOD0's leaves, which the glTF and OBJ writers put in
+/// the look's cluster material), so that LOD0 is as dense as LOD1 (issue 32). `lv` is changed
+/// as [`lone_tree_sprigs`] changes it, and the lower levels are meshed from it (default
+/// [`crate::structure::mesh::LodOptions`]). One code path for `sylva tree grow`, `sylva tree
+/// adapt` and the models of the instanced forest export (`job::export::export_instances`: a
+/// tree normalised to 1 m gets the same leaf area over the same projection, both scaled by the
+/// square of the size, and the same cards: their sides scale with the leaf cards').
+/// Deterministic.
+pub fn lone_chain(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Leaves, sp: &crate::species::Species) -> (crate::mesh::LodChain, LoneLeafArea) {
+    let (sprigs, fill) = lone_tree_sprigs(sk, lv, sp);
+    let mut chain = crate::structure::mesh::lod_chain(sk, lv, &crate::structure::mesh::LodOptions::default());
+    if let Some(full) = chain.levels.first_mut() {
+        full.leaves.append(&sprigs);
+    }
+    (chain, fill)
 }
 
 #[cfg(test)]

@@ -631,7 +631,9 @@ pub struct InstancedScene {
 }
 
 /// Encodes an [`InstancedScene`] as GLB bytes: node `trees` holds, per model and level, one node
-/// `<model>_LOD<i>` drawing the level's mesh with the extension's `TRANSLATION`, `ROTATION`
+/// `<model>_LOD<i>` drawing the level's mesh (the full level with its leaf-cluster cards, the
+/// model's [`StandModel::sprigs`] and those marked among its leaves by
+/// [`crate::mesh::CLUSTER_CARD_U`], as a third primitive in the look's `_cluster` material) with the extension's `TRANSLATION`, `ROTATION`
 /// (about the vertical) and `SCALE` attributes (and `_ID`, or `_ID_LO` and `_ID_HI`:
 /// [`InstanceGroup::ids`]), one entry per tree; node `ground` the
 /// static meshes. The extension is used, not required: a viewer without it shows each model
@@ -668,10 +670,20 @@ pub fn instanced_glb_bytes(s: &InstancedScene) -> Result<(Vec<u8>, StandCounts)>
     // trial: Debian's Blender 3.4 imported a million-tree forest as 40 trees, without a word);
     // an importer that lacks the extension now refuses the file and names it.
     d.extensions_required.push("EXT_mesh_gpu_instancing");
-    let used_looks: std::collections::BTreeSet<usize> = s.groups.iter().filter(|g| !g.translations.is_empty()).map(|g| s.models[g.model].look).collect();
+    let used_models: std::collections::BTreeSet<usize> = s.groups.iter().filter(|g| !g.translations.is_empty()).map(|g| g.model).collect();
+    let used_looks: std::collections::BTreeSet<usize> = used_models.iter().map(|&mi| s.models[mi].look).collect();
     let mut mats: Vec<Option<LookMaterials>> = vec![None; s.looks.len()];
     for &l in &used_looks {
-        mats[l] = Some(d.look(&s.looks[l], &s.levels)?);
+        // a look whose models' full level carries leaf-cluster cards (the crown's leaf area,
+        // `job::leaf_area::lone_chain`; trial 35: without them the crowns were sparse) needs
+        // its cluster material
+        let clusters = s.levels.contains(&0)
+            && used_models.iter().map(|&mi| &s.models[mi]).any(|m| m.look == l && (!m.sprigs.indices.is_empty() || m.chain.levels.first().is_some_and(|c| c.leaves.has_cluster_cards())));
+        let mut levels = s.levels.clone();
+        if clusters && !levels.contains(&1) {
+            levels.push(1);
+        }
+        mats[l] = Some(d.look(&s.looks[l], &levels)?);
     }
     let mut tree_nodes = Vec::new();
     let mut mesh_nodes = 0;
@@ -682,7 +694,7 @@ pub fn instanced_glb_bytes(s: &InstancedScene) -> Result<(Vec<u8>, StandCounts)>
         let meshes = match meshes_of.get(&g.model) {
             Some(v) => v.clone(),
             None => {
-                let v = d.chain(&m.name, &m.chain, lm, &s.levels);
+                let v = d.chain_with_sprigs(&m.name, &m.chain, &m.sprigs, lm, &s.levels);
                 meshes_of.insert(g.model, v.clone());
                 v
             }
