@@ -278,17 +278,7 @@ pub fn cluster_band_hull(sk: &Skeleton, clusters: &[(Vec3, f32)]) -> Option<TriM
             rad[b * nlon..(b + 1) * nlon].iter_mut().for_each(|r| *r = r.max(floor));
         }
     }
-    for b in 0..nb {
-        if filled[b] {
-            continue;
-        }
-        let below = (0..b).rev().find(|&j| filled[j]);
-        let above = (b + 1..nb).find(|&j| filled[j]);
-        for k in 0..nlon {
-            let v: Vec<f32> = [below, above].iter().flatten().map(|&j| rad[j * nlon + k]).collect();
-            rad[b * nlon + k] = if v.is_empty() { floor } else { v.iter().sum::<f32>() / v.len() as f32 };
-        }
-    }
+    crate::structure::mesh::fill_empty_bands(&mut rad, nlon, &filled, floor);
     let src = rad.clone();
     for b in 0..nb {
         for k in 0..nlon {

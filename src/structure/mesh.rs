@@ -315,17 +315,7 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     }
     // empty bands: mean of the nearest filled bands above and below
     let filled: Vec<bool> = (0..nb).map(|b| rad[b * nlon] >= 0.0).collect();
-    for b in 0..nb {
-        if filled[b] {
-            continue;
-        }
-        let below = (0..b).rev().find(|&j| filled[j]);
-        let above = (b + 1..nb).find(|&j| filled[j]);
-        for k in 0..nlon {
-            let v: Vec<f32> = [below, above].iter().flatten().map(|&j| rad[j * nlon + k]).collect();
-            rad[b * nlon + k] = if v.is_empty() { r.x.max(r.y) } else { v.iter().sum::<f32>() / v.len() as f32 };
-        }
-    }
+    fill_empty_bands(&mut rad, nlon, &filled, r.x.max(r.y));
     // one smoothing pass (centre 1/2, the four neighbours 1/8 each; bands clamp at the ends)
     let src = rad.clone();
     for b in 0..nb {
@@ -549,4 +539,24 @@ pub fn full_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
 pub fn lod_chain(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> LodChain {
     let levels: [TreeMesh; LOD_LEVELS] = [full_mesh(sk, leaves, o), reduced_mesh(sk, leaves, o), hull_mesh(sk, leaves, o), impostor_mesh(sk, leaves)];
     LodChain::new(levels.into())
+}
+
+/// Fills the empty height bands of a hull's radii `rad` (`filled.len()` bands of `nlon`
+/// directions each, band-major): each direction of an empty band takes the mean of the nearest
+/// filled bands below and above it, or `none` (m) when no band is filled. Used by the LOD2
+/// crown hull of leaf cards (here) and of adapted leaf clusters
+/// ([`crate::structure::crown_hull`]).
+pub(crate) fn fill_empty_bands(rad: &mut [f32], nlon: usize, filled: &[bool], none: f32) {
+    let nb = filled.len();
+    for b in 0..nb {
+        if filled[b] {
+            continue;
+        }
+        let below = (0..b).rev().find(|&j| filled[j]);
+        let above = (b + 1..nb).find(|&j| filled[j]);
+        for k in 0..nlon {
+            let v: Vec<f32> = [below, above].iter().flatten().map(|&j| rad[j * nlon + k]).collect();
+            rad[b * nlon + k] = if v.is_empty() { none } else { v.iter().sum::<f32>() / v.len() as f32 };
+        }
+    }
 }
