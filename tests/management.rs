@@ -564,6 +564,9 @@ fn bad_management_and_climate_input_is_refused_naming_file_and_field() {
     assert!(e.contains("species[0]") && e.contains("did you mean beech, Fagus sylvatica?"), "{e}");
     let e = err(&base.replace("species = [\"beech\"]", "species = [\"qwertyuiop\"]"));
     assert!(e.contains("species[0]") && e.contains("one of: ash") && !e.contains("did you mean"), "{e}");
+    // a species of one's own: the error says where it goes (trial 35: `species new` wrote the
+    // file moments before, and the error never named `--species-dir`)
+    assert!(e.contains("--species-dir DIR"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyear = 1\narea = [500.0, 500.0, 600.0, 600.0]\n"));
     assert!(e.contains("management[0].area") && e.contains("unmasked ground"), "{e}");
     // climate

@@ -787,12 +787,12 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
             pool = (0..lib.species.len() as u16).collect();
         } else {
             for (i, s) in self.species.iter().enumerate() {
-                let id = lib.find(s).ok_or_else(|| invalid(ctx, &format!("species[{i}]"), s, &format!("one of: {}{}", known(), lib.did_you_mean(s))))?;
+                let id = lib.find(s).ok_or_else(|| invalid(ctx, &format!("species[{i}]"), s, &format!("one of: {}{}; or a species file of your own, in a folder given with `--species-dir DIR`", known(), lib.did_you_mean(s))))?;
                 pool.push(id);
             }
         }
         for (i, st) in self.start.iter().enumerate() {
-            let id = lib.find(st.species()).ok_or_else(|| invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("one of: {}{}", known(), lib.did_you_mean(st.species()))))?;
+            let id = lib.find(st.species()).ok_or_else(|| invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("one of: {}{}; or a species file of your own, in a folder given with `--species-dir DIR`", known(), lib.did_you_mean(st.species()))))?;
             if !pool.contains(&id) {
                 pool.push(id);
             }
