@@ -456,3 +456,30 @@ fn sigterm_while_a_file_is_written_leaves_no_temporary() {
     let left: Vec<String> = std::fs::read_dir(dir.path().join("t")).unwrap().map(|e| e.unwrap().file_name().into_string().unwrap()).collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
+
+/// Trial 35: a 16-bit PNG heightmap read without `--cell` / `--min-height` / `--max-height`
+/// took 10 m cells and 0–1000 m silently; and `--out /proc/b.glb` was refused with "No such
+/// file or directory" for a folder that exists.
+#[test]
+fn a_png_heightmaps_assumed_scale_is_said_and_a_virtual_folder_gets_the_right_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("park16.png");
+    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(8, 8, |x, y| image::Luma([(x * 4000 + y * 3000) as u16])).save(&p).unwrap();
+    let info = |extra: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info"]).arg(&p).args(extra).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let (_, err) = info(&[]);
+    assert!(err.contains("park16.png") && err.contains("carries no scale") && err.contains("cells of 10 m (set --cell)") && err.contains("heights 0–1000 m") && err.contains("--min-height/--max-height"), "{err}");
+    let (_, err) = info(&["--cell", "2"]);
+    assert!(err.contains("heights 0–1000 m") && !err.contains("cells of"), "{err}");
+    let (out, err) = info(&["--cell", "2", "--min-height", "100", "--max-height", "400"]);
+    assert!(!err.contains("carries no scale"), "{err}");
+    assert!(out.contains("100.0") || out.contains("100 "), "the given range is used: {out}");
+    if std::path::Path::new("/proc/self").is_dir() {
+        let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "beech", "--age", "5", "--out", "/proc/b.glb"]).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains("/proc") && err.contains("takes no new files") && !err.contains("No such file"), "{err}");
+    }
+}

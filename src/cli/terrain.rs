@@ -21,21 +21,21 @@ pub struct Source {
     /// Generated grid size (cells per side).
     #[arg(long, default_value_t = 512)]
     pub size: usize,
-    /// Cell size (m) of a generated terrain or a PNG heightmap.
-    #[arg(long, default_value_t = 10.0)]
-    pub cell: f64,
+    /// Cell size (m) of a generated terrain or a PNG heightmap [default: 10].
+    #[arg(long)]
+    pub cell: Option<f64>,
     /// Relief (m) of a generated terrain.
     #[arg(long, default_value_t = 600.0, allow_negative_numbers = true, value_parser = parse_finite)]
     pub relief: f64,
     /// Seed of a generated terrain.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// PNG heightmap: height (m) of value 0.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_finite)]
-    pub min_height: f64,
-    /// PNG heightmap: height (m) of the largest value.
-    #[arg(long, default_value_t = 1000.0, allow_negative_numbers = true, value_parser = parse_finite)]
-    pub max_height: f64,
+    /// PNG heightmap: height (m) of value 0 [default: 0].
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_finite)]
+    pub min_height: Option<f64>,
+    /// PNG heightmap: height (m) of the largest value [default: 1000].
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_finite)]
+    pub max_height: Option<f64>,
     /// Cells at or below this elevation (m) are water and masked.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_finite_f32)]
     pub sea_level: f32,
@@ -70,11 +70,15 @@ impl Source {
     /// 2 × 2 cells ([`Terrain::check_min_size`]).
     fn load(&self) -> anyhow::Result<Terrain> {
         let t = if self.generate {
-            generate::generate(self.size, self.cell, self.relief, self.seed)?
+            generate::generate(self.size, self.cell.unwrap_or(io::PNG_DEFAULT_CELL_M), self.relief, self.seed)?
         } else {
             match &self.file {
                 None => io::default_terrain()?,
-                Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) => io::load_png_heightmap(p, self.cell, self.min_height, self.max_height)?,
+                Some(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) => {
+                    let [lo, hi] = io::PNG_DEFAULT_HEIGHT_RANGE_M;
+                    let range = (self.min_height.is_some() || self.max_height.is_some()).then(|| [self.min_height.unwrap_or(lo), self.max_height.unwrap_or(hi)]);
+                    io::load_png_heightmap_or_default(p, self.cell, range, ("--cell", "--min-height/--max-height"))?
+                }
                 Some(p) => io::load(p)?,
             }
         };

@@ -108,7 +108,15 @@ fn mkdir(p: &Path) -> Result<()> {
 /// Errors: [`Error::Io`] naming the folder.
 pub fn check_writable(dir: &Path) -> Result<()> {
     let probe = dir.join(format!(".sylva_write_probe.{}.tmp", std::process::id()));
-    std::fs::write(&probe, b"").map_err(|e| Error::io(dir, e))?;
+    std::fs::write(&probe, b"").map_err(|e| {
+        // a folder that exists but cannot hold a new file (procfs, sysfs) answers ENOENT, which
+        // read as "No such file or directory" names a wrong reason (trial 35, `--out /proc/b.glb`)
+        if e.kind() == std::io::ErrorKind::NotFound && dir.is_dir() {
+            Error::io(dir, std::io::Error::other("the folder exists but takes no new files (a virtual file system such as /proc or /sys?); choose a folder on a disk"))
+        } else {
+            Error::io(dir, e)
+        }
+    })?;
     Ok(std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))?)
 }
 

@@ -930,8 +930,7 @@ impl Scenario {
             TerrainSpec::Default => crate::terrain::io::default_terrain()?,
             TerrainSpec::Embedded(name) => crate::terrain::io::embedded_terrain(&name)?,
             TerrainSpec::Path(p) if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")) => {
-                let [lo, hi] = self.terrain.height_range_m.unwrap_or([0.0, 1000.0]);
-                crate::terrain::io::load_png_heightmap(&p, self.terrain.cell_m.unwrap_or(10.0), lo, hi)?
+                crate::terrain::io::load_png_heightmap_or_default(&p, self.terrain.cell_m, self.terrain.height_range_m, ("terrain.cell_m", "terrain.height_range_m"))?
             }
             TerrainSpec::Path(p) => crate::terrain::io::load(&p)?,
             TerrainSpec::Generate(g) => crate::terrain::generate::generate(g.size, g.cell_m, g.relief_m as f64, g.seed)?,

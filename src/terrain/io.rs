@@ -687,6 +687,36 @@ pub fn read_asc(text: &str, prj: Option<&str>, path: &Path) -> Result<Terrain> {
     Ok(Terrain { elevation, geo, nodata, source: path.display().to_string() })
 }
 
+/// Default cell size (m) of a PNG heightmap read without one (`--cell`, `terrain.cell_m`).
+pub const PNG_DEFAULT_CELL_M: f64 = 10.0;
+/// Default heights (m) of PNG values 0 and 65535 when none are given (`--min-height`,
+/// `--max-height`, `terrain.height_range_m`).
+pub const PNG_DEFAULT_HEIGHT_RANGE_M: [f64; 2] = [0.0, 1000.0];
+
+/// [`load_png_heightmap`] with the scale the user gave, each `None` taking its default
+/// ([`PNG_DEFAULT_CELL_M`], [`PNG_DEFAULT_HEIGHT_RANGE_M`]). A PNG carries no scale of its
+/// own, so when a default is taken a warning names the file, the values assumed and the
+/// options (`cli_names`: the CLI options or scenario fields for the cell size and the range)
+/// that set them: a heightmap read at the wrong scale would otherwise give silently wrong
+/// slopes, insolation and elevations (trial 35).
+///
+/// Errors: as [`load_png_heightmap`].
+pub fn load_png_heightmap_or_default(path: &Path, cell_m: Option<f64>, range_m: Option<[f64; 2]>, cli_names: (&str, &str)) -> Result<Terrain> {
+    let cell = cell_m.unwrap_or(PNG_DEFAULT_CELL_M);
+    let [lo, hi] = range_m.unwrap_or(PNG_DEFAULT_HEIGHT_RANGE_M);
+    let mut assumed = Vec::new();
+    if cell_m.is_none() {
+        assumed.push(format!("cells of {cell} m (set {})", cli_names.0));
+    }
+    if range_m.is_none() {
+        assumed.push(format!("heights {lo}–{hi} m for values 0–65535 (set {})", cli_names.1));
+    }
+    if !assumed.is_empty() {
+        tracing::warn!("{}: a PNG heightmap carries no scale; assumed {}", path.display(), assumed.join(" and "));
+    }
+    load_png_heightmap(path, cell, lo, hi)
+}
+
 /// Reads a 16-bit grayscale PNG heightmap — the game-engine convention: value 0 is `min_h_m`,
 /// 65535 is `max_h_m`, cells are `cell_m` metres square, no georeferencing ([`Crs::Local`],
 /// latitude [`FALLBACK_LATITUDE_DEG`]).
