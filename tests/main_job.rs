@@ -90,7 +90,7 @@ fn main_job_reduced_scenario_writes_every_output() {
     assert!(!summary.sim.stopped && summary.sim.year == 6 && summary.sim.rows.len() == 6);
     let (table, shares) = summary.tables();
     assert!(table.contains("basal area") && shares.contains("beech"), "{table}\n{shares}");
-    assert_eq!(events, ["Begin", "Conditions", "Simulating", "Year", "Simulated", "Stills", "Still", "CloseUp", "StillsDone", "Timelapse", "Frame", "TimelapseDone"], "the job's steps, in order");
+    assert_eq!(events, ["Begin", "Conditions", "Simulating", "Year", "Simulated", "Stills", "Still", "CloseUpBegin", "CloseUp", "StillsDone", "Timelapse", "Frame", "TimelapseDone"], "the job's steps, in order");
     assert_eq!(summary.stills.len(), 2 * 2 + 1, "oblique and top-down at year 0 (the still year within the run) and 6 (the last), one close-up: {:?}", summary.stills);
     assert_eq!(summary.film.as_ref().map(|f| f.frames), Some(5));
 

@@ -537,7 +537,7 @@ fn bad_management_and_climate_input_is_refused_naming_file_and_field() {
     let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\nyear = 1\n"));
     assert!(e.contains("bad.toml") && e.contains("management[0].target_") && e.contains("exactly one of"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\n"));
-    assert!(e.contains("management[0].year/years/from_year"), "{e}");
+    assert!(e.contains("management[0].year/years/from_year` = none of them given"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"coppice\"\nyear = 1\n"));
     assert!(e.contains("management[0].kind") && e.contains("coppice"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 1\narea_file = \"/nonexistent/parcels.geojson\"\n"));
@@ -554,6 +554,12 @@ fn bad_management_and_climate_input_is_refused_naming_file_and_field() {
     std::fs::write(&f, r#"{"type": "Feature", "properties": {}, "geometry": {"type": "Polygon", "coordinates": [[[0], [100], [100], [0]]]}}"#).unwrap();
     let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 1\narea_file = {:?}\n", f.display().to_string()));
     assert!(e.contains("management[0].area_file") && e.contains("two numbers"), "{e}");
+    // a planting whose file's polygon holds no lattice point: its box in the file's own
+    // coordinates (here the site's: y from −80 at the south edge to 0), rounded, with the file
+    // (trial 36: site metres with float noise, and no file)
+    std::fs::write(&f, r#"{"type": "Feature", "properties": {}, "geometry": {"type": "Polygon", "coordinates": [[[20.3, -50.5], [20.5, -50.5], [20.5, -50.3], [20.3, -50.3], [20.3, -50.5]]]}}"#).unwrap();
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 1\narea_file = {:?}\n", f.display().to_string()));
+    assert!(e.contains("management[0].area_file") && e.contains("broken.geojson: x 20.30–20.50, y -50.50–-50.30 (the site's own coordinates") && e.contains("0 trees of a 2 m lattice"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ oak = 1.0 }}\nspacing_m = 2.0\nyear = 1\n"));
     assert!(e.contains("management[0].mix.oak"), "{e}");
     // a misspelt species gets the library's nearest names by edit distance, over ids and
@@ -1000,6 +1006,23 @@ fn silent_failures_are_refused_or_warned() {
             None => assert!(warn.is_empty(), "{warn:?}"),
         }
     }
+    // two plantings in the same year over a shared area: said, with the shared area (trial
+    // 36: 2,500 beech and 2,500 oak on one hectare, 1.4 cm apart); the same areas in
+    // different years, or side by side in the same year, say nothing
+    for (areas, years, want) in [
+        (("[0.0, 0.0, 40.0, 40.0]", "[20.0, 0.0, 60.0, 40.0]"), (3, 3), Some("management[0] and management[1] both plant in year 3 on about 0.08 ha they share")),
+        (("[0.0, 0.0, 40.0, 40.0]", "[20.0, 0.0, 60.0, 40.0]"), (3, 4), None),
+        (("[0.0, 0.0, 40.0, 40.0]", "[40.0, 0.0, 80.0, 40.0]"), (3, 3), None),
+    ] {
+        let toml = format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = {}\narea = {}\n[[management]]\nkind = \"planting\"\nmix = {{ sessile_oak = 1.0 }}\nspacing_m = 2.0\nyear = {}\narea = {}\n", years.0, areas.0, years.1, areas.1).replace("species = [\"beech\"]", "species = [\"beech\", \"sessile_oak\"]");
+        let sc = Scenario::from_toml_str(&toml, "ovl.toml").unwrap();
+        let w = World::new(sc.site().unwrap(), &common::embedded(), &sc).unwrap();
+        let warn = sylva::sim::management::warnings(&w.site.management, sc.years, "ovl.toml");
+        match want {
+            Some(m) => assert!(warn.len() == 1 && warn[0].contains(m) && warn[0].contains("density is doubled"), "{warn:?}"),
+            None => assert!(warn.is_empty(), "{areas:?} {years:?}: {warn:?}"),
+        }
+    }
     // a field of another kind names the kind and method it belongs to, quoted once
     let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\ncrop_tree_distance_m = 5.0\nyear = 3\n"));
     assert!(e.contains("management[0].crop_tree_distance_m") && e.contains("(only with kind = \"thinning\", method = \"crop_trees\")"), "{e}");
@@ -1025,7 +1048,7 @@ fn silent_failures_are_refused_or_warned() {
     let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nstages = [{{ year = 10, share = 1.5 }}]\n"));
     assert!(e.contains("management[0].stages[0].share") && e.contains("1.5"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nyear = 3\nstages = [{{ year = 10, share = 1.0 }}]\n"));
-    assert!(e.contains("management[0].year/years/from_year") && e.contains("stages carry"), "{e}");
+    assert!(e.contains("management[0].year/years/from_year` = year given") && e.contains("stages carry"), "{e}");
     let e = err(&format!("{base}[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nyear = 3\n"));
     assert!(e.contains("management[0].stages") && e.contains("(missing)"), "{e}");
 }

@@ -33,6 +33,26 @@ fn geotiff_roundtrip_keeps_georeferencing() {
     }
 }
 
+/// Trial 36: the maps' GeoTIFFs carried no band description or unit (only the PNG legends
+/// did). Each band now says what it is and its unit in GDAL_METADATA, in ASCII.
+#[test]
+fn a_maps_geotiff_says_what_its_band_is_and_its_unit() {
+    let u = io::default_terrain().unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let q = dir.path().join("insolation.tif");
+    geotiff::write_f32_band(&q, &u.elevation, &u.geo, Some(geotiff::Band { description: "Annual clear-sky insolation (flat 1530)", unit: "kWh/m²/yr" })).unwrap();
+    let mut dec = tiff::decoder::Decoder::new(std::io::BufReader::new(std::fs::File::open(&q).unwrap())).unwrap();
+    let xml = dec.get_tag_ascii_string(tiff::tags::Tag::Unknown(42112)).unwrap();
+    assert!(xml.contains(r#"role="description">Annual clear-sky insolation (flat 1530)</Item>"#) && xml.contains(r#"role="unittype">kWh/m2/yr</Item>"#), "{xml}");
+    // still read back as a DEM (its unit is not a foot) with the same values
+    assert_eq!(io::load(&q).unwrap().elevation.data.len(), u.elevation.data.len());
+    assert_eq!(geotiff::ascii_text("1–9 °C × m³ <a&b>"), "1-9 degC x m3 &lt;a&amp;b&gt;");
+    if let Ok(o) = Command::new("gdalinfo").arg(&q).output() {
+        let txt = String::from_utf8_lossy(&o.stdout);
+        assert!(txt.contains("Description = Annual clear-sky insolation (flat 1530)") && txt.contains("Unit Type: kWh/m2/yr"), "{txt}");
+    }
+}
+
 #[test]
 fn map_png_has_legend_area() {
     let t = io::default_terrain().unwrap();

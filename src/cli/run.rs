@@ -132,6 +132,7 @@ impl Bars {
                 *done += 1;
                 super::plain_progress("stills", *done, *total, said, "");
             }
+            Event::CloseUpBegin { year } => eprintln!("close-up of year {year}: adapting the trees near the camera to their neighbours at full detail (the longest picture)"),
             Event::CloseUp(ad) => eprintln!("close-up: {} trees adapted to their neighbours ({:.1} s adaptation, {:.1} s meshes)", ad.adapted_trees, ad.adapt_s, ad.mesh_s),
             Event::Timelapse => {
                 eprintln!("[4/4] timelapse");

@@ -221,6 +221,13 @@ pub enum Event<'a> {
     },
     /// A still from afar is written.
     Still,
+    /// The close-up of year `year` starts: its near field is adapted at full detail, the
+    /// longest picture of the run (said so that a run under load is not silent for minutes;
+    /// trial 36).
+    CloseUpBegin {
+        /// The close-up's year.
+        year: u32,
+    },
     /// The close-up is written, with what its near field adapted.
     CloseUp(&'a AdaptStats),
     /// The stills are done.
@@ -319,16 +326,27 @@ pub fn run_species_dir(run_dir: &Path) -> PathBuf {
 }
 
 /// Writes the pool's species files into `RUN/species/` (so `render`, `timelapse` and a
-/// `--resume` find the same species later, also edited or custom ones). A scenario with
-/// `species = []` pools every species of the library, and all of them are written.
+/// `--resume` find the same species later, also edited or custom ones) and removes the other
+/// `.toml` files there (an earlier run's pool). A scenario with `species = []` pools every
+/// species of the library, and all of them are written.
 ///
 /// Errors: I/O errors naming the folder or file; serialising a species.
 pub fn save_run_species(sc: &Scenario, lib: &SpeciesLibrary, run_dir: &Path) -> Result<()> {
     let dir = run_species_dir(run_dir);
     std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
     let pool: Vec<&crate::species::Species> = if sc.species.is_empty() { lib.species.iter().collect() } else { sc.species.iter().filter_map(|name| lib.get(name)).collect() };
-    for sp in pool {
+    for sp in &pool {
         crate::output::write_atomic(&dir.join(format!("{}.toml", sp.id)), sp.to_toml_string()?.as_bytes())?;
+    }
+    // an earlier run's species files that are not in this pool are removed: `render`,
+    // `timelapse` and `--resume` read this folder as the run's pool (trial 36 found an old run's
+    // `sessile_oak.toml` beside a new beech-only run's file)
+    for e in std::fs::read_dir(&dir).map_err(|e| Error::io(&dir, e))? {
+        let p = e.map_err(|e| Error::io(&dir, e))?.path();
+        let stale = p.extension().is_some_and(|x| x == "toml") && p.file_stem().is_some_and(|st| !pool.iter().any(|sp| st.to_string_lossy() == sp.id));
+        if stale && p.is_file() {
+            std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
+        }
     }
     Ok(())
 }
@@ -651,6 +669,7 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     }
     // A close view into the final forest, where the species' architectures show.
     if let Some(&y) = years.last() {
+        sink(&Event::CloseUpBegin { year: y });
         let cam = closeup_camera(&site);
         drop(stage);
         stage = new_stage()?;
@@ -833,12 +852,20 @@ mod tests {
         let lib = SpeciesLibrary::embedded().unwrap();
         let dir = std::env::temp_dir().join(format!("sylva_run_species_{}", std::process::id()));
         let mut sc = default_scenario().unwrap();
+        let _ = std::fs::remove_dir_all(&dir);
+        // the second pool is written over the first (a fresh run into an earlier run's folder):
+        // the first pool's other files go (trial 36), a file not `.toml` stays
         for (pool, expected) in [(Vec::new(), lib.species.len()), (vec!["beech".to_string(), "silver_birch".to_string()], 2)] {
-            let _ = std::fs::remove_dir_all(&dir);
             sc.species = pool;
             save_run_species(&sc, &lib, &dir).unwrap();
-            let n = std::fs::read_dir(run_species_dir(&dir)).unwrap().filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "toml")).count();
-            assert_eq!(n, expected);
+            std::fs::write(run_species_dir(&dir).join("notes.txt"), b"mine").unwrap();
+            let mut names: Vec<String> = std::fs::read_dir(run_species_dir(&dir)).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n.ends_with(".toml")).collect();
+            names.sort();
+            assert_eq!(names.len(), expected, "{names:?}");
+            if expected == 2 {
+                assert_eq!(names, ["beech.toml", "silver_birch.toml"]);
+            }
+            assert!(run_species_dir(&dir).join("notes.txt").is_file());
         }
         assert!(lib.species.len() > 2);
         let _ = std::fs::remove_dir_all(&dir);

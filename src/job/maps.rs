@@ -70,7 +70,7 @@ pub fn write_layers(layers: &[Layer], mask: &Grid<bool>, geo: &crate::grid::GeoR
         let shade = if l.name == "hillshade" { None } else { hillshade };
         let style = maps::MapStyle { ramp: l.ramp, title: l.title.clone(), units: l.units.to_string(), range: l.range, hillshade: shade.map(|s| s.0), shade_strength: shade.map_or(0.0, |s| s.1), cell_m: Some(geo.cell_x_m_at_row(mask.height / 2)) };
         maps::write_field_png_styled(&l.grid, Some(mask), &style, &dir.join(format!("{}.png", l.name)))?;
-        geotiff::write_f32(&dir.join(format!("{}.tif", l.name)), &l.grid, geo)?;
+        geotiff::write_f32_band(&dir.join(format!("{}.tif", l.name)), &l.grid, geo, Some(geotiff::Band { description: &l.title, unit: l.units }))?;
         names.push(l.name.to_string());
     }
     Ok(names)

@@ -267,7 +267,7 @@ pub fn harvested(r: &StandRow) -> bool {
 
 fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
     let names: Vec<&str> = w.site.pool.iter().map(|&s| w.site.lib.species[s as usize].id.as_str()).collect();
-    stand_table::write_stand_table(&dir.join("stand_table.csv"), rows, &names)?;
+    stand_table::write_stand_table(&dir.join("stand_table.csv"), rows, &names, w.site.area_ha)?;
     if png && rows.len() >= 2 {
         plot::plot_stand_table(&dir.join("stand_table.png"), rows, w)?;
     }

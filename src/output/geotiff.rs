@@ -3,8 +3,10 @@
 //! Tags: ModelPixelScale (33550) = (pixel_w, pixel_h, 0); ModelTiepoint (33922) =
 //! (0, 0, 0, origin_x, origin_y, 0); GeoKeyDirectory (34735) with GTModelType (1024: 1
 //! projected, 2 geographic), GTRasterType (1025: 1 PixelIsArea) and ProjectedCSType (3072) or
-//! GeographicType (2048) = EPSG when known; GDAL_NODATA (42113) = "nan". Local grids get the
-//! scale and tiepoint only. Deflate-compressed strips.
+//! GeographicType (2048) = EPSG when known; GDAL_NODATA (42113) = "nan"; GDAL_METADATA (42112)
+//! with the band's description and unit when given ([`Band`]: `gdalinfo` shows them as
+//! `Description` and `Unit Type`, QGIS as the band name). Local grids get the scale and
+//! tiepoint only. Deflate-compressed strips.
 
 use super::{OutputError, Result};
 use crate::grid::{Crs, GeoRef, Grid};
@@ -27,8 +29,56 @@ fn geokeys(geo: &GeoRef) -> Option<Vec<u16>> {
     Some(k)
 }
 
+/// What a map's single band holds: a description (e.g. "Annual clear-sky insolation") and its
+/// unit (e.g. "kWh/m²/yr"), written as GDAL_METADATA (42112) items `DESCRIPTION` and
+/// `UNITTYPE` of band 0. TIFF text is ASCII, so ² ³ ° – × are written as 2, 3, deg, -, x
+/// ([`ascii_text`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Band<'a> {
+    /// What the values are.
+    pub description: &'a str,
+    /// Their unit ("1" or a range such as "1–9" for indices).
+    pub unit: &'a str,
+}
+
+/// `s` in 7-bit ASCII for a TIFF text tag, XML-escaped: ² ³ → 2 3, ° → deg, – — → -, × → x,
+/// any other non-ASCII character → `?`.
+pub fn ascii_text(s: &str) -> String {
+    let mut o = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '²' => o.push('2'),
+            '³' => o.push('3'),
+            '°' => o.push_str("deg"),
+            '–' | '—' | '−' => o.push('-'),
+            '×' => o.push('x'),
+            '&' => o.push_str("&amp;"),
+            '<' => o.push_str("&lt;"),
+            '>' => o.push_str("&gt;"),
+            '"' => o.push_str("&quot;"),
+            c if c.is_ascii() && c != '\0' => o.push(c),
+            _ => o.push('?'),
+        }
+    }
+    o
+}
+
+/// The GDAL_METADATA XML of `band` (GDAL's PAM layout: items with `sample="0"` and a `role`).
+fn gdal_metadata(band: &Band) -> String {
+    format!(
+        "<GDALMetadata>\n  <Item name=\"DESCRIPTION\" sample=\"0\" role=\"description\">{}</Item>\n  <Item name=\"UNITTYPE\" sample=\"0\" role=\"unittype\">{}</Item>\n</GDALMetadata>\n",
+        ascii_text(band.description),
+        ascii_text(band.unit)
+    )
+}
+
 /// Encodes `grid` as a Float32 GeoTIFF in memory.
 pub fn encode_f32(grid: &Grid<f32>, geo: &GeoRef) -> std::result::Result<Vec<u8>, tiff::TiffError> {
+    encode_f32_band(grid, geo, None)
+}
+
+/// [`encode_f32`] with the band's description and unit ([`Band`]) when given.
+pub fn encode_f32_band(grid: &Grid<f32>, geo: &GeoRef, band: Option<Band>) -> std::result::Result<Vec<u8>, tiff::TiffError> {
     let mut buf = std::io::Cursor::new(Vec::new());
     {
         let mut enc = TiffEncoder::new(&mut buf)?.with_compression(Compression::Deflate(Default::default()));
@@ -40,6 +90,9 @@ pub fn encode_f32(grid: &Grid<f32>, geo: &GeoRef) -> std::result::Result<Vec<u8>
             e.write_tag(Tag::GeoKeyDirectoryTag, &k[..])?;
         }
         e.write_tag(Tag::GdalNodata, "nan")?;
+        if let Some(b) = band {
+            e.write_tag(Tag::Unknown(42112), gdal_metadata(&b).as_str())?;
+        }
         img.write_data(&grid.data)?;
     }
     Ok(buf.into_inner())
@@ -49,6 +102,13 @@ pub fn encode_f32(grid: &Grid<f32>, geo: &GeoRef) -> std::result::Result<Vec<u8>
 ///
 /// Errors: [`OutputError::Encode`] when encoding fails (naming `path`), [`OutputError::Io`] when writing.
 pub fn write_f32(path: &Path, grid: &Grid<f32>, geo: &GeoRef) -> Result<()> {
-    let bytes = encode_f32(grid, geo).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "GeoTIFF", message: e.to_string() })?;
+    write_f32_band(path, grid, geo, None)
+}
+
+/// [`write_f32`] with the band's description and unit ([`Band`]) when given.
+///
+/// Errors: as [`write_f32`].
+pub fn write_f32_band(path: &Path, grid: &Grid<f32>, geo: &GeoRef, band: Option<Band>) -> Result<()> {
+    let bytes = encode_f32_band(grid, geo, band).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "GeoTIFF", message: e.to_string() })?;
     super::write_atomic(path, &bytes)
 }

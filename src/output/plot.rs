@@ -448,8 +448,10 @@ pub fn write_maps_masked(species_png: &Path, ba_png: &Path, w: &World, max_px: u
     crate::output::write_atomic(ba_png, &bytes)?;
     let geo = map_georef(w, rows, cell);
     let ba_tif: Vec<f32> = ba_grid.data.iter().zip(&mask.data).map(|(v, ok)| if *ok { *v } else { f32::NAN }).collect();
-    super::geotiff::write_f32(&ba_png.with_extension("tif"), &crate::grid::Grid { width: cols, height: rows, data: ba_tif }, &geo)?;
-    super::geotiff::write_f32(&species_png.with_extension("tif"), &code_grid, &geo)?;
+    let ba_title = format!("Basal area, {when}");
+    super::geotiff::write_f32_band(&ba_png.with_extension("tif"), &crate::grid::Grid { width: cols, height: rows, data: ba_tif }, &geo, Some(super::geotiff::Band { description: &ba_title, unit: "m²/ha" }))?;
+    let sp_title = format!("Dominant species by basal area, {when} (codes in species_codes.csv; 0 none)");
+    super::geotiff::write_f32_band(&species_png.with_extension("tif"), &code_grid, &geo, Some(super::geotiff::Band { description: &sp_title, unit: "code" }))?;
     let mut codes = String::from("code,species\n0,none\n");
     for (k, &s) in w.site.pool.iter().enumerate() {
         codes.push_str(&format!("{},{}\n", k + 1, w.site.lib.species[s as usize].id));

@@ -54,7 +54,27 @@ pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     s
 }
 
-/// Writes the stand table CSV atomically.
-pub fn write_stand_table(path: &Path, rows: &[StandRow], species: &[&str]) -> Result<()> {
-    crate::output::write_atomic(path, stand_table_csv(rows, species).as_bytes())
+/// [`stand_table_csv`] with a last column `area_ha`: the site's unmasked area (ha) that the
+/// per-hectare columns divide by, the same in every row, so the site totals (`regen_*`,
+/// `deaths_*`) convert to rates per hectare (trial 36: the area was written nowhere).
+pub fn stand_table_csv_with_area(rows: &[StandRow], species: &[&str], area_ha: f64) -> String {
+    let body = stand_table_csv(rows, species);
+    let mut s = String::with_capacity(body.len() + 12 * (rows.len() + 1));
+    for (k, line) in body.lines().enumerate() {
+        s.push_str(line);
+        if k == 0 {
+            s.push_str(",area_ha\n");
+        } else {
+            let _ = writeln!(s, ",{area_ha:.4}");
+        }
+    }
+    s
+}
+
+/// Writes the stand table CSV ([`stand_table_csv_with_area`]) atomically; `area_ha` is the
+/// site's unmasked area (ha).
+///
+/// Errors: [`super::OutputError::Io`] naming `path`.
+pub fn write_stand_table(path: &Path, rows: &[StandRow], species: &[&str], area_ha: f64) -> Result<()> {
+    crate::output::write_atomic(path, stand_table_csv_with_area(rows, species, area_ha).as_bytes())
 }

@@ -445,7 +445,26 @@ impl World {
                 return Err(crate::Error::Invalid {
                     context: ctx.to_string(),
                     field: format!("management[{}].{field}", op.index),
-                    value: format!("{:?} (bounding box, m; 0 trees of a {spacing_m} m lattice)", op.region.bbox),
+                    value: {
+                        let b = op.region.bbox;
+                        // an area file's box in the coordinates it was given in (the DEM's CRS),
+                        // a rectangle's and inline polygons' in the site's metres (trial 36: a
+                        // file's box came out in site metres with float noise)
+                        let (p0, p1) = match &m.area_file {
+                            None => ([b[0], b[1]], [b[2], b[3]]),
+                            Some(_) => (super::management::world_to_crs(&self.site.conditions, b[0], b[1]), super::management::world_to_crs(&self.site.conditions, b[2], b[3])),
+                        };
+                        let (x0, x1, y0, y1) = (p0[0].min(p1[0]), p0[0].max(p1[0]), p0[1].min(p1[1]), p0[1].max(p1[1]));
+                        let frame = match &m.area_file {
+                            None => "m from the site's SW corner".to_string(),
+                            Some(_) => match self.site.conditions.geo.epsg.filter(|_| self.site.conditions.geo.crs != crate::grid::Crs::Local) {
+                                Some(c) => format!("EPSG:{c}"),
+                                None => "the site's own coordinates".to_string(),
+                            },
+                        };
+                        let file = m.area_file.as_ref().map(|f| format!("{}: ", f.display())).unwrap_or_default();
+                        format!("{file}x {x0:.2}–{x1:.2}, y {y0:.2}–{y1:.2} ({frame}; the part on the site; 0 trees of a {spacing_m} m lattice)")
+                    },
                     expected: format!("an area where the planting's lattice has at least one point on unmasked ground inside it{under} (a smaller spacing, or another area)"),
                 });
             }
