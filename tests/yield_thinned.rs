@@ -32,6 +32,11 @@
 //! and the scenario planted at 1.0 m instead of 1.5 m, the main stand meets ±20 %: N −10 % /
 //! +8 %, Dq +1 % / −8 %, BA −8 % / −8 % at 50 / 100; either change alone does not (N −36 % to
 //! −46 % and −66 % at 50).
+//! Round 36 (docs/management.md, "Round 36"; measured, not adopted): the same switch with a
+//! sourced H/D, iLand's HDhigh of beech (`life.dense_hd`, as the H/D of the increments,
+//! `tools/experiments/r36_iland_thicket.patch`), leaves N −70 % / −68 % at the shipped 1.5 m
+//! and −55 % / −63 % at 1.0 m (Heukamp 1999's > 10,000 plants/ha): HDhigh falls to 87–76 at
+//! 10–15 cm DBH where the tables' thicket keeps 109–126.
 //!
 //! The spruce test passes since round 32: Norway spruce's diameter increment takes PROGNAUS's
 //! competition response (Monserud & Sterba 1996; `life.bai_competition` in

@@ -288,3 +288,76 @@ pub fn short_thinning_toml(years: u32) -> String {
     assert!(text.contains("\nyears = 137\n") && text.contains("snapshot_every = 0") && text.contains("checkpoint_every = 0"));
     text.replace("\nyears = 137\n", &format!("\nyears = {years}\n")).replace("snapshot_every = 0", "snapshot_every = 11").replace("checkpoint_every = 0", "checkpoint_every = 11")
 }
+
+/// A species' self-thinning line, `ln N = ln SDI_max + b · ln(Dq / 25 cm)` (stems/ha ≥ 7 cm,
+/// Dq cm), read from its species file's `life.density` (`sdi_max` stems/ha at Dq 25 cm and the
+/// slope `reineke_slope`; each with its source in species/*.toml: SDI_max from Vospernik &
+/// Sterba 2015's Austrian NFI line × 0.82, the slope from Pretzsch & Biber 2005, Forest Science
+/// 51(4):304–320). The reference for UNMANAGED stands (issue 35 rounds 35–36): an unthinned
+/// even-aged stand in self-thinning lies on its line; yield tables are of thinned stands.
+pub struct Line {
+    pub species: String,
+    pub sdi_max: f64,
+    pub slope: f64,
+}
+
+/// RD band of stems ≥ 7 cm on the species' line for an unmanaged planting (1.5 m, 4,444
+/// stems/ha) at ages 50 and later: an unthinned stand in self-thinning lies on its line (RD 1);
+/// 0.8 leaves room for the stems < 7 cm, which take part of the site (additive SDI) but are not
+/// counted; 1.1 is the ceiling `sim_density` puts on every pure stand. The band of `sim_yield`
+/// (issue 35 round 35, the lead's decision).
+pub const RD_CLOSED: (f64, f64) = (0.8, 1.1);
+/// RD band at age 30 (the same planting): its crowns closed at 10–16 (issue 35 round 33, beech)
+/// and it is in the self-thinning zone, which starts at 0.6 of the maximum (Long 1985, Forestry
+/// Chronicle 61:23–27), but part of its stems are still < 7 cm and not counted.
+pub const RD_30: (f64, f64) = (0.6, 1.1);
+
+impl Line {
+    /// [`RD_CLOSED`] from age 50 on, [`RD_30`] before.
+    pub fn band(age: f64) -> (f64, f64) {
+        if age >= 50.0 {
+            RD_CLOSED
+        } else {
+            RD_30
+        }
+    }
+
+    /// The line of species `id` of `lib`; panics naming the id when the library has none.
+    pub fn of(lib: &SpeciesLibrary, id: &str) -> Line {
+        let sp = lib.species.iter().find(|s| s.id == id).unwrap_or_else(|| panic!("no species {id}"));
+        Line { species: id.into(), sdi_max: sp.life.density.sdi_max as f64, slope: sp.life.density.reineke_slope as f64 }
+    }
+
+    /// Relative density RD = N (Dq / 25)^(−b) / SDI_max of `n_ha` stems/ha at `dq_cm` (1 on the line).
+    pub fn rd(&self, n_ha: f64, dq_cm: f64) -> f64 {
+        sylva::sim::density::sdi(n_ha, dq_cm, self.slope) / self.sdi_max
+    }
+
+    /// `Ok(RD)` when `n_ha` stems/ha at `dq_cm` lie within `band` (lo, hi) of RD on the line, or
+    /// the message naming `what`, the stand, the line's N at that Dq and the band.
+    pub fn check(&self, what: &str, n_ha: f64, dq_cm: f64, band: (f64, f64)) -> Result<f64, String> {
+        let rd = self.rd(n_ha, dq_cm);
+        if (band.0..=band.1).contains(&rd) {
+            Ok(rd)
+        } else {
+            let line_n = sylva::sim::density::max_stems(self.sdi_max, self.slope, dq_cm);
+            Err(format!("{what}: N {n_ha:.0} stems/ha at Dq {dq_cm:.1} cm is RD {rd:.2} on {}'s line (SDI_max {:.0}, slope {:.3}; the line holds {line_n:.0}); want {:.2}–{:.2}", self.species, self.sdi_max, self.slope, band.0, band.1))
+        }
+    }
+
+    /// Like [`Line::check`], and asserts that the check can fail: `band` is narrower than a
+    /// factor of 2 (hi < 2 lo), and the same stand with twice or half its stems fails it (the
+    /// mutation a wrong stem count, ×2, must not survive) when the stand itself passes. Returns the
+    /// stand's own result.
+    pub fn check_and_mutants(&self, what: &str, n_ha: f64, dq_cm: f64, band: (f64, f64)) -> Result<f64, String> {
+        assert!(band.1 < 2.0 * band.0, "{what}: band {band:?} is a factor of 2 or more wide: a ×2 error in N could pass");
+        let own = self.check(what, n_ha, dq_cm, band);
+        if own.is_ok() {
+            for k in [2.0, 0.5] {
+                let off = self.check(what, k * n_ha, dq_cm, band);
+                assert!(off.is_err(), "{what}: {k} × N passes as RD {:.2}", off.unwrap());
+            }
+        }
+        own
+    }
+}
