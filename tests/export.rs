@@ -562,7 +562,7 @@ fn instanced_export_places_every_live_tree_of_the_run() {
         let sp_i = lib.find(sp_id).unwrap() as u64;
         let g = grow_species_tree(sp, Model::EcoMod, sylva::job::export::class_age(1, sp.life.max_age_yr), &[], sylva::rng::hash(&[sp_i, 1])).unwrap();
         let (sk, lv) = sylva::structure::normalised(&g.skeleton, &g.leaves, 1.0).unwrap();
-        let target = sylva::sim::phases::light::crown_lai(sp.life.shade_tolerance) as f64 * sylva::structure::crown_projection_area(&sk, &lv) as f64;
+        let target = sylva::job::leaf_area::drawn_crown_lai(sp) as f64 * sylva::structure::crown_projection_area(&sk, &lv) as f64;
         eprintln!("{sp_id}: LOD0 carries {carried:.5} m² (clusters {clusters:.5}) of LAI x projection {target:.5} m² (normalised model)");
         assert!((carried - target).abs() <= 0.1 * target, "{sp_id}: LOD0 carries {carried:.5} m² of the crown's {target:.5} m² (normalised model)");
         assert!(clusters > 0.2 * carried, "{sp_id}: leaf-cluster cards carry {clusters:.5} of {carried:.5} m²");

@@ -317,14 +317,14 @@ impl LeafCover {
 }
 
 /// Gives the full-detail tree `t` (of species `sp`) its crown's leaf area, as the stand export
-/// and the stills draw it: the species' crown leaf-area index over its crown projection
-/// ([`crate::sim::phases::light::crown_leaf_area`]: LAI `2 + 0.5 · shade tolerance` × π r²,
-/// the leaf area the light model shades with), its leaf cards `lv` (in the tree's own frame,
+/// and the stills draw it: the species' drawn crown leaf-area index over its crown projection
+/// ([`super::leaf_area::drawn_leaf_area`]: the species file's sourced `life.foliage.crown_lai`
+/// × π r², else the light model's `2 + 0.5 · shade tolerance`), its leaf cards `lv` (in the tree's own frame,
 /// stem base at the origin, m) lengthened by at most 1.5 and the rest as leaf-cluster cards
 /// ([`super::leaf_area::sprig_cards`], which returns them as a mesh in the same frame).
 pub fn crown_leaf_cards(lv: &mut Leaves, t: &StandTree, sp: &crate::species::Species, cover: &LeafCover) -> TriMesh {
     let k = t.species as usize;
-    let leaf_area = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m);
+    let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
     super::leaf_area::sprig_cards(lv, leaf_area, cover.card[k], cover.sprig[k], t.crown_radius_m, t.species as u64)
 }
 
@@ -350,7 +350,7 @@ pub struct AdaptedModel {
     /// adapted tree's own leaf cards as Plastic Trees left them.
     pub adapted_leaf_area_m2: f32,
     /// Leaf area (m², one-sided) of the full level drawn: its leaf cards and sprigs (with the
-    /// crown's leaf area: [`crate::sim::phases::light::crown_leaf_area`] within half a sprig);
+    /// crown's leaf area: [`super::leaf_area::drawn_leaf_area`] within half a sprig);
     /// without, the adapted cards'.
     pub leaf_area_m2: f32,
 }

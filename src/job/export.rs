@@ -304,12 +304,12 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             // the lower levels
             let needles = full && crate::structure::texture::LeafShape::of_species(sp).is_needle();
             let sprigs = if needles {
-                let leaf_area = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m);
+                let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
                 super::leaf_area::shoot_cards(&sk, &lv, leaf_area, cover.sprig[t.species as usize], t.crown_radius_m, t.species as u64).mesh
             } else if full {
                 super::adapted::crown_leaf_cards(&mut lv, t, sp, &cover)
             } else {
-                let leaf_area = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, t.crown_radius_m);
+                let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
                 fill_leaf_area(&mut lv, leaf_area, cover.card[t.species as usize], t.crown_radius_m, t.species as u64);
                 TriMesh::default()
             };

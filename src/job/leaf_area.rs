@@ -1,5 +1,5 @@
-//! A full-detail tree's leaf area as cards (issue 32): the crown's leaf area
-//! ([`crate::sim::phases::light::crown_leaf_area`], the leaf area the light model shades with)
+//! A full-detail tree's leaf area as cards (issue 32): the crown's drawn leaf area
+//! ([`drawn_leaf_area`]: the species' sourced leaf-area index over the crown projection, round 36)
 //! given to the leaf cards of an adapted skeleton, lengthened and copied
 //! ([`fill_leaf_area`]) or with leaf-cluster cards (sprigs, [`sprig_cards`]). Shared by the
 //! stand exports ([`super::export`]) and the stills' and viewer's near field
@@ -7,6 +7,34 @@
 
 use crate::mesh::TriMesh;
 use glam::Vec3;
+
+/// The leaf-area index (m² one-sided leaf per m² of crown projection) a drawn crown of species
+/// `sp` carries: the species file's sourced `life.foliage.crown_lai` (a published leaf-area
+/// index of closed pure stands of the species, [`crate::species::Foliage`]), or, for a species
+/// without one, the light model's [`crate::sim::phases::light::crown_lai`] (`2 + 0.5 · shade
+/// tolerance`, no source). Round 36 (issue 32): every drawing of a tree takes its leaf area
+/// from here ([`drawn_leaf_area`]); the simulation's light phase keeps `crown_lai` (so the
+/// default run's stand table does not change), and so does the hemispherical photograph
+/// ([`super::hemi`]), which is compared with the light phase's relative light.
+pub fn drawn_crown_lai(sp: &crate::species::Species) -> f32 {
+    match sp.life.foliage {
+        Some(f) => f.crown_lai,
+        None => crate::sim::phases::light::crown_lai(sp.life.shade_tolerance),
+    }
+}
+
+/// One-sided leaf area (m²) a drawn tree of species `sp` with crown radius `crown_radius_m` (m;
+/// taken as at least 0.05 m) carries: [`drawn_crown_lai`] × the crown projection `π r²`. The
+/// one function the stand exports ([`super::export`]), the stills' and viewer's near field
+/// ([`super::adapted::crown_leaf_cards`]), `sylva tree grow` / `tree adapt` and the instanced
+/// export's models ([`lone_tree_sprigs`], over the tree's own projection) take a tree's leaf
+/// area from. The sourced values are stand leaf-area indices, so the leaf area follows the
+/// crown's projection, not the DBH or the height (a tree of a closed stand carries the stand's
+/// leaf area over the ground its crown covers).
+pub fn drawn_leaf_area(sp: &crate::species::Species, crown_radius_m: f32) -> f32 {
+    let r = crown_radius_m.max(0.05);
+    std::f32::consts::PI * r * r * drawn_crown_lai(sp)
+}
 
 /// Largest factor by which [`fill_leaf_area`] lengthens a tree's leaf cards (1.5: a beech
 /// card of 6 cm stays a leaf, not a board); the rest of the leaf area comes as more cards.
@@ -19,8 +47,7 @@ pub const MAX_CARDS_PER_LEAF: usize = 24;
 /// of which the leaf texture covers the share `card_cover`,
 /// [`crate::structure::texture::leaf_card_cover`]) a leaf area (one-sided) of `leaf_area_m2`,
 /// the leaf area the light model gives the tree
-/// ([`crate::sim::phases::light::crown_leaf_area`]: the crown's leaf-area index over its
-/// projection), so that the exported crown is as dense as the simulation's. With the area
+/// ([`drawn_leaf_area`]: the species' drawn leaf-area index over its projection). With the area
 /// factor `F = leaf_area_m2 / current`, each card becomes `n = ceil(F / 1.5²)` cards (at most
 /// [`MAX_CARDS_PER_LEAF`]) of length × `sqrt(F / n)`: the card itself and `n − 1` copies on
 /// the same node, turned about the vertical by a hashed angle and moved by a hashed offset of
@@ -62,7 +89,7 @@ pub fn fill_leaf_area(lv: &mut crate::structure::Leaves, leaf_area_m2: f32, card
 pub const SPRIG_MAX_INCLINATION: f32 = std::f32::consts::FRAC_PI_3;
 
 /// Gives a full-detail tree the leaf area `leaf_area_m2` (one-sided, m²; the crown's leaf-area
-/// index over its projection, [`crate::sim::phases::light::crown_leaf_area`]) with few cards:
+/// index over its projection, [`drawn_leaf_area`]) with few cards:
 /// its leaf cards (`card_cover` of each `size × size/2` card shows leaf) are lengthened by up
 /// to [`MAX_CARD_GROWTH`] (or shrunk when the tree has more leaf than that), and the rest of
 /// the area comes as sprigs: square leaf-cluster cards (the cluster texture, 36 leaves,
@@ -158,8 +185,7 @@ pub struct ShootCards {
 /// turn from it, each drawn with the leaf-cluster texture (needle shoots over a disc,
 /// [`crate::structure::texture::cluster_texture`], of which `cluster_cover` shows needles). A
 /// card's side is proportional to its segment's length plus one needle card's, scaled for all shoots alike so that the cards carry
-/// `leaf_area_m2` (the crown's leaf area, [`crate::sim::phases::light::crown_leaf_area`], the
-/// leaf area the light model shades with), at most [`MAX_SHOOT_CARD_M`] (the leaf area is
+/// `leaf_area_m2` (the crown's drawn leaf area, [`drawn_leaf_area`]), at most [`MAX_SHOOT_CARD_M`] (the leaf area is
 /// then short of the target, as `leaf_area_m2` in the result says); centres kept within
 /// `crown_radius_m` of the stem axis (the frame's origin, z up). `lv` is not changed (the
 /// needle cards remain the source of the lower levels of detail). Deterministic: the turns hash
@@ -272,11 +298,11 @@ pub fn card_covers(sp: &crate::species::Species) -> (f32, f32) {
 pub struct LoneLeafArea {
     /// Crown projection area (m², [`crate::structure::crown_projection_area`]).
     pub projection_m2: f32,
-    /// The species' crown leaf-area index (m² leaf per m² crown projection,
-    /// [`crate::sim::phases::light::crown_lai`]).
+    /// The species' drawn crown leaf-area index (m² leaf per m² crown projection,
+    /// [`drawn_crown_lai`]).
     pub lai: f32,
     /// The leaf area the crown carries in the simulation (m², one-sided): the species' crown
-    /// leaf-area index ([`crate::sim::phases::light::crown_lai`]) over the projection.
+    /// drawn leaf-area index ([`drawn_crown_lai`]) over the projection.
     pub target_m2: f32,
     /// Leaf area (m², one-sided) of the tree's leaf cards before.
     pub cards_m2: f32,
@@ -296,7 +322,7 @@ pub struct LoneLeafArea {
 /// the simulation, so that its full level (LOD0) is as dense as its leaf-cluster level (LOD1)
 /// and as the stills' and the stand exports' full-detail trees (issue 32: the full level of an
 /// adapted tree, re-leafed at its tips only, read sparser than its mid level, "a dead snag"):
-/// the crown leaf-area index of the species ([`crate::sim::phases::light::crown_lai`]) over
+/// the drawn crown leaf-area index of the species ([`drawn_crown_lai`]) over
 /// the crown projection of the tree itself ([`crate::structure::crown_projection_area`], eight
 /// crown radii, so a crown made one-sided by a wall gets the leaf area of what it has),
 /// given by [`sprig_cards`] (cards lengthened by at most [`MAX_CARD_GROWTH`], the rest as
@@ -311,7 +337,7 @@ pub fn lone_tree_sprigs(sk: &crate::structure::Skeleton, lv: &mut crate::structu
     let (card, sprig) = card_covers(sp);
     let cards_m2: f32 = lv.leaves.iter().map(|l| 0.5 * l.size * l.size * card.clamp(0.05, 1.0)).sum();
     let projection_m2 = crate::structure::crown_projection_area(sk, lv);
-    let lai = crate::sim::phases::light::crown_lai(sp.life.shade_tolerance);
+    let lai = drawn_crown_lai(sp);
     let target_m2 = lai * projection_m2;
     let mut out = LoneLeafArea { projection_m2, lai, target_m2, cards_m2, card_growth: 1.0, sprigs: 0, cards_removed: 0 };
     if lv.leaves.is_empty() || !(target_m2 > 0.0) || target_m2 == cards_m2 {
@@ -403,7 +429,7 @@ mod lone_tree_tests {
             let (card, sprig) = card_covers(sp);
             let before = area(&lv, &TriMesh::default(), card, sprig);
             let (m, f) = lone_tree_sprigs(&g.skeleton, &mut lv, sp);
-            let lai = crate::sim::phases::light::crown_lai(sp.life.shade_tolerance);
+            let lai = drawn_crown_lai(sp);
             assert!((f.target_m2 - lai * f.projection_m2).abs() < 1e-3 * f.target_m2);
             assert!((f.cards_m2 - before).abs() < 1e-3 * before);
             assert!(f.target_m2 > before, "{id}: the tips' cards alone carry {before} m², the crown {} m²", f.target_m2);
@@ -428,6 +454,58 @@ mod lone_tree_tests {
         }
         // the EcoMod beech's tip leaves carry less than 1.5² of the crown's leaf area alone
         assert!(with_sprigs >= 1);
+    }
+
+    /// Round 36 (issue 32): a spruce's and a beech's drawn leaf area is their cited stand
+    /// leaf-area index over the crown (Norway spruce: Kram 1998, 10.0; beech: Černý, Haninec &
+    /// Pokorný 2020, LAI-2000 4.5–5.1 under the litter-trap LAI by 15.1 %) within 10 % at two
+    /// DBHs of stand-grown trees (crown radius from the species' TreeGrOSS stand crown width),
+    /// and the full-detail foliage the stand export draws for them (shoot cards, sprigs)
+    /// carries it: the shoot cards' 0.8 m cap does not cut a 25–40 cm spruce's needle area short.
+    #[test]
+    fn spruce_and_beech_drawn_leaf_area_is_their_cited_stand_lai_over_the_crown() {
+        let lib = crate::species::SpeciesLibrary::embedded().unwrap();
+        let pi = std::f32::consts::PI;
+        for (id, cited, dbhs) in [("norway_spruce", 10.0f32, [25.0f32, 40.0]), ("beech", 0.5 * (4.5 / (1.0 - 0.151) + 5.1 / (1.0 - 0.151)), [20.0, 40.0])] {
+            let sp = lib.get(id).unwrap();
+            for dbh in dbhs {
+                let h = crate::species::allometry::height_from_dbh(sp, dbh);
+                let r = crate::species::allometry::stand_crown_radius(sp, dbh, h, 0.6 * h).unwrap();
+                let la = drawn_leaf_area(sp, r);
+                let want = cited * pi * r * r;
+                assert!((la - want).abs() <= 0.1 * want, "{id} DBH {dbh} cm: drawn {la:.1} m², cited LAI × π r² {want:.1} m² (r {r:.2} m)");
+                // denser than the light model's crown (the uncited 2 + 0.5 · shade tolerance)
+                let light = crate::sim::phases::light::crown_leaf_area(sp.life.shade_tolerance, r);
+                assert!(la > 1.2 * light, "{id}: drawn {la:.1} m², light model {light:.1} m²");
+            }
+        }
+        // the full level carries it: a 60-year EcoMod spruce's shoot cards and beech's sprigs
+        let spruce = lib.get("norway_spruce").unwrap();
+        let g = grow_species_tree(spruce, Model::EcoMod, 60.0, &[], 3).unwrap();
+        let (_, cluster) = card_covers(spruce);
+        for r in [1.5f32, 2.5] {
+            let target = drawn_leaf_area(spruce, r);
+            let s = shoot_cards(&g.skeleton, &g.leaves, target, cluster, r, 7);
+            assert!((s.leaf_area_m2 - target).abs() <= 0.1 * target, "spruce r {r} m: shoot cards carry {:.1} of {target:.1} m² (mean side {:.2} m)", s.leaf_area_m2, s.mean_side_m);
+        }
+        let beech = lib.get("beech").unwrap();
+        let (card, sprig) = card_covers(beech);
+        let g = grow_species_tree(beech, Model::EcoMod, 60.0, &[], 3).unwrap();
+        let mut lv = tip_leaves(&g.skeleton, &beech.architecture.ecomod);
+        let target = drawn_leaf_area(beech, 3.0);
+        let m = sprig_cards(&mut lv, target, card, sprig, 3.0, 7);
+        let got = area(&lv, &m, card, sprig);
+        assert!((got - target).abs() <= 0.1 * target, "beech: cards and sprigs carry {got:.1} of {target:.1} m²");
+        // a bad value names the file, the field and the range
+        let text = crate::species::embedded_text("norway_spruce").unwrap().replace("foliage = { crown_lai = 10.0 }", "foliage = { crown_lai = 40.0 }");
+        let (_, problems) = crate::species::parse_text(&text, std::path::Path::new("norway_spruce.toml"));
+        let p = problems.iter().find(|p| p.field == "life.foliage.crown_lai").unwrap_or_else(|| panic!("{problems:?}"));
+        assert!(p.value == "40.0" || p.value == "40", "{p:?}");
+        assert!(p.expected.contains("[1, 15]") && p.file.ends_with("norway_spruce.toml"), "{p:?}");
+        // a species without a cited value keeps the light model's crown LAI
+        let oak = lib.get("sessile_oak").unwrap();
+        assert!(oak.life.foliage.is_none());
+        assert_eq!(drawn_crown_lai(oak), crate::sim::phases::light::crown_lai(oak.life.shade_tolerance));
     }
 
     #[test]

@@ -57,7 +57,7 @@ impl Look {
                 leaf: texture::tint(&texture::leaf_texture(shape), leaf_rgb),
                 cluster: texture::tint(&texture::cluster_texture(shape, px), leaf_rgb),
                 crown: texture::tint(&texture::crown_texture(shape, px), leaf_rgb),
-                impostor: texture::tint(&texture::impostor_texture(shape, px), leaf_rgb),
+                impostor: texture::impostor_texture_coloured(shape, px, leaf_rgb, bark_rgb),
                 bark: texture::bark_texture(bark_rgb, bark, px, 1),
             },
         }

@@ -248,6 +248,11 @@ mod tests {
         let max_g = lk.textures.impostor.pixels().filter(|p| p.0[3] >= 128).map(|p| p.0[1]).max().unwrap();
         let drawn: Vec<[u8; 3]> = img.pixels().map(|p| p.0).filter(|p| *p != BACKGROUND).collect();
         assert!(!drawn.is_empty());
-        assert!(drawn.iter().all(|p| p[1] <= max_g && p[1] >= p[0] && p[1] >= p[2]), "leaf-green pixels only");
+        // leaf-green crown pixels, and the trunk in the bark's brown (round 36: it was drawn in
+        // 0.3 × the leaf colour, nearly black)
+        let leafy = |p: &[u8; 3]| p[1] <= max_g && p[1] >= p[0] && p[1] >= p[2];
+        let barky = |p: &[u8; 3]| p[0] > p[1] && p[1] > p[2];
+        assert!(drawn.iter().all(|p| leafy(p) || barky(p)), "leaf-green or bark-brown pixels only");
+        assert!(drawn.iter().any(|p| barky(p)) && drawn.iter().filter(|p| leafy(p)).count() > drawn.len() / 2);
     }
 }

@@ -191,6 +191,27 @@ pub struct LifeHistory {
     /// crowding modifier of the neighbourhood's relative density acts.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bai_competition: Option<BaiCompetition>,
+    /// Leaf area of the species' drawn crowns ([`Foliage`]): what every picture and export
+    /// gives a tree's leaf cards ([`crate::job::leaf_area::drawn_leaf_area`]). Optional: without
+    /// it a drawn crown carries the light model's crown LAI
+    /// ([`crate::sim::phases::light::crown_lai`], which has no source). Not read by the
+    /// simulation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub foliage: Option<Foliage>,
+}
+
+/// Leaf area of a species' drawn crowns (issue 32): the one-sided leaf area a drawn tree carries
+/// per m² of its crown's horizontal projection, from a published leaf-area index of closed,
+/// pure stands of the species (the stand's leaf area over the ground its closed canopy covers,
+/// crown overlap neglected), which each species file cites (species/sources/SOURCES.md,
+/// "Leaf area of drawn crowns"). Read only by the drawing
+/// ([`crate::job::leaf_area::drawn_leaf_area`]: stand exports, stills, `sylva tree grow`, the
+/// instanced export's models); the light phase keeps its own crown LAI.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Foliage {
+    /// One-sided leaf area per crown projection (m²/m²), in [1, 15].
+    pub crown_lai: f32,
 }
 
 /// Competition terms of an individual-tree basal-area increment model,

@@ -278,6 +278,7 @@ pub const FIELDS: &[FieldSpec] = &[
     f("life.bai_competition.crown_ratio", "", r(0.0, 2.0), "Basal-area increment's competition terms ln BAI = … + b3·ln CR + c1·BAL + c2·CCF (PROGNAUS, Monserud & Sterba 1996; Hasenauer 2000; optional): crown-ratio exponent b3"),
     f("life.bai_competition.bal", "1/(m²/ha)", r(-1.0, 0.0), "Basal-area increment's competition terms: coefficient c1 of the basal area of larger trees"),
     f("life.bai_competition.ccf", "1/%", r(-0.1, 0.0), "Basal-area increment's competition terms: coefficient c2 of the crown competition factor (%)"),
+    f("life.foliage.crown_lai", "m²/m²", r(1.0, 15.0), "Leaf area of drawn crowns: one-sided leaf area per m² of crown projection, a published leaf-area index of closed pure stands of the species (species/sources/SOURCES.md; optional: without it drawn crowns carry the light model's 2 + 0.5·shade tolerance; pictures and exports only, not the simulation)"),
     f(
         "architecture.ecomod.strands",
         "",

@@ -540,7 +540,39 @@ pub const IMPOSTOR_TRUNK_U: [f32; 2] = [0.48, 0.52];
 /// The impostor texture of `shape` (LOD3 billboard, v up): a crown of scattered leaves over v
 /// [`IMPOSTOR_CROWN_V`]–0.98 (u 0.04–0.96), a cone for needle shapes, an ellipse for broad
 /// ones, above and over a dark trunk column (u 0.475–0.525, v below 0.6); `size` × `size`.
+/// Greyscale; the drawn textures are [`impostor_texture_coloured`].
 pub fn impostor_texture(shape: LeafShape, size: u32) -> RgbaImage {
+    let (px, _) = impostor_layers(shape, size);
+    to_image(&px, size.max(8), None)
+}
+
+/// The impostor texture of `shape` in colour: the leaves of [`impostor_texture`] tinted by
+/// `leaf_rgb` (sRGB 0–255, as [`tint`] tints), the trunk column in the bark colour `bark_rgb`
+/// (× 0.85, the shaded side of a stem). Trial 35: the whole greyscale impostor was tinted by
+/// the leaf colour, so its trunk (grey 0.3) became 0.3 × the leaf's dark green, nearly black
+/// whatever the bark (beech's grey, birch's white). Straight alpha, `size` × `size`.
+pub fn impostor_texture_coloured(shape: LeafShape, size: u32, leaf_rgb: [u8; 3], bark_rgb: [u8; 3]) -> RgbaImage {
+    let (_, (trunk, leaf_px)) = impostor_layers(shape, size);
+    let mut img = RgbaImage::new(size.max(8), size.max(8));
+    for (i, p) in img.pixels_mut().enumerate() {
+        let (t, [g, a]) = (trunk[i], leaf_px[i]);
+        let alpha = a + t * (1.0 - a);
+        let c = |k: usize| -> u8 {
+            let leaf = leaf_rgb[k] as f32 / 255.0;
+            let bark = 0.85 * bark_rgb[k] as f32 / 255.0;
+            // premultiplied: the leaves' grey times the leaf colour over the trunk's bark
+            let pre = leaf * g + bark * t * (1.0 - a);
+            q(if alpha > 1e-3 { pre / alpha } else { 0.75 * leaf })
+        };
+        *p = Rgba([c(0), c(1), c(2), q(alpha)]);
+    }
+    img
+}
+
+/// The layers of the impostor texture: its greyscale composite (grey, alpha, premultiplied) and,
+/// apart, the trunk column's coverage (0 or 1) and the leaves' (grey, alpha).
+#[allow(clippy::type_complexity)]
+fn impostor_layers(shape: LeafShape, size: u32) -> (Vec<[f32; 2]>, (Vec<f32>, Vec<[f32; 2]>)) {
     let size = size.max(8);
     let leaf = leaf_texture_sized(shape, 64, 128);
     let conifer = shape.is_needle();
@@ -565,12 +597,14 @@ pub fn impostor_texture(shape: LeafShape, size: u32) -> RgbaImage {
         k += 1;
     }
     let mut px = vec![[0.0f32, 0.0f32]; (size * size) as usize];
+    let mut trunk = vec![0.0f32; (size * size) as usize];
     // the trunk first, the leaves over it
     for y in 0..size {
         for x in 0..size {
             let p = Vec2::new((x as f32 + 0.5) / size as f32, 1.0 - (y as f32 + 0.5) / size as f32);
             if (p.x - 0.5).abs() < 0.025 && p.y < 0.6 {
                 px[(y * size + x) as usize] = [0.3, 1.0];
+                trunk[(y * size + x) as usize] = 1.0;
             }
         }
     }
@@ -579,7 +613,7 @@ pub fn impostor_texture(shape: LeafShape, size: u32) -> RgbaImage {
         d[0] = d[0] * (1.0 - s[1]) + s[0];
         d[1] = d[1] * (1.0 - s[1]) + s[1];
     }
-    to_image(&px, size, None)
+    (px, (trunk, leaf_px))
 }
 
 /// Bark pattern of a species.
@@ -707,7 +741,7 @@ impl FoliageTextures {
             leaf: tint(&leaf_texture(shape), rgb),
             cluster: tint(&cluster_texture(shape, TEXTURE_PX), rgb),
             crown: tint(&crown_texture(shape, TEXTURE_PX), rgb),
-            impostor: tint(&impostor_texture(shape, TEXTURE_PX), rgb),
+            impostor: impostor_texture_coloured(shape, TEXTURE_PX, rgb, a.bark),
             bark: bark_texture(a.bark, BarkPattern::of_species(sp), TEXTURE_PX, seed),
         }
     }
@@ -716,6 +750,35 @@ impl FoliageTextures {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Trial 35: the billboards' trunks were drawn nearly black (0.3 × the leaf colour). Now
+    /// the trunk column of the coloured impostor has the bark's colour (× 0.85): beech's grey
+    /// bark stays grey and light, not the leaves' dark green; the leaves keep the leaf tint.
+    #[test]
+    fn the_impostor_trunk_has_the_bark_colour() {
+        let (leaf, bark) = ([40u8, 80, 30], [150u8, 150, 145]);
+        let img = impostor_texture_coloured(LeafShape::Ovate, 128, leaf, bark);
+        // the trunk column below the crown (u 0.5, v 0.05): opaque, the bark's colour × 0.85
+        let p = img.get_pixel(64, 127 - 6).0;
+        assert_eq!(p[3], 255, "{p:?}");
+        for k in 0..3 {
+            assert!((p[k] as f32 - 0.85 * bark[k] as f32).abs() <= 2.0, "trunk {p:?}, bark {bark:?}");
+        }
+        // the greyscale tinted by the leaf colour (the old way) gives a trunk 0.3 × the leaf's
+        let old = tint(&impostor_texture(LeafShape::Ovate, 128), leaf).get_pixel(64, 127 - 6).0;
+        assert!(old[0] < 20 && old[1] < 30, "{old:?}");
+        // leaves: where no trunk is, the same as the tinted greyscale (within rounding)
+        let grey = tint(&impostor_texture(LeafShape::Ovate, 128), leaf);
+        let mut n = 0;
+        for (x, y) in [(20u32, 40u32), (100, 50), (64, 20), (40, 70)] {
+            let (a, b) = (img.get_pixel(x, y).0, grey.get_pixel(x, y).0);
+            if a[3] > 0 {
+                n += 1;
+                assert!(a.iter().zip(b).all(|(a, b)| (*a as i32 - b as i32).abs() <= 2), "{x},{y}: {a:?} against {b:?}");
+            }
+        }
+        assert!(n >= 1);
+    }
 
     /// Fraction of texels at or above the alpha cutoff.
     fn cover(img: &RgbaImage) -> f64 {

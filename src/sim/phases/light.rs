@@ -33,7 +33,10 @@ pub const K_EXT: f32 = crate::sim::light_grid::EXTINCTION_K;
 pub const W_ZENITH: f32 = 0.35;
 
 /// Leaf-area index of a crown (m² leaf per m² crown projection) by shade tolerance (1–5):
-/// `2 + 0.5 · ST` (tolerant species carry deeper, denser crowns).
+/// `2 + 0.5 · ST` (tolerant species carry deeper, denser crowns). ESTIMATE without a source:
+/// what the light phase shades with (and the hemispherical photograph, `job::hemi`, compared
+/// with it). Drawn crowns take the species' sourced leaf-area index where its file gives one
+/// (`job::leaf_area::drawn_crown_lai`, round 36), e.g. Norway spruce 10.0 against 3.6 here.
 #[inline]
 pub fn crown_lai(shade_tolerance: f32) -> f32 {
     2.0 + 0.5 * shade_tolerance
@@ -41,8 +44,8 @@ pub fn crown_lai(shade_tolerance: f32) -> f32 {
 
 /// Leaf area (m², one-sided) of a crown of radius `crown_radius_m` (m) of a species of shade
 /// tolerance `shade_tolerance` (1–5): [`crown_lai`] × the crown projection `π r²` (r at least
-/// 0.05 m), the leaf area the light phase spreads over the light cells the crown covers, and
-/// what a stand export gives the tree's leaf cards (`job::export::fill_leaf_area`).
+/// 0.05 m), the leaf area the light phase spreads over the light cells the crown covers (drawn
+/// trees take `job::leaf_area::drawn_leaf_area` since round 36).
 #[inline]
 pub fn crown_leaf_area(shade_tolerance: f32, crown_radius_m: f32) -> f32 {
     let r = crown_radius_m.max(0.05);
