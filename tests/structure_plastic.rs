@@ -384,6 +384,13 @@ fn symmetric_tree_by(turn: impl Fn(Vec3, u32) -> Vec3) -> Skeleton {
     for z in 1..=4 {
         top = s.add_child(top, Vec3::new(0.0, 0.0, z as f32), 0.06, false).unwrap();
     }
+    add_crown(&mut s, top, turn);
+    s
+}
+
+/// The crown of [`symmetric_tree_by`] on the stem node `top` (at 4 m): four limbs placed by
+/// `turn` and a leader; tips marked.
+fn add_crown(s: &mut Skeleton, top: sylva::structure::NodeId, turn: impl Fn(Vec3, u32) -> Vec3) {
     for q in 0..4 {
         let limb = s.add_child(top, turn(Vec3::new(1.0, 0.0, 5.0), q), 0.03, true).unwrap();
         let l2 = s.add_child(limb, turn(Vec3::new(2.0, 0.0, 5.8), q), 0.02, false).unwrap();
@@ -392,7 +399,6 @@ fn symmetric_tree_by(turn: impl Fn(Vec3, u32) -> Vec3) -> Skeleton {
     }
     s.add_child(top, Vec3::new(0.0, 0.0, 6.5), 0.03, false).unwrap();
     s.mark_tips();
-    s
 }
 
 /// Quarter turns by a quaternion (f32 rounding leaves ~1e-7 m asymmetries).
@@ -683,4 +689,45 @@ fn coarse_shadow_grids_answer_as_the_default_ones() {
     }
     // the rays tested are shaded and unshaded, some by several clusters
     assert!(shaded > 300 && shaded < 200 * sky.dirs.len() - 300 && dark > 50, "{shaded} shaded, {dark} below 0.5");
+}
+
+/// A forest-grown tree's bole (`PlasticTree::set_bole`, round 36): one segment of four
+/// internodes from the root to the crown (eq. 7: w_s = 0.11⁴ ≈ 0, so eq. 6 sets its direction
+/// by t' alone), under the sky of 50° N after an analysis under the open sky. Marked, its
+/// flexibility κ = 1 − a/(T + 1) takes a from its base's season (a = T − t_{s_p}, the root's 0:
+/// κ = 1/(T + 1)) instead of its tip's, so it leans less than a third as much as unmarked, and
+/// the crown above still turns south; marking nothing is the default, bit for bit; the root or
+/// a node outside the tree is refused naming `bole`.
+#[test]
+fn a_marked_bole_bends_with_the_age_of_its_base() {
+    let mut sk = Skeleton::new();
+    let r = sk.add_root(Vec3::ZERO, 0.08);
+    let top = sk.add_child(r, Vec3::new(0.0, 0.0, 4.0), 0.06, false).unwrap();
+    add_crown(&mut sk, top, quat_turn);
+    let p = PlasticParams { phototropism: 0.45, gravitropism: 0.44, pruning_c_psi: 0.0, translucency_gamma_c0: 0.5 };
+    let env = Environment::global(50.0, 0.0, 0.0, Vec3::ZERO, &[]);
+    let base = PlasticTree::analyse(&sk, &p, &Environment::open(), Some(1.0)).unwrap();
+    assert_eq!(base.bole(), None);
+    let adapted = |bole: Option<u32>| {
+        let mut t = base.clone();
+        t.set_bole(bole).unwrap();
+        t.adapt(&env).unwrap();
+        t
+    };
+    let (plain, none, marked) = (adapted(None), adapted(None), adapted(Some(1)));
+    assert_eq!(none.positions(), plain.positions());
+    assert_eq!(marked.bole(), Some(1));
+    let lean = |t: &PlasticTree| (t.positions()[1] - t.positions()[0]).angle_between(Vec3::Z).to_degrees();
+    let a = base.analysis();
+    eprintln!("bole: w_s {:.5}, season {} of T {}; lean unmarked {:.2}°, marked {:.2}°", a.w_s[1], a.season[1], a.seasons, lean(&plain), lean(&marked));
+    assert!(a.w_s[1] < 0.01 && a.season[1] >= 2, "w_s {}, season {}", a.w_s[1], a.season[1]);
+    assert!(lean(&plain) > 1.0, "unmarked bole leans {}°", lean(&plain));
+    assert!(lean(&marked) < lean(&plain) / 3.0, "marked {}° vs unmarked {}°", lean(&marked), lean(&plain));
+    // the crown above the bole still turns south (the brightest sky point is at −y)
+    let (c0, c1) = (tip_centroid(&sk), tip_centroid(&marked.skeleton()));
+    assert!(c1.y < c0.y - 0.05, "tip centroid y {} -> {}", c0.y, c1.y);
+    for bad in [0u32, sk.len() as u32] {
+        let e = base.clone().set_bole(Some(bad)).unwrap_err().to_string();
+        assert!(e.contains("bole") && e.contains(&bad.to_string()), "{e}");
+    }
 }

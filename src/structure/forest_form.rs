@@ -227,13 +227,14 @@ pub fn grow_formed_tree_with(sp: &Species, model: Model, age_yr: f32, obstacles:
     // a sapling's trunk is also shortened to its low crown base (round 34: the model's own
     // trunk gave a 3-year beech 50 % clear bole); from SAPLING_END_AGE_YR on only lengthened
     let young = sapling_weight(age_yr) > 0.0;
-    if crown > 0.0 && (trunk > p.trunk_length_m || (young && trunk > 0.0)) {
+    let forest_bole = crown > 0.0 && (trunk > p.trunk_length_m || (young && trunk > 0.0));
+    if forest_bole {
         p.trunk_length_m = trunk;
         (sk, lv) = ecomod::try_grow(&p, seed, 0.0)?;
     }
     let (sk, lv) = super::normalised(&sk, &lv, 1.0)?;
     let crown_radius = super::stand::mean_crown_radius(&sk, &lv).max(0.05);
-    let g = super::stand::OpenGrown { skeleton: sk, leaves: lv, crown_radius };
+    let g = super::stand::OpenGrown { skeleton: sk, leaves: lv, crown_radius, forest_bole };
     let (mut skeleton, mut leaves) = super::stand::fit(&g, form.height_m, form.crown_radius_m, form.crown_base_m);
     let r0 = skeleton.nodes.first().map(|n| n.radius).unwrap_or(0.0);
     if r0 > 0.0 && r0.is_finite() {

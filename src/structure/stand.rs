@@ -66,6 +66,17 @@
 //!    18 m one 25) and 47 % of the sessile oaks, which stood as poles with tufts in the
 //!    close-up (round 17). The open-grown trees of a capped cache are still shed by light
 //!    among their neighbours (their crown base is what eq. 11 raises there).
+//! 5. **A forest-grown tree's bole stands.** The lengthened bole of step 1 is one segment of
+//!    43–108 internodes: eq. (7) gives it w_s ≈ 0, so eq. (6) sets its direction by the
+//!    tropism alone, and with the flexibility κ of its tip's season (0.37–0.71 of the tree's T
+//!    seasons, eq. 2) it turned like crown wood towards the light of the gaps: in round 35 the
+//!    boles of the Blender stand (92 trees ≥ 24 m) leaned 2.0° median, up to 11.8°, where the
+//!    fitted trees stand within 0.2°. It is bent with the flexibility of its base's age, a = T
+//!    − t_{s_p} ([`PlasticTree::set_bole`]; section 5.1: segments are transformed "according to
+//!    their estimated age", and this segment's base is the oldest wood of the tree); the
+//!    crown above it bends as before. Trees of a capped cache (the open-grown tree shed below
+//!    the crown base) and trees grown alone are not changed. BENCHMARKS.md, "Round 36 (issue
+//!    32 stems)".
 
 use super::grow::ecomod;
 use super::species_tree::{ecomod_strands_at, ECOMOD_FULL_AGE_YR};
@@ -215,6 +226,11 @@ pub struct OpenGrown {
     /// mean of the radii to the crown's edge in eight directions; m per m of height; at least
     /// 0.05), the radius [`fit`] gives the simulated crown radius.
     pub crown_radius: f32,
+    /// True when the skeleton's first segment (node 1, from the root) is the forest form's
+    /// lengthened bole ([`SkeletonCache::prepare`] in a cache of [`FULL_STRANDS`]): one
+    /// segment from the root to the crown base that stands for many internodes, which
+    /// [`adapt_stand`] bends with the flexibility of its base ([`PlasticTree::set_bole`]).
+    pub forest_bole: bool,
 }
 
 /// Open-grown trees per (species, age class), grown with the scenario's seed.
@@ -318,7 +334,8 @@ impl SkeletonCache {
                 let trunk = qf * crown / (1.0 - qf);
                 // a capped cache keeps the open-grown tree, shed below the crown base by [`fit`]
                 // (its spread leaf cards fill the crown; see [`DEFAULT_MAX_STRANDS`])
-                if max_strands == FULL_STRANDS && crown > 0.0 && trunk > p.trunk_length_m {
+                let forest_bole = max_strands == FULL_STRANDS && crown > 0.0 && trunk > p.trunk_length_m;
+                if forest_bole {
                     p.trunk_length_m = trunk;
                     (sk, lv) = ecomod::try_grow(&p, seed_of(s, c), 0.0)?;
                 }
@@ -336,7 +353,7 @@ impl SkeletonCache {
                 // fewer strands, fewer tips: larger leaves keep the foliage area of the full tree
                 let grow_leaf = (full as f32 / p.strands as f32).sqrt().min(MAX_LEAF_GROWTH);
                 lv.leaves.iter_mut().for_each(|l| l.size *= grow_leaf);
-                Ok(((s, c, q), OpenGrown { skeleton: sk, leaves: lv, crown_radius }))
+                Ok(((s, c, q), OpenGrown { skeleton: sk, leaves: lv, crown_radius, forest_bole }))
             })
             .collect::<Result<_>>()?;
         for (k, g) in grown {
@@ -709,7 +726,10 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
         if forest_grown && !k.5 {
             params.pruning_c_psi = 0.0;
         }
+        // the forest form's lengthened bole is bent with the flexibility of its base (step 5)
+        let bole = (g.forest_bole && !k.5 && sk.nodes.get(1).is_some_and(|n| n.parent == Some(0) && n.gravelius == 0)).then_some(1u32);
         let (mut t, lf) = if k.5 { (PlasticTree::standing(&sk, &params, &sky, None)?, None) } else { (PlasticTree::analyse(&sk, &params, &alone, None)?, Some(lf)) };
+        t.set_bole(bole)?;
         t.clearance_m = sp.architecture.ecomod.leaf_size_m.max(0.0);
         Ok((t, lf))
     };

@@ -189,7 +189,9 @@ pub struct PlasticTree {
     pub(crate) quiet: Option<Box<transform::QuietLevels>>,
     /// True for a tree made by [`PlasticTree::standing`] (shape only, no light): it can stand
     /// among adapted trees but cannot be adapted.
-    pub(crate) standing: bool,
+    pub(crate) standing: bool,    /// The node whose segment is a forest-grown tree's lengthened bole ([`PlasticTree::set_bole`]),
+    /// bent with the flexibility of its base's age; `None` for every other tree.
+    pub(crate) bole: Option<u32>,
 }
 
 impl PlasticTree {
@@ -226,6 +228,7 @@ impl PlasticTree {
             report: PlasticReport { nodes_before: n, nodes_after: n, ..Default::default() },
             quiet: None,
             standing,
+            bole: None,
         }
     }
 
@@ -361,6 +364,42 @@ impl PlasticTree {
     /// Report of the last adaptation.
     pub fn report(&self) -> PlasticReport {
         self.report
+    }
+
+    /// Marks the segment from node `node`'s parent to `node` as a forest-grown tree's bole, or
+    /// clears the mark (`None`, the default of every tree). Section 5.1 of the paper transforms
+    /// "individual branch segments according to their estimated age": the bending of eq. (6)
+    /// moves the tropism a segment grew with, t, towards the tropism of its new light by the
+    /// flexibility κ = 1 − a/(T + 1) (transform step 3), a the segment's age. For every segment a
+    /// is taken at its tip, a = T − t_s (t_s its season of eq. 2). The marked segment takes it
+    /// at its base, a = T − t_{s_p} (t_{s_p} its parent's season of eq. 2): it stands for many
+    /// internodes of different ages, and it turns about its base, the oldest wood of the stem.
+    /// The forest form of [`crate::structure::stand`] lengthens the open-grown tree's first
+    /// segment to the simulated crown base (43–108 internodes of the tree's own l_i, round 35):
+    /// its eq. (7) weight w_s = (1 − w_p − w_g)^(l_s/l_i) is about 0, so eq. (6) sets its direction by
+    /// t' alone, and with its tip's season (0.37–0.71 T) it bent like crown wood: boles leaning
+    /// 2.0° median and up to 11.8° among neighbours (BENCHMARKS.md, rounds 35 and 36). A tree
+    /// without a mark (lone trees, Plastic Trees' own set-ups) is bent as before, bit for bit.
+    /// When the mark changes the next adaptation recomputes every node.
+    ///
+    /// Errors: [`Error::Invalid`] (field `bole`) when `node` is the root (0) or not a node of
+    /// the input skeleton.
+    pub fn set_bole(&mut self, node: Option<u32>) -> Result<()> {
+        if let Some(k) = node {
+            if k == 0 || k as usize >= self.input.nodes.len() {
+                return Err(Error::Invalid { context: "PlasticTree::set_bole".into(), field: "bole".into(), value: k.to_string(), expected: format!("a node 1..{} of the input skeleton (not the root)", self.input.nodes.len().saturating_sub(1)) });
+            }
+        }
+        if node != self.bole {
+            self.bole = node;
+            self.invalidate();
+        }
+        Ok(())
+    }
+
+    /// The node whose segment is marked as a forest-grown tree's bole ([`PlasticTree::set_bole`]).
+    pub fn bole(&self) -> Option<u32> {
+        self.bole
     }
 
     /// Makes the next adaptation recompute every node (not only the changed subtrees).

@@ -29,7 +29,9 @@
 //!    t' = t + κ·(t(L') − t), L' the new average light direction at the node, t the tropism it
 //!    grew with. κ = 1 − a/(T + 1), a = T − season the branch age in years: old trunks bend
 //!    little, but they bend (our form of "transform individual branch segments according to
-//!    their estimated age", section 5.1). A node that enters an obstacle or the ground (closer
+//!    their estimated age", section 5.1). The season is the segment's own of eq. (2) (its
+//!    tip's), except for a forest-grown tree's lengthened bole ([`PlasticTree::set_bole`]),
+//!    which takes its parent's, t_{s_p} of eq. (2): the age of its base (round 36). A node that enters an obstacle or the ground (closer
 //!    than `clearance_m`), or whose segment crosses one, is removed with its subtree.
 //! 4. **Pruning (section 5.1)** after every level: ψ_s(t) = ζ_s(t)/l_s(t) from the light on the
 //!    stage's clusters (eq. 10; light normalised per stage by its best-lit cluster, see
@@ -1033,6 +1035,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     let n = t.input.nodes.len();
     let a = &t.analysis;
     let last = a.seasons as f32;
+    let bole = t.bole.map(|b| b as usize);
     let sky = &env.sky;
     // the season's nodes by depth below the older wood: a node's parent is placed before it
     // (depth − 1, or older than the season), so each depth's bending light is taken as a batch
@@ -1097,7 +1100,10 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
                 let h = seg / len;
                 let (_, l_new) = lights.next().unwrap_or((0.0, Vec3::Z));
                 let t_old = tropism(&t.params, a.light_dir[k]);
-                let kappa = 1.0 - (last - a.season[k] as f32) / (last + 1.0);
+                // flexibility by age (step 3): the tip's season of eq. (2), the base's
+                // (t_{s_p}) for a forest-grown tree's lengthened bole
+                let born = if bole == Some(k) { a.season[par] } else { a.season[k] };
+                let kappa = 1.0 - (last - born as f32) / (last + 1.0);
                 let t_eff = (t_old + kappa * (tropism(&t.params, l_new) - t_old)).normalize_or(t_old);
                 let ws = a.w_s[k];
                 let h_rigid = q_par * h;
