@@ -10,7 +10,10 @@ use sylva::sim::obstacle::ObstacleSpec;
 use sylva::species::{Season, SpeciesLibrary};
 
 fn stage() -> Option<Stage> {
-    let site = SiteConditions::uniform(10, 10, 10.0, 200.0, [6.0, 6.0, 4.0, 5.0, 6.0, 5.0], 47.0);
+    stage_on(SiteConditions::uniform(10, 10, 10.0, 200.0, [6.0, 6.0, 4.0, 5.0, 6.0, 5.0], 47.0))
+}
+
+fn stage_on(site: SiteConditions) -> Option<Stage> {
     match Stage::new(site, SpeciesLibrary::embedded().unwrap(), 0.0) {
         Ok(s) => Some(s),
         Err(e) => panic!("no wgpu adapter (install a Vulkan driver, e.g. lavapipe: mesa-vulkan-drivers): {e}"),
@@ -158,4 +161,153 @@ fn a_distant_building_is_drawn_by_its_mesh() {
     eprintln!("building: {differ} pixels differ, per level {:?}", st.per_level);
     assert_eq!(st.per_level[0], 1, "the building at its mesh level: {:?}", st.per_level);
     assert!(differ >= 40, "the building shows: {differ} pixels differ from the empty site");
+}
+
+/// Round 36 (issue 32, trial 35): foreground birches of the close-up were drawn leafless. The
+/// stills draw a tree at its full level from 88 px (switch 110 px less the cross-fade band),
+/// the near field adapted at full detail only from 180 px (the interactive switches), so a
+/// still's trees of 88–180 px were drawn at the full level with 48-strand skeletons and their
+/// few leaf cards. Fifteen birches of 24 m at 41–63 m from a camera 45 m up (the close-up's
+/// height), 100–170 px tall in a 270 px picture: every one is adapted for the full level and
+/// its full level carries at least half its crown's leaf area (the light model's, LAI × crown
+/// projection); so too when only 3 of them may have full-detail skeletons (the others then
+/// carry their leaf area on coarser ones).
+#[test]
+fn a_stills_full_level_trees_carry_their_crowns_leaf_area() {
+    let Some(mut stage) = stage_on(SiteConditions::uniform(20, 20, 10.0, 200.0, [6.0, 6.0, 4.0, 5.0, 6.0, 5.0], 47.0)) else { return };
+    stage.set_scenario(42, &[]);
+    let mut trees = Vec::new();
+    for (j, y) in [35.0, 50.0, 65.0].into_iter().enumerate() {
+        for i in 0..5 {
+            trees.push(Plant { id: 1 + (5 * j + i) as u64, species: "silver_birch", x_m: 90.0 + 5.0 * i as f64, y_m: y, height_m: 24.0, crown_radius_m: 2.5, age_yr: 90.0, crown_base_m: 13.0, alive: true });
+        }
+    }
+    let lib = SpeciesLibrary::embedded().unwrap();
+    let birch = &lib.species[lib.find("silver_birch").unwrap() as usize];
+    let crown = sylva::sim::phases::light::crown_leaf_area(birch.life.shade_tolerance, 2.5) as f64;
+    let cam = Camera::look_at([100.0, 10.0, 245.0], [100.0, 80.0, 205.0], 50.0);
+    let (w, h) = (480, 270);
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render");
+    std::fs::create_dir_all(&dir).unwrap();
+    for (max_full, name) in [(sylva::job::adapted::DEFAULT_MAX_FULL_TREES, "full"), (3, "capped")] {
+        stage.adapt = Some(sylva::job::adapted::AdaptOptions { max_full_trees: max_full, ..Default::default() });
+        let img = stage.render_plants(&trees, Season::Summer, &cam, w, h).unwrap();
+        img.save(dir.join(format!("birches_{name}.png"))).unwrap();
+        let st = stage.last_adapt;
+        eprintln!("{name}: {st:?}; crown leaf area {crown:.1} m² a tree");
+        assert_eq!(st.adapted_trees, 15, "{st:?}");
+        assert!(st.full_level_trees >= 12, "{name}: only {} of the birches tall enough for the full level ({st:?})", st.full_level_trees);
+        assert_eq!(st.bare_full_level, 0, "{name}: {} birches drawn at the full level with under half their crown's leaf area ({st:?})", st.bare_full_level);
+        // the full-detail ones carry it within a fifth (leaf cards and sprigs)
+        let n_full = st.full_level_trees.min(max_full) as f64;
+        assert!(st.leaf_area_m2 >= 0.8 * n_full * crown, "{name}: {:.1} m² of leaf on {n_full} full-detail birches, {crown:.1} m² a crown ({st:?})", st.leaf_area_m2);
+    }
+}
+
+/// Trial 35 (issue 32): a 48 ha park's close-up drew 61.7 M triangles (3.7 GB, 481 s) where the
+/// default run's draws about a fifth. A small dense site (160 m square, beech of 40 years at
+/// 2.5 m: about 4,000 trees, every one near the close-up's camera) drawn by `sylva render
+/// --camera closeup`: unconstrained it draws T triangles of trees; with `--triangle-budget`
+/// T/3 it draws at most that (`tree_triangles` of `--stats`), says it demoted, and the trees
+/// nearest the camera (the adapted ones) are still drawn with their own meshes.
+#[test]
+fn a_small_dense_sites_closeup_keeps_to_its_triangle_budget() {
+    // no adapter: fail here, not later in the command
+    let Some(_) = stage() else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    let toml = r#"
+name = "dense park"
+years = 1
+seed = 5
+snapshot_every = 1
+species = ["beech"]
+[terrain]
+uniform = { width = 8, height = 8, cell_m = 20.0, elevation_m = 310.0, indices = [5, 5, 2, 5, 6, 6] }
+[[start]]
+kind = "planted"
+species = "beech"
+spacing_m = 2.5
+age_yr = 40.0
+area = [0.0, 0.0, 160.0, 160.0]
+"#;
+    let sc = sylva::sim::Scenario::from_toml_str(toml, "dense").unwrap();
+    let site = sc.site().unwrap();
+    let mut opts = sylva::job::run::RunOptions::new(&run);
+    opts.map_px = 32;
+    sylva::job::run::run_scenario(&sc, site, &SpeciesLibrary::embedded().unwrap(), opts).unwrap();
+    let render = |budget: Option<u32>, name: &str| -> serde_json::Value {
+        let stats = dir.path().join(format!("{name}.json"));
+        let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_sylva"));
+        cmd.args(["render"]).arg(&run).args(["--camera", "closeup", "--size", "480x270", "--out"]).arg(dir.path().join(format!("{name}.png"))).arg("--stats").arg(&stats);
+        if let Some(b) = budget {
+            cmd.args(["--triangle-budget", &b.to_string()]);
+        }
+        let out = cmd.output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{err}");
+        eprintln!("{name}: {err}");
+        serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap()
+    };
+    let free = render(None, "default");
+    let t0 = free["tree_triangles"].as_u64().unwrap();
+    eprintln!("default budget: {free}");
+    assert!(t0 > 300_000 && free["demoted"] == false && free["triangle_budget"] == sylva::job::pictures::STILL_TRIANGLE_BUDGET, "{free}");
+    let budget = (t0 / 3) as u32;
+    let st = render(Some(budget), "budget");
+    eprintln!("budget {budget}: {st}");
+    let t = st["tree_triangles"].as_u64().unwrap();
+    assert!(t <= budget as u64 && t > 0, "{t} tree triangles against a budget of {budget} ({st})");
+    assert!(st["demoted"] == true && st["lod_scale"].as_f64().unwrap() > 1.0, "{st}");
+    // the same trees drawn; the nearest (adapted) ones still with their own meshes (levels 0–1:
+    // full and reduced skeleton), none dropped to a hull or a billboard. (The budget raises
+    // every switch by one factor: at T/3 the trees at the full level unconstrained drop to the
+    // reduced skeleton too; round 36 measured [345, 53, 0, 0] → [0, 398, 0, 0].)
+    assert_eq!(st["instances_drawn"], free["instances_drawn"], "{st}");
+    let own = |v: &serde_json::Value| v["adapted_per_level"][0].as_u64().unwrap() + v["adapted_per_level"][1].as_u64().unwrap();
+    assert!(own(&free) >= 300 && own(&st) == own(&free), "{st}");
+}
+
+/// Round 36 (issue 32): the close-up's mid-ground young trees were crown hulls on sticks ("blobs
+/// on sticks"). The stills pick a small tree's level as if it were larger on screen
+/// (`LodParams::small_tree_m`, 12 m): a 6 m beech 30 px tall keeps its leaf cards (level 1), a
+/// 25 m one of the same size on screen, four times as far, is its crown hull (level 2).
+#[test]
+fn a_stills_small_trees_keep_their_leaf_cards_where_tall_ones_are_hulls() {
+    let Some(mut stage) = stage_on(SiteConditions::uniform(40, 40, 10.0, 200.0, [6.0, 6.0, 4.0, 5.0, 6.0, 5.0], 47.0)) else { return };
+    stage.adapt = None;
+    assert_eq!(stage.renderer.lod.small_tree_m, sylva::job::pictures::STILL_SMALL_TREE_M);
+    let (w, h) = (320, 270);
+    // 30 px tall: 289.5 px per metre at 1 m (50° of 270 px) × height / distance
+    let mut levels = Vec::new();
+    for (height, age) in [(6.0f32, 12.0f32), (25.0, 80.0)] {
+        let d = 289.5 * height as f64 / 30.0;
+        let tree = Plant { id: 7, species: "beech", x_m: 200.0, y_m: 20.0 + d, height_m: height, crown_radius_m: 0.2 * height, age_yr: age, crown_base_m: 0.3 * height, alive: true };
+        let cam = Camera::look_at([200.0, 20.0, 200.0 + 0.5 * height], [200.0, 30.0, 200.0 + 0.5 * height], 50.0);
+        stage.render_plants(&[tree], Season::Summer, &cam, w, h).unwrap();
+        let st = stage.renderer.last_stats();
+        eprintln!("{height} m at {d:.0} m: {st:?}");
+        levels.push(st.per_level);
+    }
+    // (the last level: the tree's mirror image in the surroundings, farther away, a billboard)
+    assert_eq!(levels[0][..3], [0, 1, 0], "the 6 m beech");
+    assert_eq!(levels[1][..3], [0, 0, 1], "the 25 m beech");
+}
+
+/// `LodParams::small_tree_m` (round 36): a small tree's size for the level choice
+/// (`render::lod::lod_px`), mirrored by the culling shader.
+#[test]
+fn small_trees_pick_their_level_as_if_larger_on_screen() {
+    use sylva::render::lod::{lod_px, select_lod, LodParams, SMALL_TREE_MAX_BIAS};
+    let wgsl = include_str!("../src/render/shaders/cull.wgsl");
+    let want = format!("const SMALL_TREE_MAX_BIAS: f32 = {SMALL_TREE_MAX_BIAS:?};");
+    assert!(wgsl.lines().any(|l| l.trim().starts_with(&want)), "shaders/cull.wgsl must declare `{want}`");
+    let off = LodParams { switch_px: [110.0, 45.0, 18.0], ..Default::default() };
+    let on = LodParams { small_tree_m: 12.0, ..off };
+    // off: the size itself; a canopy tree: unchanged; a 6 m tree: twice; a 1 m one: capped
+    assert_eq!((lod_px(30.0, 6.0, &off), lod_px(30.0, 25.0, &on), lod_px(30.0, 12.0, &on)), (30.0, 30.0, 30.0));
+    assert_eq!((lod_px(30.0, 6.0, &on), lod_px(30.0, 1.0, &on)), (60.0, 90.0));
+    // a 6 m tree 30 px tall keeps its leaf cards (level 1) where a 25 m one is a hull (level 2)
+    let lv = |px: f32, h: f32| select_lod(lod_px(px, h, &on), &on, 4).unwrap().level;
+    assert_eq!((lv(30.0, 6.0), lv(30.0, 25.0), lv(12.0, 6.0)), (1, 2, 2));
 }

@@ -113,6 +113,13 @@ pub struct RenderArgs {
     /// their own meshes (on), or every tree its species' open-grown prototype (off).
     #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub adapt: bool,
+    /// Most tree triangles the frame draws (1,000–1,000,000,000): when the trees at their
+    /// levels would cost more, the level switches are raised so that the trees smallest on
+    /// screen (the farthest of a height) drop to coarser levels, never below billboards; the
+    /// trees nearest the camera keep full detail. `--stats` says whether it demoted
+    /// (`demoted`, `lod_scale`). Default: the stills' budget of `sylva run`.
+    #[arg(long, default_value_t = sylva::job::pictures::STILL_TRIANGLE_BUDGET, value_parser = clap::value_parser!(u32).range(1_000..=1_000_000_000))]
+    pub triangle_budget: u32,
     /// Write the frame's figures as JSON (adapted_trees, adapt_s, unique_meshes (one chain of
     /// level meshes per species, obstacle and adapted tree), cluster_hulls and hull_triangles
     /// (the adapted trees' mid-level crown hulls of their leaf clusters, in those chains),
@@ -121,7 +128,11 @@ pub struct RenderArgs {
     /// snapshot), trees_15m, nodes_median and nodes_min (skeleton nodes of the adapted trees of
     /// 15 m and taller), leaf_cards (of the adapted trees), sprig_cards (leaf-cluster cards carrying the rest of the full-detail trees' crown leaf area, as exports do), adapted_leaf_area_m2 and leaf_area_m2 (one-sided leaf area of the full-detail trees: their adapted leaf cards, and what their full level carries: the crowns' leaf area), mesh_bytes (CPU bytes of the adapted trees' level meshes), stumps (harvested trees drawn as
     /// stumps: cut in the 20 years up to the year; their two instances each are among the
-    /// instances drawn)). Its folder is made when missing.
+    /// instances drawn); tree_triangles (the trees' share of triangles), triangle_budget,
+    /// demoted (whether the budget raised the level switches) and lod_scale (by what factor),
+    /// full_level_trees and bare_full_level (adapted trees tall enough on screen for the full
+    /// level, and those of them carrying under half their crown's leaf area)). Its folder is
+    /// made when missing.
     #[arg(long)]
     pub stats: Option<PathBuf>,
 }
@@ -214,6 +225,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     if !a.adapt {
         stage.set_adapt(None);
     }
+    stage.renderer.lod.max_triangles = a.triangle_budget;
     let t = std::time::Instant::now();
     // the regeneration layer of the same snapshot, drawn as saplings (runs without it: none)
     let regen = if closeup { Vec::new() } else { sylva::job::inventory::read_regeneration(&a.run_dir, year)?.unwrap_or_default() };
@@ -251,11 +263,14 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
             "instanced_trees": st.instances_drawn.saturating_sub(ad.adapted_trees), "instances_drawn": st.instances_drawn, "triangles": st.triangles, "frame_s": frame_s,
             "trees": trees,
             "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards, "sprig_cards": ad.sprig_cards, "adapted_leaf_area_m2": ad.adapted_leaf_area_m2, "leaf_area_m2": ad.leaf_area_m2, "mesh_bytes": ad.mesh_bytes,
+            "tree_triangles": st.tree_triangles, "triangle_budget": a.triangle_budget, "demoted": st.lod_scale > 1.0, "lod_scale": st.lod_scale,
+            "full_level_trees": ad.full_level_trees, "bare_full_level": ad.bare_full_level, "shed_bare": ad.shed_bare,
         });
         super::write_stats(path, &j)?;
     }
     let stumps_note = if stumps_drawn > 0 { format!(", {stumps_drawn} stumps of harvested trees") } else { String::new() };
-    eprintln!("year {year}: {} trees drawn as meshes or billboards, {} more in the far-field canopy layer{stumps_note}, {} triangles → {}", st.instances_drawn, st.canopy_trees, st.triangles, a.out.display());
+    let demoted = if st.lod_scale > 1.0 { format!(" (the triangle budget of {} lowered the trees' levels: switch sizes ×{:.2})", a.triangle_budget, st.lod_scale) } else { String::new() };
+    eprintln!("year {year}: {} trees drawn as meshes or billboards, {} more in the far-field canopy layer{stumps_note}, {} triangles{demoted} → {}", st.instances_drawn, st.canopy_trees, st.triangles, a.out.display());
     Ok(())
 }
 

@@ -43,6 +43,14 @@ pub struct AdaptOptions {
     /// level begins to fade in, `switch_px[0] · (1 − band)` of
     /// [`crate::render::lod::LodParams::default`] (180 px).
     pub full_px: f32,
+    /// Width (px) of the picture the near field is drawn into; with it (> 0) only trees inside
+    /// the camera's view (their bounding spheres, [`crate::render::instanced::bounding_sphere`],
+    /// in the frustum of `image_width_px × image_height_px`) are adapted, so that the
+    /// [`AdaptOptions::max_trees`] are all in the picture. 0 (the default): every tree in front
+    /// of the eye within [`AdaptOptions::near_m`] (until round 36 the stills' too: of the
+    /// default run's close-up's 400 adapted trees, 60 were in view, and its foreground, about
+    /// 80 m from the eye, was drawn with species prototypes).
+    pub image_width_px: f32,
     /// Most trees adapted at full detail (the largest on screen first; the others of
     /// [`AdaptOptions::full_px`] get at most [`FAR_MAX_STRANDS`]): the adaptation's time and
     /// the frame's memory grow with the nodes and leaf cards. Default [`DEFAULT_MAX_FULL_TREES`].
@@ -69,7 +77,7 @@ impl Default for AdaptOptions {
     /// from 180 px for the [`DEFAULT_MAX_FULL_TREES`] largest on screen.
     fn default() -> Self {
         let lod = crate::render::lod::LodParams::default();
-        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0, image_height_px: 1080.0, full_px: lod.switch_px[0] * (1.0 - lod.band), max_full_trees: DEFAULT_MAX_FULL_TREES }
+        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0, image_height_px: 1080.0, image_width_px: 0.0, full_px: lod.switch_px[0] * (1.0 - lod.band), max_full_trees: DEFAULT_MAX_FULL_TREES }
     }
 }
 
@@ -144,6 +152,19 @@ pub struct AdaptStats {
     /// coordinates and indices of every level), held during the frame; the renderer's vertex
     /// and index buffers hold about as much again.
     pub mesh_bytes: usize,
+    /// Adapted trees at least [`AdaptOptions::full_px`] tall on screen: those the picture may
+    /// draw at its full level (the full-detail ones and, beyond [`AdaptOptions::max_full_trees`],
+    /// coarser skeletons that still carry their crown's leaf area).
+    pub full_level_trees: usize,
+    /// Of [`AdaptStats::full_level_trees`], those whose full level carries under half of their
+    /// crown's leaf area ([`crate::sim::phases::light::crown_leaf_area`]): trees that read as
+    /// bare up close (issue 32, round 36: the leafless foreground birches). 0 when every tree
+    /// near the camera is in leaf.
+    pub bare_full_level: usize,
+    /// Adapted trees that Plastic Trees left without a leaf card (light-pruned bare among
+    /// their neighbours); a full-level one gets leaves at its shoot tips
+    /// ([`tip_leaves`]) so that it can carry its crown's leaf area.
+    pub shed_bare: usize,
 }
 
 /// The level of an adapted tree's chain that is its crown hull (LOD2: 40–100 px tall on screen
@@ -204,6 +225,13 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
     let t0 = std::time::Instant::now();
     let eye = Vec3::from(camera.eye);
     let fwd = (Vec3::from(camera.target) - eye).with_z(0.0).normalize_or(Vec3::Y);
+    let frustum = (o.image_width_px > 0.0 && o.image_height_px > 0.0).then(|| crate::render::lod::Frustum::from_view_proj(camera.view_proj(o.image_width_px / o.image_height_px)));
+    let in_view = |t: &TreeInstance| {
+        frustum.as_ref().is_none_or(|f| {
+            let (c, r) = crate::render::instanced::bounding_sphere(t);
+            f.sphere_visible(c, r)
+        })
+    };
     let stand = stand_trees(plants, library, site);
     let by_id: std::collections::HashMap<u64, usize> = stand.iter().enumerate().map(|(k, (_, t))| (t.id, k)).collect();
     // the drawn trees near the eye and not behind it, nearest first
@@ -213,7 +241,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         .filter_map(|(j, t)| {
             let k = *by_id.get(&t.id)?;
             let d = (Vec3::from(t.position) - eye).with_z(0.0);
-            (d.length() <= o.near_m && d.dot(fwd) > -t.crown_radius.max(2.0)).then_some((d.length(), j, k))
+            (d.length() <= o.near_m && d.dot(fwd) > -t.crown_radius.max(2.0) && in_view(t)).then_some((d.length(), j, k))
         })
         .collect();
     near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -233,10 +261,16 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
     by_size.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
     let mut is_full = vec![false; near.len()];
     by_size.iter().take(o.max_full_trees).for_each(|&(_, k)| is_full[k] = true);
-    let (mut near, rest): (Vec<_>, Vec<_>) = near.into_iter().zip(is_full).partition(|(_, f)| *f);
+    // every tree the picture may draw at its full level carries its crown's leaf area there,
+    // also those past `max_full_trees` (coarser skeletons; until round 36 they were drawn with
+    // the few leaf cards of a 48-strand skeleton: sticks)
+    let mut at_full = vec![false; near.len()];
+    by_size.iter().for_each(|&(_, k)| at_full[k] = true);
+    let (mut near, rest): (Vec<_>, Vec<_>) = near.into_iter().zip(is_full).zip(at_full).map(|((n, f), a)| (n, f, a)).partition(|(_, f, _)| *f);
     let split = near.len();
     near.extend(rest);
-    let near: Vec<(f32, usize, usize)> = near.into_iter().map(|(n, _)| n).collect();
+    let at_full: Vec<bool> = near.iter().map(|n| n.2).collect();
+    let near: Vec<(f32, usize, usize)> = near.into_iter().map(|(n, _, _)| n).collect();
     let mut st_trees = Vec::with_capacity(near.len());
     let (mut trees_in_groups, mut n_full) = (0, 0);
     for (part, c) in [(&near[..split], &mut cache.full), (&near[split..], &mut cache.far)] {
@@ -261,14 +295,24 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         .enumerate()
         .map(|(k, a)| {
             let t = &trees[a.index];
-            adapted_model(a, t, &library.species[t.species as usize], (k < n_full).then_some(&cover))
+            adapted_model(a, t, &library.species[t.species as usize], (k < n_full || at_full.get(k) == Some(&true)).then_some(&cover))
         })
         .collect();
+    let (mut full_level_trees, mut bare_full_level, mut shed_bare) = (0, 0, 0);
     let (mut adapted, mut hulls, mut hull_triangles) = (0, 0, 0);
     let (mut nodes_15m, mut leaf_cards, mut sprigs, mut mesh_bytes) = (Vec::new(), 0, 0, 0);
     let (mut adapted_area, mut area) = (0.0f64, 0.0f64);
     for (k, (m, n)) in meshed.into_iter().zip(&near).enumerate() {
         let Some(m) = m else { continue };
+        shed_bare += m.shed_bare as usize;
+        if at_full.get(k) == Some(&true) {
+            full_level_trees += 1;
+            let t = &trees[n.2];
+            let want = crate::sim::phases::light::crown_leaf_area(library.species[t.species as usize].life.shade_tolerance, t.crown_radius_m);
+            if m.leaf_area_m2 < 0.5 * want {
+                bare_full_level += 1;
+            }
+        }
         if trees[n.2].height_m >= STATS_MIN_HEIGHT_M {
             nodes_15m.push(m.nodes);
         }
@@ -288,7 +332,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         prototypes.push(m.prototype);
         adapted += 1;
     }
-    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards, sprig_cards: sprigs, adapted_leaf_area_m2: adapted_area, leaf_area_m2: area, mesh_bytes })
+    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards, sprig_cards: sprigs, adapted_leaf_area_m2: adapted_area, leaf_area_m2: area, mesh_bytes, full_level_trees, bare_full_level, shed_bare })
 }
 
 /// The share of a leaf card and of a leaf-cluster card that their textures cover, per species
@@ -353,6 +397,8 @@ pub struct AdaptedModel {
     /// crown's leaf area: [`super::leaf_area::drawn_leaf_area`] within half a sprig);
     /// without, the adapted cards'.
     pub leaf_area_m2: f32,
+    /// Whether Plastic Trees left the tree without a leaf card ([`AdaptStats::shed_bare`]).
+    pub shed_bare: bool,
 }
 
 impl AdaptedModel {
@@ -387,6 +433,10 @@ pub fn place_adapted(inst: &mut TreeInstance, height: f32, r0: f32, t: &StandTre
 pub fn adapted_model(mut a: AdaptedTree, t: &StandTree, sp: &crate::species::Species, leaf_area: Option<&LeafCover>) -> Option<AdaptedModel> {
     let (mut sk, mut lv, h) = frame_of(std::mem::take(&mut a.skeleton), std::mem::take(&mut a.leaves), t.base)?;
     let k = t.species as usize;
+    let shed_bare = lv.leaves.is_empty();
+    if shed_bare && leaf_area.is_some() {
+        lv = tip_leaves(&sk, sp.architecture.ecomod.leaf_size_m, t.crown_base_m);
+    }
     let (card, sprig) = leaf_area.map_or_else(|| { let c = LeafCover::of_species(sp); (c.0, c.1) }, |c| (c.card[k], c.sprig[k]));
     let cards_area = |lv: &Leaves| lv.leaves.iter().map(|l| 0.5 * l.size * l.size * card.clamp(0.05, 1.0)).sum::<f32>();
     let adapted_leaf_area_m2 = cards_area(&lv);
@@ -413,7 +463,31 @@ pub fn adapted_model(mut a: AdaptedTree, t: &StandTree, sp: &crate::species::Spe
     }
     let prototype = Prototype { name: format!("{}#{}", sp.id, t.id), lods, bark_color: srgb_to_linear(sp.appearance.bark), leaf_color: srgb_to_linear(sp.appearance.leaf_summer), stiffness: sp.architecture.ecomod.k_f.clamp(0.0, 1.0), look: Some(super::scene::crown_look(sp)), rigid: false };
     let r0 = prototype.normalised_crown_radius();
-    Some(AdaptedModel { prototype, height: h, r0, hulled, nodes: n_nodes, leaf_cards: n_leaves, sprig_cards: n_sprigs, adapted_leaf_area_m2, leaf_area_m2 })
+    Some(AdaptedModel { prototype, height: h, r0, hulled, nodes: n_nodes, leaf_cards: n_leaves, sprig_cards: n_sprigs, adapted_leaf_area_m2, leaf_area_m2, shed_bare })
+}
+
+/// Leaves for a skeleton `sk` (in its own frame, stem base at the origin, m) that Plastic
+/// Trees left bare: one leaf of length `leaf_size_m` (the species' EcoMod leaf size, at least
+/// 2 cm) at every shoot tip (a node without children) at least `crown_base_m` above the base,
+/// pointing along its shoot, blade horizontal across it. What [`crown_leaf_cards`] then needs
+/// to give the tree its crown's leaf area (it places none on a tree without leaves). Empty
+/// when no tip is in the crown.
+pub fn tip_leaves(sk: &Skeleton, leaf_size_m: f32, crown_base_m: f32) -> Leaves {
+    let size = leaf_size_m.max(0.02);
+    let leaves = sk
+        .nodes
+        .iter()
+        .enumerate()
+        .filter(|(_, n)| n.children.is_empty() && n.pos.z >= crown_base_m && n.parent.is_some())
+        .map(|(i, n)| {
+            let from = n.parent.map_or(Vec3::ZERO, |p| sk.nodes[p as usize].pos);
+            let dir = (n.pos - from).normalize_or(Vec3::Z);
+            let across = dir.cross(Vec3::Z).normalize_or(Vec3::X);
+            let normal = across.cross(dir).normalize_or(Vec3::Z);
+            crate::structure::skeleton::Leaf { pos: n.pos, dir, normal, size, node: i as u32 }
+        })
+        .collect();
+    Leaves { leaves }
 }
 
 /// The level-of-detail chain of the adapted tree `a` from its skeleton `sk` and leaves `lv` in

@@ -52,6 +52,29 @@ pub struct Stage {
     landscape: scene::Landscape,
 }
 
+/// Budget of tree triangles of a still (`sylva run`'s stills and close-up, `sylva render`'s
+/// default, [`crate::render::lod::LodParams::max_triangles`]): when the trees at their levels
+/// would cost more, the renderer raises every level switch by the smallest factor `2^(k/4)`
+/// that fits ([`crate::render::lod::budget_scale`]), so that the trees smallest on screen (of
+/// one height, the farthest) drop to their next levels first, down to billboards, and the
+/// trees nearest the camera keep full detail. The stills are culled on the CPU, where the
+/// factor from the histogram of projected sizes is then raised until the frame's exact cost
+/// fits ([`crate::render::instanced::build_batches_of`]). Deterministic: integer counts over
+/// the trees, whatever the order or thread count. 30 M: the default run's year-150 close-up
+/// at 1280 × 720 drew 29.5 M (round 36); a small site's close-up costs no more.
+pub const STILL_TRIANGLE_BUDGET: u32 = 30_000_000;
+
+/// Smallest [`AdaptOptions::near_m`] of the stills' near field (m, 120): the trees in the
+/// picture within it are adapted ([`AdaptOptions::image_width_px`]), the nearest
+/// [`AdaptOptions::max_trees`] of them.
+pub const STILL_NEAR_M: f32 = 120.0;
+
+/// [`crate::render::lod::LodParams::small_tree_m`] of the stills (12 m, ESTIMATE: about the
+/// height under which the trial's mid-ground trees were drawn as crown hulls of a few dozen
+/// pixels, "balls on sticks"; a 6 m tree drops to its hull at half the size on screen of a
+/// canopy tree, a 4 m one at a third).
+pub const STILL_SMALL_TREE_M: f32 = 12.0;
+
 impl Stage {
     /// Builds the stage: terrain mesh with cells ≤ 10 m (the site alone, its edges faded out;
     /// [`Stage::set_surroundings`] adds the terrain around it), one EcoMod prototype per species.
@@ -68,11 +91,19 @@ impl Stage {
         // Offline stills: a larger triangle budget than the interactive default keeps the trees
         // near the camera at full detail (trunks and branches) in the close views, and lower switch
         // sizes keep mid-distance crowns as meshes rather than billboards.
-        renderer.lod.max_triangles = 30_000_000;
+        renderer.lod.max_triangles = STILL_TRIANGLE_BUDGET;
         renderer.lod.switch_px = [110.0, 45.0, 18.0];
         // no far-field triangle budget for stills: only trees under `canopy_px` (6 px) go to
         // the canopy layer
         renderer.lod.max_geometry_triangles = 0;
+        // trees under 12 m keep their leaf cards to a third of the size at which a canopy tree
+        // becomes a crown hull: young trees in the mid-ground read as trees, not as balls on
+        // sticks (issue 32, round 36)
+        renderer.lod.small_tree_m = STILL_SMALL_TREE_M;
+        // culled on the CPU, where the frame's exact cost is checked against the triangle
+        // budget (`render::instanced::build_batches_of`); the GPU path's histogram estimate
+        // let a small dense site's close-up draw 2.5 times its budget (round 36)
+        renderer.culling = crate::render::headless::Culling::Cpu;
         // the tree draws over render passes of at most ~250,000 triangles each, each submitted
         // and waited for on a software adapter: lavapipe binned up to 64 scenes of 36 MB
         // (2.3 GB) of the year-150 still ahead of its rasterisers; now about 150 MB
@@ -198,6 +229,17 @@ impl Stage {
             return self.render_instances(inst, season, camera, width, height);
         };
         o.image_height_px = height as f32;
+        // the trees this renderer may draw at its full level (from its first switch size less
+        // the cross-fade band: 88 px with the stills' switches) are adapted at full detail;
+        // `AdaptOptions::default` assumes the interactive switches (180 px), which left the
+        // stills' trees of 88–180 px drawn at the full level with 48-strand skeletons and their
+        // few leaf cards (round 36, issue 32: leafless birches in the close-up's foreground)
+        let lod = &self.renderer.lod;
+        o.full_px = o.full_px.min(lod.switch_px[0] / (1.0 + lod.band.max(0.0)));
+        // the trees adapted are those in the picture, to 120 m: the close-up's foreground lies
+        // about 80 m from its eye (45 m up), where the 80 m near field ended (round 36)
+        o.image_width_px = width as f32;
+        o.near_m = o.near_m.max(STILL_NEAR_M);
         // the adapted trees' prototypes are appended to the scene's own (taken out meanwhile, not
         // copied) and dropped after the frame
         let base = self.n_base;
@@ -351,10 +393,10 @@ pub fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: 
             continue;
         }
         let px = camera.projected_size_px(c, t.height, height as f32);
-        if canopy_weight(px, st.canopy_px, lod.band) >= 1.0 {
+        if canopy_weight(px, st.canopy_px, lod.band) >= 1.0 || !(px >= lod.min_px) {
             continue;
         }
-        if let Some(p) = select_lod_scaled(px, st.lod_scale, lod, drawn_levels(*n)) {
+        if let Some(p) = select_lod_scaled(crate::render::lod::lod_px(px, t.height, lod), st.lod_scale, lod, drawn_levels(*n)) {
             out[p.level.min(crate::mesh::LOD_LEVELS - 1)] += 1;
         }
     }

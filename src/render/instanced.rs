@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use super::camera::Camera;
 use crate::mesh::LOD_LEVELS;
 use super::canopy::crown_albedo;
-use super::lod::{budget_scale, canopy_threshold, canopy_weight, drawn_levels, select_lod_scaled, size_bin, Frustum, LodParams, LodPick, BILLBOARD_TRIANGLES, SIZE_BINS};
+use super::lod::{budget_scale, canopy_threshold, canopy_weight, drawn_levels, lod_px, select_lod_scaled, size_bin, Frustum, LodParams, LodPick, BILLBOARD_TRIANGLES, SIZE_BINS};
 use super::scene::{Prototype, Scene, TreeInstance};
 
 /// Per-instance record read by the tree vertex shader (`shaders/scene.wgsl`, `TreeIn`).
@@ -188,7 +188,7 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
         for (t, v) in instances.iter().zip(&seen) {
             if let Seen::Visible(px) = *v {
                 if px >= params.min_px {
-                    hist[t.species as usize][size_bin(px)] += 1;
+                    hist[t.species as usize][size_bin(lod_px(px, t.height, params))] += 1;
                 }
             }
         }
@@ -196,11 +196,44 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
     let costs: Vec<[u32; LOD_LEVELS]> = prototypes.iter().map(level_costs).collect();
     let canopy_px = canopy_threshold(&hist, &costs, &levels, params);
     let floor = if canopy_px > 0.0 { canopy_px / (1.0 + params.band.max(0.0)) } else { 0.0 };
-    let scale = if params.max_triangles > 0 {
+    let mut scale = if params.max_triangles > 0 {
         budget_scale(&hist, &costs, &levels, params, floor)
     } else {
         1.0
     };
+    // the histogram prices each tree at its bin's centre and undercounted the frames of small
+    // dense sites (round 36: 6.1 M triangles drawn under a 2.4 M budget); the frame's exact
+    // cost (every visible tree at its pick, with its cross-fade partner) is checked and the
+    // factor raised step by step until it fits, so the budget holds on this path
+    if params.max_triangles > 0 {
+        let exact = |s: f32| -> u64 {
+            instances
+                .par_iter()
+                .zip(&seen)
+                .map(|(t, v)| {
+                    let Seen::Visible(px) = *v else { return 0 };
+                    let p = t.species as usize;
+                    if prototypes[p].rigid {
+                        return level_triangles(&prototypes[p], 0);
+                    }
+                    if canopy_weight(px, canopy_px, params.band) >= 1.0 || !(px >= params.min_px) {
+                        return 0;
+                    }
+                    let Some(pick) = select_lod_scaled(lod_px(px, t.height, params), s, params, levels[p]) else { return 0 };
+                    let mut c = level_triangles(&prototypes[p], pick.level);
+                    if pick.blend > 0.0 && pick.level + 1 < levels[p] {
+                        c += level_triangles(&prototypes[p], pick.level + 1);
+                    }
+                    c
+                })
+                .sum()
+        };
+        let mut k = (4.0 * scale.log2()).round().max(0.0) as u32;
+        while k < super::lod::MAX_SCALE_STEPS && exact(scale) > params.max_triangles as u64 {
+            k += 1;
+            scale = (k as f32 / 4.0).exp2();
+        }
+    }
     let mut out = Batches { lod_scale: scale, canopy_px, ..Batches::default() };
     let max_levels = levels.iter().copied().max().unwrap_or(0);
     out.per_level = vec![0; max_levels];
@@ -223,7 +256,12 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
             }
             rec.p2[0] *= 1.0 - wc;
         }
-        select_lod_scaled(px, scale, params, levels[rec.p3[0] as usize]).map(|p| (p, rec, false))
+        // the level by the size biased for small trees (LodParams::small_tree_m); the smallest
+        // drawn and the canopy layer by the size itself
+        if !(px >= params.min_px) {
+            return None;
+        }
+        select_lod_scaled(lod_px(px, t.height, params), scale, params, levels[rec.p3[0] as usize]).map(|p| (p, rec, false))
     };
     // the canopy splats reserved to their number (a doubling growth held up to twice them:
     // most of the 2.3 M trees of a 640 × 360 timelapse frame of the default run; issue 34)

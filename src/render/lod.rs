@@ -37,6 +37,32 @@ pub struct LodParams {
     /// ([`canopy_threshold`]): more of the far forest goes to the canopy layer, which costs no
     /// triangles, so triangles per frame level off as the tree count grows.
     pub max_geometry_triangles: u32,
+    /// Height (m, 0 = off) under which a tree picks its level as if it were larger on screen:
+    /// its projected size times `small_tree_m / height`, at most [`SMALL_TREE_MAX_BIAS`]
+    /// ([`lod_px`]), in the level choice and the budget's histogram (the smallest size drawn,
+    /// `min_px`, and the canopy layer go by the size itself; the histogram then counts a small
+    /// tree that goes wholly to the canopy layer at its biased size: the estimate errs high).
+    /// A young tree of a few metres then keeps its leaf cards (levels 0–1) where a canopy tree
+    /// of the same size on screen, much farther away, is drawn as a crown hull: the hull of a
+    /// small tree read as a ball on a stick in the stills' mid-ground (issue 32, round 36).
+    pub small_tree_m: f32,
+}
+
+/// Largest factor [`lod_px`] multiplies a small tree's projected size by (3: a tree of a third
+/// of [`LodParams::small_tree_m`] or less picks its level as if three times as tall on screen).
+pub const SMALL_TREE_MAX_BIAS: f32 = 3.0;
+
+/// The size (px) by which a tree `height_m` tall and `px` tall on screen picks its level:
+/// `px · min(small_tree_m / height_m, SMALL_TREE_MAX_BIAS)` for a tree under
+/// `params.small_tree_m`, else `px` (see [`LodParams::small_tree_m`]). Mirrors `lod_px` of
+/// `shaders/cull.wgsl` (same `f32` arithmetic).
+pub fn lod_px(px: f32, height_m: f32, params: &LodParams) -> f32 {
+    let m = params.small_tree_m;
+    if m > 0.0 && height_m < m {
+        px * (m / height_m.max(1e-3)).min(SMALL_TREE_MAX_BIAS)
+    } else {
+        px
+    }
 }
 
 impl Default for LodParams {
@@ -45,9 +71,9 @@ impl Default for LodParams {
     /// not drawn as geometry; at most 6 M tree triangles per frame (switch sizes raised
     /// beyond); trees under 6 px go to the canopy layer, and the far-field switch is raised
     /// when the geometry would cost more than 100,000 triangles. Triangles per frame then level
-    /// off as the tree count grows (BENCHMARKS.md, "Rendering").
+    /// off as the tree count grows (BENCHMARKS.md, "Rendering"); no small-tree bias.
     fn default() -> Self {
-        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000, canopy_px: 6.0, max_geometry_triangles: 100_000 }
+        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000, canopy_px: 6.0, max_geometry_triangles: 100_000, small_tree_m: 0.0 }
     }
 }
 

@@ -106,7 +106,7 @@ impl Renderer {
             misc: [self.lod.min_px, ppm, self.lod.max_triangles as f32, cost_first as f32],
             counts: [src.len() as u32, gx, n_protos as u32, (slots.len() * 10) as u32],
             canopy: [gs.canopy_grid.origin[0], gs.canopy_grid.origin[1], gs.canopy_grid.texel, self.lod.canopy_px.max(0.0)],
-            canopy_n: [gs.canopy_grid.nx, gs.canopy_grid.ny, self.lod.max_geometry_triangles, 0],
+            canopy_n: [gs.canopy_grid.nx, gs.canopy_grid.ny, self.lod.max_geometry_triangles, self.lod.small_tree_m.max(0.0).to_bits()],
         };
         let Some(cull) = self.cull.as_mut() else { return Ok(None) };
         let d = &self.device;

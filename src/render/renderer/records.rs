@@ -48,7 +48,8 @@ pub(super) struct CullParams {
     pub(super) counts: [u32; 4],
     /// canopy grid origin x, y (m), texel (m); base far-field switch (px, 0 = off)
     pub(super) canopy: [f32; 4],
-    /// canopy grid nx, ny; geometry triangle budget of the far-field switch (0 = none); unused
+    /// canopy grid nx, ny; geometry triangle budget of the far-field switch (0 = none); bits of
+    /// the small-tree height of the level choice (`LodParams::small_tree_m`, f32, 0 = off)
     pub(super) canopy_n: [u32; 4],
 }
 

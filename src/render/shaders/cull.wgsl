@@ -26,7 +26,8 @@ struct Params {
     counts: vec4<u32>,   // instances, workgroups along x, number of prototypes, word offset of
                          // the per-level counters in args (= 10 * slots)
     canopy: vec4<f32>,   // canopy grid origin x, y (m), texel (m); base far-field switch px (0 off)
-    canopy_n: vec4<u32>, // canopy grid nx, ny; geometry triangle budget of the far switch (0 none); unused
+    canopy_n: vec4<u32>, // canopy grid nx, ny; geometry triangle budget of the far switch (0 none);
+                         // bits of the small-tree height of the level choice (f32 m, 0 off)
 };
 
 // Per prototype: number of drawn levels, first slot index, 1 for a rigid prototype (an
@@ -52,6 +53,7 @@ struct Proto {
 
 // Levels of detail drawn per prototype: crate::mesh::LOD_LEVELS (checked by a test in render/lod.rs).
 const LOD_LEVELS: u32 = 4u;
+const SMALL_TREE_MAX_BIAS: f32 = 3.0; // render/lod.rs SMALL_TREE_MAX_BIAS
 
 struct Pick {
     level: i32,
@@ -202,6 +204,15 @@ fn visible_px(t: Inst) -> f32 {
     return h * cp.misc.y / max(length(c - cp.eye.xyz), 1e-3);
 }
 
+// lod_px of render/lod.rs: a small tree picks its level as if larger on screen
+fn lod_px(px: f32, h: f32) -> f32 {
+    let m = bitcast<f32>(cp.canopy_n.w);
+    if (m > 0.0 && h < m) {
+        return px * min(m / max(h, 1e-3), SMALL_TREE_MAX_BIAS);
+    }
+    return px;
+}
+
 // size_bin of render/lod.rs
 fn size_bin(px: f32) -> u32 {
     return u32(clamp(i32(floor(log2(px) * 4.0)) + 4, 0, 63));
@@ -220,7 +231,7 @@ fn hist(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let p = u32(t.p3.x + 0.5);
-    atomicAdd(&args[hist_off() + p * 64u + size_bin(px)], 1u);
+    atomicAdd(&args[hist_off() + p * 64u + size_bin(lod_px(px, t.pos_h.w))], 1u);
 }
 
 fn cost(p: u32, l: u32) -> u32 {
@@ -329,7 +340,7 @@ fn cull(@builtin(global_invocation_id) gid: vec3<u32>) {
     let scale = bitcast<f32>(atomicLoad(&args[scale_word()]));
     let p = u32(t.p3.x + 0.5);
     let pr = protos[p];
-    let pick = select_lod(px / scale, pr.n_levels);
+    let pick = select_lod(lod_px(px, t.pos_h.w) / scale, pr.n_levels);
     if (pick.level < 0) {
         return;
     }
