@@ -157,7 +157,7 @@ pub struct AdaptStats {
     /// coarser skeletons that still carry their crown's leaf area).
     pub full_level_trees: usize,
     /// Of [`AdaptStats::full_level_trees`], those whose full level carries under half of their
-    /// crown's leaf area ([`crate::sim::phases::light::crown_leaf_area`]): trees that read as
+    /// crown's drawn leaf area ([`super::leaf_area::drawn_leaf_area`]): trees that read as
     /// bare up close (issue 32, round 36: the leafless foreground birches). 0 when every tree
     /// near the camera is in leaf.
     pub bare_full_level: usize,
@@ -308,7 +308,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         if at_full.get(k) == Some(&true) {
             full_level_trees += 1;
             let t = &trees[n.2];
-            let want = crate::sim::phases::light::crown_leaf_area(library.species[t.species as usize].life.shade_tolerance, t.crown_radius_m);
+            let want = super::leaf_area::drawn_leaf_area(&library.species[t.species as usize], t.crown_radius_m);
             if m.leaf_area_m2 < 0.5 * want {
                 bare_full_level += 1;
             }
