@@ -24,6 +24,7 @@
 pub mod analysis;
 pub mod evaluation;
 pub mod light;
+pub mod phases;
 pub mod transform;
 
 pub use analysis::{inverse_tropism, Analysis};
