@@ -4,12 +4,13 @@
 # except the checkpoint (one file per rank in OUT/checkpoint/) and the inventories (one part per
 # rank: OUT/inventory/year_NNNN/part-RRRRR.parquet, read as one dataset by sylva, pyarrow and
 # DuckDB). Every rank writes into OUT (its checkpoint and its inventory parts), so OUT must be on a file
-# system all ranks share and can write (the cluster's parallel or network file system). Each rank holds the whole
-# site's conditions and most per-cell grids (since issue 37 round 26 a tile keeps three of its
-# light-cell arrays for its own cells only, and ranks other than 0 no longer keep the start's
-# world beside their tile; docs/SCALING.md, "What a rank holds") and its own tile's trees: size
-# --mem-per-cpu from a one-process run's memory at the site's size plus the tile's share of the
-# trees. Sizing from the measured costs (docs/SCALING.md, "Round 23 update" and its round 26
+# system all ranks share and can write (the cluster's parallel or network file system). In a
+# fresh run each rank holds only its band and tile of the site and its own tile's trees (issue
+# 37 rounds 32-33; with [[management]] too since round 36; docs/SCALING.md, "What a rank
+# holds"). A RESUMED run (this script adds --resume when OUT holds a checkpoint) still builds
+# the whole world on rank 0 and, on another rank count, assembles every rank's checkpoint
+# there: size rank 0's memory for that (below), or keep the rank count between restarts. Sizing
+# from the measured costs (docs/SCALING.md, "Round 23 update" and its round 26
 # line): the site costs each rank about 20 KiB per hectare (rank 0 about 30 KiB: it keeps the
 # whole world; 100,000 ha: ~1.9 GiB a rank, ~2.9 GiB on rank 0; 1,000,000 ha: ~19 GiB, ~29 GiB
 # on rank 0, so there run one rank per node with --cpus-per-task=32 and --mem=0, not 8 ranks a

@@ -17,7 +17,11 @@
 //! `SYLVA_TILES_SNAPSHOTS` (default 0: snapshots off; N: a snapshot, with the inventory, every
 //! N years), `SYLVA_TILES_CELL_M` (default 50: the site's cell size in m, for the uniform site;
 //! a finer grid makes the site conditions a rank holds larger for the same hectares: issue 37
-//! Build 1).
+//! Build 1), `SYLVA_TILES_MANAGED` (default 0; 1: management too, a beech planting of year 0 at
+//! 3 m on a band across the site's middle, 5 % of its rows, and a thinning from below to a
+//! relative density of 0.6 over that band every 10 years from year 30: the ranks resolve the
+//! areas from their tiles, issue 37 round 36; the uneven site of `SYLVA_TILES_FOREST` is not
+//! managed).
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::Instant;
@@ -68,7 +72,16 @@ fn main() {
         "path = \"tiles.asc\"".to_string()
     };
     let head = format!("snapshot_every = {snapshots}\ncheckpoint_every = 0");
-    let toml = common::afforestation_toml("tiles", years, &head, &terrain);
+    let mut toml = common::afforestation_toml("tiles", years, &head, &terrain);
+    if env("SYLVA_TILES_MANAGED", 0u32) != 0 && forest >= 1.0 {
+        let s = side as f64 * cell_m;
+        let (y0, y1) = (0.475 * s, 0.525 * s);
+        toml += &format!(
+            "[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 3.0\nage_yr = 10.0\nyear = 0\narea = [0.0, {y0:?}, {s:?}, {y1:?}]\n\
+             [[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.6\nfrom_year = 30\nevery_years = 10\narea = [0.0, {y0:?}, {s:?}, {y1:?}]\n"
+        );
+        println!("managed: a beech planting of year 0 and thinnings from year 30 on y {y0:.0}–{y1:.0} m");
+    }
     let sc = tmp.path().join("tiles.toml");
     std::fs::write(&sc, toml).expect("scenario file");
     println!("tiles bench: {side} × {side} cells of {cell_m} m ({:.0} ha), {years} years, {} (one process, 2 threads) vs mpirun -np {ranks} (1 thread each)", (side * side) as f64 * cell_m * cell_m / 10_000.0, bin.display());

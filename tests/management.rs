@@ -1375,3 +1375,119 @@ fn thinning_spruce_follows_the_wiedemann_mean_height() {
         assert!((h_q - h_t).abs() < 1.5, "age {age}: mean height h_q {h_q:.1} m against the table's {h_t}");
     }
 }
+
+/// A 120 m × 120 m beech planting with every kind of management over tile edges (as [`busy`]),
+/// plus (issue 37, round 36) a planting of year 0 from a GeoJSON `area_file` (a triangle across
+/// the tiles of 2 and 3 ranks), a clear-cut strip narrower than a light cell (its area from the
+/// fine count) and snapshots and checkpoints every 3 years; the GeoJSON written into `dir`.
+fn managed_over_tiles(dir: &Path, years: u32) -> String {
+    let f = dir.join("triangle.geojson");
+    // the outputs' coordinates: y = world y − 120 m
+    std::fs::write(&f, r#"{"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {}, "geometry": {"type": "Polygon", "coordinates": [[[10.0, -110.0], [110.0, -100.0], [40.0, -20.0], [10.0, -110.0]]]}}]}"#).unwrap();
+    // 5 m site cells (a tile's window of the site is then less than the site)
+    busy(years).replace("seed = 11\n", "seed = 11\nsnapshot_every = 3\ncheckpoint_every = 3\n").replace("width = 6, height = 6, cell_m = 20.0", "width = 24, height = 24, cell_m = 5.0")
+        + &format!("[[management]]\nkind = \"planting\"\nmix = {{ beech = 0.5, norway_spruce = 0.5 }}\nspacing_m = 2.5\nage_yr = 6.0\nyear = 0\narea_file = {:?}\n", f.display().to_string())
+        + "[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\narea = [0.0, 48.0, 120.0, 52.0]\nyears = [6]\n"
+}
+
+/// Issue 37, round 36, step 1: a scenario with management resolved per tile. Every rank holds
+/// only its band of site rows (rank 0 too), cuts the layout and takes its tile's cells from
+/// the bands' owners, then resolves the management from its tile's light cells alone
+/// (`tiles::derive_tile_site_by`: each area's unmasked cells counted on the tile and all-summed,
+/// the plantings' first-year trees too) and places its start with the planting of year 0
+/// (`World::place_start_tile`): on 2 and 3 ranks every rank's resolved entries (areas to the
+/// bit, the strip's fine area included) equal one process's, its trees (the start's and the
+/// planting's, with their ids) are one process's trees on its tile, and it holds a window of
+/// the site, not the whole. A planting where no tree can stand is refused on every rank with
+/// one process's message.
+#[test]
+fn management_is_resolved_from_each_ranks_tile_as_one_process_resolves_it() {
+    use sylva::sim::tiles::Transport;
+    let d = tempfile::tempdir().unwrap();
+    let lib = common::embedded();
+    let bands = |toml: &str, n: usize| -> Vec<sylva::Result<(sylva::sim::tiles::Layout, World)>> {
+        let sc = Scenario::from_toml_str(toml, "managed.toml").unwrap();
+        std::thread::scope(|s| {
+            let hs: Vec<_> = sylva::sim::tiles::LocalTransport::group(n)
+                .into_iter()
+                .map(|mut t| {
+                    let (sc, lib) = (&sc, &lib);
+                    s.spawn(move || {
+                        let k = t.rank();
+                        let mut site = sc.site().unwrap();
+                        let b = sylva::sim::tiles::weight_band(k, n, site.height());
+                        site.hold(sylva::grid::Window { col0: 0, row0: b.start, width: site.width(), height: b.len() });
+                        let mut w = World::skeleton(site, lib, sc).unwrap();
+                        let (l, median) = sylva::job::tiled::layout_by(&w, &mut t).unwrap();
+                        let c = std::mem::replace(&mut w.site.conditions, sylva::conditions::SiteConditions::uniform(1, 0, 1.0, 0.0, [0.0; 6], 0.0));
+                        let (c, ws) = sylva::job::tiled::tile_site_by(std::borrow::Cow::Owned(c), None, w.site.light.cell_m, &l, &mut t).unwrap().unwrap();
+                        w.site.conditions = c;
+                        sylva::sim::tiles::derive_tile_site_by(&mut w, sc, &l, k, median, Some(&ws), Some(&mut |v| t.all_sum(v)))?;
+                        w.place_start_tile(sc, &|x, y| l.owner_of(x, y), k, &mut |v| t.all_sum(v))?;
+                        Ok((l, w))
+                    })
+                })
+                .collect();
+            hs.into_iter().map(|h| h.join().unwrap()).collect()
+        })
+    };
+    let toml = managed_over_tiles(d.path(), 10);
+    let (_, w0) = world(&toml);
+    let ops = &w0.site.management;
+    assert_eq!(ops.len(), 7);
+    // the strip (4 m × 120 m) holds no light-cell centre: its area is the fine count's
+    assert!(ops[6].region.area_ha > 0.03 && ops[6].region.area_ha < 0.07, "{}", ops[6].region.area_ha);
+    let key = |t: &sylva::sim::trees::TreeStore| (0..t.len()).map(|i| (t.id[i], t.species[i], t.x[i].to_bits(), t.y[i].to_bits(), t.height[i].to_bits(), t.dbh[i].to_bits())).collect::<Vec<_>>();
+    let mut planted = 0;
+    for n in [2, 3] {
+        let want = sylva::job::tiled::layout_for(&w0, n).unwrap();
+        let mut trees = 0;
+        for (k, r) in bands(&toml, n).into_iter().enumerate() {
+            let (l, w) = r.unwrap();
+            let what = format!("rank {k} of {n}");
+            assert_eq!((&l.col_bounds, &l.row_bounds), (&want.col_bounds, &want.row_bounds), "{what}");
+            let c = &w.site.conditions;
+            assert!(!c.holds_all() && c.held.width * c.held.height < c.full.0 * c.full.1, "{what}: holds {} of {:?}", c.held, c.full);
+            let o = sylva::sim::tiles::Tile::own(w0.clone(), want.clone(), k).unwrap().world;
+            assert_eq!((c.held, c.full), (o.site.conditions.held, o.site.conditions.full), "{what}: its tile's window");
+            assert_eq!(&w.site.management, ops, "{what}: resolved entries");
+            assert!(w.site.management.iter().zip(ops).all(|(a, b)| a.region.area_ha.to_bits() == b.region.area_ha.to_bits()), "{what}");
+            assert_eq!(key(&w.stand.trees), key(&o.stand.trees), "{what}: the start's and year 0's planting's trees");
+            assert_eq!(w.stand.trees.next_id, w0.stand.trees.next_id, "{what}");
+            trees += w.stand.trees.len();
+            planted += (0..w.stand.trees.len()).filter(|&i| w.stand.trees.age[i] < 10.0).count();
+        }
+        assert_eq!(trees, w0.stand.trees.len(), "{n} ranks: every tree on one rank");
+    }
+    // year 0's planting: about 0.43 ha at 2.5 m, on every rank count
+    assert!(planted > 2 * 500, "{planted} planted trees over the 2- and 3-rank runs");
+    // a planting of 50 m spacing in a 4 m square plants nothing: refused on every rank as by one process
+    let bad = toml.clone() + "[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 50.0\nyear = 2\narea = [1.0, 1.0, 5.0, 5.0]\n";
+    let e0 = World::new(Scenario::from_toml_str(&bad, "managed.toml").unwrap().site().unwrap(), &lib, &Scenario::from_toml_str(&bad, "managed.toml").unwrap()).unwrap_err().to_string();
+    assert!(e0.contains("management[7].area"), "{e0}");
+    for (k, r) in bands(&bad, 3).into_iter().enumerate() {
+        assert_eq!(r.err().map(|e| e.to_string()), Some(e0.clone()), "rank {k} of 3");
+    }
+}
+
+/// Issue 37, round 36, step 1: [`managed_over_tiles`] run on 2 and 3 tiles in threads
+/// (`--tiles N`; since round 36 rank 0 and the tiles hold their band and tile of the site only,
+/// a scenario with management too) writes one process's run directory byte for byte: stand
+/// table, inventories with the harvested dead, maps, checkpoints assembled.
+#[test]
+fn a_managed_run_on_two_and_three_tiles_writes_the_run_directory_of_one_process() {
+    let d = tempfile::tempdir().unwrap();
+    let toml = managed_over_tiles(d.path(), 10);
+    let sc = Scenario::from_toml_str(&toml, "managed.toml").unwrap();
+    let lib = common::embedded();
+    let one = d.path().join("one");
+    let s = sylva::job::run::run_scenario(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&one)).unwrap();
+    assert!(s.rows.iter().filter(|r| r.harvest_stems_ha > 0.0).count() >= 5 && s.rows[5].harvest_stems_ha > 0.0, "{:?}", s.rows);
+    let (_, template) = world(&toml);
+    for n in [2, 3] {
+        let out = d.path().join(format!("tiles{n}"));
+        sylva::job::tiled::run_local_tiles(&sc, sc.site().unwrap(), &lib, sylva::job::run::RunOptions::new(&out), n).unwrap();
+        let m = common::assert_same_run(&one, &out, &template, &format!("{n} tiles"));
+        assert_eq!((m.year, m.ranks), (10, n));
+    }
+}

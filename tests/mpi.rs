@@ -276,3 +276,42 @@ fn the_scenarios_warnings_are_printed_once_on_three_ranks() {
         assert_eq!(err.matches("management[0].years[1] = 30").count(), 1, "{how}: {err}");
     }
 }
+
+/// [`dem_scenario`] with management over the tile edges of 2 and 3 ranks (issue 37, round 36):
+/// a beech and spruce planting of year 0 in a triangle, a thinning from below over it, a
+/// clear-cut strip narrower than a light cell and a planting of year 7.
+fn dem_managed(years: u32) -> String {
+    dem_scenario(years).replace("name = \"mpi_dem\"", "name = \"mpi_dem_managed\"").replace("species = [\"beech\"]", "species = [\"beech\", \"norway_spruce\"]")
+        + "[[management]]\nkind = \"planting\"\nmix = { beech = 0.7, norway_spruce = 0.3 }\nspacing_m = 3.0\nage_yr = 25.0\nyear = 0\npolygons = [[[[150.0, 100.0], [450.0, 120.0], [300.0, 300.0]]]]\n\
+           [[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 250\narea = [150.0, 100.0, 450.0, 300.0]\nyears = [5, 10]\n\
+           [[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\narea = [0.0, 198.0, 600.0, 202.0]\nyears = [9]\n\
+           [[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 4.0\nyear = 7\narea = [250.0, 20.0, 350.0, 90.0]\n"
+}
+
+/// Issue 37, round 36, step 1: a scenario with management on a GeoTIFF site, whose ranks each
+/// derive their band of the site from a window of the DEM, hold their band and tile only and
+/// resolve the management's areas and plantings from their tiles (rank 0 too: until round 36
+/// every rank held the whole site of a managed scenario), writes one process's run directory
+/// byte for byte on 2 and 3 ranks.
+#[test]
+fn a_managed_dem_run_on_two_and_three_ranks_writes_the_run_of_one_process() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sc = tmp.path().join("dem_managed.toml");
+    std::fs::write(&sc, dem_managed(12)).unwrap();
+    let one = tmp.path().join("one");
+    simulate(0, &sc, &one, false);
+    let (_, template) = common::world_with(&dem_managed(12), &common::embedded());
+    // a meaningful run: the planting stands at the start, the thinnings and the strip remove trees
+    assert!(template.stand.trees.len() > 2_500, "{} trees at the start", template.stand.trees.len());
+    let table = std::fs::read_to_string(one.join("stand_table.csv")).unwrap();
+    let head: Vec<&str> = table.lines().next().unwrap().split(',').collect();
+    let col = head.iter().position(|h| *h == "harvest_stems_ha").unwrap();
+    let cut: Vec<u32> = table.lines().skip(1).filter(|l| l.split(',').nth(col).unwrap().parse::<f64>().unwrap() > 0.0).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
+    assert!(cut.contains(&9) && cut.len() >= 2, "harvests in years {cut:?}");
+    for n in [2, 3] {
+        let d = tmp.path().join(format!("np{n}"));
+        simulate_dem(n, &sc, &d, false);
+        let m = common::assert_same_run(&one, &d, &template, &format!("managed DEM site on {n} ranks"));
+        assert_eq!((m.year, m.ranks), (12, n));
+    }
+}

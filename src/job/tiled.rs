@@ -273,8 +273,10 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
 /// rank 0 sends every rank the maps' longest side and whether year 0's snapshot is written
 /// (`start`: `Some((map_px, year0))` on rank 0, `None` on the others); every rank derives its
 /// tile's site into `w` (its skeleton holding the tile's cells,
-/// [`crate::sim::tiles::derive_tile_site_with`]; a failure is every rank's), places its
-/// start's trees with one process's ids ([`World::place_start_tile`]: one all-sum of a word
+/// [`crate::sim::tiles::derive_tile_site_by`], the management's areas and plantings counted
+/// with the other ranks: one all-sum of a word per entry, a second for an area narrower than a
+/// light cell, one per planting; a failure is every rank's), places its start's trees and
+/// year 0's plantings with one process's ids ([`World::place_start_tile`]: one all-sum of a word
 /// per run of the start's places) and makes its tile; then sends rank 0 the flags of the map
 /// pixels whose centre it owns (masked or not, 1 byte each; [`crate::output::plot::map_masked_centres`]
 /// of the whole site, assembled) and, with `year0`, its start's trees (54 bytes each). Rank 0
@@ -301,7 +303,8 @@ fn start_tile(mut w: World, scenario: &Scenario, layout: &Layout, median: f32, w
     let fail = |s: Short| Error::Exchange { peer: 0, reason: format!("start message cut short at byte {}", s.at()) };
     let mut d = Dec::at(got.first().map(|m| m.as_slice()).unwrap_or(&[]), 0, &fail);
     let (px, year0) = (d.u64()? as usize, d.u64()? != 0);
-    let r = crate::sim::tiles::derive_tile_site_with(&mut w, scenario, layout, me, median, whole);
+    // a scenario with management resolves its areas from the ranks' tiles (issue 37 round 36)
+    let r = crate::sim::tiles::derive_tile_site_by(&mut w, scenario, layout, me, median, whole, Some(&mut |v| t.all_sum(v)));
     let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
     r?;
     a?;
@@ -786,8 +789,10 @@ impl Root<'_> {
 }
 
 impl Stepper for Root<'_> {
-    /// With `lean` (a fresh run that nothing reads whole) and no management on 2 ranks or
-    /// more: rank 0 holds its band of `site` only (cut so when given whole), checks what needs
+    /// With `lean` (a fresh run that nothing reads whole) on 2 ranks or more (with management
+    /// too since round 36: its areas are resolved by the ranks from their tiles,
+    /// [`crate::sim::tiles::derive_tile_site_by`], and its warnings printed once they are):
+    /// rank 0 holds its band of `site` only (cut so when given whole), checks what needs
     /// no whole site ([`World::skeleton`], [`World::warn`]) and builds its tile's world only,
     /// as the other ranks do ([`Root::lean_start`]: the layout, its tile's cells from the bands'
     /// owners, [`start_tile`]); the world it returns is its tile's without the site's cells
@@ -801,7 +806,7 @@ impl Stepper for Root<'_> {
     /// not whole and the start is not lean.
     fn world(&mut self, site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario, lean: Option<(usize, bool)>) -> Result<World> {
         let n = self.t.size();
-        let Some((map_px, year0)) = lean.filter(|_| n > 1 && scenario.management.is_empty()) else {
+        let Some((map_px, year0)) = lean.filter(|_| n > 1) else {
             if !site.holds_all() {
                 return Err(Error::Invalid { context: scenario.context(), field: "site conditions".into(), value: format!("cells {} of {} × {} on rank 0", site.held, site.full.0, site.full.1), expected: "the whole site on rank 0 (a resumed run, a scenario with management or a caller that reads the world at snapshots)".into() }.into());
             }
@@ -819,6 +824,10 @@ impl Stepper for Root<'_> {
             self.done = true;
         }
         let (l, mut tile, start) = r?;
+        // the management's warnings, once its areas are resolved (by the ranks together)
+        for m in crate::sim::management::warnings(&tile.world.site.management, scenario.years, &scenario.context()) {
+            tracing::warn!("{m}");
+        }
         let mut world = driver_of(&mut tile.world);
         if let Some((trees, masked)) = start {
             if year0 {
@@ -1005,7 +1014,9 @@ impl Stepper for Root<'_> {
 
 /// A rank other than 0: holds `site` in a [`World::skeleton`] of `scenario` (nothing derived
 /// from the site, no trees; a whole `site` cut to its band of site rows first unless the
-/// scenario has management, whose areas resolve against the whole site), cuts the layout
+/// scenario has management: a resumed run's ranks resolve its areas against the whole site,
+/// while a fresh run's ranks resolve them together from their tiles (`start_tile`), so an MPI
+/// rank of a fresh managed run is given its band only, `sylva simulate`), cuts the layout
 /// with the other ranks ([`layout_by`]: the weights and the insolation's median from its
 /// band; then its tile's cells from the band owners, [`tile_site_by`]), derives only its
 /// tile's part of the site into it ([`crate::sim::tiles::derive_tile_site_with`]; issue 37

@@ -863,7 +863,8 @@ pub fn read_gpkg_area(path: &Path, layer: Option<&str>, filter: Option<&AreaFilt
 }
 
 /// The parts of a site that [`resolve`] reads: its conditions (extent, georeferencing), light
-/// grid and the site cell of each light cell (`u32::MAX` where masked), and the species pool.
+/// grid and the site cell of each light cell of `span` (`u32::MAX` where masked), and the
+/// species pool.
 pub struct SiteView<'a> {
     /// Site conditions.
     pub conditions: &'a SiteConditions,
@@ -871,26 +872,45 @@ pub struct SiteView<'a> {
     pub extent: (f64, f64),
     /// The light grid.
     pub light: &'a LightGrid,
-    /// Site cell of each light cell (`u32::MAX`: masked).
+    /// The light cells `light_site` covers: the whole grid (one process), or a tile's rectangle
+    /// (a tiled run's rank, whose counts [`resolve_by`] sums over the ranks).
+    pub span: super::light_grid::Span,
+    /// Site cell of each light cell of `span`, in span order (`u32::MAX`: masked).
     pub light_site: &'a [u32],
     /// Pool species.
     pub pool: &'a [SpeciesId],
 }
 
-/// Sub-samples per light-cell side of [`fine_area_ha`] (8: 64 points a cell, 0.6 m apart in 5 m
+/// How [`resolve_by`] measures each area's unmasked ground (`Region::area_ha`).
+pub enum Areas<'a> {
+    /// Counted over the view's light cells alone (the whole grid: one process).
+    Local,
+    /// Counted over the view's light cells (a tile's rectangle), then summed over the ranks of
+    /// a tiled run by the all-sum given (every rank calls it the same number of times, with one
+    /// word per entry: the centre count, then for an area that holds no centre the fine
+    /// count); integer counts, so the area is one process's bit for bit (issue 37, round 36).
+    Summed(&'a mut dyn FnMut(Vec<u64>) -> Result<Vec<u64>>),
+    /// Not measured (`area_ha` 0, no refusal of an area without unmasked ground): the checks a
+    /// rank holding a band of the site can make before the run's folders are written (species,
+    /// area files, extents, patch sizes, spacings); the ranks measure the areas as the run
+    /// starts.
+    Unmeasured,
+}
+
+/// Sub-samples per light-cell side of [`fine_area_points`] (8: 64 points a cell, 0.6 m apart in 5 m
 /// cells).
 const FINE_SAMPLES: usize = 8;
 
-/// Area (ha) of the unmasked ground of `region` measured on a lattice of [`FINE_SAMPLES`]²
-/// points in every light cell its box touches: for regions that hold no light-cell centre
-/// (narrower than a cell), whose area the count of cell centres gives as 0.
-fn fine_area_ha(region: &Region, site: &SiteView<'_>) -> f64 {
+/// The unmasked ground of `region` measured on a lattice of [`FINE_SAMPLES`]² points in every
+/// light cell of `site.span` its box touches (a tile's part of the count in a tiled run;
+/// [`fine_points_ha`] gives the area): for regions that hold no light-cell centre (narrower
+/// than a cell), whose area the count of cell centres gives as 0.
+fn fine_area_points(region: &Region, site: &SiteView<'_>) -> u64 {
     let l = site.light;
     let step = l.cell_m / FINE_SAMPLES as f64;
-    let point_ha = step * step / 10_000.0;
-    let mut n = 0usize;
-    for c in (0..l.len()).filter(|&c| site.light_site[c] != u32::MAX) {
-        let (cx, cy) = l.centre(c);
+    let mut n = 0u64;
+    for k in (0..site.span.len()).filter(|&k| site.light_site[k] != u32::MAX) {
+        let (cx, cy) = l.centre(site.span.cell(k));
         let (x0, y0) = (cx - 0.5 * l.cell_m, cy - 0.5 * l.cell_m);
         let b = &region.bbox;
         if x0 >= b[2] || y0 >= b[3] || x0 + l.cell_m <= b[0] || y0 + l.cell_m <= b[1] {
@@ -898,11 +918,17 @@ fn fine_area_ha(region: &Region, site: &SiteView<'_>) -> f64 {
         }
         for j in 0..FINE_SAMPLES {
             for k in 0..FINE_SAMPLES {
-                n += usize::from(region.contains(x0 + (k as f64 + 0.5) * step, y0 + (j as f64 + 0.5) * step));
+                n += u64::from(region.contains(x0 + (k as f64 + 0.5) * step, y0 + (j as f64 + 0.5) * step));
             }
         }
     }
-    n as f64 * point_ha
+    n
+}
+
+/// The area (ha) of `n` points of [`fine_area_points`] on light cells of `cell_m` (m).
+fn fine_points_ha(n: u64, cell_m: f64) -> f64 {
+    let step = cell_m / FINE_SAMPLES as f64;
+    n as f64 * (step * step / 10_000.0)
 }
 
 /// Resolves the scenario's entries against the site (its extent, mask, light grid and
@@ -913,6 +939,17 @@ fn fine_area_ha(region: &Region, site: &SiteView<'_>) -> f64 {
 /// library or the pool, an area outside the site or without unmasked ground, an area file that
 /// cannot be read ([`read_geojson_polygons`], [`read_gpkg_polygons`]).
 pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary, ctx: &str) -> Result<Vec<Operation>> {
+    resolve_by(entries, site, lib, ctx, Areas::Local)
+}
+
+/// [`resolve`] with the areas measured as `areas` says: [`Areas::Summed`] by a tiled run's
+/// ranks, each counting the light cells of its own tile (`site.span`; issue 37, round 36: until
+/// then every rank held the whole site to count them), [`Areas::Unmeasured`] for the checks of
+/// a rank that holds a band of the site.
+///
+/// Errors: as [`resolve`]; the all-sum's (a failed exchange). With [`Areas::Summed`] every rank
+/// gets the same counts, so the same refusals.
+pub fn resolve_by(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary, ctx: &str, mut areas: Areas<'_>) -> Result<Vec<Operation>> {
     let (ex, ey) = site.extent;
     let mut ops = Vec::with_capacity(entries.len());
     for (i, m) in entries.iter().enumerate() {
@@ -929,18 +966,29 @@ pub fn resolve(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibrary
         let clipped = [bbox[0].max(0.0), bbox[1].max(0.0), bbox[2].min(ex), bbox[3].min(ey)];
         let mut region = Region { bbox: clipped, polygons, area_ha: 0.0 };
         let l = site.light;
-        let cells = (0..l.len()).filter(|&c| site.light_site[c] != u32::MAX && {
-            let (x, y) = l.centre(c);
+        let measured = !matches!(areas, Areas::Unmeasured);
+        let mut sum = |n: u64| -> Result<u64> {
+            match &mut areas {
+                Areas::Summed(f) => {
+                    let v = f(vec![n])?;
+                    v.first().copied().ok_or_else(|| Error::Exchange { peer: 0, reason: format!("no summed count of management[{i}]'s area") })
+                }
+                _ => Ok(n),
+            }
+        };
+        let centres = (0..site.span.len()).filter(|&k| site.light_site[k] != u32::MAX && {
+            let (x, y) = l.centre(site.span.cell(k));
             region.contains(x, y)
         });
-        region.area_ha = cells.count() as f64 * l.cell_m * l.cell_m / 10_000.0;
-        if region.area_ha <= 0.0 {
+        let centres = if measured { sum(centres.count() as u64)? } else { 0 };
+        region.area_ha = centres as f64 * l.cell_m * l.cell_m / 10_000.0;
+        if measured && region.area_ha <= 0.0 {
             // narrower than a light cell (a skid trail, a small square between cell centres):
             // its unmasked ground measured finer (round 32's trial: a 4 m strip inside the site
             // was refused as if it lay outside it)
-            region.area_ha = fine_area_ha(&region, site);
+            region.area_ha = fine_points_ha(sum(fine_area_points(&region, site))?, l.cell_m);
         }
-        if region.area_ha <= 0.0 {
+        if measured && region.area_ha <= 0.0 {
             let field = if m.area.is_some() { "area" } else if m.area_file.is_some() { "area_file" } else { "polygons" };
             let inside = clipped[0] < clipped[2] && clipped[1] < clipped[3];
             let expected = if inside { "an area that covers unmasked ground: this one lies on the site but only where its DEM has no data (masked cells)".to_string() } else { format!("an area covering unmasked ground of the site, 0 ≤ x < {ex} m and 0 ≤ y < {ey} m (origin SW corner; an area file in the DEM's CRS)") };

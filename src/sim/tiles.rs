@@ -545,19 +545,36 @@ pub struct WholeSite {
 /// unused) or exactly tile `me`'s window of it (the site cells under its rectangle plus
 /// [`SITE_HALO_CELLS`], what `job::tiled::tile_site_by` moves to it from the ranks' bands) with
 /// `whole` the whole site's identity and unmasked count; the values are the same bit for bit.
-/// A scenario with management needs the whole site (its areas count light cells over it).
+/// A scenario with management needs the whole site here (its areas count light cells over
+/// it); [`derive_tile_site_by`] counts them with the other ranks.
 ///
 /// Errors: [`Error::Invalid`] when `w`'s conditions hold neither the whole site nor the tile's
 /// window with `whole` given, or hold a window with management entries in the scenario; as
 /// [`super::management::resolve`].
 pub fn derive_tile_site_with(w: &mut World, scenario: &super::scenario::Scenario, layout: &Layout, me: usize, median: f32, whole: Option<&WholeSite>) -> Result<()> {
+    derive_tile_site_by(w, scenario, layout, me, median, whole, None)
+}
+
+/// [`derive_tile_site_with`], with `sum` (an all-sum over the ranks of a tiled run, every rank
+/// calling this function at the same point) the scenario's management resolved from the
+/// tile's cells only (issue 37, round 36): each entry's area is the all-sum of the ranks'
+/// counts of unmasked light cells of their own rectangle ([`super::management::resolve_by`],
+/// one process's integer count, so `area_ha` bit for bit), and each planting is refused when
+/// the all-sum of the trees its first year plants on the ranks' own rectangles is 0
+/// ([`World::check_plantings_by`], as one process refuses it). Then a scenario with
+/// management needs no whole site on any rank: `w` may hold the tile's window. Without `sum`,
+/// as [`derive_tile_site_with`].
+///
+/// Errors: as [`derive_tile_site_with`] (but a window with management is taken when `sum` is
+/// given); `sum`'s. Every rank gets the same sums, so the same refusals.
+pub fn derive_tile_site_by(w: &mut World, scenario: &super::scenario::Scenario, layout: &Layout, me: usize, median: f32, whole: Option<&WholeSite>, mut sum: Option<&mut dyn FnMut(Vec<u64>) -> Result<Vec<u64>>>) -> Result<()> {
     let c = &w.site.conditions;
     let light = w.site.light;
     let rect = layout.rect(me);
     let l = light.cell_m;
     let win = c.window_of(rect.col0 as f64 * l, rect.row0 as f64 * l, rect.col1 as f64 * l, rect.row1 as f64 * l, SITE_HALO_CELLS);
     let part = match whole {
-        Some(ws) if !c.holds_all() && c.held == win && scenario.management.is_empty() => Some(ws),
+        Some(ws) if !c.holds_all() && c.held == win && (scenario.management.is_empty() || sum.is_some()) => Some(ws),
         _ if c.holds_all() => None,
         _ => return Err(Error::Invalid { context: "tiled run".into(), field: "site conditions".into(), value: format!("cells {} of {} × {}", c.held, c.full.0, c.full.1), expected: format!("the whole site, or tile {me}'s cells {win} with the whole site's identity (a scenario without management)") }),
     };
@@ -573,9 +590,19 @@ pub fn derive_tile_site_with(w: &mut World, scenario: &super::scenario::Scenario
     w.site.ground_free = span.cut(&ground_free);
     drop(ground_free);
     if !scenario.management.is_empty() {
-        let whole: Vec<u32> = (0..light.len()).map(|k| super::world::light_site_cell(c, &light, k)).collect();
-        let view = super::management::SiteView { conditions: c, extent: w.site.extent, light: &light, light_site: &whole, pool: &w.site.pool };
-        w.site.management = super::management::resolve(&scenario.management, &view, &w.site.lib, &scenario.context())?;
+        w.site.management = match sum.as_mut() {
+            Some(f) => {
+                // the tile's light cells, their areas summed over the ranks
+                let view = super::management::SiteView { conditions: c, extent: w.site.extent, light: &light, span, light_site: &w.site.light_site, pool: &w.site.pool };
+                super::management::resolve_by(&scenario.management, &view, &w.site.lib, &scenario.context(), super::management::Areas::Summed(&mut **f))?
+            }
+            None => {
+                let whole: Vec<u32> = (0..light.len()).map(|k| super::world::light_site_cell(c, &light, k)).collect();
+                let all = super::light_grid::Span::new(None, &light);
+                let view = super::management::SiteView { conditions: c, extent: w.site.extent, light: &light, span: all, light_site: &whole, pool: &w.site.pool };
+                super::management::resolve(&scenario.management, &view, &w.site.lib, &scenario.context())?
+            }
+        };
     }
     if let Some(ws) = part {
         w.site.whole_identity = Some(ws.identity.clone());
@@ -596,6 +623,15 @@ pub fn derive_tile_site_with(w: &mut World, scenario: &super::scenario::Scenario
         .collect();
     w.scratch.ground_light = vec![1.0; span.len()];
     w.site.window = Some(rect);
+    if let Some(f) = sum {
+        // each planting's first-year trees on this tile's own rectangle, summed over the ranks
+        let site = &w.site;
+        w.check_plantings_by(&scenario.context(), &mut |op| {
+            let n = site.plant(op, op.spec.first_year()).iter().filter(|t| layout.owner_of(t.x, t.y) == me).count() as u64;
+            let v = f(vec![n])?;
+            v.first().copied().ok_or_else(|| Error::Exchange { peer: 0, reason: format!("no summed count of management[{}]'s planting", op.index) })
+        })?;
+    }
     Ok(())
 }
 

@@ -276,16 +276,25 @@ impl Site {
     /// and management plantings (`sim::phases::management`) both use it.
     pub fn lattice(&self, bbox: [f64; 4], spacing_m: f64, age_yr: f32, stream: impl Fn(u64, u64) -> Stream, inside: impl Fn(f64, f64) -> bool, species: impl Fn(&mut Stream) -> SpeciesId) -> Vec<NewTree> {
         let mut out = Vec::new();
-        self.lattice_each(bbox, spacing_m, age_yr, stream, |x, y, a, r| {
-            if !inside(x, y) {
-                return;
-            }
-            let s = species(r);
+        self.lattice_inside(bbox, spacing_m, age_yr, stream, inside, species, |s, x, y, a| {
             if let Some(t) = self.new_tree(s, x, y, a) {
                 out.push(t);
             }
         });
         out
+    }
+
+    /// The points of [`Site::lattice`] inside the area, before the site is read: `each(species,
+    /// x, y, age)` (m, m, yr) for every point where `inside(x, y)`, with its species drawn, in
+    /// the lattice's order. [`Site::lattice`] keeps those where a tree may stand; a tiled run's
+    /// start ([`World::place_start_tile`]) walks them for a year-0 planting.
+    #[allow(clippy::too_many_arguments)]
+    pub fn lattice_inside(&self, bbox: [f64; 4], spacing_m: f64, age_yr: f32, stream: impl Fn(u64, u64) -> Stream, inside: impl Fn(f64, f64) -> bool, species: impl Fn(&mut Stream) -> SpeciesId, mut each: impl FnMut(SpeciesId, f64, f64, f32)) {
+        self.lattice_each(bbox, spacing_m, age_yr, stream, |x, y, a, r| {
+            if inside(x, y) {
+                each(species(r), x, y, a);
+            }
+        });
     }
 
     /// The points of [`Site::lattice`] before any is kept: `each(x, y, age, stream)` for every
@@ -341,13 +350,26 @@ impl Site {
     /// the points inside its region, each tree's species drawn from its mix (streams keyed by the
     /// seed, the entry and the year). None for an entry that is not a planting.
     pub fn plant(&self, op: &super::management::Operation, y: u32) -> Vec<NewTree> {
-        let super::management::Action::Planting { mix, spacing_m, age_yr } = &op.action else { return Vec::new() };
+        let mut out = Vec::new();
+        self.plant_points(op, y, |s, x, y, a| {
+            if let Some(t) = self.new_tree(s, x, y, a) {
+                out.push(t);
+            }
+        });
+        out
+    }
+
+    /// The lattice points of planting `op` in year `y` inside its region, each with its species
+    /// and age, before the site is read ([`Site::lattice_inside`]): `each(species, x, y, age)`
+    /// in [`Site::plant`]'s order. None for an entry that is not a planting.
+    pub fn plant_points(&self, op: &super::management::Operation, y: u32, each: impl FnMut(SpeciesId, f64, f64, f32)) {
+        let super::management::Action::Planting { mix, spacing_m, age_yr } = &op.action else { return };
         let key = (op.index as u64) << 48;
         let pick = |r: &mut Stream| {
             let u = r.uniform();
             mix.iter().find(|(_, c)| u < *c).or(mix.last()).map(|m| m.0).unwrap_or(0)
         };
-        self.lattice(op.region.bbox, *spacing_m, *age_yr, |i, j| Stream::new(self.seed, key | j << 24 | i, y as u64, salt::MANAGEMENT), |x, y| op.region.contains(x, y), pick)
+        self.lattice_inside(op.region.bbox, *spacing_m, *age_yr, |i, j| Stream::new(self.seed, key | j << 24 | i, y as u64, salt::MANAGEMENT), |x, y| op.region.contains(x, y), pick, each)
     }
 
     /// Position of species `s` in the pool.
@@ -419,13 +441,19 @@ impl World {
     /// Errors: as [`World::new`].
     pub fn check(site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario) -> Result<SiteConditions> {
         if !site.holds_all() {
-            // a band of the site (a tiled run's rank 0 of a fresh run without management,
-            // issue 37 round 33): what needs no whole site (species, extent, climate anomalies);
-            // the rest is checked by the ranks together as the run begins
+            // a band of the site (a tiled run's rank 0 of a fresh run, issue 37 round 33):
+            // what needs no whole site (species, extent, climate anomalies; the management
+            // entries but their areas' unmasked ground, round 36); the rest (the areas, the
+            // plantings' lattices) is checked by the ranks together as the run begins
+            // ([`super::tiles::derive_tile_site_by`])
+            let w = World::skeleton(site, lib, scenario)?;
             if !scenario.management.is_empty() {
-                return Err(crate::Error::Invalid { context: scenario.context(), field: "site conditions".into(), value: format!("cells {} of {} × {}", site.held, site.full.0, site.full.1), expected: "the whole site (a scenario with management is checked against it)".into() });
+                let light_site: Vec<u32> = Vec::new();
+                let span = super::light_grid::Span::new(Some(CellRect { col0: 0, row0: 0, col1: 0, row1: 0 }), &w.site.light);
+                let view = super::management::SiteView { conditions: &w.site.conditions, extent: w.site.extent, light: &w.site.light, span, light_site: &light_site, pool: &w.site.pool };
+                super::management::resolve_by(&scenario.management, &view, lib, &scenario.context(), super::management::Areas::Unmeasured)?;
             }
-            return Ok(World::skeleton(site, lib, scenario)?.site.conditions);
+            return Ok(w.site.conditions);
         }
         let w = World::bare(site, lib, scenario)?;
         w.check_plantings(&scenario.context())?;
@@ -436,9 +464,18 @@ impl World {
     /// ground inside its area and outside solid obstacles (found by a break-it pass: a planting
     /// wholly inside a building planted nothing and said nothing).
     fn check_plantings(&self, ctx: &str) -> Result<()> {
+        self.check_plantings_by(ctx, &mut |op| Ok(self.site.plant(op, op.spec.first_year()).len() as u64))
+    }
+
+    /// [`World::check_plantings`] with each planting's trees in its first year counted by
+    /// `count` (a tiled run's ranks: the trees on their own tile, all-summed; issue 37 round
+    /// 36), called once per planting in entry order.
+    ///
+    /// Errors: [`crate::Error::Invalid`] naming the first planting whose count is 0; `count`'s.
+    pub fn check_plantings_by(&self, ctx: &str, count: &mut dyn FnMut(&super::management::Operation) -> Result<u64>) -> Result<()> {
         for op in &self.site.management {
             let super::management::Action::Planting { spacing_m, .. } = op.action else { continue };
-            if self.site.plant(op, op.spec.first_year()).is_empty() {
+            if count(op)? == 0 {
                 let m = &op.spec;
                 let field = if m.area.is_some() { "area" } else if m.area_file.is_some() { "area_file" } else if m.polygons.is_some() { "polygons" } else { "spacing_m" };
                 let under = if self.site.obstacles.is_empty() { "" } else { ", outside the scenario's solid obstacles" };
@@ -523,7 +560,8 @@ impl World {
             scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], dead: Vec::new(), regen_year: RegenYear::default() },
             tallies: Tallies { deaths_total: [0; super::trees::N_CAUSES], regen_ledger: RegenLedger::new(np) },
         };
-        let view = super::management::SiteView { conditions: &w.site.conditions, extent: w.site.extent, light: &w.site.light, light_site: &w.site.light_site, pool: &w.site.pool };
+        let span = super::light_grid::Span::new(None, &w.site.light);
+        let view = super::management::SiteView { conditions: &w.site.conditions, extent: w.site.extent, light: &w.site.light, span, light_site: &w.site.light_site, pool: &w.site.pool };
         w.site.management = super::management::resolve(&scenario.management, &view, lib, &ctx)?;
         Ok(w)
     }
@@ -601,8 +639,9 @@ impl World {
     /// The start's trees of tile `me` placed into `self` (a tile's world:
     /// [`super::tiles::derive_tile_site_with`]), with the ids one process gives them (issue 37
     /// Build 1, round 33: a tiled run's ranks place their own start, no rank the whole): every
-    /// rank walks the start's places in id order ([`Site::start_candidates`]: positions only,
-    /// no site read) and cuts them into runs of consecutive places with one owning tile
+    /// rank walks the start's places in id order ([`Site::start_candidates`], then since round
+    /// 36 the lattice points of each planting of year 0 in entry order, [`Site::plant_points`],
+    /// as [`World::build`] adds them after the start: positions only, no site read) and cuts them into runs of consecutive places with one owning tile
     /// (`owner_of(x, y)`, m: the layout's [`super::tiles::Layout::owner_of`]; a function, so
     /// that the world does not import the tiles); the owner of a run counts the trees that stand in
     /// it ([`Site::new_tree`], read from its own cells); the counts, one word a run, are summed
@@ -620,20 +659,27 @@ impl World {
         let mut runs: Vec<u64> = Vec::new();
         let mut owner: Option<usize> = None;
         let mut mine: Vec<(usize, NewTree)> = Vec::new();
-        self.site.start_candidates(scenario, |s, x, y, a| {
+        let site = &self.site;
+        let mut place = |s: SpeciesId, x: f64, y: f64, a: f32| {
             let o = owner_of(x as f32, y as f32);
             if owner != Some(o) {
                 runs.push(0);
                 owner = Some(o);
             }
             if o == me {
-                if let Some(t) = self.site.new_tree(s, x, y, a) {
+                if let Some(t) = site.new_tree(s, x, y, a) {
                     let r = runs.len() - 1;
                     runs[r] += 1;
                     mine.push((r, t));
                 }
             }
-        });
+        };
+        site.start_candidates(scenario, &mut place);
+        // the plantings of year 0 stand after the start, entry by entry ([`World::build`];
+        // issue 37 round 36: a scenario with management starts per tile too)
+        for op in site.management.iter().filter(|op| op.spec.due(0).is_some()) {
+            site.plant_points(op, 0, &mut place);
+        }
         let n = runs.len();
         let sums = sum(runs)?;
         if sums.len() != n {
