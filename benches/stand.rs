@@ -14,7 +14,9 @@
 //! `SYLVA_STAND_FULL=1` adapts the targets at full detail (`FULL_STRANDS`: every strand of
 //! their species at their age, forest-grown, as stills and `--full-detail` exports draw them;
 //! issue 32's near field) instead of `DEFAULT_MAX_STRANDS`. `SYLVA_STAND_SKY_RINGS=4,8` sets the
-//! sky's rings (`StandOptions::sky_rings`, default 4,8,12: 24 directions); `SYLVA_STAND_DUMP=FILE`
+//! sky's rings (`StandOptions::sky_rings`, default 4,8,12: 24 directions); `SYLVA_STAND_HEIGHT_STEP=S`
+//! sets the height classes' step (`StandOptions::height_step`, default 1.25); `SYLVA_STAND_TREES=FILE`
+//! writes one CSV row per target (index, live nodes, leaves, crown radius, height); `SYLVA_STAND_DUMP=FILE`
 //! writes every target's leaf clusters (`AdaptedTree::leaf_clusters`, in order) as
 //! little-endian f32 rows (tree index, centre x, y, z (m), light i, light in the analysis i_l0,
 //! radius (m)), so two runs' adapted trees can be compared (BENCHMARKS.md, round 32).
@@ -22,7 +24,7 @@
 use glam::Vec3;
 use sylva::rng::Stream;
 use sylva::species::SpeciesLibrary;
-use sylva::structure::stand::{adapt_stand, Stand, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS, FULL_STRANDS};
+use sylva::structure::stand::{adapt_stand, mean_crown_radius, Stand, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS, FULL_STRANDS};
 
 /// FNV-1a over the bits of the adapted trees of `st`: node positions and radii, leaf positions,
 /// clusters after adaptation, and the report counts.
@@ -39,9 +41,7 @@ fn fingerprint(st: &Stand) -> u64 {
             n.pos.to_array().iter().for_each(|v| eat(v.to_bits()));
             eat(n.radius.to_bits());
         }
-        for l in &a.leaves.leaves {
-            l.pos.to_array().iter().for_each(|v| eat(v.to_bits()));
-        }
+        a.leaves.for_each(|l| l.pos.to_array().iter().for_each(|v| eat(v.to_bits())));
         for (c, r) in &a.clusters_after {
             c.to_array().iter().for_each(|v| eat(v.to_bits()));
             eat(r.to_bits());
@@ -85,6 +85,9 @@ fn main() {
     if let Some(c) = std::env::var("SYLVA_STAND_CELL").ok().and_then(|v| v.parse().ok()) {
         opts.cell_m = c;
     }
+    if let Ok(v) = std::env::var("SYLVA_STAND_HEIGHT_STEP") {
+        opts.height_step = v.trim().parse().expect("SYLVA_STAND_HEIGHT_STEP: a relative step, e.g. 1.5625");
+    }
     if let Ok(v) = std::env::var("SYLVA_STAND_SKY_RINGS") {
         opts.sky_rings = v.split(',').map(|x| x.trim().parse().expect("SYLVA_STAND_SKY_RINGS: comma-separated ring sizes, e.g. 4,8")).collect();
     }
@@ -105,6 +108,21 @@ fn main() {
         }
         std::fs::write(&path, out).expect("SYLVA_STAND_DUMP: a writable file");
     }
+    if let Some(path) = std::env::var_os("SYLVA_STAND_TREES") {
+        // per target: index, live nodes after adaptation, leaves, crown radius (m) as
+        // foresters measure it (mean_crown_radius, about the stem base), height (m)
+        let mut out = String::from("index,nodes,leaves,crown_radius_m,height_m\n");
+        for a in &st.trees {
+            let b = trees[a.index].base;
+            let mut sk = a.skeleton.clone();
+            sk.nodes.iter_mut().for_each(|n| n.pos -= b);
+            let mut lv = a.leaves.build();
+            lv.leaves.iter_mut().for_each(|l| l.pos -= b);
+            let h = sk.nodes.iter().map(|n| n.pos.z).fold(0.0f32, f32::max);
+            out += &format!("{},{},{},{},{}\n", a.index, a.report.nodes_after, lv.len(), mean_crown_radius(&sk, &lv), h);
+        }
+        std::fs::write(&path, out).expect("SYLVA_STAND_TREES: a writable file");
+    }
     let warm = if std::env::var_os("SYLVA_STAND_ONCE").is_some() {
         f64::NAN
     } else {
@@ -120,8 +138,9 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|");
     println!("| {} | {} | {} | {} | {} | {} | {} | {:.2} | {:.2} |", st.trees.len(), st.trees_in_groups, st.cells, st.analyses, cache.len(), nodes, pruned, cold, warm);
     println!("first call: open-grown trees {:.2} s, analyses {:.2} s, adaptation {:.2} s", cold - st.analysis_s - st.adaptation_s, st.analysis_s, st.adaptation_s);
-    let leaves: usize = st.trees.iter().map(|a| a.leaves.leaves.len()).sum();
+    let leaves: usize = st.trees.iter().map(|a| a.leaves.len()).sum();
+    let held: usize = st.trees.iter().map(|a| a.leaves.held_bytes()).sum();
     let node_bytes: usize = st.trees.iter().map(|a| a.skeleton.nodes.len() * std::mem::size_of::<sylva::structure::Node>()).sum();
-    println!("adapted trees: {} nodes ({:.2} GB), {leaves} leaves ({:.2} GB)", st.trees.iter().map(|a| a.skeleton.nodes.len()).sum::<usize>(), node_bytes as f64 / 1e9, (leaves * std::mem::size_of::<sylva::structure::Leaf>()) as f64 / 1e9);
+    println!("adapted trees: {} nodes ({:.2} GB), {leaves} leaves ({:.2} GB made, {:.3} GB held: made when read)", st.trees.iter().map(|a| a.skeleton.nodes.len()).sum::<usize>(), node_bytes as f64 / 1e9, (leaves * std::mem::size_of::<sylva::structure::Leaf>()) as f64 / 1e9, held as f64 / 1e9);
     println!("fingerprint {fp:016x}");
 }

@@ -348,7 +348,7 @@ fn a_spruce_crown_hull_narrows_from_its_base_to_its_top() {
     let hull = sylva::structure::crown_hull::cluster_hull_mesh(&sk, &clusters, &LodOptions::default()).unwrap().leaves;
     let (lo, hi) = hull.positions.iter().fold((f32::MAX, f32::MIN), |(lo, hi), p| (lo.min(p[2]), hi.max(p[2])));
     // the foliage's own reach by height: the farthest leaf from the stem axis in each tenth
-    let leaves: Vec<Vec3> = a.leaves.leaves.iter().map(|l| l.pos - base).collect();
+    let leaves: Vec<Vec3> = a.leaves.build().leaves.iter().map(|l| l.pos - base).collect();
     let (flo, fhi) = leaves.iter().fold((f32::MAX, f32::MIN), |(lo, hi), p| (lo.min(p.z), hi.max(p.z)));
     let n = 20;
     let zs: Vec<f32> = (0..n).map(|j| lo + (j as f32 + 0.5) / n as f32 * (hi - lo)).collect();

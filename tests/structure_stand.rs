@@ -6,7 +6,7 @@
 use glam::Vec3;
 use sylva::species::SpeciesLibrary;
 use sylva::structure::grow::space::Obstacle;
-use sylva::structure::stand::{adapt_stand, age_class, cluster_overlap, crown_base_class, stem_lean_deg, FULL_STRANDS, fit, AdaptedTree, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
+use sylva::structure::stand::{adapt_stand, AdaptedLeaves, age_class, cluster_overlap, crown_base_class, stem_lean_deg, FULL_STRANDS, fit, AdaptedTree, SkeletonCache, StandOptions, StandTree, DEFAULT_MAX_STRANDS};
 
 fn lib() -> SpeciesLibrary {
     SpeciesLibrary::embedded().unwrap()
@@ -43,8 +43,9 @@ fn crown_offset(clusters: &[(Vec3, f32)], base: Vec3) -> Vec3 {
 /// Height of the lowest leaf above the base (m) and the 90th percentile of the leaves'
 /// horizontal distances from the stem (m).
 fn crown_base_and_width(a: &AdaptedTree, base: Vec3) -> (f32, f32) {
-    let lo = a.leaves.leaves.iter().map(|l| l.pos.z - base.z).fold(f32::INFINITY, f32::min);
-    let mut d: Vec<f32> = a.leaves.leaves.iter().map(|l| (l.pos - base).with_z(0.0).length()).collect();
+    let lv = a.leaves.build();
+    let lo = lv.leaves.iter().map(|l| l.pos.z - base.z).fold(f32::INFINITY, f32::min);
+    let mut d: Vec<f32> = lv.leaves.iter().map(|l| (l.pos - base).with_z(0.0).length()).collect();
     d.sort_by(f32::total_cmp);
     (lo, d[(d.len() * 9) / 10])
 }
@@ -159,7 +160,7 @@ fn stand_is_the_same_whatever_the_thread_count_and_obstacles_prune() {
     for (x, y) in a.trees.iter().zip(&b.trees) {
         assert_eq!(x.index, y.index);
         assert_eq!(x.skeleton, y.skeleton);
-        assert_eq!(x.leaves, y.leaves);
+        assert_eq!(x.leaves.build(), y.leaves.build());
     }
     // nothing of any tree stays inside the wall
     for t in &a.trees {
@@ -179,6 +180,46 @@ fn stand_is_the_same_whatever_the_thread_count_and_obstacles_prune() {
             assert!(reach > 2.0, "tree at {b} reaches {reach} m east");
         }
     }
+}
+
+#[test]
+fn adapted_leaves_are_made_when_read_on_their_nodes() {
+    // AdaptedTree::leaves holds each node's id and displacement, not the leaves (round 36):
+    // the leaves made from it sit on the adapted tree's live nodes, counted alike by len(),
+    // build() and for_each(), with trees pruned by a wall among them
+    let lib = lib();
+    let trees = lattice(&lib, 6, 5.0, |i, j| (i + j) % 5 == 0);
+    let all: Vec<usize> = (0..trees.len()).collect();
+    let wall = Obstacle::Box { min: Vec3::new(26.0, 0.0, 90.0), max: Vec3::new(27.0, 50.0, 125.0) };
+    let opts = StandOptions { obstacles: vec![wall], ..Default::default() };
+    let mut cache = SkeletonCache::new(9, DEFAULT_MAX_STRANDS);
+    let st = adapt_stand(&trees, &all, &lib, &mut cache, &opts).unwrap();
+    let mut pruned_trees = 0;
+    let mut far = 0.0f32;
+    for a in &st.trees {
+        let lv = a.leaves.build();
+        assert!(!lv.is_empty(), "tree {} has no leaves", a.index);
+        assert_eq!(a.leaves.len(), lv.len());
+        let mut k = 0;
+        a.leaves.for_each(|l| {
+            assert_eq!(l, lv.leaves[k]);
+            k += 1;
+        });
+        assert_eq!(k, lv.len());
+        assert!(lv.leaves.iter().all(|l| (l.node as usize) < a.skeleton.nodes.len()));
+        // a leaf moved with its node: its petiole stays where the open-grown tree had it
+        far = lv.leaves.iter().map(|l| l.pos.distance(a.skeleton.nodes[l.node as usize].pos)).fold(far, f32::max);
+        // held: 16 B a node of the fitted tree (at full detail about 13 leaves a node of 44 B
+        // each; these 48-strand trees have fewer leaves than nodes)
+        assert_eq!(a.leaves.held_bytes(), 16 * a.report.nodes_before, "tree {}", a.index);
+        pruned_trees += usize::from(a.report.pruned_light + a.report.pruned_collision > 0);
+        // given whole, the same leaves come back
+        let held = AdaptedLeaves::from(lv.clone());
+        assert_eq!(held.len(), lv.len());
+        assert_eq!(held.into_leaves(), lv);
+    }
+    assert!(pruned_trees > 0);
+    assert!(far < 1.0, "a leaf {far} m from its node");
 }
 
 #[test]
@@ -222,6 +263,36 @@ fn stand_sky_rings_default_fewer_and_refused() {
     }
 }
 
+#[test]
+fn coarser_height_classes_share_an_analysis_and_bad_steps_are_refused() {
+    let lib = lib();
+    // two beeches of 16 and 18 m of the same shape (crown radius and base in proportion):
+    // height classes 1.25^12 and 1.25^13 (16 / 1.25^12 = 1.11, 18 / 1.25^13 = 0.99) at the
+    // default step, one class 1.5625^6 (16 and 18 m / 14.55 m) at 1.25²
+    let mut t = vec![beech_tree(&lib, 1, 0.0, 0.0), beech_tree(&lib, 2, 4.0, 0.0)];
+    t[0].height_m = 16.0;
+    t[0].crown_radius_m = 3.5 * 16.0 / 18.0;
+    t[0].crown_base_m = 6.0 * 16.0 / 18.0;
+    let run = |step: f32| {
+        let opts = StandOptions { height_step: step, ..Default::default() };
+        adapt_stand(&t, &[0, 1], &lib, &mut SkeletonCache::new(1, 48), &opts)
+    };
+    assert_eq!(StandOptions::default().height_step, sylva::structure::stand::HEIGHT_STEP);
+    let (fine, coarse) = (run(1.25).unwrap(), run(1.5625).unwrap());
+    assert_eq!((fine.analyses, coarse.analyses), (2, 1));
+    // the heights stay exact
+    for st in [&fine, &coarse] {
+        for a in &st.trees {
+            let top = a.skeleton.nodes.iter().map(|n| n.pos.z).fold(f32::MIN, f32::max) - t[a.index].base.z;
+            assert!((top - t[a.index].height_m).abs() < 0.05 * t[a.index].height_m, "tree {}: top {top} m", a.index);
+        }
+    }
+    for bad in [1.0, 0.5, 5.0, f32::NAN] {
+        let e = run(bad).unwrap_err().to_string();
+        assert!(e.contains("height_step"), "{bad}: {e}");
+    }
+}
+
 /// A stem a few centimetres from a neighbour's stem is kept: the main stem is not pruned for
 /// meeting another tree's wood (round 32's trial: an oak 0.21 m from a maple was pruned to its
 /// root, 1 node and no leaves, and the stand export left it out). Its branches inside the
@@ -236,7 +307,7 @@ fn a_stem_beside_a_neighbours_stem_is_not_pruned_away() {
         let st = adapt_stand(&trees, &targets, &lib, &mut cache, &StandOptions::default()).unwrap();
         let oak = st.trees.iter().find(|a| a.index == 1).unwrap();
         let h = oak.skeleton.nodes.iter().map(|n| n.pos.z - 100.0).fold(0.0f32, f32::max);
-        assert!(oak.skeleton.nodes.len() > 500 && !oak.leaves.leaves.is_empty() && h > 11.0, "targets {targets:?}: {} nodes, {} leaves, {h:.2} m", oak.skeleton.nodes.len(), oak.leaves.leaves.len());
+        assert!(oak.skeleton.nodes.len() > 500 && !oak.leaves.is_empty() && h > 11.0, "targets {targets:?}: {} nodes, {} leaves, {h:.2} m", oak.skeleton.nodes.len(), oak.leaves.len());
     }
 }
 

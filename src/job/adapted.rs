@@ -431,7 +431,7 @@ pub fn place_adapted(inst: &mut TreeInstance, height: f32, r0: f32, t: &StandTre
 /// [`crate::mesh::CLUSTER_CARD_U`] (drawn with the leaf-cluster texture). `None` for a tree
 /// under 0.1 m or without levels.
 pub fn adapted_model(mut a: AdaptedTree, t: &StandTree, sp: &crate::species::Species, leaf_area: Option<&LeafCover>) -> Option<AdaptedModel> {
-    let (mut sk, mut lv, h) = frame_of(std::mem::take(&mut a.skeleton), std::mem::take(&mut a.leaves), t.base)?;
+    let (mut sk, mut lv, h) = frame_of(std::mem::take(&mut a.skeleton), std::mem::take(&mut a.leaves).into_leaves(), t.base)?;
     let k = t.species as usize;
     let shed_bare = lv.leaves.is_empty();
     if shed_bare && leaf_area.is_some() {
@@ -511,7 +511,7 @@ pub fn adapted_lod_chain(sk: &Skeleton, lv: &Leaves, a: &AdaptedTree, base: Vec3
 /// The adapted tree `a` in its own frame (stem base `base` moved to the origin) with its height
 /// (m, highest node or leaf); `None` for a tree under 0.1 m.
 pub fn tree_frame(a: &AdaptedTree, base: Vec3) -> Option<(Skeleton, Leaves, f32)> {
-    frame_of(a.skeleton.clone(), a.leaves.clone(), base)
+    frame_of(a.skeleton.clone(), a.leaves.build(), base)
 }
 
 /// [`tree_frame`] of a skeleton `sk` and leaves `lv` taken by value (moved, not copied).

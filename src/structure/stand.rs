@@ -186,13 +186,21 @@ pub struct StandOptions {
     /// fewer are coarser: BENCHMARKS.md, rounds 11 and 32, gives the error of each ring set
     /// against a reference of 5,872 directions (`examples/sky_quadrature`).
     pub sky_rings: Vec<usize>,
+    /// Relative step of the height classes of the adapted trees that share one analysis
+    /// (> 1, at most 4): a tree is its class's analysed tree scaled by a factor within
+    /// `height_step`^(±1/2), its translucency base γ_c0 raised to the power 1/factor
+    /// ([`PlasticTree::scale`]; eq. (4) takes the cluster radius in metres, so a coarser step
+    /// is not exact). Default [`HEIGHT_STEP`] (1.25, ±12 %); a coarser step shares analyses
+    /// across the default's height classes (fewer analyses; BENCHMARKS.md, round 36, measures
+    /// what 1.25² changes).
+    pub height_step: f32,
 }
 
 impl Default for StandOptions {
     /// Cells of 12 m, a halo of 6 m, latitude 47° N, no obstacles, the default sky
-    /// ([`DEFAULT_RINGS`]).
+    /// ([`DEFAULT_RINGS`]), height classes of [`HEIGHT_STEP`].
     fn default() -> Self {
-        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec() }
+        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec(), height_step: HEIGHT_STEP }
     }
 }
 
@@ -419,6 +427,7 @@ pub fn fit(g: &OpenGrown, h: f32, r: f32, cb: f32) -> (Skeleton, Leaves) {
 /// themselves, which the adapted trees' leaves are made from one tree at a time
 /// ([`adapted_with_leaves`]): a class's leaves are about 18 per node at full detail, and holding
 /// them for every class took about 2 GiB of the near field bench's 6.6 GiB peak (round 27).
+#[derive(Debug, Clone)]
 struct LeafFit {
     s: Vec3,
     h: f32,
@@ -502,8 +511,11 @@ pub struct AdaptedTree {
     pub index: usize,
     /// Adapted skeleton (world coordinates, m).
     pub skeleton: Skeleton,
-    /// Its leaves, moved with their nodes (world coordinates).
-    pub leaves: Leaves,
+    /// Its leaves, moved with their nodes (world coordinates), made when read
+    /// ([`AdaptedLeaves::build`]): held as the class's open-grown leaves, the class's fit and
+    /// each node's displacement (16 B a node instead of 44 B a leaf; about 13 leaves a node at
+    /// full detail), the same leaves bit for bit.
+    pub leaves: AdaptedLeaves,
     /// What the adaptation did.
     pub report: PlasticReport,
     /// Leaf clusters (centre, radius; m) of the fitted tree before adaptation.
@@ -543,15 +555,15 @@ pub struct Stand {
 /// 0 for a context tree) and whether it is a context tree.
 type ClassKey = (u16, u16, i32, u16, i32, bool);
 
-fn class_of(t: &StandTree, context: bool) -> ClassKey {
+fn class_of(t: &StandTree, context: bool, height_step: f32) -> ClassKey {
     let q = |v: f32, step: f32| (v.max(1e-3).ln() / step.ln()).round() as i32;
-    let height = if context { 0 } else { q(t.height_m, HEIGHT_STEP) };
+    let height = if context { 0 } else { q(t.height_m, height_step) };
     (t.species, age_class(t.age_yr), q(t.crown_radius_m / t.height_m, DIM_STEP), crown_base_class(t.height_m, t.crown_base_m), height, context)
 }
 
-/// Height, crown radius and crown base (m) a class is analysed at.
-fn class_dims(k: &ClassKey) -> (f32, f32, f32) {
-    let h = if k.5 { CONTEXT_CLASS_HEIGHT_M } else { HEIGHT_STEP.powi(k.4) };
+/// Height, crown radius and crown base (m) a class of height step `height_step` is analysed at.
+fn class_dims(k: &ClassKey, height_step: f32) -> (f32, f32, f32) {
+    let h = if k.5 { CONTEXT_CLASS_HEIGHT_M } else { height_step.powi(k.4) };
     (h, DIM_STEP.powi(k.2) * h, k.3 as f32 / CROWN_BASE_CLASSES * h)
 }
 
@@ -602,6 +614,10 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     }
     super::grow::space::validate_obstacles(&opts.obstacles)?;
     let sky = stand_sky(opts.latitude_deg, &opts.sky_rings)?;
+    let hs = opts.height_step;
+    if !(hs > 1.0 && hs <= 4.0) {
+        return Err(bad("height_step", hs.to_string(), "a relative step of the height classes > 1 and ≤ 4 (default 1.25)"));
+    }
     for &i in targets {
         if i >= trees.len() {
             return Err(bad("targets", i.to_string(), &format!("tree indices below {}", trees.len())));
@@ -648,7 +664,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     // 1. open-grown trees
     let t0 = std::time::Instant::now();
     // each cell's own trees at full detail, its context trees at [`CONTEXT_MAX_STRANDS`]
-    let class_in = |g: &((i64, i64), Vec<usize>, Vec<usize>), j: usize| class_of(&trees[g.2[j]], j >= g.1.len());
+    let class_in = |g: &((i64, i64), Vec<usize>, Vec<usize>), j: usize| class_of(&trees[g.2[j]], j >= g.1.len(), hs);
     let mut classes: Vec<ClassKey> = groups.iter().flat_map(|g| (0..g.2.len()).map(move |j| class_in(g, j))).collect();
     classes.sort_unstable();
     classes.dedup();
@@ -716,7 +732,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     let analyse = |k: &ClassKey| -> Result<Analysed> {
         let g = if k.5 { cache.get_context(form(k)) } else { cache.get(form(k)) };
         let g = g.ok_or_else(|| bad("species/age class", format!("{}/{}", k.0, k.1), "a grown open-grown tree"))?;
-        let (h, r, cb) = class_dims(k);
+        let (h, r, cb) = class_dims(k, hs);
         let (sk, lf) = fit_skeleton(g, h, r, cb);
         let sp = &lib.species[k.0 as usize];
         // a forest-grown tree (a cache of every strand) is not shed by light (eq. 11): its
@@ -728,7 +744,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
         }
         // the forest form's lengthened bole is bent with the flexibility of its base (step 5)
         let bole = (g.forest_bole && !k.5 && sk.nodes.get(1).is_some_and(|n| n.parent == Some(0) && n.gravelius == 0)).then_some(1u32);
-        let (mut t, lf) = if k.5 { (PlasticTree::standing(&sk, &params, &sky, None)?, None) } else { (PlasticTree::analyse(&sk, &params, &alone, None)?, Some(lf)) };
+        let (mut t, lf) = if k.5 { (PlasticTree::standing(&sk, &params, &sky, None)?, None) } else { (PlasticTree::analyse(&sk, &params, &alone, None)?, Some(Arc::new(lf))) };
         t.set_bole(bole)?;
         t.clearance_m = sp.architecture.ecomod.leaf_size_m.max(0.0);
         Ok((t, lf))
@@ -742,9 +758,9 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
         // γ_c0 back: its shape-only analysis holds no light to stay consistent with) and
         // placed at its base
         let placed = |(j, &i): (usize, &usize)| -> Result<PlasticTree> {
-            let key = class_of(&trees[i], j >= ks.len());
+            let key = class_of(&trees[i], j >= ks.len(), hs);
             let mut t = analysed[&key].0.clone();
-            let f = trees[i].height_m / class_dims(&key).0;
+            let f = trees[i].height_m / class_dims(&key, hs).0;
             if key.5 {
                 t.scale(f)?;
                 t.params.translucency_gamma_c0 = lib.species[key.0 as usize].architecture.plastic.translucency_gamma_c0;
@@ -779,17 +795,17 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
             .map(|(j, (&k, before))| {
                 let i = members[j];
                 let st = &trees[i];
-                let key = class_of(st, false);
-                let (h, r, _) = class_dims(&key);
+                let key = class_of(st, false, hs);
+                let (h, r, _) = class_dims(&key, hs);
                 let f = st.height_m / h;
                 let t = &group[j];
-                let open = cache.get(form(&key)).map_or(&[][..], |g| &g.leaves.leaves[..]);
+                let open = cache.map.get(&form(&key)).cloned();
                 // the exact crown radius: stretched about the base by the crown-shape class's
                 // rounding (the height is exact)
                 let sx = st.crown_radius_m / (r * f);
                 let s = Vec3::new(sx, sx, 1.0);
                 let at = |p: Vec3| st.base + (p - st.base) * s;
-                let (skeleton, leaves) = adapted_with_leaves(t, open, analysed[&key].1.as_ref(), f, st.base, at);
+                let (skeleton, leaves) = adapted_with_leaves(t, open, analysed[&key].1.clone(), f, st.base, s, at);
                 let scale_c = |v: Vec<(Vec3, f32)>| v.into_iter().map(|(c, rad)| (at(c), rad * s.x.max(s.z))).collect::<Vec<_>>();
                 (k, AdaptedTree { index: i, skeleton, leaves, report: rep.trees[j], clusters_before: scale_c(before), clusters_after: scale_c(t.clusters()), leaf_clusters: t.leaf_clusters().into_iter().map(|c| LeafCluster { center: at(c.center), radius: c.radius * s.x.max(s.z), ..c }).collect() })
             })
@@ -850,7 +866,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
 
 /// A class's analysed tree and how its leaves follow from the open-grown tree's (none for a
 /// context tree).
-type Analysed = (PlasticTree, Option<LeafFit>);
+type Analysed = (PlasticTree, Option<Arc<LeafFit>>);
 
 /// The task graph of [`adapt_stand`]'s steps 2–3. A task is (kind, rank, index): kind 0 a cell
 /// (index into the groups), 1 a class's analysis (index into the classes); the pool's jobs take
@@ -894,45 +910,151 @@ impl Graph {
     }
 }
 
-/// The adapted skeleton of `t` ([`PlasticTree::skeleton`]) and the leaves of its input: the
-/// open-grown tree's leaves `open` as its class's fit gives them (`fit`: [`LeafFit::leaf`], in
-/// the frame of the class's analysis, base at the origin; no leaves without it), then, with `f`
-/// the uniform scale and `base` the translation applied to the tree since, each leaf scaled,
-/// moved by its node's displacement and dropped with its node; finally every node and leaf
-/// position p becomes `at(p)` (the crown's stretch to its exact radius), in the same pass. The
-/// same leaves, bit for bit, as from the class's fitted leaves held whole and stretched after.
-fn adapted_with_leaves(t: &PlasticTree, open: &[super::Leaf], fit: Option<&LeafFit>, f: f32, base: Vec3, at: impl Fn(Vec3) -> Vec3) -> (Skeleton, Leaves) {
+/// The adapted skeleton of `t` ([`PlasticTree::skeleton`]) and the leaves of its input
+/// ([`AdaptedLeaves`], made when read): the open-grown tree's leaves `open` as its class's fit
+/// gives them (`fit`: [`LeafFit::leaf`], in the frame of the class's analysis, base at the
+/// origin; no leaves without it), then, with `f` the uniform scale and `base` the translation
+/// applied to the tree since, each leaf scaled, moved by its node's displacement and dropped with
+/// its node; finally every node and leaf position p becomes `at(p)` = base + (p − base) · `s`
+/// (the crown's stretch to its exact radius). The same leaves, bit for bit, as from the class's
+/// fitted leaves held whole and stretched after (rounds 34–35).
+fn adapted_with_leaves(t: &PlasticTree, open: Option<Arc<OpenGrown>>, fit: Option<Arc<LeafFit>>, f: f32, base: Vec3, s: Vec3, at: impl Fn(Vec3) -> Vec3) -> (Skeleton, AdaptedLeaves) {
     let mut sk = t.skeleton();
     sk.nodes.iter_mut().for_each(|n| n.pos = at(n.pos));
+    let (Some(open), Some(fit)) = (open, fit) else { return (sk, AdaptedLeaves::default()) };
     let input = t.input();
     let fates = t.fates();
     let pos = t.positions();
     // the id map of Skeleton::prune: removed nodes and their descendants are gone
     let n = input.nodes.len();
     let mut gone = vec![false; n];
-    let mut map = vec![None; n];
+    let mut nodes = Vec::with_capacity(n);
     let mut next = 0u32;
     for k in 0..n {
         let p = input.nodes[k].parent.map(|p| p as usize);
         gone[k] = k > 0 && (fates[k] != Fate::Alive || p.is_some_and(|p| gone[p]));
-        if !gone[k] {
-            map[k] = Some(next);
+        if gone[k] {
+            nodes.push((GONE, Vec3::ZERO));
+        } else {
+            nodes.push((next, pos[k] - input.nodes[k].pos));
             next += 1;
         }
     }
-    let Some(fit) = fit else { return (sk, Leaves::default()) };
-    // sized once: grown by doubling, the leaves (most of the near field's memory) held up to
-    // twice their size and were copied at every doubling
-    let mut leaves = Leaves { leaves: Vec::with_capacity(open.len()) };
-    for l in open.iter().filter_map(|l| fit.leaf(l)) {
-        let k = l.node as usize;
-        if let Some(Some(nk)) = map.get(k) {
-            let d = pos[k] - input.nodes[k].pos;
-            leaves.leaves.push(super::Leaf { pos: at(l.pos * f + base + d), size: l.size * f, node: *nk, ..l });
+    (sk, AdaptedLeaves(LeafSource::Made(MadeLeaves { open, fit, nodes, f, base, s })))
+}
+
+/// A node of [`MadeLeaves::nodes`] shed by the adaptation (its leaves are dropped).
+const GONE: u32 = u32::MAX;
+
+/// The leaves of an adapted tree ([`AdaptedTree::leaves`]), made when read: the open-grown
+/// tree's leaves of its class, the class's fit and, per node of the fitted tree, its id in the
+/// adapted skeleton and its displacement by the adaptation (m). A near field's adapted trees
+/// hold about 13 leaves a node at full detail (66.7 M leaves, 2.9 GB, for the 1,000 targets of
+/// `benches/stand.rs`); held this way they take 16 B a node, and each consumer (export, stills,
+/// viewer) makes one tree's leaves at a time ([`AdaptedLeaves::build`]), the same leaves bit for
+/// bit as the adaptation made them until round 35 (BENCHMARKS.md, round 36).
+#[derive(Debug, Clone, Default)]
+pub struct AdaptedLeaves(LeafSource);
+
+#[derive(Debug, Clone)]
+enum LeafSource {
+    /// Leaves given whole ([`AdaptedLeaves::from`]).
+    Held(Leaves),
+    /// Leaves made from the class's open-grown tree.
+    Made(MadeLeaves),
+}
+
+impl Default for LeafSource {
+    fn default() -> Self {
+        LeafSource::Held(Leaves::default())
+    }
+}
+
+#[derive(Debug, Clone)]
+struct MadeLeaves {
+    /// The class's open-grown tree (its leaves are read).
+    open: Arc<OpenGrown>,
+    /// How the class's fit turns them into the fitted tree's.
+    fit: Arc<LeafFit>,
+    /// Per node of the fitted tree: its id in the adapted skeleton ([`GONE`] when shed) and its
+    /// displacement by the adaptation (m, in the frame scaled by `f`).
+    nodes: Vec<(u32, Vec3)>,
+    /// Uniform scale from the class's height to the tree's.
+    f: f32,
+    /// Stem base (m, world coordinates).
+    base: Vec3,
+    /// The crown's stretch about `base` to its exact radius (x, y; z is 1).
+    s: Vec3,
+}
+
+impl AdaptedLeaves {
+    /// Calls `each` on every leaf in order (world coordinates, m), as [`AdaptedLeaves::build`]
+    /// holds them.
+    pub fn for_each(&self, mut each: impl FnMut(super::Leaf)) {
+        match &self.0 {
+            LeafSource::Held(lv) => lv.leaves.iter().copied().for_each(each),
+            LeafSource::Made(m) => {
+                let (f, base, s) = (m.f, m.base, m.s);
+                for l in m.open.leaves.leaves.iter().filter_map(|l| m.fit.leaf(l)) {
+                    if let Some(&(nk, d)) = m.nodes.get(l.node as usize) {
+                        if nk != GONE {
+                            let p = l.pos * f + base + d;
+                            each(super::Leaf { pos: base + (p - base) * s, size: l.size * f, node: nk, ..l });
+                        }
+                    }
+                }
+            }
         }
     }
-    leaves.leaves.shrink_to_fit();
-    (sk, leaves)
+
+    /// The leaves, made (a copy when they were given whole).
+    pub fn build(&self) -> Leaves {
+        match &self.0 {
+            LeafSource::Held(lv) => lv.clone(),
+            LeafSource::Made(_) => {
+                let mut lv = Leaves { leaves: Vec::with_capacity(self.len()) };
+                self.for_each(|l| lv.leaves.push(l));
+                lv
+            }
+        }
+    }
+
+    /// The leaves, made, taking them when they were given whole.
+    pub fn into_leaves(self) -> Leaves {
+        match self.0 {
+            LeafSource::Held(lv) => lv,
+            made @ LeafSource::Made(_) => AdaptedLeaves(made).build(),
+        }
+    }
+
+    /// Number of leaves (counted without making them when they are made when read).
+    pub fn len(&self) -> usize {
+        match &self.0 {
+            LeafSource::Held(lv) => lv.len(),
+            LeafSource::Made(m) => m.open.leaves.leaves.iter().filter_map(|l| m.fit.leaf(l)).filter(|l| m.nodes.get(l.node as usize).is_some_and(|&(nk, _)| nk != GONE)).count(),
+        }
+    }
+
+    /// True when there are no leaves.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Bytes this tree's leaves hold of their own (bytes): the leaves given whole, or the
+    /// per-node table of leaves made when read (the open-grown tree and the fit are shared
+    /// by the class).
+    pub fn held_bytes(&self) -> usize {
+        match &self.0 {
+            LeafSource::Held(lv) => lv.leaves.capacity() * std::mem::size_of::<super::Leaf>(),
+            LeafSource::Made(m) => m.nodes.capacity() * std::mem::size_of::<(u32, Vec3)>(),
+        }
+    }
+}
+
+impl From<Leaves> for AdaptedLeaves {
+    fn from(lv: Leaves) -> Self {
+        AdaptedLeaves(LeafSource::Held(lv))
+    }
 }
 
 /// Overlap of the leaf clusters of different trees: Σ over pairs of clusters of two different

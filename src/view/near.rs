@@ -40,7 +40,7 @@ use crate::render::scene::TreeInstance;
 use crate::sim::obstacle::ObstacleSpec;
 use crate::species::SpeciesLibrary;
 use crate::structure::stand::{adapt_stand, SkeletonCache, StandOptions, StandTree, FULL_STRANDS};
-use crate::structure::{Leaves, Skeleton};
+use crate::structure::Skeleton;
 
 /// Largest horizontal distance (m) from the eye of a tree adapted in the viewer: 80 m, as the
 /// stills' near field ([`crate::job::adapted::AdaptOptions`]).
@@ -142,7 +142,8 @@ pub struct NearResult {
 struct Kept {
     tree: StandTree,
     skeleton: Skeleton,
-    leaves: Leaves,
+    /// Its leaves, made when it is meshed (16 B a node held instead of 44 B a leaf).
+    leaves: crate::structure::stand::AdaptedLeaves,
     leaf_clusters: Vec<crate::structure::plastic::LeafCluster>,
     /// When it was last wanted (request counter).
     used: u64,
