@@ -13,7 +13,7 @@
 use glam::Vec3;
 use sylva::species::SpeciesLibrary;
 use sylva::structure::grow::space::Obstacle;
-use sylva::structure::plastic::{adapt_group, phases, Environment, PlasticTree, Sky};
+use sylva::structure::plastic::{adapt_group, Environment, PlasticTree, Sky};
 use sylva::structure::grow::light_guided::{self, LightOptions};
 use sylva::structure::params;
 use sylva::structure::Skeleton;
@@ -95,25 +95,6 @@ fn wall_for(r: f32, h: f32) -> Obstacle {
     Obstacle::FiniteWall { x: 0.5 * r, length: 4.0 * r, height: 1.2 * h }
 }
 
-/// With `SYLVA_PLASTIC_PHASES` set (`cpu`: thread CPU time, else wall clock; see
-/// `sylva::structure::plastic::phases`), the time and parallel loops of each phase of the
-/// `calls` adaptations since the last print, per call.
-fn print_phases(label: &str, calls: usize) {
-    if !phases::on() {
-        return;
-    }
-    let rows = phases::take();
-    let total: f64 = rows.iter().map(|r| r.1).sum();
-    let calls = calls.max(1) as f64;
-    println!("\nphases of {label} ({} per call, {calls} calls; threads: {}):", if phases::cpu() { "thread CPU ms" } else { "wall ms" }, rayon::current_num_threads());
-    println!("| phase | ms | share | spans | parallel loops |");
-    println!("|---|---|---|---|---|");
-    for (name, ms, spans, forks) in rows {
-        println!("| {name} | {:.3} | {:.1} % | {:.0} | {:.0} |", ms / calls, 100.0 * ms / total.max(1e-9), spans as f64 / calls, forks as f64 / calls);
-    }
-    println!("| all phases | {:.3} | | | |", total / calls);
-}
-
 /// `SYLVA_PLASTIC_PROFILE=CYCLES,SEED` (e.g. `14,5`, the 9,133-node tree): grows that one
 /// tree, analyses it, adapts it beside the wall once and once more after moving the wall 10 cm,
 /// printing the CPU time of each step and the wall time of the first adaptation (for a
@@ -129,11 +110,9 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     let tree = PlasticTree::analyse(&sk, p, &env_with(&[]), None).expect("analyse");
     let t1 = cpu_ms();
     let mut t = tree.clone();
-    phases::take();
     let wall_clock = std::time::Instant::now();
     let rep = t.adapt(&env_with(&[wall])).expect("adapt");
     let wall_ms = wall_clock.elapsed().as_secs_f64() * 1e3;
-    print_phases("the first adaptation", 1);
     let t2 = cpu_ms();
     let first = fingerprint(std::slice::from_ref(&t));
     let moved = match wall {
@@ -142,7 +121,6 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     };
     let rep2 = t.adapt(&env_with(&[moved])).expect("adapt");
     let t3 = cpu_ms();
-    print_phases("the wall move", 1);
     // `SYLVA_PLASTIC_MOVES=N`: N more moves of the wall by ±10 cm (for a profile of the moves)
     let extra: usize = std::env::var("SYLVA_PLASTIC_MOVES").ok().and_then(|v| v.parse().ok()).unwrap_or(0);
     // `SYLVA_PLASTIC_ADAPTS=N`: N more first adaptations (for a profile of the first adaptation)
@@ -150,17 +128,9 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     for _ in 0..again {
         std::hint::black_box(tree.clone().adapt(&env_with(&[wall])).expect("adapt"));
     }
-    if again > 0 {
-        print_phases(&format!("{again} more first adaptations"), again);
-    }
     let mut m = t.clone();
-    let moves_clock = std::time::Instant::now();
     for i in 0..extra {
         m.adapt(&env_with(&[if i % 2 == 0 { wall } else { moved }])).expect("adapt");
-    }
-    if extra > 0 {
-        println!("\n{extra} more moves: {:.3} ms wall each", moves_clock.elapsed().as_secs_f64() * 1e3 / extra as f64);
-        print_phases(&format!("{extra} more moves"), extra);
     }
     println!("{} nodes, {} seasons: analysis {:.1} ms, adapt {:.1} ms CPU, {wall_ms:.1} ms wall ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), tree.analysis().seasons, t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
 }

@@ -696,27 +696,15 @@ impl ShadowVolumes {
     /// direction k) that are not built yet, so that the queries that follow do not wait for one
     /// another's lazy builds (a query waits while another thread builds the grid it needs).
     /// Nothing to do when the occluders are scanned whole ([`SCAN_MAX`]). The grids are the
-    /// ones a lazy build gives, so the answers do not change. The directions to build are
-    /// listed first: none starts no parallel loop, one is built on the calling thread (a level
-    /// calls this before every batch of queries, and after its first batch nearly every grid
-    /// is built: a parallel loop over the directions then forked and joined for nothing).
-    /// Returns the number of grids built.
-    pub fn prepare(&self, dirs: u32) -> usize {
+    /// ones a lazy build gives, so the answers do not change.
+    pub fn prepare(&self, dirs: u32) {
         use rayon::prelude::*;
         if self.flat.is_some() {
-            return 0;
+            return;
         }
-        let todo: Vec<usize> = (0..self.dirs.len()).filter(|&k| dirs & (1 << k) != 0 && self.grids[k].get().is_none()).collect();
-        match todo[..] {
-            [] => {}
-            [k] => {
-                self.grid(k);
-            }
-            _ => todo.par_iter().for_each(|&k| {
-                self.grid(k);
-            }),
-        }
-        todo.len()
+        (0..self.dirs.len()).into_par_iter().filter(|&k| dirs & (1 << k) != 0 && self.grids[k].get().is_none()).for_each(|k| {
+            self.grid(k);
+        });
     }
 
     fn grid(&self, k: usize) -> &DirGrid {

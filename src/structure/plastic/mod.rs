@@ -24,7 +24,6 @@
 pub mod analysis;
 pub mod evaluation;
 pub mod light;
-pub mod phases;
 pub mod transform;
 
 pub use analysis::{inverse_tropism, Analysis};

@@ -58,7 +58,6 @@
 
 use super::analysis::{cluster_center, input_casters, judged, normalised, psi_over, shade_casters, StageCluster};
 use super::light::{Occluder, ShadowVolumes, SkyMask, Solids};
-use super::phases::{self, Phase};
 use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
 use crate::error::Result;
 use crate::structure::grow::space::Obstacle;
@@ -358,7 +357,6 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
         return Err(crate::Error::Invalid { context: "Plastic Trees adaptation".into(), field: format!("tree {i}"), value: "a standing tree (shape only)".into(), expected: "a tree of PlasticTree::analyse (a standing tree can only be among the fixed trees)".into() });
     }
     let sky = &env.sky;
-    let signatures_span = phases::span(Phase::Signatures);
     let solids = SkyMask::new(Solids { obstacles: &env.obstacles, ground: env.ground }, sky);
     // 1. signatures: solids and the other trees' input-time clusters at the final stage
     let neighbours: Vec<(usize, Occluder)> = trees
@@ -503,8 +501,6 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
             dirty
         })
         .collect();
-    drop(signatures_span);
-    let setup_span = phases::span(Phase::Setup);
     // where this call's light queries can come from: the trees with a node to recompute, as
     // they stand and as grown, widened by their largest cluster and 2 m for the bending within
     // the call (a query outside is still answered exactly, from grids of every caster)
@@ -569,7 +565,7 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
                 by_season[fill[sn] as usize] = k as u32;
                 fill[sn] += 1;
             }
-            Work { before: t.pos.clone(), moved: vec![false; n], shifted: vec![false; n], done: vec![false; n], own, replay, replayed: 0, record, prunes, by_season, season_start, stage: Vec::new(), stage_upto: None, carry: vec![(false, Quat::IDENTITY); n], depth: vec![0; n], pieces: None }
+            Work { before: t.pos.clone(), moved: vec![false; n], shifted: vec![false; n], done: vec![false; n], own, replay, replayed: 0, record, prunes, by_season, season_start, stage: Vec::new(), stage_upto: None, carry: vec![(false, Quat::IDENTITY); n], depth: vec![0; n] }
         })
         .collect();
     let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
@@ -587,7 +583,6 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
     // saves the query of their grids, and in a group the changed casters are few against the
     // shared grids' casters: kept there (not measured)
     let reuse_pays = trees.len() > 1 || fixed_vols.is_some();
-    drop(setup_span);
     for g in 0..=g_max {
         let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
         // the receivers that are the same stage cluster as at the previous level
@@ -602,23 +597,16 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
             .zip(prev.par_iter().zip(&maps))
             .map(|((t, w), (pr, map))| match stage_of(t) {
                 Some(s) => {
-                    let t0 = phases::span(Phase::Preposition);
                     preposition(t, s, w);
-                    drop(t0);
-                    let t1 = phases::span(Phase::StageOccluders);
                     let all_alive = t.fate.iter().all(|f| *f == Fate::Alive);
-                    phases::forks(Phase::StageOccluders, (t.analysis.stages[s].len() >= 2 * SIG_CHUNK) as u64);
                     let stage = stage_occluders_with(t, s, env, pr.as_ref().map(|p| (&map[..], &p.stage[..])), all_alive);
                     let fine: Vec<Option<Occluder>> = stage.iter().map(|c| c.occ).collect();
-                    drop(t1);
-                    let _t2 = phases::span(Phase::ShadeCasters);
                     let shade = stage_casters_of(t, s, &fine, &stage, env);
                     (fine, shade, stage)
                 }
                 None => Default::default(),
             })
             .collect();
-        let volumes_span = phases::span(Phase::Volumes);
         let casters: Vec<Occluder> = occ.iter().flat_map(|(_, c, _)| c.iter().map(|(_, o)| *o)).collect();
         // the casters that differ from the previous level's (removed, added or changed): both
         // lists are sorted by key; only where a reused value can pay (`reuse_pays`)
@@ -659,15 +647,12 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
         let delta = (reuse_pays && 5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(region.0, region.1));
         let vols = ShadowVolumes::new(sky, casters).within(region.0, region.1);
         let vols = if partial { vols.coarse() } else { vols };
-        drop(volumes_span);
         // trees at work at this level share its grids: built over the cores before the trees'
         // levels run side by side (else each tree's first batch builds them, and a core wanting
         // a grid that the other core is building waits for it); only with two or more such
         // trees, as a lone tree's batches ask for exactly the directions they need. Every
         // direction above the terrain: nearly every one is open at some receiver of a tree
         if trees.iter().zip(&work).filter(|(t, w)| stage_of(t).is_some() && w.own.iter().any(|&x| x)).take(2).count() == 2 {
-            let _t = phases::span(Phase::GridBuilds);
-            phases::forks(Phase::GridBuilds, 1);
             vols.prepare(every_dir & !solids.below_ground());
         }
         let next: Vec<Option<Prev>> = trees
@@ -714,7 +699,6 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
             .collect();
         prev = next;
     }
-    let _finish = phases::span(Phase::Finish);
     // the quiet trees keep the levels they replayed whole or recorded; a call `once` leaves
     // partial signatures, so a later call recomputes everything
     for (t, w) in trees.iter_mut().zip(&mut work) {
@@ -795,30 +779,14 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
 /// while in cache.
 fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3]) -> Vec<(f32, Vec3)> {
     let mut out = vec![(0.0f32, Vec3::ZERO); at.len()];
-    if at.is_empty() {
-        return out;
-    }
-    // the solids' masks: over the cores only for a batch of many points (a mask costs a few
-    // hundred instructions; a parallel loop over a few dozen forks and joins for nothing)
-    let masks: Vec<u32> = {
-        let _t = phases::span(Phase::BendMasks);
-        if at.len() >= 2 * MASK_CHUNK {
-            phases::forks(Phase::BendMasks, 1);
-            at.par_iter().with_min_len(MASK_CHUNK).map(|&p| solids.mask(p)).collect()
-        } else {
-            at.iter().map(|&p| solids.mask(p)).collect()
-        }
-    };
+    let masks: Vec<u32> = at.par_iter().map(|&p| solids.mask(p)).collect();
     // the grids of the directions open at some point, built over the cores first
     let open = !masks.iter().fold(u32::MAX, |a, &m| a & m);
-    {
-        let _t = phases::span(Phase::GridBuilds);
-        let built = vols.prepare(open) + fixed.map_or(0, |f| f.prepare(open));
-        phases::forks(Phase::GridBuilds, (built > 1) as u64);
+    vols.prepare(open);
+    if let Some(f) = fixed {
+        f.prepare(open);
     }
-    let _t = phases::span(Phase::BendQueries);
     let chunk = light_chunk(at.len());
-    phases::forks(Phase::BendQueries, (at.len() > chunk) as u64);
     out.par_chunks_mut(chunk).zip(at.par_chunks(chunk).zip(masks.par_chunks(chunk))).for_each(|(out, (at, masks))| {
         for k in 0..sky.dirs.len() {
             let wk = sky.weights[k];
@@ -949,9 +917,6 @@ struct Work {
     carry: Vec<(bool, Quat)>,
     /// Scratch of [`level`] (depth of a season's node below the older wood; likewise).
     depth: Vec<u32>,
-    /// The tree cut into subtrees for the pruning over the cores, built at the first level
-    /// that needs it ([`prune_by_pieces`]).
-    pieces: Option<Pieces>,
 }
 
 impl Work {
@@ -1035,17 +1000,6 @@ const SIG_CHUNK: usize = 256;
 /// each depth batch of its nodes are split into chunks over the cores).
 const LIGHT_CHUNK: usize = 64;
 
-/// Fewest points per task of a batch's solids' masks when they are split over the cores
-/// (fewer than twice as many points are masked on the calling thread).
-const MASK_CHUNK: usize = 64;
-
-/// Fewest recomputed nodes per task of a depth batch's bending (eq. 6, rotations, collisions)
-/// when it is split over the cores (fewer than twice as many are bent on the calling thread).
-const BEND_CHUNK: usize = 32;
-
-/// Fewest stage clusters per task of a level's scan for the clusters to light.
-const SCAN_CHUNK: usize = 256;
-
 /// Points per task for a batch of `n` light queries: about four tasks per thread, 8 to
 /// [`LIGHT_CHUNK`] points each. A depth batch of a level holds a few dozen nodes; with the old
 /// fixed chunks of 64 it was one task, and a second core had nothing to take (measured on the
@@ -1068,19 +1022,6 @@ fn sky_bits(sky: &super::light::Sky) -> u32 {
 /// Turn (radians, 0.057°) below which a recomputed node's children are not recomputed: they keep
 /// their rotation and follow the node's displacement.
 pub const ROTATION_EPS: f32 = 1e-3;
-
-/// A recomputed node as a level's pass 2 bends it ([`level`]): its rotation, bend angle (rad)
-/// and position, whether it moved or turned by more than [`ROTATION_EPS`], and whether it
-/// collides (an obstacle, the ground).
-struct Bent {
-    k: usize,
-    rot: Quat,
-    bend: f32,
-    pos: Vec3,
-    shifted: bool,
-    moved: bool,
-    collided: bool,
-}
 
 /// One level (stage `s`) of one tree: bend its recomputed season-`s` nodes, refresh the light on
 /// its recomputed stage clusters, prune by eq. (11).
@@ -1116,14 +1057,9 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         w.depth = depth;
     }
     let mut at: Vec<Vec3> = Vec::new();
-    // the recomputed nodes of a depth batch, each with the index of its light in `at` (none
-    // for a segment of length 0)
-    let mut todo: Vec<(usize, Option<usize>)> = Vec::new();
     for bucket in &buckets {
         // pass 1: fates, the nodes kept, and where the recomputed ones would stand unbent
-        let t1 = phases::span(Phase::BendPass1);
         at.clear();
-        todo.clear();
         for &k in bucket {
             let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
             if t.fate[par] != Fate::Alive {
@@ -1143,35 +1079,32 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
             if seg.length() > 0.0 {
                 at.push(t.pos[par] + t.rot[par] * seg);
-                todo.push((k, Some(at.len() - 1)));
-            } else {
-                todo.push((k, None));
             }
         }
-        drop(t1);
         let lights = light_many_among(sky, solids, vols, fixed, &at);
-        // pass 2: bend the recomputed nodes. A node's parent is older or one depth up (final
-        // before this batch), and a node writes only its own state, so the nodes of a batch are
-        // bent independently: over the cores for a large batch, then written in batch order
-        let _t2 = phases::span(Phase::BendPass2);
-        let tr: &PlasticTree = t;
-        let bend_one = |&(k, li): &(usize, Option<usize>)| -> Bent {
-            let par = tr.input.nodes[k].parent.unwrap_or(0) as usize;
-            let (old_pos, old_rot) = (w.before[k], tr.rot[k]);
-            let seg = tr.input.nodes[k].pos - tr.input.nodes[par].pos;
+        // pass 2: bend the recomputed nodes
+        let mut lights = lights.into_iter();
+        for &k in bucket {
+            let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
+            if !(w.own[k] || w.moved[par]) {
+                continue;
+            }
+            w.done[k] = true;
+            let (old_pos, old_rot) = (w.before[k], t.rot[k]);
+            let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
             let len = seg.length();
-            let q_par = tr.rot[par];
+            let q_par = t.rot[par];
             let mut q = q_par;
             let mut bend = 0.0;
             if len > 0.0 {
                 let h = seg / len;
-                let (_, l_new) = li.and_then(|i| lights.get(i).copied()).unwrap_or((0.0, Vec3::Z));
-                let t_old = tropism(&tr.params, a.light_dir[k]);
+                let (_, l_new) = lights.next().unwrap_or((0.0, Vec3::Z));
+                let t_old = tropism(&t.params, a.light_dir[k]);
                 // flexibility by age (step 3): the tip's season of eq. (2), the base's
                 // (t_{s_p}) for a forest-grown tree's lengthened bole
                 let born = if bole == Some(k) { a.season[par] } else { a.season[k] };
                 let kappa = 1.0 - (last - born as f32) / (last + 1.0);
-                let t_eff = (t_old + kappa * (tropism(&tr.params, l_new) - t_old)).normalize_or(t_old);
+                let t_eff = (t_old + kappa * (tropism(&t.params, l_new) - t_old)).normalize_or(t_old);
                 let ws = a.w_s[k];
                 let h_rigid = q_par * h;
                 // eq. (6) plus the analysis residual (zero where eq. 9 has a root): exact identity
@@ -1180,27 +1113,14 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
                 q = Quat::from_rotation_arc(h, h_new);
                 bend = h_rigid.dot(h_new).clamp(-1.0, 1.0).acos();
             }
-            let pos = tr.pos[par] + q * seg;
+            t.rot[k] = q;
+            t.bend[k] = bend;
+            t.pos[k] = t.pos[par] + q * seg;
+            w.shifted[k] = t.pos[k] != old_pos;
             // the children are recomputed when this node turned by more than ROTATION_EPS
-            let turn = 2.0 * (q * old_rot.inverse()).xyz().length().min(1.0).asin();
-            let collided = tr.fate[k] == Fate::Alive && collides(env, tr.pos[par], pos, clearance(tr, k));
-            Bent { k, rot: q, bend, pos, shifted: pos != old_pos, moved: turn > ROTATION_EPS, collided }
-        };
-        let bent: Vec<Bent> = if todo.len() >= 2 * BEND_CHUNK {
-            phases::forks(Phase::BendPass2, 1);
-            todo.par_iter().with_min_len(BEND_CHUNK).map(bend_one).collect()
-        } else {
-            todo.iter().map(bend_one).collect()
-        };
-        for b in bent {
-            let k = b.k;
-            w.done[k] = true;
-            t.rot[k] = b.rot;
-            t.bend[k] = b.bend;
-            t.pos[k] = b.pos;
-            w.shifted[k] = b.shifted;
-            w.moved[k] = b.moved;
-            if b.collided {
+            let turn = 2.0 * (t.rot[k] * old_rot.inverse()).xyz().length().min(1.0).asin();
+            w.moved[k] = turn > ROTATION_EPS;
+            if t.fate[k] == Fate::Alive && collides(env, t.pos[par], t.pos[k], clearance(t, k)) {
                 t.fate[k] = Fate::Collision;
             }
         }
@@ -1210,71 +1130,49 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     // that eq. (11) cannot shed (`Work::prunes`) needs the last level's only
     let clusters = &a.stages[s];
     let needs_light = w.prunes || s == a.seasons as usize;
-    let nd = sky.dirs.len();
-    // the clusters lit: touched by a recomputed node, with an occluder; each with its solids'
-    // mask and (where a reused value can be) the previous level's row. Scanned over the cores
-    // for a stage of many clusters (a cluster's test reads its lobe's nodes); the clusters
-    // come back in index order
-    let scan_span = phases::span(Phase::LitScan);
-    let done = &w.done;
-    let reuse_ref = reuse.as_ref();
-    let scan = |(ci, c): (usize, &StageCluster)| -> Option<(usize, Option<(Vec3, u32, Option<&[f32]>)>)> {
+    let mut lit = Vec::new();
+    for (ci, c) in clusters.iter().enumerate().filter(|_| needs_light) {
         let touched = match c.lobe {
-            Some(l) => a.lobes[l as usize].nodes.iter().any(|&k| done[k as usize]),
-            None => done[c.anchor as usize],
+            Some(l) => a.lobes[l as usize].nodes.iter().any(|&k| w.done[k as usize]),
+            None => w.done[c.anchor as usize],
         };
-        if !touched {
-            return None;
-        }
-        Some((
-            ci,
-            occ[ci].map(|o| {
-                let old = reuse_ref.and_then(|r| {
-                    let pj = r.map[ci]? as usize;
-                    let st = r.rows.start[pj];
-                    (st != u32::MAX && same_occluder(&r.occ[pj], &occ[ci])).then(|| &r.rows.t[st as usize..st as usize + nd])
-                });
-                (o.center, solids.mask(o.center), old)
-            }),
-        ))
-    };
-    let found: Vec<(usize, Option<(Vec3, u32, Option<&[f32]>)>)> = if !needs_light {
-        Vec::new()
-    } else if clusters.len() >= 2 * SCAN_CHUNK {
-        phases::forks(Phase::LitScan, 1);
-        clusters.par_iter().enumerate().with_min_len(SCAN_CHUNK).filter_map(scan).collect()
-    } else {
-        clusters.iter().enumerate().filter_map(scan).collect()
-    };
-    let mut lit = Vec::with_capacity(found.len());
-    // (mask, previous row) of every cluster lit
-    let mut from: Vec<(u32, Option<&[f32]>)> = Vec::with_capacity(found.len());
-    for (ci, f) in found {
-        match f {
-            Some((c, m, old)) => {
-                lit.push((ci, c));
-                from.push((m, old));
+        if touched {
+            match occ[ci] {
+                Some(o) => lit.push((ci, o.center)),
+                None => t.light_cache[s][ci] = 0.0,
             }
-            None => t.light_cache[s][ci] = 0.0,
         }
     }
+    let nd = sky.dirs.len();
     let mut rows = Rows { start: vec![u32::MAX; clusters.len()], t: vec![f32::NAN; lit.len() * nd] };
-    drop(scan_span);
+    // (mask, previous row) of every cluster lit
+    let from: Vec<(u32, Option<&[f32]>)> = lit
+        .iter()
+        .map(|&(ci, c)| {
+            let old = reuse.as_ref().and_then(|r| {
+                let pj = r.map[ci]? as usize;
+                let st = r.rows.start[pj];
+                (st != u32::MAX && same_occluder(&r.occ[pj], &occ[ci])).then(|| &r.rows.t[st as usize..st as usize + nd])
+            });
+            (solids.mask(c), old)
+        })
+        .collect();
     let mut sums = vec![0.0f32; lit.len()];
     // the grids of the directions open at some cluster to be computed, built over the cores
     // first (of the changed casters too, which the reused values are checked against)
     let open = !from.iter().fold(u32::MAX, |a, &(m, _)| a & m);
-    {
-        let _t = phases::span(Phase::GridBuilds);
-        let built = vols.prepare(open) + fixed.map_or(0, |f| f.prepare(open)) + reuse.as_ref().map_or(0, |r| r.delta.prepare(open));
-        phases::forks(Phase::GridBuilds, (built > 1) as u64);
+    vols.prepare(open);
+    if let Some(f) = fixed {
+        f.prepare(open);
+    }
+    if let Some(r) = reuse.as_ref() {
+        r.delta.prepare(open);
     }
     // chunks of clusters over the cores; within a chunk direction by direction (each direction's
     // grid read while in cache), every cluster's sum taken in direction order as before, so the
     // values are the same bit for bit whatever the thread count
-    let queries_span = phases::span(Phase::ClusterQueries);
+    let reuse_ref = reuse.as_ref();
     let chunk = light_chunk(lit.len());
-    phases::forks(Phase::ClusterQueries, (lit.len() > chunk) as u64);
     rows.t.par_chunks_mut(chunk * nd.max(1)).zip(sums.par_chunks_mut(chunk)).zip(lit.par_chunks(chunk).zip(from.par_chunks(chunk))).for_each(|((t_rows, sums), (lit, from))| {
         for k in 0..nd {
             let wk = sky.weights[k];
@@ -1299,25 +1197,11 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         rows.start[ci] = (j * nd) as u32;
         t.light_cache[s][ci] = sums[j];
     }
-    drop(queries_span);
-    let _t = phases::span(Phase::Pruning);
     // pruning (eqs. 10–11); the fates of shed parents are inherited in any case
     // the nodes of season ≤ s: the pruning below changes no other node. A tree that eq. (11)
     // cannot shed and whose nodes are all alive has nothing to prune or pass on (the loop below
     // would change no fate): skipped, its stage list brought up to date when next needed
     if !w.prunes && t.fate.iter().all(|f| *f == Fate::Alive) {
-        return rows;
-    }
-    // by pieces over the cores where the stage holds most of a large tree (a piece's pass
-    // visits all its nodes; the stage's nodes in index order are `w.stage`, of a few seasons
-    // at the early levels)
-    let stage_len = w.season_start.get(s + 1).map_or(n, |&c| c as usize);
-    if w.prunes && n >= pieces_min_nodes() && 4 * stage_len >= 3 * n {
-        let light = normalised(&t.light_cache[s], |ci| occ[ci].is_some());
-        let pieces = w.pieces.get_or_insert_with(|| Pieces::of(&t.input));
-        for (k, f) in prune_by_pieces(t, pieces, s, clusters, &light) {
-            t.fate[k as usize] = f;
-        }
         return rows;
     }
     w.stage_to(s);
@@ -1339,194 +1223,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         } else if w.prunes && t.fate[k] == Fate::Alive && judged(a.season[k], s as u16) && psi[k] < a.psi_min[k] {
             t.fate[k] = Fate::Light;
         }
-    }
-    rows
-}
-
-/// Fewest nodes of a tree whose pruning ([`level`]) runs by [`Pieces`] over the cores (a
-/// smaller tree's pass is too short to pay for the fork; in a group the trees' levels already
-/// run side by side), at the levels whose stage holds at least three quarters of its nodes
-/// (measured, callgrind, the 10 cm wall move of the 9,133-node bench tree: by pieces at every
-/// level, the pieces' passes over the nodes of later seasons made the pruning about twice the
-/// pass over the stage in index order). Tests lower it to exercise the pieces on small trees.
-fn pieces_min_nodes() -> usize {
-    PIECES_MIN_NODES.load(std::sync::atomic::Ordering::Relaxed)
-}
-
-/// See [`pieces_min_nodes`].
-static PIECES_MIN_NODES: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(4096);
-
-/// Most nodes of a piece, as a share of the tree: n / [`PIECES`] (at least [`PIECE_MIN`]).
-const PIECES: usize = 24;
-/// Fewest nodes a piece may be capped at.
-const PIECE_MIN: usize = 64;
-
-/// A tree cut into whole subtrees ("pieces") and the rest (the "top": every node whose subtree
-/// is larger than a piece, a connected set holding the root), so that the pruning pass of a
-/// level, ψ of eq. (10) summed up the tree and the fates of eq. (11) passed down it, runs over
-/// the cores piece by piece: a piece's sums and fates involve only its own nodes, its root's
-/// parent (a top node) and, for the fates, that parent's fate. Built once per call
-/// ([`Work::pieces`]); needs parents before children (checked by the analysis).
-struct Pieces {
-    /// Piece of every node, `u32::MAX` for the top.
-    of: Vec<u32>,
-    /// Position of every piece node in its piece's list.
-    at: Vec<u32>,
-    /// Every piece's nodes in index order, its root first.
-    nodes: Vec<Vec<u32>>,
-    /// The top's nodes and the pieces' roots in index order (the root node 0 left out).
-    top: Vec<u32>,
-}
-
-impl Pieces {
-    fn of(input: &crate::structure::skeleton::Skeleton) -> Pieces {
-        let n = input.nodes.len();
-        let parent = |k: usize| input.nodes[k].parent.unwrap_or(0) as usize;
-        let mut size = vec![1u32; n];
-        for k in (1..n).rev() {
-            size[parent(k)] += size[k];
-        }
-        let cap = (n / PIECES).max(PIECE_MIN) as u32;
-        let (mut of, mut at) = (vec![u32::MAX; n], vec![0u32; n]);
-        let (mut nodes, mut top): (Vec<Vec<u32>>, Vec<u32>) = (Vec::new(), Vec::new());
-        for k in 1..n {
-            let p = of[parent(k)];
-            if p != u32::MAX {
-                of[k] = p;
-                at[k] = nodes[p as usize].len() as u32;
-                nodes[p as usize].push(k as u32);
-            } else if size[k] <= cap {
-                of[k] = nodes.len() as u32;
-                nodes.push(vec![k as u32]);
-                top.push(k as u32);
-            } else {
-                top.push(k as u32);
-            }
-        }
-        Pieces { of, at, nodes, top }
-    }
-}
-
-/// The pruning of one level (stage `s`, eqs. 10–11) of tree `t` by [`Pieces`]: ψ as
-/// [`psi_over`] takes it over the nodes of season ≤ `s` (`light`: the stage clusters'
-/// normalised light) and then the fates as [`level`]'s pass in index order sets them (a shed
-/// parent's fate passed on, eq. 11's shedding). Every node's sums receive the same terms in the
-/// same order as in one pass in index order (its clusters in cluster order, then its children
-/// from the last), and a node's fate follows from its parent's, so the values are the same bit
-/// for bit: the pieces' ψ over the cores, the top's ψ from the last node (a piece's root adding
-/// its piece's sums when its turn comes), the top's fates from the first, then the pieces'
-/// fates over the cores. Returns the fates that change, (node, fate), in no particular order.
-fn prune_by_pieces(t: &PlasticTree, pieces: &Pieces, s: usize, clusters: &[StageCluster], light: &[f32]) -> Vec<(u32, Fate)> {
-    let a = &t.analysis;
-    let n = t.input.nodes.len();
-    let parent = |k: usize| t.input.nodes[k].parent.unwrap_or(0) as usize;
-    let alive = |k: usize| t.fate[k] == Fate::Alive;
-    let active = |k: usize| a.season[k] as usize <= s && alive(k);
-    let area = |ci: usize| 2.0 * std::f32::consts::PI * clusters[ci].radius * clusters[ci].radius * light[ci];
-    // the clusters' ζ terms, in cluster order: on the top's nodes directly, else by piece
-    let (mut zeta, mut len, mut psi) = (vec![0.0f32; n], vec![0.0f32; n], vec![f32::NAN; n]);
-    let mut by_piece: Vec<Vec<u32>> = vec![Vec::new(); pieces.nodes.len()];
-    for (ci, (c, _)) in clusters.iter().zip(light).enumerate() {
-        let an = c.anchor as usize;
-        if alive(an) {
-            match pieces.of[an] {
-                u32::MAX => zeta[an] += area(ci),
-                p => by_piece[p as usize].push(ci as u32),
-            }
-        }
-    }
-    // ψ of every piece: (ψ per piece node, ζ and l of its root)
-    let piece_psi = |pi: usize| -> (Vec<f32>, f32, f32) {
-        let nodes = &pieces.nodes[pi];
-        let m = nodes.len();
-        let (mut z, mut l, mut ps) = (vec![0.0f32; m], vec![0.0f32; m], vec![f32::NAN; m]);
-        for &ci in &by_piece[pi] {
-            z[pieces.at[clusters[ci as usize].anchor as usize] as usize] += area(ci as usize);
-        }
-        for j in (0..m).rev() {
-            let k = nodes[j] as usize;
-            if !active(k) {
-                continue;
-            }
-            l[j] += t.input.segment_length(k);
-            ps[j] = if l[j] > 0.0 { z[j] / l[j] } else { f32::NAN };
-            if j > 0 {
-                let pj = pieces.at[parent(k)] as usize;
-                let (zj, lj) = (z[j], l[j]);
-                z[pj] += zj;
-                l[pj] += lj;
-            }
-        }
-        (ps, z[0], l[0])
-    };
-    phases::forks(Phase::Pruning, 2);
-    let sums: Vec<(Vec<f32>, f32, f32)> = (0..pieces.nodes.len()).into_par_iter().map(piece_psi).collect();
-    // the top from the last node: a piece's root brings its piece's sums
-    for &k in pieces.top.iter().rev() {
-        let k = k as usize;
-        if !active(k) {
-            continue;
-        }
-        match pieces.of[k] {
-            u32::MAX => {
-                len[k] += t.input.segment_length(k);
-                psi[k] = if len[k] > 0.0 { zeta[k] / len[k] } else { f32::NAN };
-            }
-            p => (zeta[k], len[k]) = (sums[p as usize].1, sums[p as usize].2),
-        }
-        let par = parent(k);
-        let (z, l) = (zeta[k], len[k]);
-        zeta[par] += z;
-        len[par] += l;
-    }
-    // fates, from the first node: the top's, then every piece's from its root's parent
-    let fate_of = |k: usize, par_fate: Fate, me: Fate, psi_k: f32| -> Fate {
-        if par_fate != Fate::Alive {
-            if me == Fate::Alive {
-                return par_fate;
-            }
-        } else if me == Fate::Alive && judged(a.season[k], s as u16) && psi_k < a.psi_min[k] {
-            return Fate::Light;
-        }
-        me
-    };
-    let mut changed = Vec::new();
-    let mut top_fate: HashMap<u32, Fate> = HashMap::new();
-    for &k in &pieces.top {
-        let k = k as usize;
-        if pieces.of[k] != u32::MAX || a.season[k] as usize > s {
-            continue;
-        }
-        let par = parent(k);
-        let pf = top_fate.get(&(par as u32)).copied().unwrap_or(t.fate[par]);
-        let f = fate_of(k, pf, t.fate[k], psi[k]);
-        if f != t.fate[k] {
-            top_fate.insert(k as u32, f);
-            changed.push((k as u32, f));
-        }
-    }
-    let piece_fates = |pi: usize| -> Vec<(u32, Fate)> {
-        let nodes = &pieces.nodes[pi];
-        let mut f: Vec<Fate> = nodes.iter().map(|&k| t.fate[k as usize]).collect();
-        let mut out = Vec::new();
-        for j in 0..nodes.len() {
-            let k = nodes[j] as usize;
-            if a.season[k] as usize > s {
-                continue;
-            }
-            let par = parent(k);
-            let pf = if j == 0 { top_fate.get(&(par as u32)).copied().unwrap_or(t.fate[par]) } else { f[pieces.at[par] as usize] };
-            let nf = fate_of(k, pf, f[j], sums[pi].0[j]);
-            if nf != f[j] {
-                f[j] = nf;
-                out.push((k as u32, nf));
-            }
-        }
-        out
-    };
-    let more: Vec<Vec<(u32, Fate)>> = (0..pieces.nodes.len()).into_par_iter().map(piece_fates).collect();
-    changed.extend(more.into_iter().flatten());
-    changed
+    }    rows
 }
 
 #[cfg(test)]
@@ -1585,44 +1282,5 @@ mod tests {
             }
         }
         assert_eq!(replays, 2, "calls 3 and 4 replay the far trees' levels");
-    }
-
-    /// The pruning by pieces ([`prune_by_pieces`], the pieces over the cores) against the pass
-    /// in index order: a 25-year beech (it sheds by light) adapted beside a wall and after two
-    /// moves of the wall, once with the pieces for every tree and once without: the same fates,
-    /// positions and bend angles bit for bit, and the pieces cover every node but the top.
-    #[test]
-    fn pruning_by_pieces_equals_the_pass_in_index_order() {
-        use std::sync::atomic::Ordering;
-        let lib = SpeciesLibrary::embedded().unwrap();
-        let sp = &lib.species[lib.find("beech").unwrap() as usize];
-        let p = sp.architecture.plastic;
-        let g = grow_species_tree(sp, Model::Light, 25.0, &[], 7).unwrap();
-        let tree = PlasticTree::analyse(&g.skeleton, &p, &Environment::open(), None).unwrap();
-        let n = tree.input.nodes.len();
-        let pieces = Pieces::of(&tree.input);
-        let in_pieces: usize = pieces.nodes.iter().map(Vec::len).sum();
-        let tops = pieces.top.iter().filter(|&&k| pieces.of[k as usize] == u32::MAX).count();
-        assert_eq!(in_pieces + tops + 1, n, "every node but the root in a piece or the top");
-        assert!(pieces.nodes.len() >= 4 && in_pieces > n / 2, "{} pieces of {in_pieces} nodes, {n} nodes", pieces.nodes.len());
-        let wall = |x: f32| Environment::with_obstacles(&[Obstacle::OrientedBox { center: Vec3::new(x, 0.0, 3.0), half: Vec3::new(0.1, 4.0, 3.0), yaw_deg: 0.0 }]);
-        let run = |min: usize| {
-            PIECES_MIN_NODES.store(min, Ordering::Relaxed);
-            let mut t = tree.clone();
-            let mut out = Vec::new();
-            for x in [0.8f32, 0.9, 1.0] {
-                let r = adapt_group(std::slice::from_mut(&mut t), &wall(x)).unwrap();
-                out.push((r, t.fate.clone(), t.pos.iter().map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>(), t.bend.iter().map(|b| b.to_bits()).collect::<Vec<_>>()));
-            }
-            out
-        };
-        let by_pieces = run(0);
-        let in_order = run(usize::MAX);
-        PIECES_MIN_NODES.store(4096, Ordering::Relaxed);
-        assert!(by_pieces.iter().all(|(r, ..)| r.trees[0].pruned_light > 0), "the beech sheds by light beside the wall: the pruning is tested");
-        assert!(by_pieces[1].0.recomputed_nodes < n, "a move recomputes part of the tree");
-        for (a, b) in by_pieces.iter().zip(&in_order) {
-            assert_eq!(a, b);
-        }
     }
 }
