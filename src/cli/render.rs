@@ -115,8 +115,9 @@ pub struct RenderArgs {
     pub adapt: bool,
     /// Most tree triangles the frame draws (1,000–1,000,000,000): when the trees at their
     /// levels would cost more, the level switches are raised so that the trees smallest on
-    /// screen (the farthest of a height) drop to coarser levels, never below billboards; the
-    /// trees nearest the camera keep full detail. `--stats` says whether it demoted
+    /// screen (the farthest of a height) drop to coarser levels first, never below billboards
+    /// (one factor on every tree's switch sizes: under a tight budget the nearest trees leave
+    /// full detail too). `--stats` says whether it demoted
     /// (`demoted`, `lod_scale`). Default: the stills' budget of `sylva run`.
     #[arg(long, default_value_t = sylva::job::pictures::STILL_TRIANGLE_BUDGET, value_parser = clap::value_parser!(u32).range(1_000..=1_000_000_000))]
     pub triangle_budget: u32,
