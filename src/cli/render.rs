@@ -226,7 +226,7 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
     if !a.adapt {
         stage.set_adapt(None);
     }
-    stage.renderer.lod.max_triangles = a.triangle_budget;
+    stage.set_triangle_budget(a.triangle_budget);
     let t = std::time::Instant::now();
     // the regeneration layer of the same snapshot, drawn as saplings (runs without it: none)
     let regen = if closeup { Vec::new() } else { sylva::job::inventory::read_regeneration(&a.run_dir, year)?.unwrap_or_default() };

@@ -129,6 +129,13 @@ impl Stage {
         Ok(stage)
     }
 
+    /// Sets the most tree triangles a frame draws (`LodParams::max_triangles`; the stills'
+    /// default is [`STILL_TRIANGLE_BUDGET`]): a frame that would cost more raises every tree's
+    /// level switches by one factor until it fits (`sylva render --triangle-budget`).
+    pub fn set_triangle_budget(&mut self, triangles: u32) {
+        self.renderer.lod.max_triangles = triangles;
+    }
+
     /// Sets the adaptation of the near field ([`Stage::adapt`]; `None`: every tree an instanced
     /// prototype, and the open-grown skeletons grown for it so far are let go of); returns the
     /// one it replaces.
