@@ -482,6 +482,10 @@ fn a_png_heightmaps_assumed_scale_is_said_and_a_virtual_folder_gets_the_right_re
     let (out, err) = info(&["--cell", "2", "--min-height", "100", "--max-height", "400"]);
     assert!(!err.contains("carries no scale"), "{err}");
     assert!(out.contains("100.0") || out.contains("100 "), "the given range is used: {out}");
+    // a file that cannot be read gets its error alone, not first a claim of an assumed scale
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info"]).arg(dir.path().join("missing.png")).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("missing.png") && !err.contains("carries no scale"), "{err}");
     if std::path::Path::new("/proc/self").is_dir() {
         let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "beech", "--age", "5", "--out", "/proc/b.glb"]).output().unwrap();
         let err = String::from_utf8_lossy(&o.stderr);

@@ -33,7 +33,7 @@ pub struct Source {
     /// PNG heightmap: height (m) of value 0 [default: 0].
     #[arg(long, allow_negative_numbers = true, value_parser = parse_finite)]
     pub min_height: Option<f64>,
-    /// PNG heightmap: height (m) of the largest value [default: 1000].
+    /// PNG heightmap: height (m) of value 65535 [default: 1000].
     #[arg(long, allow_negative_numbers = true, value_parser = parse_finite)]
     pub max_height: Option<f64>,
     /// Cells at or below this elevation (m) are water and masked.

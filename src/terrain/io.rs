@@ -711,10 +711,12 @@ pub fn load_png_heightmap_or_default(path: &Path, cell_m: Option<f64>, range_m: 
     if range_m.is_none() {
         assumed.push(format!("heights {lo}–{hi} m for values 0–65535 (set {})", cli_names.1));
     }
+    let t = load_png_heightmap(path, cell, lo, hi)?;
+    // said once the file is read (a missing or refused file said it first, then its error)
     if !assumed.is_empty() {
         tracing::warn!("{}: a PNG heightmap carries no scale; assumed {}", path.display(), assumed.join(" and "));
     }
-    load_png_heightmap(path, cell, lo, hi)
+    Ok(t)
 }
 
 /// Reads a 16-bit grayscale PNG heightmap — the game-engine convention: value 0 is `min_h_m`,
