@@ -492,3 +492,15 @@ fn a_png_heightmaps_assumed_scale_is_said_and_a_virtual_folder_gets_the_right_re
         assert!(!o.status.success() && err.contains("/proc") && err.contains("takes no new files") && !err.contains("No such file"), "{err}");
     }
 }
+
+/// A scenario whose DEM is not there is refused naming the scenario file, the field
+/// `terrain.path`, the path as written and where it was looked for (a check of the final binary
+/// got the file's "No such file" under "[terrain]" without the field).
+#[test]
+fn a_missing_dem_is_refused_naming_terrain_path() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("bad3.toml"), "name = \"bad3\"\nyears = 2\nseed = 1\nspecies = [\"beech\"]\n[terrain]\npath = \"nothere.tif\"\n").unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["simulate", "bad3.toml", "--out", "o"]).current_dir(dir.path()).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("bad3.toml") && err.contains("terrain.path") && err.contains("nothere.tif (") && err.contains("an existing DEM file") && !dir.path().join("o").exists(), "{err}");
+}

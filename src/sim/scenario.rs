@@ -408,6 +408,13 @@ fn field_hint(key: &str) -> Option<&'static str> {
     })
 }
 
+/// The `[terrain]` table's `path` as written in scenario text `text` (`None` without one), for
+/// messages that quote it as given.
+fn text_terrain_path(text: &str) -> Option<String> {
+    let v: toml::Value = toml::from_str(text).ok()?;
+    v.get("terrain")?.get("path")?.as_str().map(str::to_string)
+}
+
 impl Scenario {
     /// Context for error messages: the scenario file (or source name) and the scenario's `name`.
     pub fn context(&self) -> String {
@@ -473,6 +480,18 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
                 let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
                 let joined = dir.join(p);
                 s.terrain.path = Some(std::path::absolute(&joined).unwrap_or(joined));
+            }
+        }
+        // a DEM that is not there is named with its field (a check of the final binary got the
+        // file's "No such file" under "[terrain]" without the field)
+        if let (Some(given), Some(p)) = (text_terrain_path(&text), &s.terrain.path) {
+            if !p.exists() {
+                return Err(Error::Invalid {
+                    context: path.display().to_string(),
+                    field: "terrain.path".into(),
+                    value: if Path::new(&given) == p.as_path() { given } else { format!("{given} ({})", p.display()) },
+                    expected: "an existing DEM file (.tif/.tiff GeoTIFF, .asc ESRI grid or 16-bit .png); a relative path is relative to the scenario file's folder".into(),
+                });
             }
         }
         // so are the climate anomalies and management area files
