@@ -408,13 +408,6 @@ fn field_hint(key: &str) -> Option<&'static str> {
     })
 }
 
-/// The `[terrain]` table's `path` as written in scenario text `text` (`None` without one), for
-/// messages that quote it as given.
-fn text_terrain_path(text: &str) -> Option<String> {
-    let v: toml::Value = toml::from_str(text).ok()?;
-    v.get("terrain")?.get("path")?.as_str().map(str::to_string)
-}
-
 impl Scenario {
     /// Context for error messages: the scenario file (or source name) and the scenario's `name`.
     pub fn context(&self) -> String {
@@ -475,6 +468,7 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
         let mut s = Scenario::from_toml_str(&text, &path.display().to_string())?;
         // A relative terrain path is relative to the scenario file; store it absolute so that
         // the copy written into a run directory (`RUN_DIR/scenario.toml`) still finds it.
+        let given = s.terrain.path.as_ref().map(|p| p.display().to_string());
         if let Some(p) = &s.terrain.path {
             if p.is_relative() {
                 let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
@@ -484,7 +478,7 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
         }
         // a DEM that is not there is named with its field (a check of the final binary got the
         // file's "No such file" under "[terrain]" without the field)
-        if let (Some(given), Some(p)) = (text_terrain_path(&text), &s.terrain.path) {
+        if let (Some(given), Some(p)) = (given, &s.terrain.path) {
             if !p.exists() {
                 return Err(Error::Invalid {
                     context: path.display().to_string(),
