@@ -6,7 +6,10 @@
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Climate {
-    /// Latitude (degrees, −90…90) for insolation when the terrain is not geographic.
+    /// Latitude (degrees, −90…90) for insolation, the sun of the pictures and the stands' sky
+    /// where the terrain's CRS gives none: PNG heightmaps, generated and uniform sites, projected
+    /// DEMs of a CRS Sylva cannot invert. A geographic DEM, or a projected one with a UTM code
+    /// on WGS 84, NAD83 or ETRS89 or a `.prj`, uses its own (`GeoRef::insolation_latitude_deg`).
     pub latitude_deg: f64,
     /// Mean annual temperature (°C) at `reference_elevation_m`.
     pub reference_temperature_c: f32,

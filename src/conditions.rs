@@ -323,7 +323,9 @@ fn from_fields_of(elevation: &Grid<f32>, geo: &GeoRef, full_h: usize, climate: &
     }
     let cell_x_m = (0..full_h).map(|r| geo.cell_x_m_at_row(r)).sum::<f64>() / full_h.max(1) as f64;
     SiteConditions {
-        geo: geo.clone(),
+        // the latitude the insolation above used (the grid's own where its CRS gives it, else
+        // the climate's), so the pictures' sun and the stands' sky agree with it
+        geo: GeoRef { latitude_deg: geo.insolation_latitude_deg(climate.latitude_deg), ..geo.clone() },
         cell_x_m,
         cell_y_m: geo.cell_y_m(),
         elevation_m: elevation.map(|z| if z.is_finite() { *z } else { 0.0 }),

@@ -54,15 +54,33 @@ pub struct GeoRef {
     pub pixel_w: f64,
     /// Cell height in CRS units (degrees or metres), > 0 (rows go south).
     pub pixel_h: f64,
-    /// Latitude of the grid centre in degrees (given for projected/local grids by the user or
-    /// scenario; computed for geographic grids). Used for insolation.
+    /// Latitude of the grid centre in degrees (computed for geographic grids and for projected
+    /// grids whose CRS the reader inverted, see `latitude_from_crs`; otherwise a placeholder that
+    /// [`GeoRef::insolation_latitude_deg`] replaces by the scenario's `climate.latitude_deg`).
     pub latitude_deg: f64,
+    /// True when `latitude_deg` comes from the grid's own CRS: a projected grid whose projection
+    /// (an EPSG code of `terrain::io::epsg_projection` or a `.prj`) was inverted at its centre.
+    /// Geographic grids need no flag (their latitude is their y). False for local grids
+    /// (PNG heightmaps, generated terrains) and projected grids of an unknown CRS.
+    #[serde(default)]
+    pub latitude_from_crs: bool,
 }
 
 impl GeoRef {
     /// A local metric grid with square cells of `cell_m` metres at latitude `latitude_deg`.
     pub fn local(cell_m: f64, latitude_deg: f64) -> Self {
-        GeoRef { crs: Crs::Local, epsg: None, origin_x: 0.0, origin_y: 0.0, pixel_w: cell_m, pixel_h: cell_m, latitude_deg }
+        GeoRef { crs: Crs::Local, epsg: None, origin_x: 0.0, origin_y: 0.0, pixel_w: cell_m, pixel_h: cell_m, latitude_deg, latitude_from_crs: false }
+    }
+    /// Latitude (degrees) of the grid centre for insolation and the sun: the grid's own for a
+    /// geographic grid or a projected grid whose CRS gave it (`latitude_from_crs`, any datum:
+    /// WGS 84, NAD83, ETRS89 UTM or a `.prj`), else `climate_lat` (the scenario's
+    /// `climate.latitude_deg`).
+    pub fn insolation_latitude_deg(&self, climate_lat: f64) -> f64 {
+        if self.crs == Crs::Geographic || self.latitude_from_crs {
+            self.latitude_deg
+        } else {
+            climate_lat
+        }
     }
     /// Latitude (degrees) of the centre of `row` for geographic grids; the grid latitude otherwise.
     pub fn row_latitude_deg(&self, row: usize) -> f64 {
@@ -218,7 +236,7 @@ mod tests {
     #[test]
     fn geographic_cell_size_at_jacksboro() {
         // 3 arc-second grid at 36.6°N: ≈ 74 m E–W × 92.6 m N–S (terrains/README.md).
-        let g = GeoRef { crs: Crs::Geographic, epsg: Some(4326), origin_x: -84.41, origin_y: 36.6, pixel_w: 1.0 / 1200.0, pixel_h: 1.0 / 1200.0, latitude_deg: 36.6 };
+        let g = GeoRef { crs: Crs::Geographic, epsg: Some(4326), origin_x: -84.41, origin_y: 36.6, pixel_w: 1.0 / 1200.0, pixel_h: 1.0 / 1200.0, latitude_deg: 36.6, latitude_from_crs: false };
         let dx = g.cell_x_m_at_row(0);
         assert!((dx - 74.3).abs() < 0.5, "dx {dx}");
         assert!((g.cell_y_m() - 92.6).abs() < 0.05);

@@ -285,3 +285,48 @@ fn dems_in_feet_are_refused_naming_the_unit() {
     let e = err_of(io::load(&dir.path().join("ft.asc")));
     assert!(e.contains("ft.prj") && e.contains("Foot_US") && e.contains("expected metres"), "{e}");
 }
+
+/// Round 37 (the closing check of round 36, D1): a UTM DEM on another datum than WGS 84 (NAD83
+/// EPSG:269xx, ETRS89 EPSG:258xx) got its insolation at the climate's latitude (46° unless set),
+/// not its own; only EPSG 326xx/327xx took the grid's. Now every projected grid whose CRS the
+/// reader inverts takes its own, and the site's latitude (the pictures' sun, the stands' sky)
+/// is the one the insolation used.
+#[test]
+fn a_utm_dem_on_any_datum_takes_its_own_latitude_for_insolation() {
+    use sylva::conditions::{self, Climate};
+    use sylva::terrain::fields::row_latitude;
+    // NAD83 / UTM 17N, the real Coweeta rectangle (EPSG:26917), ≈ 35.05° N
+    let t = io::load(&terrains().join("coweeta_10m_utm17n.tif")).unwrap();
+    assert_eq!(t.geo.epsg, Some(26917));
+    assert!(t.geo.latitude_from_crs && (t.geo.latitude_deg - 35.05).abs() < 0.03, "{:?}", t.geo);
+    assert_eq!(row_latitude(&t.geo, 0, 46.0), t.geo.latitude_deg);
+    let w = io::window(&t, 100, 100, 40, 40).unwrap();
+    let at = |lat: f64| conditions::derive(&w, &Climate { latitude_deg: lat, ..Climate::default() }).unwrap();
+    let (a, b) = (at(46.0), at(60.0));
+    assert_eq!(a.insolation_kwh_m2.data, b.insolation_kwh_m2.data, "the climate's latitude must not move a NAD83 DEM's insolation");
+    assert!((a.geo.latitude_deg - t.geo.latitude_deg).abs() < 1e-9);
+    // the same cells as a grid without a CRS: the climate's latitude is used, and is the site's
+    let mut local = w.clone();
+    local.geo.crs = Crs::Local;
+    local.geo.epsg = None;
+    local.geo.latitude_from_crs = false;
+    let (c, d) = (conditions::derive(&local, &Climate { latitude_deg: 35.05, ..Climate::default() }).unwrap(), conditions::derive(&local, &Climate { latitude_deg: 60.0, ..Climate::default() }).unwrap());
+    assert_eq!(d.geo.latitude_deg, 60.0);
+    let mean = |s: &conditions::SiteConditions| s.insolation_kwh_m2.data.iter().map(|&v| v as f64).sum::<f64>() / s.insolation_kwh_m2.data.len() as f64;
+    // at its own latitude the NAD83 grid gets what the same cells get when told 35.05° (±1 %),
+    // and 60° N would give markedly less (the fault: 46° gave 1,450 against 1,750 kWh/m²/yr)
+    assert!((mean(&a) / mean(&c) - 1.0).abs() < 0.01, "{} vs {}", mean(&a), mean(&c));
+    assert!(mean(&d) < 0.85 * mean(&c), "{} vs {}", mean(&d), mean(&c));
+    // ETRS89 / UTM 32N (EPSG:25832) and WGS 84 / UTM 32N (32632) at the same coordinates: the
+    // same latitude, taken from the CRS (the two ellipsoids differ by < 1e-4° here)
+    let dir = tempfile::tempdir().unwrap();
+    let lat_of = |epsg: u16| {
+        let p = dir.path().join(format!("e{epsg}.tif"));
+        geotiff_with_keys(&p, &[1024, 0, 1, 1, 3072, 0, 1, epsg], None);
+        let t = io::load(&p).unwrap();
+        assert!(t.geo.latitude_from_crs, "EPSG:{epsg}");
+        row_latitude(&t.geo, 0, 46.0)
+    };
+    let (etrs, wgs) = (lat_of(25832), lat_of(32632));
+    assert!((etrs - wgs).abs() < 1e-3 && (etrs - 46.0).abs() > 1.0, "ETRS89 {etrs}, WGS 84 {wgs}");
+}

@@ -39,7 +39,10 @@ pub struct Source {
     /// Cells at or below this elevation (m) are water and masked.
     #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_finite_f32)]
     pub sea_level: f32,
-    /// Latitude (degrees, −90…90) for insolation when the terrain is not geographic or UTM.
+    /// Latitude (degrees, −90…90) for insolation when the terrain's CRS gives none (a PNG
+    /// heightmap, a local grid, a projected grid of an unknown CRS) [default: 46]; a geographic
+    /// grid or a projected one Sylva can invert (UTM on WGS 84, NAD83, ETRS89, or a `.prj`) uses
+    /// its own.
     #[arg(long, allow_negative_numbers = true, value_parser = parse_latitude)]
     pub latitude: Option<f64>,
 }
@@ -156,9 +159,12 @@ fn info(s: &Source, tolerance: f64) -> anyhow::Result<()> {
     } else {
         println!("cell (m):    {} x {}", t.geo.pixel_w, t.geo.pixel_h);
     }
-    match s.latitude {
-        Some(l) => println!("latitude:    {l:.3}° (--latitude; the grid's own {:.3}°)", t.geo.latitude_deg),
-        None => println!("latitude:    {:.3}°", t.geo.latitude_deg),
+    let own = t.geo.crs == Crs::Geographic || t.geo.latitude_from_crs;
+    match (own, s.latitude) {
+        (true, Some(l)) => println!("latitude:    {:.3}° (the grid's own, from its CRS; --latitude {l} is used only where the CRS gives none)", t.geo.latitude_deg),
+        (true, None) => println!("latitude:    {:.3}° (the grid's own, from its CRS)", t.geo.latitude_deg),
+        (false, Some(l)) => println!("latitude:    {l:.3}° (--latitude: the grid's CRS gives none)"),
+        (false, None) => println!("latitude:    {:.3}° (the default: the grid's CRS gives none; set it with --latitude)", Climate::default().latitude_deg),
     }
     println!("elevation:   {lo:.1} … {hi:.1} m");
     println!("nodata:      {} cells{}", g.len() - valid.len(), t.nodata.map(|v| format!(" (file value {v})")).unwrap_or_default());

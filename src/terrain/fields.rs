@@ -684,12 +684,14 @@ pub fn flat_insolation(lat_deg: f64, p: &SkyParams) -> f64 {
 }
 
 /// Latitude (degrees) the sun model uses for row `r`: per row for geographic grids, the grid's
-/// (UTM-derived) latitude for UTM grids, else `climate_lat`.
+/// centre latitude for projected grids whose CRS the reader inverted (UTM on WGS 84, NAD83 or
+/// ETRS89, or a `.prj`: [`GeoRef::insolation_latitude_deg`]), else `climate_lat`. Until round 37
+/// only WGS 84 UTM codes (EPSG 326xx/327xx) took their own latitude, so a NAD83 or ETRS89 DEM
+/// got the climate's (46° by default).
 pub fn row_latitude(geo: &GeoRef, r: usize, climate_lat: f64) -> f64 {
-    match (geo.crs, geo.epsg) {
-        (Crs::Geographic, _) => geo.row_latitude_deg(r),
-        (Crs::Projected, Some(e)) if (32601..=32660).contains(&e) || (32701..=32760).contains(&e) => geo.latitude_deg,
-        _ => climate_lat,
+    match geo.crs {
+        Crs::Geographic => geo.row_latitude_deg(r),
+        _ => geo.insolation_latitude_deg(climate_lat),
     }
 }
 

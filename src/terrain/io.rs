@@ -333,9 +333,10 @@ fn geotiff_georef(tags: &GeoTiffTags, w: u32, h: u32, path: &Path) -> Result<(Ge
         ox -= pw / 2.0;
         oy += ph / 2.0;
     }
-    let mut geo = GeoRef { crs, epsg, origin_x: ox, origin_y: oy, pixel_w: pw, pixel_h: ph, latitude_deg: FALLBACK_LATITUDE_DEG };
+    let mut geo = GeoRef { crs, epsg, origin_x: ox, origin_y: oy, pixel_w: pw, pixel_h: ph, latitude_deg: FALLBACK_LATITUDE_DEG, latitude_from_crs: false };
     let proj = epsg.and_then(epsg_projection);
     geo.latitude_deg = centre_latitude(&geo, w as usize, h as usize, proj.as_ref(), path)?;
+    geo.latitude_from_crs = crs == Crs::Projected && proj.is_some();
     Ok((geo, south_up))
 }
 
@@ -537,7 +538,7 @@ fn centre_latitude(geo: &GeoRef, width: usize, height: usize, proj: Option<&Proj
             Ok(lat)
         }
         (Crs::Projected, None) => {
-            tracing::warn!("{}: projected CRS {} not known; latitude for insolation set to {FALLBACK_LATITUDE_DEG}° (put a .prj beside the file or set climate.latitude_deg)", path.display(), geo.epsg.map_or("without EPSG code".into(), |e| format!("EPSG:{e}")));
+            tracing::warn!("{}: projected CRS {} not known; insolation uses the scenario's climate.latitude_deg (46° unless set; `sylva terrain maps --latitude`) (put a .prj beside the file to use its own)", path.display(), geo.epsg.map_or("without EPSG code".into(), |e| format!("EPSG:{e}")));
             Ok(geo.latitude_deg)
         }
         _ => Ok(geo.latitude_deg),
@@ -671,12 +672,13 @@ pub fn read_asc(text: &str, prj: Option<&str>, path: &Path) -> Result<Terrain> {
         pixel_w: cs,
         pixel_h: cs,
         latitude_deg: FALLBACK_LATITUDE_DEG,
+        latitude_from_crs: false,
     };
     geo.latitude_deg = if prj.is_none() && !geographic {
         // said as missing (round 33's trial: "holes.prj: projected CRS without EPSG code not
         // known" named a .prj that was not there)
         tracing::warn!(
-            "{}: no .prj beside it ({} is missing): read as metres in an unknown projected CRS; latitude for insolation set to {FALLBACK_LATITUDE_DEG}° (put a .prj beside the file or set climate.latitude_deg)",
+            "{}: no .prj beside it ({} is missing): read as metres in an unknown projected CRS; insolation uses the scenario's climate.latitude_deg (46° unless set; `sylva terrain maps --latitude`) (put a .prj beside the file to use its own)",
             path.display(),
             prj_path.display()
         );
@@ -684,6 +686,7 @@ pub fn read_asc(text: &str, prj: Option<&str>, path: &Path) -> Result<Terrain> {
     } else {
         centre_latitude(&geo, w, h, projection.as_ref(), &prj_path)?
     };
+    geo.latitude_from_crs = !geographic && projection.is_some();
     Ok(Terrain { elevation, geo, nodata, source: path.display().to_string() })
 }
 
