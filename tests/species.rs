@@ -266,6 +266,9 @@ fn readme_documents_every_field_of_the_schema() {
     // nor the mature form (Scots pine's only)
     beech.architecture.mature_form = lib.get("scots_pine").unwrap().architecture.mature_form;
     assert!(beech.architecture.mature_form.is_some());
+    // nor the whorled stem (Norway spruce's only)
+    beech.architecture.ecomod.whorls = lib.get("norway_spruce").unwrap().architecture.ecomod.whorls;
+    assert!(beech.architecture.ecomod.whorls.is_some());
     let mut leaves: Vec<String> = species::leaf_fields(&beech).unwrap().into_iter().map(|(p, _)| p).collect();
     let mut fields: Vec<String> = schema::FIELDS.iter().map(|f| f.path.to_string()).collect();
     leaves.sort();

@@ -98,3 +98,32 @@ fn species_files_carry_the_paper_parameters() {
         assert!(hi[2] <= 1.05 && lo[2] >= -0.5, "{}: {lo:?} {hi:?}", s.id);
     }
 }
+
+/// Issue 32, round 37: a whorled stem (`[architecture.ecomod.whorls]`, our extension for
+/// conifers). The paper's pine model with whorls of 5 branches and 2 interwhorl branches a shoot
+/// keeps S strands in 2S − 1 segments (strands conserved at every split), sets its stem's
+/// first-order branches in groups of 5 whose insertions lie within a few centimetres, with 2
+/// branches between successive whorls, and is as tall as the paper's tree (each shoot is one of
+/// Algorithm 1's stem segments). Without whorls the stem carries one branch a split: no group of
+/// two insertions closer than 5 cm.
+#[test]
+fn a_whorled_stem_keeps_the_strands_and_sets_its_branches_in_whorls() {
+    use sylva::structure::forest_form::StemBranching;
+    let paper = EcoModParams::pine_paper();
+    let mut p = paper.clone();
+    p.whorls = Some(sylva::species::Whorls { branches: 5, interwhorl: 2, interwhorl_share: 0.4 });
+    let (sk, _) = ecomod::grow(&p, 1, 0.0);
+    assert_eq!(sk.len(), 2 * 6000, "root + 2S-1 segments");
+    check_conservation(&sk);
+    let (plain, _) = ecomod::grow(&paper, 1, 0.0);
+    assert!((sk.height() / plain.height() - 1.0).abs() < 0.05, "height {} against the paper's {}", sk.height(), plain.height());
+    let b = StemBranching::of(&sk, p.trunk_length_m, 0.05);
+    let b0 = StemBranching::of(&plain, paper.trunk_length_m, 0.05);
+    eprintln!("whorled: {b:?}; paper: {b0:?}");
+    assert_eq!(b.branches_per_whorl, 5.0, "{b:?}");
+    assert!(b.branches as f32 >= 5.0 * b0.branches as f32, "{} branches, the paper's stem {}", b.branches, b0.branches);
+    // every group is a whorl of 5 or a single interwhorl branch, two of them between whorls
+    assert!(b.whorls as f32 >= 2.2 * (b.branches as f32 / 7.0), "{b:?}");
+    // the paper's stem: single insertions, but for its top tuft (millimetre segments)
+    assert!(b0.whorls as f32 >= 0.8 * b0.branches as f32, "{b0:?}");
+}

@@ -457,7 +457,43 @@ pub struct EcoModParams {
     pub min_len_g: PolyLine,
     /// m^w (eq. 6).
     pub min_len_w: PolyLine,
+    /// A whorled stem ([`Whorls`], `[architecture.ecomod.whorls]`; ours, not the paper's):
+    /// each split of the stem in Algorithm 1 becomes an annual shoot of the leader with a whorl
+    /// of first-order branches at its top and interwhorl branches along it. Optional: without it
+    /// the stem splits as Algorithm 1 does, one branch a split.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub whorls: Option<Whorls>,
 }
+
+/// The whorled stem of a conifer (issue 32, round 37; `[architecture.ecomod.whorls]` of a
+/// species file, our extension of EcoMod, `004_*.txt` Algorithm 1, which splits a segment into
+/// two and so sets one branch on the stem at each split): a Norway spruce, silver fir or Scots
+/// pine sets a whorl of several branches at the top of each annual shoot of its leader, and
+/// (spruce, fir) smaller interwhorl branches along it. With it, each split of the stem (Gravelius
+/// order 0) of Algorithm 1 — its strand split S₁ = ⌈1 + k_s(S₀ − 2)⌉ (eq. 1), its angles and its
+/// lengths (eqs. 2–6) — stands for one annual shoot: the S₀ − S₁ strands that Algorithm 1 gives
+/// one branch go to `interwhorl` branches spread evenly along the shoot and `branches` branches
+/// at its top (a whorl: their insertions [`WHORL_SEGMENT`] of the shoot apart), each interwhorl
+/// branch with `interwhorl_share` of a whorl branch's strands (every branch at least one
+/// strand), all of the shoot's branches spread evenly about the stem; the shoot's Weibull order
+/// is one (Algorithm 1's split), so eqs. 1–6 see the same orders. The tree keeps S strands and
+/// 2S − 1 segments (`crate::structure::grow::ecomod`). Ranges: the schema's
+/// (`architecture.ecomod.whorls.*`); the shipped species files give their sources.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Whorls {
+    /// Branches of a whorl (1–12).
+    pub branches: u32,
+    /// Interwhorl branches along an annual shoot, below its whorl (0–12).
+    pub interwhorl: u32,
+    /// Strands of an interwhorl branch over a whorl branch's (0.05–1).
+    pub interwhorl_share: f32,
+}
+
+/// Length of the stem between successive branches of one whorl, as a share of the annual shoot
+/// ([`Whorls`]; 0.02: a whorl's branches leave the stem within a few millimetres to a couple of
+/// centimetres).
+pub const WHORL_SEGMENT: f32 = 0.02;
 
 /// Light-guided growth parameters (Yi et al., `001_*.txt`, Table 1).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

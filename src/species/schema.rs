@@ -332,6 +332,9 @@ pub const FIELDS: &[FieldSpec] = &[
         "EcoMod minimum relative branch length m^g (eq. 6)",
     ),
     f("architecture.ecomod.min_len_w", "", pl(W, (0.0, 2.0)), "EcoMod m^w (eq. 6)"),
+    f("architecture.ecomod.whorls.branches", "", Kind::Int { min: 1, max: 12 }, "Whorled stem (conifers; optional, ours: each stem split of EcoMod is an annual shoot of the leader): first-order branches of the whorl at the top of each annual shoot"),
+    f("architecture.ecomod.whorls.interwhorl", "", Kind::Int { min: 0, max: 12 }, "Whorled stem: interwhorl branches along each annual shoot, below its whorl"),
+    f("architecture.ecomod.whorls.interwhorl_share", "", r(0.05, 1.0), "Whorled stem: strands of an interwhorl branch over a whorl branch's"),
     f(
         "architecture.light_guided.lambda",
         "",

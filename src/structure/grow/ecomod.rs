@@ -23,10 +23,21 @@
 //!   branch axes droop at most [`MAX_DROOP_DEG`] below the horizontal, and no segment ends
 //!   below z = 0.
 //! - Leaves: ⌈ρ_l⌉ leaves of length l_l per tip segment, arranged by the leaf distribution.
+//! - Whorled stems (ours; `[architecture.ecomod.whorls]`, [`crate::species::Whorls`]): Algorithm
+//!   1 sets one branch on the stem at each split; a conifer sets a whorl of several at the top of
+//!   each annual shoot of its leader, and interwhorl branches along it. With `whorls`, each split
+//!   of the stem stands for an annual shoot: the strands Algorithm 1 gives its one branch are
+//!   shared among the shoot's interwhorl and whorl branches, set one a split (so S strands still
+//!   make 2S − 1 segments) along the shoot's length (Algorithm 1's segment length) and spread
+//!   evenly about the stem; the Weibull order rises once a shoot. A whorl branch, with a share of
+//!   the strands, would make fewer splits along its axis and so stay shorter than the one branch
+//!   it replaces (the crown a cylinder of short limbs under a few long ones): every branch of the
+//!   shoot is lengthened (its L) by the ratio of the reach of an axis of the shoot's branch
+//!   strands to one of a whorl branch's (Algorithm 1's own recursion, `axis_reach`).
 
 use crate::error::{Error, Result};
 use crate::rng::{salt, Stream};
-use crate::species::{EcoModParams, LeafDistribution};
+use crate::species::{EcoModParams, LeafDistribution, Whorls, WHORL_SEGMENT};
 use crate::structure::params::eval_polyline;
 use crate::structure::skeleton::{Leaf, Leaves, NodeId, Role, Skeleton};
 use glam::{Mat3, Vec3};
@@ -145,6 +156,63 @@ struct Pending {
     l: f32,
     frame: Mat3,
     lateral: bool,
+    /// A stem segment of a whorled stem ([`Whorls`]): the annual shoot it belongs to.
+    shoot: Option<Shoot>,
+}
+
+/// Where a stem segment of a whorled stem stands in its annual shoot ([`Whorls`]).
+#[derive(Clone, Copy)]
+struct Shoot {
+    /// Index of the split at this segment's end among the shoot's splits (interwhorl branches
+    /// first, then the whorl).
+    k: u32,
+    /// Strands of the shoot's first segment (S₀ of Algorithm 1's split it stands for).
+    s_start: u32,
+    /// Strands the shoot's branches take together (S₀ − S₁ of that split).
+    lateral: u32,
+    /// Length (m) of the shoot: Algorithm 1's length of the stem segment it stands for.
+    len: f32,
+}
+
+/// Strands of branch `k` of an annual shoot of `w` ([`Whorls`]) whose branches take `total`
+/// strands together: its share (interwhorl branches `interwhorl_share`, whorl branches 1) of
+/// `total`, rounded, at least 1.
+fn shoot_branch_strands(w: &Whorls, k: u32, total: u32) -> u32 {
+    let weight = |k: u32| if k < w.interwhorl { w.interwhorl_share } else { 1.0 };
+    let sum = w.interwhorl as f32 * w.interwhorl_share + w.branches as f32;
+    ((total as f32 * weight(k) / sum.max(1e-6)).round() as u32).max(1)
+}
+
+/// Reach (relative length, eq. 4–6 units) of the main axis of a branch of Gravelius order `g`
+/// whose first split has Weibull order `w` and `s` strands: the sum of its segments' k_l·L as
+/// Algorithm 1 grows them (each split keeping S₁ = ⌈1 + k_s(S₀ − 2)⌉ strands on the axis and L
+/// scaled by √(S₁/S₀) within [m, M]), from a relative length 1.
+fn axis_reach(p: &EcoModParams, g: u32, w: u32, s: u32) -> f32 {
+    let (mut s, mut w, mut big, mut reach) = (s, w, 1.0f32, 0.0f32);
+    while w < 1000 {
+        let lp = local_params(p, g, w);
+        reach += lp.k_l * big;
+        if s < 2 {
+            break;
+        }
+        let (s1, _) = split_strands(s, lp.k_s);
+        big *= ((s1 as f32 / s as f32).sqrt().min(lp.max_len)).max(lp.min_len);
+        s = s1;
+        w += 1;
+    }
+    reach
+}
+
+/// Length (m) of the stem segment that ends at split `k` of an annual shoot of length `len`
+/// ([`Whorls`]): [`WHORL_SEGMENT`] of the shoot between the whorl's branches, and the rest cut
+/// evenly by its interwhorl branches and its whorl's first branch (the segments add up to `len`).
+fn shoot_segment(w: &Whorls, k: u32, len: f32) -> f32 {
+    let whorl = WHORL_SEGMENT * len;
+    if k <= w.interwhorl {
+        (len - whorl * w.branches.saturating_sub(1) as f32).max(0.0) / (w.interwhorl + 1) as f32
+    } else {
+        whorl
+    }
 }
 
 /// Grows an EcoMod tree with explicit options. Node 0 is the trunk base at the origin; node
@@ -164,7 +232,8 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
     let up = Vec3::Z;
     // Frame columns: x, y = branch axis, z. Trunk axis = world up.
     let frame0 = Mat3::from_cols(Vec3::X, Vec3::Z, -Vec3::Y);
-    let mut stack = vec![Pending { parent: 0, g: 0, w: 0, s0: s_total, big_l: 1.0, l: p.trunk_length_m, frame: frame0, lateral: false }];
+    let whorls = p.whorls.filter(|w| w.branches > 0);
+    let mut stack = vec![Pending { parent: 0, g: 0, w: 0, s0: s_total, big_l: 1.0, l: p.trunk_length_m, frame: frame0, lateral: false, shoot: None }];
     let sway = p.wind_undirected * (1.0 - p.k_f);
     while let Some(b) = stack.pop() {
         let id = sk.nodes.len() as NodeId;
@@ -186,10 +255,56 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
             continue;
         }
         let lp = local_params(p, b.g, b.w);
-        let (s1, s2) = split_strands(b.s0, lp.k_s);
-        let r = |s: u32| ((s as f32 / b.s0 as f32).sqrt().min(lp.max_len)).max(lp.min_len);
-        let (big_l1, big_l2) = (r(s1) * b.big_l, r(s2) * b.big_l);
+        let r = |s: u32, of: u32| ((s as f32 / of as f32).sqrt().min(lp.max_len)).max(lp.min_len);
+        // a whorled stem: this split is one of its annual shoot's ([`Whorls`]); the shoot is
+        // Algorithm 1's split of its first segment's strands
+        let shoot = match (whorls, b.g) {
+            (Some(w), 0) => Some(b.shoot.unwrap_or_else(|| {
+                // the stem's first split, at the top of its first segment (the bole): a whorl
+                // without interwhorl branches (they would stand on the bole), as long as
+                // Algorithm 1's next stem segment
+                let (s1, _) = split_strands(b.s0, lp.k_s);
+                Shoot { k: w.interwhorl, s_start: b.s0, lateral: b.s0 - s1, len: lp.k_l * r(s1, b.s0) * b.big_l }
+            })),
+            _ => None,
+        };
+        let (s1, s2) = match (whorls, shoot) {
+            (Some(w), Some(sh)) => {
+                let s2 = shoot_branch_strands(&w, sh.k, sh.lateral).min(b.s0 - 1);
+                (b.s0 - s2, s2)
+            }
+            _ => split_strands(b.s0, lp.k_s),
+        };
+        // the next stem segment: within the shoot, or the next shoot (Algorithm 1's
+        // continuation of the whole shoot's split)
+        let n_shoot = whorls.map_or(1, |w| w.interwhorl + w.branches);
+        let next = match (whorls, shoot) {
+            (Some(w), Some(sh)) if sh.k + 1 < n_shoot => Some((Shoot { k: sh.k + 1, ..sh }, b.big_l, shoot_segment(&w, sh.k + 1, sh.len), b.w)),
+            (Some(w), Some(sh)) => {
+                let big = r(s1, sh.s_start) * b.big_l;
+                let len = lp.k_l * big;
+                let lp_next = local_params(p, 0, b.w + 1);
+                let (n1, _) = if s1 >= 2 { split_strands(s1, lp_next.k_s) } else { (s1, 0) };
+                Some((Shoot { k: 0, s_start: s1, lateral: s1 - n1, len }, big, shoot_segment(&w, 0, len), b.w + 1))
+            }
+            _ => None,
+        };
+        let (big_l1, mut big_l2) = (r(s1, b.s0) * b.big_l, r(s2, b.s0) * b.big_l);
+        // a whorled stem's branches reach as far as Algorithm 1's one branch of the shoot would
+        // (its strands give its axis more splits): each is lengthened by the ratio of the two
+        // axes' reach (an interwhorl branch, with fewer strands, stays shorter)
+        if let (Some(w), Some(sh)) = (whorls, shoot) {
+            let whorl_strands = shoot_branch_strands(&w, w.interwhorl, sh.lateral).min(sh.lateral);
+            let (one, each) = (axis_reach(p, 1, b.w + 1, sh.lateral), axis_reach(p, 1, b.w + 1, whorl_strands));
+            if each > 0.0 && one > each {
+                big_l2 *= one / each;
+            }
+        }
         let (l1, l2) = (lp.k_l * big_l1, lp.k_l * big_l2);
+        let (big_l1, l1, w1, shoot1) = match next {
+            Some((sh, big, len, w)) => (big, len, w, Some(sh)),
+            None => (big_l1, l1, b.w + 1, None),
+        };
         let a1 = p.k_c * (s2 as f32 / b.s0 as f32).sqrt() * lp.alpha;
         let a2 = lp.alpha - a1;
         let (rx, rz) = (rng.range(0.0, std::f64::consts::TAU) as f32, rng.range(0.0, std::f64::consts::TAU) as f32);
@@ -200,12 +315,18 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
         // form); in column form the child frame is R_wind · R_grav · F₀ · R_y · R_x · R_z.
         let grav = rot(axis.cross(up), lp.alpha_m);
         let wind = rot(o.wind, aw);
-        let twist = Mat3::from_rotation_y(p.phyllotaxis_deg.to_radians()) * Mat3::from_rotation_x(ax.to_radians());
+        // a whorled stem spreads its shoot's branches evenly about the stem, and turns each
+        // shoot from the last by the phyllotaxis angle
+        let twist_deg = match shoot {
+            Some(sh) if sh.k > 0 => 360.0 / n_shoot as f32,
+            _ => p.phyllotaxis_deg,
+        };
+        let twist = Mat3::from_rotation_y(twist_deg.to_radians()) * Mat3::from_rotation_x(ax.to_radians());
         let child = |angle: f32| wind * grav * b.frame * twist * Mat3::from_rotation_z((angle + az).to_radians());
         let f1 = constrain(orthonormal(child(a1)), end, l1, b.g == 0);
         let f2 = constrain(orthonormal(child(-a2)), end, l2, false);
-        stack.push(Pending { parent: nid, g: b.g + 1, w: b.w + 1, s0: s2, big_l: big_l2, l: l2, frame: f2, lateral: true });
-        stack.push(Pending { parent: nid, g: b.g, w: b.w + 1, s0: s1, big_l: big_l1, l: l1, frame: f1, lateral: false });
+        stack.push(Pending { parent: nid, g: b.g + 1, w: b.w + 1, s0: s2, big_l: big_l2, l: l2, frame: f2, lateral: true, shoot: None });
+        stack.push(Pending { parent: nid, g: b.g, w: w1, s0: s1, big_l: big_l1, l: l1, frame: f1, lateral: false, shoot: shoot1 });
     }
     Ok((sk, leaves))
 }
