@@ -404,6 +404,68 @@ pub fn lone_chain(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Le
     (chain, fill)
 }
 
+/// The level-of-detail chain of species `sp`'s prototype, the model every tree beyond the near
+/// field is an instance of (the stills' and the viewer's far trees, `super::scene::prototypes`):
+/// the species' EcoMod tree normalised to 1 m ([`crate::structure::species_tree`], seed
+/// `seed`) with its full level carrying the crown's drawn leaf area ([`lone_chain`]: the
+/// species' drawn crown leaf-area index, [`drawn_crown_lai`], over the model's own crown
+/// projection, [`crate::structure::crown_projection_area`]; its leaf cards lengthened by at most
+/// [`MAX_CARD_GROWTH`], the rest as leaf-cluster cards marked by [`crate::mesh::CLUSTER_CARD_U`],
+/// or, where the cards carry more, shortened and thinned). Before round 37 (issue 32) a
+/// prototype's full level carried only EcoMod's own leaf cards, a few per cent of its crown's
+/// leaf area for a birch. An instance scaled isotropically (as the near field's adapted trees
+/// are) carries [`drawn_leaf_area`] of its crown radius (within the octagon's 0.90 of the
+/// disc; cards that the lengthening or the sprigs put beyond the model's crown radius are moved
+/// in, [`keep_cards_within`], so that the renderer's crown-radius scaling is unchanged); the
+/// renderer scales a prototype by the crown radius horizontally and by the height vertically, so an instance's steep cards gain area by up to height / crown radius × the
+/// model's crown radius (BENCHMARKS.md round 37). `None`, with a warning, when the species'
+/// EcoMod parameters grow no tree. Deterministic.
+pub fn prototype_chain(sp: &crate::species::Species, seed: u64) -> Option<(crate::mesh::LodChain, LoneLeafArea)> {
+    match crate::structure::species_tree(sp, seed) {
+        Ok((sk, mut lv)) => {
+            // the model's normalised crown radius before (its leaf cards' farthest vertex), which
+            // the renderer scales each instance's crown radius by: kept, so that the drawn crowns
+            // stay as wide as the simulation's
+            let reach = crate::structure::mesh::leaf_mesh(&lv).positions.iter().map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt()).fold(0.0f32, f32::max);
+            let (mut chain, fill) = lone_chain(&sk, &mut lv, sp);
+            if let Some(full) = chain.levels.first_mut() {
+                keep_cards_within(&mut full.leaves, reach);
+            }
+            Some((chain, fill))
+        }
+        Err(e) => {
+            tracing::warn!("species {}: {e}", sp.id);
+            None
+        }
+    }
+}
+
+/// Moves each card (a quad of four consecutive vertices, as [`crate::structure::mesh::leaf_mesh`]
+/// and the sprigs make them) of `leaves` whose farthest vertex lies beyond `reach` (m from the z
+/// axis) towards the axis along its centre's bearing by the excess, twice, so that lengthened
+/// cards and sprigs do not widen the model's crown (its areas are kept). A mesh that is not made
+/// of quads is left as it is; `reach` ≤ 0 leaves it too.
+fn keep_cards_within(leaves: &mut TriMesh, reach: f32) {
+    if !(reach > 0.0) || leaves.positions.len() % 4 != 0 {
+        return;
+    }
+    for q in leaves.positions.chunks_exact_mut(4) {
+        for _ in 0..2 {
+            let far = q.iter().map(|p| (p[0] * p[0] + p[1] * p[1]).sqrt()).fold(0.0f32, f32::max);
+            let c = q.iter().fold(glam::Vec2::ZERO, |a, p| a + glam::Vec2::new(p[0], p[1])) * 0.25;
+            let dir = c.normalize_or_zero();
+            if far <= reach || dir == glam::Vec2::ZERO {
+                break;
+            }
+            let d = dir * (far - reach);
+            q.iter_mut().for_each(|p| {
+                p[0] -= d.x;
+                p[1] -= d.y;
+            });
+        }
+    }
+}
+
 #[cfg(test)]
 mod lone_tree_tests {
     use super::*;

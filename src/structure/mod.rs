@@ -59,12 +59,20 @@ pub fn normalised(sk: &Skeleton, leaves: &Leaves, height_m: f32) -> crate::Resul
 }
 
 /// Representative tree of a species for the renderer: the EcoMod tree of the species'
-/// `architecture.ecomod` parameters (seed `seed`, t = 0), normalised to height 1 m with its base
-/// at the origin, z up, meshed with the default [`mesh::LodOptions`]; the renderer scales each
-/// instance by its height and crown radius. Bad parameters give an empty chain (and a warning).
+/// `architecture.ecomod` parameters (Zamuda et al., seed 004, Algorithm 1; seed `seed`, t = 0),
+/// normalised to height 1 m with its base at the origin, z up (m per m of height). Errors: the
+/// species' EcoMod parameters cannot grow a tree ([`grow::ecomod::try_grow`]), or it has no
+/// height ([`normalised`]).
+pub fn species_tree(species: &Species, seed: u64) -> crate::Result<(Skeleton, Leaves)> {
+    grow::ecomod::try_grow(&species.architecture.ecomod, seed, 0.0).and_then(|(sk, lv)| normalised(&sk, &lv, 1.0))
+}
+
+/// [`species_tree`] meshed with the default [`mesh::LodOptions`], its leaf cards as EcoMod
+/// leaves them (the renderer's prototypes give the full level its crown's drawn leaf area on
+/// top: `job::leaf_area::prototype_chain`); the renderer scales each instance by its height and
+/// crown radius. Bad parameters give an empty chain (and a warning).
 pub fn species_lod_chain(species: &Species, seed: u64) -> LodChain {
-    let grown = grow::ecomod::try_grow(&species.architecture.ecomod, seed, 0.0).and_then(|(sk, lv)| normalised(&sk, &lv, 1.0));
-    match grown {
+    match species_tree(species, seed) {
         Ok((sk, lv)) => mesh::lod_chain(&sk, &lv, &mesh::LodOptions::default()),
         Err(e) => {
             tracing::warn!("species {}: {e}", species.id);

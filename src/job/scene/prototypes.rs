@@ -13,18 +13,20 @@ pub fn crown_look(species: &Species) -> crate::render::lod::CrownLook {
 
 /// One prototype per species of `library`, in library order (so `SpeciesId` indexes them):
 /// the species' EcoMod tree (004_*.txt, Algorithm 1) normalised to 1 m height, meshed into its
-/// LOD chain by [`crate::structure::species_lod_chain`]. A species whose model cannot be built
-/// falls back to the renderer's stand-in chain (logged).
+/// LOD chain with its full level carrying the crown's drawn leaf area
+/// ([`crate::job::leaf_area::prototype_chain`]: the species' crown leaf-area index over the
+/// model's crown projection, round 37). A species whose model cannot be built falls back to
+/// the renderer's stand-in chain (logged).
 pub fn prototypes(library: &SpeciesLibrary) -> Vec<Prototype> {
     use rayon::prelude::*;
     library
         .species
         .par_iter()
         .map(|s| {
-            let mut lods = crate::structure::species_lod_chain(s, 42);
-            if lods.levels.is_empty() {
-                lods = crate::render::lod::placeholder_chain(s.identity.leaf_type == crate::species::LeafType::Conifer);
-            }
+            let lods = match crate::job::leaf_area::prototype_chain(s, 42) {
+                Some((lods, _)) if !lods.levels.is_empty() => lods,
+                _ => crate::render::lod::placeholder_chain(s.identity.leaf_type == crate::species::LeafType::Conifer),
+            };
             Prototype {
                 name: s.id.clone(),
                 lods,
