@@ -263,6 +263,8 @@ fn readme_documents_every_field_of_the_schema() {
     // beech has every optional table but PROGNAUS's competition terms (Norway spruce's only)
     beech.life.bai_competition = lib.get("norway_spruce").unwrap().life.bai_competition;
     assert!(beech.life.bai_competition.is_some());
+    // nor BWINPro's diameter growth (issue 35 round 37: no shipped file has it; beech's values)
+    beech.life.bai_bwinpro = Some(sylva::species::BaiBwinpro { a0: 2.6518, csa: 1.0414, age: -0.6322, c66: -0.555, bias0: -22.77, bias1: 1.417, bias2: 0.03803, bias3: -0.002403, bias4: 0.00003191, bias5: -0.0000001202, youth_hd: 1.40 });
     // nor the mature form (Scots pine's only)
     beech.architecture.mature_form = lib.get("scots_pine").unwrap().architecture.mature_form;
     assert!(beech.architecture.mature_form.is_some());

@@ -63,6 +63,44 @@ pub struct Crowding {
     /// pool species has `life.bai_competition` (PROGNAUS's competition terms), else empty, and
     /// then only for the trees of such species (0 for the others, which do not read it).
     pub bal: Vec<f32>,
+    /// Crown-competition index C66 (m²/m², ≥ 0) of the trees of species with
+    /// `life.bai_bwinpro` and a DBH of at least [`MIN_DBH_CM`] (0 for the others, which do not
+    /// read it; empty when no pool species has the field): the crown cross-sections of every tree
+    /// of the neighbourhood (the tree's own included) at the height `h66 = cb + (h − cb) / 3`,
+    /// 2/3 of the tree's crown length below its top, over the neighbourhood's area (TreeGrOSS's
+    /// c66, Nagel 1999; `treegross.base.Competition.getc66` at github:softwareschneiderei/bwinpro
+    /// @ 16e1141, over the crowding neighbourhood instead of the whole stand, each tree counted
+    /// once). A neighbour counts only where it is taller than `h66`; its crown is a cylinder of
+    /// the stand-grown crown radius r (`life.stand_crown`; without it the open-grown radius)
+    /// from its crown base to a third of its crown length, then a paraboloid of cross-section
+    /// `1.5 π r² (h − x) / (h − cb)` at height x (TreeGrOSS `Tree.calculateCwAtHeight`); a
+    /// neighbour below 7 cm DBH counts with the full crown of a 7 cm tree, as TreeGrOSS's
+    /// regeneration layer. Crown bases: `life.stand_crown_base` at the neighbourhood's top
+    /// height ([`Crowding::h100`]) for trees of at least 7 cm of species with it, else the
+    /// simulated crown base.
+    pub c66: Vec<f32>,
+    /// Top height (m) of the tree's neighbourhood, taken as its tallest tree (the 100 tallest
+    /// trees per ha are 9 in the 0.09 ha neighbourhood; the tallest overstates their mean by
+    /// about a metre): the `h100` of the crown-base function; filled as [`Crowding::c66`].
+    pub h100: Vec<f32>,
+}
+
+/// Crown cross-section (m²) at height `x` (m) of a crown of radius `r` (m), top `h` (m) and base
+/// `cb` (m): 0 unless `h > x`; `π r²` from the base to a third of the crown length (and for a
+/// `small` tree, below 7 cm DBH, at any height under its top); above it the paraboloid
+/// `1.5 π r² (h − x) / (h − cb)`, which meets the cylinder there (TreeGrOSS
+/// `Tree.calculateCwAtHeight`, github:softwareschneiderei/bwinpro @ c2b096e; where the crown
+/// base is at or above `x` the whole crown counts, as in `Competition.getc66`).
+pub fn crown_cross_section(r: f32, h: f32, cb: f32, small: bool, x: f32) -> f32 {
+    if h <= x {
+        return 0.0;
+    }
+    let full = std::f32::consts::PI * r * r;
+    if small || cb >= x || x <= cb + (h - cb) / 3.0 {
+        full
+    } else {
+        1.5 * full * (h - x) / (h - cb)
+    }
 }
 
 /// Per-tree relative density and neighbourhood quadratic mean DBH of `trees` on the site `w`
@@ -176,9 +214,79 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
     } else {
         Vec::new()
     };
-    drop(items);
     // cell sides (m), clipped to the extent
     let side = |i: usize, e: f64| ((i as f64 + 1.0) * CROWD_CELL_M).min(e) - i as f64 * CROWD_CELL_M;
+    // C66 (TreeGrOSS's crown competition at 2/3 of the crown length): per tree its crown radius
+    // and base, the neighbourhood top heights, then for each tree of a species with BWINPro's
+    // growth the cross-sections of its 3 × 3 neighbourhood's trees (cells in ascending rows,
+    // then columns, each cell's trees in index order: a fixed order of the sums)
+    let c66_sp: Vec<bool> = w.lib.species.iter().map(|sp| sp.life.bai_bwinpro.is_some()).collect();
+    let need_c66 = w.pool.iter().any(|&s| c66_sp[s as usize]);
+    let (c66, h100) = if need_c66 {
+        let cell_top: Vec<f32> = (0..ncell).into_par_iter().with_min_len(256).map(|k| items[start[k] as usize..start[k + 1] as usize].iter().map(|&i| t.height[i as usize]).fold(0.0f32, f32::max)).collect();
+        let nb_top = |k: usize| -> f32 {
+            let (r, c) = (k / cols, k % cols);
+            let mut m = 0.0f32;
+            for rr in r.saturating_sub(1)..(r + 2).min(rows) {
+                for cc in c.saturating_sub(1)..(c + 2).min(cols) {
+                    m = m.max(cell_top[rr * cols + cc]);
+                }
+            }
+            m
+        };
+        let top: Vec<f32> = (0..ncell).into_par_iter().with_min_len(256).map(nb_top).collect();
+        // crown radius, crown base and "small" (below 7 cm) of every tree, as competitor
+        let crowns: Vec<(f32, f32, bool)> = (0..t.len())
+            .into_par_iter()
+            .with_min_len(1 << 12)
+            .map(|i| {
+                let sp = &w.lib.species[t.species[i] as usize];
+                let (h, d) = (t.height[i], t.dbh[i]);
+                let small = d < MIN_DBH_CM;
+                let r = crate::species::allometry::stand_crown_radius(sp, d.max(MIN_DBH_CM), h, 0.0).unwrap_or_else(|| open_crown_radius(sp, h, d));
+                let cb = match sp.life.stand_crown_base {
+                    Some(f) if !small => f.crown_base_m(h, d, top[cells[i] as usize].max(h)),
+                    _ => t.crown_base[i],
+                };
+                (r, cb, small)
+            })
+            .collect();
+        let c66: Vec<f32> = (0..t.len())
+            .into_par_iter()
+            .with_min_len(1 << 10)
+            .map(|i| {
+                if !c66_sp[t.species[i] as usize] || t.dbh[i] < MIN_DBH_CM {
+                    return 0.0;
+                }
+                let k = cells[i] as usize;
+                let (r, c) = (k / cols + r0, k % cols + c0);
+                let h = t.height[i];
+                let x = crowns[i].1 + (h - crowns[i].1) / 3.0;
+                let (mut a, mut sum) = (0f64, 0f64);
+                for rr in r.saturating_sub(1).max(r0)..(r + 2).min(r1) {
+                    for cc in c.saturating_sub(1).max(c0)..(c + 2).min(c1) {
+                        a += side(cc, ex) * side(rr, ey);
+                        let kk = (rr - r0) * cols + (cc - c0);
+                        for &j in &items[start[kk] as usize..start[kk + 1] as usize] {
+                            let j = j as usize;
+                            let (rj, cbj, small) = crowns[j];
+                            sum += crown_cross_section(rj, t.height[j], cbj, small, x) as f64;
+                        }
+                    }
+                }
+                if a > 0.0 {
+                    (sum / a) as f32
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let h100: Vec<f32> = (0..t.len()).map(|i| if c66_sp[t.species[i] as usize] { top[cells[i] as usize] } else { 0.0 }).collect();
+        (c66, h100)
+    } else {
+        (Vec::new(), Vec::new())
+    };
+    drop(items);
     // neighbourhood (3 × 3 cells) values, once per cell, rows in parallel
     let mut nb_rd = vec![0f32; ncell];
     let mut nb_dq = vec![0f32; ncell];
@@ -261,7 +369,7 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
     } else {
         Vec::new()
     };
-    Crowding { rd, dq_cm, ccf, bal }
+    Crowding { rd, dq_cm, ccf, bal, c66, h100 }
 }
 
 /// Stand density of a world, per hectare of unmasked area, for the stand tables and the tests.
@@ -317,6 +425,21 @@ pub fn stand_density(w: &World, min_dbh_cm: f32) -> StandDensity {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// TreeGrOSS's crown at a height: none at or above the top; the whole crown from the base
+    /// to a third of the crown length (and for a small tree at any height under its top); the
+    /// paraboloid above, meeting the cylinder there (r 2 m, top 20 m, base 8 m: 12.566 m² up to
+    /// 12 m, 1.5 · 12.566 · 4 / 12 = 6.283 m² at 16 m).
+    #[test]
+    fn crown_cross_section_is_treegross() {
+        let full = std::f32::consts::PI * 4.0;
+        assert_eq!(crown_cross_section(2.0, 20.0, 8.0, false, 20.0), 0.0);
+        assert_eq!(crown_cross_section(2.0, 20.0, 8.0, false, 5.0), full);
+        assert_eq!(crown_cross_section(2.0, 20.0, 8.0, false, 12.0), full);
+        assert!((crown_cross_section(2.0, 20.0, 8.0, false, 16.0) - 6.2832).abs() < 1e-3);
+        assert!((crown_cross_section(2.0, 20.0, 8.0, false, 12.001) - full).abs() < 1e-2);
+        assert_eq!(crown_cross_section(2.0, 20.0, 8.0, true, 16.0), full);
+    }
 
     #[test]
     fn sdi_is_reineke() {

@@ -319,6 +319,13 @@ impl Species {
                 expected: format!("less than life.max_age_yr = {}", l.max_age_yr),
             });
         }
+        if l.bai_bwinpro.is_some() && (l.stand_crown.is_none() || l.stand_crown_base.is_none()) {
+            out.push(Violation {
+                field: "life.bai_bwinpro".into(),
+                value: "given".into(),
+                expected: "life.stand_crown and life.stand_crown_base given too (the crown width and crown base the BWINPro increment reads)".into(),
+            });
+        }
         let a = &self.appearance;
         for (field, v, after, before) in [("appearance.autumn_doy", a.autumn_doy, "appearance.leaf_out_doy", a.leaf_out_doy), ("appearance.leaf_fall_doy", a.leaf_fall_doy, "appearance.autumn_doy", a.autumn_doy)] {
             if v.is_finite() && before.is_finite() && v <= before {
@@ -437,8 +444,8 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
         }
     }
     for spec in schema::FIELDS {
-        if spec.path == "identity.sources" || spec.path == "life.form_factor" || spec.path.starts_with("life.stand_crown.") || spec.path.starts_with("life.stand_crown_base.") || spec.path.starts_with("life.dense_hd.") || spec.path.starts_with("life.bai_competition.") || spec.path.starts_with("life.foliage.") {
-            continue; // optional (form factor: default 0.5; stand crown, stand crown base, dense-stand H/D, BAI competition, foliage: none)
+        if spec.path == "identity.sources" || spec.path == "life.form_factor" || spec.path.starts_with("life.stand_crown.") || spec.path.starts_with("life.stand_crown_base.") || spec.path.starts_with("life.dense_hd.") || spec.path.starts_with("life.bai_competition.") || spec.path.starts_with("life.bai_bwinpro.") || spec.path.starts_with("life.foliage.") {
+            continue; // optional (form factor: default 0.5; stand crown, stand crown base, dense-stand H/D, BAI competition, BWINPro growth, foliage: none)
         }
         // the mature form is optional as a table; where it is given, each of its fields is
         // required (none has a default)

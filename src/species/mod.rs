@@ -191,6 +191,14 @@ pub struct LifeHistory {
     /// crowding modifier of the neighbourhood's relative density acts.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bai_competition: Option<BaiCompetition>,
+    /// Diameter growth of BWINPro/TreeGrOSS ([`BaiBwinpro`], NW-FVA): where given, it replaces
+    /// the growth phase's diameter increment of the species' trees with a DBH
+    /// ([`crate::sim::phases::growth::bwinpro_dbh`]): the youth rule `D = h / youth_hd` below
+    /// 7 cm, the basal-area increment with the crown-competition index c66 from 7 cm. Needs
+    /// `stand_crown` and `stand_crown_base` (the crowns the increment is fitted with).
+    /// Optional: without it the open-grown potential × light × crowding acts.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bai_bwinpro: Option<BaiBwinpro>,
     /// Leaf area of the species' drawn crowns ([`Foliage`]): what every picture and export
     /// gives a tree's leaf cards ([`crate::job::leaf_area::drawn_leaf_area`]). Optional: without
     /// it a drawn crown carries the light model's crown LAI
@@ -230,6 +238,53 @@ pub struct BaiCompetition {
     pub bal: f32,
     /// Coefficient c2 of the crown competition factor (per %), in [−0.1, 0].
     pub ccf: f32,
+}
+
+/// Diameter growth of a species in the NW German growth simulator BWINPro 7 / TreeGrOSS
+/// (Nagel, Duda & Hansen 2006, Forst und Holz 61:427–429; NW-FVA, open source): the species
+/// block's `DiameterIncrement` of `ForestSimulatorNWGermany6.xml` (github:rnuske/TreeGrOSSinR
+/// @ 659d30d, `data-raw/`) and the youth growth of `treegross.base.Tree.grow`
+/// (github:softwareschneiderei/bwinpro @ c2b096e, `treegross/src/main/java/treegross/base/Tree.java`).
+///
+/// - Trees of DBH ≥ 7 cm (TreeGrOSS's threshold for single trees): 5-year basal-area increment
+///   `ΔG₅ = exp(a0 + csa · ln CSA + age · ln t + c66 · C66) + Σₖ biasₖ · Dᵏ` (cm², k = 0…5; the
+///   published `dynET Biaskorr` form), with CSA the crown surface area (m²) of a paraboloid
+///   crown of radius r = CW / 2 and length L, `π r / (6 L²) ((4 L² + r²)^1.5 − r³)`, `t` the
+///   tree's age (years), C66 the crown-competition index (crown cross-sections of the
+///   neighbours at 2/3 of the tree's crown length from its top, per unit area:
+///   [`crate::sim::density::Crowding::c66`]). TreeGrOSS's release term (`c66c`, the
+///   competition removed by a thinning in the period) is not modelled.
+/// - Trees below 7 cm: the DBH follows the height, `D = h / youth_hd` (cm; h in m), never
+///   shrinking (TreeGrOSS's youth growth; beech's 1.40 is the value of its species codes 200–299).
+///
+/// Each species file names its block and values.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BaiBwinpro {
+    /// Intercept a0 of ln ΔG₅ (ΔG₅ in cm² per 5 years), in [−20, 20].
+    pub a0: f32,
+    /// Coefficient of ln CSA (crown surface area, m²), in [0, 3].
+    pub csa: f32,
+    /// Coefficient of ln age (years), in [−3, 1].
+    pub age: f32,
+    /// Coefficient of the crown-competition index C66 (m²/m²), in [−5, 0].
+    pub c66: f32,
+    /// Bias polynomial `bias0 + bias1 D + … + bias5 D⁵` (cm² per 5 years, D in cm), added to the
+    /// exponential term: coefficients of D⁰ … D⁵.
+    pub bias0: f32,
+    /// Coefficient of D¹ of the bias polynomial.
+    pub bias1: f32,
+    /// Coefficient of D² of the bias polynomial.
+    pub bias2: f32,
+    /// Coefficient of D³ of the bias polynomial.
+    pub bias3: f32,
+    /// Coefficient of D⁴ of the bias polynomial.
+    pub bias4: f32,
+    /// Coefficient of D⁵ of the bias polynomial.
+    pub bias5: f32,
+    /// Youth height–diameter ratio (m of height per cm of DBH) of trees below 7 cm:
+    /// `D = h / youth_hd`, in (0.3, 5].
+    pub youth_hd: f32,
 }
 
 /// Dense-stand height–diameter curve of a species, `h/d = k · D^c` (h in m, D the DBH in cm,

@@ -6,7 +6,7 @@ use crate::sim::density::Crowding;
 use crate::sim::rules;
 use crate::sim::trees::{birth_id, TreeStore};
 use crate::species::allometry::{HeightIncrement, OpenDbh, Table};
-use crate::species::{BaiCompetition, DenseHd, Species, SpeciesId, SpeciesLibrary};
+use crate::species::{BaiBwinpro, BaiCompetition, DenseHd, Species, SpeciesId, SpeciesLibrary};
 pub use crate::species::allometry::{effective_age, open_crown_radius, open_dbh, potential_height, potential_increment};
 use rayon::prelude::*;
 
@@ -79,6 +79,57 @@ pub fn height_share(m: f32, s: f32) -> f32 {
 pub fn bai_competition_modifier(bc: BaiCompetition, cr_rel: f32, bal: f32, ccf: f32) -> f32 {
     let cr = cr_rel.clamp(0.01, 1.0);
     (bc.crown_ratio * cr.ln() + bc.bal * bal + bc.ccf * ccf * 100.0).exp().min(1.0)
+}
+
+/// Crown surface area (m²) of a paraboloid crown of width `cw` (m) and length `len` (m, > 0):
+/// `π r / (6 L²) ((4 L² + r²)^1.5 − r³)` with `r = cw / 2` (the crown measure of BWINPro's
+/// diameter increment, `ForestSimulatorNWGermany6.xml`, Nagel et al. 2006). 0 for a crown
+/// without width or length.
+pub fn crown_surface_area(cw: f32, len: f32) -> f32 {
+    if !(cw > 0.0 && len > 0.0) {
+        return 0.0;
+    }
+    let (r, l2) = (0.5 * cw as f64, (len as f64) * (len as f64));
+    (std::f64::consts::PI * r / (6.0 * l2) * ((4.0 * l2 + r * r).powf(1.5) - r * r * r)) as f32
+}
+
+/// BWINPro's 5-year basal-area increment (cm², ≥ 0) of a tree of DBH `d` (cm, ≥ 7), crown
+/// surface area `csa` (m², [`crown_surface_area`]), age `age` (years, at least 1) and
+/// crown-competition index `c66` ([`crate::sim::density::Crowding::c66`]):
+/// `exp(a0 + csa · ln CSA + age · ln t + c66 · C66) + Σₖ biasₖ · Dᵏ` ([`BaiBwinpro`]), floored
+/// at 0 (TreeGrOSS sets a negative increment to 0). A crown without surface has none.
+pub fn bwinpro_bai5(bw: BaiBwinpro, d: f32, csa: f32, age: f32, c66: f32) -> f32 {
+    if !(csa > 0.0) {
+        return 0.0;
+    }
+    let core = (bw.a0 + bw.csa * csa.ln() + bw.age * age.max(1.0).ln() + bw.c66 * c66).exp();
+    let bias = [bw.bias0, bw.bias1, bw.bias2, bw.bias3, bw.bias4, bw.bias5].iter().rev().fold(0.0f32, |acc, &b| acc * d + b);
+    (core + bias).max(0.0)
+}
+
+/// One year's DBH (cm) under BWINPro's diameter growth ([`BaiBwinpro`]) of a tree of DBH `d`
+/// (cm; 0 without one), height `h1` (m) after this season, age `age` (years), in a
+/// neighbourhood of crown competition `c66` and top height `h100` (m)
+/// ([`crate::sim::density::Crowding`]); `scale` multiplies the increment (the site's
+/// suitability times the tree's [`growth_factor`]). Below 7 cm the DBH follows the height,
+/// `max(d, h1 / youth_hd)` (0 while `h1` ≤ 1.3 m and the tree has none; TreeGrOSS's youth
+/// growth, which does not see competition or site); from 7 cm it grows by a fifth of the
+/// 5-year increment's DBH change `√(d² + 4 ΔG₅ / π) − d` ([`bwinpro_bai5`], TreeGrOSS
+/// `Tree.grow` over one of its 5 years), with the crown of the species' stand-grown crown width
+/// and crown base (`life.stand_crown`, `life.stand_crown_base` at `h100`) at the height `h`
+/// before the season. `None` for a species without `stand_crown` or `stand_crown_base`.
+#[allow(clippy::too_many_arguments)]
+pub fn bwinpro_dbh(bw: BaiBwinpro, sp: &Species, h: f32, h1: f32, d: f32, age: f32, c66: f32, h100: f32, scale: f32) -> Option<f32> {
+    let cbf = sp.life.stand_crown_base?;
+    sp.life.stand_crown?;
+    if d < crate::sim::density::MIN_DBH_CM {
+        return Some(if h1 > BREAST_HEIGHT_M { d.max(h1 / bw.youth_hd) } else { d });
+    }
+    let cb = cbf.crown_base_m(h, d, h100.max(h));
+    let cw = 2.0 * crate::species::allometry::stand_crown_radius(sp, d, h, cb)?;
+    let g5 = bwinpro_bai5(bw, d, crown_surface_area(cw, h - cb), age, c66);
+    let dd5 = ((d as f64) * (d as f64) + 4.0 * g5 as f64 / std::f64::consts::PI).sqrt() as f32 - d;
+    Some(d + 0.2 * dd5 * scale)
 }
 
 /// Persistent diameter-growth factor of tree `id` (lognormal, median 1, σ = [`GROWTH_SIGMA`],
@@ -178,6 +229,12 @@ pub struct Growth<'a> {
 /// above breast height; `m` still sets the height share and vigour, and a tree with `m = 0`
 /// does not grow in diameter).
 ///
+/// Species with BWINPro's diameter growth (`life.bai_bwinpro`; issue 35, round 37) take their
+/// DBH from [`bwinpro_dbh`] instead (youth rule below 7 cm, the basal-area increment with the
+/// crown-competition index C66 from 7 cm, scaled by the site's suitability and the tree's
+/// growth factor; light and the crowding modifier do not enter it); their height, crown and
+/// vigour grow as above.
+///
 /// Dense-stand height bound (issue 35; for species with `life.dense_hd`, none without): after
 /// the season, a tree with a DBH `D₁ > 0` may not be taller than
 /// [`dense_height_bound`]`(D₁)`: `H₁ ← max(H, min(H₁, h_max(D₁)))` — the height increment is
@@ -227,7 +284,7 @@ pub fn run(w: Growth<'_>) {
             if id[i] >= recruited {
                 return;
             }
-            let g = grow(lib, curves, crowd, seed, species[i], light[i], suitability[i], id[i], *hr, *dr, *cbr, *vr, gr, i);
+            let g = grow(lib, curves, crowd, seed, species[i], light[i], suitability[i], id[i], *hr, *dr, *cbr, *vr, *ar, gr, i);
             *hr = g.h;
             *dr = g.d;
             *rr = g.r;
@@ -246,7 +303,7 @@ type Curves = (Table<HeightIncrement>, Table<OpenDbh>, Option<(DenseHd, f32)>);
 /// kept); `i` its index in the crowding.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s: u16, l: f32, suitability: f32, id: u64, h: f32, d: f32, crown_base: f32, vigour: f32, factor: &mut f32, i: usize) -> Grown {
+fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s: u16, l: f32, suitability: f32, id: u64, h: f32, d: f32, crown_base: f32, vigour: f32, age: f32, factor: &mut f32, i: usize) -> Grown {
     let sp = &lib.species[s as usize];
     let (inc, dbh_of, bound) = &curves[s as usize];
     let f = light_response(l, sp.life.shade_tolerance) * suitability;
@@ -255,6 +312,20 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
     let m = crowding_modifier(crowd.rd[i], s);
     let dh_pot = inc.at(h);
     let h1 = (h + dh_pot * f * height_share(m, s)).min(sp.life.max_height_m);
+    // BWINPro's diameter growth (issue 35, round 37) in place of the potential × light × crowding
+    if let Some(bw) = sp.life.bai_bwinpro {
+        let (c66, h100) = (crowd.c66.get(i).copied().unwrap_or(0.0), crowd.h100.get(i).copied().unwrap_or(h));
+        let mut scale = suitability;
+        if d >= crate::sim::density::MIN_DBH_CM && scale > 0.0 {
+            if factor.is_nan() {
+                *factor = growth_factor(seed, id);
+            }
+            scale *= *factor;
+        }
+        if let Some(d1) = bwinpro_dbh(bw, sp, h, h1, d, age, c66, h100, scale) {
+            return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, f, m);
+        }
+    }
     // Diameter increment below is `dd_pot · f · m` with dd_pot finite and ≥ 0: a tree with no
     // light response or fully suppressed by crowding (f = 0 or m = 0) gets +0 whatever dd_pot
     // is, so its open-grown curve (two powers and two logarithms) is not evaluated.
@@ -378,6 +449,40 @@ mod tests {
         assert!((bai_competition_modifier(bc, 0.5, 20.0, 2.5) - 0.40203).abs() < 1e-4, "{}", bai_competition_modifier(bc, 0.5, 20.0, 2.5));
         assert_eq!(bai_competition_modifier(bc, 1.7, 0.0, 0.0), 1.0);
         assert!(bai_competition_modifier(bc, 0.5, 30.0, 2.5) < bai_competition_modifier(bc, 0.5, 20.0, 2.5));
+    }
+
+    /// BWINPro's beech diameter growth (species block 211, Nagel et al. 2006): the crown surface
+    /// area of a paraboloid (CW 4 m, L 6 m: 52.14 m²), the 5-year basal-area increment of a
+    /// Wiedemann-sized tree (7.4 cm, CSA 25 m², age 30) alone (36.08 cm²) and at C66 = 2
+    /// (4.46 cm², the bias −11.08 cm² included), a year's DBH from it (+0.527 cm alone), and the
+    /// youth rule below 7 cm (7 m tall: 5 cm; never shrinking; none below breast height).
+    #[test]
+    fn bwinpro_beech_increment_values() {
+        let bw = BaiBwinpro { a0: 2.6518, csa: 1.0414, age: -0.6322, c66: -0.555, bias0: -22.77, bias1: 1.417, bias2: 0.03803, bias3: -0.002403, bias4: 0.00003191, bias5: -0.0000001202, youth_hd: 1.40 };
+        assert!((crown_surface_area(4.0, 6.0) - 52.1416).abs() < 1e-3, "{}", crown_surface_area(4.0, 6.0));
+        assert_eq!(crown_surface_area(0.0, 6.0), 0.0);
+        assert!((bwinpro_bai5(bw, 7.4, 25.0, 30.0, 0.0) - 36.085).abs() < 0.01, "{}", bwinpro_bai5(bw, 7.4, 25.0, 30.0, 0.0));
+        assert!((bwinpro_bai5(bw, 7.4, 25.0, 30.0, 2.0) - 4.462).abs() < 0.01, "{}", bwinpro_bai5(bw, 7.4, 25.0, 30.0, 2.0));
+        // more competition, less increment; a negative sum is no increment
+        assert!(bwinpro_bai5(bw, 7.4, 25.0, 30.0, 3.0) < bwinpro_bai5(bw, 7.4, 25.0, 30.0, 2.0));
+        assert_eq!(bwinpro_bai5(bw, 7.4, 25.0, 30.0, 6.0), 0.0);
+        let mut b = beech_like();
+        b.life.stand_crown = Some(crate::species::StandCrown { a: 2.0837, b: 0.15, p: 1.0, c: 5.7292, e: 1.3341, g: 0.0 });
+        b.life.stand_crown_base = Some(crate::species::StandCrownBase { a: 0.25704, b: 0.11819, c: -0.002065, e: 0.13831 });
+        assert_eq!(bwinpro_dbh(bw, &b, 6.5, 7.0, 3.0, 15.0, 0.0, 7.0, 1.0), Some(5.0));
+        assert_eq!(bwinpro_dbh(bw, &b, 6.5, 7.0, 6.0, 15.0, 0.0, 7.0, 1.0), Some(6.0));
+        assert_eq!(bwinpro_dbh(bw, &b, 1.0, 1.2, 0.0, 3.0, 0.0, 1.2, 1.0), Some(0.0));
+        // from 7 cm: a fifth of the 5-year DBH change of the increment at the tree's own crown
+        let (h, d, h100) = (10.65f32, 7.4f32, 11.7f32);
+        let cb = b.life.stand_crown_base.unwrap().crown_base_m(h, d, h100);
+        let cw = 2.0 * crate::species::allometry::stand_crown_radius(&b, d, h, cb).unwrap();
+        let g5 = bwinpro_bai5(bw, d, crown_surface_area(cw, h - cb), 30.0, 2.0);
+        let want = d + 0.2 * (((d * d) as f64 + 4.0 * g5 as f64 / std::f64::consts::PI).sqrt() as f32 - d);
+        let got = bwinpro_dbh(bw, &b, h, h + 0.4, d, 30.0, 2.0, h100, 1.0).unwrap();
+        assert!((got - want).abs() < 1e-5 && got > d, "{got} {want}");
+        // without the stand-grown crown functions it does not apply
+        b.life.stand_crown_base = None;
+        assert_eq!(bwinpro_dbh(bw, &b, h, h + 0.4, d, 30.0, 2.0, h100, 1.0), None);
     }
 
     /// The dense-stand height bound: beech's curve (iLand fasy `HDhigh` integrated from breast
