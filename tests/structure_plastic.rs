@@ -753,9 +753,11 @@ fn differences(a: &PlasticTree, b: &PlasticTree) -> (f32, f32, f32, usize) {
 /// the exact one bit for bit; at every step the model's leaf-cluster light, node places and
 /// fates stay within the bounds below of the exact move's; after the 50 moves the model's tree
 /// is as near the tree adapted from scratch at the final wall as the exact moves' tree is, within
-/// the same bounds (no drift). The bounds are about 1.5–2 times the errors measured when the
+/// the same bounds (no drift). The bounds are about 1.4 times the errors measured when the
 /// test was written (printed; BENCHMARKS.md, round 37): the model's error against the exact
-/// moves is of the size of the exact moves' own against adapting from scratch.
+/// moves is of the size of the exact moves' own against adapting from scratch. With the changed
+/// casters not applied to the stored rows (measured as a mutation) the fates (142 of 2,431) and
+/// the mean light error (0.021; 0.0036 above the exact moves' against scratch) break them.
 #[test]
 fn the_move_light_model_stays_near_the_exact_moves() {
     use sylva::structure::plastic::MOVE_LIGHT_TOL_M;
@@ -793,11 +795,11 @@ fn the_move_light_model_stays_near_the_exact_moves() {
     // measured (round 37, debug and release alike): max 0.300, mean 0.0140, 0.070 m (1.1 % of
     // the height), 71 fates (2.9 % of the nodes); the exact moves themselves end 0.237, 0.0153,
     // 0.070 m and 73 fates from the tree adapted from scratch
-    assert!(worst.0 <= 0.45 && worst.1 <= 0.03, "leaf-cluster light: max {} mean {}", worst.0, worst.1);
-    assert!(worst.2 <= 0.02 * h, "node places: {} m", worst.2);
-    assert!(worst.3 <= 6 * n / 100, "fates: {} of {n} nodes", worst.3);
+    assert!(worst.0 <= 0.45 && worst.1 <= 0.02, "leaf-cluster light: max {} mean {}", worst.0, worst.1);
+    assert!(worst.2 <= 0.015 * h, "node places: {} m", worst.2);
+    assert!(worst.3 <= 4 * n / 100, "fates: {} of {n} nodes", worst.3);
     // no drift: as near the tree adapted from scratch as the exact moves are (measured: 0.237,
     // 0.0166, 0.071 m, 58 fates against 0.237, 0.0153, 0.070 m, 73), within the bounds
-    assert!(dm.0 <= de.0 + 0.1 && dm.1 <= de.1 + 0.005, "light against scratch: model {dm:?}, exact {de:?}");
+    assert!(dm.0 <= de.0 + 0.1 && dm.1 <= de.1 + 0.003, "light against scratch: model {dm:?}, exact {de:?}");
     assert!(dm.2 <= de.2 + 0.01 * h && dm.3 <= de.3 + n / 100, "places and fates against scratch: model {dm:?}, exact {de:?}");
 }

@@ -55,6 +55,13 @@
 //!
 //! Approximation: a node whose signature did not change keeps its state even when moved
 //! clusters of recomputed subtrees now shade it differently.
+//!
+//! **Move light model** (round 37, off by default; [`PlasticTree::set_move_light`]): a lone
+//! tree may keep the per-direction transmittances of its light queries between calls, each
+//! level's casters kept as a snapshot, so that a call after a small change (a wall moved 10 cm)
+//! applies the casters that changed to the stored products instead of rebuilding the level's
+//! shadow grids (see `MoveCache`). It changes results on purpose, within tolerances measured
+//! against the exact calls (BENCHMARKS.md, round 37); the first call is exact.
 
 use super::analysis::{cluster_center, input_casters, judged, normalised, psi_over, shade_casters, StageCluster};
 use super::light::{Occluder, ShadowVolumes, SkyMask, Solids};
