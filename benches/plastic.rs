@@ -7,7 +7,9 @@
 //! `RAYON_NUM_THREADS=1 cargo bench --bench plastic`. Process CPU time (hardly affected when
 //! the machine is shared) and, in the last columns, wall-clock time (the figure of a goal on
 //! several cores), medians over repeated runs (regrowth: one run). `SYLVA_PLASTIC_NO_REGROW=1`
-//! skips the regrowth (for profiling). Each case also prints a fingerprint (FNV-1a over the bits
+//! skips the regrowth (for profiling). The "move wall 10 cm" columns report the move light model
+//! (`PlasticTree::set_move_light`, tolerance `MOVE_LIGHT_TOL_M`; `SYLVA_PLASTIC_MOVE_LIGHT=exact`
+//! or a tolerance in m), the last two columns the exact move (round 36's). Each case also prints a fingerprint (FNV-1a over the bits
 //! of every adapted position, bend angle and fate) so a speed-up can be checked to compute the
 //! same trees bit for bit.
 use glam::Vec3;
@@ -90,6 +92,17 @@ fn env_with(obstacles: &[Obstacle]) -> Environment {
     Environment { sky: sky(), ..Environment::with_obstacles(obstacles) }
 }
 
+/// The move light model of the wall moves (`PlasticTree::set_move_light`): `SYLVA_PLASTIC_MOVE_LIGHT=exact`
+/// for the exact move, a number for its tolerance (m), else
+/// [`sylva::structure::plastic::MOVE_LIGHT_TOL_M`].
+fn move_light() -> Option<f32> {
+    match std::env::var("SYLVA_PLASTIC_MOVE_LIGHT") {
+        Ok(v) if v == "exact" => None,
+        Ok(v) => Some(v.parse().expect("SYLVA_PLASTIC_MOVE_LIGHT: exact or a tolerance in m")),
+        Err(_) => Some(sylva::structure::plastic::MOVE_LIGHT_TOL_M),
+    }
+}
+
 /// A finite wall beside a tree of crown half-width `r` and height `h` (m).
 fn wall_for(r: f32, h: f32) -> Obstacle {
     Obstacle::FiniteWall { x: 0.5 * r, length: 4.0 * r, height: 1.2 * h }
@@ -99,7 +112,8 @@ fn wall_for(r: f32, h: f32) -> Obstacle {
 /// tree, analyses it, adapts it beside the wall once and once more after moving the wall 10 cm,
 /// printing the CPU time of each step and the wall time of the first adaptation (for a
 /// profiler: no search over seeds, no medians). `SYLVA_PLASTIC_ADAPTS=N` repeats the first
-/// adaptation N more times, `SYLVA_PLASTIC_MOVES=N` the wall move.
+/// adaptation N more times, `SYLVA_PLASTIC_MOVES=N` the wall move. The moves use the move light
+/// model ([`move_light`]), on from the first adaptation (which it leaves exact).
 fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOptions, p: &sylva::species::PlasticParams) {
     let v: Vec<u64> = case.split(',').filter_map(|t| t.trim().parse().ok()).collect();
     let (years, seed) = (v.first().copied().unwrap_or(14) as u32, v.get(1).copied().unwrap_or(5));
@@ -110,6 +124,7 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     let tree = PlasticTree::analyse(&sk, p, &env_with(&[]), None).expect("analyse");
     let t1 = cpu_ms();
     let mut t = tree.clone();
+    t.set_move_light(move_light()).expect("move light");
     let wall_clock = std::time::Instant::now();
     let rep = t.adapt(&env_with(&[wall])).expect("adapt");
     let wall_ms = wall_clock.elapsed().as_secs_f64() * 1e3;
@@ -219,8 +234,10 @@ fn main() {
     // the light-guided model (Yi et al.) with the paper parameters in a 24 m × 24 m × 22 m space
     let lo = LightOptions { extent_m: 12.0, height_m: 22.0, ..LightOptions::default() };
     println!("# Plastic Trees benchmark (light-guided trees beside a finite wall; threads: {})", rayon::current_num_threads());
-    println!("| target nodes | cycles | seed | nodes | analysis ms | adapt ms | regrow ms | regrow / adapt | bent | pruned | move wall 10 cm: ms (recomputed nodes) | adapt wall-clock ms | move wall-clock ms |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    // the move columns: the move light model unless SYLVA_PLASTIC_MOVE_LIGHT=exact; the last
+    // two columns the exact move always
+    println!("| target nodes | cycles | seed | nodes | analysis ms | adapt ms | regrow ms | regrow / adapt | bent | pruned | move wall 10 cm: ms (recomputed nodes) | adapt wall-clock ms | move wall-clock ms | exact move ms | exact move wall-clock ms |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     if let Some(case) = std::env::var_os("SYLVA_PLASTIC_PROFILE") {
         let case = case.to_string_lossy();
         if case == "stand" {
@@ -268,7 +285,10 @@ fn main() {
         });
         let rep = rep.expect("ran");
         let mut adapted = tree.clone();
+        adapted.set_move_light(move_light()).expect("move light");
         adapted.adapt(&env).expect("adapt");
+        let mut exact = tree.clone();
+        exact.adapt(&env).expect("adapt");
         let mut rec = 0;
         let moved = match wall {
             Obstacle::FiniteWall { x, length, height } => Obstacle::FiniteWall { x: x + 0.1, length, height },
@@ -280,14 +300,20 @@ fn main() {
             rec = t.adapt(&env_with(&[moved])).expect("adapt").recomputed_nodes;
             after_move = t;
         });
-        prints.push(format!("{} (seed {seed}): adapt {:016x}, moved wall {:016x}", sk.len(), fingerprint(std::slice::from_ref(&adapted)), fingerprint(std::slice::from_ref(&after_move))));
+        let mut after_exact = exact.clone();
+        let (exact_ms, exact_wall) = median_ms(7, || {
+            let mut t = exact.clone();
+            t.adapt(&env_with(&[moved])).expect("adapt");
+            after_exact = t;
+        });
+        prints.push(format!("{} (seed {seed}): adapt {:016x}, moved wall {:016x} (exact {:016x})", sk.len(), fingerprint(std::slice::from_ref(&adapted)), fingerprint(std::slice::from_ref(&after_move)), fingerprint(std::slice::from_ref(&after_exact))));
         let t1 = cpu_ms();
         if regrow {
             std::hint::black_box(light_guided::grow(&lp, &lo, &[wall], seed, years).expect("regrow"));
         }
         let regrow_ms = cpu_ms() - t1;
         println!(
-            "| {target} | {years} | {seed} | {} | {analysis_ms:.1} | {adapt_ms:.2} | {regrow_ms:.0} | {:.0}× | {} | {} | {move_ms:.2} ({rec}) | {adapt_wall:.2} | {move_wall:.2} |",
+            "| {target} | {years} | {seed} | {} | {analysis_ms:.1} | {adapt_ms:.2} | {regrow_ms:.0} | {:.0}× | {} | {} | {move_ms:.2} ({rec}) | {adapt_wall:.2} | {move_wall:.2} | {exact_ms:.2} | {exact_wall:.2} |",
             sk.len(),
             regrow_ms / adapt_ms,
             rep.bent,

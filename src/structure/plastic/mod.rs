@@ -28,7 +28,12 @@ pub mod transform;
 
 pub use analysis::{inverse_tropism, Analysis};
 pub use light::{Ground, Sky};
-pub use transform::{adapt_group, adapt_group_among, adapt_group_among_once, cluster_density, GroupReport};
+pub use transform::{adapt_group, adapt_group_among, adapt_group_among_once, cluster_density, GroupReport, MOVE_DELTA_MAX, MOVE_GAMMA_TOL};
+
+/// Tolerance (m) of the move light model that the bench and the tests use
+/// ([`PlasticTree::set_move_light`]): half the 10 cm step of issue 31's wall move. An ESTIMATE,
+/// chosen before measuring; its errors against the exact moves are in BENCHMARKS.md, round 37.
+pub const MOVE_LIGHT_TOL_M: f32 = 0.05;
 
 use crate::error::{Error, Result};
 use crate::species::PlasticParams;
@@ -189,7 +194,11 @@ pub struct PlasticTree {
     pub(crate) quiet: Option<Box<transform::QuietLevels>>,
     /// True for a tree made by [`PlasticTree::standing`] (shape only, no light): it can stand
     /// among adapted trees but cannot be adapted.
-    pub(crate) standing: bool,    /// The node whose segment is a forest-grown tree's lengthened bole ([`PlasticTree::set_bole`]),
+    pub(crate) standing: bool,
+    /// The move light model and its stored transmittances ([`PlasticTree::set_move_light`]);
+    /// `None`: every call exact.
+    pub(crate) move_light: Option<Box<transform::MoveCache>>,
+    /// The node whose segment is a forest-grown tree's lengthened bole ([`PlasticTree::set_bole`]),
     /// bent with the flexibility of its base's age; `None` for every other tree.
     pub(crate) bole: Option<u32>,
 }
@@ -228,6 +237,7 @@ impl PlasticTree {
             report: PlasticReport { nodes_before: n, nodes_after: n, ..Default::default() },
             quiet: None,
             standing,
+            move_light: None,
             bole: None,
         }
     }
@@ -255,6 +265,7 @@ impl PlasticTree {
     /// environment it grew in are not moved; call before adapting it among others.
     pub fn translate(&mut self, offset: Vec3) {
         self.quiet = None;
+        self.forget_move_light();
         for nd in &mut self.input.nodes {
             nd.pos += offset;
         }
@@ -285,6 +296,7 @@ impl PlasticTree {
             return Err(Error::Invalid { context: "PlasticTree::scale".into(), field: "scale".into(), value: factor.to_string(), expected: "a finite factor > 0".into() });
         }
         self.quiet = None;
+        self.forget_move_light();
         let root = self.input.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO);
         let about = |p: Vec3| root + (p - root) * factor;
         for nd in &mut self.input.nodes {
@@ -405,7 +417,56 @@ impl PlasticTree {
     /// Makes the next adaptation recompute every node (not only the changed subtrees).
     pub fn invalidate(&mut self) {
         self.quiet = None;
+        self.forget_move_light();
         self.force = true;
+    }
+
+    /// Forgets the move light model's stored rows (keeps the model on).
+    fn forget_move_light(&mut self) {
+        if let Some(mc) = self.move_light.as_mut() {
+            mc.clear();
+        }
+    }
+
+    /// Turns the move light model on with receiver and caster tolerance `tol_m` (m), or off
+    /// (`None`, the default: every call exact). With the model on, each call of a tree adapted
+    /// alone (a group of one, no fixed trees) stores, per light query of eq. (3) (a node's
+    /// bending light, a stage cluster's light), the transmittance of every sky direction above
+    /// the terrain through the level's leaf-cluster casters; a later call reuses a stored row when
+    /// the query point is within `tol_m` of where it was taken, applying to it, ray by ray, the
+    /// casters that changed by more than `tol_m` (centre plus radius) or
+    /// [`transform::MOVE_GAMMA_TOL`] (transmittance) since the level's snapshot; the solids
+    /// (the obstacles, the terrain) are tested anew at every query (see `MoveCache` in
+    /// `transform.rs`). So a wall moved by a small step builds shadow grids only at the levels
+    /// where a query point moved farther or many casters changed, and the results differ from
+    /// an exact call by what moves within the tolerances (measured in BENCHMARKS.md, round 37,
+    /// and bounded by the test
+    /// `structure_plastic::the_move_light_model_stays_near_the_exact_moves`). The first call
+    /// after turning it on, after [`PlasticTree::invalidate`], [`PlasticTree::scale`],
+    /// [`PlasticTree::translate`], a change of the sky, and every call in a group or among fixed
+    /// trees are exact (the first fills the rows: the same tree bit for bit, at the cost of the
+    /// directions the solids block). Our model, not the paper's (Pirk et al. 2012 recompute
+    /// "only when required").
+    ///
+    /// Errors: [`Error::Invalid`] (field `move_light`) unless `tol_m` is finite and ≥ 0.
+    pub fn set_move_light(&mut self, tol_m: Option<f32>) -> Result<()> {
+        match tol_m {
+            Some(t) if !(t.is_finite() && t >= 0.0) => Err(Error::Invalid { context: "PlasticTree::set_move_light".into(), field: "move_light".into(), value: t.to_string(), expected: "a finite tolerance ≥ 0 m".into() }),
+            Some(t) => {
+                self.move_light = Some(Box::new(transform::MoveCache::new(t)));
+                Ok(())
+            }
+            None => {
+                self.move_light = None;
+                Ok(())
+            }
+        }
+    }
+
+    /// The move light model's tolerance (m), `None` when every call is exact
+    /// ([`PlasticTree::set_move_light`]).
+    pub fn move_light(&self) -> Option<f32> {
+        self.move_light.as_ref().map(|m| m.tol_m)
     }
 
     /// Current leaf clusters of the full-grown stage: (centre (m), radius (m)) of every lobe

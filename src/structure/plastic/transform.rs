@@ -55,6 +55,13 @@
 //!
 //! Approximation: a node whose signature did not change keeps its state even when moved
 //! clusters of recomputed subtrees now shade it differently.
+//!
+//! **Move light model** (round 37, off by default; [`PlasticTree::set_move_light`]): a lone
+//! tree may keep the per-direction transmittances of its light queries between calls, each
+//! level's casters kept as a snapshot, so that a call after a small change (a wall moved 10 cm)
+//! applies the casters that changed to the stored products instead of rebuilding the level's
+//! shadow grids (see `MoveCache`). It changes results on purpose, within tolerances measured
+//! against the exact calls (BENCHMARKS.md, round 37); the first call is exact.
 
 use super::analysis::{cluster_center, input_casters, judged, normalised, psi_over, shade_casters, StageCluster};
 use super::light::{Occluder, ShadowVolumes, SkyMask, Solids};
@@ -443,7 +450,7 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
             f.prepare(every_dir);
         }
     }
-    let own: Vec<Vec<bool>> = trees
+    let own: Vec<(Vec<bool>, bool)> = trees
         .par_iter_mut()
         .enumerate()
         .map(|(i, t)| {
@@ -498,6 +505,21 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
             }
             t.force = false;
             t.sky = sky.clone();
+            (dirty, all || !same_shade)
+        })
+        .collect();
+    // the move light model serves a tree adapted alone (no group, no fixed trees); its rows are
+    // forgotten when everything is recomputed or the others' shade changed
+    let lone = !group && fixed.is_empty();
+    let own: Vec<Vec<bool>> = own
+        .into_iter()
+        .zip(trees.iter_mut())
+        .map(|((dirty, reset), t)| {
+            if let Some(mc) = t.move_light.as_mut() {
+                if reset || !lone {
+                    mc.clear();
+                }
+            }
             dirty
         })
         .collect();
@@ -565,7 +587,8 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
                 by_season[fill[sn] as usize] = k as u32;
                 fill[sn] += 1;
             }
-            Work { before: t.pos.clone(), moved: vec![false; n], shifted: vec![false; n], done: vec![false; n], own, replay, replayed: 0, record, prunes, by_season, season_start, stage: Vec::new(), stage_upto: None, carry: vec![(false, Quat::IDENTITY); n], depth: vec![0; n] }
+            let mc = if lone { t.move_light.take() } else { None };
+            Work { before: t.pos.clone(), moved: vec![false; n], shifted: vec![false; n], done: vec![false; n], own, replay, replayed: 0, record, prunes, by_season, season_start, stage: Vec::new(), stage_upto: None, carry: vec![(false, Quat::IDENTITY); n], depth: vec![0; n], mc, mc_epoch: 0, mc_delta: Vec::new(), mc_stats: [0; 4], mc_snapshots: 0 }
         })
         .collect();
     let g_max = trees.iter().map(|t| t.analysis.seasons as usize).max().unwrap_or(0);
@@ -607,39 +630,27 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
                 None => Default::default(),
             })
             .collect();
+        for ((t, w), (_, shade, _)) in trees.iter().zip(work.iter_mut()).zip(&occ) {
+            if let (Some(mc), Some(s)) = (w.mc.as_mut(), stage_of(t)) {
+                let before = mc.stages.get(s).map_or(0, |st| st.epoch);
+                (w.mc_epoch, w.mc_delta) = mc.level(s, shade);
+                w.mc_snapshots += (w.mc_epoch != before) as usize;
+            }
+        }
         let casters: Vec<Occluder> = occ.iter().flat_map(|(_, c, _)| c.iter().map(|(_, o)| *o)).collect();
         // the casters that differ from the previous level's (removed, added or changed): both
         // lists are sorted by key; only where a reused value can pay (`reuse_pays`)
         let mut delta = Vec::new();
         for ((_, cur, _), pr) in occ.iter().zip(&prev).filter(|_| reuse_pays) {
             let old: &[(u64, Occluder)] = pr.as_ref().map_or(&[], |p| &p.shade);
-            let (mut i, mut j) = (0, 0);
-            while i < old.len() || j < cur.len() {
-                use std::cmp::Ordering;
-                let ord = match (old.get(i), cur.get(j)) {
-                    (Some(a), Some(b)) => a.0.cmp(&b.0),
-                    (Some(_), None) => Ordering::Less,
-                    _ => Ordering::Greater,
-                };
-                match ord {
-                    Ordering::Equal => {
-                        if !same_occluder(&Some(old[i].1), &Some(cur[j].1)) {
-                            delta.push(old[i].1);
-                            delta.push(cur[j].1);
-                        }
-                        i += 1;
-                        j += 1;
-                    }
-                    Ordering::Less => {
-                        delta.push(old[i].1);
-                        i += 1;
-                    }
-                    Ordering::Greater => {
-                        delta.push(cur[j].1);
-                        j += 1;
-                    }
+            by_key(old, cur, |a, b| {
+                match (a, b) {
+                    (Some(a), Some(b)) if same_occluder(&Some(a), &Some(b)) => {}
+                    (Some(a), Some(b)) => delta.extend([a, b]),
+                    (a, b) => delta.extend(a.or(b)),
                 }
-            }
+                true
+            });
         }
         // reuse pays while the changes are a minority of the casters
         // (measured on the bench trees: below 60 % changed casters the check is cheaper than the
@@ -702,6 +713,14 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
     // the quiet trees keep the levels they replayed whole or recorded; a call `once` leaves
     // partial signatures, so a later call recomputes everything
     for (t, w) in trees.iter_mut().zip(&mut work) {
+        if let Some(mc) = w.mc.take() {
+            t.move_light = Some(mc);
+            static STATS: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+            if *STATS.get_or_init(|| std::env::var_os("SYLVA_PLASTIC_MOVE_STATS").is_some()) {
+                let [all, whole, part, dirs] = w.mc_stats;
+                eprintln!("move light: {all} queries, {whole} reused whole, {part} in part, {dirs} directions computed; {} levels with a new snapshot", w.mc_snapshots);
+            }
+        }
         t.quiet = w.replay.take().or_else(|| w.record.take().map(|mut r| {
             r.last = Vec::new();
             Box::new(r)
@@ -857,6 +876,39 @@ fn match_stage(prev: &[super::analysis::StageCluster], cur: &[super::analysis::S
         .collect()
 }
 
+/// Walks two caster lists sorted by key side by side, calling `f` with (the old caster, the
+/// caster now) per key: both when the key is in both lists, one `None` when it is in one only;
+/// stops when `f` returns false.
+fn by_key(old: &[(u64, Occluder)], cur: &[(u64, Occluder)], mut f: impl FnMut(Option<Occluder>, Option<Occluder>) -> bool) {
+    let (mut i, mut j) = (0, 0);
+    while i < old.len() || j < cur.len() {
+        use std::cmp::Ordering;
+        let ord = match (old.get(i), cur.get(j)) {
+            (Some(a), Some(b)) => a.0.cmp(&b.0),
+            (Some(_), None) => Ordering::Less,
+            _ => Ordering::Greater,
+        };
+        let go = match ord {
+            Ordering::Equal => {
+                i += 1;
+                j += 1;
+                f(Some(old[i - 1].1), Some(cur[j - 1].1))
+            }
+            Ordering::Less => {
+                i += 1;
+                f(Some(old[i - 1].1), None)
+            }
+            Ordering::Greater => {
+                j += 1;
+                f(None, Some(cur[j - 1].1))
+            }
+        };
+        if !go {
+            return;
+        }
+    }
+}
+
 /// Bitwise equality of two optional occluders.
 fn same_occluder(a: &Option<Occluder>, b: &Option<Occluder>) -> bool {
     let bits = |o: &Occluder| [o.center.x.to_bits(), o.center.y.to_bits(), o.center.z.to_bits(), o.radius.to_bits(), o.gamma.to_bits()];
@@ -917,6 +969,16 @@ struct Work {
     carry: Vec<(bool, Quat)>,
     /// Scratch of [`level`] (depth of a season's node below the older wood; likewise).
     depth: Vec<u32>,
+    /// The tree's move light model while the call runs ([`MoveCache`]; `None`: exact), and of
+    /// the current level its epoch and changed casters ([`MoveCache::level`]).
+    mc: Option<Box<MoveCache>>,
+    mc_epoch: u32,
+    mc_delta: Vec<(Option<Occluder>, Option<Occluder>)>,
+    /// Light queries of the call under the move light model: all, reused whole, reused in
+    /// part, directions computed; and levels with a new snapshot (printed with
+    /// `SYLVA_PLASTIC_MOVE_STATS` set, for the measurements of BENCHMARKS.md).
+    mc_stats: [usize; 4],
+    mc_snapshots: usize,
 }
 
 impl Work {
@@ -984,6 +1046,307 @@ fn preposition(t: &mut PlasticTree, s: usize, w: &mut Work) {
         }
     }
     w.carry = carry;
+}
+
+/// The move light model of one tree ([`PlasticTree::set_move_light`]): per-direction foliage
+/// transmittances (the products of eq. 4 along each sky direction, the transmittance factors of
+/// eq. 3) of every light query of the tree's last exact evaluations, kept between calls, so that
+/// a call after a small change of the environment (a wall moved) builds no shadow grid where
+/// nothing forces it: an acceleration structure of the casters updated, not rebuilt. Per level
+/// (stage) the model keeps a snapshot of the level's casters; a row holds the transmittances
+/// from its point through the snapshot's casters. A query (a node's bending light at its
+/// season's level, a stage cluster's light at its stage's level) reuses its row when
+/// - the row is of the level's current snapshot (its epoch), and
+/// - the query point lies within `tol_m` of the point the row was taken at;
+///
+/// the casters that changed since the snapshot (added, removed, or moved, grown or cut by more
+/// than `tol_m` in centre plus radius, or whose transmittance changed by more than
+/// [`MOVE_GAMMA_TOL`]) are then applied to the row ray by ray (their new γ multiplied in, the
+/// snapshot's divided out, where the ray from the point meets them), so the products are those
+/// of the casters now but for the smaller changes. The solids' mask (the obstacles, the terrain:
+/// what a wall move changes) is taken anew at every query, and eq. (3) sums over the directions
+/// open now. Any other query is evaluated exactly from the level's grids and stored. A level
+/// whose changed casters exceed [`MOVE_DELTA_MAX`] (or half its casters) takes a new snapshot
+/// and evaluates all its queries exactly. Errors so bounded: a receiver within `tol_m` of where
+/// its row was taken, casters within `tol_m` (and [`MOVE_GAMMA_TOL`]) of the snapshot; no drift,
+/// since rows and snapshots are compared with the values at the last exact evaluation, not at
+/// the last call. Our model (not in Pirk et al. 2012, whose section 5 recomputes "only when
+/// required" without saying how); measured against the exact recomputation in BENCHMARKS.md,
+/// round 37.
+#[derive(Debug, Clone)]
+pub(crate) struct MoveCache {
+    /// Receiver and caster tolerance (m).
+    pub(crate) tol_m: f32,
+    /// Rows of every node's bending light (slot: node index).
+    nodes: RowCache,
+    /// Per stage: rows of the stage clusters' light (slot: cluster index) and the level's
+    /// caster snapshot.
+    stages: Vec<StageCache>,
+}
+
+/// Stored per-direction transmittances of light queries, `nd` per slot ([`MoveCache`]).
+#[derive(Debug, Clone, Default)]
+struct RowCache {
+    /// Query point of each slot's row (m; NaN: no row).
+    at: Vec<Vec3>,
+    /// Level epoch each row was filled in (0: none).
+    epoch: Vec<u32>,
+    /// `nd` transmittances per slot (NaN where never computed).
+    row: Vec<f32>,
+}
+
+impl RowCache {
+    fn ensure(&mut self, slots: usize, nd: usize) {
+        if self.at.len() != slots {
+            self.at = vec![Vec3::NAN; slots];
+            self.epoch = vec![0; slots];
+            self.row = vec![f32::NAN; slots * nd];
+        }
+    }
+}
+
+/// One level's part of a [`MoveCache`]: its rows, the casters at its last snapshot (sorted by
+/// key, as [`stage_casters`] gives them) and the snapshot's epoch (0: none yet).
+#[derive(Debug, Clone, Default)]
+struct StageCache {
+    rows: RowCache,
+    snapshot: Vec<(u64, Occluder)>,
+    epoch: u32,
+}
+
+/// Largest change of a caster's transmittance γ (eq. 4, eq. 13) that the move light model
+/// ([`MoveCache`]) ignores: a ray through it changes by at most this factor's difference. An
+/// ESTIMATE (a few per cent of a ray's light), not tuned.
+pub const MOVE_GAMMA_TOL: f32 = 0.02;
+
+/// Most points a level of the move light model evaluates afresh by testing every caster of the
+/// level from each (all directions at once, no grid) in a call that reuses stored rows; more
+/// points build the level's grids. An ESTIMATE: a grid of a few hundred casters for one
+/// direction costs about as many instructions as testing them from a few dozen points in all
+/// directions (round 36's phase table: 3.8 ms of grid builds in about 60 builds a move).
+pub const MOVE_SCAN_MAX_POINTS: usize = 64;
+
+/// Most changed casters a level of the move light model applies to its stored rows
+/// ([`MoveCache`]); beyond it (or beyond half the level's casters) the level takes a new
+/// snapshot and evaluates every query exactly. The changed casters are tested one by one per
+/// query, 64 at most, as [`ShadowVolumes`] scans up to 64 casters without a grid.
+pub const MOVE_DELTA_MAX: usize = 64;
+
+impl MoveCache {
+    pub(crate) fn new(tol_m: f32) -> MoveCache {
+        MoveCache { tol_m, nodes: RowCache::default(), stages: Vec::new() }
+    }
+
+    /// Forgets every row and snapshot (the next call evaluates every query exactly).
+    pub(crate) fn clear(&mut self) {
+        self.nodes = RowCache::default();
+        self.stages.clear();
+    }
+
+    /// The level of stage `s` with casters `shade` (sorted by key): its epoch and the changed
+    /// casters (snapshot version, version now) against its snapshot, taking a new
+    /// snapshot (a new epoch, no changed casters) when there is none or the changes are many.
+    fn level(&mut self, s: usize, shade: &[(u64, Occluder)]) -> (u32, Vec<(Option<Occluder>, Option<Occluder>)>) {
+        if self.stages.len() <= s {
+            self.stages.resize_with(s + 1, StageCache::default);
+        }
+        let tol = self.tol_m;
+        let st = &mut self.stages[s];
+        let mut delta = Vec::new();
+        if st.epoch > 0 {
+            by_key(&st.snapshot, shade, |a, b| {
+                match (a, b) {
+                    (Some(a), Some(b)) if a.center.distance(b.center) + (a.radius - b.radius).abs() <= tol && (a.gamma - b.gamma).abs() <= MOVE_GAMMA_TOL => {}
+                    pair => delta.push(pair),
+                }
+                delta.len() <= MOVE_DELTA_MAX
+            });
+        }
+        if st.epoch == 0 || delta.len() > MOVE_DELTA_MAX || 2 * delta.len() > shade.len() {
+            st.snapshot = shade.to_vec();
+            st.epoch += 1;
+            delta.clear();
+        }
+        (st.epoch, delta)
+    }
+}
+
+/// Sky directions as lanes ([`hit_dirs`]): x, y, z of up to 32 unit directions (0 in unused
+/// lanes).
+struct DirLanes {
+    x: [f32; 32],
+    y: [f32; 32],
+    z: [f32; 32],
+}
+
+impl DirLanes {
+    fn new(dirs: &[Vec3]) -> DirLanes {
+        let mut l = DirLanes { x: [0.0; 32], y: [0.0; 32], z: [0.0; 32] };
+        for (k, d) in dirs.iter().take(32).enumerate() {
+            (l.x[k], l.y[k], l.z[k]) = (d.x, d.y, d.z);
+        }
+        l
+    }
+}
+
+/// Bits of the directions of `want` whose ray from `p` passes the sphere `o` ahead of `p`, as
+/// the shadow volumes test a caster (the sphere ahead along the ray, the ray within its
+/// radius, `p` outside it: no direction when `p` is inside); every lane at once.
+#[inline]
+fn hit_dirs(l: &DirLanes, o: &Occluder, p: Vec3, want: u32) -> u32 {
+    let v = o.center - p;
+    let (l2, r2) = (v.length_squared(), o.radius * o.radius);
+    if !(l2 > r2) {
+        return 0;
+    }
+    let mut m = 0u32;
+    for k in (0..32).rev() {
+        let along = v.x * l.x[k] + v.y * l.y[k] + v.z * l.z[k];
+        m = (m << 1) | ((along > 0.0) & (l2 - along * along <= r2)) as u32;
+    }
+    m & want
+}
+
+/// The factor per direction of `want` by which the casters that changed since a level's
+/// snapshot (`delta`: (its snapshot version, its version now) per caster, either `None` when
+/// added or removed) change the transmittance from `p`: Π γ of the versions now hit over Π γ of
+/// the snapshot versions hit (1 where none is hit); `None` when no changed caster is hit.
+fn delta_factors(l: &DirLanes, delta: &[(Option<Occluder>, Option<Occluder>)], p: Vec3, want: u32) -> Option<[f32; 32]> {
+    let mut f: Option<[f32; 32]> = None;
+    for (old, new) in delta {
+        for (o, up) in [(old, false), (new, true)] {
+            let Some(o) = o else { continue };
+            let mut h = hit_dirs(l, o, p, want);
+            if h == 0 {
+                continue;
+            }
+            let f = f.get_or_insert([1.0; 32]);
+            while h != 0 {
+                let k = h.trailing_zeros() as usize;
+                h &= h - 1;
+                if up {
+                    f[k] *= o.gamma;
+                } else {
+                    f[k] /= o.gamma.max(1e-6);
+                }
+            }
+        }
+    }
+    f
+}
+
+/// Eq. (3) at the points `pts` (slot in `rc`, point) under the move light model
+/// ([`MoveCache`]). The rows hold, per direction, the transmittance from the row's point through
+/// the level's casters as they were at its snapshot (epoch `epoch`). A slot whose row is of
+/// `epoch` and was taken within `tol` of its point reuses it: its transmittance now is the row's
+/// times the factors of the casters changed since the snapshot ([`delta_factors`]: the changed
+/// casters' new γ multiplied in, their snapshot γ divided out, where their rays meet them from
+/// the point now), with no grid built. Any other slot gets a fresh row of every direction above
+/// the terrain (also those the solids block now, so a later call with the wall elsewhere finds
+/// them) from the level's grids, stored back in the snapshot's terms (the same factors
+/// inverted). Returns (i in 0–1, average light direction) per point, summed in direction order
+/// over the directions the solids leave open now: with no changed caster (the first call, or a
+/// level just given a new snapshot) the values of [`light_many_among`] bit for bit (the same
+/// products, summed in the same order). A transmittance below 10⁻⁴ is 0, as
+/// [`ShadowVolumes::transmittance`] gives it; a ray stored dark stays dark.
+#[allow(clippy::too_many_arguments)]
+fn light_cached(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, rc: &mut RowCache, epoch: u32, delta: &[(Option<Occluder>, Option<Occluder>)], tol: f32, pts: &[(usize, Vec3)], stats: &mut [usize; 4]) -> Vec<(f32, Vec3)> {
+    let nd = sky.dirs.len();
+    let weighted = (0..nd).filter(|&k| sky.weights[k] != 0.0).fold(0u32, |m, k| m | 1 << k);
+    let fill = sky_bits(sky) & !solids.below_ground() & weighted;
+    let lanes = DirLanes::new(&sky.dirs);
+    // per point: the solids' mask, whether its row is reused, and the changed casters' factors
+    let plan: Vec<(u32, bool, Option<[f32; 32]>)> = pts
+        .par_iter()
+        .with_min_len(LIGHT_CHUNK)
+        .map(|&(i, p)| {
+            let m = solids.mask(p);
+            let valid = rc.epoch[i] == epoch && rc.at[i].distance(p) <= tol;
+            (m, valid, delta_factors(&lanes, delta, p, fill))
+        })
+        .collect();
+    let fresh_pts = plan.iter().filter(|x| !x.1).count();
+    stats[0] += pts.len();
+    stats[1] += plan.iter().filter(|x| x.1 && x.2.is_none()).count();
+    stats[2] += plan.iter().filter(|x| x.1 && x.2.is_some()).count();
+    stats[3] += fresh_pts * fill.count_ones() as usize;
+    let mut fresh = vec![f32::NAN; pts.len() * nd];
+    let reusing = plan.iter().any(|x| x.1);
+    if reusing && fresh_pts <= MOVE_SCAN_MAX_POINTS {
+        // a few points to evaluate in a call that reuses rows: every caster of the level tested
+        // from each point, all directions at once, instead of building the level's grids
+        let casters = vols.occluders();
+        fresh.par_chunks_mut(nd.max(1)).zip(pts.par_iter().zip(&plan)).filter(|(_, (_, x))| !x.1).for_each(|(row, (&(_, p), _))| {
+            let mut t = [1.0f32; 32];
+            for o in casters {
+                let mut h = hit_dirs(&lanes, o, p, fill);
+                while h != 0 {
+                    let k = h.trailing_zeros() as usize;
+                    h &= h - 1;
+                    t[k] *= o.gamma;
+                }
+            }
+            for k in 0..nd {
+                if fill & (1 << k) != 0 {
+                    row[k] = if t[k] < 1e-4 { 0.0 } else { t[k] };
+                }
+            }
+        });
+    } else if fresh_pts > 0 {
+        vols.prepare(fill);
+        let chunk = light_chunk(pts.len());
+        fresh.par_chunks_mut(chunk * nd.max(1)).zip(pts.par_chunks(chunk).zip(plan.par_chunks(chunk))).for_each(|(rows, (pts, plan))| {
+            for k in 0..nd {
+                if fill & (1 << k) == 0 {
+                    continue;
+                }
+                for (j, (&(_, p), &(_, valid, _))) in pts.iter().zip(plan).enumerate() {
+                    if !valid {
+                        rows[j * nd + k] = vols.transmittance(k, p);
+                    }
+                }
+            }
+        });
+    }
+    let mut out = Vec::with_capacity(pts.len());
+    for (j, (&(i, p), &(m, valid, f))) in pts.iter().zip(&plan).enumerate() {
+        if !valid {
+            rc.at[i] = p;
+            rc.epoch[i] = epoch;
+        }
+        let row = &mut rc.row[i * nd..(i + 1) * nd];
+        let (mut s, mut d) = (0.0f32, Vec3::ZERO);
+        for k in 0..nd {
+            let tk = match (valid, f) {
+                (false, None) => {
+                    row[k] = fresh[j * nd + k];
+                    row[k]
+                }
+                (false, Some(f)) => {
+                    let t = fresh[j * nd + k];
+                    row[k] = (t / f[k]).min(1.0);
+                    t
+                }
+                (true, None) => row[k],
+                (true, Some(f)) => {
+                    let t = (row[k] * f[k]).min(1.0);
+                    if t < 1e-4 {
+                        0.0
+                    } else {
+                        t
+                    }
+                }
+            };
+            let wk = sky.weights[k];
+            if wk == 0.0 || m & (1 << k) != 0 {
+                continue;
+            }
+            s += wk * tk;
+            d += sky.dirs[k] * (wk * tk);
+        }
+        out.push((s, d.normalize_or(Vec3::Z)));
+    }
+    out
 }
 
 /// Largest group whose signatures use shadow volumes of the other trees' clusters built per
@@ -1057,9 +1420,15 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         w.depth = depth;
     }
     let mut at: Vec<Vec3> = Vec::new();
+    let mut at_k: Vec<(usize, Vec3)> = Vec::new();
+    let nd = sky.dirs.len();
+    if let Some(mc) = w.mc.as_mut() {
+        mc.nodes.ensure(n, nd);
+    }
     for bucket in &buckets {
         // pass 1: fates, the nodes kept, and where the recomputed ones would stand unbent
         at.clear();
+        at_k.clear();
         for &k in bucket {
             let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
             if t.fate[par] != Fate::Alive {
@@ -1079,9 +1448,13 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
             if seg.length() > 0.0 {
                 at.push(t.pos[par] + t.rot[par] * seg);
+                at_k.push((k, t.pos[par] + t.rot[par] * seg));
             }
         }
-        let lights = light_many_among(sky, solids, vols, fixed, &at);
+        let lights = match w.mc.as_mut() {
+            Some(mc) => light_cached(sky, solids, vols, &mut mc.nodes, w.mc_epoch, &w.mc_delta, mc.tol_m, &at_k, &mut w.mc_stats),
+            None => light_many_among(sky, solids, vols, fixed, &at),
+        };
         // pass 2: bend the recomputed nodes
         let mut lights = lights.into_iter();
         for &k in bucket {
@@ -1143,8 +1516,19 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             }
         }
     }
-    let nd = sky.dirs.len();
     let mut rows = Rows { start: vec![u32::MAX; clusters.len()], t: vec![f32::NAN; lit.len() * nd] };
+    if let Some(mc) = w.mc.as_mut() {
+        // the move light model: the stage's stored rows, only what the change can alter
+        // recomputed (no rows kept for the next level: a lone tree reuses none)
+        let rc = &mut mc.stages[s].rows;
+        rc.ensure(clusters.len(), nd);
+        let lights = light_cached(sky, solids, vols, rc, w.mc_epoch, &w.mc_delta, mc.tol_m, &lit, &mut w.mc_stats);
+        for (&(ci, _), (l, _)) in lit.iter().zip(lights) {
+            t.light_cache[s][ci] = l;
+        }
+        rows.t.clear();
+        return prune(t, s, w, occ, rows);
+    }
     // (mask, previous row) of every cluster lit
     let from: Vec<(u32, Option<&[f32]>)> = lit
         .iter()
@@ -1197,6 +1581,15 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         rows.start[ci] = (j * nd) as u32;
         t.light_cache[s][ci] = sums[j];
     }
+    prune(t, s, w, occ, rows)
+}
+
+/// The pruning of eqs. (10)–(11) after level `s` of [`level`] (the stage's light in
+/// `t.light_cache[s]`); returns `rows`.
+fn prune(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], rows: Rows) -> Rows {
+    let n = t.input.nodes.len();
+    let a = &t.analysis;
+    let clusters = &a.stages[s];
     // pruning (eqs. 10–11); the fates of shed parents are inherited in any case
     // the nodes of season ≤ s: the pruning below changes no other node. A tree that eq. (11)
     // cannot shed and whose nodes are all alive has nothing to prune or pass on (the loop below
