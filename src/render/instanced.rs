@@ -351,13 +351,15 @@ fn tree_cost(t: &TreeInstance, px: f32, s: f32, prototypes: &[Prototype], levels
 /// of `instances`; `levels`: drawn levels per prototype; `canopy_px`: the frame's far-field
 /// switch.
 ///
-/// With the trees sorted by [`eye_distance`] (ties: instance order), the nearest `K` keep their
+/// First the smallest factor `2^(k_all/4)` with which every tree fits (round 36's one factor,
+/// bisection over k = 1..=`MAX_SCALE_STEPS`: the cost falls as the factor grows). Then, with
+/// the trees sorted by [`eye_distance`] (ties: instance order), the nearest `K` keep their
 /// levels for the largest `K` (cut only between distinct distances) for which their cost plus
-/// the others' at the coarsest factor `2^(MAX_SCALE_STEPS/4)` fits (obstacles always cost
-/// their mesh); the others then take the smallest factor `2^(k/4)`, k = 1..=`MAX_SCALE_STEPS`,
-/// with which the frame fits (bisection over k: the cost falls as the factor grows). Nothing
-/// demoted when the frame fits as it is; when even every tree at the coarsest factor does not,
-/// every tree takes that factor (billboards are the floor: the budget never hides trees).
+/// the others' at the far factor `2^((k_all + 4)/4)` (one octave more, at most the coarsest)
+/// fits (obstacles always cost their mesh); the others then take the smallest factor with
+/// which the frame fits. Nothing demoted when the frame fits as it is; with `K` = 0 every tree
+/// takes the one factor; when even the coarsest does not fit, every tree takes it (billboards
+/// are the floor: the budget never hides trees).
 /// Integer sums: deterministic for any thread count.
 fn demote_farthest(instances: &[TreeInstance], prototypes: &[Prototype], seen: &[Seen], levels: &[usize], canopy_px: f32, params: &LodParams) -> (Demotion, u64) {
     let budget = params.max_triangles as u64;
@@ -382,9 +384,31 @@ fn demote_farthest(instances: &[TreeInstance], prototypes: &[Prototype], seen: &
         return (Demotion::NONE, unbudgeted);
     }
     order.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let smax = (MAX_SCALE_STEPS as f32 / 4.0).exp2();
-    let floor: Vec<u64> = order.par_iter().map(|o| cost(o.1, smax)).collect();
-    // the nearest trees kept while the rest at the coarsest factor fit
+    // the smallest step k in lo+1..=hi whose factor 2^(k/4) on the trees from `from` on fits
+    // with the nearer ones at their levels (the cost falls as the factor grows; `hi` fits or
+    // is the coarsest)
+    let smallest_fit = |from: usize, lo: u32, hi: u32| -> u32 {
+        let kept_cost = fixed + order[..from].iter().map(|o| o.2).sum::<u64>();
+        let fits = |k: u32| kept_cost + order[from..].par_iter().map(|o| cost(o.1, (k as f32 / 4.0).exp2())).sum::<u64>() <= budget;
+        let (mut lo, mut hi) = (lo, hi);
+        while hi - lo > 1 {
+            let mid = (lo + hi) / 2;
+            if fits(mid) {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+        }
+        hi
+    };
+    // one factor for every tree (round 36's rule; factor 1 does not fit), then the far trees'
+    // factor: one octave above it, so that the mid-ground drops one level more rather than to
+    // billboards (round 37: with the far trees at the coarsest factor the default close-up's
+    // mid-ground under a 5 M budget was billboards from 76 m on)
+    let k_all = smallest_fit(0, 0, MAX_SCALE_STEPS);
+    let k_far = (k_all + 4).min(MAX_SCALE_STEPS);
+    let floor: Vec<u64> = order.par_iter().map(|o| cost(o.1, (k_far as f32 / 4.0).exp2())).collect();
+    // the nearest trees kept while the rest at the far factor fit
     let mut acc = (fixed + floor.iter().sum::<u64>()) as i128;
     let mut kept = 0;
     if acc <= budget as i128 {
@@ -398,20 +422,10 @@ fn demote_farthest(instances: &[TreeInstance], prototypes: &[Prototype], seen: &
             }
         }
     }
-    // (kept < order.len(): all of them at their levels cost more than the budget)
+    // (kept < order.len(): all of them at their levels cost more than the budget); none kept:
+    // one factor for all, as before
     let keep_within_m = order[kept].0;
-    let kept_cost = fixed + order[..kept].iter().map(|o| o.2).sum::<u64>();
-    let fits = |k: u32| kept_cost + order[kept..].par_iter().map(|o| cost(o.1, (k as f32 / 4.0).exp2())).sum::<u64>() <= budget;
-    // factor 1 does not fit (the whole frame at its levels), the coarsest is the floor
-    let (mut lo, mut hi) = (0u32, MAX_SCALE_STEPS);
-    while hi - lo > 1 {
-        let mid = (lo + hi) / 2;
-        if fits(mid) {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
+    let hi = if kept == 0 { k_all } else { smallest_fit(kept, 0, k_far) };
     (Demotion { keep_within_m, scale: (hi as f32 / 4.0).exp2() }, unbudgeted)
 }
 
@@ -442,8 +456,8 @@ mod tests {
     /// 640 × 480, 60°: the nearest are drawn at the full level unconstrained. With a quarter of
     /// their triangles as the budget: at most the budget is drawn; every tree nearer than
     /// `keep_within_m` keeps its level, at least the nearest three (the full level); every
-    /// demoted tree is farther than every kept one; one more kept tree would not fit even
-    /// with all the others as billboards; the same in reverse instance order and on one thread.
+    /// demoted tree is farther than every kept one; one more kept tree would not fit with the
+    /// others as drawn; the same in reverse instance order and on one thread.
     #[test]
     fn the_budget_demotes_the_farthest_trees_first() {
         let proto = Prototype { name: "stand-in".into(), lods: placeholder_chain(false), bark_color: [0.3; 3], leaf_color: [0.2, 0.5, 0.2], stiffness: 0.5, look: None, rigid: false };
@@ -471,11 +485,11 @@ mod tests {
         assert!(kept.iter().all(|y| lv[y] == free_lv[y]), "the nearest keep their levels: {lv:?} vs {free_lv:?}");
         assert!(!demoted.is_empty() && demoted.iter().all(|d| kept.iter().all(|k| d > k)), "demoted {demoted:?}, kept {kept:?}");
         assert_eq!(b.demoted_trees, demoted.len());
-        // the cut is the largest: the first tree beyond it at its own level, with every farther
-        // one a billboard, costs more than the budget
-        let own = |y: i32| level_triangles(&protos[0], free_lv[&y]) + if free.instances.iter().any(|r| r.pos_h[1].round() as i32 == y && r.p1[3] == 1.0) { level_triangles(&protos[0], free_lv[&y] + 1) } else { 0 };
-        let n = kept.len();
-        let more: u64 = lv.keys().take(n + 1).map(|&y| own(y)).sum::<u64>() + (60 - n as u64 - 1) * BILLBOARD_TRIANGLES as u64;
+        // the cut is the largest: the first tree beyond it at its own level instead of its
+        // demoted one (the farther ones as drawn) costs more than the budget
+        let cost_in = |bt: &Batches, y: i32| bt.instances.iter().filter(|r| r.pos_h[1].round() as i32 == y).map(|r| level_triangles(&protos[0], r.p3[1] as usize)).sum::<u64>();
+        let first = *lv.keys().nth(kept.len()).unwrap();
+        let more = b.triangles - cost_in(&b, first) + cost_in(&free, first);
         assert!(more > budget as u64, "{more} ≤ {budget}: one more tree could have kept its level");
         // deterministic: whatever the instance order or the threads
         let rev: Vec<TreeInstance> = inst.iter().rev().copied().collect();

@@ -110,8 +110,10 @@ pub fn select_lod_scaled(size_px: f32, scale: f32, params: &LodParams, n_levels:
 /// bounding sphere, `render::instanced::eye_distance`) keep the level of their size on screen;
 /// the others pick theirs with every switch size multiplied by `scale` (≥ 1), down to
 /// billboards. The cut is the largest number of nearest trees that keep their levels while the
-/// others at the coarsest factor ([`MAX_SCALE_STEPS`]) still fit; `scale` is then the smallest
-/// `2^(k/4)` with which those others fit. [`Demotion::NONE`] when the frame fits.
+/// others still fit at twice the factor that would fit every tree (one octave; at most
+/// `2^(MAX_SCALE_STEPS/4)`); `scale` is then the smallest `2^(k/4)` with which those others
+/// fit. Without such a cut every tree takes the one factor. [`Demotion::NONE`] when the frame
+/// fits.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Demotion {
     /// Distance (m) from the eye within which every tree keeps its own level (∞: all, nothing
