@@ -115,9 +115,10 @@ pub struct RenderArgs {
     pub adapt: bool,
     /// Most tree triangles the frame draws (1,000–1,000,000,000): when the trees at their
     /// levels would cost more, the farthest trees are demoted first. The trees nearest the
-    /// eye keep the level their size on screen asks for (as many as fit with all the others
-    /// drawn as billboards); the others switch to coarser levels by the smallest factor on
-    /// their switch sizes that fits, never below billboards (the budget hides no tree). Order
+    /// eye keep the level their size on screen asks for (as many as fit with the others'
+    /// switch sizes at twice the one factor that would fit every tree); the others switch to
+    /// coarser levels by the smallest factor that fits, never below billboards (the budget
+    /// hides no tree). Order
     /// by distance from the eye alone: a tree under 12 m keeps the leaf cards its small-tree
     /// bias gives it when it is among the nearest, and is demoted as any other beyond.
     /// `--stats` says what it demoted (`demoted`, `demoted_trees`, `keep_within_m`,

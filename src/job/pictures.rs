@@ -55,9 +55,9 @@ pub struct Stage {
 /// Budget of tree triangles of a still (`sylva run`'s stills and close-up, `sylva render`'s
 /// default, [`crate::render::lod::LodParams::max_triangles`]): when the trees at their levels
 /// would cost more, the farthest trees are demoted first ([`crate::render::lod::Demotion`]):
-/// the nearest keep their levels, as many as fit with the others at their coarsest, and the
-/// others' level switches are raised by the smallest factor `2^(k/4)` that fits, down to
-/// billboards. The stills are culled on the CPU, with the frame's exact cost
+/// the nearest keep their levels, as many as fit with the others' switches at twice the one
+/// factor that would fit every tree, and the others' level switches are raised by the smallest
+/// factor `2^(k/4)` that fits, down to billboards. The stills are culled on the CPU, with the frame's exact cost
 /// ([`crate::render::instanced::build_batches_of`]). Deterministic: integer counts over the
 /// trees, whatever the order or thread count. 30 M: the default run's year-150 close-up
 /// at 1280 × 720 drew 29.5 M (round 36); a small site's close-up costs no more.
