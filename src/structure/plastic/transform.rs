@@ -817,10 +817,7 @@ fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolu
                 if m & (1 << k) != 0 {
                     continue;
                 }
-                let tk = match fixed {
-                    Some(f) => vols.transmittance(k, p) * f.transmittance(k, p),
-                    None => vols.transmittance(k, p),
-                };
+                let tk = through_both(vols, fixed, k, p);
                 o.0 += wk * tk;
                 o.1 += d * (wk * tk);
             }
@@ -830,6 +827,21 @@ fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolu
         }
     });
     out
+}
+
+/// Transmittance of the ray from `p` along sky direction `k` through the level's casters `vols`
+/// and the `fixed` trees' (eq. 4, the two products multiplied): `vols.transmittance(k, p) *
+/// fixed.transmittance(k, p)` bit for bit, but a ray that the level's casters make dark
+/// (transmittance 0: the product fell below 10⁻⁴, [`ShadowVolumes::transmittance`]) does not
+/// query the fixed trees' grid, as 0 · t is +0 for every t in 0–1. The level's casters go first:
+/// they darken a ray about five times as often as the fixed trees (stand bench, 100 targets:
+/// 2.1 % against 0.4 % of the bending rays; BENCHMARKS.md, round 37).
+fn through_both(vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, k: usize, p: Vec3) -> f32 {
+    let a = vols.transmittance(k, p);
+    match fixed {
+        Some(f) if a != 0.0 => a * f.transmittance(k, p),
+        _ => a,
+    }
 }
 
 /// Per-direction transmittances (eq. 4 products) of the clusters of one stage as evaluated at
@@ -1570,7 +1582,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
                 // the fixed trees' part of a reused value is unchanged: they do not move
                 let tk = match (old, reuse_ref) {
                     (Some(o), Some(r)) if !o[k].is_nan() && !r.delta.shaded(k, c) => o[k],
-                    _ => vols.transmittance(k, c) * fixed.map_or(1.0, |f| f.transmittance(k, c)),
+                    _ => through_both(vols, fixed, k, c),
                 };
                 t_rows[j * nd + k] = tk;
                 sums[j] += wk * tk;
@@ -1622,6 +1634,42 @@ fn prune(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`through_both`] against the plain product of the two transmittances, bit for bit, at
+    /// points inside and below two dense clouds of clusters (a level's and the fixed trees'),
+    /// where rays are dark through either cloud, through both, or lit: the skipped query of a
+    /// ray the level's casters darken changes no value.
+    #[test]
+    fn a_ray_dark_through_the_level_skips_the_fixed_trees_and_keeps_the_product() {
+        let sky = crate::structure::plastic::Sky::from_latitude(47.0);
+        let cloud = |n: usize, x0: f32, g: f32| -> Vec<Occluder> {
+            (0..n)
+                .map(|i| {
+                    let f = i as f32;
+                    let r = 0.3 + 0.5 * (f * 0.37).sin().abs();
+                    Occluder { center: Vec3::new(x0 + (f * 0.71).sin() * 3.0, (f * 0.53).cos() * 3.0, 4.0 + (f * 0.29).sin().abs() * 6.0), radius: r, gamma: g.powf(r) }
+                })
+                .collect()
+        };
+        let vols = ShadowVolumes::new(&sky, cloud(400, 0.0, 0.3));
+        let fixed = ShadowVolumes::new(&sky, cloud(300, 2.5, 0.2));
+        let (mut dark_level, mut dark_fixed_only, mut lit) = (0, 0, 0);
+        for j in 0..300 {
+            let f = j as f32;
+            let p = Vec3::new((f * 0.43).cos() * 5.0, (f * 0.61).sin() * 4.0, 1.0 + (f * 0.17).sin().abs() * 8.0);
+            for k in 0..sky.dirs.len() {
+                let (a, b) = (vols.transmittance(k, p), fixed.transmittance(k, p));
+                assert_eq!(through_both(&vols, Some(&fixed), k, p).to_bits(), (a * b).to_bits(), "point {p}, direction {k}");
+                assert_eq!(through_both(&vols, None, k, p).to_bits(), a.to_bits());
+                dark_level += (a == 0.0 && b > 0.0) as usize;
+                dark_fixed_only += (a > 0.0 && b == 0.0) as usize;
+                lit += (a * b > 0.0 && a * b < 1.0) as usize;
+            }
+        }
+        // the cases test something: rays dark through the level's casters only (the skip),
+        // through the fixed trees' only, and rays partly lit through both
+        assert!(dark_level > 100 && dark_fixed_only > 100 && lit > 500, "{dark_level} {dark_fixed_only} {lit}");
+    }
     use crate::species::SpeciesLibrary;
     use crate::structure::grow::space::Obstacle;
     use crate::structure::species_tree::{grow_species_tree, Model};
