@@ -373,3 +373,27 @@ fn a_managed_dem_run_on_two_and_three_ranks_writes_the_run_of_one_process() {
         assert_eq!(resumed_reads(&err, then, &old, &m, &what), want, "{what}: files read per rank");
     }
 }
+
+/// Issue 37 round 37: a planting that plants nothing (50 m spacing in a 4 m square), which the
+/// ranks of an MPI run refuse together as they build their tiles (each holding its band only),
+/// is refused before anything is written, as one process refuses it: the same message naming
+/// the entry's area, and no run folder (until round 37 the MPI run left the folder with its
+/// `species/` files).
+#[test]
+fn a_planting_that_plants_nothing_is_refused_on_two_ranks_before_any_folder_is_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sc = tmp.path().join("bad.toml");
+    std::fs::write(&sc, scenario(2) + "[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 50.0\nyear = 1\narea = [1.0, 1.0, 5.0, 5.0]\n").unwrap();
+    for (how, ranks) in [("one process", 0), ("mpirun -np 2", 2)] {
+        let out = tmp.path().join(how.replace(' ', "_"));
+        let mut c = if ranks == 0 { Command::new(sylva()) } else { Command::new("mpirun") };
+        if ranks > 0 {
+            c.args(["--allow-run-as-root", "--oversubscribe", "-np", &ranks.to_string(), sylva()]);
+        }
+        let o = c.arg("simulate").arg(&sc).arg("--out").arg(&out).args(["--threads", "1"]).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{how}: a planting that plants nothing ran");
+        assert!(err.contains("management[0].area"), "{how}: {err}");
+        assert!(!out.exists(), "{how}: the refused run left {:?}", common::files(&out).keys().collect::<Vec<_>>());
+    }
+}

@@ -69,12 +69,18 @@ pub struct RunOptions<'a> {
     pub on_snapshot: Option<&'a mut OnSnapshot<'a>>,
     /// File format of the inventories and regeneration tables (default Parquet).
     pub inventory: InventoryFormat,
+    /// Called once the run's world is built (the scenario checked against the site: by the
+    /// ranks together in a tiled run whose ranks hold their tiles only) and before the run
+    /// writes anything; an error stops the run there. The main job writes the run's species
+    /// files here, so a scenario the ranks refuse (a managed area without ground, a planting
+    /// that plants nothing) leaves no folder behind over MPI either (issue 37 round 37).
+    pub on_start: Option<&'a mut dyn FnMut() -> Result<()>>,
 }
 
 impl RunOptions<'_> {
     /// Defaults: no resume, no stop flag, no progress callback, 1024-pixel maps, snapshots on.
     pub fn new(out_dir: impl Into<PathBuf>) -> Self {
-        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, gpkg_years: None, on_snapshot: None, inventory: InventoryFormat::Parquet }
+        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, gpkg_years: None, on_snapshot: None, inventory: InventoryFormat::Parquet, on_start: None }
     }
 }
 
@@ -446,6 +452,9 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     let resuming = opts.resume && checkpoint::exists(&dir);
     let lean = opts.on_snapshot.is_none().then_some(Lean { map_px: opts.map_px, year0: opts.write_snapshots && !resuming, resume: resuming });
     let mut world = stepper.world(site, lib, scenario, lean)?;
+    if let Some(f) = opts.on_start.as_mut() {
+        f()?;
+    }
     mkdir(&dir)?;
     if opts.write_snapshots {
         mkdir(&dir.join("inventory"))?;
