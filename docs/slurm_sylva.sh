@@ -7,9 +7,10 @@
 # system all ranks share and can write (the cluster's parallel or network file system). In a
 # fresh run each rank holds only its band and tile of the site and its own tile's trees (issue
 # 37 rounds 32-33; with [[management]] too since round 36; docs/SCALING.md, "What a rank
-# holds"). A RESUMED run (this script adds --resume when OUT holds a checkpoint) still builds
-# the whole world on rank 0 and, on another rank count, assembles every rank's checkpoint
-# there: size rank 0's memory for that (below), or keep the rank count between restarts. Sizing
+# holds"), and so does a RESUMED run since round 37 (this script adds --resume when OUT holds a
+# checkpoint): every rank reads only the checkpoint files of the old tiles over its own, on
+# any number of ranks (1-4 files on a halved or doubled count), so the rank count may change
+# between restarts without sizing rank 0 for the whole world. Sizing
 # from the measured costs (docs/SCALING.md, "Round 23 update" and its round 26
 # line): the site costs each rank about 20 KiB per hectare (rank 0 about 30 KiB: it keeps the
 # whole world; 100,000 ha: ~1.9 GiB a rank, ~2.9 GiB on rank 0; 1,000,000 ha: ~19 GiB, ~29 GiB
@@ -31,8 +32,9 @@ set -euo pipefail
 SCENARIO=${1:?usage: sbatch slurm_sylva.sh SCENARIO.toml OUT_DIR}
 OUT=${2:?usage: sbatch slurm_sylva.sh SCENARIO.toml OUT_DIR}
 # a run already started in OUT continues from its checkpoint (on any number of ranks): the
-# per-rank checkpoints of a tiled run (OUT/checkpoint/manifest.toml; each rank reads its own
-# file when the number of ranks is the same) or one process's OUT/checkpoint.bin
+# per-rank checkpoints of a tiled run (OUT/checkpoint/manifest.toml; each rank reads the files
+# of the old tiles its tile overlaps: its own file when the number of ranks is the same) or one
+# process's OUT/checkpoint.bin (read by every rank, which keeps its tile's part)
 RESUME=()
 if [ -f "$OUT/checkpoint/manifest.toml" ] || [ -f "$OUT/checkpoint.bin" ]; then RESUME=(--resume); fi
 # srun starts one `sylva` per task; Open MPI's PMIx (or PMI2) tells each its rank

@@ -21,7 +21,10 @@
 //! 3 m on a band across the site's middle, 5 % of its rows, and a thinning from below to a
 //! relative density of 0.6 over that band every 10 years from year 30: the ranks resolve the
 //! areas from their tiles, issue 37 round 36; the uneven site of `SYLVA_TILES_FOREST` is not
-//! managed).
+//! managed), `SYLVA_TILES_RESUME` (default 0; N: also a run stopped after year N on
+//! `SYLVA_TILES_RESUME_FROM` ranks (default 3) and resumed with `--resume` on the ranks to the
+//! end, each rank reading its part of the checkpoint, issue 37 round 37: its ranks' lines give
+//! each rank's peak RSS beside the fresh run's; byte-identical to one process too).
 use std::path::PathBuf;
 use std::process::Command;
 use std::time::Instant;
@@ -73,6 +76,9 @@ fn main() {
     };
     let head = format!("snapshot_every = {snapshots}\ncheckpoint_every = 0");
     let mut toml = common::afforestation_toml("tiles", years, &head, &terrain);
+    // the same scenario stopped after `resume` years (its checkpoint at its end)
+    let resume: u32 = env("SYLVA_TILES_RESUME", 0);
+    let short = toml.replacen(&format!("\nyears = {years}\n"), &format!("\nyears = {resume}\n"), 1);
     if env("SYLVA_TILES_MANAGED", 0u32) != 0 && forest >= 1.0 {
         let s = side as f64 * cell_m;
         let (y0, y1) = (0.475 * s, 0.525 * s);
@@ -82,6 +88,7 @@ fn main() {
         );
         println!("managed: a beech planting of year 0 and thinnings from year 30 on y {y0:.0}–{y1:.0} m");
     }
+    let short = short + &toml[toml.find("[[management]]").unwrap_or(toml.len())..];
     let sc = tmp.path().join("tiles.toml");
     std::fs::write(&sc, toml).expect("scenario file");
     println!("tiles bench: {side} × {side} cells of {cell_m} m ({:.0} ha), {years} years, {} (one process, 2 threads) vs mpirun -np {ranks} (1 thread each)", (side * side) as f64 * cell_m * cell_m / 10_000.0, bin.display());
@@ -116,6 +123,32 @@ fn main() {
     println!("{ranks} ranks × 1 thread: {t_ranks:.1} s ({:.2}× the one process)", t_ranks / t_one);
     for l in err.lines().filter(|l| l.starts_with("rank ") || l.starts_with("phase times")) {
         println!("  {l}");
+    }
+    // stopped after `resume` years on `from` ranks, resumed on `ranks` (issue 37 round 37)
+    if resume > 0 {
+        let from: usize = env("SYLVA_TILES_RESUME_FROM", 3);
+        let short_sc = tmp.path().join("tiles_short.toml");
+        std::fs::write(&short_sc, &short).expect("scenario file");
+        let split = tmp.path().join("split");
+        for (n, s, again) in [(from, &short_sc, false), (ranks, &sc, true)] {
+            let t0 = Instant::now();
+            let mut c = Command::new("mpirun");
+            c.args(["--allow-run-as-root", "--oversubscribe", "-np", &n.to_string()]).arg(&bin).arg("simulate").arg(s).arg("--out").arg(&split).args(["--threads", "1"]);
+            if again {
+                c.arg("--resume");
+            }
+            let o = c.output().expect("run mpirun");
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(o.status.success(), "mpirun failed: {err}");
+            let what = if again { format!("resumed on {n} ranks to year {years}") } else { format!("{n} ranks to year {resume}") };
+            println!("{what}: {:.1} s", t0.elapsed().as_secs_f64());
+            for l in err.lines().filter(|l| l.starts_with("rank ")) {
+                println!("  {l}");
+            }
+        }
+        let same = std::fs::read(one.join("stand_table.csv")).ok() == std::fs::read(split.join("stand_table.csv")).ok();
+        println!("stopped on {from} ranks after year {resume}, resumed on {ranks}: stand table byte-identical to one process: {same}");
+        assert!(same, "the resumed run differs from one process");
     }
     // one process with one thread: the ranks' goal (issue 37) is ≤ 0.6× its time
     if env("SYLVA_TILES_ONE_THREAD", 1u32) != 0 {

@@ -1390,6 +1390,51 @@ fn managed_over_tiles(dir: &Path, years: u32) -> String {
         + "[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\narea = [0.0, 48.0, 120.0, 52.0]\nyears = [6]\n"
 }
 
+/// Issue 37 Build 1, round 37: resume per rank with management. [`managed_over_tiles`] stopped
+/// as by Ctrl-C after year 5 on 3 tiles and resumed on 2, and stopped on 2 and resumed on 3
+/// (every tile building its tile's world with the management resolved from the tiles, no
+/// start's trees, then reading the checkpoint files over its tile; until round 37 rank 0 built
+/// the world of one process and assembled every file), writes one process's run directory
+/// byte for byte, its thinnings, crop-tree thinning, patch, clear and shelterwood cuts after
+/// the resume included.
+#[test]
+fn a_managed_run_stopped_on_three_tiles_resumes_on_two_and_on_two_resumes_on_three() {
+    use sylva::job::run::RunOptions;
+    let d = tempfile::tempdir().unwrap();
+    let toml = managed_over_tiles(d.path(), 10);
+    let sc = Scenario::from_toml_str(&toml, "managed.toml").unwrap();
+    let lib = common::embedded();
+    let one = d.path().join("one");
+    let a = sylva::job::run::run_scenario(&sc, sc.site().unwrap(), &lib, RunOptions::new(&one)).unwrap();
+    let cut_after: Vec<u32> = a.rows.iter().filter(|r| r.year > 5 && r.harvest_stems_ha > 0.0).map(|r| r.year).collect();
+    assert!(cut_after.len() >= 3, "harvests after year 5 in years {cut_after:?}");
+    let (_, template) = world(&toml);
+    for (first, then) in [(3, 2), (2, 3)] {
+        let what = format!("stopped after year 5 on {first} tiles, resumed on {then}");
+        let out = d.path().join(format!("{first}_then_{then}"));
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let s2 = stop.clone();
+        let mut cb = move |p: &sylva::job::run::Progress| {
+            if p.year == 4 {
+                s2.store(true, std::sync::atomic::Ordering::SeqCst);
+            }
+        };
+        let mut o = RunOptions::new(&out);
+        o.stop = Some(stop);
+        o.progress = Some(&mut cb);
+        let part = sylva::job::tiled::run_local_tiles(&sc, sc.site().unwrap(), &lib, o, first).unwrap().0;
+        assert!(part.stopped && part.rows.len() == 5, "{what}: stopped after {} years", part.rows.len());
+        assert_eq!(sylva::job::checkpoint::read_manifest(&out).unwrap().ranks, first);
+        let mut o = RunOptions::new(&out);
+        o.resume = true;
+        let b = sylva::job::tiled::run_local_tiles(&sc, sc.site().unwrap(), &lib, o, then).unwrap().0;
+        assert_eq!(b.rows, a.rows, "{what}: stand table");
+        assert!(!b.world.site.conditions.holds_all(), "{what}: rank 0's driver holds the whole site");
+        let m = common::assert_same_run(&one, &out, &template, &what);
+        assert_eq!((m.year, m.ranks), (10, then));
+    }
+}
+
 /// Issue 37, round 36, step 1: a scenario with management resolved per tile. Every rank holds
 /// only its band of site rows (rank 0 too), cuts the layout and takes its tile's cells from
 /// the bands' owners, then resolves the management from its tile's light cells alone

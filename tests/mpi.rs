@@ -193,7 +193,7 @@ fn dem_scenario(years: u32) -> String {
 }
 
 /// Runs as [`simulate`] and returns stderr, which must name every rank's band of the site.
-fn simulate_dem(ranks: usize, sc: &Path, out: &Path, resume: bool) {
+fn simulate_dem(ranks: usize, sc: &Path, out: &Path, resume: bool) -> String {
     let mut c = Command::new("mpirun");
     c.args(["--allow-run-as-root", "--oversubscribe", "-np", &ranks.to_string(), sylva()]);
     c.arg("simulate").arg(sc).arg("--out").arg(out).args(["--threads", "1"]);
@@ -210,6 +210,40 @@ fn simulate_dem(ranks: usize, sc: &Path, out: &Path, resume: bool) {
         let (h0, h1) = (r0.saturating_sub(2), (r1 + 2).min(40));
         assert!(err.contains(&format!("hydrology from rows {h0}..{h1})")), "rank {r} of {ranks} did not read its band's rows for the hydrology: {err}");
     }
+    err.into_owned()
+}
+
+/// Issue 37 Build 1, round 37: the checkpoint files each rank of a resumed run on `ranks`
+/// ranks said it read (`rank R/N: resumed year Y from K of M checkpoint files (…); holds site
+/// cells columns a..b, rows c..d of W × H` on stderr `err`), checked against the manifests
+/// before (`old`) and after (`new`) the resume: every rank read only files of old tiles whose
+/// light columns overlap its own (tiles across only: the layouts of 2 and 3 ranks here), old
+/// rank 0's among them on rank 0, and holds a window of the site of its tile's columns plus at
+/// most 3 cells a side, not the whole site. Returns the old tiles each rank read.
+fn resumed_reads(err: &str, ranks: usize, old: &sylva::job::checkpoint::Manifest, new: &sylva::job::checkpoint::Manifest, what: &str) -> Vec<Vec<usize>> {
+    assert_eq!((old.tiles_up, new.tiles_up, new.ranks), (1, 1, ranks), "{what}: layouts of tiles across only");
+    (0..ranks)
+        .map(|r| {
+            let head = format!("rank {r}/{ranks}: resumed year {} from ", old.year);
+            let line = err.lines().find(|l| l.starts_with(&head)).unwrap_or_else(|| panic!("{what}: rank {r} did not say what it resumed from: {err}"));
+            let files = line.split_once(" checkpoint files (").unwrap().1.split_once(')').unwrap().0;
+            let read: Vec<usize> = files.split(", ").map(|f| old.files.iter().position(|g| g == f).unwrap_or_else(|| panic!("{what}: {f} is not a file of the manifest {:?}", old.files))).collect();
+            assert!(line.contains(&format!(" from {} of {} checkpoint files", read.len(), old.ranks)), "{what}: {line}");
+            let (c0, c1) = (new.col_bounds[r], new.col_bounds[r + 1]);
+            for &k in &read {
+                let (o0, o1) = (old.col_bounds[k], old.col_bounds[k + 1]);
+                assert!(o0 < c1 && c0 < o1, "{what}: rank {r} (light columns {c0}..{c1}) read the file of old tile {k} (columns {o0}..{o1}), which it does not overlap: {line}");
+            }
+            assert!(r != 0 || read.contains(&0), "{what}: rank 0 did not read old rank 0's file (the stand table): {line}");
+            // the site cells it holds: its tile's columns (10 m light cells on 10 m site cells)
+            let held = line.split_once("holds site cells columns ").unwrap().1;
+            let (cols, rest) = held.split_once(", rows ").unwrap();
+            let (a, b) = cols.split_once("..").unwrap();
+            let (a, b): (usize, usize) = (a.parse().unwrap(), b.parse().unwrap());
+            assert!(rest.ends_with(" of 60 × 40") && a + 3 >= c0 && b <= c1 + 3 && b - a < 60, "{what}: rank {r} (light columns {c0}..{c1}) holds {held}");
+            read
+        })
+        .collect()
 }
 
 #[test]
@@ -235,11 +269,18 @@ fn a_dem_read_by_window_on_two_and_three_ranks_writes_the_run_of_one_process() {
         let m = common::assert_same_run(&one, &d, &template, &format!("DEM site on {n} ranks"));
         assert_eq!((m.year, m.ranks), (24, n));
     }
-    let d = tmp.path().join("split");
-    simulate_dem(3, &short, &d, false);
-    simulate_dem(2, &long, &d, true);
-    let m = common::assert_same_run(&one, &d, &template, "DEM site on 3 ranks for 11 years, resumed on 2 for 24");
-    assert_eq!((m.year, m.ranks), (24, 2));
+    // resumed per rank (issue 37 round 37): 3 → 2 (each rank reads the two files over it),
+    // 2 → 3 (the outer ranks one file each, the middle one two) and 2 → 2 (its own file)
+    for (first, then, want) in [(3, 2, vec![vec![0, 1], vec![1, 2]]), (2, 3, vec![vec![0], vec![0, 1], vec![1]]), (2, 2, vec![vec![0], vec![1]])] {
+        let what = format!("DEM site on {first} ranks for 11 years, resumed on {then} for 24");
+        let d = tmp.path().join(format!("split_{first}_{then}"));
+        simulate_dem(first, &short, &d, false);
+        let old = sylva::job::checkpoint::read_manifest(&d).unwrap();
+        let err = simulate_dem(then, &long, &d, true);
+        let m = common::assert_same_run(&one, &d, &template, &what);
+        assert_eq!((m.year, m.ranks), (24, then));
+        assert_eq!(resumed_reads(&err, then, &old, &m, &what), want, "{what}: files read per rank");
+    }
 }
 
 /// The scenario's warnings ([`sylva::sim::World::new`]: nothing to grow from, a management year
@@ -313,5 +354,46 @@ fn a_managed_dem_run_on_two_and_three_ranks_writes_the_run_of_one_process() {
         simulate_dem(n, &sc, &d, false);
         let m = common::assert_same_run(&one, &d, &template, &format!("managed DEM site on {n} ranks"));
         assert_eq!((m.year, m.ranks), (12, n));
+    }
+    // resumed per rank (issue 37 round 37): stopped after year 6 (before the planting of year
+    // 7, the strip of 9 and the thinning of 10) on 3 and 2 ranks, resumed on 2, 3 and 2; every
+    // rank holds its band and tile, reads only the files over its tile and resolves the
+    // management with the others from its tile
+    let short = tmp.path().join("dem_managed_6.toml");
+    std::fs::write(&short, dem_managed(6)).unwrap();
+    for (first, then, want) in [(3, 2, vec![vec![0, 1], vec![1, 2]]), (2, 3, vec![vec![0], vec![0, 1], vec![1]]), (2, 2, vec![vec![0], vec![1]])] {
+        let what = format!("managed DEM site on {first} ranks for 6 years, resumed on {then} for 12");
+        let d = tmp.path().join(format!("split_{first}_{then}"));
+        simulate_dem(first, &short, &d, false);
+        let old = sylva::job::checkpoint::read_manifest(&d).unwrap();
+        assert_eq!(old.year, 6);
+        let err = simulate_dem(then, &sc, &d, true);
+        let m = common::assert_same_run(&one, &d, &template, &what);
+        assert_eq!((m.year, m.ranks), (12, then));
+        assert_eq!(resumed_reads(&err, then, &old, &m, &what), want, "{what}: files read per rank");
+    }
+}
+
+/// Issue 37 round 37: a planting that plants nothing (50 m spacing in a 4 m square), which the
+/// ranks of an MPI run refuse together as they build their tiles (each holding its band only),
+/// is refused before anything is written, as one process refuses it: the same message naming
+/// the entry's area, and no run folder (until round 37 the MPI run left the folder with its
+/// `species/` files).
+#[test]
+fn a_planting_that_plants_nothing_is_refused_on_two_ranks_before_any_folder_is_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let sc = tmp.path().join("bad.toml");
+    std::fs::write(&sc, scenario(2) + "[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 50.0\nyear = 1\narea = [1.0, 1.0, 5.0, 5.0]\n").unwrap();
+    for (how, ranks) in [("one process", 0), ("mpirun -np 2", 2)] {
+        let out = tmp.path().join(how.replace(' ', "_"));
+        let mut c = if ranks == 0 { Command::new(sylva()) } else { Command::new("mpirun") };
+        if ranks > 0 {
+            c.args(["--allow-run-as-root", "--oversubscribe", "-np", &ranks.to_string(), sylva()]);
+        }
+        let o = c.arg("simulate").arg(&sc).arg("--out").arg(&out).args(["--threads", "1"]).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{how}: a planting that plants nothing ran");
+        assert!(err.contains("management[0].area"), "{how}: {err}");
+        assert!(!out.exists(), "{how}: the refused run left {:?}", common::files(&out).keys().collect::<Vec<_>>());
     }
 }

@@ -508,9 +508,10 @@ fn per_rank_checkpoints_resume_on_the_same_and_other_counts() {
     let unbroken = run_n(&long, &one, 1, false).unwrap();
     assert_eq!(unbroken.rows.len(), 18);
     assert!(unbroken.trees > 20 && unbroken.trees == unbroken.world.stand.trees.len(), "{} trees", unbroken.trees);
-    // 3 → 3: every rank reads its own file; 3 → 2 and 3 → 1: the files assembled; 1 → 3:
-    // checkpoint.bin scattered
-    for (first, then) in [(3, 3), (3, 2), (3, 1), (1, 3)] {
+    // 3 → 3: every rank reads its own file; 3 → 2 and 2 → 3: every rank the files over its
+    // tile (issue 37 round 37); 3 → 1: the files assembled; 1 → 3: checkpoint.bin read by
+    // every tile as the one file of a 1 × 1 layout
+    for (first, then) in [(3, 3), (3, 2), (2, 3), (3, 1), (1, 3)] {
         let d = tmp.path().join(format!("{first}_then_{then}"));
         let s = run_n(&short, &d, first, false).unwrap();
         assert!(s.rows.len() == 9 && s.trees > 0, "{} rows, {} trees", s.rows.len(), s.trees);
@@ -547,6 +548,93 @@ fn per_rank_checkpoints_resume_on_the_same_and_other_counts() {
     let e = run_n(&long, &d, 3, true).unwrap_err().to_string();
     assert!(e.contains("rank 2 failed") && e.contains(&m.files[2]) && e.contains("CRC"), "{e}");
     assert_eq!(sylva::job::checkpoint::read_manifest(&d).unwrap(), m);
+}
+
+/// Issue 37 Build 1, round 37: resume per rank. A run stopped after 18 years on 2 or 3 tiles
+/// leaves one checkpoint file per tile; every tile of a new layout of 2 or 3 tiles, built as a
+/// lean start builds it (its tile's site and seed windows, no trees), reads only the files of
+/// the old tiles whose rectangle overlaps its own (`checkpoint::files_to_read`: on 2 → 3 the
+/// outer tiles read one file each; on 3 → 2 each tile two of three) and gets exactly the part
+/// of one process's world at year 18 that `Tile::new` cuts for it: trees with every column,
+/// cohorts, its windows of the seed grids, the year; rank 0 the stand table and next tree id;
+/// the tallies (deaths by cause, regeneration ledger) of the tiles sum to one process's.
+#[test]
+fn each_tile_of_a_resume_reads_only_the_checkpoint_files_over_it_and_gets_one_process_part() {
+    use sylva::job::checkpoint::{load_any, load_overlapping, read_manifest, RANK_DIR};
+    let short = resume_scenario(18);
+    let lib = sylva::sim::fixtures::library();
+    let tmp = tempfile::tempdir().unwrap();
+    let one = tmp.path().join("one");
+    run_n(&short, &one, 1, false).unwrap();
+    let template = World::new(short.site().unwrap(), &lib, &short).unwrap();
+    let mut whole = template.clone();
+    let rows_one = load_any(&one, &mut whole).unwrap();
+    let l = &whole.tallies.regen_ledger;
+    assert!(whole.stand.trees.len() > 20 && whole.stand.cohorts.len() > 100 && l.germinated[0] > 0 && l.dead[0].iter().sum::<u64>() > 0, "{} trees, {} cohorts, ledger {l:?}", whole.stand.trees.len(), whole.stand.cohorts.len());
+    assert!(whole.stand.seeds.iter().all(|g| g.data.iter().any(|&v| v > 0.0)), "no seeds on the grid at year 9");
+    let overlap = |a: sylva::sim::light_grid::CellRect, b: sylva::sim::light_grid::CellRect| a.col0 < b.col1 && b.col0 < a.col1 && a.row0 < b.row1 && b.row0 < a.row1;
+    for first in [2, 3] {
+        let d = tmp.path().join(format!("t{first}"));
+        run_n(&short, &d, first, false).unwrap();
+        let m = read_manifest(&d).unwrap();
+        let old = Layout::with_bounds(&template.site, m.col_bounds.clone(), m.row_bounds.clone()).unwrap();
+        let paths: Vec<std::path::PathBuf> = m.files.iter().map(|f| d.join(RANK_DIR).join(f)).collect();
+        for then in [2, 3] {
+            let what = format!("{first} → {then} tiles");
+            let new = sylva::job::tiled::layout_for(&template, then).unwrap();
+            let mut deaths = [0u64; sylva::sim::trees::N_CAUSES];
+            let mut ledger = sylva::sim::cohorts::RegenLedger::new(whole.site.pool.len());
+            let mut reads = Vec::new();
+            for me in 0..then {
+                let mut tw = Tile::new(&template, new.clone(), me).unwrap().world;
+                tw.stand.trees = Default::default();
+                tw.stand.cohorts = Default::default();
+                let ov = load_overlapping(&paths, Some(18), &old, &new, me, &mut tw).unwrap();
+                let overlaps: Vec<usize> = (0..old.len()).filter(|&k| overlap(old.rect(k), new.rect(me))).collect();
+                assert_eq!(ov.read, overlaps, "{what}: tile {me} read other files than those over it");
+                reads.push(ov.read.len());
+                let want = Tile::new(&whole, new.clone(), me).unwrap().world;
+                assert!(!want.stand.trees.is_empty(), "{what}: tile {me} has no trees");
+                assert_eq!(tw.stand.trees.id, want.stand.trees.id, "{what}: tile {me}'s trees");
+                // the next id is old rank 0's, all-summed to every rank (`job::tiled`)
+                tw.stand.trees.next_id = whole.stand.trees.next_id;
+                assert!(tw.stand.trees == want.stand.trees, "{what}: tile {me}'s trees' columns");
+                assert!(tw.stand.cohorts == want.stand.cohorts, "{what}: tile {me}'s cohorts");
+                for (a, b) in tw.stand.seeds.iter().zip(&want.stand.seeds) {
+                    assert!(a.held == b.held && a.data == b.data, "{what}: tile {me}'s seed window {:?}", b.held);
+                }
+                assert_eq!(tw.stand.year, 18);
+                // old rank 0's file holds the stand table and the run's next id; new tile 0
+                // always reads it
+                let zero = ov.read.contains(&0);
+                assert!(zero || me != 0, "{what}: tile 0 did not read old tile 0's file");
+                assert_eq!((ov.rows.is_empty(), ov.next_id), (!zero, zero.then_some(whole.stand.trees.next_id)), "{what}: tile {me}'s stand table and next id");
+                if zero {
+                    assert_eq!(ov.rows, rows_one, "{what}: the stand table so far");
+                }
+                for (a, b) in deaths.iter_mut().zip(tw.tallies.deaths_total) {
+                    *a += b;
+                }
+                let t = &tw.tallies.regen_ledger;
+                for p in 0..t.germinated.len() {
+                    ledger.germinated[p] += t.germinated[p];
+                    ledger.recruited[p] += t.recruited[p];
+                    for (a, b) in ledger.dead[p].iter_mut().zip(t.dead[p]) {
+                        *a += b;
+                    }
+                }
+            }
+            assert_eq!((deaths, &ledger), (whole.tallies.deaths_total, &whole.tallies.regen_ledger), "{what}: the tiles' tallies");
+            // on another count a tile reads fewer files than there are (2 → 3: 1, 2, 1; 3 → 2: 2, 2)
+            let want: Vec<usize> = match (first, then) {
+                (2, 2) => vec![1, 1],
+                (2, 3) => vec![1, 2, 1],
+                (3, 2) => vec![2, 2],
+                _ => vec![1, 1, 1],
+            };
+            assert_eq!(reads, want, "{what}: files read per tile");
+        }
+    }
 }
 
 #[test]

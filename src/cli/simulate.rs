@@ -309,9 +309,8 @@ pub fn run(a: Args) -> anyhow::Result<()> {
             // a fresh run without management: rank 0 too holds its band only (its run driver
             // builds its tile's world, issue 37 round 33)
             // (with management too since round 36: the ranks resolve its areas from their tiles;
-            // a resumed run with management still holds the whole site on every rank)
-            let band0 = !a.resume;
-            let site = sylva::job::site_ranks::site_by_ranks_banded(&sc, &mut t, !sc.management.is_empty() && a.resume, band0).with_context(|| format!("[terrain] of {} (rank {})", sc.context(), t.rank()))?;
+            // a resumed run too since round 37: every rank reads its part of the checkpoint)
+            let site = sylva::job::site_ranks::site_by_ranks_banded(&sc, &mut t, false, true).with_context(|| format!("[terrain] of {} (rank {})", sc.context(), t.rank()))?;
             let r = if t.rank() != 0 {
                 // a stop (Ctrl-C, SIGTERM from mpirun) is rank 0's to decide; the others follow it
                 let _ = ctrlc::set_handler(|| {});

@@ -300,3 +300,158 @@ pub fn load_any(dir: &Path, w: &mut World) -> Result<Vec<StandRow>> {
         Found::Ranks(m) => load_ranks(dir, &m, w),
     }
 }
+
+/// Which files of a checkpoint of the tiles `old` tile `me` of the run's layout `new` reads to
+/// resume per rank (issue 37 Build 1, round 37; [`load_overlapping`]): the old tiles whose
+/// rectangle of light cells overlaps tile `me`'s (every tree and cohort of its cells is in one
+/// of them: a tree belongs to the tile of its light cell), and, for any seed cell of its
+/// windows of the seed grids `grids` ([`crate::sim::tiles::seed_window`]; one cell of margin
+/// beyond its rectangle) that none of those old tiles' windows holds, the old tile owning the
+/// cell's centre (it holds the cell: [`crate::sim::tiles::seed_window`]). Old tile indices,
+/// ascending. `old` and `new` cut the same light grid.
+pub fn files_to_read(old: &Layout, new: &Layout, me: usize, grids: &[crate::sim::world::SeedGrid]) -> Vec<usize> {
+    let r = new.rect(me);
+    let mut read: Vec<bool> = (0..old.len())
+        .map(|k| {
+            let o = old.rect(k);
+            o.col0 < r.col1 && r.col0 < o.col1 && o.row0 < r.row1 && r.row0 < o.row1
+        })
+        .collect();
+    for g in grids {
+        let wins: Vec<_> = (0..old.len()).map(|k| crate::sim::tiles::seed_window(old, k, g)).collect();
+        for cell in crate::sim::tiles::seed_window(new, me, g).cells(g.cols) {
+            let (c, row) = (cell % g.cols, cell / g.cols);
+            if (0..old.len()).any(|k| read[k] && wins[k].contains(c, row)) {
+                continue;
+            }
+            let (x, y) = (((c as f64 + 0.5) * g.cell_m) as f32, ((row as f64 + 0.5) * g.cell_m) as f32);
+            read[old.owner_of(x, y)] = true;
+        }
+    }
+    (0..old.len()).filter(|&k| read[k]).collect()
+}
+
+/// What tile `me` read of a checkpoint to resume per rank ([`load_overlapping`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Overlap {
+    /// The stand table so far: the rows of old tile 0's file when read (new tile 0 always
+    /// reads it: both hold light cell (0, 0)), else none.
+    pub rows: Vec<StandRow>,
+    /// The old tiles whose files were read ([`files_to_read`]), ascending.
+    pub read: Vec<usize>,
+    /// The next tree id of old tile 0's file when read ([`crate::sim::TreeStore::next_id`]:
+    /// the run's, as an assembled checkpoint takes it).
+    pub next_id: Option<u64>,
+}
+
+/// Reads into `w`, the world of tile `me` of the layout `new` (its tile's site, seed grids cut
+/// to its windows, no trees), its part of the checkpoint of a run cut as `old` whose tile `k`
+/// was saved to `paths[k]` (per-rank checkpoints of one `year`, or one process's
+/// `checkpoint.bin` as the one tile of a 1 × 1 layout with `year` `None`): only the files
+/// [`files_to_read`] names, one at a time, each checked as [`load`] checks it. It keeps what
+/// [`load_ranks`] then [`crate::sim::tiles::Tile::parts`] would give the tile, without the
+/// world of one process on any rank (issue 37 Build 1, round 37): the trees whose light cell
+/// is the tile's (merged by id), the cohorts of its light cells (in (cell, pool) order), every
+/// seed cell of its windows (from the old tile owning the cell's centre when read, else from
+/// the first read file whose window holds it: every tile recomputes its whole window each year
+/// from the whole site's production, so the values are the same bits), and the tallies (deaths
+/// by cause, the regeneration ledger) of the old files assigned to it, each old tile `k` to the
+/// new tile owning `k`'s first light cell (which reads it): summed over the new tiles they are
+/// the run's, as [`crate::sim::tiles::assemble`] adds them. The year is the checkpoint's; this
+/// year's dead and regeneration counts are cleared. The next tree id is left to the caller
+/// ([`Overlap::next_id`]).
+///
+/// Errors: as [`load`] for each file read, naming it; [`Error::Format`] naming a file whose
+/// year is not `year` (or not the first file's), and [`Error::Invalid`] when `paths` has not
+/// one file per tile of `old`.
+pub fn load_overlapping(paths: &[PathBuf], year: Option<u32>, old: &Layout, new: &Layout, me: usize, w: &mut World) -> Result<Overlap> {
+    use crate::sim::cohorts::{Cohorts, RegenLedger};
+    if paths.len() != old.len() {
+        return Err(Error::Invalid { context: "resume per rank".into(), field: "checkpoint files".into(), value: paths.len().to_string(), expected: format!("{} (one per tile of the checkpoint's {} × {} tiles)", old.len(), old.nx, old.ny) }.into());
+    }
+    let read = files_to_read(old, new, me, &w.stand.seeds);
+    let mut mine = std::mem::take(&mut w.stand.seeds);
+    // per seed cell of the windows: 0 not yet read, 1 from a file whose window holds it, 2 from
+    // the file of the tile owning its centre
+    let mut got: Vec<Vec<u8>> = mine.iter().map(|g| vec![0u8; g.data.len()]).collect();
+    let np = w.site.pool.len();
+    let (mut deaths, mut ledger) = ([0u64; crate::sim::trees::N_CAUSES], RegenLedger::new(np));
+    let (mut parts, mut cohorts) = (Vec::with_capacity(read.len()), Vec::new());
+    let mut out = Overlap { rows: Vec::new(), read: read.clone(), next_id: None };
+    let mut year = year;
+    for &k in &read {
+        let p = &paths[k];
+        // the file's seed grids are old tile k's windows
+        w.stand.seeds = mine.iter().map(|g| {
+            let r = crate::sim::tiles::seed_window(old, k, g);
+            crate::sim::world::SeedGrid { cell_m: g.cell_m, cols: g.cols, rows: g.rows, held: r, data: vec![0.0; r.len()] }
+        }).collect();
+        let rows = load(p, w)?;
+        match year {
+            Some(y) if y != w.stand.year => return Err(Error::format(p, format!("year {} in a checkpoint whose manifest (or first file) says year {y}", w.stand.year)).into()),
+            _ => year = Some(w.stand.year),
+        }
+        if k == 0 {
+            out.rows = rows;
+            out.next_id = Some(w.stand.trees.next_id);
+        }
+        let mut t = std::mem::take(&mut w.stand.trees);
+        let keep: Vec<bool> = (0..t.len()).map(|i| new.owner_of(t.x[i], t.y[i]) == me).collect();
+        t.retain(&keep);
+        parts.push(t);
+        let c = std::mem::take(&mut w.stand.cohorts);
+        for i in 0..c.len() {
+            let (col, row) = new.light.col_row(c.cell[i] as usize);
+            if new.owner_of_cell(col, row) == me {
+                cohorts.push(c.get(i));
+            }
+        }
+        for ((g, s), state) in mine.iter_mut().zip(&w.stand.seeds).zip(got.iter_mut()) {
+            for (j, cell) in g.held.cells(g.cols).enumerate() {
+                let (c, row) = (cell % g.cols, cell / g.cols);
+                if state[j] == 2 || !s.held.contains(c, row) {
+                    continue;
+                }
+                let (x, y) = (((c as f64 + 0.5) * g.cell_m) as f32, ((row as f64 + 0.5) * g.cell_m) as f32);
+                let centre = old.owner_of(x, y) == k;
+                if centre || state[j] == 0 {
+                    g.data[j] = s.data[(row - s.held.row0) * (s.held.col1 - s.held.col0) + (c - s.held.col0)];
+                    state[j] = if centre { 2 } else { 1 };
+                }
+            }
+        }
+        let first = old.rect(k);
+        if new.owner_of_cell(first.col0, first.row0) == me {
+            for (a, b) in deaths.iter_mut().zip(w.tallies.deaths_total) {
+                *a += b;
+            }
+            let l = &w.tallies.regen_ledger;
+            for q in 0..np.min(l.germinated.len()) {
+                ledger.germinated[q] += l.germinated[q];
+                ledger.recruited[q] += l.recruited[q];
+                for (a, b) in ledger.dead[q].iter_mut().zip(l.dead[q]) {
+                    *a += b;
+                }
+            }
+        }
+    }
+    if let Some((p, _)) = got.iter().enumerate().find(|(_, s)| s.contains(&0)) {
+        // cannot happen: files_to_read adds the owner of every cell no other file holds
+        return Err(Error::Invalid { context: "resume per rank".into(), field: format!("seed grid of pool species {p}"), value: format!("tile {me}'s window {:?}", mine[p].held), expected: "every cell held by a checkpoint file read".into() }.into());
+    }
+    w.stand.seeds = mine;
+    let next = w.stand.trees.next_id;
+    w.stand.trees = crate::sim::TreeStore::merge_by_id(&parts, next).0;
+    cohorts.sort_unstable_by_key(|c| (c.cell, c.pool));
+    let mut c = Cohorts::default();
+    for x in cohorts {
+        c.push(x);
+    }
+    w.stand.cohorts = c;
+    w.stand.year = year.unwrap_or(w.stand.year);
+    w.tallies.deaths_total = deaths;
+    w.tallies.regen_ledger = ledger;
+    w.scratch.dead.clear();
+    w.scratch.regen_year = Default::default();
+    Ok(out)
+}

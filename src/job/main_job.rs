@@ -386,11 +386,14 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
         sink(&Event::Year(p));
     };
     // a resumed run keeps the species files it was simulated with (a changed species is
-    // refused by the checkpoint before anything is written)
-    if !(opts.resume && super::checkpoint::exists(&out)) {
-        save_run_species(sc, lib, &out)?;
-    }
+    // refused by the checkpoint before anything is written); a fresh one writes them once the
+    // world is built, so a scenario the ranks of an MPI run refuse as they build their tiles
+    // (a managed area without ground, a planting that plants nothing) leaves no folder, as
+    // one process refuses it in `World::check` above (issue 37 round 37)
+    let fresh = !(opts.resume && super::checkpoint::exists(&out));
+    let mut species = || if fresh { save_run_species(sc, lib, &out) } else { Ok(()) };
     let mut ro = RunOptions::new(&out);
+    ro.on_start = Some(&mut species);
     ro.resume = opts.resume;
     ro.gpkg_years = opts.gpkg_years;
     ro.inventory = opts.inventory;

@@ -69,12 +69,18 @@ pub struct RunOptions<'a> {
     pub on_snapshot: Option<&'a mut OnSnapshot<'a>>,
     /// File format of the inventories and regeneration tables (default Parquet).
     pub inventory: InventoryFormat,
+    /// Called once the run's world is built (the scenario checked against the site: by the
+    /// ranks together in a tiled run whose ranks hold their tiles only) and before the run
+    /// writes anything; an error stops the run there. The main job writes the run's species
+    /// files here, so a scenario the ranks refuse (a managed area without ground, a planting
+    /// that plants nothing) leaves no folder behind over MPI either (issue 37 round 37).
+    pub on_start: Option<&'a mut dyn FnMut() -> Result<()>>,
 }
 
 impl RunOptions<'_> {
     /// Defaults: no resume, no stop flag, no progress callback, 1024-pixel maps, snapshots on.
     pub fn new(out_dir: impl Into<PathBuf>) -> Self {
-        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, gpkg_years: None, on_snapshot: None, inventory: InventoryFormat::Parquet }
+        RunOptions { out_dir: out_dir.into(), resume: false, stop: None, progress: None, map_px: 1024, write_snapshots: true, gpkg_years: None, on_snapshot: None, inventory: InventoryFormat::Parquet, on_start: None }
     }
 }
 
@@ -279,14 +285,15 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
 /// from the `world` it passes; a stepper makes that world whole whenever outputs follow.
 pub trait Stepper {
     /// The world the run driver starts from: `scenario` on `site` at year 0 ([`World::new`],
-    /// the default). `lean` is `Some((map_px, year0))` when nothing will read the world whole
-    /// (a fresh run, no `on_snapshot` caller): a tiled run's rank 0 may then hold only its
-    /// band of `site` and build only its tile's world, with the start's trees of every rank
-    /// gathered when `year0` (the year-0 snapshot follows, [`Stepper::start_snapshot`]) and the
-    /// maps' masked pixels of longest side `map_px` (issue 37 Build 1, round 33).
+    /// the default). `lean` is `Some` when nothing will read the world whole (no `on_snapshot`
+    /// caller): a tiled run's rank 0 may then hold only its band of `site` and build only its
+    /// tile's world ([`Lean`]: with the start's trees of every rank gathered when a year-0
+    /// snapshot follows, [`Stepper::start_snapshot`]; without the start's trees when the run
+    /// resumes from a checkpoint, which [`Stepper::resume`] then reads per rank; issue 37
+    /// Build 1, rounds 33 and 37).
     ///
     /// Errors: as [`World::new`]; the stepper's.
-    fn world(&mut self, site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario, lean: Option<(usize, bool)>) -> Result<World> {
+    fn world(&mut self, site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario, lean: Option<Lean>) -> Result<World> {
         let _ = lean;
         Ok(World::new(site, lib, scenario)?)
     }
@@ -372,6 +379,20 @@ pub trait Stepper {
     }
 }
 
+/// How the run starts when nothing will read its world whole ([`Stepper::world`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Lean {
+    /// Longest side of the maps (pixels): a tiled run's rank 0 keeps the maps' masked pixels
+    /// of this size from the ranks.
+    pub map_px: usize,
+    /// A year-0 snapshot follows (a fresh run writing snapshots): the start's trees of every
+    /// rank are gathered into the driver's world for it.
+    pub year0: bool,
+    /// The run resumes from the run directory's checkpoint (`--resume` with one there): no
+    /// start's trees are placed; the stand comes from the checkpoint ([`Stepper::resume`]).
+    pub resume: bool,
+}
+
 /// The stepper of one process: [`step_year_with`] on the whole world.
 pub struct OneProcess;
 
@@ -425,10 +446,15 @@ pub fn run_scenario(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibr
 /// Errors: as [`run_scenario`], and the stepper's.
 pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut opts: RunOptions, stepper: &mut dyn Stepper) -> Result<RunSummary> {
     let dir = opts.out_dir.clone();
-    // the world first: a refused scenario makes no folder (a tiled run's rank 0 of a fresh run
-    // that nothing reads whole builds its tile's world only: `lean`)
-    let lean = (!opts.resume && opts.on_snapshot.is_none()).then_some((opts.map_px, opts.write_snapshots));
+    // the world first: a refused scenario makes no folder (a tiled run's rank 0 of a run that
+    // nothing reads whole builds its tile's world only: `lean`; a resumed one without the
+    // start's trees, issue 37 round 37)
+    let resuming = opts.resume && checkpoint::exists(&dir);
+    let lean = opts.on_snapshot.is_none().then_some(Lean { map_px: opts.map_px, year0: opts.write_snapshots && !resuming, resume: resuming });
     let mut world = stepper.world(site, lib, scenario, lean)?;
+    if let Some(f) = opts.on_start.as_mut() {
+        f()?;
+    }
     mkdir(&dir)?;
     if opts.write_snapshots {
         mkdir(&dir.join("inventory"))?;

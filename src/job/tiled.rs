@@ -35,19 +35,23 @@
 //! Checkpoints and `--resume` per rank ([`super::checkpoint`]): in a checkpoint year every
 //! rank writes its own tile's checkpoint, `checkpoint/year_YYYY_rank_RRRR.bin` (rank 0's with
 //! the stand table), nothing gathered; once all have, rank 0 writes `checkpoint/manifest.toml`
-//! (year, layout, files), which commits them, and removes the files it supersedes. A resume on
-//! the same number of ranks (the same layout) has every rank read its own file. On another
-//! number of ranks rank 0 assembles the world of one process from all the files
-//! ([`super::checkpoint::load_ranks`]) and sends every rank its part, so a run stopped on 3
-//! ranks can go on with 2, or with one process; a `checkpoint.bin` of one process is read by
-//! rank 0 and sent out the same way.
+//! (year, layout, files), which commits them, and removes the files it supersedes. A resume
+//! (issue 37 Build 1, round 37) starts as a fresh run does, every rank holding its band and
+//! building its tile's world only (no start's trees), then every rank reads its part of the
+//! checkpoint from the files of the old tiles that overlap its own
+//! ([`super::checkpoint::load_overlapping`]: its own file on the same layout; on another number
+//! of ranks the 1–4 files its tile overlaps; a `checkpoint.bin` of one process as the one
+//! file of a 1 × 1 layout), so a run stopped on 3 ranks can go on with 2 or with one process
+//! without the world of one process on any rank. Only when a caller reads the world at every
+//! snapshot (`RunOptions::on_snapshot`) does rank 0 build the world of one process, assemble
+//! the files there ([`super::checkpoint::load_ranks`]) and send every rank its part.
 //!
 //! Protocol: before every collective step rank 0 sends every rank a command ([`Command`]); the
 //! other ranks ([`work`]) wait for it, so all ranks take part in the same exchanges in the same
 //! order.
 
 use super::checkpoint::{self, Found, Manifest};
-use super::run::{run_scenario_with, Parts, RunOptions, RunSummary, Stepper};
+use super::run::{run_scenario_with, Lean, Parts, RunOptions, RunSummary, Stepper};
 use super::Result;
 use crate::sim::cohorts::RegenLedger;
 use crate::sim::stats::StandRow;
@@ -88,11 +92,15 @@ pub enum Command {
     /// rank 0 what year 0's snapshot needs of your tile ([`start_tile`]; a fresh run whose rank
     /// 0 holds its tile only, issue 37 Build 1, round 33: instead of [`Command::Begin`]).
     Start = 10,
+    /// Read your tile's part of the checkpoint whose manifest follows from the old ranks'
+    /// files that overlap it ([`resume_tile`]; a resumed run whose rank 0 holds its tile only,
+    /// issue 37 Build 1, round 37: instead of [`Command::Resume`] and [`Command::Begin`]).
+    ResumeRanks = 11,
 }
 
 impl Command {
     fn from_byte(b: u8) -> Option<Command> {
-        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout, Command::Start].into_iter().find(|c| *c as u8 == b)
+        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout, Command::Start, Command::ResumeRanks].into_iter().find(|c| *c as u8 == b)
     }
 }
 
@@ -107,7 +115,7 @@ fn command(t: &mut dyn Transport, c: Option<Command>) -> Result<Command> {
     };
     let got = t.exchange(out)?;
     let b = got.first().and_then(|m| m.first()).copied().unwrap_or(0);
-    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–10)") })?)
+    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–11)") })?)
 }
 
 /// Rank 0 sends every rank `k` the year and `paths[k]` (a per-rank checkpoint file); the others
@@ -168,6 +176,109 @@ fn load_tile(template: World, layout: &Layout, me: usize, path: &Path, year: u32
         return Err(Error::format(path, format!("year {} in a checkpoint whose manifest says year {year}", w.stand.year)).into());
     }
     Ok((Tile::resumed(w, layout.clone(), me)?, rows))
+}
+
+/// The checkpoint a resumed run reads per rank ([`resume_tile`]): the tiles of the run that
+/// wrote it (one process's `checkpoint.bin` as the one tile of 1 × 1) and a file per tile.
+#[derive(Debug, Clone, PartialEq)]
+struct Source {
+    /// The manifest's year (`None` for `checkpoint.bin`: its own).
+    year: Option<u32>,
+    /// Tiles across and up.
+    tiles: (usize, usize),
+    /// Column and row boundaries of the tiles (light cells), as the manifest gives them.
+    col_bounds: Vec<usize>,
+    row_bounds: Vec<usize>,
+    /// The file of each tile, in tile order.
+    paths: Vec<PathBuf>,
+    /// The file that names them (the manifest, or `checkpoint.bin`), for errors.
+    named: PathBuf,
+}
+
+impl Source {
+    fn encode(&self) -> Result<Vec<u8>> {
+        let utf8 = |p: &Path| -> Result<String> {
+            Ok(p.to_str().ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: "checkpoint path".into(), value: p.display().to_string(), expected: "a UTF-8 path (it is sent to the other ranks)".into() })?.to_string())
+        };
+        let mut e = crate::sim::codec::Enc(Vec::new());
+        e.u64(self.year.map_or(u64::MAX, |y| y as u64));
+        e.u64(self.tiles.0 as u64);
+        e.u64(self.tiles.1 as u64);
+        for b in [&self.col_bounds, &self.row_bounds] {
+            e.u64(b.len() as u64);
+            b.iter().for_each(|&v| e.u64(v as u64));
+        }
+        e.str(&utf8(&self.named)?);
+        e.u64(self.paths.len() as u64);
+        for p in &self.paths {
+            e.str(&utf8(p)?);
+        }
+        Ok(e.0)
+    }
+    fn decode(m: &[u8]) -> Result<Source> {
+        let fail = |s: crate::sim::codec::Short| Error::Exchange { peer: 0, reason: format!("checkpoint message cut short at byte {}", s.at()) };
+        let mut d = crate::sim::codec::Dec::at(m, 0, &fail);
+        let year = d.u64()?;
+        let year = (year != u64::MAX).then_some(year as u32);
+        let tiles = (d.u64()? as usize, d.u64()? as usize);
+        let mut bounds = [Vec::new(), Vec::new()];
+        for b in bounds.iter_mut() {
+            let n = d.count(8)?;
+            for _ in 0..n {
+                b.push(d.u64()? as usize);
+            }
+        }
+        let named = PathBuf::from(d.str()?);
+        let n = d.count(8)?;
+        let mut paths = Vec::with_capacity(n);
+        for _ in 0..n {
+            paths.push(PathBuf::from(d.str()?));
+        }
+        let [col_bounds, row_bounds] = bounds;
+        Ok(Source { year, tiles, col_bounds, row_bounds, paths, named })
+    }
+}
+
+/// A resumed run's tile read per rank (issue 37 Build 1, round 37; [`Command::ResumeRanks`]):
+/// rank 0 sends every rank the checkpoint `src` (the others pass `None`); every rank, its tile
+/// made by a lean start (its tile's site, no trees), cuts the checkpoint's tiles
+/// (`Layout::with_bounds` of its bounds) and reads its part from the files that overlap its
+/// tile ([`checkpoint::load_overlapping`]: at most the old tiles it overlaps, plus any whose
+/// seed cells its windows need that those do not hold; no whole-site array, no other rank's
+/// file in memory at once); all agree, then the next tree id of old rank 0's file (rank 0
+/// reads it) is all-summed to every rank. Each rank prints on stderr the files it read and the
+/// site cells it holds (`rank R/N: resumed year Y from K of M checkpoint files (…); holds site
+/// cells …`). Returns the stand table so far (rank 0's; empty on the others).
+///
+/// Errors: [`Error::Exchange`] from the transport, a malformed message, or naming the first
+/// rank that failed with its error: [`Error::Format`] naming the manifest when its bounds are
+/// not tiles of this site's light grid; as [`checkpoint::load_overlapping`].
+fn resume_tile(tile: &mut Tile, t: &mut dyn Transport, src: Option<&Source>) -> Result<Vec<StandRow>> {
+    let (me, n) = (t.rank(), t.size());
+    let out = match src {
+        Some(s) => vec![s.encode()?; n],
+        None => vec![Vec::new(); n],
+    };
+    let got = t.exchange(out)?;
+    let src = Source::decode(got.first().map(|m| m.as_slice()).unwrap_or(&[]))?;
+    let r = (|| -> Result<checkpoint::Overlap> {
+        let bad = |e: String| Error::format(&src.named, format!("col_bounds, row_bounds: {e}"));
+        let old = Layout::with_bounds(&tile.world.site, src.col_bounds.clone(), src.row_bounds.clone()).map_err(|e| bad(e.to_string()))?;
+        if (old.nx, old.ny) != src.tiles {
+            return Err(bad(format!("{:?} and {:?} are not the {} × {} tiles they bound", src.col_bounds, src.row_bounds, src.tiles.0, src.tiles.1)).into());
+        }
+        checkpoint::load_overlapping(&src.paths, src.year, &old, &tile.layout, me, &mut tile.world)
+    })();
+    let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
+    let ov = r?;
+    a?;
+    let ids = t.all_sum(vec![if me == 0 { ov.next_id.unwrap_or(0) } else { 0 }])?;
+    tile.world.stand.trees.next_id = ids.first().copied().ok_or_else(|| Error::Exchange { peer: 0, reason: "no summed next tree id".into() })?;
+    let names: Vec<String> = ov.read.iter().map(|&k| src.paths[k].file_name().map_or_else(|| src.paths[k].display().to_string(), |f| f.to_string_lossy().into_owned())).collect();
+    let c = &tile.world.site.conditions;
+    let line = format!("rank {me}/{n}: resumed year {} from {} of {} checkpoint files ({}); holds site cells {} of {} × {}\n", tile.world.stand.year, ov.read.len(), src.paths.len(), names.join(", "), c.held, c.full.0, c.full.1);
+    let _ = std::io::Write::write_all(&mut std::io::stderr(), line.as_bytes());
+    Ok(ov.rows)
 }
 
 /// A snapshot written by the ranks ([`write_parts`]).
@@ -270,14 +381,16 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
 }
 
 /// The start of a fresh tiled run on every rank (issue 37 Build 1, round 33; [`Command::Start`]):
-/// rank 0 sends every rank the maps' longest side and whether year 0's snapshot is written
-/// (`start`: `Some((map_px, year0))` on rank 0, `None` on the others); every rank derives its
+/// rank 0 sends every rank the maps' longest side, whether year 0's snapshot is written and
+/// whether the run resumes from a checkpoint (`start`: `Some((map_px, year0, resume))` on rank
+/// 0, `None` on the others); every rank derives its
 /// tile's site into `w` (its skeleton holding the tile's cells,
 /// [`crate::sim::tiles::derive_tile_site_by`], the management's areas and plantings counted
 /// with the other ranks: one all-sum of a word per entry, a second for an area narrower than a
 /// light cell, one per planting; a failure is every rank's), places its start's trees and
 /// year 0's plantings with one process's ids ([`World::place_start_tile`]: one all-sum of a word
-/// per run of the start's places) and makes its tile; then sends rank 0 the flags of the map
+/// per run of the start's places; not when the run resumes: its stand comes from the
+/// checkpoint, [`resume_tile`]) and makes its tile; then sends rank 0 the flags of the map
 /// pixels whose centre it owns (masked or not, 1 byte each; [`crate::output::plot::map_masked_centres`]
 /// of the whole site, assembled) and, with `year0`, its start's trees (54 bytes each). Rank 0
 /// gets `Some((trees, flags))`: every rank's start's trees merged by id (one process's store
@@ -289,26 +402,29 @@ fn write_parts(tile: &Tile, t: &mut dyn Transport, snap: Option<&Snap>) -> Resul
 /// [`crate::sim::tiles::derive_tile_site_with`] (on every rank), [`World::place_start_tile`]
 /// and [`Tile::own`].
 #[allow(clippy::too_many_arguments)]
-fn start_tile(mut w: World, scenario: &Scenario, layout: &Layout, median: f32, whole: Option<&crate::sim::tiles::WholeSite>, start: Option<(usize, bool)>, t: &mut dyn Transport) -> Result<(Tile, Option<(crate::sim::TreeStore, Vec<bool>)>)> {
+fn start_tile(mut w: World, scenario: &Scenario, layout: &Layout, median: f32, whole: Option<&crate::sim::tiles::WholeSite>, start: Option<(usize, bool, bool)>, t: &mut dyn Transport) -> Result<(Tile, Option<(crate::sim::TreeStore, Vec<bool>)>)> {
     use crate::sim::codec::{Dec, Enc, Short};
     let (me, n) = (t.rank(), t.size());
     let mut out = vec![Vec::new(); n];
-    if let Some((px, year0)) = start {
+    if let Some((px, year0, resume)) = start {
         let mut e = Enc(Vec::new());
         e.u64(px as u64);
         e.u64(year0 as u64);
+        e.u64(resume as u64);
         out = vec![e.0; n];
     }
     let got = t.exchange(out)?;
     let fail = |s: Short| Error::Exchange { peer: 0, reason: format!("start message cut short at byte {}", s.at()) };
     let mut d = Dec::at(got.first().map(|m| m.as_slice()).unwrap_or(&[]), 0, &fail);
-    let (px, year0) = (d.u64()? as usize, d.u64()? != 0);
+    let (px, year0, resume) = (d.u64()? as usize, d.u64()? != 0, d.u64()? != 0);
     // a scenario with management resolves its areas from the ranks' tiles (issue 37 round 36)
     let r = crate::sim::tiles::derive_tile_site_by(&mut w, scenario, layout, me, median, whole, Some(&mut |v| t.all_sum(v)));
     let a = agree(t, r.as_ref().err().map(|e| e.to_string()));
     r?;
     a?;
-    w.place_start_tile(scenario, &|x, y| layout.owner_of(x, y), me, &mut |v| t.all_sum(v))?;
+    if !resume {
+        w.place_start_tile(scenario, &|x, y| layout.owner_of(x, y), me, &mut |v| t.all_sum(v))?;
+    }
     let tile = Tile::own(w, layout.clone(), me)?;
     let tw = &tile.world;
     let dims = crate::output::plot::map_dims(tw, px);
@@ -769,13 +885,39 @@ impl Drop for Root<'_> {
 }
 
 impl Root<'_> {
+    /// [`Stepper::resume`] of a lean start: finds the checkpoint of `dir` ([`checkpoint::find`]),
+    /// tells the ranks [`Command::ResumeRanks`] and reads rank 0's part with them
+    /// ([`resume_tile`]); sets `world`'s year and next tree id (the driver's world holds no
+    /// trees) and returns the stand table so far.
+    ///
+    /// Errors: [`Error::Format`] when `dir` holds no checkpoint; as [`checkpoint::find`] and
+    /// [`resume_tile`].
+    fn resume_ranks(&mut self, dir: &Path, world: &mut World) -> Result<Vec<StandRow>> {
+        let light = world.site.light;
+        let src = match checkpoint::find(dir)? {
+            Found::Ranks(m) => {
+                let cd = dir.join(checkpoint::RANK_DIR);
+                Source { year: Some(m.year), col_bounds: m.col_bounds.clone(), row_bounds: m.row_bounds.clone(), tiles: (m.tiles_across, m.tiles_up), paths: m.files.iter().map(|f| cd.join(f)).collect(), named: cd.join(checkpoint::MANIFEST) }
+            }
+            Found::Single(p) => Source { year: None, col_bounds: vec![0, light.cols], row_bounds: vec![0, light.rows], tiles: (1, 1), paths: vec![p.clone()], named: p },
+            Found::None => return Err(Error::format(dir.join(checkpoint::FILE), "--resume: no checkpoint in the run directory").into()),
+        };
+        command(self.t, Some(Command::ResumeRanks))?;
+        let rows = self.collective(|tile, t| resume_tile(tile, t, Some(&src)))?;
+        let tile = self.tile.as_ref().ok_or_else(|| Error::Exchange { peer: 0, reason: "resumed before the run began".into() })?;
+        world.stand.year = tile.world.stand.year;
+        world.stand.trees.next_id = tile.world.stand.trees.next_id;
+        self.base = zero_tallies(world);
+        Ok(rows)
+    }
+
     /// [`Stepper::world`]'s lean start on rank 0 (`w` the skeleton of its band): the layout
     /// with the ranks ([`layout_by`]), its tile's cells from the bands' owners
     /// ([`tile_site_by`]), then [`start_tile`]. Returns the layout, rank 0's tile and what
     /// year 0 needs (every rank's start's trees when `year0`, the maps' masked pixels).
     ///
     /// Errors: as [`layout_by`], [`tile_site_by`] and [`start_tile`].
-    fn lean_start(&mut self, mut w: World, scenario: &Scenario, map_px: usize, year0: bool) -> Result<(Layout, Tile, Option<(crate::sim::TreeStore, Vec<bool>)>)> {
+    fn lean_start(&mut self, mut w: World, scenario: &Scenario, lean: Lean) -> Result<(Layout, Tile, Option<(crate::sim::TreeStore, Vec<bool>)>)> {
         command(self.t, Some(Command::Layout))?;
         let (l, median) = layout_by(&w, self.t)?;
         let c = &mut w.site.conditions;
@@ -783,13 +925,15 @@ impl Root<'_> {
         let (c, ws) = tile_site_by(std::borrow::Cow::Owned(band), None, w.site.light.cell_m, &l, self.t)?.ok_or_else(|| Error::Exchange { peer: 0, reason: "rank 0 holds its band of the site but got no tile's cells".into() })?;
         w.site.conditions = c;
         command(self.t, Some(Command::Start))?;
-        let (tile, start) = start_tile(w, scenario, &l, median, Some(&ws), Some((map_px, year0)), self.t)?;
+        let (tile, start) = start_tile(w, scenario, &l, median, Some(&ws), Some((lean.map_px, lean.year0, lean.resume)), self.t)?;
         Ok((l, tile, start))
     }
 }
 
 impl Stepper for Root<'_> {
-    /// With `lean` (a fresh run that nothing reads whole) on 2 ranks or more (with management
+    /// With `lean` (a run that nothing reads whole, fresh or, since round 37, resumed: then
+    /// no start's trees are placed and [`Stepper::resume`] reads the stand per rank) on 2
+    /// ranks or more (with management
     /// too since round 36: its areas are resolved by the ranks from their tiles,
     /// [`crate::sim::tiles::derive_tile_site_by`], and its warnings printed once they are):
     /// rank 0 holds its band of `site` only (cut so when given whole), checks what needs
@@ -804,11 +948,11 @@ impl Stepper for Root<'_> {
     ///
     /// Errors: as [`World::new`] and [`Root::lean_start`]; [`Error::Invalid`] when `site` is
     /// not whole and the start is not lean.
-    fn world(&mut self, site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario, lean: Option<(usize, bool)>) -> Result<World> {
+    fn world(&mut self, site: SiteConditions, lib: &SpeciesLibrary, scenario: &Scenario, lean: Option<Lean>) -> Result<World> {
         let n = self.t.size();
-        let Some((map_px, year0)) = lean.filter(|_| n > 1) else {
+        let Some(lean) = lean.filter(|_| n > 1) else {
             if !site.holds_all() {
-                return Err(Error::Invalid { context: scenario.context(), field: "site conditions".into(), value: format!("cells {} of {} × {} on rank 0", site.held, site.full.0, site.full.1), expected: "the whole site on rank 0 (a resumed run, a scenario with management or a caller that reads the world at snapshots)".into() }.into());
+                return Err(Error::Invalid { context: scenario.context(), field: "site conditions".into(), value: format!("cells {} of {} × {} on rank 0", site.held, site.full.0, site.full.1), expected: "the whole site on rank 0 (a caller that reads the world at snapshots)".into() }.into());
             }
             return Ok(World::new(site, lib, scenario)?);
         };
@@ -819,7 +963,7 @@ impl Stepper for Root<'_> {
         }
         let w = World::skeleton(site, lib, scenario)?;
         w.warn(scenario);
-        let r = self.lean_start(w, scenario, map_px, year0);
+        let r = self.lean_start(w, scenario, lean);
         if r.is_err() {
             self.done = true;
         }
@@ -830,10 +974,10 @@ impl Stepper for Root<'_> {
         }
         let mut world = driver_of(&mut tile.world);
         if let Some((trees, masked)) = start {
-            if year0 {
+            if lean.year0 {
                 world.stand.trees = trees;
             }
-            self.map_masked = Some((map_px, masked));
+            self.map_masked = Some((lean.map_px, masked));
         }
         self.base = zero_tallies(&world);
         self.layout = Some(l);
@@ -917,10 +1061,17 @@ impl Stepper for Root<'_> {
         let base = self.base.clone();
         self.collective(|tile, t| Ok(tile.gather(Some((world, &base)), t)?))
     }
-    /// Per-rank checkpoints with the same layout: every rank reads its own file; otherwise
-    /// rank 0 reads `checkpoint.bin` or assembles the per-rank files, and [`Stepper::begin`]
-    /// sends the ranks their parts.
+    /// When every rank holds its tile only ([`Stepper::world`]'s lean start of a resumed run,
+    /// issue 37 Build 1, round 37): every rank reads its part of the checkpoint from the files
+    /// that overlap its tile ([`resume_tile`]), on any number of ranks, from per-rank
+    /// checkpoints or one process's `checkpoint.bin`. Otherwise (a caller reads the world at
+    /// snapshots): per-rank checkpoints with the same layout have every rank read its own file;
+    /// else rank 0 reads `checkpoint.bin` or assembles the per-rank files, and
+    /// [`Stepper::begin`] sends the ranks their parts.
     fn resume(&mut self, dir: &Path, world: &mut World) -> Result<Vec<StandRow>> {
+        if self.lean {
+            return self.resume_ranks(dir, world);
+        }
         let m = match checkpoint::find(dir)? {
             Found::Ranks(m) => m,
             _ => return checkpoint::load_any(dir, world),
@@ -1014,16 +1165,18 @@ impl Stepper for Root<'_> {
 
 /// A rank other than 0: holds `site` in a [`World::skeleton`] of `scenario` (nothing derived
 /// from the site, no trees; a whole `site` cut to its band of site rows first unless the
-/// scenario has management: a resumed run's ranks resolve its areas against the whole site,
-/// while a fresh run's ranks resolve them together from their tiles (`start_tile`), so an MPI
-/// rank of a fresh managed run is given its band only, `sylva simulate`), cuts the layout
+/// scenario has management: the ranks of a run whose rank 0 builds the world of one process
+/// (a caller reads it at snapshots) resolve its areas against the whole site, while a lean
+/// run's ranks, fresh or resumed, resolve them together from their tiles (`start_tile`), so an
+/// MPI rank is given its band only, `sylva simulate`), cuts the layout
 /// with the other ranks ([`layout_by`]: the weights and the insolation's median from its
 /// band; then its tile's cells from the band owners, [`tile_site_by`]), derives only its
 /// tile's part of the site into it ([`crate::sim::tiles::derive_tile_site_with`]; issue 37
 /// Build 1: until round 32 every rank
 /// built the whole world of one process, `World::new`, and cut its tile from it), then follows
 /// rank 0's commands until [`Command::End`]. Its tile's stand and the next tree id come from
-/// rank 0 ([`Tile::scatter`]) or from its checkpoint. Writes no files. The scenario's checks
+/// rank 0 ([`Tile::scatter`]) or from the checkpoint (its own file, [`Command::Resume`], or
+/// the files overlapping its tile, [`Command::ResumeRanks`]). Writes no files. The scenario's checks
 /// and warnings are rank 0's (its run driver builds the world of one process).
 ///
 /// Errors: unknown species or points outside the site (as [`World::skeleton`]); management
@@ -1092,6 +1245,9 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
                 let (l, median) = laid(&layout, c)?;
                 let w = template(&mut world, c)?;
                 tile = Some(start_tile(w, scenario, &l, median, whole.as_ref(), None, t)?.0);
+            }
+            (Command::ResumeRanks, Some(tl)) => {
+                resume_tile(tl, t, None)?;
             }
             (Command::Step, Some(tl)) => {
                 tl.step(t)?;
@@ -1222,7 +1378,7 @@ mod tests {
         assert_eq!(grid_for(4, 100, 100), (2, 2));
         assert_eq!(grid_for(8, 100, 50), (4, 2));
         assert_eq!(grid_for(6, 40, 120), (2, 3), "a tie (1 × 6, 2 × 3) goes to more tiles across");
-        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout, Command::Start] {
+        for c in [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout, Command::Start, Command::ResumeRanks] {
             assert_eq!(Command::from_byte(c as u8), Some(c));
         }
         assert_eq!(Command::from_byte(0), None);
