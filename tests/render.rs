@@ -561,13 +561,10 @@ fn triangle_budget_bounds_a_view_inside_the_forest_on_both_paths() {
             seen.push((s, img));
         }
         r.lod = lod;
-        // the CPU path demotes the farthest trees first (round 37: the nearest keep their
-        // levels), the GPU pass raises every tree's switches by one factor: the same trees,
-        // different levels
-        if let [(a, _), (b, _)] = &seen[..] {
-            assert!(a.keep_within_m > 0.0 && a.keep_within_m.is_finite() && a.demoted_trees > 0, "{a:?}");
-            assert_eq!(a.unbudgeted_tree_triangles, free.tree_triangles, "{a:?}");
-            assert_eq!(b.keep_within_m, 0.0, "{b:?}");
+        if let [(a, ia), (b, ib)] = &seen[..] {
+            assert_eq!(a.lod_scale, b.lod_scale, "both paths choose the same factor");
+            assert_eq!(a.per_level, b.per_level);
+            assert!(mean_abs_diff(ia, ib) < 0.5);
         }
     });
 }

@@ -209,8 +209,7 @@ fn a_stills_full_level_trees_carry_their_crowns_leaf_area() {
 /// 2.5 m: about 4,000 trees, every one near the close-up's camera) drawn by `sylva render
 /// --camera closeup`: unconstrained it draws T triangles of trees; with `--triangle-budget`
 /// T/3 it draws at most that (`tree_triangles` of `--stats`), says it demoted, and the trees
-/// nearest the camera keep the full level (round 37: the farthest are demoted first);
-/// `--stats` counts the full-level trees after the demotion and says what it demoted.
+/// nearest the camera (the adapted ones) are still drawn with their own meshes.
 #[test]
 fn a_small_dense_sites_closeup_keeps_to_its_triangle_budget() {
     // no adapter: fail here, not later in the command
@@ -260,20 +259,13 @@ area = [0.0, 0.0, 160.0, 160.0]
     let t = st["tree_triangles"].as_u64().unwrap();
     assert!(t <= budget as u64 && t > 0, "{t} tree triangles against a budget of {budget} ({st})");
     assert!(st["demoted"] == true && st["lod_scale"].as_f64().unwrap() > 1.0, "{st}");
-    // the same trees drawn; the budget demotes the farthest first (round 37), so the nearest
-    // adapted trees keep the full level (round 36's one factor on every switch took them all
-    // off it: adapted per level [345, 53, 0, 0] → [0, 398, 0, 0])
+    // the same trees drawn; the nearest (adapted) ones still with their own meshes (levels 0–1:
+    // full and reduced skeleton), none dropped to a hull or a billboard. (The budget raises
+    // every switch by one factor: at T/3 the trees at the full level unconstrained drop to the
+    // reduced skeleton too; round 36 measured [345, 53, 0, 0] → [0, 398, 0, 0].)
     assert_eq!(st["instances_drawn"], free["instances_drawn"], "{st}");
-    let n = |v: &serde_json::Value, k: &str| v[k].as_u64().unwrap_or_else(|| panic!("{k} in {v}"));
-    let full = |v: &serde_json::Value| v["adapted_per_level"][0].as_u64().unwrap();
-    assert!(full(&free) >= 300 && full(&st) >= 20 && full(&st) < full(&free), "{st}");
-    // `--stats` counts the full-level trees after the demotion (round 36 counted them before),
-    // says how many trees it demoted, from where, and what the frame would have cost
-    assert_eq!((n(&free, "full_level_trees"), n(&st, "full_level_trees")), (full(&free), full(&st)), "{st}");
-    assert_eq!(n(&st, "full_level_wanted"), n(&free, "full_level_wanted"), "{st}");
-    assert_eq!(n(&st, "tree_triangles_unbudgeted"), t0, "{st}");
-    assert!(n(&st, "demoted_trees") >= full(&free) - full(&st) && free["demoted_trees"] == 0 && free["keep_within_m"].is_null(), "{st}");
-    assert!(st["keep_within_m"].as_f64().is_some_and(|d| d > 0.0), "{st}");
+    let own = |v: &serde_json::Value| v["adapted_per_level"][0].as_u64().unwrap() + v["adapted_per_level"][1].as_u64().unwrap();
+    assert!(own(&free) >= 300 && own(&st) == own(&free), "{st}");
 }
 
 /// Round 36 (issue 32): the close-up's mid-ground young trees were crown hulls on sticks ("blobs

@@ -114,15 +114,11 @@ pub struct RenderArgs {
     #[arg(long, default_value = "on", value_parser = parse_on_off, action = clap::ArgAction::Set)]
     pub adapt: bool,
     /// Most tree triangles the frame draws (1,000–1,000,000,000): when the trees at their
-    /// levels would cost more, the farthest trees are demoted first. The trees nearest the
-    /// eye keep the level their size on screen asks for (as many as fit with the others'
-    /// switch sizes at twice the one factor that would fit every tree); the others switch to
-    /// coarser levels by the smallest factor that fits, never below billboards (the budget
-    /// hides no tree). Order
-    /// by distance from the eye alone: a tree under 12 m keeps the leaf cards its small-tree
-    /// bias gives it when it is among the nearest, and is demoted as any other beyond.
-    /// `--stats` says what it demoted (`demoted`, `demoted_trees`, `keep_within_m`,
-    /// `lod_scale`, `tree_triangles_unbudgeted`). Default: the stills' budget of `sylva run`.
+    /// levels would cost more, the level switches are raised so that the trees smallest on
+    /// screen (the farthest of a height) drop to coarser levels first, never below billboards
+    /// (one factor on every tree's switch sizes: under a tight budget the nearest trees leave
+    /// full detail too). `--stats` says whether it demoted
+    /// (`demoted`, `lod_scale`). Default: the stills' budget of `sylva run`.
     #[arg(long, default_value_t = sylva::job::pictures::STILL_TRIANGLE_BUDGET, value_parser = clap::value_parser!(u32).range(1_000..=1_000_000_000))]
     pub triangle_budget: u32,
     /// Write the frame's figures as JSON (adapted_trees, adapt_s, unique_meshes (one chain of
@@ -134,14 +130,10 @@ pub struct RenderArgs {
     /// 15 m and taller), leaf_cards (of the adapted trees), sprig_cards (leaf-cluster cards carrying the rest of the full-detail trees' crown leaf area, as exports do), adapted_leaf_area_m2 and leaf_area_m2 (one-sided leaf area of the full-detail trees: their adapted leaf cards, and what their full level carries: the crowns' leaf area), mesh_bytes (CPU bytes of the adapted trees' level meshes), stumps (harvested trees drawn as
     /// stumps: cut in the 20 years up to the year; their two instances each are among the
     /// instances drawn); tree_triangles (the trees' share of triangles), triangle_budget,
-    /// demoted (whether the budget raised the level switches), demoted_trees (trees drawn
-    /// coarser than their size asks for), keep_within_m (distance from the eye within which
-    /// every tree kept its level; null when nothing was demoted), lod_scale (the demoted
-    /// trees' switch-size factor), tree_triangles_unbudgeted (the trees' triangles without
-    /// the budget); full_level_trees (adapted trees drawn at the full level, after the
-    /// budget), full_level_wanted (those tall enough on screen for it, before the budget) and
-    /// bare_full_level (of those wanted, the ones carrying under half their crown's leaf
-    /// area)). Its folder is made when missing.
+    /// demoted (whether the budget raised the level switches) and lod_scale (by what factor),
+    /// full_level_trees and bare_full_level (adapted trees tall enough on screen for the full
+    /// level, and those of them carrying under half their crown's leaf area)). Its folder is
+    /// made when missing.
     #[arg(long)]
     pub stats: Option<PathBuf>,
 }
@@ -272,18 +264,13 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
             "instanced_trees": st.instances_drawn.saturating_sub(ad.adapted_trees), "instances_drawn": st.instances_drawn, "triangles": st.triangles, "frame_s": frame_s,
             "trees": trees,
             "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards, "sprig_cards": ad.sprig_cards, "adapted_leaf_area_m2": ad.adapted_leaf_area_m2, "leaf_area_m2": ad.leaf_area_m2, "mesh_bytes": ad.mesh_bytes,
-            "tree_triangles": st.tree_triangles, "tree_triangles_unbudgeted": st.unbudgeted_tree_triangles, "triangle_budget": a.triangle_budget, "demoted": st.lod_scale > 1.0, "lod_scale": st.lod_scale,
-            "demoted_trees": st.demoted_trees, "keep_within_m": st.keep_within_m.is_finite().then_some(st.keep_within_m),
-            "full_level_trees": ad.full_level_trees, "full_level_wanted": ad.full_level_wanted, "bare_full_level": ad.bare_full_level, "shed_bare": ad.shed_bare,
+            "tree_triangles": st.tree_triangles, "triangle_budget": a.triangle_budget, "demoted": st.lod_scale > 1.0, "lod_scale": st.lod_scale,
+            "full_level_trees": ad.full_level_trees, "bare_full_level": ad.bare_full_level, "shed_bare": ad.shed_bare,
         });
         super::write_stats(path, &j)?;
     }
     let stumps_note = if stumps_drawn > 0 { format!(", {stumps_drawn} stumps of harvested trees") } else { String::new() };
-    let demoted = if st.lod_scale > 1.0 {
-        format!(" (the triangle budget of {} lowered the levels of {} trees, those from {:.0} m from the eye on: switch sizes ×{:.2}; {} triangles without it)", a.triangle_budget, st.demoted_trees, st.keep_within_m, st.lod_scale, st.unbudgeted_tree_triangles)
-    } else {
-        String::new()
-    };
+    let demoted = if st.lod_scale > 1.0 { format!(" (the triangle budget of {} lowered the trees' levels: switch sizes ×{:.2})", a.triangle_budget, st.lod_scale) } else { String::new() };
     eprintln!("year {year}: {} trees drawn as meshes or billboards, {} more in the far-field canopy layer{stumps_note}, {} triangles{demoted} → {}", st.instances_drawn, st.canopy_trees, st.triangles, a.out.display());
     Ok(())
 }

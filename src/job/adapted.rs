@@ -152,16 +152,11 @@ pub struct AdaptStats {
     /// coordinates and indices of every level), held during the frame; the renderer's vertex
     /// and index buffers hold about as much again.
     pub mesh_bytes: usize,
-    /// Adapted trees the frame drew at their full level, after the triangle budget's demotion
-    /// (`per_level[0]`, set by [`super::pictures::Stage`] after the frame; before it, and when
-    /// [`adapt_near_field`] returns, the same as [`AdaptStats::full_level_wanted`]).
+    /// Adapted trees at least [`AdaptOptions::full_px`] tall on screen: those the picture may
+    /// draw at its full level (the full-detail ones and, beyond [`AdaptOptions::max_full_trees`],
+    /// coarser skeletons that still carry their crown's leaf area).
     pub full_level_trees: usize,
-    /// Adapted trees at least [`AdaptOptions::full_px`] tall on screen: those the picture would
-    /// draw at its full level without the triangle budget (the full-detail ones and, beyond
-    /// [`AdaptOptions::max_full_trees`], coarser skeletons that still carry their crown's leaf
-    /// area).
-    pub full_level_wanted: usize,
-    /// Of [`AdaptStats::full_level_wanted`], those whose full level carries under half of their
+    /// Of [`AdaptStats::full_level_trees`], those whose full level carries under half of their
     /// crown's drawn leaf area ([`super::leaf_area::drawn_leaf_area`]): trees that read as
     /// bare up close (issue 32, round 36: the leafless foreground birches). 0 when every tree
     /// near the camera is in leaf.
@@ -337,7 +332,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         prototypes.push(m.prototype);
         adapted += 1;
     }
-    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards, sprig_cards: sprigs, adapted_leaf_area_m2: adapted_area, leaf_area_m2: area, mesh_bytes, full_level_trees, full_level_wanted: full_level_trees, bare_full_level, shed_bare })
+    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards, sprig_cards: sprigs, adapted_leaf_area_m2: adapted_area, leaf_area_m2: area, mesh_bytes, full_level_trees, bare_full_level, shed_bare })
 }
 
 /// The share of a leaf card and of a leaf-cluster card that their textures cover, per species

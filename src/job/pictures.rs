@@ -54,12 +54,13 @@ pub struct Stage {
 
 /// Budget of tree triangles of a still (`sylva run`'s stills and close-up, `sylva render`'s
 /// default, [`crate::render::lod::LodParams::max_triangles`]): when the trees at their levels
-/// would cost more, the farthest trees are demoted first ([`crate::render::lod::Demotion`]):
-/// the nearest keep their levels, as many as fit with the others' switches at twice the one
-/// factor that would fit every tree, and the others' level switches are raised by the smallest
-/// factor `2^(k/4)` that fits, down to billboards. The stills are culled on the CPU, with the frame's exact cost
-/// ([`crate::render::instanced::build_batches_of`]). Deterministic: integer counts over the
-/// trees, whatever the order or thread count. 30 M: the default run's year-150 close-up
+/// would cost more, the renderer raises every level switch by the smallest factor `2^(k/4)`
+/// that fits ([`crate::render::lod::budget_scale`]), so that the trees smallest on screen (of
+/// one height, the farthest) drop to their next levels first, down to billboards, and the
+/// trees nearest the camera keep full detail. The stills are culled on the CPU, where the
+/// factor from the histogram of projected sizes is then raised until the frame's exact cost
+/// fits ([`crate::render::instanced::build_batches_of`]). Deterministic: integer counts over
+/// the trees, whatever the order or thread count. 30 M: the default run's year-150 close-up
 /// at 1280 × 720 drew 29.5 M (round 36); a small site's close-up costs no more.
 pub const STILL_TRIANGLE_BUDGET: u32 = 30_000_000;
 
@@ -129,9 +130,8 @@ impl Stage {
     }
 
     /// Sets the most tree triangles a frame draws (`LodParams::max_triangles`; the stills'
-    /// default is [`STILL_TRIANGLE_BUDGET`]): a frame that would cost more demotes its farthest
-    /// trees first until it fits ([`crate::render::lod::Demotion`]; `sylva render
-    /// --triangle-budget`).
+    /// default is [`STILL_TRIANGLE_BUDGET`]): a frame that would cost more raises every tree's
+    /// level switches by one factor until it fits (`sylva render --triangle-budget`).
     pub fn set_triangle_budget(&mut self, triangles: u32) {
         self.renderer.lod.max_triangles = triangles;
     }
@@ -279,9 +279,6 @@ impl Stage {
         protos.truncate(base);
         self.scene.set_prototypes(protos);
         self.last_adapt.per_level = drawn_levels_of(&adapted, camera, width, height, &self.renderer.lod, &self.renderer.last_stats());
-        // the trees drawn at the full level: counted after the budget's demotion (round 36
-        // counted those tall enough for it, demoted or not)
-        self.last_adapt.full_level_trees = self.last_adapt.per_level[0];
         img
     }
 
@@ -392,8 +389,7 @@ fn release_freed_memory() {
 
 /// Instances `trees` (with their chains' level counts) by the level a frame of `width` ×
 /// `height` seen by `camera` with level parameters `lod` drew them at, from its stats `st`
-/// (its far-field switch and its budget's demotion: `lod_scale` from `keep_within_m` on;
-/// [`AdaptStats::per_level`]).
+/// ([`AdaptStats::per_level`]).
 pub fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: u32, height: u32, lod: &crate::render::lod::LodParams, st: &crate::render::renderer::FrameStats) -> [usize; crate::mesh::LOD_LEVELS] {
     use crate::render::lod::{canopy_weight, drawn_levels, select_lod_scaled, Frustum};
     let frustum = Frustum::from_view_proj(camera.view_proj(width.max(1) as f32 / height.max(1) as f32));
@@ -407,10 +403,7 @@ pub fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: 
         if canopy_weight(px, st.canopy_px, lod.band) >= 1.0 || !(px >= lod.min_px) {
             continue;
         }
-        // the frame's factor at the tree's distance: the trees nearer than `keep_within_m` kept
-        // their levels under the budget (render::lod::Demotion)
-        let scale = if crate::render::instanced::eye_distance(camera, c) < st.keep_within_m { 1.0 } else { st.lod_scale };
-        if let Some(p) = select_lod_scaled(crate::render::lod::lod_px(px, t.height, lod), scale, lod, drawn_levels(*n)) {
+        if let Some(p) = select_lod_scaled(crate::render::lod::lod_px(px, t.height, lod), st.lod_scale, lod, drawn_levels(*n)) {
             out[p.level.min(crate::mesh::LOD_LEVELS - 1)] += 1;
         }
     }

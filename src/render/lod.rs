@@ -18,10 +18,8 @@ pub struct LodParams {
     /// Trees shorter than this on screen (px) are not drawn.
     pub min_px: f32,
     /// Budget of tree triangles per frame (main pass; 0 = unlimited). When the levels picked
-    /// by `switch_px` would exceed it, a frame culled on the CPU demotes its farthest trees
-    /// first with the exact cost ([`Demotion`]: the nearest keep their levels); the GPU culling
-    /// pass multiplies every switch size by the smallest factor `2^(k/4)`, k = 1..=40, whose
-    /// cost estimated from the size histogram fits ([`budget_scale`]). Either way a camera
+    /// by `switch_px` would exceed it, every switch size is multiplied by the smallest factor
+    /// `2^(k/4)`, k = 1..=40, whose estimated cost fits ([`budget_scale`]), so that a camera
     /// inside a dense forest does not draw hundreds of full meshes. Billboards (4 triangles per
     /// tree) are the floor: the budget never hides trees.
     pub max_triangles: u32,
@@ -102,52 +100,6 @@ pub fn select_lod_scaled(size_px: f32, scale: f32, params: &LodParams, n_levels:
         return None;
     }
     select_lod(size_px / scale, &LodParams { min_px: 0.0, ..*params }, n_levels)
-}
-
-/// How a frame culled on the CPU meets its triangle budget ([`LodParams::max_triangles`];
-/// `render::instanced::build_batches_of`), farthest trees first (issue 32, round 37): the trees
-/// nearer the eye than `keep_within_m` (distance from the eye to the centre of the tree's
-/// bounding sphere, `render::instanced::eye_distance`) keep the level of their size on screen;
-/// the others pick theirs with every switch size multiplied by `scale` (≥ 1), down to
-/// billboards. The cut is the largest number of nearest trees that keep their levels while the
-/// others still fit at twice the factor that would fit every tree (one octave; at most
-/// `2^(MAX_SCALE_STEPS/4)`); `scale` is then the smallest `2^(k/4)` with which those others
-/// fit. Without such a cut every tree takes the one factor. [`Demotion::NONE`] when the frame
-/// fits.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Demotion {
-    /// Distance (m) from the eye within which every tree keeps its own level (∞: all, nothing
-    /// demoted; 0: none).
-    pub keep_within_m: f32,
-    /// Factor on the switch sizes of the trees at or beyond `keep_within_m` (1: none).
-    pub scale: f32,
-}
-
-impl Default for Demotion {
-    /// [`Demotion::NONE`].
-    fn default() -> Self {
-        Demotion::NONE
-    }
-}
-
-impl Demotion {
-    /// Nothing demoted.
-    pub const NONE: Demotion = Demotion { keep_within_m: f32::INFINITY, scale: 1.0 };
-
-    /// The switch-size factor of a tree `dist_m` from the eye: 1 nearer than
-    /// [`Demotion::keep_within_m`], else [`Demotion::scale`].
-    pub fn scale_at(&self, dist_m: f32) -> f32 {
-        if dist_m < self.keep_within_m {
-            1.0
-        } else {
-            self.scale
-        }
-    }
-
-    /// Whether any tree may be drawn at a coarser level than its size on screen asks for.
-    pub fn demotes(&self) -> bool {
-        self.scale > 1.0 && self.keep_within_m < f32::INFINITY
-    }
 }
 
 /// The switch-size factor that keeps a frame within `params.max_triangles`: the smallest

@@ -81,20 +81,8 @@ pub struct FrameStats {
     /// Whether culling and level selection ran in the GPU compute pass.
     pub gpu_culling: bool,
     /// Factor by which the level switch sizes were raised to meet
-    /// [`LodParams::max_triangles`] (1 = not needed): on the CPU path for the trees from
-    /// [`FrameStats::keep_within_m`] on ([`crate::render::lod::Demotion`]), on the GPU path for
-    /// every tree (one factor from the size histogram, [`crate::render::lod::budget_scale`]).
+    /// [`LodParams::max_triangles`] (1 = not needed).
     pub lod_scale: f32,
-    /// Distance (m) from the eye within which every tree kept its own level under the budget
-    /// (the farthest trees are demoted first, [`crate::render::lod::Demotion`]): ∞ when nothing
-    /// was demoted; 0 on the GPU path when it demoted (one factor on every tree).
-    pub keep_within_m: f32,
-    /// Trees drawn at a coarser level than their size on screen asks for (CPU path; 0 on the
-    /// GPU path).
-    pub demoted_trees: usize,
-    /// Tree triangles the frame would have drawn without the budget (CPU path with a budget;
-    /// else 0).
-    pub unbudgeted_tree_triangles: u64,
     /// Far-field switch of the frame (px; 0 = canopy layer off): trees below it (less the
     /// cross-fade band) are drawn only in the canopy layer.
     pub canopy_px: f32,
@@ -423,7 +411,6 @@ impl Renderer {
         }
         let mut per_level = [0usize; LOD_LEVELS];
         let mut lod_scale = 1.0f32;
-        let (mut keep_within_m, mut demoted_trees, mut unbudgeted_tree_triangles) = (f32::INFINITY, 0usize, 0u64);
         let (mut canopy_px, mut canopy_trees) = (0.0f32, 0usize);
         let (tree_tris, culled, invalid, drawn) = match &draws {
             FrameDraws::Cpu(b) => {
@@ -431,7 +418,6 @@ impl Renderer {
                     per_level[i.min(LOD_LEVELS - 1)] += n;
                 }
                 lod_scale = b.lod_scale;
-                (keep_within_m, demoted_trees, unbudgeted_tree_triangles) = (b.demotion.keep_within_m, b.demoted_trees, b.unbudgeted_triangles);
                 canopy_px = b.canopy_px;
                 canopy_trees = b.canopy_only + near.as_ref().map_or(0, |n| n.far_trees);
                 (b.triangles, b.culled, b.invalid, b.per_level.iter().sum())
@@ -453,9 +439,6 @@ impl Renderer {
                         let tail = words.len().saturating_sub(3);
                         if let [sc, cp, cn] = words[tail..] {
                             lod_scale = f32::from_bits(sc);
-                            if lod_scale > 1.0 {
-                                keep_within_m = 0.0;
-                            }
                             canopy_px = f32::from_bits(cp);
                             canopy_trees = cn as usize;
                         }
@@ -476,9 +459,6 @@ impl Renderer {
             per_level,
             gpu_culling: matches!(draws, FrameDraws::Gpu(_)),
             lod_scale,
-            keep_within_m,
-            demoted_trees,
-            unbudgeted_tree_triangles,
             canopy_px,
             canopy_trees,
             uploaded_terrain,
