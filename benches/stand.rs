@@ -8,6 +8,7 @@
 //! cache warm) and the counts; the figures go to BENCHMARKS.md. Also prints a fingerprint
 //! (FNV-1a over the bits of every adapted node position and radius, leaf position and cluster
 //! of the targets) so a speed-up can be checked to compute the same stand bit for bit.
+//! `SYLVA_STAND_SPECIES_DIR=DIR` reads the species from DIR instead of the embedded library;
 //! `SYLVA_STAND_TARGETS=N` adapts the N nearest trees instead of 1,000 (for a profiler);
 //! `SYLVA_STAND_ONCE=1` skips the second call; `SYLVA_STAND_CELL=M` sets the neighbourhood
 //! cell side (m, default 12; other cells group the trees otherwise, so the stand differs);
@@ -53,7 +54,12 @@ fn fingerprint(st: &Stand) -> u64 {
 }
 
 fn main() {
-    let lib = SpeciesLibrary::embedded().expect("embedded species");
+    // `SYLVA_STAND_SPECIES_DIR=DIR`: the species of a folder instead of the embedded library
+    // (e.g. main's species files beside a branch's, to tell a species change from a code change)
+    let lib = match std::env::var_os("SYLVA_STAND_SPECIES_DIR") {
+        Some(d) => SpeciesLibrary::load_dir(std::path::Path::new(&d)).expect("SYLVA_STAND_SPECIES_DIR: a species folder"),
+        None => SpeciesLibrary::embedded().expect("embedded species"),
+    };
     let names = ["beech", "sycamore", "norway_spruce", "scots_pine"];
     let ids: Vec<u16> = names.iter().map(|n| lib.find(n).expect("species")).collect();
     // 160 m × 160 m at ~4 m spacing with jitter: 1,600 trees (625/ha)

@@ -504,3 +504,41 @@ fn a_missing_dem_is_refused_naming_terrain_path() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("bad3.toml") && err.contains("terrain.path") && err.contains("nothere.tif (") && err.contains("an existing DEM file") && !dir.path().join("o").exists(), "{err}");
 }
+
+/// A TIFF without georeferencing tags (a heightmap saved by a paint program, or a GeoTIFF whose
+/// grid tags were lost) was read silently as 1 m cells (trial 37): now said, with the way out.
+#[test]
+fn a_tiff_without_georeferencing_is_said_to_be_read_as_one_metre_cells() {
+    use tiff::encoder::{colortype, TiffEncoder};
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("painted.tif");
+    let mut f = std::fs::File::create(&p).unwrap();
+    let data: Vec<f32> = (0..64).map(|i| 100.0 + i as f32).collect();
+    TiffEncoder::new(&mut f).unwrap().write_image::<colortype::Gray32Float>(8, 8, &data).unwrap();
+    drop(f);
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info"]).arg(&p).output().unwrap();
+    let (out, err) = (String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("painted.tif") && err.contains("no georeferencing") && err.contains("1 m cells") && err.contains("gdal_translate"), "{err}");
+    assert!(out.contains("8 x 8"), "{out}");
+    // a georeferenced GeoTIFF says nothing of the kind
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info"]).arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("terrains/coweeta_10m_utm17n.tif")).output().unwrap();
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("no georeferencing"));
+}
+
+/// A render that fails leaves no folder behind that it made for `--out` (trial 37: a refused
+/// `--stats` left `x/y/` empty after the render made them).
+#[test]
+fn a_failed_render_removes_the_empty_folders_it_made_for_its_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x/y/pic.png");
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["render"]).arg(dir.path().join("no_run")).arg("--out").arg(&out).arg("--stats").arg(dir.path()).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("--stats"), "{err}");
+    assert!(!dir.path().join("x").exists(), "the failed render left {}", dir.path().join("x/y").display());
+    // a folder that was there before is kept
+    std::fs::create_dir_all(dir.path().join("keep")).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["render"]).arg(dir.path().join("no_run")).arg("--out").arg(dir.path().join("keep/pic.png")).output().unwrap();
+    assert!(!o.status.success());
+    assert!(dir.path().join("keep").is_dir());
+}

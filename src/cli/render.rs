@@ -192,9 +192,29 @@ pub fn render(a: RenderArgs) -> anyhow::Result<()> {
         anyhow::bail!("--out {}: stills are written as PNG; give a file name ending in .png", a.out.display());
     }
     super::check_out_file(&a.out, "--out")?;
+    // the folders --out needs are made now (so that a folder that cannot be made is said before
+    // the picture is drawn) and removed again, if still empty, when the render fails (trial 37:
+    // a failed render left an empty folder tree)
+    let made = missing_folders(&a.out);
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
     }
+    let res = render_checked(a);
+    if res.is_err() {
+        for d in made.iter() {
+            let _ = std::fs::remove_dir(d); // only an empty folder goes
+        }
+    }
+    res
+}
+
+/// The folders above `p` that do not exist yet, deepest first.
+fn missing_folders(p: &Path) -> Vec<std::path::PathBuf> {
+    p.ancestors().skip(1).filter(|d| !d.as_os_str().is_empty()).take_while(|d| !d.exists()).map(Path::to_path_buf).collect()
+}
+
+/// [`render`] once the folder of `--out` exists.
+fn render_checked(a: RenderArgs) -> anyhow::Result<()> {
     super::check_out_file(&a.out, "--out")?;
     // the statistics file is checked before the picture is drawn, so that a bad path does not
     // leave the picture without its statistics

@@ -318,7 +318,14 @@ fn geotiff_georef(tags: &GeoTiffTags, w: u32, h: u32, path: &Path) -> Result<(Ge
             (a, -f, d, hh)
         }
         (None, Some(m)) => return Err(Error::format(path, format!("ModelTransformation has {} values: expected 16", m.len()))),
-        (None, None) => (1.0, 1.0, 0.0, h as f64),
+        (None, None) => {
+            // a plain TIFF, or a GeoTIFF without its grid tags: said, not silently 1 m (trial 37)
+            tracing::warn!(
+                "{}: no georeferencing (no ModelPixelScale or ModelTransformation tag): read as a local grid of 1 m cells with heights as stored; give it its cell size and CRS first, e.g. `gdal_translate -a_srs EPSG:NNNN -a_ullr ULX ULY LRX LRY in.tif out.tif`, or save it as a 16-bit PNG and give --cell (terrain.cell_m)",
+                path.display()
+            );
+            (1.0, 1.0, 0.0, h as f64)
+        }
     };
     let south_up = ph < 0.0;
     let ph = if south_up {
