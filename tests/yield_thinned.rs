@@ -114,7 +114,7 @@ fn check(name: &str, table: &str) {
 }
 
 #[test]
-#[ignore = "issue 35: not met (N −72 %, Dq +96 % at age 50, −69 %, +85 % at 100; round 33): docs/management.md"]
+#[ignore = "issue 35: not met (N −72 %, Dq +96 % at age 50, −69 %, +85 % at 100; round 33; with the optional BWINPro beech growth of round 37, `life.bai_bwinpro`, not adopted: N +24 % at 50, −41 % and Dq +28 % at 100): docs/management.md"]
 fn thinned_beech_follows_wiedemanns_moderate_thinning_table() {
     check("thinning_beech", "ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv");
 }
