@@ -160,6 +160,11 @@ fn main_job_reduced_scenario_writes_every_output() {
     let (ox, oy) = off(&feats[0]);
     assert!((700_000.0..800_000.0).contains(&ox) && (4_000_000.0..4_100_000.0).contains(&oy), "offset {ox} {oy}");
     assert!(feats.iter().all(|f| (off(f).0 - ox).abs() < 0.02 && (off(f).1 - oy).abs() < 0.02));
+    // summary.md says where the site's south-west corner is on the map: the same offset, so a
+    // user can place the local metres (x_m, y_m, --area) in GIS without working it out
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    let corner = format!("south-west corner, at map x {ox:.2}, y {oy:.2}: map x = {ox:.2} + x_m, map y = {oy:.2} + y_m");
+    assert!(md.contains("## Site and coordinates") && md.contains(&corner) && md.contains("EPSG:32616") && md.contains(&format!("{:.0} m × {:.0} m (12 × 12 cells of {} m)", 12.0 * cell, 12.0 * cell, cell)), "{corner}\n{md}");
 
     // Pictures are not blank: terrain and trees give contrast.
     for f in ["stills/year_0006_oblique.png", "stills/year_0006_topdown.png", "stand_table.png", "maps/conditions/elevation.png"] {

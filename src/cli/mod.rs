@@ -240,7 +240,7 @@ pub fn refuse_mpi_launch(command: &str, over_mpi: bool) -> anyhow::Result<()> {
     match cfg!(feature = "mpi") {
         false => anyhow::bail!(
             "sylva {command}: started by an MPI launcher with {n} processes ({var}), but this sylva was built without the `mpi` feature: \
-             each process would run the whole scenario into the same folder. Rebuild with `cargo build --release --features mpi` (needs Open MPI, see the README) \
+             each process would run the whole scenario into the same folder. Rebuild with `cargo build --release --features mpi` (needs Open MPI: docs/guide.md, 'Regional runs over MPI') \
              to run the processes as the tiles of one run, run `sylva {command}` without mpirun, or split the site into tiles in one process with `--tiles N`"
         ),
         true => Ok(()),

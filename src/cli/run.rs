@@ -76,6 +76,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     }
     let (table, shares) = summary.tables();
     println!("\n{}\n{}", table, shares);
+    println!("{}", summary.coordinates_md());
     if summary.film.as_ref().is_some_and(|f| !f.mp4) {
         println!("timelapse.gif written; no MP4: ffmpeg is not on PATH");
     }

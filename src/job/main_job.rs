@@ -489,9 +489,43 @@ pub struct MainJobSummary {
     pub pictures_s: f64,
     /// Wall time (s) of the whole job.
     pub total_s: f64,
+    /// How the site's local metres map to the terrain's map coordinates (its south-west corner
+    /// and CRS), as the inventories' geometry and the map GeoTIFFs use it.
+    pub geo: crate::output::georef::PointGeoRef,
+    /// The site's size (m): `(east-west, south-north)`.
+    pub extent_m: (f64, f64),
+    /// Columns, rows and the east-west cell size (m) of the site's grid.
+    pub cells: (usize, usize, f64),
 }
 
 impl MainJobSummary {
+    /// The summary's "Site and coordinates" paragraph (Markdown): the site's size and cells, the
+    /// map coordinates of its south-west corner, and how local metres (inventory `x_m`, `y_m`,
+    /// `--area`, `--camera`, scenario points) become map coordinates. A trial's artist had to work
+    /// the corner out by hand to place a stand in GIS.
+    pub fn coordinates_md(&self) -> String {
+        let g = &self.geo;
+        let (w, h) = self.extent_m;
+        let (cols, rows, cell) = self.cells;
+        let crs = match g.epsg {
+            Some(c) => format!("EPSG:{c}"),
+            None => "no coordinate reference system (a local grid: map coordinates are the local metres)".to_string(),
+        };
+        let (x0, y0) = if g.degrees { (format!("{:.7}", g.x0), format!("{:.7}", g.y0)) } else { (format!("{:.2}", g.x0), format!("{:.2}", g.y0)) };
+        let mut md = format!(
+            "The site is {w:.0} m × {h:.0} m ({cols} × {rows} cells of {cell} m), in {crs}. Every local coordinate \
+             (the inventories' `x_m`, `y_m`; `--area`, `--camera` and the scenario's points) is metres east and \
+             north of the site's south-west corner, at map x {x0}, y {y0}"
+        );
+        if g.degrees {
+            md.push_str(&format!(": longitude = {x0} + x_m · {:.9}, latitude = {y0} + y_m · {:.9} (degrees per metre at the site's centre).", g.per_m.0, g.per_m.1));
+        } else {
+            md.push_str(&format!(": map x = {x0} + x_m, map y = {y0} + y_m."));
+        }
+        md.push_str(" The inventories' geometry, the GeoPackage and the map GeoTIFFs are in map coordinates already.\n");
+        md
+    }
+
     /// The summary's two Markdown tables: figures and times, species shares of basal area
     /// and stems (largest first), as printed by `sylva run` and written into `summary.md`.
     pub fn tables(&self) -> (String, String) {
@@ -602,7 +636,9 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
         return context(Err(e.into()), || "keeping the key frames of the pictures".into());
     }
     let sim_s = t_sim.elapsed().as_secs_f64();
-    let mut summary = MainJobSummary { sim, scenario: sc.clone(), maps, stills: Vec::new(), film: None, site_s, sim_s, pictures_s: 0.0, total_s: 0.0 };
+    let geo = crate::output::georef::PointGeoRef::of_site(&site);
+    let cells = (site.width(), site.height(), site.cell_x_m);
+    let mut summary = MainJobSummary { sim, scenario: sc.clone(), maps, stills: Vec::new(), film: None, site_s, sim_s, pictures_s: 0.0, total_s: 0.0, geo, extent_m: site.extent_m(), cells };
     if summary.sim.stopped {
         summary.total_s = t0.elapsed().as_secs_f64();
         return Ok(summary);
@@ -759,6 +795,7 @@ fn write_summary_md(out: &Path, s: &MainJobSummary) -> Result<()> {
     let _ = writeln!(md, "# {}\n", sc.name);
     let _ = writeln!(md, "{} years, seed {}, {} species in the pool. Scenario as run: `scenario.toml`.\n", sc.years, sc.seed, if sc.species.is_empty() { "all".to_string() } else { sc.species.len().to_string() });
     let _ = writeln!(md, "## Result\n\n{table}\n{shares}");
+    let _ = writeln!(md, "## Site and coordinates\n\n{}", s.coordinates_md());
     let _ = writeln!(md, "## Stand development\n\n![stand table](stand_table.png)\n\nData: `stand_table.csv`; inventories: `inventory/`.\n");
     if let Some(f) = &s.film {
         let _ = writeln!(md, "## Timelapse\n\n![timelapse]({})\n\n{} frames{}.\n", rel(out, &f.gif), f.frames, if f.mp4 { ", also as `timelapse.mp4`" } else { "; no MP4 (ffmpeg was not on PATH)" });
