@@ -61,6 +61,9 @@ struct Counts {
     coll_bent_nodes: f64,
     coll_bent_s: f64,
     bent: f64,
+    alive_in_cut: f64,        // T nodes alive although in O's geometric cut
+    alive_beyond: f64,        // T nodes alive whose adapted position is beyond the plane
+    alive_in_cut_moved_cm: f64, // sum over the former of how far in front of the plane they stand now
     // T without eq. (11) (c_psi = 0): bending and collisions only
     t0_nodes: f64,
     t0_s: f64,
@@ -190,6 +193,12 @@ fn main() -> anyhow::Result<()> {
             }
             for i in 1..inp.len() {
                 if fate[i] == Fate::Alive {
+                    let x = t.positions()[i].x;
+                    c.alive_beyond += (x >= wall_x) as u8 as f64;
+                    if cut[i] {
+                        c.alive_in_cut += 1.0;
+                        c.alive_in_cut_moved_cm += 100.0 * (wall_x - x) as f64;
+                    }
                     continue;
                 }
                 let r = root_of[i];
@@ -250,6 +259,7 @@ fn main() -> anyhow::Result<()> {
     println!("collision, beyond the wall in the input: {:.1} ({:.1}) S {:.1}", mean(&|c| c.coll_in_nodes), mean(&|c| c.coll_in_roots), mean(&|c| c.coll_in_s));
     println!("collision, bent into the wall: {:.1} ({:.1}) S {:.1}", mean(&|c| c.coll_bent_nodes), mean(&|c| c.coll_bent_roots), mean(&|c| c.coll_bent_s));
     println!("ψ_ref (eq. 11): analysis {:.5}, recomputed (ψ > 0) {:.5}, all ψ_s(t) {:.5}; share of ψ_s(t) = 0: {:.3}", mean(&|c| c.psi_ref), mean(&|c| c.psi_ref_lit), mean(&|c| c.psi_ref_all), mean(&|c| c.psi_zero_share));
+    println!("alive in T although in O's cut: {:.1} nodes, standing {:.1} cm in front of the plane on average; alive beyond the plane: {:.1}", mean(&|c| c.alive_in_cut), mean(&|c| c.alive_in_cut_moved_cm) / mean(&|c| c.alive_in_cut).max(1e-9), mean(&|c| c.alive_beyond));
     println!("segments bent > 1°: {:.1}", mean(&|c| c.bent));
     println!("\nG per tree against O (mean): nodes O − G {:.1}, S O − G {:.1}; O's nodes beyond the wall {:.1} (S {:.1}); nodes shed over the cycles: O {:.1}, G − O {:+.1}; nodes on the open half (x ≤ 0): O {:.1}, G {:.1}", mean(&|c| c.o_nodes - c.g_nodes), mean(&|c| c.o_s - c.g_s), mean(&|c| c.o_beyond_nodes), mean(&|c| c.o_beyond_s), mean(&|c| c.o_shed_abs), mean(&|c| c.g_shed), mean(&|c| c.o_open_side), mean(&|c| c.g_open_side));
     // the groups of Table 1 for T as adapted and for T without light pruning
