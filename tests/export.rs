@@ -679,3 +679,71 @@ fn stand_export_trees_have_the_nodes_of_a_tree_grown_alone() {
         assert!(capped.stats.nodes_median <= 64 && capped.stats.nodes_median >= 8, "{sp}: {:?}", capped.stats);
     }
 }
+
+/// A run on a slope rising 0.4 m a metre to the east (an ESRI grid of 10 × 10 cells of 10 m at
+/// map corner 500000, 5200000), beech planted at 5 m in its south 40 m, a building of 20 m ×
+/// 15 m and 8 m on the slope; one simulated year. Returns the run folder.
+fn slope_run(dir: &Path) -> PathBuf {
+    let mut asc = String::from("ncols 10\nnrows 10\nxllcorner 500000\nyllcorner 5200000\ncellsize 10\nNODATA_value -9999\n");
+    for _ in 0..10 {
+        let row: Vec<String> = (0..10).map(|c| format!("{}", 300.0 + 0.4 * (c as f64 + 0.5) * 10.0)).collect();
+        asc += &(row.join(" ") + "\n");
+    }
+    std::fs::write(dir.join("slope.asc"), asc).unwrap();
+    let toml = format!(
+        "name = \"slope\"\nyears = 1\nseed = 3\nsnapshot_every = 1\nspecies = [\"beech\"]\n[terrain]\npath = \"{}\"\n[[start]]\nkind = \"planted\"\nspecies = \"beech\"\nspacing_m = 5.0\nage_yr = 30.0\narea = [0.0, 0.0, 100.0, 40.0]\n[[obstacle]]\nkind = \"footprint\"\npoints = [[40.0, 50.0], [60.0, 50.0], [60.0, 65.0], [40.0, 65.0]]\nheight_m = 8.0\n",
+        dir.join("slope.asc").display()
+    );
+    let sc = sylva::sim::Scenario::from_toml_str(&toml, "slope").unwrap();
+    let site = sc.site().unwrap();
+    let run = dir.join("run");
+    let mut opts = sylva::job::run::RunOptions::new(&run);
+    opts.map_px = 32;
+    sylva::job::run::run_scenario(&sc, site, &lib(), opts).unwrap();
+    run
+}
+
+/// Trial 37: a building on a slope floated on its downhill side (its footprint set at the
+/// ground of its anchor, 1 m deep: the west wall hung 3 m above the ground here). Now the
+/// export's building reaches the terrain at every corner of its footprint (a foundation down
+/// to below the lowest ground under it) and keeps its height above its anchor's ground; the
+/// stand's `extras` give the origin in map coordinates (trial 37: only the instanced export
+/// did).
+#[test]
+fn a_building_on_a_slope_reaches_the_ground_at_every_corner_of_its_footprint() {
+    use sylva::job::export::{export_stand, ExportOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let run = slope_run(dir.path());
+    let site = sylva::sim::Scenario::load(&run.join("scenario.toml")).unwrap().site().unwrap();
+    let out = dir.path().join("slope.glb");
+    let r = export_stand(&run, &lib(), &ExportOptions::new([30.0, 30.0, 70.0, 80.0]), &out).unwrap();
+    assert_eq!(r.obstacles, 1);
+    let (doc, buffers, _) = gltf::import(&out).unwrap();
+    let bytes = std::fs::read(&out).unwrap();
+    let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + n]).unwrap();
+    let extras = &js["scenes"][0]["extras"]["sylva"];
+    let o: Vec<f64> = extras["origin_m"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let om: Vec<f64> = extras["origin_map"].as_array().unwrap_or_else(|| panic!("no origin_map in {extras}")).iter().map(|v| v.as_f64().unwrap()).collect();
+    assert!((om[0] - (500000.0 + o[0])).abs() < 1e-3 && (om[1] - (5200000.0 + o[1])).abs() < 1e-3 && (om[2] - o[2]).abs() < 1e-3, "origin_map {om:?} of origin_m {o:?}");
+    // the building's vertices in world coordinates (y up in the file: (x, z, −y))
+    let node = doc.nodes().find(|n| n.name().is_some_and(|s| s.starts_with("obstacle_0_footprint"))).unwrap();
+    let mut pos: Vec<[f64; 3]> = Vec::new();
+    for p in node.mesh().unwrap().primitives() {
+        let rd = p.reader(|b| Some(&buffers[b.index()].0[..]));
+        pos.extend(rd.read_positions().unwrap().map(|q| [q[0] as f64 + o[0], -q[2] as f64 + o[1], q[1] as f64 + o[2]]));
+    }
+    let ground = |x: f64, y: f64| site.elevation_at(x, y) as f64;
+    for [x, y] in [[40.0, 50.0], [60.0, 50.0], [60.0, 65.0], [40.0, 65.0]] {
+        let at: Vec<f64> = pos.iter().filter(|p| (p[0] - x).abs() < 1e-3 && (p[1] - y).abs() < 1e-3).map(|p| p[2]).collect();
+        assert!(!at.is_empty(), "no vertex at corner {x}, {y}");
+        let (lo, hi) = (at.iter().copied().fold(f64::MAX, f64::min), at.iter().copied().fold(f64::MIN, f64::max));
+        assert!(lo <= ground(x, y) + 1e-3, "corner {x}, {y}: the building's base at {lo:.2} m, the ground at {:.2} m", ground(x, y));
+        // not sunk absurdly deep: 1 m below the lowest ground under it (the west side, 316 m)
+        assert!(lo >= ground(40.0, 57.5) - 1.0 - 0.05, "corner {x}, {y}: base {lo:.2} m");
+        // the roof: 8 m above the anchor's ground (the centre, 320 m)
+        assert!((hi - (ground(50.0, 57.5) + 8.0)).abs() < 1e-3, "corner {x}, {y}: roof at {hi:.2} m");
+    }
+    // the slope is what the test says: 8 m from the west to the east side
+    assert!((ground(60.0, 57.5) - ground(40.0, 57.5) - 8.0).abs() < 0.01);
+}

@@ -380,6 +380,8 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let mut statics = vec![StaticMesh { name: "terrain".into(), mesh: terrain, rgb: GROUND_RGB, roughness: 0.95 }];
     let terrain_triangles = statics[0].mesh.triangle_count();
     let n_obstacles = push_obstacles(&mut statics, &sc, &site, o.area, origin);
+    let geo = crate::output::georef::PointGeoRef::of_site(&site);
+    let (mx, my) = geo.map(origin.x as f64, origin.y as f64);
     let scene = StandScene {
         name: format!("stand_{year}"),
         looks,
@@ -391,8 +393,8 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             "sylva": {
                 "run_dir": run_dir.display().to_string(), "year": year, "area_m": o.area,
                 "origin_m": [origin.x, origin.y, origin.z],
-                "epsg": site.geo.epsg,
-                "note": "scene coordinates are metres from origin_m (run world coordinates: x east, y north from the terrain's south-west corner, z elevation), y up",
+                "origin_map": [mx, my, origin.z], "epsg": geo.epsg,
+                "note": "scene coordinates are metres from origin_m (run world coordinates: x east, y north from the terrain's south-west corner, z elevation), y up; origin_map is the same point in the terrain's map coordinates (EPSG code epsg)",
             }
         }),
     };
