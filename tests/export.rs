@@ -825,3 +825,39 @@ fn a_stand_written_through_its_scratch_file_is_the_stand_held_in_memory() {
     let left: Vec<String> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| !n.ends_with(".glb") || n.starts_with('.')).collect();
     assert!(left.is_empty(), "left behind: {left:?}");
 }
+
+/// Trial 37: `--instances --lod all` groups each model's levels under a node named after
+/// the model (as a stand's trees are), the levels' nodes instanced; one level stays flat.
+#[test]
+fn instanced_levels_are_grouped_under_their_model() {
+    let chain = two_node_chain();
+    for levels in [vec![0, 1, 2, 3], vec![0]] {
+        let scene = sylva::output::gltf::InstancedScene {
+            name: "t".into(),
+            looks: vec![Look::default()],
+            models: vec![StandModel { name: "m".into(), chain: chain.clone(), look: 0, sprigs: sylva::mesh::TriMesh::default() }],
+            groups: vec![sylva::output::gltf::InstanceGroup { model: 0, translations: vec![[0.0; 3], [3.0, 0.0, 0.0]], yaw: vec![0.0; 2], scales: vec![[1.0; 3]; 2], ids: vec![] }],
+            statics: vec![],
+            levels: levels.clone(),
+            extras: serde_json::json!({}),
+        };
+        let (bytes, _) = sylva::output::gltf::instanced_glb_bytes(&scene).unwrap();
+        let jl = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + jl]).unwrap();
+        let nodes = js["nodes"].as_array().unwrap();
+        let trees = nodes.iter().find(|n| n["name"] == "trees").unwrap();
+        let top: Vec<&str> = trees["children"].as_array().unwrap().iter().map(|i| nodes[i.as_u64().unwrap() as usize]["name"].as_str().unwrap()).collect();
+        let lods: Vec<usize> = (0..nodes.len()).filter(|&i| nodes[i]["name"].as_str().is_some_and(|n| n.starts_with("m_LOD"))).collect();
+        assert_eq!(lods.len(), levels.len());
+        assert!(lods.iter().all(|&i| nodes[i]["extensions"]["EXT_mesh_gpu_instancing"].is_object()));
+        if levels.len() > 1 {
+            assert_eq!(top, vec!["m"], "one node per model under `trees`");
+            let m = nodes.iter().find(|n| n["name"] == "m").unwrap();
+            let kids: Vec<usize> = m["children"].as_array().unwrap().iter().map(|i| i.as_u64().unwrap() as usize).collect();
+            assert_eq!(kids, lods, "the model's levels are its children");
+            assert!(m.get("mesh").is_none() && m.get("extensions").is_none());
+        } else {
+            assert_eq!(top, vec!["m_LOD0"]);
+        }
+    }
+}

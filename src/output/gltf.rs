@@ -734,7 +734,7 @@ pub struct InstancedScene {
 }
 
 /// Encodes an [`InstancedScene`] as GLB bytes: node `trees` holds, per model and level, one node
-/// `<model>_LOD<i>` drawing the level's mesh (the full level with its leaf-cluster cards, the
+/// `<model>_LOD<i>` (with several levels, the children of a node `<model>`) drawing the level's mesh (the full level with its leaf-cluster cards, the
 /// model's [`StandModel::sprigs`] and those marked among its leaves by
 /// [`crate::mesh::CLUSTER_CARD_U`], as a third primitive in the look's `_cluster` material) with the extension's `TRANSLATION`, `ROTATION`
 /// (about the vertical) and `SCALE` attributes (and `_ID`, or `_ID_LO` and `_ID_HI`:
@@ -826,11 +826,20 @@ pub fn instanced_glb_bytes(s: &InstancedScene) -> Result<(Vec<u8>, StandCounts)>
                 id_attribute("_ID_HI", g.ids.iter().map(|&i| (i >> 32) as u32).collect());
             }
         }
+        let mut level_nodes = Vec::new();
         for (i, mesh) in meshes.iter().enumerate() {
             if let Some(mesh) = *mesh {
-                tree_nodes.push(d.node(json!({"name": format!("{}_LOD{i}", m.name), "mesh": mesh, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": attributes}}})));
+                level_nodes.push(d.node(json!({"name": format!("{}_LOD{i}", m.name), "mesh": mesh, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": attributes}}})));
                 mesh_nodes += 1;
             }
+        }
+        // several levels: under one node `<model>`, as a stand export's trees and a tree's
+        // levels are (the grouping by which Unity's and Unreal's importers make a LOD group;
+        // trial 37: flat siblings were all drawn at once)
+        if level_nodes.len() > 1 {
+            tree_nodes.push(d.node(json!({"name": m.name, "children": level_nodes})));
+        } else {
+            tree_nodes.extend(level_nodes);
         }
     }
     let (d, scene, counts) = forest_doc(d, tree_nodes, mesh_nodes, &s.statics, &s.name, &s.extras);
