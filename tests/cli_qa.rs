@@ -542,3 +542,33 @@ fn a_failed_render_removes_the_empty_folders_it_made_for_its_picture() {
     assert!(!o.status.success());
     assert!(dir.path().join("keep").is_dir());
 }
+/// Trial 37: a 16-bit PNG heightmap's lowest pixel (value 0, the bottom of its height range)
+/// was sea-level water. A PNG now has no sea unless `--sea-level` or the scenario's
+/// `climate.sea_level_m` says where it is; other DEMs keep sea level 0 m.
+#[test]
+fn a_png_heightmaps_lowest_pixel_is_no_sea_unless_a_sea_level_is_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("h16.png");
+    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(8, 8, |x, y| image::Luma([(x * 4000 + y * 3000) as u16])).save(&p).unwrap();
+    let info = |extra: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info"]).arg(&p).args(["--cell", "10", "--min-height", "0", "--max-height", "1000"]).args(extra).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let out = info(&[]);
+    assert!(out.contains("water:       none") && out.contains("--sea-level"), "{out}");
+    let out = info(&["--sea-level", "0"]);
+    assert!(out.contains("water:       1 cells at or below sea level 0 m"), "{out}");
+    // a scenario on the PNG: no sea unless it gives one; the lowest cell is on the site
+    let toml = |climate: &str| format!("name = \"png\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\n[terrain]\npath = \"{}\"\ncell_m = 10.0\nheight_range_m = [0.0, 1000.0]\n{climate}", p.display());
+    let sc = sylva::sim::Scenario::from_toml_str(&toml(""), "png").unwrap();
+    assert_eq!(sc.climate.sea_level_m, sylva::sim::scenario::NO_SEA_LEVEL_M);
+    let site = sc.site().unwrap();
+    assert!(site.mask.data.iter().all(|&m| m), "a masked cell: {} of 64 on the site", site.mask.data.iter().filter(|&&m| m).count());
+    let sc = sylva::sim::Scenario::from_toml_str(&toml("[climate]\nsea_level_m = 0.0\n"), "png").unwrap();
+    assert_eq!(sc.climate.sea_level_m, 0.0);
+    assert_eq!(sc.site().unwrap().mask.data.iter().filter(|&&m| !m).count(), 1, "the given sea level floods the lowest cell");
+    // another DEM keeps sea level 0 m
+    let sc = sylva::sim::Scenario::from_toml_str("name = \"u\"\nyears = 1\nseed = 1\n[terrain]\nuniform = { width = 4, height = 4, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n", "u").unwrap();
+    assert_eq!(sc.climate.sea_level_m, 0.0);
+}
