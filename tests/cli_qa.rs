@@ -542,3 +542,70 @@ fn a_failed_render_removes_the_empty_folders_it_made_for_its_picture() {
     assert!(!o.status.success());
     assert!(dir.path().join("keep").is_dir());
 }
+
+/// Trial 37: `sylva render` had no camera of one's own. `--camera eye:X,Y,Z:TX,TY,TZ[:FOV]`
+/// (site metres, z the elevation) draws the picture from there; an eye outside the site or
+/// under its ground, an eye on its target, a field of view out of range and a malformed value
+/// are refused naming `--camera` and what is expected, and no picture is written.
+#[test]
+fn a_camera_of_ones_own_is_drawn_and_checked_against_the_site() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).current_dir(d).output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    std::fs::write(d.join("eye.toml"), "name = \"eye\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = { width = 4, height = 4, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n[[start]]\nkind = \"planted\"\nspecies = \"beech\"\nspacing_m = 5.0\nage_yr = 20.0\n").unwrap();
+    let (ok, err) = run(&["simulate", "eye.toml", "--out", "eye_run"]);
+    assert!(ok, "{err}");
+    let (ok, err) = run(&["render", "eye_run", "--camera", "eye:2,2,301.7:30,30,306:60", "--size", "64x48", "--out", "own.png"]);
+    assert!(ok && d.join("own.png").is_file(), "{err}");
+    // another eye draws another picture
+    let (ok, err) = run(&["render", "eye_run", "--camera", "eye:38,38,330:20,20,300", "--size", "64x48", "--out", "own2.png"]);
+    assert!(ok, "{err}");
+    assert_ne!(std::fs::read(d.join("own.png")).unwrap(), std::fs::read(d.join("own2.png")).unwrap());
+    for (cam, want) in [
+        ("eye:-5,2,302:30,30,306", &["--camera", "outside the site", "X 0–40.0 m"][..]),
+        ("eye:2,45,302:30,30,306", &["--camera", "outside the site", "Y 0–40.0 m"][..]),
+        ("eye:2,2,299:30,30,306", &["--camera", "under the ground", "300.0 m", "301.7"][..]),
+        ("eye:2,2,302:2,2,302", &["--camera", "the same point", "eye:X,Y,Z:TX,TY,TZ"][..]),
+        ("eye:2,2,302:30,30,306:200", &["--camera", "5–150 degrees"][..]),
+        ("eye:2,2:30,30,306", &["--camera", "three numbers"][..]),
+        ("eye:2,2,302", &["--camera", "an eye and a target"][..]),
+    ] {
+        let (ok, err) = run(&["render", "eye_run", "--camera", cam, "--size", "64x48", "--out", "bad.png"]);
+        assert!(!ok && want.iter().all(|w| err.contains(w)), "{cam}: {err}");
+        assert!(!d.join("bad.png").exists(), "{cam}");
+    }
+}
+
+/// Trial 37: a 16-bit PNG heightmap's lowest pixel (value 0, the bottom of its height range)
+/// was sea-level water. A PNG now has no sea unless `--sea-level` or the scenario's
+/// `climate.sea_level_m` says where it is; other DEMs keep sea level 0 m.
+#[test]
+fn a_png_heightmaps_lowest_pixel_is_no_sea_unless_a_sea_level_is_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("h16.png");
+    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(8, 8, |x, y| image::Luma([(x * 4000 + y * 3000) as u16])).save(&p).unwrap();
+    let info = |extra: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info"]).arg(&p).args(["--cell", "10", "--min-height", "0", "--max-height", "1000"]).args(extra).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let out = info(&[]);
+    assert!(out.contains("water:       none") && out.contains("--sea-level"), "{out}");
+    let out = info(&["--sea-level", "0"]);
+    assert!(out.contains("water:       1 cells at or below sea level 0 m"), "{out}");
+    // a scenario on the PNG: no sea unless it gives one; the lowest cell is on the site
+    let toml = |climate: &str| format!("name = \"png\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\n[terrain]\npath = \"{}\"\ncell_m = 10.0\nheight_range_m = [0.0, 1000.0]\n{climate}", p.display());
+    let sc = sylva::sim::Scenario::from_toml_str(&toml(""), "png").unwrap();
+    assert_eq!(sc.climate.sea_level_m, sylva::sim::scenario::NO_SEA_LEVEL_M);
+    let site = sc.site().unwrap();
+    assert!(site.mask.data.iter().all(|&m| m), "a masked cell: {} of 64 on the site", site.mask.data.iter().filter(|&&m| m).count());
+    let sc = sylva::sim::Scenario::from_toml_str(&toml("[climate]\nsea_level_m = 0.0\n"), "png").unwrap();
+    assert_eq!(sc.climate.sea_level_m, 0.0);
+    assert_eq!(sc.site().unwrap().mask.data.iter().filter(|&&m| !m).count(), 1, "the given sea level floods the lowest cell");
+    // another DEM keeps sea level 0 m
+    let sc = sylva::sim::Scenario::from_toml_str("name = \"u\"\nyears = 1\nseed = 1\n[terrain]\nuniform = { width = 4, height = 4, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n", "u").unwrap();
+    assert_eq!(sc.climate.sea_level_m, 0.0);
+}

@@ -679,3 +679,185 @@ fn stand_export_trees_have_the_nodes_of_a_tree_grown_alone() {
         assert!(capped.stats.nodes_median <= 64 && capped.stats.nodes_median >= 8, "{sp}: {:?}", capped.stats);
     }
 }
+
+/// A run on a slope rising 0.4 m a metre to the east (an ESRI grid of 10 × 10 cells of 10 m at
+/// map corner 500000, 5200000), beech planted at 5 m in its south 40 m, a building of 20 m ×
+/// 15 m and 8 m on the slope; one simulated year. Returns the run folder.
+fn slope_run(dir: &Path) -> PathBuf {
+    let mut asc = String::from("ncols 10\nnrows 10\nxllcorner 500000\nyllcorner 5200000\ncellsize 10\nNODATA_value -9999\n");
+    for _ in 0..10 {
+        let row: Vec<String> = (0..10).map(|c| format!("{}", 300.0 + 0.4 * (c as f64 + 0.5) * 10.0)).collect();
+        asc += &(row.join(" ") + "\n");
+    }
+    std::fs::write(dir.join("slope.asc"), asc).unwrap();
+    let toml = format!(
+        "name = \"slope\"\nyears = 1\nseed = 3\nsnapshot_every = 1\nspecies = [\"beech\"]\n[terrain]\npath = \"{}\"\n[[start]]\nkind = \"planted\"\nspecies = \"beech\"\nspacing_m = 5.0\nage_yr = 30.0\narea = [0.0, 0.0, 100.0, 40.0]\n[[obstacle]]\nkind = \"footprint\"\npoints = [[40.0, 50.0], [60.0, 50.0], [60.0, 65.0], [40.0, 65.0]]\nheight_m = 8.0\n",
+        dir.join("slope.asc").display()
+    );
+    let sc = sylva::sim::Scenario::from_toml_str(&toml, "slope").unwrap();
+    let site = sc.site().unwrap();
+    let run = dir.join("run");
+    let mut opts = sylva::job::run::RunOptions::new(&run);
+    opts.map_px = 32;
+    sylva::job::run::run_scenario(&sc, site, &lib(), opts).unwrap();
+    run
+}
+
+/// Trial 37: a building on a slope floated on its downhill side (its footprint set at the
+/// ground of its anchor, 1 m deep: the west wall hung 3 m above the ground here). Now the
+/// export's building reaches the terrain at every corner of its footprint (a foundation down
+/// to below the lowest ground under it) and keeps its height above its anchor's ground; the
+/// stand's `extras` give the origin in map coordinates (trial 37: only the instanced export
+/// did).
+#[test]
+fn a_building_on_a_slope_reaches_the_ground_at_every_corner_of_its_footprint() {
+    use sylva::job::export::{export_stand, ExportOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let run = slope_run(dir.path());
+    let site = sylva::sim::Scenario::load(&run.join("scenario.toml")).unwrap().site().unwrap();
+    let out = dir.path().join("slope.glb");
+    let r = export_stand(&run, &lib(), &ExportOptions::new([30.0, 30.0, 70.0, 80.0]), &out).unwrap();
+    assert_eq!(r.obstacles, 1);
+    let (doc, buffers, _) = gltf::import(&out).unwrap();
+    let bytes = std::fs::read(&out).unwrap();
+    let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + n]).unwrap();
+    let extras = &js["scenes"][0]["extras"]["sylva"];
+    let o: Vec<f64> = extras["origin_m"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let om: Vec<f64> = extras["origin_map"].as_array().unwrap_or_else(|| panic!("no origin_map in {extras}")).iter().map(|v| v.as_f64().unwrap()).collect();
+    assert!((om[0] - (500000.0 + o[0])).abs() < 1e-3 && (om[1] - (5200000.0 + o[1])).abs() < 1e-3 && (om[2] - o[2]).abs() < 1e-3, "origin_map {om:?} of origin_m {o:?}");
+    // the building's vertices in world coordinates (y up in the file: (x, z, −y))
+    let node = doc.nodes().find(|n| n.name().is_some_and(|s| s.starts_with("obstacle_0_footprint"))).unwrap();
+    let mut pos: Vec<[f64; 3]> = Vec::new();
+    for p in node.mesh().unwrap().primitives() {
+        let rd = p.reader(|b| Some(&buffers[b.index()].0[..]));
+        pos.extend(rd.read_positions().unwrap().map(|q| [q[0] as f64 + o[0], -q[2] as f64 + o[1], q[1] as f64 + o[2]]));
+    }
+    let ground = |x: f64, y: f64| site.elevation_at(x, y) as f64;
+    for [x, y] in [[40.0, 50.0], [60.0, 50.0], [60.0, 65.0], [40.0, 65.0]] {
+        let at: Vec<f64> = pos.iter().filter(|p| (p[0] - x).abs() < 1e-3 && (p[1] - y).abs() < 1e-3).map(|p| p[2]).collect();
+        assert!(!at.is_empty(), "no vertex at corner {x}, {y}");
+        let (lo, hi) = (at.iter().copied().fold(f64::MAX, f64::min), at.iter().copied().fold(f64::MIN, f64::max));
+        assert!(lo <= ground(x, y) + 1e-3, "corner {x}, {y}: the building's base at {lo:.2} m, the ground at {:.2} m", ground(x, y));
+        // not sunk absurdly deep: 1 m below the lowest ground under it (the west side, 316 m)
+        assert!(lo >= ground(40.0, 57.5) - 1.0 - 0.05, "corner {x}, {y}: base {lo:.2} m");
+        // the roof: 8 m above the anchor's ground (the centre, 320 m)
+        assert!((hi - (ground(50.0, 57.5) + 8.0)).abs() < 1e-3, "corner {x}, {y}: roof at {hi:.2} m");
+    }
+    // the slope is what the test says: 8 m from the west to the east side
+    assert!((ground(60.0, 57.5) - ground(40.0, 57.5) - 8.0).abs() < 0.01);
+}
+
+/// Trial 37: a hectare of the default run at full detail wrote 2.2 GB and held 9.5 GB of
+/// memory, and the GLB's 4 GiB limit was checked after all the work. The size is now estimated
+/// from the trees' species, ages and crowns before any tree is grown, and an export above the
+/// cap is refused naming `--area`, `--lod`, the cap and the estimate, leaving nothing behind
+/// (neither the file, nor its temporaries, nor the folder made for it); the estimate is within
+/// 0.7–1.4× of what the same export writes.
+#[test]
+fn an_export_estimated_above_the_cap_is_refused_before_any_work() {
+    use sylva::job::export::{estimate_stand_bytes, export_stand, ExportOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    small_run(&run);
+    let lib = lib();
+    let area = [20.0, 15.0, 45.0, 45.0];
+    let out = dir.path().join("stand.glb");
+    let r = export_stand(&run, &lib, &ExportOptions::new(area), &out).unwrap();
+    // the estimate of the same trees
+    let rows = sylva::job::pictures::snapshot_rows(&run, 1).unwrap();
+    let trees: Vec<(usize, f32)> = rows.iter().filter(|t| t.status == "alive" && t.height_m >= 1.0 && (20.0..45.0).contains(&t.x_m) && (15.0..45.0).contains(&t.y_m)).map(|t| (lib.find(&t.species).unwrap() as usize, t.age_yr)).collect();
+    assert_eq!(trees.len(), r.trees);
+    let est = estimate_stand_bytes(trees.iter().copied(), &lib, sylva::structure::stand::FULL_STRANDS, &[0]);
+    let ratio = r.bytes as f64 / est.bytes as f64;
+    eprintln!("written {} bytes, estimated {} ({} nodes): ratio {ratio:.2}", r.bytes, est.bytes, est.nodes);
+    assert!((0.7..=1.4).contains(&ratio), "written {} bytes, estimated {}", r.bytes, est.bytes);
+    // a cap below the estimate: refused, naming what to change; nothing written
+    let mut o = ExportOptions::new(area);
+    o.max_bytes = est.bytes / 2;
+    let refused = dir.path().join("refused.glb");
+    let e = export_stand(&run, &lib, &o, &refused).unwrap_err().to_string();
+    assert!(e.contains("--area") && e.contains("--lod") && e.contains(&format!("{:.0} MB glb", est.bytes as f64 / 1e6)) && e.contains(&format!("at most {:.0} MB", o.max_bytes as f64 / 1e6)) && e.contains("nothing was grown"), "{e}");
+    // --lod all costs more than the full level alone
+    let all = estimate_stand_bytes(trees.iter().copied(), &lib, sylva::structure::stand::FULL_STRANDS, &[0, 1, 2, 3]);
+    assert!(all.bytes > est.bytes);
+    // the command line: SYLVA_EXPORT_MAX_BYTES sets the cap; the folder made for --out goes
+    let deep = dir.path().join("new").join("x.glb");
+    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).env("SYLVA_EXPORT_MAX_BYTES", "1000").arg("export").arg(&run).args(["--year", "1", "--area", "20,15,45,45", "--stats"]).arg(dir.path().join("new/s.json")).arg("--out").arg(&deep).output().unwrap();
+    let err = String::from_utf8_lossy(&st.stderr);
+    assert!(!st.status.success() && err.contains("--area") && err.contains("SYLVA_EXPORT_MAX_BYTES") && err.contains("estimated"), "{err}");
+    assert!(!dir.path().join("new").exists());
+    let left: Vec<String> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| n != "run" && n != "stand.glb").collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+fn two_node_chain() -> LodChain {
+    let mut sk = sylva::structure::Skeleton::new();
+    sk.add_root(glam::Vec3::ZERO, 0.1);
+    sk.add_child(0, glam::Vec3::new(0.0, 0.0, 2.0), 0.05, false).unwrap();
+    sylva::structure::mesh::lod_chain(&sk, &Default::default(), &Default::default())
+}
+
+/// Trial 37: a stand's buffer, written through its scratch file 64 bytes at a time, gives
+/// the same file, byte for byte, as the buffer held in memory; the scratch file is gone.
+#[test]
+fn a_stand_written_through_its_scratch_file_is_the_stand_held_in_memory() {
+    let chain = two_node_chain();
+    let trees = (0..5).map(|k| StandNode { name: format!("t{k}"), model: k % 2, translation: [k as f32, 0.0, 0.0], scale: [1.0; 3] }).collect();
+    let ground = sylva::mesh::TriMesh { positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], normals: vec![[0.0, 0.0, 1.0]; 3], uvs: vec![[0.0; 2]; 3], indices: vec![0, 1, 2] };
+    let scene = StandScene {
+        name: "s".into(),
+        looks: vec![Look::default()],
+        models: (0..2).map(|k| StandModel { name: format!("m{k}"), chain: chain.clone(), look: 0, sprigs: sylva::mesh::TriMesh::default() }).collect(),
+        trees,
+        statics: vec![StaticMesh { name: "terrain".into(), mesh: ground, rgb: [1, 2, 3], roughness: 0.9 }],
+        levels: vec![0, 1, 2, 3],
+        extras: serde_json::json!({"a": 1}),
+    };
+    let (want, counts) = sylva::output::gltf::stand_glb_bytes(&scene).unwrap();
+    assert!(want.len() > 10_000, "{} bytes: more than a few spills", want.len());
+    let dir = tempfile::tempdir().unwrap();
+    for at in [64, 1 << 30] {
+        let out = dir.path().join(format!("s{at}.glb"));
+        assert_eq!(sylva::output::gltf::write_stand_glb_spilling_at(&out, &scene, at).unwrap(), counts);
+        assert!(std::fs::read(&out).unwrap() == want, "spilling from {at} bytes: a different file");
+    }
+    let left: Vec<String> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| !n.ends_with(".glb") || n.starts_with('.')).collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+/// Trial 37: `--instances --lod all` groups each model's levels under a node named after
+/// the model (as a stand's trees are), the levels' nodes instanced; one level stays flat.
+#[test]
+fn instanced_levels_are_grouped_under_their_model() {
+    let chain = two_node_chain();
+    for levels in [vec![0, 1, 2, 3], vec![0]] {
+        let scene = sylva::output::gltf::InstancedScene {
+            name: "t".into(),
+            looks: vec![Look::default()],
+            models: vec![StandModel { name: "m".into(), chain: chain.clone(), look: 0, sprigs: sylva::mesh::TriMesh::default() }],
+            groups: vec![sylva::output::gltf::InstanceGroup { model: 0, translations: vec![[0.0; 3], [3.0, 0.0, 0.0]], yaw: vec![0.0; 2], scales: vec![[1.0; 3]; 2], ids: vec![] }],
+            statics: vec![],
+            levels: levels.clone(),
+            extras: serde_json::json!({}),
+        };
+        let (bytes, _) = sylva::output::gltf::instanced_glb_bytes(&scene).unwrap();
+        let jl = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + jl]).unwrap();
+        let nodes = js["nodes"].as_array().unwrap();
+        let trees = nodes.iter().find(|n| n["name"] == "trees").unwrap();
+        let top: Vec<&str> = trees["children"].as_array().unwrap().iter().map(|i| nodes[i.as_u64().unwrap() as usize]["name"].as_str().unwrap()).collect();
+        let lods: Vec<usize> = (0..nodes.len()).filter(|&i| nodes[i]["name"].as_str().is_some_and(|n| n.starts_with("m_LOD"))).collect();
+        assert_eq!(lods.len(), levels.len());
+        assert!(lods.iter().all(|&i| nodes[i]["extensions"]["EXT_mesh_gpu_instancing"].is_object()));
+        if levels.len() > 1 {
+            assert_eq!(top, vec!["m"], "one node per model under `trees`");
+            let m = nodes.iter().find(|n| n["name"] == "m").unwrap();
+            let kids: Vec<usize> = m["children"].as_array().unwrap().iter().map(|i| i.as_u64().unwrap() as usize).collect();
+            assert_eq!(kids, lods, "the model's levels are its children");
+            assert!(m.get("mesh").is_none() && m.get("extensions").is_none());
+        } else {
+            assert_eq!(top, vec!["m_LOD0"]);
+        }
+    }
+}

@@ -3,6 +3,7 @@
 //! default DEM (80 m cells, WGS 84 / UTM 16N) and one 20 × 16 window of the Coweeta DEM (10 m,
 //! NAD83 / UTM 17N). Each encoding must read to the elevations and georeferencing of the plain
 //! ESRI ASCII export of the same window; latitudes are checked against `gdaltransform`.
+mod common;
 use std::path::{Path, PathBuf};
 use sylva::grid::Crs;
 use sylva::terrain::io;
@@ -92,4 +93,43 @@ fn what_cannot_be_read_is_refused_with_the_file_and_the_reason() {
     b[at + 8..at + 16].copy_from_slice(&5.0f64.to_le_bytes());
     let e = io::read_geotiff(std::io::Cursor::new(b), Path::new("south.tif")).unwrap_err().to_string();
     assert!(e.starts_with("south.tif") && e.contains("rotated"), "{e}");
+}
+
+/// Trial 37: the species codes are a Byte raster with a colour table and a nodata value: the
+/// tags read back with the `tiff` decoder (which decodes no palette image), and, where GDAL is
+/// installed, `gdalinfo` sees a Byte band with a colour table and nodata 255 and
+/// `gdal_translate` gives the codes back.
+#[test]
+fn a_categorical_geotiff_is_a_byte_raster_with_a_colour_table() {
+    use tiff::tags::Tag;
+    let grid = sylva::grid::Grid { width: 3, height: 2, data: vec![0u8, 1, 2, 255, 1, 0] };
+    let geo = sylva::grid::GeoRef::local(10.0, 47.0);
+    let palette = [[250, 250, 250], [20, 120, 40], [200, 60, 30]];
+    let bytes = sylva::output::geotiff::encode_u8_palette_band(&grid, &geo, Some(sylva::output::geotiff::Band { description: "Dominant species", unit: "code" }), &palette, 255).unwrap();
+    let mut d = tiff::decoder::Decoder::new(std::io::Cursor::new(bytes.clone())).unwrap();
+    assert_eq!(d.get_tag_u32(Tag::PhotometricInterpretation).unwrap(), 3, "palette");
+    assert_eq!(d.get_tag_u32(Tag::BitsPerSample).unwrap(), 8);
+    assert_eq!(d.get_tag_u32(Tag::SampleFormat).unwrap_or(1), 1, "unsigned integers");
+    let map = d.get_tag_u32_vec(Tag::ColorMap).unwrap();
+    assert_eq!(map.len(), 768);
+    for (k, c) in palette.iter().enumerate() {
+        assert_eq!([map[k], map[256 + k], map[512 + k]], [c[0] as u32 * 257, c[1] as u32 * 257, c[2] as u32 * 257]);
+    }
+    assert_eq!(d.get_tag_ascii_string(Tag::GdalNodata).unwrap().trim_end_matches('\0'), "255");
+    assert_eq!(common::palette_geotiff_codes(&bytes), (3, 2, grid.data.clone()), "the codes");
+    let dir = tempfile::tempdir().unwrap();
+    let tif = dir.path().join("codes.tif");
+    std::fs::write(&tif, &bytes).unwrap();
+    let Ok(o) = std::process::Command::new("gdalinfo").arg(&tif).output() else {
+        eprintln!("gdalinfo not found: the GDAL checks are skipped");
+        return;
+    };
+    let info = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success() && info.contains("Type=Byte") && info.contains("ColorInterp=Palette") && info.contains("NoData Value=255") && info.contains("0: 250,250,250,255") && info.contains("2: 200,60,30,255"), "{info}");
+    let asc = dir.path().join("codes.asc");
+    let o = std::process::Command::new("gdal_translate").args(["-q", "-of", "AAIGrid"]).arg(&tif).arg(&asc).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&asc).unwrap();
+    let codes: Vec<u8> = text.lines().filter(|l| l.starts_with(' ') || l.chars().next().is_some_and(|c| c.is_ascii_digit())).flat_map(|l| l.split_whitespace().map(|v| v.parse::<u8>().unwrap()).collect::<Vec<_>>()).collect();
+    assert_eq!(codes, grid.data, "{text}");
 }

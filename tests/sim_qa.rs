@@ -1,5 +1,6 @@
 //! QA fixes of the simulation: fresh runs clear old snapshots, start conditions outside the
 //! site and bad climate values are rejected with errors naming the field.
+mod common;
 use sylva::job::run::{run_scenario, RunOptions};
 use sylva::sim::{fixtures, Scenario, TerrainSpec};
 
@@ -199,11 +200,12 @@ fn maps_are_large_with_legend_and_distinct_species_colours() {
     let total_ba: f64 = ba.elevation.data.iter().filter(|v| v.is_finite()).map(|&v| v as f64 * cell_m * cell_m / 10_000.0).sum();
     let trees_ba: f64 = (0..w.stand.trees.len()).map(|i| w.stand.trees.basal_area_m2(i)).sum();
     assert!(trees_ba > 0.01 && (total_ba - trees_ba).abs() < 1e-3 * trees_ba, "map {total_ba} m² vs trees {trees_ba} m²");
-    let sp = sylva::terrain::io::load(&dir.path().join("maps/species_year_0003.tif")).unwrap();
-    assert_eq!((sp.elevation.width, sp.elevation.height), (ba.elevation.width, ba.elevation.height));
-    let codes: Vec<f32> = sp.elevation.data.iter().copied().filter(|v| v.is_finite()).collect();
-    assert!(codes.iter().all(|&c| c == c.round() && c >= 0.0 && c as usize <= w.site.pool.len()), "{codes:?}");
-    assert!(codes.iter().any(|&c| c >= 1.0));
+    // (a Byte raster with a colour table since trial 37; 255 marks masked cells)
+    let (sw, sh, codes) = common::palette_geotiff_codes(&std::fs::read(dir.path().join("maps/species_year_0003.tif")).unwrap());
+    assert_eq!((sw as usize, sh as usize), (ba.elevation.width, ba.elevation.height));
+    let codes: Vec<u8> = codes.into_iter().filter(|&c| c != 255).collect();
+    assert!(codes.iter().all(|&c| c as usize <= w.site.pool.len()), "{codes:?}");
+    assert!(codes.iter().any(|&c| c >= 1));
     let csv_text = std::fs::read_to_string(dir.path().join("maps/species_codes.csv")).unwrap();
     assert!(csv_text.starts_with("code,species\n0,none\n1,"), "{csv_text}");
     assert_eq!(csv_text.lines().count(), w.site.pool.len() + 2);

@@ -1,6 +1,6 @@
 # Renders a stand export of `sylva export` in Blender as an artist would first look at it: a
 # perspective view from the south (the camera DIST metres south of the export area's centre and
-# HEIGHT metres up, looking north and slightly down), a sun behind the camera and a sky-blue
+# HEIGHT metres above the ground under it, looking north and slightly down), a sun behind the camera and a sky-blue
 # world, Cycles on the
 # CPU without denoising (Debian's Blender 3.4 is built without OpenImageDenoise).
 #
@@ -10,7 +10,10 @@
 #
 # --pitch is the camera's tilt from straight down in degrees (90: level, as a person looks;
 # 82: slightly down, the default oblique view). An eye-height view from inside the stand's
-# southern edge: --dist 8 --height 1.7 --pitch 95 --lens 18.
+# southern edge: --dist 8 --height 1.7 --pitch 95 --lens 18. The height is measured from the
+# export's terrain under the camera (trial 37: measured from the export's origin, the patch's
+# lowest point, the eye-height camera stood under the ground of a slope); where no terrain is
+# under the camera, from the origin.
 #
 # Blender 3.4 with numpy 1.24: the glTF importer needs `np.bool`.
 import math
@@ -18,6 +21,7 @@ import sys
 
 import bpy
 import numpy as np
+from mathutils import Vector
 
 if not hasattr(np, "bool"):
     np.bool = bool  # the glTF importer of Blender 3.4 still uses the alias numpy 1.24 removed
@@ -45,8 +49,24 @@ cam_data.lens = lens
 cam_data.clip_start = 0.05
 cam = bpy.data.objects.new("cam", cam_data)
 scene.collection.objects.link(cam)
+
+
+def ground_under(x, y):
+    """Elevation (scene z) of the export's terrain mesh under (x, y), or 0 (the origin) where
+    there is none: a ray cast straight down on the `terrain` object only (not the trees)."""
+    for o in scene.objects:
+        if o.type != "MESH" or not o.name.startswith("terrain"):
+            continue
+        inv = o.matrix_world.inverted()
+        top, bottom = inv @ Vector((x, y, 1.0e5)), inv @ Vector((x, y, -1.0e5))
+        hit, loc, _normal, _face = o.ray_cast(top, (bottom - top).normalized())
+        if hit:
+            return (o.matrix_world @ loc).z
+    return 0.0
+
+
 # the glTF's y-up scene comes in z-up, the export area's centre at the origin
-cam.location = (0.0, -dist, height)
+cam.location = (0.0, -dist, ground_under(0.0, -dist) + height)
 cam.rotation_euler = (math.radians(pitch), 0.0, 0.0)
 scene.camera = cam
 sun = bpy.data.lights.new("sun", "SUN")

@@ -112,6 +112,15 @@ fn export(a: &Args, area: Option<[f64; 4]>, levels: Vec<usize>) -> anyhow::Resul
             anyhow::ensure!(m >= 8, "--max-strands {m}: expected at least 8 strands");
             o.max_strands = m;
         }
+        // the estimated file must fit the GLB's limit and half the available memory (the trees'
+        // meshes are held until written); SYLVA_EXPORT_MAX_BYTES sets the cap (tests)
+        if let Some(cap) = std::env::var("SYLVA_EXPORT_MAX_BYTES").ok().and_then(|v| v.trim().parse::<u64>().ok()) {
+            o.max_bytes = cap;
+            o.max_bytes_source = "SYLVA_EXPORT_MAX_BYTES".into();
+        } else if let Some(avail) = super::simulate::available_memory_bytes().filter(|&m| m / 2 < o.max_bytes) {
+            o.max_bytes = avail / 2;
+            o.max_bytes_source = format!("half of the machine's {:.1} GB of available memory: the meshes are held until written", avail as f64 / 1e9);
+        }
         sylva::job::export::export_stand(&a.run_dir, &lib, &o, &a.out)?
     };
     if let Some(p) = &a.stats {

@@ -52,14 +52,83 @@ pub enum RenderCamera {
     /// [`sylva::job::main_job::closeup_camera`]), drawn as the run draws it (without the
     /// regeneration layer).
     CloseUp,
+    /// `eye:X,Y,Z:TX,TY,TZ[:FOV]`: a camera of one's own ([`EyeCamera`]).
+    Eye(EyeCamera),
+}
+
+/// A camera of one's own (`--camera eye:X,Y,Z:TX,TY,TZ[:FOV]`): the eye and the point looked
+/// at in site metres (x east and y north from the terrain's south-west corner, as the
+/// inventory's `x_m`, `y_m` and `--area`; z the elevation above sea level, as the DEM's
+/// heights), and the vertical field of view.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EyeCamera {
+    /// Eye (m).
+    pub eye: [f64; 3],
+    /// Point looked at (m).
+    pub target: [f64; 3],
+    /// Vertical field of view (degrees, 5–150; 50 when not given, the close-up's).
+    pub fov_deg: f64,
+}
+
+/// Field of view (degrees) of `eye:…` when none is given: the close-up's 50°.
+pub const EYE_DEFAULT_FOV_DEG: f64 = 50.0;
+
+const EYE_FORM: &str = "eye:X,Y,Z:TX,TY,TZ[:FOV] with the eye X,Y,Z and the point looked at TX,TY,TZ in site metres (x east, y north from the terrain's south-west corner as the inventory's x_m, y_m; z the elevation, as the DEM's heights) and FOV the vertical field of view in degrees (5–150, default 50), e.g. eye:500,400,420:600,500,400:60";
+
+/// Parses `eye:X,Y,Z:TX,TY,TZ[:FOV]` (`None` when `s` does not start with `eye:`): numbers
+/// only, finite, an eye other than the target, a field of view of 5–150°. Whether the eye is
+/// inside the site and above its ground is checked against the site ([`check_eye`]).
+fn parse_eye(s: &str) -> Option<Result<EyeCamera, String>> {
+    let rest = s.strip_prefix("eye:").or_else(|| s.strip_prefix("EYE:"))?;
+    let bad = |why: &str| Err(format!("--camera `{s}`: {why}; expected {EYE_FORM}"));
+    let parts: Vec<&str> = rest.split(':').collect();
+    if !(2..=3).contains(&parts.len()) {
+        return Some(bad("not an eye and a target separated by `:`"));
+    }
+    let point = |p: &str| -> Option<[f64; 3]> {
+        let v: Vec<f64> = p.split(',').map(|x| x.trim().parse::<f64>().ok().filter(|v| v.is_finite())).collect::<Option<_>>()?;
+        (v.len() == 3).then(|| [v[0], v[1], v[2]])
+    };
+    let Some(eye) = point(parts[0]) else { return Some(bad("the eye is not three numbers X,Y,Z")) };
+    let Some(target) = point(parts[1]) else { return Some(bad("the target is not three numbers TX,TY,TZ")) };
+    let fov_deg = match parts.get(2) {
+        None => EYE_DEFAULT_FOV_DEG,
+        Some(f) => match f.trim().parse::<f64>() {
+            Ok(v) if (5.0..=150.0).contains(&v) => v,
+            _ => return Some(bad(&format!("field of view `{f}` is not 5–150 degrees"))),
+        },
+    };
+    if (0..3).map(|k| (eye[k] - target[k]).powi(2)).sum::<f64>() < 1e-6 {
+        return Some(bad("the eye and the target are the same point"));
+    }
+    Some(Ok(EyeCamera { eye, target, fov_deg }))
+}
+
+/// The camera of `e` on `site`, checked: the eye over the site (0 ≤ X ≤ width, 0 ≤ Y ≤ height)
+/// and at least 0.1 m above its ground there ([`sylva::conditions::SiteConditions::elevation_at`]).
+///
+/// Errors: naming `--camera`, the site's extent or the ground's elevation under the eye.
+pub fn check_eye(e: &EyeCamera, site: &sylva::conditions::SiteConditions) -> anyhow::Result<sylva::render::camera::Camera> {
+    let (w, h) = site.extent_m();
+    let [x, y, z] = e.eye;
+    anyhow::ensure!((0.0..=w).contains(&x) && (0.0..=h).contains(&y), "--camera eye:{x},{y},{z}: the eye is outside the site; expected X 0–{w:.1} m and Y 0–{h:.1} m (site metres from the terrain's south-west corner, as the inventory's x_m, y_m)");
+    let g = site.elevation_at(x, y) as f64;
+    anyhow::ensure!(z >= g + 0.1, "--camera eye:{x},{y},{z}: the eye is under the ground (the ground there is at {g:.1} m); expected Z at least {:.1} m (z is the elevation, as the DEM's heights: e.g. {:.1} for a person's eye 1.7 m above the ground)", g + 0.1, g + 1.7);
+    let f = |p: [f64; 3]| [p[0] as f32, p[1] as f32, p[2] as f32];
+    let mut cam = sylva::render::camera::Camera::look_at(f(e.eye), f(e.target), e.fov_deg as f32);
+    cam.near = cam.near.min(0.1).max(0.05);
+    Ok(cam)
 }
 
 fn parse_render_camera(s: &str) -> Result<RenderCamera, String> {
+    if let Some(e) = parse_eye(s) {
+        return e.map(RenderCamera::Eye);
+    }
     match sylva::job::hemi::parse_hemi(s) {
         Some(Ok((x, y))) => Ok(RenderCamera::Hemi(x, y)),
         Some(Err(e)) => Err(e.to_string()),
         None if s.eq_ignore_ascii_case("closeup") || s.eq_ignore_ascii_case("close-up") => Ok(RenderCamera::CloseUp),
-        None => s.parse::<CameraPreset>().map(RenderCamera::Preset).map_err(|_| format!("camera `{s}`: expected overview, oblique, ground, map, closeup or hemi:X,Y")),
+        None => s.parse::<CameraPreset>().map(RenderCamera::Preset).map_err(|_| format!("camera `{s}`: expected overview, oblique, ground, map, closeup, hemi:X,Y or eye:X,Y,Z:TX,TY,TZ[:FOV]")),
     }
 }
 
@@ -93,7 +162,10 @@ pub struct RenderArgs {
     /// Camera preset: overview, oblique, ground, map, closeup (the close-up still of `sylva run`,
     /// drawn as the run draws it); or `hemi:X,Y`, a virtual hemispherical
     /// photograph (upward equisolid fisheye from 1.3 m at X, Y in metres; a square image of the
-    /// size's smaller side; `--stats` gives gap_fraction, openness and simulated_light).
+    /// size's smaller side; `--stats` gives gap_fraction, openness and simulated_light); or
+    /// `eye:X,Y,Z:TX,TY,TZ[:FOV]`, a camera of one's own: the eye and the point looked at in
+    /// site metres (x, y from the terrain's south-west corner as the inventory's x_m, y_m; z the
+    /// elevation, as the DEM's heights), the vertical field of view in degrees (default 50).
     #[arg(long, default_value = "oblique", value_parser = parse_render_camera)]
     pub camera: RenderCamera,
     /// Season of the foliage: spring, summer, autumn (or fall), winter.
@@ -223,9 +295,10 @@ fn render_checked(a: RenderArgs) -> anyhow::Result<()> {
         anyhow::ensure!(p != &a.out, "--stats {}: the same file as --out; give the statistics their own file (e.g. stats.json)", p.display());
     }
     warn_large_size(a.size);
-    let (camera, closeup) = match a.camera {
-        RenderCamera::Preset(p) => (p, false),
-        RenderCamera::CloseUp => (CameraPreset::Oblique, true),
+    let (camera, closeup, eye) = match a.camera {
+        RenderCamera::Preset(p) => (p, false, None),
+        RenderCamera::CloseUp => (CameraPreset::Oblique, true, None),
+        RenderCamera::Eye(e) => (CameraPreset::Oblique, false, Some(e)),
         RenderCamera::Hemi(x, y) => return hemi(&a, x, y),
     };
     super::check_run_dir(&a.run_dir, "RUN")?;
@@ -233,6 +306,8 @@ fn render_checked(a: RenderArgs) -> anyhow::Result<()> {
         pictures::check_snapshot_year(&a.run_dir, y)?;
     }
     let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
+    // a camera of one's own is checked against the site before the snapshot is read
+    let eye = eye.map(|e| check_eye(&e, &stage.site)).transpose()?;
     let year = match a.year {
         Some(y) => y,
         None => sylva::job::inventory::snapshots(&a.run_dir)?.iter().map(|s| s.0).max().with_context(|| format!("{}: the run directory has no snapshots (inventory/year_NNNN.parquet or .csv)", a.run_dir.display()))?,
@@ -242,7 +317,11 @@ fn render_checked(a: RenderArgs) -> anyhow::Result<()> {
     if unknown > 0 {
         tracing::warn!("{unknown} trees of species not in the library are not drawn (give their species files with --species-dir)");
     }
-    let cam = if closeup { sylva::job::main_job::closeup_camera(&stage.site) } else { stage.camera_for(camera, &rows, a.size.0, a.size.1) };
+    let cam = match eye {
+        Some(c) => c,
+        None if closeup => sylva::job::main_job::closeup_camera(&stage.site),
+        None => stage.camera_for(camera, &rows, a.size.0, a.size.1),
+    };
     if !a.adapt {
         stage.set_adapt(None);
     }

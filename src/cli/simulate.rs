@@ -124,7 +124,7 @@ pub fn load_site(sc: &Scenario) -> anyhow::Result<SiteConditions> {
 
 /// The machine's available memory (bytes): `MemAvailable` of `/proc/meminfo`, or
 /// `SYLVA_MEM_AVAILABLE` (bytes) where set (tests); `None` where neither tells.
-fn available_memory_bytes() -> Option<u64> {
+pub(crate) fn available_memory_bytes() -> Option<u64> {
     if let Some(v) = std::env::var("SYLVA_MEM_AVAILABLE").ok().and_then(|v| v.trim().parse().ok()) {
         return Some(v);
     }

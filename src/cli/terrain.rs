@@ -36,9 +36,10 @@ pub struct Source {
     /// PNG heightmap: height (m) of value 65535 [default: 1000].
     #[arg(long, allow_negative_numbers = true, value_parser = parse_finite)]
     pub max_height: Option<f64>,
-    /// Cells at or below this elevation (m) are water and masked.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_finite_f32)]
-    pub sea_level: f32,
+    /// Cells at or below this elevation (m) are water and masked [default: 0; a PNG heightmap
+    /// has no sea unless this is given: its lowest pixel is no sea level].
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_finite_f32)]
+    pub sea_level: Option<f32>,
     /// Latitude (degrees, −90…90) for insolation when the terrain's CRS gives none (a PNG
     /// heightmap, a local grid, a projected grid of an unknown CRS) [default: 46]; a geographic
     /// grid or a projected one Sylva can invert (UTM on WGS 84, NAD83, ETRS89, or a `.prj`) uses
@@ -88,8 +89,16 @@ impl Source {
         t.check_min_size()?;
         Ok(t)
     }
+    /// The sea level: `--sea-level`, or 0 m, or for a PNG heightmap none
+    /// ([`sylva::sim::scenario::NO_SEA_LEVEL_M`]: a heightmap's 0 is the bottom of its range,
+    /// not the sea; trial 37).
+    fn sea_level_m(&self) -> f32 {
+        let png = self.file.as_ref().and_then(|f| f.extension()).is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        self.sea_level.unwrap_or(if png { sylva::sim::scenario::NO_SEA_LEVEL_M } else { 0.0 })
+    }
+
     fn climate(&self) -> Climate {
-        let mut c = Climate { sea_level_m: self.sea_level, ..Climate::default() };
+        let mut c = Climate { sea_level_m: self.sea_level_m(), ..Climate::default() };
         if let Some(l) = self.latitude {
             c.latitude_deg = l;
         }
@@ -168,8 +177,13 @@ fn info(s: &Source, tolerance: f64) -> anyhow::Result<()> {
     }
     println!("elevation:   {lo:.1} … {hi:.1} m");
     println!("nodata:      {} cells{}", g.len() - valid.len(), t.nodata.map(|v| format!(" (file value {v})")).unwrap_or_default());
-    let below = valid.iter().filter(|&&v| v <= s.sea_level).count();
-    println!("water:       {below} cells at or below sea level {} m", s.sea_level);
+    let sea = s.sea_level_m();
+    let below = valid.iter().filter(|&&v| v <= sea).count();
+    if s.sea_level.is_none() && sea == sylva::sim::scenario::NO_SEA_LEVEL_M {
+        println!("water:       none (a PNG heightmap has no sea level; give --sea-level to set one)");
+    } else {
+        println!("water:       {below} cells at or below sea level {sea} m");
+    }
     let tin = Tin::build(&t, tolerance, usize::MAX)?;
     println!("TIN:         {} vertices, {} triangles at tolerance {tolerance} m (max error {:.3} m)", tin.num_vertices(), tin.num_triangles(), tin.max_error_m);
     Ok(())

@@ -208,10 +208,63 @@ pub fn stand_trees(plants: &[Plant], library: &SpeciesLibrary, site: &SiteCondit
         .collect()
 }
 
-/// The Plastic Trees solids of `obstacles` on `site` (world coordinates, ground at each
-/// obstacle's anchor).
+/// The Plastic Trees solids of `obstacles` on `site` (world coordinates, heights above the
+/// ground at each obstacle's anchor, walls and footprints down to below the lowest ground under
+/// them: [`ground_under`], [`ObstacleSpec::solids_on`]).
 pub fn solids(obstacles: &[ObstacleSpec], site: &SiteConditions) -> Vec<Obstacle> {
-    obstacles.iter().flat_map(|o| o.solids(site.elevation_at(o.anchor()[0], o.anchor()[1]) as f64)).collect()
+    obstacles
+        .iter()
+        .flat_map(|o| {
+            let (g, low) = ground_under(o, site);
+            o.solids_on(g as f64, low as f64)
+        })
+        .collect()
+}
+
+/// The ground under an obstacle on `site` (m, elevations of [`SiteConditions::elevation_at`]):
+/// `(under its anchor, lowest under it)`. The lowest is taken over the solid's corners, its
+/// sides every quarter of a DEM cell (the bilinear surface's least along a side may lie
+/// between grid lines) and its inside on a grid of half a cell: within a few centimetres of
+/// the least of the bilinear surface over the plan, which lies at a corner, on a side or at a
+/// DEM node inside. A sphere (a boulder, placed in the air or on the ground) gives its
+/// anchor's ground for both.
+pub fn ground_under(o: &ObstacleSpec, site: &SiteConditions) -> (f32, f32) {
+    let a = o.anchor();
+    let g = site.elevation_at(a[0], a[1]);
+    let corners: Vec<[f64; 2]> = match o {
+        ObstacleSpec::Sphere { .. } => return (g, g),
+        ObstacleSpec::Box { min, max } => vec![[min[0], min[1]], [max[0], min[1]], [max[0], max[1]], [min[0], max[1]]],
+        ObstacleSpec::Wall { start, end, thickness_m, .. } => {
+            let (dx, dy) = (end[0] - start[0], end[1] - start[1]);
+            let l = (dx * dx + dy * dy).sqrt().max(1e-9);
+            let (sx, sy) = (-dy / l * 0.5 * thickness_m, dx / l * 0.5 * thickness_m);
+            vec![[start[0] + sx, start[1] + sy], [end[0] + sx, end[1] + sy], [end[0] - sx, end[1] - sy], [start[0] - sx, start[1] - sy]]
+        }
+        ObstacleSpec::Footprint { points, .. } => points.clone(),
+    };
+    let cell = site.cell_x_m.min(site.cell_y_m).max(0.01);
+    let mut low = g;
+    let mut at = |x: f64, y: f64| low = low.min(site.elevation_at(x, y));
+    for k in 0..corners.len() {
+        let (p, q) = (corners[k], corners[(k + 1) % corners.len()]);
+        let n = (((q[0] - p[0]).hypot(q[1] - p[1]) / (0.25 * cell)).ceil() as usize).clamp(1, 100_000);
+        for i in 0..n {
+            let t = i as f64 / n as f64;
+            at(p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1]));
+        }
+    }
+    let b = o.bounds_xy();
+    let step = 0.5 * cell;
+    let (nx, ny) = ((((b[2] - b[0]) / step).ceil() as usize).clamp(1, 2000), (((b[3] - b[1]) / step).ceil() as usize).clamp(1, 2000));
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let (x, y) = (b[0] + (b[2] - b[0]) * i as f64 / nx as f64, b[1] + (b[3] - b[1]) * j as f64 / ny as f64);
+            if matches!(o, ObstacleSpec::Box { .. }) || o.top_at(x, y).is_some() {
+                at(x, y);
+            }
+        }
+    }
+    (g, low)
 }
 
 /// Adapts the near field of `camera` and meshes it: replaces the instances of `inst` (built by
@@ -530,12 +583,17 @@ pub fn cache(seed: u64) -> NearCaches {
 /// Grey of the obstacles (sRGB 150, 146, 140: weathered stone and concrete).
 pub const OBSTACLE_RGB: [u8; 3] = [150, 146, 140];
 
-/// Triangle mesh of one obstacle in world coordinates (ground at its anchor's elevation on
-/// `site`), outward normals, counter-clockwise from outside: boxes and walls as 12 triangles, a
-/// sphere as 16 × 10 quads, a footprint as its side walls and a roof (ear clipping).
+/// Triangle mesh of one obstacle in world coordinates (heights above the ground at its
+/// anchor's elevation on `site`), outward normals, counter-clockwise from outside: boxes and
+/// walls as 12 triangles, a sphere as 16 × 10 quads, a footprint as its side walls and a roof
+/// (ear clipping). On a slope a building stands on the terrain: walls and footprints reach
+/// 1 m below the lowest ground under them ([`ground_under`]; below the anchor's ground this is
+/// the foundation on the downhill side), and a box whose bottom is at or below the ground
+/// reaches as far below the lowest ground as it does below its anchor's (trial 37: the
+/// downhill wall of a footprint set at its anchor's ground hung 5 m in the air).
 pub fn obstacle_mesh(o: &ObstacleSpec, site: &SiteConditions) -> TriMesh {
-    let a = o.anchor();
-    let g = site.elevation_at(a[0], a[1]);
+    let (g, low) = ground_under(o, site);
+    let low = low.min(g);
     let mut m = TriMesh::default();
     let mut quad = |m: &mut TriMesh, p: [Vec3; 4]| {
         let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or(Vec3::Z);
@@ -567,8 +625,9 @@ pub fn obstacle_mesh(o: &ObstacleSpec, site: &SiteConditions) -> TriMesh {
     match o {
         ObstacleSpec::Box { min, max } => {
             let poly = [v2(min[0], min[1]), v2(max[0], min[1]), v2(max[0], max[1]), v2(min[0], max[1])];
-            prism(&mut m, &poly, g + min[2] as f32, g + max[2] as f32, &mut quad);
-            let z = g + min[2] as f32;
+            // a box standing on the ground reaches below its lowest ground as below its anchor's
+            let z = if min[2] <= 0.0 { low + min[2] as f32 } else { g + min[2] as f32 };
+            prism(&mut m, &poly, z, g + max[2] as f32, &mut quad);
             quad(&mut m, [poly[0].with_z(z), poly[3].with_z(z), poly[2].with_z(z), poly[1].with_z(z)]);
         }
         ObstacleSpec::Wall { start, end, height_m, thickness_m } => {
@@ -577,14 +636,14 @@ pub fn obstacle_mesh(o: &ObstacleSpec, site: &SiteConditions) -> TriMesh {
             let poly = [s + side, e + side, e - side, s - side];
             // counter-clockwise seen from above
             let poly: Vec<Vec3> = if signed_area(&poly) < 0.0 { poly.iter().rev().copied().collect() } else { poly.to_vec() };
-            prism(&mut m, &poly, g - 1.0, g + *height_m as f32, &mut quad);
+            prism(&mut m, &poly, low - 1.0, g + *height_m as f32, &mut quad);
         }
         ObstacleSpec::Footprint { points, height_m } => {
             let mut poly: Vec<Vec3> = points.iter().map(|p| v2(p[0], p[1])).collect();
             if signed_area(&poly) < 0.0 {
                 poly.reverse();
             }
-            prism(&mut m, &poly, g - 1.0, g + *height_m as f32, &mut quad);
+            prism(&mut m, &poly, low - 1.0, g + *height_m as f32, &mut quad);
         }
         ObstacleSpec::Sphere { center, radius_m } => {
             let c = Vec3::new(center[0] as f32, center[1] as f32, g + center[2] as f32);
@@ -663,8 +722,11 @@ pub fn obstacle_models(obstacles: &[ObstacleSpec], site: &SiteConditions, first:
     let mut inst = Vec::new();
     for (k, o) in obstacles.iter().enumerate() {
         let a = o.anchor();
-        let base = Vec3::new(a[0] as f32, a[1] as f32, site.elevation_at(a[0], a[1]) - 1.0);
         let mut mesh = obstacle_mesh(o, site);
+        // the instance's base: the mesh's lowest point (on a slope the foundation reaches below
+        // the anchor's ground)
+        let bottom = mesh.positions.iter().map(|p| p[2]).fold(site.elevation_at(a[0], a[1]) - 1.0, f32::min);
+        let base = Vec3::new(a[0] as f32, a[1] as f32, bottom);
         let top = mesh.positions.iter().map(|p| p[2] - base.z).fold(0.0f32, f32::max).max(0.1);
         for p in &mut mesh.positions {
             *p = ((Vec3::from(*p) - base) / top).to_array();

@@ -44,6 +44,71 @@ pub const SAME_SHAPE: f32 = 1e-3;
 /// Most trees an export adapts (the area's live trees; a larger area is refused).
 pub const DEFAULT_MAX_TREES: usize = 5000;
 
+/// Largest estimated file ([`estimate_stand_bytes`]) a stand export writes by default: 3.5 GiB,
+/// below the GLB's 4 GiB limit (its length fields are 32 bits) with room for the estimate's
+/// error. The command line lowers it to half the machine's available memory where that is
+/// less ([`ExportOptions::max_bytes`]).
+pub const DEFAULT_MAX_BYTES: u64 = 7 << 29;
+
+/// Bytes a stand export writes per skeleton node of a tree at its full level (ESTIMATE, fitted
+/// to full-detail exports of main `686ed97` and this round: bark rings, about 2.5 leaf cards a
+/// node and the sprigs that carry the rest of the crown's leaf area, 0.86 a node whatever the
+/// tree's age, since a younger tree of fewer strands draws larger cards; 13–14 triangles of
+/// about 60 bytes a node). Measured per node: the default run's year 150, 25 m area
+/// `1150,850,1175,875` (94 trees, 89,884 nodes by [`estimated_nodes`], 90,193 written) 72.1 MB,
+/// 802 bytes; its 0.25 ha `1150,850,1200,900` (466 trees, 492,712 nodes) 387.4 MB, 786 bytes;
+/// its hectare `1000,800,1100,900` (2,272 trees, 3.03 M nodes) 2.2 GB, about 730 bytes (trial
+/// 37); 30-year beech planted at 5 m (160 trees, 48,000 nodes) 43.7 MB, 910 bytes; 25-year
+/// Norway spruce (6 trees, 7,608 nodes: shoot cards, no leaf cards) 5.0 MB, 660 bytes. A
+/// capped export (`--max-strands 48`) copies its few leaf cards to the crown's leaf area: about
+/// 1,100 bytes a node (the 0.25 ha: 51 MB), above this estimate by 1.4×.
+pub const EST_BYTES_PER_NODE: f64 = 800.0;
+
+/// Bytes of an export besides its trees' levels: textures, terrain, obstacles, JSON
+/// (ESTIMATE: 1–2 MB in the exports above).
+pub const EST_FIXED_BYTES: f64 = 1.0e6;
+
+/// Size of each level of detail against the full level (ESTIMATE from trial 37's hill export:
+/// `--lod all` wrote 3.75 MB against 2.94 MB for the full level alone; the hull and the
+/// billboard are small).
+pub const EST_LEVEL_SHARE: [f64; LOD_LEVELS] = [1.0, 0.25, 0.02, 0.01];
+
+/// Skeleton nodes a stand tree of species `sp` at `age_yr` gets from a skeleton cache of
+/// `max_strands` strands: two a strand ([`crate::structure::species_tree::ecomod_strands_at`]
+/// of the species' strand count at its age, at most `max_strands`).
+pub fn estimated_nodes(sp: &crate::species::Species, age_yr: f32, max_strands: u32) -> usize {
+    2 * crate::structure::species_tree::ecomod_strands_at(sp.architecture.ecomod.strands, age_yr).min(max_strands.max(8)) as usize
+}
+
+/// What an export of some trees will write, estimated before any tree is grown
+/// ([`estimate_stand_bytes`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ExportEstimate {
+    /// Trees.
+    pub trees: usize,
+    /// Skeleton nodes ([`estimated_nodes`]).
+    pub nodes: usize,
+    /// Bytes of the file.
+    pub bytes: u64,
+}
+
+/// The size of a stand export of `trees` (species index into `library` and age in years) at
+/// `levels` with skeletons of at most `max_strands` strands, before any work:
+/// [`EST_BYTES_PER_NODE`] × nodes × the written levels' [`EST_LEVEL_SHARE`] +
+/// [`EST_FIXED_BYTES`]: within 0.9–1.4× of what the exports named at [`EST_BYTES_PER_NODE`]
+/// wrote.
+pub fn estimate_stand_bytes(trees: impl IntoIterator<Item = (usize, f32)>, library: &SpeciesLibrary, max_strands: u32, levels: &[usize]) -> ExportEstimate {
+    let mut e = ExportEstimate::default();
+    for (sp, age) in trees {
+        let Some(sp) = library.species.get(sp) else { continue };
+        e.trees += 1;
+        e.nodes += estimated_nodes(sp, age, max_strands);
+    }
+    let share: f64 = levels.iter().filter_map(|&l| EST_LEVEL_SHARE.get(l)).sum();
+    e.bytes = (EST_BYTES_PER_NODE * e.nodes as f64 * share + EST_FIXED_BYTES) as u64;
+    e
+}
+
 /// What to export.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExportOptions {
@@ -60,6 +125,12 @@ pub struct ExportOptions {
     pub levels: Vec<usize>,
     /// Most trees (refused beyond: [`DEFAULT_MAX_TREES`] by default).
     pub max_trees: usize,
+    /// Largest estimated file (bytes, [`estimate_stand_bytes`]): a larger export is refused
+    /// before any tree is grown ([`DEFAULT_MAX_BYTES`] by default).
+    pub max_bytes: u64,
+    /// What sets [`ExportOptions::max_bytes`], for the refusal's message (by default "the
+    /// GLB's 4 GiB limit, less room for the estimate's error").
+    pub max_bytes_source: String,
     /// Most EcoMod strands of a tree's skeleton (≥ 8; 2 nodes a strand):
     /// [`crate::structure::stand::DEFAULT_MAX_STRANDS`] by default;
     /// [`crate::structure::stand::FULL_STRANDS`] gives every tree its species' strand count at
@@ -73,7 +144,16 @@ impl ExportOptions {
     /// age, grown as a forest tree; since round 22, when its adaptation became fast enough: the
     /// issue's 0.25 ha in about 10 s).
     pub fn new(area: [f64; 4]) -> ExportOptions {
-        ExportOptions { year: None, area, season: Season::Summer, levels: vec![0], max_trees: DEFAULT_MAX_TREES, max_strands: crate::structure::stand::FULL_STRANDS }
+        ExportOptions {
+            year: None,
+            area,
+            season: Season::Summer,
+            levels: vec![0],
+            max_trees: DEFAULT_MAX_TREES,
+            max_bytes: DEFAULT_MAX_BYTES,
+            max_bytes_source: "the GLB's 4 GiB limit, less room for the estimate's error".into(),
+            max_strands: crate::structure::stand::FULL_STRANDS,
+        }
     }
 }
 
@@ -240,8 +320,11 @@ fn in_area(x: f64, y: f64, [x0, y0, x1, y1]: [f64; 4], w: f64, h: f64) -> bool {
 /// Errors: [`Error::Format`] / [`Error::Io`] when `RUN_DIR/scenario.toml`, its terrain or the
 /// snapshot cannot be read (a missing year names the years present); [`Error::Invalid`] naming
 /// `--area` for an area outside the terrain or holding no live tree of the library (it says
-/// where the trees are), naming `--lod` for a level ≥ [`LOD_LEVELS`], and for more trees than
-/// `max_trees`; the errors of [`adapt_stand`] and of the glTF writer.
+/// where the trees are), naming `--lod` for a level ≥ [`LOD_LEVELS`], for more trees than
+/// `max_trees`, and for a file estimated above `max_bytes` ([`estimate_stand_bytes`]: refused
+/// before any tree is grown, naming `--area`, `--lod`, the cap and the estimate); the errors of
+/// [`adapt_stand`] and of the glTF writer (which writes the buffer through a scratch file
+/// beside `out`, [`crate::output::gltf::write_stand_glb`]).
 pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions, out: &Path) -> Result<ExportReport> {
     let (sc, site, year, [x0, y0, x1, y1]) = open_export(run_dir, o.year, &o.levels, Some(o.area))?;
     let opts = StandOptions { latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(&sc.obstacles, &site), ..StandOptions::default() };
@@ -273,6 +356,17 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     }
     if targets.len() > o.max_trees {
         return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}: {} trees", targets.len()), format!("at most {} trees: a smaller area", o.max_trees)));
+    }
+    // the file's size before any work (trial 37: a hectare wrote 2.2 GB and held 9.5 GB of
+    // memory, and the GLB's 4 GiB limit was checked only once everything was made)
+    let est = estimate_stand_bytes(targets.iter().map(|&k| (trees[k].species as usize, trees[k].age_yr)), library, o.max_strands, &o.levels);
+    if est.bytes > o.max_bytes {
+        let mb = |b: u64| b as f64 / 1e6;
+        return Err(invalid(
+            "--area",
+            format!("{x0},{y0},{x1},{y1} at --lod {}: an estimated {:.0} MB glb ({} trees, about {} skeleton nodes)", o.levels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(","), mb(est.bytes), est.trees, est.nodes),
+            format!("at most {:.0} MB ({}): a smaller --area, --lod 0 (the full level only), --max-strands 48 (a lighter skeleton), or --instances (every tree as an instance of its species and age class); nothing was grown or written", mb(o.max_bytes), o.max_bytes_source),
+        ));
     }
     let t0 = std::time::Instant::now();
     let mut cache = crate::structure::stand::SkeletonCache::new(sc.seed, o.max_strands);
@@ -337,6 +431,12 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
                 chain.levels[0].leaves = TriMesh::default();
             }
             let tris = o.levels.iter().map(|&l| chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 }).sum();
+            // the levels not written are not held (the writer leaves them out)
+            for (l, m) in chain.levels.iter_mut().enumerate() {
+                if !o.levels.contains(&l) {
+                    *m = Default::default();
+                }
+            }
             let figures = [sk.nodes.len(), if needles { 0 } else { lv.leaves.len() }, tris, sprigs.positions.len() / 4];
             Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize, sprigs }, s.to_array(), t.base - origin, t.species as usize, figures))
         })
@@ -380,6 +480,8 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let mut statics = vec![StaticMesh { name: "terrain".into(), mesh: terrain, rgb: GROUND_RGB, roughness: 0.95 }];
     let terrain_triangles = statics[0].mesh.triangle_count();
     let n_obstacles = push_obstacles(&mut statics, &sc, &site, o.area, origin);
+    let geo = crate::output::georef::PointGeoRef::of_site(&site);
+    let (mx, my) = geo.map(origin.x as f64, origin.y as f64);
     let scene = StandScene {
         name: format!("stand_{year}"),
         looks,
@@ -391,8 +493,8 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             "sylva": {
                 "run_dir": run_dir.display().to_string(), "year": year, "area_m": o.area,
                 "origin_m": [origin.x, origin.y, origin.z],
-                "epsg": site.geo.epsg,
-                "note": "scene coordinates are metres from origin_m (run world coordinates: x east, y north from the terrain's south-west corner, z elevation), y up",
+                "origin_map": [mx, my, origin.z], "epsg": geo.epsg,
+                "note": "scene coordinates are metres from origin_m (run world coordinates: x east, y north from the terrain's south-west corner, z elevation), y up; origin_map is the same point in the terrain's map coordinates (EPSG code epsg)",
             }
         }),
     };

@@ -1,4 +1,5 @@
-//! Float32 GeoTIFF writer carrying a grid's georeferencing (readable by GDAL/QGIS).
+//! Float32 GeoTIFF writer carrying a grid's georeferencing (readable by GDAL/QGIS), and a
+//! categorical Byte writer with a colour table ([`write_u8_palette_band`]).
 //!
 //! Tags: ModelPixelScale (33550) = (pixel_w, pixel_h, 0); ModelTiepoint (33922) =
 //! (0, 0, 0, origin_x, origin_y, 0); GeoKeyDirectory (34735) with GTModelType (1024: 1
@@ -110,5 +111,47 @@ pub fn write_f32(path: &Path, grid: &Grid<f32>, geo: &GeoRef) -> Result<()> {
 /// Errors: as [`write_f32`].
 pub fn write_f32_band(path: &Path, grid: &Grid<f32>, geo: &GeoRef, band: Option<Band>) -> Result<()> {
     let bytes = encode_f32_band(grid, geo, band).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "GeoTIFF", message: e.to_string() })?;
+    super::write_atomic(path, &bytes)
+}
+
+/// Encodes a categorical `grid` (codes 0–255, row 0 north) as a Byte GeoTIFF with a colour
+/// table: PhotometricInterpretation 3 (palette) and ColorMap (320) of 256 entries, entry `k`
+/// the sRGB colour `palette[k]` scaled to 16 bits (entries past the palette black), GDAL_NODATA
+/// = `nodata`, `geo`'s georeferencing and `band` as [`encode_f32_band`] writes them. GDAL reads
+/// it as a Byte band with a colour table and QGIS draws it in those colours (trial 37: the
+/// species codes were Float32 without colours).
+pub fn encode_u8_palette_band(grid: &Grid<u8>, geo: &GeoRef, band: Option<Band>, palette: &[[u8; 3]], nodata: u8) -> std::result::Result<Vec<u8>, tiff::TiffError> {
+    let mut map = vec![0u16; 3 * 256];
+    for (k, c) in palette.iter().take(256).enumerate() {
+        for ch in 0..3 {
+            map[ch * 256 + k] = c[ch] as u16 * 257;
+        }
+    }
+    let mut buf = std::io::Cursor::new(Vec::new());
+    {
+        let mut enc = TiffEncoder::new(&mut buf)?.with_compression(Compression::Deflate(Default::default()));
+        let mut img = enc.new_image::<colortype::Gray8>(grid.width as u32, grid.height as u32)?;
+        let e = img.encoder();
+        e.write_tag(Tag::PhotometricInterpretation, 3u16)?;
+        e.write_tag(Tag::ColorMap, &map[..])?;
+        e.write_tag(Tag::ModelPixelScaleTag, &[geo.pixel_w, geo.pixel_h, 0.0][..])?;
+        e.write_tag(Tag::ModelTiepointTag, &[0.0, 0.0, 0.0, geo.origin_x, geo.origin_y, 0.0][..])?;
+        if let Some(k) = geokeys(geo) {
+            e.write_tag(Tag::GeoKeyDirectoryTag, &k[..])?;
+        }
+        e.write_tag(Tag::GdalNodata, nodata.to_string().as_str())?;
+        if let Some(b) = band {
+            e.write_tag(Tag::Unknown(42112), gdal_metadata(&b).as_str())?;
+        }
+        img.write_data(&grid.data)?;
+    }
+    Ok(buf.into_inner())
+}
+
+/// Writes [`encode_u8_palette_band`] of `grid` to `path` atomically.
+///
+/// Errors: as [`write_f32`].
+pub fn write_u8_palette_band(path: &Path, grid: &Grid<u8>, geo: &GeoRef, band: Option<Band>, palette: &[[u8; 3]], nodata: u8) -> Result<()> {
+    let bytes = encode_u8_palette_band(grid, geo, band, palette, nodata).map_err(|e| OutputError::Encode { path: path.to_path_buf(), format: "GeoTIFF", message: e.to_string() })?;
     super::write_atomic(path, &bytes)
 }

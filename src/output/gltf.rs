@@ -127,7 +127,12 @@ struct LookMaterials {
 struct Doc {
     views: Vec<Value>,
     accessors: Vec<Value>,
+    /// The BIN chunk's bytes not yet spilled ([`Doc::spill`]).
     bin: Vec<u8>,
+    /// Where the BIN chunk's bytes go once [`SPILL_BYTES`] are held (a stand written by
+    /// [`write_stand_glb`]: a scratch file beside the output, so that the buffer is not held
+    /// in memory), the bytes already written there, and the first write error.
+    spill: Option<Spill>,
     images: Vec<Value>,
     textures: Vec<Value>,
     materials: Vec<Value>,
@@ -143,17 +148,64 @@ struct Doc {
     extensions_required: Vec<&'static str>,
 }
 
+/// Bytes of the BIN chunk a [`Doc`] with a scratch file holds before writing them there (8 MiB).
+const SPILL_BYTES: usize = 8 << 20;
+
+/// The scratch file of a [`Doc`]'s BIN chunk.
+struct Spill {
+    /// Held bytes from which they are written ([`SPILL_BYTES`]; less in tests).
+    at: usize,
+    path: std::path::PathBuf,
+    w: std::io::BufWriter<std::fs::File>,
+    written: usize,
+    error: Option<std::io::Error>,
+    _pending: super::Pending,
+}
+
+impl Drop for Spill {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
 impl Doc {
     fn new() -> Doc {
-        Doc { views: Vec::new(), accessors: Vec::new(), bin: Vec::new(), images: Vec::new(), textures: Vec::new(), materials: Vec::new(), meshes: Vec::new(), nodes: Vec::new(), texture_of: HashMap::new(), extensions_used: Vec::new(), extensions_required: Vec::new() }
+        Doc { views: Vec::new(), accessors: Vec::new(), bin: Vec::new(), spill: None, images: Vec::new(), textures: Vec::new(), materials: Vec::new(), meshes: Vec::new(), nodes: Vec::new(), texture_of: HashMap::new(), extensions_used: Vec::new(), extensions_required: Vec::new() }
+    }
+
+    /// A document whose BIN chunk goes to the scratch file `<tmp of out>.bin` beside `out`
+    /// (removed when the document is dropped or finished).
+    fn spilling(out: &Path, at: usize) -> Result<Doc> {
+        let path = super::temporary_path(&out.with_extension("glb.bin"));
+        let pending = super::Pending::register(&path);
+        let f = std::fs::File::create(&path).map_err(|e| OutputError::io(&path, e))?;
+        let mut d = Doc::new();
+        d.spill = Some(Spill { at, path, w: std::io::BufWriter::new(f), written: 0, error: None, _pending: pending });
+        Ok(d)
+    }
+
+    /// Length of the BIN chunk so far (spilled and held).
+    fn bin_len(&self) -> usize {
+        self.spill.as_ref().map_or(0, |s| s.written) + self.bin.len()
     }
 
     fn view(&mut self, bytes: &[u8], stride: Option<usize>, target: Option<u32>) -> usize {
-        while self.bin.len() % 4 != 0 {
+        while self.bin_len() % 4 != 0 {
             self.bin.push(0);
         }
-        let offset = self.bin.len();
+        let offset = self.bin_len();
         self.bin.extend_from_slice(bytes);
+        let held = self.bin.len();
+        if let Some(sp) = self.spill.as_mut().filter(|sp| held >= sp.at) {
+            use std::io::Write;
+            if sp.error.is_none() {
+                if let Err(e) = sp.w.write_all(&self.bin) {
+                    sp.error = Some(e);
+                }
+            }
+            sp.written += self.bin.len();
+            self.bin.clear();
+        }
         let mut v = json!({"buffer": 0, "byteOffset": offset, "byteLength": bytes.len()});
         if let Some(t) = target {
             v["target"] = json!(t);
@@ -324,7 +376,48 @@ impl Doc {
 
     /// The GLB bytes of the document with one scene of `roots`.
     fn finish(mut self, scene: Value) -> Result<Vec<u8>> {
-        while self.bin.len() % 4 != 0 {
+        let (js, total) = self.finish_json(scene)?;
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(&glb_header(total, &js, self.bin.len()));
+        out.extend_from_slice(&self.bin);
+        Ok(out)
+    }
+
+    /// Writes the GLB of the document with one scene to `path` (atomically), its BIN chunk
+    /// copied from the scratch file of [`Doc::spilling`], which is then removed.
+    fn finish_to(mut self, scene: Value, path: &Path) -> Result<()> {
+        use std::io::{Read, Write};
+        let (js, total) = self.finish_json(scene)?;
+        let bin_len = self.bin_len();
+        let Some(mut sp) = self.spill.take() else {
+            let bytes = [glb_header(total, &js, bin_len), std::mem::take(&mut self.bin)].concat();
+            return super::write_atomic(path, &bytes);
+        };
+        let spilled = (|| {
+            if let Some(e) = sp.error.take() {
+                return Err(e);
+            }
+            sp.w.flush()
+        })();
+        spilled.map_err(|e| OutputError::io(&sp.path, e))?;
+        let scratch = std::fs::File::open(&sp.path).map_err(|e| OutputError::io(&sp.path, e))?;
+        let held = std::mem::take(&mut self.bin);
+        super::write_atomic_with(path, |w| {
+            w.write_all(&glb_header(total, &js, bin_len))?;
+            let copied = std::io::copy(&mut scratch.take(sp.written as u64), w)?;
+            if copied != sp.written as u64 {
+                return Err(std::io::Error::new(std::io::ErrorKind::UnexpectedEof, "the scratch file of the glb's buffer is short"));
+            }
+            w.write_all(&held)
+        })
+        // `sp` dropped here: the scratch file is removed
+    }
+
+    /// The JSON chunk (padded) and the GLB's total length; the BIN chunk padded to 4 bytes.
+    ///
+    /// Errors: a JSON that `gltf-json` refuses, and a GLB above 4 GiB.
+    fn finish_json(&mut self, scene: Value) -> Result<(Vec<u8>, usize)> {
+        while self.bin_len() % 4 != 0 {
             self.bin.push(0);
         }
         let samplers = json!([
@@ -335,12 +428,12 @@ impl Doc {
             "asset": {"version": "2.0", "generator": format!("sylva {}", env!("CARGO_PKG_VERSION"))},
             "scene": 0,
             "scenes": [scene],
-            "nodes": self.nodes,
-            "meshes": self.meshes,
-            "materials": self.materials,
-            "accessors": self.accessors,
-            "bufferViews": self.views,
-            "buffers": [{"byteLength": self.bin.len()}],
+            "nodes": std::mem::take(&mut self.nodes),
+            "meshes": std::mem::take(&mut self.meshes),
+            "materials": std::mem::take(&mut self.materials),
+            "accessors": std::mem::take(&mut self.accessors),
+            "bufferViews": std::mem::take(&mut self.views),
+            "buffers": [{"byteLength": self.bin_len()}],
         });
         if !self.extensions_used.is_empty() {
             root["extensionsUsed"] = json!(self.extensions_used);
@@ -349,8 +442,8 @@ impl Doc {
             root["extensionsRequired"] = json!(self.extensions_required);
         }
         if !self.textures.is_empty() {
-            root["images"] = json!(self.images);
-            root["textures"] = json!(self.textures);
+            root["images"] = json!(std::mem::take(&mut self.images));
+            root["textures"] = json!(std::mem::take(&mut self.textures));
             root["samplers"] = samplers;
         }
         let mut js = serde_json::to_vec(&root).map_err(|e| OutputError::Serialize { what: "glb".into(), format: "JSON", message: e.to_string() })?;
@@ -358,22 +451,27 @@ impl Doc {
         while js.len() % 4 != 0 {
             js.push(b' ');
         }
-        let total = 12 + 8 + js.len() + 8 + self.bin.len();
+        let total = 12 + 8 + js.len() + 8 + self.bin_len();
         if total > u32::MAX as usize {
             return Err(Error::Invalid { context: "glb".into(), field: "size".into(), value: format!("{total} bytes"), expected: "at most 4 GiB (the GLB length field is 32 bits): export a smaller area".into() }.into());
         }
-        let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(b"glTF");
-        out.extend_from_slice(&2u32.to_le_bytes());
-        out.extend_from_slice(&(total as u32).to_le_bytes());
-        out.extend_from_slice(&(js.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"JSON");
-        out.extend_from_slice(&js);
-        out.extend_from_slice(&(self.bin.len() as u32).to_le_bytes());
-        out.extend_from_slice(b"BIN\0");
-        out.extend_from_slice(&self.bin);
-        Ok(out)
+        Ok((js, total))
     }
+}
+
+/// The GLB header, the JSON chunk (`js`, padded) and the BIN chunk's header (`bin_len` bytes
+/// follow), for a file of `total` bytes (glTF 2.0 specification, section 4.4).
+fn glb_header(total: usize, js: &[u8], bin_len: usize) -> Vec<u8> {
+    let mut out = Vec::with_capacity(28 + js.len());
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&(total as u32).to_le_bytes());
+    out.extend_from_slice(&(js.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(js);
+    out.extend_from_slice(&(bin_len as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out
 }
 
 /// Encodes a LOD chain as GLB bytes (see the module docs for the layout).
@@ -521,6 +619,12 @@ pub struct StandCounts {
 /// Errors: [`Error::Invalid`] for a node naming a missing model or look, a non-positive or
 /// non-finite scale, or nothing to draw; otherwise as [`glb_bytes`].
 pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
+    let (d, scene, counts) = stand_doc(s, Doc::new())?;
+    Ok((d.finish(scene)?, counts))
+}
+
+/// The document of [`stand_glb_bytes`] built in `d`: the document, its scene and the counts.
+fn stand_doc(s: &StandScene, mut d: Doc) -> Result<(Doc, Value, StandCounts)> {
     let bad = |field: &str, value: String, expected: String| OutputError::from(Error::Invalid { context: format!("stand glb {}", s.name), field: field.into(), value, expected });
     for m in &s.models {
         if m.look >= s.looks.len() {
@@ -538,7 +642,6 @@ pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
     if s.trees.is_empty() && s.statics.iter().all(|m| m.mesh.indices.is_empty()) {
         return Err(bad("scene", "no trees and no ground".into(), "at least one tree or mesh".into()));
     }
-    let mut d = Doc::new();
     let used_looks: std::collections::BTreeSet<usize> = s.trees.iter().map(|t| s.models[t.model].look).collect();
     let mut mats: Vec<Option<LookMaterials>> = vec![None; s.looks.len()];
     for &l in &used_looks {
@@ -584,7 +687,7 @@ pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
         }
         tree_nodes.push(d.node(node));
     }
-    finish_forest(d, tree_nodes, mesh_nodes, &s.statics, &s.name, &s.extras)
+    Ok(forest_doc(d, tree_nodes, mesh_nodes, &s.statics, &s.name, &s.extras))
 }
 
 /// The trees of one model drawn by `EXT_mesh_gpu_instancing` ([`InstancedScene`]): one entry
@@ -631,7 +734,7 @@ pub struct InstancedScene {
 }
 
 /// Encodes an [`InstancedScene`] as GLB bytes: node `trees` holds, per model and level, one node
-/// `<model>_LOD<i>` drawing the level's mesh (the full level with its leaf-cluster cards, the
+/// `<model>_LOD<i>` (with several levels, the children of a node `<model>`) drawing the level's mesh (the full level with its leaf-cluster cards, the
 /// model's [`StandModel::sprigs`] and those marked among its leaves by
 /// [`crate::mesh::CLUSTER_CARD_U`], as a third primitive in the look's `_cluster` material) with the extension's `TRANSLATION`, `ROTATION`
 /// (about the vertical) and `SCALE` attributes (and `_ID`, or `_ID_LO` and `_ID_HI`:
@@ -723,14 +826,24 @@ pub fn instanced_glb_bytes(s: &InstancedScene) -> Result<(Vec<u8>, StandCounts)>
                 id_attribute("_ID_HI", g.ids.iter().map(|&i| (i >> 32) as u32).collect());
             }
         }
+        let mut level_nodes = Vec::new();
         for (i, mesh) in meshes.iter().enumerate() {
             if let Some(mesh) = *mesh {
-                tree_nodes.push(d.node(json!({"name": format!("{}_LOD{i}", m.name), "mesh": mesh, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": attributes}}})));
+                level_nodes.push(d.node(json!({"name": format!("{}_LOD{i}", m.name), "mesh": mesh, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": attributes}}})));
                 mesh_nodes += 1;
             }
         }
+        // several levels: under one node `<model>`, as a stand export's trees and a tree's
+        // levels are (the grouping by which Unity's and Unreal's importers make a LOD group;
+        // trial 37: flat siblings were all drawn at once)
+        if level_nodes.len() > 1 {
+            tree_nodes.push(d.node(json!({"name": m.name, "children": level_nodes})));
+        } else {
+            tree_nodes.extend(level_nodes);
+        }
     }
-    finish_forest(d, tree_nodes, mesh_nodes, &s.statics, &s.name, &s.extras)
+    let (d, scene, counts) = forest_doc(d, tree_nodes, mesh_nodes, &s.statics, &s.name, &s.extras);
+    Ok((d.finish(scene)?, counts))
 }
 
 /// Writes an [`InstancedScene`] to `path` as `.glb` (atomically); returns what was written.
@@ -744,8 +857,8 @@ pub fn write_instanced_glb(path: &Path, s: &InstancedScene) -> Result<StandCount
 
 /// The end of a stand or forest document: the static meshes under node `ground`, the tree
 /// nodes under node `trees`, the scene named `name` with `extras`; `mesh_nodes` counts the tree
-/// nodes drawing a mesh so far.
-fn finish_forest(mut d: Doc, tree_nodes: Vec<usize>, mut mesh_nodes: usize, statics: &[StaticMesh], name: &str, extras: &Value) -> Result<(Vec<u8>, StandCounts)> {
+/// nodes drawing a mesh so far. Returns the document, its scene and the counts.
+fn forest_doc(mut d: Doc, tree_nodes: Vec<usize>, mut mesh_nodes: usize, statics: &[StaticMesh], name: &str, extras: &Value) -> (Doc, Value, StandCounts) {
     let mut ground_nodes = Vec::new();
     for g in statics {
         let mat = d.plain(&g.name, g.rgb, g.roughness);
@@ -767,15 +880,28 @@ fn finish_forest(mut d: Doc, tree_nodes: Vec<usize>, mut mesh_nodes: usize, stat
     if !extras.is_null() {
         scene["extras"] = extras.clone();
     }
-    Ok((d.finish(scene)?, counts))
+    (d, scene, counts)
 }
 
-/// Writes a stand to `path` as `.glb` (atomically); returns what was written.
+/// Writes a stand to `path` as `.glb` (atomically); returns what was written. The buffer is
+/// not held in memory: its bytes go, 8 MiB at a time, to a scratch file beside `path`
+/// (`.<name>.bin.<pid>.tmp`, removed when done or refused), which is then copied after the
+/// JSON chunk into the temporary file renamed to `path` (trial 37: a 2.2 GB export held its
+/// buffer twice in memory, 9.5 GB in all).
 ///
-/// Errors: as [`stand_glb_bytes`]; [`OutputError::Io`] naming `path`.
+/// Errors: as [`stand_glb_bytes`]; [`OutputError::Io`] naming `path` or the scratch file.
 pub fn write_stand_glb(path: &Path, s: &StandScene) -> Result<StandCounts> {
-    let (bytes, counts) = stand_glb_bytes(s)?;
-    super::write_atomic(path, &bytes)?;
+    write_stand_glb_spilling_at(path, s, SPILL_BYTES)
+}
+
+/// [`write_stand_glb`] writing the held buffer to the scratch file whenever `at` bytes
+/// (≥ 1) are held ([`write_stand_glb`] takes 8 MiB; tests take a few bytes to write through
+/// the scratch file often).
+///
+/// Errors: as [`write_stand_glb`].
+pub fn write_stand_glb_spilling_at(path: &Path, s: &StandScene, at: usize) -> Result<StandCounts> {
+    let (d, scene, counts) = stand_doc(s, Doc::spilling(path, at)?)?;
+    d.finish_to(scene, path)?;
     Ok(counts)
 }
 

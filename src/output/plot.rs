@@ -290,16 +290,21 @@ fn snapshot_label(p: &Path) -> String {
     }
 }
 
+/// Code of masked cells (outside the window, no data, water) in the species GeoTIFF (255).
+pub const SPECIES_NODATA: u8 = 255;
+
 /// Writes a species map (dominant species by basal area per map cell, in its
 /// [`species_color`]; grey = masked, beige = no tree ≥ 1.3 m) with a title and a legend, and a
 /// basal-area map (m²/ha per map cell, viridis 0–60 m²/ha) with a title and a colour bar.
 /// Map cells are `max(light cell, longest extent / max_px)` metres; the pictures are enlarged to
 /// at least 512 pixels on the long side. Text: DejaVu Sans via [`super::maps::draw_text`].
 ///
-/// Beside each PNG the same map is written as a Float32 GeoTIFF (`.tif`, georeferenced like the
-/// terrain, see [`map_georef`]): the basal area in m²/ha, and the species map as codes — 0 no
-/// tree ≥ 1.3 m, k ≥ 1 the k-th species of the scenario's pool — listed in
-/// `species_codes.csv` (code,species) in the same folder; NaN marks masked cells.
+/// Beside each PNG the same map is written as a GeoTIFF (`.tif`, georeferenced like the
+/// terrain, see [`map_georef`]): the basal area in m²/ha (Float32, NaN masked cells), and the
+/// species map as codes — 0 no tree ≥ 1.3 m, k ≥ 1 the k-th species of the scenario's pool —
+/// listed in `species_codes.csv` (code,species) in the same folder: a categorical Byte raster
+/// with the PNG's colours as its colour table and [`SPECIES_NODATA`] marking masked cells
+/// ([`super::geotiff::write_u8_palette_band`]; Float32 with NaN for a pool above 254 species).
 ///
 /// Errors: [`OutputError::Io`] / PNG or GeoTIFF encoding errors naming the file.
 pub fn write_maps(species_png: &Path, ba_png: &Path, w: &World, max_px: usize) -> Result<()> {
@@ -451,7 +456,19 @@ pub fn write_maps_masked(species_png: &Path, ba_png: &Path, w: &World, max_px: u
     let ba_title = format!("Basal area, {when}");
     super::geotiff::write_f32_band(&ba_png.with_extension("tif"), &crate::grid::Grid { width: cols, height: rows, data: ba_tif }, &geo, Some(super::geotiff::Band { description: &ba_title, unit: "m²/ha" }))?;
     let sp_title = format!("Dominant species by basal area, {when} (codes in species_codes.csv; 0 none)");
-    super::geotiff::write_f32_band(&species_png.with_extension("tif"), &code_grid, &geo, Some(super::geotiff::Band { description: &sp_title, unit: "code" }))?;
+    // a categorical Byte raster with the map's colours as its colour table, 255 no data
+    // (trial 37: Float32 without colours); Float32 only for a pool of more than 254 species
+    let sp_band = Some(super::geotiff::Band { description: &sp_title, unit: "code" });
+    if w.site.pool.len() < 255 {
+        let codes: Vec<u8> = code_grid.data.iter().map(|v| if v.is_finite() { *v as u8 } else { SPECIES_NODATA }).collect();
+        let mut palette = vec![empty_px];
+        palette.extend(w.site.pool.iter().map(|&s| species_color(w, s)));
+        palette.resize(SPECIES_NODATA as usize, [0, 0, 0]);
+        palette.push(masked_px);
+        super::geotiff::write_u8_palette_band(&species_png.with_extension("tif"), &crate::grid::Grid { width: code_grid.width, height: code_grid.height, data: codes }, &geo, sp_band, &palette, SPECIES_NODATA)?;
+    } else {
+        super::geotiff::write_f32_band(&species_png.with_extension("tif"), &code_grid, &geo, sp_band)?;
+    }
     let mut codes = String::from("code,species\n0,none\n");
     for (k, &s) in w.site.pool.iter().enumerate() {
         codes.push_str(&format!("{},{}\n", k + 1, w.site.lib.species[s as usize].id));

@@ -225,6 +225,16 @@ impl ObstacleSpec {
     /// Walls, footprints and their boxes reach 1 m below the ground so that no gap opens on a
     /// slope.
     pub fn solids(&self, ground_z: f64) -> Vec<Obstacle> {
+        self.solids_on(ground_z, ground_z)
+    }
+
+    /// [`ObstacleSpec::solids`] on a slope: heights are above `ground_z` (the ground under the
+    /// anchor), while walls, footprints and their boxes reach 1 m below `lowest_z`, the lowest
+    /// ground under the solid (m; `job::adapted::ground_under`), so that the downhill side
+    /// stands on the terrain as a foundation does (trial 37: a building on a slope floated 5 m
+    /// above its downhill side).
+    pub fn solids_on(&self, ground_z: f64, lowest_z: f64) -> Vec<Obstacle> {
+        let bury = (lowest_z.min(ground_z) - ground_z) - 1.0;
         let v = |x: f64, y: f64, z: f64| Vec3::new(x as f32, y as f32, (ground_z + z) as f32);
         match self {
             ObstacleSpec::Box { min, max } => vec![Obstacle::Box { min: v(min[0], min[1], min[2]), max: v(max[0], max[1], max[2]) }],
@@ -234,12 +244,12 @@ impl ObstacleSpec {
                 let h = 0.5 * thickness_m;
                 let (x0, x1) = if start[0] == end[0] { (start[0] - h, start[0] + h) } else { (b[0] + h, b[2] - h) };
                 let (y0, y1) = if start[1] == end[1] { (start[1] - h, start[1] + h) } else { (b[1] + h, b[3] - h) };
-                vec![Obstacle::Box { min: v(x0, y0, -1.0), max: v(x1, y1, *height_m) }]
+                vec![Obstacle::Box { min: v(x0, y0, bury), max: v(x1, y1, *height_m) }]
             }
             // a wall at an angle: one box turned about the vertical along it
             ObstacleSpec::Wall { start, end, height_m, thickness_m } => {
                 let (dx, dy) = (end[0] - start[0], end[1] - start[1]);
-                let (len, z0) = ((dx * dx + dy * dy).sqrt(), -1.0);
+                let (len, z0) = ((dx * dx + dy * dy).sqrt(), bury);
                 let center = v(0.5 * (start[0] + end[0]), 0.5 * (start[1] + end[1]), 0.5 * (z0 + height_m));
                 let half = Vec3::new((0.5 * len) as f32, (0.5 * thickness_m) as f32, (0.5 * (height_m - z0)) as f32);
                 vec![Obstacle::OrientedBox { center, half, yaw_deg: dy.atan2(dx).to_degrees() as f32 }]
@@ -248,7 +258,7 @@ impl ObstacleSpec {
             ObstacleSpec::Footprint { points, height_m } if points.len() <= FOOTPRINT_MAX_POINTS && Footprint::new(&points.iter().map(|p| Vec2::new(p[0] as f32, p[1] as f32)).collect::<Vec<_>>()).is_ok() => {
                 let pts: Vec<Vec2> = points.iter().map(|p| Vec2::new(p[0] as f32, p[1] as f32)).collect();
                 match Footprint::new(&pts) {
-                    Ok(footprint) => vec![Obstacle::Prism { footprint, bottom: (ground_z - 1.0) as f32, top: (ground_z + height_m) as f32 }],
+                    Ok(footprint) => vec![Obstacle::Prism { footprint, bottom: (ground_z + bury) as f32, top: (ground_z + height_m) as f32 }],
                     Err(_) => Vec::new(), // unreachable: checked by the guard
                 }
             }
@@ -269,7 +279,7 @@ impl ObstacleSpec {
                         match (covered, run) {
                             (true, None) => run = Some(i),
                             (false, Some(i0)) => {
-                                out.push(Obstacle::Box { min: v(b[0] + i0 as f64 * s, y - 0.5 * s, -1.0), max: v(b[0] + i as f64 * s, y + 0.5 * s, top) });
+                                out.push(Obstacle::Box { min: v(b[0] + i0 as f64 * s, y - 0.5 * s, bury), max: v(b[0] + i as f64 * s, y + 0.5 * s, top) });
                                 run = None;
                             }
                             _ => {}

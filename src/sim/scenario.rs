@@ -217,6 +217,10 @@ fn is_embedded_id(id: &str) -> bool {
     crate::species::EMBEDDED_FILES.iter().any(|(f, _)| f.strip_suffix(".toml") == Some(id))
 }
 
+/// Sea level (m) of a PNG heightmap whose scenario (or `--sea-level`) gives none: the lowest
+/// valid `climate.sea_level_m`, so that no cell of a height range above −500 m is water.
+pub const NO_SEA_LEVEL_M: f32 = -500.0;
+
 /// Checks `[climate]`: every value finite; latitude −90–90°, lapse rate −15–5 K/km,
 /// reference temperature −30–40 °C, K/R/N 1–9, wind direction 0–360°, elevations
 /// (reference, sea level) −500–9000 m. `ctx` names the scenario file.
@@ -455,6 +459,12 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
             }
             Error::format(name, msg)
         })?;
+        // a PNG heightmap has no sea unless the scenario says where it is: its value 0 is the
+        // bottom of its height range, not the sea (trial 37: the lowest pixel became water)
+        let png = s.terrain.path.as_ref().and_then(|p| p.extension()).is_some_and(|e| e.eq_ignore_ascii_case("png"));
+        if png && text.parse::<toml::Table>().ok().is_some_and(|t| t.get("climate").and_then(|c| c.get("sea_level_m")).is_none()) {
+            s.climate.sea_level_m = NO_SEA_LEVEL_M;
+        }
         s.validate(name)?;
         s.source = name.to_string();
         Ok(s)

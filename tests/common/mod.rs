@@ -361,3 +361,23 @@ impl Line {
         own
     }
 }
+
+/// The codes of a categorical palette GeoTIFF (Byte, PhotometricInterpretation 3, as Sylva
+/// writes the species maps): `(width, height, codes)`. The `tiff` decoder decodes no palette
+/// image, so a copy whose PhotometricInterpretation entry says 1 (grey, an inline SHORT of the
+/// little-endian first IFD) is decoded instead; panics on anything else.
+pub fn palette_geotiff_codes(bytes: &[u8]) -> (u32, u32, Vec<u8>) {
+    assert_eq!(&bytes[..4], b"II*\0", "a little-endian classic TIFF");
+    let mut b = bytes.to_vec();
+    let ifd = u32::from_le_bytes(b[4..8].try_into().unwrap()) as usize;
+    let n = u16::from_le_bytes(b[ifd..ifd + 2].try_into().unwrap()) as usize;
+    let entry = (0..n).map(|k| ifd + 2 + 12 * k).find(|&e| u16::from_le_bytes(b[e..e + 2].try_into().unwrap()) == 262).expect("a PhotometricInterpretation entry");
+    assert_eq!(u16::from_le_bytes(b[entry + 8..entry + 10].try_into().unwrap()), 3, "a palette image");
+    b[entry + 8..entry + 10].copy_from_slice(&1u16.to_le_bytes());
+    let mut d = tiff::decoder::Decoder::new(std::io::Cursor::new(b)).unwrap();
+    let (w, h) = d.dimensions().unwrap();
+    match d.read_image().unwrap() {
+        tiff::decoder::DecodingResult::U8(v) => (w, h, v),
+        _ => panic!("not a Byte raster"),
+    }
+}
