@@ -37,6 +37,10 @@
 //! `tools/experiments/r36_iland_thicket.patch`), leaves N −70 % / −68 % at the shipped 1.5 m
 //! and −55 % / −63 % at 1.0 m (Heukamp 1999's > 10,000 plants/ha): HDhigh falls to 87–76 at
 //! 10–15 cm DBH where the tables' thicket keeps 109–126.
+//! Round 37 (measured, not adopted): BWINPro/TreeGrOSS's beech growth (`life.bai_bwinpro`)
+//! gives N +24 % / −41 %, Dq −15 % / +28 % at 50 / 100. Round 38 (measured, not adopted,
+//! `tools/experiments/r38_bwinpro_c66c.patch`): with its release index C66c (+0.4521, a boost
+//! after each thinning, not a damping) N +21 % / −45 %, Dq −14 % / +33 %.
 //!
 //! The spruce test passes since round 32: Norway spruce's diameter increment takes PROGNAUS's
 //! competition response (Monserud & Sterba 1996; `life.bai_competition` in
@@ -114,7 +118,7 @@ fn check(name: &str, table: &str) {
 }
 
 #[test]
-#[ignore = "issue 35: not met (N −72 %, Dq +96 % at age 50, −69 %, +85 % at 100; round 33; with the optional BWINPro beech growth of round 37, `life.bai_bwinpro`, not adopted: N +24 % at 50, −41 % and Dq +28 % at 100): docs/management.md"]
+#[ignore = "issue 35: not met (N −72 %, Dq +96 % at age 50, −69 %, +85 % at 100; round 33; with the optional BWINPro beech growth of round 37, `life.bai_bwinpro`, not adopted: N +24 % at 50, −41 % and Dq +28 % at 100; with its release index C66c as well, round 38, not adopted: N +21 % at 50, −45 % and Dq +33 % at 100): docs/management.md"]
 fn thinned_beech_follows_wiedemanns_moderate_thinning_table() {
     check("thinning_beech", "ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv");
 }
