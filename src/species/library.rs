@@ -456,6 +456,10 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
         if spec.path.starts_with("architecture.ecomod.whorls.") && !leaves.iter().any(|(p, _)| p.starts_with("architecture.ecomod.whorls.")) {
             continue;
         }
+        // and the limbs' profile by depth into the crown
+        if spec.path.starts_with("architecture.ecomod.limbs.") && !leaves.iter().any(|(p, _)| p.starts_with("architecture.ecomod.limbs.")) {
+            continue;
+        }
         if leaves.iter().any(|(p, _)| p == spec.path) {
             continue;
         }

@@ -518,6 +518,41 @@ pub struct EcoModParams {
     /// the stem splits as Algorithm 1 does, one branch a split.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub whorls: Option<Whorls>,
+    /// The first-order limbs' insertion angle and length by depth into the crown ([`Limbs`],
+    /// `[architecture.ecomod.limbs]`; ours, not the paper's). Optional: without it each limb
+    /// leaves the stem at Algorithm 1's angle α₂ and is as long as its strands make it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limbs: Option<Limbs>,
+}
+
+/// The first-order limbs of a stem by their depth into the live crown (issue 32, round 38;
+/// `[architecture.ecomod.limbs]` of a species file, our extension of EcoMod, `004_*.txt`
+/// Algorithm 1): the branches that leave the stem (Gravelius order 0 → 1) are turned, about the
+/// horizontal axis across them, to an insertion angle from the vertical that runs linearly from
+/// `angle_top_deg` at the top of the stem to `angle_base_deg` at the crown base (the top of the
+/// trunk, Algorithm 1's first segment), keeping their azimuth; and each limb (its whole subtree,
+/// all lengths alike) is lengthened or shortened so that the reach of its main axis
+/// (Algorithm 1's own recursion of eqs. 1, 4–6) is the longest limb's times
+/// `min(1, depth / widest_depth)`, with depth the limb's distance below the top over the crown
+/// length (0 at the top, 1 at the crown base): a cone above `widest_depth`, limbs of one length
+/// below it. Strands and segments are unchanged (a tree of S strands keeps 2S − 1 segments).
+/// Ranges: the schema's (`architecture.ecomod.limbs.*`); the shipped species files give their
+/// sources.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Limbs {
+    /// Insertion angle from the vertical (degrees, 0 up, 90 horizontal; 20–120) of a limb at
+    /// the top of the stem.
+    pub angle_top_deg: f32,
+    /// Insertion angle from the vertical (degrees, 20–120) of a limb at the crown base.
+    pub angle_base_deg: f32,
+    /// Relative depth into the crown (0 top … 1 crown base; 0.05–1) below which the limbs are
+    /// as long as the longest.
+    pub widest_depth: f32,
+    /// Width of a limb's flat spray of foliage per metre of distance from the stem (0–2;
+    /// pictures and exports only: the full level's shoot cards,
+    /// `job::leaf_area::shoot_cards_with_sprays`; 0 none).
+    pub spray: f32,
 }
 
 /// The whorled stem of a conifer (issue 32, round 37; `[architecture.ecomod.whorls]` of a
