@@ -46,7 +46,7 @@ fn arch() -> Architecture {
 }
 
 fn appearance(leaf: [u8; 3]) -> Appearance {
-    Appearance { bark: [110, 105, 100], leaf_spring: leaf, leaf_summer: leaf, leaf_autumn: [190, 120, 40], leaf_winter: [90, 80, 70], leaf_texture: "none".into(), leaf_out_doy: 115.0, autumn_doy: 285.0, leaf_fall_doy: 303.0, crown_top_flatness: 0.6, crown_cover: 0.9, crown_clump: 0.3 }
+    Appearance { bark: [110, 105, 100], leaf_spring: leaf, leaf_summer: leaf, leaf_autumn: [190, 120, 40], leaf_winter: [90, 80, 70], leaf_texture: "none".into(), leaf_out_doy: 115.0, autumn_doy: 285.0, leaf_fall_doy: 303.0, crown_top_flatness: 0.6, crown_cover: 0.9, crown_clump: 0.3, leaf_length_m: None }
 }
 
 /// A beech-like species (Fagus sylvatica): L 3, shade tolerance 5, H_max 40 m, 300 years.

@@ -735,6 +735,14 @@ pub struct Appearance {
     /// Clumping of the foliage 0..1: 0 an even, smooth surface (beech), 1 separate lumps with
     /// gaps between them (oak).
     pub crown_clump: f32,
+    /// Length (m, 0.01–0.5) of a drawn leaf card: the species' leaf blade length from a flora
+    /// (issue 32, round 38: the full-detail broadleaves drew EcoMod's `leaf_size_m`, the
+    /// paper's beech 0.29 m, scaled with the tree, as 30–45 cm leaves). Optional: without it a
+    /// drawn card is `architecture.ecomod.leaf_size_m` long ([`Species::drawn_leaf_length_m`]).
+    /// Pictures and exports only: EcoMod's leaf size still sets Plastic Trees' clearance and the
+    /// grown skeleton's leaves.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub leaf_length_m: Option<f32>,
 }
 
 /// Season of a snapshot.
@@ -896,6 +904,15 @@ impl Factor {
 }
 
 impl Species {
+    /// Length (m) of a drawn leaf card of this species: `appearance.leaf_length_m` (a sourced
+    /// leaf blade length) where the file gives one, else EcoMod's `leaf_size_m`. The cards of a
+    /// full-detail tree start at this length before they carry the crown's leaf area
+    /// (lengthened by at most 1.5, the rest as leaf-cluster cards of leaves as long:
+    /// `job::leaf_area::sprig_cards`).
+    pub fn drawn_leaf_length_m(&self) -> f32 {
+        self.appearance.leaf_length_m.unwrap_or(self.architecture.ecomod.leaf_size_m)
+    }
+
     /// Per-factor suitabilities `[L, T, K, F, R, N]` (each 0–1, see [`Factor::suitability`]).
     pub fn suitability_factors(&self, indices: &[f32; 6]) -> [f32; 6] {
         let n = &self.niche;

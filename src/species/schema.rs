@@ -477,6 +477,12 @@ pub const FIELDS: &[FieldSpec] = &[
         r(0.0, 1.0),
         "Clumping of the foliage: 0 smooth even surface, 1 separate lumps with gaps",
     ),
+    f(
+        "appearance.leaf_length_m",
+        "m",
+        r(0.01, 0.5),
+        "Length of a drawn leaf card: the leaf blade length from a flora (optional: without it EcoMod's leaf_size_m; pictures and exports only)",
+    ),
 ];
 
 /// The values of `appearance.leaf_texture`: the leaf-card outlines of
