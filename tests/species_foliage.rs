@@ -199,43 +199,23 @@ fn a_species_prototype_carries_its_crown_lai_over_its_projection() {
 /// `appearance.leaf_length_m` (beech 6.5 cm: Marshall Ward 1909's 4–9 cm; birch 5 cm: 3–7 cm) set
 /// the cards' length before they carry the leaf area, by at most ×1.5 ([`MAX_CARD_GROWTH`]), and
 /// the leaf-cluster cards' leaves are as long (their side is the mean card length over 0.26, the
-/// broad-leaf cluster texture's leaf length). Asserted, for a stand tree of DBH 30 cm at the full
-/// level (`crown_leaf_cards`, as the stills' near field and the stand export draw it) and for
-/// `sylva tree grow`'s open-grown tree of 80 years (`grow_formed_tree`, `lone_tree_sprigs`): every
-/// leaf card between the species' leaf length and 1.5 times it, and within the flora's range
-/// × 1.5; the crown still carries its leaf area (the test above).
+/// broad-leaf cluster texture's leaf length). Asserted for `sylva tree grow`'s open-grown tree of
+/// 80 years (`grow_formed_tree`, `lone_tree_sprigs`): every leaf card between the species' leaf
+/// length and 1.5 times it, and within the flora's range × 1.5. (The stand exports' and stills'
+/// full-detail trees keep EcoMod's leaf size: set to the leaf length there, a beech stand's small
+/// sprigs clumped at the tips and Blender's cover from above fell from 0.707 to 0.598, round 38.)
 #[test]
 fn beech_and_birch_draw_leaf_cards_of_their_species_leaf_length() {
     use sylva::job::leaf_area::{lone_tree_sprigs, MAX_CARD_GROWTH};
     use sylva::structure::forest_form::{grow_formed_tree, Habit};
-    use sylva::structure::species_tree::{grow_species_tree, tip_leaves, Model};
+    use sylva::structure::species_tree::Model;
     let lib = library();
-    let cover = sylva::job::adapted::LeafCover::of(&lib);
     // (species, flora's leaf length range m)
     for (id, lo, hi) in [("beech", 0.04f32, 0.09f32), ("silver_birch", 0.03, 0.07)] {
-        let k = lib.find(id).unwrap() as usize;
-        let sp = &lib.species[k];
+        let sp = &lib.species[lib.find(id).unwrap() as usize];
         let len = sp.drawn_leaf_length_m();
         assert!((lo..=hi).contains(&len), "{id}: drawn leaf length {len} m outside the flora's {lo}–{hi} m");
         let ok = |s: f32| s >= len * 0.999 && s <= len * MAX_CARD_GROWTH * 1.001 && s <= hi * MAX_CARD_GROWTH;
-        // a stand tree at the full level
-        let (dbh, h) = (30.0, sylva::species::allometry::height_from_dbh(sp, 30.0));
-        let r = sylva::species::allometry::stand_crown_radius(sp, dbh, h, 0.4 * h).unwrap_or(0.25 * h).clamp(1.0, 6.0);
-        let g = grow_species_tree(sp, Model::EcoMod, 60.0, &[], 5).unwrap();
-        let mut lv = tip_leaves(&g.skeleton, &sp.architecture.ecomod);
-        // the stand skeleton's cards are EcoMod's leaf size scaled with the tree (here × 2)
-        lv.leaves.iter_mut().for_each(|l| l.size *= 2.0);
-        let root = g.skeleton.nodes[0].pos;
-        lv.leaves.iter_mut().for_each(|l| l.pos -= root);
-        let t = sylva::structure::stand::StandTree { id: 1, species: k as u16, base: Vec3::ZERO, age_yr: 60.0, height_m: h, crown_radius_m: r, crown_base_m: 0.4 * h, slope_deg: 0.0, aspect_deg: 0.0 };
-        let sprigs = sylva::job::adapted::crown_leaf_cards(&mut lv, &t, sp, &cover);
-        let sizes: Vec<f32> = lv.leaves.iter().map(|l| l.size).collect();
-        let bad: Vec<&f32> = sizes.iter().filter(|&&s| !ok(s)).collect();
-        assert!(bad.is_empty(), "{id}: stand tree cards {:?}… outside {len}–{} m", &bad[..bad.len().min(5)], len * MAX_CARD_GROWTH);
-        let side = (Vec3::from(sprigs.positions[1]) - Vec3::from(sprigs.positions[0])).length();
-        let mean = sizes.iter().sum::<f32>() / sizes.len() as f32;
-        assert!((side * 0.26 - mean).abs() < 0.01 * mean, "{id}: a sprig's leaves {:.3} m against the cards' {mean:.3} m", side * 0.26);
-        eprintln!("{id}: leaf length {len} m, stand tree cards {mean:.3} m (EcoMod's leaf × 2: {:.3} m), {} sprigs of side {side:.3} m", sp.architecture.ecomod.leaf_size_m * 2.0, sprigs.positions.len() / 4);
         // `sylva tree grow --open-grown --age 80`
         let (mut tree, _) = grow_formed_tree(sp, Model::EcoMod, 80.0, &[], 1, Habit::Open).unwrap();
         let (_, fill) = lone_tree_sprigs(&tree.skeleton, &mut tree.leaves, sp);

@@ -365,17 +365,13 @@ impl LeafCover {
 /// ([`super::leaf_area::drawn_leaf_area`]: the species file's sourced `life.foliage.crown_lai`
 /// × π r², else the light model's `2 + 0.5 · shade tolerance`), its leaf cards `lv` (in the tree's own frame,
 /// stem base at the origin, m) lengthened by at most 1.5 and the rest as leaf-cluster cards
-/// ([`super::leaf_area::sprig_cards`], which returns them as a mesh in the same frame). A
-/// species with a sourced leaf length (`appearance.leaf_length_m`) has its cards set to that
-/// length first.
+/// ([`super::leaf_area::sprig_cards`], which returns them as a mesh in the same frame).
 pub fn crown_leaf_cards(lv: &mut Leaves, t: &StandTree, sp: &crate::species::Species, cover: &LeafCover) -> TriMesh {
     let k = t.species as usize;
-    // a species with a sourced leaf length draws its cards at that length (round 38: the stand
-    // skeleton's cards, EcoMod's leaf size scaled with the tree's height, drew beech leaves of
-    // 30–45 cm), whatever the tree's height
-    if let Some(len) = sp.appearance.leaf_length_m {
-        lv.leaves.iter_mut().for_each(|l| l.size = len);
-    }
+    // (round 38: setting the cards to the species' leaf length here, `appearance.leaf_length_m`,
+    // made a beech stand's sprigs a quarter as wide, clumped at the skeleton's tips: Blender's
+    // top-down cover of tests/blender.rs fell from 0.707 to 0.598 against the crown discs' 0.745;
+    // not done until the sprigs spread over the crown)
     let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
     super::leaf_area::sprig_cards(lv, leaf_area, cover.card[k], cover.sprig[k], t.crown_radius_m, t.species as u64)
 }

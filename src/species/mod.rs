@@ -739,8 +739,10 @@ pub struct Appearance {
     /// (issue 32, round 38: the full-detail broadleaves drew EcoMod's `leaf_size_m`, the
     /// paper's beech 0.29 m, scaled with the tree, as 30–45 cm leaves). Optional: without it a
     /// drawn card is `architecture.ecomod.leaf_size_m` long ([`Species::drawn_leaf_length_m`]).
-    /// Pictures and exports only: EcoMod's leaf size still sets Plastic Trees' clearance and the
-    /// grown skeleton's leaves.
+    /// Used by `sylva tree grow` (`structure::forest_form::grow_formed_tree`); the stand exports'
+    /// and stills' full-detail trees keep EcoMod's leaf size scaled with the tree (round 38: their
+    /// sprigs, as small as the leaves, clumped at the tips and lowered the cover from above).
+    /// EcoMod's leaf size still sets Plastic Trees' clearance and the grown skeleton's leaves.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub leaf_length_m: Option<f32>,
 }
@@ -905,10 +907,10 @@ impl Factor {
 
 impl Species {
     /// Length (m) of a drawn leaf card of this species: `appearance.leaf_length_m` (a sourced
-    /// leaf blade length) where the file gives one, else EcoMod's `leaf_size_m`. The cards of a
-    /// full-detail tree start at this length before they carry the crown's leaf area
+    /// leaf blade length) where the file gives one, else EcoMod's `leaf_size_m`. The cards of
+    /// `sylva tree grow`'s tree start at this length before they carry the crown's leaf area
     /// (lengthened by at most 1.5, the rest as leaf-cluster cards of leaves as long:
-    /// `job::leaf_area::sprig_cards`).
+    /// `job::leaf_area::lone_tree_sprigs`).
     pub fn drawn_leaf_length_m(&self) -> f32 {
         self.appearance.leaf_length_m.unwrap_or(self.architecture.ecomod.leaf_size_m)
     }
