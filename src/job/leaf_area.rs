@@ -608,9 +608,10 @@ mod lone_tree_tests {
         assert!(p.value == "40.0" || p.value == "40", "{p:?}");
         assert!(p.expected.contains("[1, 15]") && p.file.ends_with("norway_spruce.toml"), "{p:?}");
         // a species without a cited value keeps the light model's crown LAI
-        let oak = lib.get("sessile_oak").unwrap();
-        assert!(oak.life.foliage.is_none());
-        assert_eq!(drawn_crown_lai(oak), crate::sim::phases::light::crown_lai(oak.life.shade_tolerance));
+        // (hornbeam: sessile oak has one since round 38)
+        let hornbeam = lib.get("hornbeam").unwrap();
+        assert!(hornbeam.life.foliage.is_none());
+        assert_eq!(drawn_crown_lai(hornbeam), crate::sim::phases::light::crown_lai(hornbeam.life.shade_tolerance));
     }
 
     #[test]

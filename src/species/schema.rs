@@ -481,7 +481,7 @@ pub const FIELDS: &[FieldSpec] = &[
         "appearance.leaf_length_m",
         "m",
         r(0.01, 0.5),
-        "Length of a drawn leaf card: the leaf blade length from a flora (optional: without it EcoMod's leaf_size_m; pictures and exports only)",
+        "Length of a drawn leaf card of `sylva tree grow`: the leaf blade length from a flora (optional: without it EcoMod's leaf_size_m; the stand exports' and stills' trees keep EcoMod's leaf size)",
     ),
 ];
 
