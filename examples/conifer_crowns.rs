@@ -10,9 +10,14 @@
 //! ```text
 //! cargo run --release --example conifer_crowns [-- SPECIES_DIR]
 //! ```
+//!
+//! `CONIFER_SPECIES=norway_spruce` measures one species, `CONIFER_AGES=60,80` those ages;
+//! `CONIFER_PICTURES=DIR` writes the cover grids as pictures. The last columns are the limbs'
+//! angles from the vertical (`ArchitectureMeasures`: order-1 branches' first and last
+//! segments, mean degrees, 90 horizontal) of the stand tree and of `sylva tree grow`'s tree.
 use glam::Vec3;
 use sylva::species::{LeafType, SpeciesLibrary};
-use sylva::structure::forest_form::{grow_formed_tree, tree_form, Habit, StemBranching};
+use sylva::structure::forest_form::{grow_formed_tree, tree_form, ArchitectureMeasures, Habit, StemBranching};
 use sylva::structure::species_tree::Model;
 use sylva::structure::stand::{adapt_stand, SkeletonCache, StandOptions, StandTree, FULL_STRANDS};
 
@@ -21,13 +26,15 @@ fn main() {
         Some(d) => SpeciesLibrary::load_dir(std::path::Path::new(&d)).unwrap(),
         None => SpeciesLibrary::embedded().unwrap(),
     };
-    println!("| species | age | height m | crown base m | crown radius m | height increment m/yr | stand: branches/m | whorls | branches/whorl | whorl spacing m | top cover | side cover | alone: top, side | nodes | tree grow: branches/m | branches/whorl | whorl spacing m |");
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("| species | age | height m | crown base m | crown radius m | height increment m/yr | stand: branches/m | whorls | branches/whorl | whorl spacing m | top cover | side cover | alone: top, side | nodes | tree grow: branches/m | branches/whorl | whorl spacing m | stand: limb angle°, limb end° | tree grow: limb angle°, limb end° |");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    let only = std::env::var("CONIFER_SPECIES").ok();
+    let ages: Vec<f32> = std::env::var("CONIFER_AGES").map_or_else(|_| vec![60.0, 80.0, 100.0], |a| a.split(',').map(|x| x.trim().parse().expect("CONIFER_AGES: numbers separated by commas")).collect());
     for (si, sp) in lib.species.iter().enumerate() {
-        if sp.identity.leaf_type != LeafType::Conifer {
+        if sp.identity.leaf_type != LeafType::Conifer || only.as_deref().is_some_and(|o| o != sp.id) {
             continue;
         }
-        for age in [60.0f32, 80.0, 100.0] {
+        for &age in &ages {
             let f = tree_form(sp, age, Habit::Forest).unwrap();
             let r = f.crown_radius_m;
             let spacing = 2.0 * r;
@@ -56,9 +63,11 @@ fn main() {
             let (g, gf) = grow_formed_tree(sp, Model::EcoMod, age, &[], 1, Habit::Forest).unwrap();
             let gb = StemBranching::of(&g.skeleton, gf.crown_base_m, 0.05);
             let inc = sp.potential_height_m(age) - sp.potential_height_m(age - 1.0);
+            let ms = ArchitectureMeasures::of(&sk, &Default::default());
+            let gm = ArchitectureMeasures::of(&g.skeleton, &g.leaves);
             println!(
-                "| {} | {age} | {:.1} | {:.1} | {:.2} | {inc:.2} | {:.1} | {} | {:.1} | {:.2} | {:.2} | {:.2} | {:.2}, {:.2} | {} | {:.1} | {:.1} | {:.2} |",
-                sp.id, f.height_m, f.crown_base_m, r, b.per_m, b.whorls, b.branches_per_whorl, b.whorl_spacing_m, c.top, c.side, ca.top, ca.side, sk.nodes.len(), gb.per_m, gb.branches_per_whorl, gb.whorl_spacing_m
+                "| {} | {age} | {:.1} | {:.1} | {:.2} | {inc:.2} | {:.1} | {} | {:.1} | {:.2} | {:.2} | {:.2} | {:.2}, {:.2} | {} | {:.1} | {:.1} | {:.2} | {:.0}, {:.0} | {:.0}, {:.0} |",
+                sp.id, f.height_m, f.crown_base_m, r, b.per_m, b.whorls, b.branches_per_whorl, b.whorl_spacing_m, c.top, c.side, ca.top, ca.side, sk.nodes.len(), gb.per_m, gb.branches_per_whorl, gb.whorl_spacing_m, ms.branch_angle_deg, ms.limb_end_angle_deg, gm.branch_angle_deg, gm.limb_end_angle_deg
             );
         }
     }

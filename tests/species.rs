@@ -271,6 +271,9 @@ fn readme_documents_every_field_of_the_schema() {
     // nor the whorled stem (Norway spruce's only)
     beech.architecture.ecomod.whorls = lib.get("norway_spruce").unwrap().architecture.ecomod.whorls;
     assert!(beech.architecture.ecomod.whorls.is_some());
+    // nor the limbs' profile (Norway spruce's only, round 38)
+    beech.architecture.ecomod.limbs = lib.get("norway_spruce").unwrap().architecture.ecomod.limbs;
+    assert!(beech.architecture.ecomod.limbs.is_some());
     let mut leaves: Vec<String> = species::leaf_fields(&beech).unwrap().into_iter().map(|(p, _)| p).collect();
     let mut fields: Vec<String> = schema::FIELDS.iter().map(|f| f.path.to_string()).collect();
     leaves.sort();

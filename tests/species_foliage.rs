@@ -12,7 +12,7 @@ use sylva::species::SpeciesLibrary;
 /// Species with a sourced `crown_lai`: (id, value in the file, the published value it rounds,
 /// a word of the citation that the comment above the field must hold). Sources in
 /// species/sources/SOURCES.md, "Leaf area of drawn crowns".
-const SOURCED: [(&str, f32, f32, &str); 6] = [
+const SOURCED: [(&str, f32, f32, &str); 8] = [
     // Kram 1998, Polish J. Ecol. 46(1): spruce 10.0 (LAI-2000)
     ("norway_spruce", 10.0, 10.0, "Kram 1998"),
     // Černý, Haninec & Pokorný 2020, J. For. Res. 31(3): 4.5–5.1 / (1 − 0.151), mean 5.65
@@ -25,11 +25,17 @@ const SOURCED: [(&str, f32, f32, &str); 6] = [
     ("aspen", 2.6, 2.58, "Johansson 1999"),
     // Beadle, Talbot & Jarvis 1982, Forestry 55(2): Thetford Forest, maximum projected LAI 2.73
     ("scots_pine", 2.7, 2.73, "Beadle, Talbot & Jarvis 1982"),
+    // Breda & Granier 1996, Ann. Sci. For. 53(2-3): a sessile oak stand's maximum LAI 3.3–6
+    // over five years (half thinned in 1992); the closed canopy's 6
+    ("sessile_oak", 6.0, 6.0, "Breda & Granier 1996"),
+    // Eur. J. For. Res. 126 (2007), doi:10.1007/s10342-007-0171-9: an 8-year-old silver birch
+    // stand, LAI 3.7
+    ("silver_birch", 3.7, 3.7, "s10342-007-0171-9"),
 ];
 
-/// Species without a source read for `crown_lai` (rounds 36–37): their drawn crowns keep the
+/// Species without a source read for `crown_lai` (rounds 36–38): their drawn crowns keep the
 /// light phase's crown LAI. A source found moves a species from here to [`SOURCED`].
-const KNOWN_EXCEPTIONS: [&str; 11] = ["ash", "european_larch", "hornbeam", "norway_maple", "pedunculate_oak", "rowan", "sessile_oak", "silver_birch", "silver_fir", "small_leaved_lime", "wych_elm"];
+const KNOWN_EXCEPTIONS: [&str; 9] = ["ash", "european_larch", "hornbeam", "norway_maple", "pedunculate_oak", "rowan", "silver_fir", "small_leaved_lime", "wych_elm"];
 
 fn library() -> SpeciesLibrary {
     SpeciesLibrary::embedded().unwrap()
@@ -184,4 +190,36 @@ fn a_species_prototype_carries_its_crown_lai_over_its_projection() {
     }
     // deterministic
     assert_eq!(sylva::job::scene::prototypes(&lib), protos);
+}
+
+/// Issue 32, round 38: the full-detail beech and birch draw leaves as long as their species'
+/// (the trial of round 37 saw an 80-year open-grown beech with oversized leaf cards: EcoMod's
+/// beech leaf of 0.2862 m, lengthened ×1.5 to carry the crown's leaf area, drew 43 cm leaves; a
+/// stand tree's cards were that size times the tree's height over the EcoMod model's). The files'
+/// `appearance.leaf_length_m` (beech 6.5 cm: Marshall Ward 1909's 4–9 cm; birch 5 cm: 3–7 cm) set
+/// the cards' length before they carry the leaf area, by at most ×1.5 ([`MAX_CARD_GROWTH`]), and
+/// the leaf-cluster cards' leaves are as long (their side is the mean card length over 0.26, the
+/// broad-leaf cluster texture's leaf length). Asserted for `sylva tree grow`'s open-grown tree of
+/// 80 years (`grow_formed_tree`, `lone_tree_sprigs`): every leaf card between the species' leaf
+/// length and 1.5 times it, and within the flora's range × 1.5. (The stand exports' and stills'
+/// full-detail trees keep EcoMod's leaf size: set to the leaf length there, a beech stand's small
+/// sprigs clumped at the tips and Blender's cover from above fell from 0.707 to 0.598, round 38.)
+#[test]
+fn beech_and_birch_draw_leaf_cards_of_their_species_leaf_length() {
+    use sylva::job::leaf_area::{lone_tree_sprigs, MAX_CARD_GROWTH};
+    use sylva::structure::forest_form::{grow_formed_tree, Habit};
+    use sylva::structure::species_tree::Model;
+    let lib = library();
+    // (species, flora's leaf length range m)
+    for (id, lo, hi) in [("beech", 0.04f32, 0.09f32), ("silver_birch", 0.03, 0.07)] {
+        let sp = &lib.species[lib.find(id).unwrap() as usize];
+        let len = sp.drawn_leaf_length_m();
+        assert!((lo..=hi).contains(&len), "{id}: drawn leaf length {len} m outside the flora's {lo}–{hi} m");
+        let ok = |s: f32| s >= len * 0.999 && s <= len * MAX_CARD_GROWTH * 1.001 && s <= hi * MAX_CARD_GROWTH;
+        // `sylva tree grow --open-grown --age 80`
+        let (mut tree, _) = grow_formed_tree(sp, Model::EcoMod, 80.0, &[], 1, Habit::Open).unwrap();
+        let (_, fill) = lone_tree_sprigs(&tree.skeleton, &mut tree.leaves, sp);
+        let bad: Vec<f32> = tree.leaves.leaves.iter().map(|l| l.size).filter(|&s| !ok(s)).collect();
+        assert!(bad.is_empty(), "{id}: tree grow's cards {:?}… outside {len}–{} m ({fill:?})", &bad[..bad.len().min(5)], len * MAX_CARD_GROWTH);
+    }
 }

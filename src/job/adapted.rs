@@ -421,6 +421,10 @@ impl LeafCover {
 /// ([`super::leaf_area::sprig_cards`], which returns them as a mesh in the same frame).
 pub fn crown_leaf_cards(lv: &mut Leaves, t: &StandTree, sp: &crate::species::Species, cover: &LeafCover) -> TriMesh {
     let k = t.species as usize;
+    // (round 38: setting the cards to the species' leaf length here, `appearance.leaf_length_m`,
+    // made a beech stand's sprigs a quarter as wide, clumped at the skeleton's tips: Blender's
+    // top-down cover of tests/blender.rs fell from 0.707 to 0.598 against the crown discs' 0.745;
+    // not done until the sprigs spread over the crown)
     let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
     super::leaf_area::sprig_cards(lv, leaf_area, cover.card[k], cover.sprig[k], t.crown_radius_m, t.species as u64)
 }

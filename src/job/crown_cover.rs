@@ -195,7 +195,7 @@ pub fn drawn_cover_pictures(a: &crate::structure::stand::AdaptedTree, t: &crate:
     let shape = LeafShape::of_species(sp);
     let needles = shape.is_needle();
     let sprigs = if needles {
-        super::leaf_area::shoot_cards(&sk, &lv, super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m), sprig, t.crown_radius_m, t.species as u64).mesh
+        super::leaf_area::shoot_cards_with_sprays(&sk, &lv, super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m), sprig, t.crown_radius_m, t.species as u64, super::leaf_area::limb_spray(sp)).mesh
     } else {
         let cover = super::adapted::LeafCover { card: vec![card; t.species as usize + 1], sprig: vec![sprig; t.species as usize + 1] };
         super::adapted::crown_leaf_cards(&mut lv, t, sp, &cover)

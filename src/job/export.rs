@@ -399,7 +399,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             let needles = full && crate::structure::texture::LeafShape::of_species(sp).is_needle();
             let sprigs = if needles {
                 let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
-                super::leaf_area::shoot_cards(&sk, &lv, leaf_area, cover.sprig[t.species as usize], t.crown_radius_m, t.species as u64).mesh
+                super::leaf_area::shoot_cards_with_sprays(&sk, &lv, leaf_area, cover.sprig[t.species as usize], t.crown_radius_m, t.species as u64, super::leaf_area::limb_spray(sp)).mesh
             } else if full {
                 super::adapted::crown_leaf_cards(&mut lv, t, sp, &cover)
             } else {

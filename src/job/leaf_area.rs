@@ -162,6 +162,8 @@ pub struct ShootCards {
     pub mesh: TriMesh,
     /// Shoots and twigs foliated (skeleton segments), i.e. card pairs.
     pub shoots: usize,
+    /// Limb-axis segments carrying a flat spray card ([`shoot_cards_with_sprays`]; 0 without).
+    pub sprays: usize,
     /// Needle cards the shoots replace.
     pub needle_cards: usize,
     /// Leaf area (m², one-sided) the cards carry: each card's side² times `cluster_cover`.
@@ -191,6 +193,21 @@ pub struct ShootCards {
 /// needle cards remain the source of the lower levels of detail). Deterministic: the turns hash
 /// `seed` and the node. A tree without needle cards, or a target of 0, gets none.
 pub fn shoot_cards(sk: &crate::structure::Skeleton, lv: &crate::structure::Leaves, leaf_area_m2: f32, cluster_cover: f32, crown_radius_m: f32, seed: u64) -> ShootCards {
+    shoot_cards_with_sprays(sk, lv, leaf_area_m2, cluster_cover, crown_radius_m, seed, 0.0)
+}
+
+/// [`shoot_cards`] with the limbs' sprays (issue 32, round 38: a stand spruce's crown covered
+/// 0.55–0.74 of its disc from above, its foliage dense near the stem and the limbs' outer parts,
+/// which set the crown radius, thin rays): every segment of a first-order limb's axis (Gravelius
+/// order 1) also carries one flat card through its middle, spanning the segment's axis and the
+/// horizontal across it (a spruce limb's flat spray of side shoots), whose relative side is
+/// `spray` × the middle's horizontal distance from the stem axis (m), so that a limb's spray
+/// widens towards its tip; the sprays share the leaf area with the shoot cards by the same
+/// scaling (their side² against a shoot's two cards' 2 side²) and are capped at
+/// [`MAX_SHOOT_CARD_M`] alike. `spray` ≤ 0 gives [`shoot_cards`]' cards exactly. The species'
+/// `spray`: `architecture.ecomod.limbs.spray` ([`crate::species::Limbs`]).
+#[allow(clippy::too_many_arguments)]
+pub fn shoot_cards_with_sprays(sk: &crate::structure::Skeleton, lv: &crate::structure::Leaves, leaf_area_m2: f32, cluster_cover: f32, crown_radius_m: f32, seed: u64, spray: f32) -> ShootCards {
     let mut out = ShootCards { needle_cards: lv.leaves.len(), ..Default::default() };
     if lv.leaves.is_empty() || !(leaf_area_m2 > 0.0) {
         return out;
@@ -241,8 +258,21 @@ pub fn shoot_cards(sk: &crate::structure::Skeleton, lv: &crate::structure::Leave
             }
         }
     }
+    // the limbs' sprays: (node, centre, axis, relative side), one flat card each
+    let mut sprays: Vec<(u32, Vec3, Vec3, f32)> = Vec::new();
+    if spray > 0.0 {
+        for (i, n) in sk.nodes.iter().enumerate() {
+            if n.gravelius == 1 {
+                let (c, axis, len) = seg(i);
+                let rel = spray * c.truncate().length();
+                if len > 0.0 && rel > 1e-4 {
+                    sprays.push((i as u32, c, axis, rel));
+                }
+            }
+        }
+    }
     let cover = cluster_cover.clamp(0.05, 1.0);
-    let sum_sq: f32 = shoots.iter().map(|s| 2.0 * s.3 * s.3).sum();
+    let sum_sq: f32 = shoots.iter().map(|s| 2.0 * s.3 * s.3).sum::<f32>() + sprays.iter().map(|s| s.3 * s.3).sum::<f32>();
     if !(sum_sq > 0.0) {
         return out;
     }
@@ -251,13 +281,13 @@ pub fn shoot_cards(sk: &crate::structure::Skeleton, lv: &crate::structure::Leave
     let m = &mut out.mesh;
     m.positions.reserve(8 * shoots.len());
     let (mut area, mut sides) = (0.0f32, 0.0f32);
-    for &(node, c, axis, rel) in &shoots {
-        let side = (k * rel).min(MAX_SHOOT_CARD_M);
-        let mut c = c;
+    // a card's side and its centre kept within the crown radius of the stem axis
+    let place = |c: Vec3, rel: f32| {
         let rho = c.truncate().length();
-        if rho > rmax {
-            c = (c.truncate() * (rmax / rho)).extend(c.z);
-        }
+        ((k * rel).min(MAX_SHOOT_CARD_M), if rho > rmax { (c.truncate() * (rmax / rho)).extend(c.z) } else { c })
+    };
+    for &(node, c, axis, rel) in &shoots {
+        let (side, c) = place(c, rel);
         let turn = crate::rng::unit_f32(crate::rng::hash(&[seed, 0x5400_7c4d, node as u64])) * std::f32::consts::PI;
         let across0 = axis.any_orthonormal_vector();
         let q = glam::Quat::from_axis_angle(axis, turn);
@@ -267,10 +297,23 @@ pub fn shoot_cards(sk: &crate::structure::Skeleton, lv: &crate::structure::Leave
         area += 2.0 * side * side * cover;
         sides += side;
     }
+    for &(_, c, axis, rel) in &sprays {
+        let (side, c) = place(c, rel);
+        let across = axis.cross(Vec3::Z).normalize_or(axis.any_orthonormal_vector());
+        crate::structure::mesh::quad(m, c, across * (0.5 * side), axis * (0.5 * side));
+        area += side * side * cover;
+    }
     out.shoots = shoots.len();
+    out.sprays = sprays.len();
     out.leaf_area_m2 = area;
-    out.mean_side_m = sides / shoots.len() as f32;
+    out.mean_side_m = sides / shoots.len().max(1) as f32;
     out
+}
+
+/// The spray factor of species `sp`'s limbs for [`shoot_cards_with_sprays`]:
+/// `architecture.ecomod.limbs.spray` where its file has the table, else 0 (no sprays).
+pub fn limb_spray(sp: &crate::species::Species) -> f32 {
+    sp.architecture.ecomod.limbs.map_or(0.0, |l| l.spray)
 }
 
 /// The share of a leaf card and of a leaf-cluster card of species `sp` that their textures
@@ -565,9 +608,10 @@ mod lone_tree_tests {
         assert!(p.value == "40.0" || p.value == "40", "{p:?}");
         assert!(p.expected.contains("[1, 15]") && p.file.ends_with("norway_spruce.toml"), "{p:?}");
         // a species without a cited value keeps the light model's crown LAI
-        let oak = lib.get("sessile_oak").unwrap();
-        assert!(oak.life.foliage.is_none());
-        assert_eq!(drawn_crown_lai(oak), crate::sim::phases::light::crown_lai(oak.life.shade_tolerance));
+        // (hornbeam: sessile oak has one since round 38)
+        let hornbeam = lib.get("hornbeam").unwrap();
+        assert!(hornbeam.life.foliage.is_none());
+        assert_eq!(drawn_crown_lai(hornbeam), crate::sim::phases::light::crown_lai(hornbeam.life.shade_tolerance));
     }
 
     #[test]

@@ -36,6 +36,7 @@ fn arch() -> Architecture {
             min_len_g: pl(0.1),
             min_len_w: pl(0.1),
             whorls: None,
+            limbs: None,
         },
         light_guided: LightGuidedParams { lambda: 0.5, k: 1.0, b: 2.0, mu: 0.5, gamma: 0.2, theta_deg: 45.0, r_s: 0.1 },
         laplacian: LaplacianParams { eta: 1.0, base_width_m: 0.01, width_rate: 1.5 },
@@ -45,7 +46,7 @@ fn arch() -> Architecture {
 }
 
 fn appearance(leaf: [u8; 3]) -> Appearance {
-    Appearance { bark: [110, 105, 100], leaf_spring: leaf, leaf_summer: leaf, leaf_autumn: [190, 120, 40], leaf_winter: [90, 80, 70], leaf_texture: "none".into(), leaf_out_doy: 115.0, autumn_doy: 285.0, leaf_fall_doy: 303.0, crown_top_flatness: 0.6, crown_cover: 0.9, crown_clump: 0.3 }
+    Appearance { bark: [110, 105, 100], leaf_spring: leaf, leaf_summer: leaf, leaf_autumn: [190, 120, 40], leaf_winter: [90, 80, 70], leaf_texture: "none".into(), leaf_out_doy: 115.0, autumn_doy: 285.0, leaf_fall_doy: 303.0, crown_top_flatness: 0.6, crown_cover: 0.9, crown_clump: 0.3, leaf_length_m: None }
 }
 
 /// A beech-like species (Fagus sylvatica): L 3, shade tolerance 5, H_max 40 m, 300 years.

@@ -444,8 +444,8 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
         }
     }
     for spec in schema::FIELDS {
-        if spec.path == "identity.sources" || spec.path == "life.form_factor" || spec.path.starts_with("life.stand_crown.") || spec.path.starts_with("life.stand_crown_base.") || spec.path.starts_with("life.dense_hd.") || spec.path.starts_with("life.bai_competition.") || spec.path.starts_with("life.bai_bwinpro.") || spec.path.starts_with("life.foliage.") {
-            continue; // optional (form factor: default 0.5; stand crown, stand crown base, dense-stand H/D, BAI competition, BWINPro growth, foliage: none)
+        if spec.path == "identity.sources" || spec.path == "life.form_factor" || spec.path.starts_with("life.stand_crown.") || spec.path.starts_with("life.stand_crown_base.") || spec.path.starts_with("life.dense_hd.") || spec.path.starts_with("life.bai_competition.") || spec.path.starts_with("life.bai_bwinpro.") || spec.path.starts_with("life.foliage.") || spec.path == "appearance.leaf_length_m" {
+            continue; // optional (form factor: default 0.5; stand crown, stand crown base, dense-stand H/D, BAI competition, BWINPro growth, foliage, drawn leaf length: none)
         }
         // the mature form is optional as a table; where it is given, each of its fields is
         // required (none has a default)
@@ -454,6 +454,10 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
         }
         // so is the whorled stem of EcoMod (each of its fields required where it is given)
         if spec.path.starts_with("architecture.ecomod.whorls.") && !leaves.iter().any(|(p, _)| p.starts_with("architecture.ecomod.whorls.")) {
+            continue;
+        }
+        // and the limbs' profile by depth into the crown
+        if spec.path.starts_with("architecture.ecomod.limbs.") && !leaves.iter().any(|(p, _)| p.starts_with("architecture.ecomod.limbs.")) {
             continue;
         }
         if leaves.iter().any(|(p, _)| p == spec.path) {

@@ -518,6 +518,41 @@ pub struct EcoModParams {
     /// the stem splits as Algorithm 1 does, one branch a split.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub whorls: Option<Whorls>,
+    /// The first-order limbs' insertion angle and length by depth into the crown ([`Limbs`],
+    /// `[architecture.ecomod.limbs]`; ours, not the paper's). Optional: without it each limb
+    /// leaves the stem at Algorithm 1's angle α₂ and is as long as its strands make it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub limbs: Option<Limbs>,
+}
+
+/// The first-order limbs of a stem by their depth into the live crown (issue 32, round 38;
+/// `[architecture.ecomod.limbs]` of a species file, our extension of EcoMod, `004_*.txt`
+/// Algorithm 1): the branches that leave the stem (Gravelius order 0 → 1) are turned, about the
+/// horizontal axis across them, to an insertion angle from the vertical that runs linearly from
+/// `angle_top_deg` at the top of the stem to `angle_base_deg` at the crown base (the top of the
+/// trunk, Algorithm 1's first segment), keeping their azimuth; and each limb (its whole subtree,
+/// all lengths alike) is lengthened or shortened so that the reach of its main axis
+/// (Algorithm 1's own recursion of eqs. 1, 4–6) is the longest limb's times
+/// `min(1, depth / widest_depth)`, with depth the limb's distance below the top over the crown
+/// length (0 at the top, 1 at the crown base): a cone above `widest_depth`, limbs of one length
+/// below it. Strands and segments are unchanged (a tree of S strands keeps 2S − 1 segments).
+/// Ranges: the schema's (`architecture.ecomod.limbs.*`); the shipped species files give their
+/// sources.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Limbs {
+    /// Insertion angle from the vertical (degrees, 0 up, 90 horizontal; 20–120) of a limb at
+    /// the top of the stem.
+    pub angle_top_deg: f32,
+    /// Insertion angle from the vertical (degrees, 20–120) of a limb at the crown base.
+    pub angle_base_deg: f32,
+    /// Relative depth into the crown (0 top … 1 crown base; 0.05–1) below which the limbs are
+    /// as long as the longest.
+    pub widest_depth: f32,
+    /// Width of a limb's flat spray of foliage per metre of distance from the stem (0–2;
+    /// pictures and exports only: the full level's shoot cards,
+    /// `job::leaf_area::shoot_cards_with_sprays`; 0 none).
+    pub spray: f32,
 }
 
 /// The whorled stem of a conifer (issue 32, round 37; `[architecture.ecomod.whorls]` of a
@@ -700,6 +735,16 @@ pub struct Appearance {
     /// Clumping of the foliage 0..1: 0 an even, smooth surface (beech), 1 separate lumps with
     /// gaps between them (oak).
     pub crown_clump: f32,
+    /// Length (m, 0.01–0.5) of a drawn leaf card: the species' leaf blade length from a flora
+    /// (issue 32, round 38: the full-detail broadleaves drew EcoMod's `leaf_size_m`, the
+    /// paper's beech 0.29 m, scaled with the tree, as 30–45 cm leaves). Optional: without it a
+    /// drawn card is `architecture.ecomod.leaf_size_m` long ([`Species::drawn_leaf_length_m`]).
+    /// Used by `sylva tree grow` (`structure::forest_form::grow_formed_tree`); the stand exports'
+    /// and stills' full-detail trees keep EcoMod's leaf size scaled with the tree (round 38: their
+    /// sprigs, as small as the leaves, clumped at the tips and lowered the cover from above).
+    /// EcoMod's leaf size still sets Plastic Trees' clearance and the grown skeleton's leaves.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub leaf_length_m: Option<f32>,
 }
 
 /// Season of a snapshot.
@@ -861,6 +906,15 @@ impl Factor {
 }
 
 impl Species {
+    /// Length (m) of a drawn leaf card of this species: `appearance.leaf_length_m` (a sourced
+    /// leaf blade length) where the file gives one, else EcoMod's `leaf_size_m`. The cards of
+    /// `sylva tree grow`'s tree start at this length before they carry the crown's leaf area
+    /// (lengthened by at most 1.5, the rest as leaf-cluster cards of leaves as long:
+    /// `job::leaf_area::lone_tree_sprigs`).
+    pub fn drawn_leaf_length_m(&self) -> f32 {
+        self.appearance.leaf_length_m.unwrap_or(self.architecture.ecomod.leaf_size_m)
+    }
+
     /// Per-factor suitabilities `[L, T, K, F, R, N]` (each 0–1, see [`Factor::suitability`]).
     pub fn suitability_factors(&self, indices: &[f32; 6]) -> [f32; 6] {
         let n = &self.niche;

@@ -346,6 +346,10 @@ pub const FIELDS: &[FieldSpec] = &[
     f("architecture.ecomod.whorls.branches", "", Kind::Int { min: 1, max: 12 }, "Whorled stem (conifers; optional, ours: each stem split of EcoMod is an annual shoot of the leader): first-order branches of the whorl at the top of each annual shoot"),
     f("architecture.ecomod.whorls.interwhorl", "", Kind::Int { min: 0, max: 12 }, "Whorled stem: interwhorl branches along each annual shoot, below its whorl"),
     f("architecture.ecomod.whorls.interwhorl_share", "", r(0.05, 1.0), "Whorled stem: strands of an interwhorl branch over a whorl branch's"),
+    f("architecture.ecomod.limbs.angle_top_deg", "°", r(20.0, 120.0), "First-order limbs by depth into the crown (optional, ours): insertion angle from the vertical of a limb at the top of the stem (0 up, 90 horizontal)"),
+    f("architecture.ecomod.limbs.angle_base_deg", "°", r(20.0, 120.0), "First-order limbs: insertion angle from the vertical of a limb at the crown base (linear in depth from the top's)"),
+    f("architecture.ecomod.limbs.spray", "", r(0.0, 2.0), "First-order limbs: relative width of a limb's flat spray of foliage per metre of its distance from the stem (pictures and exports only: the full level's shoot cards; 0 none)"),
+    f("architecture.ecomod.limbs.widest_depth", "", r(0.05, 1.0), "First-order limbs: relative depth into the crown (0 top, 1 crown base) below which the limbs are as long as the longest (above it their reach falls linearly to the top)"),
     f(
         "architecture.light_guided.lambda",
         "",
@@ -472,6 +476,12 @@ pub const FIELDS: &[FieldSpec] = &[
         "",
         r(0.0, 1.0),
         "Clumping of the foliage: 0 smooth even surface, 1 separate lumps with gaps",
+    ),
+    f(
+        "appearance.leaf_length_m",
+        "m",
+        r(0.01, 0.5),
+        "Length of a drawn leaf card of `sylva tree grow`: the leaf blade length from a flora (optional: without it EcoMod's leaf_size_m; the stand exports' and stills' trees keep EcoMod's leaf size)",
     ),
 ];
 

@@ -193,7 +193,7 @@ pub fn tree_form(sp: &Species, age_yr: f32, habit: Habit) -> Result<TreeForm> {
 /// base (as the stand skeletons of [`crate::structure::stand::SkeletonCache::prepare`] are), then
 /// the tree is scaled to the form's height and crown radius and shed below its crown base
 /// ([`crate::structure::stand::fit`]), its wood radii scaled so the stem base is the form's DBH
-/// (at least 1 cm) and its leaves kept at the species' leaf size (`leaf_size_m`), then its
+/// (at least 1 cm) and its leaves kept at the species' drawn leaf length ([`Species::drawn_leaf_length_m`]), then its
 /// crown narrowed or widened about the stem until its crown radius to the leaf tips
 /// ([`crate::structure::stand::mean_crown_radius`]) is the form's (three passes). A sapling
 /// (younger than [`SAPLING_END_AGE_YR`]) also gets its trunk shortened to its crown base and
@@ -243,7 +243,10 @@ pub fn grow_formed_tree_with(sp: &Species, model: Model, age_yr: f32, obstacles:
     }
     // a sapling's leaf cards at most half its crown radius (round 34: beech's 0.29 m cards,
     // the paper's leaf size, on a 0.9 m beech of 0.2 m crown radius made it 0.6 m wide)
-    let leaf_size = if young { p.leaf_size_m.min(0.5 * form.crown_radius_m) } else { p.leaf_size_m };
+    // (the species' drawn leaf length where its file gives a sourced one: round 38, beech's
+    // EcoMod leaf of 0.29 m drew an 80-year beech with 30–45 cm leaves)
+    let leaf_len = sp.drawn_leaf_length_m();
+    let leaf_size = if young { leaf_len.min(0.5 * form.crown_radius_m) } else { leaf_len };
     leaves.leaves.iter_mut().for_each(|l| l.size = leaf_size);
     // the species' leaf size is not scaled with the tree: a young tree's crown radius (measured
     // to the leaf tips) grew by it; three horizontal rescalings about the stem bring it back to

@@ -68,6 +68,7 @@ impl EcoModParams {
             min_len_g: pl(&[(0.0, 1.0), (7.5, 0.45), (15.0, 1.0)]),
             min_len_w: pl(&[(0.0, 1.0), (50.0, 1.0)]),
             whorls: None,
+            limbs: None,
         }
     }
 
@@ -100,6 +101,7 @@ impl EcoModParams {
             min_len_g: pl(&[(0.0, 0.7109), (1.293, 0.8531), (15.0, 1.0)]),
             min_len_w: pl(&[(0.0, 1.0), (50.0, 1.0)]),
             whorls: None,
+            limbs: None,
         }
     }
 }

@@ -37,7 +37,7 @@
 
 use crate::error::{Error, Result};
 use crate::rng::{salt, Stream};
-use crate::species::{EcoModParams, LeafDistribution, Whorls, WHORL_SEGMENT};
+use crate::species::{EcoModParams, LeafDistribution, Limbs, Whorls, WHORL_SEGMENT};
 use crate::structure::params::eval_polyline;
 use crate::structure::skeleton::{Leaf, Leaves, NodeId, Role, Skeleton};
 use glam::{Mat3, Vec3};
@@ -235,7 +235,22 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
     let whorls = p.whorls.filter(|w| w.branches > 0);
     let mut stack = vec![Pending { parent: 0, g: 0, w: 0, s0: s_total, big_l: 1.0, l: p.trunk_length_m, frame: frame0, lateral: false, shoot: None }];
     let sway = p.wind_undirected * (1.0 - p.k_f);
-    while let Some(b) = stack.pop() {
+    // the limbs' profile by depth into the crown ([`Limbs`]): the stem's top (m) and the longest
+    // limb's reach, known once the stem is grown (Algorithm 1 pops a split's continuation
+    // before its branch, so the whole stem is grown before its first limb)
+    let mut stem_top = f32::NEG_INFINITY;
+    let mut longest: Option<f32> = None;
+    while let Some(mut b) = stack.pop() {
+        if let Some(lm) = p.limbs {
+            if b.g == 1 && sk.nodes[b.parent as usize].gravelius == 0 {
+                let longest = *longest.get_or_insert_with(|| {
+                    stack.iter().chain(std::iter::once(&b)).filter(|q| q.g == 1 && sk.nodes[q.parent as usize].gravelius == 0).map(|q| limb_reach(p, q.w, q.s0, q.big_l)).fold(0.0f32, f32::max)
+                });
+                let base = sk.nodes.get(1).map_or(0.0, |n| n.pos.z);
+                let (insertion, reach) = (sk.nodes[b.parent as usize].pos, limb_reach(p, b.w, b.s0, b.big_l));
+                shape_limb(&lm, &mut b, insertion, base, stem_top, longest, reach);
+            }
+        }
         let id = sk.nodes.len() as NodeId;
         let start = sk.nodes[b.parent as usize].pos;
         let axis = b.frame.y_axis;
@@ -249,6 +264,9 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
             n.gravelius = b.g.min(u16::MAX as u32) as u16;
             n.weibull = b.w.min(u16::MAX as u32) as u16;
             n.role = if b.s0 == 1 { Role::Tip } else if b.g == 0 { Role::Trunk } else { Role::Branch };
+        }
+        if b.g == 0 {
+            stem_top = stem_top.max(end.z);
         }
         if b.s0 == 1 {
             place_leaves(&mut leaves, p.leaf_distribution, n_leaves, p.leaf_size_m, p.phyllotaxis_deg, start, &b.frame, b.l, nid, &mut rng);
@@ -329,6 +347,36 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
         stack.push(Pending { parent: nid, g: b.g, w: w1, s0: s1, big_l: big_l1, l: l1, frame: f1, lateral: false, shoot: shoot1 });
     }
     Ok((sk, leaves))
+}
+
+/// Reach (m) of the main axis of a first-order limb whose first segment has Weibull order `w`,
+/// `s` strands and relative length `big_l` ([`axis_reach`] × `big_l`, the trunk's length units).
+fn limb_reach(p: &EcoModParams, w: u32, s: u32, big_l: f32) -> f32 {
+    axis_reach(p, 1, w, s) * big_l
+}
+
+/// Shapes the limb `b` (a pending branch of Gravelius order 1 on the stem node at `insertion`)
+/// by its depth into the crown ([`Limbs`]): depth = (stem top − insertion height) / (stem top −
+/// crown base `base_z`), 0–1; turns its frame about the horizontal axis across it to the
+/// insertion angle from the vertical `angle_top_deg + depth · (angle_base_deg − angle_top_deg)`
+/// (azimuth kept; the ground limit of [`constrain`] still applies) and scales its relative
+/// and actual lengths (so its whole subtree) by `min(1, depth / widest_depth) · longest / reach`,
+/// `reach` its own axis' reach and `longest` the longest limb's (m).
+fn shape_limb(lm: &Limbs, b: &mut Pending, insertion: Vec3, base_z: f32, top_z: f32, longest: f32, reach: f32) {
+    let len = top_z - base_z;
+    let depth = if len > 1e-6 { ((top_z - insertion.z) / len).clamp(0.0, 1.0) } else { 1.0 };
+    let theta = (lm.angle_top_deg + depth * (lm.angle_base_deg - lm.angle_top_deg)).to_radians();
+    let y = b.frame.y_axis;
+    let h = Vec3::new(y.x, y.y, 0.0);
+    let h = if h.length_squared() > 1e-10 { h.normalize() } else { Vec3::new(b.frame.x_axis.x, b.frame.x_axis.y, 0.0).normalize_or(Vec3::X) };
+    let target = h * theta.sin() + Vec3::Z * theta.cos();
+    let q = glam::Quat::from_rotation_arc(y.normalize_or(Vec3::Z), target);
+    if reach > 0.0 && longest > 0.0 {
+        let f = (depth / lm.widest_depth.max(1e-3)).clamp(0.02, 1.0) * longest / reach;
+        b.big_l *= f;
+        b.l *= f;
+    }
+    b.frame = constrain(orthonormal(Mat3::from_quat(q) * b.frame), insertion, b.l, false);
 }
 
 /// Largest tilt of the trunk (the g = 0 axis) from the vertical (degrees): apical control keeps
