@@ -823,17 +823,6 @@ impl SlabLanes {
     }
 }
 
-/// Bit k of lane k ([`slab_mask`]).
-const LANE_BITS: [u32; MAX_SKY_DIRS] = {
-    let mut b = [0u32; MAX_SKY_DIRS];
-    let mut k = 0;
-    while k < MAX_SKY_DIRS {
-        b[k] = 1 << k;
-        k += 1;
-    }
-    b
-};
-
 /// [`slab_hits`] for every direction of `lanes` at once: bit k set when the unbounded ray from
 /// `p` along direction k hits the box `lo`–`hi`. The same operations on the same values as
 /// [`slab_hits`], lane by lane, without its branches: the entry distance only grows and the exit
@@ -861,10 +850,9 @@ fn slab_mask(lanes: &SlabLanes, p: Vec3, lo: Vec3, hi: Vec3) -> u32 {
             outside |= lanes.zero[ax];
         }
     }
-    // each lane's bit where its span is not empty, OR-reduced (by a table, so it vectorises)
     let mut m = 0u32;
-    for k in 0..MAX_SKY_DIRS {
-        m |= 0u32.wrapping_sub(!(near[k] > far[k]) as u32) & LANE_BITS[k];
+    for k in (0..MAX_SKY_DIRS).rev() {
+        m = (m << 1) | !(near[k] > far[k]) as u32;
     }
     m & !outside & lanes.used
 }
