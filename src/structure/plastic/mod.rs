@@ -438,7 +438,8 @@ impl PlasticTree {
     /// [`transform::MOVE_GAMMA_TOL`] (transmittance) since the level's snapshot; the solids
     /// (the obstacles, the terrain) are tested anew at every query (see `MoveCache` in
     /// `transform.rs`). So a wall moved by a small step builds shadow grids only at the levels
-    /// where many query points moved farther or more than half the casters changed, and the
+    /// where many query points moved farther or more than [`MOVE_DELTA_MAX`] (or half the
+    /// casters) changed, and the
     /// results differ from an exact call by what moves within the tolerances (measured in
     /// BENCHMARKS.md, rounds 37 and 38, and bounded by the test
     /// `structure_plastic::the_move_light_model_stays_near_the_exact_moves`). The first call
