@@ -134,6 +134,13 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
         Obstacle::FiniteWall { x, length, height } => Obstacle::FiniteWall { x: x + 0.1, length, height },
         o => o,
     };
+    // `SYLVA_PLASTIC_FIRST_MOVES=N`: N more first moves, each from a copy of the tree as the
+    // first adaptation left it (the bench's move column; for a profile of that move)
+    let first_moves: usize = std::env::var("SYLVA_PLASTIC_FIRST_MOVES").ok().and_then(|v| v.parse().ok()).unwrap_or(0);
+    for _ in 0..first_moves {
+        std::hint::black_box(t.clone().adapt(&env_with(&[moved])).expect("adapt"));
+    }
+    let t2m = cpu_ms();
     let rep2 = t.adapt(&env_with(&[moved])).expect("adapt");
     let t3 = cpu_ms();
     // `SYLVA_PLASTIC_MOVES=N`: N more moves of the wall by ±10 cm (for a profile of the moves)
@@ -147,7 +154,7 @@ fn profile_case(case: &str, lp: &sylva::species::LightGuidedParams, lo: &LightOp
     for i in 0..extra {
         m.adapt(&env_with(&[if i % 2 == 0 { wall } else { moved }])).expect("adapt");
     }
-    println!("{} nodes, {} seasons: analysis {:.1} ms, adapt {:.1} ms CPU, {wall_ms:.1} ms wall ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), tree.analysis().seasons, t1 - t0, t2 - t1, t3 - t2, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
+    println!("{} nodes, {} seasons: analysis {:.1} ms, adapt {:.1} ms CPU, {wall_ms:.1} ms wall ({rep:?}), move wall {:.1} ms ({} recomputed); fingerprints {first:016x}, {:016x}", sk.len(), tree.analysis().seasons, t1 - t0, t2 - t1, t3 - t2m, rep2.recomputed_nodes, fingerprint(std::slice::from_ref(&t)));
 }
 
 /// `SYLVA_PLASTIC_PROFILE=stand`: the stand case alone. `SYLVA_PLASTIC_PROFILE=two,N`: the two ≈ 2,540-node trees (11 cycles, seed 4) 1.5 crown

@@ -438,9 +438,10 @@ impl PlasticTree {
     /// [`transform::MOVE_GAMMA_TOL`] (transmittance) since the level's snapshot; the solids
     /// (the obstacles, the terrain) are tested anew at every query (see `MoveCache` in
     /// `transform.rs`). So a wall moved by a small step builds shadow grids only at the levels
-    /// where a query point moved farther or many casters changed, and the results differ from
-    /// an exact call by what moves within the tolerances (measured in BENCHMARKS.md, round 37,
-    /// and bounded by the test
+    /// where many query points moved farther or more than [`MOVE_DELTA_MAX`] (or half the
+    /// casters) changed, and the
+    /// results differ from an exact call by what moves within the tolerances (measured in
+    /// BENCHMARKS.md, rounds 37 and 38, and bounded by the test
     /// `structure_plastic::the_move_light_model_stays_near_the_exact_moves`). The first call
     /// after turning it on, after [`PlasticTree::invalidate`], [`PlasticTree::scale`],
     /// [`PlasticTree::translate`], a change of the sky, and every call in a group or among fixed
