@@ -271,9 +271,17 @@ pub fn harvested(r: &StandRow) -> bool {
     r.deaths[crate::sim::trees::DeathCause::Harvest.index()] > 0
 }
 
+/// The management table's file in a run directory (a run with `[[management]]`:
+/// [`stand_table::management_table_csv`]).
+pub const MANAGEMENT_TABLE: &str = "management_table.csv";
+
 fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
     let names: Vec<&str> = w.site.pool.iter().map(|&s| w.site.lib.species[s as usize].id.as_str()).collect();
     stand_table::write_stand_table(&dir.join("stand_table.csv"), rows, &names, w.site.area_ha)?;
+    // a run with `[[management]]`: the figures of each entry's area (issue 35 round 38)
+    if rows.iter().any(|r| !r.management.is_empty()) {
+        stand_table::write_management_table(&dir.join(MANAGEMENT_TABLE), rows)?;
+    }
     if png && rows.len() >= 2 {
         plot::plot_stand_table(&dir.join("stand_table.png"), rows, w)?;
     }
@@ -558,6 +566,11 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
             }
         }
         clear_snapshots(&dir)?;
+        // an earlier run's management table (this run may have no management)
+        let mt = dir.join(MANAGEMENT_TABLE);
+        if mt.is_file() {
+            std::fs::remove_file(&mt).map_err(|e| Error::io(&mt, e))?;
+        }
         // an earlier run's checkpoint must not be resumed after this run is interrupted
         checkpoint::remove_all(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
