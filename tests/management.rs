@@ -593,6 +593,20 @@ fn bad_management_and_climate_input_is_refused_naming_file_and_field() {
     std::fs::write(&a, "\u{feff}year,temperature_k,precipitation_factor\n1,0.5,1.0\n2,warm,1.0\n").unwrap();
     let e = err(&c);
     assert!(e.contains("anomalies.csv line 3") && e.contains("warm"), "{e}");
+    // an empty layer, and a filter on a property no feature has (round 38's trial, item 10:
+    // both said only "none does")
+    std::fs::write(&f, r#"{"type": "FeatureCollection", "features": []}"#).unwrap();
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 1\narea_file = {:?}\nfilter = {{ property = \"stand\", equals = \"A\" }}\n", f.display().to_string()));
+    assert!(e.contains("management[0].area_file") && e.contains("the file has 0 features"), "{e}");
+    std::fs::write(&f, r#"{"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {"stand": "A", "owner": "X"}, "geometry": {"type": "Polygon", "coordinates": [[[0, -80], [40, -80], [40, -40], [0, -80]]]}}]}"#).unwrap();
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nyear = 1\narea_file = {:?}\nfilter = {{ property = \"stnad\", equals = \"A\" }}\n", f.display().to_string()));
+    assert!(e.contains("no feature has a property `stnad`") && e.contains("`stand`") && e.contains("`owner`"), "{e}");
+    // a thinning target of 0 (round 38's trial, item 11: every stem ≥ 7 cm went at each entry,
+    // without a word) is refused naming the field and the range
+    for f in ["target_stems_ha", "target_basal_area_m2_ha", "target_relative_density"] {
+        let e = err(&format!("{base}[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\n{f} = 0\nfrom_year = 5\nevery_years = 5\n"));
+        assert!(e.contains("bad.toml") && e.contains(&format!("management[0].{f}")) && e.contains("> 0 and ≤") && e.contains("clear_cut"), "{e}");
+    }
     // a planting older than its species lives
     let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ beech = 1.0 }}\nspacing_m = 2.0\nage_yr = 900.0\nyear = 1\n"));
     assert!(e.contains("management[0].age_yr") && e.contains("maximum age of beech"), "{e}");
@@ -1652,4 +1666,32 @@ fn the_management_table_gives_each_entrys_area_as_counted_in_the_inventory() {
     }
     assert_eq!(get(1, 0, "harvest_stems_ha"), 0.0);
     assert!(rows.iter().filter(|r| r[1] == "1").all(|r| r[10] == "0.0" && r[11] == "0.00"), "a planting harvests nothing: {text}");
+}
+
+/// Trial 38, items 8 and 9, through the command line: `--resume` of a finished run with the
+/// same `years` says there is nothing to do; one with fewer years is refused without the
+/// scenario's unrelated "beyond the run" warnings first (they printed before the error); one
+/// with a changed thinning target names the entry and the field with its old and new value
+/// (it listed a CRC-32 of every entry).
+#[test]
+fn resume_says_nothing_to_do_and_names_a_changed_entrys_field() {
+    let entries = "[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.6\nfrom_year = 2\nevery_years = 1\n\
+                   [[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyears = [50]\n";
+    let toml = ScenarioToml::new("res", 3, 7).species(&["beech"]).line("snapshot_every = 0").uniform(5, 5, 20.0, 200.0).planted("beech", 1.5, 30.0).build() + entries;
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(d.path().join("q.toml"), &toml).unwrap();
+    std::fs::write(d.path().join("q2.toml"), toml.replace("target_relative_density = 0.6", "target_relative_density = 0.5")).unwrap();
+    let sylva = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).current_dir(d.path()).output().unwrap();
+        (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let beyond = "lies beyond the run's last year";
+    let (ok, err) = sylva(&["simulate", "q.toml", "--out", "r"]);
+    assert!(ok && err.contains(beyond), "{err}");
+    let (ok, err) = sylva(&["simulate", "q.toml", "--out", "r", "--resume"]);
+    assert!(ok && err.contains("nothing to do: the run in") && err.contains("is already at year 3"), "{err}");
+    let (ok, err) = sylva(&["simulate", "q.toml", "--out", "r", "--resume", "--years", "2"]);
+    assert!(!ok && err.contains("at least 3") && !err.contains(beyond), "{err}");
+    let (ok, err) = sylva(&["simulate", "q2.toml", "--out", "r", "--resume", "--years", "5"]);
+    assert!(!ok && err.contains("management[0].target_relative_density: 0.6 → 0.5 (the checkpoint's run") && err.contains("(a resumed run keeps") && !err.contains("CRC-32") && !err.contains(beyond), "{err}");
 }

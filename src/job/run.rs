@@ -214,6 +214,32 @@ fn resume_removal_note(dir: &Path, removed: &[String], why: &str) -> String {
     )
 }
 
+/// A resume refused because the scenario's management differs from the checkpoint's
+/// (`sim::checkpoint`'s identity holds a CRC-32 per entry) with the changes named field by
+/// field, old → new ([`crate::sim::checkpoint::entry_changes`] against the run directory's
+/// `scenario.toml`, the scenario as the checkpoint's run ran it), in place of the CRC-32s
+/// (trial 38, item 8); any other refusal, or one whose `scenario.toml` is missing or shows no
+/// change of an entry (an area file's polygons changed), unchanged.
+fn name_management_changes(e: super::JobError, dir: &Path, scenario: &Scenario) -> super::JobError {
+    let super::JobError::Input(Error::Format { path, message }) = &e else { return e };
+    let Some(start) = message.find("; management: ").map(|k| k + 2).or_else(|| message.find(": management: ").map(|k| k + 2)) else { return e };
+    if !message.starts_with("--resume refused") {
+        return e;
+    }
+    let Ok(text) = std::fs::read_to_string(dir.join("scenario.toml")) else { return e };
+    let Ok(old) = Scenario::from_toml_str(&text, &dir.join("scenario.toml").display().to_string()) else { return e };
+    let changes = crate::sim::checkpoint::entry_changes(&old.management, &scenario.management);
+    if changes.is_empty() {
+        return e;
+    }
+    // the management part runs to the next change ("; ") or the closing explanation (" (a resumed")
+    let rest = &message[start..];
+    let close = rest.find(" (a resumed").unwrap_or(rest.len());
+    let end = rest[..close].find("; ").unwrap_or(close);
+    let named = format!("{} (the checkpoint's run as its scenario.toml gives it → this scenario)", changes.join(", "));
+    Error::format(path.clone(), format!("{}{named}{}", &message[..start], &rest[end..])).into()
+}
+
 /// What a snapshot writes ([`Stepper::snapshot`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Parts {
@@ -459,7 +485,13 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     // start's trees, issue 37 round 37)
     let resuming = opts.resume && checkpoint::exists(&dir);
     let lean = opts.on_snapshot.is_none().then_some(Lean { map_px: opts.map_px, year0: opts.write_snapshots && !resuming, resume: resuming });
-    let mut world = stepper.world(site, lib, scenario, lean)?;
+    // a resumed run says the scenario's warnings (entries beyond the run, ...) only once its
+    // checkpoint is read and its years accepted, not before a refusal (trial 38, item 9)
+    let mut world = if resuming {
+        tracing::subscriber::with_default(tracing::subscriber::NoSubscriber::default(), || stepper.world(site, lib, scenario, lean))?
+    } else {
+        stepper.world(site, lib, scenario, lean)?
+    };
     if let Some(f) = opts.on_start.as_mut() {
         f()?;
     }
@@ -503,7 +535,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         tracing::warn!("{}: resuming a run written as {}: its inventories stay {}", dir.display(), format.extension(), format.extension());
     }
     if resume {
-        rows = stepper.resume(&dir, &mut world)?;
+        rows = stepper.resume(&dir, &mut world).map_err(|e| name_management_changes(e, &dir, scenario))?;
         // a run cannot be resumed to fewer years than it has already simulated: nothing would
         // be run, and `scenario.toml` would disagree with the stand table and the snapshots
         if world.stand.year > scenario.years {
@@ -514,6 +546,11 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
                 expected: format!("at least {}, the year of the run's checkpoint (to run it longer, set years higher; to end it earlier, start a fresh run)", world.stand.year),
             }
             .into());
+        }
+        world.warn(scenario);
+        if world.stand.year == scenario.years {
+            // (trial 38, item 9: it printed a normal summary of 0 years)
+            eprintln!("note: nothing to do: the run in {} is already at year {} (years = {}); to run it longer, set years higher", dir.display(), world.stand.year, scenario.years);
         }
         // a snapshot off this run's schedule at the checkpoint's year (one a stopped run wrote
         // so its state could be viewed, or the end of a shorter run now extended) is not one an

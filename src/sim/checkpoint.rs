@@ -313,6 +313,47 @@ fn flatten(prefix: &str, v: &toml::Value, out: &mut BTreeMap<String, String>) {
     }
 }
 
+/// The fields in which two lists of `[[management]]` entries differ, one line each:
+/// `management[i].FIELD: OLD → NEW` (TOML values; `(absent)` where a field is not given), an
+/// entry only in one list as `management[i] (KIND): added` / `removed`; entry order, fields in
+/// name order. `area_file`'s path is left out, as [`identity`] leaves it out (a project folder
+/// moved elsewhere resumes). For naming what changed when a resume is refused (trial 38, item
+/// 8: the refusal listed a CRC-32 of every entry; `job::run` compares the run directory's
+/// `scenario.toml`).
+pub fn entry_changes(old: &[super::management::Management], new: &[super::management::Management]) -> Vec<String> {
+    let flat = |m: &super::management::Management| {
+        let mut m = m.clone();
+        m.area_file = None;
+        let mut out = BTreeMap::new();
+        if let Ok(v) = toml::Value::try_from(&m) {
+            flatten("", &v, &mut out);
+        }
+        out
+    };
+    let mut out = Vec::new();
+    for i in 0..old.len().max(new.len()) {
+        match (old.get(i), new.get(i)) {
+            (Some(a), Some(b)) => {
+                let (fa, fb) = (flat(a), flat(b));
+                let mut keys: Vec<&String> = fa.keys().chain(fb.keys()).collect();
+                keys.sort();
+                keys.dedup();
+                for k in keys {
+                    let (x, y) = (fa.get(k), fb.get(k));
+                    if x != y {
+                        let show = |v: Option<&String>| v.cloned().unwrap_or_else(|| "(absent)".into());
+                        out.push(format!("management[{i}].{k}: {} → {}", show(x), show(y)));
+                    }
+                }
+            }
+            (Some(a), None) => out.push(format!("management[{i}] ({}): removed", a.kind)),
+            (None, Some(b)) => out.push(format!("management[{i}] ({}): added", b.kind)),
+            (None, None) => {}
+        }
+    }
+    out
+}
+
 /// The differences between two species' TOML texts as `parameter: checkpoint X, now Y`
 /// (at most 4, then a count); the whole texts' first difference when either does not parse.
 fn species_diff(old: &str, new: &str) -> String {
