@@ -248,6 +248,8 @@ pub struct PolygonLayer {
     pub polygons: Vec<(i64, Polygon)>,
     /// Features that passed the filter (with a geometry, empty or not).
     pub features: usize,
+    /// Features (rows) of the layer, filtered or not (an empty layer: 0).
+    pub rows: usize,
 }
 
 /// Why [`read_polygons`] failed: what was expected, and what was found.
@@ -308,8 +310,9 @@ pub fn read_polygons(path: &Path, layer: Option<&str>, filter: Option<(&str, &dy
     }
     let mut st = db.prepare(&format!("{select} FROM {t} ORDER BY {}", quote(&fid))).map_err(sqlerr)?;
     let mut rows = st.query([]).map_err(sqlerr)?;
-    let mut out = PolygonLayer { layer: info.clone(), polygons: Vec::new(), features: 0 };
+    let mut out = PolygonLayer { layer: info.clone(), polygons: Vec::new(), features: 0, rows: 0 };
     while let Some(r) = rows.next().map_err(sqlerr)? {
+        out.rows += 1;
         let id: i64 = r.get(0).map_err(sqlerr)?;
         if let Some((_, keep)) = filter {
             use rusqlite::types::ValueRef;

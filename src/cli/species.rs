@@ -160,6 +160,11 @@ pub fn run(c: Command) -> anyhow::Result<()> {
             let (from_id, text) = source_text(&from, Some(&dir))?;
             let new_text = species::replace_id(&text, &name, &target)?;
             let new_text = new_text.replacen("Sylva species file.", &format!("Sylva species file (copied from `{from_id}`)."), 1);
+            // the copy's scientific and common names get its id, so that a lookup by name
+            // (`--species "Fagus sylvatica"`, `species show`) finds one species in a library
+            // holding both (trial 38, item 12: the copy kept the names, and `species show` and
+            // `tree grow` picked different ones)
+            let new_text = distinct_names(&new_text, &name).with_context(|| format!("{}: the copy's names", target.display()))?;
             // Validate before writing (also checks the new id's form).
             Species::from_toml_str(&new_text, &target.to_string_lossy())?;
             if !dir.is_dir() {
@@ -174,4 +179,23 @@ pub fn run(c: Command) -> anyhow::Result<()> {
             Ok(())
         }
     }
+}
+
+/// `text` (a species file) with `identity.scientific_name` and `identity.common_name` each
+/// followed by ` (ID)` (`Fagus sylvatica (my_beech)`), comments and order kept; names already
+/// ending so are left.
+fn distinct_names(text: &str, id: &str) -> anyhow::Result<String> {
+    let mut doc: toml_edit::DocumentMut = text.parse()?;
+    let tag = format!(" ({id})");
+    for key in ["scientific_name", "common_name"] {
+        let Some(item) = doc.get_mut("identity").and_then(|t| t.get_mut(key)) else { continue };
+        let Some(v) = item.as_value_mut() else { continue };
+        let Some(old) = v.as_str().map(str::to_string) else { continue };
+        if !old.ends_with(&tag) {
+            let decor = v.decor().clone();
+            *v = toml_edit::Value::from(format!("{old}{tag}"));
+            *v.decor_mut() = decor;
+        }
+    }
+    Ok(doc.to_string())
 }

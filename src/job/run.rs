@@ -214,6 +214,32 @@ fn resume_removal_note(dir: &Path, removed: &[String], why: &str) -> String {
     )
 }
 
+/// A resume refused because the scenario's management differs from the checkpoint's
+/// (`sim::checkpoint`'s identity holds a CRC-32 per entry) with the changes named field by
+/// field, old → new ([`crate::sim::checkpoint::entry_changes`] against the run directory's
+/// `scenario.toml`, the scenario as the checkpoint's run ran it), in place of the CRC-32s
+/// (trial 38, item 8); any other refusal, or one whose `scenario.toml` is missing or shows no
+/// change of an entry (an area file's polygons changed), unchanged.
+fn name_management_changes(e: super::JobError, dir: &Path, scenario: &Scenario) -> super::JobError {
+    let super::JobError::Input(Error::Format { path, message }) = &e else { return e };
+    let Some(start) = message.find("; management: ").map(|k| k + 2).or_else(|| message.find(": management: ").map(|k| k + 2)) else { return e };
+    if !message.starts_with("--resume refused") {
+        return e;
+    }
+    let Ok(text) = std::fs::read_to_string(dir.join("scenario.toml")) else { return e };
+    let Ok(old) = Scenario::from_toml_str(&text, &dir.join("scenario.toml").display().to_string()) else { return e };
+    let changes = crate::sim::checkpoint::entry_changes(&old.management, &scenario.management);
+    if changes.is_empty() {
+        return e;
+    }
+    // the management part runs to the next change ("; ") or the closing explanation (" (a resumed")
+    let rest = &message[start..];
+    let close = rest.find(" (a resumed").unwrap_or(rest.len());
+    let end = rest[..close].find("; ").unwrap_or(close);
+    let named = format!("{} (the checkpoint's run as its scenario.toml gives it → this scenario)", changes.join(", "));
+    Error::format(path.clone(), format!("{}{named}{}", &message[..start], &rest[end..])).into()
+}
+
 /// What a snapshot writes ([`Stepper::snapshot`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Parts {
@@ -271,9 +297,17 @@ pub fn harvested(r: &StandRow) -> bool {
     r.deaths[crate::sim::trees::DeathCause::Harvest.index()] > 0
 }
 
+/// The management table's file in a run directory (a run with `[[management]]`:
+/// [`stand_table::management_table_csv`]).
+pub const MANAGEMENT_TABLE: &str = "management_table.csv";
+
 fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
     let names: Vec<&str> = w.site.pool.iter().map(|&s| w.site.lib.species[s as usize].id.as_str()).collect();
     stand_table::write_stand_table(&dir.join("stand_table.csv"), rows, &names, w.site.area_ha)?;
+    // a run with `[[management]]`: the figures of each entry's area (issue 35 round 38)
+    if rows.iter().any(|r| !r.management.is_empty()) {
+        stand_table::write_management_table(&dir.join(MANAGEMENT_TABLE), rows)?;
+    }
     if png && rows.len() >= 2 {
         plot::plot_stand_table(&dir.join("stand_table.png"), rows, w)?;
     }
@@ -451,7 +485,13 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     // start's trees, issue 37 round 37)
     let resuming = opts.resume && checkpoint::exists(&dir);
     let lean = opts.on_snapshot.is_none().then_some(Lean { map_px: opts.map_px, year0: opts.write_snapshots && !resuming, resume: resuming });
-    let mut world = stepper.world(site, lib, scenario, lean)?;
+    // a resumed run says the scenario's warnings (entries beyond the run, ...) only once its
+    // checkpoint is read and its years accepted, not before a refusal (trial 38, item 9)
+    let mut world = if resuming {
+        tracing::subscriber::with_default(tracing::subscriber::NoSubscriber::default(), || stepper.world(site, lib, scenario, lean))?
+    } else {
+        stepper.world(site, lib, scenario, lean)?
+    };
     if let Some(f) = opts.on_start.as_mut() {
         f()?;
     }
@@ -495,7 +535,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         tracing::warn!("{}: resuming a run written as {}: its inventories stay {}", dir.display(), format.extension(), format.extension());
     }
     if resume {
-        rows = stepper.resume(&dir, &mut world)?;
+        rows = stepper.resume(&dir, &mut world).map_err(|e| name_management_changes(e, &dir, scenario))?;
         // a run cannot be resumed to fewer years than it has already simulated: nothing would
         // be run, and `scenario.toml` would disagree with the stand table and the snapshots
         if world.stand.year > scenario.years {
@@ -506,6 +546,11 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
                 expected: format!("at least {}, the year of the run's checkpoint (to run it longer, set years higher; to end it earlier, start a fresh run)", world.stand.year),
             }
             .into());
+        }
+        world.warn(scenario);
+        if world.stand.year == scenario.years {
+            // (trial 38, item 9: it printed a normal summary of 0 years)
+            eprintln!("note: nothing to do: the run in {} is already at year {} (years = {}); to run it longer, set years higher", dir.display(), world.stand.year, scenario.years);
         }
         // a snapshot off this run's schedule at the checkpoint's year (one a stopped run wrote
         // so its state could be viewed, or the end of a shorter run now extended) is not one an
@@ -558,6 +603,11 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
             }
         }
         clear_snapshots(&dir)?;
+        // an earlier run's management table (this run may have no management)
+        let mt = dir.join(MANAGEMENT_TABLE);
+        if mt.is_file() {
+            std::fs::remove_file(&mt).map_err(|e| Error::io(&mt, e))?;
+        }
         // an earlier run's checkpoint must not be resumed after this run is interrupted
         checkpoint::remove_all(&dir)?;
         crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;

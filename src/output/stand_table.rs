@@ -78,3 +78,33 @@ pub fn stand_table_csv_with_area(rows: &[StandRow], species: &[&str], area_ha: f
 pub fn write_stand_table(path: &Path, rows: &[StandRow], species: &[&str], area_ha: f64) -> Result<()> {
     crate::output::write_atomic(path, stand_table_csv_with_area(rows, species, area_ha).as_bytes())
 }
+
+/// CSV text of the management table: one row per year and `[[management]]` entry
+/// ([`crate::sim::stats::EntryRow`]), years ascending, entries in scenario order:
+/// `year,entry,kind,method,area_ha,stems_ha,basal_area_m2_ha,volume_m3_ha,qmd_cm,top_height_m,
+/// harvest_stems_ha,harvest_volume_m3_ha` — the entry's index (0 the first) and kind, its
+/// area's unmasked hectares, and over the trees standing in that area at the year's end the
+/// stand table's figures per hectare of the area (stems ≥ 1.3 m, basal area, volume of stems
+/// ≥ 7 cm DBH, quadratic mean DBH, top height), then the stems and volume this entry removed
+/// in the year per hectare of its area. Decimals as the stand table's. Just the header for rows
+/// without management.
+pub fn management_table_csv(rows: &[StandRow]) -> String {
+    let mut s = String::from("year,entry,kind,method,area_ha,stems_ha,basal_area_m2_ha,volume_m3_ha,qmd_cm,top_height_m,harvest_stems_ha,harvest_volume_m3_ha\n");
+    for r in rows {
+        for e in &r.management {
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{:.4},{:.1},{:.3},{:.2},{:.2},{:.2},{:.1},{:.2}",
+                r.year, e.entry, e.kind, e.method, e.area_ha, e.stems_ha, e.basal_area_m2_ha, e.volume_m3_ha, e.qmd_cm, e.top_height_m, e.harvest_stems_ha, e.harvest_volume_m3_ha
+            );
+        }
+    }
+    s
+}
+
+/// Writes the management table ([`management_table_csv`]) atomically.
+///
+/// Errors: [`super::OutputError::Io`] naming `path`.
+pub fn write_management_table(path: &Path, rows: &[StandRow]) -> Result<()> {
+    crate::output::write_atomic(path, management_table_csv(rows).as_bytes())
+}

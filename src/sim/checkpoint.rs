@@ -37,6 +37,12 @@ const LAYOUT_BASE: u32 = 7;
 /// The layout base of uncompressed checkpoints (identity and body as they are), still read.
 const PLAIN_BASE: u32 = 6;
 
+/// The layout base of a checkpoint of a run with `[[management]]`: [`LAYOUT_BASE`]'s layout and
+/// the management table's rows after the stand table (issue 35 round 38). Written only by such
+/// runs, so every other run keeps layout 7's bytes, and a Sylva before it refuses a managed
+/// run's checkpoint naming both versions (rather than as corrupt).
+const MANAGED_BASE: u32 = 8;
+
 /// zstd level of the checkpoint (1: 36.2 MB for the default run's 64 MB, 0.6 s; 3 saved 0.7 %
 /// more for 1.6 times the time).
 const ZSTD_LEVEL: i32 = 1;
@@ -52,11 +58,13 @@ const PREFIX: usize = 20;
 /// Bytes of the trailing CRC-32.
 const CRC_LEN: usize = 4;
 
-/// The header of this layout: [`MAGIC`], `V`, [`LAYOUT_VERSION`] (12 bytes).
-fn header() -> Vec<u8> {
+/// The header of this layout: [`MAGIC`], `V`, [`LAYOUT_VERSION`] (12 bytes); with `managed`
+/// (the rows hold a management table) the version's base is [`MANAGED_BASE`].
+fn header(managed: bool) -> Vec<u8> {
     let mut h = MAGIC.to_vec();
     h.push(b'V');
-    h.extend_from_slice(&LAYOUT_VERSION.to_le_bytes());
+    let v = if managed { MANAGED_BASE << 16 | (LAYOUT_VERSION & 0xffff) } else { LAYOUT_VERSION };
+    h.extend_from_slice(&v.to_le_bytes());
     h
 }
 
@@ -81,7 +89,7 @@ fn check_header(bytes: &[u8], path: &Path) -> Result<bool> {
             if v == PLAIN_BASE << 16 | (LAYOUT_VERSION & 0xffff) {
                 return Ok(false);
             }
-            if v != LAYOUT_VERSION {
+            if v != LAYOUT_VERSION && v != MANAGED_BASE << 16 | (LAYOUT_VERSION & 0xffff) {
                 return Err(Error::format(path, format!("checkpoint layout version {} differs from this build's {}: {again}", describe(v), describe(LAYOUT_VERSION))));
             }
             Ok(true)
@@ -305,6 +313,47 @@ fn flatten(prefix: &str, v: &toml::Value, out: &mut BTreeMap<String, String>) {
     }
 }
 
+/// The fields in which two lists of `[[management]]` entries differ, one line each:
+/// `management[i].FIELD: OLD → NEW` (TOML values; `(absent)` where a field is not given), an
+/// entry only in one list as `management[i] (KIND): added` / `removed`; entry order, fields in
+/// name order. `area_file`'s path is left out, as [`identity`] leaves it out (a project folder
+/// moved elsewhere resumes). For naming what changed when a resume is refused (trial 38, item
+/// 8: the refusal listed a CRC-32 of every entry; `job::run` compares the run directory's
+/// `scenario.toml`).
+pub fn entry_changes(old: &[super::management::Management], new: &[super::management::Management]) -> Vec<String> {
+    let flat = |m: &super::management::Management| {
+        let mut m = m.clone();
+        m.area_file = None;
+        let mut out = BTreeMap::new();
+        if let Ok(v) = toml::Value::try_from(&m) {
+            flatten("", &v, &mut out);
+        }
+        out
+    };
+    let mut out = Vec::new();
+    for i in 0..old.len().max(new.len()) {
+        match (old.get(i), new.get(i)) {
+            (Some(a), Some(b)) => {
+                let (fa, fb) = (flat(a), flat(b));
+                let mut keys: Vec<&String> = fa.keys().chain(fb.keys()).collect();
+                keys.sort();
+                keys.dedup();
+                for k in keys {
+                    let (x, y) = (fa.get(k), fb.get(k));
+                    if x != y {
+                        let show = |v: Option<&String>| v.cloned().unwrap_or_else(|| "(absent)".into());
+                        out.push(format!("management[{i}].{k}: {} → {}", show(x), show(y)));
+                    }
+                }
+            }
+            (Some(a), None) => out.push(format!("management[{i}] ({}): removed", a.kind)),
+            (None, Some(b)) => out.push(format!("management[{i}] ({}): added", b.kind)),
+            (None, None) => {}
+        }
+    }
+    out
+}
+
 /// The differences between two species' TOML texts as `parameter: checkpoint X, now Y`
 /// (at most 4, then a count); the whole texts' first difference when either does not parse.
 fn species_diff(old: &str, new: &str) -> String {
@@ -415,8 +464,9 @@ pub fn write_to<X: std::io::Write + std::io::Seek>(w: &World, rows: &[StandRow],
     let id = identity(w);
     let mut count = Count(0);
     encode(w, rows, &id, &mut Enc(&mut count));
+    let managed = rows.iter().any(|r| !r.management.is_empty());
     let start = out.stream_position()?;
-    out.write_all(&header())?;
+    out.write_all(&header(managed))?;
     // the file length, known once the body is compressed
     out.write_all(&[0u8; 8])?;
     let mut body = Hashed { w: out, crc: crc32fast::Hasher::new(), n: 0 };
@@ -433,7 +483,7 @@ pub fn write_to<X: std::io::Write + std::io::Seek>(w: &World, rows: &[StandRow],
     let (n, body_crc) = (body.n, body.crc);
     let len = PREFIX as u64 + n + CRC_LEN as u64;
     let mut crc = crc32fast::Hasher::new();
-    crc.update(&header());
+    crc.update(&header(managed));
     crc.update(&len.to_le_bytes());
     crc.combine(&body_crc);
     out.seek(SeekFrom::Start(start + 12))?;
@@ -526,6 +576,23 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
         }
         for v in [r.volume_m3_ha, r.harvest_stems_ha, r.harvest_volume_m3_ha, r.temperature_offset_k, r.precipitation_factor] {
             o.f64(v);
+        }
+    }
+    // the management table (issue 35 round 38), after the stand table and only in a run with
+    // `[[management]]` (layout [`MANAGED_BASE`]): a run without it keeps the bytes of layout 7
+    // as they were, and a managed run's checkpoint of layout 7 (before the table) reads as one
+    // without rows for its years
+    if rows.iter().any(|r| !r.management.is_empty()) {
+        for r in rows {
+            o.u64(r.management.len() as u64);
+            for e in &r.management {
+                o.u64(e.entry as u64);
+                o.str(&e.kind);
+                o.str(&e.method);
+                for v in [e.area_ha, e.stems_ha, e.basal_area_m2_ha, e.volume_m3_ha, e.qmd_cm, e.top_height_m, e.harvest_stems_ha, e.harvest_volume_m3_ha] {
+                    o.f64(v);
+                }
+            }
         }
     }
 }
@@ -690,7 +757,23 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             harvest_volume_m3_ha: m[2],
             temperature_offset_k: m[3],
             precipitation_factor: m[4],
+            management: Vec::new(),
         });
+    }
+    if r.rest() != 0 {
+        // the management table's rows (written only by a run with `[[management]]`)
+        for row in rows.iter_mut() {
+            let n = r.count(8 + 16 + 64)?;
+            for _ in 0..n {
+                let entry = r.u64()? as usize;
+                let (kind, method) = (r.str()?, r.str()?);
+                let mut v = [0f64; 8];
+                for x in v.iter_mut() {
+                    *x = r.f64()?;
+                }
+                row.management.push(super::stats::EntryRow { entry, kind, method, area_ha: v[0], stems_ha: v[1], basal_area_m2_ha: v[2], volume_m3_ha: v[3], qmd_cm: v[4], top_height_m: v[5], harvest_stems_ha: v[6], harvest_volume_m3_ha: v[7] });
+            }
+        }
     }
     if r.rest() != 0 {
         return Err(Error::format(path, format!("checkpoint has {} bytes after its stand table: corrupt", r.rest())));

@@ -231,6 +231,12 @@ impl Management {
                         if !(v.is_finite() && v >= lo && v <= hi) {
                             return Err(bad(f, v.to_string(), &format!("a number {lo}–{hi}")));
                         }
+                        // a target of 0 takes every stem of the growing stock at each entry
+                        // (trial 38: the stand was gone by year 137, without a word); a
+                        // clear-cut is `kind = "harvest"`, `method = "clear_cut"`
+                        if f.starts_with("target_") && v <= 0.0 {
+                            return Err(bad(f, v.to_string(), &format!("a number > 0 and ≤ {hi} (0 would remove every stem of at least 7 cm DBH at each entry: for that, use kind = \"harvest\", method = \"clear_cut\")")));
+                        }
                     }
                 }
             }
@@ -745,7 +751,8 @@ pub fn read_geojson_area(path: &Path, filter: Option<&AreaFilter>, dem_epsg: Opt
     };
     let mut out = Vec::new();
     let mut seen = 0usize;
-    for (name, props, geom) in feats {
+    let props_seen: Vec<Option<&serde_json::Value>> = feats.iter().map(|f| f.1).collect();
+    for (name, props, geom) in feats.iter().cloned() {
         if let Some(f) = filter {
             let p = props.and_then(|p| p.get(&f.property));
             if !p.is_some_and(|p| matches(p, &f.equals)) {
@@ -790,8 +797,26 @@ pub fn read_geojson_area(path: &Path, filter: Option<&AreaFilter>, dem_epsg: Opt
         }
     }
     if out.is_empty() {
+        // the properties the features have, for a filter naming none of them (trial 38, item
+        // 10: a typo said only "none does")
+        let mut names: Vec<&str> = Vec::new();
+        for p in props_seen.iter().filter_map(|p| p.and_then(|p| p.as_object())) {
+            for k in p.keys() {
+                if !names.contains(&k.as_str()) {
+                    names.push(k);
+                }
+            }
+        }
         return Err(bad(match (filter, seen) {
-            (Some(f), 0) => format!("a feature whose property `{}` equals {} (none does)", f.property, f.equals),
+            (_, 0) if props_seen.is_empty() => format!("at least one {ACCEPTED} feature (the file has 0 features)"),
+            (Some(f), 0) if !names.contains(&f.property.as_str()) => format!(
+                "a feature whose property `{}` equals {} (no feature has a property `{}`; the file's features have {})",
+                f.property,
+                f.equals,
+                f.property,
+                if names.is_empty() { "no properties".to_string() } else { names.iter().map(|n| format!("`{n}`")).collect::<Vec<_>>().join(", ") }
+            ),
+            (Some(f), 0) => format!("a feature whose property `{}` equals {} (none does, of its {} features)", f.property, f.equals, props_seen.len()),
             _ => format!("at least one {ACCEPTED} feature (none found)"),
         }));
     }
@@ -849,7 +874,9 @@ pub fn read_gpkg_area(path: &Path, layer: Option<&str>, filter: Option<&AreaFilt
     }
     if got.polygons.is_empty() {
         return Err(bad(match (filter, got.features) {
-            (Some(f), 0) => format!("a feature of layer `{}` whose column `{}` equals {} (none does)", info.table, f.property, f.equals),
+            // an empty layer (trial 38, item 10: it said only "none does")
+            (_, 0) if got.rows == 0 => format!("at least one Polygon or MultiPolygon feature in layer `{}` (the layer has 0 features)", info.table),
+            (Some(f), 0) => format!("a feature of layer `{}` whose column `{}` equals {} (none does, of its {} features)", info.table, f.property, f.equals, got.rows),
             _ => format!("at least one Polygon or MultiPolygon feature in layer `{}` (none found)", info.table),
         }));
     }

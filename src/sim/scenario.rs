@@ -607,6 +607,16 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
         // a start listing a species outside the pool would grow a species the scenario excludes
         for (i, st) in self.start.iter().enumerate() {
             if !self.species.is_empty() && !self.species.iter().any(|p| p == st.species()) {
+                // a pool species named by its scientific or common name (trial 38, item 12: it
+                // was refused as not in the pool, though other commands take such names): the
+                // id to write, which the pool lists
+                if !is_embedded_id(st.species()) {
+                    if let Some(id) = crate::species::SpeciesLibrary::embedded().ok().and_then(|l| l.find(st.species()).map(|k| l.species[k as usize].id.clone())) {
+                        if let Some(j) = self.species.iter().position(|p| *p == id) {
+                            return Err(invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("the species' id as the scenario's species list names it: species = \"{id}\" (species[{j}]); a start names its species by id")));
+                        }
+                    }
+                }
                 // a pool entry one or two letters from the start's species is most likely the
                 // misspelt one (a trial's `species = ["beeech"]` was blamed on the start); which
                 // of the two is misspelt is told by the embedded library's ids where one of them

@@ -66,6 +66,98 @@ pub struct StandRow {
     pub temperature_offset_k: f64,
     /// The year's precipitation factor (1 under a constant climate).
     pub precipitation_factor: f64,
+    /// The figures of each `[[management]]` entry's area this year, scenario order (empty
+    /// without management): the run's `management_table.csv` ([`entry_rows`]).
+    #[serde(default)]
+    pub management: Vec<EntryRow>,
+}
+
+/// One `[[management]]` entry's area in a year: a row of the management table
+/// (`management_table.csv`). The stand figures are over the trees standing in the entry's area
+/// ([`crate::sim::management::Region::contains`]) at the end of the year, after that year's
+/// management, per hectare of the area's unmasked ground (`Region::area_ha`), with the stand
+/// table's definitions (stems ≥ 1.3 m; volume of stems ≥ 7 cm DBH, [`stem_volume_m3`]; top
+/// height [`top_height_by`] over the area); the harvest figures are the trees this entry
+/// removed in the year (0 in other years and for plantings), per hectare of its area.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EntryRow {
+    /// Index of the entry in the scenario's `[[management]]` list (0 the first).
+    pub entry: usize,
+    /// The entry's `kind` (`thinning`, `harvest` or `planting`).
+    pub kind: String,
+    /// The entry's `method` (`from_below`, `from_above`, `crop_trees`, `clear_cut`, `patch`,
+    /// `shelterwood`; empty for a planting).
+    pub method: String,
+    /// Unmasked area of the entry's area (ha).
+    pub area_ha: f64,
+    /// Stems (≥ 1.3 m) per ha of the area.
+    pub stems_ha: f64,
+    /// Basal area (m²/ha) of the stems.
+    pub basal_area_m2_ha: f64,
+    /// Standing stem volume (m³/ha) of the stems with DBH ≥ 7 cm.
+    pub volume_m3_ha: f64,
+    /// Quadratic mean DBH (cm) of the stems.
+    pub qmd_cm: f64,
+    /// Top height (m) of the area: [`top_height_by`] with the area's hectares.
+    pub top_height_m: f64,
+    /// Stems (≥ 1.3 m) per ha of the area this entry removed in the year.
+    pub harvest_stems_ha: f64,
+    /// Stem volume (m³/ha of the area, DBH ≥ 7 cm) this entry removed in the year.
+    pub harvest_volume_m3_ha: f64,
+}
+
+/// The management table's rows of a year ([`EntryRow`]): one per entry of `site.management`,
+/// from the sums over the trees in each entry's area (`sums`, [`RowSums::over_where`]), each
+/// area's top height (`h100`, m) and each entry's harvest of the year (`harvest`: stems ≥ 1.3 m
+/// and volume m³, [`harvest_sums`] over the trees it removed); all three in entry order.
+pub fn entry_rows(site: &Site, sums: &[RowSums], h100: &[f64], harvest: &[(u64, f64)]) -> Vec<EntryRow> {
+    site.management
+        .iter()
+        .enumerate()
+        .map(|(e, op)| {
+            let a = op.region.area_ha.max(1e-9);
+            let s = &sums[e];
+            let n = s.stems;
+            let (hn, hv) = harvest.get(e).copied().unwrap_or((0, 0.0));
+            EntryRow {
+                entry: op.index,
+                kind: op.spec.kind.clone(),
+                method: op.spec.method.clone().unwrap_or_default(),
+                area_ha: op.region.area_ha,
+                stems_ha: n as f64 / a,
+                basal_area_m2_ha: unfixed(s.ba) / a,
+                volume_m3_ha: unfixed(s.vol) / a,
+                qmd_cm: if n > 0 { (unfixed(s.d2) / n as f64).sqrt() } else { 0.0 },
+                top_height_m: h100[e],
+                harvest_stems_ha: hn as f64 / a,
+                harvest_volume_m3_ha: hv / a,
+            }
+        })
+        .collect()
+}
+
+/// Each management entry's sums over the trees `t` in its area ([`RowSums::over_where`]),
+/// in entry order (empty without management).
+pub fn entry_sums(site: &Site, t: &TreeStore) -> Vec<RowSums> {
+    let pidx: Vec<usize> = (0..site.lib.species.len() as u16).map(|s| site.pool_index(s).unwrap_or(0)).collect();
+    let ff: Vec<f32> = site.lib.species.iter().map(|s| s.life.form_factor).collect();
+    site.management.iter().map(|op| RowSums::over_where(t, site.pool.len(), &pidx, &ff, &|i| op.region.contains(t.x[i] as f64, t.y[i] as f64))).collect()
+}
+
+/// Each management entry's top height ([`top_height_by`]) over the trees of `t` in its area,
+/// with the area's hectares, `stems[e]` the stems in entry `e`'s area over every part (the
+/// ranks of a tiled run, `reduce`), in entry order.
+///
+/// Errors: those of `reduce`.
+pub fn entry_top_heights(site: &Site, t: &TreeStore, stems: &[u64], reduce: &mut Reduce) -> crate::Result<Vec<f64>> {
+    let mut out = Vec::with_capacity(site.management.len());
+    for (e, op) in site.management.iter().enumerate() {
+        let idx: Vec<usize> = (0..t.len()).filter(|&i| op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect();
+        let d: Vec<f32> = idx.iter().map(|&i| t.dbh[i]).collect();
+        let h: Vec<f32> = idx.iter().map(|&i| t.height[i]).collect();
+        out.push(top_height_by(&d, &h, op.region.area_ha.max(1e-9), stems[e], reduce)?);
+    }
+    Ok(out)
 }
 
 /// DBH (cm) from which a stem has merchantable volume (German "Derbholz": wood of at least 7 cm
@@ -207,6 +299,12 @@ impl RowSums {
     /// [`RowSums::of`] with `np` pool species, each species' pool index `pidx` and form factor
     /// `ff`: chunks of trees summed into local integers, the chunks' sums added.
     pub fn over(t: &TreeStore, np: usize, pidx: &[usize], ff: &[f32]) -> RowSums {
+        RowSums::over_where(t, np, pidx, ff, &|_| true)
+    }
+
+    /// [`RowSums::over`] over the trees `i` for which `keep(i)` holds (a management entry's
+    /// area: [`entry_sums`]); `trees` counts those kept.
+    pub fn over_where(t: &TreeStore, np: usize, pidx: &[usize], ff: &[f32], keep: &(dyn Fn(usize) -> bool + Sync)) -> RowSums {
         const CHUNK: usize = 1 << 14;
         (0..t.len().div_ceil(CHUNK))
             .into_par_iter()
@@ -215,8 +313,12 @@ impl RowSums {
                 let (mut stems, mut stems_7) = (0u64, 0u64);
                 let (mut ba, mut height, mut d2, mut d2_7, mut vol) = (0i128, 0i128, 0i128, 0i128, 0i128);
                 let range = c * CHUNK..((c + 1) * CHUNK).min(t.len());
-                s.trees = range.len() as u64;
+                let mut trees = 0u64;
                 for i in range {
+                    if !keep(i) {
+                        continue;
+                    }
+                    trees += 1;
                     let h = t.height[i];
                     if h < 1.3 {
                         continue;
@@ -237,7 +339,7 @@ impl RowSums {
                     s.ba_sp[p] += b;
                     s.stems_sp[p] += 1;
                 }
-                (s.stems, s.stems_7, s.ba, s.height, s.d2, s.d2_7, s.vol) = (stems, stems_7, ba, height, d2, d2_7, vol);
+                (s.trees, s.stems, s.stems_7, s.ba, s.height, s.d2, s.d2_7, s.vol) = (trees, stems, stems_7, ba, height, d2, d2_7, vol);
                 s
             })
             .reduce(|| RowSums::zero(np), |a, b| a.plus(&b))
@@ -441,7 +543,14 @@ pub fn stand_row(w: &World) -> StandRow {
     let t = &w.stand.trees;
     let sums = RowSums::of(&w.site, t);
     let h100 = top_height_by(&t.dbh, &t.height, w.site.area_ha.max(1e-9), sums.stems, &mut alone).unwrap_or(0.0);
-    row_of(&w.site, w.stand.year, &sums, h100, w.stand.cohorts.total_stems(), deaths, w.scratch.regen_year, harvest_sums(&w.site, &w.scratch.dead))
+    let mut row = row_of(&w.site, w.stand.year, &sums, h100, w.stand.cohorts.total_stems(), deaths, w.scratch.regen_year, harvest_sums(&w.site, &w.scratch.dead));
+    if !w.site.management.is_empty() {
+        let es = entry_sums(&w.site, t);
+        let stems: Vec<u64> = es.iter().map(|s| s.stems).collect();
+        let h = entry_top_heights(&w.site, t, &stems, &mut alone).unwrap_or_else(|_| vec![0.0; stems.len()]);
+        row.management = entry_rows(&w.site, &es, &h, &w.scratch.entry_harvest);
+    }
+    row
 }
 
 /// The stand-table row of `site` in `year` from the sums over its trees ([`RowSums`]), the top
@@ -482,6 +591,7 @@ pub fn row_of(site: &Site, year: u32, s: &RowSums, h100: f64, regeneration_stems
         harvest_volume_m3_ha: harvest.1 / a,
         temperature_offset_k: dt,
         precipitation_factor: pf,
+        management: Vec::new(),
     }
 }
 

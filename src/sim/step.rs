@@ -5,7 +5,7 @@
 use super::density;
 use super::phases::{climate, growth, light, management, mortality, regen, reproduction};
 use super::scenario::Scenario;
-use super::stats::{stand_row, StandRow};
+use super::stats::{harvest_sums, stand_row, StandRow};
 use super::world::World;
 use crate::species::Season;
 use std::time::Instant;
@@ -93,8 +93,20 @@ fn run_management(w: &mut World, report: &mut YearReport) {
     if w.site.management.is_empty() {
         return;
     }
-    let (_, notes) = management::run(management::Manage { seed: w.site.seed, year: w.stand.year, site: &w.site, trees: &mut w.stand.trees, dead: &mut w.scratch.dead, deaths_total: &mut w.tallies.deaths_total });
+    let d0 = w.scratch.dead.len();
+    let (_, notes, removed) = management::run_by_entry(management::Manage { seed: w.site.seed, year: w.stand.year, site: &w.site, trees: &mut w.stand.trees, dead: &mut w.scratch.dead, deaths_total: &mut w.tallies.deaths_total });
     report.notes.extend(notes);
+    // each entry's harvest, over its removed trees in the order they were recorded (a tiled
+    // run's ranks all see every removed tree here: `sim::tiles`)
+    let mut at = d0;
+    w.scratch.entry_harvest = removed
+        .iter()
+        .map(|&n| {
+            let s = harvest_sums(&w.site, &w.scratch.dead[at..at + n]);
+            at += n;
+            s
+        })
+        .collect();
 }
 
 fn run_light(w: &mut World, _: &mut YearReport) {

@@ -1121,6 +1121,23 @@ impl Tile {
         report.established = est;
         report.died = died;
         report.row = (t.rank() == 0).then(|| super::stats::row_of(&w.site, w.stand.year, &sums, h100, stems, deaths, ry, self.harvest));
+        // the management table's rows: each entry's area summed over the ranks as the stand
+        // table is (exact sums, one all-sum for every entry; top heights by selection), and
+        // each entry's harvest as the management phase found it (every rank sees every
+        // harvested tree there)
+        if !w.site.management.is_empty() {
+            let es = super::stats::entry_sums(&w.site, tr);
+            let got = t.all_sum(es.iter().flat_map(|s| s.words()).collect())?;
+            if got.len() != nw * es.len() {
+                return Err(Error::Exchange { peer: 0, reason: "management-table sums cut short".into() });
+            }
+            let es: Vec<super::stats::RowSums> = got.chunks(nw).map(|c| super::stats::RowSums::from_words(c, np)).collect();
+            let stems: Vec<u64> = es.iter().map(|s| s.stems).collect();
+            let h = super::stats::entry_top_heights(&w.site, tr, &stems, &mut |v| t.all_sum(v))?;
+            if let Some(r) = report.row.as_mut() {
+                r.management = super::stats::entry_rows(&w.site, &es, &h, &w.scratch.entry_harvest);
+            }
+        }
         report.phase_seconds[stats] = t0.elapsed().as_secs_f64();
         for (a, b) in self.phase_seconds.iter_mut().zip(report.phase_seconds) {
             *a += b;
@@ -1729,7 +1746,7 @@ fn clone_for_tile(global: &World, layout: &Layout, me: usize) -> Result<World> {
         seeds.push(super::world::SeedGrid { cell_m: sg.cell_m, cols: sg.cols, rows: sg.rows, held: r, data });
     }
     let stand = super::world::Stand { trees: global.stand.trees.clone(), year: global.stand.year, cohorts: global.stand.cohorts.clone(), seeds };
-    let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone() };
+    let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone(), entry_harvest: global.scratch.entry_harvest.clone() };
     Ok(World { site, stand, scratch, tallies: global.tallies.clone() })
 }
 

@@ -185,6 +185,10 @@ pub struct Scratch {
     pub dead: Vec<DeadTree>,
     /// Counts of the regeneration layer in the current year.
     pub regen_year: RegenYear,
+    /// This year's harvest of each `[[management]]` entry (stems ≥ 1.3 m, stem volume m³ of
+    /// the trees it removed; entry order; set by the management phase, empty without
+    /// management): the management table's harvest columns.
+    pub entry_harvest: Vec<(u64, f64)>,
 }
 
 /// Running totals since the start of the run (checkpointed).
@@ -557,7 +561,7 @@ impl World {
                 climate_change: super::climate_change::ClimateChange::of(&scenario.climate, &ctx)?,
             },
             stand: Stand { trees: TreeStore::default(), year: 0, cohorts: Cohorts::default(), seeds },
-            scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], dead: Vec::new(), regen_year: RegenYear::default() },
+            scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], dead: Vec::new(), regen_year: RegenYear::default(), entry_harvest: Vec::new() },
             tallies: Tallies { deaths_total: [0; super::trees::N_CAUSES], regen_ledger: RegenLedger::new(np) },
         };
         let span = super::light_grid::Span::new(None, &w.site.light);

@@ -96,10 +96,26 @@ pub fn problems_to_error(problems: &[Problem]) -> Error {
     match problems {
         [] => Error::Invalid { context: "species check".into(), field: "problems".into(), value: "none".into(), expected: "at least one problem to report".into() },
         [p] => p.to_error(),
-        ps => Error::Format {
-            path: ps[0].file.clone(),
-            message: format!("{} problems:\n{}", ps.len(), ps.iter().map(|p| format!("  {p}")).collect::<Vec<_>>().join("\n")),
-        },
+        ps => {
+            // problems in several files: the header names each of them, under their common
+            // folder (trial 38, item 7: it named the first file only)
+            let mut files: Vec<&PathBuf> = Vec::new();
+            for p in ps {
+                if !files.contains(&&p.file) {
+                    files.push(&p.file);
+                }
+            }
+            let list = ps.iter().map(|p| format!("  {p}")).collect::<Vec<_>>().join("\n");
+            if files.len() == 1 {
+                return Error::Format { path: ps[0].file.clone(), message: format!("{} problems:\n{list}", ps.len()) };
+            }
+            let parent = files[0].parent().filter(|d| files.iter().all(|f| f.parent() == Some(*d)));
+            let names: Vec<String> = files.iter().map(|f| if parent.is_some() { f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default() } else { f.display().to_string() }).collect();
+            Error::Format {
+                path: parent.map(Path::to_path_buf).unwrap_or_else(|| ps[0].file.clone()),
+                message: format!("{} problems in {} files ({}):\n{list}", ps.len(), files.len(), names.join(", ")),
+            }
+        }
     }
 }
 

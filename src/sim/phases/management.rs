@@ -42,9 +42,18 @@ pub struct Manage<'a> {
 /// or no stems of the growing stock (≥ 7 cm DBH) or of its main stand in its area; the run writes each to its log
 /// (standard error) once.
 pub fn run(m: Manage<'_>) -> (usize, Vec<String>) {
+    let (n, notes, _) = run_by_entry(m);
+    (n, notes)
+}
+
+/// [`run`], also returning how many trees each entry removed this year (entry order; the
+/// entries' harvested trees follow each other in `dead` in that order, after those recorded
+/// before the phase): the management table's harvest per entry.
+pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>) {
     let y = m.year + 1;
     let mut planted: Vec<(u32, NewTree)> = Vec::new();
     let mut notes = Vec::new();
+    let mut removed = vec![0usize; m.site.management.len()];
     for (e, op) in m.site.management.iter().enumerate() {
         let Some(k) = op.spec.due(y) else { continue };
         let t = &*m.trees;
@@ -69,7 +78,9 @@ pub fn run(m: Manage<'_>) -> (usize, Vec<String>) {
                 notes.push(format!("year {y}: management[{e}] (thinning {method}) removed nothing: {why}"));
             }
         }
+        let d0 = m.dead.len();
         harvest(&m.site.lib, t, &remove, m.year, m.dead, m.deaths_total);
+        removed[e] = m.dead.len() - d0;
         let keep: Vec<bool> = remove.iter().map(|r| !r).collect();
         m.trees.retain(&keep);
     }
@@ -77,7 +88,7 @@ pub fn run(m: Manage<'_>) -> (usize, Vec<String>) {
     if n > 0 {
         insert_planted(m.trees, planted, m.year);
     }
-    (n, notes)
+    (n, notes, removed)
 }
 
 /// Records trees flagged in `remove` as harvested in `year`.
