@@ -305,7 +305,7 @@ fn polygon_planting_from_geopackage_plants_only_inside_its_polygons() {
     let e = plant(&planting(&f, "layer = \"parcels\"\nfilter = { property = \"owner\", equals = \"x\" }\n")).unwrap_err();
     assert!(e.contains("column `owner`") && e.contains("`parcel`") && e.contains("`n`"), "{e}");
     let e = plant(&planting(&f, "layer = \"parcels\"\nfilter = { property = \"parcel\", equals = \"Z\" }\n")).unwrap_err();
-    assert!(e.contains("equals \"Z\" (none does)"), "{e}");
+    assert!(e.contains("equals \"Z\" (none does, of its 3 features)"), "{e}");
     let junk = d.path().join("junk.gpkg");
     std::fs::write(&junk, "not a database, just text that is long enough to be read as a header").unwrap();
     let e = plant(&planting(&junk, "")).unwrap_err();
