@@ -90,11 +90,11 @@ impl Source {
         Ok(t)
     }
     /// The sea level: `--sea-level`, or 0 m, or for a PNG heightmap none
-    /// ([`sylva::sim::scenario::NO_SEA_LEVEL_M`]: a heightmap's 0 is the bottom of its range,
+    /// ([`sylva::terrain::NO_SEA_LEVEL_M`]: a heightmap's 0 is the bottom of its range,
     /// not the sea; trial 37).
     fn sea_level_m(&self) -> f32 {
         let png = self.file.as_ref().and_then(|f| f.extension()).is_some_and(|e| e.eq_ignore_ascii_case("png"));
-        self.sea_level.unwrap_or(if png { sylva::sim::scenario::NO_SEA_LEVEL_M } else { 0.0 })
+        self.sea_level.unwrap_or(if png { sylva::terrain::NO_SEA_LEVEL_M } else { 0.0 })
     }
 
     fn climate(&self) -> Climate {
@@ -179,7 +179,7 @@ fn info(s: &Source, tolerance: f64) -> anyhow::Result<()> {
     println!("nodata:      {} cells{}", g.len() - valid.len(), t.nodata.map(|v| format!(" (file value {v})")).unwrap_or_default());
     let sea = s.sea_level_m();
     let below = valid.iter().filter(|&&v| v <= sea).count();
-    if s.sea_level.is_none() && sea == sylva::sim::scenario::NO_SEA_LEVEL_M {
+    if s.sea_level.is_none() && sea == sylva::terrain::NO_SEA_LEVEL_M {
         println!("water:       none (a PNG heightmap has no sea level; give --sea-level to set one)");
     } else {
         println!("water:       {below} cells at or below sea level {sea} m");

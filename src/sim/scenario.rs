@@ -217,9 +217,7 @@ fn is_embedded_id(id: &str) -> bool {
     crate::species::EMBEDDED_FILES.iter().any(|(f, _)| f.strip_suffix(".toml") == Some(id))
 }
 
-/// Sea level (m) of a PNG heightmap whose scenario (or `--sea-level`) gives none: the lowest
-/// valid `climate.sea_level_m`, so that no cell of a height range above −500 m is water.
-pub const NO_SEA_LEVEL_M: f32 = -500.0;
+pub use crate::terrain::NO_SEA_LEVEL_M;
 
 /// Checks `[climate]`: every value finite; latitude −90–90°, lapse rate −15–5 K/km,
 /// reference temperature −30–40 °C, K/R/N 1–9, wind direction 0–360°, elevations

@@ -20,6 +20,11 @@ pub struct Terrain {
 /// ([`Terrain::check_min_size`]): slopes, flow directions and the TIN need a cell's neighbours.
 pub const MIN_GRID_CELLS: usize = 2;
 
+/// Sea level (m) of a PNG heightmap whose scenario (or `sylva terrain --sea-level`) gives none:
+/// the lowest valid `climate.sea_level_m`, so that no cell of a height range above −500 m is
+/// water (a 16-bit PNG's 0 is the bottom of its range, not the sea; trial 37).
+pub const NO_SEA_LEVEL_M: f32 = -500.0;
+
 impl Terrain {
     /// `true` for cells holding a finite elevation.
     pub fn is_valid(&self, col: usize, row: usize) -> bool {
