@@ -122,7 +122,7 @@ fn oak_differs_from_beech_and_scots_pine_from_norway_spruce() {
 
 /// Issue 32 (round 33, second pass): an 80-year-old stand-grown Scots pine has a short,
 /// flat-topped crown widest high up, of few heavy limbs whose ends turn upward; a Norway spruce
-/// a conical crown widest at its base with limbs that end level or hanging. The paper's EcoMod
+/// a conical crown widest in its lower half with limbs that end level or hanging. The paper's EcoMod
 /// pine (`004_*.txt`, asserted by `tests/structure_ecomod.rs`) is kept exactly for the young tree
 /// (up to 30 years: `MatureForm::scots_pine`), and beech, oak and spruce keep their models at
 /// every age. Measured (seed 1, BENCHMARKS.md round 33): pine limb ends 55°, widest at 0.85 of
@@ -133,7 +133,10 @@ fn an_old_scots_pine_has_a_flat_top_and_upturned_limbs_a_spruce_does_not() {
     let (pine, _) = grown("scots_pine", 1);
     let (spruce, _) = grown("norway_spruce", 1);
     assert!(pine.limb_end_angle_deg < 75.0 && spruce.limb_end_angle_deg > 95.0, "limb ends from the vertical: pine {} spruce {}", pine.limb_end_angle_deg, spruce.limb_end_angle_deg);
-    assert!(pine.widest_at >= 0.5 && spruce.widest_at <= 0.25, "crown widest at: pine {} spruce {}", pine.widest_at, spruce.widest_at);
+    // round 38 (r38c): Norway spruce's limbs below half the crown depth are as long as its
+    // longest (Colin & Houllier 1991's branch-length profile), so its widest point lies anywhere
+    // in the lower half of the crown (measured 0.35, seed 1), still far below the pine's
+    assert!(pine.widest_at >= 0.5 && spruce.widest_at <= 0.4, "crown widest at: pine {} spruce {}", pine.widest_at, spruce.widest_at);
     assert!(pine.branches < spruce.branches * 2 / 3, "order-1 limbs: pine {} spruce {}", pine.branches, spruce.branches);
     // the paper's pine at 80 years (no mature form) still reads as a spruce by these measures
     let sp = species("scots_pine");
