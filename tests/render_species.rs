@@ -534,7 +534,8 @@ fn oblique_billboard_crowns_have_a_sunlit_and_a_shaded_side() {
     assert!(s1 > s0 + 0.05, "share of tree pixels in their own shade: {s0:.3} before, {s1:.3} now");
     assert!(sd1 > sd0, "canopy luminance sd {sd0:.1} before, {sd1:.1} now");
     // a fine shadow map (texels under a tenth of the crown radius): the quad's own shadow is a
-    // fair shaded side (0.25) and is kept as it was
+    // fair shaded side (0.25; round 38, with oak's and birch's sourced LAI: 0.157) and is kept
+    // as it was
     let ((s0, c0, _, _), (s1, c1, _, _)) = (got[&(320, 10, true)], got[&(320, 10, false)]);
-    assert!(c1 > 0.2 && (c1 - c0).abs() < 0.01 && (s1 - s0).abs() < 0.01, "fine shadow map: shadow share {s0:.3} before, {s1:.3} now; sun side − far side {c0:.3}, {c1:.3}");
+    assert!(c1 > 0.12 && (c1 - c0).abs() < 0.01 && (s1 - s0).abs() < 0.01, "fine shadow map: shadow share {s0:.3} before, {s1:.3} now; sun side − far side {c0:.3}, {c1:.3}");
 }
