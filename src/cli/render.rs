@@ -73,7 +73,7 @@ pub struct EyeCamera {
 /// Field of view (degrees) of `eye:…` when none is given: the close-up's 50°.
 pub const EYE_DEFAULT_FOV_DEG: f64 = 50.0;
 
-const EYE_FORM: &str = "eye:X,Y,Z:TX,TY,TZ[:FOV] with the eye X,Y,Z and the point looked at TX,TY,TZ in site metres (x east, y north from the terrain's south-west corner as the inventory's x_m, y_m; z the elevation, as the DEM's heights) and FOV the vertical field of view in degrees (5–150, default 50), e.g. eye:500,400,420:600,500,400:60";
+const EYE_FORM: &str = "eye:X,Y,Z:TX,TY,TZ[:FOV] with the eye X,Y,Z and the point looked at TX,TY,TZ in site metres (x east, y north from the terrain's south-west corner as the inventory's x_m, y_m; z the elevation, as the DEM's heights) and FOV the vertical field of view in degrees (5–150, default 50), e.g. eye:1000,700,1080:1250,950,930:55 (a view over the default site)";
 
 /// Parses `eye:X,Y,Z:TX,TY,TZ[:FOV]` (`None` when `s` does not start with `eye:`): numbers
 /// only, finite, an eye other than the target, a field of view of 5–150°. Whether the eye is
