@@ -32,7 +32,7 @@ Reads files only. Prints Markdown."""
 import math, sys
 from pathlib import Path
 
-from wiedemann import class_one, print_table, run_area_ha, species_args, species_number
+from wiedemann import class_one, print_table, run_area_ha, species_args, species_number, top_height
 from wiedemann import inventory as read_inventory
 
 species, args = species_args(sys.argv[1:])
@@ -45,25 +45,6 @@ sdi_max, s = species_number(species, "sdi_max"), -species_number(species, "reine
 area = run_area_ha(out)
 CAUSES = ("harvest", "stress", "background", "age", "wind")
 _cache = {}
-
-
-def h100(trees):
-    """Assmann's h100: mean height of the 100 thickest stems per ha of [(dbh, height)]."""
-    k = max(1, int(round(100 * area)))
-    top = sorted(trees, reverse=True)[:k]
-    return sum(h for _d, h in top) / len(top) if top else 0.0
-
-
-def top_height(trees):
-    """The stand's top height as sim::stats::top_height: h100 over the upper layer, the stems
-    at least 2/3 of the last round's h100 tall (UPPER_LAYER_SHARE), up to 8 rounds."""
-    h, layer = h100(trees), len(trees)
-    for _ in range(8):
-        keep = [t for t in trees if t[1] >= 2.0 / 3.0 * h]
-        if len(keep) == layer or not keep:
-            break
-        h, layer = h100(keep), len(keep)
-    return h
 
 
 def inventory(year):
@@ -79,7 +60,7 @@ def inventory(year):
         hts = {i: float(r["height_m"]) for i, r in inv[0].items()}
         dead = [(c, r["id"], float(r["dbh_cm"])) for c, r in inv[1]]
         stock = [(d, hts[i]) for i, d in alive.items() if d >= 7.0 and hts[i] >= 1.3]
-        low = top_height(stock) / 3.0
+        low = top_height(stock, area) / 3.0
         main = {i: d for i, d in alive.items() if d >= 7.0 and hts[i] >= low}
     else:
         alive, dead, main = None, [], None

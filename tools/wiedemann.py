@@ -63,6 +63,26 @@ def inventory(out, year):
     return living, dead
 
 
+def h100(trees, area_ha):
+    """Assmann's h100: mean height of the 100 thickest stems per ha of [(dbh, height)] on
+    `area_ha` hectares."""
+    k = max(1, int(round(100 * area_ha)))
+    top = sorted(trees, reverse=True)[:k]
+    return sum(h for _d, h in top) / len(top) if top else 0.0
+
+
+def top_height(trees, area_ha):
+    """The stand's top height as sim::stats::top_height: h100 over the upper layer, the stems
+    at least 2/3 of the last round's h100 tall (UPPER_LAYER_SHARE), up to 8 rounds."""
+    h, layer = h100(trees, area_ha), len(trees)
+    for _ in range(8):
+        keep = [t for t in trees if t[1] >= 2.0 / 3.0 * h]
+        if len(keep) == layer or not keep:
+            break
+        h, layer = h100(keep, area_ha), len(keep)
+    return h
+
+
 def print_table(head, rows):
     """Prints a Markdown table: the header line `head` ("| a | b |"), its separator and `rows`
     (lines)."""
