@@ -1232,6 +1232,76 @@ mod tests {
         }
     }
 
+    /// A direction grid's layout against its definition, for every sky direction, both cell
+    /// sizes, tagged and untagged casters, with ties in depth (every third caster a copy of the
+    /// one before with another transmittance and owner) and grids of 40 to 700 casters: each
+    /// cell's slots hold, in order, exactly the casters whose disc's cell range covers the cell
+    /// (floor of (projection ∓ radius − lo) / cell, clamped to the grid), in descending depth
+    /// along d with ties in occluder order, in the grid's coordinates, bit for bit; then padding
+    /// slots (never hit) to a whole block. It pins the layout that a faster build must keep.
+    #[test]
+    fn grid_cells_hold_their_casters_in_depth_order() {
+        let sky = Sky::from_latitude(50.0);
+        for n in [700, 150, 40] {
+            let mut occ: Vec<Occluder> = Vec::new();
+            for i in 0..n {
+                let f = i as f32;
+                let o = if i % 3 == 2 {
+                    Occluder { gamma: 0.3, ..occ[i - 1] }
+                } else {
+                    Occluder { center: Vec3::new((f * 0.71).sin() * 4.0, (f * 0.53).cos() * 4.0, 2.0 + (f * 0.29).sin().abs() * 9.0), radius: 0.2 + 0.3 * (f * 0.37).sin().abs(), gamma: 0.5 }
+                };
+                occ.push(o);
+            }
+            let owners: Vec<u32> = (0..n as u32).map(|i| i % 5).collect();
+            let (mut ties, mut slots) = (0, 0);
+            for (tag, cell_radii) in [(&owners[..], CELL_RADII), (&[][..], COARSE_CELL_RADII)] {
+                for &d in &sky.dirs {
+                    let g = DirGrid::new(d, &occ, tag, None, cell_radii);
+                    assert!(g.nx > 0 && g.ny > 0 && g.nx <= MAX_CELLS_PER_AXIS && g.ny <= MAX_CELLS_PER_AXIS);
+                    assert_eq!((g.start.len(), g.start[0] as usize, g.start[g.nx * g.ny] as usize), (g.nx * g.ny + 1, 0, g.blocks.len()));
+                    assert_eq!((g.gamma.len(), g.owner.len()), (g.blocks.len(), if tag.is_empty() { 0 } else { g.blocks.len() }));
+                    let floor_cell = |x: f32, n: usize| ((x / g.cell).floor().max(0.0) as usize).min(n - 1);
+                    let mut order: Vec<usize> = (0..n).collect();
+                    order.sort_by(|&a, &b| occ[b].center.dot(d).total_cmp(&occ[a].center.dot(d)).then(a.cmp(&b)));
+                    ties += order.windows(2).filter(|w| occ[w[0]].center.dot(d) == occ[w[1]].center.dot(d)).count();
+                    for y in 0..g.ny {
+                        for x in 0..g.nx {
+                            let want: Vec<usize> = order
+                                .iter()
+                                .copied()
+                                .filter(|&j| {
+                                    let (o, q) = (&occ[j], Vec2::new(occ[j].center.dot(g.u), occ[j].center.dot(g.v)));
+                                    let (x0, x1) = (floor_cell(q.x - o.radius - g.lo.x, g.nx), floor_cell(q.x + o.radius - g.lo.x, g.nx));
+                                    let (y0, y1) = (floor_cell(q.y - o.radius - g.lo.y, g.ny), floor_cell(q.y + o.radius - g.lo.y, g.ny));
+                                    (x0..=x1).contains(&x) && (y0..=y1).contains(&y)
+                                })
+                                .collect();
+                            let c = y * g.nx + x;
+                            let run = g.start[c] as usize..g.start[c + 1] as usize;
+                            assert_eq!(run.len(), want.len().div_ceil(LANES), "direction {d}, cell {x}, {y}");
+                            slots += want.len();
+                            for (at, (bi, l)) in run.flat_map(|bi| (0..LANES).map(move |l| (bi, l))).enumerate() {
+                                let b = &g.blocks[bi];
+                                let got = (b.u[l].to_bits(), b.v[l].to_bits(), b.w[l].to_bits(), b.r2[l].to_bits(), g.gamma[bi][l].to_bits(), g.owner.get(bi).map_or(u32::MAX, |o| o[l]));
+                                let expect = match want.get(at) {
+                                    Some(&j) => {
+                                        let o = &occ[j];
+                                        (o.center.dot(g.u).to_bits(), o.center.dot(g.v).to_bits(), o.center.dot(d).to_bits(), (o.radius * o.radius).to_bits(), o.gamma.to_bits(), tag.get(j).copied().unwrap_or(u32::MAX))
+                                    }
+                                    None => (0f32.to_bits(), 0f32.to_bits(), f32::NEG_INFINITY.to_bits(), (-1f32).to_bits(), 1f32.to_bits(), u32::MAX),
+                                };
+                                assert_eq!(got, expect, "direction {d}, cell {x}, {y}, slot {at}");
+                            }
+                        }
+                    }
+                }
+            }
+            // the cases test something: ties in depth, casters in several cells each
+            assert!(ties >= n / 3 && slots > 2 * n * sky.dirs.len(), "{n} casters: {ties} ties, {slots} slots");
+        }
+    }
+
     /// Shadow volumes told where their queries come from ([`ShadowVolumes::within`]) give the
     /// answers of the plain ones bit for bit, inside the region (grids of the casters that can
     /// reach it) and outside it (grids of every caster); and inside, the grids hold fewer casters.
