@@ -28,10 +28,10 @@
 //! 4. **Radii and shedding**: pipe model r^d = Σ r_j^d (d from the species), radii never shrink;
 //!    a lateral branch whose light per internode falls below r_s times the tree's best-lit
 //!    internode's light is shed (Takenaka 1994; the relative threshold is our choice); the light
-//!    of step 3's V_o (the full light of step 1, the side shade of obstacles included), so
-//!    branches on a wall's dim side are shed as Plastic Trees sheds them ("shedding branches that
-//!    are close to the wall", Pirk et al. 2012 section 7.1; the obstacle casts "a shadow for the
-//!    entire life span of its growth", section 5.3).
+//!    of step 2 times the share of the sky the side shade of obstacles leaves
+//!    ([`LightSpace::shedding_light_at`]), so branches on a wall's dim side are shed as Plastic
+//!    Trees sheds them ("shedding branches that are close to the wall", Pirk et al. 2012 section
+//!    7.1; the obstacle casts "a shadow for the entire life span of its growth", section 5.3).
 //!
 //! Why the side shade of obstacles (our addition) is left out of the resource Q: with it there, a
 //! tree beside a wall starved (a bud's resource falls below one internode, it grows nothing, and
@@ -112,7 +112,8 @@ pub struct LightSpace {
     /// Light the side shade of obstacles takes from each voxel (0–1): the overhead sky light
     /// (the openness where the voxel's zenith is blocked, else 1; less the obstacles' vertical
     /// shadows, times the envelope's factor) less [`LightSpace::sky`]. Added back for the
-    /// resource Q of a bud (see the module docs), not for steering or shedding.
+    /// resource Q of a bud (see the module docs), not for steering; the shedding light is
+    /// scaled by sky / (sky + side shade) ([`LightSpace::shedding_light_at`]).
     pub side_shade: Vec<f32>,
     /// Current light per voxel.
     pub light: Vec<f32>,
@@ -228,6 +229,30 @@ impl LightSpace {
     pub fn resource_light_at(&self, p: Vec3) -> f32 {
         match self.space.index(self.space.cell(p)) {
             Some(i) if !self.space.solid[i] => (self.light[i] + self.side_shade[i]).clamp(0.0, 1.0),
+            _ => 0.0,
+        }
+    }
+
+    /// Light (0–1) at `p` for the shedding test: [`LightSpace::resource_light_at`] (the vertical
+    /// shadows of nodes and obstacles) times the share of the overhead sky that the side shade
+    /// of obstacles leaves, [`LightSpace::sky`] / ([`LightSpace::sky`] + [`LightSpace::side_shade`])
+    /// (1 where there is no side shade). The product, not the difference: the directions a wall
+    /// blocks give no light whatever the crown does, and the crown's shade (the vertical
+    /// shadow) dims the directions the wall leaves open, as the visibility O = 1 − Πγ of each
+    /// sky direction combines solids and clusters in Plastic Trees' eq. (3) (Pirk et al. 2012,
+    /// section 4.2). Subtracting both (as [`LightSpace::light_at`] does for steering) counted the
+    /// crown's shade again on top of the wall's and starved trees beside a wall (round 39: set G
+    /// of type 2 kept 41 % of the open-grown trees' nodes). 0 outside the space or in obstacles.
+    pub fn shedding_light_at(&self, p: Vec3) -> f32 {
+        match self.space.index(self.space.cell(p)) {
+            Some(i) if !self.space.solid[i] => {
+                let vertical = (self.light[i] + self.side_shade[i]).clamp(0.0, 1.0);
+                if self.side_shade[i] > 0.0 {
+                    vertical * self.sky[i] / (self.sky[i] + self.side_shade[i])
+                } else {
+                    vertical
+                }
+            }
             _ => 0.0,
         }
     }
@@ -439,15 +464,14 @@ impl LightSpace {
     }
 
     /// Sheds lateral branches (≥ 3 internodes) whose light per internode is below r_s × the best
-    /// internode's light; the light is [`LightSpace::light_at`] clamped to 0–1 (the side shade of
-    /// obstacles included, module docs step 4).
+    /// internode's light; the light is [`LightSpace::shedding_light_at`] (module docs step 4).
     fn shed(&mut self, t: usize) {
         let sk = &self.trees[t].skeleton;
         let n = sk.nodes.len();
         let mut q = vec![0.0f32; n];
         let mut size = vec![0u32; n];
         for i in (1..n).rev() {
-            q[i] += self.light_clamped(sk.nodes[i].pos);
+            q[i] += self.shedding_light_at(sk.nodes[i].pos);
             size[i] += 1;
             if let Some(par) = sk.nodes[i].parent {
                 let (a, b) = (q[i], size[i]);
@@ -457,7 +481,7 @@ impl LightSpace {
         }
         // threshold relative to the best-lit internode of the tree, so that uniformly dim sites
         // (a roof's shade, the flat part of a wall's) slow growth without shedding everything
-        let best = sk.nodes.iter().skip(1).map(|nd| self.light_clamped(nd.pos)).fold(0.0f32, f32::max);
+        let best = sk.nodes.iter().skip(1).map(|nd| self.shedding_light_at(nd.pos)).fold(0.0f32, f32::max);
         let threshold = self.params.r_s * best;
         let mut remove = vec![false; n];
         let mut any = false;
@@ -583,17 +607,20 @@ mod tests {
     use crate::structure::params::light_guided_paper;
 
     /// The shedding rule sees the side shade of a wall (round 39), checked by hand. An infinite
-    /// wall x ≥ 4 m; two horizontal lateral branches of 3 nodes each at z = 2.1 m (voxel centres,
-    /// nothing above them, so no node shadow reaches them): one towards the wall (x = 1.9–2.3 m,
-    /// 1.7–2.1 m from it), one away (x = −1.7 to −2.1 m, 5.7–6.1 m from it). Of the 25 sky
-    /// directions (zenith; 8 azimuths at 20°, 45°, 70°) the wall blocks, for the near branch,
-    /// the 3 azimuths facing it (0°, ±45°) at every elevation: ray lengths to the wall
-    /// s/(cos e · cos a) ≤ 2.1/(0.940 · 0.707) = 3.2 m ≤ [`SKY_RANGE_M`] (6 m), and the 70° ones at
-    /// any range: openness 16/25 = 0.64. For the far branch only the 70° ones (5.7/0.940 = 6.07 m
-    /// > 6 m for 20°, and more for 45°): 22/25 = 0.88. The zenith is open at both, so the
-    /// resource light is 1 at both. With r_s = 0.8 the threshold is 0.8 × 0.88 = 0.704 (the far
-    /// branch is the best lit): the near branch (0.64) is shed, the far one kept. Before round
-    /// 39 the shedding used the resource light (1 and 1) and shed neither.
+    /// wall x ≥ 4 m; two horizontal lateral branches of 3 nodes each at z = 2.1 m (voxel centres):
+    /// one towards the wall (x = 1.9–2.3 m, 1.7–2.1 m from it), one away (x = −1.7 to −2.1 m,
+    /// 5.7–6.1 m from it). Of the 25 sky directions (zenith; 8 azimuths at 20°, 45°, 70°) the
+    /// wall blocks, for the near branch, the 3 azimuths facing it (0°, ±45°) at every elevation:
+    /// ray lengths to the wall s/(cos e · cos a) ≤ 2.1/(0.940 · 0.707) = 3.2 m ≤ [`SKY_RANGE_M`]
+    /// (6 m), and the 70° ones at any range: openness 16/25 = 0.64. For the far branch only the
+    /// 70° ones (5.7/0.940 = 6.07 m > 6 m for 20°, and more for 45°): 22/25 = 0.88. The zenith is
+    /// open at both, so the resource light is 1 at both, except under one node of the main axis
+    /// 0.2 m (q = 1 voxel) above the near branch's middle node: 1 − 2^−1 = 0.5 there (b = 2).
+    /// The shedding light is the product: 0.64, 0.5 × 0.64 = 0.32, 0.64 (mean 0.533) near,
+    /// 0.88 far; the steering light subtracts (0.64 − 0.5 = 0.14). With r_s = 0.8 the threshold
+    /// is 0.8 × 0.88 = 0.704 (the far branch is the best lit): the near branch is shed, the far
+    /// one kept. Before round 39 the shedding used the resource light (1, 0.5, 1 and 1) and shed
+    /// neither.
     #[test]
     fn shedding_sees_a_walls_side_shade() {
         let mut p = light_guided_paper();
@@ -607,6 +634,7 @@ mod tests {
             s = sk.add_child(s, Vec3::new(0.1, 0.1, z), 0.004, false).unwrap();
         }
         let main = sk.add_child(s, Vec3::new(0.1, 0.3, 2.1), 0.004, false).unwrap();
+        let above = sk.add_child(main, Vec3::new(2.1, 0.1, 2.3), 0.004, false).unwrap();
         let branch = |sk: &mut Skeleton, xs: [f32; 3]| -> Vec<u32> {
             let mut ids = Vec::new();
             let mut at = s;
@@ -621,22 +649,26 @@ mod tests {
         assert_eq!(sk.nodes[s as usize].children[0], main);
         ls.trees[0].skeleton = sk;
         ls.update_light();
-        for &i in &near {
+        assert_eq!(ls.trees[0].skeleton.nodes[main as usize].children, vec![above]);
+        for (k, &i) in near.iter().enumerate() {
             let pos = ls.trees[0].skeleton.nodes[i as usize].pos;
-            assert!((ls.light_at(pos) - 16.0 / 25.0).abs() < 1e-6, "near {pos}: {}", ls.light_at(pos));
-            assert!((ls.resource_light_at(pos) - 1.0).abs() < 1e-6);
+            let shade = if k == 1 { 0.5 } else { 0.0 };
+            assert!((ls.resource_light_at(pos) - (1.0 - shade)).abs() < 1e-6, "near {pos}: {}", ls.resource_light_at(pos));
+            assert!((ls.light_at(pos) - (0.64 - shade)).abs() < 1e-6, "near {pos}: {}", ls.light_at(pos));
+            assert!((ls.shedding_light_at(pos) - (1.0 - shade) * 0.64).abs() < 1e-6, "near {pos}: {}", ls.shedding_light_at(pos));
         }
         for &i in &far {
             let pos = ls.trees[0].skeleton.nodes[i as usize].pos;
-            assert!((ls.light_at(pos) - 22.0 / 25.0).abs() < 1e-6, "far {pos}: {}", ls.light_at(pos));
+            assert!((ls.light_at(pos) - 0.88).abs() < 1e-6, "far {pos}: {}", ls.light_at(pos));
             assert!((ls.resource_light_at(pos) - 1.0).abs() < 1e-6);
+            assert!((ls.shedding_light_at(pos) - 0.88).abs() < 1e-6);
         }
         let before = ls.trees[0].skeleton.len();
         ls.shed(0);
         let sk = &ls.trees[0].skeleton;
         assert_eq!(sk.len(), before - 3, "only the near branch's 3 nodes are shed");
         let xs: Vec<f32> = sk.nodes.iter().map(|n| n.pos.x).collect();
-        assert!(xs.iter().all(|&x| x < 1.0), "the near branch is gone: {xs:?}");
+        assert_eq!(xs.iter().filter(|&&x| x > 1.0).count(), 1, "the near branch is gone, the node above it kept: {xs:?}");
         assert_eq!(xs.iter().filter(|&&x| x < -1.0).count(), 3, "the far branch is kept: {xs:?}");
     }
 }
