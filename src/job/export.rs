@@ -23,7 +23,7 @@ use super::Result;
 use crate::conditions::SiteConditions;
 use crate::error::Error;
 use crate::mesh::{TriMesh, LOD_LEVELS};
-use crate::output::gltf::{Look, StandCounts, StandModel, StandNode, StandScene, StaticMesh};
+use crate::output::gltf::{Look, StandCounts, StandModel, StandNode, StaticMesh};
 use crate::sim::Scenario;
 use crate::species::{Season, SpeciesLibrary};
 use crate::structure::mesh::LodOptions;
@@ -204,6 +204,23 @@ pub struct ExportReport {
     pub bytes: u64,
     /// Figures of the trees written ([`ExportStats`]).
     pub stats: ExportStats,
+    /// Most bytes of tree meshes (vertex and index data, [`TriMesh::byte_size`], of the
+    /// levels written) held in memory at once: a stand export meshes its trees a batch of
+    /// [`MESH_BATCH_PER_THREAD`] a thread at a time and writes each batch's models to the
+    /// file's scratch buffer before the next (round 38: every tree's meshes were held until
+    /// the file was written, about twice the file in memory). 0 for [`export_instances`].
+    pub held_mesh_bytes_max: usize,
+}
+
+/// Trees a thread meshes per batch of a stand export ([`ExportReport::held_mesh_bytes_max`]):
+/// enough to keep the threads busy while the batch is written, few enough that the meshes
+/// held stay a few trees' (a canopy tree's full level is about 1 MB).
+pub const MESH_BATCH_PER_THREAD: usize = 2;
+
+/// Bytes of the vertex and index data of a stand model ([`TriMesh::byte_size`]): its chain's
+/// levels and its sprigs.
+fn model_bytes(m: &StandModel) -> usize {
+    m.chain.levels.iter().map(|l| l.bark.byte_size() + l.leaves.byte_size()).sum::<usize>() + m.sprigs.byte_size()
 }
 
 /// Figures of an export (`sylva export --stats FILE.json`).
@@ -382,98 +399,109 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let full = o.max_strands == crate::structure::stand::FULL_STRANDS;
     // each tree in its own frame, with its topology key and canonical shape
     // per tree also (skeleton nodes, leaf cards of the full level, triangles of the levels written)
-    #[allow(clippy::type_complexity)]
-    let meshed: Vec<Option<(u64, Vec<f32>, StandModel, [f32; 3], Vec3, usize, [usize; 4])>> = st
-        .trees
-        .par_iter()
-        .map(|a| {
-            let t = &trees[a.index];
-            let (sk, mut lv, hgt) = tree_frame(a, t.base)?;
-            let r = t.crown_radius_m.max(0.2);
-            let sp = &library.species[t.species as usize];
-            // full detail: the leaves grown to at most MAX_CARD_GROWTH, the rest of the leaf
-            // area as sprigs (as the stills draw them); else copies of the few tips' cards
-            // conifers: a pair of crossed shoot cards a shoot in place of the needle cards
-            // (round 35: 110,000 needle cards of 6 cm read as an empty crown), which stay for
-            // the lower levels
-            let needles = full && crate::structure::texture::LeafShape::of_species(sp).is_needle();
-            let sprigs = if needles {
-                let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
-                super::leaf_area::shoot_cards_with_sprays(&sk, &lv, leaf_area, cover.sprig[t.species as usize], t.crown_radius_m, t.species as u64, super::leaf_area::limb_spray(sp)).mesh
-            } else if full {
-                super::adapted::crown_leaf_cards(&mut lv, t, sp, &cover)
-            } else {
-                let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
-                fill_leaf_area(&mut lv, leaf_area, cover.card[t.species as usize], t.crown_radius_m, t.species as u64);
-                TriMesh::default()
-            };
-            let s = Vec3::new(r, r, hgt);
-            let mut topology = vec![t.species as u64, sk.nodes.len() as u64];
-            topology.extend(sk.nodes.iter().map(|n| n.parent.map_or(u64::MAX, |p| p as u64)));
-            topology.extend(lv.leaves.iter().map(|l| l.node as u64));
-            topology.push(sprigs.positions.len() as u64);
-            let mut canon = Vec::with_capacity(sk.nodes.len() * 4 + lv.leaves.len() * 10);
-            for n in &sk.nodes {
-                let p = n.pos / s;
-                canon.extend([p.x, p.y, p.z, n.radius / hgt]);
+    let mesh_tree = |a: &crate::structure::stand::AdaptedTree| {
+        let t = &trees[a.index];
+        let (sk, mut lv, hgt) = tree_frame(a, t.base)?;
+        let r = t.crown_radius_m.max(0.2);
+        let sp = &library.species[t.species as usize];
+        // full detail: the leaves grown to at most MAX_CARD_GROWTH, the rest of the leaf
+        // area as sprigs (as the stills draw them); else copies of the few tips' cards
+        // conifers: a pair of crossed shoot cards a shoot in place of the needle cards
+        // (round 35: 110,000 needle cards of 6 cm read as an empty crown), which stay for
+        // the lower levels
+        let needles = full && crate::structure::texture::LeafShape::of_species(sp).is_needle();
+        let sprigs = if needles {
+            let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
+            super::leaf_area::shoot_cards_with_sprays(&sk, &lv, leaf_area, cover.sprig[t.species as usize], t.crown_radius_m, t.species as u64, super::leaf_area::limb_spray(sp)).mesh
+        } else if full {
+            super::adapted::crown_leaf_cards(&mut lv, t, sp, &cover)
+        } else {
+            let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
+            fill_leaf_area(&mut lv, leaf_area, cover.card[t.species as usize], t.crown_radius_m, t.species as u64);
+            TriMesh::default()
+        };
+        let s = Vec3::new(r, r, hgt);
+        let mut topology = vec![t.species as u64, sk.nodes.len() as u64];
+        topology.extend(sk.nodes.iter().map(|n| n.parent.map_or(u64::MAX, |p| p as u64)));
+        topology.extend(lv.leaves.iter().map(|l| l.node as u64));
+        topology.push(sprigs.positions.len() as u64);
+        let mut canon = Vec::with_capacity(sk.nodes.len() * 4 + lv.leaves.len() * 10);
+        for n in &sk.nodes {
+            let p = n.pos / s;
+            canon.extend([p.x, p.y, p.z, n.radius / hgt]);
+        }
+        for l in &lv.leaves {
+            let p = l.pos / s;
+            canon.extend([p.x, p.y, p.z, l.size / hgt, l.dir.x, l.dir.y, l.dir.z, l.normal.x, l.normal.y, l.normal.z]);
+        }
+        for q in &sprigs.positions {
+            let p = Vec3::from(*q) / s;
+            canon.extend([p.x, p.y, p.z]);
+        }
+        // the mid level: the crown hull of the adapted clusters, as in the pictures
+        let (mut chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
+        if needles {
+            chain.levels[0].leaves = TriMesh::default();
+        }
+        let tris = o.levels.iter().map(|&l| chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 }).sum();
+        // the levels not written are not held (the writer leaves them out)
+        for (l, m) in chain.levels.iter_mut().enumerate() {
+            if !o.levels.contains(&l) {
+                *m = Default::default();
             }
-            for l in &lv.leaves {
-                let p = l.pos / s;
-                canon.extend([p.x, p.y, p.z, l.size / hgt, l.dir.x, l.dir.y, l.dir.z, l.normal.x, l.normal.y, l.normal.z]);
-            }
-            for q in &sprigs.positions {
-                let p = Vec3::from(*q) / s;
-                canon.extend([p.x, p.y, p.z]);
-            }
-            // the mid level: the crown hull of the adapted clusters, as in the pictures
-            let (mut chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
-            if needles {
-                chain.levels[0].leaves = TriMesh::default();
-            }
-            let tris = o.levels.iter().map(|&l| chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 }).sum();
-            // the levels not written are not held (the writer leaves them out)
-            for (l, m) in chain.levels.iter_mut().enumerate() {
-                if !o.levels.contains(&l) {
-                    *m = Default::default();
-                }
-            }
-            let figures = [sk.nodes.len(), if needles { 0 } else { lv.leaves.len() }, tris, sprigs.positions.len() / 4];
-            Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize, sprigs }, s.to_array(), t.base - origin, t.species as usize, figures))
-        })
-        .collect();
+        }
+        let figures = [sk.nodes.len(), if needles { 0 } else { lv.leaves.len() }, tris, sprigs.positions.len() / 4];
+        Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize, sprigs }, s.to_array(), t.base - origin, t.species as usize, figures))
+    };
 
+    // the adaptation's figures, then its trees meshed a batch at a time, each model's meshes
+    // written to the glb's scratch file at once and dropped (round 38: all held until written,
+    // about twice the file)
+    let nodes_total = st.trees.iter().map(|a| a.skeleton.nodes.len()).sum();
+    let nodes_before_adaptation = st.trees.iter().map(|a| a.report.nodes_before).sum();
+    let pruned_light = st.trees.iter().map(|a| a.report.pruned_light).sum();
+    let pruned_collision = st.trees.iter().map(|a| a.report.pruned_collision).sum();
+    let (analysis_s, adaptation_s, analyses) = (st.analysis_s, st.adaptation_s, st.analyses);
+    let mut w = crate::output::gltf::StandGlbWriter::create(out, &o.levels)?;
     let mut looks_of: HashMap<usize, usize> = HashMap::new();
-    let mut looks: Vec<Look> = Vec::new();
-    let mut models: Vec<StandModel> = Vec::new();
     // topology key → (model, its size, its canonical shape) of the models with that topology
     let mut model_of: HashMap<u64, Vec<(usize, [f32; 3], Vec<f32>)>> = HashMap::new();
-    let mut nodes = Vec::new();
+    let (mut n_trees, mut n_models, mut held_max) = (0usize, 0usize, 0usize);
     let (mut tall_nodes, mut leaf_cards, mut triangles, mut sprig_cards_n) = (Vec::new(), 0usize, 0usize, 0usize);
-    for (m, a) in meshed.into_iter().zip(&st.trees) {
-        let Some((key, canon, mut model, size, pos, sp, [n_nodes, n_leaves, n_tris, n_sprigs])) = m else { continue };
-        sprig_cards_n += n_sprigs;
-        if trees[a.index].height_m >= STATS_MIN_HEIGHT_M {
-            tall_nodes.push(n_nodes);
+    let batch = rayon::current_num_threads().max(1) * MESH_BATCH_PER_THREAD;
+    let mut adapted = st.trees.into_iter();
+    loop {
+        let chunk: Vec<_> = adapted.by_ref().take(batch).collect();
+        if chunk.is_empty() {
+            break;
         }
-        leaf_cards += n_leaves;
-        triangles += n_tris;
-        let look = *looks_of.entry(sp).or_insert_with(|| {
-            looks.push(Look::for_species(&library.species[sp], o.season));
-            looks.len() - 1
-        });
-        let t = &trees[a.index];
-        let name = format!("{}_{}", library.species[sp].id, t.id);
-        let same = model_of.get(&key).and_then(|c| c.iter().find(|(_, _, c)| c.iter().zip(&canon).all(|(a, b)| (a - b).abs() <= SAME_SHAPE)));
-        let (mi, scale) = match same {
-            Some(&(mi, s0, _)) => (mi, [size[0] / s0[0], size[1] / s0[1], size[2] / s0[2]]),
-            None => {
-                model.look = look;
-                models.push(model);
-                model_of.entry(key).or_default().push((models.len() - 1, size, canon));
-                (models.len() - 1, [1.0; 3])
+        let meshed: Vec<_> = chunk.par_iter().map(mesh_tree).collect();
+        held_max = held_max.max(meshed.iter().flatten().map(|m| model_bytes(&m.2)).sum());
+        for (m, a) in meshed.into_iter().zip(&chunk) {
+            let Some((key, canon, mut model, size, pos, sp, [n_nodes, n_leaves, n_tris, n_sprigs])) = m else { continue };
+            sprig_cards_n += n_sprigs;
+            if trees[a.index].height_m >= STATS_MIN_HEIGHT_M {
+                tall_nodes.push(n_nodes);
             }
-        };
-        nodes.push(StandNode { name, model: mi, translation: pos.to_array(), scale });
+            leaf_cards += n_leaves;
+            triangles += n_tris;
+            let look = *looks_of.entry(sp).or_insert_with(|| w.look(Look::for_species(&library.species[sp], o.season)));
+            let t = &trees[a.index];
+            let name = format!("{}_{}", library.species[sp].id, t.id);
+            let same = model_of.get(&key).and_then(|c| c.iter().find(|(_, _, c)| c.iter().zip(&canon).all(|(a, b)| (a - b).abs() <= SAME_SHAPE)));
+            let (mi, scale) = match same {
+                Some(&(mi, s0, _)) => (mi, [size[0] / s0[0], size[1] / s0[1], size[2] / s0[2]]),
+                None => {
+                    model.look = look;
+                    let mi = w.model(&model)?;
+                    n_models += 1;
+                    model_of.entry(key).or_default().push((mi, size, canon));
+                    (mi, [1.0; 3])
+                }
+            };
+            w.tree(&StandNode { name, model: mi, translation: pos.to_array(), scale })?;
+            n_trees += 1;
+        }
     }
 
     // obstacles reaching into the area
@@ -482,44 +510,36 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let n_obstacles = push_obstacles(&mut statics, &sc, &site, o.area, origin);
     let geo = crate::output::georef::PointGeoRef::of_site(&site);
     let (mx, my) = geo.map(origin.x as f64, origin.y as f64);
-    let scene = StandScene {
-        name: format!("stand_{year}"),
-        looks,
-        models,
-        trees: nodes,
-        statics,
-        levels: o.levels.clone(),
-        extras: serde_json::json!({
-            "sylva": {
-                "run_dir": run_dir.display().to_string(), "year": year, "area_m": o.area,
-                "origin_m": [origin.x, origin.y, origin.z],
-                "origin_map": [mx, my, origin.z], "epsg": geo.epsg,
-                "note": "scene coordinates are metres from origin_m (run world coordinates: x east, y north from the terrain's south-west corner, z elevation), y up; origin_map is the same point in the terrain's map coordinates (EPSG code epsg)",
-            }
-        }),
-    };
-    triangles += scene.statics.iter().map(|m| m.mesh.triangle_count()).sum::<usize>();
+    let extras = serde_json::json!({
+        "sylva": {
+            "run_dir": run_dir.display().to_string(), "year": year, "area_m": o.area,
+            "origin_m": [origin.x, origin.y, origin.z],
+            "origin_map": [mx, my, origin.z], "epsg": geo.epsg,
+            "note": "scene coordinates are metres from origin_m (run world coordinates: x east, y north from the terrain's south-west corner, z elevation), y up; origin_map is the same point in the terrain's map coordinates (EPSG code epsg)",
+        }
+    });
+    triangles += statics.iter().map(|m| m.mesh.triangle_count()).sum::<usize>();
     let stats = ExportStats {
-        trees: scene.trees.len(),
+        trees: n_trees,
         trees_15m: tall_nodes.len(),
         nodes_min: tall_nodes.iter().copied().min().unwrap_or(0),
         nodes_median: median_usize(&mut tall_nodes),
         leaf_cards,
         sprig_cards: sprig_cards_n,
         adapt_s,
-        analysis_s: st.analysis_s,
-        adaptation_s: st.adaptation_s,
-        analyses: st.analyses,
-        nodes_total: st.trees.iter().map(|a| a.skeleton.nodes.len()).sum(),
-        nodes_before_adaptation: st.trees.iter().map(|a| a.report.nodes_before).sum(),
-        pruned_light: st.trees.iter().map(|a| a.report.pruned_light).sum(),
-        pruned_collision: st.trees.iter().map(|a| a.report.pruned_collision).sum(),
+        analysis_s,
+        adaptation_s,
+        analyses,
+        nodes_total,
+        nodes_before_adaptation,
+        pruned_light,
+        pruned_collision,
         triangles,
         levels: o.levels.clone(),
     };
-    let counts = crate::output::gltf::write_stand_glb(out, &scene)?;
+    let counts = w.finish(&statics, &format!("stand_{year}"), &extras)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
-    Ok(ExportReport { out: out.to_path_buf(), year, trees: scene.trees.len(), models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes, stats })
+    Ok(ExportReport { out: out.to_path_buf(), year, trees: n_trees, models: n_models, obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes, stats, held_mesh_bytes_max: held_max })
 }
 
 /// Lower bounds (years) of the age classes of [`export_instances`]: a tree instances the model
@@ -683,7 +703,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     let counts = crate::output::gltf::write_instanced_glb(out, &scene)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
     let stats = ExportStats { trees, trees_15m: tall_nodes.len(), nodes_min: tall_nodes.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut tall_nodes), leaf_cards, sprig_cards, triangles, levels: o.levels.clone(), ..Default::default() };
-    Ok(ExportReport { out: out.to_path_buf(), year, trees, models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s: 0.0, bytes, stats })
+    Ok(ExportReport { out: out.to_path_buf(), year, trees, models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s: 0.0, bytes, stats, held_mesh_bytes_max: 0 })
 }
 
 /// Appends the meshes of the scenario's obstacles that reach into `area` to `statics`, moved to

@@ -127,6 +127,10 @@ struct LookMaterials {
 struct Doc {
     views: Vec<Value>,
     accessors: Vec<Value>,
+    /// The BIN chunk's first bytes, held, before the spilled ones: the textures of a stand
+    /// written tree by tree ([`StandGlbWriter`]), known only once every tree is written; empty
+    /// otherwise.
+    head: Vec<u8>,
     /// The BIN chunk's bytes not yet spilled ([`Doc::spill`]).
     bin: Vec<u8>,
     /// Where the BIN chunk's bytes go once [`SPILL_BYTES`] are held (a stand written by
@@ -170,7 +174,7 @@ impl Drop for Spill {
 
 impl Doc {
     fn new() -> Doc {
-        Doc { views: Vec::new(), accessors: Vec::new(), bin: Vec::new(), spill: None, images: Vec::new(), textures: Vec::new(), materials: Vec::new(), meshes: Vec::new(), nodes: Vec::new(), texture_of: HashMap::new(), extensions_used: Vec::new(), extensions_required: Vec::new() }
+        Doc { views: Vec::new(), accessors: Vec::new(), head: Vec::new(), bin: Vec::new(), spill: None, images: Vec::new(), textures: Vec::new(), materials: Vec::new(), meshes: Vec::new(), nodes: Vec::new(), texture_of: HashMap::new(), extensions_used: Vec::new(), extensions_required: Vec::new() }
     }
 
     /// A document whose BIN chunk goes to the scratch file `<tmp of out>.bin` beside `out`
@@ -184,9 +188,9 @@ impl Doc {
         Ok(d)
     }
 
-    /// Length of the BIN chunk so far (spilled and held).
+    /// Length of the BIN chunk so far (head, spilled and held).
     fn bin_len(&self) -> usize {
-        self.spill.as_ref().map_or(0, |s| s.written) + self.bin.len()
+        self.head.len() + self.spill.as_ref().map_or(0, |s| s.written) + self.bin.len()
     }
 
     fn view(&mut self, bytes: &[u8], stride: Option<usize>, target: Option<u32>) -> usize {
@@ -378,7 +382,8 @@ impl Doc {
     fn finish(mut self, scene: Value) -> Result<Vec<u8>> {
         let (js, total) = self.finish_json(scene)?;
         let mut out = Vec::with_capacity(total);
-        out.extend_from_slice(&glb_header(total, &js, self.bin.len()));
+        out.extend_from_slice(&glb_header(total, &js, self.bin_len()));
+        out.extend_from_slice(&self.head);
         out.extend_from_slice(&self.bin);
         Ok(out)
     }
@@ -390,7 +395,7 @@ impl Doc {
         let (js, total) = self.finish_json(scene)?;
         let bin_len = self.bin_len();
         let Some(mut sp) = self.spill.take() else {
-            let bytes = [glb_header(total, &js, bin_len), std::mem::take(&mut self.bin)].concat();
+            let bytes = [glb_header(total, &js, bin_len), std::mem::take(&mut self.head), std::mem::take(&mut self.bin)].concat();
             return super::write_atomic(path, &bytes);
         };
         let spilled = (|| {
@@ -402,8 +407,10 @@ impl Doc {
         spilled.map_err(|e| OutputError::io(&sp.path, e))?;
         let scratch = std::fs::File::open(&sp.path).map_err(|e| OutputError::io(&sp.path, e))?;
         let held = std::mem::take(&mut self.bin);
+        let head = std::mem::take(&mut self.head);
         super::write_atomic_with(path, |w| {
             w.write_all(&glb_header(total, &js, bin_len))?;
+            w.write_all(&head)?;
             let copied = std::io::copy(&mut scratch.take(sp.written as u64), w)?;
             if copied != sp.written as u64 {
                 return Err(std::io::Error::new(std::io::ErrorKind::UnexpectedEof, "the scratch file of the glb's buffer is short"));
@@ -670,24 +677,30 @@ fn stand_doc(s: &StandScene, mut d: Doc) -> Result<(Doc, Value, StandCounts)> {
     let mut mesh_nodes = 0;
     let mut tree_nodes = Vec::new();
     for t in &s.trees {
-        let mut children = Vec::new();
-        for (i, mesh) in model_meshes[t.model].iter().enumerate() {
-            if let Some(mesh) = *mesh {
-                children.push(d.node(json!({"name": format!("{}_LOD{i}", t.name), "mesh": mesh})));
-                mesh_nodes += 1;
-            }
-        }
-        let [sx, sy, sz] = t.scale;
-        let mut node = json!({"name": t.name, "children": children, "translation": y_up(t.translation)});
-        if t.scale != [1.0; 3] {
-            node["scale"] = json!([sx, sz, sy]);
-        }
-        if let (true, Some(o)) = (children.is_empty(), node.as_object_mut()) {
-            o.remove("children");
-        }
-        tree_nodes.push(d.node(node));
+        tree_nodes.push(tree_node(&mut d, t, &model_meshes[t.model], &mut mesh_nodes));
     }
     Ok(forest_doc(d, tree_nodes, mesh_nodes, &s.statics, &s.name, &s.extras))
+}
+
+/// The node of tree `t` in `d` drawing `meshes` (its model's, per level), its children one
+/// node per level drawn (counted in `mesh_nodes`); returns its index.
+fn tree_node(d: &mut Doc, t: &StandNode, meshes: &[Option<usize>], mesh_nodes: &mut usize) -> usize {
+    let mut children = Vec::new();
+    for (i, mesh) in meshes.iter().enumerate() {
+        if let Some(mesh) = *mesh {
+            children.push(d.node(json!({"name": format!("{}_LOD{i}", t.name), "mesh": mesh})));
+            *mesh_nodes += 1;
+        }
+    }
+    let [sx, sy, sz] = t.scale;
+    let mut node = json!({"name": t.name, "children": children, "translation": y_up(t.translation)});
+    if t.scale != [1.0; 3] {
+        node["scale"] = json!([sx, sz, sy]);
+    }
+    if let (true, Some(o)) = (children.is_empty(), node.as_object_mut()) {
+        o.remove("children");
+    }
+    d.node(node)
 }
 
 /// The trees of one model drawn by `EXT_mesh_gpu_instancing` ([`InstancedScene`]): one entry
@@ -903,6 +916,174 @@ pub fn write_stand_glb_spilling_at(path: &Path, s: &StandScene, at: usize) -> Re
     let (d, scene, counts) = stand_doc(s, Doc::spilling(path, at)?)?;
     d.finish_to(scene, path)?;
     Ok(counts)
+}
+
+/// Material slots of one look in a [`StandGlbWriter`]'s pending material numbers: bark, then
+/// the foliage of levels 0–3 ([`LookMaterials`]).
+const LOOK_SLOTS: usize = 5;
+/// Pending material numbers of a [`StandGlbWriter`]'s tree primitives start here (look ×
+/// [`LOOK_SLOTS`] + slot above it); [`StandGlbWriter::finish`] replaces them by the materials'
+/// indices, which are known only once every tree is written.
+const PENDING_MATERIAL: usize = 1 << 40;
+
+/// A stand written to a `.glb` tree by tree: each model's meshes go into the BIN chunk's
+/// scratch file (beside the output, as [`write_stand_glb`]'s) as soon as the model is given,
+/// so that a caller holds one tree's meshes at a time, not the stand's (round 38: a 0.25 ha
+/// export held all its trees' meshes until written, about twice the file). What is held to the
+/// end is the JSON (views, accessors, meshes, nodes) and at most [`SPILL_BYTES`] of the buffer.
+///
+/// The file is byte for byte the one [`stand_glb_bytes`] makes of a [`StandScene`] holding the
+/// same looks, models (each given before the first tree that draws it, every model drawn by
+/// some tree) and trees in the same order: the textures, which the held writer puts first in
+/// the buffer, are made at [`StandGlbWriter::finish`] (which materials a look needs depends on
+/// all its models: sprigs, leaf cards) and written before the scratch file's bytes, the tree
+/// meshes' buffer views moved past them.
+pub struct StandGlbWriter {
+    path: std::path::PathBuf,
+    doc: Doc,
+    levels: Vec<usize>,
+    looks: Vec<Look>,
+    /// Per look: whether a model given has full-level leaf cards, leaf-cluster cards at the
+    /// full level (sprigs), and a tree drawn.
+    uses: Vec<[bool; 3]>,
+    /// Per model: its look and its meshes per level.
+    models: Vec<(usize, Vec<Option<usize>>)>,
+    tree_nodes: Vec<usize>,
+    mesh_nodes: usize,
+}
+
+impl StandGlbWriter {
+    /// A writer of a stand to `path` with levels of detail `levels` (indices into the models'
+    /// chains, e.g. `[0]` or `[0, 1, 2, 3]`); nothing is at `path` until
+    /// [`StandGlbWriter::finish`] (a scratch file `.<name>.glb.bin.<pid>.tmp` beside it holds
+    /// the buffer meanwhile, removed when the writer is finished or dropped).
+    ///
+    /// Errors: [`OutputError::Io`] naming the scratch file when it cannot be made.
+    pub fn create(path: &Path, levels: &[usize]) -> Result<StandGlbWriter> {
+        Self::spilling_at(path, levels, SPILL_BYTES)
+    }
+
+    /// [`StandGlbWriter::create`] writing the held buffer to the scratch file whenever `at`
+    /// bytes (≥ 1) are held (tests take a few bytes).
+    ///
+    /// Errors: as [`StandGlbWriter::create`].
+    pub fn spilling_at(path: &Path, levels: &[usize], at: usize) -> Result<StandGlbWriter> {
+        Ok(StandGlbWriter { path: path.to_path_buf(), doc: Doc::spilling(path, at.max(1))?, levels: levels.to_vec(), looks: Vec::new(), uses: Vec::new(), models: Vec::new(), tree_nodes: Vec::new(), mesh_nodes: 0 })
+    }
+
+    /// Adds a look; returns its index (as [`StandScene::looks`]).
+    pub fn look(&mut self, look: Look) -> usize {
+        self.looks.push(look);
+        self.uses.push([false; 3]);
+        self.looks.len() - 1
+    }
+
+    /// Writes the meshes of `m` (its look given before; `m.look` is that look's index) into
+    /// the buffer now; returns the model's index (as [`StandScene::models`]) for
+    /// [`StandGlbWriter::tree`]. `m` can be dropped once this returns.
+    ///
+    /// Errors: [`Error::Invalid`] for a look index not given.
+    pub fn model(&mut self, m: &StandModel) -> Result<usize> {
+        let l = m.look;
+        if l >= self.looks.len() {
+            return Err(Error::Invalid { context: format!("stand glb {}", self.path.display()), field: "model look".into(), value: format!("{l} of {}", m.name), expected: format!("a look index below {}", self.looks.len()) }.into());
+        }
+        let full = m.chain.levels.first();
+        self.uses[l][0] |= full.is_some_and(|c| !c.leaves.indices.is_empty());
+        self.uses[l][1] |= !m.sprigs.indices.is_empty() || full.is_some_and(|c| c.leaves.has_cluster_cards());
+        // every material a primitive of this model can need (the look's final ones are a
+        // superset of these: a leaf or sprig primitive exists only where this model has them,
+        // which makes its look keep that material), numbered until finish
+        let pending = |slot: usize| Some(PENDING_MATERIAL + l * LOOK_SLOTS + slot);
+        let has = |k: usize| self.levels.iter().any(|&x| x.min(3) == k);
+        let mats = LookMaterials { bark: if self.levels.iter().any(|&x| x < 3) { pending(0) } else { None }, foliage: [0, 1, 2, 3].map(|k| if has(k) || (k == 1 && has(0)) { pending(1 + k) } else { None }) };
+        let meshes = self.doc.chain_with_sprigs(&m.name, &m.chain, &m.sprigs, mats, &self.levels);
+        self.models.push((l, meshes));
+        Ok(self.models.len() - 1)
+    }
+
+    /// Adds a tree drawing model `t.model` (given before).
+    ///
+    /// Errors: [`Error::Invalid`] for a model not given, a non-positive or non-finite scale or
+    /// a non-finite translation.
+    pub fn tree(&mut self, t: &StandNode) -> Result<()> {
+        let bad = |field: &str, value: String, expected: String| OutputError::from(Error::Invalid { context: format!("stand glb {}", self.path.display()), field: field.into(), value, expected });
+        if t.model >= self.models.len() {
+            return Err(bad("tree model", format!("{} of {}", t.model, t.name), format!("a model index below {}", self.models.len())));
+        }
+        if !t.scale.iter().all(|c| c.is_finite() && *c > 0.0) || !t.translation.iter().all(|c| c.is_finite()) {
+            return Err(bad("tree transform", format!("{:?} {:?} of {}", t.translation, t.scale, t.name), "finite numbers, scales > 0".into()));
+        }
+        let (look, meshes) = &self.models[t.model];
+        self.uses[*look][2] = true;
+        let meshes = meshes.clone();
+        let node = tree_node(&mut self.doc, t, &meshes, &mut self.mesh_nodes);
+        self.tree_nodes.push(node);
+        Ok(())
+    }
+
+    /// Makes the looks' materials and textures, adds `statics` under node `ground`, names the
+    /// scene `name` with `extras`, and writes the file (atomically); the scratch file is removed.
+    ///
+    /// Errors: [`Error::Invalid`] for nothing to draw; otherwise as [`write_stand_glb`].
+    pub fn finish(mut self, statics: &[StaticMesh], name: &str, extras: &Value) -> Result<StandCounts> {
+        if self.tree_nodes.is_empty() && statics.iter().all(|m| m.mesh.indices.is_empty()) {
+            return Err(Error::Invalid { context: format!("stand glb {name}"), field: "scene".into(), value: "no trees and no ground".into(), expected: "at least one tree or mesh".into() }.into());
+        }
+        // the looks' materials as the held writer makes them (stand_doc), in a document of
+        // their own whose buffer (the textures) goes first
+        let mut head = Doc::new();
+        let mut mats: Vec<Option<LookMaterials>> = vec![None; self.looks.len()];
+        for (l, look) in self.looks.iter().enumerate() {
+            let [leaves, sprigs, drawn] = self.uses[l];
+            if !drawn {
+                continue;
+            }
+            let mut levels = self.levels.clone();
+            if sprigs && levels.contains(&0) && !levels.contains(&1) {
+                levels.push(1);
+            }
+            if levels.iter().any(|&k| k != 0) && !leaves {
+                levels.retain(|&k| k != 0);
+            }
+            mats[l] = Some(head.look(look, &levels)?);
+        }
+        while head.bin.len() % 4 != 0 {
+            head.bin.push(0);
+        }
+        let (base, n_views) = (head.bin.len(), head.views.len());
+        let d = &mut self.doc;
+        for v in &mut d.views {
+            let o = v["byteOffset"].as_u64().unwrap_or(0) as usize;
+            v["byteOffset"] = json!(o + base);
+        }
+        for a in &mut d.accessors {
+            let v = a["bufferView"].as_u64().unwrap_or(0) as usize;
+            a["bufferView"] = json!(v + n_views);
+        }
+        for mesh in &mut d.meshes {
+            for p in mesh["primitives"].as_array_mut().into_iter().flatten() {
+                let k = p["material"].as_u64().unwrap_or(0) as usize;
+                let Some(k) = k.checked_sub(PENDING_MATERIAL) else { continue };
+                let lm = mats.get(k / LOOK_SLOTS).copied().flatten();
+                let m = lm.and_then(|lm| if k % LOOK_SLOTS == 0 { lm.bark } else { lm.foliage[k % LOOK_SLOTS - 1] });
+                let Some(m) = m else {
+                    return Err(Error::Invalid { context: format!("stand glb {name}"), field: "material".into(), value: format!("slot {} of look {}", k % LOOK_SLOTS, k / LOOK_SLOTS), expected: "a material its look has".into() }.into());
+                };
+                p["material"] = json!(m);
+            }
+        }
+        d.views.splice(0..0, std::mem::take(&mut head.views));
+        d.head = std::mem::take(&mut head.bin);
+        d.images = std::mem::take(&mut head.images);
+        d.textures = std::mem::take(&mut head.textures);
+        d.texture_of = std::mem::take(&mut head.texture_of);
+        d.materials = std::mem::take(&mut head.materials);
+        let doc = std::mem::replace(&mut self.doc, Doc::new());
+        let (doc, scene, counts) = forest_doc(doc, std::mem::take(&mut self.tree_nodes), self.mesh_nodes, statics, name, extras);
+        doc.finish_to(scene, &self.path)?;
+        Ok(counts)
+    }
 }
 
 /// Path of the skeleton sidecar of a `.glb`: `tree.glb` → `tree.skeleton.json`.

@@ -257,7 +257,7 @@ fn bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
 }
 
 /// LOD2: a low-poly star-shaped crown hull fitted to the foliage (leaf centres, or tips): the
-/// crown between the 3rd and 98th percentile of its foliage heights is cut into
+/// crown from the 3rd percentile of its foliage heights to its highest foliage point is cut into
 /// `hull_segments / 2 − 2` (≥ 2) height bands and `hull_segments` (≥ 3) azimuth directions around the trunk axis; each
 /// ring vertex lies at the band's support function in its direction (the farthest horizontal
 /// reach of the band's foliage along it, at least 2 % of the crown radius; empty bands take the
@@ -273,12 +273,17 @@ fn bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
 pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     let mut pts = foliage_points(sk, leaves);
     let Some((mut lo, mut hi)) = bounds(&pts) else { return TreeMesh::default() };
-    // the crown spans the 3rd to 98th percentile of foliage height: a few low leaves on the
-    // trunk (epicormic shoots) or a leader's leaves do not stretch the hull into a spike
+    // the crown spans the 3rd percentile of foliage height (a few low leaves on the trunk,
+    // epicormic shoots, do not stretch the hull down it) to the highest foliage point: the
+    // levels beside it reach the crown's top (the reduced level's clusters, the renderer's
+    // billboard silhouette), and in a cross-fade a hull that stopped at the 98th percentile
+    // left the top 10-20 % of a broadleaf crown to the other level's share of the Bayer mask, a
+    // dotted cap over the crown against the sky (round 39; the top bands' support functions
+    // keep a sparse leader's top as narrow as its foliage)
     let mut zs: Vec<f32> = pts.iter().map(|p| p.z).collect();
     zs.sort_by(f32::total_cmp);
     lo.z = zs[(zs.len() * 3 / 100).min(zs.len() - 1)];
-    hi.z = zs[(zs.len() * 98 / 100).min(zs.len() - 1)].max(lo.z + 1e-3);
+    hi.z = zs[zs.len() - 1].max(lo.z + 1e-3);
     pts.retain(|p| p.z >= lo.z && p.z <= hi.z);
     let top_xy = pts.iter().copied().fold(Vec3::new(0.0, 0.0, f32::MIN), |a, p| if p.z > a.z { p } else { a });
     let c = 0.5 * (lo + hi);
