@@ -396,23 +396,27 @@ fn ecomod_tree_height_follows_the_species_curve_and_scientific_names_are_accepte
     assert!(!res.status.success() && err.contains("--species \"Fagus\"") && err.contains("beech"), "{err}");
 }
 
+/// Runs `sylva` with `base`, `--out out` and `extra`, which must succeed, and gives the names
+/// of the mesh nodes of the `.glb` written.
+fn mesh_nodes(base: &[&str], extra: &[&str], out: &std::path::Path) -> Vec<String> {
+    let mut a = base.to_vec();
+    a.extend_from_slice(&["--out", out.to_str().unwrap()]);
+    a.extend_from_slice(extra);
+    let res = sylva(&a);
+    assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
+    let bytes = std::fs::read(out).unwrap();
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
+    js["nodes"].as_array().unwrap().iter().filter(|n| n.get("mesh").is_some()).map(|n| n["name"].as_str().unwrap().to_string()).collect()
+}
+
 /// Trial 35: `tree grow` wrote the whole LOD chain, which Blender showed stacked (the hull and
 /// billboard over the tree). Now `--lod 0` (the default) writes the full-detail mesh alone and
 /// `--lod all` the chain, as `sylva export` does; a bad level names the option.
 #[test]
 fn tree_grow_writes_the_full_level_alone_unless_lod_asks_for_the_chain() {
     let dir = tempfile::tempdir().unwrap();
-    let meshes = |args: &[&str], name: &str| -> Vec<String> {
-        let out = dir.path().join(name);
-        let mut a = vec!["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "10", "--out", out.to_str().unwrap()];
-        a.extend_from_slice(args);
-        let res = sylva(&a);
-        assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
-        let bytes = std::fs::read(&out).unwrap();
-        let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
-        let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + len]).unwrap();
-        js["nodes"].as_array().unwrap().iter().filter(|n| n.get("mesh").is_some()).map(|n| n["name"].as_str().unwrap().to_string()).collect()
-    };
+    let meshes = |args: &[&str], name: &str| mesh_nodes(&["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "10"], args, &dir.path().join(name));
     assert_eq!(meshes(&[], "d.glb"), ["beech_LOD0"]);
     assert_eq!(meshes(&["--lod", "all"], "a.glb"), ["beech_LOD0", "beech_LOD1", "beech_LOD2", "beech_LOD3"]);
     assert_eq!(meshes(&["--lod", "0,3"], "b.glb"), ["beech_LOD0", "beech_LOD3"]);
@@ -427,4 +431,23 @@ fn tree_grow_writes_the_full_level_alone_unless_lod_asks_for_the_chain() {
     assert!(res.status.success(), "{}", String::from_utf8_lossy(&res.stderr));
     let objects: Vec<String> = std::fs::read_to_string(&obj).unwrap().lines().filter_map(|l| l.strip_prefix("o ")).map(String::from).collect();
     assert_eq!(objects, ["beech_LOD0"]);
+}
+
+/// Trial 39: `tree adapt` wrote the whole LOD chain, which Blender showed stacked (the crown
+/// hull and billboard over the adapted tree), and had no `--lod`. Now it writes the full-detail
+/// mesh alone unless `--lod` asks for more, as `tree grow` and `export` do; a bad level names
+/// the option and writes nothing.
+#[test]
+fn tree_adapt_writes_the_full_level_alone_unless_lod_asks_for_the_chain() {
+    let dir = tempfile::tempdir().unwrap();
+    let meshes = |args: &[&str], name: &str| mesh_nodes(&["tree", "adapt", "--species", "beech", "--model", "ecomod", "--age", "8", "--obstacle", "wall:1.0"], args, &dir.path().join(name));
+    assert_eq!(meshes(&[], "d.glb"), ["beech_LOD0"]);
+    assert_eq!(meshes(&["--lod", "all"], "a.glb"), ["beech_LOD0", "beech_LOD1", "beech_LOD2", "beech_LOD3"]);
+    assert_eq!(meshes(&["--lod", "1,3"], "b.glb"), ["beech_LOD1", "beech_LOD3"]);
+    let bad = dir.path().join("x.glb");
+    let res = sylva(&["tree", "adapt", "--species", "beech", "--age", "5", "--lod", "4", "--out", bad.to_str().unwrap()]);
+    assert!(!res.status.success());
+    let e = String::from_utf8_lossy(&res.stderr);
+    assert!(e.contains("--lod") && e.contains('4'), "{e}");
+    assert!(!bad.exists() && !bad.with_extension("png").exists());
 }

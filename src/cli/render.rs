@@ -199,7 +199,7 @@ pub struct RenderArgs {
     /// instanced_trees, triangles (drawn), per_level (instances drawn per level),
     /// adapted_per_level (the adapted trees among them), frame_s; trees (live trees of the
     /// snapshot), trees_15m, nodes_median and nodes_min (skeleton nodes of the adapted trees of
-    /// 15 m and taller), leaf_cards (of the adapted trees), sprig_cards (leaf-cluster cards carrying the rest of the full-detail trees' crown leaf area, as exports do), adapted_leaf_area_m2 and leaf_area_m2 (one-sided leaf area of the full-detail trees: their adapted leaf cards, and what their full level carries: the crowns' leaf area), mesh_bytes (CPU bytes of the adapted trees' level meshes), stumps (harvested trees drawn as
+    /// 15 m and taller), leaf_cards (of the adapted trees), sprig_cards (leaf-cluster cards carrying the rest of the full-detail trees' crown leaf area, as exports do), adapted_leaf_area_m2 and leaf_area_m2 (one-sided leaf area of the full-detail trees: their adapted leaf cards, and what their full level carries: the crowns' leaf area), mesh_bytes (CPU bytes of the adapted trees' level meshes), full_held_back (trees among the 200 largest on screen kept from full detail by the budget of 3 M leaf cards and nodes), stumps (harvested trees drawn as
     /// stumps: cut in the 20 years up to the year; their two instances each are among the
     /// instances drawn); tree_triangles (the trees' share of triangles), triangle_budget,
     /// demoted (whether the budget raised the level switches) and lod_scale (by what factor),
@@ -362,7 +362,7 @@ fn render_checked(a: RenderArgs) -> anyhow::Result<()> {
             "cluster_hulls": ad.cluster_hulls, "hull_triangles": ad.hull_triangles, "per_level": st.per_level, "adapted_per_level": ad.per_level,
             "instanced_trees": st.instances_drawn.saturating_sub(ad.adapted_trees), "instances_drawn": st.instances_drawn, "triangles": st.triangles, "frame_s": frame_s,
             "trees": trees,
-            "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards, "sprig_cards": ad.sprig_cards, "adapted_leaf_area_m2": ad.adapted_leaf_area_m2, "leaf_area_m2": ad.leaf_area_m2, "mesh_bytes": ad.mesh_bytes,
+            "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards, "sprig_cards": ad.sprig_cards, "adapted_leaf_area_m2": ad.adapted_leaf_area_m2, "leaf_area_m2": ad.leaf_area_m2, "mesh_bytes": ad.mesh_bytes, "full_held_back": ad.full_held_back,
             "tree_triangles": st.tree_triangles, "triangle_budget": a.triangle_budget, "demoted": st.lod_scale > 1.0, "lod_scale": st.lod_scale,
             "full_level_trees": ad.full_level_trees, "bare_full_level": ad.bare_full_level, "shed_bare": ad.shed_bare,
         });

@@ -128,6 +128,12 @@ pub struct AdaptArgs {
     /// same name with .png.
     #[arg(long)]
     out: PathBuf,
+    /// Levels of detail written to `--out`, as `sylva tree grow --lod`: `0`, the default, the
+    /// adapted tree's full-detail mesh alone (Blender and glTF viewers draw every node: the
+    /// whole chain stacked the crown hull and billboard over the tree, trial 39); `all` the
+    /// chain `<species>_LOD0…3`; or a list such as `0,3`.
+    #[arg(long, default_value = "0")]
+    lod: String,
     /// Print one JSON object on stdout (nodes_before, nodes_after, bent, pruned, pruned_light,
     /// pruned_collision, recomputed_nodes, adapt_ms, regrow_ms, neighbours, out, png).
     #[arg(long)]
@@ -149,6 +155,12 @@ pub fn run(c: Command) -> anyhow::Result<()> {
 /// "species") and listing the ids.
 fn find_species(lib: &sylva::species::SpeciesLibrary, name: &str, what: &str) -> anyhow::Result<sylva::species::Species> {
     lib.find(name).map(|i| lib.species[i as usize].clone()).with_context(|| format!("{what} {name:?}: not in the library{} (ids: {})", lib.did_you_mean(name), lib.species.iter().map(|s| s.id.as_str()).collect::<Vec<_>>().join(", ")))
+}
+
+/// The levels `levels` of `chain` (indices 0–3, from [`sylva::job::export::parse_levels`]),
+/// the others left empty: the glTF writer skips levels without triangles.
+fn only_levels(chain: &sylva::mesh::LodChain, levels: &[usize]) -> sylva::mesh::LodChain {
+    sylva::mesh::LodChain { levels: chain.levels.iter().enumerate().map(|(i, l)| if levels.contains(&i) { l.clone() } else { Default::default() }).collect(), freed: None }
 }
 
 /// Refuses `--age` beyond the species' maximum age.
@@ -232,7 +244,7 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", out.display(), dir.display()))?;
     }
     // the levels not asked for written empty (the writers skip levels without triangles)
-    let written = sylva::mesh::LodChain { levels: chain.levels.iter().enumerate().map(|(i, l)| if lod_levels.contains(&i) { l.clone() } else { Default::default() }).collect(), freed: None };
+    let written = only_levels(&chain, &lod_levels);
     match ext.as_str() {
         "glb" => {
             sylva::output::gltf::write_glb(out, &written, &glb_options(&sp))?;
@@ -346,6 +358,8 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     for f in &outputs {
         anyhow::ensure!(!f.is_dir(), "--out {}: {} is a folder; expected to write a file there", a.out.display(), f.display());
     }
+    // checked before anything is grown (a bad level names `--lod`, as `tree grow` does)
+    let lod_levels = sylva::job::export::parse_levels(&a.lod)?;
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let find = |name: &str| find_species(&lib, name, "species");
     // the input tree is read first, so that a missing or wrong file is named as such (a trial
@@ -459,7 +473,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
     }
-    sylva::output::gltf::write_glb(&a.out, &chain, &glb_options(&sp))?;
+    sylva::output::gltf::write_glb(&a.out, &only_levels(&chain, &lod_levels), &glb_options(&sp))?;
     sylva::output::gltf::write_skeleton_sidecar(&a.out, &adapted, Some(&sp.id))?;
     let png = a.out.with_extension("png");
     let (drawing, along) = before_after(&before, &trees, &obstacles, 420, 480);

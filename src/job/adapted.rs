@@ -55,6 +55,46 @@ pub struct AdaptOptions {
     /// [`AdaptOptions::full_px`] get at most [`FAR_MAX_STRANDS`]): the adaptation's time and
     /// the frame's memory grow with the nodes and leaf cards. Default [`DEFAULT_MAX_FULL_TREES`].
     pub max_full_trees: usize,
+    /// Most leaf cards and skeleton nodes of the full-detail trees together, counted on their
+    /// species' open-grown trees at full detail ([`full_detail_cost`]; the adapted trees keep
+    /// at most these): trees past it, the largest on screen first, get at most
+    /// [`FAR_MAX_STRANDS`] like those past [`AdaptOptions::max_full_trees`]. The count of trees
+    /// alone hid a multiplier of 20: a 65-year Norway spruce (6,000 strands, needle cards) holds
+    /// about 20 times the leaf cards of a beech of the default close-up, and a dense spruce
+    /// planting's close-up took 10.1 GiB (trial 39). Default [`DEFAULT_MAX_FULL_CARDS`].
+    pub max_full_cards: usize,
+}
+
+/// Default of [`AdaptOptions::max_full_cards`]: 3,000,000 leaf cards and nodes. The default
+/// run's close-up holds 1.3 M leaf cards on its 200 full-detail trees (BENCHMARKS.md, round 21),
+/// so it is not cut; the close-up of a dense 65-year spruce planting (trial 39) is cut from 200
+/// to the number of spruces whose cards fit.
+pub const DEFAULT_MAX_FULL_CARDS: usize = 3_000_000;
+
+/// What a tree of `key` ([`crate::structure::stand::FormKey`]) costs at full detail: the leaf
+/// cards and skeleton nodes of its open-grown tree in `cache` (a cache of
+/// [`crate::structure::stand::FULL_STRANDS`], prepared for the key; 0 when it is not grown).
+pub fn full_detail_cost(cache: &SkeletonCache, key: crate::structure::stand::FormKey) -> usize {
+    cache.get(key).map_or(0, |g| g.leaves.leaves.len() + g.skeleton.nodes.len())
+}
+
+/// Which of the trees drawn at the full level get full detail: `costs` are their
+/// [`full_detail_cost`]s, the largest on screen first; each in turn is taken while fewer than
+/// `max_trees` are taken and its cost fits in what is left of `max_cards` (a tree that does
+/// not fit is passed over, and a smaller one after it may fit). Returns one flag per tree.
+pub fn choose_full_detail(costs: &[usize], max_trees: usize, max_cards: usize) -> Vec<bool> {
+    let (mut taken, mut cards) = (0usize, 0usize);
+    costs
+        .iter()
+        .map(|&c| {
+            let fits = taken < max_trees && cards.saturating_add(c) <= max_cards;
+            if fits {
+                taken += 1;
+                cards += c;
+            }
+            fits
+        })
+        .collect()
 }
 
 /// Default of [`AdaptOptions::max_full_trees`]: 200. The ground view of the default run's
@@ -74,10 +114,11 @@ pub const FAR_MAX_STRANDS: u32 = 48;
 
 impl Default for AdaptOptions {
     /// 80 m, 400 trees, cells of 12 m with a halo of 6 m, a picture 1,080 px tall, full detail
-    /// from 180 px for the [`DEFAULT_MAX_FULL_TREES`] largest on screen.
+    /// from 180 px for the [`DEFAULT_MAX_FULL_TREES`] largest on screen within
+    /// [`DEFAULT_MAX_FULL_CARDS`].
     fn default() -> Self {
         let lod = crate::render::lod::LodParams::default();
-        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0, image_height_px: 1080.0, image_width_px: 0.0, full_px: lod.switch_px[0] * (1.0 - lod.band), max_full_trees: DEFAULT_MAX_FULL_TREES }
+        AdaptOptions { near_m: 80.0, max_trees: 400, cell_m: 12.0, halo_m: 6.0, image_height_px: 1080.0, image_width_px: 0.0, full_px: lod.switch_px[0] * (1.0 - lod.band), max_full_trees: DEFAULT_MAX_FULL_TREES, max_full_cards: DEFAULT_MAX_FULL_CARDS }
     }
 }
 
@@ -165,6 +206,10 @@ pub struct AdaptStats {
     /// their neighbours); a full-level one gets leaves at its shoot tips
     /// ([`tip_leaves`]) so that it can carry its crown's leaf area.
     pub shed_bare: usize,
+    /// Trees among the [`AdaptOptions::max_full_trees`] largest on screen that
+    /// [`AdaptOptions::max_full_cards`] kept from full detail (they get at most
+    /// [`FAR_MAX_STRANDS`]).
+    pub full_held_back: usize,
 }
 
 /// The level of an adapted tree's chain that is its crown hull (LOD2: 40–100 px tall on screen
@@ -312,8 +357,19 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
     // the largest on screen (ties: nearest first) of those over full_px
     let mut by_size: Vec<(f32, usize)> = near.iter().enumerate().map(|(k, n)| (px(n), k)).filter(|(p, _)| *p >= o.full_px).collect();
     by_size.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    // full detail within a budget of leaf cards, not only of trees (trial 39): the candidates'
+    // open-grown trees are grown first (adapt_stand would grow them anyway)
+    let form_of = |k: usize| {
+        let t = &stand[near[k].2].1;
+        (t.species, crate::structure::stand::age_class(t.age_yr), crate::structure::stand::crown_base_class(t.height_m, t.crown_base_m))
+    };
+    let keys: Vec<_> = by_size.iter().map(|&(_, k)| form_of(k)).collect();
+    cache.full.prepare(library, &keys)?;
+    let costs: Vec<usize> = by_size.iter().map(|&(_, k)| full_detail_cost(&cache.full, form_of(k))).collect();
     let mut is_full = vec![false; near.len()];
-    by_size.iter().take(o.max_full_trees).for_each(|&(_, k)| is_full[k] = true);
+    let chosen = choose_full_detail(&costs, o.max_full_trees, o.max_full_cards);
+    by_size.iter().zip(&chosen).filter(|(_, &c)| c).for_each(|(&(_, k), _)| is_full[k] = true);
+    let full_held_back = chosen.iter().take(o.max_full_trees).filter(|&&c| !c).count();
     // every tree the picture may draw at its full level carries its crown's leaf area there,
     // also those past `max_full_trees` (coarser skeletons; until round 36 they were drawn with
     // the few leaf cards of a 48-strand skeleton: sticks)
@@ -385,7 +441,7 @@ pub fn adapt_near_field(plants: &[Plant], inst: &mut [TreeInstance], prototypes:
         prototypes.push(m.prototype);
         adapted += 1;
     }
-    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards, sprig_cards: sprigs, adapted_leaf_area_m2: adapted_area, leaf_area_m2: area, mesh_bytes, full_level_trees, bare_full_level, shed_bare })
+    Ok(AdaptStats { adapted_trees: adapted, adapt_s, mesh_s: t1.elapsed().as_secs_f64(), trees_in_groups, cluster_hulls: hulls, hull_triangles, per_level: [0; LOD_LEVELS], trees_15m: nodes_15m.len(), nodes_min: nodes_15m.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut nodes_15m), leaf_cards, sprig_cards: sprigs, adapted_leaf_area_m2: adapted_area, leaf_area_m2: area, mesh_bytes, full_level_trees, bare_full_level, shed_bare, full_held_back })
 }
 
 /// The share of a leaf card and of a leaf-cluster card that their textures cover, per species

@@ -361,7 +361,7 @@ mod tests {
         let m2 = l.mesh(&[tree]).unwrap();
         let v = at(105.0, 105.0);
         assert!(m2.colors[v][0] > m2.colors[v][1] && m.colors[v][1] > m.colors[v][0], "{:?} vs {:?}", m2.colors[v], m.colors[v]);
-        // without surroundings the site's edges fade out within EDGE_FADE_M
+        // without surroundings the site's mirror image fades out by the end of the margin
         let alone = Landscape::new(&site, None, 10.0, f32::NEG_INFINITY).unwrap();
         let ga = &alone.ground;
         assert!(ga.fade.iter().all(|f| (0.0..=1.0).contains(f)) && ga.fade[0] > 0.99);

@@ -18,6 +18,21 @@ pub struct Landscape {
 /// Width (m) over which the edge of the DEM (or of a site without surroundings) fades out.
 pub const EDGE_FADE_M: f64 = 150.0;
 
+/// A fractional cell coordinate `v` (cell centres at 0, 1, …, `n` − 1; the grid spans −0.5 to
+/// `n` − 0.5) brought into the grid by mirroring it at the grid's ends, as often as needed
+/// (period 2`n`): −0.5 − d ↦ −0.5 + d and `n` − 0.5 + d ↦ `n` − 0.5 − d. Inside the grid
+/// `v` is returned as it is. The ground beyond a DEM is drawn as its mirror image, which
+/// continues the relief across the edge without a seam (the window's trees are mirrored the
+/// same way, [`Landscape::surroundings`]); NaN stays NaN. `n` ≥ 1.
+pub(super) fn mirrored(v: f64, n: usize) -> f64 {
+    let span = n.max(1) as f64;
+    if (-0.5..=span - 0.5).contains(&v) || !v.is_finite() {
+        return v;
+    }
+    let t = (v + 0.5).rem_euclid(2.0 * span);
+    (if t <= span { t } else { 2.0 * span - t }) - 0.5
+}
+
 /// Multi-source breadth-first distance (in samples, 8-connected with √2 diagonals, a chamfer
 /// approximation of the Euclidean distance) from the cells where `src` is true, and the index
 /// of the nearest source cell; `(∞, usize::MAX)` when there is no source.
@@ -138,10 +153,12 @@ pub(super) fn stream_lines(acc: &Grid<f32>, dir: &Grid<u8>, m: &Grid<bool>, cell
 impl Landscape {
     /// The landscape of `site`. `full`: the whole terrain the site was cut from and the window
     /// `[col0, row0, width, height]` (cells of that terrain) it was cut with; `None`: the site
-    /// alone (its edges fade out over [`EDGE_FADE_M`] beyond it). The margin drawn around the
-    /// window is half its longer side, at most 2 km; the surroundings fade into the sky from
-    /// 35 % of the margin to its end, and over [`EDGE_FADE_M`] at the edge of the DEM (nodata or
-    /// the end of the grid). Samples at most `max_cell_m` apart; inside the window their height
+    /// alone. The margin drawn around the window is half its longer side, at most 2 km; beyond
+    /// the end of the DEM's grid (or of the site alone) the ground is the DEM's mirror image
+    /// ([`mirrored`]; until round 39 the edge samples were stretched outwards into streaks and
+    /// a site alone faded out within [`EDGE_FADE_M`] of its edge: an island in the sky). The
+    /// surroundings fade into the sky from 35 % of the margin to its end, and over
+    /// [`EDGE_FADE_M`] at the edge of the DEM's no-data cells. Samples at most `max_cell_m` apart; inside the window their height
     /// is the site's [`SiteConditions::elevation_at_valid`], so trees stand on the ground drawn,
     /// and the window's no-data cells stay NaN: [`crate::render::terrain::from_ground`] leaves
     /// their quads out, so a DEM's no-data hole is drawn as a hole (the sky's colour behind it,
@@ -172,7 +189,12 @@ impl Landscape {
                 (t, w)
             }
             None => {
-                own = crate::terrain::Terrain { elevation: site.elevation_m.clone(), geo: site.geo.clone(), nodata: None, source: "site".into() };
+                // the site's no-data cells NaN, so that its mirror image beyond the edge
+                // keeps its holes (filled and faded below) instead of their 0 m
+                let mut elevation = site.elevation_m.clone();
+                let w = elevation.width;
+                elevation.data.iter_mut().enumerate().filter(|(i, _)| site.is_no_data(site.held.col0 + i % w, site.held.row0 + i / w, sea_level)).for_each(|(_, z)| *z = f32::NAN);
+                own = crate::terrain::Terrain { elevation, geo: site.geo.clone(), nodata: None, source: "site".into() };
                 (&own, [0, 0, site.width(), site.height()])
             }
         };
@@ -195,11 +217,11 @@ impl Landscape {
         let twi = fields::twi(&acc, &slope, &sub.geo, &m);
         // source grid position (fractional column, row) of a window-local point
         let to_src = |x: f64, y: f64| (c0 as f64 + x / scx - 0.5, r0 as f64 + wh as f64 - y / scy - 0.5);
+        // beyond the end of the source grid its mirror image ([`mirrored`]): the relief goes on
+        // (a nearest-sample fill stretched the edge cells into streaks, trial 39)
         let src_at = |fc: f64, fr: f64| -> f32 {
             let g = &src.elevation;
-            if fc < -0.5 || fr < -0.5 || fc > g.width as f64 - 0.5 || fr > g.height as f64 - 0.5 {
-                return f32::NAN;
-            }
+            let (fc, fr) = (mirrored(fc, g.width), mirrored(fr, g.height));
             let (fc, fr) = (fc.clamp(0.0, (g.width - 1) as f64), fr.clamp(0.0, (g.height - 1) as f64));
             let (a, b) = (fc.floor() as usize, fr.floor() as usize);
             let (a1, b1) = ((a + 1).min(g.width - 1), (b + 1).min(g.height - 1));
@@ -273,7 +295,7 @@ impl Landscape {
             }
             // signed distance to the edge of the ground: negative inside
             let sd = if valid[i] { -(d_in[i] as f64) * step } else { d_out[i] as f64 * step };
-            let edge = if full.is_some() { sstep(-EDGE_FADE_M, 0.25 * EDGE_FADE_M, sd) } else { sstep(0.0, EDGE_FADE_M, outside[i]) };
+            let edge = sstep(-EDGE_FADE_M, 0.25 * EDGE_FADE_M, sd);
             fade[i] = sstep(0.35 * margin, margin, outside[i]).max(edge) as f32;
         }
         let ground = crate::render::terrain::GroundGrid {
