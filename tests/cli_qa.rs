@@ -246,6 +246,10 @@ fn folders_and_files_mixed_up_get_plain_errors() {
         assert!(!ok && err.contains(opt) && err.contains("afile is a file, not a folder"), "{args:?}: {err}");
     }
     assert!(!d.join("x.png").exists());
+    // a folder that cannot be made is named as `--out`'s, as render names it (round 39's trial:
+    // export said only "creating /proc/nope: No such file or directory")
+    let (ok, err) = run(&["export", "snap_final", "--out", "/proc/sylva_no_such_folder/s.glb"]);
+    assert!(!ok && err.contains("--out /proc/sylva_no_such_folder/s.glb: creating its folder"), "{err}");
     // a scenario's site mapped without simulating: the six Ellenberg indices among them
     let (ok, err) = run(&["terrain", "maps", "--scenario", "snap.toml", "--out", "smaps"]);
     assert!(ok, "{err}");

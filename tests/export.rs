@@ -376,6 +376,14 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     // many nodes, each scaled to its own height and crown
     let open = dir.path().join("open.glb");
     let ro = export_stand(&run, &lib, &ExportOptions::new([60.0, 0.0, 100.0, 100.0]), &open).unwrap();
+    // an area with more trees than the cap is refused before any work, naming `--area` and
+    // offering `--instances` (round 39's trial), and nothing is written
+    let capped = dir.path().join("capped.glb");
+    let mut few = ExportOptions::new([60.0, 0.0, 100.0, 100.0]);
+    few.max_trees = 1;
+    let m = export_stand(&run, &lib, &few, &capped).unwrap_err().to_string();
+    assert!(m.contains("--area") && m.contains("at most 1 trees") && m.contains("--instances"), "{m}");
+    assert!(!capped.exists());
     let isolated = rows.iter().filter(|t| t.status == "alive" && t.x_m >= 60.0).count();
     assert_eq!(ro.trees, isolated);
     assert!(isolated >= 8 && ro.models < ro.trees, "{} models for {} trees", ro.models, ro.trees);

@@ -424,6 +424,8 @@ fn tree_grow_writes_the_full_level_alone_unless_lod_asks_for_the_chain() {
     assert!(!res.status.success());
     let e = String::from_utf8_lossy(&res.stderr);
     assert!(e.contains("--lod") && e.contains("7"), "{e}");
+    // the error names the command the user ran, not `sylva export` (round 39's trial)
+    assert!(e.contains("sylva tree grow") && !e.contains("sylva export"), "{e}");
     assert!(!dir.path().join("x.glb").exists());
     // an OBJ holds the asked levels only
     let obj = dir.path().join("t.obj");
@@ -449,5 +451,6 @@ fn tree_adapt_writes_the_full_level_alone_unless_lod_asks_for_the_chain() {
     assert!(!res.status.success());
     let e = String::from_utf8_lossy(&res.stderr);
     assert!(e.contains("--lod") && e.contains('4'), "{e}");
+    assert!(e.contains("sylva tree adapt") && !e.contains("sylva export"), "{e}");
     assert!(!bad.exists() && !bad.with_extension("png").exists());
 }

@@ -85,7 +85,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     // the export is refused: nothing is left behind
     let made = a.out.ancestors().skip(1).filter(|d| !d.as_os_str().is_empty() && !d.exists()).last().map(|d| d.to_path_buf());
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
     }
     let r = export(&a, area, levels);
     if let (Err(_), Some(dir)) = (&r, &made) {

@@ -172,7 +172,7 @@ fn check_age(age: f32, sp: &sylva::species::Species) -> anyhow::Result<()> {
 #[allow(clippy::too_many_arguments)]
 fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, habit: forest_form::Habit, species_dir: Option<&Path>, out: &Path, lod: &str) -> anyhow::Result<()> {
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
-    let lod_levels = sylva::job::export::parse_levels(lod)?;
+    let lod_levels = sylva::job::export::parse_levels_for("sylva tree grow", lod)?;
     // the output is checked before any work, as `render` and `export` check theirs (round 33's
     // trial: a folder named d3.obj was found only after the tree was grown and its textures
     // written, with a bare "Is a directory")
@@ -359,7 +359,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
         anyhow::ensure!(!f.is_dir(), "--out {}: {} is a folder; expected to write a file there", a.out.display(), f.display());
     }
     // checked before anything is grown (a bad level names `--lod`, as `tree grow` does)
-    let lod_levels = sylva::job::export::parse_levels(&a.lod)?;
+    let lod_levels = sylva::job::export::parse_levels_for("sylva tree adapt", &a.lod)?;
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let find = |name: &str| find_species(&lib, name, "species");
     // the input tree is read first, so that a missing or wrong file is named as such (a trial

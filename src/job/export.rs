@@ -163,10 +163,20 @@ pub fn all_levels() -> Vec<usize> {
     (0..LOD_LEVELS).collect()
 }
 
-/// Parses `--lod`: `all` ([`all_levels`]) or a comma-separated list of levels, e.g. `0` or `0,1`.
+/// Parses `--lod` of `sylva export`: `all` ([`all_levels`]) or a comma-separated list of levels,
+/// e.g. `0` or `0,1` ([`parse_levels_for`] with the command `sylva export`).
 ///
 /// Errors: [`Error::Invalid`] naming `--lod` for anything else or a level ≥ [`LOD_LEVELS`].
 pub fn parse_levels(s: &str) -> Result<Vec<usize>> {
+    parse_levels_for("sylva export", s)
+}
+
+/// Parses `--lod` of `command` (e.g. `sylva tree grow`), as [`parse_levels`]; the error names
+/// `command`, so a user of `tree grow` is not told about `sylva export` (round 39's trial).
+///
+/// Errors: [`Error::Invalid`] with context `command`, naming `--lod`, for anything but `all` or
+/// levels 0–3 separated by commas.
+pub fn parse_levels_for(command: &str, s: &str) -> Result<Vec<usize>> {
     if s.trim().eq_ignore_ascii_case("all") {
         return Ok(all_levels());
     }
@@ -177,7 +187,13 @@ pub fn parse_levels(s: &str) -> Result<Vec<usize>> {
             l.dedup();
             Ok(l)
         }
-        _ => Err(invalid("--lod", s.into(), format!("`all` or levels 0–{} separated by commas, e.g. 0 (full detail, the default) or 0,1,2,3", LOD_LEVELS - 1))),
+        _ => Err(Error::Invalid {
+            context: command.into(),
+            field: "--lod".into(),
+            value: s.into(),
+            expected: format!("`all` or levels 0–{} separated by commas, e.g. 0 (full detail, the default) or 0,1,2,3", LOD_LEVELS - 1),
+        }
+        .into()),
     }
 }
 
@@ -372,7 +388,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}: no live tree in year {year}"), where_));
     }
     if targets.len() > o.max_trees {
-        return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}: {} trees", targets.len()), format!("at most {} trees: a smaller area", o.max_trees)));
+        return Err(invalid("--area", format!("{x0},{y0},{x1},{y1}: {} trees", targets.len()), format!("at most {} trees: a smaller area, or `--instances` for the whole forest as instances of shared models", o.max_trees)));
     }
     // the file's size before any work (trial 37: a hectare wrote 2.2 GB and held 9.5 GB of
     // memory, and the GLB's 4 GiB limit was checked only once everything was made)
