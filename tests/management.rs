@@ -1695,3 +1695,50 @@ fn resume_says_nothing_to_do_and_names_a_changed_entrys_field() {
     let (ok, err) = sylva(&["simulate", "q2.toml", "--out", "r", "--resume", "--years", "5"]);
     assert!(!ok && err.contains("management[0].target_relative_density: 0.6 → 0.5 (the checkpoint's run") && err.contains("(a resumed run keeps") && !err.contains("CRC-32") && !err.contains(beyond), "{err}");
 }
+
+/// Trial 40 (a landscape architect): a GeoJSON file as geojson.io or `ogr2ogr -lco RFC7946=YES`
+/// writes it has no `crs` member and is longitude/latitude (RFC 7946 §4); on the georeferenced
+/// Coweeta window (EPSG:26917) it lies wholly outside the site, and the refusal now says the
+/// coordinates look like degrees and gives the reprojection command. A polygon in the DEM's
+/// metres that lies outside gets no such hint. And a mix names its species by scientific or
+/// common name as `tree grow --species` does (`"Fagus sylvatica"` was refused); an unknown name
+/// is still refused.
+#[test]
+fn lon_lat_geojson_is_named_as_such_and_mixes_take_scientific_names() {
+    let base = ScenarioToml::new("park", 2, 1).species(&["beech", "sessile_oak"]).line("[terrain]\nembedded = \"coweeta\"\nwindow = [160, 220, 20, 20]").build();
+    let d = tempfile::tempdir().unwrap();
+    let f = d.path().join("park.geojson");
+    let poly = |x0: f64, y0: f64, w: f64| format!(r#"{{"type":"FeatureCollection","features":[{{"type":"Feature","properties":{{}},"geometry":{{"type":"Polygon","coordinates":[[[{x0},{y0}],[{x1},{y0}],[{x1},{y1}],[{x0},{y1}],[{x0},{y0}]]]}}}}]}}"#, x1 = x0 + w, y1 = y0 + w);
+    let planting = |mix: &str| format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ {mix} }}\nspacing_m = 2.0\nyear = 1\narea_file = {:?}\n", f.display().to_string());
+    std::fs::write(&f, poly(-83.46, 35.05, 0.002)).unwrap();
+    let e = err(&planting("beech = 1.0"));
+    assert!(e.contains("park.geojson") && e.contains("wholly outside") && e.contains("longitude/latitude") && e.contains("RFC 7946") && e.contains("ogr2ogr -s_srs EPSG:4326 -t_srs EPSG:26917"), "{e}");
+    // metres far off the site: outside, but not taken for degrees
+    std::fs::write(&f, poly(1000.0, 1000.0, 50.0)).unwrap();
+    let e = err(&planting("beech = 1.0"));
+    assert!(e.contains("wholly outside") && !e.contains("longitude/latitude"), "{e}");
+    // a scientific name (and a common name) in a mix plant the pool's species
+    let sc = Scenario::from_toml_str(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ \"Fagus sylvatica\" = 0.5, \"sessile oak\" = 0.5 }}\nspacing_m = 2.0\nyear = 1\n"), "park.toml").unwrap();
+    let lib = common::embedded();
+    let mut w = World::new(sc.site().unwrap(), &lib, &sc).unwrap();
+    common::run(&sc, &mut w, 1);
+    let t = &w.stand.trees;
+    let (beech, oak) = (lib.find("beech").unwrap(), lib.find("sessile_oak").unwrap());
+    let (nb, no) = ((0..t.len()).filter(|&i| t.species[i] == beech).count(), (0..t.len()).filter(|&i| t.species[i] == oak).count());
+    assert!(nb > 100 && no > 100 && (nb as f64 / no as f64 - 1.0).abs() < 0.2, "planted {nb} beech, {no} oak");
+    let e = err(&format!("{base}[[management]]\nkind = \"planting\"\nmix = {{ \"Fagus silvestris\" = 1.0 }}\nspacing_m = 2.0\nyear = 1\n"));
+    assert!(e.contains("management[0].mix.Fagus silvestris") && e.contains("scenario's species"), "{e}");
+}
+
+/// Trial 40: the pictures of a scenario with plantings or harvests do not mirror its trees into
+/// the surroundings (they would copy its parcels onto the neighbours' land); thinnings alone and
+/// unmanaged scenarios keep the mirrors.
+#[test]
+fn plantings_and_harvests_design_the_stand_thinnings_do_not() {
+    let base = ScenarioToml::new("d", 2, 1).species(&["beech"]).uniform(4, 4, 20.0, 200.0).build();
+    let designs = |extra: &str| Scenario::from_toml_str(&format!("{base}{extra}"), "d.toml").unwrap().designs_its_stand();
+    assert!(!designs(""));
+    assert!(!designs("[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\nyear = 1\n"));
+    assert!(designs("[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 2.0\nyear = 1\n"));
+    assert!(designs("[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\narea = [0.0, 0.0, 40.0, 40.0]\nyears = [1]\n"));
+}

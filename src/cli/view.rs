@@ -96,7 +96,7 @@ pub fn view(a: ViewArgs) -> anyhow::Result<()> {
         Some(w) => sc.full_terrain().context("reading the terrain around the simulated window")?.map(|t| (t, w)),
         None => None,
     };
-    let start = sylva::view::ViewStart { seed: sc.seed, obstacles: sc.obstacles.clone(), camera: a.camera, adapt: a.adapt == "on" };
+    let start = sylva::view::ViewStart { seed: sc.seed, obstacles: sc.obstacles.clone(), camera: a.camera, adapt: a.adapt == "on", mirror_trees: !sc.designs_its_stand() };
     sylva::view::run(data, sc.climate.sea_level_m, surroundings, &start, &opts)?;
     said_screenshot(&opts);
     Ok(())

@@ -160,13 +160,15 @@ impl Stage {
     }
 
     /// [`Stage::set_surroundings`] from a scenario with a `[terrain] window` of a DEM (nothing
-    /// to do for other scenarios).
+    /// to do for other scenarios); the window's trees are mirrored into them unless the
+    /// scenario designs its stand ([`crate::sim::Scenario::designs_its_stand`]).
     ///
     /// Errors: reading the scenario's terrain ([`crate::sim::Scenario::full_terrain`]).
     pub fn set_surroundings_of(&mut self, sc: &crate::sim::Scenario) -> Result<()> {
         if let Some(w) = sc.terrain.window {
             if let Some(t) = sc.full_terrain()? {
                 self.set_surroundings(&t, w)?;
+                self.landscape.mirror_trees = !sc.designs_its_stand();
             }
         }
         Ok(())

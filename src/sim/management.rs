@@ -1122,7 +1122,19 @@ fn read_area_file(f: &Path, m: &Management, site: &SiteView<'_>, (ex, ey): (f64,
                 Some(c) => format!("EPSG:{c}"),
                 None => "the coordinates of the run's outputs: a site without georeferencing runs from y = −H at its south edge to 0 at its north edge, x from 0 to W".into(),
             };
-            return Err(bad(format!("polygons on the site: polygon {k} of the file ({name}) lies wholly outside it (its bounding box x {:.2}–{:.2}, y {:.2}–{:.2}; the site covers x {:.2}–{:.2}, y {:.2}–{:.2} in the file's CRS, {crs})", fb[0], fb[2], fb[1], fb[3], s0[0], s1[0], s0[1], s1[1])));
+            // RFC 7946 GeoJSON has no `crs` member and is always longitude/latitude on WGS 84
+            // (geojson.io, `ogr2ogr -lco RFC7946=YES`); read in a projected DEM's CRS it lands
+            // near the origin (trial 40): say so, with the command that reprojects it
+            let degrees = |b: [f64; 4]| b[0] >= -180.0 && b[2] <= 180.0 && b[1] >= -90.0 && b[3] <= 90.0;
+            let site_b = [s0[0].min(s1[0]), s0[1].min(s1[1]), s0[0].max(s1[0]), s0[1].max(s1[1])];
+            let hint = match epsg {
+                Some(c) if c != 4326 && degrees(fb) && !degrees(site_b) => format!(
+                    "; its coordinates look like longitude/latitude in degrees: a GeoJSON file without a `crs` member (RFC 7946) is longitude/latitude on WGS 84, so reproject it to the DEM's CRS, e.g. `ogr2ogr -s_srs EPSG:4326 -t_srs EPSG:{c} out.geojson {}`",
+                    f.display()
+                ),
+                _ => String::new(),
+            };
+            return Err(bad(format!("polygons on the site: polygon {k} of the file ({name}) lies wholly outside it (its bounding box x {:.2}–{:.2}, y {:.2}–{:.2}; the site covers x {:.2}–{:.2}, y {:.2}–{:.2} in the file's CRS, {crs}){hint}", fb[0], fb[2], fb[1], fb[3], s0[0], s1[0], s0[1], s1[1])));
         }
         out.push(world);
     }

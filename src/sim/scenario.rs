@@ -217,6 +217,24 @@ fn is_embedded_id(id: &str) -> bool {
     crate::species::EMBEDDED_FILES.iter().any(|(f, _)| f.strip_suffix(".toml") == Some(id))
 }
 
+impl Scenario {
+    /// Whether the scenario draws a design on its stand: a `[[management]]` planting or harvest
+    /// (parcels, patch cuts, clear-cuts). Its pictures then do not mirror the window's trees into
+    /// the surroundings beyond a DEM window ([`crate::job::scene::Landscape::mirror_trees`]),
+    /// which would copy its parcels onto the neighbours' land (trial 40, a landscape architect:
+    /// "about 9 planted blocks for 5 polygons"). Thinnings alone keep the mirrors.
+    pub fn designs_its_stand(&self) -> bool {
+        self.management.iter().any(|m| m.kind == "planting" || m.kind == "harvest")
+    }
+}
+
+/// Whether `name` is the scientific or common name (or an id spelt with other case, spaces or
+/// hyphens: [`crate::species::species_name_key`]) of an embedded species whose id is in `pool`.
+fn names_a_pool_species(name: &str, pool: &[String]) -> bool {
+    let Ok(lib) = crate::species::SpeciesLibrary::embedded() else { return false };
+    lib.find(name).is_some_and(|id| pool.contains(&lib.species[id as usize].id))
+}
+
 pub use crate::terrain::NO_SEA_LEVEL_M;
 
 /// Checks `[climate]`: every value finite; latitude −90–90°, lapse rate −15–5 K/km,
@@ -666,7 +684,10 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
         for (i, m) in self.management.iter().enumerate() {
             m.validate(i, ctx)?;
             for sp in m.mix.iter().flat_map(|x| x.keys()) {
-                if !self.species.is_empty() && !self.species.contains(sp) {
+                // a scientific or common name of a pool species is accepted, as `tree grow
+                // --species` accepts it (trial 40: `"Fagus sylvatica" = 0.6` was refused); the
+                // run's own library resolves it again when the plan is built
+                if !self.species.is_empty() && !self.species.contains(sp) && !names_a_pool_species(sp, &self.species) {
                     return Err(invalid(ctx, &format!("management[{i}].mix.{sp}"), sp, &format!("one of the scenario's species = {:?} (add it there)", self.species)));
                 }
             }

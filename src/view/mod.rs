@@ -1087,6 +1087,10 @@ pub struct ViewStart {
     pub camera: Option<crate::render::camera::CameraPreset>,
     /// Whether the near field is adapted ([`Viewer::set_adapt`]; `sylva view --adapt`).
     pub adapt: bool,
+    /// Whether the window's trees are mirrored into the surroundings
+    /// ([`crate::job::scene::Landscape::mirror_trees`]: not for a scenario that designs its
+    /// stand, [`crate::sim::Scenario::designs_its_stand`]).
+    pub mirror_trees: bool,
 }
 
 /// Opens the viewer window on `data` and returns when it is closed (or, with
@@ -1105,6 +1109,7 @@ pub fn run(data: RunData, sea_level_m: f32, surroundings: Option<(crate::terrain
         let mut v = Viewer::new(d, sea_level_m, Some(vp))?;
         if let Some((full, window)) = &surroundings {
             v.set_surroundings(full, *window)?;
+            v.landscape.mirror_trees = start.mirror_trees;
         }
         v.set_scenario(start.seed, start.obstacles.clone());
         v.set_adapt(start.adapt);

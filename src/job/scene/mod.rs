@@ -188,7 +188,7 @@ mod tests {
             fade,
             focus: Some(([0.0, 0.0], [1000.0, 1000.0])),
         };
-        let land = Landscape { ground, cover: LandCover::default() };
+        let mut land = Landscape { ground, cover: LandCover::default(), mirror_trees: true };
         let mut trees = Vec::new();
         for j in 0..125 {
             for i in 0..125 {
@@ -231,6 +231,9 @@ mod tests {
         let want = 15_625.0 * (1950.0 * 1800.0 - 1e6) / 1e6;
         assert!((n as f64 / want - 1.0).abs() < 0.05, "{n} trees beyond the window, {want} expected");
         assert!((sp1 as f64 / n as f64 - 0.3).abs() < 0.02, "{sp1} of {n}");
+        // a scenario that designs its stand (plantings, harvests) mirrors none (trial 40)
+        land.mirror_trees = false;
+        assert!(land.surroundings(&trees).is_empty(), "no phantom parcels beyond the window");
     }
 
     /// A valley running at 30° to the grid: its D8 channel is a staircase of east and

@@ -13,6 +13,11 @@ pub struct Landscape {
     pub ground: crate::render::terrain::GroundGrid,
     /// Land-cover colours (sea level).
     pub cover: LandCover,
+    /// Whether the window's trees are mirrored into the surroundings ([`Landscape::surroundings`]);
+    /// off for a scenario whose plantings or harvests draw a design on the window
+    /// ([`crate::sim::Scenario::designs_its_stand`]), whose mirror images would stand as
+    /// phantom parcels on the neighbours' land (trial 40). The ground is drawn either way.
+    pub mirror_trees: bool,
 }
 
 /// Width (m) over which the edge of the DEM (or of a site without surroundings) fades out.
@@ -308,7 +313,7 @@ impl Landscape {
             fade,
             focus: Some(([0.0, 0.0], [ex as f32, ey as f32])),
         };
-        Ok(Landscape { ground, cover: LandCover { sea_level, ..LandCover::default() } })
+        Ok(Landscape { ground, cover: LandCover { sea_level, ..LandCover::default() }, mirror_trees: true })
     }
 
     /// Puts the stem base of each of `instances` on the ground [`Landscape::mesh`] draws
@@ -382,12 +387,13 @@ impl Landscape {
     /// sky with that ground ([`TreeInstance::sky_fade`] = the sample's fade). Its id is the tree's
     /// with the image number (1..=8) in bits 48..52, so that it varies like a tree of its own
     /// and keeps its sapling flag ([`SAPLING_ID_BIT`]); `z` is the ground's height there
-    /// (bilinear over the samples). Empty without a window.
+    /// (bilinear over the samples). Empty without a window, and when [`Landscape::mirror_trees`]
+    /// is off.
     ///
     /// [`GroundGrid::focus`]: crate::render::terrain::GroundGrid::focus
     pub fn surroundings(&self, instances: &[TreeInstance]) -> Vec<TreeInstance> {
         let g = &self.ground;
-        let Some((lo, hi)) = g.focus else { return Vec::new() };
+        let Some((lo, hi)) = g.focus.filter(|_| self.mirror_trees) else { return Vec::new() };
         let (w, h) = (g.heights.width, g.heights.height);
         if w < 2 || h < 2 {
             return Vec::new();
