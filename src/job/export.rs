@@ -3,8 +3,10 @@
 //! adapted to its neighbours, the light and the obstacles by [`adapt_stand`] (Plastic Trees,
 //! Pirk et al. 2012, `000_*.txt`; the same near-field adaptation `job::adapted` does for the
 //! pictures), meshed with its levels of detail (the mid level: the crown hull of its adapted leaf
-//! clusters, [`super::adapted::adapted_lod_chain`]), with the terrain patch under the area and the
-//! scenario's obstacles that reach into it, as one glTF scene ([`crate::output::gltf::StandScene`]).
+//! clusters, [`super::adapted::adapted_lod_chain`]), with the terrain patch under the area (its
+//! leaf-litter texture, [`terrain_static`]), the regeneration layer's saplings ([`area_saplings`])
+//! and the scenario's obstacles that reach into it, as one glTF scene
+//! ([`crate::output::gltf::StandScene`]).
 //!
 //! **Instancing.** Trees whose adapted skeletons have the same topology and the same shape once
 //! divided by their crown radius (x, y) and height (z), within [`SAME_SHAPE`], share one mesh
@@ -377,8 +379,9 @@ fn in_area(x: f64, y: f64, [x0, y0, x1, y1]: [f64; 4], w: f64, h: f64) -> bool {
 /// where the trees are), naming `--lod` for a level ≥ [`LOD_LEVELS`], for more trees than
 /// `max_trees`, and for a file estimated above `max_bytes` ([`estimate_stand_bytes`]: refused
 /// before any tree is grown, naming `--area`, `--lod`, the cap and the estimate); the errors of
-/// [`adapt_stand`] and of the glTF writer (which writes the buffer through a scratch file
-/// beside `out`, [`crate::output::gltf::write_stand_glb`]).
+/// [`adapt_stand`], of reading the regeneration layer ([`area_saplings`]) and of the glTF writer
+/// (which writes the buffer through a scratch file beside `out`,
+/// [`crate::output::gltf::StandGlbWriter`]).
 pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions, out: &Path) -> Result<ExportReport> {
     let (sc, site, year, [x0, y0, x1, y1]) = open_export(run_dir, o.year, &o.levels, Some(o.area))?;
     let opts = StandOptions { latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(&sc.obstacles, &site), ..StandOptions::default() };
