@@ -108,7 +108,8 @@ fn blender_imports_one_mesh_per_tree_and_sees_the_simulated_crown_cover() {
     assert_eq!(b["trees"], r.trees, "{b}");
     assert_eq!(b["tree_objects"], r.trees, "one visible mesh object per tree: {b}");
     assert_eq!(b["ground_objects"], 1, "the terrain: {b}");
-    assert_eq!(b["mesh_objects"], r.trees + 1, "{b}");
+    assert_eq!(b["sapling_objects"], r.saplings, "one visible mesh object per sapling: {b}");
+    assert_eq!(b["mesh_objects"], r.trees + r.saplings + 1, "{b}");
 
     let rows = sylva::job::pictures::snapshot_rows(&run, 1).unwrap();
     let sim = disc_cover(&rows, 50.0, 50.0, 10.0);

@@ -234,7 +234,7 @@ fn stand_writer_instances_one_model_on_many_nodes() {
     let model = StandModel { name: "beech_a".into(), chain, look: 0, sprigs: Default::default() };
     let trees: Vec<StandNode> = (0..5).map(|k| StandNode { name: format!("beech_{k}"), model: 0, translation: [k as f32 * 4.0, 0.0, 0.0], scale: [1.0, 1.0, 1.0 + 0.1 * k as f32] }).collect();
     let ground = sylva::mesh::TriMesh { positions: vec![[-10.0, -10.0, 0.0], [30.0, -10.0, 0.0], [30.0, 10.0, 0.0], [-10.0, 10.0, 0.0]], normals: vec![[0.0, 0.0, 1.0]; 4], uvs: vec![], indices: vec![0, 1, 2, 0, 2, 3] };
-    let scene = StandScene { name: "s".into(), looks: vec![Look::for_species(&sp, Season::Summer)], models: vec![model], trees, statics: vec![StaticMesh { name: "terrain".into(), mesh: ground, rgb: [90, 80, 60], roughness: 0.9 }], levels: vec![0, 1, 2, 3], extras: serde_json::Value::Null };
+    let scene = StandScene { name: "s".into(), looks: vec![Look::for_species(&sp, Season::Summer)], models: vec![model], trees, saplings: vec![], statics: vec![StaticMesh { name: "terrain".into(), mesh: ground, rgb: [90, 80, 60], roughness: 0.9, texture: None }], levels: vec![0, 1, 2, 3], extras: serde_json::Value::Null };
     let (bytes, counts) = sylva::output::gltf::stand_glb_bytes(&scene).unwrap();
     // the model's 4 levels (its own billboard among them) + terrain, whatever the number of trees
     assert_eq!(counts.meshes, 5);
@@ -485,7 +485,7 @@ fn instanced_export_places_every_live_tree_of_the_run() {
     small_run(&run);
     let lib = lib();
     let out = dir.path().join("forest.glb");
-    let o = InstanceOptions { year: Some(1), area: None, season: sylva::species::Season::Summer, levels: vec![0] };
+    let o = InstanceOptions { year: Some(1), area: None, season: sylva::species::Season::Summer, levels: vec![0], max_triangles: sylva::job::export::INSTANCE_MAX_TRIANGLES };
     let r = export_instances(&run, &lib, &o, &out).unwrap();
     let rows = sylva::job::pictures::snapshot_rows(&run, 1).unwrap();
     let live: Vec<_> = rows.iter().filter(|t| t.status == "alive" && t.height_m >= 1.0).collect();
@@ -806,34 +806,6 @@ fn two_node_chain() -> LodChain {
     sylva::structure::mesh::lod_chain(&sk, &Default::default(), &Default::default())
 }
 
-/// Trial 37: a stand's buffer, written through its scratch file 64 bytes at a time, gives
-/// the same file, byte for byte, as the buffer held in memory; the scratch file is gone.
-#[test]
-fn a_stand_written_through_its_scratch_file_is_the_stand_held_in_memory() {
-    let chain = two_node_chain();
-    let trees = (0..5).map(|k| StandNode { name: format!("t{k}"), model: k % 2, translation: [k as f32, 0.0, 0.0], scale: [1.0; 3] }).collect();
-    let ground = sylva::mesh::TriMesh { positions: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], normals: vec![[0.0, 0.0, 1.0]; 3], uvs: vec![[0.0; 2]; 3], indices: vec![0, 1, 2] };
-    let scene = StandScene {
-        name: "s".into(),
-        looks: vec![Look::default()],
-        models: (0..2).map(|k| StandModel { name: format!("m{k}"), chain: chain.clone(), look: 0, sprigs: sylva::mesh::TriMesh::default() }).collect(),
-        trees,
-        statics: vec![StaticMesh { name: "terrain".into(), mesh: ground, rgb: [1, 2, 3], roughness: 0.9 }],
-        levels: vec![0, 1, 2, 3],
-        extras: serde_json::json!({"a": 1}),
-    };
-    let (want, counts) = sylva::output::gltf::stand_glb_bytes(&scene).unwrap();
-    assert!(want.len() > 10_000, "{} bytes: more than a few spills", want.len());
-    let dir = tempfile::tempdir().unwrap();
-    for at in [64, 1 << 30] {
-        let out = dir.path().join(format!("s{at}.glb"));
-        assert_eq!(sylva::output::gltf::write_stand_glb_spilling_at(&out, &scene, at).unwrap(), counts);
-        assert!(std::fs::read(&out).unwrap() == want, "spilling from {at} bytes: a different file");
-    }
-    let left: Vec<String> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).filter(|n| !n.ends_with(".glb") || n.starts_with('.')).collect();
-    assert!(left.is_empty(), "left behind: {left:?}");
-}
-
 /// Trial 37: `--instances --lod all` groups each model's levels under a node named after
 /// the model (as a stand's trees are), the levels' nodes instanced; one level stays flat.
 #[test]
@@ -874,7 +846,9 @@ fn instanced_levels_are_grouped_under_their_model() {
 /// scratch file as it is given, the textures made at the end and put first) is byte for byte
 /// the stand held in memory (`stand_glb_bytes`), whichever looks need which materials: a
 /// broadleaf with leaf cards and sprigs, a look whose full level has no leaf cards (its leaf
-/// material left out) but sprigs (its cluster material added at `--lod 0`), shared models.
+/// material left out) but sprigs (its cluster material added at `--lod 0`), shared models;
+/// since round 40 with saplings (a model only they draw) and a textured ground. Written
+/// through the scratch file 64 bytes at a time and at once (trial 37), the scratch file gone.
 #[test]
 fn a_stand_written_tree_by_tree_is_the_stand_held_in_memory() {
     use sylva::output::gltf::StandGlbWriter;
@@ -891,12 +865,16 @@ fn a_stand_written_tree_by_tree_is_the_stand_held_in_memory() {
     // trees in the order the export gives them: a model first drawn by the tree after it
     let draws = [0, 1, 0, 2, 1, 3, 2];
     let trees: Vec<StandNode> = draws.iter().enumerate().map(|(k, &m)| StandNode { name: format!("t{k}"), model: m, translation: [k as f32 * 3.0, 1.0, 0.5], scale: [1.0, 1.0, 1.0 + 0.1 * k as f32] }).collect();
-    let ground = sylva::mesh::TriMesh { positions: vec![[0.0; 3], [9.0, 0.0, 0.0], [0.0, 9.0, 0.0]], normals: vec![[0.0, 0.0, 1.0]; 3], uvs: vec![], indices: vec![0, 1, 2] };
+    let mut models = models;
+    models.push(StandModel { name: "sapling".into(), chain: two_node_chain(), look: 1, sprigs: quad(0.5) });
+    let saplings: Vec<StandNode> = (0..3).map(|k| StandNode { name: format!("s{k}"), model: 4, translation: [k as f32, 5.0, 0.2], scale: [0.3, 0.3, 0.5] }).collect();
+    let ground = sylva::mesh::TriMesh { positions: vec![[0.0; 3], [9.0, 0.0, 0.0], [0.0, 9.0, 0.0]], normals: vec![[0.0, 0.0, 1.0]; 3], uvs: vec![[0.0, 0.0], [9.0, 0.0], [0.0, 9.0]], indices: vec![0, 1, 2] };
     let looks = vec![Look::for_species(&sp, Season::Summer), Look::default()];
-    let statics = vec![StaticMesh { name: "terrain".into(), mesh: ground, rgb: [90, 80, 60], roughness: 0.9 }];
+    let litter = sylva::structure::texture::litter_texture([82, 79, 60], 32, 1);
+    let statics = vec![StaticMesh { name: "terrain".into(), mesh: ground, rgb: [90, 80, 60], roughness: 0.9, texture: Some(litter) }];
     let dir = tempfile::tempdir().unwrap();
     for levels in [vec![0], vec![0, 1, 2, 3], vec![1, 3], vec![0, 2]] {
-        let scene = StandScene { name: "s".into(), looks: looks.clone(), models: models.clone(), trees: trees.clone(), statics: statics.clone(), levels: levels.clone(), extras: serde_json::json!({"b": 2}) };
+        let scene = StandScene { name: "s".into(), looks: looks.clone(), models: models.clone(), trees: trees.clone(), saplings: saplings.clone(), statics: statics.clone(), levels: levels.clone(), extras: serde_json::json!({"b": 2}) };
         let (want, counts) = sylva::output::gltf::stand_glb_bytes(&scene).unwrap();
         for at in [64, 1 << 30] {
             let out = dir.path().join(format!("w{at}.glb"));
@@ -911,6 +889,10 @@ fn a_stand_written_tree_by_tree_is_the_stand_held_in_memory() {
                     given += 1;
                 }
                 w.tree(t).unwrap();
+            }
+            assert_eq!(w.model(&models[4]).unwrap(), 4);
+            for t in &saplings {
+                w.sapling(t).unwrap();
             }
             assert_eq!(w.finish(&statics, "s", &serde_json::json!({"b": 2})).unwrap(), counts);
             let got = std::fs::read(&out).unwrap();
@@ -936,4 +918,124 @@ fn a_stand_export_holds_a_few_trees_meshes_at_a_time() {
     eprintln!("{} trees, {} bytes written, at most {} mesh bytes held", r.trees, r.bytes, r.held_mesh_bytes_max);
     assert!(r.trees >= 100 && r.trees > 20 * MESH_BATCH_PER_THREAD, "{} trees", r.trees);
     assert!(r.held_mesh_bytes_max > 0 && (r.held_mesh_bytes_max as u64) < r.bytes / 10, "{} mesh bytes held at once, file {}", r.held_mesh_bytes_max, r.bytes);
+}
+
+/// Round 40 (trial 39): `--instances` without `--lod` writes the finest single level whose
+/// triangles over all the trees stay within the budget (a million trees at full detail were
+/// 23.6 billion triangles): here, with budgets set between the levels' totals, the level
+/// chosen is the finest one within, its nodes `<model>_LOD<l>` alone in the file; the totals
+/// of the four levels are reported and fall from level 0 to 3; levels given are written as
+/// given.
+#[test]
+fn an_instanced_export_writes_by_default_the_finest_level_a_forest_can_hold() {
+    use sylva::job::export::{export_instances, instance_levels, InstanceOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    small_run(&run);
+    let lib = lib();
+    let mut o = InstanceOptions { year: Some(1), area: None, season: Season::Summer, levels: vec![], max_triangles: u64::MAX };
+    let out = dir.path().join("f.glb");
+    let r = export_instances(&run, &lib, &o, &out).unwrap();
+    assert_eq!(r.stats.levels, vec![0], "an unlimited budget: full detail");
+    let per = r.stats.level_triangles.clone();
+    assert_eq!(per.len(), 4);
+    assert!(per[0] > per[1] && per[1] > per[2] && per[2] > per[3] && per[3] > 0, "{per:?}");
+    // billboards: 8 triangles a tree (4 where the crown reaches the root)
+    assert!(per[3] <= 8 * r.trees && per[3] >= 4 * r.trees, "{per:?} for {} trees", r.trees);
+    // the terrain and the wall
+    let rest = r.stats.triangles - per[0];
+    assert!(rest >= r.terrain_triangles, "{rest}");
+    for (budget, want) in [(per[0] as u64 - 1, 1), (per[1] as u64, 1), (per[2] as u64 + 5, 2), (per[3] as u64, 3), (per[3] as u64 - 1, 3), (0, 3)] {
+        o.max_triangles = budget;
+        let r = export_instances(&run, &lib, &o, &out).unwrap();
+        assert_eq!(r.stats.levels, vec![want], "budget {budget} of {per:?}");
+        assert_eq!(r.stats.triangles, per[want] + rest, "budget {budget}");
+        let bytes = std::fs::read(&out).unwrap();
+        let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + n]).unwrap();
+        let lods: Vec<&str> = js["nodes"].as_array().unwrap().iter().filter_map(|n| n["name"].as_str()).filter(|n| n.contains("_LOD")).collect();
+        assert!(lods.len() == 2 && lods.iter().all(|n| n.ends_with(&format!("_LOD{want}"))), "budget {budget}: {lods:?}");
+    }
+    // levels given are written as given, however many triangles
+    o.levels = vec![0];
+    o.max_triangles = 1;
+    assert_eq!(export_instances(&run, &lib, &o, &out).unwrap().stats.levels, vec![0]);
+    assert_eq!(instance_levels(&[0, 1, 2, 3], &per, 0), vec![0, 1, 2, 3]);
+    assert_eq!(instance_levels(&[], &[10, 5, 3, 1], 4), vec![2]);
+    // the command line says which level it wrote and what the others would draw
+    let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--year", "1", "--instances", "--out"]).arg(dir.path().join("cli.glb")).output().unwrap();
+    let text = String::from_utf8_lossy(&st.stdout);
+    assert!(st.status.success() && text.contains("levels written: LOD0 (full detail): the finest level within 20 M triangles") && text.contains("--lod all"), "{text}{}", String::from_utf8_lossy(&st.stderr));
+}
+
+/// Round 40 (trial 39): a stand export gives every species its `_leaf` material (a conifer's
+/// shoot cards, which replace its needle cards at full detail, are drawn in it: Norway spruce
+/// had none), lays the leaf-litter texture on the ground (repeating, texture coordinates in
+/// metres east and north of the area's centre) and draws the regeneration layer's saplings
+/// (as the stills do: up to 3 a cohort of 0.5 m and taller, within the cohort's light cell) as
+/// instances of their species' youngest model under a node `saplings`; the file validates.
+#[test]
+fn a_stand_export_has_leaf_materials_a_litter_floor_and_the_saplings() {
+    use sylva::job::export::{export_stand, ExportOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("run");
+    small_run(&run);
+    // the regeneration layer of year 1, written by hand: a beech and a spruce cohort in the
+    // area (5 m light cells, 10 stems), one too low to be drawn and one outside the area
+    let inv = run.join("inventory");
+    for e in std::fs::read_dir(&inv).unwrap() {
+        let p = e.unwrap().path();
+        if p.file_name().unwrap().to_string_lossy().starts_with("year_0001_regeneration") {
+            std::fs::remove_file(&p).unwrap();
+        }
+    }
+    std::fs::write(
+        inv.join("year_0001_regeneration.csv"),
+        "cell,species,x_m,y_m,stems,stems_per_ha,height_m,age_yr\n1,beech,37.5,17.5,10,4000.0,1.5,6\n2,norway_spruce,45.0,12.5,10,4000.0,0.9,5\n3,beech,37.5,22.5,10,4000.0,0.3,2\n4,beech,80.0,80.0,10,4000.0,1.5,6\n",
+    )
+    .unwrap();
+    let lib = lib();
+    let out = dir.path().join("stand.glb");
+    let mut o = ExportOptions::new([35.0, 10.0, 50.0, 25.0]);
+    o.year = Some(1);
+    let r = export_stand(&run, &lib, &o, &out).unwrap();
+    let (doc, buffers, _) = gltf::import(&out).unwrap();
+    let origin = [42.5f32, 17.5];
+    // every species its `_leaf` material, drawn by its trees' full level
+    let mats: Vec<&str> = doc.materials().filter_map(|m| m.name()).collect();
+    for sp in ["beech", "norway_spruce"] {
+        assert!(mats.contains(&format!("{sp}_leaf").as_str()), "{sp}: {mats:?}");
+    }
+    let spruce = doc.nodes().find(|n| n.name().is_some_and(|s| s.starts_with("norway_spruce_") && s.ends_with("_LOD0") && !s.contains("sapling"))).unwrap();
+    assert!(spruce.mesh().unwrap().primitives().any(|p| p.material().name() == Some("norway_spruce_leaf")), "the spruce's shoot cards in its _leaf material");
+    // the ground: textured, repeating, texture coordinates in metres
+    let terrain = doc.meshes().find(|m| m.name() == Some("terrain")).unwrap();
+    let p = terrain.primitives().next().unwrap();
+    let info = p.material().pbr_metallic_roughness().base_color_texture().expect("a ground texture");
+    assert_eq!(info.texture().sampler().wrap_s(), gltf::texture::WrappingMode::Repeat);
+    let reader = p.reader(|b| Some(&buffers[b.index()].0[..]));
+    let pos: Vec<[f32; 3]> = reader.read_positions().unwrap().collect();
+    let uv: Vec<[f32; 2]> = reader.read_tex_coords(0).unwrap().into_f32().collect();
+    assert_eq!(pos.len(), uv.len());
+    // glTF's (x, z, −y) and its v flipped: u = x, 1 − v = y (m from the area's centre)
+    assert!(pos.iter().zip(&uv).all(|(p, t)| (t[0] - p[0]).abs() < 1e-4 && (1.0 - t[1] + p[2]).abs() < 1e-4), "texture coordinates in metres");
+    assert!(uv.iter().map(|t| t[0]).fold(f32::MIN, f32::max) - uv.iter().map(|t| t[0]).fold(f32::MAX, f32::min) > 14.0, "the 15 m patch spans 15 repeats");
+    // the saplings: of the two drawn cohorts only, in their light cells, as tall as the cohort (± 15 %)
+    let root = doc.nodes().find(|n| n.name() == Some("saplings")).expect("a node `saplings`");
+    let saplings: Vec<_> = root.children().collect();
+    assert!(!saplings.is_empty() && saplings.len() == r.saplings && r.stats.saplings == r.saplings && r.saplings <= 6, "{} saplings", saplings.len());
+    let mut species = std::collections::BTreeSet::new();
+    for s in &saplings {
+        let name = s.name().unwrap();
+        let (t, _, sc) = s.transform().decomposed();
+        let (x, y) = (t[0] + origin[0], -t[2] + origin[1]);
+        let (cx, cy, h) = if name.starts_with("beech") { (37.5, 17.5, 1.5) } else { (45.0, 12.5, 0.9) };
+        assert!((x - cx).abs() <= 2.5 && (y - cy).abs() <= 2.5, "{name} at {x}, {y}");
+        assert!(sc[1] >= 0.85 * h - 1e-4 && sc[1] <= 1.15 * h + 1e-4, "{name}: {} m tall", sc[1]);
+        let kid = s.children().next().unwrap();
+        assert!(kid.mesh().unwrap().name().is_some_and(|m| m.ends_with("_sapling_LOD0")), "{:?}", kid.mesh().unwrap().name());
+        species.insert(name.split("_sapling").next().unwrap().to_string());
+    }
+    assert_eq!(species.into_iter().collect::<Vec<_>>(), ["beech", "norway_spruce"]);
+    validate(&[&out]);
 }

@@ -290,3 +290,27 @@ fn absurd_planting_and_seed_rain_are_refused() {
     let e = Scenario::from_toml_str(&rain, "r.toml").unwrap_err().to_string();
     assert!(e.contains("seeds_per_ha") && e.contains("100,000,000"), "{e}");
 }
+
+/// Round 40 (trial 39): a scenario's PNG heightmap without `terrain.cell_m` or
+/// `terrain.height_range_m` is refused naming the scenario file, the missing field(s) and an
+/// example (it ran with a warning on 10 m cells and 0–1000 m, a 512 px heightmap a 5 km site);
+/// with both it runs; a GeoTIFF needs neither.
+#[test]
+fn a_png_heightmap_without_its_scale_is_refused_naming_the_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("gaea.png");
+    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(8, 6, |x, _| image::Luma([(x * 9000) as u16])).save(&png).unwrap();
+    let sc = |extra: &str| format!("name = \"png\"\nyears = 1\n[terrain]\npath = \"{}\"\n{extra}", png.display());
+    for (extra, want, not) in [
+        ("", &["terrain.cell_m and terrain.height_range_m", "gaea.png", "cell_m = 10.0", "height_range_m = [250.0, 1250.0]"][..], "§"),
+        ("cell_m = 5.0\n", &["terrain.height_range_m", "gaea.png", "metres a pixel"][..], "terrain.cell_m and"),
+        ("height_range_m = [0.0, 300.0]\n", &["terrain.cell_m", "gaea.png"][..], "terrain.height_range_m`"),
+    ] {
+        let e = Scenario::from_toml_str(&sc(extra), "my_scenario.toml").unwrap_err().to_string();
+        assert!(e.contains("my_scenario.toml") && want.iter().all(|w| e.contains(w)) && !e.contains(not), "{extra:?}: {e}");
+    }
+    let site = Scenario::from_toml_str(&sc("cell_m = 5.0\nheight_range_m = [0.0, 300.0]\n"), "my_scenario.toml").unwrap().site().unwrap();
+    assert_eq!(site.extent_m(), (40.0, 30.0));
+    let tif = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("terrains/coweeta_10m_utm17n.tif");
+    Scenario::from_toml_str(&format!("name = \"tif\"\nyears = 1\n[terrain]\npath = \"{}\"\n", tif.display()), "t.toml").unwrap();
+}

@@ -448,7 +448,7 @@ fn tiles_in_threads_write_the_run_directory_of_one_process() {
         assert!(va.rows(k).unwrap().to_vec() == vb.rows(k).unwrap().to_vec(), "the viewer's snapshot {k}");
     }
     use sylva::job::export::{export_instances, InstanceOptions};
-    let o = InstanceOptions { year: Some(12), area: None, season: sylva::species::Season::Summer, levels: vec![0] };
+    let o = InstanceOptions { year: Some(12), area: None, season: sylva::species::Season::Summer, levels: vec![0], max_triangles: sylva::job::export::INSTANCE_MAX_TRIANGLES };
     let (ga, gb) = (tmp.path().join("a.glb"), tmp.path().join("b.glb"));
     let emb = common::embedded();
     // (the file names the run directory: both exported from the same path)

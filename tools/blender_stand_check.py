@@ -7,6 +7,7 @@
 #   mesh_objects     visible mesh objects after the import
 #   tree_objects     visible mesh objects under the node "trees" (one per tree expected)
 #   ground_objects   visible mesh objects under the node "ground" (terrain, obstacles)
+#   sapling_objects  visible mesh objects under the node "saplings" (the regeneration layer)
 #   trees            tree nodes (children of "trees")
 #   cover            share (0-1) of the pixels of a top-down orthographic render of the square
 #                    of half side M metres (default 10) around the scene's origin (the export
@@ -49,6 +50,7 @@ result = {
     "mesh_objects": len(meshes),
     "tree_objects": sum(1 for o in meshes if under(o, "trees")),
     "ground_objects": sum(1 for o in meshes if under(o, "ground")),
+    "sapling_objects": sum(1 for o in meshes if under(o, "saplings")),
     "trees": len(trees_root[0].children) if trees_root else 0,
     "half_m": half,
     "px": px,
@@ -56,7 +58,7 @@ result = {
 
 # top-down orthographic render of the trees alone
 for o in meshes:
-    if under(o, "ground"):
+    if under(o, "ground") or under(o, "saplings"):
         o.hide_render = True
 scene = bpy.context.scene
 cam_data = bpy.data.cameras.new("top")

@@ -28,11 +28,14 @@ pub struct Args {
     /// Season of the foliage colours: spring, summer, autumn (or fall), winter.
     #[arg(long, default_value = "summer", value_parser = super::render::parse_season)]
     pub season: Season,
-    /// Levels of detail to write: `0`, the default, one full-detail mesh per tree (what
-    /// Blender, three.js and glTF viewers show: they draw every node); `all` the LOD chain
-    /// `<name>_LOD0…3` of each tree for game engines' LOD groups; or a list such as `0,1`.
-    #[arg(long, default_value = "0")]
-    pub lod: String,
+    /// Levels of detail to write: `0` (full detail), the default of a stand export, one
+    /// full-detail mesh per tree (what Blender, three.js and glTF viewers show: they draw every
+    /// node); `all` the LOD chain `<name>_LOD0…3` of each tree (with `--instances`, of each
+    /// species and age-class model) for game engines' LOD groups; or a list such as `0,1`.
+    /// With `--instances` the default is the finest single level whose triangles over all the
+    /// trees stay within 20 million (a whole forest: its billboards, level 3).
+    #[arg(long)]
+    pub lod: Option<String>,
     /// Write the export's figures as JSON (trees, trees_15m, nodes_median and nodes_min over
     /// the trees of 15 m and taller, leaf_cards, adapt_s, triangles, levels; for a stand
     /// export also analysis_s and adaptation_s (the two parts of adapt_s), analyses (distinct
@@ -76,7 +79,12 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     super::check_run_dir(&a.run_dir, "sylva export")?;
     super::check_out_file(&a.out, "--out")?;
     let area = a.area.as_deref().map(sylva::job::export::parse_area).transpose()?;
-    let levels = sylva::job::export::parse_levels(&a.lod)?;
+    // `--instances` without `--lod`: no levels, the finest one a whole forest can hold
+    let levels = match (&a.lod, a.instances) {
+        (Some(l), _) => sylva::job::export::parse_levels(l)?,
+        (None, true) => Vec::new(),
+        (None, false) => vec![0],
+    };
     if let Some(p) = &a.stats {
         super::check_stats_path(p)?;
         anyhow::ensure!(p != &a.out, "--stats {}: the same file as --out; give the statistics their own file (e.g. stats.json)", p.display());
@@ -97,7 +105,7 @@ pub fn run(a: Args) -> anyhow::Result<()> {
 fn export(a: &Args, area: Option<[f64; 4]>, levels: Vec<usize>) -> anyhow::Result<()> {
     let lib = super::simulate::run_library(&a.run_dir, a.species_dir.as_deref())?;
     let r = if a.instances {
-        let o = sylva::job::export::InstanceOptions { year: a.year, area, season: a.season, levels };
+        let o = sylva::job::export::InstanceOptions { year: a.year, area, season: a.season, levels, max_triangles: sylva::job::export::INSTANCE_MAX_TRIANGLES };
         sylva::job::export::export_instances(&a.run_dir, &lib, &o, &a.out)?
     } else {
         let area = area.ok_or_else(|| anyhow::anyhow!("--area X0,Y0,X1,Y1 is required for a stand export (or give --instances to export every tree as instances)"))?;
@@ -126,9 +134,18 @@ fn export(a: &Args, area: Option<[f64; 4]>, levels: Vec<usize>) -> anyhow::Resul
     if let Some(p) = &a.stats {
         super::write_stats(p, &r.stats.to_json())?;
     }
+    let saplings = if r.saplings > 0 { format!(", {} saplings", r.saplings) } else { String::new() };
     println!(
-        "year {}: {} trees ({} tree models), {} obstacles, terrain {} triangles; {} meshes, {} mesh nodes, {} images; adapt {:.2} s → {} ({:.1} MB)",
+        "year {}: {} trees{saplings} ({} tree models), {} obstacles, terrain {} triangles; {} meshes, {} mesh nodes, {} images; adapt {:.2} s → {} ({:.1} MB)",
         r.year, r.trees, r.models, r.obstacles, r.terrain_triangles, r.counts.meshes, r.counts.mesh_nodes, r.counts.images, r.adapt_s, r.out.display(), r.bytes as f64 / 1e6
     );
+    // the instanced export's level, chosen or given, and what the others would draw
+    if a.instances {
+        let names = sylva::job::export::LEVEL_NAMES;
+        let written: Vec<String> = r.stats.levels.iter().map(|&l| format!("LOD{l} ({})", names.get(l).unwrap_or(&"?"))).collect();
+        let each: Vec<String> = r.stats.level_triangles.iter().enumerate().map(|(l, t)| format!("LOD{l} {:.1} M", *t as f64 / 1e6)).collect();
+        let why = if a.lod.is_none() { format!(": the finest level within {} M triangles", sylva::job::export::INSTANCE_MAX_TRIANGLES / 1_000_000) } else { String::new() };
+        println!("levels written: {}{why}; triangles over all trees per level: {}; --lod all gives each model's chain for an engine's LOD groups", written.join(", "), each.join(", "));
+    }
     Ok(())
 }

@@ -3,8 +3,10 @@
 //! adapted to its neighbours, the light and the obstacles by [`adapt_stand`] (Plastic Trees,
 //! Pirk et al. 2012, `000_*.txt`; the same near-field adaptation `job::adapted` does for the
 //! pictures), meshed with its levels of detail (the mid level: the crown hull of its adapted leaf
-//! clusters, [`super::adapted::adapted_lod_chain`]), with the terrain patch under the area and the
-//! scenario's obstacles that reach into it, as one glTF scene ([`crate::output::gltf::StandScene`]).
+//! clusters, [`super::adapted::adapted_lod_chain`]), with the terrain patch under the area (its
+//! leaf-litter texture, [`terrain_static`]), the regeneration layer's saplings ([`area_saplings`])
+//! and the scenario's obstacles that reach into it, as one glTF scene
+//! ([`crate::output::gltf::StandScene`]).
 //!
 //! **Instancing.** Trees whose adapted skeletons have the same topology and the same shape once
 //! divided by their crown radius (x, y) and height (z), within [`SAME_SHAPE`], share one mesh
@@ -33,8 +35,20 @@ use rayon::prelude::*;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-/// Forest-floor colour of the terrain patch (sRGB 96, 84, 62: litter and soil).
-pub const GROUND_RGB: [u8; 3] = [96, 84, 62];
+/// Forest-floor colour of the terrain patch (sRGB 82, 79, 60): the pictures' forest floor of
+/// leaf litter, [`crate::render::terrain::FOREST_FLOOR`] (linear 0.085, 0.078, 0.045), in sRGB
+/// (until round 40 an untextured 96, 84, 62).
+pub const GROUND_RGB: [u8; 3] = [82, 79, 60];
+
+/// The terrain patch of an export: the forest floor in [`GROUND_RGB`] with its leaf-litter
+/// texture ([`crate::structure::texture::litter_texture`], repeating once a metre: the patch's
+/// texture coordinates are metres east and north of the area's centre, [`terrain_patch`]), so
+/// that an eye-level render shows a textured floor as the stills' ground view does (round 39's
+/// trial: flat and untextured).
+pub fn terrain_static(mesh: TriMesh) -> StaticMesh {
+    let texture = crate::structure::texture::litter_texture(GROUND_RGB, crate::structure::texture::TEXTURE_PX, 0x6c69_7474);
+    StaticMesh { name: "terrain".into(), mesh, rgb: GROUND_RGB, roughness: 0.95, texture: Some(texture) }
+}
 
 /// Largest difference (a fraction of the tree's height or crown radius; for leaf directions,
 /// of a unit vector) between two trees' canonical shapes that still share one mesh: 10⁻³, 1 cm
@@ -206,7 +220,10 @@ pub struct ExportReport {
     pub year: u32,
     /// Trees in the scene.
     pub trees: usize,
-    /// Distinct tree models (sets of LOD meshes).
+    /// Saplings of the regeneration layer in the scene (a stand export's; 0 for
+    /// [`export_instances`]).
+    pub saplings: usize,
+    /// Distinct tree models (sets of LOD meshes), the saplings' included.
     pub models: usize,
     /// Obstacles in the scene.
     pub obstacles: usize,
@@ -244,6 +261,9 @@ fn model_bytes(m: &StandModel) -> usize {
 pub struct ExportStats {
     /// Trees written.
     pub trees: usize,
+    /// Saplings of the regeneration layer written (a stand export's, [`area_saplings`]; not
+    /// counted in the other figures but `triangles`).
+    pub saplings: usize,
     /// Trees of [`STATS_MIN_HEIGHT_M`] and taller among them.
     pub trees_15m: usize,
     /// Median skeleton node count of the adapted trees of [`STATS_MIN_HEIGHT_M`] and taller (0
@@ -283,11 +303,14 @@ pub struct ExportStats {
     pub pruned_light: usize,
     /// Nodes pruned inside obstacles or neighbours' wood, all trees.
     pub pruned_collision: usize,
-    /// Triangles of the written levels of all trees (each tree counted, shared meshes too)
-    /// plus the terrain and obstacles.
+    /// Triangles of the written levels of all trees and saplings (each counted, shared meshes
+    /// too) plus the terrain and obstacles.
     pub triangles: usize,
     /// Levels of detail written.
     pub levels: Vec<usize>,
+    /// [`export_instances`]: the triangles of every tree at each level 0–3 (what a viewer
+    /// draws with that level alone, terrain left out); empty for a stand export.
+    pub level_triangles: Vec<usize>,
 }
 
 impl ExportStats {
@@ -356,8 +379,9 @@ fn in_area(x: f64, y: f64, [x0, y0, x1, y1]: [f64; 4], w: f64, h: f64) -> bool {
 /// where the trees are), naming `--lod` for a level ≥ [`LOD_LEVELS`], for more trees than
 /// `max_trees`, and for a file estimated above `max_bytes` ([`estimate_stand_bytes`]: refused
 /// before any tree is grown, naming `--area`, `--lod`, the cap and the estimate); the errors of
-/// [`adapt_stand`] and of the glTF writer (which writes the buffer through a scratch file
-/// beside `out`, [`crate::output::gltf::write_stand_glb`]).
+/// [`adapt_stand`], of reading the regeneration layer ([`area_saplings`]) and of the glTF writer
+/// (which writes the buffer through a scratch file beside `out`,
+/// [`crate::output::gltf::StandGlbWriter`]).
 pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions, out: &Path) -> Result<ExportReport> {
     let (sc, site, year, [x0, y0, x1, y1]) = open_export(run_dir, o.year, &o.levels, Some(o.area))?;
     let opts = StandOptions { latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(&sc.obstacles, &site), ..StandOptions::default() };
@@ -426,7 +450,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         // (round 35: 110,000 needle cards of 6 cm read as an empty crown), which stay for
         // the lower levels
         let needles = full && crate::structure::texture::LeafShape::of_species(sp).is_needle();
-        let sprigs = if needles {
+        let mut sprigs = if needles {
             let leaf_area = super::leaf_area::drawn_leaf_area(sp, t.crown_radius_m);
             super::leaf_area::shoot_cards_with_sprays(&sk, &lv, leaf_area, cover.sprig[t.species as usize], t.crown_radius_m, t.species as u64, super::leaf_area::limb_spray(sp)).mesh
         } else if full {
@@ -456,9 +480,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         }
         // the mid level: the crown hull of the adapted clusters, as in the pictures
         let (mut chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
-        if needles {
-            chain.levels[0].leaves = TriMesh::default();
-        }
+        let n_sprigs = sprigs.positions.len() / 4;
         let tris = o.levels.iter().map(|&l| chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 }).sum();
         // the levels not written are not held (the writer leaves them out)
         for (l, m) in chain.levels.iter_mut().enumerate() {
@@ -466,7 +488,14 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
                 *m = Default::default();
             }
         }
-        let figures = [sk.nodes.len(), if needles { 0 } else { lv.leaves.len() }, tris, sprigs.positions.len() / 4];
+        // a conifer's shoot cards are its full level's foliage cards, in the look's `_leaf`
+        // material (which wears the shoot-cluster picture, [`stand_look`]) rather than beside
+        // the needle cards they replace in `_cluster` (round 39's trial: no `_leaf` for Norway
+        // spruce in a stand export)
+        if needles {
+            chain.levels[0].leaves = std::mem::take(&mut sprigs);
+        }
+        let figures = [sk.nodes.len(), if needles { 0 } else { lv.leaves.len() }, tris, n_sprigs];
         Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize, sprigs }, s.to_array(), t.base - origin, t.species as usize, figures))
     };
 
@@ -501,7 +530,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             }
             leaf_cards += n_leaves;
             triangles += n_tris;
-            let look = *looks_of.entry(sp).or_insert_with(|| w.look(Look::for_species(&library.species[sp], o.season)));
+            let look = *looks_of.entry(sp).or_insert_with(|| w.look(stand_look(&library.species[sp], o.season, full)));
             let t = &trees[a.index];
             let name = format!("{}_{}", library.species[sp].id, t.id);
             let same = model_of.get(&key).and_then(|c| c.iter().find(|(_, _, c)| c.iter().zip(&canon).all(|(a, b)| (a - b).abs() <= SAME_SHAPE)));
@@ -520,8 +549,35 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         }
     }
 
+    // the regeneration layer's saplings in the area (as the stills draw them), each an
+    // instance of its species' youngest age-class model, after the trees
+    let mut n_saplings = 0usize;
+    let mut sapling_models: HashMap<usize, Option<(usize, f32, usize)>> = HashMap::new();
+    for s in area_saplings(run_dir, year, library, &site, o.season, o.area)? {
+        let sp = s.species as usize;
+        if !sapling_models.contains_key(&sp) {
+            let made = match class_model(library, sp, 0) {
+                Some((mut m, r0, _, tris, _)) => {
+                    m.name = format!("{}_sapling", library.species[sp].id);
+                    m.look = *looks_of.entry(sp).or_insert_with(|| w.look(stand_look(&library.species[sp], o.season, full)));
+                    let mi = w.model(&m)?;
+                    n_models += 1;
+                    Some((mi, r0, o.levels.iter().map(|&l| tris[l]).sum()))
+                }
+                None => None,
+            };
+            sapling_models.insert(sp, made);
+        }
+        let Some(&Some((mi, r0, tris))) = sapling_models.get(&sp) else { continue };
+        let r = s.crown_radius.max(0.05) / r0;
+        let pos = Vec3::from(s.position) - origin;
+        w.sapling(&StandNode { name: format!("{}_sapling_{}", library.species[sp].id, s.id & !super::scene::SAPLING_ID_BIT), model: mi, translation: pos.to_array(), scale: [r, r, s.height.max(0.05)] })?;
+        n_saplings += 1;
+        triangles += tris;
+    }
+
     // obstacles reaching into the area
-    let mut statics = vec![StaticMesh { name: "terrain".into(), mesh: terrain, rgb: GROUND_RGB, roughness: 0.95 }];
+    let mut statics = vec![terrain_static(terrain)];
     let terrain_triangles = statics[0].mesh.triangle_count();
     let n_obstacles = push_obstacles(&mut statics, &sc, &site, o.area, origin);
     let geo = crate::output::georef::PointGeoRef::of_site(&site);
@@ -537,6 +593,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     triangles += statics.iter().map(|m| m.mesh.triangle_count()).sum::<usize>();
     let stats = ExportStats {
         trees: n_trees,
+        saplings: n_saplings,
         trees_15m: tall_nodes.len(),
         nodes_min: tall_nodes.iter().copied().min().unwrap_or(0),
         nodes_median: median_usize(&mut tall_nodes),
@@ -552,10 +609,45 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         pruned_collision,
         triangles,
         levels: o.levels.clone(),
+        level_triangles: Vec::new(),
     };
     let counts = w.finish(&statics, &format!("stand_{year}"), &extras)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
-    Ok(ExportReport { out: out.to_path_buf(), year, trees: n_trees, models: n_models, obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes, stats, held_mesh_bytes_max: held_max })
+    Ok(ExportReport { out: out.to_path_buf(), year, trees: n_trees, saplings: n_saplings, models: n_models, obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes, stats, held_mesh_bytes_max: held_max })
+}
+
+/// The look of species `sp` in a stand export: [`Look::for_species`] in `season`, except that a
+/// conifer at full detail (`full`), whose full level draws crossed shoot cards
+/// ([`super::leaf_area::shoot_cards`]) as its foliage cards in place of its needle cards, wears
+/// the shoot-cluster picture (its leaf-cluster texture) in its `_leaf` material, as the stills
+/// draw those cards. Round 39's trial: a stand export's Norway spruce had no `_leaf` material
+/// (its shoot cards were drawn in `_cluster`, and a material no mesh uses is left out), where
+/// the guide promises one per species and the instanced export has it.
+pub fn stand_look(sp: &crate::species::Species, season: Season, full: bool) -> Look {
+    let mut look = Look::for_species(sp, season);
+    if full && crate::structure::texture::LeafShape::of_species(sp).is_needle() {
+        look.textures.leaf = look.textures.cluster.clone();
+    }
+    look
+}
+
+/// The saplings of the regeneration layer (`inventory/year_NNNN_regeneration.*`) that stand in
+/// `area` (m, world coordinates) of a run's snapshot `year`, as the stills draw them
+/// ([`super::scene::sapling_instances`]: per cohort of at least
+/// [`super::scene::MIN_SAPLING_HEIGHT_M`] up to [`super::scene::MAX_SAPLINGS_PER_COHORT`]
+/// instances scattered in its light cell, scaled to the cohort's height and clump crown
+/// radius), none hidden (an export holds the understory trees too). Empty for a run written
+/// without the layer.
+///
+/// Errors: [`Error::Format`] / [`Error::Io`] naming a regeneration file that cannot be read.
+pub fn area_saplings(run_dir: &Path, year: u32, library: &SpeciesLibrary, site: &SiteConditions, season: Season, area: [f64; 4]) -> Result<Vec<crate::render::scene::TreeInstance>> {
+    let [x0, y0, x1, y1] = area;
+    let Some(rows) = super::inventory::read_regeneration(run_dir, year)? else { return Ok(Vec::new()) };
+    let cohorts = super::scene::saplings_from_rows(&rows);
+    // cohorts whose light cell reaches into the area (a cell's saplings scatter over it)
+    let near: Vec<_> = cohorts.into_iter().filter(|c| c.x_m + c.cell_m >= x0 && c.x_m - c.cell_m <= x1 && c.y_m + c.cell_m >= y0 && c.y_m - c.cell_m <= y1).collect();
+    let (w, h) = site.extent_m();
+    Ok(super::scene::sapling_instances(&near, None, library, site, season).into_iter().filter(|s| in_area(s.position[0] as f64, s.position[1] as f64, area, w, h)).collect())
 }
 
 /// Lower bounds (years) of the age classes of [`export_instances`]: a tree instances the model
@@ -568,6 +660,51 @@ pub fn class_age(k: usize, max_age_yr: f32) -> f32 {
     let lo = AGE_CLASSES_YR[k];
     let mid = AGE_CLASSES_YR.get(k + 1).map_or(lo + 30.0, |hi| 0.5 * (lo + hi));
     mid.min(max_age_yr).max(1.0)
+}
+
+/// The model of species `sp_i` of `library` for age class `class` ([`AGE_CLASSES_YR`]): the
+/// species' EcoMod tree (Zamuda et al., `004_*.txt`) grown at [`class_age`] (seed: a hash of
+/// species and class), normalised to 1 m, its full level carrying the crown's leaf area as
+/// `sylva tree grow` gives it ([`super::leaf_area::lone_chain`]); named `<species>_age<lower
+/// bound>`, its look index `sp_i`. Returns (model, normalised crown radius, skeleton nodes,
+/// triangles of levels 0–3, [leaf cards, leaf-cluster cards] of level 0); `None` when the
+/// species' parameters grow no tree. Deterministic.
+#[allow(clippy::type_complexity)]
+pub fn class_model(library: &SpeciesLibrary, sp_i: usize, class: usize) -> Option<(StandModel, f32, usize, [usize; 4], [usize; 2])> {
+    let sp = library.species.get(sp_i)?;
+    let age = class_age(class, sp.life.max_age_yr);
+    let grown = crate::structure::species_tree::grow_species_tree(sp, crate::structure::species_tree::Model::EcoMod, age, &[], crate::rng::hash(&[sp_i as u64, class as u64])).ok()?;
+    let (sk, mut lv) = crate::structure::normalised(&grown.skeleton, &grown.leaves, 1.0).ok()?;
+    let r = crate::structure::crown_radius(&sk, &lv).max(0.05);
+    // the full level carries the crown's leaf area as `sylva tree grow` gives it (one code
+    // path: the crown LAI over the model's projection, its cards lengthened, the rest as
+    // leaf-cluster cards; trial 35: the instanced crowns were sparse and dark)
+    let (chain, fill) = super::leaf_area::lone_chain(&sk, &mut lv, sp);
+    let tris = [0, 1, 2, 3].map(|l| chain.levels.get(l).map_or(0, |m| m.triangle_count()));
+    let quads = chain.levels.first().map_or(0, |m| m.leaves.triangle_count() / 2);
+    Some((StandModel { name: format!("{}_age{}", sp.id, AGE_CLASSES_YR[class] as u32), chain, look: sp_i, sprigs: TriMesh::default() }, r, sk.nodes.len(), tris, [quads.saturating_sub(fill.sprigs), fill.sprigs]))
+}
+
+/// Most triangles an instanced export draws by default ([`InstanceOptions::levels`] empty:
+/// the finest single level whose triangles over all its trees stay within this): 20 million
+/// (ESTIMATE, not from a publication: the order of what a current desktop GPU draws a frame
+/// at interactive rates). The default run's year 150 (about a million trees) gets its
+/// billboards (level 3, 8 triangles a tree); its full level would be about 23.6 billion
+/// (round 39's trial).
+pub const INSTANCE_MAX_TRIANGLES: u64 = 20_000_000;
+
+/// Names of the levels of detail 0–3, for messages.
+pub const LEVEL_NAMES: [&str; LOD_LEVELS] = ["full detail", "leaf clusters", "crown hulls", "billboards"];
+
+/// The levels an instanced export writes: `given` when not empty; else the finest single level
+/// whose triangles over all trees (`per_level[l]`, levels 0–3) are at most `max_triangles`,
+/// the billboards (level 3) when none is.
+pub fn instance_levels(given: &[usize], per_level: &[usize], max_triangles: u64) -> Vec<usize> {
+    if !given.is_empty() {
+        return given.to_vec();
+    }
+    let last = per_level.len().min(LOD_LEVELS).max(1) - 1;
+    vec![(0..=last).find(|&l| per_level[l] as u64 <= max_triangles).unwrap_or(last)]
 }
 
 /// Age class (index into [`AGE_CLASSES_YR`]) of a tree of `age_yr` years.
@@ -584,8 +721,15 @@ pub struct InstanceOptions {
     pub area: Option<[f64; 4]>,
     /// Season of the foliage colours.
     pub season: Season,
-    /// Levels of detail written, one instanced node per model and level.
+    /// Levels of detail written, one instanced node per model and level (`[0, 1, 2, 3]`: each
+    /// model's chain `<model>_LOD0…3` under a node `<model>`, for an engine's LOD groups); empty
+    /// (`sylva export --instances` without `--lod`): the finest single level a whole forest can
+    /// hold, [`instance_levels`] within [`InstanceOptions::max_triangles`] (round 39's trial:
+    /// the full level on a million trees was 23.6 billion triangles).
     pub levels: Vec<usize>,
+    /// Triangles the default level may draw over all trees ([`INSTANCE_MAX_TRIANGLES`]); levels
+    /// given explicitly above it are written with a warning naming the total and `--lod`.
+    pub max_triangles: u64,
 }
 
 /// Exports every live tree (at least [`super::scene::MIN_DRAWN_HEIGHT_M`] tall) of a run's
@@ -636,23 +780,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     // per model: (model, normalised crown radius, skeleton nodes, triangles per level, (leaf
     // cards, leaf-cluster cards) of level 0)
     #[allow(clippy::type_complexity)]
-    let built: Vec<Option<(StandModel, f32, usize, [usize; 4], [usize; 2])>> = keys
-        .par_iter()
-        .map(|&(sp_i, class)| {
-            let sp = &library.species[sp_i];
-            let age = class_age(class, sp.life.max_age_yr);
-            let grown = crate::structure::species_tree::grow_species_tree(sp, crate::structure::species_tree::Model::EcoMod, age, &[], crate::rng::hash(&[sp_i as u64, class as u64])).ok()?;
-            let (sk, mut lv) = crate::structure::normalised(&grown.skeleton, &grown.leaves, 1.0).ok()?;
-            let r = crate::structure::crown_radius(&sk, &lv).max(0.05);
-            // the full level carries the crown's leaf area as `sylva tree grow` gives it (one
-            // code path: the crown LAI over the model's projection, its cards lengthened, the
-            // rest as leaf-cluster cards; trial 35: the instanced crowns were sparse and dark)
-            let (chain, fill) = super::leaf_area::lone_chain(&sk, &mut lv, sp);
-            let tris = [0, 1, 2, 3].map(|l| chain.levels.get(l).map_or(0, |m| m.triangle_count()));
-            let quads = chain.levels.first().map_or(0, |m| m.leaves.triangle_count() / 2);
-            Some((StandModel { name: format!("{}_age{}", sp.id, AGE_CLASSES_YR[class] as u32), chain, look: sp_i, sprigs: TriMesh::default() }, r, sk.nodes.len(), tris, [quads.saturating_sub(fill.sprigs), fill.sprigs]))
-        })
-        .collect();
+    let built: Vec<Option<(StandModel, f32, usize, [usize; 4], [usize; 2])>> = keys.par_iter().map(|&(sp_i, class)| class_model(library, sp_i, class)).collect();
     // looks of the species used, and the groups
     let mut looks_of: HashMap<usize, usize> = HashMap::new();
     let mut looks: Vec<Look> = Vec::new();
@@ -672,7 +800,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
         model_of.insert(*key, (models.len() - 1, r, nodes, tris, cards));
     }
     let mut groups: Vec<InstanceGroup> = (0..models.len()).map(|model| InstanceGroup { model, ..Default::default() }).collect();
-    let (mut tall_nodes, mut leaf_cards, mut sprig_cards, mut triangles) = (Vec::new(), 0usize, 0usize, 0usize);
+    let (mut tall_nodes, mut cards_all, mut per_level) = (Vec::new(), [0usize; 2], [0usize; LOD_LEVELS]);
     for r in &rows {
         let Some(sp_i) = library.find(&r.species) else { continue };
         let Some(&(mi, r0, nodes, tris, cards)) = model_of.get(&(sp_i as usize, age_class(r.age_yr))) else { continue };
@@ -686,14 +814,30 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
         if r.height_m >= STATS_MIN_HEIGHT_M {
             tall_nodes.push(nodes);
         }
-        if o.levels.contains(&0) {
-            leaf_cards += cards[0];
-            sprig_cards += cards[1];
+        cards_all[0] += cards[0];
+        cards_all[1] += cards[1];
+        for (l, t) in per_level.iter_mut().enumerate() {
+            *t += tris[l];
         }
-        triangles += o.levels.iter().map(|&l| tris[l]).sum::<usize>();
     }
+    let levels = instance_levels(&o.levels, &per_level, o.max_triangles);
+    let drawn: usize = levels.iter().map(|&l| per_level[l]).sum();
+    // the levels asked for: a warning where one of them alone is more than a forest can hold
+    // (the whole chain is for an engine's LOD groups, which draw one level a tree)
+    if !o.levels.is_empty() && levels.len() < LOD_LEVELS && drawn as u64 > o.max_triangles {
+        let each: Vec<String> = per_level.iter().enumerate().map(|(l, t)| format!("LOD{l} {t}")).collect();
+        tracing::warn!(
+            "sylva export --instances: --lod {} draws {drawn} triangles over its {} trees ({}), above the {} a whole forest can hold; --lod 3 (billboards) or 2 (crown hulls) for a viewer, --lod all for an engine's LOD groups, or leave --lod out for the finest level within it",
+            levels.iter().map(|l| l.to_string()).collect::<Vec<_>>().join(","),
+            rows.len(),
+            each.join(", "),
+            o.max_triangles
+        );
+    }
+    let (leaf_cards, sprig_cards) = if levels.contains(&0) { (cards_all[0], cards_all[1]) } else { (0, 0) };
+    let mut triangles = drawn;
     let trees: usize = groups.iter().map(|g| g.translations.len()).sum();
-    let mut statics = vec![StaticMesh { name: "terrain".into(), mesh: terrain, rgb: GROUND_RGB, roughness: 0.95 }];
+    let mut statics = vec![terrain_static(terrain)];
     let terrain_triangles = statics[0].mesh.triangle_count();
     let n_obstacles = push_obstacles(&mut statics, &sc, &site, area, origin);
     triangles += statics.iter().map(|m| m.mesh.triangle_count()).sum::<usize>();
@@ -705,7 +849,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
         models,
         groups,
         statics,
-        levels: o.levels.clone(),
+        levels: levels.clone(),
         extras: serde_json::json!({
             "sylva": {
                 "run_dir": run_dir.display().to_string(), "year": year, "area_m": area,
@@ -718,8 +862,8 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     };
     let counts = crate::output::gltf::write_instanced_glb(out, &scene)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
-    let stats = ExportStats { trees, trees_15m: tall_nodes.len(), nodes_min: tall_nodes.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut tall_nodes), leaf_cards, sprig_cards, triangles, levels: o.levels.clone(), ..Default::default() };
-    Ok(ExportReport { out: out.to_path_buf(), year, trees, models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s: 0.0, bytes, stats, held_mesh_bytes_max: 0 })
+    let stats = ExportStats { trees, trees_15m: tall_nodes.len(), nodes_min: tall_nodes.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut tall_nodes), leaf_cards, sprig_cards, triangles, levels, level_triangles: per_level.to_vec(), ..Default::default() };
+    Ok(ExportReport { out: out.to_path_buf(), year, trees, saplings: 0, models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s: 0.0, bytes, stats, held_mesh_bytes_max: 0 })
 }
 
 /// Appends the meshes of the scenario's obstacles that reach into `area` to `statics`, moved to
@@ -736,7 +880,7 @@ fn push_obstacles(statics: &mut Vec<StaticMesh>, sc: &Scenario, site: &SiteCondi
         for p in &mut m.positions {
             *p = (Vec3::from(*p) - origin).to_array();
         }
-        statics.push(StaticMesh { name: format!("obstacle_{k}_{}", ob.kind()), mesh: m, rgb: OBSTACLE_RGB, roughness: 0.9 });
+        statics.push(StaticMesh { name: format!("obstacle_{k}_{}", ob.kind()), mesh: m, rgb: OBSTACLE_RGB, roughness: 0.9, texture: None });
         n += 1;
     }
     n
@@ -750,7 +894,9 @@ pub const TERRAIN_STEP_M: f64 = 5.0;
 /// [`TERRAIN_STEP_M`] or the site's cell size if smaller (at most 256 × 256 quads, at least
 /// 0.5 m apart), elevations by [`SiteConditions::elevation_at_valid`] (masked cells, no-data or
 /// sea: holes, their quads left out), normals from central differences; positions relative to the area's
-/// centre and the patch's lowest elevation, which is returned.
+/// centre and the patch's lowest elevation, which is returned; texture coordinates the
+/// position's metres east and north of the area's centre (u = x, v = y: a tiling texture
+/// repeats once a metre).
 pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
     let [x0, y0, x1, y1] = area;
     let step = site.cell_x_m.min(site.cell_y_m).min(TERRAIN_STEP_M).max((x1 - x0).max(y1 - y0) / 256.0).max(0.5);
@@ -778,6 +924,7 @@ pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
         for i in 0..=nx {
             let (x, y) = at(i, j);
             m.positions.push([(x - cx) as f32, (y - cy) as f32, zi(i, j) - z0]);
+            m.uvs.push([(x - cx) as f32, (y - cy) as f32]);
             let (il, ir) = (i.saturating_sub(1), (i + 1).min(nx));
             let (jd, ju) = (j.saturating_sub(1), (j + 1).min(ny));
             let gx = (zi(ir, j) - zi(il, j)) / (dx * (ir - il) as f32);
@@ -801,6 +948,21 @@ pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The export's ground colour is the pictures' forest floor in sRGB (within one step of
+    /// 255 per channel), and its terrain is textured with texture coordinates in metres.
+    #[test]
+    fn the_export_ground_is_the_pictures_forest_floor() {
+        let lin = crate::species::srgb_to_linear(GROUND_RGB);
+        for k in 0..3 {
+            let f = crate::render::terrain::FOREST_FLOOR[k];
+            let step = crate::species::srgb_to_linear([GROUND_RGB[k].saturating_add(1); 3])[0] - lin[k];
+            assert!((lin[k] - f).abs() <= step, "channel {k}: {} against {f}", lin[k]);
+        }
+        let m = TriMesh { positions: vec![[1.0, 2.0, 0.0]], uvs: vec![[1.0, 2.0]], ..Default::default() };
+        let t = terrain_static(m);
+        assert!(t.texture.is_some() && t.name == "terrain");
+    }
 
     #[test]
     fn area_edges_on_the_site_edge_are_closed() {

@@ -7,7 +7,8 @@
 //! Unity's and Unreal's importers gather levels into a LOD group. **A stand**
 //! ([`stand_glb_bytes`]): the same per tree (node `<tree>` with its translation and scale,
 //! children `<tree>_LOD<i>`), meshes shared by every tree node that uses them (instancing: one
-//! mesh, many nodes), plus plain meshes (terrain, obstacles).
+//! mesh, many nodes), the saplings of the regeneration layer so too (under node `saplings`),
+//! plus static meshes (terrain, obstacles) under node `ground`.
 //!
 //! **Materials** per [`Look`] (a species in a season): `<look>_bark` (opaque, tiling bark
 //! texture), `<look>_leaf` (LOD0 leaf cards), `<look>_cluster` (LOD1 leaf-cluster cards) and
@@ -16,7 +17,9 @@
 //! `baseColorTexture` on `TEXCOORD_0`, a PNG embedded in the buffer, made by
 //! [`crate::structure::texture`] with the colours baked in (base colour factor white);
 //! identical images are stored once. Card textures clamp, bark and crown textures repeat.
-//! Plain meshes get an untextured material of their colour and no texture coordinates.
+//! Static meshes get an untextured material of their colour and no texture coordinates, or,
+//! with a texture ([`StaticMesh::texture`]: the terrain's leaf litter), a material of their name
+//! with it, repeating, on their texture coordinates.
 //!
 //! Sylva's z-up coordinates are converted to glTF's y-up: (x, y, z) ↦ (x, z, −y)
 //! (right-handed both ways); texture v is flipped (glTF's origin is the image's top-left).
@@ -134,7 +137,7 @@ struct Doc {
     /// The BIN chunk's bytes not yet spilled ([`Doc::spill`]).
     bin: Vec<u8>,
     /// Where the BIN chunk's bytes go once [`SPILL_BYTES`] are held (a stand written by
-    /// [`write_stand_glb`]: a scratch file beside the output, so that the buffer is not held
+    /// [`StandGlbWriter`]: a scratch file beside the output, so that the buffer is not held
     /// in memory), the bytes already written there, and the first write error.
     spill: Option<Spill>,
     images: Vec<Value>,
@@ -572,17 +575,22 @@ pub struct StandNode {
     pub scale: [f32; 3],
 }
 
-/// A plain mesh of a stand (terrain, obstacles): one colour, no texture.
+/// A plain mesh of a stand (terrain, obstacles): one colour, or a tiling texture.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StaticMesh {
     /// Node, mesh and material name.
     pub name: String,
     /// Triangles in scene coordinates (m, z up).
     pub mesh: TriMesh,
-    /// sRGB colour (0–255).
+    /// sRGB colour (0–255) of an untextured material (a textured one is white: its colours are
+    /// baked into the texture).
     pub rgb: [u8; 3],
     /// Roughness (0–1).
     pub roughness: f32,
+    /// A texture that tiles (repeating sampler) on the mesh's texture coordinates
+    /// ([`TriMesh::uvs`], one per vertex; the terrain's are metres east and north: one picture a
+    /// metre), colours baked in; `None`: the plain colour `rgb`, no texture coordinates.
+    pub texture: Option<RgbaImage>,
 }
 
 /// What [`stand_glb_bytes`] writes.
@@ -596,6 +604,9 @@ pub struct StandScene {
     pub models: Vec<StandModel>,
     /// Tree nodes.
     pub trees: Vec<StandNode>,
+    /// Saplings of the regeneration layer, drawn under node `saplings` (their models among
+    /// [`StandScene::models`]); empty for none.
+    pub saplings: Vec<StandNode>,
     /// Terrain and obstacles.
     pub statics: Vec<StaticMesh>,
     /// Levels of detail written (indices into the chains, e.g. `[0, 1, 2, 3]` or `[0]`).
@@ -616,7 +627,8 @@ pub struct StandCounts {
 }
 
 /// Encodes a stand as GLB bytes (module documentation): node `trees` holds one node per tree,
-/// node `ground` the static meshes. Every [`StandModel`]'s meshes are written once however many
+/// node `saplings` one per sapling ([`StandScene::saplings`], when there are any), node
+/// `ground` the static meshes. Every [`StandModel`]'s meshes are written once however many
 /// trees use it, the LOD3 billboard included: the model's own impostor
 /// ([`crate::structure::mesh::impostor_mesh`]: crown quads over its foliage from the crown base
 /// to the top, where a leaning crown is, and a trunk quad slanting from the root to under the
@@ -638,7 +650,7 @@ fn stand_doc(s: &StandScene, mut d: Doc) -> Result<(Doc, Value, StandCounts)> {
             return Err(bad("model look", format!("{} of {}", m.look, m.name), format!("a look index below {}", s.looks.len())));
         }
     }
-    for t in &s.trees {
+    for t in s.trees.iter().chain(&s.saplings) {
         if t.model >= s.models.len() {
             return Err(bad("tree model", format!("{} of {}", t.model, t.name), format!("a model index below {}", s.models.len())));
         }
@@ -649,7 +661,7 @@ fn stand_doc(s: &StandScene, mut d: Doc) -> Result<(Doc, Value, StandCounts)> {
     if s.trees.is_empty() && s.statics.iter().all(|m| m.mesh.indices.is_empty()) {
         return Err(bad("scene", "no trees and no ground".into(), "at least one tree or mesh".into()));
     }
-    let used_looks: std::collections::BTreeSet<usize> = s.trees.iter().map(|t| s.models[t.model].look).collect();
+    let used_looks: std::collections::BTreeSet<usize> = s.trees.iter().chain(&s.saplings).map(|t| s.models[t.model].look).collect();
     let mut mats: Vec<Option<LookMaterials>> = vec![None; s.looks.len()];
     for &l in &used_looks {
         // a look whose models carry sprigs at the full level needs its cluster material
@@ -667,7 +679,7 @@ fn stand_doc(s: &StandScene, mut d: Doc) -> Result<(Doc, Value, StandCounts)> {
     }
     // the models used, their meshes once (every level written, the billboard included: the
     // chain's own impostor, `structure::mesh::impostor_mesh`, drawn over the model's crown)
-    let used_models: std::collections::BTreeSet<usize> = s.trees.iter().map(|t| t.model).collect();
+    let used_models: std::collections::BTreeSet<usize> = s.trees.iter().chain(&s.saplings).map(|t| t.model).collect();
     let mut model_meshes: Vec<Vec<Option<usize>>> = vec![Vec::new(); s.models.len()];
     for &mi in &used_models {
         let m = &s.models[mi];
@@ -679,7 +691,11 @@ fn stand_doc(s: &StandScene, mut d: Doc) -> Result<(Doc, Value, StandCounts)> {
     for t in &s.trees {
         tree_nodes.push(tree_node(&mut d, t, &model_meshes[t.model], &mut mesh_nodes));
     }
-    Ok(forest_doc(d, tree_nodes, mesh_nodes, &s.statics, &s.name, &s.extras))
+    let mut sapling_nodes = Vec::new();
+    for t in &s.saplings {
+        sapling_nodes.push(tree_node(&mut d, t, &model_meshes[t.model], &mut mesh_nodes));
+    }
+    forest_doc(d, tree_nodes, sapling_nodes, mesh_nodes, &s.statics, &s.name, &s.extras)
 }
 
 /// The node of tree `t` in `d` drawing `meshes` (its model's, per level), its children one
@@ -855,7 +871,7 @@ pub fn instanced_glb_bytes(s: &InstancedScene) -> Result<(Vec<u8>, StandCounts)>
             tree_nodes.extend(level_nodes);
         }
     }
-    let (d, scene, counts) = forest_doc(d, tree_nodes, mesh_nodes, &s.statics, &s.name, &s.extras);
+    let (d, scene, counts) = forest_doc(d, tree_nodes, Vec::new(), mesh_nodes, &s.statics, &s.name, &s.extras)?;
     Ok((d.finish(scene)?, counts))
 }
 
@@ -868,14 +884,25 @@ pub fn write_instanced_glb(path: &Path, s: &InstancedScene) -> Result<StandCount
     Ok(counts)
 }
 
-/// The end of a stand or forest document: the static meshes under node `ground`, the tree
-/// nodes under node `trees`, the scene named `name` with `extras`; `mesh_nodes` counts the tree
-/// nodes drawing a mesh so far. Returns the document, its scene and the counts.
-fn forest_doc(mut d: Doc, tree_nodes: Vec<usize>, mut mesh_nodes: usize, statics: &[StaticMesh], name: &str, extras: &Value) -> (Doc, Value, StandCounts) {
+/// The end of a stand or forest document: the static meshes under node `ground` (a textured
+/// one in a material of its own name with its texture, repeating, on `TEXCOORD_0`), the tree
+/// nodes under node `trees`, the sapling nodes under node `saplings` (when there are any), the
+/// scene named `name` with `extras`; `mesh_nodes` counts the tree and sapling nodes drawing a
+/// mesh so far. Returns the document, its scene and the counts.
+///
+/// Errors: [`OutputError::Serialize`] when a static mesh's texture cannot be encoded.
+fn forest_doc(mut d: Doc, tree_nodes: Vec<usize>, sapling_nodes: Vec<usize>, mut mesh_nodes: usize, statics: &[StaticMesh], name: &str, extras: &Value) -> Result<(Doc, Value, StandCounts)> {
     let mut ground_nodes = Vec::new();
     for g in statics {
-        let mat = d.plain(&g.name, g.rgb, g.roughness);
-        let p = d.primitive(&g.mesh, mat, false);
+        let textured = g.texture.is_some() && g.mesh.uvs.len() == g.mesh.positions.len();
+        let mat = match g.texture.as_ref().filter(|_| textured) {
+            Some(img) => {
+                let t = d.texture(img, SAMPLER_REPEAT)?;
+                d.material(json!({"name": g.name, "pbrMetallicRoughness": {"baseColorTexture": {"index": t, "texCoord": 0}, "metallicFactor": 0.0, "roughnessFactor": g.roughness}}))
+            }
+            None => d.plain(&g.name, g.rgb, g.roughness),
+        };
+        let p = d.primitive(&g.mesh, mat, textured);
         if let Some(mesh) = d.mesh(&g.name, vec![p]) {
             ground_nodes.push(d.node(json!({"name": g.name, "mesh": mesh})));
             mesh_nodes += 1;
@@ -885,6 +912,9 @@ fn forest_doc(mut d: Doc, tree_nodes: Vec<usize>, mut mesh_nodes: usize, statics
     if !tree_nodes.is_empty() {
         roots.push(d.node(json!({"name": "trees", "children": tree_nodes})));
     }
+    if !sapling_nodes.is_empty() {
+        roots.push(d.node(json!({"name": "saplings", "children": sapling_nodes})));
+    }
     if !ground_nodes.is_empty() {
         roots.push(d.node(json!({"name": "ground", "children": ground_nodes})));
     }
@@ -893,29 +923,7 @@ fn forest_doc(mut d: Doc, tree_nodes: Vec<usize>, mut mesh_nodes: usize, statics
     if !extras.is_null() {
         scene["extras"] = extras.clone();
     }
-    (d, scene, counts)
-}
-
-/// Writes a stand to `path` as `.glb` (atomically); returns what was written. The buffer is
-/// not held in memory: its bytes go, 8 MiB at a time, to a scratch file beside `path`
-/// (`.<name>.bin.<pid>.tmp`, removed when done or refused), which is then copied after the
-/// JSON chunk into the temporary file renamed to `path` (trial 37: a 2.2 GB export held its
-/// buffer twice in memory, 9.5 GB in all).
-///
-/// Errors: as [`stand_glb_bytes`]; [`OutputError::Io`] naming `path` or the scratch file.
-pub fn write_stand_glb(path: &Path, s: &StandScene) -> Result<StandCounts> {
-    write_stand_glb_spilling_at(path, s, SPILL_BYTES)
-}
-
-/// [`write_stand_glb`] writing the held buffer to the scratch file whenever `at` bytes
-/// (≥ 1) are held ([`write_stand_glb`] takes 8 MiB; tests take a few bytes to write through
-/// the scratch file often).
-///
-/// Errors: as [`write_stand_glb`].
-pub fn write_stand_glb_spilling_at(path: &Path, s: &StandScene, at: usize) -> Result<StandCounts> {
-    let (d, scene, counts) = stand_doc(s, Doc::spilling(path, at)?)?;
-    d.finish_to(scene, path)?;
-    Ok(counts)
+    Ok((d, scene, counts))
 }
 
 /// Material slots of one look in a [`StandGlbWriter`]'s pending material numbers: bark, then
@@ -927,14 +935,17 @@ const LOOK_SLOTS: usize = 5;
 const PENDING_MATERIAL: usize = 1 << 40;
 
 /// A stand written to a `.glb` tree by tree: each model's meshes go into the BIN chunk's
-/// scratch file (beside the output, as [`write_stand_glb`]'s) as soon as the model is given,
+/// scratch file beside the output (`.<name>.glb.bin.<pid>.tmp`, 8 MiB written at a time, removed
+/// when done or refused; trial 37: a 2.2 GB export held its buffer twice in memory, 9.5 GB in
+/// all) as soon as the model is given,
 /// so that a caller holds one tree's meshes at a time, not the stand's (round 38: a 0.25 ha
 /// export held all its trees' meshes until written, about twice the file). What is held to the
 /// end is the JSON (views, accessors, meshes, nodes) and at most [`SPILL_BYTES`] of the buffer.
 ///
 /// The file is byte for byte the one [`stand_glb_bytes`] makes of a [`StandScene`] holding the
 /// same looks, models (each given before the first tree that draws it, every model drawn by
-/// some tree) and trees in the same order: the textures, which the held writer puts first in
+/// some tree or sapling) and trees and saplings in the same order (the saplings given after
+/// the last tree): the textures, which the held writer puts first in
 /// the buffer, are made at [`StandGlbWriter::finish`] (which materials a look needs depends on
 /// all its models: sprigs, leaf cards) and written before the scratch file's bytes, the tree
 /// meshes' buffer views moved past them.
@@ -949,6 +960,7 @@ pub struct StandGlbWriter {
     /// Per model: its look and its meshes per level.
     models: Vec<(usize, Vec<Option<usize>>)>,
     tree_nodes: Vec<usize>,
+    sapling_nodes: Vec<usize>,
     mesh_nodes: usize,
 }
 
@@ -968,7 +980,7 @@ impl StandGlbWriter {
     ///
     /// Errors: as [`StandGlbWriter::create`].
     pub fn spilling_at(path: &Path, levels: &[usize], at: usize) -> Result<StandGlbWriter> {
-        Ok(StandGlbWriter { path: path.to_path_buf(), doc: Doc::spilling(path, at.max(1))?, levels: levels.to_vec(), looks: Vec::new(), uses: Vec::new(), models: Vec::new(), tree_nodes: Vec::new(), mesh_nodes: 0 })
+        Ok(StandGlbWriter { path: path.to_path_buf(), doc: Doc::spilling(path, at.max(1))?, levels: levels.to_vec(), looks: Vec::new(), uses: Vec::new(), models: Vec::new(), tree_nodes: Vec::new(), sapling_nodes: Vec::new(), mesh_nodes: 0 })
     }
 
     /// Adds a look; returns its index (as [`StandScene::looks`]).
@@ -1007,6 +1019,23 @@ impl StandGlbWriter {
     /// Errors: [`Error::Invalid`] for a model not given, a non-positive or non-finite scale or
     /// a non-finite translation.
     pub fn tree(&mut self, t: &StandNode) -> Result<()> {
+        let node = self.node(t)?;
+        self.tree_nodes.push(node);
+        Ok(())
+    }
+
+    /// Adds a sapling of the regeneration layer drawing model `t.model` (given before), under
+    /// node `saplings`; saplings are given after the last tree ([`StandScene::saplings`]).
+    ///
+    /// Errors: as [`StandGlbWriter::tree`].
+    pub fn sapling(&mut self, t: &StandNode) -> Result<()> {
+        let node = self.node(t)?;
+        self.sapling_nodes.push(node);
+        Ok(())
+    }
+
+    /// The node of a tree or sapling (checked), its look marked drawn.
+    fn node(&mut self, t: &StandNode) -> Result<usize> {
         let bad = |field: &str, value: String, expected: String| OutputError::from(Error::Invalid { context: format!("stand glb {}", self.path.display()), field: field.into(), value, expected });
         if t.model >= self.models.len() {
             return Err(bad("tree model", format!("{} of {}", t.model, t.name), format!("a model index below {}", self.models.len())));
@@ -1017,15 +1046,14 @@ impl StandGlbWriter {
         let (look, meshes) = &self.models[t.model];
         self.uses[*look][2] = true;
         let meshes = meshes.clone();
-        let node = tree_node(&mut self.doc, t, &meshes, &mut self.mesh_nodes);
-        self.tree_nodes.push(node);
-        Ok(())
+        Ok(tree_node(&mut self.doc, t, &meshes, &mut self.mesh_nodes))
     }
 
     /// Makes the looks' materials and textures, adds `statics` under node `ground`, names the
     /// scene `name` with `extras`, and writes the file (atomically); the scratch file is removed.
     ///
-    /// Errors: [`Error::Invalid`] for nothing to draw; otherwise as [`write_stand_glb`].
+    /// Errors: [`Error::Invalid`] for nothing to draw; otherwise as [`stand_glb_bytes`];
+    /// [`OutputError::Io`] naming the output or the scratch file.
     pub fn finish(mut self, statics: &[StaticMesh], name: &str, extras: &Value) -> Result<StandCounts> {
         if self.tree_nodes.is_empty() && statics.iter().all(|m| m.mesh.indices.is_empty()) {
             return Err(Error::Invalid { context: format!("stand glb {name}"), field: "scene".into(), value: "no trees and no ground".into(), expected: "at least one tree or mesh".into() }.into());
@@ -1080,7 +1108,7 @@ impl StandGlbWriter {
         d.texture_of = std::mem::take(&mut head.texture_of);
         d.materials = std::mem::take(&mut head.materials);
         let doc = std::mem::replace(&mut self.doc, Doc::new());
-        let (doc, scene, counts) = forest_doc(doc, std::mem::take(&mut self.tree_nodes), self.mesh_nodes, statics, name, extras);
+        let (doc, scene, counts) = forest_doc(doc, std::mem::take(&mut self.tree_nodes), std::mem::take(&mut self.sapling_nodes), self.mesh_nodes, statics, name, extras)?;
         doc.finish_to(scene, &self.path)?;
         Ok(counts)
     }

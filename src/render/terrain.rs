@@ -202,6 +202,11 @@ impl LandCover {
     }
 }
 
+/// Albedo (linear RGB) of the forest floor of leaf litter under a closed canopy in
+/// [`LandCover::ground_color`] (before its ±12 % mottle); the stand export's ground texture has
+/// this colour (`job::export::GROUND_RGB`).
+pub const FOREST_FLOOR: [f32; 3] = [0.085, 0.078, 0.045];
+
 /// What lies on the ground at one terrain vertex besides its elevation and slope, each 0..1:
 /// the inputs of [`LandCover::ground_color`].
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -265,7 +270,7 @@ impl LandCover {
     pub fn ground_color(&self, x: f32, y: f32, z: f32, n: [f32; 3], g: &Ground) -> [f32; 3] {
         let grass = [0.16, 0.25, 0.07];
         let wet = [0.09, 0.19, 0.06];
-        let floor = [0.085, 0.078, 0.045];
+        let floor = FOREST_FLOOR;
         let rock = [0.30, 0.30, 0.28];
         let water = [0.03, 0.06, 0.08];
         let alpine = [0.33, 0.34, 0.18];

@@ -96,12 +96,12 @@ pub struct TerrainSection {
     /// Sub-window `[col0, row0, width, height]` in cells of the terrain grid.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub window: Option<[usize; 4]>,
-    /// PNG heightmaps only (they carry no georeferencing): cell size (m, > 0; default 10, as
-    /// `sylva terrain --cell`).
+    /// PNG heightmaps only (they carry no georeferencing): cell size (m, > 0–1000), required with
+    /// one (since round 40: until then 10 m was taken with a warning).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cell_m: Option<f64>,
-    /// PNG heightmaps only: heights (m) of the smallest and largest pixel value
-    /// (default `[0, 1000]`, as `sylva terrain --min-height/--max-height`).
+    /// PNG heightmaps only: heights (m) of the smallest and largest pixel value (0 and 65535),
+    /// required with one (since round 40: until then 0–1000 m was taken with a warning).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub height_range_m: Option<[f64; 2]>,
 }
@@ -609,6 +609,19 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
         let is_png = t.path.as_ref().is_some_and(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("png")));
         if (t.cell_m.is_some() || t.height_range_m.is_some()) && !is_png {
             return Err(invalid(ctx, "terrain.cell_m/height_range_m", "given", "only with a PNG heightmap path (other DEMs carry their own cell size and heights)"));
+        }
+        // a PNG carries no scale: one taken by default makes a wrong site without a word
+        // (round 39's trial: a 512 px heightmap became a 5 km site of 0–1000 m), so both are
+        // asked for; GeoTIFFs and ESRI grids carry their own
+        if is_png && (t.cell_m.is_none() || t.height_range_m.is_none()) {
+            let missing: Vec<&str> = [("terrain.cell_m", t.cell_m.is_none()), ("terrain.height_range_m", t.height_range_m.is_none())].into_iter().filter(|m| m.1).map(|m| m.0).collect();
+            let path = t.path.as_ref().map(|p| p.display().to_string()).unwrap_or_default();
+            return Err(invalid(
+                ctx,
+                &missing.join(" and "),
+                format!("missing for the PNG heightmap {path}"),
+                "the PNG's scale, which a PNG does not carry: under [terrain] both terrain.cell_m (metres a pixel) and terrain.height_range_m (the heights in metres of pixel values 0 and 65535), e.g. `cell_m = 10.0` and `height_range_m = [250.0, 1250.0]`",
+            ));
         }
         if let Some(c) = t.cell_m {
             if !(c > 0.0 && c <= 1000.0) {

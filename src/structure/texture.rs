@@ -702,6 +702,53 @@ pub fn bark_texture(rgb: [u8; 3], pattern: BarkPattern, size: u32, seed: u64) ->
     img
 }
 
+/// Fallen leaves drawn on a [`litter_texture`].
+pub const LITTER_LEAVES: u32 = 700;
+
+/// A forest floor of leaf litter: `size` × `size` (≥ 8), opaque, tiling in u and v (every
+/// distance is taken round the tile), the sRGB colour `rgb` (0–255) modulated: soil mottled by
+/// periodic noise (brightness 0.7–1.0) under [`LITTER_LEAVES`] fallen leaves, ellipses 2.4–7 %
+/// of the tile long and about 0.45 as wide, turned at random, each of its own brightness
+/// (0.75–1.3) with a darker midrib; `seed` varies it. The stand export lays it on the terrain
+/// at one tile a metre (texture coordinates in metres): leaves of 2.4–7 cm, as beech and oak
+/// litter (ESTIMATE, a look: no measured litter).
+pub fn litter_texture(rgb: [u8; 3], size: u32, seed: u64) -> RgbaImage {
+    let size = size.max(8);
+    // per leaf: centre (u, v), half-length, half-width, direction (cos, sin), brightness
+    let leaves: Vec<[f32; 7]> = (0..LITTER_LEAVES)
+        .map(|k| {
+            let r = |s: u64| unit(&[seed, 0x1177_e5, k as u64, s]);
+            let a = 0.012 + 0.023 * r(3);
+            let t = r(5) * std::f32::consts::PI;
+            [r(1), r(2), a, a * (0.35 + 0.2 * r(4)), t.cos(), t.sin(), 0.75 + 0.55 * r(6)]
+        })
+        .collect();
+    let mut img = RgbaImage::new(size, size);
+    let wrap = |d: f32| d - d.round();
+    for y in 0..size {
+        for x in 0..size {
+            let (u, v) = ((x as f32 + 0.5) / size as f32, (y as f32 + 0.5) / size as f32);
+            let mut m = 0.7 + 0.2 * periodic_noise(u, v, 6, 6, seed ^ 11) + 0.1 * periodic_noise(u, v, 32, 32, seed ^ 12);
+            // the later leaves lie on top
+            for l in &leaves {
+                let (du, dv) = (wrap(u - l[0]), wrap(v - l[1]));
+                if du.abs() > l[2] || dv.abs() > l[2] {
+                    continue;
+                }
+                let (a, b) = (du * l[4] + dv * l[5], -du * l[5] + dv * l[4]);
+                let e = (a / l[2]).powi(2) + (b / l[3]).powi(2);
+                if e <= 1.0 {
+                    let rib = if b.abs() < 0.08 * l[3] + 0.5 / size as f32 { 0.8 } else { 1.0 };
+                    m = l[6] * rib * (0.92 + 0.08 * (1.0 - e));
+                }
+            }
+            let c = rgb.map(|c| ((c as f32 * m).round().clamp(0.0, 255.0)) as u8);
+            img.put_pixel(x, y, Rgba([c[0], c[1], c[2], 255]));
+        }
+    }
+    img
+}
+
 /// The textures of one species for one season: what the exporters embed and the renderer may
 /// upload. Leaf, cluster and impostor textures are alpha-tested ([`ALPHA_CUTOFF`]); crown and
 /// bark are opaque. Colours are baked in (sRGB, the species' foliage colour of the season and
@@ -750,6 +797,29 @@ impl FoliageTextures {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The leaf-litter texture tiles: across its edges (column 255 to 0, row 255 to 0) the
+    /// colour steps no more than between neighbouring columns and rows inside it (a texture
+    /// that did not wrap its leaves and noise would show a seam once a metre on the ground);
+    /// its mean brightness stays within 0.8–1.05 of the colour it is given, so the export's
+    /// ground keeps the pictures' forest-floor colour; deterministic.
+    #[test]
+    fn the_litter_texture_tiles_and_keeps_its_colour() {
+        let rgb = [82u8, 79, 60];
+        let img = litter_texture(rgb, 128, 3);
+        assert_eq!(img, litter_texture(rgb, 128, 3));
+        let n = 128;
+        let px = |x: u32, y: u32| img.get_pixel(x % n, y % n).0;
+        let step = |a: [u8; 4], b: [u8; 4]| (0..3).map(|k| (a[k] as f64 - b[k] as f64).abs()).sum::<f64>();
+        let mean = |f: &dyn Fn(u32) -> f64| (0..n).map(f).sum::<f64>() / n as f64;
+        let seam_x = mean(&|y| step(px(n - 1, y), px(0, y)));
+        let seam_y = mean(&|x| step(px(x, n - 1), px(x, 0)));
+        let inner: f64 = (1..n - 1).map(|c| mean(&|y| step(px(c - 1, y), px(c, y)))).sum::<f64>() / (n - 2) as f64;
+        assert!(seam_x <= 1.5 * inner && seam_y <= 1.5 * inner, "seams {seam_x:.1}, {seam_y:.1} against {inner:.1} inside");
+        let b: f64 = img.pixels().map(|p| p.0[1] as f64).sum::<f64>() / (n * n) as f64 / rgb[1] as f64;
+        assert!((0.8..1.05).contains(&b), "mean brightness {b:.3} of the colour");
+        assert!(img.pixels().all(|p| p.0[3] == 255), "opaque");
+    }
 
     /// Trial 35: the billboards' trunks were drawn nearly black (0.3 × the leaf colour). Now
     /// the trunk column of the coloured impostor has the bark's colour (× 0.85): beech's grey
