@@ -1716,8 +1716,8 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         return prune(t, s, w, occ, rows);
     }
     // a tree that eq. (11) cannot shed: its last level's clusters of one cube (and the same
-    // solids) share the first one's light (`PlasticTree::leaf_light_cell_m`); `all` keeps
-    // every cluster lit and `share` its representative in `lit`
+    // solids) share the first one's light (`PlasticTree::leaf_light_cell_m`): `share` holds
+    // every cluster to light and, per cluster, its representative's index in `lit`
     let share = (!w.prunes && s == a.seasons as usize && t.leaf_light_cell_m > 0.0 && lit.len() > 1).then(|| {
         let all = std::mem::take(&mut lit);
         let (reps, of) = shared_points(&all.iter().map(|&(_, c)| c).collect::<Vec<_>>(), t.leaf_light_cell_m, |j| solids.mask(all[j].1));
