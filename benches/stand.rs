@@ -16,7 +16,11 @@
 //! their species at their age, forest-grown, as stills and `--full-detail` exports draw them;
 //! issue 32's near field) instead of `DEFAULT_MAX_STRANDS`. `SYLVA_STAND_SKY_RINGS=4,8` sets the
 //! sky's rings (`StandOptions::sky_rings`, default 4,8,12: 24 directions); `SYLVA_STAND_HEIGHT_STEP=S`
-//! sets the height classes' step (`StandOptions::height_step`, default 1.25); `SYLVA_STAND_TREES=FILE`
+//! sets the height classes' step (`StandOptions::height_step`, default 1.25); `SYLVA_STAND_SHAPE_STEP=S`
+//! the crown-shape classes' step (`StandOptions::shape_step`, default 1.05); `SYLVA_STAND_BEND_CELL=M`
+//! and `SYLVA_STAND_LEAF_CELL=M` the cubes (m) within which the bending light and the last level's
+//! leaf-cluster light share one query (`StandOptions::bend_light_cell_m`, `leaf_light_cell_m`,
+//! default 0: every point its own); `SYLVA_STAND_TREES=FILE`
 //! writes one CSV row per target (index, live nodes, leaves, crown radius, height); `SYLVA_STAND_DUMP=FILE`
 //! writes every target's leaf clusters (`AdaptedTree::leaf_clusters`, in order) as
 //! little-endian f32 rows (tree index, centre x, y, z (m), light i, light in the analysis i_l0,
@@ -93,6 +97,15 @@ fn main() {
     }
     if let Ok(v) = std::env::var("SYLVA_STAND_HEIGHT_STEP") {
         opts.height_step = v.trim().parse().expect("SYLVA_STAND_HEIGHT_STEP: a relative step, e.g. 1.5625");
+    }
+    if let Ok(v) = std::env::var("SYLVA_STAND_SHAPE_STEP") {
+        opts.shape_step = v.trim().parse().expect("SYLVA_STAND_SHAPE_STEP: a relative step, e.g. 1.1025");
+    }
+    if let Ok(v) = std::env::var("SYLVA_STAND_BEND_CELL") {
+        opts.bend_light_cell_m = v.trim().parse().expect("SYLVA_STAND_BEND_CELL: a cube side in m, e.g. 0.25");
+    }
+    if let Ok(v) = std::env::var("SYLVA_STAND_LEAF_CELL") {
+        opts.leaf_light_cell_m = v.trim().parse().expect("SYLVA_STAND_LEAF_CELL: a cube side in m, e.g. 0.25");
     }
     if let Ok(v) = std::env::var("SYLVA_STAND_SKY_RINGS") {
         opts.sky_rings = v.split(',').map(|x| x.trim().parse().expect("SYLVA_STAND_SKY_RINGS: comma-separated ring sizes, e.g. 4,8")).collect();

@@ -28,11 +28,12 @@
 //!    alone on flat ground under the site's sky, one analysis per class and shared by the
 //!    class's trees through uniform scaling about the base ([`PlasticTree::scale`], section 4's
 //!    quantities scale with the tree): a class is the species, age class, crown-base class, the
-//!    crown's shape R/H within [`DIM_STEP`] (5 %) and, for the adapted trees, the height within
-//!    [`HEIGHT_STEP`] (25 %). An adapted tree is its class's analysed tree scaled to its exact
+//!    crown's shape R/H within [`StandOptions::shape_step`] (default [`DIM_STEP`], 5 %) and, for
+//!    the adapted trees, the height within [`StandOptions::height_step`] (default
+//!    [`HEIGHT_STEP`], 25 %). An adapted tree is its class's analysed tree scaled to its exact
 //!    height (a factor within ±12 %: its clusters keep the transmittance of the class's
 //!    clusters, γ_c0 of eq. 4 becoming γ_c0^(1/factor)), and after the adaptation its crown is
-//!    stretched to its exact radius (at most ±2.5 %). A context tree (step 3) is analysed
+//!    stretched to its exact radius (at most ±2.5 % at the default shape step). A context tree (step 3) is analysed
 //!    without light ([`PlasticTree::standing`]: it only shades and blocks), scaled to its exact
 //!    height and given back its species' γ_c0, so it casts the shade of the tree at its size.
 //!    Until round 23 a class was the height and the crown radius within 5 % each and every
@@ -77,6 +78,13 @@
 //!    crown above it bends as before. Trees of a capped cache (the open-grown tree shed below
 //!    the crown base) and trees grown alone are not changed. BENCHMARKS.md, "Round 36 (issue
 //!    32 stems)".
+//! 6. **Shared light queries (off by default).** [`StandOptions::bend_light_cell_m`] lets the
+//!    nodes an adapted tree bends at one level share the bending light of the first node of
+//!    their cube, and [`StandOptions::leaf_light_cell_m`] lets a forest-grown tree's leaf
+//!    clusters share the last level's light the same way ([`PlasticTree::bend_light_cell_m`],
+//!    [`PlasticTree::leaf_light_cell_m`]); [`StandOptions::shape_step`] coarsens the crown-shape
+//!    classes. None is exact; what each saves and changes on the near field of
+//!    `benches/stand.rs` is in BENCHMARKS.md, "Round 40 (r40n: ...)".
 
 use super::grow::ecomod;
 use super::species_tree::{ecomod_strands_at, ECOMOD_FULL_AGE_YR};
@@ -194,13 +202,26 @@ pub struct StandOptions {
     /// across the default's height classes (fewer analyses; BENCHMARKS.md, round 36, measures
     /// what 1.25² changes).
     pub height_step: f32,
+    /// Relative step of the crown-shape classes (crown radius over height, R/H) that share one
+    /// analysis (> 1, at most 2): a tree's crown is its class's, stretched after the adaptation
+    /// to its exact radius by a factor within `shape_step`^(±1/2). Default [`DIM_STEP`] (1.05,
+    /// ±2.5 %); a coarser step shares analyses across crown shapes (BENCHMARKS.md, round 40).
+    pub shape_step: f32,
+    /// Side (m, ≥ 0) of the cubes within which an adapted tree's nodes bent at one level share
+    /// one bending-light query ([`PlasticTree::bend_light_cell_m`]; 0: every node its own, exact).
+    /// Default 0.
+    pub bend_light_cell_m: f32,
+    /// Side (m, ≥ 0) of the cubes within which a forest-grown adapted tree's leaf clusters share
+    /// one light query at the last level ([`PlasticTree::leaf_light_cell_m`]: only the clusters'
+    /// light and leaf density of eq. 12 change; 0: exact). Default 0.
+    pub leaf_light_cell_m: f32,
 }
 
 impl Default for StandOptions {
     /// Cells of 12 m, a halo of 6 m, latitude 47° N, no obstacles, the default sky
     /// ([`DEFAULT_RINGS`]), height classes of [`HEIGHT_STEP`].
     fn default() -> Self {
-        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec(), height_step: HEIGHT_STEP }
+        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec(), height_step: HEIGHT_STEP, shape_step: DIM_STEP, bend_light_cell_m: 0.0, leaf_light_cell_m: 0.0 }
     }
 }
 
@@ -551,20 +572,25 @@ pub struct Stand {
 }
 
 /// Analysis class of a tree ([`adapt_stand`] step 2): species, age class, crown-shape class
-/// (R/H in steps of [`DIM_STEP`]), crown-base class, height class (steps of [`HEIGHT_STEP`];
-/// 0 for a context tree) and whether it is a context tree.
+/// (R/H in steps of [`StandOptions::shape_step`], default [`DIM_STEP`]), crown-base class,
+/// height class (steps of [`StandOptions::height_step`], default [`HEIGHT_STEP`]; 0 for a
+/// context tree) and whether it is a context tree.
 type ClassKey = (u16, u16, i32, u16, i32, bool);
 
-fn class_of(t: &StandTree, context: bool, height_step: f32) -> ClassKey {
+/// The class steps (height, crown shape) of [`StandOptions::height_step`] and
+/// [`StandOptions::shape_step`].
+type Steps = (f32, f32);
+
+fn class_of(t: &StandTree, context: bool, (height_step, shape_step): Steps) -> ClassKey {
     let q = |v: f32, step: f32| (v.max(1e-3).ln() / step.ln()).round() as i32;
     let height = if context { 0 } else { q(t.height_m, height_step) };
-    (t.species, age_class(t.age_yr), q(t.crown_radius_m / t.height_m, DIM_STEP), crown_base_class(t.height_m, t.crown_base_m), height, context)
+    (t.species, age_class(t.age_yr), q(t.crown_radius_m / t.height_m, shape_step), crown_base_class(t.height_m, t.crown_base_m), height, context)
 }
 
-/// Height, crown radius and crown base (m) a class of height step `height_step` is analysed at.
-fn class_dims(k: &ClassKey, height_step: f32) -> (f32, f32, f32) {
+/// Height, crown radius and crown base (m) a class of steps `(height, shape)` is analysed at.
+fn class_dims(k: &ClassKey, (height_step, shape_step): Steps) -> (f32, f32, f32) {
     let h = if k.5 { CONTEXT_CLASS_HEIGHT_M } else { height_step.powi(k.4) };
-    (h, DIM_STEP.powi(k.2) * h, k.3 as f32 / CROWN_BASE_CLASSES * h)
+    (h, shape_step.powi(k.2) * h, k.3 as f32 / CROWN_BASE_CLASSES * h)
 }
 
 /// Checks one stand tree.
@@ -614,10 +640,18 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     }
     super::grow::space::validate_obstacles(&opts.obstacles)?;
     let sky = stand_sky(opts.latitude_deg, &opts.sky_rings)?;
-    let hs = opts.height_step;
-    if !(hs > 1.0 && hs <= 4.0) {
-        return Err(bad("height_step", hs.to_string(), "a relative step of the height classes > 1 and ≤ 4 (default 1.25)"));
+    if !(opts.height_step > 1.0 && opts.height_step <= 4.0) {
+        return Err(bad("height_step", opts.height_step.to_string(), "a relative step of the height classes > 1 and ≤ 4 (default 1.25)"));
     }
+    if !(opts.shape_step > 1.0 && opts.shape_step <= 2.0) {
+        return Err(bad("shape_step", opts.shape_step.to_string(), "a relative step of the crown-shape classes > 1 and ≤ 2 (default 1.05)"));
+    }
+    for (field, v) in [("bend_light_cell_m", opts.bend_light_cell_m), ("leaf_light_cell_m", opts.leaf_light_cell_m)] {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(bad(field, v.to_string(), "a cube side ≥ 0 m (0: every point its own light query)"));
+        }
+    }
+    let hs: Steps = (opts.height_step, opts.shape_step);
     for &i in targets {
         if i >= trees.len() {
             return Err(bad("targets", i.to_string(), &format!("tree indices below {}", trees.len())));
@@ -766,6 +800,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
                 t.params.translucency_gamma_c0 = lib.species[key.0 as usize].architecture.plastic.translucency_gamma_c0;
             } else {
                 t.scale_grown_on_open_ground(f)?;
+                (t.bend_light_cell_m, t.leaf_light_cell_m) = (opts.bend_light_cell_m, opts.leaf_light_cell_m);
             }
             t.translate(trees[i].base);
             Ok(t)

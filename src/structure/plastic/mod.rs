@@ -171,6 +171,23 @@ pub struct PlasticTree {
     pub clearance_m: f32,
     /// Segments of this radius (m) or thicker are solid wood for other trees.
     pub wood_radius_m: f32,
+    /// Side (m, ≥ 0; 0: off, every node its own query, the default) of the cubes, in the
+    /// tree's world coordinates, within which the nodes bent at one level of an adaptation
+    /// (one season and depth batch, [`transform`] step 3) that see the same solids share one
+    /// light query (eq. 3): the node first in index order is queried and the others take its
+    /// average light direction L' for eq. (6). Not exact (our approximation, not the paper's:
+    /// round 40 measures what it changes in the stand bench, BENCHMARKS.md); for stands
+    /// ([`crate::structure::stand::StandOptions::bend_light_cell_m`]).
+    pub bend_light_cell_m: f32,
+    /// Side (m, ≥ 0; 0: off, the default) of the cubes within which the full-grown stage's leaf
+    /// clusters of a tree that eq. (11) cannot shed (every ψ_min 0, e.g. a stand's forest-grown
+    /// tree) share one light query at the last level: the cluster first in stage order is
+    /// queried and the others of its cube that see the same solids take its light i (eq. 3),
+    /// which then sets their leaf density (eq. 12). Such a tree's cluster light feeds no
+    /// pruning and no bending, so only [`PlasticTree::leaf_clusters`]' light and density
+    /// change. Not exact (round 40, BENCHMARKS.md); for stands
+    /// ([`crate::structure::stand::StandOptions::leaf_light_cell_m`]).
+    pub leaf_light_cell_m: f32,
     pub(crate) pos: Vec<Vec3>,
     pub(crate) rot: Vec<Quat>,
     pub(crate) bend: Vec<f32>,
@@ -229,6 +246,8 @@ impl PlasticTree {
             analysis,
             clearance_m: 0.0,
             wood_radius_m: 0.02,
+            bend_light_cell_m: 0.0,
+            leaf_light_cell_m: 0.0,
             pos: sk.nodes.iter().map(|nd| nd.pos).collect(),
             rot: vec![Quat::IDENTITY; n],
             bend: vec![0.0; n],

@@ -831,6 +831,43 @@ fn light_many_among(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolu
     out
 }
 
+/// Representatives of `at` for light queries shared within cubes of side `cell` (m): per point,
+/// the index into the returned points of the first point (in order) of its cube (world
+/// coordinates, ⌊p / cell⌋) that has the same solids' mask `mask(i)`. With `cell` 0 (or not a
+/// positive number) every point is its own.
+fn shared_points(at: &[Vec3], cell: f32, mask: impl Fn(usize) -> u32) -> (Vec<usize>, Vec<u32>) {
+    if !(cell > 0.0 && cell.is_finite()) {
+        return ((0..at.len()).collect(), (0..at.len() as u32).collect());
+    }
+    let mut first: HashMap<(IVec3, u32), u32> = HashMap::with_capacity(at.len());
+    let (mut reps, mut of) = (Vec::new(), Vec::with_capacity(at.len()));
+    for (i, &p) in at.iter().enumerate() {
+        let key = ((p / cell).floor().as_ivec3(), mask(i));
+        let r = *first.entry(key).or_insert_with(|| {
+            reps.push(i);
+            (reps.len() - 1) as u32
+        });
+        of.push(r);
+    }
+    (reps, of)
+}
+
+/// [`light_many_among`] with the points of each cube of side `cell` (m) that see the same
+/// solids sharing the light of the first of them ([`PlasticTree::bend_light_cell_m`]); exactly
+/// [`light_many_among`] with `cell` 0.
+fn light_many_shared(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3], cell: f32) -> Vec<(f32, Vec3)> {
+    if !(cell > 0.0 && cell.is_finite()) || at.len() < 2 {
+        return light_many_among(sky, solids, vols, fixed, at);
+    }
+    let (reps, of) = shared_points(at, cell, |i| solids.mask(at[i]));
+    if reps.len() == at.len() {
+        return light_many_among(sky, solids, vols, fixed, at);
+    }
+    let pts: Vec<Vec3> = reps.iter().map(|&i| at[i]).collect();
+    let lit = light_many_among(sky, solids, vols, fixed, &pts);
+    of.iter().map(|&r| lit[r as usize]).collect()
+}
+
 /// Transmittance of the ray from `p` along sky direction `k` through the level's casters `vols`
 /// and the `fixed` trees' (eq. 4, the two products multiplied): `vols.transmittance(k, p) *
 /// fixed.transmittance(k, p)` bit for bit, but a ray that the level's casters make dark
@@ -1602,7 +1639,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         }
         let lights = match w.mc.as_mut() {
             Some(mc) => light_cached(sky, solids, vols, &mut mc.nodes, w.mc_epoch, &w.mc_delta, !w.mc_new, mc.tol_m, &at_k, &mut w.mc_stats),
-            None => light_many_among(sky, solids, vols, fixed, &at),
+            None => light_many_shared(sky, solids, vols, fixed, &at, t.bend_light_cell_m),
         };
         // pass 2: bend the recomputed nodes
         let mut lights = lights.into_iter();
@@ -1678,6 +1715,18 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         rows.t.clear();
         return prune(t, s, w, occ, rows);
     }
+    // a tree that eq. (11) cannot shed: its last level's clusters of one cube (and the same
+    // solids) share the first one's light (`PlasticTree::leaf_light_cell_m`): `share` holds
+    // every cluster to light and, per cluster, its representative's index in `lit`
+    let share = (!w.prunes && s == a.seasons as usize && t.leaf_light_cell_m > 0.0 && lit.len() > 1).then(|| {
+        let all = std::mem::take(&mut lit);
+        let (reps, of) = shared_points(&all.iter().map(|&(_, c)| c).collect::<Vec<_>>(), t.leaf_light_cell_m, |j| solids.mask(all[j].1));
+        lit = reps.iter().map(|&j| all[j]).collect();
+        (all, of)
+    });
+    if share.is_some() {
+        rows.t = vec![f32::NAN; lit.len() * nd];
+    }
     // (mask, previous row) of every cluster lit
     let from: Vec<(u32, Option<&[f32]>)> = lit
         .iter()
@@ -1726,9 +1775,20 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             }
         }
     });
-    for (j, &(ci, _)) in lit.iter().enumerate() {
-        rows.start[ci] = (j * nd) as u32;
-        t.light_cache[s][ci] = sums[j];
+    match share {
+        None => {
+            for (j, &(ci, _)) in lit.iter().enumerate() {
+                rows.start[ci] = (j * nd) as u32;
+                t.light_cache[s][ci] = sums[j];
+            }
+        }
+        Some((all, of)) => {
+            // every cluster takes its representative's sum and row
+            for (&(ci, _), &r) in all.iter().zip(&of) {
+                rows.start[ci] = r * nd as u32;
+                t.light_cache[s][ci] = sums[r as usize];
+            }
+        }
     }
     prune(t, s, w, occ, rows)
 }
@@ -1796,6 +1856,21 @@ fn prune(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// [`shared_points`]: points share the first point of their cube of side `cell` (world
+    /// coordinates, ⌊p / cell⌋, so −0.1 and 0.1 lie in different cubes) when their solids'
+    /// masks are equal; with cell 0 every point is its own.
+    #[test]
+    fn shared_points_take_the_first_of_their_cube_and_mask() {
+        let at = [Vec3::new(0.1, 0.1, 0.1), Vec3::new(0.4, 0.2, 0.3), Vec3::new(-0.1, 0.1, 0.1), Vec3::new(0.45, 0.45, 0.45), Vec3::new(0.6, 0.1, 0.1), Vec3::new(0.2, 0.2, 0.2)];
+        let masks = [0u32, 0, 0, 1, 0, 0];
+        let (reps, of) = shared_points(&at, 0.5, |i| masks[i]);
+        // cube (0,0,0) mask 0: points 0, 1, 5; cube (−1,0,0): 2; cube (0,0,0) mask 1: 3; cube (1,0,0): 4
+        assert_eq!(reps, vec![0, 2, 3, 4]);
+        assert_eq!(of, vec![0, 0, 1, 2, 3, 0]);
+        let (reps, of) = shared_points(&at, 0.0, |i| masks[i]);
+        assert_eq!((reps, of), ((0..6).collect::<Vec<_>>(), (0..6).collect::<Vec<u32>>()));
+    }
 
     /// [`CasterSet::factors`] (the sky-cone test, then the direction test) against every caster
     /// tested in every direction with no cone ([`hit_dirs`] alone, the same order), bit for bit,
