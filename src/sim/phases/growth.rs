@@ -217,8 +217,10 @@ pub struct Growth<'a> {
 /// Crown radius: open-grown radius of the new DBH, shrunk by [`rules::shaded_crown`]
 /// `0.5 + 0.5 L` in shade (crown plasticity); crown base rises to
 /// `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural pruning). Vigour memory
-/// [`rules::vigour_memory`] `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding
-/// is felt within a few years) feeds stress mortality, which thins crowded
+/// [`rules::vigour_memory`] `v ← 0.5 v + 0.5 S · m` (a half-life of one year, so that crowding
+/// is felt within a few years; `S` the site suitability with the species' drought factor, without
+/// the light response since issue 35 round 39: shade kills through the shade mortality
+/// [`super::mortality::p_shade`] by shade tolerance) feeds stress mortality, which thins crowded
 /// stands along the species' maximum-density line. `H(t_eff + 1) − H(t_eff)` and `D_open` are
 /// read from the species' tables ([`crate::species::allometry::Table`], within 5 · 10⁻⁵ of
 /// the curves' ranges; since session 11 of issue 16).
@@ -323,7 +325,7 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
             scale *= *factor;
         }
         if let Some(d1) = bwinpro_dbh(bw, sp, h, h1, d, age, c66, h100, scale) {
-            return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, f, m);
+            return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, suitability, m);
         }
     }
     // Diameter increment below is `dd_pot · f · m` with dd_pot finite and ≥ 0: a tree with no
@@ -331,7 +333,7 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
     // is, so its open-grown curve (two powers and two logarithms) is not evaluated.
     if f == 0.0 || m == 0.0 {
         // `d + 0.0`, as `d + dd` below with dd = +0 (−0 becomes +0 there too)
-        return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d + 0.0, crown_base, vigour, f, m);
+        return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d + 0.0, crown_base, vigour, suitability, m);
     }
     let hp = (h + dh_pot).min(sp.life.max_height_m * 0.999);
     let dd_open = (dbh_of.at(hp) - dbh_of.at(h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
@@ -372,13 +374,15 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
         }
         dd * *factor
     };
-    finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, f, m)
+    finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, suitability, m)
 }
 
 /// The end of [`grow`] from the new height `h1` and diameter `d1` (before its floor and cap):
 /// a first DBH for a tree that passed breast height without one, the dense-stand height bound
 /// (`bound`: the species' curve and its H/D at the largest DBH, where it has one; `h` the
-/// height before the season), the crown radius, crown base and vigour.
+/// height before the season), the crown radius, crown base and vigour (from `f`, the tree's
+/// site suitability with its drought factor, and the crowding modifier `m`: light is not part
+/// of it since issue 35 round 39, shade acting through [`super::mortality::p_shade`]).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn finish(sp: &Species, dbh_of: &Table<OpenDbh>, bound: Option<(DenseHd, f32)>, ccf: f32, l: f32, h: f32, h1: f32, mut d1: f32, crown_base: f32, vigour: f32, f: f32, m: f32) -> Grown {

@@ -18,8 +18,11 @@
 //!    table as for the trees, [`Table`]; [`light_response`], suitability `S`) with the ground
 //!    light of the cell under the tree canopy. Cohorts do not shade each other or the trees: they stay out of
 //!    the canopy grid (they are under it); competition within the layer is the density cap.
-//! 3. **Shade mortality** (cause `shade`): vigour `v ← 0.5 v + 0.5 f(L)·S`, the trees' memory
-//!    ([`rules::vigour_memory`] with no crowding modifier: crowding in the layer is step 4); while
+//! 3. **Shade and stress mortality** (cause `shade`): each stem dies with the shade mortality
+//!    [`p_shade`]`(L_ground, shade tolerance)` (issue 35, round 39: by shade tolerance, from
+//!    1.5 years' half-life for birch to 50 for beech in full shade), a binomial draw; then the
+//!    vigour `v ← 0.5 v + 0.5 S` (site suitability with the drought factor; the trees' memory,
+//!    [`rules::vigour_memory`] with no crowding modifier: crowding in the layer is step 4); while
 //!    `v` is below the species' [`stress_threshold`], each stem dies with [`P_STRESS`]
 //!    (Bugmann 2001), a binomial draw.
 //! 4. **Crowding** (cause `crowding`): a stem of height `h` occupies `1 / N_max(h)` ha with the
@@ -40,7 +43,7 @@
 use super::growth::{light_response, open_crown_radius};
 use crate::sim::rules;
 use crate::species::allometry::{HeightIncrement, Table};
-use super::mortality::{stress_threshold, P_STRESS};
+use super::mortality::{p_shade, stress_threshold, P_STRESS};
 pub use crate::sim::cohorts::{Cohort, Cohorts, RegenDeath, RegenLedger, RegenYear, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
 use crate::conditions::SiteConditions;
 use crate::sim::light_grid::{CellRect, LightGrid};
@@ -245,8 +248,15 @@ pub fn run(w: Regen<'_>) -> usize {
                     let f = light_response(gl, sp.life.shade_tolerance) * wr.suitability[k.pool as usize][site];
                     k.height = (k.height + inc[k.pool as usize].at(k.height) * f).min(sp.life.max_height_m);
                     k.age += 1.0;
-                    // the trees' vigour memory; crowding within the layer is its density cap (4.)
-                    k.vigour = rules::vigour_memory(k.vigour, f, 1.0);
+                    // shade mortality by shade tolerance under the ground light
+                    let ds = binomial(&mut rm, k.stems, p_shade(gl, sp.life.shade_survival(), sp.life.shade_tolerance));
+                    k.stems -= ds;
+                    out.dead[k.pool as usize][RegenDeath::Shade as usize] += ds as u64;
+                    // the trees' vigour memory of the site (drought included; light acts
+                    // through the shade mortality above); crowding within the layer is its
+                    // density cap (4.)
+                    let s = wr.suitability[k.pool as usize][site];
+                    k.vigour = rules::vigour_memory(k.vigour, s, 1.0);
                     if k.vigour < stress_threshold(sp.life.shade_tolerance) {
                         let d = binomial(&mut rm, k.stems, P_STRESS);
                         k.stems -= d;
