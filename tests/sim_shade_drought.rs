@@ -7,6 +7,9 @@
 //!   shade tolerance classes (birch and pine 1.5 years, oak 3.9, beech 49.5 from shade alone;
 //!   beech's zero-growth rate is 1/72, the mean survival time of juvenile beech in deep shade,
 //!   Petrovska et al. 2021).
+//! - Round 40: shade mortality acts below the upper layer only (height under 2/3 of the local
+//!   top height, the IUFRO upper height class), so the same saplings among peers of their own
+//!   height, or in the open, die of intrinsic mortality alone.
 //! - A dry anomaly year (precipitation factor 0.85: F 5 → 4.25, a drought index of
 //!   0.2 · 0.75 = 0.15, the year's relative precipitation deficit) cuts Norway spruce's diameter increment (drought tolerance 0.20) to
 //!   `sqrt(1 − 0.15 / 0.20)` = 0.5 of the same year without it, and Scots pine's (0.42) to
@@ -17,16 +20,20 @@ mod common;
 use sylva::conditions::SiteConditions;
 use sylva::sim::phases::mortality::{self, Mortality};
 use sylva::sim::trees::{NewTree, N_CAUSES};
-use sylva::sim::TreeStore;
+use sylva::sim::{LightGrid, TreeStore};
 
-/// Half-life (years) in the model's mortality phase of 4,000 saplings (2 m, 1 cm DBH, age 10)
-/// of species `id` under relative light 0.05 with full vigour (site and crowding do not stress
-/// them): the first year by whose end half are dead. The trees neither grow nor age (only the
-/// mortality phase runs), so the hazard is constant.
-fn half_life_in_shade(id: &str) -> u32 {
+/// 4,000 saplings (2 m, 1 cm DBH, age 10) of species `id` under relative light 0.05 with full
+/// vigour (site and crowding do not stress them), on 10 × 10 light cells of 10 m whose local
+/// top height (the light phase's `canopy_top`) is `top` m, put through the model's mortality
+/// phase for up to `years` years: the number alive after each year, until at most half are
+/// left. The trees neither grow nor age (only the mortality phase runs), so the hazard is
+/// constant.
+fn alive_in_shade(id: &str, top: f32, years: u32) -> Vec<usize> {
     let lib = common::embedded();
     let s = lib.find(id).unwrap();
     let site = SiteConditions::uniform(10, 10, 10.0, 300.0, [5.0, 5.0, 2.0, 5.0, 6.0, 6.0], 51.0);
+    let light = LightGrid::new((100.0, 100.0), 10.0);
+    let canopy_top = vec![top; light.len()];
     let mut trees = TreeStore::default();
     for k in 0..4000u32 {
         let t = NewTree { species: s, x: 5.0 + (k % 90) as f32, y: 5.0 + (k / 90) as f32 * 2.0, z: 300.0, age: 10.0, height: 2.0, dbh: 1.0, crown_radius: 0.5, suitability: 1.0 };
@@ -37,13 +44,23 @@ fn half_life_in_shade(id: &str) -> u32 {
         trees.vigour[i] = cols[9];
     }
     let (mut dead, mut totals) = (Vec::new(), [0u64; N_CAUSES]);
-    for year in 0..400u32 {
-        mortality::run(Mortality { seed: 7, year, site: &site, lib: &lib, trees: &mut trees, dead: &mut dead, deaths_total: &mut totals });
+    let mut alive = Vec::new();
+    for year in 0..years {
+        mortality::run(Mortality { seed: 7, year, site: &site, lib: &lib, light: &light, window: None, canopy_top: &canopy_top, trees: &mut trees, dead: &mut dead, deaths_total: &mut totals });
+        alive.push(trees.len());
         if trees.len() <= 2000 {
-            return year + 1;
+            break;
         }
     }
-    panic!("{id}: more than half alive after 400 years");
+    alive
+}
+
+/// Half-life (years) of [`alive_in_shade`]'s saplings under a closed canopy 30 m tall (they
+/// stand below its upper layer): the first year by whose end half are dead.
+fn half_life_in_shade(id: &str) -> u32 {
+    let alive = alive_in_shade(id, 30.0, 400);
+    assert!(*alive.last().unwrap() <= 2000, "{id}: more than half alive after 400 years");
+    alive.len() as u32
 }
 
 #[test]
@@ -60,6 +77,28 @@ fn light_demanders_die_under_a_closed_canopy_beech_persists() {
     // mortality at age 10 (0.0035 a year at a maximum age of 600) 39.7
     assert!((36..=44).contains(&beech), "beech {beech}");
     assert!(pine * 8 <= beech && oak * 8 <= beech, "pine {pine}, oak {oak}, beech {beech}");
+}
+
+/// Shade mortality acts below the upper layer only (`mortality::UPPER_LAYER_SHARE`, the IUFRO
+/// upper height class: more than 2/3 of the top height): the same 2 m Scots pines at light 0.05
+/// die with a half-life of 1–2 years where the local top height is 3.1 m (2 < 2/3 · 3.1 =
+/// 2.07), and where it is 2.9 m (2/3 · 2.9 = 1.93 < 2) or there is no canopy (0 m) they die only
+/// of intrinsic mortality: at age 10 and pine's maximum age of 600, 1 − p_intrinsic(10, 600) =
+/// 0.99655 a year, so about 3,862 of 4,000 after 10 years (binomial sd ≈ 11).
+#[test]
+fn shade_mortality_spares_the_upper_layer() {
+    let below = alive_in_shade("scots_pine", 3.1, 400);
+    assert!((1..=2).contains(&below.len()), "below the upper layer: {below:?}");
+    let lib = common::embedded();
+    let p = sylva::sim::phases::mortality::p_intrinsic(10.0, lib.species[lib.find("scots_pine").unwrap() as usize].life.max_age_yr);
+    let expected = 4000.0 * (1.0 - p).powi(10);
+    for top in [2.9f32, 0.0] {
+        let alive = alive_in_shade("scots_pine", top, 10);
+        eprintln!("local top height {top} m: alive by year {alive:?} (intrinsic only: {expected:.0} after 10)");
+        assert_eq!(alive.len(), 10, "top {top}: {alive:?}");
+        assert!((alive[9] as f64 - expected).abs() < 60.0, "top {top}: {} alive after 10 years, intrinsic mortality alone leaves {expected:.0}", alive[9]);
+    }
+    assert!(sylva::sim::phases::mortality::below_upper_layer(1.9, 3.0) && !sylva::sim::phases::mortality::below_upper_layer(2.1, 3.0));
 }
 
 /// Mean DBH increment (cm) in year 4 of the planted trees of each of Norway spruce and Scots

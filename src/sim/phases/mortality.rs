@@ -1,9 +1,10 @@
 //! Mortality (winter): intrinsic, rising with age ([`p_intrinsic`]; recorded as `age` for
-//! senescent trees, `background` for younger ones), shade ([`p_shade`], by shade tolerance,
-//! recorded as `stress`), stress (suppressed growth under crowding, a poor site or drought over
+//! senescent trees, `background` for younger ones), shade ([`p_shade`], by shade tolerance, for
+//! trees below the upper layer ([`below_upper_layer`]); recorded as `stress`), stress (suppressed growth under crowding, a poor site or drought over
 //! several years) and windthrow. Dead trees leave the store and are recorded with their cause.
 
 use crate::conditions::SiteConditions;
+use crate::sim::light_grid::{CellRect, LightGrid, Span};
 use crate::sim::trees::{DeadTree, DeathCause, TreeStore, N_CAUSES, SENESCENT_AGE_SHARE};
 use crate::species::SpeciesLibrary;
 use crate::rng::{salt, Stream};
@@ -57,9 +58,34 @@ pub fn p_shade(light: f32, survival: f32, st: f32) -> f64 {
     p_shade_zero_growth(survival) * (-SHADE_GROWTH_DECLINE * f).exp()
 }
 
+/// Share of the local top height (0–1) that a tree or sapling must exceed to stand in the
+/// upper layer, where shade mortality ([`p_shade`]) does not act: 2/3, the bound of the upper
+/// height class of the IUFRO tree classification (Leibundgut's proposal after Schädelin 1931:
+/// class 100, "taking part in the upper canopy, tree height more than two thirds of the top
+/// height"; the middle class 1/3–2/3 and the lower class below 1/3 do not take part in it).
+/// The top height here is local: the tallest crown over the tree's light cell (the light
+/// phase's [`crate::sim::phases::light::Light::canopy_top`]), not the stand's H100.
+///
+/// Why (issue 35, round 40): the growth-dependent mortality of Kobe et al. (1995) was fitted on
+/// saplings in the understorey, and SORTIE applies it to juveniles only (adults die at a
+/// constant background rate); applied to every tree, it killed the codominant and
+/// intermediate trees of light-demanders in their own closed stands (light 0.3–0.5) at about
+/// 3 % a year, so unmanaged Scots pine fell to 0.62 of its maximum-density line (round 39,
+/// branch `r39p`).
+pub const UPPER_LAYER_SHARE: f32 = 2.0 / 3.0;
+
+/// True when a tree or sapling of height `h` (m) stands below the upper layer of a canopy
+/// whose local top height is `top` (m, [`UPPER_LAYER_SHARE`]): `h < UPPER_LAYER_SHARE · top`.
+/// Where nothing is taller than 1.5 h (an open cell: `top` 0, or the tree among its peers) it
+/// is in the upper layer.
+#[inline]
+pub fn below_upper_layer(h: f32, top: f32) -> bool {
+    h < UPPER_LAYER_SHARE * top
+}
+
 /// Vigour threshold below which stress mortality applies, by shade tolerance (1–5):
-/// `0.02 + 0.08 (5 − ST) / 4` (intolerant trees die sooner when suppressed; since round 39 the
-/// vigour leaves light out, which acts through [`p_shade`]).
+/// `0.02 + 0.08 (5 − ST) / 4` (intolerant trees die sooner when suppressed; below the upper
+/// layer the vigour leaves light out, which acts there through [`p_shade`]).
 pub fn stress_threshold(st: f32) -> f32 {
     0.02 + 0.08 * ((5.0 - st) / 4.0).clamp(0.0, 1.0)
 }
@@ -116,6 +142,15 @@ pub struct Mortality<'a> {
     pub site: &'a SiteConditions,
     /// Species library.
     pub lib: &'a SpeciesLibrary,
+    /// The light grid (the cell of a tree, for its local top height).
+    pub light: &'a LightGrid,
+    /// The light cells `canopy_top` holds (a tile's, [`crate::sim::tiles`]); `None`: every cell.
+    pub window: Option<CellRect>,
+    /// Local top height (m) per light cell of the span of `window`, from this year's light
+    /// phase ([`crate::sim::phases::light::Light::canopy_top`]). A tree whose cell it does not
+    /// hold (an empty array) is taken to stand below the upper layer, as every tree did before
+    /// round 40.
+    pub canopy_top: &'a [f32],
     /// Trees: the dead are removed.
     pub trees: &'a mut TreeStore,
     /// Appended: this year's dead with their cause.
@@ -130,6 +165,8 @@ pub fn run(w: Mortality<'_>) {
     let (seed, year) = (w.seed, w.year as u64);
     let site = &w.site;
     let lib = &w.lib;
+    let (light, top) = (w.light, w.canopy_top);
+    let span = Span::new(w.window, light);
     let causes: Vec<Option<DeathCause>> = (0..t.len())
         .into_par_iter()
         .map(|i| {
@@ -146,8 +183,12 @@ pub fn run(w: Mortality<'_>) {
                 let senescent = t.age[i] >= SENESCENT_AGE_SHARE * sp.life.max_age_yr;
                 return Some(if senescent { DeathCause::Age } else { DeathCause::Background });
             }
-            // shade (by shade tolerance), then slow growth from crowding, site and drought
-            if r.chance(p_shade(t.light[i], sp.life.shade_survival(), sp.life.shade_tolerance)) {
+            // shade (by shade tolerance) below the upper layer, then slow growth from crowding,
+            // site and drought; the shade draw is made in the upper layer too (with p = 0), so
+            // the later draws of a tree's stream do not depend on its layer
+            let below = span.index(light.cell_of(t.x[i], t.y[i])).and_then(|k| top.get(k)).is_none_or(|&h| below_upper_layer(t.height[i], h));
+            let ps = if below { p_shade(t.light[i], sp.life.shade_survival(), sp.life.shade_tolerance) } else { 0.0 };
+            if r.chance(ps) {
                 return Some(DeathCause::Stress);
             }
             if t.vigour[i] < stress_threshold(sp.life.shade_tolerance) && r.chance(P_STRESS) {
