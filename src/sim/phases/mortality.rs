@@ -67,8 +67,9 @@ pub fn p_shade(light: f32, survival: f32, st: f32) -> f64 {
 /// phase's [`crate::sim::phases::light::Light::canopy_top`]), not the stand's H100.
 ///
 /// Why (issue 35, round 40): the growth-dependent mortality of Kobe et al. (1995) was fitted on
-/// saplings in the understorey, and SORTIE applies it to juveniles only (adults die at a
-/// constant background rate); applied to every tree, it killed the codominant and
+/// saplings in the understorey (SORTIE-ND's "GMF mortality" lets a user apply it to any life
+/// stage: sortie-nd.org, help, mortality behaviours; where it acts is the modeller's choice);
+/// applied to every tree, it killed the codominant and
 /// intermediate trees of light-demanders in their own closed stands (light 0.3–0.5) at about
 /// 3 % a year, so unmanaged Scots pine fell to 0.62 of its maximum-density line (round 39,
 /// branch `r39p`).
