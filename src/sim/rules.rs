@@ -66,8 +66,10 @@ pub fn crown_outline_radius(sp: &crate::species::Species, h: f32, dbh: f32, cb: 
 }
 
 /// Vigour memory of trees (`growth`) and sapling cohorts (`regen`, with `m` = 1): the new
-/// vigour from last year's `vigour` and this year's growth response `f` (light response × site
-/// suitability) under crowding modifier `m` (1: none):
+/// vigour from last year's `vigour` and this year's growth response `f` (the light response ×
+/// the site suitability with the species' drought factor; below the upper layer the suitability
+/// alone, the light's part there being the shade mortality `sim::phases::mortality::p_shade`,
+/// issue 35 rounds 39–40) under crowding modifier `m` (1: none):
 /// `v ← 0.5 v + 0.5 f m`, an exponential memory with a half-life of one year, so that
 /// suppression is felt within a few years; stress mortality acts while it is below the
 /// species' threshold (Bugmann 2001's low-growth stress mortality). Source of the weights:

@@ -119,6 +119,7 @@ fn run_light(w: &mut World, _: &mut YearReport) {
         obstacles: &w.site.obstacle_canopy,
         trees: &mut w.stand.trees,
         ground_light: &mut w.scratch.ground_light,
+        canopy_top: &mut w.scratch.canopy_top,
         grid: &mut w.scratch.grid,
         window: w.site.window,
     });
@@ -136,6 +137,7 @@ fn run_regeneration(w: &mut World, report: &mut YearReport) {
         suitability: &w.site.suitability,
         seed_rain: &w.site.seed_rain,
         ground_light: &w.scratch.ground_light,
+        canopy_top: &w.scratch.canopy_top,
         ground_free: &w.site.ground_free,
         obstacles: &w.site.obstacles,
         seeds: &w.stand.seeds,
@@ -149,7 +151,7 @@ fn run_regeneration(w: &mut World, report: &mut YearReport) {
 
 fn run_growth(w: &mut World, _: &mut YearReport) {
     let crowd = density::crowding(&w.site, &w.stand.trees);
-    growth::run(growth::Growth { seed: w.site.seed, year: w.stand.year, lib: &w.site.lib, pool: &w.site.pool, crowd: &crowd, trees: &mut w.stand.trees });
+    growth::run(growth::Growth { seed: w.site.seed, year: w.stand.year, lib: &w.site.lib, pool: &w.site.pool, crowd: &crowd, light: &w.site.light, window: w.site.window, canopy_top: &w.scratch.canopy_top, trees: &mut w.stand.trees });
 }
 
 fn run_reproduction(w: &mut World, _: &mut YearReport) {
@@ -162,6 +164,9 @@ fn run_mortality(w: &mut World, _: &mut YearReport) {
         year: w.stand.year,
         site: &w.site.conditions,
         lib: &w.site.lib,
+        light: &w.site.light,
+        window: w.site.window,
+        canopy_top: &w.scratch.canopy_top,
         trees: &mut w.stand.trees,
         dead: &mut w.scratch.dead,
         deaths_total: &mut w.tallies.deaths_total,

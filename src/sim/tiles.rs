@@ -622,6 +622,7 @@ pub fn derive_tile_site_by(w: &mut World, scenario: &super::scenario::Scenario, 
         })
         .collect();
     w.scratch.ground_light = vec![1.0; span.len()];
+    w.scratch.canopy_top = Vec::new();
     w.site.window = Some(rect);
     if let Some(f) = sum {
         // each planting's first-year trees on this tile's own rectangle, summed over the ranks
@@ -1611,6 +1612,9 @@ fn hold_own_cells(w: &mut World, rect: super::light_grid::CellRect) {
     if w.scratch.ground_light.len() == light.len() {
         w.scratch.ground_light = span.cut(&w.scratch.ground_light);
     }
+    if w.scratch.canopy_top.len() == light.len() {
+        w.scratch.canopy_top = span.cut(&w.scratch.canopy_top);
+    }
     w.site.window = Some(rect);
     hold_own_site(w, rect);
 }
@@ -1746,7 +1750,7 @@ fn clone_for_tile(global: &World, layout: &Layout, me: usize) -> Result<World> {
         seeds.push(super::world::SeedGrid { cell_m: sg.cell_m, cols: sg.cols, rows: sg.rows, held: r, data });
     }
     let stand = super::world::Stand { trees: global.stand.trees.clone(), year: global.stand.year, cohorts: global.stand.cohorts.clone(), seeds };
-    let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone(), entry_harvest: global.scratch.entry_harvest.clone() };
+    let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), canopy_top: per_light(&global.scratch.canopy_top), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone(), entry_harvest: global.scratch.entry_harvest.clone() };
     Ok(World { site, stand, scratch, tallies: global.tallies.clone() })
 }
 

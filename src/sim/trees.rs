@@ -137,7 +137,10 @@ pub struct TreeStore {
     pub crown_base: Vec<f32>,
     /// Light resource of the crown (0–1) from the last light phase.
     pub light: Vec<f32>,
-    /// Vigour memory: exponentially weighted ratio of realised to potential growth (0–1).
+    /// Vigour memory (0–1): exponentially weighted growth response (light response × suitability
+    /// with the drought factor; below the upper layer the suitability alone, shade acting there
+    /// through `sim::phases::mortality::p_shade`) × crowding modifier
+    /// (`sim::rules::vigour_memory`).
     pub vigour: Vec<f32>,
     /// Site suitability (0–1) of the tree's cell for its species (cached at establishment).
     pub suitability: Vec<f32>,

@@ -181,6 +181,11 @@ pub struct Scratch {
     /// Relative light at the ground (0–1.5) per light cell, from the last light phase; a tile
     /// ([`Site::window`] set) holds its own cells only, as [`Site::light_site`].
     pub ground_light: Vec<f32>,
+    /// Local top height (m, ≥ 0) per light cell, from the last light phase
+    /// ([`crate::sim::phases::light::Light::canopy_top`]: the tallest crown or obstacle over the
+    /// cell); held over the same cells as `ground_light`. Read in the same year by regeneration
+    /// and mortality (which layer a tree or sapling stands in), so not checkpointed.
+    pub canopy_top: Vec<f32>,
     /// Trees that died in the current year (cleared at the start of each year).
     pub dead: Vec<DeadTree>,
     /// Counts of the regeneration layer in the current year.
@@ -561,7 +566,7 @@ impl World {
                 climate_change: super::climate_change::ClimateChange::of(&scenario.climate, &ctx)?,
             },
             stand: Stand { trees: TreeStore::default(), year: 0, cohorts: Cohorts::default(), seeds },
-            scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], dead: Vec::new(), regen_year: RegenYear::default(), entry_harvest: Vec::new() },
+            scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], canopy_top: Vec::new(), dead: Vec::new(), regen_year: RegenYear::default(), entry_harvest: Vec::new() },
             tallies: Tallies { deaths_total: [0; super::trees::N_CAUSES], regen_ledger: RegenLedger::new(np) },
         };
         let span = super::light_grid::Span::new(None, &w.site.light);

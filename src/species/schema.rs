@@ -289,6 +289,8 @@ pub const FIELDS: &[FieldSpec] = &[
     f("life.bai_bwinpro.bias4", "cm²/cm⁴", r(-0.1, 0.1), "BWINPro diameter growth: bias polynomial, coefficient of D^4"),
     f("life.bai_bwinpro.bias5", "cm²/cm⁵", r(-0.01, 0.01), "BWINPro diameter growth: bias polynomial, coefficient of D^5"),
     f("life.bai_bwinpro.youth_hd", "m/cm", rx(0.3, 5.0), "BWINPro diameter growth: youth height–diameter ratio, D = h / youth_hd below 7 cm (TreeGrOSS Tree.grow)"),
+    f("life.drought_tolerance", "drought index", r(0.05, 0.6), "Drought tolerance: the largest drought index (0–1; a year's relative precipitation deficit: `species::drought_index`) at which the species grows; growth is reduced by sqrt(1 − DI / tolerance) (ForClim, Bugmann & Cramer 1998; values: LandClim's droughtTol, Schumacher et al. 2004; optional: without it no drought response)"),
+    f("life.shade_survival_class", "class", r(1.0, 5.0), "Shade tolerance class of survival in shade, 1 least … 5 most tolerant (LandClim's ShadeTolerance after Ellenberg 1996): sets the shade mortality (`sim::phases::mortality::p_shade`; optional: without it `life.shade_tolerance`)"),
     f("life.foliage.crown_lai", "m²/m²", r(1.0, 15.0), "Leaf area of drawn crowns: one-sided leaf area per m² of crown projection, a published leaf-area index of closed pure stands of the species (species/sources/SOURCES.md; optional: without it drawn crowns carry the light model's 2 + 0.5·shade tolerance; pictures and exports only, not the simulation)"),
     f(
         "architecture.ecomod.strands",

@@ -1,11 +1,13 @@
 //! Climate (the year's start): under a changing climate ([`ClimateChange`]), the year's
 //! temperature offset and precipitation factor move every cell's T (and F) index
 //! ([`shifted_indices`]); the suitability of every cell for every pool species and of every tree
-//! for its species follow, so establishment (regeneration) and growth respond this year. Under a
+//! for its species follow, times each species' drought response to the year's moisture deficit
+//! ([`crate::species::Species::drought_response`], issue 35 round 39: a dry year cuts growth by
+//! drought tolerance), so establishment (regeneration) and growth respond this year. Under a
 //! constant climate it does nothing. Per cell and per tree, in parallel, each value written
 //! once: the result does not depend on the thread count.
 
-use crate::conditions::SiteConditions;
+use crate::conditions::{factor, SiteConditions};
 use crate::sim::climate_change::{shifted_indices, ClimateChange};
 use crate::sim::trees::TreeStore;
 use crate::species::{SpeciesId, SpeciesLibrary};
@@ -40,7 +42,14 @@ pub fn run(c: ClimatePhase<'_>) -> (f64, f64) {
     for (p, out) in c.suitability.iter_mut().enumerate() {
         let sp = &c.lib.species[c.pool[p] as usize];
         out.par_iter_mut().zip(site.indices.data.par_iter()).zip(site.mask.data.par_iter()).with_min_len(4096).for_each(|((o, ix), m)| {
-            *o = if *m { sp.suitability(&shifted_indices(ix, dt, pf)) } else { 0.0 };
+            *o = if *m {
+                let sh = shifted_indices(ix, dt, pf);
+                // the niche of the year's indices, times the drought response to the year's
+                // moisture deficit against the base climate (issue 35, round 39)
+                sp.suitability(&sh) * sp.drought_response(ix[factor::F] - sh[factor::F])
+            } else {
+                0.0
+            };
         });
     }
     let suit = &*c.suitability;

@@ -200,6 +200,15 @@ pub struct Growth<'a> {
     pub pool: &'a [SpeciesId],
     /// Local crowding of every tree, tree-index order ([`crate::sim::density::crowding`]).
     pub crowd: &'a Crowding,
+    /// The light grid (the cell of a tree, for its local top height).
+    pub light: &'a crate::sim::light_grid::LightGrid,
+    /// The light cells `canopy_top` holds (a tile's, [`crate::sim::tiles`]); `None`: every cell.
+    pub window: Option<crate::sim::light_grid::CellRect>,
+    /// Local top height (m) per light cell of the span of `window`, from this year's light
+    /// phase ([`super::light::Light::canopy_top`]): which layer a tree stands in (its vigour,
+    /// [`run`]). A tree whose cell it does not hold (a halo copy, whose values are dropped; an
+    /// empty array) counts as below the upper layer.
+    pub canopy_top: &'a [f32],
     /// Trees: light and suitability read; size, vigour and age written.
     pub trees: &'a mut TreeStore,
 }
@@ -218,8 +227,14 @@ pub struct Growth<'a> {
 /// `0.5 + 0.5 L` in shade (crown plasticity); crown base rises to
 /// `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural pruning). Vigour memory
 /// [`rules::vigour_memory`] `v ← 0.5 v + 0.5 f · m` (a half-life of one year, so that crowding
-/// is felt within a few years) feeds stress mortality, which thins crowded
-/// stands along the species' maximum-density line. `H(t_eff + 1) − H(t_eff)` and `D_open` are
+/// is felt within a few years; `S` in `f` is the site suitability with the species' drought
+/// factor) feeds stress mortality, which thins crowded stands along the species'
+/// maximum-density line. A tree below the upper layer ([`super::mortality::below_upper_layer`]
+/// of its light cell's local top height, `canopy_top`) takes `S` in place of `f`: there the
+/// light's part is the shade mortality [`super::mortality::p_shade`] by shade tolerance (issue
+/// 35, rounds 39–40), so light does not count twice; in the upper layer, where shade mortality
+/// does not act, the vigour keeps the light response as before round 39 (the JABOWA/ForClim
+/// slow-growth mortality among the canopy trees). `H(t_eff + 1) − H(t_eff)` and `D_open` are
 /// read from the species' tables ([`crate::species::allometry::Table`], within 5 · 10⁻⁵ of
 /// the curves' ranges; since session 11 of issue 16).
 ///
@@ -276,6 +291,9 @@ pub fn run(w: Growth<'_>) {
     // trees restored from a checkpoint have no cached growth factors yet (NaN: drawn below)
     t.growth_factor.0.resize(t.id.len(), f32::NAN);
     let (species, light, suitability, id) = (&t.species, &t.light, &t.suitability, &t.id);
+    let (x, y) = (&t.x, &t.y);
+    let (lg, top) = (w.light, w.canopy_top);
+    let span = crate::sim::light_grid::Span::new(w.window, lg);
     (&mut t.height, &mut t.dbh, &mut t.crown_radius, &mut t.crown_base, &mut t.vigour, &mut t.age, &mut t.growth_factor.0)
         .into_par_iter()
         .enumerate()
@@ -284,7 +302,8 @@ pub fn run(w: Growth<'_>) {
             if id[i] >= recruited {
                 return;
             }
-            let g = grow(lib, curves, crowd, seed, species[i], light[i], suitability[i], id[i], *hr, *dr, *cbr, *vr, *ar, gr, i);
+            let below = span.index(lg.cell_of(x[i], y[i])).and_then(|k| top.get(k)).is_none_or(|&th| super::mortality::below_upper_layer(*hr, th));
+            let g = grow(lib, curves, crowd, seed, species[i], light[i], suitability[i], below, id[i], *hr, *dr, *cbr, *vr, *ar, gr, i);
             *hr = g.h;
             *dr = g.d;
             *rr = g.r;
@@ -298,15 +317,18 @@ pub fn run(w: Growth<'_>) {
 /// has a dense-stand height–diameter curve, that curve with its H/D at the species' largest DBH.
 type Curves = (Table<HeightIncrement>, Table<OpenDbh>, Option<(DenseHd, f32)>);
 
-/// One tree's season ([`run`]): species `s`, light `l`, suitability, id, height `h`, DBH `d`,
+/// One tree's season ([`run`]): species `s`, light `l`, suitability, whether it stands `below`
+/// the upper layer (its vigour: [`run`]), id, height `h`, DBH `d`,
 /// crown base and vigour before it, its cached [`growth_factor`] (NaN until first drawn, then
 /// kept); `i` its index in the crowding.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s: u16, l: f32, suitability: f32, id: u64, h: f32, d: f32, crown_base: f32, vigour: f32, age: f32, factor: &mut f32, i: usize) -> Grown {
+fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s: u16, l: f32, suitability: f32, below: bool, id: u64, h: f32, d: f32, crown_base: f32, vigour: f32, age: f32, factor: &mut f32, i: usize) -> Grown {
     let sp = &lib.species[s as usize];
     let (inc, dbh_of, bound) = &curves[s as usize];
     let f = light_response(l, sp.life.shade_tolerance) * suitability;
+    // the vigour's growth response: without light below the upper layer (shade mortality)
+    let fv = if below { suitability } else { f };
     let dq = crowd.dq_cm[i];
     let s = if d > 0.0 && dq > 0.0 { d / dq } else { 1.0 };
     let m = crowding_modifier(crowd.rd[i], s);
@@ -323,7 +345,7 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
             scale *= *factor;
         }
         if let Some(d1) = bwinpro_dbh(bw, sp, h, h1, d, age, c66, h100, scale) {
-            return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, f, m);
+            return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, fv, m);
         }
     }
     // Diameter increment below is `dd_pot · f · m` with dd_pot finite and ≥ 0: a tree with no
@@ -331,7 +353,7 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
     // is, so its open-grown curve (two powers and two logarithms) is not evaluated.
     if f == 0.0 || m == 0.0 {
         // `d + 0.0`, as `d + dd` below with dd = +0 (−0 becomes +0 there too)
-        return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d + 0.0, crown_base, vigour, f, m);
+        return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d + 0.0, crown_base, vigour, fv, m);
     }
     let hp = (h + dh_pot).min(sp.life.max_height_m * 0.999);
     let dd_open = (dbh_of.at(hp) - dbh_of.at(h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
@@ -372,13 +394,15 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
         }
         dd * *factor
     };
-    finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, f, m)
+    finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, fv, m)
 }
 
 /// The end of [`grow`] from the new height `h1` and diameter `d1` (before its floor and cap):
 /// a first DBH for a tree that passed breast height without one, the dense-stand height bound
 /// (`bound`: the species' curve and its H/D at the largest DBH, where it has one; `h` the
-/// height before the season), the crown radius, crown base and vigour.
+/// height before the season), the crown radius, crown base and vigour (from `f`, the tree's
+/// growth response, [`run`]: light × site suitability with its drought factor in the upper
+/// layer, the suitability alone below it, and the crowding modifier `m`).
 #[allow(clippy::too_many_arguments)]
 #[inline]
 fn finish(sp: &Species, dbh_of: &Table<OpenDbh>, bound: Option<(DenseHd, f32)>, ccf: f32, l: f32, h: f32, h1: f32, mut d1: f32, crown_base: f32, vigour: f32, f: f32, m: f32) -> Grown {

@@ -100,6 +100,12 @@ pub struct Light<'a> {
     pub trees: &'a mut TreeStore,
     /// Written: relative light at the ground per light cell of the span of `window`.
     pub ground_light: &'a mut Vec<f32>,
+    /// Written: the local top height (m, ≥ 0) per light cell of the span of `window`: the
+    /// tallest canopy entry over the cell (the top of the tallest crown whose projection
+    /// overlaps it, or of an obstacle), 0 where none. Mortality and regeneration take a tree or
+    /// sapling below [`crate::sim::phases::mortality::UPPER_LAYER_SHARE`] of it to stand below
+    /// the upper layer (shade mortality, issue 35).
+    pub canopy_top: &'a mut Vec<f32>,
     /// Written: spatial hash of the trees on the light grid.
     pub grid: &'a mut SpatialGrid,
     /// Only these light cells' ground light is computed and held (a tile's,
@@ -157,7 +163,7 @@ pub fn held_cells(trees: &TreeStore, light: &LightGrid, window: Option<CellRect>
 
 /// Builds the spatial grid and canopy over the cells [`held_cells`] (the whole grid in one
 /// process, a tile's trees' and own cells in a tiled run), and sets every tree's light and the
-/// ground light of the cells of `window`.
+/// ground light and local top height ([`Light::canopy_top`]) of the cells of `window`.
 pub fn run(w: Light<'_>) {
     let cell = w.light.cell_m;
     let grid = SpatialGrid::build_in(&w.trees, &w.light, held_cells(&w.trees, &w.light, w.window));
@@ -221,8 +227,22 @@ pub fn run(w: Light<'_>) {
             light_at(held_of(c), 0.0, rel_of(c, ls, ri))
         })
         .collect();
+    // the tallest entry over each of the span's cells (the first of its descending heights)
+    let top: Vec<f32> = (0..span.len())
+        .into_par_iter()
+        .map(|k| {
+            let c = held_of(span.cell(k));
+            let a = canopy.start[c] as usize;
+            if (canopy.start[c + 1] as usize) > a {
+                canopy.h[a]
+            } else {
+                0.0
+            }
+        })
+        .collect();
     w.trees.light = light;
     *w.ground_light = ground;
+    *w.canopy_top = top;
     *w.grid = grid;
 }
 

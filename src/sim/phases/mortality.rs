@@ -1,7 +1,10 @@
 //! Mortality (winter): intrinsic, rising with age ([`p_intrinsic`]; recorded as `age` for
-//! senescent trees, `background` for younger ones), stress (suppressed growth over several years) and windthrow. Dead trees leave the store and are recorded with their cause.
+//! senescent trees, `background` for younger ones), shade ([`p_shade`], by shade tolerance, for
+//! trees below the upper layer ([`below_upper_layer`]); recorded as `stress`), stress (suppressed growth under crowding, a poor site or drought over
+//! several years) and windthrow. Dead trees leave the store and are recorded with their cause.
 
 use crate::conditions::SiteConditions;
+use crate::sim::light_grid::{CellRect, LightGrid, Span};
 use crate::sim::trees::{DeadTree, DeathCause, TreeStore, N_CAUSES, SENESCENT_AGE_SHARE};
 use crate::species::SpeciesLibrary;
 use crate::rng::{salt, Stream};
@@ -11,8 +14,79 @@ use rayon::prelude::*;
 /// (Bugmann 2001: 0.368, "suppressed trees die within about a decade").
 pub const P_STRESS: f64 = 0.368;
 
+/// Annual shade mortality at zero growth of the most shade-tolerant class (shade tolerance 5):
+/// 1/72, a mean survival time of 72 years, that of juvenile European beech in the deep shade of
+/// the primeval beech forest of Uholka, Ukraine (Petrovska, Bugmann, Hobi, Ghosh & Brang 2021,
+/// Eur. J. For. Res. 141:43–58, "Survival time and mortality rate of regeneration in the deep
+/// shade of a primeval beech forest", abstract: "the average survival time of F. sylvatica
+/// juveniles (72 years)"; the two maples there survive shorter).
+pub const P_SHADE_TOLERANT: f64 = 1.0 / 72.0;
+
+/// Annual shade mortality (0–1) at zero growth of a species of shade survival class `st` (1–5,
+/// clamped; `life.shade_survival()`, the shipped files' LandClim class): log-linear in `st` from [`P_STRESS`] (0.368, class 1: ForClim's slow-growth
+/// mortality, Bugmann 2001, 1 % of suppressed trees alive after a decade) to
+/// [`P_SHADE_TOLERANT`] (1/72, class 5, Petrovska et al. 2021):
+/// `P_STRESS · (P_SHADE_TOLERANT / P_STRESS)^((st − 1) / 4)`. Half-lives in full shade
+/// (`ln 2 / −ln(1 − p)`): class 1 (birch, larch, Scots pine) 1.5 years, 2 (the oaks, aspen,
+/// rowan) 3.9, 3 (spruce, ash, alder, Norway maple, lime) 9.3, 4 (sycamore, hornbeam, elm) 21.6,
+/// 5 (beech, fir) 49.5. The interpolation between the two cited ends is a model
+/// choice (ESTIMATE): Kobe et al. (1995, Ecol. Appl. 5:517–532) found juvenile survival in
+/// shade to order species as their shade tolerance does, without a scale for European classes.
+pub fn p_shade_zero_growth(st: f32) -> f64 {
+    let w = ((st as f64 - 1.0) / 4.0).clamp(0.0, 1.0);
+    P_STRESS * (P_SHADE_TOLERANT / P_STRESS).powf(w)
+}
+
+/// Decline of shade mortality with relative growth ([`p_shade`]): `ln 100`, so that a tree
+/// growing at its full-light rate dies at 1 % of the zero-growth rate. Model choice (ESTIMATE):
+/// Kobe et al. (1995) fit the decline per species on radial growth in mm/yr, which Sylva's
+/// relative growth does not give.
+pub const SHADE_GROWTH_DECLINE: f64 = 4.605_170_185_988_091;
+
+/// Annual shade mortality (0–1) of a tree or sapling of shade survival class `survival` (1–5,
+/// `life.shade_survival()`) and light-response class `st` (1–5, `life.shade_tolerance`) under
+/// relative light `light` (0–1):
+/// `p_shade_zero_growth(survival) · exp(−SHADE_GROWTH_DECLINE · f(L, st))` with `f` the species'
+/// relative growth in that light ([`super::growth::light_response`], the JABOWA/ForClim curves,
+/// 0–1): the growth-dependent mortality of juveniles of Kobe et al.
+/// (1995, Ecol. Appl. 5:517–532; SORTIE's "GMF" mortality `m = A · e^(−B·G)`, with growth `G`
+/// relative here), falling from the zero-growth rate [`p_shade_zero_growth`] below the light
+/// compensation point of both curves (L ≤ 0.05) to 1 % of it in full light. Issue 35, round 39
+/// (trial 38: light-demanding oak and pine persisted for decades under a closed canopy).
+pub fn p_shade(light: f32, survival: f32, st: f32) -> f64 {
+    let f = super::growth::light_response(light, st).clamp(0.0, 1.0) as f64;
+    p_shade_zero_growth(survival) * (-SHADE_GROWTH_DECLINE * f).exp()
+}
+
+/// Share of the local top height (0–1) that a tree or sapling must exceed to stand in the
+/// upper layer, where shade mortality ([`p_shade`]) does not act: 2/3, the bound of the upper
+/// height class of the IUFRO tree classification (Leibundgut's proposal after Schädelin 1931:
+/// class 100, "taking part in the upper canopy, tree height more than two thirds of the top
+/// height"; the middle class 1/3–2/3 and the lower class below 1/3 do not take part in it).
+/// The top height here is local: the tallest crown over the tree's light cell (the light
+/// phase's [`crate::sim::phases::light::Light::canopy_top`]), not the stand's H100.
+///
+/// Why (issue 35, round 40): the growth-dependent mortality of Kobe et al. (1995) was fitted on
+/// saplings in the understorey (SORTIE-ND's "GMF mortality" lets a user apply it to any life
+/// stage: sortie-nd.org, help, mortality behaviours; where it acts is the modeller's choice);
+/// applied to every tree, it killed the codominant and
+/// intermediate trees of light-demanders in their own closed stands (light 0.3–0.5) at about
+/// 3 % a year, so unmanaged Scots pine fell to 0.62 of its maximum-density line (round 39,
+/// branch `r39p`).
+pub const UPPER_LAYER_SHARE: f32 = 2.0 / 3.0;
+
+/// True when a tree or sapling of height `h` (m) stands below the upper layer of a canopy
+/// whose local top height is `top` (m, [`UPPER_LAYER_SHARE`]): `h < UPPER_LAYER_SHARE · top`.
+/// Where nothing is taller than 1.5 h (an open cell: `top` 0, or the tree among its peers) it
+/// is in the upper layer.
+#[inline]
+pub fn below_upper_layer(h: f32, top: f32) -> bool {
+    h < UPPER_LAYER_SHARE * top
+}
+
 /// Vigour threshold below which stress mortality applies, by shade tolerance (1–5):
-/// `0.02 + 0.08 (5 − ST) / 4` (intolerant trees die sooner in shade).
+/// `0.02 + 0.08 (5 − ST) / 4` (intolerant trees die sooner when suppressed; below the upper
+/// layer the vigour leaves light out, which acts there through [`p_shade`]).
 pub fn stress_threshold(st: f32) -> f32 {
     0.02 + 0.08 * ((5.0 - st) / 4.0).clamp(0.0, 1.0)
 }
@@ -69,6 +143,15 @@ pub struct Mortality<'a> {
     pub site: &'a SiteConditions,
     /// Species library.
     pub lib: &'a SpeciesLibrary,
+    /// The light grid (the cell of a tree, for its local top height).
+    pub light: &'a LightGrid,
+    /// The light cells `canopy_top` holds (a tile's, [`crate::sim::tiles`]); `None`: every cell.
+    pub window: Option<CellRect>,
+    /// Local top height (m) per light cell of the span of `window`, from this year's light
+    /// phase ([`crate::sim::phases::light::Light::canopy_top`]). A tree whose cell it does not
+    /// hold (an empty array) is taken to stand below the upper layer, as every tree did before
+    /// round 40.
+    pub canopy_top: &'a [f32],
     /// Trees: the dead are removed.
     pub trees: &'a mut TreeStore,
     /// Appended: this year's dead with their cause.
@@ -83,6 +166,8 @@ pub fn run(w: Mortality<'_>) {
     let (seed, year) = (w.seed, w.year as u64);
     let site = &w.site;
     let lib = &w.lib;
+    let (light, top) = (w.light, w.canopy_top);
+    let span = Span::new(w.window, light);
     let causes: Vec<Option<DeathCause>> = (0..t.len())
         .into_par_iter()
         .map(|i| {
@@ -98,6 +183,14 @@ pub fn run(w: Mortality<'_>) {
             if u < intrinsic_bound(sp.life.max_age_yr) && u < p_intrinsic(t.age[i], sp.life.max_age_yr) {
                 let senescent = t.age[i] >= SENESCENT_AGE_SHARE * sp.life.max_age_yr;
                 return Some(if senescent { DeathCause::Age } else { DeathCause::Background });
+            }
+            // shade (by shade tolerance) below the upper layer, then slow growth from crowding,
+            // site and drought; the shade draw is made in the upper layer too (with p = 0), so
+            // the later draws of a tree's stream do not depend on its layer
+            let below = span.index(light.cell_of(t.x[i], t.y[i])).and_then(|k| top.get(k)).is_none_or(|&h| below_upper_layer(t.height[i], h));
+            let ps = if below { p_shade(t.light[i], sp.life.shade_survival(), sp.life.shade_tolerance) } else { 0.0 };
+            if r.chance(ps) {
+                return Some(DeathCause::Stress);
             }
             if t.vigour[i] < stress_threshold(sp.life.shade_tolerance) && r.chance(P_STRESS) {
                 return Some(DeathCause::Stress);

@@ -18,8 +18,14 @@
 //!    table as for the trees, [`Table`]; [`light_response`], suitability `S`) with the ground
 //!    light of the cell under the tree canopy. Cohorts do not shade each other or the trees: they stay out of
 //!    the canopy grid (they are under it); competition within the layer is the density cap.
-//! 3. **Shade mortality** (cause `shade`): vigour `v ← 0.5 v + 0.5 f(L)·S`, the trees' memory
-//!    ([`rules::vigour_memory`] with no crowding modifier: crowding in the layer is step 4); while
+//! 3. **Shade and stress mortality** (cause `shade`): each stem of a cohort below the upper layer
+//!    of its cell ([`below_upper_layer`] of the cell's local top height, the light phase's
+//!    `canopy_top`: under a canopy, always) dies with the shade mortality
+//!    [`p_shade`]`(L_ground, shade tolerance)` (issue 35, round 39: by shade tolerance, from
+//!    1.5 years' half-life for birch to 50 for beech in full shade), a binomial draw; then the
+//!    vigour `v ← 0.5 v + 0.5 S` (site suitability with the drought factor; `f(L)·S` for a
+//!    cohort in the upper layer, an open cell, where shade mortality does not act; the trees' memory,
+//!    [`rules::vigour_memory`] with no crowding modifier: crowding in the layer is step 4); while
 //!    `v` is below the species' [`stress_threshold`], each stem dies with [`P_STRESS`]
 //!    (Bugmann 2001), a binomial draw.
 //! 4. **Crowding** (cause `crowding`): a stem of height `h` occupies `1 / N_max(h)` ha with the
@@ -40,7 +46,7 @@
 use super::growth::{light_response, open_crown_radius};
 use crate::sim::rules;
 use crate::species::allometry::{HeightIncrement, Table};
-use super::mortality::{stress_threshold, P_STRESS};
+use super::mortality::{below_upper_layer, p_shade, stress_threshold, P_STRESS};
 pub use crate::sim::cohorts::{Cohort, Cohorts, RegenDeath, RegenLedger, RegenYear, N_REGEN_CAUSES, RECRUIT_HEIGHT_M};
 use crate::conditions::SiteConditions;
 use crate::sim::light_grid::{CellRect, LightGrid};
@@ -123,6 +129,10 @@ pub struct Regen<'a> {
     /// Relative light at the ground per light cell of the span of `window` (this year's light
     /// phase).
     pub ground_light: &'a [f32],
+    /// Local top height (m) per light cell of the span of `window` (this year's light phase,
+    /// [`super::light::Light::canopy_top`]); a cell it does not hold (an empty array) counts as
+    /// under a canopy.
+    pub canopy_top: &'a [f32],
     /// Fraction (0–1) of the ground free of solid obstacles per light cell of the span of
     /// `window` (germination scales with it; an empty array: free everywhere).
     pub ground_free: &'a [f32],
@@ -204,6 +214,7 @@ pub fn run(w: Regen<'_>) -> usize {
                 // its element of the held site grids (the tile's cells plus halo, or all)
                 let site = wr.site.held(site as usize);
                 let gl = wr.ground_light[si];
+                let top = wr.canopy_top.get(si).copied();
                 let (cx, cy) = lg.centre(c);
                 // 1. germination
                 let mut r = Stream::new(seed, c as u64, year, salt::ESTABLISH);
@@ -245,8 +256,19 @@ pub fn run(w: Regen<'_>) -> usize {
                     let f = light_response(gl, sp.life.shade_tolerance) * wr.suitability[k.pool as usize][site];
                     k.height = (k.height + inc[k.pool as usize].at(k.height) * f).min(sp.life.max_height_m);
                     k.age += 1.0;
-                    // the trees' vigour memory; crowding within the layer is its density cap (4.)
-                    k.vigour = rules::vigour_memory(k.vigour, f, 1.0);
+                    // shade mortality by shade tolerance under the ground light, below the upper
+                    // layer (in an open cell the cohort is the upper layer)
+                    let below = top.is_none_or(|t| below_upper_layer(k.height, t));
+                    let ps = if below { p_shade(gl, sp.life.shade_survival(), sp.life.shade_tolerance) } else { 0.0 };
+                    let ds = binomial(&mut rm, k.stems, ps);
+                    k.stems -= ds;
+                    out.dead[k.pool as usize][RegenDeath::Shade as usize] += ds as u64;
+                    // the trees' vigour memory of the site (drought included; below the upper
+                    // layer light acts through the shade mortality above, in it through the
+                    // growth response `f`, as for the trees); crowding within the layer is its
+                    // density cap (4.)
+                    let s = if below { wr.suitability[k.pool as usize][site] } else { f };
+                    k.vigour = rules::vigour_memory(k.vigour, s, 1.0);
                     if k.vigour < stress_threshold(sp.life.shade_tolerance) {
                         let d = binomial(&mut rm, k.stems, P_STRESS);
                         k.stems -= d;
