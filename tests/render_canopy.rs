@@ -164,7 +164,7 @@ fn surroundings_beyond_the_window_are_the_same_forest() {
         fade: vec![],
         focus: Some(([300.0, 300.0], [700.0, 700.0])),
     };
-    let land = Landscape { ground, cover: LandCover::default() };
+    let land = Landscape { ground, cover: LandCover::default(), mirror_trees: true };
     // a closed window stand: broadleaves 4.5 m wide every 8 m, 25 m tall, with conifer patches
     let mut trees = Vec::new();
     for j in 0..50 {

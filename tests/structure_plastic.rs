@@ -799,7 +799,9 @@ fn the_move_light_model_stays_near_the_exact_moves() {
     assert!(worst.2 <= 0.015 * h, "node places: {} m", worst.2);
     assert!(worst.3 <= 4 * n / 100, "fates: {} of {n} nodes", worst.3);
     // no drift: as near the tree adapted from scratch as the exact moves are (measured: 0.237,
-    // 0.0166, 0.071 m, 58 fates against 0.237, 0.0153, 0.070 m, 73), within the bounds
+    // 0.0166, 0.071 m, 58 fates against 0.237, 0.0153, 0.070 m, 73; round 40, with
+    // MOVE_DELTA_MAX 256 and MOVE_PATCH_BUDGET 512: 0.216, 0.0173, 0.076 m, 69, the worst step
+    // against the exact moves 0.335, 0.0171, 0.076 m, 71 fates), within the bounds
     assert!(dm.0 <= de.0 + 0.1 && dm.1 <= de.1 + 0.003, "light against scratch: model {dm:?}, exact {de:?}");
     assert!(dm.2 <= de.2 + 0.01 * h && dm.3 <= de.3 + n / 100, "places and fates against scratch: model {dm:?}, exact {de:?}");
 }

@@ -28,7 +28,7 @@ pub mod transform;
 
 pub use analysis::{inverse_tropism, Analysis};
 pub use light::{Ground, Sky};
-pub use transform::{adapt_group, adapt_group_among, adapt_group_among_once, cluster_density, GroupReport, MOVE_DELTA_MAX, MOVE_GAMMA_TOL};
+pub use transform::{adapt_group, adapt_group_among, adapt_group_among_once, cluster_density, GroupReport, MOVE_DELTA_MAX, MOVE_GAMMA_TOL, MOVE_PATCH_BUDGET};
 
 /// Tolerance (m) of the move light model that the bench and the tests use
 /// ([`PlasticTree::set_move_light`]): half the 10 cm step of issue 31's wall move. An ESTIMATE,
@@ -457,10 +457,11 @@ impl PlasticTree {
     /// [`transform::MOVE_GAMMA_TOL`] (transmittance) since the level's snapshot; the solids
     /// (the obstacles, the terrain) are tested anew at every query (see `MoveCache` in
     /// `transform.rs`). So a wall moved by a small step builds shadow grids only at the levels
-    /// where many query points moved farther or more than [`MOVE_DELTA_MAX`] (or half the
-    /// casters) changed, and the
+    /// where many query points moved farther, or more than [`MOVE_DELTA_MAX`] (or half the
+    /// casters) changed, or the changes applied since the level's snapshot pass
+    /// [`MOVE_PATCH_BUDGET`], and the
     /// results differ from an exact call by what moves within the tolerances (measured in
-    /// BENCHMARKS.md, rounds 37 and 38, and bounded by the test
+    /// BENCHMARKS.md, rounds 37, 38 and 40, and bounded by the test
     /// `structure_plastic::the_move_light_model_stays_near_the_exact_moves`). The first call
     /// after turning it on, after [`PlasticTree::invalidate`], [`PlasticTree::scale`],
     /// [`PlasticTree::translate`], a change of the sky, and every call in a group or among fixed
