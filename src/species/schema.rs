@@ -219,6 +219,7 @@ pub const FIELDS: &[FieldSpec] = &[
         "Chapman–Richards rate k in H(t) = H_max (1 − e^(−k t))^p",
     ),
     f("life.growth.p", "", r(1.0, 10.0), "Chapman–Richards shape p (≥ 1)"),
+    f("life.growth.h_max_m", "m", r(1.0, 150.0), "Chapman–Richards asymptote H_max (m; optional, default life.max_height_m)"),
     f(
         "life.allometry.hd_a",
         "1/cm",
@@ -288,6 +289,7 @@ pub const FIELDS: &[FieldSpec] = &[
     f("life.bai_bwinpro.bias3", "cm²/cm³", r(-1.0, 1.0), "BWINPro diameter growth: bias polynomial, coefficient of D^3"),
     f("life.bai_bwinpro.bias4", "cm²/cm⁴", r(-0.1, 0.1), "BWINPro diameter growth: bias polynomial, coefficient of D^4"),
     f("life.bai_bwinpro.bias5", "cm²/cm⁵", r(-0.01, 0.01), "BWINPro diameter growth: bias polynomial, coefficient of D^5"),
+    f("life.bai_bwinpro.period_sigma", "", r(0.0, 1.0), "BWINPro diameter growth: σ of a growth factor exp(σ z) drawn anew per tree every 5-year period (TreeGrOSS Tree.grow's increment error; optional: a persistent factor without it)"),
     f("life.bai_bwinpro.youth_hd", "m/cm", rx(0.3, 5.0), "BWINPro diameter growth: youth height–diameter ratio, D = h / youth_hd below 7 cm (TreeGrOSS Tree.grow)"),
     f("life.foliage.crown_lai", "m²/m²", r(1.0, 15.0), "Leaf area of drawn crowns: one-sided leaf area per m² of crown projection, a published leaf-area index of closed pure stands of the species (species/sources/SOURCES.md; optional: without it drawn crowns carry the light model's 2 + 0.5·shade tolerance; pictures and exports only, not the simulation)"),
     f(
