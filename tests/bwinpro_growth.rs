@@ -10,7 +10,7 @@ use sylva::species::BaiBwinpro;
 /// Beech's block 211 of TreeGrOSS's `ForestSimulatorNWGermany6.xml` (as species/beech.toml
 /// would carry it).
 fn bwinpro_beech() -> BaiBwinpro {
-    BaiBwinpro { a0: 2.6518, csa: 1.0414, age: -0.6322, c66: -0.555, bias0: -22.77, bias1: 1.417, bias2: 0.03803, bias3: -0.002403, bias4: 0.00003191, bias5: -0.0000001202, youth_hd: 1.40 }
+    BaiBwinpro { a0: 2.6518, csa: 1.0414, age: -0.6322, c66: -0.555, bias0: -22.77, bias1: 1.417, bias2: 0.03803, bias3: -0.002403, bias4: 0.00003191, bias5: -0.0000001202, youth_hd: 1.40, period_sigma: None }
 }
 
 /// A 30 m × 30 m site (3 × 3 crowding cells) planted with beech at 1.5 m, every tree set to

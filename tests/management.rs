@@ -60,12 +60,13 @@ fn thinning_from_below_removes_the_smallest_first_and_reaches_its_target() {
 }
 
 /// A thinning takes stems of the growing stock (DBH ≥ 7 cm) only: an understorey planted under
-/// the stand (beech of 4 years, no stem of 7 cm) is left whole, and the relative density of
+/// the stand (beech of 8 years, 1.7 m on beech's height curve since issue 35 round 39, no stem
+/// of 7 cm; it was 4 years, which the refitted curve puts below breast height) is left whole, and the relative density of
 /// the stems ≥ 7 cm reaches the target (taking the smallest first used to clear every stem
 /// under 7 cm first, which the relative density does not count: found by a trial).
 #[test]
 fn thinning_from_below_leaves_the_understorey() {
-    let extra = "[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 2.0\nage_yr = 4.0\nyear = 0\n[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.45\nyear = 2\n";
+    let extra = "[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 2.0\nage_yr = 8.0\nyear = 0\n[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.45\nyear = 2\n";
     let (sc, mut w) = world(&beech_stand(extra, 2));
     let rows = common::run(&sc, &mut w, 2);
     let t = &w.stand.trees;
@@ -894,13 +895,13 @@ fn twin_ba(w: &World) -> f64 {
 
 #[test]
 fn shelterwood_removes_the_shares_of_basal_area_and_regeneration_comes_under_the_shelter() {
-    let stand = |extra: &str| ScenarioToml::new("shelter", 16, 3).species(&["beech"]).uniform(5, 5, 20.0, 200.0).planted("beech", 6.0, 90.0).build() + extra;
+    let stand = |extra: &str| ScenarioToml::new("shelter", 26, 3).species(&["beech"]).uniform(5, 5, 20.0, 200.0).planted("beech", 6.0, 90.0).build() + extra;
     let entry = "[[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\nstages = [{ year = 1, share = 0.4 }, { year = 8, share = 0.5 }, { year = 15, share = 1.0 }]\n";
     let (sc, mut w) = world(&stand(entry));
     let (sc0, mut w0) = world(&stand(""));
     let mut rows = Vec::new();
     let mut rows0 = Vec::new();
-    for y in 1..=16u32 {
+    for y in 1..=26u32 {
         let r = common::run(&sc, &mut w, 1).remove(0);
         rows0.push(common::run(&sc0, &mut w0, 1).remove(0));
         let cut_ba = harvested_ba(&w);
@@ -926,8 +927,12 @@ fn shelterwood_removes_the_shares_of_basal_area_and_regeneration_comes_under_the
     // 9,901/ha at year 14), but a regeneration establishes under it and carries the stand on
     assert!(s > 0.6 * s0 && s > 3000.0, "regeneration under the shelter {s:.0}/ha, unmanaged {s0:.0}/ha");
     assert!(rows[15].seedlings_ha + rows[15].regeneration_ha > 0.8 * s, "the regeneration survives the removal cut");
+    // (a beech sapling in full light reaches the recruitment height, 4 m, at 14 years on its
+    // height curve since issue 35 round 39, about 11 before; so the saplings of the shelter's
+    // years are recruited within the ten years after the removal cut, not the first two)
     let recruits: u64 = rows[14..].iter().map(|r| r.regen_recruited).sum();
-    assert!(recruits > 20 && rows[15].stems_ha > 20.0, "saplings grow into the new stand after the removal cut: {recruits} recruits, {:.0} stems/ha", rows[15].stems_ha);
+    eprintln!("recruits by year after the removal cut: {:?}", rows[14..].iter().map(|r| r.regen_recruited).collect::<Vec<_>>());
+    assert!(recruits > 20 && rows[25].stems_ha > 20.0, "saplings grow into the new stand after the removal cut: {recruits} recruits, {:.0} stems/ha", rows[25].stems_ha);
 }
 
 #[test]
@@ -1646,11 +1651,17 @@ fn the_management_table_gives_each_entrys_area_as_counted_in_the_inventory() {
         let d_max = alive.iter().map(|a| a.0).fold(0.0, f64::max);
         assert!((get(year, 0, "qmd_cm") - qmd).abs() < 0.011 + unsure as f64 * d_max * d_max / (2.0 * n * qmd), "year {year}: qmd {} against {qmd:.3}", get(year, 0, "qmd_cm"));
         // top height: the mean height of the round(100 · area) thickest (one layer: no ingrowth)
-        alive.sort_by(|a, b| b.0.total_cmp(&a.0).then(b.1.total_cmp(&a.1)));
+        // (the inventory's DBHs are rounded, so stems tied at the k-th DBH may stand either side
+        // of the cut: the count brackets the top height between the ties broken shortest first
+        // and tallest first; a planted even-aged stand has many such ties)
         let k = (100.0 * area).round() as usize;
+        alive.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.total_cmp(&b.1)));
+        let h100_lo = alive[..k].iter().map(|a| a.1).sum::<f64>() / k as f64;
+        alive.sort_by(|a, b| b.0.total_cmp(&a.0).then(b.1.total_cmp(&a.1)));
         let h100 = alive[..k].iter().map(|a| a.1).sum::<f64>() / k as f64;
         let h_max = alive.iter().map(|a| a.1).fold(0.0, f64::max);
-        assert!((get(year, 0, "top_height_m") - h100).abs() < 0.011 + unsure as f64 * h_max / k as f64, "year {year}: top height {} against {h100:.3}", get(year, 0, "top_height_m"));
+        let (got, tol) = (get(year, 0, "top_height_m"), 0.011 + unsure as f64 * h_max / k as f64);
+        assert!(got > h100_lo - tol && got < h100 + tol, "year {year}: top height {got} against {h100_lo:.3}–{h100:.3}");
         eprintln!("year {year}: {n} stems in the triangle ({unsure} within 1 cm of its edges), {cut} harvested, BA {ba:.3} m²/ha, Dq {qmd:.2} cm, H100 {h100:.2} m: table {}", rows.iter().find(|r| r[0] == year.to_string() && r[1] == "0").unwrap().join(","));
         assert!((get(year, 0, "harvest_stems_ha") * area - cut as f64).abs() <= slack, "year {year}: harvest {} stems/ha × {area} ha against {cut} counted", get(year, 0, "harvest_stems_ha"));
         if year == 2 {

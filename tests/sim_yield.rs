@@ -107,3 +107,26 @@ fn beech_yield_class_one() {
     std::fs::create_dir_all(&docs).unwrap();
     plot_panels_png(&docs.join("yield_beech.png"), &panels, 3, (1500, 480)).unwrap();
 }
+
+/// A planted tree of age a stands at its species' height–age curve at a (`Site::new_tree`), and
+/// beech's curve (NW-FVA 2021 class I top heights fitted with its own asymptote, issue 35 round
+/// 39) puts a 3-year beech at nursery-stock size: the planted stand's median height at the
+/// start is 0.3–0.5 m (beech planting stock of 1–3 years is 30–50 cm; species/beech.toml),
+/// where the curve with the asymptote at `max_height_m` grew almost linearly from age 0 and
+/// planted it at 0.91 m (trial 38). Every planted tree is within the ±0.5-year age jitter's
+/// heights, H(2.5)–H(3.5), or at the 0.3 m floor of a new tree.
+#[test]
+fn planted_beech_starts_at_nursery_height() {
+    let lib = common::embedded();
+    let beech = lib.species.iter().find(|s| s.id == "beech").unwrap();
+    let toml = common::ScenarioToml::new("planted", 1, 7).species(&["beech"]).line("climate = { latitude_deg = 51.0 }").uniform(5, 5, 20.0, 200.0).planted("beech", 1.5, PLANT_AGE as f64).build();
+    let (_sc, w) = common::world_with(&toml, &lib);
+    let mut h: Vec<f32> = w.stand.trees.height.clone();
+    assert!(h.len() > 1000, "{} trees", h.len());
+    h.sort_by(f32::total_cmp);
+    let median = h[h.len() / 2];
+    eprintln!("planted at age {PLANT_AGE}: {} trees, heights {:.3}–{:.3} m, median {median:.3} m; curve H(3) {:.3} m", h.len(), h[0], h[h.len() - 1], beech.potential_height_m(3.0));
+    assert!((0.3..=0.5).contains(&median), "median planted height {median} m at age {PLANT_AGE}");
+    let (lo, hi) = (beech.potential_height_m(PLANT_AGE as f32 - 0.5).max(0.3), beech.potential_height_m(PLANT_AGE as f32 + 0.5));
+    assert!(h.iter().all(|&x| x >= lo - 1e-4 && x <= hi + 1e-4), "heights {}–{} outside {lo}–{hi}", h[0], h[h.len() - 1]);
+}

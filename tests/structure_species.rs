@@ -145,3 +145,29 @@ fn obstacles_with_bad_numbers_are_refused_with_the_field_named() {
         assert!(e.contains("obstacle 0"), "{e}");
     }
 }
+
+/// Issue 35, round 40: `grow_light_guided_tree` (a light-guided tree by height and growth
+/// cycles, used by the Plastic Trees tests to keep their trees when a height curve is refitted)
+/// is `grow_species_tree`'s light-guided tree when given the curve's height at the age and one
+/// cycle per year: node for node the same; another cycle count grows another tree; a cycle
+/// count outside 1–60 and a height that is not positive are refused, naming the field.
+#[test]
+fn light_guided_tree_by_height_and_cycles_is_the_species_tree_by_age() {
+    use sylva::species::allometry::potential_height;
+    use sylva::structure::species_tree::grow_light_guided_tree;
+    let sp = species("beech");
+    let pos = |g: &GrownTree| g.skeleton.nodes.iter().map(|n| n.pos.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    for age in [6.0f32, 12.4] {
+        let by_age = grow_species_tree(&sp, Model::Light, age, &[], 2).unwrap();
+        let h = potential_height(&sp, age).max(1.5);
+        let by_size = grow_light_guided_tree(&sp, h, age.round() as u32, &[], 2).unwrap();
+        assert_eq!(pos(&by_age), pos(&by_size), "age {age}");
+        assert_eq!(by_age.envelope.unwrap().height_m, by_size.envelope.unwrap().height_m);
+        let more = grow_light_guided_tree(&sp, h, age.round() as u32 + 2, &[], 2).unwrap();
+        assert_ne!(pos(&by_age), pos(&more), "age {age}: two more cycles, the same tree");
+    }
+    for (h, cycles, field) in [(3.0f32, 0u32, "cycles"), (3.0, 61, "cycles"), (0.0, 8, "height"), (f32::NAN, 8, "height")] {
+        let e = grow_light_guided_tree(&sp, h, cycles, &[], 2).unwrap_err().to_string();
+        assert!(e.contains(field), "{h} m, {cycles} cycles: {e}");
+    }
+}

@@ -319,7 +319,7 @@ mod tests {
         d.set_number("niche.t.tolerance", 2.5, false).unwrap();
         let t = d.text();
         assert!(t.contains("max_height_m = 45.5  # iLand (LandClim: 45)"), "trailing comment kept");
-        assert!(t.contains("growth = { k = 0.0131, p = 1.211 }"), "inline table edited in place");
+        assert!(t.contains("growth = { k = 0.0131, p = 1.652, h_max_m = 41.75 }"), "inline table edited in place");
         assert!(t.contains("strands = 1200\n"), "integer field stays an integer");
         assert!(t.contains("t = { value = 5, tolerance = 2.5 }"));
         // every comment line is still there, in order

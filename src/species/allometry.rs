@@ -6,16 +6,17 @@
 use super::Species;
 
 /// Potential (open-grown, fully suitable site) height (m) at age `t` (years):
-/// Chapman–Richards `H(t) = H_max (1 − e^(−k t))^p` (species file, `life.growth`).
+/// Chapman–Richards `H(t) = H_max (1 − e^(−k t))^p` (species file, `life.growth`; `H_max` its
+/// asymptote `h_max_m`, else `max_height_m`).
 pub fn potential_height(sp: &Species, t: f32) -> f32 {
     let g = sp.life.growth;
-    sp.life.max_height_m * (1.0 - (-g.k * t.max(0.0)).exp()).powf(g.p)
+    g.asymptote_m(sp.life.max_height_m) * (1.0 - (-g.k * t.max(0.0)).exp()).powf(g.p)
 }
 
 /// Effective age (years) of height `h` on the Chapman–Richards curve (its inverse).
 pub fn effective_age(sp: &Species, h: f32) -> f32 {
     let g = sp.life.growth;
-    let q = (h / sp.life.max_height_m).clamp(1e-6, 0.9995).powf(1.0 / g.p);
+    let q = (h / g.asymptote_m(sp.life.max_height_m)).clamp(1e-6, 0.9995).powf(1.0 / g.p);
     -(1.0 - q).ln() / g.k
 }
 
@@ -45,7 +46,7 @@ impl HeightIncrement {
     #[inline]
     pub fn of(sp: &Species) -> Self {
         let g = sp.life.growth;
-        HeightIncrement { hm: sp.life.max_height_m, p: g.p, inv_p: 1.0 / g.p, e_k: (-g.k).exp() }
+        HeightIncrement { hm: g.asymptote_m(sp.life.max_height_m), p: g.p, inv_p: 1.0 / g.p, e_k: (-g.k).exp() }
     }
 
     /// [`potential_increment`] at height `h` (m).
@@ -252,8 +253,11 @@ mod tests {
             assert!(ei <= 5e-5 * ri, "{}: height increment off by {ei} m (range {ri} m)", sp.id);
             assert!(ed <= 5e-5 * rd, "{}: open-grown DBH off by {ed} cm (range {rd} cm)", sp.id);
             // outside the tables' ranges: the exact curves, bit for bit
-            for h in [0.0f32, 0.3, hm / 65.0, 0.995 * hm, hm, 1.2, 1.3 + (hm - 1.3) * 0.95] {
-                if !(h >= hm / 64.0 && h < 0.99 * hm) {
+            // (the height increment's table spans its curve's asymptote, which may differ
+            // from the species' maximum height: `life.growth.h_max_m`)
+            let ha = sp.life.growth.asymptote_m(hm);
+            for h in [0.0f32, 0.3, ha / 65.0, 0.995 * ha, ha, 1.2, 1.3 + (ha - 1.3) * 0.95] {
+                if !(h >= ha / 64.0 && h < 0.99 * ha) {
                     assert_eq!(ti.at(h).to_bits(), inc.at(h).to_bits(), "{} at {h} m", sp.id);
                 }
             }

@@ -311,6 +311,15 @@ pub struct BaiBwinpro {
     /// Youth height–diameter ratio (m of height per cm of DBH) of trees below 7 cm:
     /// `D = h / youth_hd`, in (0.3, 5].
     pub youth_hd: f32,
+    /// Standard deviation σ (of ln ΔG₅, in [0, 1]) of a growth factor `exp(σ z)` drawn anew for
+    /// every tree in every 5-year period of the simulation (z standard normal from the tree's
+    /// stream keyed by the period, clamped to ±3): TreeGrOSS draws its increment error per tree
+    /// and growth step (`Tree.grow`: `exp(ln ΔG + σ z)`, github:softwareschneiderei/bwinpro),
+    /// so a thinning from below cannot select a lasting growth class. Where given it replaces
+    /// the tree's persistent growth factor ([`crate::sim::phases::growth::growth_factor`]);
+    /// `None`: the persistent factor (issue 35, round 39).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub period_sigma: Option<f32>,
 }
 
 /// Dense-stand height–diameter curve of a species, `h/d = k · D^c` (h in m, D the DBH in cm,
@@ -485,6 +494,21 @@ pub struct Growth {
     pub k: f32,
     /// Shape p (dimensionless), ≥ 1.
     pub p: f32,
+    /// Asymptote H_max (m) of the height–age curve, 1–150 m; `None`: the species'
+    /// `max_height_m`. A curve fitted with its own asymptote to a yield table's top heights
+    /// (three parameters, as site-index curves are) can differ from the species' record height,
+    /// which stays the cap on any tree's height (issue 35, round 39: beech).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub h_max_m: Option<f32>,
+}
+
+impl Growth {
+    /// The height–age curve's asymptote (m): [`Growth::h_max_m`] where given, else the species'
+    /// maximum height `max_height_m` (m).
+    #[inline]
+    pub fn asymptote_m(&self, max_height_m: f32) -> f32 {
+        self.h_max_m.unwrap_or(max_height_m)
+    }
 }
 
 /// Allometric relations.

@@ -219,6 +219,7 @@ pub const FIELDS: &[FieldSpec] = &[
         "Chapman–Richards rate k in H(t) = H_max (1 − e^(−k t))^p",
     ),
     f("life.growth.p", "", r(1.0, 10.0), "Chapman–Richards shape p (≥ 1)"),
+    f("life.growth.h_max_m", "m", r(1.0, 150.0), "Chapman–Richards asymptote H_max (m; optional, default life.max_height_m)"),
     f(
         "life.allometry.hd_a",
         "1/cm",
@@ -288,6 +289,7 @@ pub const FIELDS: &[FieldSpec] = &[
     f("life.bai_bwinpro.bias3", "cm²/cm³", r(-1.0, 1.0), "BWINPro diameter growth: bias polynomial, coefficient of D^3"),
     f("life.bai_bwinpro.bias4", "cm²/cm⁴", r(-0.1, 0.1), "BWINPro diameter growth: bias polynomial, coefficient of D^4"),
     f("life.bai_bwinpro.bias5", "cm²/cm⁵", r(-0.01, 0.01), "BWINPro diameter growth: bias polynomial, coefficient of D^5"),
+    f("life.bai_bwinpro.period_sigma", "", r(0.0, 1.0), "BWINPro diameter growth: σ of a growth factor exp(σ z) drawn anew per tree every 5-year period (TreeGrOSS Tree.grow's increment error; optional: a persistent factor without it)"),
     f("life.bai_bwinpro.youth_hd", "m/cm", rx(0.3, 5.0), "BWINPro diameter growth: youth height–diameter ratio, D = h / youth_hd below 7 cm (TreeGrOSS Tree.grow)"),
     f("life.drought_tolerance", "drought index", r(0.05, 0.6), "Drought tolerance: the largest drought index (0–1; a year's relative precipitation deficit: `species::drought_index`) at which the species grows; growth is reduced by sqrt(1 − DI / tolerance) (ForClim, Bugmann & Cramer 1998; values: LandClim's droughtTol, Schumacher et al. 2004; optional: without it no drought response)"),
     f("life.shade_survival_class", "class", r(1.0, 5.0), "Shade tolerance class of survival in shade, 1 least … 5 most tolerant (LandClim's ShadeTolerance after Ellenberg 1996): sets the shade mortality (`sim::phases::mortality::p_shade`; optional: without it `life.shade_tolerance`)"),

@@ -73,27 +73,7 @@ pub fn grow_species_tree(sp: &Species, model: Model, age_yr: f32, obstacles: &[O
             let (skeleton, leaves) = ecomod::try_grow(&p, seed, 0.0)?;
             Ok(GrownTree { skeleton, leaves, envelope: None, space: None })
         }
-        Model::Light => {
-            let env = CrownEnvelope::for_species(sp, age_yr, Vec3::ZERO);
-            let (h, r) = (env.height_m, env.radius_m);
-            let internode = (h / 40.0).min(r / 5.0).max(0.15);
-            let o = light_guided::LightOptions {
-                pipe_exponent: sp.life.allometry.pipe_exponent,
-                internode_m: internode,
-                height_m: 1.25 * h,
-                extent_m: (r + 3.0 * internode).max(1.3 * r).max(2.0),
-                envelope: Some(env),
-                // conifers carry their branches near-horizontal in whorls, broadleaves at ~45°
-                branch_angle_deg: if sp.identity.leaf_type == LeafType::Conifer { 80.0 } else { 45.0 },
-                plagiotropic: sp.identity.leaf_type == LeafType::Conifer,
-                ..Default::default()
-            };
-            let mut skeleton = light_guided::grow(&sp.architecture.light_guided, &o, obstacles, seed, age_yr.round().clamp(1.0, 60.0) as u32)?;
-            scale_radii_to_dbh(&mut skeleton, sp);
-            let leaves = tip_leaves(&skeleton, &sp.architecture.ecomod);
-            let top = (1.25 * h / (0.5 * internode)).ceil() * 0.5 * internode;
-            Ok(GrownTree { skeleton, leaves, envelope: Some(env), space: Some((top, 0.5 * internode)) })
-        }
+        Model::Light => grow_light_guided_tree(sp, crate::species::allometry::potential_height(sp, age_yr).max(1.5), age_yr.round().clamp(1.0, 60.0) as u32, obstacles, seed),
         Model::Laplacian => {
             let env = CrownEnvelope::for_species(sp, age_yr, Vec3::ZERO);
             let (h, r) = (env.height_m, env.radius_m);
@@ -107,6 +87,46 @@ pub fn grow_species_tree(sp: &Species, model: Model, age_yr: f32, obstacles: &[O
             Ok(GrownTree { skeleton: g.skeleton, leaves, envelope: Some(env), space: Some((top, voxel)) })
         }
     }
+}
+
+/// The light-guided tree of [`grow_species_tree`] by its size and growth history rather than
+/// its age: `cycles` (1–60) cycles of the light-guided model (`001_*.txt`) inside the species'
+/// crown envelope of a tree `height_m` tall ([`CrownEnvelope::for_species_height`]; at least
+/// 1.5 m). [`grow_species_tree`] grows the envelope of the species' height–age curve at the
+/// tree's age in one cycle per year. Tests of the Plastic Trees adaptation name both, so that
+/// their trees keep their size and architecture when a species' height curve is refitted (issue
+/// 35, round 40): the pruning of eq. 11 compares a branch's light with its minimum over the
+/// growth stages, so a tree grown in more cycles to the same height sheds less.
+///
+/// Errors: [`Error::Invalid`] for a height that is not a positive finite number (m), for
+/// `cycles` outside 1–60, for an invalid obstacle (naming it) or bad species parameters.
+pub fn grow_light_guided_tree(sp: &Species, height_m: f32, cycles: u32, obstacles: &[Obstacle], seed: u64) -> Result<GrownTree> {
+    if !(height_m.is_finite() && height_m > 0.0) {
+        return Err(Error::Invalid { context: format!("tree of {}", sp.id), field: "height".into(), value: height_m.to_string(), expected: "a positive height in m".into() });
+    }
+    if !(1..=60).contains(&cycles) {
+        return Err(Error::Invalid { context: format!("tree of {}", sp.id), field: "cycles".into(), value: cycles.to_string(), expected: "1 to 60 light-guided growth cycles".into() });
+    }
+    validate_obstacles(obstacles)?;
+    let env = CrownEnvelope::for_species_height(sp, height_m, Vec3::ZERO);
+    let (h, r) = (env.height_m, env.radius_m);
+    let internode = (h / 40.0).min(r / 5.0).max(0.15);
+    let o = light_guided::LightOptions {
+        pipe_exponent: sp.life.allometry.pipe_exponent,
+        internode_m: internode,
+        height_m: 1.25 * h,
+        extent_m: (r + 3.0 * internode).max(1.3 * r).max(2.0),
+        envelope: Some(env),
+        // conifers carry their branches near-horizontal in whorls, broadleaves at ~45°
+        branch_angle_deg: if sp.identity.leaf_type == LeafType::Conifer { 80.0 } else { 45.0 },
+        plagiotropic: sp.identity.leaf_type == LeafType::Conifer,
+        ..Default::default()
+    };
+    let mut skeleton = light_guided::grow(&sp.architecture.light_guided, &o, obstacles, seed, cycles)?;
+    scale_radii_to_dbh(&mut skeleton, sp);
+    let leaves = tip_leaves(&skeleton, &sp.architecture.ecomod);
+    let top = (1.25 * h / (0.5 * internode)).ceil() * 0.5 * internode;
+    Ok(GrownTree { skeleton, leaves, envelope: Some(env), space: Some((top, 0.5 * internode)) })
 }
 
 /// Leaves for models without their own: ⌈ρ_l⌉ (1–30) leaves of the species' EcoMod leaf size

@@ -30,3 +30,19 @@ pub fn tree1(sp: &Species) -> PlasticParams {
 pub fn grow(sp: &Species, age: f32, seed: u64) -> GrownTree {
     grow_species_tree(sp, Model::Light, age, &[], seed).unwrap()
 }
+
+/// Height (m) that beech's height–age curve gave at `age` years before its refit of issue 35
+/// round 39 (Chapman–Richards `48 (1 − e^(−0.0129 t))^1.211`, fitted through the NW-FVA 2021
+/// class I top heights at 50 and 100 years), in the f32 arithmetic of
+/// `allometry::potential_height`: the sizes the Plastic Trees tests were written for.
+pub fn beech_height_before_round_39(age: f32) -> f32 {
+    48.0f32 * (1.0 - (-0.0129f32 * age).exp()).powf(1.211)
+}
+
+/// The light-guided beech that [`grow`] gave at `age` years before round 39: a tree of
+/// [`beech_height_before_round_39`] grown in `age` cycles (`grow_light_guided_tree`), so a test
+/// keeps its tree's size and growth history (and so its node count and shedding) whatever
+/// beech's height curve (issue 35, round 40).
+pub fn grow_beech_sized_as_before_round_39(sp: &Species, age: u32, seed: u64) -> GrownTree {
+    sylva::structure::species_tree::grow_light_guided_tree(sp, beech_height_before_round_39(age as f32), age, &[], seed).unwrap()
+}

@@ -139,6 +139,21 @@ pub fn growth_factor(seed: u64, id: u64) -> f32 {
     (GROWTH_SIGMA * z).exp().clamp(0.6, 1.6) as f32
 }
 
+/// Length (years) of the periods of [`period_factor`]: TreeGrOSS's growth step (its increments
+/// are 5-year increments, `ForestSimulatorNWGermany6.xml`).
+pub const FACTOR_PERIOD_YR: u32 = 5;
+
+/// Growth factor of tree `id` in the 5-year period that holds simulation year `year`
+/// ([`FACTOR_PERIOD_YR`]; period `year / 5`): `exp(σ z)` with z standard normal from the tree's
+/// stream keyed by the period, clamped to ±3, for species with
+/// `life.bai_bwinpro.period_sigma` = σ (TreeGrOSS `Tree.grow` draws its increment error anew at
+/// every step; [`crate::species::BaiBwinpro::period_sigma`]). A pure function of seed, id and
+/// period: the same bits whatever the threads, tiles or resumes.
+pub fn period_factor(seed: u64, id: u64, year: u32, sigma: f32) -> f32 {
+    let z = Stream::new(seed, id, 1 + (year / FACTOR_PERIOD_YR) as u64, salt::GROWTH).normal().clamp(-3.0, 3.0);
+    (sigma as f64 * z).exp() as f32
+}
+
 /// Crown competition factor at which the open-grown crowns of a neighbourhood just cover the
 /// ground (Krajicek et al. 1961: CCF = 100 %).
 pub const CCF_FULL: f32 = 1.0;
@@ -247,8 +262,9 @@ pub struct Growth<'a> {
 /// Species with BWINPro's diameter growth (`life.bai_bwinpro`; issue 35, round 37) take their
 /// DBH from [`bwinpro_dbh`] instead (youth rule below 7 cm, the basal-area increment with the
 /// crown-competition index C66 from 7 cm, scaled by the site's suitability and the tree's
-/// growth factor; light and the crowding modifier do not enter it); their height, crown and
-/// vigour grow as above.
+/// growth factor, the persistent [`growth_factor`] or, where `life.bai_bwinpro.period_sigma`
+/// is given, a [`period_factor`] drawn anew every 5 years; light and the crowding modifier do
+/// not enter it); their height, crown and vigour grow as above.
 ///
 /// Dense-stand height bound (issue 35; for species with `life.dense_hd`, none without): after
 /// the season, a tree with a DBH `D₁ > 0` may not be taller than
@@ -268,6 +284,7 @@ pub fn run(w: Growth<'_>) {
     let crowd = w.crowd;
     let lib = &w.lib;
     let seed = w.seed;
+    let year = w.year;
     let recruited = birth_id(w.year, 0, 0);
     let t = &mut *w.trees;
     // the species' curves, tabulated once per species (`allometry::Table`: within 5 · 10⁻⁵ of
@@ -303,7 +320,7 @@ pub fn run(w: Growth<'_>) {
                 return;
             }
             let below = span.index(lg.cell_of(x[i], y[i])).and_then(|k| top.get(k)).is_none_or(|&th| super::mortality::below_upper_layer(*hr, th));
-            let g = grow(lib, curves, crowd, seed, species[i], light[i], suitability[i], below, id[i], *hr, *dr, *cbr, *vr, *ar, gr, i);
+            let g = grow(lib, curves, crowd, seed, year, species[i], light[i], suitability[i], below, id[i], *hr, *dr, *cbr, *vr, *ar, gr, i);
             *hr = g.h;
             *dr = g.d;
             *rr = g.r;
@@ -317,13 +334,13 @@ pub fn run(w: Growth<'_>) {
 /// has a dense-stand height–diameter curve, that curve with its H/D at the species' largest DBH.
 type Curves = (Table<HeightIncrement>, Table<OpenDbh>, Option<(DenseHd, f32)>);
 
-/// One tree's season ([`run`]): species `s`, light `l`, suitability, whether it stands `below`
-/// the upper layer (its vigour: [`run`]), id, height `h`, DBH `d`,
+/// One tree's season ([`run`]) in simulation year `year`: species `s`, light `l`, suitability,
+/// whether it stands `below` the upper layer (its vigour: [`run`]), id, height `h`, DBH `d`,
 /// crown base and vigour before it, its cached [`growth_factor`] (NaN until first drawn, then
 /// kept); `i` its index in the crowding.
 #[allow(clippy::too_many_arguments)]
 #[inline]
-fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s: u16, l: f32, suitability: f32, below: bool, id: u64, h: f32, d: f32, crown_base: f32, vigour: f32, age: f32, factor: &mut f32, i: usize) -> Grown {
+fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, year: u32, s: u16, l: f32, suitability: f32, below: bool, id: u64, h: f32, d: f32, crown_base: f32, vigour: f32, age: f32, factor: &mut f32, i: usize) -> Grown {
     let sp = &lib.species[s as usize];
     let (inc, dbh_of, bound) = &curves[s as usize];
     let f = light_response(l, sp.life.shade_tolerance) * suitability;
@@ -339,10 +356,16 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, s:
         let (c66, h100) = (crowd.c66.get(i).copied().unwrap_or(0.0), crowd.h100.get(i).copied().unwrap_or(h));
         let mut scale = suitability;
         if d >= crate::sim::density::MIN_DBH_CM && scale > 0.0 {
-            if factor.is_nan() {
-                *factor = growth_factor(seed, id);
+            match bw.period_sigma {
+                // a factor per 5-year period (not cached: it changes with the period)
+                Some(sigma) => scale *= period_factor(seed, id, year, sigma),
+                None => {
+                    if factor.is_nan() {
+                        *factor = growth_factor(seed, id);
+                    }
+                    scale *= *factor;
+                }
             }
-            scale *= *factor;
         }
         if let Some(d1) = bwinpro_dbh(bw, sp, h, h1, d, age, c66, h100, scale) {
             return finish(sp, dbh_of, *bound, crowd.ccf[i], l, h, h1, d1, crown_base, vigour, fv, m);
@@ -482,7 +505,7 @@ mod tests {
     /// youth rule below 7 cm (7 m tall: 5 cm; never shrinking; none below breast height).
     #[test]
     fn bwinpro_beech_increment_values() {
-        let bw = BaiBwinpro { a0: 2.6518, csa: 1.0414, age: -0.6322, c66: -0.555, bias0: -22.77, bias1: 1.417, bias2: 0.03803, bias3: -0.002403, bias4: 0.00003191, bias5: -0.0000001202, youth_hd: 1.40 };
+        let bw = BaiBwinpro { a0: 2.6518, csa: 1.0414, age: -0.6322, c66: -0.555, bias0: -22.77, bias1: 1.417, bias2: 0.03803, bias3: -0.002403, bias4: 0.00003191, bias5: -0.0000001202, youth_hd: 1.40, period_sigma: None };
         assert!((crown_surface_area(4.0, 6.0) - 52.1416).abs() < 1e-3, "{}", crown_surface_area(4.0, 6.0));
         assert_eq!(crown_surface_area(0.0, 6.0), 0.0);
         assert!((bwinpro_bai5(bw, 7.4, 25.0, 30.0, 0.0) - 36.085).abs() < 0.01, "{}", bwinpro_bai5(bw, 7.4, 25.0, 30.0, 0.0));
@@ -507,6 +530,29 @@ mod tests {
         // without the stand-grown crown functions it does not apply
         b.life.stand_crown_base = None;
         assert_eq!(bwinpro_dbh(bw, &b, h, h + 0.4, d, 30.0, 2.0, h100, 1.0), None);
+    }
+
+    /// The per-period growth factor (TreeGrOSS's increment error drawn per 5-year step): the
+    /// same within a period, drawn anew in the next; over trees its log has mean 0 and sd σ;
+    /// the draws of two periods are uncorrelated (so a thinning cannot select a lasting class),
+    /// and σ 0 is no factor.
+    #[test]
+    fn period_factor_is_drawn_per_period() {
+        let sigma = 0.15f32;
+        assert_eq!(period_factor(1, 42, 10, sigma), period_factor(1, 42, 14, sigma));
+        assert_ne!(period_factor(1, 42, 14, sigma), period_factor(1, 42, 15, sigma));
+        assert_eq!(period_factor(1, 42, 13, 0.0), 1.0);
+        let n = 20_000u64;
+        let a: Vec<f64> = (0..n).map(|id| (period_factor(3, id, 20, sigma) as f64).ln()).collect();
+        let b: Vec<f64> = (0..n).map(|id| (period_factor(3, id, 25, sigma) as f64).ln()).collect();
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        let (ma, mb) = (mean(&a), mean(&b));
+        let sd = (a.iter().map(|x| (x - ma).powi(2)).sum::<f64>() / n as f64).sqrt();
+        let cov = a.iter().zip(&b).map(|(x, y)| (x - ma) * (y - mb)).sum::<f64>() / n as f64;
+        let r = cov / (sd * sd);
+        assert!(ma.abs() < 0.005 && (sd - 0.15).abs() < 0.005 && r.abs() < 0.03, "mean {ma} sd {sd} r {r}");
+        // the persistent factor is the same tree's every year (its correlation is 1)
+        assert_eq!(growth_factor(3, 7), growth_factor(3, 7));
     }
 
     /// The dense-stand height bound: beech's curve (iLand fasy `HDhigh` integrated from breast

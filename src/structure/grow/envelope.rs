@@ -47,7 +47,13 @@ impl CrownEnvelope {
     /// allometry (≥ 0.5 m, ≤ 0.45 H for conifers and 0.6 H for broadleaves so young trees are
     /// not wider than tall), crown length `crown_ratio`·H (0.3–0.95 of H), shape by leaf type.
     pub fn for_species(sp: &Species, age_yr: f32, base: Vec3) -> Self {
-        let h = allometry::potential_height(sp, age_yr).max(1.5);
+        Self::for_species_height(sp, allometry::potential_height(sp, age_yr), base)
+    }
+
+    /// [`CrownEnvelope::for_species`] of a tree `height_m` tall (m; at least 1.5 m is used)
+    /// whatever its age: the same radius, crown length and shape.
+    pub fn for_species_height(sp: &Species, height_m: f32, base: Vec3) -> Self {
+        let h = height_m.max(1.5);
         let conifer = sp.identity.leaf_type == LeafType::Conifer;
         let r = allometry::open_crown_radius(sp, h, allometry::open_dbh(sp, h)).max(0.5).min(if conifer { 0.45 } else { 0.6 } * h);
         let ratio = sp.life.allometry.crown_ratio.clamp(0.3, 0.95);
