@@ -702,9 +702,18 @@ impl ShadowVolumes {
         if self.flat.is_some() {
             return;
         }
-        (0..self.dirs.len()).into_par_iter().filter(|&k| dirs & (1 << k) != 0 && self.grids[k].get().is_none()).for_each(|k| {
-            self.grid(k);
-        });
+        // the directions to build, found first: with none (a level's later batches) the cores
+        // are not woken for nothing
+        let todo: Vec<usize> = (0..self.dirs.len()).filter(|&k| dirs & (1 << k) != 0 && self.grids[k].get().is_none()).collect();
+        match todo[..] {
+            [] => {}
+            [k] => {
+                self.grid(k);
+            }
+            _ => todo.into_par_iter().for_each(|k| {
+                self.grid(k);
+            }),
+        }
     }
 
     fn grid(&self, k: usize) -> &DirGrid {

@@ -64,7 +64,7 @@
 //! against the exact calls (BENCHMARKS.md, round 37); the first call is exact.
 
 use super::analysis::{cluster_center, input_casters, judged, normalised, shade_casters, StageCluster};
-use super::light::{Occluder, ShadowVolumes, SkyMask, Solids};
+use super::light::{light_by, Occluder, ShadowVolumes, SkyMask, Solids};
 use super::{tropism, Environment, Fate, PlasticReport, PlasticTree};
 use crate::error::Result;
 use crate::structure::grow::space::Obstacle;
@@ -1025,7 +1025,8 @@ struct Work {
     stage_upto: Option<usize>,
     /// Scratch of [`preposition`] (per node; written for a season's node before it is read).
     carry: Vec<(bool, Quat)>,
-    /// Scratch of [`level`] (depth of a season's node below the older wood; likewise).
+    /// Scratch of [`level`] (per season node: its depth below the older wood, or its place in
+    /// the level's chains ([`bend_by_chains`]); likewise).
     depth: Vec<u32>,
     /// The tree's parents, segment lengths and ψ sums for [`prune`] (made at its first level
     /// that evaluates eq. 10).
@@ -1664,17 +1665,23 @@ pub const ROTATION_EPS: f32 = 1e-3;
 /// transmittances.
 #[allow(clippy::too_many_arguments)]
 fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], env: &Environment, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, reuse: Option<Reuse>) -> Rows {
+    // a level that recomputes every node of its season with the exact light bends the season's
+    // chains side by side (`bend_by_chains`: the same values, fewer joins of the cores)
+    // (not with shared bending light, `PlasticTree::bend_light_cell_m`: the depth batches share it)
+    let by_chains = w.mc.is_none() && t.bend_light_cell_m == 0.0 && !depth_batches_forced() && w.season(s).iter().all(|&k| w.own[k as usize]);
+    if by_chains {
+        bend_by_chains(t, s, w, env, solids, vols, fixed);
+    }
     let n = t.input.nodes.len();
     let a = &t.analysis;
-    let last = a.seasons as f32;
-    let bole = t.bole.map(|b| b as usize);
     let sky = &env.sky;
-    // the season's nodes by depth below the older wood: a node's parent is placed before it
+    let nd = sky.dirs.len();
+    // else the season's nodes by depth below the older wood: a node's parent is placed before it
     // (depth − 1, or older than the season), so each depth's bending light is taken as a batch
     // (direction by direction, over the cores) and the nodes of a depth are then bent in index
     // order as before, bit for bit the values of a node-by-node pass
     let mut buckets: Vec<Vec<usize>> = Vec::new();
-    {
+    if !by_chains {
         let mut depth = std::mem::take(&mut w.depth);
         for &k in w.season(s) {
             let k = k as usize;
@@ -1690,7 +1697,6 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     }
     let mut at: Vec<Vec3> = Vec::new();
     let mut at_k: Vec<(usize, Vec3)> = Vec::new();
-    let nd = sky.dirs.len();
     if let Some(mc) = w.mc.as_mut() {
         mc.nodes.ensure(n, nd);
     }
@@ -1735,26 +1741,8 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
             let (old_pos, old_rot) = (w.before[k], t.rot[k]);
             let seg = t.input.nodes[k].pos - t.input.nodes[par].pos;
             let len = seg.length();
-            let q_par = t.rot[par];
-            let mut q = q_par;
-            let mut bend = 0.0;
-            if len > 0.0 {
-                let h = seg / len;
-                let (_, l_new) = lights.next().unwrap_or((0.0, Vec3::Z));
-                let t_old = tropism(&t.params, a.light_dir[k]);
-                // flexibility by age (step 3): the tip's season of eq. (2), the base's
-                // (t_{s_p}) for a forest-grown tree's lengthened bole
-                let born = if bole == Some(k) { a.season[par] } else { a.season[k] };
-                let kappa = 1.0 - (last - born as f32) / (last + 1.0);
-                let t_eff = (t_old + kappa * (tropism(&t.params, l_new) - t_old)).normalize_or(t_old);
-                let ws = a.w_s[k];
-                let h_rigid = q_par * h;
-                // eq. (6) plus the analysis residual (zero where eq. 9 has a root): exact identity
-                // when nothing changed
-                let h_new = (ws * (q_par * a.d_o[k]) + (1.0 - ws) * t_eff + q_par * a.residual[k]).normalize_or(h_rigid);
-                q = Quat::from_rotation_arc(h, h_new);
-                bend = h_rigid.dot(h_new).clamp(-1.0, 1.0).acos();
-            }
+            let l_new = if len > 0.0 { lights.next().unwrap_or((0.0, Vec3::Z)).1 } else { Vec3::Z };
+            let (q, bend) = bend_of(t, k, par, t.rot[par], seg, l_new);
             t.rot[k] = q;
             t.bend[k] = bend;
             t.pos[k] = t.pos[par] + q * seg;
@@ -1812,7 +1800,8 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     }
     // (mask, previous row) of every cluster lit
     let from: Vec<(u32, Option<&[f32]>)> = lit
-        .iter()
+        .par_iter()
+        .with_min_len(LIGHT_CHUNK)
         .map(|&(ci, c)| {
             let old = reuse.as_ref().and_then(|r| {
                 let pj = r.map[ci]? as usize;
@@ -1874,6 +1863,206 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         }
     }
     prune(t, s, w, occ, rows)
+}
+
+/// Tests only: while set, [`level`] bends by depth batches where it would bend by chains
+/// ([`bend_by_chains`]), to check that both give the same trees (any call meanwhile gets the
+/// same values either way).
+#[cfg(test)]
+static DEPTH_BATCHES: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+#[cfg(test)]
+fn depth_batches_forced() -> bool {
+    DEPTH_BATCHES.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+#[cfg(not(test))]
+fn depth_batches_forced() -> bool {
+    false
+}
+
+/// The bend of node `k` of `t` (parent `par`, input segment `seg` from the parent, m) at its
+/// level: the rotation that takes its input direction to the direction of eq. (6), the
+/// weighted sum of its original direction turned by its parent's rotation `q_par`, the
+/// tropism towards the light direction `l_new` (eq. 3's average direction, unit) blended by
+/// the flexibility of its age, and the analysis residual; and the angle (radians) between that
+/// direction and the direction the parent's rotation alone gives. A segment of length 0 keeps
+/// the parent's rotation, bend 0.
+fn bend_of(t: &PlasticTree, k: usize, par: usize, q_par: Quat, seg: Vec3, l_new: Vec3) -> (Quat, f32) {
+    let len = seg.length();
+    if !(len > 0.0) {
+        return (q_par, 0.0);
+    }
+    let a = &t.analysis;
+    let last = a.seasons as f32;
+    let h = seg / len;
+    let t_old = tropism(&t.params, a.light_dir[k]);
+    // flexibility by age (step 3): the tip's season of eq. (2), the base's (t_{s_p}) for a
+    // forest-grown tree's lengthened bole
+    let born = if t.bole.map(|b| b as usize) == Some(k) { a.season[par] } else { a.season[k] };
+    let kappa = 1.0 - (last - born as f32) / (last + 1.0);
+    let t_eff = (t_old + kappa * (tropism(&t.params, l_new) - t_old)).normalize_or(t_old);
+    let ws = a.w_s[k];
+    let h_rigid = q_par * h;
+    // eq. (6) plus the analysis residual (zero where eq. 9 has a root): exact identity when
+    // nothing changed
+    let h_new = (ws * (q_par * a.d_o[k]) + (1.0 - ws) * t_eff + q_par * a.residual[k]).normalize_or(h_rigid);
+    (Quat::from_rotation_arc(h, h_new), h_rigid.dot(h_new).clamp(-1.0, 1.0).acos())
+}
+
+/// One season node as [`bend_by_chains`] leaves it: the values that [`level`]'s two passes
+/// write (position (m), rotation, bend angle (radians), fate, and the `moved`, `shifted`,
+/// `done` flags of [`Work`]).
+#[derive(Debug, Clone, Copy)]
+struct Bent {
+    pos: Vec3,
+    rot: Quat,
+    bend: f32,
+    fate: Fate,
+    moved: bool,
+    shifted: bool,
+    done: bool,
+}
+
+/// Fewest nodes of the season that one task of [`bend_by_chains`] bends (whole chains).
+const CHAIN_TASK: usize = 32;
+
+/// The bending of [`level`] for a level that recomputes every node of season `s` with the exact
+/// light (no move light model): the season's nodes fall into chains, each rooted at a node
+/// whose parent is older than the season (or the root), and a node depends only on its chain's
+/// earlier nodes and on older wood, which the level does not move (its light comes from the
+/// level's grids, built before the level bends anything). So whole chains are bent side by side
+/// over the cores, each node by the two passes of [`level`] (fates inherited, followers
+/// displaced, the light of eq. (3) summed in direction order as [`light_many_among`] sums it,
+/// the bend of eq. (6)), in index order within its chain: the same values bit for bit as the
+/// depth batches give, whatever the thread count, with one join of the cores per level instead
+/// of three per depth batch. The grids of the directions open at the season's nodes as
+/// [`preposition`] placed them are built first, over the cores (a direction first opened by a
+/// bend is built when first asked for: the same grid).
+fn bend_by_chains(t: &mut PlasticTree, s: usize, w: &mut Work, env: &Environment, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>) {
+    let sky = &env.sky;
+    let mut slot = std::mem::take(&mut w.depth);
+    let (season, a, input) = (w.season(s), &t.analysis, &t.input);
+    let parent = |k: usize| input.nodes[k].parent.unwrap_or(0) as usize;
+    let in_chain = |par: usize| par > 0 && a.season[par] as usize == s;
+    // every season node's chain (its index in `size`), then its place in `flat`, where each
+    // chain's nodes lie together in index order
+    let mut size: Vec<u32> = Vec::new();
+    for &k in season {
+        let (k, par) = (k as usize, parent(k as usize));
+        let c = if in_chain(par) {
+            slot[par]
+        } else {
+            size.push(0);
+            size.len() as u32 - 1
+        };
+        slot[k] = c;
+        size[c as usize] += 1;
+    }
+    let mut next = Vec::with_capacity(size.len());
+    let mut tasks: Vec<(usize, usize)> = Vec::new();
+    let (mut run, mut from) = (0usize, 0usize);
+    for &n in &size {
+        next.push(run as u32);
+        run += n as usize;
+        if run - from >= CHAIN_TASK {
+            tasks.push((from, run));
+            from = run;
+        }
+    }
+    if run > from {
+        tasks.push((from, run));
+    }
+    let mut flat = vec![0u32; season.len()];
+    for &k in season {
+        let c = slot[k as usize] as usize;
+        flat[next[c] as usize] = k;
+        slot[k as usize] = next[c];
+        next[c] += 1;
+    }
+    // the solids' mask of every node (in `flat`'s order) where it stands before the level bends
+    // it, and the grids of the directions open at some node
+    let masks: Vec<u32> = flat
+        .par_iter()
+        .with_min_len(SIG_CHUNK)
+        .map(|&k| {
+            let k = k as usize;
+            let seg = input.nodes[k].pos - input.nodes[parent(k)].pos;
+            if seg.length() > 0.0 {
+                solids.mask(t.pos[k])
+            } else {
+                u32::MAX
+            }
+        })
+        .collect();
+    let open = !masks.iter().fold(u32::MAX, |x, &y| x & y) & sky_bits(sky);
+    vols.prepare(open);
+    if let Some(f) = fixed {
+        f.prepare(open);
+    }
+    let tr: &PlasticTree = t;
+    let (own, moved, shifted, before, done, slot_ref) = (&w.own, &w.moved, &w.shifted, &w.before, &w.done, &slot);
+    let bent: Vec<Vec<Bent>> = tasks
+        .par_iter()
+        .map(|&(lo, hi)| {
+            let mut out: Vec<Bent> = Vec::with_capacity(hi - lo);
+            for (i, &k) in flat.iter().enumerate().take(hi).skip(lo) {
+                let k = k as usize;
+                let par = parent(k);
+                // the parent as it stands now: bent before in this chain, or older wood
+                let (p_pos, p_rot, p_fate, p_moved, p_shifted) = if in_chain(par) {
+                    let b = &out[slot_ref[par] as usize - lo];
+                    (b.pos, b.rot, b.fate, b.moved, b.shifted)
+                } else {
+                    (tr.pos[par], tr.rot[par], tr.fate[par], moved[par], shifted[par])
+                };
+                let mut b = Bent { pos: tr.pos[k], rot: tr.rot[k], bend: tr.bend[k], fate: tr.fate[k], moved: moved[k], shifted: shifted[k], done: done[k] };
+                // pass 1: the fate, and a node kept follows its parent's displacement
+                if p_fate != Fate::Alive {
+                    b.fate = p_fate;
+                }
+                let seg = input.nodes[k].pos - input.nodes[par].pos;
+                if !(own[k] || p_moved) {
+                    if p_shifted {
+                        b.pos = p_pos + b.rot * seg;
+                        b.shifted = b.pos != before[k];
+                        if b.fate == Fate::Alive && collides(env, p_pos, b.pos, clearance(tr, k)) {
+                            b.fate = Fate::Collision;
+                        }
+                    }
+                    out.push(b);
+                    continue;
+                }
+                // pass 2: the bend, from the light where the node stands unbent
+                b.done = true;
+                let l_new = if seg.length() > 0.0 {
+                    // a node on older wood stands where `preposition` placed it: its mask is known
+                    let at = p_pos + p_rot * seg;
+                    let mask = if in_chain(par) { solids.mask(at) } else { masks[i] };
+                    light_by(sky, mask, |d| through_both(vols, fixed, d, at)).1
+                } else {
+                    Vec3::Z
+                };
+                let (q, bend) = bend_of(tr, k, par, p_rot, seg, l_new);
+                let old_rot = b.rot;
+                (b.rot, b.bend, b.pos) = (q, bend, p_pos + q * seg);
+                b.shifted = b.pos != before[k];
+                let turn = 2.0 * (b.rot * old_rot.inverse()).xyz().length().min(1.0).asin();
+                b.moved = turn > ROTATION_EPS;
+                if b.fate == Fate::Alive && collides(env, p_pos, b.pos, clearance(tr, k)) {
+                    b.fate = Fate::Collision;
+                }
+                out.push(b);
+            }
+            out
+        })
+        .collect();
+    for (&k, b) in flat.iter().zip(bent.iter().flatten()) {
+        let k = k as usize;
+        (t.pos[k], t.rot[k], t.bend[k], t.fate[k]) = (b.pos, b.rot, b.bend, b.fate);
+        (w.moved[k], w.shifted[k], w.done[k]) = (b.moved, b.shifted, b.done);
+    }
+    w.depth = slot;
 }
 
 /// The pruning of eqs. (10)–(11) after level `s` of [`level`] (the stage's light in
@@ -1984,6 +2173,50 @@ mod tests {
         assert_eq!((e, d.len()), (3, 0), "more than MOVE_DELTA_MAX in one call: a new snapshot");
         // another level keeps its own snapshot and budget
         assert_eq!(mc.level(5, &shade).0, 1);
+    }
+
+    /// [`bend_by_chains`] against the depth batches of [`level`] ([`DEPTH_BATCHES`]), and on
+    /// one thread against two: a 25-year beech beside a wall alone, and two beeches adapted
+    /// together among a fixed third (the fixed trees' shade multiplied in); every position,
+    /// rotation, bend angle and fate equal bit for bit, and the reports equal. The cases test
+    /// something: nodes bent by more than 1°, shed by light and by the wall.
+    #[test]
+    fn chains_bend_as_the_depth_batches() {
+        use std::sync::atomic::Ordering;
+        let lib = crate::species::SpeciesLibrary::embedded().unwrap();
+        let sp = &lib.species[lib.find("beech").unwrap() as usize];
+        let p = sp.architecture.plastic;
+        let tree = |seed: u64, x: f32| {
+            let g = crate::structure::species_tree::grow_species_tree(sp, crate::structure::species_tree::Model::Light, 25.0, &[], seed).unwrap();
+            let mut t = PlasticTree::analyse(&g.skeleton, &p, &Environment::open(), None).unwrap();
+            t.translate(Vec3::new(x, 0.0, 0.0));
+            t
+        };
+        let env = Environment::with_obstacles(&[Obstacle::OrientedBox { center: Vec3::new(1.2, 0.0, 3.0), half: Vec3::new(0.1, 4.0, 3.0), yaw_deg: 0.0 }]);
+        let (lone, pair, fixed) = (vec![tree(7, 0.0)], vec![tree(8, 0.0), tree(9, -2.0)], vec![tree(10, -4.0)]);
+        let run = |threads: usize, batches: bool, trees: &[PlasticTree], fixed: &[PlasticTree]| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            DEPTH_BATCHES.store(batches, Ordering::Relaxed);
+            let mut trees = trees.to_vec();
+            let rep = pool.install(|| adapt_group_among(&mut trees, fixed, &env)).unwrap();
+            DEPTH_BATCHES.store(false, Ordering::Relaxed);
+            let bits: Vec<(Vec<[u32; 3]>, Vec<[u32; 4]>, Vec<u32>, Vec<Fate>)> = trees
+                .iter()
+                .map(|t| (t.pos.iter().map(|v| v.to_array().map(f32::to_bits)).collect(), t.rot.iter().map(|q| q.to_array().map(f32::to_bits)).collect(), t.bend.iter().map(|b| b.to_bits()).collect(), t.fate.clone()))
+                .collect();
+            (rep, bits)
+        };
+        for (trees, fixed) in [(&lone, &[][..]), (&pair, &fixed[..])] {
+            let (rep, bits) = run(1, false, trees, fixed);
+            assert!(rep.trees.iter().all(|r| r.bent > 10), "{rep:?}");
+            assert!(rep.trees.iter().map(|r| r.pruned_light).sum::<usize>() > 0 && rep.trees.iter().any(|r| r.pruned_collision > 0), "{rep:?}");
+            let (rep_b, bits_b) = run(1, true, trees, fixed);
+            assert_eq!(rep, rep_b);
+            assert!(bits == bits_b, "chains and depth batches differ ({} trees)", trees.len());
+            let (rep_2, bits_2) = run(2, false, trees, fixed);
+            assert_eq!(rep, rep_2);
+            assert!(bits == bits_2, "one thread and two differ ({} trees)", trees.len());
+        }
     }
 
     /// [`CasterSet::factors`] (the sky-cone test, then the direction test) against every caster
