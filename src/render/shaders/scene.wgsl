@@ -457,6 +457,10 @@ fn crown_unmap(z: f32, b0: f32, b: f32) -> f32 {
 // Least width (px) of a tree's stem drawn at the crown-hull or billboard level (issue 32: small
 // trees' stems, thinner than a pixel, vanished and their crowns floated over the ground).
 const MIN_STEM_PX: f32 = 1.2;
+// Least share of its bark colour a widened coarse stem keeps (fs_tree): a birch's white is
+// dimmed to a grey under the crown hull rather than a white stick, a small tree's stem stays
+// visible.
+const MIN_STEM_BARK: f32 = 0.4;
 
 // Linear albedo of the shaded stand interior behind a distant tree's trunk (dark foliage and
 // twigs under the canopy): what a widened trunk's pixel shows beside the real trunk.
@@ -1040,7 +1044,9 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         // the real stem covers, the shaded stand behind it over the rest, as the billboard's
         // trunk (round 40: birches' white stems, widened, read as white sticks under the
         // crown hulls from above)
-        albedo = mix(STAND_SHADE, albedo, i.lp.w);
+        // (at least MIN_STEM_BARK of it: a small tree's stem still reads as a stem, issue 32
+        // round 36)
+        albedo = mix(STAND_SHADE, albedo, max(i.lp.w, MIN_STEM_BARK));
     } else if (i.mat_s.x < 0.5 && i.uv.y > 0.0) {
         // mesh bark away from the stem: fine twigs are dark whatever the stem's colour (a
         // birch's white bark is on its stem and main limbs only)
