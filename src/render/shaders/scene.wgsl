@@ -747,12 +747,22 @@ fn hull_clumps(i: TreeOut, n: vec3<f32>) -> Clumps {
 
 // Share of the crown's half-width near the billboard's outline that is cut into lobes: at the
 // outline only the clumps' middles stay (as the crown hull's rim, HULL_RIM).
-const BB_RIM: f32 = 0.3;
-// Radius (of the crown radius) out to which the billboard's top quad draws its lobed, lumpy
-// disc: the lobes and lumps take back what lies beyond 1, so that the billboards of a stand
-// seen from straight above cover the union of their crown discs (0.92 until round 40, with
-// smaller lumps: 0.70 against 0.80, tests/render_species.rs).
-const BB_TOP_R: f32 = 1.24;
+const BB_RIM: f32 = 0.0;
+// The billboards' seams and clump middles, lighter than the hull's: the billboards hand over
+// to the far-field canopy layer, whose crowns have no clumps (tests/render_canopy.rs).
+const BB_CREVICE: f32 = 1.0;
+const BB_CLUMP_LIGHT: f32 = 1.0;
+const BB_CLUMP_TILT: f32 = 0.0;
+// The side quad's share of the half-width cut into lobes (less than the top's: the side quads
+// of distant trees hand over to the canopy layer, tests/render_canopy.rs).
+const BB_SIDE_RIM: f32 = 0.0;
+// Radius (of the crown radius) out to which the billboard's top quad draws its lumpy disc.
+// Round 40: 1.24 (with BB_RIM 0.3) made a stand's billboards cover their crown discs from
+// above (0.81 against 0.80, 0.70 at 0.92), but broke their hand-over to the far-field canopy
+// layer (tests/render_canopy.rs: mean distance to the geometry forest 19.2 against 14.2), so
+// the billboards keep their round-39 look until the canopy layer is matched to them: the
+// clump constants below are neutral (BB_*: no lobes, no seams, no tilt).
+const BB_TOP_R: f32 = 0.92;
 
 // The leaf clumps of a billboard crown: the cellular pattern of `hull_clumps` in the plane of
 // its quad (`p`, m), cells of HULL_CLUMP_CELL × the crown radius `rad`. Returns the body (0 on a
@@ -824,7 +834,7 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
         let cl = clumps2(i.lp.xz, i.rad, i.salt);
         let ws = sil_width(p, z);
         let w = ws * (1.0 - depth + depth * 2.0 * l);
-        if (abs(a) < w && abs(a) < ws * (1.0 - BB_RIM * (1.0 - cl.body))) {
+        if (abs(a) < w && abs(a) < ws * (1.0 - BB_SIDE_RIM * (1.0 - cl.body))) {
             if (crown_gap(l, look)) {
                 return r;
             }
@@ -839,7 +849,7 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
             r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.3 * nz + 0.35) + f * sqrt(max(1.0 - na * na, 0.0)));
             // each lump is a small dome of its own: its shading bends the normal about it
             r.n = normalize(r.n + right_of(f) * (l - 0.5) * look.z * 1.5);
-            r.n = normalize(r.n + (right_of(f) * cl.tilt.x + vec3<f32>(0.0, 0.0, cl.tilt.y)) * HULL_CLUMP_TILT);
+            r.n = normalize(r.n + (right_of(f) * cl.tilt.x + vec3<f32>(0.0, 0.0, cl.tilt.y)) * BB_CLUMP_TILT);
         } else if (abs(a) < max(s.info.z, 0.5 * MIN_STEM_PX * apx) && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
             r.kind = 2u;
             r.n = normalize(i.normal);
@@ -862,7 +872,7 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
             let k = mix(1.4, 0.2, smoothstep(0.1, 0.9, look.x));
             let bump = vec2<f32>(vnoise(q * 5.0 + vec2<f32>(0.5, 0.0), i.salt) - vnoise(q * 5.0 - vec2<f32>(0.5, 0.0), i.salt), vnoise(q * 5.0 + vec2<f32>(0.0, 0.5), i.salt) - vnoise(q * 5.0 - vec2<f32>(0.0, 0.5), i.salt));
             r.n = normalize(vec3<f32>(q * k + bump * (0.3 + 1.2 * look.z), sqrt(max(1.0 - d * d, 0.0)) + 0.2));
-            r.n = normalize(r.n + vec3<f32>(cl.tilt, 0.0) * HULL_CLUMP_TILT);
+            r.n = normalize(r.n + vec3<f32>(cl.tilt, 0.0) * BB_CLUMP_TILT);
         }
     }
     return r;
@@ -956,7 +966,7 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         }
         n = c.n;
         hz = c.z;
-        clump_ao = mix(HULL_CREVICE, HULL_CLUMP_LIGHT, c.body);
+        clump_ao = mix(BB_CREVICE, BB_CLUMP_LIGHT, c.body);
         if (c.kind == 1u && i.mat_s.x < 2.5) {
             // the side quad stands in the plane of the stem, facing the viewer, while in the
             // sun's shadow map the same crown is a quad through its stem facing the sun. With
