@@ -834,7 +834,7 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
         let cl = clumps2(i.lp.xz, i.rad, i.salt);
         let ws = sil_width(p, z);
         let w = ws * (1.0 - depth + depth * 2.0 * l);
-        if (abs(a) < w && abs(a) < ws * (1.0 - BB_SIDE_RIM * (1.0 - cl.body))) {
+        if (abs(a) < w * (1.0 - BB_SIDE_RIM * (1.0 - cl.body))) {
             if (crown_gap(l, look)) {
                 return r;
             }
@@ -861,7 +861,7 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
         r.z = i.mat_s.y;
         let l = lumps(q, look, i.salt);
         let cl = clumps2(i.lp.xy, i.rad, i.salt);
-        if (d < BB_TOP_R * (1.0 - depth + depth * 2.0 * l) && d < BB_TOP_R * (1.0 - BB_RIM * (1.0 - cl.body))) {
+        if (d < BB_TOP_R * (1.0 - depth + depth * 2.0 * l) * (1.0 - BB_RIM * (1.0 - cl.body))) {
             if (crown_gap(l, look)) {
                 return r;
             }
