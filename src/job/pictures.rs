@@ -110,6 +110,11 @@ impl Stage {
         // (issue 34: 2,000,000 a pass, 1.9 GB resident in all; 500,000, 1.6 GB; 250,000,
         // 1.5 GB; 125,000, 1.46 GB; the frame's time the same within the machine's noise)
         renderer.pass_triangles = 250_000;
+        // a tree in a cross-fade band draws one of its two levels whole: the complementary
+        // Bayer masks of the two levels read as a screen-door dot pattern on the mid-ground's
+        // crowns (trial 39, issue 32 round 40); a still has no camera motion that would show
+        // a tree changing level
+        renderer.fade_per_tree = true;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
         let n_base = prototypes.len();
         let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));

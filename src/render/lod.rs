@@ -410,6 +410,101 @@ impl Silhouette {
     }
 }
 
+/// Index of the crown-hull level in a drawn chain (full, reduced, crown hull, billboard).
+pub const CROWN_HULL_LEVEL: usize = LOD_LEVELS - 2;
+
+/// Least and largest factor of [`plan_spread`].
+pub const PLAN_SPREAD_RANGE: (f32, f32) = (0.75, 2.0);
+
+/// Cells across the plan grid of [`plan_area`].
+pub const PLAN_GRID: usize = 96;
+
+/// Area of the projection from above (onto the x–y plane) of the triangles of `mesh`: the
+/// cells of a [`PLAN_GRID`]² grid over the mesh's horizontal extent whose centres fall inside
+/// any projected triangle, times the cell's area (units² of the mesh; 0 for an empty mesh).
+pub fn plan_area(mesh: &TriMesh) -> f32 {
+    let Some((lo, hi)) = mesh.bounds() else { return 0.0 };
+    let (x0, y0) = (lo[0], lo[1]);
+    let side = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1e-6);
+    let cell = side / PLAN_GRID as f32;
+    let mut hit = vec![false; PLAN_GRID * PLAN_GRID];
+    for t in mesh.indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| mesh.positions.get(i as usize).map_or([0.0, 0.0], |p| [(p[0] - x0) / cell, (p[1] - y0) / cell]));
+        let area = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        if area.abs() < 1e-12 {
+            continue;
+        }
+        let edge = |p: [f32; 2], q: [f32; 2], x: f32, y: f32| ((q[0] - p[0]) * (y - p[1]) - (q[1] - p[1]) * (x - p[0])) * area.signum();
+        let (i0, i1) = (a[0].min(b[0]).min(c[0]).floor().max(0.0) as usize, (a[0].max(b[0]).max(c[0]).ceil() as usize).min(PLAN_GRID));
+        let (j0, j1) = (a[1].min(b[1]).min(c[1]).floor().max(0.0) as usize, (a[1].max(b[1]).max(c[1]).ceil() as usize).min(PLAN_GRID));
+        for j in j0..j1 {
+            for i in i0..i1 {
+                let (x, y) = (i as f32 + 0.5, j as f32 + 0.5);
+                if edge(a, b, x, y) >= 0.0 && edge(b, c, x, y) >= 0.0 && edge(c, a, x, y) >= 0.0 {
+                    hit[j * PLAN_GRID + i] = true;
+                }
+            }
+        }
+    }
+    hit.iter().filter(|h| **h).count() as f32 * cell * cell
+}
+
+/// The horizontal factor (about the stem, x = y = 0) that gives a crown hull `hull` (the
+/// crown-hull level's foliage of a normalised tree) the plan area of the crown disc the tree
+/// is drawn with, `π r0²` (`r0`: [`super::scene::Prototype::normalised_crown_radius`], the
+/// farthest leaf of the finest level): `√(π r0² / plan_area)`, within [`PLAN_SPREAD_RANGE`];
+/// 1 without a plan. The hull wraps the leaves' centres and a crown's reach is its farthest
+/// leaf in one direction, so seen from above a hull covered 0.49 of the crown discs of a
+/// closed stand against their union's 0.80 (issue 32, round 40: "blobs over brown ground"
+/// from the air; `tests/render_species.rs`); the renderer spreads the level by this factor
+/// when it uploads it.
+pub fn plan_spread(hull: &TriMesh, r0: f32) -> f32 {
+    let a = plan_area(hull);
+    if !(a > 0.0) || !(r0 > 0.0) {
+        return 1.0;
+    }
+    (std::f32::consts::PI * r0 * r0 / a).sqrt().clamp(PLAN_SPREAD_RANGE.0, PLAN_SPREAD_RANGE.1)
+}
+
+/// Index of the reduced level (leaf-cluster cards) in a drawn chain.
+pub const REDUCED_LEVEL: usize = 1;
+
+/// Steps of [`card_spread`]: factors `1 + k/8`, k = 0..=8.
+pub const CARD_SPREAD_STEPS: u32 = 8;
+
+/// `cards` (quads: four vertices each, as [`crate::structure::mesh`] builds cards) with each
+/// quad scaled by `k` about its own centre.
+pub fn spread_cards(cards: &TriMesh, k: f32) -> TriMesh {
+    let mut m = cards.clone();
+    for q in m.positions.chunks_exact_mut(4) {
+        let c = q.iter().fold([0.0f32; 3], |a, p| [a[0] + 0.25 * p[0], a[1] + 0.25 * p[1], a[2] + 0.25 * p[2]]);
+        for p in q.iter_mut() {
+            *p = [c[0] + (p[0] - c[0]) * k, c[1] + (p[1] - c[1]) * k, c[2] + (p[2] - c[2]) * k];
+        }
+    }
+    m
+}
+
+/// The factor the reduced level's leaf-cluster cards `cards` are scaled by about their own
+/// centres so that seen from above they cover the plan area of the crown disc `π r0²` as the
+/// crown hull does ([`plan_spread`]): the least `1 + k/8`, k = 0..=[`CARD_SPREAD_STEPS`],
+/// whose cards' plan ([`plan_area`]) reaches it, else 2. Issue 32, round 40: the reduced level
+/// covered 0.48 of a closed stand seen from above against its crown discs' 0.80
+/// (`tests/render_species.rs`).
+pub fn card_spread(cards: &TriMesh, r0: f32) -> f32 {
+    let target = std::f32::consts::PI * r0 * r0;
+    if cards.positions.len() < 4 || !(r0 > 0.0) {
+        return 1.0;
+    }
+    for k in 0..=CARD_SPREAD_STEPS {
+        let f = 1.0 + k as f32 / CARD_SPREAD_STEPS as f32;
+        if plan_area(&spread_cards(cards, f)) >= target {
+            return f;
+        }
+    }
+    2.0
+}
+
 /// The level(s) drawn for one instance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LodPick {
@@ -713,6 +808,42 @@ mod tests {
         assert_eq!(drawn_levels(0), 1);
         assert_eq!(drawn_levels(4), 4);
         assert_eq!(drawn_levels(6), 4);
+    }
+
+    #[test]
+    fn plan_spread_gives_the_hull_the_crown_discs_area() {
+        // a hull whose plan is a disc of half the crown radius is spread twice as wide; one as
+        // wide as the crown is kept; a square of side 2 r0 (area 4 r0²) is narrowed to √(π/4)
+        let disc = |r: f32| revolve(&[(0.2, 0.0), (0.3, r), (0.6, r), (0.9, 0.0)], 48);
+        let a = plan_area(&disc(0.3));
+        // the 48-gon's area 3 r² sin(2π/48)·8 = 0.2817 against the circle's 0.2827
+        assert!((a - 0.2817).abs() < 0.006, "{a}");
+        assert!((plan_spread(&disc(0.15), 0.3) - 2.0).abs() < 0.03, "{}", plan_spread(&disc(0.15), 0.3));
+        assert!((plan_spread(&disc(0.3), 0.3) - 1.0).abs() < 0.015, "{}", plan_spread(&disc(0.3), 0.3));
+        let mut sq = TriMesh::default();
+        sq.positions = vec![[-0.3, -0.3, 0.5], [0.3, -0.3, 0.5], [0.3, 0.3, 0.5], [-0.3, 0.3, 0.5]];
+        sq.normals = vec![[0.0, 0.0, 1.0]; 4];
+        sq.uvs = vec![[0.0, 0.0]; 4];
+        sq.indices = vec![0, 1, 2, 0, 2, 3];
+        assert!((plan_spread(&sq, 0.3) - (std::f32::consts::PI / 4.0).sqrt()).abs() < 0.01, "{}", plan_spread(&sq, 0.3));
+        // clamped; an empty mesh is left as it is
+        assert_eq!(plan_spread(&disc(0.01), 0.3), PLAN_SPREAD_RANGE.1);
+        assert_eq!(plan_spread(&TriMesh::default(), 0.3), 1.0);
+    }
+
+    #[test]
+    fn card_spread_reaches_the_crown_discs_area() {
+        // four horizontal cards of side 0.2 at the corners of a square: plan 0.16 of a disc
+        // of radius 0.3 (0.283): scaled by 1.375 they cover 0.3025 ≥ 0.283 (1.25: 0.25 < 0.283)
+        let mut m = TriMesh::default();
+        for (x, y) in [(-0.15f32, -0.15f32), (0.15, -0.15), (0.15, 0.15), (-0.15, 0.15)] {
+            crate::structure::mesh::quad(&mut m, Vec3::new(x, y, 0.5), Vec3::X * 0.1, Vec3::Y * 0.1);
+        }
+        assert!((plan_area(&m) - 0.16).abs() < 0.005, "{}", plan_area(&m));
+        assert_eq!(card_spread(&m, 0.3), 1.375);
+        // already as wide as the disc: kept
+        assert_eq!(card_spread(&spread_cards(&m, 1.5), 0.3), 1.0);
+        assert_eq!(card_spread(&TriMesh::default(), 0.3), 1.0);
     }
 
     #[test]

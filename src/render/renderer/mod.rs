@@ -23,7 +23,7 @@ use super::camera::Camera;
 use super::farfield::FarField;
 pub use super::canopy::{canopy_light_height, tree_extent};
 use super::instanced::{build_batches_of, instance_record, level_triangles, Batches, DrawBatch, InstanceRaw};
-use super::lod::{drawn_levels, Frustum, LodParams, Silhouette, SILHOUETTE_BINS};
+use super::lod::{card_spread, drawn_levels, plan_spread, spread_cards, Frustum, LodParams, Silhouette, CROWN_HULL_LEVEL, REDUCED_LEVEL, SILHOUETTE_BINS};
 use super::scene::{Scene, TreeInstance};
 use crate::mesh::LOD_LEVELS;
 use crate::structure::texture::{self, LeafShape};
@@ -189,6 +189,13 @@ pub struct Renderer {
     /// 35 (default false: at the crown surface the pixel shows; `shaders/scene.wgsl`,
     /// `fs_tree`). Kept to measure the change (`tests/render_species.rs`).
     pub crown_sun_on_quad: bool,
+    /// A tree inside a level cross-fade band draws one of its two levels whole, chosen by a
+    /// threshold of its own (its dither salt), instead of both levels split by complementary
+    /// per-pixel Bayer masks (default false: the viewer, whose moving camera would see trees
+    /// pop). For stills (`job::pictures::Stage`), where the two masks read as a screen-door dot
+    /// pattern on crowns of the mid-ground (issue 32, round 40, trial 39); the same share of
+    /// the band's trees draws each level.
+    pub fade_per_tree: bool,
     /// The far field the shadow map was drawn with (a new one redraws it).
     shadow_far: Option<std::sync::Arc<FarField>>,
     last: FrameStats,

@@ -180,6 +180,7 @@ impl Renderer {
             pass_triangles: 0,
             light_terms: LightTerms::All,
             crown_sun_on_quad: false,
+            fade_per_tree: false,
             shadow_far: None,
             last: FrameStats::default(),
         })

@@ -249,7 +249,26 @@ impl Renderer {
                     let start = idx.len() as u32;
                     let cards = mat > 0.5 && is_cards(m);
                     let r0 = sils[pi].radius.max(1e-3);
+                    // the reduced level's leaf-cluster cards grown about their centres to the
+                    // crown disc's plan area (lod::card_spread)
+                    let spread_m;
+                    let m = if cards && li == REDUCED_LEVEL && !p.rigid {
+                        spread_m = spread_cards(m, card_spread(m, r0));
+                        &spread_m
+                    } else {
+                        m
+                    };
+                    // the crown hull spread to the crown disc's plan area (lod::plan_spread)
+                    let spread = if mat > 0.5 && li == CROWN_HULL_LEVEL && !p.rigid { plan_spread(m, r0) } else { 1.0 };
+                    let spread_v = |p: &[f32; 3], n: &[f32; 3]| -> ([f32; 3], [f32; 3]) {
+                        if spread == 1.0 {
+                            return (*p, *n);
+                        }
+                        ([p[0] * spread, p[1] * spread, p[2]], Vec3::new(n[0] / spread, n[1] / spread, n[2]).normalize_or(Vec3::Z).to_array())
+                    };
                     verts.extend(m.positions.iter().zip(&m.normals).enumerate().map(|(k, (p, n))| {
+                        let (p, n) = spread_v(p, n);
+                        let (p, n) = (&p, &n);
                         let uv = if cards {
                             m.uvs[k]
                         } else if mat < 0.5 {
@@ -326,7 +345,7 @@ impl Renderer {
             sun_dir: v3(sun, self.light_terms.code()),
             sun_color: v3(scene.sun.color, if self.crown_sun_on_quad { 1.0 } else { 0.0 }),
             sky_zenith: v3(scene.sky.zenith, pixel_m_per_depth(camera, h)),
-            sky_horizon: v3(scene.sky.horizon, 0.0),
+            sky_horizon: v3(scene.sky.horizon, if self.fade_per_tree { 1.0 } else { 0.0 }),
             wind: [wd.x, wd.y, scene.wind.directed, scene.wind.undirected],
             params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.1 / size],
             canopy0: [0.0; 4],

@@ -9,7 +9,7 @@ struct Globals {
     sun_dir: vec4<f32>,      // xyz towards the sun; w: light terms (render/renderer, LightTerms: 0 all, 1 no shadows, 2 sun only, 3 sky only)
     sun_color: vec4<f32>,    // rgb; w = 1: billboard crowns take the sun on their quad (Renderer::crown_sun_on_quad)
     sky_zenith: vec4<f32>,   // rgb; w: world size (m) of one pixel per metre of clip w (0: no stem widening)
-    sky_horizon: vec4<f32>,
+    sky_horizon: vec4<f32>,  // rgb; w = 1: a tree in a cross-fade band draws one level whole (Renderer::fade_per_tree)
     wind: vec4<f32>,         // direction x, y; directed w_g; undirected w_s
     params: vec4<f32>,       // time s, sea level m, shadow texel size, fog density 1/m
     facing: vec4<f32>,       // xyz towards the viewer for billboards when w = 1 (ortho, sun); w = 0: use eye
@@ -375,6 +375,10 @@ struct TreeOut {
     @location(9) cdir: vec3<f32>,                       // direction from the crown centre (meshes)
     @location(10) uv: vec2<f32>,                        // leaf-card coordinates (-1: not a card)
     @location(11) @interpolate(flat) rad: f32,          // crown radius drawn (m)
+    // meshes: xyz the point in the tree's own frame (m from the stem base, turned with the
+    // tree, before the wind: the crown-hull level's leaf clumps are fixed to the tree); w the
+    // share of a widened coarse stem's width the real stem covers (1: not widened)
+    @location(12) lp: vec4<f32>,
 };
 
 // Direction from a tree towards the viewer (or the sun in the shadow pass).
@@ -453,6 +457,10 @@ fn crown_unmap(z: f32, b0: f32, b: f32) -> f32 {
 // Least width (px) of a tree's stem drawn at the crown-hull or billboard level (issue 32: small
 // trees' stems, thinner than a pixel, vanished and their crowns floated over the ground).
 const MIN_STEM_PX: f32 = 1.2;
+// Least share of its bark colour a widened coarse stem keeps (fs_tree): a birch's white is
+// dimmed to a grey under the crown hull rather than a white stick, a small tree's stem stays
+// visible.
+const MIN_STEM_BARK: f32 = 0.4;
 
 // Linear albedo of the shaded stand interior behind a distant tree's trunk (dark foliage and
 // twigs under the canopy): what a widened trunk's pixel shows beside the real trunk.
@@ -462,6 +470,7 @@ const STAND_SHADE: vec3<f32> = vec3<f32>(0.035, 0.045, 0.03);
 fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
     var o: TreeOut;
     o.cdir = vec3<f32>(0.0, 0.0, 1.0);
+    o.lp = vec4<f32>(0.0, 0.0, 0.0, 1.0);
     let h = v.pos_h.w;
     // the crown drawn from the instance's crown base (render/scene.rs, TreeInstance::crown_base)
     let zd = crown_remap(v.pos.z, sils[u32(v.p3.x + 0.5)].info.x, v.p4.y);
@@ -474,12 +483,15 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
         if (v.mat < 2.5) {
             rp = right_of(f) * (v.pos.x * sxy) + vec3<f32>(0.0, 0.0, zd * h);
             o.normal = f;
+            // the quad's own coordinates (m): across, and up from the stem base
+            o.lp = vec4<f32>(v.pos.x * sxy, 0.0, zd * h, 1.0);
         } else {
             // the top quad only shows from above: it shrinks to nothing as the view flattens
             // (continuous, so an orbiting camera sees no pop)
             let k = smoothstep(0.45, 0.8, f.z) * top_scale;
             rp = vec3<f32>(v.pos.x * sxy * k, v.pos.y * sxy * k, zd * h);
             o.normal = vec3<f32>(0.0, 0.0, 1.0);
+            o.lp = vec4<f32>(v.pos.x * sxy, v.pos.y * sxy, zd * h, 1.0);
         }
         w = sway(v, rp, v.pos.z);
         o.bb = v.normal.xy;
@@ -487,6 +499,11 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
         let c = cos(v.p1.y);
         let s = sin(v.p1.y);
         var lp = vec3<f32>(v.pos.x * sxy, v.pos.y * sxy, zd * h);
+        if (v.mat > 0.5 && v.p3.y > 1.5) {
+            // the crown hull's shell spread about the stem: its lobes (fs_tree, hull_clumps)
+            // reach the crown radius the tree is drawn with, as the leaves do
+            lp = vec3<f32>(lp.xy * HULL_SPREAD, lp.z);
+        }
         // the stem of the crown-hull level (and coarser meshes) at least MIN_STEM_PX wide on
         // screen: a small tree's real stem is thinner than a pixel, and without it its crown
         // floats over the ground (issue 32)
@@ -496,6 +513,7 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
             let r = length(lp.xy);
             if (r > 1e-6 && r < rmin) {
                 lp = vec3<f32>(lp.xy * (rmin / r), lp.z);
+                o.lp.w = r / rmin;
             }
         }
         let rp = vec3<f32>(c * lp.x - s * lp.y, s * lp.x + c * lp.y, lp.z);
@@ -507,6 +525,7 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
         // outward direction of the crown as an ellipsoid about (0, 0, 0.6 h) with half-height
         // 0.4 h: bends leaf-cluster normals into a rounded crown shade
         o.cdir = vec3<f32>(rp.x / max(sxy, 1e-4), rp.y / max(sxy, 1e-4), (v.pos.z - 0.6) * 0.8);
+        o.lp = vec4<f32>(rp, o.lp.w);
     }
     o.clip = g.view_proj * vec4<f32>(w, 1.0);
     o.world = w;
@@ -619,6 +638,148 @@ fn crown_gap(l: f32, look: vec4<f32>) -> bool {
     return l < (0.95 - look.y) * 0.9;
 }
 
+// The crown-hull level's leaf clumps (issue 32, round 40: the hull was a smooth shell, an
+// egg on a stick in the mid-ground). A crown of a few metres is a handful of leaf clusters
+// about the ends of its main branches (Pirk et al. 2012, section 5.2: a cluster per terminal
+// lobe); the hull's surface is cut into clumps of HULL_CLUMP_CELL × the crown radius by a
+// cellular (Worley 1996) pattern of points in the tree's own frame. Each clump is a low dome
+// (its normal tilted along the surface away from the clump's centre), the seams between clumps
+// are shaded (crevices), and near the outline only the clumps' middles are drawn, so the
+// silhouette is a row of lobes rather than a smooth curve.
+const HULL_CLUMP_CELL: f32 = 0.42;
+// Horizontal spread of the crown hull's shell about the stem, beyond the renderer's own
+// (render::lod::plan_spread, which gives the hull the plan area of the crown disc): the lobes
+// cut at the outline (HULL_RIM) take that much of it back; with this spread the crown hulls of
+// a stand seen from straight above cover the union of their crown discs
+// (tests/render_species.rs, the_coarse_levels_from_above_cover_the_crowns_of_the_simulation).
+const HULL_SPREAD: f32 = 1.16;
+// Fewest and most metres of a clump (a spruce's whorl segments, a big oak's limbs' foliage).
+const HULL_CLUMP_MIN_M: f32 = 0.5;
+const HULL_CLUMP_MAX_M: f32 = 3.0;
+// How far a clump's dome tilts the normal at its rim (relative to the surface normal).
+const HULL_CLUMP_TILT: f32 = 1.1;
+// Sky and sun light left in the seams between clumps, and in a clump's middle (about 1 on the
+// crown's mean, so the crown keeps its brightness).
+const HULL_CREVICE: f32 = 0.65;
+const HULL_CLUMP_LIGHT: f32 = 1.1;
+// Facing (|n·v|) under which the outline is cut into lobes: at the outline only the clumps'
+// middles stay, from this facing on the whole surface.
+const HULL_RIM: f32 = 0.6;
+
+struct Clumps {
+    // 0 on a seam between two clumps .. 1 in a clump's middle
+    body: f32,
+    // the dome's tilt along the surface (world axes; length up to about 1)
+    tilt: vec3<f32>,
+    // brightness of this clump's foliage (each clump a little lighter or darker)
+    tint: f32,
+};
+
+fn hash3(c: vec3<f32>, salt: f32) -> vec3<f32> {
+    var h = vec3<u32>(vec3<i32>(c) + vec3<i32>(i32(salt) * 7919));
+    h = h * 1664525u + 1013904223u;
+    h.x = h.x + h.y * h.z;
+    h.y = h.y + h.z * h.x;
+    h.z = h.z + h.x * h.y;
+    h = h ^ (h >> vec3<u32>(16u));
+    h.x = h.x + h.y * h.z;
+    h.y = h.y + h.z * h.x;
+    h.z = h.z + h.x * h.y;
+    return vec3<f32>(h & vec3<u32>(0xffffffu)) / 16777216.0;
+}
+
+// The cellular pattern (Worley 1996) of the leaf clumps at `q` (cell units): each lattice
+// cell holds one clump centre, jittered by the cell's hash; `f1`, `f2` the squared distances to
+// the nearest and second-nearest centre, `d1` the offset from the nearest, `h1` its hash. `zr`
+// = 1 searches the 27 cells about `q` (a pattern in space), 0 the 9 in its z layer (a pattern
+// in a plane, the billboards').
+struct Cells {
+    f1: f32,
+    f2: f32,
+    d1: vec3<f32>,
+    h1: f32,
+};
+
+fn cells(q: vec3<f32>, zr: i32, salt: f32) -> Cells {
+    let c0 = floor(q);
+    var r: Cells;
+    r.f1 = 1e9;
+    r.f2 = 1e9;
+    r.d1 = vec3<f32>(0.0);
+    r.h1 = 0.0;
+    for (var z = -zr; z <= zr; z = z + 1) {
+        for (var y = -1; y <= 1; y = y + 1) {
+            for (var x = -1; x <= 1; x = x + 1) {
+                let k = c0 + vec3<f32>(f32(x), f32(y), f32(z));
+                let h = hash3(k, salt);
+                var d = q - (k + 0.1 + 0.8 * h);
+                if (zr == 0) {
+                    d.z = 0.0;
+                }
+                let dd = dot(d, d);
+                if (dd < r.f1) {
+                    r.f2 = r.f1;
+                    r.f1 = dd;
+                    r.d1 = d;
+                    r.h1 = h.x;
+                } else if (dd < r.f2) {
+                    r.f2 = dd;
+                }
+            }
+        }
+    }
+    return r;
+}
+
+// The clump cell (m) of a crown of radius `rad` (m).
+fn clump_cell(rad: f32) -> f32 {
+    return clamp(HULL_CLUMP_CELL * rad, HULL_CLUMP_MIN_M, HULL_CLUMP_MAX_M);
+}
+
+fn hull_clumps(i: TreeOut, n: vec3<f32>) -> Clumps {
+    let c = cells(i.lp.xyz / clump_cell(i.rad), 1, i.salt);
+    var r: Clumps;
+    r.body = smoothstep(0.0, 0.45, sqrt(c.f2) - sqrt(c.f1));
+    r.tilt = c.d1 - n * dot(c.d1, n);
+    r.tint = 0.86 + 0.28 * c.h1;
+    return r;
+}
+
+// Share of the crown's half-width near the billboard's outline that is cut into lobes: at the
+// outline only the clumps' middles stay (as the crown hull's rim, HULL_RIM).
+const BB_RIM: f32 = 0.0;
+// The billboards' seams and clump middles, lighter than the hull's: the billboards hand over
+// to the far-field canopy layer, whose crowns have no clumps (tests/render_canopy.rs).
+const BB_CREVICE: f32 = 1.0;
+const BB_CLUMP_LIGHT: f32 = 1.0;
+const BB_CLUMP_TILT: f32 = 0.0;
+// The side quad's share of the half-width cut into lobes (less than the top's: the side quads
+// of distant trees hand over to the canopy layer, tests/render_canopy.rs).
+const BB_SIDE_RIM: f32 = 0.0;
+// Radius (of the crown radius) out to which the billboard's top quad draws its lumpy disc.
+// Round 40: 1.24 (with BB_RIM 0.3) made a stand's billboards cover their crown discs from
+// above (0.81 against 0.80, 0.70 at 0.92), but broke their hand-over to the far-field canopy
+// layer (tests/render_canopy.rs: mean distance to the geometry forest 19.2 against 14.2), so
+// the billboards keep their round-39 look until the canopy layer is matched to them: the
+// clump constants below are neutral (BB_*: no lobes, no seams, no tilt).
+const BB_TOP_R: f32 = 0.92;
+
+// The leaf clumps of a billboard crown: the cellular pattern of `hull_clumps` in the plane of
+// its quad (`p`, m), cells of HULL_CLUMP_CELL × the crown radius `rad`. Returns the body (0 on a
+// seam .. 1 in a clump's middle) and the tilt in the plane (xy).
+struct Clumps2 {
+    body: f32,
+    tilt: vec2<f32>,
+};
+
+fn clumps2(p: vec2<f32>, rad: f32, salt: f32) -> Clumps2 {
+    let c = cells(vec3<f32>(p / clump_cell(rad), 0.5), 0, salt);
+    var r: Clumps2;
+    r.body = smoothstep(0.0, 0.45, sqrt(c.f2) - sqrt(c.f1));
+    r.tilt = c.d1.xy;
+    return r;
+}
+
 // Gaps of the crown-hull level (a closed polyhedron): the species' airy or lumpy foliage cut
 // into it with the same lumps as the billboard, over the crown direction `cdir`.
 fn hull_gap(i: TreeOut) -> bool {
@@ -642,6 +803,8 @@ struct Carve {
     // side quad's crown: the normal of the crown as a round solid (an ellipsoid about its
     // middle, no lumps): where its surface turns from the sun
     ns: vec3<f32>,
+    // crown: 0 on a seam between two leaf clumps .. 1 in a clump's middle (clumps2)
+    body: f32,
 };
 
 // `apx`: outline units (`i.bb.x`) per pixel across the quad (fwidth, taken in uniform control
@@ -653,6 +816,7 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
     r.depth = 0.0;
     r.cover = 1.0;
     r.ns = vec3<f32>(0.0, 0.0, 1.0);
+    r.body = 1.0;
     let p = u32(i.info.x + 0.5);
     let s = sils[p];
     let look = s.look;
@@ -665,12 +829,17 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
         r.z = z;
         let zq = (z - s.info.x) / max(s.info.y - s.info.x, 1e-3) * 2.0 - 1.0;
         let l = lumps(vec2<f32>(a, zq * 1.4), look, i.salt);
-        let w = sil_width(p, z) * (1.0 - depth + depth * 2.0 * l);
-        if (abs(a) < w) {
+        // the leaf clumps of the crown hull's level, seen flat (hull_clumps): the outline a
+        // row of lobes, the seams shaded
+        let cl = clumps2(i.lp.xz, i.rad, i.salt);
+        let ws = sil_width(p, z);
+        let w = ws * (1.0 - depth + depth * 2.0 * l);
+        if (abs(a) < w * (1.0 - BB_SIDE_RIM * (1.0 - cl.body))) {
             if (crown_gap(l, look)) {
                 return r;
             }
             r.kind = 1u;
+            r.body = cl.body;
             let f = normalize(i.normal);
             let na = a / max(w, 1e-3);
             r.depth = w * sqrt(max(1.0 - na * na, 0.0));
@@ -680,6 +849,7 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
             r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.3 * nz + 0.35) + f * sqrt(max(1.0 - na * na, 0.0)));
             // each lump is a small dome of its own: its shading bends the normal about it
             r.n = normalize(r.n + right_of(f) * (l - 0.5) * look.z * 1.5);
+            r.n = normalize(r.n + (right_of(f) * cl.tilt.x + vec3<f32>(0.0, 0.0, cl.tilt.y)) * BB_CLUMP_TILT);
         } else if (abs(a) < max(s.info.z, 0.5 * MIN_STEM_PX * apx) && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
             r.kind = 2u;
             r.n = normalize(i.normal);
@@ -690,16 +860,19 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
         let d = length(q);
         r.z = i.mat_s.y;
         let l = lumps(q, look, i.salt);
-        if (d < 0.92 * (1.0 - depth + depth * 2.0 * l)) {
+        let cl = clumps2(i.lp.xy, i.rad, i.salt);
+        if (d < BB_TOP_R * (1.0 - depth + depth * 2.0 * l) * (1.0 - BB_RIM * (1.0 - cl.body))) {
             if (crown_gap(l, look)) {
                 return r;
             }
             r.kind = 1u;
+            r.body = cl.body;
             // seen from above: a spire's flanks slope steeply away from its tip, a dome rounds
             // off, a flat umbrella faces the sky
             let k = mix(1.4, 0.2, smoothstep(0.1, 0.9, look.x));
             let bump = vec2<f32>(vnoise(q * 5.0 + vec2<f32>(0.5, 0.0), i.salt) - vnoise(q * 5.0 - vec2<f32>(0.5, 0.0), i.salt), vnoise(q * 5.0 + vec2<f32>(0.0, 0.5), i.salt) - vnoise(q * 5.0 - vec2<f32>(0.0, 0.5), i.salt));
             r.n = normalize(vec3<f32>(q * k + bump * (0.3 + 1.2 * look.z), sqrt(max(1.0 - d * d, 0.0)) + 0.2));
+            r.n = normalize(r.n + vec3<f32>(cl.tilt, 0.0) * BB_CLUMP_TILT);
         }
     }
     return r;
@@ -708,7 +881,12 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
 // Screen-door masks: LOD cross-fade (complementary Bayer patterns) and timelapse opacity
 // (interleaved gradient noise). Returns false when the fragment is dropped.
 fn keep(i: TreeOut) -> bool {
-    let d = bayer4(i.clip.xy);
+    var d = bayer4(i.clip.xy);
+    if (g.sky_horizon.w > 0.5) {
+        // stills (Renderer::fade_per_tree): each tree in a cross-fade band draws one level
+        // whole, by a threshold of its own; no screen-door dots where two levels meet
+        d = (i.salt + 0.5) / 64.0;
+    }
     let f = i.fade.x;
     if (i.fade.y < 0.5) {
         if (d < f) { return false; }
@@ -779,6 +957,8 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
     var crown_bb = false;
     var crown_k = 0.0;
     var ns = n;
+    // leaf clumps' own shade (crevices between the crown hull's clumps; 1 elsewhere)
+    var clump_ao = 1.0;
     if (i.mat_s.x > 1.5) {
         let c = carve(i, apx);
         if (c.kind == 0u) {
@@ -786,6 +966,7 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         }
         n = c.n;
         hz = c.z;
+        clump_ao = mix(BB_CREVICE, BB_CLUMP_LIGHT, c.body);
         if (c.kind == 1u && i.mat_s.x < 2.5) {
             // the side quad stands in the plane of the stem, facing the viewer, while in the
             // sun's shadow map the same crown is a quad through its stem facing the sun. With
@@ -836,15 +1017,26 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
                 soft = 0.45;
                 bend = 0.7;
             }
-            if (hash2(i.clip.xy, i.salt + 11.0) > smoothstep(0.0, soft, e)) {
-                discard;
-            }
-            if (i.info.y > 1.5 && hull_gap(i)) {
-                discard;
-            }
             let cd = i.cdir;
-            if (dot(cd, cd) > 1e-8) {
-                n = normalize(mix(n, normalize(cd), bend));
+            if (i.info.y > 1.5) {
+                // the crown hull: leaf clumps instead of a smooth shell (issue 32, round 40)
+                let cl = hull_clumps(i, n);
+                if (e < HULL_RIM * (1.0 - cl.body) || hull_gap(i)) {
+                    discard;
+                }
+                if (dot(cd, cd) > 1e-8) {
+                    n = normalize(mix(n, normalize(cd), 0.5));
+                }
+                n = normalize(n + cl.tilt * HULL_CLUMP_TILT);
+                clump_ao = mix(HULL_CREVICE, HULL_CLUMP_LIGHT, cl.body);
+                albedo = albedo * cl.tint;
+            } else {
+                if (hash2(i.clip.xy, i.salt + 11.0) > smoothstep(0.0, soft, e)) {
+                    discard;
+                }
+                if (dot(cd, cd) > 1e-8) {
+                    n = normalize(mix(n, normalize(cd), bend));
+                }
             }
         }
     }
@@ -857,12 +1049,20 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
             albedo = twig_color(i.bark);
             leafy = 0.3;
         }
+    } else if (i.mat_s.x < 0.5 && i.lp.w < 1.0) {
+        // a coarse level's stem widened to MIN_STEM_PX: its bark over the share of the width
+        // the real stem covers, the shaded stand behind it over the rest, as the billboard's
+        // trunk (round 40: birches' white stems, widened, read as white sticks under the
+        // crown hulls from above)
+        // (at least MIN_STEM_BARK of it: a small tree's stem still reads as a stem, issue 32
+        // round 36)
+        albedo = mix(STAND_SHADE, albedo, max(i.lp.w, MIN_STEM_BARK));
     } else if (i.mat_s.x < 0.5 && i.uv.y > 0.0) {
         // mesh bark away from the stem: fine twigs are dark whatever the stem's colour (a
         // birch's white bark is on its stem and main limbs only)
         albedo = mix(i.bark, fine_twig_color(i.bark), i.uv.y);
     }
-    let ao = mix(1.0, mix(0.45, 1.0, clamp(hz * 1.3 - 0.2, 0.0, 1.0)), leafy);
+    let ao = mix(1.0, mix(0.45, 1.0, clamp(hz * 1.3 - 0.2, 0.0, 1.0)), leafy) * clump_ao;
     let sh0 = shadow_factor(sun_at, n);
     var sh = sh0;
     var wrap = 0.35 * leafy;
