@@ -613,3 +613,18 @@ fn a_png_heightmaps_lowest_pixel_is_no_sea_unless_a_sea_level_is_given() {
     let sc = sylva::sim::Scenario::from_toml_str("name = \"u\"\nyears = 1\nseed = 1\n[terrain]\nuniform = { width = 4, height = 4, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n", "u").unwrap();
     assert_eq!(sc.climate.sea_level_m, 0.0);
 }
+
+/// Trial 41, defect 10: `sylva terrain info` on an ESRI grid whose cells held `nan` and `inf`
+/// reported "nodata: 2 cells (file value -9999)". Such cells are nodata, as the file's own
+/// nodata value is, and the line now says both.
+#[test]
+fn terrain_info_says_nan_and_infinite_cells_are_nodata() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("nan.asc");
+    std::fs::write(&p, "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 10\nNODATA_value -9999\n500 501 502\n503 nan 505\n506 507 inf\n").unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["terrain", "info"]).arg(&p).output().unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let line = out.lines().find(|l| l.starts_with("nodata:")).unwrap_or_default();
+    assert!(line.contains("2 cells") && line.contains("NaN or infinite") && !line.ends_with("(file value -9999)"), "{line}");
+}

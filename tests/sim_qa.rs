@@ -314,3 +314,36 @@ fn a_png_heightmap_without_its_scale_is_refused_naming_the_fields() {
     let tif = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("terrains/coweeta_10m_utm17n.tif");
     Scenario::from_toml_str(&format!("name = \"tif\"\nyears = 1\n[terrain]\npath = \"{}\"\n", tif.display()), "t.toml").unwrap();
 }
+
+/// Trial 41, defect 9: a start's or a mix's species that no library holds (`fagus`) was told
+/// "add it there", to the scenario's pool, which cannot help; it now points to `sylva species
+/// list` and the library's species of that genus. A library species outside the pool is still
+/// told to be added, by its id.
+#[test]
+fn a_species_no_library_holds_points_to_the_library() {
+    let sc = format!("species = [\"beech\"]\n{}", SC.replace("species = \"beech\"", "species = \"fagus\""));
+    let e = Scenario::from_toml_str(&sc, "u.toml").unwrap_err().to_string();
+    assert!(e.contains("`start[0].species` = fagus") && e.contains("sylva species list") && e.contains("`beech` (Fagus sylvatica)") && !e.contains("add it there"), "{e}");
+    let sc = format!("species = [\"silver_birch\"]\n{}", SC.replace("species = \"beech\"", "species = \"Fagus sylvatica\""));
+    let e = Scenario::from_toml_str(&sc, "u.toml").unwrap_err().to_string();
+    assert!(e.contains("add \"beech\" there") && !e.contains("sylva species list"), "{e}");
+    // a management mix likewise
+    let mix = format!("species = [\"beech\"]\n{SC}[[management]]\nkind = \"planting\"\nyear = 1\nspacing_m = 2.0\nmix = {{ quercus = 1.0 }}\n");
+    let e = Scenario::from_toml_str(&mix, "u.toml").unwrap_err().to_string();
+    assert!(e.contains("management[0].mix.quercus") && e.contains("sylva species list") && e.contains("`sessile_oak` (Quercus petraea)"), "{e}");
+}
+
+/// Trial 41, defect 8: `spacing_m = "1.5m"` in a `[[start]]` got serde's "invalid type: string
+/// \"1.5m\", expected a number" at the first `[[start]]` header, naming neither the field nor its
+/// line. The key holding that value is now named with its table's index and line.
+#[test]
+fn a_wrong_type_in_a_start_names_the_start_and_field() {
+    let two = format!("{SC}[[start]]\nkind = \"planted\"\nspecies = \"beech\"\nspacing_m = \"1.5m\"\n");
+    let line = two.lines().position(|l| l.starts_with("spacing_m")).unwrap() + 1;
+    let e = Scenario::from_toml_str(&two, "p.toml").unwrap_err().to_string();
+    assert!(e.contains(&format!("the wrong value is `start[1].spacing_m` (line {line})")), "{e}");
+    let neg = SC.replace("trees_per_source = 2", "trees_per_source = -2");
+    let line = neg.lines().position(|l| l.starts_with("trees_per_source")).unwrap() + 1;
+    let e = Scenario::from_toml_str(&neg, "p.toml").unwrap_err().to_string();
+    assert!(e.contains(&format!("`start[0].trees_per_source` (line {line})")), "{e}");
+}

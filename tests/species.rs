@@ -481,7 +481,13 @@ fn cli_check_new_list_show() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let o = run(&["species", "list"]);
     assert!(o.status.success());
-    assert!(String::from_utf8_lossy(&o.stdout).contains("Fagus sylvatica"));
+    let list = String::from_utf8_lossy(&o.stdout);
+    assert!(list.contains("Fagus sylvatica"));
+    // the two heights side by side and explained (trial 41, defect 13): beech's H_max 48 m,
+    // its height curve's asymptote 41.75 m
+    let beech = list.lines().find(|l| l.starts_with("beech ")).unwrap();
+    assert!(beech.contains("48m") && beech.contains("41.8m"), "{beech}");
+    assert!(list.contains("H_max: life.max_height_m") && list.contains("H_curve: life.growth.h_max_m"), "{list}");
     let o = run(&["species", "show", "beech"]);
     assert_eq!(String::from_utf8_lossy(&o.stdout), beech_text());
 

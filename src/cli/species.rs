@@ -82,9 +82,12 @@ pub fn run(c: Command) -> anyhow::Result<()> {
     match c {
         Command::List { dir } => {
             let lib = library(dir.as_deref())?;
+            // two heights (trial 41, defect 13: beech's 48 m beside its curve's 41.75 m read as
+            // a contradiction): H_max caps every tree, H_curve is the height–age curve's
+            // asymptote, which a stand's top height approaches
             println!(
-                "{:<20} {:<24} {:<22} {:<9} {:>6} {:>6} {:>5}",
-                "id", "scientific name", "common name", "type", "H_max", "age", "shade"
+                "{:<20} {:<24} {:<22} {:<9} {:>6} {:>7} {:>6} {:>5}",
+                "id", "scientific name", "common name", "type", "H_max", "H_curve", "age", "shade"
             );
             for s in &lib.species {
                 let kind = match (s.identity.leaf_type, s.identity.deciduous) {
@@ -93,12 +96,16 @@ pub fn run(c: Command) -> anyhow::Result<()> {
                     (species::LeafType::Conifer, true) => "conif/dec",
                     (species::LeafType::Conifer, false) => "conif/evg",
                 };
+                let curve = format!("{:.1}m", s.life.growth.asymptote_m(s.life.max_height_m));
                 println!(
-                    "{:<20} {:<24} {:<22} {:<9} {:>5}m {:>5}y {:>5}",
-                    s.id, s.identity.scientific_name, s.identity.common_name, kind, s.life.max_height_m, s.life.max_age_yr, s.life.shade_tolerance
+                    "{:<20} {:<24} {:<22} {:<9} {:>5}m {:>7} {:>5}y {:>5}",
+                    s.id, s.identity.scientific_name, s.identity.common_name, kind, s.life.max_height_m, curve, s.life.max_age_yr, s.life.shade_tolerance
                 );
             }
             println!("{} species", lib.len());
+            println!("H_max: life.max_height_m, the tallest a tree of the species grows (iLand, LandClim): it caps every tree's height and is the asymptote of the open-grown height-diameter curve.");
+            println!("H_curve: life.growth.h_max_m, the asymptote of the height-age curve H(t) = H_curve (1 - e^(-k t))^p that top height follows on an optimal site (fitted to a yield table where the file says so; H_max where the file gives none).");
+            println!("age: life.max_age_yr; shade: life.shade_tolerance, iLand's light-response class (1 intolerant - 5 tolerant).");
             Ok(())
         }
         Command::Show { name, dir } => {

@@ -176,7 +176,14 @@ fn info(s: &Source, tolerance: f64) -> anyhow::Result<()> {
         (false, None) => println!("latitude:    {:.3}° (the default: the grid's CRS gives none; set it with --latitude)", Climate::default().latitude_deg),
     }
     println!("elevation:   {lo:.1} … {hi:.1} m");
-    println!("nodata:      {} cells{}", g.len() - valid.len(), t.nodata.map(|v| format!(" (file value {v})")).unwrap_or_default());
+    // the readers treat NaN and infinite values as nodata as well as the file's own nodata
+    // value, and keep no count of which was which (trial 41, defect 10: two `nan`/`inf` cells
+    // were reported as "file value -9999")
+    let why = match t.nodata {
+        Some(v) => format!(" (cells of the file's nodata value {v}, or NaN or infinite)"),
+        None => " (NaN or infinite cells; the file declares no nodata value)".to_string(),
+    };
+    println!("nodata:      {} cells{}", g.len() - valid.len(), if g.len() == valid.len() { "" } else { &why });
     let sea = s.sea_level_m();
     let below = valid.iter().filter(|&&v| v <= sea).count();
     if s.sea_level.is_none() && sea == sylva::terrain::NO_SEA_LEVEL_M {

@@ -235,6 +235,34 @@ fn names_a_pool_species(name: &str, pool: &[String]) -> bool {
     lib.find(name).is_some_and(|id| pool.contains(&lib.species[id as usize].id))
 }
 
+/// What a species name outside the scenario's pool should be: a species of the library named
+/// in `species = [...]` (with the id to add where `name` names one of the shipped library), or,
+/// where it names none, a pointer to `sylva species list` and the library's nearest names
+/// (trial 41, defect 9: "add it there" was said of `fagus`, which no library holds).
+fn not_in_pool(name: &str, pool: &[String]) -> String {
+    let lib = crate::species::SpeciesLibrary::embedded().ok();
+    if let Some((lib, k)) = lib.as_ref().and_then(|l| l.find(name).map(|k| (l, k))) {
+        let id = &lib.species[k as usize].id;
+        return format!("one of the scenario's species = {pool:?} (add \"{id}\" there: it is the library's {})", lib.species[k as usize].identity.scientific_name);
+    }
+    // the nearest names by spelling, and the species of a genus named alone (`fagus`)
+    let mut near: Vec<String> = Vec::new();
+    if let Some(lib) = &lib {
+        let key = crate::species::species_name_key(name);
+        for s in lib.nearest(name, 3).into_iter().chain(lib.species.iter().filter(|s| {
+            let genus = s.identity.scientific_name.split_whitespace().next().unwrap_or("");
+            !key.is_empty() && crate::species::species_name_key(genus) == key
+        })) {
+            let n = format!("`{}` ({})", s.id, s.identity.scientific_name);
+            if !near.contains(&n) {
+                near.push(n);
+            }
+        }
+    }
+    let hint = if near.is_empty() { String::new() } else { format!("; nearest: {}", near.join(", ")) };
+    format!("one of the scenario's species = {pool:?}, each a species id of the library: `{name}` is none (`sylva species list` lists the ids{hint})")
+}
+
 pub use crate::terrain::NO_SEA_LEVEL_M;
 
 /// Checks `[climate]`: every value finite; latitude −90–90°, lapse rate −15–5 K/km,
@@ -391,6 +419,43 @@ fn unknown_field(msg: &str) -> Option<String> {
     Some(rest[..rest.find('`')?].to_string())
 }
 
+/// What serde's "invalid type: WHAT, expected …" or "invalid value: WHAT, expected …" names as
+/// the value it got (`string "1.5m"`, `integer `-1``, `floating point `1.5``, `boolean `true``,
+/// `sequence`, `map`).
+fn invalid_type_value(msg: &str) -> Option<&str> {
+    let (i, p) = ["invalid type: ", "invalid value: "].into_iter().find_map(|p| msg.find(p).map(|i| (i, p)))?;
+    let rest = &msg[i + p.len()..];
+    Some(&rest[..rest.find(", expected")?])
+}
+
+/// The keys of the tables holding byte `at` of `text` ([`table_entries`]) whose value is the one
+/// serde names (`what`, [`invalid_type_value`]), in backquotes with the table's index and the
+/// line: "`start[0].spacing_m` (line 12)"; several joined by "or"; `None` when none is.
+fn keys_holding(text: &str, at: usize, what: &str) -> Option<String> {
+    let same = |value: &str| -> bool {
+        let Some(v) = format!("x = {value}").parse::<toml::Table>().ok().and_then(|mut t| t.remove("x")) else { return false };
+        let num = |p: &str| what.strip_prefix(p).map(|r| r.trim_matches('`')).and_then(|r| r.parse::<f64>().ok());
+        match v {
+            toml::Value::String(s) => what == format!("string {s:?}"),
+            toml::Value::Integer(i) => num("integer ").is_some_and(|n| n == i as f64),
+            toml::Value::Float(f) => num("floating point ").is_some_and(|n| n == f || (n.is_nan() && f.is_nan())),
+            toml::Value::Boolean(b) => what == format!("boolean `{b}`"),
+            toml::Value::Array(_) => what == "sequence",
+            toml::Value::Table(_) => what == "map",
+            toml::Value::Datetime(_) => false,
+        }
+    };
+    let found: Vec<String> = table_entries(text, at)
+        .into_iter()
+        .filter(|e| same(e.value))
+        .map(|e| match e.array {
+            Some((name, k)) => format!("`{name}[{k}].{}` (line {})", e.key, e.line),
+            None => format!("`{}` (line {})", e.key, e.line),
+        })
+        .collect();
+    (!found.is_empty()).then(|| found.join(" or "))
+}
+
 /// The line number (1-based) of the `key = value` line of `text` in the table (or array of
 /// tables) that holds byte `at` ([`table_entries`]), or `None` when it has no such line or
 /// that line is `at`'s own (serde's span already points at it).
@@ -472,6 +537,14 @@ impl Scenario {
             if let Some((key, line_no)) = unknown_field(&msg).zip(e.span()).and_then(|(k, sp)| key_line_in_table(text, sp.start, &k).map(|l| (k, l))) {
                 msg = format!("{}
 the unknown field `{key}` is on line {line_no}", msg.trim_end());
+            }
+            // a wrong type inside a tagged table (`spacing_m = "1.5m"` in a `[[start]]`): serde
+            // points at the array's first header and names no field, so the key holding the
+            // value serde names is found in the tables' lines (trial 41, defect 8)
+            if let Some(at) = e.span().map(|sp| sp.start).filter(|&at| key_at(text, at).is_none()) {
+                if let Some(keys) = invalid_type_value(&msg).and_then(|v| keys_holding(text, at, v)) {
+                    msg = format!("{}\nthe wrong value is {keys}", msg.trim_end());
+                }
             }
             Error::format(name, msg)
         })?;
@@ -657,7 +730,7 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
                     }
                     return Err(invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("one of the scenario's species = {:?}; did you mean `{p}` (species[{j}])?", self.species)));
                 }
-                return Err(invalid(ctx, &format!("start[{i}].species"), st.species(), &format!("one of the scenario's species = {:?} (add it there)", self.species)));
+                return Err(invalid(ctx, &format!("start[{i}].species"), st.species(), &not_in_pool(st.species(), &self.species)));
             }
         }
         for (i, sp) in self.species.iter().enumerate() {
@@ -701,7 +774,7 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
                 // --species` accepts it (trial 40: `"Fagus sylvatica" = 0.6` was refused); the
                 // run's own library resolves it again when the plan is built
                 if !self.species.is_empty() && !self.species.contains(sp) && !names_a_pool_species(sp, &self.species) {
-                    return Err(invalid(ctx, &format!("management[{i}].mix.{sp}"), sp, &format!("one of the scenario's species = {:?} (add it there)", self.species)));
+                    return Err(invalid(ctx, &format!("management[{i}].mix.{sp}"), sp, &not_in_pool(sp, &self.species)));
                 }
             }
         }
