@@ -37,6 +37,8 @@ pub const W_ZENITH: f32 = 0.35;
 /// what the light phase shades with (and the hemispherical photograph, `job::hemi`, compared
 /// with it). Drawn crowns take the species' sourced leaf-area index where its file gives one
 /// (`job::leaf_area::drawn_crown_lai`, round 36), e.g. Norway spruce 10.0 against 3.6 here.
+/// Round 41 (issue 35) measured closed pure stands passing 24–27 % of full light to the floor
+/// with it, and tried the sourced values (docs/management.md, "Round 41").
 #[inline]
 pub fn crown_lai(shade_tolerance: f32) -> f32 {
     2.0 + 0.5 * shade_tolerance
@@ -165,43 +167,14 @@ pub fn held_cells(trees: &TreeStore, light: &LightGrid, window: Option<CellRect>
 /// process, a tile's trees' and own cells in a tiled run), and sets every tree's light and the
 /// ground light and local top height ([`Light::canopy_top`]) of the cells of `window`.
 pub fn run(w: Light<'_>) {
-    let cell = w.light.cell_m;
     let grid = SpatialGrid::build_in(&w.trees, &w.light, held_cells(&w.trees, &w.light, w.window));
-    let (cols, rows, col0, row0) = (grid.cols, grid.rows, grid.col0, grid.row0);
+    let (cols, rows) = (grid.cols, grid.rows);
     let t = &w.trees;
     let lai_c: Vec<f32> = w.lib.species.iter().map(|s| crown_lai(s.life.shade_tolerance)).collect();
     let canopy = build_canopy(t, &grid, w.light.cols, &lai_c, w.obstacles);
     let ncell = cols * rows;
-    // the whole grid's cell of held cell `c`, and the held cell of the whole grid's cell `g`
-    let whole_of = |c: usize| (row0 + c / cols) * w.light.cols + col0 + c % cols;
-    let held_of = |g: usize| (g / w.light.cols - row0) * cols + g % w.light.cols - col0;
-    // 2. sun geometry
-    let lat = w.site.geo.latitude_deg as f32;
-    // the equinox's noon sun (crate::sun), kept within 10–80° above the horizon: the shading
-    // geometry below looks one light row towards the equator at `cell · tan e` higher, which
-    // a sun near the zenith (tan e → ∞) or the horizon (sin e → 0) would break
-    let elev = crate::sun::noon_equinox_elevation_deg(lat).clamp(10.0, 80.0).to_radians();
-    let (sin_e, tan_e) = (elev.sin(), elev.tan());
-    let drow = crate::sun::equatorward(lat) as isize; // towards the equator (row 0 is south here)
-    let rise = cell as f32 * tan_e;
-    let light_at = |c: usize, z: f32, rel: f32| -> f32 {
-        let own = canopy.lai_above(c, z);
-        // the next row towards the equator, if the whole grid has it (then it is held)
-        let r = (c / cols) as isize + drow;
-        let g = row0 as isize + r;
-        let sun = if g >= 0 && (g as usize) < w.light.rows { canopy.lai_above(r as usize * cols + c % cols, z + rise) } else { 0.0 };
-        rel * (W_ZENITH * (-K_EXT * own).exp() + (1.0 - W_ZENITH) * (-K_EXT * (0.5 * own + 0.5 * sun) / sin_e).exp())
-    };
     let span = crate::sim::light_grid::Span::new(w.window, w.light);
-    let rel_of = |c: usize, site: &[u32], ins: &[f32]| -> f32 {
-        let s = span.index(c).map_or(u32::MAX, |k| site[k]);
-        if s == u32::MAX {
-            1.0
-        } else {
-            ins[w.site.held(s as usize)]
-        }
-    };
-    let (ls, ri) = (&w.light_site, &w.rel_insolation);
+    let shade = Shading::new(&canopy, &grid, w.light, w.site, span, w.light_site, w.rel_insolation);
     // Trees are queried cell by cell (the spatial grid's order), so that the canopy profile of
     // a cell is read once from memory for all its trees; each value is written straight to its
     // tree's slot (blocks of cells in parallel).
@@ -212,9 +185,9 @@ pub fn run(w: Light<'_>) {
         (0..ncell.div_ceil(BLOCK)).into_par_iter().for_each(|b| {
             let (c0, c1) = (b * BLOCK, ((b + 1) * BLOCK).min(ncell));
             for c in c0..c1 {
-                let rel = rel_of(whole_of(c), ls, ri);
+                let rel = shade.rel(shade.whole_of(c));
                 for &i in grid.cell(c) {
-                    out.set(i as usize, light_at(c, t.height[i as usize], rel));
+                    out.set(i as usize, shade.at(c, t.height[i as usize], rel));
                 }
             }
         });
@@ -224,14 +197,14 @@ pub fn run(w: Light<'_>) {
         .into_par_iter()
         .map(|k| {
             let c = span.cell(k);
-            light_at(held_of(c), 0.0, rel_of(c, ls, ri))
+            shade.at(shade.held_of(c), 0.0, shade.rel(c))
         })
         .collect();
     // the tallest entry over each of the span's cells (the first of its descending heights)
     let top: Vec<f32> = (0..span.len())
         .into_par_iter()
         .map(|k| {
-            let c = held_of(span.cell(k));
+            let c = shade.held_of(span.cell(k));
             let a = canopy.start[c] as usize;
             if (canopy.start[c + 1] as usize) > a {
                 canopy.h[a]
@@ -244,6 +217,94 @@ pub fn run(w: Light<'_>) {
     *w.ground_light = ground;
     *w.canopy_top = top;
     *w.grid = grid;
+}
+
+/// What a tree's light formula reads (module docs, step 3): the sorted canopy of the held
+/// cells, the sun geometry of the site's latitude and the cells' relative insolation.
+struct Shading<'a> {
+    canopy: &'a Canopy,
+    cols: usize,
+    row0: usize,
+    col0: usize,
+    whole_cols: usize,
+    whole_rows: usize,
+    drow: isize,
+    rise: f32,
+    sin_e: f32,
+    span: crate::sim::light_grid::Span,
+    light_site: &'a [u32],
+    rel_insolation: &'a [f32],
+    site: &'a SiteConditions,
+}
+
+impl<'a> Shading<'a> {
+    fn new(canopy: &'a Canopy, grid: &SpatialGrid, light: &LightGrid, site: &'a SiteConditions, span: crate::sim::light_grid::Span, light_site: &'a [u32], rel_insolation: &'a [f32]) -> Self {
+        let lat = site.geo.latitude_deg as f32;
+        // the equinox's noon sun (crate::sun), kept within 10–80° above the horizon: the shading
+        // geometry below looks one light row towards the equator at `cell · tan e` higher, which
+        // a sun near the zenith (tan e → ∞) or the horizon (sin e → 0) would break
+        let elev = crate::sun::noon_equinox_elevation_deg(lat).clamp(10.0, 80.0).to_radians();
+        Shading {
+            canopy,
+            cols: grid.cols,
+            row0: grid.row0,
+            col0: grid.col0,
+            whole_cols: light.cols,
+            whole_rows: light.rows,
+            drow: crate::sun::equatorward(lat) as isize, // towards the equator (row 0 is south here)
+            rise: light.cell_m as f32 * elev.tan(),
+            sin_e: elev.sin(),
+            span,
+            light_site,
+            rel_insolation,
+            site,
+        }
+    }
+    /// The whole grid's cell of held cell `c`.
+    #[inline]
+    fn whole_of(&self, c: usize) -> usize {
+        (self.row0 + c / self.cols) * self.whole_cols + self.col0 + c % self.cols
+    }
+    /// The held cell of the whole grid's cell `g`.
+    #[inline]
+    fn held_of(&self, g: usize) -> usize {
+        (g / self.whole_cols - self.row0) * self.cols + g % self.whole_cols - self.col0
+    }
+    /// Relative insolation of the whole grid's cell `c` (1 outside the span or where masked).
+    #[inline]
+    fn rel(&self, c: usize) -> f32 {
+        let s = self.span.index(c).map_or(u32::MAX, |k| self.light_site[k]);
+        if s == u32::MAX {
+            1.0
+        } else {
+            self.rel_insolation[self.site.held(s as usize)]
+        }
+    }
+    /// Light at height `z` (m) in held cell `c` of relative insolation `rel` (module docs, step 3).
+    #[inline]
+    fn at(&self, c: usize, z: f32, rel: f32) -> f32 {
+        let own = self.canopy.lai_above(c, z);
+        // the next row towards the equator, if the whole grid has it (then it is held)
+        let r = (c / self.cols) as isize + self.drow;
+        let g = self.row0 as isize + r;
+        let sun = if g >= 0 && (g as usize) < self.whole_rows { self.canopy.lai_above(r as usize * self.cols + c % self.cols, z + self.rise) } else { 0.0 };
+        rel * (W_ZENITH * (-K_EXT * own).exp() + (1.0 - W_ZENITH) * (-K_EXT * (0.5 * own + 0.5 * sun) / self.sin_e).exp())
+    }
+}
+
+/// Relative light (0–1.5, as [`run`] gives a tree or the ground) at height `z_m` (m above the
+/// ground) over every cell of the light grid `light` (row 0 south, one process: no window),
+/// under the crowns of `trees` and the `obstacles`' entries; the arguments are those of
+/// [`Light`]. For measurements (the light under closed stands, issue 35 round 41:
+/// `examples/understorey_light.rs`); the simulation reads only the ground's ([`Light::ground_light`]).
+#[allow(clippy::too_many_arguments)]
+pub fn cell_light_at(trees: &TreeStore, light: &LightGrid, site: &SiteConditions, lib: &SpeciesLibrary, light_site: &[u32], rel_insolation: &[f32], obstacles: &[(u64, f32)], z_m: f32) -> Vec<f32> {
+    let grid = SpatialGrid::build_in(trees, light, held_cells(trees, light, None));
+    let lai_c: Vec<f32> = lib.species.iter().map(|s| crown_lai(s.life.shade_tolerance)).collect();
+    let canopy = build_canopy(trees, &grid, light.cols, &lai_c, obstacles);
+    let span = crate::sim::light_grid::Span::new(None, light);
+    let shade = Shading::new(&canopy, &grid, light, site, span, light_site, rel_insolation);
+    (0..light.len()).into_par_iter().map(|c| shade.at(shade.held_of(c), z_m, shade.rel(c))).collect()
 }
 
 /// The canopy of `t` on the cells of `grid` (those it holds, of a light grid of `whole_cols`
