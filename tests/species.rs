@@ -270,6 +270,8 @@ fn readme_documents_every_field_of_the_schema() {
     assert!(beech.life.bai_competition.is_some());
     // nor BWINPro's diameter growth (issue 35 round 37: no shipped file has it; beech's values)
     beech.life.bai_bwinpro = Some(sylva::species::BaiBwinpro { a0: 2.6518, csa: 1.0414, age: -0.6322, c66: -0.555, bias0: -22.77, bias1: 1.417, bias2: 0.03803, bias3: -0.002403, bias4: 0.00003191, bias5: -0.0000001202, youth_hd: 1.40, period_sigma: Some(0.15) });
+    // nor the closed-stand slenderness (issue 35 round 41: no shipped file has it; TreeGrOSS's beech value)
+    beech.life.closed_hd = Some(140.0);
     // nor the mature form (Scots pine's only)
     beech.architecture.mature_form = lib.get("scots_pine").unwrap().architecture.mature_form;
     assert!(beech.architecture.mature_form.is_some());
@@ -324,6 +326,22 @@ fn out_of_range_value_names_file_line_field_value_and_range() {
     let err = Species::from_toml_str(&beech_text().replace("k_c = 0.3\n", "k_c = 1.7\n"), "x.toml").unwrap_err();
     assert!(matches!(err, sylva::Error::Invalid { .. }), "{err}");
     assert!(err.to_string().contains("k_c"), "{err}");
+}
+
+/// `life.closed_hd` (issue 35 round 41): optional (the shipped beech has none), read where
+/// given, and a value outside 40–250 m/m is refused naming the file, line, field and range.
+#[test]
+fn closed_stand_slenderness_is_optional_read_and_range_checked() {
+    assert_eq!(SpeciesLibrary::embedded().unwrap().get("beech").unwrap().life.closed_hd, None);
+    let dense = "dense_hd = { k = 323.63, c = -0.3676 }\n";
+    assert!(beech_text().contains(dense));
+    let with = |v: &str| beech_text().replace(dense, &format!("{dense}closed_hd = {v}\n"));
+    assert_eq!(Species::from_toml_str(&with("140.0"), "x.toml").unwrap().life.closed_hd, Some(140.0));
+    let (_d, p) = problems_of(|t| t.replace(dense, &format!("{dense}closed_hd = 300.0\n")));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert!(p[0].file.ends_with("bad.toml"));
+    assert_eq!(p[0].line, Some(line_of(&with("300.0"), "closed_hd = ")));
+    assert_eq!((p[0].field.as_str(), p[0].value.as_str(), p[0].expected.as_str()), ("life.closed_hd", "300", "a number in [40, 250]"));
 }
 
 #[test]

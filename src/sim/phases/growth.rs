@@ -235,9 +235,9 @@ pub struct Growth<'a> {
 /// behind); DBH `ΔD = (D_open(H + ΔH_pot) − D_open(H)) · f · m · g` (D_open from the height–DBH
 /// allometry, `g` the tree's [`growth_factor`]), so crowded and suppressed trees stay thin.
 /// Under crowding the potential increment `D_open(H + ΔH_pot) − D_open(H)` blends, with weight
-/// `x = clamp((RD − 0.4) / 0.2, 0, 1)`, into the closed-stand increment
-/// `min(max(100 ΔH_pot / 60, 0.5 cm), open increment)` (closed-stand slenderness H/D = 60 m/m,
-/// a 5 mm/yr floor once height growth culminates; ESTIMATE, see the comments in the body).
+/// `x = clamp((RD − 0.4) / 0.2, 0, 1)`, into the closed-stand increment [`closed_increment`]
+/// `min(max(100 ΔH_pot / HD, 30 / HD cm), open increment)` (closed-stand slenderness HD the
+/// species' `life.closed_hd`, else [`HD_CLOSED`] = 60 m/m with its 5 mm/yr floor; ESTIMATE).
 /// Crown radius: open-grown radius of the new DBH, shrunk by [`rules::shaded_crown`]
 /// `0.5 + 0.5 L` in shade (crown plasticity); crown base rises to
 /// `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural pruning). Vigour memory
@@ -334,6 +334,33 @@ pub fn run(w: Growth<'_>) {
 /// has a dense-stand height–diameter curve, that curve with its H/D at the species' largest DBH.
 type Curves = (Table<HeightIncrement>, Table<OpenDbh>, Option<(DenseHd, f32)>);
 
+/// Slenderness H/D (m/m) of the closed-stand diameter increment of a species without
+/// `life.closed_hd`: under crowding, diameter increment follows height increment at the
+/// slenderness of trees in closed stands, not the open-grown curve (whose H/D of 30–60 m/m at
+/// 25–35 m comes from each species' record DBH and differs 2-fold between species). Dominants of
+/// closed Central European stands carry H/D ≈ 60–80 m/m, mean trees 80–100 (Assmann 1970;
+/// Pretzsch 2009 ch. 8; the Wiedemann beech and spruce tables give 100 and 89 at age 100); this
+/// is the potential (uncrowded-share m = 1) value, ESTIMATE within that range.
+pub const HD_CLOSED: f32 = 60.0;
+
+/// Floor (cm/yr) of the closed-stand diameter increment at [`HD_CLOSED`]: after height growth
+/// culminates, dominants of closed stands keep putting on diameter (basal-area increment of
+/// mature stands stays nearly level: Assmann 1970); ESTIMATE: 5 mm, about twice the Dq increment
+/// of Wiedemann's and Assmann & Franz's mean trees at ages 100–120. It is the closed-stand
+/// increment of a height growth of `DD_CLOSED_MIN · HD_CLOSED / 100` = 0.3 m a year.
+pub const DD_CLOSED_MIN: f32 = 0.5;
+
+/// Potential closed-stand diameter increment (cm/yr) of a tree with potential height increment
+/// `dh_pot` (m/yr) and open-grown diameter increment `dd_open` (cm/yr) at slenderness `hd` (m/m,
+/// > 0; the species' `life.closed_hd`, else [`HD_CLOSED`]): `min(max(100 dh_pot / hd, DD_CLOSED_MIN
+/// · HD_CLOSED / hd), dd_open)`. The floor is the increment of the same 0.3 m height growth at
+/// every `hd` ([`DD_CLOSED_MIN`] at 60); crowding does not speed diameter growth, so never more
+/// than the open-grown increment. At `hd` = [`HD_CLOSED`] it is bit for bit the growth model's
+/// closed-stand increment before round 41 (issue 35).
+pub fn closed_increment(dh_pot: f32, dd_open: f32, hd: f32) -> f32 {
+    (dh_pot * 100.0 / hd).max(DD_CLOSED_MIN * HD_CLOSED / hd).min(dd_open)
+}
+
 /// One tree's season ([`run`]) in simulation year `year`: species `s`, light `l`, suitability,
 /// whether it stands `below` the upper layer (its vigour: [`run`]), id, height `h`, DBH `d`,
 /// crown base and vigour before it, its cached [`growth_factor`] (NaN until first drawn, then
@@ -380,24 +407,12 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, ye
     }
     let hp = (h + dh_pot).min(sp.life.max_height_m * 0.999);
     let dd_open = (dbh_of.at(hp) - dbh_of.at(h.min(hp))).max(if h > 1.3 { 0.05 } else { 0.0 });
-    // Closed-stand allometry: under crowding, diameter increment follows height
-    // increment at the slenderness H/D of trees in closed stands, not the open-grown
-    // curve (whose H/D of 30–60 m/m at 25–35 m comes from each species' record DBH and
-    // differs 2-fold between species). Dominants of closed Central European stands carry
-    // H/D ≈ 60–80 m/m, mean trees 80–100 (Assmann 1970; Pretzsch 2009 ch. 8; the
-    // Wiedemann beech and spruce tables give 100 and 89 at age 100); HD_CLOSED is the
-    // potential (uncrowded-share m = 1) value, ESTIMATE within that range. The weight
+    // Closed-stand allometry ([`closed_increment`]): under crowding, diameter increment
+    // follows height increment at the slenderness H/D of trees in closed stands. The weight
     // x of the closed-stand allometry rises from 0 at RD_ONSET (0.4, lower limit of full
     // site occupancy) to 1 at RD 0.6 (onset of self-thinning, canopy closed: Long 1985).
-    const HD_CLOSED: f32 = 60.0;
     let x = ((crowd.rd[i] - RD_ONSET).max(0.0) / 0.2).min(1.0);
-    // After height growth culminates, dominants of closed stands keep putting on
-    // diameter (basal-area increment of mature stands stays nearly level: Assmann 1970):
-    // a floor DD_CLOSED_MIN (cm/yr, ESTIMATE: 5 mm, about twice the Dq increment of Wiedemann's
-    // and Assmann & Franz's mean trees at ages 100–120); never more than the open-grown
-    // increment: crowding does not speed diameter growth.
-    const DD_CLOSED_MIN: f32 = 0.5;
-    let dd_closed = if h > 1.3 { (dh_pot * 100.0 / HD_CLOSED).max(DD_CLOSED_MIN).min(dd_open) } else { dd_open };
+    let dd_closed = if h > 1.3 { closed_increment(dh_pot, dd_open, sp.life.closed_hd.unwrap_or(HD_CLOSED)) } else { dd_open };
     let dd_pot = (1.0 - x) * dd_open + x * dd_closed;
     // the tree's growth factor only matters for a non-zero increment (a zero times the factor,
     // which is finite and > 0, is that same zero), so it is not drawn for trees that do not
@@ -484,6 +499,23 @@ mod tests {
         let mean_ln = g.iter().map(|v| (*v as f64).ln()).sum::<f64>() / g.len() as f64;
         assert!(mean_ln.abs() < 0.02 && g.iter().all(|v| (0.6..=1.6).contains(v)), "{mean_ln}");
         assert!(light_response(1.0, 1.0) > 0.99 && light_response(0.1, 1.0) < 0.05 && light_response(0.1, 5.0) > 0.15);
+    }
+
+    /// The closed-stand diameter increment at a species' slenderness: 100 ΔH_pot / H/D (0.42 m of
+    /// height: 0.7 cm at 60, 0.3 cm at 140), floored at the increment of a 0.3 m height growth
+    /// (0.5 cm at 60, 0.3 / 1.4 = 0.2143 cm at 140), capped by the open-grown increment; at 60
+    /// bit for bit the expression the growth model had before `life.closed_hd` (issue 35, round 41).
+    #[test]
+    fn closed_increment_follows_the_slenderness() {
+        assert!((closed_increment(0.42, 2.0, HD_CLOSED) - 0.7).abs() < 1e-6);
+        assert!((closed_increment(0.42, 2.0, 140.0) - 0.3).abs() < 1e-6);
+        assert_eq!(closed_increment(0.1, 2.0, HD_CLOSED), 0.5);
+        assert!((closed_increment(0.1, 2.0, 140.0) - 0.3 / 1.4).abs() < 1e-6, "{}", closed_increment(0.1, 2.0, 140.0));
+        assert_eq!(closed_increment(0.42, 0.25, 140.0), 0.25);
+        for k in 0..2000 {
+            let (dh, open) = (k as f32 * 0.0007, 0.05 + (k % 37) as f32 * 0.03);
+            assert_eq!(closed_increment(dh, open, HD_CLOSED).to_bits(), (dh * 100.0 / 60.0).max(0.5).min(open).to_bits(), "dh {dh} open {open}");
+        }
     }
 
     /// PROGNAUS's competition response (Norway spruce's terms, Hasenauer 2000): an open-grown
