@@ -190,10 +190,12 @@ pub struct Scratch {
     pub dead: Vec<DeadTree>,
     /// Counts of the regeneration layer in the current year.
     pub regen_year: RegenYear,
-    /// This year's harvest of each `[[management]]` entry (stems ≥ 1.3 m, stem volume m³ of
-    /// the trees it removed; entry order; set by the management phase, empty without
-    /// management): the management table's harvest columns.
-    pub entry_harvest: Vec<(u64, f64)>,
+    /// This year's harvest of each `[[management]]` entry (stems ≥ 1.3 m, their basal area,
+    /// stem volume m³ of the trees it removed, sapling stems a `keep_open` entry cut; entry
+    /// order; set by the management phase, empty without management): the management table's
+    /// harvest columns. In a tiled run the saplings are the tile's own cohorts' (summed over
+    /// the ranks by the stats phase, `sim::tiles`).
+    pub entry_harvest: Vec<super::stats::EntryHarvest>,
 }
 
 /// Running totals since the start of the run (checkpointed).
