@@ -1507,9 +1507,9 @@ fn management_is_resolved_from_each_ranks_tile_as_one_process_resolves_it() {
     let toml = managed_over_tiles(d.path(), 10);
     let (_, w0) = world(&toml);
     let ops = &w0.site.management;
-    assert_eq!(ops.len(), 7);
+    assert_eq!(ops.len(), 8);
     // the strip (4 m × 120 m) holds no light-cell centre: its area is the fine count's
-    assert!(ops[6].region.area_ha > 0.03 && ops[6].region.area_ha < 0.07, "{}", ops[6].region.area_ha);
+    assert!(ops[7].region.area_ha > 0.03 && ops[7].region.area_ha < 0.07, "{}", ops[7].region.area_ha);
     let key = |t: &sylva::sim::trees::TreeStore| (0..t.len()).map(|i| (t.id[i], t.species[i], t.x[i].to_bits(), t.y[i].to_bits(), t.height[i].to_bits(), t.dbh[i].to_bits())).collect::<Vec<_>>();
     let mut planted = 0;
     for n in [2, 3] {
@@ -1537,7 +1537,7 @@ fn management_is_resolved_from_each_ranks_tile_as_one_process_resolves_it() {
     // a planting of 50 m spacing in a 4 m square plants nothing: refused on every rank as by one process
     let bad = toml.clone() + "[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 50.0\nyear = 2\narea = [1.0, 1.0, 5.0, 5.0]\n";
     let e0 = World::new(Scenario::from_toml_str(&bad, "managed.toml").unwrap().site().unwrap(), &lib, &Scenario::from_toml_str(&bad, "managed.toml").unwrap()).unwrap_err().to_string();
-    assert!(e0.contains("management[7].area"), "{e0}");
+    assert!(e0.contains("management[8].area"), "{e0}");
     for (k, r) in bands(&bad, 3).into_iter().enumerate() {
         assert_eq!(r.err().map(|e| e.to_string()), Some(e0.clone()), "rank {k} of 3");
     }

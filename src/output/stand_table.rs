@@ -19,12 +19,7 @@ use std::path::Path;
 /// thickest.
 pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     let mut s = String::from("year,stems_ha,seedlings_ha,regeneration_ha,basal_area_m2_ha,mean_height_m,top_height_m,qmd_cm,stems_7cm_ha,qmd_7cm_cm");
-    for sp in species {
-        let _ = write!(s, ",ba_share_{sp}");
-    }
-    for sp in species {
-        let _ = write!(s, ",stem_share_{sp}");
-    }
+    share_columns(&mut s, species);
     s.push_str(",regen_germinated,regen_recruited");
     for c in crate::sim::cohorts::RegenDeath::ALL {
         let _ = write!(s, ",regen_deaths_{}", c.name());
@@ -96,12 +91,7 @@ pub fn write_stand_table(path: &Path, rows: &[StandRow], species: &[&str], area_
 /// stand table's. Just the header for rows without management.
 pub fn management_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     let mut s = String::from("year,entry,kind,method,area_ha,stems_ha,basal_area_m2_ha,volume_m3_ha,qmd_cm,top_height_m,harvest_stems_ha,harvest_volume_m3_ha,name,harvest_basal_area_m2_ha,cut_saplings_ha");
-    for sp in species {
-        let _ = write!(s, ",ba_share_{sp}");
-    }
-    for sp in species {
-        let _ = write!(s, ",stem_share_{sp}");
-    }
+    share_columns(&mut s, species);
     s.push('\n');
     for r in rows {
         for e in &r.management {
@@ -134,6 +124,15 @@ pub fn management_table_csv(rows: &[StandRow], species: &[&str]) -> String {
         }
     }
     s
+}
+
+/// Appends the species-share columns' names: `,ba_share_<sp>…,stem_share_<sp>…`.
+fn share_columns(s: &mut String, species: &[&str]) {
+    for kind in ["ba_share", "stem_share"] {
+        for sp in species {
+            let _ = write!(s, ",{kind}_{sp}");
+        }
+    }
 }
 
 /// A CSV field as RFC 4180 §2 writes it: as it is, or in double quotes (quotes doubled) where it

@@ -122,20 +122,7 @@ pub struct EntryRow {
     pub stem_share: Vec<f64>,
 }
 
-/// What one `[[management]]` entry removed in a year ([`crate::sim::world::Scratch::entry_harvest`]):
-/// the management table's harvest columns before they are divided by the area.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct EntryHarvest {
-    /// Removed stems (≥ 1.3 m).
-    pub stems: u64,
-    /// Their basal area (m²).
-    pub basal_area_m2: f64,
-    /// Stem volume (m³, [`stem_volume_m3`], DBH ≥ 7 cm) of the removed trees.
-    pub volume_m3: f64,
-    /// Sapling stems of the regeneration layer removed (`keep_open`,
-    /// [`crate::sim::phases::management::keep_open_cohorts`]).
-    pub saplings: u64,
-}
+pub use super::world::EntryHarvest;
 
 /// The management table's rows of a year ([`EntryRow`]): one per entry of `site.management`,
 /// from the sums over the trees in each entry's area (`sums`, [`RowSums::over_where`]), each
