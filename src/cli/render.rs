@@ -245,7 +245,7 @@ pub struct TimelapseArgs {
     /// Frames per second (1–100; checked before any frame is drawn).
     #[arg(long, default_value_t = 12.0, value_parser = parse_fps)]
     pub fps: f32,
-    /// Interpolated frames between consecutive snapshots (0–50; 0: one frame per snapshot).
+    /// Interpolated frames between snapshots a regular interval apart (0–50; 0: one frame per snapshot); shorter or longer intervals get frames in proportion to their years.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=50))]
     pub frames_between: u32,
     /// Frame size WIDTHxHEIGHT.

@@ -35,7 +35,7 @@ pub struct Args {
     /// Size of the timelapse frames WIDTHxHEIGHT.
     #[arg(long, default_value = "640x360", value_parser = super::render::parse_size)]
     pub timelapse_size: (u32, u32),
-    /// Interpolated timelapse frames between consecutive snapshots (0–50; 0: one per snapshot).
+    /// Interpolated timelapse frames between snapshots a regular interval apart (0–50; 0: one per snapshot); shorter or longer intervals get frames in proportion to their years.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=50))]
     pub frames_between: u32,
     /// Timelapse frames per second (1–100).
