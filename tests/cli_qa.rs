@@ -548,7 +548,8 @@ fn a_failed_render_removes_the_empty_folders_it_made_for_its_picture() {
 }
 
 /// Trial 37: `sylva render` had no camera of one's own. `--camera eye:X,Y,Z:TX,TY,TZ[:FOV]`
-/// (site metres, z the elevation) draws the picture from there; an eye outside the site or
+/// (site metres, z the elevation, or `+H` above the ground since round 41) draws the picture
+/// from there; an eye outside the site or
 /// under its ground, an eye on its target, a field of view out of range and a malformed value
 /// are refused naming `--camera` and what is expected, and no picture is written.
 #[test]
@@ -564,6 +565,11 @@ fn a_camera_of_ones_own_is_drawn_and_checked_against_the_site() {
     assert!(ok, "{err}");
     let (ok, err) = run(&["render", "eye_run", "--camera", "eye:2,2,301.7:30,30,306:60", "--size", "64x48", "--out", "own.png"]);
     assert!(ok && d.join("own.png").is_file(), "{err}");
+    // round 41 (trial 40, item 8): Z as `+H`, a height above the ground at that X, Y (the
+    // eye's and the target's): on this 300 m site the same camera, so the same picture
+    let (ok, err) = run(&["render", "eye_run", "--camera", "eye:2,2,+1.7:30,30,+6:60", "--size", "64x48", "--out", "rel.png"]);
+    assert!(ok, "{err}");
+    assert!(std::fs::read(d.join("own.png")).unwrap() == std::fs::read(d.join("rel.png")).unwrap(), "eye:2,2,+1.7:30,30,+6 draws another picture than eye:2,2,301.7:30,30,306");
     // another eye draws another picture
     let (ok, err) = run(&["render", "eye_run", "--camera", "eye:38,38,330:20,20,300", "--size", "64x48", "--out", "own2.png"]);
     assert!(ok, "{err}");
@@ -572,6 +578,8 @@ fn a_camera_of_ones_own_is_drawn_and_checked_against_the_site() {
         ("eye:-5,2,302:30,30,306", &["--camera", "outside the site", "X 0–40.0 m"][..]),
         ("eye:2,45,302:30,30,306", &["--camera", "outside the site", "Y 0–40.0 m"][..]),
         ("eye:2,2,299:30,30,306", &["--camera", "under the ground", "300.0 m", "301.7"][..]),
+        ("eye:2,2,+0.05:30,30,306", &["--camera", "0.05 m above the ground", "at least 0.1 m", "+1.7"][..]),
+        ("eye:2,2,+-1:30,30,306", &["--camera", "three numbers", "+H"][..]),
         ("eye:2,2,302:2,2,302", &["--camera", "the same point", "eye:X,Y,Z:TX,TY,TZ"][..]),
         ("eye:2,2,302:30,30,306:200", &["--camera", "5–150 degrees"][..]),
         ("eye:2,2:30,30,306", &["--camera", "three numbers"][..]),

@@ -305,7 +305,8 @@ fn busy(years: u32) -> String {
            [[management]]\nkind = \"harvest\"\nmethod = \"patch\"\npatch_size_m = 30.0\nshare = 0.25\narea = [0.0, 0.0, 120.0, 60.0]\nyears = [4, 8]\n\
            [[management]]\nkind = \"planting\"\nmix = { norway_spruce = 0.6, beech = 0.4 }\nspacing_m = 2.0\nage_yr = 3.0\nyear = 5\npolygons = [[[[5.0, 5.0], [60.0, 5.0], [60.0, 55.0], [5.0, 55.0]]]]\n\
            [[management]]\nkind = \"thinning\"\nmethod = \"crop_trees\"\ncrop_trees_ha = 80\narea = [0.0, 60.0, 120.0, 120.0]\nyears = [3, 7]\n\
-           [[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\narea = [60.0, 0.0, 120.0, 60.0]\nstages = [{ year = 5, share = 0.4 }, { year = 9, share = 1.0 }]\n"
+           [[management]]\nkind = \"harvest\"\nmethod = \"shelterwood\"\narea = [60.0, 0.0, 120.0, 60.0]\nstages = [{ year = 5, share = 0.4 }, { year = 9, share = 1.0 }]\n\
+           [[management]]\nkind = \"keep_open\"\nname = \"bench, clearing\"\nmax_height_m = 0.3\narea = [80.0, 70.0, 115.0, 110.0]\nfrom_year = 2\nevery_years = 3\n"
 }
 
 fn busy_table(threads: usize, years: u32) -> String {
@@ -333,9 +334,12 @@ fn management_and_warming_are_the_same_for_one_and_two_threads_and_across_a_chec
     let mut rows = common::run(&sc, &mut w, 4);
     let bytes = to_bytes(&w, &rows);
     // a managed run's checkpoint holds the management table: layout 8, so a Sylva before it
-    // refuses it naming the versions (round 38; it read the table as bytes of a corrupt file)
-    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()) >> 16, 8);
-    assert!(rows.iter().all(|r| r.management.len() == 5), "a management-table row per entry and year");
+    // refuses it naming the versions (round 38; it read the table as bytes of a corrupt file);
+    // 9 since round 41 (names, harvested basal area, saplings cut, species shares)
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()) >> 16, 9);
+    assert!(rows.iter().all(|r| r.management.len() == 6), "a management-table row per entry and year");
+    // the clearing kept open (entry 5, years 2, 5, 8) cut its regrowth and saplings
+    assert!(rows[1].management[5].harvest_stems_ha > 0.0 && rows[1].management[5].name == "bench, clearing", "{:?}", rows[1].management[5]);
     let (sc2, mut w2) = world(&busy(10));
     rows = restore(&mut w2, &bytes, Path::new("ck.bin")).unwrap();
     rows.extend(common::run(&sc2, &mut w2, 6));
@@ -347,7 +351,8 @@ fn management_and_warming_are_the_same_for_one_and_two_threads_and_across_a_chec
     // so is one with another shelterwood stage, naming that entry
     let (_, mut w4) = world(&busy(10).replace("share = 0.4 }", "share = 0.3 }"));
     let e = restore(&mut w4, &bytes, Path::new("ck.bin")).unwrap_err().to_string();
-    let crcs = |part: &str| part.split(", ").filter(|c| c.starts_with("management[")).map(str::to_string).collect::<Vec<_>>();
+    // (each `management[i] CRC`: the last is followed by the message's next words)
+    let crcs = |part: &str| part.split(", ").filter(|c| c.starts_with("management[")).map(|c| c.split(' ').take(2).collect::<Vec<_>>().join(" ")).collect::<Vec<_>>();
     let (then, now) = e.split_once(", now ").unwrap();
     let changed: Vec<String> = crcs(then).into_iter().zip(crcs(now)).filter(|(a, b)| a != b).map(|(a, _)| a[..13].to_string()).collect();
     assert_eq!(changed, vec!["management[4]".to_string()], "{e}");
@@ -1502,9 +1507,9 @@ fn management_is_resolved_from_each_ranks_tile_as_one_process_resolves_it() {
     let toml = managed_over_tiles(d.path(), 10);
     let (_, w0) = world(&toml);
     let ops = &w0.site.management;
-    assert_eq!(ops.len(), 7);
+    assert_eq!(ops.len(), 8);
     // the strip (4 m × 120 m) holds no light-cell centre: its area is the fine count's
-    assert!(ops[6].region.area_ha > 0.03 && ops[6].region.area_ha < 0.07, "{}", ops[6].region.area_ha);
+    assert!(ops[7].region.area_ha > 0.03 && ops[7].region.area_ha < 0.07, "{}", ops[7].region.area_ha);
     let key = |t: &sylva::sim::trees::TreeStore| (0..t.len()).map(|i| (t.id[i], t.species[i], t.x[i].to_bits(), t.y[i].to_bits(), t.height[i].to_bits(), t.dbh[i].to_bits())).collect::<Vec<_>>();
     let mut planted = 0;
     for n in [2, 3] {
@@ -1532,7 +1537,7 @@ fn management_is_resolved_from_each_ranks_tile_as_one_process_resolves_it() {
     // a planting of 50 m spacing in a 4 m square plants nothing: refused on every rank as by one process
     let bad = toml.clone() + "[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 50.0\nyear = 2\narea = [1.0, 1.0, 5.0, 5.0]\n";
     let e0 = World::new(Scenario::from_toml_str(&bad, "managed.toml").unwrap().site().unwrap(), &lib, &Scenario::from_toml_str(&bad, "managed.toml").unwrap()).unwrap_err().to_string();
-    assert!(e0.contains("management[7].area"), "{e0}");
+    assert!(e0.contains("management[8].area"), "{e0}");
     for (k, r) in bands(&bad, 3).into_iter().enumerate() {
         assert_eq!(r.err().map(|e| e.to_string()), Some(e0.clone()), "rank {k} of 3");
     }
@@ -1608,7 +1613,10 @@ fn the_management_table_gives_each_entrys_area_as_counted_in_the_inventory() {
     let text = std::fs::read_to_string(d.path().join("management_table.csv")).unwrap();
     let mut lines = text.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    assert_eq!(head, ["year", "entry", "kind", "method", "area_ha", "stems_ha", "basal_area_m2_ha", "volume_m3_ha", "qmd_cm", "top_height_m", "harvest_stems_ha", "harvest_volume_m3_ha"]);
+    // the columns of round 38, then (round 41, trial 40) the entry's name, the basal area it
+    // removed, the saplings it cut and the species mix of its area
+    assert_eq!(head, ["year", "entry", "kind", "method", "area_ha", "stems_ha", "basal_area_m2_ha", "volume_m3_ha", "qmd_cm", "top_height_m", "harvest_stems_ha", "harvest_volume_m3_ha", "name", "harvest_basal_area_m2_ha", "cut_saplings_ha", "ba_share_beech", "ba_share_silver_birch", "stem_share_beech", "stem_share_silver_birch"]);
+    assert!(text.lines().skip(1).all(|l| l.contains(",thinning#0,") || l.contains(",planting#1,")), "default names KIND#INDEX: {text}");
     let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
     assert_eq!(rows.len(), 6, "3 years × 2 entries:\n{text}");
     let get = |year: u32, entry: usize, col: &str| -> f64 {
@@ -1666,6 +1674,13 @@ fn the_management_table_gives_each_entrys_area_as_counted_in_the_inventory() {
         assert!((get(year, 0, "harvest_stems_ha") * area - cut as f64).abs() <= slack, "year {year}: harvest {} stems/ha × {area} ha against {cut} counted", get(year, 0, "harvest_stems_ha"));
         if year == 2 {
             assert!(cut > 50, "{cut} stems thinned in the triangle");
+            // the thinning's own figure: the basal area of the stems it took
+            let cut_ba = harvested_in(&inv, &tri) / area;
+            assert!((get(2, 0, "harvest_basal_area_m2_ha") - cut_ba).abs() < 0.002 * cut_ba + 0.001 + unsure as f64 * 0.05, "harvested basal area {} against {cut_ba:.3} m²/ha counted", get(2, 0, "harvest_basal_area_m2_ha"));
+            // the species mix of the area: beech, and the few birch of the planting whose
+            // square the triangle's corner overlaps; shares summing to 1
+            let (b, bi) = (get(2, 0, "ba_share_beech"), get(2, 0, "ba_share_silver_birch"));
+            assert!(b > 0.95 && (b + bi - 1.0).abs() < 2e-4, "basal-area shares beech {b}, birch {bi}");
             let got = get(2, 0, "basal_area_m2_ha");
             assert!((got - target).abs() < 0.05 * target, "the triangle's basal area {got} against the target {target:.2}");
             let site = &s.rows[1];
@@ -1676,7 +1691,22 @@ fn the_management_table_gives_each_entrys_area_as_counted_in_the_inventory() {
         }
     }
     assert_eq!(get(1, 0, "harvest_stems_ha"), 0.0);
-    assert!(rows.iter().filter(|r| r[1] == "1").all(|r| r[10] == "0.0" && r[11] == "0.00"), "a planting harvests nothing: {text}");
+    assert!(rows.iter().filter(|r| r[1] == "1").all(|r| r[10] == "0.0" && r[11] == "0.00" && r[13] == "0.000"), "a planting harvests nothing: {text}");
+    // the planted parcel's mix: birch among the beech, shares summing to 1
+    let (b, be) = (get(2, 1, "stem_share_silver_birch"), get(2, 1, "stem_share_beech"));
+    assert!(b > 0.3 && (b + be - 1.0).abs() < 2e-4, "stem shares birch {b}, beech {be}");
+}
+
+/// The basal area (m²) of the trees of a CSV inventory `inv` harvested inside triangle `tri`.
+fn harvested_in(inv: &str, tri: &[[f64; 2]; 3]) -> f64 {
+    let ih: Vec<&str> = inv.lines().next().unwrap().split(',').collect();
+    let col = |n: &str| ih.iter().position(|h| *h == n).unwrap();
+    inv.lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<&str>>())
+        .filter(|f| f[col("status")] == "dead:harvest" && f[col("height_m")].parse::<f64>().unwrap() >= 1.3 && common::in_poly(tri, f[col("x_m")].parse().unwrap(), f[col("y_m")].parse().unwrap()))
+        .map(|f| std::f64::consts::FRAC_PI_4 * (f[col("dbh_cm")].parse::<f64>().unwrap() / 100.0).powi(2))
+        .sum()
 }
 
 /// Trial 38, items 8 and 9, through the command line: `--resume` of a finished run with the
@@ -1687,7 +1717,7 @@ fn the_management_table_gives_each_entrys_area_as_counted_in_the_inventory() {
 #[test]
 fn resume_says_nothing_to_do_and_names_a_changed_entrys_field() {
     let entries = "[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_relative_density = 0.6\nfrom_year = 2\nevery_years = 1\n\
-                   [[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyears = [50]\n";
+                   [[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyears = [3, 50]\n";
     let toml = ScenarioToml::new("res", 3, 7).species(&["beech"]).line("snapshot_every = 0").uniform(5, 5, 20.0, 200.0).planted("beech", 1.5, 30.0).build() + entries;
     let d = tempfile::tempdir().unwrap();
     std::fs::write(d.path().join("q.toml"), &toml).unwrap();
@@ -1752,4 +1782,129 @@ fn plantings_and_harvests_design_the_stand_thinnings_do_not() {
     assert!(!designs("[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\nyear = 1\n"));
     assert!(designs("[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 2.0\nyear = 1\n"));
     assert!(designs("[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\narea = [0.0, 0.0, 40.0, 40.0]\nyears = [1]\n"));
+}
+
+/// Round 41 (trial 40, item 11): `kind = "keep_open"` keeps a designed clearing open. A 40-year
+/// beech stand under birch seed rain; entry 0 keeps a 60 m × 60 m clearing bare
+/// (`max_height_m` 0, the default) every 3 years from year 1, entry 1 a 60 m × 40 m meadow
+/// below 1 m in the same years. In year 1 every tree of both areas goes (cause `harvest`) and
+/// no tree outside them; at the end of every entry year the clearing holds no tree and no
+/// sapling cohort, and the meadow no tree and no cohort above 1 m; between entries birch
+/// comes up in them again (the cohorts the next entry cuts, counted in `cut_saplings_ha`).
+/// The management table gives each entry's own harvest: stems and basal area equal the
+/// harvested trees in its area.
+#[test]
+fn keep_open_keeps_a_clearing_open_and_counts_what_it_cuts() {
+    let toml = ScenarioToml::new("open", 10, 5)
+        .species(&["beech", "silver_birch"])
+        .uniform(6, 6, 20.0, 200.0)
+        .planted("beech", 3.0, 40.0)
+        .seed_rain("silver_birch", 20000.0)
+        .build()
+        + "[[management]]\nkind = \"keep_open\"\narea = [0.0, 0.0, 60.0, 60.0]\nfrom_year = 1\nevery_years = 3\n\
+           [[management]]\nkind = \"keep_open\"\nname = \"meadow\"\nmax_height_m = 1.0\narea = [60.0, 0.0, 120.0, 40.0]\nfrom_year = 1\nevery_years = 3\n";
+    let (sc, mut w) = world(&toml);
+    let clearing = |x: f64, y: f64| x < 60.0 && y < 60.0;
+    let meadow = |x: f64, y: f64| (60.0..120.0).contains(&x) && y < 40.0;
+    let t0 = w.stand.trees.clone();
+    let in_areas = (0..t0.len()).filter(|&i| clearing(t0.x[i] as f64, t0.y[i] as f64) || meadow(t0.x[i] as f64, t0.y[i] as f64)).count();
+    let mut rows = Vec::new();
+    let (mut regrown, mut cut, mut died) = (0u64, 0.0f64, 0usize);
+    for year in 1..=10u32 {
+        rows.extend(common::run(&sc, &mut w, 1));
+        let t = &w.stand.trees;
+        let c = &w.stand.cohorts;
+        let cohorts = |area: &dyn Fn(f64, f64) -> bool, above: f32| (0..c.len()).filter(|&k| c.height[k] > above && { let (x, y) = w.site.light.centre(c.cell[k] as usize); area(x, y) }).map(|k| c.stems[k] as u64).sum::<u64>();
+        let trees = |area: &dyn Fn(f64, f64) -> bool, above: f32| (0..t.len()).filter(|&i| t.height[i] > above && area(t.x[i] as f64, t.y[i] as f64)).count();
+        let entry = (year - 1) % 3 == 0;
+        if year == 1 {
+            // the areas' trees that died of other causes in year 1, before the entry
+            died = w.scratch.dead.iter().filter(|d| d.cause != DeathCause::Harvest && (clearing(d.x as f64, d.y as f64) || meadow(d.x as f64, d.y as f64))).count();
+        }
+        // every tree harvested stood in one of the areas; each entry's harvest in the table is
+        // the trees it took: stems and basal area
+        assert!(w.scratch.dead.iter().all(|d| d.cause != DeathCause::Harvest || clearing(d.x as f64, d.y as f64) || meadow(d.x as f64, d.y as f64)), "year {year}: a tree harvested outside the areas");
+        for (e, area) in [(0usize, &clearing as &dyn Fn(f64, f64) -> bool), (1, &meadow)] {
+            let cut: Vec<_> = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest && d.height >= 1.3 && area(d.x as f64, d.y as f64)).collect();
+            let ba: f64 = cut.iter().map(|d| std::f64::consts::FRAC_PI_4 * (d.dbh as f64 / 100.0).powi(2)).sum();
+            let r = &rows.last().unwrap().management[e];
+            assert!((r.harvest_stems_ha * r.area_ha - cut.len() as f64).abs() < 1e-6 && (r.harvest_basal_area_m2_ha * r.area_ha - ba).abs() < 1e-9 * (1.0 + ba), "year {year}, entry {e}: {} stems/ha, {} m²/ha on {} ha against {} trees, {ba} m²", r.harvest_stems_ha, r.harvest_basal_area_m2_ha, r.area_ha, cut.len());
+        }
+        if entry {
+            assert_eq!((trees(&clearing, 0.0), cohorts(&clearing, 0.0)), (0, 0), "year {year}: the clearing holds trees or saplings");
+            assert_eq!((trees(&meadow, 1.0), cohorts(&meadow, 1.0)), (0, 0), "year {year}: the meadow holds trees or saplings above 1 m");
+            let m = &rows.last().unwrap().management;
+            cut += m[0].cut_saplings_ha + m[1].cut_saplings_ha;
+        } else {
+            regrown = regrown.max(cohorts(&clearing, 0.0));
+            assert!(rows.last().unwrap().management.iter().all(|e| e.harvest_stems_ha == 0.0 && e.cut_saplings_ha == 0.0), "year {year}: no entry due");
+        }
+    }
+    assert!(regrown > 0 && cut > 0.0, "birch comes up in the clearing between entries ({regrown} stems at most) and is cut ({cut:.0} stems/ha in all)");
+    // year 1: the 40-year beech of both areas
+    let first = &rows[0];
+    let (e0, e1) = (&first.management[0], &first.management[1]);
+    assert_eq!((e0.name.as_str(), e1.name.as_str(), e0.kind.as_str(), e0.method.as_str()), ("keep_open#0", "meadow", "keep_open", ""));
+    let n_cut = (e0.harvest_stems_ha * e0.area_ha + e1.harvest_stems_ha * e1.area_ha).round() as usize;
+    assert_eq!(n_cut + died, in_areas, "year 1 removes every planted tree of both areas ({died} died before it)");
+    assert_eq!(first.deaths[DeathCause::Harvest.index()] as usize + died, in_areas, "harvest deaths of year 1");
+    for e in [e0, e1] {
+        assert!(e.harvest_basal_area_m2_ha > 10.0, "{}: {} m²/ha of 40-year beech removed", e.name, e.harvest_basal_area_m2_ha);
+        assert_eq!((e.stems_ha, e.basal_area_m2_ha), (0.0, 0.0), "{}: nothing ≥ 1.3 m stands after the cut", e.name);
+    }
+    let outside = (0..w.stand.trees.len()).filter(|&i| { let t = &w.stand.trees; !clearing(t.x[i] as f64, t.y[i] as f64) && !meadow(t.x[i] as f64, t.y[i] as f64) && t.height[i] > 10.0 }).count();
+    assert!(outside > 500, "the stand outside stands: {outside} trees above 10 m");
+    eprintln!("keep_open: {in_areas} trees cut in year 1 ({:.1} + {:.1} m²/ha), at most {regrown} sapling stems regrown in the clearing between entries, {cut:.0} sapling stems/ha cut", e0.harvest_basal_area_m2_ha, e1.harvest_basal_area_m2_ha);
+}
+
+/// Round 41: a `keep_open` entry, a name and `max_height_m` are checked like every field.
+#[test]
+fn keep_open_and_names_are_refused_naming_the_field() {
+    let base = ScenarioToml::new("bad", 3, 1).species(&["beech"]).uniform(4, 4, 20.0, 200.0).build();
+    for (entry, want) in [
+        ("kind = \"keep_open\"\nmethod = \"clear_cut\"\nyear = 1\n", &["management[0].method", "no method for kind = \"keep_open\""][..]),
+        ("kind = \"keep_open\"\nmax_height_m = 60.0\nyear = 1\n", &["management[0].max_height_m", "0–50 m"][..]),
+        ("kind = \"keep_open\"\ntarget_stems_ha = 100\nyear = 1\n", &["management[0].target_stems_ha", "kind = \"thinning\""][..]),
+        ("kind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\nmax_height_m = 1.0\nyear = 1\n", &["management[0].max_height_m", "only with kind = \"keep_open\""][..]),
+        ("kind = \"keep_open\"\nname = \"\"\nyear = 1\n", &["management[0].name", "1–64 characters"][..]),
+        ("kind = \"keep_open\"\nyear = 0\n", &["management[0].year", "1–10000"][..]),
+    ] {
+        let e = err(&format!("{base}[[management]]\n{entry}"));
+        assert!(e.contains("bad.toml") && want.iter().all(|w| e.contains(w)), "{entry}: {e}");
+    }
+}
+
+/// Round 41 (trial 40, item 6): through the command line, an entry whose years all lie after
+/// the run's end is refused before anything is written, naming the file, the entry's field,
+/// its year and the run's last year; where `--years` shortened the run on purpose the run goes
+/// on and says so on stderr as a `warning:` line, before the run and again under its summary
+/// line (no longer only a log line). A name in the entry is quoted in the management table.
+#[test]
+fn an_entry_that_can_never_act_is_refused_or_warned_on_stderr() {
+    let toml = |years: u32| ScenarioToml::new("late", years, 7).species(&["beech"]).uniform(4, 4, 20.0, 200.0).planted("beech", 2.0, 20.0).build() + "[[management]]\nkind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 500\nname = \"stand, \\\"north\\\"\"\nyears = [1]\n[[management]]\nkind = \"planting\"\nmix = { beech = 1.0 }\nspacing_m = 3.0\nyear = 5\n";
+    let d = tempfile::tempdir().unwrap();
+    std::fs::write(d.path().join("late3.toml"), toml(3)).unwrap();
+    std::fs::write(d.path().join("late6.toml"), toml(6)).unwrap();
+    let sylva = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).current_dir(d.path()).output().unwrap();
+        (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    let (ok, err) = sylva(&["simulate", "late3.toml", "--out", "r3"]);
+    assert!(!ok && err.contains("late3.toml") && err.contains("management[1].year") && err.contains("5") && err.contains("last year 3") && err.contains("never act"), "{err}");
+    assert!(!d.path().join("r3").exists(), "a refused run writes nothing");
+    // a longer --years lets it act
+    let (ok, err) = sylva(&["simulate", "late3.toml", "--out", "r5", "--years", "5"]);
+    assert!(ok && !err.contains("never act"), "{err}");
+    // --years shortened the run on purpose: warned on stderr, twice
+    let (ok, err) = sylva(&["simulate", "late6.toml", "--out", "r6", "--years", "3"]);
+    let said = "warning: late6.toml (scenario late): management[1].year = 5 (planting \"planting#1\") lies after the run's last year 3 (--years): the entry never acts in this run";
+    assert!(ok && err.matches(said).count() == 2, "{err}");
+    let table = std::fs::read_to_string(d.path().join("r6/management_table.csv")).unwrap();
+    assert!(table.lines().nth(1).unwrap().contains(",\"stand, \"\"north\"\"\",") && table.lines().nth(2).unwrap().contains(",planting#1,"), "{table}");
+    // `sylva run` refuses the same entry, and still years outside the run
+    let (ok, err) = sylva(&["run", "late3.toml", "--out", "q3", "--no-pictures"]);
+    assert!(!ok && err.contains("management[1].year") && err.contains("last year 3"), "{err}");
+    let (ok, err) = sylva(&["run", "late6.toml", "--out", "q6", "--no-pictures", "--still-years", "2,9"]);
+    assert!(!ok && err.contains("--still-years") && err.contains("still_years[1]") && err.contains("0–6"), "{err}");
+    assert!(!d.path().join("q3").exists() && !d.path().join("q6").exists());
 }

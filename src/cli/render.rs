@@ -59,13 +59,20 @@ pub enum RenderCamera {
 /// A camera of one's own (`--camera eye:X,Y,Z:TX,TY,TZ[:FOV]`): the eye and the point looked
 /// at in site metres (x east and y north from the terrain's south-west corner, as the
 /// inventory's `x_m`, `y_m` and `--area`; z the elevation above sea level, as the DEM's
-/// heights), and the vertical field of view.
+/// heights, or with a leading `+` the height above the ground at that X, Y: `+1.7`), and the
+/// vertical field of view.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EyeCamera {
     /// Eye (m).
     pub eye: [f64; 3],
     /// Point looked at (m).
     pub target: [f64; 3],
+    /// Whether the eye's Z was given as `+H`: a height above the ground at the eye's X, Y
+    /// (the DEM's elevation there, [`sylva::conditions::SiteConditions::elevation_at`]), not an
+    /// elevation (round 41, trial 40).
+    pub eye_above_ground: bool,
+    /// Whether the target's Z was given as `+H`, a height above the ground at its X, Y.
+    pub target_above_ground: bool,
     /// Vertical field of view (degrees, 5–150; 50 when not given, the close-up's).
     pub fov_deg: f64,
 }
@@ -73,7 +80,7 @@ pub struct EyeCamera {
 /// Field of view (degrees) of `eye:…` when none is given: the close-up's 50°.
 pub const EYE_DEFAULT_FOV_DEG: f64 = 50.0;
 
-const EYE_FORM: &str = "eye:X,Y,Z:TX,TY,TZ[:FOV] with the eye X,Y,Z and the point looked at TX,TY,TZ in site metres (x east, y north from the terrain's south-west corner as the inventory's x_m, y_m; z the elevation, as the DEM's heights) and FOV the vertical field of view in degrees (5–150, default 50), e.g. eye:1000,700,1080:1250,950,930:55 (a view over the default site)";
+const EYE_FORM: &str = "eye:X,Y,Z:TX,TY,TZ[:FOV] with the eye X,Y,Z and the point looked at TX,TY,TZ in site metres (x east, y north from the terrain's south-west corner as the inventory's x_m, y_m; z the elevation, as the DEM's heights, or +H for H metres above the ground there, e.g. +1.7) and FOV the vertical field of view in degrees (5–150, default 50), e.g. eye:1000,700,1080:1250,950,930:55 (a view over the default site)";
 
 /// Parses `eye:X,Y,Z:TX,TY,TZ[:FOV]` (`None` when `s` does not start with `eye:`): numbers
 /// only, finite, an eye other than the target, a field of view of 5–150°. Whether the eye is
@@ -85,12 +92,15 @@ fn parse_eye(s: &str) -> Option<Result<EyeCamera, String>> {
     if !(2..=3).contains(&parts.len()) {
         return Some(bad("not an eye and a target separated by `:`"));
     }
-    let point = |p: &str| -> Option<[f64; 3]> {
-        let v: Vec<f64> = p.split(',').map(|x| x.trim().parse::<f64>().ok().filter(|v| v.is_finite())).collect::<Option<_>>()?;
-        (v.len() == 3).then(|| [v[0], v[1], v[2]])
+    // (the point, whether its Z is a height above the ground: `+H`)
+    let point = |p: &str| -> Option<([f64; 3], bool)> {
+        let c: Vec<&str> = p.split(',').map(str::trim).collect();
+        let rel = c.get(2).is_some_and(|z| z.starts_with('+'));
+        let v: Vec<f64> = c.iter().map(|x| x.parse::<f64>().ok().filter(|v| v.is_finite())).collect::<Option<_>>()?;
+        (v.len() == 3 && !(rel && v[2] < 0.0)).then(|| ([v[0], v[1], v[2]], rel))
     };
-    let Some(eye) = point(parts[0]) else { return Some(bad("the eye is not three numbers X,Y,Z")) };
-    let Some(target) = point(parts[1]) else { return Some(bad("the target is not three numbers TX,TY,TZ")) };
+    let Some((eye, eye_above_ground)) = point(parts[0]) else { return Some(bad("the eye is not three numbers X,Y,Z (Z an elevation, or +H a height above the ground)")) };
+    let Some((target, target_above_ground)) = point(parts[1]) else { return Some(bad("the target is not three numbers TX,TY,TZ (TZ an elevation, or +H a height above the ground)")) };
     let fov_deg = match parts.get(2) {
         None => EYE_DEFAULT_FOV_DEG,
         Some(f) => match f.trim().parse::<f64>() {
@@ -98,24 +108,37 @@ fn parse_eye(s: &str) -> Option<Result<EyeCamera, String>> {
             _ => return Some(bad(&format!("field of view `{f}` is not 5–150 degrees"))),
         },
     };
-    if (0..3).map(|k| (eye[k] - target[k]).powi(2)).sum::<f64>() < 1e-6 {
+    // (an eye and a target given one by elevation and one by height above the ground are
+    // told apart on the site, [`check_eye`])
+    if eye_above_ground == target_above_ground && (0..3).map(|k| (eye[k] - target[k]).powi(2)).sum::<f64>() < 1e-6 {
         return Some(bad("the eye and the target are the same point"));
     }
-    Some(Ok(EyeCamera { eye, target, fov_deg }))
+    Some(Ok(EyeCamera { eye, target, fov_deg, eye_above_ground, target_above_ground }))
 }
 
 /// The camera of `e` on `site`, checked: the eye over the site (0 ≤ X ≤ width, 0 ≤ Y ≤ height)
 /// and at least 0.1 m above its ground there ([`sylva::conditions::SiteConditions::elevation_at`]).
+/// A Z given as `+H` is the ground's elevation at that point's X, Y plus H (the target's
+/// ground where it lies on the site, else the nearest edge's, as `elevation_at` reads it).
 ///
 /// Errors: naming `--camera`, the site's extent or the ground's elevation under the eye.
 pub fn check_eye(e: &EyeCamera, site: &sylva::conditions::SiteConditions) -> anyhow::Result<sylva::render::camera::Camera> {
     let (w, h) = site.extent_m();
     let [x, y, z] = e.eye;
-    anyhow::ensure!((0.0..=w).contains(&x) && (0.0..=h).contains(&y), "--camera eye:{x},{y},{z}: the eye is outside the site; expected X 0–{w:.1} m and Y 0–{h:.1} m (site metres from the terrain's south-west corner, as the inventory's x_m, y_m)");
+    let zs = if e.eye_above_ground { format!("+{z}") } else { format!("{z}") };
+    anyhow::ensure!((0.0..=w).contains(&x) && (0.0..=h).contains(&y), "--camera eye:{x},{y},{zs}: the eye is outside the site; expected X 0–{w:.1} m and Y 0–{h:.1} m (site metres from the terrain's south-west corner, as the inventory's x_m, y_m)");
     let g = site.elevation_at(x, y) as f64;
-    anyhow::ensure!(z >= g + 0.1, "--camera eye:{x},{y},{z}: the eye is under the ground (the ground there is at {g:.1} m); expected Z at least {:.1} m (z is the elevation, as the DEM's heights: e.g. {:.1} for a person's eye 1.7 m above the ground)", g + 0.1, g + 1.7);
+    if e.eye_above_ground {
+        anyhow::ensure!(z >= 0.1, "--camera eye:{x},{y},{zs}: the eye is {z} m above the ground (at {g:.1} m there); expected +H with H at least 0.1 m, e.g. +1.7 for a person's eye");
+    } else {
+        anyhow::ensure!(z >= g + 0.1, "--camera eye:{x},{y},{z}: the eye is under the ground (the ground there is at {g:.1} m); expected Z at least {:.1} m (z is the elevation, as the DEM's heights: e.g. {:.1} for a person's eye 1.7 m above the ground, or +1.7)", g + 0.1, g + 1.7);
+    }
+    let eye = [x, y, if e.eye_above_ground { g + z } else { z }];
+    let [tx, ty, tz] = e.target;
+    let target = [tx, ty, if e.target_above_ground { site.elevation_at(tx.clamp(0.0, w), ty.clamp(0.0, h)) as f64 + tz } else { tz }];
+    anyhow::ensure!((0..3).map(|k| (eye[k] - target[k]).powi(2)).sum::<f64>() >= 1e-6, "--camera: the eye and the target are the same point on the site ({:.1}, {:.1}, {:.1}); expected {EYE_FORM}", eye[0], eye[1], eye[2]);
     let f = |p: [f64; 3]| [p[0] as f32, p[1] as f32, p[2] as f32];
-    let mut cam = sylva::render::camera::Camera::look_at(f(e.eye), f(e.target), e.fov_deg as f32);
+    let mut cam = sylva::render::camera::Camera::look_at(f(eye), f(target), e.fov_deg as f32);
     cam.near = cam.near.min(0.1).max(0.05);
     Ok(cam)
 }
@@ -165,7 +188,8 @@ pub struct RenderArgs {
     /// size's smaller side; `--stats` gives gap_fraction, openness and simulated_light); or
     /// `eye:X,Y,Z:TX,TY,TZ[:FOV]`, a camera of one's own: the eye and the point looked at in
     /// site metres (x, y from the terrain's south-west corner as the inventory's x_m, y_m; z the
-    /// elevation, as the DEM's heights), the vertical field of view in degrees (default 50).
+    /// elevation, as the DEM's heights, or `+H` for H metres above the ground at that x, y, e.g.
+    /// `eye:380,330,+1.7:450,160,+10`), the vertical field of view in degrees (default 50).
     #[arg(long, default_value = "oblique", value_parser = parse_render_camera)]
     pub camera: RenderCamera,
     /// Season of the foliage: spring, summer, autumn (or fall), winter.
@@ -221,7 +245,7 @@ pub struct TimelapseArgs {
     /// Frames per second (1–100; checked before any frame is drawn).
     #[arg(long, default_value_t = 12.0, value_parser = parse_fps)]
     pub fps: f32,
-    /// Interpolated frames between consecutive snapshots (0–50; 0: one frame per snapshot).
+    /// Interpolated frames between snapshots a regular interval apart (0–50; 0: one frame per snapshot); shorter or longer intervals get frames in proportion to their years.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(0..=50))]
     pub frames_between: u32,
     /// Frame size WIDTHxHEIGHT.

@@ -1,7 +1,8 @@
 //! `sylva run [SCENARIO]`: the main job ([`sylva::job::main_job::main_job`]; this module parses
 //! the arguments, draws progress and handles Ctrl-C). Derives the living conditions of the scenario's
 //! terrain, simulates the forest, and writes maps, the stand table and its plot, inventory
-//! snapshots, stills from an oblique and a top-down camera at years 0, 10, 25, 50, 100 and 150,
+//! snapshots, stills from an oblique and a top-down camera at years 0, 10, 25, 50, 100 and 150
+//! (or the scenario's `still_years`, `--still-years`),
 //! a timelapse GIF (MP4 too when ffmpeg is installed) and `summary.md`.
 
 use std::path::PathBuf;
@@ -22,13 +23,19 @@ pub struct Args {
     // to pass `-- -3`, which names a scenario; round 30's trial)
     #[arg(long, allow_negative_numbers = true, value_parser = clap::value_parser!(u32).range(1..=10_000))]
     pub years: Option<u32>,
+    /// Years of the stills from afar, comma-separated and ascending, within the run (e.g.
+    /// `20,40`); overrides the scenario's `still_years` (default: 0, 10, 25, 50, 100 and 150 as
+    /// far as the run reaches). The last year is drawn too. Each is a snapshot year (maps, key
+    /// frame).
+    #[arg(long, value_parser = parse_years, value_name = "Y,Y,...")]
+    pub still_years: Option<YearList>,
     /// Size of the stills WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720", value_parser = super::render::parse_size)]
     pub size: (u32, u32),
     /// Size of the timelapse frames WIDTHxHEIGHT.
     #[arg(long, default_value = "640x360", value_parser = super::render::parse_size)]
     pub timelapse_size: (u32, u32),
-    /// Interpolated timelapse frames between consecutive snapshots (0–50; 0: one per snapshot).
+    /// Interpolated timelapse frames between snapshots a regular interval apart (0–50; 0: one per snapshot); shorter or longer intervals get frames in proportion to their years.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=50))]
     pub frames_between: u32,
     /// Timelapse frames per second (1–100).
@@ -47,6 +54,18 @@ pub struct Args {
     pub inventory: sylva::output::inventory::InventoryFormat,
 }
 
+/// The years of `--still-years` (one option value, comma-separated).
+#[derive(Debug, Clone, PartialEq)]
+pub struct YearList(pub Vec<u32>);
+
+/// Parses `--still-years`: whole numbers 0–10,000 separated by commas (ascending and within the
+/// run is checked with the scenario).
+fn parse_years(s: &str) -> Result<YearList, String> {
+    s.split(',')
+        .map(|y| y.trim().parse::<u32>().ok().filter(|&y| y <= 10_000).ok_or_else(|| format!("`{s}`: expected years as whole numbers 0–10000 separated by commas, e.g. 20,40 (`{}` is not one)", y.trim())))
+        .collect::<Result<Vec<u32>, String>>()
+        .map(YearList)
+}
 
 /// Runs the main job.
 pub fn run(a: Args) -> anyhow::Result<()> {
@@ -55,9 +74,10 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         Some(p) => Scenario::load(p)?,
         None => main_job::default_scenario()?,
     };
-    if let Some(y) = a.years {
-        sc.years = y;
-        sc.validate("--years")?;
+    let warned = super::simulate::apply_years(&mut sc, a.years, false)?;
+    if let Some(ys) = &a.still_years {
+        sc.still_years = Some(ys.0.clone());
+        sc.validate("--still-years")?;
     }
     super::check_out_dir(&a.out, "--out")?;
     let _lock = super::lock_run_dir(&a.out, "--out")?;
@@ -79,6 +99,9 @@ pub fn run(a: Args) -> anyhow::Result<()> {
     println!("{}", summary.coordinates_md());
     if summary.film.as_ref().is_some_and(|f| !f.mp4) {
         println!("timelapse.gif written; no MP4: ffmpeg is not on PATH");
+    }
+    for w in &warned {
+        eprintln!("warning: {w} (also in summary.md)");
     }
     println!("outputs in {} (see summary.md)", a.out.display());
     Ok(())

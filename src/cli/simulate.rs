@@ -281,14 +281,50 @@ pub fn note_replaced_run(out: &Path) {
     }
 }
 
+/// Applies `--years` (`years`) to `sc` and checks what can never happen in the run: with the
+/// scenario's own `years` (or a longer `--years`), a fresh run refuses a `[[management]]` entry
+/// whose years all lie after the run's end ([`Scenario::refuse_entries_never_acting`]); a run
+/// that `--years` shortened says so on stderr (`warning: …`, again under the run's summary
+/// line; `sylva run` also in `summary.md`) and goes on; a resumed one (whose `scenario.toml`
+/// records the years run) neither refuses nor warns. Still years
+/// beyond a shortened run are dropped with a warning. Returns the warnings printed.
+///
+/// Errors: the scenario's validation under `--years`; the refusal naming the scenario file,
+/// the entry's field, its year and the run's last year.
+pub fn apply_years(sc: &mut Scenario, years: Option<u32>, resume: bool) -> anyhow::Result<Vec<String>> {
+    let own = sc.years;
+    let mut said = Vec::new();
+    if let Some(y) = years {
+        sc.years = y;
+        if let Some(ys) = sc.still_years.as_mut() {
+            let beyond: Vec<String> = ys.iter().filter(|&&s| s > y).map(|s| s.to_string()).collect();
+            if !beyond.is_empty() {
+                ys.retain(|&s| s <= y);
+                said.push(format!("still_years {} of {} lie after the run's last year {y} (--years): no stills of them", beyond.join(", "), sc.context()));
+            }
+        }
+        sc.validate("--years")?;
+    }
+    // (a resumed run said so when it started, and its checkpoint decides what may change)
+    if !resume && sc.years >= own {
+        sc.refuse_entries_never_acting(&sc.context())?;
+    } else if !resume {
+        said.extend(sc.never_acting_warnings().into_iter().map(|w| format!("{}: {w}", sc.context())));
+    }
+    // once, by rank 0 of an `mpirun` (each rank reads the scenario)
+    if !super::mpi_rank_from_env().is_some_and(|r| r != "0") {
+        for w in &said {
+            eprintln!("warning: {w}");
+        }
+    }
+    Ok(said)
+}
+
 /// Runs a simulation.
 pub fn run(a: Args) -> anyhow::Result<()> {
     super::refuse_mpi_launch("simulate", true)?;
     let mut sc = Scenario::load(&a.scenario)?;
-    if let Some(y) = a.years {
-        sc.years = y;
-        sc.validate("--years")?;
-    }
+    let warned = apply_years(&mut sc, a.years, a.resume)?;
     super::check_out_dir(&a.out, "--out")?;
     let _lock = super::lock_run_dir(&a.out, "--out")?;
     let run_species = run_species_dir(&a.out);
@@ -328,8 +364,16 @@ pub fn run(a: Args) -> anyhow::Result<()> {
         _ => Stepping::One,
     };
     let go = || simulate(&sc, site, &lib, a.out.clone(), a.resume, a.inventory, a.gpkg, stepping());
-    match a.threads {
+    let r = match a.threads {
         Some(n) => rayon::ThreadPoolBuilder::new().num_threads(n.max(1)).build().context("thread pool")?.install(go),
         None => go(),
+    };
+    // said again under the run's summary line, where it is read (trial 40: warnings were
+    // easy to miss among the log lines)
+    if r.is_ok() {
+        for w in &warned {
+            eprintln!("warning: {w}");
+        }
     }
+    r
 }

@@ -40,9 +40,24 @@ pub fn default_scenario() -> crate::Result<Scenario> {
     Scenario::from_toml_str(DEFAULT_SCENARIO, DEFAULT_SCENARIO_SOURCE)
 }
 
-/// Years at which [`main_job`] renders stills (those within the run; the last snapshot's year
-/// is always added).
+/// Years at which [`main_job`] renders stills when the scenario names none (`still_years`;
+/// those that are snapshot years of the run; the last snapshot's year is always added).
 pub const STILL_YEARS: [u32; 6] = [0, 10, 25, 50, 100, 150];
+
+/// The years [`main_job`] draws stills from afar at, ascending: the scenario's `still_years`
+/// (else [`STILL_YEARS`]) that have a key frame (`key_years`, the run's plain snapshots), and
+/// the last key year.
+pub fn still_years(sc: &Scenario, key_years: &[u32]) -> Vec<u32> {
+    let wanted: &[u32] = sc.still_years.as_deref().unwrap_or(&STILL_YEARS);
+    let mut years: Vec<u32> = wanted.iter().copied().filter(|y| key_years.contains(y)).collect();
+    if let Some(&last) = key_years.iter().max() {
+        if !years.contains(&last) {
+            years.push(last);
+        }
+    }
+    years.sort_unstable();
+    years
+}
 
 /// When an output of a run is written.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -62,8 +77,8 @@ pub enum When {
     Season,
     /// At every checkpoint: every `checkpoint_every` years, the last year, a year stopped at.
     Checkpoint,
-    /// After the simulation, once per still year ([`STILL_YEARS`] within the run and the last
-    /// snapshot's year); `sylva run` only.
+    /// After the simulation, once per still year ([`still_years`]: the scenario's `still_years`
+    /// or [`STILL_YEARS`] within the run, and the last snapshot's year); `sylva run` only.
     StillYears,
     /// Once after the simulation; `sylva run` only.
     End,
@@ -676,12 +691,7 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     // the stills from afar draw instanced prototypes; the close-up adapts its near field
     let adapt = stage.set_adapt(None);
     let key_years = keys.years();
-    let mut years: Vec<u32> = STILL_YEARS.iter().copied().filter(|y| key_years.contains(y)).collect();
-    if let Some(&last) = key_years.iter().max() {
-        if !years.contains(&last) {
-            years.push(last);
-        }
-    }
+    let years = still_years(sc, &key_years);
     sink(&Event::Stills { count: years.len() * 2, adapter: &stage.renderer.adapter_description() });
     let stills_dir = out.join("stills");
     std::fs::create_dir_all(&stills_dir).map_err(|e| Error::io(&stills_dir, e))?;
@@ -795,6 +805,16 @@ fn write_summary_md(out: &Path, s: &MainJobSummary) -> Result<()> {
     let mut md = String::new();
     let _ = writeln!(md, "# {}\n", sc.name);
     let _ = writeln!(md, "{} years, seed {}, {} species in the pool. Scenario as run: `scenario.toml`.\n", sc.years, sc.seed, if sc.species.is_empty() { "all".to_string() } else { sc.species.len().to_string() });
+    // entries a run shortened with `--years` never reaches (the command line says so too;
+    // trial 40: a log line was easy to miss)
+    let never = sc.never_acting_warnings();
+    if !never.is_empty() {
+        let _ = writeln!(md, "## Warnings\n");
+        for w in &never {
+            let _ = writeln!(md, "- {w}");
+        }
+        md.push('\n');
+    }
     let _ = writeln!(md, "## Result\n\n{table}\n{shares}");
     let _ = writeln!(md, "## Site and coordinates\n\n{}", s.coordinates_md());
     let _ = writeln!(md, "## Stand development\n\n![stand table](stand_table.png)\n\nData: `stand_table.csv`; inventories: `inventory/`.\n");
@@ -916,5 +936,34 @@ mod tests {
     fn default_scenario_parses() {
         let sc = default_scenario().unwrap();
         assert!(sc.years > 0 && !sc.name.is_empty());
+    }
+
+    /// Round 41 (trial 40, item 5): `still_years` chooses the stills' years; each is a snapshot
+    /// year (so it has a key frame); out of the run, unsorted or twice is refused naming the
+    /// field; without it the default years and the default run's snapshots are unchanged.
+    #[test]
+    fn still_years_choose_the_stills_and_are_snapshot_years() {
+        let mut sc = default_scenario().unwrap();
+        let d: Vec<u32> = (0..=sc.years).filter(|&y| sc.snapshot_year(y)).collect();
+        assert_eq!(d, (0..=150).step_by(5).collect::<Vec<u32>>(), "the default run's snapshots");
+        assert_eq!(still_years(&sc, &d), vec![0, 10, 25, 50, 100, 150]);
+        // trial 40's park: 60 years, snapshots every 10, a thinning snapshot at 55
+        sc.years = 60;
+        sc.snapshot_every = 10;
+        let keys = [0, 10, 20, 30, 40, 50, 55, 60];
+        assert_eq!(still_years(&sc, &keys), vec![0, 10, 50, 60]);
+        sc.still_years = Some(vec![20, 35, 40]);
+        sc.validate("park.toml").unwrap();
+        assert!(sc.snapshot_year(35) && !sc.snapshot_year(45));
+        assert_eq!(still_years(&sc, &[0, 10, 20, 30, 35, 40, 50, 55, 60]), vec![20, 35, 40, 60]);
+        for (ys, field, want) in [(vec![20, 70], "still_years[1]", "0–60"), (vec![40, 20], "still_years[1]", "ascending"), (vec![20, 20], "still_years[1]", "each once")] {
+            sc.still_years = Some(ys);
+            let e = sc.validate("park.toml").unwrap_err().to_string();
+            assert!(e.contains("park.toml") && e.contains(field) && e.contains(want), "{e}");
+        }
+        // written to and read from the run's scenario.toml
+        sc.still_years = Some(vec![20, 40]);
+        let back = Scenario::from_toml_str(&sc.to_toml_string().unwrap(), "back").unwrap();
+        assert_eq!(back.still_years, Some(vec![20, 40]));
     }
 }

@@ -544,7 +544,9 @@ pub struct TimelapseOptions {
     pub height: u32,
     /// Frames per second of the GIF/MP4.
     pub fps: f32,
-    /// Interpolated frames between consecutive snapshots (0–50; 0: one frame per snapshot).
+    /// Interpolated frames between consecutive snapshots a regular interval apart (0–50; 0: one
+    /// frame per snapshot); shorter and longer intervals get frames in proportion
+    /// ([`frame_steps`]).
     pub frames_between: u32,
     /// Camera: a preset, or `None` for a slow orbit (a quarter turn over the film).
     pub camera: Option<CameraPreset>,
@@ -586,6 +588,31 @@ pub fn timelapse(stage: &mut Stage, run_dir: &Path, frames_dir: &Path, out_gif: 
     )
 }
 
+/// Most frames one gap between key frames gets in [`frame_steps`], in multiples of a regular
+/// gap's (`frames_between + 1`): a long gap (a run's first and last year alone) does not make
+/// an endless film.
+pub const MAX_GAP_STEPS: u32 = 10;
+
+/// The frames of a film's gaps between consecutive key-frame years `years` (ascending): gap `j`
+/// (`years[j]` to `years[j + 1]`) gets `(frames_between + 1) · gap / regular` frames, rounded,
+/// at least 1 and at most [`MAX_GAP_STEPS`] times `frames_between + 1`, the last of them the
+/// key frame; `regular` is the most frequent gap (the largest of equally frequent ones): the
+/// snapshot interval of a run whose key frames follow `snapshot_every`. So film time follows
+/// the years (round 41, trial 40: the thinning snapshot of year 55 between those of 50 and 60
+/// got as much film as a decade); where every gap is the same, as in a run without management,
+/// each gets `frames_between + 1`, as before.
+pub fn frame_steps(years: &[u32], frames_between: u32) -> Vec<usize> {
+    let gaps: Vec<u32> = years.windows(2).map(|w| w[1].saturating_sub(w[0]).max(1)).collect();
+    let mut counts: std::collections::BTreeMap<u32, usize> = std::collections::BTreeMap::new();
+    for &g in &gaps {
+        *counts.entry(g).or_insert(0) += 1;
+    }
+    // the most frequent gap, ties to the larger (BTreeMap order: the last of the maxima)
+    let regular = counts.iter().fold((1u32, 0usize), |best, (&g, &n)| if n >= best.1 { (g, n) } else { best }).0;
+    let per = frames_between as f64 + 1.0;
+    gaps.iter().map(|&g| (per * g as f64 / regular as f64).round().clamp(1.0, per * MAX_GAP_STEPS as f64) as usize).collect()
+}
+
 /// [`timelapse`] from key frames given by `key(stage, k)`: the render instances (in
 /// `opts.season`) of the snapshot of `years[k]`, asked for once each, in order, e.g. from
 /// instances the main job kept from the in-memory world at each snapshot.
@@ -599,8 +626,8 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
     std::fs::create_dir_all(frames_dir).map_err(|e| Error::io(frames_dir, e))?;
     // frames of an earlier, longer film would otherwise remain beside the new ones
     remove_frames(frames_dir)?;
-    let steps = opts.frames_between as usize + 1;
-    let total = if snaps.len() == 1 { 1 } else { (snaps.len() - 1) * steps + 1 };
+    let steps_of = frame_steps(snaps, opts.frames_between);
+    let total = 1 + steps_of.iter().sum::<usize>();
     // the GIF is encoded as the frames come (issue 34: not every frame held to the end)
     let mut gif = crate::output::pictures::GifWriter::new(out_gif, opts.fps)?;
     let mut frames = 0usize;
@@ -623,6 +650,7 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
     for (j, w) in snaps.windows(2).enumerate() {
         let (y0, y1) = (&w[0], &w[1]);
         let next = key(stage, j + 1)?;
+        let steps = steps_of[j];
         for s in 1..=steps {
             k += 1;
             let t = s as f32 / steps as f32;
@@ -637,4 +665,27 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
     let mp4 = out_gif.with_extension("mp4");
     let wrote_mp4 = crate::output::pictures::write_mp4(frames_dir, opts.fps, &mp4).unwrap_or(false);
     Ok((frames, wrote_mp4))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::frame_steps;
+
+    /// Round 41 (trial 40, item 5): film time follows the years between key frames.
+    #[test]
+    fn film_time_follows_the_years_between_key_frames() {
+        // key frames every 10 years and a thinning snapshot at 55: half a decade's film each
+        let y = [0, 10, 20, 30, 40, 50, 55, 60];
+        assert_eq!(frame_steps(&y, 1), vec![2, 2, 2, 2, 2, 1, 1]);
+        assert_eq!(frame_steps(&y, 3), vec![4, 4, 4, 4, 4, 2, 2]);
+        // the default run's key frames every 5 years: every gap as before
+        let d: Vec<u32> = (0..=150).step_by(5).collect();
+        assert!(frame_steps(&d, 1).iter().all(|&s| s == 2));
+        // a longer gap gets more frames, at most MAX_GAP_STEPS regular gaps' worth
+        assert_eq!(frame_steps(&[0, 10, 20, 40], 1), vec![2, 2, 4]);
+        assert_eq!(frame_steps(&[0, 1, 2, 1000], 0), vec![1, 1, 10]);
+        // equally frequent gaps: the larger is the regular one
+        assert_eq!(frame_steps(&[0, 50, 55], 1), vec![2, 1]);
+        assert!(frame_steps(&[7], 1).is_empty());
+    }
 }

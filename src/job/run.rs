@@ -306,7 +306,7 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
     stand_table::write_stand_table(&dir.join("stand_table.csv"), rows, &names, w.site.area_ha)?;
     // a run with `[[management]]`: the figures of each entry's area (issue 35 round 38)
     if rows.iter().any(|r| !r.management.is_empty()) {
-        stand_table::write_management_table(&dir.join(MANAGEMENT_TABLE), rows)?;
+        stand_table::write_management_table(&dir.join(MANAGEMENT_TABLE), rows, &names)?;
     }
     if png && rows.len() >= 2 {
         plot::plot_stand_table(&dir.join("stand_table.png"), rows, w)?;

@@ -19,12 +19,7 @@ use std::path::Path;
 /// thickest.
 pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     let mut s = String::from("year,stems_ha,seedlings_ha,regeneration_ha,basal_area_m2_ha,mean_height_m,top_height_m,qmd_cm,stems_7cm_ha,qmd_7cm_cm");
-    for sp in species {
-        let _ = write!(s, ",ba_share_{sp}");
-    }
-    for sp in species {
-        let _ = write!(s, ",stem_share_{sp}");
-    }
+    share_columns(&mut s, species);
     s.push_str(",regen_germinated,regen_recruited");
     for c in crate::sim::cohorts::RegenDeath::ALL {
         let _ = write!(s, ",regen_deaths_{}", c.name());
@@ -82,29 +77,77 @@ pub fn write_stand_table(path: &Path, rows: &[StandRow], species: &[&str], area_
 /// CSV text of the management table: one row per year and `[[management]]` entry
 /// ([`crate::sim::stats::EntryRow`]), years ascending, entries in scenario order:
 /// `year,entry,kind,method,area_ha,stems_ha,basal_area_m2_ha,volume_m3_ha,qmd_cm,top_height_m,
-/// harvest_stems_ha,harvest_volume_m3_ha` — the entry's index (0 the first) and kind, its
-/// area's unmasked hectares, and over the trees standing in that area at the year's end the
-/// stand table's figures per hectare of the area (stems ≥ 1.3 m, basal area, volume of stems
-/// ≥ 7 cm DBH, quadratic mean DBH, top height), then the stems and volume this entry removed
-/// in the year per hectare of its area. Decimals as the stand table's. Just the header for rows
-/// without management.
-pub fn management_table_csv(rows: &[StandRow]) -> String {
-    let mut s = String::from("year,entry,kind,method,area_ha,stems_ha,basal_area_m2_ha,volume_m3_ha,qmd_cm,top_height_m,harvest_stems_ha,harvest_volume_m3_ha\n");
+/// harvest_stems_ha,harvest_volume_m3_ha,name,harvest_basal_area_m2_ha,cut_saplings_ha,
+/// ba_share_<sp>…,stem_share_<sp>…` — the entry's index (0 the first) and kind, its area's
+/// unmasked hectares, and over the trees standing in that area at the year's end the stand
+/// table's figures per hectare of the area (stems ≥ 1.3 m, basal area, volume of stems ≥ 7 cm
+/// DBH, quadratic mean DBH, top height: the area's, so entries on the same parcel show the same
+/// standing figures), then what this entry removed in the year per hectare of its area (stems,
+/// volume); after them (round 41, trial 40) the entry's name
+/// ([`crate::sim::management::Management::display_name`]; quoted as RFC 4180 says where it holds
+/// a comma or quote), the basal area it removed (m²/ha), the sapling stems it cut (`keep_open`,
+/// per ha) and the species mix standing in the area: each pool species' share of the basal area
+/// and of the stems (`species` = pool ids in pool order, as the stand table's). Decimals as the
+/// stand table's. Just the header for rows without management.
+pub fn management_table_csv(rows: &[StandRow], species: &[&str]) -> String {
+    let mut s = String::from("year,entry,kind,method,area_ha,stems_ha,basal_area_m2_ha,volume_m3_ha,qmd_cm,top_height_m,harvest_stems_ha,harvest_volume_m3_ha,name,harvest_basal_area_m2_ha,cut_saplings_ha");
+    share_columns(&mut s, species);
+    s.push('\n');
     for r in rows {
         for e in &r.management {
-            let _ = writeln!(
+            let _ = write!(
                 s,
-                "{},{},{},{},{:.4},{:.1},{:.3},{:.2},{:.2},{:.2},{:.1},{:.2}",
-                r.year, e.entry, e.kind, e.method, e.area_ha, e.stems_ha, e.basal_area_m2_ha, e.volume_m3_ha, e.qmd_cm, e.top_height_m, e.harvest_stems_ha, e.harvest_volume_m3_ha
+                "{},{},{},{},{:.4},{:.1},{:.3},{:.2},{:.2},{:.2},{:.1},{:.2},{},{:.3},{:.1}",
+                r.year,
+                e.entry,
+                e.kind,
+                e.method,
+                e.area_ha,
+                e.stems_ha,
+                e.basal_area_m2_ha,
+                e.volume_m3_ha,
+                e.qmd_cm,
+                e.top_height_m,
+                e.harvest_stems_ha,
+                e.harvest_volume_m3_ha,
+                csv_field(&e.name),
+                e.harvest_basal_area_m2_ha,
+                e.cut_saplings_ha
             );
+            for k in 0..species.len() {
+                let _ = write!(s, ",{:.4}", e.ba_share.get(k).copied().unwrap_or(0.0));
+            }
+            for k in 0..species.len() {
+                let _ = write!(s, ",{:.4}", e.stem_share.get(k).copied().unwrap_or(0.0));
+            }
+            s.push('\n');
         }
     }
     s
 }
 
+/// Appends the species-share columns' names: `,ba_share_<sp>…,stem_share_<sp>…`.
+fn share_columns(s: &mut String, species: &[&str]) {
+    for kind in ["ba_share", "stem_share"] {
+        for sp in species {
+            let _ = write!(s, ",{kind}_{sp}");
+        }
+    }
+}
+
+/// A CSV field as RFC 4180 §2 writes it: as it is, or in double quotes (quotes doubled) where it
+/// holds a comma, a double quote or a line break.
+fn csv_field(v: &str) -> String {
+    if v.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", v.replace('"', "\"\""))
+    } else {
+        v.to_string()
+    }
+}
+
 /// Writes the management table ([`management_table_csv`]) atomically.
 ///
 /// Errors: [`super::OutputError::Io`] naming `path`.
-pub fn write_management_table(path: &Path, rows: &[StandRow]) -> Result<()> {
-    crate::output::write_atomic(path, management_table_csv(rows).as_bytes())
+pub fn write_management_table(path: &Path, rows: &[StandRow], species: &[&str]) -> Result<()> {
+    crate::output::write_atomic(path, management_table_csv(rows, species).as_bytes())
 }

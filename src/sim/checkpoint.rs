@@ -40,8 +40,10 @@ const PLAIN_BASE: u32 = 6;
 /// The layout base of a checkpoint of a run with `[[management]]`: [`LAYOUT_BASE`]'s layout and
 /// the management table's rows after the stand table (issue 35 round 38). Written only by such
 /// runs, so every other run keeps layout 7's bytes, and a Sylva before it refuses a managed
-/// run's checkpoint naming both versions (rather than as corrupt).
-const MANAGED_BASE: u32 = 8;
+/// run's checkpoint naming both versions (rather than as corrupt). 9 (round 41): each row also
+/// holds the entry's name, the basal area it removed, the saplings it cut and the species
+/// shares of its area (a managed checkpoint of base 8 is refused, naming its version).
+const MANAGED_BASE: u32 = 9;
 
 /// zstd level of the checkpoint (1: 36.2 MB for the default run's 64 MB, 0.6 s; 3 saved 0.7 %
 /// more for 1.6 times the time).
@@ -592,6 +594,16 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
                 for v in [e.area_ha, e.stems_ha, e.basal_area_m2_ha, e.volume_m3_ha, e.qmd_cm, e.top_height_m, e.harvest_stems_ha, e.harvest_volume_m3_ha] {
                     o.f64(v);
                 }
+                // layout 9 (round 41)
+                o.str(&e.name);
+                o.f64(e.harvest_basal_area_m2_ha);
+                o.f64(e.cut_saplings_ha);
+                for shares in [&e.ba_share, &e.stem_share] {
+                    o.u64(shares.len() as u64);
+                    for &v in shares {
+                        o.f64(v);
+                    }
+                }
             }
         }
     }
@@ -771,7 +783,34 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
                 for x in v.iter_mut() {
                     *x = r.f64()?;
                 }
-                row.management.push(super::stats::EntryRow { entry, kind, method, area_ha: v[0], stems_ha: v[1], basal_area_m2_ha: v[2], volume_m3_ha: v[3], qmd_cm: v[4], top_height_m: v[5], harvest_stems_ha: v[6], harvest_volume_m3_ha: v[7] });
+                let name = r.str()?;
+                let (harvest_basal_area_m2_ha, cut_saplings_ha) = (r.f64()?, r.f64()?);
+                let mut shares = [Vec::new(), Vec::new()];
+                for sh in shares.iter_mut() {
+                    let k = r.count(8)?;
+                    for _ in 0..k {
+                        sh.push(r.f64()?);
+                    }
+                }
+                let [ba_share, stem_share] = shares;
+                row.management.push(super::stats::EntryRow {
+                    entry,
+                    kind,
+                    method,
+                    area_ha: v[0],
+                    stems_ha: v[1],
+                    basal_area_m2_ha: v[2],
+                    volume_m3_ha: v[3],
+                    qmd_cm: v[4],
+                    top_height_m: v[5],
+                    harvest_stems_ha: v[6],
+                    harvest_volume_m3_ha: v[7],
+                    name,
+                    harvest_basal_area_m2_ha,
+                    cut_saplings_ha,
+                    ba_share,
+                    stem_share,
+                });
             }
         }
     }

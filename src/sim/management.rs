@@ -1,6 +1,8 @@
 //! Forest management in scenarios (`[[management]]` entries): thinnings, harvests and plantings,
 //! their areas (a rectangle, inline polygons or polygons of a GeoJSON or GeoPackage file) and
-//! their timing.
+//! their timing, and clearings kept open (`kind = "keep_open"`: every tree and sapling cohort
+//! taller than `max_height_m` in the area removed at each entry, so a designed clearing or a
+//! path does not grow over).
 //! [`Management`] is the entry as written; [`Operation`] the entry resolved against the site and
 //! the species library (its region's polygons in world metres, its area, its species), which the
 //! management phase ([`super::phases::management`]) carries out.
@@ -25,8 +27,19 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Management {
-    /// `"thinning"`, `"harvest"` or `"planting"`.
+    /// `"thinning"`, `"harvest"`, `"planting"` or `"keep_open"`.
     pub kind: String,
+    /// A name for the entry in `management_table.csv` (its `name` column; 1–64 characters, no
+    /// line breaks). When omitted: the filter's value where an `area_file` filter picks the
+    /// area (`filter = { property = "parcel", equals = "oak_park" }` → `oak_park`), else
+    /// `KIND#INDEX` (`thinning#4`): [`Management::display_name`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// Keep open: the height (m, 0–50) above which trees and the regeneration's sapling cohorts
+    /// (by their mean height) in the area are removed at each entry; 0 (the default) removes
+    /// every tree and cohort, a bare clearing; 1.5 keeps a low layer (a mown meadow's brush).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_height_m: Option<f64>,
     /// Thinning: `"from_below"` (smallest DBH first) or `"from_above"` (largest first).
     /// Harvest: `"clear_cut"` (every tree of the area) or `"patch"` (square patches).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -163,7 +176,7 @@ pub struct AreaFilter {
 /// a time (each is an individual; 5 M is about 2,000 ha at 2 m spacing).
 pub const MAX_PLANTED_TREES: u64 = 5_000_000;
 
-const KINDS: &str = "\"thinning\", \"harvest\" or \"planting\"";
+const KINDS: &str = "\"thinning\", \"harvest\", \"planting\" or \"keep_open\"";
 
 fn invalid(ctx: &str, i: usize, field: &str, value: impl ToString, expected: &str) -> Error {
     Error::Invalid { context: ctx.to_string(), field: format!("management[{i}].{field}"), value: value.to_string(), expected: expected.to_string() }
@@ -182,6 +195,14 @@ impl Management {
         let harvest_only = [("patch_size_m", self.patch_size_m.is_some()), ("share", self.share.is_some()), ("stages", self.stages.is_some())];
         let crop_only = [("crop_trees_ha", self.crop_trees_ha.is_some()), ("crop_tree_distance_m", self.crop_tree_distance_m.is_some())];
         let planting_only = [("mix", self.mix.is_some()), ("spacing_m", self.spacing_m.is_some()), ("age_yr", self.age_yr.is_some())];
+        if let Some(n) = &self.name {
+            if n.trim().is_empty() || n.chars().count() > 64 || n.contains(['\n', '\r']) {
+                return Err(bad("name", format!("{n:?}"), "a name of 1–64 characters on one line (it names the entry's rows in management_table.csv)"));
+            }
+        }
+        if self.kind != "keep_open" && self.max_height_m.is_some() {
+            return Err(bad("max_height_m", "given".into(), &format!("not with kind = \"{}\" (only with kind = \"keep_open\")", self.kind)));
+        }
         let refuse = |list: &[(&str, bool)], kind: &str| -> Result<()> {
             for (f, g) in list {
                 if *g {
@@ -303,6 +324,20 @@ impl Management {
                 if let Some(a) = self.age_yr {
                     if !(a.is_finite() && (0.0..=1000.0).contains(&a)) {
                         return Err(bad("age_yr", a.to_string(), "0–1000 years"));
+                    }
+                }
+            }
+            "keep_open" => {
+                refuse(&thinning_only, "kind = \"thinning\"")?;
+                refuse(&harvest_only, "kind = \"harvest\"")?;
+                refuse(&crop_only, "kind = \"thinning\", method = \"crop_trees\"")?;
+                refuse(&planting_only, "kind = \"planting\"")?;
+                if let Some(m) = method {
+                    return Err(bad("method", format!("{m:?}"), "no method for kind = \"keep_open\" (it removes every tree and sapling cohort taller than max_height_m)"));
+                }
+                if let Some(h) = self.max_height_m {
+                    if !(h.is_finite() && (0.0..=50.0).contains(&h)) {
+                        return Err(bad("max_height_m", h.to_string(), "0–50 m (the height above which trees and sapling cohorts are removed)"));
                     }
                 }
             }
@@ -436,6 +471,36 @@ impl Management {
             add(format!("stages[{k}].year"), g.year);
         }
         out
+    }
+
+    /// The entry's name in `management_table.csv`: its `name`; else, where an `area_file`
+    /// filter picks its area, the filter's value (a text without quotes, a number or boolean as
+    /// written: the parcel's attribute value); else `KIND#i` (`i` its index in the scenario, 0
+    /// the first).
+    pub fn display_name(&self, i: usize) -> String {
+        if let Some(n) = &self.name {
+            return n.clone();
+        }
+        match self.filter.as_ref().filter(|_| self.area_file.is_some()) {
+            Some(AreaFilter { equals: toml::Value::String(v), .. }) => v.clone(),
+            Some(f) => f.equals.to_string(),
+            None => format!("{}#{i}", self.kind),
+        }
+    }
+
+    /// The field naming the entry's first year ([`Management::first_year`]) and that year:
+    /// `year`, `years[0]`, `from_year` or `stages[0].year`.
+    pub fn first_year_field(&self) -> (String, u32) {
+        let f = if self.year.is_some() {
+            "year"
+        } else if self.years.is_some() {
+            "years[0]"
+        } else if self.from_year.is_some() {
+            "from_year"
+        } else {
+            "stages[0].year"
+        };
+        (f.to_string(), self.first_year())
     }
 
     /// The first year the entry acts in (its earliest listed year, `from_year` or first stage).
@@ -584,6 +649,13 @@ pub enum Action {
         size_m: f64,
         /// Share (0–1) per entry.
         share: f64,
+    },
+    /// Keep open: every tree taller than `max_height_m` (m) in the area, and every sapling
+    /// cohort of a light cell whose centre lies in it with a mean height above it, is removed
+    /// (`sim::phases::management`).
+    KeepOpen {
+        /// Height (m) above which trees and cohorts go.
+        max_height_m: f64,
     },
     /// A planted lattice.
     Planting {
@@ -1055,6 +1127,7 @@ pub fn resolve_by(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibr
             }
             ("harvest", Some("shelterwood")) => Action::Shelterwood { shares: m.stages.iter().flatten().map(|g| g.share).collect() },
             ("harvest", _) => Action::ClearCut,
+            ("keep_open", _) => Action::KeepOpen { max_height_m: m.max_height_m.unwrap_or(0.0) },
             _ => {
                 let mix = m.mix.clone().unwrap_or_default();
                 let total: f64 = mix.values().sum();

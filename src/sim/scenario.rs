@@ -40,6 +40,15 @@ pub struct Scenario {
     /// removed trees and a year stopped at get one whatever this is ([`Scenario::inventory_year`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub inventory_every: Option<u32>,
+    /// Years at which `sylva run` draws its stills from afar (`stills/year_NNNN_{oblique,topdown}.png`),
+    /// each 0 to `years`, ascending, each once (`sylva run --still-years` overrides it); the
+    /// run's last year is drawn too, with the close-up. Every still year is a snapshot year
+    /// ([`Scenario::snapshot_year`]: its maps and the film's key frame are written). Absent: the
+    /// years 0, 10, 25, 50, 100 and 150 that are snapshot years of the run
+    /// (`crate::job::main_job::STILL_YEARS`). Round 41 (trial 40: a 60-year design got stills
+    /// at 0, 10, 50 and 60, not the 20 and 40 it had inventories for).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub still_years: Option<Vec<u32>>,
     /// Also write snapshots after spring, summer and autumn of snapshot years.
     #[serde(default)]
     pub seasonal_snapshots: bool,
@@ -218,13 +227,62 @@ fn is_embedded_id(id: &str) -> bool {
 }
 
 impl Scenario {
-    /// Whether the scenario draws a design on its stand: a `[[management]]` planting or harvest
-    /// (parcels, patch cuts, clear-cuts). Its pictures then do not mirror the window's trees into
+    /// The `[[management]]` entries that can never act in this run: those whose first year
+    /// ([`super::management::Management::first_year`]) lies after the run's last year `years`
+    /// (a planting at year 80 of a 60-year run plants nothing). As `(index, field, year)`,
+    /// the field naming that first year (`year`, `years[0]`, `from_year`, `stages[0].year`).
+    pub fn entries_never_acting(&self) -> Vec<(usize, String, u32)> {
+        self.management
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| m.first_year() > self.years)
+            .map(|(i, m)| {
+                let (f, y) = m.first_year_field();
+                (i, f, y)
+            })
+            .collect()
+    }
+
+    /// Refuses entries that can never act in the run ([`Scenario::entries_never_acting`]; trial
+    /// 40: a planting whose only year lay past the end planted nothing and the run exited 0).
+    /// `sylva run` and `sylva simulate` call it for the scenario's own `years` (or a longer
+    /// `--years`); a run shortened with `--years` only warns ([`Scenario::never_acting_warnings`]).
+    ///
+    /// Errors: [`Error::Invalid`] naming `ctx`, `management[i].<field>` (the entry's first year),
+    /// that year and the run's last year.
+    pub fn refuse_entries_never_acting(&self, ctx: &str) -> Result<()> {
+        if let Some((i, f, y)) = self.entries_never_acting().into_iter().next() {
+            let m = &self.management[i];
+            return Err(invalid(
+                ctx,
+                &format!("management[{i}].{f}"),
+                y,
+                &format!("a year within the run, at most its last year {} (`years`): this {} entry (\"{}\") would never act; extend `years`, or move or remove the entry", self.years, m.kind, m.display_name(i)),
+            ));
+        }
+        Ok(())
+    }
+
+    /// One warning per entry that never acts in this run ([`Scenario::entries_never_acting`]),
+    /// for a run that `--years` shortened on purpose: `management[i].FIELD = Y (KIND "NAME")
+    /// lies after the run's last year N (--years): the entry never acts in this run`.
+    pub fn never_acting_warnings(&self) -> Vec<String> {
+        self.entries_never_acting()
+            .into_iter()
+            .map(|(i, f, y)| {
+                let m = &self.management[i];
+                format!("management[{i}].{f} = {y} ({} \"{}\") lies after the run's last year {} (--years): the entry never acts in this run", m.kind, m.display_name(i), self.years)
+            })
+            .collect()
+    }
+
+    /// Whether the scenario draws a design on its stand: a `[[management]]` planting, harvest or
+    /// clearing kept open (parcels, patch cuts, clear-cuts, `keep_open`). Its pictures then do not mirror the window's trees into
     /// the surroundings beyond a DEM window ([`crate::job::scene::Landscape::mirror_trees`]),
     /// which would copy its parcels onto the neighbours' land (trial 40, a landscape architect:
     /// "about 9 planted blocks for 5 polygons"). Thinnings alone keep the mirrors.
     pub fn designs_its_stand(&self) -> bool {
-        self.management.iter().any(|m| m.kind == "planting" || m.kind == "harvest")
+        self.management.iter().any(|m| m.kind == "planting" || m.kind == "harvest" || m.kind == "keep_open")
     }
 }
 
@@ -483,6 +541,7 @@ fn field_hint(key: &str) -> Option<&'static str> {
         "seed" => "the random seed, a whole number ≥ 0",
         "snapshot_every" => "years between snapshots (maps, key frames), a whole number ≥ 0 (0: only the first and last year)",
         "inventory_every" => "years between tree inventories, a whole number: a multiple of snapshot_every, or 0 for only the first and last year (omit it for every snapshot)",
+        "still_years" => "the years of the stills of `sylva run`, a list of whole numbers within the run, ascending, e.g. [20, 40]",
         "checkpoint_every" => "years between checkpoints, a whole number ≥ 0 (0: only at the end)",
         "light_cell_m" => "the light grid's cell size, a number 2–20 (m)",
         "seasonal_snapshots" => "true or false",
@@ -618,11 +677,11 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
         self.inventory_every.unwrap_or(self.snapshot_every)
     }
 
-    /// Whether year `y` (1..=years) is a scheduled snapshot year: every `snapshot_every` years
-    /// and the last (year 0 always has one; so do years whose management removed trees and a
+    /// Whether year `y` (1..=years) is a scheduled snapshot year: every `snapshot_every` years,
+    /// the `still_years` and the last (year 0 always has one; so do years whose management removed trees and a
     /// year stopped at, which the run driver adds).
     pub fn snapshot_year(&self, y: u32) -> bool {
-        y == 0 || y == self.years || (self.snapshot_every > 0 && y.is_multiple_of(self.snapshot_every))
+        y == 0 || y == self.years || (self.snapshot_every > 0 && y.is_multiple_of(self.snapshot_every)) || self.still_years.as_ref().is_some_and(|s| s.contains(&y))
     }
 
     /// Whether the scheduled snapshot of year `y` also writes the tree inventory and
@@ -759,6 +818,16 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
                     s => format!("a multiple of snapshot_every = {s} (e.g. {}, {}), or 0 for only the first and last year", s, 5 * s),
                 };
                 return Err(invalid(ctx, "inventory_every", n, &expected));
+            }
+        }
+        if let Some(ys) = &self.still_years {
+            for (k, &y) in ys.iter().enumerate() {
+                if y > self.years {
+                    return Err(invalid(ctx, &format!("still_years[{k}]"), y, &format!("a year within the run, 0–{} (its last year, `years`)", self.years)));
+                }
+                if k > 0 && y <= ys[k - 1] {
+                    return Err(invalid(ctx, &format!("still_years[{k}]"), y, &format!("a year after the previous one ({}): the years ascending, each once", ys[k - 1])));
+                }
             }
         }
         if !(self.light_cell_m >= 2.0 && self.light_cell_m <= 20.0) {

@@ -78,7 +78,10 @@ pub struct StandRow {
 /// management, per hectare of the area's unmasked ground (`Region::area_ha`), with the stand
 /// table's definitions (stems ≥ 1.3 m; volume of stems ≥ 7 cm DBH, [`stem_volume_m3`]; top
 /// height [`top_height_by`] over the area); the harvest figures are the trees this entry
-/// removed in the year (0 in other years and for plantings), per hectare of its area.
+/// removed in the year (0 in other years and for plantings), per hectare of its area. The
+/// columns after `harvest_volume_m3_ha` (round 41, trial 40) name the entry and give the
+/// basal area it removed, the sapling stems a `keep_open` entry cut and the species mix
+/// standing in the area.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct EntryRow {
     /// Index of the entry in the scenario's `[[management]]` list (0 the first).
@@ -104,13 +107,29 @@ pub struct EntryRow {
     pub harvest_stems_ha: f64,
     /// Stem volume (m³/ha of the area, DBH ≥ 7 cm) this entry removed in the year.
     pub harvest_volume_m3_ha: f64,
+    /// The entry's name ([`crate::sim::management::Management::display_name`]).
+    pub name: String,
+    /// Basal area (m²/ha of the area) of the stems (≥ 1.3 m) this entry removed in the year.
+    pub harvest_basal_area_m2_ha: f64,
+    /// Sapling stems (per ha of the area) of the regeneration layer's cohorts this entry
+    /// removed in the year (`keep_open` only; 0 for the other kinds).
+    pub cut_saplings_ha: f64,
+    /// Share (0–1) of each pool species (pool order) in the basal area of the stems standing in
+    /// the area (0 for every species where none stands).
+    pub ba_share: Vec<f64>,
+    /// Share (0–1) of each pool species (pool order) in the stems (≥ 1.3 m) standing in the
+    /// area.
+    pub stem_share: Vec<f64>,
 }
+
+pub use super::world::EntryHarvest;
 
 /// The management table's rows of a year ([`EntryRow`]): one per entry of `site.management`,
 /// from the sums over the trees in each entry's area (`sums`, [`RowSums::over_where`]), each
-/// area's top height (`h100`, m) and each entry's harvest of the year (`harvest`: stems ≥ 1.3 m
-/// and volume m³, [`harvest_sums`] over the trees it removed); all three in entry order.
-pub fn entry_rows(site: &Site, sums: &[RowSums], h100: &[f64], harvest: &[(u64, f64)]) -> Vec<EntryRow> {
+/// area's top height (`h100`, m) and each entry's harvest of the year (`harvest`: stems ≥ 1.3 m,
+/// their basal area and volume, [`entry_harvest`] over the trees it removed, and the saplings
+/// it cut); all three in entry order.
+pub fn entry_rows(site: &Site, sums: &[RowSums], h100: &[f64], harvest: &[EntryHarvest]) -> Vec<EntryRow> {
     site.management
         .iter()
         .enumerate()
@@ -118,7 +137,8 @@ pub fn entry_rows(site: &Site, sums: &[RowSums], h100: &[f64], harvest: &[(u64, 
             let a = op.region.area_ha.max(1e-9);
             let s = &sums[e];
             let n = s.stems;
-            let (hn, hv) = harvest.get(e).copied().unwrap_or((0, 0.0));
+            let h = harvest.get(e).copied().unwrap_or_default();
+            let ba = unfixed(s.ba);
             EntryRow {
                 entry: op.index,
                 kind: op.spec.kind.clone(),
@@ -129,8 +149,13 @@ pub fn entry_rows(site: &Site, sums: &[RowSums], h100: &[f64], harvest: &[(u64, 
                 volume_m3_ha: unfixed(s.vol) / a,
                 qmd_cm: if n > 0 { (unfixed(s.d2) / n as f64).sqrt() } else { 0.0 },
                 top_height_m: h100[e],
-                harvest_stems_ha: hn as f64 / a,
-                harvest_volume_m3_ha: hv / a,
+                harvest_stems_ha: h.stems as f64 / a,
+                harvest_volume_m3_ha: h.volume_m3 / a,
+                name: op.spec.display_name(op.index),
+                harvest_basal_area_m2_ha: h.basal_area_m2 / a,
+                cut_saplings_ha: h.saplings as f64 / a,
+                ba_share: s.ba_sp.iter().map(|&v| if ba > 0.0 { unfixed(v) / ba } else { 0.0 }).collect(),
+                stem_share: s.stems_sp.iter().map(|&v| if n > 0 { v as f64 / n as f64 } else { 0.0 }).collect(),
             }
         })
         .collect()
@@ -180,14 +205,24 @@ pub fn stem_volume_m3(form_factor: f32, dbh_cm: f32, height_m: f32) -> f64 {
 /// The year's harvest: stems (≥ 1.3 m) and stem volume (m³) of the trees that died of
 /// [`DeathCause::Harvest`] in `dead`, summed in their order.
 pub fn harvest_sums(site: &Site, dead: &[super::trees::DeadTree]) -> (u64, f64) {
-    let (mut n, mut v) = (0u64, 0f64);
+    let h = entry_harvest(site, dead);
+    (h.stems, h.volume_m3)
+}
+
+/// What the harvested trees of `dead` (cause harvest) were: stems ≥ 1.3 m, their basal area
+/// (m², π/4 · DBH²) and the stem volume of all of them (m³, [`stem_volume_m3`]), summed in the
+/// order given; no saplings.
+pub fn entry_harvest(site: &Site, dead: &[super::trees::DeadTree]) -> EntryHarvest {
+    let mut h = EntryHarvest::default();
     for d in dead.iter().filter(|d| d.cause == DeathCause::Harvest) {
         if d.height >= 1.3 {
-            n += 1;
+            h.stems += 1;
+            let m = d.dbh as f64 / 100.0;
+            h.basal_area_m2 += std::f64::consts::FRAC_PI_4 * m * m;
         }
-        v += stem_volume_m3(site.lib.species[d.species as usize].life.form_factor, d.dbh, d.height);
+        h.volume_m3 += stem_volume_m3(site.lib.species[d.species as usize].life.form_factor, d.dbh, d.height);
     }
-    (n, v)
+    h
 }
 
 /// Binary digits below the unit of the stand table's exact sums ([`RowSums`], [`top_height`]):

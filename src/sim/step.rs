@@ -5,7 +5,7 @@
 use super::density;
 use super::phases::{climate, growth, light, management, mortality, regen, reproduction};
 use super::scenario::Scenario;
-use super::stats::{harvest_sums, stand_row, StandRow};
+use super::stats::{entry_harvest, stand_row, StandRow};
 use super::world::World;
 use crate::species::Season;
 use std::time::Instant;
@@ -73,7 +73,7 @@ pub const PHASES: [Phase; N_PHASES] = [
     Phase { name: "growth", summary: "summer: crowding of every tree's neighbourhood; height, DBH and crown increments", ends: Some(Season::Summer), run: run_growth, halo: Halo::Crowding },
     Phase { name: "reproduction", summary: "autumn: seed production and dispersal onto the seed grids", ends: Some(Season::Autumn), run: run_reproduction, halo: Halo::SeedSources },
     Phase { name: "mortality", summary: "winter: senescence, background, stress and wind deaths", ends: None, run: run_mortality, halo: Halo::None },
-    Phase { name: "management", summary: "the year's end: thinnings, harvests (cause `harvest`) and plantings of the scenario's `[[management]]` entries due", ends: None, run: run_management, halo: Halo::Areas },
+    Phase { name: "management", summary: "the year's end: thinnings, harvests, clearings kept open (cause `harvest`) and plantings of the scenario's `[[management]]` entries due", ends: None, run: run_management, halo: Halo::Areas },
     Phase { name: "stats", summary: "the year ends: stand-table row of the year", ends: Some(Season::Winter), run: run_stats, halo: Halo::None },
 ];
 
@@ -96,15 +96,19 @@ fn run_management(w: &mut World, report: &mut YearReport) {
     let d0 = w.scratch.dead.len();
     let (_, notes, removed) = management::run_by_entry(management::Manage { seed: w.site.seed, year: w.stand.year, site: &w.site, trees: &mut w.stand.trees, dead: &mut w.scratch.dead, deaths_total: &mut w.tallies.deaths_total });
     report.notes.extend(notes);
+    // a clearing kept open loses its sapling cohorts above its height too (a tiled run's rank
+    // its own cells' cohorts)
+    let saplings = management::keep_open_cohorts(&w.site, w.stand.year, &mut w.stand.cohorts);
     // each entry's harvest, over its removed trees in the order they were recorded (a tiled
     // run's ranks all see every removed tree here: `sim::tiles`)
     let mut at = d0;
     w.scratch.entry_harvest = removed
         .iter()
-        .map(|&n| {
-            let s = harvest_sums(&w.site, &w.scratch.dead[at..at + n]);
+        .zip(saplings)
+        .map(|(&n, saplings)| {
+            let s = entry_harvest(&w.site, &w.scratch.dead[at..at + n]);
             at += n;
-            s
+            super::stats::EntryHarvest { saplings, ..s }
         })
         .collect();
 }

@@ -1128,15 +1128,20 @@ impl Tile {
         // harvested tree there)
         if !w.site.management.is_empty() {
             let es = super::stats::entry_sums(&w.site, tr);
-            let got = t.all_sum(es.iter().flat_map(|s| s.words()).collect())?;
-            if got.len() != nw * es.len() {
+            let ne = es.len();
+            // the saplings a clearing kept open cut are each rank's own cohorts': summed with
+            // the areas' sums (the removed trees every rank saw whole)
+            let saplings = (0..ne).map(|e| w.scratch.entry_harvest.get(e).map_or(0, |h| h.saplings));
+            let got = t.all_sum(es.iter().flat_map(|s| s.words()).chain(saplings).collect())?;
+            if got.len() != nw * ne + ne {
                 return Err(Error::Exchange { peer: 0, reason: "management-table sums cut short".into() });
             }
-            let es: Vec<super::stats::RowSums> = got.chunks(nw).map(|c| super::stats::RowSums::from_words(c, np)).collect();
+            let harvest: Vec<super::stats::EntryHarvest> = (0..ne).map(|e| super::stats::EntryHarvest { saplings: got[nw * ne + e], ..w.scratch.entry_harvest.get(e).copied().unwrap_or_default() }).collect();
+            let es: Vec<super::stats::RowSums> = got[..nw * ne].chunks(nw).map(|c| super::stats::RowSums::from_words(c, np)).collect();
             let stems: Vec<u64> = es.iter().map(|s| s.stems).collect();
             let h = super::stats::entry_top_heights(&w.site, tr, &stems, &mut |v| t.all_sum(v))?;
             if let Some(r) = report.row.as_mut() {
-                r.management = super::stats::entry_rows(&w.site, &es, &h, &w.scratch.entry_harvest);
+                r.management = super::stats::entry_rows(&w.site, &es, &h, &harvest);
             }
         }
         report.phase_seconds[stats] = t0.elapsed().as_secs_f64();

@@ -190,10 +190,27 @@ pub struct Scratch {
     pub dead: Vec<DeadTree>,
     /// Counts of the regeneration layer in the current year.
     pub regen_year: RegenYear,
-    /// This year's harvest of each `[[management]]` entry (stems ≥ 1.3 m, stem volume m³ of
-    /// the trees it removed; entry order; set by the management phase, empty without
-    /// management): the management table's harvest columns.
-    pub entry_harvest: Vec<(u64, f64)>,
+    /// This year's harvest of each `[[management]]` entry (stems ≥ 1.3 m, their basal area,
+    /// stem volume m³ of the trees it removed, sapling stems a `keep_open` entry cut; entry
+    /// order; set by the management phase, empty without management): the management table's
+    /// harvest columns. In a tiled run the saplings are the tile's own cohorts' (summed over
+    /// the ranks by the stats phase, `sim::tiles`).
+    pub entry_harvest: Vec<EntryHarvest>,
+}
+
+/// What one `[[management]]` entry removed in a year ([`Scratch::entry_harvest`]):
+/// the management table's harvest columns before they are divided by the area.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct EntryHarvest {
+    /// Removed stems (≥ 1.3 m).
+    pub stems: u64,
+    /// Their basal area (m²).
+    pub basal_area_m2: f64,
+    /// Stem volume (m³, [`super::stats::stem_volume_m3`], DBH ≥ 7 cm) of the removed trees.
+    pub volume_m3: f64,
+    /// Sapling stems of the regeneration layer removed (`keep_open`,
+    /// [`crate::sim::phases::management::keep_open_cohorts`]).
+    pub saplings: u64,
 }
 
 /// Running totals since the start of the run (checkpointed).

@@ -1,7 +1,8 @@
 //! Management (the year's end, after mortality): the scenario's `[[management]]` entries due
 //! this year ([`crate::sim::management`]), in scenario order: thinnings, clear-cuts and patch
-//! cuts remove trees (recorded as dead with the cause [`DeathCause::Harvest`]), then plantings
-//! add lattices of trees. Deterministic: thinnings order trees by DBH and id, patches and
+//! cuts remove trees (recorded as dead with the cause [`DeathCause::Harvest`]), entries keeping
+//! a clearing open remove the trees taller than their height (cause `harvest` too) and the
+//! sapling cohorts above it ([`keep_open_cohorts`]), then plantings add lattices of trees. Deterministic: thinnings order trees by DBH and id, patches and
 //! planted species are drawn from streams keyed by the seed, the entry and the year, and every
 //! sum runs in tree order, so the result does not depend on the thread count.
 
@@ -63,6 +64,7 @@ pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>) {
             Action::ClearCut => ((0..t.len()).map(|i| op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect(), None),
             Action::Shelterwood { shares } => (shelterwood(t, op, shares.get(k as usize).copied().unwrap_or(1.0)), None),
             Action::Patch { size_m, share } => (patches(m.seed, t, op, *size_m, *share, k), None),
+            Action::KeepOpen { max_height_m } => ((0..t.len()).map(|i| t.height[i] as f64 > *max_height_m && op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect(), None),
             Action::Planting { .. } => {
                 planted.extend(m.site.plant(op, y).into_iter().map(|nt| (m.site.light.cell_of(nt.x, nt.y) as u32, nt)));
                 continue;
@@ -89,6 +91,36 @@ pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>) {
         insert_planted(m.trees, planted, m.year);
     }
     (n, notes, removed)
+}
+
+/// The regeneration layer's part of the entries keeping a clearing open that are due this year
+/// (`year` the years completed before it; entries due in `year + 1` act): every sapling cohort
+/// of a light cell whose centre lies in the entry's area ([`crate::sim::management::Region::contains`])
+/// and whose mean height is above the entry's `max_height_m` is removed (a cohort's stems
+/// share its mean height, so a cohort goes whole). Returns the sapling stems removed per entry
+/// (entry order; 0 for other entries). The cohorts are not in the regeneration ledger's deaths
+/// (whose causes are shade and crowding): the management table's `cut_saplings_ha` counts them.
+/// Cohort cells are cells of the whole light grid, so a tile removes its own cohorts as one
+/// process does.
+pub fn keep_open_cohorts(site: &Site, year: u32, cohorts: &mut crate::sim::cohorts::Cohorts) -> Vec<u64> {
+    let y = year + 1;
+    let mut cut = vec![0u64; site.management.len()];
+    for (e, op) in site.management.iter().enumerate() {
+        let Action::KeepOpen { max_height_m } = op.action else { continue };
+        if op.spec.due(y).is_none() || cohorts.is_empty() {
+            continue;
+        }
+        let c = std::mem::take(cohorts);
+        for i in 0..c.len() {
+            let (cx, cy) = site.light.centre(c.cell[i] as usize);
+            if c.height[i] as f64 > max_height_m && op.region.contains(cx, cy) {
+                cut[e] += c.stems[i] as u64;
+            } else {
+                cohorts.push(c.get(i));
+            }
+        }
+    }
+    cut
 }
 
 /// Records trees flagged in `remove` as harvested in `year`.
