@@ -633,3 +633,75 @@ fn the_coarse_levels_from_above_cover_the_crowns_of_the_simulation() {
         assert!(failures.is_empty(), "{failures:#?}");
     });
 }
+
+/// The bumps of a skyline: `top[x]` the highest covered row of column `x` (image rows, down;
+/// `None` where the column shows no crown). Within each run of covered columns, the widths (px)
+/// between successive notches, a notch being a column lower than the two columns either side of
+/// it and at least `depth` px below the highest of the columns up to the next notch.
+fn skyline_bumps(top: &[Option<f32>], depth: f32) -> Vec<f32> {
+    let mut widths = Vec::new();
+    let mut x = 0;
+    while x < top.len() {
+        if top[x].is_none() {
+            x += 1;
+            continue;
+        }
+        let start = x;
+        while x < top.len() && top[x].is_some() {
+            x += 1;
+        }
+        let run: Vec<f32> = top[start..x].iter().map(|v| v.unwrap()).collect();
+        // notches: local maxima of the row index (lowest points of the skyline)
+        let notches: Vec<usize> = (2..run.len().saturating_sub(2)).filter(|&i| (i - 2..=i + 2).all(|j| run[j] <= run[i]) && (i == 2 || run[i - 1] < run[i] || run[i - 2] < run[i])).collect();
+        let mut kept: Vec<usize> = Vec::new();
+        for &n in &notches {
+            let prev = kept.last().copied().unwrap_or(0);
+            let peak = run[prev..=n].iter().copied().fold(f32::MAX, f32::min);
+            if run[n] - peak >= depth {
+                kept.push(n);
+            }
+        }
+        widths.extend(kept.windows(2).map(|w| (w[1] - w[0]) as f32));
+    }
+    widths
+}
+
+#[test]
+fn crown_hull_clumps_differ_in_size_and_spacing() {
+    // issue 32, round 41: the crown hull's leaf clumps (round 40) were all one size, one per
+    // cell of a jittered lattice, and a crown read as a regular "cauliflower". A row of ten
+    // beeches (30 m, crown radius 4.5 m, 14 m apart) at the crown-hull level seen level from
+    // 110 m against the sky: the bumps of each crown's skyline (between notches 2 px deep) must
+    // vary in width, their coefficient of variation at least 0.45.
+    let all = SpeciesLibrary::embedded().unwrap();
+    let lib = SpeciesLibrary { species: SPECIES.iter().map(|(id, _, _)| all.species[all.find(id).unwrap() as usize].clone()).collect() };
+    let protos = sylva::job::scene::prototypes(&lib);
+    let trees: Vec<(usize, f32, f32, f32, f32, u64)> = (0..10).map(|k| (0usize, 97.0 + 14.0 * k as f32, 160.0, 30.0, 4.5, 11 + k as u64)).collect();
+    with_renderer(|r| {
+        still_lod(r);
+        r.lod = sylva::render::lod::LodParams { switch_px: [1e9, 1e8, 1.0], max_triangles: 0, ..r.lod };
+        let with = scene(&lib, &protos, &trees, None);
+        let mut bare = with.clone();
+        bare.instances.clear();
+        let cam = Camera::look_at([160.0, 50.0, 24.0], [160.0, 160.0, 24.0], 50.0);
+        let (w, h) = (1280u32, 400u32);
+        let img = r.render(&with, &cam, w, h).unwrap();
+        let sky = r.render(&bare, &cam, w, h).unwrap();
+        img.save(out_dir().join("hull_clumps_skyline.png")).unwrap();
+        assert_eq!(r.last_stats().per_level[2], 10, "{:?}", r.last_stats().per_level);
+        let differs = |x: u32, y: u32| {
+            let (a, b) = (img.get_pixel(x, y).0, sky.get_pixel(x, y).0);
+            (0..3).any(|c| (a[c] as i32 - b[c] as i32).abs() > 12)
+        };
+        // the crowns' tops lie in the image's upper part, above the horizon
+        let top: Vec<Option<f32>> = (0..w).map(|x| (0..h / 2).find(|&y| differs(x, y)).map(|y| y as f32)).collect();
+        let widths = skyline_bumps(&top, 2.0);
+        let n = widths.len() as f32;
+        let mean = widths.iter().sum::<f32>() / n.max(1.0);
+        let cv = (widths.iter().map(|v| (v - mean) * (v - mean)).sum::<f32>() / n.max(1.0)).sqrt() / mean.max(1e-6);
+        eprintln!("{} skyline bumps, mean width {mean:.1} px, coefficient of variation {cv:.3}; widths {widths:?}", widths.len());
+        assert!(widths.len() >= 20, "too few bumps to judge: {widths:?}");
+        assert!(cv >= 0.45, "the crown hulls' clumps are too even: bump widths' coefficient of variation {cv:.3} (mean {mean:.1} px)");
+        still_lod(r);
+    });
+}
