@@ -268,7 +268,9 @@ pub const SPRAY_MIN_WIDTH: f32 = 0.22;
 /// skeleton's do), widening from 0.35 of its half-width at the stem to the whole at the tip
 /// (half-width: twice the standard deviation of the foliage across the bearing plus half a
 /// leaf, at least [`SPRAY_MIN_WIDTH`] of the length), and a vertical strip along the same
-/// line, half as high, so the spray shows from the side. Foliage on the stem itself (the
+/// line, so the spray shows from the side, as high as the foliage spreads about the line (twice
+/// its standard deviation up and down plus a quarter leaf, at most half the width): a flat
+/// spray stays a thin card and the whorls keep the sky between them. Foliage on the stem itself (the
 /// leader) gets two crossed vertical cards. The limbs sit in the skeleton's whorls, so the
 /// crown reads as tiers of drooping branches with gaps between them and a ragged outline,
 /// the cards cut by the leaf-cluster texture (UV 0..1 across and along). 8 triangles per limb.
@@ -354,9 +356,14 @@ pub fn limb_spray_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMe
         let outer = if zs[2].1 > 0 { zs[2].0 / zs[2].1 as f32 } else { ps.iter().map(|p| p.0.z - b.z).sum::<f32>() / ps.len() as f32 };
         let mid = if zs[1].1 > 0 { zs[1].0 / zs[1].1 as f32 } else { 0.5 * outer };
         let line = [b, b + u * (0.5 * len) + Vec3::Z * mid, b + u * len + Vec3::Z * outer];
+        // the foliage's spread about the line, up and down: a flat spray is a thin card from
+        // the side, and the whorl above stays apart from it
+        let line_z = |t: f32| if t < 0.5 { mid * t / 0.5 } else { mid + (outer - mid) * (t - 0.5) / 0.5 };
+        let up_sd = (ps.iter().map(|p| (p.0.z - b.z - line_z(((p.0 - b).dot(u) / len).clamp(0.0, 1.0))).powi(2)).sum::<f32>() / ps.len() as f32).sqrt();
+        let vh = (2.0 * up_sd + 0.25 * leaf).min(0.5 * hw);
         let widths = [0.35 * hw, 0.7 * hw, hw];
         spray_strip(&mut foliage, &line, &widths, v, Vec3::Z);
-        spray_strip(&mut foliage, &line, &widths.map(|w| 0.5 * w), Vec3::Z, v);
+        spray_strip(&mut foliage, &line, &[0.35 * vh, 0.7 * vh, vh], Vec3::Z, v);
     }
     if !leader.is_empty() {
         let (lo, hi) = leader.iter().fold((f32::MAX, f32::MIN), |(lo, hi), p| (lo.min(p.0.z), hi.max(p.0.z)));
