@@ -567,7 +567,7 @@ pub fn adapted_model(mut a: AdaptedTree, t: &StandTree, sp: &crate::species::Spe
         l.pos *= s;
         l.size *= s;
     });
-    let (mut lods, hulled) = adapted_lod_chain(&sk, &lv, &a, t.base, s, &crate::structure::mesh::LodOptions::default());
+    let (mut lods, hulled) = adapted_lod_chain(&sk, &lv, &a, t.base, s, &crate::structure::mesh::LodOptions::for_species(sp));
     let full = lods.levels.first_mut()?;
     if n_sprigs > 0 && full.leaves.uvs.len() == full.leaves.positions.len() {
         sprigs.positions.iter_mut().for_each(|p| *p = (Vec3::from(*p) * s).to_array());

@@ -440,7 +440,7 @@ pub fn lone_tree_sprigs(sk: &crate::structure::Skeleton, lv: &mut crate::structu
 /// Deterministic.
 pub fn lone_chain(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Leaves, sp: &crate::species::Species) -> (crate::mesh::LodChain, LoneLeafArea) {
     let (sprigs, fill) = lone_tree_sprigs(sk, lv, sp);
-    let mut chain = crate::structure::mesh::lod_chain(sk, lv, &crate::structure::mesh::LodOptions::default());
+    let mut chain = crate::structure::mesh::lod_chain(sk, lv, &crate::structure::mesh::LodOptions::for_species(sp));
     if let Some(full) = chain.levels.first_mut() {
         full.leaves.append(&sprigs);
     }

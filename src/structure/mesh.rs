@@ -28,11 +28,24 @@ pub struct LodOptions {
     pub hull_segments: u32,
     /// Emit leaves at LOD0.
     pub leaves: bool,
+    /// LOD1 of a conifer: the crown as tiers of limb sprays ([`limb_spray_mesh`]: one
+    /// drooping card pair per first-order limb, following its foliage) instead of
+    /// [`reduced_mesh`]'s crossed cluster cards, which merged a spruce's whorls into a smooth
+    /// spire. Set for needle-leaved species by the callers that know the species.
+    pub conifer_tiers: bool,
 }
 
 impl Default for LodOptions {
     fn default() -> Self {
-        LodOptions { sides: 8, min_sides: 3, reduced_keep_fraction: 0.12, hull_segments: 10, leaves: true }
+        LodOptions { sides: 8, min_sides: 3, reduced_keep_fraction: 0.12, hull_segments: 10, leaves: true, conifer_tiers: false }
+    }
+}
+
+impl LodOptions {
+    /// The default options for species `sp`: [`LodOptions::conifer_tiers`] for needle-leaved
+    /// species.
+    pub fn for_species(sp: &crate::species::Species) -> Self {
+        LodOptions { conifer_tiers: sp.identity.leaf_type == crate::species::LeafType::Conifer, ..LodOptions::default() }
     }
 }
 
@@ -240,6 +253,150 @@ pub fn reduced_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh 
         quad(&mut foliage, mean, Vec3::X * r, Vec3::Y * r);
     }
     TreeMesh { bark, leaves: foliage }
+}
+
+/// Least half-width of a limb spray, relative to its length (a limb with all its foliage on
+/// one line still reads as a spray of twigs, not a stick).
+pub const SPRAY_MIN_WIDTH: f32 = 0.22;
+
+/// LOD1 of a conifer (`LodOptions::conifer_tiers`): the main stem as a tube (the nodes of its
+/// Gravelius order from the root, [`branch_mesh`]) and each first-order limb (a child of a
+/// stem node off the stem) as a spray of two cards that follow the limb's foliage (its leaf
+/// centres, or its nodes when leafless): a strip from the stem out to the limb's farthest
+/// foliage along the limb's bearing, through the mean height of the foliage in its inner,
+/// middle and outer thirds (so a Norway spruce's limbs droop and turn up at the tips as the
+/// skeleton's do), widening from 0.35 of its half-width at the stem to the whole at the tip
+/// (half-width: twice the standard deviation of the foliage across the bearing plus half a
+/// leaf, at least [`SPRAY_MIN_WIDTH`] of the length), and a vertical strip along the same
+/// line, so the spray shows from the side, as high as the foliage spreads about the line (twice
+/// its standard deviation up and down plus a quarter leaf, at most half the width): a flat
+/// spray stays a thin card and the whorls keep the sky between them. Foliage on the stem itself (the
+/// leader) gets two crossed vertical cards. The limbs sit in the skeleton's whorls, so the
+/// crown reads as tiers of drooping branches with gaps between them and a ragged outline,
+/// the cards cut by the leaf-cluster texture (UV 0..1 across and along). 8 triangles per limb.
+/// Issue 32, round 41: [`reduced_mesh`]'s crossed cluster cards (each cut subtree's spread
+/// about its mean) overlapped into a smooth dark spire.
+pub fn limb_spray_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
+    let n = sk.nodes.len();
+    if n < 2 {
+        return reduced_mesh(sk, leaves, o);
+    }
+    // stem nodes: the root's Gravelius order followed up from the root
+    let mut on_stem = vec![false; n];
+    let mut cur = Some(0usize);
+    while let Some(i) = cur {
+        if on_stem[i] {
+            break;
+        }
+        on_stem[i] = true;
+        cur = sk.nodes[i].children.iter().map(|&c| c as usize).find(|&c| c < n && sk.nodes[c].gravelius == sk.nodes[i].gravelius);
+    }
+    // limb of each node (u32::MAX: the stem); parents come before their children
+    let mut limb = vec![u32::MAX; n];
+    let mut bases: Vec<Vec3> = Vec::new();
+    for i in 0..n {
+        if on_stem[i] {
+            continue;
+        }
+        match sk.nodes[i].parent {
+            Some(p) if on_stem[p as usize] => {
+                limb[i] = bases.len() as u32;
+                bases.push(sk.nodes[p as usize].pos);
+            }
+            Some(p) => limb[i] = limb[p as usize],
+            None => {}
+        }
+    }
+    let nl = bases.len();
+    let mut pts: Vec<Vec<(Vec3, f32)>> = vec![Vec::new(); nl];
+    let mut leader: Vec<(Vec3, f32)> = Vec::new();
+    let mut has_leaf = vec![false; nl];
+    for l in &leaves.leaves {
+        let c = l.pos + l.dir * (0.5 * l.size);
+        match limb.get(l.node as usize) {
+            Some(&k) if k != u32::MAX => {
+                pts[k as usize].push((c, l.size));
+                has_leaf[k as usize] = true;
+            }
+            Some(_) => leader.push((c, l.size)),
+            None => {}
+        }
+    }
+    for i in 0..n {
+        let k = limb[i];
+        if k != u32::MAX && !has_leaf[k as usize] {
+            pts[k as usize].push((sk.nodes[i].pos, 0.0));
+        }
+    }
+    let bark = branch_mesh(sk, o, Some(&on_stem));
+    let mut foliage = TriMesh::default();
+    for (k, ps) in pts.iter().enumerate() {
+        let b = bases[k];
+        let mean = ps.iter().fold(Vec3::ZERO, |a, p| a + p.0) / ps.len().max(1) as f32;
+        let u = (mean - b).truncate().normalize_or_zero();
+        if ps.is_empty() || u == glam::Vec2::ZERO {
+            continue;
+        }
+        let u = u.extend(0.0);
+        let v = Vec3::Z.cross(u);
+        let len = ps.iter().map(|p| (p.0 - b).dot(u)).fold(0.0f32, f32::max);
+        if !(len > 1e-5) {
+            continue;
+        }
+        let leaf = ps.iter().map(|p| p.1).fold(0.0f32, f32::max);
+        let side_sd = (ps.iter().map(|p| (p.0 - b).dot(v).powi(2)).sum::<f32>() / ps.len() as f32).sqrt();
+        let hw = (2.0 * side_sd + 0.5 * leaf).max(SPRAY_MIN_WIDTH * len);
+        // mean foliage height (relative to the base) in the inner, middle and outer thirds
+        let mut zs = [(0.0f32, 0u32); 3];
+        for p in ps {
+            let t = ((p.0 - b).dot(u) / len * 3.0).clamp(0.0, 2.999) as usize;
+            zs[t].0 += p.0.z - b.z;
+            zs[t].1 += 1;
+        }
+        let outer = if zs[2].1 > 0 { zs[2].0 / zs[2].1 as f32 } else { ps.iter().map(|p| p.0.z - b.z).sum::<f32>() / ps.len() as f32 };
+        let mid = if zs[1].1 > 0 { zs[1].0 / zs[1].1 as f32 } else { 0.5 * outer };
+        let line = [b, b + u * (0.5 * len) + Vec3::Z * mid, b + u * len + Vec3::Z * outer];
+        // the foliage's spread about the line, up and down: a flat spray is a thin card from
+        // the side, and the whorl above stays apart from it
+        let line_z = |t: f32| if t < 0.5 { mid * t / 0.5 } else { mid + (outer - mid) * (t - 0.5) / 0.5 };
+        let up_sd = (ps.iter().map(|p| (p.0.z - b.z - line_z(((p.0 - b).dot(u) / len).clamp(0.0, 1.0))).powi(2)).sum::<f32>() / ps.len() as f32).sqrt();
+        let vh = (2.0 * up_sd + 0.25 * leaf).min(0.5 * hw);
+        let widths = [0.35 * hw, 0.7 * hw, hw];
+        spray_strip(&mut foliage, &line, &widths, v, Vec3::Z);
+        spray_strip(&mut foliage, &line, &[0.35 * vh, 0.7 * vh, vh], Vec3::Z, v);
+    }
+    if !leader.is_empty() {
+        let (lo, hi) = leader.iter().fold((f32::MAX, f32::MIN), |(lo, hi), p| (lo.min(p.0.z), hi.max(p.0.z)));
+        let leaf = leader.iter().map(|p| p.1).fold(0.0f32, f32::max);
+        let r0 = sk.nodes[0].pos.truncate();
+        let reach = leader.iter().map(|p| (p.0.truncate() - r0).length()).fold(0.0f32, f32::max) + 0.5 * leaf;
+        let (lo, hi) = (lo - 0.5 * leaf, hi + 0.5 * leaf);
+        let c = Vec3::new(r0.x, r0.y, 0.5 * (lo + hi));
+        let half = (0.5 * (hi - lo)).max(1e-4);
+        quad(&mut foliage, c, Vec3::X * reach.max(1e-4), Vec3::Z * half);
+        quad(&mut foliage, c, Vec3::Y * reach.max(1e-4), Vec3::Z * half);
+    }
+    TreeMesh { bark, leaves: foliage }
+}
+
+/// Two leaf cards along the polyline `line` (3 points): one from the first point to the
+/// second, one from the second to the third, each a quad of half-widths `widths` at its ends
+/// across `side`, its normal turned to the side of `up`; UV (0,0), (1,0), (1,1), (0,1) from
+/// the inner end (cards, as `quad` makes them, so the renderer cuts them with the leaf-cluster
+/// texture).
+fn spray_strip(m: &mut TriMesh, line: &[Vec3; 3], widths: &[f32; 3], side: Vec3, up: Vec3) {
+    for j in 0..2 {
+        let (a, b) = (line[j], line[j + 1]);
+        let nrm = side.cross(b - a).normalize_or(up);
+        let nrm = if nrm.dot(up) < 0.0 { -nrm } else { nrm };
+        let base = m.positions.len() as u32;
+        for (p, uv) in [(a - side * widths[j], [0.0, 0.0]), (a + side * widths[j], [1.0, 0.0]), (b + side * widths[j + 1], [1.0, 1.0]), (b - side * widths[j + 1], [0.0, 1.0])] {
+            m.positions.push(p.to_array());
+            m.normals.push(nrm.to_array());
+            m.uvs.push(uv);
+        }
+        m.indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
 }
 
 /// Foliage points of a tree: leaf centres, or tip nodes when there are no leaves.
@@ -542,7 +699,8 @@ pub fn full_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
 /// `TreeMesh::triangle_count`, decreasing along the chain for any tree with more than a few
 /// dozen nodes).
 pub fn lod_chain(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> LodChain {
-    let levels: [TreeMesh; LOD_LEVELS] = [full_mesh(sk, leaves, o), reduced_mesh(sk, leaves, o), hull_mesh(sk, leaves, o), impostor_mesh(sk, leaves)];
+    let reduced = if o.conifer_tiers { limb_spray_mesh(sk, leaves, o) } else { reduced_mesh(sk, leaves, o) };
+    let levels: [TreeMesh; LOD_LEVELS] = [full_mesh(sk, leaves, o), reduced, hull_mesh(sk, leaves, o), impostor_mesh(sk, leaves)];
     LodChain::new(levels.into())
 }
 

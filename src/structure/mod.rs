@@ -73,7 +73,7 @@ pub fn species_tree(species: &Species, seed: u64) -> crate::Result<(Skeleton, Le
 /// crown radius. Bad parameters give an empty chain (and a warning).
 pub fn species_lod_chain(species: &Species, seed: u64) -> LodChain {
     match species_tree(species, seed) {
-        Ok((sk, lv)) => mesh::lod_chain(&sk, &lv, &mesh::LodOptions::default()),
+        Ok((sk, lv)) => mesh::lod_chain(&sk, &lv, &mesh::LodOptions::for_species(species)),
         Err(e) => {
             tracing::warn!("species {}: {e}", species.id);
             LodChain::default()

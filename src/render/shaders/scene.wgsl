@@ -483,15 +483,12 @@ fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
         if (v.mat < 2.5) {
             rp = right_of(f) * (v.pos.x * sxy) + vec3<f32>(0.0, 0.0, zd * h);
             o.normal = f;
-            // the quad's own coordinates (m): across, and up from the stem base
-            o.lp = vec4<f32>(v.pos.x * sxy, 0.0, zd * h, 1.0);
         } else {
             // the top quad only shows from above: it shrinks to nothing as the view flattens
             // (continuous, so an orbiting camera sees no pop)
             let k = smoothstep(0.45, 0.8, f.z) * top_scale;
             rp = vec3<f32>(v.pos.x * sxy * k, v.pos.y * sxy * k, zd * h);
             o.normal = vec3<f32>(0.0, 0.0, 1.0);
-            o.lp = vec4<f32>(v.pos.x * sxy, v.pos.y * sxy, zd * h, 1.0);
         }
         w = sway(v, rp, v.pos.z);
         o.bb = v.normal.xy;
@@ -688,11 +685,14 @@ fn hash3(c: vec3<f32>, salt: f32) -> vec3<f32> {
     return vec3<f32>(h & vec3<u32>(0xffffffu)) / 16777216.0;
 }
 
-// The cellular pattern (Worley 1996) of the leaf clumps at `q` (cell units): each lattice
-// cell holds one clump centre, jittered by the cell's hash; `f1`, `f2` the squared distances to
-// the nearest and second-nearest centre, `d1` the offset from the nearest, `h1` its hash. `zr`
-// = 1 searches the 27 cells about `q` (a pattern in space), 0 the 9 in its z layer (a pattern
-// in a plane, the billboards').
+// The cellular pattern (Worley 1996) of the leaf clumps at `q` (cell units), in space: each
+// lattice cell holds one clump centre anywhere in the cell (its hash) with a size weight of its
+// own, HULL_CLUMP_SIZE_MIN..MAX (a multiplicatively weighted Voronoi pattern: distances divided
+// by the weight), so the clumps differ in size and spacing as a crown's branch ends do, and
+// a cell whose fourth hash is under HULL_CLUMP_EMPTY holds none (its neighbours' clumps fill
+// it: a few larger lumps). `f1`, `f2` the weighted squared distances to the nearest and
+// second-nearest centre, `d1` the offset from the nearest over its weight, `h1` its hash; the
+// 27 cells about `q` are searched.
 struct Cells {
     f1: f32,
     f2: f32,
@@ -700,22 +700,31 @@ struct Cells {
     h1: f32,
 };
 
-fn cells(q: vec3<f32>, zr: i32, salt: f32) -> Cells {
+// Least and largest size weight of a clump (relative to the mean cell), and the share of cells
+// without a clump (issue 32, round 41: with every clump one size and one per cell the hull's
+// clumps read as a regular cauliflower).
+const HULL_CLUMP_SIZE_MIN: f32 = 0.55;
+const HULL_CLUMP_SIZE_MAX: f32 = 1.45;
+const HULL_CLUMP_EMPTY: f32 = 0.2;
+
+fn cells(q: vec3<f32>, salt: f32) -> Cells {
     let c0 = floor(q);
     var r: Cells;
     r.f1 = 1e9;
     r.f2 = 1e9;
     r.d1 = vec3<f32>(0.0);
     r.h1 = 0.0;
-    for (var z = -zr; z <= zr; z = z + 1) {
+    for (var z = -1; z <= 1; z = z + 1) {
         for (var y = -1; y <= 1; y = y + 1) {
             for (var x = -1; x <= 1; x = x + 1) {
                 let k = c0 + vec3<f32>(f32(x), f32(y), f32(z));
                 let h = hash3(k, salt);
-                var d = q - (k + 0.1 + 0.8 * h);
-                if (zr == 0) {
-                    d.z = 0.0;
+                let h4 = fract(h.x * 13.37 + h.y * 7.91 + h.z * 3.17);
+                if (h4 < HULL_CLUMP_EMPTY) {
+                    continue;
                 }
+                let wt = mix(HULL_CLUMP_SIZE_MIN, HULL_CLUMP_SIZE_MAX, fract(h.z * 29.7 + h.x * 5.3));
+                let d = (q - (k + h)) / wt;
                 let dd = dot(d, d);
                 if (dd < r.f1) {
                     r.f2 = r.f1;
@@ -736,8 +745,13 @@ fn clump_cell(rad: f32) -> f32 {
     return clamp(HULL_CLUMP_CELL * rad, HULL_CLUMP_MIN_M, HULL_CLUMP_MAX_M);
 }
 
+// Range of a tree's own clump size about `clump_cell` (by its salt): trees of one size and
+// species do not share one grain.
+const HULL_TREE_GRAIN: vec2<f32> = vec2<f32>(0.8, 1.25);
+
 fn hull_clumps(i: TreeOut, n: vec3<f32>) -> Clumps {
-    let c = cells(i.lp.xyz / clump_cell(i.rad), 1, i.salt);
+    let grain = mix(HULL_TREE_GRAIN.x, HULL_TREE_GRAIN.y, fract(i.salt * 0.618034));
+    let c = cells(i.lp.xyz / (clump_cell(i.rad) * grain), i.salt);
     var r: Clumps;
     r.body = smoothstep(0.0, 0.45, sqrt(c.f2) - sqrt(c.f1));
     r.tilt = c.d1 - n * dot(c.d1, n);
@@ -745,40 +759,12 @@ fn hull_clumps(i: TreeOut, n: vec3<f32>) -> Clumps {
     return r;
 }
 
-// Share of the crown's half-width near the billboard's outline that is cut into lobes: at the
-// outline only the clumps' middles stay (as the crown hull's rim, HULL_RIM).
-const BB_RIM: f32 = 0.0;
-// The billboards' seams and clump middles, lighter than the hull's: the billboards hand over
-// to the far-field canopy layer, whose crowns have no clumps (tests/render_canopy.rs).
-const BB_CREVICE: f32 = 1.0;
-const BB_CLUMP_LIGHT: f32 = 1.0;
-const BB_CLUMP_TILT: f32 = 0.0;
-// The side quad's share of the half-width cut into lobes (less than the top's: the side quads
-// of distant trees hand over to the canopy layer, tests/render_canopy.rs).
-const BB_SIDE_RIM: f32 = 0.0;
 // Radius (of the crown radius) out to which the billboard's top quad draws its lumpy disc.
-// Round 40: 1.24 (with BB_RIM 0.3) made a stand's billboards cover their crown discs from
-// above (0.81 against 0.80, 0.70 at 0.92), but broke their hand-over to the far-field canopy
-// layer (tests/render_canopy.rs: mean distance to the geometry forest 19.2 against 14.2), so
-// the billboards keep their round-39 look until the canopy layer is matched to them: the
-// clump constants below are neutral (BB_*: no lobes, no seams, no tilt).
+// The billboards carry no leaf clumps (round 41): a stand's clumped billboards (round 40, a
+// wider lobed top 1.24 of the crown radius) covered their crown discs from above, but broke
+// their hand-over to the far-field canopy layer, whose crowns have no clumps
+// (tests/render_canopy.rs: mean distance to the geometry forest 19.2 against 14.2).
 const BB_TOP_R: f32 = 0.92;
-
-// The leaf clumps of a billboard crown: the cellular pattern of `hull_clumps` in the plane of
-// its quad (`p`, m), cells of HULL_CLUMP_CELL × the crown radius `rad`. Returns the body (0 on a
-// seam .. 1 in a clump's middle) and the tilt in the plane (xy).
-struct Clumps2 {
-    body: f32,
-    tilt: vec2<f32>,
-};
-
-fn clumps2(p: vec2<f32>, rad: f32, salt: f32) -> Clumps2 {
-    let c = cells(vec3<f32>(p / clump_cell(rad), 0.5), 0, salt);
-    var r: Clumps2;
-    r.body = smoothstep(0.0, 0.45, sqrt(c.f2) - sqrt(c.f1));
-    r.tilt = c.d1.xy;
-    return r;
-}
 
 // Gaps of the crown-hull level (a closed polyhedron): the species' airy or lumpy foliage cut
 // into it with the same lumps as the billboard, over the crown direction `cdir`.
@@ -803,8 +789,6 @@ struct Carve {
     // side quad's crown: the normal of the crown as a round solid (an ellipsoid about its
     // middle, no lumps): where its surface turns from the sun
     ns: vec3<f32>,
-    // crown: 0 on a seam between two leaf clumps .. 1 in a clump's middle (clumps2)
-    body: f32,
 };
 
 // `apx`: outline units (`i.bb.x`) per pixel across the quad (fwidth, taken in uniform control
@@ -816,7 +800,6 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
     r.depth = 0.0;
     r.cover = 1.0;
     r.ns = vec3<f32>(0.0, 0.0, 1.0);
-    r.body = 1.0;
     let p = u32(i.info.x + 0.5);
     let s = sils[p];
     let look = s.look;
@@ -829,17 +812,13 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
         r.z = z;
         let zq = (z - s.info.x) / max(s.info.y - s.info.x, 1e-3) * 2.0 - 1.0;
         let l = lumps(vec2<f32>(a, zq * 1.4), look, i.salt);
-        // the leaf clumps of the crown hull's level, seen flat (hull_clumps): the outline a
-        // row of lobes, the seams shaded
-        let cl = clumps2(i.lp.xz, i.rad, i.salt);
         let ws = sil_width(p, z);
         let w = ws * (1.0 - depth + depth * 2.0 * l);
-        if (abs(a) < w * (1.0 - BB_SIDE_RIM * (1.0 - cl.body))) {
+        if (abs(a) < w) {
             if (crown_gap(l, look)) {
                 return r;
             }
             r.kind = 1u;
-            r.body = cl.body;
             let f = normalize(i.normal);
             let na = a / max(w, 1e-3);
             r.depth = w * sqrt(max(1.0 - na * na, 0.0));
@@ -849,7 +828,6 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
             r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.3 * nz + 0.35) + f * sqrt(max(1.0 - na * na, 0.0)));
             // each lump is a small dome of its own: its shading bends the normal about it
             r.n = normalize(r.n + right_of(f) * (l - 0.5) * look.z * 1.5);
-            r.n = normalize(r.n + (right_of(f) * cl.tilt.x + vec3<f32>(0.0, 0.0, cl.tilt.y)) * BB_CLUMP_TILT);
         } else if (abs(a) < max(s.info.z, 0.5 * MIN_STEM_PX * apx) && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
             r.kind = 2u;
             r.n = normalize(i.normal);
@@ -860,19 +838,16 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
         let d = length(q);
         r.z = i.mat_s.y;
         let l = lumps(q, look, i.salt);
-        let cl = clumps2(i.lp.xy, i.rad, i.salt);
-        if (d < BB_TOP_R * (1.0 - depth + depth * 2.0 * l) * (1.0 - BB_RIM * (1.0 - cl.body))) {
+        if (d < BB_TOP_R * (1.0 - depth + depth * 2.0 * l)) {
             if (crown_gap(l, look)) {
                 return r;
             }
             r.kind = 1u;
-            r.body = cl.body;
             // seen from above: a spire's flanks slope steeply away from its tip, a dome rounds
             // off, a flat umbrella faces the sky
             let k = mix(1.4, 0.2, smoothstep(0.1, 0.9, look.x));
             let bump = vec2<f32>(vnoise(q * 5.0 + vec2<f32>(0.5, 0.0), i.salt) - vnoise(q * 5.0 - vec2<f32>(0.5, 0.0), i.salt), vnoise(q * 5.0 + vec2<f32>(0.0, 0.5), i.salt) - vnoise(q * 5.0 - vec2<f32>(0.0, 0.5), i.salt));
             r.n = normalize(vec3<f32>(q * k + bump * (0.3 + 1.2 * look.z), sqrt(max(1.0 - d * d, 0.0)) + 0.2));
-            r.n = normalize(r.n + vec3<f32>(cl.tilt, 0.0) * BB_CLUMP_TILT);
         }
     }
     return r;
@@ -936,9 +911,59 @@ fn fine_twig_color(bark: vec3<f32>) -> vec3<f32> {
     return mix(bark, vec3<f32>(0.09, 0.065, 0.05), 0.8);
 }
 
+// White bark (issue 32, round 41: near birches were white poles of one colour). A bark whose
+// Rec. 709 luma is above that of sRGB 200 (0.578 linear) is lenticelled, the rule
+// `structure::texture::BarkPattern::of_species` gives the exported bark textures (the shipped
+// library: silver birch). Silver birch's white bark carries dark horizontal lenticels and
+// marks, and the base of an older stem turns rough and blackish (Atkinson 1992, Biological
+// Flora of the British Isles: Betula pendula Roth and B. pubescens Ehrh., J. Ecol. 80,
+// 837-870). Rows of marks every BIRCH_ROW_M up the stem, cells of BIRCH_CELL_M around it,
+// BIRCH_MARKS of them marked (ESTIMATE, from photographs: marks of 1-4 cm in rows a hand apart);
+// the dark base up to BIRCH_BASE_M (ESTIMATE: 1-2 m on a stem of 12 cm DBH and more, none on
+// a stem under 3 cm), its upper edge ragged.
+const BIRCH_LUMA: f32 = 0.578;
+const BIRCH_ROW_M: f32 = 0.09;
+const BIRCH_CELL_M: f32 = 0.07;
+const BIRCH_MARKS: f32 = 0.7;
+const BIRCH_BASE_M: f32 = 1.6;
+const BIRCH_DARK: vec3<f32> = vec3<f32>(0.045, 0.04, 0.035);
+
+fn white_bark(b: vec3<f32>) -> bool {
+    return dot(b, vec3<f32>(0.2126, 0.7152, 0.0722)) > BIRCH_LUMA;
+}
+
+// The colour of white bark `b` at the point `lp` of a stem (m from the stem base, the tree's
+// frame), `zpx` the metres of stem height a pixel spans (the marks fade to their mean where
+// they would be under a third of a pixel).
+fn birch_bark(b: vec3<f32>, lp: vec3<f32>, zpx: f32, salt: f32) -> vec3<f32> {
+    let r = max(length(lp.xy), 0.01);
+    let arc = atan2(lp.y, lp.x) * r;
+    let row = floor(lp.z / BIRCH_ROW_M);
+    let t = fract(lp.z / BIRCH_ROW_M);
+    let cell = floor(arc / BIRCH_CELL_M);
+    let u = fract(arc / BIRCH_CELL_M);
+    let h = hash3(vec3<f32>(cell, row, 3.0), salt);
+    // a mark: a horizontal dash of 0.15-0.35 of the row's height, 0.3-1 of the cell's width
+    let th = mix(0.15, 0.35, h.y);
+    let half = mix(0.25, 0.5, h.z);
+    var m = 1.0;
+    if (h.x < BIRCH_MARKS && abs(t - 0.5) < 0.5 * th && abs(u - 0.5) < half) {
+        m = 0.25;
+    }
+    // the pattern's mean: marks of 0.75 darkness over 0.25 of a row and 0.75 of a cell
+    let mean = 1.0 - 0.75 * BIRCH_MARKS * 0.25 * 0.75;
+    let sharp = 1.0 - smoothstep(0.3, 1.0, zpx / (0.25 * BIRCH_ROW_M));
+    var c = b * mix(mean, m, sharp);
+    // the dark base, on stems over 1.5 cm radius, up to BIRCH_BASE_M at 6 cm and more
+    let top = BIRCH_BASE_M * smoothstep(0.015, 0.06, r) * (0.75 + 0.5 * lattice(vec2<f32>(floor(arc / 0.15), 1.0), salt));
+    let dark = 1.0 - smoothstep(0.55 * top, top, lp.z);
+    return mix(c, BIRCH_DARK, dark * 0.85);
+}
+
 @fragment
 fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32> {
     let apx = fwidth(i.bb.x);
+    let zpx = fwidth(i.lp.z);
     if (!keep(i) || !card_kept(i)) {
         discard;
     }
@@ -966,7 +991,6 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         }
         n = c.n;
         hz = c.z;
-        clump_ao = mix(BB_CREVICE, BB_CLUMP_LIGHT, c.body);
         if (c.kind == 1u && i.mat_s.x < 2.5) {
             // the side quad stands in the plane of the stem, facing the viewer, while in the
             // sun's shadow map the same crown is a quad through its stem facing the sun. With
@@ -1057,10 +1081,14 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         // (at least MIN_STEM_BARK of it: a small tree's stem still reads as a stem, issue 32
         // round 36)
         albedo = mix(STAND_SHADE, albedo, max(i.lp.w, MIN_STEM_BARK));
-    } else if (i.mat_s.x < 0.5 && i.uv.y > 0.0) {
+    } else if (i.mat_s.x < 0.5 && i.uv.y >= 0.0) {
         // mesh bark away from the stem: fine twigs are dark whatever the stem's colour (a
         // birch's white bark is on its stem and main limbs only)
-        albedo = mix(i.bark, fine_twig_color(i.bark), i.uv.y);
+        var b = i.bark;
+        if (white_bark(b)) {
+            b = birch_bark(b, i.lp.xyz, zpx, i.salt);
+        }
+        albedo = mix(b, fine_twig_color(i.bark), i.uv.y);
     }
     let ao = mix(1.0, mix(0.45, 1.0, clamp(hz * 1.3 - 0.2, 0.0, 1.0)), leafy) * clump_ao;
     let sh0 = shadow_factor(sun_at, n);
