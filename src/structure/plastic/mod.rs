@@ -41,6 +41,7 @@ use crate::structure::grow::space::{validate_obstacles, Obstacle};
 use crate::structure::skeleton::Skeleton;
 use glam::{Quat, Vec3};
 use light::Occluder;
+use std::sync::Arc;
 
 /// Tropism direction t of eq. (6) for phototropism towards the light direction `light` and
 /// gravitropism (negative geotropism, +z): (w_p·L + w_g·ẑ)/(w_p + w_g), normalised; +z when
@@ -161,11 +162,17 @@ pub struct LeafCluster {
 
 /// One tree ready for adaptation: its input skeleton, the analysis of section 4 and its
 /// current adapted state.
+///
+/// A clone shares the input skeleton and the analysis, which no adaptation changes (behind
+/// [`Arc`], copied on write by [`PlasticTree::translate`] and [`PlasticTree::scale`]), and the
+/// move light model's stored rows and snapshots (copied on write block by block: see
+/// `MoveCache` in `transform.rs`), so cloning an adapted tree copies only its adapted state
+/// (positions, rotations, bend angles, fates, signatures, stage light).
 #[derive(Debug, Clone)]
 pub struct PlasticTree {
-    pub(crate) input: Skeleton,
+    pub(crate) input: Arc<Skeleton>,
     pub(crate) params: PlasticParams,
-    pub(crate) analysis: Analysis,
+    pub(crate) analysis: Arc<Analysis>,
     /// Smallest distance (m) every node keeps from obstacles (e.g. the leaf length, so leaf
     /// cards stay outside).
     pub clearance_m: f32,
@@ -236,14 +243,14 @@ impl PlasticTree {
     fn with_analysis(sk: &Skeleton, params: &PlasticParams, analysis: Analysis, sig: Vec<u64>, standing: bool) -> PlasticTree {
         let n = sk.nodes.len();
         PlasticTree {
-            input: sk.clone(),
+            input: Arc::new(sk.clone()),
             params: *params,
             light_cache: analysis.stage_light.clone(),
             sig,
             shade_key: 0,
             sky: analysis.sky.clone(),
             final_occ: Vec::new(),
-            analysis,
+            analysis: Arc::new(analysis),
             clearance_m: 0.0,
             wood_radius_m: 0.02,
             bend_light_cell_m: 0.0,
@@ -285,13 +292,13 @@ impl PlasticTree {
     pub fn translate(&mut self, offset: Vec3) {
         self.quiet = None;
         self.forget_move_light();
-        for nd in &mut self.input.nodes {
+        for nd in &mut Arc::make_mut(&mut self.input).nodes {
             nd.pos += offset;
         }
         for p in &mut self.pos {
             *p += offset;
         }
-        for l in &mut self.analysis.lobes {
+        for l in &mut Arc::make_mut(&mut self.analysis).lobes {
             l.center += offset;
         }
     }
@@ -318,11 +325,11 @@ impl PlasticTree {
         self.forget_move_light();
         let root = self.input.nodes.first().map(|n| n.pos).unwrap_or(Vec3::ZERO);
         let about = |p: Vec3| root + (p - root) * factor;
-        for nd in &mut self.input.nodes {
+        for nd in &mut Arc::make_mut(&mut self.input).nodes {
             nd.pos = about(nd.pos);
             nd.radius *= factor;
         }
-        let a = &mut self.analysis;
+        let a = Arc::make_mut(&mut self.analysis);
         a.internode_m *= factor;
         for l in &mut a.lobes {
             l.center = about(l.center);
@@ -552,7 +559,7 @@ impl PlasticTree {
     /// subtrees removed and tips re-marked (the input itself, bit for bit, when nothing moved
     /// or was pruned).
     pub fn skeleton(&self) -> Skeleton {
-        let mut out = self.input.clone();
+        let mut out = Skeleton::clone(&self.input);
         for (nd, &p) in out.nodes.iter_mut().zip(&self.pos) {
             nd.pos = p;
         }

@@ -1047,7 +1047,8 @@ struct Work {
 
 /// What [`prune`] reads per node, as arrays (parent index, segment length l of eq. 10 as
 /// `Skeleton::segment_length` gives it: the input's, which bending does not change), and its
-/// sums ζ, l and ψ of eq. (10) (scratch, every entry of a stage's node written before read).
+/// sums ζ, l and ψ of eq. (10) (scratch, every entry of a stage's node written before read),
+/// and the tree split for pruning over the cores ([`PrunePart`]).
 #[derive(Default)]
 struct Pruning {
     parent: Vec<u32>,
@@ -1055,12 +1056,102 @@ struct Pruning {
     zeta: Vec<f32>,
     len: Vec<f32>,
     psi: Vec<f32>,
+    /// The subtrees, in parts of about max(n / [`PRUNE_TASKS`], [`PRUNE_PART`]) nodes ([`PrunePart`]).
+    parts: Vec<PrunePart>,
+    /// The nodes outside every subtree (the root, the stem and the big branches near it) and
+    /// the subtrees' roots, in index order: (node, its part and place in the part's list for a
+    /// subtree's root, `u32::MAX` twice for a node outside).
+    top: Vec<(u32, u32, u32)>,
 }
 
+/// Subtrees of at most half a part's nodes whose parent is in no such subtree ([`Pruning::of`]),
+/// taken together as one task of [`prune`]: their nodes in index order, each one's parent's place in
+/// the list (`u32::MAX` for a subtree's root), and per node the ζ, l, ψ sums of eq. (10) and the
+/// fate (scratch, written before read at every level).
+#[derive(Default)]
+struct PrunePart {
+    nodes: Vec<u32>,
+    par: Vec<u32>,
+    /// Per node: its season (eq. 2), segment length l (m) and ψ_s,min (eq. 11), copied from the
+    /// analysis so that a level reads them in list order.
+    season: Vec<u16>,
+    seg: Vec<f32>,
+    psi_min: Vec<f32>,
+    zeta: Vec<f32>,
+    len: Vec<f32>,
+    psi: Vec<f32>,
+    fate: Vec<Fate>,
+    /// Fates the part's pass changed at the level: (node, fate).
+    changed: Vec<(u32, Fate)>,
+}
+
+/// Fewest nodes per task of [`prune`] ([`Pruning::of`]: a tree of n nodes is split into parts of
+/// about max(n / [`PRUNE_TASKS`], this) nodes, each of subtrees of at most half as many).
+const PRUNE_PART: usize = 256;
+
+/// Tasks [`prune`] splits a large tree into: our choice, a few per core of a two-core machine
+/// (the 9,133-node bench tree: parts of about 1,140 nodes).
+const PRUNE_TASKS: usize = 8;
+
 impl Pruning {
-    fn of(sk: &crate::structure::skeleton::Skeleton) -> Pruning {
+    fn of(sk: &crate::structure::skeleton::Skeleton, a: &super::analysis::Analysis) -> Pruning {
         let n = sk.nodes.len();
-        Pruning { parent: sk.nodes.iter().map(|nd| nd.parent.unwrap_or(0)).collect(), seg: (0..n).map(|k| sk.segment_length(k)).collect(), zeta: vec![0.0; n], len: vec![0.0; n], psi: vec![f32::NAN; n] }
+        let seg: Vec<f32> = (0..n).map(|k| sk.segment_length(k)).collect();
+        let parent: Vec<u32> = sk.nodes.iter().map(|nd| nd.parent.unwrap_or(0)).collect();
+        // subtree sizes (parents precede their children), then the subtrees of at most half a
+        // part's nodes whose parent's subtree is larger; the root stays outside
+        let mut size = vec![1u32; n];
+        for k in (1..n).rev() {
+            size[parent[k] as usize] += size[k];
+        }
+        let part_nodes = (n / PRUNE_TASKS).max(PRUNE_PART);
+        let cap = if forced(Forced::SerialPrune) { 0 } else { (part_nodes / 2) as u32 };
+        let (mut sub_of, mut roots) = (vec![u32::MAX; n], Vec::new());
+        for k in 1..n {
+            let p = parent[k] as usize;
+            if sub_of[p] != u32::MAX {
+                sub_of[k] = sub_of[p];
+            } else if size[k] <= cap {
+                sub_of[k] = roots.len() as u32;
+                roots.push(k as u32);
+            }
+        }
+        // the subtrees, in their roots' order, gathered into parts of about `part_nodes` nodes
+        let mut part_of_sub = Vec::with_capacity(roots.len());
+        let (mut parts, mut fill) = (0u32, 0usize);
+        for &r in &roots {
+            if fill >= part_nodes {
+                (parts, fill) = (parts + 1, 0);
+            }
+            part_of_sub.push(parts);
+            fill += size[r as usize] as usize;
+        }
+        let mut parts: Vec<PrunePart> = (0..parts as usize + (!roots.is_empty()) as usize).map(|_| PrunePart::default()).collect();
+        let mut place = vec![u32::MAX; n];
+        let mut top = Vec::new();
+        for k in 0..n {
+            let Some(&pi) = sub_of.get(k).filter(|&&x| x != u32::MAX).map(|&x| &part_of_sub[x as usize]) else {
+                top.push((k as u32, u32::MAX, u32::MAX));
+                continue;
+            };
+            let part = &mut parts[pi as usize];
+            let p = parent[k] as usize;
+            place[k] = part.nodes.len() as u32;
+            let root = sub_of[p] != sub_of[k];
+            if root {
+                top.push((k as u32, pi, place[k]));
+            }
+            part.par.push(if root { u32::MAX } else { place[p] });
+            part.nodes.push(k as u32);
+            part.season.push(a.season[k]);
+            part.seg.push(seg[k]);
+            part.psi_min.push(a.psi_min[k]);
+        }
+        for part in &mut parts {
+            let m = part.nodes.len();
+            (part.zeta, part.len, part.psi, part.fate) = (vec![0.0; m], vec![0.0; m], vec![f32::NAN; m], vec![Fate::Alive; m]);
+        }
+        Pruning { seg, parent, zeta: vec![0.0; n], len: vec![0.0; n], psi: vec![f32::NAN; n], parts, top }
     }
 }
 
@@ -1170,24 +1261,66 @@ pub(crate) struct MoveCache {
     stages: Vec<StageCache>,
 }
 
-/// Stored per-direction transmittances of light queries, `nd` per slot ([`MoveCache`]).
-#[derive(Debug, Clone, Default)]
-struct RowCache {
-    /// Query point of each slot's row (m; NaN: no row).
-    at: Vec<Vec3>,
-    /// Level epoch each row was filled in (0: none).
-    epoch: Vec<u32>,
-    /// `nd` transmittances per slot (NaN where never computed).
+/// Slots per block of a [`RowCache`]: a block is shared between clones of a tree and copied
+/// whole when a call first writes a row of it (32 slots of 32 directions: 4 KiB of rows). Our
+/// choice: small enough that a wall move, which writes the fresh rows of the nodes and clusters
+/// near the wall (a season's nodes lie together in index order), copies a small part of the
+/// rows, large enough that a clone copies few block pointers (286 for the 9,133-node bench tree).
+const ROW_BLOCK: usize = 32;
+
+/// One block of a [`RowCache`]: [`ROW_BLOCK`] slots' query points, epochs and rows.
+#[derive(Debug, Clone)]
+struct RowBlock {
+    at: [Vec3; ROW_BLOCK],
+    epoch: [u32; ROW_BLOCK],
     row: Vec<f32>,
 }
 
+/// Stored per-direction transmittances of light queries, `nd` per slot ([`MoveCache`]), in
+/// blocks of [`ROW_BLOCK`] slots behind [`Arc`], copied on write: cloning a tree (and its move
+/// light model) shares every block, and a call copies only the blocks whose rows it writes.
+#[derive(Debug, Clone, Default)]
+struct RowCache {
+    /// Slots (the last block may hold more, never used).
+    slots: usize,
+    /// Transmittances per slot.
+    nd: usize,
+    /// Per block: query point of each slot's row (m; NaN: no row), the level epoch each row
+    /// was filled in (0: none), `nd` transmittances per slot (NaN where never computed).
+    blocks: Vec<std::sync::Arc<RowBlock>>,
+}
+
 impl RowCache {
+    /// Makes the cache hold `slots` empty rows of `nd` values unless it holds `slots` already
+    /// (every block the same empty one until written).
     fn ensure(&mut self, slots: usize, nd: usize) {
-        if self.at.len() != slots {
-            self.at = vec![Vec3::NAN; slots];
-            self.epoch = vec![0; slots];
-            self.row = vec![f32::NAN; slots * nd];
+        if self.slots != slots || self.nd != nd {
+            let empty = std::sync::Arc::new(RowBlock { at: [Vec3::NAN; ROW_BLOCK], epoch: [0; ROW_BLOCK], row: vec![f32::NAN; ROW_BLOCK * nd] });
+            self.blocks = vec![empty; slots.div_ceil(ROW_BLOCK)];
+            (self.slots, self.nd) = (slots, nd);
         }
+    }
+
+    /// Whether slot `i` holds a row of `epoch` taken within `tol` (m) of `p`.
+    fn valid(&self, i: usize, epoch: u32, p: Vec3, tol: f32) -> bool {
+        let b = &self.blocks[i / ROW_BLOCK];
+        b.epoch[i % ROW_BLOCK] == epoch && b.at[i % ROW_BLOCK].distance(p) <= tol
+    }
+
+    /// The row of slot `i`.
+    fn row(&self, i: usize) -> &[f32] {
+        let j = i % ROW_BLOCK;
+        &self.blocks[i / ROW_BLOCK].row[j * self.nd..(j + 1) * self.nd]
+    }
+
+    /// The row of slot `i`, to be filled anew at point `p` in `epoch` (its block copied first
+    /// when shared).
+    fn fill(&mut self, i: usize, p: Vec3, epoch: u32) -> &mut [f32] {
+        let (j, nd) = (i % ROW_BLOCK, self.nd);
+        let b = std::sync::Arc::make_mut(&mut self.blocks[i / ROW_BLOCK]);
+        b.at[j] = p;
+        b.epoch[j] = epoch;
+        &mut b.row[j * nd..(j + 1) * nd]
     }
 }
 
@@ -1196,7 +1329,8 @@ impl RowCache {
 #[derive(Debug, Clone, Default)]
 struct StageCache {
     rows: RowCache,
-    snapshot: Vec<(u64, Occluder)>,
+    /// Shared between clones of the tree (a new snapshot replaces it whole).
+    snapshot: std::sync::Arc<Vec<(u64, Occluder)>>,
     epoch: u32,
     /// Changed casters applied to the level's rows, summed over the calls since its snapshot.
     patched: usize,
@@ -1299,7 +1433,7 @@ impl MoveCache {
         }
         if st.epoch == 0 || delta.len() > dmax || 2 * delta.len() > shade.len() || st.patched + delta.len() > kn.budget {
             st.patched = 0;
-            st.snapshot = shade.to_vec();
+            st.snapshot = std::sync::Arc::new(shade.to_vec());
             st.epoch += 1;
             delta.clear();
         } else {
@@ -1508,7 +1642,7 @@ fn light_cached(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes,
         .with_min_len(light_chunk(pts.len()))
         .map(|&(i, p)| {
             let m = solids.mask(p);
-            let valid = rc.epoch[i] == epoch && rc.at[i].distance(p) <= tol;
+            let valid = rc.valid(i, epoch, p, tol);
             let want = if valid { fill & !m } else { fill };
             (m, valid, if delta.is_empty() { None } else { delta.factors(&lanes, p, want) })
         })
@@ -1552,39 +1686,42 @@ fn light_cached(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes,
     }
     let mut out = Vec::with_capacity(pts.len());
     for (j, (&(i, p), &(m, valid, f))) in pts.iter().zip(&plan).enumerate() {
-        if !valid {
-            rc.at[i] = p;
-            rc.epoch[i] = epoch;
-        }
-        let row = &mut rc.row[i * nd..(i + 1) * nd];
         let (mut s, mut d) = (0.0f32, Vec3::ZERO);
-        for k in 0..nd {
-            let tk = match (valid, f) {
-                (false, None) => {
-                    row[k] = fresh[j * nd + k];
-                    row[k]
-                }
-                (false, Some(f)) => {
-                    let t = fresh[j * nd + k];
-                    row[k] = (t / f[k]).min(1.0);
-                    t
-                }
-                (true, None) => row[k],
-                (true, Some(f)) => {
-                    let t = (row[k] * f[k]).min(1.0);
-                    if t < 1e-4 {
-                        0.0
-                    } else {
-                        t
-                    }
-                }
-            };
+        let mut add = |k: usize, tk: f32| {
             let wk = sky.weights[k];
             if wk == 0.0 || m & (1 << k) != 0 {
-                continue;
+                return;
             }
             s += wk * tk;
             d += sky.dirs[k] * (wk * tk);
+        };
+        if valid {
+            // a reused row is read, not written (its block stays shared)
+            let row = rc.row(i);
+            for k in 0..nd {
+                let tk = match f {
+                    None => row[k],
+                    Some(f) => {
+                        let t = (row[k] * f[k]).min(1.0);
+                        if t < 1e-4 {
+                            0.0
+                        } else {
+                            t
+                        }
+                    }
+                };
+                add(k, tk);
+            }
+        } else {
+            let row = rc.fill(i, p, epoch);
+            for k in 0..nd {
+                let t = fresh[j * nd + k];
+                row[k] = match f {
+                    None => t,
+                    Some(f) => (t / f[k]).min(1.0),
+                };
+                add(k, t);
+            }
         }
         out.push((s, d.normalize_or(Vec3::Z)));
     }
@@ -1604,7 +1741,7 @@ fn light_cached(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes,
                 s += wk * vols.transmittance(k, p);
             }
             let d = (out[j].0 - s).abs() as f64;
-            let dark = valid && (0..nd).any(|k| fill & !m & (1 << k) != 0 && rc.row[i * nd + k] == 0.0);
+            let dark = valid && (0..nd).any(|k| fill & !m & (1 << k) != 0 && rc.row(i)[k] == 0.0);
             let b = &mut e[lvl];
             let o = if valid { 0 } else { 3 };
             b[o] += 1.0;
@@ -1668,7 +1805,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     // a level that recomputes every node of its season with the exact light bends the season's
     // chains side by side (`bend_by_chains`: the same values, fewer joins of the cores)
     // (not with shared bending light, `PlasticTree::bend_light_cell_m`: the depth batches share it)
-    let by_chains = w.mc.is_none() && t.bend_light_cell_m == 0.0 && !depth_batches_forced() && w.season(s).iter().all(|&k| w.own[k as usize]);
+    let by_chains = w.mc.is_none() && t.bend_light_cell_m == 0.0 && !forced(Forced::DepthBatches) && w.season(s).iter().all(|&k| w.own[k as usize]);
     if by_chains {
         bend_by_chains(t, s, w, env, solids, vols, fixed);
     }
@@ -1865,19 +2002,30 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     prune(t, s, w, occ, rows)
 }
 
-/// Tests only: while set, [`level`] bends by depth batches where it would bend by chains
-/// ([`bend_by_chains`]), to check that both give the same trees (any call meanwhile gets the
-/// same values either way).
-#[cfg(test)]
-static DEPTH_BATCHES: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+/// Tests only: switches that make a call take its serial or older path where a faster one gives
+/// the same values bit for bit, to check that both give the same trees (any call meanwhile gets
+/// the same values either way).
+#[derive(Debug, Clone, Copy)]
+enum Forced {
+    /// [`level`] bends by depth batches where it would bend by chains ([`bend_by_chains`]).
+    DepthBatches,
+    /// [`Pruning::of`] puts every node outside the subtrees, so [`prune`] takes one pass over
+    /// the nodes (the serial pass).
+    SerialPrune,
+}
 
+/// The state of each [`Forced`] switch.
 #[cfg(test)]
-fn depth_batches_forced() -> bool {
-    DEPTH_BATCHES.load(std::sync::atomic::Ordering::Relaxed)
+static FORCED: [std::sync::atomic::AtomicBool; 2] = [std::sync::atomic::AtomicBool::new(false), std::sync::atomic::AtomicBool::new(false)];
+
+/// Whether switch `f` is set (never outside tests).
+#[cfg(test)]
+fn forced(f: Forced) -> bool {
+    FORCED[f as usize].load(std::sync::atomic::Ordering::Relaxed)
 }
 
 #[cfg(not(test))]
-fn depth_batches_forced() -> bool {
+fn forced(_: Forced) -> bool {
     false
 }
 
@@ -2066,10 +2214,9 @@ fn bend_by_chains(t: &mut PlasticTree, s: usize, w: &mut Work, env: &Environment
 }
 
 /// The pruning of eqs. (10)–(11) after level `s` of [`level`] (the stage's light in
-/// `t.light_cache[s]`); returns `rows`.
+/// `t.light_cache[s]`); returns `rows`. A tree that eq. (11) can shed is pruned over the cores
+/// ([`prune_parts`]), any other serially; the same fates either way.
 fn prune(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], rows: Rows) -> Rows {
-    let a = &t.analysis;
-    let clusters = &a.stages[s];
     // pruning (eqs. 10–11); the fates of shed parents are inherited in any case
     // the nodes of season ≤ s: the pruning below changes no other node. A tree that eq. (11)
     // cannot shed and whose nodes are all alive has nothing to prune or pass on (the loop below
@@ -2077,52 +2224,133 @@ fn prune(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     if !w.prunes && t.fate.iter().all(|f| *f == Fate::Alive) {
         return rows;
     }
-    w.stage_to(s);
     if w.prunes {
-        // ψ_s(t) of eq. (10) for the stage's nodes: `psi_over`'s sums, term for term in the
-        // same order (the same bits), over the call's parent and segment-length arrays and
-        // scratch instead of the skeleton's nodes and fresh buffers at every level
-        let light = normalised(&t.light_cache[s], |ci| occ[ci].is_some());
-        let pr = w.pruning.get_or_insert_with(|| Pruning::of(&t.input));
-        pr.zeta.iter_mut().for_each(|z| *z = 0.0);
-        pr.len.iter_mut().for_each(|z| *z = 0.0);
-        for (c, &i) in clusters.iter().zip(&light) {
-            if t.fate[c.anchor as usize] == Fate::Alive {
-                pr.zeta[c.anchor as usize] += 2.0 * std::f32::consts::PI * c.radius * c.radius * i;
-            }
-        }
-        for &k in w.stage.iter().rev() {
-            let k = k as usize;
-            if a.season[k] as usize > s || t.fate[k] != Fate::Alive {
-                pr.psi[k] = f32::NAN;
-                continue;
-            }
-            pr.len[k] += pr.seg[k];
-            pr.psi[k] = if pr.len[k] > 0.0 { pr.zeta[k] / pr.len[k] } else { f32::NAN };
-            let p = pr.parent[k] as usize;
-            let (z, l) = (pr.zeta[k], pr.len[k]);
-            pr.zeta[p] += z;
-            pr.len[p] += l;
-        }
-        pr.psi[0] = f32::NAN;
+        prune_parts(t, s, w, occ);
+        return rows;
     }
-    let empty = Pruning::default();
-    let pr = w.pruning.as_ref().unwrap_or(&empty);
-    let psi = &pr.psi;
+    w.stage_to(s);
+    let a = &t.analysis;
     for &k in &w.stage {
         let k = k as usize;
-        let par = match pr.parent.get(k) {
-            Some(&p) => p as usize,
-            None => t.input.nodes[k].parent.unwrap_or(0) as usize,
-        };
-        if t.fate[par] != Fate::Alive {
-            if t.fate[k] == Fate::Alive && a.season[k] as usize <= s {
-                t.fate[k] = t.fate[par];
-            }
-        } else if w.prunes && t.fate[k] == Fate::Alive && judged(a.season[k], s as u16) && psi[k] < a.psi_min[k] {
-            t.fate[k] = Fate::Light;
+        let par = t.input.nodes[k].parent.unwrap_or(0) as usize;
+        if t.fate[par] != Fate::Alive && t.fate[k] == Fate::Alive && a.season[k] as usize <= s {
+            t.fate[k] = t.fate[par];
         }
-    }    rows
+    }
+    rows
+}
+
+/// [`prune`] for a tree that eq. (11) can shed: ψ_s(t) of eq. (10) for the nodes of season ≤ s
+/// (ζ from the stage's clusters, 2π r_c² i_c with the light normalised per stage; l the branch
+/// length of the stage subtree; summed from the tips down as `analysis::psi_at_stage` sums them),
+/// then in index order a node whose parent is shed inherits its fate and a node judged at this
+/// stage with ψ below its ψ_s,min (eq. 11) is shed for light. Over the cores: the subtrees of
+/// [`Pruning::parts`] take their sums side by side, the nodes outside them ([`Pruning::top`])
+/// then take theirs, adding each subtree root's sums where the serial pass added them (in
+/// decreasing index order of the children), and their fates; then the subtrees take their
+/// fates side by side. Every sum is taken term for term in the order of one pass over the
+/// nodes in decreasing index order, and every fate from its parent's final fate, so the values
+/// are the same bit for bit whatever the thread count.
+fn prune_parts(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>]) {
+    let a = &t.analysis;
+    let clusters = &a.stages[s];
+    let light = normalised(&t.light_cache[s], |ci| occ[ci].is_some());
+    let pr = w.pruning.get_or_insert_with(|| Pruning::of(&t.input, &t.analysis));
+    pr.zeta.iter_mut().for_each(|z| *z = 0.0);
+    pr.len.iter_mut().for_each(|z| *z = 0.0);
+    for (c, &i) in clusters.iter().zip(&light) {
+        if t.fate[c.anchor as usize] == Fate::Alive {
+            pr.zeta[c.anchor as usize] += 2.0 * std::f32::consts::PI * c.radius * c.radius * i;
+        }
+    }
+    let Pruning { parent, seg, zeta, len, psi, parts, top } = pr;
+    let fate = &t.fate;
+    // the subtrees' sums, from the tips down (a node of a later season is in no sum, and its
+    // entries are not read)
+    let s16 = s as u16;
+    parts.par_iter_mut().for_each(|p| {
+        for (j, &k) in p.nodes.iter().enumerate() {
+            if p.season[j] <= s16 {
+                (p.zeta[j], p.len[j]) = (zeta[k as usize], 0.0);
+            }
+        }
+        for j in (0..p.nodes.len()).rev() {
+            if p.season[j] > s16 || fate[p.nodes[j] as usize] != Fate::Alive {
+                p.psi[j] = f32::NAN;
+                continue;
+            }
+            p.len[j] += p.seg[j];
+            p.psi[j] = if p.len[j] > 0.0 { p.zeta[j] / p.len[j] } else { f32::NAN };
+            let q = p.par[j];
+            if q != u32::MAX {
+                let (z, l) = (p.zeta[j], p.len[j]);
+                p.zeta[q as usize] += z;
+                p.len[q as usize] += l;
+            }
+        }
+    });
+    // the nodes outside them, the subtrees' roots added in their places (the root, node 0, is
+    // in no stage: neither judged nor given a fate)
+    for &(k, pi, j) in top.iter().rev() {
+        let k = k as usize;
+        if k == 0 || a.season[k] as usize > s || fate[k] != Fate::Alive {
+            continue;
+        }
+        let (z, l) = if pi == u32::MAX {
+            len[k] += seg[k];
+            psi[k] = if len[k] > 0.0 { zeta[k] / len[k] } else { f32::NAN };
+            (zeta[k], len[k])
+        } else {
+            let p = &parts[pi as usize];
+            (p.zeta[j as usize], p.len[j as usize])
+        };
+        let q = parent[k] as usize;
+        zeta[q] += z;
+        len[q] += l;
+    }
+    // fates: the nodes outside the subtrees, then the subtrees side by side
+    let judge = |season: u16, psi_min: f32, own: Fate, from: Fate, psi: f32| -> Fate {
+        if from != Fate::Alive {
+            if own == Fate::Alive {
+                return from;
+            }
+        } else if own == Fate::Alive && judged(season, s16) && psi < psi_min {
+            return Fate::Light;
+        }
+        own
+    };
+    let fate = &mut t.fate;
+    for &(k, pi, _) in top.iter() {
+        let k = k as usize;
+        if pi != u32::MAX || k == 0 || a.season[k] > s16 {
+            continue;
+        }
+        fate[k] = judge(a.season[k], a.psi_min[k], fate[k], fate[parent[k] as usize], psi[k]);
+    }
+    let fate_now: &[Fate] = fate;
+    parts.par_iter_mut().for_each(|p| {
+        p.changed.clear();
+        for j in 0..p.nodes.len() {
+            if p.season[j] > s16 {
+                continue;
+            }
+            let k = p.nodes[j] as usize;
+            let q = p.par[j];
+            // (a parent of a later season, not in the stage, keeps its fate)
+            let from = if q == u32::MAX || p.season[q as usize] > s16 { fate_now[parent[k] as usize] } else { p.fate[q as usize] };
+            let own = fate_now[k];
+            let f = judge(p.season[j], p.psi_min[j], own, from, p.psi[j]);
+            p.fate[j] = f;
+            if f != own {
+                p.changed.push((k as u32, f));
+            }
+        }
+    });
+    for p in parts.iter() {
+        for &(k, f) in &p.changed {
+            fate[k as usize] = f;
+        }
+    }
 }
 
 #[cfg(test)]
@@ -2175,7 +2403,23 @@ mod tests {
         assert_eq!(mc.level(5, &shade).0, 1);
     }
 
-    /// [`bend_by_chains`] against the depth batches of [`level`] ([`DEPTH_BATCHES`]), and on
+    /// A 25-year beech of the light-guided model (`grow_species_tree`, seed `seed`), analysed
+    /// in the open and moved by `x` (m) along x.
+    fn beech_at(seed: u64, x: f32) -> PlasticTree {
+        let lib = crate::species::SpeciesLibrary::embedded().unwrap();
+        let sp = &lib.species[lib.find("beech").unwrap() as usize];
+        let g = crate::structure::species_tree::grow_species_tree(sp, crate::structure::species_tree::Model::Light, 25.0, &[], seed).unwrap();
+        let mut t = PlasticTree::analyse(&g.skeleton, &sp.architecture.plastic, &Environment::open(), None).unwrap();
+        t.translate(Vec3::new(x, 0.0, 0.0));
+        t
+    }
+
+    /// Open space with a wall 0.2 m thick, 8 m long and 6 m high, centred at (x, 0, 3) m.
+    fn wall_at(x: f32) -> Environment {
+        Environment::with_obstacles(&[Obstacle::OrientedBox { center: Vec3::new(x, 0.0, 3.0), half: Vec3::new(0.1, 4.0, 3.0), yaw_deg: 0.0 }])
+    }
+
+    /// [`bend_by_chains`] against the depth batches of [`level`] ([`Forced::DepthBatches`]), and on
     /// one thread against two: a 25-year beech beside a wall alone, and two beeches adapted
     /// together among a fixed third (the fixed trees' shade multiplied in); every position,
     /// rotation, bend angle and fate equal bit for bit, and the reports equal. The cases test
@@ -2183,23 +2427,15 @@ mod tests {
     #[test]
     fn chains_bend_as_the_depth_batches() {
         use std::sync::atomic::Ordering;
-        let lib = crate::species::SpeciesLibrary::embedded().unwrap();
-        let sp = &lib.species[lib.find("beech").unwrap() as usize];
-        let p = sp.architecture.plastic;
-        let tree = |seed: u64, x: f32| {
-            let g = crate::structure::species_tree::grow_species_tree(sp, crate::structure::species_tree::Model::Light, 25.0, &[], seed).unwrap();
-            let mut t = PlasticTree::analyse(&g.skeleton, &p, &Environment::open(), None).unwrap();
-            t.translate(Vec3::new(x, 0.0, 0.0));
-            t
-        };
-        let env = Environment::with_obstacles(&[Obstacle::OrientedBox { center: Vec3::new(1.2, 0.0, 3.0), half: Vec3::new(0.1, 4.0, 3.0), yaw_deg: 0.0 }]);
+        let tree = beech_at;
+        let env = wall_at(1.2);
         let (lone, pair, fixed) = (vec![tree(7, 0.0)], vec![tree(8, 0.0), tree(9, -2.0)], vec![tree(10, -4.0)]);
         let run = |threads: usize, batches: bool, trees: &[PlasticTree], fixed: &[PlasticTree]| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            DEPTH_BATCHES.store(batches, Ordering::Relaxed);
+            FORCED[Forced::DepthBatches as usize].store(batches, Ordering::Relaxed);
             let mut trees = trees.to_vec();
             let rep = pool.install(|| adapt_group_among(&mut trees, fixed, &env)).unwrap();
-            DEPTH_BATCHES.store(false, Ordering::Relaxed);
+            FORCED[Forced::DepthBatches as usize].store(false, Ordering::Relaxed);
             let bits: Vec<(Vec<[u32; 3]>, Vec<[u32; 4]>, Vec<u32>, Vec<Fate>)> = trees
                 .iter()
                 .map(|t| (t.pos.iter().map(|v| v.to_array().map(f32::to_bits)).collect(), t.rot.iter().map(|q| q.to_array().map(f32::to_bits)).collect(), t.bend.iter().map(|b| b.to_bits()).collect(), t.fate.clone()))
@@ -2217,6 +2453,80 @@ mod tests {
             assert_eq!(rep, rep_2);
             assert!(bits == bits_2, "one thread and two differ ({} trees)", trees.len());
         }
+    }
+
+    /// [`prune_parts`] against one pass over the nodes ([`Forced::SerialPrune`]), on one thread and on
+    /// two: a 25-year beech beside a wall, adapted and then moved 10 cm under the move light
+    /// model (both pass through eq. 11), and two beeches adapted together among a fixed third;
+    /// every fate, position and bend angle equal bit for bit, and the reports equal. The cases
+    /// test something: the trees are split into several parts, and nodes are shed by light.
+    #[test]
+    fn pruning_by_subtrees_is_the_serial_pass() {
+        use std::sync::atomic::Ordering;
+        let tree = beech_at;
+        let wall = wall_at;
+        let mut lone = tree(7, 0.0);
+        lone.set_move_light(Some(crate::structure::plastic::MOVE_LIGHT_TOL_M)).unwrap();
+        let (pair, fixed) = (vec![tree(8, 0.0), tree(9, -2.0)], vec![tree(10, -4.0)]);
+        assert!(Pruning::of(&lone.input, &lone.analysis).parts.len() >= 4, "the tree is split into parts");
+        type Bits = Vec<(Vec<[u32; 3]>, Vec<u32>, Vec<Fate>)>;
+        let run = |threads: usize, serial: bool, trees: &[PlasticTree], fixed: &[PlasticTree], moves: bool| -> (Vec<GroupReport>, Bits) {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            FORCED[Forced::SerialPrune as usize].store(serial, Ordering::Relaxed);
+            let mut trees = trees.to_vec();
+            let mut reps = vec![pool.install(|| adapt_group_among(&mut trees, fixed, &wall(1.2))).unwrap()];
+            if moves {
+                reps.push(pool.install(|| adapt_group_among(&mut trees, fixed, &wall(1.3))).unwrap());
+            }
+            FORCED[Forced::SerialPrune as usize].store(false, Ordering::Relaxed);
+            let bits = trees.iter().map(|t| (t.pos.iter().map(|v| v.to_array().map(f32::to_bits)).collect(), t.bend.iter().map(|b| b.to_bits()).collect(), t.fate.clone())).collect();
+            (reps, bits)
+        };
+        for (trees, fixed, moves) in [(vec![lone], &[][..], true), (pair, &fixed[..], false)] {
+            let (rep, bits) = run(1, true, &trees, fixed, moves);
+            assert!(rep.iter().all(|r| r.trees.iter().map(|t| t.pruned_light).sum::<usize>() > 0), "{rep:?}");
+            if moves {
+                assert!(rep[1].recomputed_nodes > 0 && rep[1].recomputed_nodes < trees[0].input.nodes.len(), "{rep:?}");
+            }
+            for threads in [1, 2] {
+                let (rep_p, bits_p) = run(threads, false, &trees, fixed, moves);
+                assert_eq!(rep, rep_p, "{threads} threads");
+                assert!(bits == bits_p, "the subtrees and the serial pass differ ({} trees, {threads} threads)", trees.len());
+            }
+        }
+    }
+
+    /// A clone of a tree adapted under the move light model shares its input skeleton, its
+    /// analysis and every block of stored rows; adapting the clone after a 10 cm wall move
+    /// copies only the blocks it writes (fewer than half), leaves the original's rows as they
+    /// were bit for bit, and gives the tree that the original gives after the same move.
+    #[test]
+    fn a_moved_clone_copies_only_the_rows_it_writes() {
+        use std::sync::Arc;
+        let mut a = beech_at(7, 0.0);
+        a.set_move_light(Some(crate::structure::plastic::MOVE_LIGHT_TOL_M)).unwrap();
+        let wall = wall_at;
+        a.adapt(&wall(1.2)).unwrap();
+        let blocks = |t: &PlasticTree| -> Vec<Arc<RowBlock>> {
+            let mc = t.move_light.as_ref().unwrap();
+            mc.nodes.blocks.iter().chain(mc.stages.iter().flat_map(|s| s.rows.blocks.iter())).cloned().collect()
+        };
+        let bits = |t: &PlasticTree| -> Vec<u32> { blocks(t).iter().flat_map(|b| b.row.iter().map(|v| v.to_bits()).chain(b.at.iter().flat_map(|p| p.to_array().map(f32::to_bits))).chain(b.epoch).collect::<Vec<_>>()).collect() };
+        let rows_before = bits(&a);
+        let mut b = a.clone();
+        assert!(Arc::ptr_eq(&a.input, &b.input) && Arc::ptr_eq(&a.analysis, &b.analysis));
+        let (of_a, of_b) = (blocks(&a), blocks(&b));
+        assert!(of_a.len() == of_b.len() && of_a.iter().zip(&of_b).all(|(x, y)| Arc::ptr_eq(x, y)), "a clone shares every block");
+        let rep = b.adapt(&wall(1.3)).unwrap();
+        assert!(rep.recomputed_nodes > 0, "{rep:?}");
+        let (of_a, of_b) = (blocks(&a), blocks(&b));
+        assert_eq!(of_a.len(), of_b.len());
+        let copied = of_a.iter().zip(&of_b).filter(|(x, y)| !Arc::ptr_eq(x, y)).count();
+        assert!(copied > 0 && 2 * copied < of_a.len(), "{copied} of {} blocks copied", of_a.len());
+        assert!(bits(&a) == rows_before, "the original's rows are as they were");
+        a.adapt(&wall(1.3)).unwrap();
+        let same = a.pos.iter().zip(&b.pos).all(|(x, y)| x.to_array().map(f32::to_bits) == y.to_array().map(f32::to_bits));
+        assert!(same && a.fate == b.fate && a.bend.iter().zip(&b.bend).all(|(x, y)| x.to_bits() == y.to_bits()), "the original moved as its clone");
     }
 
     /// [`CasterSet::factors`] (the sky-cone test, then the direction test) against every caster
