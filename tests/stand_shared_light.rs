@@ -30,7 +30,7 @@ fn stand(lib: &SpeciesLibrary) -> (Vec<StandTree>, Vec<usize>) {
 
 /// Every sharing option off: each node and cluster its own light query, crown-shape classes of
 /// 5 % (round 40's defaults).
-fn exact() -> StandOptions {
+fn exact_options() -> StandOptions {
     StandOptions { bend_light_cell_m: 0.0, leaf_light_cell_m: 0.0, shape_step: DIM_STEP, ..Default::default() }
 }
 
@@ -69,8 +69,8 @@ fn light_change(a: &Stand, b: &Stand) -> (f32, f32, f32) {
 fn shared_leaf_light_changes_only_the_clusters_light_within_bounds() {
     let lib = lib();
     let (trees, targets) = stand(&lib);
-    let exact = run(&trees, &targets, &lib, exact());
-    let shared = run(&trees, &targets, &lib, StandOptions { leaf_light_cell_m: 0.25, ..exact() });
+    let exact = run(&trees, &targets, &lib, exact_options());
+    let shared = run(&trees, &targets, &lib, StandOptions { leaf_light_cell_m: 0.25, ..exact_options() });
     for (a, b) in exact.trees.iter().zip(&shared.trees) {
         assert_eq!(a.skeleton.nodes, b.skeleton.nodes);
         assert_eq!(a.clusters_after, b.clusters_after);
@@ -93,8 +93,8 @@ const LEAF_MAX: f32 = 0.15;
 fn shared_bending_light_bends_the_crowns_within_bounds() {
     let lib = lib();
     let (trees, targets) = stand(&lib);
-    let exact = run(&trees, &targets, &lib, exact());
-    let shared = run(&trees, &targets, &lib, StandOptions { bend_light_cell_m: 0.25, ..exact() });
+    let exact = run(&trees, &targets, &lib, exact_options());
+    let shared = run(&trees, &targets, &lib, StandOptions { bend_light_cell_m: 0.25, ..exact_options() });
     let (mean, max, moved) = light_change(&exact, &shared);
     let mut mv = Vec::new();
     for (a, b) in exact.trees.iter().zip(&shared.trees) {
@@ -118,8 +118,8 @@ const BEND_MOVE: f32 = 0.01;
 fn coarser_crown_shape_classes_share_analyses_and_bad_values_are_refused() {
     let lib = lib();
     let (trees, targets) = stand(&lib);
-    let fine = run(&trees, &targets, &lib, exact());
-    let coarse = run(&trees, &targets, &lib, StandOptions { shape_step: 1.1025, ..exact() });
+    let fine = run(&trees, &targets, &lib, exact_options());
+    let coarse = run(&trees, &targets, &lib, StandOptions { shape_step: 1.1025, ..exact_options() });
     assert!(coarse.analyses < fine.analyses, "analyses {} at 1.05², {} at 1.05", coarse.analyses, fine.analyses);
     for (a, b) in fine.trees.iter().zip(&coarse.trees) {
         let (rf, rc) = (radius(&trees, a), radius(&trees, b));
@@ -143,15 +143,16 @@ fn coarser_crown_shape_classes_share_analyses_and_bad_values_are_refused() {
 /// 10.25 %, together against the exact stand: fewer analyses; every crown's mean radius within
 /// 10 % of the exact one's, its live nodes within 10 % and its bole within 3° of the vertical;
 /// the mean light of the leaf clusters (the stand's shade, which the light model and the leaf
-/// density of eq. 12 read) within 0.01 of the exact stand's (crowns of other classes are not
-/// compared cluster by cluster: their clusters differ).
+/// density of eq. 12 read) within 0.005 of the exact stand's (crowns of other classes are not
+/// compared cluster by cluster: their clusters differ). Measured: radii within 1.6 %, the same
+/// live nodes, leans 0.2–0.4°, mean light 0.0529 against 0.0533.
 #[test]
 fn the_default_sharing_keeps_the_crowns_and_their_light() {
     let lib = lib();
     let (trees, targets) = stand(&lib);
     let d = StandOptions::default();
     assert_eq!((d.bend_light_cell_m, d.leaf_light_cell_m, d.shape_step), (BEND_LIGHT_CELL_M, 0.0, SHAPE_STEP));
-    let exact = run(&trees, &targets, &lib, exact());
+    let exact = run(&trees, &targets, &lib, exact_options());
     let shared = run(&trees, &targets, &lib, d);
     assert!(shared.analyses < exact.analyses, "analyses {} by default, {} exact", shared.analyses, exact.analyses);
     let mean_light = |s: &Stand| {
@@ -169,5 +170,5 @@ fn the_default_sharing_keeps_the_crowns_and_their_light() {
     }
     let (la, lb) = (mean_light(&exact), mean_light(&shared));
     eprintln!("mean leaf-cluster light {la:.4} exact, {lb:.4} by default");
-    assert!((lb - la).abs() < 0.01, "mean leaf-cluster light {lb} by default against {la}");
+    assert!((lb - la).abs() < 0.005, "mean leaf-cluster light {lb} by default against {la}");
 }
