@@ -17,10 +17,12 @@
 //! issue 32's near field) instead of `DEFAULT_MAX_STRANDS`. `SYLVA_STAND_SKY_RINGS=4,8` sets the
 //! sky's rings (`StandOptions::sky_rings`, default 4,8,12: 24 directions); `SYLVA_STAND_HEIGHT_STEP=S`
 //! sets the height classes' step (`StandOptions::height_step`, default 1.25); `SYLVA_STAND_SHAPE_STEP=S`
-//! the crown-shape classes' step (`StandOptions::shape_step`, default 1.05); `SYLVA_STAND_BEND_CELL=M`
-//! and `SYLVA_STAND_LEAF_CELL=M` the cubes (m) within which the bending light and the last level's
-//! leaf-cluster light share one query (`StandOptions::bend_light_cell_m`, `leaf_light_cell_m`,
-//! default 0: every point its own); `SYLVA_STAND_TREES=FILE`
+//! the crown-shape classes' step (`StandOptions::shape_step`, default 1.1025 since round 41, 1.05
+//! before); `SYLVA_STAND_BEND_CELL=M` and `SYLVA_STAND_LEAF_CELL=M` the cubes (m) within which the
+//! bending light and the last level's leaf-cluster light share one query
+//! (`StandOptions::bend_light_cell_m`, default 0.25 since round 41, 0 before; `leaf_light_cell_m`,
+//! default 0: every point its own); `SYLVA_STAND_BEND_CELL=0 SYLVA_STAND_SHAPE_STEP=1.05` gives
+//! round 40's exact near field (fingerprint `6ff74109f4fe3705` at 1,000 targets); `SYLVA_STAND_TREES=FILE`
 //! writes one CSV row per target (index, live nodes, leaves, crown radius, height); `SYLVA_STAND_DUMP=FILE`
 //! writes every target's leaf clusters (`AdaptedTree::leaf_clusters`, in order) as
 //! little-endian f32 rows (tree index, centre x, y, z (m), light i, light in the analysis i_l0,

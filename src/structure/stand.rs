@@ -28,12 +28,12 @@
 //!    alone on flat ground under the site's sky, one analysis per class and shared by the
 //!    class's trees through uniform scaling about the base ([`PlasticTree::scale`], section 4's
 //!    quantities scale with the tree): a class is the species, age class, crown-base class, the
-//!    crown's shape R/H within [`StandOptions::shape_step`] (default [`DIM_STEP`], 5 %) and, for
+//!    crown's shape R/H within [`StandOptions::shape_step`] (default [`SHAPE_STEP`], 10.25 %) and, for
 //!    the adapted trees, the height within [`StandOptions::height_step`] (default
 //!    [`HEIGHT_STEP`], 25 %). An adapted tree is its class's analysed tree scaled to its exact
 //!    height (a factor within ±12 %: its clusters keep the transmittance of the class's
 //!    clusters, γ_c0 of eq. 4 becoming γ_c0^(1/factor)), and after the adaptation its crown is
-//!    stretched to its exact radius (at most ±2.5 % at the default shape step). A context tree (step 3) is analysed
+//!    stretched to its exact radius (at most ±5 % at the default shape step). A context tree (step 3) is analysed
 //!    without light ([`PlasticTree::standing`]: it only shades and blocks), scaled to its exact
 //!    height and given back its species' γ_c0, so it casts the shade of the tree at its size.
 //!    Until round 23 a class was the height and the crown radius within 5 % each and every
@@ -78,13 +78,16 @@
 //!    crown above it bends as before. Trees of a capped cache (the open-grown tree shed below
 //!    the crown base) and trees grown alone are not changed. BENCHMARKS.md, "Round 36 (issue
 //!    32 stems)".
-//! 6. **Shared light queries (off by default).** [`StandOptions::bend_light_cell_m`] lets the
-//!    nodes an adapted tree bends at one level share the bending light of the first node of
-//!    their cube, and [`StandOptions::leaf_light_cell_m`] lets a forest-grown tree's leaf
-//!    clusters share the last level's light the same way ([`PlasticTree::bend_light_cell_m`],
+//! 6. **Shared light queries.** [`StandOptions::bend_light_cell_m`] lets the nodes an adapted
+//!    tree bends at one level share the bending light of the first node of their cube (default
+//!    [`BEND_LIGHT_CELL_M`], 0.25 m, since round 41), and [`StandOptions::leaf_light_cell_m`]
+//!    lets a forest-grown tree's leaf clusters share the last level's light the same way (off by
+//!    default: its error is three times the chaos floor) ([`PlasticTree::bend_light_cell_m`],
 //!    [`PlasticTree::leaf_light_cell_m`]); [`StandOptions::shape_step`] coarsens the crown-shape
-//!    classes. None is exact; what each saves and changes on the near field of
-//!    `benches/stand.rs` is in BENCHMARKS.md, "Round 40 (r40n: ...)".
+//!    classes (default [`SHAPE_STEP`], 10.25 %, since round 41). None is exact; what each saves
+//!    and changes on the near field of `benches/stand.rs` is in BENCHMARKS.md, "Round 40 (r40n:
+//!    ...)" and "Round 41 (r41n: ...)"; 0, 0 and [`DIM_STEP`] give round 40's stands bit for
+//!    bit.
 
 use super::grow::ecomod;
 use super::species_tree::{ecomod_strands_at, ECOMOD_FULL_AGE_YR};
@@ -162,8 +165,23 @@ pub fn crown_base_class(height_m: f32, crown_base_m: f32) -> u16 {
 pub type FormKey = (u16, u16, u16);
 
 /// Relative step (5 %) of the crown-shape classes (crown radius over height, R/H) that share
-/// one analysis ([`adapt_stand`] step 2).
+/// one analysis ([`adapt_stand`] step 2) until round 40; the default since round 41 is
+/// [`SHAPE_STEP`].
 pub const DIM_STEP: f32 = 1.05;
+
+/// Default relative step of the crown-shape classes ([`StandOptions::shape_step`]): 1.05²
+/// (10.25 %), so an adapted crown is stretched to its exact radius by at most ±5 %. Round 40
+/// measured it on the 1,000 targets of `benches/stand.rs`: 591 analyses instead of 836, −6.5 %
+/// CPU, crowns that differ as other classes' crowns do; round 41 made it the default
+/// (BENCHMARKS.md, "Round 40 (r40n: ...)" and "Round 41 (r41n: ...)").
+pub const SHAPE_STEP: f32 = DIM_STEP * DIM_STEP;
+
+/// Default side (m) of the cubes within which an adapted tree's nodes bent at one level share
+/// one bending-light query ([`StandOptions::bend_light_cell_m`]): 0.25 m. Round 40 measured it
+/// on the 1,000 targets of `benches/stand.rs`: −6.4 % CPU, the leaf clusters' light moved by
+/// 1.7·10⁻³ on average (p99 0.038), as much as f32-rounding-level changes move it in this
+/// chaotic adaptation (round 38); round 41 made it the default (BENCHMARKS.md).
+pub const BEND_LIGHT_CELL_M: f32 = 0.25;
 
 /// Relative step (25 %) of the height classes of the adapted trees that share one analysis
 /// ([`adapt_stand`] step 2): a tree is its class's tree scaled by a factor within
@@ -204,12 +222,13 @@ pub struct StandOptions {
     pub height_step: f32,
     /// Relative step of the crown-shape classes (crown radius over height, R/H) that share one
     /// analysis (> 1, at most 2): a tree's crown is its class's, stretched after the adaptation
-    /// to its exact radius by a factor within `shape_step`^(±1/2). Default [`DIM_STEP`] (1.05,
-    /// ±2.5 %); a coarser step shares analyses across crown shapes (BENCHMARKS.md, round 40).
+    /// to its exact radius by a factor within `shape_step`^(±1/2). Default [`SHAPE_STEP`]
+    /// (1.1025, ±5 %; [`DIM_STEP`], 1.05, until round 40); a coarser step shares analyses across
+    /// crown shapes (BENCHMARKS.md, rounds 40 and 41).
     pub shape_step: f32,
     /// Side (m, ≥ 0) of the cubes within which an adapted tree's nodes bent at one level share
-    /// one bending-light query ([`PlasticTree::bend_light_cell_m`]; 0: every node its own, exact).
-    /// Default 0.
+    /// one bending-light query ([`PlasticTree::bend_light_cell_m`]; 0: every node its own, exact,
+    /// as until round 40). Default [`BEND_LIGHT_CELL_M`] (0.25 m).
     pub bend_light_cell_m: f32,
     /// Side (m, ≥ 0) of the cubes within which a forest-grown adapted tree's leaf clusters share
     /// one light query at the last level ([`PlasticTree::leaf_light_cell_m`]: only the clusters'
@@ -219,9 +238,11 @@ pub struct StandOptions {
 
 impl Default for StandOptions {
     /// Cells of 12 m, a halo of 6 m, latitude 47° N, no obstacles, the default sky
-    /// ([`DEFAULT_RINGS`]), height classes of [`HEIGHT_STEP`].
+    /// ([`DEFAULT_RINGS`]), height classes of [`HEIGHT_STEP`], crown-shape classes of
+    /// [`SHAPE_STEP`], bending light shared in cubes of [`BEND_LIGHT_CELL_M`], every leaf
+    /// cluster its own light query.
     fn default() -> Self {
-        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec(), height_step: HEIGHT_STEP, shape_step: DIM_STEP, bend_light_cell_m: 0.0, leaf_light_cell_m: 0.0 }
+        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec(), height_step: HEIGHT_STEP, shape_step: SHAPE_STEP, bend_light_cell_m: BEND_LIGHT_CELL_M, leaf_light_cell_m: 0.0 }
     }
 }
 
@@ -572,7 +593,7 @@ pub struct Stand {
 }
 
 /// Analysis class of a tree ([`adapt_stand`] step 2): species, age class, crown-shape class
-/// (R/H in steps of [`StandOptions::shape_step`], default [`DIM_STEP`]), crown-base class,
+/// (R/H in steps of [`StandOptions::shape_step`], default [`SHAPE_STEP`]), crown-base class,
 /// height class (steps of [`StandOptions::height_step`], default [`HEIGHT_STEP`]; 0 for a
 /// context tree) and whether it is a context tree.
 type ClassKey = (u16, u16, i32, u16, i32, bool);

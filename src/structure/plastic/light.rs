@@ -5,7 +5,7 @@
 
 use crate::structure::grow::space::Obstacle;
 use crate::error::{Error, Result};
-use glam::{Vec2, Vec3};
+use glam::{BVec4A, Vec2, Vec3, Vec4};
 
 /// Rings of the default sky quadrature ([`Sky::toward`]): direction counts of the rings around
 /// the brightest sky point, multiples of 4 so that a sky with its brightest point at the zenith
@@ -501,35 +501,19 @@ impl DirGrid {
         }
         let c = y * self.nx + x;
         let pw = p.dot(self.d);
+        let at = (Vec4::splat(pu), Vec4::splat(pv), Vec4::splat(pw));
         let mut t = 1.0f32;
         for bi in self.start[c] as usize..self.start[c + 1] as usize {
             let b = &self.blocks[bi];
-            // per slot an all-ones mask where the caster is hit, else 0
-            let mut hit = [0u32; LANES];
-            for k in 0..LANES {
-                let (du, dv, along) = (b.u[k] - pu, b.v[k] - pv, b.w[k] - pw);
-                let lat2 = du * du + dv * dv;
-                hit[k] = 0u32.wrapping_sub(((along > 0.0) & (lat2 <= b.r2[k]) & (lat2 + along * along > b.r2[k])) as u32);
-            }
+            // per half block a lane mask of the casters hit
+            let (mut lo, mut hi) = (b.hits(0, at), b.hits(4, at));
             if let Some(own) = skip {
                 let os = &self.owner[bi];
-                for k in 0..LANES {
-                    hit[k] &= 0u32.wrapping_sub((os[k] != own) as u32);
-                }
+                let other = |k: usize| BVec4A::new(os[k] != own, os[k + 1] != own, os[k + 2] != own, os[k + 3] != own);
+                (lo, hi) = (lo & other(0), hi & other(4));
             }
-            if hit.iter().fold(0, |a, &h| a | h) != 0 {
-                // branch-free: a caster missed multiplies by exactly 1, so the product is the
-                // hits' product in slot order, bit for bit; the factors chosen by bit masks
-                // (γ where hit, 1 elsewhere), which vectorise, where a `bool` per slot was
-                // tested slot by slot (measured, perf: the query's hottest lines)
-                let gs = &self.gamma[bi];
-                let mut m = [1.0f32; LANES];
-                for k in 0..LANES {
-                    m[k] = f32::from_bits((gs[k].to_bits() & hit[k]) | (1.0f32.to_bits() & !hit[k]));
-                }
-                for mk in m {
-                    t *= mk;
-                }
+            if (lo | hi).any() {
+                t = hit_product(t, &self.gamma[bi], lo, hi);
                 if t < stop {
                     return None;
                 }
@@ -545,6 +529,36 @@ impl DirGrid {
 /// Distance (m) behind a query point beyond which a depth-sorted scan stops: far above the
 /// rounding of the along-ray distances (metres at f32), so no caster ahead is ever skipped.
 const DEPTH_SLACK: f32 = 1e-3;
+
+impl Block {
+    /// Lane mask of the casters `o..o + 4` of the block hit by the ray from the point at
+    /// `(u, v, w)` (each splat over the lanes; the grid's coordinates, m) along the grid's
+    /// direction: along = w_c − w > 0, lateral² = Δu² + Δv² ≤ r², lateral² + along² > r², the
+    /// operations of [`DirGrid::product`]'s test in the same order (the same bits).
+    #[inline(always)]
+    fn hits(&self, o: usize, (u, v, w): (Vec4, Vec4, Vec4)) -> BVec4A {
+        let du = Vec4::from_slice(&self.u[o..o + 4]) - u;
+        let dv = Vec4::from_slice(&self.v[o..o + 4]) - v;
+        let along = Vec4::from_slice(&self.w[o..o + 4]) - w;
+        let r2 = Vec4::from_slice(&self.r2[o..o + 4]);
+        let lat2 = du * du + dv * dv;
+        along.cmpgt(Vec4::ZERO) & lat2.cmple(r2) & (lat2 + along * along).cmpgt(r2)
+    }
+}
+
+/// `t` multiplied by the transmittance `gamma` of every slot of a block whose lane is set in
+/// `lo` (slots 0–3) or `hi` (slots 4–7), in slot order: a slot missed multiplies by exactly 1,
+/// so the product is the hits' product in slot order, bit for bit. The factors are chosen by
+/// vector selects (γ where hit, 1 elsewhere); a select per slot written on scalars was compiled
+/// into a conditional branch per slot, which mispredicts on the hit pattern (perf annotate of
+/// the round-40 stand bench: those branches held 17 % of the query's samples; BENCHMARKS.md,
+/// round 41).
+#[inline(always)]
+fn hit_product(t: f32, gamma: &[f32; LANES], lo: BVec4A, hi: BVec4A) -> f32 {
+    let a = Vec4::select(lo, Vec4::from_slice(&gamma[..4]), Vec4::ONE);
+    let b = Vec4::select(hi, Vec4::from_slice(&gamma[4..]), Vec4::ONE);
+    t * a.x * a.y * a.z * a.w * b.x * b.y * b.z * b.w
+}
 
 impl Casters {
     /// Every occluder of `occ` in order, tagged with `owners` when it holds one per occluder,
@@ -563,45 +577,44 @@ impl Casters {
     }
 
     /// Multiplies `t` by the transmittance of every caster of the block of [`LANES`] casters
-    /// from `i` that the ray from `p` along `d` hits (the ray passes through the caster's sphere
+    /// from `i` that the ray from p along d (given per component, each splat over the lanes:
+    /// `d` = (d.x, d.y, d.z), `p` likewise) hits (the ray passes through the caster's sphere
     /// ahead of `p`, and `p` is outside it), in caster order, leaving out the casters owned by
     /// `skip` (when given; the casters are then tagged), and returns it: the arithmetic of
-    /// glam's `Vec3::dot`/`length_squared` written per component so the hit tests vectorise.
+    /// glam's `Vec3::dot`/`length_squared` written per component, four lanes at a time ([`Vec4`]), in
+    /// the same order (the same bits), and the factors chosen as in [`hit_product`].
     #[inline]
-    fn block(&self, d: Vec3, i: usize, p: Vec3, mut t: f32, skip: Option<u32>) -> f32 {
-        let j = i..i + LANES;
+    fn block(&self, (dx, dy, dz): (Vec4, Vec4, Vec4), i: usize, (px, py, pz): (Vec4, Vec4, Vec4), t: f32, skip: Option<u32>) -> f32 {
         let (Ok(xs), Ok(ys), Ok(zs), Ok(rs), Ok(gs)) = (
-            <&[f32; LANES]>::try_from(&self.x[j.clone()]),
-            <&[f32; LANES]>::try_from(&self.y[j.clone()]),
-            <&[f32; LANES]>::try_from(&self.z[j.clone()]),
-            <&[f32; LANES]>::try_from(&self.r2[j.clone()]),
-            <&[f32; LANES]>::try_from(&self.gamma[j]),
+            <&[f32; LANES]>::try_from(&self.x[i..i + LANES]),
+            <&[f32; LANES]>::try_from(&self.y[i..i + LANES]),
+            <&[f32; LANES]>::try_from(&self.z[i..i + LANES]),
+            <&[f32; LANES]>::try_from(&self.r2[i..i + LANES]),
+            <&[f32; LANES]>::try_from(&self.gamma[i..i + LANES]),
         ) else {
             return t; // unreachable: runs are padded to whole blocks
         };
-        let mut hit = [false; LANES];
-        for k in 0..LANES {
-            let (ox, oy, oz) = (xs[k] - p.x, ys[k] - p.y, zs[k] - p.z);
-            let along = ox * d.x + oy * d.y + oz * d.z;
+        let hits = |o: usize| {
+            let (ox, oy, oz) = (Vec4::from_slice(&xs[o..o + 4]) - px, Vec4::from_slice(&ys[o..o + 4]) - py, Vec4::from_slice(&zs[o..o + 4]) - pz);
+            let along = ox * dx + oy * dy + oz * dz;
             let l2 = ox * ox + oy * oy + oz * oz;
-            hit[k] = (along > 0.0) & (l2 > rs[k]) & (l2 - along * along <= rs[k]);
-        }
+            let r2 = Vec4::from_slice(&rs[o..o + 4]);
+            along.cmpgt(Vec4::ZERO) & l2.cmpgt(r2) & (l2 - along * along).cmple(r2)
+        };
+        let (mut lo, mut hi) = (hits(0), hits(4));
         if let Some(own) = skip {
             let Ok(os) = <&[u32; LANES]>::try_from(&self.owner[i..i + LANES]) else {
                 return t; // unreachable: tagged casters have an owner per slot
             };
-            for k in 0..LANES {
-                hit[k] &= os[k] != own;
-            }
+            let other = |k: usize| BVec4A::new(os[k] != own, os[k + 1] != own, os[k + 2] != own, os[k + 3] != own);
+            (lo, hi) = (lo & other(0), hi & other(4));
         }
         // most blocks hit nothing: one test of the whole block, then the hits in order
-        if hit.iter().fold(false, |a, &h| a | h) {
-            // branch-free: a caster missed multiplies by exactly 1 (the hits' product, in order)
-            for k in 0..LANES {
-                t *= if hit[k] { gs[k] } else { 1.0 };
-            }
+        if (lo | hi).any() {
+            hit_product(t, gs, lo, hi)
+        } else {
+            t
         }
-        t
     }
 
     /// Π γ of the casters of the slots `r` (whole blocks) hit by the ray from `p` along `d`,
@@ -612,8 +625,9 @@ impl Casters {
     fn product_until(&self, d: Vec3, r: std::ops::Range<usize>, p: Vec3, stop: f32, skip: Option<u32>) -> Option<f32> {
         let mut t = 1.0f32;
         let mut i = r.start;
+        let (dv, pv) = ((Vec4::splat(d.x), Vec4::splat(d.y), Vec4::splat(d.z)), (Vec4::splat(p.x), Vec4::splat(p.y), Vec4::splat(p.z)));
         while i < r.end {
-            t = self.block(d, i, p, t, skip);
+            t = self.block(dv, i, pv, t, skip);
             if t < stop {
                 return None;
             }
