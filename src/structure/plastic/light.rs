@@ -508,9 +508,8 @@ impl DirGrid {
             // per half block a lane mask of the casters hit
             let (mut lo, mut hi) = (b.hits(0, at), b.hits(4, at));
             if let Some(own) = skip {
-                let os = &self.owner[bi];
-                let other = |k: usize| BVec4A::new(os[k] != own, os[k + 1] != own, os[k + 2] != own, os[k + 3] != own);
-                (lo, hi) = (lo & other(0), hi & other(4));
+                let (olo, ohi) = others(&self.owner[bi], own);
+                (lo, hi) = (lo & olo, hi & ohi);
             }
             if (lo | hi).any() {
                 t = hit_product(t, &self.gamma[bi], lo, hi);
@@ -544,6 +543,14 @@ impl Block {
         let lat2 = du * du + dv * dv;
         along.cmpgt(Vec4::ZERO) & lat2.cmple(r2) & (lat2 + along * along).cmpgt(r2)
     }
+}
+
+/// Lane masks (slots 0–3, 4–7) of a block's casters whose owner is not `own`: the casters a
+/// query that leaves out `own`'s tree may hit.
+#[inline]
+fn others(os: &[u32; LANES], own: u32) -> (BVec4A, BVec4A) {
+    let m = |k: usize| BVec4A::new(os[k] != own, os[k + 1] != own, os[k + 2] != own, os[k + 3] != own);
+    (m(0), m(4))
 }
 
 /// `t` multiplied by the transmittance `gamma` of every slot of a block whose lane is set in
@@ -606,8 +613,8 @@ impl Casters {
             let Ok(os) = <&[u32; LANES]>::try_from(&self.owner[i..i + LANES]) else {
                 return t; // unreachable: tagged casters have an owner per slot
             };
-            let other = |k: usize| BVec4A::new(os[k] != own, os[k + 1] != own, os[k + 2] != own, os[k + 3] != own);
-            (lo, hi) = (lo & other(0), hi & other(4));
+            let (olo, ohi) = others(os, own);
+            (lo, hi) = (lo & olo, hi & ohi);
         }
         // most blocks hit nothing: one test of the whole block, then the hits in order
         if (lo | hi).any() {
