@@ -49,31 +49,34 @@ fn round_trip_and_old_layouts_refused_with_a_clear_message() {
     assert!(e.contains("truncated"), "{e}");
 }
 
-/// Checkpoints are zstd-compressed (layout base 7, issue 34); an uncompressed checkpoint of the
-/// layout before (base 6: the same identity and body, as an earlier Sylva wrote them) is still
-/// read, so a run stopped by it resumes.
+/// Checkpoints are zstd-compressed (layout base 7, issue 34). Since layout 10 (round 42) the
+/// stand table's rows hold the per-species rows and year 0: a checkpoint of an older layout (the
+/// uncompressed 6, the compressed 7) is refused, naming its version, not misread.
 #[test]
-fn compressed_checkpoints_and_the_uncompressed_layout_before_are_read() {
+fn compressed_checkpoints_read_and_the_layouts_before_refused_naming_their_version() {
     let (sc, mut w) = world();
     let rows = common::run(&sc, &mut w, 3);
     let bytes = to_bytes(&w, &rows);
-    assert_eq!(LAYOUT_VERSION >> 16, 7);
+    assert_eq!(LAYOUT_VERSION >> 16, 10);
+    assert!(rows.iter().all(|r| r.species.len() == w.site.pool.len()), "every row holds its per-species rows");
     // the identity and body: one zstd frame between the file length and the checksum
     let plain_body = zstd::stream::decode_all(&bytes[20..bytes.len() - 4]).unwrap();
     assert!(plain_body.len() > bytes.len(), "compressed {} B, body {} B", bytes.len(), plain_body.len());
-    // the same checkpoint in the uncompressed layout 6
-    let mut old = b"SYLVACKV".to_vec();
-    old.extend_from_slice(&(6 << 16 | (LAYOUT_VERSION & 0xffff)).to_le_bytes());
-    old.extend_from_slice(&[0; 8]);
-    old.extend_from_slice(&plain_body);
-    old.extend_from_slice(&[0; 4]);
-    sylva::sim::checkpoint::reseal(&mut old);
     let p = Path::new("run/checkpoint.bin");
-    for (what, b) in [("compressed", &bytes), ("uncompressed layout 6", &old)] {
-        let (_, mut fresh) = world();
-        assert_eq!(restore(&mut fresh, b, p).unwrap(), rows, "{what}");
-        assert_eq!(fresh.stand.trees, w.stand.trees, "{what}");
-        assert_eq!(fresh.stand.cohorts, w.stand.cohorts, "{what}");
+    let (_, mut fresh) = world();
+    assert_eq!(restore(&mut fresh, &bytes, p).unwrap(), rows);
+    assert_eq!(fresh.stand.trees, w.stand.trees);
+    assert_eq!(fresh.stand.cohorts, w.stand.cohorts);
+    // the layouts before: uncompressed 6, compressed 7
+    for (base, body) in [(6u32, &plain_body[..]), (7, &bytes[20..bytes.len() - 4])] {
+        let mut old = b"SYLVACKV".to_vec();
+        old.extend_from_slice(&(base << 16 | (LAYOUT_VERSION & 0xffff)).to_le_bytes());
+        old.extend_from_slice(&[0; 8]);
+        old.extend_from_slice(body);
+        old.extend_from_slice(&[0; 4]);
+        sylva::sim::checkpoint::reseal(&mut old);
+        let e = restore(&mut world().1, &old, p).unwrap_err().to_string();
+        assert!(e.starts_with("run/checkpoint.bin: ") && e.contains(&format!("layout version {base}.")) && e.contains("differs from this build's 10.") && e.contains("without --resume"), "{e}");
     }
     // a frame that does not decode, sealed with a matching checksum, is refused by name
     let mut bad = bytes.clone();

@@ -126,7 +126,7 @@ fn main_job_reduced_scenario_writes_every_output() {
     let mut rdr = csv::Reader::from_path(out.join("stand_table.csv")).unwrap();
     let headers = rdr.headers().unwrap().clone();
     let rows: Vec<csv::StringRecord> = rdr.records().map(|r| r.unwrap()).collect();
-    assert_eq!(rows.len(), 6, "one row per year");
+    assert_eq!(rows.len(), 7, "one row per year, and year 0's (the planting)");
     let last = rows.last().unwrap();
     let ba: f64 = last[headers.iter().position(|h| h == "basal_area_m2_ha").unwrap()].parse().unwrap();
     assert!(ba > 0.5, "the planted beech has basal area, got {ba}");

@@ -113,6 +113,7 @@ pub const OUTPUTS: &[Output] = &[
     Output { path: "maps/{species,basal_area}_year_NNNN.{png,tif}", when: When::Snapshot, main_job_only: false, what: "dominant species and basal-area maps" },
     Output { path: "maps/species_codes.csv", when: When::Snapshot, main_job_only: false, what: "the codes of the species GeoTIFFs" },
     Output { path: "stand_table.{csv,png}", when: When::Checkpoint, main_job_only: false, what: "one row per year, and its plot (also at every snapshot)" },
+    Output { path: "stand_table_species.csv", when: When::Checkpoint, main_job_only: false, what: "one row per year and species: stems, basal area, Dq, the species' H100, volume, and its deaths and harvest (also at every snapshot)" },
     Output { path: "management_table.csv", when: When::Checkpoint, main_job_only: false, what: "a run with `[[management]]`: one row per year and entry, the figures of the entry's area and its harvest (also at every snapshot)" },
     Output { path: "checkpoint.bin", when: When::Checkpoint, main_job_only: false, what: "the latest checkpoint (a tiled run: `checkpoint/`)" },
     Output { path: "checkpoint/*", when: When::Checkpoint, main_job_only: false, what: "per-rank checkpoints of a tiled run" },

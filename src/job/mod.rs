@@ -9,6 +9,7 @@ pub use error::{JobError, Result};
 pub mod adapted;
 pub mod checkpoint;
 pub mod crown_cover;
+pub mod disk;
 pub mod export;
 pub mod hemi;
 pub mod hydrology_ranks;

@@ -96,8 +96,11 @@ pub struct RunSummary {
     pub world: World,
     /// Living trees at the end (the whole landscape's, in a tiled run too).
     pub trees: usize,
-    /// Stand table, one row per year.
+    /// Stand table, one row per year simulated (years 1 and on; year 0 is [`RunSummary::year0`]).
     pub rows: Vec<StandRow>,
+    /// The stand table's year-0 row: the state after the `[[start]]` plantings, before any
+    /// growth (the first row of `stand_table.csv`; trial 41, defect 7).
+    pub year0: Option<StandRow>,
     /// True when stopped early by the stop flag.
     pub stopped: bool,
     /// Wall time of the years simulated in this call (s).
@@ -301,9 +304,20 @@ pub fn harvested(r: &StandRow) -> bool {
 /// [`stand_table::management_table_csv`]).
 pub const MANAGEMENT_TABLE: &str = "management_table.csv";
 
+/// The disk a fresh run of `scenario` from `world` (year 0) with `opts` will write
+/// ([`super::disk::estimate`]).
+pub fn disk_estimate(scenario: &Scenario, world: &World, opts: &RunOptions) -> super::disk::DiskEstimate {
+    let w = super::disk::Writes { snapshots: opts.write_snapshots, inventory: opts.inventory, gpkg_years: opts.gpkg_years.as_deref(), map_px: opts.map_px };
+    super::disk::estimate(scenario, world, &w)
+}
+
+/// The per-species stand table's file in a run directory ([`stand_table::stand_table_species_csv`]).
+pub const SPECIES_TABLE: &str = "stand_table_species.csv";
+
 fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
     let names: Vec<&str> = w.site.pool.iter().map(|&s| w.site.lib.species[s as usize].id.as_str()).collect();
     stand_table::write_stand_table(&dir.join("stand_table.csv"), rows, &names, w.site.area_ha)?;
+    stand_table::write_stand_table_species(&dir.join(SPECIES_TABLE), rows, &names)?;
     // a run with `[[management]]`: the figures of each entry's area (issue 35 round 38)
     if rows.iter().any(|r| !r.management.is_empty()) {
         stand_table::write_management_table(&dir.join(MANAGEMENT_TABLE), rows, &names)?;
@@ -342,6 +356,14 @@ pub trait Stepper {
     ///
     /// Errors: the stepper's (a tiled run's exchange).
     fn begin(&mut self, world: &World) -> Result<()>;
+    /// The stand table's year-0 row of a fresh run, after [`Stepper::begin`] (or
+    /// [`Stepper::begin_shed`]): the start's trees, before any growth. Default: one process's
+    /// [`crate::sim::stats::stand_row`] of `world`.
+    ///
+    /// Errors: the stepper's (a tiled run's exchange).
+    fn start_row(&mut self, world: &World) -> Result<StandRow> {
+        Ok(crate::sim::stats::stand_row(world))
+    }
     /// Simulates one year of `world` into `report`, calling `on_season` after the phases that
     /// end a season when `seasonal`. With `full` false the stepper may leave `world` partly
     /// stale (a tiled run's rank 0 then holds only the year and the stand table row);
@@ -492,6 +514,14 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     } else {
         stepper.world(site, lib, scenario, lean)?
     };
+    // the disk its outputs will take, said before a fresh run starts, and a run that would
+    // fill the disk refused before it writes anything (round 42, trial 41 defect 14)
+    if !resuming {
+        let e = disk_estimate(scenario, &world, &opts);
+        let free = super::disk::free_bytes(&dir);
+        eprintln!("{}", super::disk::note(&e, &dir, free));
+        super::disk::check(&e, &dir, free)?;
+    }
     if let Some(f) = opts.on_start.as_mut() {
         f()?;
     }
@@ -631,6 +661,11 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
     } else {
         stepper.begin(&world)?;
     }
+    // a fresh run's stand table starts with year 0, the start's trees before any growth
+    // (trial 41, defect 7); a resumed run's rows hold it already (from its checkpoint)
+    if !resume {
+        rows.push(stepper.start_row(&world)?);
+    }
     let t0 = Instant::now();
     let mut stopped = false;
     while world.stand.year < scenario.years {
@@ -722,5 +757,6 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
             break;
         }
     }
-    Ok(RunSummary { world, trees, rows, stopped, seconds: t0.elapsed().as_secs_f64() })
+    let year0 = (rows.first().is_some_and(|r| r.year == 0)).then(|| rows.remove(0));
+    Ok(RunSummary { world, trees, rows, year0, stopped, seconds: t0.elapsed().as_secs_f64() })
 }

@@ -96,11 +96,14 @@ pub enum Command {
     /// files that overlap it ([`resume_tile`]; a resumed run whose rank 0 holds its tile only,
     /// issue 37 Build 1, round 37: instead of [`Command::Resume`] and [`Command::Begin`]).
     ResumeRanks = 11,
+    /// Add up the stand table's row of the tiles as they stand, year 0's
+    /// ([`Tile::start_row`]; round 42, trial 41 defect 7).
+    Row = 12,
 }
 
 impl Command {
     fn from_byte(b: u8) -> Option<Command> {
-        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout, Command::Start, Command::ResumeRanks].into_iter().find(|c| *c as u8 == b)
+        [Command::Begin, Command::Step, Command::StepFull, Command::Complete, Command::End, Command::Save, Command::Resume, Command::Snapshot, Command::Layout, Command::Start, Command::ResumeRanks, Command::Row].into_iter().find(|c| *c as u8 == b)
     }
 }
 
@@ -115,7 +118,7 @@ fn command(t: &mut dyn Transport, c: Option<Command>) -> Result<Command> {
     };
     let got = t.exchange(out)?;
     let b = got.first().and_then(|m| m.first()).copied().unwrap_or(0);
-    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–11)") })?)
+    Ok(Command::from_byte(b).ok_or(Error::Exchange { peer: 0, reason: format!("unknown command byte {b} (expected 1–12)") })?)
 }
 
 /// Rank 0 sends every rank `k` the year and `paths[k]` (a per-rank checkpoint file); the others
@@ -1043,6 +1046,14 @@ impl Stepper for Root<'_> {
         }
         Ok(())
     }
+    /// Year 0's row from the ranks' tiles ([`Command::Row`], [`Tile::start_row`]).
+    ///
+    /// Errors: [`Error::Exchange`] from the transport.
+    fn start_row(&mut self, _: &World) -> Result<StandRow> {
+        command(self.t, Some(Command::Row))?;
+        let r = self.collective(|tile, t| Ok(tile.start_row(t)?))?;
+        Ok(r.ok_or_else(|| Error::Exchange { peer: 0, reason: "rank 0 got no year-0 row".into() })?)
+    }
     fn step(&mut self, world: &mut World, _: &Scenario, report: &mut YearReport, full: bool, _: &mut dyn FnMut(Season, &World)) -> Result<()> {
         command(self.t, Some(if full { Command::StepFull } else { Command::Step }))?;
         let base = self.base.clone();
@@ -1251,6 +1262,9 @@ pub fn work(scenario: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, t: 
             }
             (Command::Step, Some(tl)) => {
                 tl.step(t)?;
+            }
+            (Command::Row, Some(tl)) => {
+                tl.start_row(t)?;
             }
             (Command::StepFull, Some(tl)) => {
                 tl.step(t)?;

@@ -49,21 +49,73 @@ pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     s
 }
 
-/// [`stand_table_csv`] with a last column `area_ha`: the site's unmasked area (ha) that the
+/// [`stand_table_csv`] with two last columns: `area_ha`, the site's unmasked area (ha) that the
 /// per-hectare columns divide by, the same in every row, so the site totals (`regen_*`,
-/// `deaths_*`) convert to rates per hectare (trial 36: the area was written nowhere).
+/// `deaths_*`) convert to rates per hectare (trial 36: the area was written nowhere); then
+/// `deaths_volume_m3_ha`, the stem volume (m³/ha, DBH ≥ 7 cm) of the trees that died of
+/// natural causes in the year (all but harvest: [`StandRow::deaths_volume_m3_ha`]; round 42,
+/// trial 41 defect 2), so gross total production is `volume_m3_ha` plus the running sums of
+/// `deaths_volume_m3_ha` and `harvest_volume_m3_ha`.
 pub fn stand_table_csv_with_area(rows: &[StandRow], species: &[&str], area_ha: f64) -> String {
     let body = stand_table_csv(rows, species);
-    let mut s = String::with_capacity(body.len() + 12 * (rows.len() + 1));
+    let mut s = String::with_capacity(body.len() + 24 * (rows.len() + 1));
     for (k, line) in body.lines().enumerate() {
         s.push_str(line);
         if k == 0 {
-            s.push_str(",area_ha\n");
+            s.push_str(",area_ha,deaths_volume_m3_ha\n");
         } else {
-            let _ = writeln!(s, ",{area_ha:.4}");
+            let _ = writeln!(s, ",{area_ha:.4},{:.2}", rows[k - 1].deaths_volume_m3_ha);
         }
     }
     s
+}
+
+/// CSV text of the per-species stand table (`stand_table_species.csv`; round 42, trial 41
+/// defect 2): one row per year and pool species (`species` = pool ids in pool order; years
+/// ascending, species in pool order), each per hectare of the site's unmasked area:
+/// `year,species,stems_ha,basal_area_m2_ha,qmd_cm,top_height_m,volume_m3_ha,deaths_stems_ha,
+/// deaths_volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha,deaths_<cause>_stems_ha…,
+/// deaths_<cause>_volume_m3_ha…` — stems ≥ 1.3 m, their basal area (m²/ha) and quadratic mean
+/// DBH (cm), the species' own top height (m: the mean height of its 100 thickest stems per ha,
+/// [`crate::sim::stats::SpeciesRow::top_height_m`]), the standing stem volume of its stems with
+/// DBH ≥ 7 cm (m³/ha, [`crate::sim::stats::stem_volume_m3`], as the stand table's); then the
+/// year's deaths of natural causes (every cause but harvest: stems ≥ 1.3 m per ha and their
+/// volume, m³/ha), the year's harvest (the same for cause harvest), and the deaths by each cause
+/// ([`DeathCause::ALL`], harvest included). Over the species of a year, stems, basal area and
+/// volume add up to the stand table's `stems_ha`, `basal_area_m2_ha` and `volume_m3_ha`, and
+/// the deaths' volumes to its `deaths_volume_m3_ha` and `harvest_volume_m3_ha` (each within
+/// the printed rounding). Decimals as the stand table's. Rows without per-species figures are
+/// left out.
+pub fn stand_table_species_csv(rows: &[StandRow], species: &[&str]) -> String {
+    let mut s = String::from("year,species,stems_ha,basal_area_m2_ha,qmd_cm,top_height_m,volume_m3_ha,deaths_stems_ha,deaths_volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha");
+    for what in ["stems_ha", "volume_m3_ha"] {
+        for c in DeathCause::ALL {
+            let _ = write!(s, ",deaths_{}_{what}", c.name());
+        }
+    }
+    s.push('\n');
+    let h = DeathCause::Harvest.index();
+    for r in rows {
+        for (sp, v) in species.iter().zip(&r.species) {
+            let natural = |a: &[f64]| a.iter().enumerate().filter(|(c, _)| *c != h).map(|(_, x)| x).sum::<f64>();
+            let _ = write!(s, "{},{},{:.1},{:.3},{:.2},{:.2},{:.2},{:.1},{:.2},{:.1},{:.2}", r.year, csv_field(sp), v.stems_ha, v.basal_area_m2_ha, v.qmd_cm, v.top_height_m, v.volume_m3_ha, natural(&v.deaths_stems_ha), natural(&v.deaths_volume_m3_ha), v.deaths_stems_ha[h], v.deaths_volume_m3_ha[h]);
+            for x in v.deaths_stems_ha {
+                let _ = write!(s, ",{x:.1}");
+            }
+            for x in v.deaths_volume_m3_ha {
+                let _ = write!(s, ",{x:.2}");
+            }
+            s.push('\n');
+        }
+    }
+    s
+}
+
+/// Writes the per-species stand table ([`stand_table_species_csv`]) atomically.
+///
+/// Errors: [`super::OutputError::Io`] naming `path`.
+pub fn write_stand_table_species(path: &Path, rows: &[StandRow], species: &[&str]) -> Result<()> {
+    crate::output::write_atomic(path, stand_table_species_csv(rows, species).as_bytes())
 }
 
 /// Writes the stand table CSV ([`stand_table_csv_with_area`]) atomically; `area_ha` is the
@@ -78,7 +130,7 @@ pub fn write_stand_table(path: &Path, rows: &[StandRow], species: &[&str], area_
 /// ([`crate::sim::stats::EntryRow`]), years ascending, entries in scenario order:
 /// `year,entry,kind,method,area_ha,stems_ha,basal_area_m2_ha,volume_m3_ha,qmd_cm,top_height_m,
 /// harvest_stems_ha,harvest_volume_m3_ha,name,harvest_basal_area_m2_ha,cut_saplings_ha,
-/// ba_share_<sp>…,stem_share_<sp>…` — the entry's index (0 the first) and kind, its area's
+/// ba_share_<sp>…,stem_share_<sp>…,capped` — the entry's index (0 the first) and kind, its area's
 /// unmasked hectares, and over the trees standing in that area at the year's end the stand
 /// table's figures per hectare of the area (stems ≥ 1.3 m, basal area, volume of stems ≥ 7 cm
 /// DBH, quadratic mean DBH, top height: the area's, so entries on the same parcel show the same
@@ -87,12 +139,14 @@ pub fn write_stand_table(path: &Path, rows: &[StandRow], species: &[&str], area_
 /// ([`crate::sim::management::Management::display_name`]; quoted as RFC 4180 says where it holds
 /// a comma or quote), the basal area it removed (m²/ha), the sapling stems it cut (`keep_open`,
 /// per ha) and the species mix standing in the area: each pool species' share of the basal area
-/// and of the stems (`species` = pool ids in pool order, as the stand table's). Decimals as the
-/// stand table's. Just the header for rows without management.
+/// and of the stems (`species` = pool ids in pool order, as the stand table's); last (round 42,
+/// trial 41 defect 1) `capped`, `true` where the entry's `max_removal_share` stopped its
+/// thinning that year short of its target, else `false`. Decimals as the stand table's. Just
+/// the header for rows without management.
 pub fn management_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     let mut s = String::from("year,entry,kind,method,area_ha,stems_ha,basal_area_m2_ha,volume_m3_ha,qmd_cm,top_height_m,harvest_stems_ha,harvest_volume_m3_ha,name,harvest_basal_area_m2_ha,cut_saplings_ha");
     share_columns(&mut s, species);
-    s.push('\n');
+    s.push_str(",capped\n");
     for r in rows {
         for e in &r.management {
             let _ = write!(
@@ -120,7 +174,7 @@ pub fn management_table_csv(rows: &[StandRow], species: &[&str]) -> String {
             for k in 0..species.len() {
                 let _ = write!(s, ",{:.4}", e.stem_share.get(k).copied().unwrap_or(0.0));
             }
-            s.push('\n');
+            let _ = writeln!(s, ",{}", e.capped);
         }
     }
     s

@@ -11,8 +11,8 @@
 //! one zstd frame ([`ZSTD_LEVEL`], with its content size and checksum) of: identity: `u64` n,
 //! n × (string key, string value) | body (year, trees, seeds, cohorts, tallies, stand table) |
 //! `u32` CRC-32 of every byte before it (the compressed bytes). Strings are a `u64` byte count
-//! and UTF-8 bytes. The layout before it (base 6, [`PLAIN_BASE`]: the same identity and body
-//! uncompressed) is still read, so a run stopped by an earlier Sylva resumes.
+//! and UTF-8 bytes. Older layouts (6: uncompressed; 7 and the managed 9, whose stand tables
+//! have no year 0 and no per-species rows) are refused, naming their version.
 
 use super::stats::StandRow;
 use super::cohorts::{Cohorts, RegenLedger, N_REGEN_CAUSES};
@@ -31,19 +31,21 @@ const MAGIC: &[u8; 7] = b"SYLVACK";
 /// stored fields changes (the cause counts below are folded in by themselves). 5: file length,
 /// run identity and CRC-32 added (issue 16). 6: the stand table's volume, harvest and climate
 /// columns (issue 35). 7: identity and body zstd-compressed (issue 34: the default run's
-/// checkpoint of 1 M trees went from 64 to 36 MB).
-const LAYOUT_BASE: u32 = 7;
-
-/// The layout base of uncompressed checkpoints (identity and body as they are), still read.
-const PLAIN_BASE: u32 = 6;
+/// checkpoint of 1 M trees went from 64 to 36 MB). 10 (round 42, trial 41 defects 2 and 7):
+/// each stand-table row also holds the natural deaths' volume and the per-species rows, and
+/// the stand table starts with year 0; checkpoints of layouts 6 and 7 are refused, naming
+/// their version (their stand tables have neither).
+const LAYOUT_BASE: u32 = 10;
 
 /// The layout base of a checkpoint of a run with `[[management]]`: [`LAYOUT_BASE`]'s layout and
 /// the management table's rows after the stand table (issue 35 round 38). Written only by such
 /// runs, so every other run keeps layout 7's bytes, and a Sylva before it refuses a managed
 /// run's checkpoint naming both versions (rather than as corrupt). 9 (round 41): each row also
 /// holds the entry's name, the basal area it removed, the saplings it cut and the species
-/// shares of its area (a managed checkpoint of base 8 is refused, naming its version).
-const MANAGED_BASE: u32 = 9;
+/// shares of its area (a managed checkpoint of base 8 is refused, naming its version). 11
+/// (round 42): [`LAYOUT_BASE`] 10's rows, and each entry's row holds whether its
+/// `max_removal_share` stopped it (`capped`).
+const MANAGED_BASE: u32 = 11;
 
 /// zstd level of the checkpoint (1: 36.2 MB for the default run's 64 MB, 0.6 s; 3 saved 0.7 %
 /// more for 1.6 times the time).
@@ -75,8 +77,8 @@ fn describe(v: u32) -> String {
     format!("{}.{}.{} (layout, tree death causes, regeneration death causes)", v >> 16, (v >> 8) & 0xff, v & 0xff)
 }
 
-/// Checks the header of `bytes`; returns whether the identity and body are compressed (this
-/// layout) or not ([`PLAIN_BASE`], with the same cause counts).
+/// Checks the header of `bytes`; returns whether the identity and body are compressed (every
+/// layout this build reads is).
 ///
 /// Errors: [`Error::Format`] naming `path`: not a checkpoint; a checkpoint of an older Sylva
 /// (before layout versions) or of another layout version, saying which and what to do.
@@ -88,9 +90,6 @@ fn check_header(bytes: &[u8], path: &Path) -> Result<bool> {
     match bytes[7] {
         b'V' => {
             let v = bytes.get(8..12).map(|s| u32::from_le_bytes([s[0], s[1], s[2], s[3]])).ok_or_else(|| Error::format(path, "checkpoint header truncated (no layout version)"))?;
-            if v == PLAIN_BASE << 16 | (LAYOUT_VERSION & 0xffff) {
-                return Ok(false);
-            }
             if v != LAYOUT_VERSION && v != MANAGED_BASE << 16 | (LAYOUT_VERSION & 0xffff) {
                 return Err(Error::format(path, format!("checkpoint layout version {} differs from this build's {}: {again}", describe(v), describe(LAYOUT_VERSION))));
             }
@@ -579,6 +578,14 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
         for v in [r.volume_m3_ha, r.harvest_stems_ha, r.harvest_volume_m3_ha, r.temperature_offset_k, r.precipitation_factor] {
             o.f64(v);
         }
+        // layout 10 (round 42)
+        o.f64(r.deaths_volume_m3_ha);
+        o.u64(r.species.len() as u64);
+        for sp in &r.species {
+            for v in [sp.stems_ha, sp.basal_area_m2_ha, sp.qmd_cm, sp.top_height_m, sp.volume_m3_ha].iter().chain(&sp.deaths_stems_ha).chain(&sp.deaths_volume_m3_ha) {
+                o.f64(*v);
+            }
+        }
     }
     // the management table (issue 35 round 38), after the stand table and only in a run with
     // `[[management]]` (layout [`MANAGED_BASE`]): a run without it keeps the bytes of layout 7
@@ -604,6 +611,8 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
                         o.f64(v);
                     }
                 }
+                // layout 11 (round 42)
+                o.u64(e.capped as u64);
             }
         }
     }
@@ -747,6 +756,20 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
         for x in m.iter_mut() {
             *x = r.f64()?;
         }
+        let deaths_volume_m3_ha = r.f64()?;
+        let k = r.count(8 * (5 + 2 * super::trees::N_CAUSES))?;
+        let mut species = Vec::with_capacity(k);
+        for _ in 0..k {
+            let mut v = [0f64; 5 + 2 * super::trees::N_CAUSES];
+            for x in v.iter_mut() {
+                *x = r.f64()?;
+            }
+            let mut ds = [0f64; super::trees::N_CAUSES];
+            let mut dv = [0f64; super::trees::N_CAUSES];
+            ds.copy_from_slice(&v[5..5 + super::trees::N_CAUSES]);
+            dv.copy_from_slice(&v[5 + super::trees::N_CAUSES..]);
+            species.push(super::stats::SpeciesRow { stems_ha: v[0], basal_area_m2_ha: v[1], qmd_cm: v[2], top_height_m: v[3], volume_m3_ha: v[4], deaths_stems_ha: ds, deaths_volume_m3_ha: dv });
+        }
         rows.push(StandRow {
             year,
             stems_ha: v[0],
@@ -770,6 +793,8 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             temperature_offset_k: m[3],
             precipitation_factor: m[4],
             management: Vec::new(),
+            deaths_volume_m3_ha,
+            species,
         });
     }
     if r.rest() != 0 {
@@ -793,6 +818,11 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
                     }
                 }
                 let [ba_share, stem_share] = shares;
+                let capped = match r.u64()? {
+                    0 => false,
+                    1 => true,
+                    _ => return Err(corrupt(path, r.pos())),
+                };
                 row.management.push(super::stats::EntryRow {
                     entry,
                     kind,
@@ -810,6 +840,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
                     cut_saplings_ha,
                     ba_share,
                     stem_share,
+                    capped,
                 });
             }
         }

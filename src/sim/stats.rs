@@ -70,6 +70,46 @@ pub struct StandRow {
     /// without management): the run's `management_table.csv` ([`entry_rows`]).
     #[serde(default)]
     pub management: Vec<EntryRow>,
+    /// Stem volume (m³/ha, trees with DBH ≥ 7 cm, [`stem_volume_m3`] at their size when they
+    /// died) of the trees that died of natural causes in the year: every [`DeathCause`] but
+    /// [`DeathCause::Harvest`] (the harvested volume is [`StandRow::harvest_volume_m3_ha`]), so
+    /// gross total production is the standing volume plus the sums over the years of this and
+    /// of the harvested volume (trial 41, defect 2).
+    #[serde(default)]
+    pub deaths_volume_m3_ha: f64,
+    /// The year's figures per pool species (pool order): the run's `stand_table_species.csv`
+    /// ([`species_rows`]; trial 41, defect 2).
+    #[serde(default)]
+    pub species: Vec<SpeciesRow>,
+}
+
+/// One pool species in a year: a row of `stand_table_species.csv`. Per hectare of the site's
+/// unmasked area, as the stand table; stems are trees ≥ 1.3 m, volume the stems with DBH ≥ 7 cm
+/// ([`stem_volume_m3`]). Over the species, `stems_ha`, `basal_area_m2_ha` and `volume_m3_ha` add
+/// up to the stand table's (the sums are exact, [`fixed`]; each is rounded once), and the
+/// deaths of all causes but harvest to [`StandRow::deaths_volume_m3_ha`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SpeciesRow {
+    /// Stems (≥ 1.3 m) per ha.
+    pub stems_ha: f64,
+    /// Basal area (m²/ha) of the stems.
+    pub basal_area_m2_ha: f64,
+    /// Quadratic mean DBH Dq (cm) of the stems (0 without stems).
+    pub qmd_cm: f64,
+    /// The species' own top height H100 (m): the mean height of its `round(100 · area_ha)`
+    /// thickest stems (Assmann 1970's h100 over this species' stems only, [`h100_by`]; all its
+    /// stems where it has fewer). Unlike the stand table's `top_height_m` it is not taken over
+    /// the upper layer: a species of the understorey has its own, lower, top height. 0 without
+    /// stems.
+    pub top_height_m: f64,
+    /// Standing stem volume (m³/ha) of the stems with DBH ≥ 7 cm.
+    pub volume_m3_ha: f64,
+    /// Stems (≥ 1.3 m) per ha that died in the year, by cause ([`DeathCause::ALL`] order; the
+    /// last, harvest, is what management removed).
+    pub deaths_stems_ha: [f64; super::trees::N_CAUSES],
+    /// Stem volume (m³/ha, DBH ≥ 7 cm, at death) of the trees that died in the year, by cause
+    /// ([`DeathCause::ALL`] order).
+    pub deaths_volume_m3_ha: [f64; super::trees::N_CAUSES],
 }
 
 /// One `[[management]]` entry's area in a year: a row of the management table
@@ -120,6 +160,11 @@ pub struct EntryRow {
     /// Share (0–1) of each pool species (pool order) in the stems (≥ 1.3 m) standing in the
     /// area.
     pub stem_share: Vec<f64>,
+    /// True when the entry's `max_removal_share` stopped its thinning this year short of its
+    /// target ([`crate::sim::management::Management::max_removal_share`]; round 42, trial 41
+    /// defect 1).
+    #[serde(default)]
+    pub capped: bool,
 }
 
 pub use super::world::EntryHarvest;
@@ -156,6 +201,7 @@ pub fn entry_rows(site: &Site, sums: &[RowSums], h100: &[f64], harvest: &[EntryH
                 cut_saplings_ha: h.saplings as f64 / a,
                 ba_share: s.ba_sp.iter().map(|&v| if ba > 0.0 { unfixed(v) / ba } else { 0.0 }).collect(),
                 stem_share: s.stems_sp.iter().map(|&v| if n > 0 { v as f64 / n as f64 } else { 0.0 }).collect(),
+                capped: h.capped,
             }
         })
         .collect()
@@ -223,6 +269,112 @@ pub fn entry_harvest(site: &Site, dead: &[super::trees::DeadTree]) -> EntryHarve
         h.volume_m3 += stem_volume_m3(site.lib.species[d.species as usize].life.form_factor, d.dbh, d.height);
     }
     h
+}
+
+/// The year's dead trees per pool species and cause, as exact sums ([`fixed`]) that add up over
+/// the parts of a tiled run as [`RowSums`] do: stems (≥ 1.3 m) and stem volume
+/// ([`stem_volume_m3`] at the size the tree died at; 0 below 7 cm DBH). Per species and cause
+/// they make the deaths columns of `stand_table_species.csv` ([`species_rows`]).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DeadSums {
+    /// Stems (≥ 1.3 m) per pool species (pool order) and cause ([`DeathCause::ALL`] order).
+    pub stems: Vec<[u64; super::trees::N_CAUSES]>,
+    /// Stem volume (m³, fixed point) per pool species and cause.
+    pub vol: Vec<[i128; super::trees::N_CAUSES]>,
+}
+
+impl DeadSums {
+    /// The sums over `dead` (a year's dead trees, [`super::world::Scratch::dead`]) of `site`'s
+    /// pool species; a tree of a species outside the pool is not counted.
+    pub fn of(site: &Site, dead: &[super::trees::DeadTree]) -> DeadSums {
+        let np = site.pool.len();
+        let mut s = DeadSums { stems: vec![[0; super::trees::N_CAUSES]; np], vol: vec![[0; super::trees::N_CAUSES]; np] };
+        for d in dead {
+            let Some(p) = site.pool_index(d.species) else { continue };
+            let c = d.cause.index();
+            if is_stem(d.height) {
+                s.stems[p][c] += 1;
+            }
+            s.vol[p][c] += fixed(stem_volume_m3(site.lib.species[d.species as usize].life.form_factor, d.dbh, d.height));
+        }
+        s
+    }
+
+    /// The sums as u64 words whose element-wise sums over parts are the words of the parts'
+    /// sums ([`DeadSums::from_words`]): the counts, then each volume as 3 limbs.
+    pub fn words(&self) -> Vec<u64> {
+        let mut w: Vec<u64> = self.stems.iter().flatten().copied().collect();
+        for v in self.vol.iter().flatten() {
+            push_limbs(&mut w, *v);
+        }
+        w
+    }
+
+    /// Number of [`DeadSums::words`] for `np` pool species.
+    pub fn n_words(np: usize) -> usize {
+        4 * np * super::trees::N_CAUSES
+    }
+
+    /// The sums of [`DeadSums::words`] (summed over parts) for `np` pool species; `w` holds
+    /// [`DeadSums::n_words`] words.
+    pub fn from_words(w: &[u64], np: usize) -> DeadSums {
+        const N: usize = super::trees::N_CAUSES;
+        let mut s = DeadSums { stems: vec![[0; N]; np], vol: vec![[0; N]; np] };
+        for p in 0..np {
+            for c in 0..N {
+                s.stems[p][c] = w[p * N + c];
+                s.vol[p][c] = from_limbs(&w[np * N + 3 * (p * N + c)..]);
+            }
+        }
+        s
+    }
+}
+
+/// Each pool species' top height H100 (m; pool order): Assmann's h100 over the species' own
+/// stems ([`h100_by`] with `a`, the site's hectares: the mean height of its `round(100 · a)`
+/// thickest stems, all of them where it has fewer), `stems_sp` each species' stems over every
+/// part (the ranks of a tiled run, `reduce`). 0 for a species without stems.
+///
+/// Errors: those of `reduce`.
+pub fn species_top_heights(site: &Site, t: &TreeStore, stems_sp: &[u64], reduce: &mut Reduce) -> crate::Result<Vec<f64>> {
+    let np = site.pool.len();
+    let pidx: Vec<Option<usize>> = (0..site.lib.species.len() as u16).map(|s| site.pool_index(s)).collect();
+    let (mut d, mut h) = (vec![Vec::new(); np], vec![Vec::new(); np]);
+    for i in 0..t.len() {
+        if let Some(p) = pidx[t.species[i] as usize] {
+            d[p].push(t.dbh[i]);
+            h[p].push(t.height[i]);
+        }
+    }
+    let a = site.area_ha.max(1e-9);
+    (0..np).map(|p| h100_by(&d[p], &h[p], a, stems_sp.get(p).copied().unwrap_or(0), reduce)).collect()
+}
+
+/// The per-species rows of a year ([`SpeciesRow`], pool order) from the sums over the trees
+/// standing at its end (`sums`), its dead trees (`dead`) and each species' top height (`h100`,
+/// [`species_top_heights`]), per hectare of `site`'s unmasked area; and the natural deaths'
+/// stem volume (m³/ha: every cause but harvest, [`StandRow::deaths_volume_m3_ha`]), summed
+/// exactly over the species.
+pub fn species_rows(site: &Site, sums: &RowSums, dead: &DeadSums, h100: &[f64]) -> (Vec<SpeciesRow>, f64) {
+    let a = site.area_ha.max(1e-9);
+    let harvest = DeathCause::Harvest.index();
+    let mut natural: i128 = 0;
+    let rows = (0..site.pool.len())
+        .map(|p| {
+            let n = sums.stems_sp[p];
+            natural += dead.vol[p].iter().enumerate().filter(|(c, _)| *c != harvest).map(|(_, v)| *v).sum::<i128>();
+            SpeciesRow {
+                stems_ha: n as f64 / a,
+                basal_area_m2_ha: unfixed(sums.ba_sp[p]) / a,
+                qmd_cm: if n > 0 { (unfixed(sums.d2_sp[p]) / n as f64).sqrt() } else { 0.0 },
+                top_height_m: h100.get(p).copied().unwrap_or(0.0),
+                volume_m3_ha: unfixed(sums.vol_sp[p]) / a,
+                deaths_stems_ha: dead.stems[p].map(|v| v as f64 / a),
+                deaths_volume_m3_ha: dead.vol[p].map(|v| unfixed(v) / a),
+            }
+        })
+        .collect();
+    (rows, unfixed(natural) / a)
 }
 
 /// Binary digits below the unit of the stand table's exact sums ([`RowSums`], [`top_height`]):
@@ -315,12 +467,16 @@ pub struct RowSums {
     pub ba_sp: Vec<i128>,
     /// Stems per pool species.
     pub stems_sp: Vec<u64>,
+    /// DBH² of the stems per pool species (cm², fixed point).
+    pub d2_sp: Vec<i128>,
+    /// Stem volume per pool species (m³, fixed point).
+    pub vol_sp: Vec<i128>,
 }
 
 impl RowSums {
     /// Zero sums for `np` pool species.
     pub fn zero(np: usize) -> RowSums {
-        RowSums { trees: 0, stems: 0, stems_7: 0, ba: 0, height: 0, d2: 0, d2_7: 0, vol: 0, ba_sp: vec![0; np], stems_sp: vec![0; np] }
+        RowSums { trees: 0, stems: 0, stems_7: 0, ba: 0, height: 0, d2: 0, d2_7: 0, vol: 0, ba_sp: vec![0; np], stems_sp: vec![0; np], d2_sp: vec![0; np], vol_sp: vec![0; np] }
     }
 
     /// The sums over the trees `t` of `site` (in parallel: the integers do not depend on the
@@ -365,14 +521,17 @@ impl RowSums {
                     height += fixed(h as f64);
                     let q = fixed((d as f64) * (d as f64));
                     d2 += q;
+                    let p = pidx[t.species[i] as usize];
                     if d >= 7.0 {
                         stems_7 += 1;
                         d2_7 += q;
-                        vol += fixed(stem_volume_m3(ff[t.species[i] as usize], d, h));
+                        let v = fixed(stem_volume_m3(ff[t.species[i] as usize], d, h));
+                        vol += v;
+                        s.vol_sp[p] += v;
                     }
-                    let p = pidx[t.species[i] as usize];
                     s.ba_sp[p] += b;
                     s.stems_sp[p] += 1;
+                    s.d2_sp[p] += q;
                 }
                 (s.trees, s.stems, s.stems_7, s.ba, s.height, s.d2, s.d2_7, s.vol) = (trees, stems, stems_7, ba, height, d2, d2_7, vol);
                 s
@@ -392,6 +551,8 @@ impl RowSums {
         self.vol += o.vol;
         self.ba_sp.iter_mut().zip(&o.ba_sp).for_each(|(a, b)| *a += b);
         self.stems_sp.iter_mut().zip(&o.stems_sp).for_each(|(a, b)| *a += b);
+        self.d2_sp.iter_mut().zip(&o.d2_sp).for_each(|(a, b)| *a += b);
+        self.vol_sp.iter_mut().zip(&o.vol_sp).for_each(|(a, b)| *a += b);
         self
     }
 
@@ -400,7 +561,7 @@ impl RowSums {
     pub fn words(&self) -> Vec<u64> {
         let mut w = vec![self.trees, self.stems, self.stems_7];
         w.extend(&self.stems_sp);
-        for v in [self.ba, self.height, self.d2, self.d2_7, self.vol].iter().chain(&self.ba_sp) {
+        for v in [self.ba, self.height, self.d2, self.d2_7, self.vol].iter().chain(&self.ba_sp).chain(&self.d2_sp).chain(&self.vol_sp) {
             push_limbs(&mut w, *v);
         }
         w
@@ -408,7 +569,7 @@ impl RowSums {
 
     /// Number of [`RowSums::words`] for `np` pool species.
     pub fn n_words(np: usize) -> usize {
-        3 + np + 3 * (5 + np)
+        3 + np + 3 * (5 + 3 * np)
     }
 
     /// The sums of [`RowSums::words`] (summed over parts) for `np` pool species; `w` holds
@@ -426,6 +587,8 @@ impl RowSums {
             d2_7: l(3),
             vol: l(4),
             ba_sp: (0..np).map(|p| l(5 + p)).collect(),
+            d2_sp: (0..np).map(|p| l(5 + np + p)).collect(),
+            vol_sp: (0..np).map(|p| l(5 + 2 * np + p)).collect(),
         }
     }
 }
@@ -569,7 +732,9 @@ pub fn h100_by(dbh: &[f32], height: &[f32], a: f64, stems: u64, reduce: &mut Red
 }
 
 /// Computes the stand-table row of the world's current state (deaths from `w.scratch.dead`):
-/// exact sums ([`RowSums`]) and the top height ([`top_height`]).
+/// exact sums ([`RowSums`]), the top height ([`top_height`]) and the per-species rows
+/// ([`species_rows`]). At year 0 (a world as [`World::new`] starts it) it is the state after
+/// the `[[start]]` plantings, before any growth.
 pub fn stand_row(w: &World) -> StandRow {
     let mut deaths = [0u64; super::trees::N_CAUSES];
     for d in &w.scratch.dead {
@@ -579,7 +744,10 @@ pub fn stand_row(w: &World) -> StandRow {
     let sums = RowSums::of(&w.site, t);
     let h100 = top_height_by(&t.dbh, &t.height, w.site.area_ha.max(1e-9), sums.stems, &mut alone).unwrap_or(0.0);
     let mut row = row_of(&w.site, w.stand.year, &sums, h100, w.stand.cohorts.total_stems(), deaths, w.scratch.regen_year, harvest_sums(&w.site, &w.scratch.dead));
-    if !w.site.management.is_empty() {
+    let hs = species_top_heights(&w.site, t, &sums.stems_sp, &mut alone).unwrap_or_else(|_| vec![0.0; sums.stems_sp.len()]);
+    (row.species, row.deaths_volume_m3_ha) = species_rows(&w.site, &sums, &DeadSums::of(&w.site, &w.scratch.dead), &hs);
+    // (no management table row at year 0: nothing was managed before the first year)
+    if !w.site.management.is_empty() && w.stand.year > 0 {
         let es = entry_sums(&w.site, t);
         let stems: Vec<u64> = es.iter().map(|s| s.stems).collect();
         let h = entry_top_heights(&w.site, t, &stems, &mut alone).unwrap_or_else(|_| vec![0.0; stems.len()]);
@@ -627,6 +795,8 @@ pub fn row_of(site: &Site, year: u32, s: &RowSums, h100: f64, regeneration_stems
         temperature_offset_k: dt,
         precipitation_factor: pf,
         management: Vec::new(),
+        deaths_volume_m3_ha: 0.0,
+        species: Vec::new(),
     }
 }
 

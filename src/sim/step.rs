@@ -94,7 +94,7 @@ fn run_management(w: &mut World, report: &mut YearReport) {
         return;
     }
     let d0 = w.scratch.dead.len();
-    let (_, notes, removed) = management::run_by_entry(management::Manage { seed: w.site.seed, year: w.stand.year, site: &w.site, trees: &mut w.stand.trees, dead: &mut w.scratch.dead, deaths_total: &mut w.tallies.deaths_total });
+    let (_, notes, removed, capped) = management::run_by_entry(management::Manage { seed: w.site.seed, year: w.stand.year, site: &w.site, trees: &mut w.stand.trees, dead: &mut w.scratch.dead, deaths_total: &mut w.tallies.deaths_total });
     report.notes.extend(notes);
     // a clearing kept open loses its sapling cohorts above its height too (a tiled run's rank
     // its own cells' cohorts)
@@ -105,10 +105,11 @@ fn run_management(w: &mut World, report: &mut YearReport) {
     w.scratch.entry_harvest = removed
         .iter()
         .zip(saplings)
-        .map(|(&n, saplings)| {
+        .zip(capped)
+        .map(|((&n, saplings), capped)| {
             let s = entry_harvest(&w.site, &w.scratch.dead[at..at + n]);
             at += n;
-            super::stats::EntryHarvest { saplings, ..s }
+            super::stats::EntryHarvest { saplings, capped, ..s }
         })
         .collect();
 }

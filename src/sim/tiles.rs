@@ -1092,6 +1092,32 @@ impl Tile {
         // of counts (`stats::top_height_by`); nothing per tree crosses ranks
         let t0 = Instant::now();
         self.world.stand.year += 1;
+        self.stats(t, &mut report)?;
+        report.phase_seconds[stats] = t0.elapsed().as_secs_f64();
+        for (a, b) in self.phase_seconds.iter_mut().zip(report.phase_seconds) {
+            *a += b;
+        }
+        Ok(report)
+    }
+
+    /// The stand table's row of the tiles as they stand now, before any year is stepped (year
+    /// 0: the start's trees; rank 0 gets it, the others `None`): the sums of [`Tile::step`]'s
+    /// stats over the ranks, without a management table row (trial 41, defect 7). Every rank
+    /// calls it together.
+    ///
+    /// Errors: [`Error::Exchange`] from the transport.
+    pub fn start_row(&mut self, t: &mut dyn Transport) -> Result<Option<super::stats::StandRow>> {
+        let mut report = YearReport::default();
+        self.stats(t, &mut report)?;
+        Ok(report.row)
+    }
+
+    /// The stats phase of [`Tile::step`] (the world's year already set): the stand table's row
+    /// into `report` (rank 0), with the per-species rows and, after year 0, the management
+    /// table's rows.
+    ///
+    /// Errors: [`Error::Exchange`] from the transport or a message cut short.
+    fn stats(&mut self, t: &mut dyn Transport, report: &mut YearReport) -> Result<()> {
         let w = &self.world;
         let np = w.site.pool.len();
         let mut words = super::stats::RowSums::of(&w.site, &w.stand.trees).words();
@@ -1101,6 +1127,8 @@ impl Tile {
         let ry = &w.scratch.regen_year;
         words.extend([w.stand.cohorts.total_stems(), ry.germinated, ry.recruited, report.established as u64, w.scratch.dead.len() as u64]);
         words.extend(ry.dead);
+        // the dead per species and cause (stems, volume) for the per-species table, last
+        words.extend(super::stats::DeadSums::of(&w.site, &w.scratch.dead).words());
         let got = t.all_sum(words)?;
         let nw = super::stats::RowSums::n_words(np);
         let sums = super::stats::RowSums::from_words(&got, np);
@@ -1116,17 +1144,27 @@ impl Tile {
         for v in ry.dead.iter_mut() {
             *v = next()?;
         }
+        let dw: Vec<u64> = rest.collect();
+        if dw.len() != super::stats::DeadSums::n_words(np) {
+            return Err(Error::Exchange { peer: 0, reason: "stand-table sums of the dead cut short".into() });
+        }
+        let dead = super::stats::DeadSums::from_words(&dw, np);
         let tr = &w.stand.trees;
         let h100 = super::stats::top_height_by(&tr.dbh, &tr.height, w.site.area_ha.max(1e-9), sums.stems, &mut |v| t.all_sum(v))?;
+        let hs = super::stats::species_top_heights(&w.site, tr, &sums.stems_sp, &mut |v| t.all_sum(v))?;
         report.trees = sums.trees as usize;
         report.established = est;
         report.died = died;
-        report.row = (t.rank() == 0).then(|| super::stats::row_of(&w.site, w.stand.year, &sums, h100, stems, deaths, ry, self.harvest));
+        report.row = (t.rank() == 0).then(|| {
+            let mut r = super::stats::row_of(&w.site, w.stand.year, &sums, h100, stems, deaths, ry, self.harvest);
+            (r.species, r.deaths_volume_m3_ha) = super::stats::species_rows(&w.site, &sums, &dead, &hs);
+            r
+        });
         // the management table's rows: each entry's area summed over the ranks as the stand
         // table is (exact sums, one all-sum for every entry; top heights by selection), and
         // each entry's harvest as the management phase found it (every rank sees every
         // harvested tree there)
-        if !w.site.management.is_empty() {
+        if !w.site.management.is_empty() && w.stand.year > 0 {
             let es = super::stats::entry_sums(&w.site, tr);
             let ne = es.len();
             // the saplings a clearing kept open cut are each rank's own cohorts': summed with
@@ -1144,11 +1182,7 @@ impl Tile {
                 r.management = super::stats::entry_rows(&w.site, &es, &h, &harvest);
             }
         }
-        report.phase_seconds[stats] = t0.elapsed().as_secs_f64();
-        for (a, b) in self.phase_seconds.iter_mut().zip(report.phase_seconds) {
-            *a += b;
-        }
-        Ok(report)
+        Ok(())
     }
 
     /// Reproduction over tiles (module docs, step 4): seeds are passed as a grid, not as

@@ -211,6 +211,8 @@ pub struct EntryHarvest {
     /// Sapling stems of the regeneration layer removed (`keep_open`,
     /// [`crate::sim::phases::management::keep_open_cohorts`]).
     pub saplings: u64,
+    /// The entry's `max_removal_share` stopped its thinning short of its target.
+    pub capped: bool,
 }
 
 /// Running totals since the start of the run (checkpointed).

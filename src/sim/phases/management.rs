@@ -43,24 +43,41 @@ pub struct Manage<'a> {
 /// or no stems of the growing stock (≥ 7 cm DBH) or of its main stand in its area; the run writes each to its log
 /// (standard error) once.
 pub fn run(m: Manage<'_>) -> (usize, Vec<String>) {
-    let (n, notes, _) = run_by_entry(m);
+    let (n, notes, _, _) = run_by_entry(m);
     (n, notes)
 }
 
 /// [`run`], also returning how many trees each entry removed this year (entry order; the
 /// entries' harvested trees follow each other in `dead` in that order, after those recorded
-/// before the phase): the management table's harvest per entry.
-pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>) {
+/// before the phase): the management table's harvest per entry; and per entry whether its
+/// `max_removal_share` stopped its thinning short of its target (the management table's
+/// `capped`; a note says so too).
+pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>, Vec<bool>) {
     let y = m.year + 1;
     let mut planted: Vec<(u32, NewTree)> = Vec::new();
     let mut notes = Vec::new();
     let mut removed = vec![0usize; m.site.management.len()];
+    let mut capped = vec![false; m.site.management.len()];
     for (e, op) in m.site.management.iter().enumerate() {
         let Some(k) = op.spec.due(y) else { continue };
         let t = &*m.trees;
         let (remove, why): (Vec<bool>, Option<String>) = match &op.action {
-            Action::Thinning { from_below, target, trigger_rd, trigger_top_height_m } => thinning(m.site, t, op, *from_below, *target, *trigger_rd, *trigger_top_height_m),
-            Action::CropTrees { n_ha, distance_m, target, trigger_rd, trigger_top_height_m } => crop_tree_thinning(m.site, t, op, *n_ha, *distance_m, *target, *trigger_rd, *trigger_top_height_m),
+            Action::Thinning { from_below, target, trigger_rd, trigger_top_height_m } => {
+                let (r, why, cap) = thinning(m.site, t, op, *from_below, *target, *trigger_rd, *trigger_top_height_m);
+                if let Some(c) = cap {
+                    notes.push(format!("year {y}: management[{e}] (thinning {}) {c}", if *from_below { "from_below" } else { "from_above" }));
+                    capped[e] = true;
+                }
+                (r, why)
+            }
+            Action::CropTrees { n_ha, distance_m, target, trigger_rd, trigger_top_height_m } => {
+                let (r, why, cap) = crop_tree_thinning(m.site, t, op, *n_ha, *distance_m, *target, *trigger_rd, *trigger_top_height_m);
+                if let Some(c) = cap {
+                    notes.push(format!("year {y}: management[{e}] (thinning crop_trees) {c}"));
+                    capped[e] = true;
+                }
+                (r, why)
+            }
             Action::ClearCut => ((0..t.len()).map(|i| op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect(), None),
             Action::Shelterwood { shares } => (shelterwood(t, op, shares.get(k as usize).copied().unwrap_or(1.0)), None),
             Action::Patch { size_m, share } => (patches(m.seed, t, op, *size_m, *share, k), None),
@@ -90,7 +107,7 @@ pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>) {
     if n > 0 {
         insert_planted(m.trees, planted, m.year);
     }
-    (n, notes, removed)
+    (n, notes, removed, capped)
 }
 
 /// The regeneration layer's part of the entries keeping a clearing open that are due this year
@@ -209,11 +226,18 @@ fn figures_and_triggers(site: &Site, t: &TreeStore, cand: &[usize], a: f64, trig
 /// Why a thinning to `target` removes nothing from an area whose figure is `value`: at or below
 /// the target already.
 fn at_target(target: Target, value: f64) -> String {
+    let (area, verb, goal) = figure(target, value);
+    format!("{area} {verb} at or below {goal} already")
+}
+
+/// The area's figure `value` for a target's messages (`the area's basal area 12.34 m²/ha`), its
+/// verb, and the target (`the target 15 m²/ha`).
+fn figure(target: Target, value: f64) -> (String, &'static str, String) {
     let g = goal(target);
     match target {
-        Target::BasalArea(_) => format!("the area's basal area {value:.2} m²/ha is at or below the target {g} m²/ha already"),
-        Target::Stems(_) => format!("the area's {value:.0} stems/ha are at or below the target {g} stems/ha already"),
-        Target::RelativeDensity(_) => format!("the area's relative density {value:.3} is at or below the target {g} already"),
+        Target::BasalArea(_) => (format!("the area's basal area {value:.2} m²/ha"), "is", format!("the target {g} m²/ha")),
+        Target::Stems(_) => (format!("the area's {value:.0} stems/ha"), "are", format!("the target {g} stems/ha")),
+        Target::RelativeDensity(_) => (format!("the area's relative density {value:.3}"), "is", format!("the target {g}")),
     }
 }
 
@@ -222,6 +246,45 @@ fn goal(target: Target) -> f64 {
     match target {
         Target::BasalArea(v) | Target::Stems(v) | Target::RelativeDensity(v) => v,
     }
+}
+
+/// The cap of an entry's `max_removal_share` ([`crate::sim::management::Management::max_removal_share`]):
+/// at most `share` of `ba0_m2`, the basal area (m²) the thinning measures its target on before
+/// it starts (the area's main stand; for crop trees every stem of the area), is removed in one
+/// entry. [`Cap::admits`] says whether tree `i` can still go.
+struct Cap {
+    limit_m2: Option<f64>,
+    ba0_m2: f64,
+    removed_m2: f64,
+    hit: bool,
+}
+
+impl Cap {
+    fn new(op: &Operation, ba0_m2: f64) -> Cap {
+        Cap { limit_m2: op.spec.max_removal_share.map(|s| s * ba0_m2), ba0_m2, removed_m2: 0.0, hit: false }
+    }
+    /// Whether removing tree `i` keeps the removed basal area within the cap (and counts it
+    /// when it does); once it does not, the entry stops there (`hit`).
+    fn admits(&mut self, t: &TreeStore, i: usize) -> bool {
+        let b = t.basal_area_m2(i);
+        if self.limit_m2.is_some_and(|l| self.removed_m2 + b > l) {
+            self.hit = true;
+            return false;
+        }
+        self.removed_m2 += b;
+        true
+    }
+    /// The note of a thinning the cap stopped short of its target (`figure`: the area's figure
+    /// left and the target); `None` when it did not.
+    fn note(&self, op: &Operation, figure: String) -> Option<String> {
+        self.hit.then(|| format!("stopped at max_removal_share = {} ({:.3} of {:.3} m² basal area removed) short of its target: {figure}", op.spec.max_removal_share.unwrap_or(1.0), self.removed_m2, self.ba0_m2))
+    }
+}
+
+/// The area's figure `v` against the target, for [`Cap::note`].
+fn left_of(target: Target, v: f64) -> String {
+    let (area, _, goal) = figure(target, v);
+    format!("{area} against {goal}")
 }
 
 /// Share of the area's top height ([`crate::sim::stats::top_height`]) below which a stem is
@@ -243,7 +306,25 @@ pub const MAIN_STAND_SHARE: f32 = 1.0 / 3.0;
 /// while a smaller stem of the main stand stands, nor uses up its target on the understorey.
 /// With the trees, why none is removed where none is (a trigger, the target held already, no
 /// stems of the main stand in the area).
-fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target: Target, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Vec<bool>, Option<String>) {
+fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target: Target, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Vec<bool>, Option<String>, Option<String>) {
+    let (remove, why) = thinning_by(site, t, op, from_below, target, trigger_rd, trigger_h);
+    match why {
+        Why::Nothing(w) => (remove, Some(w), None),
+        Why::Done(w) => (remove, w, None),
+        Why::Capped(c) => (remove, None, Some(c)),
+    }
+}
+
+/// How a thinning ended: removing nothing (why), done (at its target, or why none was
+/// removed), or stopped by its `max_removal_share` (the note).
+enum Why {
+    Nothing(String),
+    Done(Option<String>),
+    Capped(String),
+}
+
+/// [`thinning`]'s work.
+fn thinning_by(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target: Target, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Vec<bool>, Why) {
     let mut remove = vec![false; t.len()];
     let a = op.region.area_ha.max(1e-9);
     // a thinning acts on the growing stock, the stems of at least 7 cm DBH (as the yield tables
@@ -252,7 +333,7 @@ fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target
     // the relative density, which does not count them, moved at all: found by a trial)
     let stock: Vec<usize> = stems_in(t, op).into_iter().filter(|&i| t.dbh[i] >= crate::sim::density::MIN_DBH_CM).collect();
     if stock.is_empty() {
-        return (remove, Some("no stems of 7 cm DBH or more in its area".into()));
+        return (remove, Why::Nothing("no stems of 7 cm DBH or more in its area".into()));
     }
     // and on the main stand only: the ingrowth under a third of top height used up the target
     // of a thinning from below in old stands, which then took dominant trees (found by a trial)
@@ -261,27 +342,30 @@ fn thinning(site: &Site, t: &TreeStore, op: &Operation, from_below: bool, target
     let low = MAIN_STAND_SHARE * crate::sim::stats::top_height(&dbh, &height, a) as f32;
     let mut cand: Vec<usize> = stock.into_iter().filter(|&i| t.height[i] >= low).collect();
     if cand.is_empty() {
-        return (remove, Some("no stems of the main stand (7 cm DBH or more, a third of top height or more) in its area".into()));
+        return (remove, Why::Nothing("no stems of the main stand (7 cm DBH or more, a third of top height or more) in its area".into()));
     }
     let (mut f, why) = figures_and_triggers(site, t, &cand, a, trigger_rd, trigger_h);
-    if why.is_some() {
-        return (remove, why);
+    if let Some(w) = why {
+        return (remove, Why::Nothing(w));
     }
     let v0 = f.value(site, target, a);
     let goal = goal(target);
+    let mut cap = Cap::new(op, f.ba_m2);
     cand.sort_by(|&i, &j| {
         let o = t.dbh[i].total_cmp(&t.dbh[j]);
         (if from_below { o } else { o.reverse() }).then(t.id[i].cmp(&t.id[j]))
     });
     for &i in &cand {
-        if f.value(site, target, a) <= goal {
+        if f.value(site, target, a) <= goal || !cap.admits(t, i) {
             break;
         }
         remove[i] = true;
         f.add(t, i, -1.0);
     }
-    let why = (v0 <= goal).then(|| at_target(target, v0));
-    (remove, why)
+    if let Some(c) = cap.note(op, left_of(target, f.value(site, target, a))) {
+        return (remove, Why::Capped(c));
+    }
+    (remove, Why::Done((v0 <= goal).then(|| at_target(target, v0))))
 }
 
 /// Crop trees are chosen among the stems whose vigour (realised over potential growth, 0–1) is at
@@ -382,14 +466,15 @@ pub fn hegyi_term(t: &TreeStore, i: usize, j: usize) -> f64 {
 /// with one they go in order of their largest Hegyi term on a crop tree ([`hegyi_term`]; ties
 /// by id) until the area's figure is at or below the target (or no competitor is left).
 #[allow(clippy::too_many_arguments)]
-fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, distance_m: f64, target: Option<Target>, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Vec<bool>, Option<String>) {
+fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, distance_m: f64, target: Option<Target>, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Vec<bool>, Option<String>, Option<String>) {
     let mut remove = vec![false; t.len()];
     let a = op.region.area_ha.max(1e-9);
     let cand = stems_in(t, op);
     let (mut f, why) = figures_and_triggers(site, t, &cand, a, trigger_rd, trigger_h);
     if why.is_some() {
-        return (remove, why);
+        return (remove, why, None);
     }
+    let mut cap = Cap::new(op, f.ba_m2);
     let v0 = target.map(|tg| (tg, f.value(site, tg, a)));
     let crops = crop_trees(t, op, n_ha, distance_m);
     let mut is_crop = vec![false; t.len()];
@@ -419,6 +504,9 @@ fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, dis
                 break;
             }
         }
+        if !cap.admits(t, j) {
+            break;
+        }
         remove[j] = true;
         f.add(t, j, -1.0);
     }
@@ -426,7 +514,11 @@ fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, dis
         Some((tg, v)) if v <= goal(tg) => at_target(tg, v),
         _ => "its crop trees have no competitors to remove".into(),
     };
-    (remove, Some(why))
+    let left = match target {
+        Some(tg) => left_of(tg, f.value(site, tg, a)),
+        None => "competitors of its crop trees are left".into(),
+    };
+    (remove, Some(why), cap.note(op, left))
 }
 
 /// The trees a shelterwood stage removes: of the area's overstorey (stems at least
