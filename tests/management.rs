@@ -335,8 +335,9 @@ fn management_and_warming_are_the_same_for_one_and_two_threads_and_across_a_chec
     let bytes = to_bytes(&w, &rows);
     // a managed run's checkpoint holds the management table: layout 8, so a Sylva before it
     // refuses it naming the versions (round 38; it read the table as bytes of a corrupt file);
-    // 9 since round 41 (names, harvested basal area, saplings cut, species shares)
-    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()) >> 16, 9);
+    // 9 since round 41 (names, harvested basal area, saplings cut, species shares); 11 since
+    // round 42 (the per-species rows, and whether a removal cap stopped an entry)
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()) >> 16, 11);
     assert!(rows.iter().all(|r| r.management.len() == 6), "a management-table row per entry and year");
     // the clearing kept open (entry 5, years 2, 5, 8) cut its regrowth and saplings
     assert!(rows[1].management[5].harvest_stems_ha > 0.0 && rows[1].management[5].name == "bench, clearing", "{:?}", rows[1].management[5]);
@@ -1614,8 +1615,9 @@ fn the_management_table_gives_each_entrys_area_as_counted_in_the_inventory() {
     let mut lines = text.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
     // the columns of round 38, then (round 41, trial 40) the entry's name, the basal area it
-    // removed, the saplings it cut and the species mix of its area
-    assert_eq!(head, ["year", "entry", "kind", "method", "area_ha", "stems_ha", "basal_area_m2_ha", "volume_m3_ha", "qmd_cm", "top_height_m", "harvest_stems_ha", "harvest_volume_m3_ha", "name", "harvest_basal_area_m2_ha", "cut_saplings_ha", "ba_share_beech", "ba_share_silver_birch", "stem_share_beech", "stem_share_silver_birch"]);
+    // removed, the saplings it cut and the species mix of its area; then (round 42) whether a
+    // removal cap stopped the entry
+    assert_eq!(head, ["year", "entry", "kind", "method", "area_ha", "stems_ha", "basal_area_m2_ha", "volume_m3_ha", "qmd_cm", "top_height_m", "harvest_stems_ha", "harvest_volume_m3_ha", "name", "harvest_basal_area_m2_ha", "cut_saplings_ha", "ba_share_beech", "ba_share_silver_birch", "stem_share_beech", "stem_share_silver_birch", "capped"]);
     assert!(text.lines().skip(1).all(|l| l.contains(",thinning#0,") || l.contains(",planting#1,")), "default names KIND#INDEX: {text}");
     let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(str::to_string).collect()).collect();
     assert_eq!(rows.len(), 6, "3 years × 2 entries:\n{text}");

@@ -322,8 +322,10 @@ fn tables(dir: &Path, rows: &[StandRow], w: &World, png: bool) -> Result<()> {
     if rows.iter().any(|r| !r.management.is_empty()) {
         stand_table::write_management_table(&dir.join(MANAGEMENT_TABLE), rows, &names)?;
     }
-    if png && rows.len() >= 2 {
-        plot::plot_stand_table(&dir.join("stand_table.png"), rows, w)?;
+    // the plot from year 1, as before the year-0 row (round 42): its file stays the same
+    let years = if rows.first().is_some_and(|r| r.year == 0) { &rows[1..] } else { rows };
+    if png && years.len() >= 2 {
+        plot::plot_stand_table(&dir.join("stand_table.png"), years, w)?;
     }
     Ok(())
 }
