@@ -24,7 +24,9 @@
 //! default 0: every point its own); `SYLVA_STAND_BEND_LEVEL=0|1` whether the bending light's cubes
 //! are shared over a whole level (`StandOptions::bend_light_whole_level`, default 1 since round 42);
 //! `SYLVA_STAND_BEND_CELL=0 SYLVA_STAND_SHAPE_STEP=1.05` gives
-//! round 40's exact near field (fingerprint `6ff74109f4fe3705` at 1,000 targets). The default
+//! round 40's exact near field with each cell's trees in index order (fingerprint
+//! `4e723b2882995bc1` at 1,000 targets since round 42; `6ff74109f4fe3705` until then, when a cell's
+//! trees came in the targets' nearest-first order); the default is `72358689bcdcd49b`. The default
 //! shape step is 1.05² in f32, 1.1024998, one ulp below `SYLVA_STAND_SHAPE_STEP=1.1025`, which
 //! gives other classes (fingerprint `ef21e986a49d6d42` against the default's
 //! `74179efbd385d243` at 1,000 targets, round 41); `SYLVA_STAND_TREES=FILE`
