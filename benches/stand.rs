@@ -21,8 +21,15 @@
 //! before); `SYLVA_STAND_BEND_CELL=M` and `SYLVA_STAND_LEAF_CELL=M` the cubes (m) within which the
 //! bending light and the last level's leaf-cluster light share one query
 //! (`StandOptions::bend_light_cell_m`, default 0.25 since round 41, 0 before; `leaf_light_cell_m`,
-//! default 0: every point its own); `SYLVA_STAND_BEND_CELL=0 SYLVA_STAND_SHAPE_STEP=1.05` gives
-//! round 40's exact near field (fingerprint `6ff74109f4fe3705` at 1,000 targets); `SYLVA_STAND_TREES=FILE`
+//! default 0: every point its own); `SYLVA_STAND_BEND_LEVEL=0|1` whether the bending light's cubes
+//! are shared over a whole level (`StandOptions::bend_light_whole_level`, default 1 since round 42);
+//! `SYLVA_STAND_BEND_CELL=0 SYLVA_STAND_SHAPE_STEP=1.05` gives
+//! round 40's exact near field with each cell's trees in index order (fingerprint
+//! `4e723b2882995bc1` at 1,000 targets since round 42; `6ff74109f4fe3705` until then, when a cell's
+//! trees came in the targets' nearest-first order); the default is `72358689bcdcd49b`. The default
+//! shape step is 1.05² in f32, 1.1024998, one ulp below `SYLVA_STAND_SHAPE_STEP=1.1025`, which
+//! gives other classes (fingerprint `ef21e986a49d6d42` against the default's
+//! `74179efbd385d243` at 1,000 targets, round 41); `SYLVA_STAND_TREES=FILE`
 //! writes one CSV row per target (index, live nodes, leaves, crown radius, height); `SYLVA_STAND_DUMP=FILE`
 //! writes every target's leaf clusters (`AdaptedTree::leaf_clusters`, in order) as
 //! little-endian f32 rows (tree index, centre x, y, z (m), light i, light in the analysis i_l0,
@@ -105,6 +112,9 @@ fn main() {
     }
     if let Ok(v) = std::env::var("SYLVA_STAND_BEND_CELL") {
         opts.bend_light_cell_m = v.trim().parse().expect("SYLVA_STAND_BEND_CELL: a cube side in m, e.g. 0.25");
+    }
+    if let Ok(v) = std::env::var("SYLVA_STAND_BEND_LEVEL") {
+        opts.bend_light_whole_level = v.trim() == "1";
     }
     if let Ok(v) = std::env::var("SYLVA_STAND_LEAF_CELL") {
         opts.leaf_light_cell_m = v.trim().parse().expect("SYLVA_STAND_LEAF_CELL: a cube side in m, e.g. 0.25");

@@ -50,7 +50,7 @@
 //!    many trees adapted as drawn in the default close-up.) Each cell is adapted in its
 //!    [`Environment`]: the sky of the
 //!    latitude ([`Sky::from_latitude`], section 6 global light), a ground plane with the slope
-//!    and aspect of the cell's first tree lowered 5 cm below the lowest tree base of the group,
+//!    and aspect of the cell's first tree (in index order) lowered 5 cm below the lowest tree base of the group,
 //!    and the obstacles. Cells run in parallel (rayon), each as soon as the classes of its
 //!    trees are analysed (one graph of tasks for steps 2–3, the largest cells first; round 34:
 //!    until then every analysis came first and a core waited for the other's last one); each
@@ -80,14 +80,17 @@
 //!    32 stems)".
 //! 6. **Shared light queries.** [`StandOptions::bend_light_cell_m`] lets the nodes an adapted
 //!    tree bends at one level share the bending light of the first node of their cube (default
-//!    [`BEND_LIGHT_CELL_M`], 0.25 m, since round 41), and [`StandOptions::leaf_light_cell_m`]
+//!    [`BEND_LIGHT_CELL_M`], 0.25 m, since round 41; over the whole level since round 42,
+//!    [`StandOptions::bend_light_whole_level`], where until then only the nodes of one depth
+//!    batch shared), and [`StandOptions::leaf_light_cell_m`]
 //!    lets a forest-grown tree's leaf clusters share the last level's light the same way (off by
 //!    default: its error is three times the chaos floor) ([`PlasticTree::bend_light_cell_m`],
 //!    [`PlasticTree::leaf_light_cell_m`]); [`StandOptions::shape_step`] coarsens the crown-shape
 //!    classes (default [`SHAPE_STEP`], 10.25 %, since round 41). None is exact; what each saves
 //!    and changes on the near field of `benches/stand.rs` is in BENCHMARKS.md, "Round 40 (r40n:
-//!    ...)" and "Round 41 (r41n: ...)"; 0, 0 and [`DIM_STEP`] give round 40's stands bit for
-//!    bit.
+//!    ...)", "Round 41 (r41n: ...)" and "Round 42 (r42n: ...)"; 0, 0 and [`DIM_STEP`] give
+//!    round 40's stands bit for bit (for targets in index order: a cell's trees are adapted
+//!    in index order since round 42).
 
 use super::grow::ecomod;
 use super::species_tree::{ecomod_strands_at, ECOMOD_FULL_AGE_YR};
@@ -234,6 +237,10 @@ pub struct StandOptions {
     /// one light query at the last level ([`PlasticTree::leaf_light_cell_m`]: only the clusters'
     /// light and leaf density of eq. 12 change; 0: exact). Default 0.
     pub leaf_light_cell_m: f32,
+    /// With `bend_light_cell_m` > 0: an adapted tree's nodes share their cube's bending light
+    /// over the whole level, not only within one depth batch
+    /// ([`PlasticTree::bend_light_whole_level`]; false: round 41's sharing). Default true.
+    pub bend_light_whole_level: bool,
 }
 
 impl Default for StandOptions {
@@ -242,7 +249,7 @@ impl Default for StandOptions {
     /// [`SHAPE_STEP`], bending light shared in cubes of [`BEND_LIGHT_CELL_M`], every leaf
     /// cluster its own light query.
     fn default() -> Self {
-        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec(), height_step: HEIGHT_STEP, shape_step: SHAPE_STEP, bend_light_cell_m: BEND_LIGHT_CELL_M, leaf_light_cell_m: 0.0 }
+        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec(), height_step: HEIGHT_STEP, shape_step: SHAPE_STEP, bend_light_cell_m: BEND_LIGHT_CELL_M, leaf_light_cell_m: 0.0, bend_light_whole_level: true }
     }
 }
 
@@ -684,6 +691,13 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
     for (k, &i) in targets.iter().enumerate() {
         cells.entry(cell_of(&trees[i])).or_default().push(k);
     }
+    // a cell's trees in the order of their indices, not of the targets: the cell's first tree
+    // sets its ground plane, and the group's order its casters' order, so the stand is the
+    // same whatever the order of the targets (until round 41 the first target of a cell set
+    // the plane, so a reordered list adapted sloped cells otherwise)
+    for ks in cells.values_mut() {
+        ks.sort_by_key(|&k| (targets[k], k));
+    }
     // a hash of all trees by cell for the halo search
     let mut by_cell: BTreeMap<(i64, i64), Vec<usize>> = BTreeMap::new();
     for (i, t) in trees.iter().enumerate() {
@@ -821,7 +835,7 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
                 t.params.translucency_gamma_c0 = lib.species[key.0 as usize].architecture.plastic.translucency_gamma_c0;
             } else {
                 t.scale_grown_on_open_ground(f)?;
-                (t.bend_light_cell_m, t.leaf_light_cell_m) = (opts.bend_light_cell_m, opts.leaf_light_cell_m);
+                (t.bend_light_cell_m, t.leaf_light_cell_m, t.bend_light_whole_level) = (opts.bend_light_cell_m, opts.leaf_light_cell_m, opts.bend_light_whole_level);
             }
             t.translate(trees[i].base);
             Ok(t)

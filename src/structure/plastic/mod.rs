@@ -195,6 +195,14 @@ pub struct PlasticTree {
     /// change. Not exact (round 40, BENCHMARKS.md); for stands
     /// ([`crate::structure::stand::StandOptions::leaf_light_cell_m`]).
     pub leaf_light_cell_m: f32,
+    /// With [`PlasticTree::bend_light_cell_m`] > 0: the nodes bent at one level share the light
+    /// of the first node of their cube (with the same solids) over the whole level, each depth
+    /// batch taking the light of the cubes an earlier batch of the level queried, where without
+    /// it only the nodes of one depth batch share. The level's casters stand still while it bends, so a cube's light is
+    /// the same field either way. Not exact (our approximation, as the cubes are); default
+    /// false; for stands ([`crate::structure::stand::StandOptions::bend_light_whole_level`];
+    /// BENCHMARKS.md round 42).
+    pub bend_light_whole_level: bool,
     pub(crate) pos: Vec<Vec3>,
     pub(crate) rot: Vec<Quat>,
     pub(crate) bend: Vec<f32>,
@@ -255,6 +263,7 @@ impl PlasticTree {
             wood_radius_m: 0.02,
             bend_light_cell_m: 0.0,
             leaf_light_cell_m: 0.0,
+            bend_light_whole_level: false,
             pos: sk.nodes.iter().map(|nd| nd.pos).collect(),
             rot: vec![Quat::IDENTITY; n],
             bend: vec![0.0; n],

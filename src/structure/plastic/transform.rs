@@ -862,8 +862,27 @@ fn shared_points(at: &[Vec3], cell: f32, mask: impl Fn(usize) -> u32) -> (Vec<us
 /// [`light_many_among`] with the points of each cube of side `cell` (m) that see the same
 /// solids sharing the light of the first of them ([`PlasticTree::bend_light_cell_m`]); exactly
 /// [`light_many_among`] with `cell` 0.
-fn light_many_shared(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3], cell: f32) -> Vec<(f32, Vec3)> {
-    if !(cell > 0.0 && cell.is_finite()) || at.len() < 2 {
+/// With `seen` (the cubes already queried at this level, [`PlasticTree::bend_light_whole_level`]),
+/// a point of a cube in `seen` takes its light, and the cubes queried here are added to it.
+fn light_many_shared(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3], cell: f32, seen: Option<&mut HashMap<(IVec3, u32), (f32, Vec3)>>) -> Vec<(f32, Vec3)> {
+    if !(cell > 0.0 && cell.is_finite()) {
+        return light_many_among(sky, solids, vols, fixed, at);
+    }
+    if let Some(seen) = seen {
+        // each point's cube and solids, the first point of every cube not yet seen queried
+        let keys: Vec<(IVec3, u32)> = at.iter().map(|&p| ((p / cell).floor().as_ivec3(), solids.mask(p))).collect();
+        let mut fresh: HashMap<(IVec3, u32), ()> = HashMap::new();
+        let reps: Vec<usize> = (0..at.len()).filter(|&i| !seen.contains_key(&keys[i]) && fresh.insert(keys[i], ()).is_none()).collect();
+        if !reps.is_empty() {
+            let pts: Vec<Vec3> = reps.iter().map(|&i| at[i]).collect();
+            let lit = light_many_among(sky, solids, vols, fixed, &pts);
+            for (&i, l) in reps.iter().zip(lit) {
+                seen.insert(keys[i], l);
+            }
+        }
+        return keys.iter().map(|k| seen[k]).collect();
+    }
+    if at.len() < 2 {
         return light_many_among(sky, solids, vols, fixed, at);
     }
     let (reps, of) = shared_points(at, cell, |i| solids.mask(at[i]));
@@ -1834,6 +1853,8 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     }
     let mut at: Vec<Vec3> = Vec::new();
     let mut at_k: Vec<(usize, Vec3)> = Vec::new();
+    // the cubes whose bending light this level took (`PlasticTree::bend_light_whole_level`)
+    let mut seen: Option<HashMap<(IVec3, u32), (f32, Vec3)>> = (t.bend_light_whole_level && t.bend_light_cell_m > 0.0).then(HashMap::new);
     if let Some(mc) = w.mc.as_mut() {
         mc.nodes.ensure(n, nd);
     }
@@ -1865,7 +1886,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
         }
         let lights = match w.mc.as_mut() {
             Some(mc) => light_cached(sky, solids, vols, &mut mc.nodes, w.mc_epoch, &w.mc_delta, !w.mc_new, mc.tol_m, &at_k, &mut w.mc_stats, s),
-            None => light_many_shared(sky, solids, vols, fixed, &at, t.bend_light_cell_m),
+            None => light_many_shared(sky, solids, vols, fixed, &at, t.bend_light_cell_m, seen.as_mut()),
         };
         // pass 2: bend the recomputed nodes
         let mut lights = lights.into_iter();
