@@ -224,13 +224,17 @@ pub struct LifeHistory {
     /// light-response class of growth. Optional: without it `shade_tolerance`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shade_survival_class: Option<f32>,
-    /// Slenderness H/D (m/m, 40–250) of the closed-stand diameter increment: under crowding a
-    /// tree's potential diameter increment is `100 ΔH_pot / closed_hd` cm a year (ΔH_pot the
-    /// potential height increment, m), floored at the increment of a 0.3 m height growth and never
-    /// above the open-grown increment ([`crate::sim::phases::growth::closed_increment`]).
-    /// Optional: without it [`crate::sim::phases::growth::HD_CLOSED`] (60, the growth model's
-    /// ESTIMATE for dominants of closed stands). A source gives the value per species (issue 35,
-    /// round 41: TreeGrOSS's youth rule for beech, `D = h / 1.40`, i.e. 140).
+    /// Slenderness H/D (m/m, 40–250) of the closed-stand diameter increment of the youth, the
+    /// trees below the inventory threshold [`crate::sim::density::MIN_DBH_CM`] (DBH < 7 cm):
+    /// under crowding such a tree's potential diameter increment is `100 ΔH_pot / closed_hd` cm a
+    /// year (ΔH_pot the potential height increment, m), floored at the increment of a 0.3 m
+    /// height growth and never above the open-grown increment
+    /// ([`crate::sim::phases::growth::closed_increment`]). From 7 cm DBH on, and for species
+    /// without it, [`crate::sim::phases::growth::HD_CLOSED`] (60, the growth model's ESTIMATE for
+    /// dominants of closed stands; [`crate::sim::phases::growth::closed_slenderness`]). A source
+    /// gives the value per species: TreeGrOSS's youth rule for beech, `D = h / 1.40`, i.e. 140
+    /// (`Tree.youthGrowth`), which TreeGrOSS applies while DBH < 7 cm (`Tree.grow`; issue 35,
+    /// rounds 41–42).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub closed_hd: Option<f32>,
 }

@@ -237,7 +237,8 @@ pub struct Growth<'a> {
 /// Under crowding the potential increment `D_open(H + ΔH_pot) − D_open(H)` blends, with weight
 /// `x = clamp((RD − 0.4) / 0.2, 0, 1)`, into the closed-stand increment [`closed_increment`]
 /// `min(max(100 ΔH_pot / HD, 30 / HD cm), open increment)` (closed-stand slenderness HD the
-/// species' `life.closed_hd`, else [`HD_CLOSED`] = 60 m/m with its 5 mm/yr floor; ESTIMATE).
+/// species' `life.closed_hd` below 7 cm DBH, else [`HD_CLOSED`] = 60 m/m with its 5 mm/yr floor;
+/// ESTIMATE; [`closed_slenderness`]).
 /// Crown radius: open-grown radius of the new DBH, shrunk by [`rules::shaded_crown`]
 /// `0.5 + 0.5 L` in shade (crown plasticity); crown base rises to
 /// `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural pruning). Vigour memory
@@ -352,13 +353,27 @@ pub const DD_CLOSED_MIN: f32 = 0.5;
 
 /// Potential closed-stand diameter increment (cm/yr) of a tree with potential height increment
 /// `dh_pot` (m/yr) and open-grown diameter increment `dd_open` (cm/yr) at slenderness `hd` (m/m,
-/// > 0; the species' `life.closed_hd`, else [`HD_CLOSED`]): `min(max(100 dh_pot / hd, DD_CLOSED_MIN
+/// > 0; [`closed_slenderness`]: the species' `life.closed_hd` below 7 cm DBH, else [`HD_CLOSED`]): `min(max(100 dh_pot / hd, DD_CLOSED_MIN
 /// · HD_CLOSED / hd), dd_open)`. The floor is the increment of the same 0.3 m height growth at
 /// every `hd` ([`DD_CLOSED_MIN`] at 60); crowding does not speed diameter growth, so never more
 /// than the open-grown increment. At `hd` = [`HD_CLOSED`] it is bit for bit the growth model's
 /// closed-stand increment before round 41 (issue 35).
 pub fn closed_increment(dh_pot: f32, dd_open: f32, hd: f32) -> f32 {
     (dh_pot * 100.0 / hd).max(DD_CLOSED_MIN * HD_CLOSED / hd).min(dd_open)
+}
+
+/// Slenderness H/D (m/m) of the closed-stand diameter increment ([`closed_increment`]) of a tree
+/// of species `sp` with DBH `d_cm` (cm): the species' `life.closed_hd` while the tree is below
+/// the inventory threshold [`crate::sim::density::MIN_DBH_CM`] (7 cm), [`HD_CLOSED`] from it on
+/// and for species without `life.closed_hd`. The switch is hard, as in TreeGrOSS/BWINPro, whose
+/// youth rule (`D = h / 1.40` for beech) grows only the trees below the 7 cm threshold, and whose
+/// stand model grows those above it (issue 35, round 42): the DBH stays continuous, its yearly
+/// increment steps up by `closed_hd / HD_CLOSED` where the tree passes 7 cm.
+pub fn closed_slenderness(sp: &Species, d_cm: f32) -> f32 {
+    match sp.life.closed_hd {
+        Some(hd) if d_cm < crate::sim::density::MIN_DBH_CM => hd,
+        _ => HD_CLOSED,
+    }
 }
 
 /// One tree's season ([`run`]) in simulation year `year`: species `s`, light `l`, suitability,
@@ -412,7 +427,7 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, ye
     // x of the closed-stand allometry rises from 0 at RD_ONSET (0.4, lower limit of full
     // site occupancy) to 1 at RD 0.6 (onset of self-thinning, canopy closed: Long 1985).
     let x = ((crowd.rd[i] - RD_ONSET).max(0.0) / 0.2).min(1.0);
-    let dd_closed = if h > 1.3 { closed_increment(dh_pot, dd_open, sp.life.closed_hd.unwrap_or(HD_CLOSED)) } else { dd_open };
+    let dd_closed = if h > 1.3 { closed_increment(dh_pot, dd_open, closed_slenderness(sp, d)) } else { dd_open };
     let dd_pot = (1.0 - x) * dd_open + x * dd_closed;
     // the tree's growth factor only matters for a non-zero increment (a zero times the factor,
     // which is finite and > 0, is that same zero), so it is not drawn for trees that do not
@@ -516,6 +531,23 @@ mod tests {
             let (dh, open) = (k as f32 * 0.0007, 0.05 + (k % 37) as f32 * 0.03);
             assert_eq!(closed_increment(dh, open, HD_CLOSED).to_bits(), (dh * 100.0 / 60.0).max(0.5).min(open).to_bits(), "dh {dh} open {open}");
         }
+    }
+
+    /// The youth slenderness holds below the inventory threshold only (TreeGrOSS `Tree.grow`:
+    /// `youthGrowth` while DBH < 7 cm): a species with `life.closed_hd` = 140 takes it at 0 and
+    /// 6.99 cm and [`HD_CLOSED`] from 7 cm on; a species without it takes [`HD_CLOSED`] at every DBH.
+    #[test]
+    fn closed_slenderness_is_the_youths_below_seven_cm() {
+        let mut b = beech_like();
+        b.life.closed_hd = None;
+        for d in [0.0, 3.0, 6.99, 7.0, 40.0] {
+            assert_eq!(closed_slenderness(&b, d), HD_CLOSED, "no closed_hd, DBH {d}");
+        }
+        b.life.closed_hd = Some(140.0);
+        assert_eq!(closed_slenderness(&b, 0.0), 140.0);
+        assert_eq!(closed_slenderness(&b, 6.99), 140.0);
+        assert_eq!(closed_slenderness(&b, crate::sim::density::MIN_DBH_CM), HD_CLOSED);
+        assert_eq!(closed_slenderness(&b, 30.0), HD_CLOSED);
     }
 
     /// PROGNAUS's competition response (Norway spruce's terms, Hasenauer 2000): an open-grown
