@@ -12,7 +12,7 @@
 use crate::mesh::{LodChain, TreeMesh, TriMesh, LOD_LEVELS};
 use crate::structure::skeleton::{Leaves, Skeleton};
 use glam::Vec3;
-use crate::structure::texture::{IMPOSTOR_CROWN_V, IMPOSTOR_TRUNK_U};
+use crate::structure::texture::{BARK_TILE_M, IMPOSTOR_CROWN_V, IMPOSTOR_TRUNK_U};
 use std::f32::consts::TAU;
 
 /// Options of [`lod_chain`] and [`branch_mesh`].
@@ -136,8 +136,11 @@ impl StemProfile {
 
 /// Generalized cylinders along the skeleton: one tube per branch axis (a chain that follows each
 /// node's first child), rings at every node, `keep[i] == false` nodes skipped (their subtree is
-/// cut). Tips taper to 30 % of their radius. UV: u around (0–1), v = distance along the axis
-/// divided by the trunk circumference (so bark texels stay square on the trunk). With
+/// cut). Tips taper to 30 % of their radius. UV: u around, 0 to n = max(1, round(c /
+/// [`BARK_TILE_M`])) for a chain of base circumference c, and v = n × the distance along the
+/// axis / c, so the bark texture's texels are square at each chain's base and one repeat
+/// spans about [`BARK_TILE_M`] of bark on stems thicker than that (round 42; until then v was
+/// the distance over the trunk's circumference on every branch). With
 /// [`LodOptions::stem`] the radii are [`StemProfile`]'s and the root's chain gets rings at the
 /// taper's heights ([`super::taper::StemTaper::ring_heights_m`]) between its nodes below the
 /// bole's top.
@@ -151,7 +154,6 @@ pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriM
     let rad = |i: usize| profile.as_ref().map_or(sk.nodes[i].radius, |p| p.radius(sk, i));
     let bole_rings = profile.as_ref().map(|p| p.ring_heights()).unwrap_or_default();
     let r0 = rad(0).max(rad(1)).max(1e-6);
-    let vscale = 1.0 / (TAU * r0);
     let est = sk.nodes.len() * (o.sides as usize + 1);
     m.positions.reserve(est);
     m.normals.reserve(est);
@@ -186,6 +188,9 @@ pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriM
         let base_r = if root_chain && profile.is_some() { rad(0) } else { rad(chain[1]) };
         let sides = sides_for(base_r, r0, o);
         let ring = sides + 1;
+        let circ = TAU * base_r.max(1e-6);
+        let repeats = (circ / BARK_TILE_M).round().max(1.0);
+        let vscale = repeats / circ;
         let n = chain.len();
         rings.clear();
         for k in 0..n {
@@ -228,7 +233,7 @@ pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriM
                 let dir = normal * ca + binormal * sa;
                 m.positions.push((pos + dir * r).to_array());
                 m.normals.push(dir.to_array());
-                m.uvs.push([s as f32 / sides as f32, v]);
+                m.uvs.push([repeats * s as f32 / sides as f32, v]);
             }
         }
         for k in 0..(nr as u32 - 1) {
