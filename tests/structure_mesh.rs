@@ -54,9 +54,10 @@ fn tube_normals_are_continuous_along_the_trunk() {
         assert_eq!(m.normals[s], m.normals[s + 2 * ring]);
         assert!(m.normals[s][2].abs() < 1e-6, "horizontal normals on a vertical tube");
     }
-    // v grows with height, u runs 0..1 around
+    // v grows with height, u runs 0..n around: n = round(circumference / BARK_TILE_M) = 3
+    // repeats for a radius of 0.2 m (round 42; was once round)
     assert!(m.uvs[ring][1] > m.uvs[0][1]);
-    assert_eq!(m.uvs[ring - 1][0], 1.0);
+    assert_eq!(m.uvs[ring - 1][0], 3.0);
     assert_eq!(m.triangle_count(), 2 * 8 * 2);
 }
 
@@ -551,4 +552,38 @@ fn a_conifers_reduced_level_is_tiers_of_drooping_limbs() {
         }
     }
     assert!(failures.is_empty(), "{failures:#?}");
+}
+
+/// Issue 32, round 42: the bark texture keeps square texels on every tube, trunk and thin
+/// branch alike, so the birch's lenticel marks do not stretch: per tube, the texture
+/// coordinates per metre around the base ring (u over the ring's circumference) and along
+/// the first segment (v over its length) agree within 2 %, and one repeat spans at most
+/// `BARK_TILE_M` round a stem thicker than that. Until round 41 v ran over the trunk's
+/// circumference on every branch: a branch of a fifth of the trunk's radius had its texels
+/// five times as long as wide.
+#[test]
+fn bark_texels_are_square_on_the_trunk_and_the_branches() {
+    use glam::Vec3;
+    use sylva::structure::texture::BARK_TILE_M;
+    let mut sk = sylva::structure::Skeleton::new();
+    let r = sk.add_root(Vec3::ZERO, 0.25);
+    let a = sk.add_child(r, Vec3::new(0.0, 0.0, 6.0), 0.25, false).unwrap();
+    sk.add_child(a, Vec3::new(0.0, 0.0, 10.0), 0.2, false).unwrap();
+    let b = sk.add_child(a, Vec3::new(1.5, 0.0, 7.0), 0.05, true).unwrap();
+    sk.add_child(b, Vec3::new(3.0, 0.0, 7.5), 0.03, false).unwrap();
+    let m = mesh::branch_mesh(&sk, &LodOptions::default(), None);
+    // tubes: (first ring, sides) in order: the trunk (8 sides), the branch
+    let trunk_sides = 8usize;
+    let branch_first = 3 * (trunk_sides + 1);
+    let branch_sides = m.positions.len() / 3 - (trunk_sides + 1);
+    let p = |i: usize| Vec3::from(m.positions[i]);
+    for (first, sides, centre0, centre1) in [(0usize, trunk_sides, sk.nodes[0].pos, sk.nodes[1].pos), (branch_first, branch_sides - 1, sk.nodes[1].pos, sk.nodes[3].pos)] {
+        let ring = sides + 1;
+        let radius = (p(first) - centre0).length();
+        let around = (m.uvs[first + sides][0] - m.uvs[first][0]) / (std::f32::consts::TAU * radius);
+        let along = (m.uvs[first + ring][1] - m.uvs[first][1]) / centre0.distance(centre1);
+        assert!((around / along - 1.0).abs() < 0.02, "tube at ring {first}: {around:.3} per m around, {along:.3} per m along");
+        let repeats = m.uvs[first + sides][0];
+        assert!(repeats >= 1.0 && (std::f32::consts::TAU * radius / repeats <= BARK_TILE_M * 1.5 || repeats == 1.0), "{repeats} repeats round {radius} m");
+    }
 }

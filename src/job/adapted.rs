@@ -567,7 +567,10 @@ pub fn adapted_model(mut a: AdaptedTree, t: &StandTree, sp: &crate::species::Spe
         l.pos *= s;
         l.size *= s;
     });
-    let (mut lods, hulled) = adapted_lod_chain(&sk, &lv, &a, t.base, s, &crate::structure::mesh::LodOptions::for_species(sp));
+    // the bole tapered (Kozak 1988, `structure::taper`) to the stand-grown DBH of the tree's
+    // height (the pictures' trees carry no DBH: `forest_form::stand_dbh_cm`), in the 1 m frame
+    let stem = crate::structure::taper::StemTaper::new(crate::structure::taper::TaperForm::of_species(sp), crate::structure::forest_form::stand_dbh_cm(sp, t.height_m), t.height_m).map(|st| st.in_frame(s));
+    let (mut lods, hulled) = adapted_lod_chain(&sk, &lv, &a, t.base, s, &crate::structure::mesh::LodOptions { stem, ..crate::structure::mesh::LodOptions::for_species(sp) });
     let full = lods.levels.first_mut()?;
     if n_sprigs > 0 && full.leaves.uvs.len() == full.leaves.positions.len() {
         sprigs.positions.iter_mut().for_each(|p| *p = (Vec3::from(*p) * s).to_array());

@@ -401,6 +401,8 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let plants = plants_from_rows(&rows);
     let stand = stand_trees(&plants, library, &site);
     let trees: Vec<_> = stand.iter().map(|(_, t)| *t).collect();
+    // each tree's DBH from the inventory (cm): its stem's taper ([`LodOptions::stem`])
+    let dbh: Vec<f32> = stand.iter().map(|(i, _)| rows[*i].dbh_cm).collect();
     let (sw, sh) = (site.width() as f64 * site.cell_x_m, site.height() as f64 * site.cell_y_m);
     let inside = |x: f32, y: f32| in_area(x as f64, y as f64, [x0, y0, x1, y1], sw, sh);
     let targets: Vec<usize> = (0..trees.len()).filter(|&k| inside(trees[k].base.x, trees[k].base.y)).collect();
@@ -461,6 +463,8 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             TriMesh::default()
         };
         let s = Vec3::new(r, r, hgt);
+        // the bole tapered to the tree's own DBH (Kozak 1988, `structure::taper`)
+        let stem = crate::structure::taper::StemTaper::new(crate::structure::taper::TaperForm::of_species(sp), dbh[a.index], t.height_m);
         let mut topology = vec![t.species as u64, sk.nodes.len() as u64];
         topology.extend(sk.nodes.iter().map(|n| n.parent.map_or(u64::MAX, |p| p as u64)));
         topology.extend(lv.leaves.iter().map(|l| l.node as u64));
@@ -478,8 +482,10 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             let p = Vec3::from(*q) / s;
             canon.extend([p.x, p.y, p.z]);
         }
+        // trees sharing a mesh are scaled across by their crown radius: their DBH over it too
+        canon.push(stem.map_or(0.0, |st| 0.01 * st.dbh_cm / r));
         // the mid level: the crown hull of the adapted clusters, as in the pictures
-        let (mut chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions::default());
+        let (mut chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions { stem, ..LodOptions::default() });
         let n_sprigs = sprigs.positions.len() / 4;
         let tris = o.levels.iter().map(|&l| chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 }).sum();
         // the levels not written are not held (the writer leaves them out)

@@ -12,7 +12,7 @@
 use crate::mesh::{LodChain, TreeMesh, TriMesh, LOD_LEVELS};
 use crate::structure::skeleton::{Leaves, Skeleton};
 use glam::Vec3;
-use crate::structure::texture::{IMPOSTOR_CROWN_V, IMPOSTOR_TRUNK_U};
+use crate::structure::texture::{BARK_TILE_M, IMPOSTOR_CROWN_V, IMPOSTOR_TRUNK_U};
 use std::f32::consts::TAU;
 
 /// Options of [`lod_chain`] and [`branch_mesh`].
@@ -33,11 +33,18 @@ pub struct LodOptions {
     /// [`reduced_mesh`]'s crossed cluster cards, which merged a spruce's whorls into a smooth
     /// spire. Set for needle-leaved species by the callers that know the species.
     pub conifer_tiers: bool,
+    /// The stem's taper (issue 32, round 42; [`super::taper`]): when set, [`branch_mesh`]
+    /// draws the main stem up to the crown base (at least to breast height) with the taper
+    /// equation's radii conditioned on the tree's DBH, with rings at the root collar, at
+    /// 1.3 m and at most 2 m apart, and every other radius (the crown's stem and the
+    /// branches) is the pipe model's times the one factor that meets the bole at the crown
+    /// base ([`StemProfile`]). `None`: the skeleton's radii as they are.
+    pub stem: Option<super::taper::StemTaper>,
 }
 
 impl Default for LodOptions {
     fn default() -> Self {
-        LodOptions { sides: 8, min_sides: 3, reduced_keep_fraction: 0.12, hull_segments: 10, leaves: true, conifer_tiers: false }
+        LodOptions { sides: 8, min_sides: 3, reduced_keep_fraction: 0.12, hull_segments: 10, leaves: true, conifer_tiers: false, stem: None }
     }
 }
 
@@ -56,24 +63,105 @@ fn sides_for(r: f32, r0: f32, o: &LodOptions) -> u32 {
     s.clamp(o.min_sides.max(3), o.sides.max(3))
 }
 
+/// How [`branch_mesh`] draws the radii of a skeleton whose [`LodOptions::stem`] is set: the
+/// main stem ([`main_stem`]'s nodes) from the base up to the bole's top `top` (the first stem
+/// node with a branch off the stem, the crown base, or breast height where that is higher;
+/// frame units above the root) follows the taper, and every other radius is the skeleton's
+/// (pipe model) times `k`, the taper's radius at `top` over the pipe model's stem radius
+/// there, so the crown's pipes carry the bole's cross-section (Shinozaki et al. 1964: the
+/// stem below the crown base holds the pipes of the crown and of the shed branches).
+pub struct StemProfile {
+    taper: super::taper::StemTaper,
+    on_stem: Vec<bool>,
+    root_z: f32,
+    /// Top of the tapered bole (frame units above the root).
+    pub top: f32,
+    /// Factor on the other radii.
+    pub k: f32,
+}
+
+impl StemProfile {
+    /// The profile of `sk` under `taper` (`None` for a skeleton of fewer than 2 nodes).
+    pub fn new(sk: &Skeleton, taper: super::taper::StemTaper) -> Option<StemProfile> {
+        let n = sk.nodes.len();
+        if n < 2 {
+            return None;
+        }
+        let mut on_stem = vec![false; n];
+        let mut path = Vec::new();
+        let mut cur = Some(0usize);
+        while let Some(i) = cur {
+            if on_stem[i] {
+                break;
+            }
+            on_stem[i] = true;
+            path.push(i);
+            cur = sk.nodes[i].children.iter().map(|&c| c as usize).find(|&c| c < n && sk.nodes[c].gravelius == sk.nodes[i].gravelius);
+        }
+        let root_z = sk.nodes[0].pos.z;
+        let cb = path.iter().copied().find(|&i| i != 0 && sk.nodes[i].children.iter().any(|&c| !on_stem[c as usize])).unwrap_or(*path.last()?);
+        let bh = super::taper::BREAST_HEIGHT_M * taper.frame_scale;
+        let top = (sk.nodes[cb].pos.z - root_z).max(bh);
+        // the pipe model's stem radius at `top`: between the stem nodes around it
+        let mut pipe = sk.nodes[cb].radius;
+        for w in path.windows(2) {
+            let (a, b) = (&sk.nodes[w[0]], &sk.nodes[w[1]]);
+            let (za, zb) = (a.pos.z - root_z, b.pos.z - root_z);
+            if za <= top && top <= zb && zb > za {
+                pipe = b.radius;
+                break;
+            }
+        }
+        let want = taper.radius_in_frame(top);
+        let k = if pipe > 0.0 && want > 0.0 { (want / pipe).clamp(0.05, 20.0) } else { 1.0 };
+        Some(StemProfile { taper, on_stem, root_z, top, k })
+    }
+
+    /// Radius of the segment ending at node `i` of `sk` (frame units).
+    pub fn radius(&self, sk: &Skeleton, i: usize) -> f32 {
+        let z = sk.nodes[i].pos.z - self.root_z;
+        if self.on_stem[i] && z <= self.top + 1e-6 {
+            self.taper.radius_in_frame(z)
+        } else {
+            sk.nodes[i].radius * self.k
+        }
+    }
+
+    /// Heights (frame units above the root) of the rings the bole gets between its nodes.
+    fn ring_heights(&self) -> Vec<f32> {
+        let s = self.taper.frame_scale;
+        super::taper::StemTaper::ring_heights_m(self.top / s).into_iter().map(|h| h * s).collect()
+    }
+}
+
 /// Generalized cylinders along the skeleton: one tube per branch axis (a chain that follows each
 /// node's first child), rings at every node, `keep[i] == false` nodes skipped (their subtree is
-/// cut). Tips taper to 30 % of their radius. UV: u around (0–1), v = distance along the axis
-/// divided by the trunk circumference (so bark texels stay square on the trunk).
+/// cut). Tips taper to 30 % of their radius. UV: u around, 0 to n = max(1, round(c /
+/// [`BARK_TILE_M`])) for a chain of base circumference c, and v = n × the distance along the
+/// axis / c, so the bark texture's texels are square at each chain's base and one repeat
+/// spans about [`BARK_TILE_M`] of bark on stems thicker than that (round 42; until then v was
+/// the distance over the trunk's circumference on every branch). With
+/// [`LodOptions::stem`] the radii are [`StemProfile`]'s and the root's chain gets rings at the
+/// taper's heights ([`super::taper::StemTaper::ring_heights_m`]) between its nodes below the
+/// bole's top.
 pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriMesh {
     let mut m = TriMesh::default();
     if sk.nodes.len() < 2 {
         return m;
     }
     let kept = |i: usize| keep.map(|k| k[i]).unwrap_or(true);
-    let r0 = sk.nodes[0].radius.max(sk.nodes.get(1).map(|n| n.radius).unwrap_or(0.0)).max(1e-6);
-    let vscale = 1.0 / (TAU * r0);
+    let profile = o.stem.and_then(|t| StemProfile::new(sk, t));
+    let rad = |i: usize| profile.as_ref().map_or(sk.nodes[i].radius, |p| p.radius(sk, i));
+    let bole_rings = profile.as_ref().map(|p| p.ring_heights()).unwrap_or_default();
+    let r0 = rad(0).max(rad(1)).max(1e-6);
     let est = sk.nodes.len() * (o.sides as usize + 1);
     m.positions.reserve(est);
     m.normals.reserve(est);
     m.uvs.reserve(est);
     m.indices.reserve(est * 6);
     let mut chain: Vec<usize> = Vec::with_capacity(256);
+    // ring centres and radii of a chain (the nodes, and the bole's rings between them)
+    let mut rings: Vec<(Vec3, f32)> = Vec::with_capacity(256);
     // Chain starts: the root, and every non-first kept child.
     let mut starts: Vec<(usize, usize)> = vec![(0, 0)]; // (first point, first segment node)
     for (i, n) in sk.nodes.iter().enumerate() {
@@ -88,11 +176,8 @@ pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriM
     for &(p0, c0) in &starts {
         chain.clear();
         chain.push(p0);
-        let mut cur = if p0 == 0 && c0 == 0 {
-            sk.nodes[0].children.iter().map(|&c| c as usize).find(|&c| kept(c))
-        } else {
-            Some(c0)
-        };
+        let root_chain = p0 == 0 && c0 == 0;
+        let mut cur = if root_chain { sk.nodes[0].children.iter().map(|&c| c as usize).find(|&c| kept(c)) } else { Some(c0) };
         while let Some(c) = cur {
             chain.push(c);
             cur = sk.nodes[c].children.iter().map(|&c| c as usize).find(|&c| kept(c));
@@ -100,24 +185,45 @@ pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriM
         if chain.len() < 2 {
             continue;
         }
-        let base_r = sk.nodes[chain[1]].radius;
+        let base_r = if root_chain && profile.is_some() { rad(0) } else { rad(chain[1]) };
         let sides = sides_for(base_r, r0, o);
         let ring = sides + 1;
-        let mut normal = Vec3::ZERO;
-        let mut v = 0.0f32;
-        let first_vertex = m.positions.len() as u32;
+        let circ = TAU * base_r.max(1e-6);
+        let repeats = (circ / BARK_TILE_M).round().max(1.0);
+        let vscale = repeats / circ;
         let n = chain.len();
+        rings.clear();
         for k in 0..n {
             let pos = sk.nodes[chain[k]].pos;
-            let prev = sk.nodes[chain[k.saturating_sub(1)]].pos;
-            let next = sk.nodes[chain[(k + 1).min(n - 1)]].pos;
-            let t = (next - prev).normalize_or(Vec3::Z);
-            normal = if k == 0 { t.any_orthonormal_vector() } else { (normal - t * normal.dot(t)).normalize_or(t.any_orthonormal_vector()) };
-            let binormal = t.cross(normal);
-            let mut r = if k == 0 { base_r } else { sk.nodes[chain[k]].radius };
+            if k > 0 && root_chain {
+                if let Some(p) = &profile {
+                    // the bole's rings between the previous node and this one
+                    let prev = sk.nodes[chain[k - 1]].pos;
+                    let (za, zb) = (prev.z - p.root_z, pos.z - p.root_z);
+                    if zb > za + 1e-6 {
+                        for &h in bole_rings.iter().filter(|&&h| h > za + 1e-6 && h < zb - 1e-6 && h <= p.top) {
+                            rings.push((prev.lerp(pos, (h - za) / (zb - za)), p.taper.radius_in_frame(h)));
+                        }
+                    }
+                }
+            }
+            let mut r = if k == 0 { base_r } else { rad(chain[k]) };
             if k == n - 1 && sk.nodes[chain[k]].children.is_empty() {
                 r *= 0.3;
             }
+            rings.push((pos, r));
+        }
+        let mut normal = Vec3::ZERO;
+        let mut v = 0.0f32;
+        let first_vertex = m.positions.len() as u32;
+        let nr = rings.len();
+        for k in 0..nr {
+            let (pos, r) = rings[k];
+            let prev = rings[k.saturating_sub(1)].0;
+            let next = rings[(k + 1).min(nr - 1)].0;
+            let t = (next - prev).normalize_or(Vec3::Z);
+            normal = if k == 0 { t.any_orthonormal_vector() } else { (normal - t * normal.dot(t)).normalize_or(t.any_orthonormal_vector()) };
+            let binormal = t.cross(normal);
             if k > 0 {
                 v += pos.distance(prev) * vscale;
             }
@@ -127,10 +233,10 @@ pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriM
                 let dir = normal * ca + binormal * sa;
                 m.positions.push((pos + dir * r).to_array());
                 m.normals.push(dir.to_array());
-                m.uvs.push([s as f32 / sides as f32, v]);
+                m.uvs.push([repeats * s as f32 / sides as f32, v]);
             }
         }
-        for k in 0..(n as u32 - 1) {
+        for k in 0..(nr as u32 - 1) {
             let a = first_vertex + k * ring;
             let b = a + ring;
             for s in 0..sides {
@@ -589,7 +695,8 @@ pub(crate) fn stem_xy_at(stem: &[(Vec3, f32)], z: f32) -> Option<glam::Vec2> {
 pub const HULL_STEM_SEGMENTS: usize = 6;
 
 /// The stem of the crown-hull level: a 5-sided tapered tube (radius that of the root, or of its
-/// first child when larger, tapering to 70 % at the top) that follows the skeleton's main stem
+/// first child when larger, tapering to 70 % at the top; with [`LodOptions::stem`] the taper's
+/// radius at each of its points) that follows the skeleton's main stem
 /// ([`main_stem`]) from the root up to height `top_z` (m, same frame; at least 1 mm above the
 /// root), through at most [`HULL_STEM_SEGMENTS`] of its points spread evenly along it, so a
 /// leaning or bent stem carries the hull where the crown is (round 34; until then the tube
@@ -620,18 +727,23 @@ pub(crate) fn hull_stem(sk: &Skeleton, top_z: f32, o: &LodOptions) -> TriMesh {
     // at most HULL_STEM_SEGMENTS segments, points spread evenly along the stem (ends kept)
     let n = pts.len();
     let keep: Vec<Vec3> = if n - 1 <= HULL_STEM_SEGMENTS { pts } else { (0..=HULL_STEM_SEGMENTS).map(|k| pts[(k * (n - 1) + HULL_STEM_SEGMENTS / 2) / HULL_STEM_SEGMENTS]).collect() };
-    let mut t = Skeleton::new();
-    let mut parent = t.add_root(keep[0], rr);
+    // with a taper (LodOptions::stem) the tube takes the taper's radius at each point (no
+    // rings added: the level stays cheap); else the root's radius tapering to 70 % at the top
     let dz = (top_z - root.pos.z).max(1e-3);
+    let r_at = |p: Vec3| match o.stem {
+        Some(st) => st.radius_in_frame(p.z - root.pos.z).max(1e-4),
+        None => rr * (1.0 - 0.3 * ((p.z - root.pos.z) / dz).clamp(0.0, 1.0)),
+    };
+    let mut t = Skeleton::new();
+    let mut parent = t.add_root(keep[0], r_at(keep[0]));
     for p in keep.iter().skip(1) {
-        let f = ((p.z - root.pos.z) / dz).clamp(0.0, 1.0);
-        match t.add_child(parent, *p, rr * (1.0 - 0.3 * f), false) {
+        match t.add_child(parent, *p, r_at(*p), false) {
             Ok(id) => parent = id,
             Err(_) => return bark,
         }
     }
     if t.nodes.len() >= 2 {
-        bark = branch_mesh(&t, &LodOptions { sides: 5, min_sides: 5, ..*o }, None);
+        bark = branch_mesh(&t, &LodOptions { sides: 5, min_sides: 5, stem: None, ..*o }, None);
     }
     bark
 }

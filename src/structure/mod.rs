@@ -13,6 +13,7 @@
 //!   ([`grow::envelope`]).
 //! - [`edit_distance`]: constrained edit distance between skeletons (Zhang 1996), the
 //!   comparison of Plastic Trees section 7.
+//! - [`taper`]: stem taper from a tree's DBH and height (Kozak 1988; the meshed bole).
 //! - [`texture`]: procedural leaf-card (per leaf shape), LOD and bark textures.
 //! - [`plastic`]: Plastic Trees (`000_*.txt`): bends and prunes a grown skeleton for a new
 //!   obstacle instead of regrowing it.
@@ -27,6 +28,7 @@ pub mod plastic;
 pub mod skeleton;
 pub mod species_tree;
 pub mod stand;
+pub mod taper;
 pub mod texture;
 
 pub use skeleton::{Leaf, Leaves, Node, NodeId, Role, Skeleton};

@@ -34,8 +34,10 @@
 //! broadleaves filled with leaves, above a trunk).
 //!
 //! **Bark** ([`bark_texture`]): the species' bark colour with a periodic pattern (it tiles in u
-//! and v, as the branch tubes of [`super::mesh::branch_mesh`] repeat it: u once round the stem,
-//! v one stem circumference per unit) chosen by [`BarkPattern::of_species`].
+//! and v, as the branch tubes of [`super::mesh::branch_mesh`] repeat it: about one repeat per
+//! [`BARK_TILE_M`] round the stem, texels square along it) chosen by
+//! [`BarkPattern::of_species`]; white bark carries the stills' lenticel marks
+//! ([`lenticel_brightness`]).
 
 use crate::species::schema::LEAF_TEXTURES;
 use crate::species::{LeafType, Season, Species};
@@ -685,21 +687,50 @@ pub fn bark_texture(rgb: [u8; 3], pattern: BarkPattern, size: u32, seed: u64) ->
                     let plate = if (p * 7.0).fract() < 0.14 || crack < 0.18 { 0.5 } else { 1.0 };
                     plate * (0.9 + 0.2 * n2)
                 }
-                BarkPattern::Lenticelled => {
-                    let band = periodic_noise(u, v, 6, 40, seed ^ 6);
-                    let dark = band > 0.78 && periodic_noise(u, v, 3, 40, seed ^ 7) > 0.35;
-                    if dark {
-                        0.3
-                    } else {
-                        1.0 + 0.06 * n2
-                    }
-                }
+                BarkPattern::Lenticelled => lenticel_brightness(u, v, seed) * (1.0 + 0.06 * n2),
             };
             let c = rgb.map(|c| ((c as f32 * m).round().clamp(0.0, 255.0)) as u8);
             img.put_pixel(x, y, Rgba([c[0], c[1], c[2], 255]));
         }
     }
     img
+}
+
+/// Side (m of bark) of one repeat of a bark texture on the tubes of
+/// [`super::mesh::branch_mesh`]: a stem of circumference c takes max(1, round(c / 0.5 m))
+/// repeats around, and as many per metre along as keep the texels square (issue 32, round 42:
+/// until then a texture repeat was one trunk circumference on every branch, so its marks
+/// stretched along thin branches).
+pub const BARK_TILE_M: f32 = 0.5;
+/// Height (m) of a row of a white bark's lenticel marks, as the stills draw them
+/// (`BIRCH_ROW_M` of `render/shaders/scene.wgsl`; ESTIMATE, from photographs: marks of 1–4 cm
+/// in rows a hand apart).
+pub const BIRCH_ROW_M: f32 = 0.09;
+/// Width (m) of a cell of a row (`BIRCH_CELL_M` of the shader; ESTIMATE).
+pub const BIRCH_CELL_M: f32 = 0.07;
+/// Share of the cells that carry a mark (`BIRCH_MARKS` of the shader; ESTIMATE).
+pub const BIRCH_MARKS: f32 = 0.7;
+
+/// Brightness (0.25 in a mark, else 1) of a lenticelled (white) bark at texture coordinates
+/// (`u`, `v`) of one [`BARK_TILE_M`] repeat: the stills' pattern (`birch_bark` of the
+/// shader): rows of [`BIRCH_ROW_M`] up the stem, cells of [`BIRCH_CELL_M`] around (rounded
+/// to whole rows and cells of the repeat, so it tiles), [`BIRCH_MARKS`] of the cells marked by
+/// a horizontal dash 0.15–0.35 of the row high and 0.5–1 of the cell wide, placed by `seed`.
+pub fn lenticel_brightness(u: f32, v: f32, seed: u64) -> f32 {
+    let rows = (BARK_TILE_M / BIRCH_ROW_M).round().max(1.0);
+    let cells = (BARK_TILE_M / BIRCH_CELL_M).round().max(1.0);
+    // the cells' edges half a cell off the repeat's edge, so no dash is cut by it
+    let (y, x) = (v.rem_euclid(1.0) * rows, u.rem_euclid(1.0) * cells + 0.5);
+    let (row, cell) = (y.floor() as u64, x.floor().rem_euclid(cells) as u64);
+    let (t, c) = (y.fract(), x.fract());
+    let h = |k: u64| unit(&[seed, 0x6c65_6e74, row, cell, k]);
+    let th = 0.15 + 0.2 * h(1);
+    let half = 0.25 + 0.25 * h(2);
+    if h(0) < BIRCH_MARKS && (t - 0.5).abs() < 0.5 * th && (c - 0.5).abs() < half {
+        0.25
+    } else {
+        1.0
+    }
 }
 
 /// Fallen leaves drawn on a [`litter_texture`].
@@ -962,6 +993,28 @@ mod tests {
         // a cone: more cover in the lower than in the upper half of the crown
         let half = |y0: u32, y1: u32| (y0..y1).flat_map(|y| (0..128).map(move |x| (x, y))).filter(|&(x, y)| imp.get_pixel(x, y).0[3] >= 128).count();
         assert!(half(64, 100) > half(10, 46), "{} vs {}", half(64, 100), half(10, 46));
+    }
+
+    /// Issue 32, round 42: the exported white bark carries the stills' lenticel marks: dark
+    /// dashes (0.25 of the colour) in rows of [`BIRCH_ROW_M`] (whole rows of a
+    /// [`BARK_TILE_M`] repeat), each dash within its row's middle 0.35, covering 5–25 % of the
+    /// texture. Round 41's lenticelled bark (noise bands of 40 a repeat) fails the rows.
+    #[test]
+    fn white_bark_has_lenticel_rows() {
+        let (px, rgb) = (256u32, [230u8, 228, 220]);
+        let b = bark_texture(rgb, BarkPattern::Lenticelled, px, 11);
+        let rows = (BARK_TILE_M / BIRCH_ROW_M).round();
+        let mut dark = 0;
+        for (_, y, p) in b.enumerate_pixels() {
+            if (p.0[1] as f32) < 0.5 * rgb[1] as f32 {
+                dark += 1;
+                let v = 1.0 - (y as f32 + 0.5) / px as f32;
+                let t = (v * rows).fract();
+                assert!((t - 0.5).abs() <= 0.5 * 0.35 + 1.0 / px as f32 * rows, "a mark at v {v}, {t} of its row");
+            }
+        }
+        let share = dark as f32 / (px * px) as f32;
+        assert!((0.05..=0.25).contains(&share), "marks cover {share}");
     }
 
     #[test]
