@@ -1446,28 +1446,23 @@ impl MoveCache {
 /// Sky directions as lanes ([`hit_dirs`]): x, y, z of up to 32 unit directions (0 in unused
 /// lanes), and the cone that holds them ([`DirLanes::cone`]).
 struct DirLanes {
-    /// x, y, z of lane 8b + k at `[b][k]`.
-    x: [[f32; 8]; 4],
-    y: [[f32; 8]; 4],
-    z: [[f32; 8]; 4],
+    x: [f32; 32],
+    y: [f32; 32],
+    z: [f32; 32],
     /// Axis of the cone (unit): the brightest sky point.
     axis: Vec3,
     /// (cos α, sin α) of the cone's half-angle α: every direction of the mask given to
     /// [`DirLanes::new`] lies within α of `axis`; cos α = −2 (no cone) when α ≥ 90°.
     cone: (f32, f32),
-    /// Lanes in use, a multiple of 8 (8–32): the directions' count rounded up ([`hit_dirs`]
-    /// tests only these; the lanes past the directions are 0 and never hit).
-    lanes: usize,
 }
 
 impl DirLanes {
     /// The directions `dirs` as lanes, and the cone about `axis` that holds those of `used`
     /// (bit k: direction k).
     fn new(dirs: &[Vec3], axis: Vec3, used: u32) -> DirLanes {
-        let lanes = dirs.len().min(32).div_ceil(8).max(1) * 8;
-        let mut l = DirLanes { x: [[0.0; 8]; 4], y: [[0.0; 8]; 4], z: [[0.0; 8]; 4], axis, cone: (-2.0, 1.0), lanes };
+        let mut l = DirLanes { x: [0.0; 32], y: [0.0; 32], z: [0.0; 32], axis, cone: (-2.0, 1.0) };
         for (k, d) in dirs.iter().take(32).enumerate() {
-            (l.x[k / 8][k % 8], l.y[k / 8][k % 8], l.z[k / 8][k % 8]) = (d.x, d.y, d.z);
+            (l.x[k], l.y[k], l.z[k]) = (d.x, d.y, d.z);
         }
         let cos_a = dirs.iter().take(32).enumerate().filter(|(k, _)| used & (1 << k) != 0).map(|(_, d)| d.dot(axis)).fold(1.0f32, f32::min);
         if cos_a > 1e-3 && axis.is_finite() {
@@ -1488,20 +1483,14 @@ fn hit_dirs(l: &DirLanes, o: &Occluder, p: Vec3, want: u32) -> u32 {
         return 0;
     }
     // per lane an all-ones mask where the ray meets the sphere, kept on the lane's bit and
-    // OR-reduced (the lanes' bits by a table, so the loop vectorises), in blocks of 8 lanes up
-    // to the lanes in use (the default sky's 24 directions: 3 blocks, not 4)
-    // (the blocks' masks OR-ed lane by lane, reduced once at the end)
-    let mut acc = [0u32; 8];
-    for b in 0..l.lanes / 8 {
-        let (xs, ys, zs) = (&l.x[b], &l.y[b], &l.z[b]);
-        let bits = &LANE_BIT[8 * b..8 * b + 8];
-        for k in 0..8 {
-            let along = v.x * xs[k] + v.y * ys[k] + v.z * zs[k];
-            let hit = 0u32.wrapping_sub(((along > 0.0) & (l2 - along * along <= r2)) as u32);
-            acc[k] |= hit & bits[k];
-        }
+    // OR-reduced (the lanes' bits by a table, so the loop vectorises)
+    let mut m = 0u32;
+    for k in 0..32 {
+        let along = v.x * l.x[k] + v.y * l.y[k] + v.z * l.z[k];
+        let hit = 0u32.wrapping_sub(((along > 0.0) & (l2 - along * along <= r2)) as u32);
+        m |= hit & LANE_BIT[k];
     }
-    acc.iter().fold(0, |m, &a| m | a) & want
+    m & want
 }
 
 /// Bit k of lane k ([`hit_dirs`]).
@@ -2606,43 +2595,6 @@ mod tests {
             }
         }
         assert!(skipped * 3 > tested && shaded > 10_000, "skipped {skipped} of {tested}; shaded rays {shaded}");
-    }
-
-    /// [`hit_dirs`] tests the lanes in use only (the directions' count rounded up to 8): for
-    /// skies of 12, 24 and 32 directions, its bits equal a plain per-direction test of every
-    /// direction (the ray ahead, within the radius), at points around a cloud of casters.
-    #[test]
-    fn hit_dirs_tests_every_direction_of_the_sky() {
-        let mut hits = [0usize; 3];
-        for (si, rings) in [&[4usize, 8][..], &[4, 8, 12], &[4, 8, 8, 12]].into_iter().enumerate() {
-            let sky = crate::structure::plastic::Sky::with_rings(Vec3::new(0.3, 0.1, 1.0).normalize(), rings).unwrap();
-            let all = sky_bits(&sky);
-            let lanes = DirLanes::new(&sky.dirs, sky.brightest, all);
-            assert_eq!(lanes.lanes, sky.dirs.len().div_ceil(8) * 8);
-            for i in 0..200 {
-                let f = i as f32;
-                let o = Occluder { center: Vec3::new((f * 0.71).sin() * 4.0, (f * 0.53).cos() * 4.0, 2.0 + (f * 0.29).sin().abs() * 8.0), radius: 0.2 + 1.5 * (f * 0.37).sin().abs(), gamma: 0.5 };
-                for j in 0..20 {
-                    let g = j as f32;
-                    let p = Vec3::new((g * 0.43).cos() * 6.0, (g * 0.61).sin() * 6.0, (g * 0.17).sin().abs() * 6.0);
-                    let v = o.center - p;
-                    let (l2, r2) = (v.length_squared(), o.radius * o.radius);
-                    let mut want_bits = 0u32;
-                    if l2 > r2 {
-                        for (k, d) in sky.dirs.iter().enumerate() {
-                            let along = v.x * d.x + v.y * d.y + v.z * d.z;
-                            if along > 0.0 && l2 - along * along <= r2 {
-                                want_bits |= 1 << k;
-                            }
-                        }
-                    }
-                    assert_eq!(hit_dirs(&lanes, &o, p, all), want_bits, "{} directions, caster {i}, point {j}", sky.dirs.len());
-                    hits[si] += (want_bits >> 8 != 0) as usize;
-                }
-            }
-        }
-        // rays of the directions past the first 8 lanes hit in every sky
-        assert!(hits.iter().all(|&h| h > 100), "{hits:?}");
     }
 
     /// [`through_both`] against the plain product of the two transmittances, bit for bit, at
