@@ -1651,106 +1651,125 @@ fn light_cached(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes,
     let weighted = (0..nd).filter(|&k| sky.weights[k] != 0.0).fold(0u32, |m, k| m | 1 << k);
     let fill = sky_bits(sky) & !solids.below_ground() & weighted;
     let lanes = DirLanes::new(&sky.dirs, sky.brightest, fill);
-    // per point: the solids' mask, whether its row is reused, and the changed casters' factors
-    // (for a reused row only in the directions the solids leave open now: the row keeps the
-    // snapshot's terms, and the blocked directions add nothing to eq. 3)
-    // split over the cores in chunks of `light_chunk` points (a depth batch of a few dozen
-    // nodes is one task with chunks of LIGHT_CHUNK); every point's plan is its own
-    let plan: Vec<(u32, bool, Option<[f32; 32]>)> = pts
-        .par_iter()
-        .with_min_len(light_chunk(pts.len()))
-        .map(|&(i, p)| {
+    // whether each point's row is reused (a cheap serial pass: it decides how the fresh rows
+    // are computed, before the one parallel pass below)
+    let valid: Vec<bool> = pts.iter().map(|&(i, p)| rc.valid(i, epoch, p, tol)).collect();
+    let fresh_pts = valid.iter().filter(|&&v| !v).count();
+    let reusing = fresh_pts < pts.len();
+    // a few points to evaluate in a call that reuses rows (or at a level patched since its
+    // snapshot, `patched`: a batch of a few fresh points alone): every caster of the level
+    // tested from each point (the sky-cone test first), all directions at once, instead of
+    // building the level's grids; more fresh points: the level's grids, built over the cores
+    // before the pass
+    let scan = (fresh_pts > 0 && (reusing || patched) && fresh_pts <= MOVE_SCAN_MAX_POINTS).then(|| CasterSet::of(vols.occluders()));
+    if scan.is_none() && fresh_pts > 0 {
+        vols.prepare(fill);
+    }
+    // one pass over the cores, in chunks of `light_chunk` points (a depth batch of a few dozen
+    // nodes is one task with chunks of LIGHT_CHUNK; rounds 36–41 took two passes and summed the
+    // points serially): per point the solids' mask, the changed casters' factors (for a reused
+    // row only in the directions the solids leave open now: the row keeps the snapshot's terms,
+    // and the blocked directions add nothing to eq. 3), a fresh row where the row is not
+    // reused (stored back below, in the snapshot's terms), and the sums of eq. (3). Every
+    // point's values are its own, taken in direction order as before, so they are the same bit
+    // for bit whatever the chunks
+    let ndc = nd.max(1);
+    let chunk = light_chunk(pts.len());
+    let mut fresh = vec![f32::NAN; pts.len() * ndc];
+    let mut res: Vec<(f32, Vec3, u32, bool)> = vec![(0.0, Vec3::Z, 0, false); pts.len()];
+    let rc_ref = &*rc;
+    fresh.par_chunks_mut(chunk * ndc).zip(res.par_chunks_mut(chunk)).zip(pts.par_chunks(chunk).zip(valid.par_chunks(chunk))).for_each(|((rows, res), (pts, valid))| {
+        let mut fs: Vec<Option<[f32; 32]>> = Vec::with_capacity(pts.len());
+        for (j, (&(_, p), &v)) in pts.iter().zip(valid).enumerate() {
             let m = solids.mask(p);
-            let valid = rc.valid(i, epoch, p, tol);
-            let want = if valid { fill & !m } else { fill };
-            (m, valid, if delta.is_empty() { None } else { delta.factors(&lanes, p, want) })
-        })
-        .collect();
-    let fresh_pts = plan.iter().filter(|x| !x.1).count();
-    stats[0] += pts.len();
-    stats[1] += plan.iter().filter(|x| x.1 && x.2.is_none()).count();
-    stats[2] += plan.iter().filter(|x| x.1 && x.2.is_some()).count();
-    stats[3] += fresh_pts * fill.count_ones() as usize;
-    let mut fresh = vec![f32::NAN; pts.len() * nd];
-    let reusing = plan.iter().any(|x| x.1);
-    if (reusing || patched) && fresh_pts <= MOVE_SCAN_MAX_POINTS {
-        // a few points to evaluate in a call that reuses rows (or at a level patched since its
-        // snapshot, `patched`: a batch of a few fresh points alone): every caster of the level
-        // tested from each point (the sky-cone test first), all directions at once, instead of
-        // building the level's grids
-        let casters = CasterSet::of(vols.occluders());
-        fresh.par_chunks_mut(nd.max(1)).zip(pts.par_iter().zip(&plan)).filter(|(_, (_, x))| !x.1).for_each(|(row, (&(_, p), _))| {
-            let t = casters.factors(&lanes, p, fill).unwrap_or([1.0; 32]);
-            for k in 0..nd {
-                if fill & (1 << k) != 0 {
-                    row[k] = if t[k] < 1e-4 { 0.0 } else { t[k] };
+            let want = if v { fill & !m } else { fill };
+            fs.push(if delta.is_empty() { None } else { delta.factors(&lanes, p, want) });
+            res[j].2 = m;
+            if v {
+                continue;
+            }
+            if let Some(casters) = scan.as_ref() {
+                let t = casters.factors(&lanes, p, fill).unwrap_or([1.0; 32]);
+                let row = &mut rows[j * nd..(j + 1) * nd];
+                for k in 0..nd {
+                    if fill & (1 << k) != 0 {
+                        row[k] = if t[k] < 1e-4 { 0.0 } else { t[k] };
+                    }
                 }
             }
-        });
-    } else if fresh_pts > 0 {
-        vols.prepare(fill);
-        let chunk = light_chunk(pts.len());
-        fresh.par_chunks_mut(chunk * nd.max(1)).zip(pts.par_chunks(chunk).zip(plan.par_chunks(chunk))).for_each(|(rows, (pts, plan))| {
+        }
+        if scan.is_none() {
+            // direction by direction (each direction's grid read while in cache)
             for k in 0..nd {
                 if fill & (1 << k) == 0 {
                     continue;
                 }
-                for (j, (&(_, p), &(_, valid, _))) in pts.iter().zip(plan).enumerate() {
-                    if !valid {
+                for (j, (&(_, p), &v)) in pts.iter().zip(valid).enumerate() {
+                    if !v {
                         rows[j * nd + k] = vols.transmittance(k, p);
                     }
                 }
             }
-        });
-    }
-    let mut out = Vec::with_capacity(pts.len());
-    for (j, (&(i, p), &(m, valid, f))) in pts.iter().zip(&plan).enumerate() {
-        let (mut s, mut d) = (0.0f32, Vec3::ZERO);
-        let mut add = |k: usize, tk: f32| {
-            let wk = sky.weights[k];
-            if wk == 0.0 || m & (1 << k) != 0 {
-                return;
-            }
-            s += wk * tk;
-            d += sky.dirs[k] * (wk * tk);
-        };
-        if valid {
-            // a reused row is read, not written (its block stays shared)
-            let row = rc.row(i);
-            for k in 0..nd {
-                let tk = match f {
-                    None => row[k],
-                    Some(f) => {
-                        let t = (row[k] * f[k]).min(1.0);
-                        if t < 1e-4 {
-                            0.0
-                        } else {
-                            t
-                        }
-                    }
-                };
-                add(k, tk);
-            }
-        } else {
-            let row = rc.fill(i, p, epoch);
-            for k in 0..nd {
-                let t = fresh[j * nd + k];
-                row[k] = match f {
-                    None => t,
-                    Some(f) => (t / f[k]).min(1.0),
-                };
-                add(k, t);
-            }
         }
-        out.push((s, d.normalize_or(Vec3::Z)));
+        for (j, ((&(i, _), &v), f)) in pts.iter().zip(valid).zip(fs).enumerate() {
+            let m = res[j].2;
+            let (mut s, mut d) = (0.0f32, Vec3::ZERO);
+            let mut add = |k: usize, tk: f32| {
+                let wk = sky.weights[k];
+                if wk == 0.0 || m & (1 << k) != 0 {
+                    return;
+                }
+                s += wk * tk;
+                d += sky.dirs[k] * (wk * tk);
+            };
+            if v {
+                // a reused row is read, not written (its block stays shared)
+                let row = rc_ref.row(i);
+                for k in 0..nd {
+                    let tk = match f {
+                        None => row[k],
+                        Some(f) => {
+                            let t = (row[k] * f[k]).min(1.0);
+                            if t < 1e-4 {
+                                0.0
+                            } else {
+                                t
+                            }
+                        }
+                    };
+                    add(k, tk);
+                }
+            } else {
+                let row = &mut rows[j * nd..(j + 1) * nd];
+                for k in 0..nd {
+                    let t = row[k];
+                    add(k, t);
+                    // stored in the snapshot's terms
+                    row[k] = match f {
+                        None => t,
+                        Some(f) => (t / f[k]).min(1.0),
+                    };
+                }
+            }
+            res[j] = (s, d.normalize_or(Vec3::Z), m, f.is_some());
+        }
+    });
+    stats[0] += pts.len();
+    stats[1] += valid.iter().zip(&res).filter(|(&v, r)| v && !r.3).count();
+    stats[2] += valid.iter().zip(&res).filter(|(&v, r)| v && r.3).count();
+    stats[3] += fresh_pts * fill.count_ones() as usize;
+    // the fresh rows stored (their blocks copied first when shared)
+    for (j, (&(i, p), _)) in pts.iter().zip(&valid).enumerate().filter(|(_, (_, &v))| !v) {
+        rc.fill(i, p, epoch).copy_from_slice(&fresh[j * nd..(j + 1) * nd]);
     }
+    let out: Vec<(f32, Vec3)> = res.iter().map(|&(s, d, _, _)| (s, d)).collect();
     if knobs().check {
         vols.prepare(fill);
         let mut e = CHECK_ERR.lock().unwrap_or_else(|p| p.into_inner());
         if e.len() <= lvl {
             e.resize(lvl + 1, [0.0; 8]);
         }
-        for (j, (&(i, p), &(m, valid, _))) in pts.iter().zip(&plan).enumerate() {
+        for (j, ((&(i, p), &valid), &(_, _, m, _))) in pts.iter().zip(&valid).zip(&res).enumerate() {
             let mut s = 0.0f32;
             for k in 0..nd {
                 let wk = sky.weights[k];
