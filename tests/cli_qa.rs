@@ -592,6 +592,45 @@ fn a_camera_of_ones_own_is_drawn_and_checked_against_the_site() {
     }
 }
 
+/// Trial 42 (defect 1): an `eye:` camera inside an obstacle was accepted and drew a grey wall,
+/// where `hemi:` at the same place is refused. An eye inside a building's footprint (given as
+/// `+H` or as an elevation) or inside a boulder is now refused as `hemi:` is, naming `--camera`
+/// and the obstacle; an eye above the roof or the boulder is drawn; an eye under the ground is
+/// refused; no picture is written for a refused camera.
+#[test]
+fn a_camera_inside_an_obstacle_or_under_the_ground_is_refused_as_hemi_is() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let run = |args: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_sylva")).args(args).current_dir(d).output().unwrap();
+        (o.status.success(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    // a 60 m site at 300 m: a 12 m building on [10, 30] x [10, 25] and a boulder of 3 m radius
+    // centred 1 m above the ground at (45, 45)
+    let toml = "name = \"obs\"\nyears = 1\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nuniform = { width = 6, height = 6, cell_m = 10.0, elevation_m = 300.0, indices = [5, 5, 2, 5, 6, 6] }\n[[start]]\nkind = \"planted\"\nspecies = \"beech\"\nspacing_m = 6.0\nage_yr = 20.0\n[[obstacle]]\nkind = \"footprint\"\npoints = [[10.0, 10.0], [30.0, 10.0], [30.0, 25.0], [10.0, 25.0]]\nheight_m = 12.0\n[[obstacle]]\nkind = \"sphere\"\ncenter = [45.0, 45.0, 1.0]\nradius_m = 3.0\n";
+    std::fs::write(d.join("obs.toml"), toml).unwrap();
+    let (ok, err) = run(&["simulate", "obs.toml", "--out", "obs_run"]);
+    assert!(ok, "{err}");
+    // hemi: at the building's place is refused (as before)
+    let (ok, err) = run(&["render", "obs_run", "--camera", "hemi:20,17", "--size", "64x64", "--out", "bad.png"]);
+    assert!(!ok && err.contains("--camera") && err.contains("outside the obstacles"), "{err}");
+    for (cam, want) in [
+        ("eye:20,17,+1.7:55,55,+5", &["--camera", "expected a place outside the obstacles", "inside the footprint", "[[obstacle]] 1"][..]),
+        ("eye:20,17,305:55,55,305", &["--camera", "expected a place outside the obstacles", "inside the footprint"][..]),
+        ("eye:45,45,+1.5:5,55,+5", &["--camera", "expected a place outside the obstacles", "inside the sphere", "[[obstacle]] 2"][..]),
+        ("eye:50,5,299:5,55,305", &["--camera", "under the ground", "300.0 m"][..]),
+    ] {
+        let (ok, err) = run(&["render", "obs_run", "--camera", cam, "--size", "64x48", "--out", "bad.png"]);
+        assert!(!ok && want.iter().all(|w| err.contains(w)), "{cam}: {err}");
+        assert!(!d.join("bad.png").exists(), "{cam}");
+    }
+    // above the roof (12 m) and above the boulder (its top 4 m up): drawn
+    for (cam, out) in [("eye:20,17,+13:55,55,+5", "roof.png"), ("eye:45,45,+4.5:5,55,+5", "boulder.png")] {
+        let (ok, err) = run(&["render", "obs_run", "--camera", cam, "--size", "64x48", "--out", out]);
+        assert!(ok && d.join(out).is_file(), "{cam}: {err}");
+    }
+}
+
 /// Trial 37: a 16-bit PNG heightmap's lowest pixel (value 0, the bottom of its height range)
 /// was sea-level water. A PNG now has no sea unless `--sea-level` or the scenario's
 /// `climate.sea_level_m` says where it is; other DEMs keep sea level 0 m.

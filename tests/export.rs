@@ -352,6 +352,29 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     let extras = &js["scenes"][0]["extras"]["sylva"];
     assert_eq!(extras["origin_m"], serde_json::json!([32.5, 30.0, 310.0]), "{extras}");
     assert_eq!(extras["year"], 1);
+    // trial 42: the embedded images are named after the first material that uses them
+    // (`<species>_bark`, `<species>_leaf`, …, `terrain`), not left as `Image_0…`
+    let materials: Vec<&str> = js["materials"].as_array().unwrap().iter().filter_map(|m| m["name"].as_str()).collect();
+    let images: Vec<&str> = js["images"].as_array().unwrap().iter().map(|i| i["name"].as_str().unwrap_or("")).collect();
+    assert!(images.len() >= 5 && images.iter().all(|n| !n.is_empty() && materials.iter().any(|m| n.starts_with(m))), "images {images:?}, materials {materials:?}");
+    for want in ["beech_bark", "beech_leaf", "beech_cluster", "beech_impostor", "terrain"] {
+        assert!(images.contains(&want), "{want} in {images:?}");
+    }
+    for (k, m) in js["materials"].as_array().unwrap().iter().enumerate() {
+        let Some(t) = m["pbrMetallicRoughness"]["baseColorTexture"]["index"].as_u64() else { continue };
+        let img = js["textures"][t as usize]["source"].as_u64().unwrap() as usize;
+        let first = js["materials"].as_array().unwrap().iter().position(|m2| m2["pbrMetallicRoughness"]["baseColorTexture"]["index"].as_u64().and_then(|t2| js["textures"][t2 as usize]["source"].as_u64()) == Some(img as u64)).unwrap();
+        assert_eq!(images[img], js["materials"][first]["name"].as_str().unwrap(), "material {k}");
+    }
+    // trial 42: `level_triangles` of a stand export: each level's triangles over the trees
+    // (and saplings), whether written or not; the written ones plus the terrain's and the
+    // wall's make `triangles`
+    let lt = r.stats.level_triangles.clone();
+    assert_eq!(lt.len(), 4, "{:?}", r.stats);
+    assert!(lt[0] > lt[2] && lt[1] > lt[3] && lt[2] > lt[3], "{lt:?}");
+    assert!(lt[3] >= 4 * r.trees && lt[3] <= 8 * (r.trees + r.saplings), "billboards: {lt:?} for {} trees", r.trees);
+    let statics = r.stats.triangles - lt.iter().sum::<usize>();
+    assert!(statics >= r.terrain_triangles && statics <= r.terrain_triangles + 100, "terrain and wall: {statics}");
     // LOD0 only: no level nodes beyond 0
     let out0 = dir.path().join("stand0.glb");
     o.levels = vec![0];
@@ -362,6 +385,10 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     // one mesh node per tree, plus the terrain and the wall
     assert_eq!(r0.counts.mesh_nodes, r0.trees + 2, "{:?}", r0.counts);
     assert!(r0.stats.triangles < r.stats.triangles && r0.stats.leaf_cards == r.stats.leaf_cards, "{:?} {:?}", r0.stats, r.stats);
+    // every level counted though only the full one is written: the same list, and LOD0 alone
+    // plus the same terrain and wall make the total
+    assert_eq!(r0.stats.level_triangles, lt);
+    assert_eq!(r0.stats.triangles, lt[0] + statics);
     // the 25- and 30-year trees are below 15 m: no node figures
     assert_eq!((r0.stats.trees_15m, r0.stats.nodes_median, r0.stats.nodes_min), (0, 0, 0));
     assert_eq!(parse_levels("all").unwrap(), all_levels());
@@ -407,8 +434,24 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
 
     // the command line
     let cli = dir.path().join("cli.glb");
+    // trial 42: an export killed with SIGKILL left its glb buffer's scratch file
+    // `.cli.glb.bin.<pid>.tmp` (up to 319 MB), which no rerun removed; the next export to the
+    // same --out removes those of processes that are gone, not those of a live one (this test)
+    let dead = {
+        let mut c = Command::new("true").spawn().unwrap();
+        let pid = c.id();
+        c.wait().unwrap();
+        pid
+    };
+    let stale = dir.path().join(format!(".cli.glb.bin.{dead}.tmp"));
+    let live = dir.path().join(format!(".cli.glb.bin.{}.tmp", std::process::id()));
+    std::fs::write(&stale, vec![7u8; 4096]).unwrap();
+    std::fs::write(&live, b"x").unwrap();
     let st = Command::new(env!("CARGO_BIN_EXE_sylva")).arg("export").arg(&run).args(["--year", "1", "--area", "20,15,45,45", "--lod", "0", "--out"]).arg(&cli).output().unwrap();
     assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(!stale.exists(), "the scratch file of process {dead}, which is gone, is left");
+    assert!(live.exists(), "the scratch file of a live process was removed");
+    std::fs::remove_file(&live).unwrap();
     assert!(String::from_utf8_lossy(&st.stdout).contains(&format!("{} trees", r.trees)));
     // --stats: the figures as JSON; into a missing folder it is refused before anything is written
     let stats = dir.path().join("stats.json");
@@ -421,6 +464,7 @@ fn stand_export_of_a_run_area_validates_and_refuses_bad_requests() {
     }
     assert_eq!(js["trees"], r.trees);
     assert_eq!(js["levels"], serde_json::json!([0, 1, 2, 3]));
+    assert_eq!(js["level_triangles"], serde_json::json!(lt), "{js}");
     let missing = dir.path().join("no_such_folder").join("s.json");
     let never = dir.path().join("never.glb");
     // a missing folder of --stats is made, as --out's is
@@ -816,7 +860,7 @@ fn instanced_levels_are_grouped_under_their_model() {
             name: "t".into(),
             looks: vec![Look::default()],
             models: vec![StandModel { name: "m".into(), chain: chain.clone(), look: 0, sprigs: sylva::mesh::TriMesh::default() }],
-            groups: vec![sylva::output::gltf::InstanceGroup { model: 0, translations: vec![[0.0; 3], [3.0, 0.0, 0.0]], yaw: vec![0.0; 2], scales: vec![[1.0; 3]; 2], ids: vec![] }],
+            groups: vec![sylva::output::gltf::InstanceGroup { model: 0, translations: vec![[0.0; 3], [3.0, 0.0, 0.0]], yaw: vec![0.0; 2], scales: vec![[1.0; 3]; 2], ids: vec![], sapling: false }],
             statics: vec![],
             levels: levels.clone(),
             extras: serde_json::json!({}),
@@ -1038,6 +1082,50 @@ fn a_stand_export_has_leaf_materials_a_litter_floor_and_the_saplings() {
     }
     assert_eq!(species.into_iter().collect::<Vec<_>>(), ["beech", "norway_spruce"]);
     validate(&[&out]);
+
+    // trial 42 (defect 6): the instanced export of the same area had no understorey. Now the
+    // same saplings, each an instance of its species' `<species>_sapling` model under node
+    // `saplings`, at the stand export's places and heights, and in the figures
+    let stand_saplings: Vec<[f32; 3]> = saplings.iter().map(|s| {
+        let (t, _, sc) = s.transform().decomposed();
+        [t[0], t[2], sc[1]]
+    }).collect();
+    let inst = dir.path().join("inst.glb");
+    let o = sylva::job::export::InstanceOptions { year: Some(1), area: Some([35.0, 10.0, 50.0, 25.0]), season: Season::Summer, levels: vec![0], max_triangles: sylva::job::export::INSTANCE_MAX_TRIANGLES };
+    let ri = sylva::job::export::export_instances(&run, &lib, &o, &inst).unwrap();
+    assert_eq!((ri.saplings, ri.stats.saplings), (r.saplings, r.saplings));
+    let bytes = std::fs::read(&inst).unwrap();
+    let n = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let js: serde_json::Value = serde_json::from_slice(&bytes[20..20 + n]).unwrap();
+    let bin_at = 20 + n + 8;
+    let floats = |acc: u64| -> Vec<f32> {
+        let a = &js["accessors"][acc as usize];
+        let v = &js["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+        let off = bin_at + v["byteOffset"].as_u64().unwrap() as usize;
+        bytes[off..off + v["byteLength"].as_u64().unwrap() as usize].chunks(4).map(|c| f32::from_le_bytes(c.try_into().unwrap())).collect()
+    };
+    let nodes = js["nodes"].as_array().unwrap();
+    let root = nodes.iter().find(|n| n["name"] == "saplings").expect("a node `saplings`");
+    let mut got: Vec<[f32; 3]> = Vec::new();
+    for k in root["children"].as_array().unwrap() {
+        let node = &nodes[k.as_u64().unwrap() as usize];
+        let name = node["name"].as_str().unwrap();
+        assert!(name == "beech_sapling_LOD0" || name == "norway_spruce_sapling_LOD0", "{name}");
+        let a = &node["extensions"]["EXT_mesh_gpu_instancing"]["attributes"];
+        let (t, sc) = (floats(a["TRANSLATION"].as_u64().unwrap()), floats(a["SCALE"].as_u64().unwrap()));
+        got.extend(t.chunks(3).zip(sc.chunks(3)).map(|(t, s)| [t[0], t[2], s[1]]));
+    }
+    // no sapling among the trees
+    let trees_root = nodes.iter().find(|n| n["name"] == "trees").unwrap();
+    assert!(trees_root["children"].as_array().unwrap().iter().all(|k| !nodes[k.as_u64().unwrap() as usize]["name"].as_str().unwrap().contains("sapling")));
+    let key = |p: &[f32; 3]| (p[0] * 1000.0).round() as i64 * 1_000_000 + (p[1] * 1000.0).round() as i64;
+    let (mut a, mut b) = (stand_saplings.clone(), got.clone());
+    a.sort_by_key(key);
+    b.sort_by_key(key);
+    assert_eq!(a.len(), b.len(), "stand {a:?}, instanced {b:?}");
+    for (p, q) in a.iter().zip(&b) {
+        assert!((0..3).all(|i| (p[i] - q[i]).abs() < 1e-3), "stand {p:?}, instanced {q:?}");
+    }
 }
 
 /// Radius (m) of a tree's bark mesh cut by the horizontal plane at height `y` (glTF frame, y

@@ -21,8 +21,11 @@ pub struct Args {
     #[arg(long, allow_hyphen_values = true)]
     pub area: Option<String>,
     /// Export every live tree (of the whole site, or of `--area`) as an instance of its species
-    /// and age class (`EXT_mesh_gpu_instancing`: Godot 4, Unity glTFast, three.js, Blender
-    /// 4.1+), not adapted one by one: the whole forest for a game engine.
+    /// and age class, and the regeneration layer's saplings as instances of their species'
+    /// sapling model (`EXT_mesh_gpu_instancing`, required: read by three.js, Babylon.js, Unity
+    /// glTFast and Blender 4.1+; refused by Blender before 4.1, released Godot 4 and Unreal's
+    /// glTF importer, see docs/guide.md), not adapted one by one: the whole forest for a game
+    /// engine.
     #[arg(long)]
     pub instances: bool,
     /// Season of the foliage colours: spring, summer, autumn (or fall), winter.
@@ -37,7 +40,9 @@ pub struct Args {
     #[arg(long)]
     pub lod: Option<String>,
     /// Write the export's figures as JSON (trees, trees_15m, nodes_median and nodes_min over
-    /// the trees of 15 m and taller, leaf_cards, adapt_s, triangles, levels; for a stand
+    /// the trees of 15 m and taller, leaf_cards, adapt_s, triangles, levels, saplings,
+    /// level_triangles (the triangles of the trees and saplings at each level 0–3, written or
+    /// not: what each level alone would draw, terrain and obstacles left out); for a stand
     /// export also analysis_s and adaptation_s (the two parts of adapt_s), analyses (distinct
     /// Plastic Trees analyses: one per class of species, 5-year age, 5 % height and crown
     /// radius and crown base, of the exported trees and of their neighbours within the halo),
@@ -145,7 +150,7 @@ fn export(a: &Args, area: Option<[f64; 4]>, levels: Vec<usize>) -> anyhow::Resul
         let written: Vec<String> = r.stats.levels.iter().map(|&l| format!("LOD{l} ({})", names.get(l).unwrap_or(&"?"))).collect();
         let each: Vec<String> = r.stats.level_triangles.iter().enumerate().map(|(l, t)| format!("LOD{l} {:.1} M", *t as f64 / 1e6)).collect();
         let why = if a.lod.is_none() { format!(": the finest level within {} M triangles", sylva::job::export::INSTANCE_MAX_TRIANGLES / 1_000_000) } else { String::new() };
-        println!("levels written: {}{why}; triangles over all trees per level: {}; --lod all gives each model's chain for an engine's LOD groups", written.join(", "), each.join(", "));
+        println!("levels written: {}{why}; triangles over all trees and saplings per level: {}; --lod all gives each model's chain for an engine's LOD groups", written.join(", "), each.join(", "));
     }
     Ok(())
 }

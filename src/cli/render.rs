@@ -121,8 +121,14 @@ fn parse_eye(s: &str) -> Option<Result<EyeCamera, String>> {
 /// A Z given as `+H` is the ground's elevation at that point's X, Y plus H (the target's
 /// ground where it lies on the site, else the nearest edge's, as `elevation_at` reads it).
 ///
-/// Errors: naming `--camera`, the site's extent or the ground's elevation under the eye.
-pub fn check_eye(e: &EyeCamera, site: &sylva::conditions::SiteConditions) -> anyhow::Result<sylva::render::camera::Camera> {
+/// The eye must also lie outside the scenario's `obstacles` as they are drawn (their solids on
+/// the terrain, [`sylva::job::adapted::obstacle_around`]): trial 42 put an `eye:` inside a 12 m
+/// building and got a grey wall, where `hemi:` at the same place is refused.
+///
+/// Errors: naming `--camera`, the site's extent, the ground's elevation under the eye, or the
+/// obstacle (its kind and its place among the scenario's `[[obstacle]]` entries) around it.
+pub fn check_eye(e: &EyeCamera, stage: &sylva::job::pictures::Stage) -> anyhow::Result<sylva::render::camera::Camera> {
+    let site = &stage.site;
     let (w, h) = site.extent_m();
     let [x, y, z] = e.eye;
     let zs = if e.eye_above_ground { format!("+{z}") } else { format!("{z}") };
@@ -134,6 +140,9 @@ pub fn check_eye(e: &EyeCamera, site: &sylva::conditions::SiteConditions) -> any
         anyhow::ensure!(z >= g + 0.1, "--camera eye:{x},{y},{z}: the eye is under the ground (the ground there is at {g:.1} m); expected Z at least {:.1} m (z is the elevation, as the DEM's heights: e.g. {:.1} for a person's eye 1.7 m above the ground, or +1.7)", g + 0.1, g + 1.7);
     }
     let eye = [x, y, if e.eye_above_ground { g + z } else { z }];
+    if let Some((i, kind)) = sylva::job::adapted::obstacle_around(&stage.obstacles, site, eye) {
+        anyhow::bail!("--camera eye:{x},{y},{zs}: expected a place outside the obstacles (the eye is inside the {kind}, [[obstacle]] {} of the scenario)", i + 1);
+    }
     let [tx, ty, tz] = e.target;
     let target = [tx, ty, if e.target_above_ground { site.elevation_at(tx.clamp(0.0, w), ty.clamp(0.0, h)) as f64 + tz } else { tz }];
     anyhow::ensure!((0..3).map(|k| (eye[k] - target[k]).powi(2)).sum::<f64>() >= 1e-6, "--camera: the eye and the target are the same point on the site ({:.1}, {:.1}, {:.1}); expected {EYE_FORM}", eye[0], eye[1], eye[2]);
@@ -331,7 +340,7 @@ fn render_checked(a: RenderArgs) -> anyhow::Result<()> {
     }
     let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
     // a camera of one's own is checked against the site before the snapshot is read
-    let eye = eye.map(|e| check_eye(&e, &stage.site)).transpose()?;
+    let eye = eye.map(|e| check_eye(&e, &stage)).transpose()?;
     let year = match a.year {
         Some(y) => y,
         None => sylva::job::inventory::snapshots(&a.run_dir)?.iter().map(|s| s.0).max().with_context(|| format!("{}: the run directory has no snapshots (inventory/year_NNNN.parquet or .csv)", a.run_dir.display()))?,

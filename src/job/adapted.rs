@@ -253,6 +253,19 @@ pub fn stand_trees(plants: &[Plant], library: &SpeciesLibrary, site: &SiteCondit
         .collect()
 }
 
+/// The first of `obstacles` on `site` whose solids (as drawn and as the light sees them:
+/// [`ground_under`], [`ObstacleSpec::solids_on`]) hold the point `p` (m, world coordinates, z
+/// the elevation): its index in `obstacles` and its kind ([`ObstacleSpec::kind`]); `None` when
+/// `p` is outside them all. `sylva render --camera eye:` refuses such an eye (trial 42: an eye
+/// inside a building rendered a grey wall).
+pub fn obstacle_around(obstacles: &[ObstacleSpec], site: &SiteConditions, p: [f64; 3]) -> Option<(usize, &'static str)> {
+    let q = Vec3::new(p[0] as f32, p[1] as f32, p[2] as f32);
+    obstacles.iter().enumerate().find_map(|(i, o)| {
+        let (g, low) = ground_under(o, site);
+        o.solids_on(g as f64, low as f64).iter().any(|s| s.contains(q)).then(|| (i, o.kind()))
+    })
+}
+
 /// The Plastic Trees solids of `obstacles` on `site` (world coordinates, heights above the
 /// ground at each obstacle's anchor, walls and footprints down to below the lowest ground under
 /// them: [`ground_under`], [`ObstacleSpec::solids_on`]).

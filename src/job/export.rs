@@ -308,8 +308,10 @@ pub struct ExportStats {
     pub triangles: usize,
     /// Levels of detail written.
     pub levels: Vec<usize>,
-    /// [`export_instances`]: the triangles of every tree at each level 0–3 (what a viewer
-    /// draws with that level alone, terrain left out); empty for a stand export.
+    /// The triangles of every tree and sapling at each level 0–3, whether written or not (what
+    /// a viewer draws with that level alone, terrain and obstacles left out): the written
+    /// levels' entries plus the terrain's and obstacles' triangles make `triangles`. Round 42
+    /// (trial 42): a stand export's list was empty.
     pub level_triangles: Vec<usize>,
 }
 
@@ -487,13 +489,6 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         // the mid level: the crown hull of the adapted clusters, as in the pictures
         let (mut chain, _) = super::adapted::adapted_lod_chain(&sk, &lv, a, t.base, 1.0, &LodOptions { stem, ..LodOptions::default() });
         let n_sprigs = sprigs.positions.len() / 4;
-        let tris = o.levels.iter().map(|&l| chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 }).sum();
-        // the levels not written are not held (the writer leaves them out)
-        for (l, m) in chain.levels.iter_mut().enumerate() {
-            if !o.levels.contains(&l) {
-                *m = Default::default();
-            }
-        }
         // a conifer's shoot cards are its full level's foliage cards, in the look's `_leaf`
         // material (which wears the shoot-cluster picture, [`stand_look`]) rather than beside
         // the needle cards they replace in `_cluster` (round 39's trial: no `_leaf` for Norway
@@ -501,8 +496,21 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         if needles {
             chain.levels[0].leaves = std::mem::take(&mut sprigs);
         }
+        // the triangles of each level 0–3 as written (level 0 with its sprigs), whether or not
+        // the export writes it: `--stats`' `level_triangles` (trial 42: it was empty)
+        let mut per_level = [0usize; LOD_LEVELS];
+        for (l, t) in per_level.iter_mut().enumerate() {
+            *t = chain.levels.get(l).map_or(0, |m| m.triangle_count()) + if l == 0 { sprigs.indices.len() / 3 } else { 0 };
+        }
+        let tris = o.levels.iter().map(|&l| per_level[l]).sum();
+        // the levels not written are not held (the writer leaves them out)
+        for (l, m) in chain.levels.iter_mut().enumerate() {
+            if !o.levels.contains(&l) {
+                *m = Default::default();
+            }
+        }
         let figures = [sk.nodes.len(), if needles { 0 } else { lv.leaves.len() }, tris, n_sprigs];
-        Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize, sprigs }, s.to_array(), t.base - origin, t.species as usize, figures))
+        Some((crate::rng::hash(&topology), canon, StandModel { name: format!("{}_{}", sp.id, t.id), chain, look: t.species as usize, sprigs }, s.to_array(), t.base - origin, t.species as usize, figures, per_level))
     };
 
     // the adaptation's figures, then its trees meshed a batch at a time, each model's meshes
@@ -519,6 +527,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let mut model_of: HashMap<u64, Vec<(usize, [f32; 3], Vec<f32>)>> = HashMap::new();
     let (mut n_trees, mut n_models, mut held_max) = (0usize, 0usize, 0usize);
     let (mut tall_nodes, mut leaf_cards, mut triangles, mut sprig_cards_n) = (Vec::new(), 0usize, 0usize, 0usize);
+    let mut level_triangles = [0usize; LOD_LEVELS];
     let batch = rayon::current_num_threads().max(1) * MESH_BATCH_PER_THREAD;
     let mut adapted = st.trees.into_iter();
     loop {
@@ -529,8 +538,9 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         let meshed: Vec<_> = chunk.par_iter().map(mesh_tree).collect();
         held_max = held_max.max(meshed.iter().flatten().map(|m| model_bytes(&m.2)).sum());
         for (m, a) in meshed.into_iter().zip(&chunk) {
-            let Some((key, canon, mut model, size, pos, sp, [n_nodes, n_leaves, n_tris, n_sprigs])) = m else { continue };
+            let Some((key, canon, mut model, size, pos, sp, [n_nodes, n_leaves, n_tris, n_sprigs], per_level)) = m else { continue };
             sprig_cards_n += n_sprigs;
+            level_triangles.iter_mut().zip(per_level).for_each(|(a, t)| *a += t);
             if trees[a.index].height_m >= STATS_MIN_HEIGHT_M {
                 tall_nodes.push(n_nodes);
             }
@@ -558,7 +568,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     // the regeneration layer's saplings in the area (as the stills draw them), each an
     // instance of its species' youngest age-class model, after the trees
     let mut n_saplings = 0usize;
-    let mut sapling_models: HashMap<usize, Option<(usize, f32, usize)>> = HashMap::new();
+    let mut sapling_models: HashMap<usize, Option<(usize, f32, [usize; LOD_LEVELS])>> = HashMap::new();
     for s in area_saplings(run_dir, year, library, &site, o.season, o.area)? {
         let sp = s.species as usize;
         if !sapling_models.contains_key(&sp) {
@@ -568,13 +578,15 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
                     m.look = *looks_of.entry(sp).or_insert_with(|| w.look(stand_look(&library.species[sp], o.season, full)));
                     let mi = w.model(&m)?;
                     n_models += 1;
-                    Some((mi, r0, o.levels.iter().map(|&l| tris[l]).sum()))
+                    Some((mi, r0, tris))
                 }
                 None => None,
             };
             sapling_models.insert(sp, made);
         }
-        let Some(&Some((mi, r0, tris))) = sapling_models.get(&sp) else { continue };
+        let Some(&Some((mi, r0, per_level))) = sapling_models.get(&sp) else { continue };
+        level_triangles.iter_mut().zip(per_level).for_each(|(a, t)| *a += t);
+        let tris: usize = o.levels.iter().map(|&l| per_level[l]).sum();
         let r = s.crown_radius.max(0.05) / r0;
         let pos = Vec3::from(s.position) - origin;
         w.sapling(&StandNode { name: format!("{}_sapling_{}", library.species[sp].id, s.id & !super::scene::SAPLING_ID_BIT), model: mi, translation: pos.to_array(), scale: [r, r, s.height.max(0.05)] })?;
@@ -615,7 +627,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         pruned_collision,
         triangles,
         levels: o.levels.clone(),
-        level_triangles: Vec::new(),
+        level_triangles: level_triangles.to_vec(),
     };
     let counts = w.finish(&statics, &format!("stand_{year}"), &extras)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
@@ -826,6 +838,38 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
             *t += tris[l];
         }
     }
+    // the regeneration layer's saplings, as a stand export of the same area draws them
+    // ([`area_saplings`]; trial 42: the instanced export had none where the stand export had
+    // 479): each an instance of its species' sapling model (the youngest age class, named
+    // `<species>_sapling`, as in a stand export) under node `saplings`, scaled to its height
+    // and crown radius, its id the regeneration layer's (with [`super::scene::SAPLING_ID_BIT`])
+    let mut sapling_group: HashMap<usize, Option<(usize, f32, [usize; LOD_LEVELS])>> = HashMap::new();
+    let mut n_saplings = 0usize;
+    for sa in area_saplings(run_dir, year, library, &site, o.season, area)? {
+        let sp = sa.species as usize;
+        let made = sapling_group.entry(sp).or_insert_with(|| {
+            let (mut m, r0, _, tris, _) = class_model(library, sp, 0)?;
+            m.name = format!("{}_sapling", library.species[sp].id);
+            m.look = *looks_of.entry(sp).or_insert_with(|| {
+                looks.push(Look::for_species(&library.species[sp], o.season));
+                looks.len() - 1
+            });
+            models.push(m);
+            groups.push(InstanceGroup { model: models.len() - 1, sapling: true, ..Default::default() });
+            Some((groups.len() - 1, r0, tris))
+        });
+        let Some((gi, r0, tris)) = *made else { continue };
+        let g = &mut groups[gi];
+        g.translations.push([sa.position[0] - origin.x, sa.position[1] - origin.y, sa.position[2] - origin.z]);
+        g.yaw.push((crate::rng::hash(&[sa.id, 0x7961_77]) >> 11) as f32 / (1u64 << 53) as f32 * std::f32::consts::TAU);
+        let s = sa.crown_radius.max(0.05) / r0;
+        g.scales.push([s, s, sa.height.max(0.05)]);
+        g.ids.push(sa.id);
+        for (l, t) in per_level.iter_mut().enumerate() {
+            *t += tris[l];
+        }
+        n_saplings += 1;
+    }
     let levels = instance_levels(&o.levels, &per_level, o.max_triangles);
     let drawn: usize = levels.iter().map(|&l| per_level[l]).sum();
     // the levels asked for: a warning where one of them alone is more than a forest can hold
@@ -842,7 +886,7 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     }
     let (leaf_cards, sprig_cards) = if levels.contains(&0) { (cards_all[0], cards_all[1]) } else { (0, 0) };
     let mut triangles = drawn;
-    let trees: usize = groups.iter().map(|g| g.translations.len()).sum();
+    let trees: usize = groups.iter().filter(|g| !g.sapling).map(|g| g.translations.len()).sum();
     let mut statics = vec![terrain_static(terrain)];
     let terrain_triangles = statics[0].mesh.triangle_count();
     let n_obstacles = push_obstacles(&mut statics, &sc, &site, area, origin);
@@ -868,8 +912,8 @@ pub fn export_instances(run_dir: &Path, library: &SpeciesLibrary, o: &InstanceOp
     };
     let counts = crate::output::gltf::write_instanced_glb(out, &scene)?;
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
-    let stats = ExportStats { trees, trees_15m: tall_nodes.len(), nodes_min: tall_nodes.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut tall_nodes), leaf_cards, sprig_cards, triangles, levels, level_triangles: per_level.to_vec(), ..Default::default() };
-    Ok(ExportReport { out: out.to_path_buf(), year, trees, saplings: 0, models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s: 0.0, bytes, stats, held_mesh_bytes_max: 0 })
+    let stats = ExportStats { trees, trees_15m: tall_nodes.len(), nodes_min: tall_nodes.iter().copied().min().unwrap_or(0), nodes_median: median_usize(&mut tall_nodes), leaf_cards, sprig_cards, triangles, levels, level_triangles: per_level.to_vec(), saplings: n_saplings, ..Default::default() };
+    Ok(ExportReport { out: out.to_path_buf(), year, trees, saplings: n_saplings, models: scene.models.len(), obstacles: n_obstacles, terrain_triangles, counts, adapt_s: 0.0, bytes, stats, held_mesh_bytes_max: 0 })
 }
 
 /// Appends the meshes of the scenario's obstacles that reach into `area` to `statics`, moved to

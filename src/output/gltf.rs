@@ -423,10 +423,33 @@ impl Doc {
         // `sp` dropped here: the scratch file is removed
     }
 
+    /// Names each image after the first material that uses it (`<species>_bark`,
+    /// `<species>_leaf`, `terrain`, …; a texture other than the base colour adds its slot:
+    /// `<material>_normal`), so that an importer lists them by name rather than as
+    /// `Image_0…` (trial 42). An image no material uses keeps no name.
+    fn name_images(&mut self) {
+        let slots = [("baseColorTexture", ""), ("metallicRoughnessTexture", "_metallic_roughness")];
+        let other = [("normalTexture", "_normal"), ("occlusionTexture", "_occlusion"), ("emissiveTexture", "_emissive")];
+        for m in &self.materials {
+            let Some(name) = m["name"].as_str() else { continue };
+            let refs = slots.iter().map(|(k, suffix)| (&m["pbrMetallicRoughness"][k], suffix)).chain(other.iter().map(|(k, suffix)| (&m[k], suffix)));
+            for (r, suffix) in refs {
+                let Some(t) = r["index"].as_u64() else { continue };
+                let Some(src) = self.textures.get(t as usize).and_then(|t| t["source"].as_u64()) else { continue };
+                if let Some(img) = self.images.get_mut(src as usize) {
+                    if img.get("name").is_none() {
+                        img["name"] = json!(format!("{name}{suffix}"));
+                    }
+                }
+            }
+        }
+    }
+
     /// The JSON chunk (padded) and the GLB's total length; the BIN chunk padded to 4 bytes.
     ///
     /// Errors: a JSON that `gltf-json` refuses, and a GLB above 4 GiB.
     fn finish_json(&mut self, scene: Value) -> Result<(Vec<u8>, usize)> {
+        self.name_images();
         while self.bin_len() % 4 != 0 {
             self.bin.push(0);
         }
@@ -738,11 +761,15 @@ pub struct InstanceGroup {
     /// bits, and the 64-bit ids were left out without a word, found by a trial); empty to
     /// leave them out.
     pub ids: Vec<u64>,
+    /// Saplings of the regeneration layer: the group's nodes go under node `saplings` (as a
+    /// stand export's saplings do), not under `trees`.
+    pub sapling: bool,
 }
 
 /// What [`instanced_glb_bytes`] writes: tree models drawn many times through the
-/// `EXT_mesh_gpu_instancing` extension (glTF 2.0 extension registry; read by Godot 4, Unity's
-/// glTFast, three.js, Babylon.js and Blender 4.1+), and static meshes.
+/// `EXT_mesh_gpu_instancing` extension (glTF 2.0 extension registry; read by three.js,
+/// Babylon.js, Unity's glTFast and Blender 4.1+, not by released Godot 4 or Unreal's glTF
+/// importer: docs/guide.md), and static meshes.
 #[derive(Debug, Clone, PartialEq)]
 pub struct InstancedScene {
     /// Scene name.
@@ -817,7 +844,7 @@ pub fn instanced_glb_bytes(s: &InstancedScene) -> Result<(Vec<u8>, StandCounts)>
         }
         mats[l] = Some(d.look(&s.looks[l], &levels)?);
     }
-    let mut tree_nodes = Vec::new();
+    let (mut tree_nodes, mut sapling_nodes) = (Vec::new(), Vec::new());
     let mut mesh_nodes = 0;
     let mut meshes_of: HashMap<usize, Vec<Option<usize>>> = HashMap::new();
     for g in s.groups.iter().filter(|g| !g.translations.is_empty()) {
@@ -865,13 +892,14 @@ pub fn instanced_glb_bytes(s: &InstancedScene) -> Result<(Vec<u8>, StandCounts)>
         // several levels: under one node `<model>`, as a stand export's trees and a tree's
         // levels are (the grouping by which Unity's and Unreal's importers make a LOD group;
         // trial 37: flat siblings were all drawn at once)
+        let under = if g.sapling { &mut sapling_nodes } else { &mut tree_nodes };
         if level_nodes.len() > 1 {
-            tree_nodes.push(d.node(json!({"name": m.name, "children": level_nodes})));
+            under.push(d.node(json!({"name": m.name, "children": level_nodes})));
         } else {
-            tree_nodes.extend(level_nodes);
+            under.extend(level_nodes);
         }
     }
-    let (d, scene, counts) = forest_doc(d, tree_nodes, Vec::new(), mesh_nodes, &s.statics, &s.name, &s.extras)?;
+    let (d, scene, counts) = forest_doc(d, tree_nodes, sapling_nodes, mesh_nodes, &s.statics, &s.name, &s.extras)?;
     Ok((d.finish(scene)?, counts))
 }
 
@@ -1256,7 +1284,7 @@ mod tests {
                 name: "t".into(),
                 looks: vec![Look::default()],
                 models: vec![StandModel { name: "m".into(), chain: chain.clone(), look: 0, sprigs: TriMesh::default() }],
-                groups: vec![InstanceGroup { model: 0, translations: vec![[0.0; 3]; n], yaw: vec![0.0; n], scales: vec![[1.0; 3]; n], ids: ids.clone() }],
+                groups: vec![InstanceGroup { model: 0, translations: vec![[0.0; 3]; n], yaw: vec![0.0; n], scales: vec![[1.0; 3]; n], ids: ids.clone(), sapling: false }],
                 statics: vec![],
                 levels: vec![0],
                 extras: json!({}),

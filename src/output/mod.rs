@@ -150,13 +150,17 @@ pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
 
 /// [`remove_stale_temporaries`] for one output file `path`: only its own temporaries
 /// `.<name>.<pid>.tmp` of processes no longer running (an export killed while writing left a
-/// 207 MB hidden file beside its `--out`, found by a trial); other files are left alone.
+/// 207 MB hidden file beside its `--out`, found by a trial) and those of its glb buffer's
+/// scratch file (`.<stem>.glb.bin.<pid>.tmp`, [`gltf::StandGlbWriter`]: trial 42 found 319 MB
+/// of them left by an export killed with SIGKILL, which no rerun removed); other files are left
+/// alone.
 ///
 /// Errors: as [`remove_stale_temporaries`].
 pub fn remove_stale_temporaries_of(path: &Path) -> Result<usize> {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let Some(name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else { return Ok(0) };
-    remove_stale_where(dir, |stem| stem == name)
+    let scratch = path.with_extension("glb.bin").file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    remove_stale_where(dir, |stem| stem == name || stem == scratch)
 }
 
 /// The temporaries of dead processes in `dir` whose file name (`stem` of `.<stem>.<pid>.tmp`)
@@ -245,14 +249,15 @@ mod stale_tests {
         let d = std::env::temp_dir().join(format!("sylva_stale_{}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         let dead = 4_000_000_000u32; // above any pid: no such process
-        let files = [format!(".a.glb.{dead}.tmp"), format!(".b.glb.{dead}.tmp"), format!(".a.glb.{}.tmp", std::process::id()), "a.glb.tmp".into(), format!(".a.glb.{dead}.tmp.keep")];
+        // and the glb buffer's scratch files (trial 42): a dead process's goes, this one's stays
+        let files = [format!(".a.glb.{dead}.tmp"), format!(".b.glb.{dead}.tmp"), format!(".a.glb.{}.tmp", std::process::id()), "a.glb.tmp".into(), format!(".a.glb.{dead}.tmp.keep"), format!(".a.glb.bin.{dead}.tmp"), format!(".a.glb.bin.{}.tmp", std::process::id()), format!(".b.glb.bin.{dead}.tmp")];
         for f in &files {
             std::fs::write(d.join(f), b"x").unwrap();
         }
-        assert_eq!(remove_stale_temporaries_of(&d.join("a.glb")).unwrap(), 1);
+        assert_eq!(remove_stale_temporaries_of(&d.join("a.glb")).unwrap(), 2);
         let left: Vec<bool> = files.iter().map(|f| d.join(f).exists()).collect();
-        assert_eq!(left, [false, true, true, true, true]);
-        assert_eq!(remove_stale_temporaries(&d).unwrap(), 1, "the whole folder's: b's");
+        assert_eq!(left, [false, true, true, true, true, false, true, true]);
+        assert_eq!(remove_stale_temporaries(&d).unwrap(), 2, "the whole folder's: b's and its scratch");
         std::fs::remove_dir_all(&d).unwrap();
     }
 }
