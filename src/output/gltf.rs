@@ -183,7 +183,7 @@ impl Doc {
     /// A document whose BIN chunk goes to the scratch file `<tmp of out>.bin` beside `out`
     /// (removed when the document is dropped or finished).
     fn spilling(out: &Path, at: usize) -> Result<Doc> {
-        let path = super::temporary_path(&out.with_extension("glb.bin"));
+        let path = super::temporary_path(&glb_scratch_of(out));
         let pending = super::Pending::register(&path);
         let f = std::fs::File::create(&path).map_err(|e| OutputError::io(&path, e))?;
         let mut d = Doc::new();
@@ -1265,6 +1265,14 @@ pub fn parse_skeleton_sidecar(text: &str, path: &Path) -> Result<crate::structur
     Ok(sk)
 }
 
+/// The file whose temporary (`.<name>.<pid>.tmp`, [`super::temporary_path`]) holds a glb's BIN
+/// chunk while `out` is written: `out` with the extension `glb.bin` (`k.glb` → `k.glb.bin`).
+/// One place for the writer and for [`super::remove_stale_temporaries_of`], which removes a
+/// killed export's scratch by this name.
+pub(crate) fn glb_scratch_of(out: &Path) -> std::path::PathBuf {
+    out.with_extension("glb.bin")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1333,3 +1341,4 @@ mod tests {
         }
     }
 }
+

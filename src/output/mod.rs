@@ -159,7 +159,7 @@ pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
 pub fn remove_stale_temporaries_of(path: &Path) -> Result<usize> {
     let dir = path.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     let Some(name) = path.file_name().map(|n| n.to_string_lossy().into_owned()) else { return Ok(0) };
-    let scratch = path.with_extension("glb.bin").file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let scratch = gltf::glb_scratch_of(path).file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     remove_stale_where(dir, |stem| stem == name || stem == scratch)
 }
 
