@@ -272,6 +272,8 @@ fn readme_documents_every_field_of_the_schema() {
     beech.life.bai_bwinpro = Some(sylva::species::BaiBwinpro { a0: 2.6518, csa: 1.0414, age: -0.6322, c66: -0.555, bias0: -22.77, bias1: 1.417, bias2: 0.03803, bias3: -0.002403, bias4: 0.00003191, bias5: -0.0000001202, youth_hd: 1.40, period_sigma: Some(0.15) });
     // nor the closed-stand slenderness (issue 35 round 41: no shipped file has it; TreeGrOSS's beech value)
     beech.life.closed_hd = Some(140.0);
+    // nor the open-grown H/D curve (issue 35 round 43: no shipped file has it; iLand's fasy HDlow)
+    beech.life.open_hd = Some(sylva::species::DenseHd { k: 100.877, c: -0.2427 });
     // nor the mature form (Scots pine's only)
     beech.architecture.mature_form = lib.get("scots_pine").unwrap().architecture.mature_form;
     assert!(beech.architecture.mature_form.is_some());

@@ -237,6 +237,17 @@ pub struct LifeHistory {
     /// rounds 41–42).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub closed_hd: Option<f32>,
+    /// Open-grown height–diameter curve ([`DenseHd`] form, from iLand's `HDlow`, Seidl et al.
+    /// 2012): the stoutest H/D of a year's increments, that of a tree in full light, `(1 + c) ·
+    /// k · D^c` m/m. Where a species has it and [`LifeHistory::dense_hd`] (iLand's `HDhigh`,
+    /// no light), the closed-stand diameter increment of its trees from 7 cm DBH (below it,
+    /// `closed_hd` where given) follows the H/D interpolated between the two by the tree's
+    /// light, as iLand's `Tree::relative_height_growth`:
+    /// [`crate::sim::phases::growth::closed_slenderness`]. Optional: without it the
+    /// closed-stand H/D is [`crate::sim::phases::growth::HD_CLOSED`] (issue 35, round 43; no
+    /// shipped species sets it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub open_hd: Option<DenseHd>,
 }
 
 impl LifeHistory {

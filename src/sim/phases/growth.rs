@@ -237,8 +237,9 @@ pub struct Growth<'a> {
 /// Under crowding the potential increment `D_open(H + ΔH_pot) − D_open(H)` blends, with weight
 /// `x = clamp((RD − 0.4) / 0.2, 0, 1)`, into the closed-stand increment [`closed_increment`]
 /// `min(max(100 ΔH_pot / HD, 30 / HD cm), open increment)` (closed-stand slenderness HD the
-/// species' `life.closed_hd` below 7 cm DBH, else [`HD_CLOSED`] = 60 m/m with its 5 mm/yr floor;
-/// ESTIMATE; [`closed_slenderness`]).
+/// species' `life.closed_hd` below 7 cm DBH; for species with `life.open_hd` and
+/// `life.dense_hd`, iLand's H/D between them by the tree's light; else [`HD_CLOSED`] = 60 m/m
+/// with its 5 mm/yr floor, ESTIMATE; [`closed_slenderness`]).
 /// Crown radius: open-grown radius of the new DBH, shrunk by [`rules::shaded_crown`]
 /// `0.5 + 0.5 L` in shade (crown plasticity); crown base rises to
 /// `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural pruning). Vigour memory
@@ -353,7 +354,7 @@ pub const DD_CLOSED_MIN: f32 = 0.5;
 
 /// Potential closed-stand diameter increment (cm/yr) of a tree with potential height increment
 /// `dh_pot` (m/yr) and open-grown diameter increment `dd_open` (cm/yr) at slenderness `hd` (m/m,
-/// > 0; [`closed_slenderness`]: the species' `life.closed_hd` below 7 cm DBH, else [`HD_CLOSED`]): `min(max(100 dh_pot / hd, DD_CLOSED_MIN
+/// > 0; [`closed_slenderness`]): `min(max(100 dh_pot / hd, DD_CLOSED_MIN
 /// · HD_CLOSED / hd), dd_open)`. The floor is the increment of the same 0.3 m height growth at
 /// every `hd` ([`DD_CLOSED_MIN`] at 60); crowding does not speed diameter growth, so never more
 /// than the open-grown increment. At `hd` = [`HD_CLOSED`] it is bit for bit the growth model's
@@ -363,15 +364,28 @@ pub fn closed_increment(dh_pot: f32, dd_open: f32, hd: f32) -> f32 {
 }
 
 /// Slenderness H/D (m/m) of the closed-stand diameter increment ([`closed_increment`]) of a tree
-/// of species `sp` with DBH `d_cm` (cm): the species' `life.closed_hd` while the tree is below
-/// the inventory threshold [`crate::sim::density::MIN_DBH_CM`] (7 cm), [`HD_CLOSED`] from it on
-/// and for species without `life.closed_hd`. The switch is hard, as in TreeGrOSS/BWINPro, whose
-/// youth rule (`D = h / 1.40` for beech) grows only the trees below the 7 cm threshold, and whose
-/// stand model grows those above it (issue 35, round 42): the DBH stays continuous, its yearly
-/// increment steps up by `closed_hd / HD_CLOSED` where the tree passes 7 cm.
-pub fn closed_slenderness(sp: &Species, d_cm: f32) -> f32 {
-    match sp.life.closed_hd {
-        Some(hd) if d_cm < crate::sim::density::MIN_DBH_CM => hd,
+/// of species `sp` with DBH `d_cm` (cm) and light `l` (the crown's light resource, 0–1, clamped):
+/// - below the inventory threshold [`crate::sim::density::MIN_DBH_CM`] (7 cm), the species'
+///   `life.closed_hd` where it has one. The switch is hard, as in TreeGrOSS/BWINPro, whose youth
+///   rule (`D = h / 1.40` for beech) grows only the trees below the 7 cm threshold, and whose
+///   stand model grows those above it (issue 35, round 42): the DBH stays continuous, its
+///   yearly increment steps up by `closed_hd / HD_CLOSED` where the tree passes 7 cm;
+/// - otherwise, for a species with both `life.open_hd` (iLand's `HDlow`) and `life.dense_hd`
+///   (`HDhigh`), the H/D of the increments interpolated between them by the tree's light, as
+///   iLand's `Tree::relative_height_growth` does by the light resource index LRI (Seidl et al.
+///   2012, Ecol. Model. 231:87–100, stem growth): `HDhigh(D) − (HDhigh(D) − HDlow(D)) · l`, with
+///   `HD(D) = (1 + c) · k · D^c` ([`DenseHd`]) and `D` taken as at least 1 cm (the curves' H/D
+///   at 1 cm; they rise without bound towards D = 0). Full light gives `HDlow`, none `HDhigh`;
+///   iLand's fasy gives 48–100 m/m at 7 cm and 37–68 at 20 cm (issue 35, round 43);
+/// - [`HD_CLOSED`] else.
+pub fn closed_slenderness(sp: &Species, d_cm: f32, l: f32) -> f32 {
+    match (sp.life.closed_hd, sp.life.open_hd, sp.life.dense_hd) {
+        (Some(hd), _, _) if d_cm < crate::sim::density::MIN_DBH_CM => hd,
+        (_, Some(lo), Some(hi)) => {
+            let d = d_cm.max(1.0);
+            let (lo, hi) = ((1.0 + lo.c) * lo.k * d.powf(lo.c), (1.0 + hi.c) * hi.k * d.powf(hi.c));
+            hi - (hi - lo) * l.clamp(0.0, 1.0)
+        }
         _ => HD_CLOSED,
     }
 }
@@ -426,8 +440,11 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, ye
     // follows height increment at the slenderness H/D of trees in closed stands. The weight
     // x of the closed-stand allometry rises from 0 at RD_ONSET (0.4, lower limit of full
     // site occupancy) to 1 at RD 0.6 (onset of self-thinning, canopy closed: Long 1985).
-    let x = ((crowd.rd[i] - RD_ONSET).max(0.0) / 0.2).min(1.0);
-    let dd_closed = if h > 1.3 { closed_increment(dh_pot, dd_open, closed_slenderness(sp, d)) } else { dd_open };
+    // A species with iLand's H/D range (`life.open_hd` and `life.dense_hd`) takes it at every
+    // density: iLand has no open-grown curve besides it (HDlow is the H/D in full light), and
+    // the tree's light sets where between HDlow and HDhigh it grows (issue 35, round 43).
+    let x = if sp.life.open_hd.is_some() && sp.life.dense_hd.is_some() { 1.0 } else { ((crowd.rd[i] - RD_ONSET).max(0.0) / 0.2).min(1.0) };
+    let dd_closed = if h > 1.3 { closed_increment(dh_pot, dd_open, closed_slenderness(sp, d, l)) } else { dd_open };
     let dd_pot = (1.0 - x) * dd_open + x * dd_closed;
     // the tree's growth factor only matters for a non-zero increment (a zero times the factor,
     // which is finite and > 0, is that same zero), so it is not drawn for trees that do not
@@ -541,18 +558,46 @@ mod tests {
         let mut b = beech_like();
         b.life.closed_hd = None;
         for d in [0.0, 3.0, 6.99, 7.0, 40.0] {
-            assert_eq!(closed_slenderness(&b, d), HD_CLOSED, "no closed_hd, DBH {d}");
+            assert_eq!(closed_slenderness(&b, d, 0.5), HD_CLOSED, "no closed_hd, DBH {d}");
         }
         b.life.closed_hd = Some(140.0);
-        assert_eq!(closed_slenderness(&b, 0.0), 140.0);
-        assert_eq!(closed_slenderness(&b, 6.99), 140.0);
-        assert_eq!(closed_slenderness(&b, crate::sim::density::MIN_DBH_CM), HD_CLOSED);
-        assert_eq!(closed_slenderness(&b, 30.0), HD_CLOSED);
+        assert_eq!(closed_slenderness(&b, 0.0, 0.5), 140.0);
+        assert_eq!(closed_slenderness(&b, 6.99, 0.5), 140.0);
+        assert_eq!(closed_slenderness(&b, crate::sim::density::MIN_DBH_CM, 0.5), HD_CLOSED);
+        assert_eq!(closed_slenderness(&b, 30.0, 0.5), HD_CLOSED);
     }
 
     /// PROGNAUS's competition response (Norway spruce's terms, Hasenauer 2000): an open-grown
     /// tree keeps its increment, a crown ratio half the open-grown one with 20 m²/ha of larger
     /// trees at CCF 250 % keeps 0.402 of it; a crown ratio above the open-grown one counts as it.
+    /// iLand's H/D of the increments between HDlow (full light) and HDhigh (none) by the tree's
+    /// light (`Tree::relative_height_growth`), for a species with `life.open_hd` and
+    /// `life.dense_hd` (issue 35, round 43; iLand's fasy curves, species/sources/
+    /// species_traits.csv): at 20 cm HDhigh = 0.6324 · 323.63 · 20^−0.3676 = 68.04 m/m, HDlow =
+    /// 0.7573 · 100.877 · 20^−0.2427 = 36.92, 52.48 halfway; the light clamped to 0–1; DBH
+    /// under 1 cm taken as 1 cm; `closed_hd` still rules below 7 cm; without `open_hd` 60.
+    #[test]
+    fn closed_slenderness_follows_ilands_light_interpolation() {
+        let mut b = beech_like();
+        b.life.closed_hd = None;
+        b.life.dense_hd = Some(DenseHd { k: 323.63, c: -0.3676 });
+        b.life.open_hd = None;
+        assert_eq!(closed_slenderness(&b, 20.0, 0.5), HD_CLOSED);
+        b.life.open_hd = Some(DenseHd { k: 100.877, c: -0.2427 });
+        for (l, want) in [(0.0, 68.04), (1.0, 36.92), (0.5, 52.48), (-0.2, 68.04), (1.5, 36.92)] {
+            let hd = closed_slenderness(&b, 20.0, l);
+            assert!((hd - want).abs() < 0.01, "light {l}: {hd} vs {want}");
+        }
+        assert!((closed_slenderness(&b, 7.0, 0.0) - 100.09).abs() < 0.01);
+        assert!((closed_slenderness(&b, 1.0, 0.0) - 204.66).abs() < 0.01);
+        assert_eq!(closed_slenderness(&b, 0.3, 0.4), closed_slenderness(&b, 1.0, 0.4));
+        b.life.closed_hd = Some(140.0);
+        assert_eq!(closed_slenderness(&b, 6.99, 1.0), 140.0);
+        assert!((closed_slenderness(&b, 20.0, 0.5) - 52.48).abs() < 0.01);
+        b.life.dense_hd = None;
+        assert_eq!(closed_slenderness(&b, 20.0, 0.5), HD_CLOSED);
+    }
+
     #[test]
     fn bai_competition_modifier_values() {
         let bc = BaiCompetition { crown_ratio: 0.634179, bal: -0.017369, ccf: -0.000497 };
