@@ -567,9 +567,6 @@ mod tests {
         assert_eq!(closed_slenderness(&b, 30.0, 0.5), HD_CLOSED);
     }
 
-    /// PROGNAUS's competition response (Norway spruce's terms, Hasenauer 2000): an open-grown
-    /// tree keeps its increment, a crown ratio half the open-grown one with 20 m²/ha of larger
-    /// trees at CCF 250 % keeps 0.402 of it; a crown ratio above the open-grown one counts as it.
     /// iLand's H/D of the increments between HDlow (full light) and HDhigh (none) by the tree's
     /// light (`Tree::relative_height_growth`), for a species with `life.open_hd` and
     /// `life.dense_hd` (issue 35, round 43; iLand's fasy curves, species/sources/
@@ -598,6 +595,9 @@ mod tests {
         assert_eq!(closed_slenderness(&b, 20.0, 0.5), HD_CLOSED);
     }
 
+    /// PROGNAUS's competition response (Norway spruce's terms, Hasenauer 2000): an open-grown
+    /// tree keeps its increment, a crown ratio half the open-grown one with 20 m²/ha of larger
+    /// trees at CCF 250 % keeps 0.402 of it; a crown ratio above the open-grown one counts as it.
     #[test]
     fn bai_competition_modifier_values() {
         let bc = BaiCompetition { crown_ratio: 0.634179, bal: -0.017369, ccf: -0.000497 };
