@@ -1870,6 +1870,8 @@ fn keep_open_and_names_are_refused_naming_the_field() {
         ("kind = \"thinning\"\nmethod = \"from_below\"\ntarget_stems_ha = 100\nmax_height_m = 1.0\nyear = 1\n", &["management[0].max_height_m", "only with kind = \"keep_open\""][..]),
         ("kind = \"keep_open\"\nname = \"\"\nyear = 1\n", &["management[0].name", "1–64 characters"][..]),
         ("kind = \"keep_open\"\nyear = 0\n", &["management[0].year", "1–10000"][..]),
+        // round 43's trial: two entries of one name mixed their rows in management_table.csv
+        ("kind = \"keep_open\"\nname = \"north\"\nyear = 1\n[[management]]\nkind = \"keep_open\"\nname = \"north\"\nyear = 2\n", &["management[1].name", "\"north\"", "management[0] has it"][..]),
     ] {
         let e = err(&format!("{base}[[management]]\n{entry}"));
         assert!(e.contains("bad.toml") && want.iter().all(|w| e.contains(w)), "{entry}: {e}");

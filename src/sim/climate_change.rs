@@ -98,8 +98,9 @@ pub fn shifted_indices(ix: &[f32; 6], dt_k: f64, precip: f64) -> [f32; 6] {
 
 /// Parses an anomalies CSV: lines `year,temperature_k[,precipitation_factor]` (year 1–10000,
 /// each once; temperature −30–30 K; factor 0.05–5, default 1), every line with as many values
-/// as the header names (or, without one, as the first data line has: a decimal comma is an
-/// error, not a third value); blank lines and `#` comments (whole lines, or from `#` to the end
+/// as the header names (a decimal comma is an error, not a third value); a file without a
+/// header has the two columns `year,temperature_k`, and a precipitation factor column needs the
+/// header (a headerless `1,0,5` is refused, not read as 0 K and a factor of 5); blank lines and `#` comments (whole lines, or from `#` to the end
 /// of a line) skipped; a first line starting with a letter is a header, which must name the columns in
 /// that order (`year,temperature_k` or `year,temperature_k,precipitation_factor`, any case):
 /// a header in another order or with other names is refused rather than read by position
@@ -140,6 +141,13 @@ pub fn parse_anomalies(text: &str, path: &Path) -> Result<BTreeMap<u32, (f64, f6
         match columns {
             Some(c) if c != f.len() => {
                 return Err(bad(&format!("{c} comma-separated values, as the {} has (`year,temperature_k{}`; numbers with a decimal point: 0.5, not 0,5)", if from_header { "header" } else { "first data line" }, if c == 3 { ",precipitation_factor" } else { "" })));
+            }
+            // without a header only `year,temperature_k`: a headerless file whose every line
+            // has a decimal comma in its temperature (`1,0,5` for 0.5 K) has three values on every
+            // line and was read as 0 K with a precipitation factor of 5 (round 43's trial,
+            // defect 4); a precipitation factor column must be named by the header
+            None if f.len() == 3 => {
+                return Err(bad("`year,temperature_k` without a header; a third column (a precipitation factor) only under the header `year,temperature_k,precipitation_factor` (and numbers with a decimal point: 0.5, not 0,5)"));
             }
             None => columns = Some(f.len()),
             _ => {}
@@ -224,6 +232,11 @@ mod tests {
         // without a header, every line as many values as the first
         let e = parse_anomalies("1,0.5\n2,0,5\n", p).unwrap_err().to_string();
         assert!(e.contains("line 2") && e.contains("first data line"), "{e}");
+        // every line with a decimal comma and no header (round 43's trial, defect 4: read as
+        // 0 K and a precipitation factor of 5 without a word)
+        let e = parse_anomalies("1,0,5\n2,1,5\n", p).unwrap_err().to_string();
+        assert!(e.contains("line 1") && e.contains("header") && e.contains("0,5"), "{e}");
+        assert_eq!(parse_anomalies("1,0.5\n2,1\n", p).unwrap()[&2], (1.0, 1.0));
         // comments after the values
         let m = parse_anomalies("# hot decade\nyear,temperature_k\n1,0.5 # hot\n3,1.5#hotter\n", p).unwrap();
         assert_eq!((m[&1], m[&3]), ((0.5, 1.0), (1.5, 1.0)));

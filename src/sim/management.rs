@@ -30,7 +30,7 @@ pub struct Management {
     /// `"thinning"`, `"harvest"`, `"planting"` or `"keep_open"`.
     pub kind: String,
     /// A name for the entry in `management_table.csv` (its `name` column; 1–64 characters, no
-    /// line breaks). When omitted: the filter's value where an `area_file` filter picks the
+    /// line breaks, no two entries of a scenario alike). When omitted: the filter's value where an `area_file` filter picks the
     /// area (`filter = { property = "parcel", equals = "oak_park" }` → `oak_park`), else
     /// `KIND#INDEX` (`thinning#4`): [`Management::display_name`].
     #[serde(default, skip_serializing_if = "Option::is_none")]

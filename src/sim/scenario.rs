@@ -838,6 +838,13 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
         }
         for (i, m) in self.management.iter().enumerate() {
             m.validate(i, ctx)?;
+            // a name names the entry's rows in management_table.csv: two entries of one name
+            // would mix their rows there (round 43's trial: accepted without a word)
+            if let Some(n) = &m.name {
+                if let Some(j) = self.management[..i].iter().position(|o| o.name.as_deref() == Some(n.as_str())) {
+                    return Err(invalid(ctx, &format!("management[{i}].name"), format!("{n:?}"), &format!("a name no other entry has (management[{j}] has it): it names the entry's rows in management_table.csv")));
+                }
+            }
             for sp in m.mix.iter().flat_map(|x| x.keys()) {
                 // a scientific or common name of a pool species is accepted, as `tree grow
                 // --species` accepts it (trial 40: `"Fagus sylvatica" = 0.6` was refused); the
