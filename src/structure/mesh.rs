@@ -353,7 +353,7 @@ pub fn hero_leaf_count(o: &HeroLeafOptions) -> usize {
 /// leaf, the blade at [`HERO_LEAF_ANGLE_DEG`] from the shoot on the side the azimuth points
 /// to within the spray's plane. The leaves are shared equally among the anchors. Returns the
 /// leaves and the twigs that carry them (each spray's axis and shoots, segments from base to
-/// tip, for [`twig_mesh`]).
+/// tip, for [`twig_mesh`]; none for sprays of fewer than [`HERO_TWIG_MIN_LEAVES`] leaves).
 ///
 /// **Light.** A spray's plane faces the light its place in the crown gets: its normal is the
 /// vertical leaned outwards by up to 40° in proportion to the anchor's distance from the stem
@@ -426,7 +426,12 @@ pub fn hero_leaves(sk: &Skeleton, anchors: &Leaves, o: &HeroLeafOptions) -> (Lea
                 p
             }
         };
-        twigs.push([within(a.pos), within(a.pos + along * (gap * ns as f32))]);
+        // twigs only under sprays of a few leaves or more (a conifer's shoot cards, about
+        // one a spray, are their own twigs)
+        let twigged = m >= HERO_TWIG_MIN_LEAVES;
+        if twigged {
+            twigs.push([within(a.pos), within(a.pos + along * (gap * ns as f32))]);
+        }
         let (mut given, mut acc) = (0usize, 0.0f32);
         for j in 0..ns {
             acc += w(j) / wsum * m as f32;
@@ -439,7 +444,9 @@ pub fn hero_leaves(sk: &Skeleton, anchors: &Leaves, o: &HeroLeafOptions) -> (Lea
             let base = a.pos + along * (gap * (j as f32 + 0.5));
             let sdir = (along * shoot_angle.cos() + across * (side * shoot_angle.sin())).normalize();
             let sacross = np.cross(sdir).normalize_or(across);
-            twigs.push([within(base), within(base + sdir * (step * k_leaves as f32))]);
+            if twigged {
+                twigs.push([within(base), within(base + sdir * (step * k_leaves as f32))]);
+            }
             for i in 0..k_leaves {
                 let hl = |c: u64| crate::rng::unit_f32(crate::rng::hash(&[o.seed, 0x4e70_6c77, ai as u64, j as u64, i as u64, c]));
                 // the leaf's azimuth round the shoot, seen in the spray's plane: its side
@@ -456,6 +463,10 @@ pub fn hero_leaves(sk: &Skeleton, anchors: &Leaves, o: &HeroLeafOptions) -> (Lea
     }
     (Leaves { leaves: out }, twigs)
 }
+
+/// Fewest leaves of a spray for [`hero_leaves`] to give it twigs (4: a Norway spruce's
+/// 120,000 needle-shoot cards, one a spray, got 1.2 M triangles of twigs without it).
+pub const HERO_TWIG_MIN_LEAVES: usize = 4;
 
 /// Radius (m) of the twigs [`hero_leaves`] gives a spray (its axis and shoots): 1.5 mm
 /// (ESTIMATE: current-year beech shoots are 1–3 mm thick).
