@@ -1261,7 +1261,7 @@ fn a_hero_trees_leaf_cards_carry_its_crowns_whole_leaf_area() {
     let (card, cluster) = card_covers(sp);
     let o = LodOptions::for_species(sp);
     let mut lv = g.leaves.clone();
-    let (chain, h) = hero_chain(&g.skeleton, &mut lv, sp, &o);
+    let (chain, h) = hero_chain(&g.skeleton, &mut lv, sp, &o, &|_| false);
     let leaves = &chain.levels[0].leaves;
     assert!(!leaves.has_cluster_cards());
     let (on_cards, on_clusters) = card_areas(leaves, card, cluster);
@@ -1285,7 +1285,7 @@ fn a_hero_trees_leaf_cards_carry_its_crowns_whole_leaf_area() {
     assert!(leaves.positions.iter().all(|p| (p[0] * p[0] + p[1] * p[1]).sqrt() <= reach + 1e-3));
     // deterministic
     let mut again = g.leaves.clone();
-    assert_eq!(hero_chain(&g.skeleton, &mut again, sp, &o).0.levels[0].leaves, *leaves);
+    assert_eq!(hero_chain(&g.skeleton, &mut again, sp, &o, &|_| false).0.levels[0].leaves, *leaves);
     // round 42's chain: most of the area on leaf-cluster cards
     let mut lv = g.leaves.clone();
     let (old, _) = lone_chain(&g.skeleton, &mut lv, sp);

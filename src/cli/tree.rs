@@ -207,13 +207,15 @@ const HERO_SIDES: u32 = 24;
 /// The chain `tree grow` and `tree adapt` write for `sk` with its leaf cards `lv` (of species
 /// `sp`, a stem of `dbh_cm` when known): with individual leaves ([`LookChoice::hero`]) the
 /// hero chain (`hero_chain`: every leaf a card, the stem tapered to the DBH with its root
-/// flare, Kozak 1988), else `lone_chain`; and the line that says what the full level carries.
-fn tree_chain(sk: &Skeleton, lv: &mut Leaves, sp: &sylva::species::Species, dbh_cm: f32, look: LookChoice) -> (sylva::mesh::LodChain, String, serde_json::Value) {
+/// flare, Kozak 1988; its leaf sprays kept out of `obstacles`), else `lone_chain`; and the
+/// line that says what the full level carries.
+fn tree_chain(sk: &Skeleton, lv: &mut Leaves, sp: &sylva::species::Species, dbh_cm: f32, look: LookChoice, obstacles: &[Obstacle]) -> (sylva::mesh::LodChain, String, serde_json::Value) {
     use sylva::structure::taper::{Flare, StemTaper, TaperForm};
     if look.hero {
         let stem = StemTaper::new(TaperForm::of_species(sp), dbh_cm, sk.height()).map(|t| t.with_flare(Flare::of_species(sp)));
         let o = sylva::structure::mesh::LodOptions { stem, sides: HERO_SIDES, ..sylva::structure::mesh::LodOptions::for_species(sp) };
-        let (chain, h) = sylva::job::leaf_area::hero_chain(sk, lv, sp, &o);
+        let blocked = |p: Vec3| obstacles.iter().any(|ob| ob.contains(p));
+        let (chain, h) = sylva::job::leaf_area::hero_chain(sk, lv, sp, &o, &blocked);
         let line = format!(
             "leaf area {:.1} m² (crown LAI {:.1} over a crown projection of {:.1} m²): {} individual leaves of {:.3} m carry {:.1} m²{}",
             h.target_m2,
@@ -301,7 +303,8 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         adapted = Some((rep, adapt_s, regrow_s));
     }
     let t1 = std::time::Instant::now();
-    let (chain, fill, _) = tree_chain(&sk, &mut leaves, &sp, form.dbh_cm, look);
+    let all_obstacles: Vec<Obstacle> = obs.iter().chain(&later).copied().collect();
+    let (chain, fill, _) = tree_chain(&sk, &mut leaves, &sp, form.dbh_cm, look, &all_obstacles);
     let mesh_s = t1.elapsed().as_secs_f64();
     let glb_o = glb_options_sized(&sp, look.texture_px, &lod_levels);
     // a missing output folder is made (as `tree adapt`, `render` and `run` do), naming the
@@ -543,7 +546,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     let mut leaves = species_tree::tip_leaves(&adapted, &sp.architecture.ecomod);
     // the stem's DBH from the species' stand-grown height–diameter curve at the tree's height
     let dbh = sylva::structure::forest_form::stand_dbh_cm(&sp, adapted.height());
-    let (chain, fill_text, fill) = tree_chain(&adapted, &mut leaves, &sp, dbh, LookChoice { texture_px: a.texture_size, hero: !a.leaf_clusters });
+    let (chain, fill_text, fill) = tree_chain(&adapted, &mut leaves, &sp, dbh, LookChoice { texture_px: a.texture_size, hero: !a.leaf_clusters }, &obstacles);
     // a missing output folder is created (as `sylva render` and `sylva run` do) once the
     // input has been checked, just before the files are written
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {

@@ -474,10 +474,11 @@ pub struct HeroLeafArea {
 /// grown model's leaf cards by the species' phyllotaxis (`architecture.ecomod.phyllotaxis_deg`)
 /// and facing the light, on twigs ([`crate::structure::mesh::twig_mesh`], in the bark); no
 /// leaf-cluster cards. The full level's bark is meshed with `o` (the caller sets the stem's
-/// taper and flare and the sides). The lower levels are
+/// taper and flare and the sides). Sprays are kept out of the obstacles where `blocked(p)`
+/// (m, the tree's frame) says a point is inside one. The lower levels are
 /// [`lone_chain`]'s. `lv` is changed as [`lone_tree_sprigs`] changes it. Deterministic (the
 /// leaves hash the species id).
-pub fn hero_chain(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Leaves, sp: &crate::species::Species, o: &crate::structure::mesh::LodOptions) -> (crate::mesh::LodChain, HeroLeafArea) {
+pub fn hero_chain(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Leaves, sp: &crate::species::Species, o: &crate::structure::mesh::LodOptions, blocked: &dyn Fn(glam::Vec3) -> bool) -> (crate::mesh::LodChain, HeroLeafArea) {
     use crate::structure::mesh::{hero_leaves, leaf_mesh, twig_mesh, HeroLeafOptions, HERO_TWIG_RADIUS_M};
     let (card, _) = card_covers(sp);
     let projection_m2 = crate::structure::crown_projection_area(sk, lv);
@@ -491,7 +492,7 @@ pub fn hero_chain(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Le
         crown_radius_m: crate::structure::crown_radius(sk, lv),
         seed,
     };
-    let (hero, twigs) = hero_leaves(sk, lv, &ho);
+    let (hero, twigs) = hero_leaves(sk, lv, &ho, blocked);
     // the lower levels from the cards as `lone_chain` leaves them (its sprigs are not drawn:
     // the full level's leaves carry the whole area)
     let _ = lone_tree_sprigs(sk, lv, sp);

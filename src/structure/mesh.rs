@@ -362,9 +362,11 @@ pub fn hero_leaf_count(o: &HeroLeafOptions) -> usize {
 /// each leaf's blade turned about its own axis to face it, ± 15° hashed.
 ///
 /// Leaves are kept within `o.crown_radius_m` of the stem axis (the root's vertical) by moving
-/// them inwards. Deterministic (hashes of `o.seed`, the anchor and the leaf). `node` of a leaf
+/// them inwards, and out of the obstacles (`blocked(p)`: whether point `p` is inside one; a
+/// tree adapted to a wall): a spray that would reach in is drawn in towards its anchor by the
+/// largest of 1, 0.7, 0.5, 0.35, 0.25, 0.15 (else 0.1) that clears it, its leaves kept. Deterministic (hashes of `o.seed`, the anchor and the leaf). `node` of a leaf
 /// is its anchor's. Empty for no anchors or no leaf area.
-pub fn hero_leaves(sk: &Skeleton, anchors: &Leaves, o: &HeroLeafOptions) -> (Leaves, Vec<[Vec3; 2]>) {
+pub fn hero_leaves(sk: &Skeleton, anchors: &Leaves, o: &HeroLeafOptions, blocked: &dyn Fn(Vec3) -> bool) -> (Leaves, Vec<[Vec3; 2]>) {
     let n = hero_leaf_count(o);
     let na = anchors.leaves.len();
     let mut twigs = Vec::new();
@@ -381,6 +383,7 @@ pub fn hero_leaves(sk: &Skeleton, anchors: &Leaves, o: &HeroLeafOptions) -> (Lea
     let mut out = Vec::with_capacity(n);
     twigs.reserve(na * 16);
     for (ai, a) in anchors.leaves.iter().enumerate() {
+        let (out_from, twigs_from) = (out.len(), twigs.len());
         // this anchor's share of the leaves (the first `n % na` anchors one more)
         let m = n / na + usize::from(ai < n % na);
         if m == 0 {
@@ -459,6 +462,19 @@ pub fn hero_leaves(sk: &Skeleton, anchors: &Leaves, o: &HeroLeafOptions) -> (Lea
                 let pos = within(base + sdir * (step * (i as f32 + 0.5)));
                 out.push(super::skeleton::Leaf { pos, dir, normal, size, node: a.node });
             }
+        }
+        // a spray that would reach into an obstacle is drawn in towards its anchor (its
+        // leaves kept, closer together) by the largest of 1, 0.7, 0.5, … 0.1 that clears it
+        let (l0, t0) = (out_from, twigs_from);
+        let clears = |f: f32, out: &[super::skeleton::Leaf], twigs: &[[Vec3; 2]]| {
+            let at = |p: Vec3| a.pos + (p - a.pos) * f;
+            out[l0..].iter().all(|l| !blocked(at(l.pos)) && !blocked(at(l.pos) + l.dir * l.size)) && twigs[t0..].iter().all(|t| !blocked(at(t[0])) && !blocked(at(t[1])))
+        };
+        if !clears(1.0, &out, &twigs) {
+            let f = [0.7f32, 0.5, 0.35, 0.25, 0.15].into_iter().find(|&f| clears(f, &out, &twigs)).unwrap_or(0.1);
+            let at = |p: Vec3| a.pos + (p - a.pos) * f;
+            out[l0..].iter_mut().for_each(|l| l.pos = at(l.pos));
+            twigs[t0..].iter_mut().for_each(|t| *t = [at(t[0]), at(t[1])]);
         }
     }
     (Leaves { leaves: out }, twigs)
