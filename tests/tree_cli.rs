@@ -333,6 +333,8 @@ fn drawn_per_panel(png: &std::path::Path) -> [u32; 4] {
 /// and a spruce "a dead snag". Now the beech's LOD0 shows ≥ 0.75 of its LOD1's side view
 /// (measured 0.88; before 0.35), the `.glb` has the crown's leaf-cluster cards as a third
 /// primitive of LOD0 in the cluster material, and the printed leaf area is LAI × projection.
+/// Since round 43 this full level is `--leaf-clusters`' (the default draws every leaf:
+/// `tests/export.rs`, `a_hero_trees_leaf_cards_carry_its_crowns_whole_leaf_area`).
 #[test]
 fn tree_grow_adapted_full_level_carries_the_crowns_leaf_area() {
     let dir = tempfile::tempdir().unwrap();
@@ -340,7 +342,7 @@ fn tree_grow_adapted_full_level_carries_the_crowns_leaf_area() {
     let res = Command::new(env!("CARGO_BIN_EXE_sylva"))
         // open-grown (round 33): the default stand-grown beech of 60 years has a crown of 2.7 m
         // radius whose lengthened leaf cards alone carry its leaf area (no cluster cards needed)
-        .args(["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "60", "--open-grown", "--adapt-to", "wall:1.5", "--out", out.to_str().unwrap()])
+        .args(["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "60", "--open-grown", "--adapt-to", "wall:1.5", "--leaf-clusters", "--texture-size", "256", "--out", out.to_str().unwrap()])
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&res.stdout).into_owned();

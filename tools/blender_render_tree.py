@@ -51,23 +51,17 @@ cam_data.clip_start = 0.02
 cam = bpy.data.objects.new("cam", cam_data)
 scene.collection.objects.link(cam)
 scene.camera = cam
-sun = bpy.data.lights.new("sun", "SUN")
-sun.energy = 2.5
-sun_obj = bpy.data.objects.new("sun", sun)
-sun_obj.rotation_euler = (math.radians(40), 0.0, math.radians(35))
+# the sun from the south-east, 50 degrees up, and a sky-blue world (as blender_render_stand.py)
+sun_obj = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
+sun_obj.data.energy, sun_obj.rotation_euler = 2.5, (math.radians(40), 0.0, math.radians(35))
 scene.collection.objects.link(sun_obj)
-world = bpy.data.worlds.new("sky")
-scene.world = world
-world.use_nodes = True
-world.node_tree.nodes["Background"].inputs[0].default_value = (0.55, 0.7, 0.9, 1.0)
-world.node_tree.nodes["Background"].inputs[1].default_value = 0.8
-scene.render.engine = "CYCLES"
-scene.cycles.samples = samples
-scene.cycles.device = "CPU"
-scene.cycles.use_denoising = False
-scene.render.resolution_x = w
-scene.render.resolution_y = h
-scene.render.resolution_percentage = 100
+scene.world = bpy.data.worlds.new("sky")
+scene.world.use_nodes = True
+background = scene.world.node_tree.nodes["Background"].inputs
+background[0].default_value, background[1].default_value = (0.55, 0.7, 0.9, 1.0), 0.8
+render = scene.render
+render.engine, render.resolution_x, render.resolution_y, render.resolution_percentage = "CYCLES", w, h, 100
+scene.cycles.samples, scene.cycles.device, scene.cycles.use_denoising = samples, "CPU", False
 for v in views:
     name, eye, target, lens = v.split(":")
     eye = Vector([float(x) for x in eye.split(",")])
