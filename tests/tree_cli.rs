@@ -6,7 +6,7 @@ use std::process::Command;
 fn grown_height(model: &str, species: &str, age: &str, dir: &std::path::Path) -> f32 {
     let out = dir.join(format!("{model}_{species}_{age}.glb"));
     let res = Command::new(env!("CARGO_BIN_EXE_sylva"))
-        .args(["tree", "grow", "--species", species, "--model", model, "--age", age, "--seed", "3", "--out", out.to_str().unwrap()])
+        .args(["tree", "grow", "--species", species, "--model", model, "--age", age, "--seed", "3", "--leaf-clusters", "--texture-size", "256", "--out", out.to_str().unwrap()])
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&res.stdout).into_owned();
@@ -333,6 +333,8 @@ fn drawn_per_panel(png: &std::path::Path) -> [u32; 4] {
 /// and a spruce "a dead snag". Now the beech's LOD0 shows ≥ 0.75 of its LOD1's side view
 /// (measured 0.88; before 0.35), the `.glb` has the crown's leaf-cluster cards as a third
 /// primitive of LOD0 in the cluster material, and the printed leaf area is LAI × projection.
+/// Since round 43 this full level is `--leaf-clusters`' (the default draws every leaf:
+/// `tests/export.rs`, `a_hero_trees_leaf_cards_carry_its_crowns_whole_leaf_area`).
 #[test]
 fn tree_grow_adapted_full_level_carries_the_crowns_leaf_area() {
     let dir = tempfile::tempdir().unwrap();
@@ -340,7 +342,7 @@ fn tree_grow_adapted_full_level_carries_the_crowns_leaf_area() {
     let res = Command::new(env!("CARGO_BIN_EXE_sylva"))
         // open-grown (round 33): the default stand-grown beech of 60 years has a crown of 2.7 m
         // radius whose lengthened leaf cards alone carry its leaf area (no cluster cards needed)
-        .args(["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "60", "--open-grown", "--adapt-to", "wall:1.5", "--out", out.to_str().unwrap()])
+        .args(["tree", "grow", "--species", "beech", "--model", "ecomod", "--age", "60", "--open-grown", "--adapt-to", "wall:1.5", "--leaf-clusters", "--texture-size", "256", "--out", out.to_str().unwrap()])
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&res.stdout).into_owned();
@@ -380,14 +382,15 @@ fn ecomod_tree_height_follows_the_species_curve_and_scientific_names_are_accepte
     }
     // the species' dimensions at the age are printed
     let out = dir.path().join("pine.glb");
-    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "scots_pine", "--age", "80", "--out", out.to_str().unwrap()]).output().unwrap();
+    let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "scots_pine", "--age", "80", "--leaf-clusters", "--texture-size", "256", "--out", out.to_str().unwrap()]).output().unwrap();
     let so = String::from_utf8_lossy(&res.stdout).into_owned();
     assert!(res.status.success(), "{so}");
     let line = so.lines().find(|l| l.starts_with("species at 80 yr (stand-grown): height")).unwrap_or_else(|| panic!("{so}"));
     assert!(line.contains("crown base") && line.contains("% of the height clear") && line.contains("crown width/length"), "{line}");
     assert!(so.lines().any(|l| l.starts_with("measured tree: height")), "{so}");
     // the pine's needle cards carried 7× its crown's leaf area (round 33's trial): shortened
-    // and thinned to the crown LAI over its projection
+    // and thinned to the crown LAI over its projection (`--leaf-clusters`' full level; the
+    // heights above do not depend on the foliage, so they are grown the lighter way too)
     let fill = so.lines().find(|l| l.starts_with("leaf area")).unwrap_or_else(|| panic!("{so}"));
     assert!(fill.contains("shortened ×0.67 and") && fill.contains("removed"), "{fill}");
     // an unknown name is still refused, naming the option and the ids

@@ -67,6 +67,13 @@ pub struct Args {
     /// year 150: about 10 s and 460 MB (`--max-strands 48`: about 4 s and 50 MB).
     #[arg(long, conflicts_with = "instances")]
     pub full_detail: bool,
+    /// Side of the exported textures in texels (leaf-cluster, crown, impostor and bark; the
+    /// leaf card's is half as wide): a power of two from 256 to 4096. Stand exports keep 256
+    /// by default (a few species' pictures shared by hundreds of trees); `sylva tree grow`
+    /// defaults to 2048 for a close-up. Each picture is drawn at that size (finer leaf veins
+    /// and bark grain from 512), not enlarged. Not with `--instances`.
+    #[arg(long, default_value_t = 256, conflicts_with = "instances")]
+    pub texture_size: u32,
     /// Folder of extra or edited species files, over the shipped library and the run's own
     /// `species/` folder.
     #[arg(long)]
@@ -78,6 +85,8 @@ pub struct Args {
 
 /// Runs `sylva export`.
 pub fn run(a: Args) -> anyhow::Result<()> {
+    // checked before the run is read (as `tree grow` checks it before growing)
+    sylva::output::gltf::check_texture_size("--texture-size", a.texture_size)?;
     if a.out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()) != Some("glb".into()) {
         anyhow::bail!("--out {}: the stand is written as binary glTF; give a file name ending in .glb", a.out.display());
     }
@@ -118,6 +127,7 @@ fn export(a: &Args, area: Option<[f64; 4]>, levels: Vec<usize>) -> anyhow::Resul
         o.year = a.year;
         o.season = a.season;
         o.levels = levels;
+        o.texture_px = a.texture_size;
         if a.full_detail {
             o.max_strands = sylva::structure::stand::FULL_STRANDS;
         }

@@ -73,6 +73,20 @@ pub enum Command {
         /// preview PNG always shows every level.
         #[arg(long, default_value = "0")]
         lod: String,
+        /// Side of the exported textures in texels (bark, and the leaf-cluster, crown and
+        /// impostor pictures of the levels written; the leaf card's is half as wide): a power
+        /// of two from 256 to 4096, drawn at that size (finer leaf veins and bark grain from
+        /// 512), not enlarged. 2048 by default, for a close-up; `sylva export` keeps 256.
+        #[arg(long, default_value_t = 2048)]
+        texture_size: u32,
+        /// The full level's foliage as the stand exports draw it (the tree's leaf cards,
+        /// lengthened by up to 1.5, and leaf-cluster cards for the rest of the crown's leaf
+        /// area: some 50,000 triangles for a 100-year beech) instead of the default
+        /// individual leaves (every leaf a card of the species' leaf length carrying the
+        /// crown's whole leaf area: about 1.6 M triangles and 110 MB for that beech), and the
+        /// stem without its root flare.
+        #[arg(long)]
+        leaf_clusters: bool,
     },
     /// Adapt a grown tree to obstacles and neighbours by Plastic Trees (Pirk et al. 2012)
     /// instead of regrowing it; writes the adapted tree and a before/after PNG (Fig. 6).
@@ -134,6 +148,14 @@ pub struct AdaptArgs {
     /// chain `<species>_LOD0…3`; or a list such as `0,3`.
     #[arg(long, default_value = "0")]
     lod: String,
+    /// Side of the exported textures in texels, as `sylva tree grow --texture-size`: a power
+    /// of two from 256 to 4096; 2048 by default.
+    #[arg(long, default_value_t = 2048)]
+    texture_size: u32,
+    /// The full level's foliage as leaf cards and leaf-cluster cards, as `sylva tree grow
+    /// --leaf-clusters`, instead of the default individual leaves.
+    #[arg(long)]
+    leaf_clusters: bool,
     /// Print one JSON object on stdout (nodes_before, nodes_after, bent, pruned, pruned_light,
     /// pruned_collision, recomputed_nodes, adapt_ms, regrow_ms, neighbours, out, png).
     #[arg(long)]
@@ -143,9 +165,10 @@ pub struct AdaptArgs {
 /// Runs a tree subcommand.
 pub fn run(c: Command) -> anyhow::Result<()> {
     match c {
-        Command::Grow { species, model, age, obstacle, adapt_to, seed, open_grown, species_dir, out, lod } => {
+        Command::Grow { species, model, age, obstacle, adapt_to, seed, open_grown, species_dir, out, lod, texture_size, leaf_clusters } => {
             let habit = if open_grown { forest_form::Habit::Open } else { forest_form::Habit::Forest };
-            grow(&species, model, age, &obstacle, &adapt_to, seed, habit, species_dir.as_deref(), &out, &lod)
+            let look = LookChoice { texture_px: texture_size, hero: !leaf_clusters };
+            grow(&species, model, age, &obstacle, &adapt_to, seed, habit, species_dir.as_deref(), &out, &lod, look)
         }
         Command::Adapt(a) => adapt(&a),
     }
@@ -169,10 +192,54 @@ fn check_age(age: f32, sp: &sylva::species::Species) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// How `tree grow` and `tree adapt` draw the tree they write: `--texture-size` and whether
+/// the full level carries individual leaves (the default) or `--leaf-clusters`.
+#[derive(Debug, Clone, Copy)]
+struct LookChoice {
+    texture_px: u32,
+    hero: bool,
+}
+
+/// Sides of the trunk's tube in a tree with individual leaves (the root flare's lobes need
+/// them: 5 lobes of 24 / 5 sides each); thinner branches get fewer (`LodOptions::sides`).
+const HERO_SIDES: u32 = 24;
+
+/// The chain `tree grow` and `tree adapt` write for `sk` with its leaf cards `lv` (of species
+/// `sp`, a stem of `dbh_cm` when known): with individual leaves ([`LookChoice::hero`]) the
+/// hero chain (`hero_chain`: every leaf a card, the stem tapered to the DBH with its root
+/// flare, Kozak 1988; its leaf sprays kept out of `obstacles`), else `lone_chain`; and the
+/// line that says what the full level carries.
+fn tree_chain(sk: &Skeleton, lv: &mut Leaves, sp: &sylva::species::Species, dbh_cm: f32, look: LookChoice, obstacles: &[Obstacle]) -> (sylva::mesh::LodChain, String, serde_json::Value) {
+    use sylva::structure::taper::{Flare, StemTaper, TaperForm};
+    if look.hero {
+        let stem = StemTaper::new(TaperForm::of_species(sp), dbh_cm, sk.height()).map(|t| t.with_flare(Flare::of_species(sp)));
+        let o = sylva::structure::mesh::LodOptions { stem, sides: HERO_SIDES, ..sylva::structure::mesh::LodOptions::for_species(sp) };
+        let blocked = |p: Vec3| obstacles.iter().any(|ob| ob.contains(p));
+        let (chain, h) = sylva::job::leaf_area::hero_chain(sk, lv, sp, &o, &blocked);
+        let line = format!(
+            "leaf area {:.1} m² (crown LAI {:.1} over a crown projection of {:.1} m²): {} individual leaves of {:.3} m carry {:.1} m²{}",
+            h.target_m2,
+            h.lai,
+            h.projection_m2,
+            h.leaves,
+            h.leaf_length_m,
+            h.leaves_m2,
+            stem.map_or(String::new(), |t| format!("; stem tapered to DBH {:.1} cm with its root flare ({} lobes)", t.dbh_cm, t.flare.map_or(0, |f| f.lobes)))
+        );
+        let j = serde_json::json!({"crown_projection_m2": h.projection_m2, "leaf_area_m2": h.target_m2, "leaf_cluster_cards": 0, "leaf_cards": h.leaves, "leaf_cards_m2": h.leaves_m2});
+        (chain, line, j)
+    } else {
+        let (chain, f) = lone_chain(sk, lv, sp);
+        let j = serde_json::json!({"crown_projection_m2": f.projection_m2, "leaf_area_m2": f.target_m2.max(f.cards_m2), "leaf_cluster_cards": f.sprigs});
+        (chain, fill_line(&f), j)
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
-fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, habit: forest_form::Habit, species_dir: Option<&Path>, out: &Path, lod: &str) -> anyhow::Result<()> {
+fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &[String], seed: u64, habit: forest_form::Habit, species_dir: Option<&Path>, out: &Path, lod: &str, look: LookChoice) -> anyhow::Result<()> {
     anyhow::ensure!(age.is_finite() && age > 0.0, "--age {age}: expected a positive number of years");
     let lod_levels = sylva::job::export::parse_levels_for("sylva tree grow", lod)?;
+    sylva::output::gltf::check_texture_size("--texture-size", look.texture_px)?;
     // the output is checked before any work, as `render` and `export` check theirs (round 33's
     // trial: a folder named d3.obj was found only after the tree was grown and its textures
     // written, with a bare "Is a directory")
@@ -236,8 +303,10 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         adapted = Some((rep, adapt_s, regrow_s));
     }
     let t1 = std::time::Instant::now();
-    let (chain, fill) = lone_chain(&sk, &mut leaves, &sp);
+    let all_obstacles: Vec<Obstacle> = obs.iter().chain(&later).copied().collect();
+    let (chain, fill, _) = tree_chain(&sk, &mut leaves, &sp, form.dbh_cm, look, &all_obstacles);
     let mesh_s = t1.elapsed().as_secs_f64();
+    let glb_o = glb_options_sized(&sp, look.texture_px, &lod_levels);
     // a missing output folder is made (as `tree adapt`, `render` and `run` do), naming the
     // option when it cannot be (a bare OS error was all a trial got)
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -247,10 +316,10 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     let written = only_levels(&chain, &lod_levels);
     match ext.as_str() {
         "glb" => {
-            sylva::output::gltf::write_glb(out, &written, &glb_options(&sp))?;
+            sylva::output::gltf::write_glb(out, &written, &glb_o)?;
             sylva::output::gltf::write_skeleton_sidecar(out, &sk, Some(&sp.id))?;
         }
-        "obj" => sylva::output::obj::write_obj(out, &chain, Some(&lod_levels), &sp.id, &sylva::output::gltf::Look::for_species(&sp, sylva::species::Season::Summer))?,
+        "obj" => sylva::output::obj::write_obj(out, &chain, Some(&lod_levels), &sp.id, &glb_o.look)?,
         _ => anyhow::bail!("--out {}: expected a .glb or .obj file name", out.display()),
     }
     let img = sylva::output::tree_preview::lod_preview(&chain, &glb_options(&sp).look, 360, 540);
@@ -291,7 +360,7 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         ms.limb_end_angle_deg,
         ms.widest_at
     );
-    print_fill(&fill);
+    println!("{fill}");
     for (i, l) in chain.levels.iter().enumerate() {
         println!("LOD{i}: {:>8} triangles (bark {}, foliage {})", l.triangle_count(), l.bark.triangle_count(), l.leaves.triangle_count());
     }
@@ -305,20 +374,27 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     Ok(())
 }
 
-/// Prints what [`lone_chain`] gave the full level.
-fn print_fill(f: &sylva::job::leaf_area::LoneLeafArea) {
+/// What [`lone_chain`] gave the full level, as a line.
+fn fill_line(f: &sylva::job::leaf_area::LoneLeafArea) -> String {
     let what = if f.card_growth < 1.0 {
         format!("shortened ×{:.2} and {} removed", f.card_growth, f.cards_removed)
     } else {
         format!("lengthened ×{:.2}, and {} leaf-cluster cards added", f.card_growth, f.sprigs)
     };
-    println!("leaf area {:.1} m² (crown LAI {:.1} over a crown projection of {:.1} m²): leaf cards {:.1} m² before, {what}", f.target_m2, f.lai, f.projection_m2, f.cards_m2);
+    format!("leaf area {:.1} m² (crown LAI {:.1} over a crown projection of {:.1} m²): leaf cards {:.1} m² before, {what}", f.target_m2, f.lai, f.projection_m2, f.cards_m2)
 }
 
 /// glTF options of a tree of `sp`: named by its species id, its summer look, LOD levels on top
 /// of each other (a LOD group).
 fn glb_options(sp: &sylva::species::Species) -> sylva::output::gltf::GlbOptions {
     sylva::output::gltf::GlbOptions { name: sp.id.clone(), look: sylva::output::gltf::Look::for_species(sp, sylva::species::Season::Summer), spacing_m: 0.0 }
+}
+
+/// [`glb_options`] with textures of `texture_px` texels for the levels `levels` (leaf and
+/// bark always; `FoliageTextures::for_species_levels`).
+fn glb_options_sized(sp: &sylva::species::Species, texture_px: u32, levels: &[usize]) -> sylva::output::gltf::GlbOptions {
+    let textures = sylva::structure::texture::FoliageTextures::for_species_levels(sp, sylva::species::Season::Summer, texture_px, levels);
+    sylva::output::gltf::GlbOptions { look: sylva::output::gltf::Look { name: sp.id.clone(), textures }, ..glb_options(sp) }
 }
 
 /// Mean segment length of the skeleton (m, ≥ 0.05): the internode length l_i of Plastic Trees
@@ -360,6 +436,7 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     }
     // checked before anything is grown (a bad level names `--lod`, as `tree grow` does)
     let lod_levels = sylva::job::export::parse_levels_for("sylva tree adapt", &a.lod)?;
+    sylva::output::gltf::check_texture_size("--texture-size", a.texture_size)?;
     let lib = super::simulate::library(a.species_dir.as_deref().as_slice())?;
     let find = |name: &str| find_species(&lib, name, "species");
     // the input tree is read first, so that a missing or wrong file is named as such (a trial
@@ -467,13 +544,15 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     let regrow_ms = tr.elapsed().as_secs_f64() * 1e3;
     let adapted = trees[0].skeleton();
     let mut leaves = species_tree::tip_leaves(&adapted, &sp.architecture.ecomod);
-    let (chain, fill) = lone_chain(&adapted, &mut leaves, &sp);
+    // the stem's DBH from the species' stand-grown height–diameter curve at the tree's height
+    let dbh = sylva::structure::forest_form::stand_dbh_cm(&sp, adapted.height());
+    let (chain, fill_text, fill) = tree_chain(&adapted, &mut leaves, &sp, dbh, LookChoice { texture_px: a.texture_size, hero: !a.leaf_clusters }, &obstacles);
     // a missing output folder is created (as `sylva render` and `sylva run` do) once the
     // input has been checked, just before the files are written
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
     }
-    sylva::output::gltf::write_glb(&a.out, &only_levels(&chain, &lod_levels), &glb_options(&sp))?;
+    sylva::output::gltf::write_glb(&a.out, &only_levels(&chain, &lod_levels), &glb_options_sized(&sp, a.texture_size, &lod_levels))?;
     sylva::output::gltf::write_skeleton_sidecar(&a.out, &adapted, Some(&sp.id))?;
     let png = a.out.with_extension("png");
     let (drawing, along) = before_after(&before, &trees, &obstacles, 420, 480);
@@ -496,13 +575,16 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
             "pruned": r.pruned_light + r.pruned_collision, "pruned_light": r.pruned_light, "pruned_collision": r.pruned_collision,
             "recomputed_nodes": rep.recomputed_nodes, "adapt_ms": adapt_ms, "regrow_ms": regrow_ms, "neighbours": neighbours.len(),
             "trunk_base_radius_m": base_r, "out": a.out.display().to_string(), "png": png.display().to_string(),
-            "crown_projection_m2": fill.projection_m2, "leaf_area_m2": fill.target_m2.max(fill.cards_m2), "leaf_cluster_cards": fill.sprigs,
         });
+        let mut j = j;
+        if let (Some(o), Some(f)) = (j.as_object_mut(), fill.as_object()) {
+            o.extend(f.clone());
+        }
         println!("{j}");
     } else {
         println!("species {}: {} -> {} nodes, bent {}, pruned {} for light + {} in obstacles, {} nodes recomputed", sp.id, r.nodes_before, r.nodes_after, r.bent, r.pruned_light, r.pruned_collision, rep.recomputed_nodes);
         println!("adapt {adapt_ms:.1} ms, regrowing it{} {regrow_ms:.1} ms", if obstacles.is_empty() { "" } else { " among the obstacles" });
-        print_fill(&fill);
+        println!("{fill_text}");
         println!("wrote {}, {} and {}", a.out.display(), sylva::output::gltf::skeleton_sidecar_path(&a.out).display(), png.display());
     }
     Ok(())

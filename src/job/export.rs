@@ -150,6 +150,11 @@ pub struct ExportOptions {
     /// [`crate::structure::stand::FULL_STRANDS`] gives every tree its species' strand count at
     /// its age, as `sylva tree grow` gives it (`--full-detail`, `--max-strands`).
     pub max_strands: u32,
+    /// Side (texels) of the leaf-cluster, crown, impostor and bark textures; the leaf card's
+    /// is half as wide ([`crate::structure::texture::FoliageTextures::for_species_sized`]):
+    /// [`crate::structure::texture::TEXTURE_PX`] by default, a power of two from 256 to 4096
+    /// (`--texture-size`, [`crate::output::gltf::check_texture_size`]).
+    pub texture_px: u32,
 }
 
 impl ExportOptions {
@@ -166,6 +171,7 @@ impl ExportOptions {
             max_trees: DEFAULT_MAX_TREES,
             max_bytes: DEFAULT_MAX_BYTES,
             max_bytes_source: "the GLB's 4 GiB limit, less room for the estimate's error".into(),
+            texture_px: crate::structure::texture::TEXTURE_PX,
             max_strands: crate::structure::stand::FULL_STRANDS,
         }
     }
@@ -546,7 +552,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             }
             leaf_cards += n_leaves;
             triangles += n_tris;
-            let look = *looks_of.entry(sp).or_insert_with(|| w.look(stand_look(&library.species[sp], o.season, full)));
+            let look = *looks_of.entry(sp).or_insert_with(|| w.look(stand_look(&library.species[sp], o.season, full, o.texture_px)));
             let t = &trees[a.index];
             let name = format!("{}_{}", library.species[sp].id, t.id);
             let same = model_of.get(&key).and_then(|c| c.iter().find(|(_, _, c)| c.iter().zip(&canon).all(|(a, b)| (a - b).abs() <= SAME_SHAPE)));
@@ -575,7 +581,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             let made = match class_model(library, sp, 0) {
                 Some((mut m, r0, _, tris, _)) => {
                     m.name = format!("{}_sapling", library.species[sp].id);
-                    m.look = *looks_of.entry(sp).or_insert_with(|| w.look(stand_look(&library.species[sp], o.season, full)));
+                    m.look = *looks_of.entry(sp).or_insert_with(|| w.look(stand_look(&library.species[sp], o.season, full, o.texture_px)));
                     let mi = w.model(&m)?;
                     n_models += 1;
                     Some((mi, r0, tris))
@@ -634,15 +640,16 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     Ok(ExportReport { out: out.to_path_buf(), year, trees: n_trees, saplings: n_saplings, models: n_models, obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes, stats, held_mesh_bytes_max: held_max })
 }
 
-/// The look of species `sp` in a stand export: [`Look::for_species`] in `season`, except that a
+/// The look of species `sp` in a stand export: [`Look::for_species_sized`] in `season` with
+/// textures of `texture_px` texels ([`ExportOptions::texture_px`]), except that a
 /// conifer at full detail (`full`), whose full level draws crossed shoot cards
 /// ([`super::leaf_area::shoot_cards`]) as its foliage cards in place of its needle cards, wears
 /// the shoot-cluster picture (its leaf-cluster texture) in its `_leaf` material, as the stills
 /// draw those cards. Round 39's trial: a stand export's Norway spruce had no `_leaf` material
 /// (its shoot cards were drawn in `_cluster`, and a material no mesh uses is left out), where
 /// the guide promises one per species and the instanced export has it.
-pub fn stand_look(sp: &crate::species::Species, season: Season, full: bool) -> Look {
-    let mut look = Look::for_species(sp, season);
+pub fn stand_look(sp: &crate::species::Species, season: Season, full: bool, texture_px: u32) -> Look {
+    let mut look = Look::for_species_sized(sp, season, texture_px);
     if full && crate::structure::texture::LeafShape::of_species(sp).is_needle() {
         look.textures.leaf = look.textures.cluster.clone();
     }

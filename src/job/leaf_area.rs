@@ -447,6 +447,65 @@ pub fn lone_chain(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Le
     (chain, fill)
 }
 
+/// What [`hero_chain`] gave a lone tree's full level.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct HeroLeafArea {
+    /// Crown projection area (m², [`crate::structure::crown_projection_area`] of the grown
+    /// tree's leaf cards).
+    pub projection_m2: f32,
+    /// The species' drawn crown leaf-area index ([`drawn_crown_lai`]).
+    pub lai: f32,
+    /// The crown's leaf area (m², one-sided): `lai` × `projection_m2`.
+    pub target_m2: f32,
+    /// Leaf cards of the full level.
+    pub leaves: usize,
+    /// Their leaf area (m², one-sided: Σ ½ size² × the leaf texture's cover).
+    pub leaves_m2: f32,
+    /// Length of each card (m): the species' `appearance.leaf_length_m`.
+    pub leaf_length_m: f32,
+}
+
+/// The level-of-detail chain of a lone tree for a close-up (issue 32, round 43: `sylva tree
+/// grow`'s and `tree adapt`'s exports by default): the full level's foliage is
+/// [`crate::structure::mesh::hero_leaves`], individual leaf cards of the species' leaf length
+/// (`appearance.leaf_length_m`) and leaf shape carrying the crown's whole drawn leaf area
+/// (the species' crown LAI over the tree's own crown projection, as [`lone_tree_sprigs`] gives
+/// it: the area the light model and `life.foliage.crown_lai` assume), placed in sprays on the
+/// grown model's leaf cards by the species' phyllotaxis (`architecture.ecomod.phyllotaxis_deg`)
+/// and facing the light, on twigs ([`crate::structure::mesh::twig_mesh`], in the bark); no
+/// leaf-cluster cards. The full level's bark is meshed with `o` (the caller sets the stem's
+/// taper and flare and the sides). Sprays are kept out of the obstacles where `blocked(p)`
+/// (m, the tree's frame) says a point is inside one. The lower levels are
+/// [`lone_chain`]'s. `lv` is changed as [`lone_tree_sprigs`] changes it. Deterministic (the
+/// leaves hash the species id).
+pub fn hero_chain(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Leaves, sp: &crate::species::Species, o: &crate::structure::mesh::LodOptions, blocked: &dyn Fn(glam::Vec3) -> bool) -> (crate::mesh::LodChain, HeroLeafArea) {
+    use crate::structure::mesh::{hero_leaves, leaf_mesh, twig_mesh, HeroLeafOptions, HERO_TWIG_RADIUS_M};
+    let (card, _) = card_covers(sp);
+    let projection_m2 = crate::structure::crown_projection_area(sk, lv);
+    let lai = drawn_crown_lai(sp);
+    let seed = crate::rng::hash(&sp.id.bytes().map(u64::from).collect::<Vec<_>>());
+    let ho = HeroLeafOptions {
+        leaf_area_m2: lai * projection_m2,
+        leaf_length_m: sp.drawn_leaf_length_m(),
+        card_cover: card,
+        phyllotaxis_deg: sp.architecture.ecomod.phyllotaxis_deg,
+        crown_radius_m: crate::structure::crown_radius(sk, lv),
+        seed,
+    };
+    let (hero, twigs) = hero_leaves(sk, lv, &ho, blocked);
+    // the lower levels from the cards as `lone_chain` leaves them (its sprigs are not drawn:
+    // the full level's leaves carry the whole area)
+    let _ = lone_tree_sprigs(sk, lv, sp);
+    let mut chain = crate::structure::mesh::lod_chain(sk, lv, o);
+    if let Some(full) = chain.levels.first_mut() {
+        full.leaves = leaf_mesh(&hero);
+        full.bark.append(&twig_mesh(&twigs, HERO_TWIG_RADIUS_M));
+    }
+    let leaves_m2 = hero.leaves.iter().map(|l| 0.5 * f64::from(l.size * l.size * card.clamp(0.05, 1.0))).sum::<f64>() as f32;
+    let out = HeroLeafArea { projection_m2, lai, target_m2: ho.leaf_area_m2, leaves: hero.len(), leaves_m2, leaf_length_m: hero.leaves.first().map_or(ho.leaf_length_m, |l| l.size) };
+    (chain, out)
+}
+
 /// The level-of-detail chain of species `sp`'s prototype, the model every tree beyond the near
 /// field is an instance of (the stills' and the viewer's far trees, `super::scene::prototypes`):
 /// the species' EcoMod tree normalised to 1 m ([`crate::structure::species_tree`], seed

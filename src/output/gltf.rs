@@ -50,6 +50,12 @@ impl Look {
         Look { name: sp.id.clone(), textures: FoliageTextures::for_species(sp, season) }
     }
 
+    /// [`Look::for_species`] with textures of `size` texels
+    /// ([`FoliageTextures::for_species_sized`]; `--texture-size`, [`check_texture_size`]).
+    pub fn for_species_sized(sp: &Species, season: Season, size: u32) -> Look {
+        Look { name: sp.id.clone(), textures: FoliageTextures::for_species_sized(sp, season, size) }
+    }
+
     /// A look from colours (sRGB 0–255), a leaf shape and a bark pattern.
     pub fn plain(name: &str, bark_rgb: [u8; 3], leaf_rgb: [u8; 3], shape: LeafShape, bark: BarkPattern) -> Look {
         let px = texture::TEXTURE_PX;
@@ -71,6 +77,21 @@ impl Default for Look {
     /// `tree`: a brown fissured bark (96, 72, 52) and ovate leaves (70, 120, 50).
     fn default() -> Self {
         Look::plain("tree", [96, 72, 52], [70, 120, 50], LeafShape::Ovate, BarkPattern::Fissured)
+    }
+}
+
+/// Smallest and largest `--texture-size` of the export commands (texels).
+pub const TEXTURE_SIZES: [u32; 2] = [256, 4096];
+
+/// Checks a `--texture-size` of the export commands: a power of two from 256 to 4096
+/// ([`TEXTURE_SIZES`]); `option` names it in the error ("--texture-size").
+///
+/// Errors: [`Error::Invalid`] naming `option`, the value and the sizes expected.
+pub fn check_texture_size(option: &str, size: u32) -> std::result::Result<u32, Error> {
+    if size.is_power_of_two() && (TEXTURE_SIZES[0]..=TEXTURE_SIZES[1]).contains(&size) {
+        Ok(size)
+    } else {
+        Err(Error::Invalid { context: option.into(), field: "texture size".into(), value: size.to_string(), expected: "a power of two from 256 to 4096 texels (256, 512, 1024, 2048 or 4096)".into() })
     }
 }
 

@@ -130,7 +130,13 @@ impl StemProfile {
     /// Heights (frame units above the root) of the rings the bole gets between its nodes.
     fn ring_heights(&self) -> Vec<f32> {
         let s = self.taper.frame_scale;
-        super::taper::StemTaper::ring_heights_m(self.top / s).into_iter().map(|h| h * s).collect()
+        self.taper.rings_m(self.top / s).into_iter().map(|h| h * s).collect()
+    }
+
+    /// Relative amplitude of the buttress lobes at height `z` (frame units above the root;
+    /// [`super::taper::StemTaper::lobe_amplitude`]).
+    fn lobe_at(&self, z: f32) -> f32 {
+        self.taper.lobe_amplitude(z / self.taper.frame_scale)
     }
 }
 
@@ -142,8 +148,10 @@ impl StemProfile {
 /// spans about [`BARK_TILE_M`] of bark on stems thicker than that (round 42; until then v was
 /// the distance over the trunk's circumference on every branch). With
 /// [`LodOptions::stem`] the radii are [`StemProfile`]'s and the root's chain gets rings at the
-/// taper's heights ([`super::taper::StemTaper::ring_heights_m`]) between its nodes below the
-/// bole's top.
+/// taper's heights ([`super::taper::StemTaper::rings_m`]) between its nodes below the
+/// bole's top; with a lobed root flare ([`super::taper::Flare`]) the root chain's rings below
+/// breast height have the radius r (1 + a cos(n θ)) at angle θ round the stem (n lobes, a the
+/// taper's [`super::taper::StemTaper::lobe_amplitude`]), normals following the lobes.
 pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriMesh {
     let mut m = TriMesh::default();
     if sk.nodes.len() < 2 {
@@ -161,7 +169,8 @@ pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriM
     m.indices.reserve(est * 6);
     let mut chain: Vec<usize> = Vec::with_capacity(256);
     // ring centres and radii of a chain (the nodes, and the bole's rings between them)
-    let mut rings: Vec<(Vec3, f32)> = Vec::with_capacity(256);
+    let mut rings: Vec<(Vec3, f32, f32)> = Vec::with_capacity(256);
+    let lobes = o.stem.and_then(|t| t.flare).map_or(0, |f| f.lobes) as f32;
     // Chain starts: the root, and every non-first kept child.
     let mut starts: Vec<(usize, usize)> = vec![(0, 0)]; // (first point, first segment node)
     for (i, n) in sk.nodes.iter().enumerate() {
@@ -202,7 +211,7 @@ pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriM
                     let (za, zb) = (prev.z - p.root_z, pos.z - p.root_z);
                     if zb > za + 1e-6 {
                         for &h in bole_rings.iter().filter(|&&h| h > za + 1e-6 && h < zb - 1e-6 && h <= p.top) {
-                            rings.push((prev.lerp(pos, (h - za) / (zb - za)), p.taper.radius_in_frame(h)));
+                            rings.push((prev.lerp(pos, (h - za) / (zb - za)), p.taper.radius_in_frame(h), p.lobe_at(h)));
                         }
                     }
                 }
@@ -211,14 +220,18 @@ pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriM
             if k == n - 1 && sk.nodes[chain[k]].children.is_empty() {
                 r *= 0.3;
             }
-            rings.push((pos, r));
+            let lobe = match &profile {
+                Some(p) if root_chain && pos.z - p.root_z <= p.top + 1e-6 => p.lobe_at(pos.z - p.root_z),
+                _ => 0.0,
+            };
+            rings.push((pos, r, lobe));
         }
         let mut normal = Vec3::ZERO;
         let mut v = 0.0f32;
         let first_vertex = m.positions.len() as u32;
         let nr = rings.len();
         for k in 0..nr {
-            let (pos, r) = rings[k];
+            let (pos, r, lobe) = rings[k];
             let prev = rings[k.saturating_sub(1)].0;
             let next = rings[(k + 1).min(nr - 1)].0;
             let t = (next - prev).normalize_or(Vec3::Z);
@@ -231,6 +244,16 @@ pub fn branch_mesh(sk: &Skeleton, o: &LodOptions, keep: Option<&[bool]>) -> TriM
                 let a = s as f32 / sides as f32 * TAU;
                 let (sa, ca) = a.sin_cos();
                 let dir = normal * ca + binormal * sa;
+                if lobe > 0.0 {
+                    // r(θ) = r (1 + a cos nθ); the outward normal ∝ r(θ) d − r'(θ) d'
+                    let (sn, cn) = (lobes * a).sin_cos();
+                    let (rt, drt) = (r * (1.0 + lobe * cn), -r * lobe * lobes * sn);
+                    let side = binormal * ca - normal * sa;
+                    m.positions.push((pos + dir * rt).to_array());
+                    m.normals.push((dir * rt - side * drt).normalize_or(dir).to_array());
+                    m.uvs.push([repeats * s as f32 / sides as f32, v]);
+                    continue;
+                }
                 m.positions.push((pos + dir * r).to_array());
                 m.normals.push(dir.to_array());
                 m.uvs.push([repeats * s as f32 / sides as f32, v]);
@@ -268,6 +291,226 @@ pub fn leaf_mesh(leaves: &Leaves) -> TriMesh {
             m.uvs.push(uv);
         }
         m.indices.extend_from_slice(&[base, base + 1, base + 2, base, base + 2, base + 3]);
+    }
+    m
+}
+
+/// Options of [`hero_leaves`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeroLeafOptions {
+    /// One-sided leaf area (m²) the leaves carry: the crown's drawn leaf area (the species'
+    /// `life.foliage.crown_lai` over the crown projection, `job::leaf_area::drawn_leaf_area`).
+    pub leaf_area_m2: f32,
+    /// Length (m) of every leaf card: the species' `appearance.leaf_length_m`
+    /// (`Species::drawn_leaf_length_m`).
+    pub leaf_length_m: f32,
+    /// Share (0–1] of a `size × size/2` card that the leaf texture covers
+    /// ([`super::texture::leaf_card_cover`]).
+    pub card_cover: f32,
+    /// Divergence angle (degrees) between successive leaves round a shoot: the species'
+    /// `architecture.ecomod.phyllotaxis_deg`.
+    pub phyllotaxis_deg: f32,
+    /// Leaves are kept within this distance (m) of the stem axis (the crown radius).
+    pub crown_radius_m: f32,
+    /// Seed of the hashed variations.
+    pub seed: u64,
+}
+
+/// Half the most leaves on one shoot of a hero spray ([`hero_leaves`]: √m, 3–16; ESTIMATE:
+/// a beech long shoot carries some 5–12 leaves, a spray's side shoots fewer).
+pub const HERO_LEAVES_PER_SHOOT: usize = 8;
+/// Angle (degrees) between a shoot and its leaves' blades in [`hero_leaves`] (ESTIMATE).
+pub const HERO_LEAF_ANGLE_DEG: f32 = 50.0;
+/// Most leaves [`hero_leaves`] makes (8 M: 16 M triangles, about 1.2 GB of glb): a tree
+/// whose leaf area needs more gets them larger.
+pub const HERO_MAX_LEAVES: usize = 8_000_000;
+
+/// Number of leaf cards [`hero_leaves`] makes: the leaf area over one card's
+/// (½ · leaf_length² · card_cover), rounded, at most [`HERO_MAX_LEAVES`].
+pub fn hero_leaf_count(o: &HeroLeafOptions) -> usize {
+    let per = 0.5 * o.leaf_length_m * o.leaf_length_m * o.card_cover.clamp(0.05, 1.0);
+    if !(per > 0.0) || !(o.leaf_area_m2 > 0.0) {
+        return 0;
+    }
+    ((o.leaf_area_m2 / per).round() as usize).min(HERO_MAX_LEAVES)
+}
+
+/// Individual leaves for a close-up (issue 32, round 43: a 100-year beech of `sylva tree grow`
+/// carried 98 % of its leaf area on leaf-cluster cards): the crown's whole leaf area
+/// `o.leaf_area_m2` as [`hero_leaf_count`] cards of the species' leaf length, each a leaf
+/// ([`leaf_mesh`]'s card), so that Σ ½ size² · cover is the leaf area (exactly, unless
+/// [`HERO_MAX_LEAVES`] cuts the count: then the cards are lengthened to carry it).
+///
+/// **Where.** Every leaf card of `anchors` (the grown model's own leaves, on its shoots with
+/// its leaf distribution) becomes a flat spray of current-year shoots, as the leaves of beech,
+/// hornbeam or lime are held in layers (the skeleton's few thousand nodes stand for a crown's
+/// hundred thousand shoots): a spray axis along the anchor's shoot (its node's segment) laid
+/// into the spray's plane (below), √m
+/// shoots (m the anchor's leaves) branching from it alternately left and right at 45° in the
+/// spray's plane, 0.8 leaf lengths apart, carrying 1.3 to 0.5 of the mean √m leaves from the
+/// spray's base to its tip (so a spray is about as wide as long); each shoot's leaves 0.45
+/// leaf lengths apart, their azimuth round the shoot turning by `o.phyllotaxis_deg` leaf to
+/// leaf, the blade at [`HERO_LEAF_ANGLE_DEG`] from the shoot on the side the azimuth points
+/// to within the spray's plane. The leaves are shared equally among the anchors. Returns the
+/// leaves and the twigs that carry them (each spray's axis and shoots, segments from base to
+/// tip, for [`twig_mesh`]; none for sprays of fewer than [`HERO_TWIG_MIN_LEAVES`] leaves).
+///
+/// **Light.** A spray's plane faces the light its place in the crown gets: its normal is the
+/// vertical leaned outwards by up to 40° in proportion to the anchor's distance from the stem
+/// axis over the crown radius (the crown's outer leaves face the side sky, the inner ones
+/// the zenith: planophile, as broadleaf canopies are, Pisek et al. 2011, Trees 25:919–924),
+/// each leaf's blade turned about its own axis to face it, ± 15° hashed.
+///
+/// Leaves are kept within `o.crown_radius_m` of the stem axis (the root's vertical) by moving
+/// them inwards, and out of the obstacles (`blocked(p)`: whether point `p` is inside one; a
+/// tree adapted to a wall): a spray that would reach in is drawn in towards its anchor by the
+/// largest of 1, 0.7, 0.5, 0.35, 0.25, 0.15 (else 0.1) that clears it, its leaves kept. Deterministic (hashes of `o.seed`, the anchor and the leaf). `node` of a leaf
+/// is its anchor's. Empty for no anchors or no leaf area.
+pub fn hero_leaves(sk: &Skeleton, anchors: &Leaves, o: &HeroLeafOptions, blocked: &dyn Fn(Vec3) -> bool) -> (Leaves, Vec<[Vec3; 2]>) {
+    let n = hero_leaf_count(o);
+    let na = anchors.leaves.len();
+    let mut twigs = Vec::new();
+    if n == 0 || na == 0 {
+        return (Leaves::default(), twigs);
+    }
+    let per = 0.5 * o.leaf_length_m * o.leaf_length_m * o.card_cover.clamp(0.05, 1.0);
+    // lengthened only where the count is capped
+    let size = o.leaf_length_m * (o.leaf_area_m2 / (per * n as f32)).sqrt().max(1.0);
+    let axis = sk.nodes.first().map_or(Vec3::ZERO, |r| r.pos);
+    let rmax = o.crown_radius_m.max(0.05);
+    let phyllo = o.phyllotaxis_deg.to_radians();
+    let (leaf_angle, shoot_angle) = (HERO_LEAF_ANGLE_DEG.to_radians(), 45f32.to_radians());
+    let mut out = Vec::with_capacity(n);
+    twigs.reserve(na * 16);
+    for (ai, a) in anchors.leaves.iter().enumerate() {
+        let (out_from, twigs_from) = (out.len(), twigs.len());
+        // this anchor's share of the leaves (the first `n % na` anchors one more)
+        let m = n / na + usize::from(ai < n % na);
+        if m == 0 {
+            continue;
+        }
+        let h = |c: u64| crate::rng::unit_f32(crate::rng::hash(&[o.seed, 0x4e70_6c76, ai as u64, c]));
+        let node = a.node as usize;
+        let seg = sk.nodes.get(node).and_then(|nd| nd.parent.and_then(|p| sk.nodes.get(p as usize)).map(|par| nd.pos - par.pos)).unwrap_or(a.dir);
+        let along = seg.normalize_or(a.dir.normalize_or(Vec3::X));
+        // the light the place gets: up, leaned outwards with the distance from the stem axis
+        let out_dir = (a.pos - axis).truncate();
+        let rho = out_dir.length();
+        let lean = 40f32.to_radians() * (rho / rmax).min(1.0);
+        let outward = out_dir.normalize_or(glam::Vec2::X).extend(0.0);
+        let light = (Vec3::Z * lean.cos() + outward * lean.sin()).normalize();
+        // the spray's plane faces the light (a spray spreads across the light, as beech's
+        // plagiotropic shoots do), its axis the anchor's shoot laid into that plane
+        let np = light;
+        let mut flat = along - np * along.dot(np);
+        if flat.length_squared() < 1e-4 {
+            flat = outward - np * outward.dot(np);
+        }
+        let along = flat.normalize_or(np.any_orthonormal_vector());
+        let across = np.cross(along).normalize_or(along.any_orthonormal_vector());
+        // a hashed turn of the spray about its normal (± 20°)
+        let turn = glam::Quat::from_axis_angle(np, (h(0) - 0.5) * 40f32.to_radians());
+        let (along, across) = (turn * along, turn * across);
+        // the spray: `ns` shoots of about √m leaves (so that it is about as wide as long),
+        // alternately left and right along its axis 0.8 leaf lengths apart, the leaves per
+        // shoot falling from 1.3 to 0.5 of the mean towards the spray's tip
+        let q = ((m as f32).sqrt().round() as usize).clamp(3, 2 * HERO_LEAVES_PER_SHOOT);
+        let ns = m.div_ceil(q);
+        let w = |j: usize| 1.3 - 0.8 * j as f32 / (ns.max(2) - 1) as f32;
+        let wsum: f32 = (0..ns).map(w).sum();
+        let gap = 0.8 * o.leaf_length_m;
+        let step = 0.45 * o.leaf_length_m;
+        let within = |p: Vec3| {
+            let d = (p - axis).truncate();
+            let r = d.length();
+            if r > rmax {
+                (axis.truncate() + d * (rmax / r)).extend(p.z)
+            } else {
+                p
+            }
+        };
+        // twigs only under sprays of a few leaves or more (a conifer's shoot cards, about
+        // one a spray, are their own twigs)
+        let twigged = m >= HERO_TWIG_MIN_LEAVES;
+        if twigged {
+            twigs.push([within(a.pos), within(a.pos + along * (gap * ns as f32))]);
+        }
+        let (mut given, mut acc) = (0usize, 0.0f32);
+        for j in 0..ns {
+            acc += w(j) / wsum * m as f32;
+            let k_leaves = if j + 1 == ns { m - given } else { (acc.round() as usize).saturating_sub(given).min(m - given) };
+            given += k_leaves;
+            if k_leaves == 0 {
+                continue;
+            }
+            let side = if j % 2 == 0 { 1.0 } else { -1.0 };
+            let base = a.pos + along * (gap * (j as f32 + 0.5));
+            let sdir = (along * shoot_angle.cos() + across * (side * shoot_angle.sin())).normalize();
+            let sacross = np.cross(sdir).normalize_or(across);
+            if twigged {
+                twigs.push([within(base), within(base + sdir * (step * k_leaves as f32))]);
+            }
+            for i in 0..k_leaves {
+                let hl = |c: u64| crate::rng::unit_f32(crate::rng::hash(&[o.seed, 0x4e70_6c77, ai as u64, j as u64, i as u64, c]));
+                // the leaf's azimuth round the shoot, seen in the spray's plane: its side
+                let az = (i as f32 * phyllo + h(1) * std::f32::consts::TAU).cos();
+                let lside = if az.abs() < 0.2 { if i % 2 == 0 { 1.0 } else { -1.0 } } else { az.signum() };
+                let dir = (sdir * leaf_angle.cos() + sacross * (lside * leaf_angle.sin())).normalize();
+                // the blade faces the light, turned about its own axis by ± 15°
+                let facing = (np - dir * np.dot(dir)).normalize_or(dir.any_orthonormal_vector());
+                let normal = glam::Quat::from_axis_angle(dir, (hl(0) - 0.5) * 30f32.to_radians()) * facing;
+                let pos = within(base + sdir * (step * (i as f32 + 0.5)));
+                out.push(super::skeleton::Leaf { pos, dir, normal, size, node: a.node });
+            }
+        }
+        // a spray that would reach into an obstacle is drawn in towards its anchor (its
+        // leaves kept, closer together) by the largest of 1, 0.7, 0.5, … 0.1 that clears it
+        let (l0, t0) = (out_from, twigs_from);
+        let clears = |f: f32, out: &[super::skeleton::Leaf], twigs: &[[Vec3; 2]]| {
+            let at = |p: Vec3| a.pos + (p - a.pos) * f;
+            out[l0..].iter().all(|l| !blocked(at(l.pos)) && !blocked(at(l.pos) + l.dir * l.size)) && twigs[t0..].iter().all(|t| !blocked(at(t[0])) && !blocked(at(t[1])))
+        };
+        if !clears(1.0, &out, &twigs) {
+            let f = [0.7f32, 0.5, 0.35, 0.25, 0.15].into_iter().find(|&f| clears(f, &out, &twigs)).unwrap_or(0.1);
+            let at = |p: Vec3| a.pos + (p - a.pos) * f;
+            out[l0..].iter_mut().for_each(|l| l.pos = at(l.pos));
+            twigs[t0..].iter_mut().for_each(|t| *t = [at(t[0]), at(t[1])]);
+        }
+    }
+    (Leaves { leaves: out }, twigs)
+}
+
+/// Fewest leaves of a spray for [`hero_leaves`] to give it twigs (4: a Norway spruce's
+/// 120,000 needle-shoot cards, one a spray, got 1.2 M triangles of twigs without it).
+pub const HERO_TWIG_MIN_LEAVES: usize = 4;
+
+/// Radius (m) of the twigs [`hero_leaves`] gives a spray (its axis and shoots): 1.5 mm
+/// (ESTIMATE: current-year beech shoots are 1–3 mm thick).
+pub const HERO_TWIG_RADIUS_M: f32 = 0.0015;
+
+/// The twigs of [`hero_leaves`]' sprays as bark: one triangular prism of radius `radius` (m)
+/// per segment (3 sides, 6 triangles, open ends), UV u 0–1 around and v the length over
+/// [`BARK_TILE_M`] (the bark texture's scale on the stems).
+pub fn twig_mesh(twigs: &[[Vec3; 2]], radius: f32) -> TriMesh {
+    let mut m = TriMesh::default();
+    for &[a, b] in twigs {
+        let t = (b - a).normalize_or(Vec3::Z);
+        let (n0, n1) = (t.any_orthonormal_vector(), t.cross(t.any_orthonormal_vector()));
+        let base = m.positions.len() as u32;
+        let len = a.distance(b);
+        for (end, v) in [(a, 0.0), (b, len / BARK_TILE_M)] {
+            for k in 0..3 {
+                let ang = k as f32 / 3.0 * TAU;
+                let d = n0 * ang.cos() + n1 * ang.sin();
+                m.positions.push((end + d * radius).to_array());
+                m.normals.push(d.to_array());
+                m.uvs.push([k as f32 / 3.0, v]);
+            }
+        }
+        for k in 0..3u32 {
+            let k1 = (k + 1) % 3;
+            m.indices.extend_from_slice(&[base + k, base + k1, base + 3 + k1, base + k, base + 3 + k1, base + 3 + k]);
+        }
     }
     m
 }
