@@ -34,7 +34,10 @@
 //! writes every target's leaf clusters (`AdaptedTree::leaf_clusters`, in order) as
 //! little-endian f32 rows (tree index, centre x, y, z (m), light i, light in the analysis i_l0,
 //! radius (m)), so two runs' adapted trees can be compared (BENCHMARKS.md, round 32).
-//! Also prints the memory of the adapted trees' nodes and leaves.
+//! Also prints the memory of the adapted trees' nodes and leaves. The light grids' geometry
+//! (which changes no value, only the cost) has measurement hooks in the library:
+//! `SYLVA_GRID_CELL_RADII` (cell side in mean caster radii, default 2) and
+//! `SYLVA_GRID_CELLS_PER_CASTER` (default 2); BENCHMARKS.md round 43.
 use glam::Vec3;
 use sylva::rng::Stream;
 use sylva::species::SpeciesLibrary;

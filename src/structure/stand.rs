@@ -828,13 +828,14 @@ pub fn adapt_stand(trees: &[StandTree], targets: &[usize], lib: &SpeciesLibrary,
         // placed at its base
         let placed = |(j, &i): (usize, &usize)| -> Result<PlasticTree> {
             let key = class_of(&trees[i], j >= ks.len(), hs);
-            let mut t = analysed[&key].0.clone();
             let f = trees[i].height_m / class_dims(&key, hs).0;
+            let class = &analysed[&key].0;
+            let mut t;
             if key.5 {
-                t.scale(f)?;
+                t = class.scaled(f)?;
                 t.params.translucency_gamma_c0 = lib.species[key.0 as usize].architecture.plastic.translucency_gamma_c0;
             } else {
-                t.scale_grown_on_open_ground(f)?;
+                t = class.scaled_grown_on_open_ground(f)?;
                 (t.bend_light_cell_m, t.leaf_light_cell_m, t.bend_light_whole_level) = (opts.bend_light_cell_m, opts.leaf_light_cell_m, opts.bend_light_whole_level);
             }
             t.translate(trees[i].base);

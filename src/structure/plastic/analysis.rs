@@ -457,8 +457,18 @@ pub(crate) fn shade_key(foliage_of: &[u32], c: &StageCluster) -> u64 {
 /// group's input nodes still alive (eq. 13; `alive(ci)` is n_c/n_0 of cluster ci). A group of
 /// one cluster is that cluster's occluder. Returns (key, occluder) pairs.
 pub(crate) fn shade_casters(foliage_of: &[u32], clusters: &[StageCluster], fine: &[Option<Occluder>], alive: impl Fn(usize) -> f32 + Sync, gamma_c0: f32, obstacles: &[crate::structure::grow::space::Obstacle]) -> Vec<(u64, Occluder)> {
-    // the keys over the cores (in cluster order: rayon's collect keeps it), then sorted
-    let mut members: Vec<(u64, usize, Occluder)> = fine.par_iter().enumerate().with_min_len(SHADE_CHUNK).filter_map(|(ci, o)| o.map(|o| (shade_key(foliage_of, &clusters[ci]), ci, o))).collect();
+    // the keys over the cores (in cluster order: rayon's collect keeps it), then sorted; a
+    // stage of one task's size in one pass into a vector of its length (rayon's collect of a
+    // filter gathers a list of vectors, each grown one push at a time, then copies them into
+    // one; round 43)
+    let member = |(ci, o): (usize, &Option<Occluder>)| o.map(|o| (shade_key(foliage_of, &clusters[ci]), ci, o));
+    let mut members: Vec<(u64, usize, Occluder)> = if fine.len() < 2 * SHADE_CHUNK {
+        let mut m = Vec::with_capacity(fine.len());
+        m.extend(fine.iter().enumerate().filter_map(member));
+        m
+    } else {
+        fine.par_iter().enumerate().with_min_len(SHADE_CHUNK).filter_map(member).collect()
+    };
     // by (key, cluster): a stable sort by key alone gives that order (the clusters come in
     // index order)
     sort_by_shade_key(&mut members);

@@ -362,6 +362,56 @@ impl PlasticTree {
         Ok(())
     }
 
+    /// A copy of this tree scaled by `factor`: the tree a clone followed by
+    /// [`PlasticTree::scale`] gives, field for field, without first copying the adapted state
+    /// that scaling resets (positions, rotations, bend angles, fates, stage light, final
+    /// occluders). A stand places every tree of a neighbourhood this way from its class's
+    /// analysed tree ([`crate::structure::stand`]; perf, the near field of `benches/stand.rs`:
+    /// the clones under `scale` and their drops were about 3.7 % of its time, BENCHMARKS.md
+    /// round 43).
+    ///
+    /// Errors: as [`PlasticTree::scale`].
+    pub fn scaled(&self, factor: f32) -> Result<PlasticTree> {
+        let mut t = PlasticTree {
+            input: self.input.clone(),
+            params: self.params,
+            analysis: self.analysis.clone(),
+            clearance_m: self.clearance_m,
+            wood_radius_m: self.wood_radius_m,
+            bend_light_cell_m: self.bend_light_cell_m,
+            leaf_light_cell_m: self.leaf_light_cell_m,
+            bend_light_whole_level: self.bend_light_whole_level,
+            pos: Vec::new(),
+            rot: Vec::new(),
+            bend: Vec::new(),
+            fate: Vec::new(),
+            light_cache: Vec::new(),
+            sig: self.sig.clone(),
+            shade_key: self.shade_key,
+            sky: self.sky.clone(),
+            final_occ: Vec::new(),
+            force: self.force,
+            report: self.report,
+            quiet: None,
+            standing: self.standing,
+            move_light: self.move_light.clone(),
+            bole: self.bole,
+        };
+        t.scale(factor)?;
+        Ok(t)
+    }
+
+    /// [`PlasticTree::scaled`] for a tree analysed on open ground, as
+    /// [`PlasticTree::scale_grown_on_open_ground`] scales it (the caller vouches for the
+    /// environment of the analysis).
+    ///
+    /// Errors: as [`PlasticTree::scale`].
+    pub fn scaled_grown_on_open_ground(&self, factor: f32) -> Result<PlasticTree> {
+        let mut t = self.scaled(factor)?;
+        t.force = false;
+        Ok(t)
+    }
+
     /// [`PlasticTree::scale`] for a tree analysed on a ground plane through its root and
     /// without obstacles (as [`crate::structure::stand`] analyses its classes): the sky
     /// directions blocked at a node are then those of the side of the plane it stands on

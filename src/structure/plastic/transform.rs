@@ -70,7 +70,7 @@ use crate::error::Result;
 use crate::structure::grow::space::Obstacle;
 use glam::{IVec3, Quat, Vec3};
 use rayon::prelude::*;
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 /// What an [`adapt_group`] call did.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -109,7 +109,7 @@ pub fn thinned_translucency(gamma_c: f32, n_c: usize, n_0: usize) -> f32 {
 struct Wood {
     segs: Vec<(Vec3, Vec3, f32)>,
     cell: f32,
-    grid: HashMap<IVec3, Vec<u32>>,
+    grid: FxHashMap<IVec3, Vec<u32>>,
     /// Bounds of every capsule (m): points outside touch no wood of the tree.
     lo: Vec3,
     hi: Vec3,
@@ -126,7 +126,7 @@ impl Wood {
             }
         }
         let cell = (2.0 * t.analysis.internode_m).max(0.1);
-        let mut grid: HashMap<IVec3, Vec<u32>> = HashMap::new();
+        let mut grid: FxHashMap<IVec3, Vec<u32>> = FxHashMap::default();
         let (mut lo_b, mut hi_b) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for (i, &(a, b, r)) in segs.iter().enumerate() {
             lo_b = lo_b.min(a.min(b) - r);
@@ -846,7 +846,7 @@ fn shared_points(at: &[Vec3], cell: f32, mask: impl Fn(usize) -> u32) -> (Vec<us
     if !(cell > 0.0 && cell.is_finite()) {
         return ((0..at.len()).collect(), (0..at.len() as u32).collect());
     }
-    let mut first: HashMap<(IVec3, u32), u32> = HashMap::with_capacity(at.len());
+    let mut first: FxHashMap<(IVec3, u32), u32> = FxHashMap::with_capacity_and_hasher(at.len(), Default::default());
     let (mut reps, mut of) = (Vec::new(), Vec::with_capacity(at.len()));
     for (i, &p) in at.iter().enumerate() {
         let key = ((p / cell).floor().as_ivec3(), mask(i));
@@ -859,28 +859,53 @@ fn shared_points(at: &[Vec3], cell: f32, mask: impl Fn(usize) -> u32) -> (Vec<us
     (reps, of)
 }
 
+/// The cubes whose bending light one level of one tree took ([`PlasticTree::bend_light_whole_level`]):
+/// per cube and solids' mask the index of its light in `light`. A point asks the map once
+/// (rustc-hash's Fx hash of the four integers): a cube met for the first time gets the next index
+/// at once, and its light is filled in after the level's batch is queried (until round 42: std's
+/// SipHash and three map operations per point, which cost about what the sharing saved,
+/// BENCHMARKS.md round 42).
+#[derive(Debug, Default)]
+struct LevelLight {
+    index: FxHashMap<(IVec3, u32), u32>,
+    light: Vec<(f32, Vec3)>,
+}
+
 /// [`light_many_among`] with the points of each cube of side `cell` (m) that see the same
 /// solids sharing the light of the first of them ([`PlasticTree::bend_light_cell_m`]); exactly
 /// [`light_many_among`] with `cell` 0.
 /// With `seen` (the cubes already queried at this level, [`PlasticTree::bend_light_whole_level`]),
 /// a point of a cube in `seen` takes its light, and the cubes queried here are added to it.
-fn light_many_shared(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3], cell: f32, seen: Option<&mut HashMap<(IVec3, u32), (f32, Vec3)>>) -> Vec<(f32, Vec3)> {
+fn light_many_shared(sky: &super::light::Sky, solids: &SkyMask, vols: &ShadowVolumes, fixed: Option<&ShadowVolumes>, at: &[Vec3], cell: f32, seen: Option<&mut LevelLight>) -> Vec<(f32, Vec3)> {
     if !(cell > 0.0 && cell.is_finite()) {
         return light_many_among(sky, solids, vols, fixed, at);
     }
     if let Some(seen) = seen {
-        // each point's cube and solids, the first point of every cube not yet seen queried
-        let keys: Vec<(IVec3, u32)> = at.iter().map(|&p| ((p / cell).floor().as_ivec3(), solids.mask(p))).collect();
-        let mut fresh: HashMap<(IVec3, u32), ()> = HashMap::new();
-        let reps: Vec<usize> = (0..at.len()).filter(|&i| !seen.contains_key(&keys[i]) && fresh.insert(keys[i], ()).is_none()).collect();
+        // each point's slot in `seen.light`: the first point of a cube not yet seen (in order)
+        // reserves the next slot and is queried; the same representatives, in the same order,
+        // as a lookup of the seen cubes followed by one of the cubes met in this batch
+        let mut reps: Vec<usize> = Vec::new();
+        let slots: Vec<u32> = at
+            .iter()
+            .enumerate()
+            .map(|(i, &p)| {
+                let next = seen.light.len() as u32;
+                let slot = *seen.index.entry(((p / cell).floor().as_ivec3(), solids.mask(p))).or_insert(next);
+                if slot == next {
+                    reps.push(i);
+                    seen.light.push((0.0, Vec3::Z));
+                }
+                slot
+            })
+            .collect();
         if !reps.is_empty() {
             let pts: Vec<Vec3> = reps.iter().map(|&i| at[i]).collect();
             let lit = light_many_among(sky, solids, vols, fixed, &pts);
             for (&i, l) in reps.iter().zip(lit) {
-                seen.insert(keys[i], l);
+                seen.light[slots[i] as usize] = l;
             }
         }
-        return keys.iter().map(|k| seen[k]).collect();
+        return slots.iter().map(|&s| seen.light[s as usize]).collect();
     }
     if at.len() < 2 {
         return light_many_among(sky, solids, vols, fixed, at);
@@ -1873,7 +1898,7 @@ fn level(t: &mut PlasticTree, s: usize, w: &mut Work, occ: &[Option<Occluder>], 
     let mut at: Vec<Vec3> = Vec::new();
     let mut at_k: Vec<(usize, Vec3)> = Vec::new();
     // the cubes whose bending light this level took (`PlasticTree::bend_light_whole_level`)
-    let mut seen: Option<HashMap<(IVec3, u32), (f32, Vec3)>> = (t.bend_light_whole_level && t.bend_light_cell_m > 0.0).then(HashMap::new);
+    let mut seen: Option<LevelLight> = (t.bend_light_whole_level && t.bend_light_cell_m > 0.0).then(LevelLight::default);
     if let Some(mc) = w.mc.as_mut() {
         mc.nodes.ensure(n, nd);
     }
@@ -2410,6 +2435,77 @@ mod tests {
         assert_eq!(of, vec![0, 0, 1, 2, 3, 0]);
         let (reps, of) = shared_points(&at, 0.0, |i| masks[i]);
         assert_eq!((reps, of), ((0..6).collect::<Vec<_>>(), (0..6).collect::<Vec<u32>>()));
+    }
+
+    /// [`light_many_shared`] over a whole level ([`LevelLight`]): batch after batch, every point
+    /// takes, bit for bit, the light [`light_many_among`] gives the first point of the level
+    /// (over every batch so far, in order) in its cube of side `cell` with the same solids'
+    /// mask: the reference keeps a plain list of the cubes met and queries each
+    /// representative alone. The cases test something: points of a batch share a cube met in an
+    /// earlier batch, points share within a batch, and a wall splits cubes by mask.
+    #[test]
+    fn whole_level_light_is_the_first_point_of_its_cube_over_the_level() {
+        let sky = crate::structure::plastic::Sky::from_latitude(47.0);
+        let occ: Vec<Occluder> = (0..300)
+            .map(|i| {
+                let f = i as f32;
+                let r = 0.3 + 0.4 * (f * 0.37).sin().abs();
+                Occluder { center: Vec3::new((f * 0.71).sin() * 3.0, (f * 0.53).cos() * 3.0, 4.0 + (f * 0.29).sin().abs() * 5.0), radius: r, gamma: 0.5f32.powf(r) }
+            })
+            .collect();
+        let vols = ShadowVolumes::new(&sky, occ);
+        let env = wall_at(0.5);
+        let solids = SkyMask::new(Solids { obstacles: &env.obstacles, ground: Some(super::super::Ground::flat(0.0)) }, &sky);
+        let cell = 0.5;
+        let mut seen = LevelLight::default();
+        let mut met: Vec<((IVec3, u32), Vec3)> = Vec::new();
+        let (mut earlier, mut within, mut masks) = (0, 0, std::collections::BTreeSet::new());
+        for b in 0..4 {
+            let at: Vec<Vec3> = (0..150).map(|j| {
+                let f = (b * 150 + j) as f32;
+                Vec3::new((f * 0.113).sin() * 1.2, (f * 0.071).cos() * 1.2, 3.0 + (f * 0.037).sin().abs() * 2.0)
+            }).collect();
+            let got = light_many_shared(&sky, &solids, &vols, None, &at, cell, Some(&mut seen));
+            let before = met.len();
+            for (p, g) in at.iter().zip(&got) {
+                let key = ((*p / cell).floor().as_ivec3(), solids.mask(*p));
+                masks.insert(key.1);
+                let rep = match met.iter().position(|(k, _)| *k == key) {
+                    Some(r) => {
+                        if r < before { earlier += 1 } else { within += 1 }
+                        met[r].1
+                    }
+                    None => {
+                        met.push((key, *p));
+                        *p
+                    }
+                };
+                let want = light_many_among(&sky, &solids, &vols, None, &[rep])[0];
+                assert_eq!((g.0.to_bits(), g.1.to_array().map(f32::to_bits)), (want.0.to_bits(), want.1.to_array().map(f32::to_bits)), "batch {b}, point {p}");
+            }
+        }
+        assert_eq!(seen.light.len(), met.len());
+        assert!(earlier > 100 && within > 100 && masks.len() > 1, "{earlier} {within} {masks:?}");
+    }
+
+    /// [`PlasticTree::scaled`] is a clone scaled by [`PlasticTree::scale`], field for field (its
+    /// `Debug` text: every position, rotation, fate, stage light and the analysis), for a tree
+    /// fresh from its analysis and for one adapted beside a wall (whose state scaling resets).
+    #[test]
+    fn a_scaled_copy_is_a_scaled_clone() {
+        let mut t = beech_at(3, 1.0);
+        for step in 0..2 {
+            for f in [0.8f32, 1.3] {
+                let mut c = t.clone();
+                c.scale(f).unwrap();
+                assert_eq!(format!("{:?}", t.scaled(f).unwrap()), format!("{c:?}"), "step {step}, factor {f}");
+                c.force = false;
+                assert_eq!(format!("{:?}", t.scaled_grown_on_open_ground(f).unwrap()), format!("{c:?}"));
+            }
+            t.adapt(&wall_at(1.5)).unwrap();
+            assert!(t.fate.iter().any(|f| *f != Fate::Alive) || t.bend.iter().any(|&b| b > 0.01));
+        }
+        assert!(t.scaled(0.0).is_err());
     }
 
     /// The refresh policy of [`MoveCache::level`]: a level whose casters changed (10 cm, the
