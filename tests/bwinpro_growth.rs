@@ -4,7 +4,7 @@
 //! below its top, per m² of the neighbourhood.
 mod common;
 
-use sylva::sim::density::{crowding, MIN_DBH_CM};
+use sylva::sim::density::{crowding, neighbour_weight, MIN_DBH_CM};
 use sylva::species::BaiBwinpro;
 
 /// Beech's block 211 of TreeGrOSS's `ForestSimulatorNWGermany6.xml` (as species/beech.toml
@@ -15,8 +15,10 @@ fn bwinpro_beech() -> BaiBwinpro {
 
 /// A 30 m × 30 m site (3 × 3 crowding cells) planted with beech at 1.5 m, every tree set to
 /// 20 cm and 20 m: the trees of the middle cell see the whole site, and as every crown is cut at
-/// its own 2/3 point their C66 is the whole site's crown cover, N π r² / 900 m² (r the
-/// stand-grown crown radius at 20 cm, Döbbeler's beech: 2.529 m; 400 trees: 8.93). Shorter trees
+/// its own 2/3 point their C66 is the whole site's crown cover, its cells weighted 1–2–1 per
+/// axis since round 43 (`density::neighbour_weight`): Σ w π r² / (16 · 100 m²) (r the
+/// stand-grown crown radius at 20 cm, Döbbeler's beech: 2.529 m; 400 trees: 8.49; with the
+/// equal weights before, N π r² / 900 m² = 8.93, which the weighted sum fails). Shorter trees
 /// (5 m, 5 cm, every other one) are below the tall trees' cut and do not count for them; below
 /// 7 cm a tree gets no C66. Without the field no C66 is computed.
 #[test]
@@ -39,7 +41,13 @@ fn c66_of_a_closed_stand_is_its_crown_cover_at_two_thirds() {
         w.stand.trees.height[i] = 20.0;
     }
     let c = crowding(&w.site, &w.stand.trees);
-    let want = n as f32 * std::f32::consts::PI * r * r / 900.0;
+    // the middle cell's neighbourhood is the whole 3 × 3 site, its cells weighted 1–2–1 per
+    // axis (`neighbour_weight`, round 43): the crown area of the trees `of` counts by their
+    // cell's weight, over the weighted ground (16 cells' worth of 100 m²)
+    let weighted = |w: &sylva::sim::World, of: &dyn Fn(usize) -> bool| {
+        (0..n).filter(|&i| of(i)).map(|i| neighbour_weight((w.stand.trees.x[i] / 10.0).floor() as isize - 1, (w.stand.trees.y[i] / 10.0).floor() as isize - 1)).sum::<f64>() as f32
+    };
+    let want = weighted(&w, &|_| true) * std::f32::consts::PI * r * r / 1600.0;
     let mid: Vec<usize> = (0..n).filter(|&i| middle(&w, i)).collect();
     assert!(mid.len() > 20);
     for &i in &mid {
@@ -51,9 +59,8 @@ fn c66_of_a_closed_stand_is_its_crown_cover_at_two_thirds() {
         w.stand.trees.dbh[i] = 5.0;
         w.stand.trees.height[i] = 5.0;
     }
-    let tall = (0..n).filter(|i| i % 2 == 1).count() as f32;
     let c = crowding(&w.site, &w.stand.trees);
-    let want = tall * std::f32::consts::PI * r * r / 900.0;
+    let want = weighted(&w, &|i| i % 2 == 1) * std::f32::consts::PI * r * r / 1600.0;
     for &i in &mid {
         if w.stand.trees.dbh[i] < MIN_DBH_CM {
             assert_eq!(c.c66[i], 0.0);
