@@ -633,30 +633,3 @@ fn the_coarse_levels_from_above_cover_the_crowns_of_the_simulation() {
         assert!(failures.is_empty(), "{failures:#?}");
     });
 }
-
-/// Round 43: each tree's foliage varies about its species' colour
-/// (`render::instanced::leaf_tint`): deterministic per tree, lightness within ±8 %, the mean
-/// over many trees the species' colour within 1 %, and neighbouring trees differ.
-#[test]
-fn each_tree_varies_about_its_species_colour() {
-    use sylva::render::instanced::{leaf_tint, LEAF_TINT};
-    let c = [0.1f32, 0.2, 0.05];
-    let tints: Vec<[f32; 3]> = (0..2000u64).map(|id| leaf_tint(id, c)).collect();
-    assert_eq!(leaf_tint(17, c), tints[17]);
-    let (mut mean, mut lo, mut hi) = ([0.0f64; 3], f32::MAX, f32::MIN);
-    for t in &tints {
-        for k in 0..3 {
-            mean[k] += t[k] as f64 / tints.len() as f64;
-        }
-        let g = t[1] / c[1];
-        lo = lo.min(g);
-        hi = hi.max(g);
-    }
-    for k in 0..3 {
-        assert!((mean[k] / c[k] as f64 - 1.0).abs() < 0.01, "mean {mean:?} of {c:?}");
-    }
-    assert!(lo >= 1.0 - LEAF_TINT[0] && hi <= 1.0 + LEAF_TINT[0] && hi - lo > 1.5 * LEAF_TINT[0], "green factor {lo}..{hi}");
-    let differ = tints.windows(2).filter(|w| (w[0][1] - w[1][1]).abs() > 0.01 * c[1]).count();
-    // (independent uniform factors: P(|Δa| > 1/8) = (15/16)² ≈ 0.88, 1,738 of 1,999 here)
-    assert!(differ > 1600, "{differ} of 1999 neighbouring ids differ by over 1 %");
-}

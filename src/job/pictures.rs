@@ -69,14 +69,11 @@ pub const STILL_TRIANGLE_BUDGET: u32 = 30_000_000;
 /// [`AdaptOptions::max_trees`] of them.
 pub const STILL_NEAR_M: f32 = 120.0;
 
-/// [`crate::render::lod::LodParams::small_tree_m`] of the stills (25 m): the reference height
-/// by which every tree picks its level, so that trees of 8.3–75 m side by side use one level
-/// (issue 32, round 43: with 12 m, trees under 12 m kept leaf cards up to 3× smaller on screen
-/// than the canopy trees beside them, drawn as crown hulls, a visible seam in the close-up).
-/// 25 m: about the top height of the default run's canopy, where the switch sizes were tuned
-/// (H100 25.8 m at year 150, `summary.md` of trial 42's default run), so that canopy trees keep
-/// the levels they had.
-pub const STILL_SMALL_TREE_M: f32 = 25.0;
+/// [`crate::render::lod::LodParams::small_tree_m`] of the stills (12 m, ESTIMATE: about the
+/// height under which the trial's mid-ground trees were drawn as crown hulls of a few dozen
+/// pixels, "balls on sticks"; a 6 m tree drops to its hull at half the size on screen of a
+/// canopy tree, a 4 m one at a third).
+pub const STILL_SMALL_TREE_M: f32 = 12.0;
 
 impl Stage {
     /// Builds the stage: terrain mesh with cells ≤ 10 m (the site alone, its edges faded out;
@@ -99,9 +96,9 @@ impl Stage {
         // no far-field triangle budget for stills: only trees under `canopy_px` (6 px) go to
         // the canopy layer
         renderer.lod.max_geometry_triangles = 0;
-        // every tree picks its level by the size a canopy tree would have where it stands:
-        // trees side by side use one level, and young trees in the mid-ground keep their leaf
-        // cards where the canopy does (issue 32, rounds 36 and 43)
+        // trees under 12 m keep their leaf cards to a third of the size at which a canopy tree
+        // becomes a crown hull: young trees in the mid-ground read as trees, not as balls on
+        // sticks (issue 32, round 36)
         renderer.lod.small_tree_m = STILL_SMALL_TREE_M;
         // culled on the CPU, where the frame's exact cost is checked against the triangle
         // budget (`render::instanced::build_batches_of`); the GPU path's histogram estimate

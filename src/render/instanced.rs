@@ -127,25 +127,6 @@ pub fn record_prototype(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32]
     Some(s)
 }
 
-/// Half-range of the per-tree foliage lightness of [`leaf_tint`] (0.08: ±8 %) and of its
-/// yellow–blue shift (0.04: red channel up and blue down by up to 4 % of the colour, or the
-/// reverse). ESTIMATE, chosen so that trees of one species differ less than two species do
-/// (the summer colours of `species/*.toml` sit 5–20 % apart in lightness): neighbouring crowns
-/// of one species read as individuals, not as one patch of one flat colour (issue 32, round 43).
-pub const LEAF_TINT: [f32; 2] = [0.08, 0.04];
-
-/// The foliage colour (linear RGB) tree `id` is drawn with: `rgb` with its lightness scaled by
-/// `1 + LEAF_TINT[0]·a` and its red and blue by `1 + LEAF_TINT[1]·b` and `1 − LEAF_TINT[1]·b`,
-/// with `a, b ∈ [−1, 1)` fixed per tree by hashes of its id (deterministic; the mean over trees
-/// is `rgb`). Used by every level and by the canopy layer, so a tree keeps its colour over
-/// the hand-overs.
-pub fn leaf_tint(id: u64, rgb: [f32; 3]) -> [f32; 3] {
-    let a = 2.0 * hash01(id ^ 0x1EAF_7147) - 1.0;
-    let b = 2.0 * hash01(id ^ 0x7E11_0B1E) - 1.0;
-    let l = 1.0 + LEAF_TINT[0] * a;
-    [rgb[0] * l * (1.0 + LEAF_TINT[1] * b), rgb[1] * l, rgb[2] * l * (1.0 - LEAF_TINT[1] * b)]
-}
-
 /// The GPU record of `t` before level selection (fade and level fields zero), or `None` for
 /// invalid data (species index out of range, non-positive or non-finite height or position).
 /// `crown_r0` is the prototype's [`Prototype::normalised_crown_radius`].
@@ -157,7 +138,7 @@ pub fn instance_record(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32])
     Some(InstanceRaw {
         pos_h: [t.position[0], t.position[1], t.position[2], t.height],
         p1: [sxy, t.rotation, 0.0, 0.0],
-        leaf: { let c = leaf_tint(t.id, t.leaf_color); [c[0], c[1], c[2], t.leaf_amount.clamp(0.0, 1.0)] },
+        leaf: [t.leaf_color[0], t.leaf_color[1], t.leaf_color[2], t.leaf_amount.clamp(0.0, 1.0)],
         p2: [t.opacity.clamp(0.0, 1.0), hash01(t.id) * std::f32::consts::TAU, hash01(t.id ^ 0x5DEE_CE66) * std::f32::consts::TAU, (1.0 - proto.stiffness).clamp(0.0, 1.0)],
         bark: [proto.bark_color[0], proto.bark_color[1], proto.bark_color[2], (hash01(t.id ^ 0xA5A5) * 64.0).floor()],
         p3: [s as f32, 0.0, if valid_r { t.crown_radius } else { 0.0 }, sxy * crown_r0[s]],

@@ -37,38 +37,29 @@ pub struct LodParams {
     /// ([`canopy_threshold`]): more of the far forest goes to the canopy layer, which costs no
     /// triangles, so triangles per frame level off as the tree count grows.
     pub max_geometry_triangles: u32,
-    /// Reference height (m, 0 = off) of the level choice by distance: every tree picks its
-    /// level by the projected size a tree `small_tree_m` tall would have where it stands, its
-    /// projected size times `small_tree_m / height`, the factor clamped to
-    /// `1/SMALL_TREE_MAX_BIAS ..= SMALL_TREE_MAX_BIAS` ([`lod_px`]), in the level choice and the
-    /// budget's histogram (the smallest size drawn, `min_px`, and the canopy layer go by the
-    /// size itself; the histogram then counts a tree that goes wholly to the canopy layer at its
-    /// biased size: the estimate errs high). Trees from `small_tree_m / 3` to
-    /// `3 · small_tree_m` tall that stand side by side then use one level: the level seam of
-    /// round 42 (trial 42 defect 4: smooth crown hulls of canopy trees beside speckled
-    /// billboards or card trees of smaller trees at one distance) is gone, and a young tree of a
-    /// few metres keeps its leaf cards where the canopy beside it does (issue 32, rounds 36
-    /// and 43). Before round 43 only trees under `small_tree_m` were biased, up by at most 3.
+    /// Height (m, 0 = off) under which a tree picks its level as if it were larger on screen:
+    /// its projected size times `small_tree_m / height`, at most [`SMALL_TREE_MAX_BIAS`]
+    /// ([`lod_px`]), in the level choice and the budget's histogram (the smallest size drawn,
+    /// `min_px`, and the canopy layer go by the size itself; the histogram then counts a small
+    /// tree that goes wholly to the canopy layer at its biased size: the estimate errs high).
+    /// A young tree of a few metres then keeps its leaf cards (levels 0–1) where a canopy tree
+    /// of the same size on screen, much farther away, is drawn as a crown hull: the hull of a
+    /// small tree read as a ball on a stick in the stills' mid-ground (issue 32, round 36).
     pub small_tree_m: f32,
 }
 
-/// Largest factor [`lod_px`] multiplies a tree's projected size by, and the inverse of the
-/// smallest (3: a tree of a third of [`LodParams::small_tree_m`] or less picks its level as if
-/// three times as tall on screen, one three times as tall or more as if a third as tall).
-/// ESTIMATE: a seedling under a third of the canopy's height is under a third of its size on
-/// screen, where the levels it is drawn at differ little; unbounded, every seedling at the
-/// canopy's full-detail distance would cost a full mesh.
+/// Largest factor [`lod_px`] multiplies a small tree's projected size by (3: a tree of a third
+/// of [`LodParams::small_tree_m`] or less picks its level as if three times as tall on screen).
 pub const SMALL_TREE_MAX_BIAS: f32 = 3.0;
 
 /// The size (px) by which a tree `height_m` tall and `px` tall on screen picks its level:
-/// `px · clamp(small_tree_m / height_m, 1/SMALL_TREE_MAX_BIAS, SMALL_TREE_MAX_BIAS)`, `px`
-/// when `params.small_tree_m` is 0 (see [`LodParams::small_tree_m`]): for a tree within the
-/// clamp, `small_tree_m` times the pixels per metre at its distance, the same for every tree
-/// there. Mirrors `lod_px` of `shaders/cull.wgsl` (same `f32` arithmetic).
+/// `px · min(small_tree_m / height_m, SMALL_TREE_MAX_BIAS)` for a tree under
+/// `params.small_tree_m`, else `px` (see [`LodParams::small_tree_m`]). Mirrors `lod_px` of
+/// `shaders/cull.wgsl` (same `f32` arithmetic).
 pub fn lod_px(px: f32, height_m: f32, params: &LodParams) -> f32 {
     let m = params.small_tree_m;
-    if m > 0.0 {
-        px * (m / height_m.max(1e-3)).clamp(1.0 / SMALL_TREE_MAX_BIAS, SMALL_TREE_MAX_BIAS)
+    if m > 0.0 && height_m < m {
+        px * (m / height_m.max(1e-3)).min(SMALL_TREE_MAX_BIAS)
     } else {
         px
     }

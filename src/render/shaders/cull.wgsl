@@ -204,12 +204,11 @@ fn visible_px(t: Inst) -> f32 {
     return h * cp.misc.y / max(length(c - cp.eye.xyz), 1e-3);
 }
 
-// lod_px of render/lod.rs: a tree picks its level by the size a tree of the reference height
-// would have where it stands (the factor clamped to 1/SMALL_TREE_MAX_BIAS..SMALL_TREE_MAX_BIAS)
+// lod_px of render/lod.rs: a small tree picks its level as if larger on screen
 fn lod_px(px: f32, h: f32) -> f32 {
     let m = bitcast<f32>(cp.canopy_n.w);
-    if (m > 0.0) {
-        return px * clamp(m / max(h, 1e-3), 1.0 / SMALL_TREE_MAX_BIAS, SMALL_TREE_MAX_BIAS);
+    if (m > 0.0 && h < m) {
+        return px * min(m / max(h, 1e-3), SMALL_TREE_MAX_BIAS);
     }
     return px;
 }
