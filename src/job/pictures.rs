@@ -64,6 +64,19 @@ pub struct Stage {
 /// at 1280 × 720 drew 29.5 M (round 36); a small site's close-up costs no more.
 pub const STILL_TRIANGLE_BUDGET: u32 = 30_000_000;
 
+/// Tree triangles a film frame of `width` × `height` pixels may draw: [`STILL_TRIANGLE_BUDGET`]
+/// (set for a 1280 × 720 still, about 33 triangles a pixel) in proportion to the frame's pixels,
+/// at least 1,000,000 and at most the stills' budget: a 640 × 360 frame 7.5 M, 320 × 180 1.9 M.
+/// A film's trees are no smaller on screen at a smaller frame than its pixels allow, so its
+/// frames need no more triangles a pixel than a still (trial 43 defect 6: a 1.4 ha run's
+/// 320 × 180 frames drew full-detail trees for about 55 s a frame on a software adapter).
+/// The budget's effect is as for stills ([`crate::render::lod::budget_scale`]): the trees
+/// smallest on screen drop to their next levels first.
+pub fn frame_triangle_budget(width: u32, height: u32) -> u32 {
+    let share = (width as f64 * height as f64) / (1280.0 * 720.0);
+    (STILL_TRIANGLE_BUDGET as f64 * share).round().clamp(1_000_000.0, STILL_TRIANGLE_BUDGET as f64) as u32
+}
+
 /// Smallest [`AdaptOptions::near_m`] of the stills' near field (m, 120): the trees in the
 /// picture within it are adapted ([`AdaptOptions::image_width_px`]), the nearest
 /// [`AdaptOptions::max_trees`] of them.
@@ -627,6 +640,17 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
     // frames of an earlier, longer film would otherwise remain beside the new ones
     remove_frames(frames_dir)?;
     let steps_of = frame_steps(snaps, opts.frames_between);
+    // a film frame's triangles in proportion to its pixels (the stage's budget is restored below)
+    let budget = stage.renderer.lod.max_triangles;
+    stage.set_triangle_budget(frame_triangle_budget(opts.width, opts.height).min(if budget > 0 { budget } else { u32::MAX }));
+    let film = film_frames(stage, snaps, &steps_of, key, frames_dir, out_gif, opts, progress);
+    stage.set_triangle_budget(budget);
+    film
+}
+
+/// The frames of [`timelapse_from`], drawn at the stage's triangle budget.
+#[allow(clippy::too_many_arguments)]
+fn film_frames(stage: &mut Stage, snaps: &[u32], steps_of: &[usize], key: &mut dyn FnMut(&Stage, usize) -> Result<Vec<TreeInstance>>, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
     let total = 1 + steps_of.iter().sum::<usize>();
     // the GIF is encoded as the frames come (issue 34: not every frame held to the end)
     let mut gif = crate::output::pictures::GifWriter::new(out_gif, opts.fps)?;
@@ -672,6 +696,17 @@ mod tests {
     use super::frame_steps;
 
     /// Round 41 (trial 40, item 5): film time follows the years between key frames.
+    #[test]
+    fn a_film_frames_triangles_follow_its_pixels() {
+        use super::{frame_triangle_budget, STILL_TRIANGLE_BUDGET};
+        assert_eq!(frame_triangle_budget(1280, 720), STILL_TRIANGLE_BUDGET);
+        assert_eq!(frame_triangle_budget(640, 360), 7_500_000);
+        assert_eq!(frame_triangle_budget(320, 180), 1_875_000);
+        // never above the stills' budget, never below a million
+        assert_eq!(frame_triangle_budget(3840, 2160), STILL_TRIANGLE_BUDGET);
+        assert_eq!(frame_triangle_budget(64, 64), 1_000_000);
+    }
+
     #[test]
     fn film_time_follows_the_years_between_key_frames() {
         // key frames every 10 years and a thinning snapshot at 55: half a decade's film each
