@@ -405,10 +405,13 @@ fn cross_field_rules() {
     let (_d, p) = problems_of(|t| {
         t.replace("maturity_age_yr = 55.0", "maturity_age_yr = 700.0")
             .replace("max_m = 200.0", "max_m = 10.0")
+            .replace("h_max_m = 41.75", "h_max_m = 100.0")
     });
     let fields: Vec<&str> = p.iter().map(|p| p.field.as_str()).collect();
-    assert_eq!(fields.len(), 2, "{p:?}");
-    assert!(fields.contains(&"life.maturity_age_yr") && fields.contains(&"life.dispersal.max_m"));
+    assert_eq!(fields.len(), 3, "{p:?}");
+    assert!(fields.contains(&"life.maturity_age_yr") && fields.contains(&"life.dispersal.max_m") && fields.contains(&"life.growth.h_max_m"));
+    let h = p.iter().find(|p| p.field == "life.growth.h_max_m").unwrap();
+    assert!(h.expected.contains("at most life.max_height_m = 48"), "{h:?}");
 }
 
 #[test]

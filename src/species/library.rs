@@ -357,6 +357,17 @@ impl Species {
                 });
             }
         }
+        // heights stop at max_height_m (`growth::grow`), so an asymptote above it is a curve cut
+        // short, never reached (trial 44: 100 m against 48 m was accepted without a word)
+        if let Some(h) = l.growth.h_max_m {
+            if h.is_finite() && l.max_height_m.is_finite() && h > l.max_height_m {
+                out.push(Violation {
+                    field: "life.growth.h_max_m".into(),
+                    value: fmt_num(h as f64),
+                    expected: format!("at most life.max_height_m = {} (heights stop there)", l.max_height_m),
+                });
+            }
+        }
         if l.dispersal.max_m.is_finite() && l.dispersal.mean_m.is_finite() && l.dispersal.max_m < l.dispersal.mean_m {
             out.push(Violation {
                 field: "life.dispersal.max_m".into(),
