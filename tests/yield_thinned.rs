@@ -57,7 +57,7 @@
 //! 100 and 120: beech's dense-stand height bound stops the slender dominants. Round 42's second
 //! helper (r42h) limited `life.closed_hd` to the trees below 7 cm DBH, the scope of TreeGrOSS's
 //! youth rule (`Tree.grow`): the unmanaged top height is kept
-//! (`unmanaged_beech_with_treegross_youth_slenderness_keeps_its_top_height`), but the thinned
+//! (`unmanaged_beech_keeps_its_top_height`, so named since round 44), but the thinned
 //! beech at 140 below 7 cm and 1.0 m misses the table as before (N −64 % / −66 %, Dq +71 % /
 //! +76 % at 50 / 100), so beech keeps 60.
 //! Round 43 (docs/management.md, "Round 43 (branch `r43t`)"; measured, not adopted): iLand's
