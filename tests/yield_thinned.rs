@@ -148,10 +148,11 @@ fn check_with(name: &str, text: &str, lib: &sylva::species::SpeciesLibrary, tabl
 }
 
 /// Met since round 44 (module doc): N, Dq and BA of the main stand within ±20 % of Wiedemann's
-/// class I at 50 and 100. It failed on every earlier model (module doc; round 43 on main: N
-/// −71 % / −69 %, Dq +93 % / +84 %), and fails with the round-41 variant this round measured
-/// (140 at every DBH without the dense curve's slope: N −9 %, Dq +1 % at 50 but Dq −10 %,
-/// h_q 28.1 m against 31.95 at 100, and the unmanaged top height below).
+/// class I at 50 and 100. It fails on main (round 43: N −71 % / −69 %, Dq +93 % / +84 %) and on
+/// every earlier model (module doc). Round 41's variant (140 at every DBH without the dense
+/// curve's slope; the mutation `closed_slenderness_held` → `closed_slenderness`) passes it too
+/// (N −9 % / +13 %, Dq +1 % / −10 %), with h_q 28.1 m against 31.95 at 100: that mutation is
+/// caught by the unmanaged top height below, not here.
 #[test]
 fn thinned_beech_follows_wiedemanns_moderate_thinning_table() {
     check("thinning_beech", "ForestElementsR_fe_ytable_beech_wiedemann_moderate_1931.csv");
