@@ -393,32 +393,42 @@ fn every_kind_of_management_over_tiles_equals_one_process() {
 /// Issue 37, round 35: in a year whose due removals are all thinnings to a target, a tile sends
 /// the other tiles only the keys (id, species, position, height, DBH: 26 bytes) of the growing
 /// stock of the thinned area (stems of at least 1.3 m and 7 cm DBH), not its every tree whole, and the run is still one process's: `thinning_beech`
-/// (shortened) on 2 and 3 tiles for 22 years: the entry is due in year 17 (below its target,
-/// it removes nothing) and 22 (its first cut). Each tile sends exactly its stock of those two
-/// years (from one process's run: year 17's stock as it stands after the year, year 22's
-/// stock still standing plus the stems the thinning took), fewer trees than the area's trees
-/// it holds.
+/// (shortened) on 2 and 3 tiles for 32 years: the entry is due in years 17, 22 and 27 (below
+/// its target, it removes nothing) and 32 (its first cut; since issue 35 round 44, beech's
+/// slender thicket planted at 1.0 m; before it 17 and 22). Each tile sends exactly its stock of
+/// those years (from one process's run: a quiet year's stock as it stands after the year, year
+/// 32's stock still standing plus the stems the thinning took), fewer trees than the area's
+/// trees it holds.
 #[test]
 fn a_thinning_over_tiles_sends_only_the_growing_stock_of_its_area() {
     use sylva::sim::tiles::{Layout, LocalTransport, Tile, Transport};
-    let sc = short_thinning(22);
+    const QUIET: [u32; 3] = [17, 22, 27];
+    const FIRST: u32 = 32;
+    let sc = short_thinning(FIRST);
     let lib = common::embedded();
     let w0 = World::new(sc.site().unwrap(), &lib, &sc).unwrap();
-    let region = &w0.site.management.iter().find(|op| op.spec.due(22).is_some()).unwrap().region;
-    assert!(w0.site.management.len() == 1 && w0.site.management[0].spec.due(17).is_some(), "one entry, due in years 17 and 22");
+    let region = &w0.site.management.iter().find(|op| op.spec.due(FIRST).is_some()).unwrap().region;
+    assert!(w0.site.management.len() == 1 && QUIET.iter().all(|&y| w0.site.management[0].spec.due(y).is_some()), "one entry, due in years {QUIET:?} and {FIRST}");
     let stock = |h: f32, d: f32| h >= 1.3 && d >= 7.0;
-    // year 17: due, removes nothing (below its target); its stock is what stands after it
+    // the quiet years: due, remove nothing (below the target); their stock is what stands after them
     let mut w = w0.clone();
-    let mut rows = common::run(&sc, &mut w, 17);
-    let w17 = w.clone();
-    rows.extend(common::run(&sc, &mut w, 5));
-    assert!(rows[21].harvest_stems_ha > 0.0 && rows[..21].iter().all(|r| r.harvest_stems_ha == 0.0), "one thinning, in year 22");
+    let (mut rows, mut quiet, mut y) = (Vec::new(), Vec::new(), 0);
+    for q in QUIET {
+        rows.extend(common::run(&sc, &mut w, q - y));
+        quiet.push(w.clone());
+        y = q;
+    }
+    rows.extend(common::run(&sc, &mut w, FIRST - y));
+    let last = FIRST as usize - 1;
+    assert!(rows[last].harvest_stems_ha > 0.0 && rows[..last].iter().all(|r| r.harvest_stems_ha == 0.0), "one thinning, in year {FIRST}");
     for n in [2usize, 3] {
         let layout = Layout::new(&w0.site, n, 1).unwrap();
-        let t = &w17.stand.trees;
-        let mut sent17 = vec![0u64; n];
-        for i in (0..t.len()).filter(|&i| stock(t.height[i], t.dbh[i]) && region.contains(t.x[i] as f64, t.y[i] as f64)) {
-            sent17[layout.owner_of(t.x[i], t.y[i])] += 1;
+        let mut sent_quiet = vec![0u64; n];
+        for wq in &quiet {
+            let t = &wq.stand.trees;
+            for i in (0..t.len()).filter(|&i| stock(t.height[i], t.dbh[i]) && region.contains(t.x[i] as f64, t.y[i] as f64)) {
+                sent_quiet[layout.owner_of(t.x[i], t.y[i])] += 1;
+            }
         }
         let t = &w.stand.trees;
         let cut: Vec<_> = w.scratch.dead.iter().filter(|d| d.cause == DeathCause::Harvest).collect();
@@ -441,7 +451,7 @@ fn a_thinning_over_tiles_sends_only_the_growing_stock_of_its_area() {
                     let w0 = &w0;
                     s.spawn(move || {
                         let mut tile = Tile::new(w0, layout, tr.rank()).unwrap();
-                        let rows: Vec<StandRow> = (0..22).flat_map(|_| tile.step(&mut tr).unwrap().row).collect();
+                        let rows: Vec<StandRow> = (0..FIRST).flat_map(|_| tile.step(&mut tr).unwrap().row).collect();
                         (rows, tile.manage_sent)
                     })
                 })
@@ -452,13 +462,13 @@ fn a_thinning_over_tiles_sends_only_the_growing_stock_of_its_area() {
         for k in 0..n {
             // every other tile receives the stock: (n − 1) copies
             let (trees, bytes) = got[k].1;
-            assert_eq!(trees, (sent17[k] + want[k].0) * (n as u64 - 1), "{n} tiles, tile {k}: trees sent (its stock in year 17 {}, in year 22 {}, its trees in the area in year 22 {})", sent17[k], want[k].0, want[k].1);
+            assert_eq!(trees, (sent_quiet[k] + want[k].0) * (n as u64 - 1), "{n} tiles, tile {k}: trees sent (its stock in years {QUIET:?} {}, in year {FIRST} {}, its trees in the area in year {FIRST} {})", sent_quiet[k], want[k].0, want[k].1);
             assert!(want[k].0 > 0 && want[k].0 < want[k].1, "{n} tiles, tile {k}: {want:?}");
-            // per year a count word, then 26 bytes a tree (id, species, x, y, height, DBH;
-            // the whole tree's 54 until round 35's keys)
-            assert_eq!(bytes, (16 + 26 * (sent17[k] + want[k].0)) * (n as u64 - 1), "{n} tiles, tile {k}: bytes sent");
+            // per due year a count word (8 bytes), then 26 bytes a tree (id, species, x, y,
+            // height, DBH; the whole tree's 54 until round 35's keys)
+            assert_eq!(bytes, (8 * (QUIET.len() as u64 + 1) + 26 * (sent_quiet[k] + want[k].0)) * (n as u64 - 1), "{n} tiles, tile {k}: bytes sent");
         }
-        eprintln!("{n} tiles: per tile stock in year 17 {sent17:?}, (stock, trees in the area) in year 22 {want:?}; sent (trees, bytes) {:?}", got.iter().map(|g| g.1).collect::<Vec<_>>());
+        eprintln!("{n} tiles: per tile stock in years {QUIET:?} {sent_quiet:?}, (stock, trees in the area) in year {FIRST} {want:?}; sent (trees, bytes) {:?}", got.iter().map(|g| g.1).collect::<Vec<_>>());
     }
 }
 
@@ -467,26 +477,28 @@ fn short_thinning(years: u32) -> Scenario {
     Scenario::from_toml_str(&common::short_thinning_toml(years), "thinning_beech.toml").unwrap()
 }
 
-/// Issue 35: `scenarios/thinning_beech.toml` (shortened to 33 years) on 2 tiles (`sylva
-/// simulate --tiles 2`) writes the run directory of one process byte for byte (stand table,
-/// inventories with the harvested trees, maps; the per-rank checkpoints assembled equal its
-/// checkpoint), and so does a run stopped after year 22 (right after a thinning) on 2 tiles
-/// and resumed on 2 or on 1, and one stopped as by Ctrl-C after year 25 and resumed on 2.
+/// Issue 35: `scenarios/thinning_beech.toml` (shortened to 43 years: thinnings in years 32, 37
+/// and 42 since round 44's slender thicket planted at 1.0 m; before it 33 years, thinned in 22,
+/// 27 and 32) on 2 tiles (`sylva simulate --tiles 2`) writes the run directory of one process
+/// byte for byte (stand table, inventories with the harvested trees, maps; the per-rank
+/// checkpoints assembled equal its checkpoint), and so does a run stopped after year 32 (right
+/// after a thinning) on 2 tiles and resumed on 2 or on 1, and one stopped as by Ctrl-C after
+/// year 35 and resumed on 2.
 #[test]
 fn thinning_beech_over_two_tiles_and_resumed_equals_one_process() {
     use sylva::job::run::{run_scenario, RunOptions};
     use sylva::job::tiled::run_local_tiles;
     let lib = common::embedded();
-    let (long, short) = (short_thinning(33), short_thinning(22));
+    let (long, short) = (short_thinning(43), short_thinning(32));
     let template = World::new(long.site().unwrap(), &lib, &long).unwrap();
     let tmp = tempfile::tempdir().unwrap();
     let one = tmp.path().join("one");
     let a = run_scenario(&long, long.site().unwrap(), &lib, RunOptions::new(&one)).unwrap();
     let thinned: Vec<u32> = a.rows.iter().filter(|r| r.harvest_stems_ha > 0.0).map(|r| r.year).collect();
-    assert_eq!(thinned, vec![22, 27, 32], "thinning years");
-    let inv = sylva::job::inventory::read(&one.join("inventory/year_0022.parquet")).unwrap();
+    assert_eq!(thinned, vec![32, 37, 42], "thinning years");
+    let inv = sylva::job::inventory::read(&one.join("inventory/year_0032.parquet")).unwrap();
     let cut = inv.iter().filter(|r| r.status == "dead:harvest").count();
-    assert!(cut > 50, "{cut} thinned trees in year 22's inventory");
+    assert!(cut > 50, "{cut} thinned trees in year 32's inventory");
     let two = tmp.path().join("two");
     let (b, bytes) = run_local_tiles(&long, long.site().unwrap(), &lib, RunOptions::new(&two), 2).unwrap();
     assert_eq!(b.rows, a.rows, "2 tiles: stand table");
@@ -498,7 +510,7 @@ fn thinning_beech_over_two_tiles_and_resumed_equals_one_process() {
         let mut o = RunOptions::new(&d);
         o.resume = true;
         let r = if then == 2 { run_local_tiles(&long, long.site().unwrap(), &lib, o, 2).unwrap().0 } else { run_scenario(&long, long.site().unwrap(), &lib, o).unwrap() };
-        assert_eq!(r.rows, a.rows, "stopped after 22 years on 2 tiles, resumed on {then}: stand table");
+        assert_eq!(r.rows, a.rows, "stopped after 32 years on 2 tiles, resumed on {then}: stand table");
         if then == 2 {
             common::assert_same_run(&one, &d, &template, "thinning_beech stopped on 2 tiles, resumed on 2");
         } else {
@@ -507,13 +519,13 @@ fn thinning_beech_over_two_tiles_and_resumed_equals_one_process() {
             common::assert_same_outputs(&one, &d, "stopped on 2 tiles, resumed on 1", |_| false);
         }
     }
-    // stopped as by Ctrl-C during year 24 (the run ends after year 25: between two thinnings,
+    // stopped as by Ctrl-C during year 34 (the run ends after year 35: between two thinnings,
     // not a checkpoint year) on 2 tiles, then `--resume` on 2
     let d = tmp.path().join("stopped");
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let s2 = stop.clone();
     let mut cb = move |p: &sylva::job::run::Progress| {
-        if p.year == 24 {
+        if p.year == 34 {
             s2.store(true, std::sync::atomic::Ordering::SeqCst);
         }
     };
@@ -521,12 +533,12 @@ fn thinning_beech_over_two_tiles_and_resumed_equals_one_process() {
     o.stop = Some(stop);
     o.progress = Some(&mut cb);
     let part = run_local_tiles(&long, long.site().unwrap(), &lib, o, 2).unwrap().0;
-    assert!(part.stopped && part.rows.len() == 25, "stopped after {} years", part.rows.len());
+    assert!(part.stopped && part.rows.len() == 35, "stopped after {} years", part.rows.len());
     let mut o = RunOptions::new(&d);
     o.resume = true;
-    assert_eq!(run_local_tiles(&long, long.site().unwrap(), &lib, o, 2).unwrap().0.rows, a.rows, "stopped after year 25 on 2 tiles, resumed on 2");
-    common::assert_same_run(&one, &d, &template, "thinning_beech stopped after year 25 on 2 tiles, resumed on 2");
-    eprintln!("thinning_beech, 33 years: {} trees, thinned in years {thinned:?}, {cut} trees in year 22; 2 tiles sent {bytes:?} bytes of halo copies", a.trees);
+    assert_eq!(run_local_tiles(&long, long.site().unwrap(), &lib, o, 2).unwrap().0.rows, a.rows, "stopped after year 35 on 2 tiles, resumed on 2");
+    common::assert_same_run(&one, &d, &template, "thinning_beech stopped after year 35 on 2 tiles, resumed on 2");
+    eprintln!("thinning_beech, 43 years: {} trees, thinned in years {thinned:?}, {cut} trees in year 32; 2 tiles sent {bytes:?} bytes of halo copies", a.trees);
 }
 
 fn err(toml: &str) -> String {

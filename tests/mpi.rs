@@ -135,17 +135,18 @@ fn write_thinning(dir: &Path, years: u32) -> PathBuf {
 #[test]
 fn a_thinned_stand_on_two_ranks_and_stopped_and_resumed_writes_the_run_of_one_process() {
     let tmp = tempfile::tempdir().unwrap();
-    let (short, long) = (write_thinning(tmp.path(), 22), write_thinning(tmp.path(), 33));
+    let (short, long) = (write_thinning(tmp.path(), 32), write_thinning(tmp.path(), 43));
     let one = tmp.path().join("one");
     simulate(0, &long, &one, false);
-    // a meaningful run: thinnings remove trees in years 22, 27 and 32; year 22's inventory
+    // a meaningful run: thinnings remove trees in years 32, 37 and 42 (issue 35 round 44; 22,
+    // 27 and 32 before it); year 32's inventory
     // holds the thinned trees
     let table = std::fs::read_to_string(one.join("stand_table.csv")).unwrap();
     let head: Vec<&str> = table.lines().next().unwrap().split(',').collect();
     let col = head.iter().position(|h| *h == "harvest_stems_ha").unwrap();
     let thinned: Vec<u32> = table.lines().skip(1).filter(|l| l.split(',').nth(col).unwrap().parse::<f64>().unwrap() > 0.0).map(|l| l.split(',').next().unwrap().parse().unwrap()).collect();
-    assert_eq!(thinned, vec![22, 27, 32]);
-    let inv = sylva::job::inventory::read(&one.join("inventory/year_0022.parquet")).unwrap();
+    assert_eq!(thinned, vec![32, 37, 42]);
+    let inv = sylva::job::inventory::read(&one.join("inventory/year_0032.parquet")).unwrap();
     assert!(inv.iter().filter(|r| r.status == "dead:harvest").count() > 50);
     let lib = common::embedded();
     let sc = sylva::sim::Scenario::load(&long).unwrap();
@@ -153,13 +154,13 @@ fn a_thinned_stand_on_two_ranks_and_stopped_and_resumed_writes_the_run_of_one_pr
     let d = tmp.path().join("np2");
     simulate(2, &long, &d, false);
     let m = common::assert_same_run(&one, &d, &template, "thinning_beech on 2 ranks");
-    assert_eq!((m.year, m.ranks), (33, 2));
-    // stopped after the thinning of year 22 on 2 ranks, resumed on 2
+    assert_eq!((m.year, m.ranks), (43, 2));
+    // stopped after the thinning of year 32 on 2 ranks, resumed on 2
     let d = tmp.path().join("split");
     simulate(2, &short, &d, false);
     simulate(2, &long, &d, true);
-    let m = common::assert_same_run(&one, &d, &template, "thinning_beech on 2 ranks for 22 years, resumed on 2 for 33");
-    assert_eq!((m.year, m.ranks), (33, 2));
+    let m = common::assert_same_run(&one, &d, &template, "thinning_beech on 2 ranks for 32 years, resumed on 2 for 43");
+    assert_eq!((m.year, m.ranks), (43, 2));
 }
 
 #[test]

@@ -248,7 +248,10 @@ fn relative_density_is_reineke_on_a_regular_stand() {
 ///   stand carries more, thinner stems than the thinned table (0.75 × 32 = 24 to 1.2 × 37.6 = 45.12 cm,
 ///   computed so since round 33: written 45 before, and silver fir's 45.09 cm since the
 ///   dense-stand height bound counts from breast height lies between), and open-grown
-///   diameters (60–100 cm at these heights) are far outside the range;
+///   diameters (60–100 cm at these heights) are far outside the range. The 24 cm floor is a
+///   judgement, not a measurement: no table or plot series of unthinned class-I beech at 100
+///   was found to set it from (issue 35 rounds 42 and 44, docs/management.md); beech with its
+///   round-44 slenderness gives 27.4 cm here (round 41's 140 at every DBH gave 20.4);
 /// - small-statured and pioneer species (`max_height_m` < 35 m: aspen, birch, alder, hornbeam,
 ///   rowan, Norway maple): 14–35 cm, from their top heights at 100 (17–26 m) at the closed-stand
 ///   slenderness H/D of 80–120 m/m of mean trees (Assmann 1970; Pretzsch 2009 ch. 8).

@@ -270,8 +270,6 @@ fn readme_documents_every_field_of_the_schema() {
     assert!(beech.life.bai_competition.is_some());
     // nor BWINPro's diameter growth (issue 35 round 37: no shipped file has it; beech's values)
     beech.life.bai_bwinpro = Some(sylva::species::BaiBwinpro { a0: 2.6518, csa: 1.0414, age: -0.6322, c66: -0.555, bias0: -22.77, bias1: 1.417, bias2: 0.03803, bias3: -0.002403, bias4: 0.00003191, bias5: -0.0000001202, youth_hd: 1.40, period_sigma: Some(0.15) });
-    // nor the closed-stand slenderness (issue 35 round 41: no shipped file has it; TreeGrOSS's beech value)
-    beech.life.closed_hd = Some(140.0);
     // nor the open-grown H/D curve (issue 35 round 43: no shipped file has it; iLand's fasy HDlow)
     beech.life.open_hd = Some(sylva::species::DenseHd { k: 100.877, c: -0.2427 });
     // nor the mature form (Scots pine's only)
@@ -330,20 +328,33 @@ fn out_of_range_value_names_file_line_field_value_and_range() {
     assert!(err.to_string().contains("k_c"), "{err}");
 }
 
-/// `life.closed_hd` (issue 35 round 41): optional (the shipped beech has none), read where
-/// given, and a value outside 40–250 m/m is refused naming the file, line, field and range.
+/// `life.closed_hd` (issue 35 round 41) and `life.closed_hd_scope` (round 44): optional
+/// (without them 60 m/m from 7 cm, TreeGrOSS's youth scope), the shipped beech has 140 up to its
+/// dense-stand curve (`dense_curve`), read where given, and a value outside 40–250 m/m or a scope
+/// other than `youth` / `dense_curve` is refused naming the file, line, field and allowed values.
 #[test]
 fn closed_stand_slenderness_is_optional_read_and_range_checked() {
-    assert_eq!(SpeciesLibrary::embedded().unwrap().get("beech").unwrap().life.closed_hd, None);
-    let dense = "dense_hd = { k = 323.63, c = -0.3676 }\n";
-    assert!(beech_text().contains(dense));
-    let with = |v: &str| beech_text().replace(dense, &format!("{dense}closed_hd = {v}\n"));
-    assert_eq!(Species::from_toml_str(&with("140.0"), "x.toml").unwrap().life.closed_hd, Some(140.0));
-    let (_d, p) = problems_of(|t| t.replace(dense, &format!("{dense}closed_hd = 300.0\n")));
+    use sylva::species::ClosedHdScope;
+    let life = SpeciesLibrary::embedded().unwrap().get("beech").unwrap().life.clone();
+    assert_eq!((life.closed_hd, life.closed_hd_scope), (Some(140.0), Some(ClosedHdScope::DenseCurve)));
+    let (hd, scope) = ("closed_hd = 140.0\n", "closed_hd_scope = \"dense_curve\"\n");
+    assert!(beech_text().contains(hd) && beech_text().contains(scope));
+    let without = Species::from_toml_str(&beech_text().replace(hd, "").replace(scope, ""), "x.toml").unwrap();
+    assert_eq!((without.life.closed_hd, without.life.closed_hd_scope), (None, None));
+    let with = |v: &str| beech_text().replace(hd, &format!("closed_hd = {v}\n"));
+    assert_eq!(Species::from_toml_str(&with("120.0"), "x.toml").unwrap().life.closed_hd, Some(120.0));
+    let youth = beech_text().replace(scope, "closed_hd_scope = \"youth\"\n");
+    assert_eq!(Species::from_toml_str(&youth, "x.toml").unwrap().life.closed_hd_scope, Some(ClosedHdScope::Youth));
+    let (_d, p) = problems_of(|t| t.replace(hd, "closed_hd = 300.0\n"));
     assert_eq!(p.len(), 1, "{p:?}");
     assert!(p[0].file.ends_with("bad.toml"));
     assert_eq!(p[0].line, Some(line_of(&with("300.0"), "closed_hd = ")));
     assert_eq!((p[0].field.as_str(), p[0].value.as_str(), p[0].expected.as_str()), ("life.closed_hd", "300", "a number in [40, 250]"));
+    let bad_scope = |t: &str| t.replace(scope, "closed_hd_scope = \"always\"\n");
+    let (_d, p) = problems_of(bad_scope);
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert_eq!(p[0].line, Some(line_of(&bad_scope(&beech_text()), "closed_hd_scope = ")));
+    assert_eq!((p[0].field.as_str(), p[0].expected.as_str()), ("life.closed_hd_scope", "one of \"youth\", \"dense_curve\""));
 }
 
 #[test]

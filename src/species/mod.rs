@@ -225,7 +225,9 @@ pub struct LifeHistory {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shade_survival_class: Option<f32>,
     /// Slenderness H/D (m/m, 40–250) of the closed-stand diameter increment of the youth, the
-    /// trees below the inventory threshold [`crate::sim::density::MIN_DBH_CM`] (DBH < 7 cm):
+    /// trees below the inventory threshold [`crate::sim::density::MIN_DBH_CM`] (DBH < 7 cm; with
+    /// `closed_hd_scope = "dense_curve"` of every tree not yet held at the species' dense-stand
+    /// curve, [`ClosedHdScope::DenseCurve`]):
     /// under crowding such a tree's potential diameter increment is `100 ΔH_pot / closed_hd` cm a
     /// year (ΔH_pot the potential height increment, m), floored at the increment of a 0.3 m
     /// height growth and never above the open-grown increment
@@ -234,9 +236,15 @@ pub struct LifeHistory {
     /// dominants of closed stands; [`crate::sim::phases::growth::closed_slenderness`]). A source
     /// gives the value per species: TreeGrOSS's youth rule for beech, `D = h / 1.40`, i.e. 140
     /// (`Tree.youthGrowth`), which TreeGrOSS applies while DBH < 7 cm (`Tree.grow`; issue 35,
-    /// rounds 41–42).
+    /// rounds 41–42); species/beech.toml takes it to the dense-stand curve (round 44).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub closed_hd: Option<f32>,
+    /// Where `closed_hd` holds ([`ClosedHdScope`]): below 7 cm DBH only (`youth`, TreeGrOSS's
+    /// scope, the default) or at every DBH up to the species' dense-stand height–diameter curve
+    /// [`LifeHistory::dense_hd`], along which a tree held at it then grows (`dense_curve`;
+    /// issue 35, round 44). Optional: without it `youth`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub closed_hd_scope: Option<ClosedHdScope>,
     /// Open-grown height–diameter curve ([`DenseHd`] form, from iLand's `HDlow`, Seidl et al.
     /// 2012): the stoutest H/D of a year's increments, that of a tree in full light, `(1 + c) ·
     /// k · D^c` m/m. Where a species has it and [`LifeHistory::dense_hd`] (iLand's `HDhigh`,
@@ -363,6 +371,23 @@ pub struct DenseHd {
     pub k: f32,
     /// DBH exponent c, in [−1, 0] (the curve's H/D falls with DBH).
     pub c: f32,
+}
+
+/// Where a species' closed-stand slenderness `life.closed_hd` holds
+/// ([`crate::sim::phases::growth::closed_slenderness`], `closed_slenderness_held`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ClosedHdScope {
+    /// Below the inventory threshold [`crate::sim::density::MIN_DBH_CM`] (DBH < 7 cm) only, as
+    /// TreeGrOSS grows its youth (`Tree.grow` calls `youthGrowth` while DBH < 7 cm; issue 35,
+    /// round 42); from 7 cm on the growth model's other closed-stand H/D.
+    Youth,
+    /// At every DBH, for a species with a dense-stand height–diameter curve
+    /// [`LifeHistory::dense_hd`]: a tree grows its diameter at `closed_hd` until its height
+    /// reaches that curve (the height bound), and a tree held at the curve grows along it, at
+    /// the curve's own slope `dh/dD` where that is stouter (issue 35, round 44). Without
+    /// `dense_hd` as `youth`.
+    DenseCurve,
 }
 
 /// Crown width (diameter, m) of a tree of DBH `d` (cm), height `h` (m) and crown base `cb` (m)

@@ -6,7 +6,7 @@ use crate::sim::density::Crowding;
 use crate::sim::rules;
 use crate::sim::trees::{birth_id, TreeStore};
 use crate::species::allometry::{HeightIncrement, OpenDbh, Table};
-use crate::species::{BaiBwinpro, BaiCompetition, DenseHd, Species, SpeciesId, SpeciesLibrary};
+use crate::species::{BaiBwinpro, BaiCompetition, ClosedHdScope, DenseHd, Species, SpeciesId, SpeciesLibrary};
 pub use crate::species::allometry::{effective_age, open_crown_radius, open_dbh, potential_height, potential_increment};
 use rayon::prelude::*;
 
@@ -237,9 +237,11 @@ pub struct Growth<'a> {
 /// Under crowding the potential increment `D_open(H + ΔH_pot) − D_open(H)` blends, with weight
 /// `x = clamp((RD − 0.4) / 0.2, 0, 1)`, into the closed-stand increment [`closed_increment`]
 /// `min(max(100 ΔH_pot / HD, 30 / HD cm), open increment)` (closed-stand slenderness HD the
-/// species' `life.closed_hd` below 7 cm DBH; for species with `life.open_hd` and
-/// `life.dense_hd`, iLand's H/D between them by the tree's light; else [`HD_CLOSED`] = 60 m/m
-/// with its 5 mm/yr floor, ESTIMATE; [`closed_slenderness`]).
+/// species' `life.closed_hd` below 7 cm DBH, or at every DBH with `life.closed_hd_scope =
+/// "dense_curve"`, where a tree held at its dense-stand curve grows at most at that curve's
+/// slope; for species with `life.open_hd` and `life.dense_hd`, iLand's H/D between them by the
+/// tree's light; else [`HD_CLOSED`] = 60 m/m with its 5 mm/yr floor, ESTIMATE;
+/// [`closed_slenderness_held`]).
 /// Crown radius: open-grown radius of the new DBH, shrunk by [`rules::shaded_crown`]
 /// `0.5 + 0.5 L` in shade (crown plasticity); crown base rises to
 /// `H (1 − crown_ratio (0.4 + 0.6 L))` and never falls (natural pruning). Vigour memory
@@ -378,15 +380,53 @@ pub fn closed_increment(dh_pot: f32, dd_open: f32, hd: f32) -> f32 {
 ///   at 1 cm; they rise without bound towards D = 0). Full light gives `HDlow`, none `HDhigh`;
 ///   iLand's fasy gives 48–100 m/m at 7 cm and 37–68 at 20 cm (issue 35, round 43);
 /// - [`HD_CLOSED`] else.
+///
+/// With `life.closed_hd_scope = "dense_curve"` ([`ClosedHdScope::DenseCurve`]) and a
+/// `life.dense_hd` curve, `life.closed_hd` holds at every DBH (before the light interpolation);
+/// [`closed_slenderness_held`] then bounds it for trees held at the curve (issue 35, round 44).
 pub fn closed_slenderness(sp: &Species, d_cm: f32, l: f32) -> f32 {
+    let every_dbh = sp.life.closed_hd_scope == Some(ClosedHdScope::DenseCurve) && sp.life.dense_hd.is_some();
     match (sp.life.closed_hd, sp.life.open_hd, sp.life.dense_hd) {
-        (Some(hd), _, _) if d_cm < crate::sim::density::MIN_DBH_CM => hd,
+        (Some(hd), _, _) if d_cm < crate::sim::density::MIN_DBH_CM || every_dbh => hd,
         (_, Some(lo), Some(hi)) => {
             let d = d_cm.max(1.0);
             let (lo, hi) = ((1.0 + lo.c) * lo.k * d.powf(lo.c), (1.0 + hi.c) * hi.k * d.powf(hi.c));
             hi - (hi - lo) * l.clamp(0.0, 1.0)
         }
         _ => HD_CLOSED,
+    }
+}
+
+/// Share of [`dense_height_bound`] at or above which a tree counts as held at its species'
+/// dense-stand curve in [`closed_slenderness_held`]: the bound sets such a tree's height to the
+/// curve's value in `f32`, so 0.1 % (3 cm at 30 m) takes the rounding of the power, and a tree
+/// that fell short of it by more grew below the curve that season.
+pub const HELD_AT_CURVE: f32 = 0.999;
+
+/// H/D (m/m) of the dense-stand curve's own increments at DBH `d_cm` (cm, taken as at least
+/// 1 cm): the slope `100 dh/dD = (1 + c) · k · D^c` of `h = 1.3 + k · D^(1 + c) / 100`
+/// ([`dense_height_bound`]), i.e. iLand's `HDhigh` as iLand writes it, `a · b · (1 + c) · d^c`
+/// (Seidl et al. 2012; [`DenseHd`]). Beech (k 323.63, c −0.3676): 98.1 at 7.4 cm, 77.0 at
+/// 14.3 cm, 57.2 at 32 cm.
+pub fn dense_curve_slenderness(hd: DenseHd, d_cm: f32) -> f32 {
+    (1.0 + hd.c) * hd.k * d_cm.max(1.0).powf(hd.c)
+}
+
+/// Slenderness H/D (m/m) of the closed-stand diameter increment ([`closed_increment`]) of a tree
+/// of species `sp` with DBH `d_cm` (cm), height `h_m` (m) and light `l`: [`closed_slenderness`],
+/// and for a species with `life.closed_hd_scope = "dense_curve"` and a dense-stand curve
+/// `life.dense_hd`, a tree held at that curve (`h_m` at least [`HELD_AT_CURVE`] of
+/// [`dense_height_bound`]`(d_cm)`) grows at most as slender as the curve's own increments,
+/// [`dense_curve_slenderness`]: its diameter increment is then what lets its potential height
+/// increment stay within the bound, where a slenderer increment would leave it stuck at the
+/// curve with its height growth cut. Issue 35, round 44: with beech's 140 m/m at every DBH and
+/// no such cap, the dominants of an unmanaged stand were held at the curve near 30 cm and its
+/// top height fell to 0.88 of NW-FVA's at 100 (round 42: 0.90); with it 0.975.
+pub fn closed_slenderness_held(sp: &Species, d_cm: f32, h_m: f32, l: f32) -> f32 {
+    let hd = closed_slenderness(sp, d_cm, l);
+    match (sp.life.closed_hd_scope, sp.life.dense_hd) {
+        (Some(ClosedHdScope::DenseCurve), Some(c)) if d_cm > 0.0 && h_m >= dense_height_bound(c, d_cm) * HELD_AT_CURVE => hd.min(dense_curve_slenderness(c, d_cm)),
+        _ => hd,
     }
 }
 
@@ -444,7 +484,7 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, ye
     // density: iLand has no open-grown curve besides it (HDlow is the H/D in full light), and
     // the tree's light sets where between HDlow and HDhigh it grows (issue 35, round 43).
     let x = if sp.life.open_hd.is_some() && sp.life.dense_hd.is_some() { 1.0 } else { ((crowd.rd[i] - RD_ONSET).max(0.0) / 0.2).min(1.0) };
-    let dd_closed = if h > 1.3 { closed_increment(dh_pot, dd_open, closed_slenderness(sp, d, l)) } else { dd_open };
+    let dd_closed = if h > 1.3 { closed_increment(dh_pot, dd_open, closed_slenderness_held(sp, d, h, l)) } else { dd_open };
     let dd_pot = (1.0 - x) * dd_open + x * dd_closed;
     // the tree's growth factor only matters for a non-zero increment (a zero times the factor,
     // which is finite and > 0, is that same zero), so it is not drawn for trees that do not
@@ -593,6 +633,48 @@ mod tests {
         assert!((closed_slenderness(&b, 20.0, 0.5) - 52.48).abs() < 0.01);
         b.life.dense_hd = None;
         assert_eq!(closed_slenderness(&b, 20.0, 0.5), HD_CLOSED);
+    }
+
+    /// Issue 35 round 44: with `closed_hd_scope = "dense_curve"` and beech's dense-stand curve
+    /// (iLand's fasy HDhigh, k 323.63, c −0.3676), `closed_hd` 140 holds at every DBH below the
+    /// curve, and a tree held at the curve (height = [`dense_height_bound`]) grows at the
+    /// curve's slope where that is stouter: 68.04 m/m at 20 cm (204.66 · 20^−0.3676), 57.25 at
+    /// 32 cm; at 2 cm the slope (158.6) is slenderer than 140, which stays. `youth` (or no
+    /// scope) keeps TreeGrOSS's scope: 140 below 7 cm, 60 above, held or not.
+    #[test]
+    fn closed_slenderness_held_follows_the_dense_curve() {
+        let mut b = beech_like();
+        let curve = DenseHd { k: 323.63, c: -0.3676 };
+        b.life.dense_hd = Some(curve);
+        b.life.open_hd = None;
+        b.life.closed_hd = Some(140.0);
+        assert!((dense_curve_slenderness(curve, 20.0) - 68.04).abs() < 0.01, "{}", dense_curve_slenderness(curve, 20.0));
+        assert!((dense_curve_slenderness(curve, 32.0) - 57.25).abs() < 0.01, "{}", dense_curve_slenderness(curve, 32.0));
+        assert_eq!(dense_curve_slenderness(curve, 0.4), dense_curve_slenderness(curve, 1.0));
+        for scope in [None, Some(ClosedHdScope::Youth)] {
+            b.life.closed_hd_scope = scope;
+            assert_eq!(closed_slenderness(&b, 30.0, 0.5), HD_CLOSED, "{scope:?}");
+            assert_eq!(closed_slenderness_held(&b, 20.0, dense_height_bound(curve, 20.0), 0.5), HD_CLOSED, "{scope:?}, held");
+            assert_eq!(closed_slenderness_held(&b, 5.0, dense_height_bound(curve, 5.0), 0.5), 140.0, "{scope:?}, youth held");
+        }
+        b.life.closed_hd_scope = Some(ClosedHdScope::DenseCurve);
+        assert_eq!(closed_slenderness(&b, 30.0, 0.5), 140.0);
+        // below the curve: 140 whatever the DBH
+        for d in [5.0f32, 20.0, 32.0] {
+            assert_eq!(closed_slenderness_held(&b, d, 0.95 * dense_height_bound(curve, d), 0.5), 140.0, "DBH {d} below the curve");
+        }
+        // held at the curve (and above it, as a planted tree may stand): the curve's slope
+        for (d, want) in [(20.0f32, 68.04f32), (32.0, 57.25)] {
+            for h in [dense_height_bound(curve, d), 0.9995 * dense_height_bound(curve, d), 1.1 * dense_height_bound(curve, d)] {
+                let hd = closed_slenderness_held(&b, d, h, 0.5);
+                assert!((hd - want).abs() < 0.01, "DBH {d}, height {h}: {hd} vs {want}");
+            }
+        }
+        assert_eq!(closed_slenderness_held(&b, 2.0, dense_height_bound(curve, 2.0), 0.5), 140.0);
+        // without the curve the scope has nothing to follow: TreeGrOSS's scope
+        b.life.dense_hd = None;
+        assert_eq!(closed_slenderness(&b, 30.0, 0.5), HD_CLOSED);
+        assert_eq!(closed_slenderness_held(&b, 30.0, 40.0, 0.5), HD_CLOSED);
     }
 
     /// PROGNAUS's competition response (Norway spruce's terms, Hasenauer 2000): an open-grown
