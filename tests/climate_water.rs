@@ -11,8 +11,14 @@ mod common;
 use common::ScenarioToml;
 use sylva::sim::water::WaterClimate;
 
-/// A 1.2 km × 0.9 km part of the default scenario's Coweeta window (its south-west quarter).
+/// A 1.2 km × 0.9 km part of the default scenario's Coweeta window (its north-west quarter: the
+/// first 120 of its 240 columns and 90 of its 180 rows, row 0 north).
 const WINDOW: [usize; 4] = [160, 220, 120, 90];
+
+/// The embedded Coweeta DEM (the default scenario's terrain), window [`WINDOW`].
+fn coweeta() -> String {
+    format!("[terrain]\nembedded = \"coweeta\"\nwindow = {WINDOW:?}")
+}
 
 /// The default scenario's climate with the anomalies file `csv` written into `dir`.
 fn climate_line(dir: &std::path::Path, csv: &str) -> String {
@@ -48,7 +54,7 @@ fn thirds(w: &sylva::sim::World) -> (f32, f32) {
 #[test]
 fn warming_raises_the_drought_index_most_in_the_lowlands_and_cuts_suitability_by_tolerance() {
     let dir = std::env::temp_dir().join(format!("sylva_water_suit_{}", std::process::id()));
-    let toml = ScenarioToml::new("water", 1, 1).species(&["beech", "norway_spruce"]).line("snapshot_every = 0").line("checkpoint_every = 0").line(&climate_line(&dir, &anomalies(1, 3.0, 1.0))).default_terrain(WINDOW).build();
+    let toml = ScenarioToml::new("water", 1, 1).species(&["beech", "norway_spruce"]).line("snapshot_every = 0").line("checkpoint_every = 0").line(&climate_line(&dir, &anomalies(1, 3.0, 1.0))).line(&coweeta()).build();
     let lib = common::embedded();
     let (sc, mut w) = common::world_with(&toml, &lib);
     common::run(&sc, &mut w, 1);
@@ -100,7 +106,7 @@ fn warming_raises_the_drought_index_most_in_the_lowlands_and_cuts_suitability_by
 /// management warming test).
 fn beech_bai_lowlands(years: u32, pf: f64) -> f64 {
     let dir = std::env::temp_dir().join(format!("sylva_water_bai_{}_{pf}", std::process::id()));
-    let toml = ScenarioToml::new("water", years, 3).species(&["beech"]).line("snapshot_every = 0").line("checkpoint_every = 0").line(&climate_line(&dir, &anomalies(years, 3.0, pf))).default_terrain(WINDOW).planted("beech", 20.0, 40.0).build();
+    let toml = ScenarioToml::new("water", years, 3).species(&["beech"]).line("snapshot_every = 0").line("checkpoint_every = 0").line(&climate_line(&dir, &anomalies(years, 3.0, pf))).line(&coweeta()).planted("beech", 20.0, 40.0).build();
     let lib = common::embedded();
     let (sc, mut w) = common::world_with(&toml, &lib);
     let (low, _) = thirds(&w);
