@@ -40,6 +40,44 @@ pub struct Climate {
     /// line).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub anomalies_file: Option<std::path::PathBuf>,
+    /// Annual precipitation of the base climate (mm, 50–10000; default 790, about Germany's
+    /// 1961–1990 area mean of the Deutscher Wetterdienst), uniform over the terrain, falling in
+    /// equal monthly shares; an anomaly year's precipitation is this times its precipitation
+    /// factor. Read by the water balance ([`crate::sim::water`]), which acts only under a
+    /// changing climate, against the base climate's.
+    #[serde(skip_serializing_if = "is_default_precipitation")]
+    pub precipitation_mm: f32,
+    /// Warmest minus coldest monthly mean temperature (K, 0–60; default 17.4, Germany's
+    /// 1961–1990 July 16.9 °C less January −0.5 °C, Deutscher Wetterdienst): the amplitude of
+    /// the water balance's annual temperature cycle ([`crate::sim::water::monthly_temperatures`]).
+    #[serde(skip_serializing_if = "is_default_range")]
+    pub temperature_range_k: f32,
+    /// Plant-available soil water capacity (mm, 10–1000; default 150) of a cell at the reference
+    /// wetness index (TWI 8, F 5); wetter cells hold more, drier less
+    /// ([`crate::sim::water::soil_water_capacity_mm`]). 150 mm: a loam's available water
+    /// (field capacity less wilting point, 0.13–0.18 m³/m³: FAO-56, Allen et al. 1998, Table 19)
+    /// over a rooting depth of 1 m (ESTIMATE).
+    #[serde(skip_serializing_if = "is_default_capacity")]
+    pub soil_water_capacity_mm: f32,
+}
+
+/// Default [`Climate::precipitation_mm`] (mm).
+pub const DEFAULT_PRECIPITATION_MM: f32 = 790.0;
+/// Default [`Climate::temperature_range_k`] (K).
+pub const DEFAULT_TEMPERATURE_RANGE_K: f32 = 17.4;
+/// Default [`Climate::soil_water_capacity_mm`] (mm).
+pub const DEFAULT_SOIL_WATER_CAPACITY_MM: f32 = 150.0;
+
+fn is_default_precipitation(v: &f32) -> bool {
+    *v == DEFAULT_PRECIPITATION_MM
+}
+
+fn is_default_range(v: &f32) -> bool {
+    *v == DEFAULT_TEMPERATURE_RANGE_K
+}
+
+fn is_default_capacity(v: &f32) -> bool {
+    *v == DEFAULT_SOIL_WATER_CAPACITY_MM
 }
 
 fn is_zero(v: &f32) -> bool {
@@ -60,6 +98,9 @@ impl Default for Climate {
             wind_from_deg: 270.0,
             warming_k_per_century: 0.0,
             anomalies_file: None,
+            precipitation_mm: DEFAULT_PRECIPITATION_MM,
+            temperature_range_k: DEFAULT_TEMPERATURE_RANGE_K,
+            soil_water_capacity_mm: DEFAULT_SOIL_WATER_CAPACITY_MM,
         }
     }
 }

@@ -221,7 +221,10 @@ impl SiteConditions {
     }
 
     /// A flat, uniform site of `width × height` cells of `cell_m` metres with the given indices
-    /// (for tests and stand-level scenarios).
+    /// (for tests and stand-level scenarios). Its mean annual temperature and wetness index are
+    /// those its T and F map from ([`temperature_index`], [`moisture_index`] inverted: T 5 is
+    /// 8 °C, F 5 a TWI of 8), which the water balance of a changing climate reads
+    /// ([`crate::sim::water`]).
     pub fn uniform(width: usize, height: usize, cell_m: f64, elevation_m: f32, indices: [f32; 6], latitude_deg: f64) -> Self {
         SiteConditions {
             geo: GeoRef::local(cell_m, latitude_deg),
@@ -231,10 +234,10 @@ impl SiteConditions {
             elevation_m: Grid::filled(width, height, elevation_m),
             slope_deg: Grid::filled(width, height, 0.0),
             aspect_deg: Grid::filled(width, height, -1.0),
-            twi: Grid::filled(width, height, 8.0),
+            twi: Grid::filled(width, height, 2.0 * (indices[factor::F] - 1.0)),
             insolation_kwh_m2: Grid::filled(width, height, 1200.0),
             wind_exposure: Grid::filled(width, height, 0.3),
-            temperature_c: Grid::filled(width, height, 8.0),
+            temperature_c: Grid::filled(width, height, (indices[factor::T] - 1.0) * 2.5 - 2.0),
             indices: Grid::filled(width, height, indices),
             held: Window::full(width, height),
             full: (width, height),

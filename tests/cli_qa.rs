@@ -130,7 +130,7 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     // columns divide by: 4 × 4 cells of 10 m = 0.16 ha (trial 36: it was written nowhere);
     // then the natural deaths' volume (round 42), and a row for year 0
     let st = std::fs::read_to_string(d.join("snap_final/stand_table.csv")).unwrap();
-    assert!(st.lines().next().unwrap().ends_with(",precipitation_factor,area_ha,deaths_volume_m3_ha"), "{st}");
+    assert!(st.lines().next().unwrap().ends_with(",precipitation_factor,drought_index,area_ha,deaths_volume_m3_ha"), "{st}");
     assert!(st.lines().skip(1).all(|l| l.rsplit(',').nth(1) == Some("0.1600")) && st.lines().count() == 4 && st.lines().nth(1).unwrap().starts_with("0,"), "{st}");
     let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all", "--gpkg", "every-snapshot"]);
     assert!(ok && d.join("snap_all/inventory/year_0001.gpkg").is_file() && d.join("snap_all/inventory/year_0002.gpkg").is_file(), "{err}");

@@ -10,10 +10,13 @@
 //! - Round 40: shade mortality acts below the upper layer only (height under 2/3 of the local
 //!   top height, the IUFRO upper height class), so the same saplings among peers of their own
 //!   height, or in the open, die of intrinsic mortality alone.
-//! - A dry anomaly year (precipitation factor 0.85: F 5 → 4.25, a drought index of
-//!   0.2 · 0.75 = 0.15, the year's relative precipitation deficit) cuts Norway spruce's diameter increment (drought tolerance 0.20) to
-//!   `sqrt(1 − 0.15 / 0.20)` = 0.5 of the same year without it, and Scots pine's (0.42) to
-//!   `sqrt(1 − 0.15 / 0.42)` = 0.80 (`species::drought_factor`, ForClim's form).
+//! - A dry anomaly year (precipitation factor 0.7) on a fresh uniform site (T 5: 8 °C; F 5: TWI 8;
+//!   51° N; the default water balance, 790 mm, range 17.4 K, 150 mm) raises the growing season's
+//!   drought index by 0.134 (`sim::water`: Thornthwaite PET and a monthly bucket, ForClim's
+//!   index; round 44, which replaced round 39's `0.2 · (F deficit)` from a precipitation factor
+//!   moving F), which cuts Norway spruce's diameter increment (drought tolerance 0.20) to
+//!   `sqrt(1 − 0.134 / 0.20)` = 0.57 of the same year without it, and Scots pine's (0.42) to
+//!   `sqrt(1 − 0.134 / 0.42)` = 0.83 (`species::drought_factor`, ForClim's form).
 
 mod common;
 
@@ -134,23 +137,26 @@ fn a_dry_year_cuts_spruce_diameter_growth_more_than_pine() {
     let dir = std::env::temp_dir().join(format!("sylva_dry_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (s0, p0) = year4_increments(&dir, None);
-    let (s1, p1) = year4_increments(&dir, Some("year,temperature_k,precipitation_factor\n4,0,0.85\n"));
+    let (s1, p1) = year4_increments(&dir, Some("year,temperature_k,precipitation_factor\n4,0,0.7\n"));
     let _ = std::fs::remove_dir_all(&dir);
     let (rs, rp) = (s1 / s0, p1 / p0);
     eprintln!("year-4 DBH increment: spruce {s0:.4} → {s1:.4} cm (× {rs:.4}), pine {p0:.4} → {p1:.4} cm (× {rp:.4})");
     // both grow in the normal year (spruce 0.129 cm, pine 0.047 cm measured)
     assert!(s0 > 0.02 && p0 > 0.02, "{s0} {p0}");
-    // drought index 0.2 · (5 − 4.25) = 0.15 (= 1 − 0.85); ForClim's factor sqrt(1 − DI / tolerance)
-    let (want_s, want_p) = ((1.0f64 - 0.15 / 0.20).sqrt(), (1.0f64 - 0.15 / 0.42).sqrt());
+    // the rise of the drought index: the site's cell (8 °C, TWI 8, 51° N) in the dry year less
+    // in the base climate; 0.1341 by an independent reimplementation of the same formulas
+    let water = sylva::sim::water::WaterClimate::default();
+    let rise = water.cell_drought_index(8.0, 8.0, 51.0, 0.0, 0.7) - water.cell_drought_index(8.0, 8.0, 51.0, 0.0, 1.0);
+    assert!((rise - 0.1341).abs() < 0.002, "rise {rise}");
+    // ForClim's factor sqrt(1 − DI / tolerance) of the rise
+    let (want_s, want_p) = ((1.0f64 - rise / 0.20).sqrt(), (1.0f64 - rise / 0.42).sqrt());
     assert!((rs - want_s).abs() < 0.01, "spruce × {rs:.4}, expected {want_s:.4}");
     assert!((rp - want_p).abs() < 0.01, "pine × {rp:.4}, expected {want_p:.4}");
     assert!(rs < rp);
     // the function's values themselves
-    assert_eq!(sylva::species::drought_index(0.0), 0.0);
-    assert_eq!(sylva::species::drought_index(-1.0), 0.0);
-    assert!((sylva::species::drought_index(2.0) - 0.4).abs() < 1e-6);
     assert_eq!(sylva::species::drought_factor(0.0, 0.2), 1.0);
     assert_eq!(sylva::species::drought_factor(0.3, 0.2), 0.0);
+    assert!((sylva::species::drought_factor(0.15, 0.2) - 0.5).abs() < 1e-6);
 }
 
 /// `p_shade` at its cited ends (0.368 a year in class 1, Bugmann 2001; 1/72 in class 5,

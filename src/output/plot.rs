@@ -247,7 +247,7 @@ pub fn plot_stand_table(path: &Path, rows: &[StandRow], w: &World) -> Result<()>
     // a changing climate: the year's temperature offset and precipitation factor (round 32's
     // trial: the warming run's figure did not show its climate)
     if w.site.climate_change.is_active() {
-        panels.push(Panel { title: "Climate".into(), x_label: "year".into(), y_label: "K, factor".into(), series: vec![s("temperature offset (K)", x(&|r| r.temperature_offset_k), [200, 60, 40]), s("precipitation factor", x(&|r| r.precipitation_factor), [40, 90, 180])] });
+        panels.push(Panel { title: "Climate".into(), x_label: "year".into(), y_label: "K, factor, index".into(), series: vec![s("temperature offset (K)", x(&|r| r.temperature_offset_k), [200, 60, 40]), s("precipitation factor", x(&|r| r.precipitation_factor), [40, 90, 180]), s("drought index", x(&|r| r.drought_index), [190, 140, 30])] });
     }
     plot_panels_png(path, &panels, 2, (1200, 1350))
 }

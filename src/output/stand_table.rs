@@ -10,9 +10,10 @@ use std::path::Path;
 /// top_height_m,qmd_cm,stems_7cm_ha,qmd_7cm_cm,ba_share_<sp>…,stem_share_<sp>…,regen_germinated,
 /// regen_recruited,regen_deaths_shade,regen_deaths_crowding,deaths_age,deaths_stress,deaths_wind,
 /// deaths_background,deaths_harvest,volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha,
-/// temperature_offset_k,precipitation_factor` (regeneration-layer stems in the year, then tree
+/// temperature_offset_k,precipitation_factor,drought_index` (regeneration-layer stems in the year, then tree
 /// deaths in the year by [`DeathCause`], then standing and harvested stem volume (m³/ha),
-/// harvested stems/ha and the year's climate: temperature offset (K) and precipitation factor)
+/// harvested stems/ha and the year's climate: temperature offset (K), precipitation factor and
+/// the site-mean drought index, [`StandRow::drought_index`])
 /// (`species` = pool ids in pool order). `top_height_m` is H100 over the upper layer (stems at
 /// least two thirds of the top height tall; [`StandRow::top_height_m`]), so a stand with fewer
 /// than 100 overstorey trees per ha reports their height, not that of ingrowth among the 100
@@ -27,7 +28,7 @@ pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     for c in DeathCause::ALL {
         let _ = write!(s, ",deaths_{}", c.name());
     }
-    s.push_str(",volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha,temperature_offset_k,precipitation_factor\n");
+    s.push_str(",volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha,temperature_offset_k,precipitation_factor,drought_index\n");
     for r in rows {
         let _ = write!(s, "{},{:.1},{:.1},{:.1},{:.3},{:.2},{:.2},{:.2},{:.1},{:.2}", r.year, r.stems_ha, r.seedlings_ha, r.regeneration_ha, r.basal_area_m2_ha, r.mean_height_m, r.top_height_m, r.qmd_cm, r.stems_7cm_ha, r.qmd_7cm_cm);
         for v in &r.share_ba {
@@ -43,7 +44,7 @@ pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
         for d in r.deaths {
             let _ = write!(s, ",{d}");
         }
-        let _ = write!(s, ",{:.2},{:.1},{:.2},{:.3},{:.3}", r.volume_m3_ha, r.harvest_stems_ha, r.harvest_volume_m3_ha, r.temperature_offset_k, r.precipitation_factor);
+        let _ = write!(s, ",{:.2},{:.1},{:.2},{:.3},{:.3},{:.4}", r.volume_m3_ha, r.harvest_stems_ha, r.harvest_volume_m3_ha, r.temperature_offset_k, r.precipitation_factor, r.drought_index);
         s.push('\n');
     }
     s

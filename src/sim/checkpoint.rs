@@ -34,8 +34,9 @@ const MAGIC: &[u8; 7] = b"SYLVACK";
 /// checkpoint of 1 M trees went from 64 to 36 MB). 10 (round 42, trial 41 defects 2 and 7):
 /// each stand-table row also holds the natural deaths' volume and the per-species rows, and
 /// the stand table starts with year 0; checkpoints of layouts 6 and 7 are refused, naming
-/// their version (their stand tables have neither).
-const LAYOUT_BASE: u32 = 10;
+/// their version (their stand tables have neither). 12 (round 44): each row also holds the
+/// year's site-mean drought index (checkpoints of layout 10 are refused, naming their version).
+const LAYOUT_BASE: u32 = 12;
 
 /// The layout base of a checkpoint of a run with `[[management]]`: [`LAYOUT_BASE`]'s layout and
 /// the management table's rows after the stand table (issue 35 round 38). Written only by such
@@ -44,8 +45,8 @@ const LAYOUT_BASE: u32 = 10;
 /// holds the entry's name, the basal area it removed, the saplings it cut and the species
 /// shares of its area (a managed checkpoint of base 8 is refused, naming its version). 11
 /// (round 42): [`LAYOUT_BASE`] 10's rows, and each entry's row holds whether its
-/// `max_removal_share` stopped it (`capped`).
-const MANAGED_BASE: u32 = 11;
+/// `max_removal_share` stopped it (`capped`). 13 (round 44): [`LAYOUT_BASE`] 12's rows.
+const MANAGED_BASE: u32 = 13;
 
 /// zstd level of the checkpoint (1: 36.2 MB for the default run's 64 MB, 0.6 s; 3 saved 0.7 %
 /// more for 1.6 times the time).
@@ -575,7 +576,8 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
         for d in r.regen_deaths {
             o.u64(d);
         }
-        for v in [r.volume_m3_ha, r.harvest_stems_ha, r.harvest_volume_m3_ha, r.temperature_offset_k, r.precipitation_factor] {
+        // layout 12 (round 44): the drought index after the precipitation factor
+        for v in [r.volume_m3_ha, r.harvest_stems_ha, r.harvest_volume_m3_ha, r.temperature_offset_k, r.precipitation_factor, r.drought_index] {
             o.f64(v);
         }
         // layout 10 (round 42)
@@ -752,7 +754,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
         for x in regen_deaths.iter_mut() {
             *x = r.u64()?;
         }
-        let mut m = [0f64; 5];
+        let mut m = [0f64; 6];
         for x in m.iter_mut() {
             *x = r.f64()?;
         }
@@ -792,6 +794,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             harvest_volume_m3_ha: m[2],
             temperature_offset_k: m[3],
             precipitation_factor: m[4],
+            drought_index: m[5],
             management: Vec::new(),
             deaths_volume_m3_ha,
             species,

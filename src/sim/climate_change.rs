@@ -11,10 +11,19 @@
 //! −6.5 K/km, +1 K moves a temperature isoline about 154 m upslope (ECOLOGY.md). Species respond
 //! through their niche (the Ellenberg suitability of the shifted indices), which feeds growth
 //! (every tree's suitability) and establishment (every cell's suitability) from that year on.
-//! The terrain fields, the maps and the site's identity are those of the base climate.
+//!
+//! Warming and the precipitation factor also act on water (round 44): each year every cell's
+//! monthly soil-water balance ([`crate::sim::water`]: Thornthwaite's PET, a bucket, ForClim's
+//! drought index) under the year's temperature and precipitation, against the same balance
+//! under the base climate; the rise of the drought index cuts each species by its drought
+//! tolerance ([`crate::species::Species::drought_response`]). The precipitation factor acts
+//! through the water balance only (until round 43 it moved F by `5 (p − 1)`, an estimate with
+//! no water balance behind it). The terrain fields, the maps and the site's identity are those
+//! of the base climate.
 
 use crate::climate::Climate;
 use crate::conditions::factor;
+use crate::sim::water::WaterClimate;
 use crate::error::{Error, Result};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -23,23 +32,20 @@ use std::path::Path;
 /// [`crate::conditions::temperature_index`].
 pub const T_INDEX_PER_K: f32 = 0.4;
 
-/// Moisture index units per unit of precipitation factor: a year with precipitation factor `p`
-/// moves every cell's F by `5 (p − 1)` (clamped to 1–12), so 20 % less precipitation lowers F by
-/// one unit. Model choice (ESTIMATE): F is derived from the wetness index only
-/// ([`crate::conditions::moisture_index`]), which carries no precipitation; one Ellenberg F unit
-/// for a fifth of the precipitation is an order of magnitude, not a fit.
-pub const F_INDEX_PER_PRECIP: f32 = 5.0;
-
 /// Most a temperature anomaly may be (K, either sign).
 pub const MAX_ANOMALY_K: f64 = 30.0;
 
-/// The climate's change over the run: a linear ramp and yearly anomalies.
+/// The climate's change over the run: a linear ramp and yearly anomalies, and the base
+/// climate's water-balance constants they act on.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct ClimateChange {
     /// Warming (K per century) from year 0.
     pub warming_k_per_century: f64,
     /// Anomalies by simulation year: (temperature K, precipitation factor).
     pub anomalies: BTreeMap<u32, (f64, f64)>,
+    /// The base climate's precipitation, annual temperature range and soil water capacity
+    /// ([`crate::sim::water`]).
+    pub water: WaterClimate,
 }
 
 impl ClimateChange {
@@ -49,7 +55,7 @@ impl ClimateChange {
     /// Errors: [`Error::Invalid`] naming `climate.anomalies_file` when the file cannot be read,
     /// or the file and line of a malformed line.
     pub fn of(climate: &Climate, ctx: &str) -> Result<ClimateChange> {
-        let mut c = ClimateChange { warming_k_per_century: climate.warming_k_per_century as f64, anomalies: BTreeMap::new() };
+        let mut c = ClimateChange { warming_k_per_century: climate.warming_k_per_century as f64, anomalies: BTreeMap::new(), water: WaterClimate::of(climate) };
         if let Some(p) = &climate.anomalies_file {
             let text = std::fs::read_to_string(p).map_err(|e| Error::Invalid {
                 context: ctx.to_string(),
@@ -84,15 +90,12 @@ impl ClimateChange {
     }
 }
 
-/// The indices `ix` (`[L, T, K, F, R, N]`) under a temperature offset `dt_k` (K) and a
-/// precipitation factor `precip`: T moved by [`T_INDEX_PER_K`]` · dt_k` (clamped 1–9), F by
-/// [`F_INDEX_PER_PRECIP`]` · (precip − 1)` (clamped 1–12), the others unchanged.
-pub fn shifted_indices(ix: &[f32; 6], dt_k: f64, precip: f64) -> [f32; 6] {
+/// The indices `ix` (`[L, T, K, F, R, N]`) under a temperature offset `dt_k` (K): T moved by
+/// [`T_INDEX_PER_K`]` · dt_k` (clamped 1–9), the others unchanged (the precipitation factor acts
+/// through the water balance, [`crate::sim::water`], not on F).
+pub fn shifted_indices(ix: &[f32; 6], dt_k: f64) -> [f32; 6] {
     let mut v = *ix;
     v[factor::T] = (v[factor::T] + T_INDEX_PER_K * dt_k as f32).clamp(1.0, 9.0);
-    if precip != 1.0 {
-        v[factor::F] = (v[factor::F] + F_INDEX_PER_PRECIP * (precip as f32 - 1.0)).clamp(1.0, 12.0);
-    }
     v
 }
 
@@ -188,7 +191,7 @@ mod tests {
 
     #[test]
     fn ramp_anomalies_and_index_shift() {
-        let mut c = ClimateChange { warming_k_per_century: 4.0, anomalies: BTreeMap::new() };
+        let mut c = ClimateChange { warming_k_per_century: 4.0, anomalies: BTreeMap::new(), ..Default::default() };
         assert_eq!(c.of_year(50), (2.0, 1.0));
         c.anomalies.insert(50, (0.5, 0.8));
         assert_eq!(c.of_year(50), (2.5, 0.8));
@@ -196,10 +199,10 @@ mod tests {
         assert_eq!(c.years_beyond(100), vec![500]);
         assert_eq!(c.years_beyond(500), Vec::<u32>::new());
         let ix = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0];
-        let s = shifted_indices(&ix, 2.5, 0.8);
+        let s = shifted_indices(&ix, 2.5);
         assert_eq!(s[factor::T], 6.0);
-        assert!((s[factor::F] - 4.0).abs() < 1e-6);
-        assert_eq!(shifted_indices(&[5.0, 8.9, 2.0, 5.0, 6.0, 6.0], 5.0, 1.0)[factor::T], 9.0);
+        assert_eq!(s[factor::F], 5.0);
+        assert_eq!(shifted_indices(&[5.0, 8.9, 2.0, 5.0, 6.0, 6.0], 5.0)[factor::T], 9.0);
         // the slope is temperature_index's
         let d = crate::conditions::temperature_index(9.0) - crate::conditions::temperature_index(8.0);
         assert!((d - T_INDEX_PER_K).abs() < 1e-6);
@@ -240,7 +243,7 @@ mod tests {
         // comments after the values
         let m = parse_anomalies("# hot decade\nyear,temperature_k\n1,0.5 # hot\n3,1.5#hotter\n", p).unwrap();
         assert_eq!((m[&1], m[&3]), ((0.5, 1.0), (1.5, 1.0)));
-        let c = ClimateChange { warming_k_per_century: 0.0, anomalies: m };
+        let c = ClimateChange { warming_k_per_century: 0.0, anomalies: m, ..Default::default() };
         assert_eq!(c.anomaly_gaps(), vec![2]);
         assert_eq!(ClimateChange::default().anomaly_gaps(), Vec::<u32>::new());
     }

@@ -26,6 +26,7 @@ pub mod stats;
 pub mod step;
 pub mod tiles;
 pub mod trees;
+pub mod water;
 pub mod world;
 
 pub use scenario::{Scenario, Start, TerrainSpec};

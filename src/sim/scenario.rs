@@ -325,11 +325,12 @@ pub use crate::terrain::NO_SEA_LEVEL_M;
 
 /// Checks `[climate]`: every value finite; latitude −90–90°, lapse rate −15–5 K/km,
 /// reference temperature −30–40 °C, K/R/N 1–9, wind direction 0–360°, elevations
-/// (reference, sea level) −500–9000 m. `ctx` names the scenario file.
+/// (reference, sea level) −500–9000 m, precipitation 50–10000 mm, annual temperature range
+/// 0–60 K, soil water capacity 10–1000 mm, warming −20–20 K per century. `ctx` names the scenario file.
 ///
 /// Errors: [`Error::Invalid`] naming `climate.<field>`, the value and the range.
 pub fn validate_climate(c: &Climate, ctx: &str) -> Result<()> {
-    let checks: [(&str, f64, String, f64, f64, &str); 9] = [
+    let checks: [(&str, f64, String, f64, f64, &str); 12] = [
         ("latitude_deg", c.latitude_deg, c.latitude_deg.to_string(), -90.0, 90.0, "degrees"),
         ("reference_temperature_c", c.reference_temperature_c as f64, c.reference_temperature_c.to_string(), -30.0, 40.0, "°C"),
         ("reference_elevation_m", c.reference_elevation_m as f64, c.reference_elevation_m.to_string(), -500.0, 9000.0, "m"),
@@ -339,6 +340,9 @@ pub fn validate_climate(c: &Climate, ctx: &str) -> Result<()> {
         ("nitrogen_n", c.nitrogen_n as f64, c.nitrogen_n.to_string(), 1.0, 9.0, "(index)"),
         ("sea_level_m", c.sea_level_m as f64, c.sea_level_m.to_string(), -500.0, 9000.0, "m"),
         ("wind_from_deg", c.wind_from_deg as f64, c.wind_from_deg.to_string(), 0.0, 360.0, "degrees"),
+        ("precipitation_mm", c.precipitation_mm as f64, c.precipitation_mm.to_string(), 50.0, 10_000.0, "mm per year"),
+        ("temperature_range_k", c.temperature_range_k as f64, c.temperature_range_k.to_string(), 0.0, 60.0, "K (warmest minus coldest monthly mean)"),
+        ("soil_water_capacity_mm", c.soil_water_capacity_mm as f64, c.soil_water_capacity_mm.to_string(), 10.0, 1000.0, "mm of plant-available water"),
     ];
     for (field, v, shown, lo, hi, unit) in checks {
         if !(v.is_finite() && v >= lo && v <= hi) {

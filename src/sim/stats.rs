@@ -66,6 +66,13 @@ pub struct StandRow {
     pub temperature_offset_k: f64,
     /// The year's precipitation factor (1 under a constant climate).
     pub precipitation_factor: f64,
+    /// The year's drought index (0–1), site mean: ForClim's growing-season `1 − AET/PET` of each
+    /// site cell's monthly water balance ([`crate::sim::water`]) under the year's climate,
+    /// averaged over the site's unmasked light cells ([`drought_sums`]); under a constant climate
+    /// the base climate's, the same every year. The species respond to its rise over the base
+    /// climate's, cell by cell (`sim::phases::climate`). Round 44.
+    #[serde(default)]
+    pub drought_index: f64,
     /// The figures of each `[[management]]` entry's area this year, scenario order (empty
     /// without management): the run's `management_table.csv` ([`entry_rows`]).
     #[serde(default)]
@@ -731,6 +738,54 @@ pub fn h100_by(dbh: &[f32], height: &[f32], a: f64, stems: u64, reduce: &mut Red
     Ok(unfixed(total) / k as f64)
 }
 
+/// Fixed-point unit of [`drought_sums`]: a drought index of 1 is `2^24`.
+pub const DROUGHT_ONE: f64 = (1u64 << 24) as f64;
+
+/// The stand table's drought-index sums of `site` in `year`: the unmasked light cells this world
+/// steps (`site.light_site`: every light cell in one process, a tile's own) and the sum of
+/// their site cells' drought indices ([`crate::sim::water::WaterClimate::cell_drought_index`]
+/// under the year's temperature offset and precipitation factor), each rounded to
+/// [`DROUGHT_ONE`]: integers, so the parts of a tiled run add to one process's sums exactly.
+/// Under a constant climate the sums are the base climate's, computed once
+/// (`site.drought_base`). The row's index is `sum / count / DROUGHT_ONE`.
+pub fn drought_sums(site: &Site, year: u32) -> (u64, u64) {
+    let of = |dt: f64, pf: f64| {
+        let c = &site.conditions;
+        let lat = c.geo.latitude_deg;
+        let water = &site.climate_change.water;
+        let di: Vec<f32> = c
+            .mask
+            .data
+            .par_iter()
+            .zip(c.temperature_c.data.par_iter())
+            .zip(c.twi.data.par_iter())
+            .with_min_len(1024)
+            .map(|((m, t), twi)| if *m { water.cell_drought_index(*t as f64, *twi as f64, lat, dt, pf) as f32 } else { 0.0 })
+            .collect();
+        let (mut n, mut sum) = (0u64, 0u64);
+        for &k in site.light_site.iter().filter(|&&k| k != u32::MAX) {
+            n += 1;
+            sum += (di[c.held(k as usize)] as f64 * DROUGHT_ONE).round() as u64;
+        }
+        (n, sum)
+    };
+    if site.climate_change.is_active() {
+        let (dt, pf) = site.climate_change.of_year(year);
+        of(dt, pf)
+    } else {
+        *site.drought_base.get_or_init(|| of(0.0, 1.0))
+    }
+}
+
+/// The site-mean drought index of [`drought_sums`]' `(count, sum)` (0 without a cell).
+pub fn drought_mean((n, sum): (u64, u64)) -> f64 {
+    if n == 0 {
+        0.0
+    } else {
+        sum as f64 / n as f64 / DROUGHT_ONE
+    }
+}
+
 /// Computes the stand-table row of the world's current state (deaths from `w.scratch.dead`):
 /// exact sums ([`RowSums`]), the top height ([`top_height`]) and the per-species rows
 /// ([`species_rows`]). At year 0 (a world as [`World::new`] starts it) it is the state after
@@ -744,6 +799,7 @@ pub fn stand_row(w: &World) -> StandRow {
     let sums = RowSums::of(&w.site, t);
     let h100 = top_height_by(&t.dbh, &t.height, w.site.area_ha.max(1e-9), sums.stems, &mut alone).unwrap_or(0.0);
     let mut row = row_of(&w.site, w.stand.year, &sums, h100, w.stand.cohorts.total_stems(), deaths, w.scratch.regen_year, harvest_sums(&w.site, &w.scratch.dead));
+    row.drought_index = drought_mean(drought_sums(&w.site, w.stand.year));
     let hs = species_top_heights(&w.site, t, &sums.stems_sp, &mut alone).unwrap_or_else(|_| vec![0.0; sums.stems_sp.len()]);
     (row.species, row.deaths_volume_m3_ha) = species_rows(&w.site, &sums, &DeadSums::of(&w.site, &w.scratch.dead), &hs);
     // (no management table row at year 0: nothing was managed before the first year)
@@ -761,7 +817,8 @@ pub fn stand_row(w: &World) -> StandRow {
 /// and regeneration counts, and the year's harvest (stems ≥ 1.3 m, volume m³:
 /// [`harvest_sums`]) ([`stand_row`] on a world; a tiled run's ranks sum these,
 /// `sim::tiles`). The year's temperature offset and precipitation factor come from the site's
-/// climate change.
+/// climate change; the drought index is left 0 for the caller ([`drought_sums`], summed over a
+/// tiled run's parts).
 #[allow(clippy::too_many_arguments)]
 pub fn row_of(site: &Site, year: u32, s: &RowSums, h100: f64, regeneration_stems: u64, deaths: [u64; super::trees::N_CAUSES], regen_year: RegenYear, harvest: (u64, f64)) -> StandRow {
     let w = site;
@@ -794,6 +851,7 @@ pub fn row_of(site: &Site, year: u32, s: &RowSums, h100: f64, regeneration_stems
         harvest_volume_m3_ha: harvest.1 / a,
         temperature_offset_k: dt,
         precipitation_factor: pf,
+        drought_index: 0.0,
         management: Vec::new(),
         deaths_volume_m3_ha: 0.0,
         species: Vec::new(),

@@ -1127,6 +1127,9 @@ impl Tile {
         let ry = &w.scratch.regen_year;
         words.extend([w.stand.cohorts.total_stems(), ry.germinated, ry.recruited, report.established as u64, w.scratch.dead.len() as u64]);
         words.extend(ry.dead);
+        // the drought index over each rank's own light cells (round 44)
+        let (dn, ds) = super::stats::drought_sums(&w.site, w.stand.year);
+        words.extend([dn, ds]);
         // the dead per species and cause (stems, volume) for the per-species table, last
         words.extend(super::stats::DeadSums::of(&w.site, &w.scratch.dead).words());
         let got = t.all_sum(words)?;
@@ -1144,6 +1147,7 @@ impl Tile {
         for v in ry.dead.iter_mut() {
             *v = next()?;
         }
+        let drought = (next()?, next()?);
         let dw: Vec<u64> = rest.collect();
         if dw.len() != super::stats::DeadSums::n_words(np) {
             return Err(Error::Exchange { peer: 0, reason: "stand-table sums of the dead cut short".into() });
@@ -1157,6 +1161,7 @@ impl Tile {
         report.died = died;
         report.row = (t.rank() == 0).then(|| {
             let mut r = super::stats::row_of(&w.site, w.stand.year, &sums, h100, stems, deaths, ry, self.harvest);
+            r.drought_index = super::stats::drought_mean(drought);
             (r.species, r.deaths_volume_m3_ha) = super::stats::species_rows(&w.site, &sums, &dead, &hs);
             r
         });
@@ -1781,6 +1786,7 @@ fn clone_for_tile(global: &World, layout: &Layout, me: usize) -> Result<World> {
         window: Some(rect),
         management: g.management.clone(),
         climate_change: g.climate_change.clone(),
+        drought_base: std::sync::OnceLock::new(),
     };
     let mut seeds = Vec::with_capacity(global.stand.seeds.len());
     for (p, sg) in global.stand.seeds.iter().enumerate() {

@@ -157,6 +157,9 @@ pub struct Site {
     pub management: Vec<super::management::Operation>,
     /// The climate's change over the run (`[climate] warming_k_per_century`, `anomalies_file`).
     pub climate_change: super::climate_change::ClimateChange,
+    /// The stand table's drought-index sums of the base climate over this world's light cells
+    /// ([`super::stats::drought_sums`]), computed on first use; empty on a new or cut site.
+    pub drought_base: std::sync::OnceLock<(u64, u64)>,
 }
 
 /// The stand's state: everything that evolves from year to year and that a checkpoint keeps.
@@ -583,6 +586,7 @@ impl World {
                 window: None,
                 management: Vec::new(),
                 climate_change: super::climate_change::ClimateChange::of(&scenario.climate, &ctx)?,
+                drought_base: std::sync::OnceLock::new(),
             },
             stand: Stand { trees: TreeStore::default(), year: 0, cohorts: Cohorts::default(), seeds },
             scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], canopy_top: Vec::new(), dead: Vec::new(), regen_year: RegenYear::default(), entry_harvest: Vec::new() },
@@ -633,6 +637,7 @@ impl World {
                 window: None,
                 management: Vec::new(),
                 climate_change: super::climate_change::ClimateChange::of(&scenario.climate, &ctx)?,
+                drought_base: std::sync::OnceLock::new(),
             },
             stand: Stand::default(),
             scratch: Scratch::default(),

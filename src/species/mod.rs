@@ -207,12 +207,12 @@ pub struct LifeHistory {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub foliage: Option<Foliage>,
     /// Drought tolerance (0.05–0.6): the largest drought index (0 none … 1 no water for
-    /// transpiration, [`drought_index`]) at which the species still grows, as ForClim's and
+    /// transpiration, [`crate::sim::water::drought_index`]) at which the species still grows, as ForClim's and
     /// LandClim's species parameter (Bugmann & Cramer 1998, For. Ecol. Manage. 103:247–263;
     /// LandClim's `droughtTol`, Schumacher et al. 2004, values in species/sources/
     /// species_traits.csv). In a year drier than the base climate growth and establishment are
-    /// reduced by [`drought_factor`] of the year's drought index ([`Species::drought_response`];
-    /// issue 35, round 39). Optional: without it the species does not respond to drought
+    /// reduced by [`drought_factor`] of the rise of the year's drought index over the base
+    /// climate's ([`Species::drought_response`]; issue 35, rounds 39 and 44). Optional: without it the species does not respond to drought
     /// (beyond its moisture niche F).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub drought_tolerance: Option<f32>,
@@ -478,30 +478,6 @@ pub fn species_id_suggestion(s: &str) -> String {
     } else {
         format!("sp_{}", out.trim_start_matches('_'))
     }
-}
-
-/// Drought index per unit of the year's moisture deficit (Ellenberg F units below the cell's
-/// base F). A precipitation factor `p` moves F by `5 (p − 1)`
-/// ([`crate::sim::climate_change::F_INDEX_PER_PRECIP`]), so the drought index of a year is
-/// `1 − p`, the year's relative precipitation deficit.
-///
-/// Model choice (ESTIMATE): ForClim's drought index is the growing season's `1 − AET/PET`
-/// (Bugmann & Cramer 1998), from monthly precipitation, temperature and a soil bucket, which a
-/// Sylva site does not have. The base climate's moisture (the F index from the wetness index)
-/// stays in each species' F niche; the drought index counts only what a year lacks against it,
-/// as `1 − AET/PET` would on a site whose normal year meets its evaporative demand and whose
-/// actual evapotranspiration falls with the year's precipitation. (Read from the site's F
-/// itself, as an absolute index 0.2 · (5 − F), the default Coweeta window, mean F 3.4 from its
-/// steep slopes, stopped nearly every species: measured in round 39, docs/management.md.)
-pub const DROUGHT_INDEX_PER_F: f32 = 0.2;
-
-/// Drought index (0–1) of a year whose moisture index F is `deficit_f` units below the cell's
-/// base F: `clamp(DROUGHT_INDEX_PER_F · deficit_f, 0, 1)` (0 in a normal or wetter year; a
-/// precipitation factor of 0.85 gives 0.15). A stand-in for ForClim's growing-season
-/// `1 − AET/PET` (see [`DROUGHT_INDEX_PER_F`]). NaN gives 0.
-pub fn drought_index(deficit_f: f32) -> f32 {
-    let d = DROUGHT_INDEX_PER_F * deficit_f;
-    if d > 0.0 { d.min(1.0) } else { 0.0 }
 }
 
 /// Growth reduction factor (0–1) of drought index `di` for a species of drought tolerance
@@ -1073,13 +1049,14 @@ impl Species {
         self.suitability_factors(indices).into_iter().fold(1.0f32, f32::min)
     }
 
-    /// The species' growth reduction (0–1) in a year whose moisture index F lies `deficit_f`
-    /// units below the cell's base F ([`drought_index`], [`drought_factor`] of
-    /// `life.drought_tolerance`; 1 for a species without one, or in a year no drier than the
-    /// base climate). Issue 35, round 39: the climate phase multiplies it onto the suitability.
-    pub fn drought_response(&self, deficit_f: f32) -> f32 {
+    /// The species' growth reduction (0–1) in a year whose drought index lies `di_rise` above
+    /// the cell's index under the base climate ([`crate::sim::water`]): [`drought_factor`] of
+    /// the rise and `life.drought_tolerance` (1 for a species without one, or in a year no
+    /// drier than the base climate). Issue 35 (round 39, the water balance round 44): the climate
+    /// phase multiplies it onto the suitability.
+    pub fn drought_response(&self, di_rise: f32) -> f32 {
         match self.life.drought_tolerance {
-            Some(tol) => drought_factor(drought_index(deficit_f), tol),
+            Some(tol) => drought_factor(di_rise, tol),
             None => 1.0,
         }
     }

@@ -1,13 +1,16 @@
 //! Climate (the year's start): under a changing climate ([`ClimateChange`]), the year's
-//! temperature offset and precipitation factor move every cell's T (and F) index
-//! ([`shifted_indices`]); the suitability of every cell for every pool species and of every tree
-//! for its species follow, times each species' drought response to the year's moisture deficit
-//! ([`crate::species::Species::drought_response`], issue 35 round 39: a dry year cuts growth by
-//! drought tolerance), so establishment (regeneration) and growth respond this year. Under a
+//! temperature offset moves every cell's T index ([`shifted_indices`]), and the year's
+//! temperature and precipitation move every cell's soil-water balance ([`crate::sim::water`]);
+//! the suitability of every cell for every pool species and of every tree for its species
+//! follow: the niche of the shifted indices times each species' drought response to the rise of
+//! the cell's drought index over its index under the base climate
+//! ([`crate::species::Species::drought_response`]; issue 35: round 39's drought term, round 44's
+//! water balance), so establishment (regeneration) and growth respond this year. Under a
 //! constant climate it does nothing. Per cell and per tree, in parallel, each value written
 //! once: the result does not depend on the thread count.
 
-use crate::conditions::{factor, SiteConditions};
+use crate::conditions::SiteConditions;
+use crate::sim::water::WaterClimate;
 use crate::sim::climate_change::{shifted_indices, ClimateChange};
 use crate::sim::trees::TreeStore;
 use crate::species::{SpeciesId, SpeciesLibrary};
@@ -39,14 +42,15 @@ pub fn run(c: ClimatePhase<'_>) -> (f64, f64) {
         return (dt, pf);
     }
     let site = c.site;
+    // each cell's rise of the drought index over the base climate's (round 44)
+    let rise = drought_rise(site, &c.change.water, dt, pf);
     for (p, out) in c.suitability.iter_mut().enumerate() {
         let sp = &c.lib.species[c.pool[p] as usize];
-        out.par_iter_mut().zip(site.indices.data.par_iter()).zip(site.mask.data.par_iter()).with_min_len(4096).for_each(|((o, ix), m)| {
+        out.par_iter_mut().zip(site.indices.data.par_iter()).zip(site.mask.data.par_iter()).zip(rise.par_iter()).with_min_len(4096).for_each(|(((o, ix), m), r)| {
             *o = if *m {
-                let sh = shifted_indices(ix, dt, pf);
                 // the niche of the year's indices, times the drought response to the year's
-                // moisture deficit against the base climate (issue 35, round 39)
-                sp.suitability(&sh) * sp.drought_response(ix[factor::F] - sh[factor::F])
+                // drought against the base climate's
+                sp.suitability(&shifted_indices(ix, dt)) * sp.drought_response(*r)
             } else {
                 0.0
             };
@@ -64,4 +68,28 @@ pub fn run(c: ClimatePhase<'_>) -> (f64, f64) {
         }
     });
     (dt, pf)
+}
+
+/// The rise (≥ 0) of every held cell's drought index in a year `dt_k` kelvin warmer than the
+/// base climate with precipitation factor `precip`, over the cell's index in the base climate
+/// ([`WaterClimate::cell_drought_index`] of the cell's mean annual temperature and wetness index
+/// at the site's latitude); 0 on masked cells. Per cell, in parallel: the same on a tile as in
+/// one process.
+pub fn drought_rise(site: &SiteConditions, water: &WaterClimate, dt_k: f64, precip: f64) -> Vec<f32> {
+    let lat = site.geo.latitude_deg;
+    site.mask
+        .data
+        .par_iter()
+        .zip(site.temperature_c.data.par_iter())
+        .zip(site.twi.data.par_iter())
+        .with_min_len(1024)
+        .map(|((m, t), twi)| {
+            if !*m {
+                return 0.0;
+            }
+            let (t, twi) = (*t as f64, *twi as f64);
+            let base = water.cell_drought_index(t, twi, lat, 0.0, 1.0);
+            (water.cell_drought_index(t, twi, lat, dt_k, precip) - base).max(0.0) as f32
+        })
+        .collect()
 }
