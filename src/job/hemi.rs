@@ -18,7 +18,10 @@
 //! taken looking up: north at the top, east on the left.
 //!
 //! **Figures.** `gap_fraction` (sky pixels in the circle), `openness` (the expected value: the
-//! mean transmission over the circle, without the dithering) and `simulated_light`: the light
+//! mean transmission over the circle, without the dithering), `diffuse_site_factor` (the
+//! transmission weighted by the standard overcast sky's irradiance on a horizontal surface, the
+//! figure to hold against `simulated_diffuse`, the light phase's diffuse part as the run's
+//! `[light] diffuse` takes it) and `simulated_light`: the light
 //! phase's relative light (0–1.5) at that place and 1.3 m, from the same snapshot's trees (the
 //! crowns stamped on the scenario's light cells, `LAI_above` and the zenith/sun mix of
 //! `sim::phases::light`, times the place's relative insolation; the scenario's obstacles are
@@ -70,8 +73,19 @@ pub struct HemiStats {
     pub gap_fraction: f64,
     /// Mean transmission of the rays in the circle (0–1): the gap fraction's expected value.
     pub openness: f64,
+    /// Indirect (diffuse) site factor (0–1): the rays' transmission weighted by the standard
+    /// overcast sky's irradiance on a horizontal surface, `L(θ) cos θ` with `L ∝ (1 + 2 cos θ)`
+    /// (Moon & Spencer 1942), as hemispherical-photograph software gives it (Rich 1990; Frazer
+    /// et al. 1999, Gap Light Analyzer). The figure to compare with `simulated_diffuse`: the gap
+    /// fraction and openness weight every solid angle alike, the horizon as much as the zenith.
+    pub diffuse_site_factor: f64,
     /// The light phase's relative light at the place, 1.3 m above the ground (0–1.5).
     pub simulated_light: f64,
+    /// The light phase's diffuse part at the place, 1.3 m above the ground (0–1, before the
+    /// relative insolation): its transmission as the run's `[light] diffuse` takes it.
+    pub simulated_diffuse: f64,
+    /// The run's `[light] diffuse` (`column` or `sky`).
+    pub diffuse: crate::sim::light_grid::Diffuse,
     /// Trees within [`VIEW_RADIUS_M`].
     pub trees: usize,
     /// Projection of the image.
@@ -169,11 +183,12 @@ pub fn hemispherical_photo(run_dir: &Path, library: &SpeciesLibrary, o: &HemiOpt
     let half = n as f32 * 0.5;
     let sky_top = [232u8, 240, 250];
     // rows of pixels in parallel; each pixel's colour and (in circle, sky, transmission)
-    let px: Vec<(Vec<[u8; 3]>, u64, u64, f64)> = (0..n)
+    let px: Vec<(Vec<[u8; 3]>, u64, u64, f64, [f64; 2])> = (0..n)
         .into_par_iter()
         .map(|j| {
             let mut line = vec![[0u8; 3]; n];
             let (mut inside, mut sky, mut trans) = (0u64, 0u64, 0.0f64);
+            let mut soc = [0.0f64; 2]; // Σ w·t, Σ w under the standard overcast sky
             for (i, c) in line.iter_mut().enumerate() {
                 // image x to the right = west (looking up, east is on the left), y down = south
                 let (u, v) = ((i as f32 + 0.5 - half) / half, (j as f32 + 0.5 - half) / half);
@@ -189,6 +204,10 @@ pub fn hemispherical_photo(run_dir: &Path, library: &SpeciesLibrary, o: &HemiOpt
                 let d = [st * east, st * north, ct];
                 let t = transmission(&grid, &crowns, &horizon, d);
                 trans += t as f64;
+                // each pixel spans the same solid angle: weight L(θ) cos θ ∝ (1 + 2 cos θ) cos θ
+                let w = ((1.0 + 2.0 * ct) * ct).max(0.0) as f64;
+                soc[0] += w * t as f64;
+                soc[1] += w;
                 let hsh = crate::rng::hash(&[i as u64, j as u64, 0x6865_6d69]);
                 let lit = ((hsh >> 11) as f64 / (1u64 << 53) as f64) < t as f64;
                 if lit {
@@ -201,21 +220,32 @@ pub fn hemispherical_photo(run_dir: &Path, library: &SpeciesLibrary, o: &HemiOpt
                     *c = [34, 44, 30];
                 }
             }
-            (line, inside, sky, trans)
+            (line, inside, sky, trans, soc)
         })
         .collect();
     let mut img = RgbImage::new(o.size_px, o.size_px);
     let (mut inside, mut sky, mut trans) = (0u64, 0u64, 0.0f64);
-    for (j, (line, a, b, t)) in px.into_iter().enumerate() {
+    let mut soc = [0.0f64; 2];
+    for (j, (line, a, b, t, w)) in px.into_iter().enumerate() {
         for (i, c) in line.into_iter().enumerate() {
             img.put_pixel(i as u32, j as u32, image::Rgb(c));
         }
         inside += a;
         sky += b;
         trans += t;
+        soc = [soc[0] + w[0], soc[1] + w[1]];
     }
-    let simulated_light = simulated_light(&site, &sc, library, &rows, o.x_m, o.y_m) as f64;
-    let stats = HemiStats { year, camera_m: [o.x_m, o.y_m, eye_h as f64], gap_fraction: sky as f64 / inside.max(1) as f64, openness: trans / inside.max(1) as f64, simulated_light, trees: crowns.len(), projection: "equisolid, north up, east left (looking up)" };
+    let (simulated_light, simulated_diffuse) = simulated_light(&site, &sc, library, &rows, o.x_m, o.y_m);
+    let stats = HemiStats {
+        year,
+        camera_m: [o.x_m, o.y_m, eye_h as f64],
+        gap_fraction: sky as f64 / inside.max(1) as f64,
+        openness: trans / inside.max(1) as f64,
+        diffuse_site_factor: soc[0] / soc[1].max(1e-12),
+        simulated_light: simulated_light as f64,
+        simulated_diffuse: simulated_diffuse as f64,
+        diffuse: sc.light.diffuse,
+        trees: crowns.len(), projection: "equisolid, north up, east left (looking up)" };
     Ok((img, stats))
 }
 
@@ -398,35 +428,54 @@ fn horizon_angles(site: &SiteConditions, x: f64, y: f64, eye: f32) -> Vec<f32> {
 }
 
 /// The light phase's relative light (`sim::phases::light`, 0–1.5) at `(x, y)`, 1.3 m above the
-/// ground, from the trees `rows`: their crowns' leaf areas stamped on the scenario's light cells
-/// (equal-area squares, area-weighted), `LAI_above` in the place's cell and in the cell towards
-/// the equator at the sun's rise, mixed as the light phase mixes them, times the place's
-/// relative insolation (the site's insolation over its median, 0.2–1.5).
-fn simulated_light(site: &SiteConditions, sc: &Scenario, library: &SpeciesLibrary, rows: &[InventoryRow], x: f64, y: f64) -> f32 {
+/// ground, and its diffuse part's transmission (0–1), from the trees `rows`: their crowns' leaf
+/// areas stamped on the scenario's light cells (equal-area squares, area-weighted) at their top
+/// heights, the diffuse part as the scenario's `[light] diffuse` takes it (the column above the
+/// place's cell, or the sky's sectors from the cell's centre, `light::Sky`), the direct part from
+/// `LAI_above` in the place's cell and in the cell towards the equator at the sun's rise, mixed
+/// as the light phase mixes them, times the place's relative insolation (the site's insolation
+/// over its median, 0.2–1.5).
+fn simulated_light(site: &SiteConditions, sc: &Scenario, library: &SpeciesLibrary, rows: &[InventoryRow], x: f64, y: f64) -> (f32, f32) {
     let cell = sc.light_cell_m;
     let lat = site.geo.latitude_deg as f32;
     let elev = crate::sun::noon_equinox_elevation_deg(lat).clamp(10.0, 80.0).to_radians();
     let (col, row) = ((x / cell).floor(), (y / cell).floor());
     let sun_row = row + crate::sun::equatorward(lat) as f64;
     let z = CAMERA_HEIGHT_M;
-    let lai_above = |col: f64, row: f64, z: f32| -> f32 {
-        let (cx0, cy0) = (col * cell, row * cell);
-        rows.iter()
-            .filter(|r| r.height_m > z)
-            .filter_map(|r| {
-                let sp = &library.species[library.find(&r.species)? as usize];
-                let rr = r.crown_radius_m.max(0.05) as f64;
-                let s = rr * 0.886_226_9; // half side of the equal-area square
+    // the canopy entries (top height, leaf-area index) per light cell, tallest first
+    let mut cells: std::collections::HashMap<(i64, i64), Vec<(f32, f32)>> = std::collections::HashMap::new();
+    for r in rows {
+        let Some(s) = library.find(&r.species) else { continue };
+        let sp = &library.species[s as usize];
+        let rr = r.crown_radius_m.max(0.05) as f64;
+        let s = rr * 0.886_226_9; // half side of the equal-area square
+        let la = std::f64::consts::PI * rr * rr * crown_lai(sp.life.shade_tolerance) as f64;
+        for cr in ((r.y_m - s) / cell).floor() as i64..=((r.y_m + s) / cell).floor() as i64 {
+            for cc in ((r.x_m - s) / cell).floor() as i64..=((r.x_m + s) / cell).floor() as i64 {
+                let (cx0, cy0) = (cc as f64 * cell, cr as f64 * cell);
                 let ox = ((r.x_m + s).min(cx0 + cell) - (r.x_m - s).max(cx0)).max(0.0);
                 let oy = ((r.y_m + s).min(cy0 + cell) - (r.y_m - s).max(cy0)).max(0.0);
                 let share = ox * oy / (4.0 * s * s);
-                let la = std::f64::consts::PI * rr * rr * crown_lai(sp.life.shade_tolerance) as f64;
-                Some((la * share / (cell * cell)) as f32)
-            })
-            .sum()
+                if share > 0.0 {
+                    cells.entry((cc, cr)).or_default().push((r.height_m, (la * share / (cell * cell)) as f32));
+                }
+            }
+        }
+    }
+    for v in cells.values_mut() {
+        v.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.total_cmp(&b.1)));
+    }
+    let top = cells.values().filter_map(|v| v.first().map(|e| e.0)).fold(0.0f32, f32::max);
+    let lai_above = |cc: i64, cr: i64, z: f32| -> f32 { cells.get(&(cc, cr)).map_or(0.0, |v| v.iter().take_while(|e| e.0 > z).map(|e| e.1).sum()) };
+    let own = lai_above(col as i64, row as i64, z);
+    let sun = lai_above(col as i64, sun_row as i64, z + (cell as f32) * elev.tan());
+    let diffuse = match sc.light.diffuse {
+        crate::sim::light_grid::Diffuse::Column => (-K_EXT * own).exp(),
+        crate::sim::light_grid::Diffuse::Sky => {
+            let m = cell as f32;
+            crate::sim::phases::light::Sky::standard_overcast().transmission(|cc, cr, z0, z1| lai_above(cc as i64, cr as i64, z0) - lai_above(cc as i64, cr as i64, z1), ((col as f32 + 0.5) * m, (row as f32 + 0.5) * m), z, m, top)
+        }
     };
-    let own = lai_above(col, row, z);
-    let sun = lai_above(col, sun_row, z + (cell as f32) * elev.tan());
     let ins = &site.insolation_kwh_m2;
     let mut vals: Vec<f32> = ins.data.iter().copied().filter(|v| v.is_finite()).collect();
     let median = if vals.is_empty() {
@@ -438,7 +487,7 @@ fn simulated_light(site: &SiteConditions, sc: &Scenario, library: &SpeciesLibrar
     // the light cell's centre, as the light phase takes it
     let here = site.cell_at((col + 0.5) * cell, (row + 0.5) * cell).map_or(median, |(c, r)| *ins.get(c, r));
     let rel = if here.is_finite() && median > 0.0 { (here / median).clamp(0.2, 1.5) } else { 1.0 };
-    rel * (W_ZENITH * (-K_EXT * own).exp() + (1.0 - W_ZENITH) * (-K_EXT * (0.5 * own + 0.5 * sun) / elev.sin()).exp())
+    (rel * (W_ZENITH * diffuse + (1.0 - W_ZENITH) * (-K_EXT * (0.5 * own + 0.5 * sun) / elev.sin()).exp()), diffuse)
 }
 
 #[cfg(test)]

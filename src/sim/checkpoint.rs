@@ -250,6 +250,7 @@ pub fn site_identity(c: &crate::conditions::SiteConditions) -> Vec<(String, Stri
 
 /// The identity of the run of `w`: what a resumed run must share with the one that wrote the
 /// checkpoint, as (field, value) pairs in a fixed order. Fields: `seed`; `light_cell_m`;
+/// `light diffuse` (only for `[light] diffuse = "sky"`);
 /// `species pool` (ids in pool order); `species <id>` (the species' parameters as TOML, so a
 /// difference names the parameter); `terrain` (grid size, cell size, elevation range and a
 /// CRC-32 of the elevations and the valid-cell mask: a changed DEM file or window);
@@ -269,6 +270,10 @@ pub fn identity(w: &World) -> Vec<(String, String)> {
         out.push((format!("species {}", sp.id), sp.to_toml_string().unwrap_or_else(|_| format!("{sp:?}"))));
     }
     out.extend(s.whole_identity.clone().unwrap_or_else(|| site_identity(&s.conditions)));
+    // the sky model of the diffuse light, only where the scenario takes it (`[light] diffuse`)
+    if s.light.diffuse != crate::sim::light_grid::Diffuse::Column {
+        out.push(("light diffuse".into(), format!("{:?}", s.light.diffuse).to_lowercase()));
+    }
     out.push(("seed rain".into(), format!("{:?} seeds/m²/yr", s.seed_rain)));
     out.push(("obstacles".into(), format!("{} obstacles, CRC-32 {:08x}", s.obstacles.len(), crc32fast::hash(format!("{:?}", s.obstacles).as_bytes()))));
     // management and a changing climate, only where the scenario has them (so that the identity

@@ -20,12 +20,50 @@ pub struct LightGrid {
     pub cols: usize,
     /// Rows: `ceil(extent_y / cell_m)`, at least 1.
     pub rows: usize,
+    /// Where the light phase's diffuse part comes from (the scenario's `[light] diffuse`):
+    /// [`Diffuse::Column`] (the default) or [`Diffuse::Sky`].
+    pub diffuse: Diffuse,
 }
+
+/// The diffuse part of the light phase (`sim::phases::light`), the scenario's
+/// `[light] diffuse = "column" | "sky"`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Diffuse {
+    /// From the leaf-area index straight above the cell only, `e^(−k LAI_above)` (rounds 1–43).
+    #[default]
+    Column,
+    /// From the sky hemisphere: zenith bands and azimuth sectors under the standard overcast
+    /// sky, each sector's ray through the neighbouring cells' canopy (`light::sky_diffuse`,
+    /// after Canham 1988's gap light index), reaching at most [`SKY_REACH_M`].
+    Sky,
+}
+
+/// How far (m, horizontally) a sky sector's ray of [`Diffuse::Sky`] is followed through the
+/// canopy before the rest of its path counts as open. 150 m: a ray 82.5° from the zenith (the
+/// lowest band's centre) from the ground reaches 20 m at 150 m, the top layer of a young stand;
+/// it sets a tiled run's halo too (`sim::tiles::Reach`). Sylva choice.
+pub const SKY_REACH_M: f64 = 150.0;
 
 impl LightGrid {
     /// The grid of `cell_m`-metre cells over an extent `(x, y)` metres.
     pub fn new(extent: (f64, f64), cell_m: f64) -> Self {
-        LightGrid { cell_m, cols: ((extent.0 / cell_m).ceil() as usize).max(1), rows: ((extent.1 / cell_m).ceil() as usize).max(1) }
+        LightGrid { cell_m, cols: ((extent.0 / cell_m).ceil() as usize).max(1), rows: ((extent.1 / cell_m).ceil() as usize).max(1), diffuse: Diffuse::Column }
+    }
+
+    /// The same grid with the diffuse part `diffuse` (the scenario's `[light] diffuse`).
+    pub fn with_diffuse(self, diffuse: Diffuse) -> Self {
+        LightGrid { diffuse, ..self }
+    }
+
+    /// Cells (at least 0) beyond its own that the light of a cell reads: 1 (the row towards
+    /// the equator, the sun's direction) for [`Diffuse::Column`], `⌈SKY_REACH_M / cell_m⌉ + 1`
+    /// in every direction for [`Diffuse::Sky`].
+    pub fn read_cells(&self) -> usize {
+        match self.diffuse {
+            Diffuse::Column => 1,
+            Diffuse::Sky => (SKY_REACH_M / self.cell_m).ceil() as usize + 1,
+        }
     }
 
     /// Number of cells, `cols · rows`.

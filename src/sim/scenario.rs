@@ -58,6 +58,9 @@ pub struct Scenario {
     /// Light grid cell size (m), 2–20; default 5.
     #[serde(default = "default_light_cell")]
     pub light_cell_m: f64,
+    /// `[light]`: how the light phase takes its diffuse part (omitted: as rounds 1–43).
+    #[serde(default, skip_serializing_if = "LightSection::is_default")]
+    pub light: LightSection,
     /// Obstacles (`[[obstacle]]` entries: box, wall, sphere, footprint; see
     /// [`super::obstacle`]).
     #[serde(default, rename = "obstacle", skip_serializing_if = "Vec::is_empty")]
@@ -80,6 +83,25 @@ fn default_checkpoint_every() -> u32 {
 }
 fn default_light_cell() -> f64 {
     5.0
+}
+
+/// `[light]`: the light phase's options (`sim::phases::light`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LightSection {
+    /// `diffuse = "column"` (default: the diffuse part from the leaf area straight above the
+    /// light cell) or `"sky"` (from the sky hemisphere under the standard overcast sky, each
+    /// sector's ray through the neighbouring cells' canopy: Canham 1988's gap light index;
+    /// docs/model.md "Light"). Any other value is refused naming `[light] diffuse`.
+    #[serde(default)]
+    pub diffuse: super::light_grid::Diffuse,
+}
+
+impl LightSection {
+    /// True for the default (`diffuse = "column"`), which a written scenario leaves out.
+    pub fn is_default(&self) -> bool {
+        *self == LightSection::default()
+    }
 }
 
 /// `[terrain]`: exactly one source, plus an optional window.
@@ -548,6 +570,7 @@ fn field_hint(key: &str) -> Option<&'static str> {
         "still_years" => "the years of the stills of `sylva run`, a list of whole numbers within the run, ascending, e.g. [20, 40]",
         "checkpoint_every" => "years between checkpoints, a whole number ≥ 0 (0: only at the end)",
         "light_cell_m" => "the light grid's cell size, a number 2–20 (m)",
+        "diffuse" => "[light] diffuse: \"column\" (the leaf area straight above) or \"sky\" (the sky hemisphere through the neighbouring canopy)",
         "seasonal_snapshots" => "true or false",
         // [[management]]'s years (round 30's trial read "0 to 4294967295" for every_years)
         "every_years" => "years between two operations of a [[management]] entry, a whole number 1–1000",

@@ -247,7 +247,8 @@ pub struct Reach {
     /// Light ([`Halo::Crowns`]): the largest possible crown radius of the pool,
     /// `crown_c0 + crown_c1 · max_dbh_cm` (crowns only shrink from the open-grown radius), plus
     /// two light cells (the cell a crown covers and the next towards the equator, whose canopy
-    /// the sun direction reads).
+    /// the sun direction reads), or with `[light] diffuse = "sky"` the cell a crown covers and
+    /// the cells the sky's rays read (`LightGrid::read_cells`).
     pub crowns_m: f64,
     /// Growth ([`Halo::Crowding`]): 3 × [`density::CROWD_CELL_M`] (the 3 × 3 block around a
     /// tree's cell, whose cell may reach one cell past the tile).
@@ -266,7 +267,8 @@ impl Reach {
             let sp = &site.lib.species[s as usize];
             let a = sp.life.allometry;
             let crown = (a.crown_c0 + a.crown_c1 * sp.life.max_dbh_cm.max(0.0)).max(a.crown_c0) as f64;
-            r.crowns_m = r.crowns_m.max(crown + 2.0 * site.light.cell_m);
+            // the cells a cell's light reads beyond its own (the sun's row, or the sky's reach)
+            r.crowns_m = r.crowns_m.max(crown + (site.light.read_cells() + 1) as f64 * site.light.cell_m);
             let d = &sp.life.dispersal;
             let cell = SEED_CELL_M.max(d.max_m as f64 / KERNEL_CELLS);
             r.seeds_m = r.seeds_m.max(((d.max_m as f64 / cell).ceil() + 2.0) * cell);

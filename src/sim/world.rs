@@ -546,7 +546,7 @@ impl World {
         let pool = scenario.resolve_species(lib, &ctx)?;
         let extent = site.extent_m();
         scenario.validate_extent(extent, &ctx)?;
-        let light = LightGrid::new(extent, scenario.light_cell_m);
+        let light = LightGrid::new(extent, scenario.light_cell_m).with_diffuse(scenario.light.diffuse);
         let light_site: Vec<u32> = (0..light.len())
             .into_par_iter()
             .map(|c| {
@@ -615,7 +615,7 @@ impl World {
         let pool = scenario.resolve_species(lib, &ctx)?;
         let extent = site.extent_m();
         scenario.validate_extent(extent, &ctx)?;
-        let light = LightGrid::new(extent, scenario.light_cell_m);
+        let light = LightGrid::new(extent, scenario.light_cell_m).with_diffuse(scenario.light.diffuse);
         let np = pool.len();
         Ok(World {
             site: Site {

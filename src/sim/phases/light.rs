@@ -14,6 +14,12 @@
 //!    neighbouring cell towards the equator at distance `d` (one cell), and `I_rel` the cell's
 //!    insolation relative to the terrain's median (terrain shading, slope and aspect).
 //!
+//!    With `[light] diffuse = "sky"` ([`Diffuse::Sky`]) the zenith term `e^(−k·LAI_above(c, h))`
+//!    becomes the sky's: the hemisphere in zenith bands and azimuth sectors weighted by the
+//!    standard overcast sky, each sector's ray followed through the neighbouring cells' canopy
+//!    ([`Sky`], after Canham 1988's gap light index and SORTIE, Pacala et al. 1996), so the
+//!    trees round a gap shade its lower sky.
+//!
 //! 4. The scenario's obstacles (`sim::obstacle::light_cells`) enter as opaque entries at their
 //!    top height, with the leaf-area index whose transmission is the uncovered share of the cell.
 //!
@@ -21,7 +27,7 @@
 //! then O(log) per tree.
 
 use crate::conditions::SiteConditions;
-use crate::sim::light_grid::{CellRect, LightGrid};
+use crate::sim::light_grid::{CellRect, Diffuse, LightGrid, SKY_REACH_M};
 use crate::sim::trees::{SpatialGrid, TreeStore};
 use crate::species::SpeciesLibrary;
 use rayon::prelude::*;
@@ -29,7 +35,7 @@ use rayon::prelude::*;
 /// Beer–Lambert extinction coefficient (dimensionless; defined in
 /// [`crate::sim::light_grid::EXTINCTION_K`], where the obstacles' entries read it too).
 pub const K_EXT: f32 = crate::sim::light_grid::EXTINCTION_K;
-/// Weight of the zenith (diffuse) direction.
+/// Weight of the diffuse part (the zenith direction, or the sky with [`Diffuse::Sky`]).
 pub const W_ZENITH: f32 = 0.35;
 
 /// Leaf-area index of a crown (m² leaf per m² crown projection) by shade tolerance (1–5):
@@ -160,7 +166,14 @@ pub fn held_cells(trees: &TreeStore, light: &LightGrid, window: Option<CellRect>
         // no tree and an empty window: one cell
         return CellRect { col0: 0, row0: 0, col1: 1, row1: 1 };
     }
-    CellRect { col0: c0, row0: r0.saturating_sub(1), col1: c1, row1: (r1 + 1).min(light.rows) }
+    match light.diffuse {
+        Diffuse::Column => CellRect { col0: c0, row0: r0.saturating_sub(1), col1: c1, row1: (r1 + 1).min(light.rows) },
+        // the sky's rays read every direction
+        Diffuse::Sky => {
+            let n = light.read_cells();
+            CellRect { col0: c0.saturating_sub(n), row0: r0.saturating_sub(n), col1: (c1 + n).min(light.cols), row1: (r1 + n).min(light.rows) }
+        }
+    }
 }
 
 /// Builds the spatial grid and canopy over the cells [`held_cells`] (the whole grid in one
@@ -235,6 +248,10 @@ struct Shading<'a> {
     light_site: &'a [u32],
     rel_insolation: &'a [f32],
     site: &'a SiteConditions,
+    /// `Some` with `[light] diffuse = "sky"`: the sky's sectors and per held cell the tallest
+    /// entry (m) within the sky's reach ([`reach_tops`]).
+    sky: Option<(Sky, Vec<f32>)>,
+    cell_m: f32,
 }
 
 impl<'a> Shading<'a> {
@@ -258,7 +275,33 @@ impl<'a> Shading<'a> {
             light_site,
             rel_insolation,
             site,
+            sky: (light.diffuse == Diffuse::Sky).then(|| (Sky::standard_overcast(), reach_tops(canopy, grid.cols, light.read_cells()))),
+            cell_m: light.cell_m as f32,
         }
+    }
+    /// The diffuse part's transmission (0–1) at height `z` (m) in held cell `c` whose canopy
+    /// above `z` holds the leaf-area index `own`: `e^(−k own)` ([`Diffuse::Column`]) or
+    /// [`Sky::transmission`] from the cell's centre ([`Diffuse::Sky`]).
+    #[inline]
+    fn diffuse(&self, c: usize, z: f32, own: f32) -> f32 {
+        let Some((sky, tops)) = &self.sky else {
+            return (-K_EXT * own).exp();
+        };
+        // in the whole grid's frame (a tile's held cells are offset), so that every tile count
+        // rounds the rays' positions alike
+        let (c0, r0) = (self.col0 as isize, self.row0 as isize);
+        let (col, row) = ((c % self.cols) as isize + c0, (c / self.cols) as isize + r0);
+        let (cols, rows) = (self.cols as isize, (self.canopy.start.len() - 1) as isize / self.cols as isize);
+        let lai = |cc: isize, rr: isize, z0: f32, z1: f32| -> f32 {
+            let (cc, rr) = (cc - c0, rr - r0);
+            if cc < 0 || rr < 0 || cc >= cols || rr >= rows {
+                return 0.0;
+            }
+            let k = (rr * cols + cc) as usize;
+            self.canopy.lai_above(k, z0) - self.canopy.lai_above(k, z1)
+        };
+        let m = self.cell_m;
+        sky.transmission(lai, ((col as f32 + 0.5) * m, (row as f32 + 0.5) * m), z, m, tops[c])
     }
     /// The whole grid's cell of held cell `c`.
     #[inline]
@@ -288,7 +331,104 @@ impl<'a> Shading<'a> {
         let r = (c / self.cols) as isize + self.drow;
         let g = self.row0 as isize + r;
         let sun = if g >= 0 && (g as usize) < self.whole_rows { self.canopy.lai_above(r as usize * self.cols + c % self.cols, z + self.rise) } else { 0.0 };
-        rel * (W_ZENITH * (-K_EXT * own).exp() + (1.0 - W_ZENITH) * (-K_EXT * (0.5 * own + 0.5 * sun) / self.sin_e).exp())
+        rel * (W_ZENITH * self.diffuse(c, z, own) + (1.0 - W_ZENITH) * (-K_EXT * (0.5 * own + 0.5 * sun) / self.sin_e).exp())
+    }
+}
+
+/// Per cell of `canopy` (held cells, `cols` a row) the tallest entry (m, 0 where none) over the
+/// square of `n` cells on every side: a sky ray from the cell (which reads at most `n` cells
+/// away, [`LightGrid::read_cells`]) meets nothing above it. A running maximum along the rows,
+/// then along the columns; in a tiled run the squares of a tile's own cells lie inside its
+/// held cells, so they are the same as in one process.
+fn reach_tops(canopy: &Canopy, cols: usize, n: usize) -> Vec<f32> {
+    let ncell = canopy.start.len() - 1;
+    let rows = ncell / cols.max(1);
+    let own: Vec<f32> = (0..ncell).map(|c| if canopy.start[c + 1] > canopy.start[c] { canopy.h[canopy.start[c] as usize] } else { 0.0 }).collect();
+    let along: Vec<f32> = (0..ncell).into_par_iter().map(|c| {
+        let (col, row) = (c % cols, c / cols);
+        own[row * cols + col.saturating_sub(n)..row * cols + (col + n + 1).min(cols)].iter().copied().fold(0.0f32, f32::max)
+    }).collect();
+    (0..ncell).into_par_iter().map(|c| {
+        let (col, row) = (c % cols, c / cols);
+        (row.saturating_sub(n)..(row + n + 1).min(rows)).map(|r| along[r * cols + col]).fold(0.0f32, f32::max)
+    }).collect()
+}
+
+/// The sky hemisphere of the diffuse part with `[light] diffuse = "sky"`, as the gap light
+/// index of Canham (1988, Can. J. For. Res. 18:1731) and SORTIE (Canham et al. 1990; Pacala et
+/// al. 1996) divide it: [`SKY_BANDS`] zenith bands of 90°/[`SKY_BANDS`] and [`SKY_AZIMUTHS`]
+/// azimuth sectors, each sector one ray at its centre. A band's weight is its share of the
+/// diffuse irradiance on a horizontal surface under the standard overcast sky (SOC, Moon &
+/// Spencer 1942: radiance `L(θ) = L_z (1 + 2 cos θ) / 3`), `∫ L(θ) cos θ sin θ dθ`, which with
+/// `F(μ) = μ²/2 + 2μ³/3` (μ = cos θ) is `(F(cos θ_lo) − F(cos θ_hi)) / F(1)`, split evenly over
+/// the azimuths. The weights sum to 1, so an open sky transmits 1.
+#[derive(Debug, Clone)]
+pub struct Sky {
+    /// Per sector: (sin φ, cos φ) of its azimuth φ (clockwise from north: x east, y north),
+    /// tan θ and 1 / cos θ of its zenith angle θ, and its weight (sum 1).
+    pub sectors: Vec<([f32; 2], f32, f32, f32)>,
+}
+
+/// Zenith bands of [`Sky`] (15° each).
+pub const SKY_BANDS: usize = 6;
+/// Azimuth sectors of [`Sky`] (45° each).
+pub const SKY_AZIMUTHS: usize = 8;
+
+impl Sky {
+    /// The [`SKY_BANDS`] × [`SKY_AZIMUTHS`] sectors under the standard overcast sky.
+    pub fn standard_overcast() -> Sky {
+        let f = |mu: f64| mu * mu / 2.0 + 2.0 * mu * mu * mu / 3.0;
+        let dz = std::f64::consts::FRAC_PI_2 / SKY_BANDS as f64;
+        let mut sectors = Vec::with_capacity(SKY_BANDS * SKY_AZIMUTHS);
+        for j in 0..SKY_BANDS {
+            let (lo, hi) = (j as f64 * dz, (j + 1) as f64 * dz);
+            let w = (f(lo.cos()) - f(hi.cos())) / f(1.0) / SKY_AZIMUTHS as f64;
+            let th = (lo + hi) / 2.0;
+            for a in 0..SKY_AZIMUTHS {
+                let phi = (a as f64 + 0.5) * std::f64::consts::TAU / SKY_AZIMUTHS as f64;
+                sectors.push(([phi.sin() as f32, phi.cos() as f32], th.tan() as f32, (1.0 / th.cos()) as f32, w as f32));
+            }
+        }
+        Sky { sectors }
+    }
+
+    /// Diffuse transmission (0–1) at height `z` (m) over the point `(x, y)` (m, in the frame of
+    /// the cells that `lai` reads: cell `(⌊x / cell_m⌋, ⌊y / cell_m⌋)`) of a canopy whose
+    /// tallest entry is `top` (m). `lai(col, row, z0, z1)` is the leaf-area index of the canopy
+    /// entries of a cell with top heights in `(z0, z1]` (0 outside the grid; `z1` may be +∞).
+    /// Each crown's leaf area is a thin layer at its top height, as in the column model, so a
+    /// sector's ray of zenith angle θ crosses the layer at height h at the horizontal distance
+    /// `(h − z) tan θ` and meets its leaf-area index over the path `1 / cos θ`: the ray's
+    /// transmission is `exp(−k Σ LAI / cos θ)` (Beer–Lambert for a spherical leaf angle
+    /// distribution, extinction `0.5 / cos θ`, Campbell & Norman 1998 eq. 15.4), summed along
+    /// the ray in steps of half a cell until it rises above `top`, passes [`SKY_REACH_M`] or
+    /// is dark (`k Σ LAI / cos θ > 6`, a transmission under 0.25 %); the sectors' transmissions weighted as [`Sky`] says. A
+    /// place at or above `top` sees the whole sky (1).
+    pub fn transmission(&self, lai: impl Fn(isize, isize, f32, f32) -> f32, (x, y): (f32, f32), z: f32, cell_m: f32, top: f32) -> f32 {
+        if z >= top {
+            return 1.0;
+        }
+        let ds = 0.5 * cell_m;
+        let reach = SKY_REACH_M as f32;
+        let cell = |px: f32, py: f32| ((px / cell_m).floor() as isize, (py / cell_m).floor() as isize);
+        let mut total = 0.0f32;
+        for &([sx, cy], tan, sec, w) in &self.sectors {
+            let mut depth = 0.0f32; // k Σ LAI / cos θ
+            let (mut s, mut za) = (0.0f32, z);
+            while s < reach {
+                let s1 = s + ds;
+                let zb = z + s1 / tan;
+                let mid = s + 0.5 * ds;
+                let (cc, rr) = cell(x + sx * mid, y + cy * mid);
+                depth += K_EXT * sec * lai(cc, rr, za, zb);
+                if zb > top || depth > 6.0 {
+                    break;
+                }
+                (s, za) = (s1, zb);
+            }
+            total += w * (-depth).exp();
+        }
+        total
     }
 }
 
@@ -423,4 +563,47 @@ fn build_canopy(t: &TreeStore, grid: &SpatialGrid, whole_cols: usize, lai_c: &[f
         cum.extend_from_slice(&bc);
     }
     Canopy { start, h, cum }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The sectors' weights are the standard overcast sky's shares of the horizontal diffuse
+    /// irradiance: they sum to 1, and the zenith band's share is `1 − F(cos 15°) / F(1)` with
+    /// `F(μ) = μ²/2 + 2μ³/3` (0.0852; a uniform sky would give sin² 15° = 0.067).
+    #[test]
+    fn sky_weights_are_the_standard_overcast_sky() {
+        let sky = Sky::standard_overcast();
+        assert_eq!(sky.sectors.len(), SKY_BANDS * SKY_AZIMUTHS);
+        let total: f32 = sky.sectors.iter().map(|s| s.3).sum();
+        assert!((total - 1.0).abs() < 1e-5, "{total}");
+        let f = |mu: f64| mu * mu / 2.0 + 2.0 * mu * mu * mu / 3.0;
+        let zenith: f32 = sky.sectors[..SKY_AZIMUTHS].iter().map(|s| s.3).sum();
+        let want = 1.0 - f(15f64.to_radians().cos()) / f(1.0);
+        assert!((zenith as f64 - want).abs() < 1e-6 && (want - 0.0852).abs() < 1e-3, "{zenith} {want}");
+    }
+
+    /// Analytic cases: an open sky transmits 1; a boundless layer of leaf-area index L at height
+    /// H above the place is crossed once by every ray (within the reach), so the transmission is
+    /// `Σ w_j e^(−k L / cos θ_j)`; a place above the canopy sees the whole sky; a wall of canopy
+    /// only to the north darkens the northern sectors only.
+    #[test]
+    fn sky_transmission_through_analytic_canopies() {
+        let sky = Sky::standard_overcast();
+        let open = sky.transmission(|_, _, _, _| 0.0, (52.5, 52.5), 1.3, 5.0, 30.0);
+        assert!((open - 1.0).abs() < 1e-5, "{open}");
+        let (l, h) = (3.0f32, 10.0f32);
+        let layer = |_: isize, _: isize, z0: f32, z1: f32| if h > z0 && h <= z1 { l } else { 0.0 };
+        let t = sky.transmission(layer, (52.5, 52.5), 0.0, 5.0, h);
+        let dz = std::f32::consts::FRAC_PI_2 / SKY_BANDS as f32;
+        let want: f32 = sky.sectors.iter().enumerate().map(|(i, s)| s.3 * (-K_EXT * l / (((i / SKY_AZIMUTHS) as f32 + 0.5) * dz).cos()).exp()).sum();
+        assert!((t - want).abs() < 1e-5 && t < (-K_EXT * l).exp(), "{t} {want}");
+        assert_eq!(sky.transmission(layer, (52.5, 52.5), 12.0, 5.0, h), 1.0);
+        // a dense canopy north of y = 60 m (the place on that line): the southern half of the
+        // sky stays open, the northern half is dark
+        let north = |_: isize, r: isize, z0: f32, z1: f32| if r >= 12 && h > z0 && h <= z1 { 40.0 } else { 0.0 };
+        let t = sky.transmission(north, (52.5, 60.0), 0.0, 5.0, h);
+        assert!((t - 0.5).abs() < 0.02, "{t}");
+    }
 }
