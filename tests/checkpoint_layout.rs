@@ -57,7 +57,7 @@ fn compressed_checkpoints_read_and_the_layouts_before_refused_naming_their_versi
     let (sc, mut w) = world();
     let rows = common::run(&sc, &mut w, 3);
     let bytes = to_bytes(&w, &rows);
-    assert_eq!(LAYOUT_VERSION >> 16, 10);
+    assert_eq!(LAYOUT_VERSION >> 16, 12);
     assert!(rows.iter().all(|r| r.species.len() == w.site.pool.len()), "every row holds its per-species rows");
     // the identity and body: one zstd frame between the file length and the checksum
     let plain_body = zstd::stream::decode_all(&bytes[20..bytes.len() - 4]).unwrap();
@@ -76,7 +76,7 @@ fn compressed_checkpoints_read_and_the_layouts_before_refused_naming_their_versi
         old.extend_from_slice(&[0; 4]);
         sylva::sim::checkpoint::reseal(&mut old);
         let e = restore(&mut world().1, &old, p).unwrap_err().to_string();
-        assert!(e.starts_with("run/checkpoint.bin: ") && e.contains(&format!("layout version {base}.")) && e.contains("differs from this build's 10.") && e.contains("without --resume"), "{e}");
+        assert!(e.starts_with("run/checkpoint.bin: ") && e.contains(&format!("layout version {base}.")) && e.contains("differs from this build's 12.") && e.contains("without --resume"), "{e}");
     }
     // a frame that does not decode, sealed with a matching checksum, is refused by name
     let mut bad = bytes.clone();
