@@ -35,7 +35,8 @@ const MAGIC: &[u8; 7] = b"SYLVACK";
 /// each stand-table row also holds the natural deaths' volume and the per-species rows, and
 /// the stand table starts with year 0; checkpoints of layouts 6 and 7 are refused, naming
 /// their version (their stand tables have neither). 12 (round 44): each row also holds the
-/// year's site-mean drought index (checkpoints of layout 10 are refused, naming their version).
+/// year's site-mean drought index, and each sapling cohort its consecutive stress years (after
+/// the vigour column; trial 44 defect 4); checkpoints of layout 10 are refused, naming their version.
 const LAYOUT_BASE: u32 = 12;
 
 /// The layout base of a checkpoint of a run with `[[management]]`: [`LAYOUT_BASE`]'s layout and
@@ -45,7 +46,7 @@ const LAYOUT_BASE: u32 = 12;
 /// holds the entry's name, the basal area it removed, the saplings it cut and the species
 /// shares of its area (a managed checkpoint of base 8 is refused, naming its version). 11
 /// (round 42): [`LAYOUT_BASE`] 10's rows, and each entry's row holds whether its
-/// `max_removal_share` stopped it (`capped`). 13 (round 44): [`LAYOUT_BASE`] 12's rows.
+/// `max_removal_share` stopped it (`capped`). 13 (round 44): [`LAYOUT_BASE`] 12's rows and cohorts.
 const MANAGED_BASE: u32 = 13;
 
 /// zstd level of the checkpoint (1: 36.2 MB for the default run's 64 MB, 0.6 s; 3 saved 0.7 %
@@ -552,6 +553,8 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
     for v in [&c.height, &c.age, &c.vigour] {
         o.f32s(v);
     }
+    o.u64(c.stress_years.len() as u64);
+    o.each(&c.stress_years, |y| (y as u32).to_le_bytes());
     let l = &w.tallies.regen_ledger;
     o.u64(l.germinated.len() as u64);
     for p in 0..l.germinated.len() {
@@ -712,8 +715,9 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
     cohorts.height = r.f32s()?;
     cohorts.age = r.f32s()?;
     cohorts.vigour = r.f32s()?;
+    cohorts.stress_years = r.u32s()?.into_iter().map(|y| y.min(u16::MAX as u32) as u16).collect();
     let nc = cohorts.cell.len();
-    if [cohorts.pool.len(), cohorts.stems.len(), cohorts.height.len(), cohorts.age.len(), cohorts.vigour.len()].iter().any(|&l| l != nc) {
+    if [cohorts.pool.len(), cohorts.stems.len(), cohorts.height.len(), cohorts.age.len(), cohorts.vigour.len(), cohorts.stress_years.len()].iter().any(|&l| l != nc) {
         return Err(corrupt(path, r.pos()));
     }
     let bad_f = |v: &[f32]| v.iter().any(|x| !(x.is_finite() && *x >= 0.0));

@@ -10,7 +10,9 @@ pub const N_REGEN_CAUSES: usize = 2;
 /// Why sapling stems of a cohort died.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum RegenDeath {
-    /// Light-dependent (stress) mortality: vigour below the species' threshold.
+    /// Light- and site-dependent (stress) mortality: the growth-dependent shade mortality of
+    /// stems, a vigour below the species' threshold, and cohorts dead whole after too many
+    /// consecutive stress years ([`crate::sim::phases::regen`], step 3).
     Shade,
     /// The density cap [`crate::sim::phases::regen::max_density_ha`] of the cell.
     Crowding,
@@ -43,6 +45,10 @@ pub struct Cohort {
     pub age: f32,
     /// Vigour memory (0–1), as for trees.
     pub vigour: f32,
+    /// Consecutive years (up to this one) in which the cohort's realised relative height growth
+    /// stayed below its species' stress threshold (iLand's sapling stress years; the cohort dies
+    /// once it exceeds [`crate::sim::phases::regen::max_stress_years`]).
+    pub stress_years: u16,
 }
 
 /// All cohorts, struct of arrays sorted by (cell, pool position); at most one per pair.
@@ -60,6 +66,8 @@ pub struct Cohorts {
     pub age: Vec<f32>,
     /// Vigour memory (0–1).
     pub vigour: Vec<f32>,
+    /// Consecutive stress years ([`Cohort::stress_years`]).
+    pub stress_years: Vec<u16>,
 }
 
 impl Cohorts {
@@ -73,7 +81,7 @@ impl Cohorts {
     }
     /// Cohort `i`.
     pub fn get(&self, i: usize) -> Cohort {
-        Cohort { cell: self.cell[i], pool: self.pool[i], stems: self.stems[i], height: self.height[i], age: self.age[i], vigour: self.vigour[i] }
+        Cohort { cell: self.cell[i], pool: self.pool[i], stems: self.stems[i], height: self.height[i], age: self.age[i], vigour: self.vigour[i], stress_years: self.stress_years[i] }
     }
     /// Appends a cohort (the caller keeps the (cell, pool) order).
     pub fn push(&mut self, c: Cohort) {
@@ -83,6 +91,7 @@ impl Cohorts {
         self.height.push(c.height);
         self.age.push(c.age);
         self.vigour.push(c.vigour);
+        self.stress_years.push(c.stress_years);
     }
     /// Total stems.
     pub fn total_stems(&self) -> u64 {
@@ -100,7 +109,7 @@ impl Cohorts {
     }
     /// Approximate heap size in bytes.
     pub fn heap_bytes(&self) -> usize {
-        self.cell.capacity() * 22
+        self.cell.capacity() * 24
     }
 }
 

@@ -1842,6 +1842,7 @@ fn encode_part(w: &World, layout: &Layout, k: usize) -> Result<Vec<u8>> {
         e.f32(c.height[i]);
         e.f32(c.age[i]);
         e.f32(c.vigour[i]);
+        e.u64(c.stress_years[i] as u64);
     }
     e.u64(w.stand.seeds.len() as u64);
     for s in &w.stand.seeds {
@@ -1901,12 +1902,14 @@ fn decode_part(m: &[u8], peer: usize) -> Result<Part> {
     let year = u32::try_from(year).map_err(|_| bad("year", year))?;
     let next_id = d.u64()?;
     let trees = get_trees(&mut d)?;
-    let n = d.count(3 * 8 + 3 * 4)?;
+    let n = d.count(4 * 8 + 3 * 4)?;
     let mut cohorts = Cohorts::default();
     for _ in 0..n {
         let (cell, pool, stems) = (d.u64()?, d.u64()?, d.u64()?);
         let (height, age, vigour) = (d.f32()?, d.f32()?, d.f32()?);
-        cohorts.push(super::cohorts::Cohort { cell: u32::try_from(cell).map_err(|_| bad("cohort cell", cell))?, pool: u16::try_from(pool).map_err(|_| bad("cohort pool", pool))?, stems: u32::try_from(stems).map_err(|_| bad("cohort stems", stems))?, height, age, vigour });
+        let sy = d.u64()?;
+        let stress_years = u16::try_from(sy).map_err(|_| bad("cohort stress years", sy))?;
+        cohorts.push(super::cohorts::Cohort { cell: u32::try_from(cell).map_err(|_| bad("cohort cell", cell))?, pool: u16::try_from(pool).map_err(|_| bad("cohort pool", pool))?, stems: u32::try_from(stems).map_err(|_| bad("cohort stems", stems))?, height, age, vigour, stress_years });
     }
     let ns = d.count(8)?;
     let mut seeds = Vec::with_capacity(ns);
