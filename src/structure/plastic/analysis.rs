@@ -457,18 +457,14 @@ pub(crate) fn shade_key(foliage_of: &[u32], c: &StageCluster) -> u64 {
 /// group's input nodes still alive (eq. 13; `alive(ci)` is n_c/n_0 of cluster ci). A group of
 /// one cluster is that cluster's occluder. Returns (key, occluder) pairs.
 pub(crate) fn shade_casters(foliage_of: &[u32], clusters: &[StageCluster], fine: &[Option<Occluder>], alive: impl Fn(usize) -> f32 + Sync, gamma_c0: f32, obstacles: &[crate::structure::grow::space::Obstacle]) -> Vec<(u64, Occluder)> {
-    // the keys over the cores (in cluster order: rayon's collect keeps it), then sorted; a
-    // stage of one task's size in one pass into a vector of its length (rayon's collect of a
-    // filter gathers a list of vectors, each grown one push at a time, then copies them into
-    // one; round 43)
-    let member = |(ci, o): (usize, &Option<Occluder>)| o.map(|o| (shade_key(foliage_of, &clusters[ci]), ci, o));
-    let mut members: Vec<(u64, usize, Occluder)> = if fine.len() < 2 * SHADE_CHUNK {
-        let mut m = Vec::with_capacity(fine.len());
-        m.extend(fine.iter().enumerate().filter_map(member));
-        m
-    } else {
-        fine.par_iter().enumerate().with_min_len(SHADE_CHUNK).filter_map(member).collect()
-    };
+    // the keys in cluster order, in one serial pass into a vector of the stage's length, then
+    // sorted. A key is one lookup per cluster: over the cores (rayon's collect of a filter, as
+    // until round 43 for stages of 512 clusters or more) it gathered a list of vectors, each
+    // grown one push at a time, then copied them into one, which cost far more than the
+    // lookups (callgrind, 100 targets of `benches/stand.rs`: about 1.5 G instructions of
+    // growth and copies; BENCHMARKS.md round 44)
+    let mut members: Vec<(u64, usize, Occluder)> = Vec::with_capacity(fine.len());
+    members.extend(fine.iter().enumerate().filter_map(|(ci, o)| o.map(|o| (shade_key(foliage_of, &clusters[ci]), ci, o))));
     // by (key, cluster): a stable sort by key alone gives that order (the clusters come in
     // index order)
     sort_by_shade_key(&mut members);
@@ -571,9 +567,19 @@ fn sort_by_shade_key<T: Copy>(members: &mut Vec<(u64, usize, T)>) {
 
 /// The shade casters ([`shade_casters`]) of stage clusters `clusters` with centres `centres`
 /// as grown: every cluster alive, eq. (4) translucency γ_c0^r_c, no obstacle cut.
+///
+/// A cluster's own γ_c0^r_c is read only when it is alone in its group (a group of several
+/// takes γ_c0^R of its enclosing radius), so it is taken for those clusters only: the members
+/// carry NaN, which [`shade_casters`] passes through unchanged for a group of one and never
+/// reads for a larger one, and each caster still NaN is a lone cluster's, given γ_c0^r_c then
+/// (the same casters bit for bit; `powf` per cluster of every stage was about 1.4 % of the
+/// instructions of the stand bench's analyses, callgrind, BENCHMARKS.md round 44).
 pub(crate) fn input_casters(foliage_of: &[u32], clusters: &[StageCluster], centres: &[Vec3], gamma_c0: f32) -> Vec<Occluder> {
-    let fine: Vec<Option<Occluder>> = clusters.iter().zip(centres).map(|(c, &centre)| Some(Occluder { center: centre, radius: c.radius, gamma: gamma_c0.powf(c.radius) })).collect();
-    shade_casters(foliage_of, clusters, &fine, |_| 1.0, gamma_c0, &[]).into_iter().map(|(_, o)| o).collect()
+    let fine: Vec<Option<Occluder>> = clusters.iter().zip(centres).map(|(c, &centre)| Some(Occluder { center: centre, radius: c.radius, gamma: f32::NAN })).collect();
+    shade_casters(foliage_of, clusters, &fine, |_| 1.0, gamma_c0, &[])
+        .into_iter()
+        .map(|(_, o)| if o.gamma.is_nan() { Occluder { gamma: gamma_c0.powf(o.radius), ..o } } else { o })
+        .collect()
 }
 
 /// Inverse tropism (eqs. 8–9): the untropic unit direction d_o with w_s·d_o = p·h − t_w
@@ -942,5 +948,28 @@ mod tests {
             let got = pool.install(|| shade_casters(&foliage_of, &clusters, &fine, alive, 0.5, &wall));
             assert_eq!(bits(&got), bits(&want), "{threads} threads");
         }
+    }
+
+    /// [`input_casters`] takes γ_c0^r_c only for the clusters alone in their group: its casters
+    /// are, bit for bit, those of [`shade_casters`] over every cluster given γ_c0^r_c, with
+    /// lobes of one cluster, lobes of several and clusters on the skeleton proper, none NaN.
+    #[test]
+    fn input_casters_are_the_shade_casters_of_every_clusters_own_gamma() {
+        let n = 700u32;
+        // lobe of node a: every 5th node on the skeleton proper, the others in 260 lobes, some of
+        // one cluster (a lobe id met once) and some of several
+        let foliage_of: Vec<u32> = (0..=n).map(|a| if a % 5 == 0 { u32::MAX } else { (a * 37) % 260 }).collect();
+        let clusters: Vec<StageCluster> = (1..=n).map(|a| StageCluster { anchor: a, radius: 0.05 + 0.01 * (a % 17) as f32, lobe: None, max_season: 0 }).collect();
+        let centres: Vec<Vec3> = (0..n).map(|i| Vec3::new((i as f32 * 0.37).sin() * 4.0, (i as f32 * 0.23).cos() * 4.0, 2.0 + (i % 11) as f32 * 0.5)).collect();
+        let g0 = 0.43f32;
+        let fine: Vec<Option<Occluder>> = clusters.iter().zip(&centres).map(|(c, &centre)| Some(Occluder { center: centre, radius: c.radius, gamma: g0.powf(c.radius) })).collect();
+        let want: Vec<Occluder> = shade_casters(&foliage_of, &clusters, &fine, |_| 1.0, g0, &[]).into_iter().map(|(_, o)| o).collect();
+        let got = input_casters(&foliage_of, &clusters, &centres, g0);
+        let bits = |v: &[Occluder]| v.iter().map(|o| (o.center.to_array().map(f32::to_bits), o.radius.to_bits(), o.gamma.to_bits())).collect::<Vec<_>>();
+        assert_eq!(bits(&got), bits(&want));
+        // both kinds of group occur: casters that are a lone cluster's own sphere, and merged ones
+        let lone = got.iter().filter(|o| fine.iter().flatten().any(|f| f.center == o.center && f.radius == o.radius)).count();
+        assert!(lone > 100 && got.len() - lone > 100, "{lone} lone of {}", got.len());
+        assert!(got.iter().all(|o| o.gamma > 0.0 && o.gamma < 1.0));
     }
 }
