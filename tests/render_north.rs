@@ -10,6 +10,9 @@ fn arrow_direction(cam: &Camera, w: u32, h: u32) -> (f32, usize) {
     let grey = image::Rgba([120u8, 130, 110, 255]);
     let mut img = image::RgbaImage::from_pixel(w, h, grey);
     stamp_north_arrow(&mut img, cam);
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("render");
+    std::fs::create_dir_all(&dir).unwrap();
+    img.save(dir.join(format!("north_arrow_{w}x{h}_{:.0}_{:.0}.png", cam.target[0] - cam.eye[0], cam.target[1] - cam.eye[1]))).unwrap();
     let [cx, cy] = north_arrow_centre(w, h);
     let r = north_arrow_radius(w, h);
     let (mut sx, mut sy, mut n, mut outside) = (0.0f64, 0.0f64, 0.0f64, 0);

@@ -408,10 +408,10 @@ pub fn paint_north_arrow(painter: &egui::Painter, rect: egui::Rect, camera: &Cam
     let c = egui::pos2(rect.left() + cx, rect.top() + cy);
     // the screen's y runs down
     let dir = egui::vec2(d[0], -d[1]);
-    let side = egui::vec2(-dir.y, dir.x) * 0.24 * r;
+    let side = egui::vec2(-dir.y, dir.x) * 0.2 * r;
     let black = egui::Color32::from_gray(20);
     painter.circle(c, r, egui::Color32::from_white_alpha(204), egui::Stroke::new(1.5, black));
-    painter.add(egui::Shape::convex_polygon(vec![c + dir * 0.45 * r, c + side, c - side], black, egui::Stroke::NONE));
-    painter.add(egui::Shape::convex_polygon(vec![c - dir * 0.6 * r, c - side, c + side], egui::Color32::WHITE, egui::Stroke::new(1.0, black)));
-    painter.text(c + dir * 0.74 * r, egui::Align2::CENTER_CENTER, "N", egui::FontId::proportional(0.42 * r), black);
+    painter.add(egui::Shape::convex_polygon(vec![c + dir * 0.5 * r, c + side, c - side], black, egui::Stroke::NONE));
+    painter.add(egui::Shape::convex_polygon(vec![c - dir * 0.55 * r, c - side, c + side], egui::Color32::WHITE, egui::Stroke::new(1.0, black)));
+    painter.text(c + dir * 0.7 * r, egui::Align2::CENTER_CENTER, "N", egui::FontId::proportional(0.36 * r), black);
 }

@@ -79,8 +79,9 @@ pub const STILL_NEAR_M: f32 = 120.0;
 pub const STILL_SMALL_TREE_M: f32 = 25.0;
 
 /// [`crate::render::lod::LodParams::small_tree_floor_m`] of the stills (12 m): under a binding
-/// triangle budget the reference [`STILL_SMALL_TREE_M`] is lowered towards it before any tree
-/// drops a level, and the budget's switch factor is the one the 12 m reference gives, so no
+/// triangle budget, or where it would add more than
+/// [`crate::render::lod::SMALL_TREE_MAX_EXTRA`] to the frame's triangles, the reference
+/// [`STILL_SMALL_TREE_M`] is lowered towards it before any tree drops a level, and the budget's switch factor is the one the 12 m reference gives, so no
 /// tree is drawn coarser than with the stills' reference of rounds 36–43 (ESTIMATE of round
 /// 36: about the height under which the trial's mid-ground trees were drawn as crown hulls of
 /// a few dozen pixels, "balls on sticks").

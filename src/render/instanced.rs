@@ -247,8 +247,17 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
             scale = (k as f32 / 4.0).exp2();
         }
         chosen = floor_params.small_tree_m;
+        // the higher references within the budget and within SMALL_TREE_MAX_EXTRA of the
+        // floor's cost (raising trees a few pixels tall costs much and shows nothing)
+        let cap = if ladder.len() > 1 {
+            let base = exact(scale, &floor_params) as f64;
+            let extra = super::lod::SMALL_TREE_MAX_EXTRA * base.max(0.2 * params.max_triangles as f64);
+            (params.max_triangles as u64).min((base + extra) as u64)
+        } else {
+            0
+        };
         for &m in &ladder[..ladder.len() - 1] {
-            if exact(scale, &LodParams { small_tree_m: m, ..*params }) <= params.max_triangles as u64 {
+            if exact(scale, &LodParams { small_tree_m: m, ..*params }) <= cap {
                 chosen = m;
                 break;
             }

@@ -49,11 +49,13 @@ pub struct LodParams {
     /// same size on screen, much farther away, is drawn as a crown hull (issue 32, round 36),
     /// and a 10 m tree beside a 25 m one is drawn at its level (round 44, trial 42 defect 4:
     /// hull "popcorn" beside speckled cards at one distance). Under a binding triangle budget
-    /// the CPU path may lower it to `small_tree_floor_m` first ([`small_tree_ladder`]).
+    /// (or [`SMALL_TREE_MAX_EXTRA`]) the CPU path lowers it towards `small_tree_floor_m` first
+    /// ([`small_tree_ladder`]).
     pub small_tree_m: f32,
     /// Least reference height (m) the CPU path ([`crate::render::instanced::build_batches_of`])
-    /// lowers [`LodParams::small_tree_m`] to under a binding triangle budget before any switch
-    /// size is raised (0, or not under `small_tree_m`: no lowering). The budget's switch factor
+    /// lowers [`LodParams::small_tree_m`] to where the triangle budget binds, before any switch
+    /// size is raised, or where the higher reference would cost more than
+    /// [`SMALL_TREE_MAX_EXTRA`] (0, or not under `small_tree_m`: no lowering). The budget's switch factor
     /// is found with the biases of this reference, so every tree is drawn at a level at least
     /// as fine as with `small_tree_m = small_tree_floor_m`: biasing the small trees never costs
     /// a tall tree its level (round 44: r43k's 25 m reference, clamped both ways, drew the
@@ -80,6 +82,15 @@ pub fn lod_px(px: f32, height_m: f32, params: &LodParams) -> f32 {
         px
     }
 }
+
+/// Most the CPU path lets a reference height above [`LodParams::small_tree_floor_m`] add to a
+/// frame's tree triangles: this share (0.25) of what the floor's reference costs, or this share
+/// of a fifth of the budget ([`LodParams::max_triangles`]) where that is more (so a frame of a
+/// few trees may double). ESTIMATE (round 44): the default run's oblique still at year 150 drew
+/// 3.6 M tree triangles with the 12 m reference and 10.2 M with 25 m, 36,000 more trees a few
+/// pixels tall drawn as crown hulls instead of billboards, a picture the same to the eye at 2.6
+/// times the time; the close-up's budget binds before this does.
+pub const SMALL_TREE_MAX_EXTRA: f64 = 0.25;
 
 /// The reference heights the CPU path tries under a triangle budget, finest first:
 /// `small_tree_m · 2^(−k/4)`, k = 0, 1, …, while above `small_tree_floor_m`, then

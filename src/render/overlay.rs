@@ -32,10 +32,10 @@ pub fn north_on_screen(camera: &Camera) -> Option<[f32; 2]> {
     (n > 1e-6).then(|| [x / n, y / n])
 }
 
-/// Radius (px) of the north arrow's disc on a picture of `width` × `height` pixels: 1/24 of its
-/// smaller side, 12–48 px (15 px on a 640 × 360 frame, 30 px on a 1280 × 720 still).
+/// Radius (px) of the north arrow's disc on a picture of `width` × `height` pixels: 1/20 of its
+/// smaller side, 14–56 px (18 px on a 640 × 360 frame, 36 px on a 1280 × 720 still).
 pub fn north_arrow_radius(width: u32, height: u32) -> f32 {
-    (width.min(height) as f32 / 24.0).clamp(12.0, 48.0)
+    (width.min(height) as f32 / 20.0).clamp(14.0, 56.0)
 }
 
 /// Centre (px, from the top-left corner) of the north arrow's disc on a picture of `width` ×
@@ -61,16 +61,16 @@ pub fn stamp_north_arrow(img: &mut image::RgbaImage, camera: &Camera) {
     // needle: the picture's y runs down
     let (dx, dy) = (d[0], -d[1]);
     let (nx, ny) = (-dy, dx);
-    let tip = (cx + 0.45 * rad * dx, cy + 0.45 * rad * dy);
-    let tail = (cx - 0.6 * rad * dx, cy - 0.6 * rad * dy);
-    let half = 0.24 * rad;
+    let tip = (cx + 0.5 * rad * dx, cy + 0.5 * rad * dy);
+    let tail = (cx - 0.55 * rad * dx, cy - 0.55 * rad * dy);
+    let half = 0.2 * rad;
     let left = (cx + half * nx, cy + half * ny);
     let right = (cx - half * nx, cy - half * ny);
-    // the letter: centred 0.72 radius out along the needle, 0.36 radius tall, strokes 0.07
-    let (lx, ly, lh) = (cx + 0.74 * rad * dx, cy + 0.74 * rad * dy, 0.17 * rad);
-    let lw = 0.13 * rad;
+    // the letter: centred 0.7 radius out along the needle, 0.28 radius tall, inside the rim
+    let (lx, ly, lh) = (cx + 0.7 * rad * dx, cy + 0.7 * rad * dy, 0.14 * rad);
+    let lw = 0.1 * rad;
     let strokes = [((lx - lw, ly + lh), (lx - lw, ly - lh)), ((lx - lw, ly - lh), (lx + lw, ly + lh)), ((lx + lw, ly + lh), (lx + lw, ly - lh))];
-    let stroke = (0.06 * rad).max(0.8);
+    let stroke = (0.045 * rad).max(0.8);
     // what covers a point: 0 outside, 1 disc, 2 needle's white half, 3 black
     let cover = |x: f32, y: f32| -> u8 {
         let r2 = (x - cx) * (x - cx) + (y - cy) * (y - cy);
