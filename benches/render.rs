@@ -83,7 +83,7 @@ fn main() {
         times.sort_by(f64::total_cmp);
         let med = times[times.len() / 2];
         let s = r.last_stats();
-        let all0 = LodParams { switch_px: [0.0; 3], band: 0.0, min_px: 0.0, max_triangles: 0, canopy_px: 0.0, max_geometry_triangles: 0, small_tree_m: 0.0 };
+        let all0 = LodParams { switch_px: [0.0; 3], band: 0.0, min_px: 0.0, max_triangles: 0, canopy_px: 0.0, max_geometry_triangles: 0, small_tree_m: 0.0, small_tree_floor_m: 0.0 };
         let full = build_batches(&scene, &cam, w, h, &all0).triangles;
         println!(
             "{:>7} {:>9} {:>7} {:>11.1} {:>11.1} {:>13} {:>9} {:>22} {:>9} {:>9.1} {:>16}",

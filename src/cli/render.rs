@@ -236,7 +236,9 @@ pub struct RenderArgs {
     /// stumps: cut in the 20 years up to the year; their two instances each are among the
     /// instances drawn); tree_triangles (the trees' share of triangles), triangle_budget,
     /// demoted (whether the budget raised the level switches) and lod_scale (by what factor),
-    /// full_level_trees and bare_full_level (adapted trees tall enough on screen for the full
+    /// small_tree_m (the reference height under which trees took the level of a tree that tall
+    /// where they stand: 25 m, lowered to 12 m at the least where the budget binds) and
+    /// levels_raised (trees it drew finer than the 12 m reference would), full_level_trees and bare_full_level (adapted trees tall enough on screen for the full
     /// level, and those of them carrying under half their crown's leaf area)). Its folder is
     /// made when missing.
     #[arg(long)]
@@ -382,8 +384,12 @@ fn render_checked(a: RenderArgs) -> anyhow::Result<()> {
         .map(|c| sylva::job::scene::SaplingCohort { cell: c.cell, species: name(c.species), x_m: c.x_m, y_m: c.y_m, cell_m: c.cell_m, stems: c.stems, height_m: c.height_m })
         .collect();
     drop(regen);
-    let img = stage.render_plants_with(&plants, &saplings, a.season, &cam, a.size.0, a.size.1)?;
+    let mut img = stage.render_plants_with(&plants, &saplings, a.season, &cam, a.size.0, a.size.1)?;
     drop((plants, saplings));
+    // a north arrow on every picture but the map's (north up)
+    if closeup || eye.is_some() || camera != CameraPreset::Map {
+        sylva::render::overlay::stamp_north_arrow(&mut img, &cam);
+    }
     let frame_s = t.elapsed().as_secs_f64();
     sylva::output::pictures::write_png(&a.out, &img)?;
     let st = stage.renderer.last_stats();
@@ -397,6 +403,7 @@ fn render_checked(a: RenderArgs) -> anyhow::Result<()> {
             "trees": trees,
             "stumps": stumps_drawn, "trees_15m": ad.trees_15m, "nodes_median": ad.nodes_median, "nodes_min": ad.nodes_min, "leaf_cards": ad.leaf_cards, "sprig_cards": ad.sprig_cards, "adapted_leaf_area_m2": ad.adapted_leaf_area_m2, "leaf_area_m2": ad.leaf_area_m2, "mesh_bytes": ad.mesh_bytes, "full_held_back": ad.full_held_back,
             "tree_triangles": st.tree_triangles, "triangle_budget": a.triangle_budget, "demoted": st.lod_scale > 1.0, "lod_scale": st.lod_scale,
+            "small_tree_m": st.small_tree_m, "levels_raised": st.levels_raised,
             "full_level_trees": ad.full_level_trees, "bare_full_level": ad.bare_full_level, "shed_bare": ad.shed_bare,
         });
         super::write_stats(path, &j)?;

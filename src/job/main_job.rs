@@ -708,7 +708,11 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
         stage.set_stumps(stumps, y);
         for (preset, name) in [(CameraPreset::Oblique, "oblique"), (CameraPreset::Map, "topdown")] {
             let cam = stage.camera_sized(preset, w, h);
-            let img = stage.render_instances(keys.get_year(y)?, Season::Summer, &cam, w, h)?;
+            let mut img = stage.render_instances(keys.get_year(y)?, Season::Summer, &cam, w, h)?;
+            // a north arrow on the oblique (the top-down still is north up)
+            if preset != CameraPreset::Map {
+                crate::render::overlay::stamp_north_arrow(&mut img, &cam);
+            }
             let path = stills_dir.join(format!("year_{y:04}_{name}.png"));
             crate::output::pictures::write_png(&path, &img)?;
             stills.push(Still { year: y, view: name.to_string(), path });
@@ -726,7 +730,8 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
         stage = new_stage()?;
         stage.set_stumps(stumps, y);
         stage.set_adapt(adapt);
-        let img = stage.render_plants(&last.plants(), Season::Summer, &cam, w, h)?;
+        let mut img = stage.render_plants(&last.plants(), Season::Summer, &cam, w, h)?;
+        crate::render::overlay::stamp_north_arrow(&mut img, &cam);
         // the close-up's trees and open-grown skeletons are not needed by the film (issue 34)
         drop(last);
         stage.set_adapt(None);

@@ -82,11 +82,23 @@ pub fn frame_triangle_budget(width: u32, height: u32) -> u32 {
 /// [`AdaptOptions::max_trees`] of them.
 pub const STILL_NEAR_M: f32 = 120.0;
 
-/// [`crate::render::lod::LodParams::small_tree_m`] of the stills (12 m, ESTIMATE: about the
-/// height under which the trial's mid-ground trees were drawn as crown hulls of a few dozen
-/// pixels, "balls on sticks"; a 6 m tree drops to its hull at half the size on screen of a
-/// canopy tree, a 4 m one at a third).
-pub const STILL_SMALL_TREE_M: f32 = 12.0;
+/// [`crate::render::lod::LodParams::small_tree_m`] of the stills (25 m): every tree shorter
+/// than it (down to a third of it) picks the level a 25 m tree would have where it stands, so a
+/// 10 m tree beside a 25 m one is drawn at its level (trial 42 defect 4: hull "popcorn" beside
+/// speckled cards at one distance); taller trees keep the level of their own size, never
+/// coarser (round 43's 25 m reference, applied both ways, drew the close-up's canopy trees a
+/// level coarser and was reverted). 25 m: about the top height of the default run's canopy,
+/// where the switch sizes were tuned (H100 25.9 m at year 150, round 43's default run).
+pub const STILL_SMALL_TREE_M: f32 = 25.0;
+
+/// [`crate::render::lod::LodParams::small_tree_floor_m`] of the stills (12 m): under a binding
+/// triangle budget, or where it would add more than
+/// [`crate::render::lod::SMALL_TREE_MAX_EXTRA`] to the frame's triangles, the reference
+/// [`STILL_SMALL_TREE_M`] is lowered towards it before any tree drops a level, and the budget's switch factor is the one the 12 m reference gives, so no
+/// tree is drawn coarser than with the stills' reference of rounds 36–43 (ESTIMATE of round
+/// 36: about the height under which the trial's mid-ground trees were drawn as crown hulls of
+/// a few dozen pixels, "balls on sticks").
+pub const STILL_SMALL_TREE_FLOOR_M: f32 = 12.0;
 
 impl Stage {
     /// Builds the stage: terrain mesh with cells ≤ 10 m (the site alone, its edges faded out;
@@ -109,10 +121,12 @@ impl Stage {
         // no far-field triangle budget for stills: only trees under `canopy_px` (6 px) go to
         // the canopy layer
         renderer.lod.max_geometry_triangles = 0;
-        // trees under 12 m keep their leaf cards to a third of the size at which a canopy tree
-        // becomes a crown hull: young trees in the mid-ground read as trees, not as balls on
-        // sticks (issue 32, round 36)
+        // trees under 25 m pick the level a 25 m tree has where they stand (young trees in the
+        // mid-ground read as trees, not balls on sticks, and take their tall neighbours' level),
+        // as far as the triangle budget allows at the switch factor of a 12 m reference
+        // (issue 32, rounds 36 and 44)
         renderer.lod.small_tree_m = STILL_SMALL_TREE_M;
+        renderer.lod.small_tree_floor_m = STILL_SMALL_TREE_FLOOR_M;
         // culled on the CPU, where the frame's exact cost is checked against the triangle
         // budget (`render::instanced::build_batches_of`); the GPU path's histogram estimate
         // let a small dense site's close-up draw 2.5 times its budget (round 36)
@@ -412,6 +426,8 @@ fn release_freed_memory() {
 /// ([`AdaptStats::per_level`]).
 pub fn drawn_levels_of(trees: &[(TreeInstance, usize)], camera: &Camera, width: u32, height: u32, lod: &crate::render::lod::LodParams, st: &crate::render::renderer::FrameStats) -> [usize; crate::mesh::LOD_LEVELS] {
     use crate::render::lod::{canopy_weight, drawn_levels, select_lod_scaled, Frustum};
+    // the reference height the frame used (lowered under a binding budget)
+    let lod = &crate::render::lod::LodParams { small_tree_m: st.small_tree_m, ..*lod };
     let frustum = Frustum::from_view_proj(camera.view_proj(width.max(1) as f32 / height.max(1) as f32));
     let mut out = [0; crate::mesh::LOD_LEVELS];
     for (t, n) in trees {
@@ -665,6 +681,10 @@ fn film_frames(stage: &mut Stage, snaps: &[u32], steps_of: &[usize], key: &mut d
         };
         let mut img = stage.render_instances(inst, opts.season, &cam, opts.width, opts.height)?;
         crate::output::maps::stamp_caption(&mut img, &format!("year {}", year.round() as u32))?;
+        // a north arrow, but on the map's film (north up)
+        if opts.camera != Some(CameraPreset::Map) {
+            crate::render::overlay::stamp_north_arrow(&mut img, &cam);
+        }
         crate::output::pictures::write_png(&frames_dir.join(format!("frame_{k:05}.png")), &img)?;
         Ok(img)
     };

@@ -85,6 +85,13 @@ pub struct Batches {
     pub canopy: Vec<CanopySplat>,
     /// Trees drawn only in the canopy layer (no geometry).
     pub canopy_only: usize,
+    /// The reference height of the small trees' level bias the frame used
+    /// ([`LodParams::small_tree_m`], lowered towards [`LodParams::small_tree_floor_m`] where
+    /// the triangle budget binds; see [`super::lod::small_tree_ladder`]).
+    pub small_tree_m: f32,
+    /// Trees drawn at a finer level than with the bias of `small_tree_floor_m` (and the same
+    /// switch factor): those the higher reference raised. None is drawn coarser.
+    pub raised: usize,
 }
 
 use crate::rng::unit_f32 as hash01;
@@ -179,6 +186,11 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
             Seen::Visible(camera.projected_size_px(c, t.height, height as f32))
         })
         .collect();
+    // the budget is found with the small trees biased by the least reference height
+    // (`LodParams::small_tree_floor_m`), then the reference raised as far as the budget allows
+    // at that switch factor: biasing small trees never costs another tree its level (round 44)
+    let ladder = super::lod::small_tree_ladder(params);
+    let floor_params = LodParams { small_tree_m: *ladder.last().unwrap_or(&params.small_tree_m), ..*params };
     // histogram of projected sizes per prototype (trees of at least min_px), then the far-field
     // switch (tree cap) and the switch-size factor (triangle budget) of the geometry left
     let canopy_on = params.canopy_px > 0.0;
@@ -188,25 +200,26 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
         for (t, v) in instances.iter().zip(&seen) {
             if let Seen::Visible(px) = *v {
                 if px >= params.min_px {
-                    hist[t.species as usize][size_bin(lod_px(px, t.height, params))] += 1;
+                    hist[t.species as usize][size_bin(lod_px(px, t.height, &floor_params))] += 1;
                 }
             }
         }
     }
     let costs: Vec<[u32; LOD_LEVELS]> = prototypes.iter().map(level_costs).collect();
-    let canopy_px = canopy_threshold(&hist, &costs, &levels, params);
+    let canopy_px = canopy_threshold(&hist, &costs, &levels, &floor_params);
     let floor = if canopy_px > 0.0 { canopy_px / (1.0 + params.band.max(0.0)) } else { 0.0 };
     let mut scale = if params.max_triangles > 0 {
-        budget_scale(&hist, &costs, &levels, params, floor)
+        budget_scale(&hist, &costs, &levels, &floor_params, floor)
     } else {
         1.0
     };
+    let mut chosen = params.small_tree_m;
     // the histogram prices each tree at its bin's centre and undercounted the frames of small
     // dense sites (round 36: 6.1 M triangles drawn under a 2.4 M budget); the frame's exact
     // cost (every visible tree at its pick, with its cross-fade partner) is checked and the
     // factor raised step by step until it fits, so the budget holds on this path
     if params.max_triangles > 0 {
-        let exact = |s: f32| -> u64 {
+        let exact = |s: f32, pp: &LodParams| -> u64 {
             instances
                 .par_iter()
                 .zip(&seen)
@@ -219,7 +232,7 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
                     if canopy_weight(px, canopy_px, params.band) >= 1.0 || !(px >= params.min_px) {
                         return 0;
                     }
-                    let Some(pick) = select_lod_scaled(lod_px(px, t.height, params), s, params, levels[p]) else { return 0 };
+                    let Some(pick) = select_lod_scaled(lod_px(px, t.height, pp), s, pp, levels[p]) else { return 0 };
                     let mut c = level_triangles(&prototypes[p], pick.level);
                     if pick.blend > 0.0 && pick.level + 1 < levels[p] {
                         c += level_triangles(&prototypes[p], pick.level + 1);
@@ -229,12 +242,29 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
                 .sum()
         };
         let mut k = (4.0 * scale.log2()).round().max(0.0) as u32;
-        while k < super::lod::MAX_SCALE_STEPS && exact(scale) > params.max_triangles as u64 {
+        while k < super::lod::MAX_SCALE_STEPS && exact(scale, &floor_params) > params.max_triangles as u64 {
             k += 1;
             scale = (k as f32 / 4.0).exp2();
         }
+        chosen = floor_params.small_tree_m;
+        // the higher references within the budget and within SMALL_TREE_MAX_EXTRA of the
+        // floor's cost (raising trees a few pixels tall costs much and shows nothing)
+        let cap = if ladder.len() > 1 {
+            let base = exact(scale, &floor_params) as f64;
+            let extra = super::lod::SMALL_TREE_MAX_EXTRA * base.max(0.2 * params.max_triangles as f64);
+            (params.max_triangles as u64).min((base + extra) as u64)
+        } else {
+            0
+        };
+        for &m in &ladder[..ladder.len() - 1] {
+            if exact(scale, &LodParams { small_tree_m: m, ..*params }) <= cap {
+                chosen = m;
+                break;
+            }
+        }
     }
-    let mut out = Batches { lod_scale: scale, canopy_px, ..Batches::default() };
+    let params = &LodParams { small_tree_m: chosen, ..*params };
+    let mut out = Batches { lod_scale: scale, canopy_px, small_tree_m: chosen, ..Batches::default() };
     let max_levels = levels.iter().copied().max().unwrap_or(0);
     out.per_level = vec![0; max_levels];
     // the record of a visible instance as drawn: its canopy-layer share taken out of its
@@ -296,6 +326,12 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
         let s = t.species as usize;
         counts[s][p.level] += 1;
         out.per_level[p.level] += 1;
+        if chosen != floor_params.small_tree_m {
+            let at_floor = select_lod_scaled(lod_px(px, t.height, &floor_params), scale, &floor_params, levels[s]);
+            if !prototypes[s].rigid && at_floor.is_some_and(|f| f.level > p.level) {
+                out.raised += 1;
+            }
+        }
         if p.blend > 0.0 && p.level + 1 < levels[s] {
             counts[s][p.level + 1] += 1;
         }

@@ -37,25 +37,43 @@ pub struct LodParams {
     /// ([`canopy_threshold`]): more of the far forest goes to the canopy layer, which costs no
     /// triangles, so triangles per frame level off as the tree count grows.
     pub max_geometry_triangles: u32,
-    /// Height (m, 0 = off) under which a tree picks its level as if it were larger on screen:
-    /// its projected size times `small_tree_m / height`, at most [`SMALL_TREE_MAX_BIAS`]
+    /// Reference height (m, 0 = off) under which a tree picks its level as if it were larger on
+    /// screen: its projected size times `small_tree_m / height`, at most [`SMALL_TREE_MAX_BIAS`]
     /// ([`lod_px`]), in the level choice and the budget's histogram (the smallest size drawn,
     /// `min_px`, and the canopy layer go by the size itself; the histogram then counts a small
     /// tree that goes wholly to the canopy layer at its biased size: the estimate errs high).
-    /// A young tree of a few metres then keeps its leaf cards (levels 0–1) where a canopy tree
-    /// of the same size on screen, much farther away, is drawn as a crown hull: the hull of a
-    /// small tree read as a ball on a stick in the stills' mid-ground (issue 32, round 36).
+    /// Trees are only ever biased up, never down: a tree of `small_tree_m / 3` to `small_tree_m`
+    /// takes the level a tree `small_tree_m` tall would have where it stands, so trees of that
+    /// range side by side use one level, and a taller tree keeps the level of its own size.
+    /// A young tree of a few metres keeps its leaf cards (levels 0–1) where a canopy tree of the
+    /// same size on screen, much farther away, is drawn as a crown hull (issue 32, round 36),
+    /// and a 10 m tree beside a 25 m one is drawn at its level (round 44, trial 42 defect 4:
+    /// hull "popcorn" beside speckled cards at one distance). Under a binding triangle budget
+    /// (or [`SMALL_TREE_MAX_EXTRA`]) the CPU path lowers it towards `small_tree_floor_m` first
+    /// ([`small_tree_ladder`]).
     pub small_tree_m: f32,
+    /// Least reference height (m) the CPU path ([`crate::render::instanced::build_batches_of`])
+    /// lowers [`LodParams::small_tree_m`] to where the triangle budget binds, before any switch
+    /// size is raised, or where the higher reference would cost more than
+    /// [`SMALL_TREE_MAX_EXTRA`] (0, or not under `small_tree_m`: no lowering). The budget's switch factor
+    /// is found with the biases of this reference, so every tree is drawn at a level at least
+    /// as fine as with `small_tree_m = small_tree_floor_m`: biasing the small trees never costs
+    /// a tall tree its level (round 44: r43k's 25 m reference, clamped both ways, drew the
+    /// close-up's canopy a level coarser). The GPU culling path uses `small_tree_m` alone.
+    pub small_tree_floor_m: f32,
 }
 
 /// Largest factor [`lod_px`] multiplies a small tree's projected size by (3: a tree of a third
 /// of [`LodParams::small_tree_m`] or less picks its level as if three times as tall on screen).
+/// ESTIMATE: a seedling under a third of the canopy's height is under a third of its size on
+/// screen, where the levels it is drawn at differ little; unbounded, every seedling at the
+/// canopy's full-detail distance would cost a full mesh.
 pub const SMALL_TREE_MAX_BIAS: f32 = 3.0;
 
 /// The size (px) by which a tree `height_m` tall and `px` tall on screen picks its level:
 /// `px · min(small_tree_m / height_m, SMALL_TREE_MAX_BIAS)` for a tree under
-/// `params.small_tree_m`, else `px` (see [`LodParams::small_tree_m`]). Mirrors `lod_px` of
-/// `shaders/cull.wgsl` (same `f32` arithmetic).
+/// `params.small_tree_m`, else `px` (see [`LodParams::small_tree_m`]): never under `px`.
+/// Mirrors `lod_px` of `shaders/cull.wgsl` (same `f32` arithmetic).
 pub fn lod_px(px: f32, height_m: f32, params: &LodParams) -> f32 {
     let m = params.small_tree_m;
     if m > 0.0 && height_m < m {
@@ -63,6 +81,36 @@ pub fn lod_px(px: f32, height_m: f32, params: &LodParams) -> f32 {
     } else {
         px
     }
+}
+
+/// Most the CPU path lets a reference height above [`LodParams::small_tree_floor_m`] add to a
+/// frame's tree triangles: this share (0.25) of what the floor's reference costs, or this share
+/// of a fifth of the budget ([`LodParams::max_triangles`]) where that is more (so a frame of a
+/// few trees may double). ESTIMATE (round 44): the default run's oblique still at year 150 drew
+/// 3.6 M tree triangles with the 12 m reference and 10.2 M with 25 m, 36,000 more trees a few
+/// pixels tall drawn as crown hulls instead of billboards, a picture the same to the eye at 2.6
+/// times the time; the close-up's budget binds before this does.
+pub const SMALL_TREE_MAX_EXTRA: f64 = 0.25;
+
+/// The reference heights the CPU path tries under a triangle budget, finest first:
+/// `small_tree_m · 2^(−k/4)`, k = 0, 1, …, while above `small_tree_floor_m`, then
+/// `small_tree_floor_m` (a quarter octave a step, as the budget's switch factor); only
+/// `small_tree_m` when the floor is 0, not under it, or the reference is off.
+pub fn small_tree_ladder(params: &LodParams) -> Vec<f32> {
+    let (m, lo) = (params.small_tree_m, params.small_tree_floor_m);
+    if !(m > 0.0) || !(lo > 0.0) || lo >= m {
+        return vec![m];
+    }
+    let mut out = Vec::new();
+    for k in 0..=MAX_SCALE_STEPS {
+        let r = m * (-(k as f32) / 4.0).exp2();
+        if r <= lo {
+            break;
+        }
+        out.push(r);
+    }
+    out.push(lo);
+    out
 }
 
 impl Default for LodParams {
@@ -73,7 +121,7 @@ impl Default for LodParams {
     /// when the geometry would cost more than 100,000 triangles. Triangles per frame then level
     /// off as the tree count grows (BENCHMARKS.md, "Rendering"); no small-tree bias.
     fn default() -> Self {
-        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000, canopy_px: 6.0, max_geometry_triangles: 100_000, small_tree_m: 0.0 }
+        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000, canopy_px: 6.0, max_geometry_triangles: 100_000, small_tree_m: 0.0, small_tree_floor_m: 0.0 }
     }
 }
 

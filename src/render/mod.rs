@@ -42,6 +42,7 @@ pub mod farfield;
 pub mod headless;
 pub mod instanced;
 pub mod lod;
+pub mod overlay;
 pub mod renderer;
 pub mod scene;
 pub mod terrain;

@@ -838,6 +838,7 @@ impl Viewer {
         // for, the passes until the image arrives show that frame again instead of drawing it
         if let (Some(tex), true) = (self.last_frame, self.screenshot.as_ref().is_some_and(|s| s.requested())) {
             ui.painter().image(tex, rect, egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)), egui::Color32::WHITE);
+            crate::gui::paint_north_arrow(ui.painter(), rect, &self.rig.camera());
             return;
         }
         self.refresh();
@@ -858,6 +859,7 @@ impl Viewer {
             match self.last_frame.filter(|_| self.frame_sig == Some(sig)) {
                 Some(tex) => {
                     ui.painter().image(tex, rect, egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)), egui::Color32::WHITE);
+                    crate::gui::paint_north_arrow(ui.painter(), rect, &cam);
                 }
                 None => {
                     ui.painter().rect_filled(rect, 0.0, egui::Color32::from_gray(40));
@@ -920,6 +922,7 @@ impl Viewer {
             Some(Ok(tex)) => {
                 self.last_frame = Some(tex);
                 ui.painter().image(tex, rect, egui::Rect::from_min_max(egui::pos2(0.0, 0.0), egui::pos2(1.0, 1.0)), egui::Color32::WHITE);
+                crate::gui::paint_north_arrow(ui.painter(), rect, &cam);
             }
             Some(Err(e)) => {
                 self.status = Some(e.to_string());

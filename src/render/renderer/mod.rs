@@ -88,6 +88,14 @@ pub struct FrameStats {
     pub canopy_px: f32,
     /// Trees drawn only in the canopy layer (no triangles).
     pub canopy_trees: usize,
+    /// Reference height (m) of the small trees' level bias the frame used
+    /// ([`LodParams::small_tree_m`]; on the CPU path lowered towards
+    /// [`LodParams::small_tree_floor_m`] where the triangle budget binds).
+    pub small_tree_m: f32,
+    /// Trees the frame drew at a finer level than the bias of
+    /// [`LodParams::small_tree_floor_m`] gives at the same switch factor (CPU path; 0 on the GPU
+    /// path): those the higher reference raised (none is drawn coarser).
+    pub levels_raised: usize,
     /// The terrain (and water plane) was uploaded for this frame (its content changed).
     pub uploaded_terrain: bool,
     /// The prototypes were uploaded for this frame (their content changed).
@@ -419,6 +427,7 @@ impl Renderer {
         let mut per_level = [0usize; LOD_LEVELS];
         let mut lod_scale = 1.0f32;
         let (mut canopy_px, mut canopy_trees) = (0.0f32, 0usize);
+        let (mut small_tree_m, mut levels_raised) = (self.lod.small_tree_m, 0usize);
         let (tree_tris, culled, invalid, drawn) = match &draws {
             FrameDraws::Cpu(b) => {
                 for (i, n) in b.per_level.iter().enumerate() {
@@ -426,6 +435,8 @@ impl Renderer {
                 }
                 lod_scale = b.lod_scale;
                 canopy_px = b.canopy_px;
+                small_tree_m = b.small_tree_m;
+                levels_raised = b.raised;
                 canopy_trees = b.canopy_only + near.as_ref().map_or(0, |n| n.far_trees);
                 (b.triangles, b.culled, b.invalid, b.per_level.iter().sum())
             }
@@ -468,6 +479,8 @@ impl Renderer {
             lod_scale,
             canopy_px,
             canopy_trees,
+            small_tree_m,
+            levels_raised,
             uploaded_terrain,
             uploaded_prototypes,
         };

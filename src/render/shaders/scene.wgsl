@@ -927,15 +927,28 @@ const BIRCH_CELL_M: f32 = 0.07;
 const BIRCH_MARKS: f32 = 0.7;
 const BIRCH_BASE_M: f32 = 1.6;
 const BIRCH_DARK: vec3<f32> = vec3<f32>(0.045, 0.04, 0.035);
+const BIRCH_EDGE_M: f32 = 0.15;
+// A stem counts as widened to MIN_STEM_PX (fs_tree) where its interpolated `lp.w` (r / rmin,
+// exactly 1 at every vertex of an unwidened stem) is under this. Not `< 1.0`: across a
+// triangle whose vertices all carry 1.0 the interpolated value came out a rounding error under
+// 1 at scattered pixels, which then skipped the bark pattern; a birch's dark base at eye level
+// showed the white bark through as salt-and-pepper dots (issue 32, round 43, trial 42 defect 8).
+// A stem widened by under 0.5 % is drawn as itself.
+const WIDENED_BELOW: f32 = 0.995;
 
 fn white_bark(b: vec3<f32>) -> bool {
     return dot(b, vec3<f32>(0.2126, 0.7152, 0.0722)) > BIRCH_LUMA;
 }
 
 // The colour of white bark `b` at the point `lp` of a stem (m from the stem base, the tree's
-// frame), `zpx` the metres of stem height a pixel spans (the marks fade to their mean where
-// they would be under a third of a pixel).
-fn birch_bark(b: vec3<f32>, lp: vec3<f32>, zpx: f32, salt: f32) -> vec3<f32> {
+// frame), `zpx` the metres of stem height a pixel spans and `xypx` the metres across the stem
+// (`length(fwidth(lp.xy))`, large where the stem turns away at its outline). Filtered by the
+// pixel's footprint (issue 32, round 43, trial 42 defect 8: the base of a birch at eye level
+// sparkled salt-and-pepper): a mark fades to the pattern's mean where it would be under four
+// pixels tall or wide, gone at 1.5 (before: sharp down to one pixel in height, whatever its
+// width), and the ragged upper edge of the dark base (one step per BIRCH_EDGE_M of girth) to
+// its mean where a step is under three pixels wide.
+fn birch_bark(b: vec3<f32>, lp: vec3<f32>, zpx: f32, xypx: f32, salt: f32) -> vec3<f32> {
     let r = max(length(lp.xy), 0.01);
     let arc = atan2(lp.y, lp.x) * r;
     let row = floor(lp.z / BIRCH_ROW_M);
@@ -952,10 +965,11 @@ fn birch_bark(b: vec3<f32>, lp: vec3<f32>, zpx: f32, salt: f32) -> vec3<f32> {
     }
     // the pattern's mean: marks of 0.75 darkness over 0.25 of a row and 0.75 of a cell
     let mean = 1.0 - 0.75 * BIRCH_MARKS * 0.25 * 0.75;
-    let sharp = 1.0 - smoothstep(0.3, 1.0, zpx / (0.25 * BIRCH_ROW_M));
+    let sharp = (1.0 - smoothstep(0.25, 0.67, zpx / (0.25 * BIRCH_ROW_M))) * (1.0 - smoothstep(0.25, 0.67, xypx / (0.5 * BIRCH_CELL_M)));
     var c = b * mix(mean, m, sharp);
     // the dark base, on stems over 1.5 cm radius, up to BIRCH_BASE_M at 6 cm and more
-    let top = BIRCH_BASE_M * smoothstep(0.015, 0.06, r) * (0.75 + 0.5 * lattice(vec2<f32>(floor(arc / 0.15), 1.0), salt));
+    let jag = mix(lattice(vec2<f32>(floor(arc / BIRCH_EDGE_M), 1.0), salt), 0.5, smoothstep(0.15, 0.35, xypx / BIRCH_EDGE_M));
+    let top = BIRCH_BASE_M * smoothstep(0.015, 0.06, r) * (0.75 + 0.5 * jag);
     let dark = 1.0 - smoothstep(0.55 * top, top, lp.z);
     return mix(c, BIRCH_DARK, dark * 0.85);
 }
@@ -964,6 +978,7 @@ fn birch_bark(b: vec3<f32>, lp: vec3<f32>, zpx: f32, salt: f32) -> vec3<f32> {
 fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32> {
     let apx = fwidth(i.bb.x);
     let zpx = fwidth(i.lp.z);
+    let xypx = length(fwidth(i.lp.xy));
     if (!keep(i) || !card_kept(i)) {
         discard;
     }
@@ -1073,7 +1088,7 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
             albedo = twig_color(i.bark);
             leafy = 0.3;
         }
-    } else if (i.mat_s.x < 0.5 && i.lp.w < 1.0) {
+    } else if (i.mat_s.x < 0.5 && i.lp.w < WIDENED_BELOW) {
         // a coarse level's stem widened to MIN_STEM_PX: its bark over the share of the width
         // the real stem covers, the shaded stand behind it over the rest, as the billboard's
         // trunk (round 40: birches' white stems, widened, read as white sticks under the
@@ -1086,7 +1101,7 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         // birch's white bark is on its stem and main limbs only)
         var b = i.bark;
         if (white_bark(b)) {
-            b = birch_bark(b, i.lp.xyz, zpx, i.salt);
+            b = birch_bark(b, i.lp.xyz, zpx, xypx, i.salt);
         }
         albedo = mix(b, fine_twig_color(i.bark), i.uv.y);
     }
