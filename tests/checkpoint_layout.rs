@@ -57,7 +57,7 @@ fn compressed_checkpoints_read_and_the_layouts_before_refused_naming_their_versi
     let (sc, mut w) = world();
     let rows = common::run(&sc, &mut w, 3);
     let bytes = to_bytes(&w, &rows);
-    assert_eq!(LAYOUT_VERSION >> 16, 10);
+    assert_eq!(LAYOUT_VERSION >> 16, 12);
     assert!(rows.iter().all(|r| r.species.len() == w.site.pool.len()), "every row holds its per-species rows");
     // the identity and body: one zstd frame between the file length and the checksum
     let plain_body = zstd::stream::decode_all(&bytes[20..bytes.len() - 4]).unwrap();
@@ -67,8 +67,9 @@ fn compressed_checkpoints_read_and_the_layouts_before_refused_naming_their_versi
     assert_eq!(restore(&mut fresh, &bytes, p).unwrap(), rows);
     assert_eq!(fresh.stand.trees, w.stand.trees);
     assert_eq!(fresh.stand.cohorts, w.stand.cohorts);
-    // the layouts before: uncompressed 6, compressed 7
-    for (base, body) in [(6u32, &plain_body[..]), (7, &bytes[20..bytes.len() - 4])] {
+    // the layouts before: uncompressed 6, compressed 7, 10 (round 42; round 44's 12 adds each
+    // species' top height over its own area)
+    for (base, body) in [(6u32, &plain_body[..]), (7, &bytes[20..bytes.len() - 4]), (10, &bytes[20..bytes.len() - 4])] {
         let mut old = b"SYLVACKV".to_vec();
         old.extend_from_slice(&(base << 16 | (LAYOUT_VERSION & 0xffff)).to_le_bytes());
         old.extend_from_slice(&[0; 8]);
@@ -76,7 +77,7 @@ fn compressed_checkpoints_read_and_the_layouts_before_refused_naming_their_versi
         old.extend_from_slice(&[0; 4]);
         sylva::sim::checkpoint::reseal(&mut old);
         let e = restore(&mut world().1, &old, p).unwrap_err().to_string();
-        assert!(e.starts_with("run/checkpoint.bin: ") && e.contains(&format!("layout version {base}.")) && e.contains("differs from this build's 10.") && e.contains("without --resume"), "{e}");
+        assert!(e.starts_with("run/checkpoint.bin: ") && e.contains(&format!("layout version {base}.")) && e.contains("differs from this build's 12.") && e.contains("without --resume"), "{e}");
     }
     // a frame that does not decode, sealed with a matching checksum, is refused by name
     let mut bad = bytes.clone();
