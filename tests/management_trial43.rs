@@ -110,12 +110,13 @@ fn a_later_planting_fills_the_gaps_of_its_area() {
            [[management]]\nkind = \"planting\"\nmix = { norway_spruce = 1.0 }\nspacing_m = 2.0\nage_yr = 3.0\nyear = 4\narea = [0.0, 0.0, 50.0, 100.0]\n";
     let (sc, mut w) = world(&toml);
     common::run(&sc, &mut w, 3);
-    let old: Vec<(f32, f32, f32)> = (0..w.stand.trees.len()).map(|i| (w.stand.trees.x[i], w.stand.trees.y[i], w.stand.trees.height[i])).collect();
     let old_ids: std::collections::HashSet<u64> = w.stand.trees.id.iter().copied().collect();
     let mut r = sylva::sim::YearReport::default();
     sylva::sim::step_year(&mut w, &sc, &mut r);
     let t = &w.stand.trees;
     let new: Vec<usize> = (0..t.len()).filter(|i| !old_ids.contains(&t.id[*i])).collect();
+    // the trees standing when the planting came (after the year's growth and deaths)
+    let old: Vec<(f32, f32, f32)> = (0..t.len()).filter(|i| old_ids.contains(&t.id[*i])).map(|i| (t.x[i], t.y[i], t.height[i])).collect();
     let spruce = w.site.lib.find("norway_spruce").unwrap();
     let floor = sylva::species::allometry::potential_height(w.site.species(t.species[new[0]]), 2.5).max(0.3);
     eprintln!("{} old trees, {} planted in year 4 ({} spruce); notes {:?}", old.len(), new.len(), new.iter().filter(|&&i| t.species[i] == spruce).count(), r.notes);

@@ -784,6 +784,10 @@ pub struct Operation {
     pub unreachable: Option<String>,
 }
 
+/// The least DBH (cm) of the growing stock a thinning's targets count: 7 cm, as
+/// [`super::density::MIN_DBH_CM`] (the yield tables' and the relative density's).
+const GROWING_STOCK_DBH_CM: f64 = 7.0;
+
 /// The warning (without the scenario's name) for entry `i`, a thinning to `target` stems/ha
 /// of the growing stock (stems of at least [`super::density::MIN_DBH_CM`], 7 cm, DBH) when the
 /// target lies above the most such stems per hectare a stand of the pool's species can hold:
@@ -794,13 +798,15 @@ pub struct Operation {
 /// target of 100,000 stems/ha was only reported year by year in the log). `None` when the
 /// target can be exceeded or the pool is empty.
 pub fn unreachable_stems(i: usize, target: f64, lib: &SpeciesLibrary, pool: &[SpeciesId]) -> Option<String> {
-    let dq = super::density::MIN_DBH_CM as f64;
+    // `density::max_stems(sdi_max, slope, 7 cm)` written out: `sim::density` reads the world,
+    // which reads the scenario and so this module (tests/layers.rs: no import cycles)
+    let (dq, d_ref) = (GROWING_STOCK_DBH_CM, 25.0);
     let (id, d, n) = pool
         .iter()
         .map(|&s| {
             let sp = &lib.species[s as usize];
             let d = &sp.life.density;
-            (sp.id.as_str(), d, super::density::max_stems(d.sdi_max as f64, d.reineke_slope as f64, dq))
+            (sp.id.as_str(), d, d.sdi_max as f64 * (dq / d_ref).powf(d.reineke_slope as f64))
         })
         .max_by(|a, b| a.2.total_cmp(&b.2))?;
     (target > n).then(|| {
