@@ -67,7 +67,8 @@ fn compressed_checkpoints_read_and_the_layouts_before_refused_naming_their_versi
     assert_eq!(restore(&mut fresh, &bytes, p).unwrap(), rows);
     assert_eq!(fresh.stand.trees, w.stand.trees);
     assert_eq!(fresh.stand.cohorts, w.stand.cohorts);
-    // the layouts before: uncompressed 6, compressed 7, and 10 (rows without the drought index)
+    // the layouts before: uncompressed 6, compressed 7, and 10 (round 42; round 44's 12 adds the
+    // drought index, each species' top height over its own area and the cohorts' stress years)
     for (base, body) in [(6u32, &plain_body[..]), (7, &bytes[20..bytes.len() - 4]), (10, &bytes[20..bytes.len() - 4])] {
         let mut old = b"SYLVACKV".to_vec();
         old.extend_from_slice(&(base << 16 | (LAYOUT_VERSION & 0xffff)).to_le_bytes());

@@ -74,11 +74,14 @@ pub fn stand_table_csv_with_area(rows: &[StandRow], species: &[&str], area_ha: f
 /// CSV text of the per-species stand table (`stand_table_species.csv`; round 42, trial 41
 /// defect 2): one row per year and pool species (`species` = pool ids in pool order; years
 /// ascending, species in pool order), each per hectare of the site's unmasked area:
-/// `year,species,stems_ha,basal_area_m2_ha,qmd_cm,top_height_m,volume_m3_ha,deaths_stems_ha,
-/// deaths_volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha,deaths_<cause>_stems_ha…,
-/// deaths_<cause>_volume_m3_ha…` — stems ≥ 1.3 m, their basal area (m²/ha) and quadratic mean
-/// DBH (cm), the species' own top height (m: the mean height of its 100 thickest stems per ha,
-/// [`crate::sim::stats::SpeciesRow::top_height_m`]), the standing stem volume of its stems with
+/// `year,species,stems_ha,basal_area_m2_ha,qmd_cm,top_height_m,top_height_own_area_m,
+/// volume_m3_ha,deaths_stems_ha,deaths_volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha,
+/// deaths_<cause>_stems_ha…,deaths_<cause>_volume_m3_ha…` — stems ≥ 1.3 m, their basal area
+/// (m²/ha) and quadratic mean DBH (cm), the species' top height over the whole site (m: the
+/// mean height of its 100 thickest stems per ha of the site,
+/// [`crate::sim::stats::SpeciesRow::top_height_m`]) and over its own area (m: per hectare of
+/// its share of the stand's basal area, [`crate::sim::stats::SpeciesRow::top_height_own_area_m`];
+/// round 44, the one to read for a species growing in patches), the standing stem volume of its stems with
 /// DBH ≥ 7 cm (m³/ha, [`crate::sim::stats::stem_volume_m3`], as the stand table's); then the
 /// year's deaths of natural causes (every cause but harvest: stems ≥ 1.3 m per ha and their
 /// volume, m³/ha), the year's harvest (the same for cause harvest), and the deaths by each cause
@@ -88,7 +91,7 @@ pub fn stand_table_csv_with_area(rows: &[StandRow], species: &[&str], area_ha: f
 /// the printed rounding). Decimals as the stand table's. Rows without per-species figures are
 /// left out.
 pub fn stand_table_species_csv(rows: &[StandRow], species: &[&str]) -> String {
-    let mut s = String::from("year,species,stems_ha,basal_area_m2_ha,qmd_cm,top_height_m,volume_m3_ha,deaths_stems_ha,deaths_volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha");
+    let mut s = String::from("year,species,stems_ha,basal_area_m2_ha,qmd_cm,top_height_m,top_height_own_area_m,volume_m3_ha,deaths_stems_ha,deaths_volume_m3_ha,harvest_stems_ha,harvest_volume_m3_ha");
     for what in ["stems_ha", "volume_m3_ha"] {
         for c in DeathCause::ALL {
             let _ = write!(s, ",deaths_{}_{what}", c.name());
@@ -99,7 +102,7 @@ pub fn stand_table_species_csv(rows: &[StandRow], species: &[&str]) -> String {
     for r in rows {
         for (sp, v) in species.iter().zip(&r.species) {
             let natural = |a: &[f64]| a.iter().enumerate().filter(|(c, _)| *c != h).map(|(_, x)| x).sum::<f64>();
-            let _ = write!(s, "{},{},{:.1},{:.3},{:.2},{:.2},{:.2},{:.1},{:.2},{:.1},{:.2}", r.year, csv_field(sp), v.stems_ha, v.basal_area_m2_ha, v.qmd_cm, v.top_height_m, v.volume_m3_ha, natural(&v.deaths_stems_ha), natural(&v.deaths_volume_m3_ha), v.deaths_stems_ha[h], v.deaths_volume_m3_ha[h]);
+            let _ = write!(s, "{},{},{:.1},{:.3},{:.2},{:.2},{:.2},{:.2},{:.1},{:.2},{:.1},{:.2}", r.year, csv_field(sp), v.stems_ha, v.basal_area_m2_ha, v.qmd_cm, v.top_height_m, v.top_height_own_area_m, v.volume_m3_ha, natural(&v.deaths_stems_ha), natural(&v.deaths_volume_m3_ha), v.deaths_stems_ha[h], v.deaths_volume_m3_ha[h]);
             for x in v.deaths_stems_ha {
                 let _ = write!(s, ",{x:.1}");
             }

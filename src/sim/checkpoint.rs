@@ -35,8 +35,10 @@ const MAGIC: &[u8; 7] = b"SYLVACK";
 /// each stand-table row also holds the natural deaths' volume and the per-species rows, and
 /// the stand table starts with year 0; checkpoints of layouts 6 and 7 are refused, naming
 /// their version (their stand tables have neither). 12 (round 44): each row also holds the
-/// year's site-mean drought index, and each sapling cohort its consecutive stress years (after
-/// the vigour column; trial 44 defect 4); checkpoints of layout 10 are refused, naming their version.
+/// year's site-mean drought index, each per-species row the species' top height over its own
+/// area ([`super::stats::SpeciesRow::top_height_own_area_m`]; trial 43 defect 8), and each
+/// sapling cohort its consecutive stress years (after the vigour column; trial 44 defect 4);
+/// checkpoints of layout 10 are refused, naming their version.
 const LAYOUT_BASE: u32 = 12;
 
 /// The layout base of a checkpoint of a run with `[[management]]`: [`LAYOUT_BASE`]'s layout and
@@ -294,10 +296,12 @@ pub fn identity(w: &World) -> Vec<(String, String)> {
                 let mut spec = op.spec.clone();
                 spec.area_file = None;
                 let written = toml::to_string(&spec).unwrap_or_else(|_| format!("{spec:?}"));
-                format!("management[{i}] {:08x}", crc32fast::hash(format!("{written}{:?}{:?}", op.action, op.region).as_bytes()))
+                // the entry and its area apart, so a refusal can say which changed (round 44,
+                // trial 43 defect 11: a moved parcel was named by CRC-32s only)
+                format!("management[{i}] entry {:08x} area {:08x}", crc32fast::hash(format!("{written}{:?}", op.action).as_bytes()), crc32fast::hash(format!("{:?}", op.region).as_bytes()))
             })
             .collect();
-        out.push(("management".into(), format!("{} entries, CRC-32 of each with its resolved area: {}", s.management.len(), crcs.join(", "))));
+        out.push(("management".into(), format!("{} entries, CRC-32 of each and of its resolved area: {}", s.management.len(), crcs.join(", "))));
     }
     if s.climate_change.is_active() {
         let c = &s.climate_change;
@@ -404,6 +408,7 @@ fn check_identity(stored: &[(String, String)], w: &World, path: &Path) -> Result
             (Some(id), Some(a), Some(b)) if k != "species pool" => format!("species `{id}` changed: {}", species_diff(a, b)),
             (Some(id), None, Some(_)) if k != "species pool" => format!("species `{id}`: not in the checkpoint's pool"),
             (Some(id), Some(_), None) if k != "species pool" => format!("species `{id}`: no longer in the pool"),
+            _ if k == "management" && a.is_some() && b.is_some() => format!("management: {}", management_changes(a.as_deref().unwrap_or(""), b.as_deref().unwrap_or(""))),
             _ => format!("{k}: checkpoint {}, now {}", a.as_deref().unwrap_or("(absent)"), b.as_deref().unwrap_or("(absent)")),
         });
     }
@@ -417,6 +422,52 @@ fn check_identity(stored: &[(String, String)], w: &World, path: &Path) -> Result
             changes.join("; ")
         ),
     ))
+}
+
+/// What changed between two `management` identities ([`identity`]: `management[i] entry X area
+/// Y` per entry): the entries whose area changed (the polygons of an area file moved, another
+/// rectangle) and those whose entry changed (a field, what it does), runs of consecutive
+/// entries joined (`management[3–5]: area changed`), and entries added or removed; the two
+/// texts whole when either does not parse (an identity of another version).
+pub fn management_changes(old: &str, new: &str) -> String {
+    // (index, entry CRC, area CRC) of each entry
+    let parse = |s: &str| -> Option<Vec<(usize, String, String)>> {
+        let list = s.split_once(": ")?.1;
+        list.split(", ")
+            .map(|e| {
+                let w: Vec<&str> = e.split(' ').collect();
+                let i = w.first()?.strip_prefix("management[")?.strip_suffix(']')?.parse().ok()?;
+                (w.len() == 5 && w[1] == "entry" && w[3] == "area").then(|| (i, w[2].to_string(), w[4].to_string()))
+            })
+            .collect()
+    };
+    let (Some(a), Some(b)) = (parse(old), parse(new)) else { return format!("checkpoint {old}, now {new}") };
+    let mut what: Vec<(usize, &str)> = Vec::new();
+    for k in 0..a.len().max(b.len()) {
+        match (a.get(k), b.get(k)) {
+            (Some(x), Some(y)) => match (x.1 != y.1, x.2 != y.2) {
+                (true, true) => what.push((k, "entry and area changed")),
+                (true, false) => what.push((k, "entry changed")),
+                (false, true) => what.push((k, "area changed (its polygons or rectangle as resolved on the site: an area file's polygons moved or were edited?)")),
+                _ => {}
+            },
+            (Some(_), None) => what.push((k, "removed")),
+            (None, Some(_)) => what.push((k, "added")),
+            _ => {}
+        }
+    }
+    let mut parts = Vec::new();
+    let mut k = 0;
+    while k < what.len() {
+        let mut j = k;
+        while j + 1 < what.len() && what[j + 1].1 == what[k].1 && what[j + 1].0 == what[j].0 + 1 {
+            j += 1;
+        }
+        let idx = if j > k { format!("management[{}–{}]", what[k].0, what[j].0) } else { format!("management[{}]", what[k].0) };
+        parts.push(format!("{idx}: {}", what[k].1));
+        k = j + 1;
+    }
+    parts.join(", ")
 }
 
 /// Writes to `w`; after an error it writes nothing more.
@@ -592,7 +643,7 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
         o.f64(r.deaths_volume_m3_ha);
         o.u64(r.species.len() as u64);
         for sp in &r.species {
-            for v in [sp.stems_ha, sp.basal_area_m2_ha, sp.qmd_cm, sp.top_height_m, sp.volume_m3_ha].iter().chain(&sp.deaths_stems_ha).chain(&sp.deaths_volume_m3_ha) {
+            for v in [sp.stems_ha, sp.basal_area_m2_ha, sp.qmd_cm, sp.top_height_m, sp.volume_m3_ha, sp.top_height_own_area_m].iter().chain(&sp.deaths_stems_ha).chain(&sp.deaths_volume_m3_ha) {
                 o.f64(*v);
             }
         }
@@ -771,15 +822,15 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
         let k = r.count(8 * (5 + 2 * super::trees::N_CAUSES))?;
         let mut species = Vec::with_capacity(k);
         for _ in 0..k {
-            let mut v = [0f64; 5 + 2 * super::trees::N_CAUSES];
+            let mut v = [0f64; 6 + 2 * super::trees::N_CAUSES];
             for x in v.iter_mut() {
                 *x = r.f64()?;
             }
             let mut ds = [0f64; super::trees::N_CAUSES];
             let mut dv = [0f64; super::trees::N_CAUSES];
-            ds.copy_from_slice(&v[5..5 + super::trees::N_CAUSES]);
-            dv.copy_from_slice(&v[5 + super::trees::N_CAUSES..]);
-            species.push(super::stats::SpeciesRow { stems_ha: v[0], basal_area_m2_ha: v[1], qmd_cm: v[2], top_height_m: v[3], volume_m3_ha: v[4], deaths_stems_ha: ds, deaths_volume_m3_ha: dv });
+            ds.copy_from_slice(&v[6..6 + super::trees::N_CAUSES]);
+            dv.copy_from_slice(&v[6 + super::trees::N_CAUSES..]);
+            species.push(super::stats::SpeciesRow { stems_ha: v[0], basal_area_m2_ha: v[1], qmd_cm: v[2], top_height_m: v[3], volume_m3_ha: v[4], top_height_own_area_m: v[5], deaths_stems_ha: ds, deaths_volume_m3_ha: dv });
         }
         rows.push(StandRow {
             year,

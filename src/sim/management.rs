@@ -688,14 +688,68 @@ pub enum Action {
 }
 
 /// The square patches of side `size_m` (m) over `region`'s bounding box, laid from its SW
-/// corner: `(columns, rows, the squares whose centre lies in the region)`, squares numbered
-/// row-major from the SW corner.
+/// corner: `(columns, rows, the squares that hold part of the region)`, squares numbered
+/// row-major from the SW corner. A square holds part of the region when its part on the box
+/// ([`Region::bbox`]; the last row and column reach past it) is crossed by an edge of one of
+/// the region's polygons, or, crossed by none, lies wholly inside the region (its centre
+/// inside, [`Region::contains`]); a region without polygons is the box, which every square
+/// meets. Until round 44 only squares whose centre lay in the region were cut, so a row of
+/// squares reaching less than half their side into the box, and squares straddling a
+/// polygon's edge, were never cut: a 10 m strip along the north edge of the shipped
+/// `parcels.toml` central parcel (400 m high, 30 m patches) stood after entries whose shares
+/// summed to 1 (trial 43 defect 10).
 pub fn patch_squares(region: &Region, size_m: f64) -> (usize, usize, Vec<usize>) {
     let b = region.bbox;
     let nx = (((b[2] - b[0]) / size_m).ceil() as usize).max(1);
     let ny = (((b[3] - b[1]) / size_m).ceil() as usize).max(1);
-    let inside = (0..nx * ny).filter(|&p| region.contains(b[0] + ((p % nx) as f64 + 0.5) * size_m, b[1] + ((p / nx) as f64 + 0.5) * size_m)).collect();
+    let inside = (0..nx * ny)
+        .filter(|&p| {
+            let (x0, y0) = (b[0] + (p % nx) as f64 * size_m, b[1] + (p / nx) as f64 * size_m);
+            let r = [x0, y0, (x0 + size_m).min(b[2]), (y0 + size_m).min(b[3])];
+            if r[2] <= r[0] || r[3] <= r[1] {
+                return false;
+            }
+            match &region.polygons {
+                None => true,
+                Some(ps) => ps.iter().flatten().any(|ring| (0..ring.len()).any(|k| segment_meets_rect(ring[k], ring[(k + 1) % ring.len()], r))) || region.contains(0.5 * (r[0] + r[2]), 0.5 * (r[1] + r[3])),
+            }
+        })
+        .collect();
     (nx, ny, inside)
+}
+
+/// The squares (positions `lo..hi` in a patch cut's drawn order of its `n` squares) that entry
+/// `k` (0 the first) of a patch cut of `share` cuts: `round(k · share · n)` to
+/// `round((k + 1) · share · n)`, at least one, within `n`. Rounded cumulatively, so `m` entries
+/// whose shares sum to 1 cut all `n` squares (round 44: with `round(share · n)` squares an
+/// entry, five entries of 0.2 over 12 squares cut 10).
+pub fn patch_range(n: usize, share: f64, k: u32) -> (usize, usize) {
+    let at = |j: f64| ((j * share * n as f64).round().max(0.0) as usize).min(n);
+    let lo = at(k as f64);
+    (lo, at(k as f64 + 1.0).max(lo + 1).min(n))
+}
+
+/// Whether segment `a`–`b` meets the open rectangle `r = [x0, y0, x1, y1]` (its interior):
+/// Liang–Barsky clipping of the segment's parameter range to the rectangle's slabs (Liang &
+/// Barsky 1984, *A new concept and method for line clipping*, ACM TOG 3(1)).
+fn segment_meets_rect(a: [f64; 2], b: [f64; 2], r: [f64; 4]) -> bool {
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    let d = [b[0] - a[0], b[1] - a[1]];
+    for (p, q) in [(-d[0], a[0] - r[0]), (d[0], r[2] - a[0]), (-d[1], a[1] - r[1]), (d[1], r[3] - a[1])] {
+        if p == 0.0 {
+            if q <= 0.0 {
+                return false;
+            }
+        } else {
+            let t = q / p;
+            if p < 0.0 {
+                t0 = t0.max(t);
+            } else {
+                t1 = t1.min(t);
+            }
+        }
+    }
+    t0 < t1
 }
 
 /// A thinning target over the thinned area.
@@ -724,6 +778,43 @@ pub struct Operation {
     /// (the field, its share and the site's extent, [`resolve`]; [`warnings`] gives it with the
     /// scenario's name); `None` when it lies inside.
     pub clipped: Option<String>,
+    /// The warning that a thinning's `target_stems_ha` lies above the most stems of the growing
+    /// stock any stand of the pool holds ([`unreachable_stems`]), so the entry never removes a
+    /// tree; `None` otherwise.
+    pub unreachable: Option<String>,
+}
+
+/// The least DBH (cm) of the growing stock a thinning's targets count: 7 cm, as
+/// [`super::density::MIN_DBH_CM`] (the yield tables' and the relative density's).
+const GROWING_STOCK_DBH_CM: f64 = 7.0;
+
+/// The warning (without the scenario's name) for entry `i`, a thinning to `target` stems/ha
+/// of the growing stock (stems of at least [`super::density::MIN_DBH_CM`], 7 cm, DBH) when the
+/// target lies above the most such stems per hectare a stand of the pool's species can hold:
+/// the largest over the pool of the stems on a species' maximum-density line at Dq 7 cm
+/// ([`super::density::max_stems`] with its `life.density`: `SDI_max · (7/25)^slope`, Reineke
+/// 1933); a stand of stems of 7 cm or more has Dq ≥ 7 cm, and a mixed stand's relative
+/// densities share the line, so its stems stay below that (round 44, trial 43 defect 11: a
+/// target of 100,000 stems/ha was only reported year by year in the log). `None` when the
+/// target can be exceeded or the pool is empty.
+pub fn unreachable_stems(i: usize, target: f64, lib: &SpeciesLibrary, pool: &[SpeciesId]) -> Option<String> {
+    // `density::max_stems(sdi_max, slope, 7 cm)` written out: `sim::density` reads the world,
+    // which reads the scenario and so this module (tests/layers.rs: no import cycles)
+    let (dq, d_ref) = (GROWING_STOCK_DBH_CM, 25.0);
+    let (id, d, n) = pool
+        .iter()
+        .map(|&s| {
+            let sp = &lib.species[s as usize];
+            let d = &sp.life.density;
+            (sp.id.as_str(), d, d.sdi_max as f64 * (dq / d_ref).powf(d.reineke_slope as f64))
+        })
+        .max_by(|a, b| a.2.total_cmp(&b.2))?;
+    (target > n).then(|| {
+        format!(
+            "management[{i}].target_stems_ha = {target} lies above the most stems of 7 cm DBH or more a stand of the pool holds per hectare ({n:.0}: {id}'s maximum-density line at Dq 7 cm, SDI_max {} with Reineke slope {}): the thinning never finds its area above the target and removes nothing (a target below it, e.g. a yield table's stems per hectare after thinning)",
+            d.sdi_max, d.reineke_slope
+        )
+    })
 }
 
 /// Converts a point of the DEM's CRS to world metres (origin SW corner) on `site`: through the
@@ -916,6 +1007,13 @@ pub fn read_geojson_area(path: &Path, filter: Option<&AreaFilter>, dem_epsg: Opt
     }
     Ok(out)
 }
+
+/// Extensions (lower case) of vector formats GDAL/OGR reads and `ogr2ogr` converts to a
+/// GeoPackage (GDAL's vector drivers: ESRI Shapefile, KML/KMZ, GML, FlatGeobuf, MapInfo TAB/MIF,
+/// GPX, SQLite/SpatiaLite, File Geodatabase, DXF, GeoJSONSeq): an area file of
+/// such an extension is refused with the `ogr2ogr` command that converts it; any other with
+/// what `area_file` must be.
+const OGR_VECTOR_EXTENSIONS: [&str; 12] = ["shp", "kml", "kmz", "gml", "fgb", "tab", "mif", "gpx", "sqlite", "gdb", "dxf", "geojsonl"];
 
 /// Whether `path` names a GeoPackage (extension `.gpkg`, any case).
 pub fn is_gpkg(path: &Path) -> bool {
@@ -1140,7 +1238,7 @@ pub fn resolve_by(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibr
                     return Err(invalid(ctx, i, "patch_size_m", size_m, &format!("a patch that fits in the area: at most {:.1} m, the shorter side of the area's bounding box ({w:.1} m × {h:.1} m on the site)", w.min(h))));
                 }
                 if patch_squares(&region, size_m).2.is_empty() {
-                    return Err(invalid(ctx, i, "patch_size_m", size_m, "a patch size whose squares (laid from the SW corner of the area's bounding box) have at least one centre inside the area (none has: use smaller patches)"));
+                    return Err(invalid(ctx, i, "patch_size_m", size_m, "a patch size whose squares (laid from the SW corner of the area's bounding box) hold part of the area (none does: use smaller patches)"));
                 }
                 Action::Patch { size_m, share: m.share.unwrap_or(1.0) }
             }
@@ -1179,7 +1277,11 @@ pub fn resolve_by(entries: &[Management], site: &SiteView<'_>, lib: &SpeciesLibr
             }
         };
         let clipped = outside_note(m, bbox, region.polygons.as_deref(), site, i);
-        ops.push(Operation { index: i, spec: m.clone(), action, region, clipped });
+        let unreachable = match action {
+            Action::Thinning { target: Target::Stems(n), .. } => unreachable_stems(i, n, lib, site.pool),
+            _ => None,
+        };
+        ops.push(Operation { index: i, spec: m.clone(), action, region, clipped, unreachable });
     }
     Ok(ops)
 }
@@ -1200,7 +1302,16 @@ fn read_area_file(f: &Path, m: &Management, site: &SiteView<'_>, (ex, ey): (f64,
     let epsg = if g.crs == crate::grid::Crs::Local { None } else { g.epsg };
     let ext = f.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
     if !is_gpkg(f) && !["geojson", "json"].contains(&ext.as_str()) {
-        return Err(bad(format!("a GeoPackage (`.gpkg`) or GeoJSON file (`.geojson`, `.json`); a {} is not read: convert it, e.g. `ogr2ogr -f GPKG parcels.gpkg {}`", if ext.is_empty() { "file without an extension".to_string() } else { format!("`.{ext}` file") }, f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default())));
+        let what = if ext.is_empty() { "file without an extension".to_string() } else { format!("`.{ext}` file") };
+        // only a vector format GDAL reads gets the command that converts it; a scenario, a
+        // table or a text is no vector file (trial 43 defect 11: a `.toml` got the hint
+        // `ogr2ogr -f GPKG parcels.gpkg s.toml`)
+        let how = if OGR_VECTOR_EXTENSIONS.contains(&ext.as_str()) {
+            format!(": convert it, e.g. `ogr2ogr -f GPKG parcels.gpkg {}`", f.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default())
+        } else {
+            " and is no vector file: area_file names a GeoPackage or GeoJSON file holding the area's polygons (a rectangle or polygons in the scenario itself are `area` or `polygons`)".to_string()
+        };
+        return Err(bad(format!("a GeoPackage (`.gpkg`) or GeoJSON file (`.geojson`, `.json`); a {what} is not read{how}")));
     }
     let ps = if is_gpkg(f) { read_gpkg_area(f, m.layer.as_deref(), m.filter.as_ref(), epsg, ctx, field)? } else { read_geojson_area(f, m.filter.as_ref(), epsg, ctx, field)? };
     let mut out = Vec::with_capacity(ps.len());
@@ -1340,6 +1451,7 @@ pub fn warnings(ops: &[Operation], last_year: u32, ctx: &str) -> Vec<String> {
     let mut out = Vec::new();
     for op in ops {
         out.extend(op.clipped.as_ref().map(|c| format!("{ctx}: {c}")));
+        out.extend(op.unreachable.as_ref().map(|c| format!("{ctx}: {c}")));
         for (f, y) in op.spec.years_beyond(last_year) {
             out.push(format!("{ctx}: management[{}].{f} = {y} lies beyond the run's last year {last_year}: the entry does not act in that year", op.index));
         }
@@ -1375,10 +1487,10 @@ pub fn warnings(ops: &[Operation], last_year: u32, ctx: &str) -> Vec<String> {
         if let Action::Patch { size_m, share } = op.action {
             let n = patch_squares(&op.region, size_m).2.len();
             let per = ((share * n as f64).round() as usize).max(1);
-            let needed = n.div_ceil(per);
+            let needed = (1..=n as u32).find(|&k| patch_range(n, share, k - 1).1 >= n).unwrap_or(n as u32) as usize;
             let due: Vec<u32> = (1..=last_year).filter(|&y| op.spec.due(y).is_some()).collect();
             if due.len() > needed {
-                out.push(format!("{ctx}: management[{}]: a patch cut of {n} squares of {size_m} m, {per} per entry, has cut them all after {needed} entries (year {}); its {} later entries in the run cut nothing", op.index, due[needed - 1], due.len() - needed));
+                out.push(format!("{ctx}: management[{}]: a patch cut of {n} squares of {size_m} m, about {per} per entry, has cut them all after {needed} entries (year {}); its {} later entries in the run cut nothing", op.index, due[needed - 1], due.len() - needed));
             }
         }
     }

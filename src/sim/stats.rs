@@ -111,6 +111,19 @@ pub struct SpeciesRow {
     pub top_height_m: f64,
     /// Standing stem volume (m³/ha) of the stems with DBH ≥ 7 cm.
     pub volume_m3_ha: f64,
+    /// The species' top height over its own area (m): Assmann's h100 (the mean height of the
+    /// 100 thickest stems per hectare) over the hectares the species holds, its share of the
+    /// stand's basal area times the site's unmasked area (`round(100 · a · G_sp / G)` of its
+    /// thickest stems; all of them where it has fewer; [`species_own_area_top_heights`]). The
+    /// species' proportion by area estimated by its basal-area proportion, the simplest of the
+    /// estimates del Río et al. 2016 review (*Characterization of the structure, dynamics, and
+    /// productivity of mixed-species stands*, Eur. J. For. Res. 135:23–49, §"Species
+    /// proportion"; Pretzsch 2009, *Forest Dynamics, Growth and Yield*, §mixed stands), so a
+    /// species growing in patches or scattered has the top height of where it grows, not of
+    /// the whole site: `top_height_m` takes 100 stems per hectare of the whole site, which for a
+    /// species on a sixth of it averages its dominant trees with its thinnest (round 44, trial
+    /// 43 defect 8: birch 14.1 m while its trees of 80–120 years were 22–28 m). 0 without stems.
+    pub top_height_own_area_m: f64,
     /// Stems (≥ 1.3 m) per ha that died in the year, by cause ([`DeathCause::ALL`] order; the
     /// last, harvest, is what management removed).
     pub deaths_stems_ha: [f64; super::trees::N_CAUSES],
@@ -345,6 +358,14 @@ impl DeadSums {
 /// Errors: those of `reduce`.
 pub fn species_top_heights(site: &Site, t: &TreeStore, stems_sp: &[u64], reduce: &mut Reduce) -> crate::Result<Vec<f64>> {
     let np = site.pool.len();
+    let (d, h) = by_species(site, t);
+    let a = site.area_ha.max(1e-9);
+    (0..np).map(|p| h100_by(&d[p], &h[p], a, stems_sp.get(p).copied().unwrap_or(0), reduce)).collect()
+}
+
+/// The DBHs (cm) and heights (m) of the trees of `t` per pool species (pool order, store order).
+fn by_species(site: &Site, t: &TreeStore) -> (Vec<Vec<f32>>, Vec<Vec<f32>>) {
+    let np = site.pool.len();
     let pidx: Vec<Option<usize>> = (0..site.lib.species.len() as u16).map(|s| site.pool_index(s)).collect();
     let (mut d, mut h) = (vec![Vec::new(); np], vec![Vec::new(); np]);
     for i in 0..t.len() {
@@ -353,8 +374,29 @@ pub fn species_top_heights(site: &Site, t: &TreeStore, stems_sp: &[u64], reduce:
             h[p].push(t.height[i]);
         }
     }
-    let a = site.area_ha.max(1e-9);
-    (0..np).map(|p| h100_by(&d[p], &h[p], a, stems_sp.get(p).copied().unwrap_or(0), reduce)).collect()
+    (d, h)
+}
+
+/// Each pool species' top height over its own area (m; pool order,
+/// [`SpeciesRow::top_height_own_area_m`]): [`h100_by`] over the species' stems with the
+/// hectares `a · G_sp / G` (`a` the site's unmasked hectares, `G_sp` and `G` the species' and
+/// the stand's basal area of `sums`, summed over every part: the ranks of a tiled run,
+/// `reduce`). 0 for a species without stems or a stand without basal area.
+///
+/// Errors: those of `reduce`.
+pub fn species_own_area_top_heights(site: &Site, t: &TreeStore, sums: &RowSums, reduce: &mut Reduce) -> crate::Result<Vec<f64>> {
+    let np = site.pool.len();
+    let (d, h) = by_species(site, t);
+    let g = unfixed(sums.ba);
+    (0..np)
+        .map(|p| {
+            let share = if g > 0.0 { unfixed(sums.ba_sp.get(p).copied().unwrap_or(0)) / g } else { 0.0 };
+            let stems = sums.stems_sp.get(p).copied().unwrap_or(0);
+            // every part takes the same rounds of h100_by (an all-sum each), with 0 stems too
+            let v = h100_by(&d[p], &h[p], site.area_ha.max(1e-9) * share, stems, reduce)?;
+            Ok(if share > 0.0 { v } else { 0.0 })
+        })
+        .collect()
 }
 
 /// The per-species rows of a year ([`SpeciesRow`], pool order) from the sums over the trees
@@ -362,7 +404,7 @@ pub fn species_top_heights(site: &Site, t: &TreeStore, stems_sp: &[u64], reduce:
 /// [`species_top_heights`]), per hectare of `site`'s unmasked area; and the natural deaths'
 /// stem volume (m³/ha: every cause but harvest, [`StandRow::deaths_volume_m3_ha`]), summed
 /// exactly over the species.
-pub fn species_rows(site: &Site, sums: &RowSums, dead: &DeadSums, h100: &[f64]) -> (Vec<SpeciesRow>, f64) {
+pub fn species_rows(site: &Site, sums: &RowSums, dead: &DeadSums, h100: &[f64], own_area_h100: &[f64]) -> (Vec<SpeciesRow>, f64) {
     let a = site.area_ha.max(1e-9);
     let harvest = DeathCause::Harvest.index();
     let mut natural: i128 = 0;
@@ -376,6 +418,7 @@ pub fn species_rows(site: &Site, sums: &RowSums, dead: &DeadSums, h100: &[f64]) 
                 qmd_cm: if n > 0 { (unfixed(sums.d2_sp[p]) / n as f64).sqrt() } else { 0.0 },
                 top_height_m: h100.get(p).copied().unwrap_or(0.0),
                 volume_m3_ha: unfixed(sums.vol_sp[p]) / a,
+                top_height_own_area_m: own_area_h100.get(p).copied().unwrap_or(0.0),
                 deaths_stems_ha: dead.stems[p].map(|v| v as f64 / a),
                 deaths_volume_m3_ha: dead.vol[p].map(|v| unfixed(v) / a),
             }
@@ -801,7 +844,8 @@ pub fn stand_row(w: &World) -> StandRow {
     let mut row = row_of(&w.site, w.stand.year, &sums, h100, w.stand.cohorts.total_stems(), deaths, w.scratch.regen_year, harvest_sums(&w.site, &w.scratch.dead));
     row.drought_index = drought_mean(drought_sums(&w.site, w.stand.year));
     let hs = species_top_heights(&w.site, t, &sums.stems_sp, &mut alone).unwrap_or_else(|_| vec![0.0; sums.stems_sp.len()]);
-    (row.species, row.deaths_volume_m3_ha) = species_rows(&w.site, &sums, &DeadSums::of(&w.site, &w.scratch.dead), &hs);
+    let ho = species_own_area_top_heights(&w.site, t, &sums, &mut alone).unwrap_or_else(|_| vec![0.0; sums.stems_sp.len()]);
+    (row.species, row.deaths_volume_m3_ha) = species_rows(&w.site, &sums, &DeadSums::of(&w.site, &w.scratch.dead), &hs, &ho);
     // (no management table row at year 0: nothing was managed before the first year)
     if !w.site.management.is_empty() && w.stand.year > 0 {
         let es = entry_sums(&w.site, t);

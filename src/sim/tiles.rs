@@ -1158,13 +1158,14 @@ impl Tile {
         let tr = &w.stand.trees;
         let h100 = super::stats::top_height_by(&tr.dbh, &tr.height, w.site.area_ha.max(1e-9), sums.stems, &mut |v| t.all_sum(v))?;
         let hs = super::stats::species_top_heights(&w.site, tr, &sums.stems_sp, &mut |v| t.all_sum(v))?;
+        let ho = super::stats::species_own_area_top_heights(&w.site, tr, &sums, &mut |v| t.all_sum(v))?;
         report.trees = sums.trees as usize;
         report.established = est;
         report.died = died;
         report.row = (t.rank() == 0).then(|| {
             let mut r = super::stats::row_of(&w.site, w.stand.year, &sums, h100, stems, deaths, ry, self.harvest);
             r.drought_index = super::stats::drought_mean(drought);
-            (r.species, r.deaths_volume_m3_ha) = super::stats::species_rows(&w.site, &sums, &dead, &hs);
+            (r.species, r.deaths_volume_m3_ha) = super::stats::species_rows(&w.site, &sums, &dead, &hs, &ho);
             r
         });
         // the management table's rows: each entry's area summed over the ranks as the stand
@@ -1341,8 +1342,8 @@ impl Tile {
         format!("phase times rank {}: {}; management sent {} trees, {} bytes", self.me, list.join(", "), self.manage_sent.0, self.manage_sent.1)
     }
 
-    /// The management phase `run` over tiles (module docs, step 6): in a year with thinnings or
-    /// harvests due, every rank's trees standing in their areas go to every other rank and are
+    /// The management phase `run` over tiles (module docs, step 6): in a year with thinnings,
+    /// harvests or plantings due (a planting fills the gaps of its area's trees; round 44), every rank's trees standing in their areas go to every other rank and are
     /// merged with the rank's own by id; `run` carries out the year's entries on that store as
     /// one process does; the rank keeps its own trees (planted ones on its cells included) and
     /// the harvested dead it owns (the harvest tally follows), and records the year's harvest
@@ -1373,7 +1374,10 @@ impl Tile {
         let year = self.world.stand.year + 1;
         let site = &self.world.site;
         use super::management::Action;
-        let due: Vec<&super::management::Operation> = site.management.iter().filter(|op| op.spec.due(year).is_some() && !matches!(op.action, Action::Planting { .. })).collect();
+        // a planting reads the trees of its area too (it fills their gaps,
+        // `phases::management::fill_gaps`; round 44), so its area's trees are exchanged as a
+        // removal's are
+        let due: Vec<&super::management::Operation> = site.management.iter().filter(|op| op.spec.due(year).is_some()).collect();
         if !due.is_empty() {
             let stock_only = due.iter().all(|op| matches!(op.action, Action::Thinning { .. }));
             let tr = &self.world.stand.trees;

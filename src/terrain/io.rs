@@ -803,6 +803,23 @@ pub fn window(t: &Terrain, col0: usize, row0: usize, w: usize, h: usize) -> Resu
         });
     }
     let elevation = crate::grid::Window { col0, row0, width: w, height: h }.cut(g, &crate::grid::Window::full(g.width, g.height));
+    if !elevation.data.iter().any(|v| v.is_finite()) {
+        // the window, not the DEM, is what is wrong (trial 43 defect 11: this named the field
+        // `elevation`): say so, with where the DEM's data lie
+        let (mut c0, mut r0, mut c1, mut r1) = (usize::MAX, usize::MAX, 0, 0);
+        for (i, v) in g.data.iter().enumerate() {
+            if v.is_finite() {
+                let (c, r) = (i % g.width, i / g.width);
+                (c0, r0, c1, r1) = (c0.min(c), r0.min(r), c1.max(c + 1), r1.max(r + 1));
+            }
+        }
+        return Err(Error::Invalid {
+            context: t.source.clone(),
+            field: "window".into(),
+            value: format!("[{col0}, {row0}, {w}, {h}] (cols {col0}..{}, rows {row0}..{})", col0 + w, row0 + h),
+            expected: format!("a window holding at least one cell with an elevation: all {} cells of this one are nodata (the DEM's cells with data lie in cols {c0}..{c1}, rows {r0}..{r1} of its {} x {})", elevation.len(), g.width, g.height),
+        });
+    }
     check_valid(&PathBuf::from(&t.source), &elevation)?;
     let mut geo = t.geo.clone();
     geo.origin_x += col0 as f64 * geo.pixel_w;

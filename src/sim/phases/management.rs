@@ -55,6 +55,8 @@ pub fn run(m: Manage<'_>) -> (usize, Vec<String>) {
 pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>, Vec<bool>) {
     let y = m.year + 1;
     let mut planted: Vec<(u32, NewTree)> = Vec::new();
+    // the lattice points kept by this year's plantings so far ([`fill_gaps`])
+    let mut year_points: Vec<Point> = Vec::new();
     let mut notes = Vec::new();
     let mut removed = vec![0usize; m.site.management.len()];
     let mut capped = vec![false; m.site.management.len()];
@@ -82,8 +84,13 @@ pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>, Vec<bool>
             Action::Shelterwood { shares } => (shelterwood(t, op, shares.get(k as usize).copied().unwrap_or(1.0)), None),
             Action::Patch { size_m, share } => (patches(m.seed, t, op, *size_m, *share, k), None),
             Action::KeepOpen { max_height_m } => ((0..t.len()).map(|i| t.height[i] as f64 > *max_height_m && op.region.contains(t.x[i] as f64, t.y[i] as f64)).collect(), None),
-            Action::Planting { .. } => {
-                planted.extend(m.site.plant(op, y).into_iter().map(|nt| (m.site.light.cell_of(nt.x, nt.y) as u32, nt)));
+            Action::Planting { spacing_m, age_yr, .. } => {
+                let (trees, kept, skipped, lattice) = fill_gaps(m.site, t, &year_points, op, y, *spacing_m, *age_yr);
+                if skipped > 0 {
+                    notes.push(format!("year {y}: management[{e}] (planting) fills the gaps of its area: {} of its {lattice} lattice points planted, {skipped} left out for standing within {} m (half its spacing) of a tree at least as tall or of this year's earlier plantings", lattice - skipped, 0.5 * spacing_m));
+                }
+                year_points.extend(kept);
+                planted.extend(trees.into_iter().map(|nt| (m.site.light.cell_of(nt.x, nt.y) as u32, nt)));
                 continue;
             }
         };
@@ -108,6 +115,73 @@ pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>, Vec<bool>
         insert_planted(m.trees, planted, m.year);
     }
     (n, notes, removed, capped)
+}
+
+/// A lattice point of a planting: `(x, y, height)` (m, m, m; the position rounded to the f32
+/// of the tree planted there).
+type Point = (f64, f64, f32);
+
+/// A planting after the start fills the gaps of its area (round 44, trial 43 defect 3: a second
+/// planting of a parcel put its lattice on the first's, its trees a median 0.32 m from a
+/// planted tree): of its lattice points inside its area ([`Site::plant_points`]) it leaves out
+/// those closer than half its spacing `spacing_m` (m) to a point kept by a planting of the same
+/// year earlier in the scenario (`year_points`, in its area; whatever its height: fresh plants
+/// of one year are not planted among each other) or to a living tree of its area (in `t`) at
+/// least as tall as the shortest tree the planting can plant of the point's species (its age
+/// `age_yr` less the lattice's half-year jitter;
+/// [`crate::species::allometry::potential_height`]). Half the spacing because a point farther
+/// than that from every tree is where a planter working the lattice finds room (a gap of
+/// about a spacing); trees shorter than the planting's (regeneration below planting height) are
+/// planted among, as a planter plants among low regrowth. Returns the trees planted (of
+/// [`Site::plant`], those on kept points), the points kept (appended to `year_points` by the
+/// caller), the points left out and the lattice's points in the area. Points, not trees, are
+/// counted and kept, and only the area's trees are read, so a tiled run's ranks (each holding
+/// the area's trees, its own cells' planted trees) keep the same points as one process.
+///
+/// [`Site::plant_points`]: crate::sim::world::Site::plant_points
+/// [`Site::plant`]: crate::sim::world::Site::plant
+fn fill_gaps(site: &Site, t: &TreeStore, year_points: &[Point], op: &Operation, y: u32, spacing_m: f64, age_yr: f32) -> (Vec<NewTree>, Vec<Point>, usize, usize) {
+    let mut pts: Vec<(crate::species::SpeciesId, Point)> = Vec::new();
+    site.plant_points(op, y, |s, x, yy, a| pts.push((s, (x as f32 as f64, yy as f32 as f64, crate::species::allometry::potential_height(site.species(s), a).max(0.3)))));
+    let n = pts.len();
+    let r = 0.5 * spacing_m;
+    let b = op.region.bbox;
+    let (nx, ny) = ((((b[2] - b[0]) / r).ceil() as usize).max(1), (((b[3] - b[1]) / r).ceil() as usize).max(1));
+    let cell = |x: f64, y: f64| (((x - b[0]) / r).floor().clamp(0.0, (nx - 1) as f64) as usize, ((y - b[1]) / r).floor().clamp(0.0, (ny - 1) as f64) as usize);
+    // the standing trees and this year's earlier points of the area, bucketed in cells of side r
+    let mut grid: Vec<Vec<Point>> = vec![Vec::new(); nx * ny];
+    let standing = (0..t.len()).map(|i| (t.x[i] as f64, t.y[i] as f64, t.height[i])).chain(year_points.iter().copied());
+    let mut any = false;
+    for (x, yy, h) in standing {
+        if op.region.contains(x, yy) {
+            let (c, rr) = cell(x, yy);
+            grid[rr * nx + c].push((x, yy, h));
+            any = true;
+        }
+    }
+    let floor = |s: crate::species::SpeciesId| crate::species::allometry::potential_height(site.species(s), (age_yr - 0.5).max(1.0)).max(0.3);
+    let kept: Vec<Point> = pts
+        .iter()
+        .filter(|&&(s, (x, yy, _))| {
+            if !any {
+                return true;
+            }
+            let h0 = floor(s);
+            let (c, rr) = cell(x, yy);
+            !(rr.saturating_sub(1)..=(rr + 1).min(ny - 1)).any(|row| (c.saturating_sub(1)..=(c + 1).min(nx - 1)).any(|col| grid[row * nx + col].iter().any(|&(px, py, h)| h >= h0 && (px - x).hypot(py - yy) < r)))
+        })
+        // a point kept blocks later plantings of the year whatever their height (fresh plants
+        // of one year are not planted among each other)
+        .map(|p| (p.1 .0, p.1 .1, f32::INFINITY))
+        .collect();
+    let skipped = n - kept.len();
+    let trees = if skipped == 0 {
+        site.plant(op, y)
+    } else {
+        let keys: std::collections::HashSet<(u64, u64)> = kept.iter().map(|p| (p.0.to_bits(), p.1.to_bits())).collect();
+        site.plant(op, y).into_iter().filter(|nt| keys.contains(&((nt.x as f64).to_bits(), (nt.y as f64).to_bits()))).collect()
+    };
+    (trees, kept, skipped, n)
 }
 
 /// The regeneration layer's part of the entries keeping a clearing open that are due this year
@@ -462,9 +536,15 @@ pub fn hegyi_term(t: &TreeStore, i: usize, j: usize) -> f64 {
 /// the largest, are mostly chosen again) are kept; their competitors are the other stems of the
 /// area whose crown touches a crop tree's or comes within [`RELEASE_GAP_M`] of it (distance
 /// below the sum of the crown radii plus the gap) and that reach into it (at least as tall as
-/// its crown base). Without a target every competitor goes;
-/// with one they go in order of their largest Hegyi term on a crop tree ([`hegyi_term`]; ties
-/// by id) until the area's figure is at or below the target (or no competitor is left).
+/// its crown base). Without a target every competitor goes. With one, each crop tree's
+/// strongest competitor (its largest Hegyi term on that crop tree, [`hegyi_term`]; ties by id)
+/// goes whatever the area's figure: the release itself (round 44, trial 43 defect 9: a
+/// release with a target removed nothing in a young stand below it); in the Z-Baum method crop
+/// trees are released of their main competitor(s) (Bedränger) at every entry, whatever the
+/// stand's density (Abetz & Klädtke 2002, *Die Z-Baum-Kontrollmethode*, Forstw. Cbl. 121).
+/// Then the other competitors go in order of their largest Hegyi term on a crop tree until the
+/// area's figure is at or below the target (or none is left): the target bounds only what goes
+/// beyond the release. `max_removal_share` caps both, the release first.
 #[allow(clippy::too_many_arguments)]
 fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, distance_m: f64, target: Option<Target>, trigger_rd: Option<f64>, trigger_h: Option<f64>) -> (Vec<bool>, Option<String>, Option<String>) {
     let mut remove = vec![false; t.len()];
@@ -475,7 +555,6 @@ fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, dis
         return (remove, why, None);
     }
     let mut cap = Cap::new(op, f.ba_m2);
-    let v0 = target.map(|tg| (tg, f.value(site, tg, a)));
     let crops = crop_trees(t, op, n_ha, distance_m);
     let mut is_crop = vec![false; t.len()];
     for &c in &crops {
@@ -485,7 +564,10 @@ fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, dis
     let grid = Buckets::new(t, &cand, op.region.bbox, (2.0 * max_cr + RELEASE_GAP_M).max(2.0));
     // each competitor with its strongest Hegyi term on a crop tree
     let mut strength: std::collections::BTreeMap<usize, f64> = std::collections::BTreeMap::new();
+    // each crop tree's strongest competitor (Hegyi term, then the smaller id)
+    let mut mains: Vec<(usize, f64)> = Vec::new();
     for &c in &crops {
+        let mut best: Option<(usize, f64)> = None;
         for j in grid.near(t, t.x[c] as f64, t.y[c] as f64, t.crown_radius[c] as f64 + max_cr + RELEASE_GAP_M) {
             let d = (t.x[j] as f64 - t.x[c] as f64).hypot(t.y[j] as f64 - t.y[c] as f64);
             if is_crop[j] || d >= (t.crown_radius[c] + t.crown_radius[j]) as f64 + RELEASE_GAP_M || t.height[j] < t.crown_base[c] {
@@ -494,26 +576,51 @@ fn crop_tree_thinning(site: &Site, t: &TreeStore, op: &Operation, n_ha: f64, dis
             let h = hegyi_term(t, c, j);
             let e = strength.entry(j).or_insert(0.0);
             *e = e.max(h);
+            if best.is_none_or(|(b, hb)| h > hb || (h == hb && t.id[j] < t.id[b])) {
+                best = Some((j, h));
+            }
         }
+        mains.extend(best);
     }
     let mut order: Vec<(usize, f64)> = strength.into_iter().collect();
     order.sort_by(|a, b| b.1.total_cmp(&a.1).then(t.id[a.0].cmp(&t.id[b.0])));
+    // with a target, the release first: each crop tree's strongest competitor, whatever the
+    // area's figure (in the order of their strength)
+    if target.is_some() {
+        let mut main: Vec<usize> = Vec::new();
+        for &(j, _) in &mains {
+            if !main.contains(&j) {
+                main.push(j);
+            }
+        }
+        let rank: std::collections::HashMap<usize, usize> = order.iter().enumerate().map(|(k, &(j, _))| (j, k)).collect();
+        main.sort_by_key(|j| rank[j]);
+        for j in main {
+            if !cap.admits(t, j) {
+                break;
+            }
+            remove[j] = true;
+            f.add(t, j, -1.0);
+        }
+    }
     for (j, _) in order {
+        if remove[j] {
+            continue;
+        }
         if let Some(tg) = target {
             if f.value(site, tg, a) <= goal(tg) {
                 break;
             }
         }
-        if !cap.admits(t, j) {
+        if cap.hit || !cap.admits(t, j) {
             break;
         }
         remove[j] = true;
         f.add(t, j, -1.0);
     }
-    let why = match v0 {
-        Some((tg, v)) if v <= goal(tg) => at_target(tg, v),
-        _ => "its crop trees have no competitors to remove".into(),
-    };
+    // (a release removes the crop trees' strongest competitors whatever the area's figure, so
+    // an entry removes nothing only where they have none)
+    let why = "its crop trees have no competitors to remove".to_string();
     let left = match target {
         Some(tg) => left_of(tg, f.value(site, tg, a)),
         None => "competitors of its crop trees are left".into(),
@@ -571,8 +678,9 @@ fn shelterwood(t: &TreeStore, op: &Operation, share: f64) -> Vec<bool> {
 
 /// The trees of a patch cut's `k`-th entry: the area's bounding box is cut into squares of
 /// `size_m`; the squares whose centre lies in the area are put in an order drawn once per entry
-/// (seed, entry); entry `k` cuts the next `round(share · n)` (at least 1) of them, so each entry
-/// opens new patches until all are cut. Every tree of a cut square inside the area goes.
+/// (seed, entry); entry `k` cuts the next of them ([`crate::sim::management::patch_range`]:
+/// about `share · n`, at least 1), so each entry opens new patches until all are cut, and
+/// entries whose shares sum to 1 cut every square. Every tree of a cut square inside the area goes.
 fn patches(seed: u64, t: &TreeStore, op: &Operation, size_m: f64, share: f64, k: u32) -> Vec<bool> {
     let b = op.region.bbox;
     let (nx, ny, squares) = patch_squares(&op.region, size_m);
@@ -581,9 +689,7 @@ fn patches(seed: u64, t: &TreeStore, op: &Operation, size_m: f64, share: f64, k:
         .map(|p| (mix64(seed ^ mix64(salt::MANAGEMENT ^ ((op.index as u64) << 40) ^ p as u64)), p))
         .collect();
     eligible.sort_unstable();
-    let per = ((share * eligible.len() as f64).round() as usize).max(1);
-    let lo = (k as usize).saturating_mul(per).min(eligible.len());
-    let hi = (lo + per).min(eligible.len());
+    let (lo, hi) = crate::sim::management::patch_range(eligible.len(), share, k);
     let mut cut = vec![false; nx * ny];
     for &(_, p) in &eligible[lo..hi] {
         cut[p] = true;
