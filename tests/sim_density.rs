@@ -141,8 +141,11 @@ fn no_pure_stand_exceeds_its_maximum_density() {
 const MIXED_RD_MAX: f64 = 1.15;
 
 /// Least share of the basal area beech must hold at year 147 in the beech–oak–sycamore–birch
-/// mixture (issue 35 round 45; TO BE SET from the measurement).
-const BEECH_MIXED_SHARE_MIN: f64 = 0.1;
+/// mixture (issue 35 round 45): beech survives. Measured 0.019 (57 beech, sessile oak 0.89,
+/// sycamore 0.08) with beech's crown plasticity (`life.closed_hd_mixed`); round 44 left no beech
+/// (0). This is survival, not a share a forester would accept on a mesic site: the oak outgrows
+/// the young beech (tests/sim_mixture.rs, `beech_survives_among_sessile_oak`).
+const BEECH_MIXED_SHARE_MIN: f64 = 0.01;
 
 /// Runs a mixed stand of `planted` (species, spacing m) with seed rain of `rain` (species,
 /// seeds/ha/yr) on a 70 m × 70 m site at 300 m for 147 years; asserts that the basal area (all
