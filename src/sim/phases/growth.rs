@@ -239,7 +239,9 @@ pub struct Growth<'a> {
 /// `min(max(100 ΔH_pot / HD, 30 / HD cm), open increment)` (closed-stand slenderness HD the
 /// species' `life.closed_hd` below 7 cm DBH, or at every DBH with `life.closed_hd_scope =
 /// "dense_curve"`, where a tree held at its dense-stand curve grows at most at that curve's
-/// slope; for species with `life.open_hd` and `life.dense_hd`, iLand's H/D between them by the
+/// slope; blended towards `life.closed_hd_mixed` by the tree's own species' share of its
+/// neighbourhood's crown projection where the species has that field, [`mixed_closed_hd`];
+/// for species with `life.open_hd` and `life.dense_hd`, iLand's H/D between them by the
 /// tree's light; else [`HD_CLOSED`] = 60 m/m with its 5 mm/yr floor, ESTIMATE;
 /// [`closed_slenderness_held`]).
 /// Crown radius: open-grown radius of the new DBH, shrunk by [`rules::shaded_crown`]
