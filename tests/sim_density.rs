@@ -140,11 +140,19 @@ fn no_pure_stand_exceeds_its_maximum_density() {
 /// is set above the pure stands' and below the stress mortality's range.
 const MIXED_RD_MAX: f64 = 1.15;
 
+/// Least share of the basal area beech must hold at year 147 in the beech–oak–sycamore–birch
+/// mixture (issue 35 round 45): beech survives. Measured 0.019 (57 beech, sessile oak 0.89,
+/// sycamore 0.08) with beech's crown plasticity (`life.closed_hd_mixed`); round 44 left no beech
+/// (0). This is survival, not a share a forester would accept on a mesic site: the oak outgrows
+/// the young beech (tests/sim_mixture.rs, `beech_survives_among_sessile_oak`).
+const BEECH_MIXED_SHARE_MIN: f64 = 0.01;
+
 /// Runs a mixed stand of `planted` (species, spacing m) with seed rain of `rain` (species,
 /// seeds/ha/yr) on a 70 m × 70 m site at 300 m for 147 years; asserts that the basal area (all
 /// stems) never exceeds 80 m²/ha and the relative density never exceeds [`MIXED_RD_MAX`];
-/// returns (worst relative density, years with ≥ 2 species holding ≥ 10 % of the basal area).
-fn mixed_run(name: &str, planted: &[(&str, f64)], rain: &[(&str, f64)]) -> (f64, u32) {
+/// returns (worst relative density, years with ≥ 2 species holding ≥ 10 % of the basal area,
+/// the last year's share of the basal area by species id).
+fn mixed_run(name: &str, planted: &[(&str, f64)], rain: &[(&str, f64)]) -> (f64, u32, Vec<(String, f64)>) {
     let lib = common::embedded();
     let ids: Vec<&str> = planted.iter().chain(rain).map(|p| p.0).collect();
     let mut toml = common::ScenarioToml::new(name, 147, 5).species(&ids).line("climate = { latitude_deg = 51.0 }").uniform(7, 7, 10.0, 300.0);
@@ -158,9 +166,11 @@ fn mixed_run(name: &str, planted: &[(&str, f64)], rain: &[(&str, f64)]) -> (f64,
     let mut worst = (0.0f64, 0u32, 0.0f64, 0.0f64);
     let mut mixed_years = 0;
     let mut over = Vec::new();
+    let mut last = Vec::new();
     for y in 0..147 {
         let mut r = sylva::sim::YearReport::default();
         sylva::sim::step_year(&mut w, &sc, &mut r);
+        last = r.row.as_ref().unwrap().share_ba.clone();
         let d = stand_density(&w, 7.0);
         let all = stand_density(&w, 0.0);
         // Σ of the species' shares of their own lines (1 on a line), and Reineke's SDI against
@@ -184,7 +194,9 @@ fn mixed_run(name: &str, planted: &[(&str, f64)], rain: &[(&str, f64)]) -> (f64,
     });
     eprintln!("{name}: worst relative density {:.2} in year {} (SDI {:.0}, densest {:.0}); stems by species {shares:?}; {mixed_years} years with ≥ 2 species holding ≥ 10 % of the basal area; years above 1.1: {over:?}", worst.0, worst.1, worst.2, worst.3);
     assert!(worst.0 <= MIXED_RD_MAX, "{name}: relative density {:.2} > {MIXED_RD_MAX} (SDI {:.0}, densest line {:.0}) in year {}", worst.0, worst.2, worst.3, worst.1);
-    (worst.0, mixed_years)
+    let by_id: Vec<(String, f64)> = w.site.pool.iter().zip(&last).map(|(&s, &v)| (lib.species[s as usize].id.clone(), v)).collect();
+    eprintln!("{name}: basal-area shares in year 147 {by_id:?}");
+    (worst.0, mixed_years, by_id)
 }
 
 /// Mixed stands of all 17 shipped species, in three mixtures: (a) beech, sessile oak, sycamore
@@ -195,11 +207,13 @@ fn mixed_run(name: &str, planted: &[(&str, f64)], rain: &[(&str, f64)]) -> (f64,
 /// lines by more than [`MIXED_RD_MAX`] nor 80 m²/ha.
 #[test]
 fn mixed_stands_stay_below_their_densest_line() {
-    let (worst, mixed_years) = mixed_run("mixed", &[("beech", 2.5), ("sessile_oak", 2.2), ("sycamore", 3.1), ("silver_birch", 3.7)], &[("scots_pine", 1000.0)]);
+    let (worst, mixed_years, shares) = mixed_run("mixed", &[("beech", 2.5), ("sessile_oak", 2.2), ("sycamore", 3.1), ("silver_birch", 3.7)], &[("scots_pine", 1000.0)]);
     assert!(mixed_years >= 100, "stand mixed in only {mixed_years} of 147 years");
     assert!(worst > 0.5, "mixed stand never closed (SDI/SDI_max {worst:.2})");
-    let (w2, _) = mixed_run("conifers", &[("norway_spruce", 2.5), ("silver_fir", 2.9), ("european_larch", 3.3), ("small_leaved_lime", 3.7), ("hornbeam", 4.1), ("ash", 4.3)], &[]);
-    let (w3, _) = mixed_run("minor", &[("black_alder", 2.5), ("aspen", 2.9), ("rowan", 3.3), ("wych_elm", 3.7), ("norway_maple", 4.1), ("pedunculate_oak", 4.3)], &[]);
+    let beech = shares.iter().find(|s| s.0 == "beech").map_or(0.0, |s| s.1);
+    assert!(beech >= BEECH_MIXED_SHARE_MIN, "beech holds {beech:.3} of the mixed stand's basal area at 147 (round 44: none left)");
+    let (w2, _, _) = mixed_run("conifers", &[("norway_spruce", 2.5), ("silver_fir", 2.9), ("european_larch", 3.3), ("small_leaved_lime", 3.7), ("hornbeam", 4.1), ("ash", 4.3)], &[]);
+    let (w3, _, _) = mixed_run("minor", &[("black_alder", 2.5), ("aspen", 2.9), ("rowan", 3.3), ("wych_elm", 3.7), ("norway_maple", 4.1), ("pedunculate_oak", 4.3)], &[]);
     assert!(w2 > 0.5 && w3 > 0.5, "mixtures never closed ({w2:.2}, {w3:.2})");
 }
 

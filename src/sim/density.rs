@@ -112,6 +112,16 @@ pub struct Crowding {
     /// trees per ha are 9 in the 0.09 ha neighbourhood; the tallest overstates their mean by
     /// about a metre): the `h100` of the crown-base function; filled as [`Crowding::c66`].
     pub h100: Vec<f32>,
+    /// Share (0–1) of the tree's own species in the open-grown crown projection area of its
+    /// neighbourhood (the area of [`Crowding::ccf`], each tree's `π r²` of
+    /// [`open_crown_radius`], summed over the neighbourhood's trees of its species, over the
+    /// sum over all its trees): 1 in a pure neighbourhood (bit for bit: both sums add the same
+    /// terms in the same order), towards 0 for a tree among other species. Computed only when a
+    /// pool species has `life.closed_hd_mixed` (the crown plasticity of its closed-stand
+    /// slenderness in mixture, [`crate::sim::phases::growth::mixed_closed_hd`]; issue 35 round
+    /// 45), and then only for the trees of such species (1 for the others, which do not read
+    /// it); else empty.
+    pub own_share: Vec<f32>,
 }
 
 /// Crown cross-section (m²) at height `x` (m) of a crown of radius `r` (m), top `h` (m) and base
@@ -180,12 +190,21 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
     }
     let mut sums = vec![Sums::default(); ncell];
     let mut n_sp = vec![0u32; ncell * np];
-    sums.par_iter_mut().zip(n_sp.par_chunks_mut(np)).enumerate().with_min_len(256).for_each(|(k, (c, nsp))| {
+    // the own species' share of the crown projection (`Crowding::own_share`): only where a pool
+    // species reads it; per cell and pool species the open-grown crown projection (m²)
+    let share_sp: Vec<bool> = w.lib.species.iter().map(|sp| sp.life.closed_hd_mixed.is_some()).collect();
+    let need_share = w.pool.iter().any(|&s| share_sp[s as usize]);
+    let nps = if need_share { np } else { 1 };
+    let mut crown_sp = vec![0f64; ncell * nps];
+    sums.par_iter_mut().zip(n_sp.par_chunks_mut(np)).zip(crown_sp.par_chunks_mut(nps)).enumerate().with_min_len(256).for_each(|(k, ((c, nsp), csp))| {
         for &i in &items[start[k] as usize..start[k + 1] as usize] {
             let i = i as usize;
             let s = t.species[i] as usize;
             let ro = open_crown_radius(&w.lib.species[s], t.height[i], t.dbh[i]) as f64;
             c.crown += std::f64::consts::PI * ro * ro;
+            if need_share {
+                csp[pidx[s]] += std::f64::consts::PI * ro * ro;
+            }
             let d = t.dbh[i] as f64;
             if d >= MIN_DBH_CM as f64 {
                 nsp[pidx[s]] += 1;
@@ -323,13 +342,16 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
     let mut nb_rd = vec![0f32; ncell];
     let mut nb_dq = vec![0f32; ncell];
     let mut nb_ccf = vec![0f32; ncell];
-    nb_rd.par_chunks_mut(cols).zip(nb_dq.par_chunks_mut(cols)).zip(nb_ccf.par_chunks_mut(cols)).enumerate().for_each(|(lr, ((row_rd, row_dq), row_ccf))| {
+    let mut nb_share = vec![0f32; ncell * nps];
+    nb_rd.par_chunks_mut(cols).zip(nb_dq.par_chunks_mut(cols)).zip(nb_ccf.par_chunks_mut(cols)).zip(nb_share.par_chunks_mut(cols * nps)).enumerate().for_each(|(lr, (((row_rd, row_dq), row_ccf), row_share))| {
         let mut ns = vec![0f64; np];
+        let mut cs = vec![0f64; nps];
         let r = lr + r0;
         for (lc, c) in (c0..c1).enumerate() {
             let (mut a, mut s_d2, mut s_n, mut s_cr) = (0f64, 0f64, 0f64, 0f64);
             let (mut s_d2a, mut s_na, mut s_small) = (0f64, 0f64, 0f64);
             ns.iter_mut().for_each(|v| *v = 0.0);
+            cs.iter_mut().for_each(|v| *v = 0.0);
             // the whole grid's neighbourhood (rows, then columns, ascending), within the cells
             // held (a cell at the margin has no trees: its value is not read), each cell
             // weighted by `neighbour_weight`
@@ -348,6 +370,11 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
                     for p in 0..np {
                         ns[p] += wt * n_sp[k * np + p] as f64;
                     }
+                    if need_share {
+                        for p in 0..np {
+                            cs[p] += wt * crown_sp[k * np + p];
+                        }
+                    }
                 }
             }
             if a <= 0.0 {
@@ -365,8 +392,33 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
             }
             row_rd[lc] = (rd / a_ha) as f32;
             row_ccf[lc] = (s_cr / a) as f32;
+            if need_share && s_cr > 0.0 {
+                for p in 0..np {
+                    // a pure neighbourhood: the same sum twice, exactly 1
+                    row_share[lc * np + p] = if cs[p] == s_cr { 1.0 } else { (cs[p] / s_cr) as f32 };
+                }
+            }
         }
     });
+    // the own species' share per tree, for the species that read it (1 for the others, and
+    // where the neighbourhood has no crown at all)
+    let own_share: Vec<f32> = if need_share {
+        (0..t.len())
+            .into_par_iter()
+            .with_min_len(1 << 14)
+            .map(|i| {
+                let s = t.species[i] as usize;
+                let k = cells[i] as usize;
+                if share_sp[s] && nb_ccf[k] > 0.0 {
+                    nb_share[k * np + pidx[s]]
+                } else {
+                    1.0
+                }
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
     let (rd, (dq_cm, ccf)) = rayon::join(
         || cells.par_iter().with_min_len(1 << 14).map(|&k| nb_rd[k as usize]).collect(),
         || rayon::join(|| cells.par_iter().with_min_len(1 << 14).map(|&k| nb_dq[k as usize]).collect(), || cells.par_iter().with_min_len(1 << 14).map(|&k| nb_ccf[k as usize]).collect()),
@@ -404,7 +456,7 @@ pub fn crowding(w: &Site, trees: &TreeStore) -> Crowding {
     } else {
         Vec::new()
     };
-    Crowding { rd, dq_cm, ccf, bal, c66, h100 }
+    Crowding { rd, dq_cm, ccf, bal, c66, h100, own_share }
 }
 
 /// Stand density of a world, per hectare of unmasked area, for the stand tables and the tests.

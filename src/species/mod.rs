@@ -245,6 +245,20 @@ pub struct LifeHistory {
     /// issue 35, round 44). Optional: without it `youth`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub closed_hd_scope: Option<ClosedHdScope>,
+    /// Closed-stand slenderness H/D (m/m, 40–250) that `closed_hd` gives way to among other
+    /// species: crown plasticity in mixture (issue 35, round 45). A tree's closed-stand H/D is
+    /// `closed_hd_mixed + (closed_hd − closed_hd_mixed) · share`, with `share` its own species'
+    /// share of the open-grown crown projection of its neighbourhood
+    /// ([`crate::sim::density::Crowding::own_share`]; [`crate::sim::phases::growth::mixed_closed_hd`]):
+    /// `closed_hd` in a pure neighbourhood, `closed_hd_mixed` alone among other species. Beech
+    /// widens its crown among other species (greater crown volumes and flatter branches in
+    /// mixture: Bayer, Seifert & Pretzsch 2013, Trees 27:1035–1047; horizontal space
+    /// occupation: Bayer & Pretzsch 2017, Silva Fennica 51(5) 7748; Pretzsch 2014, For. Ecol.
+    /// Manage. 327:251–264), and its diameter growth follows its crown's horizontal extension
+    /// (Seidel et al. 2015, iForest 8:735–742). Optional: without it (or without `closed_hd`)
+    /// the slenderness does not depend on the mixture.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub closed_hd_mixed: Option<f32>,
     /// Open-grown height–diameter curve ([`DenseHd`] form, from iLand's `HDlow`, Seidl et al.
     /// 2012): the stoutest H/D of a year's increments, that of a tree in full light, `(1 + c) ·
     /// k · D^c` m/m. Where a species has it and [`LifeHistory::dense_hd`] (iLand's `HDhigh`,

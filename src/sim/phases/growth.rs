@@ -239,7 +239,9 @@ pub struct Growth<'a> {
 /// `min(max(100 ΔH_pot / HD, 30 / HD cm), open increment)` (closed-stand slenderness HD the
 /// species' `life.closed_hd` below 7 cm DBH, or at every DBH with `life.closed_hd_scope =
 /// "dense_curve"`, where a tree held at its dense-stand curve grows at most at that curve's
-/// slope; for species with `life.open_hd` and `life.dense_hd`, iLand's H/D between them by the
+/// slope; blended towards `life.closed_hd_mixed` by the tree's own species' share of its
+/// neighbourhood's crown projection where the species has that field, [`mixed_closed_hd`];
+/// for species with `life.open_hd` and `life.dense_hd`, iLand's H/D between them by the
 /// tree's light; else [`HD_CLOSED`] = 60 m/m with its 5 mm/yr floor, ESTIMATE;
 /// [`closed_slenderness_held`]).
 /// Crown radius: open-grown radius of the new DBH, shrunk by [`rules::shaded_crown`]
@@ -385,9 +387,43 @@ pub fn closed_increment(dh_pot: f32, dd_open: f32, hd: f32) -> f32 {
 /// `life.dense_hd` curve, `life.closed_hd` holds at every DBH (before the light interpolation);
 /// [`closed_slenderness_held`] then bounds it for trees held at the curve (issue 35, round 44).
 pub fn closed_slenderness(sp: &Species, d_cm: f32, l: f32) -> f32 {
+    closed_slenderness_among(sp, d_cm, l, 1.0)
+}
+
+/// Closed-stand slenderness H/D (m/m) of a species with `life.closed_hd` = `closed_hd` and
+/// `life.closed_hd_mixed` = `mixed` for a tree whose own species holds `share` (0–1, clamped)
+/// of its neighbourhood's open-grown crown projection
+/// ([`crate::sim::density::Crowding::own_share`]): `mixed + (closed_hd − mixed) · share`;
+/// `closed_hd` itself at a share of 1 (a pure neighbourhood) and wherever `mixed` is `None`.
+///
+/// Why (issue 35, round 45): beech's `closed_hd` 140 (TreeGrOSS's youth rule, round 44) is the
+/// slenderness of beech among beech. Among other species beech's crown widens (Bayer, Seifert &
+/// Pretzsch 2013, Trees 27:1035–1047: greater crown volumes and flatter branch angles in mixture
+/// with spruce; Bayer & Pretzsch 2017, Silva Fennica 51(5) 7748: beech invests gains in
+/// horizontal space occupation; Pretzsch 2014, For. Ecol. Manage. 327:251–264), and a beech's
+/// diameter growth follows its crown's horizontal extension (Seidel et al. 2015, iForest
+/// 8:735–742: crown projection area and mean crown radius the crown measures most closely
+/// related to basal-area increment). With 140 in mixture a beech as tall as its neighbours
+/// carried 60/140 of their DBH, counted as suppressed in the size share of the crowding
+/// modifier ([`crowding_modifier`], `s = D / Dq`), and lost the mixtures (round 44: no beech
+/// left in `tests/sim_density.rs`'s mixed stand, 20.9 % of the default run's basal area). Beech
+/// sets `mixed` to [`HD_CLOSED`], the closed-stand slenderness of the species it grows among;
+/// the linear blend by the crown-projection share is a Sylva choice (ESTIMATE).
+pub fn mixed_closed_hd(closed_hd: f32, mixed: Option<f32>, share: f32) -> f32 {
+    match mixed {
+        Some(m) if share < 1.0 => m + (closed_hd - m) * share.clamp(0.0, 1.0),
+        _ => closed_hd,
+    }
+}
+
+/// [`closed_slenderness`] of a tree whose own species holds `share` (0–1) of its
+/// neighbourhood's crown projection: where the species' `closed_hd` holds, it is taken as
+/// [`mixed_closed_hd`] of the share (the species' `life.closed_hd_mixed`; unchanged without
+/// it); `closed_slenderness` is this at a share of 1.
+pub fn closed_slenderness_among(sp: &Species, d_cm: f32, l: f32, share: f32) -> f32 {
     let every_dbh = sp.life.closed_hd_scope == Some(ClosedHdScope::DenseCurve) && sp.life.dense_hd.is_some();
     match (sp.life.closed_hd, sp.life.open_hd, sp.life.dense_hd) {
-        (Some(hd), _, _) if d_cm < crate::sim::density::MIN_DBH_CM || every_dbh => hd,
+        (Some(hd), _, _) if d_cm < crate::sim::density::MIN_DBH_CM || every_dbh => mixed_closed_hd(hd, sp.life.closed_hd_mixed, share),
         (_, Some(lo), Some(hi)) => {
             let d = d_cm.max(1.0);
             let (lo, hi) = ((1.0 + lo.c) * lo.k * d.powf(lo.c), (1.0 + hi.c) * hi.k * d.powf(hi.c));
@@ -422,8 +458,11 @@ pub fn dense_curve_slenderness(hd: DenseHd, d_cm: f32) -> f32 {
 /// curve with its height growth cut. Issue 35, round 44: with beech's 140 m/m at every DBH and
 /// no such cap, the dominants of an unmanaged stand were held at the curve near 30 cm and its
 /// top height fell to 0.88 of NW-FVA's at 100 (round 42: 0.90); with it 0.975.
-pub fn closed_slenderness_held(sp: &Species, d_cm: f32, h_m: f32, l: f32) -> f32 {
-    let hd = closed_slenderness(sp, d_cm, l);
+///
+/// `share` is the tree's own species' share of its neighbourhood's crown projection
+/// ([`closed_slenderness_among`]; 1 in a pure stand).
+pub fn closed_slenderness_held(sp: &Species, d_cm: f32, h_m: f32, l: f32, share: f32) -> f32 {
+    let hd = closed_slenderness_among(sp, d_cm, l, share);
     match (sp.life.closed_hd_scope, sp.life.dense_hd) {
         (Some(ClosedHdScope::DenseCurve), Some(c)) if d_cm > 0.0 && h_m >= dense_height_bound(c, d_cm) * HELD_AT_CURVE => hd.min(dense_curve_slenderness(c, d_cm)),
         _ => hd,
@@ -484,7 +523,8 @@ fn grow(lib: &SpeciesLibrary, curves: &[Curves], crowd: &Crowding, seed: u64, ye
     // density: iLand has no open-grown curve besides it (HDlow is the H/D in full light), and
     // the tree's light sets where between HDlow and HDhigh it grows (issue 35, round 43).
     let x = if sp.life.open_hd.is_some() && sp.life.dense_hd.is_some() { 1.0 } else { ((crowd.rd[i] - RD_ONSET).max(0.0) / 0.2).min(1.0) };
-    let dd_closed = if h > 1.3 { closed_increment(dh_pot, dd_open, closed_slenderness_held(sp, d, h, l)) } else { dd_open };
+    let share = crowd.own_share.get(i).copied().unwrap_or(1.0);
+    let dd_closed = if h > 1.3 { closed_increment(dh_pot, dd_open, closed_slenderness_held(sp, d, h, l, share)) } else { dd_open };
     let dd_pot = (1.0 - x) * dd_open + x * dd_closed;
     // the tree's growth factor only matters for a non-zero increment (a zero times the factor,
     // which is finite and > 0, is that same zero), so it is not drawn for trees that do not
@@ -654,27 +694,68 @@ mod tests {
         for scope in [None, Some(ClosedHdScope::Youth)] {
             b.life.closed_hd_scope = scope;
             assert_eq!(closed_slenderness(&b, 30.0, 0.5), HD_CLOSED, "{scope:?}");
-            assert_eq!(closed_slenderness_held(&b, 20.0, dense_height_bound(curve, 20.0), 0.5), HD_CLOSED, "{scope:?}, held");
-            assert_eq!(closed_slenderness_held(&b, 5.0, dense_height_bound(curve, 5.0), 0.5), 140.0, "{scope:?}, youth held");
+            assert_eq!(closed_slenderness_held(&b, 20.0, dense_height_bound(curve, 20.0), 0.5, 1.0), HD_CLOSED, "{scope:?}, held");
+            assert_eq!(closed_slenderness_held(&b, 5.0, dense_height_bound(curve, 5.0), 0.5, 1.0), 140.0, "{scope:?}, youth held");
         }
         b.life.closed_hd_scope = Some(ClosedHdScope::DenseCurve);
         assert_eq!(closed_slenderness(&b, 30.0, 0.5), 140.0);
         // below the curve: 140 whatever the DBH
         for d in [5.0f32, 20.0, 32.0] {
-            assert_eq!(closed_slenderness_held(&b, d, 0.95 * dense_height_bound(curve, d), 0.5), 140.0, "DBH {d} below the curve");
+            assert_eq!(closed_slenderness_held(&b, d, 0.95 * dense_height_bound(curve, d), 0.5, 1.0), 140.0, "DBH {d} below the curve");
         }
         // held at the curve (and above it, as a planted tree may stand): the curve's slope
         for (d, want) in [(20.0f32, 68.04f32), (32.0, 57.25)] {
             for h in [dense_height_bound(curve, d), 0.9995 * dense_height_bound(curve, d), 1.1 * dense_height_bound(curve, d)] {
-                let hd = closed_slenderness_held(&b, d, h, 0.5);
+                let hd = closed_slenderness_held(&b, d, h, 0.5, 1.0);
                 assert!((hd - want).abs() < 0.01, "DBH {d}, height {h}: {hd} vs {want}");
             }
         }
-        assert_eq!(closed_slenderness_held(&b, 2.0, dense_height_bound(curve, 2.0), 0.5), 140.0);
+        assert_eq!(closed_slenderness_held(&b, 2.0, dense_height_bound(curve, 2.0), 0.5, 1.0), 140.0);
         // without the curve the scope has nothing to follow: TreeGrOSS's scope
         b.life.dense_hd = None;
         assert_eq!(closed_slenderness(&b, 30.0, 0.5), HD_CLOSED);
-        assert_eq!(closed_slenderness_held(&b, 30.0, 40.0, 0.5), HD_CLOSED);
+        assert_eq!(closed_slenderness_held(&b, 30.0, 40.0, 0.5, 1.0), HD_CLOSED);
+    }
+
+    /// Issue 35 round 45: crown plasticity in mixture. Beech's 140 m/m holds in a pure
+    /// neighbourhood (own share 1, bit for bit) and gives way to `closed_hd_mixed` 60 among
+    /// other species: 100 at a share of 0.5, 76 at 0.2, 60 at 0; the dense curve's slope still
+    /// bounds a tree held at it (57.25 at 32 cm); a species without `closed_hd_mixed` keeps 140
+    /// whatever the share; the light interpolation and 60 of species without `closed_hd` do not
+    /// see it.
+    #[test]
+    fn closed_slenderness_gives_way_in_mixture() {
+        assert_eq!(mixed_closed_hd(140.0, Some(60.0), 1.0).to_bits(), 140f32.to_bits());
+        assert_eq!(mixed_closed_hd(140.0, Some(60.0), 0.0), 60.0);
+        assert!((mixed_closed_hd(140.0, Some(60.0), 0.5) - 100.0).abs() < 1e-4);
+        assert!((mixed_closed_hd(140.0, Some(60.0), 0.2) - 76.0).abs() < 1e-4);
+        assert_eq!(mixed_closed_hd(140.0, Some(60.0), -0.3), 60.0);
+        assert_eq!(mixed_closed_hd(140.0, None, 0.2), 140.0);
+        let mut b = beech_like();
+        let curve = DenseHd { k: 323.63, c: -0.3676 };
+        b.life.dense_hd = Some(curve);
+        b.life.open_hd = None;
+        b.life.closed_hd = Some(140.0);
+        b.life.closed_hd_scope = Some(ClosedHdScope::DenseCurve);
+        b.life.closed_hd_mixed = Some(60.0);
+        assert_eq!(closed_slenderness(&b, 20.0, 0.5), 140.0);
+        assert_eq!(closed_slenderness_among(&b, 20.0, 0.5, 1.0), 140.0);
+        assert!((closed_slenderness_among(&b, 20.0, 0.5, 0.5) - 100.0).abs() < 1e-4);
+        assert!((closed_slenderness_held(&b, 20.0, 0.95 * dense_height_bound(curve, 20.0), 0.5, 0.0) - 60.0).abs() < 1e-4);
+        let hd = closed_slenderness_held(&b, 32.0, dense_height_bound(curve, 32.0), 0.5, 0.5);
+        assert!((hd - 57.25).abs() < 0.01, "{hd}");
+        // the youth scope: 140 below 7 cm, blended as well; 60 above it whatever the share
+        b.life.closed_hd_scope = None;
+        assert!((closed_slenderness_among(&b, 5.0, 0.5, 0.5) - 100.0).abs() < 1e-4);
+        assert_eq!(closed_slenderness_among(&b, 20.0, 0.5, 0.5), HD_CLOSED);
+        // without closed_hd_mixed the share is not read
+        b.life.closed_hd_scope = Some(ClosedHdScope::DenseCurve);
+        b.life.closed_hd_mixed = None;
+        assert_eq!(closed_slenderness_among(&b, 20.0, 0.5, 0.0), 140.0);
+        // without closed_hd: 60
+        b.life.closed_hd = None;
+        b.life.closed_hd_mixed = Some(60.0);
+        assert_eq!(closed_slenderness_among(&b, 20.0, 0.5, 0.3), HD_CLOSED);
     }
 
     /// PROGNAUS's competition response (Norway spruce's terms, Hasenauer 2000): an open-grown
