@@ -78,26 +78,66 @@ fn broadleaf_crowns_follow_their_profile_not_a_spire() {
     }
 }
 
-/// Tuning aid (ignored): `SYLVA_TUNE="id,widest,b,base,w/l,top°,base°"` prints the measures of
-/// the species with that profile.
+/// The species of `SYLVA_TUNE="id,widest,b,base,w/l,top°,base°;…"` with those crown profiles
+/// (`id` alone: without a profile), for the tuning aids below.
+fn tuned() -> Vec<(String, Species)> {
+    let Ok(v) = std::env::var("SYLVA_TUNE") else { return Vec::new() };
+    v.split(';')
+        .map(|spec| {
+            let f: Vec<&str> = spec.split(',').collect();
+            let mut sp = species(f[0]);
+            let n: Vec<f32> = f[1..].iter().map(|x| x.parse().unwrap()).collect();
+            if n.is_empty() {
+                sp.architecture.ecomod.crown_profile = None;
+            } else if let (6, Some(cp)) = (n.len(), sp.architecture.ecomod.crown_profile.as_mut()) {
+                (cp.widest_depth, cp.top_exponent, cp.base_share, cp.width_to_length, cp.angle_top_deg, cp.angle_base_deg) = (n[0], n[1], n[2], n[3], n[4], n[5]);
+            }
+            (spec.to_string(), sp)
+        })
+        .collect()
+}
+
+/// Tuning aid (ignored): prints the measures of the species of `SYLVA_TUNE` ([`tuned`]).
 #[test]
 #[ignore]
 fn tune() {
-    let Ok(v) = std::env::var("SYLVA_TUNE") else { return };
-    for spec in v.split(';') {
-        let f: Vec<&str> = spec.split(',').collect();
-        let mut sp = species(f[0]);
-        let n: Vec<f32> = f[1..].iter().map(|x| x.parse().unwrap()).collect();
-        if let Some(cp) = sp.architecture.ecomod.crown_profile.as_mut() {
-            if n.len() == 6 {
-                (cp.widest_depth, cp.top_exponent, cp.base_share, cp.width_to_length, cp.angle_top_deg, cp.angle_base_deg) = (n[0], n[1], n[2], n[3], n[4], n[5]);
-            }
-        }
+    for (spec, sp) in tuned() {
         for age in [80.0f32, 150.0] {
             for seed in [1u64, 2] {
                 let (m, top, wl) = measure(&sp, age, seed);
                 eprintln!("{spec} {age} {seed}: widest {:.2} below top, top third {top:.3}, w/l {:.3} (form {wl:.3}), branch angle {:.1}, clear bole {:.3}", 1.0 - m.widest_at, m.width_to_length(), m.branch_angle_deg, m.clear_bole_share());
             }
         }
+    }
+}
+
+/// Tuning aid (ignored): for the species of `SYLVA_TUNE` ([`tuned`]), the prototype's leaf area over its level-0 vertex octagon
+/// (`tests/species_foliage.rs`) and the crown radii of its leaf tips.
+#[test]
+#[ignore]
+fn tune_prototype() {
+    use glam::Vec3;
+    for (spec, sp) in tuned() {
+        let (chain, fill) = sylva::job::leaf_area::prototype_chain(&sp, 42).unwrap();
+        let full = &chain.levels[0];
+        let (card, cluster) = sylva::job::leaf_area::card_covers(&sp);
+        let (plain, clusters) = full.leaves.split_cluster_cards();
+        let tri = |m: &sylva::mesh::TriMesh| -> f32 { m.indices.chunks_exact(3).map(|t| { let [a, b, c] = [t[0], t[1], t[2]].map(|i| Vec3::from(m.positions[i as usize])); 0.5 * (b - a).cross(c - a).length() }).sum() };
+        let area = tri(&plain) * card + tri(&clusters) * cluster;
+        let mut r = [0.0f32; 8];
+        let sector = std::f32::consts::TAU / 8.0;
+        for m in [&full.leaves, &full.bark] {
+            for p in &m.positions {
+                let rho = (p[0] * p[0] + p[1] * p[1]).sqrt();
+                if rho > 0.0 {
+                    let k = ((p[1].atan2(p[0]) / sector).round() as i32).rem_euclid(8) as usize;
+                    r[k] = r[k].max(rho);
+                }
+            }
+        }
+        let proj = 0.5 * sector.sin() * (0..8).map(|k| r[k] * r[(k + 1) % 8]).sum::<f32>();
+        let (sk, lv) = sylva::structure::species_tree(&sp, 42).unwrap();
+        let tips = sylva::structure::crown_radii(&sk, &lv);
+        eprintln!("{spec}: area/proj {:.3} (LAI {:.2}); fill {:?}; vertex radii {r:.3?}; tip radii {tips:.3?}", area / proj, sylva::job::leaf_area::drawn_crown_lai(&sp), fill);
     }
 }
