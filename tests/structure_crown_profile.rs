@@ -10,7 +10,7 @@
 //! - the widest point (`ArchitectureMeasures::widest_at`, leaf reach in ten slices of the crown)
 //!   lies within [`WIDEST_TOLERANCE`] of the profile's `widest_depth` below the top;
 //! - the top third of the crown length holds at least [`TOP_THIRD_LEAVES`] of the crown's leaves
-//!   (the profile's own share of the crown volume, leaf area spread evenly through it, is 0.17–0.23);
+//!   (the profile's own share of the crown volume, leaf area spread evenly through it: 0.22 beech, 0.19 oaks, 0.20 Norway maple, 0.17 birch);
 //! - crown width / crown length is the cited stand-grown functions' within ±20 % (as
 //!   `tests/structure_architecture.rs` asserts for beech and oak), and the height the species curve's.
 //!
