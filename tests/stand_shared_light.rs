@@ -64,7 +64,14 @@ fn light_change(a: &Stand, b: &Stand) -> (f32, f32, f32) {
 /// change only the clusters' light (and so their leaf density, eq. 12): the forest-grown trees'
 /// skeletons, leaves and clusters are the exact run's bit for bit, as their cluster light feeds
 /// no pruning (c_ψ 0). The light changes for some clusters (11 % here), by 0.0004 on average
-/// and at most 0.087 here (bounds 0.002 and 0.15) (the stand bench: BENCHMARKS.md round 40).
+/// and at most 0.087 here in round 40 (bounds then 0.002 and 0.15; the stand bench: BENCHMARKS.md
+/// round 40). Round 45: since the beech's crown profile puts a third of its leaves in the top
+/// third of the crown (3 % before), many more clusters sit at the sunlit crown surface, where
+/// light falls by half within a few decimetres, and a 0.25 m cube there shares a lit cluster's
+/// light with a shaded one: 9.9 % of the clusters change, by 0.0021 on average and at most 0.43.
+/// The sharing is off by default (`StandOptions::leaf_light_cell_m` 0,
+/// `the_default_sharing_keeps_the_crowns_and_their_light`); the bounds, tied to the old crowns'
+/// deep, dim foliage, are now 0.003 and 0.5.
 #[test]
 fn shared_leaf_light_changes_only_the_clusters_light_within_bounds() {
     let lib = lib();
@@ -82,8 +89,8 @@ fn shared_leaf_light_changes_only_the_clusters_light_within_bounds() {
     assert!(moved > 0.05, "the sharing takes effect: {:.1} % of the clusters changed", 100.0 * moved);
     assert!(mean < LEAF_MEAN && max < LEAF_MAX, "|Δ light| mean {mean} (bound {LEAF_MEAN}), largest {max} (bound {LEAF_MAX})");
 }
-const LEAF_MEAN: f32 = 0.002;
-const LEAF_MAX: f32 = 0.15;
+const LEAF_MEAN: f32 = 0.003;
+const LEAF_MAX: f32 = 0.5;
 
 /// What bending otherwise does to a stand `b` against `a` of the same trees: asserts that more
 /// than `least` of the leaf clusters' light changed (the option takes effect), that the light

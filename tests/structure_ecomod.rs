@@ -84,7 +84,10 @@ fn invalid_parameters_are_reported() {
 fn species_files_carry_the_paper_parameters() {
     let lib = sylva::species::SpeciesLibrary::embedded().unwrap();
     let beech = &lib.species[lib.find("beech").unwrap() as usize];
-    assert_eq!(beech.architecture.ecomod, EcoModParams::beech_paper());
+    // the crown profile (round 45, `[architecture.ecomod.crown_profile]`) is our extension, not
+    // the paper's: every parameter of Algorithm 1 is the paper's
+    assert!(beech.architecture.ecomod.crown_profile.is_some());
+    assert_eq!(EcoModParams { crown_profile: None, ..beech.architecture.ecomod.clone() }, EcoModParams::beech_paper());
     let pine = &lib.species[lib.find("scots_pine").unwrap() as usize];
     assert_eq!(pine.architecture.ecomod, EcoModParams::pine_paper());
     // and they build: beech S = 1000, pine S = 6000

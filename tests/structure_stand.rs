@@ -104,7 +104,13 @@ fn tree_at_a_gap_edge_shifts_its_crown_into_the_gap() {
         assert!(shift(a).x > 0.0, "edge tree {}: {}", a.index, shift(a));
     }
     assert!(se.x > 0.15, "edge trees' crowns moved {se} on average (towards the gap is +x)");
-    assert!(se.x > si.x.abs() + 0.1, "edge {se} vs inner {si}");
+    // the gap draws the edge trees' crowns towards it more than the inner trees' (signed, towards
+    // the gap). Until round 45 this compared with |inner|, inner trees that barely moved; but the
+    // inner column stands one tree from the lattice's open west side, and since the broadleaves'
+    // crown profile (round 45: the upper crown holds a third of the leaves, was 3 %) the inner
+    // trees' crowns move towards that open side too (measured: edge +2.59 m, inner −3.42 m).
+    eprintln!("crowns moved: edge {se}, inner {si}");
+    assert!(se.x > si.x + 0.1, "edge {se} vs inner {si}");
 }
 
 #[test]

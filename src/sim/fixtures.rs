@@ -37,6 +37,7 @@ fn arch() -> Architecture {
             min_len_w: pl(0.1),
             whorls: None,
             limbs: None,
+            crown_profile: None,
         },
         light_guided: LightGuidedParams { lambda: 0.5, k: 1.0, b: 2.0, mu: 0.5, gamma: 0.2, theta_deg: 45.0, r_s: 0.1 },
         laplacian: LaplacianParams { eta: 1.0, base_width_m: 0.01, width_rate: 1.5 },

@@ -487,6 +487,10 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
         if spec.path.starts_with("architecture.ecomod.limbs.") && !leaves.iter().any(|(p, _)| p.starts_with("architecture.ecomod.limbs.")) {
             continue;
         }
+        // and a broadleaf's crown profile
+        if spec.path.starts_with("architecture.ecomod.crown_profile.") && !leaves.iter().any(|(p, _)| p.starts_with("architecture.ecomod.crown_profile.")) {
+            continue;
+        }
         if leaves.iter().any(|(p, _)| p == spec.path) {
             continue;
         }

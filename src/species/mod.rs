@@ -648,6 +648,71 @@ pub struct EcoModParams {
     /// leaves the stem at Algorithm 1's angle α₂ and is as long as its strands make it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub limbs: Option<Limbs>,
+    /// A broadleaf's crown profile ([`CrownProfile`], `[architecture.ecomod.crown_profile]`;
+    /// ours, not the paper's): the stem's strands shared among its limbs by the crown volume
+    /// each serves and each limb as long as the ray from its insertion to the profile's surface.
+    /// Optional: without it the limbs are Algorithm 1's (or [`Limbs`]'). Where a species gives
+    /// both, the profile shapes the limbs and [`Limbs`] only its sprays.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crown_profile: Option<CrownProfile>,
+}
+
+/// The crown profile of a broadleaf (issue 32, round 45; `[architecture.ecomod.crown_profile]`
+/// of a species file, our extension of EcoMod, `004_*.txt` Algorithm 1, whose stem keeps
+/// ⌈1 + k_s(S₀ − 2)⌉ of its strands at every split, so that the lowest limbs take most of the
+/// strands and leaves and the crown reads as a cone: a spire). The crown's radius at relative
+/// depth d below its top (0 top … 1 crown base), over its largest radius R:
+///
+/// - above the widest point (d ≤ `widest_depth`), the light crown: ρ(d) = (d / `widest_depth`)^b,
+///   b = `top_exponent` (b = ½: the paraboloid of the crown model of the TreeGrOSS/BWINPro
+///   simulator, J. Nagel, Northwest German Forest Research Institute, `Tree.calculateCwAtHeight`
+///   of its published code: r² = 1.5 R² (H − z)/(H − crown base) from the top down to a third of
+///   the crown length above its base, widest at depth ⅔; smaller b a flatter dome);
+/// - below it, the shade crown: ρ(d) = 1 − (1 − `base_share`) t², t = (d − `widest_depth`) /
+///   (1 − `widest_depth`) (TreeGrOSS: a cylinder, `base_share` 1; an ellipsoid, the form found
+///   predominant for beech crowns in Slovenian montane beech forests, Univ. Ljubljana
+///   repository 151935: ½ at the widest point, the radius falling towards the crown base).
+///
+/// With it, Algorithm 1's stem keeps its number of splits and its segment lengths (the shipped
+/// broadleaves' stem lengths do not depend on the strand split: M = m = 1 at order 0) but its
+/// limbs' strands are shared anew: each limb one strand, the rest by the crown volume it
+/// serves, ρ(d)² × the stem length between it and its neighbours (leaf area spread evenly
+/// through the crown volume); each limb leaves the stem at an insertion angle from the vertical
+/// running linearly from `angle_top_deg` (top) to `angle_base_deg` (crown base), and is scaled
+/// (its whole subtree) so that its main axis (Algorithm 1's own recursion) reaches the crown
+/// surface of radius ρ(d)·A along that direction, A = ½ `width_to_length` × the crown length.
+/// The tree keeps S strands and 2S − 1 segments. Ranges: the schema's
+/// (`architecture.ecomod.crown_profile.*`); the shipped species files give their sources.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CrownProfile {
+    /// Relative depth below the crown's top of its widest point (0.1–0.9).
+    pub widest_depth: f32,
+    /// Exponent b of the light crown ρ = (d / `widest_depth`)^b (0.2–1; ½ a paraboloid).
+    pub top_exponent: f32,
+    /// Crown radius at the crown base over the largest (0–1).
+    pub base_share: f32,
+    /// Crown width over crown length of the grown model (0.2–2; the fitted tree takes the
+    /// simulation's, this sets the limbs' angles and the profile's aspect before the fit).
+    pub width_to_length: f32,
+    /// Insertion angle from the vertical (degrees, 10–120) of a limb at the top of the stem.
+    pub angle_top_deg: f32,
+    /// Insertion angle from the vertical (degrees, 10–120) of a limb at the crown base.
+    pub angle_base_deg: f32,
+}
+
+impl CrownProfile {
+    /// Relative crown radius ρ (0–1) at relative depth `d` below the top (clamped to 0–1).
+    pub fn radius_at(&self, d: f32) -> f32 {
+        let d = d.clamp(0.0, 1.0);
+        let w = self.widest_depth.clamp(1e-3, 1.0);
+        if d <= w {
+            (d / w).powf(self.top_exponent.max(1e-3))
+        } else {
+            let t = (d - w) / (1.0 - w).max(1e-6);
+            1.0 - (1.0 - self.base_share.clamp(0.0, 1.0)) * t * t
+        }
+    }
 }
 
 /// The first-order limbs of a stem by their depth into the live crown (issue 32, round 38;

@@ -359,6 +359,12 @@ pub const FIELDS: &[FieldSpec] = &[
     f("architecture.ecomod.limbs.angle_base_deg", "°", r(20.0, 120.0), "First-order limbs: insertion angle from the vertical of a limb at the crown base (linear in depth from the top's)"),
     f("architecture.ecomod.limbs.spray", "", r(0.0, 2.0), "First-order limbs: relative width of a limb's flat spray of foliage per metre of its distance from the stem (pictures and exports only: the full level's shoot cards; 0 none)"),
     f("architecture.ecomod.limbs.widest_depth", "", r(0.05, 1.0), "First-order limbs: relative depth into the crown (0 top, 1 crown base) below which the limbs are as long as the longest (above it their reach falls linearly to the top)"),
+    f("architecture.ecomod.crown_profile.angle_base_deg", "°", r(10.0, 120.0), "Broadleaf crown profile: insertion angle from the vertical of a limb at the crown base (linear in depth from the top's)"),
+    f("architecture.ecomod.crown_profile.angle_top_deg", "°", r(10.0, 120.0), "Broadleaf crown profile (optional, ours; the stem's strands shared among its limbs by the crown volume each serves, each limb reaching the profile's surface): insertion angle from the vertical of a limb at the top of the stem"),
+    f("architecture.ecomod.crown_profile.base_share", "", r(0.0, 1.0), "Broadleaf crown profile: crown radius at the crown base over the largest (below the widest point the radius falls as 1 − (1 − base_share)·t²)"),
+    f("architecture.ecomod.crown_profile.top_exponent", "", r(0.2, 1.0), "Broadleaf crown profile: exponent b of the light crown above the widest point, radius (depth / widest_depth)^b (0.5 a paraboloid)"),
+    f("architecture.ecomod.crown_profile.widest_depth", "", r(0.1, 0.9), "Broadleaf crown profile: relative depth below the crown's top of its widest point (0 top, 1 crown base)"),
+    f("architecture.ecomod.crown_profile.width_to_length", "", r(0.2, 2.0), "Broadleaf crown profile: crown width over crown length of the grown model before it is fitted to the simulated crown (sets the profile's aspect and so the limbs' lengths)"),
     f(
         "architecture.light_guided.lambda",
         "",

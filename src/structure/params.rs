@@ -69,6 +69,7 @@ impl EcoModParams {
             min_len_w: pl(&[(0.0, 1.0), (50.0, 1.0)]),
             whorls: None,
             limbs: None,
+            crown_profile: None,
         }
     }
 
@@ -102,6 +103,7 @@ impl EcoModParams {
             min_len_w: pl(&[(0.0, 1.0), (50.0, 1.0)]),
             whorls: None,
             limbs: None,
+            crown_profile: None,
         }
     }
 }

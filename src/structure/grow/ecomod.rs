@@ -37,7 +37,7 @@
 
 use crate::error::{Error, Result};
 use crate::rng::{salt, Stream};
-use crate::species::{EcoModParams, LeafDistribution, Limbs, Whorls, WHORL_SEGMENT};
+use crate::species::{CrownProfile, EcoModParams, LeafDistribution, Limbs, Whorls, WHORL_SEGMENT};
 use crate::structure::params::eval_polyline;
 use crate::structure::skeleton::{Leaf, Leaves, NodeId, Role, Skeleton};
 use glam::{Mat3, Vec3};
@@ -240,8 +240,18 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
     // before its branch, so the whole stem is grown before its first limb)
     let mut stem_top = f32::NEG_INFINITY;
     let mut longest: Option<f32> = None;
+    // a broadleaf's crown profile ([`CrownProfile`]): the limbs' strands, planned before the
+    // stem is grown (not with a whorled stem)
+    let profile = p.crown_profile.filter(|_| whorls.is_none());
+    let plan = profile.map(|cp| limb_strands(p, &cp));
     while let Some(mut b) = stack.pop() {
-        if let Some(lm) = p.limbs {
+        if let Some(cp) = profile {
+            if b.g == 1 && sk.nodes[b.parent as usize].gravelius == 0 {
+                let base = sk.nodes.get(1).map_or(0.0, |n| n.pos.z);
+                let (insertion, reach) = (sk.nodes[b.parent as usize].pos, limb_reach(p, b.w, b.s0, b.big_l));
+                profile_limb(&cp, &mut b, insertion, base, stem_top, reach);
+            }
+        } else if let Some(lm) = p.limbs {
             if b.g == 1 && sk.nodes[b.parent as usize].gravelius == 0 {
                 let longest = *longest.get_or_insert_with(|| {
                     stack.iter().chain(std::iter::once(&b)).filter(|q| q.g == 1 && sk.nodes[q.parent as usize].gravelius == 0).map(|q| limb_reach(p, q.w, q.s0, q.big_l)).fold(0.0f32, f32::max)
@@ -291,7 +301,14 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
                 let s2 = shoot_branch_strands(&w, sh.k, sh.lateral).min(b.s0 - 1);
                 (b.s0 - s2, s2)
             }
-            _ => split_strands(b.s0, lp.k_s),
+            // a crown profile's stem: the limb of split w gets its planned strands
+            _ => match plan.as_ref().and_then(|pl| if b.g == 0 { pl.get(b.w as usize) } else { None }) {
+                Some(&s2) => {
+                    let s2 = s2.clamp(1, b.s0 - 1);
+                    (b.s0 - s2, s2)
+                }
+                None => split_strands(b.s0, lp.k_s),
+            },
         };
         // the next stem segment: within the shoot, or the next shoot (Algorithm 1's
         // continuation of the whole shoot's split)
@@ -373,6 +390,98 @@ fn shape_limb(lm: &Limbs, b: &mut Pending, insertion: Vec3, base_z: f32, top_z: 
     let q = glam::Quat::from_rotation_arc(y.normalize_or(Vec3::Z), target);
     if reach > 0.0 && longest > 0.0 {
         let f = (depth / lm.widest_depth.max(1e-3)).clamp(0.02, 1.0) * longest / reach;
+        b.big_l *= f;
+        b.l *= f;
+    }
+    b.frame = constrain(orthonormal(Mat3::from_quat(q) * b.frame), insertion, b.l, false);
+}
+
+/// The stem of `p` as Algorithm 1 grows it (order 0, no whorls): the heights (m, along a
+/// vertical stem) of its splits and of its top. Each stem segment is k_l·L long, L scaled at
+/// every split by √(S₁/S₀) within [m, M] (eqs. 1, 4–6), the first `trunk_length_m`.
+fn stem_heights(p: &EcoModParams) -> (Vec<f32>, f32) {
+    let (mut s, mut w, mut big, mut z) = (p.strands, 0u32, 1.0f32, p.trunk_length_m);
+    let mut at = Vec::new();
+    while s >= 2 && w < MAX_STRANDS {
+        at.push(z);
+        let lp = local_params(p, 0, w);
+        let (s1, _) = split_strands(s, lp.k_s);
+        big *= ((s1 as f32 / s as f32).sqrt().min(lp.max_len)).max(lp.min_len);
+        z += lp.k_l * big;
+        s = s1;
+        w += 1;
+    }
+    (at, z)
+}
+
+/// Strands of each limb of the stem of `p` with crown profile `cp` ([`CrownProfile`]), from
+/// the lowest: as many limbs as Algorithm 1's stem has splits ([`stem_heights`]), one strand
+/// each and the other S − 1 − n shared by the crown volume a limb serves, ρ(d)² × half the
+/// stem length between its neighbours (d its depth below the stem's top over the crown length
+/// from the first split), by largest remainder (ties to the lower limb). They add up to S − 1:
+/// the stem's top keeps one strand.
+fn limb_strands(p: &EcoModParams, cp: &CrownProfile) -> Vec<u32> {
+    let (at, top) = stem_heights(p);
+    let n = at.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let len = (top - at[0]).max(1e-6);
+    let z = |k: isize| if k < 0 { at[0] } else if k as usize >= n { top } else { at[k as usize] };
+    let weight: Vec<f64> = (0..n as isize).map(|k| f64::from(cp.radius_at((top - z(k)) / len).powi(2) * 0.5 * (z(k + 1) - z(k - 1)).max(0.0))).collect();
+    let spare = (p.strands as usize).saturating_sub(1 + n) as f64;
+    let sum: f64 = weight.iter().sum();
+    let share: Vec<f64> = weight.iter().map(|w| if sum > 0.0 { spare * w / sum } else { spare / n as f64 }).collect();
+    let mut out: Vec<u32> = share.iter().map(|q| 1 + q.floor() as u32).collect();
+    let mut left = (p.strands as usize - 1).saturating_sub(out.iter().map(|&v| v as usize).sum());
+    let mut order: Vec<usize> = (0..n).collect();
+    order.sort_by(|&a, &b| (share[b] - share[b].floor()).total_cmp(&(share[a] - share[a].floor())).then(a.cmp(&b)));
+    for &k in order.iter().cycle() {
+        if left == 0 {
+            break;
+        }
+        out[k] += 1;
+        left -= 1;
+    }
+    out
+}
+
+/// Shapes the limb `b` (a pending branch of Gravelius order 1 on the stem node at `insertion`)
+/// by a broadleaf's crown profile ([`CrownProfile`]): depth d = (stem top − insertion height) /
+/// (stem top − crown base `base_z`), 0–1; turns its frame about the horizontal axis across it
+/// to the insertion angle θ = `angle_top_deg` + d·(`angle_base_deg` − `angle_top_deg`) from the
+/// vertical (azimuth kept; the ground limit of [`constrain`] still applies), and scales its
+/// relative and actual lengths (its whole subtree) by t / `reach`, t (m) the distance along θ
+/// from the insertion to the crown surface of radius A·ρ at each height (A = ½
+/// `width_to_length` × crown length; bisection, 40 steps) and `reach` its own axis' reach.
+fn profile_limb(cp: &CrownProfile, b: &mut Pending, insertion: Vec3, base_z: f32, top_z: f32, reach: f32) {
+    let len = top_z - base_z;
+    let depth = |z: f32| if len > 1e-6 { (top_z - z) / len } else { 1.0 };
+    let d = depth(insertion.z).clamp(0.0, 1.0);
+    let theta = (cp.angle_top_deg + d * (cp.angle_base_deg - cp.angle_top_deg)).to_radians();
+    let y = b.frame.y_axis;
+    let h = Vec3::new(y.x, y.y, 0.0);
+    let h = if h.length_squared() > 1e-10 { h.normalize() } else { Vec3::new(b.frame.x_axis.x, b.frame.x_axis.y, 0.0).normalize_or(Vec3::X) };
+    let target = h * theta.sin() + Vec3::Z * theta.cos();
+    let q = glam::Quat::from_rotation_arc(y.normalize_or(Vec3::Z), target);
+    let a = 0.5 * cp.width_to_length * len.max(1e-6);
+    // inside the crown at distance t along θ: its distance from the stem within the profile
+    let inside = |t: f32| {
+        let z = insertion.z + t * theta.cos();
+        let dz = depth(z);
+        (0.0..=1.0).contains(&dz) && t * theta.sin() <= a * cp.radius_at(dz)
+    };
+    let (mut lo, mut hi) = (0.0f32, 2.0 * (len + a).max(1e-6));
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if inside(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    if reach > 0.0 && lo > 0.0 {
+        let f = lo / reach;
         b.big_l *= f;
         b.l *= f;
     }
