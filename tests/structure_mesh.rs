@@ -639,8 +639,9 @@ fn spread(m: &sylva::mesh::TriMesh, f: f32) -> sylva::mesh::TriMesh {
 /// The crown-hull level (LOD2) of the beech and the Norway spruce prototypes (their EcoMod
 /// trees, 1 m tall) against the level of rounds 34–44 (10 sectors, a stem of at most 6
 /// segments): fewer triangles, and, each spread to the crown disc's plan area as the
-/// renderer draws it (`render::lod::plan_spread`), the same projected area within 3 % from
-/// the side (four azimuths) and within 1 % from above.
+/// renderer draws it (`render::lod::plan_spread`), the same projected area from the side
+/// within 3 % on the mean of 16 azimuths (within 6 % at each: an 8-gon turned by 22.5° is at
+/// its narrowest where the 10-gon is at its widest) and within 1 % from above.
 #[test]
 fn the_cheaper_hull_level_keeps_its_silhouette() {
     use sylva::render::lod::{plan_spread, Silhouette};
@@ -666,17 +667,24 @@ fn the_cheaper_hull_level_keeps_its_silhouette() {
         let plan = |m: &sylva::mesh::TriMesh| projected_area(m, |p| (p[0], p[1]));
         let (pa, pb) = (plan(&a), plan(&b));
         assert!((pa / pb - 1.0).abs() < 0.01, "{id}: plan {pa} against {pb}");
-        for deg in [0f32, 45.0, 90.0, 135.0] {
+        // the side silhouette of the level (foliage and stem) seen along azimuth `deg`; the
+        // renderer turns each tree by a random angle, so the mean over the azimuths counts
+        let side = |m: &sylva::mesh::TriMesh, bark: &sylva::mesh::TriMesh, deg: f32| {
             let (s, c) = deg.to_radians().sin_cos();
-            // the side silhouette of the level (foliage and stem) seen along azimuth `deg`
-            let side = |m: &sylva::mesh::TriMesh, bark: &sylva::mesh::TriMesh| {
-                let mut all = m.clone();
-                all.append(bark);
-                projected_area(&all, |p| (p[0] * -s + p[1] * c, p[2]))
-            };
-            let (sa, sb) = (side(&a, &new.bark), side(&b, &old_bark));
-            eprintln!("{id} at {deg}°: side {sa:.5} against main's {sb:.5} ({:+.2} %), plan {pa:.5} against {pb:.5}; {n_new} triangles against {n_old}", 100.0 * (sa / sb - 1.0));
-            assert!((sa / sb - 1.0).abs() < 0.03, "{id} at {deg}°: side {sa} against {sb}");
+            let mut all = m.clone();
+            all.append(bark);
+            projected_area(&all, |p| (p[0] * -s + p[1] * c, p[2]))
+        };
+        let (mut ma, mut mb) = (0.0, 0.0);
+        for k in 0..16 {
+            let deg = k as f32 * 180.0 / 16.0;
+            let (sa, sb) = (side(&a, &new.bark, deg), side(&b, &old_bark, deg));
+            eprintln!("{id} at {deg}°: side {sa:.5} against main's {sb:.5} ({:+.2} %)", 100.0 * (sa / sb - 1.0));
+            assert!((sa / sb - 1.0).abs() < 0.06, "{id} at {deg}°: side {sa} against {sb}");
+            ma += sa / 16.0;
+            mb += sb / 16.0;
         }
+        eprintln!("{id}: mean side {ma:.5} against main's {mb:.5} ({:+.2} %), plan {pa:.5} against {pb:.5}; {n_new} triangles against {n_old}", 100.0 * (ma / mb - 1.0));
+        assert!((ma / mb - 1.0).abs() < 0.03, "{id}: mean side {ma} against {mb}");
     }
 }
