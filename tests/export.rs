@@ -1365,3 +1365,58 @@ fn tree_grow_writes_film_textures_individual_leaves_and_a_flared_stem() {
     assert!((hi - lo) / hi > 0.1, "cut at 5 cm: {lo:.3}–{hi:.3} m");
     validate(&[&out]);
 }
+
+/// Round 45 (issue 32): a silver birch's stem, exported, is dark below its first ring
+/// above the ground (`<look>_bark_base`, the stills' dark base) and white above; a beech
+/// has no such material; the tree writer and the stand writer alike. A stem of 15 cm radius
+/// with rings at 0, 1.3 and 4 m: the base primitive holds the triangles up to 1.3 m (its
+/// highest vertex there), the bark primitive those above.
+#[test]
+fn a_birchs_exported_stem_has_its_dark_base() {
+    let mut sk = sylva::structure::Skeleton::new();
+    sk.add_root(glam::Vec3::ZERO, 0.15);
+    sk.add_child(0, glam::Vec3::new(0.0, 0.0, 1.3), 0.14, false).unwrap();
+    sk.add_child(1, glam::Vec3::new(0.0, 0.0, 4.0), 0.1, false).unwrap();
+    let chain = lod_chain(&sk, &Default::default(), &Default::default());
+    let lib = SpeciesLibrary::embedded().unwrap();
+    let sp = |id: &str| &lib.species[lib.find(id).unwrap() as usize];
+    // the z range (m, Sylva's frame: glTF's y) of each primitive of mesh `mesh`, by material name
+    let ranges = |js: &serde_json::Value, mesh: &str| -> Vec<(String, f32, f32)> {
+        let m = js["meshes"].as_array().unwrap().iter().find(|m| m["name"] == mesh).unwrap();
+        m["primitives"].as_array().unwrap().iter().map(|p| {
+            let a = &js["accessors"][p["attributes"]["POSITION"].as_u64().unwrap() as usize];
+            let name = js["materials"][p["material"].as_u64().unwrap() as usize]["name"].as_str().unwrap().to_string();
+            (name, a["min"][1].as_f64().unwrap() as f32, a["max"][1].as_f64().unwrap() as f32)
+        }).collect()
+    };
+    let json_of = |bytes: &[u8]| -> serde_json::Value {
+        let jl = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+        serde_json::from_slice(&bytes[20..20 + jl]).unwrap()
+    };
+    for (id, dark) in [("silver_birch", true), ("beech", false)] {
+        let look = Look::for_species(sp(id), Season::Summer);
+        assert_eq!(look.textures.bark_base.is_some(), dark, "{id}");
+        let js = json_of(&sylva::output::gltf::glb_bytes(&chain, &GlbOptions { name: "t".into(), look: look.clone(), spacing_m: 0.0 }).unwrap());
+        let r = ranges(&js, "t_LOD0");
+        eprintln!("{id}: {r:?}");
+        let base = r.iter().find(|p| p.0 == format!("{id}_bark_base"));
+        let bark = r.iter().find(|p| p.0 == format!("{id}_bark")).unwrap();
+        if dark {
+            let base = base.unwrap();
+            assert!(base.1.abs() < 1e-3 && (base.2 - 1.3).abs() < 1e-3, "the dark base from the ground to the ring at 1.3 m: {base:?}");
+            assert!((bark.1 - 1.3).abs() < 1e-3 && bark.2 > 3.9, "white above: {bark:?}");
+        } else {
+            assert!(base.is_none() && bark.1.abs() < 1e-3, "{r:?}");
+        }
+        // the stand writer (pending materials resolved at its end)
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.glb");
+        let mut w = sylva::output::gltf::StandGlbWriter::create(&path, &[0]).unwrap();
+        let l = w.look(look);
+        let m = w.model(&StandModel { name: "m".into(), chain: chain.clone(), look: l, sprigs: sylva::mesh::TriMesh::default() }).unwrap();
+        w.tree(&StandNode { name: "a".into(), model: m, translation: [0.0; 3], scale: [1.0; 3] }).unwrap();
+        w.finish(&[], "s", &serde_json::Value::Null).unwrap();
+        let r2 = ranges(&json_of(&std::fs::read(&path).unwrap()), "m_LOD0");
+        assert_eq!(r2, r, "{id}: the stand writer as the tree writer");
+    }
+}

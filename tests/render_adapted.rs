@@ -408,6 +408,68 @@ fn raising_the_reference_height_draws_no_tree_coarser() {
     }
 }
 
+/// Round 45 (issue 32): the stills draw a tree inside a cross-fade band at one of its two
+/// levels, whole (`Renderer::fade_per_tree`), and with `LodParams::one_level_per_tree` the CPU
+/// records only that one: the same stand of beech as above, each tree drawn once, at the level
+/// of the shader's rule (the finer where its threshold `(salt + ½) / 64` is at least the
+/// band's blend), its triangles those of that level; the two records of main's path cost
+/// more. Under a budget the one-level path's cost, which the two-record path exceeds, it is
+/// not demoted, and under a binding one it keeps to the budget with a switch factor no larger.
+#[test]
+fn a_stills_tree_in_a_cross_fade_band_is_recorded_and_paid_for_once() {
+    use sylva::render::instanced::{build_batches_of, dither_salt, level_triangles};
+    use sylva::render::lod::LodParams;
+    use sylva::render::scene::TreeInstance;
+    let lib = SpeciesLibrary::embedded().unwrap();
+    let protos = sylva::job::scene::prototypes(&lib);
+    let beech = lib.species.iter().position(|s| s.id == "beech").unwrap() as u32;
+    let heights = [6.0f32, 10.0, 15.0, 20.0, 25.0, 32.0, 8.0, 12.0, 18.0, 28.0, 7.0];
+    let mut trees = Vec::new();
+    for j in 0..60 {
+        for i in 0..60 {
+            let id = (j * 60 + i) as u64;
+            let h = heights[(i * 7 + j * 3) % heights.len()];
+            trees.push(TreeInstance::new(id, [4.0 * i as f32, 4.0 * j as f32, 0.0], h, 0.18 * h, beech, [0.1, 0.3, 0.05]));
+        }
+    }
+    let cam = Camera::look_at([120.0, -30.0, 40.0], [120.0, 90.0, 5.0], 50.0);
+    let (w, h) = (640, 360);
+    let two = LodParams { switch_px: [110.0, 45.0, 18.0], max_geometry_triangles: 0, max_triangles: 0, small_tree_m: 12.0, ..Default::default() };
+    let one = LodParams { one_level_per_tree: true, ..two };
+    let (b2, b1) = (build_batches_of(&trees, &protos, &cam, w, h, &two), build_batches_of(&trees, &protos, &cam, w, h, &one));
+    let key = |r: &sylva::render::instanced::InstanceRaw| ((r.pos_h[0] * 4.0) as i32, (r.pos_h[1] * 4.0) as i32);
+    let id_at: std::collections::HashMap<(i32, i32), u64> = trees.iter().map(|t| (((t.position[0] * 4.0) as i32, (t.position[1] * 4.0) as i32), t.id)).collect();
+    // main's records: side 0 at the tree's level with the band's blend, side 1 its partner
+    let firsts: Vec<_> = b2.instances.iter().filter(|r| r.p1[3] == 0.0).collect();
+    let banded = firsts.iter().filter(|r| r.p1[2] > 0.0).count();
+    assert_eq!(b2.instances.len(), firsts.len() + banded, "one partner per banded tree");
+    assert!(banded > 300, "{banded} of {} trees in a band", firsts.len());
+    let lv1: std::collections::HashMap<(i32, i32), (usize, f32)> = b1.instances.iter().map(|r| (key(r), (r.p3[1] as usize, r.p1[2]))).collect();
+    assert_eq!((b1.instances.len(), lv1.len()), (firsts.len(), firsts.len()), "each tree recorded once");
+    let (mut coarser, mut finer) = (0, 0);
+    for &r in &firsts {
+        let (l, f) = (r.p3[1] as usize, r.p1[2]);
+        let d = (dither_salt(id_at[&key(r)]) + 0.5) / 64.0;
+        assert_eq!(d, (r.bark[3] + 0.5) / 64.0, "the record's salt");
+        let want = if f > 0.0 && d < f { l + 1 } else { l };
+        assert_eq!(lv1[&key(r)], (want, 0.0), "tree at {:?}: level {l}, blend {f}, threshold {d}", key(r));
+        coarser += usize::from(want > l);
+        finer += usize::from(f > 0.0 && want == l);
+    }
+    assert!(coarser > 50 && finer > 50, "both levels drawn in the bands: {coarser} coarser, {finer} finer");
+    let paid: u64 = b1.instances.iter().map(|r| level_triangles(&protos[r.p3[0] as usize], r.p3[1] as usize)).sum();
+    eprintln!("two records: {} triangles {:?}; one: {} {:?}", b2.triangles, b2.per_level, b1.triangles, b1.per_level);
+    assert_eq!(b1.triangles, paid);
+    assert!(b1.triangles * 10 < b2.triangles * 9, "{} against {}", b1.triangles, b2.triangles);
+    // budgets: the one-level cost (binds on main's path only), then two-thirds of it
+    let at = |budget: u64, p: LodParams| build_batches_of(&trees, &protos, &cam, w, h, &LodParams { max_triangles: budget as u32, ..p });
+    let (c2, c1) = (at(b1.triangles, two), at(b1.triangles, one));
+    assert!(c2.lod_scale > 1.0 && c1.lod_scale == 1.0 && c1.triangles == b1.triangles, "main's ×{}, one level ×{} {}", c2.lod_scale, c1.lod_scale, c1.triangles);
+    let (d2, d1) = (at(b1.triangles * 2 / 3, two), at(b1.triangles * 2 / 3, one));
+    eprintln!("budget {}: two records ×{} {}; one ×{} {}", b1.triangles * 2 / 3, d2.lod_scale, d2.triangles, d1.lod_scale, d1.triangles);
+    assert!(d1.triangles <= b1.triangles * 2 / 3 && d1.lod_scale > 1.0 && d1.lod_scale <= d2.lod_scale);
+}
+
 /// Issue 32, round 43 (trial 42 defect 8): the dark base of a birch at eye level sparkled with
 /// single white pixels. The fragment shader took an unwidened stem's interpolated `lp.w`
 /// (exactly 1 at its vertices) for a stem widened to its least width where rounding put it

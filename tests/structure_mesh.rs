@@ -587,3 +587,104 @@ fn bark_texels_are_square_on_the_trunk_and_the_branches() {
         assert!(repeats >= 1.0 && (std::f32::consts::TAU * radius / repeats <= BARK_TILE_M * 1.5 || repeats == 1.0), "{repeats} repeats round {radius} m");
     }
 }
+
+// Round 45 (issue 32): the cheaper crown-hull level.
+
+/// Area (in the plane's units²) of the union of the triangles of `m` projected with
+/// `proj` (a point to plane coordinates): cell centres of a 400 × 400 grid over the
+/// projection's bounds that fall in any triangle.
+fn projected_area(m: &sylva::mesh::TriMesh, proj: impl Fn([f32; 3]) -> (f32, f32)) -> f32 {
+    let p: Vec<(f32, f32)> = m.positions.iter().map(|&q| proj(q)).collect();
+    let (mut lo, mut hi) = ((f32::MAX, f32::MAX), (f32::MIN, f32::MIN));
+    for &(x, y) in &p {
+        lo = (lo.0.min(x), lo.1.min(y));
+        hi = (hi.0.max(x), hi.1.max(y));
+    }
+    const N: usize = 400;
+    let (dx, dy) = ((hi.0 - lo.0) / N as f32, (hi.1 - lo.1) / N as f32);
+    let mut hit = vec![false; N * N];
+    for t in m.indices.chunks_exact(3) {
+        let [a, b, c] = [p[t[0] as usize], p[t[1] as usize], p[t[2] as usize]];
+        let area = (b.0 - a.0) * (c.1 - a.1) - (b.1 - a.1) * (c.0 - a.0);
+        if area.abs() < 1e-12 {
+            continue;
+        }
+        let (x0, x1) = (a.0.min(b.0).min(c.0), a.0.max(b.0).max(c.0));
+        let (y0, y1) = (a.1.min(b.1).min(c.1), a.1.max(b.1).max(c.1));
+        let (i0, i1) = (((x0 - lo.0) / dx).floor().max(0.0) as usize, (((x1 - lo.0) / dx).ceil() as usize).min(N));
+        let (j0, j1) = (((y0 - lo.1) / dy).floor().max(0.0) as usize, (((y1 - lo.1) / dy).ceil() as usize).min(N));
+        for j in j0..j1 {
+            for i in i0..i1 {
+                let (x, y) = (lo.0 + (i as f32 + 0.5) * dx, lo.1 + (j as f32 + 0.5) * dy);
+                let e = |u: (f32, f32), v: (f32, f32)| ((v.0 - u.0) * (y - u.1) - (v.1 - u.1) * (x - u.0)) * area.signum();
+                if e(a, b) >= 0.0 && e(b, c) >= 0.0 && e(c, a) >= 0.0 {
+                    hit[j * N + i] = true;
+                }
+            }
+        }
+    }
+    hit.iter().filter(|&&h| h).count() as f32 * dx * dy
+}
+
+/// `m` spread horizontally by `f` (as the renderer spreads a crown hull, `plan_spread`).
+fn spread(m: &sylva::mesh::TriMesh, f: f32) -> sylva::mesh::TriMesh {
+    let mut out = m.clone();
+    out.positions.iter_mut().for_each(|p| {
+        p[0] *= f;
+        p[1] *= f;
+    });
+    out
+}
+
+/// The crown-hull level (LOD2) of the beech and the Norway spruce prototypes (their EcoMod
+/// trees, 1 m tall) against the level of rounds 34–44 (10 sectors, a stem of at most 6
+/// segments): fewer triangles, and, each spread to the crown disc's plan area as the
+/// renderer draws it (`render::lod::plan_spread`), the same projected area from the side
+/// within 3 % on the mean of 16 azimuths (within 6 % at each: an 8-gon turned by 22.5° is at
+/// its narrowest where the 10-gon is at its widest) and within 1 % from above.
+#[test]
+fn the_cheaper_hull_level_keeps_its_silhouette() {
+    use sylva::render::lod::{plan_spread, Silhouette};
+    let lib = sylva::species::SpeciesLibrary::embedded().unwrap();
+    for id in ["beech", "norway_spruce"] {
+        let sp = lib.species.iter().find(|s| s.id == id).unwrap();
+        let (sk, lv) = sylva::structure::species_tree(sp, 42).unwrap();
+        let o = LodOptions::for_species(sp);
+        let chain = mesh::lod_chain(&sk, &lv, &o);
+        let r0 = Silhouette::from_chain(&chain).radius;
+        let new = &chain.levels[2];
+        // main's level: the 10-sector hull (its bands were 10 / 2 − 2 = 3, as HULL_BANDS)
+        // on the stem of 6 segments, up to the same height
+        let old_leaves = mesh::hull_mesh(&sk, &lv, &LodOptions { hull_segments: 10, ..o }).leaves;
+        let top = new.bark.positions.iter().map(|p| p[2]).fold(f32::MIN, f32::max);
+        let old_bark = mesh::hull_stem_of(&sk, top, &o, 6);
+        let (n_new, n_old) = (new.triangle_count(), old_leaves.triangle_count() + old_bark.triangle_count());
+        assert_eq!(new.leaves.triangle_count(), 2 * 8 * (mesh::HULL_BANDS + 3), "{id}");
+        assert_eq!(old_leaves.triangle_count(), 120, "{id}");
+        assert!(new.bark.triangle_count() <= 30 && old_bark.triangle_count() == 60, "{id}: stems {} and {}", new.bark.triangle_count(), old_bark.triangle_count());
+        assert!(n_new * 10 <= n_old * 7, "{id}: {n_new} triangles against main's {n_old}");
+        let (a, b) = (spread(&new.leaves, plan_spread(&new.leaves, r0)), spread(&old_leaves, plan_spread(&old_leaves, r0)));
+        let plan = |m: &sylva::mesh::TriMesh| projected_area(m, |p| (p[0], p[1]));
+        let (pa, pb) = (plan(&a), plan(&b));
+        assert!((pa / pb - 1.0).abs() < 0.01, "{id}: plan {pa} against {pb}");
+        // the side silhouette of the level (foliage and stem) seen along azimuth `deg`; the
+        // renderer turns each tree by a random angle, so the mean over the azimuths counts
+        let side = |m: &sylva::mesh::TriMesh, bark: &sylva::mesh::TriMesh, deg: f32| {
+            let (s, c) = deg.to_radians().sin_cos();
+            let mut all = m.clone();
+            all.append(bark);
+            projected_area(&all, |p| (p[0] * -s + p[1] * c, p[2]))
+        };
+        let (mut ma, mut mb) = (0.0, 0.0);
+        for k in 0..16 {
+            let deg = k as f32 * 180.0 / 16.0;
+            let (sa, sb) = (side(&a, &new.bark, deg), side(&b, &old_bark, deg));
+            eprintln!("{id} at {deg}°: side {sa:.5} against main's {sb:.5} ({:+.2} %)", 100.0 * (sa / sb - 1.0));
+            assert!((sa / sb - 1.0).abs() < 0.06, "{id} at {deg}°: side {sa} against {sb}");
+            ma += sa / 16.0;
+            mb += sb / 16.0;
+        }
+        eprintln!("{id}: mean side {ma:.5} against main's {mb:.5} ({:+.2} %), plan {pa:.5} against {pb:.5}; {n_new} triangles against {n_old}", 100.0 * (ma / mb - 1.0));
+        assert!((ma / mb - 1.0).abs() < 0.03, "{id}: mean side {ma} against {mb}");
+    }
+}

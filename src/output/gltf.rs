@@ -13,7 +13,10 @@
 //! **Materials** per [`Look`] (a species in a season): `<look>_bark` (opaque, tiling bark
 //! texture), `<look>_leaf` (LOD0 leaf cards), `<look>_cluster` (LOD1 leaf-cluster cards) and
 //! `<look>_impostor` (LOD3 billboard), all three double-sided with `alphaMode: MASK` and
-//! `alphaCutoff` [`ALPHA_CUTOFF`], and `<look>_crown` (LOD2 hull, opaque). Each has a
+//! `alphaCutoff` [`ALPHA_CUTOFF`], and `<look>_crown` (LOD2 hull, opaque); a white-barked
+//! species (silver birch) also `<look>_bark_base` (opaque), the dark base of its stems below
+//! [`crate::structure::texture::BARK_BASE_M`] (a primitive of its own,
+//! [`crate::structure::texture::split_bark_base`]; round 45). Each has a
 //! `baseColorTexture` on `TEXCOORD_0`, a PNG embedded in the buffer, made by
 //! [`crate::structure::texture`] with the colours baked in (base colour factor white);
 //! identical images are stored once. Card textures clamp, bark and crown textures repeat.
@@ -68,6 +71,7 @@ impl Look {
                 crown: texture::tint(&texture::crown_texture(shape, px), leaf_rgb),
                 impostor: texture::impostor_texture_coloured(shape, px, leaf_rgb, bark_rgb),
                 bark: texture::bark_texture(bark_rgb, bark, px, 1),
+                bark_base: None,
             },
         }
     }
@@ -143,6 +147,8 @@ const SAMPLER_REPEAT: usize = 1;
 struct LookMaterials {
     bark: Option<usize>,
     foliage: [Option<usize>; 4],
+    /// `<look>_bark_base`: the dark base of a white bark ([`FoliageTextures::bark_base`]).
+    bark_base: Option<usize>,
 }
 
 /// The glTF document being built, with `serde_json` (gltf-json's struct fields change with its
@@ -280,10 +286,14 @@ impl Doc {
     fn look(&mut self, look: &Look, levels: &[usize]) -> Result<LookMaterials> {
         let t = &look.textures;
         let tex = |index: usize| json!({"index": index, "texCoord": 0});
-        let mut bark = None;
+        let (mut bark, mut bark_base) = (None, None);
         if levels.iter().any(|&l| l < 3) {
             let bark_t = self.texture(&t.bark, SAMPLER_REPEAT)?;
             bark = Some(self.material(json!({"name": format!("{}_bark", look.name), "pbrMetallicRoughness": {"baseColorTexture": tex(bark_t), "metallicFactor": 0.0, "roughnessFactor": 0.95}})));
+            if let Some(img) = &t.bark_base {
+                let ti = self.texture(img, SAMPLER_REPEAT)?;
+                bark_base = Some(self.material(json!({"name": format!("{}_bark_base", look.name), "pbrMetallicRoughness": {"baseColorTexture": tex(ti), "metallicFactor": 0.0, "roughnessFactor": 0.95}})));
+            }
         }
         let mut foliage = [None; 4];
         for (k, (part, img, sampler)) in [("leaf", &t.leaf, SAMPLER_CLAMP), ("cluster", &t.cluster, SAMPLER_CLAMP), ("crown", &t.crown, SAMPLER_REPEAT), ("impostor", &t.impostor, SAMPLER_CLAMP)].into_iter().enumerate() {
@@ -299,7 +309,7 @@ impl Doc {
             }
             foliage[k] = Some(self.material(m));
         }
-        Ok(LookMaterials { bark, foliage })
+        Ok(LookMaterials { bark, foliage, bark_base })
     }
 
     /// A plain material of sRGB colour `rgb`.
@@ -380,7 +390,14 @@ impl Doc {
                 if !levels.contains(&i) {
                     return None;
                 }
-                let bark = mats.bark.and_then(|m| self.primitive(&level.bark, m, true));
+                // a white bark's dark base in a material of its own (FoliageTextures::bark_base)
+                let (bark, base) = match mats.bark_base {
+                    Some(mb) => {
+                        let (upper, base) = texture::split_bark_base(&level.bark);
+                        (mats.bark.and_then(|m| self.primitive(&upper, m, true)), self.primitive(&base, mb, true))
+                    }
+                    None => (mats.bark.and_then(|m| self.primitive(&level.bark, m, true)), None),
+                };
                 let scale = if i == 2 { CROWN_REPEAT } else { [1.0, 1.0] };
                 // leaf-cluster cards marked among the full level's leaves (a lone tree's crown
                 // leaf area, `job::leaf_area::lone_tree_sprigs`) go with the given sprigs
@@ -392,7 +409,7 @@ impl Doc {
                 let (cards, sprigs) = split.as_ref().map_or((&level.leaves, sprigs), |(c, s)| (c, s));
                 let leaves = mats.foliage[i.min(3)].and_then(|m| self.primitive_uv(cards, m, true, scale));
                 let extra = if i == 0 && !sprigs.indices.is_empty() { mats.foliage[1].and_then(|m| self.primitive(sprigs, m, true)) } else { None };
-                self.mesh(&format!("{name}_LOD{i}"), vec![bark, leaves, extra])
+                self.mesh(&format!("{name}_LOD{i}"), vec![bark, base, leaves, extra])
             })
             .collect()
     }
@@ -976,8 +993,8 @@ fn forest_doc(mut d: Doc, tree_nodes: Vec<usize>, sapling_nodes: Vec<usize>, mut
 }
 
 /// Material slots of one look in a [`StandGlbWriter`]'s pending material numbers: bark, then
-/// the foliage of levels 0–3 ([`LookMaterials`]).
-const LOOK_SLOTS: usize = 5;
+/// the foliage of levels 0–3, then a white bark's dark base ([`LookMaterials`]).
+const LOOK_SLOTS: usize = 6;
 /// Pending material numbers of a [`StandGlbWriter`]'s tree primitives start here (look ×
 /// [`LOOK_SLOTS`] + slot above it); [`StandGlbWriter::finish`] replaces them by the materials'
 /// indices, which are known only once every tree is written.
@@ -1057,7 +1074,8 @@ impl StandGlbWriter {
         // which makes its look keep that material), numbered until finish
         let pending = |slot: usize| Some(PENDING_MATERIAL + l * LOOK_SLOTS + slot);
         let has = |k: usize| self.levels.iter().any(|&x| x.min(3) == k);
-        let mats = LookMaterials { bark: if self.levels.iter().any(|&x| x < 3) { pending(0) } else { None }, foliage: [0, 1, 2, 3].map(|k| if has(k) || (k == 1 && has(0)) { pending(1 + k) } else { None }) };
+        let barked = self.levels.iter().any(|&x| x < 3);
+        let mats = LookMaterials { bark: if barked { pending(0) } else { None }, foliage: [0, 1, 2, 3].map(|k| if has(k) || (k == 1 && has(0)) { pending(1 + k) } else { None }), bark_base: if barked && self.looks[l].textures.bark_base.is_some() { pending(5) } else { None } };
         let meshes = self.doc.chain_with_sprigs(&m.name, &m.chain, &m.sprigs, mats, &self.levels);
         self.models.push((l, meshes));
         Ok(self.models.len() - 1)
@@ -1143,7 +1161,11 @@ impl StandGlbWriter {
                 let k = p["material"].as_u64().unwrap_or(0) as usize;
                 let Some(k) = k.checked_sub(PENDING_MATERIAL) else { continue };
                 let lm = mats.get(k / LOOK_SLOTS).copied().flatten();
-                let m = lm.and_then(|lm| if k % LOOK_SLOTS == 0 { lm.bark } else { lm.foliage[k % LOOK_SLOTS - 1] });
+                let m = lm.and_then(|lm| match k % LOOK_SLOTS {
+                    0 => lm.bark,
+                    5 => lm.bark_base,
+                    j => lm.foliage[j - 1],
+                });
                 let Some(m) = m else {
                     return Err(Error::Invalid { context: format!("stand glb {name}"), field: "material".into(), value: format!("slot {} of look {}", k % LOOK_SLOTS, k / LOOK_SLOTS), expected: "a material its look has".into() }.into());
                 };

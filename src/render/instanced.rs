@@ -134,6 +134,27 @@ pub fn record_prototype(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32]
     Some(s)
 }
 
+/// The dither salt of the tree with id `id` (0, 1, …, 63; [`InstanceRaw::bark`]'s w): its
+/// Bayer threshold in the shaders, and in the stills its threshold `(salt + ½) / 64` against a
+/// cross-fade band's blend ([`drawn_pick`]).
+pub fn dither_salt(id: u64) -> f32 {
+    (hash01(id ^ 0xA5A5) * 64.0).floor()
+}
+
+/// The one level a tree with dither salt `salt` ([`dither_salt`]) draws of `pick` when each
+/// tree in a cross-fade band draws one level whole ([`LodParams::one_level_per_tree`], the
+/// stills' `Renderer::fade_per_tree`): `shaders/scene.wgsl` (`keep`) keeps the finer record
+/// (fade side 0) where `d = (salt + ½) / 64 ≥ blend` and the coarser (side 1) where `d <
+/// blend`, in `f32` as here. Returned with blend 0 (drawn whole); `pick` as it is outside a
+/// band, or where the chain of `n_levels` levels has no coarser level.
+pub fn drawn_pick(pick: LodPick, salt: f32, n_levels: usize) -> LodPick {
+    if !(pick.blend > 0.0) || pick.level + 1 >= n_levels {
+        return pick;
+    }
+    let d = (salt + 0.5) / 64.0;
+    LodPick { level: if d < pick.blend { pick.level + 1 } else { pick.level }, blend: 0.0 }
+}
+
 /// The GPU record of `t` before level selection (fade and level fields zero), or `None` for
 /// invalid data (species index out of range, non-positive or non-finite height or position).
 /// `crown_r0` is the prototype's [`Prototype::normalised_crown_radius`].
@@ -147,7 +168,7 @@ pub fn instance_record(t: &TreeInstance, protos: &[Prototype], crown_r0: &[f32])
         p1: [sxy, t.rotation, 0.0, 0.0],
         leaf: [t.leaf_color[0], t.leaf_color[1], t.leaf_color[2], t.leaf_amount.clamp(0.0, 1.0)],
         p2: [t.opacity.clamp(0.0, 1.0), hash01(t.id) * std::f32::consts::TAU, hash01(t.id ^ 0x5DEE_CE66) * std::f32::consts::TAU, (1.0 - proto.stiffness).clamp(0.0, 1.0)],
-        bark: [proto.bark_color[0], proto.bark_color[1], proto.bark_color[2], (hash01(t.id ^ 0xA5A5) * 64.0).floor()],
+        bark: [proto.bark_color[0], proto.bark_color[1], proto.bark_color[2], dither_salt(t.id)],
         p3: [s as f32, 0.0, if valid_r { t.crown_radius } else { 0.0 }, sxy * crown_r0[s]],
         p4: [t.sky_fade.clamp(0.0, 1.0), if t.crown_base > 0.0 { t.crown_base.clamp(0.05, 0.85) } else { 0.0 }, 0.0, 0.0],
     })
@@ -232,7 +253,10 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
                     if canopy_weight(px, canopy_px, params.band) >= 1.0 || !(px >= params.min_px) {
                         return 0;
                     }
-                    let Some(pick) = select_lod_scaled(lod_px(px, t.height, pp), s, pp, levels[p]) else { return 0 };
+                    let Some(mut pick) = select_lod_scaled(lod_px(px, t.height, pp), s, pp, levels[p]) else { return 0 };
+                    if pp.one_level_per_tree {
+                        pick = drawn_pick(pick, dither_salt(t.id), levels[p]);
+                    }
                     let mut c = level_triangles(&prototypes[p], pick.level);
                     if pick.blend > 0.0 && pick.level + 1 < levels[p] {
                         c += level_triangles(&prototypes[p], pick.level + 1);
@@ -245,6 +269,19 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
         while k < super::lod::MAX_SCALE_STEPS && exact(scale, &floor_params) > params.max_triangles as u64 {
             k += 1;
             scale = (k as f32 / 4.0).exp2();
+        }
+        // the histogram prices a band's tree at both its levels; drawn at one, the frame may
+        // fit at a smaller factor: lowered step by step while its exact cost with the full
+        // reference (`params.small_tree_m`, the ladder's first) fits, so the reference is
+        // raised before the factor is lowered (round 45: lowered while the floor's fitted,
+        // the finer factor took the room the reference needed) and no factor is larger than
+        // the floor's alone would be
+        if params.one_level_per_tree {
+            let top = LodParams { small_tree_m: ladder[0], ..*params };
+            while k > 0 && exact(((k - 1) as f32 / 4.0).exp2(), &top) <= params.max_triangles as u64 {
+                k -= 1;
+                scale = (k as f32 / 4.0).exp2();
+            }
         }
         chosen = floor_params.small_tree_m;
         // the higher references within the budget and within SMALL_TREE_MAX_EXTRA of the
@@ -291,7 +328,10 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
         if !(px >= params.min_px) {
             return None;
         }
-        select_lod_scaled(lod_px(px, t.height, params), scale, params, levels[rec.p3[0] as usize]).map(|p| (p, rec, false))
+        let n = levels[rec.p3[0] as usize];
+        let p = select_lod_scaled(lod_px(px, t.height, params), scale, params, n)?;
+        // stills: the one level the tree draws whole (LodParams::one_level_per_tree)
+        Some((if params.one_level_per_tree { drawn_pick(p, rec.bark[3], n) } else { p }, rec, false))
     };
     // the canopy splats reserved to their number (a doubling growth held up to twice them:
     // most of the 2.3 M trees of a 640 × 360 timelapse frame of the default run; issue 34)
@@ -327,7 +367,7 @@ pub fn build_batches_of(instances: &[TreeInstance], prototypes: &[Prototype], ca
         counts[s][p.level] += 1;
         out.per_level[p.level] += 1;
         if chosen != floor_params.small_tree_m {
-            let at_floor = select_lod_scaled(lod_px(px, t.height, &floor_params), scale, &floor_params, levels[s]);
+            let at_floor = select_lod_scaled(lod_px(px, t.height, &floor_params), scale, &floor_params, levels[s]).map(|f| if params.one_level_per_tree { drawn_pick(f, dither_salt(t.id), levels[s]) } else { f });
             if !prototypes[s].rigid && at_floor.is_some_and(|f| f.level > p.level) {
                 out.raised += 1;
             }

@@ -61,6 +61,18 @@ pub struct LodParams {
     /// a tall tree its level (round 44: r43k's 25 m reference, clamped both ways, drew the
     /// close-up's canopy a level coarser). The GPU culling path uses `small_tree_m` alone.
     pub small_tree_floor_m: f32,
+    /// CPU path only (default false): a tree inside a cross-fade band is recorded once, at the
+    /// one level it draws whole ([`crate::render::instanced::drawn_pick`]: the finer level when
+    /// its dither threshold is at least the band's blend, else the coarser), and the triangle
+    /// budget counts that level alone. For the stills, whose renderer draws each tree in a band
+    /// at one level by that threshold (`Renderer::fade_per_tree`): both records were submitted,
+    /// the fragment shader discarding one of them whole, so a band's tree cost both levels'
+    /// triangles and drew one (issue 32, round 45). The budget's switch factor, found as
+    /// without it, is then lowered step by step while the frame's exact cost with the full
+    /// reference [`LodParams::small_tree_m`] fits, before the reference is lowered
+    /// ([`small_tree_ladder`]): the room the cheaper frame leaves goes to the small trees'
+    /// reference first.
+    pub one_level_per_tree: bool,
 }
 
 /// Largest factor [`lod_px`] multiplies a small tree's projected size by (3: a tree of a third
@@ -121,7 +133,7 @@ impl Default for LodParams {
     /// when the geometry would cost more than 100,000 triangles. Triangles per frame then level
     /// off as the tree count grows (BENCHMARKS.md, "Rendering"); no small-tree bias.
     fn default() -> Self {
-        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000, canopy_px: 6.0, max_geometry_triangles: 100_000, small_tree_m: 0.0, small_tree_floor_m: 0.0 }
+        LodParams { switch_px: [240.0, 100.0, 40.0], band: 0.25, min_px: 0.75, max_triangles: 6_000_000, canopy_px: 6.0, max_geometry_triangles: 100_000, small_tree_m: 0.0, small_tree_floor_m: 0.0, one_level_per_tree: false }
     }
 }
 

@@ -24,7 +24,7 @@ pub struct LodOptions {
     pub min_sides: u32,
     /// Fraction (0–1] of branch nodes kept (the thickest) in the LOD1 reduced skeleton.
     pub reduced_keep_fraction: f32,
-    /// Azimuth sectors of the LOD2 crown hull (≥ 3; height bands = half of it minus one, ≥ 2).
+    /// Azimuth sectors of the LOD2 crown hull (≥ 3; its height bands are [`HULL_BANDS`]).
     pub hull_segments: u32,
     /// Emit leaves at LOD0.
     pub leaves: bool,
@@ -42,9 +42,23 @@ pub struct LodOptions {
     pub stem: Option<super::taper::StemTaper>,
 }
 
+/// Azimuth sectors of the crown-hull level by default ([`LodOptions::hull_segments`]): 8
+/// (rounds 34–44: 10). The stills draw the level at 18–45 px (times the budget's switch
+/// factor; `job::pictures`), where a crown is 10–40 px wide: an 8-gon's mean width is
+/// `8·2r·sin(π/8)/π = 1.950 r` against the 10-gon's `1.967 r` (0.9 % narrower), and the renderer
+/// spreads every hull to its crown disc's plan area ([`crate::render::lod::plan_spread`]), so
+/// it draws the crown as wide as before with 96 triangles instead of 120 (issue 32, round 45:
+/// a cheaper hull level so that the small-tree reference fits the budget;
+/// `tests/structure_mesh.rs::the_cheaper_hull_level_keeps_its_silhouette`).
+pub const HULL_SECTORS: u32 = 8;
+
+/// Height bands of the LOD2 crown hull ([`hull_mesh`]): 3 (those of the 10-sector hull of
+/// rounds 34–44, whose bands were half the sectors minus two).
+pub const HULL_BANDS: usize = 3;
+
 impl Default for LodOptions {
     fn default() -> Self {
-        LodOptions { sides: 8, min_sides: 3, reduced_keep_fraction: 0.12, hull_segments: 10, leaves: true, conifer_tiers: false, stem: None }
+        LodOptions { sides: 8, min_sides: 3, reduced_keep_fraction: 0.12, hull_segments: HULL_SECTORS, leaves: true, conifer_tiers: false, stem: None }
     }
 }
 
@@ -764,7 +778,7 @@ fn bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
 
 /// LOD2: a low-poly star-shaped crown hull fitted to the foliage (leaf centres, or tips): the
 /// crown from the 3rd percentile of its foliage heights to its highest foliage point is cut into
-/// `hull_segments / 2 − 2` (≥ 2) height bands and `hull_segments` (≥ 3) azimuth directions around the trunk axis; each
+/// [`HULL_BANDS`] height bands and `hull_segments` (≥ 3) azimuth directions around the trunk axis; each
 /// ring vertex lies at the band's support function in its direction (the farthest horizontal
 /// reach of the band's foliage along it, at least 2 % of the crown radius; empty bands take the
 /// bands beside them; then one 5-point smoothing pass). Dome rings below and above (radii
@@ -795,7 +809,7 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     let c = 0.5 * (lo + hi);
     let r = (0.5 * (hi - lo)).max(Vec3::splat(1e-3));
     let nlon = o.hull_segments.max(3) as usize;
-    let nb = (o.hull_segments as usize / 2).max(4) - 2;
+    let nb = HULL_BANDS;
     let (z0, dz) = (lo.z, (hi.z - lo.z).max(1e-3));
     // each band's axis is the main stem where it crosses the band's middle height (a leaning
     // stem carries its crown: the rings follow it rather than a vertical line over the root)
@@ -934,8 +948,11 @@ pub(crate) fn stem_xy_at(stem: &[(Vec3, f32)], z: f32) -> Option<glam::Vec2> {
     Some(last.truncate())
 }
 
-/// Most segments of the crown-hull level's stem ([`hull_stem`]).
-pub const HULL_STEM_SEGMENTS: usize = 6;
+/// Most segments of the crown-hull level's stem ([`hull_stem`]): 3 (rounds 34–44: 6). The
+/// level is drawn at 18–45 px in the stills, its stem a quarter of the way up the crown a few
+/// pixels long and about one wide: three segments follow a leaning or bent stem's lean within
+/// a pixel and cost 30 triangles instead of 60 (issue 32, round 45).
+pub const HULL_STEM_SEGMENTS: usize = 3;
 
 /// The stem of the crown-hull level: a 5-sided tapered tube (radius that of the root, or of its
 /// first child when larger, tapering to 70 % at the top; with [`LodOptions::stem`] the taper's
@@ -946,6 +963,13 @@ pub const HULL_STEM_SEGMENTS: usize = 6;
 /// stood straight up from the root under a leaning crown). Where the stem ends below `top_z`
 /// the tube goes on straight up from its tip. Empty for an empty skeleton.
 pub(crate) fn hull_stem(sk: &Skeleton, top_z: f32, o: &LodOptions) -> TriMesh {
+    hull_stem_of(sk, top_z, o, HULL_STEM_SEGMENTS)
+}
+
+/// [`hull_stem`] through at most `segments` (≥ 1) of the stem's points (rounds 34–44 drew
+/// 6; `tests/structure_mesh.rs` compares the level with that one).
+pub fn hull_stem_of(sk: &Skeleton, top_z: f32, o: &LodOptions, segments: usize) -> TriMesh {
+    let segments = segments.max(1);
     let mut bark = TriMesh::default();
     let Some(root) = sk.nodes.first() else { return bark };
     let top_z = top_z.max(root.pos.z + 1e-3);
@@ -967,9 +991,9 @@ pub(crate) fn hull_stem(sk: &Skeleton, top_z: f32, o: &LodOptions) -> TriMesh {
     if last.z < top_z - 1e-4 {
         pts.push(last.with_z(top_z));
     }
-    // at most HULL_STEM_SEGMENTS segments, points spread evenly along the stem (ends kept)
+    // at most `segments` segments, points spread evenly along the stem (ends kept)
     let n = pts.len();
-    let keep: Vec<Vec3> = if n - 1 <= HULL_STEM_SEGMENTS { pts } else { (0..=HULL_STEM_SEGMENTS).map(|k| pts[(k * (n - 1) + HULL_STEM_SEGMENTS / 2) / HULL_STEM_SEGMENTS]).collect() };
+    let keep: Vec<Vec3> = if n - 1 <= segments { pts } else { (0..=segments).map(|k| pts[(k * (n - 1) + segments / 2) / segments]).collect() };
     // with a taper (LodOptions::stem) the tube takes the taper's radius at each point (no
     // rings added: the level stays cheap); else the root's radius tapering to 70 % at the top
     let dz = (top_z - root.pos.z).max(1e-3);
@@ -1078,3 +1102,4 @@ pub(crate) fn fill_empty_bands(rad: &mut [f32], nlon: usize, filled: &[bool], no
         }
     }
 }
+

@@ -838,6 +838,61 @@ pub struct FoliageTextures {
     pub impostor: RgbaImage,
     /// Bark, opaque, tiling, [`TEXTURE_PX`]².
     pub bark: RgbaImage,
+    /// The dark base of a white ([`BarkPattern::Lenticelled`]) bark (`None` for other barks):
+    /// [`BARK_BASE_RGB`], fissured, tiling, as `bark`; the exports draw the stem below
+    /// [`BARK_BASE_M`] with it ([`split_bark_base`]).
+    pub bark_base: Option<RgbaImage>,
+}
+
+/// Colour (sRGB) of the dark, rough base of a white-barked stem in the exports: the stills'
+/// `BIRCH_DARK` (linear 0.045, 0.04, 0.035; `render/shaders/scene.wgsl`) in sRGB. Silver
+/// birch's white bark turns rough and blackish at the base of an older stem (Atkinson 1992,
+/// Biological Flora of the British Isles: Betula pendula Roth and B. pubescens Ehrh., J. Ecol.
+/// 80, 837–870), which the stills draw (issue 32, round 41) and the exports drew white to the
+/// ground until round 45.
+pub const BARK_BASE_RGB: [u8; 3] = [60, 56, 52];
+
+/// Height (m) below which a white-barked stem of [`BARK_BASE_MIN_RADIUS_M`] and more is drawn
+/// dark in the exports ([`split_bark_base`]): 1.6 m, the stills' `BIRCH_BASE_M` (ESTIMATE: 1–2
+/// m on a stem of 12 cm DBH and more).
+pub const BARK_BASE_M: f32 = 1.6;
+
+/// Least stem radius (m) of a dark base ([`BARK_BASE_M`]): 3 cm (the stills' base reaches its
+/// full height from 6 cm and is none under 1.5 cm).
+pub const BARK_BASE_MIN_RADIUS_M: f32 = 0.03;
+
+/// Splits a white-barked tree's bark mesh (metres, the tree's frame: its stem base at the
+/// origin, z up) into the bark above its dark base and the base: the triangles whose centroid
+/// lies below [`BARK_BASE_M`] and at least [`BARK_BASE_MIN_RADIUS_M`] from the z axis (the
+/// stem's surface; a thin sapling or twig keeps its white bark). The stem's rings lie at the
+/// root collar, at 1.3 m and at most 2 m apart (`structure::mesh::LodOptions::stem`), so the
+/// dark base of an exported birch ends at its first ring above the ground, 1.3 m. Vertices
+/// are copied as they are (each part indexes its own).
+pub fn split_bark_base(bark: &crate::mesh::TriMesh) -> (crate::mesh::TriMesh, crate::mesh::TriMesh) {
+    let mut parts = [crate::mesh::TriMesh::default(), crate::mesh::TriMesh::default()];
+    let mut remap = [vec![u32::MAX; bark.positions.len()], vec![u32::MAX; bark.positions.len()]];
+    for t in bark.indices.chunks_exact(3) {
+        let c = t.iter().fold([0.0f32; 3], |a, &i| {
+            let p = bark.positions[i as usize];
+            [a[0] + p[0] / 3.0, a[1] + p[1] / 3.0, a[2] + p[2] / 3.0]
+        });
+        let k = usize::from(c[2] < BARK_BASE_M && (c[0] * c[0] + c[1] * c[1]).sqrt() >= BARK_BASE_MIN_RADIUS_M);
+        for &i in t {
+            let i = i as usize;
+            if remap[k][i] == u32::MAX {
+                let m = &mut parts[k];
+                remap[k][i] = m.positions.len() as u32;
+                m.positions.push(bark.positions[i]);
+                m.normals.push(bark.normals.get(i).copied().unwrap_or([0.0, 0.0, 1.0]));
+                if !bark.uvs.is_empty() {
+                    m.uvs.push(bark.uvs.get(i).copied().unwrap_or([0.0, 0.0]));
+                }
+            }
+            parts[k].indices.push(remap[k][i]);
+        }
+    }
+    let [upper, base] = parts;
+    (upper, base)
 }
 
 impl FoliageTextures {
@@ -880,6 +935,7 @@ impl FoliageTextures {
             crown: tint(&crown_texture(shape, at(2)), rgb),
             impostor: impostor_texture_coloured(shape, at(3), rgb, a.bark),
             bark: bark_texture(a.bark, BarkPattern::of_species(sp), size, seed),
+            bark_base: (BarkPattern::of_species(sp) == BarkPattern::Lenticelled).then(|| bark_texture(BARK_BASE_RGB, BarkPattern::Fissured, size, seed ^ 0xBA5E)),
         }
     }
 }
