@@ -21,9 +21,11 @@ pub const KERNEL_CELLS: f64 = 8.0;
 pub const FINE_SEED_CELL_M: f64 = 5.0;
 /// Radius (m) of the near field of a two-scale dispersal kernel: seeds landing within it of
 /// their source are spread on the fine cells, the tail beyond on the coarse cells
-/// ([`crate::sim::phases::reproduction::kernel`]; round 45, Sylva choice: 2 to 2.5 coarse
-/// cells for the short-distance species, where the coarse grid blurred the kernel).
-pub const NEAR_FIELD_M: f64 = 50.0;
+/// ([`crate::sim::phases::reproduction::kernel`]; round 45, Sylva choice: 2.4 to 3 coarse
+/// cells of the short-distance species, where the coarse grid blurred the kernel; at 50 m the
+/// tail's coarse cells still bent the profile at 35–40 m by up to 15 %, at 60 m by 5 %:
+/// `tests/sim_dispersal.rs`).
+pub const NEAR_FIELD_M: f64 = 60.0;
 
 /// Seeds per m² of one species on its own seed grid (row 0 south) of fine cells, `block ×
 /// block` of them to a coarse cell (the kernel's tail; round 45): the whole grid in one

@@ -1,7 +1,7 @@
 //! Reproduction (autumn): mature trees produce seeds in proportion to crown projection area
 //! and light; seeds are spread over the whole landscape on a per-species seed grid
 //! ([`SeedGrid`](super::super::world::SeedGrid)) by each species' dispersal kernel, in two
-//! scales (round 45): the near field (within [`NEAR_FIELD_M`] of the source) on the grid's fine
+//! scales (round 45): the near field (closer than [`NEAR_FIELD_M`] to the source) on the grid's fine
 //! cells (at most 5 m), the long-distance tail on its coarse cells (at least 20 m, at most 8 to
 //! the kernel's reach), a gather over kernel offsets, so tile borders do not exist. Seeds that
 //! would land outside the terrain are lost.
@@ -31,8 +31,8 @@ pub fn density(d: &Dispersal, r: f64) -> f64 {
 }
 
 /// A dispersal kernel in two scales (round 45): the share of a source's seeds landing on each
-/// fine cell within `near_m` of it, and the share landing on each coarse cell (`block × block`
-/// fine cells) beyond. The shares of both lists sum to 1.
+/// fine cell closer than `near_m` to it, and the share landing on each coarse cell (`block ×
+/// block` fine cells) beyond. The shares of both lists sum to 1.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TwoScale {
     /// `(dcol, drow, share)`: fine-cell offsets from the source's fine cell.
@@ -54,12 +54,12 @@ impl TwoScale {
 }
 
 /// The two-scale kernel of `d` on a seed grid of fine cells of `fine` metres, `block` to a
-/// coarse cell side, with the near field within `near_m` metres
+/// coarse cell side, with the near field closer than `near_m` metres
 /// ([`crate::sim::world::NEAR_FIELD_M`] in a run).
 ///
 /// Every fine offset `k` (fine cells) within `max_m` carries `g(k) = ρ(max(|k|·fine, fine/3))
 /// · fine²`, the [`density`] ρ at the cell's centre (the source's own cell at a third of a
-/// cell, as the kernel before round 45 did). An offset within `near_m` goes to the near list
+/// cell, as the kernel before round 45 did). An offset closer than `near_m` goes to the near list
 /// as it is. The rest go to the coarse cells: coarse offset `D` takes the mean over the
 /// source's positions in its coarse cell of what lands in the target coarse cell,
 /// `(1/b²) Σ_a (b − |a_x|)(b − |a_y|) g(D·b + a)` over `|a_x|, |a_y| < b` (the two cells'
@@ -85,7 +85,7 @@ pub fn kernel(d: &Dispersal, fine: f64, block: usize, near_m: f64) -> TwoScale {
             }
             let i = ((dr + n) as usize) * side + (dc + n) as usize;
             g[i] = density(d, r.max(fine / 3.0)) * fine * fine;
-            if r <= near_m {
+            if r < near_m {
                 near_of[i] = true;
                 near.push((dc, dr, g[i]));
             }
@@ -277,10 +277,11 @@ mod tests {
             assert!((s - 1.0).abs() < 1e-5, "{s}");
             let w = |dc: isize| k.near.iter().find(|o| o.0 == dc && o.1 == 0).unwrap().2;
             assert!(w(0) > w(1) && w(1) > w(3) && w(3) > w(10));
-            // no near offset beyond 50 m, no tail in the source's own coarse cell
-            assert!(k.near.iter().all(|o| ((o.0 * o.0 + o.1 * o.1) as f64).sqrt() * 5.0 <= 50.0));
+            // no near offset at 50 m or beyond, no tail in the source's own coarse cell
+            assert!(k.near.iter().all(|o| ((o.0 * o.0 + o.1 * o.1) as f64).sqrt() * 5.0 < 50.0));
             assert!(k.far.iter().all(|o| (o.0, o.1) != (0, 0)));
-            assert_eq!(k.reach(), 10 * 5);
+            // the tail's coarse offsets reach 8 cells of 25 m (200 m), and their cells whole
+            assert_eq!(k.reach(), (8 + 1) * 5);
         }
     }
 }
