@@ -118,3 +118,31 @@ fn dispersal_is_the_same_on_one_thread_and_on_four() {
     assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
     assert!(a.iter().any(|v| *v > 0.0));
 }
+
+/// The cost of one year's spreading on the default scenario's window (2.4 km × 1.8 km) for
+/// each species of its pool, with a seed source in every fine cell (a closed mature stand):
+/// the two-scale kernel against the coarse cells alone (`near_m = 0`, the grid before round
+/// 45), interleaved. Prints wall times; asserts nothing about them (`cargo test --release
+/// --test sim_dispersal -- --ignored --nocapture`; BENCHMARKS.md, round 45 r45d).
+#[test]
+#[ignore]
+fn cost_on_the_default_window() {
+    let lib = SpeciesLibrary::embedded().unwrap();
+    for sp in ["beech", "sycamore", "norway_maple", "scots_pine", "silver_birch", "norway_spruce", "sessile_oak", "black_alder"] {
+        let s = lib.find(sp).unwrap();
+        let d = lib.get(sp).unwrap().life.dispersal;
+        let g = &seed_grids(&lib, &[s], (2400.0, 1800.0))[0];
+        let src: Vec<f32> = (0..g.cols * g.rows).map(|i| 1.0 + (i % 7) as f32).collect();
+        let whole = CellRect { col0: 0, row0: 0, col1: g.cols, row1: g.rows };
+        let (two, one) = (kernel(&d, g.cell_m, g.block, NEAR_FIELD_M), kernel(&d, g.cell_m, g.block, 0.0));
+        let mut t = [0f64; 2];
+        for _ in 0..3 {
+            for (j, k) in [&one, &two].into_iter().enumerate() {
+                let t0 = std::time::Instant::now();
+                std::hint::black_box(disperse(k, g.cols, g.rows, g.cell_m, whole, &src, whole));
+                t[j] += t0.elapsed().as_secs_f64() / 3.0;
+            }
+        }
+        println!("{sp}: {} × {} fine cells of {:.2} m, {} near and {} tail offsets: coarse alone {:.3} s, two-scale {:.3} s", g.cols, g.rows, g.cell_m, two.near.len(), two.far.len(), t[0], t[1]);
+    }
+}
