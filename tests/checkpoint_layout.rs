@@ -57,7 +57,7 @@ fn compressed_checkpoints_read_and_the_layouts_before_refused_naming_their_versi
     let (sc, mut w) = world();
     let rows = common::run(&sc, &mut w, 3);
     let bytes = to_bytes(&w, &rows);
-    assert_eq!(LAYOUT_VERSION >> 16, 12);
+    assert_eq!(LAYOUT_VERSION >> 16, 14);
     assert!(rows.iter().all(|r| r.species.len() == w.site.pool.len()), "every row holds its per-species rows");
     // the identity and body: one zstd frame between the file length and the checksum
     let plain_body = zstd::stream::decode_all(&bytes[20..bytes.len() - 4]).unwrap();
@@ -68,8 +68,9 @@ fn compressed_checkpoints_read_and_the_layouts_before_refused_naming_their_versi
     assert_eq!(fresh.stand.trees, w.stand.trees);
     assert_eq!(fresh.stand.cohorts, w.stand.cohorts);
     // the layouts before: uncompressed 6, compressed 7, and 10 (round 42; round 44's 12 adds the
-    // drought index, each species' top height over its own area and the cohorts' stress years)
-    for (base, body) in [(6u32, &plain_body[..]), (7, &bytes[20..bytes.len() - 4]), (10, &bytes[20..bytes.len() - 4])] {
+    // drought index, each species' top height over its own area and the cohorts' stress years;
+    // round 45's 14 the fine seed grids of the two-scale dispersal kernel)
+    for (base, body) in [(6u32, &plain_body[..]), (7, &bytes[20..bytes.len() - 4]), (10, &bytes[20..bytes.len() - 4]), (12, &bytes[20..bytes.len() - 4])] {
         let mut old = b"SYLVACKV".to_vec();
         old.extend_from_slice(&(base << 16 | (LAYOUT_VERSION & 0xffff)).to_le_bytes());
         old.extend_from_slice(&[0; 8]);
@@ -77,7 +78,7 @@ fn compressed_checkpoints_read_and_the_layouts_before_refused_naming_their_versi
         old.extend_from_slice(&[0; 4]);
         sylva::sim::checkpoint::reseal(&mut old);
         let e = restore(&mut world().1, &old, p).unwrap_err().to_string();
-        assert!(e.starts_with("run/checkpoint.bin: ") && e.contains(&format!("layout version {base}.")) && e.contains("differs from this build's 12.") && e.contains("without --resume"), "{e}");
+        assert!(e.starts_with("run/checkpoint.bin: ") && e.contains(&format!("layout version {base}.")) && e.contains("differs from this build's 14.") && e.contains("without --resume"), "{e}");
     }
     // a frame that does not decode, sealed with a matching checksum, is refused by name
     let mut bad = bytes.clone();

@@ -347,3 +347,18 @@ fn a_wrong_type_in_a_start_names_the_start_and_field() {
     let e = Scenario::from_toml_str(&neg, "p.toml").unwrap_err().to_string();
     assert!(e.contains(&format!("`start[0].trees_per_source` (line {line})")), "{e}");
 }
+
+/// Trial 44: a 1 × 1-cell `window` ran. A window narrower than 3 cells either way is refused,
+/// naming `terrain.window`, the window and the size expected (`MIN_WINDOW_CELLS`, why: Horn's
+/// 3 × 3 neighbourhood of slope and aspect); 3 × 3 is accepted.
+#[test]
+fn a_window_too_small_to_simulate_is_refused_naming_window_and_size() {
+    use sylva::sim::scenario::MIN_WINDOW_CELLS;
+    assert_eq!(MIN_WINDOW_CELLS, 3);
+    let text = |w: &str| format!("name = \"w\"\nyears = 2\nseed = 1\nspecies = [\"beech\"]\n[terrain]\nembedded = \"coweeta\"\nwindow = {w}\n");
+    for (w, shown) in [("[160, 220, 1, 1]", "[160, 220, 1, 1]"), ("[160, 220, 2, 40]", "[160, 220, 2, 40]"), ("[160, 220, 40, 2]", "[160, 220, 40, 2]"), ("[160, 220, 0, 5]", "[160, 220, 0, 5]")] {
+        let e = Scenario::from_toml_str(&text(w), "small.toml").unwrap_err().to_string();
+        assert!(e.contains("small.toml") && e.contains("terrain.window") && e.contains(shown) && e.contains("at least 3 cells") && e.contains("3 x 3 neighbourhood"), "{w}: {e}");
+    }
+    assert!(Scenario::from_toml_str(&text("[160, 220, 3, 3]"), "small.toml").is_ok());
+}

@@ -857,21 +857,23 @@ fn a_tile_holds_its_window_of_the_seed_grids_only() {
     // a world with seeds on its grid (8 years of beech seeding)
     let one = one_process(&toml, 8);
     let g1 = &one.1.stand.seeds[0];
-    assert!(g1.holds_all() && (g1.cols, g1.rows, g1.cell_m) == (20, 12, 20.0));
+    // fine cells of 5 m (round 45: the two-scale kernel), whole coarse cells of the 400 m × 240 m site
+    let (cols, rows, f) = (g1.cols, g1.rows, g1.cell_m);
+    assert!(g1.holds_all() && f == 5.0 && cols % g1.block == 0 && rows % g1.block == 0 && cols as f64 * f >= 400.0 && rows as f64 * f >= 240.0, "{cols} × {rows} of {f} m");
     assert!(g1.data.iter().filter(|&&v| v > 0.0).count() > 20, "seeds on too few cells");
     let lg = w0.site.light;
     for (nx, ny) in [(2, 1), (3, 1), (5, 1), (10, 1), (2, 2)] {
         let layout = Layout::new(&w0.site, nx, ny).unwrap();
-        let mut owners = vec![0u32; g1.cols * g1.rows];
+        let mut owners = vec![0u32; cols * rows];
         for k in 0..layout.len() {
             let tile = Tile::new(&one.1, layout.clone(), k).unwrap();
             let g = &tile.world.stand.seeds[0];
             let win = seed_window(&layout, k, g1);
-            assert_eq!((g.held, g.data.len(), g.cols, g.rows), (win, win.len(), 20, 12), "tile {k} of {nx} × {ny}");
-            assert!(!g.holds_all() && win.len() < 20 * 12, "tile {k} of {nx} × {ny} holds {win:?}");
+            assert_eq!((g.held, g.data.len(), g.cols, g.rows), (win, win.len(), cols, rows), "tile {k} of {nx} × {ny}");
+            assert!(!g.holds_all() && win.len() < cols * rows, "tile {k} of {nx} × {ny} holds {win:?}");
             // its values are the whole grid's
-            for cell in win.cells(20) {
-                let (c, r) = (cell % 20, cell / 20);
+            for cell in win.cells(cols) {
+                let (c, r) = (cell % cols, cell / cols);
                 assert_eq!(g.data[g.index(c, r).unwrap()].to_bits(), g1.data[cell].to_bits(), "tile {k}, seed cell ({c}, {r})");
             }
             // regeneration reads the seed cells of its light cells' centres
@@ -881,9 +883,9 @@ fn a_tile_holds_its_window_of_the_seed_grids_only() {
                 assert_eq!(g.at(x, y).to_bits(), g1.at(x, y).to_bits());
             }
             // the cells whose centre it owns (its part of an assembled world) lie in it
-            for cell in 0..20 * 12 {
-                let (c, r) = (cell % 20, cell / 20);
-                if layout.owner_of(((c as f64 + 0.5) * 20.0) as f32, ((r as f64 + 0.5) * 20.0) as f32) == k {
+            for cell in 0..cols * rows {
+                let (c, r) = (cell % cols, cell / cols);
+                if layout.owner_of(((c as f64 + 0.5) * f) as f32, ((r as f64 + 0.5) * f) as f32) == k {
                     assert!(win.contains(c, r), "tile {k} of {nx} × {ny}: seed cell ({c}, {r})");
                     owners[cell] += 1;
                 }
@@ -891,10 +893,10 @@ fn a_tile_holds_its_window_of_the_seed_grids_only() {
         }
         assert!(owners.iter().all(|&n| n == 1), "{nx} × {ny}: every seed cell owned once");
     }
-    // 2 tiles of 20 light columns (200 m): seed columns 0..10 (+ 2 of margin) and 10..20 (− 1)
+    // 2 tiles of 20 light columns (200 m): seed columns 0..40 (+ 2 of margin) and 40..cols (− 1)
     let layout = Layout::new(&w0.site, 2, 1).unwrap();
-    assert_eq!(seed_window(&layout, 0, g1), CellRect { col0: 0, row0: 0, col1: 12, row1: 12 });
-    assert_eq!(seed_window(&layout, 1, g1), CellRect { col0: 9, row0: 0, col1: 20, row1: 12 });
+    assert_eq!(seed_window(&layout, 0, g1), CellRect { col0: 0, row0: 0, col1: 42, row1: rows });
+    assert_eq!(seed_window(&layout, 1, g1), CellRect { col0: 39, row0: 0, col1: cols, row1: rows });
     // a per-rank checkpoint that holds the whole grid (an earlier Sylva's) read into a tile's
     // window: cut to it
     let bytes = to_bytes(&one.1, &one.2);

@@ -384,7 +384,7 @@ pub fn load_overlapping(paths: &[PathBuf], year: Option<u32>, old: &Layout, new:
         // the file's seed grids are old tile k's windows
         w.stand.seeds = mine.iter().map(|g| {
             let r = crate::sim::tiles::seed_window(old, k, g);
-            crate::sim::world::SeedGrid { cell_m: g.cell_m, cols: g.cols, rows: g.rows, held: r, data: vec![0.0; r.len()] }
+            crate::sim::world::SeedGrid { cell_m: g.cell_m, block: g.block, cols: g.cols, rows: g.rows, held: r, data: vec![0.0; r.len()] }
         }).collect();
         let rows = load(p, w)?;
         match year {

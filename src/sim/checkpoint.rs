@@ -38,8 +38,10 @@ const MAGIC: &[u8; 7] = b"SYLVACK";
 /// year's site-mean drought index, each per-species row the species' top height over its own
 /// area ([`super::stats::SpeciesRow::top_height_own_area_m`]; trial 43 defect 8), and each
 /// sapling cohort its consecutive stress years (after the vigour column; trial 44 defect 4);
-/// checkpoints of layout 10 are refused, naming their version.
-const LAYOUT_BASE: u32 = 12;
+/// checkpoints of layout 10 are refused, naming their version. 14 (round 45): the seed grids
+/// hold fine cells (`SeedGrid::block` of them to a coarse cell side: the two-scale dispersal
+/// kernel), so their lengths differ; checkpoints of layout 12 are refused, naming their version.
+const LAYOUT_BASE: u32 = 14;
 
 /// The layout base of a checkpoint of a run with `[[management]]`: [`LAYOUT_BASE`]'s layout and
 /// the management table's rows after the stand table (issue 35 round 38). Written only by such
@@ -49,7 +51,8 @@ const LAYOUT_BASE: u32 = 12;
 /// shares of its area (a managed checkpoint of base 8 is refused, naming its version). 11
 /// (round 42): [`LAYOUT_BASE`] 10's rows, and each entry's row holds whether its
 /// `max_removal_share` stopped it (`capped`). 13 (round 44): [`LAYOUT_BASE`] 12's rows and cohorts.
-const MANAGED_BASE: u32 = 13;
+/// 15 (round 45): [`LAYOUT_BASE`] 14's fine seed grids.
+const MANAGED_BASE: u32 = 15;
 
 /// zstd level of the checkpoint (1: 36.2 MB for the default run's 64 MB, 0.6 s; 3 saved 0.7 %
 /// more for 1.6 times the time).
@@ -747,7 +750,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
             g.data = s;
         } else if s.len() == g.cols * g.rows {
             let win = g.held;
-            let mut whole = super::world::SeedGrid { data: s, ..super::world::SeedGrid::new(g.cell_m, g.cols, g.rows) };
+            let mut whole = super::world::SeedGrid { data: s, ..super::world::SeedGrid::new(g.cell_m, g.block, g.cols, g.rows) };
             if !whole.hold(win) {
                 return Err(Error::format(path, "checkpoint seed grid does not match the terrain"));
             }

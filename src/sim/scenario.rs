@@ -233,6 +233,13 @@ fn invalid(ctx: &str, field: &str, value: impl ToString, expected: &str) -> Erro
     Error::Invalid { context: ctx.to_string(), field: field.to_string(), value: value.to_string(), expected: expected.to_string() }
 }
 
+/// Smallest width and height (cells) of a `[terrain] window` (round 45, trial 44: a 1 × 1
+/// window ran): slope and aspect (Horn 1981, as `gdaldem`), and through them the insolation,
+/// wind exposure and flow routing, read each cell's 3 × 3 neighbourhood; a window narrower than
+/// 3 cells holds that neighbourhood for none of its cells (every slope would come from cells
+/// replicated at its edge).
+pub const MIN_WINDOW_CELLS: usize = 3;
+
 /// Memory of a simulated site per cell (bytes): its conditions, indices, suitability and the
 /// light, seed and crowding grids at the default light cell, measured on uniform sites of 1 and
 /// 4 million 10 m cells with two species (217 and 665 MB peak, `sylva simulate`, one year:
@@ -825,8 +832,8 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
             }
         }
         if let Some(w) = &t.window {
-            if w[2] == 0 || w[3] == 0 {
-                return Err(invalid(ctx, "terrain.window", format!("{w:?}"), "[col0, row0, width, height] with width, height ≥ 1"));
+            if w[2] < MIN_WINDOW_CELLS || w[3] < MIN_WINDOW_CELLS {
+                return Err(invalid(ctx, "terrain.window", format!("{w:?}"), &format!("[col0, row0, width, height] with width and height at least {MIN_WINDOW_CELLS} cells (the window is {} x {} cells): slope and aspect (Horn 1981), and so insolation, wind exposure and flow routing, read each cell's 3 x 3 neighbourhood, which a narrower window holds for no cell", w[2], w[3])));
             }
         }
         validate_climate(&self.climate, ctx)?;

@@ -801,8 +801,10 @@ struct SeedPlan {
     cols: usize,
     rows: usize,
     cell_m: f64,
-    /// The kernel's reach in seed cells (largest `|dc|`, `|dr|` of its offsets).
+    /// The kernel's reach in fine seed cells ([`reproduction::TwoScale::reach`]).
     reach: usize,
+    /// Fine cells per coarse cell side.
+    block: usize,
     /// Tiles across in the layout.
     nx: usize,
     /// Per seed column (row), the column (row) of tiles that owns every light column (row) a
@@ -815,8 +817,8 @@ struct SeedPlan {
 
 impl SeedPlan {
     /// The plan of seed grid `g` with kernel `k` over `layout`'s tiles.
-    fn new(layout: &Layout, g: &super::world::SeedGrid, k: &[(isize, isize, f32)]) -> SeedPlan {
-        let reach = k.iter().map(|o| o.0.unsigned_abs().max(o.1.unsigned_abs())).max().unwrap_or(0);
+    fn new(layout: &Layout, g: &super::world::SeedGrid, k: &reproduction::TwoScale) -> SeedPlan {
+        let reach = k.reach();
         let lc = layout.light.cell_m;
         // light cells (first, last) under seed cells `i` of `n` along an axis of `ln` light cells
         let span = |i: usize, n: usize, ln: usize| -> (usize, usize) {
@@ -837,7 +839,7 @@ impl SeedPlan {
             let (lo, hi) = span(r, g.rows, layout.light.rows);
             one(lo, hi, &ty)
         }).collect();
-        SeedPlan { cols: g.cols, rows: g.rows, cell_m: g.cell_m, reach, nx, col_tile, row_tile }
+        SeedPlan { cols: g.cols, rows: g.rows, cell_m: g.cell_m, reach, block: g.block, nx, col_tile, row_tile }
     }
 
     /// The tile that owns every light cell a tree in seed cell `cell` (`row · cols + col`) can
@@ -857,10 +859,14 @@ impl SeedPlan {
         seed_rect(layout, k, self.cols, self.rows, self.cell_m)
     }
 
-    /// The seed cells whose production tile `k` needs: [`SeedPlan::read`] widened by the reach.
+    /// The seed cells whose production tile `k` needs: [`SeedPlan::read`] widened by the reach
+    /// and out to whole coarse cells ([`reproduction::disperse`] sums them).
     fn need(&self, layout: &Layout, k: usize) -> CellRect {
         let r = self.read(layout, k);
-        CellRect { col0: r.col0.saturating_sub(self.reach), col1: (r.col1 + self.reach).min(self.cols), row0: r.row0.saturating_sub(self.reach), row1: (r.row1 + self.reach).min(self.rows) }
+        let b = self.block;
+        let down = |v: usize| v.saturating_sub(self.reach) / b * b;
+        let up = |v: usize, n: usize| ((v + self.reach).div_ceil(b) * b).min(n);
+        CellRect { col0: down(r.col0), col1: up(r.col1, self.cols), row0: down(r.row0), row1: up(r.row1, self.rows) }
     }
 }
 
@@ -1202,7 +1208,7 @@ impl Tile {
     /// [`SeedPlan::read`], widened by the kernel), 4 bytes per cell, and its seed trees in
     /// shared cells there as (cell, id, seeds), 20 bytes each; a rank sums each shared cell's
     /// trees in id order, so every seed cell's production is one process's bit for bit. Then it
-    /// spreads the production by the kernel ([`reproduction::gather`]) onto the cells it holds,
+    /// spreads the production by the two-scale kernel ([`reproduction::disperse`]) onto the cells it holds,
     /// its window ([`seed_window`]: the cells of its light cells' centres, and of the seed cells
     /// whose centre it owns). What a rank holds of each species grows with its tile, not the
     /// site (issue 37 Build 1): its window (kept), its own production over the window and the
@@ -1218,7 +1224,7 @@ impl Tile {
         let (site, stand) = (&w.site, &mut w.stand);
         let (lib, tr) = (&site.lib, &stand.trees);
         let np = site.pool.len();
-        let kernels: Vec<Vec<(isize, isize, f32)>> = (0..np).map(|p| reproduction::kernel(&lib.species[site.pool[p] as usize].life.dispersal, stand.seeds[p].cell_m)).collect();
+        let kernels: Vec<reproduction::TwoScale> = (0..np).map(|p| reproduction::kernel(&lib.species[site.pool[p] as usize].life.dispersal, stand.seeds[p].cell_m, stand.seeds[p].block, super::world::NEAR_FIELD_M)).collect();
         let plans: Vec<SeedPlan> = (0..np).map(|p| SeedPlan::new(&self.layout, &stand.seeds[p], &kernels[p])).collect();
         let pidx: Vec<Option<usize>> = (0..lib.species.len()).map(|s| site.pool_index(s as u16)).collect();
         // own production: per pure cell it owns (over its window, which holds them all), and
@@ -1318,14 +1324,12 @@ impl Tile {
                 return Err(Error::Exchange { peer: k, reason: format!("{} seed production values too many for pool species {p}", theirs[k].len()) });
             }
             let g = &mut stand.seeds[p];
-            let area = (g.cell_m * g.cell_m) as f32;
             let read = wins[p];
             if g.held != read {
                 return Err(Error::Exchange { peer: me, reason: format!("seed grid of pool species {p} holds {:?}, not this tile's window {read:?}", g.held) });
             }
-            let k = &kernels[p];
             // onto the window, row-major: the grid's data in its order
-            g.data = read.cells(cols).map(|c| reproduction::gather(k, cols, rows, area, c % cols, c / cols, |cc, rr| src[(rr - need.row0) * w_n + (cc - need.col0)])).collect();
+            g.data = reproduction::disperse(&kernels[p], cols, rows, g.cell_m, need, &src, read);
         }
         Ok(halo_s)
     }
@@ -1798,7 +1802,7 @@ fn clone_for_tile(global: &World, layout: &Layout, me: usize) -> Result<World> {
     for (p, sg) in global.stand.seeds.iter().enumerate() {
         let r = seed_window(layout, me, sg);
         let data = sg.window(r).ok_or_else(|| Error::Invalid { context: "tiled run".into(), field: format!("seed grid of pool species {p}"), value: format!("cells {:?} of {} × {}", sg.held, sg.cols, sg.rows), expected: format!("the whole grid or tile {me}'s window {r:?}") })?;
-        seeds.push(super::world::SeedGrid { cell_m: sg.cell_m, cols: sg.cols, rows: sg.rows, held: r, data });
+        seeds.push(super::world::SeedGrid { cell_m: sg.cell_m, block: sg.block, cols: sg.cols, rows: sg.rows, held: r, data });
     }
     let stand = super::world::Stand { trees: global.stand.trees.clone(), year: global.stand.year, cohorts: global.stand.cohorts.clone(), seeds };
     let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), canopy_top: per_light(&global.scratch.canopy_top), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone(), entry_harvest: global.scratch.entry_harvest.clone() };

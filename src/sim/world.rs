@@ -10,19 +10,33 @@ use crate::rng::{salt, Stream};
 use crate::species::{allometry, Species, SpeciesId, SpeciesLibrary};
 use rayon::prelude::*;
 
-/// Smallest seed grid cell (m) onto which seeds are dispersed.
+/// Smallest coarse seed cell (m), the cell of a dispersal kernel's long-distance tail.
 pub const SEED_CELL_M: f64 = 20.0;
-/// Largest dispersal kernel radius in seed cells: a species' seed cell is
-/// `max(SEED_CELL_M, max_m / KERNEL_CELLS)`, so the kernel has at most `(2·8+1)²` offsets.
+/// Largest dispersal kernel radius in coarse seed cells: a species' coarse seed cell is
+/// `max(SEED_CELL_M, max_m / KERNEL_CELLS)`, so the tail has at most `(2·9+1)²` offsets.
 pub const KERNEL_CELLS: f64 = 8.0;
+/// Largest fine seed cell (m): a seed grid's cells are its coarse cell cut into
+/// `⌈coarse / FINE_SEED_CELL_M⌉` per side (5 m for coarse cells of 20 and 25 m), the light
+/// cell of the default scenarios, on which the regeneration reads its seeds (round 45).
+pub const FINE_SEED_CELL_M: f64 = 5.0;
+/// Radius (m) of the near field of a two-scale dispersal kernel: seeds landing within it of
+/// their source are spread on the fine cells, the tail beyond on the coarse cells
+/// ([`crate::sim::phases::reproduction::kernel`]; round 45, Sylva choice: 2.4 to 3 coarse
+/// cells of the short-distance species, where the coarse grid blurred the kernel; at 50 m the
+/// tail's coarse cells still bent the profile at 35–40 m by up to 15 %, at 60 m by 5 %:
+/// `tests/sim_dispersal.rs`).
+pub const NEAR_FIELD_M: f64 = 60.0;
 
-/// Seeds per m² of one species on its own seed grid (row 0 south): the whole grid in one
+/// Seeds per m² of one species on its own seed grid (row 0 south) of fine cells, `block ×
+/// block` of them to a coarse cell (the kernel's tail; round 45): the whole grid in one
 /// process; in a tiled run a tile holds the window of it that it reads (issue 37 Build 1 and 3,
 /// [`crate::sim::tiles::seed_window`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SeedGrid {
-    /// Cell size (m).
+    /// Fine cell size (m).
     pub cell_m: f64,
+    /// Fine cells per coarse cell side (≥ 1); `cols` and `rows` are multiples of it.
+    pub block: usize,
     /// Columns of the whole grid.
     pub cols: usize,
     /// Rows of the whole grid.
@@ -35,9 +49,15 @@ pub struct SeedGrid {
 }
 
 impl SeedGrid {
-    /// The whole `cols × rows` grid of cells of `cell_m` metres, no seeds.
-    pub fn new(cell_m: f64, cols: usize, rows: usize) -> SeedGrid {
-        SeedGrid { cell_m, cols, rows, held: CellRect { col0: 0, row0: 0, col1: cols, row1: rows }, data: vec![0.0; cols * rows] }
+    /// The whole `cols × rows` grid of fine cells of `cell_m` metres, `block × block` to a
+    /// coarse cell, no seeds.
+    pub fn new(cell_m: f64, block: usize, cols: usize, rows: usize) -> SeedGrid {
+        SeedGrid { cell_m, block, cols, rows, held: CellRect { col0: 0, row0: 0, col1: cols, row1: rows }, data: vec![0.0; cols * rows] }
+    }
+
+    /// Coarse cell size (m): `cell_m · block`.
+    pub fn coarse_m(&self) -> f64 {
+        self.cell_m * self.block as f64
     }
 
     /// True when the whole grid is held.
@@ -242,15 +262,24 @@ pub fn insolation_median_by(insolation: &crate::grid::Grid<f32>, mask: &crate::g
     Ok(super::select::kth_smallest_by(&ins, n / 2, reduce)?.filter(|m| *m > 0.0).unwrap_or(1.0))
 }
 
-/// The seed grids of `pool` over a site of `extent` (m): per pool species a whole grid of cells
-/// of `max(SEED_CELL_M, max_m / KERNEL_CELLS)` metres (its dispersal kernel's longest reach
-/// `max_m`), at least one cell each way, no seeds.
+/// The coarse seed cell (m) of a kernel reaching `max_m` metres,
+/// `max(SEED_CELL_M, max_m / KERNEL_CELLS)`, and the fine cells per side of it,
+/// `⌈coarse / FINE_SEED_CELL_M⌉`.
+pub fn seed_cells(max_m: f64) -> (f64, usize) {
+    let coarse = SEED_CELL_M.max(max_m / KERNEL_CELLS);
+    (coarse, ((coarse / FINE_SEED_CELL_M).ceil() as usize).max(1))
+}
+
+/// The seed grids of `pool` over a site of `extent` (m): per pool species a whole grid of fine
+/// cells, `block × block` to a coarse cell of `max(SEED_CELL_M, max_m / KERNEL_CELLS)` metres
+/// (its dispersal kernel's longest reach `max_m`; [`seed_cells`]), at least one coarse cell
+/// each way, no seeds.
 pub fn seed_grids(lib: &SpeciesLibrary, pool: &[SpeciesId], extent: (f64, f64)) -> Vec<SeedGrid> {
     pool.iter()
         .map(|&s| {
-            let cell = SEED_CELL_M.max(lib.species[s as usize].life.dispersal.max_m as f64 / KERNEL_CELLS);
-            let (cols, rows) = (((extent.0 / cell).ceil() as usize).max(1), ((extent.1 / cell).ceil() as usize).max(1));
-            SeedGrid::new(cell, cols, rows)
+            let (coarse, block) = seed_cells(lib.species[s as usize].life.dispersal.max_m as f64);
+            let (cols, rows) = (((extent.0 / coarse).ceil() as usize).max(1), ((extent.1 / coarse).ceil() as usize).max(1));
+            SeedGrid::new(coarse / block as f64, block, cols * block, rows * block)
         })
         .collect()
 }
