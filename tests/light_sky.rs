@@ -105,6 +105,86 @@ fn a_bad_diffuse_value_is_refused() {
     assert_eq!(sc.light.diffuse, sylva::sim::light_grid::Diffuse::Column);
 }
 
+/// Beech crowns whose equal-area squares fill the 5 m light cells of a 400 m × 400 m grid (one
+/// crown a cell, at its centre) from `base` to `top` m, but where `keep(x, y)` is false, with the
+/// diffuse part from the sky; and the leaf-area index each crown gives its cell.
+fn crown_carpet(base: f32, top: f32, keep: impl Fn(f32, f32) -> bool) -> (sylva::sim::trees::TreeStore, sylva::sim::light_grid::LightGrid, f32) {
+    let lib = common::embedded();
+    let beech = lib.find("beech").unwrap();
+    let r = 2.5 / 0.886_226_9; // the equal-area square's half side is 2.5 m
+    let mut t = sylva::sim::trees::TreeStore::default();
+    for row in 0..80 {
+        for col in 0..80 {
+            let (x, y) = (col as f32 * 5.0 + 2.5, row as f32 * 5.0 + 2.5);
+            if keep(x, y) {
+                t.push(sylva::sim::trees::NewTree { species: beech, x, y, z: 300.0, age: 80.0, height: top, dbh: 30.0, crown_radius: r, suitability: 1.0 });
+                *t.crown_base.last_mut().unwrap() = base;
+            }
+        }
+    }
+    let light = sylva::sim::light_grid::LightGrid::new((400.0, 400.0), 5.0).with_diffuse(sylva::sim::light_grid::Diffuse::Sky);
+    let lai = sylva::sim::phases::light::crown_leaf_area(lib.species[beech as usize].life.shade_tolerance, r) / 25.0;
+    (t, light, lai)
+}
+
+/// The light phase's diffuse part at height `z` (m) over the centre of cell (col, row).
+fn diffuse_at(t: &sylva::sim::trees::TreeStore, light: &sylva::sim::light_grid::LightGrid, (col, row): (usize, usize), z: f32) -> f32 {
+    let win = sylva::sim::light_grid::CellRect { col0: col, row0: row, col1: col + 1, row1: row + 1 };
+    sylva::sim::phases::light::light_parts_at(t, light, 50.0, &common::embedded(), &[], Some(win), z)[0].0
+}
+
+/// `Σ w_j e^(−k L_j / cos θ_j)` over the sky's sectors, `L_j = lai(tan θ_j, cos φ_j)`.
+fn sky_sum(lai: impl Fn(f32, f32) -> f32) -> f32 {
+    let k = sylva::sim::phases::light::K_EXT;
+    sylva::sim::phases::light::Sky::standard_overcast().sectors.iter().map(|&([_, cy], tan, sec, w)| w * (-k * lai(tan, cy) * sec).exp()).sum()
+}
+
+/// A uniform boundless canopy (crowns 8–16 m filling every cell, leaf-area index L = 4.5, beech's
+/// crown LAI): from the ground every ray crosses all of it, so the fast sky's transmission is
+/// the standard overcast sky's weighted `Σ w_j e^(−k L / cos θ_j)` (Beer–Lambert, Monsi &
+/// Saeki 1953; 0.0508 against the column's e^(−k L) = 0.105), and from within the crowns at
+/// 12 m and 13 m the same with the leaf area above them (L/2, 3L/8, the crowns' leaf area spread
+/// over their depth); a tree at the canopy's top sees the whole sky.
+#[test]
+fn the_fast_sky_through_a_uniform_canopy_is_beer_lambert_per_sector() {
+    let (t, light, l) = crown_carpet(8.0, 16.0, |_, _| true);
+    for (z, above) in [(0.0f32, l), (12.0, l / 2.0), (13.0, 3.0 * l / 8.0), (16.0, 0.0)] {
+        let got = diffuse_at(&t, &light, (40, 40), z);
+        let want = sky_sum(|_, _| above);
+        assert!((got - want).abs() < 2e-4, "at {z} m: {got} against {want}");
+    }
+    let ground = diffuse_at(&t, &light, (40, 40), 0.0);
+    assert!(ground < (-0.5f32 * l).exp() - 0.04, "{ground}: the slanting rays cross more leaf area than the column");
+}
+
+/// A round gap of radius R = 30 m in that canopy (no crown whose centre lies within R of the
+/// place): from the gap's centre on the ground a ray of zenith angle θ leaves the gap at the
+/// height `R / tan θ` and meets the crowns' leaf area above `max(8 m, R / tan θ)`:
+/// `L_j = L · (16 − clamp(R / tan θ_j, 8, 16)) / 8` (0 in the four upper bands). The grid (5 m
+/// cells, 2 m layers, one cell a ray and layer) gives the analytic 0.832 within 0.03 (the column model gives 1).
+#[test]
+fn the_fast_sky_in_a_round_gap_is_the_analytic_one() {
+    let (cx, cy, r) = (202.5f32, 202.5f32, 30.0f32);
+    let (t, light, l) = crown_carpet(8.0, 16.0, |x, y| (x - cx).hypot(y - cy) >= r);
+    let got = diffuse_at(&t, &light, (40, 40), 0.0);
+    let want = sky_sum(|tan, _| l * (16.0 - (r / tan).clamp(8.0, 16.0)) / 8.0);
+    eprintln!("round gap: fast sky {got}, analytic {want}");
+    assert!((got - want).abs() < 0.03 && want > 0.8 && want < 0.87, "{got} against {want}");
+}
+
+/// A wall of crowns (2–10 m) north of y = 60 m, the place on the ground 2.5 m south of it: the
+/// southern half of the sky stays open; a northern sector's ray (zenith angle θ, azimuth φ)
+/// meets the wall at the height `h = 2.5 m / (tan θ cos φ)` and crosses its leaf area above
+/// `max(2 m, h)` (0.673 with L = 4.5). The fast sky within 0.03 of that.
+#[test]
+fn the_fast_sky_sees_a_wall_on_one_side() {
+    let (t, light, l) = crown_carpet(2.0, 10.0, |_, y| y > 60.0);
+    let got = diffuse_at(&t, &light, (40, 11), 0.0);
+    let want = sky_sum(|tan, cy| if cy <= 0.0 { 0.0 } else { l * (10.0 - (2.5 / (tan * cy)).clamp(2.0, 10.0)) / 8.0 });
+    eprintln!("wall: fast sky {got}, analytic {want}");
+    assert!((got - want).abs() < 0.03 && want > 0.55 && want < 0.75, "{got} against {want}");
+}
+
 trait With {
     fn clone_with(&self, line: &str) -> String;
 }

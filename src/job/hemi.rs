@@ -428,54 +428,26 @@ fn horizon_angles(site: &SiteConditions, x: f64, y: f64, eye: f32) -> Vec<f32> {
 }
 
 /// The light phase's relative light (`sim::phases::light`, 0–1.5) at `(x, y)`, 1.3 m above the
-/// ground, and its diffuse part's transmission (0–1), from the trees `rows`: their crowns' leaf
-/// areas stamped on the scenario's light cells (equal-area squares, area-weighted) at their top
-/// heights, the diffuse part as the scenario's `[light] diffuse` takes it (the column above the
-/// place's cell, or the sky's sectors from the cell's centre, `light::Sky`), the direct part from
-/// `LAI_above` in the place's cell and in the cell towards the equator at the sun's rise, mixed
-/// as the light phase mixes them, times the place's relative insolation (the site's insolation
-/// over its median, 0.2–1.5).
+/// ground, and its diffuse part's transmission (0–1), from the trees `rows`: the light phase's
+/// own formula (`light::light_parts_at`: the crowns stamped on the scenario's light cells, the
+/// diffuse part as the scenario's `[light] diffuse` takes it, the column above the place's cell
+/// or the sky's sectors through the crowns with their depth, the direct part from `LAI_above` in
+/// the place's cell and in the cell towards the equator at the sun's rise), times the place's
+/// relative insolation (the site's insolation over its median, 0.2–1.5).
 fn simulated_light(site: &SiteConditions, sc: &Scenario, library: &SpeciesLibrary, rows: &[InventoryRow], x: f64, y: f64) -> (f32, f32) {
     let cell = sc.light_cell_m;
-    let lat = site.geo.latitude_deg as f32;
-    let elev = crate::sun::noon_equinox_elevation_deg(lat).clamp(10.0, 80.0).to_radians();
     let (col, row) = ((x / cell).floor(), (y / cell).floor());
-    let sun_row = row + crate::sun::equatorward(lat) as f64;
     let z = CAMERA_HEIGHT_M;
-    // the canopy entries (top height, leaf-area index) per light cell, tallest first
-    let mut cells: std::collections::HashMap<(i64, i64), Vec<(f32, f32)>> = std::collections::HashMap::new();
+    let light = crate::sim::light_grid::LightGrid::new(site.extent_m(), cell).with_diffuse(sc.light.diffuse);
+    let mut trees = crate::sim::trees::TreeStore::default();
     for r in rows {
         let Some(s) = library.find(&r.species) else { continue };
-        let sp = &library.species[s as usize];
-        let rr = r.crown_radius_m.max(0.05) as f64;
-        let s = rr * 0.886_226_9; // half side of the equal-area square
-        let la = std::f64::consts::PI * rr * rr * crown_lai(sp.life.shade_tolerance) as f64;
-        for cr in ((r.y_m - s) / cell).floor() as i64..=((r.y_m + s) / cell).floor() as i64 {
-            for cc in ((r.x_m - s) / cell).floor() as i64..=((r.x_m + s) / cell).floor() as i64 {
-                let (cx0, cy0) = (cc as f64 * cell, cr as f64 * cell);
-                let ox = ((r.x_m + s).min(cx0 + cell) - (r.x_m - s).max(cx0)).max(0.0);
-                let oy = ((r.y_m + s).min(cy0 + cell) - (r.y_m - s).max(cy0)).max(0.0);
-                let share = ox * oy / (4.0 * s * s);
-                if share > 0.0 {
-                    cells.entry((cc, cr)).or_default().push((r.height_m, (la * share / (cell * cell)) as f32));
-                }
-            }
-        }
+        trees.push(crate::sim::trees::NewTree { species: s, x: r.x_m as f32, y: r.y_m as f32, z: r.z_m as f32, age: r.age_yr, height: r.height_m, dbh: r.dbh_cm, crown_radius: r.crown_radius_m, suitability: 1.0 });
+        *trees.crown_base.last_mut().expect("pushed") = r.crown_base_m;
     }
-    for v in cells.values_mut() {
-        v.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.total_cmp(&b.1)));
-    }
-    let top = cells.values().filter_map(|v| v.first().map(|e| e.0)).fold(0.0f32, f32::max);
-    let lai_above = |cc: i64, cr: i64, z: f32| -> f32 { cells.get(&(cc, cr)).map_or(0.0, |v| v.iter().take_while(|e| e.0 > z).map(|e| e.1).sum()) };
-    let own = lai_above(col as i64, row as i64, z);
-    let sun = lai_above(col as i64, sun_row as i64, z + (cell as f32) * elev.tan());
-    let diffuse = match sc.light.diffuse {
-        crate::sim::light_grid::Diffuse::Column => (-K_EXT * own).exp(),
-        crate::sim::light_grid::Diffuse::Sky => {
-            let m = cell as f32;
-            crate::sim::phases::light::Sky::standard_overcast().transmission(|cc, cr, z0, z1| lai_above(cc as i64, cr as i64, z0) - lai_above(cc as i64, cr as i64, z1), ((col as f32 + 0.5) * m, (row as f32 + 0.5) * m), z, m, top)
-        }
-    };
+    let (c, rw) = ((col.max(0.0) as usize).min(light.cols - 1), (row.max(0.0) as usize).min(light.rows - 1));
+    let window = crate::sim::light_grid::CellRect { col0: c, row0: rw, col1: c + 1, row1: rw + 1 };
+    let (diffuse, direct) = crate::sim::phases::light::light_parts_at(&trees, &light, site.geo.latitude_deg, library, &[], Some(window), z)[0];
     let ins = &site.insolation_kwh_m2;
     let mut vals: Vec<f32> = ins.data.iter().copied().filter(|v| v.is_finite()).collect();
     let median = if vals.is_empty() {
@@ -487,7 +459,7 @@ fn simulated_light(site: &SiteConditions, sc: &Scenario, library: &SpeciesLibrar
     // the light cell's centre, as the light phase takes it
     let here = site.cell_at((col + 0.5) * cell, (row + 0.5) * cell).map_or(median, |(c, r)| *ins.get(c, r));
     let rel = if here.is_finite() && median > 0.0 { (here / median).clamp(0.2, 1.5) } else { 1.0 };
-    (rel * (W_ZENITH * diffuse + (1.0 - W_ZENITH) * (-K_EXT * (0.5 * own + 0.5 * sun) / elev.sin()).exp()), diffuse)
+    (rel * (W_ZENITH * diffuse + (1.0 - W_ZENITH) * direct), diffuse)
 }
 
 #[cfg(test)]

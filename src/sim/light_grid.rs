@@ -34,8 +34,9 @@ pub enum Diffuse {
     #[default]
     Column,
     /// From the sky hemisphere: zenith bands and azimuth sectors under the standard overcast
-    /// sky, each sector's ray through the neighbouring cells' canopy (`light::sky_diffuse`,
-    /// after Canham 1988's gap light index), reaching at most [`SKY_REACH_M`].
+    /// sky, each sector's ray through the neighbouring cells' canopy, the crowns with their
+    /// depth (`light::sky_diffuse`, after Canham 1988's gap light index), reaching at most
+    /// [`SKY_REACH_M`].
     Sky,
 }
 
