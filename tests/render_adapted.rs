@@ -352,6 +352,23 @@ fn small_trees_pick_their_level_by_the_reference_height_and_tall_ones_by_their_o
     assert_eq!(small_tree_ladder(&on), vec![25.0]);
 }
 
+/// A closed stand of 60 × 60 beech of 6–32 m in rows 4 m apart, and a camera 40 m up looking
+/// obliquely across it (the stand of the two tests below).
+fn beech_rows_seen_obliquely() -> (SpeciesLibrary, Vec<sylva::render::scene::TreeInstance>, Camera) {
+    let lib = SpeciesLibrary::embedded().unwrap();
+    let beech = lib.species.iter().position(|s| s.id == "beech").unwrap() as u32;
+    let heights = [6.0f32, 10.0, 15.0, 20.0, 25.0, 32.0, 8.0, 12.0, 18.0, 28.0, 7.0];
+    let mut trees = Vec::new();
+    for j in 0..60 {
+        for i in 0..60 {
+            let id = (j * 60 + i) as u64;
+            let h = heights[(i * 7 + j * 3) % heights.len()];
+            trees.push(sylva::render::scene::TreeInstance::new(id, [4.0 * i as f32, 4.0 * j as f32, 0.0], h, 0.18 * h, beech, [0.1, 0.3, 0.05]));
+        }
+    }
+    (lib, trees, Camera::look_at([120.0, -30.0, 40.0], [120.0, 90.0, 5.0], 50.0))
+}
+
 /// Round 44 (issue 32): raising the stills' reference height from 12 m to 25 m draws no tree
 /// coarser. A closed stand of beech of 6–32 m in rows, seen obliquely from 40 m up, under a
 /// triangle budget that binds: with the stills' parameters (25 m, floor 12 m) every tree is
@@ -362,20 +379,8 @@ fn small_trees_pick_their_level_by_the_reference_height_and_tall_ones_by_their_o
 fn raising_the_reference_height_draws_no_tree_coarser() {
     use sylva::render::instanced::build_batches_of;
     use sylva::render::lod::LodParams;
-    use sylva::render::scene::TreeInstance;
-    let lib = SpeciesLibrary::embedded().unwrap();
+    let (lib, trees, cam) = beech_rows_seen_obliquely();
     let protos = sylva::job::scene::prototypes(&lib);
-    let beech = lib.species.iter().position(|s| s.id == "beech").unwrap() as u32;
-    let heights = [6.0f32, 10.0, 15.0, 20.0, 25.0, 32.0, 8.0, 12.0, 18.0, 28.0, 7.0];
-    let mut trees = Vec::new();
-    for j in 0..60 {
-        for i in 0..60 {
-            let id = (j * 60 + i) as u64;
-            let h = heights[(i * 7 + j * 3) % heights.len()];
-            trees.push(TreeInstance::new(id, [4.0 * i as f32, 4.0 * j as f32, 0.0], h, 0.18 * h, beech, [0.1, 0.3, 0.05]));
-        }
-    }
-    let cam = Camera::look_at([120.0, -30.0, 40.0], [120.0, 90.0, 5.0], 50.0);
     let (w, h) = (640, 360);
     let base = LodParams { switch_px: [110.0, 45.0, 18.0], max_geometry_triangles: 0, max_triangles: 0, ..Default::default() };
     let old = LodParams { small_tree_m: 12.0, ..base };
@@ -419,20 +424,8 @@ fn raising_the_reference_height_draws_no_tree_coarser() {
 fn a_stills_tree_in_a_cross_fade_band_is_recorded_and_paid_for_once() {
     use sylva::render::instanced::{build_batches_of, dither_salt, level_triangles};
     use sylva::render::lod::LodParams;
-    use sylva::render::scene::TreeInstance;
-    let lib = SpeciesLibrary::embedded().unwrap();
+    let (lib, trees, cam) = beech_rows_seen_obliquely();
     let protos = sylva::job::scene::prototypes(&lib);
-    let beech = lib.species.iter().position(|s| s.id == "beech").unwrap() as u32;
-    let heights = [6.0f32, 10.0, 15.0, 20.0, 25.0, 32.0, 8.0, 12.0, 18.0, 28.0, 7.0];
-    let mut trees = Vec::new();
-    for j in 0..60 {
-        for i in 0..60 {
-            let id = (j * 60 + i) as u64;
-            let h = heights[(i * 7 + j * 3) % heights.len()];
-            trees.push(TreeInstance::new(id, [4.0 * i as f32, 4.0 * j as f32, 0.0], h, 0.18 * h, beech, [0.1, 0.3, 0.05]));
-        }
-    }
-    let cam = Camera::look_at([120.0, -30.0, 40.0], [120.0, 90.0, 5.0], 50.0);
     let (w, h) = (640, 360);
     let two = LodParams { switch_px: [110.0, 45.0, 18.0], max_geometry_triangles: 0, max_triangles: 0, small_tree_m: 12.0, ..Default::default() };
     let one = LodParams { one_level_per_tree: true, ..two };
