@@ -102,7 +102,7 @@ fn tuned() -> Vec<(String, Species)> {
 
 /// Tuning aid (ignored): prints the measures of the species of `SYLVA_TUNE` ([`tuned`]).
 #[test]
-#[ignore]
+#[ignore = "a tuning aid that prints the measures of the species in SYLVA_TUNE; asserts nothing"]
 fn tune() {
     for (spec, sp) in tuned() {
         for age in [80.0f32, 150.0] {
@@ -117,7 +117,7 @@ fn tune() {
 /// Tuning aid (ignored): for the species of `SYLVA_TUNE` ([`tuned`]), the prototype's leaf area over its level-0 vertex octagon
 /// (`tests/species_foliage.rs`) and the crown radii of its leaf tips.
 #[test]
-#[ignore]
+#[ignore = "a tuning aid that prints a prototype's leaf area and leaf-tip radii; asserts nothing"]
 fn tune_prototype() {
     use glam::Vec3;
     for (spec, sp) in tuned() {
