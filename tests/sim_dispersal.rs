@@ -125,7 +125,7 @@ fn dispersal_is_the_same_on_one_thread_and_on_four() {
 /// 45), interleaved. Prints wall times; asserts nothing about them (`cargo test --release
 /// --test sim_dispersal -- --ignored --nocapture`; BENCHMARKS.md, round 45 r45d).
 #[test]
-#[ignore]
+#[ignore = "a cost measurement: prints wall times of the fine and coarse seed spreading on the default window, asserts nothing"]
 fn cost_on_the_default_window() {
     let lib = SpeciesLibrary::embedded().unwrap();
     for sp in ["beech", "sycamore", "norway_maple", "scots_pine", "silver_birch", "norway_spruce", "sessile_oak", "black_alder"] {
