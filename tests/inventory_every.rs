@@ -11,7 +11,8 @@ use sylva::job::{inventory, pictures};
 use sylva::sim::{fixtures, Scenario, World};
 
 /// Beech planted at 3 m on a flat 100 m × 100 m site, 18 years: snapshots every 3 years,
-/// inventories every 6, checkpoints every 4, a clear-cut of the western fifth in year 7.
+/// inventories every 6, checkpoints every 4, a clear-cut of the western fifth in year 7 (not a
+/// snapshot year) and of the next fifth in year 9 (a snapshot year without a scheduled inventory).
 fn toml(years: u32) -> String {
     common::ScenarioToml::new("inventory_every", years, 5)
         .species(&["beech"])
@@ -22,6 +23,8 @@ fn toml(years: u32) -> String {
         .planted("beech", 3.0, 30.0)
         .build()
         + "[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\narea = [0.0, 0.0, 20.0, 100.0]\nyear = 7\n"
+        // a harvest in a snapshot year that is not an inventory year (trial 46, defect 1)
+        + "[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\narea = [20.0, 0.0, 40.0, 100.0]\nyear = 9\n"
 }
 
 fn scenario(years: u32) -> Scenario {
@@ -63,8 +66,9 @@ fn inventories_every_n_years_maps_at_every_snapshot_same_with_tiles_stops_and_re
     let one = tmp.path().join("one");
     let unbroken = run(&sc, &one, false);
     assert!(unbroken.rows.iter().any(|r| r.year == 7 && sylva::job::run::harvested(r)), "year 7 cut trees");
-    // tree inventories: year 0, every 6 years, the harvest year 7, the last year
-    let inv = vec![0, 6, 7, 12, 18];
+    assert!(unbroken.rows.iter().any(|r| r.year == 9 && sylva::job::run::harvested(r)), "year 9 cut trees");
+    // tree inventories: year 0, every 6 years, the harvest years 7 and 9, the last year
+    let inv = vec![0, 6, 7, 9, 12, 18];
     assert_eq!(years(&one, "inventory", "year_", ".parquet"), inv);
     assert_eq!(years(&one, "inventory", "year_", "_regeneration.parquet"), inv);
     // GeoPackages (every snapshot by default) only where there is an inventory
@@ -76,16 +80,21 @@ fn inventories_every_n_years_maps_at_every_snapshot_same_with_tiles_stops_and_re
     assert_eq!(inventory::snapshots(&one).unwrap().iter().map(|s| s.0).collect::<Vec<_>>(), inv);
     let cut = inventory::read(&one.join("inventory/year_0007.parquet")).unwrap();
     assert!(cut.iter().any(|r| r.status == "dead:harvest"), "year 7's inventory holds the harvested trees");
+    let cut9 = inventory::read(&one.join("inventory/year_0009.parquet")).unwrap();
+    assert!(cut9.iter().any(|r| r.status == "dead:harvest" && r.x_m > 20.0), "year 9's inventory holds the trees cut in its strip");
     // the scenario as run keeps the field
-    assert!(std::fs::read_to_string(one.join("scenario.toml")).unwrap().contains("inventory_every = 6"));
+    let as_run = std::fs::read_to_string(one.join("scenario.toml")).unwrap();
+    assert!(as_run.contains("inventory_every = 6"));
+    // the version that wrote the run (trial 46, defect 9)
+    assert!(as_run.starts_with(&format!("# written by sylva {}", env!("CARGO_PKG_VERSION"))), "{as_run}");
 
     // the readers: a year with an inventory is read; a snapshot year without one is refused,
     // naming the field and the years that have one
     assert!(!pictures::snapshot_rows(&one, 12).unwrap().is_empty());
-    let e = pictures::snapshot_rows(&one, 9).unwrap_err().to_string();
-    assert!(e.contains("year 9") && e.contains("inventory_every") && e.contains("0, 6, 7, 12, 18"), "{e}");
+    let e = pictures::snapshot_rows(&one, 15).unwrap_err().to_string();
+    assert!(e.contains("year 15") && e.contains("inventory_every") && e.contains("0, 6, 7, 9, 12, 18"), "{e}");
     let e = pictures::snapshot_rows(&one, 10).unwrap_err().to_string();
-    assert!(e.contains("year 10") && e.contains("0, 6, 7, 12, 18"), "{e}");
+    assert!(e.contains("year 10") && e.contains("0, 6, 7, 9, 12, 18"), "{e}");
     // the viewer offers the years with an inventory
     let data = sylva::view::data::RunData::open(&one, sc.site().unwrap(), fixtures::library(), vec![]).unwrap();
     assert_eq!(data.years, inv);
@@ -142,12 +151,12 @@ fn render_and_export_of_a_year_without_inventory_are_refused_naming_the_years() 
     let dir = tmp.path().join("run");
     run(&sc, &dir, false);
     let bin = env!("CARGO_BIN_EXE_sylva");
-    let out = Command::new(bin).arg("render").arg(&dir).args(["--year", "9", "--out"]).arg(tmp.path().join("r.png")).output().unwrap();
+    let out = Command::new(bin).arg("render").arg(&dir).args(["--year", "15", "--out"]).arg(tmp.path().join("r.png")).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.contains("year 9") && err.contains("inventory_every") && err.contains("0, 6, 7, 12, 18"), "{err}");
+    assert!(!out.status.success() && err.contains("year 15") && err.contains("inventory_every") && err.contains("0, 6, 7, 9, 12, 18"), "{err}");
     assert!(!tmp.path().join("r.png").exists());
     let out = Command::new(bin).arg("export").arg(&dir).args(["--year", "15", "--area", "0,0,50,50", "--out"]).arg(tmp.path().join("e.glb")).output().unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.contains("year 15") && err.contains("0, 6, 7, 12, 18"), "{err}");
+    assert!(!out.status.success() && err.contains("year 15") && err.contains("0, 6, 7, 9, 12, 18"), "{err}");
     assert!(!tmp.path().join("e.glb").exists());
 }

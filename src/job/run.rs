@@ -217,6 +217,14 @@ fn resume_removal_note(dir: &Path, removed: &[String], why: &str) -> String {
     )
 }
 
+/// The text of a run directory's `scenario.toml`: the scenario as run, under a comment naming
+/// the Sylva version that wrote it (`# written by sylva 0.46.0`), so a methods section can cite
+/// the model version of each run (trial 46, defect 9; Parquet files carry it as `created_by`).
+/// Errors: [`Error::Serialize`] as [`Scenario::to_toml_string`].
+pub fn scenario_as_run(scenario: &Scenario) -> crate::Result<String> {
+    Ok(format!("# written by sylva {}, the scenario as run\n{}", env!("CARGO_PKG_VERSION"), scenario.to_toml_string()?))
+}
+
 /// A resume refused because the scenario's management differs from the checkpoint's
 /// (`sim::checkpoint`'s identity holds a CRC-32 per entry) with the changes named field by
 /// field, old → new ([`crate::sim::checkpoint::entry_changes`] against the run directory's
@@ -626,7 +634,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
             eprintln!("{}", resume_removal_note(&dir, &removed, &why));
         }
         // the scenario as run, `years` included (a resume may extend the run)
-        crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
+        crate::output::write_atomic(&dir.join("scenario.toml"), scenario_as_run(scenario)?.as_bytes())?;
     } else {
         // an old run's snapshots are only removed once the new files can be written beside them
         for sub in [dir.clone(), dir.join("inventory"), dir.join("maps")] {
@@ -642,7 +650,7 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         }
         // an earlier run's checkpoint must not be resumed after this run is interrupted
         checkpoint::remove_all(&dir)?;
-        crate::output::write_atomic(&dir.join("scenario.toml"), scenario.to_toml_string()?.as_bytes())?;
+        crate::output::write_atomic(&dir.join("scenario.toml"), scenario_as_run(scenario)?.as_bytes())?;
         if opts.write_snapshots {
             stepper.start_snapshot(&dir, &world, "year_0000", Parts { inventory: true, gpkg: gp(0), maps: true }, opts.map_px, format)?;
             if let Some(f) = opts.on_snapshot.as_mut() {
@@ -712,12 +720,15 @@ pub fn run_scenario_with(scenario: &Scenario, site: SiteConditions, lib: &Specie
         let t_out = Instant::now();
         // a year whose management removed trees is a snapshot year too: its inventory holds
         // the removed trees (`dead:harvest`), whose stumps the pictures draw (issue 35)
-        let cut = opts.write_snapshots && !snap_year && rows.last().is_some_and(|r| r.year == y && harvested(r));
+        // (a harvest in a snapshot year that is not an inventory year gets its inventory too:
+        // trial 46 found year 35's 702 cut trees in no file)
+        let harvest = opts.write_snapshots && rows.last().is_some_and(|r| r.year == y && harvested(r));
+        let cut = harvest && !snap_year;
         if cut && !full && snap_world {
             stepper.complete(&mut world)?;
         }
         let snap_year = snap_year || cut;
-        let inv_year = inv_year || cut;
+        let inv_year = inv_year || harvest;
         if snap_year {
             stepper.snapshot(&dir, &mut world, &format!("year_{y:04}"), Parts { inventory: inv_year, gpkg: gp(y), maps: true }, opts.map_px, format)?;
             tables(&dir, &rows, &world, true)?;

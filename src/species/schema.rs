@@ -270,7 +270,7 @@ pub const FIELDS: &[FieldSpec] = &[
     f("life.stand_crown.c", "cm", rx(0.0, 200.0), "Stand-grown crown width: scale c of the saturating factor 1 − e^(−(d/c)^e) (1e-6: factor 1)"),
     f("life.stand_crown.e", "", rx(0.0, 5.0), "Stand-grown crown width: shape e of the saturating factor"),
     f("life.stand_crown.g", "", r(0.0, 1.0), "Stand-grown crown width: exponent g of the crown length h − cb (m) (default 0)"),
-    f("life.stand_crown_base.a", "", r(-10.0, 10.0), "Stand-grown crown base cb = h·(1 − e^(−|a + b·h/d + c·d + e·ln h100|)) (m; h m, d DBH cm, h100 site index m; Döbbeler et al. 2001/2002, BWINPro/TreeGrOSS; optional; drawn trees only, not the simulation): intercept a"),
+    f("life.stand_crown_base.a", "", r(-10.0, 10.0), "Stand-grown crown base cb = h·(1 − e^(−|a + b·h/d + c·d + e·ln h100|)) (m; h m, d DBH cm, h100 site index m; Döbbeler et al. 2001/2002, BWINPro/TreeGrOSS; optional; the drawn trees, and the simulation's canopy trees of 7 cm and more in closed stands): intercept a"),
     f("life.stand_crown_base.b", "cm/m", r(-5.0, 5.0), "Stand-grown crown base: coefficient b of the slenderness h/d"),
     f("life.stand_crown_base.c", "1/cm", r(-1.0, 1.0), "Stand-grown crown base: coefficient c of the DBH"),
     f("life.stand_crown_base.e", "", r(-5.0, 5.0), "Stand-grown crown base: coefficient e of ln h100"),
