@@ -105,11 +105,14 @@ fn round_trip_is_lossless() {
 fn suitability_one_at_optimum_and_documented_value_at_tolerance_edge() {
     let lib = SpeciesLibrary::embedded().unwrap();
     let beech = lib.get("beech").unwrap();
-    // beech: L 3, T 5, K 2, F 5, R x, N x.
-    let opt = [3.0, 5.0, 2.0, 5.0, 1.0, 9.0];
+    // beech: L 3, T 5, K 2, F 5, R x, N x. Round 45: an indifferent factor counts as the scale's
+    // middle (5, tolerance 2), so beech's best site has R and N 5.
+    let opt = [3.0, 5.0, 2.0, 5.0, 5.0, 5.0];
     assert!((beech.suitability(&opt) - 1.0).abs() < 1e-6);
     assert_eq!(beech.suitability_factors(&opt), [1.0; 6]);
-    // Each numeric factor at optimum + tolerance gives exp(-1/2); indifferent ones stay 1.
+    assert_eq!((species::INDIFFERENT_OPTIMUM, species::INDIFFERENT_TOLERANCE), (5.0, 2.0));
+    // Each numeric factor at optimum + tolerance gives exp(-1/2); indifferent ones the Gaussian of
+    // the scale's middle.
     assert!((TOLERANCE_EDGE_SUITABILITY - (-0.5f32).exp()).abs() < 1e-7);
     let n = &beech.niche;
     for (i, f) in [&n.l, &n.t, &n.k, &n.f, &n.r, &n.n].into_iter().enumerate() {
@@ -118,14 +121,26 @@ fn suitability_one_at_optimum_and_documented_value_at_tolerance_edge() {
             Indicator::Value(v) => {
                 for sign in [-1.0, 1.0] {
                     x[i] = v + sign * f.tolerance;
-                    let s = beech.suitability(&x);
+                    let s = beech.suitability_factors(&x)[i];
                     assert!((s - TOLERANCE_EDGE_SUITABILITY).abs() < 1e-5, "factor {i}: {s}");
+                    // the site suitability: L left out (the light model's), the others by the
+                    // minimum (on F's dry side times the drought limit)
+                    let site = beech.suitability(&x);
+                    if i == 0 {
+                        assert_eq!(site, beech.suitability(&opt));
+                    } else if i == 3 && sign < 0.0 {
+                        let want = (1.0 - (f.tolerance / 10.0) / beech.life.drought_tolerance.unwrap()).max(0.0).sqrt();
+                        assert!((site - want * TOLERANCE_EDGE_SUITABILITY).abs() < 1e-5, "dry F: {site} {want}");
+                    } else {
+                        assert!((site - TOLERANCE_EDGE_SUITABILITY).abs() < 1e-5, "factor {i}: {site}");
+                    }
                 }
             }
             Indicator::Indifferent(_) => {
-                for v in [1.0, 5.0, 9.0] {
+                for (v, want) in [(1.0, (-2.0f32).exp()), (5.0, 1.0), (7.0, (-0.5f32).exp()), (9.0, (-2.0f32).exp())] {
                     x[i] = v;
-                    assert_eq!(beech.suitability(&x), 1.0);
+                    assert!((beech.suitability_factors(&x)[i] - want).abs() < 1e-6, "x at {v}");
+                    assert!((beech.suitability(&x) - want).abs() < 1e-6, "x at {v}");
                 }
             }
         }
@@ -134,22 +149,24 @@ fn suitability_one_at_optimum_and_documented_value_at_tolerance_edge() {
     let mut wet = opt;
     wet[3] = 5.0 + 3.0 * n.f.tolerance;
     assert!((beech.suitability(&wet) - (-4.5f32).exp()).abs() < 1e-4);
-    // Symmetric and monotone away from the optimum.
+    // Symmetric and monotone away from the optimum (the factor's own response).
     let mut prev = 1.0;
     for k in 1..20 {
         let mut x = opt;
         x[1] = 5.0 + k as f32 * 0.2;
-        let s = beech.suitability(&x);
+        let s = beech.suitability_factors(&x)[1];
         assert!(s < prev);
         x[1] = 5.0 - k as f32 * 0.2;
-        assert!((beech.suitability(&x) - s).abs() < 1e-6);
+        assert!((beech.suitability_factors(&x)[1] - s).abs() < 1e-6);
         prev = s;
     }
     // Black alder (F 9) is clearly better than beech on wet ground and worse on dry-moist.
     let alder = lib.get("black_alder").unwrap();
     let wet_site = [5.0, 5.0, 3.0, 9.0, 6.0, 6.0];
-    assert!(alder.suitability(&wet_site) > 0.9);
+    assert!(alder.suitability(&wet_site) > 0.85);
     assert!(beech.suitability(&wet_site) < 0.2);
+    let fresh = [5.0, 5.0, 3.0, 5.0, 6.0, 6.0];
+    assert!(alder.suitability(&fresh) < 0.1 && beech.suitability(&fresh) > 0.5);
 }
 
 #[test]

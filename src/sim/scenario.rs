@@ -364,7 +364,7 @@ pub fn validate_climate(c: &Climate, ctx: &str) -> Result<()> {
         ("reference_temperature_c", c.reference_temperature_c as f64, c.reference_temperature_c.to_string(), -30.0, 40.0, "°C"),
         ("reference_elevation_m", c.reference_elevation_m as f64, c.reference_elevation_m.to_string(), -500.0, 9000.0, "m"),
         ("lapse_rate_k_per_km", c.lapse_rate_k_per_km as f64, c.lapse_rate_k_per_km.to_string(), -15.0, 5.0, "K/km"),
-        ("continentality_k", c.continentality_k as f64, c.continentality_k.to_string(), 1.0, 9.0, "(index)"),
+        ("continentality_k", c.continentality_k.unwrap_or(5.0) as f64, c.continentality_k.map_or(String::new(), |k| k.to_string()), 1.0, 9.0, "(index; leave it out to derive it from temperature_range_k)"),
         ("reaction_r", c.reaction_r as f64, c.reaction_r.to_string(), 1.0, 9.0, "(index)"),
         ("nitrogen_n", c.nitrogen_n as f64, c.nitrogen_n.to_string(), 1.0, 9.0, "(index)"),
         ("sea_level_m", c.sea_level_m as f64, c.sea_level_m.to_string(), -500.0, 9000.0, "m"),

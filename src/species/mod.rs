@@ -207,13 +207,15 @@ pub struct LifeHistory {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub foliage: Option<Foliage>,
     /// Drought tolerance (0.05–0.6): the largest drought index (0 none … 1 no water for
-    /// transpiration, [`crate::sim::water::drought_index`]) at which the species still grows, as ForClim's and
-    /// LandClim's species parameter (Bugmann & Cramer 1998, For. Ecol. Manage. 103:247–263;
-    /// LandClim's `droughtTol`, Schumacher et al. 2004, values in species/sources/
-    /// species_traits.csv). In a year drier than the base climate growth and establishment are
-    /// reduced by [`drought_factor`] of the rise of the year's drought index over the base
-    /// climate's ([`Species::drought_response`]; issue 35, rounds 39 and 44). Optional: without it the species does not respond to drought
-    /// (beyond its moisture niche F).
+    /// transpiration, [`crate::climate::water::drought_index`]) at which the species still
+    /// grows, as ForClim's species parameter `kDrTol` (Bugmann 1994; Bugmann & Cramer 1998,
+    /// For. Ecol. Manage. 103:247–263; the shipped values are ForClim's since round 45,
+    /// LandClim's `droughtTol` before, species/sources/SOURCES.md). The site suitability's
+    /// drought limit ([`Species::drought_limit`]) is [`drought_factor`] of the drought beyond
+    /// the species' moisture optimum read off the site's F, in the base climate and, lowered by
+    /// the year's rise of the drought index, in every year of a changing climate (issue 35,
+    /// rounds 39, 44 and 45). Optional: without it the species has no drought limit (beyond its
+    /// moisture niche F).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub drought_tolerance: Option<f32>,
     /// Shade tolerance class (1 least … 5 most tolerant) of survival in shade: the class that
@@ -1083,17 +1085,45 @@ impl Factor {
     /// (= e^(−½) ≈ 0.61) at `v ± τ`, 0.135 at `v ± 2τ`, 0.011 at `v ± 3τ`. This is the Gaussian
     /// response model of species along environmental gradients (ter Braak & Looman 1986), with
     /// the Ellenberg value as optimum (Ellenberg et al. 1991, *Zeigerwerte*). An indifferent
-    /// factor ("x") gives 1 everywhere. A non-positive tolerance is treated as 0.001.
+    /// factor ("x") counts as the middle of the scale: the same Gaussian with optimum
+    /// [`INDIFFERENT_OPTIMUM`] (5) and tolerance [`INDIFFERENT_TOLERANCE`] (2), whatever the
+    /// file's tolerance (round 45; 1 everywhere before). A non-positive tolerance is treated as
+    /// 0.001.
     pub fn suitability(&self, x: f32) -> f32 {
+        let (opt, tol) = match &self.value {
+            Indicator::Value(opt) => (*opt, self.tolerance),
+            Indicator::Indifferent(_) => (INDIFFERENT_OPTIMUM, INDIFFERENT_TOLERANCE),
+        };
+        let z = (x - opt) / tol.max(1e-3);
+        (-0.5 * z * z).exp()
+    }
+
+    /// The optimum of the factor on its Ellenberg scale: the value, or for an indifferent
+    /// factor ("x") the middle of the terrestrial scale, 5 ([`INDIFFERENT_OPTIMUM`]).
+    pub fn optimum(&self) -> f32 {
         match &self.value {
-            Indicator::Value(opt) => {
-                let z = (x - *opt) / self.tolerance.max(1e-3);
-                (-0.5 * z * z).exp()
-            }
-            Indicator::Indifferent(_) => 1.0,
+            Indicator::Value(v) => *v,
+            Indicator::Indifferent(_) => INDIFFERENT_OPTIMUM,
         }
     }
 }
+
+/// The optimum an indifferent factor (Ellenberg's "x", a wide amplitude) counts with: 5, the
+/// middle of Ellenberg's terrestrial 1–9 scales (F 5 "fresh"), round 45 (trial 44 defect 1).
+/// Sylva's rule: an indifferent species is neither best nor worst along the factor, it counts
+/// as a species of the scale's middle ([`Factor::suitability`], [`Factor::optimum`]; its drought
+/// limit counts from F 5, [`Species::drought_limit`]). Until round 45 an "x" counted as 1
+/// everywhere, so an indifferent species was as suitable as the best specialist on every site
+/// (Scots pine, indifferent to T, F, R and N, as suitable on a wet, acid, cold cell as on its
+/// best). A species' best site has S = 1 still (its values, 5 for its "x" factors:
+/// `sim::pure_stand::niche_optimum`).
+pub const INDIFFERENT_OPTIMUM: f32 = 5.0;
+
+/// The tolerance an indifferent factor counts with: 2 index units, the common tolerance of
+/// the shipped niches' T and F (`species/*.toml`; ESTIMATE), so an "x" falls to 0.61 two units
+/// from the scale's middle and to 0.14 at its ends (1 and 9). At the test sites' R 6 and N 6
+/// (`tests/common::GOOD_SITE`) it gives e^(−1/8) = 0.88, what beech's L 3 gave there before.
+pub const INDIFFERENT_TOLERANCE: f32 = 2.0;
 
 impl Species {
     /// Length (m) of a drawn leaf card of this species: `appearance.leaf_length_m` (a sourced
@@ -1114,25 +1144,59 @@ impl Species {
 
     /// Combined site suitability (0–1) for Ellenberg-style site indices `[L, T, K, F, R, N]`.
     ///
-    /// Combination: Liebig's law of the minimum — the smallest of the six per-factor
-    /// suitabilities. One factor far outside the niche excludes the species however good the
-    /// others are ("a single inconvenient living condition can fully stop the prosperity of some
-    /// tree", EcoMod, `004_*.txt` section IV), which a product or geometric mean would dilute
-    /// (a geometric mean of six factors turns 0.01 into 0.46). Indifferent factors count as 1.
+    /// Combination: Liebig's law of the minimum — the smallest of the per-factor suitabilities
+    /// of T, K, F, R and N ([`Species::suitability_factors`]) — times the species' drought
+    /// limit ([`Species::drought_limit`] of F), ForClim's multiplicative drought factor (as
+    /// round 44 multiplied the niche by the drought response of a year's rise). One factor far
+    /// outside the niche excludes the species however good the others are ("a single
+    /// inconvenient living condition can fully stop the prosperity of some tree", EcoMod,
+    /// `004_*.txt` section IV), which a product or geometric mean of the niche factors would
+    /// dilute (a geometric mean of six factors turns 0.01 into 0.46). Indifferent factors count
+    /// as the scale's middle ([`INDIFFERENT_OPTIMUM`] ± [`INDIFFERENT_TOLERANCE`]). The drought limit multiplies rather than joins the
+    /// minimum, so that a drier year cuts a species whose niche is limited by another factor
+    /// (Norway spruce on a warm site) by ForClim's factor, as in round 44; on the dry side of
+    /// its F optimum a species is cut by both its Gaussian F factor and its drought limit.
     ///
-    /// The light factor L is the adult tree's light demand (Ellenberg's tree-stage value): the
-    /// site index for L should describe the open-canopy light climate of the cell (e.g. from
-    /// slope and aspect), not the shade under neighbours; shade tolerance of young trees under a
-    /// canopy is `life.shade_tolerance` and `life.germination_min_light`.
+    /// The light factor L is left out of the minimum (round 45, trial 44 defect 1): the site's L
+    /// is the open ground's light climate of the cell (terrain shading), while a tree lives in
+    /// the light its neighbours leave it, which the light model gives (the cell's relative
+    /// insolation times the canopy's transmission, `sim::phases::light`) and to which the
+    /// species responds through `life.shade_tolerance` (growth) and `life.germination_min_light`
+    /// (establishment). Counting L here as well punished shade-tolerant species (beech L 3: 0.61
+    /// on open ground of L 7) for a light they never establish in. `suitability_factors` still
+    /// reports L's factor.
     pub fn suitability(&self, indices: &[f32; 6]) -> f32 {
-        self.suitability_factors(indices).into_iter().fold(1.0f32, f32::min)
+        let f = self.suitability_factors(indices);
+        f[1..].iter().copied().fold(1.0f32, f32::min) * self.drought_limit(indices[crate::conditions::factor::F])
     }
 
-    /// The species' growth reduction (0–1) in a year whose drought index lies `di_rise` above
-    /// the cell's index under the base climate ([`crate::sim::water`]): [`drought_factor`] of
-    /// the rise and `life.drought_tolerance` (1 for a species without one, or in a year no
-    /// drier than the base climate). Issue 35 (round 39, the water balance round 44): the climate
-    /// phase multiplies it onto the suitability.
+    /// The species' drought limit (0–1) at moisture index `f` (round 45): ForClim's drought
+    /// factor `sqrt(max(0, 1 − DI / tol))` ([`drought_factor`], Bugmann & Cramer 1998) with
+    /// `tol` = `life.drought_tolerance` and `DI` the drought index by which the site is drier
+    /// than the species' moisture optimum, read off the F scale of the site's water balance
+    /// (`conditions::moisture_index_of_water`: 10 F units per unit of drought index):
+    /// `DI = max(0, min(v, 6) − f) / 10`, `v` the species' F optimum (5 for "x",
+    /// [`Factor::optimum`]), counted from at most F 6 (drought index 0): a wet-site species
+    /// (alder F 9) feels drought only where the growing season has a deficit. So at F 3 (a dry
+    /// ridge, DI 0.3) beech (F 5, tolerance 0.25) keeps sqrt(1 − 0.2/0.25) = 0.45, sessile oak
+    /// (F 5, 0.33) 0.63, Scots pine (x, 0.37) 0.68, black alder (F 9, 0.08) 0. 1 without a
+    /// drought tolerance. The Gaussian F factor alone could not tell a drought-tolerant species
+    /// from a sensitive one of the same Ellenberg F (sessile oak and beech: both 5).
+    pub fn drought_limit(&self, f: f32) -> f32 {
+        match self.life.drought_tolerance {
+            Some(tol) => {
+                let v = self.niche.f.optimum().min(crate::conditions::F_NO_DROUGHT as f32);
+                drought_factor((v - f).max(0.0) / crate::conditions::F_PER_DROUGHT_INDEX as f32, tol)
+            }
+            None => 1.0,
+        }
+    }
+
+    /// ForClim's growth reduction (0–1) of a rise `di_rise` of the drought index:
+    /// [`drought_factor`] of the rise and `life.drought_tolerance` (1 for a species without
+    /// one, or for no rise). Issue 35 (round 39, the water balance round 44): until round 44 the
+    /// climate phase multiplied it onto the suitability; since round 45 the year's drought
+    /// lowers F and acts through [`Species::drought_limit`] instead.
     pub fn drought_response(&self, di_rise: f32) -> f32 {
         match self.life.drought_tolerance {
             Some(tol) => drought_factor(di_rise, tol),
