@@ -1,6 +1,6 @@
 //! Site suitability that sorts species by ridge and cove (round 45, trial 44 defect 1): the
 //! moisture index F from the water balance (`conditions::moisture_index_of_water`), indifferent
-//! factors that count as the scale's middle (`species::INDIFFERENT_OPTIMUM`), L left out of
+//! factors that impose no limit (round 46), L left out of
 //! the site suitability, K from the climate's temperature range (`climate::continentality_index`),
 //! and each species' drought limit with ForClim's drought tolerance (`Species::drought_limit`).
 //!
@@ -98,32 +98,37 @@ fn species_sort_from_ridge_to_cove() {
     assert!(mean_s("sessile_oak", dry) > mean_s("beech", dry), "on the driest third sessile oak is the more suitable");
 }
 
-/// An indifferent ("x") factor is neither best nor worst: it counts as the scale's middle (5,
-/// tolerance 2). Silver birch (indifferent to T, K, F, R and N) loses to wych elm (no "x") at
-/// the elm's optimum and beats it on a site far from it, and an acid, nitrogen-rich cell (R, N
-/// 9) cuts it; until round 45 an "x" counted as 1, and birch was as suitable as the best
-/// specialist everywhere. And L is not part of the site suitability: beech (L 3) on open ground
+/// An indifferent ("x") factor imposes no limit (Ellenberg's "x": indifferent, wide
+/// amplitude; round 46): silver birch (indifferent to T, K, F, R and N) keeps 1 on the tests'
+/// oceanic K 2 site (`tests/common::GOOD_SITE`; round 45's trial rule, the scale's middle
+/// 5 ± 2, gave it e^(−9/8) = 0.32 there and lost `sim_succession`'s birch) and at the scales'
+/// ends; what sorts the generalists along the moisture gradient is ForClim's drought
+/// tolerance (`Species::drought_limit`, counted from F 5 for an "x"): on a dry ridge (F 3)
+/// Scots pine (x, 0.37) keeps more than sessile oak (5, 0.33), beech (5, 0.25) less, and silver
+/// birch (x, 0.16) nothing. And L is not part of the site suitability: beech (L 3) on open ground
 /// (L 7) is as suitable as at its light optimum (until round 45: 0.61 of it).
 #[test]
-fn indifferent_species_are_not_best_everywhere_and_light_is_the_light_models() {
+fn indifferent_factors_impose_no_limit_and_light_is_the_light_models() {
     let lib = common::embedded();
     let sp = |id: &str| &lib.species[lib.find(id).unwrap() as usize];
-    let (birch, elm, beech) = (sp("silver_birch"), sp("wych_elm"), sp("beech"));
-    let elm_best = [7.0, 5.0, 3.0, 6.0, 7.0, 7.0];
-    assert!((elm.suitability(&elm_best) - 1.0).abs() < 1e-6);
-    let g = |d: f32| (-0.5 * (d / sylva::species::INDIFFERENT_TOLERANCE).powi(2)).exp();
-    assert!((birch.suitability(&elm_best) - g(2.0)).abs() < 1e-6, "{}", birch.suitability(&elm_best));
-    assert!(elm.suitability(&elm_best) > birch.suitability(&elm_best) + 0.3);
-    let far = [7.0, 5.0, 6.0, 4.0, 4.0, 4.0];
-    assert!(birch.suitability(&far) > 2.0 * elm.suitability(&far), "birch {} elm {}", birch.suitability(&far), elm.suitability(&far));
-    assert!((birch.suitability(&[7.0, 5.0, 5.0, 5.0, 5.0, 5.0]) - 1.0).abs() < 1e-6);
-    assert!((birch.suitability(&[7.0, 5.0, 5.0, 5.0, 9.0, 9.0]) - g(4.0)).abs() < 1e-6);
+    let (birch, pine, oak, beech) = (sp("silver_birch"), sp("scots_pine"), sp("sessile_oak"), sp("beech"));
+    assert_eq!(birch.suitability(&common::GOOD_SITE), 1.0);
+    for site in [[7.0, 1.0, 1.0, 5.0, 1.0, 1.0], [7.0, 9.0, 9.0, 9.0, 9.0, 9.0], [1.0, 5.0, 2.0, 12.0, 6.0, 6.0]] {
+        assert_eq!(birch.suitability(&site), 1.0, "{site:?}");
+    }
+    // on the dry side of F 5 only the drought limit (ForClim: sqrt(1 − DI/tol), DI = (5 − F)/10)
+    let ridge = [7.0, 5.0, 2.0, 3.0, 6.0, 6.0];
+    let want = |tol: f32| (1.0 - 0.2 / tol).max(0.0).sqrt();
+    assert!((birch.suitability(&ridge) - want(0.16)).abs() < 1e-6 && birch.suitability(&ridge) == 0.0);
+    let (dp, doak, db) = (pine.drought_limit(3.0), oak.drought_limit(3.0), beech.drought_limit(3.0));
+    assert!((dp - want(0.37)).abs() < 1e-6 && (doak - want(0.33)).abs() < 1e-6 && (db - want(0.25)).abs() < 1e-6, "{dp} {doak} {db}");
+    assert!(dp > doak && doak > db && db > 0.4, "pine {dp}, sessile oak {doak}, beech {db}");
     let open = [7.0, 5.0, 2.0, 5.0, 6.0, 6.0];
     let shade = [3.0, 5.0, 2.0, 5.0, 6.0, 6.0];
     assert_eq!(beech.suitability(&open), beech.suitability(&shade));
 }
 
-/// ForClim's drought tolerances (Bugmann 1994): sessile oak (0.33) is more drought tolerant
+/// ForClim 2.x's drought tolerances (Bugmann & Cramer 1998's water balance): sessile oak (0.33) is more drought tolerant
 /// than beech (0.25; LandClim had 0.297 and 0.30, the other way round). A year 3 K warmer cuts
 /// beech's suitability in the lowest third of the default window by more than sessile oak's:
 /// the drier year lowers F (the rise of the drought index, 10 F units per unit), and beech's

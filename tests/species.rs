@@ -105,14 +105,11 @@ fn round_trip_is_lossless() {
 fn suitability_one_at_optimum_and_documented_value_at_tolerance_edge() {
     let lib = SpeciesLibrary::embedded().unwrap();
     let beech = lib.get("beech").unwrap();
-    // beech: L 3, T 5, K 2, F 5, R x, N x. Round 45: an indifferent factor counts as the scale's
-    // middle (5, tolerance 2), so beech's best site has R and N 5.
-    let opt = [3.0, 5.0, 2.0, 5.0, 5.0, 5.0];
+    // beech: L 3, T 5, K 2, F 5, R x, N x. An indifferent factor imposes no limit (round 46).
+    let opt = [3.0, 5.0, 2.0, 5.0, 1.0, 9.0];
     assert!((beech.suitability(&opt) - 1.0).abs() < 1e-6);
     assert_eq!(beech.suitability_factors(&opt), [1.0; 6]);
-    assert_eq!((species::INDIFFERENT_OPTIMUM, species::INDIFFERENT_TOLERANCE), (5.0, 2.0));
-    // Each numeric factor at optimum + tolerance gives exp(-1/2); indifferent ones the Gaussian of
-    // the scale's middle.
+    // Each numeric factor at optimum + tolerance gives exp(-1/2); indifferent ones stay 1.
     assert!((TOLERANCE_EDGE_SUITABILITY - (-0.5f32).exp()).abs() < 1e-7);
     let n = &beech.niche;
     for (i, f) in [&n.l, &n.t, &n.k, &n.f, &n.r, &n.n].into_iter().enumerate() {
@@ -137,10 +134,10 @@ fn suitability_one_at_optimum_and_documented_value_at_tolerance_edge() {
                 }
             }
             Indicator::Indifferent(_) => {
-                for (v, want) in [(1.0, (-2.0f32).exp()), (5.0, 1.0), (7.0, (-0.5f32).exp()), (9.0, (-2.0f32).exp())] {
+                for v in [1.0, 5.0, 9.0] {
                     x[i] = v;
-                    assert!((beech.suitability_factors(&x)[i] - want).abs() < 1e-6, "x at {v}");
-                    assert!((beech.suitability(&x) - want).abs() < 1e-6, "x at {v}");
+                    assert_eq!(beech.suitability_factors(&x)[i], 1.0, "x at {v}");
+                    assert_eq!(beech.suitability(&x), 1.0, "x at {v}");
                 }
             }
         }

@@ -8,16 +8,21 @@ use super::scenario::Scenario;
 use super::step::{step_year, YearReport};
 use super::world::World;
 use crate::error::Result;
-use crate::species::{Species, SpeciesLibrary};
+use crate::species::{Indicator, Species, SpeciesLibrary};
 
 /// Site indices `[L, T, K, F, R, N]` at a species' niche optimum: each Ellenberg value of the
-/// species, and for indifferent ("x") factors the scale's middle, 5 (the optimum an "x" counts
-/// with since round 45, [`crate::species::Factor::optimum`]; until round 44 the fresh,
-/// base-rich `[5, 5, 2, 5, 6, 6]`, where an "x" counted as 1 anyway): the site suitability is 1.
+/// species, and for indifferent ("x") factors the fresh, base-rich values `[5, 5, 2, 5, 6, 6]`
+/// (an "x" imposes no limit, [`crate::species::Factor::suitability`]; F 5 is also where an
+/// indifferent F's drought limit starts, [`crate::species::INDIFFERENT_OPTIMUM`]): the site
+/// suitability is 1 (L is not part of it since round 45).
 pub fn niche_optimum(sp: &Species) -> [f32; 6] {
+    const DEFAULT: [f32; 6] = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0];
     let n = &sp.niche;
     let f = [&n.l, &n.t, &n.k, &n.f, &n.r, &n.n];
-    std::array::from_fn(|i| f[i].optimum())
+    std::array::from_fn(|i| match f[i].value {
+        Indicator::Value(v) => v,
+        Indicator::Indifferent(_) => DEFAULT[i],
+    })
 }
 
 /// Scenario TOML of a pure, unmanaged stand of species `id` planted at `spacing_m` (m) and age

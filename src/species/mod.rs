@@ -208,9 +208,11 @@ pub struct LifeHistory {
     pub foliage: Option<Foliage>,
     /// Drought tolerance (0.05–0.6): the largest drought index (0 none … 1 no water for
     /// transpiration, [`crate::climate::water::drought_index`]) at which the species still
-    /// grows, as ForClim's species parameter `kDrTol` (Bugmann 1994; Bugmann & Cramer 1998,
-    /// For. Ecol. Manage. 103:247–263; the shipped values are ForClim's since round 45,
-    /// LandClim's `droughtTol` before, species/sources/SOURCES.md). The site suitability's
+    /// grows, as ForClim's species parameter `kDrTol` (Bugmann & Cramer 1998, For. Ecol.
+    /// Manage. 103:247–263; the shipped values are ForClim 2.x's set for that paper's bucket
+    /// water balance since round 45, LandClim's `droughtTol` before; Bugmann 1994's Tab. 3.11
+    /// belongs to FORCLIM-P's Thornthwaite–Mather balance and is lower for the conifers,
+    /// species/sources/SOURCES.md). The site suitability's
     /// drought limit ([`Species::drought_limit`]) is [`drought_factor`] of the drought beyond
     /// the species' moisture optimum read off the site's F, in the base climate and, lowered by
     /// the year's rise of the drought index, in every year of a changing climate (issue 35,
@@ -1085,17 +1087,18 @@ impl Factor {
     /// (= e^(−½) ≈ 0.61) at `v ± τ`, 0.135 at `v ± 2τ`, 0.011 at `v ± 3τ`. This is the Gaussian
     /// response model of species along environmental gradients (ter Braak & Looman 1986), with
     /// the Ellenberg value as optimum (Ellenberg et al. 1991, *Zeigerwerte*). An indifferent
-    /// factor ("x") counts as the middle of the scale: the same Gaussian with optimum
-    /// [`INDIFFERENT_OPTIMUM`] (5) and tolerance [`INDIFFERENT_TOLERANCE`] (2), whatever the
-    /// file's tolerance (round 45; 1 everywhere before). A non-positive tolerance is treated as
-    /// 0.001.
+    /// factor ("x", Ellenberg's "indifferent / wide amplitude") imposes no limit: 1 everywhere,
+    /// whatever the file's tolerance (round 46; round 45's trial counted it as a species of
+    /// the scale's middle and scored silver birch 0.32 at an oceanic K 2, wrong for a species of
+    /// Ireland and Siberia alike). A non-positive tolerance is treated as 0.001.
     pub fn suitability(&self, x: f32) -> f32 {
-        let (opt, tol) = match &self.value {
-            Indicator::Value(opt) => (*opt, self.tolerance),
-            Indicator::Indifferent(_) => (INDIFFERENT_OPTIMUM, INDIFFERENT_TOLERANCE),
-        };
-        let z = (x - opt) / tol.max(1e-3);
-        (-0.5 * z * z).exp()
+        match &self.value {
+            Indicator::Value(opt) => {
+                let z = (x - *opt) / self.tolerance.max(1e-3);
+                (-0.5 * z * z).exp()
+            }
+            Indicator::Indifferent(_) => 1.0,
+        }
     }
 
     /// The optimum of the factor on its Ellenberg scale: the value, or for an indifferent
@@ -1108,22 +1111,15 @@ impl Factor {
     }
 }
 
-/// The optimum an indifferent factor (Ellenberg's "x", a wide amplitude) counts with: 5, the
-/// middle of Ellenberg's terrestrial 1–9 scales (F 5 "fresh"), round 45 (trial 44 defect 1).
-/// Sylva's rule: an indifferent species is neither best nor worst along the factor, it counts
-/// as a species of the scale's middle ([`Factor::suitability`], [`Factor::optimum`]; its drought
-/// limit counts from F 5, [`Species::drought_limit`]). Until round 45 an "x" counted as 1
-/// everywhere, so an indifferent species was as suitable as the best specialist on every site
-/// (Scots pine, indifferent to T, F, R and N, as suitable on a wet, acid, cold cell as on its
-/// best). A species' best site has S = 1 still (its values, 5 for its "x" factors:
-/// `sim::pure_stand::niche_optimum`).
+/// The moisture optimum an indifferent F ("x") counts with in the drought limit only: 5, F
+/// "fresh", the middle of Ellenberg's terrestrial 1–9 scale ([`Factor::optimum`],
+/// [`Species::drought_limit`]). The niche factor of an "x" is 1 everywhere
+/// ([`Factor::suitability`], round 46): an indifferent value imposes no limit. The drought limit
+/// is ForClim's own species parameter (its `kDrTol`), not Ellenberg's; it needs a point on the
+/// F scale from which drought counts, and a species "indifferent" to moisture is read as one
+/// that grows on fresh sites (F 5) and beyond them as far as its drought tolerance allows
+/// (Scots pine, x and 0.37: 0.68 at F 3, more than sessile oak's 0.63 there).
 pub const INDIFFERENT_OPTIMUM: f32 = 5.0;
-
-/// The tolerance an indifferent factor counts with: 2 index units, the common tolerance of
-/// the shipped niches' T and F (`species/*.toml`; ESTIMATE), so an "x" falls to 0.61 two units
-/// from the scale's middle and to 0.14 at its ends (1 and 9). At the test sites' R 6 and N 6
-/// (`tests/common::GOOD_SITE`) it gives e^(−1/8) = 0.88, what beech's L 3 gave there before.
-pub const INDIFFERENT_TOLERANCE: f32 = 2.0;
 
 impl Species {
     /// Length (m) of a drawn leaf card of this species: `appearance.leaf_length_m` (a sourced
@@ -1151,8 +1147,8 @@ impl Species {
     /// outside the niche excludes the species however good the others are ("a single
     /// inconvenient living condition can fully stop the prosperity of some tree", EcoMod,
     /// `004_*.txt` section IV), which a product or geometric mean of the niche factors would
-    /// dilute (a geometric mean of six factors turns 0.01 into 0.46). Indifferent factors count
-    /// as the scale's middle ([`INDIFFERENT_OPTIMUM`] ± [`INDIFFERENT_TOLERANCE`]). The drought limit multiplies rather than joins the
+    /// dilute (a geometric mean of six factors turns 0.01 into 0.46). Indifferent factors ("x")
+    /// count as 1: they impose no limit (round 46). The drought limit multiplies rather than joins the
     /// minimum, so that a drier year cuts a species whose niche is limited by another factor
     /// (Norway spruce on a warm site) by ForClim's factor, as in round 44; on the dry side of
     /// its F optimum a species is cut by both its Gaussian F factor and its drought limit.
