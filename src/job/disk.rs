@@ -41,13 +41,14 @@ pub const GPKG_BYTES_PER_TREE: f64 = 130.0;
 pub const CHECKPOINT_BYTES_PER_TREE: f64 = 34.0;
 /// Bytes per fine seed cell of a checkpoint (zstd): the seed grids of every pool species, one
 /// `f32` a fine cell of at most [`crate::sim::world::FINE_SEED_CELL_M`] since round 45's
-/// two-scale dispersal (16–25 times the coarse cells before), stored whole; smooth seed
-/// densities compress to about half their 4 bytes, the empty cells to nothing (round 46).
-pub const CHECKPOINT_BYTES_PER_SEED_CELL: f64 = 2.0;
+/// two-scale dispersal (16–25 times the coarse cells before), stored whole: about 3 (main's
+/// default run at year 75, round 46: 4.58 MB for 1.47 M seed cells, 3.11 bytes a cell, the
+/// parts of the checkpoint compressed apart; BENCHMARKS.md).
+pub const CHECKPOINT_BYTES_PER_SEED_CELL: f64 = 3.0;
 /// Bytes of a checkpoint's regeneration cohorts per light cell and pool species (zstd): about
-/// half a byte (the default run's at year 30, round 42: 1.57 MB for 31,410 trees, 173,000 cells
-/// and 9 species, with the coarse seed grids then).
-pub const CHECKPOINT_COHORT_BYTES_PER_CELL_SPECIES: f64 = 0.5;
+/// 2.8 (the same checkpoint: 3.86 MB for 388,512 cohorts, 9.9 bytes a cohort, over 172,800
+/// light cells and 8 species; until round 45 the estimate counted 0.5 for cohorts and seeds).
+pub const CHECKPOINT_COHORT_BYTES_PER_CELL_SPECIES: f64 = 2.8;
 /// Bytes of an inventory file's fixed part (schema, GeoParquet and PROJJSON metadata): about
 /// 16 KB (a 1 ha run's Parquet inventories of 1,500–3,400 trees: 33–53 KB; round 42).
 pub const FILE_BYTES: f64 = 16.0 * 1024.0;
