@@ -1111,6 +1111,13 @@ impl Factor {
     }
 }
 
+/// The moisture index from which the drought limit counts at most ([`Species::drought_limit`]):
+/// F 5, Ellenberg's "fresh" (medium-moist soils, absent from drying-out ones), a growing season
+/// whose transpiration falls short of demand by 10 % on the site's water balance
+/// (`conditions::moisture_index_of_water`). Wetter than fresh, a species' moisture niche is its
+/// Gaussian F factor's alone (round 46; Sylva choice).
+pub const DROUGHT_FROM_F: f32 = 5.0;
+
 /// The moisture optimum an indifferent F ("x") counts with in the drought limit only: 5, F
 /// "fresh", the middle of Ellenberg's terrestrial 1–9 scale ([`Factor::optimum`],
 /// [`Species::drought_limit`]). The niche factor of an "x" is 1 everywhere
@@ -1171,9 +1178,12 @@ impl Species {
     /// `tol` = `life.drought_tolerance` and `DI` the drought index by which the site is drier
     /// than the species' moisture optimum, read off the F scale of the site's water balance
     /// (`conditions::moisture_index_of_water`: 10 F units per unit of drought index):
-    /// `DI = max(0, min(v, 6) − f) / 10`, `v` the species' F optimum (5 for "x",
-    /// [`Factor::optimum`]), counted from at most F 6 (drought index 0): a wet-site species
-    /// (alder F 9) feels drought only where the growing season has a deficit. So at F 3 (a dry
+    /// `DI = max(0, min(v, 5) − f) / 10`, `v` the species' F optimum (5 for "x",
+    /// [`Factor::optimum`]), counted from at most F 5 ([`DROUGHT_FROM_F`], "fresh"): a
+    /// moist-site species (sycamore F 6, alder F 9) on a fresh site is scored by its Gaussian F
+    /// factor alone, and feels drought where the site is drier than fresh (round 46; round 45
+    /// counted from F 6 and cut sycamore on the tests' fresh site twice, 0.88 × 0.77, so that it
+    /// died out of `tests/sim_density.rs`'s mixture). So at F 3 (a dry
     /// ridge, DI 0.3) beech (F 5, tolerance 0.25) keeps sqrt(1 − 0.2/0.25) = 0.45, sessile oak
     /// (F 5, 0.33) 0.63, Scots pine (x, 0.37) 0.68, black alder (F 9, 0.08) 0. 1 without a
     /// drought tolerance. The Gaussian F factor alone could not tell a drought-tolerant species
@@ -1181,7 +1191,7 @@ impl Species {
     pub fn drought_limit(&self, f: f32) -> f32 {
         match self.life.drought_tolerance {
             Some(tol) => {
-                let v = self.niche.f.optimum().min(crate::conditions::F_NO_DROUGHT as f32);
+                let v = self.niche.f.optimum().min(DROUGHT_FROM_F);
                 drought_factor((v - f).max(0.0) / crate::conditions::F_PER_DROUGHT_INDEX as f32, tol)
             }
             None => 1.0,
