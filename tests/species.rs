@@ -162,8 +162,13 @@ fn suitability_one_at_optimum_and_documented_value_at_tolerance_edge() {
     let wet_site = [5.0, 5.0, 3.0, 9.0, 6.0, 6.0];
     assert!(alder.suitability(&wet_site) > 0.85);
     assert!(beech.suitability(&wet_site) < 0.2);
+    // on a fresh site (F 5) alder has its Gaussian F factor alone (the drought limit counts
+    // below F 5, round 46), on a drier one (F 4: drought index 0.1 beyond fresh, more than its
+    // ForClim tolerance 0.08) none
     let fresh = [5.0, 5.0, 3.0, 5.0, 6.0, 6.0];
-    assert!(alder.suitability(&fresh) < 0.1 && beech.suitability(&fresh) > 0.5);
+    assert!((alder.suitability(&fresh) - (-0.5f32 * 1.6 * 1.6).exp()).abs() < 1e-5 && beech.suitability(&fresh) > 0.9, "{}", alder.suitability(&fresh));
+    let drier = [5.0, 5.0, 3.0, 4.0, 6.0, 6.0];
+    assert!(alder.suitability(&drier) == 0.0 && beech.suitability(&drier) > 0.5);
 }
 
 #[test]
