@@ -1,6 +1,9 @@
 //! Climate and soil constants of a scenario: a base module below both `terrain` (whose fields
 //! use the latitude, lapse rate and wind direction) and `conditions` (which maps the fields to
-//! indices), so that neither imports the other for it (issue 13).
+//! indices), so that neither imports the other for it (issue 13). Its submodule [`water`] is the
+//! monthly water balance (round 44), which the moisture index F reads since round 45.
+
+pub mod water;
 
 /// Climate and soil constants of a scenario that, with the terrain, give the living conditions.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -17,8 +20,12 @@ pub struct Climate {
     pub reference_elevation_m: f32,
     /// Temperature lapse rate (K per km, negative = cooling upwards); default −6.5.
     pub lapse_rate_k_per_km: f32,
-    /// Continentality index K (1–9), constant over the terrain.
-    pub continentality_k: f32,
+    /// Continentality index K (1–9), constant over the terrain, when the scenario gives it;
+    /// otherwise (the default since round 45) derived from the climate's annual temperature
+    /// range and the site's latitude ([`continentality_index`]: Conrad's index mapped onto
+    /// Ellenberg's scale), [`Climate::continentality`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub continentality_k: Option<f32>,
     /// Soil reaction index R (1–9), constant over the terrain.
     pub reaction_r: f32,
     /// Nitrogen index N (1–9), constant over the terrain.
@@ -43,18 +50,18 @@ pub struct Climate {
     /// Annual precipitation of the base climate (mm, 50–10000; default 790, about Germany's
     /// 1961–1990 area mean of the Deutscher Wetterdienst), uniform over the terrain, falling in
     /// equal monthly shares; an anomaly year's precipitation is this times its precipitation
-    /// factor. Read by the water balance ([`crate::sim::water`]), which acts only under a
+    /// factor. Read by the water balance ([`crate::climate::water`]), which acts only under a
     /// changing climate, against the base climate's.
     #[serde(skip_serializing_if = "is_default_precipitation")]
     pub precipitation_mm: f32,
     /// Warmest minus coldest monthly mean temperature (K, 0–60; default 17.4, Germany's
     /// 1961–1990 July 16.9 °C less January −0.5 °C, Deutscher Wetterdienst): the amplitude of
-    /// the water balance's annual temperature cycle ([`crate::sim::water::monthly_temperatures`]).
+    /// the water balance's annual temperature cycle ([`crate::climate::water::monthly_temperatures`]).
     #[serde(skip_serializing_if = "is_default_range")]
     pub temperature_range_k: f32,
     /// Plant-available soil water capacity (mm, 10–1000; default 150) of a cell at the reference
     /// wetness index (TWI 8, F 5); wetter cells hold more, drier less
-    /// ([`crate::sim::water::soil_water_capacity_mm`]). 150 mm: a loam's available water
+    /// ([`crate::climate::water::soil_water_capacity_mm`]). 150 mm: a loam's available water
     /// (field capacity less wilting point, 0.13–0.18 m³/m³: FAO-56, Allen et al. 1998, Table 19)
     /// over a rooting depth of 1 m (ESTIMATE).
     #[serde(skip_serializing_if = "is_default_capacity")]
@@ -67,6 +74,38 @@ pub const DEFAULT_PRECIPITATION_MM: f32 = 790.0;
 pub const DEFAULT_TEMPERATURE_RANGE_K: f32 = 17.4;
 /// Default [`Climate::soil_water_capacity_mm`] (mm).
 pub const DEFAULT_SOIL_WATER_CAPACITY_MM: f32 = 150.0;
+
+/// Conrad's continentality index (Conrad 1946, "Usual formulas of continentality and their
+/// limits of validity", Trans. Am. Geophys. Union 27:663–664): `C = 1.7 A / sin φ − 14`, with
+/// `A` the annual temperature range (K, warmest minus coldest monthly mean) and `φ` the
+/// latitude; about 0 on the most oceanic coasts (Thorshavn) and 100 in the most continental
+/// interior (Verkhoyansk). `|φ|` is taken as at least 10°: the formula is not meant for the
+/// tropics (there `sin φ → 0`).
+pub fn conrad_index(range_k: f64, latitude_deg: f64) -> f64 {
+    let s = latitude_deg.abs().clamp(10.0, 90.0).to_radians().sin();
+    1.7 * range_k / s - 14.0
+}
+
+/// Ellenberg continentality index K (1–9) of a climate of annual temperature range `range_k`
+/// (K) at `latitude_deg`: Conrad's index ([`conrad_index`], 0 … 100) mapped linearly onto
+/// Ellenberg's scale (1 euoceanic … 9 eucontinental; Ellenberg et al. 1992, Scripta Geobotanica
+/// 18), `K = clamp(1 + 0.08 C, 1, 9)`. The linear map is a Sylva choice: both scales run from
+/// the most oceanic to the most continental climate. Values: Germany's range 17.4 K at 50° N
+/// gives C 24.6, K 3.0 (Ellenberg's K 3, "most of Central Europe"); Brest (about 10 K at
+/// 48.4° N) K 1.7; Moscow (about 26 K at 55.8° N) K 4.4; the default scenario's 17.4 K at
+/// Coweeta's 35.05° N K 4.0.
+pub fn continentality_index(range_k: f64, latitude_deg: f64) -> f32 {
+    (1.0 + 0.08 * conrad_index(range_k, latitude_deg)).clamp(1.0, 9.0) as f32
+}
+
+impl Climate {
+    /// The continentality index K (1–9) of the site at `latitude_deg` (the latitude the
+    /// terrain's insolation uses): `continentality_k` where the scenario gives it, else
+    /// [`continentality_index`] of `temperature_range_k`.
+    pub fn continentality(&self, latitude_deg: f64) -> f32 {
+        self.continentality_k.unwrap_or_else(|| continentality_index(self.temperature_range_k as f64, latitude_deg))
+    }
+}
 
 fn is_default_precipitation(v: &f32) -> bool {
     *v == DEFAULT_PRECIPITATION_MM
@@ -91,7 +130,7 @@ impl Default for Climate {
             reference_temperature_c: 9.0,
             reference_elevation_m: 300.0,
             lapse_rate_k_per_km: -6.5,
-            continentality_k: 4.0,
+            continentality_k: None,
             reaction_r: 6.0,
             nitrogen_n: 5.0,
             sea_level_m: 0.0,

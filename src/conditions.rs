@@ -224,7 +224,7 @@ impl SiteConditions {
     /// (for tests and stand-level scenarios). Its mean annual temperature and wetness index are
     /// those its T and F map from ([`temperature_index`], [`moisture_index`] inverted: T 5 is
     /// 8 °C, F 5 a TWI of 8), which the water balance of a changing climate reads
-    /// ([`crate::sim::water`]).
+    /// ([`crate::climate::water`]).
     pub fn uniform(width: usize, height: usize, cell_m: f64, elevation_m: f32, indices: [f32; 6], latitude_deg: f64) -> Self {
         SiteConditions {
             geo: GeoRef::local(cell_m, latitude_deg),
@@ -261,11 +261,54 @@ pub fn temperature_index(t_c: f64) -> f32 {
     (1.0 + 8.0 * (t_c + 2.0) / 20.0).clamp(1.0, 9.0) as f32
 }
 
-/// Moisture index F (1–12) from the topographic wetness index: F = clamp(1 + 0.5·TWI, 1, 12).
-/// Anchors: a ridge (TWI ≈ 4) → 3 (dry), a mid-slope (TWI ≈ 8) → 5 ("fresh", Ellenberg's
-/// mid-point), a valley floor (TWI ≈ 14) → 8, TWI ≥ 22 → 12 (water plants).
+/// Moisture index F (1–12) from the topographic wetness index alone: F = clamp(1 + 0.5·TWI, 1,
+/// 12) (ridge TWI 4 → 3, mid-slope TWI 8 → 5, valley floor TWI 14 → 8). The site's F of
+/// rounds ≤ 44; since round 45 a derived site's F is [`moisture_index_of_water`], and this
+/// mapping remains only to give a uniform site ([`SiteConditions::uniform`]) a wetness index
+/// (its inverse, TWI = 2 (F − 1)).
 pub fn moisture_index(twi: f64) -> f32 {
     (1.0 + 0.5 * twi).clamp(1.0, 12.0) as f32
+}
+
+/// F units per unit of ForClim's drought index in [`moisture_index_of_water`] (a growing season
+/// without transpiration deficit, DI 0, is F 6; DI 0.1 is F 5, DI 0.3 F 3): the drought
+/// index's 0–0.5 span laid over Ellenberg's 1–6 span of the terrestrial F scale (F 1 "extreme
+/// dryness" … F 5 "fresh" … F 6 between fresh and moist). ESTIMATE (Sylva choice, round 45).
+pub const F_PER_DROUGHT_INDEX: f64 = 10.0;
+
+/// F of a cell whose growing season has no transpiration deficit (drought index 0) and no
+/// water from upslope: 6, between Ellenberg's "fresh" (5) and "moist" (7).
+pub const F_NO_DROUGHT: f64 = 6.0;
+
+/// Wetness index above which a cell gathers water from upslope beyond what its soil holds
+/// (coves and valley floors): the water balance's reference index
+/// ([`crate::climate::water::TWI_REFERENCE`], TWI 8, where a cell holds the climate's
+/// `soil_water_capacity_mm`). ESTIMATE (round 45: with TWI 10 the wettest 5 % of the default
+/// window reached only F 5.4, with TWI 8 F 5.5).
+pub const TWI_LATERAL: f64 = crate::climate::water::TWI_REFERENCE;
+
+/// Moisture index F (1–12) of a cell from its water balance (round 45): the growing-season
+/// drought index `drought_index` of the base climate (ForClim's mean `1 − AET/PET`, Bugmann &
+/// Cramer 1998; [`crate::climate::water::WaterClimate::cell_drought_index`]: Thornthwaite PET,
+/// the year's precipitation, a soil bucket whose capacity grows with the wetness index) and the
+/// water the cell receives from upslope (its wetness index `twi` above [`TWI_LATERAL`]):
+///
+/// `F = clamp(6 − 10 · DI + 0.5 · max(0, TWI − 8), 1, 12)`.
+///
+/// The dry side follows Ellenberg's F scale (Ellenberg et al. 1992, Scripta Geobotanica 18:
+/// 1 extreme dryness, 3 dry, 5 fresh: "medium-moist soils, absent from wet and from
+/// drying-out ones", 7 moist, 9 wet, 10–12 water), read as a growing-season water deficit:
+/// F 5 where transpiration falls short of demand by 10 % over the season, F 3 by 30 %
+/// ([`F_PER_DROUGHT_INDEX`], [`F_NO_DROUGHT`]; ESTIMATE). Indicator-calibrated F tracks measured
+/// soil moisture and the depth of the water table roughly linearly (Schaffers & Sýkora 2000,
+/// J. Veg. Sci. 11:225–244), which the linear map follows. The wet side keeps the 0.5 F per
+/// unit of wetness index of the TWI mapping of rounds ≤ 44 ([`moisture_index`]), for the water
+/// from upslope the bucket does not hold: a valley floor of TWI 14 gains 3 (F ≈ 8.5, "moist to
+/// wet"). On the default Coweeta window (790 mm, 9.5 °C at 750 m) F runs from about 2.6 on the
+/// ridges (5 %) over 4.4 (median) to 5.5 in the coves (95 %; BENCHMARKS.md, round 45).
+/// A NaN index gives NaN.
+pub fn moisture_index_of_water(drought_index: f64, twi: f64) -> f32 {
+    (F_NO_DROUGHT - F_PER_DROUGHT_INDEX * drought_index + 0.5 * (twi - TWI_LATERAL).max(0.0)).clamp(1.0, 12.0) as f32
 }
 
 /// Living conditions of `terrain` under `climate` (see [`derive_with_progress`]).
@@ -275,7 +318,9 @@ pub fn derive(terrain: &crate::terrain::Terrain, climate: &Climate) -> crate::Re
 
 /// Computes every terrain field ([`crate::terrain::fields::compute`]) and maps it to the
 /// Ellenberg-style indices: L by [`light_index`], T by [`temperature_index`], F by
-/// [`moisture_index`], K, R, N the scenario constants of `climate`. Masked cells (nodata or at
+/// [`moisture_index_of_water`] of the cell's base-climate drought index and wetness index, K
+/// by [`Climate::continentality`] (the scenario's, else from the temperature range and the
+/// latitude), R, N the scenario constants of `climate`. Masked cells (nodata or at
 /// or below `climate.sea_level_m`) get indices `[0; 6]`, elevation 0 where not finite, and NaN in
 /// the other fields. `progress` receives the name of each stage.
 ///
@@ -310,16 +355,20 @@ pub fn derive_window(dem: &crate::terrain::io::DemWindow, out: &crate::grid::Win
 fn from_fields_of(elevation: &Grid<f32>, geo: &GeoRef, full_h: usize, climate: &Climate, f: crate::terrain::fields::Fields) -> SiteConditions {
     let (w, h) = (elevation.width, elevation.height);
     let flat = f.flat_insolation_kwh_m2.max(1e-9);
+    let lat = geo.insolation_latitude_deg(climate.latitude_deg);
+    let water = crate::climate::water::WaterClimate::of(climate);
+    let k = climate.continentality(lat);
     let mut indices = Grid::filled(w, h, [0f32; 6]);
     for i in 0..w * h {
         if !f.mask.data[i] {
             continue;
         }
+        let (t, twi) = (f.temperature_c.data[i] as f64, f.twi.data[i] as f64);
         let mut v = [0f32; 6];
         v[factor::L] = light_index(f.insolation_kwh_m2.data[i] as f64 / flat);
-        v[factor::T] = temperature_index(f.temperature_c.data[i] as f64);
-        v[factor::K] = climate.continentality_k;
-        v[factor::F] = moisture_index(f.twi.data[i] as f64);
+        v[factor::T] = temperature_index(t);
+        v[factor::K] = k;
+        v[factor::F] = moisture_index_of_water(water.cell_drought_index(t, twi, lat, 0.0, 1.0), twi);
         v[factor::R] = climate.reaction_r;
         v[factor::N] = climate.nitrogen_n;
         indices.data[i] = v;
@@ -373,7 +422,7 @@ mod derive_tests {
         for &i in &valid {
             let v = s.indices.data[i];
             assert!(v.iter().all(|x| (1.0..=12.0).contains(x)), "{v:?}");
-            assert_eq!(v[factor::K], 4.0);
+            assert_eq!(v[factor::K], c.continentality(s.geo.latitude_deg));
         }
         // Higher ground is colder: the highest valid cell has the lowest T.
         let hi = *valid.iter().max_by(|&&a, &&b| s.elevation_m.data[a].total_cmp(&s.elevation_m.data[b])).unwrap();

@@ -46,11 +46,11 @@ fn thirds(w: &sylva::sim::World) -> (f32, f32) {
 }
 
 /// One year 3 K warmer (precipitation as the base climate's): every cell's suitability for
-/// Norway spruce (drought tolerance 0.20) and beech (0.30) is the niche of the warmer indices
-/// times ForClim's `sqrt(1 − rise / tolerance)` of the cell's rise of the drought index, the
-/// rise is positive, and larger in the lowest third of the window (warmest, highest PET) than in
-/// the highest. Before round 44 warming did not touch the drought term (the suitability was
-/// the niche alone: the ratio 1 where the water balance asks for less).
+/// Norway spruce (drought tolerance 0.15) and beech (0.25) is that of the warmer indices with F
+/// lowered by 10 × the cell's rise of the drought index (round 45; round 44 multiplied the
+/// niche by ForClim's `sqrt(1 − rise / tolerance)`), whose drought limit is ForClim's factor;
+/// the rise is positive, and larger in the lowest third of the window (warmest, highest PET)
+/// than in the highest. Before round 44 warming did not touch the drought term.
 #[test]
 fn warming_raises_the_drought_index_most_in_the_lowlands_and_cuts_suitability_by_tolerance() {
     let dir = std::env::temp_dir().join(format!("sylva_water_suit_{}", std::process::id()));
@@ -77,9 +77,17 @@ fn warming_raises_the_drought_index_most_in_the_lowlands_and_cuts_suitability_by
             if niche < 0.05 {
                 continue;
             }
-            let want = (1.0 - rise / tol).max(0.0).sqrt();
-            let got = w.site.suitability[p][k] as f64 / niche;
-            assert!((got - want).abs() < 1e-4, "{id} cell {k} ({:.0} m, {t:.1} °C, TWI {twi:.1}): suitability / niche {got:.5}, ForClim's factor of the rise {rise:.4} is {want:.5}", c.elevation_m.data[k]);
+            // round 45: the rise lowers F by 10 per unit, and the species' niche and drought
+            // limit (ForClim's factor of the drought beyond its F optimum, its tolerance) of
+            // the year's indices are the suitability
+            let ix = sylva::sim::climate_change::year_indices(&c.indices.data[k], 3.0, rise as f32);
+            assert!((ix[3] as f64 - (c.indices.data[k][3] as f64 - 10.0 * rise).max(1.0)).abs() < 1e-4);
+            let v = match &sp.niche.f.value { sylva::species::Indicator::Value(v) => (*v).min(6.0) as f64, _ => 5.0 };
+            let limit = (1.0 - ((v - ix[3] as f64).max(0.0) / 10.0) / tol).max(0.0).sqrt();
+            assert!((sp.drought_limit(ix[3]) as f64 - limit).abs() < 1e-4, "{id} cell {k}: drought limit {} against ForClim's {limit}", sp.drought_limit(ix[3]));
+            let want = sp.suitability(&ix) as f64;
+            let got = w.site.suitability[p][k] as f64;
+            assert!((got - want).abs() < 1e-5, "{id} cell {k} ({:.0} m, {t:.1} °C, TWI {twi:.1}): suitability {got:.5}, of the year's indices (rise {rise:.4}) {want:.5}", c.elevation_m.data[k]);
             checked += 1;
             if p == 0 {
                 let z = c.elevation_m.data[k];

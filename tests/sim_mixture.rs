@@ -98,18 +98,21 @@ fn beech_gains_on_norway_maple() {
 }
 
 /// Beech with sessile oak on a mesic site, both planted at 3 years: beech survives to 120 (at
-/// least 20 trees on the 0.49 ha) where round 44's beech was gone by 80 (by 60 before round 45's two-scale dispersal). It does NOT hold a
-/// forester's share: measured (seed 5) 0.18 of the basal area at 20, 0.015 at 60, 0.019 at 120
-/// (50 trees). The oak grows faster in its first 20 years (its height curve: 3.8 against 2.5 m
-/// at 10 years) and carries 1.4 times beech's open-grown DBH at the same height (7.7 against
-/// 5.4 cm at 5 m; `life.allometry.hd_a`, ESTIMATEs), so beech falls below the crowding
-/// modifier's size share and dies of slow-growth stress, whatever its shade tolerance
-/// (BENCHMARKS.md, "Round 45 (r45b: …)"; not solved in round 45).
+/// least 20 trees on the 0.49 ha) where round 44's beech (the variant) keeps a remnant. Measured
+/// (seed 5, round 46: L out of the site suitability, so beech's S on the test site is 1, 0.88
+/// before): beech 0.229 of the basal area at 20, 0.068 at 60, 0.112 at 120 (283 trees); round
+/// 44's beech 0.173, 0.005, 0.005 (24 trees, recruits from 80 on; until round 45 it was gone by
+/// 80). Round 45 (main): 0.18, 0.015, 0.019 (50 trees). The oak grows faster in its first 20
+/// years (its height curve: 3.8 against 2.5 m at 10 years) and carries 1.4 times beech's
+/// open-grown DBH at the same height (7.7 against 5.4 cm at 5 m; `life.allometry.hd_a`,
+/// ESTIMATEs), so beech falls below the crowding modifier's size share and dies of slow-growth
+/// stress, whatever its shade tolerance, until the oaks' canopy thins (BENCHMARKS.md, "Round 45
+/// (r45b: …)").
 #[test]
 fn beech_survives_among_sessile_oak() {
     let (now, was) = both("beech_oak", &[("beech", 2.5), ("sessile_oak", 2.2)]);
     assert!(now[119].1 >= 20 && now[119].0 > 0.005, "beech keeps {} trees, {:.3} of the basal area at 120", now[119].1, now[119].0);
-    // round 44's beech: 1 tree left at 60 with round 45's two-scale dispersal (0 before it), none from 80
-    assert_eq!(was[79].1, 0, "round 44's beech kept {} trees at 80", was[79].1);
-    assert_eq!(was[119].1, 0, "round 44's beech kept {} trees at 120", was[119].1);
+    // round 44's beech keeps a remnant: under a tenth of this beech's trees and basal area
+    assert!(10 * was[119].1 < now[119].1 && 10.0 * was[119].0 < now[119].0, "round 44's beech keeps {} trees, {:.3} of the basal area at 120", was[119].1, was[119].0);
+    assert!(was[59].0 < 0.2 * now[59].0, "round 44's beech holds {:.3} at 60, this {:.3}", was[59].0, now[59].0);
 }

@@ -145,11 +145,16 @@ fn a_dry_year_cuts_spruce_diameter_growth_more_than_pine() {
     assert!(s0 > 0.02 && p0 > 0.02, "{s0} {p0}");
     // the rise of the drought index: the site's cell (8 °C, TWI 8, 51° N) in the dry year less
     // in the base climate; 0.1341 by an independent reimplementation of the same formulas
-    let water = sylva::sim::water::WaterClimate::default();
+    let water = sylva::climate::water::WaterClimate::default();
     let rise = water.cell_drought_index(8.0, 8.0, 51.0, 0.0, 0.7) - water.cell_drought_index(8.0, 8.0, 51.0, 0.0, 1.0);
     assert!((rise - 0.1341).abs() < 0.002, "rise {rise}");
-    // ForClim's factor sqrt(1 − DI / tolerance) of the rise
-    let (want_s, want_p) = ((1.0f64 - rise / 0.20).sqrt(), (1.0f64 - rise / 0.42).sqrt());
+    // ForClim's factor sqrt(1 − DI / tolerance) of the rise (round 45: the rise lowers F by 10
+    // per unit from the site's F 5, the optimum of spruce's and pine's "x", and the drought
+    // limit of the drought beyond it multiplies the niche; tolerances ForClim's, 0.15 and 0.37)
+    let lib = common::embedded();
+    let tol = |id: &str| lib.species[lib.find(id).unwrap() as usize].life.drought_tolerance.unwrap() as f64;
+    let (want_s, want_p) = ((1.0f64 - rise / tol("norway_spruce")).max(0.0).sqrt(), (1.0f64 - rise / tol("scots_pine")).sqrt());
+    assert!((tol("norway_spruce") - 0.15).abs() < 1e-6 && (tol("scots_pine") - 0.37).abs() < 1e-6);
     assert!((rs - want_s).abs() < 0.01, "spruce × {rs:.4}, expected {want_s:.4}");
     assert!((rp - want_p).abs() < 0.01, "pine × {rp:.4}, expected {want_p:.4}");
     assert!(rs < rp);

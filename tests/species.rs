@@ -105,7 +105,7 @@ fn round_trip_is_lossless() {
 fn suitability_one_at_optimum_and_documented_value_at_tolerance_edge() {
     let lib = SpeciesLibrary::embedded().unwrap();
     let beech = lib.get("beech").unwrap();
-    // beech: L 3, T 5, K 2, F 5, R x, N x.
+    // beech: L 3, T 5, K 2, F 5, R x, N x. An indifferent factor imposes no limit (round 46).
     let opt = [3.0, 5.0, 2.0, 5.0, 1.0, 9.0];
     assert!((beech.suitability(&opt) - 1.0).abs() < 1e-6);
     assert_eq!(beech.suitability_factors(&opt), [1.0; 6]);
@@ -118,14 +118,26 @@ fn suitability_one_at_optimum_and_documented_value_at_tolerance_edge() {
             Indicator::Value(v) => {
                 for sign in [-1.0, 1.0] {
                     x[i] = v + sign * f.tolerance;
-                    let s = beech.suitability(&x);
+                    let s = beech.suitability_factors(&x)[i];
                     assert!((s - TOLERANCE_EDGE_SUITABILITY).abs() < 1e-5, "factor {i}: {s}");
+                    // the site suitability: L left out (the light model's), the others by the
+                    // minimum (on F's dry side times the drought limit)
+                    let site = beech.suitability(&x);
+                    if i == 0 {
+                        assert_eq!(site, beech.suitability(&opt));
+                    } else if i == 3 && sign < 0.0 {
+                        let want = (1.0 - (f.tolerance / 10.0) / beech.life.drought_tolerance.unwrap()).max(0.0).sqrt();
+                        assert!((site - want * TOLERANCE_EDGE_SUITABILITY).abs() < 1e-5, "dry F: {site} {want}");
+                    } else {
+                        assert!((site - TOLERANCE_EDGE_SUITABILITY).abs() < 1e-5, "factor {i}: {site}");
+                    }
                 }
             }
             Indicator::Indifferent(_) => {
                 for v in [1.0, 5.0, 9.0] {
                     x[i] = v;
-                    assert_eq!(beech.suitability(&x), 1.0);
+                    assert_eq!(beech.suitability_factors(&x)[i], 1.0, "x at {v}");
+                    assert_eq!(beech.suitability(&x), 1.0, "x at {v}");
                 }
             }
         }
@@ -134,22 +146,29 @@ fn suitability_one_at_optimum_and_documented_value_at_tolerance_edge() {
     let mut wet = opt;
     wet[3] = 5.0 + 3.0 * n.f.tolerance;
     assert!((beech.suitability(&wet) - (-4.5f32).exp()).abs() < 1e-4);
-    // Symmetric and monotone away from the optimum.
+    // Symmetric and monotone away from the optimum (the factor's own response).
     let mut prev = 1.0;
     for k in 1..20 {
         let mut x = opt;
         x[1] = 5.0 + k as f32 * 0.2;
-        let s = beech.suitability(&x);
+        let s = beech.suitability_factors(&x)[1];
         assert!(s < prev);
         x[1] = 5.0 - k as f32 * 0.2;
-        assert!((beech.suitability(&x) - s).abs() < 1e-6);
+        assert!((beech.suitability_factors(&x)[1] - s).abs() < 1e-6);
         prev = s;
     }
     // Black alder (F 9) is clearly better than beech on wet ground and worse on dry-moist.
     let alder = lib.get("black_alder").unwrap();
     let wet_site = [5.0, 5.0, 3.0, 9.0, 6.0, 6.0];
-    assert!(alder.suitability(&wet_site) > 0.9);
+    assert!(alder.suitability(&wet_site) > 0.85);
     assert!(beech.suitability(&wet_site) < 0.2);
+    // on a fresh site (F 5) alder has its Gaussian F factor alone (the drought limit counts
+    // below F 5, round 46), on a drier one (F 4: drought index 0.1 beyond fresh, more than its
+    // ForClim tolerance 0.08) none
+    let fresh = [5.0, 5.0, 3.0, 5.0, 6.0, 6.0];
+    assert!((alder.suitability(&fresh) - (-0.5f32 * 1.6 * 1.6).exp()).abs() < 1e-5 && beech.suitability(&fresh) > 0.9, "{}", alder.suitability(&fresh));
+    let drier = [5.0, 5.0, 3.0, 4.0, 6.0, 6.0];
+    assert!(alder.suitability(&drier) == 0.0 && beech.suitability(&drier) > 0.5);
 }
 
 #[test]

@@ -39,6 +39,16 @@ pub const GPKG_BYTES_PER_TREE: f64 = 130.0;
 /// run's 1,534 trees: 58 KB). The run keeps one (while it writes the next, two stand for a
 /// moment: not counted).
 pub const CHECKPOINT_BYTES_PER_TREE: f64 = 34.0;
+/// Bytes per fine seed cell of a checkpoint (zstd): the seed grids of every pool species, one
+/// `f32` a fine cell of at most [`crate::sim::world::FINE_SEED_CELL_M`] since round 45's
+/// two-scale dispersal (16–25 times the coarse cells before), stored whole: about 3 (main's
+/// default run at year 75, round 46: 4.58 MB for 1.47 M seed cells, 3.11 bytes a cell, the
+/// parts of the checkpoint compressed apart; BENCHMARKS.md).
+pub const CHECKPOINT_BYTES_PER_SEED_CELL: f64 = 3.0;
+/// Bytes of a checkpoint's regeneration cohorts per light cell and pool species (zstd): about
+/// 2.8 (the same checkpoint: 3.86 MB for 388,512 cohorts, 9.9 bytes a cohort, over 172,800
+/// light cells and 8 species; until round 45 the estimate counted 0.5 for cohorts and seeds).
+pub const CHECKPOINT_COHORT_BYTES_PER_CELL_SPECIES: f64 = 2.8;
 /// Bytes of an inventory file's fixed part (schema, GeoParquet and PROJJSON metadata): about
 /// 16 KB (a 1 ha run's Parquet inventories of 1,500–3,400 trees: 33–53 KB; round 42).
 pub const FILE_BYTES: f64 = 16.0 * 1024.0;
@@ -151,14 +161,24 @@ pub fn estimate(scenario: &Scenario, world: &World, opts: &Writes<'_>) -> DiskEs
             }
         }
     }
-    // the checkpoint of the final stand, with the seed grids and cohorts (about half a byte a
-    // light cell and species after zstd: the default run's at year 30, 1.57 MB for 31,410
-    // trees, 173,000 cells and 9 species)
-    e.checkpoint = 4096.0 + e.trees * CHECKPOINT_BYTES_PER_TREE + cells * np * 0.5;
+    // the checkpoint of the final stand, with the seed grids and cohorts
+    let seed_cells: f64 = world.stand.seeds.iter().map(|g| g.data.len() as f64).sum();
+    e.checkpoint = checkpoint_bytes(e.trees, seed_cells, cells, np);
     // stand table ~ 200 B + 24 B per species a row, the per-species table ~ 160 B per species
     // and year, and the plot
     e.tables = (years as f64 + 1.0) * (200.0 + 24.0 * np + 160.0 * np) + PLOT_BYTES;
     e
+}
+
+/// Bytes of a checkpoint (`sim::checkpoint`, zstd) of a stand of `trees` trees whose pool of
+/// `species` species has `seed_cells` fine seed cells in all (the lengths of the world's seed
+/// grids, `World::stand.seeds`) over `light_cells` light cells: 4 KB of identity and stand
+/// table, [`CHECKPOINT_BYTES_PER_TREE`] a tree, [`CHECKPOINT_BYTES_PER_SEED_CELL`] a seed cell
+/// and [`CHECKPOINT_COHORT_BYTES_PER_CELL_SPECIES`] a light cell and species for the cohorts.
+/// Within ±25 % of a real checkpoint (`tests/checkpoint_size.rs`; the default run's, round 46:
+/// BENCHMARKS.md).
+pub fn checkpoint_bytes(trees: f64, seed_cells: f64, light_cells: f64, species: f64) -> f64 {
+    4096.0 + trees * CHECKPOINT_BYTES_PER_TREE + seed_cells * CHECKPOINT_BYTES_PER_SEED_CELL + light_cells * species * CHECKPOINT_COHORT_BYTES_PER_CELL_SPECIES
 }
 
 /// Bytes free to an unprivileged user on the file system holding `dir`, or the nearest folder

@@ -13,7 +13,7 @@
 //! (every tree's suitability) and establishment (every cell's suitability) from that year on.
 //!
 //! Warming and the precipitation factor also act on water (round 44): each year every cell's
-//! monthly soil-water balance ([`crate::sim::water`]: Thornthwaite's PET, a bucket, ForClim's
+//! monthly soil-water balance ([`crate::climate::water`]: Thornthwaite's PET, a bucket, ForClim's
 //! drought index) under the year's temperature and precipitation, against the same balance
 //! under the base climate; the rise of the drought index cuts each species by its drought
 //! tolerance ([`crate::species::Species::drought_response`]). The precipitation factor acts
@@ -23,7 +23,7 @@
 
 use crate::climate::Climate;
 use crate::conditions::factor;
-use crate::sim::water::WaterClimate;
+use crate::climate::water::WaterClimate;
 use crate::error::{Error, Result};
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -44,7 +44,7 @@ pub struct ClimateChange {
     /// Anomalies by simulation year: (temperature K, precipitation factor).
     pub anomalies: BTreeMap<u32, (f64, f64)>,
     /// The base climate's precipitation, annual temperature range and soil water capacity
-    /// ([`crate::sim::water`]).
+    /// ([`crate::climate::water`]).
     pub water: WaterClimate,
 }
 
@@ -92,10 +92,23 @@ impl ClimateChange {
 
 /// The indices `ix` (`[L, T, K, F, R, N]`) under a temperature offset `dt_k` (K): T moved by
 /// [`T_INDEX_PER_K`]` · dt_k` (clamped 1–9), the others unchanged (the precipitation factor acts
-/// through the water balance, [`crate::sim::water`], not on F).
+/// through the water balance, [`crate::climate::water`], not on F).
 pub fn shifted_indices(ix: &[f32; 6], dt_k: f64) -> [f32; 6] {
     let mut v = *ix;
     v[factor::T] = (v[factor::T] + T_INDEX_PER_K * dt_k as f32).clamp(1.0, 9.0);
+    v
+}
+
+/// The indices `ix` of a year `dt_k` kelvin warmer than the base climate whose cell's drought
+/// index lies `di_rise` (≥ 0) above the base climate's (round 45): T moved as
+/// [`shifted_indices`], and F lowered by the rise on the scale of the site's water balance,
+/// `F − 10 · di_rise` (clamped 1–12; [`crate::conditions::moisture_index_of_water`], whose F is
+/// the base climate's drought index read onto Ellenberg's scale, 10 F units per unit of drought
+/// index). Through F the year's drought acts on both the species' moisture niche and its
+/// drought limit ([`crate::species::Species::drought_limit`]).
+pub fn year_indices(ix: &[f32; 6], dt_k: f64, di_rise: f32) -> [f32; 6] {
+    let mut v = shifted_indices(ix, dt_k);
+    v[factor::F] = (v[factor::F] - crate::conditions::F_PER_DROUGHT_INDEX as f32 * di_rise.max(0.0)).clamp(1.0, 12.0);
     v
 }
 

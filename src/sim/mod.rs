@@ -26,7 +26,9 @@ pub mod stats;
 pub mod step;
 pub mod tiles;
 pub mod trees;
-pub mod water;
+/// The water balance (moved to [`crate::climate::water`] in round 45, so that the site's
+/// moisture index F can read it; re-exported here under its round-44 path).
+pub use crate::climate::water;
 pub mod world;
 
 pub use scenario::{Scenario, Start, TerrainSpec};

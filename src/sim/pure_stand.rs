@@ -11,7 +11,10 @@ use crate::error::Result;
 use crate::species::{Indicator, Species, SpeciesLibrary};
 
 /// Site indices `[L, T, K, F, R, N]` at a species' niche optimum: each Ellenberg value of the
-/// species, and for indifferent ("x") factors the fresh, base-rich values `[5, 5, 2, 5, 6, 6]`.
+/// species, and for indifferent ("x") factors the fresh, base-rich values `[5, 5, 2, 5, 6, 6]`
+/// (an "x" imposes no limit, [`crate::species::Factor::suitability`]; F 5 is also where an
+/// indifferent F's drought limit starts, [`crate::species::INDIFFERENT_OPTIMUM`]): the site
+/// suitability is 1 (L is not part of it since round 45).
 pub fn niche_optimum(sp: &Species) -> [f32; 6] {
     const DEFAULT: [f32; 6] = [5.0, 5.0, 2.0, 5.0, 6.0, 6.0];
     let n = &sp.niche;

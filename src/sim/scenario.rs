@@ -240,14 +240,28 @@ fn invalid(ctx: &str, field: &str, value: impl ToString, expected: &str) -> Erro
 /// replicated at its edge).
 pub const MIN_WINDOW_CELLS: usize = 3;
 
-/// Memory of a simulated site per cell (bytes): its conditions, indices, suitability and the
-/// light, seed and crowding grids at the default light cell, measured on uniform sites of 1 and
-/// 4 million 10 m cells with two species (217 and 665 MB peak, `sylva simulate`, one year:
-/// 149 bytes a cell), before any tree.
-pub const SITE_BYTES_PER_CELL: u64 = 150;
+/// Memory of a simulated site per 10 m cell (bytes) besides its seed grids: its conditions,
+/// indices, suitability and the light and crowding grids at the default light cell, before any
+/// tree. Round 46 (after round 45's fine seed grids): a uniform site of N × N 10 m cells one
+/// year, peak RSS with two species 233 MB (N = 1,000) and 671 MB (N = 2,000), with the
+/// default's eight 396 MB and 1,181 MB (`sylva simulate`, BENCHMARKS.md round 46): 150 and 268
+/// bytes a cell, 110 besides [`SEED_BYTES_PER_CELL_SPECIES`] per species (round 26: 149 with
+/// two species on the coarse seed grids).
+pub const SITE_BYTES_PER_CELL: u64 = 110;
 
-/// Memory of a run besides its site (bytes): 70 MB (the 1-million-cell run above less its cells).
+/// Memory per 10 m cell and pool species (bytes) of its seed grid of fine cells of at most
+/// [`crate::sim::world::FINE_SEED_CELL_M`] (5 m: 4 `f32` a 10 m cell, 16 bytes, and the
+/// reproduction's spreading): 20, the slope of the measurements of [`SITE_BYTES_PER_CELL`]
+/// between two and eight species ((268 − 150) / 6). It grows with the cell's area (a 20 m cell
+/// holds 16 fine cells).
+pub const SEED_BYTES_PER_CELL_SPECIES: u64 = 20;
+
+/// Memory of a run besides its site (bytes): 70 MB, and [`BASE_BYTES_PER_SPECIES`] a species
+/// (the measurements above: 89 MB with two species, 137 MB with eight, less their cells).
 pub const BASE_BYTES: u64 = 70_000_000;
+
+/// Memory of a run besides its site per pool species (bytes): 8 MB (see [`BASE_BYTES`]).
+pub const BASE_BYTES_PER_SPECIES: u64 = 8_000_000;
 
 /// Whether `id` is the id of a species of the embedded library (`species/*.toml`, the file stem);
 /// a hint for telling which of two near names is misspelt, before any library is loaded.
@@ -364,7 +378,7 @@ pub fn validate_climate(c: &Climate, ctx: &str) -> Result<()> {
         ("reference_temperature_c", c.reference_temperature_c as f64, c.reference_temperature_c.to_string(), -30.0, 40.0, "°C"),
         ("reference_elevation_m", c.reference_elevation_m as f64, c.reference_elevation_m.to_string(), -500.0, 9000.0, "m"),
         ("lapse_rate_k_per_km", c.lapse_rate_k_per_km as f64, c.lapse_rate_k_per_km.to_string(), -15.0, 5.0, "K/km"),
-        ("continentality_k", c.continentality_k as f64, c.continentality_k.to_string(), 1.0, 9.0, "(index)"),
+        ("continentality_k", c.continentality_k.unwrap_or(5.0) as f64, c.continentality_k.map_or(String::new(), |k| k.to_string()), 1.0, 9.0, "(index; leave it out to derive it from temperature_range_k)"),
         ("reaction_r", c.reaction_r as f64, c.reaction_r.to_string(), 1.0, 9.0, "(index)"),
         ("nitrogen_n", c.nitrogen_n as f64, c.nitrogen_n.to_string(), 1.0, 9.0, "(index)"),
         ("sea_level_m", c.sea_level_m as f64, c.sea_level_m.to_string(), -500.0, 9000.0, "m"),
@@ -987,15 +1001,31 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
         }
     }
 
+    /// The memory (bytes) the site of this scenario needs before any tree where the scenario
+    /// alone tells its cells ([`Scenario::site_cells`]): per cell [`SITE_BYTES_PER_CELL`] and
+    /// per species [`SEED_BYTES_PER_CELL_SPECIES`] (scaled by the cell's area over a 10 m
+    /// cell's where the scenario gives the cell size, a window of a DEM counting as 10 m), plus
+    /// [`BASE_BYTES`] and [`BASE_BYTES_PER_SPECIES`] per species; `None` for a whole DEM file.
+    pub fn site_memory_bytes(&self) -> Option<u64> {
+        let cells = self.site_cells()?;
+        let cell_m = match (self.terrain.window, self.terrain_spec()) {
+            (None, TerrainSpec::Uniform(u)) => u.cell_m,
+            (None, TerrainSpec::Generate(g)) => g.cell_m,
+            _ => 10.0,
+        };
+        let species = self.species.len().max(1) as u64;
+        let seed = ((SEED_BYTES_PER_CELL_SPECIES * species) as f64 * (cell_m / 10.0).powi(2).max(1.0)).ceil() as u64;
+        Some(cells.saturating_mul(SITE_BYTES_PER_CELL + seed).saturating_add(BASE_BYTES + BASE_BYTES_PER_SPECIES * species))
+    }
+
     /// Refuses a site whose conditions and grids alone need more memory than `available_bytes`
-    /// (the machine's available memory): [`SITE_BYTES_PER_CELL`] a cell plus
-    /// [`BASE_BYTES`], before any tree. A trial's 8000 × 8000 uniform site passed validation and
-    /// aborted with "memory allocation failed" on an 8 GB machine.
+    /// (the machine's available memory): [`Scenario::site_memory_bytes`], before any tree. A
+    /// trial's 8000 × 8000 uniform site passed validation and aborted with "memory allocation
+    /// failed" on an 8 GB machine.
     ///
     /// Errors: [`Error::Invalid`] naming the terrain field, the bytes needed and available.
     pub fn check_site_memory(&self, available_bytes: u64) -> Result<()> {
-        let Some(cells) = self.site_cells() else { return Ok(()) };
-        let need = cells.saturating_mul(SITE_BYTES_PER_CELL).saturating_add(BASE_BYTES);
+        let (Some(cells), Some(need)) = (self.site_cells(), self.site_memory_bytes()) else { return Ok(()) };
         if need <= available_bytes {
             return Ok(());
         }
@@ -1007,7 +1037,7 @@ the unknown field `{key}` is on line {line_no}", msg.trim_end());
             _ => ("terrain", format!("{cells} cells")),
         };
         let gb = |b: u64| b as f64 / 1e9;
-        Err(invalid(&self.context(), field, value, &format!("a site this machine can hold: {cells} cells need about {:.1} GB ({SITE_BYTES_PER_CELL} bytes a cell for the conditions and grids, before any tree) and {:.1} GB are available; use a smaller site or window, or coarser cells", gb(need), gb(available_bytes))))
+        Err(invalid(&self.context(), field, value, &format!("a site this machine can hold: {cells} cells need about {:.1} GB ({:.0} bytes a cell for the conditions, grids and {} species' seed grids, before any tree) and {:.1} GB are available; use a smaller site or window, or coarser cells", gb(need), need as f64 / cells as f64, self.species.len(), gb(available_bytes))))
     }
 
     /// The terrain source to load.

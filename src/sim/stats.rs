@@ -67,7 +67,7 @@ pub struct StandRow {
     /// The year's precipitation factor (1 under a constant climate).
     pub precipitation_factor: f64,
     /// The year's drought index (0–1), site mean: ForClim's growing-season `1 − AET/PET` of each
-    /// site cell's monthly water balance ([`crate::sim::water`]) under the year's climate,
+    /// site cell's monthly water balance ([`crate::climate::water`]) under the year's climate,
     /// averaged over the site's unmasked light cells ([`drought_sums`]); under a constant climate
     /// the base climate's, the same every year. The species respond to its rise over the base
     /// climate's, cell by cell (`sim::phases::climate`). Round 44.
@@ -786,7 +786,7 @@ pub const DROUGHT_ONE: f64 = (1u64 << 24) as f64;
 
 /// The stand table's drought-index sums of `site` in `year`: the unmasked light cells this world
 /// steps (`site.light_site`: every light cell in one process, a tile's own) and the sum of
-/// their site cells' drought indices ([`crate::sim::water::WaterClimate::cell_drought_index`]
+/// their site cells' drought indices ([`crate::climate::water::WaterClimate::cell_drought_index`]
 /// under the year's temperature offset and precipitation factor), each rounded to
 /// [`DROUGHT_ONE`]: integers, so the parts of a tiled run add to one process's sums exactly.
 /// Under a constant climate the sums are the base climate's, computed once

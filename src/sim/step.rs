@@ -67,7 +67,7 @@ pub const N_PHASES: usize = 8;
 
 /// The year, in order. ARCHITECTURE.md quotes this list (checked by `tests/layers.rs`).
 pub const PHASES: [Phase; N_PHASES] = [
-    Phase { name: "climate", summary: "the year's temperature offset moves T, and the year's temperature and precipitation drive every cell's monthly water balance (`sim::water`); suitability of every cell and tree, cut by each species' drought tolerance where the drought index rises above the base climate's (nothing under a constant climate)", ends: None, run: run_climate, halo: Halo::None },
+    Phase { name: "climate", summary: "the year's temperature offset moves T, and the year's temperature and precipitation drive every cell's monthly water balance (`climate::water`), whose rise of the drought index over the base climate's lowers F; suitability of every cell and tree, the species' niche and drought limit of the year's indices (nothing under a constant climate)", ends: None, run: run_climate, halo: Halo::None },
     Phase { name: "light", summary: "canopy grid from the trees at the start of the year; light of every tree and of the ground", ends: None, run: run_light, halo: Halo::Crowns },
     Phase { name: "regeneration", summary: "spring: germination, growth, thinning and recruitment of the sapling cohorts", ends: Some(Season::Spring), run: run_regeneration, halo: Halo::None },
     Phase { name: "growth", summary: "summer: crowding of every tree's neighbourhood; height, DBH and crown increments", ends: Some(Season::Summer), run: run_growth, halo: Halo::Crowding },

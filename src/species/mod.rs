@@ -207,13 +207,17 @@ pub struct LifeHistory {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub foliage: Option<Foliage>,
     /// Drought tolerance (0.05–0.6): the largest drought index (0 none … 1 no water for
-    /// transpiration, [`crate::sim::water::drought_index`]) at which the species still grows, as ForClim's and
-    /// LandClim's species parameter (Bugmann & Cramer 1998, For. Ecol. Manage. 103:247–263;
-    /// LandClim's `droughtTol`, Schumacher et al. 2004, values in species/sources/
-    /// species_traits.csv). In a year drier than the base climate growth and establishment are
-    /// reduced by [`drought_factor`] of the rise of the year's drought index over the base
-    /// climate's ([`Species::drought_response`]; issue 35, rounds 39 and 44). Optional: without it the species does not respond to drought
-    /// (beyond its moisture niche F).
+    /// transpiration, [`crate::climate::water::drought_index`]) at which the species still
+    /// grows, as ForClim's species parameter `kDrTol` (Bugmann & Cramer 1998, For. Ecol.
+    /// Manage. 103:247–263; the shipped values are ForClim 2.x's set for that paper's bucket
+    /// water balance since round 45, LandClim's `droughtTol` before; Bugmann 1994's Tab. 3.11
+    /// belongs to FORCLIM-P's Thornthwaite–Mather balance and is lower for the conifers,
+    /// species/sources/SOURCES.md). The site suitability's
+    /// drought limit ([`Species::drought_limit`]) is [`drought_factor`] of the drought beyond
+    /// the species' moisture optimum read off the site's F, in the base climate and, lowered by
+    /// the year's rise of the drought index, in every year of a changing climate (issue 35,
+    /// rounds 39, 44 and 45). Optional: without it the species has no drought limit (beyond its
+    /// moisture niche F).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub drought_tolerance: Option<f32>,
     /// Shade tolerance class (1 least … 5 most tolerant) of survival in shade: the class that
@@ -1083,7 +1087,10 @@ impl Factor {
     /// (= e^(−½) ≈ 0.61) at `v ± τ`, 0.135 at `v ± 2τ`, 0.011 at `v ± 3τ`. This is the Gaussian
     /// response model of species along environmental gradients (ter Braak & Looman 1986), with
     /// the Ellenberg value as optimum (Ellenberg et al. 1991, *Zeigerwerte*). An indifferent
-    /// factor ("x") gives 1 everywhere. A non-positive tolerance is treated as 0.001.
+    /// factor ("x", Ellenberg's "indifferent / wide amplitude") imposes no limit: 1 everywhere,
+    /// whatever the file's tolerance (round 46; round 45's trial counted it as a species of
+    /// the scale's middle and scored silver birch 0.32 at an oceanic K 2, wrong for a species of
+    /// Ireland and Siberia alike). A non-positive tolerance is treated as 0.001.
     pub fn suitability(&self, x: f32) -> f32 {
         match &self.value {
             Indicator::Value(opt) => {
@@ -1093,7 +1100,33 @@ impl Factor {
             Indicator::Indifferent(_) => 1.0,
         }
     }
+
+    /// The optimum of the factor on its Ellenberg scale: the value, or for an indifferent
+    /// factor ("x") the middle of the terrestrial scale, 5 ([`INDIFFERENT_OPTIMUM`]).
+    pub fn optimum(&self) -> f32 {
+        match &self.value {
+            Indicator::Value(v) => *v,
+            Indicator::Indifferent(_) => INDIFFERENT_OPTIMUM,
+        }
+    }
 }
+
+/// The moisture index from which the drought limit counts at most ([`Species::drought_limit`]):
+/// F 5, Ellenberg's "fresh" (medium-moist soils, absent from drying-out ones), a growing season
+/// whose transpiration falls short of demand by 10 % on the site's water balance
+/// (`conditions::moisture_index_of_water`). Wetter than fresh, a species' moisture niche is its
+/// Gaussian F factor's alone (round 46; Sylva choice).
+pub const DROUGHT_FROM_F: f32 = 5.0;
+
+/// The moisture optimum an indifferent F ("x") counts with in the drought limit only: 5, F
+/// "fresh", the middle of Ellenberg's terrestrial 1–9 scale ([`Factor::optimum`],
+/// [`Species::drought_limit`]). The niche factor of an "x" is 1 everywhere
+/// ([`Factor::suitability`], round 46): an indifferent value imposes no limit. The drought limit
+/// is ForClim's own species parameter (its `kDrTol`), not Ellenberg's; it needs a point on the
+/// F scale from which drought counts, and a species "indifferent" to moisture is read as one
+/// that grows on fresh sites (F 5) and beyond them as far as its drought tolerance allows
+/// (Scots pine, x and 0.37: 0.68 at F 3, more than sessile oak's 0.63 there).
+pub const INDIFFERENT_OPTIMUM: f32 = 5.0;
 
 impl Species {
     /// Length (m) of a drawn leaf card of this species: `appearance.leaf_length_m` (a sourced
@@ -1114,25 +1147,62 @@ impl Species {
 
     /// Combined site suitability (0–1) for Ellenberg-style site indices `[L, T, K, F, R, N]`.
     ///
-    /// Combination: Liebig's law of the minimum — the smallest of the six per-factor
-    /// suitabilities. One factor far outside the niche excludes the species however good the
-    /// others are ("a single inconvenient living condition can fully stop the prosperity of some
-    /// tree", EcoMod, `004_*.txt` section IV), which a product or geometric mean would dilute
-    /// (a geometric mean of six factors turns 0.01 into 0.46). Indifferent factors count as 1.
+    /// Combination: Liebig's law of the minimum — the smallest of the per-factor suitabilities
+    /// of T, K, F, R and N ([`Species::suitability_factors`]) — times the species' drought
+    /// limit ([`Species::drought_limit`] of F), ForClim's multiplicative drought factor (as
+    /// round 44 multiplied the niche by the drought response of a year's rise). One factor far
+    /// outside the niche excludes the species however good the others are ("a single
+    /// inconvenient living condition can fully stop the prosperity of some tree", EcoMod,
+    /// `004_*.txt` section IV), which a product or geometric mean of the niche factors would
+    /// dilute (a geometric mean of six factors turns 0.01 into 0.46). Indifferent factors ("x")
+    /// count as 1: they impose no limit (round 46). The drought limit multiplies rather than joins the
+    /// minimum, so that a drier year cuts a species whose niche is limited by another factor
+    /// (Norway spruce on a warm site) by ForClim's factor, as in round 44; on the dry side of
+    /// its F optimum a species is cut by both its Gaussian F factor and its drought limit.
     ///
-    /// The light factor L is the adult tree's light demand (Ellenberg's tree-stage value): the
-    /// site index for L should describe the open-canopy light climate of the cell (e.g. from
-    /// slope and aspect), not the shade under neighbours; shade tolerance of young trees under a
-    /// canopy is `life.shade_tolerance` and `life.germination_min_light`.
+    /// The light factor L is left out of the minimum (round 45, trial 44 defect 1): the site's L
+    /// is the open ground's light climate of the cell (terrain shading), while a tree lives in
+    /// the light its neighbours leave it, which the light model gives (the cell's relative
+    /// insolation times the canopy's transmission, `sim::phases::light`) and to which the
+    /// species responds through `life.shade_tolerance` (growth) and `life.germination_min_light`
+    /// (establishment). Counting L here as well punished shade-tolerant species (beech L 3: 0.61
+    /// on open ground of L 7) for a light they never establish in. `suitability_factors` still
+    /// reports L's factor.
     pub fn suitability(&self, indices: &[f32; 6]) -> f32 {
-        self.suitability_factors(indices).into_iter().fold(1.0f32, f32::min)
+        let f = self.suitability_factors(indices);
+        f[1..].iter().copied().fold(1.0f32, f32::min) * self.drought_limit(indices[crate::conditions::factor::F])
     }
 
-    /// The species' growth reduction (0–1) in a year whose drought index lies `di_rise` above
-    /// the cell's index under the base climate ([`crate::sim::water`]): [`drought_factor`] of
-    /// the rise and `life.drought_tolerance` (1 for a species without one, or in a year no
-    /// drier than the base climate). Issue 35 (round 39, the water balance round 44): the climate
-    /// phase multiplies it onto the suitability.
+    /// The species' drought limit (0–1) at moisture index `f` (round 45): ForClim's drought
+    /// factor `sqrt(max(0, 1 − DI / tol))` ([`drought_factor`], Bugmann & Cramer 1998) with
+    /// `tol` = `life.drought_tolerance` and `DI` the drought index by which the site is drier
+    /// than the species' moisture optimum, read off the F scale of the site's water balance
+    /// (`conditions::moisture_index_of_water`: 10 F units per unit of drought index):
+    /// `DI = max(0, min(v, 5) − f) / 10`, `v` the species' F optimum (5 for "x",
+    /// [`Factor::optimum`]), counted from at most F 5 ([`DROUGHT_FROM_F`], "fresh"): a
+    /// moist-site species (sycamore F 6, alder F 9) on a fresh site is scored by its Gaussian F
+    /// factor alone, and feels drought where the site is drier than fresh (round 46; round 45
+    /// counted from F 6 and cut sycamore on the tests' fresh site twice, 0.88 × 0.77, so that it
+    /// died out of `tests/sim_density.rs`'s mixture). So at F 3 (a dry
+    /// ridge, DI 0.3) beech (F 5, tolerance 0.25) keeps sqrt(1 − 0.2/0.25) = 0.45, sessile oak
+    /// (F 5, 0.33) 0.63, Scots pine (x, 0.37) 0.68, black alder (F 9, 0.08) 0. 1 without a
+    /// drought tolerance. The Gaussian F factor alone could not tell a drought-tolerant species
+    /// from a sensitive one of the same Ellenberg F (sessile oak and beech: both 5).
+    pub fn drought_limit(&self, f: f32) -> f32 {
+        match self.life.drought_tolerance {
+            Some(tol) => {
+                let v = self.niche.f.optimum().min(DROUGHT_FROM_F);
+                drought_factor((v - f).max(0.0) / crate::conditions::F_PER_DROUGHT_INDEX as f32, tol)
+            }
+            None => 1.0,
+        }
+    }
+
+    /// ForClim's growth reduction (0–1) of a rise `di_rise` of the drought index:
+    /// [`drought_factor`] of the rise and `life.drought_tolerance` (1 for a species without
+    /// one, or for no rise). Issue 35 (round 39, the water balance round 44): until round 44 the
+    /// climate phase multiplied it onto the suitability; since round 45 the year's drought
+    /// lowers F and acts through [`Species::drought_limit`] instead.
     pub fn drought_response(&self, di_rise: f32) -> f32 {
         match self.life.drought_tolerance {
             Some(tol) => drought_factor(di_rise, tol),

@@ -1,17 +1,18 @@
 //! Climate (the year's start): under a changing climate ([`ClimateChange`]), the year's
-//! temperature offset moves every cell's T index ([`shifted_indices`]), and the year's
-//! temperature and precipitation move every cell's soil-water balance ([`crate::sim::water`]);
-//! the suitability of every cell for every pool species and of every tree for its species
-//! follow: the niche of the shifted indices times each species' drought response to the rise of
-//! the cell's drought index over its index under the base climate
-//! ([`crate::species::Species::drought_response`]; issue 35: round 39's drought term, round 44's
-//! water balance), so establishment (regeneration) and growth respond this year. Under a
-//! constant climate it does nothing. Per cell and per tree, in parallel, each value written
-//! once: the result does not depend on the thread count.
+//! temperature offset moves every cell's T index, and the year's temperature and precipitation
+//! move every cell's soil-water balance ([`crate::climate::water`]), whose rise of the drought
+//! index over the base climate's lowers the cell's F index ([`year_indices`]); the suitability
+//! of every cell for every pool species and of every tree for its species follow: each
+//! species' niche and drought limit of the year's indices
+//! ([`crate::species::Species::suitability`], [`crate::species::Species::drought_limit`];
+//! issue 35: round 39's drought term, round 44's water balance, round 45's F from the water
+//! balance), so establishment (regeneration) and growth respond this year. Under a constant
+//! climate it does nothing. Per cell and per tree, in parallel, each value written once: the
+//! result does not depend on the thread count.
 
 use crate::conditions::SiteConditions;
-use crate::sim::water::WaterClimate;
-use crate::sim::climate_change::{shifted_indices, ClimateChange};
+use crate::climate::water::WaterClimate;
+use crate::sim::climate_change::{year_indices, ClimateChange};
 use crate::sim::trees::TreeStore;
 use crate::species::{SpeciesId, SpeciesLibrary};
 use rayon::prelude::*;
@@ -48,9 +49,9 @@ pub fn run(c: ClimatePhase<'_>) -> (f64, f64) {
         let sp = &c.lib.species[c.pool[p] as usize];
         out.par_iter_mut().zip(site.indices.data.par_iter()).zip(site.mask.data.par_iter()).zip(rise.par_iter()).with_min_len(4096).for_each(|(((o, ix), m), r)| {
             *o = if *m {
-                // the niche of the year's indices, times the drought response to the year's
-                // drought against the base climate's
-                sp.suitability(&shifted_indices(ix, dt)) * sp.drought_response(*r)
+                // the niche and drought limit of the year's indices: T of the year's
+                // temperature, F lowered by the rise of the year's drought index (round 45)
+                sp.suitability(&year_indices(ix, dt, *r))
             } else {
                 0.0
             };

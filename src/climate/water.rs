@@ -33,7 +33,7 @@
 //! precipitation factor 1): the base climate's moisture is what each species' Ellenberg F niche
 //! already encodes, so a constant climate leaves every run as it was (`sim::phases::climate`).
 
-use crate::climate::Climate;
+use super::Climate;
 
 /// Days of each month (February 28.25: the mean year).
 pub const MONTH_DAYS: [f64; 12] = [31.0, 28.25, 31.0, 30.0, 31.0, 30.0, 31.0, 31.0, 30.0, 31.0, 30.0, 31.0];
