@@ -179,3 +179,24 @@ fn conifers_carry_no_fork() {
         assert!(species(id).architecture.ecomod.crown_profile.is_none(), "{id}");
     }
 }
+
+/// The fork and the hanging twigs share the strands differently and turn segments, but the tree
+/// keeps S strands, 2S − 1 segments, S leaf-bearing tips and its leaves (EcoMod, `004_*.txt`
+/// Algorithm 1: strands are conserved at every split).
+#[test]
+fn the_fork_keeps_strands_segments_and_leaves() {
+    use sylva::structure::grow::ecomod::try_grow;
+    for id in ["beech", "sessile_oak", "pedunculate_oak", "norway_maple", "silver_birch"] {
+        let sp = species(id);
+        let p = &sp.architecture.ecomod;
+        let (sk, lv) = try_grow(p, 1, 0.0).unwrap();
+        let (sk0, lv0) = try_grow(&before(&sp).architecture.ecomod, 1, 0.0).unwrap();
+        assert_eq!(sk.nodes.len(), 2 * p.strands as usize, "{id}");
+        assert_eq!(sk.nodes.len(), sk0.nodes.len(), "{id}");
+        assert_eq!(lv.leaves.len(), lv0.leaves.len(), "{id}");
+        assert_eq!(sk.nodes.iter().filter(|n| n.role == Role::Tip).count(), p.strands as usize, "{id}");
+        assert_eq!(sk.nodes[0].strands, p.strands, "{id}");
+        // no segment ends below the ground
+        assert!(sk.nodes.iter().all(|n| n.pos.z >= -1e-4), "{id}");
+    }
+}
