@@ -300,6 +300,11 @@ fn readme_documents_every_field_of_the_schema() {
     // nor the limbs' profile (Norway spruce's only, round 38)
     beech.architecture.ecomod.limbs = lib.get("norway_spruce").unwrap().architecture.ecomod.limbs;
     assert!(beech.architecture.ecomod.limbs.is_some());
+    // nor hanging twigs (silver birch's only, round 46)
+    if let Some(cp) = beech.architecture.ecomod.crown_profile.as_mut() {
+        cp.twig_droop_deg = lib.get("silver_birch").unwrap().architecture.ecomod.crown_profile.and_then(|b| b.twig_droop_deg);
+        assert!(cp.twig_droop_deg.is_some());
+    }
     let mut leaves: Vec<String> = species::leaf_fields(&beech).unwrap().into_iter().map(|(p, _)| p).collect();
     let mut fields: Vec<String> = schema::FIELDS.iter().map(|f| f.path.to_string()).collect();
     leaves.sort();

@@ -94,9 +94,9 @@ const LEAF_MAX: f32 = 0.5;
 
 /// What bending otherwise does to a stand `b` against `a` of the same trees: asserts that more
 /// than `least` of the leaf clusters' light changed (the option takes effect), that the light
-/// moved by less than [`BEND_MEAN`] and the clusters by less than [`BEND_MOVE`] on average, and
+/// moved by less than `mean_bound` ([`BEND_MEAN`], [`WHOLE_LEVEL_MEAN`]) and the clusters by less than [`BEND_MOVE`] on average, and
 /// that every bole of `b` stands within 3° of the vertical.
-fn assert_bent_within_bounds(a: &Stand, b: &Stand, what: &str, least: f32) {
+fn assert_bent_within_bounds(a: &Stand, b: &Stand, what: &str, least: f32, mean_bound: f32) {
     let (mean, max, moved) = light_change(a, b);
     let mut mv = Vec::new();
     for (x, y) in a.trees.iter().zip(&b.trees) {
@@ -107,7 +107,7 @@ fn assert_bent_within_bounds(a: &Stand, b: &Stand, what: &str, least: f32) {
     let move_mean = mv.iter().sum::<f32>() / mv.len() as f32;
     eprintln!("{what}: |Δ light| mean {mean:.5}, largest {max:.3}, {:.1} % changed; clusters moved {move_mean:.4} m on average", 100.0 * moved);
     assert!(moved > least, "{what} takes effect: {:.1} % of the clusters' light changed", 100.0 * moved);
-    assert!(mean < BEND_MEAN && move_mean < BEND_MOVE, "{what}: |Δ light| mean {mean} (bound {BEND_MEAN}); clusters moved {move_mean} m on average (bound {BEND_MOVE} m)");
+    assert!(mean < mean_bound && move_mean < BEND_MOVE, "{what}: |Δ light| mean {mean} (bound {mean_bound}); clusters moved {move_mean} m on average (bound {BEND_MOVE} m)");
 }
 const BEND_MEAN: f32 = 0.001;
 const BEND_MOVE: f32 = 0.01;
@@ -122,13 +122,13 @@ fn shared_bending_light_bends_the_crowns_within_bounds() {
     let (trees, targets) = stand(&lib);
     let exact = run(&trees, &targets, &lib, exact_options());
     let shared = run(&trees, &targets, &lib, StandOptions { bend_light_cell_m: 0.25, ..exact_options() });
-    assert_bent_within_bounds(&exact, &shared, "bending light shared in 0.25 m cubes", 0.05);
+    assert_bent_within_bounds(&exact, &shared, "bending light shared in 0.25 m cubes", 0.05, BEND_MEAN);
 }
 
 /// The bending light's cubes shared over a whole level (round 42's default,
 /// `StandOptions::bend_light_whole_level`) against round 41's sharing within one depth batch:
 /// it takes effect (more than 1 % of the clusters' light changes) and stays within the bounds
-/// of the 0.25 m cubes themselves.
+/// of the 0.25 m cubes themselves (the light's: [`WHOLE_LEVEL_MEAN`] since round 46).
 #[test]
 fn bending_light_shared_over_a_whole_level_within_bounds() {
     let lib = lib();
@@ -136,8 +136,15 @@ fn bending_light_shared_over_a_whole_level_within_bounds() {
     assert!(StandOptions::default().bend_light_whole_level);
     let batch = run(&trees, &targets, &lib, StandOptions { bend_light_whole_level: false, ..StandOptions::default() });
     let whole = run(&trees, &targets, &lib, StandOptions::default());
-    assert_bent_within_bounds(&batch, &whole, "bending light shared over the whole level", 0.01);
+    assert_bent_within_bounds(&batch, &whole, "bending light shared over the whole level", 0.01, WHOLE_LEVEL_MEAN);
 }
+/// Bound of the mean change of the clusters' light between the whole level's and the depth
+/// batch's sharing. Round 46: the beeches' leaders fork into three main limbs that carry the
+/// crown's top (`crown_profile.fork_depth`), so a limb bent by a slightly different light moves
+/// more of the sunlit top's clusters: 0.00073 and 0.7 mm on main's crowns, 0.00147 and 6.2 mm now
+/// (the 0.25 m cubes against the exact run: 0.00097 → 0.00063). The depth batch's bound,
+/// [`BEND_MEAN`], doubled.
+const WHOLE_LEVEL_MEAN: f32 = 0.002;
 
 /// Crown-shape classes of 10.25 % (1.05²) share analyses across the default's 5 % classes:
 /// fewer analyses, and every adapted crown, stretched to its exact radius after the adaptation,

@@ -491,6 +491,7 @@ pub fn hero_chain(sk: &crate::structure::Skeleton, lv: &mut crate::structure::Le
         phyllotaxis_deg: sp.architecture.ecomod.phyllotaxis_deg,
         crown_radius_m: crate::structure::crown_radius(sk, lv),
         seed,
+        pendulous: sp.architecture.ecomod.crown_profile.is_some_and(|cp| cp.twig_droop_deg.is_some_and(|d| d > 0.0)),
     };
     let (hero, twigs) = hero_leaves(sk, lv, &ho, blocked);
     // the lower levels from the cards as `lone_chain` leaves them (its sprigs are not drawn:

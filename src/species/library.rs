@@ -471,6 +471,10 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
         }
     }
     for spec in schema::FIELDS {
+        // the crown profile's fork and hanging twigs (round 46) are optional within it
+        if matches!(spec.path, "architecture.ecomod.crown_profile.fork_depth" | "architecture.ecomod.crown_profile.fork_limbs" | "architecture.ecomod.crown_profile.fork_angle_deg" | "architecture.ecomod.crown_profile.twig_droop_deg") {
+            continue;
+        }
         if spec.path == "identity.sources" || spec.path == "life.form_factor" || spec.path == "life.growth.h_max_m" || spec.path.starts_with("life.stand_crown.") || spec.path.starts_with("life.stand_crown_base.") || spec.path.starts_with("life.dense_hd.") || spec.path.starts_with("life.open_hd.") || spec.path.starts_with("life.bai_competition.") || spec.path.starts_with("life.bai_bwinpro.") || spec.path.starts_with("life.foliage.") || spec.path == "appearance.leaf_length_m" || spec.path == "life.drought_tolerance" || spec.path == "life.shade_survival_class" || spec.path == "life.closed_hd" || spec.path == "life.closed_hd_scope" || spec.path == "life.closed_hd_mixed" {
             continue; // optional (drought tolerance: no drought response; shade survival class: the shade tolerance; form factor: default 0.5; height curve asymptote: max_height_m; stand crown, stand crown base, dense-stand and open-grown H/D, BAI competition, BWINPro growth, foliage, drawn leaf length: none)
         }

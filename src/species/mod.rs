@@ -703,9 +703,47 @@ pub struct CrownProfile {
     pub angle_top_deg: f32,
     /// Insertion angle from the vertical (degrees, 10–120) of a limb at the crown base.
     pub angle_base_deg: f32,
+    /// Where the leader forks (issue 32, round 46; optional): relative depth below the crown's
+    /// top (0.05–0.95, the limbs' depth d) at which the stem dissolves into `fork_limbs` main
+    /// limbs that carry the crown's top ([`CrownProfile`]'s fork). None: the stem runs to the
+    /// top (an excurrent leader: birch).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fork_depth: Option<f32>,
+    /// Number of main limbs the leader forks into (2–4; with `fork_depth`, default 3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fork_limbs: Option<u32>,
+    /// Angle from the vertical (degrees, 5–60; with `fork_depth`, default 25) of the fork's main
+    /// limbs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fork_angle_deg: Option<f32>,
+    /// Hanging twigs (issue 32, round 46; optional): the angle below the horizontal (degrees,
+    /// 0–90) of every leaf-bearing tip segment (Algorithm 1's S₀ = 1) off the stem, so that
+    /// its leaves hang with it (weeping birch). None: the tips keep Algorithm 1's direction
+    /// (within [`crate::structure::grow::ecomod::MAX_DROOP_DEG`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub twig_droop_deg: Option<f32>,
+}
+
+/// The leader's fork of a [`CrownProfile`] (issue 32, round 46): where (relative depth below the
+/// crown's top, 0–1), into how many main limbs (2–4) and at what angle from the vertical
+/// (degrees).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fork {
+    /// Relative depth below the crown's top of the fork (0–1).
+    pub depth: f32,
+    /// Main limbs (2–4).
+    pub limbs: u32,
+    /// Their angle from the vertical (degrees).
+    pub angle_deg: f32,
 }
 
 impl CrownProfile {
+    /// The leader's fork, if `fork_depth` is given ([`Fork`]; `fork_limbs` default 3, clamped
+    /// to 2–4; `fork_angle_deg` default 25°).
+    pub fn fork(&self) -> Option<Fork> {
+        self.fork_depth.map(|depth| Fork { depth: depth.clamp(0.0, 1.0), limbs: self.fork_limbs.unwrap_or(3).clamp(2, 4), angle_deg: self.fork_angle_deg.unwrap_or(25.0) })
+    }
+
     /// Relative crown radius ρ (0–1) at relative depth `d` below the top (clamped to 0–1).
     pub fn radius_at(&self, d: f32) -> f32 {
         let d = d.clamp(0.0, 1.0);

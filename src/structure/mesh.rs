@@ -328,6 +328,11 @@ pub struct HeroLeafOptions {
     pub crown_radius_m: f32,
     /// Seed of the hashed variations.
     pub seed: u64,
+    /// Hanging sprays (a weeping birch's, the species'
+    /// `architecture.ecomod.crown_profile.twig_droop_deg`): each spray lies along its anchor's
+    /// shoot as grown (hanging with the twig), its plane facing outwards from the stem axis
+    /// (the side light), instead of laid flat across the light.
+    pub pendulous: bool,
 }
 
 /// Half the most leaves on one shoot of a hero spray ([`hero_leaves`]: √m, 3–16; ESTIMATE:
@@ -414,13 +419,22 @@ pub fn hero_leaves(sk: &Skeleton, anchors: &Leaves, o: &HeroLeafOptions, blocked
         let outward = out_dir.normalize_or(glam::Vec2::X).extend(0.0);
         let light = (Vec3::Z * lean.cos() + outward * lean.sin()).normalize();
         // the spray's plane faces the light (a spray spreads across the light, as beech's
-        // plagiotropic shoots do), its axis the anchor's shoot laid into that plane
-        let np = light;
-        let mut flat = along - np * along.dot(np);
-        if flat.length_squared() < 1e-4 {
-            flat = outward - np * outward.dot(np);
-        }
-        let along = flat.normalize_or(np.any_orthonormal_vector());
+        // plagiotropic shoots do), its axis the anchor's shoot laid into that plane; a
+        // hanging spray keeps its shoot's direction, its plane turned to face outwards
+        let (np, along) = if o.pendulous {
+            let mut n = outward - along * outward.dot(along);
+            if n.length_squared() < 1e-4 {
+                n = along.any_orthonormal_vector();
+            }
+            (n.normalize(), along)
+        } else {
+            let np = light;
+            let mut flat = along - np * along.dot(np);
+            if flat.length_squared() < 1e-4 {
+                flat = outward - np * outward.dot(np);
+            }
+            (np, flat.normalize_or(np.any_orthonormal_vector()))
+        };
         let across = np.cross(along).normalize_or(along.any_orthonormal_vector());
         // a hashed turn of the spray about its normal (± 20°)
         let turn = glam::Quat::from_axis_angle(np, (h(0) - 0.5) * 40f32.to_radians());

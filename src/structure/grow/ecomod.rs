@@ -37,7 +37,7 @@
 
 use crate::error::{Error, Result};
 use crate::rng::{salt, Stream};
-use crate::species::{CrownProfile, EcoModParams, LeafDistribution, Limbs, Whorls, WHORL_SEGMENT};
+use crate::species::{CrownProfile, EcoModParams, Fork, LeafDistribution, Limbs, Whorls, WHORL_SEGMENT};
 use crate::structure::params::eval_polyline;
 use crate::structure::skeleton::{Leaf, Leaves, NodeId, Role, Skeleton};
 use glam::{Mat3, Vec3};
@@ -158,6 +158,8 @@ struct Pending {
     lateral: bool,
     /// A stem segment of a whorled stem ([`Whorls`]): the annual shoot it belongs to.
     shoot: Option<Shoot>,
+    /// A main limb of the leader's fork ([`Fork`]): its index (0 … limbs − 1).
+    fork: Option<u32>,
 }
 
 /// Where a stem segment of a whorled stem stands in its annual shoot ([`Whorls`]).
@@ -233,7 +235,7 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
     // Frame columns: x, y = branch axis, z. Trunk axis = world up.
     let frame0 = Mat3::from_cols(Vec3::X, Vec3::Z, -Vec3::Y);
     let whorls = p.whorls.filter(|w| w.branches > 0);
-    let mut stack = vec![Pending { parent: 0, g: 0, w: 0, s0: s_total, big_l: 1.0, l: p.trunk_length_m, frame: frame0, lateral: false, shoot: None }];
+    let mut stack = vec![Pending { parent: 0, g: 0, w: 0, s0: s_total, big_l: 1.0, l: p.trunk_length_m, frame: frame0, lateral: false, shoot: None, fork: None }];
     let sway = p.wind_undirected * (1.0 - p.k_f);
     // the limbs' profile by depth into the crown ([`Limbs`]): the stem's top (m) and the longest
     // limb's reach, known once the stem is grown (Algorithm 1 pops a split's continuation
@@ -244,12 +246,27 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
     // stem is grown (not with a whorled stem)
     let profile = p.crown_profile.filter(|_| whorls.is_none());
     let plan = profile.map(|cp| limb_strands(p, &cp));
+    // the leader's fork ([`Fork`]): the stem split it starts at, the planned stem's top (m) and
+    // crown length, and the azimuth (radians) of its first main limb
+    let fork = profile.and_then(|cp| fork_split(p, &cp));
+    let fork_azimuth = Stream::new(seed, u64::from(MAX_STRANDS) * 2 + 1, 0, salt::ARCHITECTURE).range(0.0, std::f64::consts::TAU) as f32;
+    let twig_droop = profile.and_then(|cp| cp.twig_droop_deg);
     while let Some(mut b) = stack.pop() {
         if let Some(cp) = profile {
             if b.g == 1 && sk.nodes[b.parent as usize].gravelius == 0 {
                 let base = sk.nodes.get(1).map_or(0.0, |n| n.pos.z);
                 let (insertion, reach) = (sk.nodes[b.parent as usize].pos, limb_reach(p, b.w, b.s0, b.big_l));
-                profile_limb(&cp, &mut b, insertion, base, stem_top, reach);
+                // a forked stem ends below the crown's top: the limbs' depth is the planned
+                // stem's (Algorithm 1's, vertical)
+                let top = fork.map_or(stem_top, |f| f.top);
+                let aim = match (fork, b.fork) {
+                    (Some(f), Some(j)) => {
+                        let phi = fork_azimuth + j as f32 * std::f32::consts::TAU / f.fork.limbs as f32;
+                        Some((f.fork.angle_deg, Vec3::new(phi.cos(), phi.sin(), 0.0)))
+                    }
+                    _ => None,
+                };
+                profile_limb(&cp, &mut b, insertion, base, top, reach, aim);
             }
         } else if let Some(lm) = p.limbs {
             if b.g == 1 && sk.nodes[b.parent as usize].gravelius == 0 {
@@ -299,6 +316,14 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
         let (s1, s2) = match (whorls, shoot) {
             (Some(w), Some(sh)) => {
                 let s2 = shoot_branch_strands(&w, sh.k, sh.lateral).min(b.s0 - 1);
+                (b.s0 - s2, s2)
+            }
+            // a forked stem: split j of the fork gives its lateral main limb an equal share of
+            // the strands left to the limbs still to set
+            _ if fork.is_some_and(|f| b.g == 0 && b.w >= f.split) => {
+                let f = fork.unwrap();
+                let left = f.fork.limbs.saturating_sub(b.w - f.split).max(2);
+                let s2 = ((b.s0 as f32 / left as f32).round() as u32).clamp(1, b.s0 - 1);
                 (b.s0 - s2, s2)
             }
             // a crown profile's stem: the limb of split w gets its planned strands
@@ -358,10 +383,28 @@ pub fn grow_with(p: &EcoModParams, seed: u64, o: &EcoModOptions) -> Result<(Skel
         };
         let twist = Mat3::from_rotation_y(twist_deg.to_radians()) * Mat3::from_rotation_x(ax.to_radians());
         let child = |angle: f32| wind * grav * b.frame * twist * Mat3::from_rotation_z((angle + az).to_radians());
-        let f1 = constrain(orthonormal(child(a1)), end, l1, b.g == 0);
-        let f2 = constrain(orthonormal(child(-a2)), end, l2, false);
-        stack.push(Pending { parent: nid, g: b.g + 1, w: b.w + 1, s0: s2, big_l: big_l2, l: l2, frame: f2, lateral: true, shoot: None });
-        stack.push(Pending { parent: nid, g: b.g, w: w1, s0: s1, big_l: big_l1, l: l1, frame: f1, lateral: false, shoot: shoot1 });
+        // the leader's fork: split j sets main limb j; the stem between its splits is
+        // [`FORK_GAP`] of the crown length; at its last split the stem's continuation is the
+        // last main limb (the stem ends)
+        let fork_j = fork.filter(|f| b.g == 0 && b.w >= f.split).map(|f| (f, b.w - f.split));
+        let (g1, l1, limb1) = match fork_j {
+            Some((f, j)) if j + 2 >= f.fork.limbs => (1, l1, Some(f.fork.limbs - 1)),
+            Some((f, _)) => (0, FORK_GAP * f.len, None),
+            None => (b.g, l1, None),
+        };
+        let mut f1 = constrain(orthonormal(child(a1)), end, l1, g1 == 0);
+        let mut f2 = constrain(orthonormal(child(-a2)), end, l2, false);
+        // hanging twigs ([`CrownProfile::twig_droop_deg`]): a leaf-bearing tip off the stem
+        if let Some(deg) = twig_droop {
+            if s1 == 1 && g1 > 0 {
+                f1 = hang(f1, deg, end, l1);
+            }
+            if s2 == 1 {
+                f2 = hang(f2, deg, end, l2);
+            }
+        }
+        stack.push(Pending { parent: nid, g: b.g + 1, w: b.w + 1, s0: s2, big_l: big_l2, l: l2, frame: f2, lateral: true, shoot: None, fork: fork_j.map(|(_, j)| j) });
+        stack.push(Pending { parent: nid, g: g1, w: w1, s0: s1, big_l: big_l1, l: l1, frame: f1, lateral: g1 != b.g, shoot: shoot1, fork: limb1 });
     }
     Ok((sk, leaves))
 }
@@ -454,13 +497,15 @@ fn limb_strands(p: &EcoModParams, cp: &CrownProfile) -> Vec<u32> {
 /// relative and actual lengths (its whole subtree) by t / `reach`, t (m) the distance along θ
 /// from the insertion to the crown surface of radius A·ρ at each height (A = ½
 /// `width_to_length` × crown length; bisection, 40 steps) and `reach` its own axis' reach.
-fn profile_limb(cp: &CrownProfile, b: &mut Pending, insertion: Vec3, base_z: f32, top_z: f32, reach: f32) {
+/// `aim` (a main limb of the leader's fork, [`Fork`]): θ (degrees) and the horizontal
+/// azimuth (a unit vector) to use instead of the depth's angle and the limb's own azimuth.
+fn profile_limb(cp: &CrownProfile, b: &mut Pending, insertion: Vec3, base_z: f32, top_z: f32, reach: f32, aim: Option<(f32, Vec3)>) {
     let len = top_z - base_z;
     let depth = |z: f32| if len > 1e-6 { (top_z - z) / len } else { 1.0 };
     let d = depth(insertion.z).clamp(0.0, 1.0);
-    let theta = (cp.angle_top_deg + d * (cp.angle_base_deg - cp.angle_top_deg)).to_radians();
+    let theta = aim.map_or(cp.angle_top_deg + d * (cp.angle_base_deg - cp.angle_top_deg), |a| a.0).to_radians();
     let y = b.frame.y_axis;
-    let h = Vec3::new(y.x, y.y, 0.0);
+    let h = aim.map_or(Vec3::new(y.x, y.y, 0.0), |a| a.1);
     let h = if h.length_squared() > 1e-10 { h.normalize() } else { Vec3::new(b.frame.x_axis.x, b.frame.x_axis.y, 0.0).normalize_or(Vec3::X) };
     let target = h * theta.sin() + Vec3::Z * theta.cos();
     let q = glam::Quat::from_rotation_arc(y.normalize_or(Vec3::Z), target);
@@ -486,6 +531,61 @@ fn profile_limb(cp: &CrownProfile, b: &mut Pending, insertion: Vec3, base_z: f32
         b.l *= f;
     }
     b.frame = constrain(orthonormal(Mat3::from_quat(q) * b.frame), insertion, b.l, false);
+}
+
+/// Length (relative crown length) of each stem segment between the splits of the leader's
+/// fork ([`Fork`]): the main limbs leave the stem within a few per cent of the crown length,
+/// as a fork's limbs leave one crotch (ours).
+pub const FORK_GAP: f32 = 0.02;
+
+/// Where the leader of `p` forks ([`Fork`] of `cp`): the stem's split at which it starts.
+#[derive(Debug, Clone, Copy)]
+struct ForkAt {
+    fork: Fork,
+    /// Index of the stem split (its Weibull order) of the fork's first main limb.
+    split: u32,
+    /// Height (m) of the planned stem's top ([`stem_heights`], vertical).
+    top: f32,
+    /// Crown length (m) of the planned stem: its top less its first split's height.
+    len: f32,
+}
+
+/// The stem split of `p` at which the leader forks (issue 32, round 46; [`Fork`] of `cp`): the
+/// lowest of Algorithm 1's stem splits ([`stem_heights`]) at depth ≤ `fork.depth` below the
+/// planned stem's top over its crown length. The limbs below it keep their planned strands
+/// ([`limb_strands`]); the strands the stem has left there, which Algorithm 1 would spend on
+/// the limbs above, are shared equally by the fork's main limbs (the volume of the crown above
+/// the fork is theirs). None without a fork or where the stem has no split that high (a young
+/// tree of few strands).
+///
+/// The fork is the architecture's, after Hallé, Oldeman & Tomlinson (1978, Tropical Trees and
+/// Forests, Springer): beech's sympodial, plagiotropic axes (Troll's model) and the oaks' and
+/// maples' rhythmic orthotropic ones (Rauh's model) lose a single leader in the crown; Roloff
+/// (1984, Morphologie der Verzweigung von Fagus sylvatica L., Ber. Forschungszentrum
+/// Waldökosysteme Göttingen 3:1–25: the architectural model of beech and the phases of its
+/// top's growth) has the top of a grown beech carried by several leading shoots, the
+/// acrotonically favoured side limbs filling the space between them.
+fn fork_split(p: &EcoModParams, cp: &CrownProfile) -> Option<ForkAt> {
+    let fork = cp.fork()?;
+    let (at, top) = stem_heights(p);
+    let len = (top - *at.first()?).max(1e-6);
+    let k = at.iter().position(|&z| (top - z) / len <= fork.depth)?;
+    Some(ForkAt { fork, split: k as u32, top, len })
+}
+
+/// Turns a tip's frame `f` so that its axis points `deg` degrees below the horizontal, azimuth
+/// kept (a twig that hangs: [`CrownProfile::twig_droop_deg`]); a segment of length `len` from
+/// `start` still ends at z ≥ 0 (it droops less where it would not).
+fn hang(f: Mat3, deg: f32, start: Vec3, len: f32) -> Mat3 {
+    let y = f.y_axis;
+    let h = Vec3::new(y.x, y.y, 0.0);
+    let h = if h.length_squared() > 1e-10 { h.normalize() } else { Vec3::new(f.x_axis.x, f.x_axis.y, 0.0).normalize_or(Vec3::X) };
+    let mut down = deg.clamp(0.0, 90.0).to_radians();
+    if len > 0.0 {
+        down = down.min((start.z / len).clamp(0.0, 1.0).asin());
+    }
+    let target = h * down.cos() - Vec3::Z * down.sin();
+    orthonormal(Mat3::from_quat(glam::Quat::from_rotation_arc(y.normalize_or(Vec3::Z), target)) * f)
 }
 
 /// Largest tilt of the trunk (the g = 0 axis) from the vertical (degrees): apical control keeps
