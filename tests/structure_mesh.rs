@@ -653,13 +653,13 @@ fn the_cheaper_hull_level_keeps_its_silhouette() {
         let chain = mesh::lod_chain(&sk, &lv, &o);
         let r0 = Silhouette::from_chain(&chain).radius;
         let new = &chain.levels[2];
-        // main's level: the 10-sector hull (its bands were 10 / 2 − 2 = 3, as HULL_BANDS)
+        // the 10-sector hull (six rings, as the 8-sector one: HULL_RING_HEIGHTS)
         // on the stem of 6 segments, up to the same height
         let old_leaves = mesh::hull_mesh(&sk, &lv, &LodOptions { hull_segments: 10, ..o }).leaves;
         let top = new.bark.positions.iter().map(|p| p[2]).fold(f32::MIN, f32::max);
         let old_bark = mesh::hull_stem_of(&sk, top, &o, 6);
         let (n_new, n_old) = (new.triangle_count(), old_leaves.triangle_count() + old_bark.triangle_count());
-        assert_eq!(new.leaves.triangle_count(), 2 * 8 * (mesh::HULL_BANDS + 3), "{id}");
+        assert_eq!(new.leaves.triangle_count(), 2 * 8 * mesh::HULL_RING_HEIGHTS.len(), "{id}");
         assert_eq!(old_leaves.triangle_count(), 120, "{id}");
         assert!(new.bark.triangle_count() <= 30 && old_bark.triangle_count() == 60, "{id}: stems {} and {}", new.bark.triangle_count(), old_bark.triangle_count());
         assert!(n_new * 10 <= n_old * 7, "{id}: {n_new} triangles against main's {n_old}");
