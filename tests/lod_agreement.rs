@@ -83,12 +83,16 @@ fn coverage(m: &[bool], rows: &[usize]) -> f64 {
     d as f64 / n.max(1) as f64
 }
 
-/// The trial's trees: the crown hull (LOD2) and the billboard (LOD3) have the full level's
-/// outline. Before (round 45's code, measured with this test on main `4f37a58`): the hull an egg
-/// for every species, the billboard the species' cone or ellipse.
+/// The trial's trees: the billboard (LOD3) has the full level's outline, the crown hull (LOD2)
+/// its profile. Measured (r46b, this test): billboard IoU beech 0.769, Norway spruce 0.961,
+/// Scots pine 0.753, silver birch 0.797, where the species' picture (main's billboard, drawn in
+/// the same run) gives 0.495, 0.719, 0.424 (the pine's V drawn as a cone), 0.284: bound 0.74.
+/// The hull: the spruce's top ring under 0.3 of its widest (a spire), the Scots pine's widest
+/// ring in the crown's upper half (its flat top); hull IoU (the full level's envelope is jagged
+/// where its model leaves are few: birch 0.341, beech 0.507, spruce 0.744, pine 0.732) at
+/// least 0.3.
 #[test]
 fn the_coarse_levels_have_the_full_levels_outline() {
-    let mut worst: f64 = 1.0;
     for (id, age) in [("beech", 80.0), ("norway_spruce", 60.0), ("scots_pine", 100.0), ("silver_birch", 40.0)] {
         let v = views(id, age, false);
         let old = views(id, age, true);
@@ -98,12 +102,37 @@ fn the_coarse_levels_have_the_full_levels_outline() {
         for (l, im) in v.img.iter().enumerate() {
             im.save(std::env::temp_dir().join(format!("lod_agreement_{id}_{l}.png"))).unwrap();
         }
-        worst = worst.min(i2).min(i3);
+        assert!(i3 > 0.74, "{id}: billboard outline IoU {i3:.3} (the species' picture {i3_species:.3})");
+        assert!(i2 > 0.3, "{id}: hull outline IoU {i2:.3}");
+        // the hull's ring radii (mean over the sectors), bottom to top
+        let lib = SpeciesLibrary::embedded().unwrap();
+        let sp = lib.species.iter().find(|s| s.id == id).unwrap();
+        let (grown, _) = grow_formed_tree(sp, Model::EcoMod, age, &[], 1, Habit::Forest).unwrap();
+        let o = LodOptions::for_species(sp);
+        let hull = sylva::structure::mesh::hull_mesh(&grown.skeleton, &grown.leaves, &o).leaves;
+        let nl = o.hull_segments as usize;
+        let r: Vec<f32> = (0..sylva::structure::mesh::HULL_RING_HEIGHTS.len())
+            .map(|b| {
+                let ring = &hull.positions[b * nl..(b + 1) * nl];
+                let (cx, cy) = (ring.iter().map(|p| p[0]).sum::<f32>() / nl as f32, ring.iter().map(|p| p[1]).sum::<f32>() / nl as f32);
+                ring.iter().map(|p| ((p[0] - cx).powi(2) + (p[1] - cy).powi(2)).sqrt()).sum::<f32>() / nl as f32
+            })
+            .collect();
+        let widest = (0..r.len()).max_by(|&a, &b| r[a].total_cmp(&r[b])).unwrap();
+        eprintln!("{id}: hull ring radii {r:?}");
+        match id {
+            "norway_spruce" => assert!(r[r.len() - 1] < 0.3 * r[widest], "{id}: a spire: {r:?}"),
+            "scots_pine" => assert!(widest >= r.len() / 2, "{id}: a flat top: {r:?}"),
+            _ => {}
+        }
     }
-    eprintln!("worst {worst:.3}");
 }
 
-/// The billboard's coverage follows the full level's, and its trunk is as bright.
+/// The billboard's coverage follows the full level's, and its trunk is as bright: measured
+/// (r46b) coverage beech 80 0.281 against the full level's 0.274, silver birch 40 0.300 against
+/// 0.286, sessile oak 120 0.526 against 0.525, where the species' picture gives 0.79, 0.78,
+/// 0.80; the trunk's luma 1.13, 1.10, 1.06 of the full level's (main's bark × 0.85: 0.96, 0.94,
+/// 0.90).
 #[test]
 fn the_billboard_has_the_full_levels_coverage_and_bark() {
     for (id, age) in [("beech", 80.0), ("silver_birch", 40.0), ("sessile_oak", 120.0)] {
@@ -125,20 +154,9 @@ fn the_billboard_has_the_full_levels_coverage_and_bark() {
             }
             s / n.max(1) as f64
         };
-        let (t0, t3, t3_species) = (lum(&v.img[0], &v.mask[0]), lum(&v.img[3], &v.mask[3]), lum(&old.img[3], &old.mask[3]));
-        eprintln!("{id} {age}: coverage full {c0:.3}, billboard {c3:.3} (species' picture {c3_species:.3}); trunk luma full {t0:.1}, billboard {t3:.1} (species' picture {t3_species:.1})");
-    }
-}
-
-#[test]
-#[ignore = "diagnostic"]
-fn diag_prototype_silhouettes() {
-    let all = SpeciesLibrary::embedded().unwrap();
-    let lib = SpeciesLibrary { species: ["beech", "sessile_oak", "norway_maple", "silver_birch", "norway_spruce"].iter().map(|id| all.species[all.find(id).unwrap() as usize].clone()).collect() };
-    let mut old = lib.clone();
-    old.species.iter_mut().for_each(|s| s.architecture.ecomod.crown_profile = None);
-    for p in sylva::job::scene::prototypes(&lib).into_iter().chain(sylva::job::scene::prototypes(&old)) {
-        let s = sylva::render::lod::Silhouette::from_chain(&p.lods);
-        eprintln!("{}: bottom {:.3} top {:.3} widest {:.3} radius {:.3} r0 {:.3} widths {:?}", p.name, s.crown_bottom, s.crown_top, s.widest_z, s.radius, p.normalised_crown_radius(), s.width.iter().map(|w| (w * 100.0).round() / 100.0).collect::<Vec<_>>());
+        let (t0, t3) = (lum(&v.img[0], &v.mask[0]), lum(&v.img[3], &v.mask[3]));
+        eprintln!("{id} {age}: coverage full {c0:.3}, billboard {c3:.3} (species' picture {c3_species:.3}); trunk luma full {t0:.1}, billboard {t3:.1}");
+        assert!((c3 - c0).abs() < 0.05, "{id}: billboard coverage {c3:.3} against the full level's {c0:.3} (species' picture {c3_species:.3})");
+        assert!(t3 > 0.98 * t0 && t3 < 1.25 * t0, "{id}: billboard trunk luma {t3:.1} against the full level's {t0:.1}");
     }
 }

@@ -160,11 +160,15 @@ fn crown_hull_follows_a_conical_and_a_one_sided_crown() {
     let rings = n / o.hull_segments as usize;
     let mean_r: Vec<f32> = (0..rings).map(|b| (0..o.hull_segments as usize).map(|k| radius_xy(hull.positions[b * o.hull_segments as usize + k])).sum::<f32>() / o.hull_segments as f32).collect();
     eprintln!("cone hull ring radii {mean_r:?}");
-    // rings: a dome ring under the crown, the height bands, two dome rings over it
-    assert!(mean_r[0] < mean_r[1], "the base is rounded off: {mean_r:?}");
-    for w in mean_r[1..].windows(2) {
+    // rings at HULL_RING_HEIGHTS of the crown (round 46; until then a dome ring under three
+    // height bands and two dome rings over them, which rounded a spruce's top off): the cone's
+    // own radii, widest at its base, narrowing at every ring to a spire (measured [3.0, 2.5,
+    // 2.0, 1.25, 0.75, 0.25])
+    assert_eq!(rings, mesh::HULL_RING_HEIGHTS.len());
+    for w in mean_r.windows(2) {
         assert!(w[1] < w[0] - 0.2, "a cone narrows upward: {mean_r:?}");
     }
+    assert!(mean_r[rings - 1] < 0.1 * mean_r[0], "a spire: {mean_r:?}");
     // every ring lies inside the cone's widest reach at its band's base, and no vertex leaves it
     assert!(hull.positions.iter().all(|&p| radius_xy(p) <= 3.0 + 1e-3 && p[2] >= 5.0 - 1e-3 && p[2] <= 17.0 + 1e-3));
     assert!(mean_r[1] > 2.0, "the base of the cone is wide: {mean_r:?}");
