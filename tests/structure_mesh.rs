@@ -160,11 +160,15 @@ fn crown_hull_follows_a_conical_and_a_one_sided_crown() {
     let rings = n / o.hull_segments as usize;
     let mean_r: Vec<f32> = (0..rings).map(|b| (0..o.hull_segments as usize).map(|k| radius_xy(hull.positions[b * o.hull_segments as usize + k])).sum::<f32>() / o.hull_segments as f32).collect();
     eprintln!("cone hull ring radii {mean_r:?}");
-    // rings: a dome ring under the crown, the height bands, two dome rings over it
-    assert!(mean_r[0] < mean_r[1], "the base is rounded off: {mean_r:?}");
-    for w in mean_r[1..].windows(2) {
+    // rings at HULL_RING_HEIGHTS of the crown (round 46; until then a dome ring under three
+    // height bands and two dome rings over them, which rounded a spruce's top off): the cone's
+    // own radii, widest at its base, narrowing at every ring to a spire (measured [3.0, 2.5,
+    // 2.0, 1.25, 0.75, 0.25])
+    assert_eq!(rings, mesh::HULL_RING_HEIGHTS.len());
+    for w in mean_r.windows(2) {
         assert!(w[1] < w[0] - 0.2, "a cone narrows upward: {mean_r:?}");
     }
+    assert!(mean_r[rings - 1] < 0.1 * mean_r[0], "a spire: {mean_r:?}");
     // every ring lies inside the cone's widest reach at its band's base, and no vertex leaves it
     assert!(hull.positions.iter().all(|&p| radius_xy(p) <= 3.0 + 1e-3 && p[2] >= 5.0 - 1e-3 && p[2] <= 17.0 + 1e-3));
     assert!(mean_r[1] > 2.0, "the base of the cone is wide: {mean_r:?}");
@@ -653,13 +657,13 @@ fn the_cheaper_hull_level_keeps_its_silhouette() {
         let chain = mesh::lod_chain(&sk, &lv, &o);
         let r0 = Silhouette::from_chain(&chain).radius;
         let new = &chain.levels[2];
-        // main's level: the 10-sector hull (its bands were 10 / 2 − 2 = 3, as HULL_BANDS)
+        // the 10-sector hull (six rings, as the 8-sector one: HULL_RING_HEIGHTS)
         // on the stem of 6 segments, up to the same height
         let old_leaves = mesh::hull_mesh(&sk, &lv, &LodOptions { hull_segments: 10, ..o }).leaves;
         let top = new.bark.positions.iter().map(|p| p[2]).fold(f32::MIN, f32::max);
         let old_bark = mesh::hull_stem_of(&sk, top, &o, 6);
         let (n_new, n_old) = (new.triangle_count(), old_leaves.triangle_count() + old_bark.triangle_count());
-        assert_eq!(new.leaves.triangle_count(), 2 * 8 * (mesh::HULL_BANDS + 3), "{id}");
+        assert_eq!(new.leaves.triangle_count(), 2 * 8 * mesh::HULL_RING_HEIGHTS.len(), "{id}");
         assert_eq!(old_leaves.triangle_count(), 120, "{id}");
         assert!(new.bark.triangle_count() <= 30 && old_bark.triangle_count() == 60, "{id}: stems {} and {}", new.bark.triangle_count(), old_bark.triangle_count());
         assert!(n_new * 10 <= n_old * 7, "{id}: {n_new} triangles against main's {n_old}");

@@ -306,7 +306,9 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
     let all_obstacles: Vec<Obstacle> = obs.iter().chain(&later).copied().collect();
     let (chain, fill, _) = tree_chain(&sk, &mut leaves, &sp, form.dbh_cm, look, &all_obstacles);
     let mesh_s = t1.elapsed().as_secs_f64();
-    let glb_o = glb_options_sized(&sp, look.texture_px, &lod_levels);
+    let mut glb_o = glb_options_sized(&sp, look.texture_px, &lod_levels);
+    // the billboard shows this tree, baked from its full level (issue 32, round 46)
+    glb_o.look = glb_o.look.with_tree_impostor(&chain);
     // a missing output folder is made (as `tree adapt`, `render` and `run` do), naming the
     // option when it cannot be (a bare OS error was all a trial got)
     if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
@@ -322,7 +324,7 @@ fn grow(species: &str, model: Model, age: f32, obstacles: &[String], adapt_to: &
         "obj" => sylva::output::obj::write_obj(out, &chain, Some(&lod_levels), &sp.id, &glb_o.look)?,
         _ => anyhow::bail!("--out {}: expected a .glb or .obj file name", out.display()),
     }
-    let img = sylva::output::tree_preview::lod_preview(&chain, &glb_options(&sp).look, 360, 540);
+    let img = sylva::output::tree_preview::lod_preview(&chain, &glb_options(&sp).look.with_tree_impostor(&chain), 360, 540);
     let mut bytes = Vec::new();
     img.write_to(&mut std::io::Cursor::new(&mut bytes), image::ImageFormat::Png)?;
     sylva::output::write_atomic(&png, &bytes)?;
@@ -552,7 +554,9 @@ fn adapt(a: &AdaptArgs) -> anyhow::Result<()> {
     if let Some(dir) = a.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("--out {}: creating its folder {}", a.out.display(), dir.display()))?;
     }
-    sylva::output::gltf::write_glb(&a.out, &only_levels(&chain, &lod_levels), &glb_options_sized(&sp, a.texture_size, &lod_levels))?;
+    let mut glb_o = glb_options_sized(&sp, a.texture_size, &lod_levels);
+    glb_o.look = glb_o.look.with_tree_impostor(&chain);
+    sylva::output::gltf::write_glb(&a.out, &only_levels(&chain, &lod_levels), &glb_o)?;
     sylva::output::gltf::write_skeleton_sidecar(&a.out, &adapted, Some(&sp.id))?;
     let png = a.out.with_extension("png");
     let (drawing, along) = before_after(&before, &trees, &obstacles, 420, 480);

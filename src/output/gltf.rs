@@ -59,6 +59,21 @@ impl Look {
         Look { name: sp.id.clone(), textures: FoliageTextures::for_species_sized(sp, season, size) }
     }
 
+    /// This look with its billboard picture baked from `chain`'s own full level
+    /// ([`texture::baked_impostor`], laid out as the chain's billboard, level 3, maps it), at the
+    /// size of the look's impostor picture, the trunk in the bark picture's mean colour
+    /// ([`texture::mean_rgb`]): the billboard of ONE tree (`sylva tree grow`, `tree adapt`)
+    /// then has that tree's outline and coverage (issue 32, round 46). The look unchanged when
+    /// the chain has no billboard level or no full level.
+    pub fn with_tree_impostor(&self, chain: &crate::mesh::LodChain) -> Look {
+        let t = &self.textures;
+        let (Some(full), Some(bb)) = (chain.levels.first(), chain.levels.get(3)) else { return self.clone() };
+        match texture::baked_impostor(full, bb, &t.leaf, &t.cluster, texture::mean_rgb(&t.bark), t.impostor.width()) {
+            Some(img) => Look { name: self.name.clone(), textures: FoliageTextures { impostor: img, ..t.clone() } },
+            None => self.clone(),
+        }
+    }
+
     /// A look from colours (sRGB 0–255), a leaf shape and a bark pattern.
     pub fn plain(name: &str, bark_rgb: [u8; 3], leaf_rgb: [u8; 3], shape: LeafShape, bark: BarkPattern) -> Look {
         let px = texture::TEXTURE_PX;

@@ -98,6 +98,20 @@ pub fn same_scale_preview(trees: &[(&TreeMesh, &Look)], w: u32, h: u32, min_heig
     img
 }
 
+/// Side view (along +y, as [`lod_preview`] draws it) of level `level` of `chain` in a `w × h`
+/// picture on [`BACKGROUND`], at the scale and place where level 0 (the full level) fits the
+/// picture less the margins: the levels' views lie on top of each other, so their outlines and
+/// coverage compare pixel for pixel (issue 32, round 46: `tests/lod_agreement.rs`). A blank
+/// picture for a level the chain lacks or an empty full level.
+pub fn level_view(chain: &LodChain, look: &Look, level: usize, w: u32, h: u32) -> RgbImage {
+    let mut img = RgbImage::from_pixel(w, h, Rgb(BACKGROUND));
+    let (Some(full), Some(m)) = (chain.levels.first(), chain.levels.get(level)) else { return img };
+    let Some((lo, hi)) = crate::mesh::points_bounds(full.bark.positions.iter().chain(&full.leaves.positions)) else { return img };
+    let s = ((w as f32 - 2.0 * MARGIN) / (hi[0] - lo[0]).max(1e-3)).min((h as f32 - 2.0 * MARGIN) / (hi[2] - lo[2]).max(1e-3));
+    draw_level_at(&mut img, m, level, look, 0, w, h, Some((s, 0.5 * (lo[0] + hi[0]), lo[2])));
+    img
+}
+
 fn draw_level(img: &mut RgbImage, m: &TreeMesh, level: usize, look: &Look, x0: u32, w: u32, h: u32) {
     draw_level_at(img, m, level, look, x0, w, h, None)
 }

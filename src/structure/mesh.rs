@@ -24,7 +24,7 @@ pub struct LodOptions {
     pub min_sides: u32,
     /// Fraction (0–1] of branch nodes kept (the thickest) in the LOD1 reduced skeleton.
     pub reduced_keep_fraction: f32,
-    /// Azimuth sectors of the LOD2 crown hull (≥ 3; its height bands are [`HULL_BANDS`]).
+    /// Azimuth sectors of the LOD2 crown hull (≥ 3; its rings are [`HULL_RING_HEIGHTS`]).
     pub hull_segments: u32,
     /// Emit leaves at LOD0.
     pub leaves: bool,
@@ -52,9 +52,6 @@ pub struct LodOptions {
 /// `tests/structure_mesh.rs::the_cheaper_hull_level_keeps_its_silhouette`).
 pub const HULL_SECTORS: u32 = 8;
 
-/// Height bands of the LOD2 crown hull ([`hull_mesh`]): 3 (those of the 10-sector hull of
-/// rounds 34–44, whose bands were half the sectors minus two).
-pub const HULL_BANDS: usize = 3;
 
 impl Default for LodOptions {
     fn default() -> Self {
@@ -790,30 +787,41 @@ fn bounds(pts: &[Vec3]) -> Option<(Vec3, Vec3)> {
     Some(pts.iter().fold((first, first), |(lo, hi), &p| (lo.min(p), hi.max(p))))
 }
 
-/// LOD2: a low-poly star-shaped crown hull fitted to the foliage (leaf centres, or tips): the
-/// crown from the 3rd percentile of its foliage heights to its highest foliage point is cut into
-/// [`HULL_BANDS`] height bands and `hull_segments` (≥ 3) azimuth directions around the trunk axis; each
-/// ring vertex lies at the band's support function in its direction (the farthest horizontal
-/// reach of the band's foliage along it, at least 2 % of the crown radius; empty bands take the
-/// bands beside them; then one 5-point smoothing pass). Dome rings below and above (radii
-/// r·cos θ) round the crown off to a base point on the trunk axis and an apex over the highest
-/// foliage point. Each band's azimuths are taken around the skeleton's main stem where it
-/// crosses the band ([`main_stem`]; above the stem's tip, around its tip), so a leaning crown's
-/// rings follow the lean (round 34; until then around a vertical line over the root, which
-/// squeezed the far side of a leaning crown). Unlike a bounding ellipsoid this keeps the crown's shape: conical spruces,
-/// ovoid beeches, and crowns made one-sided by a neighbour or a wall (Plastic Trees). Normals
-/// are area-weighted face normals, outward. Sits on a 5-sided trunk ([`hull_stem`]) that follows
-/// the main stem from the root to a quarter of the way up the crown.
+/// Heights of the rings of the LOD2 crown hull ([`hull_mesh`]), as fractions of the crown's
+/// length from its lowest (3rd-percentile) to its highest foliage point: six rings (as many as
+/// round 45's three bands and three dome rings, so the level keeps its 96 foliage triangles at
+/// 8 sectors), closed by a point on the stem at the crown's bottom and an apex over its highest
+/// foliage point. Spread over the whole crown, with the top ring at 0.95, the hull's outline
+/// is the crown's own from its base to its top (issue 32, round 46): a spruce's rings narrow to
+/// a spire, a Scots pine's widen to a flat top, a beech's round off; round 45's three bands with
+/// dome rings at 45° and 75° above the top band drew every crown as a rounded egg.
+pub const HULL_RING_HEIGHTS: [f32; 6] = [0.04, 0.22, 0.42, 0.62, 0.8, 0.95];
+
+/// LOD2: a low-poly crown hull that follows the full-detail tree's own outline, per height and
+/// azimuth (issue 32, round 46): the crown from the 3rd percentile of its foliage heights (leaf
+/// centres, or tips) to its highest foliage point carries six rings at [`HULL_RING_HEIGHTS`] and
+/// `hull_segments` (≥ 3) azimuth sectors around the skeleton's main stem where it crosses the
+/// ring ([`main_stem`]; above the stem's tip, around its tip; round 34: a leaning crown's rings
+/// follow the lean). A ring's radius in a sector is the support function of the foliage in the
+/// ring's slab (from half-way to the ring below to half-way to the ring above; the lowest slab
+/// from the crown's bottom, the highest to its top) along the sector's middle direction: the
+/// farthest horizontal reach of that foliage (m), at least 2 % of the crown radius; a slab
+/// without foliage takes the mean of the slabs beside it ([`fill_empty_bands`]); then one
+/// smoothing pass along each ring (½ the radius, ¼ each neighbour), none across rings, so the
+/// crown keeps its profile by height and its lumps by azimuth. A fan closes the hull to a point
+/// on the stem at the crown's bottom and to an apex over the highest foliage point at its
+/// height: a conifer's top is a spire, a flat-topped crown's a low cone over its widest ring.
+/// Crowns made one-sided by a neighbour or a wall (Plastic Trees) stay one-sided. Normals are
+/// area-weighted face normals, outward. Sits on a 5-sided trunk ([`hull_stem`]) that follows
+/// the main stem from the root to a quarter of the way up the crown. `2 · hull_segments · 6`
+/// foliage triangles (96 at the default 8).
 pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     let mut pts = foliage_points(sk, leaves);
     let Some((mut lo, mut hi)) = bounds(&pts) else { return TreeMesh::default() };
     // the crown spans the 3rd percentile of foliage height (a few low leaves on the trunk,
     // epicormic shoots, do not stretch the hull down it) to the highest foliage point: the
-    // levels beside it reach the crown's top (the reduced level's clusters, the renderer's
-    // billboard silhouette), and in a cross-fade a hull that stopped at the 98th percentile
-    // left the top 10-20 % of a broadleaf crown to the other level's share of the Bayer mask, a
-    // dotted cap over the crown against the sky (round 39; the top bands' support functions
-    // keep a sparse leader's top as narrow as its foliage)
+    // levels beside it reach the crown's top (round 39: a hull stopping short left a dotted cap
+    // in the cross-fade)
     let mut zs: Vec<f32> = pts.iter().map(|p| p.z).collect();
     zs.sort_by(f32::total_cmp);
     lo.z = zs[(zs.len() * 3 / 100).min(zs.len() - 1)];
@@ -823,21 +831,28 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     let c = 0.5 * (lo + hi);
     let r = (0.5 * (hi - lo)).max(Vec3::splat(1e-3));
     let nlon = o.hull_segments.max(3) as usize;
-    let nb = HULL_BANDS;
+    let f = HULL_RING_HEIGHTS;
+    let nb = f.len();
     let (z0, dz) = (lo.z, (hi.z - lo.z).max(1e-3));
-    // each band's axis is the main stem where it crosses the band's middle height (a leaning
-    // stem carries its crown: the rings follow it rather than a vertical line over the root)
+    let ring_z = |b: usize| z0 + f[b] * dz;
+    // slab edges (fractions): half-way between rings, the crown's ends outside
+    let edge = |b: usize| if b == 0 { 0.0 } else if b == nb { 1.0 } else { 0.5 * (f[b - 1] + f[b]) };
+    let slab_of = |z: f32| {
+        let t = (z - z0) / dz;
+        (1..nb).take_while(|&b| t >= edge(b)).count()
+    };
+    // each ring's axis is the main stem where it crosses the ring (a leaning stem carries its
+    // crown: the rings follow it rather than a vertical line over the root)
     let stem = main_stem(sk);
-    let band_z = |b: usize| z0 + (b as f32 + 0.5) / nb as f32 * dz;
     let axis_at = |z: f32| stem_xy_at(&stem, z).map_or(Vec3::new(c.x, c.y, z), |v| v.extend(z));
-    let band_axis: Vec<Vec3> = (0..nb).map(|b| axis_at(band_z(b))).collect();
-    // support function per (band, sector): the farthest reach of the band's foliage along the
-    // sector's direction (a convex outline per band; < 0: empty band)
+    let ring_axis: Vec<Vec3> = (0..nb).map(|b| axis_at(ring_z(b))).collect();
+    // support function per (slab, sector): the farthest reach of the slab's foliage along the
+    // sector's direction (< 0: an empty slab)
     let dirs: Vec<(f32, f32)> = (0..nlon).map(|k| ((k as f32 + 0.5) / nlon as f32 * TAU).sin_cos()).map(|(s, c)| (c, s)).collect();
     let mut rad = vec![-1.0f32; nb * nlon];
     for p in &pts {
-        let b = (((p.z - z0) / dz * nb as f32) as usize).min(nb - 1);
-        let d = (*p - band_axis[b]).truncate();
+        let b = slab_of(p.z).min(nb - 1);
+        let d = (*p - ring_axis[b]).truncate();
         for (k, &(cx, cy)) in dirs.iter().enumerate() {
             let cell = &mut rad[b * nlon + k];
             *cell = cell.max(d.x * cx + d.y * cy);
@@ -847,38 +862,22 @@ pub fn hull_mesh(sk: &Skeleton, leaves: &Leaves, o: &LodOptions) -> TreeMesh {
     for b in 0..nb {
         if (0..nlon).any(|k| rad[b * nlon + k] >= 0.0) {
             for k in 0..nlon {
-                // a one-sided band: the far side closes in near the axis
+                // a one-sided slab: the far side closes in near the axis
                 rad[b * nlon + k] = rad[b * nlon + k].max(floor);
             }
         }
     }
-    // empty bands: mean of the nearest filled bands above and below
     let filled: Vec<bool> = (0..nb).map(|b| rad[b * nlon] >= 0.0).collect();
     fill_empty_bands(&mut rad, nlon, &filled, r.x.max(r.y));
-    // one smoothing pass (centre 1/2, the four neighbours 1/8 each; bands clamp at the ends)
+    // one smoothing pass along each ring (the profile by height is kept as measured)
     let src = rad.clone();
     for b in 0..nb {
         for k in 0..nlon {
-            let at = |bb: usize, kk: usize| src[bb * nlon + kk % nlon];
-            let n4 = at(b.saturating_sub(1), k) + at((b + 1).min(nb - 1), k) + at(b, k + 1) + at(b, k + nlon - 1);
-            rad[b * nlon + k] = (0.5 * src[b * nlon + k] + 0.125 * n4).max(1e-3);
+            let at = |kk: usize| src[b * nlon + kk % nlon];
+            rad[b * nlon + k] = (0.5 * at(k) + 0.25 * (at(k + 1) + at(k + nlon - 1))).max(1e-3);
         }
     }
-    // rings: a dome ring below the lowest band, the band rings, two dome rings above the top
-    // band (z = z_ring ± (end − z_ring)·sin θ, r = r_ring·cos θ at θ = 50° below, 45° and 75°
-    // above), so broadleaf crowns are rounded while a cone's narrow top stays pointed
-    let (zb, zt) = (band_z(0), band_z(nb - 1));
-    // (height, centre, radii): the dome rings take the centre of the band they round off
-    let mut rings: Vec<(f32, Vec3, Vec<f32>)> = Vec::new();
-    let th = 50f32.to_radians();
-    rings.push((zb - (zb - lo.z) * th.sin(), band_axis[0], (0..nlon).map(|k| rad[k] * th.cos()).collect()));
-    for b in 0..nb {
-        rings.push((band_z(b), band_axis[b], rad[b * nlon..(b + 1) * nlon].to_vec()));
-    }
-    for deg in [45f32, 75.0] {
-        let t = deg.to_radians();
-        rings.push((zt + (hi.z - zt) * t.sin(), band_axis[nb - 1], (0..nlon).map(|k| rad[(nb - 1) * nlon + k] * t.cos()).collect()));
-    }
+    let rings: Vec<(f32, Vec3, Vec<f32>)> = (0..nb).map(|b| (ring_z(b), ring_axis[b], rad[b * nlon..(b + 1) * nlon].to_vec())).collect();
     let hull = ring_hull(&rings, nlon, top_xy.with_z(hi.z), axis_at(lo.z).with_z(lo.z));
     // trunk: a quarter of the way up into the crown, so the hull sits on it
     TreeMesh { bark: hull_stem(sk, c.z - 0.5 * r.z, o), leaves: hull }

@@ -571,9 +571,12 @@ pub fn impostor_texture(shape: LeafShape, size: u32) -> RgbaImage {
 
 /// The impostor texture of `shape` in colour: the leaves of [`impostor_texture`] tinted by
 /// `leaf_rgb` (sRGB 0–255, as [`tint`] tints), the trunk column in the bark colour `bark_rgb`
-/// (× 0.85, the shaded side of a stem). Trial 35: the whole greyscale impostor was tinted by
-/// the leaf colour, so its trunk (grey 0.3) became 0.3 × the leaf's dark green, nearly black
-/// whatever the bark (beech's grey, birch's white). Straight alpha, `size` × `size`.
+/// (the species' textures pass their bark texture's mean, [`mean_rgb`]: what levels 0–2 wear;
+/// rounds 35–45 drew it × 0.85, "the shaded side of a stem", and the billboard quad's own
+/// shading made a birch's white stem grey, trial 45). Trial 35: the whole greyscale impostor
+/// was tinted by the leaf colour, so its trunk (grey 0.3) became 0.3 × the leaf's dark green,
+/// nearly black whatever the bark (beech's grey, birch's white). Straight alpha, `size` ×
+/// `size`.
 pub fn impostor_texture_coloured(shape: LeafShape, size: u32, leaf_rgb: [u8; 3], bark_rgb: [u8; 3]) -> RgbaImage {
     let (_, (trunk, leaf_px)) = impostor_layers(shape, size);
     let mut img = RgbaImage::new(size.max(8), size.max(8));
@@ -582,7 +585,7 @@ pub fn impostor_texture_coloured(shape: LeafShape, size: u32, leaf_rgb: [u8; 3],
         let alpha = a + t * (1.0 - a);
         let c = |k: usize| -> u8 {
             let leaf = leaf_rgb[k] as f32 / 255.0;
-            let bark = 0.85 * bark_rgb[k] as f32 / 255.0;
+            let bark = bark_rgb[k] as f32 / 255.0;
             // premultiplied: the leaves' grey times the leaf colour over the trunk's bark
             let pre = leaf * g + bark * t * (1.0 - a);
             q(if alpha > 1e-3 { pre / alpha } else { 0.75 * leaf })
@@ -637,6 +640,133 @@ fn impostor_layers(shape: LeafShape, size: u32) -> (Vec<[f32; 2]>, (Vec<f32>, Ve
         d[1] = d[1] * (1.0 - s[1]) + s[1];
     }
     (px, (trunk, leaf_px))
+}
+
+/// Mean colour (sRGB 0–255) of `img`'s texels with alpha at or above [`ALPHA_CUTOFF`] (all of
+/// them for an opaque texture); `[128, 128, 128]` for a texture without one.
+pub fn mean_rgb(img: &RgbaImage) -> [u8; 3] {
+    let (mut s, mut n) = ([0.0f64; 3], 0usize);
+    for p in img.pixels().filter(|p| p.0[3] as f32 >= ALPHA_CUTOFF * 255.0) {
+        for k in 0..3 {
+            s[k] += p.0[k] as f64;
+        }
+        n += 1;
+    }
+    if n == 0 {
+        return [128; 3];
+    }
+    s.map(|v| (v / n as f64).round().clamp(0.0, 255.0) as u8)
+}
+
+/// The billboard picture of ONE tree, baked from its own full-detail level (issue 32, round 46:
+/// the species' picture, a cone or an ellipse of scattered leaves, drew a Scots pine's V as a
+/// spruce's cone and a sparse birch as a full, opaque ellipse). `full` (level 0 of the chain)
+/// is seen along +y (orthographic, z up) into a `size` × `size` picture laid out as `billboard`'s
+/// (level 3, [`crate::structure::mesh::impostor_mesh`]) first crown quad maps it: u and v
+/// linear in x and z, from its corners' positions and texture coordinates. Its leaf cards are
+/// alpha-tested with `leaf` (the leaf card picture; leaf-cluster cards, [`crate::mesh::TriMesh::has_cluster_cards`],
+/// with `cluster`) at [`ALPHA_CUTOFF`], its bark drawn in `bark_rgb` (sRGB 0–255), the nearest
+/// surface kept, each texel shaded as the preview shades (0.35 + 0.65 |n·l|, l from the upper
+/// left front) divided by the preview's shading of a quad facing the viewer (0.74), at most 1:
+/// the billboard, itself shaded as a quad facing the viewer, shows about the full level's
+/// brightness. So the billboard's
+/// coverage (its opaque share) is the full level's at the picture's resolution, gaps and all,
+/// and its outline is the tree's. Below the crown ([`IMPOSTOR_CROWN_V`]) only the trunk column
+/// ([`IMPOSTOR_TRUNK_U`], the billboard's trunk quads) is kept, in `bark_rgb`. Transparent texels
+/// carry the mean leaf colour × 0.75 (no dark fringe when filtered). `None` when `billboard`
+/// has no crown quad (fewer than 4 vertices or a flat mapping).
+pub fn baked_impostor(full: &crate::mesh::TreeMesh, billboard: &crate::mesh::TreeMesh, leaf: &RgbaImage, cluster: &RgbaImage, bark_rgb: [u8; 3], size: u32) -> Option<RgbaImage> {
+    let size = size.max(8);
+    let q4 = billboard.leaves.positions.get(..4)?;
+    let t4 = billboard.leaves.uvs.get(..4)?;
+    // u = u0 + (x − x0)·su, v = v0 + (z − z0)·sv over the quad's corners
+    let (i0, i1) = ((0..4).min_by(|&a, &b| q4[a][0].total_cmp(&q4[b][0]))?, (0..4).max_by(|&a, &b| q4[a][0].total_cmp(&q4[b][0]))?);
+    let (j0, j1) = ((0..4).min_by(|&a, &b| q4[a][2].total_cmp(&q4[b][2]))?, (0..4).max_by(|&a, &b| q4[a][2].total_cmp(&q4[b][2]))?);
+    let (dx, dz) = (q4[i1][0] - q4[i0][0], q4[j1][2] - q4[j0][2]);
+    if !(dx.abs() > 1e-6 && dz.abs() > 1e-6) {
+        return None;
+    }
+    let su = (t4[i1][0] - t4[i0][0]) / dx;
+    let sv = (t4[j1][1] - t4[j0][1]) / dz;
+    let (x0, u0, z0, v0) = (q4[i0][0], t4[i0][0], q4[j0][2], t4[j0][1]);
+    let s = size as f32;
+    // texel coordinates (column, row from the top, depth along +y)
+    let to_px = |p: [f32; 3]| [(u0 + (p[0] - x0) * su) * s, (1.0 - (v0 + (p[2] - z0) * sv)) * s, p[1]];
+    let light = glam::Vec3::new(-0.4, -0.6, 0.7).normalize();
+    let facing = 0.35 + 0.65 * glam::Vec3::Y.dot(light).abs();
+    let n = (size * size) as usize;
+    let mut rgba = vec![[0.0f32; 4]; n];
+    let mut zbuf = vec![f32::MAX; n];
+    let sample = |img: &RgbaImage, uv: [f32; 2]| {
+        let (w, h) = img.dimensions();
+        let x = ((uv[0].clamp(0.0, 1.0) * w as f32) as u32).min(w - 1);
+        let y = (((1.0 - uv[1]).clamp(0.0, 1.0) * h as f32) as u32).min(h - 1);
+        img.get_pixel(x, y).0
+    };
+    let (cards, sprigs) = if full.leaves.has_cluster_cards() { full.leaves.split_cluster_cards() } else { (full.leaves.clone(), crate::mesh::TriMesh::default()) };
+    let bark_px = Rgba([bark_rgb[0], bark_rgb[1], bark_rgb[2], 255]);
+    let plain = RgbaImage::from_pixel(1, 1, bark_px);
+    for (mesh, img, mask) in [(&full.bark, &plain, false), (&cards, leaf, true), (&sprigs, cluster, true)] {
+        let has_uv = mesh.uvs.len() == mesh.positions.len();
+        for t in mesh.indices.chunks_exact(3) {
+            let [ia, ib, ic] = [t[0] as usize, t[1] as usize, t[2] as usize];
+            let (Some(&pa), Some(&pb), Some(&pc)) = (mesh.positions.get(ia), mesh.positions.get(ib), mesh.positions.get(ic)) else { continue };
+            let (a, b, c) = (to_px(pa), to_px(pb), to_px(pc));
+            let nrm = [ia, ib, ic].iter().filter_map(|&i| mesh.normals.get(i)).fold(glam::Vec3::ZERO, |acc, v| acc + glam::Vec3::from(*v));
+            let shade = ((0.35 + 0.65 * nrm.normalize_or(glam::Vec3::Z).dot(light).abs()) / facing).min(1.0);
+            let uv = |i: usize| if has_uv { mesh.uvs[i] } else { [0.5, 0.5] };
+            let (ua, ub, uc) = (uv(ia), uv(ib), uv(ic));
+            let area = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+            let minx = a[0].min(b[0]).min(c[0]).floor().max(0.0) as i64;
+            let maxx = a[0].max(b[0]).max(c[0]).ceil().min(s - 1.0) as i64;
+            let miny = a[1].min(b[1]).min(c[1]).floor().max(0.0) as i64;
+            let maxy = a[1].max(b[1]).max(c[1]).ceil().min(s - 1.0) as i64;
+            if area.abs() < 1e-9 {
+                // a thin twig seen edge-on keeps its texel, as the preview draws it
+                if !mask && minx <= maxx && miny <= maxy {
+                    let i = (miny as u32 * size + minx as u32) as usize;
+                    let p = img.get_pixel(0, 0).0;
+                    rgba[i] = [p[0] as f32 * shade, p[1] as f32 * shade, p[2] as f32 * shade, 255.0];
+                }
+                continue;
+            }
+            for y in miny..=maxy {
+                for x in minx..=maxx {
+                    let (fx, fy) = (x as f32 + 0.5, y as f32 + 0.5);
+                    let w0 = ((b[0] - fx) * (c[1] - fy) - (c[0] - fx) * (b[1] - fy)) / area;
+                    let w1 = ((c[0] - fx) * (a[1] - fy) - (a[0] - fx) * (c[1] - fy)) / area;
+                    let w2 = 1.0 - w0 - w1;
+                    if w0 < 0.0 || w1 < 0.0 || w2 < 0.0 {
+                        continue;
+                    }
+                    let i = (y as u32 * size + x as u32) as usize;
+                    let z = w0 * a[2] + w1 * b[2] + w2 * c[2];
+                    if z >= zbuf[i] {
+                        continue;
+                    }
+                    let p = if mask { sample(img, [w0 * ua[0] + w1 * ub[0] + w2 * uc[0], w0 * ua[1] + w1 * ub[1] + w2 * uc[1]]) } else { img.get_pixel(0, 0).0 };
+                    if mask && (p[3] as f32) < ALPHA_CUTOFF * 255.0 {
+                        continue;
+                    }
+                    zbuf[i] = z;
+                    rgba[i] = [p[0] as f32 * shade, p[1] as f32 * shade, p[2] as f32 * shade, 255.0];
+                }
+            }
+        }
+    }
+    let fill = mean_rgb(leaf).map(|c| 0.75 * c as f32);
+    let mut out = RgbaImage::new(size, size);
+    for (i, px) in out.pixels_mut().enumerate() {
+        let (x, y) = (i as u32 % size, i as u32 / size);
+        let (u, v) = ((x as f32 + 0.5) / s, 1.0 - (y as f32 + 0.5) / s);
+        let mut c = rgba[i];
+        if v < IMPOSTOR_CROWN_V {
+            // below the crown: the trunk column only (the billboard's trunk quads)
+            c = if u >= IMPOSTOR_TRUNK_U[0] - 0.005 && u <= IMPOSTOR_TRUNK_U[1] + 0.005 { [bark_rgb[0] as f32, bark_rgb[1] as f32, bark_rgb[2] as f32, 255.0] } else { [0.0; 4] };
+        }
+        *px = if c[3] > 0.0 { Rgba([q(c[0] / 255.0), q(c[1] / 255.0), q(c[2] / 255.0), 255]) } else { Rgba([fill[0] as u8, fill[1] as u8, fill[2] as u8, 0]) };
+    }
+    Some(out)
 }
 
 /// Bark pattern of a species.
@@ -928,13 +1058,14 @@ impl FoliageTextures {
         };
         let shape = LeafShape::of_species(sp);
         let seed = sp.id.bytes().fold(0xB4u64, |h, b| crate::rng::hash(&[h, b as u64]));
+        let bark = bark_texture(a.bark, BarkPattern::of_species(sp), size, seed);
         FoliageTextures {
             shape,
             leaf: tint(&if size == TEXTURE_PX { leaf_texture(shape) } else { leaf_texture_sized(shape, size / 2, size) }, rgb),
             cluster: tint(&cluster_texture(shape, at(1)), rgb),
             crown: tint(&crown_texture(shape, at(2)), rgb),
-            impostor: impostor_texture_coloured(shape, at(3), rgb, a.bark),
-            bark: bark_texture(a.bark, BarkPattern::of_species(sp), size, seed),
+            impostor: impostor_texture_coloured(shape, at(3), rgb, mean_rgb(&bark)),
+            bark,
             bark_base: (BarkPattern::of_species(sp) == BarkPattern::Lenticelled).then(|| bark_texture(BARK_BASE_RGB, BarkPattern::Fissured, size, seed ^ 0xBA5E)),
         }
     }
@@ -968,17 +1099,18 @@ mod tests {
     }
 
     /// Trial 35: the billboards' trunks were drawn nearly black (0.3 × the leaf colour). Now
-    /// the trunk column of the coloured impostor has the bark's colour (× 0.85): beech's grey
+    /// the trunk column of the coloured impostor has the bark's colour (round 46: as it is, no
+    /// longer × 0.85, which greyed a birch's white stem, trial 45): beech's grey
     /// bark stays grey and light, not the leaves' dark green; the leaves keep the leaf tint.
     #[test]
     fn the_impostor_trunk_has_the_bark_colour() {
         let (leaf, bark) = ([40u8, 80, 30], [150u8, 150, 145]);
         let img = impostor_texture_coloured(LeafShape::Ovate, 128, leaf, bark);
-        // the trunk column below the crown (u 0.5, v 0.05): opaque, the bark's colour × 0.85
+        // the trunk column below the crown (u 0.5, v 0.05): opaque, the bark's colour
         let p = img.get_pixel(64, 127 - 6).0;
         assert_eq!(p[3], 255, "{p:?}");
         for k in 0..3 {
-            assert!((p[k] as f32 - 0.85 * bark[k] as f32).abs() <= 2.0, "trunk {p:?}, bark {bark:?}");
+            assert!((p[k] as f32 - bark[k] as f32).abs() <= 2.0, "trunk {p:?}, bark {bark:?}");
         }
         // the greyscale tinted by the leaf colour (the old way) gives a trunk 0.3 × the leaf's
         let old = tint(&impostor_texture(LeafShape::Ovate, 128), leaf).get_pixel(64, 127 - 6).0;
