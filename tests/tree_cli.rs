@@ -392,7 +392,10 @@ fn ecomod_tree_height_follows_the_species_curve_and_scientific_names_are_accepte
     // and thinned to the crown LAI over its projection (`--leaf-clusters`' full level; the
     // heights above do not depend on the foliage, so they are grown the lighter way too)
     let fill = so.lines().find(|l| l.starts_with("leaf area")).unwrap_or_else(|| panic!("{so}"));
-    assert!(fill.contains("shortened ×0.67 and") && fill.contains("removed"), "{fill}");
+    // (round 46: the pine's shoot cards 9 cm, drawing its 3.8 cm needles, instead of EcoMod's
+    // 18 cm: they carry 1.85× the leaf area and are shortened ×0.73, none removed; round 33–45:
+    // ×0.67 and some removed)
+    assert!(fill.contains("shortened ×0.73 and 0 removed"), "{fill}");
     // an unknown name is still refused, naming the option and the ids
     let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["tree", "grow", "--species", "Fagus", "--out", out.to_str().unwrap()]).output().unwrap();
     let err = String::from_utf8_lossy(&res.stderr);

@@ -483,6 +483,10 @@ fn check_document(doc: &toml::Table) -> Vec<Violation> {
         if spec.path.starts_with("architecture.mature_form.") && !leaves.iter().any(|(p, _)| p.starts_with("architecture.mature_form.")) {
             continue;
         }
+        // and its crown profile (optional within the mature form)
+        if spec.path.starts_with("architecture.mature_form.crown_profile.") && !leaves.iter().any(|(p, _)| p.starts_with("architecture.mature_form.crown_profile.")) {
+            continue;
+        }
         // so is the whorled stem of EcoMod (each of its fields required where it is given)
         if spec.path.starts_with("architecture.ecomod.whorls.") && !leaves.iter().any(|(p, _)| p.starts_with("architecture.ecomod.whorls.")) {
             continue;

@@ -913,6 +913,13 @@ pub struct MatureForm {
     pub limb_alpha_m_deg: f32,
     /// Leaf distribution from the middle of the blend on.
     pub leaf_distribution: LeafDistribution,
+    /// The old tree's crown profile (`[architecture.mature_form.crown_profile]`, optional;
+    /// issue 32 round 46): from the middle of the blend on it replaces the EcoMod model's
+    /// [`EcoModParams::crown_profile`] (none: the model's own kept), so that an old tree's
+    /// limbs are shared and shaped by a profile of its own (an old Scots pine's flat, umbrella
+    /// crown of a few spreading limbs) while the young tree keeps the model's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub crown_profile: Option<CrownProfile>,
 }
 
 /// An sRGB colour (0–255 per channel, as [`Appearance`] gives them) as linear RGB (0–1), by the

@@ -438,6 +438,12 @@ pub const FIELDS: &[FieldSpec] = &[
     f("architecture.mature_form.trunk_k_s", "", r(0.5, 1.0), "Mature form: k_s^g at Gravelius order 0 (eq. 1), the stem's share of the strands at each split"),
     f("architecture.mature_form.trunk_alpha_deg", "°", r(0.0, 180.0), "Mature form: α^g at order 0 (eq. 2), the angle between the stem's continuation and a limb"),
     f("architecture.mature_form.limb_alpha_m_deg", "°", r(-180.0, 180.0), "Mature form: α_m^g at order 1 (eq. 3), the limbs' gravimorphism (+ turns up)"),
+    f("architecture.mature_form.crown_profile.angle_base_deg", "°", r(10.0, 120.0), "Mature form's crown profile: insertion angle from the vertical of a limb at the crown base"),
+    f("architecture.mature_form.crown_profile.angle_top_deg", "°", r(10.0, 120.0), "Mature form's crown profile (optional; `architecture.ecomod.crown_profile`'s fields, used from the middle of the blend on): insertion angle from the vertical of a limb at the top of the stem"),
+    f("architecture.mature_form.crown_profile.base_share", "", r(0.0, 1.0), "Mature form's crown profile: crown radius at the crown base over the largest"),
+    f("architecture.mature_form.crown_profile.top_exponent", "", r(0.2, 1.0), "Mature form's crown profile: exponent b of the light crown above the widest point, radius (depth / widest_depth)^b (small: a flat top)"),
+    f("architecture.mature_form.crown_profile.widest_depth", "", r(0.1, 0.9), "Mature form's crown profile: relative depth below the crown's top of its widest point (0 top, 1 crown base)"),
+    f("architecture.mature_form.crown_profile.width_to_length", "", r(0.2, 2.0), "Mature form's crown profile: crown width over crown length of the grown model before it is fitted"),
     f(
         "architecture.mature_form.leaf_distribution",
         "",
@@ -500,7 +506,7 @@ pub const FIELDS: &[FieldSpec] = &[
         "appearance.leaf_length_m",
         "m",
         r(0.01, 0.5),
-        "Length of a drawn leaf card of `sylva tree grow`: the leaf blade length from a flora (optional: without it EcoMod's leaf_size_m; the stand exports' and stills' trees keep EcoMod's leaf size)",
+        "Length of a drawn leaf card of `sylva tree grow`: a broadleaf's leaf length from a flora (a pinnate leaf's whole length); a conifer's shoot card, whose drawn needles are `LeafShape::needle_length_share` of it (0.17 needle_short, 0.42 needle_long, 0.21 needle_flat, 0.10 needle_tuft) (optional: without it EcoMod's leaf_size_m; every shipped species gives one, tests/species_leaf_length.rs; the stand exports' and stills' trees keep EcoMod's leaf size)",
     ),
 ];
 

@@ -298,6 +298,9 @@ impl MatureForm {
         p.alpha_m_g = at_order(&p.alpha_m_g, 1, lerp(v, self.limb_alpha_m_deg));
         if t >= 0.5 {
             p.leaf_distribution = self.leaf_distribution;
+            if let Some(cp) = self.crown_profile {
+                p.crown_profile = Some(cp);
+            }
         }
     }
 }

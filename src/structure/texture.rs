@@ -124,6 +124,23 @@ impl LeafShape {
         Self::from_name(&sp.appearance.leaf_texture).unwrap_or_else(|| Self::default_for(sp.identity.leaf_type))
     }
 
+    /// Length of the needles drawn on a shoot card of this shape over the card's length
+    /// (`None` for a broadleaf, whose card is the leaf: its length is the leaf's): the needle
+    /// rays of the shoot outlines drawn by this module, 0.17 (`needle_short`, spruce), 0.42 (`needle_long`, pine:
+    /// the mean of its 14 pairs, 0.55 − 0.02k), 0.21 (`needle_flat`, fir) and 0.10
+    /// (`needle_tuft`, larch: the needles of a short shoot's tuft). A conifer's
+    /// `appearance.leaf_length_m` is its shoot card's length, this share of which is the
+    /// published needle length (species/README.md, "Leaf length"; `tests/species_leaf_length.rs`).
+    pub fn needle_length_share(self) -> Option<f32> {
+        match self {
+            LeafShape::NeedleShort => Some(0.17),
+            LeafShape::NeedleLong => Some(0.42),
+            LeafShape::NeedleFlat => Some(0.21),
+            LeafShape::NeedleTuft => Some(0.1),
+            _ => None,
+        }
+    }
+
     /// True for the needle shoots of conifers.
     pub fn is_needle(self) -> bool {
         matches!(self, LeafShape::NeedleShort | LeafShape::NeedleLong | LeafShape::NeedleFlat | LeafShape::NeedleTuft)
