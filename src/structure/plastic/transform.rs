@@ -2632,7 +2632,7 @@ mod tests {
     /// beeches 1.5 m apart adapted together among a fixed fifth (every level's grids prepared
     /// for two or more trees at work, so merged). A checksum (FNV-1a) over the bits of every
     /// position, rotation, bend angle, fate and leaf cluster after the call is the same, and the
-    /// reports are equal. The case tests something: nodes bent and shed by light.
+    /// reports are equal. The case tests something: nodes bent.
     #[test]
     fn merged_level_grids_adapt_the_trees_of_fresh_grids_bit_for_bit() {
         use std::sync::atomic::Ordering;
