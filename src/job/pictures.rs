@@ -142,13 +142,13 @@ impl Stage {
         // crowns (trial 39, issue 32 round 40); a still has no camera motion that would show
         // a tree changing level
         renderer.fade_per_tree = true;
-        // (`LodParams::one_level_per_tree` would record only that level, the other record being
-        // submitted and discarded whole by the fragment shader; round 45 measured the default
-        // run's close-up at 18.0 M triangles with it against 27.4 M, but under a budget that the
-        // 25 m reference cannot meet its switch factor stays where the histogram put it, and
-        // tests/render_adapted.rs (the dense site's close-up under a third of its cost) then drew
-        // 47 adapted trees as hulls: off until the factor is also lowered with the 12 m
-        // reference there; BENCHMARKS.md, round 45 (r45k))
+        // and the CPU records only that level (`LodParams::one_level_per_tree`): main's path
+        // submitted the other record too, discarded whole by the fragment shader, so a banded
+        // tree cost both levels' triangles (round 45 measured the default run's close-up at
+        // 18.0 M triangles with one record against 27.4 M). Under a budget that the 25 m
+        // reference cannot meet, the switch factor is lowered while the 12 m reference's exact
+        // cost fits (round 46; BENCHMARKS.md, rounds 45 (r45k) and 46 (r46n))
+        renderer.lod.one_level_per_tree = true;
         let has_water = site.mask.data.iter().zip(&site.elevation_m.data).any(|(m, z)| !*m && z.is_finite() && *z <= sea_level_m);
         let n_base = prototypes.len();
         let scene = scene::scene(terrain, prototypes, Vec::new(), site.geo.latitude_deg, Season::Summer, has_water.then_some(sea_level_m));

@@ -71,7 +71,9 @@ pub struct LodParams {
     /// without it, is then lowered step by step while the frame's exact cost with the full
     /// reference [`LodParams::small_tree_m`] fits, before the reference is lowered
     /// ([`small_tree_ladder`]): the room the cheaper frame leaves goes to the small trees'
-    /// reference first.
+    /// reference first. Where the full reference does not fit at the factor found, the factor
+    /// is lowered while the exact cost with [`LodParams::small_tree_floor_m`] fits (round 46).
+    /// The stills turn it on (`job::pictures::Stage::new`).
     pub one_level_per_tree: bool,
 }
 

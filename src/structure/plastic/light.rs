@@ -275,6 +275,21 @@ pub struct ShadowVolumes {
     /// Grid cell size in mean cluster radii, at least ([`CELL_RADII`], or
     /// [`COARSE_CELL_RADII`] after [`ShadowVolumes::coarse`]).
     cell_radii: f32,
+    /// Whether the grids keep every slot's occluder index ([`ShadowVolumes::tracked`]).
+    track: bool,
+    /// The grids of the set these volumes follow ([`ShadowVolumes::after`]), merged from.
+    base: Option<Box<Base>>,
+}
+
+/// What [`ShadowVolumes::after`] keeps of the set before: its grids (those built), its
+/// occluders, the new index of each of them (`u32::MAX`: gone or changed) and the indices of
+/// the occluders that are new or changed (ascending).
+#[derive(Debug)]
+struct Base {
+    grids: Vec<Option<DirGrid>>,
+    occ: Vec<Occluder>,
+    map: Vec<u32>,
+    fresh: Vec<u32>,
 }
 
 impl Clone for ShadowVolumes {
@@ -282,6 +297,7 @@ impl Clone for ShadowVolumes {
         let mut c = ShadowVolumes::from_dirs(self.dirs.clone(), self.occ.clone(), self.owners.clone());
         c.region = self.region;
         c.cell_radii = self.cell_radii;
+        c.track = self.track;
         c
     }
 }
@@ -310,6 +326,41 @@ struct DirGrid {
     gamma: Vec<[f32; LANES]>,
     /// Owner of every slot of `blocks`; empty when the occluders are not tagged.
     owner: Vec<[u32; LANES]>,
+    /// Index in the occluders of every slot of `blocks` (`u32::MAX` for padding), kept only for
+    /// the volumes a later set is merged from ([`ShadowVolumes::tracked`]); else empty.
+    idx: Vec<[u32; LANES]>,
+    /// Extent (m) of the casters' discs on the plane ⟂ d when the geometry was chosen, their
+    /// number and the sum of their radii (m): what [`DirGrid::merged`] needs to tell whether
+    /// the geometry still suits the casters.
+    ext: Vec2,
+    n: u32,
+    rsum: f32,
+}
+
+/// The projection of `region`'s box on the plane of (`u`, `v`) (corners lo, hi, m) and its
+/// nearest depth along `d` (m): what [`DirGrid::new`] tests each caster against.
+fn region_bounds(region: Option<(Vec3, Vec3)>, d: Vec3, u: Vec3, v: Vec3) -> Option<(Vec2, Vec2, f32)> {
+    region.map(|(lo, hi)| {
+        let corners = (0..8).map(|i| Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z }));
+        let (mut plo, mut phi, mut near) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY), f32::INFINITY);
+        for c in corners {
+            let q = Vec2::new(c.dot(u), c.dot(v));
+            (plo, phi, near) = (plo.min(q), phi.max(q), near.min(c.dot(d)));
+        }
+        (plo, phi, near)
+    })
+}
+
+/// Whether a caster projected at `q` (m), of depth `z` (m) and radius `r` (m), can shade a
+/// point of the region of `bounds` ([`region_bounds`]; every caster without a region), with
+/// a slack of 1 mm, far above the rounding of the projections.
+#[inline]
+fn in_region(bounds: Option<(Vec2, Vec2, f32)>, q: Vec2, z: f32, r: f32) -> bool {
+    let e = 1e-3;
+    match bounds {
+        Some((plo, phi, near)) => z > near - e && (q + r + e).cmpge(plo).all() && (q - r - e).cmple(phi).all(),
+        None => true,
+    }
 }
 
 /// [`LANES`] casters of a grid cell in the coordinates of its direction's grid: `u`, `v` on
@@ -357,35 +408,24 @@ impl DirGrid {
     /// are kept (see [`ShadowVolumes::within`]), tested on the projections the grid is built
     /// from (one pass, no copy of the casters kept).
     /// Cells are at least `cell_radii` mean caster radii wide.
-    fn new(d: Vec3, occ: &[Occluder], owners: &[u32], region: Option<(Vec3, Vec3)>, cell_radii: f32) -> DirGrid {
+    /// With `track` every slot also keeps its occluder's index (`idx`, for [`DirGrid::merged`]).
+    fn new(d: Vec3, occ: &[Occluder], owners: &[u32], region: Option<(Vec3, Vec3)>, cell_radii: f32, track: bool) -> DirGrid {
         let (u, v) = d.any_orthonormal_pair();
         // every caster's projection on the plane ⟂ d and depth along d, then the ones kept
         let (mut proj, mut depth, mut kept): (Vec<Vec2>, Vec<f32>, Vec<u32>) = (Vec::with_capacity(occ.len()), Vec::with_capacity(occ.len()), Vec::with_capacity(occ.len()));
-        let bounds = region.map(|(lo, hi)| {
-            let corners = (0..8).map(|i| Vec3::new(if i & 1 == 0 { lo.x } else { hi.x }, if i & 2 == 0 { lo.y } else { hi.y }, if i & 4 == 0 { lo.z } else { hi.z }));
-            let (mut plo, mut phi, mut near) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY), f32::INFINITY);
-            for c in corners {
-                let q = Vec2::new(c.dot(u), c.dot(v));
-                (plo, phi, near) = (plo.min(q), phi.max(q), near.min(c.dot(d)));
-            }
-            (plo, phi, near)
-        });
-        // slack far above the rounding of the projections (m)
-        let e = 1e-3;
+        let bounds = region_bounds(region, d, u, v);
         for (j, o) in occ.iter().enumerate() {
             let q = Vec2::new(o.center.dot(u), o.center.dot(v));
             let z = o.center.dot(d);
-            if let Some((plo, phi, near)) = bounds {
-                if !(z > near - e && (q + o.radius + e).cmpge(plo).all() && (q - o.radius - e).cmple(phi).all()) {
-                    continue;
-                }
+            if !in_region(bounds, q, z, o.radius) {
+                continue;
             }
             proj.push(q);
             depth.push(z);
             kept.push(j as u32);
         }
         if kept.is_empty() {
-            return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], top: Vec::new(), blocks: Vec::new(), gamma: Vec::new(), owner: Vec::new() };
+            return DirGrid { d, u, v, lo: Vec2::ZERO, cell: 1.0, nx: 0, ny: 0, start: vec![0], top: Vec::new(), blocks: Vec::new(), gamma: Vec::new(), owner: Vec::new(), idx: Vec::new(), ext: Vec2::ZERO, n: 0, rsum: 0.0 };
         }
         let radius: Vec<f32> = kept.iter().map(|&j| occ[j as usize].radius).collect();
         let mut lo = Vec2::splat(f32::INFINITY);
@@ -441,6 +481,7 @@ impl DirGrid {
         let mut gamma = vec![[1.0f32; LANES]; len];
         let tagged = owners.len() == occ.len();
         let mut owner = if tagged { vec![[u32::MAX; LANES]; len] } else { Vec::new() };
+        let mut idx = if track { vec![[u32::MAX; LANES]; len] } else { Vec::new() };
         // each cell's casters in descending depth along d (farthest ahead of any receiver first;
         // ties in occluder order), so a query can stop at the first block that lies behind it
         for j in depth_order(&depth) {
@@ -460,6 +501,9 @@ impl DirGrid {
                     if tagged {
                         owner[bi][l] = own;
                     }
+                    if track {
+                        idx[bi][l] = kept[j];
+                    }
                     *f += 1;
                 }
             }
@@ -468,7 +512,166 @@ impl DirGrid {
             *c /= LANES as u32;
         }
         let top = count.windows(2).map(|r| if r[0] < r[1] { blocks[r[0] as usize].w[0] } else { f32::NEG_INFINITY }).collect();
-        DirGrid { d, u, v, lo, cell, nx, ny, start: count, top, blocks, gamma, owner }
+        DirGrid { d, u, v, lo, cell, nx, ny, start: count, top, blocks, gamma, owner, idx, ext, n: kept.len() as u32, rsum }
+    }
+
+    /// The grid that [`DirGrid::new`] (with `track`) would give of `occ` for the same
+    /// direction, region and cell size, made from `old`, the grid of `old_occ` built with
+    /// `track`, where `map[j]` is the index in `occ` of `old_occ[j]` when it is the same
+    /// occluder bit for bit (`u32::MAX` where it is gone or changed; the indices kept must
+    /// rise with j) and `fresh` lists, ascending, the indices of `occ` that no `map` entry names.
+    /// Issue 32 (round 46): from level to level of an adaptation two thirds of the casters,
+    /// and 76–97 % in the large late levels, are the same bit for bit (BENCHMARKS.md, round 45
+    /// (r45f)); they are copied cell by cell instead of projected, sorted and binned again.
+    ///
+    /// Each cell's run is the old run without the casters gone, merged with the fresh casters
+    /// covering the cell, in descending depth along d with ties by the new index, the order of
+    /// [`depth_order`]: unchanged casters keep their depth bits and their relative order (the
+    /// map rises), so every cell holds the casters of a fresh build in a fresh build's order
+    /// and every product of eq. (4) (Pirk et al. 2012) is the same bit for bit. The geometry
+    /// (`lo`, `cell`, `nx`, `ny`) is the old one, which changes no answer, only the cost (the
+    /// `SYLVA_GRID_*` hooks, round 43). `None` (build afresh) where a fresh caster's disc
+    /// leaves the old grid, where the cell a fresh build would choose differs from the old by
+    /// more than a quarter (the queries would scan too many or too few casters per cell), or
+    /// where `old` is empty, untracked or tagged with owners.
+    fn merged(old: &DirGrid, occ: &[Occluder], old_occ: &[Occluder], map: &[u32], fresh: &[u32], region: Option<(Vec3, Vec3)>, cell_radii: f32) -> Option<DirGrid> {
+        if old.nx == 0 || !old.owner.is_empty() || old.idx.len() != old.blocks.len() || map.len() != old_occ.len() {
+            return None;
+        }
+        let (d, u, v, lo, cell, nx, ny) = (old.d, old.u, old.v, old.lo, old.cell, old.nx, old.ny);
+        let bounds = region_bounds(region, d, u, v);
+        // the casters gone from the grid: their number and radii
+        let (mut gone_n, mut gone_r) = (0u32, 0.0f32);
+        for (o, _) in old_occ.iter().zip(map).filter(|(_, &m)| m == u32::MAX) {
+            if in_region(bounds, Vec2::new(o.center.dot(u), o.center.dot(v)), o.center.dot(d), o.radius) {
+                gone_n += 1;
+                gone_r += o.radius;
+            }
+        }
+        // the fresh casters kept, each inside the old grid
+        let (mut proj, mut depth, mut kept, mut fresh_r) = (Vec::with_capacity(fresh.len()), Vec::with_capacity(fresh.len()), Vec::with_capacity(fresh.len()), 0.0f32);
+        let (fx, fy) = (nx as f32, ny as f32);
+        for &j in fresh {
+            let o = &occ[j as usize];
+            let q = Vec2::new(o.center.dot(u), o.center.dot(v));
+            let z = o.center.dot(d);
+            if !in_region(bounds, q, z, o.radius) {
+                continue;
+            }
+            let (a, b) = ((q - o.radius - lo) / cell, (q + o.radius - lo) / cell);
+            if !(a.x >= 0.0 && a.y >= 0.0 && b.x < fx && b.y < fy) {
+                return None;
+            }
+            proj.push(q);
+            depth.push(z);
+            kept.push(j);
+            fresh_r += o.radius;
+        }
+        let n = (old.n + kept.len() as u32).checked_sub(gone_n).filter(|&n| n > 0)?;
+        let rsum = (old.rsum - gone_r + fresh_r).max(0.0);
+        let ext = old.ext;
+        let want = (cell_radii * rsum / n as f32).max((ext.x * ext.y / (grid_knobs().1 * n as f32)).sqrt()).max(ext.x / MAX_CELLS_PER_AXIS as f32).max(ext.y / MAX_CELLS_PER_AXIS as f32).max(1e-3);
+        if !(want <= 1.25 * cell && 1.25 * want >= cell) {
+            return None;
+        }
+        let cx = |x: f32, n: usize| x.max(0.0).min((n - 1) as f32) as u32;
+        let ranges: Vec<[u32; 4]> = proj
+            .iter()
+            .zip(&kept)
+            .map(|(p, &j)| {
+                let r = occ[j as usize].radius;
+                let a = (*p - r - lo) / cell;
+                let b = (*p + r - lo) / cell;
+                [cx(a.x, nx), cx(b.x, nx), cx(a.y, ny), cx(b.y, ny)]
+            })
+            .collect();
+        // the fresh casters of every cell, in depth order (ties by index: `kept` rises)
+        let cells = nx * ny;
+        let mut fstart = vec![0u32; cells + 1];
+        for &[x0, x1, y0, y1] in &ranges {
+            for y in y0 as usize..y1 as usize + 1 {
+                let row = 1 + y * nx;
+                for c in &mut fstart[row + x0 as usize..row + x1 as usize + 1] {
+                    *c += 1;
+                }
+            }
+        }
+        for c in 1..=cells {
+            fstart[c] += fstart[c - 1];
+        }
+        let mut ffill = fstart.clone();
+        let mut flist = vec![0u32; fstart[cells] as usize];
+        for j in depth_order(&depth) {
+            let [x0, x1, y0, y1] = ranges[j as usize];
+            for y in y0 as usize..y1 as usize + 1 {
+                let row = y * nx;
+                for f in &mut ffill[row + x0 as usize..row + x1 as usize + 1] {
+                    flist[*f as usize] = j;
+                    *f += 1;
+                }
+            }
+        }
+        // every cell's run: the old casters kept and the fresh ones, padded to whole blocks
+        let slot = |s: usize| (s / LANES, s % LANES);
+        let mut start = vec![0u32; cells + 1];
+        for c in 0..cells {
+            let mut k = fstart[c + 1] - fstart[c];
+            for s in old.start[c] as usize * LANES..old.start[c + 1] as usize * LANES {
+                let (bi, l) = slot(s);
+                let i = old.idx[bi][l];
+                k += u32::from(i != u32::MAX && map[i as usize] != u32::MAX);
+            }
+            start[c + 1] = start[c] + k.div_ceil(LANES as u32);
+        }
+        let len = start[cells] as usize;
+        let mut blocks = vec![PAD_BLOCK; len];
+        let mut gamma = vec![[1.0f32; LANES]; len];
+        let mut idx = vec![[u32::MAX; LANES]; len];
+        for c in 0..cells {
+            let mut at = start[c] as usize * LANES;
+            let mut put = |pu: f32, pv: f32, pw: f32, r2: f32, g: f32, i: u32| {
+                let (bi, l) = slot(at);
+                let b = &mut blocks[bi];
+                (b.u[l], b.v[l], b.w[l], b.r2[l]) = (pu, pv, pw, r2);
+                gamma[bi][l] = g;
+                idx[bi][l] = i;
+                at += 1;
+            };
+            let (mut s, s_end) = (old.start[c] as usize * LANES, old.start[c + 1] as usize * LANES);
+            let mut f = fstart[c] as usize;
+            loop {
+                // the next old caster kept, with its new index
+                while s < s_end {
+                    let (bi, l) = slot(s);
+                    let i = old.idx[bi][l];
+                    if i != u32::MAX && map[i as usize] != u32::MAX {
+                        break;
+                    }
+                    s += 1;
+                }
+                let fresh_next = flist[f..fstart[c + 1] as usize].first().map(|&j| (depth[j as usize], kept[j as usize], j as usize));
+                let old_next = (s < s_end).then(|| {
+                    let (bi, l) = slot(s);
+                    (old.blocks[bi].w[l], map[old.idx[bi][l] as usize], bi, l)
+                });
+                match (old_next, fresh_next) {
+                    (None, None) => break,
+                    (Some((w, i, bi, l)), fr) if fr.map_or(true, |(fw, fi, _)| w.total_cmp(&fw).then(fi.cmp(&i)).is_gt()) => {
+                        let b = &old.blocks[bi];
+                        put(b.u[l], b.v[l], w, b.r2[l], old.gamma[bi][l], i);
+                        s += 1;
+                    }
+                    (_, Some((fw, fi, j))) => {
+                        let o = &occ[fi as usize];
+                        put(proj[j].x, proj[j].y, fw, o.radius * o.radius, o.gamma, fi);
+                        f += 1;
+                    }
+                    (Some(_), None) => unreachable!("taken by the arm above"),
+                }
+            }
+        }
+        let top = start.windows(2).map(|r| if r[0] < r[1] { blocks[r[0] as usize].w[0] } else { f32::NEG_INFINITY }).collect();
+        Some(DirGrid { d, u, v, lo, cell, nx, ny, start, top, blocks, gamma, owner: Vec::new(), idx, ext, n, rsum })
     }
 
     /// Π γ of the casters hit by the ray from `p` along the grid's direction (the ray passes
@@ -744,7 +947,42 @@ impl ShadowVolumes {
         let grids = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
         let flat = (occ.len() <= SCAN_MAX).then(|| Casters::flat(&occ, &owners));
         let full = dirs.iter().map(|_| std::sync::OnceLock::new()).collect();
-        ShadowVolumes { occ, owners, dirs, grids, flat, region: None, full, cell_radii: grid_knobs().0 }
+        ShadowVolumes { occ, owners, dirs, grids, flat, region: None, full, cell_radii: grid_knobs().0, track: false, base: None }
+    }
+
+    /// The same shadow volumes, whose grids keep the index of every slot's occluder, so that a
+    /// later set can be merged from them ([`ShadowVolumes::after`]); the answers are the same.
+    pub(crate) fn tracked(mut self) -> ShadowVolumes {
+        self.track = true;
+        self
+    }
+
+    /// The same shadow volumes (built [`ShadowVolumes::tracked`]), told that they follow
+    /// `prev`, a tracked set of the same directions, region and cell size whose occluder `j`
+    /// is this set's occluder `map[j]` bit for bit (`u32::MAX`: gone or changed; the indices
+    /// kept rise with j): each direction's grid that `prev` built is then merged from it
+    /// ([`DirGrid::merged`]: the unchanged casters copied cell by cell, the others projected
+    /// and sorted) instead of built afresh, with the same answers bit for bit (issue 32, round
+    /// 46: the levels of an adaptation). `prev` is left as it is where it does not qualify.
+    pub(crate) fn after(mut self, prev: ShadowVolumes, map: Vec<u32>) -> ShadowVolumes {
+        let same = prev.track && self.track && prev.flat.is_none() && self.flat.is_none() && prev.owners.is_empty() && self.owners.is_empty() && prev.region == self.region && prev.cell_radii == self.cell_radii && prev.dirs == self.dirs && map.len() == prev.occ.len();
+        if !same {
+            return self;
+        }
+        let mut named = vec![false; self.occ.len()];
+        let mut last = None;
+        for &m in map.iter().filter(|&&m| m != u32::MAX) {
+            // the kept indices must rise (their order is the fresh build's tie order)
+            if m as usize >= named.len() || last.is_some_and(|l| l >= m) {
+                return self;
+            }
+            named[m as usize] = true;
+            last = Some(m);
+        }
+        let fresh = (0..self.occ.len() as u32).filter(|&j| !named[j as usize]).collect();
+        let grids = prev.grids.into_iter().map(|g| g.into_inner()).collect();
+        self.base = Some(Box::new(Base { grids, occ: prev.occ, map, fresh }));
+        self
     }
 
     /// The same shadow volumes, told that queries come from inside the box `lo`–`hi` (m): each
@@ -801,14 +1039,19 @@ impl ShadowVolumes {
     }
 
     fn grid(&self, k: usize) -> &DirGrid {
-        self.grids[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, self.region, self.cell_radii))
+        self.grids[k].get_or_init(|| {
+            if let Some(Some(old)) = self.base.as_ref().map(|b| (b, b.grids.get(k))).and_then(|(b, g)| g.and_then(Option::as_ref).map(|g| DirGrid::merged(g, &self.occ, &b.occ, &b.map, &b.fresh, self.region, self.cell_radii))) {
+                return old;
+            }
+            DirGrid::new(self.dirs[k], &self.occ, &self.owners, self.region, self.cell_radii, self.track)
+        })
     }
 
     /// The grid of direction `k` for a query at `p`: the region's, or every caster's when `p`
     /// lies outside the region.
     fn grid_for(&self, k: usize, p: Vec3) -> &DirGrid {
         match self.region {
-            Some((lo, hi)) if !(p.cmpge(lo).all() && p.cmple(hi).all()) => self.full[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, None, self.cell_radii)),
+            Some((lo, hi)) if !(p.cmpge(lo).all() && p.cmple(hi).all()) => self.full[k].get_or_init(|| DirGrid::new(self.dirs[k], &self.occ, &self.owners, None, self.cell_radii, false)),
             _ => self.grid(k),
         }
     }
@@ -1085,6 +1328,109 @@ mod tests {
     /// [`RADIX_MIN`], with keys that differ in every radix digit, keys that share the high
     /// digits (depths within one binade) and keys that share the low ones (halves of integers,
     /// so a skipped pass comes before the passes that sort).
+    /// Round 46: a level's grids merged from the level before's ([`ShadowVolumes::after`]) hold,
+    /// cell by cell, exactly the casters a fresh build of the new occluders with the old grid's
+    /// geometry holds, in the fresh build's order (descending depth, ties by index), and every
+    /// query's product is the fresh volumes' bit for bit. The new set drops every seventh
+    /// occluder, moves every fifth, changes the γ of every eleventh, adds new ones among them
+    /// and ties depths; a region is set, as in the adaptation's levels.
+    #[test]
+    fn merged_grids_are_fresh_grids_slot_for_slot() {
+        let sky = Sky::default();
+        let f = |i: usize, a: f32| (i as f32 * a).sin();
+        let old: Vec<Occluder> = (0..900).map(|i| Occluder { center: Vec3::new(f(i, 0.71) * 6.0, f(i, 0.53) * 6.0, 2.0 + f(i, 0.29).abs() * 12.0), radius: 0.25 + 0.2 * f(i, 0.37).abs(), gamma: 0.5 }).collect();
+        // the new list: old occluders kept (in order), changed or dropped, and new ones between
+        let (mut new, mut map) = (Vec::new(), Vec::new());
+        for (i, o) in old.iter().enumerate() {
+            if i % 13 == 4 {
+                new.push(Occluder { center: o.center + Vec3::new(0.1, -0.2, 0.05), radius: 0.3, gamma: 0.4 });
+            }
+            if i % 7 == 3 {
+                map.push(u32::MAX);
+                continue;
+            }
+            let changed = if i % 5 == 1 {
+                Some(Occluder { center: o.center + Vec3::new(0.05, 0.0, 0.3), ..*o })
+            } else if i % 11 == 2 {
+                Some(Occluder { gamma: 0.3, ..*o })
+            } else if i % 17 == 6 {
+                // a tie in depth along every direction with the kept occluder before it
+                Some(*new.last().unwrap_or(o))
+            } else {
+                None
+            };
+            match changed {
+                Some(c) => {
+                    map.push(u32::MAX);
+                    new.push(c);
+                }
+                None => {
+                    map.push(new.len() as u32);
+                    new.push(*o);
+                }
+            }
+        }
+        let region = (Vec3::new(-4.0, -4.0, 0.0), Vec3::new(4.0, 5.0, 10.0));
+        let before = ShadowVolumes::new(&sky, old.clone()).within(region.0, region.1).tracked();
+        before.prepare(u32::MAX >> (32 - sky.dirs.len()));
+        let old_geometry: Vec<(Vec2, f32, usize, usize)> = (0..sky.dirs.len()).map(|k| before.grid(k)).map(|g| (g.lo, g.cell, g.nx, g.ny)).collect();
+        let merged = ShadowVolumes::new(&sky, new.clone()).within(region.0, region.1).tracked().after(before, map);
+        assert!(merged.base.is_some());
+        let fresh = ShadowVolumes::new(&sky, new.clone()).within(region.0, region.1);
+        let bounds_of = |g: &DirGrid| region_bounds(Some(region), g.d, g.u, g.v);
+        let mut merged_dirs = 0;
+        for (k, &(lo, cell, nx, ny)) in old_geometry.iter().enumerate() {
+            let g = merged.grid(k);
+            if (g.lo, g.cell, g.nx, g.ny) != (lo, cell, nx, ny) {
+                continue; // built afresh (the geometry no longer suited)
+            }
+            merged_dirs += 1;
+            let d = sky.dirs[k];
+            let bounds = bounds_of(g);
+            let mut order: Vec<usize> = (0..new.len()).collect();
+            order.sort_by(|&a, &b| new[b].center.dot(d).total_cmp(&new[a].center.dot(d)).then(a.cmp(&b)));
+            let cx = |x: f32, n: usize| x.max(0.0).min((n - 1) as f32) as usize;
+            for y in 0..ny {
+                for x in 0..nx {
+                    let c = y * nx + x;
+                    let want: Vec<u32> = order
+                        .iter()
+                        .copied()
+                        .filter(|&j| {
+                            let o = &new[j];
+                            let q = Vec2::new(o.center.dot(g.u), o.center.dot(g.v));
+                            let (a, b) = ((q - o.radius - lo) / cell, (q + o.radius - lo) / cell);
+                            in_region(bounds, q, o.center.dot(d), o.radius) && (cx(a.x, nx)..=cx(b.x, nx)).contains(&x) && (cx(a.y, ny)..=cx(b.y, ny)).contains(&y)
+                        })
+                        .map(|j| j as u32)
+                        .collect();
+                    let slots: Vec<usize> = (g.start[c] as usize * LANES..g.start[c + 1] as usize * LANES).collect();
+                    let got: Vec<u32> = slots.iter().map(|&s| g.idx[s / LANES][s % LANES]).filter(|&i| i != u32::MAX).collect();
+                    assert_eq!(got, want, "direction {k}, cell ({x}, {y})");
+                    assert_eq!(slots.len(), want.len().div_ceil(LANES) * LANES, "padded to whole blocks");
+                    for (&s, &j) in slots.iter().zip(&want) {
+                        let (b, l, o) = (&g.blocks[s / LANES], s % LANES, &new[j as usize]);
+                        let bits = [b.u[l], b.v[l], b.w[l], b.r2[l], g.gamma[s / LANES][l]].map(f32::to_bits);
+                        assert_eq!(bits, [o.center.dot(g.u), o.center.dot(g.v), o.center.dot(d), o.radius * o.radius, o.gamma].map(f32::to_bits));
+                    }
+                    assert_eq!(g.top[c].to_bits(), if want.is_empty() { f32::NEG_INFINITY } else { new[want[0] as usize].center.dot(d) }.to_bits());
+                }
+            }
+        }
+        assert!(merged_dirs >= sky.dirs.len() / 2, "{merged_dirs} of {} directions merged", sky.dirs.len());
+        // every query the same bit for bit, inside the region and outside it
+        let mut hit = 0;
+        for i in 0..3000 {
+            let p = Vec3::new(f(i, 0.917) * 5.0, f(i, 0.613) * 5.5, 1.0 + f(i, 0.377).abs() * 11.0);
+            for k in 0..sky.dirs.len() {
+                let (a, b) = (merged.product_until(k, p, 0.0), fresh.product_until(k, p, 0.0));
+                assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits), "point {p}, direction {k}");
+                hit += usize::from(a.is_some_and(|t| t < 1.0));
+            }
+        }
+        assert!(hit > 10_000, "{hit} shaded rays");
+    }
+
     #[test]
     fn depth_order_is_the_pair_sort() {
         let pairs = |depth: &[f32]| -> Vec<u32> {
@@ -1379,7 +1725,7 @@ mod tests {
             let (mut ties, mut slots) = (0, 0);
             for (tag, cell_radii) in [(&owners[..], CELL_RADII), (&[][..], COARSE_CELL_RADII)] {
                 for &d in &sky.dirs {
-                    let g = DirGrid::new(d, &occ, tag, None, cell_radii);
+                    let g = DirGrid::new(d, &occ, tag, None, cell_radii, false);
                     assert!(g.nx > 0 && g.ny > 0 && g.nx <= MAX_CELLS_PER_AXIS && g.ny <= MAX_CELLS_PER_AXIS);
                     assert_eq!((g.start.len(), g.start[0] as usize, g.start[g.nx * g.ny] as usize), (g.nx * g.ny + 1, 0, g.blocks.len()));
                     assert_eq!((g.gamma.len(), g.owner.len()), (g.blocks.len(), if tag.is_empty() { 0 } else { g.blocks.len() }));

@@ -606,6 +606,9 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
     // saves the query of their grids, and in a group the changed casters are few against the
     // shared grids' casters: kept there (not measured)
     let reuse_pays = trees.len() > 1 || fixed_vols.is_some();
+    // the level before's shadow volumes, from whose grids this level's are merged (the casters
+    // unchanged bit for bit copied, not binned again; the same grids' answers, round 46)
+    let mut prev_vols: Option<ShadowVolumes> = None;
     for g in 0..=g_max {
         let stage_of = |t: &PlasticTree| (g + t.analysis.seasons as usize).checked_sub(g_max);
         // the receivers that are the same stage cluster as at the previous level
@@ -658,8 +661,36 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
         // (measured on the bench trees: below 60 % changed casters the check is cheaper than the
         // products it saves; above, it is not)
         let delta = (reuse_pays && 5 * delta.len() < 3 * casters.len()).then(|| ShadowVolumes::new(sky, delta).within(region.0, region.1));
-        let vols = ShadowVolumes::new(sky, casters).within(region.0, region.1);
+        // where each of the level before's casters is in this level's list, when it is the same
+        // bit for bit (a tree's casters are sorted by key and the trees keep their order, so the
+        // indices kept rise)
+        let map: Option<Vec<u32>> = prev_vols.as_ref().map(|pv| {
+            let mut map = Vec::with_capacity(pv.occluders().len());
+            let mut base = 0usize;
+            for ((_, cur, _), pr) in occ.iter().zip(&prev) {
+                let old: &[(u64, Occluder)] = pr.as_ref().map_or(&[], |p| &p.shade);
+                let mut j = 0;
+                for (key, o) in old {
+                    while j < cur.len() && cur[j].0 < *key {
+                        j += 1;
+                    }
+                    if j < cur.len() && cur[j].0 == *key && same_occluder(&Some(*o), &Some(cur[j].1)) {
+                        map.push((base + j) as u32);
+                        j += 1;
+                    } else {
+                        map.push(u32::MAX);
+                    }
+                }
+                base += cur.len();
+            }
+            map
+        });
+        let vols = ShadowVolumes::new(sky, casters).within(region.0, region.1).tracked();
         let vols = if partial { vols.coarse() } else { vols };
+        let vols = match (prev_vols.take(), map) {
+            (Some(pv), Some(map)) if !forced(Forced::FreshGrids) => vols.after(pv, map),
+            _ => vols,
+        };
         // trees at work at this level share its grids: built over the cores before the trees'
         // levels run side by side (else each tree's first batch builds them, and a core wanting
         // a grid that the other core is building waits for it); only with two or more such
@@ -711,6 +742,7 @@ fn adapt_among(trees: &mut [PlasticTree], fixed: &[PlasticTree], env: &Environme
             })
             .collect();
         prev = next;
+        prev_vols = Some(vols);
     }
     // the quiet trees keep the levels they replayed whole or recorded; a call `once` leaves
     // partial signatures, so a later call recomputes everything
@@ -2077,11 +2109,14 @@ enum Forced {
     /// [`Pruning::of`] puts every node outside the subtrees, so [`prune`] takes one pass over
     /// the nodes (the serial pass).
     SerialPrune,
+    /// [`adapt_among`] builds every level's grids afresh instead of merging them from the level
+    /// before's ([`ShadowVolumes::after`]).
+    FreshGrids,
 }
 
 /// The state of each [`Forced`] switch.
 #[cfg(test)]
-static FORCED: [std::sync::atomic::AtomicBool; 2] = [std::sync::atomic::AtomicBool::new(false), std::sync::atomic::AtomicBool::new(false)];
+static FORCED: [std::sync::atomic::AtomicBool; 3] = [std::sync::atomic::AtomicBool::new(false), std::sync::atomic::AtomicBool::new(false), std::sync::atomic::AtomicBool::new(false)];
 
 /// Whether switch `f` is set (never outside tests).
 #[cfg(test)]
@@ -2588,6 +2623,48 @@ mod tests {
             let (rep_2, bits_2) = run(2, false, trees, fixed);
             assert_eq!(rep, rep_2);
             assert!(bits == bits_2, "one thread and two differ ({} trees)", trees.len());
+        }
+    }
+
+    /// Round 46 (issue 32): the levels' grids merged from the level before's
+    /// ([`ShadowVolumes::after`]) against grids built afresh at every level
+    /// ([`Forced::FreshGrids`], main's path until round 46), on one thread and on two: four
+    /// beeches 1.5 m apart adapted together among a fixed fifth (every level's grids prepared
+    /// for two or more trees at work, so merged). A checksum (FNV-1a) over the bits of every
+    /// position, rotation, bend angle, fate and leaf cluster after the call is the same, and the
+    /// reports are equal. The case tests something: nodes bent.
+    #[test]
+    fn merged_level_grids_adapt_the_trees_of_fresh_grids_bit_for_bit() {
+        use std::sync::atomic::Ordering;
+        let trees: Vec<PlasticTree> = (0..4).map(|i| beech_at(20 + i, 1.5 * i as f32)).collect();
+        let fixed = vec![beech_at(30, -1.5)];
+        let env = Environment::open();
+        let run = |threads: usize, fresh: bool| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            FORCED[Forced::FreshGrids as usize].store(fresh, Ordering::Relaxed);
+            let mut trees = trees.clone();
+            let rep = pool.install(|| adapt_group_among(&mut trees, &fixed, &env)).unwrap();
+            FORCED[Forced::FreshGrids as usize].store(false, Ordering::Relaxed);
+            let mut h = 0xcbf2_9ce4_8422_2325u64;
+            let mut eat = |v: u32| h = (h ^ v as u64).wrapping_mul(0x0000_0100_0000_01b3);
+            for t in &trees {
+                t.pos.iter().for_each(|v| v.to_array().iter().for_each(|x| eat(x.to_bits())));
+                t.rot.iter().for_each(|q| q.to_array().iter().for_each(|x| eat(x.to_bits())));
+                t.bend.iter().for_each(|b| eat(b.to_bits()));
+                t.fate.iter().for_each(|f| eat(*f as u32));
+                for (c, r) in t.clusters() {
+                    c.to_array().iter().for_each(|x| eat(x.to_bits()));
+                    eat(r.to_bits());
+                }
+            }
+            (rep, h)
+        };
+        let (rep, h) = run(1, true);
+        assert!(rep.trees.iter().any(|r| r.bent > 0), "{rep:?}");
+        for threads in [1, 2] {
+            let (rep_m, h_m) = run(threads, false);
+            assert_eq!(rep, rep_m, "{threads} threads");
+            assert_eq!(h, h_m, "checksum of the adapted trees, {threads} threads: merged grids {h_m:016x}, fresh {h:016x}");
         }
     }
 
