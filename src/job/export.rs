@@ -75,7 +75,10 @@ pub const DEFAULT_MAX_BYTES: u64 = 7 << 29;
 /// 37); 30-year beech planted at 5 m (160 trees, 48,000 nodes) 43.7 MB, 910 bytes; 25-year
 /// Norway spruce (6 trees, 7,608 nodes: shoot cards, no leaf cards) 5.0 MB, 660 bytes. A
 /// capped export (`--max-strands 48`) copies its few leaf cards to the crown's leaf area: about
-/// 1,100 bytes a node (the 0.25 ha: 51 MB), above this estimate by 1.4×.
+/// 1,100 bytes a node (the 0.25 ha: 51 MB), above this estimate by 1.4×. These are float files
+/// (`--no-quantize`); a default export, quantised since round 46, writes about 0.45 of them
+/// (`tests/export.rs`' small stand: 5.65 MB against 12.26 MB), so the estimate is an upper bound
+/// for the cap.
 pub const EST_BYTES_PER_NODE: f64 = 800.0;
 
 /// Bytes of an export besides its trees' levels: textures, terrain, obstacles, JSON

@@ -485,12 +485,12 @@ impl Doc {
                 }
                 let pv = self.view(bytemuck::cast_slice(&enc), Some(8), Some(ARRAY_BUFFER));
                 let pa = self.accessor(pv, n, I16, "VEC3", None);
-                // bounds of a normalised accessor: its stored values normalised (glTF 2.0,
-                // section 3.6.2.5: "the values ... after normalization")
-                let f = |v: [i16; 3]| v.map(|c| (c as f32 / QUANT_MAX).max(-1.0));
+                // bounds as stored (glTF 2.0, accessor.min: "the normalized property has no
+                // effect on array values: they always correspond to the actual values stored
+                // in the buffer")
                 self.accessors[pa]["normalized"] = json!(true);
-                self.accessors[pa]["min"] = json!(f(lo));
-                self.accessors[pa]["max"] = json!(f(hi));
+                self.accessors[pa]["min"] = json!(lo);
+                self.accessors[pa]["max"] = json!(hi);
                 attributes.insert("POSITION".into(), json!(pa));
                 self.uses(MESH_QUANTIZATION, true);
             }
@@ -720,6 +720,10 @@ impl Doc {
             "bufferViews": std::mem::take(&mut self.views),
             "buffers": [{"byteLength": self.bin_len()}],
         });
+        // sorted: the same file whatever order the parts were written in (a stand written tree
+        // by tree names the materials' extensions last, one held in memory first)
+        self.extensions_used.sort_unstable();
+        self.extensions_required.sort_unstable();
         if !self.extensions_used.is_empty() {
             root["extensionsUsed"] = json!(self.extensions_used);
         }
