@@ -1,10 +1,11 @@
 # Bytes a float stand export (`sylva export --no-quantize`, or a file of round 45 and before) would
 # take written by round 46's quantisation rules (src/output/gltf.rs, `Doc::primitive_q`), counted per
-# primitive from its JSON: positions 8 B, normals 4 B (none for leaf and cluster cards, which the
-# writer leaves out where they are flat, as every sampled card of trial 45 is), card and bark
+# primitive from its JSON: positions 8 B, normals 4 B (none for leaf and cluster cards with
+# --drop-card-normals, the writer's DROP_FLAT_CARD_NORMALS, off), card and bark
 # texture coordinates 4 B, indices 2 B where a primitive has at most 65,535 vertices.
 # Usage: python3 tools/glb_quantised_size.py STAND.glb
 import json,struct,sys
+DROP = '--drop-card-normals' in sys.argv  # DROP_FLAT_CARD_NORMALS (off in the writer)
 f=open(sys.argv[1],'rb'); f.read(12); l,t=struct.unpack('<II',f.read(8)); js=json.loads(f.read(l))
 acc=js['accessors']; mats=js['materials']
 orig=0; new=0; big=0; n_prims=0; by={}
@@ -18,7 +19,7 @@ for m in js['meshes']:
       q=o
     else:
       cards = kind in ('leaf','cluster','impostor')
-      q=n*8+(0 if cards else n*4)+(n*4 if 'TEXCOORD_0' in a else 0)+pad(ni*(2 if n<=65535 else 4))
+      q=n*8+(0 if (cards and DROP) else n*4)+(n*4 if 'TEXCOORD_0' in a else 0)+pad(ni*(2 if n<=65535 else 4))
       if n>65535: big+=1
     orig+=o; new+=q; n_prims+=1
     b=by.setdefault(kind,[0,0]); b[0]+=o; b[1]+=q

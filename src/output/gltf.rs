@@ -140,13 +140,20 @@ const REPEAT: u32 = 10497;
 /// go once round it (`structure::mesh::hull_mesh`): about one picture per metre of a crown
 /// 6 m across.
 pub const CROWN_REPEAT: [f32; 2] = [6.0, 3.0];
+/// Whether quantised flat cards are written without their normals ([`normals_are_flat`]; 4 B a
+/// card vertex, 36 MB of trial 45's 0.25 ha): off. Round 46's check in Debian's Blender 3.4
+/// (12 trees of trial 45, Cycles): without them the crowns render lighter and greener than with
+/// the written normals (Blender shades a card without custom normals by its winding), a visible
+/// change; on only once the leaf cards' normals and winding agree.
+const DROP_FLAT_CARD_NORMALS: bool = false;
+
 /// What a primitive of a tree draws, for its quantisation ([`Doc::primitive_q`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Part {
     /// Bark: repeating texture coordinates ([`BARK_UV_STEPS`]).
     Bark,
     /// Double-sided flat cards (leaves, leaf clusters, billboards): normals left out where
-    /// they are the faces' ([`normals_are_flat`]).
+    /// they are the faces' ([`normals_are_flat`]) if [`DROP_FLAT_CARD_NORMALS`].
     Cards,
     /// Anything else (the crown hull).
     Other,
@@ -510,7 +517,7 @@ impl Doc {
         // flat double-sided cards whose normals are their faces' (either side) leave them out:
         // glTF's importers then use the faces' own ("client implementations MUST calculate
         // flat normals", glTF 2.0 section 3.7.2.1), the same shading
-        let flat = quant.is_some() && part == Part::Cards && m.normals.len() == n && normals_are_flat(m);
+        let flat = DROP_FLAT_CARD_NORMALS && quant.is_some() && part == Part::Cards && m.normals.len() == n && normals_are_flat(m);
         if m.normals.len() == n && !flat {
             // unit length as the specification requires (a zero normal becomes up)
             let nrm: Vec<glam::Vec3> = m.normals.iter().map(|&p| glam::Vec3::from(y_up(p)).normalize_or(glam::Vec3::Y)).collect();
