@@ -1022,7 +1022,7 @@ fn an_export_estimated_above_the_cap_is_refused_before_any_work() {
     let area = [20.0, 15.0, 45.0, 45.0];
     let out = dir.path().join("stand.glb");
     // the estimate is of the float file (`--no-quantize`); a default (quantised) export writes
-    // about 0.45 of it (round 46), so the estimate is an upper bound for the cap
+    // about half of it (round 46), so the estimate is an upper bound for the cap
     let mut floats = ExportOptions::new(area);
     floats.quantize = false;
     let r = export_stand(&run, &lib, &floats, &out).unwrap();

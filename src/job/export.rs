@@ -76,9 +76,9 @@ pub const DEFAULT_MAX_BYTES: u64 = 7 << 29;
 /// Norway spruce (6 trees, 7,608 nodes: shoot cards, no leaf cards) 5.0 MB, 660 bytes. A
 /// capped export (`--max-strands 48`) copies its few leaf cards to the crown's leaf area: about
 /// 1,100 bytes a node (the 0.25 ha: 51 MB), above this estimate by 1.4×. These are float files
-/// (`--no-quantize`); a default export, quantised since round 46, writes about 0.45 of them
-/// (`tests/export.rs`' small stand: 5.65 MB against 12.26 MB), so the estimate is an upper bound
-/// for the cap.
+/// (`--no-quantize`); a default export, quantised since round 46, writes about half of them
+/// (trial 45's 0.25 ha counted by `tools/glb_quantised_size.py`: 0.51), so the estimate is an
+/// upper bound for the cap.
 pub const EST_BYTES_PER_NODE: f64 = 800.0;
 
 /// Bytes of an export besides its trees' levels: textures, terrain, obstacles, JSON
