@@ -452,7 +452,7 @@ thickness_m = 0.5
 
 /// Round 46 (issue 32, trial 45: a 0.25 ha export of 551.7 MB, 56 bytes a triangle, took
 /// Blender 3.4 391 s and 8.2 GB to import): a default stand export writes at most
-/// `MAX_BYTES_PER_TRIANGLE` bytes a triangle (measured with the cards' normals left out: 26.5) of its trees, saplings and ground (quantised
+/// `MAX_BYTES_PER_TRIANGLE` bytes a triangle (measured 29.8; 26.5 with the cards' normals left out) of its trees, saplings and ground (quantised
 /// meshes, 16-bit indices), where the float export
 /// (`--no-quantize`: main's writer, byte for byte) takes more than 50.
 #[test]
