@@ -74,6 +74,12 @@ pub struct Args {
     /// and bark grain from 512), not enlarged. Not with `--instances`.
     #[arg(long, default_value_t = 256, conflicts_with = "instances")]
     pub texture_size: u32,
+    /// Write the trees' meshes as 32-bit floats instead of quantised (`KHR_mesh_quantization`:
+    /// 16-bit positions, 8-bit normals, 16-bit card texture coordinates and indices, about a
+    /// third of the bytes, which Blender 3.4, three.js and the Khronos viewer read): for an
+    /// importer that refuses the extension. Not with `--instances` (never quantised).
+    #[arg(long, conflicts_with = "instances")]
+    pub no_quantize: bool,
     /// Folder of extra or edited species files, over the shipped library and the run's own
     /// `species/` folder.
     #[arg(long)]
@@ -128,6 +134,7 @@ fn export(a: &Args, area: Option<[f64; 4]>, levels: Vec<usize>) -> anyhow::Resul
         o.season = a.season;
         o.levels = levels;
         o.texture_px = a.texture_size;
+        o.quantize = !a.no_quantize;
         if a.full_detail {
             o.max_strands = sylva::structure::stand::FULL_STRANDS;
         }
@@ -154,6 +161,12 @@ fn export(a: &Args, area: Option<[f64; 4]>, levels: Vec<usize>) -> anyhow::Resul
         "year {}: {} trees{saplings} ({} tree models), {} obstacles, terrain {} triangles; {} meshes, {} mesh nodes, {} images; adapt {:.2} s → {} ({:.1} MB)",
         r.year, r.trees, r.models, r.obstacles, r.terrain_triangles, r.counts.meshes, r.counts.mesh_nodes, r.counts.images, r.adapt_s, r.out.display(), r.bytes as f64 / 1e6
     );
+    if !a.instances {
+        let max_strands = a.max_strands.unwrap_or(sylva::structure::stand::FULL_STRANDS);
+        if let Some(hint) = sylva::job::export::large_export_hint(r.bytes, !a.no_quantize, max_strands, &r.stats.levels) {
+            println!("{hint}");
+        }
+    }
     // the instanced export's level, chosen or given, and what the others would draw
     if a.instances {
         let names = sylva::job::export::LEVEL_NAMES;

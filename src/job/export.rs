@@ -75,7 +75,10 @@ pub const DEFAULT_MAX_BYTES: u64 = 7 << 29;
 /// 37); 30-year beech planted at 5 m (160 trees, 48,000 nodes) 43.7 MB, 910 bytes; 25-year
 /// Norway spruce (6 trees, 7,608 nodes: shoot cards, no leaf cards) 5.0 MB, 660 bytes. A
 /// capped export (`--max-strands 48`) copies its few leaf cards to the crown's leaf area: about
-/// 1,100 bytes a node (the 0.25 ha: 51 MB), above this estimate by 1.4×.
+/// 1,100 bytes a node (the 0.25 ha: 51 MB), above this estimate by 1.4×. These are float files
+/// (`--no-quantize`); a default export, quantised since round 46, writes about half of them
+/// (trial 45's 0.25 ha counted by `tools/glb_quantised_size.py`: 0.51), so the estimate is an
+/// upper bound for the cap.
 pub const EST_BYTES_PER_NODE: f64 = 800.0;
 
 /// Bytes of an export besides its trees' levels: textures, terrain, obstacles, JSON
@@ -92,6 +95,34 @@ pub const EST_LEVEL_SHARE: [f64; LOD_LEVELS] = [1.0, 0.25, 0.02, 0.01];
 /// of the species' strand count at its age, at most `max_strands`).
 pub fn estimated_nodes(sp: &crate::species::Species, age_yr: f32, max_strands: u32) -> usize {
     2 * crate::structure::species_tree::ecomod_strands_at(sp.architecture.ecomod.strands, age_yr).min(max_strands.max(8)) as usize
+}
+
+/// Size (bytes) of a stand export above which `sylva export` points at the options that
+/// shrink it ([`large_export_hint`]): 300 MB (issue 32's artist trial 45: a 552 MB export took
+/// Debian's Blender 3.4 391 s and 8.2 GB of memory to import).
+pub const LARGE_EXPORT_BYTES: u64 = 300_000_000;
+
+/// The line `sylva export` prints after writing a stand of `bytes` bytes, when that is above
+/// [`LARGE_EXPORT_BYTES`]: the options that make it smaller, those not already given
+/// (`quantized`: the meshes were quantised; `max_strands`: the skeletons' cap, `--max-strands`;
+/// `levels`: the levels written). `None` for a smaller file.
+pub fn large_export_hint(bytes: u64, quantized: bool, max_strands: u32, levels: &[usize]) -> Option<String> {
+    if bytes <= LARGE_EXPORT_BYTES {
+        return None;
+    }
+    let mut ways = Vec::new();
+    if !quantized {
+        ways.push("leave out --no-quantize (about a third of the bytes)".to_string());
+    }
+    if levels.len() > 1 {
+        ways.push("--lod 0 (the full level only)".to_string());
+    }
+    if max_strands == crate::structure::stand::FULL_STRANDS {
+        ways.push("--max-strands 48 (lighter skeletons: about a tenth of the bytes)".to_string());
+    }
+    ways.push("a smaller --area".to_string());
+    ways.push("--instances (the whole forest as instances of shared models, a few MB)".to_string());
+    Some(format!("the file is {:.0} MB (over {:.0} MB, slow to import: Blender 3.4 took 391 s and 8.2 GB for 552 MB); to make it smaller: {}", bytes as f64 / 1e6, LARGE_EXPORT_BYTES as f64 / 1e6, ways.join(", ")))
 }
 
 /// What an export of some trees will write, estimated before any tree is grown
@@ -155,6 +186,11 @@ pub struct ExportOptions {
     /// [`crate::structure::texture::TEXTURE_PX`] by default, a power of two from 256 to 4096
     /// (`--texture-size`, [`crate::output::gltf::check_texture_size`]).
     pub texture_px: u32,
+    /// Whether the trees' meshes are quantised (`KHR_mesh_quantization`,
+    /// [`crate::output::gltf::Quant`]: 16-bit positions, 8-bit normals, 16-bit card texture
+    /// coordinates and indices; about a third of the bytes): on by default, off with
+    /// `--no-quantize` for an importer without the extension.
+    pub quantize: bool,
 }
 
 impl ExportOptions {
@@ -173,6 +209,7 @@ impl ExportOptions {
             max_bytes_source: "the GLB's 4 GiB limit, less room for the estimate's error".into(),
             texture_px: crate::structure::texture::TEXTURE_PX,
             max_strands: crate::structure::stand::FULL_STRANDS,
+            quantize: true,
         }
     }
 }
@@ -528,6 +565,7 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let pruned_collision = st.trees.iter().map(|a| a.report.pruned_collision).sum();
     let (analysis_s, adaptation_s, analyses) = (st.analysis_s, st.adaptation_s, st.analyses);
     let mut w = crate::output::gltf::StandGlbWriter::create(out, &o.levels)?;
+    w.set_quantized(o.quantize);
     let mut looks_of: HashMap<usize, usize> = HashMap::new();
     // topology key → (model, its size, its canonical shape) of the models with that topology
     let mut model_of: HashMap<u64, Vec<(usize, [f32; 3], Vec<f32>)>> = HashMap::new();

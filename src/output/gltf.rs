@@ -142,6 +142,9 @@ pub(crate) fn y_up(p: [f32; 3]) -> [f32; 3] {
 // glTF constants (glTF 2.0 specification, sections 3.6 and 5.26).
 const F32: u32 = 5126;
 const U32: u32 = 5125;
+const U16: u32 = 5123;
+const I16: u32 = 5122;
+const I8: u32 = 5120;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 const LINEAR: u32 = 9729;
@@ -152,6 +155,41 @@ const REPEAT: u32 = 10497;
 /// go once round it (`structure::mesh::hull_mesh`): about one picture per metre of a crown
 /// 6 m across.
 pub const CROWN_REPEAT: [f32; 2] = [6.0, 3.0];
+/// Whether quantised flat cards are written without their normals ([`normals_are_flat`]; 4 B a
+/// card vertex, 36 MB of trial 45's 0.25 ha): off. Round 46's check in Debian's Blender 3.4
+/// (12 trees of trial 45, Cycles): without them the crowns render lighter and greener than with
+/// the written normals (Blender shades a card without custom normals by its winding), a visible
+/// change; on only once the leaf cards' normals and winding agree.
+const DROP_FLAT_CARD_NORMALS: bool = false;
+
+/// What a primitive of a tree draws, for its quantisation ([`Doc::primitive_q`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Part {
+    /// Bark: repeating texture coordinates ([`BARK_UV_STEPS`]).
+    Bark,
+    /// Double-sided flat cards (leaves, leaf clusters, billboards): normals left out where
+    /// they are the faces' ([`normals_are_flat`]) if [`DROP_FLAT_CARD_NORMALS`].
+    Cards,
+    /// Anything else (the crown hull).
+    Other,
+}
+
+/// Whether every vertex normal of `m` is its triangles' face normal or its opposite, within
+/// 2° (a card's normal as its leaf faces; a zero-area triangle has none and passes): what a
+/// double-sided card draws without its normals.
+fn normals_are_flat(m: &TriMesh) -> bool {
+    let cos_max = 2f32.to_radians().cos();
+    m.indices.chunks_exact(3).all(|t| {
+        let p = |k: usize| glam::Vec3::from(m.positions[t[k] as usize]);
+        let face = (p(1) - p(0)).cross(p(2) - p(0));
+        if face.length_squared() < 1e-20 {
+            return true;
+        }
+        let face = face.normalize();
+        t.iter().all(|&i| face.dot(glam::Vec3::from(m.normals[i as usize]).normalize_or_zero()).abs() >= cos_max)
+    })
+}
+
 /// Sampler indices of [`Doc::new`].
 const SAMPLER_CLAMP: usize = 0;
 const SAMPLER_REPEAT: usize = 1;
@@ -195,6 +233,77 @@ struct Doc {
     /// `extensions_used`): an importer that lacks one refuses the file instead of showing
     /// something else.
     extensions_required: Vec<&'static str>,
+    /// Whether tree meshes are written quantised ([`Quant`], `KHR_mesh_quantization`): stand
+    /// exports, unless `--no-quantize`.
+    quantize: bool,
+    /// The dequantisation of each quantised mesh (by mesh index), which the nodes that draw it
+    /// carry as their translation and scale.
+    mesh_quant: HashMap<usize, Quant>,
+}
+
+/// `KHR_mesh_quantization` (Khronos, ratified 2020): the extension that lets vertex attributes
+/// be 8- and 16-bit integers.
+pub const MESH_QUANTIZATION: &str = "KHR_mesh_quantization";
+
+/// `KHR_texture_transform` (Khronos, ratified): the texture-coordinate transform by which a
+/// quantised bark's integer texture coordinates are scaled back ([`BARK_UV_STEPS`]).
+pub const TEXTURE_TRANSFORM: &str = "KHR_texture_transform";
+
+/// Steps a bark texture repeat is divided into where the bark's texture coordinates are
+/// quantised: they are stored as 16-bit unsigned integers of 1/64 repeat (after taking the
+/// whole repeats below the primitive's lowest one away: the texture repeats), and the bark
+/// materials scale them back by 1/64 (`KHR_texture_transform`). A texture coordinate moves by at
+/// most 1/128 of a repeat; a primitive spanning more than 1,023 repeats keeps floats (times 64).
+pub const BARK_UV_STEPS: f32 = 64.0;
+
+/// Largest magnitude of a quantised position component (16-bit signed normalised:
+/// glTF 2.0 specification, section 3.11, `f = max(c / 32767.0, -1.0)`).
+pub const QUANT_MAX: f32 = 32767.0;
+
+/// The dequantisation of a quantised tree mesh (`KHR_mesh_quantization`, which leaves it to the
+/// node: "the extension relies on existing ways to specify geometry transformation"): its
+/// positions (y up, m) are stored as 16-bit signed normalised integers q ∈ [−1, 1] per axis,
+/// p = `offset` + `scale` · q, and every node drawing the mesh has translation `offset` and
+/// uniform scale `scale` (uniform, so that normals need no correction). `scale` is half the
+/// mesh's largest extent: the step between stored positions is `scale` / 32767 (0.46 mm for a
+/// 30 m tree), and a position is within half a step of its unquantised value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Quant {
+    /// Centre of the mesh's bounds (m, y up).
+    pub offset: [f32; 3],
+    /// Half the mesh's largest extent (m, > 0).
+    pub scale: f32,
+}
+
+impl Quant {
+    /// The dequantisation of the meshes `parts` together (Sylva's z-up positions); `None` when
+    /// they have no vertex.
+    pub fn of<'a>(parts: impl IntoIterator<Item = &'a TriMesh>) -> Option<Quant> {
+        let (lo, hi) = crate::mesh::points_bounds(parts.into_iter().flat_map(|m| m.positions.iter()))?;
+        let (lo, hi) = (y_up(lo), y_up(hi));
+        // y_up swaps and negates: the bounds again as min and max
+        let (lo, hi) = ([lo[0].min(hi[0]), lo[1].min(hi[1]), lo[2].min(hi[2])], [lo[0].max(hi[0]), lo[1].max(hi[1]), lo[2].max(hi[2])]);
+        let offset = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])];
+        let scale = (0..3).map(|k| 0.5 * (hi[k] - lo[k])).fold(0.0f32, f32::max).max(1e-6);
+        Some(Quant { offset, scale })
+    }
+
+    /// The stored integers of a y-up position `p` (m), padded to 4 components (the 4-byte
+    /// alignment of vertex attributes, glTF 2.0 section 3.6.2.4).
+    pub fn encode(&self, p: [f32; 3]) -> [i16; 4] {
+        let q = |k: usize| ((p[k] - self.offset[k]) / self.scale * QUANT_MAX).round().clamp(-QUANT_MAX, QUANT_MAX) as i16;
+        [q(0), q(1), q(2), 0]
+    }
+
+    /// The position (m, y up) of stored integers `q`: `offset + scale · q / 32767`.
+    pub fn decode(&self, q: [i16; 3]) -> [f32; 3] {
+        [0, 1, 2].map(|k| self.offset[k] + self.scale * (q[k] as f32 / QUANT_MAX).max(-1.0))
+    }
+
+    /// The step between stored positions (m): `scale` / 32767.
+    pub fn step_m(&self) -> f32 {
+        self.scale / QUANT_MAX
+    }
 }
 
 /// Bytes of the BIN chunk a [`Doc`] with a scratch file holds before writing them there (8 MiB).
@@ -219,7 +328,17 @@ impl Drop for Spill {
 
 impl Doc {
     fn new() -> Doc {
-        Doc { views: Vec::new(), accessors: Vec::new(), head: Vec::new(), bin: Vec::new(), spill: None, images: Vec::new(), textures: Vec::new(), materials: Vec::new(), meshes: Vec::new(), nodes: Vec::new(), texture_of: HashMap::new(), extensions_used: Vec::new(), extensions_required: Vec::new() }
+        Doc { views: Vec::new(), accessors: Vec::new(), head: Vec::new(), bin: Vec::new(), spill: None, images: Vec::new(), textures: Vec::new(), materials: Vec::new(), meshes: Vec::new(), nodes: Vec::new(), texture_of: HashMap::new(), extensions_used: Vec::new(), extensions_required: Vec::new(), quantize: false, mesh_quant: HashMap::new() }
+    }
+
+    /// Marks extension `name` used, and required when `required`.
+    fn uses(&mut self, name: &'static str, required: bool) {
+        if !self.extensions_used.contains(&name) {
+            self.extensions_used.push(name);
+        }
+        if required && !self.extensions_required.contains(&name) {
+            self.extensions_required.push(name);
+        }
     }
 
     /// A document whose BIN chunk goes to the scratch file `<tmp of out>.bin` beside `out`
@@ -301,13 +420,27 @@ impl Doc {
     fn look(&mut self, look: &Look, levels: &[usize]) -> Result<LookMaterials> {
         let t = &look.textures;
         let tex = |index: usize| json!({"index": index, "texCoord": 0});
+        // a quantised stand's bark texture coordinates are integers of 1/64 repeat
+        let quantize = self.quantize;
+        let bark_tex = |index: usize| {
+            let mut info = tex(index);
+            if quantize {
+                let mut ext = serde_json::Map::new();
+                ext.insert(TEXTURE_TRANSFORM.into(), json!({"scale": [1.0 / BARK_UV_STEPS, 1.0 / BARK_UV_STEPS]}));
+                info["extensions"] = Value::Object(ext);
+            }
+            info
+        };
+        if quantize && levels.iter().any(|&l| l < 3) {
+            self.uses(TEXTURE_TRANSFORM, true);
+        }
         let (mut bark, mut bark_base) = (None, None);
         if levels.iter().any(|&l| l < 3) {
             let bark_t = self.texture(&t.bark, SAMPLER_REPEAT)?;
-            bark = Some(self.material(json!({"name": format!("{}_bark", look.name), "pbrMetallicRoughness": {"baseColorTexture": tex(bark_t), "metallicFactor": 0.0, "roughnessFactor": 0.95}})));
+            bark = Some(self.material(json!({"name": format!("{}_bark", look.name), "pbrMetallicRoughness": {"baseColorTexture": bark_tex(bark_t), "metallicFactor": 0.0, "roughnessFactor": 0.95}})));
             if let Some(img) = &t.bark_base {
                 let ti = self.texture(img, SAMPLER_REPEAT)?;
-                bark_base = Some(self.material(json!({"name": format!("{}_bark_base", look.name), "pbrMetallicRoughness": {"baseColorTexture": tex(ti), "metallicFactor": 0.0, "roughnessFactor": 0.95}})));
+                bark_base = Some(self.material(json!({"name": format!("{}_bark_base", look.name), "pbrMetallicRoughness": {"baseColorTexture": bark_tex(ti), "metallicFactor": 0.0, "roughnessFactor": 0.95}})));
             }
         }
         let mut foliage = [None; 4];
@@ -343,35 +476,115 @@ impl Doc {
     /// [`Doc::primitive`] with texture coordinates multiplied by `uv_scale` (the crown hull's
     /// once-round coordinates repeat its leafy texture [`CROWN_REPEAT`] times).
     fn primitive_uv(&mut self, m: &TriMesh, material: usize, uv: bool, uv_scale: [f32; 2]) -> Option<Value> {
+        self.primitive_q(m, material, uv, uv_scale, None, Part::Other)
+    }
+
+    /// [`Doc::primitive_uv`], quantised by `quant` where given (`KHR_mesh_quantization`):
+    /// positions as 16-bit signed normalised integers ([`Quant`]; 8 bytes a vertex with the
+    /// padding instead of 12), normals as 8-bit signed normalised (4 bytes instead of 12: a
+    /// direction within 0.5° of the unquantised), texture coordinates within 0–1 (the cards')
+    /// as 16-bit unsigned normalised (4 bytes instead of 8, a step of 1/65,535; others stay
+    /// floats; a `bark` primitive's in 1/64 repeat steps, [`BARK_UV_STEPS`], which its material
+    /// scales back), and indices 16-bit where the primitive has at most 65,535 vertices (core
+    /// glTF).
+    fn primitive_q(&mut self, m: &TriMesh, material: usize, uv: bool, uv_scale: [f32; 2], quant: Option<Quant>, part: Part) -> Option<Value> {
+        let bark = part == Part::Bark;
         if m.positions.is_empty() || m.indices.is_empty() {
             return None;
         }
         let pos: Vec<[f32; 3]> = m.positions.iter().map(|&p| y_up(p)).collect();
-        let (mut lo, mut hi) = (pos[0], pos[0]);
-        for p in &pos {
-            for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
+        let n = pos.len();
+        let mut attributes = serde_json::Map::new();
+        match quant {
+            Some(q) => {
+                let enc: Vec<[i16; 4]> = pos.iter().map(|&p| q.encode(p)).collect();
+                let (mut lo, mut hi) = ([i16::MAX; 3], [i16::MIN; 3]);
+                for e in &enc {
+                    for k in 0..3 {
+                        lo[k] = lo[k].min(e[k]);
+                        hi[k] = hi[k].max(e[k]);
+                    }
+                }
+                let pv = self.view(bytemuck::cast_slice(&enc), Some(8), Some(ARRAY_BUFFER));
+                let pa = self.accessor(pv, n, I16, "VEC3", None);
+                // bounds as stored (glTF 2.0, accessor.min: "the normalized property has no
+                // effect on array values: they always correspond to the actual values stored
+                // in the buffer")
+                self.accessors[pa]["normalized"] = json!(true);
+                self.accessors[pa]["min"] = json!(lo);
+                self.accessors[pa]["max"] = json!(hi);
+                attributes.insert("POSITION".into(), json!(pa));
+                self.uses(MESH_QUANTIZATION, true);
+            }
+            None => {
+                let (mut lo, mut hi) = (pos[0], pos[0]);
+                for p in &pos {
+                    for k in 0..3 {
+                        lo[k] = lo[k].min(p[k]);
+                        hi[k] = hi[k].max(p[k]);
+                    }
+                }
+                let pv = self.view(bytemuck::cast_slice(&pos), Some(12), Some(ARRAY_BUFFER));
+                let pa = self.accessor(pv, n, F32, "VEC3", Some((lo, hi)));
+                attributes.insert("POSITION".into(), json!(pa));
             }
         }
-        let n = pos.len();
-        let pv = self.view(bytemuck::cast_slice(&pos), Some(12), Some(ARRAY_BUFFER));
-        let pa = self.accessor(pv, n, F32, "VEC3", Some((lo, hi)));
-        let mut attributes = serde_json::Map::new();
-        attributes.insert("POSITION".into(), json!(pa));
-        if m.normals.len() == n {
+        // flat double-sided cards whose normals are their faces' (either side) leave them out:
+        // glTF's importers then use the faces' own ("client implementations MUST calculate
+        // flat normals", glTF 2.0 section 3.7.2.1), the same shading
+        let flat = DROP_FLAT_CARD_NORMALS && quant.is_some() && part == Part::Cards && m.normals.len() == n && normals_are_flat(m);
+        if m.normals.len() == n && !flat {
             // unit length as the specification requires (a zero normal becomes up)
-            let nrm: Vec<[f32; 3]> = m.normals.iter().map(|&p| glam::Vec3::from(y_up(p)).normalize_or(glam::Vec3::Y).to_array()).collect();
-            let nv = self.view(bytemuck::cast_slice(&nrm), Some(12), Some(ARRAY_BUFFER));
-            attributes.insert("NORMAL".into(), json!(self.accessor(nv, n, F32, "VEC3", None)));
+            let nrm: Vec<glam::Vec3> = m.normals.iter().map(|&p| glam::Vec3::from(y_up(p)).normalize_or(glam::Vec3::Y)).collect();
+            let na = if quant.is_some() {
+                let enc: Vec<[i8; 4]> = nrm.iter().map(|v| [v.x, v.y, v.z].map(|c| (c * 127.0).round().clamp(-127.0, 127.0) as i8)).map(|[x, y, z]| [x, y, z, 0]).collect();
+                let nv = self.view(bytemuck::cast_slice(&enc), Some(4), Some(ARRAY_BUFFER));
+                let a = self.accessor(nv, n, I8, "VEC3", None);
+                self.accessors[a]["normalized"] = json!(true);
+                a
+            } else {
+                let nrm: Vec<[f32; 3]> = nrm.iter().map(|v| v.to_array()).collect();
+                let nv = self.view(bytemuck::cast_slice(&nrm), Some(12), Some(ARRAY_BUFFER));
+                self.accessor(nv, n, F32, "VEC3", None)
+            };
+            attributes.insert("NORMAL".into(), json!(na));
         }
         if uv && m.uvs.len() == n {
             let uv: Vec<[f32; 2]> = m.uvs.iter().map(|&[u, v]| [u * uv_scale[0], 1.0 - v * uv_scale[1]]).collect();
-            let uvv = self.view(bytemuck::cast_slice(&uv), Some(8), Some(ARRAY_BUFFER));
-            attributes.insert("TEXCOORD_0".into(), json!(self.accessor(uvv, n, F32, "VEC2", None)));
+            let ua = if quant.is_some() && bark {
+                // the bark's: 1/64 repeat steps from the whole repeat below the lowest (BARK_UV_STEPS)
+                let floor = [0, 1].map(|k| uv.iter().map(|t| t[k]).fold(f32::MAX, f32::min).floor());
+                let steps: Vec<[f32; 2]> = uv.iter().map(|t| [0, 1].map(|k| ((t[k] - floor[k]) * BARK_UV_STEPS).round())).collect();
+                if steps.iter().flatten().all(|&c| c <= u16::MAX as f32) {
+                    let enc: Vec<[u16; 2]> = steps.iter().map(|t| t.map(|c| c as u16)).collect();
+                    let uvv = self.view(bytemuck::cast_slice(&enc), Some(4), Some(ARRAY_BUFFER));
+                    self.accessor(uvv, n, U16, "VEC2", None)
+                } else {
+                    let f: Vec<[f32; 2]> = uv.iter().map(|t| t.map(|c| c * BARK_UV_STEPS)).collect();
+                    let uvv = self.view(bytemuck::cast_slice(&f), Some(8), Some(ARRAY_BUFFER));
+                    self.accessor(uvv, n, F32, "VEC2", None)
+                }
+            } else if quant.is_some() && uv.iter().flatten().all(|c| (0.0..=1.0).contains(c)) {
+                let enc: Vec<[u16; 2]> = uv.iter().map(|t| t.map(|c| (c * 65535.0).round() as u16)).collect();
+                let uvv = self.view(bytemuck::cast_slice(&enc), Some(4), Some(ARRAY_BUFFER));
+                let a = self.accessor(uvv, n, U16, "VEC2", None);
+                self.accessors[a]["normalized"] = json!(true);
+                a
+            } else {
+                let uvv = self.view(bytemuck::cast_slice(&uv), Some(8), Some(ARRAY_BUFFER));
+                self.accessor(uvv, n, F32, "VEC2", None)
+            };
+            attributes.insert("TEXCOORD_0".into(), json!(ua));
         }
-        let iv = self.view(bytemuck::cast_slice(&m.indices), None, Some(ELEMENT_ARRAY_BUFFER));
-        let ia = self.accessor(iv, m.indices.len(), U32, "SCALAR", None);
+        let ia = if quant.is_some() && n <= u16::MAX as usize {
+            // 65,535 itself is the primitive restart value, which glTF forbids
+            let idx: Vec<u16> = m.indices.iter().map(|&i| i as u16).collect();
+            let iv = self.view(bytemuck::cast_slice(&idx), None, Some(ELEMENT_ARRAY_BUFFER));
+            self.accessor(iv, idx.len(), U16, "SCALAR", None)
+        } else {
+            let iv = self.view(bytemuck::cast_slice(&m.indices), None, Some(ELEMENT_ARRAY_BUFFER));
+            self.accessor(iv, m.indices.len(), U32, "SCALAR", None)
+        };
         Some(json!({"attributes": attributes, "indices": ia, "material": material, "mode": 4}))
     }
 
@@ -397,6 +610,7 @@ impl Doc {
     /// the full level's leaves marked by [`crate::mesh::CLUSTER_CARD_U`]
     /// ([`TriMesh::split_cluster_cards`]).
     fn chain_with_sprigs(&mut self, name: &str, chain: &LodChain, sprigs: &TriMesh, mats: LookMaterials, levels: &[usize]) -> Vec<Option<usize>> {
+        let empty = TriMesh::default();
         chain
             .levels
             .iter()
@@ -406,12 +620,10 @@ impl Doc {
                     return None;
                 }
                 // a white bark's dark base in a material of its own (FoliageTextures::bark_base)
-                let (bark, base) = match mats.bark_base {
-                    Some(mb) => {
-                        let (upper, base) = texture::split_bark_base(&level.bark);
-                        (mats.bark.and_then(|m| self.primitive(&upper, m, true)), self.primitive(&base, mb, true))
-                    }
-                    None => (mats.bark.and_then(|m| self.primitive(&level.bark, m, true)), None),
+                let split_base = mats.bark_base.map(|_| texture::split_bark_base(&level.bark));
+                let (upper, base): (&TriMesh, &TriMesh) = match &split_base {
+                    Some((u, b)) => (u, b),
+                    None => (&level.bark, &empty),
                 };
                 let scale = if i == 2 { CROWN_REPEAT } else { [1.0, 1.0] };
                 // leaf-cluster cards marked among the full level's leaves (a lone tree's crown
@@ -422,9 +634,18 @@ impl Doc {
                     (cards, marked)
                 });
                 let (cards, sprigs) = split.as_ref().map_or((&level.leaves, sprigs), |(c, s)| (c, s));
-                let leaves = mats.foliage[i.min(3)].and_then(|m| self.primitive_uv(cards, m, true, scale));
-                let extra = if i == 0 && !sprigs.indices.is_empty() { mats.foliage[1].and_then(|m| self.primitive(sprigs, m, true)) } else { None };
-                self.mesh(&format!("{name}_LOD{i}"), vec![bark, base, leaves, extra])
+                let sprigs = if i == 0 { sprigs } else { &empty };
+                // one dequantisation for all the level's parts: the node drawing it carries it
+                let quant = if self.quantize { Quant::of([upper, base, cards, sprigs]) } else { None };
+                let bark = mats.bark.and_then(|m| self.primitive_q(upper, m, true, [1.0, 1.0], quant, Part::Bark));
+                let base = mats.bark_base.and_then(|m| self.primitive_q(base, m, true, [1.0, 1.0], quant, Part::Bark));
+                let leaves = mats.foliage[i.min(3)].and_then(|m| self.primitive_q(cards, m, true, scale, quant, if i == 2 { Part::Other } else { Part::Cards }));
+                let extra = if i == 0 && !sprigs.indices.is_empty() { mats.foliage[1].and_then(|m| self.primitive_q(sprigs, m, true, [1.0, 1.0], quant, Part::Cards)) } else { None };
+                let mesh = self.mesh(&format!("{name}_LOD{i}"), vec![bark, base, leaves, extra]);
+                if let (Some(mesh), Some(q)) = (mesh, quant) {
+                    self.mesh_quant.insert(mesh, q);
+                }
+                mesh
             })
             .collect()
     }
@@ -521,6 +742,10 @@ impl Doc {
             "bufferViews": std::mem::take(&mut self.views),
             "buffers": [{"byteLength": self.bin_len()}],
         });
+        // sorted: the same file whatever order the parts were written in (a stand written tree
+        // by tree names the materials' extensions last, one held in memory first)
+        self.extensions_used.sort_unstable();
+        self.extensions_required.sort_unstable();
         if !self.extensions_used.is_empty() {
             root["extensionsUsed"] = json!(self.extensions_used);
         }
@@ -603,7 +828,7 @@ fn json_check(js: &[u8]) -> Result<()> {
     root.validate(&root, gltf_json::Path::new, &mut |path, err| {
         // gltf-json names such an entry `extensionsRequired[i] = "NAME"`
         let p = path().to_string();
-        if !(p.starts_with("extensionsRequired[") && p.ends_with("= \"EXT_mesh_gpu_instancing\"")) {
+        if !(p.starts_with("extensionsRequired[") && (p.ends_with("= \"EXT_mesh_gpu_instancing\"") || p.ends_with(&format!("= \"{MESH_QUANTIZATION}\"")) || p.ends_with(&format!("= \"{TEXTURE_TRANSFORM}\"")))) {
             errs.push(format!("{p}: {err}"));
         }
     });
@@ -714,7 +939,7 @@ pub struct StandCounts {
 /// Errors: [`Error::Invalid`] for a node naming a missing model or look, a non-positive or
 /// non-finite scale, or nothing to draw; otherwise as [`glb_bytes`].
 pub fn stand_glb_bytes(s: &StandScene) -> Result<(Vec<u8>, StandCounts)> {
-    let (d, scene, counts) = stand_doc(s, Doc::new())?;
+    let (d, scene, counts) = stand_doc(s, Doc { quantize: true, ..Doc::new() })?;
     Ok((d.finish(scene)?, counts))
 }
 
@@ -780,7 +1005,13 @@ fn tree_node(d: &mut Doc, t: &StandNode, meshes: &[Option<usize>], mesh_nodes: &
     let mut children = Vec::new();
     for (i, mesh) in meshes.iter().enumerate() {
         if let Some(mesh) = *mesh {
-            children.push(d.node(json!({"name": format!("{}_LOD{i}", t.name), "mesh": mesh})));
+            let mut node = json!({"name": format!("{}_LOD{i}", t.name), "mesh": mesh});
+            // a quantised mesh's dequantisation (Quant)
+            if let Some(q) = d.mesh_quant.get(&mesh) {
+                node["translation"] = json!(q.offset);
+                node["scale"] = json!([q.scale, q.scale, q.scale]);
+            }
+            children.push(d.node(node));
             *mesh_nodes += 1;
         }
     }
@@ -1061,7 +1292,14 @@ impl StandGlbWriter {
     ///
     /// Errors: as [`StandGlbWriter::create`].
     pub fn spilling_at(path: &Path, levels: &[usize], at: usize) -> Result<StandGlbWriter> {
-        Ok(StandGlbWriter { path: path.to_path_buf(), doc: Doc::spilling(path, at.max(1))?, levels: levels.to_vec(), looks: Vec::new(), uses: Vec::new(), models: Vec::new(), tree_nodes: Vec::new(), sapling_nodes: Vec::new(), mesh_nodes: 0 })
+        Ok(StandGlbWriter { path: path.to_path_buf(), doc: Doc { quantize: true, ..Doc::spilling(path, at.max(1))? }, levels: levels.to_vec(), looks: Vec::new(), uses: Vec::new(), models: Vec::new(), tree_nodes: Vec::new(), sapling_nodes: Vec::new(), mesh_nodes: 0 })
+    }
+
+    /// Whether the tree meshes written after this call are quantised ([`Quant`],
+    /// `KHR_mesh_quantization`; on by default): off for an importer without the extension
+    /// (`sylva export --no-quantize`).
+    pub fn set_quantized(&mut self, on: bool) {
+        self.doc.quantize = on;
     }
 
     /// Adds a look; returns its index (as [`StandScene::looks`]).
@@ -1142,7 +1380,7 @@ impl StandGlbWriter {
         }
         // the looks' materials as the held writer makes them (stand_doc), in a document of
         // their own whose buffer (the textures) goes first
-        let mut head = Doc::new();
+        let mut head = Doc { quantize: self.doc.quantize, ..Doc::new() };
         let mut mats: Vec<Option<LookMaterials>> = vec![None; self.looks.len()];
         for (l, look) in self.looks.iter().enumerate() {
             let [leaves, sprigs, drawn] = self.uses[l];
@@ -1193,6 +1431,9 @@ impl StandGlbWriter {
         d.textures = std::mem::take(&mut head.textures);
         d.texture_of = std::mem::take(&mut head.texture_of);
         d.materials = std::mem::take(&mut head.materials);
+        for (&e, required) in head.extensions_used.iter().map(|e| (e, head.extensions_required.contains(e))) {
+            d.uses(e, required);
+        }
         let doc = std::mem::replace(&mut self.doc, Doc::new());
         let (doc, scene, counts) = forest_doc(doc, std::mem::take(&mut self.tree_nodes), std::mem::take(&mut self.sapling_nodes), self.mesh_nodes, statics, name, extras)?;
         doc.finish_to(scene, &self.path)?;
