@@ -143,6 +143,9 @@ pub(super) fn tree_instances(rows: &[Plant], keep: &[usize], library: &SpeciesLi
             // a young tree drawn with the sapling form of `sylva tree grow` (round 35, issue 32:
             // the simulation's crowns of 2–10-year trees drew round tufts on sticks)
             let (cb_m, crown_r) = crate::structure::forest_form::sapling_blend(sp, r.age_yr, r.height_m, r.crown_base_m, r.crown_radius_m);
+            // the tree's own value and hue about its species' colour (round 46)
+            let k = tree_tint(r.id);
+            let col = [col[0] * k[0], col[1] * k[1], col[2] * k[2]];
             let mut inst = TreeInstance::new(r.id, [r.x_m as f32, r.y_m as f32, z], r.height_m, crown_r.max(0.2), sid as u32, col);
             inst.leaf_amount = amount;
             // the crown from where the simulation has its base
