@@ -634,7 +634,7 @@ fn mature_form_is_read_from_the_species_file_and_checked() {
     use sylva::structure::forest_form::MatureForm as FormMatureForm;
     let lib = SpeciesLibrary::embedded().unwrap();
     for s in &lib.species {
-        let want = (s.id == "scots_pine").then_some(MatureForm { from_age_yr: 30.0, full_age_yr: 80.0, trunk_k_s: 0.70, trunk_alpha_deg: 97.0, limb_alpha_m_deg: -1.0, leaf_distribution: LeafDistribution::Bunched, crown_profile: Some(sylva::species::CrownProfile { widest_depth: 0.15, top_exponent: 0.25, base_share: 0.5, width_to_length: 1.2, angle_top_deg: 55.0, angle_base_deg: 80.0 }) });
+        let want = (s.id == "scots_pine").then_some(MatureForm { from_age_yr: 30.0, full_age_yr: 80.0, trunk_k_s: 0.70, trunk_alpha_deg: 97.0, limb_alpha_m_deg: -1.0, leaf_distribution: LeafDistribution::Bunched, crown_profile: Some(sylva::species::CrownProfile { widest_depth: 0.15, top_exponent: 0.25, base_share: 0.5, width_to_length: 1.2, angle_top_deg: 55.0, angle_base_deg: 80.0, fork_depth: None, fork_limbs: None, fork_angle_deg: None, twig_droop_deg: None }) });
         assert_eq!(s.architecture.mature_form, want, "{}", s.id);
         assert_eq!(FormMatureForm::for_species(s), want, "{}", s.id);
     }
