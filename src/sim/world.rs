@@ -236,6 +236,8 @@ pub struct EntryHarvest {
     pub saplings: u64,
     /// The entry's `max_removal_share` stopped its thinning short of its target.
     pub capped: bool,
+    /// Trees a planting entry planted in the year (0 for the other kinds; trial 46 D5).
+    pub planted: u64,
 }
 
 /// Running totals since the start of the run (checkpointed).
