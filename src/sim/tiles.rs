@@ -1183,14 +1183,15 @@ impl Tile {
             let ne = es.len();
             // the saplings a clearing kept open cut are each rank's own cohorts': summed with
             // the areas' sums (the removed trees every rank saw whole)
-            // (the trees a planting planted, `EntryHarvest::planted`, are the whole area's on
-            // every rank: each runs the year's entries on the areas' merged trees, `manage`)
+            // and so are the trees a planting planted (each rank plants the lattice points on its
+            // own cells, `phases::management::fill_gaps`)
             let saplings = (0..ne).map(|e| w.scratch.entry_harvest.get(e).map_or(0, |h| h.saplings));
-            let got = t.all_sum(es.iter().flat_map(|s| s.words()).chain(saplings).collect())?;
-            if got.len() != nw * ne + ne {
+            let planted = (0..ne).map(|e| w.scratch.entry_harvest.get(e).map_or(0, |h| h.planted));
+            let got = t.all_sum(es.iter().flat_map(|s| s.words()).chain(saplings).chain(planted).collect())?;
+            if got.len() != nw * ne + 2 * ne {
                 return Err(Error::Exchange { peer: 0, reason: "management-table sums cut short".into() });
             }
-            let harvest: Vec<super::stats::EntryHarvest> = (0..ne).map(|e| super::stats::EntryHarvest { saplings: got[nw * ne + e], ..w.scratch.entry_harvest.get(e).copied().unwrap_or_default() }).collect();
+            let harvest: Vec<super::stats::EntryHarvest> = (0..ne).map(|e| super::stats::EntryHarvest { saplings: got[nw * ne + e], planted: got[nw * ne + ne + e], ..w.scratch.entry_harvest.get(e).copied().unwrap_or_default() }).collect();
             let es: Vec<super::stats::RowSums> = got[..nw * ne].chunks(nw).map(|c| super::stats::RowSums::from_words(c, np)).collect();
             let stems: Vec<u64> = es.iter().map(|s| s.stems).collect();
             let h = super::stats::entry_top_heights(&w.site, tr, &stems, &mut |v| t.all_sum(v))?;

@@ -52,8 +52,8 @@ pub fn run(m: Manage<'_>) -> (usize, Vec<String>) {
 /// before the phase): the management table's harvest per entry; and per entry whether its
 /// `max_removal_share` stopped its thinning short of its target (the management table's
 /// `capped`; a note says so too); and per entry the trees it planted this year (a tiled run's
-/// rank runs this on the areas' merged trees, so it plants the whole area's and this counts
-/// them all before the rank keeps its own; the management table's `planted_ha`, trial 46 D5).
+/// rank: those on its own cells, [`fill_gaps`]; the ranks' counts are summed for the
+/// management table's `planted_ha`, trial 46 D5).
 pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>, Vec<bool>, Vec<usize>) {
     let y = m.year + 1;
     let mut planted: Vec<(u32, NewTree)> = Vec::new();
