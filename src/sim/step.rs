@@ -106,13 +106,14 @@ fn run_management(w: &mut World, report: &mut YearReport) {
         .iter()
         .zip(saplings)
         .zip(capped)
-        .zip(planted)
+        .zip(planted.iter())
         .map(|(((&n, saplings), capped), planted)| {
             let s = entry_harvest(&w.site, &w.scratch.dead[at..at + n]);
             at += n;
-            super::stats::EntryHarvest { saplings, capped, planted: planted as u64, ..s }
+            super::stats::EntryHarvest { saplings, capped, planted: planted.len() as u64, ..s }
         })
         .collect();
+    w.scratch.planted_at = planted;
 }
 
 fn run_light(w: &mut World, _: &mut YearReport) {

@@ -1419,6 +1419,11 @@ impl Tile {
         let (layout, me) = (&self.layout, self.me);
         let tr = &w.stand.trees;
         let keep: Vec<bool> = (0..tr.len()).map(|i| layout.owner_of(tr.x[i], tr.y[i]) == me).collect();
+        // the trees each planting planted on this rank's own cells (it planted its halo's too),
+        // summed over the ranks by the stats phase
+        for (h, at) in w.scratch.entry_harvest.iter_mut().zip(&w.scratch.planted_at) {
+            h.planted = at.iter().filter(|p| layout.owner_of(p[0], p[1]) == me).count() as u64;
+        }
         w.stand.trees.retain(&keep);
         let mut k = 0;
         let before = w.scratch.dead.len();
@@ -1808,7 +1813,7 @@ fn clone_for_tile(global: &World, layout: &Layout, me: usize) -> Result<World> {
         seeds.push(super::world::SeedGrid { cell_m: sg.cell_m, block: sg.block, cols: sg.cols, rows: sg.rows, held: r, data });
     }
     let stand = super::world::Stand { trees: global.stand.trees.clone(), year: global.stand.year, cohorts: global.stand.cohorts.clone(), seeds };
-    let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), canopy_top: per_light(&global.scratch.canopy_top), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone(), entry_harvest: global.scratch.entry_harvest.clone() };
+    let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), canopy_top: per_light(&global.scratch.canopy_top), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone(), entry_harvest: global.scratch.entry_harvest.clone(), planted_at: Vec::new() };
     Ok(World { site, stand, scratch, tallies: global.tallies.clone() })
 }
 
