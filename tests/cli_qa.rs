@@ -128,10 +128,11 @@ fn folders_and_files_mixed_up_get_plain_errors() {
     assert!(d.join("snap_final/inventory/year_0002.gpkg").is_file() && !d.join("snap_final/inventory/year_0001.gpkg").exists() && d.join("snap_final/inventory/year_0001.parquet").is_file());
     // the stand table's column after the climate is the site's unmasked area its per-hectare
     // columns divide by: 4 × 4 cells of 10 m = 0.16 ha (trial 36: it was written nowhere);
-    // then the natural deaths' volume (round 42), and a row for year 0
+    // then the natural deaths' volume (round 42), the site's stems (round 46), and a row for
+    // year 0
     let st = std::fs::read_to_string(d.join("snap_final/stand_table.csv")).unwrap();
-    assert!(st.lines().next().unwrap().ends_with(",precipitation_factor,drought_index,area_ha,deaths_volume_m3_ha"), "{st}");
-    assert!(st.lines().skip(1).all(|l| l.rsplit(',').nth(1) == Some("0.1600")) && st.lines().count() == 4 && st.lines().nth(1).unwrap().starts_with("0,"), "{st}");
+    assert!(st.lines().next().unwrap().ends_with(",precipitation_factor,drought_index,area_ha,deaths_volume_m3_ha,stems"), "{st}");
+    assert!(st.lines().skip(1).all(|l| l.rsplit(',').nth(2) == Some("0.1600")) && st.lines().count() == 4 && st.lines().nth(1).unwrap().starts_with("0,"), "{st}");
     let (ok, err) = run(&["simulate", "snap.toml", "--out", "snap_all", "--gpkg", "every-snapshot"]);
     assert!(ok && d.join("snap_all/inventory/year_0001.gpkg").is_file() && d.join("snap_all/inventory/year_0002.gpkg").is_file(), "{err}");
     // a site larger than the machine's memory is refused before it is built, naming the field
@@ -590,6 +591,18 @@ fn a_camera_of_ones_own_is_drawn_and_checked_against_the_site() {
         assert!(!ok && want.iter().all(|w| err.contains(w)), "{cam}: {err}");
         assert!(!d.join("bad.png").exists(), "{cam}");
     }
+    // trial 46 D11: an eye outside the site or under its ground is refused as soon as the site
+    // is read, before the species files are read and the stage built (26 s on the trial's
+    // run): with a malformed --species-dir the camera's error comes, not the species file's
+    // (before, the species file's); a good camera then meets the species file's error
+    std::fs::create_dir_all(d.join("badsp")).unwrap();
+    std::fs::write(d.join("badsp/beech.toml"), "this is = = not toml\n").unwrap();
+    for (cam, want) in [("eye:1e9,0,0:1,1,1:50", "outside the site"), ("eye:2,2,-500:30,30,306", "under the ground")] {
+        let (ok, err) = run(&["render", "eye_run", "--camera", cam, "--species-dir", "badsp", "--size", "64x48", "--out", "bad.png"]);
+        assert!(!ok && err.contains(want) && !err.contains("beech.toml"), "{cam}: {err}");
+    }
+    let (ok, err) = run(&["render", "eye_run", "--camera", "eye:2,2,+1.7:30,30,+6", "--species-dir", "badsp", "--size", "64x48", "--out", "bad.png"]);
+    assert!(!ok && err.contains("beech.toml") && !d.join("bad.png").exists(), "{err}");
 }
 
 /// Trial 42 (defect 1): an `eye:` camera inside an obstacle was accepted and drew a grey wall,

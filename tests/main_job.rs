@@ -90,6 +90,12 @@ fn main_job_reduced_scenario_writes_every_output() {
     assert!(!summary.sim.stopped && summary.sim.year == 6 && summary.sim.rows.len() == 6);
     let (table, shares) = summary.tables();
     assert!(table.contains("basal area") && shares.contains("beech"), "{table}\n{shares}");
+    // the species as the maps' legends name them (trial 46 D14: the ids, `norway_maple`)
+    let lib = sylva::species::SpeciesLibrary::embedded().unwrap();
+    for id in &summary.sim.pool {
+        let name = &lib.get(id).unwrap().identity.common_name;
+        assert!(shares.contains(&format!("| {name} |")) && (name == id || !shares.contains(&format!("| {id} |"))), "{id}: {shares}");
+    }
     assert_eq!(events, ["Begin", "Conditions", "Simulating", "Year", "Simulated", "Stills", "Still", "CloseUpBegin", "CloseUp", "StillsDone", "Timelapse", "Frame", "TimelapseDone"], "the job's steps, in order");
     assert_eq!(summary.stills.len(), 2 * 2 + 1, "oblique and top-down at year 0 (the still year within the run) and 6 (the last), one close-up: {:?}", summary.stills);
     assert_eq!(summary.film.as_ref().map(|f| f.frames), Some(5));

@@ -67,7 +67,7 @@ fn the_species_table_adds_up_to_the_stand_table_from_year_0() {
     let (ph, sp) = read_csv(&r.dir.join("stand_table_species.csv"));
     assert_eq!(st.len(), 13, "years 0–12");
     assert_eq!(sp.len(), 2 * 13, "two species a year");
-    assert_eq!(sh.last().unwrap(), "deaths_volume_m3_ha");
+    assert_eq!(sh[sh.len() - 2..], ["deaths_volume_m3_ha", "stems"]);
     // year 0: the planted trees, before any growth
     let y0 = r.summary.year0.as_ref().expect("a year-0 row");
     let t = &r.start.stand.trees;
@@ -172,11 +172,39 @@ fn a_removal_cap_stops_a_thinning_at_its_share_of_basal_area() {
     assert!(free_cut > 1.5 * cut && free_row.basal_area_m2_ha < 15.5, "without the cap {free_cut:.2} m² removed, to {:.2} m²/ha", free_row.basal_area_m2_ha);
     let names: Vec<&str> = capped.site.pool.iter().map(|&p| capped.site.lib.species[p as usize].id.as_str()).collect();
     let table = sylva::output::stand_table::management_table_csv(&[row.clone()], &names);
-    assert!(table.lines().next().unwrap().ends_with(",capped") && table.lines().nth(1).unwrap().ends_with(",true"), "{table}");
+    assert!(table.lines().next().unwrap().ends_with(",capped,planted_ha,seedlings_ha") && table.lines().nth(1).unwrap().contains(",true,"), "{table}");
     // refused: 0, above 1, on a harvest
     for (extra, want) in [(thin("max_removal_share = 0.0\n"), "a share of the basal area > 0 and ≤ 1"), (thin("max_removal_share = 1.5\n"), "a share of the basal area > 0 and ≤ 1"), ("[[management]]\nkind = \"harvest\"\nmethod = \"clear_cut\"\nyears = [1]\nmax_removal_share = 0.2\n".to_string(), "only with kind = \"thinning\"")] {
         let toml = common::ScenarioToml::new("cap", 1, 7).species(&["beech"]).uniform(5, 5, 20.0, 200.0).planted("beech", 1.5, 30.0).build() + &extra;
         let e = Scenario::from_toml_str(&toml, "cap.toml").map(|_| ()).unwrap_err().to_string();
         assert!(e.contains("cap.toml") && e.contains("management[0].max_removal_share") && e.contains(want), "{e}");
     }
+}
+
+/// Trial 46 D6: the stand table's last column `stems` is the site's count of trees ≥ 1.3 m, so
+/// the tree balance `stems(t) = stems(t−1) + regen_recruited(t) − Σ deaths_*(t)` closes exactly
+/// from the table alone in every year (no planting here: the starts are planted before year 0),
+/// and it equals `stems_ha · area_ha` and the run's living trees at the end. Before, the
+/// table had only `stems_ha` rounded to 0.1, which missed the balance by up to 28 trees.
+#[test]
+fn the_stand_table_closes_the_tree_balance_with_its_site_total_stems() {
+    let r = run();
+    let (sh, st) = read_csv(&r.dir.join("stand_table.csv"));
+    let v = |row: &[String], name: &str| -> f64 { row[col(&sh, name)].parse().unwrap() };
+    let deaths: Vec<String> = DeathCause::ALL.iter().map(|c| format!("deaths_{}", c.name())).collect();
+    let (mut died, mut thinned) = (0.0, 0.0);
+    for k in 1..st.len() {
+        let (prev, row) = (&st[k - 1], &st[k]);
+        let d: f64 = deaths.iter().map(|c| v(row, c)).sum();
+        died += d;
+        thinned += v(row, "deaths_harvest");
+        let want = v(prev, "stems") + v(row, "regen_recruited") - d;
+        assert_eq!(v(row, "stems"), want, "year {}: {} stems, {} + {} recruited − {d} dead", v(row, "year"), v(row, "stems"), v(prev, "stems"), v(row, "regen_recruited"));
+        // the per-hectare figure, rounded to 0.1, is the same count over the area
+        assert!((v(row, "stems_ha") * v(row, "area_ha") - v(row, "stems")).abs() <= 0.05 * v(row, "area_ha") + 1e-6, "year {}", v(row, "year"));
+    }
+    assert!(died > thinned && thinned > 0.0, "the balance is tested on natural deaths ({died} in all) and a thinning ({thinned})");
+    // every tree of this run stands 1.3 m or more (planted at 20 and 30 years, recruits enter
+    // taller), so the living trees at the end are its stems
+    assert_eq!(v(st.last().unwrap(), "stems"), r.summary.trees as f64, "the last year's stems against the run's living trees");
 }

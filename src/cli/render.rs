@@ -116,6 +116,36 @@ fn parse_eye(s: &str) -> Option<Result<EyeCamera, String>> {
     Some(Ok(EyeCamera { eye, target, fov_deg, eye_above_ground, target_above_ground }))
 }
 
+/// `Z` of the eye of `e` as it was given (`+H` or an elevation).
+fn eye_z(e: &EyeCamera) -> String {
+    if e.eye_above_ground {
+        format!("+{}", e.eye[2])
+    } else {
+        format!("{}", e.eye[2])
+    }
+}
+
+/// The eye of `e` (site metres, z the elevation) checked against `site` alone: over the site
+/// (0 ≤ X ≤ width, 0 ≤ Y ≤ height) and at least 0.1 m above its ground there. [`check_eye`]
+/// does this and more; `render` calls it as soon as the site is read, before the species and
+/// the stage are built and the inventory read (trial 46 D11: an eye outside the site was
+/// refused only after 26 s of loading).
+///
+/// Errors: naming `--camera`, the site's extent or the ground's elevation under the eye.
+pub fn check_eye_on_site(e: &EyeCamera, site: &sylva::conditions::SiteConditions) -> anyhow::Result<[f64; 3]> {
+    let (w, h) = site.extent_m();
+    let [x, y, z] = e.eye;
+    let zs = eye_z(e);
+    anyhow::ensure!((0.0..=w).contains(&x) && (0.0..=h).contains(&y), "--camera eye:{x},{y},{zs}: the eye is outside the site; expected X 0–{w:.1} m and Y 0–{h:.1} m (site metres from the terrain's south-west corner, as the inventory's x_m, y_m)");
+    let g = site.elevation_at(x, y) as f64;
+    if e.eye_above_ground {
+        anyhow::ensure!(z >= 0.1, "--camera eye:{x},{y},{zs}: the eye is {z} m above the ground (at {g:.1} m there); expected +H with H at least 0.1 m, e.g. +1.7 for a person's eye");
+    } else {
+        anyhow::ensure!(z >= g + 0.1, "--camera eye:{x},{y},{z}: the eye is under the ground (the ground there is at {g:.1} m); expected Z at least {:.1} m (z is the elevation, as the DEM's heights: e.g. {:.1} for a person's eye 1.7 m above the ground, or +1.7)", g + 0.1, g + 1.7);
+    }
+    Ok([x, y, if e.eye_above_ground { g + z } else { z }])
+}
+
 /// The camera of `e` on `site`, checked: the eye over the site (0 ≤ X ≤ width, 0 ≤ Y ≤ height)
 /// and at least 0.1 m above its ground there ([`sylva::conditions::SiteConditions::elevation_at`]).
 /// A Z given as `+H` is the ground's elevation at that point's X, Y plus H (the target's
@@ -130,16 +160,9 @@ fn parse_eye(s: &str) -> Option<Result<EyeCamera, String>> {
 pub fn check_eye(e: &EyeCamera, stage: &sylva::job::pictures::Stage) -> anyhow::Result<sylva::render::camera::Camera> {
     let site = &stage.site;
     let (w, h) = site.extent_m();
-    let [x, y, z] = e.eye;
-    let zs = if e.eye_above_ground { format!("+{z}") } else { format!("{z}") };
-    anyhow::ensure!((0.0..=w).contains(&x) && (0.0..=h).contains(&y), "--camera eye:{x},{y},{zs}: the eye is outside the site; expected X 0–{w:.1} m and Y 0–{h:.1} m (site metres from the terrain's south-west corner, as the inventory's x_m, y_m)");
-    let g = site.elevation_at(x, y) as f64;
-    if e.eye_above_ground {
-        anyhow::ensure!(z >= 0.1, "--camera eye:{x},{y},{zs}: the eye is {z} m above the ground (at {g:.1} m there); expected +H with H at least 0.1 m, e.g. +1.7 for a person's eye");
-    } else {
-        anyhow::ensure!(z >= g + 0.1, "--camera eye:{x},{y},{z}: the eye is under the ground (the ground there is at {g:.1} m); expected Z at least {:.1} m (z is the elevation, as the DEM's heights: e.g. {:.1} for a person's eye 1.7 m above the ground, or +1.7)", g + 0.1, g + 1.7);
-    }
-    let eye = [x, y, if e.eye_above_ground { g + z } else { z }];
+    let [x, y, _] = e.eye;
+    let zs = eye_z(e);
+    let eye = check_eye_on_site(e, site)?;
     if let Some((i, kind)) = sylva::job::adapted::obstacle_around(&stage.obstacles, site, eye) {
         anyhow::bail!("--camera eye:{x},{y},{zs}: expected a place outside the obstacles (the eye is inside the {kind}, [[obstacle]] {} of the scenario)", i + 1);
     }
@@ -279,10 +302,20 @@ pub struct TimelapseArgs {
 /// Species: the shipped library, overlaid by the run's `species/` folder when it has one, then
 /// by `species_dir`.
 pub fn stage_for(run_dir: &Path, species_dir: Option<&Path>) -> anyhow::Result<Stage> {
+    stage_for_checked(run_dir, species_dir, &|_| Ok(()))
+}
+
+/// [`stage_for`] with `check` called on the run's site as soon as it is read, before the
+/// species files are read and the stage built (a camera checked against the site: trial 46
+/// D11).
+///
+/// Errors: those of [`stage_for`] and of `check`.
+pub fn stage_for_checked(run_dir: &Path, species_dir: Option<&Path>, check: &dyn Fn(&sylva::conditions::SiteConditions) -> anyhow::Result<()>) -> anyhow::Result<Stage> {
     super::check_run_dir(run_dir, "RUN")?;
     let sc_path = run_dir.join("scenario.toml");
     let sc = Scenario::load(&sc_path).with_context(|| format!("{} is not a Sylva run directory", run_dir.display()))?;
     let site = super::simulate::load_site(&sc)?;
+    check(&site)?;
     let run_species = super::simulate::run_species_dir(run_dir);
     let mut dirs: Vec<&Path> = Vec::new();
     if run_species.is_dir() {
@@ -340,8 +373,10 @@ fn render_checked(a: RenderArgs) -> anyhow::Result<()> {
     if let Some(y) = a.year {
         pictures::check_snapshot_year(&a.run_dir, y)?;
     }
-    let mut stage = stage_for(&a.run_dir, a.species_dir.as_deref())?;
-    // a camera of one's own is checked against the site before the snapshot is read
+    // a camera of one's own is checked against the site as soon as that is read, before the
+    // species and the stage (trial 46 D11), and against the stage's obstacles once it is built,
+    // all before the snapshot is read
+    let mut stage = stage_for_checked(&a.run_dir, a.species_dir.as_deref(), &|site| eye.as_ref().map_or(Ok(()), |e| check_eye_on_site(e, site).map(|_| ())))?;
     let eye = eye.map(|e| check_eye(&e, &stage)).transpose()?;
     let year = match a.year {
         Some(y) => y,

@@ -309,6 +309,10 @@ pub struct Simulated {
     pub trees_alive: usize,
     /// Species ids of the pool, in stand-table order.
     pub pool: Vec<String>,
+    /// The pool's species as the maps' legends name them (`identity.common_name`, e.g.
+    /// "Norway maple"), in the order of [`Simulated::pool`]: `summary.md`'s species table
+    /// (trial 46 D14: it wrote the ids, `norway_maple`).
+    pub pool_names: Vec<String>,
     /// Stand table, one row per year.
     pub rows: Vec<StandRow>,
     /// True when stopped early by the stop flag (outputs so far complete; continue with a
@@ -428,7 +432,8 @@ pub fn simulate(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, opts:
     let res = context(res, || format!("simulating {}", sc.name))?;
     let names = crate::sim::step::PHASES.iter().map(|p| p.name).chain(["outputs"]);
     let pool = res.world.site.pool.iter().map(|&s| res.world.site.lib.species[s as usize].id.clone()).collect();
-    let done = Simulated { name: sc.name.clone(), year: res.world.stand.year, trees_alive: res.trees, pool, rows: res.rows, stopped: res.stopped, seconds: res.seconds, phase_seconds: names.zip(phase_sums).collect(), out };
+    let pool_names = res.world.site.pool.iter().map(|&s| res.world.site.lib.species[s as usize].identity.common_name.clone()).collect();
+    let done = Simulated { name: sc.name.clone(), year: res.world.stand.year, trees_alive: res.trees, pool, pool_names, rows: res.rows, stopped: res.stopped, seconds: res.seconds, phase_seconds: names.zip(phase_sums).collect(), out };
     sink(&Event::Simulated(&done));
     Ok(done)
 }
@@ -570,7 +575,7 @@ impl MainJobSummary {
             let mut order: Vec<usize> = (0..s.pool.len()).collect();
             order.sort_by(|&i, &j| r.share_ba[j].total_cmp(&r.share_ba[i]).then(i.cmp(&j)));
             for i in order {
-                let _ = writeln!(shares, "| {} | {:.1} % | {:.1} % |", s.pool[i], 100.0 * r.share_ba[i], 100.0 * r.share_stems[i]);
+                let _ = writeln!(shares, "| {} | {:.1} % | {:.1} % |", s.pool_names.get(i).unwrap_or(&s.pool[i]), 100.0 * r.share_ba[i], 100.0 * r.share_stems[i]);
             }
         }
         (table, shares)

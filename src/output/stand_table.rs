@@ -56,16 +56,25 @@ pub fn stand_table_csv(rows: &[StandRow], species: &[&str]) -> String {
 /// `deaths_volume_m3_ha`, the stem volume (m³/ha, DBH ≥ 7 cm) of the trees that died of
 /// natural causes in the year (all but harvest: [`StandRow::deaths_volume_m3_ha`]; round 42,
 /// trial 41 defect 2), so gross total production is `volume_m3_ha` plus the running sums of
-/// `deaths_volume_m3_ha` and `harvest_volume_m3_ha`.
+/// `deaths_volume_m3_ha` and `harvest_volume_m3_ha`; last `stems`, the site's count of the
+/// trees `stems_ha` counts (≥ 1.3 m: `stems_ha · area_ha`, exact, as `stems_ha` is that count
+/// over the area), so that with the site totals `regen_recruited` and `deaths_*` the tree
+/// balance `stems(t) = stems(t−1) + regen_recruited(t) − Σ deaths_*(t)` closes exactly in a run
+/// without plantings (trial 46 D6: the rounded `stems_ha` missed it by up to 28 trees). With
+/// plantings, planted trees enter without being recruits and count from 1.3 m on, and the
+/// deaths count the planted trees below 1.3 m too: the balance then holds for
+/// `stems + seedlings_ha · area_ha` with the plantings' `planted_ha · area_ha` of
+/// `management_table.csv` added.
 pub fn stand_table_csv_with_area(rows: &[StandRow], species: &[&str], area_ha: f64) -> String {
     let body = stand_table_csv(rows, species);
     let mut s = String::with_capacity(body.len() + 24 * (rows.len() + 1));
     for (k, line) in body.lines().enumerate() {
         s.push_str(line);
         if k == 0 {
-            s.push_str(",area_ha,deaths_volume_m3_ha\n");
+            s.push_str(",area_ha,deaths_volume_m3_ha,stems\n");
         } else {
-            let _ = writeln!(s, ",{area_ha:.4},{:.2}", rows[k - 1].deaths_volume_m3_ha);
+            let r = &rows[k - 1];
+            let _ = writeln!(s, ",{area_ha:.4},{:.2},{}", r.deaths_volume_m3_ha, site_count(r.stems_ha, area_ha));
         }
     }
     s
@@ -145,12 +154,15 @@ pub fn write_stand_table(path: &Path, rows: &[StandRow], species: &[&str], area_
 /// per ha) and the species mix standing in the area: each pool species' share of the basal area
 /// and of the stems (`species` = pool ids in pool order, as the stand table's); last (round 42,
 /// trial 41 defect 1) `capped`, `true` where the entry's `max_removal_share` stopped its
-/// thinning that year short of its target, else `false`. Decimals as the stand table's. Just
-/// the header for rows without management.
+/// thinning that year short of its target, else `false`; after it (round 46, trial 46 D5)
+/// `planted_ha`, the trees the entry planted in the year per ha of its area (0 for the other
+/// kinds and years), and `seedlings_ha`, the trees below 1.3 m standing in the area per ha of
+/// it (planted ones: natural regeneration is in the cohorts; the stand table's `seedlings_ha`
+/// over the area). Decimals as the stand table's. Just the header for rows without management.
 pub fn management_table_csv(rows: &[StandRow], species: &[&str]) -> String {
     let mut s = String::from("year,entry,kind,method,area_ha,stems_ha,basal_area_m2_ha,volume_m3_ha,qmd_cm,top_height_m,harvest_stems_ha,harvest_volume_m3_ha,name,harvest_basal_area_m2_ha,cut_saplings_ha");
     share_columns(&mut s, species);
-    s.push_str(",capped\n");
+    s.push_str(",capped,planted_ha,seedlings_ha\n");
     for r in rows {
         for e in &r.management {
             let _ = write!(
@@ -178,10 +190,17 @@ pub fn management_table_csv(rows: &[StandRow], species: &[&str]) -> String {
             for k in 0..species.len() {
                 let _ = write!(s, ",{:.4}", e.stem_share.get(k).copied().unwrap_or(0.0));
             }
-            let _ = writeln!(s, ",{}", e.capped);
+            let _ = writeln!(s, ",{},{:.1},{:.1}", e.capped, e.planted_ha, e.seedlings_ha);
         }
     }
     s
+}
+
+/// The site's count behind a per-hectare figure `per_ha` of a site of `area_ha` unmasked
+/// hectares: `per_ha` is `n / max(area_ha, 1e-9)` ([`crate::sim::stats::row_of`]), so
+/// `per_ha · area` rounds back to `n` exactly for any count below 2⁵².
+fn site_count(per_ha: f64, area_ha: f64) -> u64 {
+    (per_ha * area_ha.max(1e-9)).round() as u64
 }
 
 /// Appends the species-share columns' names: `,ba_share_<sp>…,stem_share_<sp>…`.

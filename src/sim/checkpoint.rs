@@ -51,8 +51,9 @@ const LAYOUT_BASE: u32 = 14;
 /// shares of its area (a managed checkpoint of base 8 is refused, naming its version). 11
 /// (round 42): [`LAYOUT_BASE`] 10's rows, and each entry's row holds whether its
 /// `max_removal_share` stopped it (`capped`). 13 (round 44): [`LAYOUT_BASE`] 12's rows and cohorts.
-/// 15 (round 45): [`LAYOUT_BASE`] 14's fine seed grids.
-const MANAGED_BASE: u32 = 15;
+/// 15 (round 45): [`LAYOUT_BASE`] 14's fine seed grids. 16 (round 46, trial 46 D5): each
+/// entry's row also holds the trees planted and the trees below 1.3 m per ha of its area.
+const MANAGED_BASE: u32 = 16;
 
 /// zstd level of the checkpoint (1: 36.2 MB for the default run's 64 MB, 0.6 s; 3 saved 0.7 %
 /// more for 1.6 times the time).
@@ -677,6 +678,9 @@ fn encode<S: Sink>(w: &World, rows: &[StandRow], id: &[(String, String)], o: &mu
                 }
                 // layout 11 (round 42)
                 o.u64(e.capped as u64);
+                // layout 16 (round 46)
+                o.f64(e.planted_ha);
+                o.f64(e.seedlings_ha);
             }
         }
     }
@@ -889,6 +893,7 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
                     1 => true,
                     _ => return Err(corrupt(path, r.pos())),
                 };
+                let (planted_ha, seedlings_ha) = (r.f64()?, r.f64()?);
                 row.management.push(super::stats::EntryRow {
                     entry,
                     kind,
@@ -907,6 +912,8 @@ pub fn restore(w: &mut World, bytes: &[u8], path: &Path) -> Result<Vec<StandRow>
                     ba_share,
                     stem_share,
                     capped,
+                    planted_ha,
+                    seedlings_ha,
                 });
             }
         }

@@ -185,6 +185,16 @@ pub struct EntryRow {
     /// defect 1).
     #[serde(default)]
     pub capped: bool,
+    /// Trees a planting entry planted in the year per ha of its area (0 in other years and for
+    /// the other kinds; trial 46 D5: a planting could not be checked against its spacing, a
+    /// spacing of `s` m planting at most `10 000 / s²` per ha).
+    #[serde(default)]
+    pub planted_ha: f64,
+    /// Trees below 1.3 m (planted: natural regeneration is in the cohorts) standing in the
+    /// area at the year's end per ha of the area: the stand table's `seedlings_ha` over the
+    /// area (trial 46 D5).
+    #[serde(default)]
+    pub seedlings_ha: f64,
 }
 
 pub use super::world::EntryHarvest;
@@ -222,6 +232,8 @@ pub fn entry_rows(site: &Site, sums: &[RowSums], h100: &[f64], harvest: &[EntryH
                 ba_share: s.ba_sp.iter().map(|&v| if ba > 0.0 { unfixed(v) / ba } else { 0.0 }).collect(),
                 stem_share: s.stems_sp.iter().map(|&v| if n > 0 { v as f64 / n as f64 } else { 0.0 }).collect(),
                 capped: h.capped,
+                planted_ha: h.planted as f64 / a,
+                seedlings_ha: (s.trees - s.stems) as f64 / a,
             }
         })
         .collect()

@@ -94,7 +94,7 @@ fn run_management(w: &mut World, report: &mut YearReport) {
         return;
     }
     let d0 = w.scratch.dead.len();
-    let (_, notes, removed, capped) = management::run_by_entry(management::Manage { seed: w.site.seed, year: w.stand.year, site: &w.site, trees: &mut w.stand.trees, dead: &mut w.scratch.dead, deaths_total: &mut w.tallies.deaths_total });
+    let (_, notes, removed, capped, planted) = management::run_by_entry(management::Manage { seed: w.site.seed, year: w.stand.year, site: &w.site, trees: &mut w.stand.trees, dead: &mut w.scratch.dead, deaths_total: &mut w.tallies.deaths_total });
     report.notes.extend(notes);
     // a clearing kept open loses its sapling cohorts above its height too (a tiled run's rank
     // its own cells' cohorts)
@@ -106,12 +106,14 @@ fn run_management(w: &mut World, report: &mut YearReport) {
         .iter()
         .zip(saplings)
         .zip(capped)
-        .map(|((&n, saplings), capped)| {
+        .zip(planted.iter())
+        .map(|(((&n, saplings), capped), planted)| {
             let s = entry_harvest(&w.site, &w.scratch.dead[at..at + n]);
             at += n;
-            super::stats::EntryHarvest { saplings, capped, ..s }
+            super::stats::EntryHarvest { saplings, capped, planted: planted.len() as u64, ..s }
         })
         .collect();
+    w.scratch.planted_at = planted;
 }
 
 fn run_light(w: &mut World, _: &mut YearReport) {

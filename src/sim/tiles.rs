@@ -1183,12 +1183,15 @@ impl Tile {
             let ne = es.len();
             // the saplings a clearing kept open cut are each rank's own cohorts': summed with
             // the areas' sums (the removed trees every rank saw whole)
+            // and so are the trees a planting planted (each rank plants the lattice points on its
+            // own cells, `phases::management::fill_gaps`)
             let saplings = (0..ne).map(|e| w.scratch.entry_harvest.get(e).map_or(0, |h| h.saplings));
-            let got = t.all_sum(es.iter().flat_map(|s| s.words()).chain(saplings).collect())?;
-            if got.len() != nw * ne + ne {
+            let planted = (0..ne).map(|e| w.scratch.entry_harvest.get(e).map_or(0, |h| h.planted));
+            let got = t.all_sum(es.iter().flat_map(|s| s.words()).chain(saplings).chain(planted).collect())?;
+            if got.len() != nw * ne + 2 * ne {
                 return Err(Error::Exchange { peer: 0, reason: "management-table sums cut short".into() });
             }
-            let harvest: Vec<super::stats::EntryHarvest> = (0..ne).map(|e| super::stats::EntryHarvest { saplings: got[nw * ne + e], ..w.scratch.entry_harvest.get(e).copied().unwrap_or_default() }).collect();
+            let harvest: Vec<super::stats::EntryHarvest> = (0..ne).map(|e| super::stats::EntryHarvest { saplings: got[nw * ne + e], planted: got[nw * ne + ne + e], ..w.scratch.entry_harvest.get(e).copied().unwrap_or_default() }).collect();
             let es: Vec<super::stats::RowSums> = got[..nw * ne].chunks(nw).map(|c| super::stats::RowSums::from_words(c, np)).collect();
             let stems: Vec<u64> = es.iter().map(|s| s.stems).collect();
             let h = super::stats::entry_top_heights(&w.site, tr, &stems, &mut |v| t.all_sum(v))?;
@@ -1416,6 +1419,11 @@ impl Tile {
         let (layout, me) = (&self.layout, self.me);
         let tr = &w.stand.trees;
         let keep: Vec<bool> = (0..tr.len()).map(|i| layout.owner_of(tr.x[i], tr.y[i]) == me).collect();
+        // the trees each planting planted on this rank's own cells (it planted its halo's too),
+        // summed over the ranks by the stats phase
+        for (h, at) in w.scratch.entry_harvest.iter_mut().zip(&w.scratch.planted_at) {
+            h.planted = at.iter().filter(|p| layout.owner_of(p[0], p[1]) == me).count() as u64;
+        }
         w.stand.trees.retain(&keep);
         let mut k = 0;
         let before = w.scratch.dead.len();
@@ -1805,7 +1813,7 @@ fn clone_for_tile(global: &World, layout: &Layout, me: usize) -> Result<World> {
         seeds.push(super::world::SeedGrid { cell_m: sg.cell_m, block: sg.block, cols: sg.cols, rows: sg.rows, held: r, data });
     }
     let stand = super::world::Stand { trees: global.stand.trees.clone(), year: global.stand.year, cohorts: global.stand.cohorts.clone(), seeds };
-    let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), canopy_top: per_light(&global.scratch.canopy_top), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone(), entry_harvest: global.scratch.entry_harvest.clone() };
+    let scratch = super::world::Scratch { grid: global.scratch.grid.clone(), ground_light: per_light(&global.scratch.ground_light), canopy_top: per_light(&global.scratch.canopy_top), dead: global.scratch.dead.clone(), regen_year: global.scratch.regen_year.clone(), entry_harvest: global.scratch.entry_harvest.clone(), planted_at: Vec::new() };
     Ok(World { site, stand, scratch, tallies: global.tallies.clone() })
 }
 

@@ -219,6 +219,10 @@ pub struct Scratch {
     /// harvest columns. In a tiled run the saplings are the tile's own cohorts' (summed over
     /// the ranks by the stats phase, `sim::tiles`).
     pub entry_harvest: Vec<EntryHarvest>,
+    /// Positions (m) of the trees each `[[management]]` entry planted this year (entry order;
+    /// set by the management phase): a tiled run's rank counts those on its own cells
+    /// (`sim::tiles`; trial 46 D5).
+    pub planted_at: Vec<Vec<[f32; 2]>>,
 }
 
 /// What one `[[management]]` entry removed in a year ([`Scratch::entry_harvest`]):
@@ -236,6 +240,8 @@ pub struct EntryHarvest {
     pub saplings: u64,
     /// The entry's `max_removal_share` stopped its thinning short of its target.
     pub capped: bool,
+    /// Trees a planting entry planted in the year (0 for the other kinds; trial 46 D5).
+    pub planted: u64,
 }
 
 /// Running totals since the start of the run (checkpointed).
@@ -618,7 +624,7 @@ impl World {
                 drought_base: std::sync::OnceLock::new(),
             },
             stand: Stand { trees: TreeStore::default(), year: 0, cohorts: Cohorts::default(), seeds },
-            scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], canopy_top: Vec::new(), dead: Vec::new(), regen_year: RegenYear::default(), entry_harvest: Vec::new() },
+            scratch: Scratch { grid: SpatialGrid::default(), ground_light: vec![1.0; light.len()], canopy_top: Vec::new(), dead: Vec::new(), regen_year: RegenYear::default(), entry_harvest: Vec::new(), planted_at: Vec::new() },
             tallies: Tallies { deaths_total: [0; super::trees::N_CAUSES], regen_ledger: RegenLedger::new(np) },
         };
         let span = super::light_grid::Span::new(None, &w.site.light);

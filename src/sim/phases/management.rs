@@ -43,7 +43,7 @@ pub struct Manage<'a> {
 /// or no stems of the growing stock (≥ 7 cm DBH) or of its main stand in its area; the run writes each to its log
 /// (standard error) once.
 pub fn run(m: Manage<'_>) -> (usize, Vec<String>) {
-    let (n, notes, _, _) = run_by_entry(m);
+    let (n, notes, _, _, _) = run_by_entry(m);
     (n, notes)
 }
 
@@ -51,8 +51,10 @@ pub fn run(m: Manage<'_>) -> (usize, Vec<String>) {
 /// entries' harvested trees follow each other in `dead` in that order, after those recorded
 /// before the phase): the management table's harvest per entry; and per entry whether its
 /// `max_removal_share` stopped its thinning short of its target (the management table's
-/// `capped`; a note says so too).
-pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>, Vec<bool>) {
+/// `capped`; a note says so too); and per entry the positions (m) of the trees it planted this
+/// year (a tiled run's rank plants on the cells it holds, its halo's included, and counts those
+/// it keeps; the ranks' counts are summed for the management table's `planted_ha`, trial 46 D5).
+pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>, Vec<bool>, Vec<Vec<[f32; 2]>>) {
     let y = m.year + 1;
     let mut planted: Vec<(u32, NewTree)> = Vec::new();
     // the lattice points kept by this year's plantings so far ([`fill_gaps`])
@@ -60,6 +62,7 @@ pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>, Vec<bool>
     let mut notes = Vec::new();
     let mut removed = vec![0usize; m.site.management.len()];
     let mut capped = vec![false; m.site.management.len()];
+    let mut planted_by = vec![Vec::new(); m.site.management.len()];
     for (e, op) in m.site.management.iter().enumerate() {
         let Some(k) = op.spec.due(y) else { continue };
         let t = &*m.trees;
@@ -90,6 +93,7 @@ pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>, Vec<bool>
                     notes.push(format!("year {y}: management[{e}] (planting) fills the gaps of its area: {} of its {lattice} lattice points planted, {skipped} left out for standing within {} m (half its spacing) of a tree at least as tall or of this year's earlier plantings", lattice - skipped, 0.5 * spacing_m));
                 }
                 year_points.extend(kept);
+                planted_by[e] = trees.iter().map(|t| [t.x, t.y]).collect();
                 planted.extend(trees.into_iter().map(|nt| (m.site.light.cell_of(nt.x, nt.y) as u32, nt)));
                 continue;
             }
@@ -114,7 +118,7 @@ pub fn run_by_entry(m: Manage<'_>) -> (usize, Vec<String>, Vec<usize>, Vec<bool>
     if n > 0 {
         insert_planted(m.trees, planted, m.year);
     }
-    (n, notes, removed, capped)
+    (n, notes, removed, capped, planted_by)
 }
 
 /// A lattice point of a planting: `(x, y, height)` (m, m, m; the position rounded to the f32
