@@ -544,8 +544,11 @@ fn oblique_billboard_crowns_have_a_sunlit_and_a_shaded_side() {
     // the tree pixels in their own shade against 0.4 %; the crowns still shade their far side
     // themselves, at twice the quad's contrast
     // round 46: the profiles' rounder crowns hide each other's shaded sides in this stand (see
-    // above): 0.050 against 0.008 with the sun on the quad; bound 0.045 and twice the quad's
-    assert!(c1 > 0.045 && c1 > 2.0 * c0, "sun side − far side of the crowns: {c0:.3} before, {c1:.3} now");
+    // above): 0.050 against 0.008 with the sun on the quad; bound 0.045 and twice the quad's.
+    // Merged with r46c's forked broadleaf crowns and r46v's one-canopy colours: 0.036 against
+    // 0.004 with the sun on the quad (9 times its contrast), 32 % of the tree pixels in shadow;
+    // bound 0.03 and twice the quad's
+    assert!(c1 > 0.03 && c1 > 2.0 * c0, "sun side − far side of the crowns: {c0:.3} before, {c1:.3} now");
     assert!(s1 > s0 + 0.05, "share of tree pixels in their own shade: {s0:.3} before, {s1:.3} now");
     assert!(sd1 > sd0, "canopy luminance sd {sd0:.1} before, {sd1:.1} now");
     // a fine shadow map (texels under a tenth of the crown radius): the quad's own shadow is a
