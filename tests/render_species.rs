@@ -312,11 +312,14 @@ fn top_down_still_shows_the_patches_of_a_mixed_stand() {
         eprintln!("mixed stand: reference colours {refs:.0?}; confusion (row = truth) {confusion:?}; {right}/{judged} = {:.1} %", 100.0 * frac);
         assert!(frac >= 0.5, "the nearest species colour names the leading species of {:.1} % of the 40 m cells of a mixed stand (< 50 %); confusion {confusion:?}", 100.0 * frac);
         // and the patches are apart to the eye: a stand leaning to one species differs from one
-        // leaning to any other by more than 4 sRGB levels (the summer colours before issue 19
-        // gave 2 between beech and birch)
+        // leaning to any other by more than 2.5 sRGB levels (the summer colours before issue 19
+        // gave 2 between beech and birch; issue 19's colours more than 4). Round 46 makes the
+        // summer colours one canopy (trial 45's "painted by numbers", tests/species_colours.rs):
+        // beech against sessile oak 3.1 levels on lavapipe, the smallest pair; the nearest
+        // colour still names the leading species of most cells (above)
         for a in 0..SPECIES.len() {
             for b in a + 1..SPECIES.len() {
-                assert!(dist(refs[a], refs[b]) > 4.0, "{} and {} patches read alike: {:?} vs {:?}", DEFAULT_RUN_SPECIES[a].0, DEFAULT_RUN_SPECIES[b].0, refs[a], refs[b]);
+                assert!(dist(refs[a], refs[b]) > 2.5, "{} and {} patches read alike: {:?} vs {:?}", DEFAULT_RUN_SPECIES[a].0, DEFAULT_RUN_SPECIES[b].0, refs[a], refs[b]);
             }
         }
     });
