@@ -283,8 +283,9 @@ pub struct ExportReport {
     /// Most bytes of tree meshes (vertex and index data, [`TriMesh::byte_size`], of the
     /// levels written) held in memory at once: a stand export meshes its trees a batch of
     /// [`MESH_BATCH_PER_THREAD`] a thread at a time and writes each batch's models to the
-    /// file's scratch buffer before the next (round 38: every tree's meshes were held until
-    /// the file was written, about twice the file in memory). 0 for [`export_instances`].
+    /// file's scratch buffer while the next is meshed, so at most two batches are held (round
+    /// 38: every tree's meshes were held until the file was written, about twice the file in
+    /// memory). 0 for [`export_instances`].
     pub held_mesh_bytes_max: usize,
 }
 
@@ -335,6 +336,31 @@ pub struct ExportStats {
     pub analysis_s: f64,
     /// Wall time (s) of adapting the neighbourhoods left after the last analysis (section 5).
     pub adaptation_s: f64,
+    /// Wall time (s) of reading the snapshot's rows around the area and making the stand's
+    /// trees, before the adaptation (a stand export's; 0 for [`export_instances`]).
+    pub read_s: f64,
+    /// Wall time (s) of meshing the adapted trees (leaf cards, sprigs, bark, the levels of
+    /// detail; the threads' batches, [`MESH_BATCH_PER_THREAD`]) while no batch was being
+    /// written: meshing that overlapped the writing of the batch before is in
+    /// [`ExportStats::write_s`] (a stand export's; 0 for [`export_instances`]).
+    pub mesh_s: f64,
+    /// Wall time (s) of encoding the trees' models into the glb's buffer (quantisation,
+    /// buffer views, its scratch file) and making their nodes, the meshing of the next batch
+    /// running meanwhile (a stand export's; 0 for [`export_instances`]).
+    pub write_s: f64,
+    /// Wall time (s) of measuring the leaf covers ([`leaf_covers`]), baking the drawn species'
+    /// textures (leaf, cluster, crown, impostor, bark: [`stand_look`]) and the terrain's litter,
+    /// which run beside the adaptation on the threads it leaves idle (so this overlaps
+    /// [`ExportStats::adapt_s`]), and of the saplings' models (a stand export's; 0 for
+    /// [`export_instances`]).
+    pub texture_s: f64,
+    /// Wall time (s) of finishing the file: the looks' materials and PNG textures, the
+    /// terrain and obstacles, the JSON, and copying the scratch buffer into the file
+    /// (a stand export's; 0 for [`export_instances`]).
+    pub finish_s: f64,
+    /// Wall time (s) of the whole export, reading the snapshot to renaming the file (a stand
+    /// export's; 0 for [`export_instances`]).
+    pub total_s: f64,
     /// Distinct analyses.
     pub analyses: usize,
     /// Skeleton nodes of all the adapted trees together.
@@ -428,6 +454,7 @@ fn in_area(x: f64, y: f64, [x0, y0, x1, y1]: [f64; 4], w: f64, h: f64) -> bool {
 /// (which writes the buffer through a scratch file beside `out`,
 /// [`crate::output::gltf::StandGlbWriter`]).
 pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions, out: &Path) -> Result<ExportReport> {
+    let t_start = std::time::Instant::now();
     let (sc, site, year, [x0, y0, x1, y1]) = open_export(run_dir, o.year, &o.levels, Some(o.area))?;
     let opts = StandOptions { latitude_deg: site.geo.latitude_deg as f32, obstacles: solids(&sc.obstacles, &site), ..StandOptions::default() };
     // only the rows that can take part: the area and every neighbour a target's cell may group
@@ -472,18 +499,42 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             format!("at most {:.0} MB ({}): a smaller --area, --lod 0 (the full level only), --max-strands 48 (a lighter skeleton), or --instances (every tree as an instance of its species and age class); nothing was grown or written", mb(o.max_bytes), o.max_bytes_source),
         ));
     }
-    let t0 = std::time::Instant::now();
-    let mut cache = crate::structure::stand::SkeletonCache::new(sc.seed, o.max_strands);
-    let st = adapt_stand(&trees, &targets, library, &mut cache, &opts)?;
-    let adapt_s = t0.elapsed().as_secs_f64();
-
-    // terrain patch and origin
-    let (terrain, z0) = terrain_patch(&site, o.area);
-    let origin = Vec3::new(((x0 + x1) * 0.5) as f32, ((y0 + y1) * 0.5) as f32, z0);
-
-    // the share of a leaf card and of a leaf-cluster card their textures cover, per species
-    let cover = super::adapted::LeafCover::of(library);
+    // the regeneration layer's saplings in the area (drawn after the trees)
+    let saplings = area_saplings(run_dir, year, library, &site, o.season, o.area)?;
     let full = o.max_strands == crate::structure::stand::FULL_STRANDS;
+    let read_s = t_start.elapsed().as_secs_f64();
+    // the species drawn (trees and saplings), each once, in index order
+    let mut drawn: Vec<usize> = targets.iter().map(|&k| trees[k].species as usize).chain(saplings.iter().map(|s| s.species as usize)).filter(|&sp| sp < library.species.len()).collect();
+    drawn.sort_unstable();
+    drawn.dedup();
+    // the adaptation, and meanwhile, on the threads it leaves idle, what does not depend on
+    // it: the leaf covers, the drawn species' looks (textures) and the terrain patch with its
+    // litter texture (round 47: these took a third of the export's CPU time on one thread
+    // after the adaptation)
+    let mut cache = crate::structure::stand::SkeletonCache::new(sc.seed, o.max_strands);
+    let (adapted, (cover, mut baked, (terrain, z0), bake_s)) = rayon::join(
+        || {
+            let t0 = std::time::Instant::now();
+            adapt_stand(&trees, &targets, library, &mut cache, &opts).map(|st| (st, t0.elapsed().as_secs_f64()))
+        },
+        || {
+            let tb = std::time::Instant::now();
+            let (cover, (looks, terrain)) = rayon::join(
+                || leaf_covers(library),
+                || rayon::join(|| drawn.par_iter().map(|&sp| (sp, stand_look(&library.species[sp], o.season, full, o.texture_px))).collect::<Vec<_>>(), || {
+                    let (mesh, z0) = terrain_patch(&site, o.area);
+                    (terrain_static(mesh), z0)
+                }),
+            );
+            let mut baked: Vec<Option<Look>> = vec![None; library.species.len()];
+            for (sp, look) in looks {
+                baked[sp] = Some(look);
+            }
+            (cover, baked, terrain, tb.elapsed().as_secs_f64())
+        },
+    );
+    let (st, adapt_s) = adapted?;
+    let origin = Vec3::new(((x0 + x1) * 0.5) as f32, ((y0 + y1) * 0.5) as f32, z0);
     // each tree in its own frame, with its topology key and canonical shape
     // per tree also (skeleton nodes, leaf cards of the full level, triangles of the levels written)
     let mesh_tree = |a: &crate::structure::stand::AdaptedTree| {
@@ -572,15 +623,12 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
     let (mut n_trees, mut n_models, mut held_max) = (0usize, 0usize, 0usize);
     let (mut tall_nodes, mut leaf_cards, mut triangles, mut sprig_cards_n) = (Vec::new(), 0usize, 0usize, 0usize);
     let mut level_triangles = [0usize; LOD_LEVELS];
-    let batch = rayon::current_num_threads().max(1) * MESH_BATCH_PER_THREAD;
-    let mut adapted = st.trees.into_iter();
-    loop {
-        let chunk: Vec<_> = adapted.by_ref().take(batch).collect();
-        if chunk.is_empty() {
-            break;
-        }
-        let meshed: Vec<_> = chunk.par_iter().map(mesh_tree).collect();
-        held_max = held_max.max(meshed.iter().flatten().map(|m| model_bytes(&m.2)).sum());
+    let (mut mesh_s, mut write_s, mut texture_s) = (0.0f64, 0.0f64, bake_s);
+    type Meshed = Option<(u64, Vec<f32>, StandModel, [f32; 3], Vec3, usize, [usize; 4], [usize; LOD_LEVELS])>;
+    // one batch's models and nodes into the file, in the trees' order (the file does not
+    // depend on the thread count); returns the seconds spent baking textures
+    let mut write_batch = |chunk: Vec<crate::structure::stand::AdaptedTree>, meshed: Vec<Meshed>| -> Result<f64> {
+        let mut bake_s = 0.0;
         for (m, a) in meshed.into_iter().zip(&chunk) {
             let Some((key, canon, mut model, size, pos, sp, [n_nodes, n_leaves, n_tris, n_sprigs], per_level)) = m else { continue };
             sprig_cards_n += n_sprigs;
@@ -590,7 +638,16 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             }
             leaf_cards += n_leaves;
             triangles += n_tris;
-            let look = *looks_of.entry(sp).or_insert_with(|| w.look(stand_look(&library.species[sp], o.season, full, o.texture_px)));
+            let look = match looks_of.get(&sp) {
+                Some(&l) => l,
+                None => {
+                    let tb = std::time::Instant::now();
+                    let l = w.look(baked[sp].take().unwrap_or_else(|| stand_look(&library.species[sp], o.season, full, o.texture_px)));
+                    bake_s += tb.elapsed().as_secs_f64();
+                    looks_of.insert(sp, l);
+                    l
+                }
+            };
             let t = &trees[a.index];
             let name = format!("{}_{}", library.species[sp].id, t.id);
             let same = model_of.get(&key).and_then(|c| c.iter().find(|(_, _, c)| c.iter().zip(&canon).all(|(a, b)| (a - b).abs() <= SAME_SHAPE)));
@@ -607,19 +664,55 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             w.tree(&StandNode { name, model: mi, translation: pos.to_array(), scale })?;
             n_trees += 1;
         }
+        Ok(bake_s)
+    };
+    // each batch is meshed by the threads while the batch before it is written (round 47:
+    // the threads waited for the writing, and a batch's largest tree held one thread while
+    // the other idled)
+    let batch = rayon::current_num_threads().max(1) * MESH_BATCH_PER_THREAD;
+    let mut adapted = st.trees.into_iter();
+    let mut pending: Option<(Vec<crate::structure::stand::AdaptedTree>, Vec<Meshed>)> = None;
+    loop {
+        let chunk: Vec<_> = adapted.by_ref().take(batch).collect();
+        if chunk.is_empty() && pending.is_none() {
+            break;
+        }
+        let pending_bytes: usize = pending.as_ref().map_or(0, |(_, m)| m.iter().flatten().map(|m| model_bytes(&m.2)).sum());
+        let tj = std::time::Instant::now();
+        let (written, meshed) = rayon::join(
+            || -> Result<(f64, f64)> {
+                let tw = std::time::Instant::now();
+                let bake = match pending.take() {
+                    Some((c, m)) => write_batch(c, m)?,
+                    None => 0.0,
+                };
+                Ok((tw.elapsed().as_secs_f64(), bake))
+            },
+            || chunk.par_iter().map(mesh_tree).collect::<Vec<Meshed>>(),
+        );
+        let (tw, bake) = written?;
+        let tj = tj.elapsed().as_secs_f64();
+        texture_s += bake;
+        write_s += tw - bake;
+        mesh_s += (tj - tw).max(0.0);
+        held_max = held_max.max(pending_bytes + meshed.iter().flatten().map(|m| model_bytes(&m.2)).sum::<usize>());
+        if !chunk.is_empty() {
+            pending = Some((chunk, meshed));
+        }
     }
 
     // the regeneration layer's saplings in the area (as the stills draw them), each an
     // instance of its species' youngest age-class model, after the trees
+    let t_sap = std::time::Instant::now();
     let mut n_saplings = 0usize;
     let mut sapling_models: HashMap<usize, Option<(usize, f32, [usize; LOD_LEVELS])>> = HashMap::new();
-    for s in area_saplings(run_dir, year, library, &site, o.season, o.area)? {
+    for s in saplings {
         let sp = s.species as usize;
         if !sapling_models.contains_key(&sp) {
             let made = match class_model(library, sp, 0) {
                 Some((mut m, r0, _, tris, _)) => {
                     m.name = format!("{}_sapling", library.species[sp].id);
-                    m.look = *looks_of.entry(sp).or_insert_with(|| w.look(stand_look(&library.species[sp], o.season, full, o.texture_px)));
+                    m.look = *looks_of.entry(sp).or_insert_with(|| w.look(baked[sp].take().unwrap_or_else(|| stand_look(&library.species[sp], o.season, full, o.texture_px))));
                     let mi = w.model(&m)?;
                     n_models += 1;
                     Some((mi, r0, tris))
@@ -638,8 +731,11 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         triangles += tris;
     }
 
+    texture_s += t_sap.elapsed().as_secs_f64();
+
     // obstacles reaching into the area
-    let mut statics = vec![terrain_static(terrain)];
+    let t_finish = std::time::Instant::now();
+    let mut statics = vec![terrain];
     let terrain_triangles = statics[0].mesh.triangle_count();
     let n_obstacles = push_obstacles(&mut statics, &sc, &site, o.area, origin);
     let geo = crate::output::georef::PointGeoRef::of_site(&site);
@@ -653,7 +749,13 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         }
     });
     triangles += statics.iter().map(|m| m.mesh.triangle_count()).sum::<usize>();
-    let stats = ExportStats {
+    let mut stats = ExportStats {
+        read_s,
+        mesh_s,
+        write_s,
+        texture_s,
+        finish_s: 0.0,
+        total_s: 0.0,
         trees: n_trees,
         saplings: n_saplings,
         trees_15m: tall_nodes.len(),
@@ -674,8 +776,27 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
         level_triangles: level_triangles.to_vec(),
     };
     let counts = w.finish(&statics, &format!("stand_{year}"), &extras)?;
+    stats.finish_s = t_finish.elapsed().as_secs_f64();
+    stats.total_s = t_start.elapsed().as_secs_f64();
     let bytes = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
     Ok(ExportReport { out: out.to_path_buf(), year, trees: n_trees, saplings: n_saplings, models: n_models, obstacles: n_obstacles, terrain_triangles, counts, adapt_s, bytes, stats, held_mesh_bytes_max: held_max })
+}
+
+/// The leaf covers of every species of `library` ([`super::adapted::LeafCover::of`], the same
+/// values): each leaf shape's measured once, the shapes in parallel (round 47: a stand export
+/// spent a fifth of its CPU time measuring them one after another).
+pub fn leaf_covers(library: &SpeciesLibrary) -> super::adapted::LeafCover {
+    let shape = |sp: &crate::species::Species| crate::structure::texture::LeafShape::of_species(sp);
+    let mut first: Vec<&crate::species::Species> = Vec::new();
+    for sp in &library.species {
+        if !first.iter().any(|f| shape(f) == shape(sp)) {
+            first.push(sp);
+        }
+    }
+    first.par_iter().for_each(|sp| {
+        super::adapted::LeafCover::of_species(sp);
+    });
+    super::adapted::LeafCover::of(library)
 }
 
 /// The look of species `sp` in a stand export: [`Look::for_species_sized`] in `season` with

@@ -43,6 +43,7 @@ use crate::species::schema::LEAF_TEXTURES;
 use crate::species::{LeafType, Season, Species};
 use glam::Vec2;
 use image::{Rgba, RgbaImage};
+use rayon::prelude::*;
 
 /// Default leaf texture width (texels; across the card).
 pub const LEAF_TEXTURE_W: u32 = 128;
@@ -376,8 +377,11 @@ pub fn leaf_texture_sized(shape: LeafShape, width: u32, height: u32) -> RgbaImag
     let o = outline(shape);
     const N: u32 = 4;
     let mut img = RgbaImage::new(w, h);
-    for py in 0..h {
-        for px in 0..w {
+    // rows in parallel (each texel depends on its position alone: the same image whatever the
+    // thread count; round 47: a stand export spent a fifth of its CPU time here, on one thread)
+    let buf: &mut [u8] = &mut img;
+    buf.par_chunks_mut(4 * w as usize).enumerate().for_each(|(py, row)| {
+        for (px, texel) in row.chunks_exact_mut(4).enumerate() {
             let (mut cover, mut grey, mut hits) = (0u32, 0.0f32, 0u32);
             for sy in 0..N {
                 for sx in 0..N {
@@ -392,9 +396,9 @@ pub fn leaf_texture_sized(shape: LeafShape, width: u32, height: u32) -> RgbaImag
             }
             let g = if hits > 0 { grey / hits as f32 } else { 0.8 };
             let a = cover as f32 / (N * N) as f32;
-            img.put_pixel(px, py, Rgba([q(g), q(g), q(g), q(a)]));
+            texel.copy_from_slice(&[q(g), q(g), q(g), q(a)]);
         }
-    }
+    });
     img
 }
 
