@@ -48,8 +48,9 @@ pub struct Args {
     /// radius and crown base, of the exported trees and of their neighbours within the halo),
     /// nodes_total and nodes_before_adaptation (all exported trees), pruned_light and
     /// pruned_collision (nodes the adaptation removed), sprig_cards (leaf-cluster cards of
-    /// `--full-detail`, or of the instanced models' full level, each tree counted)). Its folder
-    /// is made when missing.
+    /// `--full-detail`, or of the instanced models' full level, each tree counted); a stand
+    /// export's wall times (s) of its phases: read_s, mesh_s, write_s, texture_s (beside the
+    /// adaptation), finish_s and total_s). Its folder is made when missing.
     #[arg(long)]
     pub stats: Option<PathBuf>,
     /// A lighter stand export: the open-grown skeleton of each tree capped at this many EcoMod
