@@ -14,7 +14,9 @@
 //! = `analysis_s` + `adaptation_s`, `mesh_s`, `write_s`, `texture_s`, `finish_s`, `total_s`),
 //! the trees, models and bytes written, and an FNV-1a fingerprint of the file's bytes: the same
 //! for any `RAYON_NUM_THREADS` (the export is deterministic for a given seed), so a speed-up
-//! can be checked to write the same file byte for byte. `SYLVA_EXPORT_OUT=FILE` keeps the file
+//! can be checked to write the same file byte for byte (on `SYLVA_EXPORT_RUN`: the fixture lies
+//! in a new temporary folder each time, whose path the scene's `extras` record, so its
+//! fingerprint changes from run to run). `SYLVA_EXPORT_OUT=FILE` keeps the file
 //! (default: a temporary folder, removed).
 use std::path::{Path, PathBuf};
 
