@@ -350,12 +350,20 @@ fn a_stopped_runs_pictures_are_finished_without_simulating_again() {
     let csv = std::fs::read_to_string(out.join("timings.csv")).unwrap();
     assert!(csv.contains("finishing the pictures: the final checkpoint read") && csv.contains("\"simulation ("), "{csv}");
 
-    // another seed is another run: simulated afresh
+    // stopped again; then another seed is another run: simulated afresh, the state removed
+    stop.store(false, Ordering::SeqCst);
+    let r = main_job::main_job(&sc, &lib, &opts, &mut |e| {
+        if matches!(e, Event::Still) {
+            stop.store(true, Ordering::SeqCst);
+        }
+    });
+    assert!(matches!(r, Err(sylva::job::JobError::Stopped(_))) && out.join(".sylva_pictures.json").is_file());
     let mut sc2 = sc.clone();
     sc2.seed += 1;
     let mut events: Vec<String> = Vec::new();
     main_job::main_job(&sc2, &lib, &options(&out), &mut |e| events.push(name_of(e))).unwrap();
     assert!(events.iter().any(|e| e == "Simulating") && !events.iter().any(|e| e == "Resuming"), "{events:?}");
+    assert!(!out.join(".sylva_pictures.json").exists() && !out.join(".sylva_keyframes.bin").exists());
 }
 
 /// `timings.csv` (round 47): where the main job's time went, a row per phase with wall and
@@ -389,4 +397,32 @@ fn the_main_job_says_where_its_time_went() {
     let total = rows.last().unwrap();
     assert!((total.1 - parts).abs() < 0.05 && total.1 <= summary.total_s + 0.05, "{total:?} vs {parts} and {}", summary.total_s);
     assert_eq!(summary.timings.len() + 1, rows.len());
+}
+
+/// Round 47: the pictures' key frames hold a snapshot of more than 65,535 trees, each with its
+/// own tint (round 46's `tree_tint`), bit for bit. On main's head (`457e8c7`) the tinted colour
+/// went into the snapshot's 16-bit palette, and the default `sylva run` ended after its
+/// simulation with "more than 65535 distinct foliages in year 50", drawing no picture.
+#[test]
+fn key_frames_keep_a_snapshot_of_many_tinted_trees() {
+    use sylva::job::keyframes::KeyFrames;
+    use sylva::render::scene::TreeInstance;
+    let dir = tempfile::tempdir().unwrap();
+    let inst: Vec<TreeInstance> = (0..70_000u64)
+        .map(|id| {
+            let k = sylva::job::scene::tree_tint(id);
+            let mut t = TreeInstance::new(id, [id as f32 * 0.5, 3.0, 800.0], 20.0, 3.0, (id % 4) as u32, [0.1 * k[0], 0.2 * k[1], 0.05 * k[2]]);
+            t.leaf_amount = 0.9;
+            t
+        })
+        .collect();
+    let mut tints: Vec<[u32; 3]> = inst.iter().map(|t| t.leaf_color.map(f32::to_bits)).collect();
+    tints.sort_unstable();
+    tints.dedup();
+    assert!(tints.len() > 65_535, "{} distinct foliage colours", tints.len());
+    let mut k = KeyFrames::new(dir.path()).unwrap();
+    k.push(50, &inst).unwrap();
+    k.push(55, &inst[..10]).unwrap();
+    assert_eq!(k.get_year(50).unwrap(), inst);
+    assert_eq!(k.get_year(55).unwrap(), inst[..10].to_vec());
 }

@@ -5,8 +5,12 @@
 //! (issue 34); now one or two are in memory at a time.
 //!
 //! Records are lossless: every field of [`TreeInstance`] comes back bit for bit. The fields
-//! that repeat across trees (species, foliage, opacity, sky fade) are kept once in a
-//! per-snapshot palette, so a record is 38 bytes instead of 64.
+//! that repeat across trees (species, leaf amount, opacity, sky fade) are kept once in a
+//! per-snapshot palette, so a record is 50 bytes instead of 64. The leaf colour is the
+//! record's own: round 46 gave every tree its own tint ([`crate::job::scene::tree_tint`]), and
+//! with the colour in the palette the default run's year-50 snapshot (about 100,000 trees)
+//! overflowed its 65,535 entries, so `sylva run` ended after its simulation without a picture
+//! (found in round 47).
 
 use crate::render::scene::TreeInstance;
 use crate::Error;
@@ -16,12 +20,12 @@ use std::io::{BufReader, BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 /// Bytes of one record: id (8), position (12), height, crown radius, crown base, rotation
-/// (16), palette index (2).
-const RECORD: usize = 38;
+/// (16), leaf colour (12), palette index (2).
+pub const RECORD: usize = 50;
 
 /// The fields of a [`TreeInstance`] that repeat across trees, as bit patterns: species,
-/// leaf colour ×3, leaf amount, opacity, sky fade.
-type Shared = [u32; 7];
+/// leaf amount, opacity, sky fade.
+type Shared = [u32; 4];
 
 /// Where one snapshot's records lie in the file and the palette they index (kept in the
 /// pictures' state file of a linked store, [`KeyFrames::index`]).
@@ -83,7 +87,8 @@ impl KeyFrames {
     /// not the `entries`' records (a store cut short).
     pub fn reopen(dir: &Path, entries: Vec<Entry>) -> crate::Result<Self> {
         let path = dir.join(LINKED_FILE);
-        let file = std::fs::OpenOptions::new().read(true).write(true).open(&path).map_err(|e| Error::io(&path, e))?;
+        // read only: a reopened store is read, never pushed to
+        let file = File::open(&path).map_err(|e| Error::io(&path, e))?;
         let len: u64 = entries.iter().map(|e| (e.count * RECORD) as u64).sum();
         let on_disk = file.metadata().map_err(|e| Error::io(&path, e))?.len();
         let contiguous = entries.iter().scan(0u64, |at, e| {
@@ -119,7 +124,7 @@ impl KeyFrames {
         self.file.seek(SeekFrom::Start(self.len)).map_err(io)?;
         let mut w = BufWriter::with_capacity(1 << 20, &self.file);
         for t in inst {
-            let shared: Shared = [t.species, t.leaf_color[0].to_bits(), t.leaf_color[1].to_bits(), t.leaf_color[2].to_bits(), t.leaf_amount.to_bits(), t.opacity.to_bits(), t.sky_fade.to_bits()];
+            let shared: Shared = [t.species, t.leaf_amount.to_bits(), t.opacity.to_bits(), t.sky_fade.to_bits()];
             let k = match index.get(&shared) {
                 Some(&k) => k,
                 None => {
@@ -131,10 +136,10 @@ impl KeyFrames {
             };
             let mut rec = [0u8; RECORD];
             rec[0..8].copy_from_slice(&t.id.to_le_bytes());
-            for (j, v) in [t.position[0], t.position[1], t.position[2], t.height, t.crown_radius, t.crown_base, t.rotation].into_iter().enumerate() {
+            for (j, v) in [t.position[0], t.position[1], t.position[2], t.height, t.crown_radius, t.crown_base, t.rotation, t.leaf_color[0], t.leaf_color[1], t.leaf_color[2]].into_iter().enumerate() {
                 rec[8 + 4 * j..12 + 4 * j].copy_from_slice(&v.to_bits().to_le_bytes());
             }
-            rec[36..38].copy_from_slice(&k.to_le_bytes());
+            rec[48..50].copy_from_slice(&k.to_le_bytes());
             w.write_all(&rec).map_err(io)?;
         }
         w.flush().map_err(io)?;
@@ -164,14 +169,14 @@ impl KeyFrames {
             r.read_exact(&mut rec).map_err(io)?;
             let f = |j: usize| f32::from_bits(u32::from_le_bytes([rec[8 + 4 * j], rec[9 + 4 * j], rec[10 + 4 * j], rec[11 + 4 * j]]));
             let id = u64::from_le_bytes([rec[0], rec[1], rec[2], rec[3], rec[4], rec[5], rec[6], rec[7]]);
-            let s = e.palette[u16::from_le_bytes([rec[36], rec[37]]) as usize];
+            let s = e.palette[u16::from_le_bytes([rec[48], rec[49]]) as usize];
             let b = f32::from_bits;
-            let mut t = TreeInstance::new(id, [f(0), f(1), f(2)], f(3), f(4), s[0], [b(s[1]), b(s[2]), b(s[3])]);
+            let mut t = TreeInstance::new(id, [f(0), f(1), f(2)], f(3), f(4), s[0], [f(7), f(8), f(9)]);
             t.crown_base = f(5);
             t.rotation = f(6);
-            t.leaf_amount = b(s[4]);
-            t.opacity = b(s[5]);
-            t.sky_fade = b(s[6]);
+            t.leaf_amount = b(s[1]);
+            t.opacity = b(s[2]);
+            t.sky_fade = b(s[3]);
             out.push(t);
         }
         Ok(out)
@@ -243,7 +248,7 @@ mod tests {
         drop(k);
         std::fs::OpenOptions::new().write(true).open(&p).unwrap().set_len(2 * RECORD as u64).unwrap();
         let e = KeyFrames::reopen(&dir, index.clone()).err().unwrap().to_string();
-        assert!(e.contains(LINKED_FILE) && e.contains("76 bytes; expected 114"), "{e}");
+        assert!(e.contains(LINKED_FILE) && e.contains("100 bytes; expected 150"), "{e}");
         // a linked store not kept removes its file when dropped (a stopped simulation)
         let mut k = KeyFrames::linked(&dir).unwrap();
         k.push(0, &[a]).unwrap();
