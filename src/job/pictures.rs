@@ -663,7 +663,7 @@ pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Sta
 }
 
 /// Where a film's time went ([`timelapse_timed`]): wall and process CPU seconds
-/// ([`crate::job::main_job::process_cpu_s`]; 0 where the platform gives none).
+/// ([`crate::job::timing::process_cpu_s`]; 0 where the platform gives none).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct FilmTimes {
     /// Frames drawn (instances interpolated, rendered, captioned) and written as PNG: wall, CPU (s).
@@ -705,7 +705,7 @@ pub fn timelapse_timed(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&St
 /// The frames of [`timelapse_from`], drawn at the stage's triangle budget.
 #[allow(clippy::too_many_arguments)]
 fn film_frames(stage: &mut Stage, snaps: &[u32], steps_of: &[usize], key: &mut dyn FnMut(&Stage, usize) -> Result<Vec<TreeInstance>>, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, reuse: bool, times: &mut FilmTimes, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
-    use crate::job::main_job::Clock;
+    use crate::job::timing::Clock;
     let total = 1 + steps_of.iter().sum::<usize>();
     // the GIF is encoded as the frames come (issue 34: not every frame held to the end)
     let mut gif = crate::output::pictures::GifWriter::new(out_gif, opts.fps)?;
