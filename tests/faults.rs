@@ -549,7 +549,8 @@ fn ctrl_c_then_resume_is_byte_identical_to_an_unbroken_run() {
 /// Every file Sylva writes goes through `output::write_atomic` (temporary file + rename): no
 /// other place in `src/` creates or writes a file (the write probe of `job::run`, ffmpeg's
 /// temporary output, the key-frame scratch file of `job::keyframes`, unlinked as soon as it
-/// is opened and never an output, and a stand export's BIN scratch file of `output::gltf`, removed
+/// is opened or, for `sylva run`, kept until its pictures are drawn (its index is committed
+/// atomically in `.sylva_pictures.json`), never an output, and a stand export's BIN scratch file of `output::gltf`, removed
 /// when the export ends, aside, all named here).
 #[test]
 fn every_writer_goes_through_write_atomic() {

@@ -261,3 +261,168 @@ fn without_an_adapter_sylva_run_writes_what_needs_no_rendering_and_fails() {
     let res = Command::new(env!("CARGO_BIN_EXE_sylva")).args(["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap(), "--years", "2", "--no-pictures"]).env("WGPU_BACKEND", no_gpu).output().unwrap();
     assert!(res.status.success(), "--no-pictures needs no adapter: {}", String::from_utf8_lossy(&res.stderr));
 }
+
+/// Trial 46 D10: `sylva run` stopped after its simulation while drawing its pictures finishes
+/// them when run again with the same scenario, species and options: it does not simulate (no
+/// `Simulating` event; the stand table and the checkpoint are not rewritten), keeps the stills
+/// drawn before as they are (one is replaced by a red picture here, which must survive),
+/// draws the missing ones and the whole film, writes `summary.md` and `timings.csv`, and
+/// removes the pictures' state; its close-up is the one an unbroken run draws. Another seed
+/// runs afresh. On round 46's code the second run simulated again (the key frames were gone).
+#[test]
+fn a_stopped_runs_pictures_are_finished_without_simulating_again() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    use sylva::job::main_job::Event;
+    let dir = tempfile::tempdir().unwrap();
+    let sc = sylva::sim::Scenario::from_toml_str(SCENARIO, "reduced.toml").unwrap();
+    let lib = sylva::species::SpeciesLibrary::embedded().unwrap();
+    let name_of = |e: &Event| format!("{e:?}").split([' ', '(']).next().unwrap_or("").to_string();
+    let options = |out: &Path| {
+        let mut o = MainJobOptions::new(out);
+        o.size = (320, 180);
+        o.timelapse_size = (160, 90);
+        o
+    };
+    // the unbroken run
+    let whole = dir.path().join("whole");
+    main_job::main_job(&sc, &lib, &options(&whole), &mut |_| {}).unwrap();
+
+    // stopped at the first still from afar: year 0's two are drawn (a stop is seen between
+    // years), year 6's, the close-up and the film are not
+    let out = dir.path().join("out");
+    let stop = Arc::new(AtomicBool::new(false));
+    let mut opts = options(&out);
+    opts.stop = Some(stop.clone());
+    let r = main_job::main_job(&sc, &lib, &opts, &mut |e| {
+        if matches!(e, Event::Still) {
+            stop.store(true, Ordering::SeqCst);
+        }
+    });
+    assert!(matches!(r, Err(sylva::job::JobError::Stopped(_))), "{:?}", r.map(|s| s.sim.year));
+    for f in ["stills/year_0000_oblique.png", "stills/year_0000_topdown.png", "stand_table.csv", "checkpoint.bin", ".sylva_pictures.json", ".sylva_keyframes.bin"] {
+        assert!(out.join(f).is_file(), "{f} after the stop");
+    }
+    for f in ["stills/year_0006_oblique.png", "stills/year_0006_closeup.png", "timelapse.gif", "summary.md", "timings.csv"] {
+        assert!(!out.join(f).exists(), "{f} before the stop's pictures are finished");
+    }
+    let red = image::RgbaImage::from_pixel(320, 180, image::Rgba([200, 0, 0, 255]));
+    red.save(out.join("stills/year_0000_oblique.png")).unwrap();
+    let red_bytes = std::fs::read(out.join("stills/year_0000_oblique.png")).unwrap();
+    let stamp = |f: &str| (std::fs::read(out.join(f)).unwrap(), std::fs::metadata(out.join(f)).unwrap().modified().unwrap());
+    let (table, checkpoint) = (stamp("stand_table.csv"), stamp("checkpoint.bin"));
+
+    // run again: only the missing pictures
+    let mut events: Vec<String> = Vec::new();
+    let mut resumed_with = None;
+    let summary = main_job::main_job(&sc, &lib, &options(&out), &mut |e| {
+        if let Event::Resuming { year, stills_drawn, frames_drawn } = e {
+            resumed_with = Some((*year, *stills_drawn, *frames_drawn));
+        }
+        let n = name_of(e);
+        if events.last() != Some(&n) {
+            events.push(n);
+        }
+    })
+    .unwrap();
+    assert_eq!(events, ["Begin", "Resuming", "Stills", "Still", "CloseUpBegin", "CloseUp", "StillsDone", "Timelapse", "Frame", "TimelapseDone"], "no simulation");
+    assert_eq!(resumed_with, Some((6, 2, 0)));
+    assert!(summary.resumed && summary.sim.year == 6 && summary.sim.rows.len() == 6 && summary.stills.len() == 5);
+    assert_eq!(summary.film.as_ref().map(|f| f.frames), Some(5));
+    assert_eq!(std::fs::read(out.join("stills/year_0000_oblique.png")).unwrap(), red_bytes, "a still drawn before is kept, not drawn again");
+    assert_eq!(stamp("stand_table.csv"), table);
+    assert_eq!(stamp("checkpoint.bin"), checkpoint);
+    for f in ["stills/year_0006_oblique.png", "stills/year_0006_topdown.png", "stills/year_0006_closeup.png", "timelapse.gif", "frames/frame_00004.png", "summary.md", "timings.csv"] {
+        assert!(out.join(f).is_file(), "{f} drawn when finishing");
+    }
+    assert!(!out.join(".sylva_pictures.json").exists() && !out.join(".sylva_keyframes.bin").exists(), "the pictures' state is removed");
+    let mut written = Vec::new();
+    files(&out, &out, &mut written);
+    assert!(written.iter().all(|f| main_job::is_output(f)), "{written:?}");
+    // the same figures as the unbroken run, and its close-up (trees from the final checkpoint)
+    let unbroken = main_job::main_job(&sc, &lib, &options(&dir.path().join("whole2")), &mut |_| {}).unwrap();
+    assert_eq!(summary.tables().1, unbroken.tables().1);
+    let (a, b) = (image::open(out.join("stills/year_0006_closeup.png")).unwrap().to_rgb8(), image::open(whole.join("stills/year_0006_closeup.png")).unwrap().to_rgb8());
+    let d = a.pixels().zip(b.pixels()).map(|(p, q)| (0..3).map(|k| (p[k] as f64 - q[k] as f64).abs()).sum::<f64>() / 3.0).sum::<f64>() / (320.0 * 180.0);
+    assert!(d < 0.5, "mean |Δ| of the finished close-up against the unbroken run's: {d:.3} grey levels");
+    let md = std::fs::read_to_string(out.join("summary.md")).unwrap();
+    assert!(md.contains("pictures finished by a second `sylva run`") && md.contains("## Where the time went"), "{md}");
+    let csv = std::fs::read_to_string(out.join("timings.csv")).unwrap();
+    assert!(csv.contains("finishing the pictures: the final checkpoint read") && csv.contains("\"simulation ("), "{csv}");
+
+    // stopped again; then another seed is another run: simulated afresh, the state removed
+    stop.store(false, Ordering::SeqCst);
+    let r = main_job::main_job(&sc, &lib, &opts, &mut |e| {
+        if matches!(e, Event::Still) {
+            stop.store(true, Ordering::SeqCst);
+        }
+    });
+    assert!(matches!(r, Err(sylva::job::JobError::Stopped(_))) && out.join(".sylva_pictures.json").is_file());
+    let mut sc2 = sc.clone();
+    sc2.seed += 1;
+    let mut events: Vec<String> = Vec::new();
+    main_job::main_job(&sc2, &lib, &options(&out), &mut |e| events.push(name_of(e))).unwrap();
+    assert!(events.iter().any(|e| e == "Simulating") && !events.iter().any(|e| e == "Resuming"), "{events:?}");
+    assert!(!out.join(".sylva_pictures.json").exists() && !out.join(".sylva_keyframes.bin").exists());
+}
+
+/// `timings.csv` (round 47): where the main job's time went, a row per phase with wall and
+/// CPU seconds, each phase of the job named, the total the sum of the phases.
+#[test]
+fn the_main_job_says_where_its_time_went() {
+    let dir = tempfile::tempdir().unwrap();
+    let sc = sylva::sim::Scenario::from_toml_str(SCENARIO, "reduced.toml").unwrap();
+    let lib = sylva::species::SpeciesLibrary::embedded().unwrap();
+    let out = dir.path().join("out");
+    let mut opts = MainJobOptions::new(&out);
+    opts.size = (320, 180);
+    opts.timelapse_size = (160, 90);
+    let summary = main_job::main_job(&sc, &lib, &opts, &mut |_| {}).unwrap();
+    let mut rdr = csv::Reader::from_path(out.join("timings.csv")).unwrap();
+    assert_eq!(rdr.headers().unwrap(), vec!["phase", "wall_s", "cpu_s"]);
+    let rows: Vec<(String, f64, Option<f64>)> = rdr.records().map(|r| r.unwrap()).map(|r| (r[0].to_string(), r[1].parse().unwrap(), r[2].parse().ok())).collect();
+    let phases: Vec<&str> = rows.iter().map(|r| r.0.as_str()).collect();
+    for p in ["conditions", "simulation (", "simulation: of which outputs", "simulation: of which the pictures' key frames", "pictures: setting up", "stills from afar: oblique", "stills from afar: top-down", "close-up (", "close-up: of which adapting", "timelapse: frames (5 drawn, 0 read back)", "timelapse: encoding", "total"] {
+        assert!(phases.iter().any(|q| q.starts_with(p)), "{p} in {phases:?}");
+    }
+    for (p, wall, cpu) in &rows {
+        assert!(*wall >= 0.0 && cpu.is_none_or(|c| c >= 0.0), "{p}: {wall} {cpu:?}");
+    }
+    // the process did work in each of these: CPU time was spent
+    for p in ["simulation (", "stills from afar: oblique", "close-up (", "timelapse: frames"] {
+        let r = rows.iter().find(|r| r.0.starts_with(p)).unwrap();
+        assert!(r.2.unwrap() > 0.0 && r.1 > 0.0, "{r:?}");
+    }
+    let parts: f64 = rows.iter().filter(|r| !r.0.contains("of which") && r.0 != "total").map(|r| r.1).sum();
+    let total = rows.last().unwrap();
+    assert!((total.1 - parts).abs() < 0.05 && total.1 <= summary.total_s + 0.05, "{total:?} vs {parts} and {}", summary.total_s);
+    assert_eq!(summary.timings.len() + 1, rows.len());
+}
+
+/// Round 47: the pictures' key frames hold a snapshot of more than 65,535 trees, each with its
+/// own tint (round 46's `tree_tint`), bit for bit. On main's head (`457e8c7`) the tinted colour
+/// went into the snapshot's 16-bit palette, and the default `sylva run` ended after its
+/// simulation with "more than 65535 distinct foliages in year 50", drawing no picture.
+#[test]
+fn key_frames_keep_a_snapshot_of_many_tinted_trees() {
+    use sylva::job::keyframes::KeyFrames;
+    use sylva::render::scene::TreeInstance;
+    let dir = tempfile::tempdir().unwrap();
+    let inst: Vec<TreeInstance> = (0..70_000u64)
+        .map(|id| {
+            let k = sylva::job::scene::tree_tint(id);
+            let mut t = TreeInstance::new(id, [id as f32 * 0.5, 3.0, 800.0], 20.0, 3.0, (id % 4) as u32, [0.1 * k[0], 0.2 * k[1], 0.05 * k[2]]);
+            t.leaf_amount = 0.9;
+            t
+        })
+        .collect();
+    let mut tints: Vec<[u32; 3]> = inst.iter().map(|t| t.leaf_color.map(f32::to_bits)).collect();
+    tints.sort_unstable();
+    tints.dedup();
+    assert!(tints.len() > 65_535, "{} distinct foliage colours", tints.len());
+    let mut k = KeyFrames::new(dir.path()).unwrap();
+    k.push(50, &inst).unwrap();
+    k.push(55, &inst[..10]).unwrap();
+    assert_eq!(k.get_year(50).unwrap(), inst);
+    assert_eq!(k.get_year(55).unwrap(), inst[..10].to_vec());
+}

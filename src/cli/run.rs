@@ -178,6 +178,7 @@ impl Bars {
                     pb.finish_and_clear();
                 }
             }
+            Event::Resuming { year, stills_drawn, frames_drawn } => eprintln!("[resume] the simulation of {year} years is complete in this folder and its pictures were stopped ({stills_drawn} stills, {frames_drawn} film frames drawn): drawing only the missing pictures, not simulating again (run into another --out, or remove {}/.sylva_pictures.json, to start afresh)", self.out.as_ref().map_or(String::new(), |o| o.display().to_string())),
             Event::Year(_) | Event::Simulated(_) => self.sim.show(e),
         }
     }

@@ -20,9 +20,9 @@ pub enum JobError {
     /// The pictures phase of the main job stopped by its stop flag (Ctrl-C, SIGTERM): the
     /// simulation's outputs are complete in the run directory; the message says how to draw
     /// the pictures.
-    // trial 46 D10: the message promised pictures that cannot be drawn; the key frames of
-    // snapshot years without an inventory live only while `sylva run` runs
-    #[error("pictures stopped (Ctrl-C or SIGTERM): the simulation's outputs are complete in {out}; `sylva render {out} --year Y` draws a still of a year with an inventory (`inventory_every`, year 0, the last year and harvest years) and `sylva timelapse {out}` a film of those years; the stills of the other snapshot years need `sylva run` again, which simulates the run anew (their trees are kept only while `sylva run` runs)", out = .0.display())]
+    // trial 46 D10: the run directory keeps the pictures' key frames and state until the last
+    // picture, so the same `sylva run` again finishes them without simulating
+    #[error("pictures stopped (Ctrl-C or SIGTERM): the simulation's outputs are complete in {out}; run the same `sylva run` (same scenario, --out and picture options) again to draw only the missing pictures without simulating again", out = .0.display())]
     Stopped(std::path::PathBuf),
     /// An error of a step of the main job under the step's name (e.g. "simulating NAME"), as
     /// the command line prints it: the step, then the cause.

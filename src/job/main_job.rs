@@ -8,7 +8,8 @@
 
 use crate::output::inventory::InventoryFormat;
 use super::adapted::AdaptStats;
-use super::keyframes::KeyFrames;
+use super::keyframes::{self, KeyFrames};
+pub use super::timing::{process_cpu_s, Clock, PhaseTime};
 use super::pictures::{self, Stage, TimelapseOptions};
 use super::run::{run_scenario, OnSnapshot, Progress, RunOptions};
 use super::{scene, JobError, Result};
@@ -122,6 +123,7 @@ pub const OUTPUTS: &[Output] = &[
     Output { path: "frames/frame_NNNNN.png", when: When::End, main_job_only: true, what: "the timelapse's frames" },
     Output { path: "timelapse.{gif,mp4}", when: When::End, main_job_only: true, what: "the timelapse (MP4 when ffmpeg is installed)" },
     Output { path: "summary.md", when: When::End, main_job_only: true, what: "the figures and every picture in one page" },
+    Output { path: "timings.csv", when: When::End, main_job_only: true, what: "where the run's time went: each phase's wall and CPU seconds" },
 ];
 
 /// Whether `rel` (a path in a run directory, `/`-separated) is one of [`OUTPUTS`]' patterns:
@@ -219,6 +221,18 @@ pub enum Event<'a> {
     },
     /// A year is simulated.
     Year(&'a Progress),
+    /// `sylva run` into the folder of an earlier `sylva run` of the same scenario, species and
+    /// picture options that was stopped (or killed) after its simulation while drawing its
+    /// pictures: the simulation of `year` years is not run again; only the missing pictures
+    /// are drawn (trial 46 D10).
+    Resuming {
+        /// The last year simulated.
+        year: u32,
+        /// Stills (from afar and the close-up) already drawn.
+        stills_drawn: usize,
+        /// Film frames already drawn.
+        frames_drawn: usize,
+    },
     /// The simulation ended (or was stopped: [`Simulated::stopped`]).
     Simulated(&'a Simulated),
     /// `sylva run` found no graphics adapter before simulating (`message`: what wgpu said and
@@ -511,6 +525,13 @@ pub struct MainJobSummary {
     pub pictures_s: f64,
     /// Wall time (s) of the whole job.
     pub total_s: f64,
+    /// Wall and CPU seconds of each phase of the job ([`PhaseTime`], written to `timings.csv`
+    /// and `summary.md`); a run that finished an earlier run's pictures ([`Event::Resuming`])
+    /// lists the earlier run's conditions and simulation first.
+    pub timings: Vec<PhaseTime>,
+    /// True when this run finished the pictures of an earlier, stopped run without simulating
+    /// ([`Event::Resuming`]).
+    pub resumed: bool,
     /// How the site's local metres map to the terrain's map coordinates (its south-west corner
     /// and CRS), as the inventories' geometry and the map GeoTIFFs use it.
     pub geo: crate::output::georef::PointGeoRef,
@@ -570,6 +591,9 @@ impl MainJobSummary {
         let _ = writeln!(table, "| time: simulation (s) | {:.1} |", self.sim_s);
         let _ = writeln!(table, "| time: pictures (s) | {:.1} |", self.pictures_s);
         let _ = writeln!(table, "| time: total (s) | {:.1} |", self.total_s);
+        if self.resumed {
+            let _ = writeln!(table, "| pictures finished by a second `sylva run` (the simulation not run again) | yes |");
+        }
         let mut shares = String::from("| species | share of basal area | share of stems |\n|---|---|---|\n");
         if let Some(r) = last {
             let mut order: Vec<usize> = (0..s.pool.len()).collect();
@@ -587,10 +611,19 @@ impl MainJobSummary {
 /// with a GeoPackage for the last year, species and basal-area maps, checkpoints), then, with
 /// `opts.render`, stills from an oblique and a top-down camera at [`STILL_YEARS`] (and the last
 /// snapshot), a close view into the last year's forest with its near field adapted, a
-/// timelapse of every snapshot, and `summary.md`. [`OUTPUTS`] lists the files. Reports every
-/// step to `sink`. A run stopped by `opts.stop` returns after the simulation with
-/// [`Simulated::stopped`] set (no pictures, no `summary.md`); stopped during the pictures, it
-/// returns [`JobError::Stopped`] between two pictures (those written are whole).
+/// timelapse of every snapshot, `summary.md` and `timings.csv` (each phase's wall and CPU
+/// seconds). [`OUTPUTS`] lists the files. Reports every step to `sink`. A run stopped by
+/// `opts.stop` returns after the simulation with [`Simulated::stopped`] set (no pictures, no
+/// `summary.md`); stopped during the pictures, it returns [`JobError::Stopped`] between two
+/// pictures (those written are whole).
+///
+/// Finishing a stopped run's pictures (trial 46 D10): from the end of the simulation until the
+/// last picture the run directory holds the pictures' key frames ([`keyframes::LINKED_FILE`])
+/// and their state ([`PICTURES_STATE_FILE`]: scenario, species, picture options, the key
+/// frames' index, the stumps). When `sylva run` finds them and they match `sc`, `lib` and
+/// `opts`, with the final year's checkpoint, it does not simulate: it reads the checkpoint
+/// (stand table, the close-up's trees), reports [`Event::Resuming`] and draws only the
+/// pictures not on disk (film frames written before are read back). Otherwise it runs afresh.
 ///
 /// Errors: [`Error::Format`] when `opts.out` is a file; I/O errors naming the file; reading the
 /// terrain (under "[terrain] of FILE (scenario NAME)"); the simulation's (under "simulating NAME");
@@ -600,17 +633,27 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     let out = opts.out.clone();
     check_out(&out)?;
     sink(&Event::Begin { name: &sc.name, years: sc.years, seed: sc.seed, out: &out });
+    if opts.render {
+        if let Some(state) = PicturesState::matching(&out, sc, lib, opts) {
+            return finish_pictures(sc, lib, opts, state, sink, t0);
+        }
+    }
+    let mut timings = Vec::new();
 
     // 1. Living conditions. The scenario is checked against the site before any folder is
     // made, so a refused one leaves none behind.
     let t_site = Instant::now();
+    let clock = Clock::start();
     let site = context(sc.site().map_err(JobError::from), || format!("[terrain] of {}", sc.context()))?;
     let site = context(World::check(site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
     std::fs::create_dir_all(&out).map_err(|e| Error::io(&out, e))?;
-    // an earlier run's pictures and summary go before this run writes its own
+    // an earlier run's pictures and summary go before this run writes its own, and so does
+    // the state of an earlier run's unfinished pictures
     clear_main_job_outputs(&out)?;
+    remove_pictures_state(&out)?;
     let maps = super::maps::write_site_maps(&site, &out.join("maps").join("conditions"))?;
     let site_s = t_site.elapsed().as_secs_f64();
+    clock.push(&mut timings, "conditions (living conditions and their maps)");
     sink(&Event::Conditions { width: site.width(), height: site.height(), extent_m: site.extent_m(), maps: &maps, seconds: site_s });
 
     // the adapter is looked for before the simulation: without one the run says so now,
@@ -629,17 +672,20 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
     // 2. Simulation. The pictures' key frames come from the in-memory world at each snapshot
     // (summer instances of the visible trees), not from the inventory files.
     let t_sim = Instant::now();
+    let clock = Clock::start();
     // the key frames wait on disk, not in memory (about 1.2 GB for the default run's 31
-    // snapshots; issue 34)
-    let mut keys = if render { Some(KeyFrames::new(&out)?) } else { None };
+    // snapshots; issue 34), in a file kept until the pictures are drawn (trial 46 D10)
+    let mut keys = if render { Some(KeyFrames::linked(&out)?) } else { None };
     let mut keys_err: Option<Error> = None;
     // the living trees of the last kept snapshot, for the adapted close-up
     let mut last = LastTrees::default();
     // the trees management removed, from every snapshot (a year that removed trees is one),
     // for the stumps of the stills
     let mut stumps: Vec<scene::Stump> = Vec::new();
+    let mut key_time = (0.0, 0.0);
     let mut keep = |y: u32, w: &World| {
         if let Some(k) = keys.as_mut() {
+            let clock = Clock::start();
             stumps.extend(scene::stumps_from_world(w));
             let plants = scene::plants_from_world(w);
             let inst = scene::instances_with_saplings(&plants, &scene::saplings_from_world(w), lib, &site, Season::Summer);
@@ -648,6 +694,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
             }
             drop(inst);
             last = LastTrees::of(w, &plants);
+            clock.add_to(&mut key_time);
         }
     };
     // the GeoPackage (≈ 115 bytes per tree, ≈ 120 MB at the end of the default run) only for
@@ -658,37 +705,99 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
         return context(Err(e.into()), || "keeping the key frames of the pictures".into());
     }
     let sim_s = t_sim.elapsed().as_secs_f64();
+    clock.push(&mut timings, "simulation (all of it, as the rows below split it)");
+    let outputs_s = sim.phase_seconds.iter().find(|p| p.0 == "outputs").map_or(0.0, |p| p.1);
+    timings.push(PhaseTime { phase: "simulation: of which outputs (inventories, maps, stand table, checkpoints; wall only)".into(), wall_s: outputs_s, cpu_s: f64::NAN });
+    timings.push(PhaseTime { phase: "simulation: of which the pictures' key frames".into(), wall_s: key_time.0, cpu_s: key_time.1 });
     let geo = crate::output::georef::PointGeoRef::of_site(&site);
     let cells = (site.width(), site.height(), site.cell_x_m);
-    let mut summary = MainJobSummary { sim, scenario: sc.clone(), maps, stills: Vec::new(), film: None, site_s, sim_s, pictures_s: 0.0, total_s: 0.0, geo, extent_m: site.extent_m(), cells };
+    let mut summary = MainJobSummary { sim, scenario: sc.clone(), maps, stills: Vec::new(), film: None, site_s, sim_s, pictures_s: 0.0, total_s: 0.0, timings, resumed: false, geo, extent_m: site.extent_m(), cells };
     if summary.sim.stopped {
+        // the key frames of a stopped simulation go (`sylva run` starts it over)
+        drop(keys);
         summary.total_s = t0.elapsed().as_secs_f64();
         return Ok(summary);
     }
 
     // 3 + 4. Pictures.
     let t_pic = Instant::now();
-    if let Some(keys) = keys {
-        let (stills, film) = pictures_of(sc, site, lib, keys, last, &stumps, opts, sink)?;
+    if let Some(mut keys) = keys {
+        // from here a stopped or killed run's pictures can be finished without simulating
+        let state = PicturesState::of(sc, lib, opts, &keys, &stumps, &summary)?;
+        state.write(&out)?;
+        keys.keep();
+        let (stills, film) = pictures_of(sc, site, lib, keys, last, &stumps, opts, false, &mut summary.timings, sink)?;
         summary.stills = stills;
         summary.film = Some(film);
     }
     summary.pictures_s = t_pic.elapsed().as_secs_f64();
     summary.total_s = t0.elapsed().as_secs_f64();
     write_summary_md(&out, &summary)?;
+    write_timings_csv(&out, &summary.timings)?;
+    remove_pictures_state(&out)?;
     match no_adapter {
         Some(e) => context(Err(JobError::from(e)), || "the pictures of the run (the maps, tables and inventories are written; `--no-pictures` skips the pictures on purpose)".into()),
         None => Ok(summary),
     }
 }
 
+/// The second half of [`main_job`] for a run directory whose simulation is complete and whose
+/// pictures are not (`state`, matched to the run's scenario, species and options): reads the
+/// final checkpoint, reports [`Event::Resuming`], draws the missing pictures, writes
+/// `summary.md` and `timings.csv` and removes the pictures' state.
+fn finish_pictures(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, state: PicturesState, sink: &mut Sink, t0: Instant) -> Result<MainJobSummary> {
+    let out = opts.out.clone();
+    let mut timings = state.timings.clone();
+    let clock = Clock::start();
+    let site = context(sc.site().map_err(JobError::from), || format!("[terrain] of {}", sc.context()))?;
+    let site = context(World::check(site, lib, sc).map_err(JobError::from), || format!("simulating {}", sc.name))?;
+    // the final world from its checkpoint: the stand table and the close-up's trees, as the
+    // simulation left them (the checkpoint refuses a world of other species, seed or site)
+    let ck = out.join(super::checkpoint::FILE);
+    let mut w = context(World::new(site.clone(), lib, sc).map_err(JobError::from), || format!("finishing the pictures of {}", out.display()))?;
+    let mut rows = context(super::checkpoint::load(&ck, &mut w), || format!("finishing the pictures of {}", out.display()))?;
+    if w.stand.year != state.year {
+        return Err(Error::format(&ck, format!("year {}; expected {}, the year the pictures' state {} was written at (run `sylva run` into an empty folder)", w.stand.year, state.year, PICTURES_STATE_FILE)).into());
+    }
+    if rows.first().is_some_and(|r| r.year == 0) {
+        rows.remove(0);
+    }
+    let last = LastTrees::of(&w, &scene::plants_from_world(&w));
+    let pool = w.site.pool.iter().map(|&s| w.site.lib.species[s as usize].id.clone()).collect();
+    let pool_names = w.site.pool.iter().map(|&s| w.site.lib.species[s as usize].identity.common_name.clone()).collect();
+    drop(w);
+    clock.push(&mut timings, "finishing the pictures: the final checkpoint read (no simulation)");
+    let stills_drawn = std::fs::read_dir(out.join("stills")).map_or(0, |d| d.filter_map(|e| e.ok()).filter(|e| is_output(&format!("stills/{}", e.file_name().to_string_lossy()))).count());
+    let frames_drawn = std::fs::read_dir(out.join("frames")).map_or(0, |d| d.filter_map(|e| e.ok()).filter(|e| is_output(&format!("frames/{}", e.file_name().to_string_lossy()))).count());
+    sink(&Event::Resuming { year: state.year, stills_drawn, frames_drawn });
+    let keys = KeyFrames::reopen(&out, state.keyframes.clone())?;
+    let sim = Simulated { name: sc.name.clone(), year: state.year, trees_alive: state.trees_alive, pool, pool_names, rows, stopped: false, seconds: state.sim_s, phase_seconds: Vec::new(), out: out.clone() };
+    let geo = crate::output::georef::PointGeoRef::of_site(&site);
+    let cells = (site.width(), site.height(), site.cell_x_m);
+    let mut summary = MainJobSummary { sim, scenario: sc.clone(), maps: state.maps.clone(), stills: Vec::new(), film: None, site_s: state.site_s, sim_s: state.sim_s, pictures_s: 0.0, total_s: 0.0, timings, resumed: true, geo, extent_m: site.extent_m(), cells };
+    let t_pic = Instant::now();
+    let (stills, film) = pictures_of(sc, site, lib, keys, last, &state.stumps, opts, true, &mut summary.timings, sink)?;
+    summary.stills = stills;
+    summary.film = Some(film);
+    summary.pictures_s = t_pic.elapsed().as_secs_f64();
+    summary.total_s = t0.elapsed().as_secs_f64();
+    write_summary_md(&out, &summary)?;
+    write_timings_csv(&out, &summary.timings)?;
+    remove_pictures_state(&out)?;
+    Ok(summary)
+}
+
 /// The main job's pictures: stills at the still years (with the stumps of `stumps` cut in the
 /// 20 years up to each), the close-up of the last one, the timelapse of the key frames `keys`
-/// (year, summer instances; each with the stumps of its 20 years), in `opts.out`.
+/// (year, summer instances; each with the stumps of its 20 years), in `opts.out`. With
+/// `finish` (an earlier, stopped run's pictures: [`Event::Resuming`]) the stills already on
+/// disk are kept and not drawn again, and the film's frames on disk are read back. Adds each
+/// kind of picture's wall and CPU seconds to `timings`.
 #[allow(clippy::too_many_arguments)]
-fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut keys: KeyFrames, last: LastTrees, stumps: &[scene::Stump], opts: &MainJobOptions, sink: &mut Sink) -> Result<(Vec<Still>, Film)> {
+fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut keys: KeyFrames, last: LastTrees, stumps: &[scene::Stump], opts: &MainJobOptions, finish: bool, timings: &mut Vec<PhaseTime>, sink: &mut Sink) -> Result<(Vec<Still>, Film)> {
     let out = &opts.out;
     let (w, h) = opts.size;
+    let clock = Clock::start();
     // the stills, the close-up and the film each on a stage of its own: a stage's renderer keeps
     // what its pictures grew (render targets, buffers, the software rasteriser's arenas), and
     // these added up at the close-up and the film (issue 34: 2.05 GiB peak before)
@@ -701,51 +810,70 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     sink(&Event::Stills { count: years.len() * 2, adapter: &stage.renderer.adapter_description() });
     let stills_dir = out.join("stills");
     std::fs::create_dir_all(&stills_dir).map_err(|e| Error::io(&stills_dir, e))?;
-    remove_old_stills(&stills_dir)?;
+    if !finish {
+        remove_old_stills(&stills_dir)?;
+    }
+    clock.push(timings, "pictures: setting up the renderer (stage, prototypes)");
     // Ctrl-C during the pictures: stop between pictures (each written whole)
     let stopped = || opts.stop.as_ref().is_some_and(|s| s.load(std::sync::atomic::Ordering::SeqCst));
     let stop_here = || Err(JobError::Stopped(out.clone()));
     let mut stills = Vec::new();
+    let mut view_times = [(0.0, 0.0); 2];
     for &y in &years {
         if stopped() {
             return stop_here();
         }
         stage.set_stumps(stumps, y);
-        for (preset, name) in [(CameraPreset::Oblique, "oblique"), (CameraPreset::Map, "topdown")] {
-            let cam = stage.camera_sized(preset, w, h);
-            let mut img = stage.render_instances(keys.get_year(y)?, Season::Summer, &cam, w, h)?;
-            // a north arrow on the oblique (the top-down still is north up)
-            if preset != CameraPreset::Map {
-                crate::render::overlay::stamp_north_arrow(&mut img, &cam);
-            }
+        for (v, (preset, name)) in [(CameraPreset::Oblique, "oblique"), (CameraPreset::Map, "topdown")].into_iter().enumerate() {
             let path = stills_dir.join(format!("year_{y:04}_{name}.png"));
-            crate::output::pictures::write_png(&path, &img)?;
+            if !(finish && path.is_file()) {
+                let clock = Clock::start();
+                let cam = stage.camera_sized(preset, w, h);
+                let mut img = stage.render_instances(keys.get_year(y)?, Season::Summer, &cam, w, h)?;
+                // a north arrow on the oblique (the top-down still is north up)
+                if preset != CameraPreset::Map {
+                    crate::render::overlay::stamp_north_arrow(&mut img, &cam);
+                }
+                crate::output::pictures::write_png(&path, &img)?;
+                clock.add_to(&mut view_times[v]);
+            }
             stills.push(Still { year: y, view: name.to_string(), path });
             sink(&Event::Still);
         }
+    }
+    for (v, name) in ["stills from afar: oblique", "stills from afar: top-down"].into_iter().enumerate() {
+        timings.push(PhaseTime { phase: name.into(), wall_s: view_times[v].0, cpu_s: view_times[v].1 });
     }
     if stopped() {
         return stop_here();
     }
     // A close view into the final forest, where the species' architectures show.
     if let Some(&y) = years.last() {
-        sink(&Event::CloseUpBegin { year: y });
-        let cam = closeup_camera(&site);
-        drop(stage);
-        stage = new_stage()?;
-        stage.set_stumps(stumps, y);
-        stage.set_adapt(adapt);
-        let mut img = stage.render_plants(&last.plants(), Season::Summer, &cam, w, h)?;
-        crate::render::overlay::stamp_north_arrow(&mut img, &cam);
-        // the close-up's trees and open-grown skeletons are not needed by the film (issue 34)
-        drop(last);
-        stage.set_adapt(None);
-        sink(&Event::CloseUp(&stage.last_adapt));
         let path = stills_dir.join(format!("year_{y:04}_closeup.png"));
-        crate::output::pictures::write_png(&path, &img)?;
+        if !(finish && path.is_file()) {
+            let clock = Clock::start();
+            sink(&Event::CloseUpBegin { year: y });
+            let cam = closeup_camera(&site);
+            drop(stage);
+            stage = new_stage()?;
+            stage.set_stumps(stumps, y);
+            stage.set_adapt(adapt);
+            let mut img = stage.render_plants(&last.plants(), Season::Summer, &cam, w, h)?;
+            crate::render::overlay::stamp_north_arrow(&mut img, &cam);
+            stage.set_adapt(None);
+            sink(&Event::CloseUp(&stage.last_adapt));
+            crate::output::pictures::write_png(&path, &img)?;
+            clock.push(timings, "close-up (its near field adapted at full detail)");
+            timings.push(PhaseTime { phase: "close-up: of which adapting the near field (wall only)".into(), wall_s: stage.last_adapt.adapt_s, cpu_s: f64::NAN });
+        }
         stills.push(Still { year: y, view: "closeup".to_string(), path });
     }
+    // the close-up's trees and open-grown skeletons are not needed by the film (issue 34)
+    drop(last);
     sink(&Event::StillsDone);
+    if stopped() {
+        return stop_here();
+    }
     sink(&Event::Timelapse);
     drop(stage);
     let mut stage = new_stage()?;
@@ -760,9 +888,128 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
         inst.extend(st.stump_instances_of(stumps, key_years[k]));
         Ok(inst)
     };
-    let (frames, mp4) = pictures::timelapse_from(&mut stage, &key_years, key, &out.join("frames"), &gif, &topts, &mut |done, total| sink(&Event::Frame { done, total }))?;
+    let mut film_times = pictures::FilmTimes::default();
+    let (frames, mp4) = pictures::timelapse_timed(&mut stage, &key_years, key, &out.join("frames"), &gif, &topts, finish, &mut film_times, &mut |done, total| sink(&Event::Frame { done, total }))?;
+    timings.push(PhaseTime { phase: format!("timelapse: frames ({} drawn, {} read back)", frames - film_times.reused, film_times.reused), wall_s: film_times.frames.0, cpu_s: film_times.frames.1 });
+    timings.push(PhaseTime { phase: "timelapse: encoding (GIF; MP4 by ffmpeg, its CPU not counted)".into(), wall_s: film_times.encoding.0, cpu_s: film_times.encoding.1 });
     sink(&Event::TimelapseDone);
     Ok((stills, Film { gif, frames, mp4 }))
+}
+
+/// Writes `timings.csv` into `out` atomically: `phase,wall_s,cpu_s` per [`PhaseTime`] (CPU
+/// empty where not measured), then `total` (the sum of the rows that are not "of which" parts).
+///
+/// Errors: I/O errors naming the file.
+fn write_timings_csv(out: &Path, timings: &[PhaseTime]) -> Result<()> {
+    let mut csv = String::from("phase,wall_s,cpu_s\n");
+    let num = |v: f64| if v.is_finite() { format!("{v:.2}") } else { String::new() };
+    for t in timings {
+        let _ = writeln!(csv, "\"{}\",{},{}", t.phase.replace('"', "'"), num(t.wall_s), num(t.cpu_s));
+    }
+    let whole = timings.iter().filter(|t| !t.phase.contains("of which"));
+    let (w, c) = whole.fold((0.0, 0.0), |a, t| (a.0 + t.wall_s, a.1 + if t.cpu_s.is_finite() { t.cpu_s } else { 0.0 }));
+    let _ = writeln!(csv, "total,{},{}", num(w), num(c));
+    crate::output::write_atomic(&out.join("timings.csv"), csv.as_bytes())?;
+    Ok(())
+}
+
+/// Name of the pictures' state in a run directory while `sylva run` draws its pictures
+/// ([`main_job`]; removed when the last picture is written).
+pub const PICTURES_STATE_FILE: &str = ".sylva_pictures.json";
+
+/// Version of [`PICTURES_STATE_FILE`]'s layout.
+const PICTURES_STATE_FORMAT: u32 = 1;
+
+/// What [`main_job`] needs to finish a stopped run's pictures without simulating: the run as
+/// asked for (to match a later `sylva run` against), the key frames' index, the stumps, and
+/// the simulation's figures that the checkpoint does not hold.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+struct PicturesState {
+    format: u32,
+    /// The scenario as TOML ([`Scenario::to_toml_string`]).
+    scenario: String,
+    /// The pool's species files (id, TOML).
+    species: Vec<(String, String)>,
+    size: (u32, u32),
+    timelapse_size: (u32, u32),
+    frames_between: u32,
+    fps: f32,
+    /// The last year simulated.
+    year: u32,
+    trees_alive: usize,
+    keyframes: Vec<keyframes::Entry>,
+    stumps: Vec<scene::Stump>,
+    maps: Vec<String>,
+    site_s: f64,
+    sim_s: f64,
+    timings: Vec<PhaseTime>,
+}
+
+impl PicturesState {
+    /// The state of a run whose simulation `s` just ended.
+    fn of(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, keys: &KeyFrames, stumps: &[scene::Stump], s: &MainJobSummary) -> Result<Self> {
+        Ok(PicturesState {
+            format: PICTURES_STATE_FORMAT,
+            scenario: sc.to_toml_string()?,
+            species: pool_species(sc, lib)?,
+            size: opts.size,
+            timelapse_size: opts.timelapse_size,
+            frames_between: opts.frames_between,
+            fps: opts.fps,
+            year: s.sim.year,
+            trees_alive: s.sim.trees_alive,
+            keyframes: keys.index().to_vec(),
+            stumps: stumps.to_vec(),
+            maps: s.maps.clone(),
+            site_s: s.site_s,
+            sim_s: s.sim_s,
+            timings: s.timings.clone(),
+        })
+    }
+
+    /// Writes the state to `out/`[`PICTURES_STATE_FILE`] atomically.
+    fn write(&self, out: &Path) -> Result<()> {
+        let p = out.join(PICTURES_STATE_FILE);
+        let json = serde_json::to_vec(self).map_err(|e| Error::format(&p, e.to_string()))?;
+        crate::output::write_atomic(&p, &json)?;
+        Ok(())
+    }
+
+    /// The state in `out` when it is there, readable, of this layout, and of the same scenario,
+    /// species and picture options, with the key frames and a checkpoint beside it; `None`
+    /// otherwise (the run then starts afresh).
+    fn matching(out: &Path, sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions) -> Option<Self> {
+        let bytes = std::fs::read(out.join(PICTURES_STATE_FILE)).ok()?;
+        let st: PicturesState = serde_json::from_slice(&bytes).ok()?;
+        let same = st.format == PICTURES_STATE_FORMAT
+            && st.scenario == sc.to_toml_string().ok()?
+            && st.species == pool_species(sc, lib).ok()?
+            && (st.size, st.timelapse_size, st.frames_between) == (opts.size, opts.timelapse_size, opts.frames_between)
+            && st.fps.to_bits() == opts.fps.to_bits()
+            && out.join(keyframes::LINKED_FILE).is_file()
+            && out.join(super::checkpoint::FILE).is_file();
+        same.then_some(st)
+    }
+}
+
+/// The pool's species files as [`save_run_species`] writes them: (id, TOML), in pool order.
+fn pool_species(sc: &Scenario, lib: &SpeciesLibrary) -> Result<Vec<(String, String)>> {
+    let pool: Vec<&crate::species::Species> = if sc.species.is_empty() { lib.species.iter().collect() } else { sc.species.iter().filter_map(|name| lib.get(name)).collect() };
+    pool.iter().map(|sp| Ok((sp.id.clone(), sp.to_toml_string()?))).collect()
+}
+
+/// Removes the pictures' state ([`PICTURES_STATE_FILE`], then the key frames
+/// [`keyframes::LINKED_FILE`]) from `out`, where there.
+///
+/// Errors: [`Error::Io`] naming the file that cannot be removed.
+fn remove_pictures_state(out: &Path) -> Result<()> {
+    for f in [PICTURES_STATE_FILE, keyframes::LINKED_FILE] {
+        let p = out.join(f);
+        if p.is_file() {
+            std::fs::remove_file(&p).map_err(|e| Error::io(&p, e))?;
+        }
+    }
+    Ok(())
 }
 
 /// The camera of the close-up still (`stills/year_NNNN_closeup.png`; `sylva render --camera
@@ -827,6 +1074,14 @@ fn write_summary_md(out: &Path, s: &MainJobSummary) -> Result<()> {
         md.push('\n');
     }
     let _ = writeln!(md, "## Result\n\n{table}\n{shares}");
+    if !s.timings.is_empty() {
+        let _ = writeln!(md, "## Where the time went\n\nWall and CPU seconds (user + system, all threads) of each phase; a loaded machine stretches the wall time far more than the CPU time. Also in `timings.csv`.\n\n| phase | wall (s) | CPU (s) |\n|---|---|---|");
+        let num = |v: f64| if v.is_finite() { format!("{v:.1}") } else { "–".to_string() };
+        for t in &s.timings {
+            let _ = writeln!(md, "| {} | {} | {} |", t.phase, num(t.wall_s), num(t.cpu_s));
+        }
+        md.push('\n');
+    }
     let _ = writeln!(md, "## Site and coordinates\n\n{}", s.coordinates_md());
     let _ = writeln!(md, "## Stand development\n\n![stand table](stand_table.png)\n\nData: `stand_table.csv`; inventories: `inventory/`.\n");
     if let Some(f) = &s.film {

@@ -23,5 +23,6 @@ pub mod run;
 pub mod scene;
 pub mod site_ranks;
 pub mod tiled;
+pub mod timing;
 #[cfg(feature = "mpi")]
 pub mod mpi_transport;

@@ -658,47 +658,96 @@ pub fn frame_steps(years: &[u32], frames_between: u32) -> Vec<usize> {
 ///
 /// Errors: as [`timelapse`]; [`Error::Invalid`] when `years` is empty.
 pub fn timelapse_from(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Stage, usize) -> Result<Vec<TreeInstance>>, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
+    let mut times = FilmTimes::default();
+    timelapse_timed(stage, years, key, frames_dir, out_gif, opts, false, &mut times, progress)
+}
+
+/// Where a film's time went ([`timelapse_timed`]): wall and process CPU seconds
+/// ([`crate::job::timing::process_cpu_s`]; 0 where the platform gives none).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct FilmTimes {
+    /// Frames drawn (instances interpolated, rendered, captioned) and written as PNG: wall, CPU (s).
+    pub frames: (f64, f64),
+    /// Frames read back from an earlier, stopped run ([`timelapse_timed`]'s `reuse`).
+    pub reused: usize,
+    /// The GIF's encoding (quantising each frame, writing it) and the MP4's (ffmpeg, a child
+    /// process: its CPU is not the process's): wall, CPU (s).
+    pub encoding: (f64, f64),
+}
+
+/// [`timelapse_from`], adding where its time went to `times`. With `reuse`, frames
+/// `frames_dir/frame_NNNNN.png` of an earlier run of the same film (a `sylva run` stopped
+/// while drawing it; trial 46 D10) are read back instead of drawn, when they decode at the
+/// film's size, and the folder's frames are not removed first.
+///
+/// Errors: as [`timelapse_from`].
+#[allow(clippy::too_many_arguments)]
+pub fn timelapse_timed(stage: &mut Stage, years: &[u32], key: &mut dyn FnMut(&Stage, usize) -> Result<Vec<TreeInstance>>, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, reuse: bool, times: &mut FilmTimes, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
     if years.is_empty() {
         return Err(Error::Invalid { context: "timelapse".into(), field: "snapshots".into(), value: "none".into(), expected: "at least one snapshot year".into() }.into());
     }
     let snaps = years;
     std::fs::create_dir_all(frames_dir).map_err(|e| Error::io(frames_dir, e))?;
-    // frames of an earlier, longer film would otherwise remain beside the new ones
-    remove_frames(frames_dir)?;
+    // frames of an earlier, longer film would otherwise remain beside the new ones (a film
+    // finished after a stop has the same frames: they are read back)
+    if !reuse {
+        remove_frames(frames_dir)?;
+    }
     let steps_of = frame_steps(snaps, opts.frames_between);
     // a film frame's triangles in proportion to its pixels (the stage's budget is restored below)
     let budget = stage.renderer.lod.max_triangles;
     stage.set_triangle_budget(frame_triangle_budget(opts.width, opts.height).min(if budget > 0 { budget } else { u32::MAX }));
-    let film = film_frames(stage, snaps, &steps_of, key, frames_dir, out_gif, opts, progress);
+    let film = film_frames(stage, snaps, &steps_of, key, frames_dir, out_gif, opts, reuse, times, progress);
     stage.set_triangle_budget(budget);
     film
 }
 
 /// The frames of [`timelapse_from`], drawn at the stage's triangle budget.
 #[allow(clippy::too_many_arguments)]
-fn film_frames(stage: &mut Stage, snaps: &[u32], steps_of: &[usize], key: &mut dyn FnMut(&Stage, usize) -> Result<Vec<TreeInstance>>, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
+fn film_frames(stage: &mut Stage, snaps: &[u32], steps_of: &[usize], key: &mut dyn FnMut(&Stage, usize) -> Result<Vec<TreeInstance>>, frames_dir: &Path, out_gif: &Path, opts: &TimelapseOptions, reuse: bool, times: &mut FilmTimes, progress: &mut dyn FnMut(usize, usize)) -> Result<(usize, bool)> {
+    use crate::job::timing::Clock;
     let total = 1 + steps_of.iter().sum::<usize>();
     // the GIF is encoded as the frames come (issue 34: not every frame held to the end)
     let mut gif = crate::output::pictures::GifWriter::new(out_gif, opts.fps)?;
     let mut frames = 0usize;
     let mut prev = key(stage, 0)?;
     let mut k = 0usize;
-    let emit = |stage: &mut Stage, inst: Vec<TreeInstance>, k: usize, year: f32| -> Result<image::RgbaImage> {
+    let mut emit = |stage: &mut Stage, inst: &dyn Fn() -> Vec<TreeInstance>, k: usize, year: f32| -> Result<image::RgbaImage> {
+        let clock = Clock::start();
+        let path = frames_dir.join(format!("frame_{k:05}.png"));
+        // a frame an earlier, stopped run wrote whole (PNGs are written atomically)
+        if reuse {
+            if let Ok(img) = image::open(&path) {
+                if img.width() == opts.width && img.height() == opts.height {
+                    times.reused += 1;
+                    return Ok(img.to_rgba8());
+                }
+            }
+        }
         let u = if total > 1 { k as f32 / (total - 1) as f32 } else { 0.0 };
         let cam = match opts.camera {
             Some(p) => stage.camera_sized(p, opts.width, opts.height),
             None => Camera::orbit(&stage.scene.terrain, 0.05 + 0.25 * u),
         };
-        let mut img = stage.render_instances(inst, opts.season, &cam, opts.width, opts.height)?;
+        let mut img = stage.render_instances(inst(), opts.season, &cam, opts.width, opts.height)?;
         crate::output::maps::stamp_caption(&mut img, &format!("year {}", year.round() as u32))?;
         // a north arrow, but on the map's film (north up)
         if opts.camera != Some(CameraPreset::Map) {
             crate::render::overlay::stamp_north_arrow(&mut img, &cam);
         }
-        crate::output::pictures::write_png(&frames_dir.join(format!("frame_{k:05}.png")), &img)?;
+        crate::output::pictures::write_png(&path, &img)?;
+        clock.add_to(&mut times.frames);
         Ok(img)
     };
-    gif.add(emit(stage, prev.clone(), k, snaps[0] as f32)?)?;
+    let encode = |gif: &mut crate::output::pictures::GifWriter, img: image::RgbaImage, times_enc: &mut (f64, f64)| -> Result<()> {
+        let clock = Clock::start();
+        gif.add(img)?;
+        clock.add_to(times_enc);
+        Ok(())
+    };
+    let mut enc = (0.0, 0.0);
+    let first = emit(stage, &|| prev.clone(), k, snaps[0] as f32)?;
+    encode(&mut gif, first, &mut enc)?;
     frames += 1;
     progress(1, total);
     for (j, w) in snaps.windows(2).enumerate() {
@@ -708,16 +757,20 @@ fn film_frames(stage: &mut Stage, snaps: &[u32], steps_of: &[usize], key: &mut d
         for s in 1..=steps {
             k += 1;
             let t = s as f32 / steps as f32;
-            let inst = timelapse::interpolate(&prev, &next, t);
-            gif.add(emit(stage, inst, k, *y0 as f32 + t * (*y1 as f32 - *y0 as f32))?)?;
+            let img = emit(stage, &|| timelapse::interpolate(&prev, &next, t), k, *y0 as f32 + t * (*y1 as f32 - *y0 as f32))?;
+            encode(&mut gif, img, &mut enc)?;
             frames += 1;
             progress(k + 1, total);
         }
         prev = next;
     }
+    let clock = Clock::start();
     gif.finish()?;
     let mp4 = out_gif.with_extension("mp4");
     let wrote_mp4 = crate::output::pictures::write_mp4(frames_dir, opts.fps, &mp4).unwrap_or(false);
+    clock.add_to(&mut enc);
+    times.encoding.0 += enc.0;
+    times.encoding.1 += enc.1;
     Ok((frames, wrote_mp4))
 }
 

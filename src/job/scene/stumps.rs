@@ -50,7 +50,7 @@ const FACE_RGB: [u8; 3] = [214, 184, 140];
 const WEATHERED_RGB: [u8; 3] = [128, 124, 116];
 
 /// One harvested tree whose stump the pictures draw.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Stump {
     /// Tree id.
     pub id: u64,
