@@ -15,7 +15,7 @@
 //! `SYLVA_STAND_FULL=1` adapts the targets at full detail (`FULL_STRANDS`: every strand of
 //! their species at their age, forest-grown, as stills and `--full-detail` exports draw them;
 //! issue 32's near field) instead of `DEFAULT_MAX_STRANDS`. `SYLVA_STAND_SKY_RINGS=4,8` sets the
-//! sky's rings (`StandOptions::sky_rings`, default 4,8,12: 24 directions); `SYLVA_STAND_HEIGHT_STEP=S`
+//! sky's rings (`StandOptions::sky_rings`, default 4,8,8: 20 directions since round 47, 4,8,12 (24) before); `SYLVA_STAND_HEIGHT_STEP=S`
 //! sets the height classes' step (`StandOptions::height_step`, default 1.25); `SYLVA_STAND_SHAPE_STEP=S`
 //! the crown-shape classes' step (`StandOptions::shape_step`, default 1.1025 since round 41, 1.05
 //! before); `SYLVA_STAND_BEND_CELL=M` and `SYLVA_STAND_LEAF_CELL=M` the cubes (m) within which the

@@ -241,7 +241,8 @@ fn bad_trees_are_refused_with_the_field() {
 
 
 
-/// `StandOptions::sky_rings` (issue 32): the default is `Sky::from_latitude`'s sky bit for bit;
+/// `StandOptions::sky_rings` (issue 32): the default is the near field's 20-direction sky
+/// (`NEAR_FIELD_RINGS`, round 47), `DEFAULT_RINGS` `Sky::from_latitude`'s sky bit for bit;
 /// other rings give the importance-sampled sky of that many directions about the same brightest
 /// point; bad rings are refused naming the field, before any work.
 #[test]
@@ -249,8 +250,14 @@ fn stand_sky_rings_default_fewer_and_refused() {
     use sylva::structure::plastic::light::DEFAULT_RINGS;
     use sylva::structure::plastic::Sky;
     use sylva::structure::stand::stand_sky;
-    assert_eq!(StandOptions::default().sky_rings, DEFAULT_RINGS.to_vec());
+    use sylva::structure::stand::NEAR_FIELD_RINGS;
+    assert_eq!(StandOptions::default().sky_rings, NEAR_FIELD_RINGS.to_vec());
+    // 20 directions about the same point, 3 of them below the horizon
+    let n = stand_sky(47.0, &NEAR_FIELD_RINGS).unwrap();
+    assert_eq!(n.dirs.len(), 17);
+    assert!((n.weights.iter().sum::<f32>() - 1.0).abs() < 1e-5);
     let d = stand_sky(47.0, &DEFAULT_RINGS).unwrap();
+    assert_eq!(n.brightest, d.brightest);
     assert_eq!(d, Sky::from_latitude(47.0));
     // 24 directions about the noon sun at 43° elevation (47° N), 3 of them below the horizon
     assert_eq!(d.dirs.len(), 21);

@@ -91,6 +91,15 @@
 //!    ...)", "Round 41 (r41n: ...)" and "Round 42 (r42n: ...)"; 0, 0 and [`DIM_STEP`] give
 //!    round 40's stands bit for bit (for targets in index order: a cell's trees are adapted
 //!    in index order since round 42).
+//! 7. **The near field's sky has 20 directions** ([`NEAR_FIELD_RINGS`], rings 4, 8, 8 of the
+//!    importance-sampled sky of eq. 3, where a single tree's analysis keeps
+//!    [`DEFAULT_RINGS`], 4, 8, 12: 24). The cost of the near field is about linear in the
+//!    directions; the adapted near field of `benches/stand.rs` with 20 directions is as far
+//!    from one adapted under a 32-direction sky as the 24-direction one (mean |Δ light| of the
+//!    leaf clusters 0.0268 against 0.0292; crown radius per tree 2.66 % against 2.69 %), because
+//!    the adaptation's own chaos sets that distance (BENCHMARKS.md, rounds 32 and 42), for
+//!    about 14 % less time (round 47). Eq. (3)'s quadrature on one tree is coarser with 20
+//!    directions (mean |Δi| 0.0203 against 0.0186 at a 5,872-direction reference, round 32).
 
 use super::grow::ecomod;
 use super::species_tree::{ecomod_strands_at, ECOMOD_FULL_AGE_YR};
@@ -179,6 +188,11 @@ pub const DIM_STEP: f32 = 1.05;
 /// (BENCHMARKS.md, "Round 40 (r40n: ...)" and "Round 41 (r41n: ...)").
 pub const SHAPE_STEP: f32 = DIM_STEP * DIM_STEP;
 
+/// Default rings of the near field's importance-sampled sky ([`StandOptions::sky_rings`]):
+/// 4, 8 and 8 directions about the brightest sky point, 20 in all (17 above the horizon at
+/// 47° N), since round 47; [`DEFAULT_RINGS`] (24) before. Module docs, step 7.
+pub const NEAR_FIELD_RINGS: [usize; 3] = [4, 8, 8];
+
 /// Default side (m) of the cubes within which an adapted tree's nodes bent at one level share
 /// one bending-light query ([`StandOptions::bend_light_cell_m`]): 0.25 m. Round 40 measured it
 /// on the 1,000 targets of `benches/stand.rs`: −6.4 % CPU, the leaf clusters' light moved by
@@ -210,10 +224,12 @@ pub struct StandOptions {
     /// Rings of the importance-sampled sky of eq. (3) (Plastic Trees, `000_*.txt`) that the
     /// analyses and the adaptation use: directions per ring around the brightest sky point,
     /// innermost first, each a positive multiple of 4, 1–32 in all ([`Sky::with_rings`]).
-    /// Default [`DEFAULT_RINGS`] (`[4, 8, 12]`, 24 directions: [`Sky::from_latitude`]'s sky,
-    /// bit for bit). The cost of the near field is about linear in the directions (issue 32);
-    /// fewer are coarser: BENCHMARKS.md, rounds 11 and 32, gives the error of each ring set
-    /// against a reference of 5,872 directions (`examples/sky_quadrature`).
+    /// Default [`NEAR_FIELD_RINGS`] (`[4, 8, 8]`, 20 directions, since round 47; module docs,
+    /// step 7); [`DEFAULT_RINGS`] (`[4, 8, 12]`, 24) gives [`Sky::from_latitude`]'s sky bit for
+    /// bit, the near field of rounds 11–46. The cost of the near field is about linear in the
+    /// directions (issue 32); fewer are coarser: BENCHMARKS.md, rounds 11 and 32, gives the
+    /// error of each ring set against a reference of 5,872 directions (`examples/sky_quadrature`),
+    /// round 42 the adapted near field's distance from a 32-direction one.
     pub sky_rings: Vec<usize>,
     /// Relative step of the height classes of the adapted trees that share one analysis
     /// (> 1, at most 4): a tree is its class's analysed tree scaled by a factor within
@@ -244,12 +260,12 @@ pub struct StandOptions {
 }
 
 impl Default for StandOptions {
-    /// Cells of 12 m, a halo of 6 m, latitude 47° N, no obstacles, the default sky
-    /// ([`DEFAULT_RINGS`]), height classes of [`HEIGHT_STEP`], crown-shape classes of
+    /// Cells of 12 m, a halo of 6 m, latitude 47° N, no obstacles, the near field's sky
+    /// ([`NEAR_FIELD_RINGS`]), height classes of [`HEIGHT_STEP`], crown-shape classes of
     /// [`SHAPE_STEP`], bending light shared in cubes of [`BEND_LIGHT_CELL_M`], every leaf
     /// cluster its own light query.
     fn default() -> Self {
-        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: DEFAULT_RINGS.to_vec(), height_step: HEIGHT_STEP, shape_step: SHAPE_STEP, bend_light_cell_m: BEND_LIGHT_CELL_M, leaf_light_cell_m: 0.0, bend_light_whole_level: true }
+        StandOptions { cell_m: 12.0, halo_m: 6.0, latitude_deg: 47.0, obstacles: Vec::new(), sky_rings: NEAR_FIELD_RINGS.to_vec(), height_step: HEIGHT_STEP, shape_step: SHAPE_STEP, bend_light_cell_m: BEND_LIGHT_CELL_M, leaf_light_cell_m: 0.0, bend_light_whole_level: true }
     }
 }
 
