@@ -227,29 +227,6 @@ pub fn dense_height_bound(hd: DenseHd, d_cm: f32) -> f32 {
     BREAST_HEIGHT_M + hd.k * d_cm.powf(1.0 + hd.c) / 100.0
 }
 
-/// The slenderest stem (total height over DBH, m/m) a tree with a DBH may grow to: 140,
-/// TreeGrOSS's youth slenderness (BWINPro 7 / TreeGrOSS, Nagel, NW-FVA,
-/// `Tree.youthGrowth`: `d = h / 1.40` for young trees of the species codes 200–299, beech and
-/// the other long-lived broadleaves; `life.closed_hd` of beech.toml cites it), the H/D at which
-/// the NW-FVA growth simulator starts its young stems. Issue 32, round 47 (trial 46 D8): the
-/// dense-stand curve counted from breast height ([`dense_height_bound`]) allows
-/// `130 / D + k · D^c`, 177 at 7 cm for beech (k 323.63, c −0.3676: a 12.38 m stem on 7.0 cm)
-/// and Norway maple, 216 + 43 at 3 cm, where foresters call H/D above 100 unstable and rarely
-/// measure more than about 150 in unthinned young stands. Applied to every species with a
-/// dense-stand curve (the value is TreeGrOSS's for the broadleaves of codes 200–299; for the
-/// others it is an ESTIMATE of the same order: their own curves reach 140 below 3–10 cm only).
-pub const HD_MAX: f32 = 140.0;
-
-/// Tallest height (m) the slenderness bound [`HD_MAX`] allows a tree of DBH `d_cm` (> 0):
-/// `max(BREAST_HEIGHT_M, HD_MAX · D / 100)` — below 0.93 cm, where 140 · D is below breast
-/// height, the bound is breast height (a tree with a DBH stands at least that tall). Like the
-/// dense-stand bound it cuts height growth only: a tree above it keeps its height until its
-/// DBH catches up ([`run`]).
-#[inline]
-pub fn slenderness_bound(d_cm: f32) -> f32 {
-    (HD_MAX * d_cm / 100.0).max(BREAST_HEIGHT_M)
-}
-
 /// Updated state of one tree after a growing season.
 #[derive(Clone, Copy)]
 struct Grown {
@@ -334,8 +311,7 @@ pub struct Growth<'a> {
 ///
 /// Dense-stand height bound (issue 35; for species with `life.dense_hd`, none without): after
 /// the season, a tree with a DBH `D₁ > 0` may not be taller than
-/// [`dense_height_bound`]`(D₁)` nor slenderer than [`HD_MAX`] (140 m/m, [`slenderness_bound`];
-/// round 47): `H₁ ← max(H, min(H₁, h_max(D₁), max(1.3, 1.4 D₁)))` — the height increment is
+/// [`dense_height_bound`]`(D₁)`: `H₁ ← max(H, min(H₁, h_max(D₁)))` — the height increment is
 /// cut to what the species' dense-stand H/D curve allows at the new DBH, and a tree already
 /// above it (planted, recruited or grown so before) keeps its height until its DBH catches up
 /// (trees do not shrink). Trees below breast height (no DBH) are not bounded. The diameter
@@ -623,7 +599,7 @@ fn finish(sp: &Species, dbh_of: &Table<OpenDbh>, bound: Option<(DenseHd, f32)>, 
     let d1 = d1.min(sp.life.max_dbh_cm);
     let h1 = match bound {
         // a tree no slenderer than the curve's lowest H/D is within it at any DBH
-        Some((hd, hd_min)) if d1 > 0.0 && h1 * 100.0 > hd_min * d1 => h1.min(dense_height_bound(hd, d1)).min(slenderness_bound(d1)).max(h),
+        Some((hd, hd_min)) if d1 > 0.0 && h1 * 100.0 > hd_min * d1 => h1.min(dense_height_bound(hd, d1)).max(h),
         _ => h1,
     };
     let lc = l.clamp(0.0, 1.0);
@@ -933,20 +909,9 @@ mod tests {
         let grown = |h: f32, h1: f32, d1: f32| finish(&b, &dbh_of, bound, 0.5, 10.0, 0.5, h, h1, d1, 0.0, 1.0, 1.0, 1.0).h;
         // 9.68 m on 2 cm (H/D 484, the round-27 trial's birch): no height growth until the DBH catches up
         assert_eq!(grown(9.68, 9.9, 2.0), 9.68);
-        // 4 m growing to 7 m on 2 cm: the curve allows 6.317 m (H/D 316), the slenderness
-        // bound 2.8 m (H/D 140, round 47): a tree already above it keeps its 4 m; 2.5 m growing
-        // to 3.5 m on 2 cm: cut to 2.8 m
-        assert_eq!(grown(4.0, 7.0, 2.0), 4.0);
-        assert!((grown(2.5, 3.5, 2.0) - 2.8).abs() < 1e-5);
-        // 7 cm (trial 46 D8: beech of 12.38 m on 7.0 cm, H/D 177, on the curve counted from
-        // breast height): now 9.8 m at most, H/D 140
-        assert!((dense_height_bound(hd, 7.0) - 12.38).abs() < 0.01, "{}", dense_height_bound(hd, 7.0));
-        assert!((grown(9.0, 12.5, 7.0) - 9.8).abs() < 1e-5);
-        // 10 cm: the curve (15.18 m, H/D 152) is cut to 14.0 m; within both (12 m): unchanged
-        assert!((grown(13.0, 15.5, 10.0) - 14.0).abs() < 1e-5);
-        assert_eq!(grown(11.5, 12.0, 10.0), 12.0);
-        // below 0.93 cm the bound is breast height
-        assert_eq!(slenderness_bound(0.5), BREAST_HEIGHT_M);
+        // 4 m growing to 7 m on 2 cm: cut to the curve; to 6 m: within it
+        assert!((grown(4.0, 7.0, 2.0) - 6.317).abs() < 0.01);
+        assert_eq!(grown(4.0, 6.0, 2.0), 6.0);
         // within the curve (20 m on 30 cm, H/D 67; the curve allows 29.1 m): unchanged
         assert_eq!(grown(19.5, 20.0, 30.0), 20.0);
         // below breast height, no DBH: unchanged
