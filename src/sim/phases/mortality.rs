@@ -100,8 +100,9 @@ pub fn stress_threshold(st: f32) -> f32 {
 /// ([`crate::species::Species::drought_limit`] of the year's F, `sqrt(1 − DI / kDrTol)`) is
 /// below 0.1 is a drought stress year there. ForClim counts a tree's consecutive years whose
 /// growth reduction factor is below `kMinRelInc` (ForClim v3.0 documentation, eq. 4.30, the
-/// slow-growth counter `sGr` of `Cohort.Grow`; the "10 % of optimal growth" of Bugmann 1994 and
-/// Bugmann & Cramer 1998). Sylva keeps ForClim's 0.1 and counts the drought part of the growth
+/// slow-growth counter `sGr` of `Cohort.Grow`, as a public Java port of ForClim's C# `Cohort.cs`
+/// quotes them in the code search corpus; the 10 % of optimal growth of Bugmann's gap models).
+/// Sylva keeps 0.1 and counts the drought part of the growth
 /// reduction only: light and crowding have their own mortality ([`p_shade`], the vigour's
 /// [`stress_threshold`]), whose threshold for shade-tolerant species (0.02 for beech) a drought
 /// alone never reached: the vigour memory `v ← 0.5 v + 0.5 S` settles at half of a starved
@@ -109,11 +110,10 @@ pub fn stress_threshold(st: f32) -> f32 {
 pub const DROUGHT_STRESS_LIMIT: f32 = 0.1;
 
 /// Consecutive drought stress years ([`DROUGHT_STRESS_LIMIT`]) after which a tree faces
-/// [`P_STRESS`] a year: 3, ForClim's stress memory (a count above `kSlowGrowThreshold` = 2;
-/// ForClim v3.0 eq. 4.30; Bugmann 1994's "three successive years" of slow growth before stress
-/// mortality). ESTIMATE where the two ForClim versions' defaults are not at hand: the 3 years
-/// are the form of the rule in Bugmann's thesis as read in the secondary literature, not
-/// checked against the table.
+/// [`P_STRESS`] a year: 3, the form of ForClim's stress memory (mortality once the count exceeds
+/// `kSlowGrowThreshold`; ForClim v3.0 eq. 4.30). ESTIMATE: ForClim's default of
+/// `kSlowGrowThreshold` was not found in a citable table; 3 years (a threshold of 2) is the
+/// value assumed here.
 pub const DROUGHT_STRESS_YEARS: u32 = 3;
 
 /// Whether a tree of a species with drought limit `limit(F)` stood in drought stress in each of
