@@ -49,7 +49,7 @@ fn alive_in_shade(id: &str, top: f32, years: u32) -> Vec<usize> {
     let (mut dead, mut totals) = (Vec::new(), [0u64; N_CAUSES]);
     let mut alive = Vec::new();
     for year in 0..years {
-        mortality::run(Mortality { seed: 7, year, site: &site, lib: &lib, light: &light, window: None, canopy_top: &canopy_top, trees: &mut trees, dead: &mut dead, deaths_total: &mut totals });
+        mortality::run(Mortality { seed: 7, year, site: &site, lib: &lib, change: &Default::default(), light: &light, window: None, canopy_top: &canopy_top, trees: &mut trees, dead: &mut dead, deaths_total: &mut totals });
         alive.push(trees.len());
         if trees.len() <= 2000 {
             break;

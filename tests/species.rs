@@ -674,3 +674,48 @@ fn mature_form_is_read_from_the_species_file_and_checked() {
     assert_eq!((m.from_age_yr, m.full_age_yr, m.trunk_k_s, m.trunk_alpha_deg, m.limb_alpha_m_deg, m.leaf_distribution), (50.0, 120.0, 0.8, 60.0, 5.0, LeafDistribution::Spiral));
     assert_eq!(Species::from_toml_str(&b.to_toml_string().unwrap(), "rt.toml").unwrap(), b, "round trip");
 }
+
+/// Every shipped species' `life.drought_tolerance` is ForClim 2.x's `kDrTol` of its scientific
+/// name (round 47, the broadleaves checked as the brief asked; trial 46 D4). The table is the
+/// 30-species Central European parameter set of ForClim 2.x as a ForClim-derived model ("ForDem",
+/// a public R script in the code search corpus, `selected_species_pars`: kHMax, kDDMin, kDrTol,
+/// ...) carries it, whose kDDMin column equals LandClim's minDegreeDays species by species
+/// (species/sources/SOURCES.md, "Shade survival and drought tolerance"). Bugmann 1994's Tab.
+/// 3.11 (FORCLIM-P's Thornthwaite-Mather DrT) differs for the conifers compared (spruce 0.06,
+/// fir 0.18, Scots pine 0.3, larch 0.12) and its broadleaf rows were not legible in the copy at
+/// hand; SOURCES.md says why the later set goes with Sylva's bucket water balance. The test
+/// fails when a file's value leaves the published set, and checks the ranking trial 46 asked
+/// for: both oaks at least as drought-tolerant as beech, sessile oak more.
+#[test]
+fn drought_tolerances_are_forclim_2_kdrtol() {
+    let lib = SpeciesLibrary::load_dir(&species_dir()).unwrap();
+    let forclim: [(&str, f32); 17] = [
+        ("Abies alba", 0.23),
+        ("Larix decidua", 0.25),
+        ("Picea abies", 0.15),
+        ("Pinus sylvestris", 0.37),
+        ("Acer platanoides", 0.25),
+        ("Acer pseudoplatanus", 0.25),
+        ("Alnus glutinosa", 0.08),
+        ("Betula pendula", 0.16),
+        ("Carpinus betulus", 0.25),
+        ("Fagus sylvatica", 0.25),
+        ("Fraxinus excelsior", 0.16),
+        ("Populus tremula", 0.25),
+        ("Quercus petraea", 0.33),
+        ("Quercus robur", 0.25),
+        ("Sorbus aucuparia", 0.33),
+        ("Tilia cordata", 0.33),
+        ("Ulmus glabra", 0.25),
+    ];
+    let mut seen = 0;
+    for sp in &lib.species {
+        let name = sp.identity.scientific_name.as_str();
+        let want = forclim.iter().find(|(n, _)| name.starts_with(n)).unwrap_or_else(|| panic!("{}: {name} not in ForClim 2.x's table", sp.id)).1;
+        assert_eq!(sp.life.drought_tolerance, Some(want), "{} ({name})", sp.id);
+        seen += 1;
+    }
+    assert_eq!(seen, 17, "every shipped species checked");
+    let tol = |id: &str| lib.species[lib.find(id).unwrap() as usize].life.drought_tolerance.unwrap();
+    assert!(tol("sessile_oak") > tol("beech") && tol("pedunculate_oak") >= tol("beech"));
+}

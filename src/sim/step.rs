@@ -72,7 +72,7 @@ pub const PHASES: [Phase; N_PHASES] = [
     Phase { name: "regeneration", summary: "spring: germination, growth, thinning and recruitment of the sapling cohorts", ends: Some(Season::Spring), run: run_regeneration, halo: Halo::None },
     Phase { name: "growth", summary: "summer: crowding of every tree's neighbourhood; height, DBH and crown increments", ends: Some(Season::Summer), run: run_growth, halo: Halo::Crowding },
     Phase { name: "reproduction", summary: "autumn: seed production and dispersal onto the seed grids", ends: Some(Season::Autumn), run: run_reproduction, halo: Halo::SeedSources },
-    Phase { name: "mortality", summary: "winter: senescence, background, stress and wind deaths", ends: None, run: run_mortality, halo: Halo::None },
+    Phase { name: "mortality", summary: "winter: senescence, background, stress (drought stress years under a changing climate included) and wind deaths", ends: None, run: run_mortality, halo: Halo::None },
     Phase { name: "management", summary: "the year's end: thinnings, harvests, clearings kept open (cause `harvest`) and plantings of the scenario's `[[management]]` entries due", ends: None, run: run_management, halo: Halo::Areas },
     Phase { name: "stats", summary: "the year ends: stand-table row of the year", ends: Some(Season::Winter), run: run_stats, halo: Halo::None },
 ];
@@ -171,6 +171,7 @@ fn run_mortality(w: &mut World, _: &mut YearReport) {
         year: w.stand.year,
         site: &w.site.conditions,
         lib: &w.site.lib,
+        change: &w.site.climate_change,
         light: &w.site.light,
         window: w.site.window,
         canopy_top: &w.scratch.canopy_top,
