@@ -545,14 +545,34 @@ fn crown_unmap(z: f32, b0: f32, b: f32) -> f32 {
 // Least width (px) of a tree's stem drawn at the crown-hull or billboard level (issue 32: small
 // trees' stems, thinner than a pixel, vanished and their crowns floated over the ground).
 const MIN_STEM_PX: f32 = 1.2;
-// Least share of its bark colour a widened coarse stem keeps (fs_tree): a birch's white is
-// dimmed to a grey under the crown hull rather than a white stick, a small tree's stem stays
-// visible.
-const MIN_STEM_BARK: f32 = 0.4;
 
-// Linear albedo of the shaded stand interior behind a distant tree's trunk (dark foliage and
-// twigs under the canopy): what a widened trunk's pixel shows beside the real trunk.
-const STAND_SHADE: vec3<f32> = vec3<f32>(0.035, 0.045, 0.03);
+// Stems by coverage (issue 32, round 47, trial 45 defect 6: "some stems 1-px wires from canopy
+// to ground"). A stem widened to MIN_STEM_PX covers only `cover` (0..1: its real width over the
+// drawn one) of the drawn width; until round 46 every sample of it was drawn opaque, a mix of
+// its bark and a dark stand colour, so a stem of a tenth of a pixel darkened a whole line of
+// pixels: a wire. Now a widened stem's fragment writes its full bark colour to k of the pixel's
+// STEM_SAMPLES samples (`stem_mask`, the fragment's sample mask), k = ⌊STEM_SAMPLES·cover + t⌋
+// with t an ordered threshold 0..1, so what is behind the stem shows in the others: its mean
+// over the stem's pixels is its bark over `cover` of their area, the area-sampled (box-filtered)
+// image of a thin line (Crow 1977, "The aliasing problem in computer-generated shaded images",
+// CACM 20(11)), over whatever lies behind (sky, ground, stand). t is Jimenez's (2014, "Next
+// generation post processing in Call of Duty: Advanced Warfare", SIGGRAPH course) interleaved
+// gradient noise (`ign`), offset per tree: along a pixel column it steps by 0.309 per row, so
+// the rounding is spread evenly down the stem. A stem of at least a quarter of MIN_STEM_PX's
+// coverage (0.3 px) keeps a sample in every pixel of it; a thinner one a share 4·cover of its
+// pixels, evenly spaced. The k samples are a run of the mask rotated by a second threshold, so
+// a single-sampled target (the near field's "tree 1x" pass) keeps its one sample with
+// probability k / STEM_SAMPLES: the same mean.
+const STEM_SAMPLES: f32 = 4.0;
+
+// The sample mask of a widened stem's fragment covering `cover` (0..1) of its drawn width.
+fn stem_mask(i: TreeOut, cover: f32) -> u32 {
+    let p = i.clip.xy + vec2<f32>(fract(i.salt * 0.754877) * 61.0, fract(i.salt * 0.569840) * 67.0);
+    let k = u32(clamp(floor(STEM_SAMPLES * clamp(cover, 0.0, 1.0) + ign(p)), 0.0, STEM_SAMPLES));
+    let o = u32(ign(p.yx + vec2<f32>(17.0, 29.0)) * STEM_SAMPLES) & 3u;
+    let run = (1u << k) - 1u;
+    return ((run << o) | (run >> (4u - o))) & 15u;
+}
 
 // `top_scale`: size of the billboard's top quad (1: the crown's plan disc, in both passes).
 fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
@@ -872,7 +892,7 @@ struct Carve {
     // towards the viewer (outline units, relative to the crown radius; × `rad`: m): w·√(1 −
     // (a/w)²) of the crown's half-width w at this height, the crown taken as round in plan
     depth: f32,
-    // trunk: the share of the drawn (widened) trunk's width the real trunk covers (0..1)
+    // trunk: the share of the pixel's width the trunk covers (0..1)
     cover: f32,
     // side quad's crown: the normal of the crown as a round solid (an ellipsoid about its
     // middle, no lumps): where its surface turns from the sun
@@ -880,7 +900,7 @@ struct Carve {
 };
 
 // `apx`: outline units (`i.bb.x`) per pixel across the quad (fwidth, taken in uniform control
-// flow by the caller): the trunk is at least MIN_STEM_PX wide.
+// flow by the caller): the trunk's share of each pixel's width (`cover`).
 fn carve(i: TreeOut, apx: f32) -> Carve {
     var r: Carve;
     r.kind = 0u;
@@ -917,10 +937,17 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
             r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.3 * nz + 0.35) + f * sqrt(max(1.0 - na * na, 0.0)));
             // each lump is a small dome of its own: its shading bends the normal about it
             r.n = normalize(r.n + right_of(f) * (l - 0.5) * look.z * 1.5);
-        } else if (abs(a) < max(s.info.z, 0.5 * MIN_STEM_PX * apx) && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
-            r.kind = 2u;
-            r.n = normalize(i.normal);
-            r.cover = clamp(s.info.z / max(0.5 * MIN_STEM_PX * apx, 1e-6), 0.0, 1.0);
+        } else if (z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
+            // the trunk, |a| < its half-width s.info.z: the share of the pixel's width (apx
+            // across, centred on a) it covers, its box-filtered (area-sampled) coverage (Crow
+            // 1977; round 47: before, a pixel whose centre lay within MIN_STEM_PX / 2 of the
+            // axis was the trunk's, at least 1.2 px of it)
+            let ov = min(a + 0.5 * apx, s.info.z) - max(a - 0.5 * apx, -s.info.z);
+            if (ov > 0.0) {
+                r.kind = 2u;
+                r.n = normalize(i.normal);
+                r.cover = clamp(ov / max(apx, 1e-6), 0.0, 1.0);
+            }
         }
     } else {
         let q = i.bb;
@@ -1063,8 +1090,16 @@ fn birch_bark(b: vec3<f32>, lp: vec3<f32>, zpx: f32, xypx: f32, salt: f32) -> ve
     return mix(c, BIRCH_DARK, dark * 0.85);
 }
 
+// fs_tree's output: the colour and the sample mask (all samples but a widened stem's,
+// `stem_mask`).
+struct TreeFrag {
+    @location(0) color: vec4<f32>,
+    @builtin(sample_mask) mask: u32,
+};
+
 @fragment
-fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32> {
+fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> TreeFrag {
+    var mask = 0xffffffffu;
     let apx = fwidth(i.bb.x);
     let zpx = fwidth(i.lp.z);
     let xypx = length(fwidth(i.lp.xy));
@@ -1119,10 +1154,11 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         }
         if (c.kind == 2u) {
             leafy = 0.0;
-            // a trunk widened to MIN_STEM_PX shows its bark over the share of the pixel the
-            // real trunk covers, the shaded stand behind it over the rest (round 35: a birch's
-            // white bark, 1.2 px wide on every distant birch, frosted the oblique still)
-            albedo = mix(STAND_SHADE, i.bark, c.cover);
+            // a billboard's trunk: its bark over the share `cover` of the pixel it covers, what
+            // is behind it over the rest (`stem_mask`; rounds 35 to 46 a pixel line at least
+            // 1.2 px wide, opaque, the rest of it a dark stand colour: a wire)
+            mask = stem_mask(i, c.cover);
+            albedo = i.bark;
         }
     } else {
         if (!ff) {
@@ -1178,13 +1214,11 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
             leafy = 0.3;
         }
     } else if (i.mat_s.x < 0.5 && i.lp.w < WIDENED_BELOW) {
-        // a coarse level's stem widened to MIN_STEM_PX: its bark over the share of the width
-        // the real stem covers, the shaded stand behind it over the rest, as the billboard's
-        // trunk (round 40: birches' white stems, widened, read as white sticks under the
-        // crown hulls from above)
-        // (at least MIN_STEM_BARK of it: a small tree's stem still reads as a stem, issue 32
-        // round 36)
-        albedo = mix(STAND_SHADE, albedo, max(i.lp.w, MIN_STEM_BARK));
+        // a coarse level's stem widened to MIN_STEM_PX: its bark over the share `lp.w` of the
+        // width the real stem covers, what is behind it over the rest, as the billboard's trunk
+        // (`stem_mask`, round 47; rounds 36 to 46: opaque, the bark mixed with a dark stand
+        // colour by that share but at least 0.4 bark, a wire from crown to ground)
+        mask = stem_mask(i, i.lp.w);
     } else if (i.mat_s.x < 0.5 && i.uv.y >= 0.0) {
         // mesh bark away from the stem: fine twigs are dark whatever the stem's colour (a
         // birch's white bark is on its stem and main limbs only)
@@ -1224,7 +1258,7 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32
         c = c + trans * ao;
     }
     // trees on the faded surroundings dissolve into the sky with their ground
-    return vec4<f32>(surroundings_fade(fog(c, i.world), i.world, i.info.z), 1.0);
+    return TreeFrag(vec4<f32>(surroundings_fade(fog(c, i.world), i.world, i.info.z), 1.0), mask);
 }
 
 @vertex
