@@ -15,7 +15,7 @@ use sylva::render::terrain::{from_grid, LandCover};
 
 #[path = "common/render.rs"]
 mod render_common;
-use render_common::{out_dir, with_renderer};
+use render_common::{lin_lum, out_dir, with_renderer};
 
 /// Flat 200 m terrain at z = 0, two prototypes, the given trees; sun high in the south-east.
 fn flat_scene(trees: Vec<TreeInstance>) -> Scene {
@@ -762,19 +762,6 @@ fn no_data_hole_is_a_hole_in_the_map_still() {
     assert!(rim_max <= bright + 36, "a bright wall at the hole's rim: {rim_max} vs the ground's brightest {bright} (sum of sRGB levels)");
 }
 
-/// Linear luminance (Rec. 709 weights) of an sRGB pixel.
-fn luminance(p: &image::Rgba<u8>) -> f64 {
-    let l = |c: u8| {
-        let c = c as f64 / 255.0;
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
-    0.2126 * l(p.0[0]) + 0.7152 * l(p.0[1]) + 0.0722 * l(p.0[2])
-}
-
 /// Round 47 (issue 32, trial 45 defect 6: "some stems 1-px wires from canopy to ground"):
 /// a stem thinner than a pixel is drawn with its coverage. Eight trees 20 m tall with a clear
 /// stem to 12 m and thin stems (crown radius 1.5 m, the stem scaled with it), 300 m away
@@ -818,7 +805,7 @@ fn thin_stems_darken_a_picture_by_their_coverage() {
                 want[level] = 8;
                 assert_eq!(st.per_level, want, "{s}x: level {level}");
                 img_save(&img, &format!("thin_stems_level{level}_{s}x.png"));
-                let d: f64 = (ya * s..yb * s).flat_map(|y| (0..w * s).map(move |x| (x, y))).map(|(x, y)| luminance(bg.get_pixel(x, y)) - luminance(img.get_pixel(x, y))).sum();
+                let d: f64 = (ya * s..yb * s).flat_map(|y| (0..w * s).map(move |x| (x, y))).map(|(x, y)| lin_lum(bg.get_pixel(x, y)) - lin_lum(img.get_pixel(x, y))).sum();
                 dark.push(d / (s * s) as f64);
             }
             let ratio = dark[0] / dark[1];
