@@ -1256,6 +1256,16 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> TreeFrag {
         let back = max(-dot(n, g.sun_dir.xyz), 0.0);
         let trans = albedo * vec3<f32>(1.1, 1.15, 0.6) * g.sun_color.rgb * (0.3 * back * light_sh(sh0) * through * sun_gain());
         c = c + trans * ao;
+        // and the sky light falling on their upper sides, through the leaf with the same
+        // transmittance: the sky part of the hemisphere ambient that `shade_sh` gives an
+        // up-facing normal (amb_col × 0.42), canopy-occluded as the ground's (`sky_visibility`),
+        // on leaves facing down (round 47: under the clearer air of the Koschmieder haze the
+        // canopy seen from a ground view under a closed stand went near black, 3.4 % of the
+        // view under 14/255 in every channel (tests/render_species.rs,
+        // patch_stand_from_oblique_and_ground_has_no_black_foliage; 0.0 % with this light): main's
+        // haze of 0.1 / terrain size per metre had veiled it)
+        let sky_up = mix(vec3<f32>(0.55, 0.55, 0.5), mix(g.sky_horizon.rgb, g.sky_zenith.rgb, 0.5), 0.5) * 0.42;
+        c = c + albedo * vec3<f32>(1.1, 1.15, 0.6) * sky_up * (0.3 * max(-n.z, 0.0) * light_sh(sky_visibility(i.world, n)) * sky_gain()) * ao;
     }
     // trees on the faded surroundings dissolve into the sky with their ground
     return TreeFrag(vec4<f32>(surroundings_fade(fog(c, i.world), i.world, i.info.z), 1.0), mask);
