@@ -730,11 +730,7 @@ pub fn main_job(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, sink
         summary.stills = stills;
         summary.film = Some(film);
     }
-    summary.pictures_s = t_pic.elapsed().as_secs_f64();
-    summary.total_s = t0.elapsed().as_secs_f64();
-    write_summary_md(&out, &summary)?;
-    write_timings_csv(&out, &summary.timings)?;
-    remove_pictures_state(&out)?;
+    seal(&out, &mut summary, t_pic, t0)?;
     match no_adapter {
         Some(e) => context(Err(JobError::from(e)), || "the pictures of the run (the maps, tables and inventories are written; `--no-pictures` skips the pictures on purpose)".into()),
         None => Ok(summary),
@@ -779,12 +775,19 @@ fn finish_pictures(sc: &Scenario, lib: &SpeciesLibrary, opts: &MainJobOptions, s
     let (stills, film) = pictures_of(sc, site, lib, keys, last, &state.stumps, opts, true, &mut summary.timings, sink)?;
     summary.stills = stills;
     summary.film = Some(film);
+    seal(&out, &mut summary, t_pic, t0)?;
+    Ok(summary)
+}
+
+/// The end of a run's pictures (a whole run's or a finished one's): the pictures' and the
+/// run's wall seconds into `summary`, then `summary.md` and `timings.csv` written and the
+/// pictures' state removed (the run is complete).
+fn seal(out: &Path, summary: &mut MainJobSummary, t_pic: Instant, t0: Instant) -> Result<()> {
     summary.pictures_s = t_pic.elapsed().as_secs_f64();
     summary.total_s = t0.elapsed().as_secs_f64();
-    write_summary_md(&out, &summary)?;
-    write_timings_csv(&out, &summary.timings)?;
-    remove_pictures_state(&out)?;
-    Ok(summary)
+    write_summary_md(out, summary)?;
+    write_timings_csv(out, &summary.timings)?;
+    remove_pictures_state(out)
 }
 
 /// The main job's pictures: stills at the still years (with the stumps of `stumps` cut in the
