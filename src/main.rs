@@ -55,9 +55,12 @@ fn main() -> std::process::ExitCode {
     cli::init_logging(cli.verbose);
     // commands without a stop flag of their own: a stop clears the file being written
     if matches!(cli.command, Command::Export(_) | Command::Render(_) | Command::Timelapse(_) | Command::Tree(_) | Command::Terrain(_)) {
-        let _ = ctrlc::set_handler(|| {
+        // a timelapse's finished frames are whole files and stay (trial 47 D10: the message
+        // said nothing was left)
+        let kept = if matches!(cli.command, Command::Timelapse(_)) { "; the film's finished frames stay in the `frames/` folder beside --out" } else { "" };
+        let _ = ctrlc::set_handler(move || {
             sylva::output::remove_pending_temporaries();
-            eprintln!("stopped (Ctrl-C or SIGTERM): nothing half-written is left");
+            eprintln!("stopped (Ctrl-C or SIGTERM): nothing half-written is left{kept}");
             std::process::exit(130);
         });
     }
