@@ -348,8 +348,7 @@ mod tests {
         let (c, r) = ((20.0 + (x / 10.0) - 0.5).round() as usize, (10.0 + 20.0 - y / 10.0 - 0.5).round() as usize);
         assert_eq!(g.heights.data[at(x, y)], *full.elevation.get(c, r));
         let f_near = g.fade[at(-5.0, 75.0)];
-        // (the fade starts at SURROUNDINGS_CLEAR, 60 % of the 100 m margin, since round 47)
-        let f_mid = g.fade[at(-75.0, 75.0)];
+        let f_mid = g.fade[at(-55.0, 75.0)];
         let f_far = g.fade[at(-95.0, 75.0)];
         assert!(f_near == 0.0 && f_mid > 0.0 && f_mid < f_far && f_far > 0.95, "{f_near} {f_mid} {f_far}");
         // the nodata corner (columns 40-59, rows 0-7: x ≥ 205 m, y ≥ 225 m) is filled flat and
