@@ -8,14 +8,14 @@ use std::path::PathBuf;
 
 use glam::Vec3;
 use sylva::render::camera::{Camera, CameraPreset};
-use sylva::render::headless::{Culling, LightTerms, Renderer};
+use sylva::render::headless::{Culling, Renderer};
 use sylva::render::lod::{select_lod, LodParams};
 use sylva::render::scene::{demo_scene, Scene, Sky, Sun, TreeInstance, Wind};
 use sylva::render::terrain::{from_grid, LandCover};
 
 #[path = "common/render.rs"]
 mod render_common;
-use render_common::{lin_lum, out_dir, with_renderer};
+use render_common::{out_dir, with_renderer};
 
 /// Flat 200 m terrain at z = 0, two prototypes, the given trees; sun high in the south-east.
 fn flat_scene(trees: Vec<TreeInstance>) -> Scene {
@@ -433,7 +433,9 @@ fn cross_fade_draws_both_levels_with_complementary_masks_on_both_paths() {
 fn billboard_has_a_tree_silhouette_not_a_box() {
     let (w, h) = (160u32, 120u32);
     let tree = TreeInstance::new(3, [100.0, 100.0, 0.0], 20.0, 6.0, 0, [0.1, 0.35, 0.05]);
-    let scene = flat_scene(vec![tree]);
+    // no direct sun: the tree's shadow would count as covered ground
+    let mut scene = flat_scene(vec![tree]);
+    scene.sun.color = [0.0; 3];
     let mut empty = scene.clone();
     empty.instances.clear();
     let cam = Camera::look_at([100.0, 60.0, 10.0], [100.0, 100.0, 10.0], 50.0);
@@ -441,17 +443,9 @@ fn billboard_has_a_tree_silhouette_not_a_box() {
         let lod = r.lod;
         // everything at the billboard level
         r.lod = LodParams { switch_px: [1e6, 1e6, 1e6], band: 0.0, ..lod };
-        // no shadows: the tree's shade on the ground would count as tree. Until round 46 the
-        // test turned the sun off instead, but the crown's shade of the sky light on the ground
-        // stayed (`sky_visibility`): 19 levels darker than the tree-less ground in green
-        // under main's haze, one under the 20 that count as tree; the ground less veiled by
-        // the clear air of Koschmieder's haze (40 km; round 47) made it 21, a 24 px wide "trunk". Lit by
-        // the ambient light alone the bark (16 levels from the ground) never counted either.
-        r.light_terms = LightTerms::NoShadows;
         let img = r.render(&scene, &cam, w, h).unwrap();
         let s = r.last_stats();
         let bg = r.render(&empty, &cam, w, h).unwrap();
-        r.light_terms = LightTerms::All;
         r.lod = lod;
         img_save(&img, "billboard.png");
         assert_eq!(s.per_level, [0, 0, 0, 1]);
@@ -634,15 +628,10 @@ fn split_passes_draw_the_same_picture() {
 /// understory at year 150) seen from above as the close-up sees it, about 24 px tall, is drawn at
 /// the crown-hull or billboard level. Its real stem (a few cm) is thinner than a pixel; the
 /// close-up's small trees read as capsules floating over the ground. Per level and species
-/// (beech, Norway spruce), with a red bark so that the stem is told from the ground: at least a
-/// quarter of the pixel rows from the beech's base up to its crown's bottom hold a red pixel
-/// within 2 px of the projected axis (the spruce's, whose foliage reaches the ground, a pixel of
-/// the tree), and the lowest pixel of the tree there is within 2 px of its base on the terrain.
-/// Round 47: stems are drawn by their coverage (`shaders/scene.wgsl`, `stem_mask`;
-/// `thin_stems_darken_a_picture_by_their_coverage`), so a stem of a fifth of a pixel marks some
-/// of its rows with a quarter of a pixel's samples, evenly spread, and leaves the others to the
-/// ground; until round 46 every row held a stem pixel of at least 1.2 px, opaque (a wire), and
-/// the test asked for every row.
+/// (beech, Norway spruce), with a red bark so that the stem is told from the ground: every pixel
+/// row from the beech's base up to its crown's bottom holds a red pixel within 2 px of the
+/// projected axis (the spruce's, whose foliage reaches the ground, a pixel of the tree), and the
+/// lowest pixel of the tree there is within 2 px of its base on the terrain.
 #[test]
 fn small_trees_stand_on_a_visible_stem_at_the_coarse_levels() {
     use sylva::species::SpeciesLibrary;
@@ -697,7 +686,7 @@ fn small_trees_stand_on_a_visible_stem_at_the_coarse_levels() {
                 let lowest = (0..h as i32).rev().find(|&y| (-2..=2).any(|dx| tree_px(ac + dx, y)));
                 let grounded = lowest.is_some_and(|y| (y as f32 - yb).abs() <= 2.0);
                 eprintln!("species {species} level {level}: tree {:.0} px tall, stem rows {}..{} ({} rows), {} without bark; lowest tree row {lowest:?}, base at {yb:.1}", yb - yt, rows.first().unwrap_or(&0), rows.last().unwrap_or(&0), rows.len(), missing.len());
-                if rows.len() < 6 || missing.len() * 4 > rows.len() * 3 || !grounded {
+                if rows.len() < 6 || !missing.is_empty() || !grounded {
                     failures.push(format!("species {species} level {level}: {} of {} rows between the crown ({yc:.1}) and the base ({yb:.1}) show no stem ({missing:?}); lowest tree row {lowest:?}", missing.len(), rows.len()));
                 }
             }
@@ -760,58 +749,4 @@ fn no_data_hole_is_a_hole_in_the_map_still() {
     }
     let rim_max = rim.iter().map(|p| p[0] as u32 + p[1] as u32 + p[2] as u32).max().unwrap();
     assert!(rim_max <= bright + 36, "a bright wall at the hole's rim: {rim_max} vs the ground's brightest {bright} (sum of sRGB levels)");
-}
-
-/// Round 47 (issue 32, trial 45 defect 6: "some stems 1-px wires from canopy to ground"):
-/// a stem thinner than a pixel is drawn with its coverage. Eight trees 20 m tall with a clear
-/// stem to 12 m and thin stems (crown radius 1.5 m, the stem scaled with it), 300 m away
-/// against the sky through an 8° lens, at the crown-hull and at the billboard level. The
-/// darkness the stems add (linear luminance of the tree-less picture less the picture's, summed
-/// over the rows of their clear stems above the horizon) is compared with the same picture drawn
-/// at 8 × 8 the pixels (divided by 64), where the stems are several pixels wide and drawn as
-/// they are (not widened): a stem drawn by its coverage darkens the coarse picture as much as
-/// the fine one. On main (before round 47) every widened stem's 1.2 px were drawn opaque (its
-/// bark mixed with a dark stand colour, at least 0.4 bark): the coarse pictures' stems were
-/// several times darker than the fine ones (a wire).
-#[test]
-fn thin_stems_darken_a_picture_by_their_coverage() {
-    let trees: Vec<TreeInstance> = (0..8u64)
-        .map(|i| {
-            let mut t = TreeInstance::new(10 + i, [72.0 + 8.0 * i as f32, 150.0, 0.0], 20.0, 1.5, 0, [0.1, 0.35, 0.05]);
-            t.crown_base = 0.6;
-            t
-        })
-        .collect();
-    let scene = flat_scene(trees);
-    let mut empty = scene.clone();
-    empty.instances.clear();
-    let cam = Camera::look_at([100.0, -150.0, 2.0], [100.0, 150.0, 7.0], 8.0);
-    let (w, h) = (240u32, 160u32);
-    // the rows of the clear stems against the sky: 4 m up to 1 m under the crown base
-    let (_, ya) = project(&cam, w, h, Vec3::new(100.0, 150.0, 11.0));
-    let (_, yb) = project(&cam, w, h, Vec3::new(100.0, 150.0, 4.0));
-    let (ya, yb) = (ya.ceil() as u32, yb.floor() as u32);
-    assert!(yb > ya + 20, "stem rows {ya}..{yb}");
-    with_renderer(|r| {
-        let lod = r.lod;
-        for (level, switch) in [(2usize, [1e6, 1e6, 0.0]), (3, [1e6, 1e6, 1e6])] {
-            r.lod = LodParams { switch_px: switch, band: 0.0, canopy_px: 0.0, min_px: 0.0, ..lod };
-            let mut dark = Vec::new();
-            for s in [1u32, 8] {
-                let img = r.render(&scene, &cam, w * s, h * s).unwrap();
-                let st = r.last_stats();
-                let bg = r.render(&empty, &cam, w * s, h * s).unwrap();
-                let mut want = [0usize; 4];
-                want[level] = 8;
-                assert_eq!(st.per_level, want, "{s}x: level {level}");
-                img_save(&img, &format!("thin_stems_level{level}_{s}x.png"));
-                let d: f64 = (ya * s..yb * s).flat_map(|y| (0..w * s).map(move |x| (x, y))).map(|(x, y)| lin_lum(bg.get_pixel(x, y)) - lin_lum(img.get_pixel(x, y))).sum();
-                dark.push(d / (s * s) as f64);
-            }
-            let ratio = dark[0] / dark[1];
-            eprintln!("level {level}: darkness {:.4} (1x) vs {:.4} (8x, per coarse pixel): ratio {ratio:.2}", dark[0], dark[1]);
-            assert!(dark[1] > 0.0 && (0.75..1.33).contains(&ratio), "level {level}: the thin stems darken the picture {ratio:.2} times as much as drawn 8x finer");
-        }
-        r.lod = lod;
-    });
 }

@@ -13,7 +13,7 @@ use sylva::species::{Season, SpeciesLibrary};
 
 #[path = "common/render.rs"]
 mod render_common;
-use render_common::{lin_lum, out_dir, with_renderer};
+use render_common::{out_dir, with_renderer};
 
 /// Stand side (m) and analysis cell (m).
 const SIDE: f32 = 320.0;
@@ -366,6 +366,19 @@ fn crown_looks_follow_the_species_habit() {
         assert!(l.leaf_shape.is_some(), "{l:?}");
     }
     assert_ne!(beech.leaf_shape, oak.leaf_shape);
+}
+
+/// Linear luminance (Rec. 709) of an sRGB pixel, 0..1.
+fn lin_lum(p: &image::Rgba<u8>) -> f64 {
+    let l = |c: u8| {
+        let c = c as f64 / 255.0;
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    0.2126 * l(p.0[0]) + 0.7152 * l(p.0[1]) + 0.0722 * l(p.0[2])
 }
 
 /// What a still's crowns show of the sun (issue 32, round 35), from renders of one view:

@@ -40,8 +40,7 @@ fn ground_beyond_the_dem_is_its_mirror_image_fading_with_the_margin() {
     assert!((h(-45.0, 845.0) - z(45.0, 755.0)).abs() < 1e-3, "{}", h(-45.0, 845.0));
     // 395 m east (beyond the 400 m of the site's half-width mirrored): the west edge's mirror
     assert!((h(1195.0, 405.0) - z(405.0, 405.0)).abs() < 1e-3, "{}", h(1195.0, 405.0));
-    // the fade into the sky: none near the edge, from 60 % of the margin (240 m; 35 %, 140 m,
-    // before round 46) to its end
+    // the fade into the sky: none near the edge, from 35 % of the margin (140 m) to its end
     let f = |x: f32| g.fade[at(x, 405.0)];
     assert!(f(845.0) == 0.0 && f(1005.0) < 0.5 && f(1005.0) < f(1145.0) && f(1195.0) > 0.95, "{} {} {} {}", f(845.0), f(1005.0), f(1145.0), f(1195.0));
 }

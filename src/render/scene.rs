@@ -152,16 +152,12 @@ impl Default for Sun {
     }
 }
 
-/// Sky colours (linear RGB): the ambient light's two colours. The sky drawn behind the scene
-/// (round 46) is the clear sky of Preetham, Shirley & Smits (1999) for the scene's sun
-/// (`shaders/scene.wgsl`, `sky_base`: its distribution and hue, brighter and whiter towards the
-/// horizon and the sun) at the luminance of `zenith` overhead; the aerial perspective fades to
-/// that sky's horizon.
+/// Sky colours (linear RGB) for the gradient behind the scene; also the ambient light.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sky {
-    /// Colour straight up; its luminance (Rec. 709 weights) is the drawn sky's at the zenith.
+    /// Colour straight up.
     pub zenith: [f32; 3],
-    /// Colour at the horizon (the ambient light's).
+    /// Colour at the horizon.
     pub horizon: [f32; 3],
 }
 

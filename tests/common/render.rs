@@ -34,16 +34,3 @@ pub fn out_dir() -> PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
-
-/// Linear luminance (Rec. 709) of an sRGB pixel, 0..1.
-pub fn lin_lum(p: &image::Rgba<u8>) -> f64 {
-    let l = |c: u8| {
-        let c = c as f64 / 255.0;
-        if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
-    0.2126 * l(p.0[0]) + 0.7152 * l(p.0[1]) + 0.0722 * l(p.0[2])
-}

@@ -20,12 +20,6 @@ pub struct Landscape {
     pub mirror_trees: bool,
 }
 
-/// Share of the margin around the window over which the surroundings are drawn whole before
-/// they fade into the sky (over the rest of it): 0.6 (round 46; before, 0.35: the ridges past
-/// the first one faded out, trial 45 defect 8, "the haze erases everything past the first
-/// ridge"). The haze itself is the aerial perspective's (`render/shaders/scene.wgsl`, fog).
-pub const SURROUNDINGS_CLEAR: f64 = 0.6;
-
 /// Width (m) over which the edge of the DEM (or of a site without surroundings) fades out.
 pub const EDGE_FADE_M: f64 = 150.0;
 
@@ -168,7 +162,7 @@ impl Landscape {
     /// the end of the DEM's grid (or of the site alone) the ground is the DEM's mirror image
     /// ([`mirrored`]; until round 39 the edge samples were stretched outwards into streaks and
     /// a site alone faded out within [`EDGE_FADE_M`] of its edge: an island in the sky). The
-    /// surroundings fade into the sky from [`SURROUNDINGS_CLEAR`] (60 %) of the margin to its end, and over
+    /// surroundings fade into the sky from 35 % of the margin to its end, and over
     /// [`EDGE_FADE_M`] at the edge of the DEM's no-data cells. Samples at most `max_cell_m` apart; inside the window their height
     /// is the site's [`SiteConditions::elevation_at_valid`], so trees stand on the ground drawn,
     /// and the window's no-data cells stay NaN: [`crate::render::terrain::from_ground`] leaves
@@ -307,7 +301,7 @@ impl Landscape {
             // signed distance to the edge of the ground: negative inside
             let sd = if valid[i] { -(d_in[i] as f64) * step } else { d_out[i] as f64 * step };
             let edge = sstep(-EDGE_FADE_M, 0.25 * EDGE_FADE_M, sd);
-            fade[i] = sstep(SURROUNDINGS_CLEAR * margin, margin, outside[i]).max(edge) as f32;
+            fade[i] = sstep(0.35 * margin, margin, outside[i]).max(edge) as f32;
         }
         let ground = crate::render::terrain::GroundGrid {
             heights: Grid { width: nw, height: nh, data: heights },

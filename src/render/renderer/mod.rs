@@ -48,31 +48,6 @@ pub(super) const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8U
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 const SHADOW_SIZE: u32 = 2048;
 const SAMPLES: u32 = 4;
-/// Default meteorological range (m) of [`Renderer::visibility_m`]: 40 km, "clear" air (the
-/// international visibility code's class 7, 20–50 km). A summer day in the southern
-/// Appalachians (the default Coweeta site) is often hazier (summer visual ranges of 15–40 km are
-/// common there); 40 km keeps the next ridge legible at the default run's 2–5 km while still
-/// blueing and fading the ridges behind it.
-pub const METEOROLOGICAL_RANGE_M: f32 = 40_000.0;
-
-/// Rayleigh scattering (extinction) coefficients of clear air at sea level (1/m) at 680, 550
-/// and 440 nm, the red, green and blue of the aerial perspective: 5.8e-6, 13.5e-6, 33.1e-6
-/// (Bruneton & Neyret 2008, "Precomputed atmospheric scattering", Comput. Graph. Forum 27(4),
-/// sect. 2, β_R^s; after the λ⁻⁴ law of Preetham, Shirley & Smits 1999, "A practical analytic
-/// model for daylight", SIGGRAPH, appendix A.1).
-pub const RAYLEIGH_RGB_PER_M: [f32; 3] = [5.8e-6, 13.5e-6, 33.1e-6];
-
-/// Extinction (1/m) of the aerosol (Mie, grey: the same in red, green and blue) of air whose
-/// meteorological range is `visibility_m` (m, > 0): Koschmieder's law β_550 = 3.912 / V for the
-/// whole extinction at 550 nm, less the Rayleigh part ([`RAYLEIGH_RGB_PER_M`]'s green), at
-/// least 0. 0 for an infinite or non-positive range (no haze).
-pub fn aerosol_extinction(visibility_m: f32) -> f32 {
-    if !(visibility_m > 0.0) || !visibility_m.is_finite() {
-        return 0.0;
-    }
-    (3.912 / visibility_m - RAYLEIGH_RGB_PER_M[1]).max(0.0)
-}
-
 /// Triangles of the coarse terrain mesh of [`Renderer::coarse_terrain`] (at most about).
 pub const COARSE_TERRAIN_TRIANGLES: usize = 100_000;
 
@@ -229,12 +204,6 @@ pub struct Renderer {
     /// pattern on crowns of the mid-ground (issue 32, round 40, trial 39); the same share of
     /// the band's trees draws each level.
     pub fade_per_tree: bool,
-    /// Meteorological range (m) of the air the pictures look through (default
-    /// [`METEOROLOGICAL_RANGE_M`], 40 km; > 0, `f32::INFINITY`: no haze): the distance at which
-    /// a black object's contrast against the horizon sky falls to 2 % (Koschmieder 1924:
-    /// V = ln(50) / β = 3.912 / β, β the extinction coefficient at 550 nm). The shader's
-    /// aerial perspective ([`aerosol_extinction`], `shaders/scene.wgsl` `fog`) takes it.
-    pub visibility_m: f32,
     /// The far field the shadow map was drawn with (a new one redraws it).
     shadow_far: Option<std::sync::Arc<FarField>>,
     last: FrameStats,

@@ -181,7 +181,6 @@ impl Renderer {
             light_terms: LightTerms::All,
             crown_sun_on_quad: false,
             fade_per_tree: false,
-            visibility_m: METEOROLOGICAL_RANGE_M,
             shadow_far: None,
             last: FrameStats::default(),
         })

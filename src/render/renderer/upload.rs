@@ -331,6 +331,8 @@ impl Renderer {
         let aspect = w as f32 / h as f32;
         let vp = camera.view_proj(aspect);
         let (lvp, texel_m, depth_m) = light;
+        let (lo, hi) = scene.terrain.bounds();
+        let size = (hi[0] - lo[0]).max(hi[1] - lo[1]).max(1.0);
         let ortho = matches!(camera.projection, crate::render::camera::Projection::Orthographic { .. });
         let v3 = |a: [f32; 3], w: f32| [a[0], a[1], a[2], w];
         let sun = Vec3::from(scene.sun.direction).normalize_or(Vec3::Z).to_array();
@@ -345,7 +347,7 @@ impl Renderer {
             sky_zenith: v3(scene.sky.zenith, pixel_m_per_depth(camera, h)),
             sky_horizon: v3(scene.sky.horizon, if self.fade_per_tree { 1.0 } else { 0.0 }),
             wind: [wd.x, wd.y, scene.wind.directed, scene.wind.undirected],
-            params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, aerosol_extinction(self.visibility_m)],
+            params: [scene.wind.time_s, scene.sea_level.unwrap_or(f32::NEG_INFINITY).max(-1e30), 1.0 / SHADOW_SIZE as f32, 0.1 / size],
             canopy0: [0.0; 4],
             canopy1: [0.0; 4],
             shadow: [1.0 / SHADOW_SIZE as f32, 0.5 * texel_m / depth_m, texel_m, if self.fast_shading { 1.0 } else { 0.0 }],

@@ -98,107 +98,37 @@ fn sky_visibility(world: vec3<f32>, n: vec3<f32>) -> f32 {
     return mix(0.45, 1.0, s / 10.0);
 }
 
-// Turbidity of the Preetham sky (Preetham, Shirley & Smits 1999, "A practical analytic model
-// for daylight", SIGGRAPH: T = 1 pure air, 2–3 clear, 6+ hazy): 2.5, ESTIMATE for clear summer
-// air of the 40 km meteorological range the aerial perspective uses (render/renderer,
-// METEOROLOGICAL_RANGE_M).
-const SKY_TURBIDITY: f32 = 2.5;
-
-// Scale of the drawn sky's zenith luminance over `Sky::zenith`'s (ESTIMATE): with the sun high
-// the zenith lies in its bright circumsolar part and the rest of the sky is darker; 1.6 keeps
-// the horizon at right angles to the sun (luminance 0.57 for the default sky and the stills'
-// summer sun) about as bright as round 45's horizon colour (0.67).
-const SKY_EXPOSURE: f32 = 1.6;
-
-// The Perez et al. (1993) sky distribution F(θ, γ) = (1 + A e^(B / cos θ)) (1 + C e^(D γ) +
-// E cos² γ) of the luminance Y and the chromaticities x and y at once (one per component), θ
-// the view's zenith angle (`ct` its cosine), γ its angle to the sun (`cg` its cosine).
-fn perez3(ct: f32, gamma: f32, cg: f32, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, d: vec3<f32>, e: vec3<f32>) -> vec3<f32> {
-    return (vec3<f32>(1.0) + a * exp(b / max(ct, 0.01))) * (vec3<f32>(1.0) + c * exp(d * gamma) + e * cg * cg);
-}
-
-// The clear sky's colour (linear RGB) in direction `dir` (z up; under the horizon: at it), no
-// sun disc: Preetham et al. 1999, appendix A.2 (the Perez coefficients of Y, x, y as linear
-// functions of the turbidity T, and the zenith chromaticity x_z, y_z as polynomials of T and
-// the sun's zenith angle θ_s), Y(θ, γ) = Y_z F(θ, γ) / F(0, θ_s) and likewise x, y; xyY to
-// XYZ to linear sRGB (IEC 61966-2-1), y taken on the daylight locus at Preetham's x. The zenith
-// luminance Y_z is the scene's: the luminance of `Sky::zenith` (render/scene.rs) × SKY_EXPOSURE, so the scene sets the sky's brightness and Preetham its
-// distribution and hue: brightest and whitest towards the horizon and around the sun, deepest
-// blue overhead and at right angles to the sun.
-fn sky_base(dir: vec3<f32>) -> vec3<f32> {
-    let t = SKY_TURBIDITY;
-    let a = vec3<f32>(0.1787 * t - 1.4630, -0.0193 * t - 0.2592, -0.0167 * t - 0.2608);
-    let b = vec3<f32>(-0.3554 * t + 0.4275, -0.0665 * t + 0.0008, -0.0950 * t + 0.0092);
-    let c = vec3<f32>(-0.0227 * t + 5.3251, -0.0004 * t + 0.2125, -0.0079 * t + 0.2102);
-    let d = vec3<f32>(0.1206 * t - 2.5771, -0.0641 * t - 0.8989, -0.0441 * t - 1.6537);
-    let e = vec3<f32>(-0.0670 * t + 0.3703, -0.0033 * t + 0.0452, -0.0109 * t + 0.0529);
-    let sun = normalize(g.sun_dir.xyz);
-    // the sun at or above the horizon (a night sky is the twilight's: render/scene.rs Sun)
-    let ts = acos(clamp(sun.z, 0.02, 1.0));
-    let s3 = vec4<f32>(ts * ts * ts, ts * ts, ts, 1.0);
-    let xz = t * t * dot(vec4<f32>(0.00166, -0.00375, 0.00209, 0.0), s3) + t * dot(vec4<f32>(-0.02903, 0.06377, -0.03202, 0.00394), s3) + dot(vec4<f32>(0.11693, -0.21196, 0.06052, 0.25886), s3);
-    let yz = t * t * dot(vec4<f32>(0.00275, -0.00610, 0.00317, 0.0), s3) + t * dot(vec4<f32>(-0.04214, 0.08970, -0.04153, 0.00516), s3) + dot(vec4<f32>(0.15346, -0.26756, 0.06670, 0.26688), s3);
-    let ct = max(dir.z, 0.0);
-    let cg = clamp(dot(normalize(dir), sun), -1.0, 1.0);
-    let f = perez3(ct, acos(cg), cg, a, b, c, d, e);
-    let f0 = perez3(1.0, ts, cos(ts), a, b, c, d, e);
-    let r = f / f0;
-    // the chromaticity on the CIE daylight locus at Preetham's x (CIE 15:2004 eq. 3.3,
-    // y = −3.000 x² + 2.870 x − 0.275, x in 0.25–0.38, 25 000–4 000 K): Preetham's own y falls
-    // under the locus towards the horizon (x 0.31, y 0.31 here), a magenta haze
-    let x = clamp(xz * r.y, 0.25, 0.38);
-    let y = -3.0 * x * x + 2.870 * x - 0.275;
-    let lum = dot(g.sky_zenith.rgb, vec3<f32>(0.2126, 0.7152, 0.0722)) * SKY_EXPOSURE * r.x;
-    let cx = x / y * lum;
-    let cz = (1.0 - x - y) / y * lum;
-    let rgb = vec3<f32>(3.2406 * cx - 1.5372 * lum - 0.4986 * cz, -0.9689 * cx + 1.8758 * lum + 0.0415 * cz, 0.0557 * cx - 0.2040 * lum + 1.0570 * cz);
-    return max(rgb, vec3<f32>(0.0));
-}
-
-// The horizon sky (`sky_base`) in the azimuth of `dir`.
-fn horizon_sky(dir: vec3<f32>) -> vec3<f32> {
-    return sky_base(normalize(vec3<f32>(dir.xy, 0.0) + vec3<f32>(1e-5, 0.0, 0.0)));
-}
-
 // Below the horizon (terrain19): distant forested hills seen through haze, the horizon
 // colour turning a darker blue-green the further down the view looks, so that the faded
 // surroundings of the terrain end in a landscape horizon rather than in empty sky.
-fn below_horizon(dir: vec3<f32>) -> vec3<f32> {
-    let h = horizon_sky(dir);
-    let hills = h * vec3<f32>(0.58, 0.68, 0.62);
-    return mix(h * 0.97, hills, smoothstep(0.0, 0.22, -dir.z));
+fn below_horizon(up: f32) -> vec3<f32> {
+    let hills = g.sky_horizon.rgb * vec3<f32>(0.58, 0.68, 0.62);
+    return mix(g.sky_horizon.rgb * 0.97, hills, smoothstep(0.0, 0.22, -up));
 }
 
 fn sky_color(dir: vec3<f32>) -> vec3<f32> {
     let up = clamp(dir.z, -1.0, 1.0);
-    var c = sky_base(dir);
+    var c = mix(g.sky_horizon.rgb, g.sky_zenith.rgb, pow(max(up, 0.0), 0.6));
     if (up < 0.0) {
-        c = below_horizon(dir);
+        c = below_horizon(up);
     }
     let sd = max(dot(dir, g.sun_dir.xyz), 0.0);
-    c = c + g.sun_color.rgb * (pow(sd, 800.0) * 4.0);
+    c = c + g.sun_color.rgb * (pow(sd, 800.0) * 4.0 + pow(sd, 12.0) * 0.15);
     return c;
 }
 
-// Rayleigh extinction of clear air at sea level (1/m) at 680, 550, 440 nm (render/renderer,
-// RAYLEIGH_RGB_PER_M: Bruneton & Neyret 2008, after Preetham et al. 1999 appendix A.1).
-const RAYLEIGH_RGB: vec3<f32> = vec3<f32>(5.8e-6, 13.5e-6, 33.1e-6);
-
-// Aerial perspective by Koschmieder's law (Koschmieder 1924; Middleton 1952, "Vision through
-// the atmosphere", ch. 4): an object of colour `c` at distance d is seen as
-// c·e^(−βd) + L_h·(1 − e^(−βd)), L_h the horizon sky behind it (`horizon_sky` in the view's
-// azimuth), β per colour the Rayleigh extinction plus the aerosol's (params.w, 1/m, grey; from
-// the meteorological range V: β_550 = 3.912 / V, render/renderer, aerosol_extinction). At
-// V = 40 km a ridge 5 km away keeps e^(−0.49) = 61 % of its contrast in green, less in blue:
-// distant ridges turn paler and bluer, the next one stays legible. None in orthographic views.
+// Aerial perspective: in-scattered sky light over the view distance, exp(-d * density), towards
+// the horizon colour, a little warmer towards the sun (forward scattering); at most 85 %.
 fn fog(c: vec3<f32>, world: vec3<f32>) -> vec3<f32> {
     var d = length(world - g.eye.xyz);
     if (g.eye.w > 0.5) {
         d = 0.0;
     }
-    let t = exp(-(RAYLEIGH_RGB + vec3<f32>(g.params.w)) * d);
+    let f = 1.0 - exp(-d * g.params.w);
     let v = normalize(world - g.eye.xyz + vec3<f32>(0.0, 0.0, 1e-4));
-    return c * t + horizon_sky(v) * (vec3<f32>(1.0) - t);
+    let sunward = pow(max(dot(v, g.sun_dir.xyz), 0.0), 8.0);
+    let air = mix(g.sky_horizon.rgb, g.sky_horizon.rgb * 0.6 + g.sun_color.rgb * 0.4, sunward * 0.5);
+    return mix(c, air, clamp(f, 0.0, 0.85));
 }
 
 // The light terms a frame draws (Renderer::light_terms, a diagnostic of the stills' lighting):
@@ -353,12 +283,6 @@ fn canopy_view_cover(c: f32, world: vec3<f32>) -> f32 {
 const CROWN_BUMP_M: f32 = 6.0;
 const CROWN_BUMP_TILT: f32 = 2.5;
 
-// Up-bias of the far-field canopy's crown normal over the terrain's (fs_terrain; round 46).
-const CANOPY_UP: f32 = 0.75;
-// Share of the open ground's light the ground in the far-field canopy's gaps keeps where the
-// sun's ray is blocked (its sky light under the crowns): ESTIMATE (round 46).
-const GAP_SKY: f32 = 0.35;
-
 @fragment
 fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
     let n = normalize(i.normal);
@@ -403,21 +327,9 @@ fn fs_terrain(i: TerrainOut) -> @location(0) vec4<f32> {
             let gx = vnoise(q + vec2<f32>(e, 0.0), 7.0) - vnoise(q - vec2<f32>(e, 0.0), 7.0);
             let gy = vnoise(q + vec2<f32>(0.0, e), 7.0) - vnoise(q - vec2<f32>(0.0, e), 7.0);
             let kb = 1.0 - smoothstep(0.5 * CROWN_BUMP_M, 1.2 * CROWN_BUMP_M, min(lx, ly));
-            // round 46: the crown normal follows the slope more (CANOPY_UP 0.75, before 1.5:
-            // a 30° slope tilted it 12°, now 18°), so that slopes towards and away from the
-            // sun, coves and ridges, differ in the far field as in the near
-            let cn = normalize(n + vec3<f32>(0.0, 0.0, CANOPY_UP) - vec3<f32>(gx, gy, 0.0) * (CROWN_BUMP_TILT * kb));
+            let cn = normalize(n + vec3<f32>(0.0, 0.0, 1.5) - vec3<f32>(gx, gy, 0.0) * (CROWN_BUMP_TILT * kb));
             let top = i.world + vec3<f32>(0.0, 0.0, g.canopy1.w);
             let cc = shade(cv.rgb, cn, top + cn * 0.5, 0.35, 0.75) * 0.85;
-            // the ground seen in the layer's gaps lies in the crowns' shade: it has the sun
-            // only where the sun's ray also finds a gap, a share (1 − cover)^(1 / sin h) of a
-            // random canopy of plan cover `cover` at solar elevation h (Beer–Lambert gap
-            // probability, Nilson 1971, Agric. Meteorol. 8, eq. for a Poisson canopy); the
-            // rest keeps the sky light, GAP_SKY of the whole (ESTIMATE). Round 46: the
-            // layer's gaps were lit as open ground, no shadowed gaps (trial 45 defect 8).
-            let sin_h = max(g.sun_dir.z, 0.05);
-            let sunlit = pow(clamp(1.0 - cv.w, 0.0, 1.0), 1.0 / sin_h);
-            c = c * mix(GAP_SKY, 1.0, sunlit);
             c = mix(c, cc, canopy_view_cover(cv.w, i.world));
         }
     }
@@ -545,34 +457,14 @@ fn crown_unmap(z: f32, b0: f32, b: f32) -> f32 {
 // Least width (px) of a tree's stem drawn at the crown-hull or billboard level (issue 32: small
 // trees' stems, thinner than a pixel, vanished and their crowns floated over the ground).
 const MIN_STEM_PX: f32 = 1.2;
+// Least share of its bark colour a widened coarse stem keeps (fs_tree): a birch's white is
+// dimmed to a grey under the crown hull rather than a white stick, a small tree's stem stays
+// visible.
+const MIN_STEM_BARK: f32 = 0.4;
 
-// Stems by coverage (issue 32, round 47, trial 45 defect 6: "some stems 1-px wires from canopy
-// to ground"). A stem widened to MIN_STEM_PX covers only `cover` (0..1: its real width over the
-// drawn one) of the drawn width; until round 46 every sample of it was drawn opaque, a mix of
-// its bark and a dark stand colour, so a stem of a tenth of a pixel darkened a whole line of
-// pixels: a wire. Now a widened stem's fragment writes its full bark colour to k of the pixel's
-// STEM_SAMPLES samples (`stem_mask`, the fragment's sample mask), k = ⌊STEM_SAMPLES·cover + t⌋
-// with t an ordered threshold 0..1, so what is behind the stem shows in the others: its mean
-// over the stem's pixels is its bark over `cover` of their area, the area-sampled (box-filtered)
-// image of a thin line (Crow 1977, "The aliasing problem in computer-generated shaded images",
-// CACM 20(11)), over whatever lies behind (sky, ground, stand). t is Jimenez's (2014, "Next
-// generation post processing in Call of Duty: Advanced Warfare", SIGGRAPH course) interleaved
-// gradient noise (`ign`), offset per tree: along a pixel column it steps by 0.309 per row, so
-// the rounding is spread evenly down the stem. A stem of at least a quarter of MIN_STEM_PX's
-// coverage (0.3 px) keeps a sample in every pixel of it; a thinner one a share 4·cover of its
-// pixels, evenly spaced. The k samples are a run of the mask rotated by a second threshold, so
-// a single-sampled target (the near field's "tree 1x" pass) keeps its one sample with
-// probability k / STEM_SAMPLES: the same mean.
-const STEM_SAMPLES: f32 = 4.0;
-
-// The sample mask of a widened stem's fragment covering `cover` (0..1) of its drawn width.
-fn stem_mask(i: TreeOut, cover: f32) -> u32 {
-    let p = i.clip.xy + vec2<f32>(fract(i.salt * 0.754877) * 61.0, fract(i.salt * 0.569840) * 67.0);
-    let k = u32(clamp(floor(STEM_SAMPLES * clamp(cover, 0.0, 1.0) + ign(p)), 0.0, STEM_SAMPLES));
-    let o = u32(ign(p.yx + vec2<f32>(17.0, 29.0)) * STEM_SAMPLES) & 3u;
-    let run = (1u << k) - 1u;
-    return ((run << o) | (run >> (4u - o))) & 15u;
-}
+// Linear albedo of the shaded stand interior behind a distant tree's trunk (dark foliage and
+// twigs under the canopy): what a widened trunk's pixel shows beside the real trunk.
+const STAND_SHADE: vec3<f32> = vec3<f32>(0.035, 0.045, 0.03);
 
 // `top_scale`: size of the billboard's top quad (1: the crown's plan disc, in both passes).
 fn tree_vertex(v: TreeIn, top_scale: f32) -> TreeOut {
@@ -892,7 +784,7 @@ struct Carve {
     // towards the viewer (outline units, relative to the crown radius; × `rad`: m): w·√(1 −
     // (a/w)²) of the crown's half-width w at this height, the crown taken as round in plan
     depth: f32,
-    // trunk: the share of the pixel's width the trunk covers (0..1)
+    // trunk: the share of the drawn (widened) trunk's width the real trunk covers (0..1)
     cover: f32,
     // side quad's crown: the normal of the crown as a round solid (an ellipsoid about its
     // middle, no lumps): where its surface turns from the sun
@@ -900,7 +792,7 @@ struct Carve {
 };
 
 // `apx`: outline units (`i.bb.x`) per pixel across the quad (fwidth, taken in uniform control
-// flow by the caller): the trunk's share of each pixel's width (`cover`).
+// flow by the caller): the trunk is at least MIN_STEM_PX wide.
 fn carve(i: TreeOut, apx: f32) -> Carve {
     var r: Carve;
     r.kind = 0u;
@@ -937,17 +829,10 @@ fn carve(i: TreeOut, apx: f32) -> Carve {
             r.n = normalize(right_of(f) * na * 0.8 + vec3<f32>(0.0, 0.0, 0.3 * nz + 0.35) + f * sqrt(max(1.0 - na * na, 0.0)));
             // each lump is a small dome of its own: its shading bends the normal about it
             r.n = normalize(r.n + right_of(f) * (l - 0.5) * look.z * 1.5);
-        } else if (z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
-            // the trunk, |a| < its half-width s.info.z: the share of the pixel's width (apx
-            // across, centred on a) it covers, its box-filtered (area-sampled) coverage (Crow
-            // 1977; round 47: before, a pixel whose centre lay within MIN_STEM_PX / 2 of the
-            // axis was the trunk's, at least 1.2 px of it)
-            let ov = min(a + 0.5 * apx, s.info.z) - max(a - 0.5 * apx, -s.info.z);
-            if (ov > 0.0) {
-                r.kind = 2u;
-                r.n = normalize(i.normal);
-                r.cover = clamp(ov / max(apx, 1e-6), 0.0, 1.0);
-            }
+        } else if (abs(a) < max(s.info.z, 0.5 * MIN_STEM_PX * apx) && z < s.info.x + 0.3 * (s.info.y - s.info.x)) {
+            r.kind = 2u;
+            r.n = normalize(i.normal);
+            r.cover = clamp(s.info.z / max(0.5 * MIN_STEM_PX * apx, 1e-6), 0.0, 1.0);
         }
     } else {
         let q = i.bb;
@@ -1090,16 +975,8 @@ fn birch_bark(b: vec3<f32>, lp: vec3<f32>, zpx: f32, xypx: f32, salt: f32) -> ve
     return mix(c, BIRCH_DARK, dark * 0.85);
 }
 
-// fs_tree's output: the colour and the sample mask (all samples but a widened stem's,
-// `stem_mask`).
-struct TreeFrag {
-    @location(0) color: vec4<f32>,
-    @builtin(sample_mask) mask: u32,
-};
-
 @fragment
-fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> TreeFrag {
-    var mask = 0xffffffffu;
+fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> @location(0) vec4<f32> {
     let apx = fwidth(i.bb.x);
     let zpx = fwidth(i.lp.z);
     let xypx = length(fwidth(i.lp.xy));
@@ -1154,11 +1031,10 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> TreeFrag {
         }
         if (c.kind == 2u) {
             leafy = 0.0;
-            // a billboard's trunk: its bark over the share `cover` of the pixel it covers, what
-            // is behind it over the rest (`stem_mask`; rounds 35 to 46 a pixel line at least
-            // 1.2 px wide, opaque, the rest of it a dark stand colour: a wire)
-            mask = stem_mask(i, c.cover);
-            albedo = i.bark;
+            // a trunk widened to MIN_STEM_PX shows its bark over the share of the pixel the
+            // real trunk covers, the shaded stand behind it over the rest (round 35: a birch's
+            // white bark, 1.2 px wide on every distant birch, frosted the oblique still)
+            albedo = mix(STAND_SHADE, i.bark, c.cover);
         }
     } else {
         if (!ff) {
@@ -1214,11 +1090,13 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> TreeFrag {
             leafy = 0.3;
         }
     } else if (i.mat_s.x < 0.5 && i.lp.w < WIDENED_BELOW) {
-        // a coarse level's stem widened to MIN_STEM_PX: its bark over the share `lp.w` of the
-        // width the real stem covers, what is behind it over the rest, as the billboard's trunk
-        // (`stem_mask`, round 47; rounds 36 to 46: opaque, the bark mixed with a dark stand
-        // colour by that share but at least 0.4 bark, a wire from crown to ground)
-        mask = stem_mask(i, i.lp.w);
+        // a coarse level's stem widened to MIN_STEM_PX: its bark over the share of the width
+        // the real stem covers, the shaded stand behind it over the rest, as the billboard's
+        // trunk (round 40: birches' white stems, widened, read as white sticks under the
+        // crown hulls from above)
+        // (at least MIN_STEM_BARK of it: a small tree's stem still reads as a stem, issue 32
+        // round 36)
+        albedo = mix(STAND_SHADE, albedo, max(i.lp.w, MIN_STEM_BARK));
     } else if (i.mat_s.x < 0.5 && i.uv.y >= 0.0) {
         // mesh bark away from the stem: fine twigs are dark whatever the stem's colour (a
         // birch's white bark is on its stem and main limbs only)
@@ -1256,19 +1134,9 @@ fn fs_tree(i: TreeOut, @builtin(front_facing) ff: bool) -> TreeFrag {
         let back = max(-dot(n, g.sun_dir.xyz), 0.0);
         let trans = albedo * vec3<f32>(1.1, 1.15, 0.6) * g.sun_color.rgb * (0.3 * back * light_sh(sh0) * through * sun_gain());
         c = c + trans * ao;
-        // and the sky light falling on their upper sides, through the leaf with the same
-        // transmittance: the sky part of the hemisphere ambient that `shade_sh` gives an
-        // up-facing normal (amb_col × 0.42), canopy-occluded as the ground's (`sky_visibility`),
-        // on leaves facing down (round 47: under the clearer air of the Koschmieder haze the
-        // canopy seen from a ground view under a closed stand went near black, 3.4 % of the
-        // view under 14/255 in every channel (tests/render_species.rs,
-        // patch_stand_from_oblique_and_ground_has_no_black_foliage; 0.0 % with this light): main's
-        // haze of 0.1 / terrain size per metre had veiled it)
-        let sky_up = mix(vec3<f32>(0.55, 0.55, 0.5), mix(g.sky_horizon.rgb, g.sky_zenith.rgb, 0.5), 0.5) * 0.42;
-        c = c + albedo * vec3<f32>(1.1, 1.15, 0.6) * sky_up * (0.3 * max(-n.z, 0.0) * light_sh(sky_visibility(i.world, n)) * sky_gain()) * ao;
     }
     // trees on the faded surroundings dissolve into the sky with their ground
-    return TreeFrag(vec4<f32>(surroundings_fade(fog(c, i.world), i.world, i.info.z), 1.0), mask);
+    return vec4<f32>(surroundings_fade(fog(c, i.world), i.world, i.info.z), 1.0);
 }
 
 @vertex
