@@ -60,6 +60,18 @@ pub fn still_years(sc: &Scenario, key_years: &[u32]) -> Vec<u32> {
     years
 }
 
+/// The default still years ([`STILL_YEARS`], when the scenario names no `still_years`) within
+/// the run (≤ `years`) that [`still_years`] leaves out because they have no key frame (not a
+/// snapshot year: e.g. 25 with `snapshot_every = 10`), ascending; empty when the scenario names
+/// its own still years (those are snapshot years by [`Scenario::snapshot_year`]). Trial 47 D8:
+/// [`main_job`] warns about them instead of dropping them silently.
+pub fn skipped_still_years(sc: &Scenario, key_years: &[u32]) -> Vec<u32> {
+    if sc.still_years.is_some() {
+        return Vec::new();
+    }
+    STILL_YEARS.iter().copied().filter(|&y| y <= sc.years && !key_years.contains(&y)).collect()
+}
+
 /// When an output of a run is written.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum When {
@@ -810,6 +822,10 @@ fn pictures_of(sc: &Scenario, site: SiteConditions, lib: &SpeciesLibrary, mut ke
     let adapt = stage.set_adapt(None);
     let key_years = keys.years();
     let years = still_years(sc, &key_years);
+    let skipped = skipped_still_years(sc, &key_years);
+    if !skipped.is_empty() {
+        tracing::warn!("no stills of year(s) {skipped:?}: not snapshot years of this run (snapshot_every = {}); name the years in the scenario's `still_years` to draw them", sc.snapshot_every);
+    }
     sink(&Event::Stills { count: years.len() * 2, adapter: &stage.renderer.adapter_description() });
     let stills_dir = out.join("stills");
     std::fs::create_dir_all(&stills_dir).map_err(|e| Error::io(&stills_dir, e))?;
@@ -1221,7 +1237,12 @@ mod tests {
         sc.snapshot_every = 10;
         let keys = [0, 10, 20, 30, 40, 50, 55, 60];
         assert_eq!(still_years(&sc, &keys), vec![0, 10, 50, 60]);
+        // trial 47 D8: the default year 25 is left out there, and said so (100 and 150 lie
+        // beyond the run's 60 years)
+        assert_eq!(skipped_still_years(&sc, &keys), vec![25]);
+        assert_eq!(skipped_still_years(&default_scenario().unwrap(), &d), Vec::<u32>::new());
         sc.still_years = Some(vec![20, 35, 40]);
+        assert!(skipped_still_years(&sc, &keys).is_empty(), "named still years are snapshot years");
         sc.validate("park.toml").unwrap();
         assert!(sc.snapshot_year(35) && !sc.snapshot_year(45));
         assert_eq!(still_years(&sc, &[0, 10, 20, 30, 35, 40, 50, 55, 60]), vec![20, 35, 40, 60]);
