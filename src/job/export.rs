@@ -441,6 +441,19 @@ fn in_area(x: f64, y: f64, [x0, y0, x1, y1]: [f64; 4], w: f64, h: f64) -> bool {
     x >= x0 && (x < x1 || (x1 >= w && x <= x1)) && y >= y0 && (y < y1 || (y1 >= h && y <= y1))
 }
 
+/// Whether `out`'s folder, with `free` bytes available (`None`: unknown, no check), has room
+/// for an export of `expected` bytes (`trees` trees). Errors: [`Error::Invalid`] naming `--out`,
+/// the megabytes needed and free (trial 47 D5).
+fn room_for(out: &Path, expected: u64, trees: usize, free: Option<u64>) -> Result<()> {
+    match free {
+        Some(free) if expected > free => {
+            let mb = |b: u64| b as f64 / 1e6;
+            Err(invalid("--out", format!("{}: about {:.0} MB needed ({trees} trees), {:.0} MB free there", out.display(), mb(expected), mb(free)), "a folder with room for the file, or a smaller --area; nothing was grown or written".into()))
+        }
+        _ => Ok(()),
+    }
+}
+
 /// Exports the area of a run directory's snapshot to `out` (`.glb`, atomically). `library`:
 /// the species as simulated (the caller overlays the run's `species/` folder).
 ///
@@ -449,7 +462,9 @@ fn in_area(x: f64, y: f64, [x0, y0, x1, y1]: [f64; 4], w: f64, h: f64) -> bool {
 /// `--area` for an area outside the terrain or holding no live tree of the library (it says
 /// where the trees are), naming `--lod` for a level ≥ [`LOD_LEVELS`], for more trees than
 /// `max_trees`, and for a file estimated above `max_bytes` ([`estimate_stand_bytes`]: refused
-/// before any tree is grown, naming `--area`, `--lod`, the cap and the estimate); the errors of
+/// before any tree is grown, naming `--area`, `--lod`, the cap and the estimate); naming
+/// `--out` when its folder has less free space than the file's expected size (half the
+/// estimate for a quantised file); the errors of
 /// [`adapt_stand`], of reading the regeneration layer ([`area_saplings`]) and of the glTF writer
 /// (which writes the buffer through a scratch file beside `out`,
 /// [`crate::output::gltf::StandGlbWriter`]).
@@ -499,6 +514,12 @@ pub fn export_stand(run_dir: &Path, library: &SpeciesLibrary, o: &ExportOptions,
             format!("at most {:.0} MB ({}): a smaller --area, --lod 0 (the full level only), --max-strands 48 (a lighter skeleton), or --instances (every tree as an instance of its species and age class); nothing was grown or written", mb(o.max_bytes), o.max_bytes_source),
         ));
     }
+    // the free space of `out`'s folder against the file's expected size (trial 47 D5: a full
+    // disk was found only after the adaptation, naming the scratch file): the estimate is a
+    // float file's, a quantised one is about half of it (`EST_BYTES_PER_NODE`)
+    let expected = if o.quantize { est.bytes / 2 } else { est.bytes };
+    let folder = out.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    room_for(out, expected, est.trees, super::disk::free_bytes(folder))?;
     // the regeneration layer's saplings in the area (drawn after the trees)
     let saplings = area_saplings(run_dir, year, library, &site, o.season, o.area)?;
     let full = o.max_strands == crate::structure::stand::FULL_STRANDS;
@@ -1164,6 +1185,17 @@ pub fn terrain_patch(site: &SiteConditions, area: [f64; 4]) -> (TriMesh, f32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Trial 47 D5: an export larger than its folder's free space is refused before any work,
+    /// naming `--out` and both sizes; room enough, or an unknown free space, passes.
+    #[test]
+    fn an_export_without_room_is_refused_naming_out() {
+        let out = Path::new("full/x.glb");
+        let e = room_for(out, 176_000_000, 534, Some(20_000_000)).unwrap_err().to_string();
+        assert!(e.contains("--out") && e.contains("full/x.glb") && e.contains("176 MB needed") && e.contains("20 MB free"), "{e}");
+        assert!(room_for(out, 176_000_000, 534, Some(176_000_000)).is_ok());
+        assert!(room_for(out, 176_000_000, 534, None).is_ok());
+    }
 
     /// The export's ground colour is the pictures' forest floor in sRGB (within one step of
     /// 255 per channel), and its terrain is textured with texture coordinates in metres.
