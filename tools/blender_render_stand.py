@@ -13,7 +13,7 @@
 # southern edge: --dist 8 --height 1.7 --pitch 95 --lens 18. The height is measured from the
 # export's terrain under the camera (trial 37: measured from the export's origin, the patch's
 # lowest point, the eye-height camera stood under the ground of a slope); where no terrain is
-# under the camera, from the origin.
+# under the camera, from the highest terrain on its line to the area's centre (trial 47 D3).
 #
 # Blender 3.4 with numpy 1.24: the glTF importer needs `np.bool`.
 import math
@@ -52,8 +52,8 @@ scene.collection.objects.link(cam)
 
 
 def ground_under(x, y):
-    """Elevation (scene z) of the export's terrain mesh under (x, y), or 0 (the origin) where
-    there is none: a ray cast straight down on the `terrain` object only (not the trees)."""
+    """Elevation (scene z) of the export's terrain mesh under (x, y), or None where there is
+    none: a ray cast straight down on the `terrain` object only (not the trees)."""
     for o in scene.objects:
         if o.type != "MESH" or not o.name.startswith("terrain"):
             continue
@@ -62,11 +62,24 @@ def ground_under(x, y):
         hit, loc, _normal, _face = o.ray_cast(top, (bottom - top).normalized())
         if hit:
             return (o.matrix_world @ loc).z
-    return 0.0
+    return None
+
+
+def camera_ground(x, y):
+    """The ground the camera's height is measured from: the terrain under it; where none is
+    (a camera outside the exported patch), the highest terrain on the line from it to the
+    area's centre, so that the camera looks over the patch rather than at its underside from
+    below (trial 47 D3: a 36 % slope's patch seen from under its edge); 0 without terrain."""
+    g = ground_under(x, y)
+    if g is not None:
+        return g
+    hits = [ground_under(x * (1.0 - k / 64.0), y * (1.0 - k / 64.0)) for k in range(65)]
+    hits = [h for h in hits if h is not None]
+    return max(hits) if hits else 0.0
 
 
 # the glTF's y-up scene comes in z-up, the export area's centre at the origin
-cam.location = (0.0, -dist, ground_under(0.0, -dist) + height)
+cam.location = (0.0, -dist, camera_ground(0.0, -dist) + height)
 cam.rotation_euler = (math.radians(pitch), 0.0, 0.0)
 scene.camera = cam
 sun = bpy.data.lights.new("sun", "SUN")
